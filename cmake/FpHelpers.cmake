@@ -1,0 +1,41 @@
+# Add every direct sub-folder of DIR that has a CMakeLists.txt, in name order, so that new
+# components (a plugin, a core module, a test folder) need no edit of a shared list.
+function(fp_add_subdirs dir)
+  if(EXISTS ${CMAKE_SOURCE_DIR}/${dir}/CMakeLists.txt)
+    add_subdirectory(${dir})
+    return()
+  endif()
+  file(GLOB children LIST_DIRECTORIES true ${CMAKE_SOURCE_DIR}/${dir}/*)
+  list(SORT children)
+  foreach(child ${children})
+    if(IS_DIRECTORY ${child} AND EXISTS ${child}/CMakeLists.txt)
+      add_subdirectory(${child})
+    endif()
+  endforeach()
+endfunction()
+
+# fp_add_plugin(NAME SOURCES...): a MODULE library named NAME.so in build/lib/facepuppet,
+# built against the public plugin header only, installed with the project.
+function(fp_add_plugin name)
+  add_library(${name} MODULE ${ARGN})
+  set_target_properties(${name} PROPERTIES PREFIX "" LIBRARY_OUTPUT_DIRECTORY ${FP_PLUGIN_OUTPUT_DIR}
+                        C_VISIBILITY_PRESET hidden)
+  target_include_directories(${name} PRIVATE ${CMAKE_SOURCE_DIR}/core/include)
+  install(TARGETS ${name} LIBRARY DESTINATION ${FP_PLUGIN_SUBDIR})
+endfunction()
+
+# fp_add_test(NAME SOURCES... [LIBS libs...]): a cmocka test run by ctest from the source tree
+# root, so that ../shared/data resolves as everywhere else.
+function(fp_add_test name)
+  cmake_parse_arguments(T "" "TIMEOUT" "LIBS" ${ARGN})
+  add_executable(${name} ${T_UNPARSED_ARGUMENTS})
+  pkg_check_modules(CMOCKA REQUIRED IMPORTED_TARGET cmocka)
+  target_link_libraries(${name} PRIVATE PkgConfig::CMOCKA ${T_LIBS} m)
+  set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${CMAKE_BINARY_DIR}/tests)
+  add_test(NAME ${name} COMMAND ${name} WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+  if(NOT T_TIMEOUT)
+    set(T_TIMEOUT 300)
+  endif()
+  set_tests_properties(${name} PROPERTIES TIMEOUT ${T_TIMEOUT}
+    ENVIRONMENT "FP_SHARED_DATA=${FP_SHARED_DATA};FP_BUILD_DIR=${CMAKE_BINARY_DIR}")
+endfunction()

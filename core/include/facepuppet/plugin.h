@@ -1,0 +1,367 @@
+/*
+ * facepuppet/plugin.h: the plugin ABI of facepuppet, the one header a plugin author needs.
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ *
+ * A plugin is a shared object (input-NAME.so or map-NAME.so) that exports one constant
+ * symbol, `facepuppet_plugin_entry`, of type fp_plugin_entry. The host never looks up any
+ * other symbol. Everything else is reached through factories asked for by string id
+ * (get_factory), and optional features through get_extension with versioned string ids, so
+ * the ABI grows without breaking (the pattern of CLAP's clap_entry).
+ *
+ * Versioning: the host loads a plugin whose abi.major equals FP_PLUGIN_ABI_MAJOR and whose
+ * abi.minor is at most the host's FP_PLUGIN_ABI_MINOR; anything else is refused with an error
+ * naming both versions. Structs that may grow start with a `size` field set by whoever fills
+ * them (sizeof of the struct as that side compiled it); the reader reads no field past it.
+ *
+ * Threads, as CLAP writes them:
+ *   [main-thread]    the thread that loaded the plugin (the host's control thread);
+ *   [input-thread]   a thread the input plugin creates and owns;
+ *   [session-thread] the host's frame loop; a call marked so must not allocate, block, do
+ *                    I/O or take locks, and must return within a small part of a frame;
+ *   [any-thread]     any thread, concurrently.
+ *
+ * Units: hands in millimetres in the device frame before calibration; the mapping sees them
+ * in mesh units (after the host's workspace calibration). Angles in radians. Times in
+ * nanoseconds of CLOCK_MONOTONIC (fp_host.now_ns).
+ */
+#ifndef FACEPUPPET_PLUGIN_H
+#define FACEPUPPET_PLUGIN_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define FP_PLUGIN_ABI_MAJOR 1
+#define FP_PLUGIN_ABI_MINOR 0
+
+/** Name of the one exported symbol, of type `const fp_plugin_entry`. */
+#define FP_PLUGIN_ENTRY_SYMBOL "facepuppet_plugin_entry"
+
+/** Factory ids for fp_plugin_entry.get_factory. */
+#define FP_INPUT_FACTORY_ID   "facepuppet.input-factory/1"
+#define FP_MAPPING_FACTORY_ID "facepuppet.mapping-factory/1"
+
+#if defined(_WIN32)
+#define FP_PLUGIN_EXPORT __declspec(dllexport)
+#else
+#define FP_PLUGIN_EXPORT __attribute__((visibility("default")))
+#endif
+
+typedef struct fp_version {
+    uint32_t major;
+    uint32_t minor;
+} fp_version;
+
+/** True when a plugin built for `plugin` can be loaded by a host of `host`. */
+static inline bool fp_version_is_compatible(fp_version host, fp_version plugin)
+{
+    return plugin.major == host.major && plugin.minor <= host.minor;
+}
+
+/* ------------------------------------------------------------------------------------- */
+/* Hands                                                                                 */
+
+/** Sensors of a 22-sensor CyberGlove, in the glove's own order (shared/docs/devices.md).
+ *  The 18-sensor glove is the same list without the four DIJ sensors. */
+enum fp_glove_sensor {
+    FP_SENSOR_THUMB_ROTATE = 0, FP_SENSOR_THUMB_MPJ, FP_SENSOR_THUMB_IJ, FP_SENSOR_THUMB_AB,
+    FP_SENSOR_INDEX_MPJ, FP_SENSOR_INDEX_PIJ, FP_SENSOR_INDEX_DIJ,
+    FP_SENSOR_MIDDLE_MPJ, FP_SENSOR_MIDDLE_PIJ, FP_SENSOR_MIDDLE_DIJ, FP_SENSOR_MIDDLE_INDEX_AB,
+    FP_SENSOR_RING_MPJ, FP_SENSOR_RING_PIJ, FP_SENSOR_RING_DIJ, FP_SENSOR_RING_MIDDLE_AB,
+    FP_SENSOR_PINKIE_MPJ, FP_SENSOR_PINKIE_PIJ, FP_SENSOR_PINKIE_DIJ, FP_SENSOR_PINKIE_RING_AB,
+    FP_SENSOR_PALM_ARCH, FP_SENSOR_WRIST_PITCH, FP_SENSOR_WRIST_YAW,
+    FP_GLOVE_SENSORS = 22
+};
+
+/** Joints of one hand as positions: the palm centre, then for each finger (thumb, index,
+ *  middle, ring, pinky) four points from the hand outward: MCP, PIP, DIP, tip (for the
+ *  thumb CMC, MCP, IP, tip). The layout of the Leap Motion recordings in shared/data. */
+enum fp_hand_joint {
+    FP_JOINT_PALM = 0,
+    FP_JOINT_FINGER0 = 1,       /* first joint of the thumb; finger f, segment k: 1 + 4f + k */
+    FP_HAND_JOINTS = 21
+};
+#define FP_FINGERS 5
+#define FP_JOINT(finger, k) (1 + 4 * (finger) + (k))   /* k: 0 MCP, 1 PIP, 2 DIP, 3 tip */
+#define FP_JOINT_TIP(finger) FP_JOINT(finger, 3)
+
+typedef enum fp_hand_side { FP_HAND_LEFT = 0, FP_HAND_RIGHT = 1, FP_HANDS = 2 } fp_hand_side;
+
+/* ------------------------------------------------------------------------------------- */
+/* Events: flat, memcpy-able structs behind a common header                              */
+
+typedef enum fp_event_type {
+    FP_EVENT_JOINT_ANGLES = 1,    /* fp_event_joint_angles */
+    FP_EVENT_JOINT_POSITIONS = 2, /* fp_event_joint_positions */
+    FP_EVENT_WRIST_POSE = 3,      /* fp_event_wrist_pose */
+    FP_EVENT_BUTTON = 4,          /* fp_event_button */
+    FP_EVENT_STATUS = 5           /* fp_event_status */
+} fp_event_type;
+
+typedef struct fp_event_header {
+    uint32_t size;     /* sizeof the whole event struct */
+    uint16_t type;     /* fp_event_type */
+    uint16_t flags;    /* reserved, 0 */
+    int64_t time_ns;   /* when the device measured it (host clock, fp_host.now_ns) */
+    uint32_t source;   /* set by the host: which input instance pushed it */
+    int32_t hand;      /* fp_hand_side, or -1 where no hand applies */
+} fp_event_header;
+
+/** Joint angles in radians, CyberGlove sensor order. Bit i of `valid` is set where sensor i
+ *  was measured; the others are 0 and must be ignored (the host uses its default pose). */
+typedef struct fp_event_joint_angles {
+    fp_event_header header;
+    uint32_t valid;
+    float radians[FP_GLOVE_SENSORS];
+} fp_event_joint_angles;
+
+/** Joint positions in millimetres in the device frame, fp_hand_joint layout. */
+typedef struct fp_event_joint_positions {
+    fp_event_header header;
+    float mm[FP_HAND_JOINTS][3];
+} fp_event_joint_positions;
+
+/** Wrist pose in the device frame: position in mm, orientation as a unit quaternion
+ *  (w, x, y, z) turning the hand's own frame (+x toward the thumb side for a right hand,
+ *  +y back of the hand, -z toward the fingers) into the device frame. */
+typedef struct fp_event_wrist_pose {
+    fp_event_header header;
+    float position_mm[3];
+    float rotation[4];
+} fp_event_wrist_pose;
+
+enum fp_button {
+    FP_BUTTON_LEFT = 1u << 0,
+    FP_BUTTON_MIDDLE = 1u << 1,
+    FP_BUTTON_RIGHT = 1u << 2
+};
+
+/** A button went down or up. `mask` is every button held after this change (chords). */
+typedef struct fp_event_button {
+    fp_event_header header;
+    uint32_t button;   /* one fp_button bit */
+    uint32_t down;     /* 1 pressed, 0 released */
+    uint32_t mask;
+} fp_event_button;
+
+typedef enum fp_status_code {
+    FP_STATUS_CONNECTED = 1,     /* device found and streaming */
+    FP_STATUS_DISCONNECTED = 2,  /* device gone (unplugged, cable pulled, EOF) */
+    FP_STATUS_RECONNECTING = 3,  /* trying again; text says when */
+    FP_STATUS_WARNING = 4,       /* something odd but recoverable (line noise, resync) */
+    FP_STATUS_ERROR = 5,         /* the input cannot go on without the performer */
+    FP_STATUS_END_OF_STREAM = 6  /* a recording ended (not looping) */
+} fp_status_code;
+
+typedef struct fp_event_status {
+    fp_event_header header;
+    uint32_t code;      /* fp_status_code */
+    char text[116];     /* NUL-terminated, human readable */
+} fp_event_status;
+
+/** Any event; the host's queues hold these. */
+typedef union fp_event {
+    fp_event_header header;
+    fp_event_joint_angles angles;
+    fp_event_joint_positions positions;
+    fp_event_wrist_pose wrist;
+    fp_event_button button;
+    fp_event_status status;
+} fp_event;
+
+/* ------------------------------------------------------------------------------------- */
+/* Host services                                                                         */
+
+typedef enum fp_log_level { FP_LOG_ERROR = 0, FP_LOG_WARNING, FP_LOG_INFO, FP_LOG_DEBUG } fp_log_level;
+
+/** What the host offers a plugin instance. Each instance gets its own fp_host, valid until
+ *  the instance is destroyed. */
+typedef struct fp_host {
+    uint32_t size;
+    fp_version abi;
+    void *host_data;   /* the host's; do not touch */
+
+    /** [any-thread, lock-free, wait-free] Copy one event into this instance's queue. The host
+     *  sets header.source. Returns false when the queue is full: the event is dropped and
+     *  counted by the host (the session thread always has the latest pose anyway). */
+    bool (*push_event)(const struct fp_host *host, const fp_event_header *event);
+
+    /** [any-thread] The host clock: CLOCK_MONOTONIC in nanoseconds. */
+    int64_t (*now_ns)(const struct fp_host *host);
+
+    /** [any-thread] Report a message; the host prefixes the instance's name. Not for
+     *  [session-thread] calls, which must not do I/O. */
+    void (*log)(const struct fp_host *host, fp_log_level level, const char *message);
+
+    /** [main-thread] Optional host features by versioned id; NULL where not offered. */
+    const void *(*get_extension)(const struct fp_host *host, const char *id);
+} fp_host;
+
+/** One `key=value` of a SPEC (`NAME[:ARG][,key=value...]`). Strings owned by the host, valid
+ *  during the call they are passed to. */
+typedef struct fp_param {
+    const char *key;
+    const char *value;
+} fp_param;
+
+/* ------------------------------------------------------------------------------------- */
+/* Input plugins                                                                         */
+
+/** An input instance. The plugin fills and owns it; the host calls through it. */
+typedef struct fp_input {
+    uint32_t size;
+    void *plugin_data;
+
+    /** [main-thread] Start producing events, on the plugin's own thread(s). Returns 0, or a
+     *  negative errno-style code after writing a message to `err` (errlen bytes). */
+    int (*start)(struct fp_input *self, char *err, size_t errlen);
+
+    /** [main-thread] Stop: join the plugin's threads. No push_event after it returns. May be
+     *  called without a successful start. */
+    void (*stop)(struct fp_input *self);
+
+    /** [main-thread] Free the instance (after stop). */
+    void (*destroy)(struct fp_input *self);
+
+    /** [main-thread] Optional features by versioned id; may be NULL. */
+    const void *(*get_extension)(const struct fp_input *self, const char *id);
+} fp_input;
+
+typedef struct fp_input_factory {
+    uint32_t size;
+    const char *name;        /* the SPEC name, e.g. "replay" */
+    const char *description; /* one line */
+    const char *usage;       /* SPEC grammar and keys, several lines */
+
+    /** [main-thread] Create an instance from a SPEC's ARG (NULL where none) and keys.
+     *  Returns 0 and *out, or a negative errno-style code after writing a message naming
+     *  the offending key or file to `err` (errlen bytes). Unknown keys are an error. */
+    int (*create)(const fp_host *host, const char *arg, const fp_param *params, size_t nparams,
+                  fp_input **out, char *err, size_t errlen);
+} fp_input_factory;
+
+/* ------------------------------------------------------------------------------------- */
+/* Mapping plugins                                                                       */
+
+/** The latest pose of one hand, in mesh units after the workspace calibration. */
+typedef struct fp_hand_pose {
+    bool present;              /* false: never seen, or the input reported it gone */
+    int64_t time_ns;           /* when it was measured */
+    float joints[FP_HAND_JOINTS][3];
+} fp_hand_pose;
+
+/** Read-only view of the mesh the session deforms. */
+typedef struct fp_mesh_view {
+    size_t vertex_count;
+    const float *base;         /* vertex_count x 3: the committed shape (the "base") */
+    float bounds_min[3], bounds_max[3];
+} fp_mesh_view;
+
+enum fp_intent {
+    FP_INTENT_ENGAGE = 1u << 0,   /* begin a deformation (anchored: start points are set now) */
+    FP_INTENT_COMMIT = 1u << 1,   /* fold the current deformation into the base */
+    FP_INTENT_CANCEL = 1u << 2    /* drop the current deformation, back to the base */
+};
+
+/** What the host gives a mapping each frame. */
+typedef struct fp_frame_input {
+    uint32_t size;
+    int64_t time_ns;               /* the frame's time */
+    uint64_t frame;                /* frame number since the session began */
+    fp_hand_pose hands[FP_HANDS];  /* latest poses, left and right */
+    const fp_event *events;        /* button and status events since the last frame */
+    size_t event_count;
+    const fp_mesh_view *mesh;
+    double radius;                 /* the session's support radius, mesh units */
+    uint32_t requested;            /* fp_intent bits asked for by the performer (keys, pedal) */
+} fp_frame_input;
+
+/** A named scalar a mapping drives (e.g. "jaw.open" in [0, 1]); for rigs. */
+typedef struct fp_channel {
+    char name[32];
+    float value;
+} fp_channel;
+
+/** What a mapping returns each frame. The host owns the arrays and sets the capacities; the
+ *  mapping fills at most that many.
+ *
+ *  Meaning, as the host executes it:
+ *   - active == false: nothing is being deformed; the host shows the base.
+ *   - active == true: the engine maps the base with control vectors start[i] -> end[i],
+ *     i < count, support radius `radius`. While start[] stays bit-for-bit the same the host
+ *     reuses its factorization (the anchored mode); when it changes it factors anew.
+ *   - intents & FP_INTENT_COMMIT: after this frame's evaluation the deformed shape becomes
+ *     the base (anchored commit; the unanchored mode commits every step).
+ *   - intents & FP_INTENT_CANCEL: the deformation is dropped; the base stays.
+ *   - intents & FP_INTENT_ENGAGE: informs the host (HUD, take markers) that one began. */
+typedef struct fp_control_set {
+    uint32_t size;
+    bool active;
+    uint32_t intents;             /* fp_intent bits */
+    double radius;                /* support radius, mesh units, > 0 */
+    size_t capacity;              /* set by the host */
+    size_t count;                 /* filled by the mapping, <= capacity */
+    float (*start)[3];            /* start points s_i, mesh units */
+    float (*end)[3];              /* end points d_i, mesh units */
+    size_t channel_capacity;      /* set by the host */
+    size_t channel_count;
+    fp_channel *channels;
+} fp_control_set;
+
+typedef struct fp_mapping {
+    uint32_t size;
+    void *plugin_data;
+
+    /** [session-thread] Turn this frame's input into a control set. No allocation, I/O or
+     *  locks. Returns 0, or a negative code (the host keeps the last shape and logs it). */
+    int (*process)(struct fp_mapping *self, const fp_frame_input *in, fp_control_set *out);
+
+    /** [session-thread] Forget any gesture in progress (the host reset the mesh). */
+    void (*reset)(struct fp_mapping *self);
+
+    /** [main-thread] Free the instance. */
+    void (*destroy)(struct fp_mapping *self);
+
+    /** [main-thread] Optional features by versioned id; may be NULL. */
+    const void *(*get_extension)(const struct fp_mapping *self, const char *id);
+} fp_mapping;
+
+typedef struct fp_mapping_factory {
+    uint32_t size;
+    const char *name;        /* the --mapping name, e.g. "anchored" */
+    const char *description;
+    const char *usage;
+
+    /** [main-thread] As fp_input_factory.create. */
+    int (*create)(const fp_host *host, const fp_param *params, size_t nparams,
+                  fp_mapping **out, char *err, size_t errlen);
+} fp_mapping_factory;
+
+/* ------------------------------------------------------------------------------------- */
+/* The entry                                                                             */
+
+typedef struct fp_plugin_entry {
+    fp_version abi;          /* FP_PLUGIN_ABI_MAJOR, FP_PLUGIN_ABI_MINOR as built */
+    const char *id;          /* reverse-DNS, e.g. "org.facepuppet.input-replay" */
+    const char *version;     /* the plugin's own version, free form */
+
+    /** [main-thread] Called once after loading, with the shared object's path. */
+    bool (*init)(const char *plugin_path);
+    /** [main-thread] Called once before unloading. */
+    void (*deinit)(void);
+    /** [main-thread] A factory by id (FP_INPUT_FACTORY_ID, FP_MAPPING_FACTORY_ID), or NULL. */
+    const void *(*get_factory)(const char *factory_id);
+} fp_plugin_entry;
+
+/** Declare the entry in a plugin: FP_PLUGIN_DECLARE_ENTRY = { ... }; */
+#define FP_PLUGIN_DECLARE_ENTRY FP_PLUGIN_EXPORT const fp_plugin_entry facepuppet_plugin_entry
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* FACEPUPPET_PLUGIN_H */
