@@ -279,6 +279,10 @@ typedef struct fp_frame_input {
     const fp_mesh_view *mesh;
     double radius;                 /* the session's support radius, mesh units */
     uint32_t requested;            /* fp_intent bits asked for by the performer (keys, pedal) */
+    /** Distance from each fingertip (FP_JOINT_TIP) of each present hand to the nearest
+     *  vertex of the base, mesh units; +INFINITY for an absent hand. The paper's rule "a hand
+     *  is active while its fingertips are within the support radius of the surface" reads it. */
+    float tip_distance[FP_HANDS][FP_FINGERS];
 } fp_frame_input;
 
 /** A named scalar a mapping drives (e.g. "jaw.open" in [0, 1]); for rigs. */

@@ -1,0 +1,156 @@
+/*
+ * fp_plugin_host.h: the host side of the plugin ABI (facepuppet/plugin.h): SPEC strings,
+ * finding and loading plugins, the event queues input plugins push into, and input
+ * instances. Used by the session and the facepuppet command; not part of the plugin ABI.
+ *
+ * Thread rules: everything here is [main-thread] except fp_event_queue_push (any thread)
+ * and fp_event_queue_pop (one consumer thread at a time: the session thread).
+ */
+#ifndef FP_PLUGIN_HOST_H
+#define FP_PLUGIN_HOST_H
+
+#include <facepuppet/plugin.h>
+#include <stdatomic.h>
+#include <stdbool.h>
+#include <stddef.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---- SPEC strings: NAME[:ARG][,key=value...] ---------------------------------------- */
+
+#define FP_SPEC_MAX_PARAMS 16
+
+/** A parsed SPEC. Owns one buffer; the strings point into it. */
+typedef struct fp_spec {
+    char *buffer;
+    const char *name;                      /* never NULL after a successful parse */
+    const char *arg;                       /* NULL where the SPEC has no ':ARG' */
+    fp_param params[FP_SPEC_MAX_PARAMS];
+    size_t nparams;
+} fp_spec;
+
+/** Parse `text` (e.g. "replay:take.csv,speed=2") into *spec. The ARG ends at the first
+ *  comma; keys are [A-Za-z0-9_-]+ and must be unique; a value may be empty.
+ *  Returns 0, or -EINVAL with a message in err naming the offending part.
+ *  Free with fp_spec_clear. */
+int fp_spec_parse(const char *text, fp_spec *spec, char *err, size_t errlen);
+
+/** Remove the key `key` from the spec and return its value (pointer into the spec's
+ *  buffer, valid until fp_spec_clear), or NULL where absent. */
+const char *fp_spec_take(fp_spec *spec, const char *key);
+
+void fp_spec_clear(fp_spec *spec);
+
+/* ---- finding and loading plugins ------------------------------------------------------ */
+
+typedef enum fp_plugin_kind { FP_PLUGIN_INPUT = 0, FP_PLUGIN_MAPPING = 1 } fp_plugin_kind;
+
+#define FP_PLUGIN_MAX_DIRS 16
+
+/** Where plugins are looked for, in order: the --plugin-dir folders, then each folder of
+ *  FACEPUPPET_PLUGIN_PATH (colon-separated), then the built-in folder
+ *  <directory of the executable>/FP_PLUGIN_RELDIR (build tree and install tree alike). */
+typedef struct fp_plugin_path {
+    char *dirs[FP_PLUGIN_MAX_DIRS];
+    size_t count;
+} fp_plugin_path;
+
+/** Fill *path: extra_dirs (may be NULL, n_extra entries), the environment, and builtin_dir
+ *  (may be NULL). Copies the strings. Free with fp_plugin_path_clear. */
+void fp_plugin_path_init(fp_plugin_path *path, const char *const *extra_dirs, size_t n_extra,
+                         const char *builtin_dir);
+void fp_plugin_path_clear(fp_plugin_path *path);
+
+/** A loaded shared object. */
+typedef struct fp_plugin {
+    void *handle;                    /* dlopen handle */
+    char *path;                      /* the file it was loaded from */
+    const fp_plugin_entry *entry;
+    fp_plugin_kind kind;
+    const void *factory;             /* fp_input_factory or fp_mapping_factory */
+} fp_plugin;
+
+/** Result codes of fp_plugin_load (also the facepuppet command's reasons for exit 78). */
+typedef enum fp_plugin_result {
+    FP_PLUGIN_OK = 0,
+    FP_PLUGIN_ERR_NOT_FOUND = -1,    /* no file <kind>-<name>.so in any folder */
+    FP_PLUGIN_ERR_DLOPEN = -2,       /* dlopen failed (missing library, bad ELF) */
+    FP_PLUGIN_ERR_NO_ENTRY = -3,     /* no facepuppet_plugin_entry symbol */
+    FP_PLUGIN_ERR_ABI = -4,          /* built against an incompatible ABI */
+    FP_PLUGIN_ERR_INIT = -5,         /* entry->init returned false */
+    FP_PLUGIN_ERR_NO_FACTORY = -6    /* no factory of the asked kind, or a bad one */
+} fp_plugin_result;
+
+/** Find `<input|map>-<name>.so` on `path` (or load `name` itself where it contains a '/'),
+ *  dlopen it, check its entry's ABI (fp_version_is_compatible), call init and get the
+ *  factory of `kind`. On error returns an fp_plugin_result and writes a message naming the
+ *  file (or the folders searched and the plugins found there) to err. */
+int fp_plugin_load(const fp_plugin_path *path, fp_plugin_kind kind, const char *name,
+                   fp_plugin *out, char *err, size_t errlen);
+
+/** deinit and dlclose. Safe on a zeroed fp_plugin. */
+void fp_plugin_unload(fp_plugin *plugin);
+
+/** Names of the plugins of `kind` on `path`, comma-separated into buf (for messages). */
+void fp_plugin_list(const fp_plugin_path *path, fp_plugin_kind kind, char *buf, size_t len);
+
+/* ---- the event queue: bounded, multi-producer single-consumer, lock-free ------------- */
+
+/** Bounded MPSC queue of fp_event (D. Vyukov's bounded queue, sequence number per cell).
+ *  push: [any-thread], lock-free, never blocks; pop: one consumer at a time. */
+typedef struct fp_event_queue {
+    struct fp_event_cell *cells;
+    size_t mask;
+    _Alignas(64) atomic_size_t head;     /* producers claim here */
+    _Alignas(64) atomic_size_t tail;     /* consumer reads here */
+    _Alignas(64) atomic_ulong dropped;   /* events refused because the queue was full */
+} fp_event_queue;
+
+/** capacity is rounded up to a power of two (at least 2). Returns 0 or -ENOMEM. */
+int fp_event_queue_init(fp_event_queue *q, size_t capacity);
+void fp_event_queue_destroy(fp_event_queue *q);
+/** Copy ev (ev->size bytes, at most sizeof(fp_event)) in. False when full or too large. */
+bool fp_event_queue_push(fp_event_queue *q, const fp_event_header *ev);
+/** Copy the oldest event out. False when empty. */
+bool fp_event_queue_pop(fp_event_queue *q, fp_event *out);
+
+/* ---- input instances ------------------------------------------------------------------ */
+
+struct fp_eventlog_writer;
+
+/** One running input: its plugin, the fp_host given to it, its queue. */
+typedef struct fp_input_instance {
+    fp_plugin plugin;
+    fp_host host;
+    fp_input *input;
+    fp_event_queue queue;
+    char name[64];                       /* the SPEC's name, for messages */
+    uint32_t source;                     /* index in the session; stamped into events */
+    struct fp_eventlog_writer *record;   /* record=FILE: every drained event is written */
+    bool started;
+} fp_input_instance;
+
+/** Load the plugin for `spec` and create the instance (not yet started). The host strips
+ *  the key `record=FILE` (record this input's events in the event-log format) before the
+ *  plugin sees the keys. Returns 0, an fp_plugin_result, or the plugin's own negative code;
+ *  err names the SPEC and reason. */
+int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
+                           const char *spec_text, uint32_t source, char *err, size_t errlen);
+int fp_input_instance_start(fp_input_instance *inst, char *err, size_t errlen);
+/** Stop (if started), destroy, close the recording, unload. Safe on a zeroed instance. */
+void fp_input_instance_close(fp_input_instance *inst);
+/** Pop one event; writes it to the recording if any. */
+bool fp_input_instance_poll(fp_input_instance *inst, fp_event *out);
+
+/** CLOCK_MONOTONIC in nanoseconds: the host clock of the ABI. */
+int64_t fp_now_ns(void);
+
+/** Make the standard host services for a mapping instance (no queue). */
+void fp_host_init_for_mapping(fp_host *host, const char *name);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

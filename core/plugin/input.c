@@ -1,0 +1,156 @@
+/* Input instances: a loaded input plugin, the fp_host it pushes through, its queue, and
+ * the optional recording of every event it delivered (record=FILE). */
+#include "fp_plugin_host.h"
+
+#ifdef FP_HAVE_EVENTLOG
+#include "fp_eventlog.h"
+#endif
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define FP_INPUT_QUEUE_CAPACITY 4096
+
+static bool host_push(const fp_host *host, const fp_event_header *ev)
+{
+    fp_input_instance *inst = host->host_data;
+    if (!ev || ev->size < sizeof *ev || ev->size > sizeof(fp_event)) return false;
+    fp_event copy;
+    memcpy(&copy, ev, ev->size);
+    copy.header.source = inst->source;
+    return fp_event_queue_push(&inst->queue, &copy.header);
+}
+
+static int64_t host_now(const fp_host *host)
+{
+    (void)host;
+    return fp_now_ns();
+}
+
+static void host_log(const fp_host *host, fp_log_level level, const char *message)
+{
+    static const char *names[] = {"error", "warning", "info", "debug"};
+    const char *who = host->host_data ? ((fp_input_instance *)host->host_data)->name : "plugin";
+    if (level > FP_LOG_INFO && !getenv("FACEPUPPET_DEBUG")) return;
+    fprintf(stderr, "facepuppet: %s: %s: %s\n", who,
+            names[level <= FP_LOG_DEBUG ? level : FP_LOG_DEBUG], message ? message : "");
+}
+
+static const void *host_extension(const fp_host *host, const char *id)
+{
+    (void)host;
+    (void)id;
+    return NULL;
+}
+
+static void host_fill(fp_host *h, void *data)
+{
+    memset(h, 0, sizeof *h);
+    h->size = sizeof *h;
+    h->abi = (fp_version){FP_PLUGIN_ABI_MAJOR, FP_PLUGIN_ABI_MINOR};
+    h->host_data = data;
+    h->push_event = host_push;
+    h->now_ns = host_now;
+    h->log = host_log;
+    h->get_extension = host_extension;
+}
+
+void fp_host_init_for_mapping(fp_host *host, const char *name)
+{
+    (void)name;
+    host_fill(host, NULL);
+    host->push_event = NULL; /* mappings do not push events */
+}
+
+int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
+                           const char *spec_text, uint32_t source, char *err, size_t errlen)
+{
+    memset(inst, 0, sizeof *inst);
+    fp_spec spec;
+    int rc = fp_spec_parse(spec_text, &spec, err, errlen);
+    if (rc) return rc;
+    snprintf(inst->name, sizeof inst->name, "%s", spec.name);
+    inst->source = source;
+    const char *record = fp_spec_take(&spec, "record");
+    rc = fp_plugin_load(path, FP_PLUGIN_INPUT, spec.name, &inst->plugin, err, errlen);
+    if (rc) goto out;
+    rc = fp_event_queue_init(&inst->queue, FP_INPUT_QUEUE_CAPACITY);
+    if (rc) {
+        snprintf(err, errlen, "%s: out of memory", spec_text);
+        goto out;
+    }
+    host_fill(&inst->host, inst);
+    const fp_input_factory *f = inst->plugin.factory;
+    char perr[512] = "";
+    rc = f->create(&inst->host, spec.arg, spec.params, spec.nparams, &inst->input, perr, sizeof perr);
+    if (rc || !inst->input) {
+        snprintf(err, errlen, "input '%s': %s", spec_text, perr[0] ? perr : "create failed");
+        inst->input = NULL;
+        if (!rc) rc = -EINVAL;
+        goto out;
+    }
+    if (record) {
+#ifdef FP_HAVE_EVENTLOG
+        inst->record = fp_eventlog_writer_open(record, perr, sizeof perr);
+        if (!inst->record) {
+            snprintf(err, errlen, "input '%s': record=%s: %s", spec_text, record, perr);
+            rc = -EIO;
+            goto out;
+        }
+#else
+        snprintf(err, errlen, "input '%s': record= needs the event log, not built", spec_text);
+        rc = -ENOTSUP;
+        goto out;
+#endif
+    }
+out:
+    fp_spec_clear(&spec);
+    if (rc) {
+        fp_input_instance_close(inst);
+        return rc;
+    }
+    return 0;
+}
+
+int fp_input_instance_start(fp_input_instance *inst, char *err, size_t errlen)
+{
+    char perr[512] = "";
+    int rc = inst->input->start(inst->input, perr, sizeof perr);
+    if (rc) {
+        snprintf(err, errlen, "input '%s': %s", inst->name, perr[0] ? perr : "start failed");
+        return rc;
+    }
+    inst->started = true;
+    return 0;
+}
+
+bool fp_input_instance_poll(fp_input_instance *inst, fp_event *out)
+{
+    if (!inst->queue.cells || !fp_event_queue_pop(&inst->queue, out)) return false;
+#ifdef FP_HAVE_EVENTLOG
+    if (inst->record) fp_eventlog_writer_write(inst->record, out);
+#endif
+    return true;
+}
+
+void fp_input_instance_close(fp_input_instance *inst)
+{
+    if (inst->input) {
+        if (inst->input->stop) inst->input->stop(inst->input);
+        if (inst->input->destroy) inst->input->destroy(inst->input);
+        inst->input = NULL;
+    }
+#ifdef FP_HAVE_EVENTLOG
+    if (inst->record) {
+        fp_event ev;
+        while (fp_input_instance_poll(inst, &ev)) {} /* keep what was read */
+        fp_eventlog_writer_close(inst->record);
+        inst->record = NULL;
+    }
+#endif
+    fp_event_queue_destroy(&inst->queue);
+    fp_plugin_unload(&inst->plugin);
+    inst->started = false;
+}

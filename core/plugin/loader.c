@@ -1,0 +1,168 @@
+/* Finding and loading plugins: <input|map>-<name>.so on a search path, one entry symbol. */
+#define _GNU_SOURCE
+#include "fp_plugin_host.h"
+
+#include <dirent.h>
+#include <dlfcn.h>
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+
+static const char *kind_prefix(fp_plugin_kind kind)
+{
+    return kind == FP_PLUGIN_INPUT ? "input-" : "map-";
+}
+
+static void add_dir(fp_plugin_path *path, const char *dir)
+{
+    if (!dir || !*dir || path->count == FP_PLUGIN_MAX_DIRS) return;
+    char *copy = strdup(dir);
+    if (copy) path->dirs[path->count++] = copy;
+}
+
+void fp_plugin_path_init(fp_plugin_path *path, const char *const *extra_dirs, size_t n_extra,
+                         const char *builtin_dir)
+{
+    memset(path, 0, sizeof *path);
+    for (size_t i = 0; i < n_extra; i++) add_dir(path, extra_dirs[i]);
+    const char *env = getenv("FACEPUPPET_PLUGIN_PATH");
+    if (env) {
+        char *copy = strdup(env);
+        char *save = NULL;
+        for (char *d = copy ? strtok_r(copy, ":", &save) : NULL; d; d = strtok_r(NULL, ":", &save))
+            add_dir(path, d);
+        free(copy);
+    }
+    add_dir(path, builtin_dir);
+}
+
+void fp_plugin_path_clear(fp_plugin_path *path)
+{
+    for (size_t i = 0; i < path->count; i++) free(path->dirs[i]);
+    memset(path, 0, sizeof *path);
+}
+
+void fp_plugin_list(const fp_plugin_path *path, fp_plugin_kind kind, char *buf, size_t len)
+{
+    const char *prefix = kind_prefix(kind);
+    size_t plen = strlen(prefix), used = 0;
+    if (len) buf[0] = '\0';
+    for (size_t i = 0; i < path->count; i++) {
+        DIR *d = opendir(path->dirs[i]);
+        if (!d) continue;
+        for (struct dirent *e; (e = readdir(d));) {
+            size_t n = strlen(e->d_name);
+            if (n <= plen + 3 || strncmp(e->d_name, prefix, plen) || strcmp(e->d_name + n - 3, ".so"))
+                continue;
+            int w = snprintf(buf + used, used < len ? len - used : 0, "%s%.*s", used ? ", " : "",
+                             (int)(n - plen - 3), e->d_name + plen);
+            if (w > 0) used += (size_t)w;
+        }
+        closedir(d);
+    }
+}
+
+static int fail(fp_plugin *p, int code)
+{
+    fp_plugin_unload(p);
+    return code;
+}
+
+int fp_plugin_load(const fp_plugin_path *path, fp_plugin_kind kind, const char *name,
+                   fp_plugin *out, char *err, size_t errlen)
+{
+    const char *what = kind == FP_PLUGIN_INPUT ? "input" : "mapping";
+    memset(out, 0, sizeof *out);
+    out->kind = kind;
+    char file[4096];
+    struct stat st;
+    bool found = false;
+    if (strchr(name, '/')) {
+        snprintf(file, sizeof file, "%s", name);
+        found = stat(file, &st) == 0;
+    } else {
+        for (size_t i = 0; i < path->count && !found; i++) {
+            snprintf(file, sizeof file, "%s/%s%s.so", path->dirs[i], kind_prefix(kind), name);
+            found = stat(file, &st) == 0;
+        }
+    }
+    if (!found) {
+        char dirs[1024] = "", avail[1024];
+        size_t used = 0;
+        for (size_t i = 0; i < path->count; i++) {
+            int w = snprintf(dirs + used, used < sizeof dirs ? sizeof dirs - used : 0, "%s%s",
+                             i ? ", " : "", path->dirs[i]);
+            if (w > 0) used += (size_t)w;
+        }
+        fp_plugin_list(path, kind, avail, sizeof avail);
+        if (strchr(name, '/'))
+            snprintf(err, errlen, "%s plugin file '%s' not found", what, name);
+        else
+            snprintf(err, errlen, "no %s plugin named '%s' (looked for %s%s.so in: %s; available: %s)",
+                     what, name, kind_prefix(kind), name, path->count ? dirs : "no folders",
+                     avail[0] ? avail : "none");
+        return FP_PLUGIN_ERR_NOT_FOUND;
+    }
+    out->path = strdup(file);
+    out->handle = dlopen(file, RTLD_NOW | RTLD_LOCAL);
+    if (!out->handle) {
+        snprintf(err, errlen, "%s: cannot load: %s", file, dlerror());
+        return fail(out, FP_PLUGIN_ERR_DLOPEN);
+    }
+    out->entry = (const fp_plugin_entry *)dlsym(out->handle, FP_PLUGIN_ENTRY_SYMBOL);
+    if (!out->entry) {
+        snprintf(err, errlen, "%s: not a facepuppet plugin (no symbol '%s')", file,
+                 FP_PLUGIN_ENTRY_SYMBOL);
+        return fail(out, FP_PLUGIN_ERR_NO_ENTRY);
+    }
+    fp_version host = {FP_PLUGIN_ABI_MAJOR, FP_PLUGIN_ABI_MINOR};
+    if (!fp_version_is_compatible(host, out->entry->abi)) {
+        snprintf(err, errlen,
+                 "%s: built for plugin ABI %u.%u, this facepuppet has ABI %u.%u (%s); rebuild "
+                 "the plugin against this facepuppet's facepuppet/plugin.h",
+                 file, out->entry->abi.major, out->entry->abi.minor, host.major, host.minor,
+                 out->entry->abi.major != host.major ? "another major" : "a newer minor");
+        out->entry = NULL; /* do not call its deinit */
+        return fail(out, FP_PLUGIN_ERR_ABI);
+    }
+    if (out->entry->init && !out->entry->init(file)) {
+        snprintf(err, errlen, "%s: the plugin's init failed", file);
+        out->entry = NULL;
+        return fail(out, FP_PLUGIN_ERR_INIT);
+    }
+    const char *fid = kind == FP_PLUGIN_INPUT ? FP_INPUT_FACTORY_ID : FP_MAPPING_FACTORY_ID;
+    out->factory = out->entry->get_factory ? out->entry->get_factory(fid) : NULL;
+    bool ok = out->factory != NULL;
+    if (ok && kind == FP_PLUGIN_INPUT) {
+        const fp_input_factory *f = out->factory;
+        ok = f->size >= sizeof *f && f->create && f->name;
+    } else if (ok) {
+        const fp_mapping_factory *f = out->factory;
+        ok = f->size >= sizeof *f && f->create && f->name;
+    }
+    if (!ok) {
+        snprintf(err, errlen, "%s: offers no %s factory ('%s')", file, what, fid);
+        return fail(out, FP_PLUGIN_ERR_NO_FACTORY);
+    }
+    return FP_PLUGIN_OK;
+}
+
+void fp_plugin_unload(fp_plugin *p)
+{
+    if (p->entry && p->entry->deinit) p->entry->deinit();
+    if (p->handle) dlclose(p->handle);
+    free(p->path);
+    fp_plugin_kind kind = p->kind;
+    memset(p, 0, sizeof *p);
+    p->kind = kind;
+}
+
+int64_t fp_now_ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (int64_t)ts.tv_sec * 1000000000LL + ts.tv_nsec;
+}

@@ -1,0 +1,74 @@
+/* Bounded MPSC event queue after Dmitry Vyukov's bounded MPMC queue: each cell carries a
+ * sequence number; a producer claims a slot with one CAS on head, writes, then publishes
+ * by storing seq = pos + 1. Lock-free, no allocation after init. */
+#include "fp_plugin_host.h"
+
+#include <errno.h>
+#include <stdlib.h>
+#include <string.h>
+
+struct fp_event_cell {
+    atomic_size_t seq;
+    fp_event event;
+};
+
+int fp_event_queue_init(fp_event_queue *q, size_t capacity)
+{
+    size_t n = 2;
+    while (n < capacity) n <<= 1;
+    memset(q, 0, sizeof *q);
+    q->cells = calloc(n, sizeof *q->cells);
+    if (!q->cells) return -ENOMEM;
+    for (size_t i = 0; i < n; i++) atomic_init(&q->cells[i].seq, i);
+    q->mask = n - 1;
+    atomic_init(&q->head, 0);
+    atomic_init(&q->tail, 0);
+    atomic_init(&q->dropped, 0);
+    return 0;
+}
+
+void fp_event_queue_destroy(fp_event_queue *q)
+{
+    free(q->cells);
+    q->cells = NULL;
+}
+
+bool fp_event_queue_push(fp_event_queue *q, const fp_event_header *ev)
+{
+    if (!ev || ev->size < sizeof *ev || ev->size > sizeof(fp_event)) {
+        atomic_fetch_add_explicit(&q->dropped, 1, memory_order_relaxed);
+        return false;
+    }
+    size_t pos = atomic_load_explicit(&q->head, memory_order_relaxed);
+    for (;;) {
+        struct fp_event_cell *c = &q->cells[pos & q->mask];
+        size_t seq = atomic_load_explicit(&c->seq, memory_order_acquire);
+        intptr_t dif = (intptr_t)seq - (intptr_t)pos;
+        if (dif == 0) {
+            if (atomic_compare_exchange_weak_explicit(&q->head, &pos, pos + 1,
+                                                      memory_order_relaxed,
+                                                      memory_order_relaxed)) {
+                memcpy(&c->event, ev, ev->size);
+                atomic_store_explicit(&c->seq, pos + 1, memory_order_release);
+                return true;
+            }
+        } else if (dif < 0) {
+            atomic_fetch_add_explicit(&q->dropped, 1, memory_order_relaxed);
+            return false; /* full */
+        } else {
+            pos = atomic_load_explicit(&q->head, memory_order_relaxed);
+        }
+    }
+}
+
+bool fp_event_queue_pop(fp_event_queue *q, fp_event *out)
+{
+    size_t pos = atomic_load_explicit(&q->tail, memory_order_relaxed);
+    struct fp_event_cell *c = &q->cells[pos & q->mask];
+    size_t seq = atomic_load_explicit(&c->seq, memory_order_acquire);
+    if ((intptr_t)seq - (intptr_t)(pos + 1) < 0) return false; /* empty */
+    memcpy(out, &c->event, c->event.header.size);
+    atomic_store_explicit(&c->seq, pos + q->mask + 1, memory_order_release);
+    atomic_store_explicit(&q->tail, pos + 1, memory_order_relaxed);
+    return true;
+}

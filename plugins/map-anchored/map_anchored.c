@@ -1,0 +1,175 @@
+/*
+ * map-anchored: the anchored mapping of Sato, Savchenko, Ohbuchi (Cyberworlds 2004,
+ * sec. 2.3.1). At engage the start points s_i are the fingertips of the engaged hands and
+ * stay fixed; the end points d_i follow the fingers every frame, so the host reuses one
+ * factorization for the whole gesture; commit folds the deformed shape into the base,
+ * cancel drops it.
+ *
+ * Engage and commit come from the performer's requests (FP_INTENT_ENGAGE / _COMMIT /
+ * _CANCEL: pedal, keys) and, unless auto=0, from the paper's rule: engage when a hand's
+ * fingertip comes within the support radius of the surface; commit when every engaged
+ * hand's fingertips are farther than release x R from the base (the hand has let go).
+ *
+ * Keys: hands=left|right|both (both), auto=0|1 (1), release=F (1.0, in R),
+ *       clamp=F (0.45, longest control vector in R; 0 = no limit; keeps the warp
+ *       injective, shared/docs/csrbf.md pitfall 4).
+ */
+#include <facepuppet/mapping_util.h>
+#include <facepuppet/plugin.h>
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct anchored {
+    fp_mapping mapping;
+    unsigned hands;              /* FP_HANDMASK_* listened to */
+    bool automatic;
+    double release, clamp;
+    bool engaged;
+    unsigned engaged_hands;      /* hands whose tips are the start points */
+    size_t count;
+    float start[FP_HANDS * FP_FINGERS][3];
+    float last_end[FP_HANDS * FP_FINGERS][3];
+} anchored;
+
+static int engage(anchored *a, const fp_frame_input *in, bool requested)
+{
+    unsigned which = 0;
+    for (int h = 0; h < FP_HANDS; h++) {
+        if (!(a->hands & (1u << h)) || !in->hands[h].present) continue;
+        if (requested || fp_hand_is_near(in, h, 1.0)) which |= 1u << h;
+    }
+    if (!which) return 0;
+    a->engaged = true;
+    a->engaged_hands = which;
+    a->count = 0;
+    for (int h = 0; h < FP_HANDS; h++) {
+        if (!(which & (1u << h))) continue;
+        fp_hand_tips(in, h, &a->start[a->count]);
+        a->count += FP_FINGERS;
+    }
+    memcpy(a->last_end, a->start, a->count * sizeof a->start[0]);
+    return 1;
+}
+
+static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *out)
+{
+    anchored *a = self->plugin_data;
+    out->active = false;
+    out->intents = 0;
+    out->count = 0;
+    out->channel_count = 0;
+    out->radius = in->radius;
+    if (a->engaged && (in->requested & FP_INTENT_CANCEL)) {
+        a->engaged = false;
+        out->intents = FP_INTENT_CANCEL;
+        return 0;
+    }
+    if (!a->engaged) {
+        bool requested = in->requested & FP_INTENT_ENGAGE;
+        if (!requested && !a->automatic) return 0;
+        if (!engage(a, in, requested)) return 0;
+        out->intents |= FP_INTENT_ENGAGE;
+    }
+    if (out->capacity < a->count) return -ENOSPC;
+    /* End points: the engaged hands' fingertips now (a hand that vanished keeps its last). */
+    size_t k = 0;
+    bool still_near = false;
+    for (int h = 0; h < FP_HANDS; h++) {
+        if (!(a->engaged_hands & (1u << h))) continue;
+        if (in->hands[h].present) {
+            fp_hand_tips(in, h, &a->last_end[k]);
+            if (fp_hand_is_near(in, h, a->release)) still_near = true;
+        }
+        k += FP_FINGERS;
+    }
+    for (size_t i = 0; i < a->count; i++) {
+        memcpy(out->start[i], a->start[i], sizeof a->start[i]);
+        memcpy(out->end[i], a->last_end[i], sizeof a->last_end[i]);
+        fp_clamp_vector(out->start[i], out->end[i], a->clamp * in->radius);
+    }
+    out->count = a->count;
+    out->active = true;
+    bool commit = (in->requested & FP_INTENT_COMMIT) ||
+                  (a->automatic && !(out->intents & FP_INTENT_ENGAGE) && !still_near);
+    if (commit) {
+        out->intents |= FP_INTENT_COMMIT;
+        a->engaged = false;
+    }
+    return 0;
+}
+
+static void reset(fp_mapping *self)
+{
+    anchored *a = self->plugin_data;
+    a->engaged = false;
+    a->count = 0;
+}
+
+static void destroy(fp_mapping *self)
+{
+    free(self->plugin_data);
+}
+
+static int create(const fp_host *host, const fp_param *params, size_t nparams,
+                  fp_mapping **out, char *err, size_t errlen)
+{
+    (void)host;
+    anchored *a = calloc(1, sizeof *a);
+    if (!a) return -ENOMEM;
+    a->hands = FP_HANDMASK_BOTH;
+    a->automatic = true;
+    a->release = 1.0;
+    a->clamp = 0.45;
+    for (size_t i = 0; i < nparams; i++) {
+        const char *k = params[i].key, *v = params[i].value;
+        double x;
+        bool ok = true;
+        if (!strcmp(k, "hands")) ok = (a->hands = fp_parse_hands(v)) != 0;
+        else if (!strcmp(k, "auto")) ok = fp_parse_double(v, 0, 1, &x) && (a->automatic = x != 0, true);
+        else if (!strcmp(k, "release")) ok = fp_parse_double(v, 0.1, 100, &a->release);
+        else if (!strcmp(k, "clamp")) ok = fp_parse_double(v, 0, 100, &a->clamp);
+        else {
+            snprintf(err, errlen, "anchored: unknown key '%s' (keys: hands, auto, release, clamp)", k);
+            free(a);
+            return -EINVAL;
+        }
+        if (!ok) {
+            snprintf(err, errlen, "anchored: bad value '%s' for key '%s'", v, k);
+            free(a);
+            return -EINVAL;
+        }
+    }
+    a->mapping.size = sizeof a->mapping;
+    a->mapping.plugin_data = a;
+    a->mapping.process = process;
+    a->mapping.reset = reset;
+    a->mapping.destroy = destroy;
+    *out = &a->mapping;
+    return 0;
+}
+
+static const fp_mapping_factory factory = {
+    .size = sizeof(fp_mapping_factory),
+    .name = "anchored",
+    .description = "the paper's anchored mode: start points fixed at engage, end points follow",
+    .usage = "anchored[,hands=left|right|both][,auto=0|1][,release=F][,clamp=F]\n"
+             "  auto=1 engages when a fingertip comes within R of the surface and commits when\n"
+             "  the hand lets go (farther than release*R); clamp limits each control vector\n"
+             "  to clamp*R (0.45 keeps the warp free of fold-over).",
+    .create = create,
+};
+
+static const void *get_factory(const char *id)
+{
+    return !strcmp(id, FP_MAPPING_FACTORY_ID) ? &factory : NULL;
+}
+
+FP_PLUGIN_DECLARE_ENTRY = {
+    .abi = {FP_PLUGIN_ABI_MAJOR, FP_PLUGIN_ABI_MINOR},
+    .id = "org.facepuppet.map-anchored",
+    .version = "1.0",
+    .get_factory = get_factory,
+};

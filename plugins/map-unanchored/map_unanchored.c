@@ -1,0 +1,141 @@
+/*
+ * map-unanchored: the unanchored mapping of Sato, Savchenko, Ohbuchi (Cyberworlds 2004,
+ * sec. 2.3.2). Every frame runs a small deformation from the last fingertip positions
+ * (start points) to the new ones (end points) and folds it into the base, so the surface
+ * follows the fingers' trajectories: large drags become compositions of small steps.
+ *
+ * A hand acts while one of its fingertips is within the support radius of the surface
+ * (the paper's rule; auto=0 turns it off), or while the performer holds the deformation
+ * engaged (FP_INTENT_ENGAGE until FP_INTENT_COMMIT or _CANCEL). Each step is already in the
+ * base, so cancel only ends the gesture; it cannot take steps back.
+ *
+ * Keys: hands=left|right|both (both), auto=0|1 (1), clamp=F (0.45, longest step in R).
+ */
+#include <facepuppet/mapping_util.h>
+#include <facepuppet/plugin.h>
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct unanchored {
+    fp_mapping mapping;
+    unsigned hands;
+    bool automatic;
+    double clamp;
+    bool held;                                 /* engaged by request */
+    bool have_last[FP_HANDS];
+    float last[FP_HANDS][FP_FINGERS][3];
+} unanchored;
+
+static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *out)
+{
+    unanchored *u = self->plugin_data;
+    out->active = false;
+    out->intents = 0;
+    out->count = 0;
+    out->channel_count = 0;
+    out->radius = in->radius;
+    if (in->requested & FP_INTENT_ENGAGE) {
+        u->held = true;
+        out->intents |= FP_INTENT_ENGAGE;
+    }
+    if (in->requested & (FP_INTENT_COMMIT | FP_INTENT_CANCEL)) u->held = false;
+    size_t k = 0;
+    for (int h = 0; h < FP_HANDS; h++) {
+        if (!(u->hands & (1u << h)) || !in->hands[h].present) {
+            u->have_last[h] = false;
+            continue;
+        }
+        bool acts = u->held || (u->automatic && fp_hand_is_near(in, h, 1.0));
+        float tips[FP_FINGERS][3];
+        fp_hand_tips(in, h, tips);
+        if (acts && u->have_last[h]) {
+            if (out->capacity < k + FP_FINGERS) return -ENOSPC;
+            for (int f = 0; f < FP_FINGERS; f++, k++) {
+                memcpy(out->start[k], u->last[h][f], sizeof tips[f]);
+                memcpy(out->end[k], tips[f], sizeof tips[f]);
+                fp_clamp_vector(out->start[k], out->end[k], u->clamp * in->radius);
+            }
+        }
+        memcpy(u->last[h], tips, sizeof tips);
+        u->have_last[h] = true;
+    }
+    out->count = k;
+    if (k) {
+        out->active = true;
+        out->intents |= FP_INTENT_COMMIT; /* every step folds into the base */
+    }
+    return 0;
+}
+
+static void reset(fp_mapping *self)
+{
+    unanchored *u = self->plugin_data;
+    u->held = false;
+    u->have_last[0] = u->have_last[1] = false;
+}
+
+static void destroy(fp_mapping *self)
+{
+    free(self->plugin_data);
+}
+
+static int create(const fp_host *host, const fp_param *params, size_t nparams,
+                  fp_mapping **out, char *err, size_t errlen)
+{
+    (void)host;
+    unanchored *u = calloc(1, sizeof *u);
+    if (!u) return -ENOMEM;
+    u->hands = FP_HANDMASK_BOTH;
+    u->automatic = true;
+    u->clamp = 0.45;
+    for (size_t i = 0; i < nparams; i++) {
+        const char *k = params[i].key, *v = params[i].value;
+        double x;
+        bool ok = true;
+        if (!strcmp(k, "hands")) ok = (u->hands = fp_parse_hands(v)) != 0;
+        else if (!strcmp(k, "auto")) ok = fp_parse_double(v, 0, 1, &x) && (u->automatic = x != 0, true);
+        else if (!strcmp(k, "clamp")) ok = fp_parse_double(v, 0, 100, &u->clamp);
+        else {
+            snprintf(err, errlen, "unanchored: unknown key '%s' (keys: hands, auto, clamp)", k);
+            free(u);
+            return -EINVAL;
+        }
+        if (!ok) {
+            snprintf(err, errlen, "unanchored: bad value '%s' for key '%s'", v, k);
+            free(u);
+            return -EINVAL;
+        }
+    }
+    u->mapping.size = sizeof u->mapping;
+    u->mapping.plugin_data = u;
+    u->mapping.process = process;
+    u->mapping.reset = reset;
+    u->mapping.destroy = destroy;
+    *out = &u->mapping;
+    return 0;
+}
+
+static const fp_mapping_factory factory = {
+    .size = sizeof(fp_mapping_factory),
+    .name = "unanchored",
+    .description = "the paper's unanchored mode: each step from the last fingertips to the new",
+    .usage = "unanchored[,hands=left|right|both][,auto=0|1][,clamp=F]\n"
+             "  a hand acts while a fingertip is within R of the surface (auto=1) or while\n"
+             "  engaged; each step is folded into the base at once.",
+    .create = create,
+};
+
+static const void *get_factory(const char *id)
+{
+    return !strcmp(id, FP_MAPPING_FACTORY_ID) ? &factory : NULL;
+}
+
+FP_PLUGIN_DECLARE_ENTRY = {
+    .abi = {FP_PLUGIN_ABI_MAJOR, FP_PLUGIN_ABI_MINOR},
+    .id = "org.facepuppet.map-unanchored",
+    .version = "1.0",
+    .get_factory = get_factory,
+};
