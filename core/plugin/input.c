@@ -146,8 +146,7 @@ void fp_input_instance_close(fp_input_instance *inst)
     if (inst->record) {
         fp_event ev;
         while (fp_input_instance_poll(inst, &ev)) {} /* keep what was read */
-        fp_eventlog_writer_close(inst->record);
-        inst->record = NULL;
+        fp_eventlog_writer_close(&inst->record, NULL, 0);
     }
 #endif
     fp_event_queue_destroy(&inst->queue);

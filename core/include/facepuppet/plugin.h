@@ -232,6 +232,15 @@ typedef struct fp_input {
     const void *(*get_extension)(const struct fp_input *self, const char *id);
 } fp_input;
 
+/** Optional input extension FP_EXT_WORKSPACE: the box the hands move in, millimetres,
+ *  device frame. A recording knows it in advance; a live device may give its tracking
+ *  volume. The host's default workspace calibration fits this box to the face.
+ *  [main-thread], after create. Returns false where unknown. */
+#define FP_EXT_WORKSPACE "facepuppet.workspace/1"
+typedef struct fp_input_workspace {
+    bool (*get)(const fp_input *self, float min_mm[3], float max_mm[3]);
+} fp_input_workspace;
+
 typedef struct fp_input_factory {
     uint32_t size;
     const char *name;        /* the SPEC name, e.g. "replay" */
