@@ -73,14 +73,15 @@ typedef struct fp_plugin {
 } fp_plugin;
 
 /** Result codes of fp_plugin_load (also the facepuppet command's reasons for exit 78). */
+/* Below -1000, apart from the negative errno codes plugins return. */
 typedef enum fp_plugin_result {
     FP_PLUGIN_OK = 0,
-    FP_PLUGIN_ERR_NOT_FOUND = -1,    /* no file <kind>-<name>.so in any folder */
-    FP_PLUGIN_ERR_DLOPEN = -2,       /* dlopen failed (missing library, bad ELF) */
-    FP_PLUGIN_ERR_NO_ENTRY = -3,     /* no facepuppet_plugin_entry symbol */
-    FP_PLUGIN_ERR_ABI = -4,          /* built against an incompatible ABI */
-    FP_PLUGIN_ERR_INIT = -5,         /* entry->init returned false */
-    FP_PLUGIN_ERR_NO_FACTORY = -6    /* no factory of the asked kind, or a bad one */
+    FP_PLUGIN_ERR_NOT_FOUND = -1001,    /* no file <kind>-<name>.so in any folder */
+    FP_PLUGIN_ERR_DLOPEN = -1002,       /* dlopen failed (missing library, bad ELF) */
+    FP_PLUGIN_ERR_NO_ENTRY = -1003,     /* no facepuppet_plugin_entry symbol */
+    FP_PLUGIN_ERR_ABI = -1004,          /* built against an incompatible ABI */
+    FP_PLUGIN_ERR_INIT = -1005,         /* entry->init returned false */
+    FP_PLUGIN_ERR_NO_FACTORY = -1006   /* no factory of the asked kind, or a bad one */
 } fp_plugin_result;
 
 /** Find `<input|map>-<name>.so` on `path` (or load `name` itself where it contains a '/'),

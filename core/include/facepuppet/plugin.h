@@ -241,6 +241,20 @@ typedef struct fp_input_workspace {
     bool (*get)(const fp_input *self, float min_mm[3], float max_mm[3]);
 } fp_input_workspace;
 
+/** Optional input extension FP_EXT_RECORDING_INFO: what a recording holds, for
+ *  `facepuppet info`. [main-thread], after create. Returns false where not a recording. */
+#define FP_EXT_RECORDING_INFO "facepuppet.recording-info/1"
+typedef struct fp_recording_info {
+    uint64_t frames;          /* distinct sample times */
+    uint32_t hands;           /* bit per fp_hand_side seen */
+    double rate_hz;           /* median sample rate */
+    double duration_s;        /* first to last sample */
+    char format[32];          /* e.g. "joints-csv", "angles-csv", "eventlog" */
+} fp_recording_info;
+typedef struct fp_input_recording {
+    bool (*get)(const fp_input *self, fp_recording_info *info);
+} fp_input_recording;
+
 typedef struct fp_input_factory {
     uint32_t size;
     const char *name;        /* the SPEC name, e.g. "replay" */

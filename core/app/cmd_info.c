@@ -1,0 +1,94 @@
+/* facepuppet info: what a mesh or a recording holds. */
+#define _GNU_SOURCE
+#include "app_util.h"
+#include "command.h"
+#include "fp_mesh.h"
+
+#include <getopt.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+#include <strings.h>
+
+static bool is_mesh(const char *path)
+{
+    static const char *exts[] = {".obj", ".ply", ".off", ".stl", ".gltf", ".glb"};
+    const char *dot = strrchr(path, '.');
+    for (size_t i = 0; dot && i < sizeof exts / sizeof exts[0]; i++)
+        if (!strcasecmp(dot, exts[i])) return true;
+    return false;
+}
+
+/* Mesh files carry no units; guess from the size of a head (about 0.25 m across). */
+static const char *guess_units(double extent)
+{
+    if (extent > 0.05 && extent < 1.0) return "probably metres";
+    if (extent >= 5 && extent < 100) return "probably centimetres";
+    if (extent >= 50 && extent < 1000) return "probably millimetres";
+    return "unknown";
+}
+
+static int mesh_info(const char *path)
+{
+    fp_mesh *m = NULL;
+    char err[1024];
+    if (fp_mesh_load(path, &m, err, sizeof err) != FP_MESH_OK) {
+        fprintf(stderr, "facepuppet info: %s\n", err);
+        return FP_EXIT_DATAERR;
+    }
+    float lo[3], hi[3];
+    fp_mesh_bounds(m, lo, hi);
+    double ext = fmax(hi[0] - lo[0], fmax(hi[1] - lo[1], hi[2] - lo[2]));
+    printf("%s\n  vertices  %zu\n  triangles %zu\n  uvs       %s\n"
+           "  bounds    [%g, %g, %g] .. [%g, %g, %g]\n  size      %g x %g x %g\n  units     %s\n",
+           path, m->vertex_count, m->triangle_count, m->uvs ? "yes" : "no", lo[0], lo[1], lo[2],
+           hi[0], hi[1], hi[2], hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], guess_units(ext));
+    fp_mesh_free(&m);
+    return FP_EXIT_OK;
+}
+
+static int recording_info(const char *path)
+{
+    fp_plugin_path pp;
+    fp_app_plugin_path(&pp, NULL, 0);
+    char spec[4200], err[2048];
+    snprintf(spec, sizeof spec, "replay:%s", path);
+    fp_input_instance inst;
+    int rc = fp_input_instance_open(&inst, &pp, spec, 0, err, sizeof err);
+    if (rc) {
+        fprintf(stderr, "facepuppet info: %s\n", err);
+        fp_plugin_path_clear(&pp);
+        return fp_app_exit_code(rc);
+    }
+    const fp_input_recording *ext =
+        inst.input->get_extension ? inst.input->get_extension(inst.input, FP_EXT_RECORDING_INFO) : NULL;
+    fp_recording_info ri;
+    memset(&ri, 0, sizeof ri);
+    int status = FP_EXIT_OK;
+    if (ext && ext->get && ext->get(inst.input, &ri)) {
+        printf("%s\n  format    %s\n  frames    %llu\n  rate      %.1f Hz\n  hands     %s\n"
+               "  duration  %.3f s\n", path, ri.format, (unsigned long long)ri.frames, ri.rate_hz,
+               ri.hands == 3 ? "left, right" : ri.hands == 1 ? "left" : ri.hands == 2 ? "right" : "none",
+               ri.duration_s);
+    } else {
+        fprintf(stderr, "facepuppet info: %s: the replay input gives no recording info\n", path);
+        status = FP_EXIT_FAILURE;
+    }
+    fp_input_instance_close(&inst);
+    fp_plugin_path_clear(&pp);
+    return status;
+}
+
+static int info_main(int argc, char **argv)
+{
+    if (argc != 2 || !strcmp(argv[1], "-h") || !strcmp(argv[1], "--help")) {
+        FILE *f = argc == 2 ? stdout : stderr;
+        fprintf(f, "usage: facepuppet info FILE\n\n"
+                   "A mesh (OBJ, PLY, OFF, STL, glTF): vertices, triangles, bounds, units.\n"
+                   "A recording (joints CSV, angles CSV, event log): frames, rate, hands, duration.\n");
+        return argc == 2 ? FP_EXIT_OK : FP_EXIT_USAGE;
+    }
+    return is_mesh(argv[1]) ? mesh_info(argv[1]) : recording_info(argv[1]);
+}
+
+const fp_command fp_command_info = {"info", "what a mesh or a recording holds", info_main};

@@ -1,0 +1,280 @@
+/* facepuppet run: a headless session (the main job). */
+#define _GNU_SOURCE
+#include "app_util.h"
+#include "command.h"
+#include "fp_session.h"
+
+#include <errno.h>
+#include <getopt.h>
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+
+static volatile sig_atomic_t interrupted;
+static void on_signal(int sig) { (void)sig; interrupted = 1; }
+
+static void usage(FILE *f)
+{
+    fprintf(f,
+        "usage: facepuppet run [--mesh FILE] --input SPEC [--input SPEC] --mapping NAME\n"
+        "                      [--radius R] [--out FILE] [--frames-out DIR] [--speed X]\n\n"
+        "Run a headless puppeteering session: the inputs drive the mapping, the mapping\n"
+        "drives the CSRBF engine, the face deforms; writes the final mesh.\n"
+        "With no options it runs the demo: the ICT face, the three-claps recording, the\n"
+        "anchored mapping, written to facepuppet-demo.obj.\n\n"
+        "  -m, --mesh FILE        face mesh (OBJ, PLY, OFF, STL, glTF)\n"
+        "  -i, --input SPEC       NAME[:ARG][,key=value...], e.g.\n"
+        "                         replay:../shared/data/hands/leap-motion/grab_joints_mm.csv\n"
+        "                         any input also takes record=FILE (an event log of it)\n"
+        "  -M, --mapping SPEC     anchored (default) or unanchored, [,key=value...]\n"
+        "  -r, --radius R         support radius in mesh units (default 6%% of the mesh's\n"
+        "                         bounding-box diagonal)\n"
+        "  -o, --out FILE         final mesh (default facepuppet-out.obj; demo:\n"
+        "                         facepuppet-demo.obj); format by extension\n"
+        "      --frames-out DIR   also write one mesh per frame (DIR/frame-000001.obj...)\n"
+        "  -s, --speed X          replay speed factor for replay inputs (default 1)\n"
+        "      --fps N            frames per second of the session loop (default 60)\n"
+        "      --duration S       stop after S seconds (default: when the inputs end)\n"
+        "      --hand-size F      performer's hand size, 1 = mean adult\n"
+        "      --plugin-dir DIR   look for plugins in DIR first (repeatable)\n"
+        "  -q, --quiet            no progress lines\n"
+        "  -h, --help             this text\n\n"
+        "Exit status: 0 done, 64 usage, 65 bad input data, 66 input missing, 73 output\n"
+        "not writable, 78 plugin missing or incompatible, 1 other failure.\n");
+}
+
+static double median(double *v, size_t n)
+{
+    if (!n) return 0;
+    for (size_t i = 1; i < n; i++) /* insertion sort: n is a few thousand at most */
+        for (size_t j = i; j > 0 && v[j - 1] > v[j]; j--) {
+            double t = v[j]; v[j] = v[j - 1]; v[j - 1] = t;
+        }
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+static void sleep_until(int64_t t_ns)
+{
+    struct timespec ts = {(time_t)(t_ns / 1000000000LL), (long)(t_ns % 1000000000LL)};
+    clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL);
+}
+
+static int run_main(int argc, char **argv)
+{
+    enum { OPT_FRAMES_OUT = 256, OPT_FPS, OPT_DURATION, OPT_HAND, OPT_PLUGIN_DIR };
+    static const struct option opts[] = {
+        {"mesh", required_argument, 0, 'm'},       {"input", required_argument, 0, 'i'},
+        {"mapping", required_argument, 0, 'M'},    {"radius", required_argument, 0, 'r'},
+        {"out", required_argument, 0, 'o'},        {"frames-out", required_argument, 0, OPT_FRAMES_OUT},
+        {"speed", required_argument, 0, 's'},      {"fps", required_argument, 0, OPT_FPS},
+        {"duration", required_argument, 0, OPT_DURATION}, {"hand-size", required_argument, 0, OPT_HAND},
+        {"plugin-dir", required_argument, 0, OPT_PLUGIN_DIR}, {"quiet", no_argument, 0, 'q'},
+        {"help", no_argument, 0, 'h'},             {0, 0, 0, 0}};
+    fp_session_options so = {0};
+    const char *out = NULL, *frames_out = NULL, *plugin_dirs[8];
+    size_t nplugin_dirs = 0;
+    double speed = 1, fps = 60, duration = 0;
+    bool quiet = false;
+    char *end;
+    optind = 1;
+    for (int c; (c = getopt_long(argc, argv, "m:i:M:r:o:s:qh", opts, NULL)) != -1;) {
+        switch (c) {
+        case 'm': so.mesh_path = optarg; break;
+        case 'i':
+            if (so.input_count == FP_SESSION_MAX_INPUTS) {
+                fprintf(stderr, "facepuppet run: at most %d --input\n", FP_SESSION_MAX_INPUTS);
+                return FP_EXIT_USAGE;
+            }
+            so.inputs[so.input_count++] = optarg;
+            break;
+        case 'M': so.mapping = optarg; break;
+        case 'r':
+            so.radius = strtod(optarg, &end);
+            if (*end || !(so.radius > 0) || !isfinite(so.radius)) {
+                fprintf(stderr, "facepuppet run: --radius must be a number > 0, got '%s'\n", optarg);
+                return FP_EXIT_USAGE;
+            }
+            break;
+        case 'o': out = optarg; break;
+        case OPT_FRAMES_OUT: frames_out = optarg; break;
+        case 's':
+            speed = strtod(optarg, &end);
+            if (*end || !(speed > 0) || !isfinite(speed)) {
+                fprintf(stderr, "facepuppet run: --speed must be a number > 0, got '%s'\n", optarg);
+                return FP_EXIT_USAGE;
+            }
+            break;
+        case OPT_FPS:
+            fps = strtod(optarg, &end);
+            if (*end || !(fps >= 1 && fps <= 10000)) {
+                fprintf(stderr, "facepuppet run: --fps must be in 1..10000, got '%s'\n", optarg);
+                return FP_EXIT_USAGE;
+            }
+            break;
+        case OPT_DURATION:
+            duration = strtod(optarg, &end);
+            if (*end || !(duration > 0)) {
+                fprintf(stderr, "facepuppet run: --duration must be > 0 seconds, got '%s'\n", optarg);
+                return FP_EXIT_USAGE;
+            }
+            break;
+        case OPT_HAND:
+            so.hand_size = strtod(optarg, &end);
+            if (*end || !(so.hand_size > 0.3 && so.hand_size < 3)) {
+                fprintf(stderr, "facepuppet run: --hand-size must be in 0.3..3, got '%s'\n", optarg);
+                return FP_EXIT_USAGE;
+            }
+            break;
+        case OPT_PLUGIN_DIR:
+            if (nplugin_dirs < 8) plugin_dirs[nplugin_dirs++] = optarg;
+            break;
+        case 'q': quiet = true; break;
+        case 'h': usage(stdout); return FP_EXIT_OK;
+        default: usage(stderr); return FP_EXIT_USAGE;
+        }
+    }
+    if (optind < argc) {
+        fprintf(stderr, "facepuppet run: unexpected argument '%s'\n", argv[optind]);
+        return FP_EXIT_USAGE;
+    }
+    /* The demo: no mesh and no input given. */
+    char demo_mesh[4096], demo_input[4096];
+    bool demo = !so.mesh_path && !so.input_count;
+    if (!so.mesh_path)
+        so.mesh_path = fp_app_data_path("faces/ict-facekit/generic_neutral_mesh.obj", demo_mesh,
+                                        sizeof demo_mesh);
+    if (!so.input_count) {
+        if (!demo) {
+            fprintf(stderr, "facepuppet run: give at least one --input SPEC (see --help)\n");
+            return FP_EXIT_USAGE;
+        }
+        char rec[4000];
+        fp_app_data_path("hands/leap-motion/three-claps_joints_mm.csv", rec, sizeof rec);
+        snprintf(demo_input, sizeof demo_input, "replay:%s", rec);
+        so.inputs[so.input_count++] = demo_input;
+    }
+    if (!so.mapping) so.mapping = "anchored";
+    if (!out) out = demo ? "facepuppet-demo.obj" : "facepuppet-out.obj";
+    /* --speed applies to replay inputs that do not set their own. */
+    char specs[FP_SESSION_MAX_INPUTS][4200];
+    for (size_t i = 0; i < so.input_count; i++) {
+        if (speed != 1 && !strncmp(so.inputs[i], "replay", 6) &&
+            (so.inputs[i][6] == ':' || so.inputs[i][6] == ',' || !so.inputs[i][6]) &&
+            !strstr(so.inputs[i], ",speed=")) {
+            snprintf(specs[i], sizeof specs[i], "%s,speed=%g", so.inputs[i], speed);
+            so.inputs[i] = specs[i];
+        }
+    }
+    if (frames_out && mkdir(frames_out, 0777) && errno != EEXIST) {
+        fprintf(stderr, "facepuppet run: --frames-out %s: %s\n", frames_out, strerror(errno));
+        return FP_EXIT_CANTCREAT;
+    }
+
+    fp_plugin_path path;
+    fp_app_plugin_path(&path, plugin_dirs, nplugin_dirs);
+    so.plugin_path = &path;
+    char err[2048];
+    fp_session *s = NULL;
+    int rc = fp_session_create(&so, &s, err, sizeof err);
+    if (rc) {
+        fprintf(stderr, "facepuppet run: %s\n", err);
+        fp_plugin_path_clear(&path);
+        return fp_app_exit_code(rc);
+    }
+    if (!quiet) {
+        const fp_calibration *c = fp_session_calibration(s);
+        fprintf(stderr, "facepuppet run: %s, %zu vertices, mapping %s, radius %.4g, %zu input(s); "
+                "workspace scale %.4g mesh units/mm\n", so.mesh_path, fp_session_vertex_count(s),
+                so.mapping, fp_session_radius(s), so.input_count, c->scale);
+    }
+    if ((rc = fp_session_start(s, err, sizeof err))) {
+        fprintf(stderr, "facepuppet run: %s\n", err);
+        fp_session_destroy(&s);
+        fp_plugin_path_clear(&path);
+        return fp_app_exit_code(rc);
+    }
+    signal(SIGINT, on_signal);
+    signal(SIGTERM, on_signal);
+
+    size_t cap = 1024, nupdates = 0;
+    double *update_ms = malloc(cap * sizeof *update_ms);
+    uint64_t frames = 0, commits = 0, engages = 0, active_frames = 0;
+    int64_t period = (int64_t)(1e9 / fps), t0 = fp_now_ns(), next = t0, last_report = t0;
+    int status = FP_EXIT_OK;
+    while (!interrupted) {
+        int64_t now = fp_now_ns();
+        fp_frame_stats st;
+        fp_session_step(s, now, &st);
+        frames++;
+        commits += st.committed;
+        engages += st.engaged;
+        active_frames += st.active;
+        if (st.active) {
+            if (nupdates == cap) {
+                double *grown = realloc(update_ms, 2 * cap * sizeof *update_ms);
+                if (grown) { update_ms = grown; cap *= 2; }
+            }
+            if (nupdates < cap) update_ms[nupdates++] = st.update_ms;
+        }
+        if (frames_out) {
+            char file[4400];
+            snprintf(file, sizeof file, "%s/frame-%06llu.obj", frames_out, (unsigned long long)frames);
+            if (fp_session_save(s, file, err, sizeof err)) {
+                fprintf(stderr, "facepuppet run: %s\n", err);
+                status = FP_EXIT_CANTCREAT;
+                break;
+            }
+        }
+        if (!quiet && now - last_report >= 1000000000LL) {
+            fprintf(stderr, "  %6.1f s  frame %-6llu %s  %zu control vectors  update %.3f ms\n",
+                    (now - t0) / 1e9, (unsigned long long)frames, st.active ? "deforming" : "idle     ",
+                    st.control_vectors, st.update_ms);
+            last_report = now;
+        }
+        if (fp_session_finished(s)) break;
+        if (duration > 0 && now - t0 >= (int64_t)(duration * 1e9)) break;
+        next += period;
+        if (next < fp_now_ns()) next = fp_now_ns();
+        sleep_until(next);
+    }
+    if (interrupted && !quiet) fprintf(stderr, "facepuppet run: interrupted; saving what was done\n");
+    /* The summary: displacement of the final shape from the loaded one. */
+    const float *a = fp_session_loaded(s), *b = fp_session_positions(s);
+    size_t n = fp_session_vertex_count(s), moved = 0;
+    double sum = 0, max = 0;
+    bool finite = true;
+    for (size_t v = 0; v < n; v++) {
+        double dx = b[3 * v] - a[3 * v], dy = b[3 * v + 1] - a[3 * v + 1], dz = b[3 * v + 2] - a[3 * v + 2];
+        double d = sqrt(dx * dx + dy * dy + dz * dz);
+        if (!isfinite(d)) finite = false;
+        sum += d;
+        if (d > max) max = d;
+        if (d > 0) moved++;
+    }
+    if (status == FP_EXIT_OK && fp_session_save(s, out, err, sizeof err)) {
+        fprintf(stderr, "facepuppet run: %s\n", err);
+        status = FP_EXIT_CANTCREAT;
+    }
+    double med = median(update_ms, nupdates);
+    printf("frames %llu, deforming %llu, engaged %llu, committed %llu; vertices moved %zu of %zu; "
+           "displacement mean %.6g max %.6g (mesh units); update median %.3f ms over %zu updates; "
+           "events dropped %lu%s%s\n",
+           (unsigned long long)frames, (unsigned long long)active_frames, (unsigned long long)engages,
+           (unsigned long long)commits, moved, n, n ? sum / n : 0.0, max, med, nupdates,
+           fp_session_dropped(s), status == FP_EXIT_OK ? "; wrote " : "",
+           status == FP_EXIT_OK ? out : "");
+    if (!finite) {
+        fprintf(stderr, "facepuppet run: non-finite vertex in the result\n");
+        status = FP_EXIT_SOFTWARE;
+    }
+    free(update_ms);
+    fp_session_destroy(&s);
+    fp_plugin_path_clear(&path);
+    return status;
+}
+
+const fp_command fp_command_run = {"run", "run a headless session (no options: the demo)", run_main};
