@@ -1,4 +1,5 @@
 /* Input instances: a loaded input plugin, the fp_host it pushes through, its queue, and
+#define _POSIX_C_SOURCE 200809L
  * the optional recording of every event it delivered (record=FILE). */
 #include "fp_plugin_host.h"
 

@@ -1,4 +1,5 @@
 /* SPEC strings: NAME[:ARG][,key=value...]. */
+#define _POSIX_C_SOURCE 200809L
 #include "fp_plugin_host.h"
 
 #include <ctype.h>

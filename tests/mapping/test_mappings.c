@@ -1,0 +1,206 @@
+/* The anchored and unanchored mapping plugins (Sato et al. 2004, sec. 2.3.1 and 2.3.2),
+ * driven through the plugin ABI with synthetic frames. */
+#define _GNU_SOURCE
+#include "fp_plugin_host.h"
+
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <cmocka.h>
+
+#define R 1.0
+static char plugin_dir[4096];
+
+typedef struct rig {
+    fp_plugin plugin;
+    fp_mapping *m;
+    fp_host host;
+    fp_control_set cs;
+    float start[64][3], end[64][3];
+    fp_channel ch[4];
+    fp_frame_input in;
+} rig;
+
+static int open_mapping(rig *r, const char *name, const fp_param *params, size_t n, char *err)
+{
+    memset(r, 0, sizeof *r);
+    fp_plugin_path path;
+    const char *dirs[] = {plugin_dir};
+    fp_plugin_path_init(&path, dirs, 1, NULL);
+    int rc = fp_plugin_load(&path, FP_PLUGIN_MAPPING, name, &r->plugin, err, 1024);
+    fp_plugin_path_clear(&path);
+    if (rc) return rc;
+    fp_host_init_for_mapping(&r->host, name);
+    const fp_mapping_factory *f = r->plugin.factory;
+    rc = f->create(&r->host, params, n, &r->m, err, 1024);
+    r->cs.size = sizeof r->cs;
+    r->cs.capacity = 64;
+    r->cs.start = r->start;
+    r->cs.end = r->end;
+    r->cs.channels = r->ch;
+    r->cs.channel_capacity = 4;
+    r->in.size = sizeof r->in;
+    r->in.radius = R;
+    for (int h = 0; h < FP_HANDS; h++)
+        for (int f = 0; f < FP_FINGERS; f++) r->in.tip_distance[h][f] = INFINITY;
+    return rc;
+}
+
+static void close_mapping(rig *r)
+{
+    if (r->m) r->m->destroy(r->m);
+    fp_plugin_unload(&r->plugin);
+}
+
+/* Put the right hand's fingertips at x0 + f along x, y, z; `dist` from the surface. */
+static void place_right(rig *r, float x0, float y, float z, float dist)
+{
+    fp_hand_pose *p = &r->in.hands[FP_HAND_RIGHT];
+    p->present = true;
+    for (int f = 0; f < FP_FINGERS; f++) {
+        p->joints[FP_JOINT_TIP(f)][0] = x0 + (float)f;
+        p->joints[FP_JOINT_TIP(f)][1] = y;
+        p->joints[FP_JOINT_TIP(f)][2] = z;
+        r->in.tip_distance[FP_HAND_RIGHT][f] = dist;
+    }
+}
+
+static void step(rig *r, uint32_t requested)
+{
+    r->in.requested = requested;
+    assert_int_equal(r->m->process(r->m, &r->in, &r->cs), 0);
+    r->in.frame++;
+}
+
+static void test_anchored_auto(void **state)
+{
+    (void)state;
+    rig r;
+    char err[1024];
+    assert_int_equal(open_mapping(&r, "anchored", NULL, 0, err), 0);
+    place_right(&r, 0, 0, 5, 3 * R); /* far from the surface: nothing */
+    step(&r, 0);
+    assert_false(r.cs.active);
+    assert_int_equal(r.cs.intents, 0);
+
+    place_right(&r, 0, 0, 0.5f, 0.5f * R); /* within R: engage, start = end = tips */
+    step(&r, 0);
+    assert_true(r.cs.active);
+    assert_true(r.cs.intents & FP_INTENT_ENGAGE);
+    assert_int_equal(r.cs.count, 5);
+    float s0[5][3];
+    memcpy(s0, r.start, sizeof s0);
+    assert_memory_equal(r.start, r.end, sizeof s0);
+    assert_float_equal(r.start[2][0], 2.0, 0);
+
+    place_right(&r, 0.2f, 0.1f, 0.4f, 0.4f * R); /* fingers move: start fixed, end follows */
+    step(&r, 0);
+    assert_true(r.cs.active);
+    assert_int_equal(r.cs.intents, 0);
+    assert_memory_equal(r.start, s0, sizeof s0); /* bit for bit: the host reuses its factor */
+    assert_float_equal(r.end[2][0], 2.2, 1e-6);
+    assert_float_equal(r.end[2][1], 0.1, 1e-6);
+
+    place_right(&r, 10, 0, 0.5f, 0.5f * R); /* a huge jump is clamped to 0.45 R */
+    step(&r, 0);
+    for (int i = 0; i < 5; i++) {
+        double d = 0;
+        for (int k = 0; k < 3; k++) d += pow(r.end[i][k] - r.start[i][k], 2);
+        assert_true(sqrt(d) <= 0.45 * R + 1e-5);
+        assert_true(sqrt(d) >= 0.45 * R - 1e-4);
+    }
+
+    place_right(&r, 0.2f, 0, 3, 2 * R); /* the hand lets go: commit */
+    step(&r, 0);
+    assert_true(r.cs.active);
+    assert_true(r.cs.intents & FP_INTENT_COMMIT);
+    step(&r, 0);
+    assert_false(r.cs.active);
+    close_mapping(&r);
+}
+
+static void test_anchored_requests(void **state)
+{
+    (void)state;
+    rig r;
+    char err[1024];
+    fp_param p[] = {{"auto", "0"}};
+    assert_int_equal(open_mapping(&r, "anchored", p, 1, err), 0);
+    place_right(&r, 0, 0, 0, 0.1f * R); /* near, but auto=0: nothing until asked */
+    step(&r, 0);
+    assert_false(r.cs.active);
+    step(&r, FP_INTENT_ENGAGE);
+    assert_true(r.cs.active);
+    assert_true(r.cs.intents & FP_INTENT_ENGAGE);
+    place_right(&r, 0, 0, 5, 5 * R); /* far away, still engaged: no auto commit */
+    step(&r, 0);
+    assert_true(r.cs.active);
+    assert_false(r.cs.intents & FP_INTENT_COMMIT);
+    step(&r, FP_INTENT_CANCEL);
+    assert_false(r.cs.active);
+    assert_true(r.cs.intents & FP_INTENT_CANCEL);
+    step(&r, FP_INTENT_ENGAGE);
+    step(&r, FP_INTENT_COMMIT);
+    assert_true(r.cs.intents & FP_INTENT_COMMIT);
+    close_mapping(&r);
+}
+
+static void test_unanchored(void **state)
+{
+    (void)state;
+    rig r;
+    char err[1024];
+    assert_int_equal(open_mapping(&r, "unanchored", NULL, 0, err), 0);
+    place_right(&r, 0, 0, 0, 0.2f * R);
+    step(&r, 0); /* the first sight gives no step yet */
+    assert_false(r.cs.active);
+    place_right(&r, 0.1f, 0, 0, 0.2f * R);
+    step(&r, 0); /* from the last tips to the new ones, folded in at once */
+    assert_true(r.cs.active);
+    assert_true(r.cs.intents & FP_INTENT_COMMIT);
+    assert_int_equal(r.cs.count, 5);
+    assert_float_equal(r.start[1][0], 1.0, 1e-6);
+    assert_float_equal(r.end[1][0], 1.1, 1e-6);
+    place_right(&r, 0.3f, 0, 0, 0.2f * R);
+    step(&r, 0);
+    assert_float_equal(r.start[1][0], 1.1, 1e-6); /* trajectories: start = last end */
+    assert_float_equal(r.end[1][0], 1.3, 1e-6);
+    place_right(&r, 0.4f, 0, 9, 9 * R); /* away from the surface: no step */
+    step(&r, 0);
+    assert_false(r.cs.active);
+    close_mapping(&r);
+}
+
+static void test_bad_keys(void **state)
+{
+    (void)state;
+    rig r;
+    char err[1024];
+    fp_param p[] = {{"bogus", "1"}};
+    assert_int_not_equal(open_mapping(&r, "anchored", p, 1, err), 0);
+    assert_non_null(strstr(err, "unknown key 'bogus'"));
+    close_mapping(&r);
+    fp_param q[] = {{"clamp", "abc"}};
+    assert_int_not_equal(open_mapping(&r, "unanchored", q, 1, err), 0);
+    assert_non_null(strstr(err, "bad value 'abc' for key 'clamp'"));
+    close_mapping(&r);
+    assert_int_equal(open_mapping(&r, "no-such-mapping", NULL, 0, err), FP_PLUGIN_ERR_NOT_FOUND);
+    assert_non_null(strstr(err, "no mapping plugin named 'no-such-mapping'"));
+    assert_non_null(strstr(err, "anchored"));
+    close_mapping(&r);
+}
+
+int main(void)
+{
+    const char *build = getenv("FP_BUILD_DIR");
+    snprintf(plugin_dir, sizeof plugin_dir, "%s/lib/facepuppet", build ? build : "build");
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_anchored_auto), cmocka_unit_test(test_anchored_requests),
+        cmocka_unit_test(test_unanchored), cmocka_unit_test(test_bad_keys),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

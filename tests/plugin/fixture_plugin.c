@@ -1,0 +1,64 @@
+/* Test fixtures: plugins that are broken in one way each, selected at compile time.
+ *   FIXTURE_ABI_MAJOR   entry built against another ABI major
+ *   FIXTURE_NO_ENTRY    no facepuppet_plugin_entry symbol at all
+ *   FIXTURE_INIT_FAILS  init returns false
+ *   FIXTURE_GOOD        a working input that pushes FIXTURE_EVENTS events then ends */
+#include <facepuppet/plugin.h>
+
+#include <stdlib.h>
+#include <string.h>
+
+#ifndef FIXTURE_NO_ENTRY
+static int start(fp_input *self, char *err, size_t errlen)
+{
+    const fp_host *host = self->plugin_data;
+    for (int i = 0; i < 3; i++) {
+        fp_event_button b = {{sizeof b, FP_EVENT_BUTTON, 0, host->now_ns(host), 0, -1},
+                             FP_BUTTON_LEFT, (uint32_t)(i % 2 == 0), (uint32_t)(i % 2 == 0)};
+        host->push_event(host, &b.header);
+    }
+    fp_event_status st = {{sizeof st, FP_EVENT_STATUS, 0, host->now_ns(host), 0, -1},
+                          FP_STATUS_END_OF_STREAM, "done"};
+    host->push_event(host, &st.header);
+    return 0;
+}
+static void stop(fp_input *self) { (void)self; }
+static void destroy(fp_input *self) { free(self); }
+
+static int create(const fp_host *host, const char *arg, const fp_param *params, size_t nparams,
+                  fp_input **out, char *err, size_t errlen)
+{
+    for (size_t i = 0; i < nparams; i++)
+        if (strcmp(params[i].key, "ok")) {
+            strncpy(err, "unknown key", errlen);
+            return -22;
+        }
+    fp_input *in = calloc(1, sizeof *in);
+    in->size = sizeof *in;
+    in->plugin_data = (void *)host;
+    in->start = start;
+    in->stop = stop;
+    in->destroy = destroy;
+    *out = in;
+    return 0;
+}
+
+static const fp_input_factory factory = {sizeof factory, "fixture", "test fixture", "", create};
+static const void *get_factory(const char *id)
+{
+    return !strcmp(id, FP_INPUT_FACTORY_ID) ? &factory : NULL;
+}
+#ifdef FIXTURE_INIT_FAILS
+static bool init(const char *path) { (void)path; return false; }
+#else
+static bool init(const char *path) { (void)path; return true; }
+#endif
+#ifdef FIXTURE_ABI_MAJOR
+#define MAJOR FIXTURE_ABI_MAJOR
+#else
+#define MAJOR FP_PLUGIN_ABI_MAJOR
+#endif
+FP_PLUGIN_DECLARE_ENTRY = {{MAJOR, 0}, "org.facepuppet.test-fixture", "0", init, NULL, get_factory};
+#else
+FP_PLUGIN_EXPORT int not_a_facepuppet_plugin = 1;
+#endif

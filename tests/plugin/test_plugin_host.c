@@ -1,0 +1,183 @@
+/* The host side of the plugin ABI: SPEC parsing, the loader's errors, the MPSC queue. */
+#define _GNU_SOURCE
+#include "fp_plugin_host.h"
+
+#include <pthread.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <cmocka.h>
+
+static char fixture_dir[4096], builtin_dir[4096];
+
+static void test_spec_parse(void **state)
+{
+    (void)state;
+    fp_spec s;
+    char err[256];
+    assert_int_equal(fp_spec_parse("replay:a/b.csv,speed=2,loop=1", &s, err, sizeof err), 0);
+    assert_string_equal(s.name, "replay");
+    assert_string_equal(s.arg, "a/b.csv");
+    assert_int_equal(s.nparams, 2);
+    assert_string_equal(s.params[0].key, "speed");
+    assert_string_equal(s.params[0].value, "2");
+    assert_string_equal(fp_spec_take(&s, "loop"), "1");
+    assert_int_equal(s.nparams, 1);
+    assert_null(fp_spec_take(&s, "loop"));
+    fp_spec_clear(&s);
+
+    assert_int_equal(fp_spec_parse("pedal", &s, err, sizeof err), 0);
+    assert_string_equal(s.name, "pedal");
+    assert_null(s.arg);
+    fp_spec_clear(&s);
+
+    /* An ARG may hold ':' (pedal:VID:PID); keys may have empty values. */
+    assert_int_equal(fp_spec_parse("pedal:05f3:00ff,layout=", &s, err, sizeof err), 0);
+    assert_string_equal(s.arg, "05f3:00ff");
+    assert_string_equal(s.params[0].value, "");
+    fp_spec_clear(&s);
+
+    assert_int_not_equal(fp_spec_parse("", &s, err, sizeof err), 0);
+    assert_int_not_equal(fp_spec_parse("replay:x,speed", &s, err, sizeof err), 0);
+    assert_non_null(strstr(err, "'speed' is not key=value"));
+    assert_int_not_equal(fp_spec_parse("replay:x,a=1,a=2", &s, err, sizeof err), 0);
+    assert_non_null(strstr(err, "given twice"));
+    assert_int_not_equal(fp_spec_parse("re play", &s, err, sizeof err), 0);
+}
+
+static int load(const char *name, fp_plugin *p, char *err, size_t len)
+{
+    const char *dirs[] = {fixture_dir};
+    fp_plugin_path path;
+    fp_plugin_path_init(&path, dirs, 1, builtin_dir);
+    int rc = fp_plugin_load(&path, FP_PLUGIN_INPUT, name, p, err, len);
+    fp_plugin_path_clear(&path);
+    return rc;
+}
+
+static void test_loader_errors(void **state)
+{
+    (void)state;
+    fp_plugin p;
+    char err[2048];
+    assert_int_equal(load("no-such-thing", &p, err, sizeof err), FP_PLUGIN_ERR_NOT_FOUND);
+    assert_non_null(strstr(err, "no input plugin named 'no-such-thing'"));
+    assert_non_null(strstr(err, fixture_dir)); /* names the folders searched */
+    assert_non_null(strstr(err, "fixture"));   /* and what is available */
+
+    assert_int_equal(load("fixture-abi2", &p, err, sizeof err), FP_PLUGIN_ERR_ABI);
+    assert_non_null(strstr(err, "built for plugin ABI 2.0"));
+    assert_non_null(strstr(err, "input-fixture-abi2.so"));
+
+    assert_int_equal(load("fixture-noentry", &p, err, sizeof err), FP_PLUGIN_ERR_NO_ENTRY);
+    assert_non_null(strstr(err, "no symbol 'facepuppet_plugin_entry'"));
+
+    assert_int_equal(load("fixture-initfails", &p, err, sizeof err), FP_PLUGIN_ERR_INIT);
+    assert_non_null(strstr(err, "init failed"));
+
+    /* A mapping asked for under an input plugin's name is not found. */
+    const char *dirs[] = {fixture_dir};
+    fp_plugin_path path;
+    fp_plugin_path_init(&path, dirs, 1, NULL);
+    assert_int_equal(fp_plugin_load(&path, FP_PLUGIN_MAPPING, "fixture", &p, err, sizeof err),
+                     FP_PLUGIN_ERR_NOT_FOUND);
+    fp_plugin_path_clear(&path);
+}
+
+static void test_env_path_and_instance(void **state)
+{
+    (void)state;
+    setenv("FACEPUPPET_PLUGIN_PATH", fixture_dir, 1);
+    fp_plugin_path path;
+    fp_plugin_path_init(&path, NULL, 0, NULL);
+    assert_int_equal(path.count, 1);
+    fp_input_instance inst;
+    char err[1024];
+    assert_int_equal(fp_input_instance_open(&inst, &path, "fixture,bogus=1", 7, err, sizeof err), -22);
+    assert_non_null(strstr(err, "unknown key"));
+    assert_int_equal(fp_input_instance_open(&inst, &path, "fixture,ok=1", 7, err, sizeof err), 0);
+    assert_int_equal(fp_input_instance_start(&inst, err, sizeof err), 0);
+    fp_event ev;
+    int n = 0, downs = 0;
+    while (fp_input_instance_poll(&inst, &ev)) {
+        assert_int_equal(ev.header.source, 7); /* stamped by the host */
+        if (ev.header.type == FP_EVENT_BUTTON) downs += (int)ev.button.down;
+        n++;
+    }
+    assert_int_equal(n, 4);
+    assert_int_equal(downs, 2);
+    assert_int_equal(ev.header.type, FP_EVENT_STATUS);
+    fp_input_instance_close(&inst);
+    fp_plugin_path_clear(&path);
+    unsetenv("FACEPUPPET_PLUGIN_PATH");
+}
+
+/* ---- queue: several producers, one consumer; nothing lost or duplicated ---- */
+#define PRODUCERS 4
+#define PER_PRODUCER 20000
+static fp_event_queue q;
+
+static void *producer(void *arg)
+{
+    int id = (int)(intptr_t)arg;
+    for (int i = 0; i < PER_PRODUCER; i++) {
+        fp_event_button b = {{sizeof b, FP_EVENT_BUTTON, 0, i, (uint32_t)id, -1}, 1, 1, (uint32_t)i};
+        while (!fp_event_queue_push(&q, &b.header)) sched_yield();
+    }
+    return NULL;
+}
+
+static void test_queue_mpsc(void **state)
+{
+    (void)state;
+    assert_int_equal(fp_event_queue_init(&q, 100), 0);
+    assert_int_equal(q.mask + 1, 128);
+    pthread_t t[PRODUCERS];
+    for (int i = 0; i < PRODUCERS; i++) pthread_create(&t[i], NULL, producer, (void *)(intptr_t)i);
+    int next[PRODUCERS] = {0};
+    long got = 0;
+    while (got < PRODUCERS * PER_PRODUCER) {
+        fp_event ev;
+        if (!fp_event_queue_pop(&q, &ev)) { sched_yield(); continue; }
+        int id = (int)ev.header.source;
+        assert_true(id >= 0 && id < PRODUCERS);
+        assert_int_equal(ev.button.mask, (uint32_t)next[id]); /* per-producer order kept */
+        next[id]++;
+        got++;
+    }
+    for (int i = 0; i < PRODUCERS; i++) pthread_join(t[i], NULL);
+    fp_event ev;
+    assert_false(fp_event_queue_pop(&q, &ev));
+    fp_event_queue_destroy(&q);
+}
+
+static void test_queue_full(void **state)
+{
+    (void)state;
+    assert_int_equal(fp_event_queue_init(&q, 4), 0);
+    fp_event_button b = {{sizeof b, FP_EVENT_BUTTON, 0, 0, 0, -1}, 1, 1, 0};
+    for (int i = 0; i < 4; i++) assert_true(fp_event_queue_push(&q, &b.header));
+    assert_false(fp_event_queue_push(&q, &b.header));
+    assert_int_equal(atomic_load(&q.dropped), 1);
+    fp_event_header bad = {sizeof(fp_event) + 1, FP_EVENT_BUTTON, 0, 0, 0, -1};
+    fp_event ev;
+    assert_true(fp_event_queue_pop(&q, &ev));
+    assert_false(fp_event_queue_push(&q, &bad)); /* oversize refused */
+    fp_event_queue_destroy(&q);
+}
+
+int main(void)
+{
+    const char *build = getenv("FP_BUILD_DIR");
+    snprintf(fixture_dir, sizeof fixture_dir, "%s/tests/plugins", build ? build : "build");
+    snprintf(builtin_dir, sizeof builtin_dir, "%s/lib/facepuppet", build ? build : "build");
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_spec_parse),        cmocka_unit_test(test_loader_errors),
+        cmocka_unit_test(test_env_path_and_instance), cmocka_unit_test(test_queue_mpsc),
+        cmocka_unit_test(test_queue_full),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
