@@ -267,6 +267,11 @@ static int run_main(int argc, char **argv)
            (unsigned long long)commits, moved, n, n ? sum / n : 0.0, max, med, nupdates,
            fp_session_dropped(s), status == FP_EXIT_OK ? "; wrote " : "",
            status == FP_EXIT_OK ? out : "");
+    const char *input_error;
+    if (fp_session_input_errors(s, &input_error) && status == FP_EXIT_OK) {
+        fprintf(stderr, "facepuppet run: an input reported an error: %s\n", input_error);
+        status = FP_EXIT_DATAERR;
+    }
     if (!finite) {
         fprintf(stderr, "facepuppet run: non-finite vertex in the result\n");
         status = FP_EXIT_SOFTWARE;

@@ -99,6 +99,10 @@ void fp_session_reset(fp_session *s);
 /** Events dropped because a queue was full, over all inputs. */
 unsigned long fp_session_dropped(const fp_session *s);
 
+/** How many FP_STATUS_ERROR events the inputs reported (a damaged recording, a device that
+ *  needs the performer); *last gets the latest one's text. */
+unsigned fp_session_input_errors(const fp_session *s, const char **last);
+
 /** Write the shape to show (normals recomputed) to path; format by extension. */
 int fp_session_save(const fp_session *s, const char *path, char *err, size_t errlen);
 

@@ -51,6 +51,8 @@ struct fp_session {
     double radius;
     uint32_t requested;
     bool engaged;                 /* the mapping's deformation is active */
+    unsigned input_errors;        /* FP_STATUS_ERROR events seen */
+    char last_error[128];
     uint64_t frame;
 
     csrbf_solver *solver;
@@ -277,6 +279,13 @@ static void take_event(fp_session *s, size_t src, const fp_event *ev)
         break;
     case FP_EVENT_STATUS:
         if (ev->status.code == FP_STATUS_END_OF_STREAM) s->ended[src] = true;
+        if (ev->status.code == FP_STATUS_ERROR) {
+            s->input_errors++;
+            snprintf(s->last_error, sizeof s->last_error, "%.*s", 100, ev->status.text);
+        }
+        if (ev->status.code == FP_STATUS_ERROR || ev->status.code == FP_STATUS_WARNING ||
+            ev->status.code == FP_STATUS_DISCONNECTED)
+            fprintf(stderr, "facepuppet: input %s: %s\n", s->inputs[src].name, ev->status.text);
         if (ev->status.code == FP_STATUS_DISCONNECTED && has_hand) s->hands[h].present = false;
         keep_frame_event(s, ev);
         break;
@@ -516,6 +525,12 @@ void fp_session_reset(fp_session *s)
 {
     if (memcmp(s->base, s->loaded, s->n * 3 * sizeof(float))) push_undo(s);
     set_base(s, s->loaded);
+}
+
+unsigned fp_session_input_errors(const fp_session *s, const char **last)
+{
+    if (last) *last = s->last_error;
+    return s->input_errors;
 }
 
 unsigned long fp_session_dropped(const fp_session *s)
