@@ -1,0 +1,123 @@
+/* End to end on real data: the ICT face deformed by the real three-claps recording through
+ * each mapping, in-process, checking every frame: no NaN, and no displacement outside every
+ * support (the engine runs without the polynomial, so T is exactly the identity there). */
+#define _GNU_SOURCE
+#include "fp_session.h"
+
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <cmocka.h>
+
+static char data[4096], plugins[4096];
+
+typedef struct outcome {
+    unsigned long frames, active, commits, checked_outside;
+    double max_disp;
+} outcome;
+
+static void run_session(const char *mapping, outcome *o)
+{
+    char mesh[4200], input[4300], err[2048];
+    snprintf(mesh, sizeof mesh, "%s/faces/ict-facekit/generic_neutral_mesh.obj", data);
+    snprintf(input, sizeof input, "replay:%s/hands/leap-motion/three-claps_joints_mm.csv,speed=4", data);
+    fp_plugin_path path;
+    const char *dirs[] = {plugins};
+    fp_plugin_path_init(&path, dirs, 1, NULL);
+    fp_session_options so = {0};
+    so.mesh_path = mesh;
+    so.inputs[0] = input;
+    so.input_count = 1;
+    so.mapping = mapping;
+    so.plugin_path = &path;
+    fp_session *s = NULL;
+    int rc = fp_session_create(&so, &s, err, sizeof err);
+    if (rc) fprintf(stderr, "%s\n", err);
+    assert_int_equal(rc, 0);
+    assert_int_equal(fp_session_start(s, err, sizeof err), 0);
+    size_t n = fp_session_vertex_count(s);
+    const float *loaded = fp_session_loaded(s);
+    double R = fp_session_radius(s);
+    memset(o, 0, sizeof *o);
+    float *before = malloc(n * 3 * sizeof(float));
+    int64_t deadline = fp_now_ns() + 60LL * 1000000000LL;
+    while (!fp_session_finished(s) && fp_now_ns() < deadline) {
+        memcpy(before, fp_session_base(s), n * 3 * sizeof(float));
+        fp_frame_stats st;
+        fp_session_step(s, fp_now_ns(), &st);
+        o->frames++;
+        const float *shown = fp_session_positions(s);
+        for (size_t i = 0; i < 3 * n; i++) assert_true(isfinite(shown[i]));
+        if (st.active) {
+            o->active++;
+            o->commits += st.committed;
+            /* Outside every support the shape is the base before this frame, bit for bit. */
+            const fp_control_set *cs = fp_session_control_set(s);
+            for (size_t v = 0; v < n; v++) {
+                bool inside = false;
+                for (size_t c = 0; c < cs->count && !inside; c++) {
+                    double d2 = 0;
+                    for (int k = 0; k < 3; k++) d2 += pow(before[3 * v + k] - cs->start[c][k], 2);
+                    inside = d2 < R * R * 1.0001;
+                }
+                if (inside) continue;
+                assert_memory_equal(&shown[3 * v], &before[3 * v], 3 * sizeof(float));
+                o->checked_outside++;
+            }
+        }
+        struct timespec ts = {0, 2000000};
+        nanosleep(&ts, NULL);
+    }
+    assert_true(fp_session_finished(s));
+    const float *fin = fp_session_positions(s);
+    for (size_t v = 0; v < n; v++) {
+        double d2 = 0;
+        for (int k = 0; k < 3; k++) d2 += pow(fin[3 * v + k] - loaded[3 * v + k], 2);
+        if (sqrt(d2) > o->max_disp) o->max_disp = sqrt(d2);
+    }
+    printf("%s: %lu frames, %lu deforming, %lu commits, max displacement %.4g (R %.4g), "
+           "%lu vertex checks outside the supports\n", mapping, o->frames, o->active, o->commits,
+           o->max_disp, R, o->checked_outside);
+    free(before);
+    fp_session_destroy(&s);
+    fp_plugin_path_clear(&path);
+}
+
+static void test_anchored_on_real_data(void **state)
+{
+    (void)state;
+    outcome o;
+    run_session("anchored", &o);
+    assert_true(o.active > 0);        /* the hands reached the face */
+    assert_true(o.commits > 0);       /* and let go again */
+    assert_true(o.max_disp > 0);      /* the face changed */
+    assert_true(o.checked_outside > 0);
+}
+
+static void test_unanchored_on_real_data(void **state)
+{
+    (void)state;
+    outcome o;
+    run_session("unanchored", &o);
+    assert_true(o.active > 0);
+    assert_int_equal(o.commits, o.active); /* every step folds into the base */
+    assert_true(o.max_disp > 0);
+    assert_true(o.checked_outside > 0);
+}
+
+int main(void)
+{
+    const char *d = getenv("FP_SHARED_DATA"), *b = getenv("FP_BUILD_DIR");
+    snprintf(data, sizeof data, "%s", d ? d : "../shared/data");
+    snprintf(plugins, sizeof plugins, "%s/lib/facepuppet", b ? b : "build");
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_anchored_on_real_data),
+        cmocka_unit_test(test_unanchored_on_real_data),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
