@@ -90,7 +90,9 @@ static void test_bad_csv(void **state)
     snprintf(args, sizeof args, "run --mesh %s --input replay:truncated.csv --out t.obj", face());
     assert_int_equal(fp(args), 65);
     assert_non_null(strstr(out, "truncated.csv"));
-    assert_int_equal(access("t.obj", F_OK) == 0 || (chdir(tmp) == 0 && access("t.obj", F_OK) == 0), 1);
+    char written[512];
+    snprintf(written, sizeof written, "%s/t.obj", tmp);
+    assert_int_equal(access(written, F_OK), 0); /* nothing lost: the result was saved */
 }
 
 static void test_plugins(void **state)
