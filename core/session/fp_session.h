@@ -93,6 +93,13 @@ const fp_calibration *fp_session_calibration(const fp_session *s);
 const fp_hand_pose *fp_session_hand(const fp_session *s, int hand);
 /** The last control set (start/end points) the engine used. */
 const fp_control_set *fp_session_control_set(const fp_session *s);
+/** Replace the mapping by a new one from spec (NAME[,key=value...], as the mapping option),
+ *  loaded from path: keeps the mesh, the base, the undo history, the inputs and the radius;
+ *  drops a deformation in progress (the base is shown). On error the old mapping stays and
+ *  err names the spec or plugin at fault (codes as fp_session_create: -EINVAL, FP_PLUGIN_ERR_*).
+ *  Session thread only (the viewer's keys 1 and 2). */
+int fp_session_set_mapping(fp_session *s, const fp_plugin_path *path, const char *spec,
+                           char *err, size_t errlen);
 /** Undo the last commit (one level of the commit history, up to 64), or back to loaded. */
 bool fp_session_undo(fp_session *s);
 void fp_session_reset(fp_session *s);

@@ -527,6 +527,39 @@ void fp_session_reset(fp_session *s)
     set_base(s, s->loaded);
 }
 
+int fp_session_set_mapping(fp_session *s, const fp_plugin_path *path, const char *spec,
+                           char *err, size_t errlen)
+{
+    if (!s || !path || !spec) {
+        snprintf(err, errlen, "session: a mapping spec and a plugin path are required");
+        return -EINVAL;
+    }
+    fp_plugin old_plugin = s->mapping_plugin;
+    fp_mapping *old = s->mapping;
+    fp_session_options o = {0};
+    o.mapping = spec;
+    o.plugin_path = path;
+    memset(&s->mapping_plugin, 0, sizeof s->mapping_plugin);
+    s->mapping = NULL;
+    int rc = load_mapping(s, &o, err, errlen);
+    if (rc) {
+        fp_plugin_unload(&s->mapping_plugin);
+        s->mapping_plugin = old_plugin;
+        s->mapping = old;
+        return rc;
+    }
+    if (old && old->destroy) old->destroy(old);
+    fp_plugin_unload(&old_plugin);
+    s->shown = s->base;
+    s->engaged = false;
+    s->gesture_open = false;
+    s->factored = false;
+    s->cs.active = false;
+    s->cs.intents = 0;
+    s->cs.count = 0;
+    return 0;
+}
+
 unsigned fp_session_input_errors(const fp_session *s, const char **last)
 {
     if (last) *last = s->last_error;
