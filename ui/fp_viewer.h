@@ -1,0 +1,90 @@
+/*
+ * fp_viewer.h: the live viewer (`facepuppet live`): one GLFW 3.3 window with an OpenGL 3.3
+ * core context (libepoxy) showing a puppeteering session as it is performed: the face
+ * (smooth shaded, normals recomputed every frame, optional wireframe), the base shape as a
+ * translucent ghost while a deformation is engaged, both hands' skeletons, each fingertip's
+ * support sphere (radius R), the control vectors as arrows, and a HUD (stb_easy_font).
+ *
+ * Frame loop: poll window events, run due script commands, step the session once with the
+ * current time (inputs run on their own threads, so the frame always shows the latest pose
+ * and never queues: swap interval 0 unless vsync is asked, glFinish after each swap), upload,
+ * draw, swap. Timing is measured inside: frame time (swap to swap) and the latency from a
+ * hand event's time (fp_hand_pose.time_ns, the host clock when the input pushed it) to the
+ * swap of the first frame showing it.
+ *
+ * Keys: space pause, E engage, C commit, X cancel, Z undo, R reset to the loaded shape,
+ * 1 anchored, 2 unanchored, [ ] radius down / up (x 1/1.1, 1.1), W wireframe, S screenshot
+ * (facepuppet-shot-NNN.png), F frame the mesh, H hands and supports on/off, Tab HUD on/off,
+ * ? (or /) the key list, Esc quit. Mouse: left drag orbit, right or middle drag pan, wheel
+ * zoom. A mesh file dropped on the window is loaded (the session is created anew on it).
+ *
+ * Script (deterministic runs and tests): commands separated by ';' or new lines, run in
+ * order at the start of frames; a `wait` holds the rest until it holds, a `shot` ends the
+ * frame's commands (the shot shows this frame):
+ *   wait hands | wait end | wait frames N    a hand is present / every input ended / N frames
+ *                                            passed since the wait began
+ *   key NAME     as the key: E C X Z R 1 2 [ ] W S F H Tab ? space Esc
+ *   shot FILE    write this frame as PNG
+ *   radius R     set the support radius (mesh units)
+ *   drop FILE    as a file dropped on the window
+ *   close        as the window's close button (glfwSetWindowShouldClose)
+ *
+ * Thread rules: call from the process's main thread (GLFW's rule); one viewer at a time.
+ */
+#ifndef FP_VIEWER_H
+#define FP_VIEWER_H
+
+#include "fp_session.h"
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct fp_viewer_options {
+    fp_session_options session;  /* as for fp_session_create (mesh, inputs, mapping, ...) */
+    int width, height;           /* window size in screen coordinates; 0: 1280 x 720 */
+    uint64_t frames;             /* stop after this many frames; 0: until the window closes */
+    double duration_s;           /* stop after this many seconds; 0: no limit */
+    const char *out;             /* write the final shape here (format by extension), or NULL */
+    const char *screenshot;      /* write the last frame here (PNG) before exiting, or NULL */
+    const char *script;          /* script text (see above), or NULL */
+    bool gpu_warp;               /* evaluate the warp in the vertex shader (and check it
+                                    against the CPU engine by transform feedback) */
+    bool vsync;                  /* swap interval 1 (default 0: never wait for the display) */
+    bool quiet;                  /* no messages on stderr except errors */
+} fp_viewer_options;
+
+/** What a run measured. Times in milliseconds. */
+typedef struct fp_viewer_report {
+    uint64_t frames;
+    double frame_ms_median, frame_ms_p99;      /* swap to swap, over all frames but the first */
+    size_t latency_samples;                    /* hand events shown */
+    double latency_ms_median, latency_ms_p99;  /* event time_ns to the swap showing it */
+    double engine_ms_median;                   /* fp_frame_stats.update_ms of active frames */
+    size_t warp_checks;                        /* GPU-warp read-backs compared */
+    double warp_max_error;                     /* max |GPU - CPU| over vertices, mesh units */
+    double warp_max_displacement;              /* max |CPU - base| in those frames */
+    unsigned long dropped;                     /* input events dropped (queues full) */
+} fp_viewer_report;
+
+/** Open the window, create and start the session from opt->session, run until the window
+ *  closes (Esc, close button, script), opt->frames frames pass, or an error. report may be
+ *  NULL. Returns 0, or a negative code with a message in err: the session's codes (see
+ *  fp_session_create: -EINVAL, -EBADMSG, -ENOENT, FP_PLUGIN_ERR_*), -ENODEV (no display, no
+ *  OpenGL 3.3 core context, a shader that does not build), -EIO (a screenshot could not be
+ *  or the final mesh could not be written), -EINVAL also for a malformed script (naming the command). */
+int fp_viewer_run(const fp_viewer_options *opt, fp_viewer_report *report, char *err,
+                  size_t errlen);
+
+/** The median and the 99th percentile (nearest rank) of n values; sorts v in place.
+ *  Both 0 for n == 0. */
+void fp_viewer_percentiles(double *v, size_t n, double *median, double *p99);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

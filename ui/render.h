@@ -1,0 +1,61 @@
+/* render.h: the viewer's OpenGL 3.3 core drawing (internal to ui/): the face (smooth shaded,
+ * optional wireframe, optional GPU warp), its translucent ghost, spheres, lines and points,
+ * and stb_easy_font text. Every function needs the context current. */
+#ifndef FP_UI_RENDER_H
+#define FP_UI_RENDER_H
+
+#include "fp_gpuwarp.h"
+
+#include <epoxy/gl.h>
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+typedef struct fp_render {
+    GLuint prog_mesh, prog_lines, prog_text;
+    /* the face: shown shape (updated per frame) and base shape (ghost, GPU warp) */
+    GLuint vao_shape, vbo_shape_pos, vbo_shape_nrm;
+    GLuint vao_base, vbo_base_pos, vbo_base_nrm;
+    GLuint ebo_tris;
+    size_t vertex_count, index_count;
+    /* a unit sphere */
+    GLuint vao_sphere, vbo_sphere, ebo_sphere;
+    GLsizei sphere_indices;
+    /* lines and points: x y z r g b a per vertex */
+    GLuint vao_lines, vbo_lines;
+    size_t lines_cap;
+    /* text: stb_easy_font quads */
+    GLuint vao_text, vbo_text, ebo_text;
+    size_t text_quads_cap;
+} fp_render;
+
+/** Compile the programs, make the sphere. Returns 0 or -ENODEV with the GL log in err. */
+int fp_render_init(fp_render *r, char *err, size_t errlen);
+void fp_render_free(fp_render *r);
+
+/** (Re)allocate the face's buffers for n vertices and t triangles (t x 3 indices). */
+int fp_render_set_topology(fp_render *r, size_t n, const uint32_t *tris, size_t t);
+/** Upload the shown shape, or the base shape (base = true): positions and normals, n x 3. */
+void fp_render_upload(fp_render *r, bool base, const float *pos, const float *nrm);
+
+/** Draw the face from the shown (base = false) or base buffers. warp: NULL, or coefficients
+ *  applied in the vertex shader (then base must be true). color: RGBA (A < 1: translucent,
+ *  no depth writes). mvp and view: column-major 4x4. */
+void fp_render_mesh(fp_render *r, const float mvp[16], const float view[16], bool base,
+                    const fp_warp_coeffs *warp, const float color[4], bool wireframe);
+
+/** Translucent spheres of radius `radius` at n centres (n x 3). */
+void fp_render_spheres(fp_render *r, const float proj_view[16], const float view[16],
+                       const float *centres, size_t n, float radius, const float color[4]);
+
+/** Lines (mode GL_LINES) or points (GL_POINTS, size in pixels) from n vertices of
+ *  x y z r g b a floats. depth: test against the face. */
+void fp_render_lines(fp_render *r, const float mvp[16], const float *verts, size_t n,
+                     GLenum mode, float point_size, bool depth);
+
+/** Text at pixel (x, y) from the top-left of a fbw x fbh framebuffer, stb_easy_font glyphs
+ *  scaled by `scale`, in color. Returns the height drawn in pixels. */
+float fp_render_text(fp_render *r, int fbw, int fbh, float x, float y, float scale,
+                     const char *text, const float color[4]);
+
+#endif

@@ -1,0 +1,104 @@
+/* The viewer's script: a few commands that drive a run deterministically. */
+#define _GNU_SOURCE
+#include "script.h"
+
+#include <GLFW/glfw3.h>
+
+#include <ctype.h>
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+int fp_script_key(const char *name)
+{
+    static const struct { const char *name; int key; } named[] = {
+        {"space", GLFW_KEY_SPACE}, {"esc", GLFW_KEY_ESCAPE}, {"escape", GLFW_KEY_ESCAPE},
+        {"tab", GLFW_KEY_TAB},     {"[", GLFW_KEY_LEFT_BRACKET}, {"]", GLFW_KEY_RIGHT_BRACKET},
+        {"?", GLFW_KEY_SLASH},     {"/", GLFW_KEY_SLASH}};
+    for (size_t i = 0; i < sizeof named / sizeof named[0]; i++)
+        if (!strcasecmp(name, named[i].name)) return named[i].key;
+    if (strlen(name) == 1) {
+        int c = toupper((unsigned char)name[0]);
+        if (strchr("ECXZRWSFH", c)) return GLFW_KEY_A + (c - 'A');
+        if (c == '1' || c == '2') return GLFW_KEY_0 + (c - '0');
+    }
+    return -1;
+}
+
+static int add(fp_script *s, fp_script_cmd c)
+{
+    fp_script_cmd *grown = realloc(s->cmds, (s->count + 1) * sizeof *grown);
+    if (!grown) {
+        free(c.text);
+        return -ENOMEM;
+    }
+    s->cmds = grown;
+    s->cmds[s->count++] = c;
+    return 0;
+}
+
+int fp_script_parse(const char *text, fp_script *s, char *err, size_t errlen)
+{
+    memset(s, 0, sizeof *s);
+    char *copy = strdup(text ? text : "");
+    if (!copy) return -ENOMEM;
+    int rc = 0, index = 0;
+    char *save = NULL;
+    for (char *cmd = strtok_r(copy, ";\n", &save); cmd && !rc; cmd = strtok_r(NULL, ";\n", &save)) {
+        char word[32] = "", arg[4096] = "";
+        int n = sscanf(cmd, " %31s %4095[^\n]", word, arg);
+        if (n <= 0) continue; /* empty command */
+        index++;
+        for (char *e = arg + strlen(arg); e > arg && isspace((unsigned char)e[-1]);) *--e = '\0';
+        fp_script_cmd c = {0};
+        char *end;
+        if (!strcmp(word, "wait")) {
+            char what[16] = "";
+            double k = 0;
+            int m = sscanf(arg, "%15s %lf", what, &k);
+            if (m >= 1 && !strcmp(what, "hands")) c.op = FP_SCRIPT_WAIT_HANDS;
+            else if (m >= 1 && !strcmp(what, "end")) c.op = FP_SCRIPT_WAIT_END;
+            else if (m == 2 && !strcmp(what, "frames") && k >= 0 && k < 1e9) {
+                c.op = FP_SCRIPT_WAIT_FRAMES;
+                c.number = floor(k);
+            } else {
+                rc = -EINVAL;
+            }
+        } else if (!strcmp(word, "key")) {
+            c.op = FP_SCRIPT_KEY;
+            c.key = fp_script_key(arg);
+            if (c.key < 0) rc = -EINVAL;
+        } else if (!strcmp(word, "shot") || !strcmp(word, "drop")) {
+            c.op = word[0] == 's' ? FP_SCRIPT_SHOT : FP_SCRIPT_DROP;
+            if (!arg[0]) rc = -EINVAL;
+            else if (!(c.text = strdup(arg))) rc = -ENOMEM;
+        } else if (!strcmp(word, "radius")) {
+            c.op = FP_SCRIPT_RADIUS;
+            c.number = strtod(arg, &end);
+            if (end == arg || *end || !(c.number > 0) || !isfinite(c.number)) rc = -EINVAL;
+        } else if (!strcmp(word, "close")) {
+            c.op = FP_SCRIPT_CLOSE;
+            if (arg[0]) rc = -EINVAL;
+        } else {
+            rc = -EINVAL;
+        }
+        if (rc == -EINVAL)
+            snprintf(err, errlen, "--script: command %d '%s %s' is not one of: wait hands|end|frames N, "
+                     "key NAME, shot FILE, radius R, drop FILE, close", index, word, arg);
+        if (!rc) rc = add(s, c);
+        else free(c.text);
+    }
+    free(copy);
+    if (rc) fp_script_free(s);
+    return rc;
+}
+
+void fp_script_free(fp_script *s)
+{
+    for (size_t i = 0; i < s->count; i++) free(s->cmds[i].text);
+    free(s->cmds);
+    memset(s, 0, sizeof *s);
+}

@@ -1,0 +1,33 @@
+/* script.h: the viewer's script (see fp_viewer.h), parsed into commands. Internal to ui/. */
+#ifndef FP_UI_SCRIPT_H
+#define FP_UI_SCRIPT_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+typedef enum fp_script_op {
+    FP_SCRIPT_WAIT_HANDS, FP_SCRIPT_WAIT_END, FP_SCRIPT_WAIT_FRAMES, FP_SCRIPT_KEY,
+    FP_SCRIPT_SHOT, FP_SCRIPT_RADIUS, FP_SCRIPT_DROP, FP_SCRIPT_CLOSE
+} fp_script_op;
+
+typedef struct fp_script_cmd {
+    fp_script_op op;
+    int key;            /* GLFW key code for FP_SCRIPT_KEY */
+    double number;      /* frames, radius */
+    char *text;         /* file for SHOT and DROP (owned) */
+} fp_script_cmd;
+
+typedef struct fp_script {
+    fp_script_cmd *cmds;
+    size_t count, next;
+    uint64_t wait_start;  /* frame the current wait began at */
+    int waiting;
+} fp_script;
+
+/** Parse text into s. Returns 0 or -EINVAL with the offending command in err. */
+int fp_script_parse(const char *text, fp_script *s, char *err, size_t errlen);
+void fp_script_free(fp_script *s);
+/** The GLFW key for a script key name (E, space, Esc, Tab, [, ], ?, ...), or -1. */
+int fp_script_key(const char *name);
+
+#endif

@@ -1,0 +1,736 @@
+/* The live viewer: window, frame loop, camera, keys, HUD, measurements (see fp_viewer.h). */
+#define _GNU_SOURCE
+#include "fp_viewer.h"
+
+#include "fp_gpuwarp.h"
+#include "fp_mesh.h"
+#include "render.h"
+#include "script.h"
+#include "vmath.h"
+
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+#include <epoxy/gl.h>
+#include <stb_image_write.h>
+
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* ---- growable sample arrays, percentiles ------------------------------------------------ */
+
+typedef struct samples {
+    double *v;
+    size_t n, cap;
+} samples;
+
+static void samples_add(samples *s, double x)
+{
+    if (s->n == s->cap) {
+        size_t cap = s->cap ? 2 * s->cap : 1024;
+        double *grown = realloc(s->v, cap * sizeof *grown);
+        if (!grown) return;
+        s->v = grown;
+        s->cap = cap;
+    }
+    s->v[s->n++] = x;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+void fp_viewer_percentiles(double *v, size_t n, double *median, double *p99)
+{
+    *median = *p99 = 0;
+    if (!n) return;
+    qsort(v, n, sizeof *v, cmp_double);
+    *median = n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+    size_t rank = (size_t)ceil(0.99 * (double)n); /* nearest rank, 1-based */
+    *p99 = v[(rank ? rank : 1) - 1];
+}
+
+/* ---- state ------------------------------------------------------------------------------ */
+
+typedef struct camera {
+    float target[3];
+    float yaw, pitch, dist;
+    float fovy;
+    float scene_size;   /* bounding-box diagonal of the mesh */
+} camera;
+
+typedef struct viewer {
+    const fp_viewer_options *opt;
+    fp_session_options so;
+    char *mesh_path;          /* owned copy of the current mesh path */
+    char mapping[64];         /* the current mapping spec's name, for the HUD */
+    fp_session *s;
+    GLFWwindow *win;
+    fp_render r;
+    fp_gpuwarp *gw;
+    fp_script script;
+    camera cam;
+
+    /* the face's geometry, CPU side */
+    size_t n, t;
+    float *pos, *nrm;         /* last uploaded shown shape and its normals */
+    float *base, *base_nrm;   /* last uploaded base and its normals */
+    bool have_pos, have_base;
+    float *check;             /* GPU warp read-back */
+
+    /* interaction */
+    bool paused, wireframe, hands_on, hud_on, help_on;
+    bool quit;
+    int shot_counter;
+    char *shot_path;          /* screenshot wanted for this frame */
+    char *drop_path;          /* mesh dropped, loaded at the next frame */
+    double mx, my;
+    int drag;                 /* 0 none, 1 orbit, 2 pan */
+    char status[256];         /* last message for the HUD */
+    int64_t status_until;
+
+    /* measurements */
+    uint64_t frames;
+    samples frame_ms, latency_ms, engine_ms;
+    int64_t last_swap;
+    int64_t seen_time[FP_HANDS];
+    int64_t pending_time[FP_HANDS];
+    double recent_frame_ms[64];
+    int recent_n;
+    double last_update_ms;
+    size_t events_window;
+    int64_t window_start;
+    double input_rate;
+    unsigned commits;
+    bool committed_shown;     /* last frame committed (HUD) */
+    fp_viewer_report rep;
+    int error;                /* a failure that ends the run (screenshot not written) */
+    char *err;
+    size_t errlen;
+} viewer;
+
+static void say(viewer *v, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void say(viewer *v, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(v->status, sizeof v->status, fmt, ap);
+    va_end(ap);
+    v->status_until = fp_now_ns() + 3000000000LL;
+    if (!v->opt->quiet) fprintf(stderr, "facepuppet live: %s\n", v->status);
+}
+
+/* ---- camera ----------------------------------------------------------------------------- */
+
+static void frame_mesh(viewer *v)
+{
+    const fp_mesh *m = fp_session_mesh(v->s);
+    float lo[3], hi[3];
+    fp_mesh_bounds(m, lo, hi);
+    float d[3];
+    v3_sub(hi, lo, d);
+    float diag = v3_len(d);
+    for (int i = 0; i < 3; i++) v->cam.target[i] = 0.5f * (lo[i] + hi[i]);
+    v->cam.yaw = 0;
+    v->cam.pitch = 0;
+    v->cam.fovy = 35.f * (float)M_PI / 180.f;
+    /* The box's front (width x height) fills the view with a margin; the depth adds half. */
+    int w, h;
+    glfwGetFramebufferSize(v->win, &w, &h);
+    float aspect = h > 0 ? (float)w / (float)h : 1.f;
+    float half = 0.5f * fmaxf(d[1], d[0] / aspect) * 1.15f;
+    v->cam.dist = half / tanf(v->cam.fovy / 2) + 0.5f * d[2];
+    v->cam.scene_size = diag > 0 ? diag : 1.f;
+}
+
+static void camera_matrices(const viewer *v, int w, int h, float view[16], float proj[16])
+{
+    const camera *c = &v->cam;
+    float eye[3] = {c->target[0] + c->dist * cosf(c->pitch) * sinf(c->yaw),
+                    c->target[1] + c->dist * sinf(c->pitch),
+                    c->target[2] + c->dist * cosf(c->pitch) * cosf(c->yaw)};
+    float up[3] = {0, 1, 0};
+    m4_look_at(view, eye, c->target, up);
+    float zn = fmaxf(c->dist - 2 * c->scene_size, c->dist * 0.02f);
+    m4_perspective(proj, c->fovy, h > 0 ? (float)w / (float)h : 1.f, zn, c->dist + 2 * c->scene_size);
+}
+
+/* ---- session ---------------------------------------------------------------------------- */
+
+static int geometry_alloc(viewer *v)
+{
+    const fp_mesh *m = fp_session_mesh(v->s);
+    v->n = m->vertex_count;
+    v->t = m->triangle_count;
+    size_t bytes = v->n * 3 * sizeof(float);
+    float *p[5];
+    for (int i = 0; i < 5; i++) p[i] = malloc(bytes);
+    free(v->pos); free(v->nrm); free(v->base); free(v->base_nrm); free(v->check);
+    v->pos = p[0]; v->nrm = p[1]; v->base = p[2]; v->base_nrm = p[3]; v->check = p[4];
+    v->have_pos = v->have_base = false;
+    if (!v->pos || !v->nrm || !v->base || !v->base_nrm || !v->check) return -ENOMEM;
+    return fp_render_set_topology(&v->r, v->n, m->triangles, v->t);
+}
+
+static void mapping_name(viewer *v, const char *spec)
+{
+    snprintf(v->mapping, sizeof v->mapping, "%s", spec ? spec : "anchored");
+    char *comma = strchr(v->mapping, ',');
+    if (comma) *comma = '\0';
+}
+
+/* Create and start a session on the current options; on success replace the old one. */
+static int open_session(viewer *v, char *err, size_t errlen)
+{
+    fp_session *s = NULL;
+    int rc = fp_session_create(&v->so, &s, err, errlen);
+    if (!rc && (rc = fp_session_start(s, err, errlen))) fp_session_destroy(&s);
+    if (rc) return rc;
+    fp_session_destroy(&v->s);
+    v->s = s;
+    for (int h = 0; h < FP_HANDS; h++) v->seen_time[h] = v->pending_time[h] = 0;
+    if ((rc = geometry_alloc(v))) {
+        snprintf(err, errlen, "viewer: out of memory for %zu vertices", v->n);
+        return rc;
+    }
+    frame_mesh(v);
+    return 0;
+}
+
+static void load_dropped(viewer *v)
+{
+    char *path = v->drop_path;
+    v->drop_path = NULL;
+    char err[1024];
+    const char *old = v->so.mesh_path;
+    v->so.mesh_path = path;
+    int rc = open_session(v, err, sizeof err);
+    if (rc) {
+        v->so.mesh_path = old;
+        say(v, "cannot load %s: %s", path, err);
+        free(path);
+        if (!v->n) v->error = rc;
+        return;
+    }
+    free(v->mesh_path);
+    v->mesh_path = path;
+    say(v, "loaded %s (%zu vertices)", path, v->n);
+}
+
+/* ---- keys ------------------------------------------------------------------------------- */
+
+static void set_mapping(viewer *v, const char *spec)
+{
+    char err[1024];
+    if (fp_session_set_mapping(v->s, v->so.plugin_path, spec, err, sizeof err)) {
+        say(v, "%s", err);
+        return;
+    }
+    mapping_name(v, spec);
+    say(v, "mapping %s", spec);
+}
+
+static void act(viewer *v, int key)
+{
+    switch (key) {
+    case GLFW_KEY_SPACE: v->paused = !v->paused; break;
+    case GLFW_KEY_E: fp_session_request(v->s, FP_INTENT_ENGAGE); break;
+    case GLFW_KEY_C: fp_session_request(v->s, FP_INTENT_COMMIT); break;
+    case GLFW_KEY_X: fp_session_request(v->s, FP_INTENT_CANCEL); break;
+    case GLFW_KEY_Z:
+        if (!fp_session_undo(v->s)) say(v, "nothing to undo");
+        break;
+    case GLFW_KEY_R: fp_session_reset(v->s); break;
+    case GLFW_KEY_1: set_mapping(v, "anchored"); break;
+    case GLFW_KEY_2: set_mapping(v, "unanchored"); break;
+    case GLFW_KEY_LEFT_BRACKET: fp_session_set_radius(v->s, fp_session_radius(v->s) / 1.1); break;
+    case GLFW_KEY_RIGHT_BRACKET: fp_session_set_radius(v->s, fp_session_radius(v->s) * 1.1); break;
+    case GLFW_KEY_W: v->wireframe = !v->wireframe; break;
+    case GLFW_KEY_S:
+        if (!v->shot_path && asprintf(&v->shot_path, "facepuppet-shot-%03d.png", ++v->shot_counter) < 0)
+            v->shot_path = NULL;
+        break;
+    case GLFW_KEY_F: frame_mesh(v); break;
+    case GLFW_KEY_H: v->hands_on = !v->hands_on; break;
+    case GLFW_KEY_TAB: v->hud_on = !v->hud_on; break;
+    case GLFW_KEY_SLASH: v->help_on = !v->help_on; break;
+    case GLFW_KEY_ESCAPE: glfwSetWindowShouldClose(v->win, GLFW_TRUE); break;
+    default: break;
+    }
+}
+
+static void on_key(GLFWwindow *w, int key, int scancode, int action, int mods)
+{
+    (void)scancode; (void)mods;
+    viewer *v = glfwGetWindowUserPointer(w);
+    if (action == GLFW_PRESS || (action == GLFW_REPEAT && (key == GLFW_KEY_LEFT_BRACKET ||
+                                                           key == GLFW_KEY_RIGHT_BRACKET)))
+        act(v, key);
+}
+
+static void on_button(GLFWwindow *w, int button, int action, int mods)
+{
+    (void)mods;
+    viewer *v = glfwGetWindowUserPointer(w);
+    if (action == GLFW_RELEASE) {
+        v->drag = 0;
+        return;
+    }
+    glfwGetCursorPos(w, &v->mx, &v->my);
+    v->drag = button == GLFW_MOUSE_BUTTON_LEFT ? 1 : 2;
+}
+
+static void on_cursor(GLFWwindow *w, double x, double y)
+{
+    viewer *v = glfwGetWindowUserPointer(w);
+    double dx = x - v->mx, dy = y - v->my;
+    v->mx = x;
+    v->my = y;
+    if (v->drag == 1) {
+        v->cam.yaw -= (float)dx * 0.01f;
+        v->cam.pitch += (float)dy * 0.01f;
+        v->cam.pitch = fmaxf(-1.5f, fminf(1.5f, v->cam.pitch));
+    } else if (v->drag == 2) {
+        int ww, wh;
+        glfwGetWindowSize(w, &ww, &wh);
+        float k = 2.f * v->cam.dist * tanf(v->cam.fovy / 2) / (float)(wh > 0 ? wh : 1);
+        float cy = cosf(v->cam.yaw), sy = sinf(v->cam.yaw), cp = cosf(v->cam.pitch), sp = sinf(v->cam.pitch);
+        float right[3] = {cy, 0, -sy}, up[3] = {-sp * sy, cp, -sp * cy};
+        for (int i = 0; i < 3; i++) v->cam.target[i] += (float)(-dx * right[i] + dy * up[i]) * k;
+    }
+}
+
+static void on_scroll(GLFWwindow *w, double dx, double dy)
+{
+    (void)dx;
+    viewer *v = glfwGetWindowUserPointer(w);
+    v->cam.dist *= powf(0.9f, (float)dy);
+    v->cam.dist = fmaxf(v->cam.dist, 1e-3f * v->cam.scene_size);
+}
+
+static void on_drop(GLFWwindow *w, int count, const char **paths)
+{
+    viewer *v = glfwGetWindowUserPointer(w);
+    if (count < 1) return;
+    free(v->drop_path);
+    v->drop_path = strdup(paths[0]);
+}
+
+/* ---- script ----------------------------------------------------------------------------- */
+
+static bool any_hand(const viewer *v)
+{
+    return fp_session_hand(v->s, FP_HAND_LEFT) || fp_session_hand(v->s, FP_HAND_RIGHT);
+}
+
+static void run_script(viewer *v)
+{
+    fp_script *sc = &v->script;
+    while (sc->next < sc->count) {
+        fp_script_cmd *c = &sc->cmds[sc->next];
+        if (c->op == FP_SCRIPT_WAIT_HANDS || c->op == FP_SCRIPT_WAIT_END ||
+            c->op == FP_SCRIPT_WAIT_FRAMES) {
+            if (!sc->waiting) {
+                sc->waiting = 1;
+                sc->wait_start = v->frames;
+            }
+            bool done = c->op == FP_SCRIPT_WAIT_HANDS ? any_hand(v)
+                      : c->op == FP_SCRIPT_WAIT_END   ? fp_session_finished(v->s)
+                                                      : v->frames - sc->wait_start >= (uint64_t)c->number;
+            if (!done) return;
+            sc->waiting = 0;
+            sc->next++;
+            continue;
+        }
+        sc->next++;
+        switch (c->op) {
+        case FP_SCRIPT_KEY: act(v, c->key); break;
+        case FP_SCRIPT_RADIUS: fp_session_set_radius(v->s, c->number); break;
+        case FP_SCRIPT_CLOSE: glfwSetWindowShouldClose(v->win, GLFW_TRUE); return;
+        case FP_SCRIPT_DROP:
+            free(v->drop_path);
+            v->drop_path = strdup(c->text);
+            return;
+        case FP_SCRIPT_SHOT:
+            free(v->shot_path);
+            v->shot_path = strdup(c->text);
+            return;
+        default: break;
+        }
+    }
+}
+
+/* ---- drawing ---------------------------------------------------------------------------- */
+
+typedef struct vbuf {
+    float *v;
+    size_t n, cap;
+} vbuf;
+
+static void vb_add(vbuf *b, const float p[3], const float c[4])
+{
+    if (b->n == b->cap) {
+        size_t cap = b->cap ? 2 * b->cap : 256;
+        float *g = realloc(b->v, cap * 7 * sizeof *g);
+        if (!g) return;
+        b->v = g;
+        b->cap = cap;
+    }
+    float *o = b->v + 7 * b->n++;
+    memcpy(o, p, 3 * sizeof *o);
+    memcpy(o + 3, c, 4 * sizeof *o);
+}
+
+static void draw_hands(viewer *v, const float pv[16], const float view[16])
+{
+    static const float colors[FP_HANDS][4] = {{0.35f, 0.65f, 1.f, 1.f}, {1.f, 0.6f, 0.25f, 1.f}};
+    vbuf bones = {0}, joints = {0}, arrows = {0};
+    float tips[FP_HANDS * FP_FINGERS][3];
+    size_t ntips = 0;
+    for (int h = 0; h < FP_HANDS; h++) {
+        const fp_hand_pose *p = fp_session_hand(v->s, h);
+        if (!p) continue;
+        for (int f = 0; f < FP_FINGERS; f++) {
+            vb_add(&bones, p->joints[FP_JOINT_PALM], colors[h]);
+            vb_add(&bones, p->joints[FP_JOINT(f, 0)], colors[h]);
+            for (int k = 0; k < 3; k++) {
+                vb_add(&bones, p->joints[FP_JOINT(f, k)], colors[h]);
+                vb_add(&bones, p->joints[FP_JOINT(f, k + 1)], colors[h]);
+            }
+            memcpy(tips[ntips++], p->joints[FP_JOINT_TIP(f)], sizeof tips[0]);
+        }
+        for (int j = 0; j < FP_HAND_JOINTS; j++) vb_add(&joints, p->joints[j], colors[h]);
+    }
+    /* Control vectors: a line from start to end and a two-stroke head in the plane that
+     * faces the camera. */
+    const fp_control_set *cs = fp_session_control_set(v->s);
+    if (cs->active) {
+        static const float yellow[4] = {1.f, 0.92f, 0.2f, 1.f};
+        float eye_dir[3] = {view[2], view[6], view[10]}; /* camera +z in world */
+        for (size_t i = 0; i < cs->count; i++) {
+            const float *a = cs->start[i], *b = cs->end[i];
+            float d[3];
+            v3_sub(b, a, d);
+            float len = v3_len(d);
+            vb_add(&arrows, a, yellow);
+            vb_add(&arrows, b, yellow);
+            if (len <= 0) continue;
+            float side[3];
+            v3_cross(d, eye_dir, side);
+            v3_norm(side);
+            float hl = fminf(0.3f * len, 0.15f * (float)cs->radius);
+            for (int s = -1; s <= 1; s += 2) {
+                float q[3];
+                for (int k = 0; k < 3; k++) q[k] = b[k] - d[k] / len * hl + side[k] * hl * 0.5f * (float)s;
+                vb_add(&arrows, b, yellow);
+                vb_add(&arrows, q, yellow);
+            }
+        }
+    }
+    float sphere_color[4] = {0.55f, 0.8f, 1.f, 0.13f};
+    fp_render_spheres(&v->r, pv, view, &tips[0][0], ntips, (float)fp_session_radius(v->s), sphere_color);
+    fp_render_lines(&v->r, pv, bones.v, bones.n, GL_LINES, 1.f, true);
+    fp_render_lines(&v->r, pv, joints.v, joints.n, GL_POINTS, 5.f, true);
+    fp_render_lines(&v->r, pv, arrows.v, arrows.n, GL_LINES, 1.f, false);
+    free(bones.v);
+    free(joints.v);
+    free(arrows.v);
+}
+
+static const char help_text[] =
+    "keys\n"
+    " space  pause / run\n"
+    " E      engage      C  commit\n"
+    " X      cancel      Z  undo commit\n"
+    " R      back to the loaded shape\n"
+    " 1 / 2  anchored / unanchored\n"
+    " [ / ]  radius down / up\n"
+    " W wireframe  S screenshot  F frame\n"
+    " H hands  Tab HUD  ? this list\n"
+    " Esc    quit\n"
+    "mouse: left orbit, right pan, wheel zoom\n"
+    "drop a mesh file on the window to load it";
+
+static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
+{
+    const fp_control_set *cs = fp_session_control_set(v->s);
+    double recent = 0;
+    for (int i = 0; i < v->recent_n; i++) recent += v->recent_frame_ms[i];
+    recent = v->recent_n ? recent / v->recent_n : 0;
+    const char *state = v->paused ? "PAUSED" : cs->active ? "ENGAGED" : v->committed_shown ? "committed" : "idle";
+    char text[1024];
+    snprintf(text, sizeof text,
+             "%s  %zu vertices  mapping %s\n"
+             "%s   commits %u   radius %.4g\n"
+             "%.1f fps (%.2f ms)   engine %.3f ms   input %.0f ev/s%s",
+             v->mesh_path ? v->mesh_path : "", v->n, v->mapping, state, v->commits,
+             fp_session_radius(v->s), recent > 0 ? 1000.0 / recent : 0.0, recent,
+             st->active ? st->update_ms : v->last_update_ms, v->input_rate,
+             v->opt->gpu_warp ? "   gpu-warp" : "");
+    const float white[4] = {0.95f, 0.95f, 0.92f, 1.f}, dim[4] = {0.8f, 0.85f, 0.9f, 1.f};
+    float scale = h >= 600 ? 2.f : 1.f;
+    float y = 8;
+    y += fp_render_text(&v->r, w, h, 8, y, scale, text, white) + 6 * scale;
+    if (v->status[0] && fp_now_ns() < v->status_until)
+        y += fp_render_text(&v->r, w, h, 8, y, scale, v->status, dim) + 6 * scale;
+    if (v->help_on) fp_render_text(&v->r, w, h, 8, y, scale, help_text, dim);
+    else fp_render_text(&v->r, w, h, 8, (float)h - 14 * scale, scale, "? keys", dim);
+}
+
+/* Upload the shape to show and the base when they changed (normals recomputed). */
+static void upload(viewer *v, bool warp_on_gpu)
+{
+    const fp_mesh *m = fp_session_mesh(v->s);
+    size_t bytes = v->n * 3 * sizeof(float);
+    const float *base = fp_session_base(v->s);
+    if (!v->have_base || memcmp(base, v->base, bytes)) {
+        memcpy(v->base, base, bytes);
+        fp_mesh_normals(m->triangles, v->t, v->base, v->n, v->base_nrm);
+        fp_render_upload(&v->r, true, v->base, v->base_nrm);
+        v->have_base = true;
+    }
+    if (warp_on_gpu) return;
+    const float *shown = fp_session_positions(v->s);
+    if (!v->have_pos || memcmp(shown, v->pos, bytes)) {
+        memcpy(v->pos, shown, bytes);
+        fp_mesh_normals(m->triangles, v->t, v->pos, v->n, v->nrm);
+        fp_render_upload(&v->r, false, v->pos, v->nrm);
+        v->have_pos = true;
+    }
+}
+
+/* Compare the GPU warp (transform feedback) with the CPU engine's shape this frame. */
+static void check_warp(viewer *v, const fp_warp_coeffs *c)
+{
+    if (!v->gw || fp_gpuwarp_eval(v->gw, c, v->n, v->base, v->check)) return;
+    const float *cpu = fp_session_positions(v->s);
+    double err = 0, disp = 0;
+    for (size_t i = 0; i < 3 * v->n; i += 3) {
+        double e = 0, d = 0;
+        for (int k = 0; k < 3; k++) {
+            double a = (double)v->check[i + k] - cpu[i + k], b = (double)cpu[i + k] - v->base[i + k];
+            e += a * a;
+            d += b * b;
+        }
+        err = fmax(err, sqrt(e));
+        disp = fmax(disp, sqrt(d));
+    }
+    v->rep.warp_checks++;
+    v->rep.warp_max_error = fmax(v->rep.warp_max_error, err);
+    v->rep.warp_max_displacement = fmax(v->rep.warp_max_displacement, disp);
+}
+
+static int screenshot(viewer *v, const char *path, int w, int h)
+{
+    unsigned char *px = malloc((size_t)w * h * 3);
+    if (!px) return -ENOMEM;
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glReadBuffer(GL_BACK);
+    glReadPixels(0, 0, w, h, GL_RGB, GL_UNSIGNED_BYTE, px);
+    /* GL's rows go bottom-up; PNG's top-down: write with a negative stride. */
+    int ok = stbi_write_png(path, w, h, 3, px + (size_t)(h - 1) * w * 3, -w * 3);
+    free(px);
+    if (!ok) {
+        snprintf(v->err, v->errlen, "cannot write the screenshot %s", path);
+        return -EIO;
+    }
+    if (!v->opt->quiet) fprintf(stderr, "facepuppet live: wrote %s (%dx%d)\n", path, w, h);
+    return 0;
+}
+
+static void draw(viewer *v, const fp_frame_stats *st, int w, int h)
+{
+    glViewport(0, 0, w, h);
+    glClearColor(0.11f, 0.12f, 0.15f, 1.f);
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    glEnable(GL_DEPTH_TEST);
+    float view[16], proj[16], pv[16];
+    camera_matrices(v, w, h, view, proj);
+    m4_mul(proj, view, pv);
+    static const float skin[4] = {0.86f, 0.7f, 0.6f, 1.f}, ghost[4] = {0.6f, 0.8f, 1.f, 0.22f};
+    bool deformed = fp_session_positions(v->s) != fp_session_base(v->s);
+    if (v->opt->gpu_warp) {
+        fp_warp_coeffs c;
+        const fp_control_set *cs = fp_session_control_set(v->s);
+        if (!deformed || fp_warp_solve(cs->count, &cs->start[0][0], &cs->end[0][0], cs->radius, &c))
+            fp_warp_solve(0, NULL, NULL, 1.0, &c);
+        fp_render_mesh(&v->r, pv, view, true, &c, skin, v->wireframe);
+        if (deformed && (v->frames % 30 == 0 || v->frames + 1 == v->opt->frames)) check_warp(v, &c);
+    } else {
+        fp_render_mesh(&v->r, pv, view, false, NULL, skin, v->wireframe);
+    }
+    if (deformed) fp_render_mesh(&v->r, pv, view, true, NULL, ghost, false);
+    if (v->hands_on) draw_hands(v, pv, view);
+    if (v->hud_on) draw_hud(v, w, h, st);
+}
+
+/* ---- the loop --------------------------------------------------------------------------- */
+
+static void on_glfw_error(int code, const char *text)
+{
+    (void)code;
+    fprintf(stderr, "facepuppet live: GLFW: %s\n", text);
+}
+
+static void frame(viewer *v)
+{
+    glfwPollEvents();
+    if (v->drop_path) load_dropped(v);
+    run_script(v);
+    if (v->drop_path) load_dropped(v);
+    fp_frame_stats st;
+    memset(&st, 0, sizeof st);
+    int64_t now = fp_now_ns();
+    if (!v->paused) {
+        fp_session_step(v->s, now, &st);
+        if (st.committed) v->commits++;
+        if (st.committed) v->committed_shown = true;
+        if (st.engaged || st.cancelled) v->committed_shown = false;
+        if (st.active) {
+            samples_add(&v->engine_ms, st.update_ms);
+            v->last_update_ms = st.update_ms;
+        }
+        v->events_window += st.events;
+        for (int h = 0; h < FP_HANDS; h++) {
+            const fp_hand_pose *p = fp_session_hand(v->s, h);
+            if (p && p->time_ns > v->seen_time[h]) {
+                v->seen_time[h] = p->time_ns;
+                v->pending_time[h] = p->time_ns;
+            }
+        }
+    }
+    if (now - v->window_start >= 1000000000LL) {
+        v->input_rate = (double)v->events_window * 1e9 / (double)(now - v->window_start);
+        v->events_window = 0;
+        v->window_start = now;
+    }
+    upload(v, v->opt->gpu_warp);
+    int w, h;
+    glfwGetFramebufferSize(v->win, &w, &h);
+    draw(v, &st, w, h);
+    bool last = v->opt->frames && v->frames + 1 >= v->opt->frames;
+    if (last && v->opt->screenshot && !v->shot_path) v->shot_path = strdup(v->opt->screenshot);
+    if (v->shot_path) {
+        int rc = screenshot(v, v->shot_path, w, h);
+        free(v->shot_path);
+        v->shot_path = NULL;
+        if (rc && v->opt->screenshot) v->error = rc;
+    }
+    glfwSwapBuffers(v->win);
+    glFinish(); /* never queue frames: the next frame starts when this one is shown */
+    int64_t swap = fp_now_ns();
+    if (v->frames > 0) {
+        double ms = (double)(swap - v->last_swap) / 1e6;
+        samples_add(&v->frame_ms, ms);
+        v->recent_frame_ms[v->frames % 64] = ms;
+        if (v->recent_n < 64) v->recent_n++;
+    }
+    v->last_swap = swap;
+    for (int hnd = 0; hnd < FP_HANDS; hnd++)
+        if (v->pending_time[hnd]) {
+            samples_add(&v->latency_ms, (double)(swap - v->pending_time[hnd]) / 1e6);
+            v->pending_time[hnd] = 0;
+        }
+    v->frames++;
+}
+
+int fp_viewer_run(const fp_viewer_options *opt, fp_viewer_report *report, char *err,
+                  size_t errlen)
+{
+    viewer *v = calloc(1, sizeof *v);
+    if (!v) return -ENOMEM;
+    v->opt = opt;
+    v->so = opt->session;
+    v->err = err;
+    v->errlen = errlen;
+    v->hands_on = v->hud_on = true;
+    int rc = 0;
+    bool glfw = false;
+    if (opt->script && (rc = fp_script_parse(opt->script, &v->script, err, errlen))) goto out;
+    if (!opt->session.mesh_path || !(v->mesh_path = strdup(opt->session.mesh_path))) {
+        snprintf(err, errlen, "viewer: a mesh is required");
+        rc = -EINVAL;
+        goto out;
+    }
+    v->so.mesh_path = v->mesh_path;
+    mapping_name(v, opt->session.mapping);
+
+    glfwSetErrorCallback(on_glfw_error);
+    if (!glfwInit()) {
+        snprintf(err, errlen, "no display: GLFW cannot initialise (is DISPLAY set? try xvfb-run)");
+        rc = -ENODEV;
+        goto out;
+    }
+    glfw = true;
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
+    glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+    glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+    v->win = glfwCreateWindow(opt->width > 0 ? opt->width : 1280, opt->height > 0 ? opt->height : 720,
+                              "facepuppet live", NULL, NULL);
+    if (!v->win) {
+        snprintf(err, errlen, "cannot open a window with an OpenGL 3.3 core context");
+        rc = -ENODEV;
+        goto out;
+    }
+    glfwMakeContextCurrent(v->win);
+    glfwSwapInterval(opt->vsync ? 1 : 0);
+    glfwSetWindowUserPointer(v->win, v);
+    glfwSetKeyCallback(v->win, on_key);
+    glfwSetMouseButtonCallback(v->win, on_button);
+    glfwSetCursorPosCallback(v->win, on_cursor);
+    glfwSetScrollCallback(v->win, on_scroll);
+    glfwSetDropCallback(v->win, on_drop);
+    if ((rc = fp_render_init(&v->r, err, errlen))) goto out;
+    if (opt->gpu_warp && (rc = fp_gpuwarp_create(&v->gw, err, errlen))) goto out;
+    if ((rc = open_session(v, err, errlen))) goto out;
+    if (!opt->quiet) {
+        const char *renderer = (const char *)glGetString(GL_RENDERER);
+        fprintf(stderr, "facepuppet live: %s, %zu vertices, mapping %s, radius %.4g; OpenGL %s on %s\n",
+                v->mesh_path, v->n, v->mapping, fp_session_radius(v->s),
+                (const char *)glGetString(GL_VERSION), renderer ? renderer : "?");
+    }
+    int64_t t0 = v->window_start = fp_now_ns();
+    while (!glfwWindowShouldClose(v->win) && !v->error) {
+        frame(v);
+        if (opt->frames && v->frames >= opt->frames) break;
+        if (opt->duration_s > 0 && fp_now_ns() - t0 >= (int64_t)(opt->duration_s * 1e9)) break;
+    }
+    if (!v->error && opt->out && fp_session_save(v->s, opt->out, err, errlen)) v->error = -EIO;
+    if (v->error) {
+        rc = v->error;
+        if (!err[0]) snprintf(err, errlen, "viewer: the run failed");
+    }
+out:
+    if (v->s) v->rep.dropped = fp_session_dropped(v->s);
+    v->rep.frames = v->frames;
+    fp_viewer_percentiles(v->frame_ms.v, v->frame_ms.n, &v->rep.frame_ms_median, &v->rep.frame_ms_p99);
+    fp_viewer_percentiles(v->latency_ms.v, v->latency_ms.n, &v->rep.latency_ms_median,
+                          &v->rep.latency_ms_p99);
+    v->rep.latency_samples = v->latency_ms.n;
+    double unused;
+    fp_viewer_percentiles(v->engine_ms.v, v->engine_ms.n, &v->rep.engine_ms_median, &unused);
+    if (report) *report = v->rep;
+    fp_session_destroy(&v->s);
+    if (v->win) {
+        fp_gpuwarp_destroy(&v->gw);
+        fp_render_free(&v->r);
+        glfwDestroyWindow(v->win);
+    }
+    if (glfw) glfwTerminate();
+    fp_script_free(&v->script);
+    free(v->frame_ms.v);
+    free(v->latency_ms.v);
+    free(v->engine_ms.v);
+    free(v->pos); free(v->nrm); free(v->base); free(v->base_nrm); free(v->check);
+    free(v->shot_path);
+    free(v->drop_path);
+    free(v->mesh_path);
+    free(v);
+    return rc;
+}

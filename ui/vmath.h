@@ -1,0 +1,86 @@
+/* vmath.h: the few 3D vector and 4x4 matrix helpers the viewer needs (column-major, as
+ * OpenGL takes them: m[col * 4 + row]). Internal to ui/. */
+#ifndef FP_UI_VMATH_H
+#define FP_UI_VMATH_H
+
+#include <math.h>
+#include <string.h>
+
+static inline void v3_sub(const float a[3], const float b[3], float o[3])
+{
+    o[0] = a[0] - b[0]; o[1] = a[1] - b[1]; o[2] = a[2] - b[2];
+}
+static inline float v3_dot(const float a[3], const float b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+static inline void v3_cross(const float a[3], const float b[3], float o[3])
+{
+    float x = a[1] * b[2] - a[2] * b[1], y = a[2] * b[0] - a[0] * b[2], z = a[0] * b[1] - a[1] * b[0];
+    o[0] = x; o[1] = y; o[2] = z;
+}
+static inline float v3_len(const float a[3]) { return sqrtf(v3_dot(a, a)); }
+static inline void v3_norm(float a[3])
+{
+    float l = v3_len(a);
+    if (l > 0) { a[0] /= l; a[1] /= l; a[2] /= l; }
+}
+
+static inline void m4_identity(float m[16])
+{
+    memset(m, 0, 16 * sizeof *m);
+    m[0] = m[5] = m[10] = m[15] = 1.f;
+}
+
+/* o = a * b (o may alias neither). */
+static inline void m4_mul(const float a[16], const float b[16], float o[16])
+{
+    for (int c = 0; c < 4; c++)
+        for (int r = 0; r < 4; r++) {
+            float s = 0;
+            for (int k = 0; k < 4; k++) s += a[k * 4 + r] * b[c * 4 + k];
+            o[c * 4 + r] = s;
+        }
+}
+
+/* gluPerspective: fovy in radians. */
+static inline void m4_perspective(float m[16], float fovy, float aspect, float zn, float zf)
+{
+    float f = 1.f / tanf(fovy / 2);
+    memset(m, 0, 16 * sizeof *m);
+    m[0] = f / aspect;
+    m[5] = f;
+    m[10] = (zf + zn) / (zn - zf);
+    m[11] = -1.f;
+    m[14] = 2.f * zf * zn / (zn - zf);
+}
+
+static inline void m4_ortho(float m[16], float l, float r, float b, float t)
+{
+    m4_identity(m);
+    m[0] = 2.f / (r - l);
+    m[5] = 2.f / (t - b);
+    m[10] = -1.f;
+    m[12] = -(r + l) / (r - l);
+    m[13] = -(t + b) / (t - b);
+}
+
+/* gluLookAt. */
+static inline void m4_look_at(float m[16], const float eye[3], const float at[3], const float up[3])
+{
+    float f[3], s[3], u[3];
+    v3_sub(at, eye, f);
+    v3_norm(f);
+    v3_cross(f, up, s);
+    v3_norm(s);
+    v3_cross(s, f, u);
+    m4_identity(m);
+    m[0] = s[0]; m[4] = s[1]; m[8] = s[2];
+    m[1] = u[0]; m[5] = u[1]; m[9] = u[2];
+    m[2] = -f[0]; m[6] = -f[1]; m[10] = -f[2];
+    m[12] = -v3_dot(s, eye);
+    m[13] = -v3_dot(u, eye);
+    m[14] = v3_dot(f, eye);
+}
+
+#endif
