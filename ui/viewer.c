@@ -213,6 +213,7 @@ static void load_dropped(viewer *v)
     if (rc) {
         v->so.mesh_path = old;
         say(v, "cannot load %s: %s", path, err);
+        if (v->opt->quiet) fprintf(stderr, "facepuppet live: %s\n", v->status);
         free(path);
         if (!v->n) v->error = rc;
         return;
@@ -229,6 +230,7 @@ static void set_mapping(viewer *v, const char *spec)
     char err[1024];
     if (fp_session_set_mapping(v->s, v->so.plugin_path, spec, err, sizeof err)) {
         say(v, "%s", err);
+        if (v->opt->quiet) fprintf(stderr, "facepuppet live: %s\n", v->status);
         return;
     }
     mapping_name(v, spec);

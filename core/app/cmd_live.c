@@ -218,7 +218,8 @@ static int live_main(int argc, char **argv)
     int status = FP_EXIT_OK;
     if (rc) {
         fprintf(stderr, "facepuppet live: %s\n", err);
-        status = rc == -EIO ? FP_EXIT_CANTCREAT : rc == -ENODEV ? FP_EXIT_NOINPUT : fp_app_exit_code(rc);
+        status = rc == -EIO ? FP_EXIT_CANTCREAT : rc == -ENODEV ? FP_EXIT_NOINPUT
+               : !strncmp(err, "--script", 8) ? FP_EXIT_USAGE : fp_app_exit_code(rc);
     }
     if (rep.frames) {
         printf("frames %llu; frame time median %.2f ms, p99 %.2f ms; event-to-frame latency median "

@@ -1,0 +1,267 @@
+/* `facepuppet live` end to end, under Xvfb (Mesa llvmpipe): screenshots of the ICT face,
+ * a scripted engaged deformation driven by a two-pose recording, undo, closing by Esc and by
+ * the close button, a dropped mesh, the mapping keys, and command-line errors.
+ * The run is deterministic: the recording holds pose A at 0 s and pose B at 1.5 s; the script
+ * waits for the first pose, engages (start points = A's fingertips), waits for the end of the
+ * recording (end points = B's fingertips), commits, undoes. Hands and HUD are hidden (keys H,
+ * Tab) so that the images show the face alone. */
+#define _GNU_SOURCE
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <stb_image.h>
+
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+static char tmp[256];
+static char bin[4096];
+static char face[4096];
+static char rec[512];
+
+#define SIZE "--size 320x240"
+
+/* Run `facepuppet live ARGS` with stdout and stderr into tmp/out.txt; the exit status. */
+static int live(const char *fmt, ...)
+{
+    char args[4096], cmd[16384];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(args, sizeof args, fmt, ap);
+    va_end(ap);
+    snprintf(cmd, sizeof cmd, "'%s' live -q " SIZE " --mesh '%s' %s >'%s/out.txt' 2>&1", bin, face,
+             args, tmp);
+    int st = system(cmd);
+    char out[4096] = "";
+    snprintf(cmd, sizeof cmd, "%s/out.txt", tmp);
+    FILE *f = fopen(cmd, "r");
+    if (f) {
+        size_t n = fread(out, 1, sizeof out - 1, f);
+        out[n] = '\0';
+        fclose(f);
+    }
+    print_message("live %s\n-> %s", args, out);
+    return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+
+static bool out_contains(const char *needle)
+{
+    char path[512], out[8192] = "";
+    snprintf(path, sizeof path, "%s/out.txt", tmp);
+    FILE *f = fopen(path, "r");
+    if (!f) return false;
+    size_t n = fread(out, 1, sizeof out - 1, f);
+    out[n] = '\0';
+    fclose(f);
+    return strstr(out, needle) != NULL;
+}
+
+typedef struct image {
+    int w, h;
+    unsigned char *px;  /* RGB */
+} image;
+
+static image load(const char *name)
+{
+    char path[512];
+    snprintf(path, sizeof path, "%s/%s", tmp, name);
+    image im = {0};
+    int n;
+    im.px = stbi_load(path, &im.w, &im.h, &n, 3);
+    assert_non_null(im.px);
+    assert_int_equal(im.w, 320);
+    assert_int_equal(im.h, 240);
+    return im;
+}
+
+static const unsigned char *at(const image *im, int x, int y) { return im->px + 3 * (y * im->w + x); }
+static int diff(const unsigned char *a, const unsigned char *b)
+{
+    int d = 0;
+    for (int k = 0; k < 3; k++) d = abs(a[k] - b[k]) > d ? abs(a[k] - b[k]) : d;
+    return d;
+}
+
+/* The background: the four corners' 16x16 blocks are one colour; returns it. */
+static void check_background(const image *im, unsigned char bg[3])
+{
+    memcpy(bg, at(im, 0, 0), 3);
+    int xs[2] = {0, im->w - 16}, ys[2] = {0, im->h - 16};
+    for (int i = 0; i < 2; i++)
+        for (int j = 0; j < 2; j++)
+            for (int y = ys[j]; y < ys[j] + 16; y++)
+                for (int x = xs[i]; x < xs[i] + 16; x++) assert_int_equal(diff(at(im, x, y), bg), 0);
+}
+
+/* The face shows in the middle: most pixels of the central 40x40 block differ from bg. */
+static void check_face_in_middle(const image *im, const unsigned char bg[3])
+{
+    int differ = 0;
+    for (int y = im->h / 2 - 20; y < im->h / 2 + 20; y++)
+        for (int x = im->w / 2 - 20; x < im->w / 2 + 20; x++) differ += diff(at(im, x, y), bg) > 8;
+    assert_true(differ > 40 * 40 * 9 / 10);
+}
+
+static void test_screenshot_shows_face(void **state)
+{
+    (void)state;
+    assert_int_equal(live("--frames 3 --screenshot '%s/face.png' --script 'key H; key Tab'", tmp), 0);
+    image im = load("face.png");
+    unsigned char bg[3];
+    check_background(&im, bg);
+    check_face_in_middle(&im, bg);
+    assert_true(out_contains("frame time median"));
+    assert_true(out_contains("event-to-frame latency"));
+    stbi_image_free(im.px);
+}
+
+static void test_deform_commit_undo(void **state)
+{
+    (void)state;
+    assert_int_equal(live("-i 'replay:%s' -M anchored,auto=0 --frames 2000 --script "
+                          "'key H; key Tab; wait hands; shot %s/a.png; key E; wait end; key C; "
+                          "shot %s/b.png; key Z; shot %s/c.png; key Esc'",
+                          rec, tmp, tmp, tmp),
+                     0);
+    image a = load("a.png"), b = load("b.png"), c = load("c.png");
+    unsigned char bg[3];
+    check_background(&a, bg);
+    check_face_in_middle(&a, bg);
+    /* b differs from a, inside the face: every differing pixel is a face pixel in a or b. */
+    int changed = 0, outside = 0, undo_off = 0;
+    for (int y = 0; y < a.h; y++)
+        for (int x = 0; x < a.w; x++) {
+            const unsigned char *pa = at(&a, x, y), *pb = at(&b, x, y);
+            if (diff(pa, pb) > 3) {
+                changed++;
+                if (!diff(pa, bg) && !diff(pb, bg)) outside++;
+            }
+            undo_off += diff(pa, at(&c, x, y)) > 1;
+        }
+    print_message("deformation changed %d pixels (%d outside the face); undo left %d off\n",
+                  changed, outside, undo_off);
+    assert_true(changed >= 30);
+    assert_int_equal(outside, 0);
+    unsigned char bgb[3];
+    check_background(&b, bgb);
+    assert_int_equal(diff(bg, bgb), 0);
+    /* Undo returns the first image. */
+    assert_int_equal(undo_off, 0);
+    stbi_image_free(a.px);
+    stbi_image_free(b.px);
+    stbi_image_free(c.px);
+}
+
+static void test_close_button_and_esc(void **state)
+{
+    (void)state;
+    assert_int_equal(live("-i 'replay:%s' --frames 1000 --script 'wait frames 2; close'", rec), 0);
+    assert_true(out_contains("frames 3;"));
+    assert_int_equal(live("-i 'replay:%s' --frames 1000 --script 'wait frames 1; key Esc'", rec), 0);
+    assert_true(out_contains("frames 2;"));
+}
+
+static void test_drop_mesh_and_mapping_keys(void **state)
+{
+    (void)state;
+    char path[512];
+    snprintf(path, sizeof path, "%s/cube.obj", tmp);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fputs("v -1 -1 -1\nv 1 -1 -1\nv 1 1 -1\nv -1 1 -1\nv -1 -1 1\nv 1 -1 1\nv 1 1 1\nv -1 1 1\n"
+          "f 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 4 8 7\nf 4 7 3\nf 1 5 8\n"
+          "f 1 8 4\nf 2 3 7\nf 2 7 6\n", f);
+    fclose(f);
+    /* A missing file keeps the face; the cube then replaces it and fills the middle. */
+    assert_int_equal(live("-i 'replay:%s' --frames 100 --script 'key H; key Tab; key 2; key 1; "
+                          "drop %s/missing.obj; wait frames 1; drop %s; wait frames 1; "
+                          "shot %s/cube.png; close'", rec, tmp, path, tmp), 0);
+    assert_true(out_contains("cannot load"));
+    image im = load("cube.png");
+    unsigned char bg[3];
+    check_background(&im, bg);
+    check_face_in_middle(&im, bg);
+    stbi_image_free(im.px);
+}
+
+static void test_command_line_errors(void **state)
+{
+    (void)state;
+    assert_int_equal(live("--script 'jump 3' --frames 2"), 64);
+    assert_true(out_contains("jump"));
+    assert_int_equal(live("--size 0x0"), 64);
+    assert_int_equal(live("--screenshot '%s/x.png'", tmp), 64);
+    assert_int_equal(live("--frames 2 -M nosuchmapping"), 78);
+    /* A screenshot that cannot be written: exit 73. */
+    assert_int_equal(live("--frames 1 --screenshot /nonexistent-dir/x.png"), 73);
+}
+
+static void write_recording(void)
+{
+    /* Leap joints CSV, one right hand: pose A on the left cheek (x about 40 mm), pose B 15 mm
+     * up and 15 mm toward the performer, 1.5 s later. Fingers point at the face (-z). */
+    snprintf(rec, sizeof rec, "%s/two-poses_joints_mm.csv", tmp);
+    FILE *f = fopen(rec, "w");
+    assert_non_null(f);
+    fputs("frame,timestamp_us,hand_id,hand_type,palm_x,palm_y,palm_z,palm_nx,palm_ny,palm_nz,"
+          "dir_x,dir_y,dir_z", f);
+    const char *fingers[] = {"thumb", "index", "middle", "ring", "pinky"};
+    const char *joints[] = {"mcp", "pip", "dip", "tip"};
+    for (int fi = 0; fi < 5; fi++)
+        for (int j = 0; j < 4; j++) fprintf(f, ",%s_%s_x,%s_%s_y,%s_%s_z", fingers[fi], joints[j],
+                                             fingers[fi], joints[j], fingers[fi], joints[j]);
+    fputs("\n", f);
+    for (int row = 0; row < 2; row++) {
+        double dy = row ? 15 : 0, dz = row ? 15 : 0;
+        fprintf(f, "%d,%d,7,right,40,%.1f,%.1f,0,-1,0,0,0,-1", row, row ? 1500000 : 0, 200 + dy, -40 + dz);
+        for (int fi = 0; fi < 5; fi++) {
+            double x = 22 + 9 * fi, y = (fi ? 212 : 200) + dy;
+            double z[4] = {-70, -88, -102, -112};
+            for (int j = 0; j < 4; j++) fprintf(f, ",%.1f,%.1f,%.1f", x, y, z[j] + dz);
+        }
+        fputs("\n", f);
+    }
+    fclose(f);
+}
+
+static int setup(void **state)
+{
+    (void)state;
+    const char *build = getenv("FP_BUILD_DIR");
+    snprintf(bin, sizeof bin, "%s/bin/facepuppet", build ? build : "build");
+    const char *data = getenv("FP_SHARED_DATA");
+    snprintf(face, sizeof face, "%s/faces/ict-facekit/generic_neutral_mesh.obj",
+             data ? data : "../shared/data");
+    snprintf(tmp, sizeof tmp, "/tmp/fp-test-viewer-XXXXXX");
+    if (!mkdtemp(tmp)) return -1;
+    write_recording();
+    return 0;
+}
+
+static int teardown(void **state)
+{
+    (void)state;
+    char cmd[512];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmp);
+    return system(cmd) == 0 ? 0 : -1;
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_screenshot_shows_face),
+        cmocka_unit_test(test_deform_commit_undo),
+        cmocka_unit_test(test_close_button_and_esc),
+        cmocka_unit_test(test_drop_mesh_and_mapping_keys),
+        cmocka_unit_test(test_command_line_errors),
+    };
+    return cmocka_run_group_tests(tests, setup, teardown);
+}
