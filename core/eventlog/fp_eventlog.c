@@ -443,7 +443,7 @@ static char *next_token(cursor *c, char **start)
 
 static int need_token(cursor *c, char **tok, const char *what)
 {
-    char *start;
+    char *start = NULL;
     if (!next_token(c, &start)) {
         return reader_fail(c->r, FP_EVENTLOG_ESYNTAX, col_of(c, c->p),
                            "line ends where %s was expected", what);
@@ -454,7 +454,7 @@ static int need_token(cursor *c, char **tok, const char *what)
 
 static int parse_float(cursor *c, float *out, const char *what)
 {
-    char *tok;
+    char *tok = NULL;
     int rc = need_token(c, &tok, what);
     if (rc) return rc;
     char *end;
@@ -493,7 +493,7 @@ static int parse_u32(cursor *c, const char *tok, int base, uint32_t *out, const 
 
 static int parse_u32_token(cursor *c, int base, uint32_t *out, const char *what)
 {
-    char *tok;
+    char *tok = NULL;
     int rc = need_token(c, &tok, what);
     return rc ? rc : parse_u32(c, tok, base, out, what);
 }
@@ -559,7 +559,7 @@ static int parse_event(fp_eventlog_reader *r, char *line, fp_event *out)
 {
     cursor c = {r, line, line};
     fp_event_header *h = &out->header;
-    char *tok;
+    char *tok = NULL;
     int rc = need_token(&c, &tok, "the time in ns");
     if (rc) return rc;
     char *end;
