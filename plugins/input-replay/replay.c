@@ -56,6 +56,7 @@ static const char usage_text[] =
     "  speed=X  play X times as fast (X > 0, default 1)\n"
     "  loop=1   start over at the end; event times keep increasing (default 0)\n"
     "  fast=1   as fast as possible, retrying rather than dropping when the queue is full\n"
+    "           (buttons and status events are always retried; paced poses may be dropped)\n"
     "  hands=H  left, right or both (default both)\n"
     "  Event times are the host clock at the emulated moment. Without loop, the replay ends\n"
     "  with an end-of-stream status. A malformed row fails at creation (FILE:LINE:COLUMN); a\n"
@@ -83,12 +84,15 @@ static bool wait_until(replay *r, int64_t deadline)
     return go_on;
 }
 
-/* Pushes one event. Paced mode: a full queue drops it (the host counts drops, as for a
- * device). Fast mode: waits briefly and tries again until it goes in or stop is asked. */
+/* Pushes one event. A pose (angles, positions, wrist) meeting a full queue in paced mode is
+ * dropped, as a device's would be (the host counts drops; the next pose supersedes it). In
+ * fast mode, and for buttons and status events always, it waits briefly and tries again
+ * until the event goes in or stop is asked. Returns false on stop. */
 static bool push(replay *r, const fp_event *ev)
 {
+    bool keep = r->fast || ev->header.type == FP_EVENT_BUTTON || ev->header.type == FP_EVENT_STATUS;
     while (!r->host->push_event(r->host, &ev->header)) {
-        if (!r->fast) return true;
+        if (!keep) return true;
         if (!wait_until(r, mono_ns() + RETRY_WAIT_NS)) return false;
     }
     return true;

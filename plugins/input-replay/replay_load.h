@@ -49,8 +49,10 @@ void replay_recording_free(replay_recording *rec);
 
 /** Wrist rotation from a Leap palm normal and hand direction (device frame, need not be unit
  *  or orthogonal): the right-handed frame with +y the back of the hand (-normal) and -z toward
- *  the fingers (direction), as a unit quaternion (w, x, y, z), w >= 0. Returns 0, or -1 when
- *  a vector is zero, or they are parallel. */
+ *  the fingers (direction), as a unit quaternion (w, x, y, z), w >= 0. x = y cross z, so +x
+ *  points toward the pinky of a right hand and the thumb of a left hand (plugin.h's "+x toward
+ *  the thumb side for a right hand" would need a reflection; see docs/arch/replay.md).
+ *  Returns 0, or -1 when a vector is zero, or they are parallel. */
 int replay_wrist_rotation(const double normal[3], const double direction[3], float q[4]);
 
 #endif

@@ -405,6 +405,16 @@ static void positions_and_wrist_equal_csv(void **state)
                 if (fabs(back[c] + n[c] / sqrt(ln)) > 0.01) /* CSV normal ~ orthogonal */
                     fail_msg("row %zu: +y maps to %g, -normal %g", row, back[c], -n[c]);
             }
+            /* +x = y cross z (a proper rotation): toward the pinky of a right hand and the
+             * thumb of a left hand (see docs/arch/replay.md on plugin.h's wording). */
+            const double ex[3] = {1, 0, 0};
+            double side[3], across = 0;
+            quat_rotate(q, ex, side);
+            for (int c = 0; c < 3; c++)
+                across += side[c] * (ev->positions.mm[FP_JOINT_TIP(0)][c] -
+                                     ev->positions.mm[FP_JOINT_TIP(4)][c]);
+            if (r->hand == FP_HAND_RIGHT ? across >= 0 : across <= 0)
+                fail_msg("row %zu: +x . (thumb tip - pinky tip) = %g", row, across);
             row++;
         }
     }
@@ -435,7 +445,7 @@ static void angles_in_radians_empty_invalid(void **state)
             }
             want_valid |= 1u << s;
             double want = atof(fld) * M_PI / 180.0;
-            if (fabs(ev->angles.radians[s] - want) > 1e-6 * fmax(1, fabs(want)))
+            if (fabs(ev->angles.radians[s] - want) > 1.2e-7 * fabs(want) + 1e-12) /* float rounding */
                 fail_msg("row %zu sensor %d: %.9g rad, expected %.9g", row, s,
                          ev->angles.radians[s], want);
         }
@@ -532,6 +542,28 @@ static void fast_never_drops(void **state)
         assert_int_equal(ev->header.time_ns - first, (int64_t)r * 1000000000);
         r++;
     }
+    fake_free(h);
+}
+
+/* Paced mode with a full queue: poses may be dropped (as a device's), status events never. */
+static void paced_drops_poses_not_status(void **state)
+{
+    char path[512];
+    tmp_path(path, sizeof path, "paced_joints.csv");
+    write_joints_csv(path, 10, 1000, "right"); /* 10 rows 1 ms apart */
+    fake_host *h = fake_new(100);
+    h->refuse_every = 2; /* connected goes in; then every second push is refused */
+    fp_input *in = NULL;
+    char err[512];
+    assert_int_equal(create(h, path, NULL, &in, err, sizeof err), 0);
+    assert_int_equal(in->start(in, err, sizeof err), 0);
+    assert_int_equal(fake_wait(h, 0, WAIT_LIMIT_NS), 0);
+    in->stop(in);
+    in->destroy(in);
+    assert_int_equal(h->events[0].status.code, FP_STATUS_CONNECTED);
+    assert_int_equal(h->eos, 1);
+    assert_int_equal(count_type(h, FP_EVENT_JOINT_POSITIONS, -1) +
+                     count_type(h, FP_EVENT_WRIST_POSE, -1), 10); /* 20 poses, 10 refused */
     fake_free(h);
 }
 
@@ -833,6 +865,7 @@ int main(void)
         cmocka_unit_test(hands_filter),
         cmocka_unit_test(pacing_follows_speed),
         cmocka_unit_test(fast_never_drops),
+        cmocka_unit_test(paced_drops_poses_not_status),
         cmocka_unit_test(loop_repeats_with_increasing_times),
         cmocka_unit_test(stop_is_prompt),
         cmocka_unit_test(malformed_rows_fail_create),
