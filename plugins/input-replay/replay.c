@@ -60,7 +60,8 @@ static const char usage_text[] =
     "  hands=H  left, right or both (default both)\n"
     "  Event times are the host clock at the emulated moment. Without loop, the replay ends\n"
     "  with an end-of-stream status. A malformed row fails at creation (FILE:LINE:COLUMN); a\n"
-    "  last line cut short (no newline) is dropped with a warning status.\n";
+    "  last line cut short (no newline) is dropped and reported with an error status (the\n"
+    "  recording is damaged) after the rows before it were replayed.\n";
 
 /* ------------------------------------------------------------------------------------- */
 /* Thread                                                                                 */
@@ -151,7 +152,7 @@ static void *replay_thread(void *arg)
         }
         if (r->rec.truncated_line && !warned) {
             warned = true;
-            if (!push_status(r, last_time, FP_STATUS_WARNING,
+            if (!push_status(r, last_time, FP_STATUS_ERROR,
                              "%s:%ld: last line cut short (no newline), not replayed",
                              base_name(r->path), r->rec.truncated_line))
                 return NULL;
@@ -220,6 +221,63 @@ static int parse_bool(const fp_param *p, bool *out, char *err, size_t errlen)
         return -EINVAL;
     }
     return 0;
+}
+
+/* ------------------------------------------------------------------------------------- */
+/* Extensions: the workspace the recording's hands move in, and what it holds             */
+
+static bool replay_workspace(const fp_input *self, float min_mm[3], float max_mm[3])
+{
+    const replay *r = self->plugin_data;
+    bool any = false;
+    for (int k = 0; k < 3; k++) {
+        min_mm[k] = INFINITY;
+        max_mm[k] = -INFINITY;
+    }
+    for (size_t i = 0; i < r->rec.count; i++) {
+        const fp_event *ev = &r->rec.items[i].event;
+        if (ev->header.type != FP_EVENT_JOINT_POSITIONS) continue;
+        for (int j = 0; j < FP_HAND_JOINTS; j++)
+            for (int k = 0; k < 3; k++) {
+                min_mm[k] = fminf(min_mm[k], ev->positions.mm[j][k]);
+                max_mm[k] = fmaxf(max_mm[k], ev->positions.mm[j][k]);
+            }
+        any = true;
+    }
+    return any;
+}
+
+static bool replay_recording_info(const fp_input *self, fp_recording_info *info)
+{
+    const replay *r = self->plugin_data;
+    static const char *formats[] = {"", "joints-csv", "angles-csv", "eventlog"};
+    memset(info, 0, sizeof *info);
+    uint64_t distinct = 0;
+    int64_t last = -1;
+    for (size_t i = 0; i < r->rec.count; i++) {
+        const replay_item *it = &r->rec.items[i];
+        if (it->t_ns != last) distinct++;
+        last = it->t_ns;
+        int h = it->event.header.hand;
+        if (h == FP_HAND_LEFT || h == FP_HAND_RIGHT) info->hands |= 1u << h;
+    }
+    info->frames = distinct;
+    info->duration_s = (double)r->rec.duration_ns / 1e9;
+    info->rate_hz = distinct > 1 && r->rec.duration_ns > 0 ? (double)(distinct - 1) / info->duration_s : 0;
+    snprintf(info->format, sizeof info->format, "%s",
+             r->rec.format >= 1 && r->rec.format <= 3 ? formats[r->rec.format] : "unknown");
+    return true;
+}
+
+static const fp_input_workspace workspace_ext = {replay_workspace};
+static const fp_input_recording recording_ext = {replay_recording_info};
+
+static const void *replay_get_extension(const fp_input *self, const char *id)
+{
+    (void)self;
+    if (!strcmp(id, FP_EXT_WORKSPACE)) return &workspace_ext;
+    if (!strcmp(id, FP_EXT_RECORDING_INFO)) return &recording_ext;
+    return NULL;
 }
 
 static int replay_create(const fp_host *host, const char *arg, const fp_param *params,
@@ -298,7 +356,8 @@ static int replay_create(const fp_host *host, const char *arg, const fp_param *p
     r->loop = loop;
     r->fast = fast;
     r->input = (fp_input){.size = sizeof(fp_input), .plugin_data = r, .start = replay_start,
-                          .stop = replay_stop, .destroy = replay_destroy, .get_extension = NULL};
+                          .stop = replay_stop, .destroy = replay_destroy,
+                          .get_extension = replay_get_extension};
     if (r->rec.truncated_line && host->log) {
         char msg[512];
         snprintf(msg, sizeof msg, "%s:%ld: last line cut short (no newline): replay ends at "

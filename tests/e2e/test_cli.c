@@ -112,6 +112,23 @@ static void test_plugins(void **state)
     assert_non_null(strstr(out, "no mapping plugin named 'nosuchmapping'"));
 }
 
+static void test_info(void **state)
+{
+    (void)state;
+    char args[8192];
+    snprintf(args, sizeof args, "info %s/hands/leap-motion/three-claps_joints_mm.csv", data);
+    assert_int_equal(fp(args), 0);
+    assert_non_null(strstr(out, "frames    403"));
+    assert_non_null(strstr(out, "left, right"));
+    assert_non_null(strstr(out, "joints-csv"));
+    snprintf(args, sizeof args, "info %s/faces/ict-facekit/generic_neutral_mesh.obj", data);
+    assert_int_equal(fp(args), 0);
+    assert_non_null(strstr(out, "vertices  26719"));
+    assert_non_null(strstr(out, "probably centimetres"));
+    assert_int_equal(fp("info /nonexistent/face.obj"), 65);
+    assert_non_null(strstr(out, "/nonexistent/face.obj"));
+}
+
 int main(void)
 {
     const char *d = getenv("FP_SHARED_DATA"), *b = getenv("FP_BUILD_DIR");
@@ -127,6 +144,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_help_and_usage), cmocka_unit_test(test_corrupt_obj),
         cmocka_unit_test(test_bad_csv),        cmocka_unit_test(test_plugins),
+        cmocka_unit_test(test_info),
     };
     int rc = cmocka_run_group_tests(tests, NULL, NULL);
     char cmd[512];

@@ -777,7 +777,7 @@ static void truncated_file_replays_to_last_full_row(void **state)
     assert_int_equal(count_type(h, FP_EVENT_JOINT_POSITIONS, -1), 99); /* lines 2..100 */
     const fp_event *warn = &h->events[h->count - 2], *eos = &h->events[h->count - 1];
     assert_int_equal(warn->header.type, FP_EVENT_STATUS);
-    assert_int_equal(warn->status.code, FP_STATUS_WARNING);
+    assert_int_equal(warn->status.code, FP_STATUS_ERROR);
     assert_non_null(strstr(warn->status.text, "cut_joints.csv:101:"));
     assert_int_equal(eos->status.code, FP_STATUS_END_OF_STREAM);
     assert_non_null(strstr(h->log, "cut_joints.csv:101:"));
