@@ -305,8 +305,10 @@ static int open_pedal(pedal *p, libusb_device *dev, uint16_t vid, uint16_t pid,
     libusb_set_auto_detach_kernel_driver(h, 1);  /* NOT_SUPPORTED off Linux: harmless */
     r = libusb_claim_interface(h, iface);
     if (r) {
-        host_log(p, FP_LOG_WARNING, "cannot claim interface %d of %04x:%04x: %s (is another "
-                 "program reading the pedal?)", iface, vid, pid, libusb_strerror(r));
+        host_log(p, r == LIBUSB_ERROR_NO_DEVICE ? FP_LOG_DEBUG : FP_LOG_WARNING,
+                 "cannot claim interface %d of %04x:%04x: %s%s", iface, vid, pid,
+                 libusb_strerror(r),
+                 r == LIBUSB_ERROR_BUSY ? " (is another program reading the pedal?)" : "");
         libusb_close(h);
         return r;
     }
