@@ -290,6 +290,7 @@ static int open_pedal(pedal *p, libusb_device *dev, uint16_t vid, uint16_t pid,
             char text[116];
             fp_pedal_format_access_error(text, sizeof text, bus, addr, vid, pid);
             push_status(p, FP_STATUS_ERROR, "%s", text);
+            p->announced = 1;   /* this says it all; no "no pedal found" after it */
             host_log(p, FP_LOG_ERROR, "/dev/bus/usb/%03d/%03d is not readable by this user; "
                      "copy plugins/input-pedal/70-facepuppet-pedal.rules to /etc/udev/rules.d/, "
                      "run `udevadm control --reload && udevadm trigger`, replug (docs/pedal.md)",

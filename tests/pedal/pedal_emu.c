@@ -13,6 +13,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <sys/stat.h>
+
 #include <linux/ioctl.h>
 #include <linux/usbdevice_fs.h>
 #include <umockdev.h>
@@ -348,6 +350,16 @@ void emu_unplug(emu *e)
     e->unplugged = 1;
     pthread_mutex_unlock(&e->lock);
     umockdev_testbed_remove_device(e->testbed, e->syspath);
+}
+
+int emu_deny_access(emu *e)
+{
+    char *root = umockdev_testbed_get_root_dir(e->testbed);
+    char *path = g_strdup_printf("%s%s", root, e->devnode);
+    int r = chmod(path, 0);
+    g_free(path);
+    g_free(root);
+    return r;
 }
 
 void emu_send(emu *e, const uint8_t *report, size_t len)

@@ -56,6 +56,10 @@ void emu_unplug(emu *e);
 /** Queue one report (at most 64 bytes) for the reader. */
 void emu_send(emu *e, const uint8_t *report, size_t len);
 
+/** Take read and write permission on the plugged pedal's usbfs node away from everyone
+ *  (mode 0000). Only effective on a process without CAP_DAC_OVERRIDE. Returns 0 or -1. */
+int emu_deny_access(emu *e);
+
 /** A snapshot of the statistics. */
 emu_stats emu_get_stats(emu *e);
 

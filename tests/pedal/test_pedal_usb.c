@@ -15,6 +15,10 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
+#include <linux/capability.h>
 
 #include <cmocka.h>
 
@@ -486,6 +490,40 @@ static void test_create_errors(void **state)
     assert_string_equal(f->factory->name, "pedal");
 }
 
+/* Drop (or restore) CAP_DAC_OVERRIDE and CAP_DAC_READ_SEARCH from this thread's effective
+ * set, keeping them permitted; threads created afterwards (the plugin's) inherit it. */
+static int set_dac_override(bool on)
+{
+    struct __user_cap_header_struct h = {_LINUX_CAPABILITY_VERSION_3, 0};
+    struct __user_cap_data_struct d[2];
+    if (syscall(SYS_capget, &h, d))
+        return -1;
+    uint32_t bits = (1u << CAP_DAC_OVERRIDE) | (1u << CAP_DAC_READ_SEARCH);
+    if (on)
+        d[0].effective |= bits & d[0].permitted;
+    else
+        d[0].effective &= ~bits;
+    return (int)syscall(SYS_capset, &h, d);
+}
+
+static void test_permission_error_names_device(void **state)
+{
+    fixture *f = *state;
+    if (getuid() == 0 && set_dac_override(false) != 0)
+        skip();
+    assert_int_equal(emu_plug(f->emu, EMU_VEC, 5), 0);
+    assert_int_equal(emu_deny_access(f->emu), 0);
+    int r = start_plugin(f, NULL, NULL, 0);
+    set_dac_override(true);
+    assert_int_equal(r, 0);   /* not strict: report and keep looking */
+    expect_status(f, FP_STATUS_ERROR, "05f3:00ff at bus 001 address 005");
+    fp_event ev = f->rec.events[f->rec.read - 1];
+    assert_non_null(strstr(ev.status.text, "70-facepuppet-pedal.rules"));
+    /* Named once, not at every scan (500 ms); no other event, nothing claimed. */
+    expect_quiet(f, 1200);
+    assert_int_equal(emu_get_stats(f->emu).disconnect_claims, 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -498,6 +536,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_strict_without_pedal_fails, setup, teardown),
         cmocka_unit_test_setup_teardown(test_other_device_not_taken, setup, teardown),
         cmocka_unit_test_setup_teardown(test_create_errors, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_permission_error_names_device, setup, teardown),
     };
     return cmocka_run_group_tests_name("pedal_usb", tests, NULL, NULL);
 }
