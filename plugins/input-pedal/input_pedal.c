@@ -41,7 +41,8 @@ typedef struct pedal {
     fp_pedal_config cfg;
     fp_pedal_keymap keys;
 
-    libusb_context *ctx;
+    libusb_context *ctx;             /* NULL until libusb_init succeeds (thread retries) */
+    atomic_bool ctx_ready;           /* ctx is set: stop may interrupt its event handler */
     pthread_t thread;
     bool thread_started;
     atomic_bool stopping;
@@ -391,11 +392,41 @@ static int LIBUSB_CALL hotplug_cb(libusb_context *ctx, libusb_device *dev,
     return 0;
 }
 
+/* Create the context and the hotplug callback. Returns 0 or a libusb error. */
+static int open_context(pedal *p)
+{
+    int r = libusb_init(&p->ctx);
+    if (r) {
+        p->ctx = NULL;
+        return r;
+    }
+    if (libusb_has_capability(LIBUSB_CAP_HAS_HOTPLUG)) {
+        r = libusb_hotplug_register_callback(p->ctx, LIBUSB_HOTPLUG_EVENT_DEVICE_ARRIVED, 0,
+                                             LIBUSB_HOTPLUG_MATCH_ANY, LIBUSB_HOTPLUG_MATCH_ANY,
+                                             LIBUSB_HOTPLUG_MATCH_ANY, hotplug_cb, p, &p->hotplug);
+        p->hotplug_registered = r == 0;
+    }
+    atomic_store(&p->ctx_ready, true);
+    return 0;
+}
+
 static void *pedal_thread(void *arg)
 {
     pedal *p = arg;
     int64_t next_scan = 0;
     while (!atomic_load(&p->stopping)) {
+        if (!p->ctx) {
+            /* libusb could not start (no usbfs here yet): try again every scan period. */
+            int64_t t = now_ns(p);
+            if (t >= next_scan) {
+                next_scan = t + (int64_t)SCAN_PERIOD_MS * 1000000;
+                if (open_context(p) == 0)
+                    next_scan = 0;
+            }
+            struct timespec ts = {0, LOOP_TIMEOUT_MS * 1000000L};
+            nanosleep(&ts, NULL);
+            continue;
+        }
         if (p->handle && p->gone)
             close_pedal(p, true);
         if (!p->handle) {
@@ -430,7 +461,8 @@ static void pedal_stop(fp_input *self)
     pedal *p = self->plugin_data;
     if (p->thread_started) {
         atomic_store(&p->stopping, true);
-        libusb_interrupt_event_handler(p->ctx);
+        if (atomic_load(&p->ctx_ready))
+            libusb_interrupt_event_handler(p->ctx);
         pthread_join(p->thread, NULL);
         p->thread_started = false;
     }
@@ -442,31 +474,30 @@ static void pedal_stop(fp_input *self)
         libusb_exit(p->ctx);
         p->ctx = NULL;
     }
+    atomic_store(&p->ctx_ready, false);
 }
 
 static int pedal_start(fp_input *self, char *err, size_t errlen)
 {
     pedal *p = self->plugin_data;
-    if (p->ctx) {
+    if (p->ctx || p->thread_started) {
         snprintf(err, errlen, "pedal: already started");
         return -EBUSY;
     }
     atomic_store(&p->stopping, false);
     p->announced = 0;
     p->access_reported[0] = '\0';
-    int r = libusb_init(&p->ctx);
-    if (r) {
+    int r = open_context(p);
+    if (r && p->cfg.strict) {
         snprintf(err, errlen, "pedal: libusb_init failed: %s", libusb_strerror(r));
-        p->ctx = NULL;
         return -EIO;
     }
-    if (libusb_has_capability(LIBUSB_CAP_HAS_HOTPLUG)) {
-        r = libusb_hotplug_register_callback(p->ctx, LIBUSB_HOTPLUG_EVENT_DEVICE_ARRIVED, 0,
-                                             LIBUSB_HOTPLUG_MATCH_ANY, LIBUSB_HOTPLUG_MATCH_ANY,
-                                             LIBUSB_HOTPLUG_MATCH_ANY, hotplug_cb, p, &p->hotplug);
-        p->hotplug_registered = r == 0;
-    }
-    if (p->cfg.strict) {
+    if (r) {
+        /* Not strict: say so and let the thread try again (a machine without usbfs yet). */
+        push_status(p, FP_STATUS_ERROR, "libusb cannot start (%s); retrying every %d ms",
+                    libusb_error_name(r), SCAN_PERIOD_MS);
+        p->announced = 1;
+    } else if (p->cfg.strict) {
         /* Strict: a pedal must be there now; open it before the thread runs. */
         r = scan(p);
         if (r != 0) {
@@ -531,6 +562,7 @@ static int pedal_create(const fp_host *host, const char *arg, const fp_param *pa
     p->cfg = cfg;
     p->keys = fp_pedal_config_keys(&cfg);
     atomic_init(&p->stopping, false);
+    atomic_init(&p->ctx_ready, false);
     p->input.size = sizeof p->input;
     p->input.plugin_data = p;
     p->input.start = pedal_start;
