@@ -127,7 +127,8 @@ int fp_hand_fk(const fp_hand_model *model, fp_hand_side side, const float angles
  *  (palm_*, palm_n*, dir_*). Neither vector need be unit; the direction is made orthogonal
  *  to the normal. Writes the wrist pose (position mm, quaternion w,x,y,z) that puts the
  *  model's palm centre (scaled by model->size, mirrored for the left hand) at palm_mm, in the
- *  form fp_hand_fk takes. Errors: FP_HAND_EINVAL, FP_HAND_ENONFINITE, FP_HAND_EDEGENERATE
+ *  form fp_hand_fk takes. The palm's axes are those of the hand frame at rest WRIST_PITCH and
+ *  WRIST_YAW (0 by default): a tracker's palm already includes the wrist turn. Errors: FP_HAND_EINVAL, FP_HAND_ENONFINITE, FP_HAND_EDEGENERATE
  *  (a zero vector, or normal parallel to direction). */
 int fp_hand_frame_from_palm(const fp_hand_model *model, fp_hand_side side,
                             const float palm_mm[3], const float palm_normal[3],
