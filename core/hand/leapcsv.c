@@ -49,8 +49,10 @@ static int fail(reader *r, int code, int column, const char *name, const char *f
         if (column > 0)
             snprintf(r->err, r->errlen, "%s:%ld: column %d (%s): %s", r->path, r->lineno, column,
                      name ? name : "?", msg);
-        else
+        else if (r->lineno > 0)
             snprintf(r->err, r->errlen, "%s:%ld: %s", r->path, r->lineno, msg);
+        else
+            snprintf(r->err, r->errlen, "%s: %s", r->path, msg);
     }
     return code;
 }
