@@ -175,7 +175,8 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
         diag += d * d;
     }
     s->radius = opt->radius > 0 ? opt->radius : 0.06 * sqrt(diag);
-    fp_hand_model_init(&s->hand_model, opt->hand_size > 0 ? opt->hand_size : 1.0);
+    fp_hand_model_init(&s->hand_model);
+    if (opt->hand_size > 0) s->hand_model.size = (float)opt->hand_size;
 
     if (csrbf_points_create(s->n, s->base, &s->points) != CSRBF_OK) {
         rc = -ENOMEM;
