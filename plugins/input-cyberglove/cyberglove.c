@@ -209,9 +209,11 @@ static int write_all(glove *g, const void *buf, size_t n)
 }
 
 /* Read the reply to a command: skips bytes until `c0` `c1` (c1 < 0: only c0), then collects
- * the value bytes until 0x00. An `e` `?` 0x00 reply gives -ENOTSUP. Returns the number of
- * value bytes, -ETIMEDOUT, -ECANCELED, -EPIPE or -EIO. */
-static int read_reply(glove *g, int c0, int c1, uint8_t *out, size_t cap, int timeout_ms)
+ * `fixed` value bytes whatever they are (a value may be 0, e.g. ?R of a left glove) or, with
+ * fixed == 0, the bytes up to the 0x00 terminator. An `e` `?` reply gives -ENOTSUP. Returns
+ * the number of value bytes, -ETIMEDOUT, -ECANCELED, -EPIPE or -EIO. */
+static int read_reply_n(glove *g, int c0, int c1, size_t fixed, uint8_t *out, size_t cap,
+                        int timeout_ms)
 {
     int64_t deadline = now_ns(g) + (int64_t)timeout_ms * 1000000;
     int state = 0; /* 0 seek c0, 1 seek c1, 2 value, 3 after 'e' */
@@ -247,8 +249,16 @@ static int read_reply(glove *g, int c0, int c1, uint8_t *out, size_t cap, int ti
                 state = b == c1 ? 2 : (b == c0 ? 1 : 0);
                 break;
             case 2:
+                if (fixed && n < fixed) {
+                    if (n < cap)
+                        out[n] = b;
+                    n++;
+                    break;
+                }
                 if (b == 0)
-                    return (int)n;
+                    return (int)(n < cap ? n : cap);
+                if (fixed)
+                    return -EPROTO;   /* more value bytes than the query has */
                 if (n < cap)
                     out[n++] = b;
                 break;
@@ -262,14 +272,19 @@ static int read_reply(glove *g, int c0, int c1, uint8_t *out, size_t cap, int ti
     }
 }
 
-/* Send a query `?X` and read its value bytes. */
-static int query(glove *g, char x, uint8_t *out, size_t cap)
+static int read_reply(glove *g, int c0, int c1, uint8_t *out, size_t cap, int timeout_ms)
+{
+    return read_reply_n(g, c0, c1, 0, out, cap, timeout_ms);
+}
+
+/* Send a query `?X` and read its value bytes (`fixed` of them, 0: up to the terminator). */
+static int query(glove *g, char x, size_t fixed, uint8_t *out, size_t cap)
 {
     uint8_t cmd[2] = {'?', (uint8_t)x};
     int r = write_all(g, cmd, 2);
     if (r < 0)
         return r;
-    return read_reply(g, '?', x, out, cap, 500);
+    return read_reply_n(g, '?', x, fixed, out, cap, 500);
 }
 
 /* ------------------------------------------------------------------------------------- */
@@ -354,14 +369,14 @@ static int probe(glove *g, char *err, size_t errlen)
     int r = drain(g);
     if (r < 0)
         return errf(err, errlen, r, "%s: line lost while draining", g->path);
-    r = query(g, 'G', v, sizeof v);
+    r = query(g, 'G', 1, v, sizeof v);
     if (r == -ETIMEDOUT)
         return errf(err, errlen, r, "no answer to ?G (is the glove box on, baud %d?)", g->baud);
     if (r < 1)
         return errf(err, errlen, r < 0 ? r : -EPROTO, "bad answer to ?G");
     if (v[0] != 3)
         return errf(err, errlen, -ENODEV, "glove not plugged into its box (?G = %d)", v[0]);
-    r = query(g, 'S', v, sizeof v);
+    r = query(g, 'S', 1, v, sizeof v);
     if (r < 1)
         return errf(err, errlen, r < 0 ? r : -EPROTO, "bad answer to ?S");
     if (v[0] != 18 && v[0] != 22)
@@ -370,12 +385,12 @@ static int probe(glove *g, char *err, size_t errlen)
         return errf(err, errlen, -EPROTO, "bits=16 needs a 22-sensor CyberGlove III (?S = %d)",
                     v[0]);
     int sensors = v[0];
-    r = query(g, 'R', v, sizeof v);
+    r = query(g, 'R', 1, v, sizeof v);
     int right = r >= 1 ? (v[0] != 0) : -1;
     if (r < 0 && r != -ENOTSUP)
         return errf(err, errlen, r, "bad answer to ?R");
     char version[64] = "";
-    r = query(g, 'V', v, sizeof v - 1);
+    r = query(g, 'V', 0, v, sizeof v - 1);
     if (r < 0 && r != -ENOTSUP)
         return errf(err, errlen, r, "bad answer to ?V");
     if (r > 0) {
@@ -385,7 +400,7 @@ static int probe(glove *g, char *err, size_t errlen)
     }
     bool ts_on = false, status_on = false;
     if (g->bits == 8) {
-        r = query(g, 'D', v, sizeof v);
+        r = query(g, 'D', 1, v, sizeof v);
         if (r < 0 && r != -ENOTSUP)
             return errf(err, errlen, r, "bad answer to ?D");
         ts_on = r >= 1 && v[0] != 0;
@@ -397,7 +412,7 @@ static int probe(glove *g, char *err, size_t errlen)
             return errf(err, errlen, r, "bad answer to U 1");
         status_on = r >= 0;
         if (status_on) {   /* confirm with ?U: the record layout depends on it */
-            r = query(g, 'U', v, sizeof v);
+            r = query(g, 'U', 1, v, sizeof v);
             status_on = r >= 1 && v[0] != 0;
         }
     }
