@@ -89,7 +89,7 @@ typedef struct glove {
     bool unplugged;
     bool warned_fast;
     int64_t last_record_ns;
-    bool got_record;
+    uint64_t units;     /* records and bare error messages decoded */
 
     /* statistics */
     pthread_mutex_t lock;
@@ -445,7 +445,6 @@ static int probe(glove *g, char *err, size_t errlen)
     g->in_noise = false;
     g->unplugged = false;
     g->warned_fast = false;
-    g->got_record = false;
 
     if (g->bits == 16) {
         if ((r = write_all(g, "1eu", 3)) < 0 || (r = write_all(g, "1S", 2)) < 0)
@@ -500,7 +499,7 @@ static void emit_angles(glove *g, const double *raw8, int64_t t_read)
 static void on_record(glove *g, const double *raw8, bool plugged, int errc, int64_t t)
 {
     g->last_record_ns = t;
-    g->got_record = true;
+    g->units++;
     pthread_mutex_lock(&g->lock);
     g->st.records++;
     pthread_mutex_unlock(&g->lock);
@@ -531,6 +530,23 @@ static void on_record(glove *g, const double *raw8, bool plugged, int errc, int6
     emit_angles(g, raw8, t);
 }
 
+/* A bare error message `e` X 0x00 (no record): the box is alive. */
+static void on_bare_error(glove *g, uint8_t c, int64_t t)
+{
+    g->last_record_ns = t;
+    g->units++;
+    if (c == 'g' && !g->unplugged) {
+        g->unplugged = true;
+        push_status(g, FP_STATUS_DISCONNECTED, "glove unplugged from its box (eg)");
+    } else if (c == 's' && !g->warned_fast) {
+        g->warned_fast = true;
+        push_status(g, FP_STATUS_WARNING, "glove reports sampling too fast (es) at %g Hz",
+                    g->rate_hz);
+    } else if (c != 'g' && c != 's') {
+        logf_(g, FP_LOG_WARNING, "%s: glove answered error e%c", g->path, c);
+    }
+}
+
 static void on_noise(glove *g, size_t n)
 {
     if (!g->in_noise) {
@@ -558,10 +574,7 @@ static int decode8(glove *g, const uint8_t *a, size_t len, int64_t t)
             return 0;
         if (a[2] != 0 || !strchr("?gsny", a[1]) || a[1] == 0)
             return -1;
-        if (a[1] == 'g')
-            on_record(g, NULL, false, 'g', t), g->st.records--;
-        else if (a[1] == 's')
-            on_record(g, NULL, true, 's', t), g->st.records--;
+        on_bare_error(g, a[1], t);
         return 3;
     }
     if (a[0] != 'S' && a[0] != 'G')
@@ -736,9 +749,9 @@ static int session(glove *g, char *why, size_t whylen)
             snprintf(why, whylen, "cable pulled (%s)", strerror(errno));
             return END_LOST;
         }
-        uint64_t before = g->st.records;
+        uint64_t before = g->units;
         feed(g, buf, (size_t)got, t);
-        if (g->poll_mode && g->st.records != before)
+        if (g->poll_mode && g->units != before)
             awaiting = false;
     }
 }
