@@ -374,7 +374,9 @@ static void test_stream_22_right_calibrated(void **state)
     assert_non_null(strstr(ce.status.text, "22 sensors"));
     assert_non_null(strstr(ce.status.text, "right hand"));
     assert_non_null(strstr(ce.status.text, "CyberGlove emu 1.0"));
-    fp_gloveemu_stats es;
+    long end = fh_wait_angles(f, (size_t)c, 100, WAIT_MS);
+    assert_true(end > 0);
+    fp_gloveemu_stats es;   /* records arrived, so the emulator has executed S */
     fp_gloveemu_get_stats(e, &es);
     assert_int_equal(es.streaming, 8);
     assert_true(es.status_byte);                 /* the plugin turned U on */
@@ -382,8 +384,6 @@ static void test_stream_22_right_calibrated(void **state)
     assert_int_equal(es.period_w1, 576);         /* t 576 1 = 200 Hz */
     assert_int_equal(es.period_w2, 1);
     assert_int_equal(es.unknown, 0);
-    long end = fh_wait_angles(f, (size_t)c, 100, WAIT_MS);
-    assert_true(end > 0);
     fpg_cal cal;
     char cerr[256];
     assert_int_equal(fpg_cal_load(CAL_RIGHT, &cal, cerr, sizeof cerr), 0);
