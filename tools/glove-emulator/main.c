@@ -82,11 +82,19 @@ int main(int argc, char **argv)
     sigaction(SIGINT, &sa, NULL);
     sigaction(SIGTERM, &sa, NULL);
     bool stdin_open = true;
+    char last_line[128] = "";
     char line[256];
     size_t len = 0;
     while (!quit) {
         struct pollfd p = {.fd = 0, .events = POLLIN};
         int r = poll(&p, stdin_open ? 1 : 0, 200);
+        fp_gloveemu_line l;   /* report the reader's line settings whenever they change */
+        if (fp_gloveemu_line_settings(e, &l) == 0 && strcmp(l.text, last_line) != 0) {
+            snprintf(last_line, sizeof last_line, "%s", l.text);
+            fprintf(stderr, "fp-glove-emu: line settings now %s%s\n", l.text,
+                    l.baud == 115200 && l.data_bits == 8 && !l.parity && !l.two_stop_bits && l.raw
+                        ? "" : " (a CyberGlove expects 115200 8N1 raw, or 19200 on old boxes)");
+        }
         if (r <= 0 || !(p.revents & (POLLIN | POLLHUP)))
             continue;
         ssize_t n = read(0, line + len, sizeof line - 1 - len);
