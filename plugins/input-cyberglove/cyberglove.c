@@ -970,7 +970,6 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
     g->hand_opt = -1;
     g->rate_hz = 100;
     g->bits = 8;
-    g->hand = FP_HAND_RIGHT;
     fpg_cal_default(&g->cal);
     long timeout = 0;
     int rc = 0;
@@ -1041,6 +1040,7 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
             goto fail;
         }
     }
+    g->hand = g->hand_opt;   /* -1 (no hand) in status events until ?R answers */
     if (g->bits == 16 && g->poll_mode) {
         rc = errf(err, errlen, -EINVAL, "cyberglove: bits=16 works with mode=stream only");
         goto fail;

@@ -249,6 +249,16 @@ static int create_input(fake_host *f, const char *arg, fp_input **out, char *err
         n++;
     }
     va_end(ap);
+    /* unless the test is about it, a silence timeout long enough for a loaded machine, so
+     * that a scheduling stall cannot look like a glove that stopped answering */
+    bool has_timeout = false;
+    for (size_t i = 0; i < n; i++)
+        has_timeout |= strcmp(params[i].key, "timeout") == 0;
+    if (!has_timeout && n < 16) {
+        params[n].key = "timeout";
+        params[n].value = "3000";
+        n++;
+    }
     err[0] = '\0';
     return factory->create(&f->host, arg, params, n, out, err, errlen);
 }

@@ -531,6 +531,10 @@ static void *serve(void *arg)
             break;
         if (e->req) {
             if (e->req == 1) {
+                /* the pts number is free for anyone now: remove the link, so that a reader
+                 * cannot reach another process's pty that got the same number */
+                if (e->link[0])
+                    unlink(e->link);
                 close_pty(e);
                 e->req_result = 0;
             } else {

@@ -19,8 +19,8 @@
  *
  * Faults: glove unplugged from its box (?G = 1; records with status bit0 clear and `eg`;
  * in 16-bit mode no frames), cable pulled (the master is closed: the reader sees EIO/HUP;
- * a pty cannot keep its path, so on replug a NEW pty is made and `link_path`, a symlink, is
- * re-pointed to it: readers must open the link), garbage bytes between records, slow (the
+ * a pty cannot keep its path, so `link_path`, a symlink, is removed on pull and on replug
+ * made to point at a NEW pty: readers must open the link), garbage bytes between records, slow (the
  * period multiplied) and silent (nothing answered, nothing sent).
  *
  * Threads: one service thread per emulator; every function here is [any-thread] except
@@ -101,7 +101,8 @@ const char *fp_gloveemu_path(const fp_gloveemu *emu);
 
 /** Glove plugged into its box (true at creation). */
 void fp_gloveemu_set_plugged(fp_gloveemu *emu, bool plugged);
-/** Pull the cable: close the master (and the pty). Waits until done. Returns 0. */
+/** Pull the cable: close the master (and the pty) and remove link_path (its pts number may
+ *  be handed to another pty at once). Waits until done. Returns 0. */
 int fp_gloveemu_pull_cable(fp_gloveemu *emu);
 /** Plug the cable back: a new pty, link_path re-pointed. Returns 0 or -errno. */
 int fp_gloveemu_replug_cable(fp_gloveemu *emu);
