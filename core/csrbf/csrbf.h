@@ -169,6 +169,14 @@ int csrbf_solver_solve(csrbf_solver *solver, size_t n, const float *start, const
 /** Number of centres after merging (0 before start points are set). */
 size_t csrbf_solver_centres(const csrbf_solver *solver);
 
+/** Copy out the current map: centres (m x 3, merged, in first-occurrence order), alpha
+ *  (m x 3) and the polynomial p(x) = b + B x as poly[0..2] = b, poly[3..11] = B row-major
+ *  (B[3*i+j] multiplies x_j in component i; all zero without a polynomial). Any output may
+ *  be NULL; m = csrbf_solver_centres(). Errors: CSRBF_ERR_INVALID (NULL solver),
+ *  CSRBF_ERR_STATE (no start points). Thread-safe on a const solver. */
+int csrbf_solver_get_coefficients(const csrbf_solver *solver, double *centres, double *alpha,
+                                  double poly[12]);
+
 /** Exact T(x) in double at one point, and its Jacobian dT/dx (row-major 3x3, jac[3*i+j] =
  *  dT_i/dx_j) if jac is not NULL. For psi30 the gradient at a centre is taken as 0.
  *  Errors: CSRBF_ERR_INVALID (NULL, non-finite x), CSRBF_ERR_STATE (no start points).

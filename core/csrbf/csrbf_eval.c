@@ -17,25 +17,28 @@
 
 #define B CSRBF_BLOCK
 
-/* Per-thread work arrays: the block's selected centres, structure of arrays. */
-typedef struct {
-    uint32_t *list;
-    float *c[3], *a[3];
-} thread_work;
-
-/* The block kernel: acc (initialised to -0.0f by the caller so that a vertex outside every
- * support keeps its base bit for bit) += a_j psi(|x - c_j| / R); cnt += pairs in support.
- * r = sqrt(r2): sqrt is vectorised (vsqrtps) under -fno-math-errno. */
+/* The block kernel over one block of B vertices: acc (initialised to -0.0f so that a vertex
+ * outside every support keeps its base bit for bit) += a_j psi(|x - c_j| / R) over the listed
+ * centres; cnt += pairs in support. The centre loop is outside, the B vertices are the SIMD
+ * lanes. r = sqrt(r2): vsqrtps under -fno-math-errno. */
 #define DEFINE_BLOCK_KERNEL(NAME, PSI)                                                         \
     CSRBF_CLONES static void NAME(const float *restrict x, const float *restrict y,           \
-                                  const float *restrict z, size_t k,                          \
-                                  const float *restrict cx, const float *restrict cy,         \
-                                  const float *restrict cz, const float *restrict ax,         \
-                                  const float *restrict ay, const float *restrict az,         \
-                                  float inv_r2, float *restrict accx, float *restrict accy,   \
+                                  const float *restrict z, const uint32_t *restrict list,     \
+                                  size_t k, const float *restrict cx,                         \
+                                  const float *restrict cy, const float *restrict cz,         \
+                                  const float *restrict ax, const float *restrict ay,         \
+                                  const float *restrict az, float inv_r2,                     \
+                                  float *restrict accx, float *restrict accy,                 \
                                   float *restrict accz, int *restrict cnt)                    \
     {                                                                                          \
-        for (size_t j = 0; j < k; j++) {                                                       \
+        float sx[B], sy[B], sz[B];                                                             \
+        int sc[B];                                                                             \
+        for (int v = 0; v < B; v++) {                                                          \
+            sx[v] = sy[v] = sz[v] = -0.0f;                                                     \
+            sc[v] = 0;                                                                         \
+        }                                                                                      \
+        for (size_t t = 0; t < k; t++) {                                                       \
+            const uint32_t j = list[t];                                                        \
             const float px = cx[j], py = cy[j], pz = cz[j];                                    \
             const float qx = ax[j], qy = ay[j], qz = az[j];                                    \
             _Pragma("omp simd") for (int v = 0; v < B; v++)                                    \
@@ -43,25 +46,179 @@ typedef struct {
                 float dx = x[v] - px, dy = y[v] - py, dz = z[v] - pz;                          \
                 float r2 = (dx * dx + dy * dy + dz * dz) * inv_r2;                             \
                 float r = sqrtf(r2 < 1.0f ? r2 : 1.0f);                                        \
-                float t = 1.0f - r;                                                            \
+                float t1 = 1.0f - r;                                                           \
                 float w = PSI;                                                                 \
                 int in = r2 < 1.0f;                                                            \
-                accx[v] = in ? accx[v] + qx * w : accx[v];                                     \
-                accy[v] = in ? accy[v] + qy * w : accy[v];                                     \
-                accz[v] = in ? accz[v] + qz * w : accz[v];                                     \
-                cnt[v] += in;                                                                  \
+                sx[v] = in ? sx[v] + qx * w : sx[v];                                           \
+                sy[v] = in ? sy[v] + qy * w : sy[v];                                           \
+                sz[v] = in ? sz[v] + qz * w : sz[v];                                           \
+                sc[v] += in;                                                                   \
             }                                                                                  \
+        }                                                                                      \
+        for (int v = 0; v < B; v++) {                                                          \
+            accx[v] = sx[v];                                                                   \
+            accy[v] = sy[v];                                                                   \
+            accz[v] = sz[v];                                                                   \
+            cnt[v] = sc[v];                                                                    \
         }                                                                                      \
     }
 
-DEFINE_BLOCK_KERNEL(block_psi31, (t * t) * (t * t) * (4.0f * r + 1.0f))
-DEFINE_BLOCK_KERNEL(block_psi30, t * t)
+DEFINE_BLOCK_KERNEL(block_psi31, (t1 * t1) * (t1 * t1) * (4.0f * r + 1.0f))
+DEFINE_BLOCK_KERNEL(block_psi30, t1 * t1)
 DEFINE_BLOCK_KERNEL(block_psi32,
-                    ((t * t) * (t * t) * (t * t)) * ((35.0f / 3.0f) * r2 + 6.0f * r + 1.0f))
+                    ((t1 * t1) * (t1 * t1) * (t1 * t1)) * ((35.0f / 3.0f) * r2 + 6.0f * r + 1.0f))
 
-typedef void (*block_fn)(const float *, const float *, const float *, size_t, const float *,
+typedef void (*block_fn)(const float *, const float *, const float *, const uint32_t *, size_t,
                          const float *, const float *, const float *, const float *,
-                         const float *, float, float *, float *, float *, int *);
+                         const float *, const float *, float, float *, float *, float *, int *);
+
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#include <immintrin.h>
+#define CSRBF_AVX512 1
+/* AVX-512 kernels (B = 16 = one vector). r = r2 * rsqrt(r2): the 14-bit estimate plus one
+ * Newton step (relative error below 1e-7) replaces the slower vsqrtps; lanes outside the
+ * support are masked off (their accumulators keep their bits). */
+#define AVX512_KERNEL(NAME, PSI)                                                               \
+    __attribute__((target("avx512f,fma"))) static void NAME(                                   \
+        const float *restrict x, const float *restrict y, const float *restrict z,            \
+        const uint32_t *restrict list, size_t k, const float *restrict cx,                     \
+        const float *restrict cy, const float *restrict cz, const float *restrict ax,          \
+        const float *restrict ay, const float *restrict az, float inv_r2,                      \
+        float *restrict accx, float *restrict accy, float *restrict accz, int *restrict cnt)   \
+    {                                                                                          \
+        const __m512 X = _mm512_loadu_ps(x), Y = _mm512_loadu_ps(y), Z = _mm512_loadu_ps(z);   \
+        const __m512 one = _mm512_set1_ps(1.0f), half = _mm512_set1_ps(0.5f),                  \
+                     three_half = _mm512_set1_ps(1.5f), tiny = _mm512_set1_ps(1e-30f),         \
+                     ir2 = _mm512_set1_ps(inv_r2);                                             \
+        __m512 sx = _mm512_set1_ps(-0.0f), sy = sx, sz = sx;                                   \
+        __m512i sc = _mm512_setzero_si512();                                                   \
+        const __m512i ione = _mm512_set1_epi32(1);                                             \
+        for (size_t t = 0; t < k; t++) {                                                       \
+            const uint32_t j = list[t];                                                        \
+            __m512 dx = _mm512_sub_ps(X, _mm512_set1_ps(cx[j]));                               \
+            __m512 dy = _mm512_sub_ps(Y, _mm512_set1_ps(cy[j]));                               \
+            __m512 dz = _mm512_sub_ps(Z, _mm512_set1_ps(cz[j]));                               \
+            __m512 r2 = _mm512_mul_ps(dx, dx);                                                 \
+            r2 = _mm512_fmadd_ps(dy, dy, r2);                                                  \
+            r2 = _mm512_fmadd_ps(dz, dz, r2);                                                  \
+            r2 = _mm512_mul_ps(r2, ir2);                                                       \
+            __mmask16 in = _mm512_cmp_ps_mask(r2, one, _CMP_LT_OQ);                            \
+            if (!in) continue;                                                                 \
+            __m512 q = _mm512_max_ps(r2, tiny);                                                \
+            __m512 e = _mm512_rsqrt14_ps(q);                                                   \
+            __m512 hq = _mm512_mul_ps(half, q);                                                \
+            e = _mm512_mul_ps(e, _mm512_fnmadd_ps(_mm512_mul_ps(hq, e), e, three_half));       \
+            __m512 r = _mm512_mul_ps(q, e);                                                    \
+            __m512 t1 = _mm512_sub_ps(one, r);                                                 \
+            __m512 w = PSI;                                                                    \
+            sx = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(ax[j]), sx, in);                      \
+            sy = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(ay[j]), sy, in);                      \
+            sz = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(az[j]), sz, in);                      \
+            sc = _mm512_mask_add_epi32(sc, in, sc, ione);                                      \
+        }                                                                                      \
+        _mm512_storeu_ps(accx, sx);                                                            \
+        _mm512_storeu_ps(accy, sy);                                                            \
+        _mm512_storeu_ps(accz, sz);                                                            \
+        _mm512_storeu_si512(cnt, sc);                                                          \
+    }
+
+#define T2 _mm512_mul_ps(t1, t1)
+AVX512_KERNEL(block_psi31_avx512,
+              _mm512_mul_ps(_mm512_mul_ps(T2, T2), _mm512_fmadd_ps(_mm512_set1_ps(4.0f), r, one)))
+AVX512_KERNEL(block_psi30_avx512, T2)
+AVX512_KERNEL(block_psi32_avx512,
+              _mm512_mul_ps(_mm512_mul_ps(_mm512_mul_ps(T2, T2), T2),
+                            _mm512_fmadd_ps(_mm512_fmadd_ps(_mm512_set1_ps(35.0f / 3.0f), r,
+                                                            _mm512_set1_ps(6.0f)),
+                                            r, one)))
+#undef T2
+
+/* Interleave 16 x, y, z (+ displacement) into 48 contiguous floats. */
+__attribute__((target("avx512f"))) static void write_block_avx512(
+    float *restrict out, const float *restrict x, const float *restrict y,
+    const float *restrict z, const float *restrict accx, const float *restrict accy,
+    const float *restrict accz)
+{
+    __m512 X = _mm512_add_ps(_mm512_loadu_ps(x), _mm512_loadu_ps(accx));
+    __m512 Y = _mm512_add_ps(_mm512_loadu_ps(y), _mm512_loadu_ps(accy));
+    __m512 Z = _mm512_add_ps(_mm512_loadu_ps(z), _mm512_loadu_ps(accz));
+    /* output float f = 16 k + i holds component f % 3 of vertex f / 3: first pick x or y
+     * (index < 16: X, >= 16: Y; z lanes are placeholders), then insert z (16 + v) */
+    static const int32_t ixy[3][16] = {
+        {0, 16, 0, 1, 17, 1, 2, 18, 2, 3, 19, 3, 4, 20, 4, 5},
+        {21, 5, 6, 22, 6, 7, 23, 7, 8, 24, 8, 9, 25, 9, 10, 26},
+        {10, 11, 27, 11, 12, 28, 12, 13, 29, 13, 14, 30, 14, 15, 31, 15}};
+    static const int32_t iz[3][16] = {
+        {0, 1, 16, 3, 4, 17, 6, 7, 18, 9, 10, 19, 12, 13, 20, 15},
+        {0, 21, 2, 3, 22, 5, 6, 23, 8, 9, 24, 11, 12, 25, 14, 15},
+        {26, 1, 2, 27, 4, 5, 28, 7, 8, 29, 10, 11, 30, 13, 14, 31}};
+    for (int k = 0; k < 3; k++) {
+        __m512 xy = _mm512_permutex2var_ps(X, _mm512_loadu_si512(ixy[k]), Y);
+        __m512 o = _mm512_permutex2var_ps(xy, _mm512_loadu_si512(iz[k]), Z);
+        _mm512_storeu_ps(out + 16 * k, o);
+    }
+}
+
+static int have_avx512(void)
+{
+    static int known = -1;
+    if (known < 0) {
+        __builtin_cpu_init();
+        known = __builtin_cpu_supports("avx512f") != 0; /* benign race: same value */
+    }
+    return known;
+}
+#else
+#define CSRBF_AVX512 0
+#endif
+
+
+/* out[3v + a] = base + acc (+ p(x)) for the nv <= B vertices of a block: contiguous stores. */
+CSRBF_CLONES static void write_block(float *restrict out, const float *restrict x,
+                                     const float *restrict y, const float *restrict z,
+                                     const float *restrict accx, const float *restrict accy,
+                                     const float *restrict accz, size_t nv)
+{
+    if (nv == B) {
+#pragma omp simd
+        for (int v = 0; v < B; v++) {
+            out[3 * v] = x[v] + accx[v];
+            out[3 * v + 1] = y[v] + accy[v];
+            out[3 * v + 2] = z[v] + accz[v];
+        }
+    } else {
+        for (size_t v = 0; v < nv; v++) {
+            out[3 * v] = x[v] + accx[v];
+            out[3 * v + 1] = y[v] + accy[v];
+            out[3 * v + 2] = z[v] + accz[v];
+        }
+    }
+}
+
+/* Masks of the centres (m <= 32) whose support meets each block's box, in float with a
+ * conservative margin (the kernel decides each pair exactly). Vectorised over blocks. */
+CSRBF_CLONES static void block_masks(const csrbf_points *P, size_t b0, size_t b1, size_t m,
+                                     const float *cx, const float *cy, const float *cz,
+                                     float r2c, uint32_t *restrict mask)
+{
+    const float *lx = P->lo[0], *ly = P->lo[1], *lz = P->lo[2];
+    const float *hx = P->hi[0], *hy = P->hi[1], *hz = P->hi[2];
+    for (size_t b = b0; b < b1; b++) mask[b] = 0;
+    for (size_t j = 0; j < m; j++) {
+        const float px = cx[j], py = cy[j], pz = cz[j];
+        const uint32_t bit = 1u << j;
+#pragma omp simd
+        for (size_t b = b0; b < b1; b++) {
+            float ex = lx[b] - px > px - hx[b] ? lx[b] - px : px - hx[b];
+            float ey = ly[b] - py > py - hy[b] ? ly[b] - py : py - hy[b];
+            float ez = lz[b] - pz > pz - hz[b] ? lz[b] - pz : pz - hz[b];
+            ex = ex > 0.0f ? ex : 0.0f;
+            ey = ey > 0.0f ? ey : 0.0f;
+            ez = ez > 0.0f ? ez : 0.0f;
+            mask[b] |= ex * ex + ey * ey + ez * ez < r2c ? bit : 0u;
+        }
+    }
+}
 
 /* Does the support of centre c (radius R) meet the box [lo, hi]? Conservative by a hair. */
 static inline int meets(const double c[3], const float lo[3], const float hi[3], double R2)
@@ -166,12 +323,22 @@ int csrbf_evaluate(const csrbf_solver *cs, const csrbf_points *P, float *out, un
         }
         all_in = d2 < R2 * (1.0 - 1e-6);
     }
+    const int use_mask = !all_in && m <= 32;
     block_fn kern = s->opt.kernel == CSRBF_PSI30   ? block_psi30
                     : s->opt.kernel == CSRBF_PSI32 ? block_psi32
                                                    : block_psi31;
+    int avx512 = 0;
+#if CSRBF_AVX512 && CSRBF_BLOCK == 16
+    avx512 = have_avx512();
+    if (avx512)
+        kern = s->opt.kernel == CSRBF_PSI30   ? block_psi30_avx512
+               : s->opt.kernel == CSRBF_PSI32 ? block_psi32_avx512
+                                              : block_psi31_avx512;
+#endif
 
-    size_t per_thread = align64(m * sizeof(uint32_t)) + 6 * align64(m * sizeof(float));
-    size_t need = align64(nb) + (size_t)nt * per_thread;
+    size_t per_thread = align64(m * sizeof(uint32_t));
+    size_t mask_bytes = use_mask ? align64(nb * sizeof(uint32_t)) : 0;
+    size_t need = mask_bytes + (size_t)nt * per_thread;
     void *mem = NULL;
     int own = 0;
     if (!atomic_flag_test_and_set(&s->scratch_busy)) {
@@ -190,99 +357,73 @@ int csrbf_evaluate(const csrbf_solver *cs, const csrbf_points *P, float *out, un
         if (!mem) return CSRBF_ERR_NOMEM;
         own = 1;
     }
-    unsigned char *touched = mem;
-    unsigned char *tbase = (unsigned char *)mem + align64(nb);
+    uint32_t *mask = mem;
+    unsigned char *tbase = (unsigned char *)mem + mask_bytes;
 
-    /* pass 1 (local map, partial cover): which blocks meet a support */
-    size_t touched_vertices = n;
-    int select = !all_in;
-    int copy_all = 0;
-    if (!poly && !all_in) {
-        size_t tv = 0;
-#pragma omp parallel for schedule(static) reduction(+ : tv) num_threads(nt) if (nb * m > 20000)
-        for (size_t b = 0; b < nb; b++) {
-            touched[b] = select_centres(s, P, b, NULL, 1) > 0;
-            if (touched[b]) tv += b + 1 < nb ? B : n - b * B;
-        }
-        touched_vertices = tv;
-        /* few blocks touched: one contiguous copy beats scattering the untouched ones */
-        copy_all = tv * 2 < n;
-        if (copy_all) memcpy(out, P->xyz, n * 3 * sizeof(float));
-    }
-    size_t work = touched_vertices * (m < 16 ? m : 16);
-    int threads = work > 60000 ? nt : 1;
+    /* work estimate: vertex-centre tests; small work stays on the calling thread */
+    size_t work = all_in || m <= 32 ? n * m : n * 16;
+    if (!all_in && m <= 32) work /= 4; /* typical selection */
+    int threads = work > 200000 ? nt : 1;
 
     size_t pairs = 0, moved = 0;
     double maxd = 0.0, minjac = 1.0;
-    const float inv_r2 = (float)(1.0 / R2);
+    const float inv_r2 = (float)(1.0 / R2), r2c = (float)(R2 * (1.0 + 1e-5)) + 1e-30f;
     const float pc0 = s->fpc[0], pc1 = s->fpc[1], pc2 = s->fpc[2];
     const float *G = s->fG, *g0 = s->fg0;
+    const float *fcx = s->fc[0], *fcy = s->fc[1], *fcz = s->fc[2];
+    const float *fax = s->fa[0], *fay = s->fa[1], *faz = s->fa[2];
 
 #pragma omp parallel num_threads(threads) reduction(+ : pairs, moved) reduction(max : maxd) \
     reduction(min : minjac)
     {
         int tid = omp_get_thread_num();
-        unsigned char *tb = tbase + (size_t)tid * per_thread;
-        thread_work w;
-        w.list = (uint32_t *)tb;
-        tb += align64(m * sizeof(uint32_t));
-        for (int a = 0; a < 3; a++) {
-            w.c[a] = (float *)tb;
-            tb += align64(m * sizeof(float));
-            w.a[a] = (float *)tb;
-            tb += align64(m * sizeof(float));
-        }
-        if (!select) { /* all centres, once */
-            for (size_t i = 0; i < m; i++) {
-                w.list[i] = (uint32_t)i;
-                for (int a = 0; a < 3; a++) {
-                    w.c[a][i] = s->fc[a][i];
-                    w.a[a][i] = s->fa[a][i];
-                }
+        uint32_t *list = (uint32_t *)(tbase + (size_t)tid * per_thread);
+        if (use_mask) {
+            /* phase 1: masks, in chunks of 1024 blocks */
+#pragma omp for schedule(static)
+            for (size_t c = 0; c < (nb + 1023) / 1024; c++) {
+                size_t b0 = c * 1024, b1 = b0 + 1024 < nb ? b0 + 1024 : nb;
+                block_masks(P, b0, b1, m, fcx, fcy, fcz, r2c, mask);
             }
         }
+        if (all_in)
+            for (size_t i = 0; i < m; i++) list[i] = (uint32_t)i;
         _Alignas(64) float accx[B], accy[B], accz[B];
         _Alignas(64) int cnt[B];
-#pragma omp for schedule(dynamic, 4)
+#pragma omp for schedule(static, 64)
         for (size_t b = 0; b < nb; b++) {
             size_t k0 = b * B, nv = b + 1 < nb ? B : n - k0;
-            const uint32_t *perm = P->perm + k0;
+            float *o = out + 3 * k0;
             size_t k = m;
-            if (select) {
-                if (!poly && !touched[b]) {
-                    if (!copy_all)
-                        for (size_t v = 0; v < nv; v++)
-                            memcpy(out + 3 * (size_t)perm[v], P->xyz + 3 * (size_t)perm[v],
-                                   3 * sizeof(float));
+            if (use_mask) {
+                uint32_t mk = mask[b];
+                if (!mk && !poly && !st) {
+                    memcpy(o, P->xyz + 3 * k0, nv * 3 * sizeof(float));
                     continue;
                 }
-                k = select_centres(s, P, b, w.list, 0);
-                for (size_t t = 0; t < k; t++)
-                    for (int a = 0; a < 3; a++) {
-                        w.c[a][t] = s->fc[a][w.list[t]];
-                        w.a[a][t] = s->fa[a][w.list[t]];
-                    }
-            }
-            for (int v = 0; v < B; v++) {
-                accx[v] = accy[v] = accz[v] = -0.0f;
-                cnt[v] = 0;
+                k = 0;
+                while (mk) {
+                    list[k++] = (uint32_t)__builtin_ctz(mk);
+                    mk &= mk - 1;
+                }
+            } else if (!all_in) {
+                k = select_centres(s, P, b, list, 0);
             }
             const float *x = P->s[0] + k0, *y = P->s[1] + k0, *z = P->s[2] + k0;
-            kern(x, y, z, k, w.c[0], w.c[1], w.c[2], w.a[0], w.a[1], w.a[2], inv_r2, accx, accy,
-                 accz, cnt);
+            kern(x, y, z, list, k, fcx, fcy, fcz, fax, fay, faz, inv_r2, accx, accy, accz, cnt);
             if (poly)
-                for (size_t v = 0; v < nv; v++) {
+                for (int v = 0; v < B; v++) {
                     float ex = x[v] - pc0, ey = y[v] - pc1, ez = z[v] - pc2;
                     accx[v] += g0[0] + G[0] * ex + G[1] * ey + G[2] * ez;
                     accy[v] += g0[1] + G[3] * ex + G[4] * ey + G[5] * ez;
                     accz[v] += g0[2] + G[6] * ex + G[7] * ey + G[8] * ez;
                 }
-            for (size_t v = 0; v < nv; v++) {
-                float *o = out + 3 * (size_t)perm[v];
-                o[0] = x[v] + accx[v];
-                o[1] = y[v] + accy[v];
-                o[2] = z[v] + accz[v];
-            }
+#if CSRBF_AVX512 && CSRBF_BLOCK == 16
+            if (avx512 && nv == B)
+                write_block_avx512(o, x, y, z, accx, accy, accz);
+            else
+#endif
+                write_block(o, x, y, z, accx, accy, accz, nv);
             if (st) {
                 for (size_t v = 0; v < nv; v++) {
                     pairs += (size_t)cnt[v];
@@ -292,7 +433,7 @@ int csrbf_evaluate(const csrbf_solver *cs, const csrbf_points *P, float *out, un
                     if (d > maxd) maxd = d;
                     if (want_jac && (poly || cnt[v] > 0)) {
                         double xv[3] = {x[v], y[v], z[v]};
-                        double det = jacobian_det(s, xv, w.list, k);
+                        double det = jacobian_det(s, xv, list, k);
                         if (det < minjac) minjac = det;
                     }
                 }

@@ -861,6 +861,28 @@ int csrbf_solver_solve(csrbf_solver *s, size_t n, const float *start, const floa
 
 /* --------------------------------------------------------------------------- map point */
 
+int csrbf_solver_get_coefficients(const csrbf_solver *s, double *centres, double *alpha,
+                                  double poly[12])
+{
+    if (!s) return CSRBF_ERR_INVALID;
+    if (!s->have_start) return CSRBF_ERR_STATE;
+    if (centres) memcpy(centres, s->c, s->m * 3 * sizeof(double));
+    if (alpha) memcpy(alpha, s->alpha, s->m * 3 * sizeof(double));
+    if (poly) {
+        memset(poly, 0, 12 * sizeof(double));
+        if (s->k > 0)
+            for (int a = 0; a < 3; a++) {
+                poly[a] = s->g[0][a];
+                for (int l = 0; l < 3; l++) {
+                    double Bal = s->g[l + 1][a] * s->inv_R;
+                    poly[3 + 3 * a + l] = Bal;
+                    poly[a] -= Bal * s->pc[l];
+                }
+            }
+    }
+    return CSRBF_OK;
+}
+
 int csrbf_solver_map_point(const csrbf_solver *s, const double x[3], double out[3], double jac[9])
 {
     if (!s || !x || !out) return CSRBF_ERR_INVALID;

@@ -11,8 +11,9 @@
 
 #include <cholmod.h>
 
-/* Vertices per evaluation block (a multiple of every SIMD width). */
-#define CSRBF_BLOCK 64
+/* Vertices per evaluation block: one AVX-512 vector of floats, a multiple of every SIMD
+ * width. Blocks are runs of consecutive vertex indices, so output stays contiguous. */
+#define CSRBF_BLOCK 16
 
 /* A hash grid over points (double, AoS n x 3) with cubic cells of side h. Cells hash into a
  * power-of-two table; each point keeps its integer cell so that colliding cells are told
@@ -88,8 +89,8 @@ struct csrbf_solver {
 struct csrbf_points {
     size_t n, nblocks;
     float *xyz;              /* n x 3, original order */
-    uint32_t *perm;          /* sorted position -> original index */
-    float *s[3];             /* nblocks * CSRBF_BLOCK each: sorted coordinates (padded) */
+    float *s[3];             /* nblocks * CSRBF_BLOCK each: coordinates, structure of arrays,
+                                the last block padded with copies of its first vertex */
     float *lo[3], *hi[3];    /* nblocks each: block bounding boxes */
     float blo[3], bhi[3];    /* bounding box of all vertices */
 };

@@ -310,6 +310,22 @@ static void check_reference(size_t n, double L, double R, csrbf_kernel k, int po
     assert_int_equal(csrbf_solver_centres(s), n);
     double *coef = malloc((n + 4) * 3 * sizeof *coef);
     reference_solve(k, R, poly, n, st, en, coef);
+    /* the coefficients themselves (no merging here: same order) */
+    double *al = malloc(n * 3 * sizeof *al), *cen = malloc(n * 3 * sizeof *cen), pl[12];
+    assert_int_equal(csrbf_solver_get_coefficients(s, cen, al, pl), CSRBF_OK);
+    double amax = 1e-3;
+    for (size_t i = 0; i < 3 * n; i++) amax = fmax(amax, fabs(coef[i]));
+    for (size_t i = 0; i < 3 * n; i++) {
+        assert_double_equal(al[i], coef[i], 1e-8 * amax);
+        assert_double_equal(cen[i], st[i], 0);
+    }
+    for (int a = 0; a < 3; a++) {
+        assert_double_equal(pl[a], coef[3 * n + a], 1e-8 * fmax(1, L));
+        for (int l = 0; l < 3; l++)
+            assert_double_equal(pl[3 + 3 * a + l], coef[3 * n + 3 + 3 * l + a], 1e-8);
+    }
+    free(al);
+    free(cen);
     double worst = 0;
     for (int t = 0; t < 200; t++) {
         double x[3], y[3], z[3];
