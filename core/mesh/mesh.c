@@ -404,3 +404,228 @@ int fp__obj_scan(const char *path, const char *text, size_t len, fp__obj_info *i
     *info = total;
     return FP_MESH_OK;
 }
+
+/* ---- OFF scan ------------------------------------------------------------------------ */
+
+typedef struct text_lines {
+    const char *p, *end;
+    size_t line_no;
+} text_lines;
+
+/* The next line holding a token (blank lines are skipped, as OpenMesh's >> does). */
+static int next_nonblank_line(text_lines *t, obj_line *l)
+{
+    while (t->p < t->end) {
+        t->line_no++;
+        const char *eol = memchr(t->p, '\n', (size_t)(t->end - t->p));
+        if (!eol)
+            eol = t->end;
+        l->p = t->p;
+        l->end = eol;
+        t->p = eol + 1;
+        obj_line probe = *l;
+        const char *tok;
+        size_t len;
+        if (next_token(&probe, &tok, &len))
+            return 1;
+    }
+    return 0;
+}
+
+static int parse_count(const char *tok, size_t len, unsigned long *out)
+{
+    char *e = NULL;
+    if (len == 0 || tok[0] == '-' || tok[0] == '+')
+        return 0;
+    errno = 0;
+    unsigned long v = strtoul(tok, &e, 10);
+    if (e != tok + len || errno == ERANGE)
+        return 0;
+    *out = v;
+    return 1;
+}
+
+int fp__off_scan(const char *path, const char *text, size_t len, char *err, size_t errlen)
+{
+    if (memchr(text, '\0', len) && !strstr(text, "BINARY"))
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                              "NUL byte in ASCII OFF text");
+    text_lines t = {text, text + len, 0};
+    obj_line l;
+    if (!next_nonblank_line(&t, &l))
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path, "no OFF header");
+    const char *tok = NULL;
+    size_t toklen = 0;
+    if (!next_token(&l, &tok, &toklen))
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path, "no OFF header");
+    /* [ST][C][N][4][n]OFF */
+    const char *h = tok, *he = tok + toklen;
+    int st = 0, c = 0, n = 0;
+    if (he - h >= 2 && h[0] == 'S' && h[1] == 'T') { st = 1; h += 2; }
+    if (h < he && *h == 'C') { c = 1; h++; }
+    if (h < he && *h == 'N') { n = 1; h++; }
+    if (he - h != 3 || memcmp(h, "OFF", 3) != 0)
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                              "line %zu: not an OFF header " TOK_FMT " (4D and nOFF are not "
+                              "supported)", t.line_no, TOK_ARG(tok, toklen));
+    if (next_token(&l, &tok, &toklen)) {
+        if (toklen == 6 && memcmp(tok, "BINARY", 6) == 0)
+            return FP_MESH_OK; /* binary OFF: OpenMesh's reader checks sizes */
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                              "line %zu: put the vertex and face counts on their own line",
+                              t.line_no);
+    }
+    (void)c;
+    unsigned long counts[3];
+    if (!next_nonblank_line(&t, &l))
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path, "no vertex/face counts");
+    for (int k = 0; k < 3; k++)
+        if (!next_token(&l, &tok, &toklen) || !parse_count(tok, toklen, &counts[k]))
+            return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                                  "line %zu: expected three counts: vertices faces edges",
+                                  t.line_no);
+    const unsigned long nv = counts[0], nf = counts[1];
+    const size_t need = 3 + (n ? 3u : 0u) + (st ? 2u : 0u);
+    for (unsigned long i = 0; i < nv; i++) {
+        if (!next_nonblank_line(&t, &l))
+            return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                                  "file ends after %lu of %lu vertices", i, nv);
+        size_t have = 0;
+        while (next_token(&l, &tok, &toklen)) {
+            double d;
+            if (!parse_number(tok, toklen, &d))
+                return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                                      "line %zu: malformed number " TOK_FMT " in vertex %lu",
+                                      t.line_no, TOK_ARG(tok, toklen), i);
+            if (!isfinite(d))
+                return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                                      "line %zu: non-finite value " TOK_FMT " in vertex %lu",
+                                      t.line_no, TOK_ARG(tok, toklen), i);
+            have++;
+        }
+        if (have < need)
+            return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                                  "line %zu: vertex %lu has %zu numbers, expected %zu",
+                                  t.line_no, i, have, need);
+    }
+    for (unsigned long i = 0; i < nf; i++) {
+        if (!next_nonblank_line(&t, &l))
+            return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                                  "file ends after %lu of %lu faces", i, nf);
+        unsigned long k, idx;
+        if (!next_token(&l, &tok, &toklen) || !parse_count(tok, toklen, &k) || k < 3)
+            return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                                  "line %zu: face %lu does not start with a corner count of "
+                                  "3 or more", t.line_no, i);
+        for (unsigned long j = 0; j < k; j++) {
+            if (!next_token(&l, &tok, &toklen) || !parse_count(tok, toklen, &idx))
+                return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                                      "line %zu: face %lu: expected %lu vertex indices",
+                                      t.line_no, i, k);
+            if (idx >= nv)
+                return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                                      "line %zu: face %lu references vertex %lu, but the file "
+                                      "has %lu vertices", t.line_no, i, idx, nv);
+        }
+    }
+    return FP_MESH_OK;
+}
+
+/* ---- ASCII PLY and STL scans --------------------------------------------------------- */
+
+/* Check that every token from line `l` on is a finite number (label names the part). */
+static int numbers_only(const char *path, text_lines *t, const char *label, char *err,
+                        size_t errlen)
+{
+    obj_line l;
+    while (next_nonblank_line(t, &l)) {
+        const char *tok;
+        size_t toklen;
+        while (next_token(&l, &tok, &toklen)) {
+            double d;
+            if (!parse_number(tok, toklen, &d))
+                return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                                      "line %zu: malformed number " TOK_FMT " in %s",
+                                      t->line_no, TOK_ARG(tok, toklen), label);
+            if (!isfinite(d))
+                return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                                      "line %zu: non-finite value " TOK_FMT " in %s",
+                                      t->line_no, TOK_ARG(tok, toklen), label);
+        }
+    }
+    return FP_MESH_OK;
+}
+
+static int token_is(const char *tok, size_t len, const char *word)
+{
+    return strlen(word) == len && memcmp(tok, word, len) == 0;
+}
+
+int fp__ply_scan(const char *path, const char *text, size_t len, char *err, size_t errlen)
+{
+    text_lines t = {text, text + len, 0};
+    obj_line l;
+    int ascii = 0;
+    while (next_nonblank_line(&t, &l)) {
+        const char *tok = NULL, *tok2 = NULL;
+        size_t toklen = 0, toklen2 = 0;
+        next_token(&l, &tok, &toklen);
+        if (token_is(tok, toklen, "format") && next_token(&l, &tok2, &toklen2))
+            ascii = token_is(tok2, toklen2, "ascii");
+        if (token_is(tok, toklen, "end_header"))
+            return ascii ? numbers_only(path, &t, "the PLY data", err, errlen) : FP_MESH_OK;
+    }
+    return FP_MESH_OK; /* no header end: OpenMesh's reader reports it */
+}
+
+int fp__stl_ascii_scan(const char *path, const char *text, size_t len, char *err,
+                       size_t errlen)
+{
+    if (memchr(text, '\0', len))
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                              "NUL byte in ASCII STL text");
+    text_lines t = {text, text + len, 0};
+    obj_line l;
+    size_t vertices = 0;
+    while (next_nonblank_line(&t, &l)) {
+        const char *tok = NULL;
+        size_t toklen = 0;
+        next_token(&l, &tok, &toklen);
+        int is_vertex = token_is(tok, toklen, "vertex");
+        if (token_is(tok, toklen, "facet")) {
+            if (!next_token(&l, &tok, &toklen) || !token_is(tok, toklen, "normal"))
+                return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                                      "line %zu: 'facet' without 'normal'", t.line_no);
+        } else if (!is_vertex) {
+            static const char *const words[] = {"solid", "outer", "endloop", "endfacet",
+                                                "endsolid", NULL};
+            int known = 0;
+            for (const char *const *w = words; *w; w++)
+                known |= token_is(tok, toklen, *w);
+            if (!known)
+                return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                                      "line %zu: unknown STL keyword " TOK_FMT, t.line_no,
+                                      TOK_ARG(tok, toklen));
+            continue;
+        }
+        int count = 0;
+        while (next_token(&l, &tok, &toklen)) {
+            double d;
+            if (!parse_number(tok, toklen, &d) || !isfinite(d))
+                return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                                      "line %zu: %s value " TOK_FMT, t.line_no,
+                                      parse_number(tok, toklen, &d) ? "non-finite"
+                                                                    : "malformed",
+                                      TOK_ARG(tok, toklen));
+            count++;
+        }
+        if (count != 3)
+            return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                                  "line %zu: expected 3 numbers, found %d", t.line_no, count);
+        vertices += is_vertex;
+    }
+    if (vertices % 3 != 0)
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                              "%zu vertices, not a multiple of 3", vertices);
+    return FP_MESH_OK;
+}

@@ -29,6 +29,19 @@ typedef struct fp__obj_info {
 int fp__obj_scan(const char *path, const char *text, size_t len, fp__obj_info *info,
                  char *err, size_t errlen);
 
+/** Check ASCII OFF text the way OpenMesh's reader consumes it (header line, a line of three
+ *  counts, one vertex per line with finite numbers, one face per line "k i1 .. ik" with
+ *  indices < vertex count); binary OFF passes unchecked. "path: line N: reason" errors.
+ *  Returns FP_MESH_OK or FP_MESH_ERR_FORMAT. */
+int fp__off_scan(const char *path, const char *text, size_t len, char *err, size_t errlen);
+
+/** ASCII PLY: every token after end_header is a finite number (binary PLY passes).
+ *  ASCII STL: known keywords only; facet normals and vertices with 3 finite numbers.
+ *  "path: line N: reason" errors. Return FP_MESH_OK or FP_MESH_ERR_FORMAT. */
+int fp__ply_scan(const char *path, const char *text, size_t len, char *err, size_t errlen);
+int fp__stl_ascii_scan(const char *path, const char *text, size_t len, char *err,
+                       size_t errlen);
+
 /** The extension of path after its last dot, lower-cased into ext (size extlen; "" when none). */
 void fp__mesh_extension(const char *path, char *ext, size_t extlen);
 

@@ -464,6 +464,13 @@ int load_openmesh(const char *path, const std::string &ext, const std::string &d
         if (rc != FP_MESH_OK)
             return rc;
     }
+    if (ext == "off") {
+        // OpenMesh's ASCII OFF reader does not check its stream: a bad number silently
+        // becomes 0 and leaves later values undefined. Check the text first.
+        int rc = fp__off_scan(path, data.c_str(), data.size(), err, errlen);
+        if (rc != FP_MESH_OK)
+            return rc;
+    }
     IO::Options opt = IO::Options::VertexNormal;
     opt += IO::Options::VertexTexCoord;
     opt += IO::Options::FaceTexCoord;
@@ -480,6 +487,16 @@ int load_openmesh(const char *path, const std::string &ext, const std::string &d
             return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
                                   "not an STL file (no 'solid' and the size does not match a "
                                   "binary STL's triangle count)");
+        if (!binary) {
+            int rc = fp__stl_ascii_scan(path, data.c_str(), data.size(), err, errlen);
+            if (rc != FP_MESH_OK)
+                return rc;
+        }
+    }
+    if (ext == "ply") {
+        int rc = fp__ply_scan(path, data.c_str(), data.size(), err, errlen);
+        if (rc != FP_MESH_OK)
+            return rc;
     }
     Soup soup;
     bool ok;

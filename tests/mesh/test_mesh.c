@@ -598,7 +598,7 @@ static void test_error_index_out_of_range(void **state)
                                                "f 1/1 2/2 3/1\n"),
                       FP_MESH_ERR_FORMAT, "line 5: face texture coordinate index 2");
     expect_load_error(write_tmp("range.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 5\n"),
-                      FP_MESH_ERR_FORMAT, "references vertex 5");
+                      FP_MESH_ERR_FORMAT, "line 6: face 0 references vertex 5");
     expect_load_error(write_tmp("range.ply", "ply\nformat ascii 1.0\nelement vertex 3\n"
                                              "property float x\nproperty float y\n"
                                              "property float z\nelement face 1\n"
@@ -613,7 +613,19 @@ static void test_error_nan_coordinate(void **state)
     expect_load_error(write_tmp("nan.obj", "v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n"),
                       FP_MESH_ERR_FORMAT, "line 2: non-finite value 'nan'");
     expect_load_error(write_tmp("nan.off", "OFF\n3 1 0\n0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n"),
-                      FP_MESH_ERR_FORMAT, "non-finite");
+                      FP_MESH_ERR_FORMAT, "line 4: non-finite value 'nan' in vertex 1");
+    expect_load_error(write_tmp("nan.ply", "ply\nformat ascii 1.0\nelement vertex 3\n"
+                                           "property float x\nproperty float y\n"
+                                           "property float z\nelement face 1\n"
+                                           "property list uchar int vertex_indices\n"
+                                           "end_header\n0 0 0\n1 NaN 0\n0 1 0\n3 0 1 2\n"),
+                      FP_MESH_ERR_FORMAT, "line 11: non-finite value 'NaN'");
+    expect_load_error(write_tmp("nan.stl", "solid t\nfacet normal 0 0 1\nouter loop\n"
+                                           "vertex 0 0 0\nvertex 1 nan 0\nvertex 0 1 0\n"
+                                           "endloop\nendfacet\nendsolid t\n"),
+                      FP_MESH_ERR_FORMAT, "line 5: non-finite value 'nan'");
+    expect_load_error(write_tmp("short.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n"),
+                      FP_MESH_ERR_FORMAT, "file ends after 2 of 3 vertices");
 }
 
 static void test_error_inf_coordinate(void **state)
