@@ -363,6 +363,24 @@ static void test_obj_negative_indices(void **state)
     fp_mesh_free(&m);
 }
 
+/* OpenMesh's OBJ reader removes a repeated vertex from a face and drops a face left with
+ * fewer than 3 distinct vertices; the load agrees with that and still succeeds. */
+static void test_obj_degenerate_faces(void **state)
+{
+    (void)state;
+    const char *p = write_tmp("degenerate.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n"
+                                                "f 1 1 2\nf 1 2 3 2\nf 2 4 3\n");
+    fp_mesh *m = NULL;
+    int rc = fp_mesh_load(p, &m, err, sizeof err);
+    if (rc)
+        fail_msg("%s", err);
+    assert_int_equal(m->vertex_count, 4);
+    const uint32_t want[] = {0, 1, 2, 1, 3, 2};
+    assert_int_equal(m->triangle_count, 2);
+    assert_memory_equal(m->triangles, want, sizeof want);
+    fp_mesh_free(&m);
+}
+
 /* ---- normals ------------------------------------------------------------------------- */
 
 /* The regular icosahedron, counter-clockwise from outside. */
@@ -700,7 +718,9 @@ static void test_error_save(void **state)
     m->positions[4] = NAN;
     assert_int_equal(fp_mesh_save(m, tmp_path("bad.ply"), err, sizeof err), FP_MESH_ERR_INVALID);
     assert_int_equal(fp_mesh_save(NULL, tmp_path("x.obj"), err, sizeof err), FP_MESH_ERR_INVALID);
-    assert_int_equal(fp_mesh_load(NULL, &m, err, sizeof err), FP_MESH_ERR_INVALID);
+    fp_mesh *other = m;
+    assert_int_equal(fp_mesh_load(NULL, &other, err, sizeof err), FP_MESH_ERR_INVALID);
+    assert_null(other); /* *out is NULL after any failed load */
     fp_mesh_free(&m);
     fp_mesh_free(&m); /* a second free of the NULLed pointer is a no-op */
 }
@@ -759,6 +779,7 @@ int main(void)
         cmocka_unit_test(test_round_trip_upper_case_extension),
         cmocka_unit_test(test_polygons_are_fan_triangulated),
         cmocka_unit_test(test_obj_negative_indices),
+        cmocka_unit_test(test_obj_degenerate_faces),
         cmocka_unit_test(test_normals_outward_on_icosahedron),
         cmocka_unit_test(test_normals_follow_moved_vertices),
         cmocka_unit_test(test_normals_bad_index),
