@@ -87,7 +87,8 @@ fp_mesh *fp_mesh_copy(const fp_mesh *mesh);
  *  (points, lines, strips, fans) are skipped.
  *
  *  Faces: polygons are fan-triangulated in file order, each giving (corners - 2) consecutive
- *  triangles (0,1,2), (0,2,3), ... Normals: the file's vertex normals when every vertex has a finite,
+ *  triangles (0,1,2), (0,2,3), ... OBJ faces that repeat a vertex lose the repeats, and one
+ *  left with fewer than 3 distinct vertices is dropped (OpenMesh's OBJ reader does this). Normals: the file's vertex normals when every vertex has a finite,
  *  non-zero one (normalised); otherwise computed with fp_mesh_compute_normals(). UVs: per
  *  vertex; OBJ gives a UV per face corner, and a vertex used with several UVs (a texture seam)
  *  takes the UV of its first use in face order. glTF TEXCOORD_0 (float or normalised

@@ -350,7 +350,8 @@ int fp__obj_scan(const char *path, const char *text, size_t len, fp__obj_info *i
                 else if (is_vt) seen.vt++;
                 else seen.vn++;
             } else if (is_f) {
-                size_t corners = 0;
+                size_t corners = 0, distinct = 0;
+                size_t first[3] = {0, 0, 0}; /* the first three distinct vertex indices */
                 const char *tok;
                 size_t toklen;
                 while (next_token(&l, &tok, &toklen)) {
@@ -388,6 +389,12 @@ int fp__obj_scan(const char *path, const char *text, size_t len, fp__obj_info *i
                                                   "line %zu: face %s index %ld out of range "
                                                   "(the file has %zu)",
                                                   line_no, what, bad, have);
+                        size_t v = iv > 0 ? (size_t)iv - 1 : seen.v - (size_t)(-iv);
+                        int repeat = 0;
+                        for (size_t d = 0; d < distinct && d < 3; d++)
+                            repeat |= first[d] == v;
+                        if (!repeat && distinct < 3)
+                            first[distinct++] = v;
                     }
                     corners++;
                 }
@@ -397,6 +404,7 @@ int fp__obj_scan(const char *path, const char *text, size_t len, fp__obj_info *i
                                           line_no, corners);
                 seen.faces++;
                 seen.triangles += corners - 2;
+                seen.degenerate += pass == 1 && distinct < 3;
             }
         }
         total = seen;

@@ -20,6 +20,7 @@ typedef struct fp__obj_info {
     size_t v, vt, vn;  /* counts of v, vt, vn lines */
     size_t faces;      /* f lines */
     size_t triangles;  /* sum over f lines of (corners - 2) */
+    size_t degenerate; /* f lines with fewer than 3 distinct vertices (OpenMesh drops them) */
 } fp__obj_info;
 
 /** Check OBJ text (NUL-terminated, len bytes) line by line: known statements only; v, vt, vn

@@ -311,6 +311,9 @@ private:
 // one OpenMesh call at a time, with its log captured instead of printed.
 std::mutex openmesh_lock;
 
+// OpenMesh's log streams are std::ostreams whose buffer multiplexes to std::cerr etc. While
+// OpenMesh works we point them at our own buffer (mostream::disconnect would leak its target
+// object on every call), then restore them.
 class OmLogCapture {
 public:
     OmLogCapture()
@@ -318,27 +321,21 @@ public:
         OpenMesh::mostream *s[3] = {&::omerr(), &::omlog(), &::omout()};
         for (int i = 0; i < 3; i++) {
             streams_[i] = s[i];
-            had_cerr_[i] = s[i]->disconnect(std::cerr);
-            had_clog_[i] = s[i]->disconnect(std::clog);
-            had_cout_[i] = s[i]->disconnect(std::cout);
-            s[i]->connect(text_);
+            s[i]->flush();
+            saved_[i] = s[i]->rdbuf(&text_);
         }
     }
     ~OmLogCapture()
     {
         for (int i = 0; i < 3; i++) {
             streams_[i]->flush();
-            streams_[i]->disconnect(text_);
-            if (had_cerr_[i]) streams_[i]->connect(std::cerr);
-            if (had_clog_[i]) streams_[i]->connect(std::clog);
-            if (had_cout_[i]) streams_[i]->connect(std::cout);
+            streams_[i]->rdbuf(saved_[i]);
+            streams_[i]->clear();
         }
     }
     // The first line of what OpenMesh logged, for an error message ("" if nothing).
     std::string first_line()
     {
-        for (auto *s : streams_)
-            s->flush();
         std::string t = text_.str();
         size_t b = t.find_first_not_of(" \t\r\n");
         if (b == std::string::npos)
@@ -350,9 +347,9 @@ public:
     OmLogCapture &operator=(const OmLogCapture &) = delete;
 
 private:
-    std::ostringstream text_;
+    std::stringbuf text_;
     OpenMesh::mostream *streams_[3];
-    bool had_cerr_[3], had_clog_[3], had_cout_[3];
+    std::streambuf *saved_[3];
 };
 
 // ---- small helpers ------------------------------------------------------------------
@@ -517,11 +514,13 @@ int load_openmesh(const char *path, const std::string &ext, const std::string &d
         return fail(err, errlen, FP_MESH_ERR_FORMAT, path,
                     "OpenMesh cannot read it as ." + ext +
                         (log.empty() ? std::string() : " (" + log + ")"));
-    if (ext == "obj" && (soup.n() != obj.v || soup.faces() != obj.faces))
+    // OpenMesh's OBJ reader removes repeated vertices from a face and drops a face left with
+    // fewer than 3; anything else is a disagreement between its parse and ours.
+    if (ext == "obj" && (soup.n() != obj.v || soup.faces() != obj.faces - obj.degenerate))
         return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
                               "OpenMesh read %zu vertices and %zu faces; the file has %zu and "
-                              "%zu",
-                              soup.n(), soup.faces(), obj.v, obj.faces);
+                              "%zu (%zu degenerate)",
+                              soup.n(), soup.faces(), obj.v, obj.faces, obj.degenerate);
     return soup_to_mesh(soup, path, out, err, errlen);
 }
 

@@ -363,6 +363,24 @@ static void test_obj_negative_indices(void **state)
     fp_mesh_free(&m);
 }
 
+/* OpenMesh's OBJ reader removes a repeated vertex from a face and drops a face left with
+ * fewer than 3 distinct vertices; the load agrees with that and still succeeds. */
+static void test_obj_degenerate_faces(void **state)
+{
+    (void)state;
+    const char *p = write_tmp("degenerate.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n"
+                                                "f 1 1 2\nf 1 2 3 2\nf 2 4 3\n");
+    fp_mesh *m = NULL;
+    int rc = fp_mesh_load(p, &m, err, sizeof err);
+    if (rc)
+        fail_msg("%s", err);
+    assert_int_equal(m->vertex_count, 4);
+    const uint32_t want[] = {0, 1, 2, 1, 3, 2};
+    assert_int_equal(m->triangle_count, 2);
+    assert_memory_equal(m->triangles, want, sizeof want);
+    fp_mesh_free(&m);
+}
+
 /* ---- normals ------------------------------------------------------------------------- */
 
 /* The regular icosahedron, counter-clockwise from outside. */
@@ -486,12 +504,10 @@ static void test_bounds(void **state)
     fp_mesh_free(&m);
 }
 
-/* glTF: node transforms are applied; the default scene is read. */
-static void test_gltf_node_transform_applied(void **state)
+/* glTF: node transforms are applied; the default scene is read. The node JSON replaces the
+ * plain node of a saved one-triangle file (0,0,0) (1,0,0) (0,1,0). */
+static fp_mesh *load_transformed_triangle(const char *node_json)
 {
-    (void)state;
-    /* one triangle (0,0,0) (1,0,0) (0,1,0), as a base64 buffer of 36 bytes, indices none;
-       node: translation (10, 0, 0), scale (2, 2, 2) */
     fp_mesh *tri = fp_mesh_create(3, 1, 0);
     const float p[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
     memcpy(tri->positions, p, sizeof p);
@@ -501,27 +517,64 @@ static void test_gltf_node_transform_applied(void **state)
     const char *plain = tmp_path("tri.gltf");
     assert_int_equal(fp_mesh_save(tri, plain, err, sizeof err), FP_MESH_OK);
     fp_mesh_free(&tri);
-    /* insert the node transform into the written JSON */
     FILE *f = fopen(plain, "rb");
     char json[8192];
     size_t len = fread(json, 1, sizeof json - 1, f);
     fclose(f);
     json[len] = '\0';
-    char *node = strstr(json, "\"nodes\":[{\"mesh\":0}]");
+    const char *plain_node = "\"nodes\":[{\"mesh\":0}]";
+    char *node = strstr(json, plain_node);
     assert_non_null(node);
     char out[8400];
-    snprintf(out, sizeof out, "%.*s\"nodes\":[{\"mesh\":0,\"translation\":[10,0,0],"
-                              "\"scale\":[2,2,2]}]%s",
-             (int)(node - json), json, node + strlen("\"nodes\":[{\"mesh\":0}]"));
-    const char *moved = write_tmp("moved.gltf", out);
+    snprintf(out, sizeof out, "%.*s\"nodes\":[%s]%s", (int)(node - json), json, node_json,
+             node + strlen(plain_node));
     fp_mesh *m = NULL;
-    int rc = fp_mesh_load(moved, &m, err, sizeof err);
+    int rc = fp_mesh_load(write_tmp("moved.gltf", out), &m, err, sizeof err);
     if (rc)
         fail_msg("%s", err);
-    const float want[9] = {10, 0, 0, 12, 0, 0, 10, 2, 0};
+    return m;
+}
+
+static void expect_triangle(const fp_mesh *m, const float want[9], const float normal[3])
+{
+    assert_int_equal(m->vertex_count, 3);
     for (int i = 0; i < 9; i++)
-        assert_true(fabsf(m->positions[i] - want[i]) < 1e-6f);
-    assert_true(fabsf(m->normals[2] - 1.0f) < 1e-6f);
+        if (fabsf(m->positions[i] - want[i]) > 1e-6f)
+            fail_msg("position %d: %g, want %g", i, (double)m->positions[i], (double)want[i]);
+    for (int v = 0; v < 3; v++)
+        for (int d = 0; d < 3; d++)
+            assert_true(fabsf(m->normals[3 * v + d] - normal[d]) < 1e-6f);
+    /* the stored normals agree with the winding of the (possibly flipped) triangle */
+    float check[9];
+    assert_int_equal(fp_mesh_normals(m->triangles, 1, m->positions, 3, check), FP_MESH_OK);
+    for (int d = 0; d < 3; d++)
+        assert_true(fabsf(check[d] - normal[d]) < 1e-6f);
+}
+
+static void test_gltf_node_transform_applied(void **state)
+{
+    (void)state;
+    /* translation (10, 0, 0) after scale 2 */
+    fp_mesh *m = load_transformed_triangle(
+        "{\"mesh\":0,\"translation\":[10,0,0],\"scale\":[2,2,2]}");
+    const float want1[9] = {10, 0, 0, 12, 0, 0, 10, 2, 0}, up[3] = {0, 0, 1};
+    expect_triangle(m, want1, up);
+    fp_mesh_free(&m);
+    /* rotation of 90 degrees about x: (x, y, z) -> (x, -z, y); the normal +z becomes -y */
+    const double h = sqrt(0.5);
+    char node[256];
+    snprintf(node, sizeof node, "{\"mesh\":0,\"rotation\":[%.17g,0,0,%.17g]}", h, h);
+    m = load_transformed_triangle(node);
+    const float want2[9] = {0, 0, 0, 1, 0, 0, 0, 0, 1}, minus_y[3] = {0, -1, 0};
+    expect_triangle(m, want2, minus_y);
+    fp_mesh_free(&m);
+    /* a parent matrix mirroring z, a child translating by (0, 0, 1): the triangle lands at
+       z = -1, and its winding is flipped so the normal stays consistent (now -z) */
+    m = load_transformed_triangle(
+        "{\"children\":[1],\"matrix\":[1,0,0,0, 0,1,0,0, 0,0,-1,0, 0,0,0,1]},"
+        "{\"mesh\":0,\"translation\":[0,0,1]}");
+    const float want3[9] = {0, 0, -1, 1, 0, -1, 0, 1, -1}, down[3] = {0, 0, -1};
+    expect_triangle(m, want3, down);
     fp_mesh_free(&m);
 }
 
@@ -700,7 +753,9 @@ static void test_error_save(void **state)
     m->positions[4] = NAN;
     assert_int_equal(fp_mesh_save(m, tmp_path("bad.ply"), err, sizeof err), FP_MESH_ERR_INVALID);
     assert_int_equal(fp_mesh_save(NULL, tmp_path("x.obj"), err, sizeof err), FP_MESH_ERR_INVALID);
-    assert_int_equal(fp_mesh_load(NULL, &m, err, sizeof err), FP_MESH_ERR_INVALID);
+    fp_mesh *other = m;
+    assert_int_equal(fp_mesh_load(NULL, &other, err, sizeof err), FP_MESH_ERR_INVALID);
+    assert_null(other); /* *out is NULL after any failed load */
     fp_mesh_free(&m);
     fp_mesh_free(&m); /* a second free of the NULLed pointer is a no-op */
 }
@@ -759,6 +814,7 @@ int main(void)
         cmocka_unit_test(test_round_trip_upper_case_extension),
         cmocka_unit_test(test_polygons_are_fan_triangulated),
         cmocka_unit_test(test_obj_negative_indices),
+        cmocka_unit_test(test_obj_degenerate_faces),
         cmocka_unit_test(test_normals_outward_on_icosahedron),
         cmocka_unit_test(test_normals_follow_moved_vertices),
         cmocka_unit_test(test_normals_bad_index),
