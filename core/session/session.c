@@ -82,16 +82,16 @@ static const float default_ws_max[3] = {150.f, 330.f, 120.f};
  * performer, -z) reaches 15% of the face's depth behind the face's front, so that the
  * performer's forward reach touches the face. */
 static void fit_workspace(fp_calibration *c, const float ws_min[3], const float ws_max[3],
-                          const float fmin[3], const float fmax[3])
+                          const float face_min[3], const float face_max[3])
 {
     double ws_w = fmax(ws_max[0] - ws_min[0], 1.0);
     double ws_h = fmax(ws_max[1] - ws_min[1], 1.0);
-    double sx = (fmax[0] - fmin[0]) / ws_w, sy = (fmax[1] - fmin[1]) / ws_h;
+    double sx = (face_max[0] - face_min[0]) / ws_w, sy = (face_max[1] - face_min[1]) / ws_h;
     c->scale = fmin(sx, sy);
     for (int i = 0; i < 2; i++)
-        c->offset[i] = 0.5 * (fmin[i] + fmax[i]) - c->scale * 0.5 * (ws_min[i] + ws_max[i]);
-    double depth = fmax[2] - fmin[2];
-    c->offset[2] = (fmax[2] - 0.15 * depth) - c->scale * ws_min[2];
+        c->offset[i] = 0.5 * (face_min[i] + face_max[i]) - c->scale * 0.5 * (ws_min[i] + ws_max[i]);
+    double depth = face_max[2] - face_min[2];
+    c->offset[2] = (face_max[2] - 0.15 * depth) - c->scale * ws_min[2];
 }
 
 static void to_mesh(const fp_calibration *c, const float mm[3], float out[3])
@@ -175,7 +175,8 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
         diag += d * d;
     }
     s->radius = opt->radius > 0 ? opt->radius : 0.06 * sqrt(diag);
-    fp_hand_model_init(&s->hand_model, opt->hand_size > 0 ? opt->hand_size : 1.0);
+    fp_hand_model_init(&s->hand_model);
+    if (opt->hand_size > 0) s->hand_model.size = (float)opt->hand_size;
 
     if (csrbf_points_create(s->n, s->base, &s->points) != CSRBF_OK) {
         rc = -ENOMEM;

@@ -10,13 +10,13 @@
 #include <unistd.h>
 #include <cmocka.h>
 
-static char exe[4096], data[4096], build[4096], tmp[256];
+static char exe[8192], data[4096], build[4096], tmp[256];
 static char out[65536];
 
 /* Run facepuppet with args (a shell fragment); capture stderr+stdout; return exit status. */
 static int fp(const char *args)
 {
-    char cmd[16384];
+    char cmd[40000];
     snprintf(cmd, sizeof cmd, "cd %s && timeout 120 %s %s 2>&1", tmp, exe, args);
     FILE *p = popen(cmd, "r");
     size_t n = fread(out, 1, sizeof out - 1, p);
@@ -59,7 +59,7 @@ static void test_corrupt_obj(void **state)
 {
     (void)state;
     write_file("corrupt.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
-    char args[8192];
+    char args[16384];
     snprintf(args, sizeof args, "run --mesh corrupt.obj --input replay:%s/hands/leap-motion/grab_joints_mm.csv",
              data);
     assert_int_equal(fp(args), 65);
@@ -73,11 +73,11 @@ static void test_bad_csv(void **state)
                     "thumb_abduction,index_mcp,index_pip,index_dip,middle_mcp,middle_pip,middle_dip,"
                     "middle_index_abduction,ring_mcp,ring_pip,ring_dip,ring_middle_abduction,pinky_mcp,"
                     "pinky_pip,pinky_dip,pinky_ring_abduction,palm_arch,wrist_pitch,wrist_yaw\n";
-    char text[4096];
+    char text[8192];
     snprintf(text, sizeof text, "%s0,1000,1,right,,1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,,,\n"
                                 "1,10000,1,right,,1,2,3,4,5,6,7,8,9,1O,11,12,13,14,15,16,17,18,,,\n", header);
     write_file("badnum.csv", text);
-    char args[8192];
+    char args[16384];
     snprintf(args, sizeof args, "run --mesh %s --input replay:badnum.csv", face());
     assert_int_equal(fp(args), 65);
     assert_non_null(strstr(out, "badnum.csv:3:"));   /* file and line */
@@ -98,7 +98,7 @@ static void test_bad_csv(void **state)
 static void test_plugins(void **state)
 {
     (void)state;
-    char args[8192];
+    char args[16384];
     snprintf(args, sizeof args, "run --mesh %s --input nosuchinput", face());
     assert_int_equal(fp(args), 78);
     assert_non_null(strstr(out, "no input plugin named 'nosuchinput'"));
@@ -110,6 +110,23 @@ static void test_plugins(void **state)
              "--mapping nosuchmapping", face(), data);
     assert_int_equal(fp(args), 78);
     assert_non_null(strstr(out, "no mapping plugin named 'nosuchmapping'"));
+}
+
+static void test_info(void **state)
+{
+    (void)state;
+    char args[16384];
+    snprintf(args, sizeof args, "info %s/hands/leap-motion/three-claps_joints_mm.csv", data);
+    assert_int_equal(fp(args), 0);
+    assert_non_null(strstr(out, "frames    403"));
+    assert_non_null(strstr(out, "left, right"));
+    assert_non_null(strstr(out, "joints-csv"));
+    snprintf(args, sizeof args, "info %s/faces/ict-facekit/generic_neutral_mesh.obj", data);
+    assert_int_equal(fp(args), 0);
+    assert_non_null(strstr(out, "vertices  26719"));
+    assert_non_null(strstr(out, "probably centimetres"));
+    assert_int_equal(fp("info /nonexistent/face.obj"), 65);
+    assert_non_null(strstr(out, "/nonexistent/face.obj"));
 }
 
 int main(void)
@@ -127,6 +144,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_help_and_usage), cmocka_unit_test(test_corrupt_obj),
         cmocka_unit_test(test_bad_csv),        cmocka_unit_test(test_plugins),
+        cmocka_unit_test(test_info),
     };
     int rc = cmocka_run_group_tests(tests, NULL, NULL);
     char cmd[512];

@@ -127,8 +127,9 @@ typedef struct fp_event_joint_positions {
 } fp_event_joint_positions;
 
 /** Wrist pose in the device frame: position in mm, orientation as a unit quaternion
- *  (w, x, y, z) turning the hand's own frame (+x toward the thumb side for a right hand,
- *  +y back of the hand, -z toward the fingers) into the device frame. */
+ *  (w, x, y, z) turning the hand's own frame into the device frame. The hand's frame is
+ *  right-handed: +y out of the back of the hand, -z toward the fingers, x = y cross z (toward
+ *  the pinky of a right hand, the thumb of a left hand: Leap Motion's convention). */
 typedef struct fp_event_wrist_pose {
     fp_event_header header;
     float position_mm[3];

@@ -1,0 +1,447 @@
+/* facepuppet bench: medians of the CSRBF engine's per-update time on the paper's Table 1
+ * set-up (Sato, Savchenko, Ohbuchi, Cyberworlds 2004), a 1M-vertex grid and large centre
+ * sets, each beside a reference measured in the same run (a plain scalar brute-force loop,
+ * or a fresh factorisation). */
+#define _POSIX_C_SOURCE 200809L
+#include "fp_bench.h"
+
+#include "command.h"
+#include "csrbf.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+typedef struct {
+    int quick, json;
+    const char *only;
+} bench_opts;
+
+static double now_ms(void)
+{
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return t.tv_sec * 1e3 + t.tv_nsec * 1e-6;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static double median(double *v, int n)
+{
+    qsort(v, (size_t)n, sizeof *v, cmp_double);
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+/* ------------------------------------------------------------------------ the set-up */
+
+/* The paper's Table 1 (csrbf.md): fps and (vertex, centre) pairs, 10 control vectors. */
+static const int table_vertices[4] = {1089, 4225, 16641, 33025};
+static const double table_radius[5] = {10, 20, 40, 60, 80};
+static const double paper_anchored_fps[4][5] = {{496.3, 502.1, 499.2, 427.4, 423.6},
+                                                {162.6, 138.0, 119.7, 113.1, 112.0},
+                                                {41.3, 34.8, 30.0, 28.2, 28.0},
+                                                {20.0, 16.7, 14.4, 13.6, 13.4}};
+static const long paper_pairs[4][5] = {{698, 2414, 7342, 10124, 10890},
+                                       {2646, 9526, 28686, 39476, 42250},
+                                       {10510, 37562, 113282, 115812, 166410},
+                                       {20790, 74482, 225714, 309476, 330250}};
+static const double paper_unanchored_fps[4][5] = {{446.3, 427.6, 380.2, 367.0, 364.0},
+                                                  {132.6, 114.4, 101.5, 97.5, 96.1},
+                                                  {32.9, 28.2, 24.9, 23.9, 23.4},
+                                                  {15.9, 13.5, 11.9, 11.4, 10.9}};
+
+/* A planar grid over [0, 64]^2 (z = 0) with exactly nv vertices: the square grids 33^2,
+ * 65^2, 129^2 of the paper and, for 33025 (no square; the paper's pair counts show twice the
+ * density of 129^2), 129 x 256 plus one vertex at the centre. Generic nv: a near-square
+ * grid, the remainder on the last row. */
+static float *make_grid(size_t nv)
+{
+    size_t nx, ny;
+    if (nv == 33025) {
+        nx = 129;
+        ny = 256;
+    } else {
+        nx = (size_t)llround(sqrt((double)nv));
+        ny = nv / nx;
+    }
+    float *p = malloc(nv * 3 * sizeof *p);
+    if (!p) return NULL;
+    size_t k = 0;
+    for (size_t j = 0; j < ny && k < nv; j++)
+        for (size_t i = 0; i < nx && k < nv; i++, k++) {
+            p[3 * k] = (float)(64.0 * i / (nx - 1));
+            p[3 * k + 1] = (float)(64.0 * j / (ny - 1));
+            p[3 * k + 2] = 0.0f;
+        }
+    for (size_t extra = 0; k < nv; k++, extra++) { /* the remainder, spread near the centre */
+        p[3 * k] = (float)(32.0 + 0.1 * (double)extra);
+        p[3 * k + 1] = 32.0f;
+        p[3 * k + 2] = 0.0f;
+    }
+    return p;
+}
+
+/* Ten fingertips in two rows of five over the middle of the plane: x = 2, 17, ..., 62,
+ * y = 21 and 43, z = 0. Fitted so that the pair counts on the 33^2, 65^2 and 129^2 grids come
+ * within about 10% of the paper's; every vertex of [0, 64]^2 lies within 80 of each. */
+static void fingertips(float *start)
+{
+    for (int i = 0; i < 5; i++)
+        for (int j = 0; j < 2; j++) {
+            float *s = start + 3 * (2 * i + j);
+            s[0] = 2.0f + 15.0f * (float)i;
+            s[1] = j ? 43.0f : 21.0f;
+            s[2] = 0.0f;
+        }
+}
+
+/* Frame f of a glove motion: each fingertip presses and slides a little (amplitude 0.6,
+ * below the fold-over bound at R = 10). */
+static void motion(const float *rest, float *out, int n, int frame, double amp)
+{
+    for (int i = 0; i < n; i++) {
+        double ph = 0.7 * i + 0.05 * frame;
+        out[3 * i] = rest[3 * i] + (float)(amp * 0.5 * sin(ph));
+        out[3 * i + 1] = rest[3 * i + 1] + (float)(amp * 0.5 * cos(1.3 * ph));
+        out[3 * i + 2] = rest[3 * i + 2] + (float)(amp * sin(0.9 * ph + 1.0));
+    }
+}
+
+/* The reference: every (vertex, centre) pair, plain scalar double, no index, no threads. */
+static void bruteforce(const csrbf_solver *s, size_t nv, const float *base, float *out,
+                       double *cbuf, double *abuf, double R)
+{
+    size_t m = csrbf_solver_centres(s);
+    csrbf_solver_get_coefficients(s, cbuf, abuf, NULL);
+    for (size_t v = 0; v < nv; v++) {
+        double x = base[3 * v], y = base[3 * v + 1], z = base[3 * v + 2];
+        double tx = x, ty = y, tz = z;
+        for (size_t j = 0; j < m; j++) {
+            double dx = x - cbuf[3 * j], dy = y - cbuf[3 * j + 1], dz = z - cbuf[3 * j + 2];
+            double r = sqrt(dx * dx + dy * dy + dz * dz) / R;
+            if (r < 1.0) {
+                double t = 1.0 - r, w = t * t * t * t * (4.0 * r + 1.0);
+                tx += abuf[3 * j] * w;
+                ty += abuf[3 * j + 1] * w;
+                tz += abuf[3 * j + 2] * w;
+            }
+        }
+        out[3 * v] = (float)tx;
+        out[3 * v + 1] = (float)ty;
+        out[3 * v + 2] = (float)tz;
+    }
+}
+
+/* ------------------------------------------------------------------------ reporting */
+
+typedef struct {
+    const char *name, *mode;
+    size_t vertices, centres;
+    double radius;
+    long pairs, paper_pairs;      /* -1: none */
+    double ms, ms_brute, paper_fps; /* < 0: none */
+    double ms_ref;                /* centres case: fresh factor-and-solve, else < 0 */
+} row;
+
+static void json_num(const char *key, double v, int last)
+{
+    if (v < 0)
+        printf("\"%s\":null%s", key, last ? "" : ",");
+    else
+        printf("\"%s\":%.6g%s", key, v, last ? "" : ",");
+}
+
+static void print_header(const bench_opts *o)
+{
+    if (o->json) return;
+    printf("%-8s %-10s %8s %7s %6s %9s %9s %10s %10s %8s %9s %9s\n", "case", "mode", "vertices",
+           "centres", "R", "pairs", "paper", "ms_median", "ms_ref", "ratio", "paper_fps", "fps");
+}
+
+static void print_row(const bench_opts *o, const row *r)
+{
+    double ref = r->ms_brute >= 0 ? r->ms_brute : r->ms_ref;
+    if (o->json) {
+        printf("{\"case\":\"%s\",\"mode\":\"%s\",\"vertices\":%zu,\"centres\":%zu,", r->name,
+               r->mode, r->vertices, r->centres);
+        json_num("radius", r->radius, 0);
+        if (r->pairs < 0)
+            printf("\"pairs\":null,");
+        else
+            printf("\"pairs\":%ld,", r->pairs);
+        if (r->paper_pairs < 0)
+            printf("\"paper_pairs\":null,");
+        else
+            printf("\"paper_pairs\":%ld,", r->paper_pairs);
+        json_num("ms_median", r->ms, 0);
+        json_num("ms_bruteforce", r->ms_brute, 0);
+        json_num("ms_fresh", r->ms_ref, 0);
+        json_num("paper_fps", r->paper_fps, 1);
+        printf("}\n");
+    } else {
+        char pairs[32] = "-", paper[32] = "-", refs[32] = "-", ratio[32] = "-", pf[32] = "-";
+        if (r->pairs >= 0) snprintf(pairs, sizeof pairs, "%ld", r->pairs);
+        if (r->paper_pairs >= 0) snprintf(paper, sizeof paper, "%ld", r->paper_pairs);
+        if (ref >= 0) {
+            snprintf(refs, sizeof refs, "%.4f", ref);
+            snprintf(ratio, sizeof ratio, "%.1fx", ref / r->ms);
+        }
+        if (r->paper_fps >= 0) snprintf(pf, sizeof pf, "%.1f", r->paper_fps);
+        printf("%-8s %-10s %8zu %7zu %6g %9s %9s %10.4f %10s %8s %9s %9.0f\n", r->name, r->mode,
+               r->vertices, r->centres, r->radius, pairs, paper, r->ms, refs, ratio, pf,
+               1000.0 / r->ms);
+    }
+    fflush(stdout);
+}
+
+/* ------------------------------------------------------------------- deformation cases */
+
+enum { NCTRL = 10, FRAMES = 64 };
+
+typedef struct {
+    csrbf_solver *s;
+    csrbf_points *pts;
+    size_t nv;
+    const float *base;
+    float *out;
+    double R;
+    int anchored;
+    float rest[3 * NCTRL];
+} deform_case;
+
+/* Median ms of count timed updates (after warm-up ones): [set_start +] set_end + evaluate
+ * (brute = 0) or + the brute-force loop (brute = 1). -1 on an engine error. */
+static double time_updates(deform_case *c, int count, int brute, double *times)
+{
+    float st[3 * NCTRL], en[3 * NCTRL];
+    double cbuf[3 * NCTRL], abuf[3 * NCTRL];
+    int warm = brute ? 1 : (count < 20 ? 2 : count / 10);
+    for (int it = -warm; it < count; it++) {
+        int f = (it + warm) % FRAMES;
+        motion(c->rest, en, NCTRL, f, 0.6);
+        if (!c->anchored) {
+            motion(c->rest, st, NCTRL, f + 17, 0.3); /* the start points move too */
+            for (int i = 0; i < 3 * NCTRL; i++) en[i] += st[i] - c->rest[i];
+        }
+        double t0 = now_ms();
+        if (!c->anchored && csrbf_solver_set_start_points(c->s, NCTRL, st) < 0) return -1;
+        if (csrbf_solver_set_end_points(c->s, en) < 0) return -1;
+        if (!brute) {
+            if (csrbf_evaluate(c->s, c->pts, c->out, 0, NULL) < 0) return -1;
+        } else {
+            bruteforce(c->s, c->nv, c->base, c->out, cbuf, abuf, c->R);
+        }
+        double t1 = now_ms();
+        if (it >= 0) times[it] = t1 - t0;
+    }
+    return median(times, count);
+}
+
+/* One (grid, R, mode) measurement: engine median, brute-force median, one row. */
+static int run_deform(const bench_opts *o, const char *name, size_t nv, double R, int anchored,
+                      int reps, int brute_reps, double paper_fps, long paper_pair_count)
+{
+    int rc = 0;
+    deform_case c = {0};
+    c.nv = nv;
+    c.R = R;
+    c.anchored = anchored;
+    fingertips(c.rest);
+    float *base = make_grid(nv);
+    c.base = base;
+    c.out = malloc(nv * 3 * sizeof *c.out);
+    double *times = malloc((size_t)(reps > brute_reps ? reps : brute_reps) * sizeof *times);
+    csrbf_options opt = {0};
+    opt.radius = R;
+    if (!base || !c.out || !times || csrbf_solver_create(&opt, &c.s) ||
+        csrbf_points_create(nv, base, &c.pts)) {
+        fprintf(stderr, "bench: set-up failed for %s (%zu vertices)\n", name, nv);
+        rc = 1;
+        goto done;
+    }
+    float en[3 * NCTRL];
+    motion(c.rest, en, NCTRL, 0, 0.6);
+    csrbf_eval_stats stats;
+    if (csrbf_solver_set_start_points(c.s, NCTRL, c.rest) < 0 ||
+        csrbf_solver_set_end_points(c.s, en) < 0 || csrbf_evaluate(c.s, c.pts, c.out, 0, &stats) < 0)
+        goto engine_fail;
+    if (R >= 80 && stats.pairs != nv * NCTRL)
+        fprintf(stderr, "bench: R = %g leaves %zu of %zu pairs outside the support\n", R,
+                nv * NCTRL - stats.pairs, nv * NCTRL);
+    double ms = time_updates(&c, reps, 0, times);
+    if (ms < 0) goto engine_fail;
+    double msb = -1;
+    if (brute_reps > 0 && (msb = time_updates(&c, brute_reps, 1, times)) < 0) goto engine_fail;
+    row r = {name, anchored ? "anchored" : "unanchored", nv, NCTRL, R, (long)stats.pairs,
+             paper_pair_count, ms, msb, paper_fps, -1};
+    print_row(o, &r);
+done:
+    csrbf_points_destroy(&c.pts);
+    csrbf_solver_destroy(&c.s);
+    free(base);
+    free(c.out);
+    free(times);
+    return rc;
+engine_fail:
+    fprintf(stderr, "bench: engine call failed: %s\n", csrbf_solver_message(c.s));
+    rc = 1;
+    goto done;
+}
+
+static int case_table1(const bench_opts *o)
+{
+    print_header(o);
+    for (int g = 0; g < 4; g++)
+        for (int anchored = 1; anchored >= 0; anchored--)
+            for (int ri = 0; ri < 5; ri++) {
+                size_t nv = (size_t)table_vertices[g];
+                int reps = o->quick ? 300 : 2000;
+                if (nv > 10000) reps /= 2;
+                int brute = o->quick ? 5 : 21;
+                fprintf(stderr, "bench: table1 %zu vertices R = %g %s\n", nv, table_radius[ri],
+                        anchored ? "anchored" : "unanchored");
+                double fps = anchored ? paper_anchored_fps[g][ri] : paper_unanchored_fps[g][ri];
+                if (run_deform(o, "table1", nv, table_radius[ri], anchored, reps, brute, fps,
+                               paper_pairs[g][ri]))
+                    return 1;
+            }
+    return 0;
+}
+
+static int case_scale(const bench_opts *o)
+{
+    print_header(o);
+    fprintf(stderr, "bench: scale, 1000 x 1000 grid, 10 control vectors, R = 80\n");
+    return run_deform(o, "scale", 1000000, 80.0, 1, o->quick ? 40 : 200, o->quick ? 3 : 5, -1,
+                      -1);
+}
+
+/* Large centre sets (rig-like constraints): random centres at a density giving about 27
+ * nonzeros a row of A (csrbf.md). Factor time (set_start_points), per-update time reusing the
+ * factor (set_end_points), and a fresh factor-and-solve (csrbf_solver_solve). */
+static int case_centres(const bench_opts *o)
+{
+    print_header(o);
+    static const size_t sizes[2] = {1000, 5000};
+    for (int si = 0; si < 2; si++) {
+        size_t n = sizes[si];
+        double side = 100.0 * cbrt((double)n / 5000.0), R = 10.9;
+        fprintf(stderr, "bench: centres N = %zu\n", n);
+        float *st = malloc(n * 3 * sizeof *st), *en = malloc(n * 3 * sizeof *en);
+        unsigned long long x = 12345 + n;
+        for (size_t i = 0; i < 3 * n; i++) {
+            x = x * 6364136223846793005ull + 1442695040888963407ull;
+            st[i] = (float)(side * (double)(x >> 11) * 0x1p-53);
+        }
+        int reps_f = o->quick ? 5 : 15, reps_u = o->quick ? 50 : 300;
+        double *times = malloc((size_t)reps_u * sizeof *times);
+        csrbf_options opt = {0};
+        opt.radius = R;
+        csrbf_solver *s = NULL;
+        int rc = csrbf_solver_create(&opt, &s);
+        for (int it = 0; it < reps_f && rc >= 0; it++) {
+            double t0 = now_ms();
+            rc = csrbf_solver_set_start_points(s, n, st);
+            times[it] = now_ms() - t0;
+        }
+        double ms_factor = median(times, reps_f);
+        for (int it = 0; it < reps_f && rc >= 0; it++) {
+            for (size_t i = 0; i < 3 * n; i++) en[i] = st[i] + 0.3f * (float)sin(0.1 * (double)(i + 7 * it));
+            double t0 = now_ms();
+            rc = csrbf_solver_solve(s, n, st, en);
+            times[it] = now_ms() - t0;
+        }
+        double ms_fresh = median(times, reps_f);
+        for (int it = -5; it < reps_u && rc >= 0; it++) {
+            for (size_t i = 0; i < 3 * n; i++) en[i] = st[i] + 0.3f * (float)sin(0.1 * (double)(i + 7 * it));
+            double t0 = now_ms();
+            rc = csrbf_solver_set_end_points(s, en);
+            if (it >= 0) times[it] = now_ms() - t0;
+        }
+        double ms_reused = median(times, reps_u);
+        if (rc < 0) {
+            fprintf(stderr, "bench: engine call failed: %s\n", csrbf_solver_message(s));
+            csrbf_solver_destroy(&s);
+            free(st);
+            free(en);
+            free(times);
+            return 1;
+        }
+        row f = {"centres", "factor", 0, csrbf_solver_centres(s), R, -1, -1, ms_factor, -1, -1, -1};
+        row u = {"centres", "reused", 0, csrbf_solver_centres(s), R, -1, -1, ms_reused, -1, -1,
+                 ms_fresh};
+        row fr = {"centres", "fresh", 0, csrbf_solver_centres(s), R, -1, -1, ms_fresh, -1, -1, -1};
+        print_row(o, &f);
+        print_row(o, &fr);
+        print_row(o, &u);
+        csrbf_solver_destroy(&s);
+        free(st);
+        free(en);
+        free(times);
+    }
+    return 0;
+}
+
+static void usage(FILE *f)
+{
+    fprintf(f,
+            "usage: facepuppet bench [--quick] [--json] [--case NAME] [--help]\n\n"
+            "Times the CSRBF engine (medians over repeated updates) beside references measured\n"
+            "in the same run. Cases:\n"
+            "  table1   the paper's Table 1: planar grids of 1089, 4225, 16641, 33025 vertices\n"
+            "           over 64 x 64, 10 control vectors, R = 10..80, anchored (end points move:\n"
+            "           set_end_points + evaluate) and unanchored (start and end points move:\n"
+            "           set_start_points + set_end_points + evaluate)\n"
+            "  scale    a 1,000,000-vertex grid, 10 control vectors, every vertex in support\n"
+            "  centres  1000 and 5000 random centres: factor, fresh factor-and-solve, and an\n"
+            "           update that reuses the factor\n"
+            "Columns: pairs = (vertex, centre) pairs inside the support (paper: its count);\n"
+            "ms_ref = the brute-force loop (all pairs, scalar double, one thread) for the same\n"
+            "update, or for 'reused' the fresh factor-and-solve; ratio = ms_ref / ms_median.\n"
+            "  --quick  fewer repetitions (under 40 s)\n"
+            "  --json   one JSON object per line: case, mode, vertices, centres, radius, pairs,\n"
+            "           paper_pairs, ms_median, ms_bruteforce, ms_fresh, paper_fps (null: none)\n"
+            "  --case NAME  run one case only\n");
+}
+
+int fp_bench_main(int argc, char **argv)
+{
+    bench_opts o = {0};
+    for (int i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "--quick")) {
+            o.quick = 1;
+        } else if (!strcmp(argv[i], "--json")) {
+            o.json = 1;
+        } else if (!strcmp(argv[i], "--case") && i + 1 < argc) {
+            o.only = argv[++i];
+        } else if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
+            usage(stdout);
+            return FP_EXIT_OK;
+        } else {
+            fprintf(stderr, "facepuppet bench: unknown option '%s'\n", argv[i]);
+            usage(stderr);
+            return FP_EXIT_USAGE;
+        }
+    }
+    static const struct {
+        const char *name;
+        int (*fn)(const bench_opts *);
+    } cases[] = {{"table1", case_table1}, {"scale", case_scale}, {"centres", case_centres}};
+    int found = 0;
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        if (o.only && strcmp(o.only, cases[c].name)) continue;
+        found = 1;
+        if (cases[c].fn(&o)) return FP_EXIT_FAILURE;
+    }
+    if (!found) {
+        fprintf(stderr, "facepuppet bench: unknown case '%s' (table1, scale, centres)\n", o.only);
+        return FP_EXIT_USAGE;
+    }
+    return FP_EXIT_OK;
+}

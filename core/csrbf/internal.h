@@ -1,0 +1,104 @@
+/* csrbf internals shared by the solver (csrbf_solver.c), the vertex index (csrbf_points.c)
+ * and the evaluation (csrbf_eval.c). Not part of the public API. */
+#ifndef CSRBF_INTERNAL_H
+#define CSRBF_INTERNAL_H
+
+#include "csrbf.h"
+
+#include <math.h>
+#include <stdatomic.h>
+#include <stdint.h>
+
+#include <cholmod.h>
+
+/* Vertices per evaluation block: one AVX-512 vector of floats, a multiple of every SIMD
+ * width. Blocks are runs of consecutive vertex indices, so output stays contiguous. */
+#define CSRBF_BLOCK 16
+
+/* A hash grid over points (double, AoS n x 3) with cubic cells of side h. Cells hash into a
+ * power-of-two table; each point keeps its integer cell so that colliding cells are told
+ * apart. */
+typedef struct csrbf_grid {
+    double origin[3], h, inv_h;
+    size_t n, tsize;        /* points, table size (power of two) */
+    size_t *start;          /* tsize + 1: bucket b holds items[start[b] .. start[b+1]) */
+    uint32_t *items;        /* n point indices, grouped by bucket */
+    int64_t *cell;          /* n x 3 cell coordinates */
+} csrbf_grid;
+
+int csrbf_grid_build(csrbf_grid *g, const double *p, size_t n, double h);
+void csrbf_grid_free(csrbf_grid *g);
+static inline size_t csrbf_grid_bucket(const csrbf_grid *g, int64_t x, int64_t y, int64_t z)
+{
+    uint64_t k = (uint64_t)x * 73856093u ^ (uint64_t)y * 19349663u ^ (uint64_t)z * 83492791u;
+    k ^= k >> 29;
+    k *= 0xbf58476d1ce4e5b9ull;
+    k ^= k >> 32;
+    return (size_t)(k & (g->tsize - 1));
+}
+static inline int64_t csrbf_grid_coord(const csrbf_grid *g, double x, int axis)
+{
+    return (int64_t)floor((x - g->origin[axis]) * g->inv_h);
+}
+
+struct csrbf_solver {
+    csrbf_options opt;       /* resolved: defaults filled in */
+    double R, inv_R, merge_abs;
+    double fold_bound;       /* fold-over bound * R */
+    char msg[256];
+    unsigned warnings;
+    int have_start;
+
+    size_t n, m;             /* input points, merged centres */
+    size_t cap_n, cap_m;
+    uint32_t *group;         /* n: centre of each input point */
+    double *s_in;            /* n x 3 input start points */
+    double *inv_count;       /* m: 1 / members of the centre */
+    double *c;               /* m x 3 centres */
+    double *alpha;           /* m x 3 coefficients */
+    float *fc[3], *fa[3];    /* m each: centres and coefficients, float, structure of arrays */
+    double *Y;               /* m x 3 column-major work: H, then A^-1 H */
+
+    /* factor of A */
+    int dense;
+    double *L;               /* dense: m x m row-major lower Cholesky factor */
+    cholmod_common cc;
+    int cc_started;
+    cholmod_factor *F;
+    cholmod_dense *Bh, *Xh, *Wk_Y, *Wk_E;   /* rhs m x 3, solution, CHOLMOD workspaces */
+
+    /* linear polynomial: p(x) = g0 + sum_l g_l (x_l - pc_l) / R, in reduced basis Q = P D V */
+    int k;                   /* kept polynomial directions (0 without polynomial) */
+    double pc[3];            /* centres' mean */
+    double DV[16];           /* 4 x k (row-major, stride 4): D V */
+    double *Q;               /* m x k column-major */
+    double *W;               /* m x k column-major: A^-1 Q */
+    double Sl[16];           /* k x k Cholesky factor of S = Q^T W (row-major, stride 4) */
+    double g[4][3];          /* polynomial in the basis [1, (x - pc)/R], per output axis */
+    float fpc[3], fg0[3], fG[9]; /* float: p(x) = fg0 + fG (x - fpc), fG row-major */
+
+    /* centre grid for evaluation (cell R), built with the start points */
+    csrbf_grid cgrid;
+
+    /* evaluation scratch: one user at a time; concurrent callers allocate their own */
+    atomic_flag scratch_busy;
+    void *scratch;
+    size_t scratch_cap;
+};
+
+struct csrbf_points {
+    size_t n, nblocks;
+    float *xyz;              /* n x 3, original order */
+    float *s[3];             /* nblocks * CSRBF_BLOCK each: coordinates, structure of arrays,
+                                the last block padded with copies of its first vertex */
+    float *lo[3], *hi[3];    /* nblocks each: block bounding boxes */
+    float blo[3], bhi[3];    /* bounding box of all vertices */
+};
+
+/* psi(r) for r in [0, 1) in double (no range check). */
+double csrbf_psi(csrbf_kernel k, double r);
+/* dpsi/dr divided by r, for r in [0, 1): the gradient of phi(|x - s| / R) in x is
+ * dpsi_over_r * (x - s) / R^2. For psi30 (gradient undefined at 0) 0 is returned at r = 0. */
+double csrbf_dpsi_over_r(csrbf_kernel k, double r);
+
+#endif

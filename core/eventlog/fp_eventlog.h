@@ -1,0 +1,135 @@
+/*
+ * fp_eventlog.h: the facepuppet event log, a line-oriented text recording of plugin events.
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ *
+ * The format (docs/eventlog.md has the full grammar): a header line
+ * `# facepuppet-eventlog 1`, then one event per line,
+ *
+ *     TIME_NS TYPE HAND FIELDS... [source=N] [flags=N]
+ *
+ * with TYPE one of angles, positions, wrist, button, status; HAND left, right or `-`; floats
+ * printed with %.9g so that every finite float reads back bit for bit. Lines starting with
+ * `#` and blank lines are comments.
+ *
+ * Used by the host to record live input (sessions, takes) and by plugins/input-replay to
+ * replay it. A static library built position-independent so plugins may link it in.
+ *
+ * Errors: functions return 0 (or 1 for an event read) or a negative fp_eventlog_result; the
+ * message of the last error is kept in the writer or reader (fp_eventlog_writer_error,
+ * fp_eventlog_reader_error) and names the file, and for the reader the line and column.
+ * Nothing is ever printed.
+ *
+ * Threads: a writer or reader is used by one thread at a time; different objects are
+ * independent. Numbers are written and read in the C locale whatever the process locale is.
+ */
+#ifndef FP_EVENTLOG_H
+#define FP_EVENTLOG_H
+
+#include <facepuppet/plugin.h>
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** The format name and the one version this code writes and reads. */
+#define FP_EVENTLOG_MAGIC "facepuppet-eventlog"
+#define FP_EVENTLOG_VERSION 1
+
+typedef enum fp_eventlog_result {
+    FP_EVENTLOG_OK = 0,
+    FP_EVENTLOG_EIO = -1,      /* opening, reading or writing the file failed (errno text) */
+    FP_EVENTLOG_ENOMEM = -2,   /* out of memory */
+    FP_EVENTLOG_EINVAL = -3,   /* writer: an event the format cannot hold (bad type, hand,
+                                  size, a non-finite float, an oversized valid mask) */
+    FP_EVENTLOG_ESYNTAX = -4,  /* reader: a malformed line */
+    FP_EVENTLOG_EFORMAT = -5   /* reader: not an event log, or a version this code lacks */
+} fp_eventlog_result;
+
+/** A static English string for a fp_eventlog_result ("unknown error" for others). */
+const char *fp_eventlog_strerror(int code);
+
+/* ------------------------------------------------------------------------------------- */
+/* Writer                                                                                 */
+
+typedef struct fp_eventlog_writer fp_eventlog_writer;
+
+/** Create (or truncate) the file at `path` and write the header line.
+ *  Returns the writer, or NULL after writing "PATH: reason" to err (errlen bytes; err may be
+ *  NULL). Owned by the caller: close it with fp_eventlog_writer_close. */
+fp_eventlog_writer *fp_eventlog_writer_open(const char *path, char *err, size_t errlen);
+
+/** Append one event as one line. The line is formatted in full, checked, and only then
+ *  written and flushed to the kernel (one write per line), so a crash of the process at any
+ *  moment loses at most the line being written, and a rejected event writes nothing.
+ *  Events: every fp_event_type of plugin.h; header.size must be at least the size of its
+ *  type's struct (fields past it are not recorded); hand must be -1, 0 or 1; floats must be
+ *  finite; angles.valid may use only the low FP_GLOVE_SENSORS bits; status text is recorded
+ *  up to its NUL (at most 115 bytes). time_ns, source and flags are recorded as they are.
+ *  Returns 0, FP_EVENTLOG_EINVAL (the file is unchanged) or FP_EVENTLOG_EIO; the message is
+ *  in fp_eventlog_writer_error. Not for the [session-thread]: it does I/O. */
+int fp_eventlog_writer_write(fp_eventlog_writer *w, const fp_event *event);
+
+/** Append a comment line `# TEXT` (a slate, a note). Line breaks in text become spaces.
+ *  Returns 0 or FP_EVENTLOG_EIO. */
+int fp_eventlog_writer_comment(fp_eventlog_writer *w, const char *text);
+
+/** The message of the writer's last error ("" when none). Valid until the next call. */
+const char *fp_eventlog_writer_error(const fp_eventlog_writer *w);
+
+/** Flush, close the file and free the writer; sets *w to NULL. NULL or *w NULL is a no-op.
+ *  Returns 0, or FP_EVENTLOG_EIO when the final flush or close failed (the writer is freed
+ *  anyway; err, if not NULL, receives the message). */
+int fp_eventlog_writer_close(fp_eventlog_writer **w, char *err, size_t errlen);
+
+/* ------------------------------------------------------------------------------------- */
+/* Reader                                                                                 */
+
+typedef struct fp_eventlog_reader fp_eventlog_reader;
+
+/** Open the event log at `path` and check its header line.
+ *  Returns the reader, or NULL after writing to err (errlen bytes; may be NULL)
+ *  "PATH: reason" when the file cannot be opened, or "PATH:1:COLUMN: reason" when the first
+ *  line is not `# facepuppet-eventlog VERSION` with a version this code reads.
+ *  Close it with fp_eventlog_reader_close. */
+fp_eventlog_reader *fp_eventlog_reader_open(const char *path, char *err, size_t errlen);
+
+/** Read the next event into *out (the whole union is zeroed first; header.size is the size
+ *  of the type's struct, status text is NUL-padded).
+ *  Returns 1 for an event, 0 at the end of the file, or a negative fp_eventlog_result
+ *  (FP_EVENTLOG_ESYNTAX with the message "PATH:LINE:COLUMN: reason", LINE and COLUMN
+ *  counted from 1, COLUMN in bytes; FP_EVENTLOG_EIO). After an error every later call
+ *  returns the same error.
+ *  A last line that does not end with a newline is taken as cut short by a crash: it is not
+ *  parsed, next returns 0, and fp_eventlog_reader_truncated_line gives its number. */
+int fp_eventlog_reader_next(fp_eventlog_reader *r, fp_event *out);
+
+/** The line number of the event last returned by next (0 before the first). */
+long fp_eventlog_reader_line(const fp_eventlog_reader *r);
+
+/** 0, or the number of the unterminated last line that next skipped (see next). */
+long fp_eventlog_reader_truncated_line(const fp_eventlog_reader *r);
+
+/** The message of the reader's last error ("" when none). */
+const char *fp_eventlog_reader_error(const fp_eventlog_reader *r);
+
+/** Close the file and free the reader; sets *r to NULL. NULL or *r NULL is a no-op. */
+void fp_eventlog_reader_close(fp_eventlog_reader **r);
+
+/* ------------------------------------------------------------------------------------- */
+/* Names                                                                                  */
+
+/** Format keyword of an event type ("angles", "positions", "wrist", "button", "status"),
+ *  or NULL for an unknown type. */
+const char *fp_eventlog_type_name(int type);
+
+/** Format keyword of a status code ("connected", ..., "end-of-stream"), or NULL. */
+const char *fp_eventlog_status_name(uint32_t code);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* FP_EVENTLOG_H */

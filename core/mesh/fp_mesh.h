@@ -1,0 +1,140 @@
+/* fp_mesh: the triangle mesh facepuppet deforms, and its file I/O.
+ *
+ * A mesh is a flat set of arrays (positions, normals, optional UVs, triangles) that C code
+ * reads and writes directly; the deformation engine works on `positions` in place and calls
+ * fp_mesh_compute_normals() after each frame. Files are read and written through OpenMesh
+ * (OBJ, PLY, OFF, STL) and tinygltf (glTF 2.0 .gltf and .glb) behind this C API; the C++ stays
+ * inside core/mesh/mesh_io.cpp.
+ *
+ * Units: positions are in the file's units (facepuppet calls them "mesh units"); nothing is
+ * rescaled. Normals are unit vectors. UVs are as in the file (OBJ/PLY convention, v up; glTF
+ * TEXCOORD_0 is stored as in the glTF file, v down, and not flipped).
+ *
+ * Thread rules: every function is reentrant; different meshes may be used from different
+ * threads at once, one mesh from one thread at a time. Load and save may run concurrently:
+ * OpenMesh's readers and writers are process-wide singletons with mutable state and its log
+ * streams (omerr/omlog/omout) are global, so the OpenMesh part of a load or save is serialised
+ * by one internal mutex, during which OpenMesh's log output is captured (used in error
+ * messages) instead of printed. glTF I/O runs fully in parallel.
+ *
+ * Errors: functions return an fp_mesh_result (0 = success, negative = error) and, where they
+ * take `err`/`errlen`, write a one-line, NUL-terminated message naming the file and the reason
+ * ("path: line N: reason" for OBJ text errors). err may be NULL or errlen 0. The library never
+ * prints.
+ */
+#ifndef FP_MESH_H
+#define FP_MESH_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Results of the mesh functions. */
+typedef enum fp_mesh_result {
+    FP_MESH_OK = 0,
+    FP_MESH_ERR_IO = -1,          /* file missing, unreadable or unwritable */
+    FP_MESH_ERR_FORMAT = -2,      /* malformed content: syntax, NaN/inf, index out of range,
+                                     no vertices or no faces, bad glTF accessor or buffer */
+    FP_MESH_ERR_UNSUPPORTED = -3, /* unknown file extension, or a feature not handled
+                                     (sparse glTF accessors, a glTF with no triangles) */
+    FP_MESH_ERR_NOMEM = -4,       /* out of memory */
+    FP_MESH_ERR_INVALID = -5      /* bad argument: NULL pointer, inconsistent mesh */
+} fp_mesh_result;
+
+/** A triangle mesh. All arrays are owned by the mesh, allocated with malloc() and released
+ *  by fp_mesh_free(); a caller may replace an array by its own malloc()ed one of the same
+ *  shape (the mesh then owns it). Vertex i has position positions[3i..3i+2]. */
+typedef struct fp_mesh {
+    size_t vertex_count;     /* n */
+    float *positions;        /* n x 3, mesh units */
+    float *normals;          /* n x 3, unit length; always present after fp_mesh_load() */
+    float *uvs;              /* n x 2, or NULL when the file has no texture coordinates */
+    size_t triangle_count;   /* t */
+    uint32_t *triangles;     /* t x 3 vertex indices, counter-clockwise seen from outside;
+                                polygons of the file are fan-triangulated (0,i,i+1) */
+    char *source_path;       /* the path the mesh was loaded from (a copy), or NULL */
+} fp_mesh;
+
+/** The message for a result code: a static string, never NULL. Thread-safe. */
+const char *fp_mesh_strerror(int result);
+
+/** Allocate a mesh of n vertices and t triangles with zeroed positions, normals, triangles,
+ *  and zeroed uvs when with_uvs is non-zero (else uvs = NULL); source_path = NULL.
+ *  Returns NULL when out of memory (or when n or t overflows the allocation size).
+ *  The caller frees it with fp_mesh_free(). */
+fp_mesh *fp_mesh_create(size_t vertex_count, size_t triangle_count, int with_uvs);
+
+/** Release a mesh and all its arrays and set *mesh to NULL. NULL or *mesh == NULL is a no-op. */
+void fp_mesh_free(fp_mesh **mesh);
+
+/** A deep copy of `mesh` (all arrays and source_path), or NULL when out of memory or mesh is
+ *  NULL. The caller frees it with fp_mesh_free(). */
+fp_mesh *fp_mesh_copy(const fp_mesh *mesh);
+
+/** Read a mesh from `path`, choosing the format by the (case-insensitive) extension:
+ *  .obj .ply .off .stl (OpenMesh) and .gltf .glb (tinygltf).
+ *
+ *  Vertices: OBJ and OFF keep the file's vertex order and count exactly (vertex i is the
+ *  i-th `v` line of an OBJ, so index ranges published for a model stay valid); PLY keeps its
+ *  vertex element order. STL has no shared vertices: OpenMesh merges corners with equal
+ *  positions, in first-use order. glTF: the triangle primitives (mode 4) of the meshes of
+ *  the default scene's nodes (scene 0 when none is set; every mesh when the file has no
+ *  scene), in node traversal order, each primitive's vertices appended; the node transforms
+ *  (matrix or TRS, down the hierarchy) are APPLIED to positions and normals. Other modes
+ *  (points, lines, strips, fans) are skipped.
+ *
+ *  Faces: polygons are fan-triangulated in file order, each giving (corners - 2) consecutive
+ *  triangles (0,1,2), (0,2,3), ... OBJ faces that repeat a vertex lose the repeats, and one
+ *  left with fewer than 3 distinct vertices is dropped (OpenMesh's OBJ reader does this). Normals: the file's vertex normals when every vertex has a finite,
+ *  non-zero one (normalised); otherwise computed with fp_mesh_compute_normals(). UVs: per
+ *  vertex; OBJ gives a UV per face corner, and a vertex used with several UVs (a texture seam)
+ *  takes the UV of its first use in face order. glTF TEXCOORD_0 (float or normalised
+ *  unsigned byte/short); where only some primitives have UVs the others get (0, 0).
+ *
+ *  On success *out is a new mesh (free with fp_mesh_free()) with source_path set and
+ *  FP_MESH_OK is returned. On error *out is NULL and a negative fp_mesh_result is returned:
+ *  IO (missing or unreadable file), FORMAT (empty file, syntax, NaN/inf values, face index
+ *  out of range, no vertices, no faces, glTF buffer missing or accessor out of bounds),
+ *  UNSUPPORTED (extension, sparse accessors), NOMEM, INVALID (NULL path or out).
+ *  Thread rules: see the top of this file. */
+int fp_mesh_load(const char *path, fp_mesh **out, char *err, size_t errlen);
+
+/** Write `mesh` to `path` in the format of its extension (as fp_mesh_load()), overwriting.
+ *  Written data: positions and triangles always; normals and UVs when present:
+ *  OBJ: v, vt (when uvs), vn (when normals), f v/vt/vn, 9 significant digits (float exact).
+ *  PLY: binary little-endian, x y z nx ny nz u v properties, faces as uchar/int lists.
+ *  OFF: ASCII, 9 digits; header "NOFF", "STOFF" or "STNOFF" as normals/uvs are written.
+ *  STL: binary; triangles with their face normals only (no vertex normals, no UVs).
+ *  glTF: one mesh, one triangle primitive with POSITION (with min/max), NORMAL, TEXCOORD_0
+ *  and uint32 indices, one node, one scene; .gltf embeds the buffer as a base64 data URI,
+ *  .glb puts it in the binary chunk.
+ *  Returns FP_MESH_OK, or INVALID (NULL arguments, index out of range, non-finite position),
+ *  IO (cannot create or write the file), UNSUPPORTED (extension), NOMEM, with a message. */
+int fp_mesh_save(const fp_mesh *mesh, const char *path, char *err, size_t errlen);
+
+/** Area-weighted vertex normals (each triangle adds its unnormalised cross product
+ *  (p1-p0) x (p2-p0), whose length is twice its area, to its three vertices; then each sum is
+ *  normalised). Shapes: tris t x 3, pos n x 3, normals_out n x 3 (may not alias pos).
+ *  A vertex in no triangle of non-zero area gets (0, 0, 0). Counter-clockwise triangles give
+ *  outward normals. No allocation, O(n + t); cheap enough for every frame.
+ *  Returns FP_MESH_OK, or FP_MESH_ERR_INVALID when a pointer is NULL (with n or t > 0) or an
+ *  index is >= n (normals_out is then all zero). Reentrant. */
+int fp_mesh_normals(const uint32_t *tris, size_t t, const float *pos, size_t n,
+                    float *normals_out);
+
+/** fp_mesh_normals() on the mesh's own arrays, allocating mesh->normals if it is NULL.
+ *  Returns as fp_mesh_normals(), or FP_MESH_ERR_NOMEM. */
+int fp_mesh_compute_normals(fp_mesh *mesh);
+
+/** Axis-aligned bounds of the positions: min[k] and max[k] for k = x, y, z (mesh units).
+ *  A mesh without vertices (or NULL) gives all zeros. */
+void fp_mesh_bounds(const fp_mesh *mesh, float min[3], float max[3]);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

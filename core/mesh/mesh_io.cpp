@@ -1,0 +1,1100 @@
+// fp_mesh file I/O: the project's only C++. OBJ, PLY, OFF and STL go through OpenMesh's
+// readers and writers, driven by our own importer/exporter over flat arrays (so OpenMesh's
+// half-edge kernel never sees the mesh: no vertex is split or merged, no face dropped, and
+// vertex order stays the file's). glTF 2.0 goes through tinygltf (Debian's shared build).
+// Nothing here throws past the C API: every entry point catches.
+#include "mesh_internal.h"
+
+#include <OpenMesh/Core/IO/MeshIO.hh>
+#include <OpenMesh/Core/IO/exporter/BaseExporter.hh>
+#include <OpenMesh/Core/IO/importer/BaseImporter.hh>
+#include <OpenMesh/Core/Mesh/BaseKernel.hh>
+#include <OpenMesh/Core/System/omstream.hh>
+#include <tiny_gltf.h>
+
+#include <cerrno>
+#include <climits>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <iostream>
+#include <mutex>
+#include <new>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+using OpenMesh::EdgeHandle;
+using OpenMesh::FaceHandle;
+using OpenMesh::HalfedgeHandle;
+using OpenMesh::VertexHandle;
+using OpenMesh::Vec2f;
+using OpenMesh::Vec3d;
+using OpenMesh::Vec3f;
+using OpenMesh::Vec3uc;
+using OpenMesh::Vec3ui;
+using OpenMesh::Vec4f;
+using OpenMesh::Vec4uc;
+using OpenMesh::Vec4ui;
+namespace IO = OpenMesh::IO;
+
+// A mesh as the readers deliver it: vertices, optional per-vertex normals and UVs, polygons
+// as corner lists with optional per-corner UVs. fp_mesh is built from it.
+struct Soup {
+    std::vector<float> pos;              // n x 3
+    std::vector<float> nrm;              // n x 3 where has_nrm
+    std::vector<float> uv;               // n x 2 where has_uv
+    std::vector<unsigned char> has_nrm, has_uv;
+    std::vector<uint32_t> face_start{0}; // faces + 1 offsets into corners
+    std::vector<uint32_t> corners;
+    std::vector<float> corner_uv;        // corners x 2 where has_corner_uv
+    std::vector<unsigned char> has_corner_uv;
+    bool any_corner_uv = false, any_vertex_uv = false;
+    std::string error;                   // first problem found while reading, or ""
+
+    size_t n() const { return pos.size() / 3; }
+    size_t faces() const { return face_start.size() - 1; }
+    void fail(const std::string &msg) { if (error.empty()) error = msg; }
+
+    size_t add_vertex(float x, float y, float z)
+    {
+        if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z))
+            fail("vertex " + std::to_string(n()) + " has a non-finite coordinate");
+        pos.push_back(x); pos.push_back(y); pos.push_back(z);
+        nrm.resize(pos.size()); uv.resize(n() * 2);
+        has_nrm.push_back(0); has_uv.push_back(0);
+        return n() - 1;
+    }
+};
+
+// OpenMesh importer that records what a reader delivers, with no connectivity checks.
+class Collector : public IO::BaseImporter {
+public:
+    explicit Collector(Soup &s) : s_(s) {}
+
+    VertexHandle add_vertex(const Vec3f &p) override
+    {
+        return VertexHandle(int(s_.add_vertex(p[0], p[1], p[2])));
+    }
+    VertexHandle add_vertex(const Vec3d &p) override
+    {
+        return VertexHandle(int(s_.add_vertex(float(p[0]), float(p[1]), float(p[2]))));
+    }
+    VertexHandle add_vertex() override { return VertexHandle(int(s_.add_vertex(0, 0, 0))); }
+    HalfedgeHandle add_edge(VertexHandle, VertexHandle) override { return HalfedgeHandle(); }
+
+    FaceHandle add_face(const VHandles &idx) override
+    {
+        const size_t face = s_.faces();
+        for (const VertexHandle &vh : idx) {
+            if (vh.idx() < 0 || size_t(vh.idx()) >= s_.n()) {
+                s_.fail("face " + std::to_string(face) + " references vertex " +
+                        std::to_string(vh.idx()) + ", but the file has " +
+                        std::to_string(s_.n()) + " vertices");
+                return FaceHandle();
+            }
+        }
+        if (idx.size() < 3) {
+            s_.fail("face " + std::to_string(face) + " has " + std::to_string(idx.size()) +
+                    " corners (at least 3)");
+            return FaceHandle();
+        }
+        for (const VertexHandle &vh : idx)
+            s_.corners.push_back(uint32_t(vh.idx()));
+        s_.face_start.push_back(uint32_t(s_.corners.size()));
+        s_.corner_uv.resize(s_.corners.size() * 2);
+        s_.has_corner_uv.resize(s_.corners.size());
+        return FaceHandle(int(face));
+    }
+    FaceHandle add_face(HalfedgeHandle) override
+    {
+        s_.fail("the reader used half-edge input, which is not supported");
+        return FaceHandle();
+    }
+
+    // Texture coordinates of a face's corners, starting at the corner of vertex _vh.
+    void add_face_texcoords(FaceHandle fh, VertexHandle vh,
+                            const std::vector<Vec2f> &tc) override
+    {
+        if (!fh.is_valid() || size_t(fh.idx()) >= s_.faces())
+            return;
+        const uint32_t b = s_.face_start[size_t(fh.idx())];
+        const uint32_t e = s_.face_start[size_t(fh.idx()) + 1];
+        uint32_t start = b;
+        for (uint32_t c = b; c < e; c++)
+            if (int(s_.corners[c]) == vh.idx()) { start = c; break; }
+        for (size_t i = 0; i < tc.size() && i < size_t(e - b); i++) {
+            const uint32_t c = b + uint32_t((start - b + i) % (e - b));
+            if (!std::isfinite(tc[i][0]) || !std::isfinite(tc[i][1]))
+                s_.fail("face " + std::to_string(fh.idx()) + " has a non-finite texture coordinate");
+            s_.corner_uv[2 * c] = tc[i][0];
+            s_.corner_uv[2 * c + 1] = tc[i][1];
+            s_.has_corner_uv[c] = 1;
+            s_.any_corner_uv = true;
+        }
+    }
+    void add_face_texcoords(FaceHandle fh, VertexHandle vh,
+                            const std::vector<OpenMesh::Vec3f> &tc) override
+    {
+        std::vector<Vec2f> t2;
+        for (const auto &t : tc)
+            t2.push_back(Vec2f(t[0], t[1]));
+        add_face_texcoords(fh, vh, t2);
+    }
+    void set_face_texindex(FaceHandle, int) override {}
+
+    void set_point(VertexHandle vh, const Vec3f &p) override
+    {
+        if (!valid(vh))
+            return;
+        if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
+            s_.fail("vertex " + std::to_string(vh.idx()) + " has a non-finite coordinate");
+        for (int k = 0; k < 3; k++)
+            s_.pos[3 * size_t(vh.idx()) + k] = p[k];
+    }
+    void set_halfedge(VertexHandle, HalfedgeHandle) override {}
+    void set_normal(VertexHandle vh, const Vec3f &nv) override
+    {
+        if (!valid(vh))
+            return;
+        for (int k = 0; k < 3; k++)
+            s_.nrm[3 * size_t(vh.idx()) + k] = nv[k];
+        s_.has_nrm[size_t(vh.idx())] = 1;
+    }
+    void set_normal(VertexHandle vh, const Vec3d &nv) override { set_normal(vh, Vec3f(nv)); }
+    void set_color(VertexHandle, const Vec3uc &) override {}
+    void set_color(VertexHandle, const Vec4uc &) override {}
+    void set_color(VertexHandle, const Vec3f &) override {}
+    void set_color(VertexHandle, const Vec4f &) override {}
+    void set_texcoord(VertexHandle vh, const Vec2f &t) override
+    {
+        if (!valid(vh))
+            return;
+        if (!std::isfinite(t[0]) || !std::isfinite(t[1]))
+            s_.fail("vertex " + std::to_string(vh.idx()) + " has a non-finite texture coordinate");
+        s_.uv[2 * size_t(vh.idx())] = t[0];
+        s_.uv[2 * size_t(vh.idx()) + 1] = t[1];
+        s_.has_uv[size_t(vh.idx())] = 1;
+        s_.any_vertex_uv = true;
+    }
+    void set_texcoord(VertexHandle vh, const Vec3f &t) override { set_texcoord(vh, Vec2f(t[0], t[1])); }
+    void set_status(VertexHandle, const OpenMesh::Attributes::StatusInfo &) override {}
+    void set_next(HalfedgeHandle, HalfedgeHandle) override {}
+    void set_face(HalfedgeHandle, FaceHandle) override {}
+    void request_face_texcoords2D() override {}
+    void set_texcoord(HalfedgeHandle, const Vec2f &) override {}
+    void set_texcoord(HalfedgeHandle, const Vec3f &) override {}
+    void set_status(HalfedgeHandle, const OpenMesh::Attributes::StatusInfo &) override {}
+    void set_color(EdgeHandle, const Vec3uc &) override {}
+    void set_color(EdgeHandle, const Vec4uc &) override {}
+    void set_color(EdgeHandle, const Vec3f &) override {}
+    void set_color(EdgeHandle, const Vec4f &) override {}
+    void set_status(EdgeHandle, const OpenMesh::Attributes::StatusInfo &) override {}
+    void set_normal(FaceHandle, const Vec3f &) override {}
+    void set_normal(FaceHandle, const Vec3d &) override {}
+    void set_color(FaceHandle, const Vec3uc &) override {}
+    void set_color(FaceHandle, const Vec4uc &) override {}
+    void set_color(FaceHandle, const Vec3f &) override {}
+    void set_color(FaceHandle, const Vec4f &) override {}
+    void set_status(FaceHandle, const OpenMesh::Attributes::StatusInfo &) override {}
+    void add_texture_information(int, std::string) override {}
+    void reserve(unsigned int nv, unsigned int, unsigned int nf) override
+    {
+        // counts come from file headers: cap them so a lying header cannot exhaust memory
+        const unsigned int cap = 1u << 24;
+        s_.pos.reserve(3 * size_t(nv < cap ? nv : cap));
+        s_.face_start.reserve(size_t(nf < cap ? nf : cap) + 1);
+    }
+    size_t n_vertices() const override { return s_.n(); }
+    size_t n_faces() const override { return s_.faces(); }
+    size_t n_edges() const override { return 0; }
+
+private:
+    bool valid(VertexHandle vh) const { return vh.idx() >= 0 && size_t(vh.idx()) < s_.n(); }
+    Soup &s_;
+};
+
+// OpenMesh exporter over an fp_mesh's arrays: faces are its triangles.
+class ArrayExporter : public IO::BaseExporter {
+public:
+    explicit ArrayExporter(const fp_mesh &m) : m_(m) {}
+
+    Vec3f point(VertexHandle vh) const override
+    {
+        const float *p = m_.positions + 3 * size_t(vh.idx());
+        return Vec3f(p[0], p[1], p[2]);
+    }
+    Vec3d pointd(VertexHandle vh) const override { return Vec3d(point(vh)); }
+    bool is_point_double() const override { return false; }
+    Vec3f normal(VertexHandle vh) const override
+    {
+        if (!m_.normals)
+            return Vec3f(0, 0, 0);
+        const float *p = m_.normals + 3 * size_t(vh.idx());
+        return Vec3f(p[0], p[1], p[2]);
+    }
+    Vec3d normald(VertexHandle vh) const override { return Vec3d(normal(vh)); }
+    bool is_normal_double() const override { return false; }
+    Vec3uc color(VertexHandle) const override { return Vec3uc(0, 0, 0); }
+    Vec4uc colorA(VertexHandle) const override { return Vec4uc(0, 0, 0, 0); }
+    Vec3ui colori(VertexHandle) const override { return Vec3ui(0, 0, 0); }
+    Vec4ui colorAi(VertexHandle) const override { return Vec4ui(0, 0, 0, 0); }
+    Vec3f colorf(VertexHandle) const override { return Vec3f(0, 0, 0); }
+    Vec4f colorAf(VertexHandle) const override { return Vec4f(0, 0, 0, 0); }
+    Vec2f texcoord(VertexHandle vh) const override
+    {
+        if (!m_.uvs)
+            return Vec2f(0, 0);
+        const float *p = m_.uvs + 2 * size_t(vh.idx());
+        return Vec2f(p[0], p[1]);
+    }
+    Vec2f texcoord(HalfedgeHandle) const override { return Vec2f(0, 0); }
+    OpenMesh::Attributes::StatusInfo status(VertexHandle) const override { return {}; }
+    unsigned int get_vhandles(FaceHandle fh, std::vector<VertexHandle> &vh) const override
+    {
+        vh.clear();
+        const uint32_t *t = m_.triangles + 3 * size_t(fh.idx());
+        for (int k = 0; k < 3; k++)
+            vh.push_back(VertexHandle(int(t[k])));
+        return 3;
+    }
+    HalfedgeHandle getHeh(FaceHandle, VertexHandle) const override { return HalfedgeHandle(); }
+    unsigned int get_face_texcoords(std::vector<Vec2f> &) const override { return 0; }
+    Vec3f normal(FaceHandle fh) const override
+    {
+        const uint32_t *t = m_.triangles + 3 * size_t(fh.idx());
+        Vec3f a = point(VertexHandle(int(t[0]))), b = point(VertexHandle(int(t[1]))),
+              c = point(VertexHandle(int(t[2])));
+        Vec3f n = OpenMesh::cross(b - a, c - a);
+        float len = n.norm();
+        return len > 0 ? n / len : Vec3f(0, 0, 0);
+    }
+    Vec3d normald(FaceHandle fh) const override { return Vec3d(normal(fh)); }
+    Vec3uc color(FaceHandle) const override { return Vec3uc(0, 0, 0); }
+    Vec4uc colorA(FaceHandle) const override { return Vec4uc(0, 0, 0, 0); }
+    Vec3ui colori(FaceHandle) const override { return Vec3ui(0, 0, 0); }
+    Vec4ui colorAi(FaceHandle) const override { return Vec4ui(0, 0, 0, 0); }
+    Vec3f colorf(FaceHandle) const override { return Vec3f(0, 0, 0); }
+    Vec4f colorAf(FaceHandle) const override { return Vec4f(0, 0, 0, 0); }
+    OpenMesh::Attributes::StatusInfo status(FaceHandle) const override { return {}; }
+    Vec3uc color(EdgeHandle) const override { return Vec3uc(0, 0, 0); }
+    Vec4uc colorA(EdgeHandle) const override { return Vec4uc(0, 0, 0, 0); }
+    Vec3ui colori(EdgeHandle) const override { return Vec3ui(0, 0, 0); }
+    Vec4ui colorAi(EdgeHandle) const override { return Vec4ui(0, 0, 0, 0); }
+    Vec3f colorf(EdgeHandle) const override { return Vec3f(0, 0, 0); }
+    Vec4f colorAf(EdgeHandle) const override { return Vec4f(0, 0, 0, 0); }
+    OpenMesh::Attributes::StatusInfo status(EdgeHandle) const override { return {}; }
+    int get_halfedge_id(VertexHandle) override { return -1; }
+    int get_halfedge_id(FaceHandle) override { return -1; }
+    int get_next_halfedge_id(HalfedgeHandle) override { return -1; }
+    int get_to_vertex_id(HalfedgeHandle) override { return -1; }
+    int get_face_id(HalfedgeHandle) override { return -1; }
+    OpenMesh::Attributes::StatusInfo status(HalfedgeHandle) const override { return {}; }
+    size_t n_vertices() const override { return m_.vertex_count; }
+    size_t n_faces() const override { return m_.triangle_count; }
+    size_t n_edges() const override { return 0; }
+    bool is_triangle_mesh() const override { return true; }
+    bool has_vertex_normals() const override { return m_.normals != nullptr; }
+    bool has_vertex_texcoords() const override { return m_.uvs != nullptr; }
+    // The PLY writer looks for custom properties in a kernel: give it an empty one.
+    const OpenMesh::BaseKernel *kernel() override { return &no_properties_; }
+
+private:
+    const fp_mesh &m_;
+    OpenMesh::BaseKernel no_properties_;
+};
+
+// OpenMesh's reader/writer singletons keep per-call state and its log streams are global:
+// one OpenMesh call at a time, with its log captured instead of printed.
+std::mutex openmesh_lock;
+
+// OpenMesh's log streams are std::ostreams whose buffer multiplexes to std::cerr etc. While
+// OpenMesh works we point them at our own buffer (mostream::disconnect would leak its target
+// object on every call), then restore them.
+class OmLogCapture {
+public:
+    OmLogCapture()
+    {
+        OpenMesh::mostream *s[3] = {&::omerr(), &::omlog(), &::omout()};
+        for (int i = 0; i < 3; i++) {
+            streams_[i] = s[i];
+            s[i]->flush();
+            saved_[i] = s[i]->rdbuf(&text_);
+        }
+    }
+    ~OmLogCapture()
+    {
+        for (int i = 0; i < 3; i++) {
+            streams_[i]->flush();
+            streams_[i]->rdbuf(saved_[i]);
+            streams_[i]->clear();
+        }
+    }
+    // The first line of what OpenMesh logged, for an error message ("" if nothing).
+    std::string first_line()
+    {
+        std::string t = text_.str();
+        size_t b = t.find_first_not_of(" \t\r\n");
+        if (b == std::string::npos)
+            return "";
+        size_t e = t.find_first_of("\r\n", b);
+        return t.substr(b, e == std::string::npos ? std::string::npos : e - b);
+    }
+    OmLogCapture(const OmLogCapture &) = delete;
+    OmLogCapture &operator=(const OmLogCapture &) = delete;
+
+private:
+    std::stringbuf text_;
+    OpenMesh::mostream *streams_[3];
+    std::streambuf *saved_[3];
+};
+
+// ---- small helpers ------------------------------------------------------------------
+
+int fail(char *err, size_t errlen, int code, const char *path, const std::string &msg)
+{
+    return fp__mesh_error(err, errlen, code, path, "%s", msg.c_str());
+}
+
+int read_whole_file(const char *path, std::string &data, char *err, size_t errlen)
+{
+    FILE *f = std::fopen(path, "rb");
+    if (!f)
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_IO, path, "cannot open: %s",
+                              std::strerror(errno));
+    char buf[1 << 16];
+    size_t got;
+    while ((got = std::fread(buf, 1, sizeof buf, f)) > 0)
+        data.append(buf, got);
+    int bad = std::ferror(f);
+    int e = errno;
+    std::fclose(f);
+    if (bad)
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_IO, path, "cannot read: %s",
+                              std::strerror(e));
+    if (data.empty())
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path, "file is empty");
+    return FP_MESH_OK;
+}
+
+// Build the fp_mesh from a Soup: fan triangulation, per-vertex UVs, normals.
+int soup_to_mesh(Soup &s, const char *path, fp_mesh **out, char *err, size_t errlen)
+{
+    const size_t n = s.n();
+    if (n == 0)
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path, "no vertices");
+    if (n > UINT32_MAX)
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_UNSUPPORTED, path,
+                              "%zu vertices exceed 32-bit indices", n);
+    size_t t = 0;
+    for (size_t f = 0; f < s.faces(); f++)
+        t += s.face_start[f + 1] - s.face_start[f] - 2;
+    if (t == 0)
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path, "no faces");
+    const bool with_uvs = s.any_corner_uv || s.any_vertex_uv;
+    s.has_corner_uv.resize(s.corners.size(), 0);
+    s.corner_uv.resize(2 * s.corners.size(), 0.0f);
+    fp_mesh *m = fp_mesh_create(n, t, with_uvs);
+    if (!m)
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_NOMEM, path, "out of memory");
+    std::memcpy(m->positions, s.pos.data(), n * 3 * sizeof(float));
+    size_t k = 0;
+    for (size_t f = 0; f < s.faces(); f++) {
+        const uint32_t b = s.face_start[f], e = s.face_start[f + 1];
+        for (uint32_t c = b + 1; c + 1 < e; c++) {
+            m->triangles[3 * k] = s.corners[b];
+            m->triangles[3 * k + 1] = s.corners[c];
+            m->triangles[3 * k + 2] = s.corners[c + 1];
+            k++;
+        }
+    }
+    if (with_uvs) {
+        // a corner's UV wins over a vertex UV; among corners, the first use in face order
+        std::vector<unsigned char> set(n, 0);
+        for (size_t c = 0; c < s.corners.size(); c++) {
+            const uint32_t v = s.corners[c];
+            if (s.has_corner_uv[c] && !set[v]) {
+                m->uvs[2 * v] = s.corner_uv[2 * c];
+                m->uvs[2 * v + 1] = s.corner_uv[2 * c + 1];
+                set[v] = 1;
+            }
+        }
+        for (size_t v = 0; v < n; v++)
+            if (!set[v] && s.has_uv[v]) {
+                m->uvs[2 * v] = s.uv[2 * v];
+                m->uvs[2 * v + 1] = s.uv[2 * v + 1];
+            }
+    }
+    bool file_normals = true;
+    for (size_t v = 0; v < n && file_normals; v++) {
+        const float *q = &s.nrm[3 * v];
+        const float len = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
+        if (!s.has_nrm[v] || !(len > 0.0f) || !std::isfinite(len)) {
+            file_normals = false;
+            break;
+        }
+        for (int d = 0; d < 3; d++)
+            m->normals[3 * v + d] = q[d] / len;
+    }
+    if (!file_normals)
+        fp_mesh_normals(m->triangles, t, m->positions, n, m->normals);
+    m->source_path = strdup(path);
+    if (!m->source_path) {
+        fp_mesh_free(&m);
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_NOMEM, path, "out of memory");
+    }
+    *out = m;
+    return FP_MESH_OK;
+}
+
+// ---- OpenMesh formats ---------------------------------------------------------------
+
+int load_openmesh(const char *path, const std::string &ext, const std::string &data,
+                  fp_mesh **out, char *err, size_t errlen)
+{
+    fp__obj_info obj{};
+    if (ext == "obj") {
+        int rc = fp__obj_scan(path, data.c_str(), data.size(), &obj, err, errlen);
+        if (rc != FP_MESH_OK)
+            return rc;
+    }
+    if (ext == "off") {
+        // OpenMesh's ASCII OFF reader does not check its stream: a bad number silently
+        // becomes 0 and leaves later values undefined. Check the text first.
+        int rc = fp__off_scan(path, data.c_str(), data.size(), err, errlen);
+        if (rc != FP_MESH_OK)
+            return rc;
+    }
+    IO::Options opt = IO::Options::VertexNormal;
+    opt += IO::Options::VertexTexCoord;
+    opt += IO::Options::FaceTexCoord;
+    if (ext == "stl") {
+        // binary STL: 80-byte header, uint32 count, 50 bytes per triangle; else ASCII "solid"
+        bool binary = false;
+        if (data.size() >= 84) {
+            uint32_t count;
+            std::memcpy(&count, data.data() + 80, 4);
+            binary = data.size() == 84 + 50 * uint64_t(count);
+        }
+        size_t b = data.find_first_not_of(" \t\r\n");
+        if (!binary && (b == std::string::npos || data.compare(b, 5, "solid") != 0))
+            return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                                  "not an STL file (no 'solid' and the size does not match a "
+                                  "binary STL's triangle count)");
+        if (!binary) {
+            int rc = fp__stl_ascii_scan(path, data.c_str(), data.size(), err, errlen);
+            if (rc != FP_MESH_OK)
+                return rc;
+        }
+    }
+    if (ext == "ply") {
+        int rc = fp__ply_scan(path, data.c_str(), data.size(), err, errlen);
+        if (rc != FP_MESH_OK)
+            return rc;
+    }
+    Soup soup;
+    bool ok;
+    std::string log;
+    {
+        std::lock_guard<std::mutex> guard(openmesh_lock);
+        OmLogCapture capture;
+        // By file name, not from `data`: OpenMesh's stream readers skip the header probe
+        // (can_u_read) and would use the flags of the previous file (OFF's ST/N/C, STL's
+        // binary). The file was just read whole, so it exists.
+        Collector collector(soup);
+        ok = IO::IOManager().read(path, collector, opt);
+        log = capture.first_line();
+    }
+    if (!soup.error.empty())
+        return fail(err, errlen, FP_MESH_ERR_FORMAT, path, soup.error);
+    if (!ok)
+        return fail(err, errlen, FP_MESH_ERR_FORMAT, path,
+                    "OpenMesh cannot read it as ." + ext +
+                        (log.empty() ? std::string() : " (" + log + ")"));
+    // OpenMesh's OBJ reader removes repeated vertices from a face and drops a face left with
+    // fewer than 3; anything else is a disagreement between its parse and ours.
+    if (ext == "obj" && (soup.n() != obj.v || soup.faces() != obj.faces - obj.degenerate))
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                              "OpenMesh read %zu vertices and %zu faces; the file has %zu and "
+                              "%zu (%zu degenerate)",
+                              soup.n(), soup.faces(), obj.v, obj.faces, obj.degenerate);
+    return soup_to_mesh(soup, path, out, err, errlen);
+}
+
+int save_openmesh(const fp_mesh *m, const char *path, const std::string &ext, char *err,
+                  size_t errlen)
+{
+    IO::Options opt;
+    if (m->normals && ext != "stl")
+        opt += IO::Options::VertexNormal;
+    if (m->uvs && ext != "stl")
+        opt += IO::Options::VertexTexCoord;
+    if (ext == "stl" || ext == "ply") {
+        opt += IO::Options::Binary;
+        opt += IO::Options::LSB;
+    }
+    std::ofstream os(path, std::ios::out | std::ios::binary | std::ios::trunc);
+    if (!os)
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_IO, path, "cannot create: %s",
+                              std::strerror(errno));
+    bool ok;
+    std::string log;
+    {
+        std::lock_guard<std::mutex> guard(openmesh_lock);
+        OmLogCapture capture;
+        ArrayExporter exporter(*m);
+        ok = IO::IOManager().write(os, ext, exporter, opt, 9);
+        log = capture.first_line();
+    }
+    os.flush();
+    if (!ok)
+        return fail(err, errlen, FP_MESH_ERR_IO, path,
+                    "OpenMesh cannot write ." + ext +
+                        (log.empty() ? std::string() : " (" + log + ")"));
+    if (!os)
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_IO, path, "write failed: %s",
+                              std::strerror(errno));
+    return FP_MESH_OK;
+}
+
+// ---- glTF ---------------------------------------------------------------------------
+
+struct Mat4 { double m[16]; }; // column-major, as glTF
+
+Mat4 mat_identity()
+{
+    Mat4 r{};
+    r.m[0] = r.m[5] = r.m[10] = r.m[15] = 1;
+    return r;
+}
+
+Mat4 mat_mul(const Mat4 &a, const Mat4 &b)
+{
+    Mat4 r{};
+    for (int c = 0; c < 4; c++)
+        for (int row = 0; row < 4; row++) {
+            double s = 0;
+            for (int k = 0; k < 4; k++)
+                s += a.m[k * 4 + row] * b.m[c * 4 + k];
+            r.m[c * 4 + row] = s;
+        }
+    return r;
+}
+
+// The node's local transform: its matrix, or T * R * S.
+Mat4 node_local(const tinygltf::Node &nd)
+{
+    Mat4 r = mat_identity();
+    if (nd.matrix.size() == 16) {
+        for (int i = 0; i < 16; i++)
+            r.m[i] = nd.matrix[size_t(i)];
+        return r;
+    }
+    double sx = 1, sy = 1, sz = 1, qx = 0, qy = 0, qz = 0, qw = 1;
+    if (nd.scale.size() == 3) { sx = nd.scale[0]; sy = nd.scale[1]; sz = nd.scale[2]; }
+    if (nd.rotation.size() == 4) {
+        qx = nd.rotation[0]; qy = nd.rotation[1]; qz = nd.rotation[2]; qw = nd.rotation[3];
+    }
+    const double R[9] = {1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy + qz * qw), 2 * (qx * qz - qy * qw),
+                         2 * (qx * qy - qz * qw), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz + qx * qw),
+                         2 * (qx * qz + qy * qw), 2 * (qy * qz - qx * qw), 1 - 2 * (qx * qx + qy * qy)};
+    const double S[3] = {sx, sy, sz};
+    for (int c = 0; c < 3; c++)
+        for (int row = 0; row < 3; row++)
+            r.m[c * 4 + row] = R[c * 3 + row] * S[c]; // column c of R, times scale c
+    if (nd.translation.size() == 3)
+        for (int k = 0; k < 3; k++)
+            r.m[12 + k] = nd.translation[size_t(k)];
+    return r;
+}
+
+struct GltfReader {
+    const tinygltf::Model &model;
+    Soup &soup;
+    std::string error;
+    int code = FP_MESH_OK;
+    size_t prims_seen = 0, prims_used = 0;
+    bool all_normals = true, any_uv = false;
+
+    bool bad(int c, const std::string &msg)
+    {
+        if (code == FP_MESH_OK) { code = c; error = msg; }
+        return false;
+    }
+
+    // Read accessor `ai` as `want` components per element into out (as float; integers
+    // normalised when the accessor says so).
+    bool read_floats(int ai, int want, const char *what, std::vector<float> &out)
+    {
+        const std::string name = std::string(what) + " accessor " + std::to_string(ai);
+        if (ai < 0 || size_t(ai) >= model.accessors.size())
+            return bad(FP_MESH_ERR_FORMAT, name + " does not exist");
+        const tinygltf::Accessor &a = model.accessors[size_t(ai)];
+        const int ncomp = tinygltf::GetNumComponentsInType(uint32_t(a.type));
+        if (ncomp != want)
+            return bad(FP_MESH_ERR_FORMAT, name + " has " + std::to_string(ncomp) +
+                                                " components, expected " + std::to_string(want));
+        const uint8_t *base;
+        size_t stride;
+        if (!locate(a, name, &base, &stride))
+            return false;
+        out.resize(a.count * size_t(want));
+        const int csize = tinygltf::GetComponentSizeInBytes(uint32_t(a.componentType));
+        for (size_t i = 0; i < a.count; i++)
+            for (int k = 0; k < want; k++) {
+                const uint8_t *p = base + i * stride + size_t(k * csize);
+                float v;
+                switch (a.componentType) {
+                case TINYGLTF_COMPONENT_TYPE_FLOAT: std::memcpy(&v, p, 4); break;
+                case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+                    v = float(*p); if (a.normalized) v /= 255.0f; break;
+                case TINYGLTF_COMPONENT_TYPE_BYTE: {
+                    v = float(int8_t(*p));
+                    if (a.normalized) v = std::fmax(v / 127.0f, -1.0f);
+                    break;
+                }
+                case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+                    uint16_t u; std::memcpy(&u, p, 2); v = float(u);
+                    if (a.normalized) v /= 65535.0f;
+                    break;
+                }
+                case TINYGLTF_COMPONENT_TYPE_SHORT: {
+                    int16_t u; std::memcpy(&u, p, 2); v = float(u);
+                    if (a.normalized) v = std::fmax(v / 32767.0f, -1.0f);
+                    break;
+                }
+                default:
+                    return bad(FP_MESH_ERR_FORMAT, name + " has component type " +
+                                                        std::to_string(a.componentType) +
+                                                        ", not a vertex attribute type");
+                }
+                if (!std::isfinite(v))
+                    return bad(FP_MESH_ERR_FORMAT, name + " element " + std::to_string(i) +
+                                                        " is not finite");
+                out[i * size_t(want) + size_t(k)] = v;
+            }
+        return true;
+    }
+
+    bool read_indices(int ai, std::vector<uint32_t> &out)
+    {
+        const std::string name = "index accessor " + std::to_string(ai);
+        if (ai < 0 || size_t(ai) >= model.accessors.size())
+            return bad(FP_MESH_ERR_FORMAT, name + " does not exist");
+        const tinygltf::Accessor &a = model.accessors[size_t(ai)];
+        if (a.type != TINYGLTF_TYPE_SCALAR)
+            return bad(FP_MESH_ERR_FORMAT, name + " is not SCALAR");
+        const uint8_t *base;
+        size_t stride;
+        if (!locate(a, name, &base, &stride))
+            return false;
+        out.resize(a.count);
+        for (size_t i = 0; i < a.count; i++) {
+            const uint8_t *p = base + i * stride;
+            switch (a.componentType) {
+            case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: out[i] = *p; break;
+            case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
+                uint16_t u; std::memcpy(&u, p, 2); out[i] = u; break;
+            }
+            case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: std::memcpy(&out[i], p, 4); break;
+            default:
+                return bad(FP_MESH_ERR_FORMAT, name + " has component type " +
+                                                    std::to_string(a.componentType) +
+                                                    " (indices must be unsigned integers)");
+            }
+        }
+        return true;
+    }
+
+    // Find an accessor's first element and stride, checking every bound.
+    bool locate(const tinygltf::Accessor &a, const std::string &name, const uint8_t **base,
+                size_t *stride)
+    {
+        if (a.sparse.isSparse)
+            return bad(FP_MESH_ERR_UNSUPPORTED, name + " is sparse (not supported)");
+        if (a.bufferView < 0 || size_t(a.bufferView) >= model.bufferViews.size())
+            return bad(FP_MESH_ERR_FORMAT, name + " has no valid bufferView");
+        const tinygltf::BufferView &bv = model.bufferViews[size_t(a.bufferView)];
+        if (bv.buffer < 0 || size_t(bv.buffer) >= model.buffers.size())
+            return bad(FP_MESH_ERR_FORMAT, name + ": bufferView " + std::to_string(a.bufferView) +
+                                                " has no valid buffer");
+        const tinygltf::Buffer &buf = model.buffers[size_t(bv.buffer)];
+        const int csize = tinygltf::GetComponentSizeInBytes(uint32_t(a.componentType));
+        const int ncomp = tinygltf::GetNumComponentsInType(uint32_t(a.type));
+        const int s = a.ByteStride(bv);
+        if (csize <= 0 || ncomp <= 0 || s <= 0)
+            return bad(FP_MESH_ERR_FORMAT, name + " has an invalid type, component type or stride");
+        const size_t elem = size_t(csize) * size_t(ncomp);
+        if (bv.byteOffset > buf.data.size() || bv.byteLength > buf.data.size() - bv.byteOffset)
+            return bad(FP_MESH_ERR_FORMAT, name + ": bufferView " + std::to_string(a.bufferView) +
+                                                " lies outside its buffer (" +
+                                                std::to_string(buf.data.size()) + " bytes)");
+        if (a.count > 0) {
+            const size_t limit = bv.byteLength;
+            const bool fits = a.byteOffset <= limit && elem <= limit - a.byteOffset &&
+                              (a.count - 1) <= (limit - a.byteOffset - elem) / size_t(s);
+            if (!fits)
+                return bad(FP_MESH_ERR_FORMAT, name + " (" + std::to_string(a.count) +
+                                                    " elements) overruns bufferView " +
+                                                    std::to_string(a.bufferView));
+        }
+        *base = buf.data.data() + bv.byteOffset + a.byteOffset;
+        *stride = size_t(s);
+        return true;
+    }
+
+    bool add_mesh(int mi, const Mat4 &xf)
+    {
+        if (mi < 0 || size_t(mi) >= model.meshes.size())
+            return bad(FP_MESH_ERR_FORMAT, "mesh " + std::to_string(mi) + " does not exist");
+        const tinygltf::Mesh &mesh = model.meshes[size_t(mi)];
+        // normal matrix: cofactor of the upper 3x3 (= det * inverse transpose)
+        const double *M = xf.m;
+        auto a = [&](int r, int c) { return M[c * 4 + r]; };
+        double C[3][3];
+        for (int r = 0; r < 3; r++)
+            for (int c = 0; c < 3; c++) {
+                const int r1 = (r + 1) % 3, r2 = (r + 2) % 3, c1 = (c + 1) % 3, c2 = (c + 2) % 3;
+                C[r][c] = a(r1, c1) * a(r2, c2) - a(r1, c2) * a(r2, c1);
+            }
+        const double det = a(0, 0) * C[0][0] + a(0, 1) * C[0][1] + a(0, 2) * C[0][2];
+        const bool flip = det < 0;
+        for (size_t pi = 0; pi < mesh.primitives.size(); pi++) {
+            const tinygltf::Primitive &prim = mesh.primitives[pi];
+            prims_seen++;
+            if (prim.mode != -1 && prim.mode != TINYGLTF_MODE_TRIANGLES)
+                continue;
+            const std::string where = "mesh " + std::to_string(mi) + " primitive " +
+                                      std::to_string(pi);
+            auto pos_it = prim.attributes.find("POSITION");
+            if (pos_it == prim.attributes.end())
+                return bad(FP_MESH_ERR_FORMAT, where + " has no POSITION");
+            std::vector<float> pos, nrm, uv;
+            if (!read_floats(pos_it->second, 3, "POSITION", pos))
+                return false;
+            const size_t count = pos.size() / 3;
+            auto n_it = prim.attributes.find("NORMAL");
+            auto t_it = prim.attributes.find("TEXCOORD_0");
+            if (n_it != prim.attributes.end()) {
+                if (!read_floats(n_it->second, 3, "NORMAL", nrm))
+                    return false;
+                if (nrm.size() != pos.size())
+                    return bad(FP_MESH_ERR_FORMAT, where + ": NORMAL count differs from POSITION");
+            } else {
+                all_normals = false;
+            }
+            if (t_it != prim.attributes.end()) {
+                if (!read_floats(t_it->second, 2, "TEXCOORD_0", uv))
+                    return false;
+                if (uv.size() / 2 != count)
+                    return bad(FP_MESH_ERR_FORMAT, where + ": TEXCOORD_0 count differs from POSITION");
+                any_uv = true;
+            }
+            std::vector<uint32_t> idx;
+            if (prim.indices >= 0) {
+                if (!read_indices(prim.indices, idx))
+                    return false;
+            } else {
+                idx.resize(count);
+                for (size_t i = 0; i < count; i++)
+                    idx[i] = uint32_t(i);
+            }
+            if (idx.size() % 3 != 0)
+                return bad(FP_MESH_ERR_FORMAT, where + " has " + std::to_string(idx.size()) +
+                                                   " indices, not a multiple of 3");
+            for (size_t i = 0; i < idx.size(); i++)
+                if (idx[i] >= count)
+                    return bad(FP_MESH_ERR_FORMAT, where + ": index " + std::to_string(i) + " = " +
+                                                       std::to_string(idx[i]) + " is out of range (" +
+                                                       std::to_string(count) + " vertices)");
+            const size_t base = soup.n();
+            if (base + count > UINT32_MAX)
+                return bad(FP_MESH_ERR_UNSUPPORTED, "more vertices than 32-bit indices hold");
+            for (size_t i = 0; i < count; i++) {
+                const float *p = &pos[3 * i];
+                double q[3];
+                for (int r = 0; r < 3; r++)
+                    q[r] = a(r, 0) * p[0] + a(r, 1) * p[1] + a(r, 2) * p[2] + a(r, 3);
+                const size_t v = soup.add_vertex(float(q[0]), float(q[1]), float(q[2]));
+                if (!nrm.empty()) {
+                    const float *nn = &nrm[3 * i];
+                    double w[3], len = 0;
+                    for (int r = 0; r < 3; r++) {
+                        w[r] = (C[r][0] * nn[0] + C[r][1] * nn[1] + C[r][2] * nn[2]) * (flip ? -1 : 1);
+                        len += w[r] * w[r];
+                    }
+                    len = std::sqrt(len);
+                    for (int r = 0; r < 3; r++)
+                        soup.nrm[3 * v + size_t(r)] = len > 0 ? float(w[r] / len) : 0.0f;
+                    soup.has_nrm[v] = 1;
+                }
+                if (!uv.empty()) {
+                    soup.uv[2 * v] = uv[2 * i];
+                    soup.uv[2 * v + 1] = uv[2 * i + 1];
+                    soup.has_uv[v] = 1;
+                }
+            }
+            if (!soup.error.empty())
+                return bad(FP_MESH_ERR_FORMAT, where + ": " + soup.error);
+            for (size_t i = 0; i + 2 < idx.size(); i += 3) {
+                soup.corners.push_back(uint32_t(base + idx[i]));
+                soup.corners.push_back(uint32_t(base + idx[i + (flip ? 2 : 1)]));
+                soup.corners.push_back(uint32_t(base + idx[i + (flip ? 1 : 2)]));
+                soup.face_start.push_back(uint32_t(soup.corners.size()));
+            }
+            prims_used++;
+        }
+        return true;
+    }
+
+    bool add_node(int ni, const Mat4 &parent, std::vector<char> &visited, int depth)
+    {
+        if (ni < 0 || size_t(ni) >= model.nodes.size())
+            return bad(FP_MESH_ERR_FORMAT, "node " + std::to_string(ni) + " does not exist");
+        if (visited[size_t(ni)] || depth > 1000)
+            return bad(FP_MESH_ERR_FORMAT, "node " + std::to_string(ni) +
+                                               " appears twice in the hierarchy (cycle?)");
+        visited[size_t(ni)] = 1;
+        const tinygltf::Node &nd = model.nodes[size_t(ni)];
+        const Mat4 xf = mat_mul(parent, node_local(nd));
+        if (nd.mesh >= 0 && !add_mesh(nd.mesh, xf))
+            return false;
+        for (int c : nd.children)
+            if (!add_node(c, xf, visited, depth + 1))
+                return false;
+        return true;
+    }
+};
+
+// Images are not needed: accept any without decoding.
+bool skip_image(tinygltf::Image *, const int, std::string *, std::string *, int, int,
+                const unsigned char *, int, void *)
+{
+    return true;
+}
+
+std::string one_line(std::string s)
+{
+    for (char &c : s)
+        if (c == '\n' || c == '\r')
+            c = ' ';
+    while (!s.empty() && s.back() == ' ')
+        s.pop_back();
+    return s;
+}
+
+int load_gltf(const char *path, const std::string &ext, const std::string &data,
+              fp_mesh **out, char *err, size_t errlen)
+{
+    tinygltf::TinyGLTF loader;
+    loader.SetImageLoader(skip_image, nullptr);
+    tinygltf::Model model;
+    std::string gerr, gwarn;
+    std::string dir = path;
+    size_t slash = dir.find_last_of('/');
+    dir = slash == std::string::npos ? std::string(".") : dir.substr(0, slash);
+    if (data.size() > UINT_MAX)
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_UNSUPPORTED, path, "file too large");
+    bool ok;
+    if (ext == "glb")
+        ok = loader.LoadBinaryFromMemory(&model, &gerr, &gwarn,
+                                         reinterpret_cast<const unsigned char *>(data.data()),
+                                         unsigned(data.size()), dir);
+    else
+        ok = loader.LoadASCIIFromString(&model, &gerr, &gwarn, data.data(),
+                                        unsigned(data.size()), dir);
+    if (!ok)
+        return fail(err, errlen, FP_MESH_ERR_FORMAT, path,
+                    "glTF: " + one_line(gerr.empty() ? std::string("cannot parse") : gerr));
+    Soup soup;
+    GltfReader r{model, soup, {}};
+    std::vector<char> visited(model.nodes.size(), 0);
+    int scene = model.defaultScene >= 0 ? model.defaultScene : (model.scenes.empty() ? -1 : 0);
+    if (scene >= 0 && size_t(scene) >= model.scenes.size())
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                              "glTF: default scene %d does not exist", scene);
+    if (scene >= 0) {
+        for (int ni : model.scenes[size_t(scene)].nodes)
+            if (!r.add_node(ni, mat_identity(), visited, 0))
+                break;
+    } else {
+        for (size_t mi = 0; mi < model.meshes.size(); mi++)
+            if (!r.add_mesh(int(mi), mat_identity()))
+                break;
+    }
+    if (r.code != FP_MESH_OK)
+        return fail(err, errlen, r.code, path, "glTF: " + r.error);
+    if (r.prims_seen > 0 && r.prims_used == 0)
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_UNSUPPORTED, path,
+                              "glTF: no triangle primitives (only points, lines, strips or fans)");
+    if (!r.all_normals)
+        std::fill(soup.has_nrm.begin(), soup.has_nrm.end(), 0);
+    soup.any_vertex_uv = r.any_uv;
+    return soup_to_mesh(soup, path, out, err, errlen);
+}
+
+int save_gltf(const fp_mesh *m, const char *path, const std::string &ext, char *err,
+              size_t errlen)
+{
+    const size_t n = m->vertex_count, t = m->triangle_count;
+    tinygltf::Model model;
+    model.asset.version = "2.0";
+    model.asset.generator = "facepuppet fp_mesh";
+    tinygltf::Buffer buffer;
+    auto add_view = [&](const void *src, size_t bytes, int target) {
+        tinygltf::BufferView bv;
+        bv.buffer = 0;
+        bv.byteOffset = buffer.data.size();
+        bv.byteLength = bytes;
+        bv.target = target;
+        const unsigned char *p = static_cast<const unsigned char *>(src);
+        buffer.data.insert(buffer.data.end(), p, p + bytes);
+        model.bufferViews.push_back(bv);
+        return int(model.bufferViews.size() - 1);
+    };
+    auto add_accessor = [&](int view, int ctype, int type, size_t count) {
+        tinygltf::Accessor a;
+        a.bufferView = view;
+        a.componentType = ctype;
+        a.type = type;
+        a.count = count;
+        model.accessors.push_back(a);
+        return int(model.accessors.size() - 1);
+    };
+    tinygltf::Primitive prim;
+    prim.mode = TINYGLTF_MODE_TRIANGLES;
+    int pa = add_accessor(add_view(m->positions, n * 12, TINYGLTF_TARGET_ARRAY_BUFFER),
+                          TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, n);
+    float lo[3], hi[3];
+    fp_mesh_bounds(m, lo, hi);
+    model.accessors[size_t(pa)].minValues = {lo[0], lo[1], lo[2]};
+    model.accessors[size_t(pa)].maxValues = {hi[0], hi[1], hi[2]};
+    prim.attributes["POSITION"] = pa;
+    if (m->normals)
+        prim.attributes["NORMAL"] =
+            add_accessor(add_view(m->normals, n * 12, TINYGLTF_TARGET_ARRAY_BUFFER),
+                         TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, n);
+    if (m->uvs)
+        prim.attributes["TEXCOORD_0"] =
+            add_accessor(add_view(m->uvs, n * 8, TINYGLTF_TARGET_ARRAY_BUFFER),
+                         TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC2, n);
+    prim.indices = add_accessor(add_view(m->triangles, t * 12, TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER),
+                                TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, TINYGLTF_TYPE_SCALAR, 3 * t);
+    model.buffers.push_back(std::move(buffer));
+    tinygltf::Mesh mesh;
+    mesh.primitives.push_back(prim);
+    model.meshes.push_back(mesh);
+    tinygltf::Node node;
+    node.mesh = 0;
+    model.nodes.push_back(node);
+    tinygltf::Scene scene;
+    scene.nodes.push_back(0);
+    model.scenes.push_back(scene);
+    model.defaultScene = 0;
+
+    std::ofstream os(path, std::ios::out | std::ios::binary | std::ios::trunc);
+    if (!os)
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_IO, path, "cannot create: %s",
+                              std::strerror(errno));
+    tinygltf::TinyGLTF writer;
+    const bool ok = writer.WriteGltfSceneToStream(&model, os, false, ext == "glb");
+    os.flush();
+    if (!ok || !os)
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_IO, path, "write failed: %s",
+                              std::strerror(errno));
+    return FP_MESH_OK;
+}
+
+int check_mesh(const fp_mesh *m, const char *path, char *err, size_t errlen)
+{
+    if (m->vertex_count == 0 || m->triangle_count == 0 || !m->positions || !m->triangles)
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_INVALID, path,
+                              "mesh has no vertices or no triangles");
+    if (m->vertex_count > size_t(INT_MAX) || m->triangle_count > size_t(INT_MAX) / 3)
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_INVALID, path, "mesh too large");
+    for (size_t i = 0; i < 3 * m->triangle_count; i++)
+        if (m->triangles[i] >= m->vertex_count)
+            return fp__mesh_error(err, errlen, FP_MESH_ERR_INVALID, path,
+                                  "triangle %zu references vertex %u of %zu", i / 3,
+                                  m->triangles[i], m->vertex_count);
+    for (size_t i = 0; i < 3 * m->vertex_count; i++)
+        if (!std::isfinite(m->positions[i]) || (m->normals && !std::isfinite(m->normals[i])))
+            return fp__mesh_error(err, errlen, FP_MESH_ERR_INVALID, path,
+                                  "vertex %zu has a non-finite position or normal", i / 3);
+    if (m->uvs)
+        for (size_t i = 0; i < 2 * m->vertex_count; i++)
+            if (!std::isfinite(m->uvs[i]))
+                return fp__mesh_error(err, errlen, FP_MESH_ERR_INVALID, path,
+                                      "vertex %zu has a non-finite UV", i / 2);
+    return FP_MESH_OK;
+}
+
+bool is_openmesh_ext(const std::string &e) { return e == "obj" || e == "ply" || e == "off" || e == "stl"; }
+bool is_gltf_ext(const std::string &e) { return e == "gltf" || e == "glb"; }
+
+} // namespace
+
+extern "C" int fp_mesh_load(const char *path, fp_mesh **out, char *err, size_t errlen)
+{
+    if (err && errlen)
+        err[0] = '\0';
+    if (out)
+        *out = nullptr;
+    if (!path || !out)
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_INVALID, path, "NULL path or out");
+    try {
+        char e[16];
+        fp__mesh_extension(path, e, sizeof e);
+        const std::string ext = e;
+        if (!is_openmesh_ext(ext) && !is_gltf_ext(ext))
+            return fp__mesh_error(err, errlen, FP_MESH_ERR_UNSUPPORTED, path,
+                                  "unsupported extension '%s' (obj, ply, off, stl, gltf, glb)",
+                                  e);
+        std::string data;
+        int rc = read_whole_file(path, data, err, errlen);
+        if (rc != FP_MESH_OK)
+            return rc;
+        if (is_gltf_ext(ext))
+            return load_gltf(path, ext, data, out, err, errlen);
+        return load_openmesh(path, ext, data, out, err, errlen);
+    } catch (const std::bad_alloc &) {
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_NOMEM, path, "out of memory");
+    } catch (const std::exception &x) {
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path, "reader failed: %s",
+                              x.what());
+    } catch (...) {
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path, "reader failed");
+    }
+}
+
+extern "C" int fp_mesh_save(const fp_mesh *mesh, const char *path, char *err, size_t errlen)
+{
+    if (err && errlen)
+        err[0] = '\0';
+    if (!path || !mesh)
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_INVALID, path, "NULL mesh or path");
+    try {
+        char e[16];
+        fp__mesh_extension(path, e, sizeof e);
+        const std::string ext = e;
+        if (!is_openmesh_ext(ext) && !is_gltf_ext(ext))
+            return fp__mesh_error(err, errlen, FP_MESH_ERR_UNSUPPORTED, path,
+                                  "unsupported extension '%s' (obj, ply, off, stl, gltf, glb)",
+                                  e);
+        int rc = check_mesh(mesh, path, err, errlen);
+        if (rc != FP_MESH_OK)
+            return rc;
+        if (is_gltf_ext(ext))
+            return save_gltf(mesh, path, ext, err, errlen);
+        return save_openmesh(mesh, path, ext, err, errlen);
+    } catch (const std::bad_alloc &) {
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_NOMEM, path, "out of memory");
+    } catch (const std::exception &x) {
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_IO, path, "writer failed: %s", x.what());
+    } catch (...) {
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_IO, path, "writer failed");
+    }
+}

@@ -1,0 +1,400 @@
+/*
+ * replay.c: the input-replay plugin. Replays a recorded hand (Leap CSV or facepuppet event
+ * log) as live input, on its own thread, at the recorded pace or faster.
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ *
+ * Flow: create() parses the SPEC and loads the whole file (replay_load.c), so that every
+ * error shows before the session starts; start() launches one pthread that waits for each
+ * event's moment (a timed wait on a condition variable over CLOCK_MONOTONIC, so stop() wakes
+ * it at once) and pushes it; stop() sets a flag, signals and joins.
+ */
+#define _GNU_SOURCE
+#include "replay_load.h"
+
+#include <facepuppet/plugin.h>
+
+#include <errno.h>
+#include <locale.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdarg.h>
+#include <stdatomic.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#define RETRY_WAIT_NS 1000000 /* fast mode: wait 1 ms before pushing again into a full queue */
+
+typedef struct replay {
+    fp_input input;
+    const fp_host *host;
+    char *path;
+    replay_recording rec;
+    double speed;
+    bool loop, fast;
+
+    pthread_t thread;
+    bool running;
+    pthread_mutex_t mutex;
+    pthread_cond_t cond;     /* CLOCK_MONOTONIC; signalled by stop() */
+    atomic_bool stop;
+} replay;
+
+static const char usage_text[] =
+    "replay:FILE[,speed=X][,loop=1][,fast=1][,hands=left|right|both]\n"
+    "  Replays a recording as live input, at the recorded pace (timestamp_us or time_ns).\n"
+    "  FILE is detected by its header line:\n"
+    "    Leap joint-positions CSV (*_joints_mm.csv): per hand and row, joint positions in the\n"
+    "      palm, thumb..pinky MCP/PIP/DIP/tip layout and a wrist pose (palm position; rotation\n"
+    "      from palm normal and hand direction);\n"
+    "    Leap joint-angles CSV (*_cyberglove_like_angles_deg.csv): joint angles, degrees to\n"
+    "      radians, empty fields marked not valid;\n"
+    "    facepuppet event log (docs/eventlog.md): the events as recorded.\n"
+    "  speed=X  play X times as fast (X > 0, default 1)\n"
+    "  loop=1   start over at the end; event times keep increasing (default 0)\n"
+    "  fast=1   as fast as possible, retrying rather than dropping when the queue is full\n"
+    "           (buttons and status events are always retried; paced poses may be dropped)\n"
+    "  hands=H  left, right or both (default both)\n"
+    "  Event times are the host clock at the emulated moment. Without loop, the replay ends\n"
+    "  with an end-of-stream status. A malformed row fails at creation (FILE:LINE:COLUMN); a\n"
+    "  last line cut short (no newline) is dropped and reported with an error status (the\n"
+    "  recording is damaged) after the rows before it were replayed.\n";
+
+/* ------------------------------------------------------------------------------------- */
+/* Thread                                                                                 */
+
+static int64_t mono_ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
+}
+
+/* Waits until CLOCK_MONOTONIC reaches `deadline` or stop is asked. Returns false on stop. */
+static bool wait_until(replay *r, int64_t deadline)
+{
+    struct timespec ts = {(time_t)(deadline / 1000000000), (long)(deadline % 1000000000)};
+    pthread_mutex_lock(&r->mutex);
+    while (!atomic_load(&r->stop) && mono_ns() < deadline)
+        if (pthread_cond_timedwait(&r->cond, &r->mutex, &ts) == ETIMEDOUT) break;
+    bool go_on = !atomic_load(&r->stop);
+    pthread_mutex_unlock(&r->mutex);
+    return go_on;
+}
+
+/* Pushes one event. A pose (angles, positions, wrist) meeting a full queue in paced mode is
+ * dropped, as a device's would be (the host counts drops; the next pose supersedes it). In
+ * fast mode, and for buttons and status events always, it waits briefly and tries again
+ * until the event goes in or stop is asked. Returns false on stop. */
+static bool push(replay *r, const fp_event *ev)
+{
+    bool keep = r->fast || ev->header.type == FP_EVENT_BUTTON || ev->header.type == FP_EVENT_STATUS;
+    while (!r->host->push_event(r->host, &ev->header)) {
+        if (!keep) return true;
+        if (!wait_until(r, mono_ns() + RETRY_WAIT_NS)) return false;
+    }
+    return true;
+}
+
+static bool push_status(replay *r, int64_t time_ns, uint32_t code, const char *fmt, ...)
+{
+    fp_event ev;
+    memset(&ev, 0, sizeof ev);
+    ev.status.header = (fp_event_header){.size = sizeof ev.status, .type = FP_EVENT_STATUS,
+                                         .time_ns = time_ns, .hand = -1};
+    ev.status.code = code;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(ev.status.text, sizeof ev.status.text, fmt, ap);
+    va_end(ap);
+    return push(r, &ev);
+}
+
+/* Emulated offset, in host ns after the start, of recording time t in pass `pass`. */
+static int64_t emulated_offset(const replay *r, uint64_t pass, int64_t t)
+{
+    double rec_ns = (double)pass * (double)r->rec.loop_period_ns + (double)t;
+    if (r->speed == 1.0) return (int64_t)rec_ns;
+    return (int64_t)llround(rec_ns / r->speed);
+}
+
+static const char *base_name(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    return slash ? slash + 1 : path;
+}
+
+static void *replay_thread(void *arg)
+{
+    replay *r = arg;
+    const int64_t host_t0 = r->host->now_ns(r->host);
+    const int64_t mono_t0 = mono_ns();
+    int64_t last_time = host_t0;
+    bool warned = false;
+    if (!push_status(r, host_t0, FP_STATUS_CONNECTED, "replaying %s: %zu frames, %.3f s",
+                     base_name(r->path), r->rec.frames, (double)r->rec.duration_ns * 1e-9))
+        return NULL;
+    for (uint64_t pass = 0;; pass++) {
+        for (size_t i = 0; i < r->rec.count; i++) {
+            const replay_item *it = &r->rec.items[i];
+            int64_t off = emulated_offset(r, pass, it->t_ns);
+            if (r->fast) {
+                if (atomic_load(&r->stop)) return NULL;
+            } else if (!wait_until(r, mono_t0 + off)) {
+                return NULL;
+            }
+            fp_event ev = it->event;
+            ev.header.time_ns = last_time = host_t0 + off;
+            if (!push(r, &ev)) return NULL;
+        }
+        if (r->rec.truncated_line && !warned) {
+            warned = true;
+            if (!push_status(r, last_time, FP_STATUS_ERROR,
+                             "%s:%ld: last line cut short (no newline), not replayed",
+                             base_name(r->path), r->rec.truncated_line))
+                return NULL;
+        }
+        if (!r->loop) break;
+    }
+    push_status(r, last_time, FP_STATUS_END_OF_STREAM, "end of %s", base_name(r->path));
+    return NULL;
+}
+
+/* ------------------------------------------------------------------------------------- */
+/* fp_input                                                                               */
+
+static int replay_start(fp_input *self, char *err, size_t errlen)
+{
+    replay *r = self->plugin_data;
+    if (r->running) {
+        snprintf(err, errlen, "replay: already started");
+        return -EBUSY;
+    }
+    atomic_store(&r->stop, false);
+    int rc = pthread_create(&r->thread, NULL, replay_thread, r);
+    if (rc) {
+        snprintf(err, errlen, "replay: cannot start its thread: %s", strerror(rc));
+        return -rc;
+    }
+    r->running = true;
+    return 0;
+}
+
+static void replay_stop(fp_input *self)
+{
+    replay *r = self->plugin_data;
+    if (!r->running) return;
+    pthread_mutex_lock(&r->mutex);
+    atomic_store(&r->stop, true);
+    pthread_cond_broadcast(&r->cond);
+    pthread_mutex_unlock(&r->mutex);
+    pthread_join(r->thread, NULL);
+    r->running = false;
+}
+
+static void replay_destroy(fp_input *self)
+{
+    if (!self) return;
+    replay *r = self->plugin_data;
+    replay_stop(self);
+    pthread_cond_destroy(&r->cond);
+    pthread_mutex_destroy(&r->mutex);
+    replay_recording_free(&r->rec);
+    free(r->path);
+    free(r);
+}
+
+/* ------------------------------------------------------------------------------------- */
+/* Factory                                                                                */
+
+static int parse_bool(const fp_param *p, bool *out, char *err, size_t errlen)
+{
+    if (strcmp(p->value, "1") == 0 || strcmp(p->value, "true") == 0)
+        *out = true;
+    else if (strcmp(p->value, "0") == 0 || strcmp(p->value, "false") == 0)
+        *out = false;
+    else {
+        snprintf(err, errlen, "replay: %s=%s: expected 0 or 1", p->key, p->value);
+        return -EINVAL;
+    }
+    return 0;
+}
+
+/* ------------------------------------------------------------------------------------- */
+/* Extensions: the workspace the recording's hands move in, and what it holds             */
+
+static bool replay_workspace(const fp_input *self, float min_mm[3], float max_mm[3])
+{
+    const replay *r = self->plugin_data;
+    bool any = false;
+    for (int k = 0; k < 3; k++) {
+        min_mm[k] = INFINITY;
+        max_mm[k] = -INFINITY;
+    }
+    for (size_t i = 0; i < r->rec.count; i++) {
+        const fp_event *ev = &r->rec.items[i].event;
+        if (ev->header.type != FP_EVENT_JOINT_POSITIONS) continue;
+        for (int j = 0; j < FP_HAND_JOINTS; j++)
+            for (int k = 0; k < 3; k++) {
+                min_mm[k] = fminf(min_mm[k], ev->positions.mm[j][k]);
+                max_mm[k] = fmaxf(max_mm[k], ev->positions.mm[j][k]);
+            }
+        any = true;
+    }
+    return any;
+}
+
+static bool replay_recording_info(const fp_input *self, fp_recording_info *info)
+{
+    const replay *r = self->plugin_data;
+    static const char *formats[] = {"", "joints-csv", "angles-csv", "eventlog"};
+    memset(info, 0, sizeof *info);
+    uint64_t distinct = 0;
+    int64_t last = -1;
+    for (size_t i = 0; i < r->rec.count; i++) {
+        const replay_item *it = &r->rec.items[i];
+        if (it->t_ns != last) distinct++;
+        last = it->t_ns;
+        int h = it->event.header.hand;
+        if (h == FP_HAND_LEFT || h == FP_HAND_RIGHT) info->hands |= 1u << h;
+    }
+    info->frames = distinct;
+    info->duration_s = (double)r->rec.duration_ns / 1e9;
+    info->rate_hz = distinct > 1 && r->rec.duration_ns > 0 ? (double)(distinct - 1) / info->duration_s : 0;
+    snprintf(info->format, sizeof info->format, "%s",
+             r->rec.format >= 1 && r->rec.format <= 3 ? formats[r->rec.format] : "unknown");
+    return true;
+}
+
+static const fp_input_workspace workspace_ext = {replay_workspace};
+static const fp_input_recording recording_ext = {replay_recording_info};
+
+static const void *replay_get_extension(const fp_input *self, const char *id)
+{
+    (void)self;
+    if (!strcmp(id, FP_EXT_WORKSPACE)) return &workspace_ext;
+    if (!strcmp(id, FP_EXT_RECORDING_INFO)) return &recording_ext;
+    return NULL;
+}
+
+static int replay_create(const fp_host *host, const char *arg, const fp_param *params,
+                         size_t nparams, fp_input **out, char *err, size_t errlen)
+{
+    *out = NULL;
+    if (!host || !host->push_event || !host->now_ns) {
+        snprintf(err, errlen, "replay: the host lacks push_event or now_ns");
+        return -EINVAL;
+    }
+    if (!arg || !*arg) {
+        snprintf(err, errlen, "replay: no FILE given (replay:FILE[,speed=X][,loop=1][,fast=1]"
+                              "[,hands=left|right|both])");
+        return -EINVAL;
+    }
+    double speed = 1.0;
+    bool loop = false, fast = false;
+    int hands = REPLAY_HAND_BOTH;
+    for (size_t i = 0; i < nparams; i++) {
+        const fp_param *p = &params[i];
+        const char *v = p->value ? p->value : "";
+        fp_param q = {p->key ? p->key : "", v};
+        if (strcmp(q.key, "speed") == 0) {
+            locale_t c = newlocale(LC_ALL_MASK, "C", (locale_t)0);
+            char *end = NULL;
+            double s = c != (locale_t)0 ? strtod_l(v, &end, c) : NAN;
+            if (c != (locale_t)0) freelocale(c);
+            if (!end || end == v || *end || !isfinite(s) || !(s > 0) || s > 1e6) {
+                snprintf(err, errlen, "replay: speed=%s: expected a number > 0 (at most 1e6)", v);
+                return -EINVAL;
+            }
+            speed = s;
+        } else if (strcmp(q.key, "loop") == 0) {
+            if (parse_bool(&q, &loop, err, errlen)) return -EINVAL;
+        } else if (strcmp(q.key, "fast") == 0) {
+            if (parse_bool(&q, &fast, err, errlen)) return -EINVAL;
+        } else if (strcmp(q.key, "hands") == 0) {
+            if (strcmp(v, "left") == 0)
+                hands = REPLAY_HAND_LEFT;
+            else if (strcmp(v, "right") == 0)
+                hands = REPLAY_HAND_RIGHT;
+            else if (strcmp(v, "both") == 0)
+                hands = REPLAY_HAND_BOTH;
+            else {
+                snprintf(err, errlen, "replay: hands=%s: expected left, right or both", v);
+                return -EINVAL;
+            }
+        } else {
+            snprintf(err, errlen, "replay: unknown key \"%s\" (known: speed, loop, fast, hands)",
+                     q.key);
+            return -EINVAL;
+        }
+    }
+
+    replay *r = calloc(1, sizeof *r);
+    if (!r || !(r->path = strdup(arg))) {
+        free(r);
+        snprintf(err, errlen, "replay: out of memory");
+        return -ENOMEM;
+    }
+    int rc = replay_load(arg, hands, &r->rec, err, errlen);
+    if (rc) {
+        free(r->path);
+        free(r);
+        return rc;
+    }
+    pthread_condattr_t ca;
+    pthread_condattr_init(&ca);
+    pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
+    pthread_cond_init(&r->cond, &ca);
+    pthread_condattr_destroy(&ca);
+    pthread_mutex_init(&r->mutex, NULL);
+    atomic_init(&r->stop, false);
+    r->host = host;
+    r->speed = speed;
+    r->loop = loop;
+    r->fast = fast;
+    r->input = (fp_input){.size = sizeof(fp_input), .plugin_data = r, .start = replay_start,
+                          .stop = replay_stop, .destroy = replay_destroy,
+                          .get_extension = replay_get_extension};
+    if (r->rec.truncated_line && host->log) {
+        char msg[512];
+        snprintf(msg, sizeof msg, "%s:%ld: last line cut short (no newline): replay ends at "
+                 "the row before", arg, r->rec.truncated_line);
+        host->log(host, FP_LOG_WARNING, msg);
+    }
+    *out = &r->input;
+    return 0;
+}
+
+static const fp_input_factory replay_factory = {
+    .size = sizeof(fp_input_factory),
+    .name = "replay",
+    .description = "replays a recorded hand (Leap CSV or facepuppet event log) as live input",
+    .usage = usage_text,
+    .create = replay_create,
+};
+
+static bool replay_init(const char *plugin_path)
+{
+    (void)plugin_path;
+    return true;
+}
+
+static void replay_deinit(void) {}
+
+static const void *replay_get_factory(const char *factory_id)
+{
+    if (factory_id && strcmp(factory_id, FP_INPUT_FACTORY_ID) == 0) return &replay_factory;
+    return NULL;
+}
+
+FP_PLUGIN_DECLARE_ENTRY = {
+    .abi = {FP_PLUGIN_ABI_MAJOR, FP_PLUGIN_ABI_MINOR},
+    .id = "org.facepuppet.input-replay",
+    .version = "1.0.0",
+    .init = replay_init,
+    .deinit = replay_deinit,
+    .get_factory = replay_get_factory,
+};

@@ -1,0 +1,759 @@
+/* Tests of the csrbf engine against formulas, finite differences and an independent dense
+ * double-precision solve (Gaussian elimination of the full saddle system). */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "csrbf.h"
+
+/* cmocka 1.1 compares floats only; doubles with a tolerance, failing on NaN. */
+#define assert_double_equal(a, b, eps)                                                        \
+    do {                                                                                       \
+        double a_ = (a), b_ = (b), e_ = (eps);                                                 \
+        if (!(fabs(a_ - b_) <= e_))                                                            \
+            fail_msg("%s = %.17g and %s = %.17g differ by more than %g", #a, a_, #b, b_, e_);  \
+    } while (0)
+
+/* ------------------------------------------------------------------------- helpers */
+
+static uint64_t rng_state = 0x9e3779b97f4a7c15ull;
+static double urand(void) /* [0, 1) */
+{
+    rng_state ^= rng_state << 13;
+    rng_state ^= rng_state >> 7;
+    rng_state ^= rng_state << 17;
+    return (double)(rng_state >> 11) * 0x1p-53;
+}
+
+/* n random points in [0, L]^3 at least dmin apart (rejection), as floats. */
+static float *random_points(size_t n, double L, double dmin)
+{
+    float *p = malloc(n * 3 * sizeof *p);
+    for (size_t i = 0; i < n; i++) {
+        for (int tries = 0;; tries++) {
+            for (int a = 0; a < 3; a++) p[3 * i + a] = (float)(urand() * L);
+            int ok = 1;
+            for (size_t j = 0; j < i && ok; j++) {
+                double d2 = 0;
+                for (int a = 0; a < 3; a++) d2 += pow(p[3 * i + a] - p[3 * j + a], 2);
+                ok = d2 >= dmin * dmin;
+            }
+            if (ok || tries > 100) break;
+        }
+    }
+    return p;
+}
+
+static float *displaced(const float *s, size_t n, double amp)
+{
+    float *d = malloc(n * 3 * sizeof *d);
+    for (size_t i = 0; i < 3 * n; i++) d[i] = s[i] + (float)((urand() * 2 - 1) * amp);
+    return d;
+}
+
+static csrbf_solver *make_solver(double R, csrbf_kernel k, csrbf_poly poly, int dense_limit)
+{
+    csrbf_options o = {0};
+    o.radius = R;
+    o.kernel = k;
+    o.poly = poly;
+    o.dense_limit = dense_limit;
+    csrbf_solver *s = NULL;
+    assert_int_equal(csrbf_solver_create(&o, &s), CSRBF_OK);
+    assert_non_null(s);
+    return s;
+}
+
+/* Reference formulas straight from csrbf.md (psi32 normalised by 1/3 as documented). */
+static double ref_psi(csrbf_kernel k, double r)
+{
+    if (r >= 1) return 0;
+    switch (k) {
+    case CSRBF_PSI30: return pow(1 - r, 2);
+    case CSRBF_PSI31: return 1 - 10 * r * r + 20 * r * r * r - 15 * pow(r, 4) + 4 * pow(r, 5);
+    default: return pow(1 - r, 6) * (35 * r * r + 18 * r + 3) / 3;
+    }
+}
+static double ref_dpsi(csrbf_kernel k, double r)
+{
+    if (r >= 1) return 0;
+    switch (k) {
+    case CSRBF_PSI30: return -2 * (1 - r);
+    case CSRBF_PSI31: return -20 * r * pow(1 - r, 3);
+    default: return -56 * r * pow(1 - r, 5) * (5 * r + 1) / 3;
+    }
+}
+
+/* Independent solve: the full (n+4) x (n+4) saddle system [A P; P^T 0] with P = [1 x y z]
+ * (raw coordinates), or just A without polynomial, by Gaussian elimination with partial
+ * pivoting. coef: n x 3 alpha then 4 x 3 polynomial b0, Bx, By, Bz. */
+static void reference_solve(csrbf_kernel k, double R, int poly, size_t n, const float *s,
+                            const float *d, double *coef)
+{
+    size_t N = n + (poly ? 4 : 0);
+    double *M = calloc(N * N, sizeof *M), *rhs = calloc(N * 3, sizeof *rhs);
+    for (size_t i = 0; i < n; i++) {
+        for (size_t j = 0; j < n; j++) {
+            double r2 = 0;
+            for (int a = 0; a < 3; a++) r2 += pow((double)s[3 * i + a] - s[3 * j + a], 2);
+            M[i * N + j] = ref_psi(k, sqrt(r2) / R);
+        }
+        if (poly) {
+            double q[4] = {1, s[3 * i], s[3 * i + 1], s[3 * i + 2]};
+            for (int l = 0; l < 4; l++) M[i * N + n + l] = M[(n + l) * N + i] = q[l];
+        }
+        for (int a = 0; a < 3; a++) rhs[i * 3 + a] = (double)d[3 * i + a] - s[3 * i + a];
+    }
+    for (size_t c = 0; c < N; c++) {
+        size_t p = c;
+        for (size_t r = c + 1; r < N; r++)
+            if (fabs(M[r * N + c]) > fabs(M[p * N + c])) p = r;
+        if (p != c) {
+            for (size_t j = 0; j < N; j++) {
+                double t = M[c * N + j];
+                M[c * N + j] = M[p * N + j];
+                M[p * N + j] = t;
+            }
+            for (int a = 0; a < 3; a++) {
+                double t = rhs[c * 3 + a];
+                rhs[c * 3 + a] = rhs[p * 3 + a];
+                rhs[p * 3 + a] = t;
+            }
+        }
+        assert_true(fabs(M[c * N + c]) > 1e-300);
+        for (size_t r = c + 1; r < N; r++) {
+            double f = M[r * N + c] / M[c * N + c];
+            if (f == 0) continue;
+            for (size_t j = c; j < N; j++) M[r * N + j] -= f * M[c * N + j];
+            for (int a = 0; a < 3; a++) rhs[r * 3 + a] -= f * rhs[c * 3 + a];
+        }
+    }
+    for (size_t c = N; c-- > 0;) {
+        for (int a = 0; a < 3; a++) {
+            double v = rhs[c * 3 + a];
+            for (size_t j = c + 1; j < N; j++) v -= M[c * N + j] * rhs[j * 3 + a];
+            rhs[c * 3 + a] = v / M[c * N + c];
+        }
+    }
+    memset(coef, 0, (n + 4) * 3 * sizeof *coef);
+    memcpy(coef, rhs, N * 3 * sizeof *coef);
+    free(M);
+    free(rhs);
+}
+
+static void reference_map(csrbf_kernel k, double R, size_t n, const float *s, const double *coef,
+                          const double x[3], double out[3])
+{
+    for (int a = 0; a < 3; a++) out[a] = x[a];
+    for (size_t i = 0; i < n; i++) {
+        double r2 = 0;
+        for (int a = 0; a < 3; a++) r2 += pow(x[a] - s[3 * i + a], 2);
+        double p = ref_psi(k, sqrt(r2) / R);
+        for (int a = 0; a < 3; a++) out[a] += coef[3 * i + a] * p;
+    }
+    const double *b = coef + 3 * n;
+    for (int a = 0; a < 3; a++) out[a] += b[a] + b[3 + a] * x[0] + b[6 + a] * x[1] + b[9 + a] * x[2];
+}
+
+/* Max |T(s_i) - d_i| / max(1, |d_i|) through csrbf_evaluate (float) on the start points. */
+static double interpolation_error(csrbf_solver *s, size_t n, const float *st, const float *en)
+{
+    csrbf_points *p = NULL;
+    assert_int_equal(csrbf_points_create(n, st, &p), CSRBF_OK);
+    float *out = malloc(n * 3 * sizeof *out);
+    assert_int_equal(csrbf_evaluate(s, p, out, 0, NULL), CSRBF_OK);
+    double worst = 0;
+    for (size_t i = 0; i < n; i++) {
+        double e = 0, m = 0;
+        for (int a = 0; a < 3; a++) {
+            e += pow((double)out[3 * i + a] - en[3 * i + a], 2);
+            m += pow(en[3 * i + a], 2);
+        }
+        worst = fmax(worst, sqrt(e) / fmax(1, sqrt(m)));
+    }
+    free(out);
+    csrbf_points_destroy(&p);
+    return worst;
+}
+
+/* ---------------------------------------------------------------------------- kernels */
+
+static void test_kernel_values(void **state)
+{
+    (void)state;
+    for (int k = 0; k < 3; k++)
+        for (int i = 0; i <= 120; i++) {
+            double r = i / 100.0, p, d;
+            assert_int_equal(csrbf_kernel_eval((csrbf_kernel)k, r, &p, &d), CSRBF_OK);
+            assert_double_equal(p, ref_psi((csrbf_kernel)k, r), 1e-13);
+            assert_double_equal(d, ref_dpsi((csrbf_kernel)k, r), 1e-12);
+            if (r > 0.01 && r < 0.99) { /* derivative vs central differences */
+                double h = 1e-6, pp, pm;
+                csrbf_kernel_eval((csrbf_kernel)k, r + h, &pp, NULL);
+                csrbf_kernel_eval((csrbf_kernel)k, r - h, &pm, NULL);
+                assert_double_equal(d, (pp - pm) / (2 * h), 1e-7);
+            }
+        }
+    double p;
+    assert_int_equal(csrbf_kernel_eval(CSRBF_PSI31, 0.0, &p, NULL), CSRBF_OK);
+    assert_double_equal(p, 1.0, 0);
+    assert_int_equal(csrbf_kernel_eval(CSRBF_PSI32, 0.0, &p, NULL), CSRBF_OK);
+    assert_double_equal(p, 1.0, 1e-15);
+    assert_int_equal(csrbf_kernel_eval(CSRBF_PSI31, -0.1, &p, NULL), CSRBF_ERR_INVALID);
+    assert_int_equal(csrbf_kernel_eval(CSRBF_PSI31, NAN, &p, NULL), CSRBF_ERR_INVALID);
+    assert_int_equal(csrbf_kernel_eval((csrbf_kernel)7, 0.5, &p, NULL), CSRBF_ERR_INVALID);
+    assert_int_equal(csrbf_kernel_eval(CSRBF_PSI31, 0.5, NULL, NULL), CSRBF_ERR_INVALID);
+    /* fold-over bounds from csrbf.md: 0.47, 0.5, 0.40 */
+    assert_double_equal(csrbf_kernel_foldover_bound(CSRBF_PSI31), 0.474, 1e-3);
+    assert_double_equal(csrbf_kernel_foldover_bound(CSRBF_PSI30), 0.5, 1e-12);
+    assert_double_equal(csrbf_kernel_foldover_bound(CSRBF_PSI32), 0.40, 0.01);
+}
+
+/* -------------------------------------------------------------------------- interpolation */
+
+static void check_interpolation(csrbf_kernel k, csrbf_poly poly)
+{
+    size_t n = 60;
+    float *st = random_points(n, 10.0, 1.0), *en = displaced(st, n, 0.5);
+    csrbf_solver *s = make_solver(4.0, k, poly, 0);
+    assert_true(csrbf_solver_solve(s, n, st, en) >= 0);
+    double e = interpolation_error(s, n, st, en);
+    assert_true(e < 1e-5);
+    /* exact map_point in double interpolates to near machine precision */
+    for (size_t i = 0; i < n; i++) {
+        double x[3] = {st[3 * i], st[3 * i + 1], st[3 * i + 2]}, y[3];
+        assert_int_equal(csrbf_solver_map_point(s, x, y, NULL), CSRBF_OK);
+        for (int a = 0; a < 3; a++) assert_double_equal(y[a], en[3 * i + a], 1e-9);
+    }
+    csrbf_solver_destroy(&s);
+    assert_null(s);
+    free(st);
+    free(en);
+}
+
+static void test_interpolation(void **state)
+{
+    (void)state;
+    for (int k = 0; k < 3; k++) {
+        check_interpolation((csrbf_kernel)k, CSRBF_POLY_NONE);
+        check_interpolation((csrbf_kernel)k, CSRBF_POLY_LINEAR);
+    }
+}
+
+/* Vertices outside every support keep their base position bit for bit (no polynomial), and
+ * the pair statistics match a brute-force count. */
+static void test_outside_support_exact(void **state)
+{
+    (void)state;
+    size_t n = 8, nv = 20000;
+    float *st = random_points(n, 10.0, 1.0), *en = displaced(st, n, 0.8);
+    float *v = malloc(nv * 3 * sizeof *v), *out = malloc(nv * 3 * sizeof *out);
+    for (size_t i = 0; i < 3 * nv; i++) v[i] = (float)(urand() * 40 - 15);
+    v[0] = -0.0f; /* a negative zero far from every centre stays negative zero */
+    v[1] = -30.0f;
+    v[2] = -0.0f;
+    double R = 3.0;
+    csrbf_solver *s = make_solver(R, CSRBF_PSI31, CSRBF_POLY_NONE, 0);
+    assert_int_equal(csrbf_solver_solve(s, n, st, en), CSRBF_OK);
+    csrbf_points *p = NULL;
+    assert_int_equal(csrbf_points_create(nv, v, &p), CSRBF_OK);
+    csrbf_eval_stats stats;
+    assert_int_equal(csrbf_evaluate(s, p, out, 0, &stats), CSRBF_OK);
+    size_t pairs = 0, moved = 0, outside = 0;
+    for (size_t i = 0; i < nv; i++) {
+        size_t in = 0;
+        for (size_t j = 0; j < n; j++) {
+            double d2 = 0;
+            for (int a = 0; a < 3; a++) {
+                float dd = v[3 * i + a] - st[3 * j + a];
+                d2 += (double)dd * dd;
+            }
+            in += d2 < R * R * (1 - 1e-6);
+        }
+        pairs += in;
+        moved += in > 0;
+        if (!in) {
+            outside++;
+            assert_memory_equal(out + 3 * i, v + 3 * i, 3 * sizeof(float));
+        }
+    }
+    assert_true(outside > nv / 2);
+    assert_true(pairs > 100);
+    /* float boundary decisions may differ from the double count by a pair or two */
+    assert_true(stats.pairs + 2 >= pairs && stats.pairs <= pairs + 2);
+    assert_true(stats.moved + 2 >= moved && stats.moved <= moved + 2);
+    assert_true(signbit(out[0]) && signbit(out[2]));
+    csrbf_points_destroy(&p);
+    csrbf_solver_destroy(&s);
+    free(st);
+    free(en);
+    free(v);
+    free(out);
+}
+
+/* ------------------------------------------------------------------ dense reference */
+
+static void check_reference(size_t n, double L, double R, csrbf_kernel k, int poly,
+                            int dense_limit)
+{
+    float *st = random_points(n, L, 0.05 * R), *en = displaced(st, n, 0.05 * R);
+    csrbf_solver *s = make_solver(R, k, poly ? CSRBF_POLY_LINEAR : CSRBF_POLY_NONE, dense_limit);
+    int rc = csrbf_solver_solve(s, n, st, en);
+    assert_true(rc == CSRBF_OK || rc == CSRBF_WARN_FOLDOVER);
+    assert_int_equal(csrbf_solver_centres(s), n);
+    double *coef = malloc((n + 4) * 3 * sizeof *coef);
+    reference_solve(k, R, poly, n, st, en, coef);
+    /* the coefficients themselves (no merging here: same order) */
+    double *al = malloc(n * 3 * sizeof *al), *cen = malloc(n * 3 * sizeof *cen), pl[12];
+    assert_int_equal(csrbf_solver_get_coefficients(s, cen, al, pl), CSRBF_OK);
+    double amax = 1e-3;
+    for (size_t i = 0; i < 3 * n; i++) amax = fmax(amax, fabs(coef[i]));
+    for (size_t i = 0; i < 3 * n; i++) {
+        assert_double_equal(al[i], coef[i], 1e-8 * amax);
+        assert_double_equal(cen[i], st[i], 0);
+    }
+    for (int a = 0; a < 3; a++) {
+        assert_double_equal(pl[a], coef[3 * n + a], 1e-8 * fmax(1, L));
+        for (int l = 0; l < 3; l++)
+            assert_double_equal(pl[3 + 3 * a + l], coef[3 * n + 3 + 3 * l + a], 1e-8);
+    }
+    free(al);
+    free(cen);
+    double worst = 0;
+    for (int t = 0; t < 200; t++) {
+        double x[3], y[3], z[3];
+        if (t < 100) {
+            size_t i = (size_t)(urand() * n);
+            for (int a = 0; a < 3; a++) x[a] = st[3 * i + a] + (urand() - 0.5) * R;
+        } else {
+            for (int a = 0; a < 3; a++) x[a] = urand() * L;
+        }
+        assert_int_equal(csrbf_solver_map_point(s, x, y, NULL), CSRBF_OK);
+        reference_map(k, R, n, st, coef, x, z);
+        for (int a = 0; a < 3; a++) worst = fmax(worst, fabs(y[a] - z[a]));
+    }
+    assert_true(worst < 1e-8 * fmax(1.0, L));
+    csrbf_solver_destroy(&s);
+    free(coef);
+    free(st);
+    free(en);
+}
+
+static void test_dense_reference(void **state)
+{
+    (void)state;
+    check_reference(10, 5.0, 3.0, CSRBF_PSI31, 0, 0);
+    check_reference(10, 5.0, 3.0, CSRBF_PSI31, 1, 0);
+    check_reference(100, 10.0, 3.0, CSRBF_PSI32, 1, 0);
+    check_reference(100, 10.0, 3.0, CSRBF_PSI30, 0, 0);
+    check_reference(1000, 20.0, 3.0, CSRBF_PSI31, 0, 0); /* CHOLMOD path (> dense limit) */
+    check_reference(1000, 20.0, 3.0, CSRBF_PSI31, 1, 0);
+}
+
+static void test_cholmod_vs_dense(void **state)
+{
+    (void)state;
+    size_t n = 150;
+    float *st = random_points(n, 10.0, 0.2), *en = displaced(st, n, 0.3);
+    for (int poly = 0; poly < 2; poly++) {
+        csrbf_solver *a = make_solver(3.0, CSRBF_PSI31, poly, 1000); /* dense */
+        csrbf_solver *b = make_solver(3.0, CSRBF_PSI31, poly, -1);   /* always CHOLMOD */
+        assert_true(csrbf_solver_solve(a, n, st, en) >= 0);
+        assert_true(csrbf_solver_solve(b, n, st, en) >= 0);
+        for (int t = 0; t < 100; t++) {
+            double x[3] = {urand() * 10, urand() * 10, urand() * 10}, ya[3], yb[3], ja[9], jb[9];
+            assert_int_equal(csrbf_solver_map_point(a, x, ya, ja), CSRBF_OK);
+            assert_int_equal(csrbf_solver_map_point(b, x, yb, jb), CSRBF_OK);
+            for (int c = 0; c < 3; c++) assert_double_equal(ya[c], yb[c], 1e-9);
+            for (int c = 0; c < 9; c++) assert_double_equal(ja[c], jb[c], 1e-8);
+        }
+        csrbf_solver_destroy(&a);
+        csrbf_solver_destroy(&b);
+    }
+    free(st);
+    free(en);
+}
+
+/* ------------------------------------------------------------------ degenerate centres */
+
+static void test_coincident_centres(void **state)
+{
+    (void)state;
+    float st[] = {0, 0, 0, 1, 0, 0, 1, 0, 0, 0, 1, 0, 1.00001f, 0, 0};
+    float en[] = {0, 0, 0.1f, 1, 0, 0.2f, 1, 0, 0.4f, 0, 1, 0.1f, 1, 0, 0.6f};
+    csrbf_solver *s = make_solver(2.0, CSRBF_PSI31, CSRBF_POLY_NONE, 0);
+    int rc = csrbf_solver_solve(s, 5, st, en);
+    assert_int_equal(rc, CSRBF_WARN_MERGED);
+    assert_true(csrbf_solver_warnings(s) & (1u << CSRBF_WARN_MERGED));
+    assert_non_null(strstr(csrbf_solver_message(s), "merged"));
+    assert_int_equal(csrbf_solver_centres(s), 3);
+    /* the merged centre moves by the mean displacement (0.2 + 0.4 + 0.6) / 3 */
+    double x[3] = {1, 0, 0}, y[3];
+    assert_int_equal(csrbf_solver_map_point(s, x, y, NULL), CSRBF_OK);
+    assert_double_equal(y[2], 0.4, 1e-6);
+    assert_double_equal(y[0], 1.0 - 0.00001 / 3, 1e-7); /* the third member sat at 1.00001 */
+    double x0[3] = {0, 1, 0};
+    assert_int_equal(csrbf_solver_map_point(s, x0, y, NULL), CSRBF_OK);
+    assert_double_equal(y[2], (double)0.1f, 1e-9);
+    csrbf_solver_destroy(&s);
+
+    /* just above the tolerance: kept apart, still finite and interpolating */
+    float st2[] = {0, 0, 0, 0.001f, 0, 0};
+    float en2[] = {0, 0, 0.01f, 0.001f, 0, -0.01f};
+    s = make_solver(2.0, CSRBF_PSI31, CSRBF_POLY_NONE, 0);
+    rc = csrbf_solver_solve(s, 2, st2, en2);
+    assert_true(rc == CSRBF_OK || rc == CSRBF_WARN_FOLDOVER);
+    assert_int_equal(csrbf_solver_centres(s), 2);
+    double x2[3] = {0.001, 0, 0};
+    assert_int_equal(csrbf_solver_map_point(s, x2, y, NULL), CSRBF_OK);
+    assert_double_equal(y[2], -0.01, 1e-6);
+    csrbf_solver_destroy(&s);
+}
+
+static void test_coplanar_poly(void **state)
+{
+    (void)state;
+    size_t n = 30;
+    float *st = random_points(n, 10.0, 1.0);
+    for (size_t i = 0; i < 3 * n; i++) st[i] = floorf(st[i] * 64) / 64; /* exact sums below */
+    for (size_t i = 0; i < n; i++) st[3 * i + 2] = 2.0f; /* the plane z = 2 */
+    float *en = displaced(st, n, 0.3);
+    csrbf_solver *s = make_solver(3.0, CSRBF_PSI31, CSRBF_POLY_LINEAR, 0);
+    int rc = csrbf_solver_solve(s, n, st, en);
+    assert_true(csrbf_solver_warnings(s) & (1u << CSRBF_WARN_POLY_RANK));
+    assert_true(rc > 0);
+    assert_non_null(strstr(csrbf_solver_message(s), "coplanar"));
+    assert_true(interpolation_error(s, n, st, en) < 1e-5);
+    /* a translation is reproduced everywhere by the polynomial, far points included */
+    for (size_t i = 0; i < 3 * n; i++) en[i] = st[i] + (i % 3 == 0 ? 0.5f : i % 3 == 1 ? -0.25f : 0.125f);
+    assert_true(csrbf_solver_set_end_points(s, en) >= 0);
+    double x[3] = {100, -50, 7}, y[3];
+    assert_int_equal(csrbf_solver_map_point(s, x, y, NULL), CSRBF_OK);
+    assert_double_equal(y[0], 100.5, 1e-9);
+    assert_double_equal(y[1], -50.25, 1e-9);
+    assert_double_equal(y[2], 7.125, 1e-9);
+    csrbf_solver_destroy(&s);
+    free(st);
+    free(en);
+}
+
+static void test_small_n_poly(void **state)
+{
+    (void)state;
+    float st[] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    float en[] = {0.1f, 0.2f, 0.3f, 1.1f, 0.3f, 0.1f, 0.2f, 1.1f, -0.2f};
+    for (size_t n = 1; n <= 3; n++) {
+        csrbf_solver *s = make_solver(2.0, CSRBF_PSI31, CSRBF_POLY_LINEAR, 0);
+        int rc = csrbf_solver_solve(s, n, st, en);
+        assert_true(rc > 0);
+        assert_true(csrbf_solver_warnings(s) & (1u << CSRBF_WARN_POLY_RANK));
+        assert_true(interpolation_error(s, n, st, en) < 1e-5);
+        double x[3] = {50, 50, 50}, y[3];
+        assert_int_equal(csrbf_solver_map_point(s, x, y, NULL), CSRBF_OK);
+        for (int a = 0; a < 3; a++) assert_true(isfinite(y[a]));
+        if (n == 1) /* one control vector: a pure translation */
+            for (int a = 0; a < 3; a++) assert_double_equal(y[a] - x[a], en[a] - st[a], 1e-6);
+        csrbf_solver_destroy(&s);
+    }
+}
+
+/* ------------------------------------------------------------------ factor reuse */
+
+static void test_reuse_factor(void **state)
+{
+    (void)state;
+    size_t n = 300;
+    float *st = random_points(n, 12.0, 0.3);
+    float *e1 = displaced(st, n, 0.2), *e2 = displaced(st, n, 0.2);
+    for (int poly = 0; poly < 2; poly++) {
+        csrbf_solver *a = make_solver(3.0, CSRBF_PSI31, poly, 0);
+        csrbf_solver *b = make_solver(3.0, CSRBF_PSI31, poly, 0);
+        assert_true(csrbf_solver_solve(a, n, st, e1) >= 0);
+        assert_true(csrbf_solver_set_end_points(a, e2) >= 0); /* reused factor */
+        assert_true(csrbf_solver_solve(b, n, st, e2) >= 0);   /* fresh */
+        for (int t = 0; t < 100; t++) {
+            double x[3] = {urand() * 12, urand() * 12, urand() * 12}, ya[3], yb[3];
+            csrbf_solver_map_point(a, x, ya, NULL);
+            csrbf_solver_map_point(b, x, yb, NULL);
+            for (int c = 0; c < 3; c++) assert_double_equal(ya[c], yb[c], 1e-12);
+        }
+        csrbf_solver_destroy(&a);
+        csrbf_solver_destroy(&b);
+    }
+    free(st);
+    free(e1);
+    free(e2);
+}
+
+/* ------------------------------------------------------------- evaluate vs map_point */
+
+static void check_evaluate(size_t n, double R, csrbf_kernel k, csrbf_poly poly, int threads)
+{
+    size_t nv = 5000;
+    float *st = random_points(n, 10.0, 0.1 * R), *en = displaced(st, n, 0.1 * R);
+    float *v = malloc(nv * 3 * sizeof *v), *out = malloc(nv * 3 * sizeof *out);
+    for (size_t i = 0; i < 3 * nv; i++) v[i] = (float)(urand() * 12 - 1);
+    csrbf_options o = {0};
+    o.radius = R;
+    o.kernel = k;
+    o.poly = poly;
+    o.threads = threads;
+    csrbf_solver *s = NULL;
+    assert_int_equal(csrbf_solver_create(&o, &s), CSRBF_OK);
+    assert_true(csrbf_solver_solve(s, n, st, en) >= 0);
+    csrbf_points *p = NULL;
+    assert_int_equal(csrbf_points_create(nv, v, &p), CSRBF_OK);
+    csrbf_eval_stats stats;
+    assert_int_equal(csrbf_evaluate(s, p, out, CSRBF_EVAL_JACOBIAN, &stats), CSRBF_OK);
+    double worst = 0, maxd = 0, minj = 1;
+    for (size_t i = 0; i < nv; i++) {
+        double x[3] = {v[3 * i], v[3 * i + 1], v[3 * i + 2]}, y[3], J[9];
+        assert_int_equal(csrbf_solver_map_point(s, x, y, J), CSRBF_OK);
+        double d2 = 0;
+        for (int a = 0; a < 3; a++) {
+            worst = fmax(worst, fabs(out[3 * i + a] - y[a]));
+            d2 += pow(y[a] - x[a], 2);
+        }
+        maxd = fmax(maxd, sqrt(d2));
+        double det = J[0] * (J[4] * J[8] - J[5] * J[7]) - J[1] * (J[3] * J[8] - J[5] * J[6]) +
+                     J[2] * (J[3] * J[7] - J[4] * J[6]);
+        minj = fmin(minj, det);
+    }
+    assert_true(worst < 2e-5 * 12);
+    assert_double_equal(stats.max_displacement, maxd, 1e-4);
+    assert_double_equal(stats.min_jacobian_det, minj, 1e-9);
+    /* the same result without statistics (the fast path) */
+    float *out2 = malloc(nv * 3 * sizeof *out2);
+    assert_int_equal(csrbf_evaluate(s, p, out2, 0, NULL), CSRBF_OK);
+    assert_memory_equal(out, out2, nv * 3 * sizeof *out);
+    free(out2);
+    csrbf_points_destroy(&p);
+    csrbf_solver_destroy(&s);
+    free(st);
+    free(en);
+    free(v);
+    free(out);
+}
+
+static void test_evaluate_vs_map(void **state)
+{
+    (void)state;
+    for (int k = 0; k < 3; k++) {
+        check_evaluate(10, 30.0, (csrbf_kernel)k, CSRBF_POLY_NONE, 0);   /* all in support */
+        check_evaluate(10, 2.0, (csrbf_kernel)k, CSRBF_POLY_NONE, 2);    /* block selection */
+        check_evaluate(200, 2.0, (csrbf_kernel)k, CSRBF_POLY_LINEAR, 1); /* centre grid */
+    }
+    check_evaluate(400, 1.5, CSRBF_PSI31, CSRBF_POLY_NONE, 2);
+}
+
+/* points_update moves the vertices; the result follows. */
+static void test_points_update(void **state)
+{
+    (void)state;
+    float st[] = {0, 0, 0};
+    float en[] = {0.1f, 0, 0};
+    float v[] = {0, 0, 0, 5, 5, 5};
+    float v2[] = {5, 5, 5, 0, 0, 0};
+    float out[6];
+    csrbf_solver *s = make_solver(1.0, CSRBF_PSI31, CSRBF_POLY_NONE, 0);
+    assert_int_equal(csrbf_solver_solve(s, 1, st, en), CSRBF_OK);
+    csrbf_points *p = NULL;
+    assert_int_equal(csrbf_points_create(2, v, &p), CSRBF_OK);
+    assert_int_equal(csrbf_points_count(p), 2);
+    assert_int_equal(csrbf_evaluate(s, p, out, 0, NULL), CSRBF_OK);
+    assert_double_equal(out[0], 0.1, 1e-7);
+    assert_double_equal(out[3], 5, 0);
+    assert_int_equal(csrbf_points_update(p, v2), CSRBF_OK);
+    assert_int_equal(csrbf_evaluate(s, p, out, 0, NULL), CSRBF_OK);
+    assert_double_equal(out[0], 5, 0);
+    assert_double_equal(out[3], 0.1, 1e-7);
+    csrbf_points_destroy(&p);
+    csrbf_solver_destroy(&s);
+}
+
+/* ------------------------------------------------------------------ Jacobian */
+
+static void test_jacobian_fd(void **state)
+{
+    (void)state;
+    size_t n = 20;
+    float *st = random_points(n, 6.0, 0.5), *en = displaced(st, n, 0.3);
+    for (int k = 0; k < 3; k++)
+        for (int poly = 0; poly < 2; poly++) {
+            csrbf_solver *s = make_solver(3.0, (csrbf_kernel)k, poly, 0);
+            assert_true(csrbf_solver_solve(s, n, st, en) >= 0);
+            for (int t = 0; t < 50; t++) {
+                double x[3] = {urand() * 6, urand() * 6, urand() * 6}, y[3], J[9];
+                assert_int_equal(csrbf_solver_map_point(s, x, y, J), CSRBF_OK);
+                for (int b = 0; b < 3; b++) {
+                    double h = 1e-6, xp[3] = {x[0], x[1], x[2]}, xm[3] = {x[0], x[1], x[2]}, yp[3], ym[3];
+                    xp[b] += h;
+                    xm[b] -= h;
+                    csrbf_solver_map_point(s, xp, yp, NULL);
+                    csrbf_solver_map_point(s, xm, ym, NULL);
+                    for (int a = 0; a < 3; a++)
+                        assert_double_equal(J[a * 3 + b], (yp[a] - ym[a]) / (2 * h), 1e-5);
+                }
+            }
+            csrbf_solver_destroy(&s);
+        }
+    free(st);
+    free(en);
+}
+
+static void test_foldover(void **state)
+{
+    (void)state;
+    float st[] = {0, 0, 0, 5, 0, 0};
+    float small[] = {0.2f, 0, 0, 5, 0, 0};
+    float big[] = {3.0f, 0, 0, 5, 0, 0};
+    csrbf_solver *s = make_solver(4.0, CSRBF_PSI31, CSRBF_POLY_NONE, 0);
+    assert_int_equal(csrbf_solver_solve(s, 2, st, small), CSRBF_OK);
+    float v[3 * 200];
+    for (int i = 0; i < 200; i++) {
+        v[3 * i] = -4.0f + 0.05f * (float)i;
+        v[3 * i + 1] = 0.0f;
+        v[3 * i + 2] = 0.0f;
+    }
+    csrbf_points *p = NULL;
+    assert_int_equal(csrbf_points_create(200, v, &p), CSRBF_OK);
+    float out[3 * 200];
+    csrbf_eval_stats stats;
+    assert_int_equal(csrbf_evaluate(s, p, out, CSRBF_EVAL_JACOBIAN, &stats), CSRBF_OK);
+    assert_true(stats.min_jacobian_det > 0);
+    assert_int_equal(csrbf_solver_set_end_points(s, big), CSRBF_WARN_FOLDOVER);
+    assert_non_null(strstr(csrbf_solver_message(s), "fold-over"));
+    assert_int_equal(csrbf_evaluate(s, p, out, CSRBF_EVAL_JACOBIAN, &stats), CSRBF_OK);
+    assert_true(stats.min_jacobian_det < 0);
+    /* without the flag the determinant is not computed */
+    assert_int_equal(csrbf_evaluate(s, p, out, 0, &stats), CSRBF_OK);
+    assert_double_equal(stats.min_jacobian_det, 1.0, 0);
+    csrbf_points_destroy(&p);
+    csrbf_solver_destroy(&s);
+}
+
+/* ------------------------------------------------------------------ invalid input */
+
+static void test_invalid(void **state)
+{
+    (void)state;
+    csrbf_options o = {0};
+    csrbf_solver *s = (csrbf_solver *)1;
+    assert_int_equal(csrbf_solver_create(&o, &s), CSRBF_ERR_INVALID);
+    assert_null(s);
+    assert_non_null(strstr(csrbf_options_message(), "radius"));
+    o.radius = NAN;
+    assert_int_equal(csrbf_solver_create(&o, &s), CSRBF_ERR_INVALID);
+    o.radius = -1;
+    assert_int_equal(csrbf_solver_create(&o, &s), CSRBF_ERR_INVALID);
+    o.radius = 1;
+    o.merge_tolerance = -1;
+    assert_int_equal(csrbf_solver_create(&o, &s), CSRBF_ERR_INVALID);
+    assert_non_null(strstr(csrbf_options_message(), "merge_tolerance"));
+    o.merge_tolerance = 0;
+    o.kernel = (csrbf_kernel)9;
+    assert_int_equal(csrbf_solver_create(&o, &s), CSRBF_ERR_INVALID);
+    o.kernel = CSRBF_PSI31;
+    assert_int_equal(csrbf_solver_create(NULL, &s), CSRBF_ERR_INVALID);
+    assert_int_equal(csrbf_solver_create(&o, NULL), CSRBF_ERR_INVALID);
+    assert_int_equal(csrbf_solver_create(&o, &s), CSRBF_OK);
+
+    float st[] = {0, 0, 0, 1, 0, 0, 2, 0, 0, 3, 0, NAN};
+    float en[] = {0, 0, 0, 1, 0, 0, 2, 0, INFINITY, 3, 0, 0};
+    assert_int_equal(csrbf_solver_set_end_points(s, en), CSRBF_ERR_STATE);
+    assert_int_equal(csrbf_solver_set_start_points(s, 4, st), CSRBF_ERR_INVALID);
+    assert_non_null(strstr(csrbf_solver_message(s), "start point 3 has a NaN z coordinate"));
+    assert_int_equal(csrbf_solver_set_start_points(s, 0, st), CSRBF_ERR_INVALID);
+    assert_non_null(strstr(csrbf_solver_message(s), "n is 0"));
+    assert_int_equal(csrbf_solver_set_start_points(s, 3, NULL), CSRBF_ERR_INVALID);
+    assert_int_equal(csrbf_solver_set_start_points(s, 3, st), CSRBF_OK);
+    assert_int_equal(csrbf_solver_set_end_points(s, en), CSRBF_ERR_INVALID);
+    assert_non_null(strstr(csrbf_solver_message(s), "end point 2"));
+    assert_int_equal(csrbf_solver_set_end_points(s, NULL), CSRBF_ERR_INVALID);
+    float huge[] = {0, 0, 0, 1e20f, 0, 0, 2, 0, 0};
+    assert_int_equal(csrbf_solver_set_end_points(s, huge), CSRBF_ERR_INVALID);
+    assert_non_null(strstr(csrbf_solver_message(s), "end point 1"));
+    /* a failed start leaves no start points */
+    assert_int_equal(csrbf_solver_set_start_points(s, 4, st), CSRBF_ERR_INVALID);
+    assert_int_equal(csrbf_solver_set_end_points(s, en), CSRBF_ERR_STATE);
+
+    double x[3] = {0, 0, 0}, y[3];
+    assert_int_equal(csrbf_solver_map_point(s, x, y, NULL), CSRBF_ERR_STATE);
+    csrbf_points *p = NULL;
+    float v[] = {0, 0, 0};
+    float out[3];
+    assert_int_equal(csrbf_points_create(1, v, &p), CSRBF_OK);
+    assert_int_equal(csrbf_evaluate(s, p, out, 0, NULL), CSRBF_ERR_STATE);
+    assert_int_equal(csrbf_solver_set_start_points(s, 3, st), CSRBF_OK);
+    assert_int_equal(csrbf_evaluate(s, p, NULL, 0, NULL), CSRBF_ERR_INVALID);
+    assert_int_equal(csrbf_evaluate(s, NULL, out, 0, NULL), CSRBF_ERR_INVALID);
+    assert_int_equal(csrbf_evaluate(s, p, out, 0x80, NULL), CSRBF_ERR_INVALID);
+    x[1] = NAN;
+    assert_int_equal(csrbf_solver_map_point(s, x, y, NULL), CSRBF_ERR_INVALID);
+    csrbf_points *q = (csrbf_points *)1;
+    float bad[] = {0, NAN, 0};
+    assert_int_equal(csrbf_points_create(1, bad, &q), CSRBF_ERR_INVALID);
+    assert_null(q);
+    assert_int_equal(csrbf_points_create(0, v, &q), CSRBF_ERR_INVALID);
+    assert_int_equal(csrbf_points_update(p, bad), CSRBF_ERR_INVALID);
+    assert_string_equal(csrbf_strerror(CSRBF_ERR_INVALID), "invalid argument");
+    assert_string_equal(csrbf_strerror(12345), "unknown result");
+    csrbf_points_destroy(&p);
+    csrbf_points_destroy(&p); /* NULL is a no-op */
+    csrbf_solver_destroy(&s);
+    csrbf_solver_destroy(&s);
+    csrbf_solver_destroy(NULL);
+}
+
+/* Two threads evaluating the same const solver at once get the same result as one. */
+static void test_concurrent_evaluate(void **state)
+{
+    (void)state;
+    size_t n = 50, nv = 30000;
+    float *st = random_points(n, 10.0, 0.5), *en = displaced(st, n, 0.2);
+    float *v = malloc(nv * 3 * sizeof *v);
+    for (size_t i = 0; i < 3 * nv; i++) v[i] = (float)(urand() * 10);
+    csrbf_solver *s = make_solver(2.0, CSRBF_PSI31, CSRBF_POLY_NONE, 0);
+    assert_true(csrbf_solver_solve(s, n, st, en) >= 0);
+    csrbf_points *p = NULL;
+    assert_int_equal(csrbf_points_create(nv, v, &p), CSRBF_OK);
+    float *ref = malloc(nv * 3 * sizeof *ref), *o[4];
+    assert_int_equal(csrbf_evaluate(s, p, ref, 0, NULL), CSRBF_OK);
+    for (int t = 0; t < 4; t++) o[t] = malloc(nv * 3 * sizeof *ref);
+    int rc[4];
+#pragma omp parallel for num_threads(4)
+    for (int t = 0; t < 4; t++) rc[t] = csrbf_evaluate(s, p, o[t], 0, NULL);
+    for (int t = 0; t < 4; t++) {
+        assert_int_equal(rc[t], CSRBF_OK);
+        assert_memory_equal(o[t], ref, nv * 3 * sizeof *ref);
+        free(o[t]);
+    }
+    free(ref);
+    csrbf_points_destroy(&p);
+    csrbf_solver_destroy(&s);
+    free(st);
+    free(en);
+    free(v);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_kernel_values),       cmocka_unit_test(test_interpolation),
+        cmocka_unit_test(test_outside_support_exact), cmocka_unit_test(test_dense_reference),
+        cmocka_unit_test(test_cholmod_vs_dense),    cmocka_unit_test(test_coincident_centres),
+        cmocka_unit_test(test_coplanar_poly),       cmocka_unit_test(test_small_n_poly),
+        cmocka_unit_test(test_reuse_factor),        cmocka_unit_test(test_evaluate_vs_map),
+        cmocka_unit_test(test_points_update),       cmocka_unit_test(test_jacobian_fd),
+        cmocka_unit_test(test_foldover),            cmocka_unit_test(test_invalid),
+        cmocka_unit_test(test_concurrent_evaluate),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

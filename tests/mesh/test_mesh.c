@@ -1,0 +1,836 @@
+/* Tests of fp_mesh: loading the real faces, round trips through every format, normals, and
+ * every error path. Inputs are written to a mkdtemp() folder, never into the repository. */
+#define _POSIX_C_SOURCE 200809L
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include "fp_mesh.h"
+
+#include <fcntl.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+static char tmpdir[64];
+static char err[1024];
+
+static const char *data_dir(void)
+{
+    const char *d = getenv("FP_SHARED_DATA");
+    return d && *d ? d : "../shared/data";
+}
+
+static const char *face_path(const char *rel)
+{
+    static char buf[4][512];
+    static int k;
+    k = (k + 1) % 4;
+    snprintf(buf[k], sizeof buf[k], "%s/faces/%s", data_dir(), rel);
+    return buf[k];
+}
+
+static const char *tmp_path(const char *name)
+{
+    static char buf[4][512];
+    static int k;
+    k = (k + 1) % 4;
+    snprintf(buf[k], sizeof buf[k], "%s/%s", tmpdir, name);
+    return buf[k];
+}
+
+static const char *write_tmp(const char *name, const char *text)
+{
+    const char *p = tmp_path(name);
+    FILE *f = fopen(p, "wb");
+    assert_non_null(f);
+    fputs(text, f);
+    fclose(f);
+    return p;
+}
+
+static int setup(void **state)
+{
+    (void)state;
+    snprintf(tmpdir, sizeof tmpdir, "/tmp/fp_mesh_test_XXXXXX");
+    return mkdtemp(tmpdir) ? 0 : -1;
+}
+
+static int teardown(void **state)
+{
+    (void)state;
+    char cmd[128];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmpdir);
+    return system(cmd) == 0 ? 0 : -1;
+}
+
+/* ---- an independent OBJ reading, for reference: v lines and polygon sizes -------------- */
+
+typedef struct obj_ref {
+    size_t nv, nfaces, ntris, quads, tris;
+    float *v;        /* nv x 3, strtof of the v lines */
+    long first_face[4];
+    int first_face_n;
+} obj_ref;
+
+static void obj_ref_read(const char *path, obj_ref *r)
+{
+    memset(r, 0, sizeof *r);
+    FILE *f = fopen(path, "r");
+    assert_non_null(f);
+    size_t cap = 1024;
+    r->v = malloc(cap * 3 * sizeof(float));
+    char line[4096];
+    while (fgets(line, sizeof line, f)) {
+        if (line[0] == 'v' && line[1] == ' ') {
+            if (r->nv == cap) {
+                cap *= 2;
+                r->v = realloc(r->v, cap * 3 * sizeof(float));
+            }
+            char *p = line + 2;
+            for (int k = 0; k < 3; k++)
+                r->v[3 * r->nv + k] = strtof(p, &p);
+            r->nv++;
+        } else if (line[0] == 'f' && line[1] == ' ') {
+            int n = 0;
+            char *save = NULL;
+            for (char *tok = strtok_r(line + 2, " \t\r\n", &save); tok;
+                 tok = strtok_r(NULL, " \t\r\n", &save)) {
+                if (r->nfaces == 0 && n < 4)
+                    r->first_face[n] = strtol(tok, NULL, 10);
+                n++;
+            }
+            if (r->nfaces == 0)
+                r->first_face_n = n;
+            r->nfaces++;
+            r->ntris += (size_t)(n - 2);
+            r->quads += n == 4;
+            r->tris += n == 3;
+        }
+    }
+    fclose(f);
+}
+
+static void check_against_obj(const fp_mesh *m, const obj_ref *r)
+{
+    assert_int_equal(m->vertex_count, r->nv);
+    assert_int_equal(m->triangle_count, r->ntris);
+    for (size_t i = 0; i < 3 * r->nv; i++)
+        assert_true(m->positions[i] == r->v[i]); /* same decimal, same float */
+    /* the first face, fan-triangulated, is the first triangle(s) */
+    assert_int_equal(m->triangles[0], r->first_face[0] - 1);
+    assert_int_equal(m->triangles[1], r->first_face[1] - 1);
+    assert_int_equal(m->triangles[2], r->first_face[2] - 1);
+    if (r->first_face_n == 4) {
+        assert_int_equal(m->triangles[3], r->first_face[0] - 1);
+        assert_int_equal(m->triangles[4], r->first_face[2] - 1);
+        assert_int_equal(m->triangles[5], r->first_face[3] - 1);
+    }
+    for (size_t i = 0; i < 3 * m->triangle_count; i++)
+        assert_true(m->triangles[i] < m->vertex_count);
+    for (size_t i = 0; i < m->vertex_count; i++) {
+        const float *n = m->normals + 3 * i;
+        float len = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        assert_true(isfinite(len));
+        assert_true(fabsf(len - 1.0f) < 1e-4f || len == 0.0f);
+    }
+}
+
+/* ---- the real faces ------------------------------------------------------------------ */
+
+static void test_load_ict_keeps_vertex_order(void **state)
+{
+    (void)state;
+    const char *path = face_path("ict-facekit/generic_neutral_mesh.obj");
+    obj_ref r;
+    obj_ref_read(path, &r);
+    /* the counts the ICT README gives */
+    assert_int_equal(r.nv, 26719);
+    assert_int_equal(r.nfaces, 26384);
+    assert_int_equal(r.quads, 25836);
+    assert_int_equal(r.tris, 548);
+    fp_mesh *m = NULL;
+    assert_int_equal(fp_mesh_load(path, &m, err, sizeof err), FP_MESH_OK);
+    assert_int_equal(m->vertex_count, 26719);
+    assert_int_equal(m->triangle_count, 52220);
+    check_against_obj(m, &r);
+    assert_non_null(m->uvs);
+    assert_string_equal(m->source_path, path);
+    /* every vertex of the ICT face is used, so every normal is a unit vector */
+    for (size_t i = 0; i < m->vertex_count; i++) {
+        const float *n = m->normals + 3 * i;
+        assert_true(fabsf(sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) - 1.0f) < 1e-4f);
+    }
+    fp_mesh_free(&m);
+    assert_null(m);
+    free(r.v);
+}
+
+static void test_load_lee_perry_smith(void **state)
+{
+    (void)state;
+    const char *path = face_path("lee-perry-smith/LeePerrySmith.obj");
+    obj_ref r;
+    obj_ref_read(path, &r);
+    fp_mesh *m = NULL;
+    assert_int_equal(fp_mesh_load(path, &m, err, sizeof err), FP_MESH_OK);
+    check_against_obj(m, &r);
+    assert_non_null(m->uvs);
+    fp_mesh_free(&m);
+    free(r.v);
+}
+
+static void test_load_mediapipe_canonical(void **state)
+{
+    (void)state;
+    const char *path = face_path("mediapipe-canonical/canonical_face_model.obj");
+    obj_ref r;
+    obj_ref_read(path, &r);
+    fp_mesh *m = NULL;
+    assert_int_equal(fp_mesh_load(path, &m, err, sizeof err), FP_MESH_OK);
+    assert_int_equal(m->vertex_count, 468);
+    assert_int_equal(m->triangle_count, 898);
+    check_against_obj(m, &r);
+    assert_non_null(m->uvs);
+    fp_mesh_free(&m);
+    free(r.v);
+}
+
+/* OpenMesh warns about the missing .mtl of the ICT face: the library must not print. */
+static void test_load_prints_nothing(void **state)
+{
+    (void)state;
+    const char *log = tmp_path("stderr.txt");
+    fflush(stderr);
+    fflush(stdout);
+    int saved_err = dup(2), saved_out = dup(1);
+    int fd = open(log, O_WRONLY | O_CREAT | O_TRUNC, 0600);
+    assert_true(fd >= 0);
+    dup2(fd, 2);
+    dup2(fd, 1);
+    fp_mesh *m = NULL, *m2 = NULL;
+    int rc = fp_mesh_load(face_path("mediapipe-canonical/canonical_face_model.obj"), &m, err,
+                          sizeof err);
+    int rc2 = fp_mesh_load(write_tmp("quiet.ply", "ply\nformat ascii 1.0\nelement vertex 1\n"
+                                                  "property float x\nend_header\nzzz\n"),
+                           &m2, err, sizeof err);
+    fflush(stderr);
+    fflush(stdout);
+    dup2(saved_err, 2);
+    dup2(saved_out, 1);
+    close(saved_err);
+    close(saved_out);
+    close(fd);
+    assert_int_equal(rc, FP_MESH_OK);
+    assert_int_equal(rc2, FP_MESH_ERR_FORMAT);
+    struct stat st;
+    assert_int_equal(stat(log, &st), 0);
+    assert_int_equal(st.st_size, 0);
+    fp_mesh_free(&m);
+}
+
+/* ---- round trips --------------------------------------------------------------------- */
+
+static void assert_close(float a, float b, float tol)
+{
+    if (!(fabsf(a - b) <= tol * (1.0f + fabsf(b))))
+        fail_msg("%.9g differs from %.9g", (double)a, (double)b);
+}
+
+static void round_trip(const char *ext, int keeps_uvs)
+{
+    fp_mesh *m = NULL;
+    assert_int_equal(fp_mesh_load(face_path("mediapipe-canonical/canonical_face_model.obj"), &m,
+                                  err, sizeof err),
+                     FP_MESH_OK);
+    char name[32];
+    snprintf(name, sizeof name, "round.%s", ext);
+    const char *path = tmp_path(name);
+    assert_int_equal(fp_mesh_save(m, path, err, sizeof err), FP_MESH_OK);
+    fp_mesh *r = NULL;
+    int rc = fp_mesh_load(path, &r, err, sizeof err);
+    if (rc != FP_MESH_OK)
+        fail_msg("%s", err);
+    assert_int_equal(r->vertex_count, m->vertex_count);
+    assert_int_equal(r->triangle_count, m->triangle_count);
+    for (size_t i = 0; i < 3 * m->vertex_count; i++) {
+        assert_close(r->positions[i], m->positions[i], 1e-6f);
+        assert_close(r->normals[i], m->normals[i], 1e-5f);
+    }
+    assert_memory_equal(r->triangles, m->triangles, 3 * m->triangle_count * sizeof(uint32_t));
+    if (keeps_uvs) {
+        assert_non_null(r->uvs);
+        for (size_t i = 0; i < 2 * m->vertex_count; i++)
+            assert_close(r->uvs[i], m->uvs[i], 1e-6f);
+    }
+    /* a copy of what was read is equal to it and independent of it */
+    fp_mesh *c = fp_mesh_copy(r);
+    assert_non_null(c);
+    assert_memory_equal(c->positions, r->positions, 3 * r->vertex_count * sizeof(float));
+    assert_ptr_not_equal(c->positions, r->positions);
+    assert_string_equal(c->source_path, path);
+    fp_mesh_free(&c);
+    fp_mesh_free(&r);
+    fp_mesh_free(&m);
+}
+
+static void test_round_trip_obj(void **state) { (void)state; round_trip("obj", 1); }
+static void test_round_trip_ply(void **state) { (void)state; round_trip("ply", 1); }
+static void test_round_trip_off(void **state) { (void)state; round_trip("off", 1); }
+static void test_round_trip_gltf(void **state) { (void)state; round_trip("gltf", 1); }
+static void test_round_trip_glb(void **state) { (void)state; round_trip("glb", 1); }
+static void test_round_trip_upper_case_extension(void **state) { (void)state; round_trip("PLY", 1); }
+
+/* STL stores triangles as three corner positions each: a round trip keeps every triangle's
+ * corner positions in order, but vertex sharing is rebuilt from equal positions (vertices
+ * with equal positions merge, unused ones vanish), and normals are recomputed, UVs lost. */
+static void test_round_trip_stl(void **state)
+{
+    (void)state;
+    fp_mesh *m = NULL;
+    assert_int_equal(fp_mesh_load(face_path("lee-perry-smith/LeePerrySmith.obj"), &m, err,
+                                  sizeof err),
+                     FP_MESH_OK);
+    const char *path = tmp_path("round.stl");
+    assert_int_equal(fp_mesh_save(m, path, err, sizeof err), FP_MESH_OK);
+    /* binary STL: 80 + 4 + 50 bytes per triangle */
+    struct stat st;
+    assert_int_equal(stat(path, &st), 0);
+    assert_int_equal((size_t)st.st_size, 84 + 50 * m->triangle_count);
+    fp_mesh *r = NULL;
+    assert_int_equal(fp_mesh_load(path, &r, err, sizeof err), FP_MESH_OK);
+    assert_int_equal(r->triangle_count, m->triangle_count);
+    assert_true(r->vertex_count <= m->vertex_count);
+    assert_null(r->uvs);
+    for (size_t t = 0; t < m->triangle_count; t++)
+        for (int k = 0; k < 3; k++)
+            for (int d = 0; d < 3; d++)
+                assert_true(r->positions[3 * r->triangles[3 * t + k] + d] ==
+                            m->positions[3 * m->triangles[3 * t + k] + d]);
+    fp_mesh_free(&r);
+    fp_mesh_free(&m);
+}
+
+/* A polygon file: an OBJ quad and pentagon are fan-triangulated, and an OFF/PLY too. */
+static void test_polygons_are_fan_triangulated(void **state)
+{
+    (void)state;
+    const char *obj = write_tmp("poly.obj", "v 0 0 0\nv 1 0 0\nv 2 1 0\nv 1 2 0\nv 0 1 0\n"
+                                            "v 5 5 5\n"
+                                            "f 1 2 3 4 5\nf 1/1 2/1 4/1\nvt 0.5 0.25\n");
+    fp_mesh *m = NULL;
+    int rc = fp_mesh_load(obj, &m, err, sizeof err);
+    if (rc)
+        fail_msg("%s", err);
+    assert_int_equal(m->vertex_count, 6);
+    assert_int_equal(m->triangle_count, 4);
+    const uint32_t want[] = {0, 1, 2, 0, 2, 3, 0, 3, 4, 0, 1, 3};
+    assert_memory_equal(m->triangles, want, sizeof want);
+    /* UVs: vertices 0, 1, 3 got (0.5, 0.25) from the second face; the others (0, 0) */
+    assert_non_null(m->uvs);
+    assert_true(m->uvs[0] == 0.5f && m->uvs[1] == 0.25f);
+    assert_true(m->uvs[2 * 2] == 0.0f && m->uvs[2 * 3] == 0.5f);
+    /* vertex 5 is in no face: zero normal; the others point along +z */
+    assert_true(m->normals[15] == 0.0f && m->normals[16] == 0.0f && m->normals[17] == 0.0f);
+    assert_true(fabsf(m->normals[2] - 1.0f) < 1e-6f);
+    fp_mesh_free(&m);
+
+    const char *off = write_tmp("poly.off", "OFF\n4 1 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n");
+    assert_int_equal(fp_mesh_load(off, &m, err, sizeof err), FP_MESH_OK);
+    assert_int_equal(m->triangle_count, 2);
+    const uint32_t want2[] = {0, 1, 2, 0, 2, 3};
+    assert_memory_equal(m->triangles, want2, sizeof want2);
+    assert_null(m->uvs);
+    fp_mesh_free(&m);
+}
+
+/* Relative (negative) OBJ indices refer back from the last vertex read. */
+static void test_obj_negative_indices(void **state)
+{
+    (void)state;
+    const char *p = write_tmp("neg.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\n");
+    fp_mesh *m = NULL;
+    int rc = fp_mesh_load(p, &m, err, sizeof err);
+    if (rc)
+        fail_msg("%s", err);
+    const uint32_t want[] = {0, 1, 2};
+    assert_memory_equal(m->triangles, want, sizeof want);
+    fp_mesh_free(&m);
+}
+
+/* OpenMesh's OBJ reader removes a repeated vertex from a face and drops a face left with
+ * fewer than 3 distinct vertices; the load agrees with that and still succeeds. */
+static void test_obj_degenerate_faces(void **state)
+{
+    (void)state;
+    const char *p = write_tmp("degenerate.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n"
+                                                "f 1 1 2\nf 1 2 3 2\nf 2 4 3\n");
+    fp_mesh *m = NULL;
+    int rc = fp_mesh_load(p, &m, err, sizeof err);
+    if (rc)
+        fail_msg("%s", err);
+    assert_int_equal(m->vertex_count, 4);
+    const uint32_t want[] = {0, 1, 2, 1, 3, 2};
+    assert_int_equal(m->triangle_count, 2);
+    assert_memory_equal(m->triangles, want, sizeof want);
+    fp_mesh_free(&m);
+}
+
+/* ---- normals ------------------------------------------------------------------------- */
+
+/* The regular icosahedron, counter-clockwise from outside. */
+static fp_mesh *icosahedron(void)
+{
+    const float t = (1.0f + sqrtf(5.0f)) / 2.0f;
+    const float v[12][3] = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0},
+                            {0, -1, t}, {0, 1, t}, {0, -1, -t}, {0, 1, -t},
+                            {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+    const uint32_t f[20][3] = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
+                               {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
+                               {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
+                               {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
+    fp_mesh *m = fp_mesh_create(12, 20, 0);
+    assert_non_null(m);
+    memcpy(m->positions, v, sizeof v);
+    memcpy(m->triangles, f, sizeof f);
+    return m;
+}
+
+/* Reference: sum over incident triangles of area * unit face normal, in double. */
+static void reference_normal(const fp_mesh *m, uint32_t v, double out[3])
+{
+    out[0] = out[1] = out[2] = 0;
+    for (size_t t = 0; t < m->triangle_count; t++) {
+        const uint32_t *tri = m->triangles + 3 * t;
+        if (tri[0] != v && tri[1] != v && tri[2] != v)
+            continue;
+        double p[3][3];
+        for (int k = 0; k < 3; k++)
+            for (int d = 0; d < 3; d++)
+                p[k][d] = m->positions[3 * tri[k] + d];
+        double a[3], b[3], c[3];
+        for (int d = 0; d < 3; d++) {
+            a[d] = p[1][d] - p[0][d];
+            b[d] = p[2][d] - p[0][d];
+        }
+        c[0] = a[1] * b[2] - a[2] * b[1];
+        c[1] = a[2] * b[0] - a[0] * b[2];
+        c[2] = a[0] * b[1] - a[1] * b[0];
+        double len = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+        double area = 0.5 * len;
+        for (int d = 0; d < 3; d++)
+            out[d] += area * c[d] / len;
+    }
+    double len = sqrt(out[0] * out[0] + out[1] * out[1] + out[2] * out[2]);
+    for (int d = 0; d < 3; d++)
+        out[d] /= len;
+}
+
+static void test_normals_outward_on_icosahedron(void **state)
+{
+    (void)state;
+    fp_mesh *m = icosahedron();
+    assert_int_equal(fp_mesh_compute_normals(m), FP_MESH_OK);
+    for (uint32_t i = 0; i < 12; i++) {
+        const float *p = m->positions + 3 * i, *n = m->normals + 3 * i;
+        float pl = sqrtf(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+        float nl = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        assert_true(fabsf(nl - 1.0f) < 1e-6f);
+        /* by symmetry the normal is the radial direction, and it points outward */
+        assert_true((p[0] * n[0] + p[1] * n[1] + p[2] * n[2]) / pl > 0.99999f);
+    }
+    fp_mesh_free(&m);
+}
+
+static void test_normals_follow_moved_vertices(void **state)
+{
+    (void)state;
+    fp_mesh *m = icosahedron();
+    assert_int_equal(fp_mesh_compute_normals(m), FP_MESH_OK);
+    float before[3];
+    memcpy(before, m->normals, sizeof before);
+    /* pull vertex 0 outward and push vertex 5 sideways, as a deformation would */
+    m->positions[0] *= 2.0f;
+    m->positions[1] *= 2.0f;
+    m->positions[3 * 5 + 0] += 0.7f;
+    assert_int_equal(fp_mesh_compute_normals(m), FP_MESH_OK);
+    assert_true(fabsf(m->normals[0] - before[0]) + fabsf(m->normals[1] - before[1]) > 1e-3f);
+    for (uint32_t i = 0; i < 12; i++) {
+        double ref[3];
+        reference_normal(m, i, ref);
+        for (int d = 0; d < 3; d++)
+            assert_true(fabs(m->normals[3 * i + d] - ref[d]) < 1e-5);
+    }
+    /* the external-array form gives the same on a separate positions array */
+    float pos[36], nrm[36];
+    memcpy(pos, m->positions, sizeof pos);
+    assert_int_equal(fp_mesh_normals(m->triangles, 20, pos, 12, nrm), FP_MESH_OK);
+    assert_memory_equal(nrm, m->normals, sizeof nrm);
+    fp_mesh_free(&m);
+}
+
+static void test_normals_bad_index(void **state)
+{
+    (void)state;
+    const uint32_t tris[] = {0, 1, 7};
+    const float pos[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    float nrm[9];
+    memset(nrm, 0x7f, sizeof nrm);
+    assert_int_equal(fp_mesh_normals(tris, 1, pos, 3, nrm), FP_MESH_ERR_INVALID);
+    for (int i = 0; i < 9; i++)
+        assert_true(nrm[i] == 0.0f);
+    assert_int_equal(fp_mesh_normals(tris, 1, NULL, 3, nrm), FP_MESH_ERR_INVALID);
+    assert_int_equal(fp_mesh_compute_normals(NULL), FP_MESH_ERR_INVALID);
+}
+
+static void test_bounds(void **state)
+{
+    (void)state;
+    fp_mesh *m = icosahedron();
+    float lo[3], hi[3];
+    fp_mesh_bounds(m, lo, hi);
+    const float t = (1.0f + sqrtf(5.0f)) / 2.0f;
+    for (int k = 0; k < 3; k++) {
+        assert_true(lo[k] == -t);
+        assert_true(hi[k] == t);
+    }
+    fp_mesh_bounds(NULL, lo, hi);
+    assert_true(lo[0] == 0.0f && hi[2] == 0.0f);
+    fp_mesh_free(&m);
+}
+
+/* glTF: node transforms are applied; the default scene is read. The node JSON replaces the
+ * plain node of a saved one-triangle file (0,0,0) (1,0,0) (0,1,0). */
+static fp_mesh *load_transformed_triangle(const char *node_json)
+{
+    fp_mesh *tri = fp_mesh_create(3, 1, 0);
+    const float p[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    memcpy(tri->positions, p, sizeof p);
+    const uint32_t t[3] = {0, 1, 2};
+    memcpy(tri->triangles, t, sizeof t);
+    assert_int_equal(fp_mesh_compute_normals(tri), FP_MESH_OK);
+    const char *plain = tmp_path("tri.gltf");
+    assert_int_equal(fp_mesh_save(tri, plain, err, sizeof err), FP_MESH_OK);
+    fp_mesh_free(&tri);
+    FILE *f = fopen(plain, "rb");
+    char json[8192];
+    size_t len = fread(json, 1, sizeof json - 1, f);
+    fclose(f);
+    json[len] = '\0';
+    const char *plain_node = "\"nodes\":[{\"mesh\":0}]";
+    char *node = strstr(json, plain_node);
+    assert_non_null(node);
+    char out[8400];
+    snprintf(out, sizeof out, "%.*s\"nodes\":[%s]%s", (int)(node - json), json, node_json,
+             node + strlen(plain_node));
+    fp_mesh *m = NULL;
+    int rc = fp_mesh_load(write_tmp("moved.gltf", out), &m, err, sizeof err);
+    if (rc)
+        fail_msg("%s", err);
+    return m;
+}
+
+static void expect_triangle(const fp_mesh *m, const float want[9], const float normal[3])
+{
+    assert_int_equal(m->vertex_count, 3);
+    for (int i = 0; i < 9; i++)
+        if (fabsf(m->positions[i] - want[i]) > 1e-6f)
+            fail_msg("position %d: %g, want %g", i, (double)m->positions[i], (double)want[i]);
+    for (int v = 0; v < 3; v++)
+        for (int d = 0; d < 3; d++)
+            assert_true(fabsf(m->normals[3 * v + d] - normal[d]) < 1e-6f);
+    /* the stored normals agree with the winding of the (possibly flipped) triangle */
+    float check[9];
+    assert_int_equal(fp_mesh_normals(m->triangles, 1, m->positions, 3, check), FP_MESH_OK);
+    for (int d = 0; d < 3; d++)
+        assert_true(fabsf(check[d] - normal[d]) < 1e-6f);
+}
+
+static void test_gltf_node_transform_applied(void **state)
+{
+    (void)state;
+    /* translation (10, 0, 0) after scale 2 */
+    fp_mesh *m = load_transformed_triangle(
+        "{\"mesh\":0,\"translation\":[10,0,0],\"scale\":[2,2,2]}");
+    const float want1[9] = {10, 0, 0, 12, 0, 0, 10, 2, 0}, up[3] = {0, 0, 1};
+    expect_triangle(m, want1, up);
+    fp_mesh_free(&m);
+    /* rotation of 90 degrees about x: (x, y, z) -> (x, -z, y); the normal +z becomes -y */
+    const double h = sqrt(0.5);
+    char node[256];
+    snprintf(node, sizeof node, "{\"mesh\":0,\"rotation\":[%.17g,0,0,%.17g]}", h, h);
+    m = load_transformed_triangle(node);
+    const float want2[9] = {0, 0, 0, 1, 0, 0, 0, 0, 1}, minus_y[3] = {0, -1, 0};
+    expect_triangle(m, want2, minus_y);
+    fp_mesh_free(&m);
+    /* a parent matrix mirroring z, a child translating by (0, 0, 1): the triangle lands at
+       z = -1, and its winding is flipped so the normal stays consistent (now -z) */
+    m = load_transformed_triangle(
+        "{\"children\":[1],\"matrix\":[1,0,0,0, 0,1,0,0, 0,0,-1,0, 0,0,0,1]},"
+        "{\"mesh\":0,\"translation\":[0,0,1]}");
+    const float want3[9] = {0, 0, -1, 1, 0, -1, 0, 1, -1}, down[3] = {0, 0, -1};
+    expect_triangle(m, want3, down);
+    fp_mesh_free(&m);
+}
+
+/* ---- errors: each names the file and the reason ---------------------------------------- */
+
+static void expect_load_error(const char *path, int code, const char *needle)
+{
+    fp_mesh *m = (fp_mesh *)(uintptr_t)1;
+    err[0] = '\0';
+    int rc = fp_mesh_load(path, &m, err, sizeof err);
+    if (rc != code)
+        fail_msg("%s: got %d (%s), want %d", path, rc, err, code);
+    assert_null(m);
+    if (!strstr(err, path))
+        fail_msg("message does not name the file: %s", err);
+    if (needle && !strstr(err, needle))
+        fail_msg("message lacks '%s': %s", needle, err);
+    assert_true(strlen(fp_mesh_strerror(rc)) > 0);
+}
+
+static void test_error_missing_file(void **state)
+{
+    (void)state;
+    expect_load_error(tmp_path("nonexistent.obj"), FP_MESH_ERR_IO, "No such file");
+    expect_load_error(tmp_path("nonexistent.glb"), FP_MESH_ERR_IO, "No such file");
+}
+
+static void test_error_empty_file(void **state)
+{
+    (void)state;
+    expect_load_error(write_tmp("empty.obj", ""), FP_MESH_ERR_FORMAT, "empty");
+    expect_load_error(write_tmp("empty.ply", ""), FP_MESH_ERR_FORMAT, "empty");
+    expect_load_error(write_tmp("empty.gltf", ""), FP_MESH_ERR_FORMAT, "empty");
+    /* only comments: no vertices */
+    expect_load_error(write_tmp("comments.obj", "# nothing\n\n"), FP_MESH_ERR_FORMAT,
+                      "no vertices");
+    expect_load_error(write_tmp("nofaces.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n"),
+                      FP_MESH_ERR_FORMAT, "no faces");
+}
+
+static void test_error_malformed_text(void **state)
+{
+    (void)state;
+    expect_load_error(write_tmp("garbage.obj", "v 0 0 0\nhello world, this is not a mesh\n"),
+                      FP_MESH_ERR_FORMAT, "line 2: unknown OBJ statement 'hello'");
+    expect_load_error(write_tmp("badnum.obj", "v 0 0 0\nv 1 x 0\n"), FP_MESH_ERR_FORMAT,
+                      "line 2: malformed number 'x'");
+    expect_load_error(write_tmp("short.obj", "v 0 0\n"), FP_MESH_ERR_FORMAT, "line 1");
+    expect_load_error(write_tmp("badcorner.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3a\n"),
+                      FP_MESH_ERR_FORMAT, "line 4: malformed face corner '3a'");
+    expect_load_error(write_tmp("twocorners.obj", "v 0 0 0\nv 1 0 0\nf 1 2\n"),
+                      FP_MESH_ERR_FORMAT, "line 3");
+    expect_load_error(write_tmp("garbage.ply", "this is not a ply file\n"), FP_MESH_ERR_FORMAT,
+                      NULL);
+    expect_load_error(write_tmp("garbage.off", "this is not an off file\n"), FP_MESH_ERR_FORMAT,
+                      NULL);
+    expect_load_error(write_tmp("garbage.stl", "this is not an stl file\n"), FP_MESH_ERR_FORMAT,
+                      "not an STL file");
+    expect_load_error(write_tmp("garbage.gltf", "{ not json"), FP_MESH_ERR_FORMAT, "glTF");
+    expect_load_error(write_tmp("garbage.glb", "glTF but not really a binary glTF"),
+                      FP_MESH_ERR_FORMAT, "glTF");
+}
+
+static void test_error_index_out_of_range(void **state)
+{
+    (void)state;
+    expect_load_error(write_tmp("range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 9\n"),
+                      FP_MESH_ERR_FORMAT, "line 5: face vertex index 9 out of range");
+    expect_load_error(write_tmp("zero.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n"),
+                      FP_MESH_ERR_FORMAT, "line 4");
+    expect_load_error(write_tmp("negrange.obj", "v 0 0 0\nv 1 0 0\nf -3 -2 -1\nv 0 1 0\n"),
+                      FP_MESH_ERR_FORMAT, "line 3");
+    expect_load_error(write_tmp("vtrange.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\n"
+                                               "f 1/1 2/2 3/1\n"),
+                      FP_MESH_ERR_FORMAT, "line 5: face texture coordinate index 2");
+    expect_load_error(write_tmp("range.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 5\n"),
+                      FP_MESH_ERR_FORMAT, "line 6: face 0 references vertex 5");
+    expect_load_error(write_tmp("range.ply", "ply\nformat ascii 1.0\nelement vertex 3\n"
+                                             "property float x\nproperty float y\n"
+                                             "property float z\nelement face 1\n"
+                                             "property list uchar int vertex_indices\n"
+                                             "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n"),
+                      FP_MESH_ERR_FORMAT, "references vertex 3");
+}
+
+static void test_error_nan_coordinate(void **state)
+{
+    (void)state;
+    expect_load_error(write_tmp("nan.obj", "v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n"),
+                      FP_MESH_ERR_FORMAT, "line 2: non-finite value 'nan'");
+    expect_load_error(write_tmp("nan.off", "OFF\n3 1 0\n0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n"),
+                      FP_MESH_ERR_FORMAT, "line 4: non-finite value 'nan' in vertex 1");
+    expect_load_error(write_tmp("nan.ply", "ply\nformat ascii 1.0\nelement vertex 3\n"
+                                           "property float x\nproperty float y\n"
+                                           "property float z\nelement face 1\n"
+                                           "property list uchar int vertex_indices\n"
+                                           "end_header\n0 0 0\n1 NaN 0\n0 1 0\n3 0 1 2\n"),
+                      FP_MESH_ERR_FORMAT, "line 11: non-finite value 'NaN'");
+    expect_load_error(write_tmp("nan.stl", "solid t\nfacet normal 0 0 1\nouter loop\n"
+                                           "vertex 0 0 0\nvertex 1 nan 0\nvertex 0 1 0\n"
+                                           "endloop\nendfacet\nendsolid t\n"),
+                      FP_MESH_ERR_FORMAT, "line 5: non-finite value 'nan'");
+    expect_load_error(write_tmp("short.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n"),
+                      FP_MESH_ERR_FORMAT, "file ends after 2 of 3 vertices");
+}
+
+static void test_error_inf_coordinate(void **state)
+{
+    (void)state;
+    expect_load_error(write_tmp("inf.obj", "v 0 0 0\nv 1 0 0\nv 0 -inf 0\nf 1 2 3\n"),
+                      FP_MESH_ERR_FORMAT, "line 3: non-finite value '-inf'");
+    expect_load_error(write_tmp("big.obj", "v 0 0 0\nv 1e999 0 0\nv 0 1 0\nf 1 2 3\n"),
+                      FP_MESH_ERR_FORMAT, "line 2");
+}
+
+static const char tri_gltf_fmt[] =
+    "{\"asset\":{\"version\":\"2.0\"},\"scene\":0,\"scenes\":[{\"nodes\":[0]}],"
+    "\"nodes\":[{\"mesh\":0}],\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0}}]}],"
+    "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":%d,\"type\":\"VEC3\"}],"
+    "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36}],"
+    "\"buffers\":[{\"byteLength\":36,\"uri\":\"%s\"}]}";
+
+static void test_error_gltf_missing_buffer(void **state)
+{
+    (void)state;
+    char json[1024];
+    snprintf(json, sizeof json, tri_gltf_fmt, 3, "missing.bin");
+    expect_load_error(write_tmp("nobuffer.gltf", json), FP_MESH_ERR_FORMAT, "missing.bin");
+}
+
+static void test_error_gltf_bad_accessor(void **state)
+{
+    (void)state;
+    /* a real 36-byte buffer, but an accessor claiming 4 vertices (48 bytes) */
+    static const float p[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    FILE *f = fopen(tmp_path("tri.bin"), "wb");
+    fwrite(p, sizeof p, 1, f);
+    fclose(f);
+    char json[1024];
+    snprintf(json, sizeof json, tri_gltf_fmt, 3, "tri.bin");
+    fp_mesh *m = NULL;
+    const char *good = write_tmp("good.gltf", json);
+    int rc = fp_mesh_load(good, &m, err, sizeof err);
+    if (rc)
+        fail_msg("%s", err);
+    assert_int_equal(m->triangle_count, 1); /* non-indexed: 3 vertices, one triangle */
+    fp_mesh_free(&m);
+    snprintf(json, sizeof json, tri_gltf_fmt, 4, "tri.bin");
+    expect_load_error(write_tmp("overrun.gltf", json), FP_MESH_ERR_FORMAT, "overruns");
+}
+
+static void test_error_unknown_extension(void **state)
+{
+    (void)state;
+    expect_load_error(write_tmp("mesh.fbx", "whatever"), FP_MESH_ERR_UNSUPPORTED, "fbx");
+    expect_load_error(write_tmp("noext", "v 0 0 0\n"), FP_MESH_ERR_UNSUPPORTED, NULL);
+    fp_mesh *m = icosahedron();
+    assert_int_equal(fp_mesh_save(m, tmp_path("out.3ds"), err, sizeof err),
+                     FP_MESH_ERR_UNSUPPORTED);
+    fp_mesh_free(&m);
+}
+
+static void test_error_save(void **state)
+{
+    (void)state;
+    fp_mesh *m = icosahedron();
+    assert_int_equal(fp_mesh_save(m, tmp_path("no/such/dir/out.obj"), err, sizeof err),
+                     FP_MESH_ERR_IO);
+    assert_non_null(strstr(err, "no/such/dir/out.obj"));
+    assert_int_equal(fp_mesh_save(m, tmp_path("no/such/dir/out.glb"), err, sizeof err),
+                     FP_MESH_ERR_IO);
+    m->triangles[5] = 12; /* out of range */
+    assert_int_equal(fp_mesh_save(m, tmp_path("bad.obj"), err, sizeof err), FP_MESH_ERR_INVALID);
+    assert_non_null(strstr(err, "triangle 1"));
+    m->triangles[5] = 1;
+    m->positions[4] = NAN;
+    assert_int_equal(fp_mesh_save(m, tmp_path("bad.ply"), err, sizeof err), FP_MESH_ERR_INVALID);
+    assert_int_equal(fp_mesh_save(NULL, tmp_path("x.obj"), err, sizeof err), FP_MESH_ERR_INVALID);
+    fp_mesh *other = m;
+    assert_int_equal(fp_mesh_load(NULL, &other, err, sizeof err), FP_MESH_ERR_INVALID);
+    assert_null(other); /* *out is NULL after any failed load */
+    fp_mesh_free(&m);
+    fp_mesh_free(&m); /* a second free of the NULLed pointer is a no-op */
+}
+
+/* ---- threads ------------------------------------------------------------------------- */
+
+static void *load_many(void *arg)
+{
+    const char *path = arg;
+    for (int i = 0; i < 4; i++) {
+        fp_mesh *m = NULL;
+        char e[256];
+        if (fp_mesh_load(path, &m, e, sizeof e) != FP_MESH_OK || m->vertex_count != 468)
+            return (void *)1;
+        fp_mesh_free(&m);
+    }
+    return NULL;
+}
+
+static void test_concurrent_loads(void **state)
+{
+    (void)state;
+    fp_mesh *m = NULL;
+    assert_int_equal(fp_mesh_load(face_path("mediapipe-canonical/canonical_face_model.obj"), &m,
+                                  err, sizeof err),
+                     FP_MESH_OK);
+    char *paths[4] = {strdup(tmp_path("c.ply")), strdup(tmp_path("c.off")),
+                      strdup(tmp_path("c.glb")), strdup(tmp_path("c.obj"))};
+    for (int i = 0; i < 4; i++)
+        assert_int_equal(fp_mesh_save(m, paths[i], err, sizeof err), FP_MESH_OK);
+    pthread_t th[4];
+    for (int i = 0; i < 4; i++)
+        assert_int_equal(pthread_create(&th[i], NULL, load_many, paths[i]), 0);
+    for (int i = 0; i < 4; i++) {
+        void *ret;
+        pthread_join(th[i], &ret);
+        assert_null(ret);
+        free(paths[i]);
+    }
+    fp_mesh_free(&m);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_load_ict_keeps_vertex_order),
+        cmocka_unit_test(test_load_lee_perry_smith),
+        cmocka_unit_test(test_load_mediapipe_canonical),
+        cmocka_unit_test(test_load_prints_nothing),
+        cmocka_unit_test(test_round_trip_obj),
+        cmocka_unit_test(test_round_trip_ply),
+        cmocka_unit_test(test_round_trip_off),
+        cmocka_unit_test(test_round_trip_stl),
+        cmocka_unit_test(test_round_trip_gltf),
+        cmocka_unit_test(test_round_trip_glb),
+        cmocka_unit_test(test_round_trip_upper_case_extension),
+        cmocka_unit_test(test_polygons_are_fan_triangulated),
+        cmocka_unit_test(test_obj_negative_indices),
+        cmocka_unit_test(test_obj_degenerate_faces),
+        cmocka_unit_test(test_normals_outward_on_icosahedron),
+        cmocka_unit_test(test_normals_follow_moved_vertices),
+        cmocka_unit_test(test_normals_bad_index),
+        cmocka_unit_test(test_bounds),
+        cmocka_unit_test(test_gltf_node_transform_applied),
+        cmocka_unit_test(test_error_missing_file),
+        cmocka_unit_test(test_error_empty_file),
+        cmocka_unit_test(test_error_malformed_text),
+        cmocka_unit_test(test_error_index_out_of_range),
+        cmocka_unit_test(test_error_nan_coordinate),
+        cmocka_unit_test(test_error_inf_coordinate),
+        cmocka_unit_test(test_error_gltf_missing_buffer),
+        cmocka_unit_test(test_error_gltf_bad_accessor),
+        cmocka_unit_test(test_error_unknown_extension),
+        cmocka_unit_test(test_error_save),
+        cmocka_unit_test(test_concurrent_loads),
+    };
+    return cmocka_run_group_tests_name("mesh", tests, setup, teardown);
+}

@@ -1,0 +1,66 @@
+/*
+ * pedal_emu.h: byte-exact USB foot pedals emulated in-process with a umockdev testbed.
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ *
+ * The testbed provides the sysfs device (descriptors, busnum, devnum) that libusb enumerates
+ * and a usbfs node /dev/bus/usb/001/DDD whose ioctls (SUBMITURB, REAPURBNDELAY, DISCARDURB,
+ * DISCONNECT_CLAIM, RELEASEINTERFACE, USBDEVFS_IOCTL(CONNECT), GET_CAPABILITIES) are answered
+ * by a handler on umockdev's worker thread, as in libusb's own tests/umockdev.c. Reports
+ * queued with emu_send complete the interrupt IN URB that the reader has in flight, one
+ * report per URB. emu_unplug completes the in-flight URB with -ESHUTDOWN (as the kernel does
+ * on disconnect), fails every later ioctl with ENODEV and removes the sysfs device.
+ * The process must run with libumockdev-preload loaded (the test links it first).
+ */
+#ifndef PEDAL_EMU_H
+#define PEDAL_EMU_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+typedef enum emu_kind {
+    EMU_VEC = 0,       /* 05f3:00ff, one HID interface, EP 0x81, 2-byte bitmask reports */
+    EMU_PCSENSOR = 1   /* 0c45:7403, interface 0 vendor HID (EP 0x82), interface 1 boot
+                          keyboard (EP 0x81, 16-byte packets), 9-byte reports with id 1 */
+} emu_kind;
+
+typedef struct emu emu;
+
+/** What the reader asked of the device so far (counts since the last emu_plug). */
+typedef struct emu_stats {
+    int disconnect_claims;     /* USBDEVFS_DISCONNECT_CLAIM (auto-detach of the kernel driver) */
+    int claimed_interface;     /* interface of the last claim, -1 none */
+    char claim_driver[16];     /* the driver named in DISCONNECT_CLAIM ("usbfs") */
+    unsigned claim_flags;
+    int releases;              /* USBDEVFS_RELEASEINTERFACE */
+    int reattaches;            /* USBDEVFS_IOCTL(USBDEVFS_CONNECT): kernel driver back */
+    int submits;               /* SUBMITURB accepted */
+    int bad_submits;           /* SUBMITURB of the wrong type or endpoint */
+    int discards;              /* DISCARDURB of a flying URB (cancel, timeout) */
+    int flying;                /* URBs submitted and not yet reaped */
+    int delivered;             /* reports delivered */
+    int queued;                /* reports waiting for a URB */
+    int last_endpoint;         /* endpoint of the last SUBMITURB */
+} emu_stats;
+
+/** A testbed with no device. NULL when umockdev is not active (preload missing). */
+emu *emu_new(void);
+void emu_free(emu **e);
+
+/** Plug a pedal of `kind` at bus 1 address `devnum`. Returns 0 or -1. */
+int emu_plug(emu *e, emu_kind kind, int devnum);
+
+/** Unplug the pedal: the in-flight URB ends with -ESHUTDOWN, the device leaves sysfs. */
+void emu_unplug(emu *e);
+
+/** Queue one report (at most 64 bytes) for the reader. */
+void emu_send(emu *e, const uint8_t *report, size_t len);
+
+/** Take read and write permission on the plugged pedal's usbfs node away from everyone
+ *  (mode 0000). Only effective on a process without CAP_DAC_OVERRIDE. Returns 0 or -1. */
+int emu_deny_access(emu *e);
+
+/** A snapshot of the statistics. */
+emu_stats emu_get_stats(emu *e);
+
+#endif

@@ -1,0 +1,122 @@
+/* End to end: an emulated USB foot pedal (umockdev) engages and commits the anchored mapping
+ * over a replayed two-hand recording on the ICT face, in a headless session. With auto=0
+ * only the pedal starts and ends deformations: left engages, left again commits, right
+ * cancels (the default binding, docs/pedal.md). */
+#define _GNU_SOURCE
+#include "fp_session.h"
+#include "pedal_emu.h"
+
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <cmocka.h>
+
+static char data[4096], plugins[4096];
+
+static void press(emu *e, uint8_t bit)
+{
+    uint8_t down[2] = {bit, 0}, up[2] = {0, 0};
+    emu_send(e, down, 2);
+    emu_send(e, up, 2);
+}
+
+/* Step until `pred` holds for a frame, or 20 s pass. Returns the frame's stats. */
+typedef bool (*frame_pred)(const fp_frame_stats *);
+static bool is_engaged(const fp_frame_stats *st) { return st->engaged; }
+static bool is_committed(const fp_frame_stats *st) { return st->committed; }
+static bool is_cancelled(const fp_frame_stats *st) { return st->cancelled; }
+
+static unsigned long engaged_seen;
+static bool step_until(fp_session *s, frame_pred pred)
+{
+    int64_t deadline = fp_now_ns() + 20LL * 1000000000LL;
+    while (fp_now_ns() < deadline) {
+        fp_frame_stats st;
+        fp_session_step(s, fp_now_ns(), &st);
+        engaged_seen += st.engaged;
+        if (pred(&st)) return true;
+        struct timespec ts = {0, 3000000};
+        nanosleep(&ts, NULL);
+    }
+    return false;
+}
+
+static void test_pedal_drives_anchored(void **state)
+{
+    (void)state;
+    emu *e = emu_new();
+    assert_non_null(e);
+    assert_int_equal(emu_plug(e, EMU_VEC, 5), 0);
+    char mesh[4200], input[4300], err[2048];
+    snprintf(mesh, sizeof mesh, "%s/faces/ict-facekit/generic_neutral_mesh.obj", data);
+    snprintf(input, sizeof input, "replay:%s/hands/leap-motion/three-claps_joints_mm.csv,loop=1", data);
+    fp_plugin_path path;
+    const char *dirs[] = {plugins};
+    fp_plugin_path_init(&path, dirs, 1, NULL);
+    fp_session_options so = {0};
+    so.mesh_path = mesh;
+    so.inputs[0] = input;
+    so.inputs[1] = "pedal,strict=1";
+    so.input_count = 2;
+    so.mapping = "anchored,auto=0";
+    so.plugin_path = &path;
+    fp_session *s = NULL;
+    int rc = fp_session_create(&so, &s, err, sizeof err);
+    if (rc) fprintf(stderr, "%s\n", err);
+    assert_int_equal(rc, 0);
+    assert_int_equal(fp_session_start(s, err, sizeof err), 0);
+    size_t bytes = fp_session_vertex_count(s) * 3 * sizeof(float);
+
+    /* Hands move for half a second: with auto=0 nothing engages by itself. */
+    int64_t until = fp_now_ns() + 500000000LL;
+    while (fp_now_ns() < until) {
+        fp_frame_stats st;
+        fp_session_step(s, fp_now_ns(), &st);
+        assert_false(st.active);
+        struct timespec ts = {0, 3000000};
+        nanosleep(&ts, NULL);
+    }
+    assert_memory_equal(fp_session_base(s), fp_session_loaded(s), bytes);
+
+    press(e, 0x01); /* left: engage */
+    assert_true(step_until(s, is_engaged));
+    /* Let the fingers move the control vectors' end points for a while, then commit. */
+    until = fp_now_ns() + 700000000LL;
+    while (fp_now_ns() < until) {
+        fp_session_step(s, fp_now_ns(), NULL);
+        struct timespec ts = {0, 3000000};
+        nanosleep(&ts, NULL);
+    }
+    press(e, 0x01); /* left again: commit */
+    assert_true(step_until(s, is_committed));
+    assert_memory_not_equal(fp_session_base(s), fp_session_loaded(s), bytes);
+
+    float *committed = malloc(bytes);
+    memcpy(committed, fp_session_base(s), bytes);
+    press(e, 0x01); /* engage again, then right: cancel; the base stays */
+    assert_true(step_until(s, is_engaged));
+    press(e, 0x04);
+    assert_true(step_until(s, is_cancelled));
+    fp_session_step(s, fp_now_ns(), NULL);
+    assert_memory_equal(fp_session_base(s), committed, bytes);
+    assert_memory_equal(fp_session_positions(s), committed, bytes);
+    assert_int_equal(engaged_seen, 2);
+    free(committed);
+    fp_session_destroy(&s);
+    fp_plugin_path_clear(&path);
+    emu_free(&e);
+}
+
+int main(void)
+{
+    const char *d = getenv("FP_SHARED_DATA"), *b = getenv("FP_BUILD_DIR");
+    snprintf(data, sizeof data, "%s", d ? d : "../shared/data");
+    snprintf(plugins, sizeof plugins, "%s/lib/facepuppet", b ? b : "build");
+    const struct CMUnitTest tests[] = {cmocka_unit_test(test_pedal_drives_anchored)};
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
