@@ -470,7 +470,7 @@ static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
              "%s  %zu vertices  mapping %s\n"
              "%s   commits %u   radius %.4g\n"
              "%.1f fps (%.2f ms)   engine %.3f ms   input %.0f ev/s%s",
-             v->mesh_path ? v->mesh_path : "", v->n, v->mapping, state, v->commits,
+             v->mesh_path ? (strrchr(v->mesh_path, '/') ? strrchr(v->mesh_path, '/') + 1 : v->mesh_path) : "", v->n, v->mapping, state, v->commits,
              fp_session_radius(v->s), recent > 0 ? 1000.0 / recent : 0.0, recent,
              st->active ? st->update_ms : v->last_update_ms, v->input_rate,
              v->opt->gpu_warp ? "   gpu-warp" : "");
