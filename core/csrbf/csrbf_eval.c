@@ -459,8 +459,7 @@ int csrbf_evaluate(const csrbf_solver *cs, const csrbf_points *P, float *out, un
     unsigned char *tbase = (unsigned char *)mem + mask_bytes;
 
     /* work estimate: vertex-centre tests; small work stays on the calling thread */
-    size_t work = all_in || m <= 32 ? n * m : n * 16;
-    if (!all_in && m <= 32) work /= 4; /* typical selection */
+    size_t work = n * (m < 32 ? m : 32);
     int threads = work > 50000 ? nt : 1;
 
     /* the fused AVX-512 path: no statistics, no polynomial, all centres or a mask */
