@@ -184,14 +184,15 @@ int csrbf_solver_get_coefficients(const csrbf_solver *solver, double *centres, d
 int csrbf_solver_map_point(const csrbf_solver *solver, const double x[3], double out[3],
                            double jac[9]);
 
-/** Create a vertex set: copies n x 3 floats (finite, |coord| <= CSRBF_MAX_COORD), sorts the
- *  vertices along a Morton curve and cuts them into blocks of 64 with bounding boxes.
+/** Create a vertex set: copies n x 3 floats (finite, |coord| <= CSRBF_MAX_COORD) and cuts
+ *  them into blocks of 16 consecutive vertices (structure of arrays) with bounding boxes.
+ *  Locality comes from the vertex order (grids, scanned and modelled meshes keep neighbours
+ *  close in index); a scrambled order stays correct but skips fewer blocks.
  *  1 <= n < 2^32. Errors: CSRBF_ERR_INVALID (*out = NULL), CSRBF_ERR_NOMEM. */
 int csrbf_points_create(size_t n, const float *xyz, csrbf_points **out);
 
-/** Replace the positions (same n, same vertex order), e.g. after a commit in unanchored mode.
- *  The Morton order of the first positions is kept (still correct, less tight if vertices
- *  travel far); block boxes are recomputed. Errors: CSRBF_ERR_INVALID (points unchanged). */
+/** Replace the positions (same n, same vertex order), e.g. after a commit in unanchored mode;
+ *  block boxes are recomputed (O(n)). Errors: CSRBF_ERR_INVALID (points unchanged). */
 int csrbf_points_update(csrbf_points *points, const float *xyz);
 
 /** Number of vertices. */
@@ -219,8 +220,10 @@ typedef struct csrbf_eval_stats {
  *  overlap the solver's or the points' memory). Only (vertex, centre) pairs whose block boxes
  *  meet the support are visited; the arithmetic is float (positions, coefficients), the
  *  coefficients having been solved in double. Without a polynomial a vertex outside every
- *  support gets exactly its base position, bit for bit. Vectorised (AVX-512 / AVX2 / SSE2
- *  clones chosen at load time) and parallel over blocks with OpenMP (options.threads).
+ *  support gets exactly its base position, bit for bit. Vectorised (AVX-512 intrinsics with
+ *  r from rsqrt14 + one Newton step where the CPU has it, else target_clones of portable C
+ *  for x86-64-v3 / baseline, chosen at run time) and parallel over blocks with OpenMP
+ *  (options.threads; one thread below about 50k vertex-centre tests).
  *  stats may be NULL (fastest); with stats the pair count, moved count and maximum
  *  displacement are filled in, and with flags & CSRBF_EVAL_JACOBIAN the minimum Jacobian
  *  determinant too. Errors: CSRBF_ERR_INVALID (NULL, unknown flag), CSRBF_ERR_STATE (no start

@@ -134,14 +134,9 @@ AVX512_KERNEL(block_psi32_avx512,
 #undef T2
 
 /* Interleave 16 x, y, z (+ displacement) into 48 contiguous floats. */
-__attribute__((target("avx512f"))) static void write_block_avx512(
-    float *restrict out, const float *restrict x, const float *restrict y,
-    const float *restrict z, const float *restrict accx, const float *restrict accy,
-    const float *restrict accz)
+static inline __attribute__((target("avx512f"), always_inline)) void
+interleave_avx512(float *restrict out, __m512 X, __m512 Y, __m512 Z)
 {
-    __m512 X = _mm512_add_ps(_mm512_loadu_ps(x), _mm512_loadu_ps(accx));
-    __m512 Y = _mm512_add_ps(_mm512_loadu_ps(y), _mm512_loadu_ps(accy));
-    __m512 Z = _mm512_add_ps(_mm512_loadu_ps(z), _mm512_loadu_ps(accz));
     /* output float f = 16 k + i holds component f % 3 of vertex f / 3: first pick x or y
      * (index < 16: X, >= 16: Y; z lanes are placeholders), then insert z (16 + v) */
     static const int32_t ixy[3][16] = {
@@ -158,6 +153,109 @@ __attribute__((target("avx512f"))) static void write_block_avx512(
         _mm512_storeu_ps(out + 16 * k, o);
     }
 }
+
+__attribute__((target("avx512f"))) static void write_block_avx512(
+    float *restrict out, const float *restrict x, const float *restrict y,
+    const float *restrict z, const float *restrict accx, const float *restrict accy,
+    const float *restrict accz)
+{
+    interleave_avx512(out, _mm512_add_ps(_mm512_loadu_ps(x), _mm512_loadu_ps(accx)),
+                      _mm512_add_ps(_mm512_loadu_ps(y), _mm512_loadu_ps(accy)),
+                      _mm512_add_ps(_mm512_loadu_ps(z), _mm512_loadu_ps(accz)));
+}
+
+/* One centre's contribution to the 16 lanes (shared by the fused drivers below). */
+#define AVX512_PAIR(PSI, J)                                                                    \
+    do {                                                                                       \
+        __m512 dx = _mm512_sub_ps(X, _mm512_set1_ps(cx[J]));                                   \
+        __m512 dy = _mm512_sub_ps(Y, _mm512_set1_ps(cy[J]));                                   \
+        __m512 dz = _mm512_sub_ps(Z, _mm512_set1_ps(cz[J]));                                   \
+        __m512 r2 = _mm512_mul_ps(dx, dx);                                                     \
+        r2 = _mm512_fmadd_ps(dy, dy, r2);                                                      \
+        r2 = _mm512_fmadd_ps(dz, dz, r2);                                                      \
+        r2 = _mm512_mul_ps(r2, ir2);                                                           \
+        __mmask16 in = _mm512_cmp_ps_mask(r2, one, _CMP_LT_OQ);                                \
+        __m512 q = _mm512_max_ps(r2, tiny);                                                    \
+        __m512 e = _mm512_rsqrt14_ps(q);                                                       \
+        __m512 hq = _mm512_mul_ps(half, q);                                                    \
+        e = _mm512_mul_ps(e, _mm512_fnmadd_ps(_mm512_mul_ps(hq, e), e, three_half));           \
+        __m512 r = _mm512_mul_ps(q, e);                                                        \
+        __m512 t1 = _mm512_sub_ps(one, r);                                                     \
+        __m512 w = PSI;                                                                        \
+        sx = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(ax[J]), sx, in);                          \
+        sy = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(ay[J]), sy, in);                          \
+        sz = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(az[J]), sz, in);                          \
+    } while (0)
+
+/* The fast path without statistics or polynomial: blocks b0..b1 end to end. mask (centres
+ * j < 32 whose support meets the block) or, with mask NULL, all m centres. Untouched blocks
+ * are copied; touched ones computed in registers and stored interleaved. */
+#define AVX512_DRIVER(NAME, PSI)                                                               \
+    __attribute__((target("avx512f,fma"))) static void NAME(                                   \
+        const csrbf_points *P, float *restrict out, size_t b0, size_t b1,                      \
+        const uint32_t *restrict mask, size_t m, const float *restrict cx,                     \
+        const float *restrict cy, const float *restrict cz, const float *restrict ax,          \
+        const float *restrict ay, const float *restrict az, float inv_r2)                      \
+    {                                                                                          \
+        const __m512 one = _mm512_set1_ps(1.0f), half = _mm512_set1_ps(0.5f),                 \
+                     three_half = _mm512_set1_ps(1.5f), tiny = _mm512_set1_ps(1e-30f),         \
+                     ir2 = _mm512_set1_ps(inv_r2);                                             \
+        const size_t n = P->n;                                                                 \
+        for (size_t b = b0; b < b1; b++) {                                                     \
+            const size_t k0 = b * B, nv = k0 + B <= n ? B : n - k0;                            \
+            float *o = out + 3 * k0;                                                           \
+            uint32_t mk = mask ? mask[b] : 0;                                                  \
+            if (mask && !mk) {                                                                 \
+                if (nv == B)                                                                   \
+                    interleave_avx512(o, _mm512_loadu_ps(P->s[0] + k0),                        \
+                                      _mm512_loadu_ps(P->s[1] + k0),                           \
+                                      _mm512_loadu_ps(P->s[2] + k0));                          \
+                else                                                                           \
+                    memcpy(o, P->xyz + 3 * k0, nv * 3 * sizeof(float));                        \
+                continue;                                                                      \
+            }                                                                                  \
+            const __m512 X = _mm512_loadu_ps(P->s[0] + k0), Y = _mm512_loadu_ps(P->s[1] + k0), \
+                         Z = _mm512_loadu_ps(P->s[2] + k0);                                    \
+            __m512 sx = _mm512_set1_ps(-0.0f), sy = sx, sz = sx;                               \
+            if (mask) {                                                                        \
+                while (mk) {                                                                   \
+                    const unsigned j = (unsigned)__builtin_ctz(mk);                            \
+                    mk &= mk - 1;                                                              \
+                    AVX512_PAIR(PSI, j);                                                       \
+                }                                                                              \
+            } else {                                                                           \
+                for (size_t j = 0; j < m; j++) AVX512_PAIR(PSI, j);                            \
+            }                                                                                  \
+            _Alignas(64) float acc[3][B];                                                      \
+            _mm512_store_ps(acc[0], sx);                                                       \
+            _mm512_store_ps(acc[1], sy);                                                       \
+            _mm512_store_ps(acc[2], sz);                                                       \
+            if (nv == B)                                                                       \
+                interleave_avx512(o, _mm512_add_ps(X, sx), _mm512_add_ps(Y, sy),               \
+                                  _mm512_add_ps(Z, sz));                                       \
+            else                                                                               \
+                for (size_t v = 0; v < nv; v++) {                                              \
+                    o[3 * v] = P->s[0][k0 + v] + acc[0][v];                                    \
+                    o[3 * v + 1] = P->s[1][k0 + v] + acc[1][v];                                \
+                    o[3 * v + 2] = P->s[2][k0 + v] + acc[2][v];                                \
+                }                                                                              \
+        }                                                                                      \
+    }
+
+#define T2 _mm512_mul_ps(t1, t1)
+AVX512_DRIVER(drive_psi31_avx512,
+              _mm512_mul_ps(_mm512_mul_ps(T2, T2), _mm512_fmadd_ps(_mm512_set1_ps(4.0f), r, one)))
+AVX512_DRIVER(drive_psi30_avx512, T2)
+AVX512_DRIVER(drive_psi32_avx512,
+              _mm512_mul_ps(_mm512_mul_ps(_mm512_mul_ps(T2, T2), T2),
+                            _mm512_fmadd_ps(_mm512_fmadd_ps(_mm512_set1_ps(35.0f / 3.0f), r,
+                                                            _mm512_set1_ps(6.0f)),
+                                            r, one)))
+#undef T2
+
+typedef void (*drive_fn)(const csrbf_points *, float *, size_t, size_t, const uint32_t *,
+                         size_t, const float *, const float *, const float *, const float *,
+                         const float *, const float *, float);
 
 static int have_avx512(void)
 {
@@ -361,10 +459,11 @@ int csrbf_evaluate(const csrbf_solver *cs, const csrbf_points *P, float *out, un
     unsigned char *tbase = (unsigned char *)mem + mask_bytes;
 
     /* work estimate: vertex-centre tests; small work stays on the calling thread */
-    size_t work = all_in || m <= 32 ? n * m : n * 16;
-    if (!all_in && m <= 32) work /= 4; /* typical selection */
-    int threads = work > 200000 ? nt : 1;
+    size_t work = n * (m < 32 ? m : 32);
+    int threads = work > 50000 ? nt : 1;
 
+    /* the fused AVX-512 path: no statistics, no polynomial, all centres or a mask */
+    const int fast = avx512 && !st && !poly && (all_in || use_mask);
     size_t pairs = 0, moved = 0;
     double maxd = 0.0, minjac = 1.0;
     const float inv_r2 = (float)(1.0 / R2), r2c = (float)(R2 * (1.0 + 1e-5)) + 1e-30f;
@@ -388,6 +487,20 @@ int csrbf_evaluate(const csrbf_solver *cs, const csrbf_points *P, float *out, un
         }
         if (all_in)
             for (size_t i = 0; i < m; i++) list[i] = (uint32_t)i;
+#if CSRBF_AVX512 && CSRBF_BLOCK == 16
+        if (fast) {
+            drive_fn drive = s->opt.kernel == CSRBF_PSI30   ? drive_psi30_avx512
+                             : s->opt.kernel == CSRBF_PSI32 ? drive_psi32_avx512
+                                                            : drive_psi31_avx512;
+#pragma omp for schedule(dynamic, 1)
+            for (size_t c = 0; c < (nb + 63) / 64; c++) {
+                size_t b0 = c * 64, b1 = b0 + 64 < nb ? b0 + 64 : nb;
+                drive(P, out, b0, b1, use_mask ? mask : NULL, m, fcx, fcy, fcz, fax, fay, faz,
+                      inv_r2);
+            }
+        } else
+#endif
+        {
         _Alignas(64) float accx[B], accy[B], accz[B];
         _Alignas(64) int cnt[B];
 #pragma omp for schedule(static, 64)
@@ -438,6 +551,7 @@ int csrbf_evaluate(const csrbf_solver *cs, const csrbf_points *P, float *out, un
                     }
                 }
             }
+        }
         }
     }
     if (own)

@@ -40,6 +40,8 @@ typedef struct fp_session_options {
     double hand_size;                               /* 0 or 1: mean adult hand */
     const fp_calibration *calibration;              /* NULL: fit the workspace to the face */
     const fp_plugin_path *plugin_path;              /* required */
+    int engine_threads;                             /* 0: 1 below 200k vertices, else all
+                                                       cores; -1: all cores; N: N threads */
 } fp_session_options;
 
 /** Statistics of one fp_session_step. */

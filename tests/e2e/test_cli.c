@@ -129,6 +129,42 @@ static void test_info(void **state)
     assert_non_null(strstr(out, "/nonexistent/face.obj"));
 }
 
+static void test_frames_out_and_monitor(void **state)
+{
+    (void)state;
+    char args[16384];
+    snprintf(args, sizeof args, "run -q --mesh %s --input replay:%s/hands/leap-motion/grab_joints_mm.csv,speed=8 "
+             "--fps 20 --frames-out frames --out final.ply", face(), data);
+    assert_int_equal(fp(args), 0);
+    char cmd[8400];
+    snprintf(cmd, sizeof cmd, "ls %s/frames | grep -c '^frame-[0-9]*\\.obj$'", tmp);
+    FILE *p = popen(cmd, "r");
+    int frames = 0;
+    assert_int_equal(fscanf(p, "%d", &frames), 1);
+    pclose(p);
+    assert_true(frames >= 5); /* 3.3 s / 8 at 20 fps: about 8 frames */
+    snprintf(args, sizeof args, "info final.ply");
+    assert_int_equal(fp(args), 0);
+    assert_non_null(strstr(out, "vertices  468"));
+
+    /* monitor against the CyberGlove emulator on a pseudo-terminal: JSON lines. */
+    snprintf(cmd, sizeof cmd, "cd %s && (sleep 30 2>/dev/null | %s/bin/fp-glove-emu --rate 200 > emu.path 2>/dev/null &) && "
+             "for i in $(seq 50); do [ -s emu.path ] && break; sleep 0.1; done", tmp, build);
+    assert_int_equal(system(cmd), 0);
+    char pts[256] = "";
+    snprintf(cmd, sizeof cmd, "%s/emu.path", tmp);
+    FILE *f = fopen(cmd, "r");
+    assert_non_null(f);
+    assert_non_null(fgets(pts, sizeof pts, f));
+    fclose(f);
+    pts[strcspn(pts, "\n")] = '\0';
+    snprintf(args, sizeof args, "monitor --count 5 cyberglove:%s", pts);
+    assert_int_equal(fp(args), 0);
+    assert_non_null(strstr(out, "\"type\":\"joint_angles\",\"hand\":\"right\",\"valid\":"));
+    snprintf(cmd, sizeof cmd, "pkill -f '%s/bin/fp-glove-emu --rate 200'; pkill -f '^sleep 30$'", build);
+    if (system(cmd)) {}
+}
+
 int main(void)
 {
     const char *d = getenv("FP_SHARED_DATA"), *b = getenv("FP_BUILD_DIR");
@@ -144,7 +180,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_help_and_usage), cmocka_unit_test(test_corrupt_obj),
         cmocka_unit_test(test_bad_csv),        cmocka_unit_test(test_plugins),
-        cmocka_unit_test(test_info),
+        cmocka_unit_test(test_info),         cmocka_unit_test(test_frames_out_and_monitor),
     };
     int rc = cmocka_run_group_tests(tests, NULL, NULL);
     char cmd[512];
