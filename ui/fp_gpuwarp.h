@@ -4,12 +4,10 @@
  * shared/docs/csrbf.md), so that the viewer can draw a deformation from the base shape and a
  * few uniforms instead of uploading every vertex each frame (`facepuppet live --gpu-warp`).
  *
- * The coefficients: the engine (core/csrbf) exposes no getter for its solved coefficients
- * yet, so fp_warp_solve() solves the same small system the engine does for the session's
- * settings (kernel psi31, no polynomial, start points merged below 1e-4 R as the engine's
- * default merge rule): A alpha = d - s, A_ij = psi31(|c_i - c_j| / R), by a dense Cholesky
- * factorisation in double. The result is checked against the CPU engine's evaluation
- * (fp_gpuwarp_eval, tests/viewer/test_gpuwarp.c).
+ * The coefficients come from the engine (csrbf_solver_solve, then
+ * csrbf_solver_get_coefficients), with the session's settings: kernel psi31, no polynomial,
+ * start points merged below 1e-4 R. The shader evaluates psi31 only; the result is checked
+ * against the CPU engine's evaluation (fp_gpuwarp_eval, tests/viewer/test_gpuwarp.c).
  *
  * Thread rules: fp_warp_solve is reentrant; the fp_gpuwarp functions need the GL 3.3 core
  * context they were created in to be current on the calling thread.
@@ -38,8 +36,8 @@ typedef struct fp_warp_coeffs {
 /** Solve the warp for n control vectors start[i] -> end[i] (n x 3 floats each, mesh units)
  *  and support radius R > 0. n == 0 gives the identity. Returns 0, or -EINVAL (n above
  *  FP_WARP_MAX_CENTRES, R not finite and > 0, a non-finite point), -EDOM (the matrix is not
- *  positive definite: cannot happen for distinct merged centres, reported rather than
- *  producing NaN). out is the identity after an error. */
+ *  positive definite: the engine refused the system, reported rather than producing NaN).
+ *  out is the identity after an error. */
 int fp_warp_solve(size_t n, const float *start, const float *end, double radius,
                   fp_warp_coeffs *out);
 

@@ -1,4 +1,4 @@
-/* The CSRBF warp on the GPU: coefficients (dense solve), GLSL, transform-feedback read-back. */
+/* The CSRBF warp on the GPU: coefficients (from the engine), GLSL, transform-feedback read-back. */
 #include "fp_gpuwarp.h"
 
 #include "csrbf.h"
@@ -20,74 +20,28 @@ int fp_warp_solve(size_t n, const float *start, const float *end, double radius,
     if (!n) return 0;
     for (size_t i = 0; i < 3 * n; i++)
         if (!isfinite(start[i]) || !isfinite(end[i])) return -EINVAL;
-    /* Merge start points closer than 1e-4 R into the first earlier centre (the engine's
-     * default, CSRBF_DEFAULT_MERGE_TOLERANCE); a centre's displacement is its members' mean. */
-    double c[FP_WARP_MAX_CENTRES][3], h[FP_WARP_MAX_CENTRES][3] = {{0}};
-    int members[FP_WARP_MAX_CENTRES] = {0};
-    size_t m = 0;
-    double tol = CSRBF_DEFAULT_MERGE_TOLERANCE * radius;
-    for (size_t i = 0; i < n; i++) {
-        const float *s = start + 3 * i, *d = end + 3 * i;
-        size_t j = 0;
-        for (; j < m; j++) {
-            double dx = s[0] - c[j][0], dy = s[1] - c[j][1], dz = s[2] - c[j][2];
-            if (sqrt(dx * dx + dy * dy + dz * dz) < tol) break;
-        }
-        if (j == m) {
-            for (int k = 0; k < 3; k++) c[m][k] = s[k];
-            m++;
-        }
-        for (int k = 0; k < 3; k++) h[j][k] += (double)d[k] - (double)s[k];
-        members[j]++;
+    /* The engine solves (merging included) and hands out its coefficients: the session's
+     * settings, psi31 and no polynomial, are the engine's defaults, which the shader uses. */
+    csrbf_options o = {0};
+    o.radius = radius;
+    o.threads = 1;
+    csrbf_solver *s = NULL;
+    if (csrbf_solver_create(&o, &s) < 0) return -EINVAL;
+    double c[FP_WARP_MAX_CENTRES * 3], a[FP_WARP_MAX_CENTRES * 3];
+    int rc = csrbf_solver_solve(s, n, start, end);
+    size_t m = rc < 0 ? 0 : csrbf_solver_centres(s);
+    if (rc >= 0 && m <= FP_WARP_MAX_CENTRES) rc = csrbf_solver_get_coefficients(s, c, a, NULL);
+    csrbf_solver_destroy(&s);
+    if (rc < 0 || m > FP_WARP_MAX_CENTRES) {
+        memset(out, 0, sizeof *out);
+        out->radius = (float)radius;
+        return -EDOM;
     }
-    for (size_t j = 0; j < m; j++)
-        for (int k = 0; k < 3; k++) h[j][k] /= members[j];
-    /* A = L L^T, A_ij = psi31(|c_i - c_j| / R). */
-    static const size_t M = FP_WARP_MAX_CENTRES;
-    double *L = calloc(M * M, sizeof *L);
-    if (!L) return -ENOMEM;
     for (size_t i = 0; i < m; i++)
-        for (size_t j = 0; j <= i; j++) {
-            double dx = c[i][0] - c[j][0], dy = c[i][1] - c[j][1], dz = c[i][2] - c[j][2];
-            double psi = 0;
-            csrbf_kernel_eval(CSRBF_PSI31, sqrt(dx * dx + dy * dy + dz * dz) / radius, &psi, NULL);
-            L[i * M + j] = psi;
+        for (int k = 0; k < 3; k++) {
+            out->centre[i][k] = (float)c[3 * i + k];
+            out->alpha[i][k] = (float)a[3 * i + k];
         }
-    for (size_t j = 0; j < m; j++) {
-        double d = L[j * M + j];
-        for (size_t k = 0; k < j; k++) d -= L[j * M + k] * L[j * M + k];
-        if (!(d > 0)) {
-            free(L);
-            memset(out, 0, sizeof *out);
-            out->radius = (float)radius;
-            return -EDOM;
-        }
-        d = sqrt(d);
-        L[j * M + j] = d;
-        for (size_t i = j + 1; i < m; i++) {
-            double v = L[i * M + j];
-            for (size_t k = 0; k < j; k++) v -= L[i * M + k] * L[j * M + k];
-            L[i * M + j] = v / d;
-        }
-    }
-    /* L y = h, L^T alpha = y, per axis. */
-    for (int k = 0; k < 3; k++) {
-        double y[FP_WARP_MAX_CENTRES];
-        for (size_t i = 0; i < m; i++) {
-            double v = h[i][k];
-            for (size_t j = 0; j < i; j++) v -= L[i * M + j] * y[j];
-            y[i] = v / L[i * M + i];
-        }
-        for (size_t i = m; i-- > 0;) {
-            double v = y[i];
-            for (size_t j = i + 1; j < m; j++) v -= L[j * M + i] * y[j];
-            y[i] = v / L[i * M + i];
-        }
-        for (size_t i = 0; i < m; i++) out->alpha[i][k] = (float)y[i];
-    }
-    free(L);
-    for (size_t i = 0; i < m; i++)
-        for (int k = 0; k < 3; k++) out->centre[i][k] = (float)c[i][k];
     out->count = m;
     return 0;
 }
