@@ -458,8 +458,21 @@ int csrbf_evaluate(const csrbf_solver *cs, const csrbf_points *P, float *out, un
     uint32_t *mask = mem;
     unsigned char *tbase = (unsigned char *)mem + mask_bytes;
 
-    /* work estimate: vertex-centre tests; small work stays on the calling thread */
-    size_t work = n * (m < 32 ? m : 32);
+    /* work estimate: vertex-centre pairs, each centre counting the fraction of the vertex
+     * box its support's bounding cube covers (axis by axis); small work stays on the
+     * calling thread, where a fork/join would cost more than it saves */
+    double est = 0.0;
+    for (size_t i = 0; i < m; i++) {
+        double frac = 1.0;
+        for (int a = 0; a < 3; a++) {
+            double ext = P->bhi[a] - P->blo[a], c = s->c[3 * i + a];
+            if (ext <= 0.0) continue;
+            double ov = fmin(c + s->R, P->bhi[a]) - fmax(c - s->R, P->blo[a]);
+            frac *= ov > 0.0 ? ov / ext : 0.0;
+        }
+        est += frac;
+    }
+    size_t work = (size_t)((double)n * est);
     int threads = work > 50000 ? nt : 1;
 
     /* the fused AVX-512 path: no statistics, no polynomial, all centres or a mask */
