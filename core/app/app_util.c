@@ -5,6 +5,7 @@
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #ifndef FP_PLUGIN_RELDIR
 #define FP_PLUGIN_RELDIR "../lib/facepuppet"
@@ -37,4 +38,28 @@ int fp_app_exit_code(int rc)
     case ENOMEM: return FP_EXIT_SOFTWARE;
     default: return FP_EXIT_FAILURE;
     }
+}
+
+bool fp_app_session_defaults(fp_session_options *so, double speed, fp_app_inputs *buf)
+{
+    bool demo = !so->mesh_path && !so->input_count;
+    if (!so->mesh_path)
+        so->mesh_path = fp_app_data_path("faces/ict-facekit/generic_neutral_mesh.obj",
+                                         buf->demo_mesh, sizeof buf->demo_mesh);
+    if (demo) {
+        char rec[4000];
+        fp_app_data_path("hands/leap-motion/three-claps_joints_mm.csv", rec, sizeof rec);
+        snprintf(buf->demo_input, sizeof buf->demo_input, "replay:%s", rec);
+        so->inputs[so->input_count++] = buf->demo_input;
+    }
+    if (!so->mapping) so->mapping = "anchored";
+    for (size_t i = 0; i < so->input_count; i++) {
+        const char *in = so->inputs[i];
+        if (speed != 1 && !strncmp(in, "replay", 6) && (in[6] == ':' || in[6] == ',' || !in[6]) &&
+            !strstr(in, ",speed=")) {
+            snprintf(buf->specs[i], sizeof buf->specs[i], "%s,speed=%g", in, speed);
+            so->inputs[i] = buf->specs[i];
+        }
+    }
+    return demo;
 }

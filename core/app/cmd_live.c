@@ -175,29 +175,9 @@ static int live_main(int argc, char **argv)
         fprintf(stderr, "facepuppet live: --screenshot needs --frames N (or a --script that closes)\n");
         return FP_EXIT_USAGE;
     }
-    /* The demo: no mesh and no input given. */
-    char demo_mesh[4096], demo_input[4200];
-    bool demo = !so->mesh_path && !so->input_count;
-    if (!so->mesh_path)
-        so->mesh_path = fp_app_data_path("faces/ict-facekit/generic_neutral_mesh.obj", demo_mesh,
-                                         sizeof demo_mesh);
-    if (demo) {
-        char rec[4000];
-        fp_app_data_path("hands/leap-motion/three-claps_joints_mm.csv", rec, sizeof rec);
-        snprintf(demo_input, sizeof demo_input, "replay:%s", rec);
-        so->inputs[so->input_count++] = demo_input;
-    }
-    if (!so->mapping) so->mapping = "anchored";
-    /* --speed applies to replay inputs that do not set their own (as in `run`). */
-    char specs[FP_SESSION_MAX_INPUTS][4300];
-    for (size_t i = 0; i < so->input_count; i++) {
-        if (speed != 1 && !strncmp(so->inputs[i], "replay", 6) &&
-            (so->inputs[i][6] == ':' || so->inputs[i][6] == ',' || !so->inputs[i][6]) &&
-            !strstr(so->inputs[i], ",speed=")) {
-            snprintf(specs[i], sizeof specs[i], "%s,speed=%g", so->inputs[i], speed);
-            so->inputs[i] = specs[i];
-        }
-    }
+    /* The demo when no mesh and no input are given; --speed for replay inputs. */
+    fp_app_inputs inputs_buf;
+    fp_app_session_defaults(so, speed, &inputs_buf);
     char *script_text = NULL;
     if (script_arg && script_arg[0] == '@') {
         if (!(script_text = read_file(script_arg + 1))) {

@@ -142,33 +142,14 @@ static int run_main(int argc, char **argv)
         return FP_EXIT_USAGE;
     }
     /* The demo: no mesh and no input given. */
-    char demo_mesh[4096], demo_input[4096];
-    bool demo = !so.mesh_path && !so.input_count;
-    if (!so.mesh_path)
-        so.mesh_path = fp_app_data_path("faces/ict-facekit/generic_neutral_mesh.obj", demo_mesh,
-                                        sizeof demo_mesh);
-    if (!so.input_count) {
-        if (!demo) {
-            fprintf(stderr, "facepuppet run: give at least one --input SPEC (see --help)\n");
-            return FP_EXIT_USAGE;
-        }
-        char rec[4000];
-        fp_app_data_path("hands/leap-motion/three-claps_joints_mm.csv", rec, sizeof rec);
-        snprintf(demo_input, sizeof demo_input, "replay:%s", rec);
-        so.inputs[so.input_count++] = demo_input;
+    bool mesh_given = so.mesh_path != NULL;
+    fp_app_inputs inputs_buf;
+    bool demo = fp_app_session_defaults(&so, speed, &inputs_buf);
+    if (mesh_given && !so.input_count) {
+        fprintf(stderr, "facepuppet run: give at least one --input SPEC (see --help)\n");
+        return FP_EXIT_USAGE;
     }
-    if (!so.mapping) so.mapping = "anchored";
     if (!out) out = demo ? "facepuppet-demo.obj" : "facepuppet-out.obj";
-    /* --speed applies to replay inputs that do not set their own. */
-    char specs[FP_SESSION_MAX_INPUTS][4200];
-    for (size_t i = 0; i < so.input_count; i++) {
-        if (speed != 1 && !strncmp(so.inputs[i], "replay", 6) &&
-            (so.inputs[i][6] == ':' || so.inputs[i][6] == ',' || !so.inputs[i][6]) &&
-            !strstr(so.inputs[i], ",speed=")) {
-            snprintf(specs[i], sizeof specs[i], "%s,speed=%g", so.inputs[i], speed);
-            so.inputs[i] = specs[i];
-        }
-    }
     if (frames_out && mkdir(frames_out, 0777) && errno != EEXIST) {
         fprintf(stderr, "facepuppet run: --frames-out %s: %s\n", frames_out, strerror(errno));
         return FP_EXIT_CANTCREAT;
