@@ -1083,7 +1083,8 @@ fail:
 
 static const fp_input_factory FACTORY = {
     sizeof(fp_input_factory), "cyberglove",
-    "CyberGlove I/II/III data glove on a serial port (8-bit or 16-bit records)", USAGE, create};
+    "CyberGlove I/II/III data glove on a serial port (8-bit or 16-bit records)", USAGE, create,
+    NULL};
 
 static bool entry_init(const char *path) { return true; }
 static void entry_deinit(void) {}

@@ -5,6 +5,7 @@
  *   FIXTURE_GOOD        a working input that pushes FIXTURE_EVENTS events then ends */
 #include <facepuppet/plugin.h>
 
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -43,7 +44,10 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
     return 0;
 }
 
-static const fp_input_factory factory = {sizeof factory, "fixture", "test fixture", "", create};
+/* Built as an ABI 1.0 plugin: its factory ends before the 1.1 field `params`. */
+static const fp_input_factory factory = {.size = offsetof(fp_input_factory, params),
+                                         .name = "fixture", .description = "test fixture",
+                                         .usage = "", .create = create};
 static const void *get_factory(const char *id)
 {
     return !strcmp(id, FP_INPUT_FACTORY_ID) ? &factory : NULL;

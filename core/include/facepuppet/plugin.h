@@ -37,7 +37,16 @@ extern "C" {
 #endif
 
 #define FP_PLUGIN_ABI_MAJOR 1
-#define FP_PLUGIN_ABI_MINOR 0
+#define FP_PLUGIN_ABI_MINOR 1   /* 1.1: capacities, face frame, rig and surface services,
+                                   typed parameters; 1.0 plugins still load */
+
+/** Capacities the host guarantees (ABI 1.1). A mapping may rely on at least this many
+ *  control vectors and channels in every fp_control_set (fp_control_set.capacity and
+ *  channel_capacity say the exact figure, never less than these). */
+#define FP_CONTROL_CAPACITY 64
+#define FP_CHANNEL_CAPACITY 16
+/** At most this many events (buttons, status) reach a mapping in one frame. */
+#define FP_FRAME_EVENT_CAPACITY 64
 
 /** Name of the one exported symbol, of type `const fp_plugin_entry`. */
 #define FP_PLUGIN_ENTRY_SYMBOL "facepuppet_plugin_entry"
@@ -210,6 +219,26 @@ typedef struct fp_param {
     const char *value;
 } fp_param;
 
+/** Typed description of one key a factory accepts (ABI 1.1), for `facepuppet plugins`,
+ *  `plugins check` and the viewer. A list ends with an entry whose name is NULL. */
+typedef enum fp_param_type {
+    FP_PARAM_BOOL = 1,         /* 0 or 1 */
+    FP_PARAM_INT = 2,          /* integer in [min, max] */
+    FP_PARAM_FLOAT = 3,        /* real in [min, max] */
+    FP_PARAM_ENUM = 4,         /* one of `choices` ("a|b|c") */
+    FP_PARAM_STRING = 5,       /* free text */
+    FP_PARAM_PATH = 6          /* a file or device path */
+} fp_param_type;
+typedef struct fp_param_info {
+    const char *name;          /* the key */
+    fp_param_type type;
+    double min, max;           /* INT and FLOAT; ignored otherwise */
+    const char *default_value; /* as text; NULL where the key is required */
+    const char *choices;       /* ENUM: "a|b|c"; NULL otherwise */
+    const char *unit;          /* e.g. "mm", "s", "mesh units"; NULL where none */
+    const char *description;   /* one line */
+} fp_param_info;
+
 /* ------------------------------------------------------------------------------------- */
 /* Input plugins                                                                         */
 
@@ -267,6 +296,9 @@ typedef struct fp_input_factory {
      *  the offending key or file to `err` (errlen bytes). Unknown keys are an error. */
     int (*create)(const fp_host *host, const char *arg, const fp_param *params, size_t nparams,
                   fp_input **out, char *err, size_t errlen);
+
+    /* ABI 1.1 (read where size covers it): the keys, ended by a NULL name; may be NULL. */
+    const fp_param_info *params;
 } fp_input_factory;
 
 /* ------------------------------------------------------------------------------------- */
@@ -307,7 +339,82 @@ typedef struct fp_frame_input {
      *  vertex of the base, mesh units; +INFINITY for an absent hand. The paper's rule "a hand
      *  is active while its fingertips are within the support radius of the surface" reads it. */
     float tip_distance[FP_HANDS][FP_FINGERS];
+
+    /* ---- ABI 1.1 (read only where size covers them; a 1.0 host does not fill them) --- */
+    /** The mesh's unit in millimetres (from the rig, the calibration or the head's size);
+     *  0 where unknown. A gain "in mm" becomes mesh units by dividing by it. */
+    double mm_per_unit;
+    /** The face's frame in mesh coordinates, unit vectors: up (chin to crown), forward
+     *  (out of the face, toward the viewer) and the face's own left. */
+    float face_up[3], face_forward[3], face_left[3];
+    /** The rig of this mesh (fp_rig_view below), or NULL where the session has none. Valid
+     *  during this call. */
+    const struct fp_rig_view *rig;
 } fp_frame_input;
+
+/* ------------------------------------------------------------------------------------- */
+/* Rigs (ABI 1.1): what a mapping may know of the face's skull, jaw and landmarks          */
+
+/** Region of a vertex in a rig (rigs/README.md). */
+typedef enum fp_rig_region {
+    FP_REGION_SOFT = 0,        /* soft tissue: free to deform */
+    FP_REGION_SKULL = 1,       /* rigid with the skull (cranium, upper teeth, eyes): never moves */
+    FP_REGION_JAW = 2          /* rigid with the jaw (lower teeth, chin bone): turns about the hinge */
+} fp_rig_region;
+
+typedef struct fp_rig_landmark {
+    const char *name;          /* e.g. "chin", "nose_tip", "mouth_corner_left" */
+    uint32_t vertex;           /* vertex index in the mesh */
+    float position[3];         /* that vertex of the base, mesh units */
+} fp_rig_landmark;
+
+typedef struct fp_rig_channel_info {
+    const char *name;          /* e.g. "jaw.open" */
+    float min, max;            /* the range the host clamps to */
+    float neutral;             /* the value at rest */
+    float value;               /* the value the host applied last frame */
+} fp_rig_channel_info;
+
+/** A rig as a mapping sees it. Owned by the host; valid during the call it is passed to (or,
+ *  from FP_HOST_EXT_RIG, until the mapping is reset or destroyed). */
+typedef struct fp_rig_view {
+    uint32_t size;
+    const char *name;                    /* the rig file's name */
+    double mm_per_unit;                  /* the mesh's unit in millimetres */
+    float up[3], forward[3], left[3];    /* face axes, mesh coordinates */
+    size_t vertex_count;
+    const uint8_t *region;               /* vertex_count fp_rig_region values */
+    size_t landmark_count;
+    const fp_rig_landmark *landmarks;
+    size_t channel_count;
+    const fp_rig_channel_info *channels;
+    float hinge[2][3];                   /* the jaw hinge: two points on its axis, mesh units */
+} fp_rig_view;
+
+/** Host extension FP_HOST_EXT_RIG (ABI 1.1): the session's rig, for a mapping that wants it
+ *  at create (to look up landmarks once). get returns NULL where the session has no rig.
+ *  [main-thread] and [session-thread]; no allocation. */
+#define FP_HOST_EXT_RIG "facepuppet.rig/1"
+typedef struct fp_host_rig {
+    const fp_rig_view *(*get)(const fp_host *host);
+} fp_host_rig;
+
+/** Host extension FP_HOST_EXT_SURFACE (ABI 1.1): nearest points of the base surface.
+ *  For each of `count` query points (mesh units) the nearest base vertex within
+ *  `max_distance` (mesh units; +INFINITY for no limit): out[i].vertex (UINT32_MAX where none
+ *  is within reach), its position, its distance and its unit normal. Returns 0 or a negative
+ *  errno. [session-thread]: no allocation, no lock; cost follows the queries, not the mesh. */
+#define FP_HOST_EXT_SURFACE "facepuppet.surface/1"
+typedef struct fp_surface_hit {
+    uint32_t vertex;
+    float distance;
+    float position[3];
+    float normal[3];
+} fp_surface_hit;
+typedef struct fp_host_surface {
+    int (*nearest)(const fp_host *host, const float (*points)[3], size_t count,
+                   float max_distance, fp_surface_hit *out);
+} fp_host_surface;
 
 /** A named scalar a mapping drives (e.g. "jaw.open" in [0, 1]); for rigs. */
 typedef struct fp_channel {
@@ -332,12 +439,15 @@ typedef struct fp_control_set {
     bool active;
     uint32_t intents;             /* fp_intent bits */
     double radius;                /* support radius, mesh units, > 0 */
-    size_t capacity;              /* set by the host */
+    size_t capacity;              /* set by the host, >= FP_CONTROL_CAPACITY (ABI 1.1) */
     size_t count;                 /* filled by the mapping, <= capacity */
     float (*start)[3];            /* start points s_i, mesh units */
     float (*end)[3];              /* end points d_i, mesh units */
     size_t channel_capacity;      /* set by the host */
     size_t channel_count;
+    /** Rig channels the mapping drives this frame, by name (e.g. "jaw.open"); the host's rig
+     *  step clamps each to its range and poses the face before the control vectors apply.
+     *  Channels not set keep their last value; a name the rig lacks is reported once. */
     fp_channel *channels;
 } fp_control_set;
 
@@ -368,6 +478,9 @@ typedef struct fp_mapping_factory {
     /** [main-thread] As fp_input_factory.create. */
     int (*create)(const fp_host *host, const fp_param *params, size_t nparams,
                   fp_mapping **out, char *err, size_t errlen);
+
+    /* ABI 1.1 (read where size covers it): the keys, ended by a NULL name; may be NULL. */
+    const fp_param_info *params;
 } fp_mapping_factory;
 
 /* ------------------------------------------------------------------------------------- */
