@@ -7,6 +7,7 @@
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <stddef.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <time.h>
@@ -137,11 +138,12 @@ int fp_plugin_load(const fp_plugin_path *path, fp_plugin_kind kind, const char *
     out->factory = out->entry->get_factory ? out->entry->get_factory(fid) : NULL;
     bool ok = out->factory != NULL;
     if (ok && kind == FP_PLUGIN_INPUT) {
+        /* An ABI 1.0 factory ends before `params`; fields past f->size are never read. */
         const fp_input_factory *f = out->factory;
-        ok = f->size >= sizeof *f && f->create && f->name;
+        ok = f->size >= offsetof(fp_input_factory, params) && f->create && f->name;
     } else if (ok) {
         const fp_mapping_factory *f = out->factory;
-        ok = f->size >= sizeof *f && f->create && f->name;
+        ok = f->size >= offsetof(fp_mapping_factory, params) && f->create && f->name;
     }
     if (!ok) {
         snprintf(err, errlen, "%s: offers no %s factory ('%s')", file, what, fid);
