@@ -19,6 +19,13 @@ void fp_app_plugin_path(fp_plugin_path *path, const char *const *dirs, size_t nd
     char builtin[4096];
     snprintf(builtin, sizeof builtin, "%s/%s", fp_app_exe_dir(), FP_PLUGIN_RELDIR);
     fp_plugin_path_init(path, dirs, ndirs, builtin);
+    /* Folders skipped for safety are said once, each on its own line. */
+    for (const char *w = path->warnings; *w;) {
+        const char *nl = strchr(w, '\n');
+        int n = nl ? (int)(nl - w) : (int)strlen(w);
+        fprintf(stderr, "facepuppet: warning: %.*s\n", n, w);
+        w += n + (nl ? 1 : 0);
+    }
 }
 
 const char *fp_app_data_path(const char *rel, char *buf, size_t len)

@@ -49,18 +49,32 @@ typedef enum fp_plugin_kind { FP_PLUGIN_INPUT = 0, FP_PLUGIN_MAPPING = 1 } fp_pl
 
 #define FP_PLUGIN_MAX_DIRS 16
 
-/** Where plugins are looked for, in order: the --plugin-dir folders, then each folder of
- *  FACEPUPPET_PLUGIN_PATH (colon-separated), then the built-in folder
- *  <directory of the executable>/FP_PLUGIN_RELDIR (build tree and install tree alike). */
+/** Where plugins are looked for, in order: the built-in folder <directory of the
+ *  executable>/FP_PLUGIN_RELDIR first (so a built-in plugin's name always resolves to the
+ *  built-in plugin), then the --plugin-dir folders, then each folder of
+ *  FACEPUPPET_PLUGIN_PATH (colon-separated).
+ *
+ *  Safety (plugins run with the caller's rights): a folder other than the built-in one is
+ *  skipped when it is writable by group or others, or owned by a user other than the caller
+ *  and root; a relative FACEPUPPET_PLUGIN_PATH entry is ignored (--plugin-dir folders are
+ *  made absolute); a plugin file in a searched folder is skipped on the same rules. Each
+ *  skip is explained in `warnings` (one line each) or in fp_plugin.warning. */
 typedef struct fp_plugin_path {
     char *dirs[FP_PLUGIN_MAX_DIRS];
     size_t count;
+    size_t builtin;                      /* index of the built-in folder, or SIZE_MAX */
+    char warnings[1024];                 /* folders skipped and why, "\n"-separated */
 } fp_plugin_path;
 
-/** Fill *path: extra_dirs (may be NULL, n_extra entries), the environment, and builtin_dir
- *  (may be NULL). Copies the strings. Free with fp_plugin_path_clear. */
+/** Fill *path: builtin_dir (may be NULL), extra_dirs (may be NULL, n_extra entries), then the
+ *  environment, applying the safety rules above. Copies the strings. Never prints: the
+ *  caller shows path->warnings. Free with fp_plugin_path_clear. */
 void fp_plugin_path_init(fp_plugin_path *path, const char *const *extra_dirs, size_t n_extra,
                          const char *builtin_dir);
+/** Why `file_or_dir` may not be trusted (writable by group or others; owned by another user
+ *  than the caller or root), into why (whylen bytes); false where it is safe. Follows
+ *  symbolic links. [any-thread] */
+bool fp_plugin_path_unsafe(const char *file_or_dir, char *why, size_t whylen);
 void fp_plugin_path_clear(fp_plugin_path *path);
 
 /** A loaded shared object. */
@@ -70,6 +84,7 @@ typedef struct fp_plugin {
     const fp_plugin_entry *entry;
     fp_plugin_kind kind;
     const void *factory;             /* fp_input_factory or fp_mapping_factory */
+    char warning[512];               /* set when an unsafe candidate file was skipped */
 } fp_plugin;
 
 /** Result codes of fp_plugin_load (also the facepuppet command's reasons for exit 78). */

@@ -10,34 +10,82 @@
 #include <stddef.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <limits.h>
+#include <stdint.h>
 #include <time.h>
+#include <unistd.h>
 
 static const char *kind_prefix(fp_plugin_kind kind)
 {
     return kind == FP_PLUGIN_INPUT ? "input-" : "map-";
 }
 
-static void add_dir(fp_plugin_path *path, const char *dir)
+/* Appends "plugin folder 'DIR' VERDICT: WHY\n" to path->warnings (truncated when full). */
+static void add_warning(fp_plugin_path *path, const char *dir, const char *verdict, const char *why)
+{
+    size_t used = strlen(path->warnings);
+    if (used + 1 < sizeof path->warnings)
+        snprintf(path->warnings + used, sizeof path->warnings - used,
+                 "plugin folder '%.300s' %s: %.200s\n", dir, verdict, why);
+}
+
+bool fp_plugin_path_unsafe(const char *p, char *why, size_t whylen)
+{
+    struct stat st;
+    if (stat(p, &st)) return false; /* absent: nothing to load from it */
+    uid_t me = getuid();
+    if (st.st_mode & (S_IWGRP | S_IWOTH)) {
+        snprintf(why, whylen, "writable by %s", st.st_mode & S_IWOTH ? "others" : "its group");
+        return true;
+    }
+    if (st.st_uid != me && st.st_uid != 0) {
+        snprintf(why, whylen, "owned by uid %u, neither you (uid %u) nor root",
+                 (unsigned)st.st_uid, (unsigned)me);
+        return true;
+    }
+    return false;
+}
+
+static void add_dir(fp_plugin_path *path, const char *dir, bool builtin, bool make_absolute)
 {
     if (!dir || !*dir || path->count == FP_PLUGIN_MAX_DIRS) return;
+    char abs[PATH_MAX];
+    if (dir[0] != '/') {
+        if (!make_absolute || !realpath(dir, abs)) {
+            add_warning(path, dir, "ignored",
+                        make_absolute ? "it does not exist" : "a relative path (give an absolute one)");
+            return;
+        }
+        dir = abs;
+    }
+    char why[128];
+    if (!builtin && fp_plugin_path_unsafe(dir, why, sizeof why)) {
+        add_warning(path, dir, "skipped", why);
+        return;
+    }
+    for (size_t i = 0; i < path->count; i++)
+        if (!strcmp(path->dirs[i], dir)) return; /* already searched */
     char *copy = strdup(dir);
-    if (copy) path->dirs[path->count++] = copy;
+    if (!copy) return;
+    if (builtin) path->builtin = path->count;
+    path->dirs[path->count++] = copy;
 }
 
 void fp_plugin_path_init(fp_plugin_path *path, const char *const *extra_dirs, size_t n_extra,
                          const char *builtin_dir)
 {
     memset(path, 0, sizeof *path);
-    for (size_t i = 0; i < n_extra; i++) add_dir(path, extra_dirs[i]);
+    path->builtin = SIZE_MAX;
+    add_dir(path, builtin_dir, true, true);
+    for (size_t i = 0; i < n_extra; i++) add_dir(path, extra_dirs[i], false, true);
     const char *env = getenv("FACEPUPPET_PLUGIN_PATH");
     if (env) {
         char *copy = strdup(env);
         char *save = NULL;
         for (char *d = copy ? strtok_r(copy, ":", &save) : NULL; d; d = strtok_r(NULL, ":", &save))
-            add_dir(path, d);
+            add_dir(path, d, false, false);
         free(copy);
     }
-    add_dir(path, builtin_dir);
 }
 
 void fp_plugin_path_clear(fp_plugin_path *path)
@@ -88,6 +136,14 @@ int fp_plugin_load(const fp_plugin_path *path, fp_plugin_kind kind, const char *
         for (size_t i = 0; i < path->count && !found; i++) {
             snprintf(file, sizeof file, "%s/%s%s.so", path->dirs[i], kind_prefix(kind), name);
             found = stat(file, &st) == 0;
+            char why[128];
+            if (found && i != path->builtin && fp_plugin_path_unsafe(file, why, sizeof why)) {
+                size_t used = strlen(out->warning);
+                if (used < sizeof out->warning)
+                    snprintf(out->warning + used, sizeof out->warning - used, "%s%.300s skipped: %.120s",
+                             used ? "; " : "", file, why);
+                found = false;
+            }
         }
     }
     if (!found) {
@@ -102,9 +158,9 @@ int fp_plugin_load(const fp_plugin_path *path, fp_plugin_kind kind, const char *
         if (strchr(name, '/'))
             snprintf(err, errlen, "%s plugin file '%s' not found", what, name);
         else
-            snprintf(err, errlen, "no %s plugin named '%s' (looked for %s%s.so in: %s; available: %s)",
+            snprintf(err, errlen, "no %s plugin named '%s' (looked for %s%s.so in: %s; available: %s)%s%s",
                      what, name, kind_prefix(kind), name, path->count ? dirs : "no folders",
-                     avail[0] ? avail : "none");
+                     avail[0] ? avail : "none", out->warning[0] ? "; " : "", out->warning);
         return FP_PLUGIN_ERR_NOT_FOUND;
     }
     out->path = strdup(file);

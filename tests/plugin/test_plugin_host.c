@@ -9,6 +9,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 #include <cmocka.h>
 
 static char fixture_dir[4096], builtin_dir[4096];
@@ -115,6 +117,105 @@ static void test_env_path_and_instance(void **state)
     unsetenv("FACEPUPPET_PLUGIN_PATH");
 }
 
+/* ---- plugin folders that could be hijacked are skipped, with the reason ---- */
+
+/* A fresh folder holding a copy of the good fixture plugin as input-NAME.so. */
+static void make_plugin_dir(char *dir, size_t len, const char *name, mode_t mode)
+{
+    snprintf(dir, len, "/tmp/fp-plugdir-XXXXXX");
+    assert_non_null(mkdtemp(dir));
+    char src[4200], dst[4200], cmd[9000];
+    snprintf(src, sizeof src, "%s/input-fixture.so", fixture_dir);
+    snprintf(dst, sizeof dst, "%s/input-%s.so", dir, name);
+    snprintf(cmd, sizeof cmd, "cp '%s' '%s'", src, dst);
+    assert_int_equal(system(cmd), 0);
+    assert_int_equal(chmod(dst, 0755), 0);
+    assert_int_equal(chmod(dir, mode), 0);
+}
+
+static void remove_dir(const char *dir)
+{
+    char cmd[4200];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+    assert_int_equal(system(cmd), 0);
+}
+
+static void test_unsafe_folders_skipped(void **state)
+{
+    (void)state;
+    char dir[64], err[2048];
+    fp_plugin p;
+    fp_plugin_path path;
+
+    /* World-writable folder: skipped, its plugin never loads. */
+    make_plugin_dir(dir, sizeof dir, "hijack", 0777);
+    setenv("FACEPUPPET_PLUGIN_PATH", dir, 1);
+    fp_plugin_path_init(&path, NULL, 0, builtin_dir);
+    assert_non_null(strstr(path.warnings, dir));
+    assert_non_null(strstr(path.warnings, "skipped: writable by others"));
+    assert_int_equal(fp_plugin_load(&path, FP_PLUGIN_INPUT, "hijack", &p, err, sizeof err),
+                     FP_PLUGIN_ERR_NOT_FOUND);
+    fp_plugin_path_clear(&path);
+
+    /* The same folder made safe: the plugin loads (the rule, not the name, decided). */
+    assert_int_equal(chmod(dir, 0755), 0);
+    fp_plugin_path_init(&path, NULL, 0, builtin_dir);
+    assert_string_equal(path.warnings, "");
+    assert_int_equal(fp_plugin_load(&path, FP_PLUGIN_INPUT, "hijack", &p, err, sizeof err), 0);
+    fp_plugin_unload(&p);
+    fp_plugin_path_clear(&path);
+
+    /* A group-writable plugin file inside a safe folder: skipped, and the error says why. */
+    char file[128];
+    snprintf(file, sizeof file, "%s/input-hijack.so", dir);
+    assert_int_equal(chmod(file, 0775), 0);
+    fp_plugin_path_init(&path, NULL, 0, builtin_dir);
+    assert_int_equal(fp_plugin_load(&path, FP_PLUGIN_INPUT, "hijack", &p, err, sizeof err),
+                     FP_PLUGIN_ERR_NOT_FOUND);
+    assert_non_null(strstr(err, "skipped: writable by its group"));
+    fp_plugin_path_clear(&path);
+    assert_int_equal(chmod(file, 0755), 0);
+
+    /* Owned by another user (only root can arrange it): skipped. */
+    if (getuid() == 0) {
+        assert_int_equal(chown(dir, 65534, 65534), 0);
+        fp_plugin_path_init(&path, NULL, 0, builtin_dir);
+        assert_non_null(strstr(path.warnings, "owned by uid 65534"));
+        assert_int_equal(path.count, 1); /* the built-in folder alone */
+        fp_plugin_path_clear(&path);
+        assert_int_equal(chown(dir, 0, 0), 0);
+    }
+
+    /* A relative entry is ignored; an empty one too. */
+    setenv("FACEPUPPET_PLUGIN_PATH", "build/tests/plugins::", 1);
+    fp_plugin_path_init(&path, NULL, 0, builtin_dir);
+    assert_non_null(strstr(path.warnings, "'build/tests/plugins' ignored: a relative path"));
+    assert_int_equal(path.count, 1);
+    fp_plugin_path_clear(&path);
+    unsetenv("FACEPUPPET_PLUGIN_PATH");
+    remove_dir(dir);
+}
+
+/* A built-in plugin's name resolves to the built-in folder even when an extra folder that
+ * comes first on the command line holds a file of the same name. */
+static void test_builtin_first(void **state)
+{
+    (void)state;
+    char dir[64], err[2048];
+    make_plugin_dir(dir, sizeof dir, "replay", 0755);
+    const char *dirs[] = {dir};
+    fp_plugin_path path;
+    fp_plugin_path_init(&path, dirs, 1, builtin_dir);
+    assert_int_equal(path.builtin, 0);
+    fp_plugin p;
+    assert_int_equal(fp_plugin_load(&path, FP_PLUGIN_INPUT, "replay", &p, err, sizeof err), 0);
+    assert_non_null(strstr(p.path, builtin_dir));
+    assert_string_equal(p.entry->id, "org.facepuppet.input-replay");
+    fp_plugin_unload(&p);
+    fp_plugin_path_clear(&path);
+    remove_dir(dir);
+}
+
 /* ---- queue: several producers, one consumer; nothing lost or duplicated ---- */
 #define PRODUCERS 4
 #define PER_PRODUCER 20000
@@ -177,7 +278,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_spec_parse),        cmocka_unit_test(test_loader_errors),
         cmocka_unit_test(test_env_path_and_instance), cmocka_unit_test(test_queue_mpsc),
-        cmocka_unit_test(test_queue_full),
+        cmocka_unit_test(test_queue_full),        cmocka_unit_test(test_unsafe_folders_skipped),
+        cmocka_unit_test(test_builtin_first),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
