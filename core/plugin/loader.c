@@ -1,6 +1,7 @@
 /* Finding and loading plugins: <input|map>-<name>.so on a search path, one entry symbol. */
 #define _GNU_SOURCE
 #include "fp_plugin_host.h"
+#include "fp_plugin_crash.h"
 
 #include <dirent.h>
 #include <dlfcn.h>
@@ -185,7 +186,11 @@ int fp_plugin_load(const fp_plugin_path *path, fp_plugin_kind kind, const char *
         out->entry = NULL; /* do not call its deinit */
         return fail(out, FP_PLUGIN_ERR_ABI);
     }
-    if (out->entry->init && !out->entry->init(file)) {
+    fp_plugin_crash_register(out->handle, file);
+    fp_plugin_call_enter(out->path, "init", 0);
+    bool init_ok = !out->entry->init || out->entry->init(file);
+    fp_plugin_call_leave();
+    if (!init_ok) {
         snprintf(err, errlen, "%s: the plugin's init failed", file);
         out->entry = NULL;
         return fail(out, FP_PLUGIN_ERR_INIT);
@@ -210,8 +215,15 @@ int fp_plugin_load(const fp_plugin_path *path, fp_plugin_kind kind, const char *
 
 void fp_plugin_unload(fp_plugin *p)
 {
-    if (p->entry && p->entry->deinit) p->entry->deinit();
-    if (p->handle) dlclose(p->handle);
+    if (p->entry && p->entry->deinit) {
+        fp_plugin_call_enter(p->path, "deinit", 0);
+        p->entry->deinit();
+        fp_plugin_call_leave();
+    }
+    if (p->handle) {
+        fp_plugin_crash_unregister(p->handle);
+        dlclose(p->handle);
+    }
     free(p->path);
     fp_plugin_kind kind = p->kind;
     memset(p, 0, sizeof *p);

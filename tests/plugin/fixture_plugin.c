@@ -2,6 +2,8 @@
  *   FIXTURE_ABI_MAJOR   entry built against another ABI major
  *   FIXTURE_NO_ENTRY    no facepuppet_plugin_entry symbol at all
  *   FIXTURE_INIT_FAILS  init returns false
+ *   FIXTURE_CRASH_INIT  init dereferences a null pointer
+ *   FIXTURE_CRASH_THREAD start() runs a thread of its own that dereferences a null pointer
  *   FIXTURE_GOOD        a working input that pushes FIXTURE_EVENTS events then ends */
 #include <facepuppet/plugin.h>
 
@@ -10,8 +12,30 @@
 #include <string.h>
 
 #ifndef FIXTURE_NO_ENTRY
+#if defined(FIXTURE_CRASH_INIT) || defined(FIXTURE_CRASH_THREAD)
+static void crash(void)
+{
+    volatile int *volatile nowhere = NULL;
+    *nowhere = 1;
+}
+#endif
+#ifdef FIXTURE_CRASH_THREAD
+#include <pthread.h>
+#include <unistd.h>
+static void *crashing_thread(void *arg)
+{
+    (void)arg;
+    crash();
+    return NULL;
+}
+#endif
 static int start(fp_input *self, char *err, size_t errlen)
 {
+#ifdef FIXTURE_CRASH_THREAD
+    pthread_t t;
+    pthread_create(&t, NULL, crashing_thread, NULL);
+    pthread_join(t, NULL);
+#endif
     const fp_host *host = self->plugin_data;
     for (int i = 0; i < 3; i++) {
         fp_event_button b = {{sizeof b, FP_EVENT_BUTTON, 0, host->now_ns(host), 0, -1},
@@ -54,6 +78,8 @@ static const void *get_factory(const char *id)
 }
 #ifdef FIXTURE_INIT_FAILS
 static bool init(const char *path) { (void)path; return false; }
+#elif defined(FIXTURE_CRASH_INIT)
+static bool init(const char *path) { (void)path; crash(); return true; }
 #else
 static bool init(const char *path) { (void)path; return true; }
 #endif

@@ -1,6 +1,7 @@
 /* The host side of the plugin ABI: SPEC parsing, the loader's errors, the MPSC queue. */
 #define _GNU_SOURCE
 #include "fp_plugin_host.h"
+#include "fp_plugin_crash.h"
 
 #include <pthread.h>
 #include <setjmp.h>
@@ -9,7 +10,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <signal.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 #include <cmocka.h>
 
@@ -216,6 +219,65 @@ static void test_builtin_first(void **state)
     remove_dir(dir);
 }
 
+/* ---- a fatal signal inside a plugin names the plugin, then ends the process ---- */
+
+/* Runs fn in a child with the crash handler installed; returns what the child wrote to
+ * stderr and its terminating signal (0 if it exited). */
+static int crash_child(void (*fn)(void), char *out, size_t len)
+{
+    int pipefd[2];
+    assert_int_equal(pipe(pipefd), 0);
+    pid_t pid = fork();
+    assert_true(pid >= 0);
+    if (pid == 0) {
+        dup2(pipefd[1], STDERR_FILENO);
+        close(pipefd[0]);
+        if (fp_plugin_crash_install()) _exit(90);
+        fn();
+        _exit(0);
+    }
+    close(pipefd[1]);
+    size_t n = 0;
+    ssize_t r;
+    while (n + 1 < len && (r = read(pipefd[0], out + n, len - 1 - n)) > 0) n += (size_t)r;
+    out[n] = '\0';
+    close(pipefd[0]);
+    int status = 0;
+    assert_int_equal(waitpid(pid, &status, 0), pid);
+    return WIFSIGNALED(status) ? WTERMSIG(status) : 0;
+}
+
+static void load_crashinit(void)
+{
+    fp_plugin p;
+    char err[1024];
+    load("fixture-crashinit", &p, err, sizeof err);
+}
+
+static void start_crashthread(void)
+{
+    const char *dirs[] = {fixture_dir};
+    fp_plugin_path path;
+    fp_plugin_path_init(&path, dirs, 1, NULL);
+    fp_input_instance inst;
+    char err[1024];
+    if (fp_input_instance_open(&inst, &path, "fixture-crashthread", 0, err, sizeof err)) _exit(91);
+    fp_input_instance_start(&inst, err, sizeof err);
+}
+
+static void test_crash_names_plugin(void **state)
+{
+    (void)state;
+    char out[2048];
+    assert_int_equal(crash_child(load_crashinit, out, sizeof out), SIGSEGV);
+    assert_non_null(strstr(out, "facepuppet: fatal signal SIGSEGV in plugin '"));
+    assert_non_null(strstr(out, "input-fixture-crashinit.so' during init (frame 0)"));
+
+    assert_int_equal(crash_child(start_crashthread, out, sizeof out), SIGSEGV);
+    assert_non_null(strstr(out, "facepuppet: fatal signal SIGSEGV in plugin "));
+    assert_non_null(strstr(out, "input-fixture-crashthread.so (its own thread)"));
+}
+
 /* ---- queue: several producers, one consumer; nothing lost or duplicated ---- */
 #define PRODUCERS 4
 #define PER_PRODUCER 20000
@@ -279,7 +341,7 @@ int main(void)
         cmocka_unit_test(test_spec_parse),        cmocka_unit_test(test_loader_errors),
         cmocka_unit_test(test_env_path_and_instance), cmocka_unit_test(test_queue_mpsc),
         cmocka_unit_test(test_queue_full),        cmocka_unit_test(test_unsafe_folders_skipped),
-        cmocka_unit_test(test_builtin_first),
+        cmocka_unit_test(test_builtin_first),     cmocka_unit_test(test_crash_names_plugin),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
