@@ -113,35 +113,34 @@ static void destroy(fp_mapping *self)
     free(self->plugin_data);
 }
 
+/* The keys, typed (ABI 1.1): `facepuppet plugins` prints them, fpmu_params_parse checks
+ * them. The order is that of the values create reads. */
+enum { KEY_HANDS, KEY_AUTO, KEY_RELEASE, KEY_CLAMP, KEY_COUNT };
+static const fp_param_info keys[KEY_COUNT + 1] = {
+    {"hands", FP_PARAM_ENUM, 0, 0, "both", "left|right|both", NULL, "which hands deform"},
+    {"auto", FP_PARAM_BOOL, 0, 1, "1", NULL, NULL,
+     "engage when a fingertip comes within R of the surface, commit when the hand lets go"},
+    {"release", FP_PARAM_FLOAT, 0.1, 100, "1.0", NULL, "R",
+     "auto commit once every engaged fingertip is farther than release x R"},
+    {"clamp", FP_PARAM_FLOAT, 0, 100, "0.45", NULL, "R",
+     "longest control vector (0: no limit)"},
+    {NULL, 0, 0, 0, NULL, NULL, NULL, NULL},
+};
+static const unsigned hand_masks[] = {FP_HANDMASK_LEFT, FP_HANDMASK_RIGHT, FP_HANDMASK_BOTH};
+
 static int create(const fp_host *host, const fp_param *params, size_t nparams,
                   fp_mapping **out, char *err, size_t errlen)
 {
     (void)host;
+    fpmu_value v[KEY_COUNT];
+    int rc = fpmu_params_parse("anchored", keys, params, nparams, v, err, errlen);
+    if (rc) return rc;
     anchored *a = calloc(1, sizeof *a);
     if (!a) return -ENOMEM;
-    a->hands = FP_HANDMASK_BOTH;
-    a->automatic = true;
-    a->release = 1.0;
-    a->clamp = 0.45;
-    for (size_t i = 0; i < nparams; i++) {
-        const char *k = params[i].key, *v = params[i].value;
-        double x;
-        bool ok = true;
-        if (!strcmp(k, "hands")) ok = (a->hands = fp_parse_hands(v)) != 0;
-        else if (!strcmp(k, "auto")) ok = fp_parse_double(v, 0, 1, &x) && (a->automatic = x != 0, true);
-        else if (!strcmp(k, "release")) ok = fp_parse_double(v, 0.1, 100, &a->release);
-        else if (!strcmp(k, "clamp")) ok = fp_parse_double(v, 0, 100, &a->clamp);
-        else {
-            snprintf(err, errlen, "anchored: unknown key '%s' (keys: hands, auto, release, clamp)", k);
-            free(a);
-            return -EINVAL;
-        }
-        if (!ok) {
-            snprintf(err, errlen, "anchored: bad value '%s' for key '%s'", v, k);
-            free(a);
-            return -EINVAL;
-        }
-    }
+    a->hands = hand_masks[(int)v[KEY_HANDS].number];
+    a->automatic = v[KEY_AUTO].number != 0;
+    a->release = v[KEY_RELEASE].number;
+    a->clamp = v[KEY_CLAMP].number;
     a->mapping.size = sizeof a->mapping;
     a->mapping.plugin_data = a;
     a->mapping.process = process;
@@ -160,6 +159,7 @@ static const fp_mapping_factory factory = {
              "  the hand lets go (farther than release*R); clamp limits each control vector\n"
              "  to clamp*R (0.45 keeps the warp free of fold-over).",
     .create = create,
+    .params = keys,
 };
 
 static const void *get_factory(const char *id)

@@ -82,33 +82,29 @@ static void destroy(fp_mapping *self)
     free(self->plugin_data);
 }
 
+/* The keys, typed (ABI 1.1). */
+enum { KEY_HANDS, KEY_AUTO, KEY_CLAMP, KEY_COUNT };
+static const fp_param_info keys[KEY_COUNT + 1] = {
+    {"hands", FP_PARAM_ENUM, 0, 0, "both", "left|right|both", NULL, "which hands deform"},
+    {"auto", FP_PARAM_BOOL, 0, 1, "1", NULL, NULL,
+     "a hand acts while a fingertip is within R of the surface"},
+    {"clamp", FP_PARAM_FLOAT, 0, 100, "0.45", NULL, "R", "longest step (0: no limit)"},
+    {NULL, 0, 0, 0, NULL, NULL, NULL, NULL},
+};
+static const unsigned hand_masks[] = {FP_HANDMASK_LEFT, FP_HANDMASK_RIGHT, FP_HANDMASK_BOTH};
+
 static int create(const fp_host *host, const fp_param *params, size_t nparams,
                   fp_mapping **out, char *err, size_t errlen)
 {
     (void)host;
+    fpmu_value v[KEY_COUNT];
+    int rc = fpmu_params_parse("unanchored", keys, params, nparams, v, err, errlen);
+    if (rc) return rc;
     unanchored *u = calloc(1, sizeof *u);
     if (!u) return -ENOMEM;
-    u->hands = FP_HANDMASK_BOTH;
-    u->automatic = true;
-    u->clamp = 0.45;
-    for (size_t i = 0; i < nparams; i++) {
-        const char *k = params[i].key, *v = params[i].value;
-        double x;
-        bool ok = true;
-        if (!strcmp(k, "hands")) ok = (u->hands = fp_parse_hands(v)) != 0;
-        else if (!strcmp(k, "auto")) ok = fp_parse_double(v, 0, 1, &x) && (u->automatic = x != 0, true);
-        else if (!strcmp(k, "clamp")) ok = fp_parse_double(v, 0, 100, &u->clamp);
-        else {
-            snprintf(err, errlen, "unanchored: unknown key '%s' (keys: hands, auto, clamp)", k);
-            free(u);
-            return -EINVAL;
-        }
-        if (!ok) {
-            snprintf(err, errlen, "unanchored: bad value '%s' for key '%s'", v, k);
-            free(u);
-            return -EINVAL;
-        }
-    }
+    u->hands = hand_masks[(int)v[KEY_HANDS].number];
+    u->automatic = v[KEY_AUTO].number != 0;
+    u->clamp = v[KEY_CLAMP].number;
     u->mapping.size = sizeof u->mapping;
     u->mapping.plugin_data = u;
     u->mapping.process = process;
@@ -126,6 +122,7 @@ static const fp_mapping_factory factory = {
              "  a hand acts while a fingertip is within R of the surface (auto=1) or while\n"
              "  engaged; each step is folded into the base at once.",
     .create = create,
+    .params = keys,
 };
 
 static const void *get_factory(const char *id)

@@ -9,7 +9,9 @@
 #define FACEPUPPET_MAPPING_UTIL_H
 
 #include <facepuppet/plugin.h>
+#include <errno.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -65,6 +67,114 @@ static inline bool fp_parse_double(const char *v, double lo, double hi, double *
     if (end == v || *end || !isfinite(x) || x < lo || x > hi) return false;
     *out = x;
     return true;
+}
+
+/* ---- table-driven keys (ABI 1.1 fp_param_info) --------------------------------------- */
+
+/** One parsed key: `number` for BOOL, INT, FLOAT and ENUM (the index of the choice in
+ *  "a|b|c"), `text` for STRING and PATH (points into the host's SPEC: valid only during
+ *  create; copy it). */
+typedef struct fpmu_value {
+    double number;
+    const char *text;
+} fpmu_value;
+
+/* The index of `v` among the '|'-separated `choices`, or -1. */
+static inline int fpmu_choice_index(const char *choices, const char *v)
+{
+    size_t n = strlen(v);
+    int k = 0;
+    for (const char *c = choices; c && *c; k++) {
+        const char *bar = strchr(c, '|');
+        size_t len = bar ? (size_t)(bar - c) : strlen(c);
+        if (len == n && !strncmp(c, v, n)) return k;
+        if (!bar) break;
+        c = bar + 1;
+    }
+    return -1;
+}
+
+/* Parse one value of `info`'s type into *out; false where it is not one. */
+static inline bool fpmu_parse_value(const fp_param_info *info, const char *v, fpmu_value *out)
+{
+    char *end;
+    out->text = v;
+    switch (info->type) {
+    case FP_PARAM_BOOL:
+        if (!strcmp(v, "1") || !strcmp(v, "true") || !strcmp(v, "yes") || !strcmp(v, "on")) out->number = 1;
+        else if (!strcmp(v, "0") || !strcmp(v, "false") || !strcmp(v, "no") || !strcmp(v, "off")) out->number = 0;
+        else return false;
+        return true;
+    case FP_PARAM_INT:
+    case FP_PARAM_FLOAT:
+        out->number = strtod(v, &end);
+        if (end == v || *end || !isfinite(out->number)) return false;
+        if (info->type == FP_PARAM_INT && out->number != floor(out->number)) return false;
+        return out->number >= info->min && out->number <= info->max;
+    case FP_PARAM_ENUM:
+        out->number = fpmu_choice_index(info->choices, v);
+        return out->number >= 0;
+    case FP_PARAM_STRING:
+    case FP_PARAM_PATH:
+        return info->type == FP_PARAM_STRING || *v;
+    }
+    return false;
+}
+
+/** Parse a SPEC's keys against a factory's typed key list `info` (ended by a NULL name):
+ *  out[i] receives info[i]'s value, its default where the key is absent. Errors (-EINVAL,
+ *  a message in err that begins with `plugin`): an unknown key (the message lists the keys),
+ *  a value of the wrong type or outside [min, max] (the message gives the range or the
+ *  choices), a required key (default NULL) that is missing. out must have as many entries as
+ *  info. [main-thread] (a create call); no allocation. */
+static inline int fpmu_params_parse(const char *plugin, const fp_param_info *info,
+                                    const fp_param *params, size_t nparams, fpmu_value *out,
+                                    char *err, size_t errlen)
+{
+    size_t n = 0;
+    while (info[n].name) n++;
+    for (size_t i = 0; i < n; i++) {
+        out[i].number = 0;
+        out[i].text = NULL;
+        if (info[i].default_value && !fpmu_parse_value(&info[i], info[i].default_value, &out[i])) {
+            snprintf(err, errlen, "%s: the default of key '%s' is not valid (a bug in the plugin)",
+                     plugin, info[i].name);
+            return -EINVAL;
+        }
+    }
+    bool given[64] = {false};
+    for (size_t p = 0; p < nparams; p++) {
+        size_t i = 0;
+        while (i < n && strcmp(info[i].name, params[p].key)) i++;
+        if (i == n) {
+            int w = snprintf(err, errlen, "%s: unknown key '%s' (keys:", plugin, params[p].key);
+            for (size_t j = 0; j < n && w >= 0 && (size_t)w < errlen; j++)
+                w += snprintf(err + w, errlen - (size_t)w, "%s %s", j ? "," : "", info[j].name);
+            if (w >= 0 && (size_t)w < errlen) snprintf(err + w, errlen - (size_t)w, ")");
+            return -EINVAL;
+        }
+        if (!fpmu_parse_value(&info[i], params[p].value, &out[i])) {
+            if (info[i].type == FP_PARAM_ENUM)
+                snprintf(err, errlen, "%s: key '%s': '%s' is not one of %s", plugin, info[i].name,
+                         params[p].value, info[i].choices ? info[i].choices : "(none)");
+            else if (info[i].type == FP_PARAM_INT || info[i].type == FP_PARAM_FLOAT)
+                snprintf(err, errlen, "%s: key '%s': '%s' is not a%s number in [%g, %g]%s%s", plugin,
+                         info[i].name, params[p].value, info[i].type == FP_PARAM_INT ? "n integer" : "",
+                         info[i].min, info[i].max, info[i].unit ? " " : "", info[i].unit ? info[i].unit : "");
+            else
+                snprintf(err, errlen, "%s: key '%s': bad value '%s'", plugin, info[i].name,
+                         params[p].value);
+            return -EINVAL;
+        }
+        if (i < 64) given[i] = true;
+    }
+    for (size_t i = 0; i < n; i++)
+        if (!info[i].default_value && !(i < 64 && given[i])) {
+            snprintf(err, errlen, "%s: key '%s' is required (%s)", plugin, info[i].name,
+                     info[i].description ? info[i].description : "no default");
+            return -EINVAL;
+        }
+    return 0;
 }
 
 #endif
