@@ -104,19 +104,19 @@ int fp_plugin_load(const fp_plugin_path *path, fp_plugin_kind kind, const char *
             snprintf(err, errlen, "no %s plugin named '%s' (looked for %s%s.so in: %s; available: %s)",
                      what, name, kind_prefix(kind), name, path->count ? dirs : "no folders",
                      avail[0] ? avail : "none");
-        return FP_PLUGIN_ERR_NOT_FOUND;
+        return FP_EPLUGIN_NOT_FOUND;
     }
     out->path = strdup(file);
     out->handle = dlopen(file, RTLD_NOW | RTLD_LOCAL);
     if (!out->handle) {
         snprintf(err, errlen, "%s: cannot load: %s", file, dlerror());
-        return fail(out, FP_PLUGIN_ERR_DLOPEN);
+        return fail(out, FP_EPLUGIN_DLOPEN);
     }
     out->entry = (const fp_plugin_entry *)dlsym(out->handle, FP_PLUGIN_ENTRY_SYMBOL);
     if (!out->entry) {
         snprintf(err, errlen, "%s: not a facepuppet plugin (no symbol '%s')", file,
                  FP_PLUGIN_ENTRY_SYMBOL);
-        return fail(out, FP_PLUGIN_ERR_NO_ENTRY);
+        return fail(out, FP_EPLUGIN_NO_ENTRY);
     }
     fp_version host = {FP_PLUGIN_ABI_MAJOR, FP_PLUGIN_ABI_MINOR};
     if (!fp_version_is_compatible(host, out->entry->abi)) {
@@ -126,12 +126,12 @@ int fp_plugin_load(const fp_plugin_path *path, fp_plugin_kind kind, const char *
                  file, out->entry->abi.major, out->entry->abi.minor, host.major, host.minor,
                  out->entry->abi.major != host.major ? "another major" : "a newer minor");
         out->entry = NULL; /* do not call its deinit */
-        return fail(out, FP_PLUGIN_ERR_ABI);
+        return fail(out, FP_EPLUGIN_ABI);
     }
     if (out->entry->init && !out->entry->init(file)) {
         snprintf(err, errlen, "%s: the plugin's init failed", file);
         out->entry = NULL;
-        return fail(out, FP_PLUGIN_ERR_INIT);
+        return fail(out, FP_EPLUGIN_INIT);
     }
     const char *fid = kind == FP_PLUGIN_INPUT ? FP_INPUT_FACTORY_ID : FP_MAPPING_FACTORY_ID;
     out->factory = out->entry->get_factory ? out->entry->get_factory(fid) : NULL;
@@ -145,9 +145,9 @@ int fp_plugin_load(const fp_plugin_path *path, fp_plugin_kind kind, const char *
     }
     if (!ok) {
         snprintf(err, errlen, "%s: offers no %s factory ('%s')", file, what, fid);
-        return fail(out, FP_PLUGIN_ERR_NO_FACTORY);
+        return fail(out, FP_EPLUGIN_NO_FACTORY);
     }
-    return FP_PLUGIN_OK;
+    return 0;
 }
 
 void fp_plugin_unload(fp_plugin *p)

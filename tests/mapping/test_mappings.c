@@ -188,7 +188,7 @@ static void test_bad_keys(void **state)
     assert_int_not_equal(open_mapping(&r, "unanchored", q, 1, err), 0);
     assert_non_null(strstr(err, "bad value 'abc' for key 'clamp'"));
     close_mapping(&r);
-    assert_int_equal(open_mapping(&r, "no-such-mapping", NULL, 0, err), FP_PLUGIN_ERR_NOT_FOUND);
+    assert_int_equal(open_mapping(&r, "no-such-mapping", NULL, 0, err), FP_EPLUGIN_NOT_FOUND);
     assert_non_null(strstr(err, "no mapping plugin named 'no-such-mapping'"));
     assert_non_null(strstr(err, "anchored"));
     close_mapping(&r);

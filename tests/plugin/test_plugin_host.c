@@ -63,19 +63,19 @@ static void test_loader_errors(void **state)
     (void)state;
     fp_plugin p;
     char err[2048];
-    assert_int_equal(load("no-such-thing", &p, err, sizeof err), FP_PLUGIN_ERR_NOT_FOUND);
+    assert_int_equal(load("no-such-thing", &p, err, sizeof err), FP_EPLUGIN_NOT_FOUND);
     assert_non_null(strstr(err, "no input plugin named 'no-such-thing'"));
     assert_non_null(strstr(err, fixture_dir)); /* names the folders searched */
     assert_non_null(strstr(err, "fixture"));   /* and what is available */
 
-    assert_int_equal(load("fixture-abi2", &p, err, sizeof err), FP_PLUGIN_ERR_ABI);
+    assert_int_equal(load("fixture-abi2", &p, err, sizeof err), FP_EPLUGIN_ABI);
     assert_non_null(strstr(err, "built for plugin ABI 2.0"));
     assert_non_null(strstr(err, "input-fixture-abi2.so"));
 
-    assert_int_equal(load("fixture-noentry", &p, err, sizeof err), FP_PLUGIN_ERR_NO_ENTRY);
+    assert_int_equal(load("fixture-noentry", &p, err, sizeof err), FP_EPLUGIN_NO_ENTRY);
     assert_non_null(strstr(err, "no symbol 'facepuppet_plugin_entry'"));
 
-    assert_int_equal(load("fixture-initfails", &p, err, sizeof err), FP_PLUGIN_ERR_INIT);
+    assert_int_equal(load("fixture-initfails", &p, err, sizeof err), FP_EPLUGIN_INIT);
     assert_non_null(strstr(err, "init failed"));
 
     /* A mapping asked for under an input plugin's name is not found. */
@@ -83,7 +83,7 @@ static void test_loader_errors(void **state)
     fp_plugin_path path;
     fp_plugin_path_init(&path, dirs, 1, NULL);
     assert_int_equal(fp_plugin_load(&path, FP_PLUGIN_MAPPING, "fixture", &p, err, sizeof err),
-                     FP_PLUGIN_ERR_NOT_FOUND);
+                     FP_EPLUGIN_NOT_FOUND);
     fp_plugin_path_clear(&path);
 }
 

@@ -14,8 +14,28 @@ void fp_app_plugin_path(fp_plugin_path *path, const char *const *dirs, size_t nd
  *  beside the source tree): writes "<data>/<rel>" into buf. */
 const char *fp_app_data_path(const char *rel, char *buf, size_t len);
 
-/** The exit code (enum fp_exit) for a negative code from session or plugin calls. */
-int fp_app_exit_code(int rc);
+/** What a failing call was doing, for the codes whose exit status depends on it. */
+typedef enum fp_app_io {
+    FP_APP_INPUT,   /* reading an input: a mesh, a recording, a device, plugins, options */
+    FP_APP_OUTPUT   /* creating or writing an output file */
+} fp_app_io;
+
+/** The one map from an error code (fp_error.h: 0, a negative errno or an FP_E* code) to the
+ *  command's exit status (enum fp_exit, sysexits.h); every subcommand uses it, never the
+ *  message text. The table (docs/architecture.md, "Errors"; `facepuppet --help`):
+ *    0                                          0
+ *    -EINVAL (a bad option or SPEC key)         64 usage
+ *    -EBADMSG -ERANGE -EPROTO -ENOTSUP -EILSEQ  65 bad input data
+ *    -ENOENT -EACCES -EPERM -ENODEV -ENXIO      66 an input (file, device, display) that cannot
+ *    -EBUSY -ENOTDIR -EISDIR                       be opened; 73 when io is FP_APP_OUTPUT
+ *    -EIO -ENOSPC -EROFS -EDQUOT -EFBIG -EEXIST 73 an output that cannot be created or written
+ *    -ENOMEM                                    70 internal
+ *    FP_EPLUGIN_*                               78 a plugin missing, of another ABI, failing
+ *    anything else (FP_ENUMERIC, -ETIMEDOUT...) 1
+ *  A plugin's create() and start() codes go through the same table, so a plugin says "bad
+ *  SPEC" with -EINVAL, "malformed file" with -EBADMSG, "no such file or device" with -ENOENT
+ *  or -ENODEV (plugin.h). */
+int fp_app_exit_code(int code, fp_app_io io);
 
 /** Storage for the strings fp_app_session_defaults puts into a fp_session_options; it must
  *  outlive the options' use. */
