@@ -35,7 +35,8 @@ int fp_app_exit_code(int code, fp_app_io io)
     switch (-code) {
     case 0: return FP_EXIT_OK;
     case EINVAL: return FP_EXIT_USAGE;
-    case EBADMSG: case ERANGE: case EPROTO: case ENOTSUP: case EILSEQ: return FP_EXIT_DATAERR;
+    case EBADMSG: case ERANGE: case EDOM: case EPROTO: case ENOTSUP: case EILSEQ:
+        return FP_EXIT_DATAERR;
     case ENOENT: case EACCES: case EPERM: case ENODEV: case ENXIO: case EBUSY: case ENOTDIR:
     case EISDIR:
         return io == FP_APP_OUTPUT ? FP_EXIT_CANTCREAT : FP_EXIT_NOINPUT;

@@ -25,7 +25,7 @@ typedef enum fp_app_io {
  *  message text. The table (docs/architecture.md, "Errors"; `facepuppet --help`):
  *    0                                          0
  *    -EINVAL (a bad option or SPEC key)         64 usage
- *    -EBADMSG -ERANGE -EPROTO -ENOTSUP -EILSEQ  65 bad input data
+ *    -EBADMSG -ERANGE -EDOM -EPROTO -ENOTSUP    65 bad input data (and -EILSEQ)
  *    -ENOENT -EACCES -EPERM -ENODEV -ENXIO      66 an input (file, device, display) that cannot
  *    -EBUSY -ENOTDIR -EISDIR                       be opened; 73 when io is FP_APP_OUTPUT
  *    -EIO -ENOSPC -EROFS -EDQUOT -EFBIG -EEXIST 73 an output that cannot be created or written
