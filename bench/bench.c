@@ -5,9 +5,10 @@
 #define _POSIX_C_SOURCE 200809L
 #include "fp_bench.h"
 
-#include "command.h"
 #include "csrbf.h"
+#include "fp_error.h"
 
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -16,7 +17,6 @@
 
 typedef struct {
     int quick, json, rounds;
-    const char *only;
 } bench_opts;
 
 static double now_ms(void)
@@ -264,7 +264,7 @@ static int run_deform(const bench_opts *o, const char *name, size_t nv, double R
     if (!base || !c.out || !times || csrbf_solver_create(&opt, &c.s) ||
         csrbf_points_create(nv, base, &c.pts)) {
         fprintf(stderr, "bench: set-up failed for %s (%zu vertices)\n", name, nv);
-        rc = 1;
+        rc = -ENOMEM;
         goto done;
     }
     float en[3 * NCTRL];
@@ -300,7 +300,7 @@ done:
     return rc;
 engine_fail:
     fprintf(stderr, "bench: engine call failed: %s\n", csrbf_solver_message(c.s));
-    rc = 1;
+    rc = FP_ENUMERIC;
     goto done;
 }
 
@@ -317,9 +317,9 @@ static int case_table1(const bench_opts *o)
                 fprintf(stderr, "bench: table1 %zu vertices R = %g %s\n", nv, table_radius[ri],
                         anchored ? "anchored" : "unanchored");
                 double fps = anchored ? paper_anchored_fps[g][ri] : paper_unanchored_fps[g][ri];
-                if (run_deform(o, "table1", nv, table_radius[ri], anchored, reps, brute, fps,
-                               paper_pairs[g][ri]))
-                    return 1;
+                int rc = run_deform(o, "table1", nv, table_radius[ri], anchored, reps, brute, fps,
+                                    paper_pairs[g][ri]);
+                if (rc) return rc;
             }
     return 0;
 }
@@ -381,7 +381,7 @@ static int case_centres(const bench_opts *o)
             free(st);
             free(en);
             free(times);
-            return 1;
+            return FP_ENUMERIC;
         }
         row f = {"centres", "factor", 0, csrbf_solver_centres(s), R, -1, -1, ms_factor, -1, -1, -1};
         row u = {"centres", "reused", 0, csrbf_solver_centres(s), R, -1, -1, ms_reused, -1, -1,
@@ -398,62 +398,18 @@ static int case_centres(const bench_opts *o)
     return 0;
 }
 
-static void usage(FILE *f)
-{
-    fprintf(f,
-            "usage: facepuppet bench [--quick] [--json] [--case NAME] [--help]\n\n"
-            "Times the CSRBF engine (medians over repeated updates; the lowest median of 3\n"
-            "rounds, 2 with --quick, as the machine may be shared) beside references measured\n"
-            "in the same run. Cases:\n"
-            "  table1   the paper's Table 1: planar grids of 1089, 4225, 16641, 33025 vertices\n"
-            "           over 64 x 64, 10 control vectors, R = 10..80, anchored (end points move:\n"
-            "           set_end_points + evaluate) and unanchored (start and end points move:\n"
-            "           set_start_points + set_end_points + evaluate)\n"
-            "  scale    a 1,000,000-vertex grid, 10 control vectors, every vertex in support\n"
-            "  centres  1000 and 5000 random centres: factor, fresh factor-and-solve, and an\n"
-            "           update that reuses the factor\n"
-            "Columns: pairs = (vertex, centre) pairs inside the support (paper: its count);\n"
-            "ms_ref = the brute-force loop (all pairs, scalar double, one thread) for the same\n"
-            "update, or for 'reused' the fresh factor-and-solve; ratio = ms_ref / ms_median.\n"
-            "  --quick  fewer repetitions (under 40 s)\n"
-            "  --json   one JSON object per line: case, mode, vertices, centres, radius, pairs,\n"
-            "           paper_pairs, ms_median, ms_bruteforce, ms_fresh, paper_fps (null: none)\n"
-            "  --case NAME  run one case only\n");
-}
+const char *const fp_bench_cases[] = {"table1", "scale", "centres", NULL};
 
-int fp_bench_main(int argc, char **argv)
+int fp_bench_run(const fp_bench_options *opt)
 {
-    bench_opts o = {0};
-    for (int i = 1; i < argc; i++) {
-        if (!strcmp(argv[i], "--quick")) {
-            o.quick = 1;
-        } else if (!strcmp(argv[i], "--json")) {
-            o.json = 1;
-        } else if (!strcmp(argv[i], "--case") && i + 1 < argc) {
-            o.only = argv[++i];
-        } else if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
-            usage(stdout);
-            return FP_EXIT_OK;
-        } else {
-            fprintf(stderr, "facepuppet bench: unknown option '%s'\n", argv[i]);
-            usage(stderr);
-            return FP_EXIT_USAGE;
-        }
-    }
-    o.rounds = o.quick ? 2 : 3;
-    static const struct {
-        const char *name;
-        int (*fn)(const bench_opts *);
-    } cases[] = {{"table1", case_table1}, {"scale", case_scale}, {"centres", case_centres}};
+    static int (*const run[])(const bench_opts *) = {case_table1, case_scale, case_centres};
+    bench_opts o = {opt->quick, opt->json, opt->quick ? 2 : 3};
     int found = 0;
-    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
-        if (o.only && strcmp(o.only, cases[c].name)) continue;
+    for (size_t c = 0; fp_bench_cases[c]; c++) {
+        if (opt->only && strcmp(opt->only, fp_bench_cases[c])) continue;
         found = 1;
-        if (cases[c].fn(&o)) return FP_EXIT_FAILURE;
+        int rc = run[c](&o);
+        if (rc) return rc;
     }
-    if (!found) {
-        fprintf(stderr, "facepuppet bench: unknown case '%s' (table1, scale, centres)\n", o.only);
-        return FP_EXIT_USAGE;
-    }
-    return FP_EXIT_OK;
+    return found ? 0 : -EINVAL;
 }

@@ -16,6 +16,7 @@
  *   -ENOMEM   out of memory                              -ENOTSUP  a format or feature we lack
  *   -ERANGE   a value outside its documented range       -EEXIST   an output that must not
  *                                                                    be overwritten
+ *   -EDOM     degenerate geometry (a zero vector or quaternion, coincident points)
  * Thread rules: every function here is reentrant and [any-thread].
  * Link: the static library `fp_common` (PIC), which plugins may link too.
  */

@@ -33,19 +33,6 @@ const char *fp_eventlog_status_name(uint32_t code)
     return code >= 1 && code <= 6 ? status_names[code] : NULL;
 }
 
-const char *fp_eventlog_strerror(int code)
-{
-    switch (code) {
-    case FP_EVENTLOG_OK: return "success";
-    case FP_EVENTLOG_EIO: return "input/output error";
-    case FP_EVENTLOG_ENOMEM: return "out of memory";
-    case FP_EVENTLOG_EINVAL: return "event not representable in the event log";
-    case FP_EVENTLOG_ESYNTAX: return "malformed event-log line";
-    case FP_EVENTLOG_EFORMAT: return "not a facepuppet event log of a known version";
-    default: return "unknown error";
-    }
-}
-
 static size_t type_size(int type)
 {
     switch (type) {
@@ -164,7 +151,7 @@ static int writer_fail(fp_eventlog_writer *w, int code, const char *fmt, ...)
 static int write_line(fp_eventlog_writer *w, const char *s, size_t n)
 {
     if (fwrite(s, 1, n, w->f) != n || fflush(w->f) != 0)
-        return writer_fail(w, FP_EVENTLOG_EIO, "cannot write: %s", strerror(errno));
+        return writer_fail(w, -EIO, "cannot write: %s", strerror(errno));
     return 0;
 }
 
@@ -172,12 +159,12 @@ static int format_event(fp_eventlog_writer *w, const fp_event *e, line_buf *b)
 {
     const fp_event_header *h = &e->header;
     const char *name = fp_eventlog_type_name(h->type);
-    if (!name) return writer_fail(w, FP_EVENTLOG_EINVAL, "unknown event type %u", h->type);
+    if (!name) return writer_fail(w, -EINVAL, "unknown event type %u", h->type);
     if (h->size < type_size(h->type))
-        return writer_fail(w, FP_EVENTLOG_EINVAL, "%s event of size %u, smaller than %zu", name,
+        return writer_fail(w, -EINVAL, "%s event of size %u, smaller than %zu", name,
                            h->size, type_size(h->type));
     if (h->hand < -1 || h->hand > 1)
-        return writer_fail(w, FP_EVENTLOG_EINVAL, "%s event with hand %d (not -1, 0 or 1)", name,
+        return writer_fail(w, -EINVAL, "%s event with hand %d (not -1, 0 or 1)", name,
                            (int)h->hand);
     const char *hand = h->hand == FP_HAND_LEFT ? "left" : h->hand == FP_HAND_RIGHT ? "right" : "-";
     lb_printf(b, "%" PRId64 " %s %s", h->time_ns, name, hand);
@@ -185,7 +172,7 @@ static int format_event(fp_eventlog_writer *w, const fp_event *e, line_buf *b)
     switch (h->type) {
     case FP_EVENT_JOINT_ANGLES:
         if (e->angles.valid >> FP_GLOVE_SENSORS)
-            return writer_fail(w, FP_EVENTLOG_EINVAL, "angles valid mask 0x%x has bits beyond %d",
+            return writer_fail(w, -EINVAL, "angles valid mask 0x%x has bits beyond %d",
                                e->angles.valid, FP_GLOVE_SENSORS);
         lb_printf(b, " 0x%06x", e->angles.valid);
         bad = lb_floats(b, e->angles.radians, FP_GLOVE_SENSORS);
@@ -212,7 +199,7 @@ static int format_event(fp_eventlog_writer *w, const fp_event *e, line_buf *b)
             lb_printf(b, " %" PRIu32 " \"", e->status.code);
         size_t len = strnlen(e->status.text, TEXT_BYTES);
         if (len >= (size_t)TEXT_BYTES)
-            return writer_fail(w, FP_EVENTLOG_EINVAL, "status text not NUL-terminated");
+            return writer_fail(w, -EINVAL, "status text not NUL-terminated");
         for (size_t i = 0; i < len; i++) {
             unsigned char c = (unsigned char)e->status.text[i];
             switch (c) {
@@ -233,18 +220,18 @@ static int format_event(fp_eventlog_writer *w, const fp_event *e, line_buf *b)
     }
     }
     if (bad)
-        return writer_fail(w, FP_EVENTLOG_EINVAL, "%s event: float %d is not finite", name, bad);
+        return writer_fail(w, -EINVAL, "%s event: float %d is not finite", name, bad);
     if (h->source) lb_printf(b, " source=%" PRIu32, h->source);
     if (h->flags) lb_printf(b, " flags=%u", (unsigned)h->flags);
     lb_printf(b, "\n");
-    if (b->pos >= b->cap) return writer_fail(w, FP_EVENTLOG_EINVAL, "line too long");
+    if (b->pos >= b->cap) return writer_fail(w, -EINVAL, "line too long");
     return 0;
 }
 
 int fp_eventlog_writer_write(fp_eventlog_writer *w, const fp_event *event)
 {
-    if (!w) return FP_EVENTLOG_EINVAL;
-    if (!event) return writer_fail(w, FP_EVENTLOG_EINVAL, "no event given");
+    if (!w) return -EINVAL;
+    if (!event) return writer_fail(w, -EINVAL, "no event given");
     line_buf b = {w->line, sizeof w->line, 0};
     locale_t old = uselocale(w->c_locale);
     int rc = format_event(w, event, &b);
@@ -255,7 +242,7 @@ int fp_eventlog_writer_write(fp_eventlog_writer *w, const fp_event *event)
 
 int fp_eventlog_writer_comment(fp_eventlog_writer *w, const char *text)
 {
-    if (!w) return FP_EVENTLOG_EINVAL;
+    if (!w) return -EINVAL;
     line_buf b = {w->line, sizeof w->line, 0};
     lb_printf(&b, "# ");
     for (const char *p = text ? text : ""; *p && b.pos + 2 < b.cap; p++)
@@ -272,11 +259,11 @@ int fp_eventlog_writer_close(fp_eventlog_writer **pw, char *err, size_t errlen)
     int rc = 0;
     if (fflush(w->f) != 0) {
         put_msg(err, errlen, "%s: cannot write: %s", w->path, strerror(errno));
-        rc = FP_EVENTLOG_EIO;
+        rc = -EIO;
     }
     if (fclose(w->f) != 0 && rc == 0) {
         put_msg(err, errlen, "%s: cannot close: %s", w->path, strerror(errno));
-        rc = FP_EVENTLOG_EIO;
+        rc = -EIO;
     }
     freelocale(w->c_locale);
     free(w->path);
@@ -328,13 +315,13 @@ void fp_eventlog_reader_close(fp_eventlog_reader **pr)
 }
 
 /* Reads one line into r->line without its "\n" (and "\r"). Returns 1 for a complete line, 2 for
- * a last line without newline, 0 at the end, or FP_EVENTLOG_EIO. */
+ * a last line without newline, 0 at the end, or -EIO. */
 static int read_line(fp_eventlog_reader *r, size_t *len)
 {
     errno = 0;
     ssize_t n = getline(&r->line, &r->line_cap, r->f);
     if (n < 0) {
-        if (ferror(r->f)) return FP_EVENTLOG_EIO;
+        if (ferror(r->f)) return -EIO;
         return 0;
     }
     r->line_no++;
@@ -445,7 +432,7 @@ static int need_token(cursor *c, char **tok, const char *what)
 {
     char *start = NULL;
     if (!next_token(c, &start)) {
-        return reader_fail(c->r, FP_EVENTLOG_ESYNTAX, col_of(c, c->p),
+        return reader_fail(c->r, -EBADMSG, col_of(c, c->p),
                            "line ends where %s was expected", what);
     }
     *tok = start;
@@ -461,10 +448,10 @@ static int parse_float(cursor *c, float *out, const char *what)
     errno = 0;
     float v = strtof_l(tok, &end, c->r->c_locale);
     if (end == tok || *end)
-        return reader_fail(c->r, FP_EVENTLOG_ESYNTAX, col_of(c, tok), "bad number \"%s\" for %s",
+        return reader_fail(c->r, -EBADMSG, col_of(c, tok), "bad number \"%s\" for %s",
                            tok, what);
     if (!isfinite(v))
-        return reader_fail(c->r, FP_EVENTLOG_ESYNTAX, col_of(c, tok),
+        return reader_fail(c->r, -EBADMSG, col_of(c, tok),
                            "%s is \"%s\", not a finite number", what, tok);
     *out = v;
     return 0;
@@ -485,7 +472,7 @@ static int parse_u32(cursor *c, const char *tok, int base, uint32_t *out, const 
     errno = 0;
     unsigned long long v = strtoull(tok, &end, base);
     if (end == tok || *end || tok[0] == '-' || tok[0] == '+' || errno || v > UINT32_MAX)
-        return reader_fail(c->r, FP_EVENTLOG_ESYNTAX, col_of(c, tok),
+        return reader_fail(c->r, -EBADMSG, col_of(c, tok),
                            "bad %s \"%s\" (an unsigned 32-bit integer)", what, tok);
     *out = (uint32_t)v;
     return 0;
@@ -510,7 +497,7 @@ static int parse_text(cursor *c, char *text)
 {
     skip_blanks(c);
     if (*c->p != '"')
-        return reader_fail(c->r, FP_EVENTLOG_ESYNTAX, col_of(c, c->p),
+        return reader_fail(c->r, -EBADMSG, col_of(c, c->p),
                            "expected the status text in double quotes");
     char *open = c->p++;
     int n = 0;
@@ -518,7 +505,7 @@ static int parse_text(cursor *c, char *text)
         char *at = c->p;
         int ch = (unsigned char)*c->p++;
         if (ch == '\0')
-            return reader_fail(c->r, FP_EVENTLOG_ESYNTAX, col_of(c, open),
+            return reader_fail(c->r, -EBADMSG, col_of(c, open),
                                "status text has no closing quote");
         if (ch == '"') break;
         if (ch == '\\') {
@@ -533,24 +520,24 @@ static int parse_text(cursor *c, char *text)
                 int hi = hex_digit((unsigned char)c->p[0]);
                 int lo = hi < 0 ? -1 : hex_digit((unsigned char)c->p[1]);
                 if (hi < 0 || lo < 0 || (hi == 0 && lo == 0))
-                    return reader_fail(c->r, FP_EVENTLOG_ESYNTAX, col_of(c, at),
+                    return reader_fail(c->r, -EBADMSG, col_of(c, at),
                                        "bad escape: \\x needs two hex digits, not 00");
                 ch = hi * 16 + lo;
                 c->p += 2;
                 break;
             }
             default:
-                return reader_fail(c->r, FP_EVENTLOG_ESYNTAX, col_of(c, at),
+                return reader_fail(c->r, -EBADMSG, col_of(c, at),
                                    "unknown escape \\%c in status text", e ? e : '0');
             }
         }
         if (n >= TEXT_BYTES - 1)
-            return reader_fail(c->r, FP_EVENTLOG_ESYNTAX, col_of(c, at),
+            return reader_fail(c->r, -EBADMSG, col_of(c, at),
                                "status text longer than %d bytes", TEXT_BYTES - 1);
         text[n++] = (char)ch;
     }
     if (*c->p && *c->p != ' ' && *c->p != '\t')
-        return reader_fail(c->r, FP_EVENTLOG_ESYNTAX, col_of(c, c->p),
+        return reader_fail(c->r, -EBADMSG, col_of(c, c->p),
                            "expected a blank after the status text");
     return 0;
 }
@@ -566,7 +553,7 @@ static int parse_event(fp_eventlog_reader *r, char *line, fp_event *out)
     errno = 0;
     long long t = strtoll(tok, &end, 10);
     if (end == tok || *end || errno)
-        return reader_fail(r, FP_EVENTLOG_ESYNTAX, col_of(&c, tok),
+        return reader_fail(r, -EBADMSG, col_of(&c, tok),
                            "bad time \"%s\" (a signed 64-bit integer of ns)", tok);
     h->time_ns = (int64_t)t;
 
@@ -575,7 +562,7 @@ static int parse_event(fp_eventlog_reader *r, char *line, fp_event *out)
     for (int i = 1; i <= 5; i++)
         if (strcmp(tok, type_names[i]) == 0) type = i;
     if (!type)
-        return reader_fail(r, FP_EVENTLOG_ESYNTAX, col_of(&c, tok),
+        return reader_fail(r, -EBADMSG, col_of(&c, tok),
                            "unknown event type \"%s\" (angles, positions, wrist, button, "
                            "status)", tok);
     h->type = (uint16_t)type;
@@ -589,7 +576,7 @@ static int parse_event(fp_eventlog_reader *r, char *line, fp_event *out)
     else if (strcmp(tok, "-") == 0)
         h->hand = -1;
     else
-        return reader_fail(r, FP_EVENTLOG_ESYNTAX, col_of(&c, tok),
+        return reader_fail(r, -EBADMSG, col_of(&c, tok),
                            "unknown hand \"%s\" (left, right or -)", tok);
 
     switch (type) {
@@ -597,7 +584,7 @@ static int parse_event(fp_eventlog_reader *r, char *line, fp_event *out)
         if ((rc = need_token(&c, &tok, "the valid mask"))) return rc;
         if ((rc = parse_u32(&c, tok, 0, &out->angles.valid, "valid mask"))) return rc;
         if (out->angles.valid >> FP_GLOVE_SENSORS)
-            return reader_fail(r, FP_EVENTLOG_ESYNTAX, col_of(&c, tok),
+            return reader_fail(r, -EBADMSG, col_of(&c, tok),
                                "valid mask %s has bits beyond the %d sensors", tok,
                                FP_GLOVE_SENSORS);
         rc = parse_floats(&c, out->angles.radians, FP_GLOVE_SENSORS, "an angle in radians");
@@ -622,7 +609,7 @@ static int parse_event(fp_eventlog_reader *r, char *line, fp_event *out)
             if (strcmp(tok, status_names[i]) == 0) out->status.code = i;
         if (!out->status.code) {
             if (tok[0] < '0' || tok[0] > '9')
-                return reader_fail(r, FP_EVENTLOG_ESYNTAX, col_of(&c, tok),
+                return reader_fail(r, -EBADMSG, col_of(&c, tok),
                                    "unknown status code \"%s\"", tok);
             if ((rc = parse_u32(&c, tok, 10, &out->status.code, "status code"))) return rc;
         }
@@ -642,12 +629,12 @@ static int parse_event(fp_eventlog_reader *r, char *line, fp_event *out)
         } else if (strncmp(tok, "flags=", 6) == 0 && !seen_flags) {
             if ((rc = parse_u32(&c, tok + 6, 10, &v, "flags"))) return rc;
             if (v > UINT16_MAX)
-                return reader_fail(r, FP_EVENTLOG_ESYNTAX, col_of(&c, tok + 6),
+                return reader_fail(r, -EBADMSG, col_of(&c, tok + 6),
                                    "flags %s beyond 16 bits", tok + 6);
             h->flags = (uint16_t)v;
             seen_flags = 1;
         } else {
-            return reader_fail(r, FP_EVENTLOG_ESYNTAX, col_of(&c, tok),
+            return reader_fail(r, -EBADMSG, col_of(&c, tok),
                                "unexpected \"%s\" after the %s fields (only source=N and "
                                "flags=N may follow, once each)", tok, type_names[type]);
         }
@@ -657,12 +644,12 @@ static int parse_event(fp_eventlog_reader *r, char *line, fp_event *out)
 
 int fp_eventlog_reader_next(fp_eventlog_reader *r, fp_event *out)
 {
-    if (!r || !out) return FP_EVENTLOG_EINVAL;
+    if (!r || !out) return -EINVAL;
     if (r->status) return r->status;
     for (;;) {
         size_t len = 0;
         int rc = read_line(r, &len);
-        if (rc < 0) return reader_fail(r, FP_EVENTLOG_EIO, 0, "cannot read: %s", strerror(errno));
+        if (rc < 0) return reader_fail(r, -EIO, 0, "cannot read: %s", strerror(errno));
         if (rc == 0) return 0;
         if (rc == 2) {
             /* An unterminated last line: cut short by a crash; never parsed. */
@@ -670,7 +657,7 @@ int fp_eventlog_reader_next(fp_eventlog_reader *r, fp_event *out)
             return 0;
         }
         if (strlen(r->line) != len)
-            return reader_fail(r, FP_EVENTLOG_ESYNTAX, (long)strlen(r->line) + 1,
+            return reader_fail(r, -EBADMSG, (long)strlen(r->line) + 1,
                                "NUL byte in line");
         const char *p = r->line;
         while (*p == ' ' || *p == '\t') p++;

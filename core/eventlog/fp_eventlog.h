@@ -15,7 +15,7 @@
  * Used by the host to record live input (sessions, takes) and by plugins/input-replay to
  * replay it. A static library built position-independent so plugins may link it in.
  *
- * Errors: functions return 0 (or 1 for an event read) or a negative fp_eventlog_result; the
+ * Errors: functions return 0 (or 1 for an event read) or a negative errno (fp_error.h); the
  * message of the last error is kept in the writer or reader (fp_eventlog_writer_error,
  * fp_eventlog_reader_error) and names the file, and for the reader the line and column.
  * Nothing is ever printed.
@@ -39,19 +39,6 @@ extern "C" {
 #define FP_EVENTLOG_MAGIC "facepuppet-eventlog"
 #define FP_EVENTLOG_VERSION 1
 
-typedef enum fp_eventlog_result {
-    FP_EVENTLOG_OK = 0,
-    FP_EVENTLOG_EIO = -1,      /* opening, reading or writing the file failed (errno text) */
-    FP_EVENTLOG_ENOMEM = -2,   /* out of memory */
-    FP_EVENTLOG_EINVAL = -3,   /* writer: an event the format cannot hold (bad type, hand,
-                                  size, a non-finite float, an oversized valid mask) */
-    FP_EVENTLOG_ESYNTAX = -4,  /* reader: a malformed line */
-    FP_EVENTLOG_EFORMAT = -5   /* reader: not an event log, or a version this code lacks */
-} fp_eventlog_result;
-
-/** A static English string for a fp_eventlog_result ("unknown error" for others). */
-const char *fp_eventlog_strerror(int code);
-
 /* ------------------------------------------------------------------------------------- */
 /* Writer                                                                                 */
 
@@ -69,19 +56,19 @@ fp_eventlog_writer *fp_eventlog_writer_open(const char *path, char *err, size_t 
  *  type's struct (fields past it are not recorded); hand must be -1, 0 or 1; floats must be
  *  finite; angles.valid may use only the low FP_GLOVE_SENSORS bits; status text is recorded
  *  up to its NUL (at most 115 bytes). time_ns, source and flags are recorded as they are.
- *  Returns 0, FP_EVENTLOG_EINVAL (the file is unchanged) or FP_EVENTLOG_EIO; the message is
+ *  Returns 0, -EINVAL (the file is unchanged) or -EIO; the message is
  *  in fp_eventlog_writer_error. Not for the [session-thread]: it does I/O. */
 int fp_eventlog_writer_write(fp_eventlog_writer *w, const fp_event *event);
 
 /** Append a comment line `# TEXT` (a slate, a note). Line breaks in text become spaces.
- *  Returns 0 or FP_EVENTLOG_EIO. */
+ *  Returns 0 or -EIO. */
 int fp_eventlog_writer_comment(fp_eventlog_writer *w, const char *text);
 
 /** The message of the writer's last error ("" when none). Valid until the next call. */
 const char *fp_eventlog_writer_error(const fp_eventlog_writer *w);
 
 /** Flush, close the file and free the writer; sets *w to NULL. NULL or *w NULL is a no-op.
- *  Returns 0, or FP_EVENTLOG_EIO when the final flush or close failed (the writer is freed
+ *  Returns 0, or -EIO when the final flush or close failed (the writer is freed
  *  anyway; err, if not NULL, receives the message). */
 int fp_eventlog_writer_close(fp_eventlog_writer **w, char *err, size_t errlen);
 
@@ -99,9 +86,9 @@ fp_eventlog_reader *fp_eventlog_reader_open(const char *path, char *err, size_t 
 
 /** Read the next event into *out (the whole union is zeroed first; header.size is the size
  *  of the type's struct, status text is NUL-padded).
- *  Returns 1 for an event, 0 at the end of the file, or a negative fp_eventlog_result
- *  (FP_EVENTLOG_ESYNTAX with the message "PATH:LINE:COLUMN: reason", LINE and COLUMN
- *  counted from 1, COLUMN in bytes; FP_EVENTLOG_EIO). After an error every later call
+ *  Returns 1 for an event, 0 at the end of the file, or a negative errno (fp_error.h)
+ *  (-EBADMSG with the message "PATH:LINE:COLUMN: reason", LINE and COLUMN
+ *  counted from 1, COLUMN in bytes; -EIO). After an error every later call
  *  returns the same error.
  *  A last line that does not end with a newline is taken as cut short by a crash: it is not
  *  parsed, next returns 0, and fp_eventlog_reader_truncated_line gives its number. */

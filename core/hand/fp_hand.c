@@ -7,6 +7,9 @@
  */
 #include "fp_hand.h"
 
+#include "fp_error.h"
+
+#include <errno.h>
 #include <math.h>
 #include <string.h>
 
@@ -17,14 +20,12 @@
 
 typedef double mat3[3][3];
 
-const char *fp_hand_strerror(int result)
+const char *fp_hand_strerror(int code)
 {
-    switch (result) {
-    case FP_HAND_OK: return "success";
-    case FP_HAND_EINVAL: return "invalid argument";
-    case FP_HAND_ENONFINITE: return "non-finite value (NaN or infinity) in the input";
-    case FP_HAND_EDEGENERATE: return "degenerate geometry (zero vector, zero quaternion or coincident joints)";
-    default: return "unknown error";
+    switch (code) {
+    case -ERANGE: return "non-finite value (NaN or infinity) in the input";
+    case -EDOM: return "degenerate geometry (zero vector, zero quaternion or coincident joints)";
+    default: return fp_strerror(code);
     }
 }
 
@@ -312,21 +313,21 @@ int fp_hand_fk(const fp_hand_model *model, fp_hand_side side, const float angles
                float joints_mm[FP_HAND_JOINTS][3])
 {
     if (!model || !joints_mm || (side != FP_HAND_LEFT && side != FP_HAND_RIGHT))
-        return FP_HAND_EINVAL;
+        return -EINVAL;
     if ((valid_mask & FP_HAND_ALL_SENSORS) && !angles_rad)
-        return FP_HAND_EINVAL;
+        return -EINVAL;
     if ((wrist_pos_mm == NULL) != (wrist_rot_wxyz == NULL))
-        return FP_HAND_EINVAL;
+        return -EINVAL;
     if (!(model->size > 0))
-        return isfinite(model->size) ? FP_HAND_EINVAL : FP_HAND_ENONFINITE;
+        return isfinite(model->size) ? -EINVAL : -ERANGE;
     if (!model_ok(model))
-        return FP_HAND_ENONFINITE;
+        return -ERANGE;
 
     double a[FP_GLOVE_SENSORS];
     for (int i = 0; i < FP_GLOVE_SENSORS; i++) {
         if (valid_mask & (1u << i)) {
             if (!isfinite(angles_rad[i]))
-                return FP_HAND_ENONFINITE;
+                return -ERANGE;
             a[i] = angles_rad[i];
         } else {
             a[i] = model->rest_rad[i];
@@ -342,9 +343,9 @@ int fp_hand_fk(const fp_hand_model *model, fp_hand_side side, const float angles
     mat3 rot;
     if (wrist_rot_wxyz) {
         if (!finite3f(wrist_pos_mm) || !finite3f(wrist_rot_wxyz) || !isfinite(wrist_rot_wxyz[3]))
-            return FP_HAND_ENONFINITE;
+            return -ERANGE;
         if (!quat_to_mat(wrist_rot_wxyz, rot))
-            return FP_HAND_EDEGENERATE;
+            return -EDOM;
     }
 
     double j[FP_HAND_JOINTS][3];
@@ -363,11 +364,11 @@ int fp_hand_fk(const fp_hand_model *model, fp_hand_side side, const float angles
     for (int i = 0; i < FP_HAND_JOINTS; i++)
         for (int k = 0; k < 3; k++)
             if (!isfinite(j[i][k]))
-                return FP_HAND_ENONFINITE; /* only from absurd model values */
+                return -ERANGE; /* only from absurd model values */
     for (int i = 0; i < FP_HAND_JOINTS; i++)
         for (int k = 0; k < 3; k++)
             joints_mm[i][k] = (float)j[i][k];
-    return FP_HAND_OK;
+    return 0;
 }
 
 /* ---------------------------------------------------------------------------------- */
@@ -390,17 +391,17 @@ int fp_hand_frame_from_palm(const fp_hand_model *model, fp_hand_side side,
 {
     if (!model || !palm_mm || !palm_normal || !direction || !wrist_pos_mm || !wrist_rot_wxyz ||
         (side != FP_HAND_LEFT && side != FP_HAND_RIGHT) || !(model->size > 0))
-        return FP_HAND_EINVAL;
+        return -EINVAL;
     if (!finite3f(palm_mm) || !finite3f(palm_normal) || !finite3f(direction) || !model_ok(model))
-        return FP_HAND_ENONFINITE;
+        return -ERANGE;
     double y[3] = {-palm_normal[0], -palm_normal[1], -palm_normal[2]};
     double d[3] = {direction[0], direction[1], direction[2]};
     if (normalize3(y) < 1e-9 || normalize3(d) < 1e-9)
-        return FP_HAND_EDEGENERATE;
+        return -EDOM;
     double dy = dot3(d, y);
     double z[3] = {-(d[0] - dy * y[0]), -(d[1] - dy * y[1]), -(d[2] - dy * y[2])};
     if (normalize3(z) < 1e-3)
-        return FP_HAND_EDEGENERATE;
+        return -EDOM;
     double x[3];
     cross3(y, z, x);
     mat3 r;
@@ -413,29 +414,29 @@ int fp_hand_frame_from_palm(const fp_hand_model *model, fp_hand_side side,
     for (int k = 0; k < 3; k++)
         wrist_pos_mm[k] = (float)(palm_mm[k] - pl[k]);
     mat_to_quat(r, wrist_rot_wxyz);
-    return FP_HAND_OK;
+    return 0;
 }
 
 int fp_hand_to_hand_frame(const float wrist_pos_mm[3], const float wrist_rot_wxyz[4],
                           const float (*in_mm)[3], size_t n, float (*out_mm)[3])
 {
     if (!wrist_pos_mm || !wrist_rot_wxyz || (n && (!in_mm || !out_mm)))
-        return FP_HAND_EINVAL;
+        return -EINVAL;
     if (!finite3f(wrist_pos_mm) || !finite3f(wrist_rot_wxyz) || !isfinite(wrist_rot_wxyz[3]))
-        return FP_HAND_ENONFINITE;
+        return -ERANGE;
     mat3 r;
     if (!quat_to_mat(wrist_rot_wxyz, r))
-        return FP_HAND_EDEGENERATE;
+        return -EDOM;
     for (size_t i = 0; i < n; i++)
         if (!finite3f(in_mm[i]))
-            return FP_HAND_ENONFINITE;
+            return -ERANGE;
     for (size_t i = 0; i < n; i++) {
         double p[3] = {in_mm[i][0] - wrist_pos_mm[0], in_mm[i][1] - wrist_pos_mm[1],
                        in_mm[i][2] - wrist_pos_mm[2]};
         mat_tvec(r, p, p);
         out_mm[i][0] = (float)p[0], out_mm[i][1] = (float)p[1], out_mm[i][2] = (float)p[2];
     }
-    return FP_HAND_OK;
+    return 0;
 }
 
 /* Orthonormal triad from the palm centre and the index and little MCPs: e0 along
@@ -462,12 +463,12 @@ int fp_hand_from_positions(const fp_hand_model *model, fp_hand_side side,
 {
     if (!model || !joints_mm || !out || (side != FP_HAND_LEFT && side != FP_HAND_RIGHT) ||
         !(model->size > 0))
-        return FP_HAND_EINVAL;
+        return -EINVAL;
     if (!model_ok(model))
-        return FP_HAND_ENONFINITE;
+        return -ERANGE;
     for (int i = 0; i < FP_HAND_JOINTS; i++)
         if (!finite3f(joints_mm[i]))
-            return FP_HAND_ENONFINITE;
+            return -ERANGE;
 
     const double s = model->size, mx = side == FP_HAND_LEFT ? -1.0 : 1.0;
     /* Model points (device-frame scale, mirrored) at the rest pose, rest wrist included. */
@@ -491,7 +492,7 @@ int fp_hand_from_positions(const fp_hand_model *model, fp_hand_side side,
     mat3 fm, fd, r;
     if (!palm_triad(jm[0], jm[FP_JOINT(1, 0)], jm[FP_JOINT(4, 0)], fm) ||
         !palm_triad(jd[0], jd[FP_JOINT(1, 0)], jd[FP_JOINT(4, 0)], fd))
-        return FP_HAND_EDEGENERATE;
+        return -EDOM;
     /* R = Fd Fm^T maps hand-frame vectors to the device frame. For the left hand both triads
      * are built from mirrored points, so R is still a proper rotation. */
     for (int i = 0; i < 3; i++)
@@ -526,7 +527,7 @@ int fp_hand_from_positions(const fp_hand_model *model, fp_hand_side side,
                 b[sg][k] = h[FP_JOINT(f, sg + 1)][k] - h[FP_JOINT(f, sg)][k];
             mat_tvec(arch, b[sg], b[sg]);
             if (normalize3(b[sg]) < 1e-9)
-                return FP_HAND_EDEGENERATE;
+                return -EDOM;
         }
         yaw[f] = atan2(-b[0][0], -b[0][2]);
         double phi = atan2(-b[0][1], -b[0][2]);
@@ -550,7 +551,7 @@ int fp_hand_from_positions(const fp_hand_model *model, fp_hand_side side,
             for (int k = 0; k < 3; k++)
                 b[sg][k] = h[FP_JOINT(0, sg + 1)][k] - h[FP_JOINT(0, sg)][k];
             if (normalize3(b[sg]) < 1e-9)
-                return FP_HAND_EDEGENERATE;
+                return -EDOM;
         }
         double ty = atan2(-b[0][0], -b[0][2]);
         double el = atan2(-b[0][1], hypot(b[0][0], b[0][2]));
@@ -587,7 +588,7 @@ int fp_hand_from_positions(const fp_hand_model *model, fp_hand_side side,
     for (int k = 0; k < 3; k++)
         out->wrist_pos_mm[k] = (float)org[k];
     mat_to_quat(r, out->wrist_rot_wxyz);
-    return FP_HAND_OK;
+    return 0;
 }
 
 /* ---------------------------------------------------------------------------------- */
@@ -596,22 +597,22 @@ int fp_hand_from_positions(const fp_hand_model *model, fp_hand_side side,
 int fp_hand_fingertips(const float joints_mm[FP_HAND_JOINTS][3], float tips_mm[FP_FINGERS][3])
 {
     if (!joints_mm || !tips_mm)
-        return FP_HAND_EINVAL;
+        return -EINVAL;
     for (int f = 0; f < FP_FINGERS; f++)
         memcpy(tips_mm[f], joints_mm[FP_JOINT_TIP(f)], sizeof tips_mm[f]);
-    return FP_HAND_OK;
+    return 0;
 }
 
 int fp_hand_fingertips2(const float left_mm[FP_HAND_JOINTS][3],
                         const float right_mm[FP_HAND_JOINTS][3], float tips_mm[10][3])
 {
     if (!tips_mm)
-        return FP_HAND_EINVAL;
+        return -EINVAL;
     if (left_mm)
         fp_hand_fingertips(left_mm, tips_mm);
     if (right_mm)
         fp_hand_fingertips(right_mm, tips_mm + FP_FINGERS);
-    return FP_HAND_OK;
+    return 0;
 }
 
 /* ---------------------------------------------------------------------------------- */
@@ -639,9 +640,9 @@ int fp_hand_fit_size(const fp_hand_model *model, const float (*joints_mm)[FP_HAN
                      size_t n, float *size_out)
 {
     if (!model || !joints_mm || !size_out || n == 0)
-        return FP_HAND_EINVAL;
+        return -EINVAL;
     if (!model_ok(model))
-        return FP_HAND_ENONFINITE;
+        return -ERANGE;
     double num = 0, den = 0;
     size_t used = 0;
     for (size_t i = 0; i < n; i++) {
@@ -659,16 +660,16 @@ int fp_hand_fit_size(const fp_hand_model *model, const float (*joints_mm)[FP_HAN
             }
     }
     if (!used || !(den > 0) || !(num > 0))
-        return FP_HAND_EINVAL;
+        return -EINVAL;
     *size_out = (float)(num / den);
-    return FP_HAND_OK;
+    return 0;
 }
 
 int fp_hand_fit_geometry(fp_hand_model *model, fp_hand_side side,
                          const float (*joints_hand_mm)[FP_HAND_JOINTS][3], size_t n)
 {
     if (!model || (side != FP_HAND_LEFT && side != FP_HAND_RIGHT))
-        return FP_HAND_EINVAL;
+        return -EINVAL;
     float size;
     int rc = fp_hand_fit_size(model, joints_hand_mm, n, &size);
     if (rc)
@@ -703,7 +704,7 @@ int fp_hand_fit_geometry(fp_hand_model *model, fp_hand_side side,
     m.middle_yaw_rad = (float)atan2(ys, yc);
     m.rest_rad[FP_SENSOR_THUMB_ROTATE] = (float)(el / (double)used);
     if (!model_ok(&m))
-        return FP_HAND_ENONFINITE;
+        return -ERANGE;
     *model = m;
-    return FP_HAND_OK;
+    return 0;
 }

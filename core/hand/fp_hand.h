@@ -9,8 +9,11 @@
  * Threads: every function here is pure and reentrant ([any-thread]); none allocates, locks,
  * does I/O or keeps state between calls, so all may run on the session thread.
  *
- * Errors: functions return 0 (FP_HAND_OK) or a negative fp_hand_result; fp_hand_strerror
- * names it. On error the outputs are left untouched (never partly written, never NaN).
+ * Errors (fp_error.h): functions return 0 or a negative errno: -EINVAL (NULL pointer, bad
+ * side, size <= 0, too few frames), -ERANGE (a NaN or infinite value in the input), -EDOM
+ * (degenerate geometry: zero quaternion, parallel frame axes, coincident joints);
+ * fp_hand_strerror says which in the hand's words. On error the outputs are left untouched
+ * (never partly written, never NaN).
  *
  * ## The hand's own frame
  * Right-handed, in millimetres. Origin: the wrist, placed at the base of the middle
@@ -62,15 +65,9 @@
 extern "C" {
 #endif
 
-typedef enum fp_hand_result {
-    FP_HAND_OK = 0,
-    FP_HAND_EINVAL = -1,     /* NULL pointer, bad side, size <= 0, too few frames */
-    FP_HAND_ENONFINITE = -2, /* a NaN or infinite value in the input */
-    FP_HAND_EDEGENERATE = -3 /* zero quaternion, parallel frame axes, coincident joints */
-} fp_hand_result;
-
-/** [any-thread] A static English message for an fp_hand_result ("unknown error" otherwise). */
-const char *fp_hand_strerror(int result);
+/** [any-thread] A static English message for a code of this module: -ERANGE and -EDOM in
+ *  the hand's words, anything else as fp_strerror. */
+const char *fp_hand_strerror(int code);
 
 /** All bit masks of the 22 sensors; FP_HAND_DIJ_BITS are the four DIJ sensors. */
 #define FP_HAND_ALL_SENSORS 0x3FFFFFu
@@ -113,11 +110,11 @@ void fp_hand_model_init(fp_hand_model *m);
  *  cleared sensors take model->rest_rad[i] (DIJ: 2/3 of a valid PIJ).
  *  wrist_pos_mm, wrist_rot_wxyz: the pose of the hand frame in the device frame (plugin.h
  *  fp_event_wrist_pose; the quaternion need not be unit, it is normalised); both NULL: the
- *  joints are given in the hand's own frame. One NULL and not the other: FP_HAND_EINVAL.
+ *  joints are given in the hand's own frame. One NULL and not the other: -EINVAL.
  *  side: the left hand is the right mirrored in x in the hand frame.
- *  joints_mm: out, millimetres. Errors: FP_HAND_EINVAL (NULL model/joints, bad side,
- *  size <= 0), FP_HAND_ENONFINITE (NaN/inf in a valid angle, in the pose or in the model),
- *  FP_HAND_EDEGENERATE (quaternion of norm < 1e-6). */
+ *  joints_mm: out, millimetres. Errors: -EINVAL (NULL model/joints, bad side,
+ *  size <= 0), -ERANGE (NaN/inf in a valid angle, in the pose or in the model),
+ *  -EDOM (quaternion of norm < 1e-6). */
 int fp_hand_fk(const fp_hand_model *model, fp_hand_side side, const float angles_rad[22],
                uint32_t valid_mask, const float wrist_pos_mm[3], const float wrist_rot_wxyz[4],
                float joints_mm[FP_HAND_JOINTS][3]);
@@ -128,7 +125,7 @@ int fp_hand_fk(const fp_hand_model *model, fp_hand_side side, const float angles
  *  to the normal. Writes the wrist pose (position mm, quaternion w,x,y,z) that puts the
  *  model's palm centre (scaled by model->size, mirrored for the left hand) at palm_mm, in the
  *  form fp_hand_fk takes. The palm's axes are those of the hand frame at rest WRIST_PITCH and
- *  WRIST_YAW (0 by default): a tracker's palm already includes the wrist turn. Errors: FP_HAND_EINVAL, FP_HAND_ENONFINITE, FP_HAND_EDEGENERATE
+ *  WRIST_YAW (0 by default): a tracker's palm already includes the wrist turn. Errors: -EINVAL, -ERANGE, -EDOM
  *  (a zero vector, or normal parallel to direction). */
 int fp_hand_frame_from_palm(const fp_hand_model *model, fp_hand_side side,
                             const float palm_mm[3], const float palm_normal[3],
@@ -137,7 +134,7 @@ int fp_hand_frame_from_palm(const fp_hand_model *model, fp_hand_side side,
 
 /** [any-thread] Move n points from the device frame into the hand frame whose pose is
  *  (wrist_pos_mm, wrist_rot_wxyz): out = R^T (in - pos). in and out may be the same array.
- *  Errors: FP_HAND_EINVAL, FP_HAND_ENONFINITE, FP_HAND_EDEGENERATE (zero quaternion). */
+ *  Errors: -EINVAL, -ERANGE, -EDOM (zero quaternion). */
 int fp_hand_to_hand_frame(const float wrist_pos_mm[3], const float wrist_rot_wxyz[4],
                           const float (*in_mm)[3], size_t n, float (*out_mm)[3]);
 
@@ -159,16 +156,16 @@ typedef struct fp_hand_angles {
  *  cannot separate from the wrist pose (they stay at rest; the pose carries them).
  *  fp_hand_fk(model, side, out...) reproduces the input exactly when the input was itself
  *  made by fp_hand_fk with the same model and rest palm arch/wrist angles.
- *  Errors: FP_HAND_EINVAL, FP_HAND_ENONFINITE, FP_HAND_EDEGENERATE (coincident joints). */
+ *  Errors: -EINVAL, -ERANGE, -EDOM (coincident joints). */
 int fp_hand_from_positions(const fp_hand_model *model, fp_hand_side side,
                            const float joints_mm[FP_HAND_JOINTS][3], fp_hand_angles *out);
 
 /** [any-thread] The five fingertips (thumb first) of one hand's joints: tips[f] =
- *  joints[FP_JOINT_TIP(f)]. Errors: FP_HAND_EINVAL (NULL). */
+ *  joints[FP_JOINT_TIP(f)]. Errors: -EINVAL (NULL). */
 int fp_hand_fingertips(const float joints_mm[FP_HAND_JOINTS][3], float tips_mm[FP_FINGERS][3]);
 
 /** [any-thread] The ten fingertips of both hands: tips[0..4] left thumb..little, tips[5..9]
- *  right. A NULL hand leaves its five rows untouched. Errors: FP_HAND_EINVAL (tips NULL). */
+ *  right. A NULL hand leaves its five rows untouched. Errors: -EINVAL (tips NULL). */
 int fp_hand_fingertips2(const float left_mm[FP_HAND_JOINTS][3],
                         const float right_mm[FP_HAND_JOINTS][3], float tips_mm[10][3]);
 
@@ -177,7 +174,7 @@ int fp_hand_fingertips2(const float left_mm[FP_HAND_JOINTS][3],
  *  MCP-PIP-DIP-tip) of (|measured| - size * model length)^2, closed form
  *  size = sum(l m) / sum(m^2) with m the model's size-1 length (the distal segment includes
  *  tip_pad * tip_pad_mm). joints_mm: n frames of 21 x 3 mm. Frames with a non-finite value
- *  are skipped. Errors: FP_HAND_EINVAL (NULL, n == 0, no usable frame). */
+ *  are skipped. Errors: -EINVAL (NULL, n == 0, no usable frame). */
 int fp_hand_fit_size(const fp_hand_model *model, const float (*joints_mm)[FP_HAND_JOINTS][3],
                      size_t n, float *size_out);
 

@@ -65,7 +65,7 @@ static int next_line(reader *r)
         errno = 0;
         len = getline(&r->line, &r->cap, r->f);
         if (len < 0)
-            return ferror(r->f) ? fail(r, FP_LEAPCSV_EIO, 0, NULL, "read error: %s", strerror(errno)) : 0;
+            return ferror(r->f) ? fail(r, -EIO, 0, NULL, "read error: %s", strerror(errno)) : 0;
         r->lineno++;
         while (len > 0 && (r->line[len - 1] == '\n' || r->line[len - 1] == '\r'))
             r->line[--len] = '\0';
@@ -76,7 +76,7 @@ static int next_line(reader *r)
     char *p = r->line;
     for (;;) {
         if (r->nfield == MAX_FIELDS)
-            return fail(r, FP_LEAPCSV_EFORMAT, 0, NULL, "more than %d fields", MAX_FIELDS);
+            return fail(r, -EBADMSG, 0, NULL, "more than %d fields", MAX_FIELDS);
         r->field[r->nfield++] = p;
         char *c = strchr(p, ',');
         if (!c)
@@ -95,7 +95,7 @@ static int open_reader(reader *r, const char *path, char *err, size_t errlen)
     r->errlen = errlen;
     r->f = fopen(path, "r");
     if (!r->f)
-        return fail(r, FP_LEAPCSV_EIO, 0, NULL, "cannot open: %s", strerror(errno));
+        return fail(r, errno ? -errno : -EIO, 0, NULL, "cannot open: %s", strerror(errno));
     return 0;
 }
 
@@ -112,12 +112,12 @@ static int check_header(reader *r, const char *const *names, int count)
     if (rc < 0)
         return rc;
     if (rc == 0)
-        return fail(r, FP_LEAPCSV_EFORMAT, 0, NULL, "empty file, expected a header line");
+        return fail(r, -EBADMSG, 0, NULL, "empty file, expected a header line");
     if (r->nfield != count)
-        return fail(r, FP_LEAPCSV_EFORMAT, 0, NULL, "header has %d columns, expected %d", r->nfield, count);
+        return fail(r, -EBADMSG, 0, NULL, "header has %d columns, expected %d", r->nfield, count);
     for (int i = 0; i < count; i++)
         if (strcmp(r->field[i], names[i]) != 0)
-            return fail(r, FP_LEAPCSV_EFORMAT, i + 1, names[i], "header reads '%s'", r->field[i]);
+            return fail(r, -EBADMSG, i + 1, names[i], "header reads '%s'", r->field[i]);
     return 0;
 }
 
@@ -127,7 +127,7 @@ static int parse_long(reader *r, int i, const char *name, long *out)
     errno = 0;
     long v = strtol(r->field[i], &end, 10);
     if (end == r->field[i] || *end || errno)
-        return fail(r, FP_LEAPCSV_EFORMAT, i + 1, name, "not an integer: '%s'", r->field[i]);
+        return fail(r, -EBADMSG, i + 1, name, "not an integer: '%s'", r->field[i]);
     *out = v;
     return 0;
 }
@@ -138,7 +138,7 @@ static int parse_i64(reader *r, int i, const char *name, int64_t *out)
     errno = 0;
     long long v = strtoll(r->field[i], &end, 10);
     if (end == r->field[i] || *end || errno)
-        return fail(r, FP_LEAPCSV_EFORMAT, i + 1, name, "not an integer: '%s'", r->field[i]);
+        return fail(r, -EBADMSG, i + 1, name, "not an integer: '%s'", r->field[i]);
     *out = (int64_t)v;
     return 0;
 }
@@ -150,13 +150,13 @@ static int parse_float(reader *r, int i, const char *name, bool allow_empty, flo
     if (!*s) {
         if (allow_empty)
             return 0;
-        return fail(r, FP_LEAPCSV_EFORMAT, i + 1, name, "empty field");
+        return fail(r, -EBADMSG, i + 1, name, "empty field");
     }
     char *end;
     errno = 0;
     double v = strtod(s, &end);
     if (end == s || *end || errno == ERANGE || !isfinite(v) || !isfinite((float)v))
-        return fail(r, FP_LEAPCSV_EFORMAT, i + 1, name, "not a finite number: '%s'", s);
+        return fail(r, -EBADMSG, i + 1, name, "not a finite number: '%s'", s);
     *out = (float)v;
     return 1;
 }
@@ -168,7 +168,7 @@ static int parse_side(reader *r, int i, fp_hand_side *side)
     else if (strcmp(r->field[i], "right") == 0)
         *side = FP_HAND_RIGHT;
     else
-        return fail(r, FP_LEAPCSV_EFORMAT, i + 1, "hand_type", "expected 'left' or 'right', got '%s'", r->field[i]);
+        return fail(r, -EBADMSG, i + 1, "hand_type", "expected 'left' or 'right', got '%s'", r->field[i]);
     return 0;
 }
 
@@ -179,7 +179,7 @@ static int grow(reader *r, void **rows, size_t *cap, size_t n, size_t elem)
     size_t nc = *cap ? *cap * 2 : 256;
     void *p = realloc(*rows, nc * elem);
     if (!p)
-        return fail(r, FP_LEAPCSV_ENOMEM, 0, NULL, "out of memory");
+        return fail(r, -ENOMEM, 0, NULL, "out of memory");
     *rows = p;
     *cap = nc;
     return 0;
@@ -191,7 +191,7 @@ int fp_leapcsv_read_joints(const char *path, fp_leap_joints_row **rows, size_t *
     if (!path || !rows || !n) {
         if (err && errlen)
             snprintf(err, errlen, "fp_leapcsv_read_joints: NULL argument");
-        return FP_LEAPCSV_EFORMAT;
+        return -EINVAL;
     }
     enum { NCOL = 13 + FP_FINGERS * 4 * 3 };
     char names[NCOL][24];
@@ -217,7 +217,7 @@ int fp_leapcsv_read_joints(const char *path, fp_leap_joints_row **rows, size_t *
             break;
         rc = 0;
         if (r.nfield != NCOL) {
-            rc = fail(&r, FP_LEAPCSV_EFORMAT, 0, NULL, "%d fields, expected %d", r.nfield, NCOL);
+            rc = fail(&r, -EBADMSG, 0, NULL, "%d fields, expected %d", r.nfield, NCOL);
             break;
         }
         if ((rc = grow(&r, (void **)&out, &cap, count, sizeof *out)))
@@ -246,7 +246,7 @@ int fp_leapcsv_read_joints(const char *path, fp_leap_joints_row **rows, size_t *
         count++;
     }
     if (!rc && count == 0)
-        rc = fail(&r, FP_LEAPCSV_EFORMAT, 0, NULL, "no data rows");
+        rc = fail(&r, -EBADMSG, 0, NULL, "no data rows");
     close_reader(&r);
     if (rc) {
         free(out);
@@ -263,7 +263,7 @@ int fp_leapcsv_read_angles(const char *path, fp_leap_angles_row **rows, size_t *
     if (!path || !rows || !n) {
         if (err && errlen)
             snprintf(err, errlen, "fp_leapcsv_read_angles: NULL argument");
-        return FP_LEAPCSV_EFORMAT;
+        return -EINVAL;
     }
     enum { NCOL = 4 + FP_GLOVE_SENSORS };
     reader r;
@@ -278,7 +278,7 @@ int fp_leapcsv_read_angles(const char *path, fp_leap_angles_row **rows, size_t *
             break;
         rc = 0;
         if (r.nfield != NCOL) {
-            rc = fail(&r, FP_LEAPCSV_EFORMAT, 0, NULL, "%d fields, expected %d", r.nfield, NCOL);
+            rc = fail(&r, -EBADMSG, 0, NULL, "%d fields, expected %d", r.nfield, NCOL);
             break;
         }
         if ((rc = grow(&r, (void **)&out, &cap, count, sizeof *out)))
@@ -302,7 +302,7 @@ int fp_leapcsv_read_angles(const char *path, fp_leap_angles_row **rows, size_t *
         count++;
     }
     if (!rc && count == 0)
-        rc = fail(&r, FP_LEAPCSV_EFORMAT, 0, NULL, "no data rows");
+        rc = fail(&r, -EBADMSG, 0, NULL, "no data rows");
     close_reader(&r);
     if (rc) {
         free(out);

@@ -5,8 +5,10 @@
  * the replay input plugin has its own reader.
  * SPDX-License-Identifier: GPL-3.0-or-later
  *
- * Threads: reentrant. Errors: a negative code and a message in err naming the file, the line
- * and the column ("file:LINE: column N (name): ...").
+ * Threads: reentrant. Errors (fp_error.h): a negative errno and a message in err naming the
+ * file, the line and the column ("file:LINE: column N (name): ..."): -EBADMSG malformed
+ * content, -ENOENT / -EACCES the file cannot be opened, -EIO a read failed, -ENOMEM,
+ * -EINVAL a NULL argument.
  */
 #ifndef FP_LEAPCSV_H
 #define FP_LEAPCSV_H
@@ -33,8 +35,6 @@ typedef struct fp_leap_angles_row {
     float degrees[FP_GLOVE_SENSORS];     /* fp_glove_sensor order; 0 where empty */
     uint32_t valid;                      /* bit i: column i was not empty */
 } fp_leap_angles_row;
-
-enum { FP_LEAPCSV_EIO = -1, FP_LEAPCSV_EFORMAT = -2, FP_LEAPCSV_ENOMEM = -3 };
 
 /** Read a *_joints_mm.csv. On success *rows (free() it) holds *n rows in file order.
  *  Non-finite numbers, missing or extra fields, a wrong header, an unknown hand_type are

@@ -9,6 +9,8 @@
 #ifndef FP_PLUGIN_HOST_H
 #define FP_PLUGIN_HOST_H
 
+#include "fp_error.h"
+
 #include <facepuppet/plugin.h>
 #include <stdatomic.h>
 #include <stdbool.h>
@@ -87,22 +89,11 @@ typedef struct fp_plugin {
     char warning[512];               /* set when an unsafe candidate file was skipped */
 } fp_plugin;
 
-/** Result codes of fp_plugin_load (also the facepuppet command's reasons for exit 78). */
-/* Below -1000, apart from the negative errno codes plugins return. */
-typedef enum fp_plugin_result {
-    FP_PLUGIN_OK = 0,
-    FP_PLUGIN_ERR_NOT_FOUND = -1001,    /* no file <kind>-<name>.so in any folder */
-    FP_PLUGIN_ERR_DLOPEN = -1002,       /* dlopen failed (missing library, bad ELF) */
-    FP_PLUGIN_ERR_NO_ENTRY = -1003,     /* no facepuppet_plugin_entry symbol */
-    FP_PLUGIN_ERR_ABI = -1004,          /* built against an incompatible ABI */
-    FP_PLUGIN_ERR_INIT = -1005,         /* entry->init returned false */
-    FP_PLUGIN_ERR_NO_FACTORY = -1006   /* no factory of the asked kind, or a bad one */
-} fp_plugin_result;
-
 /** Find `<input|map>-<name>.so` on `path` (or load `name` itself where it contains a '/'),
  *  dlopen it, check its entry's ABI (fp_version_is_compatible), call init and get the
- *  factory of `kind`. On error returns an fp_plugin_result and writes a message naming the
- *  file (or the folders searched and the plugins found there) to err. */
+ *  factory of `kind`. Returns 0, or one of the FP_EPLUGIN_* codes of fp_error.h
+ *  (NOT_FOUND, DLOPEN, NO_ENTRY, ABI, INIT, NO_FACTORY; -ENOMEM) with a message naming the
+ *  file (or the folders searched and the plugins found there) in err. */
 int fp_plugin_load(const fp_plugin_path *path, fp_plugin_kind kind, const char *name,
                    fp_plugin *out, char *err, size_t errlen);
 
@@ -150,7 +141,7 @@ typedef struct fp_input_instance {
 
 /** Load the plugin for `spec` and create the instance (not yet started). The host strips
  *  the key `record=FILE` (record this input's events in the event-log format) before the
- *  plugin sees the keys. Returns 0, an fp_plugin_result, or the plugin's own negative code;
+ *  plugin sees the keys. Returns 0, an FP_EPLUGIN_* code (fp_error.h), or the plugin's own negative errno;
  *  err names the SPEC and reason. */
 int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
                            const char *spec_text, uint32_t source, char *err, size_t errlen);

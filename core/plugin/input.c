@@ -1,11 +1,9 @@
 /* Input instances: a loaded input plugin, the fp_host it pushes through, its queue, and
-#define _POSIX_C_SOURCE 200809L
  * the optional recording of every event it delivered (record=FILE). */
+#define _POSIX_C_SOURCE 200809L
 #include "fp_plugin_host.h"
 
-#ifdef FP_HAVE_EVENTLOG
 #include "fp_eventlog.h"
-#endif
 
 #include <errno.h>
 #include <stdio.h>
@@ -93,18 +91,12 @@ int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
         goto out;
     }
     if (record) {
-#ifdef FP_HAVE_EVENTLOG
         inst->record = fp_eventlog_writer_open(record, perr, sizeof perr);
         if (!inst->record) {
             snprintf(err, errlen, "input '%s': record=%s: %s", spec_text, record, perr);
             rc = -EIO;
             goto out;
         }
-#else
-        snprintf(err, errlen, "input '%s': record= needs the event log, not built", spec_text);
-        rc = -ENOTSUP;
-        goto out;
-#endif
     }
 out:
     fp_spec_clear(&spec);
@@ -130,9 +122,7 @@ int fp_input_instance_start(fp_input_instance *inst, char *err, size_t errlen)
 bool fp_input_instance_poll(fp_input_instance *inst, fp_event *out)
 {
     if (!inst->queue.cells || !fp_event_queue_pop(&inst->queue, out)) return false;
-#ifdef FP_HAVE_EVENTLOG
     if (inst->record) fp_eventlog_writer_write(inst->record, out);
-#endif
     return true;
 }
 
@@ -143,13 +133,11 @@ void fp_input_instance_close(fp_input_instance *inst)
         if (inst->input->destroy) inst->input->destroy(inst->input);
         inst->input = NULL;
     }
-#ifdef FP_HAVE_EVENTLOG
     if (inst->record) {
         fp_event ev;
         while (fp_input_instance_poll(inst, &ev)) {} /* keep what was read */
         fp_eventlog_writer_close(&inst->record, NULL, 0);
     }
-#endif
     fp_event_queue_destroy(&inst->queue);
     fp_plugin_unload(&inst->plugin);
     inst->started = false;

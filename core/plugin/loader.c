@@ -162,19 +162,19 @@ int fp_plugin_load(const fp_plugin_path *path, fp_plugin_kind kind, const char *
             snprintf(err, errlen, "no %s plugin named '%s' (looked for %s%s.so in: %s; available: %s)%s%s",
                      what, name, kind_prefix(kind), name, path->count ? dirs : "no folders",
                      avail[0] ? avail : "none", out->warning[0] ? "; " : "", out->warning);
-        return FP_PLUGIN_ERR_NOT_FOUND;
+        return FP_EPLUGIN_NOT_FOUND;
     }
     out->path = strdup(file);
     out->handle = dlopen(file, RTLD_NOW | RTLD_LOCAL);
     if (!out->handle) {
         snprintf(err, errlen, "%s: cannot load: %s", file, dlerror());
-        return fail(out, FP_PLUGIN_ERR_DLOPEN);
+        return fail(out, FP_EPLUGIN_DLOPEN);
     }
     out->entry = (const fp_plugin_entry *)dlsym(out->handle, FP_PLUGIN_ENTRY_SYMBOL);
     if (!out->entry) {
         snprintf(err, errlen, "%s: not a facepuppet plugin (no symbol '%s')", file,
                  FP_PLUGIN_ENTRY_SYMBOL);
-        return fail(out, FP_PLUGIN_ERR_NO_ENTRY);
+        return fail(out, FP_EPLUGIN_NO_ENTRY);
     }
     fp_version host = {FP_PLUGIN_ABI_MAJOR, FP_PLUGIN_ABI_MINOR};
     if (!fp_version_is_compatible(host, out->entry->abi)) {
@@ -184,7 +184,7 @@ int fp_plugin_load(const fp_plugin_path *path, fp_plugin_kind kind, const char *
                  file, out->entry->abi.major, out->entry->abi.minor, host.major, host.minor,
                  out->entry->abi.major != host.major ? "another major" : "a newer minor");
         out->entry = NULL; /* do not call its deinit */
-        return fail(out, FP_PLUGIN_ERR_ABI);
+        return fail(out, FP_EPLUGIN_ABI);
     }
     fp_plugin_crash_register(out->handle, file);
     fp_plugin_call_enter(out->path, "init", 0);
@@ -193,7 +193,7 @@ int fp_plugin_load(const fp_plugin_path *path, fp_plugin_kind kind, const char *
     if (!init_ok) {
         snprintf(err, errlen, "%s: the plugin's init failed", file);
         out->entry = NULL;
-        return fail(out, FP_PLUGIN_ERR_INIT);
+        return fail(out, FP_EPLUGIN_INIT);
     }
     const char *fid = kind == FP_PLUGIN_INPUT ? FP_INPUT_FACTORY_ID : FP_MAPPING_FACTORY_ID;
     out->factory = out->entry->get_factory ? out->entry->get_factory(fid) : NULL;
@@ -208,9 +208,9 @@ int fp_plugin_load(const fp_plugin_path *path, fp_plugin_kind kind, const char *
     }
     if (!ok) {
         snprintf(err, errlen, "%s: offers no %s factory ('%s')", file, what, fid);
-        return fail(out, FP_PLUGIN_ERR_NO_FACTORY);
+        return fail(out, FP_EPLUGIN_NO_FACTORY);
     }
-    return FP_PLUGIN_OK;
+    return 0;
 }
 
 void fp_plugin_unload(fp_plugin *p)

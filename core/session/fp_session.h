@@ -62,7 +62,7 @@ typedef struct fp_session fp_session;
 
 /** Load the mesh, load the mapping plugin and every input (not started). Returns 0, or a
  *  negative code with a message in err naming the file, SPEC or plugin at fault:
- *  -EINVAL bad options, FP_PLUGIN_ERR_* for plugins (see fp_plugin_host.h), -ENOENT and
+ *  -EINVAL bad options, FP_EPLUGIN_* for plugins (see fp_plugin_host.h), -ENOENT and
  *  -EBADMSG for the mesh (unreadable, malformed). */
 int fp_session_create(const fp_session_options *opt, fp_session **out, char *err, size_t errlen);
 
@@ -98,7 +98,7 @@ const fp_control_set *fp_session_control_set(const fp_session *s);
 /** Replace the mapping by a new one from spec (NAME[,key=value...], as the mapping option),
  *  loaded from path: keeps the mesh, the base, the undo history, the inputs and the radius;
  *  drops a deformation in progress (the base is shown). On error the old mapping stays and
- *  err names the spec or plugin at fault (codes as fp_session_create: -EINVAL, FP_PLUGIN_ERR_*).
+ *  err names the spec or plugin at fault (codes as fp_session_create: -EINVAL, FP_EPLUGIN_*).
  *  Session thread only (the viewer's keys 1 and 2). */
 int fp_session_set_mapping(fp_session *s, const fp_plugin_path *path, const char *spec,
                            char *err, size_t errlen);

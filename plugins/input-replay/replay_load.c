@@ -215,11 +215,11 @@ static int parse_number(loader *L, const char *s, double *out)
 
 static int number_error(loader *L, long line, const field *f, int rc, const char *col)
 {
-    if (rc == 1) return fail(L, -EINVAL, line, f->col, "empty field in column %s", col);
+    if (rc == 1) return fail(L, -EBADMSG, line, f->col, "empty field in column %s", col);
     if (rc == -2)
-        return fail(L, -EINVAL, line, f->col, "\"%s\" in column %s is not a finite number", f->s,
+        return fail(L, -EBADMSG, line, f->col, "\"%s\" in column %s is not a finite number", f->s,
                     col);
-    return fail(L, -EINVAL, line, f->col, "bad number \"%s\" in column %s", f->s, col);
+    return fail(L, -EBADMSG, line, f->col, "bad number \"%s\" in column %s", f->s, col);
 }
 
 /* One data row of either CSV format. */
@@ -231,28 +231,28 @@ static int csv_row(loader *L, replay_format fmt, long line, char *text, long lon
     long line_len = (long)strlen(text);
     int n = split_csv(text, f, MAX_COLUMNS);
     if (n < want)
-        return fail(L, -EINVAL, line, line_len + 1, "expected %d fields, found %d (row too short)",
+        return fail(L, -EBADMSG, line, line_len + 1, "expected %d fields, found %d (row too short)",
                     want, n);
     if (n > want)
-        return fail(L, -EINVAL, line, f[want < MAX_COLUMNS ? want : 0].col,
+        return fail(L, -EBADMSG, line, f[want < MAX_COLUMNS ? want : 0].col,
                     "expected %d fields, found %d (row too long)", want, n);
     char name[64];
     long long frame, ts, id;
     if (parse_int64(f[0].s, &frame))
-        return fail(L, -EINVAL, line, f[0].col, "bad frame number \"%s\"", f[0].s);
+        return fail(L, -EBADMSG, line, f[0].col, "bad frame number \"%s\"", f[0].s);
     if (parse_int64(f[1].s, &ts) || ts > INT64_MAX / 1000 || ts < INT64_MIN / 1000)
-        return fail(L, -EINVAL, line, f[1].col, "bad timestamp_us \"%s\"", f[1].s);
+        return fail(L, -EBADMSG, line, f[1].col, "bad timestamp_us \"%s\"", f[1].s);
     if (parse_int64(f[2].s, &id))
-        return fail(L, -EINVAL, line, f[2].col, "bad hand_id \"%s\"", f[2].s);
+        return fail(L, -EBADMSG, line, f[2].col, "bad hand_id \"%s\"", f[2].s);
     int hand;
     if (strcmp(f[3].s, "left") == 0)
         hand = FP_HAND_LEFT;
     else if (strcmp(f[3].s, "right") == 0)
         hand = FP_HAND_RIGHT;
     else
-        return fail(L, -EINVAL, line, f[3].col, "unknown hand_type \"%s\" (left or right)", f[3].s);
+        return fail(L, -EBADMSG, line, f[3].col, "unknown hand_type \"%s\" (left or right)", f[3].s);
     if (*have_ts && ts < *last_ts)
-        return fail(L, -EINVAL, line, f[1].col,
+        return fail(L, -EBADMSG, line, f[1].col,
                     "timestamp_us %lld goes backwards (the row before has %lld)", ts, *last_ts);
     *last_ts = ts;
     *have_ts = 1;
@@ -287,7 +287,7 @@ static int csv_row(loader *L, replay_format fmt, long line, char *text, long lon
     } else {
         float q[4];
         if (replay_wrist_rotation(&v[3], &v[6], q))
-            return fail(L, -EINVAL, line, f[LEAD_COLUMNS + 3].col,
+            return fail(L, -EBADMSG, line, f[LEAD_COLUMNS + 3].col,
                         "palm normal and hand direction are zero or parallel");
         replay_item *it = push_item(L);
         if (!it) return oom(L);
@@ -322,11 +322,11 @@ static int check_csv_header(loader *L, replay_format fmt, char *text)
     for (int i = 0; i < want && i < n; i++) {
         column_name(fmt, i, name, sizeof name);
         if (strcmp(f[i].s, name) != 0)
-            return fail(L, -EINVAL, 1, f[i].col, "header column %d is \"%s\", expected \"%s\"",
+            return fail(L, -EBADMSG, 1, f[i].col, "header column %d is \"%s\", expected \"%s\"",
                         i + 1, f[i].s, name);
     }
     if (n != want)
-        return fail(L, -EINVAL, 1, n < want ? (long)strlen(text) + 1 : f[want].col,
+        return fail(L, -EBADMSG, 1, n < want ? (long)strlen(text) + 1 : f[want].col,
                     "header has %d columns, expected %d", n, want);
     return 0;
 }
@@ -374,14 +374,14 @@ static int load_csv(loader *L, replay_format fmt, char *data, size_t len)
         line++;
         if (!nl) {
             /* The last line has no newline: cut short (a crash, a copy cut off). */
-            if (line == 1) return fail(L, -EINVAL, 1, 1, "header line not terminated");
+            if (line == 1) return fail(L, -EBADMSG, 1, 1, "header line not terminated");
             L->rec->truncated_line = line;
             break;
         }
         *nl = '\0';
         size_t n = (size_t)(nl - p);
         if (n > 0 && p[n - 1] == '\r') p[--n] = '\0';
-        if (strlen(p) != n) return fail(L, -EINVAL, line, (long)strlen(p) + 1, "NUL byte in line");
+        if (strlen(p) != n) return fail(L, -EBADMSG, line, (long)strlen(p) + 1, "NUL byte in line");
         int rc;
         if (line == 1)
             rc = check_csv_header(L, fmt, p);
@@ -401,14 +401,14 @@ static int load_csv(loader *L, replay_format fmt, char *data, size_t len)
 static int load_eventlog(loader *L)
 {
     fp_eventlog_reader *r = fp_eventlog_reader_open(L->path, L->err, L->errlen);
-    if (!r) return -EINVAL;
+    if (!r) return -EBADMSG;
     fp_event ev;
     int rc, own = 0; /* own: rc is this loader's -errno, with its message in err */
     int64_t last = 0;
     int have = 0;
     while ((rc = fp_eventlog_reader_next(r, &ev)) == 1) {
         if (have && ev.header.time_ns < last) {
-            rc = fail(L, -EINVAL, fp_eventlog_reader_line(r), 1,
+            rc = fail(L, -EBADMSG, fp_eventlog_reader_line(r), 1,
                       "time %lld goes backwards (the event before has %lld)",
                       (long long)ev.header.time_ns, (long long)last);
             own = 1;
@@ -430,7 +430,6 @@ static int load_eventlog(loader *L)
     }
     if (rc < 0 && !own) {
         put_msg(L->err, L->errlen, "%s", fp_eventlog_reader_error(r));
-        rc = rc == FP_EVENTLOG_EIO ? -EIO : rc == FP_EVENTLOG_ENOMEM ? -ENOMEM : -EINVAL;
     }
     L->rec->truncated_line = fp_eventlog_reader_truncated_line(r);
     fp_eventlog_reader_close(&r);
@@ -476,7 +475,7 @@ int replay_load(const char *path, int hands, replay_recording *out, char *err, s
                                                        : REPLAY_FORMAT_ANGLES_CSV;
         rc = load_csv(&L, out->format, data, len);
     } else {
-        rc = fail(&L, -EINVAL, 1, 1,
+        rc = fail(&L, -EBADMSG, 1, 1,
                   "unknown format: expected a facepuppet event log (\"# %s 1\") or a Leap CSV "
                   "(header \"%s...\")", FP_EVENTLOG_MAGIC, csv_lead);
     }

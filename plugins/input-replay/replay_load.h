@@ -40,8 +40,10 @@ typedef struct replay_recording {
 
 /** Read `path` in full. hands: REPLAY_HAND_* bits.
  *  Returns 0, or a negative errno code after writing to err "PATH: reason" or
- *  "PATH:LINE:COLUMN: reason" (bad number, wrong column count, unknown hand_type, time going
- *  backwards, unknown format, no events for the hands asked for). */
+ *  "PATH:LINE:COLUMN: reason": -EBADMSG for malformed content (bad number, wrong column
+ *  count, unknown hand_type, time going backwards, unknown format), -ENOENT / -EACCES / -EIO
+ *  for a file that cannot be read, -EINVAL when no events are left for the hands asked for
+ *  (the SPEC's hands= key), -ENOMEM. */
 int replay_load(const char *path, int hands, replay_recording *out, char *err, size_t errlen);
 
 /** Free what replay_load allocated; leaves *rec zeroed. */

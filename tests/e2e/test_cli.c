@@ -125,7 +125,19 @@ static void test_info(void **state)
     assert_int_equal(fp(args), 0);
     assert_non_null(strstr(out, "vertices  26719"));
     assert_non_null(strstr(out, "probably centimetres"));
-    assert_int_equal(fp("info /nonexistent/face.obj"), 65);
+    assert_int_equal(fp("info /nonexistent/face.obj"), 66);
+    assert_non_null(strstr(out, "/nonexistent/face.obj"));
+}
+
+/* A mesh that is not there is an input that cannot be opened: exit 66 (EX_NOINPUT), from
+ * the code fp_mesh_load gives (-ENOENT) through the session, never from the message. */
+static void test_missing_mesh(void **state)
+{
+    (void)state;
+    char args[16384];
+    snprintf(args, sizeof args, "run --mesh /nonexistent/face.obj --input replay:%s/hands/leap-motion/"
+             "grab_joints_mm.csv", data);
+    assert_int_equal(fp(args), 66);
     assert_non_null(strstr(out, "/nonexistent/face.obj"));
 }
 
@@ -180,7 +192,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_help_and_usage), cmocka_unit_test(test_corrupt_obj),
         cmocka_unit_test(test_bad_csv),        cmocka_unit_test(test_plugins),
-        cmocka_unit_test(test_info),         cmocka_unit_test(test_frames_out_and_monitor),
+        cmocka_unit_test(test_info),           cmocka_unit_test(test_missing_mesh),
+        cmocka_unit_test(test_frames_out_and_monitor),
     };
     int rc = cmocka_run_group_tests(tests, NULL, NULL);
     char cmd[512];

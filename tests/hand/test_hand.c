@@ -5,6 +5,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #define _POSIX_C_SOURCE 200809L
+#include <errno.h>
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -210,20 +211,20 @@ static void test_errors(void **state)
     memset(j, 0x5a, sizeof j);
     memcpy(before, j, sizeof j);
     float p[3] = {0}, q0[4] = {0}, q[4] = {1, 0, 0, 0};
-    assert_int_equal(fp_hand_fk(NULL, FP_HAND_RIGHT, a, 0, NULL, NULL, j), FP_HAND_EINVAL);
-    assert_int_equal(fp_hand_fk(&m, (fp_hand_side)7, a, 0, NULL, NULL, j), FP_HAND_EINVAL);
-    assert_int_equal(fp_hand_fk(&m, FP_HAND_RIGHT, NULL, 1, NULL, NULL, j), FP_HAND_EINVAL);
-    assert_int_equal(fp_hand_fk(&m, FP_HAND_RIGHT, a, 0, p, NULL, j), FP_HAND_EINVAL);
-    assert_int_equal(fp_hand_fk(&m, FP_HAND_RIGHT, a, 0, p, q0, j), FP_HAND_EDEGENERATE);
+    assert_int_equal(fp_hand_fk(NULL, FP_HAND_RIGHT, a, 0, NULL, NULL, j), -EINVAL);
+    assert_int_equal(fp_hand_fk(&m, (fp_hand_side)7, a, 0, NULL, NULL, j), -EINVAL);
+    assert_int_equal(fp_hand_fk(&m, FP_HAND_RIGHT, NULL, 1, NULL, NULL, j), -EINVAL);
+    assert_int_equal(fp_hand_fk(&m, FP_HAND_RIGHT, a, 0, p, NULL, j), -EINVAL);
+    assert_int_equal(fp_hand_fk(&m, FP_HAND_RIGHT, a, 0, p, q0, j), -EDOM);
     a[3] = INFINITY;
-    assert_int_equal(fp_hand_fk(&m, FP_HAND_RIGHT, a, FP_HAND_ALL_SENSORS, p, q, j), FP_HAND_ENONFINITE);
+    assert_int_equal(fp_hand_fk(&m, FP_HAND_RIGHT, a, FP_HAND_ALL_SENSORS, p, q, j), -ERANGE);
     a[3] = 0;
     p[1] = NAN;
-    assert_int_equal(fp_hand_fk(&m, FP_HAND_RIGHT, a, FP_HAND_ALL_SENSORS, p, q, j), FP_HAND_ENONFINITE);
+    assert_int_equal(fp_hand_fk(&m, FP_HAND_RIGHT, a, FP_HAND_ALL_SENSORS, p, q, j), -ERANGE);
     m.size = 0;
-    assert_int_equal(fp_hand_fk(&m, FP_HAND_RIGHT, a, 0, NULL, NULL, j), FP_HAND_EINVAL);
+    assert_int_equal(fp_hand_fk(&m, FP_HAND_RIGHT, a, 0, NULL, NULL, j), -EINVAL);
     assert_memory_equal(j, before, sizeof j);
-    assert_string_equal(fp_hand_strerror(FP_HAND_EDEGENERATE),
+    assert_string_equal(fp_hand_strerror(-EDOM),
                         "degenerate geometry (zero vector, zero quaternion or coincident joints)");
 }
 
@@ -271,8 +272,8 @@ static void test_frame_from_palm(void **state)
             assert_true(dist(back[i], jh[i]) < 1e-3);
     }
     float z3[3] = {0}, one[3] = {0, 1, 0}, p[3], q[4];
-    assert_int_equal(fp_hand_frame_from_palm(&m, FP_HAND_RIGHT, z3, z3, one, p, q), FP_HAND_EDEGENERATE);
-    assert_int_equal(fp_hand_frame_from_palm(&m, FP_HAND_RIGHT, z3, one, one, p, q), FP_HAND_EDEGENERATE);
+    assert_int_equal(fp_hand_frame_from_palm(&m, FP_HAND_RIGHT, z3, z3, one, p, q), -EDOM);
+    assert_int_equal(fp_hand_frame_from_palm(&m, FP_HAND_RIGHT, z3, one, one, p, q), -EDOM);
 }
 
 static void test_from_positions_roundtrip(void **state)
@@ -301,9 +302,9 @@ static void test_from_positions_roundtrip(void **state)
     }
     float j[21][3] = {{0}}, tips[5][3], tips10[10][3];
     fp_hand_angles h;
-    assert_int_equal(fp_hand_from_positions(&m, FP_HAND_RIGHT, (const float(*)[3])j, &h), FP_HAND_EDEGENERATE);
+    assert_int_equal(fp_hand_from_positions(&m, FP_HAND_RIGHT, (const float(*)[3])j, &h), -EDOM);
     j[3][1] = NAN;
-    assert_int_equal(fp_hand_from_positions(&m, FP_HAND_RIGHT, (const float(*)[3])j, &h), FP_HAND_ENONFINITE);
+    assert_int_equal(fp_hand_from_positions(&m, FP_HAND_RIGHT, (const float(*)[3])j, &h), -ERANGE);
     /* Fingertips: joints 4, 8, 12, 16, 20. */
     for (int i = 0; i < 21; i++)
         j[i][0] = (float)i;
@@ -346,7 +347,7 @@ static void test_fit(void **state)
     for (int f = 0; f < 5; f++)
         for (int k = 0; k < 3; k++)
             assert_float_equal(m.base_mm[f][k], truth.base_mm[f][k], 1e-2);
-    assert_int_equal(fp_hand_fit_size(&m, (const float(*)[21][3])frames, 0, &s), FP_HAND_EINVAL);
+    assert_int_equal(fp_hand_fit_size(&m, (const float(*)[21][3])frames, 0, &s), -EINVAL);
 }
 
 static const char *shared_data(void)
@@ -379,18 +380,18 @@ static void test_csv_errors(void **state)
     size_t n = 0;
     snprintf(text, sizeof text, "%s%s%s", hdr, good, "1,6,1,right,,1,2,3,4,5,6,7,8,x9,10,11,12,13,14,15,16,17,18,,,\n");
     write_file(path, text);
-    assert_int_equal(fp_leapcsv_read_angles(path, &rows, &n, err, sizeof err), FP_LEAPCSV_EFORMAT);
+    assert_int_equal(fp_leapcsv_read_angles(path, &rows, &n, err, sizeof err), -EBADMSG);
     assert_non_null(strstr(err, "a.csv:3: column 14 (middle_dip)"));
     snprintf(text, sizeof text, "%s%s", hdr, "0,5,1,middle,,1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,,,\n");
     write_file(path, text);
-    assert_int_equal(fp_leapcsv_read_angles(path, &rows, &n, err, sizeof err), FP_LEAPCSV_EFORMAT);
+    assert_int_equal(fp_leapcsv_read_angles(path, &rows, &n, err, sizeof err), -EBADMSG);
     assert_non_null(strstr(err, ":2: column 4 (hand_type)"));
     snprintf(text, sizeof text, "%s%s", hdr, "0,5,1,right,,1,2\n");
     write_file(path, text);
-    assert_int_equal(fp_leapcsv_read_angles(path, &rows, &n, err, sizeof err), FP_LEAPCSV_EFORMAT);
+    assert_int_equal(fp_leapcsv_read_angles(path, &rows, &n, err, sizeof err), -EBADMSG);
     assert_non_null(strstr(err, ":2: 7 fields, expected 26"));
     write_file(path, "frame,timestamp_us,hand_id,hand_type,thumb_rot\n");
-    assert_int_equal(fp_leapcsv_read_angles(path, &rows, &n, err, sizeof err), FP_LEAPCSV_EFORMAT);
+    assert_int_equal(fp_leapcsv_read_angles(path, &rows, &n, err, sizeof err), -EBADMSG);
     assert_non_null(strstr(err, ":1: header has 5 columns"));
     snprintf(text, sizeof text, "%s%s", hdr, good);
     write_file(path, text);
@@ -414,11 +415,11 @@ static void test_csv_errors(void **state)
     snprintf(text, sizeof text, "%s%s", line1, line2);
     write_file(path, text);
     fp_leap_joints_row *jr = NULL;
-    assert_int_equal(fp_leapcsv_read_joints(path, &jr, &n, err, sizeof err), FP_LEAPCSV_EFORMAT);
+    assert_int_equal(fp_leapcsv_read_joints(path, &jr, &n, err, sizeof err), -EBADMSG);
     assert_non_null(strstr(err, ":2: column 21 (thumb_dip_y)"));
     unlink(path);
     rmdir(dir);
-    assert_int_equal(fp_leapcsv_read_joints(path, &jr, &n, err, sizeof err), FP_LEAPCSV_EIO);
+    assert_int_equal(fp_leapcsv_read_joints(path, &jr, &n, err, sizeof err), -ENOENT); /* the file is gone */
     assert_non_null(strstr(err, "a.csv"));
 }
 

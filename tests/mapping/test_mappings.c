@@ -199,7 +199,7 @@ static void test_bad_keys(void **state)
     fp_param ok[] = {{"hands", "left"}, {"auto", "off"}, {"release", "2.5"}};
     assert_int_equal(open_mapping(&r, "anchored", ok, 3, err), 0);
     close_mapping(&r);
-    assert_int_equal(open_mapping(&r, "no-such-mapping", NULL, 0, err), FP_PLUGIN_ERR_NOT_FOUND);
+    assert_int_equal(open_mapping(&r, "no-such-mapping", NULL, 0, err), FP_EPLUGIN_NOT_FOUND);
     assert_non_null(strstr(err, "no mapping plugin named 'no-such-mapping'"));
     assert_non_null(strstr(err, "anchored"));
     close_mapping(&r);

@@ -68,19 +68,19 @@ static void test_loader_errors(void **state)
     (void)state;
     fp_plugin p;
     char err[2048];
-    assert_int_equal(load("no-such-thing", &p, err, sizeof err), FP_PLUGIN_ERR_NOT_FOUND);
+    assert_int_equal(load("no-such-thing", &p, err, sizeof err), FP_EPLUGIN_NOT_FOUND);
     assert_non_null(strstr(err, "no input plugin named 'no-such-thing'"));
     assert_non_null(strstr(err, fixture_dir)); /* names the folders searched */
     assert_non_null(strstr(err, "fixture"));   /* and what is available */
 
-    assert_int_equal(load("fixture-abi2", &p, err, sizeof err), FP_PLUGIN_ERR_ABI);
+    assert_int_equal(load("fixture-abi2", &p, err, sizeof err), FP_EPLUGIN_ABI);
     assert_non_null(strstr(err, "built for plugin ABI 2.0"));
     assert_non_null(strstr(err, "input-fixture-abi2.so"));
 
-    assert_int_equal(load("fixture-noentry", &p, err, sizeof err), FP_PLUGIN_ERR_NO_ENTRY);
+    assert_int_equal(load("fixture-noentry", &p, err, sizeof err), FP_EPLUGIN_NO_ENTRY);
     assert_non_null(strstr(err, "no symbol 'facepuppet_plugin_entry'"));
 
-    assert_int_equal(load("fixture-initfails", &p, err, sizeof err), FP_PLUGIN_ERR_INIT);
+    assert_int_equal(load("fixture-initfails", &p, err, sizeof err), FP_EPLUGIN_INIT);
     assert_non_null(strstr(err, "init failed"));
 
     /* A mapping asked for under an input plugin's name is not found. */
@@ -88,7 +88,7 @@ static void test_loader_errors(void **state)
     fp_plugin_path path;
     fp_plugin_path_init(&path, dirs, 1, NULL);
     assert_int_equal(fp_plugin_load(&path, FP_PLUGIN_MAPPING, "fixture", &p, err, sizeof err),
-                     FP_PLUGIN_ERR_NOT_FOUND);
+                     FP_EPLUGIN_NOT_FOUND);
     fp_plugin_path_clear(&path);
 }
 
@@ -157,7 +157,7 @@ static void test_unsafe_folders_skipped(void **state)
     assert_non_null(strstr(path.warnings, dir));
     assert_non_null(strstr(path.warnings, "skipped: writable by others"));
     assert_int_equal(fp_plugin_load(&path, FP_PLUGIN_INPUT, "hijack", &p, err, sizeof err),
-                     FP_PLUGIN_ERR_NOT_FOUND);
+                     FP_EPLUGIN_NOT_FOUND);
     fp_plugin_path_clear(&path);
 
     /* The same folder made safe: the plugin loads (the rule, not the name, decided). */
@@ -174,7 +174,7 @@ static void test_unsafe_folders_skipped(void **state)
     assert_int_equal(chmod(file, 0775), 0);
     fp_plugin_path_init(&path, NULL, 0, builtin_dir);
     assert_int_equal(fp_plugin_load(&path, FP_PLUGIN_INPUT, "hijack", &p, err, sizeof err),
-                     FP_PLUGIN_ERR_NOT_FOUND);
+                     FP_EPLUGIN_NOT_FOUND);
     assert_non_null(strstr(err, "skipped: writable by its group"));
     fp_plugin_path_clear(&path);
     assert_int_equal(chmod(file, 0755), 0);

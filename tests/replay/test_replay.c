@@ -636,6 +636,7 @@ static void expect_create_error(const char *path, const char *keys, long line, l
     char err[1024], want[1024];
     int rc = create(h, path, keys, &in, err, sizeof err);
     assert_true(rc < 0);
+    if (line) assert_int_equal(rc, -EBADMSG); /* a malformed file; else a bad key: -EINVAL */
     assert_null(in);
     if (line)
         snprintf(want, sizeof want, "%s:%ld:%ld: %s", path, line, col, reason);

@@ -1,4 +1,4 @@
-/* The GPU warp (ui/gpuwarp.c) against the CPU engine (core/csrbf) on the ICT face: the
+/* The GPU warp (ui/viewer/gpuwarp.c) against the CPU engine (core/csrbf) on the ICT face: the
  * vertex shader's T(x), read back by transform feedback, agrees with csrbf_evaluate to 1e-4
  * of the largest displacement; the identity leaves the base bit for bit; coincident start
  * points merge as the engine merges them; bad input is refused. Also the viewer's script

@@ -3,6 +3,7 @@
 #include "app_util.h"
 #include "command.h"
 #include "fp_session.h"
+#include "session_opts.h"
 
 #include <errno.h>
 #include <getopt.h>
@@ -26,25 +27,18 @@ static void usage(FILE *f)
         "drives the CSRBF engine, the face deforms; writes the final mesh.\n"
         "With no options it runs the demo: the ICT face, the three-claps recording, the\n"
         "anchored mapping, written to facepuppet-demo.obj.\n\n"
-        "  -m, --mesh FILE        face mesh (OBJ, PLY, OFF, STL, glTF)\n"
-        "  -i, --input SPEC       NAME[:ARG][,key=value...], e.g.\n"
-        "                         replay:../shared/data/hands/leap-motion/grab_joints_mm.csv\n"
-        "                         any input also takes record=FILE (an event log of it)\n"
-        "  -M, --mapping SPEC     anchored (default) or unanchored, [,key=value...]\n"
-        "  -r, --radius R         support radius in mesh units (default 6%% of the mesh's\n"
-        "                         bounding-box diagonal)\n"
+        "Session options (shared with `facepuppet live`):\n");
+    fp_session_opts_help(f);
+    fprintf(f,
+        "Options of run:\n"
         "  -o, --out FILE         final mesh (default facepuppet-out.obj; demo:\n"
         "                         facepuppet-demo.obj); format by extension\n"
         "      --frames-out DIR   also write one mesh per frame (DIR/frame-000001.obj...)\n"
-        "  -s, --speed X          replay speed factor for replay inputs (default 1)\n"
         "      --fps N            frames per second of the session loop (default 60)\n"
-        "      --duration S       stop after S seconds (default: when the inputs end)\n"
-        "      --hand-size F      performer's hand size, 1 = mean adult\n"
-        "      --plugin-dir DIR   look for plugins in DIR first (repeatable)\n"
-        "  -q, --quiet            no progress lines\n"
         "  -h, --help             this text\n\n"
         "Exit status: 0 done, 64 usage, 65 bad input data, 66 input missing, 73 output\n"
-        "not writable, 78 plugin missing or incompatible, 1 other failure.\n");
+        "not writable, 78 plugin missing or incompatible, 1 other failure\n"
+        "(facepuppet --help has the whole table).\n");
 }
 
 static double median(double *v, size_t n)
@@ -65,49 +59,27 @@ static void sleep_until(int64_t t_ns)
 
 static int run_main(int argc, char **argv)
 {
-    enum { OPT_FRAMES_OUT = 256, OPT_FPS, OPT_DURATION, OPT_HAND, OPT_PLUGIN_DIR };
-    static const struct option opts[] = {
-        {"mesh", required_argument, 0, 'm'},       {"input", required_argument, 0, 'i'},
-        {"mapping", required_argument, 0, 'M'},    {"radius", required_argument, 0, 'r'},
+    enum { OPT_FRAMES_OUT = FP_SESSION_OPTS_FIRST_FREE, OPT_FPS };
+    static const struct option own[] = {
         {"out", required_argument, 0, 'o'},        {"frames-out", required_argument, 0, OPT_FRAMES_OUT},
-        {"speed", required_argument, 0, 's'},      {"fps", required_argument, 0, OPT_FPS},
-        {"duration", required_argument, 0, OPT_DURATION}, {"hand-size", required_argument, 0, OPT_HAND},
-        {"plugin-dir", required_argument, 0, OPT_PLUGIN_DIR}, {"quiet", no_argument, 0, 'q'},
-        {"help", no_argument, 0, 'h'},             {0, 0, 0, 0}};
+        {"fps", required_argument, 0, OPT_FPS},    {"help", no_argument, 0, 'h'},
+        {0, 0, 0, 0}};
+    struct option opts[FP_SESSION_OPTS_COUNT + sizeof own / sizeof own[0]];
+    memcpy(opts + fp_session_opts_longopts(opts), own, sizeof own);
     fp_session_options so = {0};
-    const char *out = NULL, *frames_out = NULL, *plugin_dirs[8];
-    size_t nplugin_dirs = 0;
-    double speed = 1, fps = 60, duration = 0;
-    bool quiet = false;
+    fp_session_opts sopt;
+    fp_session_opts_init(&sopt, &so);
+    const char *out = NULL, *frames_out = NULL;
+    double fps = 60;
     char *end;
     optind = 1;
-    for (int c; (c = getopt_long(argc, argv, "m:i:M:r:o:s:qh", opts, NULL)) != -1;) {
+    for (int c; (c = getopt_long(argc, argv, FP_SESSION_OPTS_SHORT "o:h", opts, NULL)) != -1;) {
+        int shared = fp_session_opts_parse(&sopt, c, optarg, "run");
+        if (shared < 0) return fp_app_exit_code(shared, FP_APP_INPUT);
+        if (shared) continue;
         switch (c) {
-        case 'm': so.mesh_path = optarg; break;
-        case 'i':
-            if (so.input_count == FP_SESSION_MAX_INPUTS) {
-                fprintf(stderr, "facepuppet run: at most %d --input\n", FP_SESSION_MAX_INPUTS);
-                return FP_EXIT_USAGE;
-            }
-            so.inputs[so.input_count++] = optarg;
-            break;
-        case 'M': so.mapping = optarg; break;
-        case 'r':
-            so.radius = strtod(optarg, &end);
-            if (*end || !(so.radius > 0) || !isfinite(so.radius)) {
-                fprintf(stderr, "facepuppet run: --radius must be a number > 0, got '%s'\n", optarg);
-                return FP_EXIT_USAGE;
-            }
-            break;
         case 'o': out = optarg; break;
         case OPT_FRAMES_OUT: frames_out = optarg; break;
-        case 's':
-            speed = strtod(optarg, &end);
-            if (*end || !(speed > 0) || !isfinite(speed)) {
-                fprintf(stderr, "facepuppet run: --speed must be a number > 0, got '%s'\n", optarg);
-                return FP_EXIT_USAGE;
-            }
-            break;
         case OPT_FPS:
             fps = strtod(optarg, &end);
             if (*end || !(fps >= 1 && fps <= 10000)) {
@@ -115,24 +87,6 @@ static int run_main(int argc, char **argv)
                 return FP_EXIT_USAGE;
             }
             break;
-        case OPT_DURATION:
-            duration = strtod(optarg, &end);
-            if (*end || !(duration > 0)) {
-                fprintf(stderr, "facepuppet run: --duration must be > 0 seconds, got '%s'\n", optarg);
-                return FP_EXIT_USAGE;
-            }
-            break;
-        case OPT_HAND:
-            so.hand_size = strtod(optarg, &end);
-            if (*end || !(so.hand_size > 0.3 && so.hand_size < 3)) {
-                fprintf(stderr, "facepuppet run: --hand-size must be in 0.3..3, got '%s'\n", optarg);
-                return FP_EXIT_USAGE;
-            }
-            break;
-        case OPT_PLUGIN_DIR:
-            if (nplugin_dirs < 8) plugin_dirs[nplugin_dirs++] = optarg;
-            break;
-        case 'q': quiet = true; break;
         case 'h': usage(stdout); return FP_EXIT_OK;
         default: usage(stderr); return FP_EXIT_USAGE;
         }
@@ -141,6 +95,8 @@ static int run_main(int argc, char **argv)
         fprintf(stderr, "facepuppet run: unexpected argument '%s'\n", argv[optind]);
         return FP_EXIT_USAGE;
     }
+    double speed = sopt.speed, duration = sopt.duration_s;
+    bool quiet = sopt.quiet;
     /* The demo: no mesh and no input given. */
     bool mesh_given = so.mesh_path != NULL;
     fp_app_inputs inputs_buf;
@@ -152,11 +108,11 @@ static int run_main(int argc, char **argv)
     if (!out) out = demo ? "facepuppet-demo.obj" : "facepuppet-out.obj";
     if (frames_out && mkdir(frames_out, 0777) && errno != EEXIST) {
         fprintf(stderr, "facepuppet run: --frames-out %s: %s\n", frames_out, strerror(errno));
-        return FP_EXIT_CANTCREAT;
+        return fp_app_exit_code(-errno, FP_APP_OUTPUT);
     }
 
     fp_plugin_path path;
-    fp_app_plugin_path(&path, plugin_dirs, nplugin_dirs);
+    fp_app_plugin_path(&path, sopt.plugin_dirs, sopt.nplugin_dirs);
     so.plugin_path = &path;
     char err[2048];
     fp_session *s = NULL;
@@ -164,7 +120,7 @@ static int run_main(int argc, char **argv)
     if (rc) {
         fprintf(stderr, "facepuppet run: %s\n", err);
         fp_plugin_path_clear(&path);
-        return fp_app_exit_code(rc);
+        return fp_app_exit_code(rc, FP_APP_INPUT);
     }
     if (!quiet) {
         const fp_calibration *c = fp_session_calibration(s);
@@ -176,7 +132,7 @@ static int run_main(int argc, char **argv)
         fprintf(stderr, "facepuppet run: %s\n", err);
         fp_session_destroy(&s);
         fp_plugin_path_clear(&path);
-        return fp_app_exit_code(rc);
+        return fp_app_exit_code(rc, FP_APP_INPUT);
     }
     signal(SIGINT, on_signal);
     signal(SIGTERM, on_signal);
@@ -204,9 +160,9 @@ static int run_main(int argc, char **argv)
         if (frames_out) {
             char file[4400];
             snprintf(file, sizeof file, "%s/frame-%06llu.obj", frames_out, (unsigned long long)frames);
-            if (fp_session_save(s, file, err, sizeof err)) {
+            if ((rc = fp_session_save(s, file, err, sizeof err))) {
                 fprintf(stderr, "facepuppet run: %s\n", err);
-                status = FP_EXIT_CANTCREAT;
+                status = fp_app_exit_code(rc, FP_APP_OUTPUT);
                 break;
             }
         }
@@ -236,9 +192,9 @@ static int run_main(int argc, char **argv)
         if (d > max) max = d;
         if (d > 0) moved++;
     }
-    if (status == FP_EXIT_OK && fp_session_save(s, out, err, sizeof err)) {
+    if (status == FP_EXIT_OK && (rc = fp_session_save(s, out, err, sizeof err))) {
         fprintf(stderr, "facepuppet run: %s\n", err);
-        status = FP_EXIT_CANTCREAT;
+        status = fp_app_exit_code(rc, FP_APP_OUTPUT);
     }
     double med = median(update_ms, nupdates);
     printf("frames %llu, deforming %llu, engaged %llu, committed %llu; vertices moved %zu of %zu; "

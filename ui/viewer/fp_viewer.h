@@ -74,9 +74,9 @@ typedef struct fp_viewer_report {
 /** Open the window, create and start the session from opt->session, run until the window
  *  closes (Esc, close button, script), opt->frames frames pass, or an error. report may be
  *  NULL. Returns 0, or a negative code with a message in err: the session's codes (see
- *  fp_session_create: -EINVAL, -EBADMSG, -ENOENT, FP_PLUGIN_ERR_*), -ENODEV (no display, no
- *  OpenGL 3.3 core context, a shader that does not build), -EIO (a screenshot could not be
- *  or the final mesh could not be written), -EINVAL also for a malformed script (naming the command). */
+ *  fp_session_create: -EINVAL, -EBADMSG, -ENOENT, FP_EPLUGIN_*), -ENODEV (no display, no
+ *  OpenGL 3.3 core context, a shader that does not build), -EIO (a screenshot or the final
+ *  mesh could not be written), -EINVAL also for a malformed script (naming the command). */
 int fp_viewer_run(const fp_viewer_options *opt, fp_viewer_report *report, char *err,
                   size_t errlen);
 

@@ -32,9 +32,10 @@ static int mesh_info(const char *path)
 {
     fp_mesh *m = NULL;
     char err[1024];
-    if (fp_mesh_load(path, &m, err, sizeof err) != FP_MESH_OK) {
+    int rc = fp_mesh_load(path, &m, err, sizeof err);
+    if (rc < 0) {
         fprintf(stderr, "facepuppet info: %s\n", err);
-        return FP_EXIT_DATAERR;
+        return fp_app_exit_code(rc, FP_APP_INPUT);
     }
     float lo[3], hi[3];
     fp_mesh_bounds(m, lo, hi);
@@ -58,7 +59,7 @@ static int recording_info(const char *path)
     if (rc) {
         fprintf(stderr, "facepuppet info: %s\n", err);
         fp_plugin_path_clear(&pp);
-        return fp_app_exit_code(rc);
+        return fp_app_exit_code(rc, FP_APP_INPUT);
     }
     const fp_input_recording *ext =
         inst.input->get_extension ? inst.input->get_extension(inst.input, FP_EXT_RECORDING_INFO) : NULL;

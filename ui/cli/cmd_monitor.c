@@ -127,7 +127,7 @@ static int monitor_main(int argc, char **argv)
         fprintf(stderr, "facepuppet monitor: %s\n", err);
         fp_input_instance_close(&inst);
         fp_plugin_path_clear(&path);
-        return fp_app_exit_code(rc);
+        return fp_app_exit_code(rc, FP_APP_INPUT);
     }
     signal(SIGINT, on_signal);
     signal(SIGTERM, on_signal);

@@ -1,6 +1,7 @@
 #include "app_util.h"
 
 #include "command.h"
+#include "fp_error.h"
 
 #include <errno.h>
 #include <stdio.h>
@@ -35,13 +36,18 @@ const char *fp_app_data_path(const char *rel, char *buf, size_t len)
     return buf;
 }
 
-int fp_app_exit_code(int rc)
+int fp_app_exit_code(int code, fp_app_io io)
 {
-    if (rc <= -1001 && rc >= -1006) return FP_EXIT_PLUGIN;
-    switch (-rc) {
+    if (fp_error_is_plugin(code)) return FP_EXIT_PLUGIN;
+    switch (-code) {
     case 0: return FP_EXIT_OK;
-    case ENOENT: case EACCES: case ENODEV: case EBUSY: return FP_EXIT_NOINPUT;
-    case EINVAL: case EBADMSG: case EPROTO: case ERANGE: return FP_EXIT_DATAERR;
+    case EINVAL: return FP_EXIT_USAGE;
+    case EBADMSG: case ERANGE: case EDOM: case EPROTO: case ENOTSUP: case EILSEQ:
+        return FP_EXIT_DATAERR;
+    case ENOENT: case EACCES: case EPERM: case ENODEV: case ENXIO: case EBUSY: case ENOTDIR:
+    case EISDIR:
+        return io == FP_APP_OUTPUT ? FP_EXIT_CANTCREAT : FP_EXIT_NOINPUT;
+    case EIO: case ENOSPC: case EROFS: case EDQUOT: case EFBIG: case EEXIST: return FP_EXIT_CANTCREAT;
     case ENOMEM: return FP_EXIT_SOFTWARE;
     default: return FP_EXIT_FAILURE;
     }

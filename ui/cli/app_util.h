@@ -1,0 +1,54 @@
+/* Helpers shared by the subcommands: plugin search path, data paths, error -> exit code. */
+#ifndef FP_APP_UTIL_H
+#define FP_APP_UTIL_H
+
+#include "fp_plugin_host.h"
+#include "fp_session.h"
+
+#include <stdbool.h>
+
+/** The plugin path: --plugin-dir folders, FACEPUPPET_PLUGIN_PATH, the built-in folder. */
+void fp_app_plugin_path(fp_plugin_path *path, const char *const *dirs, size_t ndirs);
+
+/** A file under the shared data folder (FP_SHARED_DATA in the environment, else the one
+ *  beside the source tree): writes "<data>/<rel>" into buf. */
+const char *fp_app_data_path(const char *rel, char *buf, size_t len);
+
+/** What a failing call was doing, for the codes whose exit status depends on it. */
+typedef enum fp_app_io {
+    FP_APP_INPUT,   /* reading an input: a mesh, a recording, a device, plugins, options */
+    FP_APP_OUTPUT   /* creating or writing an output file */
+} fp_app_io;
+
+/** The one map from an error code (fp_error.h: 0, a negative errno or an FP_E* code) to the
+ *  command's exit status (enum fp_exit, sysexits.h); every subcommand uses it, never the
+ *  message text. The table (docs/architecture.md, "Errors"; `facepuppet --help`):
+ *    0                                          0
+ *    -EINVAL (a bad option or SPEC key)         64 usage
+ *    -EBADMSG -ERANGE -EDOM -EPROTO -ENOTSUP    65 bad input data (and -EILSEQ)
+ *    -ENOENT -EACCES -EPERM -ENODEV -ENXIO      66 an input (file, device, display) that cannot
+ *    -EBUSY -ENOTDIR -EISDIR                       be opened; 73 when io is FP_APP_OUTPUT
+ *    -EIO -ENOSPC -EROFS -EDQUOT -EFBIG -EEXIST 73 an output that cannot be created or written
+ *    -ENOMEM                                    70 internal
+ *    FP_EPLUGIN_*                               78 a plugin missing, of another ABI, failing
+ *    anything else (FP_ENUMERIC, -ETIMEDOUT...) 1
+ *  A plugin's create() and start() codes go through the same table, so a plugin says "bad
+ *  SPEC" with -EINVAL, "malformed file" with -EBADMSG, "no such file or device" with -ENOENT
+ *  or -ENODEV (plugin.h). */
+int fp_app_exit_code(int code, fp_app_io io);
+
+/** Storage for the strings fp_app_session_defaults puts into a fp_session_options; it must
+ *  outlive the options' use. */
+typedef struct fp_app_inputs {
+    char demo_mesh[4096];
+    char demo_input[4200];
+    char specs[FP_SESSION_MAX_INPUTS][4300];
+} fp_app_inputs;
+
+/** Defaults shared by `run` and `live`. With neither a mesh nor an input the session is the
+ *  demo: the ICT face and the three-claps recording (returns true). Without a mesh: the ICT
+ *  face. Without a mapping: "anchored". A speed other than 1 is appended as `,speed=X` to
+ *  every replay input that sets none. Strings point into *buf. */
+bool fp_app_session_defaults(fp_session_options *so, double speed, fp_app_inputs *buf);
+
+#endif

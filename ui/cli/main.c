@@ -1,0 +1,84 @@
+/* facepuppet: the command-line entry. Dispatches to the subcommands in cmd_*.c. */
+#define _GNU_SOURCE
+#include "command.h"
+
+#include <limits.h>
+#include <stdio.h>
+#include <string.h>
+#include <unistd.h>
+
+#ifndef FP_VERSION_STRING
+#define FP_VERSION_STRING "unknown"
+#endif
+
+/* The subcommands, in --help order. Each is defined in its cmd_NAME.c; `live` exists in
+ * every build and says so when the viewer was not built (FP_BUILD_UI off). */
+extern const fp_command fp_command_run, fp_command_live, fp_command_monitor, fp_command_info,
+    fp_command_bench;
+static const fp_command *const commands[] = {&fp_command_run, &fp_command_live,
+                                             &fp_command_monitor, &fp_command_info,
+                                             &fp_command_bench};
+enum { NCOMMANDS = sizeof commands / sizeof commands[0] };
+
+const char *fp_app_exe_dir(void)
+{
+    static char dir[PATH_MAX];
+    if (!dir[0]) {
+        ssize_t n = readlink("/proc/self/exe", dir, sizeof dir - 1);
+        if (n <= 0) {
+            strcpy(dir, ".");
+        } else {
+            dir[n] = '\0';
+            char *slash = strrchr(dir, '/');
+            if (slash) *slash = '\0';
+        }
+    }
+    return dir;
+}
+
+static void usage(FILE *f)
+{
+    fprintf(f, "usage: facepuppet COMMAND [OPTIONS]\n\n"
+               "Live facial puppeteering: data gloves drive compactly supported radial basis\n"
+               "functions (Wendland CSRBFs) that deform a 3D face in real time.\n\n"
+               "Commands:\n");
+    for (size_t i = 0; i < NCOMMANDS; i++)
+        fprintf(f, "  %-10s %s\n", commands[i]->name, commands[i]->summary);
+    fprintf(f, "\nfacepuppet COMMAND --help shows a command's options.\n"
+               "Options: -h, --help   this text;  -V, --version   the version.\n\n"
+               "Errors name the file and line, the option, the SPEC or the plugin at fault.\n"
+               "Exit status (sysexits.h), the same for every command:\n"
+               "   0  done\n"
+               "   1  the work ran and failed (the engine could not solve, a device went away)\n"
+               "  64  usage: a bad option or SPEC key (EINVAL)\n"
+               "  65  bad input data: a malformed mesh, recording or calibration (EBADMSG,\n"
+               "      ERANGE, EPROTO, ENOTSUP)\n"
+               "  66  an input that cannot be opened: file, device or display (ENOENT, EACCES,\n"
+               "      ENODEV, EBUSY)\n"
+               "  69  a command this build left out (live without the viewer)\n"
+               "  70  internal error, out of memory\n"
+               "  73  an output that cannot be created or written (ENOENT or EACCES on an\n"
+               "      output, EIO, ENOSPC, EROFS)\n"
+               "  78  a plugin missing, built for another ABI, or failing its init\n");
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) {
+        usage(stderr);
+        return FP_EXIT_USAGE;
+    }
+    const char *name = argv[1];
+    if (!strcmp(name, "-h") || !strcmp(name, "--help") || !strcmp(name, "help")) {
+        usage(stdout);
+        return FP_EXIT_OK;
+    }
+    if (!strcmp(name, "-V") || !strcmp(name, "--version")) {
+        printf("facepuppet %s\n", FP_VERSION_STRING);
+        return FP_EXIT_OK;
+    }
+    for (size_t i = 0; i < NCOMMANDS; i++)
+        if (!strcmp(commands[i]->name, name)) return commands[i]->main(argc - 1, argv + 1);
+    fprintf(stderr, "facepuppet: unknown command '%s' (see facepuppet --help)\n", name);
+    return FP_EXIT_USAGE;
+}

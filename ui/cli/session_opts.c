@@ -1,0 +1,113 @@
+/* The options `run` and `live` share: one table for getopt, parsing and --help. */
+#define _GNU_SOURCE
+#include "session_opts.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+enum { OPT_DURATION = 0x100, OPT_HAND_SIZE, OPT_PLUGIN_DIR };
+
+static const struct {
+    const char *name;
+    int has_arg, val;
+    const char *arg, *help;   /* help: lines after the first are indented under it */
+} table[FP_SESSION_OPTS_COUNT] = {
+    {"mesh", required_argument, 'm', "FILE", "face mesh (OBJ, PLY, OFF, STL, glTF)"},
+    {"input", required_argument, 'i', "SPEC",
+     "NAME[:ARG][,key=value...] (repeatable), e.g.\n"
+     "replay:../shared/data/hands/leap-motion/grab_joints_mm.csv\n"
+     "any input also takes record=FILE (an event log of it)"},
+    {"mapping", required_argument, 'M', "SPEC", "anchored (default) or unanchored, [,key=value...]"},
+    {"radius", required_argument, 'r', "R",
+     "support radius in mesh units (default 6% of the mesh's\nbounding-box diagonal)"},
+    {"speed", required_argument, 's', "X", "replay speed factor for replay inputs (default 1)"},
+    {"duration", required_argument, OPT_DURATION, "S", "stop after S seconds (default: when the inputs end)"},
+    {"hand-size", required_argument, OPT_HAND_SIZE, "F", "performer's hand size, 1 = mean adult"},
+    {"plugin-dir", required_argument, OPT_PLUGIN_DIR, "DIR", "look for plugins in DIR first (repeatable)"},
+    {"quiet", no_argument, 'q', NULL, "no progress lines"},
+};
+
+void fp_session_opts_init(fp_session_opts *o, fp_session_options *session)
+{
+    memset(o, 0, sizeof *o);
+    o->session = session;
+    o->speed = 1;
+}
+
+size_t fp_session_opts_longopts(struct option *out)
+{
+    for (size_t i = 0; i < FP_SESSION_OPTS_COUNT; i++)
+        out[i] = (struct option){table[i].name, table[i].has_arg, NULL, table[i].val};
+    return FP_SESSION_OPTS_COUNT;
+}
+
+/* A finite number in (lo, hi) (exclusive bounds), the whole of arg. */
+static bool number(const char *arg, double lo, double hi, double *out)
+{
+    char *end;
+    double v = strtod(arg, &end);
+    if (end == arg || *end || !isfinite(v) || !(v > lo && v < hi)) return false;
+    *out = v;
+    return true;
+}
+
+static int bad(const char *cmd, const char *what, const char *arg)
+{
+    fprintf(stderr, "facepuppet %s: %s, got '%s'\n", cmd, what, arg);
+    return -EINVAL;
+}
+
+int fp_session_opts_parse(fp_session_opts *o, int c, const char *arg, const char *cmd)
+{
+    fp_session_options *so = o->session;
+    switch (c) {
+    case 'm': so->mesh_path = arg; return 1;
+    case 'i':
+        if (so->input_count == FP_SESSION_MAX_INPUTS) {
+            fprintf(stderr, "facepuppet %s: at most %d --input\n", cmd, FP_SESSION_MAX_INPUTS);
+            return -EINVAL;
+        }
+        so->inputs[so->input_count++] = arg;
+        return 1;
+    case 'M': so->mapping = arg; return 1;
+    case 'r':
+        return number(arg, 0, INFINITY, &so->radius) ? 1 : bad(cmd, "--radius must be a number > 0", arg);
+    case 's':
+        return number(arg, 0, INFINITY, &o->speed) ? 1 : bad(cmd, "--speed must be a number > 0", arg);
+    case OPT_DURATION:
+        return number(arg, 0, INFINITY, &o->duration_s) ? 1
+               : bad(cmd, "--duration must be > 0 seconds", arg);
+    case OPT_HAND_SIZE:
+        return number(arg, 0.3, 3, &so->hand_size) ? 1 : bad(cmd, "--hand-size must be in 0.3..3", arg);
+    case OPT_PLUGIN_DIR:
+        if (o->nplugin_dirs == FP_SESSION_OPTS_MAX_PLUGIN_DIRS) {
+            fprintf(stderr, "facepuppet %s: at most %d --plugin-dir\n", cmd,
+                    FP_SESSION_OPTS_MAX_PLUGIN_DIRS);
+            return -EINVAL;
+        }
+        o->plugin_dirs[o->nplugin_dirs++] = arg;
+        return 1;
+    case 'q': o->quiet = true; return 1;
+    default: return 0;
+    }
+}
+
+void fp_session_opts_help(FILE *f)
+{
+    for (size_t i = 0; i < FP_SESSION_OPTS_COUNT; i++) {
+        char flag[48];
+        int n = table[i].val < 0x100 ? snprintf(flag, sizeof flag, "-%c, ", table[i].val)
+                                     : snprintf(flag, sizeof flag, "    ");
+        snprintf(flag + n, sizeof flag - (size_t)n, "--%s%s%s", table[i].name,
+                 table[i].arg ? " " : "", table[i].arg ? table[i].arg : "");
+        fprintf(f, "  %-22s ", flag);
+        for (const char *h = table[i].help; *h;) {
+            size_t len = strcspn(h, "\n");
+            fprintf(f, "%.*s\n", (int)len, h);
+            h += len;
+            if (*h == '\n' && *++h) fprintf(f, "%25s", "");
+        }
+    }
+}
