@@ -125,7 +125,7 @@ bool fp_event_queue_pop(fp_event_queue *q, fp_event *out);
 
 /* ---- input instances ------------------------------------------------------------------ */
 
-struct fp_eventlog_writer;
+struct fp_event_recorder;
 
 /** One running input: its plugin, the fp_host given to it, its queue. */
 typedef struct fp_input_instance {
@@ -135,8 +135,10 @@ typedef struct fp_input_instance {
     fp_event_queue queue;
     char name[64];                       /* the SPEC's name, for messages */
     uint32_t source;                     /* index in the session; stamped into events */
-    struct fp_eventlog_writer *record;   /* record=FILE: every drained event is written */
+    struct fp_event_recorder *record;    /* record=FILE: every polled event is queued for
+                                            its writer thread (fp_record.h) */
     bool started;
+    bool stopped;                        /* stop() was called (it is called once) */
 } fp_input_instance;
 
 /** Load the plugin for `spec` and create the instance (not yet started). The host strips
@@ -148,8 +150,16 @@ int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
 int fp_input_instance_start(fp_input_instance *inst, char *err, size_t errlen);
 /** Stop (if started), destroy, close the recording, unload. Safe on a zeroed instance. */
 void fp_input_instance_close(fp_input_instance *inst);
-/** Pop one event; writes it to the recording if any. */
+/** Pop one event; queues it for the recording if any (no I/O on the caller's thread).
+ *  [session-thread]. */
 bool fp_input_instance_poll(fp_input_instance *inst, fp_event *out);
+/** The recording's first error so far (a failed write, events dropped), 0 when none or no
+ *  recording; the message into err. Any thread. */
+int fp_input_instance_record_error(fp_input_instance *inst, char *err, size_t errlen);
+/** Stop the input, record what is still queued, close the recording (join its writer) and
+ *  return 0 or its first error (fp_record.h's codes; message into err). No-op without a
+ *  recording. fp_input_instance_close does this too but drops the error. */
+int fp_input_instance_close_record(fp_input_instance *inst, char *err, size_t errlen);
 
 /** CLOCK_MONOTONIC in nanoseconds: the host clock of the ABI. */
 int64_t fp_now_ns(void);

@@ -3,7 +3,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "fp_plugin_host.h"
 
-#include "fp_eventlog.h"
+#include "fp_record.h"
 
 #include <errno.h>
 #include <stdio.h>
@@ -90,13 +90,9 @@ int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
         if (!rc) rc = -EINVAL;
         goto out;
     }
-    if (record) {
-        inst->record = fp_eventlog_writer_open(record, perr, sizeof perr);
-        if (!inst->record) {
-            snprintf(err, errlen, "input '%s': record=%s: %s", spec_text, record, perr);
-            rc = -EIO;
-            goto out;
-        }
+    if (record && (rc = fp_event_recorder_open(record, &inst->record, perr, sizeof perr))) {
+        snprintf(err, errlen, "input '%s': record=%s: %s", spec_text, record, perr);
+        goto out;
     }
 out:
     fp_spec_clear(&spec);
@@ -122,21 +118,38 @@ int fp_input_instance_start(fp_input_instance *inst, char *err, size_t errlen)
 bool fp_input_instance_poll(fp_input_instance *inst, fp_event *out)
 {
     if (!inst->queue.cells || !fp_event_queue_pop(&inst->queue, out)) return false;
-    if (inst->record) fp_eventlog_writer_write(inst->record, out);
+    if (inst->record) fp_event_recorder_push(inst->record, out); /* written on its own thread */
     return true;
+}
+
+static void stop_input(fp_input_instance *inst)
+{
+    if (inst->input && !inst->stopped && inst->input->stop) inst->input->stop(inst->input);
+    inst->stopped = true;
+    inst->started = false;
+}
+
+int fp_input_instance_record_error(fp_input_instance *inst, char *err, size_t errlen)
+{
+    return inst->record ? fp_event_recorder_error(inst->record, err, errlen) : 0;
+}
+
+int fp_input_instance_close_record(fp_input_instance *inst, char *err, size_t errlen)
+{
+    if (!inst->record) return 0;
+    stop_input(inst);
+    fp_event ev;
+    while (fp_input_instance_poll(inst, &ev)) {} /* keep what was read */
+    return fp_event_recorder_close(&inst->record, err, errlen);
 }
 
 void fp_input_instance_close(fp_input_instance *inst)
 {
+    fp_input_instance_close_record(inst, NULL, 0);
+    stop_input(inst);
     if (inst->input) {
-        if (inst->input->stop) inst->input->stop(inst->input);
         if (inst->input->destroy) inst->input->destroy(inst->input);
         inst->input = NULL;
-    }
-    if (inst->record) {
-        fp_event ev;
-        while (fp_input_instance_poll(inst, &ev)) {} /* keep what was read */
-        fp_eventlog_writer_close(&inst->record, NULL, 0);
     }
     fp_event_queue_destroy(&inst->queue);
     fp_plugin_unload(&inst->plugin);

@@ -1,17 +1,34 @@
 /*
- * fp_session.h: one puppeteering session, the frame loop of shared/docs/design.md: drain
- * the inputs' events, turn hands into poses (forward kinematics for joint angles), place
- * them in mesh space (workspace calibration), ask the mapping for a control set, and let
- * the CSRBF engine solve and evaluate deformed = T(base).
+ * fp_session.h: one puppeteering session, the frame loop of shared/docs/design.md. One
+ * fp_session_step runs the frame's steps, each a module of core/session (or core/pose):
+ *   1 inputs and intents (intents.h): drain the inputs' queues, pedal and key bindings
+ *   2 hand poses and calibration (core/pose/fp_pose.h): FK, workspace calibration
+ *   3 the mapping call (step_mapping.h): the control set, checked
+ *   4 the rig (step_rig.h): a pass-through until the rigs issue
+ *   5 the engine (step_engine.h): factor or reuse, solve, guard, evaluate; tip distances
+ *   6 history (history.h): commit into the base, undo ring, reset
+ *   7 the recorder (step_record.h): the frame's record to the sink of the options
+ *
+ * Errors: functions return 0 or a negative code of core/common/fp_error.h: negative errno
+ * (-EINVAL, -ENOMEM, ...), the mesh loader's code unchanged, the plugin host's codes
+ * unchanged (FP_EPLUGIN_* / FP_EPLUGIN_*, or a plugin's own negative code), the event
+ * log's code for a recording; a message naming the file, SPEC or plugin goes into err.
+ * The session never prints: run-time messages (input status lines, mapping and engine
+ * errors, recording errors) go to the log callback of the options; an error that repeats
+ * every frame is sent once, then as "... (repeated N more times)" when it ends or changes.
  *
  * Thread rules: a session is used from one thread (the session thread: the frame loop of
- * `facepuppet run` or the viewer). Input plugins run on their own threads and reach it only
- * through the lock-free queues of core/plugin.
+ * `facepuppet run` or the viewer); every function here is [session-thread] unless noted.
+ * Input plugins run on their own threads and reach it only through the lock-free queues of
+ * core/plugin; record=FILE recordings are written by threads of their own.
  */
 #ifndef FP_SESSION_H
 #define FP_SESSION_H
 
 #include "fp_plugin_host.h"
+#include "fp_pose.h"
+#include "session_log.h"
+#include "step_record.h"
 
 #include <stdbool.h>
 #include <stddef.h>
@@ -22,13 +39,12 @@ extern "C" {
 #endif
 
 #define FP_SESSION_MAX_INPUTS 8
+/** Commits that fp_session_undo can take back (the oldest is forgotten beyond). */
+#define FP_SESSION_UNDO_LEVELS 32
 
-/** Workspace calibration: p_mesh = scale * p_mm + offset (hands: mm, device frame; the
- *  device's +x right, +y up, +z toward the performer, as the mesh's +x, +y, +z). */
-typedef struct fp_calibration {
-    double scale;        /* mesh units per millimetre */
-    double offset[3];    /* mesh units */
-} fp_calibration;
+/* fp_calibration (p_mesh = scale * p_mm + offset) is declared in fp_pose.h;
+ * fp_session_log_fn in session_log.h; fp_frame_record and fp_frame_record_fn in
+ * step_record.h. */
 
 typedef struct fp_session_options {
     const char *mesh_path;                          /* required */
@@ -42,6 +58,17 @@ typedef struct fp_session_options {
     const fp_plugin_path *plugin_path;              /* required */
     int engine_threads;                             /* 0: 1 below 200k vertices, else all
                                                        cores; -1: all cores; N: N threads */
+    fp_session_log_fn log;                          /* NULL: silent. Called on the session
+                                                       thread (and in create/destroy) with an
+                                                       fp_log_level, a source (input SPEC
+                                                       name, mapping name, "engine") and a
+                                                       line without newline */
+    void *log_user;                                 /* passed to log */
+    fp_frame_record_fn record;                      /* NULL: none. After each frame, on the
+                                                       session thread; must not block, lock
+                                                       or do I/O (a take recorder pushes into
+                                                       its lock-free queue) */
+    void *record_user;                              /* passed to record */
 } fp_session_options;
 
 /** Statistics of one fp_session_step. */
@@ -60,18 +87,37 @@ typedef struct fp_frame_stats {
 
 typedef struct fp_session fp_session;
 
-/** Load the mesh, load the mapping plugin and every input (not started). Returns 0, or a
- *  negative code with a message in err naming the file, SPEC or plugin at fault:
- *  -EINVAL bad options, FP_EPLUGIN_* for plugins (see fp_plugin_host.h), -ENOENT and
- *  -EBADMSG for the mesh (unreadable, malformed). */
+/** Load the mesh, load the mapping plugin and every input (not started), open the inputs'
+ *  record=FILE recordings. Returns 0, or a negative code with a message in err naming the
+ *  file, SPEC or plugin at fault: -EINVAL bad options (no mesh or plugin path, too many
+ *  inputs, a negative or NaN radius, a mapping SPEC with ':ARG'), -ENOMEM, the mesh
+ *  loader's code unchanged (fp_mesh_load), the plugin host's codes unchanged
+ *  (fp_plugin_load, fp_input_instance_open: FP_EPLUGIN_*, a plugin's own code, a
+ *  recording's code). [main-thread]. */
 int fp_session_create(const fp_session_options *opt, fp_session **out, char *err, size_t errlen);
 
-/** Start the inputs' threads. */
+/** Start the inputs' threads. Returns 0 or the first failing input's code (unchanged),
+ *  err naming it. [main-thread]. */
 int fp_session_start(fp_session *s, char *err, size_t errlen);
 
-/** One frame at host time now_ns (fp_now_ns()). Never fails the session: an engine or
- *  mapping error keeps the last shape and is counted in the frame's stats and logged. */
+/** One frame at host time now_ns (fp_now_ns()): the seven steps above. Never fails the
+ *  session: an engine or mapping error keeps the base shown for this frame and is sent to
+ *  the log (once, then counted). stats may be NULL. */
 void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *stats);
+
+/** The engine step's solver (core/csrbf) whose coefficients made fp_session_positions, for
+ *  a GPU warp (csrbf_solver_get_coefficients): non-NULL only while a deformation is shown
+ *  (fp_session_positions != fp_session_base). Valid until the next step, radius change or
+ *  destroy; read it on the session thread between steps. */
+const struct csrbf_solver *fp_session_solver(const fp_session *s);
+
+/** Close the inputs' record=FILE recordings: each recorded input is stopped, what it had
+ *  queued is written, its writer thread joined (inputs without a recording keep running). Returns 0, or the first recording's error (a failed write,
+ *  events dropped because its writer fell behind; the event log's code or -ENOBUFS), also
+ *  sent to the log, with the message in err. Call once, before
+ *  destroy where a failed recording must change the exit status; destroy does it otherwise
+ *  (and only logs). */
+int fp_session_stop(fp_session *s, char *err, size_t errlen);
 
 /** True once every input has reported FP_STATUS_END_OF_STREAM (recordings ended). */
 bool fp_session_finished(const fp_session *s);
@@ -93,7 +139,7 @@ void fp_session_set_radius(fp_session *s, double radius);
 const fp_calibration *fp_session_calibration(const fp_session *s);
 /** The latest pose of a hand in mesh units (NULL if never seen). */
 const fp_hand_pose *fp_session_hand(const fp_session *s, int hand);
-/** The last control set (start/end points) the engine used. */
+/** The last control set (start/end points) the mapping made and the engine used. */
 const fp_control_set *fp_session_control_set(const fp_session *s);
 /** Replace the mapping by a new one from spec (NAME[,key=value...], as the mapping option),
  *  loaded from path: keeps the mesh, the base, the undo history, the inputs and the radius;
@@ -102,20 +148,25 @@ const fp_control_set *fp_session_control_set(const fp_session *s);
  *  Session thread only (the viewer's keys 1 and 2). */
 int fp_session_set_mapping(fp_session *s, const fp_plugin_path *path, const char *spec,
                            char *err, size_t errlen);
-/** Undo the last commit (one level of the commit history, up to 64), or back to loaded. */
+/** Undo the last commit or reset (one level, up to FP_SESSION_UNDO_LEVELS): the base goes
+ *  back, a deformation in progress is dropped, the mapping's gesture is reset. Returns false
+ *  when there is nothing to undo. */
 bool fp_session_undo(fp_session *s);
+/** Back to the loaded shape (undoable when the base differed). */
 void fp_session_reset(fp_session *s);
-/** Events dropped because a queue was full, over all inputs. */
+/** Events dropped because an input's queue was full, over all inputs. Any thread. */
 unsigned long fp_session_dropped(const fp_session *s);
 
 /** How many FP_STATUS_ERROR events the inputs reported (a damaged recording, a device that
  *  needs the performer); *last gets the latest one's text. */
 unsigned fp_session_input_errors(const fp_session *s, const char **last);
 
-/** Write the shape to show (normals recomputed) to path; format by extension. */
+/** Write the shape to show (normals recomputed) to path; format by extension. Returns 0,
+ *  -ENOMEM, or the mesh writer's code unchanged (fp_mesh_save), err naming path. */
 int fp_session_save(const fp_session *s, const char *path, char *err, size_t errlen);
 
-/** Stop inputs, unload plugins, free everything; sets *s to NULL. */
+/** fp_session_stop if not done (its error only logged), then a pending repeated error's
+ *  count is logged, plugins unloaded, everything freed; sets *s to NULL. NULL-safe. */
 void fp_session_destroy(fp_session **s);
 
 #ifdef __cplusplus

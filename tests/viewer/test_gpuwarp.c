@@ -47,7 +47,7 @@ static double compare(size_t n, const float *start, const float *end, double rad
     assert_true(csrbf_solver_solve(s, n, start, end) >= 0);
     assert_true(csrbf_evaluate(s, p, cpu, 0, NULL) >= 0);
     fp_warp_coeffs c;
-    assert_int_equal(fp_warp_solve(n, start, end, radius, &c), 0);
+    assert_int_equal(fp_warp_from_solver(s, radius, &c), 0);
     assert_int_equal(c.count, csrbf_solver_centres(s));
     assert_int_equal(fp_gpuwarp_eval(gw, &c, nv, face->positions, gpu), 0);
     double err = 0;
@@ -117,7 +117,7 @@ static void test_identity_is_exact(void **state)
 {
     (void)state;
     fp_warp_coeffs c;
-    assert_int_equal(fp_warp_solve(0, NULL, NULL, 1.0, &c), 0);
+    assert_int_equal(fp_warp_from_solver(NULL, 1.0, &c), 0);
     assert_int_equal(c.count, 0);
     size_t nv = face->vertex_count;
     float *gpu = malloc(nv * 3 * sizeof *gpu);
@@ -130,14 +130,35 @@ static void test_identity_is_exact(void **state)
 static void test_solve_refuses_bad_input(void **state)
 {
     (void)state;
-    float s[65 * 3] = {0}, e[65 * 3] = {0};
+    float st[65 * 3], en[65 * 3];
+    for (int i = 0; i < 65; i++)
+        for (int k = 0; k < 3; k++) st[3 * i + k] = en[3 * i + k] = (float)(i * (k + 1)) * 0.1f;
     fp_warp_coeffs c;
-    assert_int_equal(fp_warp_solve(65, s, e, 1.0, &c), -EINVAL);
-    assert_int_equal(fp_warp_solve(1, s, e, 0.0, &c), -EINVAL);
-    assert_int_equal(fp_warp_solve(1, s, e, INFINITY, &c), -EINVAL);
-    e[1] = NAN;
-    assert_int_equal(fp_warp_solve(1, s, e, 1.0, &c), -EINVAL);
+    csrbf_options o = {0};
+    o.radius = 1.0;
+    csrbf_solver *s = NULL;
+    assert_true(csrbf_solver_create(&o, &s) >= 0);
+    /* no start points yet; bad radii */
+    assert_int_equal(fp_warp_from_solver(s, 1.0, &c), -EINVAL);
+    assert_true(csrbf_solver_solve(s, 1, st, en) >= 0);
+    assert_int_equal(fp_warp_from_solver(s, 0.0, &c), -EINVAL);
+    assert_int_equal(fp_warp_from_solver(s, INFINITY, &c), -EINVAL);
+    assert_int_equal(fp_warp_from_solver(s, 1.0, &c), 0);
+    assert_int_equal(c.count, 1);
+    /* 65 distinct centres: more than the shader's uniforms hold */
+    assert_true(csrbf_solver_solve(s, 65, st, en) >= 0);
+    assert_int_equal(csrbf_solver_centres(s), 65);
+    assert_int_equal(fp_warp_from_solver(s, 1.0, &c), -E2BIG);
     assert_int_equal(c.count, 0);
+    csrbf_solver_destroy(&s);
+    /* a polynomial part, which the shader lacks */
+    o.poly = CSRBF_POLY_LINEAR;
+    assert_true(csrbf_solver_create(&o, &s) >= 0);
+    for (int i = 0; i < 3 * 6; i++) en[i] += 0.05f;
+    assert_true(csrbf_solver_solve(s, 6, st, en) >= 0);
+    assert_int_equal(fp_warp_from_solver(s, 1.0, &c), -ENOTSUP);
+    assert_int_equal(c.count, 0);
+    csrbf_solver_destroy(&s);
 }
 
 static void test_script_parse(void **state)

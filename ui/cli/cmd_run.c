@@ -18,6 +18,15 @@
 static volatile sig_atomic_t interrupted;
 static void on_signal(int sig) { (void)sig; interrupted = 1; }
 
+/* The session's log lines (input status, mapping and engine errors, recordings) to stderr;
+ * debug lines only with FACEPUPPET_DEBUG set. */
+static void log_line(void *user, int level, const char *source, const char *message)
+{
+    (void)user;
+    if (level > FP_LOG_INFO && !getenv("FACEPUPPET_DEBUG")) return;
+    fprintf(stderr, "facepuppet: %s: %s\n", source, message);
+}
+
 static void usage(FILE *f)
 {
     fprintf(f,
@@ -114,6 +123,7 @@ static int run_main(int argc, char **argv)
     fp_plugin_path path;
     fp_app_plugin_path(&path, sopt.plugin_dirs, sopt.nplugin_dirs);
     so.plugin_path = &path;
+    so.log = log_line;
     char err[2048];
     fp_session *s = NULL;
     int rc = fp_session_create(&so, &s, err, sizeof err);
@@ -179,6 +189,8 @@ static int run_main(int argc, char **argv)
         sleep_until(next);
     }
     if (interrupted && !quiet) fprintf(stderr, "facepuppet run: interrupted; saving what was done\n");
+    /* Close the record=FILE recordings: a failed write must fail the run. */
+    bool record_failed = fp_session_stop(s, err, sizeof err) != 0;
     /* The summary: displacement of the final shape from the loaded one. */
     const float *a = fp_session_loaded(s), *b = fp_session_positions(s);
     size_t n = fp_session_vertex_count(s), moved = 0;
@@ -208,6 +220,10 @@ static int run_main(int argc, char **argv)
     if (fp_session_input_errors(s, &input_error) && status == FP_EXIT_OK) {
         fprintf(stderr, "facepuppet run: an input reported an error: %s\n", input_error);
         status = FP_EXIT_DATAERR;
+    }
+    if (record_failed && status == FP_EXIT_OK) {
+        fprintf(stderr, "facepuppet run: %s\n", err);
+        status = FP_EXIT_CANTCREAT;
     }
     if (!finite) {
         fprintf(stderr, "facepuppet run: non-finite vertex in the result\n");

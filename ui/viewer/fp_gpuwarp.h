@@ -4,13 +4,15 @@
  * shared/docs/csrbf.md), so that the viewer can draw a deformation from the base shape and a
  * few uniforms instead of uploading every vertex each frame (`facepuppet live --gpu-warp`).
  *
- * The coefficients come from the engine (csrbf_solver_solve, then
- * csrbf_solver_get_coefficients), with the session's settings: kernel psi31, no polynomial,
- * start points merged below 1e-4 R. The shader evaluates psi31 only; the result is checked
- * against the CPU engine's evaluation (fp_gpuwarp_eval, tests/viewer/test_gpuwarp.c).
+ * The coefficients are the engine's own: fp_warp_from_solver copies them out of the solver
+ * that made the CPU shape (the session's engine step, fp_session_solver), with the
+ * session's settings: kernel psi31, no polynomial, start points merged below 1e-4 R. No
+ * second solve. The shader evaluates psi31 only; the result is checked against the CPU
+ * engine's evaluation (fp_gpuwarp_eval, tests/viewer/test_gpuwarp.c).
  *
- * Thread rules: fp_warp_solve is reentrant; the fp_gpuwarp functions need the GL 3.3 core
- * context they were created in to be current on the calling thread.
+ * Thread rules: fp_warp_from_solver is reentrant on a const solver that no thread changes
+ * meanwhile; the fp_gpuwarp functions need the GL 3.3 core context they were created in to
+ * be current on the calling thread.
  */
 #ifndef FP_GPUWARP_H
 #define FP_GPUWARP_H
@@ -33,13 +35,15 @@ typedef struct fp_warp_coeffs {
     float alpha[FP_WARP_MAX_CENTRES][3];
 } fp_warp_coeffs;
 
-/** Solve the warp for n control vectors start[i] -> end[i] (n x 3 floats each, mesh units)
- *  and support radius R > 0. n == 0 gives the identity. Returns 0, or -EINVAL (n above
- *  FP_WARP_MAX_CENTRES, R not finite and > 0, a non-finite point), -EDOM (the matrix is not
- *  positive definite: the engine refused the system, reported rather than producing NaN).
- *  out is the identity after an error. */
-int fp_warp_solve(size_t n, const float *start, const float *end, double radius,
-                  fp_warp_coeffs *out);
+struct csrbf_solver;
+
+/** Copy the solved warp out of an engine solver (core/csrbf: csrbf_solver_get_coefficients)
+ *  whose support radius is R (mesh units) and whose kernel is psi31 (the engine's default;
+ *  the solver cannot tell its kernel, the caller vouches). solver NULL gives the identity.
+ *  Returns 0, or -EINVAL (R not finite and > 0; a solver with no start points),
+ *  -E2BIG (more than FP_WARP_MAX_CENTRES centres after merging), -ENOTSUP (the solver has
+ *  a polynomial part, which the shader lacks). out is the identity after an error. */
+int fp_warp_from_solver(const struct csrbf_solver *solver, double radius, fp_warp_coeffs *out);
 
 /** The GLSL (3.30) text declaring the warp's uniforms and
  *  `vec3 fp_warp(vec3 x, out mat3 jacobian)`; inserted into the viewer's mesh shader. */

@@ -11,32 +11,18 @@
 #include <stdlib.h>
 #include <string.h>
 
-int fp_warp_solve(size_t n, const float *start, const float *end, double radius,
-                  fp_warp_coeffs *out)
+int fp_warp_from_solver(const csrbf_solver *solver, double radius, fp_warp_coeffs *out)
 {
     memset(out, 0, sizeof *out);
-    if (n > FP_WARP_MAX_CENTRES || !(radius > 0) || !isfinite(radius)) return -EINVAL;
+    if (!(radius > 0) || !isfinite(radius)) return -EINVAL;
     out->radius = (float)radius;
-    if (!n) return 0;
-    for (size_t i = 0; i < 3 * n; i++)
-        if (!isfinite(start[i]) || !isfinite(end[i])) return -EINVAL;
-    /* The engine solves (merging included) and hands out its coefficients: the session's
-     * settings, psi31 and no polynomial, are the engine's defaults, which the shader uses. */
-    csrbf_options o = {0};
-    o.radius = radius;
-    o.threads = 1;
-    csrbf_solver *s = NULL;
-    if (csrbf_solver_create(&o, &s) < 0) return -EINVAL;
-    double c[FP_WARP_MAX_CENTRES * 3], a[FP_WARP_MAX_CENTRES * 3];
-    int rc = csrbf_solver_solve(s, n, start, end);
-    size_t m = rc < 0 ? 0 : csrbf_solver_centres(s);
-    if (rc >= 0 && m <= FP_WARP_MAX_CENTRES) rc = csrbf_solver_get_coefficients(s, c, a, NULL);
-    csrbf_solver_destroy(&s);
-    if (rc < 0 || m > FP_WARP_MAX_CENTRES) {
-        memset(out, 0, sizeof *out);
-        out->radius = (float)radius;
-        return -EDOM;
-    }
+    if (!solver) return 0;
+    size_t m = csrbf_solver_centres(solver);
+    if (m > FP_WARP_MAX_CENTRES) return -E2BIG;
+    double c[FP_WARP_MAX_CENTRES * 3], a[FP_WARP_MAX_CENTRES * 3], poly[12];
+    if (csrbf_solver_get_coefficients(solver, c, a, poly) < 0) return -EINVAL;
+    for (int i = 0; i < 12; i++)
+        if (poly[i] != 0) return -ENOTSUP;
     for (size_t i = 0; i < m; i++)
         for (int k = 0; k < 3; k++) {
             out->centre[i][k] = (float)c[3 * i + k];

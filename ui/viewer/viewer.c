@@ -125,6 +125,18 @@ static void say(viewer *v, const char *fmt, ...)
     if (!v->opt->quiet) fprintf(stderr, "facepuppet live: %s\n", v->status);
 }
 
+/* The session's log lines (input status, mapping and engine errors, recordings): the
+ * latest in the HUD's status line, every one to stderr (debug lines only with
+ * FACEPUPPET_DEBUG). Called on this (the session) thread, from fp_session_step. */
+static void on_session_log(void *user, int level, const char *source, const char *message)
+{
+    viewer *v = user;
+    if (level > FP_LOG_INFO && !getenv("FACEPUPPET_DEBUG")) return;
+    snprintf(v->status, sizeof v->status, "%s: %s", source, message);
+    v->status_until = fp_now_ns() + 5000000000LL;
+    fprintf(stderr, "facepuppet live: %s: %s\n", source, message);
+}
+
 /* ---- camera ----------------------------------------------------------------------------- */
 
 static void frame_mesh(viewer *v)
@@ -557,10 +569,12 @@ static void draw(viewer *v, const fp_frame_stats *st, int w, int h)
     static const float skin[4] = {0.86f, 0.7f, 0.6f, 1.f}, ghost[4] = {0.6f, 0.8f, 1.f, 0.22f};
     bool deformed = fp_session_positions(v->s) != fp_session_base(v->s);
     if (v->opt->gpu_warp) {
+        /* The engine step's own coefficients (no second solve); the identity when nothing
+         * is deformed or they cannot be drawn. */
         fp_warp_coeffs c;
         const fp_control_set *cs = fp_session_control_set(v->s);
-        if (!deformed || fp_warp_solve(cs->count, &cs->start[0][0], &cs->end[0][0], cs->radius, &c))
-            fp_warp_solve(0, NULL, NULL, 1.0, &c);
+        if (fp_warp_from_solver(deformed ? fp_session_solver(v->s) : NULL, cs->radius, &c))
+            fp_warp_from_solver(NULL, 1.0, &c);
         fp_render_mesh(&v->r, pv, view, true, &c, skin, v->wireframe);
         if (deformed && (v->frames % 30 == 0 || v->frames + 1 == v->opt->frames)) check_warp(v, &c);
     } else {
@@ -648,6 +662,8 @@ int fp_viewer_run(const fp_viewer_options *opt, fp_viewer_report *report, char *
     if (!v) return -ENOMEM;
     v->opt = opt;
     v->so = opt->session;
+    v->so.log = on_session_log;
+    v->so.log_user = v;
     v->err = err;
     v->errlen = errlen;
     v->hands_on = v->hud_on = true;
@@ -704,6 +720,12 @@ int fp_viewer_run(const fp_viewer_options *opt, fp_viewer_report *report, char *
         if (opt->duration_s > 0 && fp_now_ns() - t0 >= (int64_t)(opt->duration_s * 1e9)) break;
     }
     if (!v->error && opt->out && fp_session_save(v->s, opt->out, err, errlen)) v->error = -EIO;
+    char stop_err[1024]; /* record=FILE: a failed write fails the run */
+    int stop_rc = fp_session_stop(v->s, stop_err, sizeof stop_err);
+    if (!v->error && stop_rc) {
+        v->error = stop_rc;
+        snprintf(err, errlen, "%s", stop_err);
+    }
     if (v->error) {
         rc = v->error;
         if (!err[0]) snprintf(err, errlen, "viewer: the run failed");

@@ -1,0 +1,80 @@
+/* Step 1 of the frame: drain the inputs, bind pedals and keys to intents, count statuses. */
+#include "intents.h"
+
+#include <stdio.h>
+#include <string.h>
+
+void fp_intents_init(fp_intents *it) { memset(it, 0, sizeof *it); }
+
+void fp_intents_request(fp_intents *it, uint32_t intents) { it->requested |= intents; }
+
+void fp_intents_bind_button(fp_intents *it, const fp_event_button *b, bool engaged)
+{
+    if (!b->down) return;
+    if (b->button == FP_BUTTON_LEFT) it->requested |= engaged ? FP_INTENT_COMMIT : FP_INTENT_ENGAGE;
+    else if (b->button == FP_BUTTON_RIGHT) it->requested |= FP_INTENT_CANCEL;
+    /* FP_BUTTON_MIDDLE: reserved for takes (start/stop a take), not bound yet. */
+}
+
+static void keep(fp_intents *it, const fp_event *ev)
+{
+    if (it->frame_event_count < FP_INTENTS_MAX_FRAME_EVENTS) it->frame_events[it->frame_event_count++] = *ev;
+}
+
+void fp_intents_take(fp_intents *it, size_t input, const char *name, const fp_event *ev,
+                     bool engaged, const fp_slog *log)
+{
+    switch (ev->header.type) {
+    case FP_EVENT_BUTTON:
+        fp_intents_bind_button(it, &ev->button, engaged);
+        keep(it, ev);
+        break;
+    case FP_EVENT_STATUS: {
+        const fp_event_status *st = &ev->status;
+        if (st->code == FP_STATUS_END_OF_STREAM && input < FP_INTENTS_MAX_INPUTS) it->ended[input] = true;
+        if (st->code == FP_STATUS_ERROR) {
+            it->input_errors++;
+            snprintf(it->last_error, sizeof it->last_error, "%.*s", 100, st->text);
+        }
+        if (st->code == FP_STATUS_ERROR || st->code == FP_STATUS_WARNING ||
+            st->code == FP_STATUS_DISCONNECTED)
+            fp_slog_printf(log, st->code == FP_STATUS_ERROR ? FP_LOG_ERROR : FP_LOG_WARNING,
+                           name ? name : "input", "%.*s", (int)sizeof st->text, st->text);
+        keep(it, ev);
+        break;
+    }
+    default:
+        break;
+    }
+}
+
+size_t fp_intents_drain(fp_intents *it, fp_input_instance *inputs, size_t n, bool engaged,
+                        const fp_slog *log, fp_intents_event_fn each, void *user)
+{
+    size_t count = 0;
+    it->frame_event_count = 0;
+    for (size_t i = 0; i < n; i++) {
+        fp_event ev;
+        while (fp_input_instance_poll(&inputs[i], &ev)) {
+            fp_intents_take(it, i, inputs[i].name, &ev, engaged, log);
+            if (each) each(user, i, &ev);
+            count++;
+        }
+    }
+    return count;
+}
+
+uint32_t fp_intents_take_requested(fp_intents *it)
+{
+    uint32_t r = it->requested;
+    it->requested = 0;
+    return r;
+}
+
+bool fp_intents_all_ended(const fp_intents *it, size_t n)
+{
+    if (!n) return false;
+    for (size_t i = 0; i < n && i < FP_INTENTS_MAX_INPUTS; i++)
+        if (!it->ended[i]) return false;
+    return true;
+}

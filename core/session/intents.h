@@ -1,0 +1,76 @@
+/*
+ * intents.h: step 1 of the frame (docs/architecture.md): the inputs' events and the intents.
+ * Drains every input's queue (the lock-free MPSC queues of core/plugin), binds pedal buttons
+ * to intents (left engages, or commits an engaged deformation; right cancels; middle is
+ * reserved for takes and does nothing yet), collects key requests (fp_session_request) into
+ * intent bits for the mapping, and turns status events into counts (end of stream per input,
+ * errors) and log lines (errors, warnings, disconnects) naming the input's SPEC name.
+ * Every drained event is handed to a callback (the session gives it to the pose step and the
+ * recorder); button and status events are also kept for the mapping's fp_frame_input.
+ *
+ * Threads: the session thread only. No allocation, no I/O (log lines go to the callback).
+ */
+#ifndef FP_INTENTS_H
+#define FP_INTENTS_H
+
+#include "fp_plugin_host.h"
+#include "session_log.h"
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define FP_INTENTS_MAX_INPUTS 8         /* = FP_SESSION_MAX_INPUTS */
+#define FP_INTENTS_MAX_FRAME_EVENTS 64  /* button/status events kept per frame for the mapping */
+
+typedef struct fp_intents {
+    uint32_t requested;                     /* fp_intent bits for the next mapping call */
+    bool ended[FP_INTENTS_MAX_INPUTS];      /* input i reported FP_STATUS_END_OF_STREAM */
+    unsigned input_errors;                  /* FP_STATUS_ERROR events seen */
+    char last_error[128];                   /* the latest one's text */
+    fp_event frame_events[FP_INTENTS_MAX_FRAME_EVENTS];  /* this frame's buttons, statuses */
+    size_t frame_event_count;
+} fp_intents;
+
+/** Called for every drained event, in queue order per input, inputs in index order. */
+typedef void (*fp_intents_event_fn)(void *user, size_t input, const fp_event *ev);
+
+/** Zero the state (no request, no input ended). */
+void fp_intents_init(fp_intents *it);
+
+/** Request intents (fp_intent bits) for the next mapping call; bits accumulate. */
+void fp_intents_request(fp_intents *it, uint32_t intents);
+
+/** The pedal binding for one button event: on a press, left requests COMMIT when `engaged`
+ *  (a deformation is active) and ENGAGE otherwise; right requests CANCEL; middle (reserved
+ *  for takes) and releases request nothing. */
+void fp_intents_bind_button(fp_intents *it, const fp_event_button *b, bool engaged);
+
+/** Take one event from input `input` named `name`: buttons through the binding, statuses
+ *  into the counts (END_OF_STREAM marks the input ended; ERROR counts and keeps its text) and
+ *  a log line for ERROR (FP_LOG_ERROR), WARNING and DISCONNECTED (FP_LOG_WARNING) with the
+ *  status text and source `name`. Buttons and statuses are kept for the frame (up to
+ *  FP_INTENTS_MAX_FRAME_EVENTS; later ones are not kept). Other events are ignored here. */
+void fp_intents_take(fp_intents *it, size_t input, const char *name, const fp_event *ev,
+                     bool engaged, const fp_slog *log);
+
+/** One frame's step 1: forget the last frame's kept events, then pop every event of the n
+ *  inputs (fp_input_instance_poll), take each (fp_intents_take) and hand it to each(user,
+ *  input, event) when each is not NULL. Returns the number of events drained. */
+size_t fp_intents_drain(fp_intents *it, fp_input_instance *inputs, size_t n, bool engaged,
+                        const fp_slog *log, fp_intents_event_fn each, void *user);
+
+/** Hand the requested intents to the mapping: returns them and clears the request. */
+uint32_t fp_intents_take_requested(fp_intents *it);
+
+/** True when n > 0 and every one of the n inputs has ended. */
+bool fp_intents_all_ended(const fp_intents *it, size_t n);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

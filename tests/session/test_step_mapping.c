@@ -1,0 +1,130 @@
+/* core/session/step_mapping (the control set's check, errors reported once with a count),
+ * step_rig (the pass-through) and session_log's repeat counter. */
+#include "log_capture.h"
+#include "step_mapping.h"
+#include "step_rig.h"
+
+#include <errno.h>
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <string.h>
+#include <cmocka.h>
+
+static float starts[4][3], ends[4][3];
+static int mode; /* 0 ok, 1 returns -EIO, 2 over capacity, 3 NaN end, 4 radius 0 */
+
+static int fake_process(fp_mapping *self, const fp_frame_input *in, fp_control_set *out)
+{
+    (void)self;
+    (void)in;
+    out->active = true;
+    out->intents = FP_INTENT_ENGAGE;
+    out->radius = mode == 4 ? 0.0 : 1.0;
+    out->count = mode == 2 ? out->capacity + 1 : 2;
+    for (int i = 0; i < 2; i++)
+        for (int k = 0; k < 3; k++) out->start[i][k] = out->end[i][k] = (float)(i + k);
+    if (mode == 3) out->end[1][2] = NAN;
+    return mode == 1 ? -EIO : 0;
+}
+
+static void setup_cs(fp_control_set *cs)
+{
+    memset(cs, 0, sizeof *cs);
+    cs->size = sizeof *cs;
+    cs->capacity = 4;
+    cs->start = starts;
+    cs->end = ends;
+}
+
+static void test_check(void **state)
+{
+    (void)state;
+    fp_control_set cs;
+    setup_cs(&cs);
+    cs.radius = 1.0;
+    cs.count = 4;
+    assert_int_equal(fp_control_set_check(&cs), 0);
+    cs.count = 5;
+    assert_int_equal(fp_control_set_check(&cs), -ERANGE);
+    cs.count = 1;
+    cs.radius = INFINITY;
+    assert_int_equal(fp_control_set_check(&cs), -EINVAL);
+    cs.radius = 1.0;
+    starts[0][1] = NAN;
+    assert_int_equal(fp_control_set_check(&cs), -EINVAL);
+    starts[0][1] = 0;
+    cs.channel_count = 1; /* no channel array */
+    assert_int_equal(fp_control_set_check(&cs), -ERANGE);
+}
+
+/* Every failure deactivates the frame's set; one line for a run of the same error, then its
+ * count when it ends or another comes. */
+static void test_errors_once_with_count(void **state)
+{
+    (void)state;
+    fp_mapping m = {0};
+    m.size = sizeof m;
+    m.process = fake_process;
+    fp_mapping_step st = {0};
+    log_capture cap = {0};
+    fp_slog log = {capture_log, &cap};
+    fp_control_set cs;
+    setup_cs(&cs);
+    fp_frame_input in = {0};
+    mode = 0;
+    assert_int_equal(fp_mapping_step_run(&st, &m, "anchored", &in, &cs, &log), 0);
+    assert_true(cs.active);
+    mode = 1;
+    for (int f = 0; f < 10; f++) {
+        in.frame = (uint64_t)f;
+        assert_int_equal(fp_mapping_step_run(&st, &m, "anchored", &in, &cs, &log), -EIO);
+        assert_false(cs.active);
+        assert_int_equal(cs.intents, 0);
+    }
+    assert_int_equal(cap.count, 1);
+    assert_string_equal(cap.source, "anchored");
+    assert_non_null(strstr(cap.lines[0], "frame 0"));
+    mode = 3; /* another error: the count of the first, then the new one */
+    assert_int_equal(fp_mapping_step_run(&st, &m, "anchored", &in, &cs, &log), -EINVAL);
+    assert_int_equal(cap.count, 3);
+    assert_non_null(strstr(cap.lines[1], "repeated 9 more times"));
+    mode = 2;
+    assert_int_equal(fp_mapping_step_run(&st, &m, "anchored", &in, &cs, &log), -ERANGE);
+    mode = 4;
+    assert_int_equal(fp_mapping_step_run(&st, &m, "anchored", &in, &cs, &log), -EINVAL);
+    assert_int_equal(cap.count, 5);
+    mode = 0; /* success flushes nothing when the error did not repeat */
+    assert_int_equal(fp_mapping_step_run(&st, &m, "anchored", &in, &cs, &log), 0);
+    assert_int_equal(cap.count, 5);
+    assert_int_equal(st.errors.total, 13);
+    mode = 1;
+    fp_mapping_step_run(&st, &m, "anchored", &in, &cs, &log);
+    fp_mapping_step_run(&st, &m, "anchored", &in, &cs, &log);
+    fp_mapping_step_flush(&st, &log);
+    assert_int_equal(cap.count, 7);
+    assert_non_null(strstr(cap.lines[6], "repeated 1 more time)"));
+}
+
+static void test_rig_pass_through(void **state)
+{
+    (void)state;
+    fp_rig_step r = {0};
+    fp_control_set cs;
+    setup_cs(&cs);
+    cs.count = 3;
+    fp_control_set copy = cs;
+    assert_ptr_equal(fp_rig_step_run(&r, &cs), &cs);
+    assert_memory_equal(&copy, &cs, sizeof cs);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_check),
+        cmocka_unit_test(test_errors_once_with_count),
+        cmocka_unit_test(test_rig_pass_through),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
