@@ -88,6 +88,7 @@ typedef struct leap_slot {
 typedef struct mp_hand {
     unsigned have;                 /* bit 0 x, 1 y, 2 z since the last frame */
     bool z_seen;                   /* this sender sends z: wait for it */
+    bool xy_only;                  /* the last frame was emitted from x and y alone */
     float v[3][21];
 } mp_hand;
 
@@ -522,12 +523,26 @@ static void fmt_mediapipe(osc_input *o, const char *path, const char *types, lo_
         return;
     }
     mp_hand *m = &o->mp[hand];
-    if (m->have & (1u << axis)) count(o, FP_OSC_INCOMPLETE); /* a new frame began */
-    if (m->have & (1u << axis)) m->have = 0;
+    if (axis == 2 && !m->z_seen && m->have == 0 && m->xy_only) {
+        /* the first z of a sender that sends z after x and y: the frame just emitted without
+         * depth is emitted again with it */
+        memcpy(m->v[2], v, sizeof v);
+        m->z_seen = true;
+        m->xy_only = false;
+        m->have = 7;
+        mp_emit(o, hand, t, recv_ns);
+        m->have = 0;
+        return;
+    }
+    if (m->have & (1u << axis)) {
+        count(o, FP_OSC_INCOMPLETE); /* a new frame began before the last was complete */
+        m->have = 0;
+    }
     memcpy(m->v[axis], v, sizeof v);
     m->have |= 1u << axis;
     if (axis == 2) m->z_seen = true;
     unsigned need = m->z_seen ? 7u : 3u;
+    m->xy_only = !m->z_seen;
     if ((m->have & need) == need) {
         mp_emit(o, hand, t, recv_ns);
         m->have = 0;
