@@ -100,6 +100,8 @@ typedef struct osc_input {
     double timeout_s;
     float mp_width, mp_aspect, mp_height, mp_depth;
     bool mp_mirror;
+    bool have_box;
+    float box[6];                  /* box=: the tracking volume, mm (workspace extension) */
     char bind_text[64];
     uint16_t port;
     bool loopback;
@@ -813,10 +815,22 @@ static const char *problem_name(int kind)
 
 static const fp_osc_ext osc_ext = {sizeof(fp_osc_ext), get_stats, problem_name};
 
+static bool osc_workspace(const fp_input *self, float min_mm[3], float max_mm[3])
+{
+    const osc_input *o = self->plugin_data;
+    if (!o->have_box) return false;
+    memcpy(min_mm, o->box, 3 * sizeof(float));
+    memcpy(max_mm, o->box + 3, 3 * sizeof(float));
+    return true;
+}
+
+static const fp_input_workspace workspace_ext = {osc_workspace};
+
 static const void *osc_get_extension(const fp_input *self, const char *id)
 {
-    (void)self;
+    const osc_input *o = self->plugin_data;
     if (id && strcmp(id, FP_OSC_EXT_ID) == 0) return &osc_ext;
+    if (id && strcmp(id, FP_EXT_WORKSPACE) == 0 && o->have_box) return &workspace_ext;
     return NULL;
 }
 
@@ -825,7 +839,8 @@ static const void *osc_get_extension(const fp_input *self, const char *id)
 
 static const char usage_text[] =
     "osc[:PORT][,format=facepuppet|leap|mediapipe][,bind=ADDR][,hand=left|right|both]\n"
-    "   [,timeout=SECONDS][,width=MM][,aspect=H/W][,height=MM][,depth=MM][,mirror=1]\n"
+    "   [,timeout=SECONDS][,box=X0/Y0/Z0/X1/Y1/Z1][,width=MM][,aspect=H/W][,height=MM]\n"
+    "   [,depth=MM][,mirror=1]\n"
     "  Hand tracking over OSC (UDP), decoded with liblo; address spaces in docs/osc.md.\n"
     "  PORT     UDP port (default 9000; 0 picks a free one, logged at start)\n"
     "  format   facepuppet: /facepuppet/hand/{left,right}/{joints,angles,wrist}, /facepuppet/button\n"
@@ -836,6 +851,8 @@ static const char usage_text[] =
     "  bind     address to listen on (default 127.0.0.1; anything else is logged as a warning)\n"
     "  hand     which hands to take (default both; for leap, left/right takes slot 0 as that hand)\n"
     "  timeout  seconds of silence before the sender is reported disconnected (default 1)\n"
+    "  box      the volume the hands move in, mm, device frame: fitted to the face by the host\n"
+    "           (default: the host's desktop-tracker box)\n"
     "  mediapipe: width = mm across the image (default 400), aspect = image height / width\n"
     "    (default 0.75), height = device y of the image centre (default 200 mm), depth = device\n"
     "    z of the landmarks' z = 0 (default 0), mirror=1 flips x.\n"
@@ -876,7 +893,8 @@ static int osc_create(const fp_host *host, const char *arg, const fp_param *para
     }
     int format = FMT_FACEPUPPET, hands = HANDS_BOTH;
     double timeout = 1.0, width = 400, aspect = 0.75, height = 200, depth = 0;
-    bool mirror = false;
+    bool mirror = false, have_box = false;
+    float box[6] = {0};
     const char *bind_addr = "127.0.0.1";
     for (size_t i = 0; i < nparams; i++) {
         const char *k = params[i].key ? params[i].key : "", *v = params[i].value ? params[i].value : "";
@@ -917,6 +935,29 @@ static int osc_create(const fp_host *host, const char *arg, const fp_param *para
             rc = parse_number(k, v, -10000, 10000, &height, err, errlen);
         } else if (strcmp(k, "depth") == 0) {
             rc = parse_number(k, v, -10000, 10000, &depth, err, errlen);
+        } else if (strcmp(k, "box") == 0) {
+            /* x0/y0/z0/x1/y1/z1 in mm: the volume the hands move in (workspace extension) */
+            locale_t c = newlocale(LC_ALL_MASK, "C", (locale_t)0);
+            const char *p = v;
+            int got = 0;
+            for (; got < 6 && c != (locale_t)0; got++) {
+                char *end = NULL;
+                double x = strtod_l(p, &end, c);
+                if (end == p || !isfinite(x) || fabs(x) > HUGE_MM) break;
+                box[got] = (float)x;
+                p = end;
+                if (got < 5 && *p++ != '/') {
+                    got++;
+                    break;
+                }
+            }
+            if (c != (locale_t)0) freelocale(c);
+            if (got != 6 || *p || !(box[0] < box[3] && box[1] < box[4] && box[2] < box[5])) {
+                snprintf(err, errlen, "osc: box=%s: expected x0/y0/z0/x1/y1/z1 in mm with x0 < x1, "
+                         "y0 < y1, z0 < z1", v);
+                return -EINVAL;
+            }
+            have_box = true;
         } else if (strcmp(k, "mirror") == 0) {
             if (strcmp(v, "1") && strcmp(v, "0")) {
                 snprintf(err, errlen, "osc: mirror=%s: expected 0 or 1", v);
@@ -925,7 +966,7 @@ static int osc_create(const fp_host *host, const char *arg, const fp_param *para
             mirror = v[0] == '1';
         } else {
             snprintf(err, errlen, "osc: unknown key \"%s\" (known: format, bind, hand, timeout, "
-                     "width, aspect, height, depth, mirror)", k);
+                     "width, aspect, height, depth, mirror, box)", k);
             return -EINVAL;
         }
         if (rc) return rc;
@@ -965,6 +1006,8 @@ static int osc_create(const fp_host *host, const char *arg, const fp_param *para
     o->mp_height = (float)height;
     o->mp_depth = (float)depth;
     o->mp_mirror = mirror;
+    o->have_box = have_box;
+    memcpy(o->box, box, sizeof box);
     pthread_mutex_init(&o->lock, NULL);
     o->st.size = sizeof o->st;
     o->st.port = o->port;
