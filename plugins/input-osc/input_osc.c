@@ -1,0 +1,1053 @@
+/*
+ * input_osc.c: the input-osc plugin. Hand tracking over OSC (UDP): the project's own
+ * address space, Leap Motion bridges and MediaPipe hands (docs/osc.md).
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ *
+ * Flow: create() parses the SPEC and binds the UDP socket (127.0.0.1 unless bind= says
+ * otherwise), so that a taken port or a bad address fails before the session starts. start()
+ * runs one pthread: poll() on the socket and a stop pipe (50 ms ticks); each datagram is read
+ * with recvfrom() into one fixed 64 KiB buffer and stamped with the host clock at once; a
+ * bundle is walked here (timetags, nesting), each message is decoded by liblo
+ * (lo_message_deserialise), checked (address, type tags, count, finite, range) and turned into
+ * events pushed to the host's bounded queue. Nothing grows with traffic: one buffer, one
+ * liblo message at a time, fixed assembly state per hand, a fixed latency ring.
+ * stop() writes to the pipe and joins.
+ */
+#define _GNU_SOURCE
+#include "osc.h"
+
+#include <facepuppet/plugin.h>
+
+#include <lo/lo.h>
+#include <lo/lo_lowlevel.h>
+
+#include <arpa/inet.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <locale.h>
+#include <math.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <pthread.h>
+#include <stdarg.h>
+#include <stdatomic.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <time.h>
+#include <unistd.h>
+
+#define DEFAULT_PORT 9000
+#define PACKET_MAX 65536           /* a UDP datagram never exceeds it */
+#define BURST 256                  /* datagrams read per wake before timers are looked at */
+#define TICK_MS 50                 /* poll timeout: timers are checked at least this often */
+#define MAX_DEPTH 8                /* nested bundles */
+#define HUGE_MM 10000.f            /* 10 m: beyond it a position is hostile or broken */
+#define MAX_RADIANS 6.2831853f     /* 2 pi */
+#define LATENCY_RING 65536
+#define REPORT_DELAY_NS 1000000000LL /* a problem kind is reported 1 s after it first occurs */
+#define REANCHOR_NS 1000000000LL   /* timetag mapping re-anchored beyond 1 s from arrival */
+#define STATUS_RETRY_NS 100000000LL /* a status event is retried for up to 100 ms */
+
+enum osc_format { FMT_FACEPUPPET, FMT_LEAP, FMT_MEDIAPIPE, FMT_VMC };
+static const char *const format_names[] = {"facepuppet", "leap", "mediapipe", "vmc"};
+enum { HANDS_LEFT = 1, HANDS_RIGHT = 2, HANDS_BOTH = 3 };
+
+static const char *const problem_names[FP_OSC_PROBLEMS] = {
+    "malformed", "bad-types", "bad-count", "non-finite", "out-of-range", "unknown-address",
+    "incomplete", "queue-full"};
+static const char *const problem_text[FP_OSC_PROBLEMS] = {
+    "malformed packets (not OSC, or a bad bundle)", "messages with wrong type tags",
+    "messages with a wrong argument count", "messages with NaN or infinite values",
+    "messages with values out of range (beyond 10 m, 2 pi, a bad quaternion or button)",
+    "messages to addresses outside the format", "incomplete frames superseded",
+    "events dropped (host queue full)"};
+
+/* Straight-finger estimate of the joints a Leap bridge does not send: for each finger the
+ * lengths (mm) from the palm centre to MCP (CMC for the thumb), MCP-PIP, PIP-DIP, DIP-tip
+ * (with the soft tip), after Buryanov & Kotiuk 2010 (shared/docs/devices.md); fingers use half
+ * the metacarpal from the palm centre, the thumb 30 mm to its CMC. */
+static const float leap_chain_mm[FP_FINGERS][4] = {
+    {30.0f, 46.2f, 31.6f, 27.4f},  /* thumb: palm-CMC, metacarpal, proximal, distal + tip */
+    {34.05f, 39.8f, 22.4f, 19.6f}, /* index */
+    {32.3f, 44.6f, 26.3f, 21.4f},  /* middle */
+    {29.0f, 41.4f, 25.7f, 21.3f},  /* ring */
+    {26.85f, 32.6f, 18.1f, 19.7f}, /* pinky */
+};
+
+typedef struct leap_slot {
+    bool have_palm;
+    int32_t hand_id;
+    unsigned tips;                 /* bit per finger received since the palm */
+    float palm[3], tip[FP_FINGERS][3];
+} leap_slot;
+
+typedef struct mp_hand {
+    unsigned have;                 /* bit 0 x, 1 y, 2 z since the last frame */
+    bool z_seen;                   /* this sender sends z: wait for it */
+    bool xy_only;                  /* the last frame was emitted from x and y alone */
+    float v[3][21];
+} mp_hand;
+
+typedef struct osc_input {
+    fp_input input;
+    const fp_host *host;
+    /* configuration */
+    int format, hands;
+    double timeout_s;
+    float mp_width, mp_aspect, mp_height, mp_depth;
+    bool mp_mirror;
+    bool have_box;
+    float box[6];                  /* box=: the tracking volume, mm (workspace extension) */
+    char bind_text[64];
+    uint16_t port;
+    bool loopback;
+    /* socket and thread */
+    int sock;
+    int stop_pipe[2];
+    pthread_t thread;
+    bool running;
+    unsigned char buf[PACKET_MAX] __attribute__((aligned(8)));
+    /* receive-thread state */
+    bool connected;
+    int64_t last_valid_ns;
+    unsigned hands_seen;           /* bit per hand that got a pose since the connect */
+    char sender[64];
+    bool have_offset;
+    int64_t offset_ns;
+    uint32_t buttons;
+    leap_slot leap[2];
+    mp_hand mp[FP_HANDS];
+    int64_t report_at[FP_OSC_PROBLEMS]; /* 0: not pending; -1: reported */
+    bool packet_pushed;
+    /* statistics (mutex) */
+    pthread_mutex_t lock;
+    fp_osc_stats st;
+    float *lat_us;                 /* LATENCY_RING samples, microseconds */
+    uint64_t lat_n;
+} osc_input;
+
+/* ------------------------------------------------------------------------------------- */
+/* Helpers                                                                                */
+
+static void logf_(osc_input *o, fp_log_level level, const char *fmt, ...)
+{
+    if (!o->host->log) return;
+    char msg[512];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    o->host->log(o->host, level, msg);
+}
+
+static int64_t now_ns(const osc_input *o) { return o->host->now_ns(o->host); }
+
+static void sleep_ns(int64_t ns)
+{
+    struct timespec ts = {(time_t)(ns / 1000000000), (long)(ns % 1000000000)};
+    nanosleep(&ts, NULL);
+}
+
+static void count(osc_input *o, int kind)
+{
+    pthread_mutex_lock(&o->lock);
+    o->st.problems[kind]++;
+    pthread_mutex_unlock(&o->lock);
+    if (o->report_at[kind] == 0) o->report_at[kind] = now_ns(o) + REPORT_DELAY_NS;
+}
+
+static void bump(osc_input *o, uint64_t *field)
+{
+    pthread_mutex_lock(&o->lock);
+    (*field)++;
+    pthread_mutex_unlock(&o->lock);
+}
+
+/* Pushes a pose or button; a full queue drops it (counted): the next pose supersedes it. */
+static void push_event(osc_input *o, fp_event *ev)
+{
+    if (o->host->push_event(o->host, &ev->header)) {
+        bump(o, &o->st.events);
+        o->packet_pushed = true;
+    } else {
+        count(o, FP_OSC_QUEUE_FULL);
+    }
+}
+
+/* Pushes a status event, retrying for up to 100 ms while the queue is full. */
+static void push_status(osc_input *o, uint32_t code, int hand, const char *fmt, ...)
+{
+    fp_event ev;
+    memset(&ev, 0, sizeof ev);
+    ev.status.header = (fp_event_header){.size = sizeof ev.status, .type = FP_EVENT_STATUS,
+                                         .time_ns = now_ns(o), .hand = hand};
+    ev.status.code = code;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(ev.status.text, sizeof ev.status.text, fmt, ap);
+    va_end(ap);
+    for (int64_t waited = 0; !o->host->push_event(o->host, &ev.header); waited += 1000000) {
+        if (waited >= STATUS_RETRY_NS) {
+            count(o, FP_OSC_QUEUE_FULL);
+            return;
+        }
+        sleep_ns(1000000);
+    }
+    bump(o, &o->st.events);
+}
+
+static bool finite_all(const float *v, size_t n)
+{
+    for (size_t i = 0; i < n; i++)
+        if (!isfinite(v[i])) return false;
+    return true;
+}
+
+static bool within(const float *v, size_t n, float limit)
+{
+    for (size_t i = 0; i < n; i++)
+        if (fabsf(v[i]) > limit) return false;
+    return true;
+}
+
+/* Checks a message's type tags against `want` (all of one letter when `want` is a single
+ * letter repeated n times). Counts bad-count or bad-types and returns false on mismatch. */
+static bool check_types(osc_input *o, const char *types, const char *want)
+{
+    if (strcmp(types, want) == 0) return true;
+    count(o, strlen(types) != strlen(want) ? FP_OSC_BAD_COUNT : FP_OSC_BAD_TYPES);
+    return false;
+}
+
+static void floats_of(lo_arg **argv, int first, int n, float *out)
+{
+    for (int i = 0; i < n; i++) out[i] = argv[first + i]->f;
+}
+
+static bool hand_wanted(const osc_input *o, int h) { return o->hands & (1 << h); }
+
+/* Called for every message that produced a pose or button: connection bookkeeping. */
+static void note_valid(osc_input *o, int64_t recv_ns, int hand)
+{
+    if (!o->connected) {
+        o->connected = true;
+        bump(o, &o->st.connects);
+        o->hands_seen = 0;
+        push_status(o, FP_STATUS_CONNECTED, -1, "osc %s: sender %s on port %u",
+                    format_names[o->format], o->sender, (unsigned)o->port);
+    }
+    o->last_valid_ns = recv_ns;
+    if (hand >= 0) o->hands_seen |= 1u << hand;
+}
+
+static void header_for(fp_event *ev, size_t size, uint16_t type, int64_t t, int hand)
+{
+    memset(ev, 0, sizeof *ev);
+    ev->header = (fp_event_header){.size = (uint32_t)size, .type = type, .time_ns = t,
+                                   .hand = hand};
+}
+
+static void push_joints(osc_input *o, int hand, int64_t t, int64_t recv_ns,
+                        const float mm[FP_HAND_JOINTS][3])
+{
+    if (!finite_all(&mm[0][0], FP_HAND_JOINTS * 3)) {
+        count(o, FP_OSC_NONFINITE);
+        return;
+    }
+    if (!within(&mm[0][0], FP_HAND_JOINTS * 3, HUGE_MM)) {
+        count(o, FP_OSC_OUT_OF_RANGE);
+        return;
+    }
+    note_valid(o, recv_ns, hand);
+    fp_event ev;
+    header_for(&ev, sizeof ev.positions, FP_EVENT_JOINT_POSITIONS, t, hand);
+    memcpy(ev.positions.mm, mm, sizeof ev.positions.mm);
+    push_event(o, &ev);
+}
+
+/* ------------------------------------------------------------------------------------- */
+/* format=facepuppet                                                                      */
+
+static void fmt_facepuppet(osc_input *o, const char *path, const char *types, lo_arg **argv,
+                           int64_t t, int64_t recv_ns)
+{
+    if (strcmp(path, "/facepuppet/button") == 0) {
+        if (!check_types(o, types, "ii")) return;
+        int32_t index = argv[0]->i, down = argv[1]->i;
+        if (index < 0 || index > 2 || (down != 0 && down != 1)) {
+            count(o, FP_OSC_OUT_OF_RANGE);
+            return;
+        }
+        note_valid(o, recv_ns, -1);
+        uint32_t bit = 1u << index;
+        o->buttons = down ? (o->buttons | bit) : (o->buttons & ~bit);
+        fp_event ev;
+        header_for(&ev, sizeof ev.button, FP_EVENT_BUTTON, t, -1);
+        ev.button.button = bit;
+        ev.button.down = (uint32_t)down;
+        ev.button.mask = o->buttons;
+        push_event(o, &ev);
+        return;
+    }
+    static const char prefix[] = "/facepuppet/hand/";
+    if (strncmp(path, prefix, sizeof prefix - 1) != 0) {
+        count(o, FP_OSC_UNKNOWN_ADDRESS);
+        return;
+    }
+    const char *rest = path + sizeof prefix - 1;
+    int hand;
+    if (strncmp(rest, "left/", 5) == 0)
+        hand = FP_HAND_LEFT, rest += 5;
+    else if (strncmp(rest, "right/", 6) == 0)
+        hand = FP_HAND_RIGHT, rest += 6;
+    else {
+        count(o, FP_OSC_UNKNOWN_ADDRESS);
+        return;
+    }
+    fp_event ev;
+    if (strcmp(rest, "joints") == 0) {
+        char want[64];
+        memset(want, 'f', 63);
+        want[63] = 0;
+        if (!check_types(o, types, want)) return;
+        if (!hand_wanted(o, hand)) {
+            bump(o, &o->st.filtered);
+            return;
+        }
+        float mm[FP_HAND_JOINTS][3];
+        floats_of(argv, 0, 63, &mm[0][0]);
+        push_joints(o, hand, t, recv_ns, (const float(*)[3])mm);
+    } else if (strcmp(rest, "angles") == 0) {
+        /* 22 floats (all valid), or an int mask of the valid sensors and 22 floats */
+        char want[32];
+        memset(want, 'f', 22);
+        want[22] = 0;
+        int first = 0;
+        uint32_t valid = (1u << FP_GLOVE_SENSORS) - 1;
+        if (types[0] == 'i' && strlen(types) == 23) {
+            if (strcmp(types + 1, want) != 0) {
+                count(o, FP_OSC_BAD_TYPES);
+                return;
+            }
+            first = 1;
+            valid = (uint32_t)argv[0]->i & ((1u << FP_GLOVE_SENSORS) - 1);
+        } else if (!check_types(o, types, want)) {
+            return;
+        }
+        if (!hand_wanted(o, hand)) {
+            bump(o, &o->st.filtered);
+            return;
+        }
+        float rad[FP_GLOVE_SENSORS];
+        floats_of(argv, first, FP_GLOVE_SENSORS, rad);
+        if (!finite_all(rad, FP_GLOVE_SENSORS)) {
+            count(o, FP_OSC_NONFINITE);
+            return;
+        }
+        if (!within(rad, FP_GLOVE_SENSORS, MAX_RADIANS)) {
+            count(o, FP_OSC_OUT_OF_RANGE);
+            return;
+        }
+        note_valid(o, recv_ns, hand);
+        header_for(&ev, sizeof ev.angles, FP_EVENT_JOINT_ANGLES, t, hand);
+        ev.angles.valid = valid;
+        for (int i = 0; i < FP_GLOVE_SENSORS; i++) ev.angles.radians[i] = valid >> i & 1 ? rad[i] : 0.f;
+        push_event(o, &ev);
+    } else if (strcmp(rest, "wrist") == 0) {
+        if (!check_types(o, types, "fffffff")) return;
+        if (!hand_wanted(o, hand)) {
+            bump(o, &o->st.filtered);
+            return;
+        }
+        float v[7];
+        floats_of(argv, 0, 7, v);
+        if (!finite_all(v, 7)) {
+            count(o, FP_OSC_NONFINITE);
+            return;
+        }
+        double n = sqrt((double)v[3] * v[3] + (double)v[4] * v[4] + (double)v[5] * v[5] +
+                        (double)v[6] * v[6]);
+        if (!within(v, 3, HUGE_MM) || fabs(n - 1.0) > 0.1) {
+            count(o, FP_OSC_OUT_OF_RANGE);
+            return;
+        }
+        note_valid(o, recv_ns, -1); /* a wrist alone does not make a hand present */
+        header_for(&ev, sizeof ev.wrist, FP_EVENT_WRIST_POSE, t, hand);
+        memcpy(ev.wrist.position_mm, v, sizeof ev.wrist.position_mm);
+        for (int i = 0; i < 4; i++) ev.wrist.rotation[i] = (float)(v[3 + i] / n);
+        push_event(o, &ev);
+    } else {
+        count(o, FP_OSC_UNKNOWN_ADDRESS);
+    }
+}
+
+/* ------------------------------------------------------------------------------------- */
+/* format=leap                                                                            */
+
+/* Parses "/hand<s>" or "/finger<s>-<n>"; returns 1 hand, 2 finger, 0 neither. */
+static int leap_address(const char *path, int *slot, int *finger)
+{
+    const char *p;
+    if (strncmp(path, "/hand", 5) == 0)
+        p = path + 5;
+    else if (strncmp(path, "/finger", 7) == 0)
+        p = path + 7;
+    else
+        return 0;
+    if (*p < '0' || *p > '1' || (p[1] >= '0' && p[1] <= '9')) return 0;
+    *slot = *p - '0';
+    if (path[1] == 'h') return p[1] == 0 ? 1 : 0;
+    if (p[1] != '-' || p[2] < '0' || p[2] > '4' || p[3] != 0) return 0;
+    *finger = p[2] - '0';
+    return 2;
+}
+
+static void leap_emit(osc_input *o, int slot, int64_t t, int64_t recv_ns)
+{
+    leap_slot *ls = &o->leap[slot];
+    int hand;
+    if (o->hands == HANDS_BOTH)
+        hand = ls->palm[0] < 0 ? FP_HAND_LEFT : FP_HAND_RIGHT;
+    else
+        hand = o->hands == HANDS_LEFT ? FP_HAND_LEFT : FP_HAND_RIGHT;
+    float mm[FP_HAND_JOINTS][3];
+    memcpy(mm[FP_JOINT_PALM], ls->palm, sizeof mm[0]);
+    for (int f = 0; f < FP_FINGERS; f++) {
+        const float *c = leap_chain_mm[f];
+        float total = c[0] + c[1] + c[2] + c[3], acc = 0;
+        for (int k = 0; k < 3; k++) {
+            acc += c[k];
+            float s = acc / total;
+            for (int i = 0; i < 3; i++) mm[FP_JOINT(f, k)][i] = ls->palm[i] + s * (ls->tip[f][i] - ls->palm[i]);
+        }
+        memcpy(mm[FP_JOINT_TIP(f)], ls->tip[f], sizeof mm[0]);
+    }
+    push_joints(o, hand, t, recv_ns, (const float(*)[3])mm);
+}
+
+static void fmt_leap(osc_input *o, const char *path, const char *types, lo_arg **argv,
+                     int64_t t, int64_t recv_ns)
+{
+    int slot = 0, finger = 0, kind = leap_address(path, &slot, &finger);
+    if (!kind) {
+        count(o, FP_OSC_UNKNOWN_ADDRESS);
+        return;
+    }
+    if (!check_types(o, types, "iifff")) return;
+    if (o->hands != HANDS_BOTH && slot != 0) {
+        bump(o, &o->st.filtered);
+        return;
+    }
+    float v[3];
+    floats_of(argv, 2, 3, v);
+    if (!finite_all(v, 3)) {
+        count(o, FP_OSC_NONFINITE);
+        return;
+    }
+    if (!within(v, 3, HUGE_MM)) {
+        count(o, FP_OSC_OUT_OF_RANGE);
+        return;
+    }
+    leap_slot *ls = &o->leap[slot];
+    if (kind == 1) {
+        if (ls->have_palm && ls->tips) count(o, FP_OSC_INCOMPLETE);
+        ls->have_palm = true;
+        ls->hand_id = argv[0]->i;
+        ls->tips = 0;
+        memcpy(ls->palm, v, sizeof v);
+        return;
+    }
+    if (!ls->have_palm || argv[0]->i != ls->hand_id) {
+        count(o, FP_OSC_INCOMPLETE);
+        ls->have_palm = false;
+        ls->tips = 0;
+        return;
+    }
+    memcpy(ls->tip[finger], v, sizeof v);
+    ls->tips |= 1u << finger;
+    if (ls->tips == (1u << FP_FINGERS) - 1) {
+        leap_emit(o, slot, t, recv_ns);
+        ls->have_palm = false;
+        ls->tips = 0;
+    }
+}
+
+/* ------------------------------------------------------------------------------------- */
+/* format=mediapipe                                                                       */
+
+static void mp_emit(osc_input *o, int hand, int64_t t, int64_t recv_ns)
+{
+    mp_hand *m = &o->mp[hand];
+    float lm[21][3];
+    for (int j = 0; j < 21; j++) {
+        float x = m->v[0][j], y = m->v[1][j], z = m->have & 4 ? m->v[2][j] : 0.f;
+        if (o->mp_mirror) x = 1.f - x;
+        lm[j][0] = (x - 0.5f) * o->mp_width;
+        lm[j][1] = o->mp_height + (0.5f - y) * o->mp_width * o->mp_aspect;
+        lm[j][2] = o->mp_depth + z * o->mp_width;
+    }
+    /* MediaPipe's 21 landmarks: 0 wrist, then thumb CMC MCP IP tip, then MCP PIP DIP tip of
+     * index, middle, ring, pinky: plugin.h's layout from 1 on. The palm centre is the mean of
+     * the wrist and the four finger MCPs. */
+    float mm[FP_HAND_JOINTS][3];
+    for (int j = 1; j < 21; j++) memcpy(mm[j], lm[j], sizeof mm[j]);
+    for (int i = 0; i < 3; i++)
+        mm[FP_JOINT_PALM][i] = (lm[0][i] + lm[5][i] + lm[9][i] + lm[13][i] + lm[17][i]) / 5.f;
+    push_joints(o, hand, t, recv_ns, (const float(*)[3])mm);
+}
+
+static void fmt_mediapipe(osc_input *o, const char *path, const char *types, lo_arg **argv,
+                          int64_t t, int64_t recv_ns)
+{
+    size_t n = strlen(path);
+    if (n < 3 || n > 4 || path[0] != '/' || (path[1] != 'l' && path[1] != 'r') ||
+        (path[2] != 'x' && path[2] != 'y' && path[2] != 'z') || (n == 4 && path[3] != '/')) {
+        count(o, FP_OSC_UNKNOWN_ADDRESS);
+        return;
+    }
+    char want[22];
+    memset(want, 'f', 21);
+    want[21] = 0;
+    if (!check_types(o, types, want)) return;
+    int hand = path[1] == 'l' ? FP_HAND_LEFT : FP_HAND_RIGHT, axis = path[2] - 'x';
+    if (!hand_wanted(o, hand)) {
+        bump(o, &o->st.filtered);
+        return;
+    }
+    float v[21];
+    floats_of(argv, 0, 21, v);
+    if (!finite_all(v, 21)) {
+        count(o, FP_OSC_NONFINITE);
+        return;
+    }
+    mp_hand *m = &o->mp[hand];
+    if (axis == 2 && !m->z_seen && m->have == 0 && m->xy_only) {
+        /* the first z of a sender that sends z after x and y: the frame just emitted without
+         * depth is emitted again with it */
+        memcpy(m->v[2], v, sizeof v);
+        m->z_seen = true;
+        m->xy_only = false;
+        m->have = 7;
+        mp_emit(o, hand, t, recv_ns);
+        m->have = 0;
+        return;
+    }
+    if (m->have & (1u << axis)) {
+        count(o, FP_OSC_INCOMPLETE); /* a new frame began before the last was complete */
+        m->have = 0;
+    }
+    memcpy(m->v[axis], v, sizeof v);
+    m->have |= 1u << axis;
+    if (axis == 2) m->z_seen = true;
+    unsigned need = m->z_seen ? 7u : 3u;
+    m->xy_only = !m->z_seen;
+    if ((m->have & need) == need) {
+        mp_emit(o, hand, t, recv_ns);
+        m->have = 0;
+    }
+}
+
+/* ------------------------------------------------------------------------------------- */
+/* Packets, bundles, timetags                                                             */
+
+static uint32_t be32(const unsigned char *p)
+{
+    return (uint32_t)p[0] << 24 | (uint32_t)p[1] << 16 | (uint32_t)p[2] << 8 | p[3];
+}
+
+/* Host time of an OSC timetag: sender time plus the offset fixed by the first timed bundle
+ * (arrival - timetag), re-anchored when the result strays more than 1 s from the arrival
+ * (the sender restarted or its clock stepped). Immediate (0, 1) means the arrival. */
+static int64_t map_timetag(osc_input *o, uint32_t sec, uint32_t frac, int64_t recv_ns)
+{
+    if (sec == 0 && frac <= 1) return recv_ns;
+    int64_t tt = (int64_t)sec * 1000000000 + (int64_t)(((uint64_t)frac * 1000000000u) >> 32);
+    if (!o->have_offset || llabs(tt + o->offset_ns - recv_ns) > REANCHOR_NS) {
+        o->have_offset = true;
+        o->offset_ns = recv_ns - tt;
+        pthread_mutex_lock(&o->lock);
+        o->st.timetag_offset_ns = o->offset_ns;
+        pthread_mutex_unlock(&o->lock);
+    }
+    return tt + o->offset_ns;
+}
+
+static void handle_message(osc_input *o, unsigned char *data, size_t size, int64_t t,
+                           int64_t recv_ns)
+{
+    int result = 0;
+    lo_message m = lo_message_deserialise(data, size, &result);
+    if (!m) {
+        count(o, FP_OSC_MALFORMED);
+        return;
+    }
+    bump(o, &o->st.messages);
+    const char *path = (const char *)data; /* validated by lo_message_deserialise */
+    const char *types = lo_message_get_types(m);
+    lo_arg **argv = lo_message_get_argv(m);
+    if (!types) types = "";
+    switch (o->format) {
+    case FMT_FACEPUPPET: fmt_facepuppet(o, path, types, argv, t, recv_ns); break;
+    case FMT_LEAP: fmt_leap(o, path, types, argv, t, recv_ns); break;
+    case FMT_MEDIAPIPE: fmt_mediapipe(o, path, types, argv, t, recv_ns); break;
+    default: break;
+    }
+    lo_message_free(m);
+}
+
+/* A packet or bundle element: "#bundle\0", timetag, then (int32 size, element)*. */
+static void handle_packet(osc_input *o, unsigned char *data, size_t size, int64_t t,
+                          int64_t recv_ns, int depth)
+{
+    if (size >= 8 && memcmp(data, "#bundle", 8) == 0) {
+        if (size < 16 || depth >= MAX_DEPTH) {
+            count(o, FP_OSC_MALFORMED);
+            return;
+        }
+        bump(o, &o->st.bundles);
+        int64_t bt = map_timetag(o, be32(data + 8), be32(data + 12), recv_ns);
+        size_t at = 16;
+        while (at < size) {
+            if (size - at < 4) {
+                count(o, FP_OSC_MALFORMED);
+                return;
+            }
+            uint32_t n = be32(data + at);
+            at += 4;
+            if (n == 0 || n % 4 || n > size - at) {
+                count(o, FP_OSC_MALFORMED);
+                return;
+            }
+            handle_packet(o, data + at, n, bt, recv_ns, depth + 1);
+            at += n;
+        }
+        return;
+    }
+    if (size < 4 || size % 4 || data[0] != '/') {
+        count(o, FP_OSC_MALFORMED);
+        return;
+    }
+    handle_message(o, data, size, t, recv_ns);
+}
+
+static void record_latency(osc_input *o, int64_t recv_ns)
+{
+    float us = (float)((double)(now_ns(o) - recv_ns) / 1e3);
+    pthread_mutex_lock(&o->lock);
+    o->lat_us[o->lat_n % LATENCY_RING] = us;
+    o->lat_n++;
+    pthread_mutex_unlock(&o->lock);
+}
+
+static void timers(osc_input *o, int64_t now)
+{
+    if (o->connected && now - o->last_valid_ns > (int64_t)(o->timeout_s * 1e9)) {
+        o->connected = false;
+        bump(o, &o->st.disconnects);
+        for (int h = 0; h < FP_HANDS; h++)
+            if (o->hands_seen & (1u << h))
+                push_status(o, FP_STATUS_DISCONNECTED, h, "osc: %s hand: no data from %s for %.3g s",
+                            h == FP_HAND_LEFT ? "left" : "right", o->sender, o->timeout_s);
+        if (!o->hands_seen)
+            push_status(o, FP_STATUS_DISCONNECTED, -1, "osc: no data from %s for %.3g s", o->sender,
+                        o->timeout_s);
+        memset(o->leap, 0, sizeof o->leap);
+        for (int h = 0; h < FP_HANDS; h++) o->mp[h].have = 0;
+    }
+    for (int k = 0; k < FP_OSC_PROBLEMS; k++) {
+        if (o->report_at[k] <= 0 || now < o->report_at[k]) continue;
+        o->report_at[k] = -1;
+        pthread_mutex_lock(&o->lock);
+        unsigned long long n = (unsigned long long)o->st.problems[k];
+        pthread_mutex_unlock(&o->lock);
+        logf_(o, FP_LOG_WARNING, "port %u: %llu %s in the first second (dropped; further ones are "
+              "counted, totals at stop)", (unsigned)o->port, n, problem_text[k]);
+        push_status(o, FP_STATUS_WARNING, -1, "osc: %llu %s (%s)", n, problem_names[k],
+                    "dropped, counted");
+    }
+}
+
+static void *osc_thread(void *arg)
+{
+    osc_input *o = arg;
+    struct pollfd fds[2] = {{o->sock, POLLIN, 0}, {o->stop_pipe[0], POLLIN, 0}};
+    for (;;) {
+        int rc = poll(fds, 2, TICK_MS);
+        if (rc < 0 && errno != EINTR) {
+            push_status(o, FP_STATUS_ERROR, -1, "osc: poll: %s", strerror(errno));
+            return NULL;
+        }
+        if (fds[1].revents) return NULL;
+        for (int i = 0; i < BURST && rc > 0 && (fds[0].revents & POLLIN); i++) {
+            struct sockaddr_storage from;
+            socklen_t fromlen = sizeof from;
+            ssize_t n = recvfrom(o->sock, o->buf, sizeof o->buf, MSG_DONTWAIT | MSG_TRUNC,
+                                 (struct sockaddr *)&from, &fromlen);
+            if (n < 0) break; /* EAGAIN: drained */
+            int64_t recv_ns = now_ns(o);
+            bump(o, &o->st.packets);
+            if ((size_t)n > sizeof o->buf) {
+                count(o, FP_OSC_MALFORMED);
+                continue;
+            }
+            if (!o->connected) {
+                char addr[INET6_ADDRSTRLEN] = "?";
+                unsigned port = 0;
+                if (from.ss_family == AF_INET) {
+                    const struct sockaddr_in *a = (const struct sockaddr_in *)&from;
+                    inet_ntop(AF_INET, &a->sin_addr, addr, sizeof addr);
+                    port = ntohs(a->sin_port);
+                }
+                snprintf(o->sender, sizeof o->sender, "%s:%u", addr, port);
+            }
+            o->packet_pushed = false;
+            handle_packet(o, o->buf, (size_t)n, recv_ns, recv_ns, 0);
+            if (o->packet_pushed) record_latency(o, recv_ns);
+        }
+        timers(o, now_ns(o));
+    }
+}
+
+/* ------------------------------------------------------------------------------------- */
+/* fp_input                                                                               */
+
+static int osc_start(fp_input *self, char *err, size_t errlen)
+{
+    osc_input *o = self->plugin_data;
+    if (o->running) {
+        snprintf(err, errlen, "osc: already started");
+        return -EBUSY;
+    }
+    if (pipe2(o->stop_pipe, O_CLOEXEC | O_NONBLOCK) != 0) {
+        int e = errno;
+        snprintf(err, errlen, "osc: pipe: %s", strerror(e));
+        return -e;
+    }
+    o->connected = false;
+    int rc = pthread_create(&o->thread, NULL, osc_thread, o);
+    if (rc) {
+        close(o->stop_pipe[0]);
+        close(o->stop_pipe[1]);
+        snprintf(err, errlen, "osc: cannot start its thread: %s", strerror(rc));
+        return -rc;
+    }
+    o->running = true;
+    logf_(o, FP_LOG_INFO, "listening on %s:%u (format %s)", o->bind_text, (unsigned)o->port,
+          format_names[o->format]);
+    return 0;
+}
+
+static int cmp_float(const void *a, const void *b)
+{
+    float x = *(const float *)a, y = *(const float *)b;
+    return (x > y) - (x < y);
+}
+
+static void get_stats(const fp_input *in, fp_osc_stats *out)
+{
+    osc_input *o = in->plugin_data;
+    uint32_t want = out->size && out->size < sizeof(fp_osc_stats) ? out->size : sizeof(fp_osc_stats);
+    float *tmp = malloc(LATENCY_RING * sizeof *tmp);
+    fp_osc_stats s;
+    pthread_mutex_lock(&o->lock);
+    s = o->st;
+    size_t n = !tmp ? 0 : o->lat_n < LATENCY_RING ? (size_t)o->lat_n : LATENCY_RING;
+    if (n) memcpy(tmp, o->lat_us, n * sizeof *tmp);
+    pthread_mutex_unlock(&o->lock);
+    s.size = want;
+    s.port = o->port;
+    s.latency_samples = n;
+    s.latency_median_us = s.latency_p99_us = 0;
+    if (n) {
+        qsort(tmp, n, sizeof *tmp, cmp_float);
+        s.latency_median_us = n % 2 ? tmp[n / 2] : 0.5 * ((double)tmp[n / 2 - 1] + tmp[n / 2]);
+        size_t k = (size_t)ceil(0.99 * (double)n) - 1;
+        s.latency_p99_us = tmp[k < n ? k : n - 1];
+    }
+    free(tmp);
+    memcpy(out, &s, want);
+}
+
+static void osc_stop(fp_input *self)
+{
+    osc_input *o = self->plugin_data;
+    if (!o->running) return;
+    ssize_t w = write(o->stop_pipe[1], "x", 1);
+    (void)w;
+    pthread_join(o->thread, NULL);
+    close(o->stop_pipe[0]);
+    close(o->stop_pipe[1]);
+    o->running = false;
+    fp_osc_stats s = {.size = sizeof s};
+    get_stats(self, &s);
+    char problems[512] = "";
+    size_t len = 0;
+    for (int k = 0; k < FP_OSC_PROBLEMS; k++)
+        if (s.problems[k] && len < sizeof problems)
+            len += (size_t)snprintf(problems + len, sizeof problems - len, "%s%s %llu", len ? ", " : "",
+                                    problem_names[k], (unsigned long long)s.problems[k]);
+    logf_(o, FP_LOG_INFO, "port %u: %llu packets, %llu messages, %llu bundles, %llu events; "
+          "latency packet -> event median %.1f us, p99 %.1f us (%llu packets); problems: %s",
+          (unsigned)s.port, (unsigned long long)s.packets, (unsigned long long)s.messages,
+          (unsigned long long)s.bundles, (unsigned long long)s.events, s.latency_median_us,
+          s.latency_p99_us, (unsigned long long)s.latency_samples, len ? problems : "none");
+}
+
+static void osc_destroy(fp_input *self)
+{
+    if (!self) return;
+    osc_input *o = self->plugin_data;
+    osc_stop(self);
+    if (o->sock >= 0) close(o->sock);
+    pthread_mutex_destroy(&o->lock);
+    free(o->lat_us);
+    free(o);
+}
+
+static const char *problem_name(int kind)
+{
+    return kind >= 0 && kind < FP_OSC_PROBLEMS ? problem_names[kind] : "?";
+}
+
+static const fp_osc_ext osc_ext = {sizeof(fp_osc_ext), get_stats, problem_name};
+
+static bool osc_workspace(const fp_input *self, float min_mm[3], float max_mm[3])
+{
+    const osc_input *o = self->plugin_data;
+    if (!o->have_box) return false;
+    memcpy(min_mm, o->box, 3 * sizeof(float));
+    memcpy(max_mm, o->box + 3, 3 * sizeof(float));
+    return true;
+}
+
+static const fp_input_workspace workspace_ext = {osc_workspace};
+
+static const void *osc_get_extension(const fp_input *self, const char *id)
+{
+    const osc_input *o = self->plugin_data;
+    if (id && strcmp(id, FP_OSC_EXT_ID) == 0) return &osc_ext;
+    if (id && strcmp(id, FP_EXT_WORKSPACE) == 0 && o->have_box) return &workspace_ext;
+    return NULL;
+}
+
+/* ------------------------------------------------------------------------------------- */
+/* Factory                                                                                */
+
+static const char usage_text[] =
+    "osc[:PORT][,format=facepuppet|leap|mediapipe][,bind=ADDR][,hand=left|right|both]\n"
+    "   [,timeout=SECONDS][,box=X0/Y0/Z0/X1/Y1/Z1][,width=MM][,aspect=H/W][,height=MM]\n"
+    "   [,depth=MM][,mirror=1]\n"
+    "  Hand tracking over OSC (UDP), decoded with liblo; address spaces in docs/osc.md.\n"
+    "  PORT     UDP port (default 9000; 0 picks a free one, logged at start)\n"
+    "  format   facepuppet: /facepuppet/hand/{left,right}/{joints,angles,wrist}, /facepuppet/button\n"
+    "           leap: /hand<s> i i f f f (palm), /finger<s>-<n> i i f f f (tips; the other\n"
+    "             joints are estimated on the straight line from palm to tip)\n"
+    "           mediapipe: /lx/ /ly/ [/lz/] /rx/ /ry/ [/rz/], 21 normalised floats each\n"
+    "           (vmc is not supported yet)\n"
+    "  bind     address to listen on (default 127.0.0.1; anything else is logged as a warning)\n"
+    "  hand     which hands to take (default both; for leap, left/right takes slot 0 as that hand)\n"
+    "  timeout  seconds of silence before the sender is reported disconnected (default 1)\n"
+    "  box      the volume the hands move in, mm, device frame: fitted to the face by the host\n"
+    "           (default: the host's desktop-tracker box)\n"
+    "  mediapipe: width = mm across the image (default 400), aspect = image height / width\n"
+    "    (default 0.75), height = device y of the image centre (default 200 mm), depth = device\n"
+    "    z of the landmarks' z = 0 (default 0), mirror=1 flips x.\n"
+    "  Bundles' timetags become event times (offset fixed by the first timed bundle).\n";
+
+static int parse_number(const char *key, const char *v, double lo, double hi, double *out,
+                        char *err, size_t errlen)
+{
+    locale_t c = newlocale(LC_ALL_MASK, "C", (locale_t)0);
+    char *end = NULL;
+    double x = c != (locale_t)0 ? strtod_l(v, &end, c) : NAN;
+    if (c != (locale_t)0) freelocale(c);
+    if (!end || end == v || *end || !isfinite(x) || x < lo || x > hi) {
+        snprintf(err, errlen, "osc: %s=%s: expected a number in [%g, %g]", key, v, lo, hi);
+        return -EINVAL;
+    }
+    *out = x;
+    return 0;
+}
+
+static int osc_create(const fp_host *host, const char *arg, const fp_param *params,
+                      size_t nparams, fp_input **out, char *err, size_t errlen)
+{
+    *out = NULL;
+    if (!host || !host->push_event || !host->now_ns) {
+        snprintf(err, errlen, "osc: the host lacks push_event or now_ns");
+        return -EINVAL;
+    }
+    long port = DEFAULT_PORT;
+    if (arg && *arg) {
+        char *end = NULL;
+        errno = 0;
+        port = strtol(arg, &end, 10);
+        if (errno || !end || *end || port < 0 || port > 65535) {
+            snprintf(err, errlen, "osc:%s: PORT must be a number in 0..65535", arg);
+            return -EINVAL;
+        }
+    }
+    int format = FMT_FACEPUPPET, hands = HANDS_BOTH;
+    double timeout = 1.0, width = 400, aspect = 0.75, height = 200, depth = 0;
+    bool mirror = false, have_box = false;
+    float box[6] = {0};
+    const char *bind_addr = "127.0.0.1";
+    for (size_t i = 0; i < nparams; i++) {
+        const char *k = params[i].key ? params[i].key : "", *v = params[i].value ? params[i].value : "";
+        int rc = 0;
+        if (strcmp(k, "format") == 0) {
+            format = -1;
+            for (int f = 0; f < 4; f++)
+                if (strcmp(v, format_names[f]) == 0) format = f;
+            if (format == FMT_VMC) {
+                snprintf(err, errlen, "osc: format=vmc: the VMC protocol is not supported yet "
+                         "(see docs/osc.md); use facepuppet, leap or mediapipe");
+                return -ENOTSUP;
+            }
+            if (format < 0) {
+                snprintf(err, errlen, "osc: format=%s: expected facepuppet, leap or mediapipe", v);
+                return -EINVAL;
+            }
+        } else if (strcmp(k, "bind") == 0) {
+            bind_addr = v;
+        } else if (strcmp(k, "hand") == 0) {
+            if (strcmp(v, "left") == 0)
+                hands = HANDS_LEFT;
+            else if (strcmp(v, "right") == 0)
+                hands = HANDS_RIGHT;
+            else if (strcmp(v, "both") == 0)
+                hands = HANDS_BOTH;
+            else {
+                snprintf(err, errlen, "osc: hand=%s: expected left, right or both", v);
+                return -EINVAL;
+            }
+        } else if (strcmp(k, "timeout") == 0) {
+            rc = parse_number(k, v, 0.01, 3600, &timeout, err, errlen);
+        } else if (strcmp(k, "width") == 0) {
+            rc = parse_number(k, v, 1, 10000, &width, err, errlen);
+        } else if (strcmp(k, "aspect") == 0) {
+            rc = parse_number(k, v, 0.01, 100, &aspect, err, errlen);
+        } else if (strcmp(k, "height") == 0) {
+            rc = parse_number(k, v, -10000, 10000, &height, err, errlen);
+        } else if (strcmp(k, "depth") == 0) {
+            rc = parse_number(k, v, -10000, 10000, &depth, err, errlen);
+        } else if (strcmp(k, "box") == 0) {
+            /* x0/y0/z0/x1/y1/z1 in mm: the volume the hands move in (workspace extension) */
+            locale_t c = newlocale(LC_ALL_MASK, "C", (locale_t)0);
+            const char *p = v;
+            int got = 0;
+            for (; got < 6 && c != (locale_t)0; got++) {
+                char *end = NULL;
+                double x = strtod_l(p, &end, c);
+                if (end == p || !isfinite(x) || fabs(x) > HUGE_MM) break;
+                box[got] = (float)x;
+                p = end;
+                if (got < 5 && *p++ != '/') {
+                    got++;
+                    break;
+                }
+            }
+            if (c != (locale_t)0) freelocale(c);
+            if (got != 6 || *p || !(box[0] < box[3] && box[1] < box[4] && box[2] < box[5])) {
+                snprintf(err, errlen, "osc: box=%s: expected x0/y0/z0/x1/y1/z1 in mm with x0 < x1, "
+                         "y0 < y1, z0 < z1", v);
+                return -EINVAL;
+            }
+            have_box = true;
+        } else if (strcmp(k, "mirror") == 0) {
+            if (strcmp(v, "1") && strcmp(v, "0")) {
+                snprintf(err, errlen, "osc: mirror=%s: expected 0 or 1", v);
+                return -EINVAL;
+            }
+            mirror = v[0] == '1';
+        } else {
+            snprintf(err, errlen, "osc: unknown key \"%s\" (known: format, bind, hand, timeout, "
+                     "width, aspect, height, depth, mirror, box)", k);
+            return -EINVAL;
+        }
+        if (rc) return rc;
+    }
+    struct sockaddr_in sa = {.sin_family = AF_INET, .sin_port = htons((uint16_t)port)};
+    if (inet_pton(AF_INET, bind_addr, &sa.sin_addr) != 1) {
+        snprintf(err, errlen, "osc: bind=%s: expected an IPv4 address (127.0.0.1, 0.0.0.0, ...)",
+                 bind_addr);
+        return -EINVAL;
+    }
+    osc_input *o = calloc(1, sizeof *o);
+    if (!o || !(o->lat_us = calloc(LATENCY_RING, sizeof *o->lat_us))) {
+        free(o);
+        snprintf(err, errlen, "osc: out of memory");
+        return -ENOMEM;
+    }
+    o->sock = socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
+    if (o->sock < 0 || bind(o->sock, (struct sockaddr *)&sa, sizeof sa) != 0) {
+        int e = errno;
+        snprintf(err, errlen, "osc: cannot listen on %s:%ld (UDP): %s", bind_addr, port, strerror(e));
+        if (o->sock >= 0) close(o->sock);
+        free(o->lat_us);
+        free(o);
+        return -e;
+    }
+    socklen_t len = sizeof sa;
+    getsockname(o->sock, (struct sockaddr *)&sa, &len);
+    o->port = ntohs(sa.sin_port);
+    snprintf(o->bind_text, sizeof o->bind_text, "%s", bind_addr);
+    o->loopback = (ntohl(sa.sin_addr.s_addr) >> 24) == 127;
+    o->host = host;
+    o->format = format;
+    o->hands = hands;
+    o->timeout_s = timeout;
+    o->mp_width = (float)width;
+    o->mp_aspect = (float)aspect;
+    o->mp_height = (float)height;
+    o->mp_depth = (float)depth;
+    o->mp_mirror = mirror;
+    o->have_box = have_box;
+    memcpy(o->box, box, sizeof box);
+    pthread_mutex_init(&o->lock, NULL);
+    o->st.size = sizeof o->st;
+    o->st.port = o->port;
+    o->input = (fp_input){.size = sizeof(fp_input), .plugin_data = o, .start = osc_start,
+                          .stop = osc_stop, .destroy = osc_destroy,
+                          .get_extension = osc_get_extension};
+    if (!o->loopback)
+        logf_(o, FP_LOG_WARNING, "listening on %s:%u beyond loopback: any host that can reach "
+              "this port can drive the hands", bind_addr, (unsigned)o->port);
+    *out = &o->input;
+    return 0;
+}
+
+static const fp_input_factory osc_factory = {
+    .size = sizeof(fp_input_factory),
+    .name = "osc",
+    .description = "hand tracking over OSC/UDP (facepuppet, Leap Motion bridges, MediaPipe hands)",
+    .usage = usage_text,
+    .create = osc_create,
+};
+
+static bool osc_init(const char *plugin_path)
+{
+    (void)plugin_path;
+    return true;
+}
+
+static void osc_deinit(void) {}
+
+static const void *osc_get_factory(const char *factory_id)
+{
+    if (factory_id && strcmp(factory_id, FP_INPUT_FACTORY_ID) == 0) return &osc_factory;
+    return NULL;
+}
+
+FP_PLUGIN_DECLARE_ENTRY = {
+    .abi = {FP_PLUGIN_ABI_MAJOR, FP_PLUGIN_ABI_MINOR},
+    .id = "org.facepuppet.input-osc",
+    .version = "1.0.0",
+    .init = osc_init,
+    .deinit = osc_deinit,
+    .get_factory = osc_get_factory,
+};

@@ -1,0 +1,791 @@
+/*
+ * test_osc.c: the input-osc plugin, dlopened from the build tree with a fake host, fed over
+ * loopback UDP (127.0.0.1, port 0 = a free port each time) through liblo's sender. Reference
+ * values are rows of the Leap recordings in shared/data read with core/hand's CSV reader.
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#define _GNU_SOURCE
+#include "leapcsv.h"
+#include "osc.h"
+
+#include <facepuppet/plugin.h>
+
+#include <lo/lo.h>
+
+#include <arpa/inet.h>
+#include <dlfcn.h>
+#include <errno.h>
+#include <math.h>
+#include <netinet/in.h>
+#include <pthread.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <cmocka.h>
+
+#define LEAP "../shared/data/hands/leap-motion/"
+#define CLAPS LEAP "three-claps_joints_mm.csv"
+#define CLAPS_ANGLES LEAP "three-claps_cyberglove_like_angles_deg.csv"
+
+static void *plugin_handle;
+static const fp_input_factory *factory;
+static fp_leap_joints_row *rows;
+static size_t nrows;
+
+/* ------------------------------------------------------------------------------------- */
+/* Fake host: a bounded event store; a full store refuses, as the host's queue does.      */
+
+typedef struct fake_host {
+    fp_host host;
+    pthread_mutex_t mutex;
+    fp_event *events;
+    size_t count, cap;
+    size_t refused, refused_poses;
+    bool store;          /* false: count only (flood) */
+    size_t pushed;
+    char log[8192];
+} fake_host;
+
+static int64_t mono_ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
+}
+
+static void sleep_ms(int ms)
+{
+    struct timespec ts = {ms / 1000, (long)(ms % 1000) * 1000000};
+    nanosleep(&ts, NULL);
+}
+
+static bool fake_push(const fp_host *host, const fp_event_header *ev)
+{
+    fake_host *h = (fake_host *)host;
+    bool ok = true;
+    pthread_mutex_lock(&h->mutex);
+    if (!h->store) {
+        h->pushed++;
+        if (h->pushed % 4 == 0) { /* a queue drained at a quarter of the rate: some refusals */
+            h->refused++;
+            if (ev->type != FP_EVENT_STATUS) h->refused_poses++; /* status events are retried */
+            ok = false;
+        }
+    } else if (h->count < h->cap) {
+        fp_event *e = &h->events[h->count++];
+        memset(e, 0, sizeof *e);
+        memcpy(e, ev, ev->size < sizeof *e ? ev->size : sizeof *e);
+    } else {
+        h->refused++;
+        ok = false;
+    }
+    pthread_mutex_unlock(&h->mutex);
+    return ok;
+}
+
+static int64_t fake_now(const fp_host *host)
+{
+    (void)host;
+    return mono_ns();
+}
+
+static void fake_log(const fp_host *host, fp_log_level level, const char *message)
+{
+    fake_host *h = (fake_host *)host;
+    pthread_mutex_lock(&h->mutex);
+    size_t n = strlen(h->log);
+    if (n < sizeof h->log - 1) snprintf(h->log + n, sizeof h->log - n, "%d %s\n", (int)level, message);
+    pthread_mutex_unlock(&h->mutex);
+}
+
+static fake_host *fake_new(size_t cap)
+{
+    fake_host *h = calloc(1, sizeof *h);
+    assert_non_null(h);
+    h->host = (fp_host){.size = sizeof(fp_host), .abi = {FP_PLUGIN_ABI_MAJOR, FP_PLUGIN_ABI_MINOR},
+                        .push_event = fake_push, .now_ns = fake_now, .log = fake_log};
+    pthread_mutex_init(&h->mutex, NULL);
+    h->events = calloc(cap, sizeof *h->events);
+    assert_non_null(h->events);
+    h->cap = cap;
+    h->store = true;
+    return h;
+}
+
+static void fake_free(fake_host *h)
+{
+    pthread_mutex_destroy(&h->mutex);
+    free(h->events);
+    free(h);
+}
+
+static size_t count_type(fake_host *h, int type, int code)
+{
+    size_t n = 0;
+    pthread_mutex_lock(&h->mutex);
+    for (size_t i = 0; i < h->count; i++)
+        if (h->events[i].header.type == type && (code < 0 || h->events[i].status.code == (uint32_t)code)) n++;
+    pthread_mutex_unlock(&h->mutex);
+    return n;
+}
+
+/* Waits until `n` events of `type` (status `code` where >= 0) are stored; false after 5 s. */
+static bool wait_type(fake_host *h, int type, int code, size_t n)
+{
+    for (int64_t end = mono_ns() + 5000000000LL; mono_ns() < end; sleep_ms(2))
+        if (count_type(h, type, code) >= n) return true;
+    return false;
+}
+
+/* ------------------------------------------------------------------------------------- */
+/* Plugin                                                                                 */
+
+typedef struct osc_fixture {
+    fake_host *h;
+    fp_input *in;
+    const fp_osc_ext *ext;
+    lo_address to;
+    char port[16];
+} osc_fixture;
+
+static int create(fake_host *h, const char *keys, fp_input **in, char *err, size_t errlen)
+{
+    char buf[256];
+    fp_param params[8];
+    size_t n = 0;
+    snprintf(buf, sizeof buf, "%s", keys ? keys : "");
+    for (char *save = NULL, *kv = strtok_r(buf, ",", &save); kv && n < 8; kv = strtok_r(NULL, ",", &save)) {
+        char *eq = strchr(kv, '=');
+        assert_non_null(eq);
+        *eq = '\0';
+        params[n++] = (fp_param){kv, eq + 1};
+    }
+    err[0] = '\0';
+    return factory->create(&h->host, "0", params, n, in, err, errlen);
+}
+
+static void open_fixture(osc_fixture *f, const char *keys, size_t cap)
+{
+    memset(f, 0, sizeof *f);
+    f->h = fake_new(cap);
+    char err[512];
+    int rc = create(f->h, keys, &f->in, err, sizeof err);
+    if (rc) fail_msg("create [%s]: %d %s", keys ? keys : "", rc, err);
+    f->ext = f->in->get_extension(f->in, FP_OSC_EXT_ID);
+    assert_non_null(f->ext);
+    fp_osc_stats st = {.size = sizeof st};
+    f->ext->get_stats(f->in, &st);
+    assert_true(st.port > 0);
+    snprintf(f->port, sizeof f->port, "%u", (unsigned)st.port);
+    assert_int_equal(f->in->start(f->in, err, sizeof err), 0);
+    f->to = lo_address_new("127.0.0.1", f->port);
+    assert_non_null(f->to);
+}
+
+static void close_fixture(osc_fixture *f)
+{
+    f->in->stop(f->in);
+    f->in->destroy(f->in);
+    lo_address_free(f->to);
+    fake_free(f->h);
+}
+
+static fp_osc_stats stats(osc_fixture *f)
+{
+    fp_osc_stats st = {.size = sizeof st};
+    f->ext->get_stats(f->in, &st);
+    return st;
+}
+
+/* Waits until the plugin has read `packets` datagrams, or read none for 100 ms (the kernel
+ * may drop datagrams when the socket buffer overflows), or 5 s passed. */
+static void wait_packets(osc_fixture *f, uint64_t packets)
+{
+    uint64_t last = 0;
+    int64_t end = mono_ns() + 5000000000LL, progress = mono_ns();
+    while (mono_ns() < end && mono_ns() - progress < 100000000) {
+        uint64_t n = stats(f).packets;
+        if (n >= packets) return;
+        if (n != last) progress = mono_ns(), last = n;
+        sleep_ms(1);
+    }
+}
+
+static lo_message joints_message(const fp_leap_joints_row *r)
+{
+    lo_message m = lo_message_new();
+    for (int j = 0; j < FP_HAND_JOINTS; j++)
+        for (int k = 0; k < 3; k++) lo_message_add_float(m, r->joints_mm[j][k]);
+    return m;
+}
+
+static const char *side(int h) { return h == FP_HAND_LEFT ? "left" : "right"; }
+
+/* The i-th joint_positions event (in arrival order). */
+static const fp_event *nth_positions(fake_host *h, size_t i)
+{
+    size_t k = 0;
+    for (size_t e = 0; e < h->count; e++)
+        if (h->events[e].header.type == FP_EVENT_JOINT_POSITIONS && k++ == i) return &h->events[e];
+    return NULL;
+}
+
+/* ------------------------------------------------------------------------------------- */
+/* Tests                                                                                  */
+
+static void factory_describes_itself(void **state)
+{
+    (void)state;
+    assert_string_equal(factory->name, "osc");
+    assert_non_null(strstr(factory->usage, "format"));
+    fake_host *h = fake_new(4);
+    fp_input *in = NULL;
+    char err[512];
+    assert_int_equal(create(h, "format=vmc", &in, err, sizeof err), -ENOTSUP);
+    assert_non_null(strstr(err, "vmc"));
+    assert_int_equal(create(h, "format=faceosc", &in, err, sizeof err), -EINVAL);
+    assert_int_equal(create(h, "hand=middle", &in, err, sizeof err), -EINVAL);
+    assert_int_equal(create(h, "bind=localhost.invalid", &in, err, sizeof err), -EINVAL);
+    assert_int_equal(create(h, "timeout=-1", &in, err, sizeof err), -EINVAL);
+    assert_int_equal(create(h, "colour=red", &in, err, sizeof err), -EINVAL);
+    assert_non_null(strstr(err, "colour"));
+    /* a port already taken fails at create, naming the address */
+    assert_int_equal(create(h, NULL, &in, err, sizeof err), 0);
+    const fp_osc_ext *ext = in->get_extension(in, FP_OSC_EXT_ID);
+    fp_osc_stats st = {.size = sizeof st};
+    ext->get_stats(in, &st);
+    char port[16];
+    snprintf(port, sizeof port, "%u", (unsigned)st.port);
+    fp_input *in2 = NULL;
+    assert_int_equal(factory->create(&h->host, port, NULL, 0, &in2, err, sizeof err), -EADDRINUSE);
+    assert_non_null(strstr(err, "127.0.0.1"));
+    assert_int_equal(factory->create(&h->host, "70000", NULL, 0, &in2, err, sizeof err), -EINVAL);
+    in->destroy(in); /* never started */
+    fake_free(h);
+}
+
+/* format=facepuppet: joints of real rows, sent in bundles, come back bit for bit. */
+static void facepuppet_joints_equal_csv(void **state)
+{
+    (void)state;
+    osc_fixture f;
+    open_fixture(&f, NULL, 4096);
+    size_t sent = 0;
+    for (size_t i = 0; i < 200 && i < nrows; i++) {
+        lo_timetag tt;
+        lo_timetag_now(&tt);
+        lo_bundle b = lo_bundle_new(tt);
+        char path[64];
+        snprintf(path, sizeof path, "/facepuppet/hand/%s/joints", side(rows[i].side));
+        lo_bundle_add_message(b, path, joints_message(&rows[i]));
+        assert_true(lo_send_bundle(f.to, b) > 0);
+        lo_bundle_free_recursive(b);
+        sent++;
+        if (i % 20 == 19) wait_packets(&f, sent);
+    }
+    assert_true(wait_type(f.h, FP_EVENT_JOINT_POSITIONS, -1, sent));
+    assert_int_equal(count_type(f.h, FP_EVENT_STATUS, FP_STATUS_CONNECTED), 1);
+    for (size_t i = 0; i < sent; i++) {
+        const fp_event *e = nth_positions(f.h, i);
+        assert_non_null(e);
+        assert_int_equal(e->header.hand, rows[i].side);
+        assert_memory_equal(e->positions.mm, rows[i].joints_mm, sizeof e->positions.mm);
+    }
+    fp_osc_stats st = stats(&f);
+    assert_int_equal(st.bundles, sent);
+    assert_int_equal(st.messages, sent);
+    for (int k = 0; k < FP_OSC_PROBLEMS; k++) assert_int_equal(st.problems[k], 0);
+    /* the latency figures exist and are ordered; the log at stop carries them */
+    assert_true(st.latency_samples == sent);
+    assert_true(st.latency_median_us > 0 && st.latency_p99_us >= st.latency_median_us);
+    printf("latency packet -> event over %llu packets: median %.1f us, p99 %.1f us\n",
+           (unsigned long long)st.latency_samples, st.latency_median_us, st.latency_p99_us);
+    f.in->stop(f.in);
+    assert_non_null(strstr(f.h->log, "latency packet -> event median"));
+    close_fixture(&f);
+}
+
+/* format=facepuppet: angles (all valid, or with a mask), wrist, buttons; hand filter. */
+static void facepuppet_angles_wrist_buttons(void **state)
+{
+    (void)state;
+    fp_leap_angles_row *ar = NULL;
+    size_t na = 0;
+    char err[512];
+    assert_int_equal(fp_leapcsv_read_angles(CLAPS_ANGLES, &ar, &na, err, sizeof err), 0);
+    osc_fixture f;
+    open_fixture(&f, "hand=left", 256);
+    size_t left = 0;
+    for (size_t i = 0; i < 20; i++) {
+        lo_message m = lo_message_new();
+        lo_message_add_int32(m, (int32_t)ar[i].valid);
+        for (int s = 0; s < FP_GLOVE_SENSORS; s++) lo_message_add_float(m, (float)(ar[i].degrees[s] * M_PI / 180));
+        char path[64];
+        snprintf(path, sizeof path, "/facepuppet/hand/%s/angles", side(ar[i].side));
+        assert_true(lo_send_message(f.to, path, m) > 0);
+        lo_message_free(m);
+        left += ar[i].side == FP_HAND_LEFT;
+    }
+    assert_true(wait_type(f.h, FP_EVENT_JOINT_ANGLES, -1, left));
+    wait_packets(&f, 20);
+    assert_int_equal(stats(&f).filtered, 20 - left);
+    size_t k = 0;
+    for (size_t i = 0; i < 20; i++) {
+        if (ar[i].side != FP_HAND_LEFT) continue;
+        const fp_event *e = NULL;
+        for (size_t x = 0, seen = 0; x < f.h->count; x++)
+            if (f.h->events[x].header.type == FP_EVENT_JOINT_ANGLES && seen++ == k) e = &f.h->events[x];
+        k++;
+        assert_non_null(e);
+        assert_int_equal(e->header.hand, FP_HAND_LEFT);
+        assert_int_equal(e->angles.valid, ar[i].valid);
+        for (int s = 0; s < FP_GLOVE_SENSORS; s++)
+            if (ar[i].valid >> s & 1)
+                assert_true(e->angles.radians[s] == (float)(ar[i].degrees[s] * M_PI / 180));
+            else
+                assert_true(e->angles.radians[s] == 0.f);
+    }
+    /* wrist: the quaternion is normalised; buttons keep the held mask */
+    assert_true(lo_send(f.to, "/facepuppet/hand/left/wrist", "fffffff", 10.f, 20.f, 30.f, 0.f, 0.f, 0.f, 1.02f) > 0);
+    assert_true(lo_send(f.to, "/facepuppet/button", "ii", 0, 1) > 0);
+    assert_true(lo_send(f.to, "/facepuppet/button", "ii", 2, 1) > 0);
+    assert_true(lo_send(f.to, "/facepuppet/button", "ii", 0, 0) > 0);
+    assert_true(wait_type(f.h, FP_EVENT_BUTTON, -1, 3));
+    assert_true(wait_type(f.h, FP_EVENT_WRIST_POSE, -1, 1));
+    for (size_t x = 0, b = 0; x < f.h->count; x++) {
+        const fp_event *e = &f.h->events[x];
+        if (e->header.type == FP_EVENT_WRIST_POSE) {
+            assert_true(e->wrist.position_mm[2] == 30.f);
+            assert_true(fabsf(e->wrist.rotation[3] - 1.f) < 1e-6f);
+        }
+        if (e->header.type == FP_EVENT_BUTTON) {
+            static const uint32_t mask[3] = {1, 5, 4};
+            assert_int_equal(e->button.mask, mask[b++]);
+        }
+    }
+    close_fixture(&f);
+    free(ar);
+}
+
+/* format=leap: palm and tips are the CSV's, the rest lies on the palm-tip line in order;
+ * the side comes from the palm's x (hand=both). */
+static void leap_palm_and_tips_equal_csv(void **state)
+{
+    (void)state;
+    osc_fixture f;
+    open_fixture(&f, "format=leap", 1024);
+    size_t frames = 0;
+    for (size_t i = 0; i + 1 < nrows && frames < 60;) {
+        lo_timetag tt;
+        lo_timetag_now(&tt);
+        lo_bundle b = lo_bundle_new(tt);
+        size_t j = i, slot = 0;
+        for (; j < nrows && rows[j].timestamp_us == rows[i].timestamp_us; j++, slot++) {
+            const fp_leap_joints_row *r = &rows[j];
+            char path[32];
+            lo_message m = lo_message_new();
+            lo_message_add_int32(m, (int32_t)r->hand_id);
+            lo_message_add_int32(m, 0);
+            for (int k = 0; k < 3; k++) lo_message_add_float(m, r->palm_mm[k]);
+            snprintf(path, sizeof path, "/hand%zu", slot);
+            lo_bundle_add_message(b, path, m);
+            for (int fi = 0; fi < FP_FINGERS; fi++) {
+                m = lo_message_new();
+                lo_message_add_int32(m, (int32_t)r->hand_id);
+                lo_message_add_int32(m, fi);
+                for (int k = 0; k < 3; k++) lo_message_add_float(m, r->joints_mm[FP_JOINT_TIP(fi)][k]);
+                snprintf(path, sizeof path, "/finger%zu-%d", slot, fi);
+                lo_bundle_add_message(b, path, m);
+            }
+        }
+        assert_true(lo_send_bundle(f.to, b) > 0);
+        lo_bundle_free_recursive(b);
+        frames++;
+        wait_packets(&f, frames);
+        i = j;
+    }
+    size_t expect = 0;
+    for (size_t i = 0; i < nrows; i++) {
+        if (i > 0 && rows[i].timestamp_us != rows[i - 1].timestamp_us && --frames == 0) break;
+        expect++;
+    }
+    assert_true(wait_type(f.h, FP_EVENT_JOINT_POSITIONS, -1, expect));
+    for (size_t i = 0; i < expect; i++) {
+        const fp_event *e = nth_positions(f.h, i);
+        const fp_leap_joints_row *r = &rows[i];
+        assert_int_equal(e->header.hand, r->palm_mm[0] < 0 ? FP_HAND_LEFT : FP_HAND_RIGHT);
+        assert_int_equal(e->header.hand, r->side); /* in this recording, left is at x < 0 */
+        assert_memory_equal(e->positions.mm[FP_JOINT_PALM], r->palm_mm, sizeof r->palm_mm);
+        for (int fi = 0; fi < FP_FINGERS; fi++) {
+            const float *tip = e->positions.mm[FP_JOINT_TIP(fi)], *palm = e->positions.mm[0];
+            assert_memory_equal(tip, r->joints_mm[FP_JOINT_TIP(fi)], 3 * sizeof(float));
+            double len = 0, prev = 0;
+            for (int k = 0; k < 3; k++) len += ((double)tip[k] - palm[k]) * ((double)tip[k] - palm[k]);
+            len = sqrt(len);
+            for (int s = 0; s < 3; s++) { /* estimated joints: on the segment, in order */
+                const float *p = e->positions.mm[FP_JOINT(fi, s)];
+                double t = 0, off = 0;
+                for (int k = 0; k < 3; k++) t += ((double)p[k] - palm[k]) * ((double)tip[k] - palm[k]) / len;
+                for (int k = 0; k < 3; k++) {
+                    double q = palm[k] + t / len * ((double)tip[k] - palm[k]) - p[k];
+                    off += q * q;
+                }
+                assert_true(sqrt(off) < 1e-3 && t > prev && t < len);
+                prev = t;
+            }
+        }
+    }
+    assert_int_equal(stats(&f).problems[FP_OSC_INCOMPLETE], 0);
+    /* a frame cut short (palm and two tips, then a new palm) is counted, never emitted */
+    size_t before = count_type(f.h, FP_EVENT_JOINT_POSITIONS, -1);
+    lo_send(f.to, "/hand0", "iifff", 7, 0, 1.f, 2.f, 3.f);
+    lo_send(f.to, "/finger0-0", "iifff", 7, 0, 1.f, 2.f, 3.f);
+    lo_send(f.to, "/finger0-1", "iifff", 7, 1, 1.f, 2.f, 3.f);
+    lo_send(f.to, "/hand0", "iifff", 7, 0, 1.f, 2.f, 3.f);
+    wait_packets(&f, stats(&f).packets + 4);
+    sleep_ms(20);
+    assert_int_equal(stats(&f).problems[FP_OSC_INCOMPLETE], 1);
+    assert_int_equal(count_type(f.h, FP_EVENT_JOINT_POSITIONS, -1), before);
+    close_fixture(&f);
+}
+
+/* format=mediapipe: landmarks made from CSV joints by the documented mapping (with
+ * non-default keys) come back as those joints; the palm is the mean of wrist and MCPs. */
+static void mediapipe_landmarks_to_mm(void **state)
+{
+    (void)state;
+    const float W = 500.f, A = 0.5625f, H = 180.f, D = 10.f;
+    osc_fixture f;
+    open_fixture(&f, "format=mediapipe,width=500,aspect=0.5625,height=180,depth=10", 256);
+    const size_t n = 30;
+    for (size_t i = 0; i < n; i++) {
+        const fp_leap_joints_row *r = &rows[i];
+        float lm[21][3];
+        for (int k = 0; k < 3; k++) lm[0][k] = r->palm_mm[k] - 50.f * r->direction[k];
+        for (int j = 1; j < 21; j++) memcpy(lm[j], r->joints_mm[j], sizeof lm[j]);
+        lo_timetag tt;
+        lo_timetag_now(&tt);
+        lo_bundle b = lo_bundle_new(tt);
+        for (int axis = 0; axis < 3; axis++) {
+            lo_message m = lo_message_new();
+            for (int j = 0; j < 21; j++)
+                lo_message_add_float(m, axis == 0   ? lm[j][0] / W + 0.5f
+                                        : axis == 1 ? 0.5f - (lm[j][1] - H) / (W * A)
+                                                    : (lm[j][2] - D) / W);
+            char path[8];
+            snprintf(path, sizeof path, "/%c%c/", r->side == FP_HAND_LEFT ? 'l' : 'r', 'x' + axis);
+            lo_bundle_add_message(b, path, m);
+        }
+        assert_true(lo_send_bundle(f.to, b) > 0);
+        lo_bundle_free_recursive(b);
+        wait_packets(&f, i + 1);
+    }
+    /* the first frame of each hand comes before z was ever seen (x, y alone complete it) */
+    assert_true(wait_type(f.h, FP_EVENT_JOINT_POSITIONS, -1, n));
+    for (size_t i = 0, e_i = 0; i < n; i++) {
+        const fp_leap_joints_row *r = &rows[i];
+        const fp_event *e = nth_positions(f.h, e_i++);
+        assert_non_null(e);
+        if (i < 2) { /* x-and-y frame: z at depth; then z completes a second event */
+            assert_true(fabsf(e->positions.mm[5][2] - D) < 1e-3f);
+            e = nth_positions(f.h, e_i++);
+        }
+        assert_int_equal(e->header.hand, r->side);
+        for (int j = 1; j < 21; j++)
+            for (int k = 0; k < 3; k++)
+                assert_true(fabsf(e->positions.mm[j][k] - r->joints_mm[j][k]) < 2e-3f * (1 + fabsf(r->joints_mm[j][k])) / 10);
+        for (int k = 0; k < 3; k++) {
+            float wrist = r->palm_mm[k] - 50.f * r->direction[k];
+            float palm = (wrist + r->joints_mm[5][k] + r->joints_mm[9][k] + r->joints_mm[13][k] +
+                          r->joints_mm[17][k]) / 5.f;
+            assert_true(fabsf(e->positions.mm[0][k] - palm) < 0.01f);
+        }
+    }
+    close_fixture(&f);
+}
+
+/* Bundles keep the sender's time: event times step as the timetags do; the first timed
+ * bundle fixes the offset; a plain message takes its arrival. */
+static void bundles_keep_timetags(void **state)
+{
+    (void)state;
+    osc_fixture f;
+    open_fixture(&f, NULL, 256);
+    lo_timetag base = {3900000000u, 0x40000000u}; /* a sender clock far from ours */
+    const int64_t step_ns[] = {0, 10000000, 20000000, 35000000, 36000000};
+    int64_t before = mono_ns();
+    for (int i = 0; i < 5; i++) {
+        uint64_t frac = (uint64_t)base.frac + (uint64_t)(((double)step_ns[i] / 1e9) * 4294967296.0);
+        lo_timetag tt = {base.sec + (uint32_t)(frac >> 32), (uint32_t)frac};
+        lo_bundle b = lo_bundle_new(tt);
+        lo_bundle_add_message(b, "/facepuppet/hand/right/joints", joints_message(&rows[1]));
+        assert_true(lo_send_bundle(f.to, b) > 0);
+        lo_bundle_free_recursive(b);
+        wait_packets(&f, (uint64_t)i + 1);
+    }
+    lo_message m = joints_message(&rows[1]);
+    sleep_ms(30);
+    int64_t plain_sent = mono_ns();
+    assert_true(lo_send_message(f.to, "/facepuppet/hand/right/joints", m) > 0);
+    lo_message_free(m);
+    assert_true(wait_type(f.h, FP_EVENT_JOINT_POSITIONS, -1, 6));
+    int64_t t0 = nth_positions(f.h, 0)->header.time_ns;
+    assert_true(t0 >= before && t0 - before < 100000000);
+    for (int i = 1; i < 5; i++) {
+        int64_t d = nth_positions(f.h, (size_t)i)->header.time_ns - t0;
+        assert_true(llabs(d - step_ns[i]) <= 2); /* timetag fraction rounding */
+    }
+    int64_t tp = nth_positions(f.h, 5)->header.time_ns;
+    assert_true(tp >= plain_sent && tp - plain_sent < 100000000);
+    assert_int_equal(stats(&f).bundles, 5);
+    close_fixture(&f);
+}
+
+/* A sender that stops is reported disconnected (per hand it drove) after the timeout, and
+ * connected again when it returns. */
+static void stopped_sender_reported(void **state)
+{
+    (void)state;
+    osc_fixture f;
+    open_fixture(&f, "timeout=0.2", 256);
+    for (int round = 0; round < 2; round++) {
+        for (int i = 0; i < 5; i++) {
+            lo_message m = joints_message(&rows[0]);
+            assert_true(lo_send_message(f.to, "/facepuppet/hand/left/joints", m) > 0);
+            lo_message_free(m);
+            sleep_ms(20);
+        }
+        assert_true(wait_type(f.h, FP_EVENT_STATUS, FP_STATUS_CONNECTED, (size_t)round + 1));
+        int64_t quiet = mono_ns();
+        assert_true(wait_type(f.h, FP_EVENT_STATUS, FP_STATUS_DISCONNECTED, (size_t)round + 1));
+        int64_t waited = mono_ns() - quiet;
+        assert_true(waited > 100000000 && waited < 1000000000);
+    }
+    /* order: connected, poses, disconnected (left hand), connected, ... */
+    int last = 0;
+    for (size_t i = 0; i < f.h->count; i++) {
+        const fp_event *e = &f.h->events[i];
+        if (e->header.type != FP_EVENT_STATUS) continue;
+        assert_int_not_equal((int)e->status.code, last);
+        if (e->status.code == FP_STATUS_DISCONNECTED) assert_int_equal(e->header.hand, FP_HAND_LEFT);
+        last = (int)e->status.code;
+    }
+    fp_osc_stats st = stats(&f);
+    assert_int_equal(st.connects, 2);
+    assert_int_equal(st.disconnects, 2);
+    close_fixture(&f);
+}
+
+/* Hostile traffic: random bytes, random type tags, wrong counts, NaN, huge values, unknown
+ * addresses, broken bundles: 20,000 packets, all counted, none reaching the host as a pose;
+ * each kind reported once; a good frame afterwards still arrives. */
+static void hostile_packets_counted(void **state)
+{
+    (void)state;
+    osc_fixture f;
+    open_fixture(&f, "format=facepuppet", 4096);
+    int raw = socket(AF_INET, SOCK_DGRAM, 0);
+    assert_true(raw >= 0);
+    struct sockaddr_in sa = {.sin_family = AF_INET, .sin_port = htons((uint16_t)atoi(f.port))};
+    inet_pton(AF_INET, "127.0.0.1", &sa.sin_addr);
+    srand(17);
+    static const char tags[] = "ifsbhtdScmTFNIc[]xyz";
+    const int N = 20000;
+    unsigned char pkt[1024];
+    for (int i = 0; i < N; i++) {
+        int kind = i % 8;
+        if (kind == 0) { /* random bytes, sometimes starting like a message or a bundle */
+            size_t len = (size_t)(rand() % 200);
+            for (size_t k = 0; k < len; k++) pkt[k] = (unsigned char)rand();
+            if (len >= 8 && rand() % 3 == 0) memcpy(pkt, "#bundle", 8);
+            else if (len > 0 && rand() % 3 == 0) pkt[0] = '/';
+            sendto(raw, pkt, len, 0, (struct sockaddr *)&sa, sizeof sa);
+        } else if (kind == 1) { /* a real message with random type tags and arguments */
+            char t[16];
+            int nt = rand() % 12;
+            for (int k = 0; k < nt; k++) t[k] = tags[rand() % (int)(sizeof tags - 1)];
+            t[nt] = 0;
+            size_t len = 0;
+            memcpy(pkt, "/facepuppet/hand/left/joints\0\0\0\0", 32);
+            len = 32;
+            pkt[len++] = ',';
+            memcpy(pkt + len, t, (size_t)nt + 1);
+            len += (size_t)nt + 1;
+            while (len % 4) pkt[len++] = 0;
+            size_t extra = (size_t)(rand() % 64);
+            for (size_t k = 0; k < extra; k++) pkt[len++] = (unsigned char)rand();
+            sendto(raw, pkt, len, 0, (struct sockaddr *)&sa, sizeof sa);
+        } else if (kind == 2) { /* a wrong count */
+            lo_message m = lo_message_new();
+            for (int k = 0; k < 62; k++) lo_message_add_float(m, 1.f);
+            lo_send_message(f.to, "/facepuppet/hand/left/joints", m);
+            lo_message_free(m);
+        } else if (kind == 3 || kind == 4) { /* NaN or inf, or beyond 10 m */
+            fp_leap_joints_row r = rows[i % nrows];
+            r.joints_mm[i % 21][i % 3] = kind == 3 ? (i % 2 ? NAN : INFINITY) : 10001.f;
+            lo_message m = joints_message(&r);
+            lo_send_message(f.to, "/facepuppet/hand/left/joints", m);
+            lo_message_free(m);
+        } else if (kind == 5) { /* wrong types: ints where floats belong */
+            lo_send(f.to, "/facepuppet/hand/right/wrist", "iiiiiii", 1, 2, 3, 4, 5, 6, 7);
+        } else if (kind == 6) { /* unknown addresses (another tracker's traffic) */
+            lo_send(f.to, i % 2 ? "/found" : "/facepuppet/hand/middle/joints", "i", 1);
+        } else { /* bundles with element sizes that lie, or nested beyond the limit */
+            size_t len = 16;
+            memcpy(pkt, "#bundle\0\0\0\0\0\0\0\0\1", 16);
+            if (i % 2) {
+                uint32_t big = htonl(4000);
+                memcpy(pkt + len, &big, 4);
+                len += 4;
+                memcpy(pkt + len, "/x\0\0,\0\0\0", 8);
+                len += 8;
+            } else {
+                for (int d = 0; d < 12 && len + 20 < sizeof pkt; d++) {
+                    uint32_t sz = htonl((uint32_t)(16 * (11 - d) + 4 * (11 - d) + 16));
+                    memcpy(pkt + len, &sz, 4);
+                    memcpy(pkt + len + 4, "#bundle\0\0\0\0\0\0\0\0\1", 16);
+                    len += 20;
+                }
+            }
+            sendto(raw, pkt, len, 0, (struct sockaddr *)&sa, sizeof sa);
+        }
+        if (i % 100 == 99) wait_packets(&f, (uint64_t)i + 1);
+    }
+    wait_packets(&f, (uint64_t)N);
+    sleep_ms(1200); /* the once-per-kind reports are due 1 s after the first of each kind */
+    fp_osc_stats st = stats(&f);
+    printf("hostile: %llu packets read of %d; malformed %llu, bad-types %llu, bad-count %llu, "
+           "non-finite %llu, out-of-range %llu, unknown %llu\n",
+           (unsigned long long)st.packets, N, (unsigned long long)st.problems[FP_OSC_MALFORMED],
+           (unsigned long long)st.problems[FP_OSC_BAD_TYPES], (unsigned long long)st.problems[FP_OSC_BAD_COUNT],
+           (unsigned long long)st.problems[FP_OSC_NONFINITE], (unsigned long long)st.problems[FP_OSC_OUT_OF_RANGE],
+           (unsigned long long)st.problems[FP_OSC_UNKNOWN_ADDRESS]);
+    assert_true(st.packets > (uint64_t)N * 9 / 10);
+    for (int k = FP_OSC_MALFORMED; k <= FP_OSC_UNKNOWN_ADDRESS; k++) assert_true(st.problems[k] > 0);
+    assert_true(st.problems[FP_OSC_NONFINITE] >= N / 8 * 9 / 10);
+    assert_true(st.problems[FP_OSC_OUT_OF_RANGE] >= N / 8 * 9 / 10);
+    /* no pose reached the host; one warning per kind seen */
+    assert_int_equal(count_type(f.h, FP_EVENT_JOINT_POSITIONS, -1), 0);
+    assert_int_equal(count_type(f.h, FP_EVENT_WRIST_POSE, -1), 0);
+    assert_int_equal(count_type(f.h, FP_EVENT_STATUS, FP_STATUS_WARNING), 6);
+    assert_non_null(strstr(f.h->log, "messages with NaN or infinite values"));
+    /* still alive: a good frame arrives */
+    lo_message m = joints_message(&rows[0]);
+    lo_send_message(f.to, "/facepuppet/hand/left/joints", m);
+    lo_message_free(m);
+    assert_true(wait_type(f.h, FP_EVENT_JOINT_POSITIONS, -1, 1));
+    close(raw);
+    close_fixture(&f);
+}
+
+static long rss_kib(void)
+{
+    FILE *fp = fopen("/proc/self/status", "r");
+    char line[256];
+    long kib = -1;
+    while (fp && fgets(line, sizeof line, fp))
+        if (sscanf(line, "VmRSS: %ld", &kib) == 1) break;
+    if (fp) fclose(fp);
+    return kib;
+}
+
+/* A flood of 100,000 packets a second for a second: memory stays put, the host's bounded
+ * queue refuses some events and the plugin counts them. */
+static void flood_keeps_memory_bounded(void **state)
+{
+    (void)state;
+    osc_fixture f;
+    open_fixture(&f, NULL, 16);
+    f.h->store = false;
+    lo_message m = joints_message(&rows[0]);
+    size_t len = 0; /* serialised once by liblo, sent with sendto: 100,000 a second */
+    void *wire = lo_message_serialise(m, "/facepuppet/hand/left/joints", NULL, &len);
+    assert_non_null(wire);
+    int raw = socket(AF_INET, SOCK_DGRAM, 0);
+    struct sockaddr_in sa = {.sin_family = AF_INET, .sin_port = htons((uint16_t)atoi(f.port))};
+    inet_pton(AF_INET, "127.0.0.1", &sa.sin_addr);
+    sleep_ms(50);
+    long rss0 = rss_kib();
+    int64_t t0 = mono_ns();
+    long sent = 0;
+    for (int slice = 0; slice < 100; slice++) { /* 100 slices of 10 ms, 1000 packets each */
+        for (int k = 0; k < 1000; k++)
+            if (sendto(raw, wire, len, 0, (struct sockaddr *)&sa, sizeof sa) == (ssize_t)len) sent++;
+        int64_t due = t0 + (int64_t)(slice + 1) * 10000000;
+        while (mono_ns() < due) sleep_ms(1);
+    }
+    double secs = (double)(mono_ns() - t0) / 1e9;
+    sleep_ms(300);
+    long rss1 = rss_kib();
+    lo_message_free(m);
+    free(wire);
+    close(raw);
+    fp_osc_stats st = stats(&f);
+    printf("flood: %ld packets sent in %.2f s (%.0f/s), %llu read by the plugin, %llu events "
+           "accepted, %llu refused by the queue (counted); RSS %ld -> %ld KiB; latency median "
+           "%.1f us p99 %.1f us\n",
+           sent, secs, (double)sent / secs, (unsigned long long)st.packets,
+           (unsigned long long)st.events, (unsigned long long)st.problems[FP_OSC_QUEUE_FULL], rss0,
+           rss1, st.latency_median_us, st.latency_p99_us);
+    assert_true(sent >= 99000 && secs < 2.5);
+    assert_true(st.packets > 10000);
+    assert_true(st.problems[FP_OSC_QUEUE_FULL] > 0);
+    assert_int_equal(st.problems[FP_OSC_QUEUE_FULL], f.h->refused_poses);
+    assert_true(rss1 - rss0 < 4096); /* under 4 MiB of growth for 100,000 packets */
+    close_fixture(&f);
+}
+
+static int group_setup(void **state)
+{
+    (void)state;
+    const char *build = getenv("FP_BUILD_DIR");
+    char path[1024];
+    snprintf(path, sizeof path, "%s/lib/facepuppet/input-osc.so", build ? build : "build");
+    plugin_handle = dlopen(path, RTLD_NOW | RTLD_LOCAL);
+    if (!plugin_handle) {
+        fprintf(stderr, "dlopen %s: %s\n", path, dlerror());
+        return -1;
+    }
+    const fp_plugin_entry *entry = dlsym(plugin_handle, FP_PLUGIN_ENTRY_SYMBOL);
+    if (!entry || !entry->init(path)) return -1;
+    factory = entry->get_factory(FP_INPUT_FACTORY_ID);
+    char err[512];
+    if (fp_leapcsv_read_joints(CLAPS, &rows, &nrows, err, sizeof err) < 0) {
+        fprintf(stderr, "%s\n", err);
+        return -1;
+    }
+    return factory ? 0 : -1;
+}
+
+static int group_teardown(void **state)
+{
+    (void)state;
+    free(rows);
+    if (plugin_handle) dlclose(plugin_handle);
+    return 0;
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(factory_describes_itself),
+        cmocka_unit_test(facepuppet_joints_equal_csv),
+        cmocka_unit_test(facepuppet_angles_wrist_buttons),
+        cmocka_unit_test(leap_palm_and_tips_equal_csv),
+        cmocka_unit_test(mediapipe_landmarks_to_mm),
+        cmocka_unit_test(bundles_keep_timetags),
+        cmocka_unit_test(stopped_sender_reported),
+        cmocka_unit_test(hostile_packets_counted),
+        cmocka_unit_test(flood_keeps_memory_bounded),
+    };
+    return cmocka_run_group_tests(tests, group_setup, group_teardown);
+}

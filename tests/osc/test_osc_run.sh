@@ -1,0 +1,37 @@
+#!/bin/bash
+# End to end over loopback: `facepuppet run --input osc:PORT` while fp-osc-send replays the
+# three-claps recording to it (bundles, timetags, recorded pace); the ICT face must deform.
+# A random high port is tried, and another if it is taken (tests run in parallel).
+# SPDX-License-Identifier: GPL-3.0-or-later
+set -u
+build=${FP_BUILD_DIR:-build}
+csv=../shared/data/hands/leap-motion/three-claps_joints_mm.csv
+tmp=$(mktemp -d "${TMPDIR:-/tmp}/fp-osc-run-XXXXXX")
+trap 'rm -rf "$tmp"' EXIT
+# the recording's volume (mm), as a performer would state their tracker's
+box=-100/100/-111/132/292/77
+for attempt in 1 2 3 4 5; do
+    port=$((20000 + RANDOM % 40000))
+    "$build/bin/facepuppet" run --plugin-dir "$build/lib/facepuppet" \
+        --input "osc:$port,box=$box" --duration 4 --out "$tmp/out.obj" >"$tmp/run.out" 2>"$tmp/run.err" &
+    run=$!
+    sleep 0.3
+    if ! kill -0 $run 2>/dev/null && grep -q "cannot listen" "$tmp/run.err"; then
+        wait $run
+        continue
+    fi
+    "$build/bin/fp-osc-send" --port "$port" "$csv" || { echo "fp-osc-send failed"; kill $run; exit 1; }
+    wait $run
+    rc=$?
+    cat "$tmp/run.out"
+    grep -v '^ ' "$tmp/run.err"
+    [ $rc -eq 0 ] || { echo "facepuppet run exited $rc"; exit 1; }
+    moved=$(sed -n 's/.*vertices moved \([0-9]*\) of.*/\1/p' "$tmp/run.out")
+    [ -n "$moved" ] && [ "$moved" -gt 0 ] || { echo "the face did not deform"; exit 1; }
+    grep -q "problems: none" "$tmp/run.err" || { echo "the osc input counted problems"; exit 1; }
+    [ -s "$tmp/out.obj" ] || { echo "no mesh written"; exit 1; }
+    echo "ok: $moved vertices moved (port $port)"
+    exit 0
+done
+echo "no free port found in 5 tries"
+exit 1
