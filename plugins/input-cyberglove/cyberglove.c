@@ -41,6 +41,8 @@
 #include <unistd.h>
 
 #include "cyberglove.h"
+#include "fp_error.h"
+#include "fp_stats.h"
 #include "facepuppet/plugin.h"
 #include "glove_cal.h"
 
@@ -100,17 +102,6 @@ typedef struct glove {
 
 /* ------------------------------------------------------------------------------------- */
 /* Small helpers                                                                         */
-
-static int errf(char *err, size_t errlen, int code, const char *fmt, ...)
-{
-    if (err && errlen) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(err, errlen, fmt, ap);
-        va_end(ap);
-    }
-    return code;
-}
 
 static int64_t now_ns(const glove *g)
 {
@@ -310,7 +301,7 @@ static int open_port(const glove *g, char *err, size_t errlen)
     int fd = open(g->path, O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
     if (fd < 0) {
         int e = errno;
-        return errf(err, errlen, -e, "cannot open %s: %s%s", g->path, strerror(e),
+        return fp_errorf(err, errlen, -e, "cannot open %s: %s%s", g->path, strerror(e),
                     e == EACCES ? " (join the dialout group or add a udev rule, see "
                                   "docs/cyberglove.md)" : "");
     }
@@ -318,7 +309,7 @@ static int open_port(const glove *g, char *err, size_t errlen)
     if (tcgetattr(fd, &t) != 0) {
         int e = errno;
         close(fd);
-        return errf(err, errlen, -e, "%s is not a serial port: %s", g->path, strerror(e));
+        return fp_errorf(err, errlen, -e, "%s is not a serial port: %s", g->path, strerror(e));
     }
     t.c_iflag &= ~(tcflag_t)(IGNBRK | BRKINT | PARMRK | ISTRIP | INLCR | IGNCR | ICRNL | IXON |
                              IXOFF | IXANY | INPCK);
@@ -333,7 +324,7 @@ static int open_port(const glove *g, char *err, size_t errlen)
     if (tcsetattr(fd, TCSANOW, &t) != 0) {
         int e = errno;
         close(fd);
-        return errf(err, errlen, -e, "cannot configure %s: %s", g->path, strerror(e));
+        return fp_errorf(err, errlen, -e, "cannot configure %s: %s", g->path, strerror(e));
     }
     tcflush(fd, TCIOFLUSH);
     return fd;
@@ -368,31 +359,31 @@ static int probe(glove *g, char *err, size_t errlen)
     uint8_t v[64];
     int r = drain(g);
     if (r < 0)
-        return errf(err, errlen, r, "%s: line lost while draining", g->path);
+        return fp_errorf(err, errlen, r, "%s: line lost while draining", g->path);
     r = query(g, 'G', 1, v, sizeof v);
     if (r == -ETIMEDOUT)
-        return errf(err, errlen, r, "no answer to ?G (is the glove box on, baud %d?)", g->baud);
+        return fp_errorf(err, errlen, r, "no answer to ?G (is the glove box on, baud %d?)", g->baud);
     if (r < 1)
-        return errf(err, errlen, r < 0 ? r : -EPROTO, "bad answer to ?G");
+        return fp_errorf(err, errlen, r < 0 ? r : -EPROTO, "bad answer to ?G");
     if (v[0] != 3)
-        return errf(err, errlen, -ENODEV, "glove not plugged into its box (?G = %d)", v[0]);
+        return fp_errorf(err, errlen, -ENODEV, "glove not plugged into its box (?G = %d)", v[0]);
     r = query(g, 'S', 1, v, sizeof v);
     if (r < 1)
-        return errf(err, errlen, r < 0 ? r : -EPROTO, "bad answer to ?S");
+        return fp_errorf(err, errlen, r < 0 ? r : -EPROTO, "bad answer to ?S");
     if (v[0] != 18 && v[0] != 22)
-        return errf(err, errlen, -EPROTO, "unsupported sensor count %d (?S)", v[0]);
+        return fp_errorf(err, errlen, -EPROTO, "unsupported sensor count %d (?S)", v[0]);
     if (g->bits == 16 && v[0] != 22)
-        return errf(err, errlen, -EPROTO, "bits=16 needs a 22-sensor CyberGlove III (?S = %d)",
+        return fp_errorf(err, errlen, -EPROTO, "bits=16 needs a 22-sensor CyberGlove III (?S = %d)",
                     v[0]);
     int sensors = v[0];
     r = query(g, 'R', 1, v, sizeof v);
     int right = r >= 1 ? (v[0] != 0) : -1;
     if (r < 0 && r != -ENOTSUP)
-        return errf(err, errlen, r, "bad answer to ?R");
+        return fp_errorf(err, errlen, r, "bad answer to ?R");
     char version[64] = "";
     r = query(g, 'V', 0, v, sizeof v - 1);
     if (r < 0 && r != -ENOTSUP)
-        return errf(err, errlen, r, "bad answer to ?V");
+        return fp_errorf(err, errlen, r, "bad answer to ?V");
     if (r > 0) {
         for (int i = 0; i < r && i < (int)sizeof version - 1; i++)
             version[i] = (v[i] >= 32 && v[i] < 127) ? (char)v[i] : '.';
@@ -402,14 +393,14 @@ static int probe(glove *g, char *err, size_t errlen)
     if (g->bits == 8) {
         r = query(g, 'D', 1, v, sizeof v);
         if (r < 0 && r != -ENOTSUP)
-            return errf(err, errlen, r, "bad answer to ?D");
+            return fp_errorf(err, errlen, r, "bad answer to ?D");
         ts_on = r >= 1 && v[0] != 0;
         uint8_t u[2] = {'U', 1};
         if ((r = write_all(g, u, 2)) < 0)
-            return errf(err, errlen, r, "line lost");
+            return fp_errorf(err, errlen, r, "line lost");
         r = read_reply(g, 'U', -1, v, sizeof v, 500);
         if (r < 0 && r != -ENOTSUP)
-            return errf(err, errlen, r, "bad answer to U 1");
+            return fp_errorf(err, errlen, r, "bad answer to U 1");
         status_on = r >= 0;
         if (status_on) {   /* confirm with ?U: the record layout depends on it */
             r = query(g, 'U', 1, v, sizeof v);
@@ -427,10 +418,10 @@ static int probe(glove *g, char *err, size_t errlen)
     char tcmd[32];
     int tn = snprintf(tcmd, sizeof tcmd, "t %u %u\r", w1, w2);
     if ((r = write_all(g, tcmd, (size_t)tn)) < 0)
-        return errf(err, errlen, r, "line lost");
+        return fp_errorf(err, errlen, r, "line lost");
     r = read_reply(g, 't', -1, v, sizeof v, 300);
     if (r == -EPIPE || r == -ECANCELED)
-        return errf(err, errlen, r, "line lost");
+        return fp_errorf(err, errlen, r, "line lost");
     if (r < 0)
         logf_(g, FP_LOG_WARNING, "%s: sample period command `t %u %u` not acknowledged (%s)",
               g->path, w1, w2, strerror(-r));
@@ -448,10 +439,10 @@ static int probe(glove *g, char *err, size_t errlen)
 
     if (g->bits == 16) {
         if ((r = write_all(g, "1eu", 3)) < 0 || (r = write_all(g, "1S", 2)) < 0)
-            return errf(err, errlen, r, "line lost");
+            return fp_errorf(err, errlen, r, "line lost");
     } else if (!g->poll_mode) {
         if ((r = write_all(g, "S", 1)) < 0)
-            return errf(err, errlen, r, "line lost");
+            return fp_errorf(err, errlen, r, "line lost");
     }
     pthread_mutex_lock(&g->lock);
     g->st.connects++;
@@ -816,17 +807,11 @@ static void *thread_main(void *arg)
 /* ------------------------------------------------------------------------------------- */
 /* Statistics                                                                            */
 
-static int cmp_i32(const void *a, const void *b)
-{
-    int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
-    return (x > y) - (x < y);
-}
-
 static void get_stats(const fp_input *in, fp_cyberglove_stats *out)
 {
     glove *g = in->plugin_data;
     fp_cyberglove_stats s;
-    int32_t *tmp = NULL;
+    double *tmp = NULL;
     size_t n;
     pthread_mutex_lock(&g->lock);
     s = g->st;
@@ -834,15 +819,13 @@ static void get_stats(const fp_input *in, fp_cyberglove_stats *out)
     if (n)
         tmp = malloc(n * sizeof *tmp);
     if (tmp)
-        memcpy(tmp, g->lat, n * sizeof *tmp);
+        for (size_t i = 0; i < n; i++) tmp[i] = g->lat[i];
     pthread_mutex_unlock(&g->lock);
     s.latency_samples = tmp ? n : 0;
     s.latency_median_us = s.latency_p99_us = 0;
     if (tmp) {
-        qsort(tmp, n, sizeof *tmp, cmp_i32);
-        s.latency_median_us = (n % 2 ? tmp[n / 2] : 0.5 * (tmp[n / 2 - 1] + tmp[n / 2])) / 1e3;
-        size_t k = (size_t)(0.99 * (double)(n - 1) + 0.5);
-        s.latency_p99_us = tmp[k] / 1e3;
+        s.latency_median_us = fp_median(tmp, n) / 1e3;
+        s.latency_p99_us = fp_percentile(tmp, n, 0.99) / 1e3;
         free(tmp);
     }
     uint32_t size = out->size && out->size < sizeof s ? out->size : (uint32_t)sizeof s;
@@ -864,7 +847,7 @@ static int input_start(fp_input *self, char *err, size_t errlen)
 {
     glove *g = self->plugin_data;
     if (g->thread_started)
-        return errf(err, errlen, -EALREADY, "cyberglove %s: already started", g->path);
+        return fp_errorf(err, errlen, -EALREADY, "cyberglove %s: already started", g->path);
     int fd = open_port(g, err, errlen);
     if (fd < 0)
         return fd;
@@ -874,7 +857,7 @@ static int input_start(fp_input *self, char *err, size_t errlen)
     if (e) {
         close(fd);
         g->fd = -1;
-        return errf(err, errlen, -e, "cyberglove %s: cannot start thread: %s", g->path,
+        return fp_errorf(err, errlen, -e, "cyberglove %s: cannot start thread: %s", g->path,
                     strerror(e));
     }
     g->thread_started = true;
@@ -948,19 +931,19 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
                   fp_input **out, char *err, size_t errlen)
 {
     if (!host || !host->push_event || !out)
-        return errf(err, errlen, -EINVAL, "cyberglove: bad host");
+        return fp_errorf(err, errlen, -EINVAL, "cyberglove: bad host");
     if (!arg || !*arg)
-        return errf(err, errlen, -EINVAL,
+        return fp_errorf(err, errlen, -EINVAL,
                     "cyberglove: missing device path, e.g. cyberglove:/dev/ttyUSB0");
     if (strlen(arg) >= PATH_MAX)
-        return errf(err, errlen, -ENAMETOOLONG, "cyberglove: device path too long");
+        return fp_errorf(err, errlen, -ENAMETOOLONG, "cyberglove: device path too long");
     glove *g = calloc(1, sizeof *g);
     if (!g)
-        return errf(err, errlen, -ENOMEM, "cyberglove: out of memory");
+        return fp_errorf(err, errlen, -ENOMEM, "cyberglove: out of memory");
     g->lat = calloc(LAT_CAP, sizeof *g->lat);
     if (!g->lat) {
         free(g);
-        return errf(err, errlen, -ENOMEM, "cyberglove: out of memory");
+        return fp_errorf(err, errlen, -ENOMEM, "cyberglove: out of memory");
     }
     g->host = host;
     g->fd = -1;
@@ -978,7 +961,7 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
         long n;
         if (strcmp(k, "baud") == 0) {
             if (parse_int(v, 1, 4000000, &n) != 0 || speed_of((int)n, &g->speed) != 0) {
-                rc = errf(err, errlen, -EINVAL, "cyberglove: baud=%s: not a supported speed "
+                rc = fp_errorf(err, errlen, -EINVAL, "cyberglove: baud=%s: not a supported speed "
                           "(1200..921600, standard rates)", v);
                 goto fail;
             }
@@ -987,7 +970,7 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
             char e2[256];
             int r = fpg_cal_load(v, &g->cal, e2, sizeof e2);
             if (r < 0) {
-                rc = errf(err, errlen, r, "cyberglove: cal=%s", e2);
+                rc = fp_errorf(err, errlen, r, "cyberglove: cal=%s", e2);
                 goto fail;
             }
             snprintf(g->cal_path, sizeof g->cal_path, "%s", v);
@@ -997,7 +980,7 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
             else if (strcmp(v, "right") == 0)
                 g->hand_opt = FP_HAND_RIGHT;
             else {
-                rc = errf(err, errlen, -EINVAL, "cyberglove: hand=%s: expected left or right", v);
+                rc = fp_errorf(err, errlen, -EINVAL, "cyberglove: hand=%s: expected left or right", v);
                 goto fail;
             }
         } else if (strcmp(k, "rate") == 0) {
@@ -1005,7 +988,7 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
             errno = 0;
             double r = strtod(v, &end);
             if (!*v || *end || errno || !(r >= 1.0 && r <= 10000.0)) {
-                rc = errf(err, errlen, -EINVAL, "cyberglove: rate=%s: expected 1..10000 Hz", v);
+                rc = fp_errorf(err, errlen, -EINVAL, "cyberglove: rate=%s: expected 1..10000 Hz", v);
                 goto fail;
             }
             g->rate_hz = r;
@@ -1015,7 +998,7 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
             else if (strcmp(v, "poll") == 0)
                 g->poll_mode = true;
             else {
-                rc = errf(err, errlen, -EINVAL, "cyberglove: mode=%s: expected stream or poll", v);
+                rc = fp_errorf(err, errlen, -EINVAL, "cyberglove: mode=%s: expected stream or poll", v);
                 goto fail;
             }
         } else if (strcmp(k, "bits") == 0) {
@@ -1024,17 +1007,17 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
             else if (strcmp(v, "16") == 0)
                 g->bits = 16;
             else {
-                rc = errf(err, errlen, -EINVAL, "cyberglove: bits=%s: expected 8 or 16", v);
+                rc = fp_errorf(err, errlen, -EINVAL, "cyberglove: bits=%s: expected 8 or 16", v);
                 goto fail;
             }
         } else if (strcmp(k, "timeout") == 0) {
             if (parse_int(v, 10, 600000, &timeout) != 0) {
-                rc = errf(err, errlen, -EINVAL, "cyberglove: timeout=%s: expected 10..600000 ms",
+                rc = fp_errorf(err, errlen, -EINVAL, "cyberglove: timeout=%s: expected 10..600000 ms",
                           v);
                 goto fail;
             }
         } else {
-            rc = errf(err, errlen, -EINVAL, "cyberglove: unknown key `%s` (keys: baud, cal, hand, "
+            rc = fp_errorf(err, errlen, -EINVAL, "cyberglove: unknown key `%s` (keys: baud, cal, hand, "
                       "rate, mode, bits, timeout%s)", k,
                       strcmp(k, "record") == 0 ? "; record= is the host's" : "");
             goto fail;
@@ -1042,7 +1025,7 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
     }
     g->hand = g->hand_opt;   /* -1 (no hand) in status events until ?R answers */
     if (g->bits == 16 && g->poll_mode) {
-        rc = errf(err, errlen, -EINVAL, "cyberglove: bits=16 works with mode=stream only");
+        rc = fp_errorf(err, errlen, -EINVAL, "cyberglove: bits=16 works with mode=stream only");
         goto fail;
     }
     if (!g->speed)
@@ -1054,11 +1037,11 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
     }
     g->timeout_ms = (int)timeout;
     if (pipe2(g->wake, O_CLOEXEC | O_NONBLOCK) != 0) {
-        rc = errf(err, errlen, -errno, "cyberglove: pipe: %s", strerror(errno));
+        rc = fp_errorf(err, errlen, -errno, "cyberglove: pipe: %s", strerror(errno));
         goto fail;
     }
     if (pthread_mutex_init(&g->lock, NULL) != 0) {
-        rc = errf(err, errlen, -ENOMEM, "cyberglove: mutex");
+        rc = fp_errorf(err, errlen, -ENOMEM, "cyberglove: mutex");
         goto fail;
     }
     g->st.size = sizeof g->st;
