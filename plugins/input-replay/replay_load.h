@@ -1,6 +1,7 @@
 /*
  * replay_load.h: input-replay's loader. Reads a whole recording (Leap joint-positions CSV,
- * Leap joint-angles CSV or facepuppet event log) into a list of timed events.
+ * Leap joint-angles CSV, both read by core/hand/leapcsv.h, or facepuppet event log) into a
+ * list of timed events.
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
@@ -39,7 +40,8 @@ typedef struct replay_recording {
 } replay_recording;
 
 /** Read `path` in full. hands: REPLAY_HAND_* bits.
- *  Returns 0, or a negative errno code after writing to err "PATH: reason" or
+ *  Returns 0, or a negative errno code (-EBADMSG for malformed content, -ENOENT ...) after
+ *  writing to err "PATH: reason" or
  *  "PATH:LINE:COLUMN: reason" (bad number, wrong column count, unknown hand_type, time going
  *  backwards, unknown format, no events for the hands asked for). */
 int replay_load(const char *path, int hands, replay_recording *out, char *err, size_t errlen);

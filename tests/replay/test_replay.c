@@ -744,6 +744,19 @@ static void malformed_rows_fail_create(void **state)
     expect_create_error(angles, NULL, 2, field_col(line, 4 + FP_SENSOR_INDEX_MPJ),
                         "bad number \"4..5\" in column index_mcp");
 
+    /* a joints header with one column too many (74 of 73): the error names the extra
+     * column (this once read past a 73-field array and printed a stack address) */
+    const char *hdr = read_header(LEAP "grab_joints_mm.csv");
+    size_t hlen = strcspn(hdr, "\r\n");
+    f = fopen(bad, "w");
+    assert_non_null(f);
+    fprintf(f, "%.*s,extra\n", (int)hlen, hdr);
+    get_line(good, 2, line, sizeof line);
+    fprintf(f, "%s\n", line);
+    fclose(f);
+    snprintf(mod, sizeof mod, "header has 74 columns, expected 73");
+    expect_create_error(bad, NULL, 1, (long)hlen + 2, mod);
+
     /* a file in no known format, a missing file */
     tmp_path(bad, sizeof bad, "unknown.txt");
     f = fopen(bad, "w");
