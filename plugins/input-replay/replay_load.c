@@ -9,6 +9,7 @@
 
 #include "fp_error.h"
 #include "fp_eventlog.h"
+#include "fp_hand.h"
 #include "leapcsv.h"
 
 #include <errno.h>
@@ -43,37 +44,14 @@ int replay_wrist_rotation(const double normal[3], const double direction[3], flo
     x[0] = y[1] * z[2] - y[2] * z[1];                       /* right-handed: x = y x z */
     x[1] = y[2] * z[0] - y[0] * z[2];
     x[2] = y[0] * z[1] - y[1] * z[0];
-    /* R's columns are the hand axes in the device frame; quaternion by Shepperd's method. */
+    /* R's columns are the hand axes in the device frame. */
     double r[3][3];
     for (int i = 0; i < 3; i++) {
         r[i][0] = x[i];
         r[i][1] = y[i];
         r[i][2] = z[i];
     }
-    double w, qx, qy, qz, tr = r[0][0] + r[1][1] + r[2][2];
-    if (tr > 0) {
-        double s = sqrt(tr + 1.0) * 2;
-        w = s / 4, qx = (r[2][1] - r[1][2]) / s, qy = (r[0][2] - r[2][0]) / s,
-        qz = (r[1][0] - r[0][1]) / s;
-    } else if (r[0][0] > r[1][1] && r[0][0] > r[2][2]) {
-        double s = sqrt(1.0 + r[0][0] - r[1][1] - r[2][2]) * 2;
-        w = (r[2][1] - r[1][2]) / s, qx = s / 4, qy = (r[0][1] + r[1][0]) / s,
-        qz = (r[0][2] + r[2][0]) / s;
-    } else if (r[1][1] > r[2][2]) {
-        double s = sqrt(1.0 + r[1][1] - r[0][0] - r[2][2]) * 2;
-        w = (r[0][2] - r[2][0]) / s, qx = (r[0][1] + r[1][0]) / s, qy = s / 4,
-        qz = (r[1][2] + r[2][1]) / s;
-    } else {
-        double s = sqrt(1.0 + r[2][2] - r[0][0] - r[1][1]) * 2;
-        w = (r[1][0] - r[0][1]) / s, qx = (r[0][2] + r[2][0]) / s, qy = (r[1][2] + r[2][1]) / s,
-        qz = s / 4;
-    }
-    double l = sqrt(w * w + qx * qx + qy * qy + qz * qz);
-    if (w < 0) l = -l;
-    q[0] = (float)(w / l);
-    q[1] = (float)(qx / l);
-    q[2] = (float)(qy / l);
-    q[3] = (float)(qz / l);
+    fp_hand_mat_to_quat((const double (*)[3])r, q);
     return 0;
 }
 

@@ -479,6 +479,43 @@ static void test_leap_recordings(void **state)
     assert_true(sum_size / hands < 11.0);
 }
 
+/* fp_hand_mat_to_quat / fp_hand_quat_to_mat against Rodrigues' formula (axis-angle, an
+ * independent construction), including 180-degree turns, where a trace-only method fails. */
+static void test_quaternion_matrix(void **state)
+{
+    (void)state;
+    srand(3);
+    for (int k = 0; k < 200; k++) {
+        double a[3] = {rand() / (double)RAND_MAX - 0.5, rand() / (double)RAND_MAX - 0.5,
+                       rand() / (double)RAND_MAX - 0.5};
+        if (k % 4 == 0) a[k % 3] = 0; /* some axes in coordinate planes */
+        double n = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+        for (int i = 0; i < 3; i++) a[i] /= n;
+        double th = k < 20 ? PI : (rand() / (double)RAND_MAX) * 2 * PI - PI;
+        double c = cos(th), s = sin(th), R[3][3];
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++) R[i][j] = (i == j ? c : 0) + (1 - c) * a[i] * a[j];
+        R[0][1] -= s * a[2], R[0][2] += s * a[1], R[1][0] += s * a[2];
+        R[1][2] -= s * a[0], R[2][0] -= s * a[1], R[2][1] += s * a[0];
+        float q[4];
+        fp_hand_mat_to_quat((const double (*)[3])R, q);
+        assert_true(q[0] >= 0);
+        /* q = +-(cos th/2, sin th/2 a) */
+        double sg = cos(th / 2) >= 0 ? 1 : -1;
+        if (fabs(cos(th / 2)) < 1e-6 && q[1] * a[0] + q[2] * a[1] + q[3] * a[2] < 0) sg = -sg;
+        assert_float_equal(q[0], sg * cos(th / 2), 1e-6);
+        for (int i = 0; i < 3; i++) assert_float_equal(q[1 + i], sg * sin(th / 2) * a[i], 1e-6);
+        double back[3][3];
+        assert_int_equal(fp_hand_quat_to_mat(q, back), 0);
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++) assert_float_equal(back[i][j], R[i][j], 1e-6);
+    }
+    const float zero[4] = {0, 0, 0, 0}, nan4[4] = {NAN, 0, 0, 0};
+    double r[3][3];
+    assert_int_equal(fp_hand_quat_to_mat(zero, r), -1);
+    assert_int_equal(fp_hand_quat_to_mat(nan4, r), -1);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -494,6 +531,7 @@ int main(void)
         cmocka_unit_test(test_from_positions_roundtrip),
         cmocka_unit_test(test_fit),
         cmocka_unit_test(test_csv_errors),
+        cmocka_unit_test(test_quaternion_matrix),
         cmocka_unit_test(test_leap_recordings),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
