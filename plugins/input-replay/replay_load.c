@@ -197,11 +197,6 @@ void replay_recording_free(replay_recording *rec)
     memset(rec, 0, sizeof *rec);
 }
 
-static const char *hands_name(int hands)
-{
-    return hands == REPLAY_HAND_LEFT ? "left" : hands == REPLAY_HAND_RIGHT ? "right" : "both";
-}
-
 /* The first bytes of the file, NUL-terminated, to tell the formats apart. */
 static int read_head(loader *L, char *head, size_t len)
 {
@@ -241,7 +236,7 @@ int replay_load(const char *path, int hands, replay_recording *out, char *err, s
                   "(header \"%s...\")", FP_EVENTLOG_MAGIC, csv_lead);
     }
     if (!rc && out->count == 0)
-        rc = fail(&L, -EINVAL, 0, 0, "no events to replay (hands=%s)", hands_name(hands));
+        rc = fail(&L, -EINVAL, 0, 0, "no events to replay (hands=%s)", fp_hands_name((unsigned)hands));
     if (rc) {
         replay_recording_free(out);
         return rc;

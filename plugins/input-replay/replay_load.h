@@ -9,13 +9,14 @@
 #define REPLAY_LOAD_H
 
 #include <facepuppet/plugin.h>
+#include <facepuppet/plugin_util.h>
 
 #include <stddef.h>
 #include <stdint.h>
 
 /** Which hands to keep (bit per fp_hand_side). Events with hand -1 are always kept. */
-enum { REPLAY_HAND_LEFT = 1 << FP_HAND_LEFT, REPLAY_HAND_RIGHT = 1 << FP_HAND_RIGHT,
-       REPLAY_HAND_BOTH = REPLAY_HAND_LEFT | REPLAY_HAND_RIGHT };
+enum { REPLAY_HAND_LEFT = FP_HANDMASK_LEFT, REPLAY_HAND_RIGHT = FP_HANDMASK_RIGHT,
+       REPLAY_HAND_BOTH = FP_HANDMASK_BOTH };
 
 typedef enum replay_format {
     REPLAY_FORMAT_JOINTS_CSV = 1,  /* *_joints_mm.csv */
