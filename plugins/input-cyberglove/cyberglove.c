@@ -11,7 +11,7 @@
  * the glove (?G ?S ?R ?V ?D, then U 1 to get the status byte), sets the sample period with
  * the ASCII command `t w1 w2\r` (period = w1*w2/115200 s, shared/docs/devices.md), then
  * streams (`S`) or polls (`G` at `rate`), or in 16-bit mode sends `1eu` then `1S`.
- * Records are decoded, calibrated (glove_cal.h) and pushed as fp_event_joint_angles stamped
+ * Records are decoded (glove_decode.h, pure), calibrated (glove_cal.h) and pushed as fp_event_joint_angles stamped
  * with fp_host.now_ns taken when the chunk holding the record's last byte was read.
  *
  * Faults (each reported as fp_event_status; the session keeps the last pose since no angles
@@ -45,13 +45,11 @@
 #include "fp_stats.h"
 #include "facepuppet/plugin.h"
 #include "glove_cal.h"
+#include "glove_decode.h"
 
 #define LAT_CAP 65536
-#define ACC_CAP 1024
 #define BACKOFF_MIN_MS 100
 #define BACKOFF_MAX_MS 2000
-
-static const int DIJ_SKIP[18] = {0, 1, 2, 3, 4, 5, 7, 8, 10, 11, 12, 14, 15, 16, 18, 19, 20, 21};
 
 typedef struct glove {
     fp_input input;
@@ -83,13 +81,13 @@ typedef struct glove {
     char version[64];
     int hand;           /* used in events */
 
-    /* decoder */
-    uint8_t acc[ACC_CAP];
-    size_t len;
+    /* decoder (glove_decode.h) */
+    fpg_decoder dec;
     bool in_noise;
     uint64_t noise_episode;
     bool unplugged;
     bool warned_fast;
+    bool warned_nonfinite;
     int64_t last_record_ns;
     uint64_t units;     /* records and bare error messages decoded */
 
@@ -432,7 +430,7 @@ static int probe(glove *g, char *err, size_t errlen)
     g->status_on = status_on;
     snprintf(g->version, sizeof g->version, "%s", version);
     g->hand = g->hand_opt >= 0 ? g->hand_opt : (right >= 0 ? right : FP_HAND_RIGHT);
-    g->len = 0;
+    fpg_decoder_init(&g->dec, g->bits, sensors, ts_on, status_on);
     g->in_noise = false;
     g->unplugged = false;
     g->warned_fast = false;
@@ -460,7 +458,7 @@ static int probe(glove *g, char *err, size_t errlen)
 /* ------------------------------------------------------------------------------------- */
 /* Decoding                                                                              */
 
-static void emit_angles(glove *g, const double *raw8, int64_t t_read)
+static void emit_angles(glove *g, const fpg_unit *u, int64_t t_read)
 {
     fp_event_joint_angles ev;
     memset(&ev, 0, sizeof ev);
@@ -468,12 +466,10 @@ static void emit_angles(glove *g, const double *raw8, int64_t t_read)
     ev.header.type = FP_EVENT_JOINT_ANGLES;
     ev.header.time_ns = t_read;
     ev.header.hand = g->hand;
-    for (int k = 0; k < g->sensors; k++) {
-        int i = g->sensors == 22 ? k : DIJ_SKIP[k];
-        if (!(g->cal.used & (1u << i)))
-            continue;
-        ev.radians[i] = fpg_cal_angle(&g->cal, i, raw8[k]);
-        ev.valid |= 1u << i;
+    if (fpg_angles_from_raw(&g->cal, u, ev.radians, &ev.valid) && !g->warned_nonfinite) {
+        g->warned_nonfinite = true;
+        logf_(g, FP_LOG_WARNING, "%s: calibration gives a non-finite angle; sensor left out",
+              g->path);
     }
     bool ok = g->host->push_event(g->host, &ev.header);
     int64_t lat = now_ns(g) - t_read;
@@ -487,8 +483,10 @@ static void emit_angles(glove *g, const double *raw8, int64_t t_read)
     pthread_mutex_unlock(&g->lock);
 }
 
-static void on_record(glove *g, const double *raw8, bool plugged, int errc, int64_t t)
+static void on_record(glove *g, const fpg_unit *u, int64_t t)
 {
+    bool plugged = u->plugged;
+    int errc = u->errc;
     g->last_record_ns = t;
     g->units++;
     pthread_mutex_lock(&g->lock);
@@ -518,7 +516,7 @@ static void on_record(glove *g, const double *raw8, bool plugged, int errc, int6
         g->unplugged = false;
         push_status(g, FP_STATUS_CONNECTED, "glove plugged into its box again");
     }
-    emit_angles(g, raw8, t);
+    emit_angles(g, u, t);
 }
 
 /* A bare error message `e` X 0x00 (no record): the box is alive. */
@@ -554,125 +552,27 @@ static void on_noise(glove *g, size_t n)
     pthread_mutex_unlock(&g->lock);
 }
 
-/* Try to decode one 8-bit unit at a[0..len). Returns >0 bytes consumed, 0 need more,
- * -1 not a unit here (skip a byte). */
-static int decode8(glove *g, const uint8_t *a, size_t len, int64_t t)
-{
-    const size_t n = (size_t)g->sensors;
-    const size_t body = 1 + n + (g->ts_on ? 5 : 0) + (g->status_on ? 1 : 0);
-    if (a[0] == 'e') {   /* a bare error: `e` X 0x00 */
-        if (len < 3)
-            return 0;
-        if (a[2] != 0 || !strchr("?gsny", a[1]) || a[1] == 0)
-            return -1;
-        on_bare_error(g, a[1], t);
-        return 3;
-    }
-    if (a[0] != 'S' && a[0] != 'G')
-        return -1;
-    size_t avail = len < 1 + n ? len : 1 + n;
-    for (size_t i = 1; i < avail; i++)
-        if (a[i] == 0)
-            return -1;
-    if (len < body + 1)
-        return 0;
-    int errc = 0;
-    size_t used;
-    if (a[body] == 0) {
-        used = body + 1;
-    } else if (a[body] == 'e') {
-        if (len < body + 3)
-            return 0;
-        if ((a[body + 1] != 'g' && a[body + 1] != 's') || a[body + 2] != 0)
-            return -1;
-        errc = a[body + 1];
-        used = body + 3;
-    } else {
-        return -1;
-    }
-    double raw[FPG_SENSORS];
-    for (size_t i = 0; i < n; i++)
-        raw[i] = a[1 + i];
-    bool plugged = g->status_on ? (a[body - 1] & 1) != 0 : true;
-    on_record(g, raw, plugged, errc, t);
-    return (int)used;
-}
+/* The decoder's units, as they come (glove_decode.h). */
+typedef struct feed_ctx {
+    glove *g;
+    int64_t t;
+} feed_ctx;
 
-static bool ts_char(uint8_t c) { return (c >= '0' && c <= '9') || c == ':' || c == ' ' || c == '.'; }
-
-/* 16-bit frame: 0D 0A 00, ASCII timestamp (8..16 chars of digits and ':'), 'S', 22 x BE16. */
-static int decode16(glove *g, const uint8_t *a, size_t len, int64_t t)
+static void on_unit(void *user, const fpg_unit *u)
 {
-    static const uint8_t hdr[3] = {0x0D, 0x0A, 0x00};
-    for (size_t i = 0; i < 3; i++) {
-        if (i >= len)
-            return 0;
-        if (a[i] != hdr[i])
-            return -1;
-    }
-    size_t k = 3;
-    for (; k < len && k < 3 + 17; k++) {
-        if (a[k] == 'S')
-            break;
-        if (!ts_char(a[k]))
-            return -1;
-    }
-    if (k >= 3 + 17)
-        return -1;
-    if (k >= len)
-        return 0;
-    if (k - 3 < 8)
-        return -1;
-    size_t need = k + 1 + 2 * FPG_SENSORS;
-    if (len < need)
-        return 0;
-    double raw[FPG_SENSORS];
-    for (int i = 0; i < FPG_SENSORS; i++) {
-        unsigned v = (unsigned)a[k + 1 + 2 * i] << 8 | a[k + 2 + 2 * i];
-        if (v < 1 || v > 4094)
-            return -1;
-        raw[i] = v / 16.0;
-    }
-    on_record(g, raw, true, 0, t);
-    return (int)need;
+    feed_ctx *c = user;
+    if (u->kind == FPG_UNIT_RECORD)
+        on_record(c->g, u, c->t);
+    else if (u->kind == FPG_UNIT_ERROR)
+        on_bare_error(c->g, (uint8_t)u->errc, c->t);
+    else
+        on_noise(c->g, u->noise);
 }
 
 static void feed(glove *g, const uint8_t *data, size_t n, int64_t t)
 {
-    while (n) {
-        size_t take = ACC_CAP - g->len;
-        if (take > n)
-            take = n;
-        memcpy(g->acc + g->len, data, take);
-        g->len += take;
-        data += take;
-        n -= take;
-        size_t pos = 0, skipped = 0;
-        while (pos < g->len) {
-            int r = g->bits == 16 ? decode16(g, g->acc + pos, g->len - pos, t)
-                                  : decode8(g, g->acc + pos, g->len - pos, t);
-            if (r == 0)
-                break;
-            if (r < 0) {
-                pos++;
-                skipped++;
-                continue;
-            }
-            if (skipped) {
-                on_noise(g, skipped);
-                skipped = 0;
-            }
-            pos += (size_t)r;
-        }
-        if (skipped)
-            on_noise(g, skipped);
-        memmove(g->acc, g->acc + pos, g->len - pos);
-        g->len -= pos;
-        if (g->len == ACC_CAP) {   /* cannot happen with well-formed limits; stay safe */
-            on_noise(g, g->len);
-            g->len = 0;
-        }
-    }
+    feed_ctx c = {g, t};
+    fpg_decoder_feed(&g->dec, data, n, on_unit, &c);
 }
 
 /* ------------------------------------------------------------------------------------- */

@@ -9,6 +9,7 @@
 
 #include <errno.h>
 #include <math.h>
+#include <stdbool.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -28,6 +29,12 @@ void fpg_cal_default(fpg_cal *cal)
         cal->offset[i] = (float)(-g);
     }
     cal->used = (1u << FPG_SENSORS) - 1u;
+}
+
+/* True when v is finite and stays finite as a float (what the calibration stores). */
+static bool finite_float(double v)
+{
+    return isfinite(v) && isfinite((float)v);
 }
 
 /* Strip comments and whitespace; returns the first non-blank char or NULL when empty. */
@@ -129,6 +136,11 @@ int fpg_cal_load(const char *path, fpg_cal *cal, char *err, size_t errlen)
             }
             int s_idx = FPG_ASR_LINE_SENSOR[rows];
             double g = (v[2] - v[0]) / (v[3] - v[1]);
+            if (!finite_float(g) || !finite_float(v[0] - g * v[1])) {
+                rc = fp_errorf(err, errlen, -EINVAL, "%s:%d: gain or offset beyond float range",
+                               path, lineno);
+                goto out;
+            }
             cal->gain[s_idx] = (float)g;
             cal->offset[s_idx] = (float)(v[0] - g * v[1]);
             if (g != 0.0)
@@ -164,6 +176,11 @@ int fpg_cal_load(const char *path, fpg_cal *cal, char *err, size_t errlen)
             }
             if (seen & (1u << idx)) {
                 rc = fp_errorf(err, errlen, -EINVAL, "%s:%d: sensor %ld given twice", path, lineno, idx);
+                goto out;
+            }
+            if (!finite_float(g) || !finite_float(o)) {
+                rc = fp_errorf(err, errlen, -EINVAL, "%s:%d: GAIN or OFFSET beyond float range",
+                               path, lineno);
                 goto out;
             }
             seen |= 1u << idx;

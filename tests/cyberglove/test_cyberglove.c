@@ -585,6 +585,42 @@ static void test_calibration_gain_and_default(void **state)
     unlink(calpath);
 }
 
+/* A gain whose angle leaves float range: the plugin pushes that sensor as invalid, never
+ * an infinite angle (issue 16). */
+static void test_calibration_never_infinite(void **state)
+{
+    (void)state;
+    char calpath[256];
+    snprintf(calpath, sizeof calpath, "%s/huge.cal", tmpdir);
+    FILE *cf = fopen(calpath, "w");
+    assert_non_null(cf);
+    fputs("0 3e38 0\n", cf); /* finite as a float, but 3e38 x raw 100 is not */
+    fclose(cf);
+    fp_gloveemu *e = emu_new((fp_gloveemu_options){0}, "g6i");
+    uint8_t raw[22];
+    memset(raw, 100, sizeof raw);
+    fp_gloveemu_set_raw(e, raw);
+    fake_host *f = fh_new();
+    fp_input *in = NULL;
+    char err[256], cal_kv[300];
+    snprintf(cal_kv, sizeof cal_kv, "cal=%s", calpath);
+    assert_int_equal(create_input(f, fp_gloveemu_path(e), &in, err, sizeof err, cal_kv,
+                                  (char *)NULL), 0);
+    start_input(in);
+    long end = fh_wait_angles(f, 0, 3, WAIT_MS);
+    assert_true(end > 0);
+    for (long i = 0; i < end; i++) {
+        fp_event ev = fh_get(f, (size_t)i);
+        if (ev.header.type != FP_EVENT_JOINT_ANGLES) continue;
+        assert_int_equal(ev.angles.valid, 0x3FFFFEu);
+        for (int k = 0; k < 22; k++) assert_true(isfinite(ev.angles.radians[k]));
+    }
+    stop_input(&in);
+    fh_free(f);
+    fp_gloveemu_destroy(&e);
+    unlink(calpath);
+}
+
 /* Glove unplugged from its box and plugged back. */
 static void test_fault_unplug(void **state)
 {
@@ -989,6 +1025,7 @@ int main(void)
         cmocka_unit_test(test_sixteen_bit),
         cmocka_unit_test(test_calibration_asr_by_hand),
         cmocka_unit_test(test_calibration_gain_and_default),
+        cmocka_unit_test(test_calibration_never_infinite),
         cmocka_unit_test(test_fault_unplug),
         cmocka_unit_test(test_fault_cable_pull),
         cmocka_unit_test(test_fault_garbage_resync),
