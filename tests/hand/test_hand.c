@@ -20,6 +20,7 @@
 
 #include "fp_hand.h"
 #include "handcheck.h"
+#include "fp_test_support.h"
 #include "leapcsv.h"
 
 #define PI 3.14159265358979323846
@@ -350,12 +351,6 @@ static void test_fit(void **state)
     assert_int_equal(fp_hand_fit_size(&m, (const float(*)[21][3])frames, 0, &s), FP_HAND_EINVAL);
 }
 
-static const char *shared_data(void)
-{
-    const char *d = getenv("FP_SHARED_DATA");
-    return d && *d ? d : "../shared/data";
-}
-
 static void write_file(const char *path, const char *text)
 {
     FILE *f = fopen(path, "w");
@@ -417,7 +412,7 @@ static void test_csv_errors(void **state)
     assert_float_equal(rows[0].degrees[FP_SENSOR_PINKIE_RING_AB], 18, 0);
     free(rows);
     /* The joints reader names the column of a bad value. */
-    snprintf(text, sizeof text, "%s/hands/leap-motion/grab_joints_mm.csv", shared_data());
+    snprintf(text, sizeof text, "%s/hands/leap-motion/grab_joints_mm.csv", fp_test_data_dir());
     FILE *in = fopen(text, "r");
     assert_non_null(in);
     char line1[4096], line2[4096];
@@ -452,8 +447,8 @@ static void test_leap_recordings(void **state)
     int hands = 0;
     for (int r = 0; r < 4; r++) {
         char jp[1024], ap[1024], err[512];
-        snprintf(jp, sizeof jp, "%s/hands/leap-motion/%s_joints_mm.csv", shared_data(), recs[r]);
-        snprintf(ap, sizeof ap, "%s/hands/leap-motion/%s_cyberglove_like_angles_deg.csv", shared_data(), recs[r]);
+        snprintf(jp, sizeof jp, "%s/hands/leap-motion/%s_joints_mm.csv", fp_test_data_dir(), recs[r]);
+        snprintf(ap, sizeof ap, "%s/hands/leap-motion/%s_cyberglove_like_angles_deg.csv", fp_test_data_dir(), recs[r]);
         fp_handcheck_hand h[4], hs[4];
         size_t n = 0, ns = 0;
         fp_handcheck_options geo = {FP_HANDCHECK_FIT_GEOMETRY, 0}, size = {FP_HANDCHECK_FIT_SIZE, 0};
