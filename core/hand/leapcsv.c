@@ -59,17 +59,8 @@ typedef struct reader {
     size_t errlen;
 } reader;
 
-/* "PATH:LINE:COL: reason", or "PATH: reason" when line is 0. Returns code. */
-__attribute__((format(printf, 5, 6)))
-static int fail(reader *r, int code, long line, long col, const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    fp_verrorf(r->err, r->errlen, code, fmt, ap);
-    va_end(ap);
-    if (line > 0) return fp_error_prefix(r->err, r->errlen, code, "%s:%ld:%ld", r->path, line, col);
-    return fp_error_prefix(r->err, r->errlen, code, "%s", r->path);
-}
+/* "PATH:LINE:COL: reason", or "PATH: reason" when line is 0 (fp_error_at). Returns code. */
+#define fail(r, code, line, col, ...) fp_error_at((r)->err, (r)->errlen, code, (r)->path, line, col, __VA_ARGS__)
 
 /* Fields of one line, split at commas in place (no quoting in these files). One more than
  * the widest format is stored, so that the first extra field of a too-long line has a column. */
@@ -313,14 +304,16 @@ static void *collect_next(collect *c)
     return slot;
 }
 
+/* The four lead columns, which both row types start with. */
+#define COPY_LEAD(row, in) \
+    ((row)->frame = (in)->frame, (row)->timestamp_us = (in)->timestamp_us, \
+     (row)->hand_id = (in)->hand_id, (row)->side = (in)->side)
+
 static int on_joints(void *user, const fp_leapcsv_row *in, char *err, size_t errlen)
 {
     fp_leap_joints_row *row = collect_next(user);
     if (!row) return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", in->path);
-    row->frame = in->frame;
-    row->timestamp_us = in->timestamp_us;
-    row->hand_id = in->hand_id;
-    row->side = in->side;
+    COPY_LEAD(row, in);
     for (int k = 0; k < 3; k++) {
         row->palm_mm[k] = in->valuef[k];
         row->normal[k] = in->valuef[3 + k];
@@ -338,10 +331,7 @@ static int on_angles(void *user, const fp_leapcsv_row *in, char *err, size_t err
 {
     fp_leap_angles_row *row = collect_next(user);
     if (!row) return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", in->path);
-    row->frame = in->frame;
-    row->timestamp_us = in->timestamp_us;
-    row->hand_id = in->hand_id;
-    row->side = in->side;
+    COPY_LEAD(row, in);
     row->valid = in->valid;
     for (int i = 0; i < FP_GLOVE_SENSORS; i++) row->degrees[i] = in->valuef[i];
     return 0;

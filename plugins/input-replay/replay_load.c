@@ -82,16 +82,8 @@ static replay_item *push_item(loader *L)
     return it;
 }
 
-__attribute__((format(printf, 5, 6)))
-static int fail(loader *L, int code, long line, long col, const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    fp_verrorf(L->err, L->errlen, code, fmt, ap);
-    va_end(ap);
-    if (line > 0) return fp_error_prefix(L->err, L->errlen, code, "%s:%ld:%ld", L->path, line, col);
-    return fp_error_prefix(L->err, L->errlen, code, "%s", L->path);
-}
+/* "PATH:LINE:COL: reason", or "PATH: reason" when line is 0 (fp_error_at). */
+#define fail(L, code, line, col, ...) fp_error_at((L)->err, (L)->errlen, code, (L)->path, line, col, __VA_ARGS__)
 
 static int oom(loader *L)
 {

@@ -372,34 +372,56 @@ static void test_calibration_asr_by_hand(void **state)
     fp_gloveemu_destroy(&e);
 }
 
+/* A glove whose sensors send raw[], read through the calibration text cal_text, until three
+ * angle events have come. Fills *run; returns the index just past the third. */
+typedef struct cal_run {
+    char calpath[256];
+    fp_gloveemu *e;
+    fp_test_host *f;
+    fp_input *in;
+} cal_run;
+
+static long start_with_cal(cal_run *run, const char *name, const char *cal_text,
+                           const uint8_t raw[22])
+{
+    snprintf(run->calpath, sizeof run->calpath, "%s/%s.cal", tmpdir, name);
+    fp_test_write_file(run->calpath, cal_text);
+    run->e = emu_new((fp_gloveemu_options){0}, name);
+    fp_gloveemu_set_raw(run->e, raw);
+    run->f = fp_test_host_new(0);
+    run->in = NULL;
+    char err[256], cal_kv[300];
+    snprintf(cal_kv, sizeof cal_kv, "cal=%s", run->calpath);
+    assert_int_equal(create_input(run->f, fp_gloveemu_path(run->e), &run->in, err, sizeof err,
+                                  cal_kv, (char *)NULL), 0);
+    start_input(run->in);
+    long end = fp_test_host_wait_angles(run->f, 0, 3, WAIT_MS);
+    assert_true(end > 0);
+    return end;
+}
+
+static void finish_cal(cal_run *run)
+{
+    stop_input(&run->in);
+    fp_test_host_free(run->f);
+    fp_gloveemu_destroy(&run->e);
+    unlink(run->calpath);
+}
+
 /* The gain/offset format and the default map, by hand. */
 static void test_calibration_gain_and_default(void **state)
 {
     (void)state;
-    char calpath[256];
-    snprintf(calpath, sizeof calpath, "%s/gain.cal", tmpdir);
-    FILE *cf = fopen(calpath, "w");
-    assert_non_null(cf);
-    fputs("# sensor gain offset (radians)\n0 0.01 -0.5\n\n21 -0.02 1.0   # wrist yaw\n", cf);
-    fclose(cf);
-    fp_gloveemu *e = emu_new((fp_gloveemu_options){0}, "g6");
     uint8_t raw[22];
     memset(raw, 128, sizeof raw);
     raw[0] = 100;
     raw[21] = 50;
     raw[1] = 1;
     raw[2] = 254;
-    fp_gloveemu_set_raw(e, raw);
-    fp_test_host *f = fp_test_host_new(0);
-    fp_input *in = NULL;
-    char err[256], cal_kv[300];
-    snprintf(cal_kv, sizeof cal_kv, "cal=%s", calpath);
-    assert_int_equal(create_input(f, fp_gloveemu_path(e), &in, err, sizeof err, cal_kv,
-                                  (char *)NULL), 0);
-    start_input(in);
-    long end = fp_test_host_wait_angles(f, 0, 3, WAIT_MS);
-    assert_true(end > 0);
-    fp_event ev = fp_test_host_get(f, (size_t)end - 1);
+    cal_run run;
+    long end = start_with_cal(&run, "g6", "# sensor gain offset (radians)\n0 0.01 -0.5\n\n"
+                              "21 -0.02 1.0   # wrist yaw\n", raw);
+    fp_event ev = fp_test_host_get(run.f, (size_t)end - 1);
     assert_float_equal(ev.angles.radians[0], 0.5, 1e-5);
     assert_float_equal(ev.angles.radians[21], 0.0, 1e-5);
     /* unlisted sensors keep the default map: raw 1 -> 0, raw 254 -> pi/2, 128 -> 127/253 */
@@ -407,10 +429,7 @@ static void test_calibration_gain_and_default(void **state)
     assert_float_equal(ev.angles.radians[2], M_PI / 2, 1e-5);
     assert_float_equal(ev.angles.radians[5], (127.0 / 253.0) * M_PI / 2, 1e-5);
     assert_int_equal(ev.angles.valid, 0x3FFFFFu);
-    stop_input(&in);
-    fp_test_host_free(f);
-    fp_gloveemu_destroy(&e);
-    unlink(calpath);
+    finish_cal(&run);
 }
 
 /* A gain whose angle leaves float range: the plugin pushes that sensor as invalid, never
@@ -418,35 +437,17 @@ static void test_calibration_gain_and_default(void **state)
 static void test_calibration_never_infinite(void **state)
 {
     (void)state;
-    char calpath[256];
-    snprintf(calpath, sizeof calpath, "%s/huge.cal", tmpdir);
-    FILE *cf = fopen(calpath, "w");
-    assert_non_null(cf);
-    fputs("0 3e38 0\n", cf); /* finite as a float, but 3e38 x raw 100 is not */
-    fclose(cf);
-    fp_gloveemu *e = emu_new((fp_gloveemu_options){0}, "g6i");
     uint8_t raw[22];
     memset(raw, 100, sizeof raw);
-    fp_gloveemu_set_raw(e, raw);
-    fp_test_host *f = fp_test_host_new(0);
-    fp_input *in = NULL;
-    char err[256], cal_kv[300];
-    snprintf(cal_kv, sizeof cal_kv, "cal=%s", calpath);
-    assert_int_equal(create_input(f, fp_gloveemu_path(e), &in, err, sizeof err, cal_kv,
-                                  (char *)NULL), 0);
-    start_input(in);
-    long end = fp_test_host_wait_angles(f, 0, 3, WAIT_MS);
-    assert_true(end > 0);
+    cal_run run; /* 3e38 is finite as a float, but 3e38 x raw 100 is not */
+    long end = start_with_cal(&run, "g6i", "0 3e38 0\n", raw);
     for (long i = 0; i < end; i++) {
-        fp_event ev = fp_test_host_get(f, (size_t)i);
+        fp_event ev = fp_test_host_get(run.f, (size_t)i);
         if (ev.header.type != FP_EVENT_JOINT_ANGLES) continue;
         assert_int_equal(ev.angles.valid, 0x3FFFFEu);
         for (int k = 0; k < 22; k++) assert_true(isfinite(ev.angles.radians[k]));
     }
-    stop_input(&in);
-    fp_test_host_free(f);
-    fp_gloveemu_destroy(&e);
-    unlink(calpath);
+    finish_cal(&run);
 }
 
 /* Glove unplugged from its box and plugged back. */
@@ -737,14 +738,6 @@ static void expect_create_error(const char *arg, const char *kv, const char *mus
     fp_test_host_free(f);
 }
 
-static void write_file(const char *path, const char *text)
-{
-    FILE *fp = fopen(path, "w");
-    assert_non_null(fp);
-    fputs(text, fp);
-    fclose(fp);
-}
-
 static void test_bad_spec_and_cal(void **state)
 {
     (void)state;
@@ -761,22 +754,22 @@ static void test_bad_spec_and_cal(void **state)
     snprintf(p, sizeof p, "%s/bad.cal", tmpdir);
     snprintf(kv, sizeof kv, "cal=%s", p);
     /* asr: line 3 malformed */
-    write_file(p, "0.3:46 -0.5:164\n0.9:73 -0.7:181\n-0.5:216 oops\n");
+    fp_test_write_file(p, "0.3:46 -0.5:164\n0.9:73 -0.7:181\n-0.5:216 oops\n");
     snprintf(want, sizeof want, "%s:3:", p);
     expect_create_error("/dev/null", kv, want);
     /* asr: raw1 == raw2 on line 2 */
-    write_file(p, "0.3:46 -0.5:164\n0.9:73 -0.7:73\n");
+    fp_test_write_file(p, "0.3:46 -0.5:164\n0.9:73 -0.7:73\n");
     snprintf(want, sizeof want, "%s:2: raw1 equals raw2", p);
     expect_create_error("/dev/null", kv, want);
     /* asr: too few lines */
-    write_file(p, "0.3:46 -0.5:164\n0.9:73 -0.7:181\n");
+    fp_test_write_file(p, "0.3:46 -0.5:164\n0.9:73 -0.7:181\n");
     snprintf(want, sizeof want, "only 2 of 22");
     expect_create_error("/dev/null", kv, want);
     /* gain format: sensor out of range on line 2, and NaN gain on line 1 */
-    write_file(p, "0 0.01 0\n22 0.01 0\n");
+    fp_test_write_file(p, "0 0.01 0\n22 0.01 0\n");
     snprintf(want, sizeof want, "%s:2: sensor 22", p);
     expect_create_error("/dev/null", kv, want);
-    write_file(p, "5 nan 0\n");
+    fp_test_write_file(p, "5 nan 0\n");
     snprintf(want, sizeof want, "%s:1:", p);
     expect_create_error("/dev/null", kv, want);
     unlink(p);

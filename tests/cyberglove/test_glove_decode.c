@@ -21,6 +21,7 @@
 #include <unistd.h>
 
 #include "glove_cal.h"
+#include "fp_test_support.h"
 #include "glove_decode.h"
 
 #define MAX_UNITS 64
@@ -245,14 +246,6 @@ static void test_angles_finite(void **state)
     for (int i = 0; i < FPG_SENSORS; i++) assert_true(isfinite(rad[i]));
 }
 
-static void write_file(const char *path, const char *text)
-{
-    FILE *f = fopen(path, "w");
-    assert_non_null(f);
-    fputs(text, f);
-    fclose(f);
-}
-
 static void test_cal_beyond_float(void **state)
 {
     (void)state;
@@ -260,21 +253,21 @@ static void test_cal_beyond_float(void **state)
     assert_non_null(mkdtemp(dir));
     snprintf(path, sizeof path, "%s/g.cal", dir);
     fpg_cal cal;
-    write_file(path, "0 0.01 0\n3 1e39 0\n");
+    fp_test_write_file(path, "0 0.01 0\n3 1e39 0\n");
     assert_int_equal(fpg_cal_load(path, &cal, err, sizeof err), -EINVAL);
     snprintf(want, sizeof want, "%s:2: GAIN or OFFSET beyond float range", path);
     assert_string_equal(err, want);
-    write_file(path, "# offsets too\n\n4 0.01 -5e38\n");
+    fp_test_write_file(path, "# offsets too\n\n4 0.01 -5e38\n");
     assert_int_equal(fpg_cal_load(path, &cal, err, sizeof err), -EINVAL);
     snprintf(want, sizeof want, "%s:3: GAIN or OFFSET beyond float range", path);
     assert_string_equal(err, want);
     /* asr two-point: a slope beyond float range on line 2 */
-    write_file(path, "0.3:46 -0.5:164\n0:46 1e39:47\n");
+    fp_test_write_file(path, "0.3:46 -0.5:164\n0:46 1e39:47\n");
     assert_int_equal(fpg_cal_load(path, &cal, err, sizeof err), -EINVAL);
     snprintf(want, sizeof want, "%s:2: gain or offset beyond float range", path);
     assert_string_equal(err, want);
     /* the largest float still loads */
-    write_file(path, "3 3.4e38 0\n");
+    fp_test_write_file(path, "3 3.4e38 0\n");
     assert_int_equal(fpg_cal_load(path, &cal, err, sizeof err), 0);
     assert_true(cal.gain[3] > 3e38f && isfinite(cal.gain[3]));
     unlink(path);

@@ -351,14 +351,6 @@ static void test_fit(void **state)
     assert_int_equal(fp_hand_fit_size(&m, (const float(*)[21][3])frames, 0, &s), FP_HAND_EINVAL);
 }
 
-static void write_file(const char *path, const char *text)
-{
-    FILE *f = fopen(path, "w");
-    assert_non_null(f);
-    fputs(text, f);
-    fclose(f);
-}
-
 static void test_csv_errors(void **state)
 {
     (void)state;
@@ -374,38 +366,38 @@ static void test_csv_errors(void **state)
     fp_leap_angles_row *rows = NULL;
     size_t n = 0;
     snprintf(text, sizeof text, "%s%s%s", hdr, good, "1,6,1,right,,1,2,3,4,5,6,7,8,x9,10,11,12,13,14,15,16,17,18,,,\n");
-    write_file(path, text);
+    fp_test_write_file(path, text);
     assert_int_equal(fp_leapcsv_read_angles(path, &rows, &n, err, sizeof err), -EBADMSG);
     assert_non_null(strstr(err, "a.csv:3:30: bad number \"x9\" in column middle_dip"));
     snprintf(text, sizeof text, "%s%s", hdr, "0,5,1,middle,,1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,,,\n");
-    write_file(path, text);
+    fp_test_write_file(path, text);
     assert_int_equal(fp_leapcsv_read_angles(path, &rows, &n, err, sizeof err), -EBADMSG);
     assert_non_null(strstr(err, "a.csv:2:7: unknown hand_type \"middle\""));
     snprintf(text, sizeof text, "%s%s", hdr, "0,5,1,right,,1,2\n");
-    write_file(path, text);
+    fp_test_write_file(path, text);
     assert_int_equal(fp_leapcsv_read_angles(path, &rows, &n, err, sizeof err), -EBADMSG);
     assert_non_null(strstr(err, "a.csv:2:17: expected 26 fields, found 7 (row too short)"));
-    write_file(path, "frame,timestamp_us,hand_id,hand_type,thumb_rot\n");
+    fp_test_write_file(path, "frame,timestamp_us,hand_id,hand_type,thumb_rot\n");
     assert_int_equal(fp_leapcsv_read_angles(path, &rows, &n, err, sizeof err), -EBADMSG);
     assert_non_null(strstr(err, "a.csv:1:47: header has 5 columns, expected 26"));
     /* one header column too many: named at the extra column, nothing read past the end */
     char want[256];
     snprintf(text, sizeof text, "%.*s,extra\n%s", (int)strlen(hdr) - 1, hdr, good);
-    write_file(path, text);
+    fp_test_write_file(path, text);
     assert_int_equal(fp_leapcsv_read_angles(path, &rows, &n, err, sizeof err), -EBADMSG);
     snprintf(want, sizeof want, "a.csv:1:%d: header has 27 columns, expected 26", (int)strlen(hdr) + 1);
     assert_non_null(strstr(err, want));
     /* beyond float range is not finite; times must not run backwards */
     snprintf(text, sizeof text, "%s%s", hdr, "0,5,1,right,,1e39,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,,,\n");
-    write_file(path, text);
+    fp_test_write_file(path, text);
     assert_int_equal(fp_leapcsv_read_angles(path, &rows, &n, err, sizeof err), -EBADMSG);
     assert_non_null(strstr(err, "a.csv:2:14: \"1e39\" in column thumb_mcp is not a finite number"));
     snprintf(text, sizeof text, "%s%s%s", hdr, good, "1,4,1,right,,1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,,,\n");
-    write_file(path, text);
+    fp_test_write_file(path, text);
     assert_int_equal(fp_leapcsv_read_angles(path, &rows, &n, err, sizeof err), -EBADMSG);
     assert_non_null(strstr(err, "a.csv:3:3: timestamp_us 4 goes backwards"));
     snprintf(text, sizeof text, "%s%s", hdr, good);
-    write_file(path, text);
+    fp_test_write_file(path, text);
     assert_int_equal(fp_leapcsv_read_angles(path, &rows, &n, err, sizeof err), 0);
     assert_int_equal(n, 1);
     assert_int_equal(rows[0].valid, 0x3FFFFFu & ~1u & ~(7u << 19));
@@ -424,7 +416,7 @@ static void test_csv_errors(void **state)
         c = strchr(c, ',') + 1;
     *c = 'q';
     snprintf(text, sizeof text, "%s%s", line1, line2);
-    write_file(path, text);
+    fp_test_write_file(path, text);
     fp_leap_joints_row *jr = NULL;
     assert_int_equal(fp_leapcsv_read_joints(path, &jr, &n, err, sizeof err), -EBADMSG);
     snprintf(want, sizeof want, "a.csv:2:%ld: bad number \"q", (long)(c - line2) + 1);

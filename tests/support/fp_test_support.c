@@ -44,6 +44,14 @@ const char *fp_test_face_path(void)
     return path;
 }
 
+void fp_test_write_file(const char *path, const char *text)
+{
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    assert_true(fputs(text, f) >= 0);
+    assert_int_equal(fclose(f), 0);
+}
+
 int64_t fp_test_mono_ns(void)
 {
     struct timespec ts;

@@ -28,6 +28,9 @@ const char *fp_test_plugin_dir(void);
 /** "<data>/faces/ict-facekit/generic_neutral_mesh.obj". */
 const char *fp_test_face_path(void);
 
+/** Write text to path (created or truncated). Fails the test when it cannot. */
+void fp_test_write_file(const char *path, const char *text);
+
 /** CLOCK_MONOTONIC in ns. */
 int64_t fp_test_mono_ns(void);
 /** Sleep ms milliseconds. */
