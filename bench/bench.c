@@ -7,6 +7,7 @@
 
 #include "csrbf.h"
 #include "fp_error.h"
+#include "fp_stats.h"
 
 #include <errno.h>
 #include <math.h>
@@ -24,18 +25,6 @@ static double now_ms(void)
     struct timespec t;
     clock_gettime(CLOCK_MONOTONIC, &t);
     return t.tv_sec * 1e3 + t.tv_nsec * 1e-6;
-}
-
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double median(double *v, int n)
-{
-    qsort(v, (size_t)n, sizeof *v, cmp_double);
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
 /* ------------------------------------------------------------------------ the set-up */
@@ -242,7 +231,7 @@ static double time_updates(deform_case *c, int count, int brute, double *times)
         double t1 = now_ms();
         if (it >= 0) times[it] = t1 - t0;
     }
-    return median(times, count);
+    return fp_median(times, (size_t)count);
 }
 
 /* One (grid, R, mode) measurement: engine median, brute-force median, one row. */
@@ -360,21 +349,21 @@ static int case_centres(const bench_opts *o)
             rc = csrbf_solver_set_start_points(s, n, st);
             times[it] = now_ms() - t0;
         }
-        double ms_factor = median(times, reps_f);
+        double ms_factor = fp_median(times, (size_t)reps_f);
         for (int it = 0; it < reps_f && rc >= 0; it++) {
             for (size_t i = 0; i < 3 * n; i++) en[i] = st[i] + 0.3f * (float)sin(0.1 * (double)(i + 7 * it));
             double t0 = now_ms();
             rc = csrbf_solver_solve(s, n, st, en);
             times[it] = now_ms() - t0;
         }
-        double ms_fresh = median(times, reps_f);
+        double ms_fresh = fp_median(times, (size_t)reps_f);
         for (int it = -5; it < reps_u && rc >= 0; it++) {
             for (size_t i = 0; i < 3 * n; i++) en[i] = st[i] + 0.3f * (float)sin(0.1 * (double)(i + 7 * it));
             double t0 = now_ms();
             rc = csrbf_solver_set_end_points(s, en);
             if (it >= 0) times[it] = now_ms() - t0;
         }
-        double ms_reused = median(times, reps_u);
+        double ms_reused = fp_median(times, (size_t)reps_u);
         if (rc < 0) {
             fprintf(stderr, "bench: engine call failed: %s\n", csrbf_solver_message(s));
             csrbf_solver_destroy(&s);

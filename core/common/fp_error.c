@@ -61,3 +61,16 @@ int fp_error_prefix(char *err, size_t errlen, int code, const char *fmt, ...)
     if (n >= 0 && (size_t)n < errlen && old[0]) snprintf(err + n, errlen - (size_t)n, ": %s", old);
     return code;
 }
+
+int fp_error_at(char *err, size_t errlen, int code, const char *path, long line, long col,
+                const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    fp_verrorf(err, errlen, code, fmt, ap);
+    va_end(ap);
+    if (line > 0 && col > 0)
+        return fp_error_prefix(err, errlen, code, "%s:%ld:%ld", path, line, col);
+    if (line > 0) return fp_error_prefix(err, errlen, code, "%s:%ld", path, line);
+    return fp_error_prefix(err, errlen, code, "%s", path);
+}

@@ -60,6 +60,12 @@ int fp_verrorf(char *err, size_t errlen, int code, const char *fmt, va_list ap);
 int fp_error_prefix(char *err, size_t errlen, int code, const char *fmt, ...)
     __attribute__((format(printf, 4, 5)));
 
+/** The project's message for a place in a file: "PATH:LINE:COL: text" (line > 0, col > 0),
+ *  "PATH:LINE: text" (col <= 0) or "PATH: text" (line <= 0), written like fp_errorf.
+ *  Returns `code`. */
+int fp_error_at(char *err, size_t errlen, int code, const char *path, long line, long col,
+                const char *fmt, ...) __attribute__((format(printf, 7, 8)));
+
 #ifdef __cplusplus
 }
 #endif

@@ -5,6 +5,7 @@
  */
 #define _GNU_SOURCE
 #include "fp_eventlog.h"
+#include "fp_error.h"
 
 #include <errno.h>
 #include <inttypes.h>
@@ -45,14 +46,8 @@ static size_t type_size(int type)
     }
 }
 
-static void put_msg(char *buf, size_t len, const char *fmt, ...)
-{
-    if (!buf || len == 0) return;
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(buf, len, fmt, ap);
-    va_end(ap);
-}
+/* A message for a caller's buffer (core/common/fp_error.h). */
+#define put_msg(buf, len, ...) ((void)fp_errorf((buf), (len), 0, __VA_ARGS__))
 
 /* The C locale, created once per object (newlocale is cheap and thread-safe). */
 static locale_t c_locale_new(void)
@@ -139,13 +134,11 @@ static int lb_floats(line_buf *b, const float *v, int n)
 
 static int writer_fail(fp_eventlog_writer *w, int code, const char *fmt, ...)
 {
-    int n = snprintf(w->error, sizeof w->error, "%s: ", w->path);
-    if (n < 0 || (size_t)n >= sizeof w->error) return code;
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(w->error + n, sizeof w->error - (size_t)n, fmt, ap);
+    fp_verrorf(w->error, sizeof w->error, code, fmt, ap);
     va_end(ap);
-    return code;
+    return fp_error_prefix(w->error, sizeof w->error, code, "%s", w->path);
 }
 
 static int write_line(fp_eventlog_writer *w, const char *s, size_t n)
@@ -335,17 +328,14 @@ static int read_line(fp_eventlog_reader *r, size_t *len)
 /* A syntax error at column `col` (1-based) of the current line. */
 static int reader_fail(fp_eventlog_reader *r, int code, long col, const char *fmt, ...)
 {
-    int n;
+    va_list ap;
+    va_start(ap, fmt);
+    fp_verrorf(r->error, sizeof r->error, code, fmt, ap);
+    va_end(ap);
     if (col > 0)
-        n = snprintf(r->error, sizeof r->error, "%s:%ld:%ld: ", r->path, r->line_no, col);
+        fp_error_prefix(r->error, sizeof r->error, code, "%s:%ld:%ld", r->path, r->line_no, col);
     else
-        n = snprintf(r->error, sizeof r->error, "%s: ", r->path);
-    if (n >= 0 && (size_t)n < sizeof r->error) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(r->error + n, sizeof r->error - (size_t)n, fmt, ap);
-        va_end(ap);
-    }
+        fp_error_prefix(r->error, sizeof r->error, code, "%s", r->path);
     r->status = code;
     return code;
 }

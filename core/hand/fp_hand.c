@@ -105,13 +105,12 @@ static bool finite3f(const float v[3])
     return isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]);
 }
 
-/* Unit quaternion (w, x, y, z) -> rotation matrix; false if |q| < 1e-6. */
-static bool quat_to_mat(const float qf[4], mat3 r)
+int fp_hand_quat_to_mat(const float qf[4], double r[3][3])
 {
     double w = qf[0], x = qf[1], y = qf[2], z = qf[3];
     double n = sqrt(w * w + x * x + y * y + z * z);
-    if (!(n >= 1e-6))
-        return false;
+    if (!(n >= 1e-6) || !isfinite(n))
+        return -1;
     w /= n, x /= n, y /= n, z /= n;
     r[0][0] = 1 - 2 * (y * y + z * z);
     r[0][1] = 2 * (x * y - w * z);
@@ -122,11 +121,16 @@ static bool quat_to_mat(const float qf[4], mat3 r)
     r[2][0] = 2 * (x * z - w * y);
     r[2][1] = 2 * (y * z + w * x);
     r[2][2] = 1 - 2 * (x * x + y * y);
-    return true;
+    return 0;
 }
 
-/* Rotation matrix -> unit quaternion (Shepperd's method), w >= 0. */
-static void mat_to_quat(const mat3 r, float q[4])
+/* A matrix is a quaternion: fp_hand_quat_to_mat / fp_hand_mat_to_quat (fp_hand.h). */
+static bool quat_to_mat(const float qf[4], mat3 r)
+{
+    return fp_hand_quat_to_mat(qf, r) == 0;
+}
+
+void fp_hand_mat_to_quat(const double r[3][3], float q[4])
 {
     double t = r[0][0] + r[1][1] + r[2][2], w, x, y, z;
     if (t > 0) {
@@ -413,7 +417,7 @@ int fp_hand_frame_from_palm(const fp_hand_model *model, fp_hand_side side,
     mat_vec(r, pl, pl);
     for (int k = 0; k < 3; k++)
         wrist_pos_mm[k] = (float)(palm_mm[k] - pl[k]);
-    mat_to_quat(r, wrist_rot_wxyz);
+    fp_hand_mat_to_quat((const double (*)[3])r, wrist_rot_wxyz);
     return 0;
 }
 
@@ -587,7 +591,7 @@ int fp_hand_from_positions(const fp_hand_model *model, fp_hand_side side,
                                          (1u << FP_SENSOR_WRIST_YAW));
     for (int k = 0; k < 3; k++)
         out->wrist_pos_mm[k] = (float)org[k];
-    mat_to_quat(r, out->wrist_rot_wxyz);
+    fp_hand_mat_to_quat((const double (*)[3])r, out->wrist_rot_wxyz);
     return 0;
 }
 

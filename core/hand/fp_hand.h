@@ -189,6 +189,18 @@ int fp_hand_fit_size(const fp_hand_model *model, const float (*joints_mm)[FP_HAN
 int fp_hand_fit_geometry(fp_hand_model *model, fp_hand_side side,
                          const float (*joints_hand_mm)[FP_HAND_JOINTS][3], size_t n);
 
+/** [any-thread] Unit quaternion -> rotation matrix: q = (w, x, y, z) need not be unit (it is
+ *  normalised in double); r[i][j] is row i, column j, so r's columns are the rotated axes.
+ *  Returns 0, or -1 (r untouched) when |q| < 1e-6 or q is not finite. */
+int fp_hand_quat_to_mat(const float q_wxyz[4], double r[3][3]);
+
+/** [any-thread] Rotation matrix -> unit quaternion (w, x, y, z) with w >= 0, by Shepperd's
+ *  method (S. W. Shepperd, "Quaternion from rotation matrix", J. Guidance and Control 1(3),
+ *  1978): the largest of w, x, y, z is taken from the diagonal, the others from the
+ *  off-diagonal sums and differences, which stays accurate near 180-degree turns. r must be
+ *  a proper rotation (orthonormal, det +1; no check); r as in fp_hand_quat_to_mat. */
+void fp_hand_mat_to_quat(const double r[3][3], float q_wxyz[4]);
+
 #ifdef __cplusplus
 }
 #endif

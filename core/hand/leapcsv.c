@@ -1,314 +1,368 @@
 /*
- * leapcsv.c: reader of the Leap Motion recording CSVs (see leapcsv.h).
+ * leapcsv.c: the reader of the Leap Motion recording CSVs (see leapcsv.h).
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
-#define _POSIX_C_SOURCE 200809L
+#define _GNU_SOURCE
 #include "leapcsv.h"
 
+#include "fp_error.h"
+
 #include <errno.h>
+#include <float.h>
+#include <locale.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#define MAX_FIELDS 80
-
-static const char *const joints_header[] = {
-    "frame", "timestamp_us", "hand_id", "hand_type", "palm_x", "palm_y", "palm_z", "palm_nx",
-    "palm_ny", "palm_nz", "dir_x", "dir_y", "dir_z"};
+static const char *const lead_names[FP_LEAPCSV_LEAD] = {"frame", "timestamp_us", "hand_id",
+                                                        "hand_type"};
+static const char *const palm_names[9] = {"palm_x",  "palm_y", "palm_z", "palm_nx", "palm_ny",
+                                          "palm_nz", "dir_x",  "dir_y",  "dir_z"};
 static const char *const finger_names[FP_FINGERS] = {"thumb", "index", "middle", "ring", "pinky"};
-static const char *const joint_names[4] = {"mcp", "pip", "dip", "tip"};
-static const char *const angles_header[4 + FP_GLOVE_SENSORS] = {
-    "frame", "timestamp_us", "hand_id", "hand_type", "thumb_rotation", "thumb_mcp", "thumb_ip",
-    "thumb_abduction", "index_mcp", "index_pip", "index_dip", "middle_mcp", "middle_pip",
-    "middle_dip", "middle_index_abduction", "ring_mcp", "ring_pip", "ring_dip",
-    "ring_middle_abduction", "pinky_mcp", "pinky_pip", "pinky_dip", "pinky_ring_abduction",
-    "palm_arch", "wrist_pitch", "wrist_yaw"};
+static const char *const segment_names[4] = {"mcp", "pip", "dip", "tip"};
+static const char *const angle_names[FP_GLOVE_SENSORS] = {
+    "thumb_rotation", "thumb_mcp", "thumb_ip", "thumb_abduction", "index_mcp", "index_pip",
+    "index_dip", "middle_mcp", "middle_pip", "middle_dip", "middle_index_abduction", "ring_mcp",
+    "ring_pip", "ring_dip", "ring_middle_abduction", "pinky_mcp", "pinky_pip", "pinky_dip",
+    "pinky_ring_abduction", "palm_arch", "wrist_pitch", "wrist_yaw"};
+
+/* "thumb_mcp_x" .. "pinky_tip_z": built once per call into a caller's buffer. */
+static const char *joint_name(int k, char *buf, size_t len)
+{
+    snprintf(buf, len, "%s_%s_%c", finger_names[k / 12], segment_names[(k / 3) % 4], "xyz"[k % 3]);
+    return buf;
+}
+
+const char *fp_leapcsv_column_name(fp_leapcsv_format format, int i)
+{
+    static _Thread_local char buf[32];
+    if (i < 0) return "?";
+    if (i < FP_LEAPCSV_LEAD) return lead_names[i];
+    i -= FP_LEAPCSV_LEAD;
+    if (format == FP_LEAPCSV_ANGLES) return i < FP_GLOVE_SENSORS ? angle_names[i] : "?";
+    if (format != FP_LEAPCSV_JOINTS || i >= FP_LEAPCSV_JOINT_VALUES) return "?";
+    if (i < 9) return palm_names[i];
+    return joint_name(i - 9, buf, sizeof buf);
+}
+
+static int columns_of(fp_leapcsv_format format)
+{
+    return FP_LEAPCSV_LEAD + (format == FP_LEAPCSV_JOINTS ? FP_LEAPCSV_JOINT_VALUES : FP_GLOVE_SENSORS);
+}
 
 typedef struct reader {
     const char *path;
-    FILE *f;
-    char *line;
-    size_t cap;
-    long lineno;
-    char *field[MAX_FIELDS];
-    int nfield;
+    locale_t c_locale;
     char *err;
     size_t errlen;
 } reader;
 
-static int fail(reader *r, int code, int column, const char *name, const char *fmt, ...)
+/* "PATH:LINE:COL: reason", or "PATH: reason" when line is 0 (fp_error_at). Returns code. */
+#define fail(r, code, line, col, ...) fp_error_at((r)->err, (r)->errlen, code, (r)->path, line, col, __VA_ARGS__)
+
+/* Fields of one line, split at commas in place (no quoting in these files). One more than
+ * the widest format is stored, so that the first extra field of a too-long line has a column. */
+enum { MAX_STORED = FP_LEAPCSV_MAX_COLUMNS + 1 };
+typedef struct fields {
+    char *s[MAX_STORED];
+    long col[MAX_STORED];
+    int n; /* fields in the line, which may exceed MAX_STORED */
+} fields;
+
+static void split(char *line, fields *f)
 {
-    char msg[256];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(msg, sizeof msg, fmt, ap);
-    va_end(ap);
-    if (r->err && r->errlen) {
-        if (column > 0)
-            snprintf(r->err, r->errlen, "%s:%ld: column %d (%s): %s", r->path, r->lineno, column,
-                     name ? name : "?", msg);
-        else if (r->lineno > 0)
-            snprintf(r->err, r->errlen, "%s:%ld: %s", r->path, r->lineno, msg);
-        else
-            snprintf(r->err, r->errlen, "%s: %s", r->path, msg);
+    char *p = line;
+    f->n = 0;
+    for (;;) {
+        if (f->n < MAX_STORED) {
+            f->s[f->n] = p;
+            f->col[f->n] = (long)(p - line) + 1;
+        }
+        f->n++;
+        char *comma = strchr(p, ',');
+        if (!comma) break;
+        *comma = '\0';
+        p = comma + 1;
     }
-    return code;
 }
 
-/* Next line split at commas (no quoting in these files). 1: a line, 0: end of file. */
-static int next_line(reader *r)
+/* The column to blame for a wrong field count: the end of a short line, or the first extra
+ * field of a long one (always stored: want < MAX_STORED). */
+static long count_col(const fields *f, int want, long line_len)
 {
-    ssize_t len;
-    for (;;) {
-        errno = 0;
-        len = getline(&r->line, &r->cap, r->f);
-        if (len < 0)
-            return ferror(r->f) ? fail(r, -EIO, 0, NULL, "read error: %s", strerror(errno)) : 0;
-        r->lineno++;
-        while (len > 0 && (r->line[len - 1] == '\n' || r->line[len - 1] == '\r'))
-            r->line[--len] = '\0';
-        if (len > 0)
-            break; /* skip blank lines (a trailing newline at the end) */
-    }
-    r->nfield = 0;
-    char *p = r->line;
-    for (;;) {
-        if (r->nfield == MAX_FIELDS)
-            return fail(r, -EBADMSG, 0, NULL, "more than %d fields", MAX_FIELDS);
-        r->field[r->nfield++] = p;
-        char *c = strchr(p, ',');
-        if (!c)
-            break;
-        *c = '\0';
-        p = c + 1;
-    }
-    return 1;
+    return f->n < want ? line_len + 1 : f->col[want];
 }
 
-static int open_reader(reader *r, const char *path, char *err, size_t errlen)
+static int check_header(reader *r, fp_leapcsv_format want, fp_leapcsv_format *format, char *text)
 {
-    memset(r, 0, sizeof *r);
-    r->path = path;
-    r->err = err;
-    r->errlen = errlen;
-    r->f = fopen(path, "r");
-    if (!r->f)
-        return fail(r, errno ? -errno : -EIO, 0, NULL, "cannot open: %s", strerror(errno));
+    long len = (long)strlen(text);
+    fields f;
+    split(text, &f);
+    fp_leapcsv_format fmt = want;
+    if (fmt == FP_LEAPCSV_ANY)
+        fmt = f.n > FP_LEAPCSV_LEAD && strcmp(f.s[FP_LEAPCSV_LEAD], "palm_x") == 0 ? FP_LEAPCSV_JOINTS
+                                                                                  : FP_LEAPCSV_ANGLES;
+    int ncol = columns_of(fmt);
+    if (f.n != ncol)
+        return fail(r, -EBADMSG, 1, count_col(&f, ncol, len), "header has %d columns, expected %d",
+                    f.n, ncol);
+    for (int i = 0; i < ncol; i++) {
+        const char *name = fp_leapcsv_column_name(fmt, i);
+        if (strcmp(f.s[i], name) != 0)
+            return fail(r, -EBADMSG, 1, f.col[i], "header column %d is \"%s\", expected \"%s\"",
+                        i + 1, f.s[i], name);
+    }
+    *format = fmt;
     return 0;
 }
 
-static void close_reader(reader *r)
-{
-    if (r->f)
-        fclose(r->f);
-    free(r->line);
-}
-
-static int check_header(reader *r, const char *const *names, int count)
-{
-    int rc = next_line(r);
-    if (rc < 0)
-        return rc;
-    if (rc == 0)
-        return fail(r, -EBADMSG, 0, NULL, "empty file, expected a header line");
-    if (r->nfield != count)
-        return fail(r, -EBADMSG, 0, NULL, "header has %d columns, expected %d", r->nfield, count);
-    for (int i = 0; i < count; i++)
-        if (strcmp(r->field[i], names[i]) != 0)
-            return fail(r, -EBADMSG, i + 1, names[i], "header reads '%s'", r->field[i]);
-    return 0;
-}
-
-static int parse_long(reader *r, int i, const char *name, long *out)
+static int parse_int64(const char *s, long long *out)
 {
     char *end;
     errno = 0;
-    long v = strtol(r->field[i], &end, 10);
-    if (end == r->field[i] || *end || errno)
-        return fail(r, -EBADMSG, i + 1, name, "not an integer: '%s'", r->field[i]);
+    long long v = strtoll(s, &end, 10);
+    if (end == s || *end || errno) return -1;
     *out = v;
     return 0;
 }
 
-static int parse_i64(reader *r, int i, const char *name, int64_t *out)
+/* One data row: checks it and fills *row (lead columns, values, columns). */
+static int parse_row(reader *r, fp_leapcsv_format fmt, long line, char *text, fp_leapcsv_row *row,
+                     int have_ts)
 {
-    char *end;
-    errno = 0;
-    long long v = strtoll(r->field[i], &end, 10);
-    if (end == r->field[i] || *end || errno)
-        return fail(r, -EBADMSG, i + 1, name, "not an integer: '%s'", r->field[i]);
-    *out = (int64_t)v;
-    return 0;
-}
-
-/* 1: a number, 0: empty (allowed only if allow_empty), negative: error. */
-static int parse_float(reader *r, int i, const char *name, bool allow_empty, float *out)
-{
-    const char *s = r->field[i];
-    if (!*s) {
-        if (allow_empty)
-            return 0;
-        return fail(r, -EBADMSG, i + 1, name, "empty field");
-    }
-    char *end;
-    errno = 0;
-    double v = strtod(s, &end);
-    if (end == s || *end || errno == ERANGE || !isfinite(v) || !isfinite((float)v))
-        return fail(r, -EBADMSG, i + 1, name, "not a finite number: '%s'", s);
-    *out = (float)v;
-    return 1;
-}
-
-static int parse_side(reader *r, int i, fp_hand_side *side)
-{
-    if (strcmp(r->field[i], "left") == 0)
-        *side = FP_HAND_LEFT;
-    else if (strcmp(r->field[i], "right") == 0)
-        *side = FP_HAND_RIGHT;
+    int want = columns_of(fmt);
+    long len = (long)strlen(text);
+    fields f;
+    split(text, &f);
+    if (f.n < want)
+        return fail(r, -EBADMSG, line, count_col(&f, want, len),
+                    "expected %d fields, found %d (row too short)", want, f.n);
+    if (f.n > want)
+        return fail(r, -EBADMSG, line, count_col(&f, want, len),
+                    "expected %d fields, found %d (row too long)", want, f.n);
+    long long frame, ts, id;
+    if (parse_int64(f.s[0], &frame) || (long long)(long)frame != frame)
+        return fail(r, -EBADMSG, line, f.col[0], "bad frame number \"%s\"", f.s[0]);
+    if (parse_int64(f.s[1], &ts) || ts > INT64_MAX / 1000 || ts < INT64_MIN / 1000)
+        return fail(r, -EBADMSG, line, f.col[1], "bad timestamp_us \"%s\"", f.s[1]);
+    if (parse_int64(f.s[2], &id) || (long long)(long)id != id)
+        return fail(r, -EBADMSG, line, f.col[2], "bad hand_id \"%s\"", f.s[2]);
+    fp_hand_side side;
+    if (strcmp(f.s[3], "left") == 0)
+        side = FP_HAND_LEFT;
+    else if (strcmp(f.s[3], "right") == 0)
+        side = FP_HAND_RIGHT;
     else
-        return fail(r, -EBADMSG, i + 1, "hand_type", "expected 'left' or 'right', got '%s'", r->field[i]);
+        return fail(r, -EBADMSG, line, f.col[3], "unknown hand_type \"%s\" (left or right)", f.s[3]);
+    if (have_ts && ts < row->timestamp_us)
+        return fail(r, -EBADMSG, line, f.col[1],
+                    "timestamp_us %lld goes backwards (the row before has %lld)", ts,
+                    (long long)row->timestamp_us);
+    row->format = fmt;
+    row->line = line;
+    row->frame = (long)frame;
+    row->timestamp_us = ts;
+    row->hand_id = (long)id;
+    row->side = side;
+    row->nvalues = want - FP_LEAPCSV_LEAD;
+    row->valid = fmt == FP_LEAPCSV_JOINTS ? (1u << FP_GLOVE_SENSORS) - 1u : 0;
+    for (int i = 0; i < want; i++) row->col[i] = f.col[i];
+    for (int i = FP_LEAPCSV_LEAD; i < want; i++) {
+        int k = i - FP_LEAPCSV_LEAD;
+        const char *s = f.s[i];
+        row->value[k] = 0;
+        row->valuef[k] = 0;
+        if (!*s) {
+            if (fmt == FP_LEAPCSV_ANGLES) continue;
+            return fail(r, -EBADMSG, line, f.col[i], "empty field in column %s",
+                        fp_leapcsv_column_name(fmt, i));
+        }
+        char *end;
+        double v = strtod_l(s, &end, r->c_locale);
+        if (end == s || *end)
+            return fail(r, -EBADMSG, line, f.col[i], "bad number \"%s\" in column %s", s,
+                        fp_leapcsv_column_name(fmt, i));
+        if (!isfinite(v) || fabs(v) > FLT_MAX)
+            return fail(r, -EBADMSG, line, f.col[i], "\"%s\" in column %s is not a finite number",
+                        s, fp_leapcsv_column_name(fmt, i));
+        row->value[k] = v;
+        row->valuef[k] = strtof_l(s, NULL, r->c_locale);
+        if (!isfinite(row->valuef[k])) /* a value just above FLT_MAX that rounds up */
+            return fail(r, -EBADMSG, line, f.col[i], "\"%s\" in column %s is not a finite number",
+                        s, fp_leapcsv_column_name(fmt, i));
+        if (fmt == FP_LEAPCSV_ANGLES) row->valid |= 1u << k;
+    }
     return 0;
 }
 
-static int grow(reader *r, void **rows, size_t *cap, size_t n, size_t elem)
+static int read_whole(reader *r, char **data, size_t *len)
 {
-    if (n < *cap)
-        return 0;
-    size_t nc = *cap ? *cap * 2 : 256;
-    void *p = realloc(*rows, nc * elem);
-    if (!p)
-        return fail(r, -ENOMEM, 0, NULL, "out of memory");
-    *rows = p;
-    *cap = nc;
+    FILE *f = fopen(r->path, "rb");
+    if (!f) {
+        int e = errno;
+        return fail(r, -e, 0, 0, "cannot open: %s", strerror(e));
+    }
+    size_t cap = 1 << 16, n = 0;
+    char *buf = malloc(cap + 1);
+    while (buf) {
+        n += fread(buf + n, 1, cap - n, f);
+        if (n < cap) break;
+        char *bigger = realloc(buf, cap * 2 + 1);
+        if (!bigger) {
+            free(buf);
+            buf = NULL;
+            break;
+        }
+        buf = bigger;
+        cap *= 2;
+    }
+    int bad = ferror(f);
+    fclose(f);
+    if (!buf) return fail(r, -ENOMEM, 0, 0, "out of memory");
+    if (bad) {
+        free(buf);
+        return fail(r, -EIO, 0, 0, "cannot read");
+    }
+    buf[n] = '\0';
+    *data = buf;
+    *len = n;
+    return 0;
+}
+
+int fp_leapcsv_read(const char *path, fp_leapcsv_format want, fp_leapcsv_format *format,
+                    fp_leapcsv_row_fn fn, void *user, long *truncated_line, char *err,
+                    size_t errlen)
+{
+    reader r = {path ? path : "(null)", (locale_t)0, err, errlen};
+    if (truncated_line) *truncated_line = 0;
+    if (!path || !fn) return fail(&r, -EINVAL, 0, 0, "fp_leapcsv_read: NULL argument");
+    fp_leapcsv_row *row = calloc(1, sizeof *row);
+    r.c_locale = newlocale(LC_ALL_MASK, "C", (locale_t)0);
+    char *data = NULL;
+    size_t len = 0;
+    int rc = !row || r.c_locale == (locale_t)0 ? fail(&r, -ENOMEM, 0, 0, "out of memory")
+                                               : read_whole(&r, &data, &len);
+    fp_leapcsv_format fmt = FP_LEAPCSV_ANY;
+    long line = 0;
+    int have_ts = 0;
+    char *p = data, *end = data + len;
+    while (!rc && p < end) {
+        char *nl = memchr(p, '\n', (size_t)(end - p));
+        line++;
+        if (!nl) {
+            /* The last line has no newline: cut short (a crash, a copy cut off). */
+            if (line == 1) rc = fail(&r, -EBADMSG, 1, 1, "header line not terminated");
+            else if (truncated_line) *truncated_line = line;
+            break;
+        }
+        *nl = '\0';
+        size_t n = (size_t)(nl - p);
+        if (n > 0 && p[n - 1] == '\r') p[--n] = '\0';
+        if (strlen(p) != n) {
+            rc = fail(&r, -EBADMSG, line, (long)strlen(p) + 1, "NUL byte in line");
+            break;
+        }
+        if (line == 1) {
+            rc = check_header(&r, want, &fmt, p);
+        } else if (*p) { /* blank lines are skipped */
+            row->path = path;
+            rc = parse_row(&r, fmt, line, p, row, have_ts);
+            if (!rc) rc = fn(user, row, err, errlen);
+            have_ts = 1;
+        }
+        p = nl + 1;
+    }
+    if (!rc && line == 0) rc = fail(&r, -EBADMSG, 1, 1, "empty file, expected a header line");
+    if (!rc && format) *format = fmt;
+    free(data);
+    free(row);
+    if (r.c_locale != (locale_t)0) freelocale(r.c_locale);
+    return rc;
+}
+
+/* ------------------------------------------------------------------------------------- */
+/* Whole-file readers into row arrays                                                     */
+
+typedef struct collect {
+    void *rows;
+    size_t n, cap, elem;
+} collect;
+
+static void *collect_next(collect *c)
+{
+    if (c->n == c->cap) {
+        size_t nc = c->cap ? c->cap * 2 : 256;
+        void *p = realloc(c->rows, nc * c->elem);
+        if (!p) return NULL;
+        c->rows = p;
+        c->cap = nc;
+    }
+    void *slot = (char *)c->rows + c->n++ * c->elem;
+    memset(slot, 0, c->elem);
+    return slot;
+}
+
+/* The four lead columns, which both row types start with. */
+#define COPY_LEAD(row, in) \
+    ((row)->frame = (in)->frame, (row)->timestamp_us = (in)->timestamp_us, \
+     (row)->hand_id = (in)->hand_id, (row)->side = (in)->side)
+
+static int on_joints(void *user, const fp_leapcsv_row *in, char *err, size_t errlen)
+{
+    fp_leap_joints_row *row = collect_next(user);
+    if (!row) return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", in->path);
+    COPY_LEAD(row, in);
+    for (int k = 0; k < 3; k++) {
+        row->palm_mm[k] = in->valuef[k];
+        row->normal[k] = in->valuef[3 + k];
+        row->direction[k] = in->valuef[6 + k];
+        row->joints_mm[FP_JOINT_PALM][k] = in->valuef[k];
+    }
+    for (int f = 0; f < FP_FINGERS; f++)
+        for (int j = 0; j < 4; j++)
+            for (int k = 0; k < 3; k++)
+                row->joints_mm[FP_JOINT(f, j)][k] = in->valuef[9 + (f * 4 + j) * 3 + k];
+    return 0;
+}
+
+static int on_angles(void *user, const fp_leapcsv_row *in, char *err, size_t errlen)
+{
+    fp_leap_angles_row *row = collect_next(user);
+    if (!row) return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", in->path);
+    COPY_LEAD(row, in);
+    row->valid = in->valid;
+    for (int i = 0; i < FP_GLOVE_SENSORS; i++) row->degrees[i] = in->valuef[i];
+    return 0;
+}
+
+static int read_rows(const char *path, fp_leapcsv_format fmt, fp_leapcsv_row_fn fn, size_t elem,
+                     void **rows, size_t *n, char *err, size_t errlen)
+{
+    if (!rows || !n) return fp_errorf(err, errlen, -EINVAL, "fp_leapcsv_read: NULL argument");
+    collect c = {NULL, 0, 0, elem};
+    int rc = fp_leapcsv_read(path, fmt, NULL, fn, &c, NULL, err, errlen);
+    if (!rc && c.n == 0) rc = fp_errorf(err, errlen, -EBADMSG, "%s: no data rows", path);
+    if (rc) {
+        free(c.rows);
+        return rc;
+    }
+    *rows = c.rows;
+    *n = c.n;
     return 0;
 }
 
 int fp_leapcsv_read_joints(const char *path, fp_leap_joints_row **rows, size_t *n, char *err,
                            size_t errlen)
 {
-    if (!path || !rows || !n) {
-        if (err && errlen)
-            snprintf(err, errlen, "fp_leapcsv_read_joints: NULL argument");
-        return -EINVAL;
-    }
-    enum { NCOL = 13 + FP_FINGERS * 4 * 3 };
-    char names[NCOL][24];
-    const char *np[NCOL];
-    for (int i = 0; i < 13; i++)
-        snprintf(names[i], sizeof names[i], "%s", joints_header[i]);
-    for (int f = 0, c = 13; f < FP_FINGERS; f++)
-        for (int k = 0; k < 4; k++)
-            for (int a = 0; a < 3; a++, c++)
-                snprintf(names[c], sizeof names[c], "%s_%s_%c", finger_names[f], joint_names[k], "xyz"[a]);
-    for (int i = 0; i < NCOL; i++)
-        np[i] = names[i];
-
-    reader r;
-    fp_leap_joints_row *out = NULL;
-    size_t count = 0, cap = 0;
-    int rc = open_reader(&r, path, err, errlen);
-    if (!rc)
-        rc = check_header(&r, np, NCOL);
-    while (!rc) {
-        rc = next_line(&r);
-        if (rc <= 0)
-            break;
-        rc = 0;
-        if (r.nfield != NCOL) {
-            rc = fail(&r, -EBADMSG, 0, NULL, "%d fields, expected %d", r.nfield, NCOL);
-            break;
-        }
-        if ((rc = grow(&r, (void **)&out, &cap, count, sizeof *out)))
-            break;
-        fp_leap_joints_row *row = &out[count];
-        memset(row, 0, sizeof *row);
-        if ((rc = parse_long(&r, 0, np[0], &row->frame)) || (rc = parse_i64(&r, 1, np[1], &row->timestamp_us)) ||
-            (rc = parse_long(&r, 2, np[2], &row->hand_id)) || (rc = parse_side(&r, 3, &row->side)))
-            break;
-        float v[NCOL];
-        for (int i = 4; i < NCOL && rc >= 0; i++)
-            rc = parse_float(&r, i, np[i], false, &v[i]);
-        if (rc < 0)
-            break;
-        rc = 0;
-        for (int k = 0; k < 3; k++) {
-            row->palm_mm[k] = v[4 + k];
-            row->normal[k] = v[7 + k];
-            row->direction[k] = v[10 + k];
-            row->joints_mm[FP_JOINT_PALM][k] = v[4 + k];
-        }
-        for (int f = 0; f < FP_FINGERS; f++)
-            for (int j = 0; j < 4; j++)
-                for (int k = 0; k < 3; k++)
-                    row->joints_mm[FP_JOINT(f, j)][k] = v[13 + (f * 4 + j) * 3 + k];
-        count++;
-    }
-    if (!rc && count == 0)
-        rc = fail(&r, -EBADMSG, 0, NULL, "no data rows");
-    close_reader(&r);
-    if (rc) {
-        free(out);
-        return rc;
-    }
-    *rows = out;
-    *n = count;
-    return 0;
+    return read_rows(path, FP_LEAPCSV_JOINTS, on_joints, sizeof **rows, (void **)rows, n, err,
+                     errlen);
 }
 
 int fp_leapcsv_read_angles(const char *path, fp_leap_angles_row **rows, size_t *n, char *err,
                            size_t errlen)
 {
-    if (!path || !rows || !n) {
-        if (err && errlen)
-            snprintf(err, errlen, "fp_leapcsv_read_angles: NULL argument");
-        return -EINVAL;
-    }
-    enum { NCOL = 4 + FP_GLOVE_SENSORS };
-    reader r;
-    fp_leap_angles_row *out = NULL;
-    size_t count = 0, cap = 0;
-    int rc = open_reader(&r, path, err, errlen);
-    if (!rc)
-        rc = check_header(&r, angles_header, NCOL);
-    while (!rc) {
-        rc = next_line(&r);
-        if (rc <= 0)
-            break;
-        rc = 0;
-        if (r.nfield != NCOL) {
-            rc = fail(&r, -EBADMSG, 0, NULL, "%d fields, expected %d", r.nfield, NCOL);
-            break;
-        }
-        if ((rc = grow(&r, (void **)&out, &cap, count, sizeof *out)))
-            break;
-        fp_leap_angles_row *row = &out[count];
-        memset(row, 0, sizeof *row);
-        if ((rc = parse_long(&r, 0, angles_header[0], &row->frame)) ||
-            (rc = parse_i64(&r, 1, angles_header[1], &row->timestamp_us)) ||
-            (rc = parse_long(&r, 2, angles_header[2], &row->hand_id)) || (rc = parse_side(&r, 3, &row->side)))
-            break;
-        for (int i = 0; i < FP_GLOVE_SENSORS; i++) {
-            rc = parse_float(&r, 4 + i, angles_header[4 + i], true, &row->degrees[i]);
-            if (rc < 0)
-                break;
-            if (rc == 1)
-                row->valid |= 1u << i;
-            rc = 0;
-        }
-        if (rc)
-            break;
-        count++;
-    }
-    if (!rc && count == 0)
-        rc = fail(&r, -EBADMSG, 0, NULL, "no data rows");
-    close_reader(&r);
-    if (rc) {
-        free(out);
-        return rc;
-    }
-    *rows = out;
-    *n = count;
-    return 0;
+    return read_rows(path, FP_LEAPCSV_ANGLES, on_angles, sizeof **rows, (void **)rows, n, err,
+                     errlen);
 }

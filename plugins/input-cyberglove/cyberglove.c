@@ -11,7 +11,7 @@
  * the glove (?G ?S ?R ?V ?D, then U 1 to get the status byte), sets the sample period with
  * the ASCII command `t w1 w2\r` (period = w1*w2/115200 s, shared/docs/devices.md), then
  * streams (`S`) or polls (`G` at `rate`), or in 16-bit mode sends `1eu` then `1S`.
- * Records are decoded, calibrated (glove_cal.h) and pushed as fp_event_joint_angles stamped
+ * Records are decoded (glove_decode.h, pure), calibrated (glove_cal.h) and pushed as fp_event_joint_angles stamped
  * with fp_host.now_ns taken when the chunk holding the record's last byte was read.
  *
  * Faults (each reported as fp_event_status; the session keeps the last pose since no angles
@@ -41,15 +41,15 @@
 #include <unistd.h>
 
 #include "cyberglove.h"
+#include "fp_error.h"
+#include "fp_stats.h"
 #include "facepuppet/plugin.h"
 #include "glove_cal.h"
+#include "glove_decode.h"
 
 #define LAT_CAP 65536
-#define ACC_CAP 1024
 #define BACKOFF_MIN_MS 100
 #define BACKOFF_MAX_MS 2000
-
-static const int DIJ_SKIP[18] = {0, 1, 2, 3, 4, 5, 7, 8, 10, 11, 12, 14, 15, 16, 18, 19, 20, 21};
 
 typedef struct glove {
     fp_input input;
@@ -81,13 +81,13 @@ typedef struct glove {
     char version[64];
     int hand;           /* used in events */
 
-    /* decoder */
-    uint8_t acc[ACC_CAP];
-    size_t len;
+    /* decoder (glove_decode.h) */
+    fpg_decoder dec;
     bool in_noise;
     uint64_t noise_episode;
     bool unplugged;
     bool warned_fast;
+    bool warned_nonfinite;
     int64_t last_record_ns;
     uint64_t units;     /* records and bare error messages decoded */
 
@@ -100,17 +100,6 @@ typedef struct glove {
 
 /* ------------------------------------------------------------------------------------- */
 /* Small helpers                                                                         */
-
-static int errf(char *err, size_t errlen, int code, const char *fmt, ...)
-{
-    if (err && errlen) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(err, errlen, fmt, ap);
-        va_end(ap);
-    }
-    return code;
-}
 
 static int64_t now_ns(const glove *g)
 {
@@ -310,7 +299,7 @@ static int open_port(const glove *g, char *err, size_t errlen)
     int fd = open(g->path, O_RDWR | O_NOCTTY | O_NONBLOCK | O_CLOEXEC);
     if (fd < 0) {
         int e = errno;
-        return errf(err, errlen, -e, "cannot open %s: %s%s", g->path, strerror(e),
+        return fp_errorf(err, errlen, -e, "cannot open %s: %s%s", g->path, strerror(e),
                     e == EACCES ? " (join the dialout group or add a udev rule, see "
                                   "docs/cyberglove.md)" : "");
     }
@@ -318,7 +307,7 @@ static int open_port(const glove *g, char *err, size_t errlen)
     if (tcgetattr(fd, &t) != 0) {
         int e = errno;
         close(fd);
-        return errf(err, errlen, -e, "%s is not a serial port: %s", g->path, strerror(e));
+        return fp_errorf(err, errlen, -e, "%s is not a serial port: %s", g->path, strerror(e));
     }
     t.c_iflag &= ~(tcflag_t)(IGNBRK | BRKINT | PARMRK | ISTRIP | INLCR | IGNCR | ICRNL | IXON |
                              IXOFF | IXANY | INPCK);
@@ -333,7 +322,7 @@ static int open_port(const glove *g, char *err, size_t errlen)
     if (tcsetattr(fd, TCSANOW, &t) != 0) {
         int e = errno;
         close(fd);
-        return errf(err, errlen, -e, "cannot configure %s: %s", g->path, strerror(e));
+        return fp_errorf(err, errlen, -e, "cannot configure %s: %s", g->path, strerror(e));
     }
     tcflush(fd, TCIOFLUSH);
     return fd;
@@ -368,31 +357,31 @@ static int probe(glove *g, char *err, size_t errlen)
     uint8_t v[64];
     int r = drain(g);
     if (r < 0)
-        return errf(err, errlen, r, "%s: line lost while draining", g->path);
+        return fp_errorf(err, errlen, r, "%s: line lost while draining", g->path);
     r = query(g, 'G', 1, v, sizeof v);
     if (r == -ETIMEDOUT)
-        return errf(err, errlen, r, "no answer to ?G (is the glove box on, baud %d?)", g->baud);
+        return fp_errorf(err, errlen, r, "no answer to ?G (is the glove box on, baud %d?)", g->baud);
     if (r < 1)
-        return errf(err, errlen, r < 0 ? r : -EPROTO, "bad answer to ?G");
+        return fp_errorf(err, errlen, r < 0 ? r : -EPROTO, "bad answer to ?G");
     if (v[0] != 3)
-        return errf(err, errlen, -ENODEV, "glove not plugged into its box (?G = %d)", v[0]);
+        return fp_errorf(err, errlen, -ENODEV, "glove not plugged into its box (?G = %d)", v[0]);
     r = query(g, 'S', 1, v, sizeof v);
     if (r < 1)
-        return errf(err, errlen, r < 0 ? r : -EPROTO, "bad answer to ?S");
+        return fp_errorf(err, errlen, r < 0 ? r : -EPROTO, "bad answer to ?S");
     if (v[0] != 18 && v[0] != 22)
-        return errf(err, errlen, -EPROTO, "unsupported sensor count %d (?S)", v[0]);
+        return fp_errorf(err, errlen, -EPROTO, "unsupported sensor count %d (?S)", v[0]);
     if (g->bits == 16 && v[0] != 22)
-        return errf(err, errlen, -EPROTO, "bits=16 needs a 22-sensor CyberGlove III (?S = %d)",
+        return fp_errorf(err, errlen, -EPROTO, "bits=16 needs a 22-sensor CyberGlove III (?S = %d)",
                     v[0]);
     int sensors = v[0];
     r = query(g, 'R', 1, v, sizeof v);
     int right = r >= 1 ? (v[0] != 0) : -1;
     if (r < 0 && r != -ENOTSUP)
-        return errf(err, errlen, r, "bad answer to ?R");
+        return fp_errorf(err, errlen, r, "bad answer to ?R");
     char version[64] = "";
     r = query(g, 'V', 0, v, sizeof v - 1);
     if (r < 0 && r != -ENOTSUP)
-        return errf(err, errlen, r, "bad answer to ?V");
+        return fp_errorf(err, errlen, r, "bad answer to ?V");
     if (r > 0) {
         for (int i = 0; i < r && i < (int)sizeof version - 1; i++)
             version[i] = (v[i] >= 32 && v[i] < 127) ? (char)v[i] : '.';
@@ -402,14 +391,14 @@ static int probe(glove *g, char *err, size_t errlen)
     if (g->bits == 8) {
         r = query(g, 'D', 1, v, sizeof v);
         if (r < 0 && r != -ENOTSUP)
-            return errf(err, errlen, r, "bad answer to ?D");
+            return fp_errorf(err, errlen, r, "bad answer to ?D");
         ts_on = r >= 1 && v[0] != 0;
         uint8_t u[2] = {'U', 1};
         if ((r = write_all(g, u, 2)) < 0)
-            return errf(err, errlen, r, "line lost");
+            return fp_errorf(err, errlen, r, "line lost");
         r = read_reply(g, 'U', -1, v, sizeof v, 500);
         if (r < 0 && r != -ENOTSUP)
-            return errf(err, errlen, r, "bad answer to U 1");
+            return fp_errorf(err, errlen, r, "bad answer to U 1");
         status_on = r >= 0;
         if (status_on) {   /* confirm with ?U: the record layout depends on it */
             r = query(g, 'U', 1, v, sizeof v);
@@ -427,10 +416,10 @@ static int probe(glove *g, char *err, size_t errlen)
     char tcmd[32];
     int tn = snprintf(tcmd, sizeof tcmd, "t %u %u\r", w1, w2);
     if ((r = write_all(g, tcmd, (size_t)tn)) < 0)
-        return errf(err, errlen, r, "line lost");
+        return fp_errorf(err, errlen, r, "line lost");
     r = read_reply(g, 't', -1, v, sizeof v, 300);
     if (r == -EPIPE || r == -ECANCELED)
-        return errf(err, errlen, r, "line lost");
+        return fp_errorf(err, errlen, r, "line lost");
     if (r < 0)
         logf_(g, FP_LOG_WARNING, "%s: sample period command `t %u %u` not acknowledged (%s)",
               g->path, w1, w2, strerror(-r));
@@ -441,17 +430,17 @@ static int probe(glove *g, char *err, size_t errlen)
     g->status_on = status_on;
     snprintf(g->version, sizeof g->version, "%s", version);
     g->hand = g->hand_opt >= 0 ? g->hand_opt : (right >= 0 ? right : FP_HAND_RIGHT);
-    g->len = 0;
+    fpg_decoder_init(&g->dec, g->bits, sensors, ts_on, status_on);
     g->in_noise = false;
     g->unplugged = false;
     g->warned_fast = false;
 
     if (g->bits == 16) {
         if ((r = write_all(g, "1eu", 3)) < 0 || (r = write_all(g, "1S", 2)) < 0)
-            return errf(err, errlen, r, "line lost");
+            return fp_errorf(err, errlen, r, "line lost");
     } else if (!g->poll_mode) {
         if ((r = write_all(g, "S", 1)) < 0)
-            return errf(err, errlen, r, "line lost");
+            return fp_errorf(err, errlen, r, "line lost");
     }
     pthread_mutex_lock(&g->lock);
     g->st.connects++;
@@ -469,7 +458,7 @@ static int probe(glove *g, char *err, size_t errlen)
 /* ------------------------------------------------------------------------------------- */
 /* Decoding                                                                              */
 
-static void emit_angles(glove *g, const double *raw8, int64_t t_read)
+static void emit_angles(glove *g, const fpg_unit *u, int64_t t_read)
 {
     fp_event_joint_angles ev;
     memset(&ev, 0, sizeof ev);
@@ -477,12 +466,10 @@ static void emit_angles(glove *g, const double *raw8, int64_t t_read)
     ev.header.type = FP_EVENT_JOINT_ANGLES;
     ev.header.time_ns = t_read;
     ev.header.hand = g->hand;
-    for (int k = 0; k < g->sensors; k++) {
-        int i = g->sensors == 22 ? k : DIJ_SKIP[k];
-        if (!(g->cal.used & (1u << i)))
-            continue;
-        ev.radians[i] = fpg_cal_angle(&g->cal, i, raw8[k]);
-        ev.valid |= 1u << i;
+    if (fpg_angles_from_raw(&g->cal, u, ev.radians, &ev.valid) && !g->warned_nonfinite) {
+        g->warned_nonfinite = true;
+        logf_(g, FP_LOG_WARNING, "%s: calibration gives a non-finite angle; sensor left out",
+              g->path);
     }
     bool ok = g->host->push_event(g->host, &ev.header);
     int64_t lat = now_ns(g) - t_read;
@@ -496,8 +483,10 @@ static void emit_angles(glove *g, const double *raw8, int64_t t_read)
     pthread_mutex_unlock(&g->lock);
 }
 
-static void on_record(glove *g, const double *raw8, bool plugged, int errc, int64_t t)
+static void on_record(glove *g, const fpg_unit *u, int64_t t)
 {
+    bool plugged = u->plugged;
+    int errc = u->errc;
     g->last_record_ns = t;
     g->units++;
     pthread_mutex_lock(&g->lock);
@@ -527,7 +516,7 @@ static void on_record(glove *g, const double *raw8, bool plugged, int errc, int6
         g->unplugged = false;
         push_status(g, FP_STATUS_CONNECTED, "glove plugged into its box again");
     }
-    emit_angles(g, raw8, t);
+    emit_angles(g, u, t);
 }
 
 /* A bare error message `e` X 0x00 (no record): the box is alive. */
@@ -563,125 +552,27 @@ static void on_noise(glove *g, size_t n)
     pthread_mutex_unlock(&g->lock);
 }
 
-/* Try to decode one 8-bit unit at a[0..len). Returns >0 bytes consumed, 0 need more,
- * -1 not a unit here (skip a byte). */
-static int decode8(glove *g, const uint8_t *a, size_t len, int64_t t)
-{
-    const size_t n = (size_t)g->sensors;
-    const size_t body = 1 + n + (g->ts_on ? 5 : 0) + (g->status_on ? 1 : 0);
-    if (a[0] == 'e') {   /* a bare error: `e` X 0x00 */
-        if (len < 3)
-            return 0;
-        if (a[2] != 0 || !strchr("?gsny", a[1]) || a[1] == 0)
-            return -1;
-        on_bare_error(g, a[1], t);
-        return 3;
-    }
-    if (a[0] != 'S' && a[0] != 'G')
-        return -1;
-    size_t avail = len < 1 + n ? len : 1 + n;
-    for (size_t i = 1; i < avail; i++)
-        if (a[i] == 0)
-            return -1;
-    if (len < body + 1)
-        return 0;
-    int errc = 0;
-    size_t used;
-    if (a[body] == 0) {
-        used = body + 1;
-    } else if (a[body] == 'e') {
-        if (len < body + 3)
-            return 0;
-        if ((a[body + 1] != 'g' && a[body + 1] != 's') || a[body + 2] != 0)
-            return -1;
-        errc = a[body + 1];
-        used = body + 3;
-    } else {
-        return -1;
-    }
-    double raw[FPG_SENSORS];
-    for (size_t i = 0; i < n; i++)
-        raw[i] = a[1 + i];
-    bool plugged = g->status_on ? (a[body - 1] & 1) != 0 : true;
-    on_record(g, raw, plugged, errc, t);
-    return (int)used;
-}
+/* The decoder's units, as they come (glove_decode.h). */
+typedef struct feed_ctx {
+    glove *g;
+    int64_t t;
+} feed_ctx;
 
-static bool ts_char(uint8_t c) { return (c >= '0' && c <= '9') || c == ':' || c == ' ' || c == '.'; }
-
-/* 16-bit frame: 0D 0A 00, ASCII timestamp (8..16 chars of digits and ':'), 'S', 22 x BE16. */
-static int decode16(glove *g, const uint8_t *a, size_t len, int64_t t)
+static void on_unit(void *user, const fpg_unit *u)
 {
-    static const uint8_t hdr[3] = {0x0D, 0x0A, 0x00};
-    for (size_t i = 0; i < 3; i++) {
-        if (i >= len)
-            return 0;
-        if (a[i] != hdr[i])
-            return -1;
-    }
-    size_t k = 3;
-    for (; k < len && k < 3 + 17; k++) {
-        if (a[k] == 'S')
-            break;
-        if (!ts_char(a[k]))
-            return -1;
-    }
-    if (k >= 3 + 17)
-        return -1;
-    if (k >= len)
-        return 0;
-    if (k - 3 < 8)
-        return -1;
-    size_t need = k + 1 + 2 * FPG_SENSORS;
-    if (len < need)
-        return 0;
-    double raw[FPG_SENSORS];
-    for (int i = 0; i < FPG_SENSORS; i++) {
-        unsigned v = (unsigned)a[k + 1 + 2 * i] << 8 | a[k + 2 + 2 * i];
-        if (v < 1 || v > 4094)
-            return -1;
-        raw[i] = v / 16.0;
-    }
-    on_record(g, raw, true, 0, t);
-    return (int)need;
+    feed_ctx *c = user;
+    if (u->kind == FPG_UNIT_RECORD)
+        on_record(c->g, u, c->t);
+    else if (u->kind == FPG_UNIT_ERROR)
+        on_bare_error(c->g, (uint8_t)u->errc, c->t);
+    else
+        on_noise(c->g, u->noise);
 }
 
 static void feed(glove *g, const uint8_t *data, size_t n, int64_t t)
 {
-    while (n) {
-        size_t take = ACC_CAP - g->len;
-        if (take > n)
-            take = n;
-        memcpy(g->acc + g->len, data, take);
-        g->len += take;
-        data += take;
-        n -= take;
-        size_t pos = 0, skipped = 0;
-        while (pos < g->len) {
-            int r = g->bits == 16 ? decode16(g, g->acc + pos, g->len - pos, t)
-                                  : decode8(g, g->acc + pos, g->len - pos, t);
-            if (r == 0)
-                break;
-            if (r < 0) {
-                pos++;
-                skipped++;
-                continue;
-            }
-            if (skipped) {
-                on_noise(g, skipped);
-                skipped = 0;
-            }
-            pos += (size_t)r;
-        }
-        if (skipped)
-            on_noise(g, skipped);
-        memmove(g->acc, g->acc + pos, g->len - pos);
-        g->len -= pos;
-        if (g->len == ACC_CAP) {   /* cannot happen with well-formed limits; stay safe */
-            on_noise(g, g->len);
-            g->len = 0;
-        }
-    }
+    feed_ctx c = {g, t};
+    fpg_decoder_feed(&g->dec, data, n, on_unit, &c);
 }
 
 /* ------------------------------------------------------------------------------------- */
@@ -816,17 +707,11 @@ static void *thread_main(void *arg)
 /* ------------------------------------------------------------------------------------- */
 /* Statistics                                                                            */
 
-static int cmp_i32(const void *a, const void *b)
-{
-    int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
-    return (x > y) - (x < y);
-}
-
 static void get_stats(const fp_input *in, fp_cyberglove_stats *out)
 {
     glove *g = in->plugin_data;
     fp_cyberglove_stats s;
-    int32_t *tmp = NULL;
+    double *tmp = NULL;
     size_t n;
     pthread_mutex_lock(&g->lock);
     s = g->st;
@@ -834,15 +719,13 @@ static void get_stats(const fp_input *in, fp_cyberglove_stats *out)
     if (n)
         tmp = malloc(n * sizeof *tmp);
     if (tmp)
-        memcpy(tmp, g->lat, n * sizeof *tmp);
+        for (size_t i = 0; i < n; i++) tmp[i] = g->lat[i];
     pthread_mutex_unlock(&g->lock);
     s.latency_samples = tmp ? n : 0;
     s.latency_median_us = s.latency_p99_us = 0;
     if (tmp) {
-        qsort(tmp, n, sizeof *tmp, cmp_i32);
-        s.latency_median_us = (n % 2 ? tmp[n / 2] : 0.5 * (tmp[n / 2 - 1] + tmp[n / 2])) / 1e3;
-        size_t k = (size_t)(0.99 * (double)(n - 1) + 0.5);
-        s.latency_p99_us = tmp[k] / 1e3;
+        s.latency_median_us = fp_median(tmp, n) / 1e3;
+        s.latency_p99_us = fp_percentile(tmp, n, 0.99) / 1e3;
         free(tmp);
     }
     uint32_t size = out->size && out->size < sizeof s ? out->size : (uint32_t)sizeof s;
@@ -864,7 +747,7 @@ static int input_start(fp_input *self, char *err, size_t errlen)
 {
     glove *g = self->plugin_data;
     if (g->thread_started)
-        return errf(err, errlen, -EALREADY, "cyberglove %s: already started", g->path);
+        return fp_errorf(err, errlen, -EALREADY, "cyberglove %s: already started", g->path);
     int fd = open_port(g, err, errlen);
     if (fd < 0)
         return fd;
@@ -874,7 +757,7 @@ static int input_start(fp_input *self, char *err, size_t errlen)
     if (e) {
         close(fd);
         g->fd = -1;
-        return errf(err, errlen, -e, "cyberglove %s: cannot start thread: %s", g->path,
+        return fp_errorf(err, errlen, -e, "cyberglove %s: cannot start thread: %s", g->path,
                     strerror(e));
     }
     g->thread_started = true;
@@ -948,19 +831,19 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
                   fp_input **out, char *err, size_t errlen)
 {
     if (!host || !host->push_event || !out)
-        return errf(err, errlen, -EINVAL, "cyberglove: bad host");
+        return fp_errorf(err, errlen, -EINVAL, "cyberglove: bad host");
     if (!arg || !*arg)
-        return errf(err, errlen, -EINVAL,
+        return fp_errorf(err, errlen, -EINVAL,
                     "cyberglove: missing device path, e.g. cyberglove:/dev/ttyUSB0");
     if (strlen(arg) >= PATH_MAX)
-        return errf(err, errlen, -ENAMETOOLONG, "cyberglove: device path too long");
+        return fp_errorf(err, errlen, -ENAMETOOLONG, "cyberglove: device path too long");
     glove *g = calloc(1, sizeof *g);
     if (!g)
-        return errf(err, errlen, -ENOMEM, "cyberglove: out of memory");
+        return fp_errorf(err, errlen, -ENOMEM, "cyberglove: out of memory");
     g->lat = calloc(LAT_CAP, sizeof *g->lat);
     if (!g->lat) {
         free(g);
-        return errf(err, errlen, -ENOMEM, "cyberglove: out of memory");
+        return fp_errorf(err, errlen, -ENOMEM, "cyberglove: out of memory");
     }
     g->host = host;
     g->fd = -1;
@@ -978,7 +861,7 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
         long n;
         if (strcmp(k, "baud") == 0) {
             if (parse_int(v, 1, 4000000, &n) != 0 || speed_of((int)n, &g->speed) != 0) {
-                rc = errf(err, errlen, -EINVAL, "cyberglove: baud=%s: not a supported speed "
+                rc = fp_errorf(err, errlen, -EINVAL, "cyberglove: baud=%s: not a supported speed "
                           "(1200..921600, standard rates)", v);
                 goto fail;
             }
@@ -987,7 +870,7 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
             char e2[256];
             int r = fpg_cal_load(v, &g->cal, e2, sizeof e2);
             if (r < 0) {
-                rc = errf(err, errlen, r, "cyberglove: cal=%s", e2);
+                rc = fp_errorf(err, errlen, r, "cyberglove: cal=%s", e2);
                 goto fail;
             }
             snprintf(g->cal_path, sizeof g->cal_path, "%s", v);
@@ -997,7 +880,7 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
             else if (strcmp(v, "right") == 0)
                 g->hand_opt = FP_HAND_RIGHT;
             else {
-                rc = errf(err, errlen, -EINVAL, "cyberglove: hand=%s: expected left or right", v);
+                rc = fp_errorf(err, errlen, -EINVAL, "cyberglove: hand=%s: expected left or right", v);
                 goto fail;
             }
         } else if (strcmp(k, "rate") == 0) {
@@ -1005,7 +888,7 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
             errno = 0;
             double r = strtod(v, &end);
             if (!*v || *end || errno || !(r >= 1.0 && r <= 10000.0)) {
-                rc = errf(err, errlen, -EINVAL, "cyberglove: rate=%s: expected 1..10000 Hz", v);
+                rc = fp_errorf(err, errlen, -EINVAL, "cyberglove: rate=%s: expected 1..10000 Hz", v);
                 goto fail;
             }
             g->rate_hz = r;
@@ -1015,7 +898,7 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
             else if (strcmp(v, "poll") == 0)
                 g->poll_mode = true;
             else {
-                rc = errf(err, errlen, -EINVAL, "cyberglove: mode=%s: expected stream or poll", v);
+                rc = fp_errorf(err, errlen, -EINVAL, "cyberglove: mode=%s: expected stream or poll", v);
                 goto fail;
             }
         } else if (strcmp(k, "bits") == 0) {
@@ -1024,17 +907,17 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
             else if (strcmp(v, "16") == 0)
                 g->bits = 16;
             else {
-                rc = errf(err, errlen, -EINVAL, "cyberglove: bits=%s: expected 8 or 16", v);
+                rc = fp_errorf(err, errlen, -EINVAL, "cyberglove: bits=%s: expected 8 or 16", v);
                 goto fail;
             }
         } else if (strcmp(k, "timeout") == 0) {
             if (parse_int(v, 10, 600000, &timeout) != 0) {
-                rc = errf(err, errlen, -EINVAL, "cyberglove: timeout=%s: expected 10..600000 ms",
+                rc = fp_errorf(err, errlen, -EINVAL, "cyberglove: timeout=%s: expected 10..600000 ms",
                           v);
                 goto fail;
             }
         } else {
-            rc = errf(err, errlen, -EINVAL, "cyberglove: unknown key `%s` (keys: baud, cal, hand, "
+            rc = fp_errorf(err, errlen, -EINVAL, "cyberglove: unknown key `%s` (keys: baud, cal, hand, "
                       "rate, mode, bits, timeout%s)", k,
                       strcmp(k, "record") == 0 ? "; record= is the host's" : "");
             goto fail;
@@ -1042,7 +925,7 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
     }
     g->hand = g->hand_opt;   /* -1 (no hand) in status events until ?R answers */
     if (g->bits == 16 && g->poll_mode) {
-        rc = errf(err, errlen, -EINVAL, "cyberglove: bits=16 works with mode=stream only");
+        rc = fp_errorf(err, errlen, -EINVAL, "cyberglove: bits=16 works with mode=stream only");
         goto fail;
     }
     if (!g->speed)
@@ -1054,11 +937,11 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
     }
     g->timeout_ms = (int)timeout;
     if (pipe2(g->wake, O_CLOEXEC | O_NONBLOCK) != 0) {
-        rc = errf(err, errlen, -errno, "cyberglove: pipe: %s", strerror(errno));
+        rc = fp_errorf(err, errlen, -errno, "cyberglove: pipe: %s", strerror(errno));
         goto fail;
     }
     if (pthread_mutex_init(&g->lock, NULL) != 0) {
-        rc = errf(err, errlen, -ENOMEM, "cyberglove: mutex");
+        rc = fp_errorf(err, errlen, -ENOMEM, "cyberglove: mutex");
         goto fail;
     }
     g->st.size = sizeof g->st;

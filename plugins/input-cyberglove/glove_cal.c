@@ -5,9 +5,11 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "glove_cal.h"
+#include "fp_error.h"
 
 #include <errno.h>
 #include <math.h>
+#include <stdbool.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -29,15 +31,10 @@ void fpg_cal_default(fpg_cal *cal)
     cal->used = (1u << FPG_SENSORS) - 1u;
 }
 
-static int fail(char *err, size_t errlen, int code, const char *fmt, ...)
+/* True when v is finite and stays finite as a float (what the calibration stores). */
+static bool finite_float(double v)
 {
-    if (err && errlen) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(err, errlen, fmt, ap);
-        va_end(ap);
-    }
-    return code;
+    return isfinite(v) && isfinite((float)v);
 }
 
 /* Strip comments and whitespace; returns the first non-blank char or NULL when empty. */
@@ -94,7 +91,7 @@ int fpg_cal_load(const char *path, fpg_cal *cal, char *err, size_t errlen)
     FILE *f = fopen(path, "r");
     if (!f) {
         int e = errno;
-        return fail(err, errlen, -e, "%s: cannot open calibration file: %s", path, strerror(e));
+        return fp_errorf(err, errlen, -e, "%s: cannot open calibration file: %s", path, strerror(e));
     }
     fpg_cal_default(cal);
     char buf[512];
@@ -104,7 +101,7 @@ int fpg_cal_load(const char *path, fpg_cal *cal, char *err, size_t errlen)
     while (fgets(buf, sizeof buf, f)) {
         lineno++;
         if (!strchr(buf, '\n') && !feof(f)) {
-            rc = fail(err, errlen, -EINVAL, "%s:%d: line too long", path, lineno);
+            rc = fp_errorf(err, errlen, -EINVAL, "%s:%d: line too long", path, lineno);
             goto out;
         }
         char *s = trim_line(buf);
@@ -119,26 +116,31 @@ int fpg_cal_load(const char *path, fpg_cal *cal, char *err, size_t errlen)
         if (fmt == FPG_CAL_ASR) {
             double v[4];
             if (rows >= FPG_SENSORS) {
-                rc = fail(err, errlen, -EINVAL, "%s:%d: more than %d calibration lines (asr "
+                rc = fp_errorf(err, errlen, -EINVAL, "%s:%d: more than %d calibration lines (asr "
                           "format)", path, lineno, FPG_SENSORS);
                 goto out;
             }
             if (parse_asr_line(s, v) != 0) {
-                rc = fail(err, errlen, -EINVAL, "%s:%d: expected `rad1:raw1 rad2:raw2` (asr "
+                rc = fp_errorf(err, errlen, -EINVAL, "%s:%d: expected `rad1:raw1 rad2:raw2` (asr "
                           "format), got \"%.60s\"", path, lineno, s);
                 goto out;
             }
             if (v[1] < 0 || v[1] > 255 || v[3] < 0 || v[3] > 255) {
-                rc = fail(err, errlen, -EINVAL, "%s:%d: raw value outside 0..255", path, lineno);
+                rc = fp_errorf(err, errlen, -EINVAL, "%s:%d: raw value outside 0..255", path, lineno);
                 goto out;
             }
             if (v[1] == v[3]) {
-                rc = fail(err, errlen, -EINVAL, "%s:%d: raw1 equals raw2 (%g): no slope", path,
+                rc = fp_errorf(err, errlen, -EINVAL, "%s:%d: raw1 equals raw2 (%g): no slope", path,
                           lineno, v[1]);
                 goto out;
             }
             int s_idx = FPG_ASR_LINE_SENSOR[rows];
             double g = (v[2] - v[0]) / (v[3] - v[1]);
+            if (!finite_float(g) || !finite_float(v[0] - g * v[1])) {
+                rc = fp_errorf(err, errlen, -EINVAL, "%s:%d: gain or offset beyond float range",
+                               path, lineno);
+                goto out;
+            }
             cal->gain[s_idx] = (float)g;
             cal->offset[s_idx] = (float)(v[0] - g * v[1]);
             if (g != 0.0)
@@ -150,30 +152,35 @@ int fpg_cal_load(const char *path, fpg_cal *cal, char *err, size_t errlen)
             long idx = strtol(p, &end, 10);
             double g, o;
             if (end == p || errno || (*end != ' ' && *end != '\t')) {
-                rc = fail(err, errlen, -EINVAL, "%s:%d: expected `SENSOR GAIN OFFSET`, got "
+                rc = fp_errorf(err, errlen, -EINVAL, "%s:%d: expected `SENSOR GAIN OFFSET`, got "
                           "\"%.60s\"", path, lineno, s);
                 goto out;
             }
             if (idx < 0 || idx >= FPG_SENSORS) {
-                rc = fail(err, errlen, -EINVAL, "%s:%d: sensor %ld outside 0..%d", path, lineno,
+                rc = fp_errorf(err, errlen, -EINVAL, "%s:%d: sensor %ld outside 0..%d", path, lineno,
                           idx, FPG_SENSORS - 1);
                 goto out;
             }
             p = end;
             if (parse_num(&p, &g) != 0 || parse_num(&p, &o) != 0) {
-                rc = fail(err, errlen, -EINVAL, "%s:%d: expected finite GAIN and OFFSET after "
+                rc = fp_errorf(err, errlen, -EINVAL, "%s:%d: expected finite GAIN and OFFSET after "
                           "sensor %ld", path, lineno, idx);
                 goto out;
             }
             while (*p == ' ' || *p == '\t')
                 p++;
             if (*p) {
-                rc = fail(err, errlen, -EINVAL, "%s:%d: unexpected text \"%.30s\"", path, lineno,
+                rc = fp_errorf(err, errlen, -EINVAL, "%s:%d: unexpected text \"%.30s\"", path, lineno,
                           p);
                 goto out;
             }
             if (seen & (1u << idx)) {
-                rc = fail(err, errlen, -EINVAL, "%s:%d: sensor %ld given twice", path, lineno, idx);
+                rc = fp_errorf(err, errlen, -EINVAL, "%s:%d: sensor %ld given twice", path, lineno, idx);
+                goto out;
+            }
+            if (!finite_float(g) || !finite_float(o)) {
+                rc = fp_errorf(err, errlen, -EINVAL, "%s:%d: GAIN or OFFSET beyond float range",
+                               path, lineno);
                 goto out;
             }
             seen |= 1u << idx;
@@ -185,15 +192,15 @@ int fpg_cal_load(const char *path, fpg_cal *cal, char *err, size_t errlen)
         }
     }
     if (ferror(f)) {
-        rc = fail(err, errlen, -EIO, "%s: read error", path);
+        rc = fp_errorf(err, errlen, -EIO, "%s: read error", path);
         goto out;
     }
     if (rows == 0) {
-        rc = fail(err, errlen, -EINVAL, "%s: no calibration lines", path);
+        rc = fp_errorf(err, errlen, -EINVAL, "%s: no calibration lines", path);
         goto out;
     }
     if (fmt == FPG_CAL_ASR && rows != FPG_SENSORS) {
-        rc = fail(err, errlen, -EINVAL, "%s:%d: only %d of %d calibration lines (asr format)",
+        rc = fp_errorf(err, errlen, -EINVAL, "%s:%d: only %d of %d calibration lines (asr format)",
                   path, lineno, rows, FPG_SENSORS);
         goto out;
     }

@@ -315,13 +315,8 @@ static int replay_create(const fp_host *host, const char *arg, const fp_param *p
         } else if (strcmp(q.key, "fast") == 0) {
             if (parse_bool(&q, &fast, err, errlen)) return -EINVAL;
         } else if (strcmp(q.key, "hands") == 0) {
-            if (strcmp(v, "left") == 0)
-                hands = REPLAY_HAND_LEFT;
-            else if (strcmp(v, "right") == 0)
-                hands = REPLAY_HAND_RIGHT;
-            else if (strcmp(v, "both") == 0)
-                hands = REPLAY_HAND_BOTH;
-            else {
+            hands = (int)fp_parse_hands(v);
+            if (!hands) {
                 snprintf(err, errlen, "replay: hands=%s: expected left, right or both", v);
                 return -EINVAL;
             }

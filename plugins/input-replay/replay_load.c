@@ -7,10 +7,12 @@
 #define _GNU_SOURCE
 #include "replay_load.h"
 
+#include "fp_error.h"
 #include "fp_eventlog.h"
+#include "fp_hand.h"
+#include "leapcsv.h"
 
 #include <errno.h>
-#include <locale.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -18,28 +20,6 @@
 #include <string.h>
 
 #define DEFAULT_LOOP_GAP_NS 10000000 /* 10 ms: the loop gap of a one-moment recording */
-
-static const char *const finger_names[FP_FINGERS] = {"thumb", "index", "middle", "ring", "pinky"};
-static const char *const segment_names[4] = {"mcp", "pip", "dip", "tip"};
-static const char *const angle_columns[FP_GLOVE_SENSORS] = {
-    "thumb_rotation", "thumb_mcp", "thumb_ip", "thumb_abduction", "index_mcp", "index_pip",
-    "index_dip", "middle_mcp", "middle_pip", "middle_dip", "middle_index_abduction", "ring_mcp",
-    "ring_pip", "ring_dip", "ring_middle_abduction", "pinky_mcp", "pinky_pip", "pinky_dip",
-    "pinky_ring_abduction", "palm_arch", "wrist_pitch", "wrist_yaw"};
-
-#define LEAD_COLUMNS 4                                   /* frame, timestamp_us, id, type */
-#define JOINT_COLUMNS (LEAD_COLUMNS + 9 + 4 * FP_FINGERS * 3) /* 73 */
-#define ANGLE_COLUMNS (LEAD_COLUMNS + FP_GLOVE_SENSORS)      /* 26 */
-#define MAX_COLUMNS JOINT_COLUMNS
-
-static void put_msg(char *buf, size_t len, const char *fmt, ...)
-{
-    if (!buf || len == 0) return;
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(buf, len, fmt, ap);
-    va_end(ap);
-}
 
 /* ------------------------------------------------------------------------------------- */
 /* Geometry                                                                               */
@@ -64,37 +44,14 @@ int replay_wrist_rotation(const double normal[3], const double direction[3], flo
     x[0] = y[1] * z[2] - y[2] * z[1];                       /* right-handed: x = y x z */
     x[1] = y[2] * z[0] - y[0] * z[2];
     x[2] = y[0] * z[1] - y[1] * z[0];
-    /* R's columns are the hand axes in the device frame; quaternion by Shepperd's method. */
+    /* R's columns are the hand axes in the device frame. */
     double r[3][3];
     for (int i = 0; i < 3; i++) {
         r[i][0] = x[i];
         r[i][1] = y[i];
         r[i][2] = z[i];
     }
-    double w, qx, qy, qz, tr = r[0][0] + r[1][1] + r[2][2];
-    if (tr > 0) {
-        double s = sqrt(tr + 1.0) * 2;
-        w = s / 4, qx = (r[2][1] - r[1][2]) / s, qy = (r[0][2] - r[2][0]) / s,
-        qz = (r[1][0] - r[0][1]) / s;
-    } else if (r[0][0] > r[1][1] && r[0][0] > r[2][2]) {
-        double s = sqrt(1.0 + r[0][0] - r[1][1] - r[2][2]) * 2;
-        w = (r[2][1] - r[1][2]) / s, qx = s / 4, qy = (r[0][1] + r[1][0]) / s,
-        qz = (r[0][2] + r[2][0]) / s;
-    } else if (r[1][1] > r[2][2]) {
-        double s = sqrt(1.0 + r[1][1] - r[0][0] - r[2][2]) * 2;
-        w = (r[0][2] - r[2][0]) / s, qx = (r[0][1] + r[1][0]) / s, qy = s / 4,
-        qz = (r[1][2] + r[2][1]) / s;
-    } else {
-        double s = sqrt(1.0 + r[2][2] - r[0][0] - r[1][1]) * 2;
-        w = (r[1][0] - r[0][1]) / s, qx = (r[0][2] + r[2][0]) / s, qy = (r[1][2] + r[2][1]) / s,
-        qz = s / 4;
-    }
-    double l = sqrt(w * w + qx * qx + qy * qy + qz * qz);
-    if (w < 0) l = -l;
-    q[0] = (float)(w / l);
-    q[1] = (float)(qx / l);
-    q[2] = (float)(qy / l);
-    q[3] = (float)(qz / l);
+    fp_hand_mat_to_quat((const double (*)[3])r, q);
     return 0;
 }
 
@@ -104,7 +61,6 @@ int replay_wrist_rotation(const double normal[3], const double direction[3], flo
 typedef struct loader {
     const char *path;
     int hands;
-    locale_t c_locale;
     replay_recording *rec;
     size_t cap;
     char *err;
@@ -126,21 +82,8 @@ static replay_item *push_item(loader *L)
     return it;
 }
 
-static int fail(loader *L, int code, long line, long col, const char *fmt, ...)
-{
-    int n;
-    if (line > 0)
-        n = snprintf(L->err, L->errlen, "%s:%ld:%ld: ", L->path, line, col);
-    else
-        n = snprintf(L->err, L->errlen, "%s: ", L->path);
-    if (L->err && n >= 0 && (size_t)n < L->errlen) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(L->err + n, L->errlen - (size_t)n, fmt, ap);
-        va_end(ap);
-    }
-    return code;
-}
+/* "PATH:LINE:COL: reason", or "PATH: reason" when line is 0 (fp_error_at). */
+#define fail(L, code, line, col, ...) fp_error_at((L)->err, (L)->errlen, code, (L)->path, line, col, __VA_ARGS__)
 
 static int oom(loader *L)
 {
@@ -148,146 +91,30 @@ static int oom(loader *L)
 }
 
 /* ------------------------------------------------------------------------------------- */
-/* CSV                                                                                    */
+/* Leap CSV (core/hand/leapcsv.h reads and checks; this keeps the hands asked for)        */
 
-typedef struct field {
-    char *s;   /* NUL-terminated in place */
-    long col;  /* 1-based column of its first byte */
-} field;
-
-/* Splits `line` (NUL-terminated) at commas in place. Returns the number of fields (which may
- * exceed max; only max are stored). */
-static int split_csv(char *line, field *f, int max)
+static int csv_row(void *user, const fp_leapcsv_row *row, char *err, size_t errlen)
 {
-    int n = 0;
-    char *p = line;
-    for (;;) {
-        if (n < max) f[n] = (field){p, (long)(p - line) + 1};
-        n++;
-        char *comma = strchr(p, ',');
-        if (!comma) break;
-        *comma = '\0';
-        p = comma + 1;
-    }
-    return n;
-}
-
-static void column_name(replay_format fmt, int i, char *buf, size_t len)
-{
-    static const char *const lead[LEAD_COLUMNS] = {"frame", "timestamp_us", "hand_id",
-                                                   "hand_type"};
-    static const char *const palm[9] = {"palm_x",  "palm_y",  "palm_z", "palm_nx", "palm_ny",
-                                        "palm_nz", "dir_x",   "dir_y",  "dir_z"};
-    if (i < LEAD_COLUMNS) {
-        snprintf(buf, len, "%s", lead[i]);
-    } else if (fmt == REPLAY_FORMAT_ANGLES_CSV) {
-        snprintf(buf, len, "%s", angle_columns[i - LEAD_COLUMNS]);
-    } else if (i < LEAD_COLUMNS + 9) {
-        snprintf(buf, len, "%s", palm[i - LEAD_COLUMNS]);
-    } else {
-        int k = i - LEAD_COLUMNS - 9;
-        snprintf(buf, len, "%s_%s_%c", finger_names[k / 12], segment_names[(k / 3) % 4],
-                 "xyz"[k % 3]);
-    }
-}
-
-static int parse_int64(const char *s, long long *out)
-{
-    char *end;
-    errno = 0;
-    long long v = strtoll(s, &end, 10);
-    if (end == s || *end || errno) return -1;
-    *out = v;
-    return 0;
-}
-
-/* 0 and the value; 1 for an empty field; -1 for a bad number; -2 for a non-finite one. */
-static int parse_number(loader *L, const char *s, double *out)
-{
-    if (!*s) return 1;
-    char *end;
-    double v = strtod_l(s, &end, L->c_locale);
-    if (end == s || *end) return -1;
-    if (!isfinite(v)) return -2;
-    *out = v;
-    return 0;
-}
-
-static int number_error(loader *L, long line, const field *f, int rc, const char *col)
-{
-    if (rc == 1) return fail(L, -EBADMSG, line, f->col, "empty field in column %s", col);
-    if (rc == -2)
-        return fail(L, -EBADMSG, line, f->col, "\"%s\" in column %s is not a finite number", f->s,
-                    col);
-    return fail(L, -EBADMSG, line, f->col, "bad number \"%s\" in column %s", f->s, col);
-}
-
-/* One data row of either CSV format. */
-static int csv_row(loader *L, replay_format fmt, long line, char *text, long long *last_ts,
-                   int *have_ts)
-{
-    field f[MAX_COLUMNS];
-    int want = fmt == REPLAY_FORMAT_JOINTS_CSV ? JOINT_COLUMNS : ANGLE_COLUMNS;
-    long line_len = (long)strlen(text);
-    int n = split_csv(text, f, MAX_COLUMNS);
-    if (n < want)
-        return fail(L, -EBADMSG, line, line_len + 1, "expected %d fields, found %d (row too short)",
-                    want, n);
-    if (n > want)
-        return fail(L, -EBADMSG, line, f[want < MAX_COLUMNS ? want : 0].col,
-                    "expected %d fields, found %d (row too long)", want, n);
-    char name[64];
-    long long frame, ts, id;
-    if (parse_int64(f[0].s, &frame))
-        return fail(L, -EBADMSG, line, f[0].col, "bad frame number \"%s\"", f[0].s);
-    if (parse_int64(f[1].s, &ts) || ts > INT64_MAX / 1000 || ts < INT64_MIN / 1000)
-        return fail(L, -EBADMSG, line, f[1].col, "bad timestamp_us \"%s\"", f[1].s);
-    if (parse_int64(f[2].s, &id))
-        return fail(L, -EBADMSG, line, f[2].col, "bad hand_id \"%s\"", f[2].s);
-    int hand;
-    if (strcmp(f[3].s, "left") == 0)
-        hand = FP_HAND_LEFT;
-    else if (strcmp(f[3].s, "right") == 0)
-        hand = FP_HAND_RIGHT;
-    else
-        return fail(L, -EBADMSG, line, f[3].col, "unknown hand_type \"%s\" (left or right)", f[3].s);
-    if (*have_ts && ts < *last_ts)
-        return fail(L, -EBADMSG, line, f[1].col,
-                    "timestamp_us %lld goes backwards (the row before has %lld)", ts, *last_ts);
-    *last_ts = ts;
-    *have_ts = 1;
-
-    double v[MAX_COLUMNS - LEAD_COLUMNS];
-    uint32_t valid = 0;
-    for (int i = LEAD_COLUMNS; i < want; i++) {
-        int rc = parse_number(L, f[i].s, &v[i - LEAD_COLUMNS]);
-        if (rc == 1 && fmt == REPLAY_FORMAT_ANGLES_CSV) {
-            v[i - LEAD_COLUMNS] = 0;
-            continue;
-        }
-        if (rc) {
-            column_name(fmt, i, name, sizeof name);
-            return number_error(L, line, &f[i], rc, name);
-        }
-        if (fmt == REPLAY_FORMAT_ANGLES_CSV) valid |= 1u << (i - LEAD_COLUMNS);
-    }
+    (void)err, (void)errlen; /* the loader's own buffer */
+    loader *L = user;
+    int hand = row->side;
     if (!(L->hands & (1 << hand))) return 0; /* parsed for errors, not kept */
-
-    int64_t t_ns = (int64_t)ts * 1000; /* made relative to the first kept item later */
-    if (fmt == REPLAY_FORMAT_ANGLES_CSV) {
+    int64_t t_ns = row->timestamp_us * 1000; /* made relative to the first kept item later */
+    const double *v = row->value;
+    if (row->format == FP_LEAPCSV_ANGLES) {
         replay_item *it = push_item(L);
         if (!it) return oom(L);
         it->t_ns = t_ns;
         fp_event_joint_angles *a = &it->event.angles;
         a->header = (fp_event_header){.size = sizeof *a, .type = FP_EVENT_JOINT_ANGLES,
                                       .hand = hand};
-        a->valid = valid;
+        a->valid = row->valid;
         for (int s = 0; s < FP_GLOVE_SENSORS; s++)
-            a->radians[s] = (valid >> s & 1) ? (float)(v[s] * (M_PI / 180.0)) : 0.0f;
+            a->radians[s] = (row->valid >> s & 1) ? (float)(v[s] * (M_PI / 180.0)) : 0.0f;
     } else {
         float q[4];
         if (replay_wrist_rotation(&v[3], &v[6], q))
-            return fail(L, -EBADMSG, line, f[LEAD_COLUMNS + 3].col,
+            return fail(L, -EBADMSG, row->line, row->col[FP_LEAPCSV_LEAD + 3],
                         "palm normal and hand direction are zero or parallel");
         replay_item *it = push_item(L);
         if (!it) return oom(L);
@@ -296,102 +123,18 @@ static int csv_row(loader *L, replay_format fmt, long line, char *text, long lon
         p->header = (fp_event_header){.size = sizeof *p, .type = FP_EVENT_JOINT_POSITIONS,
                                       .hand = hand};
         /* Columns as strtof reads them: the nearest float to the CSV text. */
-        for (int c = 0; c < 3; c++) p->mm[FP_JOINT_PALM][c] = strtof_l(f[4 + c].s, NULL, L->c_locale);
+        for (int c = 0; c < 3; c++) p->mm[FP_JOINT_PALM][c] = row->valuef[c];
         for (int j = 0; j < 4 * FP_FINGERS; j++)
-            for (int c = 0; c < 3; c++)
-                p->mm[FP_JOINT_FINGER0 + j][c] =
-                    strtof_l(f[LEAD_COLUMNS + 9 + 3 * j + c].s, NULL, L->c_locale);
+            for (int c = 0; c < 3; c++) p->mm[FP_JOINT_FINGER0 + j][c] = row->valuef[9 + 3 * j + c];
         replay_item *wi = push_item(L);
         if (!wi) return oom(L);
         wi->t_ns = t_ns;
         fp_event_wrist_pose *w = &wi->event.wrist;
         w->header = (fp_event_header){.size = sizeof *w, .type = FP_EVENT_WRIST_POSE, .hand = hand};
-        for (int c = 0; c < 3; c++) w->position_mm[c] = L->rec->items[L->rec->count - 2].event.positions.mm[0][c];
+        for (int c = 0; c < 3; c++) w->position_mm[c] = row->valuef[c];
         memcpy(w->rotation, q, sizeof q);
     }
     L->rec->frames++;
-    return 0;
-}
-
-static int check_csv_header(loader *L, replay_format fmt, char *text)
-{
-    field f[MAX_COLUMNS];
-    int want = fmt == REPLAY_FORMAT_JOINTS_CSV ? JOINT_COLUMNS : ANGLE_COLUMNS;
-    int n = split_csv(text, f, MAX_COLUMNS);
-    char name[64];
-    for (int i = 0; i < want && i < n; i++) {
-        column_name(fmt, i, name, sizeof name);
-        if (strcmp(f[i].s, name) != 0)
-            return fail(L, -EBADMSG, 1, f[i].col, "header column %d is \"%s\", expected \"%s\"",
-                        i + 1, f[i].s, name);
-    }
-    if (n != want)
-        return fail(L, -EBADMSG, 1, n < want ? (long)strlen(text) + 1 : f[want].col,
-                    "header has %d columns, expected %d", n, want);
-    return 0;
-}
-
-static int read_file(loader *L, char **data, size_t *len)
-{
-    FILE *f = fopen(L->path, "rb");
-    if (!f) return fail(L, -errno, 0, 0, "cannot open: %s", strerror(errno));
-    size_t cap = 1 << 16, n = 0;
-    char *buf = malloc(cap + 1);
-    while (buf) {
-        size_t got = fread(buf + n, 1, cap - n, f);
-        n += got;
-        if (n < cap) break;
-        char *bigger = realloc(buf, cap * 2 + 1);
-        if (!bigger) {
-            free(buf);
-            buf = NULL;
-            break;
-        }
-        buf = bigger;
-        cap *= 2;
-    }
-    int bad = ferror(f);
-    fclose(f);
-    if (!buf) return oom(L);
-    if (bad) {
-        free(buf);
-        return fail(L, -EIO, 0, 0, "cannot read");
-    }
-    buf[n] = '\0';
-    *data = buf;
-    *len = n;
-    return 0;
-}
-
-static int load_csv(loader *L, replay_format fmt, char *data, size_t len)
-{
-    long line = 0;
-    long long last_ts = 0;
-    int have_ts = 0;
-    char *p = data, *end = data + len;
-    while (p < end) {
-        char *nl = memchr(p, '\n', (size_t)(end - p));
-        line++;
-        if (!nl) {
-            /* The last line has no newline: cut short (a crash, a copy cut off). */
-            if (line == 1) return fail(L, -EBADMSG, 1, 1, "header line not terminated");
-            L->rec->truncated_line = line;
-            break;
-        }
-        *nl = '\0';
-        size_t n = (size_t)(nl - p);
-        if (n > 0 && p[n - 1] == '\r') p[--n] = '\0';
-        if (strlen(p) != n) return fail(L, -EBADMSG, line, (long)strlen(p) + 1, "NUL byte in line");
-        int rc;
-        if (line == 1)
-            rc = check_csv_header(L, fmt, p);
-        else if (*p == '\0')
-            rc = 0; /* blank line */
-        else
-            rc = csv_row(L, fmt, line, p, &last_ts, &have_ts);
-        if (rc) return rc;
-        p = nl + 1;
-    }
     return 0;
 }
 
@@ -401,14 +144,14 @@ static int load_csv(loader *L, replay_format fmt, char *data, size_t len)
 static int load_eventlog(loader *L)
 {
     fp_eventlog_reader *r = fp_eventlog_reader_open(L->path, L->err, L->errlen);
-    if (!r) return -EBADMSG;
+    if (!r) return -EINVAL;
     fp_event ev;
     int rc, own = 0; /* own: rc is this loader's -errno, with its message in err */
     int64_t last = 0;
     int have = 0;
     while ((rc = fp_eventlog_reader_next(r, &ev)) == 1) {
         if (have && ev.header.time_ns < last) {
-            rc = fail(L, -EBADMSG, fp_eventlog_reader_line(r), 1,
+            rc = fail(L, -EINVAL, fp_eventlog_reader_line(r), 1,
                       "time %lld goes backwards (the event before has %lld)",
                       (long long)ev.header.time_ns, (long long)last);
             own = 1;
@@ -429,7 +172,7 @@ static int load_eventlog(loader *L)
         L->rec->frames++;
     }
     if (rc < 0 && !own) {
-        put_msg(L->err, L->errlen, "%s", fp_eventlog_reader_error(r));
+        fp_errorf(L->err, L->errlen, 0, "%s", fp_eventlog_reader_error(r)); /* rc is an errno */
     }
     L->rec->truncated_line = fp_eventlog_reader_truncated_line(r);
     fp_eventlog_reader_close(&r);
@@ -445,44 +188,46 @@ void replay_recording_free(replay_recording *rec)
     memset(rec, 0, sizeof *rec);
 }
 
-static const char *hands_name(int hands)
+/* The first bytes of the file, NUL-terminated, to tell the formats apart. */
+static int read_head(loader *L, char *head, size_t len)
 {
-    return hands == REPLAY_HAND_LEFT ? "left" : hands == REPLAY_HAND_RIGHT ? "right" : "both";
+    FILE *f = fopen(L->path, "rb");
+    if (!f) {
+        int e = errno;
+        return fail(L, -e, 0, 0, "cannot open: %s", strerror(e));
+    }
+    size_t n = fread(head, 1, len - 1, f);
+    int bad = ferror(f);
+    fclose(f);
+    if (bad) return fail(L, -EIO, 0, 0, "cannot read");
+    head[n] = '\0';
+    return 0;
 }
 
 int replay_load(const char *path, int hands, replay_recording *out, char *err, size_t errlen)
 {
     memset(out, 0, sizeof *out);
-    loader L = {path, hands, newlocale(LC_ALL_MASK, "C", (locale_t)0), out, 0, err, errlen};
-    if (L.c_locale == (locale_t)0) return oom(&L);
-    char *data = NULL;
-    size_t len = 0;
-    int rc = read_file(&L, &data, &len);
-    if (rc) {
-        freelocale(L.c_locale);
-        return rc;
-    }
+    loader L = {path, hands, out, 0, err, errlen};
     static const char csv_lead[] = "frame,timestamp_us,hand_id,hand_type,";
     static const char log_lead[] = "# " FP_EVENTLOG_MAGIC;
-    if (strncmp(data, log_lead, sizeof log_lead - 1) == 0) {
+    char head[64];
+    int rc = read_head(&L, head, sizeof head);
+    if (rc) return rc;
+    if (strncmp(head, log_lead, sizeof log_lead - 1) == 0) {
         out->format = REPLAY_FORMAT_EVENTLOG;
-        free(data);
-        data = NULL;
         rc = load_eventlog(&L);
-    } else if (strncmp(data, csv_lead, sizeof csv_lead - 1) == 0) {
-        const char *next = data + sizeof csv_lead - 1;
-        out->format = strncmp(next, "palm_x,", 7) == 0 ? REPLAY_FORMAT_JOINTS_CSV
-                                                       : REPLAY_FORMAT_ANGLES_CSV;
-        rc = load_csv(&L, out->format, data, len);
+    } else if (strncmp(head, csv_lead, sizeof csv_lead - 1) == 0) {
+        fp_leapcsv_format fmt = FP_LEAPCSV_ANY;
+        rc = fp_leapcsv_read(path, FP_LEAPCSV_ANY, &fmt, csv_row, &L, &out->truncated_line, err,
+                             errlen);
+        out->format = fmt == FP_LEAPCSV_JOINTS ? REPLAY_FORMAT_JOINTS_CSV : REPLAY_FORMAT_ANGLES_CSV;
     } else {
         rc = fail(&L, -EBADMSG, 1, 1,
                   "unknown format: expected a facepuppet event log (\"# %s 1\") or a Leap CSV "
                   "(header \"%s...\")", FP_EVENTLOG_MAGIC, csv_lead);
     }
-    free(data);
-    freelocale(L.c_locale);
     if (!rc && out->count == 0)
-        rc = fail(&L, -EINVAL, 0, 0, "no events to replay (hands=%s)", hands_name(hands));
+        rc = fail(&L, -EINVAL, 0, 0, "no events to replay (hands=%s)", fp_hands_name((unsigned)hands));
     if (rc) {
         replay_recording_free(out);
         return rc;

@@ -1,6 +1,7 @@
 /*
  * replay_load.h: input-replay's loader. Reads a whole recording (Leap joint-positions CSV,
- * Leap joint-angles CSV or facepuppet event log) into a list of timed events.
+ * Leap joint-angles CSV, both read by core/hand/leapcsv.h, or facepuppet event log) into a
+ * list of timed events.
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
@@ -8,13 +9,14 @@
 #define REPLAY_LOAD_H
 
 #include <facepuppet/plugin.h>
+#include <facepuppet/plugin_util.h>
 
 #include <stddef.h>
 #include <stdint.h>
 
 /** Which hands to keep (bit per fp_hand_side). Events with hand -1 are always kept. */
-enum { REPLAY_HAND_LEFT = 1 << FP_HAND_LEFT, REPLAY_HAND_RIGHT = 1 << FP_HAND_RIGHT,
-       REPLAY_HAND_BOTH = REPLAY_HAND_LEFT | REPLAY_HAND_RIGHT };
+enum { REPLAY_HAND_LEFT = FP_HANDMASK_LEFT, REPLAY_HAND_RIGHT = FP_HANDMASK_RIGHT,
+       REPLAY_HAND_BOTH = FP_HANDMASK_BOTH };
 
 typedef enum replay_format {
     REPLAY_FORMAT_JOINTS_CSV = 1,  /* *_joints_mm.csv */
@@ -39,11 +41,10 @@ typedef struct replay_recording {
 } replay_recording;
 
 /** Read `path` in full. hands: REPLAY_HAND_* bits.
- *  Returns 0, or a negative errno code after writing to err "PATH: reason" or
- *  "PATH:LINE:COLUMN: reason": -EBADMSG for malformed content (bad number, wrong column
- *  count, unknown hand_type, time going backwards, unknown format), -ENOENT / -EACCES / -EIO
- *  for a file that cannot be read, -EINVAL when no events are left for the hands asked for
- *  (the SPEC's hands= key), -ENOMEM. */
+ *  Returns 0, or a negative errno code (-EBADMSG for malformed content, -ENOENT ...) after
+ *  writing to err "PATH: reason" or
+ *  "PATH:LINE:COLUMN: reason" (bad number, wrong column count, unknown hand_type, time going
+ *  backwards, unknown format, no events for the hands asked for). */
 int replay_load(const char *path, int hands, replay_recording *out, char *err, size_t errlen);
 
 /** Free what replay_load allocated; leaves *rec zeroed. */

@@ -26,6 +26,8 @@
 #include "cyberglove.h"
 #include "facepuppet/plugin.h"
 #include "glove_cal.h"
+#include "fp_stats.h"
+#include "fp_test_support.h"
 #include "gloveemu.h"
 
 #define CAL_RIGHT "../shared/data/cyberglove/GloveCalibrationRight.cal"
@@ -39,178 +41,12 @@ static void *plugin_so;
 static char tmpdir[64];
 
 /* ------------------------------------------------------------------------------------- */
-/* A fake host collecting events                                                          */
-
-typedef struct fake_host {
-    fp_host host;
-    pthread_mutex_t lock;
-    pthread_cond_t cond;
-    fp_event *ev;
-    size_t n, cap;
-    bool count_only;    /* keep counters, not events (throughput run) */
-    uint64_t angles;
-    char last_log[1024];
-} fake_host;
-
-static int64_t mono_ns(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
-}
-
-static bool fh_push(const fp_host *h, const fp_event_header *e)
-{
-    fake_host *f = h->host_data;
-    assert_true(e->size <= sizeof(fp_event));
-    pthread_mutex_lock(&f->lock);
-    if (e->type == FP_EVENT_JOINT_ANGLES)
-        f->angles++;
-    if (!f->count_only || e->type != FP_EVENT_JOINT_ANGLES) {
-        if (f->n == f->cap) {
-            f->cap = f->cap ? 2 * f->cap : 1024;
-            f->ev = realloc(f->ev, f->cap * sizeof *f->ev);
-        }
-        memset(&f->ev[f->n], 0, sizeof f->ev[0]);
-        memcpy(&f->ev[f->n], e, e->size);
-        f->n++;
-    }
-    pthread_cond_broadcast(&f->cond);
-    pthread_mutex_unlock(&f->lock);
-    return true;
-}
-
-static int64_t fh_now(const fp_host *h) { (void)h; return mono_ns(); }
-
-static void fh_log(const fp_host *h, fp_log_level lvl, const char *msg)
-{
-    fake_host *f = h->host_data;
-    pthread_mutex_lock(&f->lock);
-    snprintf(f->last_log, sizeof f->last_log, "%s", msg);
-    pthread_mutex_unlock(&f->lock);
-    if (getenv("FP_TEST_VERBOSE") || lvl == FP_LOG_ERROR)
-        fprintf(stderr, "  [plugin] %s\n", msg);
-}
-
-static fake_host *fh_new(void)
-{
-    fake_host *f = calloc(1, sizeof *f);
-    f->host.size = sizeof f->host;
-    f->host.abi = (fp_version){FP_PLUGIN_ABI_MAJOR, FP_PLUGIN_ABI_MINOR};
-    f->host.host_data = f;
-    f->host.push_event = fh_push;
-    f->host.now_ns = fh_now;
-    f->host.log = fh_log;
-    pthread_mutex_init(&f->lock, NULL);
-    pthread_cond_init(&f->cond, NULL);
-    return f;
-}
-
-static void fh_free(fake_host *f)
-{
-    pthread_mutex_destroy(&f->lock);
-    pthread_cond_destroy(&f->cond);
-    free(f->ev);
-    free(f);
-}
-
-static size_t fh_count(fake_host *f)
-{
-    pthread_mutex_lock(&f->lock);
-    size_t n = f->n;
-    pthread_mutex_unlock(&f->lock);
-    return n;
-}
-
-static fp_event fh_get(fake_host *f, size_t i)
-{
-    pthread_mutex_lock(&f->lock);
-    fp_event e = f->ev[i];
-    pthread_mutex_unlock(&f->lock);
-    return e;
-}
-
-/* Wait until an event at index >= from satisfies (type, code/angles count). Returns the index
- * of the match, or -1 after ms milliseconds. */
-static long fh_wait_status(fake_host *f, size_t from, uint32_t code, const char *text_part,
-                           int ms)
-{
-    int64_t deadline = mono_ns() + (int64_t)ms * 1000000;
-    pthread_mutex_lock(&f->lock);
-    for (;;) {
-        for (size_t i = from; i < f->n; i++)
-            if (f->ev[i].header.type == FP_EVENT_STATUS && f->ev[i].status.code == code &&
-                (!text_part || strstr(f->ev[i].status.text, text_part))) {
-                pthread_mutex_unlock(&f->lock);
-                return (long)i;
-            }
-        from = f->n;
-        struct timespec ts;
-        clock_gettime(CLOCK_MONOTONIC, &ts);
-        if (mono_ns() > deadline)
-            break;
-        struct timespec until;
-        clock_gettime(CLOCK_REALTIME, &until);
-        until.tv_nsec += 20000000;
-        if (until.tv_nsec >= 1000000000) {
-            until.tv_sec++;
-            until.tv_nsec -= 1000000000;
-        }
-        pthread_cond_timedwait(&f->cond, &f->lock, &until);
-    }
-    pthread_mutex_unlock(&f->lock);
-    return -1;
-}
-
-/* Wait until `count` angle events follow index from; returns the index just past the
- * count-th, or -1. */
-static long fh_wait_angles(fake_host *f, size_t from, size_t count, int ms)
-{
-    int64_t deadline = mono_ns() + (int64_t)ms * 1000000;
-    size_t seen = 0, i = from;
-    pthread_mutex_lock(&f->lock);
-    for (;;) {
-        for (; i < f->n; i++)
-            if (f->ev[i].header.type == FP_EVENT_JOINT_ANGLES && ++seen == count) {
-                pthread_mutex_unlock(&f->lock);
-                return (long)i + 1;
-            }
-        if (mono_ns() > deadline)
-            break;
-        struct timespec until;
-        clock_gettime(CLOCK_REALTIME, &until);
-        until.tv_nsec += 20000000;
-        if (until.tv_nsec >= 1000000000) {
-            until.tv_sec++;
-            until.tv_nsec -= 1000000000;
-        }
-        pthread_cond_timedwait(&f->cond, &f->lock, &until);
-    }
-    pthread_mutex_unlock(&f->lock);
-    return -1;
-}
-
-/* ------------------------------------------------------------------------------------- */
 /* Plugin and emulator helpers                                                           */
 
 static int group_setup(void **state)
 {
     (void)state;
-    const char *bd = getenv("FP_BUILD_DIR");
-    char path[4096];
-    snprintf(path, sizeof path, "%s/lib/facepuppet/input-cyberglove.so", bd ? bd : "build");
-    plugin_so = dlopen(path, RTLD_NOW | RTLD_LOCAL);
-    if (!plugin_so) {
-        fprintf(stderr, "dlopen %s: %s\n", path, dlerror());
-        return -1;
-    }
-    const fp_plugin_entry *entry = dlsym(plugin_so, FP_PLUGIN_ENTRY_SYMBOL);
-    if (!entry || !fp_version_is_compatible((fp_version){FP_PLUGIN_ABI_MAJOR, FP_PLUGIN_ABI_MINOR},
-                                            entry->abi))
-        return -1;
-    if (!entry->init(path))
-        return -1;
-    factory = entry->get_factory(FP_INPUT_FACTORY_ID);
+    factory = fp_test_plugin_open("input-cyberglove.so", FP_INPUT_FACTORY_ID, &plugin_so);
     if (!factory || strcmp(factory->name, "cyberglove") != 0)
         return -1;
     snprintf(tmpdir, sizeof tmpdir, "/tmp/fp-cyberglove-XXXXXX");
@@ -222,15 +58,13 @@ static int group_setup(void **state)
 static int group_teardown(void **state)
 {
     (void)state;
-    const fp_plugin_entry *entry = dlsym(plugin_so, FP_PLUGIN_ENTRY_SYMBOL);
-    entry->deinit();
-    dlclose(plugin_so);
+    fp_test_plugin_close(&plugin_so);
     rmdir(tmpdir);
     return 0;
 }
 
 /* Create an input from "k=v" strings (NULL-terminated). Returns the create() result. */
-static int create_input(fake_host *f, const char *arg, fp_input **out, char *err, size_t errlen,
+static int create_input(fp_test_host *f, const char *arg, fp_input **out, char *err, size_t errlen,
                         ...)
 {
     fp_param params[16];
@@ -306,12 +140,12 @@ static fp_cyberglove_stats plugin_stats(fp_input *in)
  * no record lost or invented, every measured sensor within one raw step of the angle the
  * emulator made the record from (sensors clamped to the raw range excepted). Returns the
  * number of events checked. */
-static size_t check_against_records(fake_host *f, fp_gloveemu *e, const fpg_cal *cal,
+static size_t check_against_records(fp_test_host *f, fp_gloveemu *e, const fpg_cal *cal,
                                     size_t from, size_t to, uint64_t seq0, int hand)
 {
     size_t k = 0;
     for (size_t i = from; i < to; i++) {
-        fp_event ev = fh_get(f, i);
+        fp_event ev = fp_test_host_get(f, i);
         if (ev.header.type != FP_EVENT_JOINT_ANGLES)
             continue;
         fp_gloveemu_record r;
@@ -337,28 +171,22 @@ static size_t check_against_records(fake_host *f, fp_gloveemu *e, const fpg_cal 
     return k;
 }
 
-static void print_wire_latency(fake_host *f, fp_gloveemu *e, size_t from, size_t to,
+static void print_wire_latency(fp_test_host *f, fp_gloveemu *e, size_t from, size_t to,
                                uint64_t seq0, const char *what)
 {
     double *d = calloc(to - from + 1, sizeof *d);
     size_t n = 0, k = 0;
     for (size_t i = from; i < to; i++) {
-        fp_event ev = fh_get(f, i);
+        fp_event ev = fp_test_host_get(f, i);
         if (ev.header.type != FP_EVENT_JOINT_ANGLES)
             continue;
         fp_gloveemu_record r;
         if (fp_gloveemu_get_record(e, seq0 + k++, &r) == 0)
             d[n++] = (ev.header.time_ns - r.sent_ns) / 1e3;
     }
-    for (size_t a = 1; a < n; a++)   /* insertion sort: n is small */
-        for (size_t b = a; b > 0 && d[b - 1] > d[b]; b--) {
-            double t = d[b];
-            d[b] = d[b - 1];
-            d[b - 1] = t;
-        }
     if (n)
         printf("  %s: emulator write -> plugin read: median %.1f us, p99 %.1f us (%zu records)\n",
-               what, d[n / 2], d[(size_t)(0.99 * (n - 1))], n);
+               what, fp_median(d, n), fp_percentile(d, n, 0.99), n);
     free(d);
 }
 
@@ -372,19 +200,19 @@ static void test_stream_22_right_calibrated(void **state)
     fp_gloveemu *e = emu_new((fp_gloveemu_options){.sensors = 22, .recording = CSV_GRAB,
                                                    .calibration = CAL_RIGHT, .timestamps = true},
                              "g1");
-    fake_host *f = fh_new();
+    fp_test_host *f = fp_test_host_new(0);
     fp_input *in = NULL;
     char err[256];
     assert_int_equal(create_input(f, fp_gloveemu_path(e), &in, err, sizeof err, "cal=" CAL_RIGHT,
                                   "rate=200", (char *)NULL), 0);
     start_input(in);
-    long c = fh_wait_status(f, 0, FP_STATUS_CONNECTED, NULL, WAIT_MS);
+    long c = fp_test_host_wait_status(f, 0, FP_STATUS_CONNECTED, NULL, WAIT_MS);
     assert_true(c >= 0);
-    fp_event ce = fh_get(f, (size_t)c);
+    fp_event ce = fp_test_host_get(f, (size_t)c);
     assert_non_null(strstr(ce.status.text, "22 sensors"));
     assert_non_null(strstr(ce.status.text, "right hand"));
     assert_non_null(strstr(ce.status.text, "CyberGlove emu 1.0"));
-    long end = fh_wait_angles(f, (size_t)c, 100, WAIT_MS);
+    long end = fp_test_host_wait_angles(f, (size_t)c, 100, WAIT_MS);
     assert_true(end > 0);
     fp_gloveemu_stats es;   /* records arrived, so the emulator has executed S */
     fp_gloveemu_get_stats(e, &es);
@@ -408,7 +236,7 @@ static void test_stream_22_right_calibrated(void **state)
     printf("  plugin: last byte -> event median %.1f us, p99 %.1f us over %llu records\n",
            s.latency_median_us, s.latency_p99_us, (unsigned long long)s.latency_samples);
     stop_input(&in);
-    fh_free(f);
+    fp_test_host_free(f);
     fp_gloveemu_destroy(&e);
 }
 
@@ -418,14 +246,14 @@ static void test_stream_18_left_default_map(void **state)
     (void)state;
     fp_gloveemu *e = emu_new((fp_gloveemu_options){.sensors = 18, .left = true,
                                                    .recording = CSV_CLAPS}, "g2");
-    fake_host *f = fh_new();
+    fp_test_host *f = fp_test_host_new(0);
     fp_input *in = NULL;
     char err[256];
     assert_int_equal(create_input(f, fp_gloveemu_path(e), &in, err, sizeof err, (char *)NULL), 0);
     start_input(in);
-    long c = fh_wait_status(f, 0, FP_STATUS_CONNECTED, "18 sensors", WAIT_MS);
+    long c = fp_test_host_wait_status(f, 0, FP_STATUS_CONNECTED, "18 sensors", WAIT_MS);
     assert_true(c >= 0);
-    long end = fh_wait_angles(f, (size_t)c, 60, WAIT_MS);
+    long end = fp_test_host_wait_angles(f, (size_t)c, 60, WAIT_MS);
     assert_true(end > 0);
     fp_gloveemu_stats es;
     fp_gloveemu_get_stats(e, &es);
@@ -433,10 +261,10 @@ static void test_stream_18_left_default_map(void **state)
     fpg_cal_default(&cal);
     assert_int_equal(check_against_records(f, e, &cal, (size_t)c, (size_t)end, es.session_seq,
                                            FP_HAND_LEFT), 60);
-    fp_event ev = fh_get(f, (size_t)end - 1);
+    fp_event ev = fp_test_host_get(f, (size_t)end - 1);
     assert_int_equal(ev.angles.valid, 0x3FFFFFu & ~((1u << 6) | (1u << 9) | (1u << 13) | (1u << 17)));
     stop_input(&in);
-    fh_free(f);
+    fp_test_host_free(f);
     fp_gloveemu_destroy(&e);
 }
 
@@ -446,15 +274,15 @@ static void test_poll_mode(void **state)
     (void)state;
     fp_gloveemu *e = emu_new((fp_gloveemu_options){.recording = CSV_GRAB,
                                                    .calibration = CAL_RIGHT}, "g3");
-    fake_host *f = fh_new();
+    fp_test_host *f = fp_test_host_new(0);
     fp_input *in = NULL;
     char err[256];
     assert_int_equal(create_input(f, fp_gloveemu_path(e), &in, err, sizeof err, "mode=poll",
                                   "rate=250", "cal=" CAL_RIGHT, "hand=right", (char *)NULL), 0);
     start_input(in);
-    long c = fh_wait_status(f, 0, FP_STATUS_CONNECTED, "poll", WAIT_MS);
+    long c = fp_test_host_wait_status(f, 0, FP_STATUS_CONNECTED, "poll", WAIT_MS);
     assert_true(c >= 0);
-    long end = fh_wait_angles(f, (size_t)c, 50, WAIT_MS);
+    long end = fp_test_host_wait_angles(f, (size_t)c, 50, WAIT_MS);
     assert_true(end > 0);
     fp_gloveemu_stats es;
     fp_gloveemu_get_stats(e, &es);
@@ -469,7 +297,7 @@ static void test_poll_mode(void **state)
     assert_int_equal(fp_gloveemu_get_record(e, es.session_seq, &r), 0);
     assert_int_equal(r.start, 'G');
     stop_input(&in);
-    fh_free(f);
+    fp_test_host_free(f);
     fp_gloveemu_destroy(&e);
 }
 
@@ -479,15 +307,15 @@ static void test_sixteen_bit(void **state)
     (void)state;
     fp_gloveemu *e = emu_new((fp_gloveemu_options){.recording = CSV_GRAB,
                                                    .calibration = CAL_RIGHT}, "g4");
-    fake_host *f = fh_new();
+    fp_test_host *f = fp_test_host_new(0);
     fp_input *in = NULL;
     char err[256];
     assert_int_equal(create_input(f, fp_gloveemu_path(e), &in, err, sizeof err, "bits=16",
                                   "cal=" CAL_RIGHT, (char *)NULL), 0);
     start_input(in);
-    long c = fh_wait_status(f, 0, FP_STATUS_CONNECTED, "16-bit", WAIT_MS);
+    long c = fp_test_host_wait_status(f, 0, FP_STATUS_CONNECTED, "16-bit", WAIT_MS);
     assert_true(c >= 0);
-    long end = fh_wait_angles(f, (size_t)c, 60, WAIT_MS);
+    long end = fp_test_host_wait_angles(f, (size_t)c, 60, WAIT_MS);
     assert_true(end > 0);
     fp_gloveemu_stats es;
     fp_gloveemu_get_stats(e, &es);
@@ -502,7 +330,7 @@ static void test_sixteen_bit(void **state)
     assert_int_equal(r.bits, 16);
     assert_int_equal(plugin_stats(in).noise_bytes, 0);
     stop_input(&in);
-    fh_free(f);
+    fp_test_host_free(f);
     fp_gloveemu_destroy(&e);
 }
 
@@ -521,18 +349,18 @@ static void test_calibration_asr_by_hand(void **state)
     raw[0] = 86;
     raw[4] = 151;
     fp_gloveemu_set_raw(e, raw);
-    fake_host *f = fh_new();
+    fp_test_host *f = fp_test_host_new(0);
     fp_input *in = NULL;
     char err[256];
     assert_int_equal(create_input(f, fp_gloveemu_path(e), &in, err, sizeof err, "cal=" CAL_RIGHT,
                                   "hand=left", (char *)NULL), 0);
     start_input(in);
-    long end = fh_wait_angles(f, 0, 3, WAIT_MS);
+    long end = fp_test_host_wait_angles(f, 0, 3, WAIT_MS);
     assert_true(end > 0);
     /* hand=left on a glove that says right: a warning, and the SPEC wins */
-    assert_true(fh_wait_status(f, 0, FP_STATUS_WARNING, "hand=left but the glove says right",
+    assert_true(fp_test_host_wait_status(f, 0, FP_STATUS_WARNING, "hand=left but the glove says right",
                                0) >= 0);
-    fp_event ev = fh_get(f, (size_t)end - 1);
+    fp_event ev = fp_test_host_get(f, (size_t)end - 1);
     assert_int_equal(ev.header.hand, FP_HAND_LEFT);
     assert_float_equal(ev.angles.radians[21], -0.1, 1e-5);
     assert_float_equal(ev.angles.radians[0], -0.2, 1e-5);
@@ -540,38 +368,60 @@ static void test_calibration_asr_by_hand(void **state)
     assert_int_equal(ev.angles.valid & (1u << 19), 0);
     assert_int_equal(ev.angles.valid, 0x3FFFFFu & ~(1u << 19));
     stop_input(&in);
-    fh_free(f);
+    fp_test_host_free(f);
     fp_gloveemu_destroy(&e);
+}
+
+/* A glove whose sensors send raw[], read through the calibration text cal_text, until three
+ * angle events have come. Fills *run; returns the index just past the third. */
+typedef struct cal_run {
+    char calpath[256];
+    fp_gloveemu *e;
+    fp_test_host *f;
+    fp_input *in;
+} cal_run;
+
+static long start_with_cal(cal_run *run, const char *name, const char *cal_text,
+                           const uint8_t raw[22])
+{
+    snprintf(run->calpath, sizeof run->calpath, "%s/%s.cal", tmpdir, name);
+    fp_test_write_file(run->calpath, cal_text);
+    run->e = emu_new((fp_gloveemu_options){0}, name);
+    fp_gloveemu_set_raw(run->e, raw);
+    run->f = fp_test_host_new(0);
+    run->in = NULL;
+    char err[256], cal_kv[300];
+    snprintf(cal_kv, sizeof cal_kv, "cal=%s", run->calpath);
+    assert_int_equal(create_input(run->f, fp_gloveemu_path(run->e), &run->in, err, sizeof err,
+                                  cal_kv, (char *)NULL), 0);
+    start_input(run->in);
+    long end = fp_test_host_wait_angles(run->f, 0, 3, WAIT_MS);
+    assert_true(end > 0);
+    return end;
+}
+
+static void finish_cal(cal_run *run)
+{
+    stop_input(&run->in);
+    fp_test_host_free(run->f);
+    fp_gloveemu_destroy(&run->e);
+    unlink(run->calpath);
 }
 
 /* The gain/offset format and the default map, by hand. */
 static void test_calibration_gain_and_default(void **state)
 {
     (void)state;
-    char calpath[256];
-    snprintf(calpath, sizeof calpath, "%s/gain.cal", tmpdir);
-    FILE *cf = fopen(calpath, "w");
-    assert_non_null(cf);
-    fputs("# sensor gain offset (radians)\n0 0.01 -0.5\n\n21 -0.02 1.0   # wrist yaw\n", cf);
-    fclose(cf);
-    fp_gloveemu *e = emu_new((fp_gloveemu_options){0}, "g6");
     uint8_t raw[22];
     memset(raw, 128, sizeof raw);
     raw[0] = 100;
     raw[21] = 50;
     raw[1] = 1;
     raw[2] = 254;
-    fp_gloveemu_set_raw(e, raw);
-    fake_host *f = fh_new();
-    fp_input *in = NULL;
-    char err[256], cal_kv[300];
-    snprintf(cal_kv, sizeof cal_kv, "cal=%s", calpath);
-    assert_int_equal(create_input(f, fp_gloveemu_path(e), &in, err, sizeof err, cal_kv,
-                                  (char *)NULL), 0);
-    start_input(in);
-    long end = fh_wait_angles(f, 0, 3, WAIT_MS);
-    assert_true(end > 0);
-    fp_event ev = fh_get(f, (size_t)end - 1);
+    cal_run run;
+    long end = start_with_cal(&run, "g6", "# sensor gain offset (radians)\n0 0.01 -0.5\n\n"
+                              "21 -0.02 1.0   # wrist yaw\n", raw);
+    fp_event ev = fp_test_host_get(run.f, (size_t)end - 1);
     assert_float_equal(ev.angles.radians[0], 0.5, 1e-5);
     assert_float_equal(ev.angles.radians[21], 0.0, 1e-5);
     /* unlisted sensors keep the default map: raw 1 -> 0, raw 254 -> pi/2, 128 -> 127/253 */
@@ -579,10 +429,25 @@ static void test_calibration_gain_and_default(void **state)
     assert_float_equal(ev.angles.radians[2], M_PI / 2, 1e-5);
     assert_float_equal(ev.angles.radians[5], (127.0 / 253.0) * M_PI / 2, 1e-5);
     assert_int_equal(ev.angles.valid, 0x3FFFFFu);
-    stop_input(&in);
-    fh_free(f);
-    fp_gloveemu_destroy(&e);
-    unlink(calpath);
+    finish_cal(&run);
+}
+
+/* A gain whose angle leaves float range: the plugin pushes that sensor as invalid, never
+ * an infinite angle (issue 16). */
+static void test_calibration_never_infinite(void **state)
+{
+    (void)state;
+    uint8_t raw[22];
+    memset(raw, 100, sizeof raw);
+    cal_run run; /* 3e38 is finite as a float, but 3e38 x raw 100 is not */
+    long end = start_with_cal(&run, "g6i", "0 3e38 0\n", raw);
+    for (long i = 0; i < end; i++) {
+        fp_event ev = fp_test_host_get(run.f, (size_t)i);
+        if (ev.header.type != FP_EVENT_JOINT_ANGLES) continue;
+        assert_int_equal(ev.angles.valid, 0x3FFFFEu);
+        for (int k = 0; k < 22; k++) assert_true(isfinite(ev.angles.radians[k]));
+    }
+    finish_cal(&run);
 }
 
 /* Glove unplugged from its box and plugged back. */
@@ -590,35 +455,35 @@ static void test_fault_unplug(void **state)
 {
     (void)state;
     fp_gloveemu *e = emu_new((fp_gloveemu_options){.recording = CSV_GRAB, .loop = true}, "g7");
-    fake_host *f = fh_new();
+    fp_test_host *f = fp_test_host_new(0);
     fp_input *in = NULL;
     char err[256];
     assert_int_equal(create_input(f, fp_gloveemu_path(e), &in, err, sizeof err, (char *)NULL), 0);
     start_input(in);
-    long c = fh_wait_status(f, 0, FP_STATUS_CONNECTED, NULL, WAIT_MS);
-    assert_true(c >= 0 && fh_wait_angles(f, (size_t)c, 10, WAIT_MS) > 0);
+    long c = fp_test_host_wait_status(f, 0, FP_STATUS_CONNECTED, NULL, WAIT_MS);
+    assert_true(c >= 0 && fp_test_host_wait_angles(f, (size_t)c, 10, WAIT_MS) > 0);
     fp_gloveemu_set_plugged(e, false);
-    long d = fh_wait_status(f, (size_t)c, FP_STATUS_DISCONNECTED, "unplugged", WAIT_MS);
+    long d = fp_test_host_wait_status(f, (size_t)c, FP_STATUS_DISCONNECTED, "unplugged", WAIT_MS);
     assert_true(d >= 0);
     /* the box keeps sending (status bit clear, eg): let 20 such records pass */
     fp_gloveemu_stats es;
     fp_gloveemu_get_stats(e, &es);
     uint64_t target = es.records + 20;
-    int64_t deadline = mono_ns() + (int64_t)WAIT_MS * 1000000;
-    while (es.records < target && mono_ns() < deadline) {
+    int64_t deadline = fp_test_mono_ns() + (int64_t)WAIT_MS * 1000000;
+    while (es.records < target && fp_test_mono_ns() < deadline) {
         usleep(5000);
         fp_gloveemu_get_stats(e, &es);
     }
     assert_true(es.records >= target);
     fp_gloveemu_set_plugged(e, true);
-    long r = fh_wait_status(f, (size_t)d, FP_STATUS_CONNECTED, "plugged", WAIT_MS);
+    long r = fp_test_host_wait_status(f, (size_t)d, FP_STATUS_CONNECTED, "plugged", WAIT_MS);
     assert_true(r > d);
     for (long i = d + 1; i < r; i++)   /* no angles while unplugged: the last pose stays */
-        assert_int_not_equal(fh_get(f, (size_t)i).header.type, FP_EVENT_JOINT_ANGLES);
-    assert_true(fh_wait_angles(f, (size_t)r, 10, WAIT_MS) > 0);
+        assert_int_not_equal(fp_test_host_get(f, (size_t)i).header.type, FP_EVENT_JOINT_ANGLES);
+    assert_true(fp_test_host_wait_angles(f, (size_t)r, 10, WAIT_MS) > 0);
     assert_int_equal(plugin_stats(in).connects, 1);   /* no reconnection was needed */
     stop_input(&in);
-    fh_free(f);
+    fp_test_host_free(f);
     fp_gloveemu_destroy(&e);
 }
 
@@ -628,28 +493,28 @@ static void test_fault_cable_pull(void **state)
     (void)state;
     fp_gloveemu *e = emu_new((fp_gloveemu_options){.recording = CSV_GRAB,
                                                    .calibration = CAL_RIGHT}, "g8");
-    fake_host *f = fh_new();
+    fp_test_host *f = fp_test_host_new(0);
     fp_input *in = NULL;
     char err[256];
     assert_int_equal(create_input(f, fp_gloveemu_path(e), &in, err, sizeof err, "cal=" CAL_RIGHT,
                                   (char *)NULL), 0);
     start_input(in);
-    long c = fh_wait_status(f, 0, FP_STATUS_CONNECTED, NULL, WAIT_MS);
-    assert_true(c >= 0 && fh_wait_angles(f, (size_t)c, 10, WAIT_MS) > 0);
+    long c = fp_test_host_wait_status(f, 0, FP_STATUS_CONNECTED, NULL, WAIT_MS);
+    assert_true(c >= 0 && fp_test_host_wait_angles(f, (size_t)c, 10, WAIT_MS) > 0);
     char before[64], after[64];
     fp_gloveemu_slave_path(e, before, sizeof before);
     assert_int_equal(fp_gloveemu_pull_cable(e), 0);
-    long d = fh_wait_status(f, (size_t)c, FP_STATUS_DISCONNECTED, "cable pulled", WAIT_MS);
+    long d = fp_test_host_wait_status(f, (size_t)c, FP_STATUS_DISCONNECTED, "cable pulled", WAIT_MS);
     assert_true(d >= 0);
-    long r1 = fh_wait_status(f, (size_t)d, FP_STATUS_RECONNECTING, NULL, WAIT_MS);
-    long r2 = fh_wait_status(f, (size_t)r1 + 1, FP_STATUS_RECONNECTING, NULL, WAIT_MS);
+    long r1 = fp_test_host_wait_status(f, (size_t)d, FP_STATUS_RECONNECTING, NULL, WAIT_MS);
+    long r2 = fp_test_host_wait_status(f, (size_t)r1 + 1, FP_STATUS_RECONNECTING, NULL, WAIT_MS);
     assert_true(r1 > d && r2 > r1);   /* it keeps trying, backing off */
-    assert_non_null(strstr(fh_get(f, (size_t)r2).status.text, "attempt 2"));
+    assert_non_null(strstr(fp_test_host_get(f, (size_t)r2).status.text, "attempt 2"));
     assert_int_equal(fp_gloveemu_replug_cable(e), 0);
     fp_gloveemu_slave_path(e, after, sizeof after);
-    long c2 = fh_wait_status(f, (size_t)r2, FP_STATUS_CONNECTED, NULL, WAIT_MS);
+    long c2 = fp_test_host_wait_status(f, (size_t)r2, FP_STATUS_CONNECTED, NULL, WAIT_MS);
     assert_true(c2 > r2);
-    long end = fh_wait_angles(f, (size_t)c2, 30, WAIT_MS);
+    long end = fp_test_host_wait_angles(f, (size_t)c2, 30, WAIT_MS);
     assert_true(end > 0);
     fp_gloveemu_stats es;
     fp_gloveemu_get_stats(e, &es);
@@ -661,7 +526,7 @@ static void test_fault_cable_pull(void **state)
     assert_int_equal(plugin_stats(in).connects, 2);
     printf("  cable pull: %s -> %s via %s\n", before, after, fp_gloveemu_path(e));
     stop_input(&in);
-    fh_free(f);
+    fp_test_host_free(f);
     fp_gloveemu_destroy(&e);
 }
 
@@ -671,23 +536,23 @@ static void test_fault_garbage_resync(void **state)
     (void)state;
     fp_gloveemu *e = emu_new((fp_gloveemu_options){.recording = CSV_GRAB,
                                                    .calibration = CAL_RIGHT}, "g9");
-    fake_host *f = fh_new();
+    fp_test_host *f = fp_test_host_new(0);
     fp_input *in = NULL;
     char err[256];
     assert_int_equal(create_input(f, fp_gloveemu_path(e), &in, err, sizeof err, "cal=" CAL_RIGHT,
                                   (char *)NULL), 0);
     start_input(in);
-    long c = fh_wait_status(f, 0, FP_STATUS_CONNECTED, NULL, WAIT_MS);
-    assert_true(c >= 0 && fh_wait_angles(f, (size_t)c, 10, WAIT_MS) > 0);
+    long c = fp_test_host_wait_status(f, 0, FP_STATUS_CONNECTED, NULL, WAIT_MS);
+    assert_true(c >= 0 && fp_test_host_wait_angles(f, (size_t)c, 10, WAIT_MS) > 0);
     /* false starts ('S', 'G', 'e'), zeros, a 16-bit header, high bytes */
     static const uint8_t junk[] = {'S', 0x41, 0x00, 'G', 0x10, 0x20, 0x00, 0xff, 'e', 'x', 0x00,
                                    0x0D, 0x0A, 0x00, 'S', 'S', 0x7f, 0x80, 0x01, 0x02, 0x03,
                                    0xfe, 0x00, 0x00, 'e', 'g', 'S', 0x11, 0x22, 0x33, 0x44,
                                    0x55, 0x66, 0x77, 0x88, 0x99, 'S'};
     fp_gloveemu_inject_garbage(e, junk, sizeof junk);
-    long w = fh_wait_status(f, (size_t)c, FP_STATUS_WARNING, "line noise", WAIT_MS);
+    long w = fp_test_host_wait_status(f, (size_t)c, FP_STATUS_WARNING, "line noise", WAIT_MS);
     assert_true(w > c);
-    long end = fh_wait_angles(f, (size_t)w, 30, WAIT_MS);
+    long end = fp_test_host_wait_angles(f, (size_t)w, 30, WAIT_MS);
     assert_true(end > 0);
     fp_gloveemu_stats es;
     fp_gloveemu_get_stats(e, &es);
@@ -697,7 +562,7 @@ static void test_fault_garbage_resync(void **state)
     assert_int_equal(fpg_cal_load(CAL_RIGHT, &cal, cerr, sizeof cerr), 0);
     size_t total = 0;
     for (size_t i = (size_t)c; i < (size_t)end; i++)
-        total += fh_get(f, i).header.type == FP_EVENT_JOINT_ANGLES;
+        total += fp_test_host_get(f, i).header.type == FP_EVENT_JOINT_ANGLES;
     assert_int_equal(check_against_records(f, e, &cal, (size_t)c, (size_t)end, es.session_seq,
                                            FP_HAND_RIGHT), total);
     fp_cyberglove_stats s = plugin_stats(in);
@@ -705,7 +570,7 @@ static void test_fault_garbage_resync(void **state)
     assert_int_equal(s.resyncs, 1);
     assert_int_equal(s.connects, 1);
     stop_input(&in);
-    fh_free(f);
+    fp_test_host_free(f);
     fp_gloveemu_destroy(&e);
 }
 
@@ -714,28 +579,28 @@ static void test_fault_silence(void **state)
 {
     (void)state;
     fp_gloveemu *e = emu_new((fp_gloveemu_options){.recording = CSV_GRAB}, "g10");
-    fake_host *f = fh_new();
+    fp_test_host *f = fp_test_host_new(0);
     fp_input *in = NULL;
     char err[256];
     assert_int_equal(create_input(f, fp_gloveemu_path(e), &in, err, sizeof err, "timeout=300",
                                   (char *)NULL), 0);
     start_input(in);
-    long c = fh_wait_status(f, 0, FP_STATUS_CONNECTED, NULL, WAIT_MS);
-    assert_true(c >= 0 && fh_wait_angles(f, (size_t)c, 10, WAIT_MS) > 0);
+    long c = fp_test_host_wait_status(f, 0, FP_STATUS_CONNECTED, NULL, WAIT_MS);
+    assert_true(c >= 0 && fp_test_host_wait_angles(f, (size_t)c, 10, WAIT_MS) > 0);
     fp_gloveemu_set_silent(e, true);
-    long d = fh_wait_status(f, (size_t)c, FP_STATUS_DISCONNECTED, "stopped answering", WAIT_MS);
+    long d = fp_test_host_wait_status(f, (size_t)c, FP_STATUS_DISCONNECTED, "stopped answering", WAIT_MS);
     assert_true(d > c);
-    long d2 = fh_wait_status(f, (size_t)d + 1, FP_STATUS_DISCONNECTED, "no answer", WAIT_MS);
+    long d2 = fp_test_host_wait_status(f, (size_t)d + 1, FP_STATUS_DISCONNECTED, "no answer", WAIT_MS);
     assert_true(d2 > d);   /* re-probed and got no answer */
     fp_gloveemu_set_silent(e, false);
-    long c2 = fh_wait_status(f, (size_t)d2, FP_STATUS_CONNECTED, NULL, WAIT_MS);
+    long c2 = fp_test_host_wait_status(f, (size_t)d2, FP_STATUS_CONNECTED, NULL, WAIT_MS);
     assert_true(c2 > d2);
-    assert_true(fh_wait_angles(f, (size_t)c2, 20, WAIT_MS) > 0);
+    assert_true(fp_test_host_wait_angles(f, (size_t)c2, 20, WAIT_MS) > 0);
     fp_cyberglove_stats s = plugin_stats(in);
     assert_true(s.timeouts >= 1);
     assert_int_equal(s.connects, 2);
     stop_input(&in);
-    fh_free(f);
+    fp_test_host_free(f);
     fp_gloveemu_destroy(&e);
 }
 
@@ -744,22 +609,22 @@ static void test_fault_slow(void **state)
 {
     (void)state;
     fp_gloveemu *e = emu_new((fp_gloveemu_options){.recording = CSV_GRAB}, "g11");
-    fake_host *f = fh_new();
+    fp_test_host *f = fp_test_host_new(0);
     fp_input *in = NULL;
     char err[256];
     assert_int_equal(create_input(f, fp_gloveemu_path(e), &in, err, sizeof err, "rate=100",
                                   (char *)NULL), 0);
     start_input(in);
-    long c = fh_wait_status(f, 0, FP_STATUS_CONNECTED, NULL, WAIT_MS);
-    assert_true(c >= 0 && fh_wait_angles(f, (size_t)c, 10, WAIT_MS) > 0);
+    long c = fp_test_host_wait_status(f, 0, FP_STATUS_CONNECTED, NULL, WAIT_MS);
+    assert_true(c >= 0 && fp_test_host_wait_angles(f, (size_t)c, 10, WAIT_MS) > 0);
     fp_gloveemu_set_slow(e, 2.0);
-    size_t from = fh_count(f);
-    long end = fh_wait_angles(f, from + 1, 30, WAIT_MS);   /* skip one in-flight record */
+    size_t from = fp_test_host_count(f);
+    long end = fp_test_host_wait_angles(f, from + 1, 30, WAIT_MS);   /* skip one in-flight record */
     assert_true(end > 0);
     int64_t t0 = 0, t1 = 0;
     size_t n = 0;
     for (size_t i = from + 1; i < (size_t)end; i++) {
-        fp_event ev = fh_get(f, i);
+        fp_event ev = fp_test_host_get(f, i);
         if (ev.header.type != FP_EVENT_JOINT_ANGLES)
             continue;
         if (!t0)
@@ -770,9 +635,9 @@ static void test_fault_slow(void **state)
     double mean_ms = (t1 - t0) / 1e6 / (double)(n - 1);
     printf("  slow x2: mean interval %.1f ms (nominal 20)\n", mean_ms);
     assert_true(mean_ms > 15.0);   /* an emulator cannot send faster than its period */
-    assert_int_equal(fh_wait_status(f, (size_t)c, FP_STATUS_DISCONNECTED, NULL, 0), -1);
+    assert_int_equal(fp_test_host_wait_status(f, (size_t)c, FP_STATUS_DISCONNECTED, NULL, 0), -1);
     stop_input(&in);
-    fh_free(f);
+    fp_test_host_free(f);
     fp_gloveemu_destroy(&e);
 }
 
@@ -785,7 +650,7 @@ static void test_two_gloves(void **state)
                                                     .calibration = CAL_LEFT}, "left");
     fp_gloveemu *er = emu_new((fp_gloveemu_options){.sensors = 22, .recording = CSV_CLAPS,
                                                     .calibration = CAL_RIGHT}, "right");
-    fake_host *fl = fh_new(), *fr = fh_new();
+    fp_test_host *fl = fp_test_host_new(0), *fr = fp_test_host_new(0);
     fp_input *il = NULL, *ir = NULL;
     char err[256];
     assert_int_equal(create_input(fl, fp_gloveemu_path(el), &il, err, sizeof err,
@@ -794,11 +659,11 @@ static void test_two_gloves(void **state)
                                   "cal=" CAL_RIGHT, "rate=150", (char *)NULL), 0);
     start_input(il);
     start_input(ir);
-    long cl = fh_wait_status(fl, 0, FP_STATUS_CONNECTED, "18 sensors, left", WAIT_MS);
-    long cr = fh_wait_status(fr, 0, FP_STATUS_CONNECTED, "22 sensors, right", WAIT_MS);
+    long cl = fp_test_host_wait_status(fl, 0, FP_STATUS_CONNECTED, "18 sensors, left", WAIT_MS);
+    long cr = fp_test_host_wait_status(fr, 0, FP_STATUS_CONNECTED, "22 sensors, right", WAIT_MS);
     assert_true(cl >= 0 && cr >= 0);
-    long endl = fh_wait_angles(fl, (size_t)cl, 60, WAIT_MS);
-    long endr = fh_wait_angles(fr, (size_t)cr, 60, WAIT_MS);
+    long endl = fp_test_host_wait_angles(fl, (size_t)cl, 60, WAIT_MS);
+    long endr = fp_test_host_wait_angles(fr, (size_t)cr, 60, WAIT_MS);
     assert_true(endl > 0 && endr > 0);
     fpg_cal call, calr;
     char cerr[256];
@@ -815,8 +680,8 @@ static void test_two_gloves(void **state)
     assert_int_equal(sl.period_w1, 1152);  /* 100 Hz default */
     stop_input(&il);
     stop_input(&ir);
-    fh_free(fl);
-    fh_free(fr);
+    fp_test_host_free(fl);
+    fp_test_host_free(fr);
     fp_gloveemu_destroy(&el);
     fp_gloveemu_destroy(&er);
 }
@@ -832,14 +697,14 @@ static void test_line_settings(void **state)
         assert_int_equal(fp_gloveemu_line_settings(e, &l), 0);
         assert_int_equal(l.baud, 9600);   /* power-up state: the checks below can fail */
         assert_false(l.raw);
-        fake_host *f = fh_new();
+        fp_test_host *f = fp_test_host_new(0);
         fp_input *in = NULL;
         char err[256], kv[32];
         snprintf(kv, sizeof kv, "baud=%d", bauds[k]);
         assert_int_equal(create_input(f, fp_gloveemu_path(e), &in, err, sizeof err,
                                       k ? kv : "mode=stream", (char *)NULL), 0);
         start_input(in);
-        assert_true(fh_wait_status(f, 0, FP_STATUS_CONNECTED, NULL, WAIT_MS) >= 0);
+        assert_true(fp_test_host_wait_status(f, 0, FP_STATUS_CONNECTED, NULL, WAIT_MS) >= 0);
         assert_int_equal(fp_gloveemu_line_settings(e, &l), 0);
         printf("  line: %s\n", l.text);
         assert_int_equal(l.baud, bauds[k]);
@@ -852,7 +717,7 @@ static void test_line_settings(void **state)
         assert_false(l.crtscts);
         assert_true(l.clocal && l.cread);
         stop_input(&in);
-        fh_free(f);
+        fp_test_host_free(f);
         fp_gloveemu_destroy(&e);
     }
 }
@@ -860,7 +725,7 @@ static void test_line_settings(void **state)
 /* Bad SPECs and bad calibration files: clear errors naming the key, file and line. */
 static void expect_create_error(const char *arg, const char *kv, const char *must_contain)
 {
-    fake_host *f = fh_new();
+    fp_test_host *f = fp_test_host_new(0);
     fp_input *in = NULL;
     char err[512];
     int rc = create_input(f, arg, &in, err, sizeof err, kv, (char *)NULL);
@@ -870,15 +735,7 @@ static void expect_create_error(const char *arg, const char *kv, const char *mus
     assert_true(rc < 0);
     assert_null(in);
     assert_non_null(strstr(err, must_contain));
-    fh_free(f);
-}
-
-static void write_file(const char *path, const char *text)
-{
-    FILE *fp = fopen(path, "w");
-    assert_non_null(fp);
-    fputs(text, fp);
-    fclose(fp);
+    fp_test_host_free(f);
 }
 
 static void test_bad_spec_and_cal(void **state)
@@ -897,27 +754,27 @@ static void test_bad_spec_and_cal(void **state)
     snprintf(p, sizeof p, "%s/bad.cal", tmpdir);
     snprintf(kv, sizeof kv, "cal=%s", p);
     /* asr: line 3 malformed */
-    write_file(p, "0.3:46 -0.5:164\n0.9:73 -0.7:181\n-0.5:216 oops\n");
+    fp_test_write_file(p, "0.3:46 -0.5:164\n0.9:73 -0.7:181\n-0.5:216 oops\n");
     snprintf(want, sizeof want, "%s:3:", p);
     expect_create_error("/dev/null", kv, want);
     /* asr: raw1 == raw2 on line 2 */
-    write_file(p, "0.3:46 -0.5:164\n0.9:73 -0.7:73\n");
+    fp_test_write_file(p, "0.3:46 -0.5:164\n0.9:73 -0.7:73\n");
     snprintf(want, sizeof want, "%s:2: raw1 equals raw2", p);
     expect_create_error("/dev/null", kv, want);
     /* asr: too few lines */
-    write_file(p, "0.3:46 -0.5:164\n0.9:73 -0.7:181\n");
+    fp_test_write_file(p, "0.3:46 -0.5:164\n0.9:73 -0.7:181\n");
     snprintf(want, sizeof want, "only 2 of 22");
     expect_create_error("/dev/null", kv, want);
     /* gain format: sensor out of range on line 2, and NaN gain on line 1 */
-    write_file(p, "0 0.01 0\n22 0.01 0\n");
+    fp_test_write_file(p, "0 0.01 0\n22 0.01 0\n");
     snprintf(want, sizeof want, "%s:2: sensor 22", p);
     expect_create_error("/dev/null", kv, want);
-    write_file(p, "5 nan 0\n");
+    fp_test_write_file(p, "5 nan 0\n");
     snprintf(want, sizeof want, "%s:1:", p);
     expect_create_error("/dev/null", kv, want);
     unlink(p);
     /* mode=poll with bits=16 is refused */
-    fake_host *f = fh_new();
+    fp_test_host *f = fp_test_host_new(0);
     fp_input *in = NULL;
     char err[256];
     assert_true(create_input(f, "/dev/null", &in, err, sizeof err, "bits=16", "mode=poll",
@@ -935,7 +792,7 @@ static void test_bad_spec_and_cal(void **state)
     assert_true(in->start(in, err, sizeof err) < 0);
     assert_non_null(strstr(err, "not a serial port"));
     in->destroy(in);
-    fh_free(f);
+    fp_test_host_free(f);
 }
 
 /* Throughput and latency: the emulator streams as fast as the plugin takes records. */
@@ -945,20 +802,20 @@ static void test_throughput_and_latency(void **state)
     fp_gloveemu *e = emu_new((fp_gloveemu_options){.recording = CSV_GRAB, .loop = true,
                                                    .fast = true, .calibration = CAL_RIGHT},
                              "g13");
-    fake_host *f = fh_new();
+    fp_test_host *f = fp_test_host_new(0);
     f->count_only = true;
     fp_input *in = NULL;
     char err[256];
     assert_int_equal(create_input(f, fp_gloveemu_path(e), &in, err, sizeof err, "cal=" CAL_RIGHT,
                                   (char *)NULL), 0);
     start_input(in);
-    assert_true(fh_wait_status(f, 0, FP_STATUS_CONNECTED, NULL, WAIT_MS) >= 0);
+    assert_true(fp_test_host_wait_status(f, 0, FP_STATUS_CONNECTED, NULL, WAIT_MS) >= 0);
     fp_cyberglove_stats s0 = plugin_stats(in);
-    int64_t t0 = mono_ns();
-    while (mono_ns() - t0 < 1500000000LL)
+    int64_t t0 = fp_test_mono_ns();
+    while (fp_test_mono_ns() - t0 < 1500000000LL)
         usleep(50000);
     fp_cyberglove_stats s1 = plugin_stats(in);
-    int64_t t1 = mono_ns();
+    int64_t t1 = fp_test_mono_ns();
     double secs = (t1 - t0) / 1e9;
     double rate = (double)(s1.records - s0.records) / secs;
     printf("  throughput: %.0f records/s sustained over %.2f s (22 sensors, 8-bit, status byte; "
@@ -976,7 +833,7 @@ static void test_throughput_and_latency(void **state)
     /* the log line at stop carries the same figures */
     assert_non_null(strstr(f->last_log, "latency last byte -> event median"));
     printf("  stop log: %s\n", f->last_log);
-    fh_free(f);
+    fp_test_host_free(f);
     fp_gloveemu_destroy(&e);
 }
 
@@ -989,6 +846,7 @@ int main(void)
         cmocka_unit_test(test_sixteen_bit),
         cmocka_unit_test(test_calibration_asr_by_hand),
         cmocka_unit_test(test_calibration_gain_and_default),
+        cmocka_unit_test(test_calibration_never_infinite),
         cmocka_unit_test(test_fault_unplug),
         cmocka_unit_test(test_fault_cable_pull),
         cmocka_unit_test(test_fault_garbage_resync),

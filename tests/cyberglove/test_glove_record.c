@@ -3,6 +3,7 @@
  * the same joint angles, bit for bit, in the same order. */
 #define _GNU_SOURCE
 #include "fp_plugin_host.h"
+#include "fp_test_support.h"
 #include "gloveemu.h"
 
 #include <setjmp.h>
@@ -16,13 +17,6 @@
 #include <cmocka.h>
 
 #define WANT 200
-static char data[4096], plugins[4096];
-
-static void nap(void)
-{
-    struct timespec ts = {0, 2000000};
-    nanosleep(&ts, NULL);
-}
 
 static void test_record_and_replay(void **state)
 {
@@ -30,7 +24,7 @@ static void test_record_and_replay(void **state)
     char tmp[] = "/tmp/fp-glove-rec-XXXXXX", rec[128], csv[4200], err[2048], spec[4400];
     assert_non_null(mkdtemp(tmp));
     snprintf(rec, sizeof rec, "%s/glove.log", tmp);
-    snprintf(csv, sizeof csv, "%s/hands/leap-motion/grab_cyberglove_like_angles_deg.csv", data);
+    snprintf(csv, sizeof csv, "%s/hands/leap-motion/grab_cyberglove_like_angles_deg.csv", fp_test_data_dir());
     fp_gloveemu_options o = {0};
     o.recording = csv;
     o.rate_hz = 400;
@@ -42,12 +36,10 @@ static void test_record_and_replay(void **state)
     char pts[256];
     fp_gloveemu_slave_path(e, pts, sizeof pts);
 
-    fp_plugin_path path;
-    const char *dirs[] = {plugins};
-    fp_plugin_path_init(&path, dirs, 1, NULL);
+    const fp_plugin_path *path = fp_test_plugin_path();
     fp_input_instance in;
     snprintf(spec, sizeof spec, "cyberglove:%s,record=%s", pts, rec);
-    rc = fp_input_instance_open(&in, &path, spec, 0, err, sizeof err);
+    rc = fp_input_instance_open(&in, path, spec, 0, err, sizeof err);
     if (rc) fprintf(stderr, "%s\n", err);
     assert_int_equal(rc, 0);
     assert_int_equal(fp_input_instance_start(&in, err, sizeof err), 0);
@@ -56,7 +48,7 @@ static void test_record_and_replay(void **state)
     int64_t deadline = fp_now_ns() + 30LL * 1000000000LL;
     while (n < WANT && fp_now_ns() < deadline) {
         fp_event ev;
-        if (!fp_input_instance_poll(&in, &ev)) { nap(); continue; }
+        if (!fp_input_instance_poll(&in, &ev)) { fp_test_nap_ms(2); continue; }
         if (ev.header.type == FP_EVENT_JOINT_ANGLES) live[n++] = ev.angles;
     }
     assert_int_equal(n, WANT);
@@ -65,7 +57,7 @@ static void test_record_and_replay(void **state)
 
     /* Perform it again from the log. */
     snprintf(spec, sizeof spec, "replay:%s,fast=1", rec);
-    rc = fp_input_instance_open(&in, &path, spec, 0, err, sizeof err);
+    rc = fp_input_instance_open(&in, path, spec, 0, err, sizeof err);
     if (rc) fprintf(stderr, "%s\n", err);
     assert_int_equal(rc, 0);
     assert_int_equal(fp_input_instance_start(&in, err, sizeof err), 0);
@@ -74,7 +66,7 @@ static void test_record_and_replay(void **state)
     deadline = fp_now_ns() + 30LL * 1000000000LL;
     while (!ended && fp_now_ns() < deadline) {
         fp_event ev;
-        if (!fp_input_instance_poll(&in, &ev)) { nap(); continue; }
+        if (!fp_input_instance_poll(&in, &ev)) { fp_test_nap_ms(2); continue; }
         if (ev.header.type == FP_EVENT_STATUS && ev.status.code == FP_STATUS_END_OF_STREAM) ended = true;
         if (ev.header.type != FP_EVENT_JOINT_ANGLES || m >= WANT) continue;
         assert_int_equal(ev.angles.valid, live[m].valid);
@@ -85,16 +77,12 @@ static void test_record_and_replay(void **state)
     assert_true(ended);
     assert_true(m >= WANT); /* everything delivered live is in the log */
     fp_input_instance_close(&in);
-    fp_plugin_path_clear(&path);
     unlink(rec);
     rmdir(tmp);
 }
 
 int main(void)
 {
-    const char *d = getenv("FP_SHARED_DATA"), *b = getenv("FP_BUILD_DIR");
-    snprintf(data, sizeof data, "%s", d ? d : "../shared/data");
-    snprintf(plugins, sizeof plugins, "%s/lib/facepuppet", b ? b : "build");
     const struct CMUnitTest tests[] = {cmocka_unit_test(test_record_and_replay)};
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -3,6 +3,7 @@
  * support (the engine runs without the polynomial, so T is exactly the identity there). */
 #define _GNU_SOURCE
 #include "fp_session.h"
+#include "fp_test_support.h"
 
 #include <math.h>
 #include <setjmp.h>
@@ -14,8 +15,6 @@
 #include <time.h>
 #include <cmocka.h>
 
-static char data[4096], plugins[4096];
-
 typedef struct outcome {
     unsigned long frames, active, commits, checked_outside;
     double max_disp;
@@ -23,23 +22,11 @@ typedef struct outcome {
 
 static void run_session(const char *mapping, outcome *o)
 {
-    char mesh[4200], input[4300], err[2048];
-    snprintf(mesh, sizeof mesh, "%s/faces/ict-facekit/generic_neutral_mesh.obj", data);
-    snprintf(input, sizeof input, "replay:%s/hands/leap-motion/three-claps_joints_mm.csv,speed=4", data);
-    fp_plugin_path path;
-    const char *dirs[] = {plugins};
-    fp_plugin_path_init(&path, dirs, 1, NULL);
-    fp_session_options so = {0};
-    so.mesh_path = mesh;
-    so.inputs[0] = input;
-    so.input_count = 1;
-    so.mapping = mapping;
-    so.plugin_path = &path;
-    fp_session *s = NULL;
-    int rc = fp_session_create(&so, &s, err, sizeof err);
-    if (rc) fprintf(stderr, "%s\n", err);
-    assert_int_equal(rc, 0);
-    assert_int_equal(fp_session_start(s, err, sizeof err), 0);
+    char input[4300];
+    snprintf(input, sizeof input, "replay:%s/hands/leap-motion/three-claps_joints_mm.csv,speed=4",
+             fp_test_data_dir());
+    const char *inputs[] = {input};
+    fp_session *s = fp_test_session_start(mapping, inputs, 1);
     size_t n = fp_session_vertex_count(s);
     const float *loaded = fp_session_loaded(s);
     double R = fp_session_radius(s);
@@ -85,7 +72,6 @@ static void run_session(const char *mapping, outcome *o)
            o->max_disp, R, o->checked_outside);
     free(before);
     fp_session_destroy(&s);
-    fp_plugin_path_clear(&path);
 }
 
 static void test_anchored_on_real_data(void **state)
@@ -112,9 +98,6 @@ static void test_unanchored_on_real_data(void **state)
 
 int main(void)
 {
-    const char *d = getenv("FP_SHARED_DATA"), *b = getenv("FP_BUILD_DIR");
-    snprintf(data, sizeof data, "%s", d ? d : "../shared/data");
-    snprintf(plugins, sizeof plugins, "%s/lib/facepuppet", b ? b : "build");
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_anchored_on_real_data),
         cmocka_unit_test(test_unanchored_on_real_data),

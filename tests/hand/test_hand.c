@@ -20,6 +20,7 @@
 
 #include "fp_hand.h"
 #include "handcheck.h"
+#include "fp_test_support.h"
 #include "leapcsv.h"
 
 #define PI 3.14159265358979323846
@@ -350,20 +351,6 @@ static void test_fit(void **state)
     assert_int_equal(fp_hand_fit_size(&m, (const float(*)[21][3])frames, 0, &s), -EINVAL);
 }
 
-static const char *shared_data(void)
-{
-    const char *d = getenv("FP_SHARED_DATA");
-    return d && *d ? d : "../shared/data";
-}
-
-static void write_file(const char *path, const char *text)
-{
-    FILE *f = fopen(path, "w");
-    assert_non_null(f);
-    fputs(text, f);
-    fclose(f);
-}
-
 static void test_csv_errors(void **state)
 {
     (void)state;
@@ -379,29 +366,45 @@ static void test_csv_errors(void **state)
     fp_leap_angles_row *rows = NULL;
     size_t n = 0;
     snprintf(text, sizeof text, "%s%s%s", hdr, good, "1,6,1,right,,1,2,3,4,5,6,7,8,x9,10,11,12,13,14,15,16,17,18,,,\n");
-    write_file(path, text);
+    fp_test_write_file(path, text);
     assert_int_equal(fp_leapcsv_read_angles(path, &rows, &n, err, sizeof err), -EBADMSG);
-    assert_non_null(strstr(err, "a.csv:3: column 14 (middle_dip)"));
+    assert_non_null(strstr(err, "a.csv:3:30: bad number \"x9\" in column middle_dip"));
     snprintf(text, sizeof text, "%s%s", hdr, "0,5,1,middle,,1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,,,\n");
-    write_file(path, text);
+    fp_test_write_file(path, text);
     assert_int_equal(fp_leapcsv_read_angles(path, &rows, &n, err, sizeof err), -EBADMSG);
-    assert_non_null(strstr(err, ":2: column 4 (hand_type)"));
+    assert_non_null(strstr(err, "a.csv:2:7: unknown hand_type \"middle\""));
     snprintf(text, sizeof text, "%s%s", hdr, "0,5,1,right,,1,2\n");
-    write_file(path, text);
+    fp_test_write_file(path, text);
     assert_int_equal(fp_leapcsv_read_angles(path, &rows, &n, err, sizeof err), -EBADMSG);
-    assert_non_null(strstr(err, ":2: 7 fields, expected 26"));
-    write_file(path, "frame,timestamp_us,hand_id,hand_type,thumb_rot\n");
+    assert_non_null(strstr(err, "a.csv:2:17: expected 26 fields, found 7 (row too short)"));
+    fp_test_write_file(path, "frame,timestamp_us,hand_id,hand_type,thumb_rot\n");
     assert_int_equal(fp_leapcsv_read_angles(path, &rows, &n, err, sizeof err), -EBADMSG);
-    assert_non_null(strstr(err, ":1: header has 5 columns"));
+    assert_non_null(strstr(err, "a.csv:1:47: header has 5 columns, expected 26"));
+    /* one header column too many: named at the extra column, nothing read past the end */
+    char want[256];
+    snprintf(text, sizeof text, "%.*s,extra\n%s", (int)strlen(hdr) - 1, hdr, good);
+    fp_test_write_file(path, text);
+    assert_int_equal(fp_leapcsv_read_angles(path, &rows, &n, err, sizeof err), -EBADMSG);
+    snprintf(want, sizeof want, "a.csv:1:%d: header has 27 columns, expected 26", (int)strlen(hdr) + 1);
+    assert_non_null(strstr(err, want));
+    /* beyond float range is not finite; times must not run backwards */
+    snprintf(text, sizeof text, "%s%s", hdr, "0,5,1,right,,1e39,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,,,\n");
+    fp_test_write_file(path, text);
+    assert_int_equal(fp_leapcsv_read_angles(path, &rows, &n, err, sizeof err), -EBADMSG);
+    assert_non_null(strstr(err, "a.csv:2:14: \"1e39\" in column thumb_mcp is not a finite number"));
+    snprintf(text, sizeof text, "%s%s%s", hdr, good, "1,4,1,right,,1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,,,\n");
+    fp_test_write_file(path, text);
+    assert_int_equal(fp_leapcsv_read_angles(path, &rows, &n, err, sizeof err), -EBADMSG);
+    assert_non_null(strstr(err, "a.csv:3:3: timestamp_us 4 goes backwards"));
     snprintf(text, sizeof text, "%s%s", hdr, good);
-    write_file(path, text);
+    fp_test_write_file(path, text);
     assert_int_equal(fp_leapcsv_read_angles(path, &rows, &n, err, sizeof err), 0);
     assert_int_equal(n, 1);
     assert_int_equal(rows[0].valid, 0x3FFFFFu & ~1u & ~(7u << 19));
     assert_float_equal(rows[0].degrees[FP_SENSOR_PINKIE_RING_AB], 18, 0);
     free(rows);
     /* The joints reader names the column of a bad value. */
-    snprintf(text, sizeof text, "%s/hands/leap-motion/grab_joints_mm.csv", shared_data());
+    snprintf(text, sizeof text, "%s/hands/leap-motion/grab_joints_mm.csv", fp_test_data_dir());
     FILE *in = fopen(text, "r");
     assert_non_null(in);
     char line1[4096], line2[4096];
@@ -413,13 +416,15 @@ static void test_csv_errors(void **state)
         c = strchr(c, ',') + 1;
     *c = 'q';
     snprintf(text, sizeof text, "%s%s", line1, line2);
-    write_file(path, text);
+    fp_test_write_file(path, text);
     fp_leap_joints_row *jr = NULL;
     assert_int_equal(fp_leapcsv_read_joints(path, &jr, &n, err, sizeof err), -EBADMSG);
-    assert_non_null(strstr(err, ":2: column 21 (thumb_dip_y)"));
+    snprintf(want, sizeof want, "a.csv:2:%ld: bad number \"q", (long)(c - line2) + 1);
+    assert_non_null(strstr(err, want));
+    assert_non_null(strstr(err, "in column thumb_dip_y"));
     unlink(path);
     rmdir(dir);
-    assert_int_equal(fp_leapcsv_read_joints(path, &jr, &n, err, sizeof err), -ENOENT); /* the file is gone */
+    assert_int_equal(fp_leapcsv_read_joints(path, &jr, &n, err, sizeof err), -ENOENT);
     assert_non_null(strstr(err, "a.csv"));
 }
 
@@ -434,8 +439,8 @@ static void test_leap_recordings(void **state)
     int hands = 0;
     for (int r = 0; r < 4; r++) {
         char jp[1024], ap[1024], err[512];
-        snprintf(jp, sizeof jp, "%s/hands/leap-motion/%s_joints_mm.csv", shared_data(), recs[r]);
-        snprintf(ap, sizeof ap, "%s/hands/leap-motion/%s_cyberglove_like_angles_deg.csv", shared_data(), recs[r]);
+        snprintf(jp, sizeof jp, "%s/hands/leap-motion/%s_joints_mm.csv", fp_test_data_dir(), recs[r]);
+        snprintf(ap, sizeof ap, "%s/hands/leap-motion/%s_cyberglove_like_angles_deg.csv", fp_test_data_dir(), recs[r]);
         fp_handcheck_hand h[4], hs[4];
         size_t n = 0, ns = 0;
         fp_handcheck_options geo = {FP_HANDCHECK_FIT_GEOMETRY, 0}, size = {FP_HANDCHECK_FIT_SIZE, 0};
@@ -461,6 +466,43 @@ static void test_leap_recordings(void **state)
     assert_true(sum_size / hands < 11.0);
 }
 
+/* fp_hand_mat_to_quat / fp_hand_quat_to_mat against Rodrigues' formula (axis-angle, an
+ * independent construction), including 180-degree turns, where a trace-only method fails. */
+static void test_quaternion_matrix(void **state)
+{
+    (void)state;
+    srand(3);
+    for (int k = 0; k < 200; k++) {
+        double a[3] = {rand() / (double)RAND_MAX - 0.5, rand() / (double)RAND_MAX - 0.5,
+                       rand() / (double)RAND_MAX - 0.5};
+        if (k % 4 == 0) a[k % 3] = 0; /* some axes in coordinate planes */
+        double n = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+        for (int i = 0; i < 3; i++) a[i] /= n;
+        double th = k < 20 ? PI : (rand() / (double)RAND_MAX) * 2 * PI - PI;
+        double c = cos(th), s = sin(th), R[3][3];
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++) R[i][j] = (i == j ? c : 0) + (1 - c) * a[i] * a[j];
+        R[0][1] -= s * a[2], R[0][2] += s * a[1], R[1][0] += s * a[2];
+        R[1][2] -= s * a[0], R[2][0] -= s * a[1], R[2][1] += s * a[0];
+        float q[4];
+        fp_hand_mat_to_quat((const double (*)[3])R, q);
+        assert_true(q[0] >= 0);
+        /* q = +-(cos th/2, sin th/2 a) */
+        double sg = cos(th / 2) >= 0 ? 1 : -1;
+        if (fabs(cos(th / 2)) < 1e-6 && q[1] * a[0] + q[2] * a[1] + q[3] * a[2] < 0) sg = -sg;
+        assert_float_equal(q[0], sg * cos(th / 2), 1e-6);
+        for (int i = 0; i < 3; i++) assert_float_equal(q[1 + i], sg * sin(th / 2) * a[i], 1e-6);
+        double back[3][3];
+        assert_int_equal(fp_hand_quat_to_mat(q, back), 0);
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++) assert_float_equal(back[i][j], R[i][j], 1e-6);
+    }
+    const float zero[4] = {0, 0, 0, 0}, nan4[4] = {NAN, 0, 0, 0};
+    double r[3][3];
+    assert_int_equal(fp_hand_quat_to_mat(zero, r), -1);
+    assert_int_equal(fp_hand_quat_to_mat(nan4, r), -1);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -476,6 +518,7 @@ int main(void)
         cmocka_unit_test(test_from_positions_roundtrip),
         cmocka_unit_test(test_fit),
         cmocka_unit_test(test_csv_errors),
+        cmocka_unit_test(test_quaternion_matrix),
         cmocka_unit_test(test_leap_recordings),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

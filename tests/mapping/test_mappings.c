@@ -2,6 +2,7 @@
  * driven through the plugin ABI with synthetic frames. */
 #define _GNU_SOURCE
 #include "fp_plugin_host.h"
+#include "fp_test_support.h"
 
 #include <math.h>
 #include <setjmp.h>
@@ -13,7 +14,6 @@
 #include <cmocka.h>
 
 #define R 1.0
-static char plugin_dir[4096];
 
 typedef struct rig {
     fp_plugin plugin;
@@ -28,11 +28,7 @@ typedef struct rig {
 static int open_mapping(rig *r, const char *name, const fp_param *params, size_t n, char *err)
 {
     memset(r, 0, sizeof *r);
-    fp_plugin_path path;
-    const char *dirs[] = {plugin_dir};
-    fp_plugin_path_init(&path, dirs, 1, NULL);
-    int rc = fp_plugin_load(&path, FP_PLUGIN_MAPPING, name, &r->plugin, err, 1024);
-    fp_plugin_path_clear(&path);
+    int rc = fp_plugin_load(fp_test_plugin_path(), FP_PLUGIN_MAPPING, name, &r->plugin, err, 1024);
     if (rc) return rc;
     fp_host_init_for_mapping(&r->host, name);
     const fp_mapping_factory *f = r->plugin.factory;
@@ -207,8 +203,6 @@ static void test_bad_keys(void **state)
 
 int main(void)
 {
-    const char *build = getenv("FP_BUILD_DIR");
-    snprintf(plugin_dir, sizeof plugin_dir, "%s/lib/facepuppet", build ? build : "build");
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_anchored_auto), cmocka_unit_test(test_anchored_requests),
         cmocka_unit_test(test_unanchored), cmocka_unit_test(test_bad_keys),

@@ -4,6 +4,7 @@
  * cancels (the default binding, docs/pedal.md). */
 #define _GNU_SOURCE
 #include "fp_session.h"
+#include "fp_test_support.h"
 #include "pedal_emu.h"
 
 #include <math.h>
@@ -15,8 +16,6 @@
 #include <string.h>
 #include <time.h>
 #include <cmocka.h>
-
-static char data[4096], plugins[4096];
 
 static void press(emu *e, uint8_t bit)
 {
@@ -52,24 +51,11 @@ static void test_pedal_drives_anchored(void **state)
     emu *e = emu_new();
     assert_non_null(e);
     assert_int_equal(emu_plug(e, EMU_VEC, 5), 0);
-    char mesh[4200], input[4300], err[2048];
-    snprintf(mesh, sizeof mesh, "%s/faces/ict-facekit/generic_neutral_mesh.obj", data);
-    snprintf(input, sizeof input, "replay:%s/hands/leap-motion/three-claps_joints_mm.csv,loop=1", data);
-    fp_plugin_path path;
-    const char *dirs[] = {plugins};
-    fp_plugin_path_init(&path, dirs, 1, NULL);
-    fp_session_options so = {0};
-    so.mesh_path = mesh;
-    so.inputs[0] = input;
-    so.inputs[1] = "pedal,strict=1";
-    so.input_count = 2;
-    so.mapping = "anchored,auto=0";
-    so.plugin_path = &path;
-    fp_session *s = NULL;
-    int rc = fp_session_create(&so, &s, err, sizeof err);
-    if (rc) fprintf(stderr, "%s\n", err);
-    assert_int_equal(rc, 0);
-    assert_int_equal(fp_session_start(s, err, sizeof err), 0);
+    char input[4300];
+    snprintf(input, sizeof input, "replay:%s/hands/leap-motion/three-claps_joints_mm.csv,loop=1",
+             fp_test_data_dir());
+    const char *inputs[] = {input, "pedal,strict=1"};
+    fp_session *s = fp_test_session_start("anchored,auto=0", inputs, 2);
     size_t bytes = fp_session_vertex_count(s) * 3 * sizeof(float);
 
     /* Hands move for half a second: with auto=0 nothing engages by itself. */
@@ -108,15 +94,11 @@ static void test_pedal_drives_anchored(void **state)
     assert_int_equal(engaged_seen, 2);
     free(committed);
     fp_session_destroy(&s);
-    fp_plugin_path_clear(&path);
     emu_free(&e);
 }
 
 int main(void)
 {
-    const char *d = getenv("FP_SHARED_DATA"), *b = getenv("FP_BUILD_DIR");
-    snprintf(data, sizeof data, "%s", d ? d : "../shared/data");
-    snprintf(plugins, sizeof plugins, "%s/lib/facepuppet", b ? b : "build");
     const struct CMUnitTest tests[] = {cmocka_unit_test(test_pedal_drives_anchored)};
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

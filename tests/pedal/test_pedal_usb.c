@@ -23,6 +23,7 @@
 #include <cmocka.h>
 
 #include "facepuppet/plugin.h"
+#include "fp_test_support.h"
 #include "pedal_emu.h"
 
 /* ----------------------------------------------------------------------------------- */
@@ -30,104 +31,30 @@
 
 #define MAX_EVENTS 256
 
-typedef struct rec_host {
-    fp_host host;
-    pthread_mutex_t lock;
-    pthread_cond_t cond;
-    fp_event events[MAX_EVENTS];
-    int count;
-    int read;          /* next event a test expects */
-    int bad_header;    /* events with a wrong size/type/hand */
-} rec_host;
-
-static int64_t mono_ns(void)
+/* Events whose header does not fit a pedal's: hand -1, no flags, button or status of the
+ * right size. */
+static int bad_headers(fp_test_host *r)
 {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
-}
-
-static bool rec_push(const fp_host *h, const fp_event_header *ev)
-{
-    rec_host *r = (rec_host *)h;
+    int bad = 0;
     pthread_mutex_lock(&r->lock);
-    bool ok = r->count < MAX_EVENTS && ev->size <= sizeof(fp_event);
-    if (ok) {
-        memcpy(&r->events[r->count], ev, ev->size);
+    for (size_t i = 0; i < r->count; i++) {
+        const fp_event_header *ev = &r->events[i].header;
         if (ev->hand != -1 || ev->flags != 0 ||
             (ev->type == FP_EVENT_BUTTON && ev->size != sizeof(fp_event_button)) ||
             (ev->type == FP_EVENT_STATUS && ev->size != sizeof(fp_event_status)) ||
             (ev->type != FP_EVENT_BUTTON && ev->type != FP_EVENT_STATUS))
-            r->bad_header++;
-        r->count++;
-        pthread_cond_broadcast(&r->cond);
+            bad++;
     }
     pthread_mutex_unlock(&r->lock);
-    return ok;
+    return bad;
 }
 
-static int64_t rec_now(const fp_host *h)
+/* The pedal's host: keeps MAX_EVENTS, refuses more, echoes warnings. */
+static void rec_init(fp_test_host *r)
 {
-    (void)h;
-    return mono_ns();
-}
-
-static void rec_log(const fp_host *h, fp_log_level level, const char *msg)
-{
-    (void)h;
-    if (getenv("PEDAL_TEST_VERBOSE") || level <= FP_LOG_WARNING)
-        fprintf(stderr, "  [plugin %d] %s\n", (int)level, msg);
-}
-
-static const void *rec_ext(const fp_host *h, const char *id)
-{
-    (void)h;
-    (void)id;
-    return NULL;
-}
-
-static void rec_init(rec_host *r)
-{
-    memset(r, 0, sizeof *r);
-    r->host.size = sizeof r->host;
-    r->host.abi = (fp_version){FP_PLUGIN_ABI_MAJOR, FP_PLUGIN_ABI_MINOR};
-    r->host.push_event = rec_push;
-    r->host.now_ns = rec_now;
-    r->host.log = rec_log;
-    r->host.get_extension = rec_ext;
-    pthread_mutex_init(&r->lock, NULL);
-    pthread_cond_init(&r->cond, NULL);
-}
-
-/* The next unread event, waiting at most timeout_ms; false on timeout. */
-static bool next_event(rec_host *r, fp_event *out, int timeout_ms)
-{
-    struct timespec dl;
-    clock_gettime(CLOCK_REALTIME, &dl);
-    dl.tv_sec += timeout_ms / 1000;
-    dl.tv_nsec += (long)(timeout_ms % 1000) * 1000000L;
-    if (dl.tv_nsec >= 1000000000L) {
-        dl.tv_sec++;
-        dl.tv_nsec -= 1000000000L;
-    }
-    pthread_mutex_lock(&r->lock);
-    while (r->read >= r->count) {
-        if (pthread_cond_timedwait(&r->cond, &r->lock, &dl) == ETIMEDOUT)
-            break;
-    }
-    bool ok = r->read < r->count;
-    if (ok)
-        *out = r->events[r->read++];
-    pthread_mutex_unlock(&r->lock);
-    return ok;
-}
-
-static int unread(rec_host *r)
-{
-    pthread_mutex_lock(&r->lock);
-    int n = r->count - r->read;
-    pthread_mutex_unlock(&r->lock);
-    return n;
+    fp_test_host_init(r, MAX_EVENTS);
+    r->refuse_when_full = true;
+    r->echo_level = getenv("PEDAL_TEST_VERBOSE") ? FP_LOG_DEBUG : FP_LOG_WARNING;
 }
 
 /* ----------------------------------------------------------------------------------- */
@@ -137,31 +64,14 @@ typedef struct fixture {
     void *so;
     const fp_input_factory *factory;
     emu *emu;
-    rec_host rec;
+    fp_test_host rec;
     fp_input *input;
 } fixture;
-
-static const fp_input_factory *load_factory(void **so)
-{
-    const char *dir = getenv("FP_BUILD_DIR");
-    char path[4096];
-    snprintf(path, sizeof path, "%s/lib/facepuppet/input-pedal.so", dir ? dir : "build");
-    *so = dlopen(path, RTLD_NOW | RTLD_LOCAL);
-    if (!*so) {
-        fprintf(stderr, "dlopen %s: %s\n", path, dlerror());
-        return NULL;
-    }
-    const fp_plugin_entry *entry = dlsym(*so, FP_PLUGIN_ENTRY_SYMBOL);
-    if (!entry || !fp_version_is_compatible((fp_version){FP_PLUGIN_ABI_MAJOR, FP_PLUGIN_ABI_MINOR},
-                                            entry->abi) || !entry->init(path))
-        return NULL;
-    return entry->get_factory(FP_INPUT_FACTORY_ID);
-}
 
 static int setup(void **state)
 {
     fixture *f = calloc(1, sizeof *f);
-    f->factory = load_factory(&f->so);
+    f->factory = fp_test_plugin_open("input-pedal.so", FP_INPUT_FACTORY_ID, &f->so);
     if (!f->factory) {
         free(f);
         return -1;
@@ -169,6 +79,7 @@ static int setup(void **state)
     f->emu = emu_new();
     if (!f->emu) {
         fprintf(stderr, "umockdev is not active: run with libumockdev-preload\n");
+        fp_test_plugin_close(&f->so);
         free(f);
         return -1;
     }
@@ -185,12 +96,8 @@ static int teardown(void **state)
         f->input->destroy(f->input);
     }
     emu_free(&f->emu);
-    if (f->so) {
-        const fp_plugin_entry *entry = dlsym(f->so, FP_PLUGIN_ENTRY_SYMBOL);
-        if (entry)
-            entry->deinit();
-        dlclose(f->so);
-    }
+    fp_test_plugin_close(&f->so);
+    fp_test_host_clear(&f->rec);
     free(f);
     return 0;
 }
@@ -213,7 +120,7 @@ static int start_plugin(fixture *f, const char *arg, const fp_param *params, siz
 static void expect_status(fixture *f, fp_status_code code, const char *contains)
 {
     fp_event ev;
-    assert_true(next_event(&f->rec, &ev, 5000));
+    assert_true(fp_test_host_next(&f->rec, &ev, 5000));
     assert_int_equal(ev.header.type, FP_EVENT_STATUS);
     if (ev.status.code != (uint32_t)code)
         fprintf(stderr, "status %u \"%s\", expected %d\n", ev.status.code, ev.status.text, code);
@@ -225,20 +132,20 @@ static void expect_status(fixture *f, fp_status_code code, const char *contains)
 static void expect_button(fixture *f, uint32_t button, uint32_t down, uint32_t mask)
 {
     fp_event ev;
-    assert_true(next_event(&f->rec, &ev, 3000));
+    assert_true(fp_test_host_next(&f->rec, &ev, 3000));
     if (ev.header.type != FP_EVENT_BUTTON)
         fprintf(stderr, "got status %u \"%s\"\n", ev.status.code, ev.status.text);
     assert_int_equal(ev.header.type, FP_EVENT_BUTTON);
     assert_int_equal(ev.button.button, button);
     assert_int_equal(ev.button.down, down);
     assert_int_equal(ev.button.mask, mask);
-    assert_true(ev.header.time_ns > 0 && ev.header.time_ns <= mono_ns());
+    assert_true(ev.header.time_ns > 0 && ev.header.time_ns <= fp_test_mono_ns());
 }
 
 static void expect_quiet(fixture *f, int ms)
 {
     fp_event ev;
-    if (next_event(&f->rec, &ev, ms)) {
+    if (fp_test_host_next(&f->rec, &ev, ms)) {
         fprintf(stderr, "unexpected event type %u\n", ev.header.type);
         fail();
     }
@@ -312,7 +219,7 @@ static void test_vec_press_release_chords(void **state)
     expect_button(f, FP_BUTTON_LEFT, 0, FP_BUTTON_RIGHT);
     expect_button(f, FP_BUTTON_RIGHT, 0, 0);
     expect_quiet(f, 200);
-    assert_int_equal(f->rec.bad_header, 0);
+    assert_int_equal(bad_headers(&f->rec), 0);
 
     /* Stop: the transfer is cancelled (discarded), the interface released and the kernel
      * driver given back. */
@@ -352,7 +259,7 @@ static void test_pcsensor_default_keys(void **state)
     send(f, (const uint8_t[]){0x02, 0x01, 0x00, 0x00}, 4);   /* a mouse report: ignored */
     KBD(f, 0, 0, 0, 0, 0, 0);
     expect_quiet(f, 200);
-    assert_int_equal(f->rec.bad_header, 0);
+    assert_int_equal(bad_headers(&f->rec), 0);
 }
 
 static void test_pcsensor_single_key(void **state)
@@ -418,7 +325,7 @@ static void test_unplug_and_return(void **state)
     expect_button(f, FP_BUTTON_MIDDLE, 1, FP_BUTTON_MIDDLE);
     VEC(f, 0x00);
     expect_button(f, FP_BUTTON_MIDDLE, 0, 0);
-    assert_int_equal(f->rec.bad_header, 0);
+    assert_int_equal(bad_headers(&f->rec), 0);
 }
 
 static void test_absent_at_start_then_plugged(void **state)
@@ -442,13 +349,13 @@ static void test_strict_without_pedal_fails(void **state)
                      0);
     assert_int_equal(f->input->start(f->input, err, sizeof err), -ENODEV);
     assert_non_null(strstr(err, "no known USB foot pedal"));
-    assert_int_equal(unread(&f->rec), 0);
+    assert_int_equal((int)fp_test_host_unread(&f->rec), 0);
     /* With the pedal there, strict starts and is connected before start returns. */
     f->input->destroy(f->input);
     f->input = NULL;
     assert_int_equal(emu_plug(f->emu, EMU_VEC, 5), 0);
     assert_int_equal(start_plugin(f, "05f3:00ff", p, 1), 0);
-    assert_true(unread(&f->rec) >= 1);
+    assert_true((int)fp_test_host_unread(&f->rec) >= 1);
     expect_status(f, FP_STATUS_CONNECTED, NULL);
 }
 

@@ -7,6 +7,7 @@
  */
 #define _GNU_SOURCE
 #include "fp_eventlog.h"
+#include "fp_test_support.h"
 
 #include <facepuppet/plugin.h>
 
@@ -36,104 +37,6 @@ static const fp_plugin_entry *entry;
 static const fp_input_factory *factory;
 
 /* ------------------------------------------------------------------------------------- */
-/* Fake host                                                                              */
-
-typedef struct fake_host {
-    fp_host host;  /* first: push_event gets a pointer to it */
-    pthread_mutex_t mutex;
-    pthread_cond_t cond;
-    fp_event *events;
-    size_t count, cap;
-    unsigned refuse_every; /* refuse every Nth push (queue full), 0: never */
-    unsigned long calls;
-    size_t refused;
-    int eos;
-    char log[2048];
-} fake_host;
-
-static int64_t mono_ns(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
-}
-
-static bool fake_push(const fp_host *host, const fp_event_header *ev)
-{
-    fake_host *h = (fake_host *)host;
-    pthread_mutex_lock(&h->mutex);
-    h->calls++;
-    if (h->refuse_every && h->calls % h->refuse_every == 0) {
-        h->refused++;
-        pthread_mutex_unlock(&h->mutex);
-        return false;
-    }
-    if (h->count < h->cap) {
-        fp_event *e = &h->events[h->count++];
-        memset(e, 0, sizeof *e);
-        memcpy(e, ev, ev->size < sizeof *e ? ev->size : sizeof *e);
-        if (ev->type == FP_EVENT_STATUS && e->status.code == FP_STATUS_END_OF_STREAM) h->eos++;
-    }
-    pthread_cond_broadcast(&h->cond);
-    pthread_mutex_unlock(&h->mutex);
-    return true;
-}
-
-static int64_t fake_now(const fp_host *host)
-{
-    (void)host;
-    return mono_ns();
-}
-
-static void fake_log(const fp_host *host, fp_log_level level, const char *message)
-{
-    fake_host *h = (fake_host *)host;
-    pthread_mutex_lock(&h->mutex);
-    size_t n = strlen(h->log);
-    snprintf(h->log + n, sizeof h->log - n, "%d %s\n", (int)level, message);
-    pthread_mutex_unlock(&h->mutex);
-}
-
-static fake_host *fake_new(size_t cap)
-{
-    fake_host *h = calloc(1, sizeof *h);
-    assert_non_null(h);
-    h->host = (fp_host){.size = sizeof(fp_host), .abi = {FP_PLUGIN_ABI_MAJOR, FP_PLUGIN_ABI_MINOR},
-                        .push_event = fake_push, .now_ns = fake_now, .log = fake_log};
-    pthread_mutex_init(&h->mutex, NULL);
-    pthread_cond_init(&h->cond, NULL);
-    h->events = calloc(cap, sizeof *h->events);
-    assert_non_null(h->events);
-    h->cap = cap;
-    return h;
-}
-
-static void fake_free(fake_host *h)
-{
-    pthread_mutex_destroy(&h->mutex);
-    pthread_cond_destroy(&h->cond);
-    free(h->events);
-    free(h);
-}
-
-/* Waits until end of stream (min_count 0) or at least min_count events. 0 or -1 on time out. */
-static int fake_wait(fake_host *h, size_t min_count, int64_t limit_ns)
-{
-    int64_t end = mono_ns() + limit_ns;
-    pthread_mutex_lock(&h->mutex);
-    int ok;
-    while (!(ok = min_count ? h->count >= min_count : h->eos > 0) && mono_ns() < end) {
-        struct timespec ts;
-        clock_gettime(CLOCK_REALTIME, &ts);
-        ts.tv_nsec += 5000000;
-        if (ts.tv_nsec >= 1000000000) ts.tv_sec++, ts.tv_nsec -= 1000000000;
-        pthread_cond_timedwait(&h->cond, &h->mutex, &ts);
-    }
-    pthread_mutex_unlock(&h->mutex);
-    return ok ? 0 : -1;
-}
-
-/* ------------------------------------------------------------------------------------- */
 /* Plugin                                                                                 */
 
 static int rm_entry(const char *path, const struct stat *sb, int flag, struct FTW *ftw)
@@ -144,20 +47,9 @@ static int rm_entry(const char *path, const struct stat *sb, int flag, struct FT
 
 static int group_setup(void **state)
 {
-    const char *build = getenv("FP_BUILD_DIR");
-    char path[1024];
-    snprintf(path, sizeof path, "%s/lib/facepuppet/input-replay.so", build ? build : "build");
-    plugin_handle = dlopen(path, RTLD_NOW | RTLD_LOCAL);
-    if (!plugin_handle) {
-        fprintf(stderr, "dlopen %s: %s\n", path, dlerror());
-        return -1;
-    }
-    entry = dlsym(plugin_handle, FP_PLUGIN_ENTRY_SYMBOL);
-    if (!entry) return -1;
-    fp_version host = {FP_PLUGIN_ABI_MAJOR, FP_PLUGIN_ABI_MINOR};
-    if (!fp_version_is_compatible(host, entry->abi) || !entry->init(path)) return -1;
-    factory = entry->get_factory(FP_INPUT_FACTORY_ID);
+    factory = fp_test_plugin_open("input-replay.so", FP_INPUT_FACTORY_ID, &plugin_handle);
     if (!factory) return -1;
+    entry = dlsym(plugin_handle, FP_PLUGIN_ENTRY_SYMBOL);
     const char *base = getenv("TMPDIR");
     snprintf(tmpdir, sizeof tmpdir, "%s/fp-replay-XXXXXX", base && *base ? base : "/tmp");
     return mkdtemp(tmpdir) ? 0 : -1;
@@ -165,13 +57,12 @@ static int group_setup(void **state)
 
 static int group_teardown(void **state)
 {
-    if (entry) entry->deinit();
-    if (plugin_handle) dlclose(plugin_handle);
+    fp_test_plugin_close(&plugin_handle);
     return tmpdir[0] ? nftw(tmpdir, rm_entry, 16, FTW_DEPTH | FTW_PHYS) : 0;
 }
 
 /* Creates an instance from FILE and "k=v,k=v" keys. Returns create's code. */
-static int create(fake_host *h, const char *file, const char *keys, fp_input **in, char *err,
+static int create(fp_test_host *h, const char *file, const char *keys, fp_input **in, char *err,
                   size_t errlen)
 {
     char buf[256];
@@ -190,21 +81,21 @@ static int create(fake_host *h, const char *file, const char *keys, fp_input **i
 }
 
 /* Replays to the end of stream; returns the host with every event. */
-static fake_host *replay_all(const char *file, const char *keys, size_t cap)
+static fp_test_host *replay_all(const char *file, const char *keys, size_t cap)
 {
-    fake_host *h = fake_new(cap);
+    fp_test_host *h = fp_test_host_new(cap);
     fp_input *in = NULL;
     char err[512];
     int rc = create(h, file, keys, &in, err, sizeof err);
     if (rc) fail_msg("create %s [%s]: %d %s", file, keys ? keys : "", rc, err);
     assert_int_equal(in->start(in, err, sizeof err), 0);
-    if (fake_wait(h, 0, WAIT_LIMIT_NS)) fail_msg("replay of %s did not end", file);
+    if (fp_test_host_wait(h, 0, WAIT_LIMIT_NS)) fail_msg("replay of %s did not end", file);
     in->stop(in);
     in->destroy(in);
     return h;
 }
 
-static size_t count_type(const fake_host *h, int type, int hand)
+static size_t count_type(const fp_test_host *h, int type, int hand)
 {
     size_t n = 0;
     for (size_t i = 0; i < h->count; i++)
@@ -308,7 +199,7 @@ static void frame_counts_match_csv_rows(void **state)
             csv_row *rows = read_csv(path, &nrows);
             size_t per_hand[2] = {0, 0};
             for (size_t r = 0; r < nrows; r++) per_hand[rows[r].hand]++;
-            fake_host *h = replay_all(path, "fast=1", 8 * nrows + 16);
+            fp_test_host *h = replay_all(path, "fast=1", 8 * nrows + 16);
             for (int hand = 0; hand < 2; hand++) {
                 if (kind == 0) {
                     assert_int_equal(count_type(h, FP_EVENT_JOINT_POSITIONS, hand), per_hand[hand]);
@@ -335,7 +226,7 @@ static void frame_counts_match_csv_rows(void **state)
             /* Emulated times span the recording: last - first = last ts - first ts. */
             assert_int_equal(h->events[h->count - 2].header.time_ns - h->events[1].header.time_ns,
                              (rows[nrows - 1].ts - rows[0].ts) * 1000);
-            fake_free(h);
+            fp_test_host_free(h);
             free(rows);
         }
     }
@@ -356,7 +247,7 @@ static void positions_and_wrist_equal_csv(void **state)
     const char *path = LEAP "three-claps_joints_mm.csv";
     size_t nrows;
     csv_row *rows = read_csv(path, &nrows);
-    fake_host *h = replay_all(path, "fast=1", 4 * nrows + 16);
+    fp_test_host *h = replay_all(path, "fast=1", 4 * nrows + 16);
     size_t row = 0;
     for (size_t e = 0; e < h->count; e++) {
         const fp_event *ev = &h->events[e];
@@ -419,7 +310,7 @@ static void positions_and_wrist_equal_csv(void **state)
         }
     }
     assert_int_equal(row, nrows);
-    fake_free(h);
+    fp_test_host_free(h);
     free(rows);
 }
 
@@ -428,7 +319,7 @@ static void angles_in_radians_empty_invalid(void **state)
     const char *path = LEAP "three-claps_cyberglove_like_angles_deg.csv";
     size_t nrows;
     csv_row *rows = read_csv(path, &nrows);
-    fake_host *h = replay_all(path, "fast=1", nrows + 16);
+    fp_test_host *h = replay_all(path, "fast=1", nrows + 16);
     size_t row = 0;
     for (size_t e = 0; e < h->count; e++) {
         const fp_event *ev = &h->events[e];
@@ -458,26 +349,26 @@ static void angles_in_radians_empty_invalid(void **state)
         assert_true(ev->angles.valid & (1u << FP_SENSOR_INDEX_MPJ));
     }
     assert_int_equal(row, nrows);
-    fake_free(h);
+    fp_test_host_free(h);
     free(rows);
 }
 
 static void hands_filter(void **state)
 {
-    fake_host *h = replay_all(LEAP "three-claps_joints_mm.csv", "fast=1,hands=left", 2000);
+    fp_test_host *h = replay_all(LEAP "three-claps_joints_mm.csv", "fast=1,hands=left", 2000);
     assert_int_equal(count_type(h, FP_EVENT_JOINT_POSITIONS, FP_HAND_LEFT), 403);
     assert_int_equal(count_type(h, FP_EVENT_JOINT_POSITIONS, FP_HAND_RIGHT), 0);
     assert_int_equal(count_type(h, FP_EVENT_WRIST_POSE, FP_HAND_RIGHT), 0);
-    fake_free(h);
+    fp_test_host_free(h);
     /* a right-only recording has nothing for the left hand: an error at create */
-    h = fake_new(4);
+    h = fp_test_host_new(4);
     fp_input *in = NULL;
     char err[512];
     assert_int_equal(create(h, LEAP "grab_joints_mm.csv", "hands=left", &in, err, sizeof err),
                      -EINVAL);
     assert_null(in);
     assert_non_null(strstr(err, "no events to replay (hands=left)"));
-    fake_free(h);
+    fp_test_host_free(h);
 }
 
 /* speed=4 on 21 rows 20 ms apart (400 ms): about 100 ms of wall time, event times 5 ms apart. */
@@ -486,14 +377,14 @@ static void pacing_follows_speed(void **state)
     char path[512];
     tmp_path(path, sizeof path, "pace_joints.csv");
     write_joints_csv(path, 21, 20000, "right");
-    fake_host *h = fake_new(200);
+    fp_test_host *h = fp_test_host_new(200);
     fp_input *in = NULL;
     char err[512];
     assert_int_equal(create(h, path, "speed=4", &in, err, sizeof err), 0);
-    int64_t t0 = mono_ns();
+    int64_t t0 = fp_test_mono_ns();
     assert_int_equal(in->start(in, err, sizeof err), 0);
-    assert_int_equal(fake_wait(h, 0, WAIT_LIMIT_NS), 0);
-    double took = (double)(mono_ns() - t0) * 1e-9;
+    assert_int_equal(fp_test_host_wait(h, 0, WAIT_LIMIT_NS), 0);
+    double took = (double)(fp_test_mono_ns() - t0) * 1e-9;
     in->stop(in);
     in->destroy(in);
     print_message("speed=4 replay of a 0.4 s recording took %.3f s (expected 0.1 s; machine "
@@ -509,7 +400,7 @@ static void pacing_follows_speed(void **state)
         prev = ev->header.time_ns;
     }
     assert_int_equal(n, 21);
-    fake_free(h);
+    fp_test_host_free(h);
 }
 
 /* fast=1 on 500 rows 1 s apart (8 min recorded) ends at once, and a queue that refuses every
@@ -519,13 +410,13 @@ static void fast_never_drops(void **state)
     char path[512];
     tmp_path(path, sizeof path, "fast_joints.csv");
     write_joints_csv(path, 500, 1000000, "left");
-    fake_host *h = fake_new(2000);
+    fp_test_host *h = fp_test_host_new(2000);
     h->refuse_every = 3;
     fp_input *in = NULL;
     char err[512];
     assert_int_equal(create(h, path, "fast=1", &in, err, sizeof err), 0);
     assert_int_equal(in->start(in, err, sizeof err), 0);
-    assert_int_equal(fake_wait(h, 0, WAIT_LIMIT_NS), 0);
+    assert_int_equal(fp_test_host_wait(h, 0, WAIT_LIMIT_NS), 0);
     in->stop(in);
     in->destroy(in);
     assert_true(h->refused > 300);
@@ -542,7 +433,7 @@ static void fast_never_drops(void **state)
         assert_int_equal(ev->header.time_ns - first, (int64_t)r * 1000000000);
         r++;
     }
-    fake_free(h);
+    fp_test_host_free(h);
 }
 
 /* Paced mode with a full queue: poses may be dropped (as a device's), status events never. */
@@ -551,20 +442,20 @@ static void paced_drops_poses_not_status(void **state)
     char path[512];
     tmp_path(path, sizeof path, "paced_joints.csv");
     write_joints_csv(path, 10, 1000, "right"); /* 10 rows 1 ms apart */
-    fake_host *h = fake_new(100);
+    fp_test_host *h = fp_test_host_new(100);
     h->refuse_every = 2; /* connected goes in; then every second push is refused */
     fp_input *in = NULL;
     char err[512];
     assert_int_equal(create(h, path, NULL, &in, err, sizeof err), 0);
     assert_int_equal(in->start(in, err, sizeof err), 0);
-    assert_int_equal(fake_wait(h, 0, WAIT_LIMIT_NS), 0);
+    assert_int_equal(fp_test_host_wait(h, 0, WAIT_LIMIT_NS), 0);
     in->stop(in);
     in->destroy(in);
     assert_int_equal(h->events[0].status.code, FP_STATUS_CONNECTED);
     assert_int_equal(h->eos, 1);
     assert_int_equal(count_type(h, FP_EVENT_JOINT_POSITIONS, -1) +
                      count_type(h, FP_EVENT_WRIST_POSE, -1), 10); /* 20 poses, 10 refused */
-    fake_free(h);
+    fp_test_host_free(h);
 }
 
 /* loop=1: the rows come again, times keep increasing by the loop period, no end of stream. */
@@ -573,12 +464,12 @@ static void loop_repeats_with_increasing_times(void **state)
     char path[512];
     tmp_path(path, sizeof path, "loop_joints.csv");
     write_joints_csv(path, 5, 10000, "right"); /* 40 ms long, 10 ms steps: period 50 ms */
-    fake_host *h = fake_new(1 + 3 * 5 * 2);
+    fp_test_host *h = fp_test_host_new(1 + 3 * 5 * 2);
     fp_input *in = NULL;
     char err[512];
     assert_int_equal(create(h, path, "loop=1,fast=1", &in, err, sizeof err), 0);
     assert_int_equal(in->start(in, err, sizeof err), 0);
-    assert_int_equal(fake_wait(h, h->cap, WAIT_LIMIT_NS), 0);
+    assert_int_equal(fp_test_host_wait(h, h->cap, WAIT_LIMIT_NS), 0);
     in->stop(in);
     in->destroy(in);
     assert_int_equal(h->eos, 0);
@@ -593,7 +484,7 @@ static void loop_repeats_with_increasing_times(void **state)
         assert_int_equal(pos[k + 5]->header.time_ns - pos[k]->header.time_ns, 50000000);
     }
     for (size_t k = 1; k < n; k++) assert_true(pos[k]->header.time_ns > pos[k - 1]->header.time_ns);
-    fake_free(h);
+    fp_test_host_free(h);
 }
 
 /* stop() wakes the thread out of a long wait at once, and nothing is pushed after it. */
@@ -602,16 +493,16 @@ static void stop_is_prompt(void **state)
     char path[512];
     tmp_path(path, sizeof path, "slow_joints.csv");
     write_joints_csv(path, 3, 100000000, "right"); /* rows 100 s apart */
-    fake_host *h = fake_new(100);
+    fp_test_host *h = fp_test_host_new(100);
     fp_input *in = NULL;
     char err[512];
     assert_int_equal(create(h, path, NULL, &in, err, sizeof err), 0);
     assert_int_equal(in->start(in, err, sizeof err), 0);
-    assert_int_equal(fake_wait(h, 3, WAIT_LIMIT_NS), 0); /* connected, row 0's two events */
+    assert_int_equal(fp_test_host_wait(h, 3, WAIT_LIMIT_NS), 0); /* connected, row 0's two events */
     usleep(20000);
-    int64_t t0 = mono_ns();
+    int64_t t0 = fp_test_mono_ns();
     in->stop(in);
-    double took = (double)(mono_ns() - t0) * 1e-9;
+    double took = (double)(fp_test_mono_ns() - t0) * 1e-9;
     print_message("stop() took %.6f s\n", took);
     assert_true(took < 1.0);
     size_t count = h->count;
@@ -619,19 +510,19 @@ static void stop_is_prompt(void **state)
     /* start again after a stop: a fresh replay from the beginning */
     assert_int_equal(in->start(in, err, sizeof err), 0);
     assert_int_equal(in->start(in, err, sizeof err), -EBUSY);
-    assert_int_equal(fake_wait(h, 6, WAIT_LIMIT_NS), 0);
+    assert_int_equal(fp_test_host_wait(h, 6, WAIT_LIMIT_NS), 0);
     in->stop(in);
     in->destroy(in);
     assert_int_equal(h->count, 6);
     assert_true(h->events[4].positions.mm[0][0] == 0.0f);
-    fake_free(h);
+    fp_test_host_free(h);
 }
 
 /* Creates and expects failure with a message starting "PATH:LINE:COL: reason". */
 static void expect_create_error(const char *path, const char *keys, long line, long col,
                                 const char *reason)
 {
-    fake_host *h = fake_new(4);
+    fp_test_host *h = fp_test_host_new(4);
     fp_input *in = (fp_input *)1;
     char err[1024], want[1024];
     int rc = create(h, path, keys, &in, err, sizeof err);
@@ -644,7 +535,7 @@ static void expect_create_error(const char *path, const char *keys, long line, l
         snprintf(want, sizeof want, "%s", reason);
     if (!strstr(err, want)) fail_msg("message \"%s\"\n   expected \"%s\"", err, want);
     assert_int_equal(h->count, 0);
-    fake_free(h);
+    fp_test_host_free(h);
 }
 
 /* 1-based column of field i (0-based) of a CSV line. */
@@ -745,6 +636,19 @@ static void malformed_rows_fail_create(void **state)
     expect_create_error(angles, NULL, 2, field_col(line, 4 + FP_SENSOR_INDEX_MPJ),
                         "bad number \"4..5\" in column index_mcp");
 
+    /* a joints header with one column too many (74 of 73): the error names the extra
+     * column (this once read past a 73-field array and printed a stack address) */
+    const char *hdr = read_header(LEAP "grab_joints_mm.csv");
+    size_t hlen = strcspn(hdr, "\r\n");
+    f = fopen(bad, "w");
+    assert_non_null(f);
+    fprintf(f, "%.*s,extra\n", (int)hlen, hdr);
+    get_line(good, 2, line, sizeof line);
+    fprintf(f, "%s\n", line);
+    fclose(f);
+    snprintf(mod, sizeof mod, "header has 74 columns, expected 73");
+    expect_create_error(bad, NULL, 1, (long)hlen + 2, mod);
+
     /* a file in no known format, a missing file */
     tmp_path(bad, sizeof bad, "unknown.txt");
     f = fopen(bad, "w");
@@ -774,7 +678,7 @@ static void truncated_file_replays_to_last_full_row(void **state)
     }
     fclose(in);
     fclose(out);
-    fake_host *h = replay_all(cut, "fast=1", 1000);
+    fp_test_host *h = replay_all(cut, "fast=1", 1000);
     assert_int_equal(count_type(h, FP_EVENT_JOINT_POSITIONS, -1), 99); /* lines 2..100 */
     const fp_event *warn = &h->events[h->count - 2], *eos = &h->events[h->count - 1];
     assert_int_equal(warn->header.type, FP_EVENT_STATUS);
@@ -782,7 +686,7 @@ static void truncated_file_replays_to_last_full_row(void **state)
     assert_non_null(strstr(warn->status.text, "cut_joints.csv:101:"));
     assert_int_equal(eos->status.code, FP_STATUS_END_OF_STREAM);
     assert_non_null(strstr(h->log, "cut_joints.csv:101:"));
-    fake_free(h);
+    fp_test_host_free(h);
 }
 
 static void spec_errors(void **state)
@@ -795,12 +699,12 @@ static void spec_errors(void **state)
     expect_create_error(file, "loop=2", 0, 0, "loop=2: expected 0 or 1");
     expect_create_error(file, "fast=yes", 0, 0, "fast=yes: expected 0 or 1");
     expect_create_error(file, "hands=middle", 0, 0, "hands=middle: expected left, right or both");
-    fake_host *h = fake_new(4);
+    fp_test_host *h = fp_test_host_new(4);
     fp_input *in = NULL;
     char err[512];
     assert_int_equal(factory->create(&h->host, NULL, NULL, 0, &in, err, sizeof err), -EINVAL);
     assert_non_null(strstr(err, "no FILE given"));
-    fake_free(h);
+    fp_test_host_free(h);
 }
 
 /* An event log written with fp_eventlog replays event for event, spacing kept. */
@@ -832,7 +736,7 @@ static void eventlog_replays_as_recorded(void **state)
     for (int i = 0; i < 6; i++) assert_int_equal(fp_eventlog_writer_write(w, &ev[i]), 0);
     assert_int_equal(fp_eventlog_writer_close(&w, err, sizeof err), 0);
 
-    fake_host *h = replay_all(path, "fast=1", 64);
+    fp_test_host *h = replay_all(path, "fast=1", 64);
     assert_int_equal(h->count, 8); /* connected, 6, end of stream */
     for (int i = 0; i < 6; i++) {
         fp_event got = h->events[1 + i], want = ev[i];
@@ -840,14 +744,14 @@ static void eventlog_replays_as_recorded(void **state)
         got.header.time_ns = want.header.time_ns = 0;
         if (memcmp(&got, &want, sizeof got) != 0) fail_msg("event %d differs", i);
     }
-    fake_free(h);
+    fp_test_host_free(h);
 
     /* hands=right keeps the right hand's and the handless events */
     h = replay_all(path, "fast=1,hands=right", 64);
     assert_int_equal(h->count, 2 + 4); /* connected, 4, end of stream */
     assert_int_equal(count_type(h, FP_EVENT_JOINT_ANGLES, -1), 0);
     assert_int_equal(count_type(h, FP_EVENT_BUTTON, -1), 1);
-    fake_free(h);
+    fp_test_host_free(h);
 
     /* an event-log syntax error fails create with the reader's FILE:LINE:COLUMN */
     FILE *f = fopen(path, "a");

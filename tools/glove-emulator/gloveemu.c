@@ -20,6 +20,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "fp_error.h"
 #include "glove_cal.h"
 
 #define OUT_CAP 65536
@@ -79,17 +80,6 @@ static int64_t mono_ns(void)
     return (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
 }
 
-static int errf(char *err, size_t errlen, int code, const char *fmt, ...)
-{
-    if (err && errlen) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(err, errlen, fmt, ap);
-        va_end(ap);
-    }
-    return code;
-}
-
 /* ------------------------------------------------------------------------------------- */
 /* Recording                                                                             */
 
@@ -97,7 +87,7 @@ static int load_csv(fp_gloveemu *e, const char *path, char *err, size_t errlen)
 {
     FILE *f = fopen(path, "r");
     if (!f)
-        return errf(err, errlen, -errno, "%s: %s", path, strerror(errno));
+        return fp_errorf(err, errlen, -errno, "%s: %s", path, strerror(errno));
     char line[4096];
     int lineno = 0, rc = 0;
     size_t cap = 0, n = 0, nright = 0;
@@ -107,7 +97,7 @@ static int load_csv(fp_gloveemu *e, const char *path, char *err, size_t errlen)
         lineno++;
         if (lineno == 1) {
             if (strncmp(line, "frame,timestamp_us,hand_id,hand_type,", 37) != 0) {
-                rc = errf(err, errlen, -EINVAL, "%s:1: not a joint-angle CSV (header)", path);
+                rc = fp_errorf(err, errlen, -EINVAL, "%s:1: not a joint-angle CSV (header)", path);
                 goto out;
             }
             continue;
@@ -122,7 +112,7 @@ static int load_csv(fp_gloveemu *e, const char *path, char *err, size_t errlen)
             if (r2)
                 right = r2;
             if (!r1 || !r2) {
-                rc = errf(err, errlen, -ENOMEM, "out of memory");
+                rc = fp_errorf(err, errlen, -ENOMEM, "out of memory");
                 goto out;
             }
         }
@@ -141,7 +131,7 @@ static int load_csv(fp_gloveemu *e, const char *path, char *err, size_t errlen)
                     char *end;
                     double v = strtod(p, &end);
                     if (end != p + len || !isfinite(v)) {
-                        rc = errf(err, errlen, -EINVAL, "%s:%d: column %d is not a number",
+                        rc = fp_errorf(err, errlen, -EINVAL, "%s:%d: column %d is not a number",
                                   path, lineno, col + 1);
                         goto out;
                     }
@@ -154,7 +144,7 @@ static int load_csv(fp_gloveemu *e, const char *path, char *err, size_t errlen)
             p = comma + 1;
         }
         if (col != 26) {
-            rc = errf(err, errlen, -EINVAL, "%s:%d: %d columns, expected 26", path, lineno, col);
+            rc = fp_errorf(err, errlen, -EINVAL, "%s:%d: %d columns, expected 26", path, lineno, col);
             goto out;
         }
         right[n] = is_right;
@@ -162,7 +152,7 @@ static int load_csv(fp_gloveemu *e, const char *path, char *err, size_t errlen)
         n++;
     }
     if (n == 0) {
-        rc = errf(err, errlen, -EINVAL, "%s: no frames", path);
+        rc = fp_errorf(err, errlen, -EINVAL, "%s: no frames", path);
         goto out;
     }
     /* keep the frames of this glove's hand when the recording has any */
@@ -605,16 +595,16 @@ int fp_gloveemu_create(const fp_gloveemu_options *opts, fp_gloveemu **out, char 
     if (o.sensors == 0)
         o.sensors = 22;
     if (o.sensors != 18 && o.sensors != 22)
-        return errf(err, errlen, -EINVAL, "sensors=%d: expected 18 or 22", o.sensors);
+        return fp_errorf(err, errlen, -EINVAL, "sensors=%d: expected 18 or 22", o.sensors);
     if (o.rate_hz == 0)
         o.rate_hz = 100;
     if (!(o.rate_hz > 0 && o.rate_hz <= 100000))
-        return errf(err, errlen, -EINVAL, "rate %g: expected 0..100000 Hz", o.rate_hz);
+        return fp_errorf(err, errlen, -EINVAL, "rate %g: expected 0..100000 Hz", o.rate_hz);
     if (o.history == 0)
         o.history = 8192;
     fp_gloveemu *e = calloc(1, sizeof *e);
     if (!e)
-        return errf(err, errlen, -ENOMEM, "out of memory");
+        return fp_errorf(err, errlen, -ENOMEM, "out of memory");
     e->o = o;
     e->master = e->slave = -1;
     e->wake[0] = e->wake[1] = -1;
@@ -634,7 +624,7 @@ int fp_gloveemu_create(const fp_gloveemu_options *opts, fp_gloveemu **out, char 
     e->hist_cap = o.history;
     e->hist = calloc(e->hist_cap, sizeof *e->hist);
     if (!e->hist) {
-        rc = errf(err, errlen, -ENOMEM, "out of memory");
+        rc = fp_errorf(err, errlen, -ENOMEM, "out of memory");
         goto fail;
     }
     e->plugged = true;
@@ -643,18 +633,18 @@ int fp_gloveemu_create(const fp_gloveemu_options *opts, fp_gloveemu **out, char 
     e->period_s = 1.0 / o.rate_hz;
     e->t0 = mono_ns();
     if (pipe2(e->wake, O_CLOEXEC | O_NONBLOCK) != 0) {
-        rc = errf(err, errlen, -errno, "pipe: %s", strerror(errno));
+        rc = fp_errorf(err, errlen, -errno, "pipe: %s", strerror(errno));
         goto fail;
     }
     if ((rc = open_pty(e)) < 0) {
-        errf(err, errlen, rc, "cannot make a pty%s%s: %s", e->link[0] ? " linked at " : "",
+        fp_errorf(err, errlen, rc, "cannot make a pty%s%s: %s", e->link[0] ? " linked at " : "",
              e->link, strerror(-rc));
         goto fail;
     }
     pthread_mutex_init(&e->lock, NULL);
     pthread_cond_init(&e->cond, NULL);
     if ((rc = pthread_create(&e->thread, NULL, serve, e)) != 0) {
-        rc = errf(err, errlen, -rc, "cannot start the emulator thread");
+        rc = fp_errorf(err, errlen, -rc, "cannot start the emulator thread");
         pthread_mutex_destroy(&e->lock);
         pthread_cond_destroy(&e->cond);
         close_pty(e);

@@ -4,6 +4,7 @@
 #include "command.h"
 #include "fp_session.h"
 #include "session_opts.h"
+#include "fp_stats.h"
 
 #include <errno.h>
 #include <getopt.h>
@@ -48,16 +49,6 @@ static void usage(FILE *f)
         "Exit status: 0 done, 64 usage, 65 bad input data, 66 input missing, 73 output\n"
         "not writable, 78 plugin missing or incompatible, 1 other failure\n"
         "(facepuppet --help has the whole table).\n");
-}
-
-static double median(double *v, size_t n)
-{
-    if (!n) return 0;
-    for (size_t i = 1; i < n; i++) /* insertion sort: n is a few thousand at most */
-        for (size_t j = i; j > 0 && v[j - 1] > v[j]; j--) {
-            double t = v[j]; v[j] = v[j - 1]; v[j - 1] = t;
-        }
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
 static void sleep_until(int64_t t_ns)
@@ -208,7 +199,7 @@ static int run_main(int argc, char **argv)
         fprintf(stderr, "facepuppet run: %s\n", err);
         status = fp_app_exit_code(rc, FP_APP_OUTPUT);
     }
-    double med = median(update_ms, nupdates);
+    double med = fp_median(update_ms, nupdates);
     printf("frames %llu, deforming %llu, engaged %llu, committed %llu; vertices moved %zu of %zu; "
            "displacement mean %.6g max %.6g (mesh units); update median %.3f ms over %zu updates; "
            "events dropped %lu%s%s\n",

@@ -4,6 +4,7 @@
 
 #include "fp_gpuwarp.h"
 #include "fp_mesh.h"
+#include "fp_stats.h"
 #include "render.h"
 #include "script.h"
 #include "vmath.h"
@@ -39,20 +40,10 @@ static void samples_add(samples *s, double x)
     s->v[s->n++] = x;
 }
 
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
 void fp_viewer_percentiles(double *v, size_t n, double *median, double *p99)
 {
-    *median = *p99 = 0;
-    if (!n) return;
-    qsort(v, n, sizeof *v, cmp_double);
-    *median = n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-    size_t rank = (size_t)ceil(0.99 * (double)n); /* nearest rank, 1-based */
-    *p99 = v[(rank ? rank : 1) - 1];
+    *median = fp_median(v, n);
+    *p99 = fp_percentile(v, n, 0.99);
 }
 
 /* ---- state ------------------------------------------------------------------------------ */

@@ -10,15 +10,13 @@
 
 #include <facepuppet/plugin.h>
 #include <errno.h>
+#include <facepuppet/plugin_util.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-/** Which hands a mapping listens to: a bit per fp_hand_side. */
-#define FP_HANDMASK_LEFT (1u << FP_HAND_LEFT)
-#define FP_HANDMASK_RIGHT (1u << FP_HAND_RIGHT)
-#define FP_HANDMASK_BOTH (FP_HANDMASK_LEFT | FP_HANDMASK_RIGHT)
+/* Which hands a mapping listens to: FP_HANDMASK_* and fp_parse_hands, in plugin_util.h. */
 
 /** The paper's activation rule (Sato et al. 2004, sec. 2.3): a hand is active while one of
  *  its fingertips is within `factor` x the support radius of the surface. */
@@ -48,15 +46,6 @@ static inline void fp_clamp_vector(const float start[3], float end[3], double ma
     if (len <= max_len) return;
     double k = max_len / len;
     for (int i = 0; i < 3; i++) end[i] = (float)(start[i] + d[i] * k);
-}
-
-/** Parse a "left|right|both" hands value into a FP_HANDMASK_*; 0 where not one of them. */
-static inline unsigned fp_parse_hands(const char *v)
-{
-    if (!strcmp(v, "left")) return FP_HANDMASK_LEFT;
-    if (!strcmp(v, "right")) return FP_HANDMASK_RIGHT;
-    if (!strcmp(v, "both")) return FP_HANDMASK_BOTH;
-    return 0;
 }
 
 /** Parse a finite double in [lo, hi]; false where the text is not one. */

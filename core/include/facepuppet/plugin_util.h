@@ -1,0 +1,35 @@
+/*
+ * facepuppet/plugin_util.h: small inline helpers for any plugin author (input or mapping),
+ * on top of facepuppet/plugin.h. Header-only, no allocation, reentrant, [any-thread].
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#ifndef FACEPUPPET_PLUGIN_UTIL_H
+#define FACEPUPPET_PLUGIN_UTIL_H
+
+#include <facepuppet/plugin.h>
+#include <string.h>
+
+/** A set of hands: a bit per fp_hand_side (the `hands=` key of mappings and of replay). */
+#define FP_HANDMASK_LEFT (1u << FP_HAND_LEFT)
+#define FP_HANDMASK_RIGHT (1u << FP_HAND_RIGHT)
+#define FP_HANDMASK_BOTH (FP_HANDMASK_LEFT | FP_HANDMASK_RIGHT)
+
+/** The one parser of a `hands=` value: "left", "right" or "both" -> FP_HANDMASK_*; 0 for
+ *  anything else (the caller reports "hands=V: expected left, right or both"). */
+static inline unsigned fp_parse_hands(const char *v)
+{
+    if (!v) return 0;
+    if (!strcmp(v, "left")) return FP_HANDMASK_LEFT;
+    if (!strcmp(v, "right")) return FP_HANDMASK_RIGHT;
+    if (!strcmp(v, "both")) return FP_HANDMASK_BOTH;
+    return 0;
+}
+
+/** The `hands=` value naming mask: "left", "right" or "both" (any other mask). */
+static inline const char *fp_hands_name(unsigned mask)
+{
+    return mask == FP_HANDMASK_LEFT ? "left" : mask == FP_HANDMASK_RIGHT ? "right" : "both";
+}
+
+#endif

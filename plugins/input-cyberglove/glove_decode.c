@@ -1,0 +1,178 @@
+/*
+ * glove_decode.c: CyberGlove record decoder and raw -> angle conversion (glove_decode.h).
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#include "glove_decode.h"
+
+#include <math.h>
+#include <string.h>
+
+/* Glove sensor of each of an 18-sensor glove's values (no DIP of index..pinky, no palm arch). */
+static const int DIJ_SKIP[18] = {0, 1, 2, 3, 4, 5, 7, 8, 10, 11, 12, 14, 15, 16, 18, 19, 20, 21};
+
+void fpg_decoder_init(fpg_decoder *d, int bits, int sensors, bool ts_on, bool status_on)
+{
+    memset(d, 0, sizeof *d);
+    d->bits = bits;
+    d->sensors = sensors;
+    d->ts_on = ts_on;
+    d->status_on = status_on;
+}
+
+/* Try to decode one 8-bit unit at a[0..len). Returns >0 bytes consumed, 0 need more,
+ * -1 not a unit here (skip a byte). */
+static int decode8(const fpg_decoder *d, const uint8_t *a, size_t len, fpg_unit *u)
+{
+    const size_t n = (size_t)d->sensors;
+    const size_t body = 1 + n + (d->ts_on ? 5 : 0) + (d->status_on ? 1 : 0);
+    if (a[0] == 'e') {   /* a bare error: `e` X 0x00 */
+        if (len < 3)
+            return 0;
+        if (a[2] != 0 || a[1] == 0 || !strchr("?gsny", a[1]))
+            return -1;
+        u->kind = FPG_UNIT_ERROR;
+        u->errc = a[1];
+        return 3;
+    }
+    if (a[0] != 'S' && a[0] != 'G')
+        return -1;
+    size_t avail = len < 1 + n ? len : 1 + n;
+    for (size_t i = 1; i < avail; i++)
+        if (a[i] == 0)
+            return -1;
+    if (len < body + 1)
+        return 0;
+    int errc = 0;
+    size_t used;
+    if (a[body] == 0) {
+        used = body + 1;
+    } else if (a[body] == 'e') {
+        if (len < body + 3)
+            return 0;
+        if ((a[body + 1] != 'g' && a[body + 1] != 's') || a[body + 2] != 0)
+            return -1;
+        errc = a[body + 1];
+        used = body + 3;
+    } else {
+        return -1;
+    }
+    u->kind = FPG_UNIT_RECORD;
+    u->nraw = (int)n;
+    for (size_t i = 0; i < n; i++)
+        u->raw[i] = a[1 + i];
+    u->plugged = d->status_on ? (a[body - 1] & 1) != 0 : true;
+    u->errc = errc;
+    return (int)used;
+}
+
+static bool ts_char(uint8_t c) { return (c >= '0' && c <= '9') || c == ':' || c == ' ' || c == '.'; }
+
+/* 16-bit frame: 0D 0A 00, ASCII timestamp (8..16 chars), 'S', 22 x BE16. */
+static int decode16(const uint8_t *a, size_t len, fpg_unit *u)
+{
+    static const uint8_t hdr[3] = {0x0D, 0x0A, 0x00};
+    for (size_t i = 0; i < 3; i++) {
+        if (i >= len)
+            return 0;
+        if (a[i] != hdr[i])
+            return -1;
+    }
+    size_t k = 3;
+    for (; k < len && k < 3 + 17; k++) {
+        if (a[k] == 'S')
+            break;
+        if (!ts_char(a[k]))
+            return -1;
+    }
+    if (k >= 3 + 17)
+        return -1;
+    if (k >= len)
+        return 0;
+    if (k - 3 < 8)
+        return -1;
+    size_t need = k + 1 + 2 * FPG_SENSORS;
+    if (len < need)
+        return 0;
+    for (int i = 0; i < FPG_SENSORS; i++) {
+        unsigned v = (unsigned)a[k + 1 + 2 * i] << 8 | a[k + 2 + 2 * i];
+        if (v < 1 || v > 4094)
+            return -1;
+        u->raw[i] = v / 16.0;
+    }
+    u->kind = FPG_UNIT_RECORD;
+    u->nraw = FPG_SENSORS;
+    u->plugged = true;
+    u->errc = 0;
+    return (int)need;
+}
+
+static void noise(size_t n, fpg_unit_fn fn, void *user)
+{
+    fpg_unit u;
+    memset(&u, 0, sizeof u);
+    u.kind = FPG_UNIT_NOISE;
+    u.noise = n;
+    fn(user, &u);
+}
+
+void fpg_decoder_feed(fpg_decoder *d, const uint8_t *data, size_t n, fpg_unit_fn fn, void *user)
+{
+    fpg_unit u;
+    while (n) {
+        size_t take = FPG_DECODE_CAP - d->len;
+        if (take > n)
+            take = n;
+        memcpy(d->acc + d->len, data, take);
+        d->len += take;
+        data += take;
+        n -= take;
+        size_t pos = 0, skipped = 0;
+        while (pos < d->len) {
+            int r = d->bits == 16 ? decode16(d->acc + pos, d->len - pos, &u)
+                                  : decode8(d, d->acc + pos, d->len - pos, &u);
+            if (r == 0)
+                break;
+            if (r < 0) {
+                pos++;
+                skipped++;
+                continue;
+            }
+            if (skipped) {
+                noise(skipped, fn, user);
+                skipped = 0;
+            }
+            fn(user, &u);
+            pos += (size_t)r;
+        }
+        if (skipped)
+            noise(skipped, fn, user);
+        memmove(d->acc, d->acc + pos, d->len - pos);
+        d->len -= pos;
+        if (d->len == FPG_DECODE_CAP) {   /* cannot happen with well-formed limits; stay safe */
+            noise(d->len, fn, user);
+            d->len = 0;
+        }
+    }
+}
+
+int fpg_angles_from_raw(const fpg_cal *cal, const fpg_unit *u, float radians[FPG_SENSORS],
+                        uint32_t *valid)
+{
+    int dropped = 0;
+    *valid = 0;
+    memset(radians, 0, FPG_SENSORS * sizeof *radians);
+    for (int k = 0; k < u->nraw && k < FPG_SENSORS; k++) {
+        int i = u->nraw == FPG_SENSORS ? k : DIJ_SKIP[k];
+        if (!(cal->used & (1u << i)))
+            continue;
+        float a = fpg_cal_angle(cal, i, u->raw[k]);
+        if (!isfinite(a)) {
+            dropped++;
+            continue;
+        }
+        radians[i] = a;
+        *valid |= 1u << i;
+    }
+    return dropped;
+}

@@ -1,0 +1,290 @@
+/*
+ * test_glove_decode.c: the CyberGlove record decoder (plugins/input-cyberglove/glove_decode.h)
+ * fed byte-exact records directly, without a pseudo-terminal: 8-bit records with and without
+ * timestamp and status bytes, trailing and bare error messages, 16-bit frames, garbage
+ * between records (resynchronisation), records split across reads; raw -> angle never
+ * yields a non-finite angle; calibration values beyond float range are refused with
+ * FILE:LINE.
+ */
+#define _GNU_SOURCE
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "glove_cal.h"
+#include "fp_test_support.h"
+#include "glove_decode.h"
+
+#define MAX_UNITS 64
+
+typedef struct sink {
+    fpg_unit u[MAX_UNITS];
+    int n;
+} sink;
+
+static void collect(void *user, const fpg_unit *u)
+{
+    sink *s = user;
+    assert_true(s->n < MAX_UNITS);
+    s->u[s->n++] = *u;
+}
+
+/* An 8-bit record: cmd, n sensor bytes (first + i), optional 5 timestamp bytes and a status
+ * byte, then 0x00 or the error pair `e` errc 0x00. Returns its length. */
+static size_t rec8(uint8_t *b, char cmd, int n, int first, bool ts, int status, int errc)
+{
+    size_t k = 0;
+    b[k++] = (uint8_t)cmd;
+    for (int i = 0; i < n; i++) b[k++] = (uint8_t)(first + i);
+    if (ts) {
+        const uint8_t t[5] = {0x00, 0x12, 0x34, 0x00, 0x56}; /* any bytes, zeros included */
+        memcpy(b + k, t, 5);
+        k += 5;
+    }
+    if (status >= 0) b[k++] = (uint8_t)status;
+    if (errc) {
+        b[k++] = 'e';
+        b[k++] = (uint8_t)errc;
+    }
+    b[k++] = 0x00;
+    return k;
+}
+
+/* A 16-bit frame: 0D 0A 00, timestamp text, 'S', 22 big-endian values v[i]. */
+static size_t frame16(uint8_t *b, const char *stamp, const unsigned v[FPG_SENSORS])
+{
+    size_t k = 0;
+    b[k++] = 0x0D;
+    b[k++] = 0x0A;
+    b[k++] = 0x00;
+    memcpy(b + k, stamp, strlen(stamp));
+    k += strlen(stamp);
+    b[k++] = 'S';
+    for (int i = 0; i < FPG_SENSORS; i++) {
+        b[k++] = (uint8_t)(v[i] >> 8);
+        b[k++] = (uint8_t)(v[i] & 0xFF);
+    }
+    return k;
+}
+
+static void expect_record(const fpg_unit *u, int n, int first, bool plugged, int errc)
+{
+    assert_int_equal(u->kind, FPG_UNIT_RECORD);
+    assert_int_equal(u->nraw, n);
+    for (int i = 0; i < n; i++) assert_true(u->raw[i] == first + i);
+    assert_int_equal(u->plugged, plugged);
+    assert_int_equal(u->errc, errc);
+}
+
+static void test_8bit_plain(void **state)
+{
+    (void)state;
+    fpg_decoder d;
+    fpg_decoder_init(&d, 8, 22, false, false);
+    uint8_t b[64];
+    size_t len = rec8(b, 'S', 22, 1, false, -1, 0);
+    assert_int_equal(len, 24);
+    sink s = {.n = 0};
+    fpg_decoder_feed(&d, b, len, collect, &s);
+    assert_int_equal(s.n, 1);
+    expect_record(&s.u[0], 22, 1, true, 0);
+    assert_int_equal(d.len, 0);
+}
+
+static void test_8bit_timestamp_status(void **state)
+{
+    (void)state;
+    fpg_decoder d;
+    fpg_decoder_init(&d, 8, 18, true, true);
+    uint8_t b[256];
+    size_t k = rec8(b, 'G', 18, 100, true, 0x01, 0);   /* plugged */
+    assert_int_equal(k, 1 + 18 + 5 + 1 + 1);
+    k += rec8(b + k, 'G', 18, 50, true, 0x00, 0);      /* status bit clear: unplugged */
+    k += rec8(b + k, 'S', 18, 7, true, 0x03, 'g');     /* trailing `eg` */
+    sink s = {.n = 0};
+    fpg_decoder_feed(&d, b, k, collect, &s);
+    assert_int_equal(s.n, 3);
+    expect_record(&s.u[0], 18, 100, true, 0);
+    expect_record(&s.u[1], 18, 50, false, 0);
+    expect_record(&s.u[2], 18, 7, true, 'g');
+}
+
+static void test_bare_errors(void **state)
+{
+    (void)state;
+    fpg_decoder d;
+    fpg_decoder_init(&d, 8, 22, false, false);
+    const uint8_t b[] = {'e', 's', 0x00, 'e', 'g', 0x00, 'e', '?', 0x00};
+    sink s = {.n = 0};
+    fpg_decoder_feed(&d, b, sizeof b, collect, &s);
+    assert_int_equal(s.n, 3);
+    assert_int_equal(s.u[0].kind, FPG_UNIT_ERROR);
+    assert_int_equal(s.u[0].errc, 's');
+    assert_int_equal(s.u[1].errc, 'g');
+    assert_int_equal(s.u[2].errc, '?');
+}
+
+static void test_16bit_frames(void **state)
+{
+    (void)state;
+    fpg_decoder d;
+    fpg_decoder_init(&d, 16, 22, false, false);
+    unsigned v[FPG_SENSORS];
+    for (int i = 0; i < FPG_SENSORS; i++) v[i] = 16u * (unsigned)(i + 1); /* raw i + 1 */
+    uint8_t b[256];
+    size_t k = frame16(b, "12:34:56.78", v);
+    assert_int_equal(k, 3 + 11 + 1 + 44);
+    v[0] = 1, v[21] = 4094; /* the extremes */
+    size_t k2 = frame16(b + k, "00001234", v);
+    sink s = {.n = 0};
+    fpg_decoder_feed(&d, b, k + k2, collect, &s);
+    assert_int_equal(s.n, 2);
+    expect_record(&s.u[0], 22, 1, true, 0);
+    assert_true(s.u[1].raw[0] == 1 / 16.0 && s.u[1].raw[21] == 4094 / 16.0);
+    assert_true(s.u[1].raw[5] == 6);
+    /* a value 0 (outside 1..4094) is no frame: its bytes are noise */
+    v[3] = 0;
+    k = frame16(b, "12:34:56.78", v);
+    s.n = 0;
+    fpg_decoder_feed(&d, b, k, collect, &s);
+    assert_int_equal(s.n, 1);
+    assert_int_equal(s.u[0].kind, FPG_UNIT_NOISE);
+    assert_int_equal(s.u[0].noise, k);
+}
+
+static void test_garbage_resync(void **state)
+{
+    (void)state;
+    fpg_decoder d;
+    fpg_decoder_init(&d, 8, 22, false, true);
+    uint8_t b[256];
+    size_t k = 0;
+    const uint8_t junk[] = {'x', 0x00, 0xFF, 'q', 0x00};
+    memcpy(b, junk, sizeof junk);
+    k += sizeof junk;
+    k += rec8(b + k, 'S', 22, 30, false, 0x01, 0);
+    /* a record cut short by a 0x00 inside its sensor bytes, then a whole one */
+    const uint8_t cut[] = {'S', 9, 9, 0x00};
+    memcpy(b + k, cut, sizeof cut);
+    k += sizeof cut;
+    k += rec8(b + k, 'S', 22, 60, false, 0x01, 0);
+    b[k++] = 'z'; /* trailing junk, reported at the end of the feed */
+    sink s = {.n = 0};
+    fpg_decoder_feed(&d, b, k, collect, &s);
+    assert_int_equal(s.n, 5);
+    assert_int_equal(s.u[0].kind, FPG_UNIT_NOISE);
+    assert_int_equal(s.u[0].noise, sizeof junk);
+    expect_record(&s.u[1], 22, 30, true, 0);
+    assert_int_equal(s.u[2].kind, FPG_UNIT_NOISE);
+    assert_int_equal(s.u[2].noise, sizeof cut);
+    expect_record(&s.u[3], 22, 60, true, 0);
+    assert_int_equal(s.u[4].kind, FPG_UNIT_NOISE);
+    assert_int_equal(s.u[4].noise, 1);
+}
+
+/* Every split point of two records across two reads gives the same two records. */
+static void test_split_reads(void **state)
+{
+    (void)state;
+    uint8_t b[256];
+    size_t k = rec8(b, 'S', 22, 5, true, 0x01, 0);
+    k += rec8(b + k, 'S', 22, 40, true, 0x01, 's');
+    for (size_t cutat = 0; cutat <= k; cutat++) {
+        fpg_decoder d;
+        fpg_decoder_init(&d, 8, 22, true, true);
+        sink s = {.n = 0};
+        fpg_decoder_feed(&d, b, cutat, collect, &s);
+        fpg_decoder_feed(&d, b + cutat, k - cutat, collect, &s);
+        assert_int_equal(s.n, 2);
+        expect_record(&s.u[0], 22, 5, true, 0);
+        expect_record(&s.u[1], 22, 40, true, 's');
+        assert_int_equal(d.len, 0);
+    }
+    /* a 16-bit frame split inside its timestamp */
+    unsigned v[FPG_SENSORS];
+    for (int i = 0; i < FPG_SENSORS; i++) v[i] = 160;
+    k = frame16(b, "12:34:56.78", v);
+    fpg_decoder d;
+    fpg_decoder_init(&d, 16, 22, false, false);
+    sink s = {.n = 0};
+    fpg_decoder_feed(&d, b, 7, collect, &s);
+    assert_int_equal(s.n, 0);
+    fpg_decoder_feed(&d, b + 7, k - 7, collect, &s);
+    assert_int_equal(s.n, 1);
+    assert_true(s.u[0].raw[0] == 10);
+}
+
+static void test_angles_finite(void **state)
+{
+    (void)state;
+    fpg_cal cal;
+    fpg_cal_default(&cal);
+    fpg_unit u = {.kind = FPG_UNIT_RECORD, .nraw = 18, .plugged = true};
+    for (int i = 0; i < 18; i++) u.raw[i] = 254;
+    float rad[FPG_SENSORS];
+    uint32_t valid;
+    assert_int_equal(fpg_angles_from_raw(&cal, &u, rad, &valid), 0);
+    /* an 18-sensor glove lacks the index..pinky DIPs (6, 9, 13, 17) */
+    uint32_t want = 0x3FFFFFu & ~(1u << 6 | 1u << 9 | 1u << 13 | 1u << 17);
+    assert_int_equal(valid, want);
+    assert_float_equal(rad[21], M_PI / 2, 1e-5);
+    assert_true(rad[6] == 0);
+    /* a gain that overflows float range at this raw value: left out, not infinite */
+    cal.gain[3] = 3e38f;
+    cal.offset[4] = INFINITY; /* even a bad offset that got in some other way */
+    assert_int_equal(fpg_angles_from_raw(&cal, &u, rad, &valid), 2);
+    assert_int_equal(valid, want & ~(1u << 3 | 1u << 4));
+    for (int i = 0; i < FPG_SENSORS; i++) assert_true(isfinite(rad[i]));
+}
+
+static void test_cal_beyond_float(void **state)
+{
+    (void)state;
+    char dir[] = "/tmp/fp_glove_decode_XXXXXX", path[256], want[320], err[512];
+    assert_non_null(mkdtemp(dir));
+    snprintf(path, sizeof path, "%s/g.cal", dir);
+    fpg_cal cal;
+    fp_test_write_file(path, "0 0.01 0\n3 1e39 0\n");
+    assert_int_equal(fpg_cal_load(path, &cal, err, sizeof err), -EINVAL);
+    snprintf(want, sizeof want, "%s:2: GAIN or OFFSET beyond float range", path);
+    assert_string_equal(err, want);
+    fp_test_write_file(path, "# offsets too\n\n4 0.01 -5e38\n");
+    assert_int_equal(fpg_cal_load(path, &cal, err, sizeof err), -EINVAL);
+    snprintf(want, sizeof want, "%s:3: GAIN or OFFSET beyond float range", path);
+    assert_string_equal(err, want);
+    /* asr two-point: a slope beyond float range on line 2 */
+    fp_test_write_file(path, "0.3:46 -0.5:164\n0:46 1e39:47\n");
+    assert_int_equal(fpg_cal_load(path, &cal, err, sizeof err), -EINVAL);
+    snprintf(want, sizeof want, "%s:2: gain or offset beyond float range", path);
+    assert_string_equal(err, want);
+    /* the largest float still loads */
+    fp_test_write_file(path, "3 3.4e38 0\n");
+    assert_int_equal(fpg_cal_load(path, &cal, err, sizeof err), 0);
+    assert_true(cal.gain[3] > 3e38f && isfinite(cal.gain[3]));
+    unlink(path);
+    rmdir(dir);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_8bit_plain),
+        cmocka_unit_test(test_8bit_timestamp_status),
+        cmocka_unit_test(test_bare_errors),
+        cmocka_unit_test(test_16bit_frames),
+        cmocka_unit_test(test_garbage_resync),
+        cmocka_unit_test(test_split_reads),
+        cmocka_unit_test(test_angles_finite),
+        cmocka_unit_test(test_cal_beyond_float),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
