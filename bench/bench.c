@@ -464,12 +464,14 @@ static int guard_run(const guard_bench_opts *g, const fp_mesh *f, csrbf_points *
     double *tp = malloc((size_t)reps * sizeof *tp), *tg = malloc((size_t)reps * sizeof *tg);
     csrbf_options opt = {0};
     opt.radius = R;
-    csrbf_solver *s = NULL;
+    csrbf_solver *sv[2] = {NULL, NULL}, *s = NULL; /* plain, guarded: each its own factor */
     int rc = !rest || !st || !en || !out || !tp || !tg ? CSRBF_ERR_NOMEM
-                                                       : csrbf_solver_create(&opt, &s);
+                                                       : csrbf_solver_create(&opt, &sv[0]);
+    if (rc >= 0) rc = csrbf_solver_create(&opt, &sv[1]);
     if (rc >= 0) {
         face_fingertips(f, R, m, rest);
-        rc = csrbf_solver_set_start_points(s, (size_t)m, rest);
+        for (int k = 0; k < 2 && rc >= 0; k++)
+            rc = csrbf_solver_set_start_points(sv[k], (size_t)m, rest);
     }
     double best_p = -1, best_g = -1, Lmax = 0;
     for (int round = 0; round < g->rounds && rc >= 0; round++) {
@@ -482,6 +484,7 @@ static int guard_run(const guard_bench_opts *g, const fp_mesh *f, csrbf_points *
                 face_motion(rest, st, m, fr - 1, amp);
             }
             for (int guarded = 0; guarded < 2 && rc >= 0; guarded++) {
+                s = sv[guarded];
                 double t0 = now_ms();
                 csrbf_guard_stats gs;
                 if (anchored) {
@@ -524,7 +527,8 @@ static int guard_run(const guard_bench_opts *g, const fp_mesh *f, csrbf_points *
                best_g / best_p, reps, acted, sub, Lmax);
     }
     fflush(stdout);
-    csrbf_solver_destroy(&s);
+    csrbf_solver_destroy(&sv[0]);
+    csrbf_solver_destroy(&sv[1]);
     free(rest);
     free(st);
     free(en);

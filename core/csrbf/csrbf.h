@@ -234,9 +234,10 @@ typedef struct csrbf_eval_stats {
  *  r from rsqrt14 + one Newton step where the CPU has it, else target_clones of portable C
  *  for x86-64-v3 / baseline, chosen at run time) and parallel over blocks with OpenMP
  *  (options.threads; one thread below about 50k vertex-centre tests).
- *  stats may be NULL (fastest); with stats the pair count, moved count and maximum
- *  displacement are filled in, and with flags & CSRBF_EVAL_JACOBIAN the minimum Jacobian
- *  determinant too. Errors: CSRBF_ERR_INVALID (NULL, unknown flag), CSRBF_ERR_STATE (no start
+ *  stats may be NULL; with stats the pair count, moved count and maximum
+ *  displacement are filled in, counted per block inside the vectorised kernel (the fast path
+ *  stays: a few per cent at most), and with flags & CSRBF_EVAL_JACOBIAN the minimum Jacobian
+ *  determinant too (a slower general path). Errors: CSRBF_ERR_INVALID (NULL, unknown flag), CSRBF_ERR_STATE (no start
  *  points). Thread-safe on a const solver and const points. Source: the map T above. */
 int csrbf_evaluate(const csrbf_solver *solver, const csrbf_points *base, float *deformed,
                    unsigned flags, csrbf_eval_stats *stats);

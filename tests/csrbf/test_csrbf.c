@@ -247,6 +247,40 @@ static void test_interpolation(void **state)
     }
 }
 
+/* Statistics from the fast path (counted per block inside the vectorised kernel) equal the
+ * general path's (taken with the Jacobian flag), with a padded last block, for the masked
+ * (some centres) and the all-in (every vertex in every support) cases. */
+static void test_stats_fast_path(void **state)
+{
+    (void)state;
+    size_t n = 8, nv = 20001;
+    float *st = random_points(n, 10.0, 1.0), *en = displaced(st, n, 0.3);
+    float *v = malloc(nv * 3 * sizeof *v), *out = malloc(nv * 3 * sizeof *out);
+    for (size_t i = 0; i < 3 * nv; i++) v[i] = (float)(urand() * 20 - 5);
+    csrbf_points *p = NULL;
+    assert_int_equal(csrbf_points_create(nv, v, &p), CSRBF_OK);
+    const double radii[2] = {3.0, 80.0};
+    for (int k = 0; k < 2; k++) {
+        csrbf_solver *s = make_solver(radii[k], CSRBF_PSI31, CSRBF_POLY_NONE, 0);
+        assert_true(csrbf_solver_solve(s, n, st, en) >= 0);
+        csrbf_eval_stats a, b;
+        assert_int_equal(csrbf_evaluate(s, p, out, 0, &a), CSRBF_OK);
+        assert_int_equal(csrbf_evaluate(s, p, out, CSRBF_EVAL_JACOBIAN, &b), CSRBF_OK);
+        assert_int_equal(a.pairs, b.pairs);
+        assert_int_equal(a.moved, b.moved);
+        assert_true(a.pairs > 1000);
+        if (k == 1) assert_int_equal(a.pairs, n * nv);
+        assert_double_equal(a.max_displacement, b.max_displacement, 1e-5 * b.max_displacement);
+        assert_true(a.min_jacobian_det == 1.0);
+        csrbf_solver_destroy(&s);
+    }
+    csrbf_points_destroy(&p);
+    free(st);
+    free(en);
+    free(v);
+    free(out);
+}
+
 /* Vertices outside every support keep their base position bit for bit (no polynomial), and
  * the pair statistics match a brute-force count. */
 static void test_outside_support_exact(void **state)
@@ -753,7 +787,7 @@ int main(void)
         cmocka_unit_test(test_reuse_factor),        cmocka_unit_test(test_evaluate_vs_map),
         cmocka_unit_test(test_points_update),       cmocka_unit_test(test_jacobian_fd),
         cmocka_unit_test(test_foldover),            cmocka_unit_test(test_invalid),
-        cmocka_unit_test(test_concurrent_evaluate),
+        cmocka_unit_test(test_concurrent_evaluate), cmocka_unit_test(test_stats_fast_path),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
