@@ -37,6 +37,7 @@
 
 #include <errno.h>
 #include <stddef.h>
+#include <stdint.h>
 
 #ifdef __cplusplus
 extern "C" {
@@ -205,6 +206,14 @@ int csrbf_points_create(size_t n, const float *xyz, csrbf_points **out);
  *  block boxes are recomputed (O(n)). Errors: CSRBF_ERR_INVALID (points unchanged). */
 int csrbf_points_update(csrbf_points *points, const float *xyz);
 
+/** Replace the positions of some vertices only: the ranges (first vertex, count) pairs,
+ *  e.g. those csrbf_touch_ranges reports after a commit; xyz is the full n x 3 array, of
+ *  which only the listed vertices are read. Their blocks' boxes are recomputed (O(vertices
+ *  listed)); the whole-set box only grows, which keeps every test conservative.
+ *  Errors: CSRBF_ERR_INVALID (NULL, a range beyond n, a bad coordinate: nothing changed). */
+int csrbf_points_update_ranges(csrbf_points *points, const float *xyz, const uint32_t *ranges,
+                               size_t nranges);
+
 /** Number of vertices. */
 size_t csrbf_points_count(const csrbf_points *points);
 
@@ -241,6 +250,47 @@ typedef struct csrbf_eval_stats {
  *  points). Thread-safe on a const solver and const points. Source: the map T above. */
 int csrbf_evaluate(const csrbf_solver *solver, const csrbf_points *base, float *deformed,
                    unsigned flags, csrbf_eval_stats *stats);
+
+/* ------------------------------------------------- work that follows the supports
+ *
+ * csrbf_evaluate writes every vertex. For a frame loop whose output buffer persists, a
+ * csrbf_touch remembers which blocks (16 consecutive vertices) the last call rewrote from
+ * the kernel; csrbf_evaluate_touched then rewrites only the blocks inside a support this call
+ * (computed) or the last (restored to the base) and leaves the others alone: they equal the
+ * base already. Contract: the same points and the same output buffer on every call with one
+ * touch; nothing else writes the buffer. After the base changes in a way the output does not
+ * already show (csrbf_points_update on other data, an undo, a new mesh) call
+ * csrbf_touch_reset: the next call writes every block. After a commit that makes the output
+ * the new base (base := deformed, csrbf_points_update_ranges with the reported ranges),
+ * call csrbf_touch_commit: no block then differs from the base. */
+
+typedef struct csrbf_touch csrbf_touch;
+
+/** A touch state for `points` (which it refers to, not copies; the first evaluate writes
+ *  everything). Errors: CSRBF_ERR_INVALID, CSRBF_ERR_NOMEM. */
+int csrbf_touch_create(const csrbf_points *points, csrbf_touch **out);
+/** Free; sets *touch to NULL. NULL and *NULL are no-ops. */
+void csrbf_touch_destroy(csrbf_touch **touch);
+/** The next csrbf_evaluate_touched writes every block (the base changed). */
+void csrbf_touch_reset(csrbf_touch *touch);
+/** The output buffer has become the base: no block differs from it any more. */
+void csrbf_touch_commit(csrbf_touch *touch);
+/** The vertex ranges the last csrbf_evaluate_touched wrote, as *ranges[2k] = first vertex,
+ *  [2k+1] = count, increasing and disjoint; returns their number (0 before any call and after
+ *  csrbf_touch_commit). The viewer uploads and re-normals only these. Owned by the touch,
+ *  valid until its next use. */
+size_t csrbf_touch_ranges(const csrbf_touch *touch, const uint32_t **ranges);
+
+/** csrbf_evaluate with a persistent output (contract above): deformed equals T(base) on return,
+ *  bit for bit what csrbf_evaluate writes, but only the blocks in a support now or at the last
+ *  call are written, so the cost follows the supports, not the mesh (the per-block centre
+ *  masks are still one vectorised pass over the block boxes). Statistics as csrbf_evaluate.
+ *  With the linear polynomial every vertex moves and every block is written.
+ *  Errors: as csrbf_evaluate, and CSRBF_ERR_INVALID when touch was made for other points.
+ *  Not thread-safe on one touch. */
+int csrbf_evaluate_touched(const csrbf_solver *solver, const csrbf_points *base,
+                           csrbf_touch *touch, float *deformed, unsigned flags,
+                           csrbf_eval_stats *stats);
 
 /* ------------------------------------------------------------------ fold-over guard
  *

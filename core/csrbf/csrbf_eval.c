@@ -205,7 +205,8 @@ typedef struct {
         const csrbf_points *P, float *restrict out, size_t b0, size_t b1,                      \
         const uint32_t *restrict mask, size_t m, const float *restrict cx,                     \
         const float *restrict cy, const float *restrict cz, const float *restrict ax,          \
-        const float *restrict ay, const float *restrict az, float inv_r2, block_stats *bs)     \
+        const float *restrict ay, const float *restrict az, float inv_r2, block_stats *bs,     \
+        uint8_t *restrict cur, const uint8_t *restrict prev)                                   \
     {                                                                                          \
         const __m512 one = _mm512_set1_ps(1.0f), half = _mm512_set1_ps(0.5f),                 \
                      three_half = _mm512_set1_ps(1.5f), tiny = _mm512_set1_ps(1e-30f),         \
@@ -220,7 +221,9 @@ typedef struct {
             const size_t k0 = b * B, nv = k0 + B <= n ? B : n - k0;                            \
             float *o = out + 3 * k0;                                                           \
             uint32_t mk = mask ? mask[b] : 0;                                                  \
+            if (cur) cur[b] = !mask || mk;                                                     \
             if (mask && !mk) {                                                                 \
+                if (prev && !prev[b]) continue; /* the output holds the base already */        \
                 if (nv == B)                                                                   \
                     interleave_avx512(o, _mm512_loadu_ps(P->s[0] + k0),                        \
                                       _mm512_loadu_ps(P->s[1] + k0),                           \
@@ -295,7 +298,8 @@ AVX512_DRIVER(drive_psi32_avx512_stats, PSI32_AVX512, 1)
 
 typedef void (*drive_fn)(const csrbf_points *, float *, size_t, size_t, const uint32_t *,
                          size_t, const float *, const float *, const float *, const float *,
-                         const float *, const float *, float, block_stats *);
+                         const float *, const float *, float, block_stats *, uint8_t *,
+                         const uint8_t *);
 
 static int have_avx512(void)
 {
@@ -436,11 +440,89 @@ static double jacobian_det(const csrbf_solver *s, const double x[3], const uint3
            J[2] * (J[3] * J[7] - J[4] * J[6]);
 }
 
+/* Persistent-output state of csrbf_evaluate_touched (see csrbf.h). */
+struct csrbf_touch {
+    const csrbf_points *points; /* the points it was made for */
+    size_t nblocks;
+    uint8_t *cur, *prev;        /* per block: rewritten from the kernel this call / last call */
+    int full;                   /* the next call writes every block */
+    uint32_t *ranges;           /* 2 x nranges: first vertex, count */
+    size_t nranges;
+};
+
+static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *out,
+                         unsigned flags, csrbf_eval_stats *st, csrbf_touch *touch);
+
 int csrbf_evaluate(const csrbf_solver *cs, const csrbf_points *P, float *out, unsigned flags,
                    csrbf_eval_stats *st)
 {
+    return evaluate_impl(cs, P, out, flags, st, NULL);
+}
+
+int csrbf_touch_create(const csrbf_points *points, csrbf_touch **out)
+{
+    if (!out) return CSRBF_ERR_INVALID;
+    *out = NULL;
+    if (!points) return CSRBF_ERR_INVALID;
+    csrbf_touch *t = calloc(1, sizeof *t);
+    if (!t) return CSRBF_ERR_NOMEM;
+    t->points = points;
+    t->nblocks = points->nblocks;
+    t->cur = calloc(t->nblocks, 1);
+    t->prev = calloc(t->nblocks, 1);
+    t->ranges = malloc((t->nblocks + 1) * 2 * sizeof *t->ranges);
+    if (!t->cur || !t->prev || !t->ranges) {
+        csrbf_touch_destroy(&t);
+        return CSRBF_ERR_NOMEM;
+    }
+    t->full = 1;
+    *out = t;
+    return CSRBF_OK;
+}
+
+void csrbf_touch_destroy(csrbf_touch **tp)
+{
+    if (!tp || !*tp) return;
+    free((*tp)->cur);
+    free((*tp)->prev);
+    free((*tp)->ranges);
+    free(*tp);
+    *tp = NULL;
+}
+
+void csrbf_touch_reset(csrbf_touch *t)
+{
+    if (t) t->full = 1;
+}
+
+void csrbf_touch_commit(csrbf_touch *t)
+{
+    if (!t) return;
+    memset(t->prev, 0, t->nblocks);
+    t->nranges = 0;
+}
+
+size_t csrbf_touch_ranges(const csrbf_touch *t, const uint32_t **ranges)
+{
+    if (ranges) *ranges = t ? t->ranges : NULL;
+    return t ? t->nranges : 0;
+}
+
+int csrbf_evaluate_touched(const csrbf_solver *cs, const csrbf_points *P, csrbf_touch *touch,
+                           float *out, unsigned flags, csrbf_eval_stats *st)
+{
+    if (!touch || touch->points != P || !P || touch->nblocks != P->nblocks)
+        return CSRBF_ERR_INVALID;
+    return evaluate_impl(cs, P, out, flags, st, touch);
+}
+
+static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *out,
+                         unsigned flags, csrbf_eval_stats *st, csrbf_touch *touch)
+{
     if (!cs || !P || !out || (flags & ~(unsigned)CSRBF_EVAL_JACOBIAN)) return CSRBF_ERR_INVALID;
     if (!cs->have_start) return CSRBF_ERR_STATE;
+    uint8_t *tcur = touch ? touch->cur : NULL;
+    const uint8_t *tprev = touch && !touch->full ? touch->prev : NULL;
     /* The scratch buffer is the only state evaluate touches; a concurrent caller that finds it
      * busy allocates its own. The solver itself is read-only here. */
     csrbf_solver *s = (csrbf_solver *)cs;
@@ -555,7 +637,7 @@ int csrbf_evaluate(const csrbf_solver *cs, const csrbf_points *P, float *out, un
             for (size_t c = 0; c < (nb + 63) / 64; c++) {
                 size_t b0 = c * 64, b1 = b0 + 64 < nb ? b0 + 64 : nb;
                 drive(P, out, b0, b1, use_mask ? mask : NULL, m, fcx, fcy, fcz, fax, fay, faz,
-                      inv_r2, &bs);
+                      inv_r2, &bs, tcur, tprev);
             }
             pairs += bs.pairs;
             moved += bs.moved;
@@ -572,8 +654,9 @@ int csrbf_evaluate(const csrbf_solver *cs, const csrbf_points *P, float *out, un
             size_t k = m;
             if (use_mask) {
                 uint32_t mk = mask[b];
-                if (!mk && !poly && !st) {
-                    memcpy(o, P->xyz + 3 * k0, nv * 3 * sizeof(float));
+                if (!mk && !poly && !want_jac) { /* outside every support: the base */
+                    if (tcur) tcur[b] = 0;
+                    if (!tprev || tprev[b]) memcpy(o, P->xyz + 3 * k0, nv * 3 * sizeof(float));
                     continue;
                 }
                 k = 0;
@@ -583,7 +666,13 @@ int csrbf_evaluate(const csrbf_solver *cs, const csrbf_points *P, float *out, un
                 }
             } else if (!all_in) {
                 k = select_centres(s, P, b, list, 0);
+                if (!k && !poly && !want_jac) {
+                    if (tcur) tcur[b] = 0;
+                    if (!tprev || tprev[b]) memcpy(o, P->xyz + 3 * k0, nv * 3 * sizeof(float));
+                    continue;
+                }
             }
+            if (tcur) tcur[b] = 1;
             const float *x = P->s[0] + k0, *y = P->s[1] + k0, *z = P->s[2] + k0;
             kern(x, y, z, list, k, fcx, fcy, fcz, fax, fay, faz, inv_r2, accx, accy, accz, cnt);
             if (poly)
@@ -620,6 +709,26 @@ int csrbf_evaluate(const csrbf_solver *cs, const csrbf_points *P, float *out, un
         free(mem);
     else
         atomic_flag_clear(&s->scratch_busy);
+    if (touch) { /* the rewritten blocks as vertex ranges, then this call becomes the last */
+        size_t nr = 0;
+        for (size_t b = 0; b < nb;) {
+            if (!(touch->full || touch->cur[b] || touch->prev[b])) {
+                b++;
+                continue;
+            }
+            size_t b0 = b;
+            while (b < nb && (touch->full || touch->cur[b] || touch->prev[b])) b++;
+            size_t v1 = b * B < n ? b * B : n;
+            touch->ranges[2 * nr] = (uint32_t)(b0 * B);
+            touch->ranges[2 * nr + 1] = (uint32_t)(v1 - b0 * B);
+            nr++;
+        }
+        touch->nranges = nr;
+        uint8_t *tmp = touch->prev;
+        touch->prev = touch->cur;
+        touch->cur = tmp;
+        touch->full = 0;
+    }
     if (st) {
         st->pairs = pairs;
         st->moved = moved;
