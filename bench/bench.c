@@ -587,6 +587,109 @@ static int case_guard(const bench_opts *o)
     return bench_guard(&g);
 }
 
+/* --------------------------------------------------- work that follows the supports */
+
+/* Options of the support case. */
+typedef struct {
+    int quick, json, rounds;
+} support_bench_opts;
+
+/* Anchored updates (set_end_points + evaluation) on a grid: csrbf_evaluate (writes every
+ * vertex) vs csrbf_evaluate_touched (persistent output), interleaved, with statistics asked
+ * for (as the session does), medians. */
+static int support_run(const support_bench_opts *g, const char *name, size_t nv, double R,
+                       double amp)
+{
+    int reps = g->quick ? 200 : 1000;
+    if (nv > 500000) reps /= 4;
+    float *base = make_grid(nv), *o1 = malloc(nv * 3 * sizeof *o1), *o2 = malloc(nv * 3 * sizeof *o2);
+    double *t1 = malloc((size_t)reps * sizeof *t1), *t2 = malloc((size_t)reps * sizeof *t2);
+    float rest[3 * NCTRL], en[3 * NCTRL];
+    fingertips(rest);
+    csrbf_options opt = {0};
+    opt.radius = R;
+    csrbf_solver *s = NULL;
+    csrbf_points *pts = NULL;
+    csrbf_touch *tc = NULL;
+    int rc = !base || !o1 || !o2 || !t1 || !t2 ? CSRBF_ERR_NOMEM : csrbf_solver_create(&opt, &s);
+    if (rc >= 0) rc = csrbf_points_create(nv, base, &pts);
+    if (rc >= 0) rc = csrbf_touch_create(pts, &tc);
+    if (rc >= 0) rc = csrbf_solver_set_start_points(s, NCTRL, rest);
+    double best1 = -1, best2 = -1;
+    size_t pairs = 0, written = 0;
+    for (int round = 0; round < g->rounds && rc >= 0; round++) {
+        for (int it = -10; it < reps && rc >= 0; it++) {
+            motion(rest, en, NCTRL, (it + 10) % FRAMES, amp);
+            csrbf_eval_stats es;
+            double a = now_ms();
+            rc = csrbf_solver_set_end_points(s, en);
+            if (rc >= 0) rc = csrbf_evaluate(s, pts, o1, 0, &es);
+            double b = now_ms();
+            if (rc >= 0) rc = csrbf_solver_set_end_points(s, en);
+            if (rc >= 0) rc = csrbf_evaluate_touched(s, pts, tc, o2, 0, &es);
+            double c = now_ms();
+            if (it >= 0) {
+                t1[it] = b - a;
+                t2[it] = c - b;
+            }
+            pairs = es.pairs;
+            const uint32_t *rg;
+            size_t nr = csrbf_touch_ranges(tc, &rg);
+            written = 0;
+            for (size_t r = 0; r < nr; r++) written += rg[2 * r + 1];
+        }
+        if (rc < 0) break;
+        double a = median(t1, reps), b = median(t2, reps);
+        if (best1 < 0 || a < best1) best1 = a;
+        if (best2 < 0 || b < best2) best2 = b;
+    }
+    if (rc >= 0 && memcmp(o1, o2, nv * 3 * sizeof *o1)) {
+        fprintf(stderr, "bench: touched output differs from the full evaluation\n");
+        rc = CSRBF_ERR_NUMERIC;
+    }
+    if (rc < 0) {
+        fprintf(stderr, "bench: %s failed: %s\n", name, s ? csrbf_solver_message(s) : csrbf_strerror(rc));
+    } else if (g->json) {
+        printf("{\"case\":\"support\",\"mode\":\"%s\",\"vertices\":%zu,\"centres\":%d,\"radius\":%.6g,"
+               "\"pairs\":%zu,\"written\":%zu,\"ms_full\":%.6g,\"ms_touched\":%.6g}\n",
+               name, nv, NCTRL, R, pairs, written, best1, best2);
+    } else {
+        printf("%-8s %-10s %8zu %7d %6.3g %9zu %9zu %10.4f %10.4f %8.2fx\n", "support", name, nv,
+               NCTRL, R, pairs, written, best1, best2, best1 / best2);
+    }
+    fflush(stdout);
+    csrbf_touch_destroy(&tc);
+    csrbf_points_destroy(&pts);
+    csrbf_solver_destroy(&s);
+    free(base);
+    free(o1);
+    free(o2);
+    free(t1);
+    free(t2);
+    return rc < 0;
+}
+
+/* Table 1's 33,025 grid at R = 10 and 80, and 1M / 1.8M grids with about 1% of the vertices
+ * in a support (10 supports of radius 0.36 over 64 x 64). */
+static int bench_support(const support_bench_opts *g)
+{
+    if (!g->json)
+        printf("%-8s %-10s %8s %7s %6s %9s %9s %10s %10s %9s\n", "case", "mode", "vertices",
+               "centres", "R", "pairs", "written", "ms_full", "ms_touch", "speedup");
+    fprintf(stderr, "bench: support (anchored; full vs touched evaluation, statistics on)\n");
+    int rc = support_run(g, "anchored", 33025, 10.0, 0.6);
+    if (!rc) rc = support_run(g, "anchored", 33025, 80.0, 0.6);
+    if (!rc) rc = support_run(g, "anchored", 1000000, 0.361, 0.02);
+    if (!rc) rc = support_run(g, "anchored", 1800000, 0.361, 0.02);
+    return rc;
+}
+
+static int case_support(const bench_opts *o)
+{
+    support_bench_opts g = {o->quick, o->json, o->rounds};
+    return bench_support(&g);
+}
+
 static void usage(FILE *f)
 {
     fprintf(f,
@@ -603,6 +706,8 @@ static void usage(FILE *f)
             "           update that reuses the factor\n"
             "  guard    the fold-over guard's cost on the ICT face (10 and 42 fingertips, R =\n"
             "           0.06 x diagonal): update without and with it, medians, same frames\n"
+            "  support  csrbf_evaluate vs csrbf_evaluate_touched (persistent output): 33,025\n"
+            "           grid at R = 10 and 80, 1M and 1.8M grids with about 1%% in support\n"
             "Columns: pairs = (vertex, centre) pairs inside the support (paper: its count);\n"
             "ms_ref = the brute-force loop (all pairs, scalar double, one thread) for the same\n"
             "update, or for 'reused' the fresh factor-and-solve; ratio = ms_ref / ms_median.\n"
@@ -636,7 +741,7 @@ int fp_bench_main(int argc, char **argv)
         const char *name;
         int (*fn)(const bench_opts *);
     } cases[] = {{"table1", case_table1}, {"scale", case_scale}, {"centres", case_centres},
-                 {"guard", case_guard}};
+                 {"guard", case_guard}, {"support", case_support}};
     int found = 0;
     for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
         if (o.only && strcmp(o.only, cases[c].name)) continue;
@@ -644,7 +749,7 @@ int fp_bench_main(int argc, char **argv)
         if (cases[c].fn(&o)) return FP_EXIT_FAILURE;
     }
     if (!found) {
-        fprintf(stderr, "facepuppet bench: unknown case '%s' (table1, scale, centres, guard)\n", o.only);
+        fprintf(stderr, "facepuppet bench: unknown case '%s' (table1, scale, centres, guard, support)\n", o.only);
         return FP_EXIT_USAGE;
     }
     return FP_EXIT_OK;
