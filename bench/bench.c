@@ -8,6 +8,7 @@
 #include "csrbf.h"
 #include "fp_error.h"
 #include "fp_stats.h"
+#include "fp_mesh.h"
 
 #include <errno.h>
 #include <math.h>
@@ -387,11 +388,304 @@ static int case_centres(const bench_opts *o)
     return 0;
 }
 
-const char *const fp_bench_cases[] = {"table1", "scale", "centres", NULL};
+/* ------------------------------------------------------------- the fold-over guard */
+
+/* Options of the guard case (kept apart from the command line, which lives elsewhere). */
+typedef struct {
+    int quick, json, rounds;
+    const char *face; /* OBJ path; NULL: $FP_SHARED_DATA or ../shared/data, ICT FaceKit */
+} guard_bench_opts;
+
+/* m fingertip-like start points on the face: front-facing vertices (normal z > 0.5, in the
+ * front 40% of the depth) nearest to targets on a grid over the middle of the face, pushed
+ * 0.3 R inward along the normal, as a pressing fingertip is. */
+static void face_fingertips(const fp_mesh *f, double R, int m, float *start)
+{
+    float lo[3], hi[3];
+    fp_mesh_bounds(f, lo, hi);
+    double zcut = lo[2] + 0.6 * (hi[2] - lo[2]);
+    int cols = m >= 10 ? (m + 1) / 2 : m, rows = (m + cols - 1) / cols;
+    if (m > 10) {
+        cols = (int)ceil(sqrt(m * 1.5));
+        rows = (m + cols - 1) / cols;
+    }
+    for (int i = 0; i < m; i++) {
+        int r = i / cols, c = i % cols;
+        double tx = lo[0] + (hi[0] - lo[0]) * (0.25 + 0.5 * (c + 0.5) / cols);
+        double ty = lo[1] + (hi[1] - lo[1]) * (0.3 + 0.4 * (r + 0.5) / rows);
+        size_t best = 0;
+        double bd = INFINITY;
+        for (size_t v = 0; v < f->vertex_count; v++) {
+            const float *p = f->positions + 3 * v, *nn = f->normals + 3 * v;
+            if (nn[2] < 0.5f || p[2] < zcut) continue;
+            double d = (p[0] - tx) * (p[0] - tx) + (p[1] - ty) * (p[1] - ty);
+            if (d < bd) {
+                bd = d;
+                best = v;
+            }
+        }
+        for (int a = 0; a < 3; a++)
+            start[3 * i + a] = f->positions[3 * best + a] - (float)(0.3 * R) * f->normals[3 * best + a];
+    }
+}
+
+/* Frame f of a pressing, sliding hand over m fingertips (amplitude amp, mesh units). */
+static void face_motion(const float *rest, float *out, int m, int frame, double amp)
+{
+    for (int i = 0; i < m; i++) {
+        double ph = 0.7 * i + 0.05 * frame;
+        out[3 * i] = rest[3 * i] + (float)(amp * 0.6 * sin(ph));
+        out[3 * i + 1] = rest[3 * i + 1] + (float)(amp * 0.6 * cos(1.3 * ph));
+        out[3 * i + 2] = rest[3 * i + 2] - (float)(amp * fabs(sin(0.9 * ph + 1.0)));
+    }
+}
+
+/* Median ms of plain updates and guarded ones, interleaved frame by frame (same frames, same
+ * run). anchored: set_end + evaluate vs set_end + limit + evaluate; unanchored: set_start +
+ * set_end + evaluate vs csrbf_guarded_step. Counts the frames where the guard acted. */
+static int guard_run(const guard_bench_opts *g, const fp_mesh *f, csrbf_points *pts, double R,
+                     int m, int anchored, double amp)
+{
+    int reps = g->quick ? 400 : 2000, acted = 0, sub = 0;
+    float *rest = malloc((size_t)m * 3 * sizeof *rest), *st = malloc((size_t)m * 3 * sizeof *st),
+          *en = malloc((size_t)m * 3 * sizeof *en);
+    float *out = malloc(f->vertex_count * 3 * sizeof *out);
+    double *tp = malloc((size_t)reps * sizeof *tp), *tg = malloc((size_t)reps * sizeof *tg);
+    csrbf_options opt = {0};
+    opt.radius = R;
+    csrbf_solver *sv[2] = {NULL, NULL}, *s = NULL; /* plain, guarded: each its own factor */
+    int rc = !rest || !st || !en || !out || !tp || !tg ? CSRBF_ERR_NOMEM
+                                                       : csrbf_solver_create(&opt, &sv[0]);
+    if (rc >= 0) rc = csrbf_solver_create(&opt, &sv[1]);
+    if (rc >= 0) {
+        face_fingertips(f, R, m, rest);
+        for (int k = 0; k < 2 && rc >= 0; k++)
+            rc = csrbf_solver_set_start_points(sv[k], (size_t)m, rest);
+    }
+    double best_p = -1, best_g = -1, Lmax = 0;
+    for (int round = 0; round < g->rounds && rc >= 0; round++) {
+        acted = sub = 0;
+        for (int it = -20; it < reps && rc >= 0; it++) {
+            int fr = (it + 20) % 200;
+            face_motion(rest, en, m, fr, amp);
+            memcpy(st, rest, (size_t)m * 3 * sizeof *st);
+            if (!anchored) { /* the start points move too: last frame's end points */
+                face_motion(rest, st, m, fr - 1, amp);
+            }
+            for (int guarded = 0; guarded < 2 && rc >= 0; guarded++) {
+                s = sv[guarded];
+                double t0 = now_ms();
+                csrbf_guard_stats gs;
+                if (anchored) {
+                    rc = csrbf_solver_set_end_points(s, en);
+                    if (rc >= 0 && guarded) rc = csrbf_solver_limit_end_points(s, 0, &gs);
+                    if (rc >= 0) rc = csrbf_evaluate(s, pts, out, 0, NULL);
+                } else if (!guarded) {
+                    rc = csrbf_solver_set_start_points(s, (size_t)m, st);
+                    if (rc >= 0) rc = csrbf_solver_set_end_points(s, en);
+                    if (rc >= 0) rc = csrbf_evaluate(s, pts, out, 0, NULL);
+                } else {
+                    csrbf_guard gd = {0};
+                    rc = csrbf_guarded_step(s, pts, (size_t)m, st, en, &gd, out, &gs);
+                }
+                double t1 = now_ms();
+                if (it >= 0) (guarded ? tg : tp)[it] = t1 - t0;
+                if (guarded && rc >= 0 && it >= 0) {
+                    acted += gs.clusters_limited > 0;
+                    sub += gs.substeps > 1;
+                    if (gs.bound_before > Lmax) Lmax = gs.bound_before;
+                }
+            }
+        }
+        if (rc < 0) break;
+        double a = fp_median(tp, reps), b = fp_median(tg, reps);
+        if (best_p < 0 || a < best_p) best_p = a;
+        if (best_g < 0 || b < best_g) best_g = b;
+    }
+    if (rc < 0) {
+        fprintf(stderr, "bench: engine call failed: %s\n", s ? csrbf_solver_message(s) : csrbf_strerror(rc));
+    } else if (g->json) {
+        printf("{\"case\":\"guard\",\"mode\":\"%s\",\"vertices\":%zu,\"centres\":%d,\"radius\":%.6g,"
+               "\"ms_plain\":%.6g,\"ms_guarded\":%.6g,\"ratio\":%.4f,\"frames\":%d,"
+               "\"frames_limited\":%d,\"frames_substeps\":%d,\"max_bound\":%.4g}\n",
+               anchored ? "anchored" : "unanchored", f->vertex_count, m, R, best_p, best_g,
+               best_g / best_p, reps, acted, sub, Lmax);
+    } else {
+        printf("%-8s %-10s %8zu %7d %6.3g %10.4f %10.4f %8.3f %6d %7d %8d %8.3g\n", "guard",
+               anchored ? "anchored" : "unanchored", f->vertex_count, m, R, best_p, best_g,
+               best_g / best_p, reps, acted, sub, Lmax);
+    }
+    fflush(stdout);
+    csrbf_solver_destroy(&sv[0]);
+    csrbf_solver_destroy(&sv[1]);
+    free(rest);
+    free(st);
+    free(en);
+    free(out);
+    free(tp);
+    free(tg);
+    return rc < 0;
+}
+
+/* The guard's cost per update on the ICT face, as a ratio to the same update without it. */
+static int bench_guard(const guard_bench_opts *g)
+{
+    char path[4096];
+    const char *face = g->face;
+    if (!face) {
+        const char *root = getenv("FP_SHARED_DATA");
+        snprintf(path, sizeof path, "%s/faces/ict-facekit/generic_neutral_mesh.obj",
+                 root && *root ? root : "../shared/data");
+        face = path;
+    }
+    char err[512];
+    fp_mesh *f = NULL;
+    if (fp_mesh_load(face, &f, err, sizeof err) < 0) {
+        fprintf(stderr, "bench: %s\n", err);
+        return 1;
+    }
+    float lo[3], hi[3];
+    fp_mesh_bounds(f, lo, hi);
+    double diag = sqrt((double)(hi[0] - lo[0]) * (hi[0] - lo[0]) +
+                       (double)(hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                       (double)(hi[2] - lo[2]) * (hi[2] - lo[2]));
+    double R = 0.06 * diag; /* the session's default radius */
+    csrbf_points *pts = NULL;
+    if (csrbf_points_create(f->vertex_count, f->positions, &pts) < 0) {
+        fp_mesh_free(&f);
+        return 1;
+    }
+    if (!g->json)
+        printf("%-8s %-10s %8s %7s %6s %10s %10s %8s %6s %7s %8s %8s\n", "case", "mode", "vertices",
+               "centres", "R", "ms_plain", "ms_guard", "ratio", "frames", "limited", "substeps",
+               "max_L");
+    fprintf(stderr, "bench: guard on %s (%zu vertices), R = %.3g\n", face, f->vertex_count, R);
+    int rc = 0;
+    static const int counts[2] = {10, 42};
+    for (int c = 0; c < 2 && !rc; c++)
+        for (int anchored = 1; anchored >= 0 && !rc; anchored--)
+            rc = guard_run(g, f, pts, R, counts[c], anchored, 0.3 * R);
+    csrbf_points_destroy(&pts);
+    fp_mesh_free(&f);
+    return rc;
+}
+
+static int case_guard(const bench_opts *o)
+{
+    guard_bench_opts g = {o->quick, o->json, o->rounds, NULL};
+    return bench_guard(&g);
+}
+
+/* --------------------------------------------------- work that follows the supports */
+
+/* Options of the support case. */
+typedef struct {
+    int quick, json, rounds;
+} support_bench_opts;
+
+/* Anchored updates (set_end_points + evaluation) on a grid: csrbf_evaluate (writes every
+ * vertex) vs csrbf_evaluate_touched (persistent output), interleaved, with statistics asked
+ * for (as the session does), medians. */
+static int support_run(const support_bench_opts *g, const char *name, size_t nv, double R,
+                       double amp)
+{
+    int reps = g->quick ? 200 : 1000;
+    if (nv > 500000) reps /= 4;
+    float *base = make_grid(nv), *o1 = malloc(nv * 3 * sizeof *o1), *o2 = malloc(nv * 3 * sizeof *o2);
+    double *t1 = malloc((size_t)reps * sizeof *t1), *t2 = malloc((size_t)reps * sizeof *t2);
+    float rest[3 * NCTRL], en[3 * NCTRL];
+    fingertips(rest);
+    csrbf_options opt = {0};
+    opt.radius = R;
+    csrbf_solver *s = NULL;
+    csrbf_points *pts = NULL;
+    csrbf_touch *tc = NULL;
+    int rc = !base || !o1 || !o2 || !t1 || !t2 ? CSRBF_ERR_NOMEM : csrbf_solver_create(&opt, &s);
+    if (rc >= 0) rc = csrbf_points_create(nv, base, &pts);
+    if (rc >= 0) rc = csrbf_touch_create(pts, &tc);
+    if (rc >= 0) rc = csrbf_solver_set_start_points(s, NCTRL, rest);
+    double best1 = -1, best2 = -1;
+    size_t pairs = 0, written = 0;
+    for (int round = 0; round < g->rounds && rc >= 0; round++) {
+        for (int it = -10; it < reps && rc >= 0; it++) {
+            motion(rest, en, NCTRL, (it + 10) % FRAMES, amp);
+            csrbf_eval_stats es;
+            double a = now_ms();
+            rc = csrbf_solver_set_end_points(s, en);
+            if (rc >= 0) rc = csrbf_evaluate(s, pts, o1, 0, &es);
+            double b = now_ms();
+            if (rc >= 0) rc = csrbf_solver_set_end_points(s, en);
+            if (rc >= 0) rc = csrbf_evaluate_touched(s, pts, tc, o2, 0, &es);
+            double c = now_ms();
+            if (it >= 0) {
+                t1[it] = b - a;
+                t2[it] = c - b;
+            }
+            pairs = es.pairs;
+            const uint32_t *rg;
+            size_t nr = csrbf_touch_ranges(tc, &rg);
+            written = 0;
+            for (size_t r = 0; r < nr; r++) written += rg[2 * r + 1];
+        }
+        if (rc < 0) break;
+        double a = fp_median(t1, reps), b = fp_median(t2, reps);
+        if (best1 < 0 || a < best1) best1 = a;
+        if (best2 < 0 || b < best2) best2 = b;
+    }
+    if (rc >= 0 && memcmp(o1, o2, nv * 3 * sizeof *o1)) {
+        fprintf(stderr, "bench: touched output differs from the full evaluation\n");
+        rc = CSRBF_ERR_NUMERIC;
+    }
+    if (rc < 0) {
+        fprintf(stderr, "bench: %s failed: %s\n", name, s ? csrbf_solver_message(s) : csrbf_strerror(rc));
+    } else if (g->json) {
+        printf("{\"case\":\"support\",\"mode\":\"%s\",\"vertices\":%zu,\"centres\":%d,\"radius\":%.6g,"
+               "\"pairs\":%zu,\"written\":%zu,\"ms_full\":%.6g,\"ms_touched\":%.6g}\n",
+               name, nv, NCTRL, R, pairs, written, best1, best2);
+    } else {
+        printf("%-8s %-10s %8zu %7d %6.3g %9zu %9zu %10.4f %10.4f %8.2fx\n", "support", name, nv,
+               NCTRL, R, pairs, written, best1, best2, best1 / best2);
+    }
+    fflush(stdout);
+    csrbf_touch_destroy(&tc);
+    csrbf_points_destroy(&pts);
+    csrbf_solver_destroy(&s);
+    free(base);
+    free(o1);
+    free(o2);
+    free(t1);
+    free(t2);
+    return rc < 0;
+}
+
+/* Table 1's 33,025 grid at R = 10 and 80, and 1M / 1.8M grids with about 1% of the vertices
+ * in a support (10 supports of radius 0.36 over 64 x 64). */
+static int bench_support(const support_bench_opts *g)
+{
+    if (!g->json)
+        printf("%-8s %-10s %8s %7s %6s %9s %9s %10s %10s %9s\n", "case", "mode", "vertices",
+               "centres", "R", "pairs", "written", "ms_full", "ms_touch", "speedup");
+    fprintf(stderr, "bench: support (anchored; full vs touched evaluation, statistics on)\n");
+    int rc = support_run(g, "anchored", 33025, 10.0, 0.6);
+    if (!rc) rc = support_run(g, "anchored", 33025, 80.0, 0.6);
+    if (!rc) rc = support_run(g, "anchored", 1000000, 0.361, 0.02);
+    if (!rc) rc = support_run(g, "anchored", 1800000, 0.361, 0.02);
+    return rc;
+}
+
+static int case_support(const bench_opts *o)
+{
+    support_bench_opts g = {o->quick, o->json, o->rounds};
+    return bench_support(&g);
+}
+
+
+const char *const fp_bench_cases[] = {"table1", "scale", "centres", "guard", "support", NULL};
 
 int fp_bench_run(const fp_bench_options *opt)
 {
-    static int (*const run[])(const bench_opts *) = {case_table1, case_scale, case_centres};
+    static int (*const run[])(const bench_opts *) = {case_table1, case_scale, case_centres,
+                                                     case_guard, case_support};
     bench_opts o = {opt->quick, opt->json, opt->quick ? 2 : 3};
     int found = 0;
     for (size_t c = 0; fp_bench_cases[c]; c++) {

@@ -35,7 +35,9 @@
 #ifndef CSRBF_H
 #define CSRBF_H
 
+#include <errno.h>
 #include <stddef.h>
+#include <stdint.h>
 
 #ifdef __cplusplus
 extern "C" {
@@ -53,7 +55,9 @@ typedef enum { CSRBF_PSI31 = 0, CSRBF_PSI30, CSRBF_PSI32 } csrbf_kernel;
  *  (csrbf.md pitfall 3). */
 typedef enum { CSRBF_POLY_NONE = 0, CSRBF_POLY_LINEAR } csrbf_poly;
 
-/** Result codes. */
+/** Result codes. Errors are negative errno values (the project's convention,
+ *  core/common/fp_error.h; the engine stays standalone and does not include it) and warnings
+ *  are small positive numbers: a caller may return an error code as it is. */
 enum {
     CSRBF_OK = 0,
     CSRBF_WARN_MERGED = 1,      /* coincident / near-coincident start points were merged */
@@ -61,10 +65,17 @@ enum {
                                    coplanar or fewer than 4 (csrbf.md pitfall 2) */
     CSRBF_WARN_FOLDOVER = 3,    /* some |alpha_i| exceeds the fold-over bound R / max|psi'|:
                                    the map may not be injective (csrbf.md pitfall 4) */
-    CSRBF_ERR_INVALID = -1,     /* a bad argument; see csrbf_solver_message() */
-    CSRBF_ERR_NOMEM = -2,       /* out of memory */
-    CSRBF_ERR_NUMERIC = -3,     /* factorisation failed or a result was not finite */
-    CSRBF_ERR_STATE = -4        /* called out of order (end points before start points) */
+    CSRBF_WARN_LIMITED = 4,     /* the fold-over guard scaled control vectors back: the map
+                                   stops short of some end points (csrbf_solver_limit_end_points,
+                                   csrbf_guarded_step) */
+    CSRBF_WARN_SUBSTEPS = 5,    /* csrbf_guarded_step split the step into composed sub-steps
+                                   and reached every end point */
+    CSRBF_ERR_INVALID = -EINVAL, /* a bad argument; see csrbf_solver_message() */
+    CSRBF_ERR_NOMEM = -ENOMEM,  /* out of memory */
+    CSRBF_ERR_NUMERIC = -1101,  /* factorisation failed or a result was not finite; equal to
+                                   the project's FP_ENUMERIC */
+    CSRBF_ERR_STATE = -ENODATA  /* called out of order: no start points (or no end points
+                                   where the call needs coefficients) */
 };
 
 /** A static English text for a result code ("unknown result" for others). Thread-safe. */
@@ -195,6 +206,14 @@ int csrbf_points_create(size_t n, const float *xyz, csrbf_points **out);
  *  block boxes are recomputed (O(n)). Errors: CSRBF_ERR_INVALID (points unchanged). */
 int csrbf_points_update(csrbf_points *points, const float *xyz);
 
+/** Replace the positions of some vertices only: the ranges (first vertex, count) pairs,
+ *  e.g. those csrbf_touch_ranges reports after a commit; xyz is the full n x 3 array, of
+ *  which only the listed vertices are read. Their blocks' boxes are recomputed (O(vertices
+ *  listed)); the whole-set box only grows, which keeps every test conservative.
+ *  Errors: CSRBF_ERR_INVALID (NULL, a range beyond n, a bad coordinate: nothing changed). */
+int csrbf_points_update_ranges(csrbf_points *points, const float *xyz, const uint32_t *ranges,
+                               size_t nranges);
+
 /** Number of vertices. */
 size_t csrbf_points_count(const csrbf_points *points);
 
@@ -224,12 +243,152 @@ typedef struct csrbf_eval_stats {
  *  r from rsqrt14 + one Newton step where the CPU has it, else target_clones of portable C
  *  for x86-64-v3 / baseline, chosen at run time) and parallel over blocks with OpenMP
  *  (options.threads; one thread below about 50k vertex-centre tests).
- *  stats may be NULL (fastest); with stats the pair count, moved count and maximum
- *  displacement are filled in, and with flags & CSRBF_EVAL_JACOBIAN the minimum Jacobian
- *  determinant too. Errors: CSRBF_ERR_INVALID (NULL, unknown flag), CSRBF_ERR_STATE (no start
+ *  stats may be NULL; with stats the pair count, moved count and maximum
+ *  displacement are filled in, counted per block inside the vectorised kernel (the fast path
+ *  stays: a few per cent at most), and with flags & CSRBF_EVAL_JACOBIAN the minimum Jacobian
+ *  determinant too (a slower general path). Errors: CSRBF_ERR_INVALID (NULL, unknown flag), CSRBF_ERR_STATE (no start
  *  points). Thread-safe on a const solver and const points. Source: the map T above. */
 int csrbf_evaluate(const csrbf_solver *solver, const csrbf_points *base, float *deformed,
                    unsigned flags, csrbf_eval_stats *stats);
+
+/* ------------------------------------------------- work that follows the supports
+ *
+ * csrbf_evaluate writes every vertex. For a frame loop whose output buffer persists, a
+ * csrbf_touch remembers which blocks (16 consecutive vertices) the last call rewrote from
+ * the kernel; csrbf_evaluate_touched then rewrites only the blocks inside a support this call
+ * (computed) or the last (restored to the base) and leaves the others alone: they equal the
+ * base already. Contract: the same points and the same output buffer on every call with one
+ * touch; nothing else writes the buffer. After the base changes in a way the output does not
+ * already show (csrbf_points_update on other data, an undo, a new mesh) call
+ * csrbf_touch_reset: the next call writes every block. After a commit that makes the output
+ * the new base (base := deformed, csrbf_points_update_ranges with the reported ranges),
+ * call csrbf_touch_commit: no block then differs from the base. */
+
+typedef struct csrbf_touch csrbf_touch;
+
+/** A touch state for `points` (which it refers to, not copies; the first evaluate writes
+ *  everything). Errors: CSRBF_ERR_INVALID, CSRBF_ERR_NOMEM. */
+int csrbf_touch_create(const csrbf_points *points, csrbf_touch **out);
+/** Free; sets *touch to NULL. NULL and *NULL are no-ops. */
+void csrbf_touch_destroy(csrbf_touch **touch);
+/** The next csrbf_evaluate_touched writes every block (the base changed). */
+void csrbf_touch_reset(csrbf_touch *touch);
+/** The output buffer has become the base: no block differs from it any more. */
+void csrbf_touch_commit(csrbf_touch *touch);
+/** The vertex ranges the last csrbf_evaluate_touched wrote, as *ranges[2k] = first vertex,
+ *  [2k+1] = count, increasing and disjoint; returns their number (0 before any call and after
+ *  csrbf_touch_commit). The viewer uploads and re-normals only these. Owned by the touch,
+ *  valid until its next use. */
+size_t csrbf_touch_ranges(const csrbf_touch *touch, const uint32_t **ranges);
+
+/** csrbf_evaluate with a persistent output (contract above): deformed equals T(base) on return,
+ *  bit for bit what csrbf_evaluate writes, but only the blocks in a support now or at the last
+ *  call are written, so the cost follows the supports, not the mesh (the per-block centre
+ *  masks are still one vectorised pass over the block boxes). Statistics as csrbf_evaluate.
+ *  With the linear polynomial every vertex moves and every block is written.
+ *  Errors: as csrbf_evaluate, and CSRBF_ERR_INVALID when touch was made for other points.
+ *  Not thread-safe on one touch. */
+int csrbf_evaluate_touched(const csrbf_solver *solver, const csrbf_points *base,
+                           csrbf_touch *touch, float *deformed, unsigned flags,
+                           csrbf_eval_stats *stats);
+
+/* ------------------------------------------------------------------ fold-over guard
+ *
+ * T(x) = x + f(x) is injective and has det dT/dx > 0 everywhere when f's Lipschitz constant
+ * L is below 1: |T(x) - T(y)| >= (1 - L) |x - y|, and ||Df|| < 1 keeps every eigenvalue of
+ * I + Df off the negative axis (csrbf.md pitfall 4). With M = max_r |psi'(r)| and the
+ * gradient |grad phi(|x - s_j| / R)| = |psi'(r_j)| / R,
+ *
+ *     ||Df(x)|| <= sum_{j : |x - s_j| < R} |alpha_j| |psi'(r_j)| / R  +  ||B||_F
+ *
+ * (B the linear polynomial's matrix, 0 without one). The engine bounds the sum per centre
+ * i: every x inside i's support has r_j >= |s_i - s_j| / R - 1 for each j containing it,
+ * and only j with |s_i - s_j| < 2R can contain it, so
+ *
+ *     L <= max_i sum_{j : |s_i - s_j| < 2R} |alpha_j| w(|s_i - s_j| / R - 1) / R + ||B||_F,
+ *     w(a) = max_{r in [max(a, 0), 1]} |psi'(r)|   (= M while a <= argmax |psi'|)
+ *
+ * a rigorous bound, exact for one centre (fold-over starts at |alpha| = R / M there). The
+ * neighbour lists (centres within 2R, through the centre grid) and the clusters (connected
+ * components of "supports overlap", |s_i - s_j| < 2R) are built by set_start_points; the
+ * bound then costs O(sum of neighbour counts) per update (about m^2 for m <= 10 fingertips).
+ * Without the polynomial A is block-diagonal over clusters, so a cluster's coefficients
+ * depend only on its own control vectors, linearly: scaling its displacements d_i - s_i by
+ * t scales its alphas and its bound by t. */
+
+/** Default margin of the guard: a map is accepted when its bound L <= 0.9. */
+#define CSRBF_GUARD_MARGIN 0.9
+/** Default limit of composed sub-steps in csrbf_guarded_step. */
+#define CSRBF_GUARD_MAX_SUBSTEPS 16
+
+/** The injectivity bound L of the current map (see above); L < 1 implies T injective with
+ *  det dT/dx > 0 everywhere. 0 before end points are set (T = identity).
+ *  Errors: CSRBF_ERR_INVALID (NULL), CSRBF_ERR_STATE (no start points). Thread-safe on a
+ *  const solver. Cost O(sum over centres of the centres within 2R). */
+int csrbf_solver_injectivity(const csrbf_solver *solver, double *bound);
+
+/** What the guard did (any pointer to one may be NULL where it is accepted). */
+typedef struct csrbf_guard_stats {
+    double bound_before;      /* L of the requested map (first sub-step, before limiting) */
+    double bound_after;       /* largest L over the maps applied (<= margin) */
+    size_t clusters;          /* clusters of overlapping supports (first sub-step) */
+    size_t clusters_limited;  /* clusters scaled back (first sub-step) */
+    double min_scale;         /* smallest cluster scale t of the first sub-step (1: none) */
+    int substeps;             /* maps composed (1: the step was applied in one map) */
+    double reached;           /* smallest fraction of its control vector that any start
+                                 point travelled (1: every end point reached) */
+    csrbf_eval_stats eval;    /* csrbf_guarded_step only: pairs summed over the sub-steps,
+                                 moved / max_displacement against the input shape,
+                                 min_jacobian_det the minimum over the sub-steps' maps */
+} csrbf_guard_stats;
+
+/** Anchored guard: after set_end_points, scale back the clusters whose bound exceeds margin.
+ *  Each cluster C (connected component of overlapping supports) gets
+ *  t_C = min(1, margin / L_C) and alpha_j *= t_C for its centres: exactly the coefficients
+ *  that end points s_i + t_C (d_i - s_i) would give (alpha is linear in the displacements and
+ *  A is block-diagonal over clusters), without a solve; clusters with t_C = 1 keep their
+ *  coefficients bit for bit. The factor stays valid (the next set_end_points starts afresh).
+ *  With CSRBF_POLY_LINEAR the polynomial couples all clusters: the whole map (alphas and p)
+ *  is scaled by one t = min(1, margin / L) instead. margin: in (0, 1); 0 selects
+ *  CSRBF_GUARD_MARGIN. stats (may be NULL) gets bound_before/after, clusters, clusters_limited,
+ *  min_scale (substeps = 1, reached = min_scale, eval zeroed).
+ *  Returns CSRBF_OK, CSRBF_WARN_LIMITED (some cluster was scaled), CSRBF_ERR_INVALID (NULL,
+ *  bad margin), CSRBF_ERR_STATE (no start points). O(neighbour pairs), no allocation.
+ *  Source: csrbf.md pitfall 4 (the Lipschitz bound above). */
+int csrbf_solver_limit_end_points(csrbf_solver *solver, double margin, csrbf_guard_stats *stats);
+
+/** Options of csrbf_guarded_step; a zero struct (or NULL) selects every default. */
+typedef struct csrbf_guard {
+    double margin;       /* accepted bound per map, in (0, 1); 0: CSRBF_GUARD_MARGIN */
+    int max_substeps;    /* maps composed at most; 0: CSRBF_GUARD_MAX_SUBSTEPS; 1: limit only
+                            (the anchored mode: the start points stay, the factor is reused) */
+    unsigned eval_flags; /* flags for csrbf_evaluate (CSRBF_EVAL_JACOBIAN) */
+} csrbf_guard;
+
+/** One guarded step: deformed = T_k o ... o T_1 (shape), each T_j injective (bound <= margin),
+ *  moving the n start points toward the end points as far as injective maps allow.
+ *  shape: the csrbf_points of the current shape (its vertices are deformed, n_vertices =
+ *  csrbf_points_count); start, end: n x 3 floats; deformed: n_vertices x 3 floats (must not
+ *  overlap shape's memory). Sub-step j factors at the current start points p (p = start for
+ *  j = 1), solves for the end points, limits per cluster (csrbf_solver_limit_end_points:
+ *  t_C), evaluates on the shape so far, and moves p_i <- p_i + t_C (end_i - p_i); it stops
+ *  when every t_C = 1 (T(start_i) = end_i, the composition of injective maps is injective)
+ *  or after max_substeps maps (the rest of the motion is dropped; CSRBF_WARN_LIMITED).
+ *  When start equals the solver's current start points bit for bit, the factor is reused.
+ *  Cost: a step that is injective already costs one update plus the bound (O(m^2) for m
+ *  fingertips: a few per cent of the evaluation); otherwise each sub-step costs a
+ *  factorisation, a solve, an evaluation and an O(n_vertices) re-index of the intermediate
+ *  shape (a scratch csrbf_points owned by the solver, allocated on first need).
+ *  Returns CSRBF_OK (one map, nothing limited), CSRBF_WARN_SUBSTEPS (composed, every end
+ *  point reached), CSRBF_WARN_LIMITED (stopped short), or the first error of the calls it
+ *  makes (CSRBF_ERR_INVALID for NULL arguments, n == 0 or a bad margin / max_substeps,
+ *  CSRBF_ERR_NOMEM,
+ *  CSRBF_ERR_NUMERIC); after an error deformed is unspecified. On return the solver holds the
+ *  last sub-step's start points and (limited) coefficients. stats may be NULL.
+ *  Not thread-safe (modifies the solver). Source: csrbf.md pitfall 4 (compose or scale). */
+int csrbf_guarded_step(csrbf_solver *solver, const csrbf_points *shape, size_t n,
+                       const float *start, const float *end, const csrbf_guard *guard,
+                       float *deformed, csrbf_guard_stats *stats);
 
 #ifdef __cplusplus
 }

@@ -185,27 +185,45 @@ __attribute__((target("avx512f"))) static void write_block_avx512(
         sx = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(ax[J]), sx, in);                          \
         sy = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(ay[J]), sy, in);                          \
         sz = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(az[J]), sz, in);                          \
+        if (stats_on) cntv = _mm512_mask_add_epi32(cntv, in, cntv, ione);                       \
     } while (0)
 
-/* The fast path without statistics or polynomial: blocks b0..b1 end to end. mask (centres
- * j < 32 whose support meets the block) or, with mask NULL, all m centres. Untouched blocks
- * are copied; touched ones computed in registers and stored interleaved. */
-#define AVX512_DRIVER(NAME, PSI)                                                               \
+/* Statistics of a run of blocks (the fast path counts them per block, in registers). */
+typedef struct {
+    size_t pairs, moved;
+    float maxd2;
+} block_stats;
+
+/* The fast path without polynomial: blocks b0..b1 end to end. mask (centres j < 32 whose
+ * support meets the block) or, with mask NULL, all m centres. Untouched blocks are copied;
+ * touched ones computed in registers and stored interleaved. With STATS (a compile-time
+ * constant: a second copy of the driver) the pairs in support are counted per lane with one
+ * masked add per pair, and moved vertices and the largest squared displacement per block,
+ * into *bs (padding lanes excluded). */
+#define AVX512_DRIVER(NAME, PSI, STATS)                                                        \
     __attribute__((target("avx512f,fma"))) static void NAME(                                   \
         const csrbf_points *P, float *restrict out, size_t b0, size_t b1,                      \
         const uint32_t *restrict mask, size_t m, const float *restrict cx,                     \
         const float *restrict cy, const float *restrict cz, const float *restrict ax,          \
-        const float *restrict ay, const float *restrict az, float inv_r2)                      \
+        const float *restrict ay, const float *restrict az, float inv_r2, block_stats *bs,     \
+        uint8_t *restrict cur, const uint8_t *restrict prev)                                   \
     {                                                                                          \
         const __m512 one = _mm512_set1_ps(1.0f), half = _mm512_set1_ps(0.5f),                 \
                      three_half = _mm512_set1_ps(1.5f), tiny = _mm512_set1_ps(1e-30f),         \
                      ir2 = _mm512_set1_ps(inv_r2);                                             \
+        const __m512i ione = _mm512_set1_epi32(1), izero = _mm512_setzero_si512();             \
+        enum { stats_on = STATS };                                                             \
+        __m512i pairv = izero;                                                                 \
+        __m512 maxd = _mm512_setzero_ps();                                                     \
+        size_t nmoved = 0;                                                                     \
         const size_t n = P->n;                                                                 \
         for (size_t b = b0; b < b1; b++) {                                                     \
             const size_t k0 = b * B, nv = k0 + B <= n ? B : n - k0;                            \
             float *o = out + 3 * k0;                                                           \
             uint32_t mk = mask ? mask[b] : 0;                                                  \
+            if (cur) cur[b] = !mask || mk;                                                     \
             if (mask && !mk) {                                                                 \
+                if (prev && !prev[b]) continue; /* the output holds the base already */        \
                 if (nv == B)                                                                   \
                     interleave_avx512(o, _mm512_loadu_ps(P->s[0] + k0),                        \
                                       _mm512_loadu_ps(P->s[1] + k0),                           \
@@ -217,6 +235,7 @@ __attribute__((target("avx512f"))) static void write_block_avx512(
             const __m512 X = _mm512_loadu_ps(P->s[0] + k0), Y = _mm512_loadu_ps(P->s[1] + k0), \
                          Z = _mm512_loadu_ps(P->s[2] + k0);                                    \
             __m512 sx = _mm512_set1_ps(-0.0f), sy = sx, sz = sx;                               \
+            __m512i cntv = izero;                                                              \
             if (mask) {                                                                        \
                 while (mk) {                                                                   \
                     const unsigned j = (unsigned)__builtin_ctz(mk);                            \
@@ -225,6 +244,17 @@ __attribute__((target("avx512f"))) static void write_block_avx512(
                 }                                                                              \
             } else {                                                                           \
                 for (size_t j = 0; j < m; j++) AVX512_PAIR(PSI, j);                            \
+            }                                                                                  \
+            if (STATS) {                                                                       \
+                const __mmask16 valid = nv == B ? (__mmask16)0xFFFF                            \
+                                                : (__mmask16)((1u << nv) - 1u);                \
+                pairv = _mm512_mask_add_epi32(pairv, valid, pairv, cntv);                      \
+                nmoved += (size_t)__builtin_popcount(                                          \
+                    (unsigned)_mm512_mask_cmpgt_epi32_mask(valid, cntv, izero));               \
+                __m512 d2 = _mm512_mul_ps(sx, sx);                                             \
+                d2 = _mm512_fmadd_ps(sy, sy, d2);                                              \
+                d2 = _mm512_fmadd_ps(sz, sz, d2);                                              \
+                maxd = _mm512_mask_max_ps(maxd, valid, maxd, d2);                              \
             }                                                                                  \
             _Alignas(64) float acc[3][B];                                                      \
             _mm512_store_ps(acc[0], sx);                                                       \
@@ -240,22 +270,36 @@ __attribute__((target("avx512f"))) static void write_block_avx512(
                     o[3 * v + 2] = P->s[2][k0 + v] + acc[2][v];                                \
                 }                                                                              \
         }                                                                                      \
+        if (STATS) {                                                                           \
+            bs->pairs += (size_t)(uint32_t)_mm512_reduce_add_epi32(pairv);                     \
+            bs->moved += nmoved;                                                               \
+            float mx = _mm512_reduce_max_ps(maxd);                                             \
+            if (mx > bs->maxd2) bs->maxd2 = mx;                                                \
+        }                                                                                      \
+        (void)bs;                                                                              \
     }
 
 #define T2 _mm512_mul_ps(t1, t1)
-AVX512_DRIVER(drive_psi31_avx512,
-              _mm512_mul_ps(_mm512_mul_ps(T2, T2), _mm512_fmadd_ps(_mm512_set1_ps(4.0f), r, one)))
-AVX512_DRIVER(drive_psi30_avx512, T2)
-AVX512_DRIVER(drive_psi32_avx512,
-              _mm512_mul_ps(_mm512_mul_ps(_mm512_mul_ps(T2, T2), T2),
-                            _mm512_fmadd_ps(_mm512_fmadd_ps(_mm512_set1_ps(35.0f / 3.0f), r,
-                                                            _mm512_set1_ps(6.0f)),
-                                            r, one)))
+#define PSI31_AVX512 _mm512_mul_ps(_mm512_mul_ps(T2, T2), _mm512_fmadd_ps(_mm512_set1_ps(4.0f), r, one))
+#define PSI32_AVX512                                                                           \
+    _mm512_mul_ps(_mm512_mul_ps(_mm512_mul_ps(T2, T2), T2),                                    \
+                  _mm512_fmadd_ps(_mm512_fmadd_ps(_mm512_set1_ps(35.0f / 3.0f), r,             \
+                                                  _mm512_set1_ps(6.0f)),                       \
+                                  r, one))
+AVX512_DRIVER(drive_psi31_avx512, PSI31_AVX512, 0)
+AVX512_DRIVER(drive_psi30_avx512, T2, 0)
+AVX512_DRIVER(drive_psi32_avx512, PSI32_AVX512, 0)
+AVX512_DRIVER(drive_psi31_avx512_stats, PSI31_AVX512, 1)
+AVX512_DRIVER(drive_psi30_avx512_stats, T2, 1)
+AVX512_DRIVER(drive_psi32_avx512_stats, PSI32_AVX512, 1)
+#undef PSI31_AVX512
+#undef PSI32_AVX512
 #undef T2
 
 typedef void (*drive_fn)(const csrbf_points *, float *, size_t, size_t, const uint32_t *,
                          size_t, const float *, const float *, const float *, const float *,
-                         const float *, const float *, float);
+                         const float *, const float *, float, block_stats *, uint8_t *,
+                         const uint8_t *);
 
 static int have_avx512(void)
 {
@@ -396,11 +440,89 @@ static double jacobian_det(const csrbf_solver *s, const double x[3], const uint3
            J[2] * (J[3] * J[7] - J[4] * J[6]);
 }
 
+/* Persistent-output state of csrbf_evaluate_touched (see csrbf.h). */
+struct csrbf_touch {
+    const csrbf_points *points; /* the points it was made for */
+    size_t nblocks;
+    uint8_t *cur, *prev;        /* per block: rewritten from the kernel this call / last call */
+    int full;                   /* the next call writes every block */
+    uint32_t *ranges;           /* 2 x nranges: first vertex, count */
+    size_t nranges;
+};
+
+static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *out,
+                         unsigned flags, csrbf_eval_stats *st, csrbf_touch *touch);
+
 int csrbf_evaluate(const csrbf_solver *cs, const csrbf_points *P, float *out, unsigned flags,
                    csrbf_eval_stats *st)
 {
+    return evaluate_impl(cs, P, out, flags, st, NULL);
+}
+
+int csrbf_touch_create(const csrbf_points *points, csrbf_touch **out)
+{
+    if (!out) return CSRBF_ERR_INVALID;
+    *out = NULL;
+    if (!points) return CSRBF_ERR_INVALID;
+    csrbf_touch *t = calloc(1, sizeof *t);
+    if (!t) return CSRBF_ERR_NOMEM;
+    t->points = points;
+    t->nblocks = points->nblocks;
+    t->cur = calloc(t->nblocks, 1);
+    t->prev = calloc(t->nblocks, 1);
+    t->ranges = malloc((t->nblocks + 1) * 2 * sizeof *t->ranges);
+    if (!t->cur || !t->prev || !t->ranges) {
+        csrbf_touch_destroy(&t);
+        return CSRBF_ERR_NOMEM;
+    }
+    t->full = 1;
+    *out = t;
+    return CSRBF_OK;
+}
+
+void csrbf_touch_destroy(csrbf_touch **tp)
+{
+    if (!tp || !*tp) return;
+    free((*tp)->cur);
+    free((*tp)->prev);
+    free((*tp)->ranges);
+    free(*tp);
+    *tp = NULL;
+}
+
+void csrbf_touch_reset(csrbf_touch *t)
+{
+    if (t) t->full = 1;
+}
+
+void csrbf_touch_commit(csrbf_touch *t)
+{
+    if (!t) return;
+    memset(t->prev, 0, t->nblocks);
+    t->nranges = 0;
+}
+
+size_t csrbf_touch_ranges(const csrbf_touch *t, const uint32_t **ranges)
+{
+    if (ranges) *ranges = t ? t->ranges : NULL;
+    return t ? t->nranges : 0;
+}
+
+int csrbf_evaluate_touched(const csrbf_solver *cs, const csrbf_points *P, csrbf_touch *touch,
+                           float *out, unsigned flags, csrbf_eval_stats *st)
+{
+    if (!touch || touch->points != P || !P || touch->nblocks != P->nblocks)
+        return CSRBF_ERR_INVALID;
+    return evaluate_impl(cs, P, out, flags, st, touch);
+}
+
+static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *out,
+                         unsigned flags, csrbf_eval_stats *st, csrbf_touch *touch)
+{
     if (!cs || !P || !out || (flags & ~(unsigned)CSRBF_EVAL_JACOBIAN)) return CSRBF_ERR_INVALID;
     if (!cs->have_start) return CSRBF_ERR_STATE;
+    uint8_t *tcur = touch ? touch->cur : NULL;
+    const uint8_t *tprev = touch && !touch->full ? touch->prev : NULL;
     /* The scratch buffer is the only state evaluate touches; a concurrent caller that finds it
      * busy allocates its own. The solver itself is read-only here. */
     csrbf_solver *s = (csrbf_solver *)cs;
@@ -475,8 +597,9 @@ int csrbf_evaluate(const csrbf_solver *cs, const csrbf_points *P, float *out, un
     size_t work = (size_t)((double)n * est);
     int threads = work > 50000 ? nt : 1;
 
-    /* the fused AVX-512 path: no statistics, no polynomial, all centres or a mask */
-    const int fast = avx512 && !st && !poly && (all_in || use_mask);
+    /* the fused AVX-512 path: no polynomial, no Jacobian, all centres or a mask (statistics
+     * are counted inside it) */
+    const int fast = avx512 && !want_jac && !poly && (all_in || use_mask);
     size_t pairs = 0, moved = 0;
     double maxd = 0.0, minjac = 1.0;
     const float inv_r2 = (float)(1.0 / R2), r2c = (float)(R2 * (1.0 + 1e-5)) + 1e-30f;
@@ -505,12 +628,20 @@ int csrbf_evaluate(const csrbf_solver *cs, const csrbf_points *P, float *out, un
             drive_fn drive = s->opt.kernel == CSRBF_PSI30   ? drive_psi30_avx512
                              : s->opt.kernel == CSRBF_PSI32 ? drive_psi32_avx512
                                                             : drive_psi31_avx512;
+            if (st)
+                drive = s->opt.kernel == CSRBF_PSI30   ? drive_psi30_avx512_stats
+                        : s->opt.kernel == CSRBF_PSI32 ? drive_psi32_avx512_stats
+                                                       : drive_psi31_avx512_stats;
+            block_stats bs = {0, 0, 0.0f};
 #pragma omp for schedule(dynamic, 1)
             for (size_t c = 0; c < (nb + 63) / 64; c++) {
                 size_t b0 = c * 64, b1 = b0 + 64 < nb ? b0 + 64 : nb;
                 drive(P, out, b0, b1, use_mask ? mask : NULL, m, fcx, fcy, fcz, fax, fay, faz,
-                      inv_r2);
+                      inv_r2, &bs, tcur, tprev);
             }
+            pairs += bs.pairs;
+            moved += bs.moved;
+            if ((double)bs.maxd2 > maxd) maxd = bs.maxd2;
         } else
 #endif
         {
@@ -523,8 +654,9 @@ int csrbf_evaluate(const csrbf_solver *cs, const csrbf_points *P, float *out, un
             size_t k = m;
             if (use_mask) {
                 uint32_t mk = mask[b];
-                if (!mk && !poly && !st) {
-                    memcpy(o, P->xyz + 3 * k0, nv * 3 * sizeof(float));
+                if (!mk && !poly && !want_jac) { /* outside every support: the base */
+                    if (tcur) tcur[b] = 0;
+                    if (!tprev || tprev[b]) memcpy(o, P->xyz + 3 * k0, nv * 3 * sizeof(float));
                     continue;
                 }
                 k = 0;
@@ -534,7 +666,13 @@ int csrbf_evaluate(const csrbf_solver *cs, const csrbf_points *P, float *out, un
                 }
             } else if (!all_in) {
                 k = select_centres(s, P, b, list, 0);
+                if (!k && !poly && !want_jac) {
+                    if (tcur) tcur[b] = 0;
+                    if (!tprev || tprev[b]) memcpy(o, P->xyz + 3 * k0, nv * 3 * sizeof(float));
+                    continue;
+                }
             }
+            if (tcur) tcur[b] = 1;
             const float *x = P->s[0] + k0, *y = P->s[1] + k0, *z = P->s[2] + k0;
             kern(x, y, z, list, k, fcx, fcy, fcz, fax, fay, faz, inv_r2, accx, accy, accz, cnt);
             if (poly)
@@ -571,6 +709,26 @@ int csrbf_evaluate(const csrbf_solver *cs, const csrbf_points *P, float *out, un
         free(mem);
     else
         atomic_flag_clear(&s->scratch_busy);
+    if (touch) { /* the rewritten blocks as vertex ranges, then this call becomes the last */
+        size_t nr = 0;
+        for (size_t b = 0; b < nb;) {
+            if (!(touch->full || touch->cur[b] || touch->prev[b])) {
+                b++;
+                continue;
+            }
+            size_t b0 = b;
+            while (b < nb && (touch->full || touch->cur[b] || touch->prev[b])) b++;
+            size_t v1 = b * B < n ? b * B : n;
+            touch->ranges[2 * nr] = (uint32_t)(b0 * B);
+            touch->ranges[2 * nr + 1] = (uint32_t)(v1 - b0 * B);
+            nr++;
+        }
+        touch->nranges = nr;
+        uint8_t *tmp = touch->prev;
+        touch->prev = touch->cur;
+        touch->cur = tmp;
+        touch->full = 0;
+    }
     if (st) {
         st->pairs = pairs;
         st->moved = moved;

@@ -17,14 +17,12 @@ static int check(size_t n, const float *xyz)
     return CSRBF_OK;
 }
 
-static void fill_blocks(csrbf_points *p)
+/* Recompute blocks b0..b1 from p->xyz; the global box grows to hold them (it never
+ * shrinks here, which only makes csrbf_evaluate's whole-box test more conservative). */
+static void fill_block_range(csrbf_points *p, size_t b0, size_t b1)
 {
-    size_t n = p->n, nb = p->nblocks;
-    for (int a = 0; a < 3; a++) {
-        p->blo[a] = INFINITY;
-        p->bhi[a] = -INFINITY;
-    }
-    for (size_t b = 0; b < nb; b++) {
+    size_t n = p->n;
+    for (size_t b = b0; b < b1; b++) {
         size_t k0 = b * CSRBF_BLOCK, k1 = k0 + CSRBF_BLOCK < n ? k0 + CSRBF_BLOCK : n;
         for (int a = 0; a < 3; a++) {
             float lo = INFINITY, hi = -INFINITY;
@@ -41,6 +39,15 @@ static void fill_blocks(csrbf_points *p)
             if (hi > p->bhi[a]) p->bhi[a] = hi;
         }
     }
+}
+
+static void fill_blocks(csrbf_points *p)
+{
+    for (int a = 0; a < 3; a++) {
+        p->blo[a] = INFINITY;
+        p->bhi[a] = -INFINITY;
+    }
+    fill_block_range(p, 0, p->nblocks);
 }
 
 void csrbf_points_destroy(csrbf_points **pp)
@@ -96,6 +103,23 @@ int csrbf_points_update(csrbf_points *p, const float *xyz)
     if (!p || !xyz || check(p->n, xyz)) return CSRBF_ERR_INVALID;
     memcpy(p->xyz, xyz, p->n * 3 * sizeof(float));
     fill_blocks(p);
+    return CSRBF_OK;
+}
+
+int csrbf_points_update_ranges(csrbf_points *p, const float *xyz, const uint32_t *ranges,
+                               size_t nranges)
+{
+    if (!p || !xyz || (!ranges && nranges)) return CSRBF_ERR_INVALID;
+    for (size_t r = 0; r < nranges; r++) {
+        size_t v0 = ranges[2 * r], c = ranges[2 * r + 1];
+        if (v0 > p->n || c > p->n - v0 || check(c, xyz + 3 * v0)) return CSRBF_ERR_INVALID;
+    }
+    for (size_t r = 0; r < nranges; r++) {
+        size_t v0 = ranges[2 * r], c = ranges[2 * r + 1];
+        if (!c) continue;
+        memcpy(p->xyz + 3 * v0, xyz + 3 * v0, c * 3 * sizeof(float));
+        fill_block_range(p, v0 / CSRBF_BLOCK, (v0 + c + CSRBF_BLOCK - 1) / CSRBF_BLOCK);
+    }
     return CSRBF_OK;
 }
 

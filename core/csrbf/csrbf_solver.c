@@ -17,6 +17,8 @@ const char *csrbf_strerror(int result)
     case CSRBF_WARN_MERGED: return "coincident start points were merged";
     case CSRBF_WARN_POLY_RANK: return "the linear polynomial was reduced (degenerate centres)";
     case CSRBF_WARN_FOLDOVER: return "a coefficient exceeds the fold-over bound";
+    case CSRBF_WARN_LIMITED: return "the fold-over guard limited the motion";
+    case CSRBF_WARN_SUBSTEPS: return "the fold-over guard split the step into sub-steps";
     case CSRBF_ERR_INVALID: return "invalid argument";
     case CSRBF_ERR_NOMEM: return "out of memory";
     case CSRBF_ERR_NUMERIC: return "numerical failure";
@@ -283,6 +285,7 @@ void csrbf_solver_destroy(csrbf_solver **sp)
     free(s->Q);
     free(s->W);
     csrbf_grid_free(&s->cgrid);
+    csrbf_guard_free(s);
     free(s->scratch);
     free(s);
     *sp = NULL;
@@ -713,6 +716,7 @@ static void reset_coefficients(csrbf_solver *s)
 {
     size_t m = s->m;
     memset(s->alpha, 0, m * 3 * sizeof(double));
+    memset(s->anorm, 0, m * sizeof(double));
     for (int a = 0; a < 3; a++) {
         memset(s->fa[a], 0, m * sizeof(float));
         for (size_t i = 0; i < m; i++) s->fc[a][i] = (float)s->c[3 * i + a];
@@ -747,6 +751,8 @@ int csrbf_solver_set_start_points(csrbf_solver *s, size_t n, const float *start)
     if (rc) return fail(s, rc, "out of memory building the centre grid");
     rc = factor_A(s);
     if (rc) return rc;
+    rc = csrbf_guard_prepare(s);
+    if (rc) return fail(s, rc, "out of memory for the fold-over guard's neighbour lists");
     s->k = 0;
     memset(s->pc, 0, sizeof s->pc);
     if (s->opt.poly == CSRBF_POLY_LINEAR) {
@@ -824,11 +830,15 @@ int csrbf_solver_set_end_points(csrbf_solver *s, const float *end)
         }
     if (!finite || !(amax2 < 1e60))
         return fail(s, CSRBF_ERR_NUMERIC, "the coefficients are not finite or out of range");
-    for (size_t i = 0; i < m; i++)
+    for (size_t i = 0; i < m; i++) {
+        double n2 = 0.0;
         for (int a = 0; a < 3; a++) {
             s->alpha[3 * i + a] = Y[a * m + i];
             s->fa[a][i] = (float)Y[a * m + i];
+            n2 += Y[a * m + i] * Y[a * m + i];
         }
+        s->anorm[i] = sqrt(n2);
+    }
     memcpy(s->g, g, sizeof g);
     for (int a = 0; a < 3; a++) {
         s->fg0[a] = (float)g[0][a];

@@ -80,6 +80,21 @@ struct csrbf_solver {
     /* centre grid for evaluation (cell R), built with the start points */
     csrbf_grid cgrid;
 
+    /* fold-over guard (csrbf_guard.c), built with the start points: for centre i its
+     * neighbours within 2R gn_idx[gn_start[i] .. gn_start[i+1]) (i itself included) with
+     * weights gn_w = w(|s_i - s_j| / R - 1) / R; clusters = components of that graph */
+    size_t *gn_start;        /* m + 1 */
+    uint32_t *gn_idx;        /* gn_start[m] */
+    double *gn_w;
+    size_t gn_cap;
+    uint32_t *cluster;       /* m: cluster of each centre, 0 .. nclusters-1 */
+    size_t nclusters;
+    double *cl_L, *cl_t;     /* m each: per-cluster bound and scale (scratch) */
+    double *anorm;           /* m: |alpha_j| (scratch) */
+    float *g_p, *g_e;        /* guarded step: current start and end points, n x 3 */
+    size_t g_cap;
+    csrbf_points *g_tmp;     /* guarded step: index of the intermediate shape */
+
     /* evaluation scratch: one user at a time; concurrent callers allocate their own */
     atomic_flag scratch_busy;
     void *scratch;
@@ -94,6 +109,11 @@ struct csrbf_points {
     float *lo[3], *hi[3];    /* nblocks each: block bounding boxes */
     float blo[3], bhi[3];    /* bounding box of all vertices */
 };
+
+/* Build the guard's neighbour lists and clusters for the current centres (solver.c calls it
+ * from set_start_points); free them (destroy). */
+int csrbf_guard_prepare(csrbf_solver *s);
+void csrbf_guard_free(csrbf_solver *s);
 
 /* psi(r) for r in [0, 1) in double (no range check). */
 double csrbf_psi(csrbf_kernel k, double r);

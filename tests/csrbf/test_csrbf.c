@@ -247,6 +247,135 @@ static void test_interpolation(void **state)
     }
 }
 
+/* The persistent-output evaluation: on a grid, fingertips that move (and jump away) give
+ * bit-identical output to csrbf_evaluate every frame; vertices outside the reported ranges are
+ * unchanged from the last frame; a commit through csrbf_points_update_ranges and
+ * csrbf_touch_commit leaves an index equal to a fresh one. */
+static void test_touched(void **state)
+{
+    (void)state;
+    size_t nx = 203, ny = 150, nv = nx * ny; /* not a multiple of 16 */
+    float *v = malloc(nv * 3 * sizeof *v), *out = malloc(nv * 3 * sizeof *out),
+          *ref = malloc(nv * 3 * sizeof *ref), *last = malloc(nv * 3 * sizeof *last);
+    for (size_t j = 0; j < ny; j++)
+        for (size_t i = 0; i < nx; i++) {
+            float *q = v + 3 * (j * nx + i);
+            q[0] = (float)i * 0.5f;
+            q[1] = (float)j * 0.5f;
+            q[2] = 0.1f * sinf((float)i * 0.1f);
+        }
+    csrbf_points *p = NULL;
+    csrbf_touch *tc = NULL;
+    assert_int_equal(csrbf_points_create(nv, v, &p), CSRBF_OK);
+    assert_int_equal(csrbf_touch_create(p, &tc), CSRBF_OK);
+    assert_int_equal(csrbf_touch_ranges(tc, NULL), 0);
+    csrbf_solver *s = make_solver(4.0, CSRBF_PSI31, CSRBF_POLY_NONE, 0);
+    float st[3 * 5], en[3 * 5];
+    for (int frame = 0; frame < 12; frame++) {
+        for (int i = 0; i < 5; i++) {
+            double cx = frame == 6 ? 90.0 : 10.0 + 12.0 * i + 0.7 * frame; /* frame 6 jumps */
+            st[3 * i] = (float)cx;
+            st[3 * i + 1] = (float)(20.0 + 3.0 * i);
+            st[3 * i + 2] = 0.0f;
+            en[3 * i] = st[3 * i] + 0.5f;
+            en[3 * i + 1] = st[3 * i + 1] - 0.3f;
+            en[3 * i + 2] = 0.4f;
+        }
+        if (frame == 6)
+            for (int i = 0; i < 5; i++) st[3 * i + 1] = en[3 * i + 1] = (float)(5 + 12 * i);
+        assert_true(csrbf_solver_solve(s, 5, st, en) >= 0);
+        csrbf_eval_stats a, b;
+        assert_int_equal(csrbf_evaluate(s, p, ref, 0, &a), CSRBF_OK);
+        if (frame > 0) memcpy(last, out, nv * 3 * sizeof *out);
+        assert_int_equal(csrbf_evaluate_touched(s, p, tc, out, 0, &b), CSRBF_OK);
+        assert_memory_equal(out, ref, nv * 3 * sizeof *out);
+        assert_int_equal(a.pairs, b.pairs);
+        const uint32_t *rg;
+        size_t nr = csrbf_touch_ranges(tc, &rg);
+        assert_true(nr > 0);
+        size_t covered = 0, prev_end = 0;
+        for (size_t r = 0; r < nr; r++) {
+            assert_true(rg[2 * r] >= prev_end);
+            assert_true(rg[2 * r] + rg[2 * r + 1] <= nv);
+            if (frame > 0) /* outside the ranges nothing changed since the last frame */
+                assert_memory_equal(out + 3 * prev_end, last + 3 * prev_end,
+                                    (rg[2 * r] - prev_end) * 3 * sizeof(float));
+            prev_end = rg[2 * r] + rg[2 * r + 1];
+            covered += rg[2 * r + 1];
+        }
+        if (frame > 0)
+            assert_memory_equal(out + 3 * prev_end, last + 3 * prev_end,
+                                (nv - prev_end) * 3 * sizeof(float));
+        if (frame == 0) assert_int_equal(covered, nv); /* the first call writes everything */
+        else assert_true(covered < nv / 2);
+        if (frame == 9) { /* commit: the output becomes the base, only touched blocks re-indexed */
+            assert_int_equal(csrbf_points_update_ranges(p, out, rg, nr), CSRBF_OK);
+            memcpy(v, out, nv * 3 * sizeof *v);
+            csrbf_touch_commit(tc);
+            assert_int_equal(csrbf_touch_ranges(tc, NULL), 0);
+            csrbf_points *fresh = NULL;
+            assert_int_equal(csrbf_points_create(nv, v, &fresh), CSRBF_OK);
+            assert_int_equal(csrbf_evaluate(s, fresh, ref, 0, NULL), CSRBF_OK);
+            assert_int_equal(csrbf_evaluate(s, p, last, 0, NULL), CSRBF_OK);
+            assert_memory_equal(ref, last, nv * 3 * sizeof *out);
+            csrbf_points_destroy(&fresh);
+        }
+    }
+    /* reset: the next call writes everything */
+    csrbf_touch_reset(tc);
+    assert_int_equal(csrbf_evaluate_touched(s, p, tc, out, 0, NULL), CSRBF_OK);
+    size_t nr = csrbf_touch_ranges(tc, NULL);
+    assert_int_equal(nr, 1);
+    /* a touch of other points is refused */
+    csrbf_points *q = NULL;
+    assert_int_equal(csrbf_points_create(nv, v, &q), CSRBF_OK);
+    assert_int_equal(csrbf_evaluate_touched(s, q, tc, out, 0, NULL), CSRBF_ERR_INVALID);
+    const uint32_t bad[2] = {(uint32_t)nv - 1, 5};
+    assert_int_equal(csrbf_points_update_ranges(p, v, bad, 1), CSRBF_ERR_INVALID);
+    csrbf_points_destroy(&q);
+    csrbf_touch_destroy(&tc);
+    csrbf_points_destroy(&p);
+    csrbf_solver_destroy(&s);
+    free(v);
+    free(out);
+    free(ref);
+    free(last);
+}
+
+/* Statistics from the fast path (counted per block inside the vectorised kernel) equal the
+ * general path's (taken with the Jacobian flag), with a padded last block, for the masked
+ * (some centres) and the all-in (every vertex in every support) cases. */
+static void test_stats_fast_path(void **state)
+{
+    (void)state;
+    size_t n = 8, nv = 20001;
+    float *st = random_points(n, 10.0, 1.0), *en = displaced(st, n, 0.3);
+    float *v = malloc(nv * 3 * sizeof *v), *out = malloc(nv * 3 * sizeof *out);
+    for (size_t i = 0; i < 3 * nv; i++) v[i] = (float)(urand() * 20 - 5);
+    csrbf_points *p = NULL;
+    assert_int_equal(csrbf_points_create(nv, v, &p), CSRBF_OK);
+    const double radii[2] = {3.0, 80.0};
+    for (int k = 0; k < 2; k++) {
+        csrbf_solver *s = make_solver(radii[k], CSRBF_PSI31, CSRBF_POLY_NONE, 0);
+        assert_true(csrbf_solver_solve(s, n, st, en) >= 0);
+        csrbf_eval_stats a, b;
+        assert_int_equal(csrbf_evaluate(s, p, out, 0, &a), CSRBF_OK);
+        assert_int_equal(csrbf_evaluate(s, p, out, CSRBF_EVAL_JACOBIAN, &b), CSRBF_OK);
+        assert_int_equal(a.pairs, b.pairs);
+        assert_int_equal(a.moved, b.moved);
+        assert_true(a.pairs > 1000);
+        if (k == 1) assert_int_equal(a.pairs, n * nv);
+        assert_double_equal(a.max_displacement, b.max_displacement, 1e-5 * b.max_displacement);
+        assert_true(a.min_jacobian_det == 1.0);
+        csrbf_solver_destroy(&s);
+    }
+    csrbf_points_destroy(&p);
+    free(st);
+    free(en);
+    free(v);
+    free(out);
+}
+
 /* Vertices outside every support keep their base position bit for bit (no polynomial), and
  * the pair statistics match a brute-force count. */
 static void test_outside_support_exact(void **state)
@@ -753,7 +882,8 @@ int main(void)
         cmocka_unit_test(test_reuse_factor),        cmocka_unit_test(test_evaluate_vs_map),
         cmocka_unit_test(test_points_update),       cmocka_unit_test(test_jacobian_fd),
         cmocka_unit_test(test_foldover),            cmocka_unit_test(test_invalid),
-        cmocka_unit_test(test_concurrent_evaluate),
+        cmocka_unit_test(test_concurrent_evaluate), cmocka_unit_test(test_stats_fast_path),
+        cmocka_unit_test(test_touched),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

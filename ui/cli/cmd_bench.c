@@ -20,6 +20,10 @@ static void usage(FILE *f)
             "  scale    a 1,000,000-vertex grid, 10 control vectors, every vertex in support\n"
             "  centres  1000 and 5000 random centres: factor, fresh factor-and-solve, and an\n"
             "           update that reuses the factor\n"
+            "  guard    the fold-over guard's cost on the ICT face (10 and 42 fingertips, R =\n"
+            "           0.06 x diagonal): update without and with it, medians, same frames\n"
+            "  support  csrbf_evaluate vs csrbf_evaluate_touched (persistent output): 33,025\n"
+            "           grid at R = 10 and 80, 1M and 1.8M grids with about 1%% in support\n"
             "Columns: pairs = (vertex, centre) pairs inside the support (paper: its count);\n"
             "ms_ref = the brute-force loop (all pairs, scalar double, one thread) for the same\n"
             "update, or for 'reused' the fresh factor-and-solve; ratio = ms_ref / ms_median.\n"
@@ -53,7 +57,9 @@ static int bench_main(int argc, char **argv)
         size_t c = 0;
         while (fp_bench_cases[c] && strcmp(fp_bench_cases[c], o.only)) c++;
         if (!fp_bench_cases[c]) {
-            fprintf(stderr, "facepuppet bench: unknown case '%s' (table1, scale, centres)\n", o.only);
+            fprintf(stderr, "facepuppet bench: unknown case '%s' (cases:", o.only);
+            for (size_t k = 0; fp_bench_cases[k]; k++) fprintf(stderr, " %s", fp_bench_cases[k]);
+            fprintf(stderr, ")\n");
             return FP_EXIT_USAGE;
         }
     }

@@ -1,0 +1,406 @@
+/* csrbf fold-over guard: the injectivity bound of the solved map (a Lipschitz bound on
+ * f = T - id from the coefficients, per cluster of overlapping supports), the anchored limit
+ * (scale a cluster's coefficients back) and the unanchored guarded step (composed
+ * sub-steps). The maths is in csrbf.h ("fold-over guard") and ../shared/docs/csrbf.md
+ * pitfall 4. */
+#include "internal.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* |psi'(r)| on [0, 1] and its maximiser r*: |psi'| rises on [0, r*] and falls on [r*, 1]
+ * for the three kernels (psi30: r* = 0; psi31: 20 r (1-r)^3, r* = 1/4; psi32:
+ * (56/3) r (1-r)^5 (5r+1), whose derivative is a multiple of (1-r)^4 (1 + 4r - 35r^2), so
+ * r* = (2 + sqrt(39)) / 35). */
+static double dpsi_abs(csrbf_kernel k, double r)
+{
+    if (r >= 1.0) return 0.0;
+    if (k == CSRBF_PSI30) return 2.0 * (1.0 - r);
+    return fabs(csrbf_dpsi_over_r(k, r) * r);
+}
+
+static double dpsi_argmax(csrbf_kernel k)
+{
+    switch (k) {
+    case CSRBF_PSI30: return 0.0;
+    case CSRBF_PSI32: return (2.0 + sqrt(39.0)) / 35.0;
+    case CSRBF_PSI31:
+    default: return 0.25;
+    }
+}
+
+/* w(a) = max over r in [max(a, 0), 1] of |psi'(r)|. */
+static double dpsi_max_from(csrbf_kernel k, double a)
+{
+    double rs = dpsi_argmax(k);
+    return dpsi_abs(k, a > rs ? a : rs);
+}
+
+void csrbf_guard_free(csrbf_solver *s)
+{
+    free(s->gn_start);
+    free(s->gn_idx);
+    free(s->gn_w);
+    free(s->cluster);
+    free(s->cl_L);
+    free(s->cl_t);
+    free(s->anorm);
+    free(s->g_p);
+    free(s->g_e);
+    csrbf_points_destroy(&s->g_tmp);
+    s->gn_start = NULL;
+    s->gn_idx = NULL;
+    s->gn_w = NULL;
+    s->cluster = NULL;
+    s->cl_L = s->cl_t = s->anorm = NULL;
+    s->g_p = s->g_e = NULL;
+    s->gn_cap = s->g_cap = 0;
+}
+
+static uint32_t uf_find(uint32_t *par, uint32_t i)
+{
+    while (par[i] != i) {
+        par[i] = par[par[i]];
+        i = par[i];
+    }
+    return i;
+}
+
+int csrbf_guard_prepare(csrbf_solver *s)
+{
+    size_t m = s->m;
+    size_t *st = realloc(s->gn_start, (m + 1) * sizeof *st);
+    if (!st) return CSRBF_ERR_NOMEM;
+    s->gn_start = st;
+    uint32_t *cl = realloc(s->cluster, (m ? m : 1) * sizeof *cl);
+    if (!cl) return CSRBF_ERR_NOMEM;
+    s->cluster = cl;
+    double *a = realloc(s->cl_L, (m ? m : 1) * sizeof *a);
+    if (!a) return CSRBF_ERR_NOMEM;
+    s->cl_L = a;
+    a = realloc(s->cl_t, (m ? m : 1) * sizeof *a);
+    if (!a) return CSRBF_ERR_NOMEM;
+    s->cl_t = a;
+    a = realloc(s->anorm, (m ? m : 1) * sizeof *a);
+    if (!a) return CSRBF_ERR_NOMEM;
+    s->anorm = a;
+    memset(s->anorm, 0, (m ? m : 1) * sizeof *a);
+    if (!s->gn_cap) {
+        s->gn_cap = 16 * (m ? m : 1);
+        s->gn_idx = malloc(s->gn_cap * sizeof *s->gn_idx);
+        s->gn_w = malloc(s->gn_cap * sizeof *s->gn_w);
+        if (!s->gn_idx || !s->gn_w) {
+            s->gn_cap = 0;
+            return CSRBF_ERR_NOMEM;
+        }
+    }
+    for (size_t i = 0; i < m; i++) cl[i] = (uint32_t)i; /* union-find parents */
+    const csrbf_grid *g = &s->cgrid;
+    const double R2x4 = 4.0 * s->R * s->R;
+    size_t nnz = 0;
+    for (size_t i = 0; i < m; i++) {
+        st[i] = nnz;
+        const double *ci = s->c + 3 * i;
+        int64_t cx = csrbf_grid_coord(g, ci[0], 0), cy = csrbf_grid_coord(g, ci[1], 1),
+                cz = csrbf_grid_coord(g, ci[2], 2);
+        /* cells have side h >= R: neighbours within 2R lie within two cells */
+        for (int dz = -2; dz <= 2; dz++)
+            for (int dy = -2; dy <= 2; dy++)
+                for (int dx = -2; dx <= 2; dx++) {
+                    int64_t x = cx + dx, y = cy + dy, z = cz + dz;
+                    size_t b = csrbf_grid_bucket(g, x, y, z);
+                    for (size_t t = g->start[b]; t < g->start[b + 1]; t++) {
+                        uint32_t j = g->items[t];
+                        if (g->cell[3 * j] != x || g->cell[3 * j + 1] != y ||
+                            g->cell[3 * j + 2] != z)
+                            continue;
+                        const double *cj = s->c + 3 * (size_t)j;
+                        double d0 = ci[0] - cj[0], d1 = ci[1] - cj[1], d2 = ci[2] - cj[2];
+                        double r2 = d0 * d0 + d1 * d1 + d2 * d2;
+                        if (r2 >= R2x4) continue;
+                        if (nnz == s->gn_cap) {
+                            size_t cap = 2 * s->gn_cap;
+                            uint32_t *ni = realloc(s->gn_idx, cap * sizeof *ni);
+                            if (!ni) return CSRBF_ERR_NOMEM;
+                            s->gn_idx = ni;
+                            double *nw = realloc(s->gn_w, cap * sizeof *nw);
+                            if (!nw) return CSRBF_ERR_NOMEM;
+                            s->gn_w = nw;
+                            s->gn_cap = cap;
+                        }
+                        s->gn_idx[nnz] = j;
+                        s->gn_w[nnz] =
+                            dpsi_max_from(s->opt.kernel, sqrt(r2) * s->inv_R - 1.0) * s->inv_R;
+                        nnz++;
+                        uint32_t ri = uf_find(cl, (uint32_t)i), rj = uf_find(cl, j);
+                        if (ri != rj) cl[ri > rj ? ri : rj] = ri < rj ? ri : rj;
+                    }
+                }
+    }
+    st[m] = nnz;
+    /* number the clusters 0..nclusters-1 in order of their smallest centre */
+    size_t nc = 0;
+    for (size_t i = 0; i < m; i++) {
+        uint32_t r = uf_find(cl, (uint32_t)i);
+        if (r == i)
+            s->cl_L[i] = (double)nc++; /* the root's new number, kept in cl_L for now */
+    }
+    for (size_t i = 0; i < m; i++) {
+        uint32_t r = uf_find(cl, (uint32_t)i);
+        s->cl_t[i] = s->cl_L[r];
+    }
+    for (size_t i = 0; i < m; i++) cl[i] = (uint32_t)s->cl_t[i];
+    s->nclusters = nc;
+    return CSRBF_OK;
+}
+
+/* Per-cluster bounds into cl_L (without the polynomial term); returns ||B||_F. */
+static double cluster_bounds(const csrbf_solver *s, double *cl_L)
+{
+    for (size_t c = 0; c < s->nclusters; c++) cl_L[c] = 0.0;
+    for (size_t i = 0; i < s->m; i++) {
+        double L = 0.0;
+        for (size_t t = s->gn_start[i]; t < s->gn_start[i + 1]; t++)
+            L += s->gn_w[t] * s->anorm[s->gn_idx[t]];
+        size_t c = s->cluster[i];
+        if (L > cl_L[c]) cl_L[c] = L;
+    }
+    double b2 = 0.0;
+    if (s->k > 0)
+        for (int l = 1; l < 4; l++)
+            for (int a = 0; a < 3; a++) b2 += s->g[l][a] * s->g[l][a];
+    return sqrt(b2) * s->inv_R;
+}
+
+static double total_bound(const csrbf_solver *s)
+{
+    double L = 0.0;
+    for (size_t i = 0; i < s->m; i++) {
+        double v = 0.0;
+        for (size_t t = s->gn_start[i]; t < s->gn_start[i + 1]; t++)
+            v += s->gn_w[t] * s->anorm[s->gn_idx[t]];
+        if (v > L) L = v;
+    }
+    double b2 = 0.0;
+    if (s->k > 0)
+        for (int l = 1; l < 4; l++)
+            for (int a = 0; a < 3; a++) b2 += s->g[l][a] * s->g[l][a];
+    return L + sqrt(b2) * s->inv_R;
+}
+
+int csrbf_solver_injectivity(const csrbf_solver *s, double *bound)
+{
+    if (!s || !bound) return CSRBF_ERR_INVALID;
+    if (!s->have_start) return CSRBF_ERR_STATE;
+    *bound = total_bound(s);
+    return CSRBF_OK;
+}
+
+static void scale_centre(csrbf_solver *s, size_t i, double t)
+{
+    for (int a = 0; a < 3; a++) {
+        s->alpha[3 * i + a] *= t;
+        s->fa[a][i] = (float)s->alpha[3 * i + a];
+    }
+    s->anorm[i] *= t;
+}
+
+int csrbf_solver_limit_end_points(csrbf_solver *s, double margin, csrbf_guard_stats *st)
+{
+    if (!s) return CSRBF_ERR_INVALID;
+    if (margin == 0.0) margin = CSRBF_GUARD_MARGIN;
+    if (!(margin > 0.0 && margin < 1.0)) {
+        snprintf(s->msg, sizeof s->msg, "margin %g must be in (0, 1)", margin);
+        return CSRBF_ERR_INVALID;
+    }
+    if (!s->have_start) {
+        snprintf(s->msg, sizeof s->msg, "limit_end_points before start points");
+        return CSRBF_ERR_STATE;
+    }
+    size_t nc = s->nclusters, limited = 0;
+    double Bf = cluster_bounds(s, s->cl_L);
+    double before = Bf, tmin = 1.0;
+    for (size_t c = 0; c < nc; c++) before = fmax(before, s->cl_L[c] + Bf);
+    if (s->k > 0) { /* the polynomial couples every centre: one scale for the whole map */
+        double t = before > margin ? margin / before : 1.0;
+        for (size_t c = 0; c < nc; c++) s->cl_t[c] = t;
+        if (t < 1.0) {
+            limited = nc;
+            tmin = t;
+            for (size_t i = 0; i < s->m; i++) scale_centre(s, i, t);
+            for (int l = 0; l < 4; l++)
+                for (int a = 0; a < 3; a++) s->g[l][a] *= t;
+            for (int a = 0; a < 3; a++) {
+                s->fg0[a] = (float)s->g[0][a];
+                for (int l = 0; l < 3; l++) s->fG[a * 3 + l] = (float)(s->g[l + 1][a] * s->inv_R);
+            }
+        }
+    } else {
+        for (size_t c = 0; c < nc; c++) {
+            double L = s->cl_L[c];
+            s->cl_t[c] = L > margin ? margin / L : 1.0;
+            if (s->cl_t[c] < 1.0) {
+                limited++;
+                if (s->cl_t[c] < tmin) tmin = s->cl_t[c];
+            }
+        }
+        if (limited)
+            for (size_t i = 0; i < s->m; i++) {
+                double t = s->cl_t[s->cluster[i]];
+                if (t < 1.0) scale_centre(s, i, t);
+            }
+    }
+    if (st) {
+        memset(st, 0, sizeof *st);
+        st->bound_before = before;
+        st->bound_after = limited ? total_bound(s) : before;
+        st->clusters = nc;
+        st->clusters_limited = limited;
+        st->min_scale = tmin;
+        st->substeps = 1;
+        st->reached = tmin;
+        st->eval.min_jacobian_det = 1.0;
+    }
+    if (!limited) return CSRBF_OK;
+    size_t used = strlen(s->msg);
+    if (used < sizeof s->msg)
+        snprintf(s->msg + used, sizeof s->msg - used,
+                 "%sthe fold-over guard scaled %zu of %zu clusters back (bound %.3g > %.3g; "
+                 "smallest scale %.3g)",
+                 used ? "; " : "", limited, nc, before, margin, tmin);
+    s->warnings |= 1u << CSRBF_WARN_LIMITED;
+    return CSRBF_WARN_LIMITED;
+}
+
+int csrbf_guarded_step(csrbf_solver *s, const csrbf_points *shape, size_t n, const float *start,
+                       const float *end, const csrbf_guard *guard, float *deformed,
+                       csrbf_guard_stats *st)
+{
+    if (!s) return CSRBF_ERR_INVALID;
+    if (!shape || !start || !end || !deformed || n == 0) {
+        snprintf(s->msg, sizeof s->msg, "guarded_step: %s",
+                 !shape ? "shape is NULL" : !start ? "start is NULL" : !end ? "end is NULL"
+                 : !deformed ? "deformed is NULL" : "n is 0");
+        return CSRBF_ERR_INVALID;
+    }
+    double margin = guard && guard->margin != 0.0 ? guard->margin : CSRBF_GUARD_MARGIN;
+    int maxk = guard && guard->max_substeps != 0 ? guard->max_substeps : CSRBF_GUARD_MAX_SUBSTEPS;
+    unsigned flags = guard ? guard->eval_flags : 0u;
+    if (!(margin > 0.0 && margin < 1.0) || maxk < 1) {
+        snprintf(s->msg, sizeof s->msg,
+                 "guarded_step: margin %g must be in (0, 1) and max_substeps %d >= 1", margin, maxk);
+        return CSRBF_ERR_INVALID;
+    }
+    if (n > s->g_cap) {
+        float *p = realloc(s->g_p, n * 3 * sizeof *p);
+        if (!p) return CSRBF_ERR_NOMEM;
+        s->g_p = p;
+        p = realloc(s->g_e, n * 3 * sizeof *p);
+        if (!p) return CSRBF_ERR_NOMEM;
+        s->g_e = p;
+        s->g_cap = n;
+    }
+    float *P = s->g_p, *E = s->g_e;
+    memcpy(P, start, n * 3 * sizeof *P);
+    memcpy(E, end, n * 3 * sizeof *E);
+    int reuse = s->have_start && s->n == n;
+    for (size_t i = 0; i < 3 * n && reuse; i++) reuse = (double)start[i] == s->s_in[i];
+
+    const csrbf_points *cur = shape;
+    const size_t nv = csrbf_points_count(shape);
+    csrbf_guard_stats out;
+    memset(&out, 0, sizeof out);
+    out.min_scale = 1.0;
+    out.eval.min_jacobian_det = 1.0;
+    int rc;
+    for (int j = 0;; j++) {
+        if (j > 0 || !reuse) {
+            rc = csrbf_solver_set_start_points(s, n, P);
+            if (rc < 0) return rc;
+        }
+        rc = csrbf_solver_set_end_points(s, E);
+        if (rc < 0) return rc;
+        csrbf_guard_stats ls;
+        rc = csrbf_solver_limit_end_points(s, margin, &ls);
+        if (rc < 0) return rc;
+        if (j == 0) {
+            out.bound_before = ls.bound_before;
+            out.clusters = ls.clusters;
+            out.clusters_limited = ls.clusters_limited;
+            out.min_scale = ls.min_scale;
+        }
+        if (ls.bound_after > out.bound_after) out.bound_after = ls.bound_after;
+        csrbf_eval_stats es;
+        rc = csrbf_evaluate(s, cur, deformed, flags, st ? &es : NULL);
+        if (rc < 0) return rc;
+        out.substeps = j + 1;
+        if (st) {
+            out.eval.pairs += es.pairs;
+            if (es.min_jacobian_det < out.eval.min_jacobian_det)
+                out.eval.min_jacobian_det = es.min_jacobian_det;
+            if (j == 0) {
+                out.eval.moved = es.moved;
+                out.eval.max_displacement = es.max_displacement;
+            }
+        }
+        /* each start point travels its cluster's share of the rest of its control vector */
+        for (size_t i = 0; i < n; i++) {
+            double t = s->cl_t[s->cluster[s->group[i]]];
+            for (int a = 0; a < 3; a++)
+                P[3 * i + a] = t < 1.0 ? (float)(P[3 * i + a] + t * (E[3 * i + a] - P[3 * i + a]))
+                                       : E[3 * i + a];
+        }
+        if (ls.clusters_limited == 0 || j + 1 >= maxk) break;
+        /* the next map acts on the shape so far */
+        if (s->g_tmp && csrbf_points_count(s->g_tmp) != nv) csrbf_points_destroy(&s->g_tmp);
+        rc = s->g_tmp ? csrbf_points_update(s->g_tmp, deformed)
+                      : csrbf_points_create(nv, deformed, &s->g_tmp);
+        if (rc < 0) return rc;
+        cur = s->g_tmp;
+    }
+    /* how far each start point got along its control vector */
+    double reached = 1.0;
+    for (size_t i = 0; i < n; i++) {
+        double full = 0.0, left = 0.0;
+        for (int a = 0; a < 3; a++) {
+            double f = (double)end[3 * i + a] - start[3 * i + a];
+            double l = (double)end[3 * i + a] - P[3 * i + a];
+            full += f * f;
+            left += l * l;
+        }
+        if (full > 0.0) {
+            double u = 1.0 - sqrt(left / full);
+            if (u < reached) reached = u;
+        }
+    }
+    out.reached = reached;
+    if (st) {
+        if (out.substeps > 1) { /* moved and max displacement against the input shape */
+            const float *b = shape->xyz;
+            size_t moved = 0;
+            double md = 0.0;
+            for (size_t v = 0; v < nv; v++) {
+                double d0 = (double)deformed[3 * v] - b[3 * v],
+                       d1 = (double)deformed[3 * v + 1] - b[3 * v + 1],
+                       d2 = (double)deformed[3 * v + 2] - b[3 * v + 2];
+                double d = d0 * d0 + d1 * d1 + d2 * d2;
+                moved += d > 0.0;
+                if (d > md) md = d;
+            }
+            out.eval.moved = moved;
+            out.eval.max_displacement = sqrt(md);
+        }
+        *st = out;
+    }
+    if (reached < 1.0) {
+        s->warnings |= 1u << CSRBF_WARN_LIMITED;
+        return CSRBF_WARN_LIMITED;
+    }
+    if (out.substeps > 1) {
+        s->warnings |= 1u << CSRBF_WARN_SUBSTEPS;
+        return CSRBF_WARN_SUBSTEPS;
+    }
+    return CSRBF_OK;
+}

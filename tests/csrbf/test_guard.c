@@ -1,0 +1,422 @@
+/* Tests of the csrbf fold-over guard (csrbf.h "fold-over guard", csrbf.md pitfall 4):
+ * configurations known to fold do fold without the guard and do not with it (det dT/dx on a
+ * dense grid, and the orientation of every tetrahedron of a deformed lattice); the bound is
+ * checked against the measured ||dT/dx - I|| and det dT/dx on random configurations; the
+ * limit keeps clusters that are within the bound bit for bit; the composed sub-steps reach
+ * the end points. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "csrbf.h"
+#include "fp_error.h"
+
+#define assert_double_le(a, b)                                                                 \
+    do {                                                                                       \
+        double a_ = (a), b_ = (b);                                                             \
+        if (!(a_ <= b_)) fail_msg("%s = %.17g exceeds %s = %.17g", #a, a_, #b, b_);             \
+    } while (0)
+
+static uint64_t rng_state = 0x2545f4914f6cdd1dull;
+static double urand(void) /* [0, 1) */
+{
+    rng_state ^= rng_state << 13;
+    rng_state ^= rng_state >> 7;
+    rng_state ^= rng_state << 17;
+    return (double)(rng_state >> 11) * 0x1p-53;
+}
+
+static csrbf_solver *make_solver(double R, csrbf_kernel k, csrbf_poly poly)
+{
+    csrbf_options o = {0};
+    o.radius = R;
+    o.kernel = k;
+    o.poly = poly;
+    csrbf_solver *s = NULL;
+    assert_int_equal(csrbf_solver_create(&o, &s), CSRBF_OK);
+    return s;
+}
+
+/* A lattice of (q+1)^3 points over [lo, hi]^3, x fastest. */
+static float *lattice(int q, const double lo[3], const double hi[3], size_t *n)
+{
+    size_t k = 0, N = (size_t)(q + 1) * (q + 1) * (q + 1);
+    float *p = malloc(N * 3 * sizeof *p);
+    for (int z = 0; z <= q; z++)
+        for (int y = 0; y <= q; y++)
+            for (int x = 0; x <= q; x++, k++) {
+                p[3 * k] = (float)(lo[0] + (hi[0] - lo[0]) * x / q);
+                p[3 * k + 1] = (float)(lo[1] + (hi[1] - lo[1]) * y / q);
+                p[3 * k + 2] = (float)(lo[2] + (hi[2] - lo[2]) * z / q);
+            }
+    *n = N;
+    return p;
+}
+
+/* min det dT/dx over a dense lattice of the box, through map_point (double). */
+static double min_det_map(const csrbf_solver *s, int q, const double lo[3], const double hi[3])
+{
+    double mn = INFINITY;
+    for (int z = 0; z <= q; z++)
+        for (int y = 0; y <= q; y++)
+            for (int x = 0; x <= q; x++) {
+                double p[3] = {lo[0] + (hi[0] - lo[0]) * x / q, lo[1] + (hi[1] - lo[1]) * y / q,
+                               lo[2] + (hi[2] - lo[2]) * z / q}, o[3], J[9];
+                assert_int_equal(csrbf_solver_map_point(s, p, o, J), CSRBF_OK);
+                double d = J[0] * (J[4] * J[8] - J[5] * J[7]) - J[1] * (J[3] * J[8] - J[5] * J[6]) +
+                           J[2] * (J[3] * J[7] - J[4] * J[6]);
+                if (d < mn) mn = d;
+            }
+    return mn;
+}
+
+static double min_det_eval(const csrbf_solver *s, const csrbf_points *pts, float *out)
+{
+    csrbf_eval_stats st;
+    assert_int_equal(csrbf_evaluate(s, pts, out, CSRBF_EVAL_JACOBIAN, &st), CSRBF_OK);
+    return st.min_jacobian_det;
+}
+
+static double orient(const float *a, const float *b, const float *c, const float *d)
+{
+    double u[3], v[3], w[3];
+    for (int k = 0; k < 3; k++) {
+        u[k] = (double)b[k] - a[k];
+        v[k] = (double)c[k] - a[k];
+        w[k] = (double)d[k] - a[k];
+    }
+    return u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) +
+           u[2] * (v[0] * w[1] - v[1] * w[0]);
+}
+
+/* Number of lattice tetrahedra (6 per cube, Kuhn split) whose orientation flips under the
+ * deformation: a discrete fold test of the whole (possibly composed) map. */
+static size_t flipped_tets(const float *before, const float *after, int q)
+{
+    static const int tet[6][4] = {{0, 1, 3, 7}, {0, 3, 2, 7}, {0, 2, 6, 7},
+                                  {0, 6, 4, 7}, {0, 4, 5, 7}, {0, 5, 1, 7}};
+    size_t bad = 0, Q = (size_t)q + 1;
+    for (int z = 0; z < q; z++)
+        for (int y = 0; y < q; y++)
+            for (int x = 0; x < q; x++) {
+                size_t c[8];
+                for (int k = 0; k < 8; k++)
+                    c[k] = ((size_t)z + (k >> 2 & 1)) * Q * Q + ((size_t)y + (k >> 1 & 1)) * Q +
+                           (size_t)x + (k & 1);
+                for (int t = 0; t < 6; t++) {
+                    const size_t *i = (const size_t[4]){c[tet[t][0]], c[tet[t][1]], c[tet[t][2]],
+                                                        c[tet[t][3]]};
+                    double o0 = orient(before + 3 * i[0], before + 3 * i[1], before + 3 * i[2],
+                                       before + 3 * i[3]);
+                    double o1 = orient(after + 3 * i[0], after + 3 * i[1], after + 3 * i[2],
+                                       after + 3 * i[3]);
+                    bad += (o0 > 0) != (o1 > 0);
+                }
+            }
+    return bad;
+}
+
+/* The two folding configurations of the brief. R = 1. */
+static const float pair_start[6] = {0.0f, 0.0f, 0.0f, 0.2f, 0.0f, 0.0f};
+static const float pair_end[6] = {-0.4f, 0.0f, 0.0f, 0.6f, 0.0f, 0.0f}; /* pulled apart */
+static const float one_start[3] = {0.0f, 0.0f, 0.0f};
+static const float one_end[3] = {0.0f, 0.6f, 0.0f}; /* 0.6 R > R / max|psi'| = 0.474 R */
+
+static void check_fold_and_limit(size_t n, const float *st, const float *en)
+{
+    const double lo[3] = {-1.3, -1.3, -1.3}, hi[3] = {1.5, 1.3, 1.3};
+    size_t nv;
+    float *grid = lattice(40, lo, hi, &nv);
+    float *out = malloc(nv * 3 * sizeof *out);
+    csrbf_points *pts;
+    assert_int_equal(csrbf_points_create(nv, grid, &pts), CSRBF_OK);
+    csrbf_solver *s = make_solver(1.0, CSRBF_PSI31, CSRBF_POLY_NONE);
+    assert_true(csrbf_solver_solve(s, n, st, en) >= 0);
+    double L;
+    assert_int_equal(csrbf_solver_injectivity(s, &L), CSRBF_OK);
+    assert_true(L > 1.0);
+    /* without the guard it folds: det <= 0 on the dense grid, in double and in the engine */
+    assert_true(min_det_map(s, 56, lo, hi) <= 0.0);
+    assert_true(min_det_eval(s, pts, out) <= 0.0);
+    assert_true(flipped_tets(grid, out, 40) > 0);
+    /* with the limit: det > 0 everywhere sampled, no tetrahedron flips */
+    csrbf_guard_stats gs;
+    assert_int_equal(csrbf_solver_limit_end_points(s, 0.9, &gs), CSRBF_WARN_LIMITED);
+    assert_double_le(gs.bound_after, 0.9 + 1e-12);
+    assert_true(gs.bound_before > 1.0);
+    assert_int_equal(gs.clusters, 1);
+    assert_int_equal(gs.clusters_limited, 1);
+    assert_true(gs.min_scale > 0.0 && gs.min_scale < 1.0);
+    assert_int_equal(csrbf_solver_injectivity(s, &L), CSRBF_OK);
+    assert_double_le(L, 0.9 + 1e-12);
+    double md = min_det_map(s, 56, lo, hi);
+    assert_true(md > 0.0);
+    assert_double_le(pow(1.0 - L, 3) - 1e-9, md); /* det >= (1 - L)^3 */
+    assert_true(min_det_eval(s, pts, out) > 0.0);
+    assert_int_equal(flipped_tets(grid, out, 40), 0);
+    /* the guarded step, anchored (limit only, the factor reused) gives the same map */
+    csrbf_guard g = {0};
+    g.max_substeps = 1;
+    float *out2 = malloc(nv * 3 * sizeof *out2);
+    assert_int_equal(csrbf_guarded_step(s, pts, n, st, en, &g, out2, &gs), CSRBF_WARN_LIMITED);
+    assert_int_equal(gs.substeps, 1);
+    assert_true(gs.reached < 1.0);
+    assert_memory_equal(out, out2, nv * 3 * sizeof *out);
+    /* unanchored: composed sub-steps, no flipped tetrahedron, T(s_i) = e_i */
+    csrbf_solver_destroy(&s);
+    s = make_solver(1.0, CSRBF_PSI31, CSRBF_POLY_NONE);
+    /* the lattice plus the start points as vertices, to follow them */
+    float *shape = malloc((nv + n) * 3 * sizeof *shape);
+    memcpy(shape, grid, nv * 3 * sizeof *shape);
+    memcpy(shape + 3 * nv, st, n * 3 * sizeof *shape);
+    csrbf_points *sp;
+    assert_int_equal(csrbf_points_create(nv + n, shape, &sp), CSRBF_OK);
+    float *out3 = malloc((nv + n) * 3 * sizeof *out3);
+    g.max_substeps = 64;
+    g.eval_flags = CSRBF_EVAL_JACOBIAN;
+    int rc = csrbf_guarded_step(s, sp, n, st, en, &g, out3, &gs);
+    assert_int_equal(rc, CSRBF_WARN_SUBSTEPS);
+    assert_true(gs.substeps > 1);
+    assert_double_le(gs.bound_after, 0.9 + 1e-12);
+    assert_true(gs.bound_before > 1.0);
+    assert_true(gs.reached == 1.0);
+    assert_true(gs.eval.min_jacobian_det > 0.0);
+    assert_int_equal(flipped_tets(grid, out3, 40), 0);
+    for (size_t i = 0; i < n; i++)
+        for (int a = 0; a < 3; a++)
+            if (!(fabs(out3[3 * (nv + i) + a] - en[3 * i + a]) < 1e-4))
+                fail_msg("start point %zu axis %d went to %g, not %g", i, a,
+                         (double)out3[3 * (nv + i) + a], (double)en[3 * i + a]);
+    printf("  folding case n=%zu: bound %.3f -> %.3f, %d sub-steps\n", n, gs.bound_before,
+           gs.bound_after, gs.substeps);
+    free(shape);
+    free(out3);
+    free(out2);
+    csrbf_points_destroy(&sp);
+    csrbf_points_destroy(&pts);
+    csrbf_solver_destroy(&s);
+    free(grid);
+    free(out);
+}
+
+static void test_pair_pulled_apart(void **state)
+{
+    (void)state;
+    check_fold_and_limit(2, pair_start, pair_end);
+}
+
+static void test_single_centre_beyond_bound(void **state)
+{
+    (void)state;
+    check_fold_and_limit(1, one_start, one_end);
+}
+
+/* Spectral norm of a 3x3 matrix (power iteration on M^T M, then exact Rayleigh quotient). */
+static double spectral_norm(const double M[9])
+{
+    double A[9] = {0};
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            for (int k = 0; k < 3; k++) A[3 * i + j] += M[3 * k + i] * M[3 * k + j];
+    double v[3] = {1, 0.7, 0.3}, lam = 0;
+    for (int it = 0; it < 200; it++) {
+        double w[3] = {0};
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++) w[i] += A[3 * i + j] * v[j];
+        double nw = sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+        if (nw == 0) return 0;
+        for (int i = 0; i < 3; i++) v[i] = w[i] / nw;
+        lam = nw;
+    }
+    /* the largest eigenvalue of A is at most its trace and at least lam; use the max row sum
+     * as a safe upper bound when iteration has not converged (never below the true value) */
+    double tr = A[0] + A[4] + A[8];
+    return sqrt(lam > tr ? tr : lam);
+}
+
+/* Random configurations: ||dT/dx - I||_2 <= L at every sample, and L < 1 implies
+ * min det > 0 (indeed >= (1 - L)^3). Also checked: the bound is not vacuous (it sits within a
+ * small factor of the measured maximum). */
+static void test_bound_random(void **state)
+{
+    (void)state;
+    int with_l_below = 0, folded = 0;
+    for (int trial = 0; trial < 60; trial++) {
+        csrbf_kernel k = (csrbf_kernel)(trial % 3);
+        csrbf_poly poly = trial % 4 == 3 ? CSRBF_POLY_LINEAR : CSRBF_POLY_NONE;
+        size_t n = 2 + (size_t)(urand() * 10);
+        double R = 1.0, box = 0.5 + 2.5 * urand(), amp = 0.3 * urand() * urand();
+        float st[3 * 12], en[3 * 12];
+        for (size_t i = 0; i < 3 * n; i++) {
+            st[i] = (float)(urand() * box);
+            en[i] = st[i] + (float)((2 * urand() - 1) * amp);
+        }
+        csrbf_solver *s = make_solver(R, k, poly);
+        int rc = csrbf_solver_solve(s, n, st, en);
+        assert_true(rc >= 0);
+        double L;
+        assert_int_equal(csrbf_solver_injectivity(s, &L), CSRBF_OK);
+        double maxn = 0.0, mindet = INFINITY;
+        for (int q = 0; q < 4000; q++) {
+            double x[3], o[3], J[9];
+            if (q % 2) { /* near a centre */
+                size_t i = (size_t)(urand() * n);
+                for (int a = 0; a < 3; a++) x[a] = st[3 * i + a] + (2 * urand() - 1) * 0.6 * R;
+            } else {
+                for (int a = 0; a < 3; a++) x[a] = -R + urand() * (box + 2 * R);
+            }
+            assert_int_equal(csrbf_solver_map_point(s, x, o, J), CSRBF_OK);
+            double D[9];
+            memcpy(D, J, sizeof D);
+            D[0] -= 1;
+            D[4] -= 1;
+            D[8] -= 1;
+            double nn = spectral_norm(D);
+            if (nn > maxn) maxn = nn;
+            double d = J[0] * (J[4] * J[8] - J[5] * J[7]) - J[1] * (J[3] * J[8] - J[5] * J[6]) +
+                       J[2] * (J[3] * J[7] - J[4] * J[6]);
+            if (d < mindet) mindet = d;
+        }
+        if (!(maxn <= L * (1 + 1e-9) + 1e-12))
+            fail_msg("trial %d: measured ||J - I|| %.6g above the bound %.6g", trial, maxn, L);
+        if (L < 1.0) {
+            with_l_below++;
+            if (!(mindet >= pow(1.0 - L, 3) - 1e-9))
+                fail_msg("trial %d: L = %.6g but min det %.6g", trial, L, mindet);
+        }
+        if (mindet <= 0.0) folded++;
+        /* limiting always brings L under the margin, and then nothing folds */
+        csrbf_guard_stats gs;
+        assert_true(csrbf_solver_limit_end_points(s, 0.8, &gs) >= 0);
+        assert_int_equal(csrbf_solver_injectivity(s, &L), CSRBF_OK);
+        assert_double_le(L, 0.8 + 1e-12);
+        csrbf_solver_destroy(&s);
+    }
+    /* the random set covers both sides of the bound */
+    printf("  random: %d of 60 with L < 1, %d folded without the guard\n", with_l_below, folded);
+    assert_true(with_l_below >= 10);
+    assert_true(folded >= 3);
+}
+
+/* Two clusters far apart (> 2R): one folds, one is gentle. The limit scales the folding one
+ * by exactly margin / L_C (its coefficients then equal a solve with the scaled end points)
+ * and leaves the gentle one bit for bit. */
+static void test_limit_per_cluster(void **state)
+{
+    (void)state;
+    const float st[12] = {0, 0, 0, 0.2f, 0, 0, 5, 0, 0, 5.5f, 0.3f, 0};
+    const float en[12] = {-0.15f, 0, 0, 0.35f, 0, 0, 5.05f, 0.02f, 0, 5.5f, 0.33f, -0.01f};
+    csrbf_solver *s = make_solver(1.0, CSRBF_PSI31, CSRBF_POLY_NONE);
+    assert_true(csrbf_solver_solve(s, 4, st, en) >= 0);
+    double a0[12], a1[12], a2[12], c[12];
+    assert_int_equal(csrbf_solver_get_coefficients(s, c, a0, NULL), CSRBF_OK);
+    csrbf_guard_stats gs;
+    assert_int_equal(csrbf_solver_limit_end_points(s, 0.9, &gs), CSRBF_WARN_LIMITED);
+    assert_int_equal(gs.clusters, 2);
+    assert_int_equal(gs.clusters_limited, 1);
+    assert_int_equal(csrbf_solver_get_coefficients(s, NULL, a1, NULL), CSRBF_OK);
+    assert_memory_equal(a0 + 6, a1 + 6, 6 * sizeof(double)); /* the gentle cluster */
+    double t = gs.min_scale;
+    assert_true(t < 1.0 && t > 0.0);
+    /* the same coefficients from a solve with end points s + t (d - s) in the first cluster */
+    float en2[12];
+    memcpy(en2, en, sizeof en2);
+    for (int i = 0; i < 6; i++) en2[i] = (float)(st[i] + t * ((double)en[i] - st[i]));
+    csrbf_solver *s2 = make_solver(1.0, CSRBF_PSI31, CSRBF_POLY_NONE);
+    assert_true(csrbf_solver_solve(s2, 4, st, en2) >= 0);
+    assert_int_equal(csrbf_solver_get_coefficients(s2, NULL, a2, NULL), CSRBF_OK);
+    for (int i = 0; i < 6; i++)
+        if (!(fabs(a1[i] - a2[i]) < 1e-5 * (1 + fabs(a2[i]))))
+            fail_msg("alpha[%d] limited %.9g vs solved %.9g", i, a1[i], a2[i]);
+    /* a map within the margin is left alone: CSRBF_OK and bit-identical coefficients */
+    assert_true(csrbf_solver_set_end_points(s, st) >= 0); /* identity */
+    assert_int_equal(csrbf_solver_limit_end_points(s, 0.9, &gs), CSRBF_OK);
+    assert_int_equal(gs.clusters_limited, 0);
+    assert_true(gs.min_scale == 1.0);
+    /* with the polynomial the whole map is scaled by one factor */
+    csrbf_solver *s3 = make_solver(1.0, CSRBF_PSI31, CSRBF_POLY_LINEAR);
+    const float st3[15] = {0, 0, 0, 0.2f, 0, 0, 5, 0, 0, 5.5f, 0.3f, 0, 2, 2, 2};
+    const float en3[15] = {-0.15f, 0, 0, 0.35f, 0, 0, 5.05f, 0.02f, 0, 5.5f, 0.33f, -0.01f, 2, 2, 2};
+    assert_true(csrbf_solver_solve(s3, 5, st3, en3) >= 0);
+    double p0[12], p1[12], b0[15], b1[15];
+    assert_int_equal(csrbf_solver_get_coefficients(s3, NULL, b0, p0), CSRBF_OK);
+    assert_int_equal(csrbf_solver_limit_end_points(s3, 0.9, &gs), CSRBF_WARN_LIMITED);
+    assert_int_equal(csrbf_solver_get_coefficients(s3, NULL, b1, p1), CSRBF_OK);
+    for (int i = 0; i < 15; i++) assert_true(fabs(b1[i] - gs.min_scale * b0[i]) <= 1e-12 * (1 + fabs(b0[i])));
+    for (int i = 0; i < 12; i++) assert_true(fabs(p1[i] - gs.min_scale * p0[i]) <= 1e-12 * (1 + fabs(p0[i])));
+    double L;
+    assert_int_equal(csrbf_solver_injectivity(s3, &L), CSRBF_OK);
+    assert_double_le(L, 0.9 + 1e-12);
+    csrbf_solver_destroy(&s3);
+    csrbf_solver_destroy(&s2);
+    csrbf_solver_destroy(&s);
+}
+
+/* A gentle step goes through in one map, bit-identical to the plain update; the factor is
+ * reused when the start points are unchanged. */
+static void test_guarded_step_gentle(void **state)
+{
+    (void)state;
+    const double lo[3] = {-1, -1, -0.5}, hi[3] = {2, 1, 0.5};
+    size_t nv;
+    float *grid = lattice(24, lo, hi, &nv);
+    float *o1 = malloc(nv * 3 * sizeof *o1), *o2 = malloc(nv * 3 * sizeof *o2);
+    csrbf_points *pts;
+    assert_int_equal(csrbf_points_create(nv, grid, &pts), CSRBF_OK);
+    const float st[6] = {0, 0, 0, 1, 0, 0}, en[6] = {0.05f, 0.1f, 0, 1, -0.1f, 0.05f};
+    csrbf_solver *s = make_solver(1.0, CSRBF_PSI31, CSRBF_POLY_NONE);
+    assert_true(csrbf_solver_solve(s, 2, st, en) >= 0);
+    assert_int_equal(csrbf_evaluate(s, pts, o1, 0, NULL), CSRBF_OK);
+    csrbf_guard_stats gs;
+    assert_int_equal(csrbf_guarded_step(s, pts, 2, st, en, NULL, o2, &gs), CSRBF_OK);
+    assert_memory_equal(o1, o2, nv * 3 * sizeof *o1);
+    assert_int_equal(gs.substeps, 1);
+    assert_true(gs.reached == 1.0);
+    assert_int_equal(gs.clusters_limited, 0);
+    assert_true(gs.bound_before < 0.9 && gs.bound_before == gs.bound_after);
+    /* bad arguments */
+    csrbf_guard g = {0};
+    g.margin = 1.5;
+    assert_int_equal(csrbf_guarded_step(s, pts, 2, st, en, &g, o2, NULL), CSRBF_ERR_INVALID);
+    assert_int_equal(csrbf_guarded_step(s, pts, 0, st, en, NULL, o2, NULL), CSRBF_ERR_INVALID);
+    assert_int_equal(csrbf_solver_limit_end_points(s, -1, NULL), CSRBF_ERR_INVALID);
+    double L;
+    assert_int_equal(csrbf_solver_injectivity(NULL, &L), CSRBF_ERR_INVALID);
+    csrbf_solver *e = make_solver(1.0, CSRBF_PSI31, CSRBF_POLY_NONE);
+    assert_int_equal(csrbf_solver_injectivity(e, &L), CSRBF_ERR_STATE);
+    assert_int_equal(csrbf_solver_limit_end_points(e, 0.9, NULL), CSRBF_ERR_STATE);
+    csrbf_solver_destroy(&e);
+    csrbf_solver_destroy(&s);
+    csrbf_points_destroy(&pts);
+    free(grid);
+    free(o1);
+    free(o2);
+}
+
+/* Error codes follow the project's convention: negative errno values. */
+static void test_error_codes(void **state)
+{
+    (void)state;
+    assert_int_equal(CSRBF_ERR_INVALID, -EINVAL);
+    assert_int_equal(CSRBF_ERR_NOMEM, -ENOMEM);
+    assert_int_equal(CSRBF_ERR_NUMERIC, FP_ENUMERIC);
+    assert_true(CSRBF_ERR_STATE < 0);
+    assert_string_equal(csrbf_strerror(CSRBF_WARN_LIMITED), "the fold-over guard limited the motion");
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_error_codes),          cmocka_unit_test(test_pair_pulled_apart),
+        cmocka_unit_test(test_single_centre_beyond_bound), cmocka_unit_test(test_bound_random),
+        cmocka_unit_test(test_limit_per_cluster),    cmocka_unit_test(test_guarded_step_gentle),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
