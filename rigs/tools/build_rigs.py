@@ -146,7 +146,7 @@ def build_ict(data):
              0.5 * (V[5711] + V[5966]), 0.5 * (V[lm["upper_lip_inner"]] + V[lm["lower_lip_inner"]]),
              0.5 * (V[6216] + V[6470]), V[lm["mouth_corner_left"]]]
     falloff = {"mouth_line": [r3(p) for p in mouth], "lip_band": 0.05, "cheek_band": 1.8,
-               "cheek_distance": 2.0, "menton": [0.0, -8.0, 9.2], "gonion": [5.3, -5.0, 1.6],
+               "cheek_distance": 0.7, "menton": [0.0, -8.0, 9.2], "gonion": [5.3, -5.0, 1.6],
                "neck_band": 2.5, "back_band": 1.2}
     return rig("ict-facekit", "ICT FaceKit generic neutral head (cm): skull, jaw, falloff from anatomy",
                mesh, V, 10.0, regions, lm, hinge, 26.0, [0.0, 0.0], falloff, 1.0), V, F
@@ -165,7 +165,7 @@ def build_mediapipe(data):
     brow_top = max(V[lm[k]][1] for k in ("brow_right", "brow_left"))
     idx = np.arange(len(V))
     cranium = idx[V[:, 1] > brow_top + 1.0]
-    chin = idx[np.linalg.norm(V - V[lm["chin"]], axis=1) < 1.0]
+    chin = idx[np.linalg.norm(V - V[lm["chin"]], axis=1) < 1.6]
     regions = [("forehead", "skull", cranium), ("chin_bone", "jaw", chin)]
     hinge = ([-6.2, -0.5, -2.0], [6.2, -0.5, -2.0])
     mouth = [V[61], 0.5 * (V[13] + V[14]), V[291]]
