@@ -51,4 +51,9 @@ typedef struct fp_app_inputs {
  *  every replay input that sets none. Strings point into *buf. */
 bool fp_app_session_defaults(fp_session_options *so, double speed, fp_app_inputs *buf);
 
+/** `facepuppet info RIG.json` (cmd_pose.c): describe the rig and check it against its mesh
+ *  (the mesh the rig names under the shared data folder, when it is there). Returns an exit
+ *  code. */
+int fp_app_rig_info(const char *path);
+
 #endif

@@ -86,9 +86,12 @@ static int info_main(int argc, char **argv)
         FILE *f = argc == 2 ? stdout : stderr;
         fprintf(f, "usage: facepuppet info FILE\n\n"
                    "A mesh (OBJ, PLY, OFF, STL, glTF): vertices, triangles, bounds, units.\n"
-                   "A recording (joints CSV, angles CSV, event log): frames, rate, hands, duration.\n");
+                   "A recording (joints CSV, angles CSV, event log): frames, rate, hands, duration.\n"
+                   "A rig (RIG.json): regions, landmarks, hinge, channels; checked against its mesh.\n");
         return argc == 2 ? FP_EXIT_OK : FP_EXIT_USAGE;
     }
+    const char *dot = strrchr(argv[1], '.');
+    if (dot && !strcasecmp(dot, ".json")) return fp_app_rig_info(argv[1]);
     return is_mesh(argv[1]) ? mesh_info(argv[1]) : recording_info(argv[1]);
 }
 

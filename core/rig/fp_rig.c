@@ -1,0 +1,1109 @@
+/* fp_rig: rig files, validation, the jaw pose and the mobility blend (fp_rig.h). */
+#define _GNU_SOURCE
+#include "fp_rig.h"
+
+#include "fp_error.h"
+
+#include <cjson/cJSON.h>
+#include <dirent.h>
+#include <errno.h>
+#include <float.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <zlib.h>
+
+#define MAX_MOUTH_POINTS 16
+
+typedef struct region {
+    char name[FP_RIG_NAME_MAX + 1];
+    int kind;
+    size_t count;
+} region;
+
+typedef struct landmark {
+    char name[FP_RIG_NAME_MAX + 1];
+    uint32_t vertex;
+} landmark;
+
+typedef struct channel {
+    char name[FP_RIG_NAME_MAX + 1];
+    float min, max, neutral;
+} channel;
+
+struct fp_rig {
+    char name[128];
+    char source[1024];
+    char mesh_name[256];
+    size_t n;
+    uint32_t crc;
+    double mm_per_unit;
+    double up[3], fwd[3], left[3];
+    size_t region_count;
+    region regions[FP_RIG_MAX_REGIONS];
+    uint8_t *kind;              /* n */
+    size_t landmark_count;
+    landmark landmarks[FP_RIG_MAX_LANDMARKS];
+    size_t channel_count;
+    channel channels[FP_RIG_MAX_CHANNELS];
+    long jaw_open;              /* index of jaw.open */
+    /* jaw */
+    double hinge_r[3], hinge_l[3];
+    double open_deg;
+    double glide[2];            /* forward, down; mesh units at jaw.open = 1 */
+    size_t mouth_count;
+    double mouth[MAX_MOUTH_POINTS][3];
+    double lip_band, cheek_band, cheek_distance;
+    double menton[3], gonion[3];
+    double neck_band, back_band;
+    double ramp;                /* mobility ramp, mesh units */
+    /* bound */
+    float *w;                   /* n jaw weights */
+    float *m;                   /* n mobility */
+    double axis[3];             /* unit hinge axis, right -> left */
+};
+
+/* ---------------------------------------------------------------------------------- */
+/* Parsing helpers: every error names the file and the JSON path.                      */
+
+typedef struct ctx {
+    const char *file;
+    char *err;
+    size_t errlen;
+} ctx;
+
+static int bad(const ctx *c, const char *path, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+static int bad(const ctx *c, const char *path, const char *fmt, ...)
+{
+    char msg[512];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    return fp_errorf(c->err, c->errlen, -EBADMSG, "%s: %s: %s", c->file, path[0] ? path : "(top)",
+                     msg);
+}
+
+static const char *type_name(const cJSON *j)
+{
+    if (!j) return "nothing";
+    if (cJSON_IsNumber(j)) return "a number";
+    if (cJSON_IsString(j)) return "a string";
+    if (cJSON_IsArray(j)) return "an array";
+    if (cJSON_IsObject(j)) return "an object";
+    if (cJSON_IsBool(j)) return "a boolean";
+    if (cJSON_IsNull(j)) return "null";
+    return "an invalid value";
+}
+
+static void join(char *out, size_t len, const char *path, const char *key)
+{
+    snprintf(out, len, "%s%s%s", path, path[0] ? "." : "", key);
+}
+
+/* Refuse fields not in `allowed` (NULL-terminated) and repeated fields. */
+static int check_fields(const ctx *c, const cJSON *obj, const char *path, const char *const *allowed)
+{
+    for (const cJSON *it = obj->child; it; it = it->next) {
+        char p[512];
+        join(p, sizeof p, path, it->string ? it->string : "?");
+        bool ok = false;
+        for (size_t i = 0; allowed[i]; i++)
+            if (it->string && !strcmp(it->string, allowed[i])) ok = true;
+        if (!ok) return bad(c, p, "unknown field");
+        for (const cJSON *jt = it->next; jt; jt = jt->next)
+            if (jt->string && !strcmp(jt->string, it->string)) return bad(c, p, "field given twice");
+    }
+    return 0;
+}
+
+static int get_member(const ctx *c, const cJSON *obj, const char *path, const char *key,
+                      bool required, const cJSON **out, char *p, size_t plen)
+{
+    join(p, plen, path, key);
+    *out = cJSON_GetObjectItemCaseSensitive(obj, key);
+    if (!*out && required) return bad(c, p, "missing");
+    return 0;
+}
+
+static int get_number(const ctx *c, const cJSON *obj, const char *path, const char *key,
+                      bool required, double lo, double hi, double *out)
+{
+    char p[512];
+    const cJSON *j;
+    int rc = get_member(c, obj, path, key, required, &j, p, sizeof p);
+    if (rc || !j) return rc;
+    if (!cJSON_IsNumber(j)) return bad(c, p, "expected a number, got %s", type_name(j));
+    if (!isfinite(j->valuedouble) || j->valuedouble < lo || j->valuedouble > hi)
+        return bad(c, p, "%g is outside [%g, %g]", j->valuedouble, lo, hi);
+    *out = j->valuedouble;
+    return 0;
+}
+
+static int get_string(const ctx *c, const cJSON *obj, const char *path, const char *key,
+                      bool required, char *out, size_t len)
+{
+    char p[512];
+    const cJSON *j;
+    int rc = get_member(c, obj, path, key, required, &j, p, sizeof p);
+    if (rc || !j) return rc;
+    if (!cJSON_IsString(j)) return bad(c, p, "expected a string, got %s", type_name(j));
+    if (strlen(j->valuestring) >= len) return bad(c, p, "longer than %zu bytes", len - 1);
+    strcpy(out, j->valuestring);
+    return 0;
+}
+
+static int vec3_of(const ctx *c, const cJSON *j, const char *p, double out[3])
+{
+    if (!cJSON_IsArray(j) || cJSON_GetArraySize(j) != 3)
+        return bad(c, p, "expected an array of 3 numbers, got %s", type_name(j));
+    int i = 0;
+    for (const cJSON *e = j->child; e; e = e->next, i++) {
+        char q[560];
+        snprintf(q, sizeof q, "%s[%d]", p, i);
+        if (!cJSON_IsNumber(e)) return bad(c, q, "expected a number, got %s", type_name(e));
+        if (!isfinite(e->valuedouble) || fabs(e->valuedouble) > 1e12)
+            return bad(c, q, "not a finite coordinate");
+        out[i] = e->valuedouble;
+    }
+    return 0;
+}
+
+static int get_vec3(const ctx *c, const cJSON *obj, const char *path, const char *key, double out[3])
+{
+    char p[512];
+    const cJSON *j;
+    int rc = get_member(c, obj, path, key, true, &j, p, sizeof p);
+    return rc ? rc : vec3_of(c, j, p, out);
+}
+
+static int get_object(const ctx *c, const cJSON *obj, const char *path, const char *key,
+                      bool required, const cJSON **out, char *p, size_t plen)
+{
+    int rc = get_member(c, obj, path, key, required, out, p, plen);
+    if (rc || !*out) return rc;
+    if (!cJSON_IsObject(*out)) return bad(c, p, "expected an object, got %s", type_name(*out));
+    return 0;
+}
+
+static bool valid_name(const char *s)
+{
+    size_t n = strlen(s);
+    if (n == 0 || n > FP_RIG_NAME_MAX) return false;
+    for (size_t i = 0; i < n; i++) {
+        char ch = s[i];
+        if (!((ch >= 'a' && ch <= 'z') || (ch >= '0' && ch <= '9') || ch == '_' || ch == '.' ||
+              ch == '-'))
+            return false;
+    }
+    return true;
+}
+
+static int vertex_index(const ctx *c, const cJSON *e, const char *p, size_t n, uint32_t *out)
+{
+    if (!cJSON_IsNumber(e)) return bad(c, p, "expected a vertex index, got %s", type_name(e));
+    double v = e->valuedouble;
+    if (!isfinite(v) || v != floor(v) || v < 0) return bad(c, p, "%g is not a vertex index", v);
+    if (v >= (double)n) return bad(c, p, "vertex %.0f is out of range (the mesh has %zu)", v, n);
+    *out = (uint32_t)v;
+    return 0;
+}
+
+static void normalize(double v[3])
+{
+    double l = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    if (l > 0) v[0] /= l, v[1] /= l, v[2] /= l;
+}
+
+static double dot3(const double a[3], const double b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static void cross3(const double a[3], const double b[3], double o[3])
+{
+    o[0] = a[1] * b[2] - a[2] * b[1];
+    o[1] = a[2] * b[0] - a[0] * b[2];
+    o[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+/* ---------------------------------------------------------------------------------- */
+
+static int parse_mesh(const ctx *c, fp_rig *r, const cJSON *root)
+{
+    char p[512];
+    const cJSON *m;
+    int rc = get_object(c, root, "", "mesh", true, &m, p, sizeof p);
+    if (rc) return rc;
+    static const char *const f[] = {"name", "vertex_count", "positions_crc32", NULL};
+    if ((rc = check_fields(c, m, "mesh", f))) return rc;
+    if ((rc = get_string(c, m, "mesh", "name", false, r->mesh_name, sizeof r->mesh_name))) return rc;
+    double n = 0;
+    if ((rc = get_number(c, m, "mesh", "vertex_count", true, 1, 1e8, &n))) return rc;
+    if (n != floor(n)) return bad(c, "mesh.vertex_count", "not an integer");
+    r->n = (size_t)n;
+    char crc[16] = "";
+    if ((rc = get_string(c, m, "mesh", "positions_crc32", true, crc, sizeof crc))) return rc;
+    char *end = NULL;
+    unsigned long v = strtoul(crc, &end, 16);
+    if (strlen(crc) != 8 || !end || *end)
+        return bad(c, "mesh.positions_crc32", "expected 8 hexadecimal digits, got \"%s\"", crc);
+    r->crc = (uint32_t)v;
+    return 0;
+}
+
+static int parse_axes(const ctx *c, fp_rig *r, const cJSON *root)
+{
+    char p[512];
+    const cJSON *a;
+    int rc = get_object(c, root, "", "axes", true, &a, p, sizeof p);
+    if (rc) return rc;
+    static const char *const f[] = {"up", "forward", "left", NULL};
+    if ((rc = check_fields(c, a, "axes", f))) return rc;
+    if ((rc = get_vec3(c, a, "axes", "up", r->up)) || (rc = get_vec3(c, a, "axes", "forward", r->fwd)) ||
+        (rc = get_vec3(c, a, "axes", "left", r->left)))
+        return rc;
+    double *ax[3] = {r->up, r->fwd, r->left};
+    const char *nm[3] = {"axes.up", "axes.forward", "axes.left"};
+    for (int i = 0; i < 3; i++) {
+        double l = sqrt(dot3(ax[i], ax[i]));
+        if (fabs(l - 1) > 1e-3) return bad(c, nm[i], "not a unit vector (length %g)", l);
+        normalize(ax[i]);
+    }
+    if (fabs(dot3(r->up, r->fwd)) > 1e-3 || fabs(dot3(r->up, r->left)) > 1e-3 ||
+        fabs(dot3(r->fwd, r->left)) > 1e-3)
+        return bad(c, "axes", "up, forward and left are not orthogonal");
+    double x[3];
+    cross3(r->up, r->fwd, x);
+    if (dot3(x, r->left) < 0.999) return bad(c, "axes.left", "must equal up x forward (a right-handed frame)");
+    return 0;
+}
+
+static int parse_regions(const ctx *c, fp_rig *r, const cJSON *root)
+{
+    char p[512];
+    const cJSON *rs;
+    int rc = get_member(c, root, "", "regions", true, &rs, p, sizeof p);
+    if (rc) return rc;
+    if (!cJSON_IsArray(rs)) return bad(c, "regions", "expected an array, got %s", type_name(rs));
+    int nr = cJSON_GetArraySize(rs);
+    if (nr > FP_RIG_MAX_REGIONS) return bad(c, "regions", "more than %d regions", FP_RIG_MAX_REGIONS);
+    r->kind = calloc(r->n, 1);
+    uint8_t *owner = calloc(r->n, 1); /* region index + 1 that claimed the vertex */
+    if (!r->kind || !owner) {
+        free(owner);
+        return fp_errorf(c->err, c->errlen, -ENOMEM, "%s: out of memory", c->file);
+    }
+    int i = 0;
+    rc = 0;
+    for (const cJSON *g = rs->child; g && !rc; g = g->next, i++) {
+        char gp[64];
+        snprintf(gp, sizeof gp, "regions[%d]", i);
+        if (!cJSON_IsObject(g)) { rc = bad(c, gp, "expected an object, got %s", type_name(g)); break; }
+        static const char *const f[] = {"name", "kind", "vertices", NULL};
+        if ((rc = check_fields(c, g, gp, f))) break;
+        region *reg = &r->regions[i];
+        if ((rc = get_string(c, g, gp, "name", true, reg->name, sizeof reg->name))) break;
+        if (!valid_name(reg->name)) { rc = bad(c, gp, "name \"%s\": use a-z 0-9 _ . -", reg->name); break; }
+        for (int k = 0; k < i; k++)
+            if (!strcmp(r->regions[k].name, reg->name)) rc = bad(c, gp, "region \"%s\" given twice", reg->name);
+        if (rc) break;
+        char kind[16];
+        if ((rc = get_string(c, g, gp, "kind", true, kind, sizeof kind))) break;
+        if (!strcmp(kind, "soft")) reg->kind = FP_RIG_SOFT;
+        else if (!strcmp(kind, "skull")) reg->kind = FP_RIG_SKULL;
+        else if (!strcmp(kind, "jaw")) reg->kind = FP_RIG_JAW;
+        else { char q[80]; snprintf(q, sizeof q, "%s.kind", gp); rc = bad(c, q, "\"%s\" is not soft, skull or jaw", kind); break; }
+        const cJSON *vs;
+        char vp[96];
+        if ((rc = get_member(c, g, gp, "vertices", true, &vs, vp, sizeof vp))) break;
+        if (!cJSON_IsArray(vs)) { rc = bad(c, vp, "expected an array, got %s", type_name(vs)); break; }
+        int k = 0;
+        for (const cJSON *e = vs->child; e && !rc; e = e->next, k++) {
+            char ep[128];
+            snprintf(ep, sizeof ep, "%s[%d]", vp, k);
+            uint32_t a, b;
+            if (cJSON_IsArray(e)) {
+                if (cJSON_GetArraySize(e) != 2) { rc = bad(c, ep, "a range is [first, last]"); break; }
+                char q[140];
+                snprintf(q, sizeof q, "%s[0]", ep);
+                if ((rc = vertex_index(c, e->child, q, r->n, &a))) break;
+                snprintf(q, sizeof q, "%s[1]", ep);
+                if ((rc = vertex_index(c, e->child->next, q, r->n, &b))) break;
+                if (b < a) { rc = bad(c, ep, "range [%u, %u] runs backwards", a, b); break; }
+            } else {
+                if ((rc = vertex_index(c, e, ep, r->n, &a))) break;
+                b = a;
+            }
+            for (uint32_t v = a; v <= b; v++) {
+                if (owner[v] == (uint8_t)(i + 1)) continue; /* repeated in the same region */
+                if (owner[v]) {
+                    const region *o = &r->regions[owner[v] - 1];
+                    rc = bad(c, ep, "vertex %u is already in regions[%d] \"%s\" (%s): regions may not overlap",
+                             v, owner[v] - 1, o->name,
+                             o->kind == FP_RIG_SKULL ? "skull" : o->kind == FP_RIG_JAW ? "jaw" : "soft");
+                    break;
+                }
+                owner[v] = (uint8_t)(i + 1);
+                r->kind[v] = (uint8_t)reg->kind;
+                reg->count++;
+            }
+        }
+    }
+    free(owner);
+    if (rc) return rc;
+    r->region_count = (size_t)nr;
+    size_t skull = 0, jaw = 0;
+    for (size_t v = 0; v < r->n; v++) skull += r->kind[v] == FP_RIG_SKULL, jaw += r->kind[v] == FP_RIG_JAW;
+    if (!skull) return bad(c, "regions", "no skull vertices: a rig needs a skull region");
+    if (!jaw) return bad(c, "regions", "no jaw vertices: a rig needs a jaw region");
+    return 0;
+}
+
+static int parse_landmarks(const ctx *c, fp_rig *r, const cJSON *root)
+{
+    char p[512];
+    const cJSON *ls;
+    int rc = get_object(c, root, "", "landmarks", true, &ls, p, sizeof p);
+    if (rc) return rc;
+    for (const cJSON *e = ls->child; e; e = e->next) {
+        char q[600];
+        join(q, sizeof q, "landmarks", e->string ? e->string : "?");
+        if (!e->string || !valid_name(e->string)) return bad(c, q, "bad landmark name: use a-z 0-9 _ . -");
+        if (r->landmark_count >= FP_RIG_MAX_LANDMARKS) return bad(c, q, "more than %d landmarks", FP_RIG_MAX_LANDMARKS);
+        for (size_t k = 0; k < r->landmark_count; k++)
+            if (!strcmp(r->landmarks[k].name, e->string)) return bad(c, q, "landmark given twice");
+        landmark *l = &r->landmarks[r->landmark_count];
+        if ((rc = vertex_index(c, e, q, r->n, &l->vertex))) return rc;
+        strcpy(l->name, e->string);
+        r->landmark_count++;
+    }
+    static const char *const need[] = {"chin", "nose_tip", "upper_lip", "lower_lip",
+                                       "mouth_corner_left", "mouth_corner_right", "brow_left",
+                                       "brow_right", "eye_outer_left", "eye_inner_left",
+                                       "eye_outer_right", "eye_inner_right", NULL};
+    for (size_t i = 0; need[i]; i++) {
+        bool found = false;
+        for (size_t k = 0; k < r->landmark_count; k++) found |= !strcmp(r->landmarks[k].name, need[i]);
+        if (!found) {
+            char q[80];
+            snprintf(q, sizeof q, "landmarks.%s", need[i]);
+            return bad(c, q, "missing (every rig names it)");
+        }
+    }
+    return 0;
+}
+
+static int parse_channels(const ctx *c, fp_rig *r, const cJSON *root)
+{
+    char p[512];
+    const cJSON *cs;
+    int rc = get_member(c, root, "", "channels", true, &cs, p, sizeof p);
+    if (rc) return rc;
+    if (!cJSON_IsArray(cs)) return bad(c, "channels", "expected an array, got %s", type_name(cs));
+    int i = 0;
+    r->jaw_open = -1;
+    for (const cJSON *e = cs->child; e; e = e->next, i++) {
+        char q[64];
+        snprintf(q, sizeof q, "channels[%d]", i);
+        if (!cJSON_IsObject(e)) return bad(c, q, "expected an object, got %s", type_name(e));
+        if (i >= FP_RIG_MAX_CHANNELS) return bad(c, q, "more than %d channels", FP_RIG_MAX_CHANNELS);
+        static const char *const f[] = {"name", "min", "max", "neutral", NULL};
+        if ((rc = check_fields(c, e, q, f))) return rc;
+        channel *ch = &r->channels[i];
+        if ((rc = get_string(c, e, q, "name", true, ch->name, sizeof ch->name))) return rc;
+        if (!valid_name(ch->name)) return bad(c, q, "name \"%s\": use a-z 0-9 _ . -", ch->name);
+        for (int k = 0; k < i; k++)
+            if (!strcmp(r->channels[k].name, ch->name)) return bad(c, q, "channel \"%s\" given twice", ch->name);
+        double lo, hi, neutral = 0;
+        if ((rc = get_number(c, e, q, "min", true, -1e6, 1e6, &lo)) ||
+            (rc = get_number(c, e, q, "max", true, -1e6, 1e6, &hi)))
+            return rc;
+        if (!(hi > lo)) return bad(c, q, "max (%g) must exceed min (%g)", hi, lo);
+        neutral = lo;
+        if ((rc = get_number(c, e, q, "neutral", false, lo, hi, &neutral))) return rc;
+        ch->min = (float)lo, ch->max = (float)hi, ch->neutral = (float)neutral;
+        if (!strcmp(ch->name, "jaw.open")) {
+            if (lo != 0 || hi != 1) return bad(c, q, "jaw.open must range over [0, 1]");
+            r->jaw_open = i;
+        }
+    }
+    r->channel_count = (size_t)i;
+    if (r->jaw_open < 0) return bad(c, "channels", "no \"jaw.open\" channel");
+    return 0;
+}
+
+static int parse_jaw(const ctx *c, fp_rig *r, const cJSON *root)
+{
+    char p[512];
+    const cJSON *jaw, *h, *fo;
+    int rc = get_object(c, root, "", "jaw", true, &jaw, p, sizeof p);
+    if (rc) return rc;
+    static const char *const fj[] = {"hinge", "open_degrees", "glide", "falloff", NULL};
+    if ((rc = check_fields(c, jaw, "jaw", fj))) return rc;
+    if ((rc = get_object(c, jaw, "jaw", "hinge", true, &h, p, sizeof p))) return rc;
+    static const char *const fh[] = {"right", "left", NULL};
+    if ((rc = check_fields(c, h, "jaw.hinge", fh)) || (rc = get_vec3(c, h, "jaw.hinge", "right", r->hinge_r)) ||
+        (rc = get_vec3(c, h, "jaw.hinge", "left", r->hinge_l)))
+        return rc;
+    double ax[3] = {r->hinge_l[0] - r->hinge_r[0], r->hinge_l[1] - r->hinge_r[1], r->hinge_l[2] - r->hinge_r[2]};
+    double len = sqrt(dot3(ax, ax));
+    if (!(len > 0)) return bad(c, "jaw.hinge", "the two joints coincide");
+    normalize(ax);
+    if (dot3(ax, r->left) < cos(30 * M_PI / 180))
+        return bad(c, "jaw.hinge", "the axis from right to left joint is %.0f degrees off the face's left axis (at most 30)",
+                   acos(fmax(-1, fmin(1, dot3(ax, r->left)))) * 180 / M_PI);
+    memcpy(r->axis, ax, sizeof ax);
+    if ((rc = get_number(c, jaw, "jaw", "open_degrees", true, 1, 60, &r->open_deg))) return rc;
+    const cJSON *g;
+    if ((rc = get_member(c, jaw, "jaw", "glide", false, &g, p, sizeof p))) return rc;
+    if (g) {
+        if (!cJSON_IsArray(g) || cJSON_GetArraySize(g) != 2)
+            return bad(c, p, "expected [forward, down], got %s", type_name(g));
+        int k = 0;
+        for (const cJSON *e = g->child; e; e = e->next, k++) {
+            char q[64];
+            snprintf(q, sizeof q, "jaw.glide[%d]", k);
+            if (!cJSON_IsNumber(e) || !isfinite(e->valuedouble)) return bad(c, q, "expected a number, got %s", type_name(e));
+            r->glide[k] = e->valuedouble;
+        }
+    }
+    if ((rc = get_object(c, jaw, "jaw", "falloff", true, &fo, p, sizeof p))) return rc;
+    static const char *const ff[] = {"mouth_line", "lip_band", "cheek_band", "cheek_distance",
+                                     "menton", "gonion", "neck_band", "back_band", NULL};
+    if ((rc = check_fields(c, fo, "jaw.falloff", ff))) return rc;
+    const cJSON *ml;
+    if ((rc = get_member(c, fo, "jaw.falloff", "mouth_line", true, &ml, p, sizeof p))) return rc;
+    if (!cJSON_IsArray(ml) || cJSON_GetArraySize(ml) < 2 || cJSON_GetArraySize(ml) > MAX_MOUTH_POINTS)
+        return bad(c, p, "expected an array of 2 to %d points (right corner to left corner)", MAX_MOUTH_POINTS);
+    int k = 0;
+    for (const cJSON *e = ml->child; e; e = e->next, k++) {
+        char q[64];
+        snprintf(q, sizeof q, "jaw.falloff.mouth_line[%d]", k);
+        if ((rc = vec3_of(c, e, q, r->mouth[k]))) return rc;
+        if (k > 0) {
+            double d[3] = {r->mouth[k][0] - r->mouth[k - 1][0], r->mouth[k][1] - r->mouth[k - 1][1],
+                           r->mouth[k][2] - r->mouth[k - 1][2]};
+            if (dot3(d, r->left) <= 0) return bad(c, q, "the mouth line must run from the right corner to the left (along axes.left)");
+        }
+    }
+    r->mouth_count = (size_t)k;
+    double big = 1e9;
+    if ((rc = get_number(c, fo, "jaw.falloff", "lip_band", true, 0, big, &r->lip_band)) ||
+        (rc = get_number(c, fo, "jaw.falloff", "cheek_band", true, 0, big, &r->cheek_band)) ||
+        (rc = get_number(c, fo, "jaw.falloff", "cheek_distance", true, 0, big, &r->cheek_distance)) ||
+        (rc = get_number(c, fo, "jaw.falloff", "neck_band", true, 0, big, &r->neck_band)) ||
+        (rc = get_number(c, fo, "jaw.falloff", "back_band", true, 0, big, &r->back_band)) ||
+        (rc = get_vec3(c, fo, "jaw.falloff", "menton", r->menton)) ||
+        (rc = get_vec3(c, fo, "jaw.falloff", "gonion", r->gonion)))
+        return rc;
+    if (!(r->lip_band > 0) || !(r->cheek_band > 0) || !(r->neck_band > 0) || !(r->back_band > 0) ||
+        !(r->cheek_distance > 0))
+        return bad(c, "jaw.falloff", "the bands and cheek_distance must be > 0");
+    return 0;
+}
+
+int fp_rig_parse(const char *json, size_t len, const char *name, fp_rig **out, char *err, size_t errlen)
+{
+    if (out) *out = NULL;
+    if (!json || !out) return fp_errorf(err, errlen, -EINVAL, "fp_rig_parse: NULL argument");
+    ctx c = {name ? name : "(rig)", err, errlen};
+    cJSON *root = cJSON_ParseWithLength(json, len);
+    if (!root) {
+        const char *at = cJSON_GetErrorPtr();
+        size_t off = at && at >= json && at <= json + len ? (size_t)(at - json) : 0;
+        size_t line = 1;
+        for (size_t i = 0; i < off; i++) line += json[i] == '\n';
+        return fp_errorf(err, errlen, -EBADMSG, "%s:%zu: not valid JSON (near byte %zu)", c.file, line, off);
+    }
+    fp_rig *r = calloc(1, sizeof *r);
+    if (!r) {
+        cJSON_Delete(root);
+        return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", c.file);
+    }
+    snprintf(r->source, sizeof r->source, "%s", c.file);
+    int rc = 0;
+    if (!cJSON_IsObject(root)) {
+        rc = bad(&c, "", "expected an object, got %s", type_name(root));
+        goto done;
+    }
+    static const char *const top[] = {"format", "version", "name", "description", "mesh",
+                                      "mm_per_unit", "axes", "regions", "landmarks", "jaw",
+                                      "mobility", "channels", NULL};
+    if ((rc = check_fields(&c, root, "", top))) goto done;
+    char fmt[32] = "";
+    if ((rc = get_string(&c, root, "", "format", true, fmt, sizeof fmt))) goto done;
+    if (strcmp(fmt, "facepuppet-rig")) {
+        rc = bad(&c, "format", "expected \"facepuppet-rig\", got \"%s\"", fmt);
+        goto done;
+    }
+    double ver = 0;
+    if ((rc = get_number(&c, root, "", "version", true, 0, 1e6, &ver))) goto done;
+    if (ver != FP_RIG_FORMAT_VERSION) {
+        rc = bad(&c, "version", "this facepuppet reads version %d, the file is %g", FP_RIG_FORMAT_VERSION, ver);
+        goto done;
+    }
+    char desc[2048];
+    if ((rc = get_string(&c, root, "", "name", true, r->name, sizeof r->name)) ||
+        (rc = get_string(&c, root, "", "description", false, desc, sizeof desc)) ||
+        (rc = parse_mesh(&c, r, root)) ||
+        (rc = get_number(&c, root, "", "mm_per_unit", true, 1e-6, 1e6, &r->mm_per_unit)) ||
+        (rc = parse_axes(&c, r, root)) || (rc = parse_regions(&c, r, root)) ||
+        (rc = parse_landmarks(&c, r, root)) || (rc = parse_channels(&c, r, root)) ||
+        (rc = parse_jaw(&c, r, root)))
+        goto done;
+    char p[64];
+    const cJSON *mob;
+    if ((rc = get_object(&c, root, "", "mobility", true, &mob, p, sizeof p))) goto done;
+    static const char *const fm[] = {"ramp", NULL};
+    if ((rc = check_fields(&c, mob, "mobility", fm)) ||
+        (rc = get_number(&c, mob, "mobility", "ramp", true, 1e-9, 1e9, &r->ramp)))
+        goto done;
+done:
+    cJSON_Delete(root);
+    if (rc) {
+        fp_rig_free(&r);
+        return rc;
+    }
+    *out = r;
+    return 0;
+}
+
+int fp_rig_load(const char *path, fp_rig **out, char *err, size_t errlen)
+{
+    if (out) *out = NULL;
+    if (!path || !out) return fp_errorf(err, errlen, -EINVAL, "fp_rig_load: NULL argument");
+    FILE *f = fopen(path, "rb");
+    if (!f) return fp_errorf(err, errlen, -errno, "%s: %s", path, strerror(errno));
+    char *buf = NULL;
+    size_t len = 0, cap = 0;
+    for (;;) {
+        if (len + 65536 > cap) {
+            cap = cap ? cap * 2 : 1 << 20;
+            if (cap > (size_t)1 << 30) {
+                free(buf);
+                fclose(f);
+                return fp_errorf(err, errlen, -EBADMSG, "%s: larger than 1 GiB", path);
+            }
+            char *nb = realloc(buf, cap);
+            if (!nb) {
+                free(buf);
+                fclose(f);
+                return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", path);
+            }
+            buf = nb;
+        }
+        size_t got = fread(buf + len, 1, cap - len, f);
+        len += got;
+        if (got == 0) break;
+    }
+    int ioerr = ferror(f);
+    fclose(f);
+    if (ioerr) {
+        free(buf);
+        return fp_errorf(err, errlen, -EIO, "%s: read error", path);
+    }
+    int rc = fp_rig_parse(buf, len, path, out, err, errlen);
+    free(buf);
+    return rc;
+}
+
+/* ---------------------------------------------------------------------------------- */
+/* Binding: the falloff and the mobility.                                              */
+
+static double smoothstep(double a, double b, double x)
+{
+    if (x <= a) return 0;
+    if (x >= b) return 1;
+    double t = (x - a) / (b - a);
+    return t * t * (3 - 2 * t);
+}
+
+/* Face coordinates of p relative to the hinge centre: x left, y up, z forward. */
+static void face_coords(const fp_rig *r, const double p[3], double *x, double *y, double *z)
+{
+    double d[3];
+    for (int i = 0; i < 3; i++) d[i] = p[i] - 0.5 * (r->hinge_r[i] + r->hinge_l[i]);
+    *x = dot3(d, r->left);
+    *y = dot3(d, r->up);
+    *z = dot3(d, r->fwd);
+}
+
+/* Signed distance of (z, y) from the line a -> b in the sagittal plane, positive on the side
+ * away from the point o. */
+static double side_distance(const double a[2], const double b[2], const double o[2], double z, double y)
+{
+    double dz = b[0] - a[0], dy = b[1] - a[1];
+    double l = sqrt(dz * dz + dy * dy);
+    if (!(l > 0)) return -INFINITY;
+    double nz = dy / l, ny = -dz / l; /* a normal */
+    double so = (o[0] - a[0]) * nz + (o[1] - a[1]) * ny;
+    if (so > 0) nz = -nz, ny = -ny;
+    return (z - a[0]) * nz + (y - a[1]) * ny;
+}
+
+/* The jaw weight of a soft-tissue point (rigs/README.md "Falloff"). */
+static double falloff(const fp_rig *r, const double p[3], const double mouth[][2], const double C[2],
+                      const double G[2], const double M[2])
+{
+    double x, y, z;
+    face_coords(r, p, &x, &y, &z);
+    /* the mouth line's height at x, and the distance beyond the corners */
+    size_t k = r->mouth_count;
+    double ym, e = 0;
+    if (x <= mouth[0][0]) {
+        ym = mouth[0][1];
+        e = mouth[0][0] - x;
+    } else if (x >= mouth[k - 1][0]) {
+        ym = mouth[k - 1][1];
+        e = x - mouth[k - 1][0];
+    } else {
+        size_t i = 1;
+        while (i < k - 1 && x > mouth[i][0]) i++;
+        double t = (x - mouth[i - 1][0]) / (mouth[i][0] - mouth[i - 1][0]);
+        ym = mouth[i - 1][1] + t * (mouth[i][1] - mouth[i - 1][1]);
+    }
+    double b = r->lip_band + (r->cheek_band - r->lip_band) * smoothstep(0, r->cheek_distance, e);
+    double w_mouth = 1 - smoothstep(-b, b, y - ym);
+    if (w_mouth == 0) return 0;
+    double d_back = side_distance(C, G, M, z, y);  /* behind the ramus */
+    double d_below = side_distance(G, M, C, z, y); /* below the mandible's lower border */
+    double w_back = 1 - smoothstep(0, r->back_band, d_back);
+    double w_neck = 1 - smoothstep(0, r->neck_band, d_below);
+    return w_mouth * w_back * w_neck;
+}
+
+int fp_rig_bind(fp_rig *r, size_t n, const float *pos, char *err, size_t errlen)
+{
+    if (!r || !pos) return fp_errorf(err, errlen, -EINVAL, "fp_rig_bind: NULL argument");
+    ctx c = {r->source, err, errlen};
+    if (n != r->n) return bad(&c, "mesh.vertex_count", "the rig fits %zu vertices, the mesh has %zu", r->n, n);
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t v = 0; v < n; v++)
+        for (int i = 0; i < 3; i++) {
+            double q = pos[3 * v + i];
+            if (!isfinite(q)) return fp_errorf(err, errlen, -EINVAL, "fp_rig_bind: vertex %zu is not finite", v);
+            lo[i] = fmin(lo[i], q), hi[i] = fmax(hi[i], q);
+        }
+    const double *hp[2] = {r->hinge_r, r->hinge_l};
+    const char *hn[2] = {"jaw.hinge.right", "jaw.hinge.left"};
+    double reach = 60.0 / r->mm_per_unit;
+    for (int s = 0; s < 2; s++) {
+        for (int i = 0; i < 3; i++)
+            if (hp[s][i] < lo[i] || hp[s][i] > hi[i])
+                return bad(&c, hn[s], "(%g, %g, %g) lies outside the mesh's bounds: the hinge must be inside the head",
+                           hp[s][0], hp[s][1], hp[s][2]);
+        double best = INFINITY;
+        for (size_t v = 0; v < n; v++) {
+            double d0 = pos[3 * v] - hp[s][0], d1 = pos[3 * v + 1] - hp[s][1], d2 = pos[3 * v + 2] - hp[s][2];
+            best = fmin(best, d0 * d0 + d1 * d1 + d2 * d2);
+        }
+        if (sqrt(best) > reach)
+            return bad(&c, hn[s], "no vertex within 60 mm (nearest %.1f mm): not near the head",
+                       sqrt(best) * r->mm_per_unit);
+    }
+    float *w = malloc(n * sizeof *w), *m = malloc(n * sizeof *m);
+    if (!w || !m) {
+        free(w), free(m);
+        return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", r->source);
+    }
+    /* sagittal-plane points of the jaw outline and the mouth line in face coordinates */
+    double mouth[MAX_MOUTH_POINTS][2], C[2] = {0, 0}, G[2], M[2], x, y, z;
+    for (size_t k = 0; k < r->mouth_count; k++) {
+        face_coords(r, r->mouth[k], &x, &y, &z);
+        mouth[k][0] = x, mouth[k][1] = y;
+    }
+    face_coords(r, r->gonion, &x, &y, &z);
+    G[0] = z, G[1] = y;
+    face_coords(r, r->menton, &x, &y, &z);
+    M[0] = z, M[1] = y;
+    for (size_t v = 0; v < n; v++) {
+        if (r->kind[v] == FP_RIG_SKULL) w[v] = 0;
+        else if (r->kind[v] == FP_RIG_JAW) w[v] = 1;
+        else {
+            double p[3] = {pos[3 * v], pos[3 * v + 1], pos[3 * v + 2]};
+            w[v] = (float)falloff(r, p, mouth, C, G, M);
+        }
+    }
+    /* mobility: smoothstep of the distance to the nearest rigid vertex, through a grid */
+    double cell = r->ramp;
+    long dims[3];
+    for (int i = 0; i < 3; i++) {
+        double d = floor((hi[i] - lo[i]) / cell) + 1;
+        dims[i] = d > 256 ? 256 : (long)d;
+    }
+    double csz[3];
+    for (int i = 0; i < 3; i++) csz[i] = fmax((hi[i] - lo[i]) / (double)dims[i], cell);
+    for (int i = 0; i < 3; i++) dims[i] = (long)floor((hi[i] - lo[i]) / csz[i]) + 1;
+    size_t ncell = (size_t)(dims[0] * dims[1] * dims[2]);
+    size_t *start = calloc(ncell + 1, sizeof *start), *items = malloc(n * sizeof *items);
+    if (!start || !items) {
+        free(w), free(m), free(start), free(items);
+        return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", r->source);
+    }
+#define CELL(v, i) ((long)fmin((double)(dims[i] - 1), floor((pos[3 * (v) + (i)] - lo[i]) / csz[i])))
+    for (size_t v = 0; v < n; v++)
+        if (r->kind[v] != FP_RIG_SOFT) start[(CELL(v, 0) * dims[1] + CELL(v, 1)) * dims[2] + CELL(v, 2) + 1]++;
+    for (size_t i = 0; i < ncell; i++) start[i + 1] += start[i];
+    size_t *fill = calloc(ncell, sizeof *fill);
+    if (!fill) {
+        free(w), free(m), free(start), free(items);
+        return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", r->source);
+    }
+    for (size_t v = 0; v < n; v++)
+        if (r->kind[v] != FP_RIG_SOFT) {
+            size_t ci = (size_t)((CELL(v, 0) * dims[1] + CELL(v, 1)) * dims[2] + CELL(v, 2));
+            items[start[ci] + fill[ci]++] = v;
+        }
+    for (size_t v = 0; v < n; v++) {
+        if (r->kind[v] != FP_RIG_SOFT) {
+            m[v] = 0;
+            continue;
+        }
+        long cc[3] = {CELL(v, 0), CELL(v, 1), CELL(v, 2)};
+        double best = INFINITY;
+        for (long a = cc[0] - 1; a <= cc[0] + 1; a++)
+            for (long b = cc[1] - 1; b <= cc[1] + 1; b++)
+                for (long d = cc[2] - 1; d <= cc[2] + 1; d++) {
+                    if (a < 0 || b < 0 || d < 0 || a >= dims[0] || b >= dims[1] || d >= dims[2]) continue;
+                    size_t ci = (size_t)((a * dims[1] + b) * dims[2] + d);
+                    for (size_t k = start[ci]; k < start[ci + 1]; k++) {
+                        size_t u = items[k];
+                        double d0 = pos[3 * u] - pos[3 * v], d1 = pos[3 * u + 1] - pos[3 * v + 1],
+                               d2 = pos[3 * u + 2] - pos[3 * v + 2];
+                        best = fmin(best, d0 * d0 + d1 * d1 + d2 * d2);
+                    }
+                }
+        m[v] = (float)smoothstep(0, r->ramp, sqrt(best));
+    }
+#undef CELL
+    free(start), free(items), free(fill);
+    free(r->w), free(r->m);
+    r->w = w, r->m = m;
+    return 0;
+}
+
+int fp_rig_load_for_mesh(const char *path, size_t n, const float *pos, fp_rig **out, char *err, size_t errlen)
+{
+    int rc = fp_rig_load(path, out, err, errlen);
+    if (rc) return rc;
+    rc = fp_rig_bind(*out, n, pos, err, errlen);
+    if (rc) fp_rig_free(out);
+    return rc;
+}
+
+void fp_rig_free(fp_rig **rig)
+{
+    if (!rig || !*rig) return;
+    free((*rig)->kind);
+    free((*rig)->w);
+    free((*rig)->m);
+    free(*rig);
+    *rig = NULL;
+}
+
+uint32_t fp_rig_positions_crc32(size_t n, const float *pos)
+{
+    uLong crc = crc32(0L, Z_NULL, 0);
+    unsigned char buf[4096];
+    size_t k = 0;
+    for (size_t i = 0; i < 3 * n; i++) {
+        uint32_t u;
+        memcpy(&u, &pos[i], 4);
+        buf[k++] = (unsigned char)u, buf[k++] = (unsigned char)(u >> 8);
+        buf[k++] = (unsigned char)(u >> 16), buf[k++] = (unsigned char)(u >> 24);
+        if (k == sizeof buf) crc = crc32(crc, buf, (uInt)k), k = 0;
+    }
+    if (k) crc = crc32(crc, buf, (uInt)k);
+    return (uint32_t)crc;
+}
+
+int fp_rig_checksum_matches(const fp_rig *rig, size_t n, const float *pos)
+{
+    return rig && pos && n == rig->n && fp_rig_positions_crc32(n, pos) == rig->crc;
+}
+
+static int by_name(const void *a, const void *b)
+{
+    return strcmp(*(char *const *)a, *(char *const *)b);
+}
+
+int fp_rig_find(const char *dir, size_t n, const float *pos, char *path_out, size_t path_len, char *err,
+                size_t errlen)
+{
+    if (!dir || !pos || !path_out || !path_len) return fp_errorf(err, errlen, -EINVAL, "fp_rig_find: NULL argument");
+    DIR *d = opendir(dir);
+    if (!d) return fp_errorf(err, errlen, -ENOENT, "%s: %s", dir, strerror(errno));
+    char *names[512];
+    size_t count = 0;
+    struct dirent *e;
+    while ((e = readdir(d)) && count < 512) {
+        size_t l = strlen(e->d_name);
+        if (l > 5 && !strcmp(e->d_name + l - 5, ".json")) names[count++] = strdup(e->d_name);
+    }
+    closedir(d);
+    qsort(names, count, sizeof *names, by_name);
+    uint32_t crc = fp_rig_positions_crc32(n, pos);
+    char by_count[4096] = "";
+    int count_matches = 0;
+    int rc = -ENOENT;
+    for (size_t i = 0; i < count; i++) {
+        if (!names[i]) continue;
+        char path[4096];
+        snprintf(path, sizeof path, "%s/%s", dir, names[i]);
+        fp_rig *r = NULL;
+        char e2[256];
+        if (fp_rig_load(path, &r, e2, sizeof e2) == 0) {
+            if (r->n == n && r->crc == crc && rc != 0) {
+                rc = strlen(path) < path_len ? 0 : -ENAMETOOLONG;
+                if (!rc) strcpy(path_out, path);
+            } else if (r->n == n) {
+                count_matches++;
+                snprintf(by_count, sizeof by_count, "%s", path);
+            }
+            fp_rig_free(&r);
+        }
+    }
+    for (size_t i = 0; i < count; i++) free(names[i]);
+    if (rc == 0) return 0;
+    if (rc == -ENAMETOOLONG) return fp_errorf(err, errlen, rc, "%s: path too long", dir);
+    if (count_matches == 1) {
+        if (strlen(by_count) >= path_len) return fp_errorf(err, errlen, -ENAMETOOLONG, "%s: path too long", by_count);
+        strcpy(path_out, by_count);
+        return 0;
+    }
+    if (count_matches > 1)
+        return fp_errorf(err, errlen, -ENOENT, "%s: %d rigs fit %zu vertices and none has the mesh's checksum %08x: name one with --rig",
+                         dir, count_matches, n, crc);
+    return fp_errorf(err, errlen, -ENOENT, "%s: no rig fits this mesh (%zu vertices, checksum %08x)", dir, n, crc);
+}
+
+/* ---------------------------------------------------------------------------------- */
+
+const char *fp_rig_name(const fp_rig *r) { return r ? r->name : ""; }
+const char *fp_rig_source(const fp_rig *r) { return r ? r->source : ""; }
+size_t fp_rig_vertex_count(const fp_rig *r) { return r ? r->n : 0; }
+const char *fp_rig_mesh_name(const fp_rig *r) { return r ? r->mesh_name : ""; }
+uint32_t fp_rig_mesh_crc32(const fp_rig *r) { return r ? r->crc : 0; }
+double fp_rig_mm_per_unit(const fp_rig *r) { return r ? r->mm_per_unit : 0; }
+
+void fp_rig_axes(const fp_rig *r, float up[3], float forward[3], float left[3])
+{
+    for (int i = 0; i < 3; i++) {
+        if (up) up[i] = (float)r->up[i];
+        if (forward) forward[i] = (float)r->fwd[i];
+        if (left) left[i] = (float)r->left[i];
+    }
+}
+
+const uint8_t *fp_rig_vertex_kinds(const fp_rig *r) { return r ? r->kind : NULL; }
+size_t fp_rig_region_count(const fp_rig *r) { return r ? r->region_count : 0; }
+
+int fp_rig_region_get(const fp_rig *r, size_t i, fp_rig_region_desc *out)
+{
+    if (!r || !out || i >= r->region_count) return -EINVAL;
+    out->name = r->regions[i].name;
+    out->kind = r->regions[i].kind;
+    out->count = r->regions[i].count;
+    return 0;
+}
+
+size_t fp_rig_landmark_count(const fp_rig *r) { return r ? r->landmark_count : 0; }
+
+int fp_rig_landmark_get(const fp_rig *r, size_t i, const char **name, uint32_t *vertex)
+{
+    if (!r || i >= r->landmark_count) return -EINVAL;
+    if (name) *name = r->landmarks[i].name;
+    if (vertex) *vertex = r->landmarks[i].vertex;
+    return 0;
+}
+
+long fp_rig_landmark_index(const fp_rig *r, const char *name)
+{
+    for (size_t i = 0; r && name && i < r->landmark_count; i++)
+        if (!strcmp(r->landmarks[i].name, name)) return (long)r->landmarks[i].vertex;
+    return -ENOENT;
+}
+
+size_t fp_rig_channel_count(const fp_rig *r) { return r ? r->channel_count : 0; }
+
+int fp_rig_channel_get(const fp_rig *r, size_t i, fp_rig_channel_desc *out)
+{
+    if (!r || !out || i >= r->channel_count) return -EINVAL;
+    out->name = r->channels[i].name;
+    out->min = r->channels[i].min;
+    out->max = r->channels[i].max;
+    out->neutral = r->channels[i].neutral;
+    return 0;
+}
+
+long fp_rig_channel_index(const fp_rig *r, const char *name)
+{
+    for (size_t i = 0; r && name && i < r->channel_count; i++)
+        if (!strcmp(r->channels[i].name, name)) return (long)i;
+    return -ENOENT;
+}
+
+int fp_rig_channel_check(const fp_rig *r, const char *name, double value, char *err, size_t errlen)
+{
+    long i = fp_rig_channel_index(r, name);
+    if (i < 0) return fp_errorf(err, errlen, -ENOENT, "%s: no channel \"%s\"", r ? r->source : "(rig)", name ? name : "");
+    const channel *c = &r->channels[i];
+    if (!(value >= c->min && value <= c->max))
+        return fp_errorf(err, errlen, -ERANGE, "%s: channel %s = %g is outside [%g, %g]", r->source, name, value,
+                         c->min, c->max);
+    return 0;
+}
+
+int fp_rig_channel_values(const fp_rig *r, const char *const *names, const float *vals, size_t n, float *values)
+{
+    if (!r || !values) return -EINVAL;
+    for (size_t i = 0; i < r->channel_count; i++) values[i] = r->channels[i].neutral;
+    int unknown = 0;
+    for (size_t k = 0; k < n; k++) {
+        long i = names && names[k] ? fp_rig_channel_index(r, names[k]) : -1;
+        if (i < 0) unknown++;
+        else values[i] = vals[k];
+    }
+    return unknown;
+}
+
+void fp_rig_hinge(const fp_rig *r, float right[3], float left[3], double *open_degrees, double glide[2])
+{
+    for (int i = 0; i < 3; i++) {
+        if (right) right[i] = (float)r->hinge_r[i];
+        if (left) left[i] = (float)r->hinge_l[i];
+    }
+    if (open_degrees) *open_degrees = r->open_deg;
+    if (glide) glide[0] = r->glide[0], glide[1] = r->glide[1];
+}
+
+const float *fp_rig_jaw_weights(const fp_rig *r) { return r ? r->w : NULL; }
+const float *fp_rig_mobility(const fp_rig *r) { return r ? r->m : NULL; }
+
+/* Rodrigues: rotation matrix by angle a (radians) about unit axis k. */
+static void rotation(const double k[3], double a, double R[9])
+{
+    double c = cos(a), s = sin(a), t = 1 - c;
+    R[0] = t * k[0] * k[0] + c, R[1] = t * k[0] * k[1] - s * k[2], R[2] = t * k[0] * k[2] + s * k[1];
+    R[3] = t * k[0] * k[1] + s * k[2], R[4] = t * k[1] * k[1] + c, R[5] = t * k[1] * k[2] - s * k[0];
+    R[6] = t * k[0] * k[2] - s * k[1], R[7] = t * k[1] * k[2] + s * k[0], R[8] = t * k[2] * k[2] + c;
+}
+
+int fp_rig_pose(const fp_rig *r, const float *base, const float *values, float *out)
+{
+    if (!r || !base || !out || !r->w) return -EINVAL;
+    const channel *jc = &r->channels[r->jaw_open];
+    double open = values ? values[r->jaw_open] : jc->neutral;
+    if (isnan(open)) open = jc->neutral;
+    open = fmin(jc->max, fmax(jc->min, open));
+    double theta = open * r->open_deg * M_PI / 180;
+    double R1[9];
+    rotation(r->axis, theta, R1);
+    for (size_t v = 0; v < r->n; v++) {
+        double w = r->w[v];
+        if (w == 0 || theta == 0) {
+            if (out != base) memcpy(&out[3 * v], &base[3 * v], 3 * sizeof(float));
+            continue;
+        }
+        double Rw[9];
+        const double *R = R1;
+        if (w != 1) {
+            rotation(r->axis, w * theta, Rw);
+            R = Rw;
+        }
+        double d[3] = {base[3 * v] - r->hinge_r[0], base[3 * v + 1] - r->hinge_r[1], base[3 * v + 2] - r->hinge_r[2]};
+        double g = w * open;
+        for (int i = 0; i < 3; i++)
+            out[3 * v + i] = (float)(r->hinge_r[i] + R[3 * i] * d[0] + R[3 * i + 1] * d[1] + R[3 * i + 2] * d[2] +
+                                     g * (r->glide[0] * r->fwd[i] - r->glide[1] * r->up[i]));
+    }
+    return 0;
+}
+
+int fp_rig_apply_mobility(const fp_rig *r, const float *posed, const float *warped, float *out)
+{
+    if (!r || !posed || !warped || !out || !r->m) return -EINVAL;
+    for (size_t v = 0; v < r->n; v++) {
+        float m = r->m[v];
+        for (int i = 0; i < 3; i++) {
+            size_t k = 3 * v + i;
+            out[k] = m == 0 ? posed[k] : posed[k] + m * (warped[k] - posed[k]);
+        }
+    }
+    return 0;
+}
+
+double fp_rig_max_finger_displacement(const fp_rig *r)
+{
+    return r ? r->ramp / 3 : 0;
+}
+
+size_t fp_rig_describe(const fp_rig *r, size_t n, const float *pos, char *buf, size_t len)
+{
+    size_t used = 0;
+#define OUT(...)                                                                                   \
+    do {                                                                                           \
+        int k_ = snprintf(buf && used < len ? buf + used : NULL, buf && used < len ? len - used : 0, \
+                          __VA_ARGS__);                                                            \
+        if (k_ > 0) used += (size_t)k_;                                                            \
+    } while (0)
+    if (buf && len) buf[0] = '\0';
+    OUT("%s\n  rig        %s (format version %d)\n  mesh       %s, %zu vertices, positions crc32 %08x\n",
+        r->source, r->name, FP_RIG_FORMAT_VERSION, r->mesh_name[0] ? r->mesh_name : "(unnamed)", r->n, r->crc);
+    OUT("  unit       %g mm per mesh unit\n  axes       up (%g, %g, %g)  forward (%g, %g, %g)  left (%g, %g, %g)\n",
+        r->mm_per_unit, r->up[0], r->up[1], r->up[2], r->fwd[0], r->fwd[1], r->fwd[2], r->left[0], r->left[1],
+        r->left[2]);
+    size_t tot[3] = {0, 0, 0};
+    for (size_t v = 0; v < r->n; v++) tot[r->kind[v]]++;
+    OUT("  regions    %zu (skull %zu, jaw %zu, soft %zu vertices)\n", r->region_count, tot[1], tot[2], tot[0]);
+    for (size_t i = 0; i < r->region_count; i++)
+        OUT("    %-22s %-5s %zu\n", r->regions[i].name,
+            r->regions[i].kind == FP_RIG_SKULL ? "skull" : r->regions[i].kind == FP_RIG_JAW ? "jaw" : "soft",
+            r->regions[i].count);
+    OUT("  landmarks  %zu\n", r->landmark_count);
+    for (size_t i = 0; i < r->landmark_count; i++) OUT("    %-22s %u\n", r->landmarks[i].name, r->landmarks[i].vertex);
+    OUT("  hinge      right (%g, %g, %g)  left (%g, %g, %g), opens %g degrees at jaw.open = 1, glide %g forward %g down\n",
+        r->hinge_r[0], r->hinge_r[1], r->hinge_r[2], r->hinge_l[0], r->hinge_l[1], r->hinge_l[2], r->open_deg,
+        r->glide[0], r->glide[1]);
+    OUT("  falloff    lip band %g, cheek band %g over %g, neck band %g, back band %g; mobility ramp %g\n", r->lip_band,
+        r->cheek_band, r->cheek_distance, r->neck_band, r->back_band, r->ramp);
+    OUT("  channels   %zu\n", r->channel_count);
+    for (size_t i = 0; i < r->channel_count; i++)
+        OUT("    %-22s [%g, %g], neutral %g\n", r->channels[i].name, r->channels[i].min, r->channels[i].max,
+            r->channels[i].neutral);
+    if (pos) {
+        if (n != r->n) OUT("  check      DOES NOT FIT: the mesh has %zu vertices\n", n);
+        else OUT("  check      fits %zu vertices; checksum %s\n", n,
+                 fp_rig_positions_crc32(n, pos) == r->crc ? "matches" : "differs (same topology, another shape)");
+    }
+#undef OUT
+    return used;
+}
+
+#ifndef FP_RIG_SOURCE_DIR
+#define FP_RIG_SOURCE_DIR "rigs"
+#endif
+
+const char *fp_rig_default_dir(const char *exe_dir, char *buf, size_t len)
+{
+    const char *env = getenv("FACEPUPPET_RIGS");
+    if (env && *env) {
+        snprintf(buf, len, "%s", env);
+        return buf;
+    }
+    if (exe_dir) {
+        snprintf(buf, len, "%s/../share/facepuppet/rigs", exe_dir);
+        DIR *d = opendir(buf);
+        if (d) {
+            closedir(d);
+            return buf;
+        }
+    }
+    snprintf(buf, len, "%s", FP_RIG_SOURCE_DIR);
+    return buf;
+}

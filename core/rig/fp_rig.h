@@ -1,0 +1,226 @@
+/* fp_rig: rig files (rigs/README.md) and the frame's step 4: a skull that stays, a jaw that
+ * turns about its hinge, landmarks and channels that mappings can aim at.
+ *
+ * A rig file (JSON) names, for one mesh: its unit (mm_per_unit) and face axes; regions of
+ * vertices (skull: never moves; jaw: turns rigidly about the hinge; soft: everything else);
+ * the jaw hinge (the axis through the two temporomandibular joints), its opening angle and
+ * the soft-tissue falloff; landmarks by vertex index; channels (named scalars with ranges).
+ *
+ * Typical use (the session's rig step, once per frame):
+ *
+ *     fp_rig *rig;
+ *     fp_rig_load_for_mesh(path, n, rest_positions, &rig, err, sizeof err);  // load + bind
+ *     float vals[FP_RIG_MAX_CHANNELS];
+ *     fp_rig_channel_values(rig, control_set.channels, control_set.channel_count, vals);
+ *     fp_rig_pose(rig, base, vals, posed);          // the jaw about its hinge
+ *     // the engine: csrbf_points on `posed`, fingers' control vectors start -> end,
+ *     csrbf_evaluate(solver, posed_points, warped, 0, NULL);
+ *     fp_rig_apply_mobility(rig, posed, warped, out);  // skull and jaw exactly as posed
+ *
+ * Keeping the skull still under the fingers: the mobility weight (chosen approach).
+ * Each vertex has a mobility m in [0, 1]: 0 on every skull and jaw vertex, rising smoothly
+ * (smoothstep) with the distance d to the nearest skull or jaw vertex to 1 at d >= ramp
+ * (rig field "mobility.ramp", mesh units). The fingers' map T (any engine result) is blended
+ * per vertex: out = posed + m * (T(posed) - posed), and vertices with m == 0 are copied bit
+ * for bit. Why this and not extra CSRBF constraint centres (zero displacement on the skull,
+ * the hinge motion on the jaw) solved with the fingers:
+ *  - exactness: an interpolating CSRBF only pins its centres; every skull vertex between
+ *    centres would still move a little, so a mask is needed anyway to make it exactly 0;
+ *  - cost: the factorization of the fingers alone is untouched (10 centres, not 1000-5000),
+ *    and the blend is one multiply-add per vertex;
+ *  - injectivity: centres of zero displacement next to a finger force steep coefficients
+ *    (the fold-over guard trips); the blend's Jacobian is I + m J_T + (T - x) grad(m)^T,
+ *    whose extra term is bounded by |T - x| / ramp * 1.5 (max slope of smoothstep), so a
+ *    session that keeps finger displacements below ramp / 3 (and the engine's own 0.45 R
+ *    guard) keeps the blended map injective. fp_rig_max_finger_displacement() gives it.
+ * The rig's pose itself (the jaw about its hinge, rotated by a smooth fraction of the angle)
+ * is applied before the fingers, so a finger's start point is taken on the posed base.
+ *
+ * Units: positions in mesh units (the mesh file's own), angles in degrees in the file and
+ * the API unless named _rad. Thread rules: a bound rig is immutable; every const function
+ * may run concurrently from any thread ([any-thread]). Load, bind and free: one thread.
+ * Errors: 0 or a negative errno (fp_error.h); a message naming the file and the field as a
+ * JSON path ("rigs/x.json: jaw.hinge.left[2]: expected a number") goes into err.
+ * The library never prints. Link: static library fp_rig (cJSON, zlib, libm).
+ */
+#ifndef FP_RIG_H
+#define FP_RIG_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** The rig format version this library reads (the file's "version"). */
+#define FP_RIG_FORMAT_VERSION 1
+/** At most this many channels, regions and landmarks in one rig. */
+#define FP_RIG_MAX_CHANNELS 32
+#define FP_RIG_MAX_REGIONS 64
+#define FP_RIG_MAX_LANDMARKS 256
+/** Longest name (region, landmark, channel), bytes, without the NUL. */
+#define FP_RIG_NAME_MAX 31
+
+/** Kind of a region / a vertex. Same numbers as fp_rig_region of plugin.h (ABI 1.1). */
+enum {
+    FP_RIG_SOFT = 0,   /* soft tissue: posed by the falloff, free for the fingers */
+    FP_RIG_SKULL = 1,  /* rigid with the skull: never moves (bit-identical) */
+    FP_RIG_JAW = 2     /* rigid with the jaw: turns about the hinge, fingers cannot move it */
+};
+
+typedef struct fp_rig fp_rig;
+
+/** One region of the file: name, kind, number of vertices. */
+typedef struct fp_rig_region_desc {
+    const char *name;
+    int kind;          /* FP_RIG_SOFT / SKULL / JAW */
+    size_t count;      /* vertices listed (after removing repeats) */
+} fp_rig_region_desc;
+
+/** One channel: name, range, neutral value (the value at rest). */
+typedef struct fp_rig_channel_desc {
+    const char *name;
+    float min, max, neutral;
+} fp_rig_channel_desc;
+
+/** Parse a rig from `len` bytes of JSON (need not be NUL-terminated). `name` (e.g. the file
+ *  path) starts every message. Checks the structure, every type, unknown fields, ranges,
+ *  index ranges against the file's own mesh.vertex_count, overlapping regions, landmark and
+ *  channel names, axes (unit, orthogonal, right-handed: left = up x forward), and that the
+ *  hinge axis runs along the left axis (within 30 degrees). The rig is not yet bound to a
+ *  mesh: fp_rig_bind() must follow before posing.
+ *  Returns 0 and *out (free with fp_rig_free), or -EBADMSG (malformed or invalid; message
+ *  "NAME: json.path: reason"), -ENOMEM, -EINVAL (NULL arguments). Never crashes on any bytes
+ *  (fuzzed: tests/fuzz/fuzz_rig.c). */
+int fp_rig_parse(const char *json, size_t len, const char *name, fp_rig **out, char *err,
+                 size_t errlen);
+
+/** Read and parse a rig file. Errors as fp_rig_parse, plus -ENOENT / -EACCES / -EIO. */
+int fp_rig_load(const char *path, fp_rig **out, char *err, size_t errlen);
+
+/** Bind a parsed rig to its mesh's rest positions (n x 3 floats, mesh units): checks that
+ *  n equals the rig's mesh.vertex_count and that each hinge point lies inside the mesh's
+ *  bounding box and within 60 mm of a vertex (a hinge "inside nothing" is refused), then
+ *  computes the per-vertex jaw weights (the falloff) and mobility weights. The checksum
+ *  (mesh.positions_crc32) need not match: a rig fits any shape of its topology (an identity
+ *  morph, a committed base); fp_rig_checksum_matches() tells. O(n) plus a grid search.
+ *  Returns 0, -EBADMSG (does not fit; message names the field), -ENOMEM, -EINVAL. */
+int fp_rig_bind(fp_rig *rig, size_t n, const float *positions, char *err, size_t errlen);
+
+/** fp_rig_load then fp_rig_bind. */
+int fp_rig_load_for_mesh(const char *path, size_t n, const float *positions, fp_rig **out,
+                         char *err, size_t errlen);
+
+/** Free a rig; sets *rig to NULL. NULL and *NULL are no-ops. */
+void fp_rig_free(fp_rig **rig);
+
+/** zlib crc32 of the positions as n*3 little-endian IEEE-754 floats: the mesh checksum a
+ *  rig file records (mesh.positions_crc32). */
+uint32_t fp_rig_positions_crc32(size_t n, const float *positions);
+
+/** Whether positions (n x 3) have the checksum the rig records: 1 yes, 0 no. */
+int fp_rig_checksum_matches(const fp_rig *rig, size_t n, const float *positions);
+
+/** Find the rig of a mesh among the *.json files of `dir`: the file whose mesh checksum
+ *  matches; else the only one whose vertex count matches. Files that do not parse are
+ *  skipped. Writes its path into path_out. Returns 0, -ENOENT (none, or several with that
+ *  vertex count and none by checksum; message says which), -ENAMETOOLONG, -EINVAL. */
+int fp_rig_find(const char *dir, size_t n, const float *positions, char *path_out,
+                size_t path_len, char *err, size_t errlen);
+
+/** The rig's name (file "name"), its file's name (as given to parse/load), the vertex
+ *  count it fits, the mesh name it records (may be ""). Strings owned by the rig. */
+const char *fp_rig_name(const fp_rig *rig);
+const char *fp_rig_source(const fp_rig *rig);
+size_t fp_rig_vertex_count(const fp_rig *rig);
+const char *fp_rig_mesh_name(const fp_rig *rig);
+uint32_t fp_rig_mesh_crc32(const fp_rig *rig);
+
+/** The mesh's unit in millimetres (e.g. 10 for a mesh in centimetres). */
+double fp_rig_mm_per_unit(const fp_rig *rig);
+
+/** Face axes, unit vectors in mesh coordinates: up (chin to crown), forward (out of the
+ *  face), left (the face's own left). Any pointer may be NULL. */
+void fp_rig_axes(const fp_rig *rig, float up[3], float forward[3], float left[3]);
+
+/** Region kind of every vertex: n bytes of FP_RIG_* values, owned by the rig. */
+const uint8_t *fp_rig_vertex_kinds(const fp_rig *rig);
+
+/** Number of regions and the i-th (0 <= i < count). Returns 0 or -EINVAL (i out of range). */
+size_t fp_rig_region_count(const fp_rig *rig);
+int fp_rig_region_get(const fp_rig *rig, size_t i, fp_rig_region_desc *out);
+
+/** Landmarks: count, the i-th name and vertex, and lookup by name (vertex index, or -ENOENT). */
+size_t fp_rig_landmark_count(const fp_rig *rig);
+int fp_rig_landmark_get(const fp_rig *rig, size_t i, const char **name, uint32_t *vertex);
+long fp_rig_landmark_index(const fp_rig *rig, const char *name);
+
+/** Channels: count, the i-th, lookup by name (index, or -ENOENT). */
+size_t fp_rig_channel_count(const fp_rig *rig);
+int fp_rig_channel_get(const fp_rig *rig, size_t i, fp_rig_channel_desc *out);
+long fp_rig_channel_index(const fp_rig *rig, const char *name);
+
+/** Check one value for a channel: 0 when name exists and min <= value <= max; -ENOENT
+ *  (unknown channel) or -ERANGE (outside, or NaN), with a message. For the command line,
+ *  which refuses out-of-range values; fp_rig_pose clamps instead. */
+int fp_rig_channel_check(const fp_rig *rig, const char *name, double value, char *err,
+                         size_t errlen);
+
+/** Fill values[fp_rig_channel_count] from named pairs (the control set's channels, plugin.h
+ *  fp_channel is {char name[32]; float value;}: pass them as parallel arrays here to keep
+ *  this library free of the plugin ABI): channels not named keep their neutral value; names
+ *  the rig does not have are ignored and counted. Returns that count (>= 0). No allocation. */
+int fp_rig_channel_values(const fp_rig *rig, const char *const *names, const float *vals,
+                          size_t n, float *values);
+
+/** The jaw: hinge points (right and left temporomandibular joints, mesh units), the opening
+ *  angle at jaw.open = 1 (degrees; jaw.open = x turns by x times it), and the glide (the
+ *  jaw's translation at jaw.open = 1, mesh units, forward and down). Any pointer may be NULL. */
+void fp_rig_hinge(const fp_rig *rig, float right[3], float left[3], double *open_degrees,
+                  double glide[2]);
+
+/** Per-vertex weights after fp_rig_bind (NULL before): the jaw weight w (fraction of the
+ *  jaw's motion a vertex takes: 1 on the jaw, 0 on the skull, the falloff in soft tissue)
+ *  and the mobility m (see the top of this file). n floats each, owned by the rig. */
+const float *fp_rig_jaw_weights(const fp_rig *rig);
+const float *fp_rig_mobility(const fp_rig *rig);
+
+/** Pose the base by the channels: out[v] = H + R(w_v * theta) (base[v] - H) + w_v * glide,
+ *  where H is the right hinge point, R(a) the rotation by a about the hinge axis (right to
+ *  left TMJ; positive opens the mouth: the chin goes down and back), theta = jaw.open *
+ *  open_degrees and w_v the vertex's jaw weight. Skull vertices and every vertex with
+ *  w_v == 0 are copied bit for bit; jaw vertices (w = 1) move rigidly. Computed in double.
+ *  base, out: n x 3 floats (n = fp_rig_vertex_count), may be the same array. values: the
+ *  channel values in the rig's channel order (fp_rig_channel_values), NULL = neutral; values
+ *  outside a channel's range are clamped to it (a mapping's noise must not fail a frame),
+ *  NaN counts as neutral. Returns 0, -EINVAL (NULL, rig not bound). [any-thread], no
+ *  allocation. Source: rigs/README.md "Jaw" (rotation about a fixed axis, Rodrigues). */
+int fp_rig_pose(const fp_rig *rig, const float *base, const float *values, float *out);
+
+/** Blend the fingers' result into the posed shape: out[v] = posed[v] + m_v (warped[v] -
+ *  posed[v]); vertices with m_v == 0 (skull, jaw) are copied from posed bit for bit. Arrays
+ *  n x 3 floats; out may alias posed or warped. Returns 0 or -EINVAL. [any-thread]. */
+int fp_rig_apply_mobility(const fp_rig *rig, const float *posed, const float *warped,
+                          float *out);
+
+/** The largest finger displacement (mesh units) for which the blended map stays injective
+ *  by the bound above: mobility.ramp / 3. The session clamps control vectors to the smaller
+ *  of this and the engine's fold-over bound. */
+double fp_rig_max_finger_displacement(const fp_rig *rig);
+
+/** The folder of the rig files: $FACEPUPPET_RIGS when set; else <exe_dir>/../share/
+ *  facepuppet/rigs when it exists (installed); else the source tree's rigs/ (compiled in as
+ *  FP_RIG_SOURCE_DIR). Writes it into buf (truncated to len) and returns buf. */
+const char *fp_rig_default_dir(const char *exe_dir, char *buf, size_t len);
+
+/** Print-free description for `facepuppet info RIG`: writes lines (regions with counts,
+ *  landmarks, hinge, channels, and, when positions are given, whether the rig fits them) into
+ *  buf (truncated, NUL-terminated). Returns the length it needed (like snprintf). */
+size_t fp_rig_describe(const fp_rig *rig, size_t n, const float *positions, char *buf,
+                       size_t len);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,396 @@
+/* Tests of core/rig against the three faces of ../shared/data and broken rig files. */
+#define _GNU_SOURCE
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include "csrbf.h"
+#include "fp_mesh.h"
+#include "fp_rig.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static const char *data_dir(void)
+{
+    const char *d = getenv("FP_SHARED_DATA");
+    return d && *d ? d : "../shared/data";
+}
+
+static fp_mesh *load_face(const char *rel)
+{
+    char path[4096];
+    snprintf(path, sizeof path, "%s/faces/%s", data_dir(), rel);
+    fp_mesh *m = NULL;
+    char err[512];
+    int rc = fp_mesh_load(path, &m, err, sizeof err);
+    if (rc) fprintf(stderr, "%s\n", err);
+    assert_int_equal(rc, 0);
+    return m;
+}
+
+static fp_rig *find_rig(const fp_mesh *m)
+{
+    char path[4096], err[512];
+    int rc = fp_rig_find(FP_TEST_RIGS_DIR, m->vertex_count, m->positions, path, sizeof path, err, sizeof err);
+    if (rc) fprintf(stderr, "%s\n", err);
+    assert_int_equal(rc, 0);
+    fp_rig *r = NULL;
+    rc = fp_rig_load_for_mesh(path, m->vertex_count, m->positions, &r, err, sizeof err);
+    if (rc) fprintf(stderr, "%s\n", err);
+    assert_int_equal(rc, 0);
+    assert_true(fp_rig_checksum_matches(r, m->vertex_count, m->positions));
+    return r;
+}
+
+/* Jacobi eigen-decomposition of a symmetric 4x4 matrix: largest eigenvector. */
+static void eig4_max(double A[4][4], double v[4])
+{
+    double V[4][4] = {{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}};
+    for (int sweep = 0; sweep < 100; sweep++) {
+        double off = 0;
+        for (int p = 0; p < 4; p++)
+            for (int q = p + 1; q < 4; q++) off += A[p][q] * A[p][q];
+        if (off < 1e-30) break;
+        for (int p = 0; p < 4; p++)
+            for (int q = p + 1; q < 4; q++) {
+                if (fabs(A[p][q]) < 1e-300) continue;
+                double th = 0.5 * atan2(2 * A[p][q], A[q][q] - A[p][p]);
+                double c = cos(th), s = sin(th);
+                for (int k = 0; k < 4; k++) {
+                    double akp = A[k][p], akq = A[k][q];
+                    A[k][p] = c * akp - s * akq, A[k][q] = s * akp + c * akq;
+                }
+                for (int k = 0; k < 4; k++) {
+                    double apk = A[p][k], aqk = A[q][k];
+                    A[p][k] = c * apk - s * aqk, A[q][k] = s * apk + c * aqk;
+                }
+                for (int k = 0; k < 4; k++) {
+                    double vkp = V[k][p], vkq = V[k][q];
+                    V[k][p] = c * vkp - s * vkq, V[k][q] = s * vkp + c * vkq;
+                }
+            }
+    }
+    int best = 0;
+    for (int i = 1; i < 4; i++)
+        if (A[i][i] > A[best][best]) best = i;
+    for (int i = 0; i < 4; i++) v[i] = V[i][best];
+}
+
+/* Best rigid fit (Horn's quaternion method) of vertices `sel` from a to b: returns the RMS
+ * residual, the RMS displacement and the rotation angle in degrees. */
+static void rigid_fit(const float *a, const float *b, const uint8_t *kinds, int kind, size_t n, double *resid,
+                      double *disp, double *angle_deg)
+{
+    double ca[3] = {0}, cb[3] = {0};
+    size_t k = 0;
+    for (size_t v = 0; v < n; v++)
+        if (kinds[v] == kind) {
+            for (int i = 0; i < 3; i++) ca[i] += a[3 * v + i], cb[i] += b[3 * v + i];
+            k++;
+        }
+    assert_true(k > 3);
+    for (int i = 0; i < 3; i++) ca[i] /= (double)k, cb[i] /= (double)k;
+    double S[3][3] = {{0}};
+    for (size_t v = 0; v < n; v++)
+        if (kinds[v] == kind)
+            for (int i = 0; i < 3; i++)
+                for (int j = 0; j < 3; j++) S[i][j] += (a[3 * v + i] - ca[i]) * (b[3 * v + j] - cb[j]);
+    double N[4][4] = {
+        {S[0][0] + S[1][1] + S[2][2], S[1][2] - S[2][1], S[2][0] - S[0][2], S[0][1] - S[1][0]},
+        {S[1][2] - S[2][1], S[0][0] - S[1][1] - S[2][2], S[0][1] + S[1][0], S[2][0] + S[0][2]},
+        {S[2][0] - S[0][2], S[0][1] + S[1][0], -S[0][0] + S[1][1] - S[2][2], S[1][2] + S[2][1]},
+        {S[0][1] - S[1][0], S[2][0] + S[0][2], S[1][2] + S[2][1], -S[0][0] - S[1][1] + S[2][2]}};
+    double q[4];
+    eig4_max(N, q);
+    double w = q[0], x = q[1], y = q[2], z = q[3];
+    double R[9] = {w * w + x * x - y * y - z * z, 2 * (x * y - w * z), 2 * (x * z + w * y),
+                   2 * (x * y + w * z), w * w - x * x + y * y - z * z, 2 * (y * z - w * x),
+                   2 * (x * z - w * y), 2 * (y * z + w * x), w * w - x * x - y * y + z * z};
+    double r2 = 0, d2 = 0;
+    for (size_t v = 0; v < n; v++)
+        if (kinds[v] == kind) {
+            double p[3] = {a[3 * v] - ca[0], a[3 * v + 1] - ca[1], a[3 * v + 2] - ca[2]};
+            for (int i = 0; i < 3; i++) {
+                double t = cb[i] + R[3 * i] * p[0] + R[3 * i + 1] * p[1] + R[3 * i + 2] * p[2];
+                r2 += (t - b[3 * v + i]) * (t - b[3 * v + i]);
+                d2 += (b[3 * v + i] - a[3 * v + i]) * (b[3 * v + i] - a[3 * v + i]);
+            }
+        }
+    *resid = sqrt(r2 / (double)k);
+    *disp = sqrt(d2 / (double)k);
+    *angle_deg = acos(fmin(1, fmax(-1, (R[0] + R[4] + R[8] - 1) / 2))) * 180 / M_PI;
+}
+
+static void assert_skull_still(const fp_rig *r, const float *ref, const float *out)
+{
+    const uint8_t *kinds = fp_rig_vertex_kinds(r);
+    size_t bad = 0;
+    for (size_t v = 0; v < fp_rig_vertex_count(r); v++)
+        if (kinds[v] == FP_RIG_SKULL && memcmp(&ref[3 * v], &out[3 * v], 3 * sizeof(float))) bad++;
+    assert_int_equal(bad, 0);
+}
+
+static void test_ict_pose(void **state)
+{
+    (void)state;
+    fp_mesh *m = load_face("ict-facekit/generic_neutral_mesh.obj");
+    fp_rig *r = find_rig(m);
+    assert_string_equal(fp_rig_name(r), "ict-facekit");
+    size_t n = m->vertex_count;
+    float *out = malloc(n * 3 * sizeof *out);
+    float vals[FP_RIG_MAX_CHANNELS];
+    const char *names[] = {"jaw.open", "no.such"};
+    const float v1[] = {1.0f, 3.0f};
+    assert_int_equal(fp_rig_channel_values(r, names, v1, 2, vals), 1);
+    assert_int_equal(fp_rig_pose(r, m->positions, vals, out), 0);
+    assert_skull_still(r, m->positions, out);
+    double resid, disp, angle, deg;
+    fp_rig_hinge(r, NULL, NULL, &deg, NULL);
+    rigid_fit(m->positions, out, fp_rig_vertex_kinds(r), FP_RIG_JAW, n, &resid, &disp, &angle);
+    printf("ICT jaw.open=1: lower jaw residual %.3g (%.4f%% of displacement %.3f), angle %.3f (rig %.1f)\n",
+           resid, 100 * resid / disp, disp, angle, deg);
+    assert_true(resid < 0.01 * disp);
+    assert_true(fabs(angle - deg) < 0.5);
+    /* out of range values are clamped: 3 behaves as 1 */
+    float *out2 = malloc(n * 3 * sizeof *out2);
+    vals[fp_rig_channel_index(r, "jaw.open")] = 3.0f;
+    fp_rig_pose(r, m->positions, vals, out2);
+    assert_memory_equal(out, out2, n * 3 * sizeof *out);
+    /* the command line refuses them */
+    char err[256];
+    assert_int_equal(fp_rig_channel_check(r, "jaw.open", 1.5, err, sizeof err), -ERANGE);
+    assert_non_null(strstr(err, "jaw.open"));
+    assert_int_equal(fp_rig_channel_check(r, "jaw.shut", 0.5, err, sizeof err), -ENOENT);
+    /* landmarks: the chin goes down and back, the upper lip stays, the lower lip follows */
+    long chin = fp_rig_landmark_index(r, "chin"), ul = fp_rig_landmark_index(r, "upper_lip"),
+         ll = fp_rig_landmark_index(r, "lower_lip"), nose = fp_rig_landmark_index(r, "nose_tip");
+    assert_true(chin >= 0 && ul >= 0 && ll >= 0 && nose >= 0);
+    assert_true(out[3 * chin + 1] < m->positions[3 * chin + 1] - 1.0); /* down > 1 cm */
+    assert_true(out[3 * chin + 2] < m->positions[3 * chin + 2]);       /* back */
+    assert_true(fabsf(out[3 * ul + 1] - m->positions[3 * ul + 1]) < 0.05f);
+    assert_true(out[3 * ll + 1] < m->positions[3 * ll + 1] - 0.8);
+    assert_memory_equal(&out[3 * nose], &m->positions[3 * nose], 3 * sizeof(float));
+    /* neutral pose is the base, bit for bit */
+    fp_rig_pose(r, m->positions, NULL, out2);
+    assert_memory_equal(m->positions, out2, n * 3 * sizeof *out);
+    free(out), free(out2);
+    fp_rig_free(&r);
+    fp_mesh_free(&m);
+}
+
+/* Fingers pressing on the forehead with the jaw fully open, through the engine. */
+static void test_ict_fingers(void **state)
+{
+    (void)state;
+    fp_mesh *m = load_face("ict-facekit/generic_neutral_mesh.obj");
+    fp_rig *r = find_rig(m);
+    size_t n = m->vertex_count;
+    float *posed = malloc(n * 3 * sizeof *posed), *warped = malloc(n * 3 * sizeof *warped),
+          *out = malloc(n * 3 * sizeof *out);
+    float vals[FP_RIG_MAX_CHANNELS];
+    fp_rig_channel_values(r, NULL, NULL, 0, vals);
+    vals[fp_rig_channel_index(r, "jaw.open")] = 1.0f;
+    assert_int_equal(fp_rig_pose(r, m->positions, vals, posed), 0);
+    /* five fingertips on the forehead above the brows, pushed 1 cm into the head, and one on
+     * the chin pushed up: R = 4 cm (the supports reach the brows and the lower lip) */
+    long brow_l = fp_rig_landmark_index(r, "brow_left"), brow_r = fp_rig_landmark_index(r, "brow_right"),
+         chin = fp_rig_landmark_index(r, "chin");
+    float up[3], fwd[3];
+    fp_rig_axes(r, up, fwd, NULL);
+    float start[6][3], end[6][3];
+    for (int f = 0; f < 5; f++) {
+        double t = f / 4.0;
+        for (int i = 0; i < 3; i++) {
+            start[f][i] = (float)((1 - t) * posed[3 * brow_r + i] + t * posed[3 * brow_l + i] + 2.0 * up[i]);
+            end[f][i] = start[f][i] - 1.0f * fwd[i];
+        }
+    }
+    for (int i = 0; i < 3; i++) start[5][i] = posed[3 * chin + i], end[5][i] = start[5][i] + 0.8f * up[i];
+    csrbf_options o = {0};
+    o.radius = 4.0;
+    csrbf_solver *s = NULL;
+    csrbf_points *pts = NULL;
+    assert_int_equal(csrbf_solver_create(&o, &s), 0);
+    assert_true(csrbf_solver_solve(s, 6, &start[0][0], &end[0][0]) >= 0);
+    assert_int_equal(csrbf_points_create(n, posed, &pts), 0);
+    csrbf_eval_stats st;
+    assert_int_equal(csrbf_evaluate(s, pts, warped, 0, &st), 0);
+    assert_true(st.max_displacement > 0.5); /* the fingers did move the raw map */
+    assert_int_equal(fp_rig_apply_mobility(r, posed, warped, out), 0);
+    assert_skull_still(r, posed, out);
+    /* every skull vertex is also bit-identical to the posed base, which is the base itself */
+    assert_skull_still(r, m->positions, out);
+    double resid, disp, angle, deg;
+    fp_rig_hinge(r, NULL, NULL, &deg, NULL);
+    rigid_fit(m->positions, out, fp_rig_vertex_kinds(r), FP_RIG_JAW, n, &resid, &disp, &angle);
+    printf("ICT fingers + jaw.open=1: jaw residual %.3g = %.4f%% of %.3f, angle %.3f (rig %.1f)\n", resid,
+           100 * resid / disp, disp, angle, deg);
+    assert_true(resid < 0.01 * disp);
+    assert_true(fabs(angle - deg) < 0.5);
+    /* soft tissue under the fingers did move: the brows went in */
+    double moved = 0;
+    const float *mob = fp_rig_mobility(r);
+    for (size_t v = 0; v < n; v++)
+        if (mob[v] > 0.5f) moved = fmax(moved, fabs(out[3 * v + 2] - posed[3 * v + 2]));
+    assert_true(moved > 0.2);
+    csrbf_points_destroy(&pts);
+    csrbf_solver_destroy(&s);
+    free(posed), free(warped), free(out);
+    fp_rig_free(&r);
+    fp_mesh_free(&m);
+}
+
+static void other_face(const char *rel, const char *name)
+{
+    fp_mesh *m = load_face(rel);
+    fp_rig *r = find_rig(m);
+    assert_string_equal(fp_rig_name(r), name);
+    size_t n = m->vertex_count;
+    float *out = malloc(n * 3 * sizeof *out);
+    float vals[FP_RIG_MAX_CHANNELS];
+    fp_rig_channel_values(r, NULL, NULL, 0, vals);
+    vals[fp_rig_channel_index(r, "jaw.open")] = 1.0f;
+    assert_int_equal(fp_rig_pose(r, m->positions, vals, out), 0);
+    assert_skull_still(r, m->positions, out);
+    long chin = fp_rig_landmark_index(r, "chin");
+    float up[3];
+    fp_rig_axes(r, up, NULL, NULL);
+    double dy = 0;
+    for (int i = 0; i < 3; i++) dy += (out[3 * chin + i] - m->positions[3 * chin + i]) * up[i];
+    printf("%s: chin moves %.2f mm along up at jaw.open=1\n", name, dy * fp_rig_mm_per_unit(r));
+    assert_true(dy * fp_rig_mm_per_unit(r) < -10); /* down by more than 1 cm */
+    double resid, disp, angle, deg;
+    fp_rig_hinge(r, NULL, NULL, &deg, NULL);
+    rigid_fit(m->positions, out, fp_rig_vertex_kinds(r), FP_RIG_JAW, n, &resid, &disp, &angle);
+    assert_true(resid < 0.01 * disp);
+    assert_true(fabs(angle - deg) < 0.5);
+    free(out);
+    fp_rig_free(&r);
+    fp_mesh_free(&m);
+}
+
+static void test_lee_perry_smith(void **state)
+{
+    (void)state;
+    other_face("lee-perry-smith/LeePerrySmith.obj", "lee-perry-smith");
+}
+
+static void test_mediapipe(void **state)
+{
+    (void)state;
+    other_face("mediapipe-canonical/canonical_face_model.obj", "mediapipe-canonical");
+}
+
+static char *read_text(const char *path, size_t *len)
+{
+    FILE *f = fopen(path, "rb");
+    assert_non_null(f);
+    fseek(f, 0, SEEK_END);
+    long l = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    char *b = malloc((size_t)l + 1);
+    assert_int_equal(fread(b, 1, (size_t)l, f), (size_t)l);
+    b[l] = 0;
+    fclose(f);
+    *len = (size_t)l;
+    return b;
+}
+
+/* Replace the first occurrence of `from` by `to` in text (a new string). */
+static char *edit(const char *text, const char *from, const char *to)
+{
+    const char *p = strstr(text, from);
+    assert_non_null(p);
+    size_t a = (size_t)(p - text), lf = strlen(from), lt = strlen(to), lt0 = strlen(text);
+    char *o = malloc(lt0 - lf + lt + 1);
+    memcpy(o, text, a);
+    memcpy(o + a, to, lt);
+    memcpy(o + a + lt, p + lf, lt0 - a - lf + 1);
+    return o;
+}
+
+static void test_broken_files(void **state)
+{
+    (void)state;
+    size_t len;
+    char *good = read_text(FP_TEST_RIGS_DIR "/ict-facekit.json", &len);
+    fp_rig *r = NULL;
+    char err[1024];
+    assert_int_equal(fp_rig_parse(good, len, "ict.json", &r, err, sizeof err), 0);
+    fp_rig_free(&r);
+    static const struct {
+        const char *from, *to, *field;
+    } cases[] = {
+        {"\"version\": 1", "\"version\": 2", "version"},
+        {"\"version\": 1", "\"version\": \"1\"", "version"},
+        {"\"format\": \"facepuppet-rig\"", "\"format\": \"x\"", "format"},
+        {"\"vertex_count\": 26719", "\"vertex_count\": 26719.5", "mesh.vertex_count"},
+        {"\"positions_crc32\": \"", "\"positions_crc32\": \"zz", "mesh.positions_crc32"},
+        {"\"mm_per_unit\": 10.0", "\"mm_per_unit\": -1", "mm_per_unit"},
+        {"\"up\": [0, 1, 0]", "\"up\": [0, 2, 0]", "axes.up"},
+        {"\"left\": [1, 0, 0]", "\"left\": [-1, 0, 0]", "axes.left"},
+        {"\"forward\": [0, 0, 1]", "\"forward\": [0, 0]", "axes.forward"},
+        {"\"kind\": \"skull\"", "\"kind\": \"bone\"", "regions[0].kind"},
+        {"\"vertices\": [", "\"vertices\": [99999999, ", "regions[0].vertices[0]"},
+        {"\"vertices\": [", "\"vertices\": [[10, 5], ", "regions[0].vertices[0]"},
+        {"\"vertices\": [", "\"vertices\": [-1, ", "regions[0].vertices[0]"},
+        {"\"vertices\": [", "\"vertices\": [19300, ", "regions[5].vertices"}, /* a lower tooth: overlaps jaw */
+        {"\"chin\": ", "\"chin\": 26719, \"x\": ", "landmarks.chin"},
+        {"\"nose_tip\": ", "\"nose tip\": ", "landmarks.nose tip"},
+        {"\"right\": [", "\"right\": [\"a\", ", "jaw.hinge.right"},
+        {"\"right\": [", "\"right\": [0, 0, 0], \"x\": [", "jaw.hinge.x"},
+        {"\"open_degrees\": 26.0", "\"open_degrees\": 90", "jaw.open_degrees"},
+        {"\"lip_band\": ", "\"lip_band\": -", "jaw.falloff.lip_band"},
+        {"\"ramp\": ", "\"ramp\": null, \"r\": ", "mobility.r"},
+        {"\"name\": \"jaw.open\"", "\"name\": \"jaw.shut\"", "channels"},
+        {"\"max\": 1", "\"max\": -1", "channels[0]"},
+        {"\"mobility\": {", "\"extra\": 1, \"mobility\": {", "extra"},
+        {"{", "[", ""},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        char *bad = edit(good, cases[i].from, cases[i].to);
+        err[0] = 0;
+        int rc = fp_rig_parse(bad, strlen(bad), "broken.json", &r, err, sizeof err);
+        printf("case %zu: %s\n", i, err);
+        assert_int_equal(rc, -EBADMSG);
+        assert_null(r);
+        assert_non_null(strstr(err, "broken.json"));
+        assert_non_null(strstr(err, cases[i].field));
+        free(bad);
+    }
+    /* truncations at every 997th byte never crash and always fail */
+    for (size_t cut = 0; cut < len - 2; cut += 997) {
+        int rc = fp_rig_parse(good, cut, "cut.json", &r, err, sizeof err);
+        assert_int_equal(rc, -EBADMSG);
+    }
+    /* a hinge outside the head and a mesh of another size are refused at bind */
+    fp_mesh *m = load_face("ict-facekit/generic_neutral_mesh.obj");
+    char *far = edit(good, "\"right\": [", "\"right\": [-500, ");
+    char *far2 = edit(far, "-500, -5.0, ", "-500, ");
+    assert_int_equal(fp_rig_parse(far2, strlen(far2), "far.json", &r, err, sizeof err), 0);
+    assert_int_equal(fp_rig_bind(r, m->vertex_count, m->positions, err, sizeof err), -EBADMSG);
+    assert_non_null(strstr(err, "jaw.hinge.right"));
+    assert_int_equal(fp_rig_bind(r, 100, m->positions, err, sizeof err), -EBADMSG);
+    assert_non_null(strstr(err, "mesh.vertex_count"));
+    fp_rig_free(&r);
+    free(far), free(far2);
+    assert_int_equal(fp_rig_load("no/such/rig.json", &r, err, sizeof err), -ENOENT);
+    fp_mesh_free(&m);
+    free(good);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_ict_pose),         cmocka_unit_test(test_ict_fingers),
+        cmocka_unit_test(test_lee_perry_smith),  cmocka_unit_test(test_mediapipe),
+        cmocka_unit_test(test_broken_files),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
