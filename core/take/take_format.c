@@ -395,10 +395,27 @@ static void add_i64(cJSON *o, const char *key, int64_t v)
     cJSON_AddStringToObject(o, key, buf);
 }
 
+/* A JSON number that reads back as the same double (cJSON's own printing compares with an
+ * epsilon and may lose the last bit): the shortest of %.15g, %.16g, %.17g that round-trips. */
+static cJSON *exact_number(double d)
+{
+    char buf[40];
+    for (int prec = 15; prec <= 17; prec++) {
+        snprintf(buf, sizeof buf, "%.*g", prec, d);
+        if (strtod(buf, NULL) == d) break;
+    }
+    return cJSON_CreateRaw(buf);
+}
+
+static void add_number(cJSON *o, const char *key, double d)
+{
+    cJSON_AddItemToObject(o, key, exact_number(d));
+}
+
 static cJSON *darray(const double *v, int n)
 {
     cJSON *a = cJSON_CreateArray();
-    for (int i = 0; i < n; i++) cJSON_AddItemToArray(a, cJSON_CreateNumber(v[i]));
+    for (int i = 0; i < n; i++) cJSON_AddItemToArray(a, exact_number(v[i]));
     return a;
 }
 
@@ -440,12 +457,12 @@ char *take_header_to_json(const fp_take_header *h)
             continue;
         }
         cJSON *e = cJSON_CreateObject();
-        cJSON_AddNumberToObject(e, "scale", c->scale);
+        add_number(e, "scale", c->scale);
         cJSON_AddItemToObject(e, "rotation", darray(c->rotation, 4));
         cJSON_AddItemToObject(e, "offset", darray(c->offset, 3));
         cJSON_AddItemToArray(cal, e);
     }
-    cJSON_AddNumberToObject(o, "radius", h->radius);
+    add_number(o, "radius", h->radius);
     add_str(o, "description", h->description ? h->description : "");
     cJSON_AddNumberToObject(o, "rating", h->rating);
     char *text = cJSON_PrintUnformatted(o);

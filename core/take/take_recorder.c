@@ -219,24 +219,20 @@ int fp_take_recorder_close(fp_take_recorder **rp, fp_take_recorder_status *st, c
     atomic_store_explicit(&rec->stop, true, memory_order_release);
     pthread_join(rec->thread, NULL);
     int error = atomic_load_explicit(&rec->error, memory_order_acquire);
-    /* Frames still in the ring after an error were never written: count them as dropped. */
-    uint64_t lost = 0;
-    for (uint64_t t = atomic_load(&rec->tail), h = atomic_load(&rec->head); t != h;) {
-        size_t pos = (size_t)(t & (rec->cap - 1));
-        uint32_t len = le_get32(rec->ring + pos), kind = le_get32(rec->ring + pos + 4);
-        lost += kind == SLOT_FRAME;
-        t += SLOT_HEAD + pad8(len);
-    }
-    atomic_fetch_add(&rec->dropped, lost);
-    uint64_t dropped = atomic_load(&rec->dropped);
+    /* Every frame offered is either on disk or dropped: refused by push, or lost after a
+     * write error (still in the ring or in the chunk that failed). */
+    uint64_t pushed = atomic_load(&rec->pushed), refused = atomic_load(&rec->dropped);
+    uint64_t on_disk = take_writer_frames(rec->w);
+    uint64_t will_be = on_disk + (error ? 0 : fp_take_writer_pending(rec->w));
     char msg[512] = "";
-    uint64_t written = take_writer_frames(rec->w) + fp_take_writer_pending(rec->w);
-    int rc = fp_take_writer_close(&rec->w, dropped, error, msg, sizeof msg);
-    if (!rc && !error) atomic_store(&rec->written, written);
+    int rc = fp_take_writer_close(&rec->w, refused + pushed - will_be, error, msg, sizeof msg);
     if (!error && rc) {
         error = rc;
         fail(rec, rc, msg);
+        will_be = on_disk;
     }
+    atomic_store(&rec->written, will_be);
+    atomic_store(&rec->dropped, refused + pushed - will_be);
     if (st) {
         fp_take_recorder_status_get(rec, st);
         st->stopped = true;
