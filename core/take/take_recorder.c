@@ -166,6 +166,7 @@ int fp_take_recorder_start(const char *dir, const fp_take_header *header,
         free(rec);
         return fp_errorf(err, errlen, -ENOMEM, "take recorder: out of memory for a %zu-byte ring", cap);
     }
+    memset(rec->ring, 0, cap);   /* touch every page now, not on the session thread */
     int rc = fp_take_writer_create(dir, header, &o.writer, &rec->w, err, errlen);
     if (rc) {
         free(rec->ring);
