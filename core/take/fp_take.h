@@ -240,7 +240,9 @@ typedef struct fp_take_recorder_options {
 
 typedef struct fp_take_recorder_status {
     uint64_t pushed;           /* frames accepted by fp_take_recorder_push */
-    uint64_t dropped;          /* frames refused: ring full, too large, or after an error */
+    uint64_t dropped;          /* frames refused: ring full, too large, or after an error;
+                                  after close also those lost in the ring or the failed
+                                  chunk, so that written + dropped = frames offered */
     uint64_t written;          /* frames on disk (in written chunks) */
     uint64_t bytes;            /* file size written so far */
     int error;                 /* 0, or the code that stopped the recording (-ENOSPC...) */
