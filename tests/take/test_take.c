@@ -439,8 +439,9 @@ static void test_sigkill_mid_take(void **state)
     assert_false(s->complete);             /* no TAIL: the process died */
     assert_true(got >= written);           /* everything reported on disk is there */
     assert_true(got <= pushed + 1);
-    /* At most the chunk being gathered, plus what reached the ring in the last few ms. */
-    assert_true(pushed - got <= 2 * chunk + 25);
+    /* At most the chunk being gathered plus what reached the ring while the recorder thread
+     * waited for a core (0.3 s at 500 frames a second on a loaded machine). */
+    assert_true(pushed - got <= chunk + 150);
     fp_take_reader_close(&r);
     munmap(sh, sizeof *sh);
     rm_rf(dir);
