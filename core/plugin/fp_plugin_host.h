@@ -103,6 +103,39 @@ void fp_plugin_unload(fp_plugin *plugin);
 /** Names of the plugins of `kind` on `path`, comma-separated into buf (for messages). */
 void fp_plugin_list(const fp_plugin_path *path, fp_plugin_kind kind, char *buf, size_t len);
 
+/** What a loaded plugin's factory says of itself (plugin.h), read only where the factory's
+ *  `size` covers a field: name, description, usage (NULL where absent) and, for an ABI 1.1
+ *  factory, the typed key list `params` (NULL-name terminated; NULL for a 1.0 factory or
+ *  one that declares none). Pointers into the plugin: valid until it is unloaded. */
+typedef struct fp_plugin_about {
+    const char *name, *description, *usage;
+    const fp_param_info *params;
+} fp_plugin_about;
+void fp_plugin_describe(const fp_plugin *plugin, fp_plugin_about *out);
+
+/** One candidate file that fp_plugin_scan found. */
+typedef struct fp_plugin_scan_item {
+    fp_plugin_kind kind;
+    const char *dir;           /* the folder it was found in */
+    const char *file;          /* full path */
+    const char *name;          /* the NAME of input-NAME.so / map-NAME.so */
+    bool shadowed;             /* a folder searched earlier has a plugin of that kind and name:
+                                  this one is never loaded by name (it is still inspected) */
+    int code;                  /* 0 loaded; an FP_EPLUGIN_* code (why it is broken); -EACCES
+                                  skipped for safety (not loaded) */
+    const char *error;         /* the reason where code != 0 */
+    const fp_plugin *plugin;   /* loaded where code == 0: entry and factory readable during
+                                  the callback only (the scan unloads it afterwards) */
+} fp_plugin_scan_item;
+
+/** Every `input-*.so` and `map-*.so` in every folder of `path`, in search order, each
+ *  file's names sorted: loaded (fp_plugin_load, which runs the plugin's init), passed to fn,
+ *  then unloaded. A file outside the built-in folder that fp_plugin_path_unsafe rejects is
+ *  passed with code -EACCES and not loaded. Returns how many files were passed.
+ *  [main-thread]: loading runs plugins' init functions. */
+size_t fp_plugin_scan(const fp_plugin_path *path,
+                      void (*fn)(void *user, const fp_plugin_scan_item *item), void *user);
+
 /* ---- the event queue: bounded, multi-producer single-consumer, lock-free ------------- */
 
 /** Bounded MPSC queue of fp_event (D. Vyukov's bounded queue, sequence number per cell).
