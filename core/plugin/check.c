@@ -157,7 +157,7 @@ static bool check_keys(creator *cr, const fp_param_info *info, bool *device)
     for (const fp_param_info *p = info; p->name && nd < FP_SPEC_MAX_PARAMS; p++) {
         bool given = false;
         for (size_t i = 0; i < c->opt->nparams; i++) given |= !strcmp(c->opt->params[i].key, p->name);
-        if (p->default_value && !given && p->type != FP_PARAM_PATH)
+        if (p->default_value && *p->default_value && !given && p->type != FP_PARAM_PATH)
             defaults[nd++] = (fp_param){p->name, p->default_value};
     }
     rc = create_with(cr, defaults, nd, &inst, msg, sizeof msg);

@@ -129,9 +129,9 @@ static void on_item(void *user, const fp_plugin_scan_item *it)
         for (const fp_param_info *p = about.params; p->name; p++) {
             char range[128];
             range_text(p, range, sizeof range);
-            printf("          %-10s %-6s %-18s default %-8s%s%s  %s\n", p->name, type_name(p->type), range,
-                   p->default_value ? p->default_value : "(required)", p->unit ? " " : "",
-                   p->unit ? p->unit : "", p->description ? p->description : "");
+            printf("          %-9s %-6s %-18s %-5s default %-8s %s\n", p->name, type_name(p->type), range,
+                   p->unit ? p->unit : "", !p->default_value ? "(required)" : *p->default_value ? p->default_value : "-",
+                   p->description ? p->description : "");
         }
     } else {
         printf("        keys: not declared (ABI 1.0 factory or no fp_param_info list)\n");
