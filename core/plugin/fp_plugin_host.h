@@ -197,8 +197,27 @@ int fp_input_instance_close_record(fp_input_instance *inst, char *err, size_t er
 /** CLOCK_MONOTONIC in nanoseconds: the host clock of the ABI. */
 int64_t fp_now_ns(void);
 
-/** Make the standard host services for a mapping instance (no queue). */
+/** Make the standard host services for a mapping instance (no queue); its log lines go to
+ *  stderr as "facepuppet: NAME: LEVEL: MESSAGE". `name` must outlive the host. Prefer
+ *  fp_mapping_host_init, which routes them through a log callback. */
 void fp_host_init_for_mapping(fp_host *host, const char *name);
+
+/** A log callback with the signature of the session's (fp_session_log_fn): level is an
+ *  fp_log_level, source names who speaks. */
+typedef void (*fp_host_log_fn)(void *user, int level, const char *source, const char *message);
+
+/** The fp_host of a mapping instance, with its log target: plugin log lines go to `log`
+ *  (NULL: stderr, "facepuppet: mapping 'NAME': LEVEL: MESSAGE") with the source
+ *  "mapping 'NAME'"; FP_LOG_DEBUG lines only when FACEPUPPET_DEBUG is set in the
+ *  environment. Pass &mh->host to the factory; mh must stay in place while the instance
+ *  lives. */
+typedef struct fp_mapping_host {
+    fp_host host;
+    char source[96];
+    fp_host_log_fn log;
+    void *log_user;
+} fp_mapping_host;
+void fp_mapping_host_init(fp_mapping_host *mh, const char *name, fp_host_log_fn log, void *log_user);
 
 #ifdef __cplusplus
 }
