@@ -69,6 +69,8 @@ typedef struct fp_session_options {
                                                        or do I/O (a take recorder pushes into
                                                        its lock-free queue) */
     void *record_user;                              /* passed to record */
+    double mapping_budget_ms;                       /* a process() call slower than this is
+                                                       reported (once, then counted); 0: 2 ms */
 } fp_session_options;
 
 /** Statistics of one fp_session_step. */
@@ -148,6 +150,21 @@ const fp_control_set *fp_session_control_set(const fp_session *s);
  *  Session thread only (the viewer's keys 1 and 2). */
 int fp_session_set_mapping(fp_session *s, const fp_plugin_path *path, const char *spec,
                            char *err, size_t errlen);
+/** Hot reload: replace the mapping by the one in `file` (a path, e.g. a fresh copy of the
+ *  mapping's rebuilt .so), created with the current mapping's SPEC keys, then reset; as
+ *  fp_session_set_mapping otherwise (a deformation in progress is dropped; on error the old
+ *  mapping stays and err says why: the loader's FP_EPLUGIN_* codes, the plugin's create
+ *  code). Session thread only, between frames. */
+int fp_session_reload_mapping(fp_session *s, const char *file, char *err, size_t errlen);
+/** The file the mapping was found at by name (not a reload's copy), the loaded plugin (its
+ *  entry's id and version), and the mapping's name. Valid until the mapping changes. */
+const char *fp_session_mapping_file(const fp_session *s);
+const fp_plugin *fp_session_mapping_plugin(const fp_session *s);
+const char *fp_session_mapping_name(const fp_session *s);
+/** FP_EPLUGIN_FAULT when the mapping was stopped for a fault (it wrote past the capacity of
+ *  the host's arrays; the base has been shown since), the message naming the mapping, the
+ *  array and the frame in err; else 0. */
+int fp_session_mapping_fault(const fp_session *s, char *err, size_t errlen);
 /** Undo the last commit or reset (one level, up to FP_SESSION_UNDO_LEVELS): the base goes
  *  back, a deformation in progress is dropped, the mapping's gesture is reset. Returns false
  *  when there is nothing to undo. */

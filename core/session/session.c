@@ -4,6 +4,7 @@
 #include "fp_session.h"
 
 #include "csrbf.h"
+#include "fp_plugin_crash.h"
 #include "fp_mesh.h"
 #include "fp_pose.h"
 #include "history.h"
@@ -35,8 +36,11 @@ struct fp_session {
 
     fp_plugin mapping_plugin;
     fp_mapping *mapping;
-    fp_host mapping_host;
+    fp_mapping_host mapping_host;
     char mapping_name[64];
+    char mapping_spec[1024];      /* the SPEC it was made from (keys kept for a reload) */
+    char mapping_file[4096];      /* the file it was found at (a reload loads a copy) */
+    double mapping_budget_ms;
     fp_mesh_view view;
 
     double radius;
@@ -51,15 +55,17 @@ struct fp_session {
     fp_history history;           /* step 6 */
     fp_record_step record;        /* step 7 */
 
-    fp_control_set cs;
-    float cs_start[FP_ENGINE_MAX_CONTROL][3], cs_end[FP_ENGINE_MAX_CONTROL][3];
-    fp_channel channels[16];
+    fp_control_set cs;            /* its arrays are the mapping step's (with canaries) */
 };
+
+_Static_assert(FP_ENGINE_MAX_CONTROL >= FP_CONTROL_CAPACITY, "the engine takes a full control set");
 
 /* ---- creation -------------------------------------------------------------------------- */
 
-static int load_mapping(fp_session *s, const char *mapping, const fp_plugin_path *path, char *err,
-                        size_t errlen)
+/* Load the mapping of SPEC `mapping` (from `file` where not NULL: a copy being hot-reloaded)
+ * and create it with the SPEC's keys. */
+static int load_mapping(fp_session *s, const char *mapping, const fp_plugin_path *path,
+                        const char *file, char *err, size_t errlen)
 {
     fp_spec spec;
     int rc = fp_spec_parse(mapping ? mapping : "anchored", &spec, err, errlen);
@@ -69,18 +75,23 @@ static int load_mapping(fp_session *s, const char *mapping, const fp_plugin_path
         fp_spec_clear(&spec);
         return -EINVAL;
     }
-    rc = fp_plugin_load(path, FP_PLUGIN_MAPPING, spec.name, &s->mapping_plugin, err, errlen);
+    rc = fp_plugin_load(path, FP_PLUGIN_MAPPING, file ? file : spec.name, &s->mapping_plugin, err, errlen);
     if (!rc) {
-        fp_host_init_for_mapping(&s->mapping_host, spec.name);
+        snprintf(s->mapping_name, sizeof s->mapping_name, "%s", spec.name);
+        fp_mapping_host_init(&s->mapping_host, spec.name, s->log.fn, s->log.user);
         const fp_mapping_factory *f = s->mapping_plugin.factory;
         char perr[512] = "";
-        rc = f->create(&s->mapping_host, spec.params, spec.nparams, &s->mapping, perr, sizeof perr);
+        fp_plugin_call_enter(s->mapping_name, "create", s->frame);
+        rc = f->create(&s->mapping_host.host, spec.params, spec.nparams, &s->mapping, perr, sizeof perr);
+        fp_plugin_call_leave();
         if (rc || !s->mapping) {
-            snprintf(err, errlen, "mapping '%s': %s", mapping, perr[0] ? perr : "create failed");
+            snprintf(err, errlen, "mapping '%s': %s", mapping,
+                     perr[0] ? perr : rc ? "create failed" : "create returned 0 without an instance");
             s->mapping = NULL;
-            rc = rc ? rc : -EINVAL;
+            rc = rc ? rc : FP_EPLUGIN_FAULT;
         } else {
-            snprintf(s->mapping_name, sizeof s->mapping_name, "%s", spec.name);
+            snprintf(s->mapping_spec, sizeof s->mapping_spec, "%s", mapping);
+            if (!file) snprintf(s->mapping_file, sizeof s->mapping_file, "%s", s->mapping_plugin.path);
         }
     }
     fp_spec_clear(&spec);
@@ -160,7 +171,8 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
         snprintf(err, errlen, "session: cannot index %zu vertices", s->n);
         goto fail;
     }
-    if ((rc = load_mapping(s, opt->mapping, opt->plugin_path, err, errlen))) goto fail;
+    s->mapping_budget_ms = opt->mapping_budget_ms;
+    if ((rc = load_mapping(s, opt->mapping, opt->plugin_path, NULL, err, errlen))) goto fail;
     for (size_t i = 0; i < opt->input_count; i++) {
         rc = fp_input_instance_open(&s->inputs[i], opt->plugin_path, opt->inputs[i], (uint32_t)i,
                                     err, errlen);
@@ -168,12 +180,7 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
         s->input_count = i + 1;
     }
     calibrate(s, opt->calibration);
-    s->cs.size = sizeof s->cs;
-    s->cs.capacity = FP_ENGINE_MAX_CONTROL;
-    s->cs.start = s->cs_start;
-    s->cs.end = s->cs_end;
-    s->cs.channels = s->channels;
-    s->cs.channel_capacity = sizeof s->channels / sizeof s->channels[0];
+    fp_mapping_step_init(&s->mapping_step, &s->cs, s->mapping_budget_ms);
     *out = s;
     return 0;
 fail:
@@ -303,11 +310,27 @@ const fp_hand_pose *fp_session_hand(const fp_session *s, int hand)
     return hand >= 0 && hand < FP_HANDS && s->pose.poses[hand].present ? &s->pose.poses[hand] : NULL;
 }
 
+static void reset_mapping(fp_session *s)
+{
+    if (!s->mapping->reset || s->mapping_step.stopped) return;
+    fp_plugin_call_enter(s->mapping_name, "reset", s->frame);
+    s->mapping->reset(s->mapping);
+    fp_plugin_call_leave();
+}
+
+static void destroy_mapping(fp_session *s, fp_mapping *m, const char *name)
+{
+    if (!m || !m->destroy) return;
+    fp_plugin_call_enter(name, "destroy", s->frame);
+    m->destroy(m);
+    fp_plugin_call_leave();
+}
+
 /* After undo or reset: the mapping forgets its gesture. */
 static void after_set_base(fp_session *s)
 {
     base_changed(s);
-    if (s->mapping->reset) s->mapping->reset(s->mapping);
+    reset_mapping(s);
 }
 
 bool fp_session_undo(fp_session *s)
@@ -323,6 +346,47 @@ void fp_session_reset(fp_session *s)
     after_set_base(s);
 }
 
+/* Replace the mapping by one made from spec (from file where not NULL); the old one stays on
+ * error. */
+static int swap_mapping(fp_session *s, const fp_plugin_path *path, const char *spec, const char *file,
+                        char *err, size_t errlen)
+{
+    fp_plugin old_plugin = s->mapping_plugin;
+    fp_mapping *old = s->mapping;
+    fp_mapping_host old_host = s->mapping_host;
+    char old_name[sizeof s->mapping_name], old_spec[sizeof s->mapping_spec];
+    memcpy(old_name, s->mapping_name, sizeof old_name);
+    memcpy(old_spec, s->mapping_spec, sizeof old_spec);
+    memset(&s->mapping_plugin, 0, sizeof s->mapping_plugin);
+    s->mapping = NULL;
+    char spec_copy[sizeof s->mapping_spec];
+    snprintf(spec_copy, sizeof spec_copy, "%s", spec); /* spec may be s->mapping_spec */
+    int rc = load_mapping(s, spec_copy, path, file, err, errlen);
+    if (rc) {
+        fp_plugin_unload(&s->mapping_plugin);
+        s->mapping_plugin = old_plugin;
+        s->mapping = old;
+        s->mapping_host = old_host;
+        memcpy(s->mapping_name, old_name, sizeof old_name);
+        memcpy(s->mapping_spec, old_spec, sizeof old_spec);
+        return rc;
+    }
+    /* The old instance's host must stay valid until it is destroyed. */
+    fp_mapping_host new_host = s->mapping_host;
+    s->mapping_host = old_host;
+    destroy_mapping(s, old, old_name);
+    s->mapping_host = new_host;
+    fp_mapping_step_flush(&s->mapping_step, &s->log);
+    fp_plugin_unload(&old_plugin);
+    s->shown = s->base;
+    s->engaged = false;
+    fp_history_end_gesture(&s->history);
+    fp_engine_step_invalidate(&s->engine);
+    fp_mapping_step_init(&s->mapping_step, &s->cs, s->mapping_budget_ms);
+    reset_mapping(s);
+    return 0;
+}
+
 int fp_session_set_mapping(fp_session *s, const fp_plugin_path *path, const char *spec,
                            char *err, size_t errlen)
 {
@@ -330,31 +394,30 @@ int fp_session_set_mapping(fp_session *s, const fp_plugin_path *path, const char
         snprintf(err, errlen, "session: a mapping spec and a plugin path are required");
         return -EINVAL;
     }
-    fp_plugin old_plugin = s->mapping_plugin;
-    fp_mapping *old = s->mapping;
-    char old_name[sizeof s->mapping_name];
-    memcpy(old_name, s->mapping_name, sizeof old_name);
-    memset(&s->mapping_plugin, 0, sizeof s->mapping_plugin);
-    s->mapping = NULL;
-    int rc = load_mapping(s, spec, path, err, errlen);
-    if (rc) {
-        fp_plugin_unload(&s->mapping_plugin);
-        s->mapping_plugin = old_plugin;
-        s->mapping = old;
-        memcpy(s->mapping_name, old_name, sizeof old_name);
-        return rc;
+    return swap_mapping(s, path, spec, NULL, err, errlen);
+}
+
+int fp_session_reload_mapping(fp_session *s, const char *file, char *err, size_t errlen)
+{
+    if (!s || !file) {
+        snprintf(err, errlen, "session: a plugin file is required");
+        return -EINVAL;
     }
-    fp_mapping_step_flush(&s->mapping_step, &s->log);
-    if (old && old->destroy) old->destroy(old);
-    fp_plugin_unload(&old_plugin);
-    s->shown = s->base;
-    s->engaged = false;
-    fp_history_end_gesture(&s->history);
-    fp_engine_step_invalidate(&s->engine);
-    s->cs.active = false;
-    s->cs.intents = 0;
-    s->cs.count = 0;
-    return 0;
+    fp_plugin_path none;
+    memset(&none, 0, sizeof none);
+    none.builtin = SIZE_MAX;
+    return swap_mapping(s, &none, s->mapping_spec, file, err, errlen);
+}
+
+const char *fp_session_mapping_file(const fp_session *s) { return s->mapping_file; }
+const fp_plugin *fp_session_mapping_plugin(const fp_session *s) { return &s->mapping_plugin; }
+const char *fp_session_mapping_name(const fp_session *s) { return s->mapping_name; }
+
+int fp_session_mapping_fault(const fp_session *s, char *err, size_t errlen)
+{
+    if (!s->mapping_step.fault) return 0;
+    snprintf(err, errlen, "mapping '%s': %s", s->mapping_name, s->mapping_step.fault_message);
+    return s->mapping_step.fault;
 }
 
 unsigned fp_session_input_errors(const fp_session *s, const char **last)
@@ -415,7 +478,7 @@ void fp_session_destroy(fp_session **sp)
     fp_mapping_step_flush(&s->mapping_step, &s->log);
     fp_engine_step_flush(&s->engine, &s->log);
     for (size_t i = 0; i < s->input_count; i++) fp_input_instance_close(&s->inputs[i]);
-    if (s->mapping && s->mapping->destroy) s->mapping->destroy(s->mapping);
+    destroy_mapping(s, s->mapping, s->mapping_name);
     fp_plugin_unload(&s->mapping_plugin);
     fp_engine_step_free(&s->engine);
     fp_history_free(&s->history);

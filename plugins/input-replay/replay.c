@@ -363,12 +363,23 @@ static int replay_create(const fp_host *host, const char *arg, const fp_param *p
     return 0;
 }
 
+/* The keys, typed (ABI 1.1), for `facepuppet plugins` and `plugins check`; create parses
+ * them itself. */
+static const fp_param_info replay_keys[] = {
+    {"speed", FP_PARAM_FLOAT, 0, 1e6, "1", NULL, "x", "play this many times as fast (> 0)"},
+    {"loop", FP_PARAM_BOOL, 0, 1, "0", NULL, NULL, "start over at the end"},
+    {"fast", FP_PARAM_BOOL, 0, 1, "0", NULL, NULL, "as fast as possible, retrying when the queue is full"},
+    {"hands", FP_PARAM_ENUM, 0, 0, "both", "left|right|both", NULL, "which hands to replay"},
+    {NULL, 0, 0, 0, NULL, NULL, NULL, NULL},
+};
+
 static const fp_input_factory replay_factory = {
     .size = sizeof(fp_input_factory),
     .name = "replay",
     .description = "replays a recorded hand (Leap CSV or facepuppet event log) as live input",
     .usage = usage_text,
     .create = replay_create,
+    .params = replay_keys,
 };
 
 static bool replay_init(const char *plugin_path)

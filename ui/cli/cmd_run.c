@@ -45,9 +45,11 @@ static void usage(FILE *f)
         "                         facepuppet-demo.obj); format by extension\n"
         "      --frames-out DIR   also write one mesh per frame (DIR/frame-000001.obj...)\n"
         "      --fps N            frames per second of the session loop (default 60)\n"
+        "      --budget MS        report a mapping process() slower than MS (default 2)\n"
         "  -h, --help             this text\n\n"
         "Exit status: 0 done, 64 usage, 65 bad input data, 66 input missing, 73 output\n"
-        "not writable, 78 plugin missing or incompatible, 1 other failure\n"
+        "not writable, 78 plugin missing or incompatible, or the mapping stopped for a\n"
+        "fault (it wrote past the host's arrays), 1 other failure\n"
         "(facepuppet --help has the whole table).\n");
 }
 
@@ -59,10 +61,11 @@ static void sleep_until(int64_t t_ns)
 
 static int run_main(int argc, char **argv)
 {
-    enum { OPT_FRAMES_OUT = FP_SESSION_OPTS_FIRST_FREE, OPT_FPS };
+    enum { OPT_FRAMES_OUT = FP_SESSION_OPTS_FIRST_FREE, OPT_FPS, OPT_BUDGET };
     static const struct option own[] = {
         {"out", required_argument, 0, 'o'},        {"frames-out", required_argument, 0, OPT_FRAMES_OUT},
         {"fps", required_argument, 0, OPT_FPS},    {"help", no_argument, 0, 'h'},
+        {"budget", required_argument, 0, OPT_BUDGET},
         {0, 0, 0, 0}};
     struct option opts[FP_SESSION_OPTS_COUNT + sizeof own / sizeof own[0]];
     memcpy(opts + fp_session_opts_longopts(opts), own, sizeof own);
@@ -84,6 +87,13 @@ static int run_main(int argc, char **argv)
             fps = strtod(optarg, &end);
             if (*end || !(fps >= 1 && fps <= 10000)) {
                 fprintf(stderr, "facepuppet run: --fps must be in 1..10000, got '%s'\n", optarg);
+                return FP_EXIT_USAGE;
+            }
+            break;
+        case OPT_BUDGET:
+            so.mapping_budget_ms = strtod(optarg, &end);
+            if (*end || !(so.mapping_budget_ms > 0 && so.mapping_budget_ms <= 1000)) {
+                fprintf(stderr, "facepuppet run: --budget must be in (0, 1000] ms, got '%s'\n", optarg);
                 return FP_EXIT_USAGE;
             }
             break;
@@ -215,6 +225,10 @@ static int run_main(int argc, char **argv)
     if (record_failed && status == FP_EXIT_OK) {
         fprintf(stderr, "facepuppet run: %s\n", err);
         status = FP_EXIT_CANTCREAT;
+    }
+    if (fp_session_mapping_fault(s, err, sizeof err)) {
+        fprintf(stderr, "facepuppet run: %s\n", err);
+        if (status == FP_EXIT_OK) status = fp_app_exit_code(FP_EPLUGIN_FAULT, FP_APP_INPUT);
     }
     if (!finite) {
         fprintf(stderr, "facepuppet run: non-finite vertex in the result\n");
