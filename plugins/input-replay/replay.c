@@ -226,25 +226,36 @@ static int parse_bool(const fp_param *p, bool *out, char *err, size_t errlen)
 /* ------------------------------------------------------------------------------------- */
 /* Extensions: the workspace the recording's hands move in, and what it holds             */
 
+static int cmp_float(const void *a, const void *b)
+{
+    float x = *(const float *)a, y = *(const float *)b;
+    return (x > y) - (x < y);
+}
+
+/* The robust box: per axis the 2nd and 98th percentiles of every joint position, so that a
+ * tracking glitch (a palm 3 m away for a few samples) moves nothing. */
 static bool replay_workspace(const fp_input *self, float min_mm[3], float max_mm[3])
 {
     const replay *r = self->plugin_data;
-    bool any = false;
+    size_t n = 0;
+    for (size_t i = 0; i < r->rec.count; i++)
+        if (r->rec.items[i].event.header.type == FP_EVENT_JOINT_POSITIONS) n += FP_HAND_JOINTS;
+    if (!n) return false;
+    float *v = malloc(n * sizeof *v);
+    if (!v) return false;
     for (int k = 0; k < 3; k++) {
-        min_mm[k] = INFINITY;
-        max_mm[k] = -INFINITY;
+        size_t m = 0;
+        for (size_t i = 0; i < r->rec.count; i++) {
+            const fp_event *ev = &r->rec.items[i].event;
+            if (ev->header.type != FP_EVENT_JOINT_POSITIONS) continue;
+            for (int j = 0; j < FP_HAND_JOINTS; j++) v[m++] = ev->positions.mm[j][k];
+        }
+        qsort(v, m, sizeof *v, cmp_float);
+        min_mm[k] = v[(size_t)(0.02 * (double)(m - 1) + 0.5)];
+        max_mm[k] = v[(size_t)(0.98 * (double)(m - 1) + 0.5)];
     }
-    for (size_t i = 0; i < r->rec.count; i++) {
-        const fp_event *ev = &r->rec.items[i].event;
-        if (ev->header.type != FP_EVENT_JOINT_POSITIONS) continue;
-        for (int j = 0; j < FP_HAND_JOINTS; j++)
-            for (int k = 0; k < 3; k++) {
-                min_mm[k] = fminf(min_mm[k], ev->positions.mm[j][k]);
-                max_mm[k] = fmaxf(max_mm[k], ev->positions.mm[j][k]);
-            }
-        any = true;
-    }
-    return any;
+    free(v);
+    return true;
 }
 
 static bool replay_recording_info(const fp_input *self, fp_recording_info *info)

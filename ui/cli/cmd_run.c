@@ -133,10 +133,9 @@ static int run_main(int argc, char **argv)
         return fp_app_exit_code(rc, FP_APP_INPUT);
     }
     if (!quiet) {
-        const fp_calibration *c = fp_session_calibration(s);
         fprintf(stderr, "facepuppet run: %s, %zu vertices, mapping %s, radius %.4g, %zu input(s); "
-                "workspace scale %.4g mesh units/mm\n", so.mesh_path, fp_session_vertex_count(s),
-                so.mapping, fp_session_radius(s), so.input_count, c->scale);
+                "scale: %.4g mm per mesh unit (%s)\n", so.mesh_path, fp_session_vertex_count(s),
+                so.mapping, fp_session_radius(s), so.input_count, fp_session_head(s)->mm_per_unit, fp_session_head(s)->how);
     }
     if ((rc = fp_session_start(s, err, sizeof err))) {
         fprintf(stderr, "facepuppet run: %s\n", err);
