@@ -83,6 +83,12 @@ typedef struct fp_session_options {
                                                        or do I/O (a take recorder pushes into
                                                        its lock-free queue) */
     void *record_user;                              /* passed to record */
+    bool input_clock;                               /* step on the inputs' own clock (a
+                                                       headless run): fp_session_step(t)
+                                                       consumes only events stamped <= t from
+                                                       recordings (inputs with the
+                                                       recording-info extension); false (live):
+                                                       every queued event, each frame */
 } fp_session_options;
 
 /** Statistics of one fp_session_step. */
@@ -133,6 +139,16 @@ const struct csrbf_solver *fp_session_solver(const fp_session *s);
  *  destroy where a failed recording must change the exit status; destroy does it otherwise
  *  (and only logs). */
 int fp_session_stop(fp_session *s, char *err, size_t errlen);
+
+/** Input clock (options.input_clock): the earliest first event time of the recordings, once
+ *  each has delivered one: 1 and *t0; 0 while waiting (poll again); -1 when no input is a
+ *  recording (then step on the wall clock). */
+int fp_session_input_start(fp_session *s, int64_t *t0);
+
+/** Input clock: true when every recording has ended or delivered an event later than t, so
+ *  that fp_session_step(s, t) sees every event up to t whatever the replay's pacing (poll it
+ *  before each step; it consumes nothing). True without the input clock. */
+bool fp_session_inputs_ready(fp_session *s, int64_t t);
 
 /** True once every input has reported FP_STATUS_END_OF_STREAM (recordings ended). */
 bool fp_session_finished(const fp_session *s);

@@ -207,6 +207,14 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
         s->input_count = i + 1;
     }
     if ((rc = calibrate(s, opt, err, errlen))) goto fail;
+    s->intents.clocked = opt->input_clock;
+    for (size_t i = 0; i < s->input_count && opt->input_clock; i++) {
+        const fp_input *in = s->inputs[i].input;
+        const fp_input_recording *ri = in && in->get_extension
+                                           ? in->get_extension(in, FP_EXT_RECORDING_INFO) : NULL;
+        fp_recording_info info;
+        s->intents.waited[i] = ri && ri->get && ri->get(in, &info);
+    }
     s->cs.size = sizeof s->cs;
     s->cs.capacity = FP_ENGINE_MAX_CONTROL;
     s->cs.start = s->cs_start;
@@ -256,8 +264,11 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
 
     /* 1: inputs and intents. */
     fp_record_step_begin(&s->record);
-    st->events = fp_intents_drain(&s->intents, s->inputs, s->input_count, s->engaged, &s->log,
-                                  on_event, s);
+    st->events = s->intents.clocked
+                     ? fp_intents_drain_until(&s->intents, s->inputs, s->input_count, now_ns,
+                                              s->engaged, &s->log, on_event, s)
+                     : fp_intents_drain(&s->intents, s->inputs, s->input_count, s->engaged,
+                                        &s->log, on_event, s);
     /* 2: hand poses in mesh units. */
     fp_pose_build(&s->pose);
 
@@ -318,6 +329,16 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
 }
 
 /* ---- queries and edits ------------------------------------------------------------------ */
+
+int fp_session_input_start(fp_session *s, int64_t *t0)
+{
+    return fp_intents_first_time(&s->intents, s->inputs, s->input_count, t0);
+}
+
+bool fp_session_inputs_ready(fp_session *s, int64_t t)
+{
+    return !s->intents.clocked || fp_intents_ready(&s->intents, s->inputs, s->input_count, t);
+}
 
 bool fp_session_finished(const fp_session *s) { return fp_intents_all_ended(&s->intents, s->input_count); }
 
@@ -463,6 +484,7 @@ void fp_session_destroy(fp_session **sp)
     fp_plugin_unload(&s->mapping_plugin);
     fp_engine_step_free(&s->engine);
     fp_history_free(&s->history);
+    fp_intents_free(&s->intents);
     fp_record_step_free(&s->record);
     free(s->loaded);
     free(s->base);

@@ -55,10 +55,10 @@ static const char usage_text[] =
     "    facepuppet event log (docs/eventlog.md): the events as recorded.\n"
     "  speed=X  play X times as fast (X > 0, default 1)\n"
     "  loop=1   start over at the end; event times keep increasing (default 0)\n"
-    "  fast=1   as fast as possible, retrying rather than dropping when the queue is full\n"
-    "           (buttons and status events are always retried; paced poses may be dropped)\n"
+    "  fast=1   as fast as possible (a full queue is always retried, never dropped)\n"
     "  hands=H  left, right or both (default both)\n"
-    "  Event times are the host clock at the emulated moment. Without loop, the replay ends\n"
+    "  Event times are the recording's own clock (the host clock at start + the sample's\n"
+    "  time), whatever the speed; speed and fast only change the pacing. Without loop, the replay ends\n"
     "  with an end-of-stream status. A malformed row fails at creation (FILE:LINE:COLUMN); a\n"
     "  last line cut short (no newline) is dropped and reported with an error status (the\n"
     "  recording is damaged) after the rows before it were replayed.\n";
@@ -85,17 +85,14 @@ static bool wait_until(replay *r, int64_t deadline)
     return go_on;
 }
 
-/* Pushes one event. A pose (angles, positions, wrist) meeting a full queue in paced mode is
- * dropped, as a device's would be (the host counts drops; the next pose supersedes it). In
- * fast mode, and for buttons and status events always, it waits briefly and tries again
- * until the event goes in or stop is asked. Returns false on stop. */
+/* Pushes one event. A full queue is retried every RETRY_WAIT_NS until the event goes in or
+ * stop is asked, in every mode: a recording holds every sample, and a headless run that
+ * steps on the recording's clock must see each one whatever the pacing or the machine's
+ * load. Returns false on stop. */
 static bool push(replay *r, const fp_event *ev)
 {
-    bool keep = r->fast || ev->header.type == FP_EVENT_BUTTON || ev->header.type == FP_EVENT_STATUS;
-    while (!r->host->push_event(r->host, &ev->header)) {
-        if (!keep) return true;
+    while (!r->host->push_event(r->host, &ev->header))
         if (!wait_until(r, mono_ns() + RETRY_WAIT_NS)) return false;
-    }
     return true;
 }
 
@@ -147,7 +144,10 @@ static void *replay_thread(void *arg)
                 return NULL;
             }
             fp_event ev = it->event;
-            ev.header.time_ns = last_time = host_t0 + off;
+            /* The time the sample was measured, on the recording's own clock (independent
+             * of speed and of when it is pushed): a run steps on it deterministically. */
+            ev.header.time_ns = last_time =
+                host_t0 + (int64_t)pass * r->rec.loop_period_ns + it->t_ns;
             if (!push(r, &ev)) return NULL;
         }
         if (r->rec.truncated_line && !warned) {
