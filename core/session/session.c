@@ -44,6 +44,7 @@ struct fp_session {
     fp_mesh_view view;
 
     double radius;
+    fp_head head;                 /* the head and the mesh's unit (life-size calibration) */
     bool engaged;                 /* the mapping's deformation is active */
     uint64_t frame;
 
@@ -98,21 +99,31 @@ static int load_mapping(fp_session *s, const char *mapping, const fp_plugin_path
     return rc;
 }
 
-/* Workspace calibration: given, or the inputs' workspaces (else the default one) fitted to
- * the face. */
-static void calibrate(fp_session *s, const fp_calibration *given)
+/* Workspace calibration (step 2's state): the mesh's unit (given, else detected from the
+ * head), then the calibration (given, else the inputs' workspaces, or the default one,
+ * fitted life-size in front of the face), then the glove placement. */
+static int calibrate(fp_session *s, const fp_session_options *opt, char *err, size_t errlen)
 {
     fp_calibration c;
-    if (given) {
-        c = *given;
+    if (opt->calibration) {
+        c = *opt->calibration;
+        if (!(c.scale > 0) || !isfinite(c.scale)) {
+            snprintf(err, errlen, "calibration: scale must be > 0, got %g", c.scale);
+            return -EINVAL;
+        }
+        s->head.mm_per_unit = 1.0 / c.scale;
+        s->head.method = FP_HEAD_GIVEN;
+        snprintf(s->head.how, sizeof s->head.how, "from the calibration");
     } else {
         fp_input *ins[FP_SESSION_MAX_INPUTS];
         for (size_t i = 0; i < s->input_count; i++) ins[i] = s->inputs[i].input;
         float wmin[3], wmax[3];
         if (!fp_pose_inputs_workspace(ins, s->input_count, wmin, wmax)) fp_pose_default_workspace(wmin, wmax);
-        fp_pose_fit_workspace(&c, wmin, wmax, s->view.bounds_min, s->view.bounds_max);
+        fp_pose_fit_workspace(&c, s->head.mm_per_unit, wmin, wmax, s->head.min, s->head.max);
     }
     s->pose.calib = c;
+    fp_pose_place_gloves(&s->pose, s->loaded, s->n, &s->head);
+    return 0;
 }
 
 int fp_session_create(const fp_session_options *opt, fp_session **out, char *err, size_t errlen)
@@ -124,6 +135,10 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
     }
     if (opt->input_count > FP_SESSION_MAX_INPUTS) {
         snprintf(err, errlen, "session: at most %d inputs", FP_SESSION_MAX_INPUTS);
+        return -EINVAL;
+    }
+    if (opt->mm_per_unit < 0 || isnan(opt->mm_per_unit)) {
+        snprintf(err, errlen, "--mm-per-unit must be > 0, got %g", opt->mm_per_unit);
         return -EINVAL;
     }
     if (opt->radius < 0 || isnan(opt->radius)) {
@@ -157,7 +172,31 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
         double d = s->view.bounds_max[i] - s->view.bounds_min[i];
         diag += d * d;
     }
-    s->radius = opt->radius > 0 ? opt->radius : 0.06 * sqrt(diag);
+    if ((rc = fp_head_detect(s->loaded, s->n, &s->head))) {
+        snprintf(err, errlen, "%s: cannot find a head in %zu vertices (flat or non-finite mesh)",
+                 opt->mesh_path, s->n);
+        goto fail;
+    }
+    if (opt->mm_per_unit > 0) {
+        s->head.mm_per_unit = opt->mm_per_unit;
+        s->head.method = FP_HEAD_GIVEN;
+        snprintf(s->head.how, sizeof s->head.how, "from %s",
+                 opt->mm_per_unit_source ? opt->mm_per_unit_source : "the options");
+    } else if (opt->calibration && opt->calibration->scale > 0) {
+        s->head.mm_per_unit = 1.0 / opt->calibration->scale;
+    }
+    if (opt->radius > 10 * sqrt(diag)) {
+        rc = -EINVAL;
+        snprintf(err, errlen, "--radius %g is beyond 10x the mesh's bounding-box diagonal (%.4g "
+                 "mesh units): every vertex would move as one; give a radius in mesh units",
+                 opt->radius, sqrt(diag));
+        goto fail;
+    }
+    /* Default radius: 6% of the bounding-box diagonal, at least a fingertip's reach
+     * (FP_SESSION_MIN_RADIUS_MM): on a sparse mask (MediaPipe's 468 vertices) a smaller one
+     * holds hardly a vertex. */
+    s->radius = opt->radius > 0 ? opt->radius
+                                : fmax(0.06 * sqrt(diag), FP_SESSION_MIN_RADIUS_MM / s->head.mm_per_unit);
     /* One engine thread for face-sized meshes: the ICT face (27k vertices) takes about
      * 0.1 ms on one core, and a second OpenMP thread that the input and display threads
      * keep off its core can cost a whole scheduler time slice (measured: 13.7 ms median
@@ -179,7 +218,15 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
         if (rc) goto fail;
         s->input_count = i + 1;
     }
-    calibrate(s, opt->calibration);
+    if ((rc = calibrate(s, opt, err, errlen))) goto fail;
+    s->intents.clocked = opt->input_clock;
+    for (size_t i = 0; i < s->input_count && opt->input_clock; i++) {
+        const fp_input *in = s->inputs[i].input;
+        const fp_input_recording *ri = in && in->get_extension
+                                           ? in->get_extension(in, FP_EXT_RECORDING_INFO) : NULL;
+        fp_recording_info info;
+        s->intents.waited[i] = ri && ri->get && ri->get(in, &info);
+    }
     fp_mapping_step_init(&s->mapping_step, &s->cs, s->mapping_budget_ms);
     *out = s;
     return 0;
@@ -224,8 +271,11 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
 
     /* 1: inputs and intents. */
     fp_record_step_begin(&s->record);
-    st->events = fp_intents_drain(&s->intents, s->inputs, s->input_count, s->engaged, &s->log,
-                                  on_event, s);
+    st->events = s->intents.clocked
+                     ? fp_intents_drain_until(&s->intents, s->inputs, s->input_count, now_ns,
+                                              s->engaged, &s->log, on_event, s)
+                     : fp_intents_drain(&s->intents, s->inputs, s->input_count, s->engaged,
+                                        &s->log, on_event, s);
     /* 2: hand poses in mesh units. */
     fp_pose_build(&s->pose);
 
@@ -241,6 +291,10 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     in.mesh = &s->view;
     in.radius = s->radius;
     in.requested = fp_intents_take_requested(&s->intents);
+    in.mm_per_unit = s->head.mm_per_unit;
+    in.face_up[1] = 1.f;       /* the project's convention (fp_head.h); a rig may say better */
+    in.face_forward[2] = 1.f;
+    in.face_left[0] = 1.f;
     fp_engine_tip_distances(s->base, s->n, s->pose.poses, in.tip_distance);
     fp_mapping_step_run(&s->mapping_step, s->mapping, s->mapping_name, &in, &s->cs, &s->log);
     st->engaged = s->cs.intents & FP_INTENT_ENGAGE;
@@ -283,6 +337,16 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
 
 /* ---- queries and edits ------------------------------------------------------------------ */
 
+int fp_session_input_start(fp_session *s, int64_t *t0)
+{
+    return fp_intents_first_time(&s->intents, s->inputs, s->input_count, t0);
+}
+
+bool fp_session_inputs_ready(fp_session *s, int64_t t)
+{
+    return !s->intents.clocked || fp_intents_ready(&s->intents, s->inputs, s->input_count, t);
+}
+
 bool fp_session_finished(const fp_session *s) { return fp_intents_all_ended(&s->intents, s->input_count); }
 
 void fp_session_request(fp_session *s, uint32_t intents) { fp_intents_request(&s->intents, intents); }
@@ -293,6 +357,7 @@ size_t fp_session_vertex_count(const fp_session *s) { return s->n; }
 const struct fp_mesh *fp_session_mesh(const fp_session *s) { return s->mesh; }
 double fp_session_radius(const fp_session *s) { return s->radius; }
 const fp_calibration *fp_session_calibration(const fp_session *s) { return &s->pose.calib; }
+const fp_head *fp_session_head(const fp_session *s) { return &s->head; }
 const fp_control_set *fp_session_control_set(const fp_session *s) { return &s->cs; }
 
 const struct csrbf_solver *fp_session_solver(const fp_session *s)
@@ -482,6 +547,7 @@ void fp_session_destroy(fp_session **sp)
     fp_plugin_unload(&s->mapping_plugin);
     fp_engine_step_free(&s->engine);
     fp_history_free(&s->history);
+    fp_intents_free(&s->intents);
     fp_record_step_free(&s->record);
     free(s->loaded);
     free(s->base);
