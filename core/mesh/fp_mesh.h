@@ -25,6 +25,7 @@
 #ifndef FP_MESH_H
 #define FP_MESH_H
 
+#include <errno.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -32,16 +33,23 @@
 extern "C" {
 #endif
 
-/** Results of the mesh functions. */
+/** Results of the mesh functions: 0 or a negative errno value, as everywhere in the project
+ *  (core/common/fp_error.h; fp_strerror() gives the text of any of them). */
 typedef enum fp_mesh_result {
     FP_MESH_OK = 0,
-    FP_MESH_ERR_IO = -1,          /* file missing, unreadable or unwritable */
-    FP_MESH_ERR_FORMAT = -2,      /* malformed content: syntax, NaN/inf, index out of range,
-                                     no vertices or no faces, bad glTF accessor or buffer */
-    FP_MESH_ERR_UNSUPPORTED = -3, /* unknown file extension, or a feature not handled
-                                     (sparse glTF accessors, a glTF with no triangles) */
-    FP_MESH_ERR_NOMEM = -4,       /* out of memory */
-    FP_MESH_ERR_INVALID = -5      /* bad argument: NULL pointer, inconsistent mesh */
+    FP_MESH_ERR_NOENT = -ENOENT,        /* the file is not there */
+    FP_MESH_ERR_ACCESS = -EACCES,       /* the file (or its folder) may not be read/written */
+    FP_MESH_ERR_IO = -EIO,              /* a read or write failed (or the path is no regular
+                                           file) */
+    FP_MESH_ERR_NOSPACE = -ENOSPC,      /* a save ran out of disk space (old file kept) */
+    FP_MESH_ERR_FORMAT = -EBADMSG,      /* malformed content: syntax, NaN/inf, index out of
+                                           range, counts that do not fit the file's size, no
+                                           vertices or no faces, bad glTF accessor or buffer,
+                                           a glTF URI that leaves the file's folder */
+    FP_MESH_ERR_UNSUPPORTED = -ENOTSUP, /* unknown file extension, or a feature not handled
+                                           (sparse glTF accessors, a glTF with no triangles) */
+    FP_MESH_ERR_NOMEM = -ENOMEM,        /* out of memory */
+    FP_MESH_ERR_INVALID = -EINVAL       /* bad argument: NULL pointer, inconsistent mesh */
 } fp_mesh_result;
 
 /** A triangle mesh. All arrays are owned by the mesh, allocated with malloc() and released
@@ -58,7 +66,8 @@ typedef struct fp_mesh {
     char *source_path;       /* the path the mesh was loaded from (a copy), or NULL */
 } fp_mesh;
 
-/** The message for a result code: a static string, never NULL. Thread-safe. */
+/** The message for a result code: fp_strerror(result) (a static string, never NULL), kept
+ *  for older callers. Thread-safe. */
 const char *fp_mesh_strerror(int result);
 
 /** Allocate a mesh of n vertices and t triangles with zeroed positions, normals, triangles,

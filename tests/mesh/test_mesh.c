@@ -598,8 +598,8 @@ static void expect_load_error(const char *path, int code, const char *needle)
 static void test_error_missing_file(void **state)
 {
     (void)state;
-    expect_load_error(tmp_path("nonexistent.obj"), FP_MESH_ERR_IO, "No such file");
-    expect_load_error(tmp_path("nonexistent.glb"), FP_MESH_ERR_IO, "No such file");
+    expect_load_error(tmp_path("nonexistent.obj"), FP_MESH_ERR_NOENT, "No such file");
+    expect_load_error(tmp_path("nonexistent.glb"), FP_MESH_ERR_NOENT, "No such file");
 }
 
 static void test_error_empty_file(void **state)
@@ -742,10 +742,10 @@ static void test_error_save(void **state)
     (void)state;
     fp_mesh *m = icosahedron();
     assert_int_equal(fp_mesh_save(m, tmp_path("no/such/dir/out.obj"), err, sizeof err),
-                     FP_MESH_ERR_IO);
+                     FP_MESH_ERR_NOENT);
     assert_non_null(strstr(err, "no/such/dir/out.obj"));
     assert_int_equal(fp_mesh_save(m, tmp_path("no/such/dir/out.glb"), err, sizeof err),
-                     FP_MESH_ERR_IO);
+                     FP_MESH_ERR_NOENT);
     m->triangles[5] = 12; /* out of range */
     assert_int_equal(fp_mesh_save(m, tmp_path("bad.obj"), err, sizeof err), FP_MESH_ERR_INVALID);
     assert_non_null(strstr(err, "triangle 1"));
