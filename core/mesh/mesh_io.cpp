@@ -165,6 +165,8 @@ public:
     {
         if (!valid(vh))
             return;
+        if (!std::isfinite(nv[0]) || !std::isfinite(nv[1]) || !std::isfinite(nv[2]))
+            s_.fail("vertex " + std::to_string(vh.idx()) + " has a non-finite normal");
         for (int k = 0; k < 3; k++)
             s_.nrm[3 * size_t(vh.idx()) + k] = nv[k];
         s_.has_nrm[size_t(vh.idx())] = 1;
