@@ -20,6 +20,7 @@
 
 #include <cerrno>
 #include <climits>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -631,6 +632,24 @@ int soup_to_mesh(Soup &s, const char *path, fp_mesh **out, char *err, size_t err
 
 // ---- OpenMesh formats ---------------------------------------------------------------
 
+// OBJ text with every `mtllib` statement turned into a comment (same length and lines).
+std::string obj_without_mtllib(const std::string &data)
+{
+    std::string out = data;
+    size_t p = 0;
+    while (p < out.size()) {
+        size_t b = out.find_first_not_of(" \t", p);
+        if (b != std::string::npos && out.compare(b, 6, "mtllib") == 0 &&
+            (b + 6 == out.size() || std::isspace((unsigned char)out[b + 6])))
+            out[b] = '#';
+        size_t e = out.find('\n', p);
+        if (e == std::string::npos)
+            break;
+        p = e + 1;
+    }
+    return out;
+}
+
 int load_openmesh(const char *path, const std::string &ext, const std::string &data,
                   fp_mesh **out, char *err, size_t errlen)
 {
@@ -681,11 +700,19 @@ int load_openmesh(const char *path, const std::string &ext, const std::string &d
     {
         std::lock_guard<std::mutex> guard(openmesh_lock);
         OmLogCapture capture;
-        // By file name, not from `data`: OpenMesh's stream readers skip the header probe
-        // (can_u_read) and would use the flags of the previous file (OFF's ST/N/C, STL's
-        // binary). The file was just read whole, so it exists.
+        // PLY/OFF/STL by file name, not from `data`: OpenMesh's stream readers skip the
+        // header probe (can_u_read) and would use the flags of the previous file (OFF's
+        // ST/N/C, STL's binary). The file was just read whole and checked.
+        // OBJ from memory, with its `mtllib` lines commented out: OpenMesh would open the
+        // named material files itself, wherever they point (outside the folder, a FIFO
+        // that blocks for ever), and materials are not used.
         Collector collector(soup);
-        ok = IO::IOManager().read(path, collector, opt);
+        if (ext == "obj") {
+            std::istringstream in(obj_without_mtllib(data), std::ios::in | std::ios::binary);
+            ok = IO::IOManager().read(in, ext, collector, opt);
+        } else {
+            ok = IO::IOManager().read(path, collector, opt);
+        }
         log = capture.first_line();
         if (capture.truncated())
             log += " [OpenMesh log truncated at " + std::to_string(capture.captured()) + " bytes]";

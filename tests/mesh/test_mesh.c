@@ -905,8 +905,31 @@ static void test_gltf_uri_fifo_symlink(void **state)
     expect_refused_bounded(tmp_path("uri/fifo.obj"), "not a regular file");
 }
 
-/* Files made here (not kept in the repository) that must be refused: a PLY header too long to
- * be real, and binary PLY/OFF whose counts would make OpenMesh loop or allocate for ever. */
+/* OBJ `mtllib` names are never opened (OpenMesh used to open them wherever they pointed and
+ * blocked for ever on a FIFO): the mesh loads, in a child with a 10 s alarm. */
+static void test_obj_mtllib_not_opened(void **state)
+{
+    (void)state;
+    assert_int_equal(mkfifo(tmp_path("pipe.mtl"), 0600), 0);
+    const char *p = write_tmp("mtl.obj", "mtllib pipe.mtl\n  mtllib ../../../../etc/passwd\n"
+                                         "v 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl skin\nf 1 2 3\n");
+    fflush(NULL);
+    double t0 = now_s();
+    pid_t pid = fork();
+    assert_true(pid >= 0);
+    if (pid == 0) {
+        alarm(10);
+        fp_mesh *m = NULL;
+        int rc = fp_mesh_load(p, &m, NULL, 0);
+        _exit(rc == FP_MESH_OK && m && m->vertex_count == 3 && m->triangle_count == 1 ? 0 : 1);
+    }
+    int status;
+    assert_int_equal(waitpid(pid, &status, 0), pid);
+    assert_true(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+    assert_true(now_s() - t0 < 2.0);
+}
+
+/* The codes are the project's negative errno values; a missing and an unreadable file. */
 static void test_error_codes(void **state)
 {
     (void)state;
@@ -1165,6 +1188,7 @@ int main(void)
         cmocka_unit_test(test_hostile_files_refused),
         cmocka_unit_test(test_gltf_uri_fifo_symlink),
         cmocka_unit_test(test_error_codes),
+        cmocka_unit_test(test_obj_mtllib_not_opened),
         cmocka_unit_test(test_save_failure_keeps_old_file),
         cmocka_unit_test(test_save_survives_sigkill),
     };
