@@ -156,10 +156,11 @@ int fp_mesh_normals(const uint32_t *tris, size_t t, const float *pos, size_t n,
     }
     for (size_t i = 0; i < n; i++) {
         float *v = normals_out + 3 * i;
-        float len = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-        if (len > 0.0f && isfinite(len)) {
-            float s = 1.0f / len;
-            v[0] *= s; v[1] *= s; v[2] *= s;
+        /* in double: the sums of tiny (denormal) triangles would lose their unit length */
+        const double x = v[0], y = v[1], z = v[2];
+        const double len = sqrt(x * x + y * y + z * z);
+        if (len > 0.0 && isfinite(len)) {
+            v[0] = (float)(x / len); v[1] = (float)(y / len); v[2] = (float)(z / len);
         } else {
             v[0] = v[1] = v[2] = 0.0f; /* no area around it (or non-finite input) */
         }

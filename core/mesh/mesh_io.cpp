@@ -611,13 +611,14 @@ int soup_to_mesh(Soup &s, const char *path, fp_mesh **out, char *err, size_t err
     bool file_normals = true;
     for (size_t v = 0; v < n && file_normals; v++) {
         const float *q = &s.nrm[3 * v];
-        const float len = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
-        if (!s.has_nrm[v] || !(len > 0.0f) || !std::isfinite(len)) {
+        const double len = std::sqrt(double(q[0]) * q[0] + double(q[1]) * q[1] +
+                                     double(q[2]) * q[2]);
+        if (!s.has_nrm[v] || !(len > 0.0) || !std::isfinite(len)) {
             file_normals = false;
             break;
         }
         for (int d = 0; d < 3; d++)
-            m->normals[3 * v + d] = q[d] / len;
+            m->normals[3 * v + d] = float(q[d] / len);
     }
     if (!file_normals)
         fp_mesh_normals(m->triangles, t, m->positions, n, m->normals);
