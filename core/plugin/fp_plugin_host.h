@@ -167,6 +167,16 @@ int64_t fp_now_ns(void);
 /** Make the standard host services for a mapping instance (no queue). */
 void fp_host_init_for_mapping(fp_host *host, const char *name);
 
+/** What a session offers its mapping through get_extension (ABI 1.1). */
+typedef struct fp_mapping_services {
+    char name[64];                    /* the mapping's name, for its log lines */
+    const struct fp_rig_view *rig;    /* FP_HOST_EXT_RIG's answer; NULL: no rig */
+} fp_mapping_services;
+
+/** fp_host_init_for_mapping, and get_extension serves FP_HOST_EXT_RIG from svc (whose rig may
+ *  change between calls; svc must outlive the host: host_data points at it). */
+void fp_host_init_for_mapping_services(fp_host *host, fp_mapping_services *svc);
+
 #ifdef __cplusplus
 }
 #endif

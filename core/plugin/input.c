@@ -63,6 +63,38 @@ void fp_host_init_for_mapping(fp_host *host, const char *name)
     host->push_event = NULL; /* mappings do not push events */
 }
 
+static const fp_rig_view *mapping_rig(const fp_host *host)
+{
+    const fp_mapping_services *svc = host ? host->host_data : NULL;
+    return svc ? svc->rig : NULL;
+}
+
+static const fp_host_rig mapping_rig_ext = {mapping_rig};
+
+static const void *mapping_extension(const fp_host *host, const char *id)
+{
+    (void)host;
+    if (id && !strcmp(id, FP_HOST_EXT_RIG)) return &mapping_rig_ext;
+    return NULL;
+}
+
+static void mapping_log(const fp_host *host, fp_log_level level, const char *message)
+{
+    static const char *names[] = {"error", "warning", "info", "debug"};
+    const fp_mapping_services *svc = host->host_data;
+    if (level > FP_LOG_INFO && !getenv("FACEPUPPET_DEBUG")) return;
+    fprintf(stderr, "facepuppet: %s: %s: %s\n", svc && svc->name[0] ? svc->name : "mapping",
+            names[level <= FP_LOG_DEBUG ? level : FP_LOG_DEBUG], message ? message : "");
+}
+
+void fp_host_init_for_mapping_services(fp_host *host, fp_mapping_services *svc)
+{
+    fp_host_init_for_mapping(host, svc ? svc->name : NULL);
+    host->host_data = svc;
+    host->log = mapping_log;
+    host->get_extension = mapping_extension;
+}
+
 int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
                            const char *spec_text, uint32_t source, char *err, size_t errlen)
 {
