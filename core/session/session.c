@@ -141,7 +141,6 @@ static int attach_rig(fp_session *s, const fp_session_options *opt, char *err, s
         snprintf(err, errlen, "session: out of memory for the rig");
         return rc;
     }
-    fp_slog_printf(&s->log, FP_LOG_INFO, "rig", "%s", s->rig_how);
     return 0;
 }
 

@@ -125,9 +125,9 @@ static int run_main(int argc, char **argv)
     }
     if (!quiet) {
         const fp_calibration *c = fp_session_calibration(s);
-        fprintf(stderr, "facepuppet run: %s, %zu vertices, mapping %s, radius %.4g, %zu input(s); "
+        fprintf(stderr, "facepuppet run: %s, %zu vertices, rig %s, mapping %s, radius %.4g, %zu input(s); "
                 "workspace scale %.4g mesh units/mm\n", so.mesh_path, fp_session_vertex_count(s),
-                so.mapping, fp_session_radius(s), so.input_count, c->scale);
+                fp_session_rig_how(s), so.mapping, fp_session_radius(s), so.input_count, c->scale);
     }
     if ((rc = fp_session_start(s, err, sizeof err))) {
         fprintf(stderr, "facepuppet run: %s\n", err);
