@@ -122,6 +122,8 @@ ICT_CORNER_INSET = float(__import__('os').environ.get('FP_CORNER_INSET', 1.0))
 ICT_INNER_DEPTH = float(__import__('os').environ.get('FP_INNER_DEPTH', 0.8))
 ICT_NECK_BAND = float(__import__('os').environ.get('FP_NECK_BAND', 7.0))
 ICT_SOCKET_RATIO = float(__import__('os').environ.get('FP_SOCKET_RATIO', 0.5))
+# Mobility ramp: fingers act fully this far from bone; the finger clamp is ramp / 3 (fp_rig.h).
+ICT_RAMP = 1.0
 ICT_BACK_BAND = float(__import__('os').environ.get('FP_BACK_BAND', 4.0))
 
 
@@ -171,7 +173,7 @@ def build_ict(data):
                "inner_depth": ICT_INNER_DEPTH, "menton": [0.0, -8.0, 9.2], "gonion": [5.3, -5.0, 1.6],
                "neck_band": ICT_NECK_BAND, "back_band": ICT_BACK_BAND}
     return rig("ict-facekit", "ICT FaceKit generic neutral head (cm): skull, jaw, falloff from anatomy",
-               mesh, V, 10.0, regions, lm, hinge, 26.0, [0.0, 0.0], falloff, 1.0), V, F
+               mesh, V, 10.0, regions, lm, hinge, 26.0, [0.0, 0.0], falloff, ICT_RAMP), V, F
 
 
 def build_mediapipe(data):
@@ -195,7 +197,7 @@ def build_mediapipe(data):
                "cheek_distance": 2.0, "menton": [0.0, -9.2, 4.0], "gonion": [5.9, -6.0, -0.8],
                "neck_band": 2.5, "back_band": 1.2}
     return rig("mediapipe-canonical", "MediaPipe canonical face mask (cm); hinge behind the mask",
-               mesh, V, 10.0, regions, lm, hinge, 26.0, [0.0, 0.0], falloff, 1.0), V, F
+               mesh, V, 10.0, regions, lm, hinge, 26.0, [0.0, 0.0], falloff, ICT_RAMP), V, F
 
 
 def build_lps(data, ict_rig, Vi):
@@ -229,7 +231,7 @@ def build_lps(data, ict_rig, Vi):
         fo[k] = round(fo[k] * s, 4)
     return rig("lee-perry-smith", "Lee Perry-Smith head scan; landmarks and hinge carried over from ICT by a similarity",
                mesh, V, round(mm, 4), regions, lm, (T(h["right"]), T(h["left"])), 26.0, [0.0, 0.0], fo,
-               round(1.0 * s, 4)), V, F
+               round(ICT_RAMP * s, 4)), V, F
 
 
 def main():
