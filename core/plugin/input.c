@@ -3,6 +3,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "fp_plugin_host.h"
 
+#include "fp_plugin_crash.h"
 #include "fp_record.h"
 
 #include <errno.h>
@@ -56,17 +57,40 @@ static void host_fill(fp_host *h, void *data)
     h->get_extension = host_extension;
 }
 
+static void named_log(const fp_host *host, fp_log_level level, const char *message)
+{
+    static const char *names[] = {"error", "warning", "info", "debug"};
+    if (level > FP_LOG_INFO && !getenv("FACEPUPPET_DEBUG")) return;
+    fprintf(stderr, "facepuppet: %s: %s: %s\n", host->host_data ? (const char *)host->host_data : "plugin",
+            names[level <= FP_LOG_DEBUG ? level : FP_LOG_DEBUG], message ? message : "");
+}
+
 void fp_host_init_for_mapping(fp_host *host, const char *name)
 {
-    (void)name;
-    host_fill(host, NULL);
+    host_fill(host, (void *)name);
+    host->log = named_log;
     host->push_event = NULL; /* mappings do not push events */
 }
 
+/* host_data is the fp_mapping_host itself (the fp_host is its first member). */
+static void mapping_log(const fp_host *host, fp_log_level level, const char *message)
+{
+    const fp_mapping_host *mh = (const fp_mapping_host *)host;
+    if (level > FP_LOG_INFO && !getenv("FACEPUPPET_DEBUG")) return;
+    if (mh->log) {
+        mh->log(mh->log_user, (int)level, mh->source, message ? message : "");
+        return;
+    }
+    static const char *names[] = {"error", "warning", "info", "debug"};
+    fprintf(stderr, "facepuppet: %s: %s: %s\n", mh->source, names[level <= FP_LOG_DEBUG ? level : FP_LOG_DEBUG],
+            message ? message : "");
+}
+
+/* FP_HOST_EXT_RIG: the session's rig view (host_data is the fp_mapping_host). */
 static const fp_rig_view *mapping_rig(const fp_host *host)
 {
-    const fp_mapping_services *svc = host ? host->host_data : NULL;
-    return svc ? svc->rig : NULL;
+    const fp_mapping_host *mh = host ? host->host_data : NULL;
+    return mh ? mh->rig : NULL;
 }
 
 static const fp_host_rig mapping_rig_ext = {mapping_rig};
@@ -78,21 +102,16 @@ static const void *mapping_extension(const fp_host *host, const char *id)
     return NULL;
 }
 
-static void mapping_log(const fp_host *host, fp_log_level level, const char *message)
+void fp_mapping_host_init(fp_mapping_host *mh, const char *name, fp_host_log_fn log, void *log_user)
 {
-    static const char *names[] = {"error", "warning", "info", "debug"};
-    const fp_mapping_services *svc = host->host_data;
-    if (level > FP_LOG_INFO && !getenv("FACEPUPPET_DEBUG")) return;
-    fprintf(stderr, "facepuppet: %s: %s: %s\n", svc && svc->name[0] ? svc->name : "mapping",
-            names[level <= FP_LOG_DEBUG ? level : FP_LOG_DEBUG], message ? message : "");
-}
-
-void fp_host_init_for_mapping_services(fp_host *host, fp_mapping_services *svc)
-{
-    fp_host_init_for_mapping(host, svc ? svc->name : NULL);
-    host->host_data = svc;
-    host->log = mapping_log;
-    host->get_extension = mapping_extension;
+    memset(mh, 0, sizeof *mh);
+    host_fill(&mh->host, mh);
+    mh->host.log = mapping_log;
+    mh->host.push_event = NULL; /* mappings do not push events */
+    mh->host.get_extension = mapping_extension;
+    snprintf(mh->source, sizeof mh->source, "mapping '%s'", name ? name : "?");
+    mh->log = log;
+    mh->log_user = log_user;
 }
 
 int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
@@ -115,11 +134,14 @@ int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
     host_fill(&inst->host, inst);
     const fp_input_factory *f = inst->plugin.factory;
     char perr[512] = "";
+    fp_plugin_call_enter(inst->name, "create", 0);
     rc = f->create(&inst->host, spec.arg, spec.params, spec.nparams, &inst->input, perr, sizeof perr);
+    fp_plugin_call_leave();
     if (rc || !inst->input) {
-        snprintf(err, errlen, "input '%s': %s", spec_text, perr[0] ? perr : "create failed");
+        snprintf(err, errlen, "input '%s': %s", spec_text,
+                 perr[0] ? perr : rc ? "create failed" : "create returned 0 without an instance");
         inst->input = NULL;
-        if (!rc) rc = -EINVAL;
+        if (!rc) rc = FP_EPLUGIN_FAULT;
         goto out;
     }
     if (record && (rc = fp_event_recorder_open(record, &inst->record, perr, sizeof perr))) {
@@ -138,7 +160,9 @@ out:
 int fp_input_instance_start(fp_input_instance *inst, char *err, size_t errlen)
 {
     char perr[512] = "";
+    fp_plugin_call_enter(inst->name, "start", 0);
     int rc = inst->input->start(inst->input, perr, sizeof perr);
+    fp_plugin_call_leave();
     if (rc) {
         snprintf(err, errlen, "input '%s': %s", inst->name, perr[0] ? perr : "start failed");
         return rc;
@@ -156,7 +180,11 @@ bool fp_input_instance_poll(fp_input_instance *inst, fp_event *out)
 
 static void stop_input(fp_input_instance *inst)
 {
-    if (inst->input && !inst->stopped && inst->input->stop) inst->input->stop(inst->input);
+    if (inst->input && !inst->stopped && inst->input->stop) {
+        fp_plugin_call_enter(inst->name, "stop", 0);
+        inst->input->stop(inst->input);
+        fp_plugin_call_leave();
+    }
     inst->stopped = true;
     inst->started = false;
 }
@@ -180,7 +208,11 @@ void fp_input_instance_close(fp_input_instance *inst)
     fp_input_instance_close_record(inst, NULL, 0);
     stop_input(inst);
     if (inst->input) {
-        if (inst->input->destroy) inst->input->destroy(inst->input);
+        if (inst->input->destroy) {
+            fp_plugin_call_enter(inst->name, "destroy", 0);
+            inst->input->destroy(inst->input);
+            fp_plugin_call_leave();
+        }
         inst->input = NULL;
     }
     fp_event_queue_destroy(&inst->queue);

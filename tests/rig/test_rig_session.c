@@ -144,7 +144,7 @@ static void test_ict_press_forehead_jaw_open(void **state)
     const fp_rig *rig = fp_session_rig(s);
     assert_non_null(rig);
     assert_non_null(strstr(fp_session_rig_how(s), "ict-facekit.json (found by the mesh's checksum"));
-    assert_true(fabs(fp_session_mm_per_unit(s) - 10) < 1e-9);
+    assert_true(fabs(fp_session_head(s)->mm_per_unit - 10) < 1e-9); /* the rig's unit */
     steps(s, 3);
     size_t n = fp_session_vertex_count(s);
     const float *base = fp_session_base(s), *shown = fp_session_positions(s);
