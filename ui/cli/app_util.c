@@ -2,8 +2,10 @@
 
 #include "command.h"
 #include "fp_error.h"
+#include "fp_session_take.h"
 
 #include <errno.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -68,11 +70,30 @@ bool fp_app_session_defaults(fp_session_options *so, double speed, fp_app_inputs
     if (!so->mapping) so->mapping = "anchored";
     for (size_t i = 0; i < so->input_count; i++) {
         const char *in = so->inputs[i];
-        if (speed != 1 && !strncmp(in, "replay", 6) && (in[6] == ':' || in[6] == ',' || !in[6]) &&
-            !strstr(in, ",speed=")) {
+        bool paced = (!strncmp(in, "replay", 6) && (in[6] == ':' || in[6] == ',' || !in[6])) ||
+                     (!strncmp(in, "take", 4) && (in[4] == ':' || in[4] == ','));
+        if (speed != 1 && paced && !strstr(in, ",speed=")) {
             snprintf(buf->specs[i], sizeof buf->specs[i], "%s,speed=%g", in, speed);
             so->inputs[i] = buf->specs[i];
         }
     }
     return demo;
+}
+
+fp_take_rate fp_app_take_rate(double fps)
+{
+    if (fps == floor(fps)) return (fp_take_rate){(uint32_t)fps, 1};
+    if (fabs(fps * 1001 - floor(fps * 1001 + 0.5)) < 1e-6 * fps && fabs(fps - round(fps) * 1000 / 1001) < 1e-3)
+        return (fp_take_rate){(uint32_t)round(fps) * 1000, 1001};
+    return (fp_take_rate){(uint32_t)llround(fps * 1000), 1000};
+}
+
+void fp_app_print_take(FILE *f, const char *prefix, const fp_session_take_result *r)
+{
+    char in[32], out[32];
+    fp_timecode_format(&r->timecode_in, in, sizeof in);
+    fp_timecode_format(&r->timecode_out, out, sizeof out);
+    fprintf(f, "%s: take %s: %llu frames, %llu dropped, timecode %s - %s%s\n", prefix, r->path,
+            (unsigned long long)r->frames, (unsigned long long)r->dropped, in, out,
+            r->error ? " (stopped by an error)" : "");
 }

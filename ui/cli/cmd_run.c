@@ -3,6 +3,7 @@
 #include "app_util.h"
 #include "command.h"
 #include "fp_session.h"
+#include "fp_session_take.h"
 #include "session_opts.h"
 #include "fp_stats.h"
 
@@ -45,6 +46,10 @@ static void usage(FILE *f)
         "                         facepuppet-demo.obj); format by extension\n"
         "      --frames-out DIR   also write one mesh per frame (DIR/frame-000001.obj...)\n"
         "      --fps N            frames per second of the session loop (default 60)\n"
+        "      --take-dir DIR     record the run as a take in DIR (SLATE_TNNN.fptake; see\n"
+        "                         facepuppet takes, play, --input take:FILE)\n"
+        "      --slate NAME       the take's slate (default \"take\"); numbers go up per slate\n"
+        "      --take-description TEXT  a line stored in the take's header\n"
         "  -h, --help             this text\n\n"
         "Exit status: 0 done, 64 usage, 65 bad input data, 66 input missing, 73 output\n"
         "not writable, 78 plugin missing or incompatible, 1 other failure\n"
@@ -59,10 +64,13 @@ static void sleep_until(int64_t t_ns)
 
 static int run_main(int argc, char **argv)
 {
-    enum { OPT_FRAMES_OUT = FP_SESSION_OPTS_FIRST_FREE, OPT_FPS };
+    enum { OPT_FRAMES_OUT = FP_SESSION_OPTS_FIRST_FREE, OPT_FPS, OPT_TAKE_DIR, OPT_SLATE,
+           OPT_TAKE_DESC };
     static const struct option own[] = {
         {"out", required_argument, 0, 'o'},        {"frames-out", required_argument, 0, OPT_FRAMES_OUT},
         {"fps", required_argument, 0, OPT_FPS},    {"help", no_argument, 0, 'h'},
+        {"take-dir", required_argument, 0, OPT_TAKE_DIR}, {"slate", required_argument, 0, OPT_SLATE},
+        {"take-description", required_argument, 0, OPT_TAKE_DESC},
         {0, 0, 0, 0}};
     struct option opts[FP_SESSION_OPTS_COUNT + sizeof own / sizeof own[0]];
     memcpy(opts + fp_session_opts_longopts(opts), own, sizeof own);
@@ -70,6 +78,7 @@ static int run_main(int argc, char **argv)
     fp_session_opts sopt;
     fp_session_opts_init(&sopt, &so);
     const char *out = NULL, *frames_out = NULL;
+    const char *take_dir = NULL, *slate = NULL, *take_desc = NULL;
     double fps = 60;
     char *end;
     optind = 1;
@@ -87,6 +96,9 @@ static int run_main(int argc, char **argv)
                 return FP_EXIT_USAGE;
             }
             break;
+        case OPT_TAKE_DIR: take_dir = optarg; break;
+        case OPT_SLATE: slate = optarg; break;
+        case OPT_TAKE_DESC: take_desc = optarg; break;
         case 'h': usage(stdout); return FP_EXIT_OK;
         default: usage(stderr); return FP_EXIT_USAGE;
         }
@@ -109,6 +121,25 @@ static int run_main(int argc, char **argv)
     if (frames_out && mkdir(frames_out, 0777) && errno != EEXIST) {
         fprintf(stderr, "facepuppet run: --frames-out %s: %s\n", frames_out, strerror(errno));
         return fp_app_exit_code(-errno, FP_APP_OUTPUT);
+    }
+
+    if ((slate || take_desc) && !take_dir) {
+        fprintf(stderr, "facepuppet run: --slate and --take-description need --take-dir\n");
+        return FP_EXIT_USAGE;
+    }
+    if (slate && !fp_take_slate_valid(slate)) {
+        fprintf(stderr, "facepuppet run: --slate '%s': use 1-63 of A-Z a-z 0-9 . _ - (not "
+                "starting with '.')\n", slate);
+        return FP_EXIT_USAGE;
+    }
+    /* --take-dir: the session's record sink feeds the take recorder (fp_session_take.h). */
+    fp_session_take take;
+    fp_session_take_options take_opt = {.dir = take_dir, .slate = slate,
+                                        .description = take_desc, .rate = fp_app_take_rate(fps)};
+    fp_session_take_init(&take, &take_opt, &so);
+    if (take_dir) {
+        so.record = fp_session_take_sink;
+        so.record_user = &take;
     }
 
     fp_plugin_path path;
@@ -143,6 +174,11 @@ static int run_main(int argc, char **argv)
     uint64_t frames = 0, commits = 0, engages = 0, active_frames = 0;
     int64_t period = (int64_t)(1e9 / fps), t0 = fp_now_ns(), next = t0, last_report = t0;
     int status = FP_EXIT_OK;
+    if (take_dir && (rc = fp_session_take_start(&take, s, t0, err, sizeof err))) {
+        fprintf(stderr, "facepuppet run: take: %s\n", err);
+        status = fp_app_exit_code(rc, FP_APP_OUTPUT);
+        interrupted = 1;
+    }
     while (!interrupted) {
         int64_t now = fp_now_ns();
         fp_frame_stats st;
@@ -180,6 +216,14 @@ static int run_main(int argc, char **argv)
         sleep_until(next);
     }
     if (interrupted && !quiet) fprintf(stderr, "facepuppet run: interrupted; saving what was done\n");
+    /* Close the take: a failed write (ENOSPC) fails the run with 73. */
+    int take_rc = 0;
+    char take_err[1024] = "";
+    if (fp_session_take_recording(&take)) {
+        fp_session_take_result tr;
+        take_rc = fp_session_take_stop(&take, &tr, take_err, sizeof take_err);
+        fp_app_print_take(stderr, "facepuppet run", &tr);
+    }
     /* Close the record=FILE recordings: a failed write must fail the run. */
     bool record_failed = fp_session_stop(s, err, sizeof err) != 0;
     /* The summary: displacement of the final shape from the loaded one. */
@@ -211,6 +255,10 @@ static int run_main(int argc, char **argv)
     if (fp_session_input_errors(s, &input_error) && status == FP_EXIT_OK) {
         fprintf(stderr, "facepuppet run: an input reported an error: %s\n", input_error);
         status = FP_EXIT_DATAERR;
+    }
+    if (take_rc && status == FP_EXIT_OK) {
+        fprintf(stderr, "facepuppet run: the take was not written whole: %s\n", take_err);
+        status = fp_app_exit_code(take_rc, FP_APP_OUTPUT);
     }
     if (record_failed && status == FP_EXIT_OK) {
         fprintf(stderr, "facepuppet run: %s\n", err);
