@@ -77,6 +77,26 @@ bool fp_app_session_defaults(fp_session_options *so, double speed, fp_app_inputs
             so->inputs[i] = buf->specs[i];
         }
     }
+    /* A take performed again: its hands where the take had them (the recorded calibration). */
+    for (size_t i = 0; i < so->input_count && !so->calibration; i++) {
+        fp_spec spec;
+        char err[512];
+        if (strncmp(so->inputs[i], "take:", 5) || fp_spec_parse(so->inputs[i], &spec, err, sizeof err))
+            continue;
+        fp_take_reader *r = NULL;
+        if (spec.arg && !fp_take_reader_open(spec.arg, &r, err, sizeof err)) {
+            const fp_take_header *h = fp_take_reader_header(r);
+            for (int hand = FP_HANDS - 1; hand >= 0 && !so->calibration; hand--) {
+                const fp_take_calibration *c = &h->calibration[hand];
+                if (!c->present || !(c->scale > 0)) continue;
+                buf->take_calibration.scale = c->scale;
+                memcpy(buf->take_calibration.offset, c->offset, sizeof c->offset);
+                so->calibration = &buf->take_calibration;
+            }
+            fp_take_reader_close(&r);
+        }
+        fp_spec_clear(&spec);
+    }
     return demo;
 }
 

@@ -45,12 +45,15 @@ typedef struct fp_app_inputs {
     char demo_mesh[4096];
     char demo_input[4200];
     char specs[FP_SESSION_MAX_INPUTS][4300];
+    fp_calibration take_calibration;   /* a take input's recorded calibration */
 } fp_app_inputs;
 
 /** Defaults shared by `run` and `live`. With neither a mesh nor an input the session is the
  *  demo: the ICT face and the three-claps recording (returns true). Without a mesh: the ICT
  *  face. Without a mapping: "anchored". A speed other than 1 is appended as `,speed=X` to
- *  every replay input that sets none. Strings point into *buf. */
+ *  every replay or take input that sets none. With no calibration and a `take:FILE` input,
+ *  the calibration the take recorded (so that a take performed again sees its hands where
+ *  they were). Strings point into *buf. */
 bool fp_app_session_defaults(fp_session_options *so, double speed, fp_app_inputs *buf);
 
 /** `facepuppet info RIG.json` (cmd_pose.c): describe the rig and check it against its mesh

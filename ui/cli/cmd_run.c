@@ -256,9 +256,9 @@ static int run_main(int argc, char **argv)
         fprintf(stderr, "facepuppet run: an input reported an error: %s\n", input_error);
         status = FP_EXIT_DATAERR;
     }
-    if (take_rc && status == FP_EXIT_OK) {
+    if (take_rc) {
         fprintf(stderr, "facepuppet run: the take was not written whole: %s\n", take_err);
-        status = fp_app_exit_code(take_rc, FP_APP_OUTPUT);
+        if (status == FP_EXIT_OK) status = fp_app_exit_code(take_rc, FP_APP_OUTPUT);
     }
     if (record_failed && status == FP_EXIT_OK) {
         fprintf(stderr, "facepuppet run: %s\n", err);
