@@ -7,6 +7,7 @@
 #include "fp_stats.h"
 #include "render.h"
 #include "script.h"
+#include "takes.h"
 #include "vmath.h"
 
 #define GLFW_INCLUDE_NONE
@@ -20,6 +21,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 /* ---- growable sample arrays, percentiles ------------------------------------------------ */
 
@@ -100,9 +104,20 @@ typedef struct viewer {
     unsigned commits;
     bool committed_shown;     /* last frame committed (HUD) */
     fp_viewer_report rep;
+    fp_vtakes takes;          /* T: takes, REC, the review strip (takes.h) */
     int error;                /* a failure that ends the run (screenshot not written) */
     char *err;
     size_t errlen;
+
+    /* hot reload of the mapping's .so (checked at most every 250 ms, between frames) */
+    struct {
+        char file[4096];      /* the file watched (the mapping's, as found by name) */
+        struct stat seen;     /* its state when loaded or last reloaded */
+        struct stat pending;  /* a change seen, reloaded once it holds still for a check */
+        bool have_pending;
+        int64_t next_check;
+        unsigned long attempts, reloads;
+    } hot;
 } viewer;
 
 static void say(viewer *v, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
@@ -240,6 +255,14 @@ static void set_mapping(viewer *v, const char *spec)
     say(v, "mapping %s", spec);
 }
 
+/* T or the pedal's middle button: start or stop a take. */
+static void take_toggle(viewer *v)
+{
+    char msg[1200];
+    fp_vtakes_toggle(&v->takes, v->s, fp_now_ns(), msg, sizeof msg);
+    if (msg[0]) say(v, "%s", msg);
+}
+
 static void act(viewer *v, int key)
 {
     switch (key) {
@@ -265,6 +288,10 @@ static void act(viewer *v, int key)
     case GLFW_KEY_TAB: v->hud_on = !v->hud_on; break;
     case GLFW_KEY_SLASH: v->help_on = !v->help_on; break;
     case GLFW_KEY_ESCAPE: glfwSetWindowShouldClose(v->win, GLFW_TRUE); break;
+    case GLFW_KEY_T: take_toggle(v); break;
+    case GLFW_KEY_P: fp_vtakes_play_pause(&v->takes, fp_now_ns()); break;
+    case GLFW_KEY_COMMA: fp_vtakes_step(&v->takes, -1); break;
+    case GLFW_KEY_PERIOD: fp_vtakes_step(&v->takes, 1); break;
     default: break;
     }
 }
@@ -288,6 +315,17 @@ static void on_button(GLFWwindow *w, int button, int action, int mods)
     }
     glfwGetCursorPos(w, &v->mx, &v->my);
     v->drag = button == GLFW_MOUSE_BUTTON_LEFT ? 1 : 2;
+    /* the left button on the take strip scrubs (drag 3) */
+    int ww, wh, fw, fh;
+    glfwGetWindowSize(w, &ww, &wh);
+    glfwGetFramebufferSize(w, &fw, &fh);
+    float sx, sy, sw, sh, px = (float)(v->mx * fw / (ww > 0 ? ww : 1)), py = (float)(v->my * fh / (wh > 0 ? wh : 1));
+    fp_vtakes_strip_rect(fw, fh, &sx, &sy, &sw, &sh);
+    if (button == GLFW_MOUSE_BUTTON_LEFT && v->takes.frames && px >= sx && px <= sx + sw &&
+        py >= sy && py <= sy + sh) {
+        v->drag = 3;
+        fp_vtakes_scrub(&v->takes, (px - sx) / sw);
+    }
 }
 
 static void on_cursor(GLFWwindow *w, double x, double y)
@@ -296,7 +334,11 @@ static void on_cursor(GLFWwindow *w, double x, double y)
     double dx = x - v->mx, dy = y - v->my;
     v->mx = x;
     v->my = y;
-    if (v->drag == 1) {
+    if (v->drag == 3) {
+        int ww, wh;
+        glfwGetWindowSize(w, &ww, &wh);
+        fp_vtakes_scrub(&v->takes, (x - 8) / fmax(1, ww - 16));
+    } else if (v->drag == 1) {
         v->cam.yaw -= (float)dx * 0.01f;
         v->cam.pitch += (float)dy * 0.01f;
         v->cam.pitch = fmaxf(-1.5f, fminf(1.5f, v->cam.pitch));
@@ -326,6 +368,82 @@ static void on_drop(GLFWwindow *w, int count, const char **paths)
     v->drop_path = strdup(paths[0]);
 }
 
+/* ---- hot reload ------------------------------------------------------------------------- */
+
+static bool same_file_state(const struct stat *a, const struct stat *b)
+{
+    return a->st_dev == b->st_dev && a->st_ino == b->st_ino && a->st_size == b->st_size &&
+           a->st_mtim.tv_sec == b->st_mtim.tv_sec && a->st_mtim.tv_nsec == b->st_mtim.tv_nsec;
+}
+
+/* Copy src to a fresh private temporary file (dlopen caches by path: a copy has a new one). */
+static int copy_to_temp(const char *src, char *tmp, size_t len)
+{
+    const char *dir = getenv("TMPDIR");
+    snprintf(tmp, len, "%s/facepuppet-reload-XXXXXX", dir && *dir ? dir : "/tmp");
+    int out = mkstemp(tmp);
+    if (out < 0) return -errno;
+    int in = open(src, O_RDONLY | O_CLOEXEC), rc = 0;
+    if (in < 0) rc = -errno;
+    char buf[65536];
+    for (ssize_t n; !rc && (n = read(in, buf, sizeof buf)) != 0;) {
+        if (n < 0 || write(out, buf, (size_t)n) != n) rc = -EIO;
+    }
+    if (in >= 0) close(in);
+    if (close(out) && !rc) rc = -EIO;
+    if (rc) unlink(tmp);
+    return rc;
+}
+
+/* Between frames: when the mapping's file changed (inode, size or mtime) and then held still
+ * for one check, load a copy, create it with the same keys, swap it in; a failure keeps the
+ * old mapping and says why (HUD and stderr). */
+static void watch_mapping(viewer *v)
+{
+    int64_t now = fp_now_ns();
+    if (now < v->hot.next_check) return;
+    v->hot.next_check = now + 250000000LL;
+    const char *file = fp_session_mapping_file(v->s);
+    struct stat st;
+    if (!file || !*file) return;
+    if (strcmp(file, v->hot.file)) { /* a new mapping (keys 1, 2, a dropped mesh): watch it */
+        snprintf(v->hot.file, sizeof v->hot.file, "%s", file);
+        v->hot.have_pending = false;
+        if (stat(file, &v->hot.seen)) memset(&v->hot.seen, 0, sizeof v->hot.seen);
+        return;
+    }
+    if (stat(file, &st) || same_file_state(&st, &v->hot.seen)) {
+        v->hot.have_pending = false;
+        return; /* absent for a moment (being replaced), or unchanged */
+    }
+    if (!v->hot.have_pending || !same_file_state(&st, &v->hot.pending)) {
+        v->hot.pending = st; /* changed: reload at the next check if it holds still */
+        v->hot.have_pending = true;
+        return;
+    }
+    v->hot.have_pending = false;
+    v->hot.seen = st;
+    v->hot.attempts++;
+    char tmp[4200], err[2048];
+    const char *name = fp_session_mapping_name(v->s);
+    int rc = copy_to_temp(file, tmp, sizeof tmp);
+    if (rc) {
+        say(v, "mapping '%s': reload of %s failed: cannot copy it (%s); keeping the old one", name, file,
+            strerror(-rc));
+        return;
+    }
+    rc = fp_session_reload_mapping(v->s, tmp, err, sizeof err);
+    unlink(tmp); /* loaded (or not): the copy is no longer needed by name */
+    if (rc) {
+        say(v, "mapping '%s': reload of %s failed: %s; keeping the old one", name, file, err);
+        return;
+    }
+    v->hot.reloads++;
+    const fp_plugin *p = fp_session_mapping_plugin(v->s);
+    say(v, "mapping '%s' reloaded from %s (%s %s)", name, file, p->entry && p->entry->id ? p->entry->id : "?",
+        p->entry && p->entry->version ? p->entry->version : "?");
+}
+
 /* ---- script ----------------------------------------------------------------------------- */
 
 static bool any_hand(const viewer *v)
@@ -339,14 +457,16 @@ static void run_script(viewer *v)
     while (sc->next < sc->count) {
         fp_script_cmd *c = &sc->cmds[sc->next];
         if (c->op == FP_SCRIPT_WAIT_HANDS || c->op == FP_SCRIPT_WAIT_END ||
-            c->op == FP_SCRIPT_WAIT_FRAMES) {
+            c->op == FP_SCRIPT_WAIT_FRAMES || c->op == FP_SCRIPT_WAIT_RELOAD) {
             if (!sc->waiting) {
                 sc->waiting = 1;
                 sc->wait_start = v->frames;
+                sc->reload_mark = v->hot.attempts;
             }
-            bool done = c->op == FP_SCRIPT_WAIT_HANDS ? any_hand(v)
-                      : c->op == FP_SCRIPT_WAIT_END   ? fp_session_finished(v->s)
-                                                      : v->frames - sc->wait_start >= (uint64_t)c->number;
+            bool done = c->op == FP_SCRIPT_WAIT_HANDS  ? any_hand(v)
+                      : c->op == FP_SCRIPT_WAIT_END    ? fp_session_finished(v->s)
+                      : c->op == FP_SCRIPT_WAIT_RELOAD ? v->hot.attempts > sc->reload_mark
+                                                       : v->frames - sc->wait_start >= (uint64_t)c->number;
             if (!done) return;
             sc->waiting = 0;
             sc->next++;
@@ -356,7 +476,18 @@ static void run_script(viewer *v)
         switch (c->op) {
         case FP_SCRIPT_KEY: act(v, c->key); break;
         case FP_SCRIPT_RADIUS: fp_session_set_radius(v->s, c->number); break;
+        case FP_SCRIPT_SCRUB: fp_vtakes_scrub(&v->takes, c->number); break;
         case FP_SCRIPT_CLOSE: glfwSetWindowShouldClose(v->win, GLFW_TRUE); return;
+        case FP_SCRIPT_PRINT_MAPPING: {
+            const fp_plugin *p = fp_session_mapping_plugin(v->s);
+            const fp_control_set *cs = fp_session_control_set(v->s);
+            printf("mapping %s id %s version %s frame %llu active %d count %zu reloads %lu\n",
+                   fp_session_mapping_name(v->s), p->entry && p->entry->id ? p->entry->id : "?",
+                   p->entry && p->entry->version ? p->entry->version : "?", (unsigned long long)v->frames,
+                   cs->active, cs->count, v->hot.reloads);
+            fflush(stdout);
+            break;
+        }
         case FP_SCRIPT_DROP:
             free(v->drop_path);
             v->drop_path = strdup(c->text);
@@ -457,6 +588,9 @@ static const char help_text[] =
     " [ / ]  radius down / up\n"
     " W wireframe  S screenshot  F frame\n"
     " H hands  Tab HUD  ? this list\n"
+    " T      record a take (start / stop)\n"
+    " P      play / pause the last take\n"
+    " , / .  a frame back / on; mouse on the strip scrubs\n"
     " Esc    quit\n"
     "mouse: left orbit, right pan, wheel zoom\n"
     "drop a mesh file on the window to load it";
@@ -483,6 +617,7 @@ static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
     y += fp_render_text(&v->r, w, h, 8, y, scale, text, white) + 6 * scale;
     if (v->status[0] && fp_now_ns() < v->status_until)
         y += fp_render_text(&v->r, w, h, 8, y, scale, v->status, dim) + 6 * scale;
+    fp_vtakes_draw(&v->takes, &v->r, w, h, fp_now_ns());
     if (v->help_on) fp_render_text(&v->r, w, h, 8, y, scale, help_text, dim);
     else fp_render_text(&v->r, w, h, 8, (float)h - 14 * scale, scale, "? keys", dim);
 }
@@ -500,7 +635,8 @@ static void upload(viewer *v, bool warp_on_gpu)
         v->have_base = true;
     }
     if (warp_on_gpu) return;
-    const float *shown = fp_session_positions(v->s);
+    const float *review = fp_vtakes_shown(&v->takes);
+    const float *shown = review ? review : fp_session_positions(v->s);
     if (!v->have_pos || memcmp(shown, v->pos, bytes)) {
         memcpy(v->pos, shown, bytes);
         fp_mesh_normals(m->triangles, v->t, v->pos, v->n, v->nrm);
@@ -558,8 +694,11 @@ static void draw(viewer *v, const fp_frame_stats *st, int w, int h)
     camera_matrices(v, w, h, view, proj);
     m4_mul(proj, view, pv);
     static const float skin[4] = {0.86f, 0.7f, 0.6f, 1.f}, ghost[4] = {0.6f, 0.8f, 1.f, 0.22f};
-    bool deformed = fp_session_positions(v->s) != fp_session_base(v->s);
-    if (v->opt->gpu_warp) {
+    bool reviewing = fp_vtakes_shown(&v->takes) != NULL;
+    bool deformed = !reviewing && fp_session_positions(v->s) != fp_session_base(v->s);
+    if (reviewing) {
+        fp_render_mesh(&v->r, pv, view, false, NULL, skin, v->wireframe);
+    } else if (v->opt->gpu_warp) {
         /* The engine step's own coefficients (no second solve); the identity when nothing
          * is deformed or they cannot be drawn. */
         fp_warp_coeffs c;
@@ -572,7 +711,7 @@ static void draw(viewer *v, const fp_frame_stats *st, int w, int h)
         fp_render_mesh(&v->r, pv, view, false, NULL, skin, v->wireframe);
     }
     if (deformed) fp_render_mesh(&v->r, pv, view, true, NULL, ghost, false);
-    if (v->hands_on) draw_hands(v, pv, view);
+    if (v->hands_on && !reviewing) draw_hands(v, pv, view);
     if (v->hud_on) draw_hud(v, w, h, st);
 }
 
@@ -588,13 +727,18 @@ static void frame(viewer *v)
 {
     glfwPollEvents();
     if (v->drop_path) load_dropped(v);
+    watch_mapping(v);
     run_script(v);
     if (v->drop_path) load_dropped(v);
     fp_frame_stats st;
     memset(&st, 0, sizeof st);
     int64_t now = fp_now_ns();
+    char take_msg[1200];
+    fp_vtakes_tick(&v->takes, v->s, now, take_msg, sizeof take_msg);
+    if (take_msg[0]) say(v, "%s", take_msg);
     if (!v->paused) {
         fp_session_step(v->s, now, &st);
+        for (unsigned k = fp_session_record_toggles(v->s); k > 0; k--) take_toggle(v);
         if (st.committed) v->commits++;
         if (st.committed) v->committed_shown = true;
         if (st.engaged || st.cancelled) v->committed_shown = false;
@@ -655,6 +799,7 @@ int fp_viewer_run(const fp_viewer_options *opt, fp_viewer_report *report, char *
     v->so = opt->session;
     v->so.log = on_session_log;
     v->so.log_user = v;
+    fp_vtakes_init(&v->takes, opt->take_dir, opt->slate, opt->countdown_s, &v->so);
     v->err = err;
     v->errlen = errlen;
     v->hands_on = v->hud_on = true;
@@ -711,6 +856,15 @@ int fp_viewer_run(const fp_viewer_options *opt, fp_viewer_report *report, char *
         if (opt->duration_s > 0 && fp_now_ns() - t0 >= (int64_t)(opt->duration_s * 1e9)) break;
     }
     if (!v->error && opt->out && fp_session_save(v->s, opt->out, err, errlen)) v->error = -EIO;
+    {   /* a take still recording ends with the run; a failed one fails it */
+        char msg[1200];
+        int trc = fp_vtakes_stop(&v->takes, v->s, msg, sizeof msg);
+        if (msg[0] && (trc || !opt->quiet)) fprintf(stderr, "facepuppet live: %s\n", msg);
+        if (trc && !v->error) {
+            v->error = trc;
+            snprintf(err, errlen, "%s", msg);
+        }
+    }
     char stop_err[1024]; /* record=FILE: a failed write fails the run */
     int stop_rc = fp_session_stop(v->s, stop_err, sizeof stop_err);
     if (!v->error && stop_rc) {
@@ -731,6 +885,7 @@ out:
     double unused;
     fp_viewer_percentiles(v->engine_ms.v, v->engine_ms.n, &v->rep.engine_ms_median, &unused);
     if (report) *report = v->rep;
+    fp_vtakes_free(&v->takes);
     fp_session_destroy(&v->s);
     if (v->win) {
         fp_gpuwarp_destroy(&v->gw);
