@@ -39,3 +39,42 @@ function(fp_add_test name)
   set_tests_properties(${name} PROPERTIES TIMEOUT ${T_TIMEOUT}
     ENVIRONMENT "FP_SHARED_DATA=${FP_SHARED_DATA};FP_BUILD_DIR=${CMAKE_BINARY_DIR}")
 endfunction()
+
+# fp_add_fuzz(NAME SOURCES... [LIBS libs...] [CORPUS dirs...]): a libFuzzer target (clang,
+# ASan + UBSan), built only in the fuzz build (cmake --preset fuzz, build-fuzz/, FP_FUZZ=ON).
+# CORPUS: seed folders, relative to the source root or absolute (e.g. tests/fuzz/corpus/NAME,
+# ../shared/data/...); they are only read. New inputs go to build-fuzz/fuzz/corpus/NAME,
+# crashes to build-fuzz/fuzz/artifacts/. Also a ctest `fuzz_NAME` (label fuzz) that runs the
+# target for FP_FUZZ_SECONDS (default 20) and fails on any crash, leak, timeout or OOM.
+# tools/fuzz-run reads build-fuzz/fuzz/NAME.corpus (one seed folder a line) for long runs.
+function(fp_add_fuzz name)
+  if(NOT FP_FUZZ)
+    return()
+  endif()
+  cmake_parse_arguments(F "" "" "LIBS;CORPUS" ${ARGN})
+  add_executable(${name} ${F_UNPARSED_ARGUMENTS})
+  target_compile_options(${name} PRIVATE -fsanitize=fuzzer)
+  target_link_options(${name} PRIVATE -fsanitize=fuzzer)
+  target_link_libraries(${name} PRIVATE ${F_LIBS})
+  set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${CMAKE_BINARY_DIR}/fuzz)
+  set(dirs "")
+  foreach(d ${F_CORPUS})
+    if(NOT IS_ABSOLUTE ${d})
+      set(d ${CMAKE_SOURCE_DIR}/${d})
+    endif()
+    string(APPEND dirs "${d}\n")
+  endforeach()
+  file(WRITE ${CMAKE_BINARY_DIR}/fuzz/${name}.corpus "${dirs}")
+  if(NOT TARGET fuzz)
+    add_custom_target(fuzz)
+  endif()
+  add_dependencies(fuzz ${name})
+  if(NOT FP_FUZZ_SECONDS)
+    set(FP_FUZZ_SECONDS 20)
+  endif()
+  add_test(NAME fuzz_${name}
+           COMMAND ${CMAKE_SOURCE_DIR}/tools/fuzz-run --no-build ${FP_FUZZ_SECONDS} ${name}
+           WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+  set_tests_properties(fuzz_${name} PROPERTIES LABELS fuzz
+    TIMEOUT 600 ENVIRONMENT "FP_FUZZ_BUILD_DIR=${CMAKE_BINARY_DIR}")
+endfunction()

@@ -25,6 +25,7 @@
 #ifndef FP_MESH_H
 #define FP_MESH_H
 
+#include <errno.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -32,16 +33,23 @@
 extern "C" {
 #endif
 
-/** Results of the mesh functions. */
+/** Results of the mesh functions: 0 or a negative errno value, as everywhere in the project
+ *  (core/common/fp_error.h; fp_strerror() gives the text of any of them). */
 typedef enum fp_mesh_result {
     FP_MESH_OK = 0,
-    FP_MESH_ERR_IO = -1,          /* file missing, unreadable or unwritable */
-    FP_MESH_ERR_FORMAT = -2,      /* malformed content: syntax, NaN/inf, index out of range,
-                                     no vertices or no faces, bad glTF accessor or buffer */
-    FP_MESH_ERR_UNSUPPORTED = -3, /* unknown file extension, or a feature not handled
-                                     (sparse glTF accessors, a glTF with no triangles) */
-    FP_MESH_ERR_NOMEM = -4,       /* out of memory */
-    FP_MESH_ERR_INVALID = -5      /* bad argument: NULL pointer, inconsistent mesh */
+    FP_MESH_ERR_NOENT = -ENOENT,        /* the file is not there */
+    FP_MESH_ERR_ACCESS = -EACCES,       /* the file (or its folder) may not be read/written */
+    FP_MESH_ERR_IO = -EIO,              /* a read or write failed (or the path is no regular
+                                           file) */
+    FP_MESH_ERR_NOSPACE = -ENOSPC,      /* a save ran out of disk space (old file kept) */
+    FP_MESH_ERR_FORMAT = -EBADMSG,      /* malformed content: syntax, NaN/inf, index out of
+                                           range, counts that do not fit the file's size, no
+                                           vertices or no faces, bad glTF accessor or buffer,
+                                           a glTF URI that leaves the file's folder */
+    FP_MESH_ERR_UNSUPPORTED = -ENOTSUP, /* unknown file extension, or a feature not handled
+                                           (sparse glTF accessors, a glTF with no triangles) */
+    FP_MESH_ERR_NOMEM = -ENOMEM,        /* out of memory */
+    FP_MESH_ERR_INVALID = -EINVAL       /* bad argument: NULL pointer, inconsistent mesh */
 } fp_mesh_result;
 
 /** A triangle mesh. All arrays are owned by the mesh, allocated with malloc() and released
@@ -58,7 +66,8 @@ typedef struct fp_mesh {
     char *source_path;       /* the path the mesh was loaded from (a copy), or NULL */
 } fp_mesh;
 
-/** The message for a result code: a static string, never NULL. Thread-safe. */
+/** The message for a result code: fp_strerror(result) (a static string, never NULL), kept
+ *  for older callers. Thread-safe. */
 const char *fp_mesh_strerror(int result);
 
 /** Allocate a mesh of n vertices and t triangles with zeroed positions, normals, triangles,
@@ -94,11 +103,21 @@ fp_mesh *fp_mesh_copy(const fp_mesh *mesh);
  *  takes the UV of its first use in face order. glTF TEXCOORD_0 (float or normalised
  *  unsigned byte/short); where only some primitives have UVs the others get (0, 0).
  *
+ *  Hostile files are refused before any third-party parser sees them, in time and memory
+ *  bounded by the file's size: PLY headers are checked strictly (element before property,
+ *  known types, numeric counts, a real end_header) and every value walked; OFF (ASCII and
+ *  binary) and STL counts must fit the file's size; every number must be finite as a float;
+ *  glTF buffers and images are read only from data URIs or relative paths that stay inside
+ *  the file's folder (after normalisation and symlinks) and name regular files. The path
+ *  itself must name a regular file (a FIFO or device is refused, never opened blocking).
+ *
  *  On success *out is a new mesh (free with fp_mesh_free()) with source_path set and
- *  FP_MESH_OK is returned. On error *out is NULL and a negative fp_mesh_result is returned:
- *  IO (missing or unreadable file), FORMAT (empty file, syntax, NaN/inf values, face index
- *  out of range, no vertices, no faces, glTF buffer missing or accessor out of bounds),
- *  UNSUPPORTED (extension, sparse accessors), NOMEM, INVALID (NULL path or out).
+ *  FP_MESH_OK is returned. On error *out is NULL and a negative errno code is returned, with
+ *  a message "path: [line N: ]reason": NOENT (missing), ACCESS (unreadable), IO (read error,
+ *  not a regular file), FORMAT (empty file, syntax, NaN/inf values, counts beyond the file's
+ *  size, face index out of range, no vertices, no faces, glTF buffer missing, refused or
+ *  accessor out of bounds), UNSUPPORTED (extension, sparse accessors, binary COFF, > 2 GiB),
+ *  NOMEM, INVALID (NULL path or out).
  *  Thread rules: see the top of this file. */
 int fp_mesh_load(const char *path, fp_mesh **out, char *err, size_t errlen);
 
@@ -111,8 +130,14 @@ int fp_mesh_load(const char *path, fp_mesh **out, char *err, size_t errlen);
  *  glTF: one mesh, one triangle primitive with POSITION (with min/max), NORMAL, TEXCOORD_0
  *  and uint32 indices, one node, one scene; .gltf embeds the buffer as a base64 data URI,
  *  .glb puts it in the binary chunk.
+ *  Never half-written: the file is written to a temporary file in the same folder
+ *  (".NAME.XXXXXX"), every write checked, fsync()ed, then renamed over `path`; on any failure
+ *  the temporary file is removed and an existing file at `path` is left unchanged. A
+ *  replaced file keeps its mode; a new one gets 0666 & ~umask. (A process killed during the
+ *  write may leave its temporary file behind, never a broken `path`.)
  *  Returns FP_MESH_OK, or INVALID (NULL arguments, index out of range, non-finite position),
- *  IO (cannot create or write the file), UNSUPPORTED (extension), NOMEM, with a message. */
+ *  NOENT (no such folder), ACCESS (folder not writable), NOSPACE (disk full), IO (another
+ *  write failure, e.g. EFBIG), UNSUPPORTED (extension), NOMEM, with a message naming path. */
 int fp_mesh_save(const fp_mesh *mesh, const char *path, char *err, size_t errlen);
 
 /** Area-weighted vertex normals (each triangle adds its unnormalised cross product

@@ -1,26 +1,18 @@
 /* fp_mesh: the C part: allocation, copies, normals, bounds, error text, the OBJ scan. */
 #include "mesh_internal.h"
+#include "fp_error.h"
 
 #include <ctype.h>
 #include <errno.h>
+#include <float.h>
 #include <math.h>
+#include <stdint.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-const char *fp_mesh_strerror(int result)
-{
-    switch (result) {
-    case FP_MESH_OK: return "success";
-    case FP_MESH_ERR_IO: return "file cannot be read or written";
-    case FP_MESH_ERR_FORMAT: return "malformed mesh file";
-    case FP_MESH_ERR_UNSUPPORTED: return "unsupported mesh format or feature";
-    case FP_MESH_ERR_NOMEM: return "out of memory";
-    case FP_MESH_ERR_INVALID: return "invalid argument";
-    default: return "unknown fp_mesh result";
-    }
-}
+const char *fp_mesh_strerror(int result) { return fp_strerror(result); }
 
 int fp__mesh_error(char *err, size_t errlen, int code, const char *path, const char *fmt, ...)
 {
@@ -164,10 +156,11 @@ int fp_mesh_normals(const uint32_t *tris, size_t t, const float *pos, size_t n,
     }
     for (size_t i = 0; i < n; i++) {
         float *v = normals_out + 3 * i;
-        float len = sqrtf(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-        if (len > 0.0f && isfinite(len)) {
-            float s = 1.0f / len;
-            v[0] *= s; v[1] *= s; v[2] *= s;
+        /* in double: the sums of tiny (denormal) triangles would lose their unit length */
+        const double x = v[0], y = v[1], z = v[2];
+        const double len = sqrt(x * x + y * y + z * z);
+        if (len > 0.0 && isfinite(len)) {
+            v[0] = (float)(x / len); v[1] = (float)(y / len); v[2] = (float)(z / len);
         } else {
             v[0] = v[1] = v[2] = 0.0f; /* no area around it (or non-finite input) */
         }
@@ -241,9 +234,10 @@ static int parse_number(const char *tok, size_t len, double *out)
     char *e = NULL;
     errno = 0;
     double d = strtod(tok, &e);
-    if (e != tok + len)
-        return 0;
-    *out = d;
+    if (e != tok + len || memchr(tok, 'x', len) || memchr(tok, 'X', len))
+        return 0; /* hexadecimal floats: C++ streams (OpenMesh) do not read them */
+    /* a value beyond float range reads as infinite (the mesh stores floats) */
+    *out = isfinite(d) && fabs(d) > FLT_MAX ? (d > 0 ? INFINITY : -INFINITY) : d;
     return 1;
 }
 
@@ -453,8 +447,76 @@ static int parse_count(const char *tok, size_t len, unsigned long *out)
     return 1;
 }
 
-int fp__off_scan(const char *path, const char *text, size_t len, char *err, size_t errlen)
+/* Binary OFF as OpenMesh reads it: the header line, then little-endian uint32 counts
+ * (vertices, faces, edges), vertices of 3 [+3 normal] [+2 texture] floats, faces as a uint32
+ * corner count and that many uint32 indices. Everything is checked against the file's end. */
+static int off_binary_scan(const char *path, const char *text, size_t len, const char *data,
+                           int st, int c, int n, size_t *nv_out, size_t *nf_out, char *err,
+                           size_t errlen)
 {
+    if (c)
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_UNSUPPORTED, path,
+                              "binary OFF with colours (COFF BINARY) is not supported");
+    const unsigned char *b = (const unsigned char *)data, *end = (const unsigned char *)text + len;
+    if (end - b < 12)
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                              "binary OFF: the file ends before the vertex/face counts");
+    uint32_t cnt[3];
+    memcpy(cnt, b, 12); /* little-endian hosts only, like OpenMesh's reader */
+    b += 12;
+    const uint64_t nv = cnt[0], nf = cnt[1];
+    const uint64_t per_vertex = 4u * (3u + (n ? 3u : 0u) + (st ? 2u : 0u));
+    if (nv * per_vertex + nf * 16u > (uint64_t)(end - b))
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                              "binary OFF: %llu vertices and %llu faces need at least %llu "
+                              "bytes, the file has %zu after its counts",
+                              (unsigned long long)nv, (unsigned long long)nf,
+                              (unsigned long long)(nv * per_vertex + nf * 16u),
+                              (size_t)(end - b));
+    for (uint64_t i = 0; i < nv * (per_vertex / 4); i++) {
+        float f;
+        memcpy(&f, b + 4 * i, 4);
+        if (!isfinite(f))
+            return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                                  "binary OFF: vertex %llu has a non-finite value",
+                                  (unsigned long long)(i / (per_vertex / 4)));
+    }
+    b += nv * per_vertex;
+    for (uint64_t f = 0; f < nf; f++) {
+        uint32_t k;
+        if (end - b < 4)
+            return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                                  "binary OFF: the file ends after %llu of %llu faces",
+                                  (unsigned long long)f, (unsigned long long)nf);
+        memcpy(&k, b, 4);
+        b += 4;
+        if (k < 3 || (uint64_t)k * 4u > (uint64_t)(end - b))
+            return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                                  "binary OFF: face %llu has %u corners (3 or more, within the "
+                                  "file)", (unsigned long long)f, k);
+        for (uint32_t j = 0; j < k; j++) {
+            uint32_t idx;
+            memcpy(&idx, b + 4 * (size_t)j, 4);
+            if (idx >= nv)
+                return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                                      "binary OFF: face %llu references vertex %u, but the "
+                                      "file has %llu vertices", (unsigned long long)f, idx,
+                                      (unsigned long long)nv);
+        }
+        b += 4 * (size_t)k;
+    }
+    if (b != end)
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                              "binary OFF: %zu bytes after the last face", (size_t)(end - b));
+    *nv_out = (size_t)nv;
+    *nf_out = (size_t)nf;
+    return FP_MESH_OK;
+}
+
+int fp__off_scan(const char *path, const char *text, size_t len, size_t *nv_out,
+                 size_t *nf_out, char *err, size_t errlen)
+{
+    *nv_out = *nf_out = 0;
     if (memchr(text, '\0', len) && !strstr(text, "BINARY"))
         return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
                               "NUL byte in ASCII OFF text");
@@ -468,6 +530,7 @@ int fp__off_scan(const char *path, const char *text, size_t len, char *err, size
         return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path, "no OFF header");
     /* [ST][C][N][4][n]OFF */
     const char *h = tok, *he = tok + toklen;
+    const char *const hdr = tok, *const hdr_end = he;
     int st = 0, c = 0, n = 0;
     if (he - h >= 2 && h[0] == 'S' && h[1] == 'T') { st = 1; h += 2; }
     if (h < he && *h == 'C') { c = 1; h++; }
@@ -477,8 +540,16 @@ int fp__off_scan(const char *path, const char *text, size_t len, char *err, size
                               "line %zu: not an OFF header " TOK_FMT " (4D and nOFF are not "
                               "supported)", t.line_no, TOK_ARG(tok, toklen));
     if (next_token(&l, &tok, &toklen)) {
-        if (toklen == 6 && memcmp(tok, "BINARY", 6) == 0)
-            return FP_MESH_OK; /* binary OFF: OpenMesh's reader checks sizes */
+        if (toklen == 6 && memcmp(tok, "BINARY", 6) == 0) {
+            /* OpenMesh takes the header as one line "[ST][C][N]OFF BINARY" */
+            if (hdr != text || hdr_end + 1 != tok || *hdr_end != ' ' || tok + 6 >= text + len ||
+                tok[6] != '\n')
+                return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                                      "line %zu: a binary OFF starts with exactly "
+                                      "'[ST][N]OFF BINARY' and a newline", t.line_no);
+            return off_binary_scan(path, text, len, t.p, st, c, n, nv_out, nf_out, err,
+                                   errlen);
+        }
         return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
                               "line %zu: put the vertex and face counts on their own line",
                               t.line_no);
@@ -494,6 +565,10 @@ int fp__off_scan(const char *path, const char *text, size_t len, char *err, size
                                   t.line_no);
     const unsigned long nv = counts[0], nf = counts[1];
     const size_t need = 3 + (n ? 3u : 0u) + (st ? 2u : 0u);
+    if (nv > UINT32_MAX || nf > UINT32_MAX || nv * need + nf * 4 > len)
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                              "line %zu: %lu vertices and %lu faces cannot fit in a file of "
+                              "%zu bytes", t.line_no, nv, nf, len);
     for (unsigned long i = 0; i < nv; i++) {
         if (!next_nonblank_line(&t, &l))
             return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
@@ -536,54 +611,428 @@ int fp__off_scan(const char *path, const char *text, size_t len, char *err, size
                                       "has %lu vertices", t.line_no, i, idx, nv);
         }
     }
+    *nv_out = nv;
+    *nf_out = nf;
     return FP_MESH_OK;
 }
 
 /* ---- ASCII PLY and STL scans --------------------------------------------------------- */
-
-/* Check that every token from line `l` on is a finite number (label names the part). */
-static int numbers_only(const char *path, text_lines *t, const char *label, char *err,
-                        size_t errlen)
-{
-    obj_line l;
-    while (next_nonblank_line(t, &l)) {
-        const char *tok;
-        size_t toklen;
-        while (next_token(&l, &tok, &toklen)) {
-            double d;
-            if (!parse_number(tok, toklen, &d))
-                return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
-                                      "line %zu: malformed number " TOK_FMT " in %s",
-                                      t->line_no, TOK_ARG(tok, toklen), label);
-            if (!isfinite(d))
-                return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
-                                      "line %zu: non-finite value " TOK_FMT " in %s",
-                                      t->line_no, TOK_ARG(tok, toklen), label);
-        }
-    }
-    return FP_MESH_OK;
-}
 
 static int token_is(const char *tok, size_t len, const char *word)
 {
     return strlen(word) == len && memcmp(tok, word, len) == 0;
 }
 
-int fp__ply_scan(const char *path, const char *text, size_t len, char *err, size_t errlen)
+/* ---- PLY: a strict header, then a walk over every value ------------------------------ */
+
+/* The scalar types of the PLY format (Turk 1994) with both spellings OpenMesh knows. */
+static const struct ply_type_info {
+    const char *name, *alias;
+    int size, is_int, is_signed;
+} ply_types[] = {
+    {"char", "int8", 1, 1, 1},     {"uchar", "uint8", 1, 1, 0}, {"short", "int16", 2, 1, 1},
+    {"ushort", "uint16", 2, 1, 0}, {"int", "int32", 4, 1, 1},   {"uint", "uint32", 4, 1, 0},
+    {"float", "float32", 4, 0, 1}, {"double", "float64", 8, 0, 1}};
+#define PLY_NTYPES (int)(sizeof ply_types / sizeof ply_types[0])
+
+enum { PLY_MAX_ELEMENTS = 16, PLY_MAX_PROPS = 64 };
+enum { PLY_OTHER, PLY_VERTEX, PLY_FACE };
+enum { PLY_ROLE_OTHER, PLY_ROLE_VINDEX, PLY_ROLE_TEXCOORD };
+
+typedef struct ply_prop {
+    int type;       /* index into ply_types */
+    int count_type; /* list count type, or -1 for a scalar */
+    int role;
+} ply_prop;
+
+typedef struct ply_element {
+    int kind;
+    unsigned long long count;
+    int nprops;
+    ply_prop props[PLY_MAX_PROPS];
+    size_t line;
+} ply_element;
+
+static int ply_type(const char *tok, size_t len)
 {
-    text_lines t = {text, text + len, 0};
-    obj_line l;
-    int ascii = 0;
-    while (next_nonblank_line(&t, &l)) {
-        const char *tok = NULL, *tok2 = NULL;
-        size_t toklen = 0, toklen2 = 0;
-        next_token(&l, &tok, &toklen);
-        if (token_is(tok, toklen, "format") && next_token(&l, &tok2, &toklen2))
-            ascii = token_is(tok2, toklen2, "ascii");
-        if (token_is(tok, toklen, "end_header"))
-            return ascii ? numbers_only(path, &t, "the PLY data", err, errlen) : FP_MESH_OK;
+    for (int i = 0; i < PLY_NTYPES; i++)
+        if (token_is(tok, len, ply_types[i].name) || token_is(tok, len, ply_types[i].alias))
+            return i;
+    return -1;
+}
+
+/* A decimal number as C++ streams read it (no hex, no inf/nan words). */
+static int is_decimal(const char *tok, size_t len)
+{
+    for (size_t i = 0; i < len; i++)
+        if (!strchr("0123456789+-.eE", tok[i]))
+            return 0;
+    return 1;
+}
+
+/* Check one ASCII value of type `t`; *ival gets integers. 0 when fine, else an error code
+ * with the message written. */
+static int ply_ascii_value(const char *path, size_t line, const char *tok, size_t len, int t,
+                           long long *ival, char *err, size_t errlen)
+{
+    const struct ply_type_info *ti = &ply_types[t];
+    char buf[64];
+    if (len >= sizeof buf)
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                              "line %zu: malformed number " TOK_FMT, line, TOK_ARG(tok, len));
+    memcpy(buf, tok, len);
+    buf[len] = '\0';
+    char *e = NULL;
+    errno = 0;
+    if (ti->is_int) {
+        long long v = strtoll(buf, &e, 10);
+        long long lo = ti->is_signed ? -(1LL << (8 * ti->size - 1)) : 0;
+        long long hi = ti->is_signed ? (1LL << (8 * ti->size - 1)) - 1
+                                     : (long long)((1ULL << (8 * ti->size)) - 1);
+        if (e == buf || *e || errno == ERANGE || v < lo || v > hi)
+            return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                                  "line %zu: " TOK_FMT " is not a %s", line, TOK_ARG(tok, len),
+                                  ti->name);
+        *ival = v;
+        return 0;
     }
-    return FP_MESH_OK; /* no header end: OpenMesh's reader reports it */
+    double d = strtod(buf, &e);
+    if (e == buf || *e)
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                              "line %zu: malformed number " TOK_FMT, line, TOK_ARG(tok, len));
+    if (!isfinite(d) || fabs(d) > FLT_MAX)
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                              "line %zu: non-finite value " TOK_FMT, line, TOK_ARG(tok, len));
+    if (!is_decimal(tok, len))
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                              "line %zu: malformed number " TOK_FMT, line, TOK_ARG(tok, len));
+    *ival = 0;
+    return 0;
+}
+
+/* A cursor over whitespace-separated tokens that counts lines. */
+typedef struct tok_cursor {
+    const char *p, *end;
+    size_t line;
+} tok_cursor;
+
+static int cursor_next(tok_cursor *c, const char **tok, size_t *len)
+{
+    while (c->p < c->end && (is_blank(*c->p) || *c->p == '\n'))
+        c->line += *c->p++ == '\n';
+    if (c->p >= c->end)
+        return 0;
+    *tok = c->p;
+    while (c->p < c->end && !is_blank(*c->p) && *c->p != '\n')
+        c->p++;
+    *len = (size_t)(c->p - *tok);
+    return 1;
+}
+
+static uint64_t ply_read_uint(const unsigned char *p, int size, int big)
+{
+    uint64_t v = 0;
+    for (int i = 0; i < size; i++)
+        v |= (uint64_t)p[big ? size - 1 - i : i] << (8 * i);
+    return v;
+}
+
+/* Value of type t at p (binary, size bytes), as a signed integer or a double. */
+static void ply_binary_value(const unsigned char *p, int t, int big, long long *iv, double *dv)
+{
+    const struct ply_type_info *ti = &ply_types[t];
+    uint64_t u = ply_read_uint(p, ti->size, big);
+    *iv = 0;
+    *dv = 0;
+    if (ti->is_int) {
+        if (ti->is_signed && ti->size < 8 && (u >> (8 * ti->size - 1)))
+            *iv = (long long)u - (1LL << (8 * ti->size));
+        else
+            *iv = (long long)u;
+    } else if (ti->size == 4) {
+        uint32_t w = (uint32_t)u;
+        float f;
+        memcpy(&f, &w, 4);
+        *dv = f;
+    } else {
+        memcpy(dv, &u, 8);
+    }
+}
+
+int fp__ply_scan(const char *path, const char *text, size_t len, size_t *vertices,
+                 size_t *faces, char *err, size_t errlen)
+{
+    *vertices = *faces = 0;
+    ply_element *el = calloc(PLY_MAX_ELEMENTS, sizeof *el);
+    if (!el)
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_NOMEM, path, "out of memory");
+    int nel = 0, format = -1; /* 0 ascii, 1 little endian, 2 big endian */
+    int rc = FP_MESH_OK;
+    const char *p = text, *end = text + len, *data = NULL;
+    size_t line_no = 0;
+    int prev_was_decl = 0; /* the line before was an element/property line without trailing
+                              blanks (OpenMesh finds binary data by that) */
+    int prev_crlf = 0;
+#define PLY_FAIL(...) do { rc = fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path, __VA_ARGS__); goto done; } while (0)
+    while (!data) {
+        if (p >= end)
+            PLY_FAIL("no 'end_header' line: the PLY header does not end");
+        line_no++;
+        const char *eol = memchr(p, '\n', (size_t)(end - p));
+        if (!eol)
+            PLY_FAIL("line %zu: no 'end_header' line: the PLY header does not end", line_no);
+        if (memchr(p, '\0', (size_t)(eol - p)))
+            PLY_FAIL("line %zu: NUL byte in the PLY header", line_no);
+        const int crlf = eol > p && eol[-1] == '\r';
+        const int trailing = eol > p && is_blank(eol[crlf ? -2 : -1]);
+        obj_line l = {p, eol};
+        p = eol + 1;
+        const char *tok[6];
+        size_t tl[6];
+        int nt = 0;
+        while (nt < 6 && next_token(&l, &tok[nt], &tl[nt]))
+            nt++;
+        const char *more;
+        size_t morelen;
+        const int extra = next_token(&l, &more, &morelen);
+        if (line_no == 1) {
+            if (nt != 1 || !token_is(tok[0], tl[0], "ply"))
+                PLY_FAIL("line 1: not a PLY file (the first line is not 'ply')");
+            continue;
+        }
+        int decl = 0;
+        if (nt == 0) {
+            PLY_FAIL("line %zu: empty line in the PLY header", line_no);
+        } else if (token_is(tok[0], tl[0], "comment")) {
+            /* skipped */
+        } else if (token_is(tok[0], tl[0], "format")) {
+            if (format >= 0 || nel > 0)
+                PLY_FAIL("line %zu: 'format' must come once, before any element", line_no);
+            if (nt != 3 || extra || !token_is(tok[2], tl[2], "1.0"))
+                PLY_FAIL("line %zu: expected 'format ascii|binary_little_endian|"
+                         "binary_big_endian 1.0'", line_no);
+            if (token_is(tok[1], tl[1], "ascii")) format = 0;
+            else if (token_is(tok[1], tl[1], "binary_little_endian")) format = 1;
+            else if (token_is(tok[1], tl[1], "binary_big_endian")) format = 2;
+            else
+                PLY_FAIL("line %zu: unknown PLY format " TOK_FMT, line_no,
+                         TOK_ARG(tok[1], tl[1]));
+        } else if (token_is(tok[0], tl[0], "element")) {
+            if (format < 0)
+                PLY_FAIL("line %zu: 'element' before the 'format' line", line_no);
+            if (nt != 3 || extra)
+                PLY_FAIL("line %zu: expected 'element NAME COUNT'", line_no);
+            unsigned long cnt;
+            if (!parse_count(tok[2], tl[2], &cnt) || cnt > UINT32_MAX)
+                PLY_FAIL("line %zu: element count " TOK_FMT " is not a number from 0 to %u",
+                         line_no, TOK_ARG(tok[2], tl[2]), UINT32_MAX);
+            if (nel == PLY_MAX_ELEMENTS)
+                PLY_FAIL("line %zu: more than %d elements", line_no, PLY_MAX_ELEMENTS);
+            ply_element *e = &el[nel++];
+            e->kind = token_is(tok[1], tl[1], "vertex") ? PLY_VERTEX
+                      : token_is(tok[1], tl[1], "face") ? PLY_FACE : PLY_OTHER;
+            e->count = cnt;
+            e->line = line_no;
+            for (int i = 0; i + 1 < nel; i++)
+                if (e->kind != PLY_OTHER && el[i].kind == e->kind)
+                    PLY_FAIL("line %zu: a second '%.*s' element", line_no, (int)tl[1], tok[1]);
+            decl = 1;
+        } else if (token_is(tok[0], tl[0], "property")) {
+            if (nel == 0)
+                PLY_FAIL("line %zu: 'property' before any 'element'", line_no);
+            ply_element *e = &el[nel - 1];
+            if (e->nprops == PLY_MAX_PROPS)
+                PLY_FAIL("line %zu: more than %d properties in one element", line_no,
+                         PLY_MAX_PROPS);
+            ply_prop pr = {-1, -1, PLY_ROLE_OTHER};
+            const char *name;
+            size_t namelen;
+            if (nt >= 2 && token_is(tok[1], tl[1], "list")) {
+                if (nt != 5 || extra)
+                    PLY_FAIL("line %zu: expected 'property list COUNT_TYPE TYPE NAME'", line_no);
+                pr.count_type = ply_type(tok[2], tl[2]);
+                pr.type = ply_type(tok[3], tl[3]);
+                name = tok[4];
+                namelen = tl[4];
+                /* the count types OpenMesh's reader accepts */
+                if (!token_is(tok[2], tl[2], "uchar") && !token_is(tok[2], tl[2], "uint8") &&
+                    !token_is(tok[2], tl[2], "uint16") && !token_is(tok[2], tl[2], "int"))
+                    PLY_FAIL("line %zu: list count type " TOK_FMT " is not supported (uchar, "
+                             "uint8, uint16 or int)", line_no, TOK_ARG(tok[2], tl[2]));
+                if (pr.type < 0)
+                    PLY_FAIL("line %zu: unknown PLY type " TOK_FMT, line_no,
+                             TOK_ARG(tok[3], tl[3]));
+                if (e->kind != PLY_FACE)
+                    PLY_FAIL("line %zu: list properties are supported in the 'face' element "
+                             "only", line_no);
+                if (token_is(name, namelen, "vertex_indices") ||
+                    token_is(name, namelen, "vertex_index")) {
+                    if (e->nprops != 0)
+                        PLY_FAIL("line %zu: 'vertex_indices' must be the face's first property",
+                                 line_no);
+                    if (!ply_types[pr.type].is_int)
+                        PLY_FAIL("line %zu: vertex indices must have an integer type", line_no);
+                    pr.role = PLY_ROLE_VINDEX;
+                } else if (token_is(name, namelen, "texcoord") && e->nprops > 0 &&
+                           e->props[0].role == PLY_ROLE_VINDEX) {
+                    pr.role = PLY_ROLE_TEXCOORD;
+                } else {
+                    PLY_FAIL("line %zu: list property " TOK_FMT " is not supported (face "
+                             "vertex_indices first, then texcoord)", line_no,
+                             TOK_ARG(name, namelen));
+                }
+            } else {
+                if (nt != 3 || extra)
+                    PLY_FAIL("line %zu: expected 'property TYPE NAME'", line_no);
+                pr.type = ply_type(tok[1], tl[1]);
+                name = tok[2];
+                namelen = tl[2];
+                if (pr.type < 0)
+                    PLY_FAIL("line %zu: unknown PLY type " TOK_FMT, line_no,
+                             TOK_ARG(tok[1], tl[1]));
+            }
+            if (ply_type(name, namelen) >= 0 || token_is(name, namelen, "list"))
+                PLY_FAIL("line %zu: property name " TOK_FMT " is a type name", line_no,
+                         TOK_ARG(name, namelen));
+            e->props[e->nprops++] = pr;
+            decl = 1;
+        } else if (token_is(tok[0], tl[0], "end_header")) {
+            if (nt != 1 || extra)
+                PLY_FAIL("line %zu: text after 'end_header'", line_no);
+            if (format > 0 && (!prev_was_decl || prev_crlf != crlf || trailing ||
+                               (size_t)(eol - tok[0]) != 10u + (unsigned)crlf))
+                PLY_FAIL("line %zu: in a binary PLY, 'end_header' must directly follow an "
+                         "element or property line, alone on its line", line_no);
+            data = p;
+        } else {
+            PLY_FAIL("line %zu: unknown PLY header keyword " TOK_FMT, line_no,
+                     TOK_ARG(tok[0], tl[0]));
+        }
+        prev_was_decl = decl && !trailing;
+        prev_crlf = crlf;
+    }
+    if (format < 0)
+        PLY_FAIL("no 'format' line in the PLY header");
+    /* the elements: vertex with x, y, z once each; counts against the file's size */
+    unsigned long long need = 0, nverts = 0;
+    for (int i = 0; i < nel; i++) {
+        ply_element *e = &el[i];
+        if (e->count > 0 && e->nprops == 0)
+            PLY_FAIL("line %zu: element with %llu rows but no properties", e->line, e->count);
+        unsigned long long row = 0;
+        for (int k = 0; k < e->nprops; k++)
+            row += format == 0 ? 1u
+                               : (unsigned)(e->props[k].count_type >= 0
+                                                ? ply_types[e->props[k].count_type].size
+                                                : ply_types[e->props[k].type].size);
+        need += e->count * row;
+        if (e->kind == PLY_VERTEX)
+            nverts = e->count;
+        if (e->kind == PLY_FACE)
+            *faces = (size_t)e->count;
+    }
+    const size_t avail = (size_t)(end - data);
+    if (need > avail)
+        PLY_FAIL("the header's element counts need at least %llu bytes of data, the file "
+                 "has %zu", need, avail);
+    *vertices = (size_t)nverts;
+    /* the walk: every value's type and range, list counts, indices, finite floats */
+    tok_cursor c = {data, end, line_no + 1};
+    const unsigned char *b = (const unsigned char *)data, *bend = (const unsigned char *)end;
+    const int big = format == 2;
+    for (int i = 0; i < nel; i++) {
+        const ply_element *e = &el[i];
+        for (unsigned long long r = 0; r < e->count; r++) {
+            long long corners = 0;
+            for (int k = 0; k < e->nprops; k++) {
+                const ply_prop *pr = &e->props[k];
+                long long n = 1;
+                if (pr->count_type >= 0) {
+                    long long cnt;
+                    if (format == 0) {
+                        const char *t;
+                        size_t tlen;
+                        if (!cursor_next(&c, &t, &tlen))
+                            PLY_FAIL("the data ends in row %llu of %llu of element %d", r,
+                                     e->count, i);
+                        rc = ply_ascii_value(path, c.line, t, tlen, pr->count_type, &cnt, err,
+                                             errlen);
+                        if (rc)
+                            goto done;
+                    } else {
+                        const int cs = ply_types[pr->count_type].size;
+                        if ((size_t)(bend - b) < (size_t)cs)
+                            PLY_FAIL("the data ends in row %llu of %llu of element %d", r,
+                                     e->count, i);
+                        double dv;
+                        ply_binary_value(b, pr->count_type, big, &cnt, &dv);
+                        b += cs;
+                    }
+                    if (cnt < 0)
+                        PLY_FAIL("line %zu: negative list count in row %llu", c.line, r);
+                    if (pr->role == PLY_ROLE_VINDEX) {
+                        if (cnt < 3)
+                            PLY_FAIL("line %zu: face %llu has %lld corners (at least 3)", c.line,
+                                     r, cnt);
+                        corners = cnt;
+                    } else if (pr->role == PLY_ROLE_TEXCOORD && cnt != 2 * corners &&
+                               cnt != 3 * corners) {
+                        PLY_FAIL("face %llu: %lld texture coordinates for %lld corners", r, cnt,
+                                 corners);
+                    }
+                    n = cnt;
+                    if (format != 0 &&
+                        (unsigned long long)n * (unsigned)ply_types[pr->type].size >
+                            (size_t)(bend - b))
+                        PLY_FAIL("face %llu: a list of %lld values runs past the file's end", r,
+                                 n);
+                }
+                for (long long j = 0; j < n; j++) {
+                    long long iv = 0;
+                    double dv = 0;
+                    size_t at = c.line;
+                    if (format == 0) {
+                        const char *t;
+                        size_t tlen;
+                        if (!cursor_next(&c, &t, &tlen))
+                            PLY_FAIL("the data ends in row %llu of %llu of element %d", r,
+                                     e->count, i);
+                        at = c.line;
+                        rc = ply_ascii_value(path, c.line, t, tlen, pr->type, &iv, err, errlen);
+                        if (rc)
+                            goto done;
+                    } else {
+                        const int sz = ply_types[pr->type].size;
+                        if ((size_t)(bend - b) < (size_t)sz)
+                            PLY_FAIL("the data ends in row %llu of %llu of element %d", r,
+                                     e->count, i);
+                        ply_binary_value(b, pr->type, big, &iv, &dv);
+                        b += sz;
+                        if (!ply_types[pr->type].is_int && (!isfinite(dv) || fabs(dv) > FLT_MAX))
+                            PLY_FAIL("non-finite value in row %llu of element %d (byte %zu)", r,
+                                     i, (size_t)((const char *)b - text) - (size_t)sz);
+                    }
+                    if (pr->role == PLY_ROLE_VINDEX && (iv < 0 || (unsigned long long)iv >= nverts))
+                        PLY_FAIL("line %zu: face %llu references vertex %lld, but the file has "
+                                 "%llu vertices", at, r, iv, nverts);
+                }
+            }
+        }
+    }
+    if (format == 0) {
+        const char *t;
+        size_t tlen;
+        if (cursor_next(&c, &t, &tlen))
+            PLY_FAIL("line %zu: data after the last element: " TOK_FMT, c.line,
+                     TOK_ARG(t, tlen));
+    } else if (b != bend) {
+        PLY_FAIL("%zu bytes after the last element (the header's counts do not fit the file)",
+                 (size_t)(bend - b));
+    }
+#undef PLY_FAIL
+done:
+    free(el);
+    return rc;
 }
 
 int fp__stl_ascii_scan(const char *path, const char *text, size_t len, char *err,
@@ -592,48 +1041,57 @@ int fp__stl_ascii_scan(const char *path, const char *text, size_t len, char *err
     if (memchr(text, '\0', len))
         return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
                               "NUL byte in ASCII STL text");
+    /* solid NAME, then per facet: facet normal n n n / outer loop / vertex x y z (3 times) /
+     * endloop / endfacet; then endsolid [NAME]. Several solids may follow each other. */
+    static const char *const expect[] = {"solid", "facet", "outer", "vertex", "vertex",
+                                         "vertex", "endloop", "endfacet"};
     text_lines t = {text, text + len, 0};
     obj_line l;
-    size_t vertices = 0;
+    int state = 0; /* index into expect; in state 1 'endsolid' is allowed too */
     while (next_nonblank_line(&t, &l)) {
         const char *tok = NULL;
         size_t toklen = 0;
         next_token(&l, &tok, &toklen);
-        int is_vertex = token_is(tok, toklen, "vertex");
-        if (token_is(tok, toklen, "facet")) {
-            if (!next_token(&l, &tok, &toklen) || !token_is(tok, toklen, "normal"))
-                return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
-                                      "line %zu: 'facet' without 'normal'", t.line_no);
-        } else if (!is_vertex) {
-            static const char *const words[] = {"solid", "outer", "endloop", "endfacet",
-                                                "endsolid", NULL};
-            int known = 0;
-            for (const char *const *w = words; *w; w++)
-                known |= token_is(tok, toklen, *w);
-            if (!known)
-                return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
-                                      "line %zu: unknown STL keyword " TOK_FMT, t.line_no,
-                                      TOK_ARG(tok, toklen));
-            continue;
+        if (state == 1 && token_is(tok, toklen, "endsolid")) {
+            state = 0;
+            continue; /* a name may follow */
         }
+        if (!token_is(tok, toklen, expect[state]))
+            return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                                  "line %zu: expected '%s'%s, found " TOK_FMT, t.line_no,
+                                  expect[state], state == 1 ? " or 'endsolid'" : "",
+                                  TOK_ARG(tok, toklen));
+        const int numbers = state == 1 || (state >= 3 && state <= 5);
+        if (state == 1 && (!next_token(&l, &tok, &toklen) || !token_is(tok, toklen, "normal")))
+            return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                                  "line %zu: 'facet' without 'normal'", t.line_no);
+        if (state == 2 && (!next_token(&l, &tok, &toklen) || !token_is(tok, toklen, "loop")))
+            return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                                  "line %zu: 'outer' without 'loop'", t.line_no);
+        state = state == 7 ? 1 : state + 1;
+        if (state == 1 && token_is(tok, toklen, "solid"))
+            continue; /* the solid's name */
         int count = 0;
         while (next_token(&l, &tok, &toklen)) {
             double d;
-            if (!parse_number(tok, toklen, &d) || !isfinite(d))
+            const int parsed = parse_number(tok, toklen, &d);
+            if (!numbers || !parsed || !is_decimal(tok, toklen) || !isfinite(d) ||
+                fabs(d) > FLT_MAX)
                 return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
-                                      "line %zu: %s value " TOK_FMT, t.line_no,
-                                      parse_number(tok, toklen, &d) ? "non-finite"
-                                                                    : "malformed",
+                                      "line %zu: %s " TOK_FMT, t.line_no,
+                                      !numbers ? "unexpected"
+                                      : parsed && (!isfinite(d) || fabs(d) > FLT_MAX)
+                                          ? "non-finite value"
+                                          : "malformed value",
                                       TOK_ARG(tok, toklen));
             count++;
         }
-        if (count != 3)
+        if (numbers && count != 3)
             return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
                                   "line %zu: expected 3 numbers, found %d", t.line_no, count);
-        vertices += is_vertex;
     }
-    if (vertices % 3 != 0)
+    if (state != 0)
         return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
-                              "%zu vertices, not a multiple of 3", vertices);
+                              "the file ends inside a solid (expected '%s')", expect[state]);
     return FP_MESH_OK;
 }

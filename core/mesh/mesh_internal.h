@@ -30,16 +30,26 @@ typedef struct fp__obj_info {
 int fp__obj_scan(const char *path, const char *text, size_t len, fp__obj_info *info,
                  char *err, size_t errlen);
 
-/** Check ASCII OFF text the way OpenMesh's reader consumes it (header line, a line of three
- *  counts, one vertex per line with finite numbers, one face per line "k i1 .. ik" with
- *  indices < vertex count); binary OFF passes unchecked. "path: line N: reason" errors.
- *  Returns FP_MESH_OK or FP_MESH_ERR_FORMAT. */
-int fp__off_scan(const char *path, const char *text, size_t len, char *err, size_t errlen);
+/** Check OFF text the way OpenMesh's reader consumes it. ASCII: header line, a line of three
+ *  counts (which must fit the file's size), one vertex per line with finite numbers, one
+ *  face per line "k i1 .. ik" with indices < vertex count. Binary ("[ST][N]OFF BINARY"):
+ *  counts, finite floats, corner counts and indices walked exactly to the file's end.
+ *  *nv and *nf get the header's counts. "path: line N: reason" errors.
+ *  Returns FP_MESH_OK, FP_MESH_ERR_FORMAT or FP_MESH_ERR_UNSUPPORTED (binary COFF). */
+int fp__off_scan(const char *path, const char *text, size_t len, size_t *nv, size_t *nf,
+                 char *err, size_t errlen);
 
-/** ASCII PLY: every token after end_header is a finite number (binary PLY passes).
- *  ASCII STL: known keywords only; facet normals and vertices with 3 finite numbers.
- *  "path: line N: reason" errors. Return FP_MESH_OK or FP_MESH_ERR_FORMAT. */
-int fp__ply_scan(const char *path, const char *text, size_t len, char *err, size_t errlen);
+/** PLY, before OpenMesh sees it (its reader crashes or loops on bad headers): a strict
+ *  header ("ply", one format line, 'element NAME COUNT' before its 'property TYPE NAME' or
+ *  'property list CTYPE TYPE NAME' lines, known types, numeric counts, a real end_header),
+ *  counts against the file's size, then every value walked: ASCII tokens of the right type
+ *  and range (floats finite), binary sizes exact to the file's end, list counts, face indices
+ *  < vertex count. *nv and *nf get the header's vertex and face counts.
+ *  ASCII STL: solid / facet normal / outer loop / 3 vertex / endloop / endfacet / endsolid in
+ *  order, 3 finite numbers where numbers belong.
+ *  "path: line N: reason" errors. Return FP_MESH_OK, FP_MESH_ERR_FORMAT or NOMEM. */
+int fp__ply_scan(const char *path, const char *text, size_t len, size_t *nv, size_t *nf,
+                 char *err, size_t errlen);
 int fp__stl_ascii_scan(const char *path, const char *text, size_t len, char *err,
                        size_t errlen);
 

@@ -12,12 +12,18 @@
 #include <OpenMesh/Core/System/omstream.hh>
 #include <tiny_gltf.h>
 
+#include <fcntl.h>
+#include <limits.h>
+#include <stdlib.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <cerrno>
 #include <climits>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <iostream>
 #include <mutex>
 #include <new>
@@ -160,6 +166,8 @@ public:
     {
         if (!valid(vh))
             return;
+        if (!std::isfinite(nv[0]) || !std::isfinite(nv[1]) || !std::isfinite(nv[2]))
+            s_.fail("vertex " + std::to_string(vh.idx()) + " has a non-finite normal");
         for (int k = 0; k < 3; k++)
             s_.nrm[3 * size_t(vh.idx()) + k] = nv[k];
         s_.has_nrm[size_t(vh.idx())] = 1;
@@ -311,9 +319,39 @@ private:
 // one OpenMesh call at a time, with its log captured instead of printed.
 std::mutex openmesh_lock;
 
+// OpenMesh's log text, kept up to a cap: a reader that loops while it logs (it did, on a bad
+// PLY header) must not grow memory without bound.
+class CappedLog : public std::streambuf {
+public:
+    static constexpr size_t cap = 64 * 1024;
+    std::string text;
+    bool truncated = false;
+
+protected:
+    int_type overflow(int_type ch) override
+    {
+        if (ch != traits_type::eof()) {
+            if (text.size() < cap)
+                text.push_back(char(ch));
+            else
+                truncated = true;
+        }
+        return traits_type::not_eof(ch);
+    }
+    std::streamsize xsputn(const char *s, std::streamsize n) override
+    {
+        const size_t room = text.size() < cap ? cap - text.size() : 0;
+        const size_t k = size_t(n) < room ? size_t(n) : room;
+        text.append(s, k);
+        if (k < size_t(n))
+            truncated = true;
+        return n;
+    }
+};
+
 // OpenMesh's log streams are std::ostreams whose buffer multiplexes to std::cerr etc. While
-// OpenMesh works we point them at our own buffer (mostream::disconnect would leak its target
-// object on every call), then restore them.
+// OpenMesh works we point them at our own capped buffer (mostream::disconnect would leak its
+// target object on every call), then restore them.
 class OmLogCapture {
 public:
     OmLogCapture()
@@ -336,18 +374,21 @@ public:
     // The first line of what OpenMesh logged, for an error message ("" if nothing).
     std::string first_line()
     {
-        std::string t = text_.str();
+        const std::string &t = text_.text;
         size_t b = t.find_first_not_of(" \t\r\n");
         if (b == std::string::npos)
             return "";
         size_t e = t.find_first_of("\r\n", b);
-        return t.substr(b, e == std::string::npos ? std::string::npos : e - b);
+        std::string line = t.substr(b, e == std::string::npos ? std::string::npos : e - b);
+        return line.size() > 200 ? line.substr(0, 200) + "..." : line;
     }
+    size_t captured() const { return text_.text.size(); }
+    bool truncated() const { return text_.truncated; }
     OmLogCapture(const OmLogCapture &) = delete;
     OmLogCapture &operator=(const OmLogCapture &) = delete;
 
 private:
-    std::stringbuf text_;
+    CappedLog text_;
     OpenMesh::mostream *streams_[3];
     std::streambuf *saved_[3];
 };
@@ -359,24 +400,163 @@ int fail(char *err, size_t errlen, int code, const char *path, const std::string
     return fp__mesh_error(err, errlen, code, path, "%s", msg.c_str());
 }
 
+// The project's code for a failed open/read/write (fp_error.h's table).
+int errno_code(int e)
+{
+    switch (e) {
+    case ENOENT: case ENOTDIR: return FP_MESH_ERR_NOENT;
+    case EACCES: case EPERM: case EROFS: return FP_MESH_ERR_ACCESS;
+    case ENOSPC: case EDQUOT: return FP_MESH_ERR_NOSPACE;
+    case ENOMEM: return FP_MESH_ERR_NOMEM;
+    default: return FP_MESH_ERR_IO;
+    }
+}
+
+// Open a file for reading only if it is a regular file: O_NONBLOCK so that a FIFO or a
+// device cannot block the open, then fstat. Returns the fd, or -1 with *code and *why set.
+int open_regular(const char *path, size_t max_bytes, off_t *size, int *code, std::string *why)
+{
+    int fd = ::open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOCTTY);
+    if (fd < 0) {
+        *code = errno_code(errno);
+        *why = std::string("cannot open: ") + std::strerror(errno);
+        return -1;
+    }
+    struct stat st;
+    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        ::close(fd);
+        *code = FP_MESH_ERR_IO;
+        *why = "not a regular file";
+        return -1;
+    }
+    if (uint64_t(st.st_size) > max_bytes) {
+        ::close(fd);
+        *code = FP_MESH_ERR_UNSUPPORTED;
+        *why = "file too large (" + std::to_string(st.st_size) + " bytes)";
+        return -1;
+    }
+    *size = st.st_size;
+    return fd;
+}
+
+// Read all of fd (a regular file of about `size` bytes) into data.
+bool read_fd(int fd, off_t size, std::string &data, int *code, std::string *why)
+{
+    data.clear();
+    data.reserve(size_t(size));
+    char buf[1 << 16];
+    for (;;) {
+        ssize_t got = ::read(fd, buf, sizeof buf);
+        if (got < 0 && errno == EINTR)
+            continue;
+        if (got < 0) {
+            *code = errno_code(errno);
+            *why = std::string("cannot read: ") + std::strerror(errno);
+            return false;
+        }
+        if (got == 0)
+            return true;
+        data.append(buf, size_t(got));
+    }
+}
+
+// Mesh files larger than this are refused (2 GiB: far above any face mesh).
+constexpr size_t max_file_bytes = size_t(1) << 31;
+
 int read_whole_file(const char *path, std::string &data, char *err, size_t errlen)
 {
-    FILE *f = std::fopen(path, "rb");
-    if (!f)
-        return fp__mesh_error(err, errlen, FP_MESH_ERR_IO, path, "cannot open: %s",
-                              std::strerror(errno));
-    char buf[1 << 16];
-    size_t got;
-    while ((got = std::fread(buf, 1, sizeof buf, f)) > 0)
-        data.append(buf, got);
-    int bad = std::ferror(f);
-    int e = errno;
-    std::fclose(f);
-    if (bad)
-        return fp__mesh_error(err, errlen, FP_MESH_ERR_IO, path, "cannot read: %s",
-                              std::strerror(e));
+    off_t size = 0;
+    int code = FP_MESH_OK;
+    std::string why;
+    int fd = open_regular(path, max_file_bytes, &size, &code, &why);
+    if (fd < 0)
+        return fail(err, errlen, code, path, why);
+    const bool ok = read_fd(fd, size, data, &code, &why);
+    ::close(fd);
+    if (!ok)
+        return fail(err, errlen, code, path, why);
     if (data.empty())
         return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path, "file is empty");
+    return FP_MESH_OK;
+}
+
+// Write `bytes` to `path` so that the file is never half-written: a temporary file in the
+// same folder (mkostemp), every write checked, fsync, then rename over the target (and an
+// fsync of the folder). On any failure the temporary file is removed and the old file, if
+// any, is left as it was. A new file gets mode 0666 & ~umask; a replaced one keeps its mode.
+int write_atomically(const char *path, const std::string &bytes, char *err, size_t errlen)
+{
+    const std::string target = path;
+    const size_t slash = target.find_last_of('/');
+    const std::string dir = slash == std::string::npos ? std::string(".")
+                            : slash == 0 ? std::string("/") : target.substr(0, slash);
+    const std::string base = slash == std::string::npos ? target : target.substr(slash + 1);
+    std::string tmpl = (dir == "/" ? std::string() : dir) + "/." + base + ".XXXXXX";
+    std::vector<char> name(tmpl.begin(), tmpl.end());
+    name.push_back('\0');
+    int fd = mkostemp(name.data(), O_CLOEXEC);
+    if (fd < 0)
+        return fp__mesh_error(err, errlen, errno_code(errno), path,
+                              "cannot create a temporary file in %s: %s", dir.c_str(),
+                              std::strerror(errno));
+    mode_t mode = 0644;
+    struct stat st;
+    if (::stat(path, &st) == 0 && S_ISREG(st.st_mode)) {
+        mode = st.st_mode & 07777;
+    } else {
+        // the umask, read without changing it (umask() is process-wide and racy)
+        mode_t mask = 022;
+        if (FILE *f = std::fopen("/proc/self/status", "re")) {
+            char line[256];
+            unsigned m;
+            while (std::fgets(line, sizeof line, f))
+                if (std::sscanf(line, "Umask: %o", &m) == 1)
+                    mask = mode_t(m);
+            std::fclose(f);
+        }
+        mode = 0666 & ~mask;
+    }
+    auto give_up = [&](const char *what, int e) {
+        ::close(fd);
+        ::unlink(name.data());
+        return fp__mesh_error(err, errlen, errno_code(e), path,
+                              "%s: %s (the previous file, if any, is unchanged)", what,
+                              std::strerror(e));
+    };
+    if (fchmod(fd, mode) != 0)
+        return give_up("cannot set the mode of the temporary file", errno);
+    const char *p = bytes.data();
+    size_t left = bytes.size();
+    while (left > 0) {
+        ssize_t put = ::write(fd, p, left);
+        if (put < 0 && errno == EINTR)
+            continue;
+        if (put <= 0)
+            return give_up("write failed", put < 0 ? errno : EIO);
+        p += put;
+        left -= size_t(put);
+    }
+    if (fsync(fd) != 0)
+        return give_up("fsync failed", errno);
+    if (::close(fd) != 0) {
+        const int e = errno;
+        ::unlink(name.data());
+        return fp__mesh_error(err, errlen, errno_code(e), path,
+                              "close failed: %s (the previous file, if any, is unchanged)",
+                              std::strerror(e));
+    }
+    if (::rename(name.data(), path) != 0) {
+        const int e = errno;
+        ::unlink(name.data());
+        return fp__mesh_error(err, errlen, errno_code(e), path,
+                              "cannot replace the file: %s (the previous file, if any, is "
+                              "unchanged)", std::strerror(e));
+    }
+    int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (dfd >= 0) {
+        (void)fsync(dfd); // durability of the rename; the data is already safe
+        ::close(dfd);
+    }
     return FP_MESH_OK;
 }
 
@@ -431,13 +611,14 @@ int soup_to_mesh(Soup &s, const char *path, fp_mesh **out, char *err, size_t err
     bool file_normals = true;
     for (size_t v = 0; v < n && file_normals; v++) {
         const float *q = &s.nrm[3 * v];
-        const float len = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2]);
-        if (!s.has_nrm[v] || !(len > 0.0f) || !std::isfinite(len)) {
+        const double len = std::sqrt(double(q[0]) * q[0] + double(q[1]) * q[1] +
+                                     double(q[2]) * q[2]);
+        if (!s.has_nrm[v] || !(len > 0.0) || !std::isfinite(len)) {
             file_normals = false;
             break;
         }
         for (int d = 0; d < 3; d++)
-            m->normals[3 * v + d] = q[d] / len;
+            m->normals[3 * v + d] = float(q[d] / len);
     }
     if (!file_normals)
         fp_mesh_normals(m->triangles, t, m->positions, n, m->normals);
@@ -452,10 +633,29 @@ int soup_to_mesh(Soup &s, const char *path, fp_mesh **out, char *err, size_t err
 
 // ---- OpenMesh formats ---------------------------------------------------------------
 
+// OBJ text with every `mtllib` statement turned into a comment (same length and lines).
+std::string obj_without_mtllib(const std::string &data)
+{
+    std::string out = data;
+    size_t p = 0;
+    while (p < out.size()) {
+        size_t b = out.find_first_not_of(" \t", p);
+        if (b != std::string::npos && out.compare(b, 6, "mtllib") == 0 &&
+            (b + 6 == out.size() || std::isspace((unsigned char)out[b + 6])))
+            out[b] = '#';
+        size_t e = out.find('\n', p);
+        if (e == std::string::npos)
+            break;
+        p = e + 1;
+    }
+    return out;
+}
+
 int load_openmesh(const char *path, const std::string &ext, const std::string &data,
                   fp_mesh **out, char *err, size_t errlen)
 {
     fp__obj_info obj{};
+    size_t want_v = 0, want_f = 0; // the header's counts (PLY, OFF)
     if (ext == "obj") {
         int rc = fp__obj_scan(path, data.c_str(), data.size(), &obj, err, errlen);
         if (rc != FP_MESH_OK)
@@ -464,7 +664,7 @@ int load_openmesh(const char *path, const std::string &ext, const std::string &d
     if (ext == "off") {
         // OpenMesh's ASCII OFF reader does not check its stream: a bad number silently
         // becomes 0 and leaves later values undefined. Check the text first.
-        int rc = fp__off_scan(path, data.c_str(), data.size(), err, errlen);
+        int rc = fp__off_scan(path, data.c_str(), data.size(), &want_v, &want_f, err, errlen);
         if (rc != FP_MESH_OK)
             return rc;
     }
@@ -491,7 +691,7 @@ int load_openmesh(const char *path, const std::string &ext, const std::string &d
         }
     }
     if (ext == "ply") {
-        int rc = fp__ply_scan(path, data.c_str(), data.size(), err, errlen);
+        int rc = fp__ply_scan(path, data.c_str(), data.size(), &want_v, &want_f, err, errlen);
         if (rc != FP_MESH_OK)
             return rc;
     }
@@ -501,12 +701,22 @@ int load_openmesh(const char *path, const std::string &ext, const std::string &d
     {
         std::lock_guard<std::mutex> guard(openmesh_lock);
         OmLogCapture capture;
-        // By file name, not from `data`: OpenMesh's stream readers skip the header probe
-        // (can_u_read) and would use the flags of the previous file (OFF's ST/N/C, STL's
-        // binary). The file was just read whole, so it exists.
+        // PLY/OFF/STL by file name, not from `data`: OpenMesh's stream readers skip the
+        // header probe (can_u_read) and would use the flags of the previous file (OFF's
+        // ST/N/C, STL's binary). The file was just read whole and checked.
+        // OBJ from memory, with its `mtllib` lines commented out: OpenMesh would open the
+        // named material files itself, wherever they point (outside the folder, a FIFO
+        // that blocks for ever), and materials are not used.
         Collector collector(soup);
-        ok = IO::IOManager().read(path, collector, opt);
+        if (ext == "obj") {
+            std::istringstream in(obj_without_mtllib(data), std::ios::in | std::ios::binary);
+            ok = IO::IOManager().read(in, ext, collector, opt);
+        } else {
+            ok = IO::IOManager().read(path, collector, opt);
+        }
         log = capture.first_line();
+        if (capture.truncated())
+            log += " [OpenMesh log truncated at " + std::to_string(capture.captured()) + " bytes]";
     }
     if (!soup.error.empty())
         return fail(err, errlen, FP_MESH_ERR_FORMAT, path, soup.error);
@@ -521,6 +731,11 @@ int load_openmesh(const char *path, const std::string &ext, const std::string &d
                               "OpenMesh read %zu vertices and %zu faces; the file has %zu and "
                               "%zu (%zu degenerate)",
                               soup.n(), soup.faces(), obj.v, obj.faces, obj.degenerate);
+    // PLY and OFF were checked value by value: OpenMesh must have read what the header says.
+    if ((ext == "ply" || ext == "off") && (soup.n() != want_v || soup.faces() != want_f))
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                              "OpenMesh read %zu vertices and %zu faces; the header says %zu "
+                              "and %zu", soup.n(), soup.faces(), want_v, want_f);
     return soup_to_mesh(soup, path, out, err, errlen);
 }
 
@@ -536,10 +751,7 @@ int save_openmesh(const fp_mesh *m, const char *path, const std::string &ext, ch
         opt += IO::Options::Binary;
         opt += IO::Options::LSB;
     }
-    std::ofstream os(path, std::ios::out | std::ios::binary | std::ios::trunc);
-    if (!os)
-        return fp__mesh_error(err, errlen, FP_MESH_ERR_IO, path, "cannot create: %s",
-                              std::strerror(errno));
+    std::ostringstream os(std::ios::out | std::ios::binary);
     bool ok;
     std::string log;
     {
@@ -549,15 +761,11 @@ int save_openmesh(const fp_mesh *m, const char *path, const std::string &ext, ch
         ok = IO::IOManager().write(os, ext, exporter, opt, 9);
         log = capture.first_line();
     }
-    os.flush();
-    if (!ok)
+    if (!ok || !os)
         return fail(err, errlen, FP_MESH_ERR_IO, path,
                     "OpenMesh cannot write ." + ext +
                         (log.empty() ? std::string() : " (" + log + ")"));
-    if (!os)
-        return fp__mesh_error(err, errlen, FP_MESH_ERR_IO, path, "write failed: %s",
-                              std::strerror(errno));
-    return FP_MESH_OK;
+    return write_atomically(path, os.str(), err, errlen);
 }
 
 // ---- glTF ---------------------------------------------------------------------------
@@ -886,6 +1094,86 @@ std::string one_line(std::string s)
     return s;
 }
 
+// tinygltf's file access, restricted: a buffer or image URI (data URIs never come here) must
+// be a relative path that stays inside the glTF file's folder after normalisation, whose
+// real path (symlinks resolved) is inside that folder too, and that names a regular file
+// (opened O_NONBLOCK, so a FIFO or device cannot block). Every refusal is remembered, and the
+// load fails naming the URI, even where tinygltf would only warn (images).
+struct GltfFs {
+    std::string base;    // the folder given to tinygltf
+    std::string refused; // the first refusal: "URI 'x': reason"
+};
+
+bool gltf_fs_exists(const std::string &, void *) { return true; } // fs_read decides
+std::string gltf_fs_expand(const std::string &p, void *) { return p; } // no ~ or $VAR
+bool gltf_fs_write(std::string *, const std::string &, const std::vector<unsigned char> &, void *)
+{
+    return false;
+}
+
+bool gltf_fs_read(std::vector<unsigned char> *out, std::string *err, const std::string &path,
+                  void *user)
+{
+    GltfFs &fs = *static_cast<GltfFs *>(user);
+    const std::string prefix = fs.base.empty() || fs.base.back() == '/' ? fs.base : fs.base + "/";
+    std::string rel = path.compare(0, prefix.size(), prefix) == 0 ? path.substr(prefix.size())
+                                                                  : path;
+    auto refuse = [&](const std::string &why) {
+        const std::string msg = "URI '" + rel + "' refused: " + why;
+        if (fs.refused.empty())
+            fs.refused = msg;
+        if (err)
+            *err = msg;
+        return false;
+    };
+    if (path.compare(0, prefix.size(), prefix) != 0)
+        return refuse("not inside the glTF file's folder");
+    if (rel.empty())
+        return refuse("empty path");
+    if (rel[0] == '/')
+        return refuse("absolute path (only paths relative to the glTF file are read)");
+    int depth = 0;
+    size_t b = 0;
+    while (b <= rel.size()) {
+        size_t e = rel.find('/', b);
+        if (e == std::string::npos)
+            e = rel.size();
+        const std::string seg = rel.substr(b, e - b);
+        if (seg == "..") {
+            if (--depth < 0)
+                return refuse("leaves the glTF file's folder");
+        } else if (!seg.empty() && seg != ".") {
+            depth++;
+        }
+        b = e + 1;
+    }
+    char *real_base = realpath(fs.base.empty() ? "." : fs.base.c_str(), nullptr);
+    char *real = realpath(path.c_str(), nullptr);
+    const int e = errno;
+    std::string rb = real_base ? real_base : "", rp = real ? real : "";
+    free(real_base);
+    free(real);
+    if (rb.empty() || rp.empty())
+        return refuse(std::string("cannot resolve: ") + std::strerror(e));
+    if (rb.back() != '/')
+        rb += '/';
+    if (rp.compare(0, rb.size(), rb) != 0)
+        return refuse("a symbolic link leads outside the glTF file's folder");
+    off_t size = 0;
+    int code = FP_MESH_OK;
+    std::string why;
+    int fd = open_regular(rp.c_str(), max_file_bytes, &size, &code, &why);
+    if (fd < 0)
+        return refuse(why);
+    std::string data;
+    const bool ok = read_fd(fd, size, data, &code, &why);
+    ::close(fd);
+    if (!ok)
+        return refuse(why);
+    out->assign(data.begin(), data.end());
+    return true;
+}
+
 int load_gltf(const char *path, const std::string &ext, const std::string &data,
               fp_mesh **out, char *err, size_t errlen)
 {
@@ -895,7 +1183,10 @@ int load_gltf(const char *path, const std::string &ext, const std::string &data,
     std::string gerr, gwarn;
     std::string dir = path;
     size_t slash = dir.find_last_of('/');
-    dir = slash == std::string::npos ? std::string(".") : dir.substr(0, slash);
+    dir = slash == std::string::npos ? std::string(".") : slash == 0 ? std::string("/")
+                                                                       : dir.substr(0, slash);
+    GltfFs fs{dir, {}};
+    loader.SetFsCallbacks({gltf_fs_exists, gltf_fs_expand, gltf_fs_read, gltf_fs_write, &fs});
     if (data.size() > UINT_MAX)
         return fp__mesh_error(err, errlen, FP_MESH_ERR_UNSUPPORTED, path, "file too large");
     bool ok;
@@ -906,6 +1197,8 @@ int load_gltf(const char *path, const std::string &ext, const std::string &data,
     else
         ok = loader.LoadASCIIFromString(&model, &gerr, &gwarn, data.data(),
                                         unsigned(data.size()), dir);
+    if (!fs.refused.empty())
+        return fail(err, errlen, FP_MESH_ERR_FORMAT, path, "glTF: " + fs.refused);
     if (!ok)
         return fail(err, errlen, FP_MESH_ERR_FORMAT, path,
                     "glTF: " + one_line(gerr.empty() ? std::string("cannot parse") : gerr));
@@ -995,17 +1288,12 @@ int save_gltf(const fp_mesh *m, const char *path, const std::string &ext, char *
     model.scenes.push_back(scene);
     model.defaultScene = 0;
 
-    std::ofstream os(path, std::ios::out | std::ios::binary | std::ios::trunc);
-    if (!os)
-        return fp__mesh_error(err, errlen, FP_MESH_ERR_IO, path, "cannot create: %s",
-                              std::strerror(errno));
+    std::ostringstream os(std::ios::out | std::ios::binary);
     tinygltf::TinyGLTF writer;
     const bool ok = writer.WriteGltfSceneToStream(&model, os, false, ext == "glb");
-    os.flush();
     if (!ok || !os)
-        return fp__mesh_error(err, errlen, FP_MESH_ERR_IO, path, "write failed: %s",
-                              std::strerror(errno));
-    return FP_MESH_OK;
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_IO, path, "the glTF writer failed");
+    return write_atomically(path, os.str(), err, errlen);
 }
 
 int check_mesh(const fp_mesh *m, const char *path, char *err, size_t errlen)

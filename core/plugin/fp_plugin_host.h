@@ -216,6 +216,8 @@ typedef struct fp_mapping_host {
     char source[96];
     fp_host_log_fn log;
     void *log_user;
+    const struct fp_rig_view *rig;   /* FP_HOST_EXT_RIG's answer (ABI 1.1); NULL: no rig. The
+                                        session sets it after fp_mapping_host_init */
 } fp_mapping_host;
 void fp_mapping_host_init(fp_mapping_host *mh, const char *name, fp_host_log_fn log, void *log_user);
 

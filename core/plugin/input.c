@@ -86,12 +86,29 @@ static void mapping_log(const fp_host *host, fp_log_level level, const char *mes
             message ? message : "");
 }
 
+/* FP_HOST_EXT_RIG: the session's rig view (host_data is the fp_mapping_host). */
+static const fp_rig_view *mapping_rig(const fp_host *host)
+{
+    const fp_mapping_host *mh = host ? host->host_data : NULL;
+    return mh ? mh->rig : NULL;
+}
+
+static const fp_host_rig mapping_rig_ext = {mapping_rig};
+
+static const void *mapping_extension(const fp_host *host, const char *id)
+{
+    (void)host;
+    if (id && !strcmp(id, FP_HOST_EXT_RIG)) return &mapping_rig_ext;
+    return NULL;
+}
+
 void fp_mapping_host_init(fp_mapping_host *mh, const char *name, fp_host_log_fn log, void *log_user)
 {
     memset(mh, 0, sizeof *mh);
     host_fill(&mh->host, mh);
     mh->host.log = mapping_log;
     mh->host.push_event = NULL; /* mappings do not push events */
+    mh->host.get_extension = mapping_extension;
     snprintf(mh->source, sizeof mh->source, "mapping '%s'", name ? name : "?");
     mh->log = log;
     mh->log_user = log_user;

@@ -56,7 +56,7 @@ struct fp_rig {
     double glide[2];            /* forward, down; mesh units at jaw.open = 1 */
     size_t mouth_count;
     double mouth[MAX_MOUTH_POINTS][3];
-    double lip_band, cheek_band, cheek_distance;
+    double lip_band, cheek_band, cheek_distance, corner_inset, inner_depth;
     double menton[3], gonion[3];
     double neck_band, back_band;
     double ramp;                /* mobility ramp, mesh units */
@@ -474,6 +474,7 @@ static int parse_jaw(const ctx *c, fp_rig *r, const cJSON *root)
     }
     if ((rc = get_object(c, jaw, "jaw", "falloff", true, &fo, p, sizeof p))) return rc;
     static const char *const ff[] = {"mouth_line", "lip_band", "cheek_band", "cheek_distance",
+                                     "corner_inset", "inner_depth",
                                      "menton", "gonion", "neck_band", "back_band", NULL};
     if ((rc = check_fields(c, fo, "jaw.falloff", ff))) return rc;
     const cJSON *ml;
@@ -496,6 +497,8 @@ static int parse_jaw(const ctx *c, fp_rig *r, const cJSON *root)
     if ((rc = get_number(c, fo, "jaw.falloff", "lip_band", true, 0, big, &r->lip_band)) ||
         (rc = get_number(c, fo, "jaw.falloff", "cheek_band", true, 0, big, &r->cheek_band)) ||
         (rc = get_number(c, fo, "jaw.falloff", "cheek_distance", true, 0, big, &r->cheek_distance)) ||
+        (rc = get_number(c, fo, "jaw.falloff", "corner_inset", false, 0, big, &r->corner_inset)) ||
+        (rc = get_number(c, fo, "jaw.falloff", "inner_depth", false, 0, big, &r->inner_depth)) ||
         (rc = get_number(c, fo, "jaw.falloff", "neck_band", true, 0, big, &r->neck_band)) ||
         (rc = get_number(c, fo, "jaw.falloff", "back_band", true, 0, big, &r->back_band)) ||
         (rc = get_vec3(c, fo, "jaw.falloff", "menton", r->menton)) ||
@@ -647,27 +650,33 @@ static double side_distance(const double a[2], const double b[2], const double o
 }
 
 /* The jaw weight of a soft-tissue point (rigs/README.md "Falloff"). */
-static double falloff(const fp_rig *r, const double p[3], const double mouth[][2], const double C[2],
+static double falloff(const fp_rig *r, const double p[3], const double mouth[][3], const double C[2],
                       const double G[2], const double M[2])
 {
     double x, y, z;
     face_coords(r, p, &x, &y, &z);
     /* the mouth line's height at x, and the distance beyond the corners */
     size_t k = r->mouth_count;
-    double ym, e = 0;
+    double ym, zm, e;
     if (x <= mouth[0][0]) {
-        ym = mouth[0][1];
+        ym = mouth[0][1], zm = mouth[0][2];
         e = mouth[0][0] - x;
     } else if (x >= mouth[k - 1][0]) {
-        ym = mouth[k - 1][1];
+        ym = mouth[k - 1][1], zm = mouth[k - 1][2];
         e = x - mouth[k - 1][0];
     } else {
         size_t i = 1;
         while (i < k - 1 && x > mouth[i][0]) i++;
         double t = (x - mouth[i - 1][0]) / (mouth[i][0] - mouth[i - 1][0]);
         ym = mouth[i - 1][1] + t * (mouth[i][1] - mouth[i - 1][1]);
+        zm = mouth[i - 1][2] + t * (mouth[i][2] - mouth[i - 1][2]);
+        e = -fmin(x - mouth[0][0], mouth[k - 1][0] - x); /* inside the corners: negative */
     }
-    double b = r->lip_band + (r->cheek_band - r->lip_band) * smoothstep(0, r->cheek_distance, e);
+    /* the split between the lips widens toward the corners (from corner_inset inside them to
+     * cheek_distance beyond) and with the depth behind the lips (the mouth's lining) */
+    double s = smoothstep(-r->corner_inset, r->cheek_distance, e);
+    if (r->inner_depth > 0) s = fmax(s, smoothstep(r->inner_depth, 2 * r->inner_depth, zm - z));
+    double b = r->lip_band + (r->cheek_band - r->lip_band) * s;
     double w_mouth = 1 - smoothstep(-b, b, y - ym);
     if (w_mouth == 0) return 0;
     double d_back = side_distance(C, G, M, z, y);  /* behind the ramus */
@@ -712,10 +721,10 @@ int fp_rig_bind(fp_rig *r, size_t n, const float *pos, char *err, size_t errlen)
         return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", r->source);
     }
     /* sagittal-plane points of the jaw outline and the mouth line in face coordinates */
-    double mouth[MAX_MOUTH_POINTS][2], C[2] = {0, 0}, G[2], M[2], x, y, z;
+    double mouth[MAX_MOUTH_POINTS][3], C[2] = {0, 0}, G[2], M[2], x, y, z;
     for (size_t k = 0; k < r->mouth_count; k++) {
         face_coords(r, r->mouth[k], &x, &y, &z);
-        mouth[k][0] = x, mouth[k][1] = y;
+        mouth[k][0] = x, mouth[k][1] = y, mouth[k][2] = z;
     }
     face_coords(r, r->gonion, &x, &y, &z);
     G[0] = z, G[1] = y;
@@ -985,6 +994,14 @@ void fp_rig_hinge(const fp_rig *r, float right[3], float left[3], double *open_d
 const float *fp_rig_jaw_weights(const fp_rig *r) { return r ? r->w : NULL; }
 const float *fp_rig_mobility(const fp_rig *r) { return r ? r->m : NULL; }
 
+static double jaw_open_value(const fp_rig *r, const float *values)
+{
+    const channel *jc = &r->channels[r->jaw_open];
+    double open = values ? values[r->jaw_open] : jc->neutral;
+    if (isnan(open)) open = jc->neutral;
+    return fmin(jc->max, fmax(jc->min, open));
+}
+
 /* Rodrigues: rotation matrix by angle a (radians) about unit axis k. */
 static void rotation(const double k[3], double a, double R[9])
 {
@@ -997,10 +1014,7 @@ static void rotation(const double k[3], double a, double R[9])
 int fp_rig_pose(const fp_rig *r, const float *base, const float *values, float *out)
 {
     if (!r || !base || !out || !r->w) return -EINVAL;
-    const channel *jc = &r->channels[r->jaw_open];
-    double open = values ? values[r->jaw_open] : jc->neutral;
-    if (isnan(open)) open = jc->neutral;
-    open = fmin(jc->max, fmax(jc->min, open));
+    double open = jaw_open_value(r, values);
     double theta = open * r->open_deg * M_PI / 180;
     double R1[9];
     rotation(r->axis, theta, R1);
@@ -1021,6 +1035,32 @@ int fp_rig_pose(const fp_rig *r, const float *base, const float *values, float *
         for (int i = 0; i < 3; i++)
             out[3 * v + i] = (float)(r->hinge_r[i] + R[3 * i] * d[0] + R[3 * i + 1] * d[1] + R[3 * i + 2] * d[2] +
                                      g * (r->glide[0] * r->fwd[i] - r->glide[1] * r->up[i]));
+    }
+    return 0;
+}
+
+int fp_rig_unpose(const fp_rig *r, const float *base, const float *values, const float *shown, float *out)
+{
+    if (!r || !base || !shown || !out || !r->w || !r->m) return -EINVAL;
+    double open = jaw_open_value(r, values);
+    double theta = open * r->open_deg * M_PI / 180;
+    for (size_t v = 0; v < r->n; v++) {
+        double w = r->w[v];
+        if (r->m[v] == 0) {
+            memcpy(&out[3 * v], &base[3 * v], 3 * sizeof(float));
+            continue;
+        }
+        if (w == 0 || theta == 0) {
+            memcpy(&out[3 * v], &shown[3 * v], 3 * sizeof(float));
+            continue;
+        }
+        double R[9], d[3];
+        rotation(r->axis, w * theta, R);
+        double g = w * open;
+        for (int i = 0; i < 3; i++)
+            d[i] = shown[3 * v + i] - r->hinge_r[i] - g * (r->glide[0] * r->fwd[i] - r->glide[1] * r->up[i]);
+        for (int i = 0; i < 3; i++) /* R^T d */
+            out[3 * v + i] = (float)(r->hinge_r[i] + R[i] * d[0] + R[3 + i] * d[1] + R[6 + i] * d[2]);
     }
     return 0;
 }
@@ -1070,8 +1110,9 @@ size_t fp_rig_describe(const fp_rig *r, size_t n, const float *pos, char *buf, s
     OUT("  hinge      right (%g, %g, %g)  left (%g, %g, %g), opens %g degrees at jaw.open = 1, glide %g forward %g down\n",
         r->hinge_r[0], r->hinge_r[1], r->hinge_r[2], r->hinge_l[0], r->hinge_l[1], r->hinge_l[2], r->open_deg,
         r->glide[0], r->glide[1]);
-    OUT("  falloff    lip band %g, cheek band %g over %g, neck band %g, back band %g; mobility ramp %g\n", r->lip_band,
-        r->cheek_band, r->cheek_distance, r->neck_band, r->back_band, r->ramp);
+    OUT("  falloff    lip band %g, cheek band %g from %g inside the corners to %g beyond, inner depth %g, neck band %g,"
+        " back band %g; mobility ramp %g\n", r->lip_band, r->cheek_band, r->corner_inset, r->cheek_distance,
+        r->inner_depth, r->neck_band, r->back_band, r->ramp);
     OUT("  channels   %zu\n", r->channel_count);
     for (size_t i = 0; i < r->channel_count; i++)
         OUT("    %-22s [%g, %g], neutral %g\n", r->channels[i].name, r->channels[i].min, r->channels[i].max,

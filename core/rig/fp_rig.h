@@ -198,6 +198,17 @@ const float *fp_rig_mobility(const fp_rig *rig);
  *  allocation. Source: rigs/README.md "Jaw" (rotation about a fixed axis, Rodrigues). */
 int fp_rig_pose(const fp_rig *rig, const float *base, const float *values, float *out);
 
+/** The inverse of fp_rig_pose for a committed shape: each vertex v of `shown` (the posed
+ *  base plus the fingers' work) is taken back by the inverse of its own pose,
+ *  out[v] = J_r + R(w_v theta)^T (shown[v] - J_r - w_v jaw.open glide), so that posing `out`
+ *  with the same values gives `shown` again (to float rounding) and a commit keeps only the
+ *  fingers' part (the jaw does not turn twice). Vertices with mobility 0 (skull, jaw: the
+ *  fingers cannot move them) are copied from `base` bit for bit. Arrays n x 3 floats; out
+ *  may alias neither base nor shown. values as fp_rig_pose. Returns 0 or -EINVAL.
+ *  [any-thread], no allocation. */
+int fp_rig_unpose(const fp_rig *rig, const float *base, const float *values, const float *shown,
+                  float *out);
+
 /** Blend the fingers' result into the posed shape: out[v] = posed[v] + m_v (warped[v] -
  *  posed[v]); vertices with m_v == 0 (skull, jaw) are copied from posed bit for bit. Arrays
  *  n x 3 floats; out may alias posed or warped. Returns 0 or -EINVAL. [any-thread]. */

@@ -4,7 +4,7 @@
  *   1 inputs and intents (intents.h): drain the inputs' queues, pedal and key bindings
  *   2 hand poses and calibration (core/pose/fp_pose.h): FK, workspace calibration
  *   3 the mapping call (step_mapping.h): the control set, checked
- *   4 the rig (step_rig.h): a pass-through until the rigs issue
+ *   4 the rig (step_rig.h): channels pose the base (the jaw), fingers blended by mobility
  *   5 the engine (step_engine.h): factor or reuse, solve, guard, evaluate; tip distances
  *   6 history (history.h): commit into the base, undo ring, reset
  *   7 the recorder (step_record.h): the frame's record to the sink of the options
@@ -91,6 +91,13 @@ typedef struct fp_session_options {
                                                        recordings (inputs with the
                                                        recording-info extension); false (live):
                                                        every queued event, each frame */
+    const char *rig_path;                           /* the rig file (rigs/README.md); NULL:
+                                                       the rig of this mesh found in rig_dir
+                                                       (fp_rig_find: checksum, else vertex
+                                                       count; none found: no rig); "none":
+                                                       no rig. A rig's mm_per_unit is the
+                                                       mesh's unit unless mm_per_unit is given */
+    const char *rig_dir;                            /* NULL: fp_rig_default_dir(NULL) */
 } fp_session_options;
 
 /** Statistics of one fp_session_step. */
@@ -114,7 +121,9 @@ typedef struct fp_session fp_session;
  *  file, SPEC or plugin at fault: -EINVAL bad options (no mesh or plugin path, too many
  *  inputs, a negative or NaN radius, a radius beyond 10x the mesh's bounding-box diagonal,
  *  a negative or NaN mm_per_unit, a mapping SPEC with ':ARG'), -ENOMEM, the mesh
- *  loader's code unchanged (fp_mesh_load), the plugin host's codes unchanged
+ *  loader's code unchanged (fp_mesh_load), the rig's code unchanged (options rig_path,
+ *  rig_dir; fp_rig_load_for_mesh: -ENOENT a missing file, -EBADMSG a malformed rig or one that
+ *  does not fit the mesh, naming the file and field), the plugin host's codes unchanged
  *  (fp_plugin_load, fp_input_instance_open: FP_EPLUGIN_*, a plugin's own code, a
  *  recording's code). [main-thread]. */
 int fp_session_create(const fp_session_options *opt, fp_session **out, char *err, size_t errlen);
@@ -130,7 +139,9 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *stats);
 
 /** The engine step's solver (core/csrbf) whose coefficients made fp_session_positions, for
  *  a GPU warp (csrbf_solver_get_coefficients): non-NULL only while a deformation is shown
- *  (fp_session_positions != fp_session_base). Valid until the next step, radius change or
+ *  (fp_session_positions != fp_session_base) and the session has no rig (with a rig the shape
+ *  is the posed base warped and blended by mobility, which the coefficients alone do not
+ *  give). Valid until the next step, radius change or
  *  destroy; read it on the session thread between steps. */
 const struct csrbf_solver *fp_session_solver(const fp_session *s);
 
@@ -218,11 +229,23 @@ const char *fp_session_mapping_name(const fp_session *s);
  *  the host's arrays; the base has been shown since), the message naming the mapping, the
  *  array and the frame in err; else 0. */
 int fp_session_mapping_fault(const fp_session *s, char *err, size_t errlen);
+/** The session's rig (core/rig), or NULL without one. */
+const struct fp_rig *fp_session_rig(const fp_session *s);
+/** How the rig was chosen, for a command's first line: "rigs/ict-facekit.json (found by the
+ *  mesh's checksum 577903df)", "... (given)", "none (--rig none)", "none (no rig fits ...)". */
+const char *fp_session_rig_how(const fp_session *s);
+/** Set a rig channel (e.g. "jaw.open"; the viewer's keys), clamped to its range; it applies
+ *  from the next fp_session_step (a mapping that drives the channel overrides it). Returns 0,
+ *  -ENOENT (no rig, or no such channel), -ERANGE (NaN). */
+int fp_session_set_channel(fp_session *s, const char *name, double value);
+/** A channel's current value; NaN without a rig or for an unknown name. */
+double fp_session_channel(const fp_session *s, const char *name);
+
 /** Undo the last commit or reset (one level, up to FP_SESSION_UNDO_LEVELS): the base goes
  *  back, a deformation in progress is dropped, the mapping's gesture is reset. Returns false
  *  when there is nothing to undo. */
 bool fp_session_undo(fp_session *s);
-/** Back to the loaded shape (undoable when the base differed). */
+/** Back to the loaded shape (undoable when the base differed); rig channels to neutral. */
 void fp_session_reset(fp_session *s);
 /** Events dropped because an input's queue was full, over all inputs. Any thread. */
 unsigned long fp_session_dropped(const fp_session *s);

@@ -43,7 +43,8 @@ typedef struct fp_session_take_options {
     const char *dir;               /* take folder (created if missing); required */
     const char *slate;             /* slate name; NULL: "take" */
     const char *description;       /* NULL: none */
-    const char *rig_path;          /* the rig the session uses; NULL: none */
+    const char *rig_path;          /* the rig the session uses; NULL: the session's own
+                                      (fp_session_rig_how) */
     fp_take_rate rate;             /* nominal frame rate; {0,0}: 60/1 */
     fp_take_recorder_options recorder;  /* zero: the recorder's defaults */
 } fp_session_take_options;
@@ -67,6 +68,7 @@ typedef struct fp_session_take {
     int64_t origin_ns;             /* host time of timecode in */
     bool have_first;
     uint64_t frames;               /* frames offered to the recorder */
+    char rig_buf[1024];            /* the session's rig path, for the header */
 } fp_session_take;
 
 /** Keep the options (copied; their strings are the caller's) and the session options the

@@ -7,6 +7,7 @@
 #include "fp_plugin_crash.h"
 #include "fp_mesh.h"
 #include "fp_pose.h"
+#include "fp_rig.h"
 #include "history.h"
 #include "intents.h"
 #include "step_engine.h"
@@ -42,6 +43,7 @@ struct fp_session {
     char mapping_file[4096];      /* the file it was found at (a reload loads a copy) */
     double mapping_budget_ms;
     fp_mesh_view view;
+    char rig_how[1200];           /* how the rig was chosen (fp_session_rig_how) */
 
     double radius;
     fp_head head;                 /* the head and the mesh's unit (life-size calibration) */
@@ -81,6 +83,7 @@ static int load_mapping(fp_session *s, const char *mapping, const fp_plugin_path
     if (!rc) {
         snprintf(s->mapping_name, sizeof s->mapping_name, "%s", spec.name);
         fp_mapping_host_init(&s->mapping_host, spec.name, s->log.fn, s->log.user);
+        s->mapping_host.rig = fp_rig_step_view(&s->rig); /* FP_HOST_EXT_RIG */
         const fp_mapping_factory *f = s->mapping_plugin.factory;
         char perr[512] = "";
         fp_plugin_call_enter(s->mapping_name, "create", s->frame);
@@ -124,6 +127,39 @@ static int calibrate(fp_session *s, const fp_session_options *opt, char *err, si
     }
     s->pose.calib = c;
     fp_pose_place_gloves(&s->pose, s->loaded, s->n, &s->head);
+    return 0;
+}
+
+/* The rig: given, "none", or the one of this mesh in the rig folder (fp_rig_find). */
+static int attach_rig(fp_session *s, const fp_session_options *opt, char *err, size_t errlen)
+{
+    fp_rig *rig = NULL;
+    int rc;
+    if (opt->rig_path && !strcmp(opt->rig_path, "none")) {
+        snprintf(s->rig_how, sizeof s->rig_how, "none (--rig none)");
+    } else if (opt->rig_path) {
+        if ((rc = fp_rig_load_for_mesh(opt->rig_path, s->n, s->loaded, &rig, err, errlen))) return rc;
+        snprintf(s->rig_how, sizeof s->rig_how, "%s (given; mesh checksum %s)", opt->rig_path,
+                 fp_rig_checksum_matches(rig, s->n, s->loaded) ? "matches" : "differs, same vertex count");
+    } else {
+        char dir[1024], path[1024], msg[1200] = "";
+        const char *d = opt->rig_dir ? opt->rig_dir : fp_rig_default_dir(NULL, dir, sizeof dir);
+        rc = fp_rig_find(d, s->n, s->loaded, path, sizeof path, msg, sizeof msg);
+        if (rc) {
+            snprintf(s->rig_how, sizeof s->rig_how, "none (%s)", msg);
+        } else {
+            if ((rc = fp_rig_load_for_mesh(path, s->n, s->loaded, &rig, err, errlen))) return rc;
+            if (fp_rig_checksum_matches(rig, s->n, s->loaded))
+                snprintf(s->rig_how, sizeof s->rig_how, "%s (found by the mesh's checksum %08x)", path,
+                         fp_rig_mesh_crc32(rig));
+            else
+                snprintf(s->rig_how, sizeof s->rig_how, "%s (found by the vertex count %zu)", path, s->n);
+        }
+    }
+    if ((rc = fp_rig_step_init(&s->rig, rig, s->n, s->base))) {
+        snprintf(err, errlen, "session: out of memory for the rig");
+        return rc;
+    }
     return 0;
 }
 
@@ -178,6 +214,8 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
                  opt->mesh_path, s->n);
         goto fail;
     }
+    if ((rc = attach_rig(s, opt, err, errlen))) goto fail;
+    s->shown = s->view.base = fp_rig_step_posed(&s->rig, s->base);
     if (opt->mm_per_unit > 0) {
         s->head.mm_per_unit = opt->mm_per_unit;
         s->head.method = FP_HEAD_GIVEN;
@@ -185,6 +223,10 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
                  opt->mm_per_unit_source ? opt->mm_per_unit_source : "the options");
     } else if (opt->calibration && opt->calibration->scale > 0) {
         s->head.mm_per_unit = 1.0 / opt->calibration->scale;
+    } else if (s->rig.rig) { /* a rig wins over detection, the option over a rig */
+        s->head.mm_per_unit = fp_rig_mm_per_unit(s->rig.rig);
+        s->head.method = FP_HEAD_GIVEN;
+        snprintf(s->head.how, sizeof s->head.how, "from the rig %s", fp_rig_source(s->rig.rig));
     }
     if (opt->radius > 10 * sqrt(diag)) {
         rc = -EINVAL;
@@ -207,7 +249,7 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
     fp_pose_init(&s->pose, opt->hand_size, NULL);
     fp_history_init(&s->history, s->n, s->base);
     fp_record_step_init(&s->record, opt->record, opt->record_user);
-    if ((rc = fp_engine_step_init(&s->engine, s->n, s->base, threads))) {
+    if ((rc = fp_engine_step_init(&s->engine, s->n, s->shown, threads))) {
         snprintf(err, errlen, "session: cannot index %zu vertices", s->n);
         goto fail;
     }
@@ -256,18 +298,22 @@ static void on_event(void *user, size_t input, const fp_event *ev)
     fp_record_step_event(&s->record, ev);
 }
 
-/* The base changed (commit, undo, reset): the engine re-indexes it, the base is shown. */
+/* The base changed (commit, undo, reset): the rig poses it, the engine re-indexes the posed
+ * base, which is shown. */
 static void base_changed(fp_session *s)
 {
-    fp_engine_step_set_base(&s->engine, s->base);
-    s->shown = s->base;
+    fp_rig_step_base_changed(&s->rig);
+    fp_rig_step_update(&s->rig, NULL, s->base, &s->log);
+    s->shown = fp_rig_step_posed(&s->rig, s->base);
+    fp_engine_step_set_base(&s->engine, s->shown);
 }
 
-/* Steps 5 and 6 on the control set the engine is given (after the rig): evaluate, show,
- * commit. Shared by fp_session_step and fp_session_apply_controls (takes played back). */
+/* Steps 5 and 6 on the control set the engine is given (after the rig's clamp), on the
+ * posed base: evaluate, the rig's mobility blend, show, commit. Shared by fp_session_step
+ * and fp_session_apply_controls (takes played back). */
 static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame_stats *st)
 {
-    s->shown = s->base;
+    s->shown = fp_rig_step_posed(&s->rig, s->base);
     if (cs->active && cs->count > 0) {
         fp_engine_result er;
         int rc = fp_engine_step_run(&s->engine, cs, s->deformed, &er, &s->log);
@@ -277,9 +323,10 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame
         st->control_vectors = cs->count;
         if (!rc) {
             st->active = true;
-            s->shown = s->deformed;
+            s->shown = fp_rig_step_finish(&s->rig, s->deformed);
             if (cs->intents & FP_INTENT_COMMIT) {
-                fp_history_commit(&s->history, s->deformed);
+                /* with a rig only the fingers' part goes into the base */
+                fp_history_commit(&s->history, fp_rig_step_commit_shape(&s->rig, s->base, s->shown));
                 base_changed(s); /* the anchored gesture ended; unanchored restarts anyway */
                 st->committed = true;
             }
@@ -320,10 +367,17 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     in.radius = s->radius;
     in.requested = fp_intents_take_requested(&s->intents);
     in.mm_per_unit = s->head.mm_per_unit;
-    in.face_up[1] = 1.f;       /* the project's convention (fp_head.h); a rig may say better */
-    in.face_forward[2] = 1.f;
-    in.face_left[0] = 1.f;
-    fp_engine_tip_distances(s->base, s->n, s->pose.poses, in.tip_distance);
+    if (s->rig.rig) {
+        fp_rig_axes(s->rig.rig, in.face_up, in.face_forward, in.face_left);
+    } else {
+        in.face_up[1] = 1.f; /* the project's convention (fp_head.h) */
+        in.face_forward[2] = 1.f;
+        in.face_left[0] = 1.f;
+    }
+    in.rig = fp_rig_step_view(&s->rig);
+    const float *surface = fp_rig_step_posed(&s->rig, s->base); /* what the fingers touch */
+    s->view.base = surface;
+    fp_engine_tip_distances(surface, s->n, s->pose.poses, in.tip_distance);
     fp_mapping_step_run(&s->mapping_step, s->mapping, s->mapping_name, &in, &s->cs, &s->log);
     st->engaged = s->cs.intents & FP_INTENT_ENGAGE;
     if (s->cs.intents & FP_INTENT_CANCEL) {
@@ -331,7 +385,9 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
         s->cs.active = false;
     }
 
-    /* 4: the rig. */
+    /* 4: the rig: channels pose the base; the engine works on the posed base. */
+    if (fp_rig_step_update(&s->rig, &s->cs, s->base, &s->log))
+        fp_engine_step_set_base(&s->engine, fp_rig_step_posed(&s->rig, s->base));
     const fp_control_set *cs = fp_rig_step_run(&s->rig, &s->cs);
 
     /* 5: the engine. 6: history. */
@@ -354,6 +410,10 @@ void fp_session_apply_controls(fp_session *s, int64_t now_ns, const fp_control_s
     fp_record_step_begin(&s->record);
     st->engaged = cs->intents & FP_INTENT_ENGAGE;
     st->cancelled = cs->intents & FP_INTENT_CANCEL;
+    /* 4: the rig poses the base from the stored channels; the stored set is already the
+     * one the rig's clamp returned, so it goes to the engine as it is. */
+    if (fp_rig_step_update(&s->rig, cs, s->base, &s->log))
+        fp_engine_step_set_base(&s->engine, fp_rig_step_posed(&s->rig, s->base));
     engine_and_history(s, cs, st);
     fp_record_step_end(&s->record, s->frame, now_ns, requested | s->actions, cs, s->inputs,
                        s->input_count, &s->log);
@@ -395,7 +455,20 @@ const fp_control_set *fp_session_control_set(const fp_session *s) { return &s->c
 
 const struct csrbf_solver *fp_session_solver(const fp_session *s)
 {
-    return s->shown != s->base ? fp_engine_step_solver(&s->engine) : NULL;
+    return s->shown != s->base && !s->rig.rig ? fp_engine_step_solver(&s->engine) : NULL;
+}
+
+const struct fp_rig *fp_session_rig(const fp_session *s) { return s->rig.rig; }
+const char *fp_session_rig_how(const fp_session *s) { return s->rig_how; }
+
+int fp_session_set_channel(fp_session *s, const char *name, double value)
+{
+    return fp_rig_step_set_channel(&s->rig, name, (float)value);
+}
+
+double fp_session_channel(const fp_session *s, const char *name)
+{
+    return fp_rig_step_channel(&s->rig, name);
 }
 
 void fp_session_set_radius(fp_session *s, double radius)
@@ -442,6 +515,7 @@ bool fp_session_undo(fp_session *s)
 void fp_session_reset(fp_session *s)
 {
     fp_history_reset(&s->history, s->loaded);
+    fp_rig_step_neutral(&s->rig);
     after_set_base(s);
     s->actions |= FP_SESSION_ACTION_RESET;
 }
@@ -478,7 +552,7 @@ static int swap_mapping(fp_session *s, const fp_plugin_path *path, const char *s
     s->mapping_host = new_host;
     fp_mapping_step_flush(&s->mapping_step, &s->log);
     fp_plugin_unload(&old_plugin);
-    s->shown = s->base;
+    s->shown = fp_rig_step_posed(&s->rig, s->base);
     s->engaged = false;
     fp_history_end_gesture(&s->history);
     fp_engine_step_invalidate(&s->engine);
@@ -581,6 +655,7 @@ void fp_session_destroy(fp_session **sp)
     destroy_mapping(s, s->mapping, s->mapping_name);
     fp_plugin_unload(&s->mapping_plugin);
     fp_engine_step_free(&s->engine);
+    fp_rig_step_free(&s->rig);
     fp_history_free(&s->history);
     fp_intents_free(&s->intents);
     fp_record_step_free(&s->record);

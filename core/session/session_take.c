@@ -72,6 +72,11 @@ int fp_session_take_start(fp_session_take *t, const fp_session *s, int64_t origi
     h->mesh_crc32 = fp_take_crc32_positions(fp_session_loaded(s), h->mesh_vertices);
     h->mesh_crc_of = "positions";
     h->rig_path = t->opt.rig_path;
+    if (!h->rig_path && fp_session_rig(s)) {   /* "PATH (how it was found)" */
+        const char *how = fp_session_rig_how(s), *paren = strstr(how, " (");
+        snprintf(t->rig_buf, sizeof t->rig_buf, "%.*s", paren ? (int)(paren - how) : (int)strlen(how), how);
+        h->rig_path = t->rig_buf;
+    }
     fp_spec spec;
     memset(&spec, 0, sizeof spec);
     int rc = mapping_keys(so->mapping, &spec, h, err, errlen);

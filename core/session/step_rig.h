@@ -1,31 +1,102 @@
 /*
- * step_rig.h: step 4 of the frame (docs/architecture.md): the rig. The home of the rigs
- * issue: a rig (core/rig) turns channels into control vectors or morph-target weights. A
- * mapping drives rig channels through fp_control_set.channels (named scalars, e.g.
- * "jaw.open" in [0, 1]; channel_count <= channel_capacity, the host's arrays).
+ * step_rig.h: step 4 of the frame (docs/architecture.md): the rig (core/rig, rigs/README.md).
  *
- * Today this step is a documented pass-through: no rig is attached, the control set goes to
- * the engine unchanged and the channels are not read.
+ * With a rig attached, each frame:
+ *   - channel values: the viewer's requests (fp_rig_step_set_channel) and the mapping's
+ *     fp_control_set.channels (by name, clamped to the channel's range; a value persists until
+ *     set again; a name the rig lacks is reported once per name);
+ *   - the posed base: fp_rig_pose(base, values) (the jaw about its hinge, the soft tissue by
+ *     the rig's falloff), recomputed only when the base or a value changed; the engine's
+ *     points follow it (the session re-indexes them), so fingers start on the posed surface;
+ *   - the fingers' control vectors are clamped to min(0.45 R, fp_rig_max_finger_displacement)
+ *     (the mobility blend stays injective, fp_rig.h), in a copy of the control set;
+ *   - after the engine: shown = fp_rig_apply_mobility(posed, T(posed)): skull and jaw
+ *     vertices exactly as posed (the skull bit-identical to the base), soft tissue moved by
+ *     the fingers weighted by its mobility;
+ *   - a commit keeps only the fingers' part: the base becomes fp_rig_unpose(shown) (the jaw
+ *     does not turn twice; skull and jaw vertices keep their base values bit for bit).
+ * Without a rig (rig == NULL) the step passes the control set through and shows T(base).
  *
- * Threads: the session thread. No allocation, no I/O.
+ * For mappings: an fp_rig_view (plugin.h, ABI 1.1) built once from the rig; landmark
+ * positions (from the posed base) and channel values refreshed each frame.
+ *
+ * Threads: the session thread. Allocation only in init; no I/O.
  */
 #ifndef FP_STEP_RIG_H
 #define FP_STEP_RIG_H
 
+#include "fp_rig.h"
+#include "session_log.h"
+
 #include <facepuppet/plugin.h>
+
+#include <stdbool.h>
+#include <stddef.h>
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-/** The rig step's state (none yet; the rigs issue adds the attached rig here). */
+#define FP_RIG_STEP_MAX_CONTROL 64   /* = FP_ENGINE_MAX_CONTROL */
+#define FP_RIG_STEP_UNKNOWN 16       /* unknown channel names remembered (reported once) */
+
 typedef struct fp_rig_step {
-    int unused;
+    fp_rig *rig;                                  /* owned; NULL: pass-through */
+    size_t n;
+    float values[FP_RIG_MAX_CHANNELS];            /* current channel values */
+    float posed_values[FP_RIG_MAX_CHANNELS];      /* the values `posed` was made with */
+    bool dirty;                                   /* base or values changed since posing */
+    float *posed;                                 /* n x 3: the base posed by the channels */
+    float *shown;                                 /* n x 3: posed + fingers (mobility blend) */
+    float *commit;                                /* n x 3: the shape a commit folds in */
+    double max_displacement;                      /* finger clamp, mesh units (0: none) */
+    fp_control_set cs;                            /* the clamped copy the engine takes */
+    float start[FP_RIG_STEP_MAX_CONTROL][3], end[FP_RIG_STEP_MAX_CONTROL][3];
+    fp_rig_view view;                             /* for mappings */
+    fp_rig_landmark landmarks[FP_RIG_MAX_LANDMARKS];
+    fp_rig_channel_info channels[FP_RIG_MAX_CHANNELS];
+    char unknown[FP_RIG_STEP_UNKNOWN][32];        /* unknown channel names already reported */
+    size_t unknown_count;
 } fp_rig_step;
 
-/** Apply the rig to the mapping's control set and return the set the engine takes. Today:
- *  returns cs unchanged (same pointer, nothing written). */
+/** Attach `rig` (bound to the session's mesh, n vertices; owned by the step from here on,
+ *  even on error) or NULL for none. base: the base, n x 3 floats. Returns 0 or -ENOMEM. */
+int fp_rig_step_init(fp_rig_step *st, fp_rig *rig, size_t n, const float *base);
+void fp_rig_step_free(fp_rig_step *st);
+
+/** Set one channel (the viewer's keys): clamped to its range. Returns 0, -ENOENT (no such
+ *  channel or no rig), -ERANGE (NaN). */
+int fp_rig_step_set_channel(fp_rig_step *st, const char *name, float value);
+/** The current value of a channel (its neutral value before any is set); NaN if unknown. */
+float fp_rig_step_channel(const fp_rig_step *st, const char *name);
+/** All channels to neutral. */
+void fp_rig_step_neutral(fp_rig_step *st);
+
+/** The base changed (commit, undo, reset): pose it again at the next update. */
+void fp_rig_step_base_changed(fp_rig_step *st);
+
+/** Take the control set's channels (may be NULL), then pose the base if it or a value
+ *  changed. Returns true when `posed` was recomputed (the engine must re-index it). Unknown
+ *  channel names go to log once each (source "rig"). */
+bool fp_rig_step_update(fp_rig_step *st, const fp_control_set *cs, const float *base, const fp_slog *log);
+
+/** The surface the fingers work on: the posed base, or base without a rig. */
+const float *fp_rig_step_posed(const fp_rig_step *st, const float *base);
+
+/** The control set the engine takes: cs itself without a rig, else a copy with every control
+ *  vector end - start clamped to max_displacement (same direction). */
 const fp_control_set *fp_rig_step_run(fp_rig_step *st, const fp_control_set *cs);
+
+/** After the engine wrote deformed = T(posed): the shape to show (the mobility blend), or
+ *  deformed itself without a rig. */
+const float *fp_rig_step_finish(fp_rig_step *st, const float *deformed);
+
+/** The shape a commit folds into the base: `shown` itself without a rig, else its fingers'
+ *  part taken back to the rest pose (fp_rig_unpose). */
+const float *fp_rig_step_commit_shape(fp_rig_step *st, const float *base, const float *shown);
+
+/** The view for mappings (NULL without a rig), landmarks at the posed base, channel values. */
+const fp_rig_view *fp_rig_step_view(fp_rig_step *st);
 
 #ifdef __cplusplus
 }

@@ -115,6 +115,18 @@ def ict_landmarks():
     }
 
 
+# The soft-tissue falloff (rigs/README.md "ICT: how the hinge and falloff were chosen").
+ICT_CHEEK_BAND = float(__import__('os').environ.get('FP_CHEEK_BAND', 2.2))
+ICT_CHEEK_DISTANCE = float(__import__('os').environ.get('FP_CHEEK_DISTANCE', 1.0))
+ICT_CORNER_INSET = float(__import__('os').environ.get('FP_CORNER_INSET', 1.0))
+ICT_INNER_DEPTH = float(__import__('os').environ.get('FP_INNER_DEPTH', 0.8))
+ICT_NECK_BAND = float(__import__('os').environ.get('FP_NECK_BAND', 7.0))
+ICT_SOCKET_RATIO = float(__import__('os').environ.get('FP_SOCKET_RATIO', 0.5))
+# Mobility ramp: fingers act fully this far from bone; the finger clamp is ramp / 3 (fp_rig.h).
+ICT_RAMP = 1.0
+ICT_BACK_BAND = float(__import__('os').environ.get('FP_BACK_BAND', 4.0))
+
+
 def build_ict(data):
     mesh = 'faces/ict-facekit/generic_neutral_mesh.obj'
     V, F = load_obj(data / mesh)
@@ -130,11 +142,22 @@ def build_ict(data):
     du, _ = cKDTree(V[upper_teeth]).query(V[gums])
     dl, _ = cKDTree(V[lower_teeth]).query(V[gums])
     eyeballs = np.arange(21451, 24591)
+    # The mouth's lining: the part next to the lower gums and teeth is the floor of the mouth
+    # and moves with the mandible (jaw), the part next to the upper ones is the palate and the
+    # upper vestibule (skull); the band between stays soft and takes the falloff.
+    socket = np.arange(11248, 13294)
+    upper = np.r_[upper_teeth, gums[du < dl]]
+    lower = np.r_[lower_teeth, gums[du >= dl]]
+    su, _ = cKDTree(V[upper]).query(V[socket])
+    sl, _ = cKDTree(V[lower]).query(V[socket])
+    socket_jaw = socket[sl < ICT_SOCKET_RATIO * su]
+    socket_skull = socket[su < ICT_SOCKET_RATIO * sl]
     regions = [
         ("cranium", "skull", cranium), ("ears", "skull", ears),
         ("upper_teeth", "skull", upper_teeth), ("upper_gums", "skull", gums[du < dl]),
         ("eyeballs", "skull", eyeballs),
         ("lower_teeth", "jaw", lower_teeth), ("lower_gums_tongue", "jaw", gums[du >= dl]),
+        ("mouth_floor", "jaw", socket_jaw), ("palate", "skull", socket_skull),
         ("face", "soft", np.arange(0, 9409)), ("head_neck", "soft", np.arange(9409, 11248)),
         ("mouth_socket", "soft", np.arange(11248, 13294)), ("eye_sockets", "soft", np.arange(13294, 14062)),
         ("eye_surfaces", "soft", np.arange(24591, 25351)), ("eyelashes", "soft", np.arange(25351, 26719)),
@@ -145,11 +168,12 @@ def build_ict(data):
     mouth = [V[lm["mouth_corner_right"]],
              0.5 * (V[5711] + V[5966]), 0.5 * (V[lm["upper_lip_inner"]] + V[lm["lower_lip_inner"]]),
              0.5 * (V[6216] + V[6470]), V[lm["mouth_corner_left"]]]
-    falloff = {"mouth_line": [r3(p) for p in mouth], "lip_band": 0.05, "cheek_band": 1.8,
-               "cheek_distance": 0.7, "menton": [0.0, -8.0, 9.2], "gonion": [5.3, -5.0, 1.6],
-               "neck_band": 2.5, "back_band": 1.2}
+    falloff = {"mouth_line": [r3(p) for p in mouth], "lip_band": 0.05, "cheek_band": ICT_CHEEK_BAND,
+               "cheek_distance": ICT_CHEEK_DISTANCE, "corner_inset": ICT_CORNER_INSET,
+               "inner_depth": ICT_INNER_DEPTH, "menton": [0.0, -8.0, 9.2], "gonion": [5.3, -5.0, 1.6],
+               "neck_band": ICT_NECK_BAND, "back_band": ICT_BACK_BAND}
     return rig("ict-facekit", "ICT FaceKit generic neutral head (cm): skull, jaw, falloff from anatomy",
-               mesh, V, 10.0, regions, lm, hinge, 26.0, [0.0, 0.0], falloff, 1.0), V, F
+               mesh, V, 10.0, regions, lm, hinge, 26.0, [0.0, 0.0], falloff, ICT_RAMP), V, F
 
 
 def build_mediapipe(data):
@@ -173,7 +197,7 @@ def build_mediapipe(data):
                "cheek_distance": 2.0, "menton": [0.0, -9.2, 4.0], "gonion": [5.9, -6.0, -0.8],
                "neck_band": 2.5, "back_band": 1.2}
     return rig("mediapipe-canonical", "MediaPipe canonical face mask (cm); hinge behind the mask",
-               mesh, V, 10.0, regions, lm, hinge, 26.0, [0.0, 0.0], falloff, 1.0), V, F
+               mesh, V, 10.0, regions, lm, hinge, 26.0, [0.0, 0.0], falloff, ICT_RAMP), V, F
 
 
 def build_lps(data, ict_rig, Vi):
@@ -203,11 +227,11 @@ def build_lps(data, ict_rig, Vi):
                         r3(V[lm["mouth_corner_left"]])]
     for k in ("menton", "gonion"):
         fo[k] = r3(T(fo[k]))
-    for k in ("lip_band", "cheek_band", "cheek_distance", "neck_band", "back_band"):
+    for k in ("lip_band", "cheek_band", "cheek_distance", "corner_inset", "inner_depth", "neck_band", "back_band"):
         fo[k] = round(fo[k] * s, 4)
     return rig("lee-perry-smith", "Lee Perry-Smith head scan; landmarks and hinge carried over from ICT by a similarity",
                mesh, V, round(mm, 4), regions, lm, (T(h["right"]), T(h["left"])), 26.0, [0.0, 0.0], fo,
-               round(1.0 * s, 4)), V, F
+               round(ICT_RAMP * s, 4)), V, F
 
 
 def main():

@@ -89,7 +89,7 @@ static int play_main(int argc, char **argv)
     fp_plugin_path path;
     fp_app_plugin_path(&path, dirs, ndirs);
     fp_session_options so = {.mesh_path = mesh, .mapping = "anchored", .radius = h->radius,
-                             .plugin_path = &path};
+                             .plugin_path = &path, .rig_path = h->rig_path ? h->rig_path : "none"};
     fp_session *s = NULL;
     int status = FP_EXIT_OK;
     if ((rc = fp_session_create(&so, &s, err, sizeof err))) {

@@ -216,9 +216,9 @@ static int run_main(int argc, char **argv)
         return fp_app_exit_code(rc, FP_APP_INPUT);
     }
     if (!quiet) {
-        fprintf(stderr, "facepuppet run: %s, %zu vertices, mapping %s, radius %.4g, %zu input(s); "
+        fprintf(stderr, "facepuppet run: %s, %zu vertices, rig %s, mapping %s, radius %.4g, %zu input(s); "
                 "scale: %.4g mm per mesh unit (%s)\n", so.mesh_path, fp_session_vertex_count(s),
-                so.mapping, fp_session_radius(s), so.input_count, fp_session_head(s)->mm_per_unit, fp_session_head(s)->how);
+                fp_session_rig_how(s), so.mapping, fp_session_radius(s), so.input_count, fp_session_head(s)->mm_per_unit, fp_session_head(s)->how);
     }
     if ((rc = fp_session_start(s, err, sizeof err))) {
         fprintf(stderr, "facepuppet run: %s\n", err);

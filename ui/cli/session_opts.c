@@ -2,6 +2,9 @@
 #define _GNU_SOURCE
 #include "session_opts.h"
 
+#include "command.h"
+#include "fp_rig.h"
+
 #include "fp_calib_file.h"
 
 #include <errno.h>
@@ -9,7 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-enum { OPT_DURATION = 0x100, OPT_HAND_SIZE, OPT_PLUGIN_DIR, OPT_MM_PER_UNIT, OPT_CALIBRATION };
+enum { OPT_DURATION = 0x100, OPT_HAND_SIZE, OPT_PLUGIN_DIR, OPT_MM_PER_UNIT, OPT_CALIBRATION, OPT_RIG };
 
 static const struct {
     const char *name;
@@ -32,6 +35,8 @@ static const struct {
     {"duration", required_argument, OPT_DURATION, "S", "stop after S seconds (default: when the inputs end)"},
     {"hand-size", required_argument, OPT_HAND_SIZE, "F", "performer's hand size, 1 = mean adult"},
     {"plugin-dir", required_argument, OPT_PLUGIN_DIR, "DIR", "look for plugins in DIR first (repeatable)"},
+    {"rig", required_argument, OPT_RIG, "R",
+     "rig file (rigs/README.md); default: the mesh's rig found\nby checksum, else vertex count; 'none': no rig"},
     {"quiet", no_argument, 'q', NULL, "no progress lines"},
 };
 
@@ -39,6 +44,8 @@ void fp_session_opts_init(fp_session_opts *o, fp_session_options *session)
 {
     memset(o, 0, sizeof *o);
     o->session = session;
+    static char rig_dir[1024]; /* the rig folder next to the program (fp_rig_default_dir) */
+    session->rig_dir = fp_rig_default_dir(fp_app_exe_dir(), rig_dir, sizeof rig_dir);
     o->speed = 1;
 }
 
@@ -78,6 +85,7 @@ int fp_session_opts_parse(fp_session_opts *o, int c, const char *arg, const char
         so->inputs[so->input_count++] = arg;
         return 1;
     case 'M': so->mapping = arg; return 1;
+    case OPT_RIG: so->rig_path = arg; return 1;
     case 'r':
         return number(arg, 0, INFINITY, &so->radius) ? 1 : bad(cmd, "--radius must be a number > 0", arg);
     case 's':

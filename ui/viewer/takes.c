@@ -48,7 +48,9 @@ static int review_open(fp_vtakes *t, const fp_session_take_result *res, char *ms
     const fp_session_options *so = t->take.so;
     fp_session_options ro = {.mesh_path = so->mesh_path, .mapping = "anchored",
                              .radius = fp_take_reader_header(t->reader)->radius,
-                             .plugin_path = so->plugin_path};
+                             .plugin_path = so->plugin_path,
+                             .rig_path = fp_take_reader_header(t->reader)->rig_path
+                                             ? fp_take_reader_header(t->reader)->rig_path : "none"};
     if ((rc = fp_session_create(&ro, &t->rs, err, sizeof err))) {
         snprintf(msg, n, "review: %.900s", err);
         fp_take_reader_close(&t->reader);

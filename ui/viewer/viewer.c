@@ -274,6 +274,15 @@ static void act(viewer *v, int key)
         if (!fp_session_undo(v->s)) say(v, "nothing to undo");
         break;
     case GLFW_KEY_R: fp_session_reset(v->s); break;
+    case GLFW_KEY_J: /* fall through: the jaw, 0.1 per press (the session clamps to [0, 1]) */
+    case GLFW_KEY_K: {
+        double j = fp_session_channel(v->s, "jaw.open");
+        if (isnan(j) || fp_session_set_channel(v->s, "jaw.open", j + (key == GLFW_KEY_J ? 0.1 : -0.1)))
+            say(v, "no rig with a jaw.open channel");
+        else
+            say(v, "jaw.open %.1f", fmin(1, fmax(0, j + (key == GLFW_KEY_J ? 0.1 : -0.1))));
+        break;
+    }
     case GLFW_KEY_1: set_mapping(v, "anchored"); break;
     case GLFW_KEY_2: set_mapping(v, "unanchored"); break;
     case GLFW_KEY_LEFT_BRACKET: fp_session_set_radius(v->s, fp_session_radius(v->s) / 1.1); break;
@@ -584,6 +593,7 @@ static const char help_text[] =
     " E      engage      C  commit\n"
     " X      cancel      Z  undo commit\n"
     " R      back to the loaded shape\n"
+    " J / K  open / close the jaw (rig)\n"
     " 1 / 2  anchored / unanchored\n"
     " [ / ]  radius down / up\n"
     " W wireframe  S screenshot  F frame\n"
@@ -696,9 +706,10 @@ static void draw(viewer *v, const fp_frame_stats *st, int w, int h)
     static const float skin[4] = {0.86f, 0.7f, 0.6f, 1.f}, ghost[4] = {0.6f, 0.8f, 1.f, 0.22f};
     bool reviewing = fp_vtakes_shown(&v->takes) != NULL;
     bool deformed = !reviewing && fp_session_positions(v->s) != fp_session_base(v->s);
+    /* with a rig the shape is the posed base blended by mobility: drawn from the CPU */
     if (reviewing) {
         fp_render_mesh(&v->r, pv, view, false, NULL, skin, v->wireframe);
-    } else if (v->opt->gpu_warp) {
+    } else if (v->opt->gpu_warp && !fp_session_rig(v->s)) {
         /* The engine step's own coefficients (no second solve); the identity when nothing
          * is deformed or they cannot be drawn. */
         fp_warp_coeffs c;
@@ -710,7 +721,7 @@ static void draw(viewer *v, const fp_frame_stats *st, int w, int h)
     } else {
         fp_render_mesh(&v->r, pv, view, false, NULL, skin, v->wireframe);
     }
-    if (deformed) fp_render_mesh(&v->r, pv, view, true, NULL, ghost, false);
+    if (deformed && (st->active || !fp_session_rig(v->s))) fp_render_mesh(&v->r, pv, view, true, NULL, ghost, false);
     if (v->hands_on && !reviewing) draw_hands(v, pv, view);
     if (v->hud_on) draw_hud(v, w, h, st);
 }
@@ -760,7 +771,7 @@ static void frame(viewer *v)
         v->events_window = 0;
         v->window_start = now;
     }
-    upload(v, v->opt->gpu_warp);
+    upload(v, v->opt->gpu_warp && !fp_session_rig(v->s));
     int w, h;
     glfwGetFramebufferSize(v->win, &w, &h);
     draw(v, &st, w, h);
@@ -845,8 +856,8 @@ int fp_viewer_run(const fp_viewer_options *opt, fp_viewer_report *report, char *
     if ((rc = open_session(v, err, errlen))) goto out;
     if (!opt->quiet) {
         const char *renderer = (const char *)glGetString(GL_RENDERER);
-        fprintf(stderr, "facepuppet live: %s, %zu vertices, mapping %s, radius %.4g; OpenGL %s on %s\n",
-                v->mesh_path, v->n, v->mapping, fp_session_radius(v->s),
+        fprintf(stderr, "facepuppet live: %s, %zu vertices, rig %s, mapping %s, radius %.4g; OpenGL %s on %s\n",
+                v->mesh_path, v->n, fp_session_rig_how(v->s), v->mapping, fp_session_radius(v->s),
                 (const char *)glGetString(GL_VERSION), renderer ? renderer : "?");
     }
     int64_t t0 = v->window_start = fp_now_ns();
