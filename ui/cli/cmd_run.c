@@ -4,6 +4,7 @@
 #include "command.h"
 #include "fp_session.h"
 #include "fp_session_take.h"
+#include "app_export.h"
 #include "session_opts.h"
 #include "fp_stats.h"
 
@@ -49,6 +50,8 @@ static void usage(FILE *f)
         "      --frames-out DIR   also write one mesh per frame, every frame at --fps\n"
         "                         (DIR/frame_000123_t2.050s.obj: number, time on the input clock)\n"
         "      --fps N            frames per second of the session loop (default 60)\n"
+        "      --export FILE      every frame into FILE: .gltf/.glb (morph-target animation,\n"
+        "                         0.1 mm), .pc2/.mdd (point caches); see facepuppet export\n"
         "      --take-dir DIR     record the run as a take in DIR (SLATE_TNNN.fptake; see\n"
         "                         facepuppet takes, play, --input take:FILE)\n"
         "      --slate NAME       the take's slate (default \"take\"); numbers go up per slate\n"
@@ -103,13 +106,14 @@ static int check_out(const char *out)
 static int run_main(int argc, char **argv)
 {
     enum { OPT_FRAMES_OUT = FP_SESSION_OPTS_FIRST_FREE, OPT_FPS, OPT_BUDGET, OPT_TAKE_DIR,
-           OPT_SLATE, OPT_TAKE_DESC };
+           OPT_SLATE, OPT_TAKE_DESC, OPT_EXPORT };
     static const struct option own[] = {
         {"out", required_argument, 0, 'o'},        {"frames-out", required_argument, 0, OPT_FRAMES_OUT},
         {"fps", required_argument, 0, OPT_FPS},    {"help", no_argument, 0, 'h'},
         {"budget", required_argument, 0, OPT_BUDGET},
         {"take-dir", required_argument, 0, OPT_TAKE_DIR}, {"slate", required_argument, 0, OPT_SLATE},
         {"take-description", required_argument, 0, OPT_TAKE_DESC},
+        {"export", required_argument, 0, OPT_EXPORT},
         {0, 0, 0, 0}};
     struct option opts[FP_SESSION_OPTS_COUNT + sizeof own / sizeof own[0]];
     memcpy(opts + fp_session_opts_longopts(opts), own, sizeof own);
@@ -118,7 +122,7 @@ static int run_main(int argc, char **argv)
     fp_session_opts sopt;
     fp_session_opts_init(&sopt, &so);
     const char *out = NULL, *frames_out = NULL;
-    const char *take_dir = NULL, *slate = NULL, *take_desc = NULL;
+    const char *take_dir = NULL, *slate = NULL, *take_desc = NULL, *export_file = NULL;
     double fps = 60;
     char *end;
     optind = 1;
@@ -139,6 +143,7 @@ static int run_main(int argc, char **argv)
         case OPT_TAKE_DIR: take_dir = optarg; break;
         case OPT_SLATE: slate = optarg; break;
         case OPT_TAKE_DESC: take_desc = optarg; break;
+        case OPT_EXPORT: export_file = optarg; break;
         case OPT_BUDGET:
             so.mapping_budget_ms = strtod(optarg, &end);
             if (*end || !(so.mapping_budget_ms > 0 && so.mapping_budget_ms <= 1000)) {
@@ -183,6 +188,12 @@ static int run_main(int argc, char **argv)
         }
     }
 
+    fp_export_format export_fmt;
+    if (export_file && fp_export_format_from_path(export_file, &export_fmt)) {
+        fprintf(stderr, "facepuppet run: --export %s: give a file ending in .gltf, .glb, .pc2 "
+                "or .mdd\n", export_file);
+        return FP_EXIT_USAGE;
+    }
     if ((slate || take_desc) && !take_dir) {
         fprintf(stderr, "facepuppet run: --slate and --take-description need --take-dir\n");
         return FP_EXIT_USAGE;
@@ -220,8 +231,17 @@ static int run_main(int argc, char **argv)
                 "scale: %.4g mm per mesh unit (%s)\n", so.mesh_path, fp_session_vertex_count(s),
                 fp_session_rig_how(s), so.mapping, fp_session_radius(s), so.input_count, fp_session_head(s)->mm_per_unit, fp_session_head(s)->how);
     }
+    /* --export: every frame into one animation file (core/export), finished after the run */
+    fp_exporter *ex = NULL;
+    if (export_file && (rc = fp_app_export_open("facepuppet run", export_file, fp_session_mesh(s),
+                                                fp_session_head(s)->mm_per_unit, "run", &ex))) {
+        fp_session_destroy(&s);
+        fp_plugin_path_clear(&path);
+        return rc;
+    }
     if ((rc = fp_session_start(s, err, sizeof err))) {
         fprintf(stderr, "facepuppet run: %s\n", err);
+        fp_export_abort(&ex);
         fp_session_destroy(&s);
         fp_plugin_path_clear(&path);
         return fp_app_exit_code(rc, FP_APP_INPUT);
@@ -266,6 +286,12 @@ static int run_main(int argc, char **argv)
                 if (grown) { update_ms = grown; cap *= 2; }
             }
             if (nupdates < cap) update_ms[nupdates++] = st.update_ms;
+        }
+        if (ex && (rc = fp_export_add(ex, fp_session_positions(s), (double)(now - t0) * 1e-9, err,
+                                      sizeof err))) {
+            fprintf(stderr, "facepuppet run: export: %s\n", err);
+            status = fp_app_exit_code(rc, FP_APP_OUTPUT);
+            break;
         }
         if (frames_out) {
             char file[4400];
@@ -315,6 +341,10 @@ static int run_main(int argc, char **argv)
         fprintf(stderr, "facepuppet run: %s\n", err);
         status = fp_app_exit_code(rc, FP_APP_OUTPUT);
     }
+    if (ex && status == FP_EXIT_OK)
+        status = fp_app_export_close("facepuppet run", &ex, export_fmt, export_file, 0.1, quiet,
+                                     stderr);
+    fp_export_abort(&ex);
     double med = fp_median(update_ms, nupdates);
     printf("frames %llu, deforming %llu, engaged %llu, committed %llu; vertices moved %zu of %zu; "
            "displacement mean %.6g max %.6g (mesh units); update median %.3f ms over %zu updates; "
