@@ -548,6 +548,22 @@ int fp_export_compress(const double *D, size_t F, size_t m, double tol, size_t k
         Df[i] = (float)D[i];
     int rc = compress_f(Df, F, m, tol, kmax, k_out, targets, weights, max_err, err, errlen);
     free(Df);
+    if (rc == 0) {   /* the error against D as given (double), not its float32 copy */
+        const size_t K = *k_out;
+        double worst = 0;
+        for (size_t f = 0; f < F; f++)
+            for (size_t j = 0; j + 2 < m; j += 3) {
+                double e2 = 0;
+                for (int c = 0; c < 3; c++) {
+                    double r = D[f * m + j + (size_t)c];
+                    for (size_t k = 0; k < K; k++)
+                        r -= (double)(*weights)[f * K + k] * (double)(*targets)[k * m + j + (size_t)c];
+                    e2 += r * r;
+                }
+                if (e2 > worst) worst = e2;
+            }
+        *max_err = sqrt(worst);
+    }
     return rc;
 }
 

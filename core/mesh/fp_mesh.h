@@ -174,9 +174,10 @@ int fp_mesh_save(const fp_mesh *mesh, const char *path, char *err, size_t errlen
  *  (embedded in .gltf as base64, the BIN chunk of .glb); image URIs are kept as written.
  *  Another format keeps what it can hold: PLY and OFF write the file's polygons (per-vertex
  *  UVs: seams dropped); glTF from an OBJ splits vertices at UV seams (one glTF vertex per
- *  (vertex, UV) pair: mesh vertex i is glTF vertex i, copies follow, their source vertices in
- *  mesh.extras.seamCopyOf), one primitive per OBJ material (named, default PBR values),
- *  triangles. Returns as fp_mesh_save(). */
+ *  (vertex, UV) pair; OBJ's v-up UVs flipped to glTF's v-down), one primitive per OBJ
+ *  material (named, default PBR values) with its own block of the vertices its triangles
+ *  use, triangles; where glTF vertex j is not mesh vertex j, mesh.extras.sourceVertex lists
+ *  the mesh vertex of every glTF vertex (the primitives' blocks in order). Returns as fp_mesh_save(). */
 int fp_mesh_save_ex(const fp_mesh *mesh, const char *path, unsigned *dropped, char *err,
                     size_t errlen);
 
@@ -200,7 +201,7 @@ typedef struct fp_mesh_morph_animation {
  *  and one animation whose `weights` channel plays `anim` (glTF 2.0 sections 3.7.2.2 morph
  *  targets, 3.11 animations). The base mesh is written as fp_mesh_save_ex() writes a glTF
  *  from a non-glTF input (UV seams split, one primitive per OBJ material, names of targets
- *  in mesh.extras.targetNames, seam copies' source vertices in mesh.extras.seamCopyOf); each
+ *  in mesh.extras.targetNames, mesh.extras.sourceVertex); each
  *  primitive gets K POSITION targets (accessors with min/max) sharing the vertex set. From a
  *  glTF input the document's nodes and materials are not kept (*dropped says so).
  *  Buffer views carry their target (34962/34963) except the animation's. Atomic as

@@ -1597,6 +1597,18 @@ std::string file_stem(const char *path)
     return s;
 }
 
+void minmax3(const std::vector<float> &v, tinygltf::Accessor &a)
+{
+    std::vector<double> lo(3, 0), hi(3, 0);
+    for (size_t i = 0; i < v.size() / 3; i++)
+        for (size_t k = 0; k < 3; k++) {
+            if (i == 0 || v[3 * i + k] < lo[k]) lo[k] = v[3 * i + k];
+            if (i == 0 || v[3 * i + k] > hi[k]) hi[k] = v[3 * i + k];
+        }
+    a.minValues = lo;
+    a.maxValues = hi;
+}
+
 // A fresh glTF document of the mesh (and its source's polygons, UV seams, OBJ materials),
 // with morph targets and an animation when anim is given.
 void build_gltf(const fp_mesh *m, const fp_mesh_morph_animation *anim, GltfOut &g,
@@ -1655,27 +1667,10 @@ void build_gltf(const fp_mesh *m, const fp_mesh_morph_animation *anim, GltfOut &
     }
     const size_t N = n + copy_of.size();
     auto src_vertex = [&](size_t j) { return j < n ? j : size_t(copy_of[j - n]); };
-    std::vector<float> pos(3 * N), nrm(3 * N);
-    for (size_t j = 0; j < N; j++) {
-        const size_t v = src_vertex(j);
-        float q[3] = {0, 0, 1};
-        if (m->normals) {
-            const float *a = m->normals + 3 * v;
-            const double len = std::sqrt(double(a[0]) * a[0] + double(a[1]) * a[1] +
-                                         double(a[2]) * a[2]);
-            if (len > 0 && std::isfinite(len))
-                for (int k = 0; k < 3; k++)
-                    q[k] = float(a[k] / len);
-        }
-        for (int k = 0; k < 3; k++) {
-            pos[3 * j + size_t(k)] = m->positions[3 * v + size_t(k)];
-            nrm[3 * j + size_t(k)] = q[k];
-        }
-    }
     if (flip_v)
         for (size_t j = 0; j < uv.size() / 2; j++)
             uv[2 * j + 1] = 1.0f - uv[2 * j + 1];
-    // triangles per material
+    // triangles per material, in split vertices
     const size_t nmat = src ? src->materials.size() : 0;
     std::vector<std::vector<uint32_t>> tris(nmat + 1); // last: no material
     if (src) {
@@ -1697,33 +1692,98 @@ void build_gltf(const fp_mesh *m, const fp_mesh_morph_animation *anim, GltfOut &
     } else {
         tris[0].assign(m->triangles, m->triangles + 3 * m->triangle_count);
     }
+    // Each primitive gets its own block of vertices (those its triangles use, in first-use
+    // order; a vertex on a material border appears in both blocks), so that every reader
+    // (ours appends each primitive's vertices) sees each vertex once per primitive.
+    std::vector<uint32_t> out_src;              // output vertex -> split vertex
+    std::vector<size_t> prim_first, prim_count; // per non-empty material: its block
+    std::vector<size_t> prim_mat;
+    {
+        std::vector<int64_t> local(N, -1);
+        for (size_t mi = 0; mi <= nmat; mi++) {
+            if (tris[mi].empty())
+                continue;
+            const size_t first = out_src.size();
+            for (uint32_t &v : tris[mi]) {
+                if (local[v] < 0) {
+                    local[v] = int64_t(out_src.size() - first);
+                    out_src.push_back(v);
+                }
+                v = uint32_t(local[v]);
+            }
+            for (size_t j = first; j < out_src.size(); j++)
+                local[out_src[j]] = -1;
+            prim_first.push_back(first);
+            prim_count.push_back(out_src.size() - first);
+            prim_mat.push_back(mi);
+        }
+    }
+    const size_t NO = out_src.size();
+    std::vector<float> pos(3 * NO), nrm(3 * NO), tuv(uv.empty() ? 0 : 2 * NO);
+    for (size_t j = 0; j < NO; j++) {
+        const size_t v = src_vertex(out_src[j]);
+        float q[3] = {0, 0, 1};
+        if (m->normals) {
+            const float *a = m->normals + 3 * v;
+            const double len = std::sqrt(double(a[0]) * a[0] + double(a[1]) * a[1] +
+                                         double(a[2]) * a[2]);
+            if (len > 0 && std::isfinite(len))
+                for (int k = 0; k < 3; k++)
+                    q[k] = float(a[k] / len);
+        }
+        for (int k = 0; k < 3; k++) {
+            pos[3 * j + size_t(k)] = m->positions[3 * v + size_t(k)];
+            nrm[3 * j + size_t(k)] = q[k];
+        }
+        if (!tuv.empty()) {
+            tuv[2 * j] = uv[2 * size_t(out_src[j])];
+            tuv[2 * j + 1] = uv[2 * size_t(out_src[j]) + 1];
+        }
+    }
     g.model.asset.version = "2.0";
     g.model.asset.generator = "facepuppet fp_mesh";
-    const int pa = g.add_floats(pos, 3, TINYGLTF_TARGET_ARRAY_BUFFER, true);
-    const int na = g.add_floats(nrm, 3, TINYGLTF_TARGET_ARRAY_BUFFER, false);
-    const int ta = uv.empty() ? -1 : g.add_floats(uv, 2, TINYGLTF_TARGET_ARRAY_BUFFER, false);
-    std::vector<int> target_acc;
+    // one buffer view per attribute; one accessor per primitive over its block
+    auto sub_accessors = [&](const std::vector<float> &v, int comps, bool minmax) {
+        const int view = g.add_view(v.data(), v.size() * 4, TINYGLTF_TARGET_ARRAY_BUFFER);
+        g.model.bufferViews[size_t(view)].byteStride = size_t(comps) * 4; // shared by accessors
+        std::vector<int> acc;
+        for (size_t p = 0; p < prim_first.size(); p++) {
+            const int type = comps == 2 ? TINYGLTF_TYPE_VEC2 : TINYGLTF_TYPE_VEC3;
+            const int a = g.add_accessor(view, TINYGLTF_COMPONENT_TYPE_FLOAT, type, prim_count[p]);
+            g.model.accessors[size_t(a)].byteOffset = prim_first[p] * size_t(comps) * 4;
+            if (minmax) {
+                std::vector<float> part(v.begin() + long(prim_first[p] * size_t(comps)),
+                                        v.begin() + long((prim_first[p] + prim_count[p]) * size_t(comps)));
+                minmax3(part, g.model.accessors[size_t(a)]);
+            }
+            acc.push_back(a);
+        }
+        return acc;
+    };
+    const std::vector<int> pa = sub_accessors(pos, 3, true);
+    const std::vector<int> na = sub_accessors(nrm, 3, false);
+    const std::vector<int> ta = tuv.empty() ? std::vector<int>() : sub_accessors(tuv, 2, false);
+    std::vector<std::vector<int>> target_acc; // [target][primitive]
     if (anim) {
-        std::vector<float> d(3 * N);
+        std::vector<float> d(3 * NO);
         for (size_t k = 0; k < anim->target_count; k++) {
             const float *t = anim->targets + k * 3 * n;
-            for (size_t j = 0; j < N; j++)
+            for (size_t j = 0; j < NO; j++)
                 for (int c = 0; c < 3; c++)
-                    d[3 * j + size_t(c)] = t[3 * src_vertex(j) + size_t(c)];
-            target_acc.push_back(g.add_floats(d, 3, TINYGLTF_TARGET_ARRAY_BUFFER, true));
+                    d[3 * j + size_t(c)] = t[3 * src_vertex(out_src[j]) + size_t(c)];
+            target_acc.push_back(sub_accessors(d, 3, true));
         }
     }
     tinygltf::Mesh mesh;
     mesh.name = file_stem(m->source_path);
-    for (size_t mi = 0; mi <= nmat; mi++) {
-        if (tris[mi].empty())
-            continue;
+    for (size_t p = 0; p < prim_first.size(); p++) {
+        const size_t mi = prim_mat[p];
         tinygltf::Primitive prim;
         prim.mode = TINYGLTF_MODE_TRIANGLES;
-        prim.attributes["POSITION"] = pa;
-        prim.attributes["NORMAL"] = na;
-        if (ta >= 0)
-            prim.attributes["TEXCOORD_0"] = ta;
+        prim.attributes["POSITION"] = pa[p];
+        prim.attributes["NORMAL"] = na[p];
+        if (!ta.empty())
+            prim.attributes["TEXCOORD_0"] = ta[p];
         prim.indices = g.add_accessor(g.add_view(tris[mi].data(), tris[mi].size() * 4,
                                                  TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER),
                                       TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT,
@@ -1735,10 +1795,10 @@ void build_gltf(const fp_mesh *m, const fp_mesh_morph_animation *anim, GltfOut &
             g.model.materials.push_back(mat);
             prim.material = int(g.model.materials.size() - 1);
         }
-        for (int a : target_acc) {
-            std::map<std::string, int> t;
-            t["POSITION"] = a;
-            prim.targets.push_back(t);
+        for (const auto &t : target_acc) {
+            std::map<std::string, int> tm;
+            tm["POSITION"] = t[p];
+            prim.targets.push_back(tm);
         }
         mesh.primitives.push_back(prim);
     }
@@ -1752,11 +1812,14 @@ void build_gltf(const fp_mesh *m, const fp_mesh_morph_animation *anim, GltfOut &
         extras["targetNames"] = tinygltf::Value(names);
         mesh.weights.assign(anim->target_count, 0.0);
     }
-    if (!copy_of.empty()) {
-        tinygltf::Value::Array copies;
-        for (uint32_t v : copy_of)
-            copies.push_back(tinygltf::Value(int(v)));
-        extras["seamCopyOf"] = tinygltf::Value(copies);
+    bool identity = NO == n;
+    for (size_t j = 0; j < NO && identity; j++)
+        identity = src_vertex(out_src[j]) == j;
+    if (!identity) { // the mesh vertex of each glTF vertex, primitives' blocks in order
+        tinygltf::Value::Array map;
+        for (size_t j = 0; j < NO; j++)
+            map.push_back(tinygltf::Value(int(src_vertex(out_src[j]))));
+        extras["sourceVertex"] = tinygltf::Value(map);
     }
     if (!extras.empty())
         mesh.extras = tinygltf::Value(extras);
@@ -1811,18 +1874,6 @@ bool affine_inverse(const std::array<double, 16> &M, std::array<double, 16> &R)
                               R[size_t(8 + r)] * a(2, 3));
     R[15] = 1;
     return true;
-}
-
-void minmax3(const std::vector<float> &v, tinygltf::Accessor &a)
-{
-    std::vector<double> lo(3, 0), hi(3, 0);
-    for (size_t i = 0; i < v.size() / 3; i++)
-        for (size_t k = 0; k < 3; k++) {
-            if (i == 0 || v[3 * i + k] < lo[k]) lo[k] = v[3 * i + k];
-            if (i == 0 || v[3 * i + k] > hi[k]) hi[k] = v[3 * i + k];
-        }
-    a.minValues = lo;
-    a.maxValues = hi;
 }
 
 // glTF back as it came in: the document with POSITION and NORMAL rewritten.
