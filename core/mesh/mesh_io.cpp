@@ -1704,13 +1704,18 @@ void build_gltf(const fp_mesh *m, const fp_mesh_morph_animation *anim, GltfOut &
             if (tris[mi].empty())
                 continue;
             const size_t first = out_src.size();
-            for (uint32_t &v : tris[mi]) {
+            for (uint32_t v : tris[mi])
                 if (local[v] < 0) {
-                    local[v] = int64_t(out_src.size() - first);
+                    local[v] = 0;
                     out_src.push_back(v);
                 }
+            // in vertex order (mesh vertices, then seam copies): one material using every
+            // vertex without seams keeps the mesh's own order
+            std::sort(out_src.begin() + long(first), out_src.end());
+            for (size_t j = first; j < out_src.size(); j++)
+                local[out_src[j]] = int64_t(j - first);
+            for (uint32_t &v : tris[mi])
                 v = uint32_t(local[v]);
-            }
             for (size_t j = first; j < out_src.size(); j++)
                 local[out_src[j]] = -1;
             prim_first.push_back(first);
@@ -1775,7 +1780,8 @@ void build_gltf(const fp_mesh *m, const fp_mesh_morph_animation *anim, GltfOut &
         }
     }
     tinygltf::Mesh mesh;
-    mesh.name = file_stem(m->source_path);
+    if (m->source_path)
+        mesh.name = file_stem(m->source_path);
     for (size_t p = 0; p < prim_first.size(); p++) {
         const size_t mi = prim_mat[p];
         tinygltf::Primitive prim;

@@ -2,6 +2,7 @@
 #include "fp_take_player.h"
 #include "fp_session_take.h"
 #include "fp_error.h"
+#include "fp_mesh.h"
 
 #include <errno.h>
 #include <stdlib.h>
@@ -33,6 +34,19 @@ int fp_take_player_open(const char *take_path, const char *mesh_path,
     if (!p->mesh) {
         rc = fp_errorf(err, errlen, -EINVAL, "%s names no mesh: give the mesh", take_path);
         goto fail;
+    }
+    /* the mesh first: the take's (checksum) before any rig is bound to it */
+    {
+        fp_mesh *m = NULL;
+        if ((rc = fp_mesh_load(p->mesh, &m, err, errlen)))
+            goto fail;
+        char why[1024];
+        rc = fp_take_check_positions(m->positions, m->vertex_count, p->mesh, h, why, sizeof why);
+        fp_mesh_free(&m);
+        if (rc) {
+            fp_errorf(err, errlen, rc, "%s: %s", take_path, why);
+            goto fail;
+        }
     }
     /* a session on the take's mesh with no inputs; its mapping is never called */
     fp_session_options so = {.mesh_path = p->mesh, .mapping = "anchored", .radius = h->radius,
