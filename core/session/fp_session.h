@@ -69,6 +69,9 @@ typedef struct fp_session_options {
                                                        or do I/O (a take recorder pushes into
                                                        its lock-free queue) */
     void *record_user;                              /* passed to record */
+    bool measure_jacobian;                          /* fill fp_frame_stats.min_det_j (the
+                                                       engine's general path: slower, same
+                                                       shape) */
 } fp_session_options;
 
 /** Statistics of one fp_session_step. */
@@ -82,7 +85,18 @@ typedef struct fp_frame_stats {
     bool refactored;          /* the engine factored anew (start points changed) */
     size_t control_vectors;
     uint64_t pairs;           /* vertex-centre pairs evaluated */
-    double update_ms;         /* engine solve + evaluate, milliseconds */
+    double update_ms;         /* engine solve + guard + evaluate, milliseconds */
+    /* the fold-over guard (step_engine.h): every map applied is injective */
+    double guard_bound;       /* injectivity bound L of the map the mapping asked for (L < 1:
+                                 injective; the guard applies maps with L <= 0.9) */
+    size_t guard_clusters;    /* clusters of overlapping supports */
+    size_t guard_limited;     /* clusters the guard scaled back (first map) */
+    int guard_substeps;       /* maps composed (1: one; unanchored steps may compose) */
+    double guard_reached;     /* smallest fraction of a control vector the map reached (1: all;
+                                 below 1 the guard stopped short of an end point) */
+    double min_det_j;         /* min det dT/dx over the moved vertices (and composed maps) with
+                                 fp_session_options.measure_jacobian, else NAN (and when not
+                                 active) */
 } fp_frame_stats;
 
 typedef struct fp_session fp_session;

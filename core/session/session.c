@@ -160,6 +160,7 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
         snprintf(err, errlen, "session: cannot index %zu vertices", s->n);
         goto fail;
     }
+    s->engine.jacobian = opt->measure_jacobian;
     if ((rc = load_mapping(s, opt->mapping, opt->plugin_path, err, errlen))) goto fail;
     for (size_t i = 0; i < opt->input_count; i++) {
         rc = fp_input_instance_open(&s->inputs[i], opt->plugin_path, opt->inputs[i], (uint32_t)i,
@@ -214,6 +215,8 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     if (!st) st = &local;
     memset(st, 0, sizeof *st);
     st->frame = s->frame;
+    st->guard_reached = 1.0;
+    st->min_det_j = NAN;
 
     /* 1: inputs and intents. */
     fp_record_step_begin(&s->record);
@@ -254,6 +257,12 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
         st->pairs = er.pairs;
         st->update_ms = er.update_ms;
         st->control_vectors = cs->count;
+        st->guard_bound = er.bound;
+        st->guard_clusters = er.clusters;
+        st->guard_limited = er.clusters_limited;
+        st->guard_substeps = er.substeps;
+        st->guard_reached = er.reached;
+        st->min_det_j = er.min_det_j;
         if (!rc) {
             st->active = true;
             s->shown = s->deformed;
@@ -265,6 +274,7 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
         }
     } else {
         fp_history_end_gesture(&s->history);
+        fp_engine_step_end_gesture(&s->engine, &s->log);
     }
     s->engaged = cs->active && !(cs->intents & (FP_INTENT_COMMIT | FP_INTENT_CANCEL));
 
@@ -350,6 +360,7 @@ int fp_session_set_mapping(fp_session *s, const fp_plugin_path *path, const char
     s->shown = s->base;
     s->engaged = false;
     fp_history_end_gesture(&s->history);
+    fp_engine_step_end_gesture(&s->engine, &s->log);
     fp_engine_step_invalidate(&s->engine);
     s->cs.active = false;
     s->cs.intents = 0;

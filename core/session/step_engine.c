@@ -28,11 +28,26 @@ void fp_engine_step_set_base(fp_engine_step *e, const float *base)
 
 void fp_engine_step_invalidate(fp_engine_step *e) { e->factored = false; }
 
-int fp_engine_step_guard(fp_engine_step *e, const fp_control_set *cs)
+static bool same_start(const fp_engine_step *e, const fp_control_set *cs)
 {
-    (void)e;
-    (void)cs;
-    return 0;
+    return e->factored && e->factored_count == cs->count &&
+           !memcmp(e->factored_start, cs->start, cs->count * sizeof cs->start[0]);
+}
+
+static void keep_start(fp_engine_step *e, const fp_control_set *cs)
+{
+    memcpy(e->factored_start, cs->start, cs->count * sizeof cs->start[0]);
+    e->factored_count = cs->count;
+    e->factored = true;
+}
+
+static void take_guard(fp_engine_result *res, const csrbf_guard_stats *gs)
+{
+    res->bound = gs->bound_before;
+    res->clusters = gs->clusters;
+    res->clusters_limited = gs->clusters_limited;
+    res->substeps = gs->substeps;
+    res->reached = gs->reached;
 }
 
 static int run(fp_engine_step *e, const fp_control_set *cs, float *deformed, fp_engine_result *res)
@@ -48,22 +63,41 @@ static int run(fp_engine_step *e, const fp_control_set *cs, float *deformed, fp_
         e->solver_radius = cs->radius;
         e->factored = false;
     }
-    if (!e->factored || e->factored_count != cs->count ||
-        memcmp(e->factored_start, cs->start, cs->count * sizeof cs->start[0])) {
-        if ((rc = csrbf_solver_set_start_points(e->solver, cs->count, &cs->start[0][0])) < 0) {
+    const unsigned flags = e->jacobian ? CSRBF_EVAL_JACOBIAN : 0u;
+    csrbf_guard_stats gs;
+    csrbf_eval_stats es = {0};
+    if (!same_start(e, cs) && (cs->intents & FP_INTENT_COMMIT)) {
+        /* a one-shot step (unanchored): composed injective sub-steps */
+        csrbf_guard g = {FP_ENGINE_GUARD_MARGIN, CSRBF_GUARD_MAX_SUBSTEPS, flags};
+        res->refactored = true;
+        rc = csrbf_guarded_step(e->solver, e->points, cs->count, &cs->start[0][0], &cs->end[0][0],
+                                &g, deformed, &gs);
+        if (rc < 0) {
             e->factored = false;
             return rc;
         }
-        memcpy(e->factored_start, cs->start, cs->count * sizeof cs->start[0]);
-        e->factored_count = cs->count;
-        e->factored = true;
-        res->refactored = true;
+        /* the solver holds the last sub-step's start points: the factor of cs->start only
+         * when the step was one map */
+        if (gs.substeps == 1) keep_start(e, cs);
+        else e->factored = false;
+        es = gs.eval;
+    } else {
+        /* a gesture (anchored): factor at its start points once, limit every frame */
+        if (!same_start(e, cs)) {
+            if ((rc = csrbf_solver_set_start_points(e->solver, cs->count, &cs->start[0][0])) < 0) {
+                e->factored = false;
+                return rc;
+            }
+            keep_start(e, cs);
+            res->refactored = true;
+        }
+        if ((rc = csrbf_solver_set_end_points(e->solver, &cs->end[0][0])) < 0) return rc;
+        if ((rc = csrbf_solver_limit_end_points(e->solver, FP_ENGINE_GUARD_MARGIN, &gs)) < 0) return rc;
+        if ((rc = csrbf_evaluate(e->solver, e->points, deformed, flags, &es)) < 0) return rc;
     }
-    if ((rc = csrbf_solver_set_end_points(e->solver, &cs->end[0][0])) < 0) return rc;
-    if ((rc = fp_engine_step_guard(e, cs)) < 0) return rc;
-    csrbf_eval_stats es = {0};
-    if ((rc = csrbf_evaluate(e->solver, e->points, deformed, 0, &es)) < 0) return rc;
+    take_guard(res, &gs);
     res->pairs = es.pairs;
+    res->min_det_j = e->jacobian ? es.min_jacobian_det : NAN;
     return 0;
 }
 
@@ -71,6 +105,8 @@ int fp_engine_step_run(fp_engine_step *e, const fp_control_set *cs, float *defor
                        fp_engine_result *res, const fp_slog *log)
 {
     memset(res, 0, sizeof *res);
+    res->reached = 1.0;
+    res->min_det_j = NAN;
     int64_t t0 = fp_now_ns();
     int rc = run(e, cs, deformed, res);
     res->update_ms = (double)(fp_now_ns() - t0) / 1e6;
@@ -81,12 +117,43 @@ int fp_engine_step_run(fp_engine_step *e, const fp_control_set *cs, float *defor
         return rc;
     }
     fp_slog_repeat_flush(&e->errors, log);
+    if (!e->g_frames) {
+        e->g_reached = 1.0;
+        e->g_substeps = 1;
+        e->g_bound = 0.0;
+    }
+    e->g_frames++;
+    e->g_limited += res->reached < 1.0;
+    e->g_composed += res->substeps > 1;
+    if (res->reached < e->g_reached) e->g_reached = res->reached;
+    if (res->substeps > e->g_substeps) e->g_substeps = res->substeps;
+    if (res->bound > e->g_bound) e->g_bound = res->bound;
     return 0;
+}
+
+void fp_engine_step_end_gesture(fp_engine_step *e, const fp_slog *log)
+{
+    if (e->g_limited)
+        fp_slog_printf(log, FP_LOG_WARNING, "engine",
+                       "fold-over guard limited the deformation to %.0f%% this gesture (%lu of %lu "
+                       "frames limited, largest fold-over bound %.2f > %.2f)",
+                       100.0 * e->g_reached, e->g_limited, e->g_frames, e->g_bound,
+                       FP_ENGINE_GUARD_MARGIN);
+    else if (e->g_composed)
+        fp_slog_printf(log, FP_LOG_INFO, "engine",
+                       "fold-over guard composed %lu of %lu steps from up to %d injective maps this "
+                       "gesture (largest fold-over bound %.2f)",
+                       e->g_composed, e->g_frames, e->g_substeps, e->g_bound);
+    e->g_frames = e->g_limited = e->g_composed = 0;
 }
 
 const csrbf_solver *fp_engine_step_solver(const fp_engine_step *e) { return e->solver; }
 
-void fp_engine_step_flush(fp_engine_step *e, const fp_slog *log) { fp_slog_repeat_flush(&e->errors, log); }
+void fp_engine_step_flush(fp_engine_step *e, const fp_slog *log)
+{
+    fp_slog_repeat_flush(&e->errors, log);
+    fp_engine_step_end_gesture(e, log);
+}
 
 void fp_engine_tip_distances(const float *base, size_t n, const fp_hand_pose hands[FP_HANDS],
                              float d[FP_HANDS][FP_FINGERS])

@@ -7,9 +7,26 @@
  * Per frame: a solver is created when the support radius changes; the system is factored
  * when the start points differ (bitwise) from the ones last factored, else the factor is
  * reused (anchored gestures: only the end points move); the end points are solved; the
- * guard hook runs (a no-op today: the fold-over guard of the trust issue goes there); the
- * base is evaluated. Also here: each fingertip's distance to the base surface, which the
- * mapping reads (fp_frame_input.tip_distance).
+ * fold-over guard makes the map injective; the base is evaluated. Also here: each
+ * fingertip's distance to the base surface, which the mapping reads
+ * (fp_frame_input.tip_distance).
+ *
+ * The fold-over guard (issue 10 item 1; csrbf.h "fold-over guard", csrbf.md pitfall 4):
+ * every map the session applies has the engine's injectivity bound L <= FP_ENGINE_GUARD_MARGIN
+ * (L < 1 means T injective with det dT/dx > 0 everywhere, so the surface cannot cross
+ * itself), decided from the solved coefficients, per cluster of overlapping supports:
+ *  - a gesture (start points kept from the last factorisation: anchored, or the first frame
+ *    of one) is limited (csrbf_solver_limit_end_points): a cluster over the margin has its
+ *    control vectors shortened in proportion, the factor is kept, other clusters untouched;
+ *  - a one-shot step (start points new this frame and committed at once: unanchored) is
+ *    composed (csrbf_guarded_step): up to CSRBF_GUARD_MAX_SUBSTEPS injective maps, each
+ *    start point travelling its cluster's share, until every end point is reached; beyond
+ *    that the rest of the step is dropped (a composition of injective maps is injective).
+ * So the face follows the fingers as far as an injective map allows: an unanchored step
+ * reaches its end points (in sub-steps), an anchored gesture stops where the map would
+ * start to fold. What the guard did is in fp_engine_result (per frame) and, once per
+ * gesture (not per frame), a log line: "fold-over guard limited the deformation to 63%
+ * this gesture ...".
  *
  * Errors: the engine's codes (csrbf.h: CSRBF_ERR_*) are returned unchanged and reported
  * through the log once with a count (source "engine", csrbf_strerror and the solver's
@@ -34,6 +51,14 @@ extern "C" {
 
 #define FP_ENGINE_MAX_CONTROL 64   /* the session's control-set capacity */
 
+/** The guard's margin: a map is applied when its bound L <= 0.9. L bounds the Lipschitz
+ *  constant of T - id, so every singular value of dT/dx lies in [1 - L, 1 + L]: 0.9 keeps a
+ *  surface from being compressed more than tenfold by one map while losing only 10% of the
+ *  reach that injectivity allows (a single centre folds at |alpha| = R / max|psi'|; the
+ *  mappings' own 0.45 R clamp of a control vector sits just below that, 0.474 R for psi31,
+ *  and stays as a first line). Smaller margins cost reach and, unanchored, more sub-steps. */
+#define FP_ENGINE_GUARD_MARGIN 0.9
+
 typedef struct fp_engine_step {
     csrbf_solver *solver;         /* NULL until the first run */
     double solver_radius;         /* the radius the solver was made for */
@@ -43,6 +68,12 @@ typedef struct fp_engine_step {
     size_t factored_count;
     float factored_start[FP_ENGINE_MAX_CONTROL][3];
     fp_slog_repeat errors;        /* the engine's repeated error */
+    bool jacobian;                /* measure min det dT/dx (fp_engine_result.min_det_j) */
+    /* the current gesture, for the guard's one line per gesture */
+    unsigned long g_frames, g_limited, g_composed;
+    double g_reached;             /* smallest fraction reached over the gesture */
+    int g_substeps;               /* most sub-steps in one frame */
+    double g_bound;               /* largest requested bound */
 } fp_engine_step;
 
 /** What one run did. */
@@ -50,6 +81,13 @@ typedef struct fp_engine_result {
     bool refactored;              /* factored anew (start points or radius changed) */
     uint64_t pairs;               /* vertex-centre pairs evaluated */
     double update_ms;             /* factor/solve + guard + evaluate, milliseconds */
+    double bound;                 /* injectivity bound L of the requested map (first map) */
+    size_t clusters;              /* clusters of overlapping supports */
+    size_t clusters_limited;      /* clusters the guard scaled back (first map) */
+    int substeps;                 /* maps composed (1: one map) */
+    double reached;               /* smallest fraction of a control vector reached (1: all) */
+    double min_det_j;             /* min det dT/dx over the moved vertices and the maps
+                                     applied when e->jacobian, else NAN */
 } fp_engine_result;
 
 /** Index n base vertices (n x 3 floats, mesh units; not copied: csrbf_points copies them
@@ -64,15 +102,13 @@ void fp_engine_step_set_base(fp_engine_step *e, const float *base);
 /** Forget the factor (a new gesture, a new mapping): the next run factors anew. */
 void fp_engine_step_invalidate(fp_engine_step *e);
 
-/** The guard hook, between solve and evaluate: may check or limit the solved coefficients
- *  (csrbf_kernel_foldover_bound). Today a no-op that returns 0; the trust issue's fold-over
- *  guard goes here. A negative return stops the run with that code. */
-int fp_engine_step_guard(fp_engine_step *e, const fp_control_set *cs);
-
 /** Run the engine on cs (cs->count <= FP_ENGINE_MAX_CONTROL, radius > 0, checked by the
- *  mapping step) and write deformed (n x 3 floats). Returns 0 (warnings of csrbf are not
- *  errors) or a negative csrbf code, unchanged; on error deformed may be partly written and
- *  must not be shown; the error is reported through log (once, then counted). */
+ *  mapping step) and write deformed (n x 3 floats): T(base) with the fold-over guard (see
+ *  above: limited when the start points are those last factored or the step is not
+ *  committed this frame, composed when the start points are new and cs commits).
+ *  Returns 0 (warnings of csrbf, CSRBF_WARN_LIMITED included, are not errors) or a negative
+ *  csrbf code, unchanged; on error deformed may be partly written and must not be shown; the
+ *  error is reported through log (once, then counted). */
 int fp_engine_step_run(fp_engine_step *e, const fp_control_set *cs, float *deformed,
                        fp_engine_result *res, const fp_slog *log);
 
@@ -80,7 +116,13 @@ int fp_engine_step_run(fp_engine_step *e, const fp_control_set *cs, float *defor
  *  before the first. */
 const csrbf_solver *fp_engine_step_solver(const fp_engine_step *e);
 
-/** Report a pending repeated error; call at destruction. */
+/** The gesture ended (a frame without a deformation, a cancel, destruction): when the guard
+ *  acted during it, one log line (source "engine"): FP_LOG_WARNING "fold-over guard limited
+ *  the deformation to P% this gesture (...)" when some end point was not reached, else
+ *  FP_LOG_INFO "fold-over guard composed N steps ... this gesture". Then forgets it. */
+void fp_engine_step_end_gesture(fp_engine_step *e, const fp_slog *log);
+
+/** Report a pending repeated error and the gesture's guard line; call at destruction. */
 void fp_engine_step_flush(fp_engine_step *e, const fp_slog *log);
 
 /** Distance from each fingertip (FP_JOINT_TIP) of each present hand to the nearest of the n
