@@ -124,3 +124,79 @@ int csrbf_points_update_ranges(csrbf_points *p, const float *xyz, const uint32_t
 }
 
 size_t csrbf_points_count(const csrbf_points *p) { return p ? p->n : 0; }
+
+/* Squared distance from q to block b's box (0 inside), float, the same rounding as a vertex
+ * of the block would see on each axis (|q - v| >= |q - box| exactly, and float squares and
+ * sums round monotonically), so it never exceeds a vertex's own squared distance. */
+static inline float box_d2(const csrbf_points *p, size_t b, const float q[3])
+{
+    float d[3];
+    for (int a = 0; a < 3; a++) {
+        float lo = p->lo[a][b], hi = p->hi[a][b];
+        d[a] = q[a] < lo ? q[a] - lo : q[a] > hi ? q[a] - hi : 0.0f;
+    }
+    return d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+}
+
+/* Block b against query q: improves *best / *idx (ties: the smaller vertex index). */
+static inline void scan_block(const csrbf_points *p, size_t b, const float q[3], float *best,
+                              uint32_t *idx)
+{
+    size_t k0 = b * CSRBF_BLOCK, nv = k0 + CSRBF_BLOCK <= p->n ? CSRBF_BLOCK : p->n - k0;
+    const float *x = p->s[0] + k0, *y = p->s[1] + k0, *z = p->s[2] + k0;
+    float d2[CSRBF_BLOCK];
+    for (size_t l = 0; l < CSRBF_BLOCK; l++) { /* vectorised: 16 lanes */
+        float dx = x[l] - q[0], dy = y[l] - q[1], dz = z[l] - q[2];
+        d2[l] = dx * dx + dy * dy + dz * dz;
+    }
+    for (size_t l = 0; l < nv; l++)
+        if (d2[l] < *best || (d2[l] == *best && (uint32_t)(k0 + l) < *idx)) {
+            *best = d2[l];
+            *idx = (uint32_t)(k0 + l);
+        }
+}
+
+int csrbf_points_nearest(const csrbf_points *p, const float *queries, size_t nq, float max_dist,
+                         float *out_dist, uint32_t *out_index)
+{
+    if (!p || (nq && (!queries || !out_dist)) || isnan(max_dist) || max_dist < 0)
+        return CSRBF_ERR_INVALID;
+    enum { QMAX = 64 };
+    for (size_t q0 = 0; q0 < nq; q0 += QMAX) {
+        size_t m = nq - q0 < QMAX ? nq - q0 : QMAX;
+        float best[QMAX], q[QMAX][3];
+        uint32_t idx[QMAX];
+        float lim = max_dist * max_dist; /* +inf stays +inf */
+        for (size_t i = 0; i < m; i++) {
+            memcpy(q[i], queries + 3 * (q0 + i), sizeof q[i]);
+            best[i] = INFINITY;
+            idx[i] = UINT32_MAX;
+            if (!(isfinite(q[i][0]) && isfinite(q[i][1]) && isfinite(q[i][2])))
+                return CSRBF_ERR_INVALID;
+            /* a first candidate: the block whose box is nearest */
+            size_t bb = 0;
+            float bd = INFINITY;
+            for (size_t b = 0; b < p->nblocks; b++) {
+                float d = box_d2(p, b, q[i]);
+                if (d < bd) {
+                    bd = d;
+                    bb = b;
+                }
+            }
+            if (bd <= lim) scan_block(p, bb, q[i], &best[i], &idx[i]);
+        }
+        /* one pass over the blocks for all queries: a block is read only by the queries
+         * whose current best it may improve */
+        for (size_t b = 0; b < p->nblocks; b++)
+            for (size_t i = 0; i < m; i++) {
+                float d = box_d2(p, b, q[i]);
+                if (d <= best[i] && d <= lim) scan_block(p, b, q[i], &best[i], &idx[i]);
+            }
+        for (size_t i = 0; i < m; i++) {
+            int hit = idx[i] != UINT32_MAX && best[i] <= lim;
+            out_dist[q0 + i] = hit ? sqrtf(best[i]) : INFINITY;
+            if (out_index) out_index[q0 + i] = hit ? idx[i] : UINT32_MAX;
+        }
+    }
+    return CSRBF_OK;
+}

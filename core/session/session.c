@@ -237,7 +237,7 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     in.mesh = &s->view;
     in.radius = s->radius;
     in.requested = fp_intents_take_requested(&s->intents);
-    fp_engine_tip_distances(s->base, s->n, s->pose.poses, in.tip_distance);
+    fp_engine_step_tip_distances(&s->engine, s->pose.poses, in.tip_distance);
     fp_mapping_step_run(&s->mapping_step, s->mapping, s->mapping_name, &in, &s->cs, &s->log);
     st->engaged = s->cs.intents & FP_INTENT_ENGAGE;
     if (s->cs.intents & FP_INTENT_CANCEL) {

@@ -125,9 +125,15 @@ void fp_engine_step_end_gesture(fp_engine_step *e, const fp_slog *log);
 /** Report a pending repeated error and the gesture's guard line; call at destruction. */
 void fp_engine_step_flush(fp_engine_step *e, const fp_slog *log);
 
-/** Distance from each fingertip (FP_JOINT_TIP) of each present hand to the nearest of the n
- *  base vertices (mesh units), +INFINITY for an absent hand: brute force over the base
- *  (10 tips x 27k vertices is about 0.1 ms). */
+/** Distance from each fingertip (FP_JOINT_TIP) of each present hand to the nearest base
+ *  vertex (mesh units), +INFINITY for an absent hand: csrbf_points_nearest on the engine's
+ *  own blocks (all tips in one pass over the blocks within reach), equal bit for bit to
+ *  fp_engine_tip_distances on the same base. */
+void fp_engine_step_tip_distances(const fp_engine_step *e, const fp_hand_pose hands[FP_HANDS],
+                                  float d[FP_HANDS][FP_FINGERS]);
+
+/** The reference: the same distances by a scalar brute-force loop over the n base vertices
+ *  (tests and `bench --case frame`; about 0.45 ms on the ICT face). */
 void fp_engine_tip_distances(const float *base, size_t n, const fp_hand_pose hands[FP_HANDS],
                              float d[FP_HANDS][FP_FINGERS]);
 

@@ -3,6 +3,7 @@
  * force. */
 #include "log_capture.h"
 #include "step_engine.h"
+#include "fp_mesh.h"
 
 #include <math.h>
 #include <setjmp.h>
@@ -136,12 +137,73 @@ static void test_tip_distances(void **state)
     free(base);
 }
 
+/* csrbf_points_nearest through the engine step equals the brute force bit for bit, on the
+ * ICT face, for tips near and far from the surface, inside the head and beyond its box. */
+static void test_tip_distances_indexed_ict(void **state)
+{
+    (void)state;
+    const char *dir = getenv("FP_SHARED_DATA") ? getenv("FP_SHARED_DATA") : "../shared/data";
+    char path[4200], err[512];
+    snprintf(path, sizeof path, "%s/faces/ict-facekit/generic_neutral_mesh.obj", dir);
+    fp_mesh *m = NULL;
+    assert_int_equal(fp_mesh_load(path, &m, err, sizeof err), 0);
+    size_t n = m->vertex_count;
+    fp_engine_step e;
+    assert_int_equal(fp_engine_step_init(&e, n, m->positions, 1), 0);
+    float lo[3], hi[3];
+    fp_mesh_bounds(m, lo, hi);
+    srand(7);
+    unsigned checked = 0;
+    for (int trial = 0; trial < 60; trial++) {
+        fp_hand_pose hands[FP_HANDS];
+        memset(hands, 0, sizeof hands);
+        for (int h = 0; h < FP_HANDS; h++) {
+            hands[h].present = trial % 3 != h; /* one hand, the other, or both */
+            for (int j = 0; j < FP_HAND_JOINTS; j++)
+                for (int k = 0; k < 3; k++) {
+                    float u = (float)rand() / (float)RAND_MAX * 1.6f - 0.3f; /* beyond the box too */
+                    float v = lo[k] + u * (hi[k] - lo[k]);
+                    /* some tips exactly on a vertex */
+                    if (j % 5 == 0) v = m->positions[3 * ((size_t)rand() % n) + k];
+                    hands[h].joints[j][k] = v;
+                }
+        }
+        if (trial % 7 == 0) /* a tip on a vertex, all three coordinates */
+            memcpy(hands[0].joints[FP_JOINT_TIP(1)], m->positions + 3 * (size_t)(trial * 311 % n), 12);
+        float a[FP_HANDS][FP_FINGERS], b[FP_HANDS][FP_FINGERS];
+        fp_engine_step_tip_distances(&e, hands, a);
+        fp_engine_tip_distances(m->positions, n, hands, b);
+        assert_memory_equal(a, b, sizeof a);
+        checked++;
+    }
+    /* the index: a vertex at the reported distance; max_dist cuts */
+    float q[2][3] = {{0, 0, 0}, {hi[0] + 100, hi[1], hi[2]}}, d[2];
+    uint32_t idx[2];
+    memcpy(q[0], m->positions + 3 * 1234, sizeof q[0]);
+    q[0][2] += 0.01f;
+    assert_int_equal(csrbf_points_nearest(e.points, &q[0][0], 2, 50.f, d, idx), 0);
+    assert_true(idx[0] < n);
+    float dx = m->positions[3 * idx[0]] - q[0][0], dy = m->positions[3 * idx[0] + 1] - q[0][1],
+          dz = m->positions[3 * idx[0] + 2] - q[0][2];
+    assert_true(sqrtf(dx * dx + dy * dy + dz * dz) == d[0]);
+    assert_true(d[0] <= 0.0101f);
+    assert_true(isinf(d[1]));
+    assert_int_equal(idx[1], UINT32_MAX);
+    float bad[3] = {NAN, 0, 0};
+    assert_int_equal(csrbf_points_nearest(e.points, bad, 1, INFINITY, d, idx), CSRBF_ERR_INVALID);
+    printf("indexed fingertip distances equal the brute force on %u tip sets (ICT, %zu vertices)\n",
+           checked, n);
+    fp_engine_step_free(&e);
+    fp_mesh_free(&m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_factor_reuse_and_interpolation),
         cmocka_unit_test(test_engine_error_once),
         cmocka_unit_test(test_tip_distances),
+        cmocka_unit_test(test_tip_distances_indexed_ict),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
