@@ -167,6 +167,17 @@ int64_t fp_now_ns(void);
 /** Make the standard host services for a mapping instance (no queue). */
 void fp_host_init_for_mapping(fp_host *host, const char *name);
 
+/** Services a session offers its mapping through get_extension (plugin.h, ABI 1.1). */
+typedef struct fp_mapping_services {
+    fp_host_surface surface;   /* FP_HOST_EXT_SURFACE; not offered while nearest is NULL */
+    void *user;                /* the provider's data: ((fp_mapping_services *)
+                                  host->host_data)->user inside a service call */
+} fp_mapping_services;
+
+/** fp_host_init_for_mapping whose get_extension serves svc (kept by pointer: it must
+ *  outlive the host): FP_HOST_EXT_SURFACE returns &svc->surface. */
+void fp_host_init_for_mapping_services(fp_host *host, const char *name, fp_mapping_services *svc);
+
 #ifdef __cplusplus
 }
 #endif

@@ -31,7 +31,9 @@ static int64_t host_now(const fp_host *host)
 static void host_log(const fp_host *host, fp_log_level level, const char *message)
 {
     static const char *names[] = {"error", "warning", "info", "debug"};
-    const char *who = host->host_data ? ((fp_input_instance *)host->host_data)->name : "plugin";
+    /* an input's host pushes events; a mapping's host_data holds its services */
+    const char *who = host->host_data && host->push_event ? ((fp_input_instance *)host->host_data)->name
+                      : host->push_event ? "plugin" : "mapping";
     if (level > FP_LOG_INFO && !getenv("FACEPUPPET_DEBUG")) return;
     fprintf(stderr, "facepuppet: %s: %s: %s\n", who,
             names[level <= FP_LOG_DEBUG ? level : FP_LOG_DEBUG], message ? message : "");
@@ -39,8 +41,9 @@ static void host_log(const fp_host *host, fp_log_level level, const char *messag
 
 static const void *host_extension(const fp_host *host, const char *id)
 {
-    (void)host;
-    (void)id;
+    if (!host || !id || host->push_event || !host->host_data) return NULL; /* inputs: none */
+    fp_mapping_services *svc = host->host_data;
+    if (!strcmp(id, FP_HOST_EXT_SURFACE) && svc->surface.nearest) return &svc->surface;
     return NULL;
 }
 
@@ -61,6 +64,12 @@ void fp_host_init_for_mapping(fp_host *host, const char *name)
     (void)name;
     host_fill(host, NULL);
     host->push_event = NULL; /* mappings do not push events */
+}
+
+void fp_host_init_for_mapping_services(fp_host *host, const char *name, fp_mapping_services *svc)
+{
+    fp_host_init_for_mapping(host, name);
+    host->host_data = svc;
 }
 
 int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,

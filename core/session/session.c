@@ -36,6 +36,7 @@ struct fp_session {
     fp_plugin mapping_plugin;
     fp_mapping *mapping;
     fp_host mapping_host;
+    fp_mapping_services services;     /* the host extensions the mapping may ask for */
     char mapping_name[64];
     fp_mesh_view view;
 
@@ -71,7 +72,7 @@ static int load_mapping(fp_session *s, const char *mapping, const fp_plugin_path
     }
     rc = fp_plugin_load(path, FP_PLUGIN_MAPPING, spec.name, &s->mapping_plugin, err, errlen);
     if (!rc) {
-        fp_host_init_for_mapping(&s->mapping_host, spec.name);
+        fp_host_init_for_mapping_services(&s->mapping_host, spec.name, &s->services);
         const fp_mapping_factory *f = s->mapping_plugin.factory;
         char perr[512] = "";
         rc = f->create(&s->mapping_host, spec.params, spec.nparams, &s->mapping, perr, sizeof perr);
@@ -85,6 +86,14 @@ static int load_mapping(fp_session *s, const char *mapping, const fp_plugin_path
     }
     fp_spec_clear(&spec);
     return rc;
+}
+
+/* FP_HOST_EXT_SURFACE: nearest base vertices, from the engine's index of the base. */
+static int surface_nearest(const fp_host *host, const float (*points)[3], size_t count,
+                           float max_distance, fp_surface_hit *out)
+{
+    const fp_session *s = ((const fp_mapping_services *)host->host_data)->user;
+    return fp_engine_step_surface(&s->engine, s->base, points, count, max_distance, out);
 }
 
 /* Workspace calibration: given, or the inputs' workspaces (else the default one) fitted to
@@ -161,6 +170,12 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
         goto fail;
     }
     s->engine.jacobian = opt->measure_jacobian;
+    if ((rc = fp_engine_step_set_topology(&s->engine, s->mesh->triangles, s->mesh->triangle_count))) {
+        snprintf(err, errlen, "session: out of memory for %zu triangles", s->mesh->triangle_count);
+        goto fail;
+    }
+    s->services.surface.nearest = surface_nearest;
+    s->services.user = s;
     if ((rc = load_mapping(s, opt->mapping, opt->plugin_path, err, errlen))) goto fail;
     for (size_t i = 0; i < opt->input_count; i++) {
         rc = fp_input_instance_open(&s->inputs[i], opt->plugin_path, opt->inputs[i], (uint32_t)i,

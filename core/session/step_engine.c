@@ -5,6 +5,7 @@
 
 #include <errno.h>
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 int fp_engine_step_init(fp_engine_step *e, size_t n, const float *base, int threads)
@@ -16,6 +17,9 @@ int fp_engine_step_init(fp_engine_step *e, size_t n, const float *base, int thre
 
 void fp_engine_step_free(fp_engine_step *e)
 {
+    free(e->vt_start);
+    free(e->vt);
+    e->vt_start = e->vt = NULL;
     csrbf_solver_destroy(&e->solver);
     csrbf_points_destroy(&e->points);
 }
@@ -199,4 +203,70 @@ void fp_engine_step_tip_distances(const fp_engine_step *e, const fp_hand_pose ha
     for (int h = 0; h < FP_HANDS; h++)
         for (int f = 0; f < FP_FINGERS; f++)
             if (hands[h].present) d[h][f] = best[nt++];
+}
+
+int fp_engine_step_set_topology(fp_engine_step *e, const uint32_t *tris, size_t t)
+{
+    size_t n = csrbf_points_count(e->points);
+    uint32_t *st = calloc(n + 1, sizeof *st), *vt = malloc((t ? 3 * t : 1) * sizeof *vt);
+    if (!st || !vt) {
+        free(st);
+        free(vt);
+        return -ENOMEM;
+    }
+    for (size_t i = 0; i < 3 * t; i++) st[tris[i] + 1]++;
+    for (size_t v = 0; v < n; v++) st[v + 1] += st[v];
+    for (size_t i = 0; i < t; i++)
+        for (int k = 0; k < 3; k++) vt[st[tris[3 * i + k]]++] = (uint32_t)i;
+    for (size_t v = n; v > 0; v--) st[v] = st[v - 1]; /* the fill moved each start to the next */
+    st[0] = 0;
+    free(e->vt_start);
+    free(e->vt);
+    e->vt_start = st;
+    e->vt = vt;
+    e->tris = tris;
+    return 0;
+}
+
+int fp_engine_step_surface(const fp_engine_step *e, const float *base, const float (*points)[3],
+                           size_t count, float max_distance, fp_surface_hit *out)
+{
+    if (!e || !base || (count && (!points || !out))) return -EINVAL;
+    if (!e->vt_start) return -ENODATA;
+    enum { CHUNK = 64 };
+    for (size_t q0 = 0; q0 < count; q0 += CHUNK) {
+        size_t m = count - q0 < CHUNK ? count - q0 : CHUNK;
+        float d[CHUNK];
+        uint32_t idx[CHUNK];
+        int rc = csrbf_points_nearest(e->points, &points[q0][0], m, max_distance, d, idx);
+        if (rc < 0) return rc;
+        for (size_t i = 0; i < m; i++) {
+            fp_surface_hit *h = &out[q0 + i];
+            memset(h, 0, sizeof *h);
+            h->vertex = idx[i];
+            h->distance = d[i];
+            if (idx[i] == UINT32_MAX) continue;
+            const float *p = base + 3 * (size_t)idx[i];
+            memcpy(h->position, p, sizeof h->position);
+            /* fp_mesh_normals at one vertex: the sum of its triangles' cross products */
+            float nx = 0, ny = 0, nz = 0;
+            for (uint32_t k = e->vt_start[idx[i]]; k < e->vt_start[idx[i] + 1]; k++) {
+                const uint32_t *t = e->tris + 3 * (size_t)e->vt[k];
+                const float *a = base + 3 * (size_t)t[0], *b = base + 3 * (size_t)t[1],
+                            *c = base + 3 * (size_t)t[2];
+                float ux = b[0] - a[0], uy = b[1] - a[1], uz = b[2] - a[2];
+                float vx = c[0] - a[0], vy = c[1] - a[1], vz = c[2] - a[2];
+                nx += uy * vz - uz * vy;
+                ny += uz * vx - ux * vz;
+                nz += ux * vy - uy * vx;
+            }
+            float len = sqrtf(nx * nx + ny * ny + nz * nz);
+            if (len > 0) {
+                h->normal[0] = nx / len;
+                h->normal[1] = ny / len;
+                h->normal[2] = nz / len;
+            }
+        }
+    }
+    return 0;
 }

@@ -69,6 +69,9 @@ typedef struct fp_engine_step {
     float factored_start[FP_ENGINE_MAX_CONTROL][3];
     fp_slog_repeat errors;        /* the engine's repeated error */
     bool jacobian;                /* measure min det dT/dx (fp_engine_result.min_det_j) */
+    /* the surface service (FP_HOST_EXT_SURFACE): triangles around each vertex */
+    const uint32_t *tris;         /* the mesh's triangles (not owned) */
+    uint32_t *vt_start, *vt;      /* vertex v's triangles: vt[vt_start[v] .. vt_start[v+1]) */
     /* the current gesture, for the guard's one line per gesture */
     unsigned long g_frames, g_limited, g_composed;
     double g_reached;             /* smallest fraction reached over the gesture */
@@ -131,6 +134,20 @@ void fp_engine_step_flush(fp_engine_step *e, const fp_slog *log);
  *  fp_engine_tip_distances on the same base. */
 void fp_engine_step_tip_distances(const fp_engine_step *e, const fp_hand_pose hands[FP_HANDS],
                                   float d[FP_HANDS][FP_FINGERS]);
+
+/** Give the engine the mesh's triangles (t x 3, kept by pointer, must outlive e) for
+ *  fp_engine_step_surface: builds each vertex's triangle list. Returns 0 or -ENOMEM. */
+int fp_engine_step_set_topology(fp_engine_step *e, const uint32_t *tris, size_t t);
+
+/** The host's surface service (plugin.h FP_HOST_EXT_SURFACE) on the current base: for each
+ *  query point (count x 3, mesh units) the nearest base vertex within max_distance
+ *  (csrbf_points_nearest: equal to a brute force), its position, distance and unit normal
+ *  (the area-weighted normal of fp_mesh_normals, computed for that vertex alone from its
+ *  triangles); vertex UINT32_MAX, distance INFINITY and zeros where none is within reach.
+ *  base: the base the engine indexes (n x 3). Returns 0, -EINVAL (NULL, a non-finite query,
+ *  a NaN or negative max_distance) or -ENODATA (no topology). No allocation. */
+int fp_engine_step_surface(const fp_engine_step *e, const float *base, const float (*points)[3],
+                           size_t count, float max_distance, fp_surface_hit *out);
 
 /** The reference: the same distances by a scalar brute-force loop over the n base vertices
  *  (tests and `bench --case frame`; about 0.45 ms on the ICT face). */

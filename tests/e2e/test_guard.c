@@ -237,6 +237,62 @@ static void test_fold_fixture_unanchored(void **state)
     fold_fixture("fixture-fold,commit=1", true);
 }
 
+/* ---- the host's surface service (FP_HOST_EXT_SURFACE) ------------------------------------ */
+
+/* The fixture mapping asks the service; its answers equal a brute force over the base
+ * (vertex, distance bit for bit) and fp_mesh_normals' normal at that vertex; also after a
+ * commit changed the base (the service reads the current base). */
+static void check_surface_answers(fp_session *s)
+{
+    const fp_control_set *cs = fp_session_control_set(s);
+    const struct fp_mesh *m = fp_session_mesh(s);
+    size_t n = fp_session_vertex_count(s);
+    const float *b = fp_session_base(s);
+    float *nrm = malloc(n * 3 * sizeof *nrm);
+    fp_mesh_normals(m->triangles, m->triangle_count, b, n, nrm);
+    assert_int_equal(cs->count, 7);
+    for (int i = 0; i < 6; i++) {
+        const float *v = b + 3 * ((4409u * (unsigned)i + 17u) % n);
+        float q[3] = {v[0] + 0.05f * i, v[1] - 0.02f * i, v[2] + 0.1f * i};
+        float best = INFINITY;
+        size_t bi = 0;
+        for (size_t k = 0; k < n; k++) {
+            float dx = b[3 * k] - q[0], dy = b[3 * k + 1] - q[1], dz = b[3 * k + 2] - q[2];
+            float d2 = dx * dx + dy * dy + dz * dz;
+            if (d2 < best) {
+                best = d2;
+                bi = k;
+            }
+        }
+        assert_true(cs->channels[2 * i].value == (float)bi);
+        assert_true(cs->channels[2 * i + 1].value == sqrtf(best));
+        assert_memory_equal(cs->start[i], b + 3 * bi, 3 * sizeof(float));
+        for (int k = 0; k < 3; k++) assert_true(fabsf(cs->end[i][k] - nrm[3 * bi + k]) < 1e-5f);
+    }
+    assert_true(cs->channels[12].value == -1.f); /* beyond max_distance */
+    assert_true(isinf(cs->channels[13].value));
+    free(nrm);
+}
+
+static void test_surface_service(void **state)
+{
+    (void)state;
+    logbook lb = {0};
+    fp_session *s = open_session(fp_test_face_path(), "fixture-surface", NULL, &lb);
+    fp_session_step(s, fp_now_ns(), NULL);
+    check_surface_answers(s);
+    /* a new base: the fold fixture's committed gesture, then the service again */
+    char err[512];
+    assert_int_equal(fp_session_set_mapping(s, plugin_path(), "fixture-fold,commit=1", err, sizeof err), 0);
+    for (int f = 0; f < 10; f++) fp_session_step(s, fp_now_ns(), NULL);
+    assert_int_equal(fp_session_set_mapping(s, plugin_path(), "fixture-surface", err, sizeof err), 0);
+    fp_session_step(s, fp_now_ns(), NULL);
+    assert_true(memcmp(fp_session_base(s), fp_session_loaded(s),
+                       fp_session_vertex_count(s) * 3 * sizeof(float)));
+    check_surface_answers(s);
+    fp_session_destroy(&s);
+}
+
 /* ---- the real faces and recordings --------------------------------------------------------- */
 
 static const char *faces[] = {"ict-facekit/generic_neutral_mesh.obj",
@@ -346,6 +402,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_fold_fixture_anchored),
         cmocka_unit_test(test_fold_fixture_unanchored),
+        cmocka_unit_test(test_surface_service),
         cmocka_unit_test(test_recordings_anchored),
         cmocka_unit_test(test_recordings_unanchored),
     };
