@@ -283,7 +283,10 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
             s->shown = s->deformed;
             if (cs->intents & FP_INTENT_COMMIT) {
                 fp_history_commit(&s->history, s->deformed);
-                base_changed(s); /* the anchored gesture ended; unanchored restarts anyway */
+                /* the anchored gesture ended; unanchored restarts anyway. Only the blocks
+                 * the engine rewrote are re-indexed. */
+                fp_engine_step_commit(&s->engine, s->base);
+                s->shown = s->base;
                 st->committed = true;
             }
         }

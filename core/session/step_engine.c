@@ -12,14 +12,22 @@ int fp_engine_step_init(fp_engine_step *e, size_t n, const float *base, int thre
 {
     memset(e, 0, sizeof *e);
     e->threads = threads;
-    return csrbf_points_create(n, base, &e->points) == CSRBF_OK ? 0 : -ENOMEM;
+    if (csrbf_points_create(n, base, &e->points) != CSRBF_OK ||
+        csrbf_touch_create(e->points, &e->touch) != CSRBF_OK) {
+        fp_engine_step_free(e);
+        return -ENOMEM;
+    }
+    return 0;
 }
 
 void fp_engine_step_free(fp_engine_step *e)
 {
     free(e->vt_start);
     free(e->vt);
+    free(e->scratch);
     e->vt_start = e->vt = NULL;
+    e->scratch = NULL;
+    csrbf_touch_destroy(&e->touch);
     csrbf_solver_destroy(&e->solver);
     csrbf_points_destroy(&e->points);
 }
@@ -27,7 +35,31 @@ void fp_engine_step_free(fp_engine_step *e)
 void fp_engine_step_set_base(fp_engine_step *e, const float *base)
 {
     csrbf_points_update(e->points, base);
+    csrbf_touch_reset(e->touch); /* the output buffer no longer matches the base */
+    e->touched_valid = false;
     e->factored = false;
+}
+
+void fp_engine_step_commit(fp_engine_step *e, const float *base)
+{
+    const uint32_t *ranges;
+    size_t nr = csrbf_touch_ranges(e->touch, &ranges);
+    if (e->touched_valid) /* only the blocks the last evaluation wrote differ */
+        csrbf_points_update_ranges(e->points, base, ranges, nr);
+    else
+        csrbf_points_update(e->points, base);
+    csrbf_touch_commit(e->touch); /* the output buffer is the base now */
+    e->touched_valid = true;
+    e->factored = false;
+}
+
+size_t fp_engine_step_touched(const fp_engine_step *e, const uint32_t **ranges)
+{
+    if (!e->touched_valid) {
+        if (ranges) *ranges = NULL;
+        return SIZE_MAX;
+    }
+    return csrbf_touch_ranges(e->touch, ranges);
 }
 
 void fp_engine_step_invalidate(fp_engine_step *e) { e->factored = false; }
@@ -67,27 +99,53 @@ static int run(fp_engine_step *e, const fp_control_set *cs, float *deformed, fp_
         e->solver_radius = cs->radius;
         e->factored = false;
     }
-    const unsigned flags = e->jacobian ? CSRBF_EVAL_JACOBIAN : 0u;
+    /* The shape always comes from the flag-free fast path (bit-identical with or without
+     * the Jacobian); min det J, when asked, from a second evaluation into a scratch buffer. */
     csrbf_guard_stats gs;
     csrbf_eval_stats es = {0};
-    if (!same_start(e, cs) && (cs->intents & FP_INTENT_COMMIT)) {
-        /* a one-shot step (unanchored): composed injective sub-steps */
-        csrbf_guard g = {FP_ENGINE_GUARD_MARGIN, CSRBF_GUARD_MAX_SUBSTEPS, flags};
+    res->min_det_j = NAN;
+    bool fresh = !same_start(e, cs);
+    if (fresh && (cs->intents & FP_INTENT_COMMIT)) {
+        /* a one-shot step (unanchored): one map when it is injective already, else
+         * composed injective sub-steps */
         res->refactored = true;
-        rc = csrbf_guarded_step(e->solver, e->points, cs->count, &cs->start[0][0], &cs->end[0][0],
-                                &g, deformed, &gs);
-        if (rc < 0) {
+        if ((rc = csrbf_solver_set_start_points(e->solver, cs->count, &cs->start[0][0])) < 0 ||
+            (rc = csrbf_solver_set_end_points(e->solver, &cs->end[0][0])) < 0 ||
+            (rc = csrbf_solver_limit_end_points(e->solver, FP_ENGINE_GUARD_MARGIN, &gs)) < 0) {
             e->factored = false;
             return rc;
         }
-        /* the solver holds the last sub-step's start points: the factor of cs->start only
-         * when the step was one map */
-        if (gs.substeps == 1) keep_start(e, cs);
-        else e->factored = false;
-        es = gs.eval;
+        keep_start(e, cs);
+        if (gs.clusters_limited) {
+            csrbf_guard g = {FP_ENGINE_GUARD_MARGIN, CSRBF_GUARD_MAX_SUBSTEPS, 0u};
+            if (e->jacobian) {
+                csrbf_guard gj = g;
+                gj.eval_flags = CSRBF_EVAL_JACOBIAN;
+                csrbf_guard_stats js;
+                if (!e->scratch && !(e->scratch = malloc(csrbf_points_count(e->points) * 3 * sizeof(float))))
+                    return CSRBF_ERR_NOMEM;
+                rc = csrbf_guarded_step(e->solver, e->points, cs->count, &cs->start[0][0],
+                                        &cs->end[0][0], &gj, e->scratch, &js);
+                if (rc < 0) {
+                    e->factored = false;
+                    return rc;
+                }
+                res->min_det_j = js.eval.min_jacobian_det;
+            }
+            /* the whole buffer is written: the touched blocks are unknown from here */
+            csrbf_touch_reset(e->touch);
+            e->touched_valid = false;
+            rc = csrbf_guarded_step(e->solver, e->points, cs->count, &cs->start[0][0],
+                                    &cs->end[0][0], &g, deformed, &gs);
+            /* the solver holds the last sub-step's start points */
+            e->factored = false;
+            if (rc < 0) return rc;
+            es = gs.eval;
+            goto done;
+        }
     } else {
         /* a gesture (anchored): factor at its start points once, limit every frame */
-        if (!same_start(e, cs)) {
+        if (fresh) {
             if ((rc = csrbf_solver_set_start_points(e->solver, cs->count, &cs->start[0][0])) < 0) {
                 e->factored = false;
                 return rc;
@@ -97,11 +155,23 @@ static int run(fp_engine_step *e, const fp_control_set *cs, float *deformed, fp_
         }
         if ((rc = csrbf_solver_set_end_points(e->solver, &cs->end[0][0])) < 0) return rc;
         if ((rc = csrbf_solver_limit_end_points(e->solver, FP_ENGINE_GUARD_MARGIN, &gs)) < 0) return rc;
-        if ((rc = csrbf_evaluate(e->solver, e->points, deformed, flags, &es)) < 0) return rc;
     }
+    /* one map: only the blocks in a support now or at the last evaluation are written */
+    if ((rc = csrbf_evaluate_touched(e->solver, e->points, e->touch, deformed, 0u, &es)) < 0) {
+        csrbf_touch_reset(e->touch);
+        return rc;
+    }
+    e->touched_valid = true;
+    if (e->jacobian) {
+        csrbf_eval_stats js;
+        if (!e->scratch && !(e->scratch = malloc(csrbf_points_count(e->points) * 3 * sizeof(float))))
+            return CSRBF_ERR_NOMEM;
+        if ((rc = csrbf_evaluate(e->solver, e->points, e->scratch, CSRBF_EVAL_JACOBIAN, &js)) < 0) return rc;
+        res->min_det_j = js.min_jacobian_det;
+    }
+done:
     take_guard(res, &gs);
     res->pairs = es.pairs;
-    res->min_det_j = e->jacobian ? es.min_jacobian_det : NAN;
     return 0;
 }
 
@@ -110,7 +180,6 @@ int fp_engine_step_run(fp_engine_step *e, const fp_control_set *cs, float *defor
 {
     memset(res, 0, sizeof *res);
     res->reached = 1.0;
-    res->min_det_j = NAN;
     int64_t t0 = fp_now_ns();
     int rc = run(e, cs, deformed, res);
     res->update_ms = (double)(fp_now_ns() - t0) / 1e6;

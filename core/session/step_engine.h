@@ -63,6 +63,9 @@ typedef struct fp_engine_step {
     csrbf_solver *solver;         /* NULL until the first run */
     double solver_radius;         /* the radius the solver was made for */
     csrbf_points *points;         /* the base vertices, blocked for evaluation */
+    csrbf_touch *touch;           /* which blocks of the (persistent) output differ from the base */
+    bool touched_valid;           /* the last write of the output was csrbf_evaluate_touched */
+    float *scratch;               /* n x 3: the Jacobian evaluation's output (e->jacobian) */
     int threads;                  /* csrbf_options.threads */
     bool factored;                /* factored_start holds the factored start points */
     size_t factored_count;
@@ -99,14 +102,27 @@ typedef struct fp_engine_result {
 int fp_engine_step_init(fp_engine_step *e, size_t n, const float *base, int threads);
 void fp_engine_step_free(fp_engine_step *e);
 
-/** The base changed (commit, undo, reset): re-index it and forget the factor. */
+/** The base changed to something the output buffer does not show (undo, reset, a new
+ *  base): re-index it whole, forget the factor, and the next run rewrites the whole output. */
 void fp_engine_step_set_base(fp_engine_step *e, const float *base);
+
+/** A commit: base is now the output buffer of the last run (deformed copied into it).
+ *  Re-indexes only the vertex ranges that run wrote (csrbf_points_update_ranges; all after a
+ *  composed step), csrbf_touch_commit, forgets the factor. */
+void fp_engine_step_commit(fp_engine_step *e, const float *base);
+
+/** The vertex ranges ((first, count) pairs) of the output that the last run rewrote, for a
+ *  viewer's partial upload; SIZE_MAX (and *ranges NULL) when the whole output may have
+ *  changed (after a composed step or a new base). */
+size_t fp_engine_step_touched(const fp_engine_step *e, const uint32_t **ranges);
 
 /** Forget the factor (a new gesture, a new mapping): the next run factors anew. */
 void fp_engine_step_invalidate(fp_engine_step *e);
 
 /** Run the engine on cs (cs->count <= FP_ENGINE_MAX_CONTROL, radius > 0, checked by the
- *  mapping step) and write deformed (n x 3 floats): T(base) with the fold-over guard (see
+ *  mapping step) and write deformed (n x 3 floats; the same buffer on every call, written by
+ *  nobody else: only the blocks in a support now or at the last run are rewritten,
+ *  csrbf_evaluate_touched, bit for bit what a full evaluation gives): T(base) with the fold-over guard (see
  *  above: limited when the start points are those last factored or the step is not
  *  committed this frame, composed when the start points are new and cs commits).
  *  Returns 0 (warnings of csrbf, CSRBF_WARN_LIMITED included, are not errors) or a negative
