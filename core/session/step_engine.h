@@ -86,7 +86,9 @@ typedef struct fp_engine_step {
 typedef struct fp_engine_result {
     bool refactored;              /* factored anew (start points or radius changed) */
     uint64_t pairs;               /* vertex-centre pairs evaluated */
-    double update_ms;             /* factor/solve + guard + evaluate, milliseconds */
+    double update_ms;             /* factor/solve + guard + evaluate, milliseconds (without
+                                     the Jacobian measurement) */
+    double jacobian_ms;           /* the min det J evaluation (e->jacobian), milliseconds */
     double bound;                 /* injectivity bound L of the requested map (first map) */
     size_t clusters;              /* clusters of overlapping supports */
     size_t clusters_limited;      /* clusters the guard scaled back (first map) */
