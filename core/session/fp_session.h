@@ -47,7 +47,10 @@ extern "C" {
  * step_record.h. */
 
 typedef struct fp_session_options {
-    const char *mesh_path;                          /* required */
+    const char *mesh_path;                          /* required (unless mesh is given) */
+    const struct fp_mesh *mesh;                     /* a mesh in memory instead of mesh_path
+                                                       (copied; e.g. `bench --case frame`'s
+                                                       subdivided face) */
     const char *inputs[FP_SESSION_MAX_INPUTS];      /* SPECs */
     size_t input_count;
     const char *mapping;                            /* NAME[,key=value...]; "anchored" */
@@ -74,6 +77,18 @@ typedef struct fp_session_options {
                                                        shape) */
 } fp_session_options;
 
+/** The frame's stages, for fp_frame_stats.stage_ms (`bench --case frame`). */
+enum fp_frame_stage {
+    FP_STAGE_EVENTS = 0,      /* drain the inputs, intents */
+    FP_STAGE_HANDS,           /* hand poses, calibration */
+    FP_STAGE_DISTANCES,       /* fingertip-to-surface distances */
+    FP_STAGE_MAPPING,         /* the mapping plugin and the rig */
+    FP_STAGE_SOLVE,           /* factor or reuse, solve, the fold-over guard */
+    FP_STAGE_EVALUATE,        /* T(base) (touched blocks) */
+    FP_STAGE_COMMIT,          /* history and re-index after a commit */
+    FP_STAGE_COUNT
+};
+
 /** Statistics of one fp_session_step. */
 typedef struct fp_frame_stats {
     uint64_t frame;
@@ -97,6 +112,7 @@ typedef struct fp_frame_stats {
     double min_det_j;         /* min det dT/dx over the moved vertices (and composed maps) with
                                  fp_session_options.measure_jacobian, else NAN (and when not
                                  active) */
+    double stage_ms[FP_STAGE_COUNT]; /* wall time of each stage (fp_frame_stage), ms */
 } fp_frame_stats;
 
 typedef struct fp_session fp_session;

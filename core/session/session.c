@@ -116,7 +116,7 @@ static void calibrate(fp_session *s, const fp_calibration *given)
 int fp_session_create(const fp_session_options *opt, fp_session **out, char *err, size_t errlen)
 {
     *out = NULL;
-    if (!opt || !opt->mesh_path || !opt->plugin_path) {
+    if (!opt || (!opt->mesh_path && !opt->mesh) || !opt->plugin_path) {
         snprintf(err, errlen, "session: a mesh and a plugin path are required");
         return -EINVAL;
     }
@@ -131,8 +131,16 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
     fp_session *s = calloc(1, sizeof *s);
     if (!s) return -ENOMEM;
     s->log = (fp_slog){opt->log, opt->log_user};
-    int rc = fp_mesh_load(opt->mesh_path, &s->mesh, err, errlen);  /* its code, unchanged */
-    if (rc) goto fail;
+    int rc = 0;
+    if (opt->mesh) {
+        if (!(s->mesh = fp_mesh_copy(opt->mesh))) {
+            rc = -ENOMEM;
+            snprintf(err, errlen, "session: out of memory for the mesh");
+            goto fail;
+        }
+    } else if ((rc = fp_mesh_load(opt->mesh_path, &s->mesh, err, errlen))) { /* its code */
+        goto fail;
+    }
     s->n = s->mesh->vertex_count;
     size_t bytes = s->n * 3 * sizeof(float);
     s->loaded = malloc(bytes);
@@ -233,12 +241,17 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     st->guard_reached = 1.0;
     st->min_det_j = NAN;
 
+    int64_t tick = fp_now_ns(), tock;
+#define FP_STAGE_END(stage)                                                                   \
+    (tock = fp_now_ns(), st->stage_ms[stage] += (double)(tock - tick) / 1e6, tick = tock)
     /* 1: inputs and intents. */
     fp_record_step_begin(&s->record);
     st->events = fp_intents_drain(&s->intents, s->inputs, s->input_count, s->engaged, &s->log,
                                   on_event, s);
+    FP_STAGE_END(FP_STAGE_EVENTS);
     /* 2: hand poses in mesh units. */
     fp_pose_build(&s->pose);
+    FP_STAGE_END(FP_STAGE_HANDS);
 
     /* 3: the mapping. */
     fp_frame_input in;
@@ -253,6 +266,7 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     in.radius = s->radius;
     in.requested = fp_intents_take_requested(&s->intents);
     fp_engine_step_tip_distances(&s->engine, s->pose.poses, in.tip_distance);
+    FP_STAGE_END(FP_STAGE_DISTANCES);
     fp_mapping_step_run(&s->mapping_step, s->mapping, s->mapping_name, &in, &s->cs, &s->log);
     st->engaged = s->cs.intents & FP_INTENT_ENGAGE;
     if (s->cs.intents & FP_INTENT_CANCEL) {
@@ -262,6 +276,7 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
 
     /* 4: the rig. */
     const fp_control_set *cs = fp_rig_step_run(&s->rig, &s->cs);
+    FP_STAGE_END(FP_STAGE_MAPPING);
 
     /* 5: the engine. 6: history. */
     s->shown = s->base;
@@ -271,6 +286,9 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
         st->refactored = er.refactored;
         st->pairs = er.pairs;
         st->update_ms = er.update_ms;
+        st->stage_ms[FP_STAGE_SOLVE] = er.update_ms - er.eval_ms;
+        st->stage_ms[FP_STAGE_EVALUATE] = er.eval_ms;
+        tick = fp_now_ns();
         st->control_vectors = cs->count;
         st->guard_bound = er.bound;
         st->guard_clusters = er.clusters;
@@ -287,6 +305,7 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
                  * the engine rewrote are re-indexed. */
                 fp_engine_step_commit(&s->engine, s->base);
                 s->shown = s->base;
+                FP_STAGE_END(FP_STAGE_COMMIT);
                 st->committed = true;
             }
         }
@@ -296,6 +315,7 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     }
     s->engaged = cs->active && !(cs->intents & (FP_INTENT_COMMIT | FP_INTENT_CANCEL));
 
+#undef FP_STAGE_END
     /* 7: the recorder. */
     fp_record_step_end(&s->record, s->frame, now_ns, in.requested, cs, s->inputs, s->input_count,
                        &s->log);

@@ -137,8 +137,10 @@ static int run(fp_engine_step *e, const fp_control_set *cs, float *deformed, fp_
             /* the whole buffer is written: the touched blocks are unknown from here */
             csrbf_touch_reset(e->touch);
             e->touched_valid = false;
+            int64_t ev0 = fp_now_ns();
             rc = csrbf_guarded_step(e->solver, e->points, cs->count, &cs->start[0][0],
                                     &cs->end[0][0], &g, deformed, &gs);
+            res->eval_ms = (double)(fp_now_ns() - ev0) / 1e6; /* sub-steps' solves included */
             /* the solver holds the last sub-step's start points */
             e->factored = false;
             if (rc < 0) return rc;
@@ -159,7 +161,10 @@ static int run(fp_engine_step *e, const fp_control_set *cs, float *deformed, fp_
         if ((rc = csrbf_solver_limit_end_points(e->solver, FP_ENGINE_GUARD_MARGIN, &gs)) < 0) return rc;
     }
     /* one map: only the blocks in a support now or at the last evaluation are written */
-    if ((rc = csrbf_evaluate_touched(e->solver, e->points, e->touch, deformed, 0u, &es)) < 0) {
+    int64_t ev0 = fp_now_ns();
+    rc = csrbf_evaluate_touched(e->solver, e->points, e->touch, deformed, 0u, &es);
+    res->eval_ms = (double)(fp_now_ns() - ev0) / 1e6;
+    if (rc < 0) {
         csrbf_touch_reset(e->touch);
         return rc;
     }

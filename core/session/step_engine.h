@@ -88,6 +88,7 @@ typedef struct fp_engine_result {
     uint64_t pairs;               /* vertex-centre pairs evaluated */
     double update_ms;             /* factor/solve + guard + evaluate, milliseconds (without
                                      the Jacobian measurement) */
+    double eval_ms;               /* of update_ms: the evaluation (a composed step: all of it) */
     double jacobian_ms;           /* the min det J evaluation (e->jacobian), milliseconds */
     double bound;                 /* injectivity bound L of the requested map (first map) */
     size_t clusters;              /* clusters of overlapping supports */
