@@ -326,10 +326,10 @@ static void recordings(const char *mapping)
             fp_session *s = open_session(mesh, mapping, input, &lb);
             unsigned long frames = 0, active = 0, limited = 0, composed = 0;
             double min_det = INFINITY;
-            /* snapshots of every 30th deforming frame (at most 4), checked after the run so
+            /* snapshots of the 40th and 80th deforming frames, checked after the run so
              * that the exact counts do not hold up the paced replay */
             size_t n = fp_session_vertex_count(s), nsnap = 0;
-            float *snap[4];
+            float *snap[2];
             int64_t deadline = fp_now_ns() + 60LL * 1000000000LL;
             while (!fp_session_finished(s) && fp_now_ns() < deadline) {
                 fp_frame_stats st;
@@ -340,7 +340,7 @@ static void recordings(const char *mapping)
                     limited += st.guard_reached < 1;
                     composed += st.guard_substeps > 1;
                     min_det = fmin(min_det, st.min_det_j);
-                    if (active % 30 == 0 && nsnap < 4) {
+                    if (active % 40 == 0 && nsnap < 2) {
                         snap[nsnap] = malloc(n * 3 * sizeof(float));
                         memcpy(snap[nsnap++], fp_session_positions(s), n * 3 * sizeof(float));
                     }
