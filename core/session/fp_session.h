@@ -199,6 +199,24 @@ bool fp_session_finished(const fp_session *s);
 /** Ask for intents (fp_intent bits) on the next frame: keys, pedal bindings. */
 void fp_session_request(fp_session *s, uint32_t intents);
 
+/** Host actions between frames, recorded with the next frame's requested intents (bits
+ *  above the fp_intent bits; docs/take-format.md): fp_session_undo and fp_session_reset. A
+ *  take played back applies them before that frame (fp_session_take.h). */
+#define FP_SESSION_ACTION_UNDO (1u << 16)
+#define FP_SESSION_ACTION_RESET (1u << 17)
+
+/** How many times the performer asked to start or stop a take (the pedal's middle button,
+ *  pressed) since the last call; the count is cleared. The viewer reads it each frame. */
+unsigned fp_session_record_toggles(fp_session *s);
+
+/** Steps 5-7 of a frame on a given control set instead of the inputs and the mapping: a
+ *  take's stored control set (the one the engine was given, after the rig) through the
+ *  engine (factor or reuse, solve, guard, evaluate), history (its COMMIT) and the recorder
+ *  (requested goes into the frame's record). The inputs are not drained. cs->count <=
+ *  FP_ENGINE_MAX_CONTROL and cs->radius > 0 where cs->active (a take's frames are). */
+void fp_session_apply_controls(fp_session *s, int64_t now_ns, const fp_control_set *cs,
+                               uint32_t requested, fp_frame_stats *st);
+
 /** The shape to show: vertex_count x 3 floats, mesh units; valid until the next step. */
 const float *fp_session_positions(const fp_session *s);
 /** The committed shape (the base). */

@@ -50,6 +50,7 @@ struct fp_session {
     fp_head head;                 /* the head and the mesh's unit (life-size calibration) */
     bool engaged;                 /* the mapping's deformation is active */
     uint64_t frame;
+    uint32_t actions;             /* FP_SESSION_ACTION_* since the last frame (recorded) */
 
     fp_intents intents;           /* step 1 */
     fp_pose_state pose;           /* step 2 */
@@ -334,6 +335,54 @@ static void base_changed(fp_session *s)
     fp_engine_step_set_base(&s->engine, s->shown);
 }
 
+/* Steps 5 and 6 on the control set the engine is given (after the rig's clamp), on the
+ * posed base: evaluate, the rig's mobility blend, show, commit. Shared by fp_session_step
+ * and fp_session_apply_controls (takes played back). */
+static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame_stats *st)
+{
+    s->shown = fp_rig_step_posed(&s->rig, s->base);
+    if (cs->active && cs->count > 0) {
+        fp_engine_result er;
+        int rc = fp_engine_step_run(&s->engine, cs, s->deformed, &er, &s->log);
+        st->refactored = er.refactored;
+        st->pairs = er.pairs;
+        st->update_ms = er.update_ms;
+        st->stage_ms[FP_STAGE_SOLVE] = er.update_ms - er.eval_ms;
+        st->stage_ms[FP_STAGE_EVALUATE] = er.eval_ms;
+        st->control_vectors = cs->count;
+        st->guard_bound = er.bound;
+        st->guard_clusters = er.clusters;
+        st->guard_limited = er.clusters_limited;
+        st->guard_substeps = er.substeps;
+        st->guard_reached = er.reached;
+        st->min_det_j = er.min_det_j;
+        if (!rc) {
+            st->active = true;
+            s->shown = fp_rig_step_finish(&s->rig, s->deformed);
+            if (cs->intents & FP_INTENT_COMMIT) {
+                int64_t t0 = fp_now_ns();
+                if (s->rig.rig) {
+                    /* with a rig only the fingers' part goes into the base */
+                    fp_history_commit(&s->history, fp_rig_step_commit_shape(&s->rig, s->base, s->shown));
+                    base_changed(s); /* the anchored gesture ended; unanchored restarts anyway */
+                } else {
+                    fp_history_commit(&s->history, s->deformed);
+                    /* the anchored gesture ended; unanchored restarts anyway. Only the blocks
+                     * the engine rewrote are re-indexed. */
+                    fp_engine_step_commit(&s->engine, s->base);
+                    s->shown = s->base;
+                }
+                st->stage_ms[FP_STAGE_COMMIT] = (double)(fp_now_ns() - t0) / 1e6;
+                st->committed = true;
+            }
+        }
+    } else {
+        fp_history_end_gesture(&s->history);
+        fp_engine_step_end_gesture(&s->engine, &s->log);
+    }
+    s->engaged = cs->active && !(cs->intents & (FP_INTENT_COMMIT | FP_INTENT_CANCEL));
+}
+
 void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
 {
     fp_frame_stats local;
@@ -397,52 +446,34 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     FP_STAGE_END(FP_STAGE_MAPPING);
 
     /* 5: the engine. 6: history. */
-    s->shown = fp_rig_step_posed(&s->rig, s->base);
-    if (cs->active && cs->count > 0) {
-        fp_engine_result er;
-        int rc = fp_engine_step_run(&s->engine, cs, s->deformed, &er, &s->log);
-        st->refactored = er.refactored;
-        st->pairs = er.pairs;
-        st->update_ms = er.update_ms;
-        st->stage_ms[FP_STAGE_SOLVE] = er.update_ms - er.eval_ms;
-        st->stage_ms[FP_STAGE_EVALUATE] = er.eval_ms;
-        tick = fp_now_ns();
-        st->control_vectors = cs->count;
-        st->guard_bound = er.bound;
-        st->guard_clusters = er.clusters;
-        st->guard_limited = er.clusters_limited;
-        st->guard_substeps = er.substeps;
-        st->guard_reached = er.reached;
-        st->min_det_j = er.min_det_j;
-        if (!rc) {
-            st->active = true;
-            s->shown = fp_rig_step_finish(&s->rig, s->deformed);
-            if (cs->intents & FP_INTENT_COMMIT) {
-                if (s->rig.rig) {
-                    /* with a rig only the fingers' part goes into the base */
-                    fp_history_commit(&s->history, fp_rig_step_commit_shape(&s->rig, s->base, s->shown));
-                    base_changed(s); /* the anchored gesture ended; unanchored restarts anyway */
-                } else {
-                    fp_history_commit(&s->history, s->deformed);
-                    /* the anchored gesture ended; unanchored restarts anyway. Only the blocks
-                     * the engine rewrote are re-indexed. */
-                    fp_engine_step_commit(&s->engine, s->base);
-                    s->shown = s->base;
-                }
-                FP_STAGE_END(FP_STAGE_COMMIT);
-                st->committed = true;
-            }
-        }
-    } else {
-        fp_history_end_gesture(&s->history);
-        fp_engine_step_end_gesture(&s->engine, &s->log);
-    }
-    s->engaged = cs->active && !(cs->intents & (FP_INTENT_COMMIT | FP_INTENT_CANCEL));
+    engine_and_history(s, cs, st);
 
 #undef FP_STAGE_END
     /* 7: the recorder. */
-    fp_record_step_end(&s->record, s->frame, now_ns, in.requested, cs, s->inputs, s->input_count,
-                       &s->log);
+    fp_record_step_end(&s->record, s->frame, now_ns, in.requested | s->actions, cs, s->inputs,
+                       s->input_count, &s->log);
+    s->actions = 0;
+    s->frame++;
+}
+
+void fp_session_apply_controls(fp_session *s, int64_t now_ns, const fp_control_set *cs,
+                               uint32_t requested, fp_frame_stats *st)
+{
+    fp_frame_stats local;
+    if (!st) st = &local;
+    memset(st, 0, sizeof *st);
+    st->frame = s->frame;
+    fp_record_step_begin(&s->record);
+    st->engaged = cs->intents & FP_INTENT_ENGAGE;
+    st->cancelled = cs->intents & FP_INTENT_CANCEL;
+    /* 4: the rig poses the base from the stored channels; the stored set is already the
+     * one the rig's clamp returned, so it goes to the engine as it is. */
+    if (fp_rig_step_update(&s->rig, cs, s->base, &s->log))
+        fp_engine_step_set_base(&s->engine, fp_rig_step_posed(&s->rig, s->base));
+    engine_and_history(s, cs, st);
+    fp_record_step_end(&s->record, s->frame, now_ns, requested | s->actions, cs, s->inputs,
+                       s->input_count, &s->log);
+    s->actions = 0;
     s->frame++;
 }
 
@@ -461,6 +492,13 @@ bool fp_session_inputs_ready(fp_session *s, int64_t t)
 bool fp_session_finished(const fp_session *s) { return fp_intents_all_ended(&s->intents, s->input_count); }
 
 void fp_session_request(fp_session *s, uint32_t intents) { fp_intents_request(&s->intents, intents); }
+
+unsigned fp_session_record_toggles(fp_session *s)
+{
+    unsigned n = s->intents.record_toggles;
+    s->intents.record_toggles = 0;
+    return n;
+}
 const float *fp_session_positions(const fp_session *s) { return s->shown; }
 const float *fp_session_base(const fp_session *s) { return s->base; }
 const float *fp_session_loaded(const fp_session *s) { return s->loaded; }
@@ -526,6 +564,7 @@ bool fp_session_undo(fp_session *s)
 {
     if (!fp_history_undo(&s->history)) return false;
     after_set_base(s);
+    s->actions |= FP_SESSION_ACTION_UNDO;
     return true;
 }
 
@@ -534,6 +573,7 @@ void fp_session_reset(fp_session *s)
     fp_history_reset(&s->history, s->loaded);
     fp_rig_step_neutral(&s->rig);
     after_set_base(s);
+    s->actions |= FP_SESSION_ACTION_RESET;
 }
 
 /* Replace the mapping by one made from spec (from file where not NULL); the old one stays on

@@ -206,6 +206,56 @@ static void test_command_line_errors(void **state)
     assert_int_equal(live("--frames 1 --screenshot /nonexistent-dir/x.png"), 73);
 }
 
+/* Takes in live: T records (REC in red at the top right), T again stops and the timeline
+ * strip shows the take as a block; scrubbing the strip from the first frame (pose A, the
+ * engage: no deformation) to the last (pose B) changes the face. */
+static void test_take_rec_timeline_scrub(void **state)
+{
+    (void)state;
+    assert_int_equal(live("--input 'replay:%s' --take-dir '%s/takes' --slate scene --script "
+                          "'wait hands; key T; key E; wait end; wait frames 3; shot %s/rec.png; "
+                          "key T; wait frames 2; shot %s/strip.png; scrub 0; wait frames 1; "
+                          "shot %s/a.png; scrub 1; wait frames 1; shot %s/b.png; close'",
+                          rec, tmp, tmp, tmp, tmp, tmp), 0);
+    char path[512];
+    snprintf(path, sizeof path, "%s/takes/scene_T001.fptake", tmp);
+    struct stat st;
+    assert_int_equal(stat(path, &st), 0);
+    image r = load("rec.png"), s = load("strip.png"), a = load("a.png"), b = load("b.png");
+    /* REC: red pixels in the top right (the box and the letters) while recording, none after */
+    int red_rec = 0, red_after = 0;
+    for (int y = 0; y < 40; y++)
+        for (int x = r.w / 2; x < r.w; x++) {
+            const unsigned char *p = at(&r, x, y), *q = at(&s, x, y);
+            red_rec += p[0] > 200 && p[1] < 80 && p[2] < 80;
+            red_after += q[0] > 200 && q[1] < 80 && q[2] < 80;
+        }
+    print_message("red pixels: %d recording, %d after\n", red_rec, red_after);
+    assert_true(red_rec > 100);
+    assert_int_equal(red_after, 0);
+    /* the strip (bottom, y 194..212 at 320x240): the reviewed take's block, light blue */
+    int block = 0, block_before = 0;
+    for (int y = 194; y < 212; y++)
+        for (int x = 8; x < 312; x++) {
+            const unsigned char *p = at(&s, x, y), *q = at(&r, x, y);
+            block += diff(p, (const unsigned char[]){115, 178, 255}) < 12;
+            block_before += diff(q, (const unsigned char[]){115, 178, 255}) < 12;
+        }
+    print_message("strip block pixels: %d (before the take: %d)\n", block, block_before);
+    assert_true(block > 2000);
+    assert_int_equal(block_before, 0);
+    /* scrubbing changes the face: pixels of the face area that differ between frames */
+    int changed = 0;
+    for (int y = 40; y < 180; y++)
+        for (int x = 60; x < 260; x++) changed += diff(at(&a, x, y), at(&b, x, y)) > 8;
+    print_message("face pixels changed by scrubbing: %d\n", changed);
+    assert_true(changed > 50);
+    free(r.px);
+    free(s.px);
+    free(a.px);
+    free(b.px);
+}
+
 static void write_recording(void)
 {
     /* Leap joints CSV, one right hand: pose A on the left cheek (x about 40 mm), pose B 15 mm
@@ -264,6 +314,7 @@ int main(void)
         cmocka_unit_test(test_close_button_and_esc),
         cmocka_unit_test(test_drop_mesh_and_mapping_keys),
         cmocka_unit_test(test_command_line_errors),
+        cmocka_unit_test(test_take_rec_timeline_scrub),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

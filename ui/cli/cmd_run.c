@@ -3,6 +3,7 @@
 #include "app_util.h"
 #include "command.h"
 #include "fp_session.h"
+#include "fp_session_take.h"
 #include "session_opts.h"
 #include "fp_stats.h"
 
@@ -48,6 +49,10 @@ static void usage(FILE *f)
         "      --frames-out DIR   also write one mesh per frame, every frame at --fps\n"
         "                         (DIR/frame_000123_t2.050s.obj: number, time on the input clock)\n"
         "      --fps N            frames per second of the session loop (default 60)\n"
+        "      --take-dir DIR     record the run as a take in DIR (SLATE_TNNN.fptake; see\n"
+        "                         facepuppet takes, play, --input take:FILE)\n"
+        "      --slate NAME       the take's slate (default \"take\"); numbers go up per slate\n"
+        "      --take-description TEXT  a line stored in the take's header\n"
         "      --budget MS        report a mapping process() slower than MS (default 2)\n\n"
         "The run steps on the recordings' own clock (frame k at t0 + k/fps), not the wall\n"
         "clock: the same inputs and options give bit-identical meshes whatever --speed,\n"
@@ -97,11 +102,14 @@ static int check_out(const char *out)
 
 static int run_main(int argc, char **argv)
 {
-    enum { OPT_FRAMES_OUT = FP_SESSION_OPTS_FIRST_FREE, OPT_FPS, OPT_BUDGET };
+    enum { OPT_FRAMES_OUT = FP_SESSION_OPTS_FIRST_FREE, OPT_FPS, OPT_BUDGET, OPT_TAKE_DIR,
+           OPT_SLATE, OPT_TAKE_DESC };
     static const struct option own[] = {
         {"out", required_argument, 0, 'o'},        {"frames-out", required_argument, 0, OPT_FRAMES_OUT},
         {"fps", required_argument, 0, OPT_FPS},    {"help", no_argument, 0, 'h'},
         {"budget", required_argument, 0, OPT_BUDGET},
+        {"take-dir", required_argument, 0, OPT_TAKE_DIR}, {"slate", required_argument, 0, OPT_SLATE},
+        {"take-description", required_argument, 0, OPT_TAKE_DESC},
         {0, 0, 0, 0}};
     struct option opts[FP_SESSION_OPTS_COUNT + sizeof own / sizeof own[0]];
     memcpy(opts + fp_session_opts_longopts(opts), own, sizeof own);
@@ -110,6 +118,7 @@ static int run_main(int argc, char **argv)
     fp_session_opts sopt;
     fp_session_opts_init(&sopt, &so);
     const char *out = NULL, *frames_out = NULL;
+    const char *take_dir = NULL, *slate = NULL, *take_desc = NULL;
     double fps = 60;
     char *end;
     optind = 1;
@@ -127,6 +136,9 @@ static int run_main(int argc, char **argv)
                 return FP_EXIT_USAGE;
             }
             break;
+        case OPT_TAKE_DIR: take_dir = optarg; break;
+        case OPT_SLATE: slate = optarg; break;
+        case OPT_TAKE_DESC: take_desc = optarg; break;
         case OPT_BUDGET:
             so.mapping_budget_ms = strtod(optarg, &end);
             if (*end || !(so.mapping_budget_ms > 0 && so.mapping_budget_ms <= 1000)) {
@@ -171,6 +183,25 @@ static int run_main(int argc, char **argv)
         }
     }
 
+    if ((slate || take_desc) && !take_dir) {
+        fprintf(stderr, "facepuppet run: --slate and --take-description need --take-dir\n");
+        return FP_EXIT_USAGE;
+    }
+    if (slate && !fp_take_slate_valid(slate)) {
+        fprintf(stderr, "facepuppet run: --slate '%s': use 1-63 of A-Z a-z 0-9 . _ - (not "
+                "starting with '.')\n", slate);
+        return FP_EXIT_USAGE;
+    }
+    /* --take-dir: the session's record sink feeds the take recorder (fp_session_take.h). */
+    fp_session_take take;
+    fp_session_take_options take_opt = {.dir = take_dir, .slate = slate,
+                                        .description = take_desc, .rate = fp_app_take_rate(fps)};
+    fp_session_take_init(&take, &take_opt, &so);
+    if (take_dir) {
+        so.record = fp_session_take_sink;
+        so.record_user = &take;
+    }
+
     fp_plugin_path path;
     fp_app_plugin_path(&path, sopt.plugin_dirs, sopt.nplugin_dirs);
     so.plugin_path = &path;
@@ -211,6 +242,12 @@ static int run_main(int argc, char **argv)
     while ((clock = fp_session_input_start(s, &t0)) == 0 && !interrupted) sleep_until(fp_now_ns() + 200000);
     bool input_clock = clock == 1;
     if (!input_clock) t0 = wall0;
+    /* The take's time origin (timecode in) is the first frame's time. */
+    if (take_dir && !interrupted && (rc = fp_session_take_start(&take, s, t0, err, sizeof err))) {
+        fprintf(stderr, "facepuppet run: take: %s\n", err);
+        status = fp_app_exit_code(rc, FP_APP_OUTPUT);
+        interrupted = 1;
+    }
     for (uint64_t k = 0; !interrupted; k++) {
         int64_t now = t0 + (int64_t)llround((double)k * 1e9 / fps);
         if (input_clock) {
@@ -258,6 +295,14 @@ static int run_main(int argc, char **argv)
         if (duration > 0 && now - t0 >= (int64_t)(duration * 1e9)) break;
     }
     if (interrupted && !quiet) fprintf(stderr, "facepuppet run: interrupted; saving what was done\n");
+    /* Close the take: a failed write (ENOSPC) fails the run with 73. */
+    int take_rc = 0;
+    char take_err[1024] = "";
+    if (fp_session_take_recording(&take)) {
+        fp_session_take_result tr;
+        take_rc = fp_session_take_stop(&take, &tr, take_err, sizeof take_err);
+        fp_app_print_take(stderr, "facepuppet run", &tr);
+    }
     /* Close the record=FILE recordings: a failed write must fail the run. */
     bool record_failed = fp_session_stop(s, err, sizeof err) != 0;
     /* The summary: displacement of the final shape from the loaded one. */
@@ -291,6 +336,10 @@ static int run_main(int argc, char **argv)
     if (fp_session_input_errors(s, &input_error) && status == FP_EXIT_OK) {
         fprintf(stderr, "facepuppet run: an input reported an error: %s\n", input_error);
         status = FP_EXIT_DATAERR;
+    }
+    if (take_rc) {
+        fprintf(stderr, "facepuppet run: the take was not written whole: %s\n", take_err);
+        if (status == FP_EXIT_OK) status = fp_app_exit_code(take_rc, FP_APP_OUTPUT);
     }
     if (record_failed && status == FP_EXIT_OK) {
         fprintf(stderr, "facepuppet run: %s\n", err);

@@ -56,6 +56,9 @@ typedef struct fp_viewer_options {
                                     against the CPU engine by transform feedback) */
     bool vsync;                  /* swap interval 1 (default 0: never wait for the display) */
     bool quiet;                  /* no messages on stderr except errors */
+    const char *take_dir;        /* T records takes here (ui/viewer/takes.h); NULL: no takes */
+    const char *slate;           /* the takes' slate; NULL: "take" */
+    double countdown_s;          /* seconds counted down before a take starts; 0: none */
 } fp_viewer_options;
 
 /** What a run measured. Times in milliseconds. */
