@@ -49,7 +49,10 @@ extern "C" {
  * step_record.h. */
 
 typedef struct fp_session_options {
-    const char *mesh_path;                          /* required */
+    const char *mesh_path;                          /* required (unless mesh is given) */
+    const struct fp_mesh *mesh;                     /* a mesh in memory instead of mesh_path
+                                                       (copied; e.g. `bench --case frame`'s
+                                                       subdivided face) */
     const char *inputs[FP_SESSION_MAX_INPUTS];      /* SPECs */
     size_t input_count;
     const char *mapping;                            /* NAME[,key=value...]; "anchored" */
@@ -98,7 +101,22 @@ typedef struct fp_session_options {
                                                        no rig. A rig's mm_per_unit is the
                                                        mesh's unit unless mm_per_unit is given */
     const char *rig_dir;                            /* NULL: fp_rig_default_dir(NULL) */
+    bool measure_jacobian;                          /* fill fp_frame_stats.min_det_j (the
+                                                       engine's general path: slower, same
+                                                       shape) */
 } fp_session_options;
+
+/** The frame's stages, for fp_frame_stats.stage_ms (`bench --case frame`). */
+enum fp_frame_stage {
+    FP_STAGE_EVENTS = 0,      /* drain the inputs, intents */
+    FP_STAGE_HANDS,           /* hand poses, calibration */
+    FP_STAGE_DISTANCES,       /* fingertip-to-surface distances */
+    FP_STAGE_MAPPING,         /* the mapping plugin and the rig */
+    FP_STAGE_SOLVE,           /* factor or reuse, solve, the fold-over guard */
+    FP_STAGE_EVALUATE,        /* T(base) (touched blocks) */
+    FP_STAGE_COMMIT,          /* history and re-index after a commit */
+    FP_STAGE_COUNT
+};
 
 /** Statistics of one fp_session_step. */
 typedef struct fp_frame_stats {
@@ -111,7 +129,19 @@ typedef struct fp_frame_stats {
     bool refactored;          /* the engine factored anew (start points changed) */
     size_t control_vectors;
     uint64_t pairs;           /* vertex-centre pairs evaluated */
-    double update_ms;         /* engine solve + evaluate, milliseconds */
+    double update_ms;         /* engine solve + guard + evaluate, milliseconds */
+    /* the fold-over guard (step_engine.h): every map applied is injective */
+    double guard_bound;       /* injectivity bound L of the map the mapping asked for (L < 1:
+                                 injective; the guard applies maps with L <= 0.9) */
+    size_t guard_clusters;    /* clusters of overlapping supports */
+    size_t guard_limited;     /* clusters the guard scaled back (first map) */
+    int guard_substeps;       /* maps composed (1: one; unanchored steps may compose) */
+    double guard_reached;     /* smallest fraction of a control vector the map reached (1: all;
+                                 below 1 the guard stopped short of an end point) */
+    double min_det_j;         /* min det dT/dx over the moved vertices (and composed maps) with
+                                 fp_session_options.measure_jacobian, else NAN (and when not
+                                 active) */
+    double stage_ms[FP_STAGE_COUNT]; /* wall time of each stage (fp_frame_stage), ms */
 } fp_frame_stats;
 
 typedef struct fp_session fp_session;

@@ -38,6 +38,7 @@ struct fp_session {
     fp_plugin mapping_plugin;
     fp_mapping *mapping;
     fp_mapping_host mapping_host;
+    fp_mapping_services services;     /* the host extensions the mapping may ask for */
     char mapping_name[64];
     char mapping_spec[1024];      /* the SPEC it was made from (keys kept for a reload) */
     char mapping_file[4096];      /* the file it was found at (a reload loads a copy) */
@@ -84,6 +85,7 @@ static int load_mapping(fp_session *s, const char *mapping, const fp_plugin_path
         snprintf(s->mapping_name, sizeof s->mapping_name, "%s", spec.name);
         fp_mapping_host_init(&s->mapping_host, spec.name, s->log.fn, s->log.user);
         s->mapping_host.rig = fp_rig_step_view(&s->rig); /* FP_HOST_EXT_RIG */
+        s->mapping_host.services = &s->services; /* FP_HOST_EXT_SURFACE */
         const fp_mapping_factory *f = s->mapping_plugin.factory;
         char perr[512] = "";
         fp_plugin_call_enter(s->mapping_name, "create", s->frame);
@@ -101,6 +103,16 @@ static int load_mapping(fp_session *s, const char *mapping, const fp_plugin_path
     }
     fp_spec_clear(&spec);
     return rc;
+}
+
+/* FP_HOST_EXT_SURFACE: nearest vertices of the surface the fingers touch (the posed base),
+ * from the engine's index of it. */
+static int surface_nearest(const fp_host *host, const float (*points)[3], size_t count,
+                           float max_distance, fp_surface_hit *out)
+{
+    const fp_session *s = ((const fp_mapping_host *)host->host_data)->services->user;
+    return fp_engine_step_surface(&s->engine, fp_rig_step_posed(&s->rig, s->base), points, count,
+                                  max_distance, out);
 }
 
 /* Workspace calibration (step 2's state): the mesh's unit (given, else detected from the
@@ -166,7 +178,7 @@ static int attach_rig(fp_session *s, const fp_session_options *opt, char *err, s
 int fp_session_create(const fp_session_options *opt, fp_session **out, char *err, size_t errlen)
 {
     *out = NULL;
-    if (!opt || !opt->mesh_path || !opt->plugin_path) {
+    if (!opt || (!opt->mesh_path && !opt->mesh) || !opt->plugin_path) {
         snprintf(err, errlen, "session: a mesh and a plugin path are required");
         return -EINVAL;
     }
@@ -185,8 +197,16 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
     fp_session *s = calloc(1, sizeof *s);
     if (!s) return -ENOMEM;
     s->log = (fp_slog){opt->log, opt->log_user};
-    int rc = fp_mesh_load(opt->mesh_path, &s->mesh, err, errlen);  /* its code, unchanged */
-    if (rc) goto fail;
+    int rc = 0;
+    if (opt->mesh) {
+        if (!(s->mesh = fp_mesh_copy(opt->mesh))) {
+            rc = -ENOMEM;
+            snprintf(err, errlen, "session: out of memory for the mesh");
+            goto fail;
+        }
+    } else if ((rc = fp_mesh_load(opt->mesh_path, &s->mesh, err, errlen))) { /* its code */
+        goto fail;
+    }
     s->n = s->mesh->vertex_count;
     size_t bytes = s->n * 3 * sizeof(float);
     s->loaded = malloc(bytes);
@@ -254,6 +274,13 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
         goto fail;
     }
     s->mapping_budget_ms = opt->mapping_budget_ms;
+    s->engine.jacobian = opt->measure_jacobian;
+    if ((rc = fp_engine_step_set_topology(&s->engine, s->mesh->triangles, s->mesh->triangle_count))) {
+        snprintf(err, errlen, "session: out of memory for %zu triangles", s->mesh->triangle_count);
+        goto fail;
+    }
+    s->services.surface.nearest = surface_nearest;
+    s->services.user = s;
     if ((rc = load_mapping(s, opt->mapping, opt->plugin_path, NULL, err, errlen))) goto fail;
     for (size_t i = 0; i < opt->input_count; i++) {
         rc = fp_input_instance_open(&s->inputs[i], opt->plugin_path, opt->inputs[i], (uint32_t)i,
@@ -320,19 +347,38 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame
         st->refactored = er.refactored;
         st->pairs = er.pairs;
         st->update_ms = er.update_ms;
+        st->stage_ms[FP_STAGE_SOLVE] = er.update_ms - er.eval_ms;
+        st->stage_ms[FP_STAGE_EVALUATE] = er.eval_ms;
         st->control_vectors = cs->count;
+        st->guard_bound = er.bound;
+        st->guard_clusters = er.clusters;
+        st->guard_limited = er.clusters_limited;
+        st->guard_substeps = er.substeps;
+        st->guard_reached = er.reached;
+        st->min_det_j = er.min_det_j;
         if (!rc) {
             st->active = true;
             s->shown = fp_rig_step_finish(&s->rig, s->deformed);
             if (cs->intents & FP_INTENT_COMMIT) {
-                /* with a rig only the fingers' part goes into the base */
-                fp_history_commit(&s->history, fp_rig_step_commit_shape(&s->rig, s->base, s->shown));
-                base_changed(s); /* the anchored gesture ended; unanchored restarts anyway */
+                int64_t t0 = fp_now_ns();
+                if (s->rig.rig) {
+                    /* with a rig only the fingers' part goes into the base */
+                    fp_history_commit(&s->history, fp_rig_step_commit_shape(&s->rig, s->base, s->shown));
+                    base_changed(s); /* the anchored gesture ended; unanchored restarts anyway */
+                } else {
+                    fp_history_commit(&s->history, s->deformed);
+                    /* the anchored gesture ended; unanchored restarts anyway. Only the blocks
+                     * the engine rewrote are re-indexed. */
+                    fp_engine_step_commit(&s->engine, s->base);
+                    s->shown = s->base;
+                }
+                st->stage_ms[FP_STAGE_COMMIT] = (double)(fp_now_ns() - t0) / 1e6;
                 st->committed = true;
             }
         }
     } else {
         fp_history_end_gesture(&s->history);
+        fp_engine_step_end_gesture(&s->engine, &s->log);
     }
     s->engaged = cs->active && !(cs->intents & (FP_INTENT_COMMIT | FP_INTENT_CANCEL));
 }
@@ -343,7 +389,12 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     if (!st) st = &local;
     memset(st, 0, sizeof *st);
     st->frame = s->frame;
+    st->guard_reached = 1.0;
+    st->min_det_j = NAN;
 
+    int64_t tick = fp_now_ns(), tock;
+#define FP_STAGE_END(stage)                                                                   \
+    (tock = fp_now_ns(), st->stage_ms[stage] += (double)(tock - tick) / 1e6, tick = tock)
     /* 1: inputs and intents. */
     fp_record_step_begin(&s->record);
     st->events = s->intents.clocked
@@ -351,8 +402,10 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
                                               s->engaged, &s->log, on_event, s)
                      : fp_intents_drain(&s->intents, s->inputs, s->input_count, s->engaged,
                                         &s->log, on_event, s);
+    FP_STAGE_END(FP_STAGE_EVENTS);
     /* 2: hand poses in mesh units. */
     fp_pose_build(&s->pose);
+    FP_STAGE_END(FP_STAGE_HANDS);
 
     /* 3: the mapping. */
     fp_frame_input in;
@@ -377,7 +430,8 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     in.rig = fp_rig_step_view(&s->rig);
     const float *surface = fp_rig_step_posed(&s->rig, s->base); /* what the fingers touch */
     s->view.base = surface;
-    fp_engine_tip_distances(surface, s->n, s->pose.poses, in.tip_distance);
+    fp_engine_step_tip_distances(&s->engine, s->pose.poses, in.tip_distance); /* on its base: the posed surface */
+    FP_STAGE_END(FP_STAGE_DISTANCES);
     fp_mapping_step_run(&s->mapping_step, s->mapping, s->mapping_name, &in, &s->cs, &s->log);
     st->engaged = s->cs.intents & FP_INTENT_ENGAGE;
     if (s->cs.intents & FP_INTENT_CANCEL) {
@@ -389,10 +443,12 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     if (fp_rig_step_update(&s->rig, &s->cs, s->base, &s->log))
         fp_engine_step_set_base(&s->engine, fp_rig_step_posed(&s->rig, s->base));
     const fp_control_set *cs = fp_rig_step_run(&s->rig, &s->cs);
+    FP_STAGE_END(FP_STAGE_MAPPING);
 
     /* 5: the engine. 6: history. */
     engine_and_history(s, cs, st);
 
+#undef FP_STAGE_END
     /* 7: the recorder. */
     fp_record_step_end(&s->record, s->frame, now_ns, in.requested | s->actions, cs, s->inputs,
                        s->input_count, &s->log);
@@ -555,6 +611,7 @@ static int swap_mapping(fp_session *s, const fp_plugin_path *path, const char *s
     s->shown = fp_rig_step_posed(&s->rig, s->base);
     s->engaged = false;
     fp_history_end_gesture(&s->history);
+    fp_engine_step_end_gesture(&s->engine, &s->log);
     fp_engine_step_invalidate(&s->engine);
     fp_mapping_step_init(&s->mapping_step, &s->cs, s->mapping_budget_ms);
     reset_mapping(s);

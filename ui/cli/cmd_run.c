@@ -218,6 +218,7 @@ static int run_main(int argc, char **argv)
     so.plugin_path = &path;
     so.log = log_line;
     so.input_clock = true;
+    so.measure_jacobian = true; /* min det J in the summary (the same shape, a slower path) */
     char err[2048];
     fp_session *s = NULL;
     rc = fp_session_create(&so, &s, err, sizeof err);
@@ -251,7 +252,8 @@ static int run_main(int argc, char **argv)
 
     size_t cap = 1024, nupdates = 0;
     double *update_ms = malloc(cap * sizeof *update_ms);
-    uint64_t frames = 0, commits = 0, engages = 0, active_frames = 0;
+    uint64_t frames = 0, commits = 0, engages = 0, active_frames = 0, guarded = 0, limited = 0;
+    double min_det_j = INFINITY;
     int status = FP_EXIT_OK;
     /* The clock: the recordings' own (frame k at t0 + k/fps, each step only once every
      * recording has delivered past it), else the wall clock (live devices only). */
@@ -280,6 +282,11 @@ static int run_main(int argc, char **argv)
         commits += st.committed;
         engages += st.engaged;
         active_frames += st.active;
+        if (st.active) {
+            guarded += st.guard_limited > 0 || st.guard_substeps > 1;
+            limited += st.guard_reached < 1.0;
+            if (st.min_det_j < min_det_j) min_det_j = st.min_det_j;
+        }
         if (st.active) {
             if (nupdates == cap) {
                 double *grown = realloc(update_ms, 2 * cap * sizeof *update_ms);
@@ -348,10 +355,12 @@ static int run_main(int argc, char **argv)
     double med = fp_median(update_ms, nupdates);
     printf("frames %llu, deforming %llu, engaged %llu, committed %llu; vertices moved %zu of %zu; "
            "displacement mean %.6g max %.6g (mesh units); update median %.3f ms over %zu updates; "
+           "fold-over guard acted on %llu frames (stopped short on %llu), min det J %.3g; "
            "events dropped %lu%s%s\n",
            (unsigned long long)frames, (unsigned long long)active_frames, (unsigned long long)engages,
            (unsigned long long)commits, moved, n, n ? sum / n : 0.0, max, med, nupdates,
-           fp_session_dropped(s), status == FP_EXIT_OK ? "; wrote " : "",
+           (unsigned long long)guarded, (unsigned long long)limited,
+           active_frames ? min_det_j : 1.0, fp_session_dropped(s), status == FP_EXIT_OK ? "; wrote " : "",
            status == FP_EXIT_OK ? out : "");
     const char *input_error;
     if (fp_session_input_errors(s, &input_error) && status == FP_EXIT_OK) {

@@ -98,6 +98,7 @@ typedef struct viewer {
     double recent_frame_ms[64];
     int recent_n;
     double last_update_ms;
+    fp_frame_stats last_active;   /* the last deforming frame's stats (the HUD's guard line) */
     size_t events_window;
     int64_t window_start;
     double input_rate;
@@ -616,11 +617,14 @@ static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
     snprintf(text, sizeof text,
              "%s  %zu vertices  mapping %s\n"
              "%s   commits %u   radius %.4g\n"
-             "%.1f fps (%.2f ms)   engine %.3f ms   input %.0f ev/s%s",
+             "%.1f fps (%.2f ms)   engine %.3f ms   input %.0f ev/s%s\n"
+             "fold-over guard: bound %.2f  reach %.0f%%  sub-steps %d%s",
              v->mesh_path ? (strrchr(v->mesh_path, '/') ? strrchr(v->mesh_path, '/') + 1 : v->mesh_path) : "", v->n, v->mapping, state, v->commits,
              fp_session_radius(v->s), recent > 0 ? 1000.0 / recent : 0.0, recent,
              st->active ? st->update_ms : v->last_update_ms, v->input_rate,
-             v->opt->gpu_warp ? "   gpu-warp" : "");
+             v->opt->gpu_warp ? "   gpu-warp" : "", v->last_active.guard_bound,
+             100.0 * v->last_active.guard_reached, v->last_active.guard_substeps,
+             v->last_active.guard_reached < 1.0 ? "  LIMITED" : "");
     const float white[4] = {0.95f, 0.95f, 0.92f, 1.f}, dim[4] = {0.8f, 0.85f, 0.9f, 1.f};
     float scale = h >= 600 ? 2.f : 1.f;
     float y = 8;
@@ -756,6 +760,7 @@ static void frame(viewer *v)
         if (st.active) {
             samples_add(&v->engine_ms, st.update_ms);
             v->last_update_ms = st.update_ms;
+            v->last_active = st;
         }
         v->events_window += st.events;
         for (int h = 0; h < FP_HANDS; h++) {
@@ -814,6 +819,8 @@ int fp_viewer_run(const fp_viewer_options *opt, fp_viewer_report *report, char *
     v->err = err;
     v->errlen = errlen;
     v->hands_on = v->hud_on = true;
+    v->last_active.guard_reached = 1.0;
+    v->last_active.guard_substeps = 1;
     int rc = 0;
     bool glfw = false;
     if (opt->script && (rc = fp_script_parse(opt->script, &v->script, err, errlen))) goto out;
