@@ -118,7 +118,7 @@ static void test_fit_workspace(void **state)
     fp_pose_to_mesh(&c, FP_HAND_RIGHT, centre, out);
     assert_true(fabsf(out[0] - 0.f) < 1e-5f);
     assert_true(fabsf(out[1] - 2.f) < 1e-5f);
-    assert_true(fabsf(out[2] - (6.f - 0.15f * 10.f)) < 1e-5f);
+    assert_true(fabsf(out[2] - (6.f - (float)(FP_POSE_REACH_PRESS_MM * 0.1))) < 1e-5f); /* front at the face's */
     /* A rotation and a per-hand offset: a quarter turn about y maps +x to -z. */
     c.rotation[0] = c.rotation[2] = sqrt(0.5);
     c.hand_offset[FP_HAND_LEFT][1] = 3;
