@@ -200,6 +200,10 @@ const char *fp_session_mapping_name(const fp_session *s);
  *  the host's arrays; the base has been shown since), the message naming the mapping, the
  *  array and the frame in err; else 0. */
 int fp_session_mapping_fault(const fp_session *s, char *err, size_t errlen);
+/** Committed gestures in the base since the loaded shape (one per undo level: an anchored
+ *  commit, an unanchored drag): undo restores the count of the level it returns to, reset
+ *  sets 0. [main-thread]. */
+unsigned long fp_session_commits(const fp_session *s);
 /** Undo the last commit or reset (one level, up to FP_SESSION_UNDO_LEVELS): the base goes
  *  back, a deformation in progress is dropped, the mapping's gesture is reset. Returns false
  *  when there is nothing to undo. */
