@@ -118,17 +118,17 @@ static void destroy(fp_mapping *self)
 
 /* The keys, typed (ABI 1.1): `facepuppet plugins` prints them, fpmu_params_parse checks
  * them. The order is that of the values create reads. */
-enum { KEY_HANDS, KEY_AUTO, KEY_ENGAGE, KEY_RELEASE, KEY_CLAMP, KEY_COUNT };
+enum { KEY_HANDS, KEY_AUTO, KEY_RELEASE, KEY_CLAMP, KEY_ENGAGE, KEY_COUNT };
 static const fp_param_info keys[KEY_COUNT + 1] = {
     {"hands", FP_PARAM_ENUM, 0, 0, "both", "left|right|both", NULL, "which hands deform"},
     {"auto", FP_PARAM_BOOL, 0, 1, "1", NULL, NULL,
      "engage when a fingertip comes within engage x R of the surface, commit when the hand lets go"},
-    {"engage", FP_PARAM_FLOAT, 0.01, 100, "0.5", NULL, "R",
-     "auto engage once a fingertip is within engage x R of the surface"},
     {"release", FP_PARAM_FLOAT, 0.1, 100, "1.0", NULL, "R",
      "auto commit once every engaged fingertip is farther than release x R"},
     {"clamp", FP_PARAM_FLOAT, 0, 100, "0.45", NULL, "R",
      "longest control vector (0: no limit)"},
+    {"engage", FP_PARAM_FLOAT, 0.01, 100, "0.5", NULL, "R",
+     "auto engage once a fingertip is within engage x R of the surface"},
     {NULL, 0, 0, 0, NULL, NULL, NULL, NULL},
 };
 static const unsigned hand_masks[] = {FP_HANDMASK_LEFT, FP_HANDMASK_RIGHT, FP_HANDMASK_BOTH};
