@@ -44,6 +44,12 @@ enum { FP_CALIB_CHIN = 0, FP_CALIB_NOSE_TIP, FP_CALIB_FOREHEAD, FP_CALIB_LANDMAR
 /** A fingertip is still while it stays within this distance (mm) of where it stopped. */
 #define FP_CALIB_STILL_MM 8.0
 
+/** Touches closer than this (mm) to each other are refused. */
+#define FP_CALIB_MIN_APART_MM 20.0
+/** A touch fit whose rms residual (in mm at the fitted scale) exceeds this is refused: the
+ *  touches do not have the face's shape. */
+#define FP_CALIB_MAX_RESIDUAL_MM 15.0
+
 /** Where "in front of each half of the face" is: the target of the left (h = 0) and right
  *  hand's palm, mesh units: x a quarter of the head box's width left / right of its middle,
  *  y the nose tip's height, z the frontmost surface there (fp_head_surface_z within 15 mm). */
@@ -78,7 +84,8 @@ int fp_calib_similarity(const double (*a)[3], const double (*b)[3], size_t n, do
 /** Touch mode: fp_calib_find_touches (index fingertip) matched to landmarks[3] (mesh units,
  *  chin, nose tip, forehead), then fp_calib_similarity: scale s, rotation, offset t. The
  *  touch points in mm go to touched (may be NULL); rms the fit's residual, mesh units (may
- *  be NULL). */
+ *  be NULL). -EDOM also for touches under FP_CALIB_MIN_APART_MM apart or a residual over
+ *  FP_CALIB_MAX_RESIDUAL_MM. */
 int fp_calib_fit_touch(const fp_calib_sample *samples, size_t n,
                        const float landmarks[FP_CALIB_LANDMARKS][3], fp_calibration *out,
                        double touched[FP_CALIB_LANDMARKS][3], double *rms, char *err, size_t errlen);
