@@ -588,11 +588,11 @@ static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
     char text[1024];
     snprintf(text, sizeof text,
              "%s  %zu vertices  mapping %s\n"
-             "%.3g mm per mesh unit, %s\n"
+             "%.3g mm per mesh unit, %.*s\n"
              "%s   commits %lu   radius %.4g\n"
              "%.1f fps (%.2f ms)   engine %.3f ms   input %.0f ev/s%s",
              v->mesh_path ? (strrchr(v->mesh_path, '/') ? strrchr(v->mesh_path, '/') + 1 : v->mesh_path) : "", v->n, v->mapping,
-             head->mm_per_unit, head->how, hud_state(v), fp_session_commits(v->s),
+             head->mm_per_unit, (int)strcspn(head->how, ":"), head->how, hud_state(v), fp_session_commits(v->s),
              fp_session_radius(v->s), recent > 0 ? 1000.0 / recent : 0.0, recent,
              st->active ? st->update_ms : v->last_update_ms, v->input_rate,
              v->opt->gpu_warp ? "   gpu-warp" : "");
