@@ -271,6 +271,10 @@ int fp_session_set_channel(fp_session *s, const char *name, double value);
 /** A channel's current value; NaN without a rig or for an unknown name. */
 double fp_session_channel(const fp_session *s, const char *name);
 
+/** Committed gestures in the base since the loaded shape (one per undo level: an anchored
+ *  commit, an unanchored drag): undo restores the count of the level it returns to, reset
+ *  sets 0. [main-thread]. */
+unsigned long fp_session_commits(const fp_session *s);
 /** Undo the last commit or reset (one level, up to FP_SESSION_UNDO_LEVELS): the base goes
  *  back, a deformation in progress is dropped, the mapping's gesture is reset. Returns false
  *  when there is nothing to undo. */

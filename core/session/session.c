@@ -553,12 +553,19 @@ static void destroy_mapping(fp_session *s, fp_mapping *m, const char *name)
     fp_plugin_call_leave();
 }
 
-/* After undo or reset: the mapping forgets its gesture. */
+/* After undo or reset: the mapping forgets its gesture, and so does the control set that
+ * fp_session_control_set shows (no deformation until the next frame makes one). */
 static void after_set_base(fp_session *s)
 {
     base_changed(s);
     reset_mapping(s);
+    s->cs.active = false;
+    s->cs.count = 0;
+    s->cs.intents = 0;
+    s->engaged = false;
 }
+
+unsigned long fp_session_commits(const fp_session *s) { return s->history.gestures; }
 
 bool fp_session_undo(fp_session *s)
 {

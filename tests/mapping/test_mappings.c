@@ -83,7 +83,11 @@ static void test_anchored_auto(void **state)
     assert_false(r.cs.active);
     assert_int_equal(r.cs.intents, 0);
 
-    place_right(&r, 0, 0, 0.5f, 0.5f * R); /* within R: engage, start = end = tips */
+    place_right(&r, 0, 0, 0.7f, 0.7f * R); /* within R but beyond engage (0.5 R): nothing */
+    step(&r, 0);
+    assert_false(r.cs.active);
+
+    place_right(&r, 0, 0, 0.5f, 0.45f * R); /* within 0.5 R: engage, start = end = tips */
     step(&r, 0);
     assert_true(r.cs.active);
     assert_true(r.cs.intents & FP_INTENT_ENGAGE);
@@ -101,8 +105,11 @@ static void test_anchored_auto(void **state)
     assert_float_equal(r.end[2][0], 2.2, 1e-6);
     assert_float_equal(r.end[2][1], 0.1, 1e-6);
 
-    place_right(&r, 10, 0, 0.5f, 0.5f * R); /* a huge jump is clamped to 0.45 R */
+    place_right(&r, 10, 0, 0.5f, 0.9f * R); /* a huge jump is clamped to 0.45 R; still held
+                                             * (release beyond R) */
     step(&r, 0);
+    assert_true(r.cs.active);
+    assert_int_equal(r.cs.intents, 0);
     for (int i = 0; i < 5; i++) {
         double d = 0;
         for (int k = 0; k < 3; k++) d += pow(r.end[i][k] - r.start[i][k], 2);

@@ -162,6 +162,37 @@ static void test_deform_commit_undo(void **state)
     stbi_image_free(c.px);
 }
 
+/* The HUD follows the session (issue 10): ENGAGED clears and the commit count goes back on
+ * undo, reset and a dropped mesh; `print hud` prints what the HUD shows. */
+static void test_hud_follows_undo_reset_drop(void **state)
+{
+    (void)state;
+    assert_int_equal(live("-i 'replay:%s' -M anchored,auto=0 --frames 2000 --script "
+                          "'wait hands; key E; wait frames 3; print hud; key C; wait frames 3; "
+                          "key E; wait frames 3; key C; wait frames 3; print hud; "
+                          "key E; wait frames 3; key Z; print hud; key Z; print hud; "
+                          "key E; wait frames 3; key C; wait frames 3; key R; print hud; "
+                          "key E; wait frames 3; drop %s; wait frames 1; print hud; close'",
+                          rec, face),
+                     0);
+    assert_true(out_contains("state ENGAGED commits 0 scale 10.24 mm per mesh unit (detected from the head"));
+    assert_true(out_contains("state committed commits 2 "));
+    assert_true(out_contains("state idle commits 1 "));  /* undo while engaged: the gesture */
+    assert_true(out_contains("state idle commits 0 "));  /* is dropped, the base goes back */
+    assert_false(out_contains("state ENGAGED commits 1"));
+    assert_false(out_contains("state ENGAGED commits 2"));
+    /* reset and the dropped mesh: idle, no commits (three lines, counted below) */
+    char path[512], out[8192] = "";
+    snprintf(path, sizeof path, "%s/out.txt", tmp);
+    FILE *f = fopen(path, "r");
+    assert_non_null(f);
+    out[fread(out, 1, sizeof out - 1, f)] = '\0';
+    fclose(f);
+    int idle0 = 0;
+    for (const char *p = out; (p = strstr(p, "state idle commits 0 ")); p++) idle0++;
+    assert_int_equal(idle0, 3);
+}
+
 static void test_close_button_and_esc(void **state)
 {
     (void)state;
@@ -311,6 +342,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_screenshot_shows_face),
         cmocka_unit_test(test_deform_commit_undo),
+        cmocka_unit_test(test_hud_follows_undo_reset_drop),
         cmocka_unit_test(test_close_button_and_esc),
         cmocka_unit_test(test_drop_mesh_and_mapping_keys),
         cmocka_unit_test(test_command_line_errors),

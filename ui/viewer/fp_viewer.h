@@ -27,6 +27,9 @@
  *   shot FILE    write this frame as PNG
  *   radius R     set the support radius (mesh units)
  *   drop FILE    as a file dropped on the window
+ *   print mapping | print hud   one stdout line: the mapping (name, id, version, active,
+ *                control vectors, reloads) / the HUD (state ENGAGED|committed|idle|PAUSED,
+ *                commits in the base, mm per mesh unit and how it was found)
  *   close        as the window's close button (glfwSetWindowShouldClose)
  *
  * Thread rules: call from the process's main thread (GLFW's rule); one viewer at a time.

@@ -90,6 +90,8 @@ int fp_script_parse(const char *text, fp_script *s, char *err, size_t errlen)
             if (end == arg || *end || !(c.number > 0) || !isfinite(c.number)) rc = -EINVAL;
         } else if (!strcmp(word, "print") && !strcmp(arg, "mapping")) {
             c.op = FP_SCRIPT_PRINT_MAPPING;
+        } else if (!strcmp(word, "print") && !strcmp(arg, "hud")) {
+            c.op = FP_SCRIPT_PRINT_HUD;
         } else if (!strcmp(word, "close")) {
             c.op = FP_SCRIPT_CLOSE;
             if (arg[0]) rc = -EINVAL;
@@ -98,7 +100,7 @@ int fp_script_parse(const char *text, fp_script *s, char *err, size_t errlen)
         }
         if (rc == -EINVAL)
             snprintf(err, errlen, "--script: command %d '%s %s' is not one of: wait hands|end|reload|frames N, "
-                     "key NAME, shot FILE, radius R, drop FILE, scrub F, print mapping, close", index, word, arg);
+                     "key NAME, shot FILE, radius R, drop FILE, scrub F, print mapping|hud, close", index, word, arg);
         if (!rc) rc = add(s, c);
         else free(c.text);
     }

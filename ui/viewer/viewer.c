@@ -102,7 +102,6 @@ typedef struct viewer {
     size_t events_window;
     int64_t window_start;
     double input_rate;
-    unsigned commits;
     bool committed_shown;     /* last frame committed (HUD) */
     fp_viewer_report rep;
     fp_vtakes takes;          /* T: takes, REC, the review strip (takes.h) */
@@ -239,7 +238,15 @@ static void load_dropped(viewer *v)
     }
     free(v->mesh_path);
     v->mesh_path = path;
+    v->committed_shown = false;
     say(v, "loaded %s (%zu vertices)", path, v->n);
+}
+
+/* The HUD's state word: the session's, so that undo, reset and a new mesh show at once. */
+static const char *hud_state(const viewer *v)
+{
+    const fp_control_set *cs = fp_session_control_set(v->s);
+    return v->paused ? "PAUSED" : cs->active ? "ENGAGED" : v->committed_shown ? "committed" : "idle";
 }
 
 /* ---- keys ------------------------------------------------------------------------------- */
@@ -273,8 +280,12 @@ static void act(viewer *v, int key)
     case GLFW_KEY_X: fp_session_request(v->s, FP_INTENT_CANCEL); break;
     case GLFW_KEY_Z:
         if (!fp_session_undo(v->s)) say(v, "nothing to undo");
+        v->committed_shown = false;
         break;
-    case GLFW_KEY_R: fp_session_reset(v->s); break;
+    case GLFW_KEY_R:
+        fp_session_reset(v->s);
+        v->committed_shown = false;
+        break;
     case GLFW_KEY_J: /* fall through: the jaw, 0.1 per press (the session clamps to [0, 1]) */
     case GLFW_KEY_K: {
         double j = fp_session_channel(v->s, "jaw.open");
@@ -498,6 +509,12 @@ static void run_script(viewer *v)
             fflush(stdout);
             break;
         }
+        case FP_SCRIPT_PRINT_HUD:
+            printf("hud frame %llu state %s commits %lu scale %.4g mm per mesh unit (%s)\n",
+                   (unsigned long long)v->frames, hud_state(v), fp_session_commits(v->s),
+                   fp_session_head(v->s)->mm_per_unit, fp_session_head(v->s)->how);
+            fflush(stdout);
+            break;
         case FP_SCRIPT_DROP:
             free(v->drop_path);
             v->drop_path = strdup(c->text);
@@ -608,18 +625,19 @@ static const char help_text[] =
 
 static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
 {
-    const fp_control_set *cs = fp_session_control_set(v->s);
     double recent = 0;
     for (int i = 0; i < v->recent_n; i++) recent += v->recent_frame_ms[i];
     recent = v->recent_n ? recent / v->recent_n : 0;
-    const char *state = v->paused ? "PAUSED" : cs->active ? "ENGAGED" : v->committed_shown ? "committed" : "idle";
+    const fp_head *head = fp_session_head(v->s);
     char text[1024];
     snprintf(text, sizeof text,
              "%s  %zu vertices  mapping %s\n"
-             "%s   commits %u   radius %.4g\n"
+             "%.3g mm per mesh unit, %.*s\n"
+             "%s   commits %lu   radius %.4g\n"
              "%.1f fps (%.2f ms)   engine %.3f ms   input %.0f ev/s%s\n"
              "fold-over guard: bound %.2f  reach %.0f%%  sub-steps %d%s",
-             v->mesh_path ? (strrchr(v->mesh_path, '/') ? strrchr(v->mesh_path, '/') + 1 : v->mesh_path) : "", v->n, v->mapping, state, v->commits,
+             v->mesh_path ? (strrchr(v->mesh_path, '/') ? strrchr(v->mesh_path, '/') + 1 : v->mesh_path) : "", v->n, v->mapping,
+             head->mm_per_unit, (int)strcspn(head->how, ":"), head->how, hud_state(v), fp_session_commits(v->s),
              fp_session_radius(v->s), recent > 0 ? 1000.0 / recent : 0.0, recent,
              st->active ? st->update_ms : v->last_update_ms, v->input_rate,
              v->opt->gpu_warp ? "   gpu-warp" : "", v->last_active.guard_bound,
@@ -754,7 +772,6 @@ static void frame(viewer *v)
     if (!v->paused) {
         fp_session_step(v->s, now, &st);
         for (unsigned k = fp_session_record_toggles(v->s); k > 0; k--) take_toggle(v);
-        if (st.committed) v->commits++;
         if (st.committed) v->committed_shown = true;
         if (st.engaged || st.cancelled) v->committed_shown = false;
         if (st.active) {
