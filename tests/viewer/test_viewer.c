@@ -167,7 +167,8 @@ static void test_deform_commit_undo(void **state)
 static void test_hud_follows_undo_reset_drop(void **state)
 {
     (void)state;
-    assert_int_equal(live("-i 'replay:%s' -M anchored,auto=0 --frames 2000 --script "
+    /* --rig none: the scale then comes from the head, as the expected lines say */
+    assert_int_equal(live("--rig none -i 'replay:%s' -M anchored,auto=0 --frames 2000 --script "
                           "'wait hands; key E; wait frames 3; print hud; key C; wait frames 3; "
                           "key E; wait frames 3; key C; wait frames 3; print hud; "
                           "key E; wait frames 3; key Z; print hud; key Z; print hud; "
@@ -243,7 +244,8 @@ static void test_command_line_errors(void **state)
 static void test_take_rec_timeline_scrub(void **state)
 {
     (void)state;
-    assert_int_equal(live("--input 'replay:%s' --take-dir '%s/takes' --slate scene --script "
+    /* --rig none: the deformation checked here is the fingers', not the rig's clamp */
+    assert_int_equal(live("--rig none --input 'replay:%s' --take-dir '%s/takes' --slate scene --script "
                           "'wait hands; key T; key E; wait end; wait frames 3; shot %s/rec.png; "
                           "key T; wait frames 2; shot %s/strip.png; scrub 0; wait frames 1; "
                           "shot %s/a.png; scrub 1; wait frames 1; shot %s/b.png; close'",
@@ -289,8 +291,8 @@ static void test_take_rec_timeline_scrub(void **state)
 
 static void write_recording(void)
 {
-    /* Leap joints CSV, one right hand: pose A on the left cheek (x about 40 mm), pose B 15 mm
-     * up and 15 mm toward the performer, 1.5 s later. Fingers point at the face (-z). */
+    /* Leap joints CSV, one right hand: pose A on the left cheek (x about 40 mm), pose B 35 mm
+     * up and 35 mm toward the performer, 1.5 s later. Fingers point at the face (-z). */
     snprintf(rec, sizeof rec, "%s/two-poses_joints_mm.csv", tmp);
     FILE *f = fopen(rec, "w");
     assert_non_null(f);
@@ -303,7 +305,7 @@ static void write_recording(void)
                                              fingers[fi], joints[j], fingers[fi], joints[j]);
     fputs("\n", f);
     for (int row = 0; row < 2; row++) {
-        double dy = row ? 15 : 0, dz = row ? 15 : 0;
+        double dy = row ? 35 : 0, dz = row ? 35 : 0;
         fprintf(f, "%d,%d,7,right,40,%.1f,%.1f,0,-1,0,0,0,-1", row, row ? 1500000 : 0, 200 + dy, -40 + dz);
         for (int fi = 0; fi < 5; fi++) {
             double x = 22 + 9 * fi, y = (fi ? 212 : 200) + dy;
