@@ -19,6 +19,8 @@ data=${FP_SHARED_DATA:-../shared/data}
 tmp=$(mktemp -d "${TMPDIR:-/tmp}/fp-export-XXXXXX")
 trap 'rm -rf "$tmp"' EXIT
 fail() { echo "FAIL: $*"; exit 1; }
+expect() { local want=$1; shift; "$@" >"$tmp/x.out" 2>&1; local got=$?
+           [ $got -eq "$want" ] || { cat "$tmp/x.out"; fail "exit $got, want $want: $*"; }; }
 
 # The validator: node and the npm package gltf-validator (tools/gltf-validate; fp-setup
 # installs it). Only a machine without node skips it.
@@ -105,12 +107,39 @@ cmp -s <(tail -c $((10 * 26719 * 12)) "$ict/r.pc2") \
     fail "--range 10-19: frames differ from the whole export's"
 echo "ict-facekit: --fps 30 gives $n30 samples of $frames frames; --range 10-19 the same 10 frames"
 
+# png-seq: rendered headless as the viewer draws the face (under Xvfb), the asked size
+if "$fp" live --help >/dev/null 2>&1 && command -v xvfb-run >/dev/null; then
+    LIBGL_ALWAYS_SOFTWARE=1 xvfb-run -a -s "-screen 0 1280x720x24" "$fp" export "$take" --format png-seq \
+        --range 30-32 --size 320x240 --camera 20,5,1.2 --out "$ict/png" -q || fail "png-seq exited $?"
+    pngs=($(ls "$ict/png"))
+    [ ${#pngs[@]} -eq 3 ] || fail "png-seq: ${#pngs[@]} files, want 3"
+    for p in "${pngs[@]}"; do
+        python3 - "$ict/png/$p" <<'PY' || fail "png-seq: $p"
+import struct, sys, zlib
+b = open(sys.argv[1], 'rb').read()
+assert b[:8] == b'\x89PNG\r\n\x1a\n', 'not a PNG'
+w, h = struct.unpack('>II', b[16:24])
+assert (w, h) == (320, 240), (w, h)
+# the pixels: not one colour (the face is drawn on the background)
+data, i = b'', 8
+while i < len(b):
+    n, = struct.unpack('>I', b[i:i + 4]); t = b[i + 4:i + 8]
+    if t == b'IDAT': data += b[i + 8:i + 8 + n]
+    i += 12 + n
+raw = zlib.decompress(data)
+assert len(set(raw[1:1 + w * 3])) >= 1 and len(set(raw)) > 20, 'blank picture'
+PY
+    done
+    echo "ict-facekit: png-seq frames 30-32 at 320x240 rendered under Xvfb"
+    DISPLAY= expect 66 "$fp" export "$take" --format png-seq --range 0-0 --out "$ict/png-none"
+else
+    echo "SKIP (png-seq only): no viewer in this build or no xvfb-run"
+fi
+
 # refusals
-expect() { local want=$1; shift; "$@" >"$tmp/x.out" 2>&1; local got=$?
-           [ $got -eq "$want" ] || { cat "$tmp/x.out"; fail "exit $got, want $want: $*"; }; }
 expect 64 "$fp" export "$take" --format fbx
 expect 64 "$fp" export "$take"
-expect 69 "$fp" export "$take" --format png-seq
+expect 64 "$fp" export "$take" --format png-seq --size 10x10
 expect 64 "$fp" export "$take" --format pc2 --range 5
 expect 66 "$fp" export "$tmp/none.fptake" --format pc2
 expect 73 "$fp" export "$take" --format pc2 --out /proc/nope/x.pc2

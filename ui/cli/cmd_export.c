@@ -6,6 +6,10 @@
 #include "app_util.h"
 #include "command.h"
 #include "fp_take_player.h"
+#include "fp_error.h"
+#ifdef FP_HAVE_UI
+#include "fp_frame_render.h"
+#endif
 
 #include <errno.h>
 #include <getopt.h>
@@ -13,13 +17,51 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
+
+/* Where frames go: an exporter (core/export), or PNG files rendered headless (png-seq). */
+typedef struct sink {
+    fp_exporter *x;
+#ifdef FP_HAVE_UI
+    fp_frame_renderer *png;
+#endif
+    const char *dir, *stem;
+    uint64_t frames, bytes;
+} sink;
+
+static int sink_add(sink *k, const float *pos, double t, char *err, size_t errlen)
+{
+    if (k->x)
+        return fp_export_add(k->x, pos, t, err, errlen);
+#ifdef FP_HAVE_UI
+    char file[4400];
+    snprintf(file, sizeof file, "%s/%s_%06llu.png", k->dir, k->stem, (unsigned long long)k->frames);
+    int rc = fp_frame_renderer_png(k->png, pos, file, err, errlen);
+    if (rc)
+        return rc;
+    struct stat st;
+    if (stat(file, &st) == 0)
+        k->bytes += (uint64_t)st.st_size;
+    k->frames++;
+    return 0;
+#else
+    (void)pos; (void)t;
+    return fp_errorf(err, errlen, -ENOTSUP, "png-seq needs the viewer (FP_BUILD_UI)");
+#endif
+}
+
+static uint64_t sink_frames(const sink *k)
+{
+    return k->x ? fp_export_frames(k->x) : k->frames;
+}
 
 static void usage(FILE *f)
 {
     fprintf(f,
         "usage: facepuppet export TAKE --format gltf|glb|pc2|mdd|obj-seq|png-seq [--out PATH]\n"
-        "                         [--range IN-OUT] [--fps F] [--max-error MM] [--mesh FILE]\n\n"
+        "                         [--range IN-OUT] [--fps F] [--max-error MM] [--mesh FILE]\n"
+        "                         [--size WxH] [--camera YAW,PITCH[,ZOOM]]\n\n"
         "Play a take's frames from the control sets it stored (as `play`: bit-identical to the\n"
         "recording) and write them for an animator's tools:\n"
         "  gltf, glb   glTF 2.0: the mesh with its UVs and materials, K morph targets and one\n"
@@ -30,7 +72,8 @@ static void usage(FILE *f)
         "              vertex order (Blender's Mesh Cache modifier, Maya, 3ds Max)\n"
         "  obj-seq     one mesh per frame in a folder, written back as the input came in\n"
         "              (quads, UV seams, groups, materials kept)\n"
-        "  png-seq     not available yet (see docs/export.md)\n\n"
+        "  png-seq     one PNG per frame, drawn as the live viewer draws the face, headless\n"
+        "              (needs a display: xvfb-run on a server)\n\n"
         "  -f, --format F        the format (required)\n"
         "  -o, --out PATH        the file (a folder for obj-seq); default: the take's path with\n"
         "                        the format's extension (obj-seq: TAKE_frames/)\n"
@@ -44,12 +87,15 @@ static void usage(FILE *f)
         "                        or the head's\n"
         "      --max-targets K   glTF: at most K morph targets (the error is then what it is)\n"
         "      --step            glTF: STEP interpolation between keys (default LINEAR)\n"
+        "      --size WxH        png-seq: the picture's size in pixels (default 1280x720)\n"
+        "      --camera Y,P[,Z]  png-seq: turn the framed view by yaw Y and pitch P degrees,\n"
+        "                        zoom Z (default 0,0,1: the face from the front)\n"
         "  -m, --mesh FILE       the take's mesh from another path (its crc32 must match)\n"
         "      --plugin-dir DIR  look for plugins in DIR first\n"
         "  -q, --quiet           no progress and no summary\n"
         "  -h, --help            this text\n\n"
         "Exit status: 0 done, 64 usage, 65 a damaged take or another mesh, 66 missing,\n"
-        "69 png-seq, 73 an output not written (facepuppet --help has the whole table).\n");
+        "66 no display for png-seq, 69 png-seq in a build without the viewer, 73 an output not written (facepuppet --help has the whole table).\n");
 }
 
 /* One end of --range: "" (open), a frame index, or a timecode. */
@@ -112,7 +158,8 @@ static void progress(bool on, size_t done, size_t total, uint64_t written)
 
 static int export_main(int argc, char **argv)
 {
-    enum { OPT_RANGE = 0x200, OPT_FPS, OPT_MAX_ERROR, OPT_MAX_TARGETS, OPT_STEP, OPT_PLUGIN_DIR };
+    enum { OPT_RANGE = 0x200, OPT_FPS, OPT_MAX_ERROR, OPT_MAX_TARGETS, OPT_STEP, OPT_PLUGIN_DIR,
+           OPT_SIZE, OPT_CAMERA };
     static const struct option opts[] = {
         {"format", required_argument, 0, 'f'},   {"out", required_argument, 0, 'o'},
         {"range", required_argument, 0, OPT_RANGE}, {"fps", required_argument, 0, OPT_FPS},
@@ -121,7 +168,10 @@ static int export_main(int argc, char **argv)
         {"step", no_argument, 0, OPT_STEP},      {"mesh", required_argument, 0, 'm'},
         {"plugin-dir", required_argument, 0, OPT_PLUGIN_DIR},
         {"quiet", no_argument, 0, 'q'},          {"help", no_argument, 0, 'h'},
+        {"size", required_argument, 0, OPT_SIZE}, {"camera", required_argument, 0, OPT_CAMERA},
         {0, 0, 0, 0}};
+    int width = 1280, height = 720;
+    double yaw = 0, pitch = 0, zoom = 1;
     const char *format = NULL, *out = NULL, *range = NULL, *mesh = NULL, *dirs[8];
     size_t ndirs = 0;
     double fps = 0, max_error = 0.1;
@@ -156,6 +206,22 @@ static int export_main(int argc, char **argv)
             }
             break;
         case OPT_STEP: step = 1; break;
+        case OPT_SIZE:
+            if (sscanf(optarg, "%dx%d", &width, &height) != 2 || width < 16 || height < 16 ||
+                width > 8192 || height > 8192) {
+                fprintf(stderr, "facepuppet export: --size WxH, 16..8192 each, got '%s'\n", optarg);
+                return FP_EXIT_USAGE;
+            }
+            break;
+        case OPT_CAMERA: {
+            int k = sscanf(optarg, "%lf,%lf,%lf", &yaw, &pitch, &zoom);
+            if (k < 2 || !isfinite(yaw) || !isfinite(pitch) || !(zoom > 0 && zoom < 1000)) {
+                fprintf(stderr, "facepuppet export: --camera YAW,PITCH[,ZOOM] in degrees (zoom > 0), "
+                        "got '%s'\n", optarg);
+                return FP_EXIT_USAGE;
+            }
+            break;
+        }
         case 'm': mesh = optarg; break;
         case OPT_PLUGIN_DIR:
             if (ndirs < 8) dirs[ndirs++] = optarg;
@@ -173,14 +239,16 @@ static int export_main(int argc, char **argv)
         fprintf(stderr, "facepuppet export: give --format gltf|glb|pc2|mdd|obj-seq|png-seq\n");
         return FP_EXIT_USAGE;
     }
-    if (strcmp(format, "png-seq") == 0) {
-        fprintf(stderr, "facepuppet export: png-seq is not available yet: render frames with "
-                "`facepuppet play --frames-out DIR` and the viewer's screenshots, or export "
-                "obj-seq (docs/export.md)\n");
+    const bool png = strcmp(format, "png-seq") == 0;
+#ifndef FP_HAVE_UI
+    if (png) {
+        fprintf(stderr, "facepuppet export: png-seq needs the viewer, and this build has none "
+                "(FP_BUILD_UI off)\n");
         return FP_EXIT_UNAVAILABLE;
     }
-    fp_export_format fmt;
-    if (fp_export_format_parse(format, &fmt)) {
+#endif
+    fp_export_format fmt = FP_EXPORT_OBJ_SEQ;
+    if (!png && fp_export_format_parse(format, &fmt)) {
         fprintf(stderr, "facepuppet export: unknown --format '%s' (gltf, glb, pc2, mdd, obj-seq, "
                 "png-seq)\n", format);
         return FP_EXIT_USAGE;
@@ -197,7 +265,7 @@ static int export_main(int argc, char **argv)
         return fp_app_exit_code(rc, FP_APP_INPUT);
     }
     int status = FP_EXIT_OK;
-    fp_exporter *x = NULL;
+    sink k = {0};
     float *held = NULL;
     const fp_take_header *h = fp_take_player_header(p);
     fp_take_reader *r = fp_take_player_reader(p);
@@ -230,7 +298,9 @@ static int export_main(int argc, char **argv)
     if (!out) {
         const char *dot = strrchr(take_path, '.'), *slash = strrchr(take_path, '/');
         int stem = dot && (!slash || dot > slash) ? (int)(dot - take_path) : (int)strlen(take_path);
-        if (fmt == FP_EXPORT_OBJ_SEQ)
+        if (png)
+            snprintf(def_out, sizeof def_out, "%.*s_png", stem, take_path);
+        else if (fmt == FP_EXPORT_OBJ_SEQ)
             snprintf(def_out, sizeof def_out, "%.*s_frames", stem, take_path);
         else
             snprintf(def_out, sizeof def_out, "%.*s.%s", stem, take_path,
@@ -244,11 +314,31 @@ static int export_main(int argc, char **argv)
     fp_export_options eo = {.format = fmt, .path = out, .max_error_mm = max_error,
                             .mm_per_unit = mm_per_unit, .max_targets = max_targets,
                             .step = step, .name = name, .stem = name};
-    if ((rc = fp_export_begin(fp_session_mesh(s), &eo, &x, err, sizeof err))) {
+    if (!png && (rc = fp_export_begin(fp_session_mesh(s), &eo, &k.x, err, sizeof err))) {
         fprintf(stderr, "facepuppet export: %s\n", err);
         status = fp_app_exit_code(rc, FP_APP_OUTPUT);
         goto done;
     }
+#ifdef FP_HAVE_UI
+    if (png) {
+        k.dir = out;
+        k.stem = name;
+        if (mkdir(out, 0777) != 0 && errno != EEXIST) {
+            fprintf(stderr, "facepuppet export: %s: %s\n", out, strerror(errno));
+            status = fp_app_exit_code(-errno, FP_APP_OUTPUT);
+            goto done;
+        }
+        fp_frame_render_options ro = {.width = width, .height = height, .yaw_deg = yaw,
+                                      .pitch_deg = pitch, .zoom = zoom};
+        if ((rc = fp_frame_renderer_open(fp_session_mesh(s), &ro, &k.png, err, sizeof err))) {
+            fprintf(stderr, "facepuppet export: %s\n", err);
+            status = fp_app_exit_code(rc, FP_APP_INPUT);
+            goto done;
+        }
+    }
+#else
+    (void)width; (void)height; (void)yaw; (void)pitch; (void)zoom;
+#endif
     const size_t n = fp_session_vertex_count(s), total = fp_take_reader_frames(r);
     const bool bar = !quiet && isatty(STDERR_FILENO);
     held = malloc(n * 3 * sizeof(float));
@@ -275,14 +365,14 @@ static int export_main(int argc, char **argv)
                 first_ns = f.time_ns;
             }
             if (fps <= 0) {
-                rc = fp_export_add(x, pos, (double)(f.time_ns - first_ns) * 1e-9, err, sizeof err);
+                rc = sink_add(&k, pos, (double)(f.time_ns - first_ns) * 1e-9, err, sizeof err);
             } else {
                 /* samples before this frame's time show the frame held before it */
                 rc = 0;
                 for (double t; have_held && !rc &&
                                (t = (double)sample / fps) < (double)(f.time_ns - first_ns) * 1e-9;
                      sample++)
-                    rc = fp_export_add(x, held, t, err, sizeof err);
+                    rc = sink_add(&k, held, t, err, sizeof err);
                 memcpy(held, pos, n * 3 * sizeof(float));
                 held_ns = f.time_ns;
                 have_held = true;
@@ -296,7 +386,7 @@ static int export_main(int argc, char **argv)
             break;   /* past OUT */
         }
         if (bar && (i + 1 == total || (double)i - last_bar >= (double)total / 100)) {
-            progress(true, i + 1, total, fp_export_frames(x));
+            progress(true, i + 1, total, sink_frames(&k));
             last_bar = (double)i;
         }
     }
@@ -306,11 +396,11 @@ static int export_main(int argc, char **argv)
         goto done;
     }
     if (bar && index < total)
-        progress(true, total, total, fp_export_frames(x));
+        progress(true, total, total, sink_frames(&k));
     if (fps > 0 && have_held) {   /* the held frame's own sample times, up to its time */
         for (double t; (t = (double)sample / fps) <= (double)(held_ns - first_ns) * 1e-9 + 1e-12;
              sample++)
-            if ((rc = fp_export_add(x, held, t, err, sizeof err))) {
+            if ((rc = sink_add(&k, held, t, err, sizeof err))) {
                 fprintf(stderr, "facepuppet export: %s\n", err);
                 status = fp_app_exit_code(rc, FP_APP_OUTPUT);
                 goto done;
@@ -322,12 +412,21 @@ static int export_main(int argc, char **argv)
         status = FP_EXIT_USAGE;
         goto done;
     }
-    status = fp_app_export_close("facepuppet export", &x, fmt, out, max_error, quiet, stdout);
+    if (png) {
+        if (!quiet)
+            printf("facepuppet export: wrote %llu PNG frames (%dx%d) to %s: %.2f MB\n",
+                   (unsigned long long)k.frames, width, height, out, (double)k.bytes / 1e6);
+        goto done;
+    }
+    status = fp_app_export_close("facepuppet export", &k.x, fmt, out, max_error, quiet, stdout);
     if (!quiet && status == FP_EXIT_OK && (fmt == FP_EXPORT_GLTF || fmt == FP_EXPORT_GLB))
         printf("facepuppet export: %.6g mm per mesh unit; frame rate %u/%u%s\n", mm_per_unit,
                h->rate.num, h->rate.den, fps > 0 ? " (resampled)" : "");
 done:
-    fp_export_abort(&x);
+    fp_export_abort(&k.x);
+#ifdef FP_HAVE_UI
+    fp_frame_renderer_close(&k.png);
+#endif
     free(held);
     fp_take_player_close(&p);
     fp_plugin_path_clear(&path);
