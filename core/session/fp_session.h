@@ -291,6 +291,10 @@ unsigned fp_session_input_errors(const fp_session *s, const char **last);
 /** Write the shape to show (normals recomputed) to path; format by extension. Returns 0,
  *  -ENOMEM, or the mesh writer's code unchanged (fp_mesh_save), err naming path. */
 int fp_session_save(const fp_session *s, const char *path, char *err, size_t errlen);
+/** fp_session_save, written back as the mesh came in (fp_mesh_save_ex): *dropped (may be
+ *  NULL) gets what the file's format could not keep (FP_MESH_DROPPED_* bits). */
+int fp_session_save_ex(const fp_session *s, const char *path, unsigned *dropped, char *err,
+                       size_t errlen);
 
 /** fp_session_stop if not done (its error only logged), then a pending repeated error's
  *  count is logged, plugins unloaded, everything freed; sets *s to NULL. NULL-safe. */

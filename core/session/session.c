@@ -674,6 +674,12 @@ unsigned long fp_session_dropped(const fp_session *s)
 
 int fp_session_save(const fp_session *s, const char *path, char *err, size_t errlen)
 {
+    return fp_session_save_ex(s, path, NULL, err, errlen);
+}
+
+int fp_session_save_ex(const fp_session *s, const char *path, unsigned *dropped, char *err,
+                       size_t errlen)
+{
     fp_mesh out = *s->mesh;
     size_t bytes = s->n * 3 * sizeof(float);
     out.positions = (float *)s->shown;
@@ -683,7 +689,7 @@ int fp_session_save(const fp_session *s, const char *path, char *err, size_t err
         return -ENOMEM;
     }
     fp_mesh_compute_normals(&out);
-    int rc = fp_mesh_save(&out, path, err, errlen);  /* its code, unchanged */
+    int rc = fp_mesh_save_ex(&out, path, dropped, err, errlen);  /* its code, unchanged */
     free(out.normals);
     return rc;
 }

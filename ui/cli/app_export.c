@@ -50,3 +50,12 @@ int fp_app_export_close(const char *cmd, fp_exporter **x, fp_export_format forma
     }
     return FP_EXIT_OK;
 }
+
+void fp_app_print_dropped(const char *cmd, const char *file, unsigned dropped, bool quiet)
+{
+    if (!dropped || quiet)
+        return;
+    char what[256];
+    fprintf(stderr, "%s: note: %s cannot hold the input's %s\n", cmd, file,
+            fp_mesh_dropped_text(dropped, what, sizeof what));
+}

@@ -20,4 +20,9 @@ int fp_app_export_open(const char *cmd, const char *file, const struct fp_mesh *
 int fp_app_export_close(const char *cmd, fp_exporter **x, fp_export_format format,
                         const char *file, double limit_mm, bool quiet, FILE *f);
 
+/** "CMD: note: FILE cannot hold the input's polygons, UV seams, ..." on stderr where a mesh
+ *  written to another format lost something (fp_mesh_save_ex's dropped bits); nothing when
+ *  dropped is 0 or quiet. */
+void fp_app_print_dropped(const char *cmd, const char *file, unsigned dropped, bool quiet);
+
 #endif

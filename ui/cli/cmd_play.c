@@ -136,11 +136,14 @@ static int play_main(int argc, char **argv)
         status = fp_app_exit_code(rc, FP_APP_INPUT);
         goto done;
     }
-    if (out && (rc = fp_session_save(s, out, err, sizeof err))) {
+    unsigned dropped = 0;
+    if (out && (rc = fp_session_save_ex(s, out, &dropped, err, sizeof err))) {
         fprintf(stderr, "facepuppet play: %s\n", err);
         status = fp_app_exit_code(rc, FP_APP_OUTPUT);
         goto done;
     }
+    if (out)
+        fp_app_print_dropped("facepuppet play", out, dropped, quiet);
     if (ex && (status = fp_app_export_close("facepuppet play", &ex, export_fmt, export_file, 0.1,
                                             quiet, stdout)))
         goto done;

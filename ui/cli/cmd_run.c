@@ -344,10 +344,12 @@ static int run_main(int argc, char **argv)
         if (d > max) max = d;
         if (d > 0) moved++;
     }
-    if (status == FP_EXIT_OK && (rc = fp_session_save(s, out, err, sizeof err))) {
+    unsigned dropped = 0;
+    if (status == FP_EXIT_OK && (rc = fp_session_save_ex(s, out, &dropped, err, sizeof err))) {
         fprintf(stderr, "facepuppet run: %s\n", err);
         status = fp_app_exit_code(rc, FP_APP_OUTPUT);
     }
+    fp_app_print_dropped("facepuppet run", out, dropped, quiet);
     if (ex && status == FP_EXIT_OK)
         status = fp_app_export_close("facepuppet run", &ex, export_fmt, export_file, 0.1, quiet,
                                      stderr);
