@@ -14,8 +14,12 @@
  *    at flex_range degrees more flexion (or open_range mm more opening), linear between and
  *    clamped to the channel's range, so monotonic in the thumb's motion.
  *  - The other fingertips drive control vectors whose start points are rig landmarks (the
- *    table below, key map= or targets=): start points are fixed for the whole gesture, so
- *    the host reuses its factorization (the anchored mode of sec. 2.3.1).
+ *    table below, key map= or targets=): each start point is the landmark's position as the
+ *    host's rig view gives it this frame (on the base posed by the rig's channels), so start
+ *    points stay bit-identical while the face's pose does not change and the host reuses its
+ *    factorization (the anchored mode of sec. 2.3.1). When jaw.open changes, the host poses
+ *    the base anew (and factors anew anyway); the landmarks the jaw carries (the mouth
+ *    corners) then follow it, a frame behind the host's pose.
  *  - Relative to the performer's own neutral hand: the pose at engage is the zero.
  *    end = landmark + gain x (fingertip now - fingertip at neutral), the hand's motion
  *    taken in millimetres and expressed in the face's frame from the rig (the hand's right,
@@ -100,7 +104,6 @@ typedef struct onehand {
     double scale;                          /* mesh units per mm of hand, measured at engage */
     float neutral[FP_HAND_JOINTS][3];      /* the hand at engage, mesh units */
     double neutral_jaw;                    /* the jaw measure at engage (rad or mm) */
-    float start[OH_SLOTS][3];              /* the landmarks at engage */
     float held[OH_SLOTS][3];               /* displacement kept from before a rest, mesh units */
     float last[OH_SLOTS][3];               /* this gesture's last displacement (no clamp) */
     double held_jaw, last_jaw;             /* jaw.open above neutral: kept, and the last */
@@ -201,7 +204,7 @@ static void end_gesture(onehand *o)
 }
 
 /* The hand's pose becomes the zero. A held shape (hold=1) is kept as an offset. */
-static int engage(onehand *o, const fp_hand_pose *h, const fp_rig_view *rig)
+static int engage(onehand *o, const fp_hand_pose *h)
 {
     double scale = hand_scale(o, h);
     if (!(scale > 0)) return -EDOM;
@@ -212,13 +215,6 @@ static int engage(onehand *o, const fp_hand_pose *h, const fp_rig_view *rig)
     }
     memset(o->last, 0, sizeof o->last);
     o->last_jaw = 0;
-    if (!o->posed) {                       /* a new gesture: the landmarks of the base now */
-        for (size_t i = 0; i < o->count; i++) {
-            const fp_rig_landmark *lm = find_landmark(rig, o->landmark[i]);
-            if (!lm) return -ENOENT;
-            memcpy(o->start[i], lm->position, sizeof o->start[i]);
-        }
-    }
     o->scale = scale;
     memcpy(o->neutral, h->joints, sizeof o->neutral);
     o->neutral_jaw = jaw_measure(o, h, scale);
@@ -263,13 +259,17 @@ static void follow(onehand *o, const fp_hand_pose *h, const fp_rig_view *rig, do
     o->last_jaw = t / (o->jaw == JAW_FLEXION ? o->flex_range : o->open_range);
 }
 
-/* Write the control set of the shape shown: start = landmark, end = start + held + last. */
-static int emit(const onehand *o, const fp_frame_input *in, fp_control_set *out)
+/* Write the control set of the shape shown: start = the landmark where the rig view has it
+ * now, end = start + held + last. */
+static int emit(const onehand *o, const fp_rig_view *rig, const fp_frame_input *in,
+                fp_control_set *out)
 {
     if (o->count > out->capacity) return -ENOSPC;
     for (size_t i = 0; i < o->count; i++) {
-        memcpy(out->start[i], o->start[i], sizeof o->start[i]);
-        for (int k = 0; k < 3; k++) out->end[i][k] = o->start[i][k] + (o->held[i][k] + o->last[i][k]);
+        const fp_rig_landmark *lm = find_landmark(rig, o->landmark[i]);
+        if (!lm) return -ENOENT;
+        memcpy(out->start[i], lm->position, sizeof out->start[i]);
+        for (int k = 0; k < 3; k++) out->end[i][k] = lm->position[k] + (o->held[i][k] + o->last[i][k]);
         fp_clamp_vector(out->start[i], out->end[i], o->clamp * in->radius);
     }
     out->count = o->count;
@@ -332,14 +332,14 @@ static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *o
         bool asked = req & FP_INTENT_ENGAGE;
         bool still = o->automatic && !o->engaged && held_still(o, h, in->time_ns);
         if ((asked && (!o->engaged || o->hold)) || still) {
-            int rc = engage(o, h, rig);
+            int rc = engage(o, h);
             if (rc) return rc;
             out->intents |= FP_INTENT_ENGAGE;
         }
         if (o->engaged) follow(o, h, rig, mm_per_unit);
     }
     if (o->posed) {
-        int rc = emit(o, in, out);
+        int rc = emit(o, rig, in, out);
         if (rc) return rc;
     }
     emit_jaw(o, rig, out, o->posed);

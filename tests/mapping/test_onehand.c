@@ -361,7 +361,8 @@ static void test_still_hand(void **state)
 }
 
 /* The start points are exactly the rig's landmarks (table mouth), and stay bit-identical
- * frame after frame while the hand moves, so the host reuses its factorization. */
+ * frame after frame while the hand moves, so the host reuses its factorization; when the
+ * host's view moves a landmark (the rig posed the face), the start point follows it. */
 static void test_start_points_are_landmarks(void **state)
 {
     (void)state;
@@ -396,6 +397,19 @@ static void test_start_points_are_landmarks(void **state)
             assert_memory_equal(x.start, s0, sizeof s0);
         }
         assert_true(x.end[idx_slot][1] != x.start[idx_slot][1]);
+        /* the host poses the face (the jaw carries a corner down): the start point is the
+         * landmark where the view has it now, the displacement unchanged */
+        fp_rig_landmark *lm = (fp_rig_landmark *)landmark("mouth_corner_left");
+        float keep[3], d0[3];
+        memcpy(keep, lm->position, sizeof keep);
+        size_t k = slot_of(&x, "mouth_corner_left");
+        for (int c = 0; c < 3; c++) d0[c] = x.end[k][c] - x.start[k][c];
+        lm->position[1] -= 0.25f;
+        put(&x, side, &h, false);
+        step(&x, 0);
+        assert_memory_equal(x.start[k], lm->position, sizeof keep);
+        for (int c = 0; c < 3; c++) assert_float_equal(x.end[k][c] - x.start[k][c], d0[c], 1e-6);
+        memcpy(lm->position, keep, sizeof keep);
         close_onehand(&x);
     }
 }
