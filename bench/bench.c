@@ -680,12 +680,15 @@ static int case_support(const bench_opts *o)
 }
 
 
-const char *const fp_bench_cases[] = {"table1", "scale", "centres", "guard", "support", NULL};
+/* The recorder's cost on the session thread (bench_take.c). */
+static int case_take(const bench_opts *o) { return fp_bench_take(stdout, o->quick, o->json); }
+
+const char *const fp_bench_cases[] = {"table1", "scale", "centres", "guard", "support", "take", NULL};
 
 int fp_bench_run(const fp_bench_options *opt)
 {
     static int (*const run[])(const bench_opts *) = {case_table1, case_scale, case_centres,
-                                                     case_guard, case_support};
+                                                     case_guard, case_support, case_take};
     bench_opts o = {opt->quick, opt->json, opt->quick ? 2 : 3};
     int found = 0;
     for (size_t c = 0; fp_bench_cases[c]; c++) {

@@ -20,4 +20,14 @@ extern const char *const fp_bench_cases[];
  *  FP_ENUMERIC (an engine call failed; its message is on stderr). Not thread-safe. */
 int fp_bench_run(const fp_bench_options *o);
 
+#include <stdio.h>
+
+/** `--case take` (bench/bench_take.c): the take recorder's cost on the session thread
+ *  (median, p99 and max of fp_take_recorder_push per frame, 10 control vectors and 4
+ *  events, while the recorder thread writes to a folder under /tmp) and a take's size per
+ *  minute at 60 fps. One line of text, or one JSON object with json != 0, to `out`.
+ *  quick: 4000 frames instead of 20000 (about 1 s against 5 s). Returns 0, or 1 when the
+ *  take could not be written (the reason on stderr). */
+int fp_bench_take(FILE *out, int quick, int json);
+
 #endif

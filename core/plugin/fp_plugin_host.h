@@ -103,6 +103,39 @@ void fp_plugin_unload(fp_plugin *plugin);
 /** Names of the plugins of `kind` on `path`, comma-separated into buf (for messages). */
 void fp_plugin_list(const fp_plugin_path *path, fp_plugin_kind kind, char *buf, size_t len);
 
+/** What a loaded plugin's factory says of itself (plugin.h), read only where the factory's
+ *  `size` covers a field: name, description, usage (NULL where absent) and, for an ABI 1.1
+ *  factory, the typed key list `params` (NULL-name terminated; NULL for a 1.0 factory or
+ *  one that declares none). Pointers into the plugin: valid until it is unloaded. */
+typedef struct fp_plugin_about {
+    const char *name, *description, *usage;
+    const fp_param_info *params;
+} fp_plugin_about;
+void fp_plugin_describe(const fp_plugin *plugin, fp_plugin_about *out);
+
+/** One candidate file that fp_plugin_scan found. */
+typedef struct fp_plugin_scan_item {
+    fp_plugin_kind kind;
+    const char *dir;           /* the folder it was found in */
+    const char *file;          /* full path */
+    const char *name;          /* the NAME of input-NAME.so / map-NAME.so */
+    bool shadowed;             /* a folder searched earlier has a plugin of that kind and name:
+                                  this one is never loaded by name (it is still inspected) */
+    int code;                  /* 0 loaded; an FP_EPLUGIN_* code (why it is broken); -EACCES
+                                  skipped for safety (not loaded) */
+    const char *error;         /* the reason where code != 0 */
+    const fp_plugin *plugin;   /* loaded where code == 0: entry and factory readable during
+                                  the callback only (the scan unloads it afterwards) */
+} fp_plugin_scan_item;
+
+/** Every `input-*.so` and `map-*.so` in every folder of `path`, in search order, each
+ *  file's names sorted: loaded (fp_plugin_load, which runs the plugin's init), passed to fn,
+ *  then unloaded. A file outside the built-in folder that fp_plugin_path_unsafe rejects is
+ *  passed with code -EACCES and not loaded. Returns how many files were passed.
+ *  [main-thread]: loading runs plugins' init functions. */
+size_t fp_plugin_scan(const fp_plugin_path *path,
+                      void (*fn)(void *user, const fp_plugin_scan_item *item), void *user);
+
 /* ---- the event queue: bounded, multi-producer single-consumer, lock-free ------------- */
 
 /** Bounded MPSC queue of fp_event (D. Vyukov's bounded queue, sequence number per cell).
@@ -164,8 +197,27 @@ int fp_input_instance_close_record(fp_input_instance *inst, char *err, size_t er
 /** CLOCK_MONOTONIC in nanoseconds: the host clock of the ABI. */
 int64_t fp_now_ns(void);
 
-/** Make the standard host services for a mapping instance (no queue). */
+/** Make the standard host services for a mapping instance (no queue); its log lines go to
+ *  stderr as "facepuppet: NAME: LEVEL: MESSAGE". `name` must outlive the host. Prefer
+ *  fp_mapping_host_init, which routes them through a log callback. */
 void fp_host_init_for_mapping(fp_host *host, const char *name);
+
+/** A log callback with the signature of the session's (fp_session_log_fn): level is an
+ *  fp_log_level, source names who speaks. */
+typedef void (*fp_host_log_fn)(void *user, int level, const char *source, const char *message);
+
+/** The fp_host of a mapping instance, with its log target: plugin log lines go to `log`
+ *  (NULL: stderr, "facepuppet: mapping 'NAME': LEVEL: MESSAGE") with the source
+ *  "mapping 'NAME'"; FP_LOG_DEBUG lines only when FACEPUPPET_DEBUG is set in the
+ *  environment. Pass &mh->host to the factory; mh must stay in place while the instance
+ *  lives. */
+typedef struct fp_mapping_host {
+    fp_host host;
+    char source[96];
+    fp_host_log_fn log;
+    void *log_user;
+} fp_mapping_host;
+void fp_mapping_host_init(fp_mapping_host *mh, const char *name, fp_host_log_fn log, void *log_user);
 
 #ifdef __cplusplus
 }

@@ -3,6 +3,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "fp_plugin_host.h"
 
+#include "fp_plugin_crash.h"
 #include "fp_record.h"
 
 #include <errno.h>
@@ -56,11 +57,44 @@ static void host_fill(fp_host *h, void *data)
     h->get_extension = host_extension;
 }
 
+static void named_log(const fp_host *host, fp_log_level level, const char *message)
+{
+    static const char *names[] = {"error", "warning", "info", "debug"};
+    if (level > FP_LOG_INFO && !getenv("FACEPUPPET_DEBUG")) return;
+    fprintf(stderr, "facepuppet: %s: %s: %s\n", host->host_data ? (const char *)host->host_data : "plugin",
+            names[level <= FP_LOG_DEBUG ? level : FP_LOG_DEBUG], message ? message : "");
+}
+
 void fp_host_init_for_mapping(fp_host *host, const char *name)
 {
-    (void)name;
-    host_fill(host, NULL);
+    host_fill(host, (void *)name);
+    host->log = named_log;
     host->push_event = NULL; /* mappings do not push events */
+}
+
+/* host_data is the fp_mapping_host itself (the fp_host is its first member). */
+static void mapping_log(const fp_host *host, fp_log_level level, const char *message)
+{
+    const fp_mapping_host *mh = (const fp_mapping_host *)host;
+    if (level > FP_LOG_INFO && !getenv("FACEPUPPET_DEBUG")) return;
+    if (mh->log) {
+        mh->log(mh->log_user, (int)level, mh->source, message ? message : "");
+        return;
+    }
+    static const char *names[] = {"error", "warning", "info", "debug"};
+    fprintf(stderr, "facepuppet: %s: %s: %s\n", mh->source, names[level <= FP_LOG_DEBUG ? level : FP_LOG_DEBUG],
+            message ? message : "");
+}
+
+void fp_mapping_host_init(fp_mapping_host *mh, const char *name, fp_host_log_fn log, void *log_user)
+{
+    memset(mh, 0, sizeof *mh);
+    host_fill(&mh->host, mh);
+    mh->host.log = mapping_log;
+    mh->host.push_event = NULL; /* mappings do not push events */
+    snprintf(mh->source, sizeof mh->source, "mapping '%s'", name ? name : "?");
+    mh->log = log;
+    mh->log_user = log_user;
 }
 
 int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
@@ -83,11 +117,14 @@ int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
     host_fill(&inst->host, inst);
     const fp_input_factory *f = inst->plugin.factory;
     char perr[512] = "";
+    fp_plugin_call_enter(inst->name, "create", 0);
     rc = f->create(&inst->host, spec.arg, spec.params, spec.nparams, &inst->input, perr, sizeof perr);
+    fp_plugin_call_leave();
     if (rc || !inst->input) {
-        snprintf(err, errlen, "input '%s': %s", spec_text, perr[0] ? perr : "create failed");
+        snprintf(err, errlen, "input '%s': %s", spec_text,
+                 perr[0] ? perr : rc ? "create failed" : "create returned 0 without an instance");
         inst->input = NULL;
-        if (!rc) rc = -EINVAL;
+        if (!rc) rc = FP_EPLUGIN_FAULT;
         goto out;
     }
     if (record && (rc = fp_event_recorder_open(record, &inst->record, perr, sizeof perr))) {
@@ -106,7 +143,9 @@ out:
 int fp_input_instance_start(fp_input_instance *inst, char *err, size_t errlen)
 {
     char perr[512] = "";
+    fp_plugin_call_enter(inst->name, "start", 0);
     int rc = inst->input->start(inst->input, perr, sizeof perr);
+    fp_plugin_call_leave();
     if (rc) {
         snprintf(err, errlen, "input '%s': %s", inst->name, perr[0] ? perr : "start failed");
         return rc;
@@ -124,7 +163,11 @@ bool fp_input_instance_poll(fp_input_instance *inst, fp_event *out)
 
 static void stop_input(fp_input_instance *inst)
 {
-    if (inst->input && !inst->stopped && inst->input->stop) inst->input->stop(inst->input);
+    if (inst->input && !inst->stopped && inst->input->stop) {
+        fp_plugin_call_enter(inst->name, "stop", 0);
+        inst->input->stop(inst->input);
+        fp_plugin_call_leave();
+    }
     inst->stopped = true;
     inst->started = false;
 }
@@ -148,7 +191,11 @@ void fp_input_instance_close(fp_input_instance *inst)
     fp_input_instance_close_record(inst, NULL, 0);
     stop_input(inst);
     if (inst->input) {
-        if (inst->input->destroy) inst->input->destroy(inst->input);
+        if (inst->input->destroy) {
+            fp_plugin_call_enter(inst->name, "destroy", 0);
+            inst->input->destroy(inst->input);
+            fp_plugin_call_leave();
+        }
         inst->input = NULL;
     }
     fp_event_queue_destroy(&inst->queue);

@@ -64,6 +64,9 @@ void fp_pose_build(fp_pose_state *p)
             if (hs->have_wrist) {
                 memcpy(pos, hs->wrist_pos, sizeof pos);
                 memcpy(rot, hs->wrist_rot, sizeof rot);
+            } else if (p->glove_placed) {
+                memcpy(pos, p->glove_pos[h], sizeof pos);
+                memcpy(rot, p->glove_rot[h], sizeof rot);
             } else {
                 fp_pose_default_wrist(h, pos, rot);
             }
@@ -72,7 +75,7 @@ void fp_pose_build(fp_pose_state *p)
             fp_hand_fk(&p->model, (fp_hand_side)h, hs->angles.radians, hs->angles.valid, pos, rot,
                        hs->joints_mm);
         }
-        for (int j = 0; j < FP_HAND_JOINTS; j++) fp_pose_to_mesh(&p->calib, hs->joints_mm[j], out->joints[j]);
+        for (int j = 0; j < FP_HAND_JOINTS; j++) fp_pose_to_mesh(&p->calib, h, hs->joints_mm[j], out->joints[j]);
     }
 }
 
@@ -107,20 +110,97 @@ bool fp_pose_inputs_workspace(fp_input *const *inputs, size_t n, float ws_min[3]
     return known;
 }
 
-void fp_pose_fit_workspace(fp_calibration *c, const float ws_min[3], const float ws_max[3],
-                           const float face_min[3], const float face_max[3])
+/* The calibration's rotation, normalised; all zeros (or degenerate): the identity. */
+static void calib_rotation(const fp_calibration *c, double q[4])
 {
-    double ws_w = fmax(ws_max[0] - ws_min[0], 1.0);
-    double ws_h = fmax(ws_max[1] - ws_min[1], 1.0);
-    double sx = (face_max[0] - face_min[0]) / ws_w, sy = (face_max[1] - face_min[1]) / ws_h;
-    c->scale = fmin(sx, sy);
-    for (int i = 0; i < 2; i++)
-        c->offset[i] = 0.5 * (face_min[i] + face_max[i]) - c->scale * 0.5 * (ws_min[i] + ws_max[i]);
-    double depth = face_max[2] - face_min[2];
-    c->offset[2] = (face_max[2] - 0.15 * depth) - c->scale * ws_min[2];
+    double n = sqrt(c->rotation[0] * c->rotation[0] + c->rotation[1] * c->rotation[1] +
+                    c->rotation[2] * c->rotation[2] + c->rotation[3] * c->rotation[3]);
+    if (!(n > 1e-12) || !isfinite(n)) {
+        q[0] = 1, q[1] = q[2] = q[3] = 0;
+        return;
+    }
+    for (int i = 0; i < 4; i++) q[i] = c->rotation[i] / n;
 }
 
-void fp_pose_to_mesh(const fp_calibration *c, const float mm[3], float out[3])
+/* v' = q v q* (q unit, w x y z). */
+static void qrot(const double q[4], const double v[3], double out[3])
 {
-    for (int i = 0; i < 3; i++) out[i] = (float)(c->scale * mm[i] + c->offset[i]);
+    double w = q[0], x = q[1], y = q[2], z = q[3];
+    double tx = 2 * (y * v[2] - z * v[1]), ty = 2 * (z * v[0] - x * v[2]), tz = 2 * (x * v[1] - y * v[0]);
+    out[0] = v[0] + w * tx + (y * tz - z * ty);
+    out[1] = v[1] + w * ty + (z * tx - x * tz);
+    out[2] = v[2] + w * tz + (x * ty - y * tx);
+}
+
+static void qmul(const double a[4], const double b[4], double out[4])
+{
+    out[0] = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3];
+    out[1] = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2];
+    out[2] = a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1];
+    out[3] = a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0];
+}
+
+void fp_pose_fit_workspace(fp_calibration *c, double mm_per_unit, const float ws_min[3],
+                           const float ws_max[3], const float head_min[3], const float head_max[3])
+{
+    memset(c, 0, sizeof *c);
+    if (!(mm_per_unit > 0) || !isfinite(mm_per_unit)) mm_per_unit = 1;
+    c->scale = 1.0 / mm_per_unit;
+    c->rotation[0] = 1;
+    for (int i = 0; i < 2; i++)
+        c->offset[i] = 0.5 * ((double)head_min[i] + head_max[i]) - c->scale * 0.5 * ((double)ws_min[i] + ws_max[i]);
+    double depth = (double)head_max[2] - head_min[2];
+    c->offset[2] = ((double)head_max[2] - 0.15 * depth) - c->scale * ws_min[2];
+}
+
+void fp_pose_to_mesh(const fp_calibration *c, int hand, const float mm[3], float out[3])
+{
+    double q[4], v[3] = {mm[0], mm[1], mm[2]}, r[3];
+    calib_rotation(c, q);
+    if (q[0] == 1) memcpy(r, v, sizeof r);
+    else qrot(q, v, r);
+    bool h = hand == FP_HAND_LEFT || hand == FP_HAND_RIGHT;
+    for (int i = 0; i < 3; i++)
+        out[i] = (float)(c->scale * r[i] + c->offset[i] + (h ? c->hand_offset[hand][i] : 0.0));
+}
+
+void fp_pose_place_gloves(fp_pose_state *p, const float *pos, size_t n, const fp_head *head)
+{
+    const fp_calibration *c = &p->calib;
+    double s = c->scale > 0 ? c->scale : 1;
+    /* Palm toward the face (the back of the hand, +y of the hand frame, toward +z), fingers
+     * (-z of the hand frame) up +y: a quarter turn about x. */
+    const double qm[4] = {0.70710678118654752440, 0.70710678118654752440, 0, 0};
+    const float qf[4] = {(float)qm[0], (float)qm[1], 0.f, 0.f}, zero[3] = {0, 0, 0};
+    float cx = 0.5f * (head->min[0] + head->max[0]), cy = 0.5f * (head->min[1] + head->max[1]);
+    float w = head->max[0] - head->min[0];
+    float r = (float)(15.0 * s), gap = (float)(FP_POSE_GLOVE_GAP_MM * s);
+    double q[4], qinv[4];
+    calib_rotation(c, q);
+    qinv[0] = q[0], qinv[1] = -q[1], qinv[2] = -q[2], qinv[3] = -q[3];
+    for (int h = 0; h < FP_HANDS; h++) {
+        float j[FP_HAND_JOINTS][3];
+        /* The open hand (rest angles) at the origin, mesh axes, mm. */
+        if (fp_hand_fk(&p->model, (fp_hand_side)h, NULL, 0, zero, qf, j)) return;
+        const float *mid = j[FP_JOINT_TIP(2)];
+        float wx = cx + (h == FP_HAND_LEFT ? -0.25f : 0.25f) * w - (float)(s * mid[0]);
+        float wy = cy - (float)(s * mid[1]);
+        float wz = -INFINITY;
+        for (int f = 0; f < FP_FINGERS; f++)
+            for (int k = 0; k < 2; k++) {
+                int jj = FP_JOINT(f, k ? 3 : 2);
+                float x = wx + (float)(s * j[jj][0]), y = wy + (float)(s * j[jj][1]), z;
+                if (fp_head_surface_z(pos, n, x, y, r, head->neck_y, INFINITY, &z))
+                    wz = fmaxf(wz, z + gap - (float)(s * j[jj][2]));
+            }
+        if (!isfinite(wz)) wz = head->max[2] + gap;
+        /* Back to the device frame: mm = R^-1 (mesh - offset - hand offset) / scale. */
+        double m[3] = {wx, wy, wz}, d[3], qd[4];
+        for (int i = 0; i < 3; i++) m[i] = (m[i] - c->offset[i] - c->hand_offset[h][i]) / s;
+        qrot(qinv, m, d);
+        qmul(qinv, qm, qd);
+        for (int i = 0; i < 3; i++) p->glove_pos[h][i] = (float)d[i];
+        for (int i = 0; i < 4; i++) p->glove_rot[h][i] = (float)qd[i];
+    }
+    p->glove_placed = true;
 }

@@ -16,6 +16,7 @@
 #define FP_POSE_H
 
 #include "fp_hand.h"
+#include "fp_head.h"
 
 #include <facepuppet/plugin.h>
 
@@ -27,11 +28,15 @@
 extern "C" {
 #endif
 
-/** Workspace calibration: p_mesh = scale * p_mm + offset (hands: mm, device frame; the
- *  device's +x right, +y up, +z toward the performer, as the mesh's +x, +y, +z). */
+/** Workspace calibration: p_mesh = scale * R p_mm + offset + hand_offset[hand] (hands: mm,
+ *  device frame; the device's +x right, +y up, +z toward the performer, as the mesh's +x,
+ *  +y, +z when R is the identity). A rotation of all zeros counts as the identity, so
+ *  {scale, {x, y, z}} initialisers keep their meaning. docs/calibration.md has the file. */
 typedef struct fp_calibration {
-    double scale;        /* mesh units per millimetre */
-    double offset[3];    /* mesh units */
+    double scale;                   /* mesh units per millimetre (1 / mm_per_unit) */
+    double offset[3];               /* mesh units, both hands */
+    double rotation[4];             /* device -> mesh, unit quaternion w, x, y, z */
+    double hand_offset[FP_HANDS][3];/* mesh units, added per hand (left, right) */
 } fp_calibration;
 
 /** What is known of one hand from its events (millimetres, device frame). */
@@ -52,6 +57,8 @@ typedef struct fp_pose_state {
     fp_pose_hand hands[FP_HANDS];
     fp_hand_model model;
     fp_calibration calib;
+    bool glove_placed;                          /* fp_pose_place_gloves ran */
+    float glove_pos[FP_HANDS][3], glove_rot[FP_HANDS][4];  /* its wrists, device mm */
     fp_hand_pose poses[FP_HANDS];   /* mesh units; poses[h].present as hands[h].present */
 } fp_pose_state;
 
@@ -65,7 +72,8 @@ void fp_pose_init(fp_pose_state *p, double hand_size, const fp_calibration *c);
 void fp_pose_take_event(fp_pose_state *p, const fp_event *ev);
 
 /** Build p->poses from the hands' state: forward kinematics where only angles came (with the
- *  given wrist pose, else fp_pose_default_wrist), then the calibration. Call once a frame
+ *  given wrist pose, else the glove placement of fp_pose_place_gloves, else
+ *  fp_pose_default_wrist), then the calibration. Call once a frame
  *  after the events are taken. */
 void fp_pose_build(fp_pose_state *p);
 
@@ -83,16 +91,29 @@ void fp_pose_default_workspace(float ws_min[3], float ws_max[3]);
  *  input tells one; false (box untouched) otherwise. Main thread (calls the plugins). */
 bool fp_pose_inputs_workspace(fp_input *const *inputs, size_t n, float ws_min[3], float ws_max[3]);
 
-/** Fit the hands' workspace (mm) to the face's bounds (mesh units): the workspace's width
- *  spans the face's width (scale = the smaller of the width and height ratios), its centre
- *  in x and y lands on the face's centre, and its deepest point (-z, farthest from the
- *  performer) reaches 15% of the face's depth behind the face's front (max z), so that the
- *  performer's forward reach touches the face. Extents below 1 mm count as 1 mm. */
-void fp_pose_fit_workspace(fp_calibration *c, const float ws_min[3], const float ws_max[3],
-                           const float face_min[3], const float face_max[3]);
+/** The life-size calibration: scale = 1 / mm_per_unit (hands and head at the same physical
+ *  scale), rotation identity, and the offset that puts the workspace's centre in x and y on
+ *  the head box's centre and its deepest point (-z, farthest from the performer) 15% of the
+ *  head box's depth behind the face's front (head_max z), so that the performer's forward
+ *  reach touches the face. mm_per_unit <= 0 or non-finite counts as 1. */
+void fp_pose_fit_workspace(fp_calibration *c, double mm_per_unit, const float ws_min[3],
+                           const float ws_max[3], const float head_min[3], const float head_max[3]);
 
-/** p_mesh = c->scale * p_mm + c->offset, in double, rounded to float. */
-void fp_pose_to_mesh(const fp_calibration *c, const float mm[3], float out[3]);
+/** Place gloves that report no wrist pose (p->calib set first): each hand's wrist in front
+ *  of its half of the face (the head box of `head`), palm toward the face (-z), fingers up
+ *  (+y), the open hand's middle fingertip at the head box's centre height and a quarter of
+ *  its width from the middle; the hand is then moved along z until its open fingertips and
+ *  DIP joints are FP_POSE_GLOVE_GAP_MM in front of the surface under them
+ *  (fp_head_surface_z within 15 mm), so that curling the fingers presses the tips in.
+ *  pos: the mesh's n vertices (mesh units). Stores the wrists in device mm (the inverse of
+ *  the calibration) in p->glove_pos/glove_rot and sets p->glove_placed. */
+#define FP_POSE_GLOVE_GAP_MM 8.0
+void fp_pose_place_gloves(fp_pose_state *p, const float *pos, size_t n, const fp_head *head);
+
+/** p_mesh = c->scale * R p_mm + c->offset + c->hand_offset[hand], in double, rounded to
+ *  float (hand outside left/right: no hand offset). */
+void fp_pose_to_mesh(const fp_calibration *c, int hand, const float mm[3], float out[3]);
+
 
 #ifdef __cplusplus
 }

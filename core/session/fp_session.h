@@ -41,6 +41,8 @@ extern "C" {
 #define FP_SESSION_MAX_INPUTS 8
 /** Commits that fp_session_undo can take back (the oldest is forgotten beyond). */
 #define FP_SESSION_UNDO_LEVELS 32
+/** The default support radius is at least this many millimetres (a fingertip's reach). */
+#define FP_SESSION_MIN_RADIUS_MM 25.0
 
 /* fp_calibration (p_mesh = scale * p_mm + offset) is declared in fp_pose.h;
  * fp_session_log_fn in session_log.h; fp_frame_record and fp_frame_record_fn in
@@ -52,9 +54,21 @@ typedef struct fp_session_options {
     size_t input_count;
     const char *mapping;                            /* NAME[,key=value...]; "anchored" */
     double radius;                                  /* support radius, mesh units; 0: 6% of
-                                                       the mesh's bounding-box diagonal */
+                                                       the mesh's bounding-box diagonal, at
+                                                       least FP_SESSION_MIN_RADIUS_MM */
     double hand_size;                               /* 0 or 1: mean adult hand */
-    const fp_calibration *calibration;              /* NULL: fit the workspace to the face */
+    const fp_calibration *calibration;              /* NULL: the life-size calibration (the
+                                                       inputs' workspace in front of the face
+                                                       at scale 1 / mm_per_unit) */
+    double mm_per_unit;                             /* the mesh's unit in mm; 0: detect it
+                                                       from the head (core/pose/fp_head.h).
+                                                       The --mm-per-unit option sets it, and
+                                                       the rig integration fills it from the
+                                                       rig's mm_per_unit (a rig wins over
+                                                       detection, the option over a rig) */
+    const char *mm_per_unit_source;                 /* where a given mm_per_unit came from,
+                                                       for the scale line ("--mm-per-unit",
+                                                       "rig FILE"); NULL: "given" */
     const fp_plugin_path *plugin_path;              /* required */
     int engine_threads;                             /* 0: 1 below 200k vertices, else all
                                                        cores; -1: all cores; N: N threads */
@@ -69,6 +83,14 @@ typedef struct fp_session_options {
                                                        or do I/O (a take recorder pushes into
                                                        its lock-free queue) */
     void *record_user;                              /* passed to record */
+    double mapping_budget_ms;                       /* a process() call slower than this is
+                                                       reported (once, then counted); 0: 2 ms */
+    bool input_clock;                               /* step on the inputs' own clock (a
+                                                       headless run): fp_session_step(t)
+                                                       consumes only events stamped <= t from
+                                                       recordings (inputs with the
+                                                       recording-info extension); false (live):
+                                                       every queued event, each frame */
 } fp_session_options;
 
 /** Statistics of one fp_session_step. */
@@ -90,7 +112,8 @@ typedef struct fp_session fp_session;
 /** Load the mesh, load the mapping plugin and every input (not started), open the inputs'
  *  record=FILE recordings. Returns 0, or a negative code with a message in err naming the
  *  file, SPEC or plugin at fault: -EINVAL bad options (no mesh or plugin path, too many
- *  inputs, a negative or NaN radius, a mapping SPEC with ':ARG'), -ENOMEM, the mesh
+ *  inputs, a negative or NaN radius, a radius beyond 10x the mesh's bounding-box diagonal,
+ *  a negative or NaN mm_per_unit, a mapping SPEC with ':ARG'), -ENOMEM, the mesh
  *  loader's code unchanged (fp_mesh_load), the plugin host's codes unchanged
  *  (fp_plugin_load, fp_input_instance_open: FP_EPLUGIN_*, a plugin's own code, a
  *  recording's code). [main-thread]. */
@@ -119,6 +142,16 @@ const struct csrbf_solver *fp_session_solver(const fp_session *s);
  *  (and only logs). */
 int fp_session_stop(fp_session *s, char *err, size_t errlen);
 
+/** Input clock (options.input_clock): the earliest first event time of the recordings, once
+ *  each has delivered one: 1 and *t0; 0 while waiting (poll again); -1 when no input is a
+ *  recording (then step on the wall clock). */
+int fp_session_input_start(fp_session *s, int64_t *t0);
+
+/** Input clock: true when every recording has ended or delivered an event later than t, so
+ *  that fp_session_step(s, t) sees every event up to t whatever the replay's pacing (poll it
+ *  before each step; it consumes nothing). True without the input clock. */
+bool fp_session_inputs_ready(fp_session *s, int64_t t);
+
 /** True once every input has reported FP_STATUS_END_OF_STREAM (recordings ended). */
 bool fp_session_finished(const fp_session *s);
 
@@ -137,6 +170,10 @@ const struct fp_mesh *fp_session_mesh(const fp_session *s);
 double fp_session_radius(const fp_session *s);
 void fp_session_set_radius(fp_session *s, double radius);
 const fp_calibration *fp_session_calibration(const fp_session *s);
+/** The head found in the loaded mesh and the mesh's unit: head->mm_per_unit is the one the
+ *  session uses (given, from the calibration's scale, or detected), head->how says where it
+ *  came from ("detected from the head: ...", "from --mm-per-unit", "from the calibration"). */
+const fp_head *fp_session_head(const fp_session *s);
 /** The latest pose of a hand in mesh units (NULL if never seen). */
 const fp_hand_pose *fp_session_hand(const fp_session *s, int hand);
 /** The last control set (start/end points) the mapping made and the engine used. */
@@ -148,6 +185,21 @@ const fp_control_set *fp_session_control_set(const fp_session *s);
  *  Session thread only (the viewer's keys 1 and 2). */
 int fp_session_set_mapping(fp_session *s, const fp_plugin_path *path, const char *spec,
                            char *err, size_t errlen);
+/** Hot reload: replace the mapping by the one in `file` (a path, e.g. a fresh copy of the
+ *  mapping's rebuilt .so), created with the current mapping's SPEC keys, then reset; as
+ *  fp_session_set_mapping otherwise (a deformation in progress is dropped; on error the old
+ *  mapping stays and err says why: the loader's FP_EPLUGIN_* codes, the plugin's create
+ *  code). Session thread only, between frames. */
+int fp_session_reload_mapping(fp_session *s, const char *file, char *err, size_t errlen);
+/** The file the mapping was found at by name (not a reload's copy), the loaded plugin (its
+ *  entry's id and version), and the mapping's name. Valid until the mapping changes. */
+const char *fp_session_mapping_file(const fp_session *s);
+const fp_plugin *fp_session_mapping_plugin(const fp_session *s);
+const char *fp_session_mapping_name(const fp_session *s);
+/** FP_EPLUGIN_FAULT when the mapping was stopped for a fault (it wrote past the capacity of
+ *  the host's arrays; the base has been shown since), the message naming the mapping, the
+ *  array and the frame in err; else 0. */
+int fp_session_mapping_fault(const fp_session *s, char *err, size_t errlen);
 /** Undo the last commit or reset (one level, up to FP_SESSION_UNDO_LEVELS): the base goes
  *  back, a deformation in progress is dropped, the mapping's gesture is reset. Returns false
  *  when there is nothing to undo. */

@@ -2,9 +2,11 @@
 #include "intents.h"
 
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 void fp_intents_init(fp_intents *it) { memset(it, 0, sizeof *it); }
+
 
 void fp_intents_request(fp_intents *it, uint32_t intents) { it->requested |= intents; }
 
@@ -77,4 +79,101 @@ bool fp_intents_all_ended(const fp_intents *it, size_t n)
     for (size_t i = 0; i < n && i < FP_INTENTS_MAX_INPUTS; i++)
         if (!it->ended[i]) return false;
     return true;
+}
+
+/* ---- the input clock ------------------------------------------------------------------- */
+
+static const fp_event *ahead_at(const fp_intents_ahead *a, size_t k) { return &a->ev[(a->head + k) % a->cap]; }
+
+/* Move queued events of input i into its lookahead while it holds nothing later than t. */
+static void fetch(fp_intents *it, fp_input_instance *in, size_t i, int64_t t)
+{
+    fp_intents_ahead *a = &it->ahead[i];
+    while (!a->len || ahead_at(a, a->len - 1)->header.time_ns <= t) {
+        if (a->len == a->cap) {
+            size_t cap = a->cap ? 2 * a->cap : 256;
+            fp_event *ev = malloc(cap * sizeof *ev);
+            if (!ev) return;
+            for (size_t k = 0; k < a->len; k++) ev[k] = *ahead_at(a, k);
+            free(a->ev);
+            a->ev = ev;
+            a->cap = cap;
+            a->head = 0;
+        }
+        fp_event *slot = &a->ev[(a->head + a->len) % a->cap];
+        if (!fp_input_instance_poll(in, slot)) return;
+        a->len++;
+        if (slot->header.type == FP_EVENT_STATUS && slot->status.code == FP_STATUS_END_OF_STREAM)
+            a->eos = true;
+    }
+}
+
+size_t fp_intents_drain_until(fp_intents *it, fp_input_instance *inputs, size_t n, int64_t t,
+                              bool engaged, const fp_slog *log, fp_intents_event_fn each, void *user)
+{
+    size_t count = 0;
+    it->frame_event_count = 0;
+    for (size_t i = 0; i < n; i++) {
+        fp_event ev;
+        if (i >= FP_INTENTS_MAX_INPUTS || !it->waited[i]) {
+            while (fp_input_instance_poll(&inputs[i], &ev)) {
+                fp_intents_take(it, i, inputs[i].name, &ev, engaged, log);
+                if (each) each(user, i, &ev);
+                count++;
+            }
+            continue;
+        }
+        fp_intents_ahead *a = &it->ahead[i];
+        for (;;) {
+            if (!a->len) fetch(it, &inputs[i], i, t);
+            if (!a->len || ahead_at(a, 0)->header.time_ns > t) break;
+            ev = *ahead_at(a, 0);
+            a->head = (a->head + 1) % a->cap;
+            a->len--;
+            fp_intents_take(it, i, inputs[i].name, &ev, engaged, log);
+            if (each) each(user, i, &ev);
+            count++;
+        }
+    }
+    return count;
+}
+
+bool fp_intents_ready(fp_intents *it, fp_input_instance *inputs, size_t n, int64_t t)
+{
+    for (size_t i = 0; i < n && i < FP_INTENTS_MAX_INPUTS; i++) {
+        if (!it->waited[i] || it->ended[i]) continue;
+        fetch(it, &inputs[i], i, t);
+        const fp_intents_ahead *a = &it->ahead[i];
+        if (a->eos) continue;
+        if (!a->len || ahead_at(a, a->len - 1)->header.time_ns <= t) return false;
+    }
+    return true;
+}
+
+int fp_intents_first_time(fp_intents *it, fp_input_instance *inputs, size_t n, int64_t *t0)
+{
+    bool any = false;
+    int64_t first = 0;
+    for (size_t i = 0; i < n && i < FP_INTENTS_MAX_INPUTS; i++) {
+        if (!it->waited[i]) continue;
+        fp_intents_ahead *a = &it->ahead[i];
+        if (!a->len) fetch(it, &inputs[i], i, INT64_MIN);
+        if (!a->len) {
+            if (a->eos || it->ended[i]) continue;
+            return 0;
+        }
+        int64_t t = ahead_at(a, 0)->header.time_ns;
+        if (!any || t < first) first = t;
+        any = true;
+    }
+    if (any) *t0 = first;
+    return any ? 1 : -1;
+}
+
+void fp_intents_free(fp_intents *it)
+{
+    for (size_t i = 0; i < FP_INTENTS_MAX_INPUTS; i++) {
+        free(it->ahead[i].ev);
+        it->ahead[i] = (fp_intents_ahead){0};
+    }
 }

@@ -27,7 +27,17 @@ extern "C" {
 #define FP_INTENTS_MAX_INPUTS 8         /* = FP_SESSION_MAX_INPUTS */
 #define FP_INTENTS_MAX_FRAME_EVENTS 64  /* button/status events kept per frame for the mapping */
 
+/** Events taken from an input's queue but not yet consumed (the input clock's lookahead). */
+typedef struct fp_intents_ahead {
+    fp_event *ev;       /* ring of cap events, malloc()ed on demand */
+    size_t head, len, cap;
+    bool eos;           /* an END_OF_STREAM status is among them (or was consumed) */
+} fp_intents_ahead;
+
 typedef struct fp_intents {
+    bool clocked;                           /* consume by time: fp_intents_drain_until */
+    bool waited[FP_INTENTS_MAX_INPUTS];     /* inputs on the input clock (recordings) */
+    fp_intents_ahead ahead[FP_INTENTS_MAX_INPUTS];
     uint32_t requested;                     /* fp_intent bits for the next mapping call */
     bool ended[FP_INTENTS_MAX_INPUTS];      /* input i reported FP_STATUS_END_OF_STREAM */
     unsigned input_errors;                  /* FP_STATUS_ERROR events seen */
@@ -63,6 +73,26 @@ void fp_intents_take(fp_intents *it, size_t input, const char *name, const fp_ev
  *  input, event) when each is not NULL. Returns the number of events drained. */
 size_t fp_intents_drain(fp_intents *it, fp_input_instance *inputs, size_t n, bool engaged,
                         const fp_slog *log, fp_intents_event_fn each, void *user);
+
+/** The input clock (a headless run): like fp_intents_drain, but from each `waited` input only
+ *  the events stamped at or before t (time_ns) are consumed, in order; the first later one
+ *  stays in the lookahead for a later frame. Inputs not waited for are drained whole.
+ *  Returns the number of events consumed. Allocation: the lookahead grows as needed (an
+ *  event that finds no memory stays in its queue). */
+size_t fp_intents_drain_until(fp_intents *it, fp_input_instance *inputs, size_t n, int64_t t,
+                              bool engaged, const fp_slog *log, fp_intents_event_fn each, void *user);
+
+/** True when every waited input has ended or has delivered an event stamped later than t, so
+ *  that fp_intents_drain_until(t) misses nothing whatever the inputs' pacing. Moves queued
+ *  events into the lookahead (consumes none). */
+bool fp_intents_ready(fp_intents *it, fp_input_instance *inputs, size_t n, int64_t t);
+
+/** The earliest first event time of the waited inputs, once each has delivered one or ended:
+ *  1 and *t0; 0 while one has not yet; -1 when none is waited for (or all ended empty). */
+int fp_intents_first_time(fp_intents *it, fp_input_instance *inputs, size_t n, int64_t *t0);
+
+/** Free the lookahead buffers. */
+void fp_intents_free(fp_intents *it);
 
 /** Hand the requested intents to the mapping: returns them and clears the request. */
 uint32_t fp_intents_take_requested(fp_intents *it);

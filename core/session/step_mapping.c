@@ -1,10 +1,18 @@
-/* Step 3 of the frame: the mapping call and the check of its control set. */
+/* Step 3 of the frame: the mapping call, its time, its canaries and the check of its
+ * control set. */
+#define _POSIX_C_SOURCE 200809L
 #include "step_mapping.h"
 
 #include "fp_error.h"
+#include "fp_plugin_crash.h"
 
 #include <errno.h>
 #include <math.h>
+#include <stdio.h>
+#include <string.h>
+#include <time.h>
+
+static const unsigned char canary = 0xA5;
 
 int fp_control_set_check(const fp_control_set *cs)
 {
@@ -17,19 +25,117 @@ int fp_control_set_check(const fp_control_set *cs)
     return 0;
 }
 
+static void fill_canaries(fp_mapping_step *st)
+{
+    memset(st->start[FP_CONTROL_CAPACITY], canary, sizeof st->start[0] * FP_MAPPING_GUARD);
+    memset(st->end[FP_CONTROL_CAPACITY], canary, sizeof st->end[0] * FP_MAPPING_GUARD);
+    memset(&st->channels[FP_CHANNEL_CAPACITY], canary, sizeof st->channels[0] * FP_MAPPING_GUARD);
+}
+
+/* The first array whose canary was overwritten, or NULL. */
+static const char *overwritten(const fp_mapping_step *st)
+{
+    const unsigned char *p[3] = {(const unsigned char *)st->start[FP_CONTROL_CAPACITY],
+                                 (const unsigned char *)st->end[FP_CONTROL_CAPACITY],
+                                 (const unsigned char *)&st->channels[FP_CHANNEL_CAPACITY]};
+    const size_t n[3] = {sizeof st->start[0] * FP_MAPPING_GUARD, sizeof st->end[0] * FP_MAPPING_GUARD,
+                         sizeof st->channels[0] * FP_MAPPING_GUARD};
+    static const char *names[3] = {"start", "end", "channels"};
+    for (int a = 0; a < 3; a++)
+        for (size_t i = 0; i < n[a]; i++)
+            if (p[a][i] != canary) return names[a];
+    return NULL;
+}
+
+void fp_mapping_step_init(fp_mapping_step *st, fp_control_set *cs, double budget_ms)
+{
+    memset(&st->errors, 0, sizeof st->errors);
+    memset(&st->slow, 0, sizeof st->slow);
+    st->budget_ms = budget_ms > 0 ? budget_ms : FP_MAPPING_BUDGET_MS;
+    st->stopped = false;
+    st->fault = 0;
+    st->fault_message[0] = '\0';
+    st->slow_calls = 0;
+    st->slow_max_ms = 0;
+    fill_canaries(st);
+    st->guarded = true;
+    cs->size = sizeof *cs;
+    cs->active = false;
+    cs->intents = 0;
+    cs->count = 0;
+    cs->channel_count = 0;
+    cs->capacity = FP_CONTROL_CAPACITY;
+    cs->start = st->start;
+    cs->end = st->end;
+    cs->channel_capacity = FP_CHANNEL_CAPACITY;
+    cs->channels = st->channels;
+}
+
+static double now_ms(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec * 1e3 + ts.tv_nsec / 1e6;
+}
+
 int fp_mapping_step_run(fp_mapping_step *st, fp_mapping *mapping, const char *name,
                         const fp_frame_input *in, fp_control_set *cs, const fp_slog *log)
 {
+    char source[96];
+    snprintf(source, sizeof source, "mapping '%s'", name ? name : "?");
+    unsigned long long frame = (unsigned long long)in->frame;
+    if (st->stopped) {
+        cs->active = false;
+        cs->intents = 0;
+        cs->count = 0;
+        return st->fault;
+    }
+    fp_plugin_call_enter(name, "process", in->frame);
+    double t0 = now_ms();
     int rc = mapping->process(mapping, in, cs);
-    const char *what = "process() failed";
-    if (rc >= 0) {
+    double ms = now_ms() - t0;
+    fp_plugin_call_leave();
+    double budget = st->budget_ms > 0 ? st->budget_ms : FP_MAPPING_BUDGET_MS;
+    if (ms > budget) {
+        st->slow_calls++;
+        if (ms > st->slow_max_ms) st->slow_max_ms = ms;
+        fp_slog_repeat_report(&st->slow, log, FP_LOG_WARNING, source, -ETIME,
+                              "process took %.2f ms on frame %llu, over the budget of %g ms "
+                              "(frames may be dropped)", ms, frame, budget);
+    }
+    const char *which = st->guarded && cs->start == st->start ? overwritten(st) : NULL;
+    if (which) {
+        size_t cap = !strcmp(which, "channels") ? cs->channel_capacity : cs->capacity;
+        snprintf(st->fault_message, sizeof st->fault_message,
+                 "wrote past the capacity of the host's %s array (%zu entries) on frame %llu; "
+                 "the mapping is stopped, the base stays shown", which, cap, frame);
+        fp_slog_printf(log, FP_LOG_ERROR, source, "%s", st->fault_message);
+        fill_canaries(st);
+        st->stopped = true;
+        st->fault = FP_EPLUGIN_FAULT;
+        cs->active = false;
+        cs->intents = 0;
+        cs->count = 0;
+        return st->fault;
+    }
+    const char *what = NULL;
+    if (rc < 0) {
+        what = "process returned";
+    } else {
         rc = fp_control_set_check(cs);
-        what = rc == -ERANGE ? "control set over capacity" : "invalid control set (radius or points)";
+        if (rc == -ERANGE) what = "control set over capacity: count";
+        else if (rc) what = "invalid control set (radius or points):";
     }
     if (rc < 0) {
-        fp_slog_repeat_report(&st->errors, log, FP_LOG_ERROR, name, rc,
-                              "%s on frame %llu (%s); keeping the last shape", what,
-                              (unsigned long long)in->frame, fp_strerror(rc));
+        if (rc == -ERANGE && what[0] == 'c')
+            fp_slog_repeat_report(&st->errors, log, FP_LOG_ERROR, source, rc,
+                                  "%s %zu > capacity %zu (or channel_count %zu > %zu) on frame %llu; "
+                                  "keeping the last shape", what, cs->count, cs->capacity,
+                                  cs->channel_count, cs->channel_capacity, frame);
+        else
+            fp_slog_repeat_report(&st->errors, log, FP_LOG_ERROR, source, rc,
+                                  "%s %d (%s) on frame %llu; keeping the last shape", what, rc,
+                                  fp_strerror(rc), frame);
         cs->active = false;
         cs->intents = 0;
         return rc;
@@ -38,4 +144,8 @@ int fp_mapping_step_run(fp_mapping_step *st, fp_mapping *mapping, const char *na
     return 0;
 }
 
-void fp_mapping_step_flush(fp_mapping_step *st, const fp_slog *log) { fp_slog_repeat_flush(&st->errors, log); }
+void fp_mapping_step_flush(fp_mapping_step *st, const fp_slog *log)
+{
+    fp_slog_repeat_flush(&st->errors, log);
+    fp_slog_repeat_flush(&st->slow, log);
+}

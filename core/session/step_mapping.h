@@ -24,23 +24,56 @@
 extern "C" {
 #endif
 
+/** Entries of canary after each host array a mapping fills (start, end, channels). */
+#define FP_MAPPING_GUARD 8
+/** The default budget of one process() call, milliseconds. */
+#define FP_MAPPING_BUDGET_MS 2.0
+
 typedef struct fp_mapping_step {
     fp_slog_repeat errors;    /* the mapping's repeated error, reported once with a count */
+    fp_slog_repeat slow;      /* process() over the budget, reported once with its time, counted */
+    double budget_ms;         /* process() budget; 0: FP_MAPPING_BUDGET_MS */
+    bool stopped;             /* stopped for a fault (a write past capacity): never called again */
+    int fault;                /* FP_EPLUGIN_FAULT once stopped, else 0 */
+    char fault_message[256];  /* why it was stopped */
+    unsigned long slow_calls; /* process() calls over the budget */
+    double slow_max_ms;       /* the slowest of them */
+    /* The host's arrays, each followed by FP_MAPPING_GUARD canary entries (bound to a
+     * control set by fp_mapping_step_init). */
+    float start[FP_CONTROL_CAPACITY + FP_MAPPING_GUARD][3];
+    float end[FP_CONTROL_CAPACITY + FP_MAPPING_GUARD][3];
+    fp_channel channels[FP_CHANNEL_CAPACITY + FP_MAPPING_GUARD];
+    bool guarded;             /* the canaries are in place */
 } fp_mapping_step;
+
+/** (Re)initialise the step for a new mapping instance: clears the fault and counters, fills
+ *  the canaries and points cs at the step's arrays (capacity FP_CONTROL_CAPACITY, channel
+ *  capacity FP_CHANNEL_CAPACITY), count 0, inactive. budget_ms 0: FP_MAPPING_BUDGET_MS.
+ *  Flush pending repeated errors first (fp_mapping_step_flush). */
+void fp_mapping_step_init(fp_mapping_step *st, fp_control_set *cs, double budget_ms);
 
 /** Check a control set as a mapping wrote it. Returns 0, -ERANGE (count above capacity,
  *  or channel_count above channel_capacity), -EINVAL (radius not > 0 and finite, a NULL
  *  array with count > 0, a non-finite start or end point among the first count). */
 int fp_control_set_check(const fp_control_set *cs);
 
-/** Call mapping->process(in, cs) and check cs. On an error (the mapping's negative code, or
- *  fp_control_set_check's) cs->active and cs->intents are cleared, and the error is
- *  reported through log with source `name` (the first time, then counted). On success a
- *  pending repeated error is flushed. Returns 0 or the error code. */
+/** Call mapping->process(in, cs) and check cs. `name` is the mapping instance's name (the
+ *  SPEC's NAME); messages go through log with the source "mapping 'NAME'" and name the
+ *  frame and the cause, e.g. "process returned -28 (No space left on device) on frame 12".
+ *  The call is bracketed for the crash handler (fp_plugin_call_enter(name, "process",
+ *  frame)) and timed: a call over the budget is reported once with its time (a warning),
+ *  later ones counted. When cs uses the step's arrays (fp_mapping_step_init), the canaries
+ *  after them are checked after every call: an overwritten canary (a write past capacity)
+ *  is reported, the canaries restored, and the mapping stopped (st->stopped, st->fault =
+ *  FP_EPLUGIN_FAULT): it is not called again and every later frame shows the base. On an
+ *  error (the mapping's negative code, fp_control_set_check's, or the fault) cs->active and
+ *  cs->intents are cleared; the error is reported the first time, then counted. On success
+ *  a pending repeated error is flushed. Returns 0 or the error code. */
 int fp_mapping_step_run(fp_mapping_step *st, fp_mapping *mapping, const char *name,
                         const fp_frame_input *in, fp_control_set *cs, const fp_slog *log);
 
-/** Report a pending repeated error ("repeated N more times"); call at destruction. */
+/** Report pending repeated errors and slow calls ("repeated N more times"); call at
+ *  destruction and before fp_mapping_step_init for a new instance. */
 void fp_mapping_step_flush(fp_mapping_step *st, const fp_slog *log);
 
 #ifdef __cplusplus

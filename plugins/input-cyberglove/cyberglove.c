@@ -964,10 +964,23 @@ fail:
     return rc;
 }
 
+/* The keys, typed (ABI 1.1), for `facepuppet plugins` and `plugins check`; create parses
+ * them itself. A default of "" means: none, decided at run time. */
+static const fp_param_info KEYS[] = {
+    {"baud", FP_PARAM_INT, 1200, 921600, "115200", NULL, "baud", "line speed, 8N1 (standard rates)"},
+    {"cal", FP_PARAM_PATH, 0, 0, "", NULL, NULL, "calibration file (asr two-point or SENSOR GAIN OFFSET)"},
+    {"hand", FP_PARAM_ENUM, 0, 0, "", "left|right", NULL, "which hand (default: the glove's answer to ?R)"},
+    {"rate", FP_PARAM_FLOAT, 1, 10000, "100", NULL, "Hz", "records per second"},
+    {"mode", FP_PARAM_ENUM, 0, 0, "stream", "stream|poll", NULL, "stream (S) or poll (G per record)"},
+    {"bits", FP_PARAM_ENUM, 0, 0, "8", "8|16", NULL, "record format (16: CyberGlove III USB)"},
+    {"timeout", FP_PARAM_INT, 10, 600000, "", NULL, "ms", "silence before reconnecting (default 3 periods, >= 250)"},
+    {NULL, 0, 0, 0, NULL, NULL, NULL, NULL},
+};
+
 static const fp_input_factory FACTORY = {
     sizeof(fp_input_factory), "cyberglove",
     "CyberGlove I/II/III data glove on a serial port (8-bit or 16-bit records)", USAGE, create,
-    NULL};
+    KEYS};
 
 static bool entry_init(const char *path) { return true; }
 static void entry_deinit(void) {}

@@ -576,6 +576,16 @@ static int pedal_create(const fp_host *host, const char *arg, const fp_param *pa
 /* ----------------------------------------------------------------------------------- */
 /* The entry                                                                           */
 
+/* The keys, typed (ABI 1.1), for `facepuppet plugins` and `plugins check`; create parses
+ * them itself (fp_pedal_config_parse). A default of "" means: none, from the device. */
+static const fp_param_info pedal_keys[] = {
+    {"layout", FP_PARAM_ENUM, 0, 0, "", "vec|keyboard", NULL, "report layout (default: from the known pedal)"},
+    {"keys", FP_PARAM_STRING, 0, 0, "a/b/c", NULL, NULL, "keyboard layout: keys for left/middle/right, '-' unbound"},
+    {"pedals", FP_PARAM_ENUM, 0, 0, "", "1|3", NULL, "1: a single-pedal unit (its key b is the left button)"},
+    {"strict", FP_PARAM_BOOL, 0, 1, "0", NULL, NULL, "fail at start when no pedal is there"},
+    {NULL, 0, 0, 0, NULL, NULL, NULL, NULL},
+};
+
 static const fp_input_factory pedal_factory = {
     .size = sizeof(fp_input_factory),
     .name = "pedal",
@@ -589,6 +599,7 @@ static const fp_input_factory pedal_factory = {
         "  pedals   1: a single-pedal unit, its key b is the left button (same as keys=b)\n"
         "  strict   1: fail at start when no pedal is there (default: report it, keep looking)",
     .create = pedal_create,
+    .params = pedal_keys,
 };
 
 static bool entry_init(const char *path)

@@ -55,10 +55,10 @@ static const char usage_text[] =
     "    facepuppet event log (docs/eventlog.md): the events as recorded.\n"
     "  speed=X  play X times as fast (X > 0, default 1)\n"
     "  loop=1   start over at the end; event times keep increasing (default 0)\n"
-    "  fast=1   as fast as possible, retrying rather than dropping when the queue is full\n"
-    "           (buttons and status events are always retried; paced poses may be dropped)\n"
+    "  fast=1   as fast as possible (a full queue is always retried, never dropped)\n"
     "  hands=H  left, right or both (default both)\n"
-    "  Event times are the host clock at the emulated moment. Without loop, the replay ends\n"
+    "  Event times are the recording's own clock (the host clock at start + the sample's\n"
+    "  time), whatever the speed; speed and fast only change the pacing. Without loop, the replay ends\n"
     "  with an end-of-stream status. A malformed row fails at creation (FILE:LINE:COLUMN); a\n"
     "  last line cut short (no newline) is dropped and reported with an error status (the\n"
     "  recording is damaged) after the rows before it were replayed.\n";
@@ -85,17 +85,14 @@ static bool wait_until(replay *r, int64_t deadline)
     return go_on;
 }
 
-/* Pushes one event. A pose (angles, positions, wrist) meeting a full queue in paced mode is
- * dropped, as a device's would be (the host counts drops; the next pose supersedes it). In
- * fast mode, and for buttons and status events always, it waits briefly and tries again
- * until the event goes in or stop is asked. Returns false on stop. */
+/* Pushes one event. A full queue is retried every RETRY_WAIT_NS until the event goes in or
+ * stop is asked, in every mode: a recording holds every sample, and a headless run that
+ * steps on the recording's clock must see each one whatever the pacing or the machine's
+ * load. Returns false on stop. */
 static bool push(replay *r, const fp_event *ev)
 {
-    bool keep = r->fast || ev->header.type == FP_EVENT_BUTTON || ev->header.type == FP_EVENT_STATUS;
-    while (!r->host->push_event(r->host, &ev->header)) {
-        if (!keep) return true;
+    while (!r->host->push_event(r->host, &ev->header))
         if (!wait_until(r, mono_ns() + RETRY_WAIT_NS)) return false;
-    }
     return true;
 }
 
@@ -147,7 +144,10 @@ static void *replay_thread(void *arg)
                 return NULL;
             }
             fp_event ev = it->event;
-            ev.header.time_ns = last_time = host_t0 + off;
+            /* The time the sample was measured, on the recording's own clock (independent
+             * of speed and of when it is pushed): a run steps on it deterministically. */
+            ev.header.time_ns = last_time =
+                host_t0 + (int64_t)pass * r->rec.loop_period_ns + it->t_ns;
             if (!push(r, &ev)) return NULL;
         }
         if (r->rec.truncated_line && !warned) {
@@ -226,25 +226,36 @@ static int parse_bool(const fp_param *p, bool *out, char *err, size_t errlen)
 /* ------------------------------------------------------------------------------------- */
 /* Extensions: the workspace the recording's hands move in, and what it holds             */
 
+static int cmp_float(const void *a, const void *b)
+{
+    float x = *(const float *)a, y = *(const float *)b;
+    return (x > y) - (x < y);
+}
+
+/* The robust box: per axis the 2nd and 98th percentiles of every joint position, so that a
+ * tracking glitch (a palm 3 m away for a few samples) moves nothing. */
 static bool replay_workspace(const fp_input *self, float min_mm[3], float max_mm[3])
 {
     const replay *r = self->plugin_data;
-    bool any = false;
+    size_t n = 0;
+    for (size_t i = 0; i < r->rec.count; i++)
+        if (r->rec.items[i].event.header.type == FP_EVENT_JOINT_POSITIONS) n += FP_HAND_JOINTS;
+    if (!n) return false;
+    float *v = malloc(n * sizeof *v);
+    if (!v) return false;
     for (int k = 0; k < 3; k++) {
-        min_mm[k] = INFINITY;
-        max_mm[k] = -INFINITY;
+        size_t m = 0;
+        for (size_t i = 0; i < r->rec.count; i++) {
+            const fp_event *ev = &r->rec.items[i].event;
+            if (ev->header.type != FP_EVENT_JOINT_POSITIONS) continue;
+            for (int j = 0; j < FP_HAND_JOINTS; j++) v[m++] = ev->positions.mm[j][k];
+        }
+        qsort(v, m, sizeof *v, cmp_float);
+        min_mm[k] = v[(size_t)(0.02 * (double)(m - 1) + 0.5)];
+        max_mm[k] = v[(size_t)(0.98 * (double)(m - 1) + 0.5)];
     }
-    for (size_t i = 0; i < r->rec.count; i++) {
-        const fp_event *ev = &r->rec.items[i].event;
-        if (ev->header.type != FP_EVENT_JOINT_POSITIONS) continue;
-        for (int j = 0; j < FP_HAND_JOINTS; j++)
-            for (int k = 0; k < 3; k++) {
-                min_mm[k] = fminf(min_mm[k], ev->positions.mm[j][k]);
-                max_mm[k] = fmaxf(max_mm[k], ev->positions.mm[j][k]);
-            }
-        any = true;
-    }
-    return any;
+    free(v);
+    return true;
 }
 
 static bool replay_recording_info(const fp_input *self, fp_recording_info *info)
@@ -363,12 +374,23 @@ static int replay_create(const fp_host *host, const char *arg, const fp_param *p
     return 0;
 }
 
+/* The keys, typed (ABI 1.1), for `facepuppet plugins` and `plugins check`; create parses
+ * them itself. */
+static const fp_param_info replay_keys[] = {
+    {"speed", FP_PARAM_FLOAT, 0, 1e6, "1", NULL, "x", "play this many times as fast (> 0)"},
+    {"loop", FP_PARAM_BOOL, 0, 1, "0", NULL, NULL, "start over at the end"},
+    {"fast", FP_PARAM_BOOL, 0, 1, "0", NULL, NULL, "as fast as possible, retrying when the queue is full"},
+    {"hands", FP_PARAM_ENUM, 0, 0, "both", "left|right|both", NULL, "which hands to replay"},
+    {NULL, 0, 0, 0, NULL, NULL, NULL, NULL},
+};
+
 static const fp_input_factory replay_factory = {
     .size = sizeof(fp_input_factory),
     .name = "replay",
     .description = "replays a recorded hand (Leap CSV or facepuppet event log) as live input",
     .usage = usage_text,
     .create = replay_create,
+    .params = replay_keys,
 };
 
 static bool replay_init(const char *plugin_path)

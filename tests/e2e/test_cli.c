@@ -3,6 +3,7 @@
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -149,12 +150,12 @@ static void test_frames_out_and_monitor(void **state)
              "--fps 20 --frames-out frames --out final.ply", face(), data);
     assert_int_equal(fp(args), 0);
     char cmd[8400];
-    snprintf(cmd, sizeof cmd, "ls %s/frames | grep -c '^frame-[0-9]*\\.obj$'", tmp);
+    snprintf(cmd, sizeof cmd, "ls %s/frames | grep -c '^frame_[0-9]*_t[0-9]*\\.[0-9]*s\\.obj$'", tmp);
     FILE *p = popen(cmd, "r");
     int frames = 0;
     assert_int_equal(fscanf(p, "%d", &frames), 1);
     pclose(p);
-    assert_true(frames >= 5); /* 3.3 s / 8 at 20 fps: about 8 frames */
+    assert_true(frames >= 64 && frames <= 70); /* every frame of 3.3 s at 20 fps, whatever speed */
     snprintf(args, sizeof args, "info final.ply");
     assert_int_equal(fp(args), 0);
     assert_non_null(strstr(out, "vertices  468"));
@@ -177,6 +178,143 @@ static void test_frames_out_and_monitor(void **state)
     if (system(cmd)) {}
 }
 
+static int count_lines(const char *cmdfmt, const char *arg)
+{
+    char cmd[8400];
+    snprintf(cmd, sizeof cmd, cmdfmt, arg);
+    FILE *p = popen(cmd, "r");
+    int n = -1;
+    if (fscanf(p, "%d", &n) != 1) n = -1;
+    pclose(p);
+    return n;
+}
+
+/* run on the input's clock: speed=1, speed=10 and fast=1 give bit-identical meshes, also
+ * every frame of --frames-out (a frame per 1/60 s of the take, its time in its name). */
+static void test_deterministic(void **state)
+{
+    (void)state;
+    static const char *modes[] = {"speed=1", "speed=10", "fast=1"};
+    char args[16384], cmd[9000];
+    for (int m = 0; m < 3; m++) {
+        snprintf(args, sizeof args, "run -q --mesh %s --input replay:%s/hands/leap-motion/"
+                 "grab_joints_mm.csv,%s --out det%d.obj --frames-out det%d", face(), data, modes[m], m, m);
+        assert_int_equal(fp(args), 0);
+        assert_non_null(strstr(out, "events dropped 0"));
+        assert_null(strstr(out, "vertices moved 0 "));
+    }
+    for (int m = 1; m < 3; m++) {
+        snprintf(cmd, sizeof cmd, "cd %s && cmp det0.obj det%d.obj && diff -r det0 det%d", tmp, m, m);
+        assert_int_equal(system(cmd), 0);
+    }
+    /* grab is 3.304 s: frames at 0, 1/60, ..., 3.300 s (199 of them, the last with the end). */
+    int n = count_lines("ls %s/det0 | grep -c '^frame_[0-9]*_t[0-9.]*s\\.obj$'", tmp);
+    print_message("frames written: %d\n", n);
+    assert_true(n >= 198 && n <= 202);
+    snprintf(cmd, sizeof cmd, "test -f %s/det0/frame_000123_t2.050s.obj", tmp);
+    assert_int_equal(system(cmd), 0);
+}
+
+/* Bad requests are refused before any work, with the path named. */
+static void test_refused_up_front(void **state)
+{
+    (void)state;
+    char args[16384], rec[4400];
+    snprintf(rec, sizeof rec, "--input replay:%s/hands/leap-motion/grab_joints_mm.csv,fast=1", data);
+    snprintf(args, sizeof args, "run --mesh %s %s --out result.xyz", face(), rec);
+    assert_int_equal(fp(args), 64);
+    assert_non_null(strstr(out, "result.xyz"));
+    assert_null(strstr(out, "vertices")); /* no session made */
+    snprintf(args, sizeof args, "run --mesh %s %s --out /nonexistent-dir/out.obj", face(), rec);
+    assert_int_equal(fp(args), 73);
+    assert_non_null(strstr(out, "/nonexistent-dir/out.obj"));
+    assert_null(strstr(out, "vertices"));
+    snprintf(args, sizeof args, "run --mesh %s %s --frames-out /proc/no-frames-here", face(), rec);
+    assert_int_equal(fp(args), 73);
+    assert_non_null(strstr(out, "/proc/no-frames-here"));
+    write_file("plain-file", "x\n");
+    snprintf(args, sizeof args, "run --mesh %s %s --frames-out plain-file", face(), rec);
+    assert_int_equal(fp(args), 73);
+    assert_non_null(strstr(out, "plain-file"));
+    /* A radius beyond 10x the diagonal: a usage error, said once. */
+    snprintf(args, sizeof args, "run --mesh %s %s --radius 1e20 --out r.obj", face(), rec);
+    assert_int_equal(fp(args), 64);
+    assert_non_null(strstr(out, "--radius"));
+    int lines = 0;
+    for (const char *c = out; *c; c++) lines += *c == '\n';
+    assert_true(lines <= 2);
+    /* A bad calibration file: its name and field, exit 65; a missing one, 66. */
+    write_file("bad-cal.json", "{\"mm_per_unit\": \"ten\"}\n");
+    snprintf(args, sizeof args, "run --mesh %s %s --calibration bad-cal.json", face(), rec);
+    assert_int_equal(fp(args), 65);
+    assert_non_null(strstr(out, "bad-cal.json"));
+    assert_non_null(strstr(out, "mm_per_unit"));
+    snprintf(args, sizeof args, "run --mesh %s %s --calibration missing-cal.json", face(), rec);
+    assert_int_equal(fp(args), 66);
+    /* A good one and --mm-per-unit: the scale line says where the scale came from. */
+    write_file("cal.json", "{\"mm_per_unit\": 10, \"offset\": [0, 0, 5]}\n");
+    snprintf(args, sizeof args, "run --mesh %s %s --calibration cal.json --out c.obj", face(), rec);
+    assert_int_equal(fp(args), 0);
+    assert_non_null(strstr(out, "scale: 10 mm per mesh unit (from the calibration)"));
+    snprintf(args, sizeof args, "run --mesh %s %s --mm-per-unit 12.5 --out c.obj", face(), rec);
+    assert_int_equal(fp(args), 0);
+    assert_non_null(strstr(out, "scale: 12.5 mm per mesh unit (from --mm-per-unit)"));
+}
+
+/* One tracking glitch (a palm and its joints 3 m away for one sample) moves nothing in the
+ * recording's workspace (2nd-98th percentiles): the same box as without it. */
+static void test_robust_workspace(void **state)
+{
+    (void)state;
+    char cmd[16384], args[9000], clean[4096], glitch[4096];
+    snprintf(cmd, sizeof cmd,
+             "awk -F, 'BEGIN{OFS=\",\"} NR==100{for(i=5;i<=NF;i++) if(i<8||i>13) $i=$i+3000} {print}' "
+             "%s/hands/leap-motion/grab_joints_mm.csv > %s/glitch_joints_mm.csv", data, tmp);
+    assert_int_equal(system(cmd), 0);
+    snprintf(args, sizeof args, "info %s/hands/leap-motion/grab_joints_mm.csv", data);
+    assert_int_equal(fp(args), 0);
+    assert_non_null(strstr(out, "workspace"));
+    snprintf(clean, sizeof clean, "%s", strstr(out, "workspace"));
+    assert_int_equal(fp("info glitch_joints_mm.csv"), 0);
+    snprintf(glitch, sizeof glitch, "%s", strstr(out, "workspace"));
+    print_message("clean  %sglitch %s", clean, glitch);
+    float a[6], b[6];
+    assert_int_equal(sscanf(clean, "workspace x %f..%f y %f..%f z %f..%f", a, a + 1, a + 2, a + 3, a + 4, a + 5), 6);
+    assert_int_equal(sscanf(glitch, "workspace x %f..%f y %f..%f z %f..%f", b, b + 1, b + 2, b + 3, b + 4, b + 5), 6);
+    for (int k = 0; k < 6; k++) assert_true(fabsf(a[k] - b[k]) < 3.f); /* min/max: 3000 mm */
+    /* and the run's hands are the same size: the scale line is the face's. */
+    snprintf(args, sizeof args, "run -q --mesh %s --input replay:glitch_joints_mm.csv,fast=1 --out g.obj", face());
+    assert_int_equal(fp(args), 0);
+}
+
+/* The glove alone deforms every face: every *_cyberglove_like_angles_deg.csv through both
+ * mappings moves at least 0.5% of each face's vertices (within its first 3 s at 30 fps, to
+ * keep the test short on a loaded machine). */
+static void test_glove_deforms(void **state)
+{
+    (void)state;
+    static const char *faces[] = {"ict-facekit/generic_neutral_mesh.obj", "lee-perry-smith/LeePerrySmith.obj",
+                                  "mediapipe-canonical/canonical_face_model.obj"};
+    static const char *recs[] = {"HandSplay-110fps", "Waiting-110fps", "grab", "three-claps"};
+    static const char *maps[] = {"anchored", "unanchored"};
+    char args[16384];
+    for (int f = 0; f < 3; f++)
+        for (int r = 0; r < 4; r++)
+            for (int m = 0; m < 2; m++) {
+                snprintf(args, sizeof args, "run -q --mesh %s/faces/%s --input replay:%s/hands/leap-motion/"
+                         "%s_cyberglove_like_angles_deg.csv,fast=1 --mapping %s --fps 30 --duration 3 --out g.obj",
+                         data, faces[f], data, recs[r], maps[m]);
+                assert_int_equal(fp(args), 0);
+                const char *v = strstr(out, "vertices moved ");
+                assert_non_null(v);
+                unsigned long moved = 0, n = 1;
+                assert_int_equal(sscanf(v, "vertices moved %lu of %lu", &moved, &n), 2);
+                print_message("glove %-45s %-17s %-10s moved %5lu of %5lu = %5.2f%%\n", faces[f], recs[r],
+                              maps[m], moved, n, 100.0 * moved / n);
+                assert_true(moved * 200 >= n);
+            }
+}
+
 int main(void)
 {
     const char *d = getenv("FP_SHARED_DATA"), *b = getenv("FP_BUILD_DIR");
@@ -194,6 +332,8 @@ int main(void)
         cmocka_unit_test(test_bad_csv),        cmocka_unit_test(test_plugins),
         cmocka_unit_test(test_info),           cmocka_unit_test(test_missing_mesh),
         cmocka_unit_test(test_frames_out_and_monitor),
+        cmocka_unit_test(test_deterministic),  cmocka_unit_test(test_refused_up_front),
+        cmocka_unit_test(test_robust_workspace), cmocka_unit_test(test_glove_deforms),
     };
     int rc = cmocka_run_group_tests(tests, NULL, NULL);
     char cmd[512];

@@ -87,7 +87,7 @@ static void test_loader_errors(void **state)
     const char *dirs[] = {fixture_dir};
     fp_plugin_path path;
     fp_plugin_path_init(&path, dirs, 1, NULL);
-    assert_int_equal(fp_plugin_load(&path, FP_PLUGIN_MAPPING, "fixture", &p, err, sizeof err),
+    assert_int_equal(fp_plugin_load(&path, FP_PLUGIN_MAPPING, "fixture-initfails", &p, err, sizeof err),
                      FP_EPLUGIN_NOT_FOUND);
     fp_plugin_path_clear(&path);
 }

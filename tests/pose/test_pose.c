@@ -1,6 +1,14 @@
 /* core/pose: hand state from events, forward kinematics, workspace calibration. */
+#define _GNU_SOURCE
+#include "fp_calib_file.h"
+#include "fp_mesh.h"
 #include "fp_pose.h"
 
+#include <stdio.h>
+#include <stdlib.h>
+#include <unistd.h>
+
+#include <errno.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -25,7 +33,7 @@ static fp_event positions_event(int hand, float base, int64_t t)
 static void test_positions_calibrated(void **state)
 {
     (void)state;
-    fp_calibration c = {0.25, {1.0, -2.0, 3.5}};
+    fp_calibration c = {0.25, {1.0, -2.0, 3.5}, {0, 0, 0, 0}, {{0, 0, 0}, {0, 0, 0}}};
     fp_pose_state p;
     fp_pose_init(&p, 0, &c);
     fp_event ev = positions_event(FP_HAND_RIGHT, 100.f, 42);
@@ -62,7 +70,7 @@ static void test_positions_calibrated(void **state)
 static void test_angles_forward_kinematics(void **state)
 {
     (void)state;
-    fp_calibration id = {1.0, {0, 0, 0}};
+    fp_calibration id = {1.0, {0, 0, 0}, {1, 0, 0, 0}, {{0, 0, 0}, {0, 0, 0}}};
     fp_pose_state p;
     fp_pose_init(&p, 1.1, &id);
     assert_true(fabsf(p.model.size - 1.1f) < 1e-6f);
@@ -95,7 +103,7 @@ static void test_angles_forward_kinematics(void **state)
     for (int j = 0; j < FP_HAND_JOINTS; j++) assert_true(fabsf(p.poses[FP_HAND_LEFT].joints[j][0] - want[j][0] - 5.f) < 1e-3f);
 }
 
-/* The fit's three promises, on a made-up face and workspace. */
+/* The life-size fit's promises, on a made-up head and workspace. */
 static void test_fit_workspace(void **state)
 {
     (void)state;
@@ -104,14 +112,133 @@ static void test_fit_workspace(void **state)
     assert_true(ws_min[0] == -150.f && ws_max[1] == 330.f && ws_min[2] == -120.f);
     const float fmin[3] = {-8.f, -10.f, -4.f}, fmax[3] = {8.f, 14.f, 6.f};
     fp_calibration c;
-    fp_pose_fit_workspace(&c, ws_min, ws_max, fmin, fmax);
-    /* width 16 / 300, height 24 / 250: the smaller ratio */
-    assert_true(fabs(c.scale - 16.0 / 300.0) < 1e-12);
+    fp_pose_fit_workspace(&c, 10.0, ws_min, ws_max, fmin, fmax);
+    assert_true(fabs(c.scale - 0.1) < 1e-15); /* 1 / mm_per_unit: the hands life-size */
     float centre[3] = {0.5f * (ws_min[0] + ws_max[0]), 0.5f * (ws_min[1] + ws_max[1]), ws_min[2]}, out[3];
-    fp_pose_to_mesh(&c, centre, out);
+    fp_pose_to_mesh(&c, FP_HAND_RIGHT, centre, out);
     assert_true(fabsf(out[0] - 0.f) < 1e-5f);
     assert_true(fabsf(out[1] - 2.f) < 1e-5f);
     assert_true(fabsf(out[2] - (6.f - 0.15f * 10.f)) < 1e-5f);
+    /* A rotation and a per-hand offset: a quarter turn about y maps +x to -z. */
+    c.rotation[0] = c.rotation[2] = sqrt(0.5);
+    c.hand_offset[FP_HAND_LEFT][1] = 3;
+    float a[3] = {0, 0, 0}, b[3] = {10, 0, 0}, pa[3], pb[3];
+    fp_pose_to_mesh(&c, FP_HAND_LEFT, a, pa);
+    fp_pose_to_mesh(&c, FP_HAND_LEFT, b, pb);
+    assert_true(fabsf(pb[0] - pa[0]) < 1e-5f && fabsf(pb[2] - pa[2] + 1.f) < 1e-5f);
+    assert_true(fabsf(pa[1] - (float)(c.offset[1] + 3)) < 1e-5f);
+}
+
+static fp_mesh *load_face(const char *rel)
+{
+    char path[1024], err[512];
+    const char *root = getenv("FP_SHARED_DATA");
+    snprintf(path, sizeof path, "%s/faces/%s", root && *root ? root : "../shared/data", rel);
+    fp_mesh *m = NULL;
+    if (fp_mesh_load(path, &m, err, sizeof err)) fail_msg("%s", err);
+    return m;
+}
+
+/* The mesh's unit from the head, on the three real faces: the ICT face is in centimetres
+ * (10 mm per unit); Lee Perry-Smith (head and shoulders) and the MediaPipe mask get a head of
+ * plausible size: a 190 mm hand spans 0.75..0.95 of the head's height (230 mm chin to crown
+ * for heads), the head box is 130..230 mm wide. */
+static void test_head_detect(void **state)
+{
+    (void)state;
+    static const struct { const char *rel; fp_head_method method; double lo, hi; } faces[] = {
+        {"ict-facekit/generic_neutral_mesh.obj", FP_HEAD_NECK, 9.5, 10.5},
+        {"lee-perry-smith/LeePerrySmith.obj", FP_HEAD_NECK, 35, 65},
+        {"mediapipe-canonical/canonical_face_model.obj", FP_HEAD_FACE_WIDTH, 8, 11},
+    };
+    for (size_t i = 0; i < sizeof faces / sizeof faces[0]; i++) {
+        fp_mesh *m = load_face(faces[i].rel);
+        fp_head h;
+        assert_int_equal(fp_head_detect(m->positions, m->vertex_count, &h), 0);
+        print_message("%s: %.3f mm per unit, %s\n", faces[i].rel, h.mm_per_unit, h.how);
+        assert_int_equal(h.method, faces[i].method);
+        assert_true(h.mm_per_unit > faces[i].lo && h.mm_per_unit < faces[i].hi);
+        double width_mm = (h.max[0] - h.min[0]) * h.mm_per_unit;
+        assert_true(width_mm > 130 && width_mm < 230);
+        if (h.method == FP_HEAD_NECK) {
+            double height_mm = (h.max[1] - h.neck_y) * h.mm_per_unit;
+            assert_true(190 / height_mm > 0.75 && 190 / height_mm < 0.95);
+            /* Lee Perry-Smith's shoulders are not the head: the box is under half the mesh wide. */
+            float lo[3], hi[3];
+            fp_mesh_bounds(m, lo, hi);
+            if (i == 1) assert_true(h.max[0] - h.min[0] < 0.5f * (hi[0] - lo[0]));
+        }
+        /* Gloves placed in front of each half of the face: palm toward it (the hand's +y,
+         * its back, along +z), the open fingertips just in front of the surface. */
+        fp_pose_state p;
+        fp_calibration c;
+        float ws_min[3], ws_max[3];
+        fp_pose_default_workspace(ws_min, ws_max);
+        fp_pose_fit_workspace(&c, h.mm_per_unit, ws_min, ws_max, h.min, h.max);
+        fp_pose_init(&p, 0, &c);
+        fp_pose_place_gloves(&p, m->positions, m->vertex_count, &h);
+        assert_true(p.glove_placed);
+        for (int hand = 0; hand < FP_HANDS; hand++) {
+            fp_event ev;
+            memset(&ev, 0, sizeof ev);
+            ev.header.type = FP_EVENT_JOINT_ANGLES;
+            ev.header.hand = hand;
+            fp_pose_take_event(&p, &ev);
+        }
+        fp_pose_build(&p);
+        float cx = 0.5f * (h.min[0] + h.max[0]);
+        for (int hand = 0; hand < FP_HANDS; hand++) {
+            const float (*j)[3] = p.poses[hand].joints;
+            float tip = j[FP_JOINT_TIP(2)][0];
+            assert_true(hand == FP_HAND_LEFT ? tip < cx : tip > cx);
+            assert_true(j[FP_JOINT_TIP(2)][1] > j[FP_JOINT_PALM][1]); /* fingers up */
+            float z;
+            assert_true(fp_head_surface_z(m->positions, m->vertex_count, j[FP_JOINT_TIP(2)][0],
+                                          j[FP_JOINT_TIP(2)][1], (float)(15 / h.mm_per_unit),
+                                          h.neck_y, INFINITY, &z));
+            double gap_mm = (j[FP_JOINT_TIP(2)][2] - z) * h.mm_per_unit;
+            assert_true(gap_mm >= FP_POSE_GLOVE_GAP_MM - 0.01 && gap_mm < 60);
+        }
+        fp_mesh_free(&m);
+    }
+}
+
+/* The calibration file: a round trip, and errors naming the file and the field. */
+static void test_calibration_file(void **state)
+{
+    (void)state;
+    char dir[] = "/tmp/fp_calib_XXXXXX", path[256], err[512];
+    assert_non_null(mkdtemp(dir));
+    snprintf(path, sizeof path, "%s/c.json", dir);
+    fp_calibration c = {0.1, {1, 2, 3}, {0, 0, 0, 1}, {{0.5, 0, 0}, {0, -0.5, 0}}}, back;
+    assert_int_equal(fp_calibration_save(path, &c, "test", err, sizeof err), 0);
+    assert_int_equal(fp_calibration_load(path, &back, err, sizeof err), 0);
+    assert_true(fabs(back.scale - 0.1) < 1e-15 && back.offset[2] == 3 && back.rotation[3] == 1 &&
+                back.hand_offset[1][1] == -0.5);
+    static const struct { const char *text, *field; int code; } bad[] = {
+        {"{\"rotation\": [1,0,0,0]}", "mm_per_unit", -EBADMSG},
+        {"{\"mm_per_unit\": -3}", "mm_per_unit", -ERANGE},
+        {"{\"scale\": 0.1, \"rotation\": [1, 0, 0]}", "rotation", -EBADMSG},
+        {"{\"scale\": 0.1, \"right\": {\"offset\": [1, \"a\", 0]}}", "right.offset[1]", -EBADMSG},
+        {"{\"scale\": 0.1, \"rotation\": [0, 0, 0, 0]}", "rotation", -ERANGE},
+        {"not json", "not a JSON object", -EBADMSG},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        FILE *f = fopen(path, "w");
+        fputs(bad[i].text, f);
+        fclose(f);
+        assert_int_equal(fp_calibration_load(path, &back, err, sizeof err), bad[i].code);
+        assert_non_null(strstr(err, path));
+        assert_non_null(strstr(err, bad[i].field));
+    }
+    snprintf(path, sizeof path, "%s/missing.json", dir);
+    assert_int_equal(fp_calibration_load(path, &back, err, sizeof err), -ENOENT);
+    /* An unwritable place: an error, nothing half-written. */
+    snprintf(path, sizeof path, "%s/no/such/dir/c.json", dir);
+    assert_true(fp_calibration_save(path, &c, NULL, err, sizeof err) < 0);
+    snprintf(path, sizeof path, "%s/c.json", dir);
+    unlink(path);
+    rmdir(dir);
 }
 
 /* No input tells a workspace: false, box untouched. */
@@ -130,6 +257,8 @@ int main(void)
         cmocka_unit_test(test_positions_calibrated),
         cmocka_unit_test(test_angles_forward_kinematics),
         cmocka_unit_test(test_fit_workspace),
+        cmocka_unit_test(test_head_detect),
+        cmocka_unit_test(test_calibration_file),
         cmocka_unit_test(test_inputs_workspace_unknown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

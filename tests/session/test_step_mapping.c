@@ -84,7 +84,7 @@ static void test_errors_once_with_count(void **state)
         assert_int_equal(cs.intents, 0);
     }
     assert_int_equal(cap.count, 1);
-    assert_string_equal(cap.source, "anchored");
+    assert_string_equal(cap.source, "mapping 'anchored'");
     assert_non_null(strstr(cap.lines[0], "frame 0"));
     mode = 3; /* another error: the count of the first, then the new one */
     assert_int_equal(fp_mapping_step_run(&st, &m, "anchored", &in, &cs, &log), -EINVAL);

@@ -15,10 +15,16 @@
 #define FP_SHARED_DATA "../shared/data"
 #endif
 
+const char *fp_app_builtin_plugin_dir(char *buf, size_t len)
+{
+    snprintf(buf, len, "%s/%s", fp_app_exe_dir(), FP_PLUGIN_RELDIR);
+    return buf;
+}
+
 void fp_app_plugin_path(fp_plugin_path *path, const char *const *dirs, size_t ndirs)
 {
-    char builtin[4096];
-    snprintf(builtin, sizeof builtin, "%s/%s", fp_app_exe_dir(), FP_PLUGIN_RELDIR);
+    char builtin[4200];
+    fp_app_builtin_plugin_dir(builtin, sizeof builtin);
     fp_plugin_path_init(path, dirs, ndirs, builtin);
     /* Folders skipped for safety are said once, each on its own line. */
     for (const char *w = path->warnings; *w;) {

@@ -10,6 +10,9 @@
 /** The plugin path: --plugin-dir folders, FACEPUPPET_PLUGIN_PATH, the built-in folder. */
 void fp_app_plugin_path(fp_plugin_path *path, const char *const *dirs, size_t ndirs);
 
+/** The built-in plugin folder, <directory of the executable>/FP_PLUGIN_RELDIR, into buf. */
+const char *fp_app_builtin_plugin_dir(char *buf, size_t len);
+
 /** A file under the shared data folder (FP_SHARED_DATA in the environment, else the one
  *  beside the source tree): writes "<data>/<rel>" into buf. */
 const char *fp_app_data_path(const char *rel, char *buf, size_t len);

@@ -24,6 +24,8 @@ static void usage(FILE *f)
             "           0.06 x diagonal): update without and with it, medians, same frames\n"
             "  support  csrbf_evaluate vs csrbf_evaluate_touched (persistent output): 33,025\n"
             "           grid at R = 10 and 80, 1M and 1.8M grids with about 1%% in support\n"
+            "  take     the take recorder's cost on the session thread per frame (median, p99)\n"
+            "           and a take's size per minute at 60 fps\n"
             "Columns: pairs = (vertex, centre) pairs inside the support (paper: its count);\n"
             "ms_ref = the brute-force loop (all pairs, scalar double, one thread) for the same\n"
             "update, or for 'reused' the fresh factor-and-solve; ratio = ms_ref / ms_median.\n"

@@ -71,6 +71,12 @@ static int recording_info(const char *path)
                "  duration  %.3f s\n", path, ri.format, (unsigned long long)ri.frames, ri.rate_hz,
                ri.hands == 3 ? "left, right" : ri.hands == 1 ? "left" : ri.hands == 2 ? "right" : "none",
                ri.duration_s);
+        const fp_input_workspace *ws =
+            inst.input->get_extension ? inst.input->get_extension(inst.input, FP_EXT_WORKSPACE) : NULL;
+        float lo[3], hi[3];
+        if (ws && ws->get && ws->get(inst.input, lo, hi))
+            printf("  workspace x %.1f..%.1f y %.1f..%.1f z %.1f..%.1f mm\n", lo[0], hi[0], lo[1],
+                   hi[1], lo[2], hi[2]);
     } else {
         fprintf(stderr, "facepuppet info: %s: the replay input gives no recording info\n", path);
         status = FP_EXIT_FAILURE;

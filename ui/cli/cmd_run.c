@@ -14,7 +14,9 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <strings.h>
 #include <time.h>
+#include <unistd.h>
 
 static volatile sig_atomic_t interrupted;
 static void on_signal(int sig) { (void)sig; interrupted = 1; }
@@ -43,11 +45,17 @@ static void usage(FILE *f)
         "Options of run:\n"
         "  -o, --out FILE         final mesh (default facepuppet-out.obj; demo:\n"
         "                         facepuppet-demo.obj); format by extension\n"
-        "      --frames-out DIR   also write one mesh per frame (DIR/frame-000001.obj...)\n"
+        "      --frames-out DIR   also write one mesh per frame, every frame at --fps\n"
+        "                         (DIR/frame_000123_t2.050s.obj: number, time on the input clock)\n"
         "      --fps N            frames per second of the session loop (default 60)\n"
+        "      --budget MS        report a mapping process() slower than MS (default 2)\n\n"
+        "The run steps on the recordings' own clock (frame k at t0 + k/fps), not the wall\n"
+        "clock: the same inputs and options give bit-identical meshes whatever --speed,\n"
+        "speed=, fast=1 or the machine's load (--speed only changes how long it takes).\n"
         "  -h, --help             this text\n\n"
         "Exit status: 0 done, 64 usage, 65 bad input data, 66 input missing, 73 output\n"
-        "not writable, 78 plugin missing or incompatible, 1 other failure\n"
+        "not writable, 78 plugin missing or incompatible, or the mapping stopped for a\n"
+        "fault (it wrote past the host's arrays), 1 other failure\n"
         "(facepuppet --help has the whole table).\n");
 }
 
@@ -57,16 +65,48 @@ static void sleep_until(int64_t t_ns)
     clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL);
 }
 
+/* --out, before any work: a format we write (by extension) and a folder we can write in.
+ * Returns 0 or the exit status (64 unknown extension, 73 folder missing or not writable). */
+static int check_out(const char *out)
+{
+    static const char *exts[] = {".obj", ".ply", ".off", ".stl", ".gltf", ".glb"};
+    const char *dot = strrchr(out, '.'), *slash = strrchr(out, '/');
+    bool known = false;
+    for (size_t i = 0; dot && (!slash || dot > slash) && i < sizeof exts / sizeof exts[0]; i++)
+        known |= !strcasecmp(dot, exts[i]);
+    if (!known) {
+        fprintf(stderr, "facepuppet run: --out %s: unknown mesh format (give .obj, .ply, .off, "
+                ".stl, .gltf or .glb)\n", out);
+        return FP_EXIT_USAGE;
+    }
+    char dir[4096];
+    snprintf(dir, sizeof dir, "%.*s", slash ? (int)(slash - out) + 1 : 1, slash ? out : ".");
+    struct stat st;
+    if (stat(dir, &st) || !S_ISDIR(st.st_mode) || access(dir, W_OK | X_OK)) {
+        fprintf(stderr, "facepuppet run: --out %s: cannot write in %s: %s\n", out, dir,
+                errno ? strerror(errno) : "not a folder");
+        return FP_EXIT_CANTCREAT;
+    }
+    if (!stat(out, &st) && (S_ISDIR(st.st_mode) || access(out, W_OK))) {
+        fprintf(stderr, "facepuppet run: --out %s: %s\n", out,
+                S_ISDIR(st.st_mode) ? "is a folder" : strerror(errno));
+        return FP_EXIT_CANTCREAT;
+    }
+    return 0;
+}
+
 static int run_main(int argc, char **argv)
 {
-    enum { OPT_FRAMES_OUT = FP_SESSION_OPTS_FIRST_FREE, OPT_FPS };
+    enum { OPT_FRAMES_OUT = FP_SESSION_OPTS_FIRST_FREE, OPT_FPS, OPT_BUDGET };
     static const struct option own[] = {
         {"out", required_argument, 0, 'o'},        {"frames-out", required_argument, 0, OPT_FRAMES_OUT},
         {"fps", required_argument, 0, OPT_FPS},    {"help", no_argument, 0, 'h'},
+        {"budget", required_argument, 0, OPT_BUDGET},
         {0, 0, 0, 0}};
     struct option opts[FP_SESSION_OPTS_COUNT + sizeof own / sizeof own[0]];
     memcpy(opts + fp_session_opts_longopts(opts), own, sizeof own);
     fp_session_options so = {0};
+    int rc;
     fp_session_opts sopt;
     fp_session_opts_init(&sopt, &so);
     const char *out = NULL, *frames_out = NULL;
@@ -84,6 +124,13 @@ static int run_main(int argc, char **argv)
             fps = strtod(optarg, &end);
             if (*end || !(fps >= 1 && fps <= 10000)) {
                 fprintf(stderr, "facepuppet run: --fps must be in 1..10000, got '%s'\n", optarg);
+                return FP_EXIT_USAGE;
+            }
+            break;
+        case OPT_BUDGET:
+            so.mapping_budget_ms = strtod(optarg, &end);
+            if (*end || !(so.mapping_budget_ms > 0 && so.mapping_budget_ms <= 1000)) {
+                fprintf(stderr, "facepuppet run: --budget must be in (0, 1000] ms, got '%s'\n", optarg);
                 return FP_EXIT_USAGE;
             }
             break;
@@ -106,28 +153,41 @@ static int run_main(int argc, char **argv)
         return FP_EXIT_USAGE;
     }
     if (!out) out = demo ? "facepuppet-demo.obj" : "facepuppet-out.obj";
-    if (frames_out && mkdir(frames_out, 0777) && errno != EEXIST) {
-        fprintf(stderr, "facepuppet run: --frames-out %s: %s\n", frames_out, strerror(errno));
-        return fp_app_exit_code(-errno, FP_APP_OUTPUT);
+    /* Outputs are checked before any work: a folder we can write into, a format we write. */
+    if ((rc = check_out(out))) return rc;
+    if (frames_out) {
+        struct stat st;
+        if (mkdir(frames_out, 0777) && errno != EEXIST) {
+            fprintf(stderr, "facepuppet run: --frames-out %s: %s\n", frames_out, strerror(errno));
+            return fp_app_exit_code(-errno, FP_APP_OUTPUT);
+        }
+        if (stat(frames_out, &st) || !S_ISDIR(st.st_mode)) {
+            fprintf(stderr, "facepuppet run: --frames-out %s: not a folder\n", frames_out);
+            return FP_EXIT_CANTCREAT;
+        }
+        if (access(frames_out, W_OK | X_OK)) {
+            fprintf(stderr, "facepuppet run: --frames-out %s: %s\n", frames_out, strerror(errno));
+            return FP_EXIT_CANTCREAT;
+        }
     }
 
     fp_plugin_path path;
     fp_app_plugin_path(&path, sopt.plugin_dirs, sopt.nplugin_dirs);
     so.plugin_path = &path;
     so.log = log_line;
+    so.input_clock = true;
     char err[2048];
     fp_session *s = NULL;
-    int rc = fp_session_create(&so, &s, err, sizeof err);
+    rc = fp_session_create(&so, &s, err, sizeof err);
     if (rc) {
         fprintf(stderr, "facepuppet run: %s\n", err);
         fp_plugin_path_clear(&path);
         return fp_app_exit_code(rc, FP_APP_INPUT);
     }
     if (!quiet) {
-        const fp_calibration *c = fp_session_calibration(s);
         fprintf(stderr, "facepuppet run: %s, %zu vertices, mapping %s, radius %.4g, %zu input(s); "
-                "workspace scale %.4g mesh units/mm\n", so.mesh_path, fp_session_vertex_count(s),
-                so.mapping, fp_session_radius(s), so.input_count, c->scale);
+                "scale: %.4g mm per mesh unit (%s)\n", so.mesh_path, fp_session_vertex_count(s),
+                so.mapping, fp_session_radius(s), so.input_count, fp_session_head(s)->mm_per_unit, fp_session_head(s)->how);
     }
     if ((rc = fp_session_start(s, err, sizeof err))) {
         fprintf(stderr, "facepuppet run: %s\n", err);
@@ -141,10 +201,22 @@ static int run_main(int argc, char **argv)
     size_t cap = 1024, nupdates = 0;
     double *update_ms = malloc(cap * sizeof *update_ms);
     uint64_t frames = 0, commits = 0, engages = 0, active_frames = 0;
-    int64_t period = (int64_t)(1e9 / fps), t0 = fp_now_ns(), next = t0, last_report = t0;
     int status = FP_EXIT_OK;
-    while (!interrupted) {
-        int64_t now = fp_now_ns();
+    /* The clock: the recordings' own (frame k at t0 + k/fps, each step only once every
+     * recording has delivered past it), else the wall clock (live devices only). */
+    int64_t t0 = 0, wall0 = fp_now_ns(), last_report = wall0;
+    int clock;
+    while ((clock = fp_session_input_start(s, &t0)) == 0 && !interrupted) sleep_until(fp_now_ns() + 200000);
+    bool input_clock = clock == 1;
+    if (!input_clock) t0 = wall0;
+    for (uint64_t k = 0; !interrupted; k++) {
+        int64_t now = t0 + (int64_t)llround((double)k * 1e9 / fps);
+        if (input_clock) {
+            while (!fp_session_inputs_ready(s, now) && !interrupted) sleep_until(fp_now_ns() + 200000);
+            if (interrupted) break;
+        } else {
+            sleep_until(now);
+        }
         fp_frame_stats st;
         fp_session_step(s, now, &st);
         frames++;
@@ -160,24 +232,23 @@ static int run_main(int argc, char **argv)
         }
         if (frames_out) {
             char file[4400];
-            snprintf(file, sizeof file, "%s/frame-%06llu.obj", frames_out, (unsigned long long)frames);
+            snprintf(file, sizeof file, "%s/frame_%06llu_t%.3fs.obj", frames_out, (unsigned long long)k,
+                     (double)(now - t0) * 1e-9);
             if ((rc = fp_session_save(s, file, err, sizeof err))) {
                 fprintf(stderr, "facepuppet run: %s\n", err);
                 status = fp_app_exit_code(rc, FP_APP_OUTPUT);
                 break;
             }
         }
-        if (!quiet && now - last_report >= 1000000000LL) {
+        int64_t wall = fp_now_ns();
+        if (!quiet && wall - last_report >= 1000000000LL) {
             fprintf(stderr, "  %6.1f s  frame %-6llu %s  %zu control vectors  update %.3f ms\n",
                     (now - t0) / 1e9, (unsigned long long)frames, st.active ? "deforming" : "idle     ",
                     st.control_vectors, st.update_ms);
-            last_report = now;
+            last_report = wall;
         }
         if (fp_session_finished(s)) break;
         if (duration > 0 && now - t0 >= (int64_t)(duration * 1e9)) break;
-        next += period;
-        if (next < fp_now_ns()) next = fp_now_ns();
-        sleep_until(next);
     }
     if (interrupted && !quiet) fprintf(stderr, "facepuppet run: interrupted; saving what was done\n");
     /* Close the record=FILE recordings: a failed write must fail the run. */
@@ -215,6 +286,10 @@ static int run_main(int argc, char **argv)
     if (record_failed && status == FP_EXIT_OK) {
         fprintf(stderr, "facepuppet run: %s\n", err);
         status = FP_EXIT_CANTCREAT;
+    }
+    if (fp_session_mapping_fault(s, err, sizeof err)) {
+        fprintf(stderr, "facepuppet run: %s\n", err);
+        if (status == FP_EXIT_OK) status = fp_app_exit_code(FP_EPLUGIN_FAULT, FP_APP_INPUT);
     }
     if (!finite) {
         fprintf(stderr, "facepuppet run: non-finite vertex in the result\n");

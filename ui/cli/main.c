@@ -1,6 +1,7 @@
 /* facepuppet: the command-line entry. Dispatches to the subcommands in cmd_*.c. */
 #define _GNU_SOURCE
 #include "command.h"
+#include "fp_plugin_crash.h"
 
 #include <limits.h>
 #include <stdio.h>
@@ -14,10 +15,11 @@
 /* The subcommands, in --help order. Each is defined in its cmd_NAME.c; `live` exists in
  * every build and says so when the viewer was not built (FP_BUILD_UI off). */
 extern const fp_command fp_command_run, fp_command_live, fp_command_monitor, fp_command_info,
-    fp_command_bench, fp_command_pose;
+    fp_command_bench, fp_command_pose, fp_command_plugins;
 static const fp_command *const commands[] = {&fp_command_run, &fp_command_live,
                                              &fp_command_monitor, &fp_command_info,
-                                             &fp_command_pose, &fp_command_bench};
+                                             &fp_command_pose, &fp_command_plugins,
+                                             &fp_command_bench};
 enum { NCOMMANDS = sizeof commands / sizeof commands[0] };
 
 const char *fp_app_exe_dir(void)
@@ -59,7 +61,14 @@ static void usage(FILE *f)
                "  70  internal error, out of memory\n"
                "  73  an output that cannot be created or written (ENOENT or EACCES on an\n"
                "      output, EIO, ENOSPC, EROFS)\n"
-               "  78  a plugin missing, built for another ABI, or failing its init\n");
+               "  78  a plugin missing, built for another ABI, failing its init, or stopped\n"
+               "      for a fault (it wrote past the host's arrays; create returned no instance)\n"
+               "A plugin's create() error goes through the same table by its code (EINVAL 64,\n"
+               "EBADMSG 65, ENOENT/ENODEV 66...). A crash inside a plugin prints\n"
+               "\"fatal signal SIG... in plugin 'NAME' during CALL (frame N)\" and ends with\n"
+               "128 + the signal.\n\n"
+               "Environment: FACEPUPPET_PLUGIN_PATH  more plugin folders (colon-separated,\n"
+               "absolute); FACEPUPPET_DEBUG=1  show plugins' and the session's debug lines.\n");
 }
 
 int main(int argc, char **argv)
@@ -77,6 +86,8 @@ int main(int argc, char **argv)
         printf("facepuppet %s\n", FP_VERSION_STRING);
         return FP_EXIT_OK;
     }
+    /* A fatal signal inside a plugin call names the plugin, the call and the frame. */
+    fp_plugin_crash_install();
     for (size_t i = 0; i < NCOMMANDS; i++)
         if (!strcmp(commands[i]->name, name)) return commands[i]->main(argc - 1, argv + 1);
     fprintf(stderr, "facepuppet: unknown command '%s' (see facepuppet --help)\n", name);

@@ -2,12 +2,14 @@
 #define _GNU_SOURCE
 #include "session_opts.h"
 
+#include "fp_calib_file.h"
+
 #include <errno.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-enum { OPT_DURATION = 0x100, OPT_HAND_SIZE, OPT_PLUGIN_DIR };
+enum { OPT_DURATION = 0x100, OPT_HAND_SIZE, OPT_PLUGIN_DIR, OPT_MM_PER_UNIT, OPT_CALIBRATION };
 
 static const struct {
     const char *name;
@@ -21,7 +23,11 @@ static const struct {
      "any input also takes record=FILE (an event log of it)"},
     {"mapping", required_argument, 'M', "SPEC", "anchored (default) or unanchored, [,key=value...]"},
     {"radius", required_argument, 'r', "R",
-     "support radius in mesh units (default 6% of the mesh's\nbounding-box diagonal)"},
+     "support radius in mesh units (default 6% of the mesh's\nbounding-box diagonal, at least 25 mm)"},
+    {"mm-per-unit", required_argument, OPT_MM_PER_UNIT, "X",
+     "the mesh's unit in millimetres (default: detected from\nthe head, about 23 cm chin to crown)"},
+    {"calibration", required_argument, OPT_CALIBRATION, "FILE",
+     "hand calibration JSON (docs/calibration.md; made by\n`facepuppet calibrate`)"},
     {"speed", required_argument, 's', "X", "replay speed factor for replay inputs (default 1)"},
     {"duration", required_argument, OPT_DURATION, "S", "stop after S seconds (default: when the inputs end)"},
     {"hand-size", required_argument, OPT_HAND_SIZE, "F", "performer's hand size, 1 = mean adult"},
@@ -89,6 +95,20 @@ int fp_session_opts_parse(fp_session_opts *o, int c, const char *arg, const char
         }
         o->plugin_dirs[o->nplugin_dirs++] = arg;
         return 1;
+    case OPT_MM_PER_UNIT:
+        if (!number(arg, 0, INFINITY, &so->mm_per_unit)) return bad(cmd, "--mm-per-unit must be a number > 0", arg);
+        so->mm_per_unit_source = "--mm-per-unit";
+        return 1;
+    case OPT_CALIBRATION: {
+        char err[1024];
+        int rc = fp_calibration_load(arg, &o->calibration, err, sizeof err);
+        if (rc) {
+            fprintf(stderr, "facepuppet %s: --calibration %s\n", cmd, err);
+            return rc;
+        }
+        so->calibration = &o->calibration;
+        return 1;
+    }
     case 'q': o->quiet = true; return 1;
     default: return 0;
     }

@@ -12,7 +12,7 @@
 /** The short letters of the shared options, for getopt_long's optstring. */
 #define FP_SESSION_OPTS_SHORT "m:i:M:r:s:q"
 /** How many entries fp_session_opts_longopts writes. */
-#define FP_SESSION_OPTS_COUNT 9
+#define FP_SESSION_OPTS_COUNT 11
 /** A command's own long-only options take values from here up (the shared ones use 0x100..). */
 #define FP_SESSION_OPTS_FIRST_FREE 0x200
 #define FP_SESSION_OPTS_MAX_PLUGIN_DIRS 8
@@ -25,6 +25,7 @@ typedef struct fp_session_opts {
     bool quiet;                   /* --quiet: no progress lines */
     const char *plugin_dirs[FP_SESSION_OPTS_MAX_PLUGIN_DIRS]; /* --plugin-dir (repeatable) */
     size_t nplugin_dirs;
+    fp_calibration calibration;   /* --calibration FILE, loaded (session->calibration points here) */
 } fp_session_opts;
 
 /** Zero *o, point it at `session` (zeroed by the caller) and set the defaults. */
@@ -36,7 +37,8 @@ size_t fp_session_opts_longopts(struct option *out);
 
 /** Parse one option as getopt_long returned it (c and its argument). Returns 1 when c is a
  *  shared option and its value is good, 0 when c is not a shared option, -EINVAL when the
- *  value is bad (the message, prefixed "facepuppet CMD: ", is on stderr). */
+ *  value is bad, the calibration file's code (fp_calibration_load: -ENOENT, -EBADMSG,
+ *  -ERANGE) for --calibration (the message, prefixed "facepuppet CMD: ", is on stderr). */
 int fp_session_opts_parse(fp_session_opts *o, int c, const char *arg, const char *cmd);
 
 /** Print the shared options' help lines (one table for both commands). */

@@ -61,6 +61,7 @@ int fp_script_parse(const char *text, fp_script *s, char *err, size_t errlen)
             int m = sscanf(arg, "%15s %lf", what, &k);
             if (m >= 1 && !strcmp(what, "hands")) c.op = FP_SCRIPT_WAIT_HANDS;
             else if (m >= 1 && !strcmp(what, "end")) c.op = FP_SCRIPT_WAIT_END;
+            else if (m == 1 && !strcmp(what, "reload")) c.op = FP_SCRIPT_WAIT_RELOAD;
             else if (m == 2 && !strcmp(what, "frames") && k >= 0 && k < 1e9) {
                 c.op = FP_SCRIPT_WAIT_FRAMES;
                 c.number = floor(k);
@@ -79,6 +80,8 @@ int fp_script_parse(const char *text, fp_script *s, char *err, size_t errlen)
             c.op = FP_SCRIPT_RADIUS;
             c.number = strtod(arg, &end);
             if (end == arg || *end || !(c.number > 0) || !isfinite(c.number)) rc = -EINVAL;
+        } else if (!strcmp(word, "print") && !strcmp(arg, "mapping")) {
+            c.op = FP_SCRIPT_PRINT_MAPPING;
         } else if (!strcmp(word, "close")) {
             c.op = FP_SCRIPT_CLOSE;
             if (arg[0]) rc = -EINVAL;
@@ -86,8 +89,8 @@ int fp_script_parse(const char *text, fp_script *s, char *err, size_t errlen)
             rc = -EINVAL;
         }
         if (rc == -EINVAL)
-            snprintf(err, errlen, "--script: command %d '%s %s' is not one of: wait hands|end|frames N, "
-                     "key NAME, shot FILE, radius R, drop FILE, close", index, word, arg);
+            snprintf(err, errlen, "--script: command %d '%s %s' is not one of: wait hands|end|reload|frames N, "
+                     "key NAME, shot FILE, radius R, drop FILE, print mapping, close", index, word, arg);
         if (!rc) rc = add(s, c);
         else free(c.text);
     }

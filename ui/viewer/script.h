@@ -7,7 +7,9 @@
 
 typedef enum fp_script_op {
     FP_SCRIPT_WAIT_HANDS, FP_SCRIPT_WAIT_END, FP_SCRIPT_WAIT_FRAMES, FP_SCRIPT_KEY,
-    FP_SCRIPT_SHOT, FP_SCRIPT_RADIUS, FP_SCRIPT_DROP, FP_SCRIPT_CLOSE
+    FP_SCRIPT_SHOT, FP_SCRIPT_RADIUS, FP_SCRIPT_DROP, FP_SCRIPT_CLOSE,
+    FP_SCRIPT_WAIT_RELOAD,   /* wait reload: until the mapping's file was reloaded (or failed to) */
+    FP_SCRIPT_PRINT_MAPPING  /* print mapping: one stdout line, the mapping's name, id, version */
 } fp_script_op;
 
 typedef struct fp_script_cmd {
@@ -22,6 +24,7 @@ typedef struct fp_script {
     size_t count, next;
     uint64_t wait_start;  /* frame the current wait began at */
     int waiting;
+    unsigned long reload_mark;  /* reload attempts when the current wait began */
 } fp_script;
 
 /** Parse text into s. Returns 0 or -EINVAL with the offending command in err. */

@@ -20,6 +20,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 /* ---- growable sample arrays, percentiles ------------------------------------------------ */
 
@@ -103,6 +106,16 @@ typedef struct viewer {
     int error;                /* a failure that ends the run (screenshot not written) */
     char *err;
     size_t errlen;
+
+    /* hot reload of the mapping's .so (checked at most every 250 ms, between frames) */
+    struct {
+        char file[4096];      /* the file watched (the mapping's, as found by name) */
+        struct stat seen;     /* its state when loaded or last reloaded */
+        struct stat pending;  /* a change seen, reloaded once it holds still for a check */
+        bool have_pending;
+        int64_t next_check;
+        unsigned long attempts, reloads;
+    } hot;
 } viewer;
 
 static void say(viewer *v, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
@@ -326,6 +339,82 @@ static void on_drop(GLFWwindow *w, int count, const char **paths)
     v->drop_path = strdup(paths[0]);
 }
 
+/* ---- hot reload ------------------------------------------------------------------------- */
+
+static bool same_file_state(const struct stat *a, const struct stat *b)
+{
+    return a->st_dev == b->st_dev && a->st_ino == b->st_ino && a->st_size == b->st_size &&
+           a->st_mtim.tv_sec == b->st_mtim.tv_sec && a->st_mtim.tv_nsec == b->st_mtim.tv_nsec;
+}
+
+/* Copy src to a fresh private temporary file (dlopen caches by path: a copy has a new one). */
+static int copy_to_temp(const char *src, char *tmp, size_t len)
+{
+    const char *dir = getenv("TMPDIR");
+    snprintf(tmp, len, "%s/facepuppet-reload-XXXXXX", dir && *dir ? dir : "/tmp");
+    int out = mkstemp(tmp);
+    if (out < 0) return -errno;
+    int in = open(src, O_RDONLY | O_CLOEXEC), rc = 0;
+    if (in < 0) rc = -errno;
+    char buf[65536];
+    for (ssize_t n; !rc && (n = read(in, buf, sizeof buf)) != 0;) {
+        if (n < 0 || write(out, buf, (size_t)n) != n) rc = -EIO;
+    }
+    if (in >= 0) close(in);
+    if (close(out) && !rc) rc = -EIO;
+    if (rc) unlink(tmp);
+    return rc;
+}
+
+/* Between frames: when the mapping's file changed (inode, size or mtime) and then held still
+ * for one check, load a copy, create it with the same keys, swap it in; a failure keeps the
+ * old mapping and says why (HUD and stderr). */
+static void watch_mapping(viewer *v)
+{
+    int64_t now = fp_now_ns();
+    if (now < v->hot.next_check) return;
+    v->hot.next_check = now + 250000000LL;
+    const char *file = fp_session_mapping_file(v->s);
+    struct stat st;
+    if (!file || !*file) return;
+    if (strcmp(file, v->hot.file)) { /* a new mapping (keys 1, 2, a dropped mesh): watch it */
+        snprintf(v->hot.file, sizeof v->hot.file, "%s", file);
+        v->hot.have_pending = false;
+        if (stat(file, &v->hot.seen)) memset(&v->hot.seen, 0, sizeof v->hot.seen);
+        return;
+    }
+    if (stat(file, &st) || same_file_state(&st, &v->hot.seen)) {
+        v->hot.have_pending = false;
+        return; /* absent for a moment (being replaced), or unchanged */
+    }
+    if (!v->hot.have_pending || !same_file_state(&st, &v->hot.pending)) {
+        v->hot.pending = st; /* changed: reload at the next check if it holds still */
+        v->hot.have_pending = true;
+        return;
+    }
+    v->hot.have_pending = false;
+    v->hot.seen = st;
+    v->hot.attempts++;
+    char tmp[4200], err[2048];
+    const char *name = fp_session_mapping_name(v->s);
+    int rc = copy_to_temp(file, tmp, sizeof tmp);
+    if (rc) {
+        say(v, "mapping '%s': reload of %s failed: cannot copy it (%s); keeping the old one", name, file,
+            strerror(-rc));
+        return;
+    }
+    rc = fp_session_reload_mapping(v->s, tmp, err, sizeof err);
+    unlink(tmp); /* loaded (or not): the copy is no longer needed by name */
+    if (rc) {
+        say(v, "mapping '%s': reload of %s failed: %s; keeping the old one", name, file, err);
+        return;
+    }
+    v->hot.reloads++;
+    const fp_plugin *p = fp_session_mapping_plugin(v->s);
+    say(v, "mapping '%s' reloaded from %s (%s %s)", name, file, p->entry && p->entry->id ? p->entry->id : "?",
+        p->entry && p->entry->version ? p->entry->version : "?");
+}
+
 /* ---- script ----------------------------------------------------------------------------- */
 
 static bool any_hand(const viewer *v)
@@ -339,14 +428,16 @@ static void run_script(viewer *v)
     while (sc->next < sc->count) {
         fp_script_cmd *c = &sc->cmds[sc->next];
         if (c->op == FP_SCRIPT_WAIT_HANDS || c->op == FP_SCRIPT_WAIT_END ||
-            c->op == FP_SCRIPT_WAIT_FRAMES) {
+            c->op == FP_SCRIPT_WAIT_FRAMES || c->op == FP_SCRIPT_WAIT_RELOAD) {
             if (!sc->waiting) {
                 sc->waiting = 1;
                 sc->wait_start = v->frames;
+                sc->reload_mark = v->hot.attempts;
             }
-            bool done = c->op == FP_SCRIPT_WAIT_HANDS ? any_hand(v)
-                      : c->op == FP_SCRIPT_WAIT_END   ? fp_session_finished(v->s)
-                                                      : v->frames - sc->wait_start >= (uint64_t)c->number;
+            bool done = c->op == FP_SCRIPT_WAIT_HANDS  ? any_hand(v)
+                      : c->op == FP_SCRIPT_WAIT_END    ? fp_session_finished(v->s)
+                      : c->op == FP_SCRIPT_WAIT_RELOAD ? v->hot.attempts > sc->reload_mark
+                                                       : v->frames - sc->wait_start >= (uint64_t)c->number;
             if (!done) return;
             sc->waiting = 0;
             sc->next++;
@@ -357,6 +448,16 @@ static void run_script(viewer *v)
         case FP_SCRIPT_KEY: act(v, c->key); break;
         case FP_SCRIPT_RADIUS: fp_session_set_radius(v->s, c->number); break;
         case FP_SCRIPT_CLOSE: glfwSetWindowShouldClose(v->win, GLFW_TRUE); return;
+        case FP_SCRIPT_PRINT_MAPPING: {
+            const fp_plugin *p = fp_session_mapping_plugin(v->s);
+            const fp_control_set *cs = fp_session_control_set(v->s);
+            printf("mapping %s id %s version %s frame %llu active %d count %zu reloads %lu\n",
+                   fp_session_mapping_name(v->s), p->entry && p->entry->id ? p->entry->id : "?",
+                   p->entry && p->entry->version ? p->entry->version : "?", (unsigned long long)v->frames,
+                   cs->active, cs->count, v->hot.reloads);
+            fflush(stdout);
+            break;
+        }
         case FP_SCRIPT_DROP:
             free(v->drop_path);
             v->drop_path = strdup(c->text);
@@ -588,6 +689,7 @@ static void frame(viewer *v)
 {
     glfwPollEvents();
     if (v->drop_path) load_dropped(v);
+    watch_mapping(v);
     run_script(v);
     if (v->drop_path) load_dropped(v);
     fp_frame_stats st;

@@ -1,0 +1,834 @@
+/* The plugin validator (fp_plugin_check.h): a plugin exercised through plugin.h as the host
+ * would, and harder. */
+#define _GNU_SOURCE
+#include "fp_plugin_check.h"
+#include "fp_plugin_crash.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+typedef struct checker {
+    fp_check_fn fn;
+    void *user;
+    fp_check_summary *sum;
+    const fp_check_options *opt;
+    const char *who;          /* the plugin's file, for the crash bracket */
+} checker;
+
+static void report(checker *c, fp_check_level level, const char *check, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+static void report(checker *c, fp_check_level level, const char *check, const char *fmt, ...)
+{
+    char msg[1024];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    if (level == FP_CHECK_PASS) c->sum->passed++;
+    if (level == FP_CHECK_FAIL) c->sum->failed++;
+    if (level == FP_CHECK_SKIP) c->sum->skipped++;
+    if (c->fn) c->fn(c->user, level, check, msg);
+}
+
+static int64_t now_ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (int64_t)ts.tv_sec * 1000000000LL + ts.tv_nsec;
+}
+
+static bool device_code(int rc)
+{
+    return rc == -ENOENT || rc == -ENODEV || rc == -EACCES || rc == -EBUSY || rc == -ENXIO ||
+           rc == -EPERM;
+}
+
+/* ---- creating with keys ------------------------------------------------------------------ */
+
+typedef struct creator {
+    checker *c;
+    const fp_plugin *plugin;
+    fp_host host;
+} creator;
+
+/* create() with the options' keys plus `extra` (n of them). *out_inst gets the instance
+ * (fp_input* or fp_mapping*) or NULL. Returns create's code; a 0 without an instance is
+ * returned as 1. */
+static int create_with(creator *cr, const fp_param *extra, size_t n, void **out_inst, char *msg,
+                       size_t msglen)
+{
+    const fp_check_options *o = cr->c->opt;
+    fp_param keys[FP_SPEC_MAX_PARAMS + 4];
+    size_t k = 0;
+    for (size_t i = 0; i < o->nparams && k < FP_SPEC_MAX_PARAMS; i++) keys[k++] = o->params[i];
+    for (size_t i = 0; i < n && k < sizeof keys / sizeof keys[0]; i++) keys[k++] = extra[i];
+    msg[0] = '\0';
+    *out_inst = NULL;
+    int rc;
+    fp_plugin_call_enter(cr->c->who, "create", 0);
+    if (cr->plugin->kind == FP_PLUGIN_INPUT) {
+        const fp_input_factory *f = cr->plugin->factory;
+        fp_input *in = NULL;
+        rc = f->create(&cr->host, o->arg, keys, k, &in, msg, msglen);
+        *out_inst = in;
+    } else {
+        const fp_mapping_factory *f = cr->plugin->factory;
+        fp_mapping *m = NULL;
+        rc = f->create(&cr->host, keys, k, &m, msg, msglen);
+        *out_inst = m;
+    }
+    fp_plugin_call_leave();
+    msg[msglen - 1] = '\0';
+    if (rc == 0 && !*out_inst) return 1;
+    if (rc != 0) *out_inst = NULL; /* an instance with an error is not ours to free */
+    return rc;
+}
+
+static void destroy_inst2(creator *cr, void *inst, bool stopped)
+{
+    if (!inst) return;
+    fp_plugin_call_enter(cr->c->who, "destroy", 0);
+    if (cr->plugin->kind == FP_PLUGIN_INPUT) {
+        fp_input *in = inst;
+        if (!stopped && in->stop) in->stop(in); /* allowed without a start (plugin.h) */
+        if (in->destroy) in->destroy(in);
+    } else {
+        fp_mapping *m = inst;
+        if (m->destroy) m->destroy(m);
+    }
+    fp_plugin_call_leave();
+}
+
+static void destroy_inst(creator *cr, void *inst) { destroy_inst2(cr, inst, false); }
+
+/* The key checks every plugin gets. Returns false when create with the defaults already
+ * failed (nothing more can be checked); *device set when it failed for want of a device. */
+static bool check_keys(creator *cr, const fp_param_info *info, bool *device)
+{
+    checker *c = cr->c;
+    char msg[1024];
+    void *inst;
+    *device = false;
+    int rc = create_with(cr, NULL, 0, &inst, msg, sizeof msg);
+    if (rc == 1) {
+        report(c, FP_CHECK_FAIL, "create", "create returned 0 without an instance (*out left NULL)");
+        return false;
+    }
+    if (rc) {
+        if (device_code(rc) && msg[0]) {
+            *device = true;
+            report(c, FP_CHECK_SKIP, "create", "needs a device: create failed with %d (%s): %s", rc,
+                   fp_strerror(rc), msg);
+        } else {
+            report(c, FP_CHECK_FAIL, "create", "create with the default keys failed with %d (%s): %s",
+                   rc, fp_strerror(rc), msg[0] ? msg : "(no message)");
+        }
+        return false;
+    }
+    report(c, FP_CHECK_PASS, "create", "created with the default keys");
+    destroy_inst(cr, inst);
+
+    /* An unknown key must be refused, by name. */
+    static const char *bogus = "fpcheck-no-such-key";
+    fp_param bad = {bogus, "1"};
+    rc = create_with(cr, &bad, 1, &inst, msg, sizeof msg);
+    if (rc == 0 || rc == 1) {
+        report(c, FP_CHECK_FAIL, "unknown key", "create accepted the unknown key '%s'", bogus);
+        destroy_inst(cr, inst);
+    } else if (!strstr(msg, bogus)) {
+        report(c, FP_CHECK_FAIL, "unknown key",
+               "create refused the unknown key '%s' (%d) but its message does not name it: '%s'",
+               bogus, rc, msg);
+    } else {
+        report(c, FP_CHECK_PASS, "unknown key", "refused: %s", msg);
+    }
+    if (!info) {
+        report(c, FP_CHECK_INFO, "keys", "the factory declares no typed keys (fp_param_info)");
+        return true;
+    }
+    /* Every key at its declared default, then each key out of its range. */
+    fp_param defaults[FP_SPEC_MAX_PARAMS];
+    size_t nd = 0;
+    for (const fp_param_info *p = info; p->name && nd < FP_SPEC_MAX_PARAMS; p++) {
+        bool given = false;
+        for (size_t i = 0; i < c->opt->nparams; i++) given |= !strcmp(c->opt->params[i].key, p->name);
+        if (p->default_value && *p->default_value && !given && p->type != FP_PARAM_PATH)
+            defaults[nd++] = (fp_param){p->name, p->default_value};
+    }
+    rc = create_with(cr, defaults, nd, &inst, msg, sizeof msg);
+    if (rc) report(c, FP_CHECK_FAIL, "defaults", "create refused its own declared defaults (%d): %s", rc, msg);
+    else report(c, FP_CHECK_PASS, "defaults", "%zu key(s) at their declared defaults accepted", nd);
+    destroy_inst(cr, inst);
+    for (const fp_param_info *p = info; p->name; p++) {
+        char value[64];
+        switch (p->type) {
+        case FP_PARAM_INT:
+        case FP_PARAM_FLOAT: {
+            double span = p->max - p->min;
+            if (!isfinite(p->max) || p->max > 1e300) continue;
+            snprintf(value, sizeof value, "%.17g", p->max + (span > 1 ? span : 1));
+            break;
+        }
+        case FP_PARAM_ENUM: snprintf(value, sizeof value, "fpcheck-not-a-choice"); break;
+        case FP_PARAM_BOOL: snprintf(value, sizeof value, "2"); break;
+        default: continue;
+        }
+        fp_param one = {p->name, value};
+        rc = create_with(cr, &one, 1, &inst, msg, sizeof msg);
+        if (rc == 0 || rc == 1) {
+            report(c, FP_CHECK_FAIL, "key range", "create accepted %s=%s, outside the key's declared %s",
+                   p->name, value, p->type == FP_PARAM_ENUM ? "choices" : "range");
+            destroy_inst(cr, inst);
+        } else {
+            report(c, FP_CHECK_PASS, "key range", "%s=%s refused: %s", p->name, value, msg);
+        }
+    }
+    return true;
+}
+
+/* ---- mappings --------------------------------------------------------------------------- */
+
+#define GRID 9
+#define NV (GRID * GRID)
+#define GUARD 8
+#define SEQ 120                     /* frames per half; the second half has a rig */
+#define FRAMES (2 * SEQ)
+static const unsigned char canary_byte = 0xA5;
+
+typedef struct snapshot {
+    bool active;
+    uint32_t intents;
+    double radius;
+    size_t count, channel_count;
+    float start[FP_CONTROL_CAPACITY][3], end[FP_CONTROL_CAPACITY][3];
+    fp_channel channels[FP_CHANNEL_CAPACITY];
+} snapshot;
+
+typedef struct scene {
+    float grid[NV][3];
+    fp_mesh_view view;
+    fp_rig_view rig;
+    uint8_t region[NV];
+    fp_rig_landmark landmarks[2];
+    fp_rig_channel_info channels[1];
+    /* the host's arrays, each followed by GUARD canary entries */
+    float start[FP_CONTROL_CAPACITY + GUARD][3], end[FP_CONTROL_CAPACITY + GUARD][3];
+    fp_channel ch[FP_CHANNEL_CAPACITY + GUARD];
+    fp_control_set cs;
+    fp_event events[2];
+} scene;
+
+static void scene_init(scene *s)
+{
+    memset(s, 0, sizeof *s);
+    for (int j = 0; j < GRID; j++)
+        for (int i = 0; i < GRID; i++) {
+            float *v = s->grid[j * GRID + i];
+            v[0] = -1 + 2.0f * i / (GRID - 1);
+            v[1] = -1 + 2.0f * j / (GRID - 1);
+            v[2] = 0.05f * (v[0] * v[0] + v[1] * v[1]); /* a shallow bowl */
+        }
+    s->view.vertex_count = NV;
+    s->view.base = &s->grid[0][0];
+    for (int k = 0; k < 3; k++) {
+        s->view.bounds_min[k] = k < 2 ? -1 : 0;
+        s->view.bounds_max[k] = k < 2 ? 1 : 0.1f;
+    }
+    for (int v = 0; v < NV; v++) s->region[v] = v < GRID ? FP_REGION_JAW : v >= NV - GRID ? FP_REGION_SKULL : FP_REGION_SOFT;
+    s->landmarks[0] = (fp_rig_landmark){"chin", GRID / 2, {0, -1, 0.05f}};
+    s->landmarks[1] = (fp_rig_landmark){"nose_tip", NV / 2, {0, 0, 0}};
+    s->channels[0] = (fp_rig_channel_info){"jaw.open", 0, 1, 0, 0};
+    fp_rig_view *r = &s->rig;
+    r->size = sizeof *r;
+    r->name = "fpcheck-grid";
+    r->mm_per_unit = 100;
+    r->up[1] = 1;
+    r->forward[2] = 1;
+    r->left[0] = 1;
+    r->vertex_count = NV;
+    r->region = s->region;
+    r->landmark_count = 2;
+    r->landmarks = s->landmarks;
+    r->channel_count = 1;
+    r->channels = s->channels;
+    r->hinge[0][0] = -1;
+    r->hinge[0][1] = -1;
+    r->hinge[1][0] = 1;
+    r->hinge[1][1] = -1;
+    s->cs.size = sizeof s->cs;
+    s->cs.capacity = FP_CONTROL_CAPACITY;
+    s->cs.start = s->start;
+    s->cs.end = s->end;
+    s->cs.channel_capacity = FP_CHANNEL_CAPACITY;
+    s->cs.channels = s->ch;
+    memset(s->start[FP_CONTROL_CAPACITY], canary_byte, sizeof s->start[0] * GUARD);
+    memset(s->end[FP_CONTROL_CAPACITY], canary_byte, sizeof s->end[0] * GUARD);
+    memset(&s->ch[FP_CHANNEL_CAPACITY], canary_byte, sizeof s->ch[0] * GUARD);
+}
+
+static bool canaries_intact(const scene *s, const char **which)
+{
+    const unsigned char *p[3] = {(const unsigned char *)s->start[FP_CONTROL_CAPACITY],
+                                 (const unsigned char *)s->end[FP_CONTROL_CAPACITY],
+                                 (const unsigned char *)&s->ch[FP_CHANNEL_CAPACITY]};
+    size_t n[3] = {sizeof s->start[0] * GUARD, sizeof s->end[0] * GUARD, sizeof s->ch[0] * GUARD};
+    static const char *names[3] = {"start", "end", "channels"};
+    for (int a = 0; a < 3; a++)
+        for (size_t i = 0; i < n[a]; i++)
+            if (p[a][i] != canary_byte) {
+                *which = names[a];
+                return false;
+            }
+    return true;
+}
+
+/* A hand whose palm is at (x, y, z + lift) and whose five fingertips lie on a row at height z;
+ * collapse: every joint at one point. */
+static void make_hand(fp_hand_pose *h, float x, float y, float z, bool collapse)
+{
+    h->present = true;
+    for (int j = 0; j < FP_HAND_JOINTS; j++) {
+        h->joints[j][0] = x;
+        h->joints[j][1] = y;
+        h->joints[j][2] = z;
+    }
+    if (collapse) return;
+    h->joints[FP_JOINT_PALM][2] = z + 0.4f;
+    for (int f = 0; f < FP_FINGERS; f++)
+        for (int k = 0; k < 4; k++) {
+            float t = (k + 1) / 4.0f;
+            float *p = h->joints[FP_JOINT(f, k)];
+            p[0] = x + t * 0.12f * (f - 2);
+            p[1] = y + t * 0.25f;
+            p[2] = z + (1 - t) * 0.4f;
+        }
+}
+
+/* Frame f (0..FRAMES-1) of the sequence: hands, requests, events, the rig in the second half. */
+static void make_frame(scene *s, size_t f, fp_frame_input *in, const char **what)
+{
+    size_t g = f % SEQ;
+    memset(in, 0, sizeof *in);
+    in->size = sizeof *in;
+    in->frame = f;
+    in->time_ns = (int64_t)f * 16666667;
+    in->mesh = &s->view;
+    in->radius = 0.3;
+    in->mm_per_unit = 100;
+    in->face_up[1] = 1;
+    in->face_forward[2] = 1;
+    in->face_left[0] = 1;
+    in->rig = f >= SEQ ? &s->rig : NULL;
+    float ph = (float)g / 10.0f;
+    fp_hand_pose *L = &in->hands[FP_HAND_LEFT], *R = &in->hands[FP_HAND_RIGHT];
+    if (g < 10) {
+        *what = "no hands";
+    } else if (g < 25) {
+        *what = "one hand far";
+        make_hand(R, 0.2f * sinf(ph), 0, 3, false);
+    } else if (g < 55) {
+        *what = "one hand touching";
+        float z = g < 32 ? 1.0f - (g - 25) * 0.14f : 0.02f;
+        make_hand(R, 0.3f * sinf(ph), 0.1f * cosf(ph), z, false);
+        if (g == 33) in->requested = FP_INTENT_ENGAGE;
+        if (g == 50) in->requested = FP_INTENT_COMMIT;
+    } else if (g < 85) {
+        *what = "both hands touching";
+        make_hand(L, -0.5f + 0.2f * sinf(ph), 0, 0.03f, false);
+        make_hand(R, 0.5f - 0.2f * sinf(ph), 0, 0.03f, false);
+        if (g == 56) in->requested = FP_INTENT_ENGAGE;
+        if (g == 80) in->requested = FP_INTENT_CANCEL;
+    } else if (g < 95) {
+        *what = "both hands far";
+        make_hand(L, -0.5f, 0, 2, false);
+        make_hand(R, 0.5f, 0, 2, false);
+    } else if (g < 110) {
+        *what = "edge poses";
+        switch (g % 5) {
+        case 0: make_hand(R, s->grid[NV / 2][0], s->grid[NV / 2][1], s->grid[NV / 2][2], true); break;
+        case 1: make_hand(L, -1, -1, 0, false); make_hand(R, 1, 1, 0.1f, false); break;
+        case 2: make_hand(R, 1e4f, -1e4f, 1e4f, false); break;
+        case 3: make_hand(L, 0, 0, 0, true); make_hand(R, 0, 0, 0, true); break;
+        default: make_hand(R, 0, 0, 0.0f, false); in->requested = FP_INTENT_ENGAGE | FP_INTENT_COMMIT; break;
+        }
+    } else {
+        *what = "no hands, requests";
+        in->requested = g % 2 ? FP_INTENT_COMMIT : FP_INTENT_CANCEL;
+    }
+    for (int h = 0; h < FP_HANDS; h++)
+        for (int t = 0; t < FP_FINGERS; t++) {
+            const fp_hand_pose *p = &in->hands[h];
+            if (!p->present) {
+                in->tip_distance[h][t] = INFINITY;
+                continue;
+            }
+            const float *tip = p->joints[FP_JOINT_TIP(t)];
+            double best = INFINITY;
+            for (int v = 0; v < NV; v++) {
+                double dx = tip[0] - s->grid[v][0], dy = tip[1] - s->grid[v][1], dz = tip[2] - s->grid[v][2];
+                double d = dx * dx + dy * dy + dz * dz;
+                if (d < best) best = d;
+            }
+            in->tip_distance[h][t] = (float)sqrt(best);
+            p = NULL;
+        }
+    /* Pedal presses now and then: the left button down and up. */
+    if (g == 40 || g == 41) {
+        fp_event_button *b = &s->events[0].button;
+        memset(b, 0, sizeof *b);
+        *b = (fp_event_button){{sizeof *b, FP_EVENT_BUTTON, 0, in->time_ns, 0, -1}, FP_BUTTON_LEFT,
+                               g == 40, g == 40 ? FP_BUTTON_LEFT : 0};
+        in->events = s->events;
+        in->event_count = 1;
+    }
+}
+
+typedef struct fault {
+    const char *what;
+    size_t count;
+    size_t first;
+    char detail[512];
+} fault;
+
+static void fault_add(fault *f, size_t frame, const char *scen, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+static void fault_add(fault *f, size_t frame, const char *scen, const char *fmt, ...)
+{
+    if (!f->count++) {
+        f->first = frame;
+        char d[400];
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(d, sizeof d, fmt, ap);
+        va_end(ap);
+        snprintf(f->detail, sizeof f->detail, "%s (first on frame %zu, %s%s)", d, frame, scen,
+                 frame >= SEQ ? ", rig" : "");
+    }
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* One pass over the sequence: checks each frame, records times and control sets. */
+static void run_sequence(checker *c, fp_mapping *m, scene *s, snapshot *snaps, double *times_us,
+                         fault *faults, bool *dead)
+{
+    enum { F_RC, F_COUNT, F_CANARY, F_NONFINITE, F_RADIUS, F_CHANNEL };
+    for (size_t f = 0; f < FRAMES && !*dead; f++) {
+        fp_frame_input in;
+        const char *scen = "";
+        make_frame(s, f, &in, &scen);
+        fp_plugin_call_enter(c->who, "process", f);
+        int64_t t0 = now_ns();
+        int rc = m->process(m, &in, &s->cs);
+        int64_t t1 = now_ns();
+        fp_plugin_call_leave();
+        times_us[f] = (t1 - t0) / 1e3;
+        const char *which = NULL;
+        fp_control_set *cs = &s->cs;
+        if (!canaries_intact(s, &which)) {
+            fault_add(&faults[F_CANARY], f, scen,
+                      "wrote past the capacity of the host's %s array (%zu entries; the canary after "
+                      "it was overwritten); count %zu",
+                      which, !strcmp(which, "channels") ? cs->channel_capacity : cs->capacity, cs->count);
+            *dead = true; /* the host's memory is no longer trustworthy: stop here */
+            memset(s->start[FP_CONTROL_CAPACITY], canary_byte, sizeof s->start[0] * GUARD);
+            memset(s->end[FP_CONTROL_CAPACITY], canary_byte, sizeof s->end[0] * GUARD);
+            memset(&s->ch[FP_CHANNEL_CAPACITY], canary_byte, sizeof s->ch[0] * GUARD);
+        }
+        if (rc < 0) {
+            fault_add(&faults[F_RC], f, scen, "process returned %d (%s)", rc, fp_strerror(rc));
+            continue;
+        }
+        if (cs->count > cs->capacity || cs->channel_count > cs->channel_capacity) {
+            fault_add(&faults[F_COUNT], f, scen, "count %zu > capacity %zu or channel_count %zu > %zu",
+                      cs->count, cs->capacity, cs->channel_count, cs->channel_capacity);
+            continue;
+        }
+        if (cs->active && (!(cs->radius > 0) || !isfinite(cs->radius)))
+            fault_add(&faults[F_RADIUS], f, scen, "active with radius %g (must be > 0 and finite)", cs->radius);
+        for (size_t i = 0; i < cs->count; i++)
+            for (int k = 0; k < 3; k++)
+                if (!isfinite(cs->start[i][k]) || !isfinite(cs->end[i][k])) {
+                    fault_add(&faults[F_NONFINITE], f, scen,
+                              "control vector %zu: %s point (%g, %g, %g) is not finite", i,
+                              isfinite(cs->start[i][k]) ? "end" : "start",
+                              isfinite(cs->start[i][k]) ? cs->end[i][0] : cs->start[i][0],
+                              isfinite(cs->start[i][k]) ? cs->end[i][1] : cs->start[i][1],
+                              isfinite(cs->start[i][k]) ? cs->end[i][2] : cs->start[i][2]);
+                    i = cs->count;
+                    break;
+                }
+        for (size_t i = 0; i < cs->channel_count; i++)
+            if (!isfinite(cs->channels[i].value) || !memchr(cs->channels[i].name, 0, sizeof cs->channels[i].name)) {
+                fault_add(&faults[F_CHANNEL], f, scen, "channel %zu: name not NUL-terminated or value not finite", i);
+                break;
+            }
+        snapshot *sn = &snaps[f];
+        memset(sn, 0, sizeof *sn);
+        sn->active = cs->active;
+        sn->intents = cs->intents;
+        sn->radius = cs->active ? cs->radius : 0;
+        sn->count = cs->active ? cs->count : 0;
+        sn->channel_count = cs->channel_count;
+        memcpy(sn->start, cs->start, sn->count * sizeof sn->start[0]);
+        memcpy(sn->end, cs->end, sn->count * sizeof sn->end[0]);
+        for (size_t i = 0; i < cs->channel_count; i++) {
+            memcpy(sn->channels[i].name, cs->channels[i].name, sizeof sn->channels[i].name);
+            sn->channels[i].value = cs->channels[i].value;
+        }
+    }
+}
+
+static void check_mapping(checker *c, creator *cr)
+{
+    void *inst;
+    char msg[1024];
+    int rc = create_with(cr, NULL, 0, &inst, msg, sizeof msg);
+    if (rc) return; /* reported by check_keys */
+    fp_mapping *m = inst;
+    if (m->size < offsetof(fp_mapping, get_extension) || !m->process) {
+        report(c, FP_CHECK_FAIL, "instance", "the fp_mapping has size %u or no process()", m->size);
+        destroy_inst(cr, m);
+        return;
+    }
+    scene *s = calloc(1, sizeof *s);
+    snapshot *a = calloc(FRAMES, sizeof *a), *b = calloc(FRAMES, sizeof *b);
+    double *ta = calloc(FRAMES, sizeof *ta), *tb = calloc(FRAMES, sizeof *tb);
+    fault faults[6] = {{.what = "process"}, {.what = "capacity"}, {.what = "overrun"},
+                       {.what = "finite points"}, {.what = "radius"}, {.what = "channels"}};
+    if (!s || !a || !b || !ta || !tb) {
+        report(c, FP_CHECK_FAIL, "memory", "out of memory");
+        goto out;
+    }
+    scene_init(s);
+    bool dead = false;
+    run_sequence(c, m, s, a, ta, faults, &dead);
+    bool ran_twice = false;
+    if (!dead) {
+        if (m->reset) {
+            fp_plugin_call_enter(c->who, "reset", FRAMES);
+            m->reset(m);
+            fp_plugin_call_leave();
+        }
+        fault again[6];
+        memcpy(again, faults, sizeof again);
+        for (int k = 0; k < 6; k++) again[k].count = 0;
+        run_sequence(c, m, s, b, tb, again, &dead);
+        for (int k = 0; k < 6; k++)
+            if (!faults[k].count && again[k].count) faults[k] = again[k];
+        ran_twice = true;
+    }
+    bool any = false;
+    for (int k = 0; k < 6; k++)
+        if (faults[k].count) {
+            any = true;
+            report(c, FP_CHECK_FAIL, faults[k].what, "%s; %zu frame(s)", faults[k].detail, faults[k].count);
+        }
+    if (!any)
+        report(c, FP_CHECK_PASS, "control sets",
+               "%d frames (no hands, one hand, both, touching and far, edge poses; without and "
+               "with a rig): count <= capacity, canaries intact, finite points, radius > 0",
+               FRAMES);
+    /* Timing: per frame the lower of the two runs. */
+    size_t nt = dead ? 0 : FRAMES;
+    double *t = calloc(FRAMES, sizeof *t);
+    if (t && nt) {
+        size_t worst = 0;
+        for (size_t f = 0; f < nt; f++) {
+            t[f] = ran_twice && tb[f] < ta[f] ? tb[f] : ta[f];
+            if (t[f] > t[worst]) worst = f;
+        }
+        double max = t[worst];
+        qsort(t, nt, sizeof *t, cmp_double);
+        c->sum->frames = nt;
+        c->sum->median_us = t[nt / 2];
+        c->sum->max_us = max;
+        double budget_us = c->opt->budget_ms * 1e3;
+        if (max > budget_us)
+            report(c, FP_CHECK_FAIL, "time",
+                   "process took %.3f ms on frame %zu (in both runs), over the budget of %g ms "
+                   "(median %.3f ms)", max / 1e3, worst, c->opt->budget_ms, c->sum->median_us / 1e3);
+        else
+            report(c, FP_CHECK_PASS, "time", "process median %.1f us, max %.1f us (budget %g ms)",
+                   c->sum->median_us, max, c->opt->budget_ms);
+    }
+    free(t);
+    if (ran_twice && !any) {
+        size_t f = 0;
+        for (; f < FRAMES; f++) {
+            const snapshot *x = &a[f], *y = &b[f];
+            if (x->active != y->active || x->intents != y->intents || x->radius != y->radius ||
+                x->count != y->count || x->channel_count != y->channel_count ||
+                memcmp(x->start, y->start, x->count * sizeof x->start[0]) ||
+                memcmp(x->end, y->end, x->count * sizeof x->end[0]))
+                break;
+            bool same = true;
+            for (size_t i = 0; i < x->channel_count; i++)
+                same &= !strncmp(x->channels[i].name, y->channels[i].name, sizeof x->channels[i].name) &&
+                        x->channels[i].value == y->channels[i].value;
+            if (!same) break;
+        }
+        if (f < FRAMES)
+            report(c, FP_CHECK_FAIL, "determinism",
+                   "after reset the same frames gave a different control set on frame %zu "
+                   "(active %d/%d, count %zu/%zu, intents %u/%u)",
+                   f, a[f].active, b[f].active, a[f].count, b[f].count, a[f].intents, b[f].intents);
+        else
+            report(c, FP_CHECK_PASS, "determinism", "after reset the same %d frames gave identical control sets",
+                   FRAMES);
+    } else if (!m->reset && !dead) {
+        report(c, FP_CHECK_INFO, "determinism", "the mapping has no reset()");
+    }
+out:
+    if (!dead) {
+        destroy_inst(cr, m);
+        report(c, FP_CHECK_PASS, "destroy", "destroyed");
+    } else {
+        report(c, FP_CHECK_INFO, "destroy", "not destroyed: the host's memory was overwritten");
+    }
+    free(s);
+    free(a);
+    free(b);
+    free(ta);
+    free(tb);
+}
+
+/* ---- inputs ------------------------------------------------------------------------------ */
+
+typedef struct input_host {
+    fp_event_queue queue;
+    atomic_bool stopped;          /* stop() returned */
+    atomic_ulong after_stop;      /* pushes after that */
+    atomic_ulong bad_size;        /* pushes with a size no event has */
+} input_host;
+
+static bool ih_push(const fp_host *host, const fp_event_header *ev)
+{
+    input_host *ih = host->host_data;
+    if (atomic_load(&ih->stopped)) {
+        atomic_fetch_add(&ih->after_stop, 1);
+        return false;
+    }
+    if (!ev || ev->size < sizeof *ev || ev->size > sizeof(fp_event)) {
+        atomic_fetch_add(&ih->bad_size, 1);
+        return false;
+    }
+    return fp_event_queue_push(&ih->queue, ev);
+}
+static int64_t ih_now(const fp_host *host) { (void)host; return now_ns(); }
+static void ih_log(const fp_host *host, fp_log_level level, const char *message)
+{
+    (void)host; (void)level; (void)message;
+}
+static const void *ih_ext(const fp_host *host, const char *id) { (void)host; (void)id; return NULL; }
+
+static bool finite_n(const float *v, size_t n)
+{
+    for (size_t i = 0; i < n; i++)
+        if (!isfinite(v[i])) return false;
+    return true;
+}
+
+/* Why ev is malformed, or NULL. */
+static const char *event_problem(const fp_event *ev, int64_t latest)
+{
+    static const uint32_t sizes[] = {0, sizeof(fp_event_joint_angles), sizeof(fp_event_joint_positions),
+                                     sizeof(fp_event_wrist_pose), sizeof(fp_event_button),
+                                     sizeof(fp_event_status)};
+    const fp_event_header *h = &ev->header;
+    if (h->type < 1 || h->type > 5) return "unknown type";
+    if (h->size != sizes[h->type]) return "size is not that of its type";
+    if (h->hand < -1 || h->hand > 1) return "hand is not -1, 0 or 1";
+    if (h->type <= FP_EVENT_WRIST_POSE && h->hand < 0) return "a pose event without a hand";
+    if (h->time_ns < 0 || h->time_ns > latest + 1000000000LL) return "time_ns in the future or negative";
+    switch (h->type) {
+    case FP_EVENT_JOINT_ANGLES:
+        if (!finite_n(ev->angles.radians, FP_GLOVE_SENSORS)) return "a joint angle is not finite";
+        break;
+    case FP_EVENT_JOINT_POSITIONS:
+        if (!finite_n(&ev->positions.mm[0][0], FP_HAND_JOINTS * 3)) return "a joint position is not finite";
+        break;
+    case FP_EVENT_WRIST_POSE: {
+        const float *q = ev->wrist.rotation;
+        if (!finite_n(ev->wrist.position_mm, 3) || !finite_n(q, 4)) return "the wrist pose is not finite";
+        double n = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
+        if (fabs(n - 1) > 1e-2) return "the wrist rotation is not a unit quaternion";
+        break;
+    }
+    case FP_EVENT_BUTTON:
+        if (ev->button.button != FP_BUTTON_LEFT && ev->button.button != FP_BUTTON_MIDDLE &&
+            ev->button.button != FP_BUTTON_RIGHT)
+            return "button is not one fp_button bit";
+        if (ev->button.down > 1 || ev->button.mask > 7) return "button down or mask out of range";
+        break;
+    case FP_EVENT_STATUS:
+        if (ev->status.code < FP_STATUS_CONNECTED || ev->status.code > FP_STATUS_END_OF_STREAM)
+            return "unknown status code";
+        if (!memchr(ev->status.text, 0, sizeof ev->status.text)) return "status text not NUL-terminated";
+        break;
+    }
+    return NULL;
+}
+
+static void check_input(checker *c, creator *cr)
+{
+    input_host *ih = calloc(1, sizeof *ih);
+    if (!ih || fp_event_queue_init(&ih->queue, 8192)) {
+        report(c, FP_CHECK_FAIL, "memory", "out of memory");
+        free(ih);
+        return;
+    }
+    cr->host.host_data = ih;
+    cr->host.push_event = ih_push;
+    int cycles = c->opt->cycles;
+    size_t events = 0, bad = 0;
+    char first_bad[256] = "";
+    bool skipped = false, failed = false;
+    for (int k = 0; k < cycles && !skipped && !failed; k++) {
+        atomic_store(&ih->stopped, false);
+        void *inst;
+        char msg[1024];
+        int rc = create_with(cr, NULL, 0, &inst, msg, sizeof msg);
+        if (rc) {
+            report(c, FP_CHECK_FAIL, "cycle", "cycle %d: create failed with %d: %s", k + 1, rc, msg);
+            failed = true;
+            break;
+        }
+        fp_input *in = inst;
+        if (in->size < offsetof(fp_input, get_extension) || !in->start || !in->destroy) {
+            report(c, FP_CHECK_FAIL, "instance", "the fp_input has size %u, or no start or destroy", in->size);
+            destroy_inst(cr, in);
+            failed = true;
+            break;
+        }
+        fp_plugin_call_enter(c->who, "start", 0);
+        rc = in->start(in, msg, sizeof msg);
+        fp_plugin_call_leave();
+        msg[sizeof msg - 1] = '\0';
+        if (rc) {
+            if (device_code(rc) && msg[0]) {
+                report(c, FP_CHECK_SKIP, "start", "needs a device: start failed with %d (%s): %s", rc,
+                       fp_strerror(rc), msg);
+                skipped = true;
+            } else {
+                report(c, FP_CHECK_FAIL, "start", "cycle %d: start failed with %d (%s): %s", k + 1, rc,
+                       fp_strerror(rc), msg[0] ? msg : "(no message)");
+                failed = true;
+            }
+        } else {
+            struct timespec ts = {0, 100 * 1000000L};
+            nanosleep(&ts, NULL);
+        }
+        if (in->stop) {
+            fp_plugin_call_enter(c->who, "stop", 0);
+            in->stop(in);
+            fp_plugin_call_leave();
+        }
+        atomic_store(&ih->stopped, true);
+        int64_t latest = now_ns();
+        fp_event ev;
+        while (fp_event_queue_pop(&ih->queue, &ev)) {
+            events++;
+            const char *why = event_problem(&ev, latest);
+            if (why && !bad++)
+                snprintf(first_bad, sizeof first_bad, "cycle %d, event %zu (type %u, size %u, hand %d): %s",
+                         k + 1, events, ev.header.type, ev.header.size, ev.header.hand, why);
+        }
+        /* Give a thread that outlived stop() a moment to show itself. */
+        struct timespec ts = {0, 20 * 1000000L};
+        nanosleep(&ts, NULL);
+        destroy_inst2(cr, in, true);
+    }
+    if (!skipped && !failed)
+        report(c, FP_CHECK_PASS, "cycle", "%d x create, start, stop, destroy", cycles);
+    c->sum->events = events;
+    if (bad)
+        report(c, FP_CHECK_FAIL, "events", "%zu of %zu events malformed; first: %s", bad, events, first_bad);
+    else if (!skipped)
+        report(c, FP_CHECK_PASS, "events", "%zu events well-formed", events);
+    if (atomic_load(&ih->bad_size))
+        report(c, FP_CHECK_FAIL, "events", "%lu push_event calls with a size no event has",
+               atomic_load(&ih->bad_size));
+    if (atomic_load(&ih->after_stop))
+        report(c, FP_CHECK_FAIL, "stop", "%lu push_event calls after stop() returned",
+               atomic_load(&ih->after_stop));
+    fp_event_queue_destroy(&ih->queue);
+    free(ih);
+}
+
+/* ---- the entry ------------------------------------------------------------------------- */
+
+int fp_plugin_check(const char *file, const fp_check_options *opt_in, fp_check_fn fn, void *user,
+                    fp_check_summary *sum, char *err, size_t errlen)
+{
+    fp_check_options opt = opt_in ? *opt_in : (fp_check_options){0};
+    if (!(opt.budget_ms > 0)) opt.budget_ms = 2;
+    if (opt.cycles <= 0) opt.cycles = 5;
+    fp_check_summary local;
+    if (!sum) sum = &local;
+    memset(sum, 0, sizeof *sum);
+    checker c = {fn, user, sum, &opt, file};
+    const char *base = strrchr(file, '/');
+    base = base ? base + 1 : file;
+    fp_plugin_path none;
+    memset(&none, 0, sizeof none);
+    none.builtin = SIZE_MAX;
+    fp_plugin p;
+    int rc;
+    if (!strncmp(base, "input-", 6)) {
+        rc = fp_plugin_load(&none, FP_PLUGIN_INPUT, file, &p, err, errlen);
+    } else {
+        rc = fp_plugin_load(&none, FP_PLUGIN_MAPPING, file, &p, err, errlen);
+        if (rc == FP_EPLUGIN_NO_FACTORY || !strncmp(base, "map-", 4)) {
+            if (rc == FP_EPLUGIN_NO_FACTORY && strncmp(base, "map-", 4))
+                rc = fp_plugin_load(&none, FP_PLUGIN_INPUT, file, &p, err, errlen);
+        }
+    }
+    if (rc) {
+        report(&c, FP_CHECK_FAIL, "load", "%s", err);
+        return rc;
+    }
+    sum->kind = p.kind;
+    snprintf(sum->id, sizeof sum->id, "%s", p.entry->id ? p.entry->id : "");
+    snprintf(sum->version, sizeof sum->version, "%s", p.entry->version ? p.entry->version : "");
+    fp_plugin_about about;
+    fp_plugin_describe(&p, &about);
+    snprintf(sum->name, sizeof sum->name, "%s", about.name);
+    report(&c, FP_CHECK_PASS, "load", "%s plugin '%s' (%s %s), ABI %u.%u",
+           p.kind == FP_PLUGIN_INPUT ? "input" : "mapping", about.name, sum->id, sum->version,
+           p.entry->abi.major, p.entry->abi.minor);
+    if (!about.description || !*about.description)
+        report(&c, FP_CHECK_INFO, "factory", "the factory has no description");
+    creator cr = {&c, &p, {0}};
+    cr.host.size = sizeof cr.host;
+    cr.host.abi = (fp_version){FP_PLUGIN_ABI_MAJOR, FP_PLUGIN_ABI_MINOR};
+    cr.host.now_ns = ih_now;
+    cr.host.log = ih_log;
+    cr.host.get_extension = ih_ext;
+    /* A scratch queue for inputs whose create already pushes (before check_input's host). */
+    input_host scratch;
+    memset(&scratch, 0, sizeof scratch);
+    atomic_store(&scratch.stopped, true);
+    cr.host.host_data = &scratch;
+    cr.host.push_event = p.kind == FP_PLUGIN_INPUT ? ih_push : NULL;
+    bool device = false;
+    if (check_keys(&cr, about.params, &device)) {
+        if (p.kind == FP_PLUGIN_MAPPING) check_mapping(&c, &cr);
+        else check_input(&c, &cr);
+    }
+    fp_plugin_unload(&p);
+    if (sum->failed) {
+        snprintf(err, errlen, "%s: %u check(s) failed", file, sum->failed);
+        return FP_EPLUGIN_FAULT;
+    }
+    return 0;
+}

@@ -1,0 +1,77 @@
+/*
+ * fp_plugin_check.h: a validator for plugins, in the spirit of clap-validator
+ * (`facepuppet plugins check FILE.so`). It loads one plugin file and exercises it through
+ * plugin.h only, as the host would, and harder:
+ *
+ *  every plugin: the ABI and the factory (the loader's checks), create with the defaults,
+ *    with every declared key set to its default, with an unknown key (must be refused with a
+ *    message naming the key), with each INT/FLOAT/ENUM/BOOL key of its fp_param_info out of
+ *    range (must be refused), create returning 0 without an instance (a failure);
+ *  a mapping: a frame sequence over a small synthetic surface (a 9 x 9 grid, 2 units wide)
+ *    with no hands, one hand far and touching, both hands touching, engage/commit/cancel
+ *    requests and pedal events, edge poses without NaN (joints all at one point, a tip on a
+ *    vertex, a hand 1e4 units away, at the bounds' corner), once without and once with a rig
+ *    view; after each process(): the return code, count <= capacity, channel_count <=
+ *    channel_capacity, canaries after the host's start, end and channel arrays untouched,
+ *    finite start and end points, radius > 0 and finite when active, the call's time
+ *    against the budget (the lower of two runs per frame, so a preemption does not fail it);
+ *    then reset and the same sequence again: identical control sets (determinism); destroy;
+ *  an input: `cycles` times create, start, 100 ms of events, stop, destroy; every event
+ *    well-formed (size for its type, type, hand, finite values, unit quaternion, button
+ *    bits, NUL-terminated status text) and none pushed after stop returned. A create or
+ *    start failing with -ENOENT, -ENODEV, -EACCES, -EBUSY, -ENXIO and a message is a
+ *    documented skip ("needs a device"), not a failure.
+ *
+ * Threads: [main-thread]; calls into the plugin are bracketed (fp_plugin_crash.h), so a
+ * crash in one names the plugin and the call.
+ */
+#ifndef FP_PLUGIN_CHECK_H
+#define FP_PLUGIN_CHECK_H
+
+#include "fp_plugin_host.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum fp_check_level {
+    FP_CHECK_PASS = 0,
+    FP_CHECK_FAIL = 1,
+    FP_CHECK_SKIP = 2,
+    FP_CHECK_INFO = 3
+} fp_check_level;
+
+typedef struct fp_check_options {
+    const char *arg;          /* an input's ARG (e.g. a recording), NULL where none */
+    const fp_param *params;   /* keys added to every create (e.g. fast=1), may be NULL */
+    size_t nparams;
+    double budget_ms;         /* a mapping's process() budget; 0: 2 ms */
+    int cycles;               /* an input's create/start/stop/destroy cycles; 0: 5 */
+} fp_check_options;
+
+/** What the check found, besides the lines it reported. */
+typedef struct fp_check_summary {
+    fp_plugin_kind kind;
+    char id[128], version[64], name[64];
+    unsigned passed, failed, skipped;
+    size_t frames;            /* mapping: process() calls timed */
+    double median_us, max_us; /* mapping: per-frame process() time (lower of the two runs) */
+    size_t events;            /* input: events checked */
+} fp_check_summary;
+
+/** Called for each finding: level, the check's short name ("create", "unknown key",
+ *  "process", "determinism", "cycle", "events"...) and a message naming the cause. */
+typedef void (*fp_check_fn)(void *user, fp_check_level level, const char *check,
+                            const char *message);
+
+/** Check the plugin in `file` (a path; its kind from its name input-*.so / map-*.so, else
+ *  whichever factory it offers). Returns 0 when every check passed or was skipped,
+ *  FP_EPLUGIN_FAULT when one failed, or the loader's FP_EPLUGIN_* code (message in err)
+ *  when it cannot be loaded at all. opt may be NULL (defaults). */
+int fp_plugin_check(const char *file, const fp_check_options *opt, fp_check_fn fn, void *user,
+                    fp_check_summary *summary, char *err, size_t errlen);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,170 @@
+/* The calibration file: read and write (fp_calib_file.h). */
+#define _GNU_SOURCE
+#include "fp_calib_file.h"
+
+#include "fp_error.h"
+
+#include <cJSON.h>
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+/* Reads a JSON array of n finite numbers at obj[key] (absent: returns 0, untouched). */
+static int numbers(const char *path, const cJSON *obj, const char *prefix, const char *key,
+                   double *out, int n, char *err, size_t errlen)
+{
+    const cJSON *a = cJSON_GetObjectItemCaseSensitive(obj, key);
+    if (!a) return 0;
+    if (!cJSON_IsArray(a) || cJSON_GetArraySize(a) != n)
+        return fp_errorf(err, errlen, -EBADMSG, "%s: field %s%s: expected an array of %d numbers",
+                         path, prefix, key, n);
+    for (int i = 0; i < n; i++) {
+        const cJSON *v = cJSON_GetArrayItem(a, i);
+        if (!cJSON_IsNumber(v))
+            return fp_errorf(err, errlen, -EBADMSG, "%s: field %s%s[%d]: expected a number", path,
+                             prefix, key, i);
+        if (!isfinite(v->valuedouble))
+            return fp_errorf(err, errlen, -ERANGE, "%s: field %s%s[%d]: not finite", path, prefix, key, i);
+        out[i] = v->valuedouble;
+    }
+    return 1;
+}
+
+int fp_calibration_load(const char *path, fp_calibration *out, char *err, size_t errlen)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return fp_errorf(err, errlen, -errno, "%s: %s", path, strerror(errno));
+    char *text = NULL;
+    size_t len = 0, cap = 0;
+    for (;;) {
+        if (len + 4096 > cap) {
+            cap = cap ? 2 * cap : 8192;
+            char *t = realloc(text, cap + 1);
+            if (!t) {
+                free(text);
+                fclose(f);
+                return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", path);
+            }
+            text = t;
+        }
+        size_t got = fread(text + len, 1, cap - len, f);
+        len += got;
+        if (got == 0) break;
+        if (len > (1u << 20)) break;
+    }
+    int rerr = ferror(f);
+    fclose(f);
+    if (rerr) {
+        free(text);
+        return fp_errorf(err, errlen, -EIO, "%s: read error", path);
+    }
+    text[len] = 0;
+    cJSON *root = cJSON_ParseWithLength(text, len);
+    int rc = 0;
+    if (!root || !cJSON_IsObject(root)) {
+        long line = 1;
+        const char *at = root ? text : cJSON_GetErrorPtr();
+        for (const char *p = text; at && p < at && *p; p++) line += *p == '\n';
+        rc = fp_errorf(err, errlen, -EBADMSG, "%s:%ld: not a JSON object", path, line);
+        goto done;
+    }
+    fp_calibration c;
+    memset(&c, 0, sizeof c);
+    c.rotation[0] = 1;
+    const cJSON *mpu = cJSON_GetObjectItemCaseSensitive(root, "mm_per_unit");
+    const cJSON *sc = cJSON_GetObjectItemCaseSensitive(root, "scale");
+    if (mpu && sc) {
+        rc = fp_errorf(err, errlen, -EBADMSG, "%s: give mm_per_unit or scale, not both", path);
+        goto done;
+    }
+    const cJSON *one = mpu ? mpu : sc;
+    const char *name = mpu ? "mm_per_unit" : "scale";
+    if (!one) {
+        rc = fp_errorf(err, errlen, -EBADMSG, "%s: field mm_per_unit (or scale) is missing", path);
+        goto done;
+    }
+    if (!cJSON_IsNumber(one)) {
+        rc = fp_errorf(err, errlen, -EBADMSG, "%s: field %s: expected a number", path, name);
+        goto done;
+    }
+    if (!isfinite(one->valuedouble) || !(one->valuedouble > 0)) {
+        rc = fp_errorf(err, errlen, -ERANGE, "%s: field %s: must be a finite number > 0, got %g",
+                       path, name, one->valuedouble);
+        goto done;
+    }
+    c.scale = mpu ? 1.0 / one->valuedouble : one->valuedouble;
+    if ((rc = numbers(path, root, "", "rotation", c.rotation, 4, err, errlen)) < 0) goto done;
+    double qn = sqrt(c.rotation[0] * c.rotation[0] + c.rotation[1] * c.rotation[1] +
+                     c.rotation[2] * c.rotation[2] + c.rotation[3] * c.rotation[3]);
+    if (!(qn > 1e-6)) {
+        rc = fp_errorf(err, errlen, -ERANGE, "%s: field rotation: a quaternion of norm %g", path, qn);
+        goto done;
+    }
+    for (int i = 0; i < 4; i++) c.rotation[i] /= qn;
+    if ((rc = numbers(path, root, "", "offset", c.offset, 3, err, errlen)) < 0) goto done;
+    static const char *hands[FP_HANDS] = {"left", "right"};
+    for (int h = 0; h < FP_HANDS; h++) {
+        const cJSON *o = cJSON_GetObjectItemCaseSensitive(root, hands[h]);
+        if (!o) continue;
+        if (!cJSON_IsObject(o)) {
+            rc = fp_errorf(err, errlen, -EBADMSG, "%s: field %s: expected an object", path, hands[h]);
+            goto done;
+        }
+        char prefix[16];
+        snprintf(prefix, sizeof prefix, "%s.", hands[h]);
+        if ((rc = numbers(path, o, prefix, "offset", c.hand_offset[h], 3, err, errlen)) < 0) goto done;
+    }
+    rc = 0;
+    *out = c;
+done:
+    cJSON_Delete(root);
+    free(text);
+    return rc;
+}
+
+int fp_calibration_save(const char *path, const fp_calibration *c, const char *comment, char *err,
+                        size_t errlen)
+{
+    if (!(c->scale > 0)) return fp_errorf(err, errlen, -EINVAL, "%s: scale must be > 0", path);
+    char tmp[4200];
+    snprintf(tmp, sizeof tmp, "%s.tmp.XXXXXX", path);
+    int fd = mkstemp(tmp);
+    if (fd < 0) return fp_errorf(err, errlen, -errno, "%s: cannot create %s: %s", path, tmp, strerror(errno));
+    FILE *f = fdopen(fd, "w");
+    if (!f) {
+        int e = errno;
+        close(fd);
+        unlink(tmp);
+        return fp_errorf(err, errlen, -e, "%s: %s", path, strerror(e));
+    }
+    fprintf(f, "{\n");
+    if (comment) {
+        cJSON *s = cJSON_CreateString(comment);
+        char *q = s ? cJSON_PrintUnformatted(s) : NULL;
+        if (q) fprintf(f, "  \"comment\": %s,\n", q);
+        free(q);
+        cJSON_Delete(s);
+    }
+    fprintf(f, "  \"mm_per_unit\": %.17g,\n", 1.0 / c->scale);
+    double q[4] = {c->rotation[0], c->rotation[1], c->rotation[2], c->rotation[3]};
+    if (q[0] == 0 && q[1] == 0 && q[2] == 0 && q[3] == 0) q[0] = 1;
+    fprintf(f, "  \"rotation\": [%.17g, %.17g, %.17g, %.17g],\n", q[0], q[1], q[2], q[3]);
+    fprintf(f, "  \"offset\": [%.17g, %.17g, %.17g],\n", c->offset[0], c->offset[1], c->offset[2]);
+    fprintf(f, "  \"left\": {\"offset\": [%.17g, %.17g, %.17g]},\n", c->hand_offset[0][0],
+            c->hand_offset[0][1], c->hand_offset[0][2]);
+    fprintf(f, "  \"right\": {\"offset\": [%.17g, %.17g, %.17g]}\n}\n", c->hand_offset[1][0],
+            c->hand_offset[1][1], c->hand_offset[1][2]);
+    int bad = fflush(f) != 0 || fsync(fileno(f)) != 0;
+    int e = errno;
+    if (fclose(f) != 0 && !bad) bad = 1, e = errno;
+    if (bad || rename(tmp, path) != 0) {
+        if (!bad) e = errno;
+        unlink(tmp);
+        return fp_errorf(err, errlen, e == ENOSPC ? -ENOSPC : -EIO, "%s: cannot write: %s", path,
+                         strerror(e));
+    }
+    return 0;
+}

@@ -1,0 +1,35 @@
+/*
+ * fp_calib_file.h: the calibration file (docs/calibration.md), a small JSON object:
+ *   { "mm_per_unit": 10.0,            // or "scale": 0.1 (mesh units per mm); one is required
+ *     "rotation": [1, 0, 0, 0],       // optional, device -> mesh, quaternion w x y z
+ *     "offset": [0, 0, 0],            // optional, mesh units, both hands
+ *     "left":  {"offset": [x, y, z]}, // optional, per hand, added
+ *     "right": {"offset": [x, y, z]} }
+ * Errors: -ENOENT / -EACCES (cannot read), -EBADMSG (not JSON, a field of the wrong type or
+ * length), -ERANGE (a non-finite number, a scale <= 0, a rotation of norm ~0); err names
+ * the file and the field. Writing is atomic (a temporary file in the same folder, then
+ * rename): -EACCES, -ENOENT, -EIO, -ENOSPC with the path. Pure library: no printing.
+ */
+#ifndef FP_CALIB_FILE_H
+#define FP_CALIB_FILE_H
+
+#include "fp_pose.h"
+
+#include <stddef.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Read path into *c (untouched on error). */
+int fp_calibration_load(const char *path, fp_calibration *c, char *err, size_t errlen);
+
+/** Write *c to path atomically (mm_per_unit = 1 / scale, rotation, offsets); `comment` (may be
+ *  NULL) goes into a "comment" field. */
+int fp_calibration_save(const char *path, const fp_calibration *c, const char *comment, char *err,
+                        size_t errlen);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

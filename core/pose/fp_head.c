@@ -1,0 +1,114 @@
+/* The head in a face mesh and the mesh's unit (fp_head.h says how). */
+#include "fp_head.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define SLICES 64
+
+int fp_head_detect(const float *pos, size_t n, fp_head *out)
+{
+    if (!pos || !out || n < 4) return -EINVAL;
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t v = 0; v < n; v++)
+        for (int k = 0; k < 3; k++) {
+            float c = pos[3 * v + k];
+            if (!isfinite(c)) return -EINVAL;
+            lo[k] = fminf(lo[k], c);
+            hi[k] = fmaxf(hi[k], c);
+        }
+    double height = (double)hi[1] - lo[1];
+    if (!(height > 0) || !(hi[0] > lo[0])) return -EINVAL;
+    /* Per slice: x and z extents of its vertices. */
+    float (*ext)[4] = malloc(SLICES * sizeof *ext);   /* xmin, xmax, zmin, zmax */
+    if (!ext) return -ENOMEM;
+    for (int s = 0; s < SLICES; s++) ext[s][0] = ext[s][2] = INFINITY, ext[s][1] = ext[s][3] = -INFINITY;
+    for (size_t v = 0; v < n; v++) {
+        int s = (int)((pos[3 * v + 1] - lo[1]) / height * SLICES);
+        if (s >= SLICES) s = SLICES - 1;
+        if (s < 0) s = 0;
+        ext[s][0] = fminf(ext[s][0], pos[3 * v]);
+        ext[s][1] = fmaxf(ext[s][1], pos[3 * v]);
+        ext[s][2] = fminf(ext[s][2], pos[3 * v + 2]);
+        ext[s][3] = fmaxf(ext[s][3], pos[3 * v + 2]);
+    }
+    double width[SLICES];
+    for (int s = 0; s < SLICES; s++) {
+        float e[4] = {INFINITY, -INFINITY, INFINITY, -INFINITY};
+        for (int t = s - 1; t <= s + 1; t++) {
+            if (t < 0 || t >= SLICES) continue;
+            e[0] = fminf(e[0], ext[t][0]);
+            e[1] = fmaxf(e[1], ext[t][1]);
+            e[2] = fminf(e[2], ext[t][2]);
+            e[3] = fmaxf(e[3], ext[t][3]);
+        }
+        width[s] = e[1] >= e[0] ? (double)e[1] - e[0] : 0;
+    }
+    free(ext);
+    /* Walk down from the top. */
+    int widest = SLICES - 1, neck = -1, narrow = -1;
+    for (int s = SLICES - 1; s >= 0; s--) {
+        if (narrow < 0) {
+            if (width[s] > width[widest]) widest = s;
+            else if (width[s] < 0.85 * width[widest]) narrow = s;
+            continue;
+        }
+        if (width[s] < width[narrow]) narrow = s;
+        else if (width[s] > 1.2 * width[narrow]) {
+            neck = narrow;
+            break;
+        }
+    }
+    memset(out, 0, sizeof *out);
+    float y_neck = neck > 0 ? (float)(lo[1] + (neck + 0.5) * height / SLICES) : lo[1];
+    for (int pass = 0; pass < 2; pass++) {
+        for (int k = 0; k < 3; k++) out->min[k] = INFINITY, out->max[k] = -INFINITY;
+        for (size_t v = 0; v < n; v++) {
+            if (pos[3 * v + 1] < y_neck) continue;
+            for (int k = 0; k < 3; k++) {
+                out->min[k] = fminf(out->min[k], pos[3 * v + k]);
+                out->max[k] = fmaxf(out->max[k], pos[3 * v + k]);
+            }
+        }
+        double w = (double)out->max[0] - out->min[0], d = (double)out->max[2] - out->min[2];
+        if (pass == 1) break;
+        if (d < 0.8 * w) { /* a mask: no back of the head; the whole mesh is the face */
+            out->method = FP_HEAD_FACE_WIDTH;
+            out->mm_per_unit = FP_HEAD_FACE_WIDTH_MM / ((double)hi[0] - lo[0]);
+            snprintf(out->how, sizeof out->how,
+                     "detected from the face: a mask %.4g units wide = %g mm (depth %.2f of width)",
+                     (double)hi[0] - lo[0], FP_HEAD_FACE_WIDTH_MM, d / w);
+            y_neck = lo[1];
+            continue;
+        }
+        double h = (double)hi[1] - y_neck;
+        out->method = neck > 0 ? FP_HEAD_NECK : FP_HEAD_NO_NECK;
+        out->mm_per_unit = FP_HEAD_HEIGHT_MM / h;
+        snprintf(out->how, sizeof out->how, "detected from the head: %.4g units %s to crown = %g mm",
+                 h, neck > 0 ? "neck" : "bottom", FP_HEAD_HEIGHT_MM);
+        break;
+    }
+    out->neck_y = y_neck;
+    return 0;
+}
+
+int fp_head_surface_z(const float *pos, size_t n, float x, float y, float r, float y_lo,
+                      float y_hi, float *z)
+{
+    int found = 0;
+    float best = -INFINITY, r2 = r * r;
+    for (size_t v = 0; v < n; v++) {
+        const float *p = pos + 3 * v;
+        if (p[1] < y_lo || p[1] > y_hi) continue;
+        float dx = p[0] - x, dy = p[1] - y;
+        if (dx * dx + dy * dy > r2) continue;
+        if (p[2] > best) best = p[2];
+        found = 1;
+    }
+    if (found) *z = best;
+    return found;
+}

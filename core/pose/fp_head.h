@@ -1,0 +1,69 @@
+/*
+ * fp_head.h: the head in a face mesh and the mesh's physical unit, for the life-size
+ * calibration of core/pose (hands and head at the same physical scale).
+ *
+ * Convention: the mesh's +y is up (chin to crown) and +z points out of the face (toward the
+ * viewer), as the rest of the project assumes (plugin.h: the device's +x right, +y up, +z
+ * toward the performer map to the mesh's axes).
+ *
+ * Detection (fp_head_detect), on the vertex positions alone:
+ *  1. The width profile: 64 slices along y over the mesh's height; each slice's width is the
+ *     x extent and its depth the z extent of the vertices in it and its two neighbours.
+ *  2. Walking down from the top: the widest slice so far is the head's widest part; the neck
+ *     is the narrowest slice after the width fell below 85% of that, confirmed when the width
+ *     below grows again past 120% of the narrowest (shoulders, the neck's base) or the mesh
+ *     ends there.
+ *  3. Mask or head: where the depth of the widest head slice is under 0.8 of its width, the
+ *     mesh is a face mask without crown or back (MediaPipe's canonical face): its unit comes
+ *     from the face's width, FP_HEAD_FACE_WIDTH_MM (145 mm, the face's breadth at the
+ *     cheeks and temples) over the mask's x extent. Otherwise it is a head: FP_HEAD_HEIGHT_MM
+ *     (230 mm, chin to crown) over the height from the neck slice to the top (the neck's
+ *     narrowest slice lies at the jaw's lower edge, the chin's level).
+ *  4. No neck found (a head cut off above the shoulders with no narrowing): the head's
+ *     height is the mesh's height.
+ * The head's box: x, y, z extents of the vertices from the neck (or the mesh's bottom) up.
+ *
+ * Threads: pure and reentrant; allocates a small profile internally (no I/O, never prints).
+ */
+#ifndef FP_HEAD_H
+#define FP_HEAD_H
+
+#include <stddef.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define FP_HEAD_HEIGHT_MM 230.0      /* chin to crown of an adult head */
+#define FP_HEAD_FACE_WIDTH_MM 145.0  /* the breadth a face mask spans */
+
+typedef enum fp_head_method {
+    FP_HEAD_GIVEN = 0,     /* mm_per_unit given (option, rig, calibration file) */
+    FP_HEAD_NECK,          /* head height from the neck to the crown */
+    FP_HEAD_NO_NECK,       /* a head without neck: the mesh's height */
+    FP_HEAD_FACE_WIDTH,    /* a face mask: its width */
+} fp_head_method;
+
+typedef struct fp_head {
+    double mm_per_unit;    /* millimetres per mesh unit */
+    float min[3], max[3];  /* the head's box, mesh units */
+    float neck_y;          /* the neck (chin level) or the mesh's bottom, mesh units */
+    fp_head_method method;
+    char how[160];         /* e.g. "detected from the head: 22.8 units neck to crown = 230 mm" */
+} fp_head;
+
+/** Find the head in n vertices (pos: n x 3 floats, mesh units) and the mesh's unit, as the
+ *  top of this file says. Returns 0, or -EINVAL (NULL, n < 4, a non-finite coordinate or a
+ *  flat mesh), -ENOMEM. */
+int fp_head_detect(const float *pos, size_t n, fp_head *out);
+
+/** The frontmost surface at (x, y): the largest z of the vertices within r (in the x-y
+ *  plane) of (x, y) whose y lies in [y_lo, y_hi]. Returns 1 with *z, or 0 where no vertex is
+ *  that close. */
+int fp_head_surface_z(const float *pos, size_t n, float x, float y, float r, float y_lo,
+                      float y_hi, float *z);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

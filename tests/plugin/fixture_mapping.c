@@ -1,0 +1,135 @@
+/* Mapping fixtures for `facepuppet plugins check`, the host's protections and hot reload, one
+ * behaviour each, selected at compile time:
+ *   (none)                 A: engages while a hand is present: five control vectors from the
+ *                             fingertips, moved by `gain` x 0.01 along +z; version "A"
+ *   FIXTURE_B              B: the same file name's next build: never engages; version "B"
+ *   FIXTURE_OVERRUN        writes capacity + 2 control vectors, claims count = capacity
+ *   FIXTURE_NAN            a NaN end point while active
+ *   FIXTURE_SLOW           process busy-waits 5 ms
+ *   FIXTURE_NO_INSTANCE    create returns 0 without an instance
+ *   FIXTURE_SEGV           process dereferences a null pointer from frame 3 on
+ *   FIXTURE_ABI_MAJOR=2    built for ABI 2.0 */
+#define _POSIX_C_SOURCE 200809L
+#include <facepuppet/mapping_util.h>
+#include <facepuppet/plugin.h>
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#ifndef FIXTURE_ABI_MAJOR
+#define FIXTURE_ABI_MAJOR FP_PLUGIN_ABI_MAJOR
+#endif
+#ifdef FIXTURE_B
+#define FIXTURE_VERSION "B"
+#else
+#define FIXTURE_VERSION "A"
+#endif
+
+typedef struct fixture {
+    fp_mapping mapping;
+    double gain;
+} fixture;
+
+static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *out)
+{
+    fixture *fx = self->plugin_data;
+#ifdef FIXTURE_SLOW
+    struct timespec t0, t;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    do clock_gettime(CLOCK_MONOTONIC, &t);
+    while ((t.tv_sec - t0.tv_sec) * 1e9 + (t.tv_nsec - t0.tv_nsec) < 5e6);
+#endif
+#ifdef FIXTURE_SEGV
+    if (in->frame >= 3) {
+        volatile int *volatile nowhere = NULL;
+        *nowhere = 1;
+    }
+#endif
+    out->active = false;
+    out->intents = 0;
+    out->count = 0;
+    out->channel_count = 0;
+    out->radius = in->radius;
+#ifdef FIXTURE_B
+    return 0;
+#endif
+    for (int h = 0; h < FP_HANDS; h++) {
+        if (!in->hands[h].present) continue;
+        float tips[FP_FINGERS][3];
+        fp_hand_tips(in, h, tips);
+        for (int f = 0; f < FP_FINGERS && out->count < out->capacity; f++) {
+            memcpy(out->start[out->count], tips[f], sizeof tips[f]);
+            memcpy(out->end[out->count], tips[f], sizeof tips[f]);
+            out->end[out->count][2] += (float)(0.01 * fx->gain * in->radius);
+            out->count++;
+        }
+        out->active = true;
+    }
+#ifdef FIXTURE_NAN
+    if (out->active) out->end[0][1] = NAN;
+#endif
+#ifdef FIXTURE_OVERRUN
+    for (size_t i = 0; i < out->capacity + 2; i++) {
+        out->start[i][0] = out->end[i][0] = 0.1f * (float)i;
+        out->start[i][1] = out->end[i][1] = out->start[i][2] = out->end[i][2] = 0;
+    }
+    out->count = out->capacity;
+    out->active = true;
+#endif
+    return 0;
+}
+
+static void reset(fp_mapping *self) { (void)self; }
+static void destroy(fp_mapping *self) { free(self->plugin_data); }
+
+static const fp_param_info keys[] = {
+    {"gain", FP_PARAM_FLOAT, 0, 10, "1", NULL, "R/100", "how far the fingertips push"},
+    {NULL, 0, 0, 0, NULL, NULL, NULL, NULL},
+};
+
+static int create(const fp_host *host, const fp_param *params, size_t nparams, fp_mapping **out,
+                  char *err, size_t errlen)
+{
+    fpmu_value v[1];
+    int rc = fpmu_params_parse("fixture", keys, params, nparams, v, err, errlen);
+    if (rc) return rc;
+#ifdef FIXTURE_NO_INSTANCE
+    (void)host;
+    (void)process;
+    (void)reset;
+    (void)destroy;
+    return 0;
+#else
+    fixture *fx = calloc(1, sizeof *fx);
+    if (!fx) return -12;
+    fx->gain = v[0].number;
+    fx->mapping.size = sizeof fx->mapping;
+    fx->mapping.plugin_data = fx;
+    fx->mapping.process = process;
+    fx->mapping.reset = reset;
+    fx->mapping.destroy = destroy;
+    *out = &fx->mapping;
+    if (host && host->log) host->log(host, FP_LOG_INFO, "fixture " FIXTURE_VERSION " created");
+    return 0;
+#endif
+}
+
+static const fp_mapping_factory factory = {
+    .size = sizeof(fp_mapping_factory),
+    .name = "fixture",
+    .description = "test fixture (build " FIXTURE_VERSION ")",
+    .usage = "fixture[,gain=F]",
+    .create = create,
+    .params = keys,
+};
+
+static const void *get_factory(const char *id)
+{
+    return !strcmp(id, FP_MAPPING_FACTORY_ID) ? &factory : NULL;
+}
+
+FP_PLUGIN_DECLARE_ENTRY = {
+    {FIXTURE_ABI_MAJOR, 0}, "org.facepuppet.test.map-fixture", FIXTURE_VERSION, NULL, NULL, get_factory,
+};
