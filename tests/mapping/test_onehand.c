@@ -164,7 +164,7 @@ static int open_onehand(fx *x, const fp_param *params, size_t n, bool ext, char 
     memcpy(x->in.face_left, g_view.left, sizeof x->in.face_left);
     for (int h = 0; h < FP_HANDS; h++)
         for (int k = 0; k < FP_FINGERS; k++) x->in.tip_distance[h][k] = INFINITY;
-    fp_calibration c = {SCALE, {0, -4, 16}};
+    fp_calibration c = {.scale = SCALE, .offset = {0, -4, 16}};
     fp_pose_init(&x->pose, 0, &c);
     return rc;
 }
