@@ -53,8 +53,9 @@
  *                        two landmarks of one finger, '-' for none (not mirrored).
  *
  * Without a rig (fp_frame_input.rig NULL and no FP_HOST_EXT_RIG) the mapping logs "onehand
- * needs a rig (--rig)" at create and every frame returns -ENODATA with an inactive control
- * set (the host reports it once and shows the base); a landmark the rig lacks: -ENOENT.
+ * needs a rig (--rig)" at create (an error line) and every frame returns an inactive control
+ * set (the host shows the base). A landmark the rig lacks is refused at create where the
+ * host serves the rig then (FP_HOST_EXT_RIG), else left out of the control set.
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
@@ -203,11 +204,13 @@ static void end_gesture(onehand *o)
     o->have_anchor = false;
 }
 
-/* The hand's pose becomes the zero. A held shape (hold=1) is kept as an offset. */
-static int engage(onehand *o, const fp_hand_pose *h)
+/* The hand's pose becomes the zero. A held shape (hold=1) is kept as an offset. A hand
+ * whose scale cannot be measured (degenerate, not finite) does not engage: false. */
+static bool engage(onehand *o, const fp_hand_pose *h)
 {
     double scale = hand_scale(o, h);
-    if (!(scale > 0)) return -EDOM;
+    double zero = jaw_measure(o, h, scale);
+    if (!(scale > 0) || !isfinite(zero)) return false;
     if (o->posed) {                        /* continue from the shape shown */
         for (size_t i = 0; i < o->count; i++)
             for (int k = 0; k < 3; k++) o->held[i][k] += o->last[i][k];
@@ -217,11 +220,11 @@ static int engage(onehand *o, const fp_hand_pose *h)
     o->last_jaw = 0;
     o->scale = scale;
     memcpy(o->neutral, h->joints, sizeof o->neutral);
-    o->neutral_jaw = jaw_measure(o, h, scale);
+    o->neutral_jaw = zero;
     o->engaged = true;
     o->posed = true;
     o->have_anchor = false;
-    return 0;
+    return true;
 }
 
 /* auto=1: true once the hand has been still for still_s (tips and palm within still_mm). */
@@ -242,9 +245,13 @@ static bool held_still(onehand *o, const fp_hand_pose *h, int64_t now_ns)
     return scale > 0 && (double)(now_ns - o->anchor_ns) >= o->still_s * 1e9;
 }
 
-/* Follow the hand: this gesture's displacement of every landmark and the jaw. */
+/* Follow the hand: this gesture's displacement of every landmark and the jaw. A frame with
+ * a non-finite joint keeps the last displacement. */
 static void follow(onehand *o, const fp_hand_pose *h, const fp_rig_view *rig, double mm_per_unit)
 {
+    for (int j = 0; j < FP_HAND_JOINTS; j++)
+        for (int c = 0; c < 3; c++)
+            if (!isfinite(h->joints[j][c])) return;
     /* mesh units of hand -> mm of hand -> mm on the face -> mesh units of face */
     double k = o->gain / (o->scale * mm_per_unit);
     for (size_t i = 0; i < o->count; i++) {
@@ -256,23 +263,26 @@ static void follow(onehand *o, const fp_hand_pose *h, const fp_rig_view *rig, do
             o->last[i][c] = (float)(k * (d[0] * rig->left[c] + d[1] * rig->up[c] + d[2] * rig->forward[c]));
     }
     double t = jaw_measure(o, h, o->scale) - o->neutral_jaw;
-    o->last_jaw = t / (o->jaw == JAW_FLEXION ? o->flex_range : o->open_range);
+    if (isfinite(t)) o->last_jaw = t / (o->jaw == JAW_FLEXION ? o->flex_range : o->open_range);
 }
 
 /* Write the control set of the shape shown: start = the landmark where the rig view has it
- * now, end = start + held + last. */
+ * now, end = start + held + last. Landmarks the rig lacks are left out (create refuses them
+ * where the host serves the rig at create; a rig given only per frame may lack some). */
 static int emit(const onehand *o, const fp_rig_view *rig, const fp_frame_input *in,
                 fp_control_set *out)
 {
     if (o->count > out->capacity) return -ENOSPC;
+    size_t n = 0;
     for (size_t i = 0; i < o->count; i++) {
         const fp_rig_landmark *lm = find_landmark(rig, o->landmark[i]);
-        if (!lm) return -ENOENT;
-        memcpy(out->start[i], lm->position, sizeof out->start[i]);
-        for (int k = 0; k < 3; k++) out->end[i][k] = lm->position[k] + (o->held[i][k] + o->last[i][k]);
-        fp_clamp_vector(out->start[i], out->end[i], o->clamp * in->radius);
+        if (!lm) continue;
+        memcpy(out->start[n], lm->position, sizeof out->start[n]);
+        for (int k = 0; k < 3; k++) out->end[n][k] = lm->position[k] + (o->held[i][k] + o->last[i][k]);
+        fp_clamp_vector(out->start[n], out->end[n], o->clamp * in->radius);
+        n++;
     }
-    out->count = o->count;
+    out->count = n;
     out->active = true;
     return 0;
 }
@@ -305,13 +315,12 @@ static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *o
     out->channel_count = 0;
     out->radius = in->radius;
     const fp_rig_view *rig = frame_rig(o, in);
-    if (!rig) return -ENODATA;             /* "onehand needs a rig (--rig)", logged at create */
+    if (!rig) return 0;                    /* "onehand needs a rig (--rig)", logged at create */
     double mm_per_unit = rig->mm_per_unit;
     if (frame_has(in, offsetof(fp_frame_input, mm_per_unit) + sizeof in->mm_per_unit) &&
         in->mm_per_unit > 0)
         mm_per_unit = in->mm_per_unit;
     if (!(mm_per_unit > 0) || !isfinite(mm_per_unit)) return -ERANGE;
-    if (missing_landmark(o, rig)) return -ENOENT;
     const fp_hand_pose *h = &in->hands[o->hand];
     uint32_t req = in->requested;
 
@@ -331,11 +340,8 @@ static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *o
     } else {
         bool asked = req & FP_INTENT_ENGAGE;
         bool still = o->automatic && !o->engaged && held_still(o, h, in->time_ns);
-        if ((asked && (!o->engaged || o->hold)) || still) {
-            int rc = engage(o, h);
-            if (rc) return rc;
+        if (((asked && (!o->engaged || o->hold)) || still) && engage(o, h))
             out->intents |= FP_INTENT_ENGAGE;
-        }
         if (o->engaged) follow(o, h, rig, mm_per_unit);
     }
     if (o->posed) {
