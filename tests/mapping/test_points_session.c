@@ -2,7 +2,7 @@
  * points=tips+palm (11 per hand) and points=all (21 per hand) on the ICT face, driven by the
  * real two-hand three-claps recording, deform with more than 10 centres and add no
  * self-crossing: fp_selfx_count_new(the base before the frame, the shape shown) == 0 on
- * every other deforming frame (tests/support/selfx: CGAL's exact triangle-triangle test),
+ * every tenth deforming frame (tests/support/selfx: CGAL's exact triangle-triangle test),
  * and the final shape against the loaded face. The session steps on the recording's own
  * clock (frame k at t0 + k / 60 s, as `facepuppet run`), so the run is deterministic and
  * the checks' time loses no frame. */
@@ -23,7 +23,7 @@
 #include <cmocka.h>
 
 #define FPS 60
-#define SELFX_EVERY 2 /* selfx on every other deforming frame (tens of ms each) */
+#define SELFX_EVERY 10 /* selfx on every tenth deforming frame (up to a second each on a loaded machine) */
 
 static void run(const char *mapping, size_t want_min_centres)
 {
@@ -49,7 +49,7 @@ static void run(const char *mapping, size_t want_min_centres)
     unsigned long frames = 0, active = 0, commits = 0, checks = 0;
     size_t max_centres = 0;
     long new_pairs = 0;
-    int64_t t0 = 0, limit = fp_now_ns() + 300LL * 1000000000LL;
+    int64_t t0 = 0, limit = fp_now_ns() + 900LL * 1000000000LL;
     while (fp_session_input_start(s, &t0) == 0 && fp_now_ns() < limit) fp_test_nap_ms(1);
     for (uint64_t k = 0; !fp_session_finished(s) && fp_now_ns() < limit; k++) {
         int64_t now = t0 + (int64_t)llround((double)k * 1e9 / FPS);
@@ -69,7 +69,7 @@ static void run(const char *mapping, size_t want_min_centres)
             checks++;
         }
     }
-    assert_true(fp_session_finished(s));
+    if (!fp_session_finished(s)) fail_msg("%s: not finished after %lu frames", mapping, frames);
     long total = fp_selfx_count_new(fp_session_loaded(s), fp_session_positions(s), n,
                                     mesh->triangles, mesh->triangle_count, NULL, 0, NULL);
     double max_disp = 0;
