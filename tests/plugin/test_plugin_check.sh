@@ -26,7 +26,7 @@ expect() {
 }
 
 # Built-in plugins pass (the glove has no device here: a documented skip, exit 0).
-expect 0 'passed: 13 checks' "$fp" plugins check "$builtin/map-anchored.so"  # 13: the engage key's check
+expect 0 'passed: 14 checks' "$fp" plugins check "$builtin/map-anchored.so"  # 14: a check per key (engage, points)
 expect 0 'PASS  determinism' "$fp" plugins check "$builtin/map-unanchored.so"
 expect 0 'PASS  events +[0-9]+ events well-formed' "$fp" plugins check "$builtin/input-replay.so" --arg "$rec"
 expect 0 'PASS  cycle +5 x create' "$fp" plugins check "$builtin/input-pedal.so"
