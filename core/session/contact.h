@@ -1,0 +1,72 @@
+/*
+ * contact.h: the contact guard (issue 10): a discrete check that a candidate shape adds no
+ * self-crossings of the surface to a reference shape, and a bisection that scales the
+ * motion back until it adds none.
+ *
+ * Only what moved is checked: the triangles with a vertex whose position differs (bitwise)
+ * between reference and candidate, against the triangles near them, found through a uniform
+ * hash grid over the moved region (cell: the largest moved triangle's extent in the
+ * candidate). Two triangles cross when they share a point (closed triangles) and no vertex;
+ * vertices at identical positions in the shape given to fp_contact_create are welded, so
+ * OBJ seams (duplicated vertices) are adjacency, as in tests/support/selfx. Degenerate
+ * (zero-area) triangles are skipped. A pair is new when it crosses in the candidate and not
+ * in the reference, so crossings the input already has (the ICT face's eyes and mouth
+ * interior) never count. The triangle-triangle test: two closed triangles meet iff an edge
+ * of one meets the other (their intersection is convex, its boundary lies on an edge), each
+ * segment-triangle test from the signs of orient3d determinants in double (float inputs),
+ * with a 2D test for coplanar segments. Not exact: a determinant within rounding of zero
+ * (touching to ~1e-16 relative) may be decided either way; CGAL's exact test agrees on
+ * the real faces (tests/unit/test_contact.c).
+ *
+ * Errors: negative errno (-EINVAL for NULL or a triangle index >= n, -ENOMEM). Threads: one
+ * fp_contact per thread (it keeps scratch buffers).
+ */
+#ifndef FP_CONTACT_H
+#define FP_CONTACT_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct fp_contact fp_contact;
+
+/** Index a mesh: tris (t x 3 indices < n, kept by pointer: must outlive c), weld positions
+ *  weld (n x 3 floats, copied into a weld map; vertices at identical positions are one).
+ *  Returns 0, -EINVAL or -ENOMEM; *out owned by the caller (fp_contact_destroy). */
+int fp_contact_create(const uint32_t *tris, size_t t, size_t n, const float *weld, fp_contact **out);
+void fp_contact_destroy(fp_contact **c);
+
+/** New crossing pairs of cand against ref (both n x 3 floats): pairs with a moved triangle
+ *  that cross in cand and not in ref. Up to max_pairs pairs (a < b) go to pairs[2k],
+ *  pairs[2k+1] (may be NULL), unordered. *moved_tris (may be NULL): moved triangles.
+ *  Returns the number of new pairs (>= 0) or -ENOMEM. */
+long fp_contact_count_new(fp_contact *c, const float *ref, const float *cand, uint32_t *pairs,
+                          size_t max_pairs, size_t *moved_tris);
+
+/** What fp_contact_guard did. */
+typedef struct fp_contact_result {
+    double t;            /* the fraction of the motion kept (1: all, 0: the reference) */
+    long pairs;          /* new pairs of the full candidate (0: nothing scaled back) */
+    int checks;          /* fp_contact_count_new calls */
+    size_t moved_tris;   /* moved triangles of the full candidate */
+} fp_contact_result;
+
+/** The guard: out = ref + t (cand - ref) per vertex (float), with the largest t of the
+ *  bisection over [0, 1] (`iters` halvings after a failed t = 1) for which out adds no new
+ *  pair to ref; t = 1 (out = cand bit for bit) when cand adds none, t = 0 (out = ref) when
+ *  every tried t adds some. out (n x 3) may not alias ref or cand. Returns 0 or -ENOMEM
+ *  (out then holds ref). */
+int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *out, int iters,
+                     fp_contact_result *res);
+
+/** The triangle-triangle test alone (closed triangles, 3 x 3 doubles each): 1 when they
+ *  share a point, else 0. Exposed for tests. */
+int fp_contact_tri_tri(const double a[3][3], const double b[3][3]);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
