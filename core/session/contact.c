@@ -18,6 +18,8 @@ struct fp_contact {
     uint32_t *stamp;      /* t: last moved triangle that looked at it, + 1 */
     uint32_t *bucket_start, *entries;
     size_t bucket_cap, entry_cap;
+    uint8_t *own;         /* t: the triangle crosses another in the weld shape */
+    float (*nrm)[3];      /* t: the weld shape's triangle normals (unnormalised) */
 };
 
 /* ---- the triangle-triangle test ---------------------------------------------------------- */
@@ -102,6 +104,11 @@ int fp_contact_tri_tri(const double a[3][3], const double b[3][3])
     return 0;
 }
 
+typedef struct fp_contact_count fp_contact_count;
+static void tri_of(const float *pos, const uint32_t *v, double out[3][3]);
+static long scan(fp_contact *c, const float *ref, const float *cand, bool all, uint32_t *pairs,
+                 size_t max_pairs, fp_contact_count *info);
+
 /* ---- the index ------------------------------------------------------------------------------ */
 
 static const float *weld_pos;
@@ -147,6 +154,27 @@ int fp_contact_create(const uint32_t *tris, size_t t, size_t n, const float *wel
         c->weld[order[i]] = same ? c->weld[order[i - 1]] : order[i];
     }
     free(order);
+    c->own = calloc(t ? t : 1, 1);
+    c->nrm = malloc((t ? t : 1) * sizeof *c->nrm);
+    if (!c->own || !c->nrm) {
+        fp_contact_destroy(&c);
+        return -ENOMEM;
+    }
+    for (size_t i = 0; i < t; i++) {
+        double tr[3][3], e1[3], e2[3];
+        tri_of(weld, tris + 3 * i, tr);
+        for (int k = 0; k < 3; k++) {
+            e1[k] = tr[1][k] - tr[0][k];
+            e2[k] = tr[2][k] - tr[0][k];
+        }
+        c->nrm[i][0] = (float)(e1[1] * e2[2] - e1[2] * e2[1]);
+        c->nrm[i][1] = (float)(e1[2] * e2[0] - e1[0] * e2[2]);
+        c->nrm[i][2] = (float)(e1[0] * e2[1] - e1[1] * e2[0]);
+    }
+    if (scan(c, NULL, weld, true, NULL, 0, NULL) < 0) {
+        fp_contact_destroy(&c);
+        return -ENOMEM;
+    }
     *out = c;
     return 0;
 }
@@ -163,6 +191,8 @@ void fp_contact_destroy(fp_contact **cp)
     free(c->stamp);
     free(c->bucket_start);
     free(c->entries);
+    free(c->own);
+    free(c->nrm);
     free(c);
     *cp = NULL;
 }
@@ -217,28 +247,53 @@ static int grow(uint32_t **p, size_t *cap, size_t need)
     return 0;
 }
 
-long fp_contact_count_new(fp_contact *c, const float *ref, const float *cand, uint32_t *pairs,
-                          size_t max_pairs, size_t *moved_tris)
+static bool flipped(const fp_contact *c, const float *pos, const uint32_t *v, size_t i)
+{
+    double t[3][3], e1[3], e2[3];
+    tri_of(pos, v, t);
+    for (int k = 0; k < 3; k++) {
+        e1[k] = t[1][k] - t[0][k];
+        e2[k] = t[2][k] - t[0][k];
+    }
+    double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                   e1[0] * e2[1] - e1[1] * e2[0]};
+    return n[0] * c->nrm[i][0] + n[1] * c->nrm[i][1] + n[2] * c->nrm[i][2] < 0;
+}
+
+/* The pairs of a moved triangle and a triangle near it that cross in cand and (ref not NULL)
+ * not in ref; all: every triangle counts as moved (ref NULL: the weld shape's own crossings,
+ * marked in c->own). */
+static long scan(fp_contact *c, const float *ref, const float *cand, bool all, uint32_t *pairs,
+                 size_t max_pairs, fp_contact_count *info)
 {
     size_t nm = 0;
     for (size_t v = 0; v < c->n; v++)
-        c->moved[v] = memcmp(ref + 3 * v, cand + 3 * v, 3 * sizeof(float)) != 0;
+        c->moved[v] = all || memcmp(ref + 3 * v, cand + 3 * v, 3 * sizeof(float)) != 0;
     float reg[6] = {INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY};
-    double cell = 0;
+    double cell = 0, sum = 0;
     for (size_t i = 0; i < c->t; i++) {
         const uint32_t *v = c->tris + 3 * i;
         if (!(c->moved[v[0]] | c->moved[v[1]] | c->moved[v[2]])) continue;
         c->mtris[nm++] = (uint32_t)i;
         float b[6];
         tri_box(cand, v, b);
+        double ext = 0;
         for (int k = 0; k < 3; k++) {
             reg[k] = fminf(reg[k], b[k]);
             reg[3 + k] = fmaxf(reg[3 + k], b[3 + k]);
-            cell = fmax(cell, (double)b[3 + k] - b[k]);
+            ext = fmax(ext, (double)b[3 + k] - b[k]);
         }
+        cell = fmax(cell, ext);
+        sum += ext;
+        /* a triangle turned over against the weld shape (and not already in ref) */
+        if (info && ref && !c->own[i] && flipped(c, cand, v, i) && !flipped(c, ref, v, i))
+            info->flipped++;
     }
-    if (moved_tris) *moved_tris = nm;
+    if (info) info->moved_tris = nm;
     if (!nm) return 0;
+    /* the cell: twice the mean moved extent, at most 16 cells across the largest one (a few
+     * large triangles, the back of a head, must not make one cell of the whole region) */
+    cell = fmax(2.0 * sum / (double)nm, cell / 16.0);
     if (!(cell > 0)) cell = 1e-9;
     /* the triangles whose candidate box meets the moved region, into the grid */
     size_t ni = 0, ne = 0;
@@ -290,8 +345,11 @@ long fp_contact_count_new(fp_contact *c, const float *ref, const float *cand, ui
         double ta[3][3], ra[3][3];
         tri_of(cand, va, ta);
         if (degenerate(ta)) continue;
-        tri_of(ref, va, ra);
-        bool rdeg_a = degenerate(ra);
+        bool rdeg_a = true;
+        if (ref) {
+            tri_of(ref, va, ra);
+            rdeg_a = degenerate(ra);
+        }
         long lo[3], hi[3];
         CELL_RANGE(c->box[a], lo, hi)
         for (long x = lo[0]; x <= hi[0]; x++)
@@ -317,8 +375,17 @@ long fp_contact_count_new(fp_contact *c, const float *ref, const float *cand, ui
                         double tb[3][3], rb[3][3];
                         tri_of(cand, vb, tb);
                         if (degenerate(tb) || !fp_contact_tri_tri(ta, tb)) continue;
+                        if (!ref) { /* the weld shape's own crossings */
+                            c->own[a] = c->own[b] = 1;
+                            found++;
+                            continue;
+                        }
                         tri_of(ref, vb, rb);
                         if (!rdeg_a && !degenerate(rb) && fp_contact_tri_tri(ra, rb)) continue;
+                        if (c->own[a] || c->own[b]) { /* next to the input's own crossings */
+                            if (info) info->near_own++;
+                            continue;
+                        }
                         if (pairs && (size_t)found < max_pairs) {
                             pairs[2 * found] = a < b ? a : b;
                             pairs[2 * found + 1] = a < b ? b : a;
@@ -331,6 +398,13 @@ long fp_contact_count_new(fp_contact *c, const float *ref, const float *cand, ui
     for (size_t j = 0; j < ni; j++) c->stamp[c->ins[j]] = 0;
 #undef CELL_RANGE
     return found;
+}
+
+long fp_contact_count_new(fp_contact *c, const float *ref, const float *cand, uint32_t *pairs,
+                          size_t max_pairs, fp_contact_count *info)
+{
+    if (info) memset(info, 0, sizeof *info);
+    return scan(c, ref, cand, false, pairs, max_pairs, info);
 }
 
 static void lerp(const fp_contact *c, const float *ref, const float *cand, double t, float *out)
@@ -350,7 +424,10 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
 {
     memset(res, 0, sizeof *res);
     res->t = 1;
-    long k = fp_contact_count_new(c, ref, cand, NULL, 0, &res->moved_tris);
+    fp_contact_count info;
+    long k = fp_contact_count_new(c, ref, cand, NULL, 0, &info);
+    res->moved_tris = info.moved_tris;
+    res->flipped = info.flipped;
     res->checks = 1;
     if (k < 0) {
         lerp(c, ref, cand, 0, out);
@@ -358,6 +435,7 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
         return (int)k;
     }
     res->pairs = k;
+    k += (long)info.flipped;
     if (!k) {
         lerp(c, ref, cand, 1, out);
         return 0;
@@ -366,7 +444,8 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
     for (int i = 0; i < iters; i++) {
         double mid = 0.5 * (lo + hi);
         lerp(c, ref, cand, mid, out);
-        long m = fp_contact_count_new(c, ref, out, NULL, 0, NULL);
+        long m = fp_contact_count_new(c, ref, out, NULL, 0, &info);
+        if (m >= 0) m += (long)info.flipped;
         res->checks++;
         if (m < 0) {
             lo = 0;
