@@ -2,10 +2,14 @@
 #include "contact.h"
 
 #include <errno.h>
+#include <stdio.h>
 #include <math.h>
 #include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
+#define FP_CONTACT_CELL 1.0 /* the grid cell over the mean moved triangle extent */
+
+
 
 struct fp_contact {
     const uint32_t *tris;
@@ -291,9 +295,9 @@ static long scan(fp_contact *c, const float *ref, const float *cand, bool all, u
     }
     if (info) info->moved_tris = nm;
     if (!nm) return 0;
-    /* the cell: twice the mean moved extent, at most 16 cells across the largest one (a few
+    /* the cell: the mean moved extent, at most 32 cells across the largest one (a few
      * large triangles, the back of a head, must not make one cell of the whole region) */
-    cell = fmax(2.0 * sum / (double)nm, cell / 16.0);
+    cell = fmax(FP_CONTACT_CELL * sum / (double)nm, cell / 32.0);
     if (!(cell > 0)) cell = 1e-9;
     /* the triangles whose candidate box meets the moved region, into the grid */
     size_t ni = 0, ne = 0;
@@ -339,6 +343,7 @@ static long scan(fp_contact *c, const float *ref, const float *cand, bool all, u
             memmove(bs + 1, bs, nb * sizeof *bs), bs[0] = 0;
     }
     long found = 0;
+    unsigned long visits = 0, boxok = 0, tests = 0;
     for (size_t j = 0; j < nm; j++) {
         uint32_t a = c->mtris[j];
         const uint32_t *va = c->tris + 3 * (size_t)a;
@@ -358,6 +363,7 @@ static long scan(fp_contact *c, const float *ref, const float *cand, bool all, u
                     uint32_t h = cell_hash(x, y, z) & (uint32_t)(nb - 1);
                     for (uint32_t e = bs[h]; e < bs[h + 1]; e++) {
                         uint32_t b = c->entries[e];
+                        visits++;
                         if (b == a || c->stamp[b] == a + 1) continue;
                         c->stamp[b] = a + 1;
                         const uint32_t *vb = c->tris + 3 * (size_t)b;
@@ -371,7 +377,9 @@ static long scan(fp_contact *c, const float *ref, const float *cand, bool all, u
                                     adjacent = true;
                                     break;
                                 }
+                        boxok++;
                         if (adjacent) continue;
+                        tests++;
                         double tb[3][3], rb[3][3];
                         tri_of(cand, vb, tb);
                         if (degenerate(tb) || !fp_contact_tri_tri(ta, tb)) continue;
@@ -394,6 +402,9 @@ static long scan(fp_contact *c, const float *ref, const float *cand, bool all, u
                     }
                 }
     }
+    if (getenv("FP_CONTACT_DEBUG"))
+        fprintf(stderr, "contact: moved %zu inserted %zu entries %zu buckets %zu cell %g visits %lu box %lu tests %lu\n",
+                nm, ni, ne, nb, cell, visits, boxok, tests);
     /* stamps hold moved triangle ids + 1: clear them for the next check */
     for (size_t j = 0; j < ni; j++) c->stamp[c->ins[j]] = 0;
 #undef CELL_RANGE
