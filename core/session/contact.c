@@ -2,7 +2,6 @@
 #include "contact.h"
 
 #include <errno.h>
-#include <stdio.h>
 #include <math.h>
 #include <stdbool.h>
 #include <stdlib.h>
@@ -19,8 +18,8 @@ struct fp_contact {
     uint32_t *mtris;      /* moved triangles */
     uint32_t *ins;        /* triangles in the grid */
     float (*box)[6];      /* t: candidate bounding box (min xyz, max xyz) of inserted ones */
-    uint32_t *stamp;      /* t: last moved triangle that looked at it, + 1 */
-    uint32_t *bucket_start, *entries;
+    uint32_t *bucket_start;
+    struct entry { float box[6]; uint32_t tri, moved; } *entries; /* the grid, by bucket */
     size_t bucket_cap, entry_cap;
     uint8_t *own;         /* t: the triangle crosses another in the weld shape */
     float (*nrm)[3];      /* t: the weld shape's triangle normals (unnormalised) */
@@ -142,9 +141,8 @@ int fp_contact_create(const uint32_t *tris, size_t t, size_t n, const float *wel
     c->mtris = malloc((t ? t : 1) * sizeof *c->mtris);
     c->ins = malloc((t ? t : 1) * sizeof *c->ins);
     c->box = malloc((t ? t : 1) * sizeof *c->box);
-    c->stamp = calloc(t ? t : 1, sizeof *c->stamp);
     uint32_t *order = malloc((n ? n : 1) * sizeof *order);
-    if (!c->weld || !c->moved || !c->mtris || !c->ins || !c->box || !c->stamp || !order) {
+    if (!c->weld || !c->moved || !c->mtris || !c->ins || !c->box || !order) {
         free(order);
         fp_contact_destroy(&c);
         return -ENOMEM;
@@ -192,7 +190,6 @@ void fp_contact_destroy(fp_contact **cp)
     free(c->mtris);
     free(c->ins);
     free(c->box);
-    free(c->stamp);
     free(c->bucket_start);
     free(c->entries);
     free(c->own);
@@ -321,8 +318,13 @@ static long scan(fp_contact *c, const float *ref, const float *cand, bool all, u
     }
     size_t nb = 64;
     while (nb < 2 * ne) nb *= 2;
-    if (grow(&c->bucket_start, &c->bucket_cap, nb + 1) || grow(&c->entries, &c->entry_cap, ne))
-        return -ENOMEM;
+    if (grow(&c->bucket_start, &c->bucket_cap, nb + 1)) return -ENOMEM;
+    if (ne > c->entry_cap) {
+        void *q = realloc(c->entries, (ne + ne / 2) * sizeof *c->entries);
+        if (!q) return -ENOMEM;
+        c->entries = q;
+        c->entry_cap = ne + ne / 2;
+    }
     uint32_t *bs = c->bucket_start;
     memset(bs, 0, (nb + 1) * sizeof *bs);
     for (int pass = 0; pass < 2; pass++) {
@@ -334,7 +336,14 @@ static long scan(fp_contact *c, const float *ref, const float *cand, bool all, u
                     for (long z = lo[2]; z <= hi[2]; z++) {
                         uint32_t h = cell_hash(x, y, z) & (uint32_t)(nb - 1);
                         if (!pass) bs[h + 1]++;
-                        else c->entries[bs[h]++] = c->ins[j];
+                        else {
+                            struct entry *en = &c->entries[bs[h]++];
+                            uint32_t i = c->ins[j];
+                            const uint32_t *v = c->tris + 3 * (size_t)i;
+                            memcpy(en->box, c->box[i], sizeof en->box);
+                            en->tri = i;
+                            en->moved = c->moved[v[0]] | c->moved[v[1]] | c->moved[v[2]];
+                        }
                     }
         }
         if (!pass)
@@ -343,7 +352,6 @@ static long scan(fp_contact *c, const float *ref, const float *cand, bool all, u
             memmove(bs + 1, bs, nb * sizeof *bs), bs[0] = 0;
     }
     long found = 0;
-    unsigned long visits = 0, boxok = 0, tests = 0;
     for (size_t j = 0; j < nm; j++) {
         uint32_t a = c->mtris[j];
         const uint32_t *va = c->tris + 3 * (size_t)a;
@@ -356,20 +364,27 @@ static long scan(fp_contact *c, const float *ref, const float *cand, bool all, u
             rdeg_a = degenerate(ra);
         }
         long lo[3], hi[3];
-        CELL_RANGE(c->box[a], lo, hi)
+        const float *ba = c->box[a];
+        CELL_RANGE(ba, lo, hi)
         for (long x = lo[0]; x <= hi[0]; x++)
             for (long y = lo[1]; y <= hi[1]; y++)
                 for (long z = lo[2]; z <= hi[2]; z++) {
                     uint32_t h = cell_hash(x, y, z) & (uint32_t)(nb - 1);
                     for (uint32_t e = bs[h]; e < bs[h + 1]; e++) {
-                        uint32_t b = c->entries[e];
-                        visits++;
-                        if (b == a || c->stamp[b] == a + 1) continue;
-                        c->stamp[b] = a + 1;
+                        const struct entry *en = &c->entries[e];
+                        if (!boxes_meet(ba, en->box)) continue;
+                        uint32_t b = en->tri;
+                        if (b == a || (en->moved && b < a)) continue; /* a moved pair is the lower's */
+                        /* a pair once: in the cell of its boxes' common lower corner */
+                        long own[3], cur[3] = {x, y, z};
+                        bool mine = true;
+                        for (int k = 0; k < 3 && mine; k++) {
+                            float l = fmaxf(fmaxf(ba[k], en->box[k]), reg[k]);
+                            own[k] = (long)floor(((double)l - reg[k]) / cell);
+                            mine = own[k] == cur[k];
+                        }
+                        if (!mine) continue;
                         const uint32_t *vb = c->tris + 3 * (size_t)b;
-                        bool bm = c->moved[vb[0]] | c->moved[vb[1]] | c->moved[vb[2]];
-                        if (bm && b < a) continue; /* the pair is b's */
-                        if (!boxes_meet(c->box[a], c->box[b])) continue;
                         bool adjacent = false;
                         for (int p = 0; p < 3 && !adjacent; p++)
                             for (int q = 0; q < 3; q++)
@@ -377,9 +392,7 @@ static long scan(fp_contact *c, const float *ref, const float *cand, bool all, u
                                     adjacent = true;
                                     break;
                                 }
-                        boxok++;
                         if (adjacent) continue;
-                        tests++;
                         double tb[3][3], rb[3][3];
                         tri_of(cand, vb, tb);
                         if (degenerate(tb) || !fp_contact_tri_tri(ta, tb)) continue;
@@ -402,11 +415,6 @@ static long scan(fp_contact *c, const float *ref, const float *cand, bool all, u
                     }
                 }
     }
-    if (getenv("FP_CONTACT_DEBUG"))
-        fprintf(stderr, "contact: moved %zu inserted %zu entries %zu buckets %zu cell %g visits %lu box %lu tests %lu\n",
-                nm, ni, ne, nb, cell, visits, boxok, tests);
-    /* stamps hold moved triangle ids + 1: clear them for the next check */
-    for (size_t j = 0; j < ni; j++) c->stamp[c->ins[j]] = 0;
 #undef CELL_RANGE
     return found;
 }

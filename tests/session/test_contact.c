@@ -188,9 +188,14 @@ static void test_ict_frame(void **state)
         long cgal = fp_selfx_count_new_away(m->positions, after, n, m->triangles,
                                             m->triangle_count, 0, NULL, 0, &own, &near);
         fp_contact_count info;
-        int64_t c0 = fp_now_ns();
-        long mine = fp_contact_count_new(c, m->positions, after, NULL, 0, &info);
-        printf("  one check: %.2f ms\n", (double)(fp_now_ns() - c0) / 1e6);
+        double best = INFINITY;
+        long mine = 0;
+        for (int rep = 0; rep < 5; rep++) { /* the fastest of 5: the machine is shared */
+            int64_t c0 = fp_now_ns();
+            mine = fp_contact_count_new(c, m->positions, after, NULL, 0, &info);
+            best = fmin(best, (double)(fp_now_ns() - c0) / 1e6);
+        }
+        printf("  one check: %.2f ms (fastest of 5)\n", best);
         printf("ICT pull %d (%.2f R): %zu moved triangles, new pairs away from the input's own: "
                "contact %ld, CGAL %ld; next to them: contact %ld, CGAL %ld (input's own %ld); "
                "flipped %zu\n", trial, (0.3 + 0.3 * trial), info.moved_tris, mine, cgal,
