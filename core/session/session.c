@@ -65,7 +65,6 @@ struct fp_session {
 
     /* the contact guard (contact.h); NULL with no_contact_guard */
     fp_contact *contact;
-    float *ref;                   /* n x 3: the shape shown last (the guard's reference) */
     float *guarded;               /* n x 3: the shape shown when the guard scaled back */
     unsigned long cg_frames, cg_limited; /* this gesture: frames checked, scaled back */
     double cg_t;                  /* this gesture: smallest fraction kept */
@@ -290,16 +289,14 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
         goto fail;
     }
     if (!opt->no_contact_guard) {
-        s->ref = malloc(bytes);
         s->guarded = malloc(bytes);
-        if (!s->ref || !s->guarded ||
+        if (!s->guarded ||
             (rc = fp_contact_create(s->mesh->triangles, s->mesh->triangle_count, s->n, s->loaded,
                                     &s->contact))) {
             rc = rc ? rc : -ENOMEM;
             snprintf(err, errlen, "session: out of memory for the contact guard");
             goto fail;
         }
-        memcpy(s->ref, s->shown, bytes);
     }
     s->services.surface.nearest = surface_nearest;
     s->services.user = s;
@@ -357,17 +354,18 @@ static void base_changed(fp_session *s)
     fp_engine_step_set_base(&s->engine, s->shown);
 }
 
-/* The contact guard: what is shown now (s->shown) against what was shown last (s->ref): when
- * it adds self-crossings, the motion is scaled back (fp_contact_guard) and s->shown becomes
- * s->guarded. Induction: no frame adds a crossing pair, so the shown surface never crosses
- * itself where the loaded face did not. */
-static void contact_guard(fp_session *s, fp_frame_stats *st)
+/* The contact guard: the frame's shape (s->shown) against the shape it starts from (ref: the
+ * posed base; for a gesture the posed base, for an unanchored step the current base): when
+ * it adds self-crossings or flipped triangles, the fingers' motion is scaled back
+ * (fp_contact_guard) and s->shown becomes s->guarded. Without a rig, by induction over
+ * commits, the shown surface never crosses itself where the loaded face did not; a rig's
+ * own pose (its channels) is not checked. */
+static void contact_guard(fp_session *s, const float *ref, fp_frame_stats *st)
 {
-    if (!s->contact || s->shown == s->guarded) return;
-    if (!memcmp(s->shown, s->ref, s->n * 3 * sizeof(float))) return;
+    if (!s->contact || s->shown == ref) return;
     int64_t t0 = fp_now_ns();
     fp_contact_result r;
-    fp_contact_guard(s->contact, s->ref, s->shown, s->guarded, FP_CONTACT_BISECTIONS, &r);
+    fp_contact_guard(s->contact, ref, s->shown, s->guarded, FP_CONTACT_BISECTIONS, &r);
     st->collide_ms += (double)(fp_now_ns() - t0) / 1e6;
     st->collide_pairs += r.pairs;
     if (!s->cg_frames) s->cg_t = 1.0;
@@ -389,12 +387,6 @@ static void contact_end_gesture(fp_session *s)
                        "%.0f%% (%lu of %lu frames scaled back)",
                        100.0 * s->cg_t, s->cg_limited, s->cg_frames);
     s->cg_frames = s->cg_limited = 0;
-}
-
-/* What is shown changed outside a frame (undo, reset, a new mapping): the new reference. */
-static void contact_reset(fp_session *s)
-{
-    if (s->contact) memcpy(s->ref, s->shown, s->n * 3 * sizeof(float));
 }
 
 /* Steps 5 and 6 on the control set the engine is given (after the rig's clamp), on the
@@ -420,8 +412,9 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame
         st->min_det_j = er.min_det_j;
         if (!rc) {
             st->active = true;
+            const float *ref = s->shown; /* the posed base */
             s->shown = fp_rig_step_finish(&s->rig, s->deformed);
-            contact_guard(s, st);
+            contact_guard(s, ref, st);
             if (cs->intents & FP_INTENT_COMMIT) {
                 int64_t t0 = fp_now_ns();
                 if (s->rig.rig) {
@@ -451,9 +444,6 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame
         fp_engine_step_end_gesture(&s->engine, &s->log);
         contact_end_gesture(s);
     }
-    /* what is shown now (a rig's re-posed base after a commit, a channel change) */
-    contact_guard(s, st);
-    if (s->contact) memcpy(s->ref, s->shown, s->n * 3 * sizeof(float));
     s->engaged = cs->active && !(cs->intents & (FP_INTENT_COMMIT | FP_INTENT_CANCEL));
 }
 
@@ -633,7 +623,6 @@ static void destroy_mapping(fp_session *s, fp_mapping *m, const char *name)
 static void after_set_base(fp_session *s)
 {
     base_changed(s);
-    contact_reset(s);
     reset_mapping(s);
 }
 
@@ -686,7 +675,6 @@ static int swap_mapping(fp_session *s, const fp_plugin_path *path, const char *s
     fp_mapping_step_flush(&s->mapping_step, &s->log);
     fp_plugin_unload(&old_plugin);
     s->shown = fp_rig_step_posed(&s->rig, s->base);
-    contact_reset(s);
     s->engaged = false;
     fp_history_end_gesture(&s->history);
     fp_engine_step_end_gesture(&s->engine, &s->log);
@@ -793,7 +781,6 @@ void fp_session_destroy(fp_session **sp)
     fp_plugin_unload(&s->mapping_plugin);
     fp_engine_step_free(&s->engine);
     fp_contact_destroy(&s->contact);
-    free(s->ref);
     free(s->guarded);
     fp_rig_step_free(&s->rig);
     fp_history_free(&s->history);
