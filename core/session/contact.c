@@ -181,6 +181,22 @@ int fp_contact_create(const uint32_t *tris, size_t t, size_t n, const float *wel
     return 0;
 }
 
+int fp_contact_dilate_own(fp_contact *c, int rings)
+{
+    uint8_t *mark = calloc(c->n ? c->n : 1, 1);
+    if (!mark) return -ENOMEM;
+    for (int r = 0; r < rings; r++) {
+        for (size_t i = 0; i < c->t; i++)
+            if (c->own[i])
+                for (int k = 0; k < 3; k++) mark[c->weld[c->tris[3 * i + k]]] = 1;
+        for (size_t i = 0; i < c->t; i++)
+            for (int k = 0; k < 3; k++)
+                if (mark[c->weld[c->tris[3 * i + k]]]) c->own[i] = 1;
+    }
+    free(mark);
+    return 0;
+}
+
 void fp_contact_destroy(fp_contact **cp)
 {
     fp_contact *c = *cp;

@@ -40,6 +40,13 @@ typedef struct fp_contact fp_contact;
 int fp_contact_create(const uint32_t *tris, size_t t, size_t n, const float *weld, fp_contact **out);
 void fp_contact_destroy(fp_contact **c);
 
+/** Widen the input's own crossings by `rings` vertex rings (through welded vertices): a
+ *  pair with a triangle that has a vertex within `rings` rings of an own-crossing triangle
+ *  is left out as well (fp_selfx_count_new_away's rings; the intersection curve of surfaces
+ *  that interpenetrate in the input, the ICT face's eyes, moves onto the neighbouring
+ *  triangles under the smallest motion). Cumulative. Returns 0 or -ENOMEM. */
+int fp_contact_dilate_own(fp_contact *c, int rings);
+
 /** What fp_contact_count_new saw besides the new pairs. */
 typedef struct fp_contact_count {
     size_t moved_tris;   /* triangles with a moved vertex */

@@ -71,6 +71,9 @@ struct fp_session {
 };
 
 #define FP_CONTACT_BISECTIONS 6
+/* pairs within this many vertex rings of the input's own crossings are not the guard's
+ * business (fp_contact_dilate_own): the eyes' intersection curves move under any motion */
+#define FP_CONTACT_OWN_RINGS 2
 
 _Static_assert(FP_ENGINE_MAX_CONTROL >= FP_CONTROL_CAPACITY, "the engine takes a full control set");
 
@@ -292,7 +295,8 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
         s->guarded = malloc(bytes);
         if (!s->guarded ||
             (rc = fp_contact_create(s->mesh->triangles, s->mesh->triangle_count, s->n, s->loaded,
-                                    &s->contact))) {
+                                    &s->contact)) ||
+            (rc = fp_contact_dilate_own(s->contact, FP_CONTACT_OWN_RINGS))) {
             rc = rc ? rc : -ENOMEM;
             snprintf(err, errlen, "session: out of memory for the contact guard");
             goto fail;
@@ -577,7 +581,9 @@ const fp_control_set *fp_session_control_set(const fp_session *s) { return &s->c
 
 const struct csrbf_solver *fp_session_solver(const fp_session *s)
 {
-    return s->shown != s->base && !s->rig.rig ? fp_engine_step_solver(&s->engine) : NULL;
+    /* not when the contact guard scaled the shape back: the solver's map is not what is shown */
+    return s->shown != s->base && s->shown != s->guarded && !s->rig.rig
+               ? fp_engine_step_solver(&s->engine) : NULL;
 }
 
 const struct fp_rig *fp_session_rig(const fp_session *s) { return s->rig.rig; }
