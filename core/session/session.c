@@ -73,7 +73,7 @@ struct fp_session {
 #define FP_CONTACT_BISECTIONS 6
 /* pairs within this many vertex rings of the input's own crossings are not the guard's
  * business (fp_contact_dilate_own): the eyes' intersection curves move under any motion */
-#define FP_CONTACT_OWN_RINGS 2
+#define FP_CONTACT_OWN_RINGS 1
 
 _Static_assert(FP_ENGINE_MAX_CONTROL >= FP_CONTROL_CAPACITY, "the engine takes a full control set");
 
