@@ -104,6 +104,10 @@ typedef struct fp_session_options {
     bool measure_jacobian;                          /* fill fp_frame_stats.min_det_j (the
                                                        engine's general path: slower, same
                                                        shape) */
+    bool no_contact_guard;                          /* true: no contact guard (benchmarks);
+                                                       default (false): every shown shape is
+                                                       checked for new self-crossings
+                                                       (contact.h) and its motion scaled back */
 } fp_session_options;
 
 /** The frame's stages, for fp_frame_stats.stage_ms (`bench --case frame`). */
@@ -141,6 +145,10 @@ typedef struct fp_frame_stats {
     double min_det_j;         /* min det dT/dx over the moved vertices (and composed maps) with
                                  fp_session_options.measure_jacobian, else NAN (and when not
                                  active) */
+    /* the contact guard (contact.h): the shown shape adds no self-crossing to the last one */
+    double collide_t;         /* fraction of this frame's motion kept (1: all; 0: none) */
+    long collide_pairs;       /* new crossing pairs the full motion would have added */
+    double collide_ms;        /* the guard's checks, milliseconds */
     double stage_ms[FP_STAGE_COUNT]; /* wall time of each stage (fp_frame_stage), ms */
 } fp_frame_stats;
 

@@ -3,6 +3,7 @@
 #define _GNU_SOURCE
 #include "fp_session.h"
 
+#include "contact.h"
 #include "csrbf.h"
 #include "fp_plugin_crash.h"
 #include "fp_mesh.h"
@@ -61,7 +62,18 @@ struct fp_session {
     fp_record_step record;        /* step 7 */
 
     fp_control_set cs;            /* its arrays are the mapping step's (with canaries) */
+
+    /* the contact guard (contact.h); NULL with no_contact_guard */
+    fp_contact *contact;
+    float *guarded;               /* n x 3: the shape shown when the guard scaled back */
+    unsigned long cg_frames, cg_limited; /* this gesture: frames checked, scaled back */
+    double cg_t;                  /* this gesture: smallest fraction kept */
 };
+
+#define FP_CONTACT_BISECTIONS 6
+/* pairs within this many vertex rings of the input's own crossings are not the guard's
+ * business (fp_contact_dilate_own): the eyes' intersection curves move under any motion */
+#define FP_CONTACT_OWN_RINGS 1
 
 _Static_assert(FP_ENGINE_MAX_CONTROL >= FP_CONTROL_CAPACITY, "the engine takes a full control set");
 
@@ -279,6 +291,17 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
         snprintf(err, errlen, "session: out of memory for %zu triangles", s->mesh->triangle_count);
         goto fail;
     }
+    if (!opt->no_contact_guard) {
+        s->guarded = malloc(bytes);
+        if (!s->guarded ||
+            (rc = fp_contact_create(s->mesh->triangles, s->mesh->triangle_count, s->n, s->loaded,
+                                    &s->contact)) ||
+            (rc = fp_contact_dilate_own(s->contact, FP_CONTACT_OWN_RINGS))) {
+            rc = rc ? rc : -ENOMEM;
+            snprintf(err, errlen, "session: out of memory for the contact guard");
+            goto fail;
+        }
+    }
     s->services.surface.nearest = surface_nearest;
     s->services.user = s;
     if ((rc = load_mapping(s, opt->mapping, opt->plugin_path, NULL, err, errlen))) goto fail;
@@ -335,6 +358,41 @@ static void base_changed(fp_session *s)
     fp_engine_step_set_base(&s->engine, s->shown);
 }
 
+/* The contact guard: the frame's shape (s->shown) against the shape it starts from (ref: the
+ * posed base; for a gesture the posed base, for an unanchored step the current base): when
+ * it adds self-crossings or flipped triangles, the fingers' motion is scaled back
+ * (fp_contact_guard) and s->shown becomes s->guarded. Without a rig, by induction over
+ * commits, the shown surface never crosses itself where the loaded face did not; a rig's
+ * own pose (its channels) is not checked. */
+static void contact_guard(fp_session *s, const float *ref, fp_frame_stats *st)
+{
+    if (!s->contact || s->shown == ref) return;
+    int64_t t0 = fp_now_ns();
+    fp_contact_result r;
+    fp_contact_guard(s->contact, ref, s->shown, s->guarded, FP_CONTACT_BISECTIONS, &r);
+    st->collide_ms += (double)(fp_now_ns() - t0) / 1e6;
+    st->collide_pairs += r.pairs;
+    if (!s->cg_frames) s->cg_t = 1.0;
+    s->cg_frames++;
+    if (r.t < 1) {
+        s->shown = s->guarded;
+        s->cg_limited++;
+        if (r.t < s->cg_t) s->cg_t = r.t;
+        if (r.t < st->collide_t) st->collide_t = r.t;
+    }
+}
+
+/* The gesture ended: one line when the contact guard scaled it back. */
+static void contact_end_gesture(fp_session *s)
+{
+    if (s->cg_limited)
+        fp_slog_printf(&s->log, FP_LOG_WARNING, "contact",
+                       "contact guard stopped the surface from passing through itself: reached "
+                       "%.0f%% (%lu of %lu frames scaled back)",
+                       100.0 * s->cg_t, s->cg_limited, s->cg_frames);
+    s->cg_frames = s->cg_limited = 0;
+}
+
 /* Steps 5 and 6 on the control set the engine is given (after the rig's clamp), on the
  * posed base: evaluate, the rig's mobility blend, show, commit. Shared by fp_session_step
  * and fp_session_apply_controls (takes played back). */
@@ -358,13 +416,22 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame
         st->min_det_j = er.min_det_j;
         if (!rc) {
             st->active = true;
+            const float *ref = s->shown; /* the posed base */
             s->shown = fp_rig_step_finish(&s->rig, s->deformed);
+            contact_guard(s, ref, st);
             if (cs->intents & FP_INTENT_COMMIT) {
                 int64_t t0 = fp_now_ns();
                 if (s->rig.rig) {
                     /* with a rig only the fingers' part goes into the base */
                     fp_history_commit(&s->history, fp_rig_step_commit_shape(&s->rig, s->base, s->shown));
                     base_changed(s); /* the anchored gesture ended; unanchored restarts anyway */
+                } else if (s->shown == s->guarded) {
+                    /* the guard scaled the motion back: its shape goes into the base and
+                     * the output buffer; the engine re-indexes the whole base */
+                    memcpy(s->deformed, s->guarded, s->n * 3 * sizeof(float));
+                    fp_history_commit(&s->history, s->deformed);
+                    fp_engine_step_set_base(&s->engine, s->base);
+                    s->shown = s->base;
                 } else {
                     fp_history_commit(&s->history, s->deformed);
                     /* the anchored gesture ended; unanchored restarts anyway. Only the blocks
@@ -379,6 +446,7 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame
     } else {
         fp_history_end_gesture(&s->history);
         fp_engine_step_end_gesture(&s->engine, &s->log);
+        contact_end_gesture(s);
     }
     s->engaged = cs->active && !(cs->intents & (FP_INTENT_COMMIT | FP_INTENT_CANCEL));
 }
@@ -391,6 +459,7 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     st->frame = s->frame;
     st->guard_reached = 1.0;
     st->min_det_j = NAN;
+    st->collide_t = 1.0;
 
     int64_t tick = fp_now_ns(), tock;
 #define FP_STAGE_END(stage)                                                                   \
@@ -463,6 +532,7 @@ void fp_session_apply_controls(fp_session *s, int64_t now_ns, const fp_control_s
     if (!st) st = &local;
     memset(st, 0, sizeof *st);
     st->frame = s->frame;
+    st->collide_t = 1.0;
     fp_record_step_begin(&s->record);
     st->engaged = cs->intents & FP_INTENT_ENGAGE;
     st->cancelled = cs->intents & FP_INTENT_CANCEL;
@@ -511,7 +581,9 @@ const fp_control_set *fp_session_control_set(const fp_session *s) { return &s->c
 
 const struct csrbf_solver *fp_session_solver(const fp_session *s)
 {
-    return s->shown != s->base && !s->rig.rig ? fp_engine_step_solver(&s->engine) : NULL;
+    /* not when the contact guard scaled the shape back: the solver's map is not what is shown */
+    return s->shown != s->base && s->shown != s->guarded && !s->rig.rig
+               ? fp_engine_step_solver(&s->engine) : NULL;
 }
 
 const struct fp_rig *fp_session_rig(const fp_session *s) { return s->rig.rig; }
@@ -619,6 +691,7 @@ static int swap_mapping(fp_session *s, const fp_plugin_path *path, const char *s
     s->engaged = false;
     fp_history_end_gesture(&s->history);
     fp_engine_step_end_gesture(&s->engine, &s->log);
+    contact_end_gesture(s);
     fp_engine_step_invalidate(&s->engine);
     fp_mapping_step_init(&s->mapping_step, &s->cs, s->mapping_budget_ms);
     reset_mapping(s);
@@ -721,10 +794,13 @@ void fp_session_destroy(fp_session **sp)
     fp_session_stop(s, msg, sizeof msg);
     fp_mapping_step_flush(&s->mapping_step, &s->log);
     fp_engine_step_flush(&s->engine, &s->log);
+    contact_end_gesture(s);
     for (size_t i = 0; i < s->input_count; i++) fp_input_instance_close(&s->inputs[i]);
     destroy_mapping(s, s->mapping, s->mapping_name);
     fp_plugin_unload(&s->mapping_plugin);
     fp_engine_step_free(&s->engine);
+    fp_contact_destroy(&s->contact);
+    free(s->guarded);
     fp_rig_step_free(&s->rig);
     fp_history_free(&s->history);
     fp_intents_free(&s->intents);

@@ -300,21 +300,29 @@ static const char *faces[] = {"ict-facekit/generic_neutral_mesh.obj",
                               "mediapipe-canonical/canonical_face_model.obj"};
 static const char *takes[] = {"HandSplay-110fps", "Waiting-110fps", "grab", "three-claps"};
 
-/* Anchored: asserted strictly (no new crossing away from the input's own, at the end and
- * at the snapshots). Unanchored: the guard makes every step injective (asserted: min det J >
- * 0 over every map), but the output still gains crossings on most faces (printed, asserted
- * only with FP_GUARD_STRICT=1): each step is committed into the base, so a long drag
- * composes hundreds of injective maps that squeeze surfaces that nearly touch in the input
- * (lips, eyelids) towards each other without bound, and on coarse meshes (MediaPipe: 468
- * vertices, edges near R) the piecewise-linear surface through the mapped vertices is not
- * the mapped surface: a vertex can pass its neighbours' triangle while the space map stays
- * injective. Injectivity of T is necessary, not sufficient, for the mesh (reported to the
- * lead, issue 10). */
-static unsigned unstrict_runs;
+/* Both mappings, strictly: no new crossing away from the input's own, at the end and at the
+ * snapshots. The fold-over guard alone (injective maps) does not give that: unanchored drags
+ * compose hundreds of injective steps that squeeze near-touching surfaces (lips, eyelids)
+ * together, the flat triangles between moved vertices are not the smooth mapped surface,
+ * and a rig's mobility blend is no CSRBF map. The contact guard (core/session/contact.h)
+ * checks every shown shape against the last one and scales the motion back. */
+static unsigned long total_collide_frames;
+
+static int cmp_d(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static double pctl(double *v, size_t n, double p)
+{
+    if (!n) return 0;
+    qsort(v, n, sizeof *v, cmp_d);
+    return v[(size_t)(p * (double)(n - 1) + 0.5)];
+}
 
 static void recordings(const char *mapping)
 {
-    bool strict = strcmp(mapping, "unanchored") || getenv("FP_GUARD_STRICT");
     for (size_t fi = 0; fi < sizeof faces / sizeof faces[0]; fi++) {
         char mesh[4300];
         snprintf(mesh, sizeof mesh, "%s/faces/%s", fp_test_data_dir(), faces[fi]);
@@ -324,7 +332,9 @@ static void recordings(const char *mapping)
                      fp_test_data_dir(), takes[ti]);
             logbook lb = {0};
             fp_session *s = open_session(mesh, mapping, input, &lb);
-            unsigned long frames = 0, active = 0, limited = 0, composed = 0;
+            unsigned long frames = 0, active = 0, limited = 0, composed = 0, collided = 0;
+            double collide_t = 1, collide_ms = 0, cms[4096];
+            size_t ncms = 0;
             double min_det = INFINITY;
             /* snapshots of the 40th and 80th deforming frames, checked after the run so
              * that the exact counts do not hold up the paced replay */
@@ -340,6 +350,10 @@ static void recordings(const char *mapping)
                     limited += st.guard_reached < 1;
                     composed += st.guard_substeps > 1;
                     min_det = fmin(min_det, st.min_det_j);
+                    collided += st.collide_t < 1;
+                    collide_t = fmin(collide_t, st.collide_t);
+                    collide_ms = fmax(collide_ms, st.collide_ms);
+                    if (st.collide_ms > 0 && ncms < 4096) cms[ncms++] = st.collide_ms;
                     if (active % 40 == 0 && nsnap < 2) {
                         snap[nsnap] = malloc(n * 3 * sizeof(float));
                         memcpy(snap[nsnap++], fp_session_positions(s), n * 3 * sizeof(float));
@@ -362,23 +376,22 @@ static void recordings(const char *mapping)
             double maxd;
             displacement(s, &moved, &maxd);
             printf("%-13.13s %-16s %-10s frames %4lu deforming %4lu guard stopped short %3lu "
-                   "composed %3lu min det J %.3g; moved %5zu of %5zu (%5.2f%%), max displacement "
+                   "composed %3lu min det J %.3g; contact guard on %3lu frames (least kept %3.0f%%, "
+                   "check median %.2f ms p99 %.2f ms); moved %5zu of %5zu (%5.2f%%), max displacement "
                    "%.4g (R %.4g); new crossings %ld (+%ld next to the input's own), flipped %zu "
                    "(%zu checks)\n",
                    faces[fi], takes[ti], mapping, frames, active, limited, composed,
-                   active ? min_det : 1.0, moved, n, 100.0 * moved / n, maxd,
+                   active ? min_det : 1.0, collided, 100.0 * collide_t, pctl(cms, ncms, 0.5), pctl(cms, ncms, 0.99), moved, n, 100.0 * moved / n, maxd,
                    fp_session_radius(s), k, near, fl, nsnap + 1);
             fflush(stdout);
             /* every map applied is injective (the guard's guarantee) */
             assert_true(!active || min_det > 0);
-            if (strict) {
-                assert_int_equal(k, 0);
-                assert_int_equal(fl, 0);
-            } else if (k) {
-                unstrict_runs++;
-                printf("  NOT MET (unanchored): %ld new crossings although every map was "
-                       "injective (see the note at recordings())\n", k);
-            }
+            total_collide_frames += collided;
+            assert_int_equal(k, 0);
+            assert_int_equal(fl, 0);
+            /* the face still deforms (MediaPipe's mask is not reached by three-claps, with
+             * or without the guards) */
+            if (fi < 2) assert_true(moved > 0);
             fp_session_destroy(&s);
         }
     }
@@ -394,7 +407,7 @@ static void test_recordings_unanchored(void **state)
 {
     (void)state;
     recordings("unanchored");
-    printf("unanchored: %u of 12 runs gained crossings away from the input's own\n", unstrict_runs);
+    printf("contact guard scaled back %lu frames over both mappings\n", total_collide_frames);
 }
 
 int main(void)

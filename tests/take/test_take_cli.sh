@@ -109,7 +109,9 @@ fi
 "$fp" run "${pd[@]}" --mesh "$mesh" --input "take:$take" --speed 3 --mapping unanchored \
     -o "$tmp/unanch.obj" -q 2>"$tmp/unanch.err" || { cat "$tmp/unanch.err"; fail "unanchored exited $?"; }
 cmp -s "$tmp/unanch.obj" "$tmp/run.obj" && fail "another mapping gave the same face"
-"$build/bin/fp-selfx" "$mesh" "$tmp/unanch.obj" || fail "new self-crossings through the unanchored mapping"
+# New crossings away from the input's own (ICT's eyes and mouth interior cross already, and
+# their intersection curves move under any deformation): the trust issue's measure.
+"$build/bin/fp-selfx" --away 0 "$mesh" "$tmp/unanch.obj" || fail "new self-crossings through the unanchored mapping"
 grep -q "vertices moved 0 of" "$tmp/unanch.err" && fail "the unanchored mapping moved nothing"
 
 # ---- 4. a failed write: exit 73 -------------------------------------------------------------

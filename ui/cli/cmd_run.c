@@ -253,7 +253,8 @@ static int run_main(int argc, char **argv)
     size_t cap = 1024, nupdates = 0;
     double *update_ms = malloc(cap * sizeof *update_ms);
     uint64_t frames = 0, commits = 0, engages = 0, active_frames = 0, guarded = 0, limited = 0;
-    double min_det_j = INFINITY;
+    double min_det_j = INFINITY, collide_t = 1.0;
+    uint64_t collided = 0;
     int status = FP_EXIT_OK;
     /* The clock: the recordings' own (frame k at t0 + k/fps, each step only once every
      * recording has delivered past it), else the wall clock (live devices only). */
@@ -286,6 +287,10 @@ static int run_main(int argc, char **argv)
             guarded += st.guard_limited > 0 || st.guard_substeps > 1;
             limited += st.guard_reached < 1.0;
             if (st.min_det_j < min_det_j) min_det_j = st.min_det_j;
+        }
+        if (st.collide_t < 1.0) {
+            collided++;
+            if (st.collide_t < collide_t) collide_t = st.collide_t;
         }
         if (st.active) {
             if (nupdates == cap) {
@@ -358,11 +363,12 @@ static int run_main(int argc, char **argv)
     printf("frames %llu, deforming %llu, engaged %llu, committed %llu; vertices moved %zu of %zu; "
            "displacement mean %.6g max %.6g (mesh units); update median %.3f ms over %zu updates; "
            "fold-over guard acted on %llu frames (stopped short on %llu), min det J %.3g; "
-           "events dropped %lu%s%s\n",
+           "contact guard scaled back %llu frames (least kept %.0f%%); events dropped %lu%s%s\n",
            (unsigned long long)frames, (unsigned long long)active_frames, (unsigned long long)engages,
            (unsigned long long)commits, moved, n, n ? sum / n : 0.0, max, med, nupdates,
            (unsigned long long)guarded, (unsigned long long)limited,
-           active_frames ? min_det_j : 1.0, fp_session_dropped(s), status == FP_EXIT_OK ? "; wrote " : "",
+           active_frames ? min_det_j : 1.0, (unsigned long long)collided, 100.0 * collide_t,
+           fp_session_dropped(s), status == FP_EXIT_OK ? "; wrote " : "",
            status == FP_EXIT_OK ? out : "");
     const char *input_error;
     if (fp_session_input_errors(s, &input_error) && status == FP_EXIT_OK) {
