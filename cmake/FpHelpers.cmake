@@ -34,7 +34,7 @@ set(FP_SANITIZER_ENV "")
 if(FP_SANITIZE)
   set(FP_TEST_TIMEOUT_SCALE 3)
   set(FP_SANITIZER_ENV
-      "ASAN_OPTIONS=verify_asan_link_order=0:detect_leaks=1:strict_string_checks=1"
+      "ASAN_OPTIONS=verify_asan_link_order=0:detect_leaks=1"
       "LSAN_OPTIONS=suppressions=${CMAKE_SOURCE_DIR}/tests/lsan.supp:print_suppressions=0"
       "UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1")
 endif()

@@ -1,9 +1,9 @@
 /* enospc_shim.c: an LD_PRELOAD library that makes a disk look full for one file, for the
  * tests of recordings that hit a full disk (test_outputs.sh). Files opened (open, open64,
- * openat, openat64, creat) whose path ends with $FP_ENOSPC_MATCH are watched; all watched
- * files together may receive $FP_ENOSPC_AFTER bytes through write(); a write past that takes
- * what still fits (a short count) and the next fails with ENOSPC, as a full disk does. Every
- * other file and fd is untouched. Test code only: not thread-safe beyond what the recorder
+ * openat, openat64, creat; forgotten at close) whose path ends with $FP_ENOSPC_MATCH are
+ * watched; all watched files together may receive $FP_ENOSPC_AFTER bytes through write(); a
+ * write past that takes what still fits (a short count) and the next fails with ENOSPC, as a
+ * full disk does. Every other file and fd is untouched. Test code only: not thread-safe beyond what the recorder
  * needs (one writer thread per file; a mutex guards the table). */
 #define _GNU_SOURCE
 #include <dlfcn.h>
@@ -94,6 +94,14 @@ int openat64(int dir, const char *path, int flags, ...)
 int creat(const char *path, mode_t mode)
 {
     return open(path, O_WRONLY | O_CREAT | O_TRUNC, mode);
+}
+
+int close(int fd)
+{
+    static int (*real)(int);
+    if (!real) real = (int (*)(int))dlsym(RTLD_NEXT, "close");
+    if (fd >= 0 && fd < MAX_FD) watched[fd] = 0; /* the number may come back for another file */
+    return real(fd);
 }
 
 ssize_t write(int fd, const void *buf, size_t n)

@@ -68,7 +68,7 @@ if [[ -f $shim ]]; then
         --input "replay:$rec,fast=1,record=$log" --out "$tmp/full/out.obj" >"$tmp/full.out" 2>"$tmp/full.err"
     rc=$?
     size=$(stat -c %s "$log" 2>/dev/null || echo 0)
-    [[ $rc == 73 ]] || fail "disk full during record=: exit $rc, expected 73"
+    [[ $rc == 73 ]] || fail "disk full during record=: exit $rc, expected 73: $(cat "$tmp/full.err")"
     grep -q "rec.log.*No space left on device" "$tmp/full.err" || fail "disk full: no message naming the recording and the cause"
     (( size > 0 && size <= 30000 )) || fail "disk full: the recording has $size bytes (at most 30000 fit)"
     [[ $(tail -c 1 "$log" | od -An -c | tr -d ' ') == '\n' ]] || fail "disk full: the recording ends inside a line"

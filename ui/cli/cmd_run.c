@@ -252,7 +252,8 @@ static int run_main(int argc, char **argv)
     }
     if (interrupted && !quiet) fprintf(stderr, "facepuppet run: interrupted; saving what was done\n");
     /* Close the record=FILE recordings: a failed write must fail the run. */
-    bool record_failed = fp_session_stop(s, err, sizeof err) != 0;
+    char record_err[1024] = "";
+    bool record_failed = fp_session_stop(s, record_err, sizeof record_err) != 0;
     /* The summary: displacement of the final shape from the loaded one. */
     const float *a = fp_session_loaded(s), *b = fp_session_positions(s);
     size_t n = fp_session_vertex_count(s), moved = 0;
@@ -284,7 +285,7 @@ static int run_main(int argc, char **argv)
         status = FP_EXIT_DATAERR;
     }
     if (record_failed && status == FP_EXIT_OK) {
-        fprintf(stderr, "facepuppet run: %s\n", err);
+        fprintf(stderr, "facepuppet run: %s\n", record_err);
         status = FP_EXIT_CANTCREAT;
     }
     if (fp_session_mapping_fault(s, err, sizeof err)) {
