@@ -37,7 +37,8 @@ typedef struct fp_event_recorder fp_event_recorder;
  *  (PATH-N without an extension) is taken instead, created with O_EXCL so that two
  *  recorders never share one. `used` (usedlen bytes; may be NULL) receives the path opened;
  *  the caller says so when it differs from path. Returns 0 or a negative code with
- *  "PATH: reason" in err (-EEXIST when all 1000 names exist). */
+ *  "PATH: reason" in err: -EIO when the file cannot be created (the message says why),
+ *  -ENOSPC, -EEXIST when all 1000 names exist, -ENOMEM. */
 int fp_event_recorder_create(const char *path, unsigned flags, char *used, size_t usedlen,
                              fp_event_recorder **out, char *err, size_t errlen);
 

@@ -97,7 +97,9 @@ int fp_event_recorder_create(const char *path, unsigned flags, char *used, size_
     if (rc) {
         fp_event_queue_destroy(&r->queue);
         free(r);
-        return rc;
+        /* an output that cannot be created (exit 73 in the commands): -EIO unless the code
+         * says more (full disk, no memory, every name taken) */
+        return rc == -ENOMEM || rc == -ENOSPC || rc == -EDQUOT || rc == -EEXIST ? rc : -EIO;
     }
     if (pthread_create(&r->thread, NULL, writer_main, r)) {
         fp_eventlog_writer_close(&r->writer, NULL, 0);
