@@ -9,6 +9,8 @@
 #include "fp_error.h"
 #include "fp_stats.h"
 #include "fp_mesh.h"
+#include "fp_session.h"
+#include "step_engine.h"
 
 #include <errno.h>
 #include <math.h>
@@ -680,15 +682,207 @@ static int case_support(const bench_opts *o)
 }
 
 
+/* ---------------------------------------------------------------- the whole frame */
+
+static const char *fp_bench_data_dir(void)
+{
+    const char *root = getenv("FP_SHARED_DATA");
+    return root && *root ? root : "../shared/data";
+}
+
+/* Midpoint subdivision: every triangle into four, edge midpoints shared. New vertices follow
+ * the old ones, in the order of their edges' (smaller, larger) vertex pairs. */
+static int edge_cmp(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+static fp_mesh *subdivide(const fp_mesh *m)
+{
+    size_t nv = m->vertex_count, nt = m->triangle_count;
+    uint64_t *e = malloc(3 * nt * sizeof *e); /* key << 24 | ... : sort key, then look up */
+    uint64_t *keys = malloc(3 * nt * sizeof *keys);
+    if (!e || !keys) {
+        free(e);
+        free(keys);
+        return NULL;
+    }
+    for (size_t t = 0; t < nt; t++)
+        for (int k = 0; k < 3; k++) {
+            uint64_t a = m->triangles[3 * t + k], b = m->triangles[3 * t + (k + 1) % 3];
+            keys[3 * t + k] = a < b ? a << 32 | b : b << 32 | a;
+        }
+    memcpy(e, keys, 3 * nt * sizeof *e);
+    qsort(e, 3 * nt, sizeof *e, edge_cmp);
+    size_t ne = 0;
+    for (size_t i = 0; i < 3 * nt; i++)
+        if (!ne || e[ne - 1] != e[i]) e[ne++] = e[i];
+    fp_mesh *o = fp_mesh_create(nv + ne, 4 * nt, 0);
+    if (!o) {
+        free(e);
+        free(keys);
+        return NULL;
+    }
+    memcpy(o->positions, m->positions, nv * 3 * sizeof(float));
+    for (size_t i = 0; i < ne; i++) {
+        uint32_t a = (uint32_t)(e[i] >> 32), b = (uint32_t)e[i];
+        for (int k = 0; k < 3; k++)
+            o->positions[3 * (nv + i) + k] = 0.5f * (m->positions[3 * a + k] + m->positions[3 * b + k]);
+    }
+    for (size_t t = 0; t < nt; t++) {
+        uint32_t v[3], mid[3];
+        for (int k = 0; k < 3; k++) {
+            v[k] = m->triangles[3 * t + k];
+            uint64_t *f = bsearch(&keys[3 * t + k], e, ne, sizeof *e, edge_cmp);
+            mid[k] = (uint32_t)(nv + (size_t)(f - e)); /* mid[k]: edge v[k] -> v[k+1] */
+        }
+        uint32_t tri[4][3] = {{v[0], mid[0], mid[2]}, {v[1], mid[1], mid[0]},
+                              {v[2], mid[2], mid[1]}, {mid[0], mid[1], mid[2]}};
+        memcpy(o->triangles + 12 * t, tri, sizeof tri);
+    }
+    free(e);
+    free(keys);
+    fp_mesh_compute_normals(o);
+    return o;
+}
+
+static double pct(double *v, size_t n, double p) { return n ? fp_percentile(v, n, p / 100.0) : 0.0; }
+
+/* One replay of three-claps at its own pace through the session API, 60 frames a second:
+ * per-stage times (fp_frame_stats.stage_ms), the whole frame, and the brute-force fingertip
+ * distances on the same frame's hands for reference. */
+static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char *label,
+                     const fp_mesh *mesh)
+{
+    char input[4300];
+    snprintf(input, sizeof input, "replay:%s/hands/leap-motion/three-claps_joints_mm.csv",
+             fp_bench_data_dir());
+    fp_session_options so = {0};
+    so.mesh = mesh;
+    so.inputs[0] = input;
+    so.input_count = 1;
+    so.mapping = "anchored";
+    so.plugin_path = bo->plugin_path;
+    char err[1024];
+    fp_session *s = NULL;
+    int rc = fp_session_create(&so, &s, err, sizeof err);
+    if (!rc) rc = fp_session_start(s, err, sizeof err);
+    if (rc) {
+        fprintf(stderr, "bench: frame: %s\n", err);
+        fp_session_destroy(&s);
+        return rc;
+    }
+    size_t cap = 4096, nf = 0, nact = 0, nbrute = 0;
+    double *st_ms[FP_STAGE_COUNT], *total = malloc(cap * sizeof *total),
+           *brute = malloc(cap * sizeof *brute), *act = malloc(cap * sizeof *act);
+    for (int k = 0; k < FP_STAGE_COUNT; k++) st_ms[k] = malloc(cap * sizeof(double));
+    int64_t period = 1000000000LL / 60, next = fp_now_ns();
+    size_t n = fp_session_vertex_count(s);
+    unsigned commits = 0;
+    while (!fp_session_finished(s) && nf < cap) {
+        fp_frame_stats st;
+        int64_t a = fp_now_ns();
+        fp_session_step(s, a, &st);
+        int64_t b = fp_now_ns();
+        total[nf] = (double)(b - a) / 1e6;
+        if (st.active) act[nact++] = total[nf];
+        commits += st.committed;
+        for (int k = 0; k < FP_STAGE_COUNT; k++) st_ms[k][nf] = st.stage_ms[k];
+        fp_hand_pose hands[FP_HANDS];
+        memset(hands, 0, sizeof hands);
+        for (int h = 0; h < FP_HANDS; h++)
+            if (fp_session_hand(s, h)) hands[h] = *fp_session_hand(s, h);
+        /* the reference on every 8th frame (it costs as much as the rest of the frame) */
+        if (nf % 8 == 0) {
+            float d[FP_HANDS][FP_FINGERS];
+            int64_t c = fp_now_ns();
+            fp_engine_tip_distances(fp_session_base(s), n, hands, d);
+            brute[nbrute++] = (double)(fp_now_ns() - c) / 1e6;
+        }
+        nf++;
+        next += period;
+        int64_t now = fp_now_ns();
+        if (next > now) {
+            struct timespec ts = {(time_t)((next - now) / 1000000000LL), (long)((next - now) % 1000000000LL)};
+            nanosleep(&ts, NULL);
+        } else {
+            next = now;
+        }
+    }
+    (void)o;
+    static const char *names[FP_STAGE_COUNT] = {"events", "hands", "distances", "mapping",
+                                                "solve", "evaluate", "commit"};
+    if (o->json) {
+        printf("{\"case\":\"frame\",\"mesh\":\"%s\",\"vertices\":%zu,\"frames\":%zu,\"deforming\":%zu,"
+               "\"commits\":%u,\"ms_median\":%.6g,\"ms_p99\":%.6g,\"ms_deforming_median\":%.6g,"
+               "\"ms_deforming_p99\":%.6g,\"ms_distances_bruteforce_median\":%.6g",
+               label, n, nf, nact, commits, pct(total, nf, 50), pct(total, nf, 99),
+               pct(act, nact, 50), pct(act, nact, 99), pct(brute, nbrute, 50));
+        for (int k = 0; k < FP_STAGE_COUNT; k++)
+            printf(",\"%s_median\":%.6g,\"%s_p99\":%.6g", names[k], pct(st_ms[k], nf, 50),
+                   names[k], pct(st_ms[k], nf, 99));
+        printf("}\n");
+    } else {
+        printf("frame %-14s %8zu vertices, %zu frames (%zu deforming, %u commits)\n", label, n, nf,
+               nact, commits);
+        printf("  %-22s %10s %10s\n", "stage", "median_ms", "p99_ms");
+        for (int k = 0; k < FP_STAGE_COUNT; k++)
+            printf("  %-22s %10.4f %10.4f\n", names[k], pct(st_ms[k], nf, 50), pct(st_ms[k], nf, 99));
+        printf("  %-22s %10.4f %10.4f\n", "whole frame", pct(total, nf, 50), pct(total, nf, 99));
+        printf("  %-22s %10.4f %10.4f\n", "whole frame, deforming", pct(act, nact, 50), pct(act, nact, 99));
+        printf("  %-22s %10.4f %10.4f\n", "distances, brute force", pct(brute, nbrute, 50), pct(brute, nbrute, 99));
+    }
+    fflush(stdout);
+    for (int k = 0; k < FP_STAGE_COUNT; k++) free(st_ms[k]);
+    free(total);
+    free(brute);
+    free(act);
+    fp_session_destroy(&s);
+    return 0;
+}
+
+static const fp_bench_options *frame_bo;
+
+static int case_frame(const bench_opts *o)
+{
+    if (!frame_bo || !frame_bo->plugin_path) {
+        fprintf(stderr, "bench: frame: no plugin path; skipped\n");
+        return 0;
+    }
+    char path[4300], err[512];
+    snprintf(path, sizeof path, "%s/faces/ict-facekit/generic_neutral_mesh.obj", fp_bench_data_dir());
+    fp_mesh *m = NULL;
+    if (fp_mesh_load(path, &m, err, sizeof err)) {
+        fprintf(stderr, "bench: %s\n", err);
+        return -ENOENT;
+    }
+    fprintf(stderr, "bench: frame (the session's whole frame; three-claps at its own pace, 60 fps, anchored)\n");
+    int rc = frame_run(o, frame_bo, "ict", m);
+    fp_mesh *sub = m;
+    for (int l = 0; l < 3 && !rc; l++) {
+        fp_mesh *next = subdivide(sub);
+        if (sub != m) fp_mesh_free(&sub);
+        if (!next) rc = -ENOMEM;
+        sub = next;
+    }
+    if (!rc) rc = frame_run(o, frame_bo, "ict-subdiv3", sub);
+    if (sub != m) fp_mesh_free(&sub);
+    fp_mesh_free(&m);
+    return rc;
+}
+
+
 /* The recorder's cost on the session thread (bench_take.c). */
 static int case_take(const bench_opts *o) { return fp_bench_take(stdout, o->quick, o->json); }
 
-const char *const fp_bench_cases[] = {"table1", "scale", "centres", "guard", "support", "take", NULL};
+const char *const fp_bench_cases[] = {"table1", "scale", "centres", "guard", "support", "take", "frame", NULL};
 
 int fp_bench_run(const fp_bench_options *opt)
 {
     static int (*const run[])(const bench_opts *) = {case_table1, case_scale, case_centres,
-                                                     case_guard, case_support, case_take};
+                                                     case_guard, case_support, case_take, case_frame};
+    frame_bo = opt;
     bench_opts o = {opt->quick, opt->json, opt->quick ? 2 : 3};
     int found = 0;
     for (size_t c = 0; fp_bench_cases[c]; c++) {

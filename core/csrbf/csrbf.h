@@ -217,6 +217,19 @@ int csrbf_points_update_ranges(csrbf_points *points, const float *xyz, const uin
 /** Number of vertices. */
 size_t csrbf_points_count(const csrbf_points *points);
 
+/** Nearest vertex of each query point: out_dist[i] = min over vertices v of |v - q_i| within
+ *  max_dist (mesh units; INFINITY for no limit), computed in float as
+ *  sqrtf(dx*dx + dy*dy + dz*dz) so that it equals a scalar brute-force loop bit for bit;
+ *  out_index[i] (may be NULL) the vertex (the smallest index among equals). Where no vertex
+ *  is within max_dist: INFINITY and UINT32_MAX. queries: nq x 3 floats, finite.
+ *  Work: the blocks whose boxes are within reach of a query's best so far (a first candidate
+ *  from the nearest box), all queries in one pass over the block boxes, 16 vertices per
+ *  vectorised step; O(blocks x queries) box tests plus the blocks read.
+ *  Errors: CSRBF_ERR_INVALID (NULL, a non-finite query, a NaN or negative max_dist).
+ *  Thread-safe on const points; no allocation. */
+int csrbf_points_nearest(const csrbf_points *points, const float *queries, size_t nq,
+                         float max_dist, float *out_dist, uint32_t *out_index);
+
 /** Free a vertex set; sets *points to NULL. NULL and *NULL are no-ops. */
 void csrbf_points_destroy(csrbf_points **points);
 

@@ -41,6 +41,24 @@ static void fill_block_range(csrbf_points *p, size_t b0, size_t b1)
     }
 }
 
+/* Recompute the superblock boxes that hold blocks b0..b1-1. */
+static void fill_super_range(csrbf_points *p, size_t b0, size_t b1)
+{
+    if (b1 <= b0) return;
+    for (size_t sb = b0 / CSRBF_SUPER; sb <= (b1 - 1) / CSRBF_SUPER; sb++) {
+        size_t k0 = sb * CSRBF_SUPER, k1 = k0 + CSRBF_SUPER < p->nblocks ? k0 + CSRBF_SUPER : p->nblocks;
+        for (int a = 0; a < 3; a++) {
+            float lo = INFINITY, hi = -INFINITY;
+            for (size_t b = k0; b < k1; b++) {
+                lo = p->lo[a][b] < lo ? p->lo[a][b] : lo;
+                hi = p->hi[a][b] > hi ? p->hi[a][b] : hi;
+            }
+            p->slo[a][sb] = lo;
+            p->shi[a][sb] = hi;
+        }
+    }
+}
+
 static void fill_blocks(csrbf_points *p)
 {
     for (int a = 0; a < 3; a++) {
@@ -48,6 +66,7 @@ static void fill_blocks(csrbf_points *p)
         p->bhi[a] = -INFINITY;
     }
     fill_block_range(p, 0, p->nblocks);
+    fill_super_range(p, 0, p->nblocks);
 }
 
 void csrbf_points_destroy(csrbf_points **pp)
@@ -59,6 +78,8 @@ void csrbf_points_destroy(csrbf_points **pp)
         free(p->s[a]);
         free(p->lo[a]);
         free(p->hi[a]);
+        free(p->slo[a]);
+        free(p->shi[a]);
     }
     free(p);
     *pp = NULL;
@@ -86,7 +107,10 @@ int csrbf_points_create(size_t n, const float *xyz, csrbf_points **out)
         p->s[a] = alloc64(padded * sizeof(float));
         p->lo[a] = alloc64(p->nblocks * sizeof(float));
         p->hi[a] = alloc64(p->nblocks * sizeof(float));
-        ok = p->s[a] && p->lo[a] && p->hi[a];
+        p->nsuper = (p->nblocks + CSRBF_SUPER - 1) / CSRBF_SUPER;
+        p->slo[a] = malloc(p->nsuper * sizeof(float));
+        p->shi[a] = malloc(p->nsuper * sizeof(float));
+        ok = p->s[a] && p->lo[a] && p->hi[a] && p->slo[a] && p->shi[a];
     }
     if (!ok) {
         csrbf_points_destroy(&p);
@@ -119,8 +143,115 @@ int csrbf_points_update_ranges(csrbf_points *p, const float *xyz, const uint32_t
         if (!c) continue;
         memcpy(p->xyz + 3 * v0, xyz + 3 * v0, c * 3 * sizeof(float));
         fill_block_range(p, v0 / CSRBF_BLOCK, (v0 + c + CSRBF_BLOCK - 1) / CSRBF_BLOCK);
+        fill_super_range(p, v0 / CSRBF_BLOCK, (v0 + c + CSRBF_BLOCK - 1) / CSRBF_BLOCK);
     }
     return CSRBF_OK;
 }
 
 size_t csrbf_points_count(const csrbf_points *p) { return p ? p->n : 0; }
+
+/* Squared distance from q to block b's box (0 inside), float, the same rounding as a vertex
+ * of the block would see on each axis (|q - v| >= |q - box| exactly, and float squares and
+ * sums round monotonically), so it never exceeds a vertex's own squared distance. */
+static inline float box_d2_of(const float *const lo3[3], const float *const hi3[3], size_t b,
+                              const float q[3])
+{
+    float d[3];
+    for (int a = 0; a < 3; a++) {
+        float lo = lo3[a][b], hi = hi3[a][b];
+        d[a] = q[a] < lo ? q[a] - lo : q[a] > hi ? q[a] - hi : 0.0f;
+    }
+    return d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+}
+
+static inline float box_d2(const csrbf_points *p, size_t b, const float q[3])
+{
+    return box_d2_of((const float *const *)p->lo, (const float *const *)p->hi, b, q);
+}
+
+static inline float super_d2(const csrbf_points *p, size_t sb, const float q[3])
+{
+    return box_d2_of((const float *const *)p->slo, (const float *const *)p->shi, sb, q);
+}
+
+/* Block b against query q: improves *best / *idx (ties: the smaller vertex index). */
+static inline void scan_block(const csrbf_points *p, size_t b, const float q[3], float *best,
+                              uint32_t *idx)
+{
+    size_t k0 = b * CSRBF_BLOCK, nv = k0 + CSRBF_BLOCK <= p->n ? CSRBF_BLOCK : p->n - k0;
+    const float *x = p->s[0] + k0, *y = p->s[1] + k0, *z = p->s[2] + k0;
+    float d2[CSRBF_BLOCK];
+    for (size_t l = 0; l < CSRBF_BLOCK; l++) { /* vectorised: 16 lanes */
+        float dx = x[l] - q[0], dy = y[l] - q[1], dz = z[l] - q[2];
+        d2[l] = dx * dx + dy * dy + dz * dz;
+    }
+    for (size_t l = 0; l < nv; l++)
+        if (d2[l] < *best || (d2[l] == *best && (uint32_t)(k0 + l) < *idx)) {
+            *best = d2[l];
+            *idx = (uint32_t)(k0 + l);
+        }
+}
+
+int csrbf_points_nearest(const csrbf_points *p, const float *queries, size_t nq, float max_dist,
+                         float *out_dist, uint32_t *out_index)
+{
+    if (!p || (nq && (!queries || !out_dist)) || isnan(max_dist) || max_dist < 0)
+        return CSRBF_ERR_INVALID;
+    enum { QMAX = 64 };
+    for (size_t q0 = 0; q0 < nq; q0 += QMAX) {
+        size_t m = nq - q0 < QMAX ? nq - q0 : QMAX;
+        float best[QMAX], q[QMAX][3];
+        uint32_t idx[QMAX];
+        float lim = max_dist * max_dist; /* +inf stays +inf */
+        for (size_t i = 0; i < m; i++) {
+            memcpy(q[i], queries + 3 * (q0 + i), sizeof q[i]);
+            best[i] = INFINITY;
+            idx[i] = UINT32_MAX;
+            if (!(isfinite(q[i][0]) && isfinite(q[i][1]) && isfinite(q[i][2])))
+                return CSRBF_ERR_INVALID;
+            /* a first candidate: the nearest block of the nearest superblock */
+            size_t sbb = 0, bb = 0;
+            float bd = INFINITY;
+            for (size_t sb = 0; sb < p->nsuper; sb++) {
+                float d = super_d2(p, sb, q[i]);
+                if (d < bd) {
+                    bd = d;
+                    sbb = sb;
+                }
+            }
+            bd = INFINITY;
+            size_t k1 = (sbb + 1) * CSRBF_SUPER < p->nblocks ? (sbb + 1) * CSRBF_SUPER : p->nblocks;
+            for (size_t b = sbb * CSRBF_SUPER; b < k1; b++) {
+                float d = box_d2(p, b, q[i]);
+                if (d < bd) {
+                    bd = d;
+                    bb = b;
+                }
+            }
+            if (bd <= lim) scan_block(p, bb, q[i], &best[i], &idx[i]);
+        }
+        /* one pass over the superblocks and blocks for all queries: a box is opened only by
+         * the queries whose current best it may improve */
+        for (size_t sb = 0; sb < p->nsuper; sb++) {
+            uint64_t want = 0;
+            for (size_t i = 0; i < m; i++) {
+                float d = super_d2(p, sb, q[i]);
+                if (d <= best[i] && d <= lim) want |= 1ull << i;
+            }
+            if (!want) continue;
+            size_t k1 = (sb + 1) * CSRBF_SUPER < p->nblocks ? (sb + 1) * CSRBF_SUPER : p->nblocks;
+            for (size_t b = sb * CSRBF_SUPER; b < k1; b++)
+                for (uint64_t w = want; w; w &= w - 1) {
+                    size_t i = (size_t)__builtin_ctzll(w);
+                    float d = box_d2(p, b, q[i]);
+                    if (d <= best[i] && d <= lim) scan_block(p, b, q[i], &best[i], &idx[i]);
+                }
+        }
+        for (size_t i = 0; i < m; i++) {
+            int hit = idx[i] != UINT32_MAX && best[i] <= lim;
+            out_dist[q0 + i] = hit ? sqrtf(best[i]) : INFINITY;
+            if (out_index) out_index[q0 + i] = hit ? idx[i] : UINT32_MAX;
+        }
+    }
+    return CSRBF_OK;
+}

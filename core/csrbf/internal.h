@@ -108,7 +108,12 @@ struct csrbf_points {
                                 the last block padded with copies of its first vertex */
     float *lo[3], *hi[3];    /* nblocks each: block bounding boxes */
     float blo[3], bhi[3];    /* bounding box of all vertices */
+    size_t nsuper;           /* superblocks of CSRBF_SUPER blocks (csrbf_points_nearest) */
+    float *slo[3], *shi[3];  /* nsuper each: superblock boxes */
 };
+
+/* Blocks per superblock: csrbf_points_nearest skips a superblock's blocks with one box test. */
+#define CSRBF_SUPER 64
 
 /* Build the guard's neighbour lists and clusters for the current centres (solver.c calls it
  * from set_start_points); free them (destroy). */

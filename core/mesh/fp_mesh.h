@@ -64,7 +64,26 @@ typedef struct fp_mesh {
     uint32_t *triangles;     /* t x 3 vertex indices, counter-clockwise seen from outside;
                                 polygons of the file are fan-triangulated (0,i,i+1) */
     char *source_path;       /* the path the mesh was loaded from (a copy), or NULL */
+    /** What the file held beyond these arrays, kept by fp_mesh_load() so that a save writes
+     *  the mesh back as it came in (fp_mesh_save): the polygons with their per-corner UVs,
+     *  OBJ materials per face and the OBJ text itself (groups, materials, comments), or the
+     *  glTF document (materials, nodes, images). Opaque, immutable, reference-counted:
+     *  fp_mesh_copy() shares it, fp_mesh_free() releases it; a shallow struct copy may use it
+     *  while the mesh lives. It applies while vertex_count and triangle_count are those
+     *  loaded (the engine only moves vertices); NULL for meshes built in memory. */
+    struct fp_mesh_source *source;
 } fp_mesh;
+
+/** What a save could not keep of the input (fp_mesh_save_ex's *dropped, bit flags). */
+enum {
+    FP_MESH_DROPPED_POLYGONS = 1u << 0,  /* polygons written as triangles */
+    FP_MESH_DROPPED_UV_SEAMS = 1u << 1,  /* per-corner UVs merged per vertex (first use) */
+    FP_MESH_DROPPED_UVS = 1u << 2,       /* texture coordinates not written */
+    FP_MESH_DROPPED_NORMALS = 1u << 3,   /* vertex normals not written */
+    FP_MESH_DROPPED_GROUPS = 1u << 4,    /* OBJ g, o, s statements and comments */
+    FP_MESH_DROPPED_MATERIALS = 1u << 5, /* OBJ mtllib/usemtl, glTF materials and images */
+    FP_MESH_DROPPED_NODES = 1u << 6      /* glTF node hierarchy and names, other primitives */
+};
 
 /** The message for a result code: fp_strerror(result) (a static string, never NULL), kept
  *  for older callers. Thread-safe. */
@@ -139,6 +158,57 @@ int fp_mesh_load(const char *path, fp_mesh **out, char *err, size_t errlen);
  *  NOENT (no such folder), ACCESS (folder not writable), NOSPACE (disk full), IO (another
  *  write failure, e.g. EFBIG), UNSUPPORTED (extension), NOMEM, with a message naming path. */
 int fp_mesh_save(const fp_mesh *mesh, const char *path, char *err, size_t errlen);
+
+/** fp_mesh_save(), and in *dropped (may be NULL) what the file at `path` could not keep of
+ *  what the mesh came in with (FP_MESH_DROPPED_* bits; 0 when nothing was lost).
+ *
+ *  Written back as it came in: where mesh->source applies (see fp_mesh), a mesh saved in the
+ *  format it was loaded from keeps everything but positions and normals:
+ *  OBJ: the file's text line for line (comments, mtllib, usemtl, g, o, s, vt and f lines
+ *  unchanged; the .mtl is never opened), with each `v` line's x y z replaced (any further
+ *  numbers on the line kept) and each `vn` line replaced by the normal of the first vertex
+ *  that uses it (when the file had vn lines): quads stay quads, UV seams stay seams.
+ *  glTF/GLB: the document (nodes, materials, images, other attributes, morph targets) with
+ *  POSITION (min/max updated) and NORMAL of each triangle primitive rewritten in the node's
+ *  local frame (the inverse of the transform fp_mesh_load() applied); the buffers become one
+ *  (embedded in .gltf as base64, the BIN chunk of .glb); image URIs are kept as written.
+ *  Another format keeps what it can hold: PLY and OFF write the file's polygons (per-vertex
+ *  UVs: seams dropped); glTF from an OBJ splits vertices at UV seams (one glTF vertex per
+ *  (vertex, UV) pair; OBJ's v-up UVs flipped to glTF's v-down), one primitive per OBJ
+ *  material (named, default PBR values) with its own block of the vertices its triangles
+ *  use, triangles; where glTF vertex j is not mesh vertex j, mesh.extras.sourceVertex lists
+ *  the mesh vertex of every glTF vertex (the primitives' blocks in order). Returns as fp_mesh_save(). */
+int fp_mesh_save_ex(const fp_mesh *mesh, const char *path, unsigned *dropped, char *err,
+                    size_t errlen);
+
+/** "polygons, UV seams, ..." naming the FP_MESH_DROPPED_* bits of `dropped` into buf (n
+ *  bytes); "" for 0. Returns buf. */
+const char *fp_mesh_dropped_text(unsigned dropped, char *buf, size_t n);
+
+/** A morph-target animation for fp_mesh_save_animation(). */
+typedef struct fp_mesh_morph_animation {
+    size_t target_count;           /* K >= 1 */
+    const float *targets;          /* K x n x 3 position displacements, mesh units */
+    const char *const *target_names; /* K names (mesh.extras.targetNames), or NULL: "t0".. */
+    size_t frame_count;            /* F >= 1 */
+    const float *times;            /* F key times, seconds, strictly increasing */
+    const float *weights;          /* F x K: weights of the targets at each key */
+    int step;                      /* 0: LINEAR sampler, 1: STEP */
+    const char *name;              /* the animation's name, or NULL */
+} fp_mesh_morph_animation;
+
+/** Write `mesh` as glTF 2.0 (.gltf, buffer embedded as base64, or .glb) with morph targets
+ *  and one animation whose `weights` channel plays `anim` (glTF 2.0 sections 3.7.2.2 morph
+ *  targets, 3.11 animations). The base mesh is written as fp_mesh_save_ex() writes a glTF
+ *  from a non-glTF input (UV seams split, one primitive per OBJ material, names of targets
+ *  in mesh.extras.targetNames, mesh.extras.sourceVertex); each
+ *  primitive gets K POSITION targets (accessors with min/max) sharing the vertex set. From a
+ *  glTF input the document's nodes and materials are not kept (*dropped says so).
+ *  Buffer views carry their target (34962/34963) except the animation's. Atomic as
+ *  fp_mesh_save(). Returns FP_MESH_OK, INVALID (bad arguments, non-finite values, times not
+ *  increasing), UNSUPPORTED (extension other than gltf/glb), and the save's codes. */
+int fp_mesh_save_animation(const fp_mesh *mesh, const fp_mesh_morph_animation *anim,
+                           const char *path, unsigned *dropped, char *err, size_t errlen);
 
 /** Area-weighted vertex normals (each triangle adds its unnormalised cross product
  *  (p1-p0) x (p2-p0), whose length is twice its area, to its three vertices; then each sum is

@@ -88,6 +88,7 @@ void fp_mesh_free(fp_mesh **mesh)
     free(m->uvs);
     free(m->triangles);
     free(m->source_path);
+    fp__mesh_source_unref(m->source);
     free(m);
     *mesh = NULL;
 }
@@ -121,6 +122,7 @@ fp_mesh *fp_mesh_copy(const fp_mesh *mesh)
         }
         memcpy(c->source_path, mesh->source_path, len);
     }
+    c->source = mesh->source ? fp__mesh_source_ref(mesh->source) : NULL;
     return c;
 }
 

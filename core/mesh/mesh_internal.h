@@ -53,6 +53,10 @@ int fp__ply_scan(const char *path, const char *text, size_t len, size_t *nv, siz
 int fp__stl_ascii_scan(const char *path, const char *text, size_t len, char *err,
                        size_t errlen);
 
+/** Reference counting of fp_mesh_source (mesh_io.cpp): ref returns src. */
+struct fp_mesh_source *fp__mesh_source_ref(struct fp_mesh_source *src);
+void fp__mesh_source_unref(struct fp_mesh_source *src);
+
 /** The extension of path after its last dot, lower-cased into ext (size extlen; "" when none). */
 void fp__mesh_extension(const char *path, char *ext, size_t extlen);
 

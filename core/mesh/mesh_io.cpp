@@ -29,7 +29,51 @@
 #include <new>
 #include <sstream>
 #include <string>
+#include <array>
+#include <atomic>
+#include <map>
+#include <memory>
 #include <vector>
+#include <algorithm>
+
+// What a file held beyond fp_mesh's arrays, to write it back as it came in (fp_mesh.h).
+// Immutable once loaded; shared between copies by reference count.
+struct fp_mesh_source {
+    std::atomic<int> refs{1};
+    std::string format;                  // extension it came from: obj, ply, off, stl, gltf, glb
+    size_t n = 0, t = 0;                 // vertex and triangle counts it describes
+    std::vector<uint32_t> face_start{0}; // polygons: faces + 1 offsets into corners
+    std::vector<uint32_t> corners;
+    std::vector<float> corner_uv;        // corners x 2 where has_corner_uv
+    std::vector<unsigned char> has_corner_uv;
+    bool any_corner_uv = false, seams = false, polygons = false, file_normals = false;
+    std::vector<int> face_material;      // OBJ: material per face (index into materials), -1
+    std::vector<std::string> materials;  // OBJ usemtl names in first-use order
+    bool groups = false;                 // OBJ g / o statements
+    std::string obj_text;                // OBJ: the file
+    // glTF: the document and where each triangle primitive's vertices went
+    struct Instance {
+        int mesh, prim;
+        size_t first, count;             // mesh vertices [first, first + count)
+        std::array<double, 16> xf;       // node transform applied at load (column-major)
+        int pos, nrm;                    // accessors (nrm -1: none)
+    };
+    std::unique_ptr<tinygltf::Model> model;
+    std::vector<Instance> instances;
+};
+
+extern "C" struct fp_mesh_source *fp__mesh_source_ref(struct fp_mesh_source *src)
+{
+    if (src)
+        src->refs.fetch_add(1, std::memory_order_relaxed);
+    return src;
+}
+
+extern "C" void fp__mesh_source_unref(struct fp_mesh_source *src)
+{
+    if (src && src->refs.fetch_sub(1, std::memory_order_acq_rel) == 1)
+        delete src;
+}
 
 namespace {
 
@@ -228,7 +272,9 @@ private:
 // OpenMesh exporter over an fp_mesh's arrays: faces are its triangles.
 class ArrayExporter : public IO::BaseExporter {
 public:
-    explicit ArrayExporter(const fp_mesh &m) : m_(m) {}
+    // poly: write these polygons instead of the mesh's triangles (nullptr: triangles)
+    explicit ArrayExporter(const fp_mesh &m, const fp_mesh_source *poly = nullptr)
+        : m_(m), poly_(poly) {}
 
     Vec3f point(VertexHandle vh) const override
     {
@@ -264,6 +310,12 @@ public:
     unsigned int get_vhandles(FaceHandle fh, std::vector<VertexHandle> &vh) const override
     {
         vh.clear();
+        if (poly_) {
+            const size_t f = size_t(fh.idx());
+            for (uint32_t c = poly_->face_start[f]; c < poly_->face_start[f + 1]; c++)
+                vh.push_back(VertexHandle(int(poly_->corners[c])));
+            return unsigned(vh.size());
+        }
         const uint32_t *t = m_.triangles + 3 * size_t(fh.idx());
         for (int k = 0; k < 3; k++)
             vh.push_back(VertexHandle(int(t[k])));
@@ -273,7 +325,13 @@ public:
     unsigned int get_face_texcoords(std::vector<Vec2f> &) const override { return 0; }
     Vec3f normal(FaceHandle fh) const override
     {
-        const uint32_t *t = m_.triangles + 3 * size_t(fh.idx());
+        uint32_t t[3];
+        if (poly_) {
+            const uint32_t b0 = poly_->face_start[size_t(fh.idx())];
+            t[0] = poly_->corners[b0]; t[1] = poly_->corners[b0 + 1]; t[2] = poly_->corners[b0 + 2];
+        } else {
+            std::memcpy(t, m_.triangles + 3 * size_t(fh.idx()), sizeof t);
+        }
         Vec3f a = point(VertexHandle(int(t[0]))), b = point(VertexHandle(int(t[1]))),
               c = point(VertexHandle(int(t[2])));
         Vec3f n = OpenMesh::cross(b - a, c - a);
@@ -302,9 +360,12 @@ public:
     int get_face_id(HalfedgeHandle) override { return -1; }
     OpenMesh::Attributes::StatusInfo status(HalfedgeHandle) const override { return {}; }
     size_t n_vertices() const override { return m_.vertex_count; }
-    size_t n_faces() const override { return m_.triangle_count; }
+    size_t n_faces() const override
+    {
+        return poly_ ? poly_->face_start.size() - 1 : m_.triangle_count;
+    }
     size_t n_edges() const override { return 0; }
-    bool is_triangle_mesh() const override { return true; }
+    bool is_triangle_mesh() const override { return !poly_ || !poly_->polygons; }
     bool has_vertex_normals() const override { return m_.normals != nullptr; }
     bool has_vertex_texcoords() const override { return m_.uvs != nullptr; }
     // The PLY writer looks for custom properties in a kernel: give it an empty one.
@@ -312,6 +373,7 @@ public:
 
 private:
     const fp_mesh &m_;
+    const fp_mesh_source *poly_;
     OpenMesh::BaseKernel no_properties_;
 };
 
@@ -561,8 +623,47 @@ int write_atomically(const char *path, const std::string &bytes, char *err, size
 }
 
 // Build the fp_mesh from a Soup: fan triangulation, per-vertex UVs, normals.
-int soup_to_mesh(Soup &s, const char *path, fp_mesh **out, char *err, size_t errlen)
+// The polygons of a Soup into a source (which keeps them for writing back).
+void keep_polygons(const Soup &s, fp_mesh_source &src)
 {
+    src.face_start = s.face_start;
+    src.corners = s.corners;
+    src.corner_uv = s.corner_uv;
+    src.has_corner_uv = s.has_corner_uv;
+    src.corner_uv.resize(2 * s.corners.size(), 0.0f);
+    src.has_corner_uv.resize(s.corners.size(), 0);
+    src.any_corner_uv = s.any_corner_uv;
+    size_t t = 0;
+    for (size_t f = 0; f + 1 < s.face_start.size(); f++) {
+        const uint32_t k = s.face_start[f + 1] - s.face_start[f];
+        t += k - 2;
+        if (k > 3)
+            src.polygons = true;
+    }
+    src.n = s.n();
+    src.t = t;
+    // a seam: one vertex with two different corner UVs
+    std::vector<float> first(2 * s.n());
+    std::vector<unsigned char> seen(s.n(), 0);
+    for (size_t c = 0; c < s.corners.size() && !src.seams; c++) {
+        if (!src.has_corner_uv[c])
+            continue;
+        const uint32_t v = s.corners[c];
+        if (!seen[v]) {
+            seen[v] = 1;
+            first[2 * v] = src.corner_uv[2 * c];
+            first[2 * v + 1] = src.corner_uv[2 * c + 1];
+        } else if (first[2 * v] != src.corner_uv[2 * c] ||
+                   first[2 * v + 1] != src.corner_uv[2 * c + 1]) {
+            src.seams = true;
+        }
+    }
+}
+
+int soup_to_mesh(Soup &s, const char *path, fp_mesh **out, char *err, size_t errlen,
+                 fp_mesh_source *src = nullptr)
+{
+    std::unique_ptr<fp_mesh_source> keep(src);
     const size_t n = s.n();
     if (n == 0)
         return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path, "no vertices");
@@ -627,6 +728,11 @@ int soup_to_mesh(Soup &s, const char *path, fp_mesh **out, char *err, size_t err
         fp_mesh_free(&m);
         return fp__mesh_error(err, errlen, FP_MESH_ERR_NOMEM, path, "out of memory");
     }
+    if (keep) {
+        keep_polygons(s, *keep);
+        keep->file_normals = file_normals;
+        m->source = keep.release();
+    }
     *out = m;
     return FP_MESH_OK;
 }
@@ -649,6 +755,104 @@ std::string obj_without_mtllib(const std::string &data)
         p = e + 1;
     }
     return out;
+}
+
+// One line of OBJ text split into whitespace tokens (the text passed fp__obj_scan).
+struct ObjLine {
+    size_t begin, end;                 // the line without its '\n' (and '\r')
+    bool cr;                           // the line ended in "\r\n"
+    std::vector<std::pair<size_t, size_t>> tok; // token offsets and lengths
+};
+
+bool obj_next_line(const std::string &text, size_t &p, ObjLine &l)
+{
+    if (p >= text.size())
+        return false;
+    size_t e = text.find('\n', p);
+    if (e == std::string::npos)
+        e = text.size();
+    l.begin = p;
+    l.end = e;
+    l.cr = e > p && text[e - 1] == '\r';
+    if (l.cr)
+        l.end--;
+    l.tok.clear();
+    size_t q = l.begin;
+    while (q < l.end) {
+        while (q < l.end && (text[q] == ' ' || text[q] == '\t'))
+            q++;
+        if (q >= l.end)
+            break;
+        size_t b = q;
+        while (q < l.end && text[q] != ' ' && text[q] != '\t')
+            q++;
+        l.tok.push_back({b, q - b});
+    }
+    p = e + 1;
+    return true;
+}
+
+bool obj_is(const std::string &text, const ObjLine &l, const char *kw)
+{
+    return !l.tok.empty() && text.compare(l.tok[0].first, l.tok[0].second, kw) == 0 &&
+           std::strlen(kw) == l.tok[0].second;
+}
+
+// Corner k of an f line: 0-based v, vt, vn indices (-1 where absent), relative resolved.
+void obj_corner(const std::string &text, std::pair<size_t, size_t> tok, size_t nv, size_t nvt,
+                size_t nvn, long out[3])
+{
+    out[0] = out[1] = out[2] = -1;
+    const size_t count[3] = {nv, nvt, nvn};
+    size_t q = tok.first, e = tok.first + tok.second;
+    for (int k = 0; k < 3 && q <= e; k++) {
+        size_t s = q;
+        while (q < e && text[q] != '/')
+            q++;
+        if (q > s) {
+            long x = std::strtol(text.c_str() + s, nullptr, 10);
+            out[k] = x < 0 ? long(count[k]) + x : x - 1;
+        }
+        q++;
+    }
+}
+
+// OBJ materials per face (faces OpenMesh keeps: >= 3 distinct vertices) and groups.
+void obj_materials(const std::string &text, fp_mesh_source &src)
+{
+    size_t p = 0, nv = 0, nvt = 0, nvn = 0;
+    int current = -1;
+    ObjLine l;
+    while (obj_next_line(text, p, l)) {
+        if (l.tok.empty())
+            continue;
+        if (obj_is(text, l, "v")) nv++;
+        else if (obj_is(text, l, "vt")) nvt++;
+        else if (obj_is(text, l, "vn")) nvn++;
+        else if (obj_is(text, l, "g") || obj_is(text, l, "o")) src.groups = true;
+        else if (obj_is(text, l, "usemtl") && l.tok.size() >= 2) {
+            const std::string name = text.substr(l.tok[1].first, l.tok.back().first +
+                                                 l.tok.back().second - l.tok[1].first);
+            current = -1;
+            for (size_t i = 0; i < src.materials.size(); i++)
+                if (src.materials[i] == name)
+                    current = int(i);
+            if (current < 0) {
+                src.materials.push_back(name);
+                current = int(src.materials.size() - 1);
+            }
+        } else if (obj_is(text, l, "f")) {
+            std::vector<long> vs;
+            for (size_t k = 1; k < l.tok.size(); k++) {
+                long c[3];
+                obj_corner(text, l.tok[k], nv, nvt, nvn, c);
+                if (std::find(vs.begin(), vs.end(), c[0]) == vs.end())
+                    vs.push_back(c[0]);
+            }
+            if (vs.size() >= 3)
+                src.face_material.push_back(current);
+        }
+    }
 }
 
 int load_openmesh(const char *path, const std::string &ext, const std::string &data,
@@ -736,11 +940,21 @@ int load_openmesh(const char *path, const std::string &ext, const std::string &d
         return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
                               "OpenMesh read %zu vertices and %zu faces; the header says %zu "
                               "and %zu", soup.n(), soup.faces(), want_v, want_f);
-    return soup_to_mesh(soup, path, out, err, errlen);
+    auto src = std::make_unique<fp_mesh_source>();
+    src->format = ext;
+    if (ext == "obj") {
+        src->obj_text = data;
+        obj_materials(data, *src);
+        if (src->face_material.size() != soup.faces()) { // should not happen: same rule
+            src->face_material.clear();
+            src->materials.clear();
+        }
+    }
+    return soup_to_mesh(soup, path, out, err, errlen, src.release());
 }
 
 int save_openmesh(const fp_mesh *m, const char *path, const std::string &ext, char *err,
-                  size_t errlen)
+                  size_t errlen, const fp_mesh_source *poly = nullptr)
 {
     IO::Options opt;
     if (m->normals && ext != "stl")
@@ -757,7 +971,7 @@ int save_openmesh(const fp_mesh *m, const char *path, const std::string &ext, ch
     {
         std::lock_guard<std::mutex> guard(openmesh_lock);
         OmLogCapture capture;
-        ArrayExporter exporter(*m);
+        ArrayExporter exporter(*m, ext == "stl" ? nullptr : poly);
         ok = IO::IOManager().write(os, ext, exporter, opt, 9);
         log = capture.first_line();
     }
@@ -826,6 +1040,7 @@ struct GltfReader {
     int code = FP_MESH_OK;
     size_t prims_seen = 0, prims_used = 0;
     bool all_normals = true, any_uv = false;
+    std::vector<fp_mesh_source::Instance> instances;
 
     bool bad(int c, const std::string &msg)
     {
@@ -1019,6 +1234,12 @@ struct GltfReader {
                                                        std::to_string(idx[i]) + " is out of range (" +
                                                        std::to_string(count) + " vertices)");
             const size_t base = soup.n();
+            {
+                fp_mesh_source::Instance in{mi, int(pi), base, count, {}, pos_it->second,
+                                            n_it != prim.attributes.end() ? n_it->second : -1};
+                std::copy(xf.m, xf.m + 16, in.xf.begin());
+                instances.push_back(in);
+            }
             if (base + count > UINT32_MAX)
                 return bad(FP_MESH_ERR_UNSUPPORTED, "more vertices than 32-bit indices hold");
             for (size_t i = 0; i < count; i++) {
@@ -1203,7 +1424,7 @@ int load_gltf(const char *path, const std::string &ext, const std::string &data,
         return fail(err, errlen, FP_MESH_ERR_FORMAT, path,
                     "glTF: " + one_line(gerr.empty() ? std::string("cannot parse") : gerr));
     Soup soup;
-    GltfReader r{model, soup, {}};
+    GltfReader r{model, soup, {}, FP_MESH_OK, 0, 0, true, false, {}};
     std::vector<char> visited(model.nodes.size(), 0);
     int scene = model.defaultScene >= 0 ? model.defaultScene : (model.scenes.empty() ? -1 : 0);
     if (scene >= 0 && size_t(scene) >= model.scenes.size())
@@ -1226,18 +1447,101 @@ int load_gltf(const char *path, const std::string &ext, const std::string &data,
     if (!r.all_normals)
         std::fill(soup.has_nrm.begin(), soup.has_nrm.end(), 0);
     soup.any_vertex_uv = r.any_uv;
-    return soup_to_mesh(soup, path, out, err, errlen);
+    auto src = std::make_unique<fp_mesh_source>();
+    src->format = ext;
+    src->instances = std::move(r.instances);
+    src->model = std::make_unique<tinygltf::Model>(std::move(model));
+    return soup_to_mesh(soup, path, out, err, errlen, src.release());
 }
 
-int save_gltf(const fp_mesh *m, const char *path, const std::string &ext, char *err,
-              size_t errlen)
+// ---- writing back as it came in ----------------------------------------------------
+
+// The source applies while the mesh has the counts it was loaded with.
+const fp_mesh_source *source_of(const fp_mesh *m)
 {
-    const size_t n = m->vertex_count, t = m->triangle_count;
+    const fp_mesh_source *src = m->source;
+    if (src && src->n == m->vertex_count && src->t == m->triangle_count)
+        return src;
+    return nullptr;
+}
+
+std::string fmt9(float x)
+{
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.9g", double(x));
+    return buf;
+}
+
+// OBJ back as it came in: the text with v (and vn) lines rewritten.
+int save_obj_source(const fp_mesh *m, const fp_mesh_source &src, const char *path, char *err,
+                    size_t errlen)
+{
+    const std::string &text = src.obj_text;
+    // vn index -> the first vertex that uses it
+    std::vector<long> vn_vertex;
+    {
+        size_t p = 0, nv = 0, nvt = 0, nvn = 0;
+        ObjLine l;
+        while (obj_next_line(text, p, l)) {
+            if (obj_is(text, l, "v")) nv++;
+            else if (obj_is(text, l, "vt")) nvt++;
+            else if (obj_is(text, l, "vn")) { nvn++; vn_vertex.push_back(-1); }
+            else if (obj_is(text, l, "f"))
+                for (size_t k = 1; k < l.tok.size(); k++) {
+                    long c[3];
+                    obj_corner(text, l.tok[k], nv, nvt, nvn, c);
+                    if (c[2] >= 0 && size_t(c[2]) < vn_vertex.size() && vn_vertex[size_t(c[2])] < 0)
+                        vn_vertex[size_t(c[2])] = c[0];
+                }
+        }
+    }
+    std::string out;
+    out.reserve(text.size() + text.size() / 4);
+    size_t p = 0, iv = 0, ivn = 0;
+    ObjLine l;
+    while (obj_next_line(text, p, l)) {
+        const bool v = obj_is(text, l, "v"), vn = obj_is(text, l, "vn");
+        if ((v && iv < m->vertex_count && l.tok.size() >= 4) ||
+            (vn && m->normals && ivn < vn_vertex.size() && vn_vertex[ivn] >= 0 &&
+             size_t(vn_vertex[ivn]) < m->vertex_count && l.tok.size() >= 4)) {
+            const float *q = v ? m->positions + 3 * iv : m->normals + 3 * size_t(vn_vertex[ivn]);
+            out += v ? "v " : "vn ";
+            out += fmt9(q[0]) + " " + fmt9(q[1]) + " " + fmt9(q[2]);
+            if (l.tok.size() > 4) // w or colours: kept as written
+                out.append(text, l.tok[4].first - 1, l.end - (l.tok[4].first - 1));
+        } else {
+            out.append(text, l.begin, l.end - l.begin);
+        }
+        if (l.cr)
+            out += '\r';
+        if (l.end + (l.cr ? 1 : 0) < text.size())
+            out += '\n';
+        iv += v;
+        ivn += vn;
+    }
+    return write_atomically(path, out, err, errlen);
+}
+
+// The tinygltf writer with image files left alone (URIs kept as written).
+int write_gltf_model(tinygltf::Model &model, const char *path, const std::string &ext,
+                     char *err, size_t errlen)
+{
+    std::ostringstream os(std::ios::out | std::ios::binary);
+    tinygltf::TinyGLTF writer;
+    writer.SetImageWriter(nullptr, nullptr);
+    const bool ok = writer.WriteGltfSceneToStream(&model, os, false, ext == "glb");
+    if (!ok || !os)
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_IO, path, "the glTF writer failed");
+    return write_atomically(path, os.str(), err, errlen);
+}
+
+struct GltfOut {
     tinygltf::Model model;
-    model.asset.version = "2.0";
-    model.asset.generator = "facepuppet fp_mesh";
     tinygltf::Buffer buffer;
-    auto add_view = [&](const void *src, size_t bytes, int target) {
+    int add_view(const void *src, size_t bytes, int target)
+    {
+        while (buffer.data.size() % 4)
+            buffer.data.push_back(0);
         tinygltf::BufferView bv;
         bv.buffer = 0;
         bv.byteOffset = buffer.data.size();
@@ -1247,8 +1551,9 @@ int save_gltf(const fp_mesh *m, const char *path, const std::string &ext, char *
         buffer.data.insert(buffer.data.end(), p, p + bytes);
         model.bufferViews.push_back(bv);
         return int(model.bufferViews.size() - 1);
-    };
-    auto add_accessor = [&](int view, int ctype, int type, size_t count) {
+    }
+    int add_accessor(int view, int ctype, int type, size_t count)
+    {
         tinygltf::Accessor a;
         a.bufferView = view;
         a.componentType = ctype;
@@ -1256,44 +1561,428 @@ int save_gltf(const fp_mesh *m, const char *path, const std::string &ext, char *
         a.count = count;
         model.accessors.push_back(a);
         return int(model.accessors.size() - 1);
-    };
-    tinygltf::Primitive prim;
-    prim.mode = TINYGLTF_MODE_TRIANGLES;
-    int pa = add_accessor(add_view(m->positions, n * 12, TINYGLTF_TARGET_ARRAY_BUFFER),
-                          TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, n);
-    float lo[3], hi[3];
-    fp_mesh_bounds(m, lo, hi);
-    model.accessors[size_t(pa)].minValues = {lo[0], lo[1], lo[2]};
-    model.accessors[size_t(pa)].maxValues = {hi[0], hi[1], hi[2]};
-    prim.attributes["POSITION"] = pa;
-    if (m->normals)
-        prim.attributes["NORMAL"] =
-            add_accessor(add_view(m->normals, n * 12, TINYGLTF_TARGET_ARRAY_BUFFER),
-                         TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC3, n);
+    }
+    // float accessor of `comps` components with min/max
+    int add_floats(const std::vector<float> &v, int comps, int target, bool minmax)
+    {
+        const size_t count = v.size() / size_t(comps);
+        const int type = comps == 1 ? TINYGLTF_TYPE_SCALAR : comps == 2 ? TINYGLTF_TYPE_VEC2
+                                                                       : TINYGLTF_TYPE_VEC3;
+        int a = add_accessor(add_view(v.data(), v.size() * 4, target),
+                             TINYGLTF_COMPONENT_TYPE_FLOAT, type, count);
+        if (minmax) {
+            std::vector<double> lo(size_t(comps), 0), hi(size_t(comps), 0);
+            for (size_t i = 0; i < count; i++)
+                for (int k = 0; k < comps; k++) {
+                    const double x = v[i * size_t(comps) + size_t(k)];
+                    if (i == 0 || x < lo[size_t(k)]) lo[size_t(k)] = x;
+                    if (i == 0 || x > hi[size_t(k)]) hi[size_t(k)] = x;
+                }
+            model.accessors[size_t(a)].minValues = lo;
+            model.accessors[size_t(a)].maxValues = hi;
+        }
+        return a;
+    }
+};
+
+std::string file_stem(const char *path)
+{
+    std::string s = path ? path : "mesh";
+    size_t slash = s.find_last_of('/');
+    if (slash != std::string::npos)
+        s = s.substr(slash + 1);
+    size_t dot = s.find_last_of('.');
+    if (dot != std::string::npos && dot > 0)
+        s = s.substr(0, dot);
+    return s;
+}
+
+void minmax3(const std::vector<float> &v, tinygltf::Accessor &a)
+{
+    std::vector<double> lo(3, 0), hi(3, 0);
+    for (size_t i = 0; i < v.size() / 3; i++)
+        for (size_t k = 0; k < 3; k++) {
+            if (i == 0 || v[3 * i + k] < lo[k]) lo[k] = v[3 * i + k];
+            if (i == 0 || v[3 * i + k] > hi[k]) hi[k] = v[3 * i + k];
+        }
+    a.minValues = lo;
+    a.maxValues = hi;
+}
+
+// A fresh glTF document of the mesh (and its source's polygons, UV seams, OBJ materials),
+// with morph targets and an animation when anim is given.
+void build_gltf(const fp_mesh *m, const fp_mesh_morph_animation *anim, GltfOut &g,
+                unsigned *dropped)
+{
+    const fp_mesh_source *src = source_of(m);
+    const bool from_gltf = src && (src->format == "gltf" || src->format == "glb");
+    if (from_gltf) {
+        *dropped |= FP_MESH_DROPPED_NODES;
+        if (!src->model->materials.empty())
+            *dropped |= FP_MESH_DROPPED_MATERIALS;
+        src = nullptr;
+    }
+    const size_t n = m->vertex_count;
+    // glTF vertices: mesh vertex i is glTF vertex i; seam copies follow
+    std::vector<uint32_t> copy_of;                 // source vertex of glTF vertex n + j
+    std::vector<float> uv;                         // glTF vertices x 2
+    std::vector<uint32_t> corner_vertex;           // per source corner: glTF vertex
+    const bool split = src && src->any_corner_uv;
+    const bool flip_v = src != nullptr;            // OBJ/PLY/OFF: v up; glTF: v down
     if (m->uvs)
-        prim.attributes["TEXCOORD_0"] =
-            add_accessor(add_view(m->uvs, n * 8, TINYGLTF_TARGET_ARRAY_BUFFER),
-                         TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_TYPE_VEC2, n);
-    prim.indices = add_accessor(add_view(m->triangles, t * 12, TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER),
-                                TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT, TINYGLTF_TYPE_SCALAR, 3 * t);
-    model.buffers.push_back(std::move(buffer));
+        uv.assign(m->uvs, m->uvs + 2 * n);
+    if (split) {
+        std::vector<unsigned char> first(n, 0);
+        std::map<std::array<uint32_t, 3>, uint32_t> copies;
+        corner_vertex.resize(src->corners.size());
+        for (size_t c = 0; c < src->corners.size(); c++) {
+            const uint32_t v = src->corners[c];
+            corner_vertex[c] = v;
+            if (!src->has_corner_uv[c])
+                continue;
+            const float u0 = src->corner_uv[2 * c], u1 = src->corner_uv[2 * c + 1];
+            if (!first[v]) {
+                first[v] = 1;
+                uv[2 * v] = u0;
+                uv[2 * v + 1] = u1;
+                continue;
+            }
+            if (uv[2 * v] == u0 && uv[2 * v + 1] == u1)
+                continue;
+            uint32_t b0, b1;
+            std::memcpy(&b0, &u0, 4);
+            std::memcpy(&b1, &u1, 4);
+            auto it = copies.find({v, b0, b1});
+            if (it != copies.end()) {
+                corner_vertex[c] = it->second;
+                continue;
+            }
+            const uint32_t nv = uint32_t(n + copy_of.size());
+            copy_of.push_back(v);
+            uv.push_back(u0);
+            uv.push_back(u1);
+            copies[{v, b0, b1}] = nv;
+            corner_vertex[c] = nv;
+        }
+    }
+    const size_t N = n + copy_of.size();
+    auto src_vertex = [&](size_t j) { return j < n ? j : size_t(copy_of[j - n]); };
+    if (flip_v)
+        for (size_t j = 0; j < uv.size() / 2; j++)
+            uv[2 * j + 1] = 1.0f - uv[2 * j + 1];
+    // triangles per material, in split vertices
+    const size_t nmat = src ? src->materials.size() : 0;
+    std::vector<std::vector<uint32_t>> tris(nmat + 1); // last: no material
+    if (src) {
+        const bool mats = src->face_material.size() == src->face_start.size() - 1;
+        for (size_t f = 0; f + 1 < src->face_start.size(); f++) {
+            const uint32_t b = src->face_start[f], e = src->face_start[f + 1];
+            const int mi = mats ? src->face_material[f] : -1;
+            std::vector<uint32_t> &t = tris[mi < 0 ? nmat : size_t(mi)];
+            for (uint32_t c = b + 1; c + 1 < e; c++) {
+                t.push_back(split ? corner_vertex[b] : src->corners[b]);
+                t.push_back(split ? corner_vertex[c] : src->corners[c]);
+                t.push_back(split ? corner_vertex[c + 1] : src->corners[c + 1]);
+            }
+        }
+        if (src->polygons)
+            *dropped |= FP_MESH_DROPPED_POLYGONS;
+        if (src->groups)
+            *dropped |= FP_MESH_DROPPED_GROUPS;
+    } else {
+        tris[0].assign(m->triangles, m->triangles + 3 * m->triangle_count);
+    }
+    // Each primitive gets its own block of vertices (those its triangles use, in first-use
+    // order; a vertex on a material border appears in both blocks), so that every reader
+    // (ours appends each primitive's vertices) sees each vertex once per primitive.
+    std::vector<uint32_t> out_src;              // output vertex -> split vertex
+    std::vector<size_t> prim_first, prim_count; // per non-empty material: its block
+    std::vector<size_t> prim_mat;
+    {
+        std::vector<int64_t> local(N, -1);
+        for (size_t mi = 0; mi <= nmat; mi++) {
+            if (tris[mi].empty())
+                continue;
+            const size_t first = out_src.size();
+            for (uint32_t v : tris[mi])
+                if (local[v] < 0) {
+                    local[v] = 0;
+                    out_src.push_back(v);
+                }
+            // in vertex order (mesh vertices, then seam copies): one material using every
+            // vertex without seams keeps the mesh's own order
+            std::sort(out_src.begin() + long(first), out_src.end());
+            for (size_t j = first; j < out_src.size(); j++)
+                local[out_src[j]] = int64_t(j - first);
+            for (uint32_t &v : tris[mi])
+                v = uint32_t(local[v]);
+            for (size_t j = first; j < out_src.size(); j++)
+                local[out_src[j]] = -1;
+            prim_first.push_back(first);
+            prim_count.push_back(out_src.size() - first);
+            prim_mat.push_back(mi);
+        }
+    }
+    const size_t NO = out_src.size();
+    std::vector<float> pos(3 * NO), nrm(3 * NO), tuv(uv.empty() ? 0 : 2 * NO);
+    for (size_t j = 0; j < NO; j++) {
+        const size_t v = src_vertex(out_src[j]);
+        float q[3] = {0, 0, 1};
+        if (m->normals) {
+            const float *a = m->normals + 3 * v;
+            const double len = std::sqrt(double(a[0]) * a[0] + double(a[1]) * a[1] +
+                                         double(a[2]) * a[2]);
+            if (len > 0 && std::isfinite(len))
+                for (int k = 0; k < 3; k++)
+                    q[k] = float(a[k] / len);
+        }
+        for (int k = 0; k < 3; k++) {
+            pos[3 * j + size_t(k)] = m->positions[3 * v + size_t(k)];
+            nrm[3 * j + size_t(k)] = q[k];
+        }
+        if (!tuv.empty()) {
+            tuv[2 * j] = uv[2 * size_t(out_src[j])];
+            tuv[2 * j + 1] = uv[2 * size_t(out_src[j]) + 1];
+        }
+    }
+    g.model.asset.version = "2.0";
+    g.model.asset.generator = "facepuppet fp_mesh";
+    // one buffer view per attribute; one accessor per primitive over its block
+    auto sub_accessors = [&](const std::vector<float> &v, int comps, bool minmax) {
+        const int view = g.add_view(v.data(), v.size() * 4, TINYGLTF_TARGET_ARRAY_BUFFER);
+        g.model.bufferViews[size_t(view)].byteStride = size_t(comps) * 4; // shared by accessors
+        std::vector<int> acc;
+        for (size_t p = 0; p < prim_first.size(); p++) {
+            const int type = comps == 2 ? TINYGLTF_TYPE_VEC2 : TINYGLTF_TYPE_VEC3;
+            const int a = g.add_accessor(view, TINYGLTF_COMPONENT_TYPE_FLOAT, type, prim_count[p]);
+            g.model.accessors[size_t(a)].byteOffset = prim_first[p] * size_t(comps) * 4;
+            if (minmax) {
+                std::vector<float> part(v.begin() + long(prim_first[p] * size_t(comps)),
+                                        v.begin() + long((prim_first[p] + prim_count[p]) * size_t(comps)));
+                minmax3(part, g.model.accessors[size_t(a)]);
+            }
+            acc.push_back(a);
+        }
+        return acc;
+    };
+    const std::vector<int> pa = sub_accessors(pos, 3, true);
+    const std::vector<int> na = sub_accessors(nrm, 3, false);
+    const std::vector<int> ta = tuv.empty() ? std::vector<int>() : sub_accessors(tuv, 2, false);
+    std::vector<std::vector<int>> target_acc; // [target][primitive]
+    if (anim) {
+        std::vector<float> d(3 * NO);
+        for (size_t k = 0; k < anim->target_count; k++) {
+            const float *t = anim->targets + k * 3 * n;
+            for (size_t j = 0; j < NO; j++)
+                for (int c = 0; c < 3; c++)
+                    d[3 * j + size_t(c)] = t[3 * src_vertex(out_src[j]) + size_t(c)];
+            target_acc.push_back(sub_accessors(d, 3, true));
+        }
+    }
     tinygltf::Mesh mesh;
-    mesh.primitives.push_back(prim);
-    model.meshes.push_back(mesh);
+    if (m->source_path)
+        mesh.name = file_stem(m->source_path);
+    for (size_t p = 0; p < prim_first.size(); p++) {
+        const size_t mi = prim_mat[p];
+        tinygltf::Primitive prim;
+        prim.mode = TINYGLTF_MODE_TRIANGLES;
+        prim.attributes["POSITION"] = pa[p];
+        prim.attributes["NORMAL"] = na[p];
+        if (!ta.empty())
+            prim.attributes["TEXCOORD_0"] = ta[p];
+        prim.indices = g.add_accessor(g.add_view(tris[mi].data(), tris[mi].size() * 4,
+                                                 TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER),
+                                      TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT,
+                                      TINYGLTF_TYPE_SCALAR, tris[mi].size());
+        if (mi < nmat) {
+            tinygltf::Material mat;
+            mat.name = src->materials[mi];
+            mat.pbrMetallicRoughness.metallicFactor = 0.0;
+            g.model.materials.push_back(mat);
+            prim.material = int(g.model.materials.size() - 1);
+        }
+        for (const auto &t : target_acc) {
+            std::map<std::string, int> tm;
+            tm["POSITION"] = t[p];
+            prim.targets.push_back(tm);
+        }
+        mesh.primitives.push_back(prim);
+    }
+    tinygltf::Value::Object extras;
+    if (anim) {
+        tinygltf::Value::Array names;
+        for (size_t k = 0; k < anim->target_count; k++)
+            names.push_back(tinygltf::Value(anim->target_names && anim->target_names[k]
+                                                ? std::string(anim->target_names[k])
+                                                : "t" + std::to_string(k)));
+        extras["targetNames"] = tinygltf::Value(names);
+        mesh.weights.assign(anim->target_count, 0.0);
+    }
+    bool identity = NO == n;
+    for (size_t j = 0; j < NO && identity; j++)
+        identity = src_vertex(out_src[j]) == j;
+    if (!identity) { // the mesh vertex of each glTF vertex, primitives' blocks in order
+        tinygltf::Value::Array map;
+        for (size_t j = 0; j < NO; j++)
+            map.push_back(tinygltf::Value(int(src_vertex(out_src[j]))));
+        extras["sourceVertex"] = tinygltf::Value(map);
+    }
+    if (!extras.empty())
+        mesh.extras = tinygltf::Value(extras);
+    g.model.meshes.push_back(mesh);
     tinygltf::Node node;
     node.mesh = 0;
-    model.nodes.push_back(node);
+    node.name = mesh.name;
+    g.model.nodes.push_back(node);
     tinygltf::Scene scene;
     scene.nodes.push_back(0);
-    model.scenes.push_back(scene);
-    model.defaultScene = 0;
+    g.model.scenes.push_back(scene);
+    g.model.defaultScene = 0;
+    if (anim) {
+        std::vector<float> times(anim->times, anim->times + anim->frame_count);
+        std::vector<float> w(anim->weights, anim->weights + anim->frame_count * anim->target_count);
+        tinygltf::AnimationSampler sm;
+        sm.input = g.add_floats(times, 1, 0, true);
+        sm.output = g.add_floats(w, 1, 0, false);
+        sm.interpolation = anim->step ? "STEP" : "LINEAR";
+        tinygltf::Animation an;
+        an.name = anim->name ? anim->name : "take";
+        an.samplers.push_back(sm);
+        tinygltf::AnimationChannel ch;
+        ch.sampler = 0;
+        ch.target_node = 0;
+        ch.target_path = "weights";
+        an.channels.push_back(ch);
+        g.model.animations.push_back(an);
+    }
+    g.model.buffers.push_back(std::move(g.buffer));
+}
 
-    std::ostringstream os(std::ios::out | std::ios::binary);
-    tinygltf::TinyGLTF writer;
-    const bool ok = writer.WriteGltfSceneToStream(&model, os, false, ext == "glb");
-    if (!ok || !os)
-        return fp__mesh_error(err, errlen, FP_MESH_ERR_IO, path, "the glTF writer failed");
-    return write_atomically(path, os.str(), err, errlen);
+// Affine inverse of a column-major 4x4 (upper 3x4 used); false when singular.
+bool affine_inverse(const std::array<double, 16> &M, std::array<double, 16> &R)
+{
+    auto a = [&](int r, int c) { return M[size_t(c * 4 + r)]; };
+    double C[3][3];
+    for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 3; c++) {
+            const int r1 = (r + 1) % 3, r2 = (r + 2) % 3, c1 = (c + 1) % 3, c2 = (c + 2) % 3;
+            C[r][c] = a(r1, c1) * a(r2, c2) - a(r1, c2) * a(r2, c1);
+        }
+    const double det = a(0, 0) * C[0][0] + a(0, 1) * C[0][1] + a(0, 2) * C[0][2];
+    if (!(std::fabs(det) > 0))
+        return false;
+    R.fill(0);
+    for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 3; c++)
+            R[size_t(c * 4 + r)] = C[c][r] / det; // inverse = adjugate / det
+    for (int r = 0; r < 3; r++)
+        R[size_t(12 + r)] = -(R[size_t(r)] * a(0, 3) + R[size_t(4 + r)] * a(1, 3) +
+                              R[size_t(8 + r)] * a(2, 3));
+    R[15] = 1;
+    return true;
+}
+
+// glTF back as it came in: the document with POSITION and NORMAL rewritten.
+int save_gltf_source(const fp_mesh *m, const fp_mesh_source &src, const char *path,
+                     const std::string &ext, char *err, size_t errlen)
+{
+    tinygltf::Model model = *src.model;
+    // one buffer: the document's buffers back to back (4-byte aligned)
+    tinygltf::Buffer all;
+    std::vector<size_t> at(model.buffers.size());
+    for (size_t b = 0; b < model.buffers.size(); b++) {
+        while (all.data.size() % 4)
+            all.data.push_back(0);
+        at[b] = all.data.size();
+        all.data.insert(all.data.end(), model.buffers[b].data.begin(), model.buffers[b].data.end());
+    }
+    for (auto &bv : model.bufferViews) {
+        bv.byteOffset += at[size_t(bv.buffer)];
+        bv.buffer = 0;
+    }
+    model.buffers.clear();
+    model.buffers.push_back(all);
+    GltfOut extra; // new accessors where the old cannot be overwritten in place
+    std::vector<char> done(model.accessors.size(), 0);
+    auto rewrite = [&](int ai, const std::vector<float> &v, bool minmax, int mesh, int prim,
+                       const char *attr) {
+        if (ai < 0 || size_t(ai) >= done.size() || done[size_t(ai)])
+            return;
+        done[size_t(ai)] = 1;
+        tinygltf::Accessor &a = model.accessors[size_t(ai)];
+        const tinygltf::BufferView *bv = a.bufferView >= 0 ? &model.bufferViews[size_t(a.bufferView)] : nullptr;
+        const bool in_place = bv && !a.sparse.isSparse && a.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT &&
+                              a.type == TINYGLTF_TYPE_VEC3 && (bv->byteStride == 0 || bv->byteStride == 12) &&
+                              a.count * 3 == v.size();
+        if (in_place) {
+            std::memcpy(model.buffers[0].data.data() + bv->byteOffset + a.byteOffset, v.data(),
+                        v.size() * 4);
+            if (minmax)
+                minmax3(v, a);
+            return;
+        }
+        // a new float accessor at the end of the buffer
+        while (model.buffers[0].data.size() % 4)
+            model.buffers[0].data.push_back(0);
+        tinygltf::BufferView nb;
+        nb.buffer = 0;
+        nb.byteOffset = model.buffers[0].data.size();
+        nb.byteLength = v.size() * 4;
+        nb.target = TINYGLTF_TARGET_ARRAY_BUFFER;
+        const unsigned char *p = reinterpret_cast<const unsigned char *>(v.data());
+        model.buffers[0].data.insert(model.buffers[0].data.end(), p, p + v.size() * 4);
+        model.bufferViews.push_back(nb);
+        tinygltf::Accessor na;
+        na.bufferView = int(model.bufferViews.size() - 1);
+        na.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
+        na.type = TINYGLTF_TYPE_VEC3;
+        na.count = v.size() / 3;
+        model.accessors.push_back(na);
+        const int nai = int(model.accessors.size() - 1);
+        done.push_back(1);
+        model.meshes[size_t(mesh)].primitives[size_t(prim)].attributes[attr] = nai;
+        if (minmax)
+            minmax3(v, model.accessors[size_t(nai)]);
+    };
+    for (const auto &in : src.instances) {
+        std::array<double, 16> inv;
+        if (!affine_inverse(in.xf, inv))
+            return fp__mesh_error(err, errlen, FP_MESH_ERR_INVALID, path,
+                                  "glTF: mesh %d has a singular node transform", in.mesh);
+        std::vector<float> p(3 * in.count), q;
+        for (size_t i = 0; i < in.count; i++) {
+            const float *x = m->positions + 3 * (in.first + i);
+            for (int r = 0; r < 3; r++)
+                p[3 * i + size_t(r)] = float(inv[size_t(r)] * x[0] + inv[size_t(4 + r)] * x[1] +
+                                             inv[size_t(8 + r)] * x[2] + inv[size_t(12 + r)]);
+        }
+        rewrite(in.pos, p, true, in.mesh, in.prim, "POSITION");
+        if (in.nrm >= 0 && m->normals) {
+            q.resize(3 * in.count);
+            for (size_t i = 0; i < in.count; i++) {
+                const float *x = m->normals + 3 * (in.first + i);
+                double w[3], len = 0;
+                for (int r = 0; r < 3; r++) { // local normal ~ M^T n
+                    w[r] = in.xf[size_t(r * 4)] * x[0] + in.xf[size_t(r * 4 + 1)] * x[1] +
+                           in.xf[size_t(r * 4 + 2)] * x[2];
+                    len += w[r] * w[r];
+                }
+                len = std::sqrt(len);
+                for (int r = 0; r < 3; r++)
+                    q[3 * i + size_t(r)] = len > 0 ? float(w[r] / len) : 0.0f;
+            }
+            rewrite(in.nrm, q, false, in.mesh, in.prim, "NORMAL");
+        }
+    }
+    return write_gltf_model(model, path, ext, err, errlen);
+}
+
+int save_gltf(const fp_mesh *m, const char *path, const std::string &ext, char *err,
+              size_t errlen, unsigned *dropped)
+{
+    GltfOut g;
+    build_gltf(m, nullptr, g, dropped);
+    return write_gltf_model(g.model, path, ext, err, errlen);
 }
 
 int check_mesh(const fp_mesh *m, const char *path, char *err, size_t errlen)
@@ -1358,8 +2047,123 @@ extern "C" int fp_mesh_load(const char *path, fp_mesh **out, char *err, size_t e
     }
 }
 
+// What writing a mesh with this source to `ext` drops, and the writer to use.
+int save_dispatch(const fp_mesh *mesh, const char *path, const std::string &ext,
+                  unsigned *dropped, char *err, size_t errlen)
+{
+    const fp_mesh_source *src = source_of(mesh);
+    const bool src_gltf = src && (src->format == "gltf" || src->format == "glb");
+    if (is_gltf_ext(ext)) {
+        if (src_gltf)
+            return save_gltf_source(mesh, *src, path, ext, err, errlen);
+        return save_gltf(mesh, path, ext, err, errlen, dropped);
+    }
+    if (ext == "obj" && src && src->format == "obj" && !src->obj_text.empty())
+        return save_obj_source(mesh, *src, path, err, errlen);
+    if (src) {
+        if (src->groups)
+            *dropped |= FP_MESH_DROPPED_GROUPS;
+        if (!src->materials.empty() || (src_gltf && !src->model->materials.empty()))
+            *dropped |= FP_MESH_DROPPED_MATERIALS;
+        if (src_gltf)
+            *dropped |= FP_MESH_DROPPED_NODES;
+        if (ext == "stl") {
+            if (src->polygons)
+                *dropped |= FP_MESH_DROPPED_POLYGONS;
+        } else if (src->seams) {
+            *dropped |= FP_MESH_DROPPED_UV_SEAMS;
+        }
+    }
+    if (ext == "stl") {
+        if (mesh->uvs)
+            *dropped |= FP_MESH_DROPPED_UVS;
+        if (src && src->file_normals)
+            *dropped |= FP_MESH_DROPPED_NORMALS;
+    }
+    return save_openmesh(mesh, path, ext, err, errlen, src);
+}
+
 extern "C" int fp_mesh_save(const fp_mesh *mesh, const char *path, char *err, size_t errlen)
 {
+    return fp_mesh_save_ex(mesh, path, nullptr, err, errlen);
+}
+
+extern "C" const char *fp_mesh_dropped_text(unsigned dropped, char *buf, size_t n)
+{
+    static const char *const names[] = {"polygons (written as triangles)", "UV seams",
+                                        "texture coordinates", "normals", "groups",
+                                        "materials", "glTF nodes"};
+    if (!buf || n == 0)
+        return buf;
+    buf[0] = '\0';
+    size_t k = 0;
+    for (int i = 0; i < 7; i++)
+        if (dropped & (1u << i)) {
+            int w = std::snprintf(buf + k, n - k, "%s%s", k ? ", " : "", names[i]);
+            if (w < 0 || size_t(w) >= n - k)
+                break;
+            k += size_t(w);
+        }
+    return buf;
+}
+
+extern "C" int fp_mesh_save_animation(const fp_mesh *mesh, const fp_mesh_morph_animation *anim,
+                                      const char *path, unsigned *dropped, char *err,
+                                      size_t errlen)
+{
+    if (err && errlen)
+        err[0] = '\0';
+    unsigned lost = 0;
+    if (dropped)
+        *dropped = 0;
+    if (!path || !mesh || !anim || anim->target_count == 0 || anim->frame_count == 0 ||
+        !anim->targets || !anim->times || !anim->weights)
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_INVALID, path,
+                              "NULL mesh, path or animation, or no targets or frames");
+    try {
+        char e[16];
+        fp__mesh_extension(path, e, sizeof e);
+        if (!is_gltf_ext(e))
+            return fp__mesh_error(err, errlen, FP_MESH_ERR_UNSUPPORTED, path,
+                                  "an animation is written as .gltf or .glb, not '%s'", e);
+        int rc = check_mesh(mesh, path, err, errlen);
+        if (rc != FP_MESH_OK)
+            return rc;
+        const size_t K = anim->target_count, F = anim->frame_count;
+        for (size_t i = 0; i < K * 3 * mesh->vertex_count; i++)
+            if (!std::isfinite(anim->targets[i]))
+                return fp__mesh_error(err, errlen, FP_MESH_ERR_INVALID, path,
+                                      "target %zu is not finite", i / (3 * mesh->vertex_count));
+        for (size_t f = 0; f < F; f++) {
+            if (!std::isfinite(anim->times[f]) || (f > 0 && !(anim->times[f] > anim->times[f - 1])))
+                return fp__mesh_error(err, errlen, FP_MESH_ERR_INVALID, path,
+                                      "key %zu: times must be finite and increasing", f);
+            for (size_t k = 0; k < K; k++)
+                if (!std::isfinite(anim->weights[f * K + k]))
+                    return fp__mesh_error(err, errlen, FP_MESH_ERR_INVALID, path,
+                                          "key %zu: weight %zu is not finite", f, k);
+        }
+        GltfOut g;
+        build_gltf(mesh, anim, g, &lost);
+        rc = write_gltf_model(g.model, path, e, err, errlen);
+        if (rc == FP_MESH_OK && dropped)
+            *dropped = lost;
+        return rc;
+    } catch (const std::bad_alloc &) {
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_NOMEM, path, "out of memory");
+    } catch (const std::exception &x) {
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_IO, path, "writer failed: %s", x.what());
+    } catch (...) {
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_IO, path, "writer failed");
+    }
+}
+
+extern "C" int fp_mesh_save_ex(const fp_mesh *mesh, const char *path, unsigned *dropped,
+                               char *err, size_t errlen)
+{
+    unsigned lost = 0;
+    if (dropped)
+        *dropped = 0;
     if (err && errlen)
         err[0] = '\0';
     if (!path || !mesh)
@@ -1375,9 +2179,10 @@ extern "C" int fp_mesh_save(const fp_mesh *mesh, const char *path, char *err, si
         int rc = check_mesh(mesh, path, err, errlen);
         if (rc != FP_MESH_OK)
             return rc;
-        if (is_gltf_ext(ext))
-            return save_gltf(mesh, path, ext, err, errlen);
-        return save_openmesh(mesh, path, ext, err, errlen);
+        rc = save_dispatch(mesh, path, ext, &lost, err, errlen);
+        if (rc == FP_MESH_OK && dropped)
+            *dropped = lost;
+        return rc;
     } catch (const std::bad_alloc &) {
         return fp__mesh_error(err, errlen, FP_MESH_ERR_NOMEM, path, "out of memory");
     } catch (const std::exception &x) {

@@ -202,6 +202,12 @@ int64_t fp_now_ns(void);
  *  fp_mapping_host_init, which routes them through a log callback. */
 void fp_host_init_for_mapping(fp_host *host, const char *name);
 
+/** Services a session offers its mapping through get_extension (plugin.h, ABI 1.1). */
+typedef struct fp_mapping_services {
+    fp_host_surface surface;   /* FP_HOST_EXT_SURFACE; not offered while nearest is NULL */
+    void *user;                /* the provider's data, for the service's implementation */
+} fp_mapping_services;
+
 /** A log callback with the signature of the session's (fp_session_log_fn): level is an
  *  fp_log_level, source names who speaks. */
 typedef void (*fp_host_log_fn)(void *user, int level, const char *source, const char *message);
@@ -218,6 +224,8 @@ typedef struct fp_mapping_host {
     void *log_user;
     const struct fp_rig_view *rig;   /* FP_HOST_EXT_RIG's answer (ABI 1.1); NULL: no rig. The
                                         session sets it after fp_mapping_host_init */
+    const fp_mapping_services *services; /* FP_HOST_EXT_SURFACE (ABI 1.1); NULL: not offered.
+                                        Kept by pointer: it must outlive the host */
 } fp_mapping_host;
 void fp_mapping_host_init(fp_mapping_host *mh, const char *name, fp_host_log_fn log, void *log_user);
 

@@ -38,6 +38,7 @@ static void host_log(const fp_host *host, fp_log_level level, const char *messag
             names[level <= FP_LOG_DEBUG ? level : FP_LOG_DEBUG], message ? message : "");
 }
 
+/* Inputs are offered no host extension; a mapping's host answers through mapping_extension. */
 static const void *host_extension(const fp_host *host, const char *id)
 {
     (void)host;
@@ -97,8 +98,11 @@ static const fp_host_rig mapping_rig_ext = {mapping_rig};
 
 static const void *mapping_extension(const fp_host *host, const char *id)
 {
-    (void)host;
-    if (id && !strcmp(id, FP_HOST_EXT_RIG)) return &mapping_rig_ext;
+    const fp_mapping_host *mh = host ? host->host_data : NULL;
+    if (!id) return NULL;
+    if (!strcmp(id, FP_HOST_EXT_RIG)) return &mapping_rig_ext;
+    if (!strcmp(id, FP_HOST_EXT_SURFACE) && mh && mh->services && mh->services->surface.nearest)
+        return &mh->services->surface;
     return NULL;
 }
 

@@ -149,8 +149,8 @@ void fp_pose_fit_workspace(fp_calibration *c, double mm_per_unit, const float ws
     c->rotation[0] = 1;
     for (int i = 0; i < 2; i++)
         c->offset[i] = 0.5 * ((double)head_min[i] + head_max[i]) - c->scale * 0.5 * ((double)ws_min[i] + ws_max[i]);
-    double depth = (double)head_max[2] - head_min[2];
-    c->offset[2] = ((double)head_max[2] - 0.15 * depth) - c->scale * ws_min[2];
+    (void)head_min;
+    c->offset[2] = ((double)head_max[2] - FP_POSE_REACH_PRESS_MM * c->scale) - c->scale * ws_min[2];
 }
 
 void fp_pose_to_mesh(const fp_calibration *c, int hand, const float mm[3], float out[3])

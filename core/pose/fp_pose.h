@@ -92,10 +92,16 @@ void fp_pose_default_workspace(float ws_min[3], float ws_max[3]);
 bool fp_pose_inputs_workspace(fp_input *const *inputs, size_t n, float ws_min[3], float ws_max[3]);
 
 /** The life-size calibration: scale = 1 / mm_per_unit (hands and head at the same physical
- *  scale), rotation identity, and the offset that puts the workspace's centre in x and y on
- *  the head box's centre and its deepest point (-z, farthest from the performer) 15% of the
- *  head box's depth behind the face's front (head_max z), so that the performer's forward
- *  reach touches the face. mm_per_unit <= 0 or non-finite counts as 1. */
+ *  scale), rotation identity, the workspace's centre in x and y on the head box's centre, and
+ *  in depth its front (ws_min z, the reach toward the face: a tracker sees the hands fingers
+ *  first, so the 2nd percentile of every joint's depth is where the fingertips usually reach)
+ *  FP_POSE_REACH_PRESS_MM behind the face's frontmost point (head_max z, the nose tip). The
+ *  hands at rest hover in front of the face (on the ICT face the fingertips of the real
+ *  recordings sit a median 25-40 mm off the surface under them), the usual forward reach
+ *  touches the face's front, a reach beyond it presses in; moving across the face brings
+ *  the fingertips near the surface and away (the anchored mapping engages and lets go).
+ *  head_min is unused (kept for the callers). mm_per_unit <= 0 or non-finite counts as 1. */
+#define FP_POSE_REACH_PRESS_MM 0.0
 void fp_pose_fit_workspace(fp_calibration *c, double mm_per_unit, const float ws_min[3],
                            const float ws_max[3], const float head_min[3], const float head_max[3]);
 

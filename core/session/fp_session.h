@@ -49,7 +49,10 @@ extern "C" {
  * step_record.h. */
 
 typedef struct fp_session_options {
-    const char *mesh_path;                          /* required */
+    const char *mesh_path;                          /* required (unless mesh is given) */
+    const struct fp_mesh *mesh;                     /* a mesh in memory instead of mesh_path
+                                                       (copied; e.g. `bench --case frame`'s
+                                                       subdivided face) */
     const char *inputs[FP_SESSION_MAX_INPUTS];      /* SPECs */
     size_t input_count;
     const char *mapping;                            /* NAME[,key=value...]; "anchored" */
@@ -98,7 +101,26 @@ typedef struct fp_session_options {
                                                        no rig. A rig's mm_per_unit is the
                                                        mesh's unit unless mm_per_unit is given */
     const char *rig_dir;                            /* NULL: fp_rig_default_dir(NULL) */
+    bool measure_jacobian;                          /* fill fp_frame_stats.min_det_j (the
+                                                       engine's general path: slower, same
+                                                       shape) */
+    bool no_contact_guard;                          /* true: no contact guard (benchmarks);
+                                                       default (false): every shown shape is
+                                                       checked for new self-crossings
+                                                       (contact.h) and its motion scaled back */
 } fp_session_options;
+
+/** The frame's stages, for fp_frame_stats.stage_ms (`bench --case frame`). */
+enum fp_frame_stage {
+    FP_STAGE_EVENTS = 0,      /* drain the inputs, intents */
+    FP_STAGE_HANDS,           /* hand poses, calibration */
+    FP_STAGE_DISTANCES,       /* fingertip-to-surface distances */
+    FP_STAGE_MAPPING,         /* the mapping plugin and the rig */
+    FP_STAGE_SOLVE,           /* factor or reuse, solve, the fold-over guard */
+    FP_STAGE_EVALUATE,        /* T(base) (touched blocks) */
+    FP_STAGE_COMMIT,          /* history and re-index after a commit */
+    FP_STAGE_COUNT
+};
 
 /** Statistics of one fp_session_step. */
 typedef struct fp_frame_stats {
@@ -111,7 +133,23 @@ typedef struct fp_frame_stats {
     bool refactored;          /* the engine factored anew (start points changed) */
     size_t control_vectors;
     uint64_t pairs;           /* vertex-centre pairs evaluated */
-    double update_ms;         /* engine solve + evaluate, milliseconds */
+    double update_ms;         /* engine solve + guard + evaluate, milliseconds */
+    /* the fold-over guard (step_engine.h): every map applied is injective */
+    double guard_bound;       /* injectivity bound L of the map the mapping asked for (L < 1:
+                                 injective; the guard applies maps with L <= 0.9) */
+    size_t guard_clusters;    /* clusters of overlapping supports */
+    size_t guard_limited;     /* clusters the guard scaled back (first map) */
+    int guard_substeps;       /* maps composed (1: one; unanchored steps may compose) */
+    double guard_reached;     /* smallest fraction of a control vector the map reached (1: all;
+                                 below 1 the guard stopped short of an end point) */
+    double min_det_j;         /* min det dT/dx over the moved vertices (and composed maps) with
+                                 fp_session_options.measure_jacobian, else NAN (and when not
+                                 active) */
+    /* the contact guard (contact.h): the shown shape adds no self-crossing to the last one */
+    double collide_t;         /* fraction of this frame's motion kept (1: all; 0: none) */
+    long collide_pairs;       /* new crossing pairs the full motion would have added */
+    double collide_ms;        /* the guard's checks, milliseconds */
+    double stage_ms[FP_STAGE_COUNT]; /* wall time of each stage (fp_frame_stage), ms */
 } fp_frame_stats;
 
 typedef struct fp_session fp_session;
@@ -169,6 +207,24 @@ bool fp_session_finished(const fp_session *s);
 /** Ask for intents (fp_intent bits) on the next frame: keys, pedal bindings. */
 void fp_session_request(fp_session *s, uint32_t intents);
 
+/** Host actions between frames, recorded with the next frame's requested intents (bits
+ *  above the fp_intent bits; docs/take-format.md): fp_session_undo and fp_session_reset. A
+ *  take played back applies them before that frame (fp_session_take.h). */
+#define FP_SESSION_ACTION_UNDO (1u << 16)
+#define FP_SESSION_ACTION_RESET (1u << 17)
+
+/** How many times the performer asked to start or stop a take (the pedal's middle button,
+ *  pressed) since the last call; the count is cleared. The viewer reads it each frame. */
+unsigned fp_session_record_toggles(fp_session *s);
+
+/** Steps 5-7 of a frame on a given control set instead of the inputs and the mapping: a
+ *  take's stored control set (the one the engine was given, after the rig) through the
+ *  engine (factor or reuse, solve, guard, evaluate), history (its COMMIT) and the recorder
+ *  (requested goes into the frame's record). The inputs are not drained. cs->count <=
+ *  FP_ENGINE_MAX_CONTROL and cs->radius > 0 where cs->active (a take's frames are). */
+void fp_session_apply_controls(fp_session *s, int64_t now_ns, const fp_control_set *cs,
+                               uint32_t requested, fp_frame_stats *st);
+
 /** The shape to show: vertex_count x 3 floats, mesh units; valid until the next step. */
 const float *fp_session_positions(const fp_session *s);
 /** The committed shape (the base). */
@@ -223,6 +279,10 @@ int fp_session_set_channel(fp_session *s, const char *name, double value);
 /** A channel's current value; NaN without a rig or for an unknown name. */
 double fp_session_channel(const fp_session *s, const char *name);
 
+/** Committed gestures in the base since the loaded shape (one per undo level: an anchored
+ *  commit, an unanchored drag): undo restores the count of the level it returns to, reset
+ *  sets 0. [main-thread]. */
+unsigned long fp_session_commits(const fp_session *s);
 /** Undo the last commit or reset (one level, up to FP_SESSION_UNDO_LEVELS): the base goes
  *  back, a deformation in progress is dropped, the mapping's gesture is reset. Returns false
  *  when there is nothing to undo. */
@@ -239,6 +299,10 @@ unsigned fp_session_input_errors(const fp_session *s, const char **last);
 /** Write the shape to show (normals recomputed) to path; format by extension. Returns 0,
  *  -ENOMEM, or the mesh writer's code unchanged (fp_mesh_save), err naming path. */
 int fp_session_save(const fp_session *s, const char *path, char *err, size_t errlen);
+/** fp_session_save, written back as the mesh came in (fp_mesh_save_ex): *dropped (may be
+ *  NULL) gets what the file's format could not keep (FP_MESH_DROPPED_* bits). */
+int fp_session_save_ex(const fp_session *s, const char *path, unsigned *dropped, char *err,
+                       size_t errlen);
 
 /** fp_session_stop if not done (its error only logged), then a pending repeated error's
  *  count is logged, plugins unloaded, everything freed; sets *s to NULL. NULL-safe. */

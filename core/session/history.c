@@ -27,13 +27,17 @@ void fp_history_push(fp_history *h)
     if (!*slot) *slot = malloc(bytes ? bytes : 1);
     if (!*slot) return;
     memcpy(*slot, h->base, bytes);
+    h->snap_gestures[h->next] = h->gestures;
     h->next = (h->next + 1) % FP_HISTORY_LEVELS;
     if (h->count < FP_HISTORY_LEVELS) h->count++;
 }
 
 void fp_history_commit(fp_history *h, const float *deformed)
 {
-    if (!h->gesture_open) fp_history_push(h);
+    if (!h->gesture_open) {
+        fp_history_push(h);
+        h->gestures++;
+    }
     h->gesture_open = true;
     memcpy(h->base, deformed, h->n * 3 * sizeof(float));
 }
@@ -52,6 +56,7 @@ bool fp_history_undo(fp_history *h)
     h->next = (h->next + FP_HISTORY_LEVELS - 1) % FP_HISTORY_LEVELS;
     h->count--;
     fp_history_set_base(h, h->snap[h->next]);
+    h->gestures = h->snap_gestures[h->next];
     return true;
 }
 
@@ -59,4 +64,5 @@ void fp_history_reset(fp_history *h, const float *loaded)
 {
     if (memcmp(h->base, loaded, h->n * 3 * sizeof(float))) fp_history_push(h);
     fp_history_set_base(h, loaded);
+    h->gestures = 0;
 }

@@ -32,6 +32,9 @@ typedef struct fp_history {
     size_t count;                      /* snapshots that can be undone */
     size_t next;                       /* the slot the next snapshot goes to */
     bool gesture_open;                 /* a commit of the current gesture was taken */
+    unsigned long gestures;            /* committed gestures in the base since the loaded
+                                        * shape (undo restores it, reset zeroes it) */
+    unsigned long snap_gestures[FP_HISTORY_LEVELS]; /* gestures of each snapshot */
 } fp_history;
 
 /** Start an empty history over the caller's base array (n x 3 floats, mesh units). */

@@ -15,7 +15,9 @@ void fp_intents_bind_button(fp_intents *it, const fp_event_button *b, bool engag
     if (!b->down) return;
     if (b->button == FP_BUTTON_LEFT) it->requested |= engaged ? FP_INTENT_COMMIT : FP_INTENT_ENGAGE;
     else if (b->button == FP_BUTTON_RIGHT) it->requested |= FP_INTENT_CANCEL;
-    /* FP_BUTTON_MIDDLE: reserved for takes (start/stop a take), not bound yet. */
+    else if (b->button == FP_BUTTON_MIDDLE) it->record_toggles++;   /* start/stop a take */
+    else if (b->button == FP_BUTTON_REQUEST)
+        it->requested |= b->mask & (FP_INTENT_ENGAGE | FP_INTENT_COMMIT | FP_INTENT_CANCEL);
 }
 
 static void keep(fp_intents *it, const fp_event *ev)

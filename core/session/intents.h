@@ -44,6 +44,7 @@ typedef struct fp_intents {
     char last_error[128];                   /* the latest one's text */
     fp_event frame_events[FP_INTENTS_MAX_FRAME_EVENTS];  /* this frame's buttons, statuses */
     size_t frame_event_count;
+    unsigned record_toggles;                /* middle pedal presses: start/stop a take */
 } fp_intents;
 
 /** Called for every drained event, in queue order per input, inputs in index order. */
@@ -56,8 +57,9 @@ void fp_intents_init(fp_intents *it);
 void fp_intents_request(fp_intents *it, uint32_t intents);
 
 /** The pedal binding for one button event: on a press, left requests COMMIT when `engaged`
- *  (a deformation is active) and ENGAGE otherwise; right requests CANCEL; middle (reserved
- *  for takes) and releases request nothing. */
+ *  (a deformation is active) and ENGAGE otherwise; right requests CANCEL; middle counts a
+ *  record toggle (start/stop a take: fp_session_record_toggles); FP_BUTTON_REQUEST requests
+ *  its mask's fp_intent bits (a take performed again); releases request nothing. */
 void fp_intents_bind_button(fp_intents *it, const fp_event_button *b, bool engaged);
 
 /** Take one event from input `input` named `name`: buttons through the binding, statuses

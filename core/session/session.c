@@ -3,6 +3,7 @@
 #define _GNU_SOURCE
 #include "fp_session.h"
 
+#include "contact.h"
 #include "csrbf.h"
 #include "fp_plugin_crash.h"
 #include "fp_mesh.h"
@@ -38,6 +39,7 @@ struct fp_session {
     fp_plugin mapping_plugin;
     fp_mapping *mapping;
     fp_mapping_host mapping_host;
+    fp_mapping_services services;     /* the host extensions the mapping may ask for */
     char mapping_name[64];
     char mapping_spec[1024];      /* the SPEC it was made from (keys kept for a reload) */
     char mapping_file[4096];      /* the file it was found at (a reload loads a copy) */
@@ -49,6 +51,7 @@ struct fp_session {
     fp_head head;                 /* the head and the mesh's unit (life-size calibration) */
     bool engaged;                 /* the mapping's deformation is active */
     uint64_t frame;
+    uint32_t actions;             /* FP_SESSION_ACTION_* since the last frame (recorded) */
 
     fp_intents intents;           /* step 1 */
     fp_pose_state pose;           /* step 2 */
@@ -59,7 +62,18 @@ struct fp_session {
     fp_record_step record;        /* step 7 */
 
     fp_control_set cs;            /* its arrays are the mapping step's (with canaries) */
+
+    /* the contact guard (contact.h); NULL with no_contact_guard */
+    fp_contact *contact;
+    float *guarded;               /* n x 3: the shape shown when the guard scaled back */
+    unsigned long cg_frames, cg_limited; /* this gesture: frames checked, scaled back */
+    double cg_t;                  /* this gesture: smallest fraction kept */
 };
+
+#define FP_CONTACT_BISECTIONS 6
+/* pairs within this many vertex rings of the input's own crossings are not the guard's
+ * business (fp_contact_dilate_own): the eyes' intersection curves move under any motion */
+#define FP_CONTACT_OWN_RINGS 1
 
 _Static_assert(FP_ENGINE_MAX_CONTROL >= FP_CONTROL_CAPACITY, "the engine takes a full control set");
 
@@ -83,6 +97,7 @@ static int load_mapping(fp_session *s, const char *mapping, const fp_plugin_path
         snprintf(s->mapping_name, sizeof s->mapping_name, "%s", spec.name);
         fp_mapping_host_init(&s->mapping_host, spec.name, s->log.fn, s->log.user);
         s->mapping_host.rig = fp_rig_step_view(&s->rig); /* FP_HOST_EXT_RIG */
+        s->mapping_host.services = &s->services; /* FP_HOST_EXT_SURFACE */
         const fp_mapping_factory *f = s->mapping_plugin.factory;
         char perr[512] = "";
         fp_plugin_call_enter(s->mapping_name, "create", s->frame);
@@ -100,6 +115,16 @@ static int load_mapping(fp_session *s, const char *mapping, const fp_plugin_path
     }
     fp_spec_clear(&spec);
     return rc;
+}
+
+/* FP_HOST_EXT_SURFACE: nearest vertices of the surface the fingers touch (the posed base),
+ * from the engine's index of it. */
+static int surface_nearest(const fp_host *host, const float (*points)[3], size_t count,
+                           float max_distance, fp_surface_hit *out)
+{
+    const fp_session *s = ((const fp_mapping_host *)host->host_data)->services->user;
+    return fp_engine_step_surface(&s->engine, fp_rig_step_posed(&s->rig, s->base), points, count,
+                                  max_distance, out);
 }
 
 /* Workspace calibration (step 2's state): the mesh's unit (given, else detected from the
@@ -165,7 +190,7 @@ static int attach_rig(fp_session *s, const fp_session_options *opt, char *err, s
 int fp_session_create(const fp_session_options *opt, fp_session **out, char *err, size_t errlen)
 {
     *out = NULL;
-    if (!opt || !opt->mesh_path || !opt->plugin_path) {
+    if (!opt || (!opt->mesh_path && !opt->mesh) || !opt->plugin_path) {
         snprintf(err, errlen, "session: a mesh and a plugin path are required");
         return -EINVAL;
     }
@@ -184,8 +209,16 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
     fp_session *s = calloc(1, sizeof *s);
     if (!s) return -ENOMEM;
     s->log = (fp_slog){opt->log, opt->log_user};
-    int rc = fp_mesh_load(opt->mesh_path, &s->mesh, err, errlen);  /* its code, unchanged */
-    if (rc) goto fail;
+    int rc = 0;
+    if (opt->mesh) {
+        if (!(s->mesh = fp_mesh_copy(opt->mesh))) {
+            rc = -ENOMEM;
+            snprintf(err, errlen, "session: out of memory for the mesh");
+            goto fail;
+        }
+    } else if ((rc = fp_mesh_load(opt->mesh_path, &s->mesh, err, errlen))) { /* its code */
+        goto fail;
+    }
     s->n = s->mesh->vertex_count;
     size_t bytes = s->n * 3 * sizeof(float);
     s->loaded = malloc(bytes);
@@ -253,6 +286,24 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
         goto fail;
     }
     s->mapping_budget_ms = opt->mapping_budget_ms;
+    s->engine.jacobian = opt->measure_jacobian;
+    if ((rc = fp_engine_step_set_topology(&s->engine, s->mesh->triangles, s->mesh->triangle_count))) {
+        snprintf(err, errlen, "session: out of memory for %zu triangles", s->mesh->triangle_count);
+        goto fail;
+    }
+    if (!opt->no_contact_guard) {
+        s->guarded = malloc(bytes);
+        if (!s->guarded ||
+            (rc = fp_contact_create(s->mesh->triangles, s->mesh->triangle_count, s->n, s->loaded,
+                                    &s->contact)) ||
+            (rc = fp_contact_dilate_own(s->contact, FP_CONTACT_OWN_RINGS))) {
+            rc = rc ? rc : -ENOMEM;
+            snprintf(err, errlen, "session: out of memory for the contact guard");
+            goto fail;
+        }
+    }
+    s->services.surface.nearest = surface_nearest;
+    s->services.user = s;
     if ((rc = load_mapping(s, opt->mapping, opt->plugin_path, NULL, err, errlen))) goto fail;
     for (size_t i = 0; i < opt->input_count; i++) {
         rc = fp_input_instance_open(&s->inputs[i], opt->plugin_path, opt->inputs[i], (uint32_t)i,
@@ -307,13 +358,112 @@ static void base_changed(fp_session *s)
     fp_engine_step_set_base(&s->engine, s->shown);
 }
 
+/* The contact guard: the frame's shape (s->shown) against the shape it starts from (ref: the
+ * posed base; for a gesture the posed base, for an unanchored step the current base): when
+ * it adds self-crossings or flipped triangles, the fingers' motion is scaled back
+ * (fp_contact_guard) and s->shown becomes s->guarded. Without a rig, by induction over
+ * commits, the shown surface never crosses itself where the loaded face did not; a rig's
+ * own pose (its channels) is not checked. */
+static void contact_guard(fp_session *s, const float *ref, fp_frame_stats *st)
+{
+    if (!s->contact || s->shown == ref) return;
+    int64_t t0 = fp_now_ns();
+    fp_contact_result r;
+    fp_contact_guard(s->contact, ref, s->shown, s->guarded, FP_CONTACT_BISECTIONS, &r);
+    st->collide_ms += (double)(fp_now_ns() - t0) / 1e6;
+    st->collide_pairs += r.pairs;
+    if (!s->cg_frames) s->cg_t = 1.0;
+    s->cg_frames++;
+    if (r.t < 1) {
+        s->shown = s->guarded;
+        s->cg_limited++;
+        if (r.t < s->cg_t) s->cg_t = r.t;
+        if (r.t < st->collide_t) st->collide_t = r.t;
+    }
+}
+
+/* The gesture ended: one line when the contact guard scaled it back. */
+static void contact_end_gesture(fp_session *s)
+{
+    if (s->cg_limited)
+        fp_slog_printf(&s->log, FP_LOG_WARNING, "contact",
+                       "contact guard stopped the surface from passing through itself: reached "
+                       "%.0f%% (%lu of %lu frames scaled back)",
+                       100.0 * s->cg_t, s->cg_limited, s->cg_frames);
+    s->cg_frames = s->cg_limited = 0;
+}
+
+/* Steps 5 and 6 on the control set the engine is given (after the rig's clamp), on the
+ * posed base: evaluate, the rig's mobility blend, show, commit. Shared by fp_session_step
+ * and fp_session_apply_controls (takes played back). */
+static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame_stats *st)
+{
+    s->shown = fp_rig_step_posed(&s->rig, s->base);
+    if (cs->active && cs->count > 0) {
+        fp_engine_result er;
+        int rc = fp_engine_step_run(&s->engine, cs, s->deformed, &er, &s->log);
+        st->refactored = er.refactored;
+        st->pairs = er.pairs;
+        st->update_ms = er.update_ms;
+        st->stage_ms[FP_STAGE_SOLVE] = er.update_ms - er.eval_ms;
+        st->stage_ms[FP_STAGE_EVALUATE] = er.eval_ms;
+        st->control_vectors = cs->count;
+        st->guard_bound = er.bound;
+        st->guard_clusters = er.clusters;
+        st->guard_limited = er.clusters_limited;
+        st->guard_substeps = er.substeps;
+        st->guard_reached = er.reached;
+        st->min_det_j = er.min_det_j;
+        if (!rc) {
+            st->active = true;
+            const float *ref = s->shown; /* the posed base */
+            s->shown = fp_rig_step_finish(&s->rig, s->deformed);
+            contact_guard(s, ref, st);
+            if (cs->intents & FP_INTENT_COMMIT) {
+                int64_t t0 = fp_now_ns();
+                if (s->rig.rig) {
+                    /* with a rig only the fingers' part goes into the base */
+                    fp_history_commit(&s->history, fp_rig_step_commit_shape(&s->rig, s->base, s->shown));
+                    base_changed(s); /* the anchored gesture ended; unanchored restarts anyway */
+                } else if (s->shown == s->guarded) {
+                    /* the guard scaled the motion back: its shape goes into the base and
+                     * the output buffer; the engine re-indexes the whole base */
+                    memcpy(s->deformed, s->guarded, s->n * 3 * sizeof(float));
+                    fp_history_commit(&s->history, s->deformed);
+                    fp_engine_step_set_base(&s->engine, s->base);
+                    s->shown = s->base;
+                } else {
+                    fp_history_commit(&s->history, s->deformed);
+                    /* the anchored gesture ended; unanchored restarts anyway. Only the blocks
+                     * the engine rewrote are re-indexed. */
+                    fp_engine_step_commit(&s->engine, s->base);
+                    s->shown = s->base;
+                }
+                st->stage_ms[FP_STAGE_COMMIT] = (double)(fp_now_ns() - t0) / 1e6;
+                st->committed = true;
+            }
+        }
+    } else {
+        fp_history_end_gesture(&s->history);
+        fp_engine_step_end_gesture(&s->engine, &s->log);
+        contact_end_gesture(s);
+    }
+    s->engaged = cs->active && !(cs->intents & (FP_INTENT_COMMIT | FP_INTENT_CANCEL));
+}
+
 void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
 {
     fp_frame_stats local;
     if (!st) st = &local;
     memset(st, 0, sizeof *st);
     st->frame = s->frame;
+    st->guard_reached = 1.0;
+    st->min_det_j = NAN;
+    st->collide_t = 1.0;
 
+    int64_t tick = fp_now_ns(), tock;
+#define FP_STAGE_END(stage)                                                                   \
+    (tock = fp_now_ns(), st->stage_ms[stage] += (double)(tock - tick) / 1e6, tick = tock)
     /* 1: inputs and intents. */
     fp_record_step_begin(&s->record);
     st->events = s->intents.clocked
@@ -321,8 +471,10 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
                                               s->engaged, &s->log, on_event, s)
                      : fp_intents_drain(&s->intents, s->inputs, s->input_count, s->engaged,
                                         &s->log, on_event, s);
+    FP_STAGE_END(FP_STAGE_EVENTS);
     /* 2: hand poses in mesh units. */
     fp_pose_build(&s->pose);
+    FP_STAGE_END(FP_STAGE_HANDS);
 
     /* 3: the mapping. */
     fp_frame_input in;
@@ -347,7 +499,8 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     in.rig = fp_rig_step_view(&s->rig);
     const float *surface = fp_rig_step_posed(&s->rig, s->base); /* what the fingers touch */
     s->view.base = surface;
-    fp_engine_tip_distances(surface, s->n, s->pose.poses, in.tip_distance);
+    fp_engine_step_tip_distances(&s->engine, s->pose.poses, in.tip_distance); /* on its base: the posed surface */
+    FP_STAGE_END(FP_STAGE_DISTANCES);
     fp_mapping_step_run(&s->mapping_step, s->mapping, s->mapping_name, &in, &s->cs, &s->log);
     st->engaged = s->cs.intents & FP_INTENT_ENGAGE;
     if (s->cs.intents & FP_INTENT_CANCEL) {
@@ -359,34 +512,38 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     if (fp_rig_step_update(&s->rig, &s->cs, s->base, &s->log))
         fp_engine_step_set_base(&s->engine, fp_rig_step_posed(&s->rig, s->base));
     const fp_control_set *cs = fp_rig_step_run(&s->rig, &s->cs);
+    FP_STAGE_END(FP_STAGE_MAPPING);
 
     /* 5: the engine. 6: history. */
-    s->shown = fp_rig_step_posed(&s->rig, s->base);
-    if (cs->active && cs->count > 0) {
-        fp_engine_result er;
-        int rc = fp_engine_step_run(&s->engine, cs, s->deformed, &er, &s->log);
-        st->refactored = er.refactored;
-        st->pairs = er.pairs;
-        st->update_ms = er.update_ms;
-        st->control_vectors = cs->count;
-        if (!rc) {
-            st->active = true;
-            s->shown = fp_rig_step_finish(&s->rig, s->deformed);
-            if (cs->intents & FP_INTENT_COMMIT) {
-                /* with a rig only the fingers' part goes into the base */
-                fp_history_commit(&s->history, fp_rig_step_commit_shape(&s->rig, s->base, s->shown));
-                base_changed(s); /* the anchored gesture ended; unanchored restarts anyway */
-                st->committed = true;
-            }
-        }
-    } else {
-        fp_history_end_gesture(&s->history);
-    }
-    s->engaged = cs->active && !(cs->intents & (FP_INTENT_COMMIT | FP_INTENT_CANCEL));
+    engine_and_history(s, cs, st);
 
+#undef FP_STAGE_END
     /* 7: the recorder. */
-    fp_record_step_end(&s->record, s->frame, now_ns, in.requested, cs, s->inputs, s->input_count,
-                       &s->log);
+    fp_record_step_end(&s->record, s->frame, now_ns, in.requested | s->actions, cs, s->inputs,
+                       s->input_count, &s->log);
+    s->actions = 0;
+    s->frame++;
+}
+
+void fp_session_apply_controls(fp_session *s, int64_t now_ns, const fp_control_set *cs,
+                               uint32_t requested, fp_frame_stats *st)
+{
+    fp_frame_stats local;
+    if (!st) st = &local;
+    memset(st, 0, sizeof *st);
+    st->frame = s->frame;
+    st->collide_t = 1.0;
+    fp_record_step_begin(&s->record);
+    st->engaged = cs->intents & FP_INTENT_ENGAGE;
+    st->cancelled = cs->intents & FP_INTENT_CANCEL;
+    /* 4: the rig poses the base from the stored channels; the stored set is already the
+     * one the rig's clamp returned, so it goes to the engine as it is. */
+    if (fp_rig_step_update(&s->rig, cs, s->base, &s->log))
+        fp_engine_step_set_base(&s->engine, fp_rig_step_posed(&s->rig, s->base));
+    engine_and_history(s, cs, st);
+    fp_record_step_end(&s->record, s->frame, now_ns, requested | s->actions, cs, s->inputs,
+                       s->input_count, &s->log);
+    s->actions = 0;
     s->frame++;
 }
 
@@ -405,6 +562,13 @@ bool fp_session_inputs_ready(fp_session *s, int64_t t)
 bool fp_session_finished(const fp_session *s) { return fp_intents_all_ended(&s->intents, s->input_count); }
 
 void fp_session_request(fp_session *s, uint32_t intents) { fp_intents_request(&s->intents, intents); }
+
+unsigned fp_session_record_toggles(fp_session *s)
+{
+    unsigned n = s->intents.record_toggles;
+    s->intents.record_toggles = 0;
+    return n;
+}
 const float *fp_session_positions(const fp_session *s) { return s->shown; }
 const float *fp_session_base(const fp_session *s) { return s->base; }
 const float *fp_session_loaded(const fp_session *s) { return s->loaded; }
@@ -417,7 +581,9 @@ const fp_control_set *fp_session_control_set(const fp_session *s) { return &s->c
 
 const struct csrbf_solver *fp_session_solver(const fp_session *s)
 {
-    return s->shown != s->base && !s->rig.rig ? fp_engine_step_solver(&s->engine) : NULL;
+    /* not when the contact guard scaled the shape back: the solver's map is not what is shown */
+    return s->shown != s->base && s->shown != s->guarded && !s->rig.rig
+               ? fp_engine_step_solver(&s->engine) : NULL;
 }
 
 const struct fp_rig *fp_session_rig(const fp_session *s) { return s->rig.rig; }
@@ -459,17 +625,25 @@ static void destroy_mapping(fp_session *s, fp_mapping *m, const char *name)
     fp_plugin_call_leave();
 }
 
-/* After undo or reset: the mapping forgets its gesture. */
+/* After undo or reset: the mapping forgets its gesture, and so does the control set that
+ * fp_session_control_set shows (no deformation until the next frame makes one). */
 static void after_set_base(fp_session *s)
 {
     base_changed(s);
     reset_mapping(s);
+    s->cs.active = false;
+    s->cs.count = 0;
+    s->cs.intents = 0;
+    s->engaged = false;
 }
+
+unsigned long fp_session_commits(const fp_session *s) { return s->history.gestures; }
 
 bool fp_session_undo(fp_session *s)
 {
     if (!fp_history_undo(&s->history)) return false;
     after_set_base(s);
+    s->actions |= FP_SESSION_ACTION_UNDO;
     return true;
 }
 
@@ -478,6 +652,7 @@ void fp_session_reset(fp_session *s)
     fp_history_reset(&s->history, s->loaded);
     fp_rig_step_neutral(&s->rig);
     after_set_base(s);
+    s->actions |= FP_SESSION_ACTION_RESET;
 }
 
 /* Replace the mapping by one made from spec (from file where not NULL); the old one stays on
@@ -515,6 +690,8 @@ static int swap_mapping(fp_session *s, const fp_plugin_path *path, const char *s
     s->shown = fp_rig_step_posed(&s->rig, s->base);
     s->engaged = false;
     fp_history_end_gesture(&s->history);
+    fp_engine_step_end_gesture(&s->engine, &s->log);
+    contact_end_gesture(s);
     fp_engine_step_invalidate(&s->engine);
     fp_mapping_step_init(&s->mapping_step, &s->cs, s->mapping_budget_ms);
     reset_mapping(s);
@@ -570,6 +747,12 @@ unsigned long fp_session_dropped(const fp_session *s)
 
 int fp_session_save(const fp_session *s, const char *path, char *err, size_t errlen)
 {
+    return fp_session_save_ex(s, path, NULL, err, errlen);
+}
+
+int fp_session_save_ex(const fp_session *s, const char *path, unsigned *dropped, char *err,
+                       size_t errlen)
+{
     fp_mesh out = *s->mesh;
     size_t bytes = s->n * 3 * sizeof(float);
     out.positions = (float *)s->shown;
@@ -579,7 +762,7 @@ int fp_session_save(const fp_session *s, const char *path, char *err, size_t err
         return -ENOMEM;
     }
     fp_mesh_compute_normals(&out);
-    int rc = fp_mesh_save(&out, path, err, errlen);  /* its code, unchanged */
+    int rc = fp_mesh_save_ex(&out, path, dropped, err, errlen);  /* its code, unchanged */
     free(out.normals);
     return rc;
 }
@@ -611,10 +794,13 @@ void fp_session_destroy(fp_session **sp)
     fp_session_stop(s, msg, sizeof msg);
     fp_mapping_step_flush(&s->mapping_step, &s->log);
     fp_engine_step_flush(&s->engine, &s->log);
+    contact_end_gesture(s);
     for (size_t i = 0; i < s->input_count; i++) fp_input_instance_close(&s->inputs[i]);
     destroy_mapping(s, s->mapping, s->mapping_name);
     fp_plugin_unload(&s->mapping_plugin);
     fp_engine_step_free(&s->engine);
+    fp_contact_destroy(&s->contact);
+    free(s->guarded);
     fp_rig_step_free(&s->rig);
     fp_history_free(&s->history);
     fp_intents_free(&s->intents);

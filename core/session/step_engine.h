@@ -7,9 +7,26 @@
  * Per frame: a solver is created when the support radius changes; the system is factored
  * when the start points differ (bitwise) from the ones last factored, else the factor is
  * reused (anchored gestures: only the end points move); the end points are solved; the
- * guard hook runs (a no-op today: the fold-over guard of the trust issue goes there); the
- * base is evaluated. Also here: each fingertip's distance to the base surface, which the
- * mapping reads (fp_frame_input.tip_distance).
+ * fold-over guard makes the map injective; the base is evaluated. Also here: each
+ * fingertip's distance to the base surface, which the mapping reads
+ * (fp_frame_input.tip_distance).
+ *
+ * The fold-over guard (issue 10 item 1; csrbf.h "fold-over guard", csrbf.md pitfall 4):
+ * every map the session applies has the engine's injectivity bound L <= FP_ENGINE_GUARD_MARGIN
+ * (L < 1 means T injective with det dT/dx > 0 everywhere, so the surface cannot cross
+ * itself), decided from the solved coefficients, per cluster of overlapping supports:
+ *  - a gesture (start points kept from the last factorisation: anchored, or the first frame
+ *    of one) is limited (csrbf_solver_limit_end_points): a cluster over the margin has its
+ *    control vectors shortened in proportion, the factor is kept, other clusters untouched;
+ *  - a one-shot step (start points new this frame and committed at once: unanchored) is
+ *    composed (csrbf_guarded_step): up to CSRBF_GUARD_MAX_SUBSTEPS injective maps, each
+ *    start point travelling its cluster's share, until every end point is reached; beyond
+ *    that the rest of the step is dropped (a composition of injective maps is injective).
+ * So the face follows the fingers as far as an injective map allows: an unanchored step
+ * reaches its end points (in sub-steps), an anchored gesture stops where the map would
+ * start to fold. What the guard did is in fp_engine_result (per frame) and, once per
+ * gesture (not per frame), a log line: "fold-over guard limited the deformation to 63%
+ * this gesture ...".
  *
  * Errors: the engine's codes (csrbf.h: CSRBF_ERR_*) are returned unchanged and reported
  * through the log once with a count (source "engine", csrbf_strerror and the solver's
@@ -34,22 +51,52 @@ extern "C" {
 
 #define FP_ENGINE_MAX_CONTROL 64   /* the session's control-set capacity */
 
+/** The guard's margin: a map is applied when its bound L <= 0.9. L bounds the Lipschitz
+ *  constant of T - id, so every singular value of dT/dx lies in [1 - L, 1 + L]: 0.9 keeps a
+ *  surface from being compressed more than tenfold by one map while losing only 10% of the
+ *  reach that injectivity allows (a single centre folds at |alpha| = R / max|psi'|; the
+ *  mappings' own 0.45 R clamp of a control vector sits just below that, 0.474 R for psi31,
+ *  and stays as a first line). Smaller margins cost reach and, unanchored, more sub-steps. */
+#define FP_ENGINE_GUARD_MARGIN 0.9
+
 typedef struct fp_engine_step {
     csrbf_solver *solver;         /* NULL until the first run */
     double solver_radius;         /* the radius the solver was made for */
     csrbf_points *points;         /* the base vertices, blocked for evaluation */
+    csrbf_touch *touch;           /* which blocks of the (persistent) output differ from the base */
+    bool touched_valid;           /* the last write of the output was csrbf_evaluate_touched */
+    float *scratch;               /* n x 3: the Jacobian evaluation's output (e->jacobian) */
     int threads;                  /* csrbf_options.threads */
     bool factored;                /* factored_start holds the factored start points */
     size_t factored_count;
     float factored_start[FP_ENGINE_MAX_CONTROL][3];
     fp_slog_repeat errors;        /* the engine's repeated error */
+    bool jacobian;                /* measure min det dT/dx (fp_engine_result.min_det_j) */
+    /* the surface service (FP_HOST_EXT_SURFACE): triangles around each vertex */
+    const uint32_t *tris;         /* the mesh's triangles (not owned) */
+    uint32_t *vt_start, *vt;      /* vertex v's triangles: vt[vt_start[v] .. vt_start[v+1]) */
+    /* the current gesture, for the guard's one line per gesture */
+    unsigned long g_frames, g_limited, g_composed;
+    double g_reached;             /* smallest fraction reached over the gesture */
+    int g_substeps;               /* most sub-steps in one frame */
+    double g_bound;               /* largest requested bound */
 } fp_engine_step;
 
 /** What one run did. */
 typedef struct fp_engine_result {
     bool refactored;              /* factored anew (start points or radius changed) */
     uint64_t pairs;               /* vertex-centre pairs evaluated */
-    double update_ms;             /* factor/solve + guard + evaluate, milliseconds */
+    double update_ms;             /* factor/solve + guard + evaluate, milliseconds (without
+                                     the Jacobian measurement) */
+    double eval_ms;               /* of update_ms: the evaluation (a composed step: all of it) */
+    double jacobian_ms;           /* the min det J evaluation (e->jacobian), milliseconds */
+    double bound;                 /* injectivity bound L of the requested map (first map) */
+    size_t clusters;              /* clusters of overlapping supports */
+    size_t clusters_limited;      /* clusters the guard scaled back (first map) */
+    int substeps;                 /* maps composed (1: one map) */
+    double reached;               /* smallest fraction of a control vector reached (1: all) */
+    double min_det_j;             /* min det dT/dx over the moved vertices and the maps
+                                     applied when e->jacobian, else NAN */
 } fp_engine_result;
 
 /** Index n base vertices (n x 3 floats, mesh units; not copied: csrbf_points copies them
@@ -58,21 +105,32 @@ typedef struct fp_engine_result {
 int fp_engine_step_init(fp_engine_step *e, size_t n, const float *base, int threads);
 void fp_engine_step_free(fp_engine_step *e);
 
-/** The base changed (commit, undo, reset): re-index it and forget the factor. */
+/** The base changed to something the output buffer does not show (undo, reset, a new
+ *  base): re-index it whole, forget the factor, and the next run rewrites the whole output. */
 void fp_engine_step_set_base(fp_engine_step *e, const float *base);
+
+/** A commit: base is now the output buffer of the last run (deformed copied into it).
+ *  Re-indexes only the vertex ranges that run wrote (csrbf_points_update_ranges; all after a
+ *  composed step), csrbf_touch_commit, forgets the factor. */
+void fp_engine_step_commit(fp_engine_step *e, const float *base);
+
+/** The vertex ranges ((first, count) pairs) of the output that the last run rewrote, for a
+ *  viewer's partial upload; SIZE_MAX (and *ranges NULL) when the whole output may have
+ *  changed (after a composed step or a new base). */
+size_t fp_engine_step_touched(const fp_engine_step *e, const uint32_t **ranges);
 
 /** Forget the factor (a new gesture, a new mapping): the next run factors anew. */
 void fp_engine_step_invalidate(fp_engine_step *e);
 
-/** The guard hook, between solve and evaluate: may check or limit the solved coefficients
- *  (csrbf_kernel_foldover_bound). Today a no-op that returns 0; the trust issue's fold-over
- *  guard goes here. A negative return stops the run with that code. */
-int fp_engine_step_guard(fp_engine_step *e, const fp_control_set *cs);
-
 /** Run the engine on cs (cs->count <= FP_ENGINE_MAX_CONTROL, radius > 0, checked by the
- *  mapping step) and write deformed (n x 3 floats). Returns 0 (warnings of csrbf are not
- *  errors) or a negative csrbf code, unchanged; on error deformed may be partly written and
- *  must not be shown; the error is reported through log (once, then counted). */
+ *  mapping step) and write deformed (n x 3 floats; the same buffer on every call, written by
+ *  nobody else: only the blocks in a support now or at the last run are rewritten,
+ *  csrbf_evaluate_touched, bit for bit what a full evaluation gives): T(base) with the fold-over guard (see
+ *  above: limited when the start points are those last factored or the step is not
+ *  committed this frame, composed when the start points are new and cs commits).
+ *  Returns 0 (warnings of csrbf, CSRBF_WARN_LIMITED included, are not errors) or a negative
+ *  csrbf code, unchanged; on error deformed may be partly written and must not be shown; the
+ *  error is reported through log (once, then counted). */
 int fp_engine_step_run(fp_engine_step *e, const fp_control_set *cs, float *deformed,
                        fp_engine_result *res, const fp_slog *log);
 
@@ -80,12 +138,38 @@ int fp_engine_step_run(fp_engine_step *e, const fp_control_set *cs, float *defor
  *  before the first. */
 const csrbf_solver *fp_engine_step_solver(const fp_engine_step *e);
 
-/** Report a pending repeated error; call at destruction. */
+/** The gesture ended (a frame without a deformation, a cancel, destruction): when the guard
+ *  acted during it, one log line (source "engine"): FP_LOG_WARNING "fold-over guard limited
+ *  the deformation to P% this gesture (...)" when some end point was not reached, else
+ *  FP_LOG_INFO "fold-over guard composed N steps ... this gesture". Then forgets it. */
+void fp_engine_step_end_gesture(fp_engine_step *e, const fp_slog *log);
+
+/** Report a pending repeated error and the gesture's guard line; call at destruction. */
 void fp_engine_step_flush(fp_engine_step *e, const fp_slog *log);
 
-/** Distance from each fingertip (FP_JOINT_TIP) of each present hand to the nearest of the n
- *  base vertices (mesh units), +INFINITY for an absent hand: brute force over the base
- *  (10 tips x 27k vertices is about 0.1 ms). */
+/** Distance from each fingertip (FP_JOINT_TIP) of each present hand to the nearest base
+ *  vertex (mesh units), +INFINITY for an absent hand: csrbf_points_nearest on the engine's
+ *  own blocks (all tips in one pass over the blocks within reach), equal bit for bit to
+ *  fp_engine_tip_distances on the same base. */
+void fp_engine_step_tip_distances(const fp_engine_step *e, const fp_hand_pose hands[FP_HANDS],
+                                  float d[FP_HANDS][FP_FINGERS]);
+
+/** Give the engine the mesh's triangles (t x 3, kept by pointer, must outlive e) for
+ *  fp_engine_step_surface: builds each vertex's triangle list. Returns 0 or -ENOMEM. */
+int fp_engine_step_set_topology(fp_engine_step *e, const uint32_t *tris, size_t t);
+
+/** The host's surface service (plugin.h FP_HOST_EXT_SURFACE) on the current base: for each
+ *  query point (count x 3, mesh units) the nearest base vertex within max_distance
+ *  (csrbf_points_nearest: equal to a brute force), its position, distance and unit normal
+ *  (the area-weighted normal of fp_mesh_normals, computed for that vertex alone from its
+ *  triangles); vertex UINT32_MAX, distance INFINITY and zeros where none is within reach.
+ *  base: the base the engine indexes (n x 3). Returns 0, -EINVAL (NULL, a non-finite query,
+ *  a NaN or negative max_distance) or -ENODATA (no topology). No allocation. */
+int fp_engine_step_surface(const fp_engine_step *e, const float *base, const float (*points)[3],
+                           size_t count, float max_distance, fp_surface_hit *out);
+
+/** The reference: the same distances by a scalar brute-force loop over the n base vertices
+ *  (tests and `bench --case frame`; about 0.45 ms on the ICT face). */
 void fp_engine_tip_distances(const float *base, size_t n, const fp_hand_pose hands[FP_HANDS],
                              float d[FP_HANDS][FP_FINGERS]);
 

@@ -7,12 +7,17 @@
  *
  * Engage and commit come from the performer's requests (FP_INTENT_ENGAGE / _COMMIT /
  * _CANCEL: pedal, keys) and, unless auto=0, from the paper's rule: engage when a hand's
- * fingertip comes within the support radius of the surface; commit when every engaged
- * hand's fingertips are farther than release x R from the base (the hand has let go).
+ * fingertip comes within engage x R of the surface; commit when every engaged hand's
+ * fingertips are farther than release x R from the base (the hand has let go). The start
+ * points are the fingertips at engage: engaging at the support's edge (engage=1) would hold
+ * the surface where the Wendland function is ~0 and move nothing, so the default engages at
+ * half the radius (psi_{3,1}(0.5) = 0.19 there) and releases at R (hysteresis).
  *
- * Keys: hands=left|right|both (both), auto=0|1 (1), release=F (1.0, in R),
+ * Keys: hands=left|right|both (both), auto=0|1 (1), engage=F (0.5, in R), release=F (1.0, in R),
  *       clamp=F (0.45, longest control vector in R; 0 = no limit; keeps the warp
- *       injective, shared/docs/csrbf.md pitfall 4).
+ *       injective, shared/docs/csrbf.md pitfall 4), points=tips|tips+palm|all (tips: the
+ *       paper's fingertips; tips+palm adds the palm centre and the knuckles, all every
+ *       joint: 5, 11 or 21 points per hand, mapping_util.h fp_points).
  */
 #include <facepuppet/mapping_util.h>
 #include <facepuppet/plugin.h>
@@ -26,12 +31,14 @@ typedef struct anchored {
     fp_mapping mapping;
     unsigned hands;              /* FP_HANDMASK_* listened to */
     bool automatic;
-    double release, clamp;
+    double engage, release, clamp;
+    int points;                  /* fp_points mode */
+    size_t per_hand;             /* points per hand (FP_POINTS_*_COUNT) */
     bool engaged;
     unsigned engaged_hands;      /* hands whose tips are the start points */
     size_t count;
-    float start[FP_HANDS * FP_FINGERS][3];
-    float last_end[FP_HANDS * FP_FINGERS][3];
+    float start[FP_CONTROL_CAPACITY][3];
+    float last_end[FP_CONTROL_CAPACITY][3];
 } anchored;
 
 static int engage(anchored *a, const fp_frame_input *in, bool requested)
@@ -39,7 +46,7 @@ static int engage(anchored *a, const fp_frame_input *in, bool requested)
     unsigned which = 0;
     for (int h = 0; h < FP_HANDS; h++) {
         if (!(a->hands & (1u << h)) || !in->hands[h].present) continue;
-        if (requested || fp_hand_is_near(in, h, 1.0)) which |= 1u << h;
+        if (requested || fp_hand_is_near(in, h, a->engage)) which |= 1u << h;
     }
     if (!which) return 0;
     a->engaged = true;
@@ -47,8 +54,7 @@ static int engage(anchored *a, const fp_frame_input *in, bool requested)
     a->count = 0;
     for (int h = 0; h < FP_HANDS; h++) {
         if (!(which & (1u << h))) continue;
-        fp_hand_tips(in, h, &a->start[a->count]);
-        a->count += FP_FINGERS;
+        a->count += fp_hand_points(in, h, a->points, &a->start[a->count]);
     }
     memcpy(a->last_end, a->start, a->count * sizeof a->start[0]);
     return 1;
@@ -80,10 +86,10 @@ static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *o
     for (int h = 0; h < FP_HANDS; h++) {
         if (!(a->engaged_hands & (1u << h))) continue;
         if (in->hands[h].present) {
-            fp_hand_tips(in, h, &a->last_end[k]);
+            fp_hand_points(in, h, a->points, &a->last_end[k]);
             if (fp_hand_is_near(in, h, a->release)) still_near = true;
         }
-        k += FP_FINGERS;
+        k += a->per_hand;
     }
     for (size_t i = 0; i < a->count; i++) {
         memcpy(out->start[i], a->start[i], sizeof a->start[i]);
@@ -115,15 +121,19 @@ static void destroy(fp_mapping *self)
 
 /* The keys, typed (ABI 1.1): `facepuppet plugins` prints them, fpmu_params_parse checks
  * them. The order is that of the values create reads. */
-enum { KEY_HANDS, KEY_AUTO, KEY_RELEASE, KEY_CLAMP, KEY_COUNT };
+enum { KEY_HANDS, KEY_AUTO, KEY_RELEASE, KEY_CLAMP, KEY_ENGAGE, KEY_POINTS, KEY_COUNT };
 static const fp_param_info keys[KEY_COUNT + 1] = {
     {"hands", FP_PARAM_ENUM, 0, 0, "both", "left|right|both", NULL, "which hands deform"},
     {"auto", FP_PARAM_BOOL, 0, 1, "1", NULL, NULL,
-     "engage when a fingertip comes within R of the surface, commit when the hand lets go"},
+     "engage when a fingertip comes within engage x R of the surface, commit when the hand lets go"},
     {"release", FP_PARAM_FLOAT, 0.1, 100, "1.0", NULL, "R",
      "auto commit once every engaged fingertip is farther than release x R"},
     {"clamp", FP_PARAM_FLOAT, 0, 100, "0.45", NULL, "R",
      "longest control vector (0: no limit)"},
+    {"engage", FP_PARAM_FLOAT, 0.01, 100, "0.5", NULL, "R",
+     "auto engage once a fingertip is within engage x R of the surface"},
+    {"points", FP_PARAM_ENUM, 0, 0, "tips", FP_POINTS_CHOICES, NULL,
+     "points of contact per hand: the 5 tips, + palm centre and knuckles (11), every joint (21)"},
     {NULL, 0, 0, 0, NULL, NULL, NULL, NULL},
 };
 static const unsigned hand_masks[] = {FP_HANDMASK_LEFT, FP_HANDMASK_RIGHT, FP_HANDMASK_BOTH};
@@ -139,8 +149,12 @@ static int create(const fp_host *host, const fp_param *params, size_t nparams,
     if (!a) return -ENOMEM;
     a->hands = hand_masks[(int)v[KEY_HANDS].number];
     a->automatic = v[KEY_AUTO].number != 0;
+    a->engage = v[KEY_ENGAGE].number;
     a->release = v[KEY_RELEASE].number;
     a->clamp = v[KEY_CLAMP].number;
+    a->points = (int)v[KEY_POINTS].number;
+    int joints[FP_POINTS_MAX];
+    a->per_hand = fp_points_joints(a->points, joints);
     a->mapping.size = sizeof a->mapping;
     a->mapping.plugin_data = a;
     a->mapping.process = process;
@@ -154,10 +168,13 @@ static const fp_mapping_factory factory = {
     .size = sizeof(fp_mapping_factory),
     .name = "anchored",
     .description = "the paper's anchored mode: start points fixed at engage, end points follow",
-    .usage = "anchored[,hands=left|right|both][,auto=0|1][,release=F][,clamp=F]\n"
-             "  auto=1 engages when a fingertip comes within R of the surface and commits when\n"
-             "  the hand lets go (farther than release*R); clamp limits each control vector\n"
-             "  to clamp*R (0.45 keeps the warp free of fold-over).",
+    .usage = "anchored[,hands=left|right|both][,auto=0|1][,engage=F][,release=F][,clamp=F]\n"
+             "        [,points=tips|tips+palm|all]\n"
+             "  auto=1 engages when a fingertip comes within engage*R of the surface (0.5)\n"
+             "  and commits when the hand lets go (farther than release*R, 1.0); clamp limits\n"
+             "  each control vector to clamp*R (0.45 keeps the warp free of fold-over).\n"
+             "  points: the fingertips (5 per hand, the paper's), tips+palm (+ palm centre and\n"
+             "  knuckles: 11) or all (every joint: 21 per hand, 42 for two).",
     .create = create,
     .params = keys,
 };

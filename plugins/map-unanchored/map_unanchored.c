@@ -9,7 +9,8 @@
  * engaged (FP_INTENT_ENGAGE until FP_INTENT_COMMIT or _CANCEL). Each step is already in the
  * base, so cancel only ends the gesture; it cannot take steps back.
  *
- * Keys: hands=left|right|both (both), auto=0|1 (1), clamp=F (0.45, longest step in R).
+ * Keys: hands=left|right|both (both), auto=0|1 (1), clamp=F (0.45, longest step in R),
+ *       points=tips|tips+palm|all (5, 11 or 21 points per hand, mapping_util.h fp_points).
  */
 #include <facepuppet/mapping_util.h>
 #include <facepuppet/plugin.h>
@@ -24,9 +25,10 @@ typedef struct unanchored {
     unsigned hands;
     bool automatic;
     double clamp;
+    int points;                                /* fp_points mode */
     bool held;                                 /* engaged by request */
     bool have_last[FP_HANDS];
-    float last[FP_HANDS][FP_FINGERS][3];
+    float last[FP_HANDS][FP_POINTS_MAX][3];
 } unanchored;
 
 static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *out)
@@ -49,17 +51,17 @@ static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *o
             continue;
         }
         bool acts = u->held || (u->automatic && fp_hand_is_near(in, h, 1.0));
-        float tips[FP_FINGERS][3];
-        fp_hand_tips(in, h, tips);
+        float pts[FP_POINTS_MAX][3];
+        size_t n = fp_hand_points(in, h, u->points, pts);
         if (acts && u->have_last[h]) {
-            if (out->capacity < k + FP_FINGERS) return -ENOSPC;
-            for (int f = 0; f < FP_FINGERS; f++, k++) {
-                memcpy(out->start[k], u->last[h][f], sizeof tips[f]);
-                memcpy(out->end[k], tips[f], sizeof tips[f]);
+            if (out->capacity < k + n) return -ENOSPC;
+            for (size_t f = 0; f < n; f++, k++) {
+                memcpy(out->start[k], u->last[h][f], sizeof pts[f]);
+                memcpy(out->end[k], pts[f], sizeof pts[f]);
                 fp_clamp_vector(out->start[k], out->end[k], u->clamp * in->radius);
             }
         }
-        memcpy(u->last[h], tips, sizeof tips);
+        memcpy(u->last[h], pts, n * sizeof pts[0]);
         u->have_last[h] = true;
     }
     out->count = k;
@@ -83,12 +85,14 @@ static void destroy(fp_mapping *self)
 }
 
 /* The keys, typed (ABI 1.1). */
-enum { KEY_HANDS, KEY_AUTO, KEY_CLAMP, KEY_COUNT };
+enum { KEY_HANDS, KEY_AUTO, KEY_CLAMP, KEY_POINTS, KEY_COUNT };
 static const fp_param_info keys[KEY_COUNT + 1] = {
     {"hands", FP_PARAM_ENUM, 0, 0, "both", "left|right|both", NULL, "which hands deform"},
     {"auto", FP_PARAM_BOOL, 0, 1, "1", NULL, NULL,
      "a hand acts while a fingertip is within R of the surface"},
     {"clamp", FP_PARAM_FLOAT, 0, 100, "0.45", NULL, "R", "longest step (0: no limit)"},
+    {"points", FP_PARAM_ENUM, 0, 0, "tips", FP_POINTS_CHOICES, NULL,
+     "points of contact per hand: the 5 tips, + palm centre and knuckles (11), every joint (21)"},
     {NULL, 0, 0, 0, NULL, NULL, NULL, NULL},
 };
 static const unsigned hand_masks[] = {FP_HANDMASK_LEFT, FP_HANDMASK_RIGHT, FP_HANDMASK_BOTH};
@@ -105,6 +109,7 @@ static int create(const fp_host *host, const fp_param *params, size_t nparams,
     u->hands = hand_masks[(int)v[KEY_HANDS].number];
     u->automatic = v[KEY_AUTO].number != 0;
     u->clamp = v[KEY_CLAMP].number;
+    u->points = (int)v[KEY_POINTS].number;
     u->mapping.size = sizeof u->mapping;
     u->mapping.plugin_data = u;
     u->mapping.process = process;
@@ -118,9 +123,10 @@ static const fp_mapping_factory factory = {
     .size = sizeof(fp_mapping_factory),
     .name = "unanchored",
     .description = "the paper's unanchored mode: each step from the last fingertips to the new",
-    .usage = "unanchored[,hands=left|right|both][,auto=0|1][,clamp=F]\n"
+    .usage = "unanchored[,hands=left|right|both][,auto=0|1][,clamp=F][,points=tips|tips+palm|all]\n"
              "  a hand acts while a fingertip is within R of the surface (auto=1) or while\n"
-             "  engaged; each step is folded into the base at once.",
+             "  engaged; each step is folded into the base at once. points: the fingertips\n"
+             "  (5 per hand), tips+palm (+ palm centre and knuckles: 11) or all (21 per hand).",
     .create = create,
     .params = keys,
 };

@@ -263,6 +263,35 @@ static void test_refused_up_front(void **state)
 
 /* One tracking glitch (a palm and its joints 3 m away for one sample) moves nothing in the
  * recording's workspace (2nd-98th percentiles): the same box as without it. */
+/* facepuppet calibrate: hold mode on a real recording writes a file that run accepts (its
+ * placement is checked in tests/pose: the median palm lands on the face); touch mode refuses
+ * a recording without three touches, naming why; bad requests fail up front. */
+static void test_calibrate(void **state)
+{
+    (void)state;
+    char args[9000], rec[4300], ict[4300];
+    snprintf(rec, sizeof rec, "replay:%s/hands/leap-motion/three-claps_joints_mm.csv,fast=1", data);
+    snprintf(ict, sizeof ict, "%s/faces/ict-facekit/generic_neutral_mesh.obj", data);
+    snprintf(args, sizeof args, "calibrate --mesh %s --input %s --out cal-hold.json", ict, rec);
+    assert_int_equal(fp(args), 0);
+    assert_non_null(strstr(out, "wrote cal-hold.json: 10.24 mm per mesh unit"));
+    snprintf(args, sizeof args, "run --mesh %s --input %s --calibration cal-hold.json --out h.obj", ict, rec);
+    assert_int_equal(fp(args), 0);
+    assert_non_null(strstr(out, "scale: 10.24 mm per mesh unit (from the calibration)"));
+    /* touch: three-claps has no three touches */
+    snprintf(args, sizeof args, "calibrate --mode touch --mesh %s --input %s --out t.json", ict, rec);
+    assert_int_equal(fp(args), 65);
+    assert_non_null(strstr(out, "chin, nose tip and forehead"));
+    snprintf(args, sizeof args, "calibrate --mesh %s --input replay:%s/hands/leap-motion/"
+             "grab_cyberglove_like_angles_deg.csv,fast=1 --out g.json", ict, data);
+    assert_int_equal(fp(args), 65);
+    assert_non_null(strstr(out, "no joint positions (only joint angles)"));
+    snprintf(args, sizeof args, "calibrate --mesh %s --input %s --out /nonexistent-dir/c.json", ict, rec);
+    assert_int_equal(fp(args), 73);
+    assert_int_equal(fp("calibrate --mode poke --input x --out y.json"), 64);
+    assert_int_equal(fp("calibrate --input x"), 64);
+}
+
 static void test_robust_workspace(void **state)
 {
     (void)state;
@@ -333,7 +362,8 @@ int main(void)
         cmocka_unit_test(test_info),           cmocka_unit_test(test_missing_mesh),
         cmocka_unit_test(test_frames_out_and_monitor),
         cmocka_unit_test(test_deterministic),  cmocka_unit_test(test_refused_up_front),
-        cmocka_unit_test(test_robust_workspace), cmocka_unit_test(test_glove_deforms),
+        cmocka_unit_test(test_robust_workspace),
+        cmocka_unit_test(test_calibrate), cmocka_unit_test(test_glove_deforms),
     };
     int rc = cmocka_run_group_tests(tests, NULL, NULL);
     char cmd[512];

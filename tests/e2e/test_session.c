@@ -48,8 +48,17 @@ static void run_session(const char *mapping, outcome *o)
             for (size_t v = 0; v < n; v++) {
                 bool inside = false;
                 for (size_t c = 0; c < cs->count && !inside; c++) {
-                    double d2 = 0;
-                    for (int k = 0; k < 3; k++) d2 += pow(before[3 * v + k] - cs->start[c][k], 2);
+                    /* the fold-over guard may compose sub-steps whose centres lie on the
+                     * segment start -> end: the union of their supports is the capsule */
+                    double se[3], sv[3], ss = 0, t = 0, d2 = 0;
+                    for (int k = 0; k < 3; k++) {
+                        se[k] = (double)cs->end[c][k] - cs->start[c][k];
+                        sv[k] = (double)before[3 * v + k] - cs->start[c][k];
+                        ss += se[k] * se[k];
+                        t += se[k] * sv[k];
+                    }
+                    t = ss > 0 ? fmin(1, fmax(0, t / ss)) : 0;
+                    for (int k = 0; k < 3; k++) d2 += pow(sv[k] - t * se[k], 2);
                     inside = d2 < R * R * 1.0001;
                 }
                 if (inside) continue;

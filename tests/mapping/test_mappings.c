@@ -4,6 +4,7 @@
 #include "fp_plugin_host.h"
 #include "fp_test_support.h"
 
+#include <errno.h>
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -83,7 +84,11 @@ static void test_anchored_auto(void **state)
     assert_false(r.cs.active);
     assert_int_equal(r.cs.intents, 0);
 
-    place_right(&r, 0, 0, 0.5f, 0.5f * R); /* within R: engage, start = end = tips */
+    place_right(&r, 0, 0, 0.7f, 0.7f * R); /* within R but beyond engage (0.5 R): nothing */
+    step(&r, 0);
+    assert_false(r.cs.active);
+
+    place_right(&r, 0, 0, 0.5f, 0.45f * R); /* within 0.5 R: engage, start = end = tips */
     step(&r, 0);
     assert_true(r.cs.active);
     assert_true(r.cs.intents & FP_INTENT_ENGAGE);
@@ -101,8 +106,11 @@ static void test_anchored_auto(void **state)
     assert_float_equal(r.end[2][0], 2.2, 1e-6);
     assert_float_equal(r.end[2][1], 0.1, 1e-6);
 
-    place_right(&r, 10, 0, 0.5f, 0.5f * R); /* a huge jump is clamped to 0.45 R */
+    place_right(&r, 10, 0, 0.5f, 0.9f * R); /* a huge jump is clamped to 0.45 R; still held
+                                             * (release beyond R) */
     step(&r, 0);
+    assert_true(r.cs.active);
+    assert_int_equal(r.cs.intents, 0);
     for (int i = 0; i < 5; i++) {
         double d = 0;
         for (int k = 0; k < 3; k++) d += pow(r.end[i][k] - r.start[i][k], 2);
@@ -201,11 +209,97 @@ static void test_bad_keys(void **state)
     close_mapping(&r);
 }
 
+/* Put every joint of hand h at a distinct point: joint j at (base + j, 10 h, z). */
+static void place_joints(rig *r, int h, float base, float z, float dist)
+{
+    fp_hand_pose *p = &r->in.hands[h];
+    p->present = true;
+    for (int j = 0; j < FP_HAND_JOINTS; j++) {
+        p->joints[j][0] = base + (float)j;
+        p->joints[j][1] = 10.0f * (float)h;
+        p->joints[j][2] = z;
+    }
+    for (int f = 0; f < FP_FINGERS; f++) r->in.tip_distance[h][f] = dist;
+}
+
+/* points=tips|tips+palm|all: 5, 11 or 21 points per hand, 42 for two; the tips first, then
+ * (tips+palm) the palm centre and the five knuckles, or (all) every other joint in layout
+ * order; end points follow the same joints. */
+static void test_points(void **state)
+{
+    (void)state;
+    static const struct { const char *mode; size_t per_hand; int extra[6]; } modes[] = {
+        {"tips", 5, {-1}},
+        {"tips+palm", 11, {FP_JOINT_PALM, FP_JOINT(0, 1), FP_JOINT(1, 0), FP_JOINT(2, 0),
+                           FP_JOINT(3, 0), FP_JOINT(4, 0)}},
+        {"all", 21, {-1}},
+    };
+    for (size_t m = 0; m < 3; m++) {
+        for (int anchored = 0; anchored <= 1; anchored++) {
+            rig r;
+            char err[1024];
+            fp_param p[] = {{"points", modes[m].mode}};
+            assert_int_equal(open_mapping(&r, anchored ? "anchored" : "unanchored", p, 1, err), 0);
+            /* within R/2 of the surface: the anchored mapping engages there by default */
+            place_joints(&r, FP_HAND_LEFT, 0, 0.5f, 0.4f * R);
+            place_joints(&r, FP_HAND_RIGHT, 100, 0.5f, 0.4f * R);
+            step(&r, 0);
+            if (!anchored) { /* unanchored: a step from the last points to the new */
+                place_joints(&r, FP_HAND_LEFT, 0.1f, 0.5f, 0.4f * R);
+                place_joints(&r, FP_HAND_RIGHT, 100.1f, 0.5f, 0.4f * R);
+                step(&r, 0);
+            }
+            assert_true(r.cs.active);
+            size_t n = modes[m].per_hand;
+            assert_int_equal(r.cs.count, 2 * n);
+            assert_true(r.cs.count <= FP_CONTROL_CAPACITY);
+            for (int h = 0; h < FP_HANDS; h++) {
+                float base = h ? 100.0f : 0.0f;
+                bool seen[FP_HAND_JOINTS] = {false};
+                for (size_t i = 0; i < n; i++) {
+                    int j = (int)lroundf(r.start[h * n + i][0] - base);
+                    assert_true(j >= 0 && j < FP_HAND_JOINTS);
+                    assert_false(seen[j]);
+                    seen[j] = true;
+                    if (i < 5) assert_int_equal(j, FP_JOINT_TIP(i));    /* the tips first */
+                    else if (modes[m].extra[0] >= 0) assert_int_equal(j, modes[m].extra[i - 5]);
+                    assert_float_equal(r.start[h * n + i][1], 10.0 * h, 0);
+                    if (!anchored) assert_float_equal(r.end[h * n + i][0] - r.start[h * n + i][0], 0.1, 1e-4);
+                }
+            }
+            if (anchored) { /* the joints move: start fixed, every end follows its joint */
+                float s0[42][3];
+                memcpy(s0, r.start, sizeof s0);
+                place_joints(&r, FP_HAND_LEFT, 0.2f, 0.5f, 0.4f * R);
+                place_joints(&r, FP_HAND_RIGHT, 100.2f, 0.5f, 0.4f * R);
+                step(&r, 0);
+                assert_int_equal(r.cs.count, 2 * n);
+                assert_memory_equal(r.start, s0, 2 * n * sizeof s0[0]);
+                for (size_t i = 0; i < 2 * n; i++)
+                    assert_float_equal(r.end[i][0] - r.start[i][0], 0.2, 1e-4);
+            }
+            /* a host with less room than the points: -ENOSPC, nothing written past it */
+            r.cs.capacity = 2 * n - 1;
+            r.in.requested = FP_INTENT_ENGAGE;
+            place_joints(&r, FP_HAND_LEFT, 0.3f, 0.5f, 0.4f * R);
+            assert_int_equal(r.m->process(r.m, &r.in, &r.cs), -ENOSPC);
+            close_mapping(&r);
+        }
+    }
+    rig r;
+    char err[1024];
+    fp_param bad[] = {{"points", "palm"}};
+    assert_int_not_equal(open_mapping(&r, "anchored", bad, 1, err), 0);
+    assert_non_null(strstr(err, "anchored: key 'points': 'palm' is not one of tips|tips+palm|all"));
+    close_mapping(&r);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_anchored_auto), cmocka_unit_test(test_anchored_requests),
         cmocka_unit_test(test_unanchored), cmocka_unit_test(test_bad_keys),
+        cmocka_unit_test(test_points),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

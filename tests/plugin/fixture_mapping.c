@@ -8,6 +8,9 @@
  *   FIXTURE_SLOW           process busy-waits 5 ms
  *   FIXTURE_NO_INSTANCE    create returns 0 without an instance
  *   FIXTURE_SEGV           process dereferences a null pointer from frame 3 on
+ *   FIXTURE_ENGINE_FAIL    A with a support radius of 1e20 (finite and positive: the host's
+ *                             checks pass), which the engine refuses every frame (coincident
+ *                             start points would not do: the engine merges them)
  *   FIXTURE_ABI_MAJOR=2    built for ABI 2.0 */
 #define _POSIX_C_SOURCE 200809L
 #include <facepuppet/mapping_util.h>
@@ -67,6 +70,9 @@ static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *o
         }
         out->active = true;
     }
+#ifdef FIXTURE_ENGINE_FAIL
+    out->radius = 1e20;
+#endif
 #ifdef FIXTURE_NAN
     if (out->active) out->end[0][1] = NAN;
 #endif

@@ -1,7 +1,8 @@
 #!/bin/sh
 # `facepuppet plugins check` passes every built-in plugin and fails each fixture plugin with a
 # message naming the cause; `facepuppet run` names the mapping at fault (overrun: exit 78,
-# segfault: the fatal-signal line with the frame, slow process: its time); `plugins` lists.
+# segfault: the fatal-signal line with the frame, slow process: its time; an engine error
+# on every frame: one line and its count); `plugins` lists.
 # Usage: test_plugin_check.sh FACEPUPPET FIXTURE_DIR BUILTIN_DIR   (from the source root)
 set -u
 fp=$1 fx=$2 builtin=$3
@@ -25,7 +26,7 @@ expect() {
 }
 
 # Built-in plugins pass (the glove has no device here: a documented skip, exit 0).
-expect 0 'passed: 12 checks' "$fp" plugins check "$builtin/map-anchored.so"
+expect 0 'passed: 14 checks' "$fp" plugins check "$builtin/map-anchored.so"  # 14: a check per key (engage, points)
 expect 0 'PASS  determinism' "$fp" plugins check "$builtin/map-unanchored.so"
 expect 0 'PASS  events +[0-9]+ events well-formed' "$fp" plugins check "$builtin/input-replay.so" --arg "$rec"
 expect 0 'PASS  cycle +5 x create' "$fp" plugins check "$builtin/input-pedal.so"
@@ -67,6 +68,10 @@ expect 139 "fatal signal SIGSEGV in plugin 'fixture-segv' during process \(frame
 expect 0 "mapping 'fixture-slow': process took [0-9]+\.[0-9]+ ms on frame [0-9]+, over the budget of 2 ms" run --mapping fixture-slow
 expect 0 "mapping 'fixture-nan': invalid control set .* on frame [0-9]+" run --mapping fixture-nan
 expect 78 "mapping 'fixture-noinstance': create returned 0 without an instance" run --mapping fixture-noinstance
+# An engine error on every frame (the engine refuses the radius) is one line, then its count.
+expect 0 "engine: invalid argument; keeping the last shape \(repeated [0-9]+ more times\)" run --mapping fixture-enginefail
+n=$(grep -c "engine: " "$tmp/out")
+[ "$n" = 2 ] && echo "ok: the repeated engine error: 2 lines" || { fail "engine error lines: $n, wanted 2"; sed 's/^/    /' "$tmp/out"; }
 # Mapping log lines carry the instance's name.
 expect 0 "facepuppet: mapping 'fixture': fixture A created" run --mapping fixture
 

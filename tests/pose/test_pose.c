@@ -1,6 +1,7 @@
 /* core/pose: hand state from events, forward kinematics, workspace calibration. */
 #define _GNU_SOURCE
 #include "fp_calib_file.h"
+#include "fp_calib_fit.h"
 #include "fp_mesh.h"
 #include "fp_pose.h"
 
@@ -118,7 +119,7 @@ static void test_fit_workspace(void **state)
     fp_pose_to_mesh(&c, FP_HAND_RIGHT, centre, out);
     assert_true(fabsf(out[0] - 0.f) < 1e-5f);
     assert_true(fabsf(out[1] - 2.f) < 1e-5f);
-    assert_true(fabsf(out[2] - (6.f - 0.15f * 10.f)) < 1e-5f);
+    assert_true(fabsf(out[2] - (6.f - (float)(FP_POSE_REACH_PRESS_MM * 0.1))) < 1e-5f); /* front at the face's */
     /* A rotation and a per-hand offset: a quarter turn about y maps +x to -z. */
     c.rotation[0] = c.rotation[2] = sqrt(0.5);
     c.hand_offset[FP_HAND_LEFT][1] = 3;
@@ -251,6 +252,107 @@ static void test_inputs_workspace_unknown(void **state)
     assert_true(a[0] == 1 && b[2] == 6);
 }
 
+/* Touch mode on a synthetic recording: the index fingertip rests on three known points
+ * (0.8 s each), moves between them, and pauses briefly (0.15 s, not a touch) on the way; the
+ * similarity fitted to landmarks made with a known scale, rotation and offset recovers them.
+ * Independent reference: the landmarks are built from the mm touches by the known transform
+ * (fp_pose_to_mesh), the fit must invert that. */
+static void test_calibrate_touch(void **state)
+{
+    (void)state;
+    fp_calibration want = {0};
+    want.scale = 1.0 / 9.5;
+    double ang = 0.3, ax[3] = {0.2, 1, 0.1}, na = sqrt(0.05 + 1);
+    want.rotation[0] = cos(ang / 2);
+    for (int k = 0; k < 3; k++) want.rotation[k + 1] = sin(ang / 2) * ax[k] / na;
+    want.offset[0] = 1.5, want.offset[1] = -20, want.offset[2] = 4;
+    const float touch_mm[3][3] = {{10, 120, -60}, {12, 185, -40}, {8, 250, -55}}; /* chin, nose, forehead */
+    float lm[3][3];
+    for (int i = 0; i < 3; i++) fp_pose_to_mesh(&want, -1, touch_mm[i], lm[i]);
+    /* The recording, 100 Hz: rest 0.8 s at each touch, 0.5 s moves, a 0.15 s pause midway. */
+    fp_calib_sample *smp = calloc(2000, sizeof *smp);
+    size_t n = 0;
+    float at[3] = {60, 100, 40};
+    unsigned seed = 7;
+    for (int i = 0; i <= 3; i++) {
+        const float *to = i < 3 ? touch_mm[i] : (const float[3]){60, 100, 40};
+        float from[3] = {at[0], at[1], at[2]};
+        for (int f = 0; f < 50 + (i < 3 ? 80 : 0); f++) {
+            float u = f < 50 ? (f < 20 ? f / 40.f : f < 35 ? 0.5f : (f - 15) / 40.f) : 1.f;
+            for (int k = 0; k < 3; k++) at[k] = from[k] + u * (to[k] - from[k]);
+            fp_calib_sample *sm = &smp[n];
+            sm->t_ns = (int64_t)n * 10000000LL;
+            sm->hand = FP_HAND_RIGHT;
+            for (int j = 0; j < FP_HAND_JOINTS; j++)
+                for (int k = 0; k < 3; k++) {
+                    seed = seed * 1103515245u + 12345u;
+                    float noise = ((float)((seed >> 16) & 0x7fff) / 32767.f - 0.5f) * 1.0f; /* +-0.5 mm */
+                    sm->joints[j][k] = at[k] + noise;
+                }
+            n++;
+        }
+    }
+    fp_calibration got;
+    double touched[3][3], rms;
+    char err[512];
+    assert_int_equal(fp_calib_fit_touch(smp, n, (const float(*)[3])lm, &got, touched, &rms, err, sizeof err), 0);
+    for (int i = 0; i < 3; i++)
+        for (int k = 0; k < 3; k++) {
+            assert_true(fabs(touched[i][k] - touch_mm[i][k]) < 0.5);
+        }
+    print_message("touch fit: scale %.5f (want %.5f), rms %.3g mesh units\n", got.scale, want.scale, rms);
+    assert_true(fabs(got.scale - want.scale) < 0.01 * want.scale);
+    double dot = 0;
+    for (int k = 0; k < 4; k++) dot += got.rotation[k] * want.rotation[k];
+    assert_true(fabs(dot) > cos(0.5 * M_PI / 180)); /* within 1 degree */
+    for (int k = 0; k < 3; k++) assert_true(fabs(got.offset[k] - want.offset[k]) < 0.2); /* 2 mm */
+    /* Over the whole workspace the two maps agree within 2 mm. */
+    for (int i = 0; i < 8; i++) {
+        float p[3] = {i & 1 ? 150.f : -150.f, i & 2 ? 330.f : 80.f, i & 4 ? 120.f : -120.f}, pg[3], pw[3];
+        fp_pose_to_mesh(&got, -1, p, pg);
+        fp_pose_to_mesh(&want, -1, p, pw);
+        for (int k = 0; k < 3; k++) assert_true(fabsf(pg[k] - pw[k]) < 0.2f);
+    }
+    /* Two touches only: refused with a message. */
+    assert_int_equal(fp_calib_fit_touch(smp, 2 * 130 + 20, (const float(*)[3])lm, &got, NULL, NULL, err, sizeof err), -EDOM);
+    assert_non_null(strstr(err, "need 3"));
+    /* Collinear landmarks are refused. */
+    float line[3][3] = {{0, 0, 0}, {0, 1, 0}, {0, 2, 0}};
+    assert_int_equal(fp_calib_fit_touch(smp, n, (const float(*)[3])line, &got, NULL, NULL, err, sizeof err), -EDOM);
+    free(smp);
+}
+
+/* Hold mode: one hand's median palm lands on its hold target (the ICT face). */
+static void test_calibrate_hold(void **state)
+{
+    (void)state;
+    char path[4200], err[512];
+    snprintf(path, sizeof path, "%s/faces/ict-facekit/generic_neutral_mesh.obj",
+             getenv("FP_SHARED_DATA") ? getenv("FP_SHARED_DATA") : "../shared/data");
+    fp_mesh *m = NULL;
+    assert_int_equal(fp_mesh_load(path, &m, err, sizeof err), 0);
+    fp_head head;
+    assert_int_equal(fp_head_detect(m->positions, m->vertex_count, &head), 0);
+    fp_calib_sample smp[9] = {0};
+    for (int i = 0; i < 9; i++) {
+        smp[i].hand = i % 3 ? FP_HAND_RIGHT : FP_HAND_LEFT;
+        for (int k = 0; k < 3; k++) smp[i].joints[FP_JOINT_PALM][k] = (float)(100 * k + i * (i % 2 ? 1 : -1));
+    }
+    fp_calibration c;
+    assert_int_equal(fp_calib_fit_hold(smp, 9, m->positions, m->vertex_count, &head, &c, err, sizeof err), 0);
+    assert_true(fabs(c.scale - 1 / head.mm_per_unit) < 1e-12);
+    for (int h = 0; h < 2; h++) {
+        float target[3], med[3], out[3];
+        fp_calib_hold_target(m->positions, m->vertex_count, &head, h, target);
+        /* medians: left samples 0, 3, 6 -> x {0, 3, -6}: 0; right 1,2,4,5,7,8 -> x {1,-2,-4,5,7,-8}: -0.5 */
+        med[0] = h ? -0.5f : 0.f, med[1] = 100 + med[0], med[2] = 200 + med[0];
+        fp_pose_to_mesh(&c, h, med, out);
+        for (int k = 0; k < 3; k++) assert_true(fabsf(out[k] - target[k]) < 1e-4f);
+        assert_true(target[2] > head.max[2] - 40 / head.mm_per_unit); /* on the front of the face */
+    }
+    fp_mesh_free(&m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -260,6 +362,8 @@ int main(void)
         cmocka_unit_test(test_head_detect),
         cmocka_unit_test(test_calibration_file),
         cmocka_unit_test(test_inputs_workspace_unknown),
+        cmocka_unit_test(test_calibrate_touch),
+        cmocka_unit_test(test_calibrate_hold),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -3,6 +3,7 @@
  * force. */
 #include "log_capture.h"
 #include "step_engine.h"
+#include "fp_mesh.h"
 
 #include <math.h>
 #include <setjmp.h>
@@ -75,7 +76,6 @@ static void test_factor_reuse_and_interpolation(void **state)
     fp_engine_step_invalidate(&e);
     assert_int_equal(fp_engine_step_run(&e, &cs, out, &r, NULL), 0);
     assert_true(r.refactored);
-    assert_int_equal(fp_engine_step_guard(&e, &cs), 0);
     fp_engine_step_free(&e);
     free(base);
     free(out);
@@ -137,12 +137,168 @@ static void test_tip_distances(void **state)
     free(base);
 }
 
+/* csrbf_points_nearest through the engine step equals the brute force bit for bit, on the
+ * ICT face, for tips near and far from the surface, inside the head and beyond its box. */
+static void test_tip_distances_indexed_ict(void **state)
+{
+    (void)state;
+    const char *dir = getenv("FP_SHARED_DATA") ? getenv("FP_SHARED_DATA") : "../shared/data";
+    char path[4200], err[512];
+    snprintf(path, sizeof path, "%s/faces/ict-facekit/generic_neutral_mesh.obj", dir);
+    fp_mesh *m = NULL;
+    assert_int_equal(fp_mesh_load(path, &m, err, sizeof err), 0);
+    size_t n = m->vertex_count;
+    fp_engine_step e;
+    assert_int_equal(fp_engine_step_init(&e, n, m->positions, 1), 0);
+    float lo[3], hi[3];
+    fp_mesh_bounds(m, lo, hi);
+    srand(7);
+    unsigned checked = 0;
+    for (int trial = 0; trial < 60; trial++) {
+        fp_hand_pose hands[FP_HANDS];
+        memset(hands, 0, sizeof hands);
+        for (int h = 0; h < FP_HANDS; h++) {
+            hands[h].present = trial % 3 != h; /* one hand, the other, or both */
+            for (int j = 0; j < FP_HAND_JOINTS; j++)
+                for (int k = 0; k < 3; k++) {
+                    float u = (float)rand() / (float)RAND_MAX * 1.6f - 0.3f; /* beyond the box too */
+                    float v = lo[k] + u * (hi[k] - lo[k]);
+                    /* some tips exactly on a vertex */
+                    if (j % 5 == 0) v = m->positions[3 * ((size_t)rand() % n) + k];
+                    hands[h].joints[j][k] = v;
+                }
+        }
+        if (trial % 7 == 0) /* a tip on a vertex, all three coordinates */
+            memcpy(hands[0].joints[FP_JOINT_TIP(1)], m->positions + 3 * (size_t)(trial * 311 % n), 12);
+        float a[FP_HANDS][FP_FINGERS], b[FP_HANDS][FP_FINGERS];
+        fp_engine_step_tip_distances(&e, hands, a);
+        fp_engine_tip_distances(m->positions, n, hands, b);
+        assert_memory_equal(a, b, sizeof a);
+        checked++;
+    }
+    /* the index: a vertex at the reported distance; max_dist cuts */
+    float q[2][3] = {{0, 0, 0}, {hi[0] + 100, hi[1], hi[2]}}, d[2];
+    uint32_t idx[2];
+    memcpy(q[0], m->positions + 3 * 1234, sizeof q[0]);
+    q[0][2] += 0.01f;
+    assert_int_equal(csrbf_points_nearest(e.points, &q[0][0], 2, 50.f, d, idx), 0);
+    assert_true(idx[0] < n);
+    float dx = m->positions[3 * idx[0]] - q[0][0], dy = m->positions[3 * idx[0] + 1] - q[0][1],
+          dz = m->positions[3 * idx[0] + 2] - q[0][2];
+    assert_true(sqrtf(dx * dx + dy * dy + dz * dz) == d[0]);
+    assert_true(d[0] <= 0.0101f);
+    assert_true(isinf(d[1]));
+    assert_int_equal(idx[1], UINT32_MAX);
+    float bad[3] = {NAN, 0, 0};
+    assert_int_equal(csrbf_points_nearest(e.points, bad, 1, INFINITY, d, idx), CSRBF_ERR_INVALID);
+    printf("indexed fingertip distances equal the brute force on %u tip sets (ICT, %zu vertices)\n",
+           checked, n);
+    fp_engine_step_free(&e);
+    fp_mesh_free(&m);
+}
+
+/* The engine's persistent output (touched blocks only, partial re-index at commits, the
+ * guard's limit and composed steps) equals, bit for bit, a plain full evaluation of the same
+ * maps on the same base every frame: anchored frames, a commit, unanchored committed steps
+ * (two close points pulled apart: composed), a base set back (undo). */
+static void test_touched_equals_full(void **state)
+{
+    (void)state;
+    size_t n;
+    float *base = grid(&n), *loaded = malloc(n * 3 * sizeof *loaded);
+    memcpy(loaded, base, n * 3 * sizeof *loaded);
+    float *out = malloc(n * 3 * sizeof *out), *ref = malloc(n * 3 * sizeof *ref);
+    float *rbase = malloc(n * 3 * sizeof *rbase);
+    memcpy(rbase, base, n * 3 * sizeof *rbase);
+    fp_engine_step e;
+    assert_int_equal(fp_engine_step_init(&e, n, base, 1), 0);
+    csrbf_options o = {0};
+    o.radius = 0.3;
+    o.threads = 1;
+    csrbf_solver *rs;
+    csrbf_points *rp;
+    assert_int_equal(csrbf_solver_create(&o, &rs), 0);
+    assert_int_equal(csrbf_points_create(n, rbase, &rp), 0);
+    float start[2][3], end[2][3];
+    fp_control_set cs = {0};
+    cs.size = sizeof cs;
+    cs.active = true;
+    cs.radius = 0.3;
+    cs.capacity = 2;
+    cs.count = 2;
+    cs.start = start;
+    cs.end = end;
+    unsigned composed = 0, limited = 0;
+    for (int f = 0; f < 40; f++) {
+        bool unanchored = f >= 12;
+        float cx = 0.4f + 0.05f * (float)(f % 7), cy = 0.3f + 0.04f * (float)(f % 11);
+        if (!unanchored) {
+            float t = 0.02f * (float)f;
+            float st[2][3] = {{0.5f, 0.5f, 0.1f}, {0.53f, 0.5f, 0.1f}};
+            memcpy(start, st, sizeof st);
+            memcpy(end, st, sizeof st);
+            end[0][0] -= t;
+            end[1][0] += t; /* pulled apart: folds without the guard */
+            cs.intents = f == 11 ? FP_INTENT_COMMIT : 0;
+        } else {
+            float big = f % 5 == 0 ? 0.12f : 0.02f;
+            float st[2][3] = {{cx, cy, 0.05f}, {cx + 0.02f, cy, 0.05f}};
+            memcpy(start, st, sizeof st);
+            memcpy(end, st, sizeof st);
+            end[0][0] -= big;
+            end[1][0] += big;
+            end[1][2] += 0.01f;
+            cs.intents = FP_INTENT_COMMIT;
+        }
+        fp_engine_result r;
+        assert_int_equal(fp_engine_step_run(&e, &cs, out, &r, NULL), 0);
+        composed += r.substeps > 1;
+        limited += r.clusters_limited > 0;
+        /* the reference: solve afresh, limit or compose, evaluate every vertex */
+        assert_true(csrbf_solver_solve(rs, 2, &start[0][0], &end[0][0]) >= 0);
+        csrbf_guard_stats gs;
+        assert_true(csrbf_solver_limit_end_points(rs, FP_ENGINE_GUARD_MARGIN, &gs) >= 0);
+        if (gs.clusters_limited && (cs.intents & FP_INTENT_COMMIT) && unanchored) {
+            csrbf_guard g = {FP_ENGINE_GUARD_MARGIN, CSRBF_GUARD_MAX_SUBSTEPS, 0};
+            assert_true(csrbf_guarded_step(rs, rp, 2, &start[0][0], &end[0][0], &g, ref, NULL) >= 0);
+        } else {
+            assert_int_equal(csrbf_evaluate(rs, rp, ref, 0, NULL), 0);
+        }
+        assert_memory_equal(out, ref, n * 3 * sizeof *out);
+        if (cs.intents & FP_INTENT_COMMIT) {
+            memcpy(base, out, n * 3 * sizeof *base);
+            fp_engine_step_commit(&e, base);
+            memcpy(rbase, ref, n * 3 * sizeof *rbase);
+            assert_int_equal(csrbf_points_update(rp, rbase), 0);
+        }
+        if (f == 25) { /* undo to the loaded shape */
+            memcpy(base, loaded, n * 3 * sizeof *base);
+            fp_engine_step_set_base(&e, base);
+            memcpy(rbase, loaded, n * 3 * sizeof *rbase);
+            assert_int_equal(csrbf_points_update(rp, rbase), 0);
+        }
+    }
+    printf("touched = full on 40 frames (%u limited, %u composed)\n", limited, composed);
+    assert_true(composed > 0);
+    assert_true(limited > composed);
+    csrbf_points_destroy(&rp);
+    csrbf_solver_destroy(&rs);
+    fp_engine_step_free(&e);
+    free(base);
+    free(loaded);
+    free(out);
+    free(ref);
+    free(rbase);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_factor_reuse_and_interpolation),
         cmocka_unit_test(test_engine_error_once),
         cmocka_unit_test(test_tip_distances),
+        cmocka_unit_test(test_tip_distances_indexed_ict),
+        cmocka_unit_test(test_touched_equals_full),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -162,6 +162,38 @@ static void test_deform_commit_undo(void **state)
     stbi_image_free(c.px);
 }
 
+/* The HUD follows the session (issue 10): ENGAGED clears and the commit count goes back on
+ * undo, reset and a dropped mesh; `print hud` prints what the HUD shows. */
+static void test_hud_follows_undo_reset_drop(void **state)
+{
+    (void)state;
+    /* --rig none: the scale then comes from the head, as the expected lines say */
+    assert_int_equal(live("--rig none -i 'replay:%s' -M anchored,auto=0 --frames 2000 --script "
+                          "'wait hands; key E; wait frames 3; print hud; key C; wait frames 3; "
+                          "key E; wait frames 3; key C; wait frames 3; print hud; "
+                          "key E; wait frames 3; key Z; print hud; key Z; print hud; "
+                          "key E; wait frames 3; key C; wait frames 3; key R; print hud; "
+                          "key E; wait frames 3; drop %s; wait frames 1; print hud; close'",
+                          rec, face),
+                     0);
+    assert_true(out_contains("state ENGAGED commits 0 scale 10.24 mm per mesh unit (detected from the head"));
+    assert_true(out_contains("state committed commits 2 "));
+    assert_true(out_contains("state idle commits 1 "));  /* undo while engaged: the gesture */
+    assert_true(out_contains("state idle commits 0 "));  /* is dropped, the base goes back */
+    assert_false(out_contains("state ENGAGED commits 1"));
+    assert_false(out_contains("state ENGAGED commits 2"));
+    /* reset and the dropped mesh: idle, no commits (three lines, counted below) */
+    char path[512], out[8192] = "";
+    snprintf(path, sizeof path, "%s/out.txt", tmp);
+    FILE *f = fopen(path, "r");
+    assert_non_null(f);
+    out[fread(out, 1, sizeof out - 1, f)] = '\0';
+    fclose(f);
+    int idle0 = 0;
+    for (const char *p = out; (p = strstr(p, "state idle commits 0 ")); p++) idle0++;
+    assert_int_equal(idle0, 3);
+}
+
 static void test_close_button_and_esc(void **state)
 {
     (void)state;
@@ -206,10 +238,61 @@ static void test_command_line_errors(void **state)
     assert_int_equal(live("--frames 1 --screenshot /nonexistent-dir/x.png"), 73);
 }
 
+/* Takes in live: T records (REC in red at the top right), T again stops and the timeline
+ * strip shows the take as a block; scrubbing the strip from the first frame (pose A, the
+ * engage: no deformation) to the last (pose B) changes the face. */
+static void test_take_rec_timeline_scrub(void **state)
+{
+    (void)state;
+    /* --rig none: the deformation checked here is the fingers', not the rig's clamp */
+    assert_int_equal(live("--rig none --input 'replay:%s' --take-dir '%s/takes' --slate scene --script "
+                          "'wait hands; key T; key E; wait end; wait frames 3; shot %s/rec.png; "
+                          "key T; wait frames 2; shot %s/strip.png; scrub 0; wait frames 1; "
+                          "shot %s/a.png; scrub 1; wait frames 1; shot %s/b.png; close'",
+                          rec, tmp, tmp, tmp, tmp, tmp), 0);
+    char path[512];
+    snprintf(path, sizeof path, "%s/takes/scene_T001.fptake", tmp);
+    struct stat st;
+    assert_int_equal(stat(path, &st), 0);
+    image r = load("rec.png"), s = load("strip.png"), a = load("a.png"), b = load("b.png");
+    /* REC: red pixels in the top right (the box and the letters) while recording, none after */
+    int red_rec = 0, red_after = 0;
+    for (int y = 0; y < 40; y++)
+        for (int x = r.w / 2; x < r.w; x++) {
+            const unsigned char *p = at(&r, x, y), *q = at(&s, x, y);
+            red_rec += p[0] > 200 && p[1] < 80 && p[2] < 80;
+            red_after += q[0] > 200 && q[1] < 80 && q[2] < 80;
+        }
+    print_message("red pixels: %d recording, %d after\n", red_rec, red_after);
+    assert_true(red_rec > 100);
+    assert_int_equal(red_after, 0);
+    /* the strip (bottom, y 194..212 at 320x240): the reviewed take's block, light blue */
+    int block = 0, block_before = 0;
+    for (int y = 194; y < 212; y++)
+        for (int x = 8; x < 312; x++) {
+            const unsigned char *p = at(&s, x, y), *q = at(&r, x, y);
+            block += diff(p, (const unsigned char[]){115, 178, 255}) < 12;
+            block_before += diff(q, (const unsigned char[]){115, 178, 255}) < 12;
+        }
+    print_message("strip block pixels: %d (before the take: %d)\n", block, block_before);
+    assert_true(block > 2000);
+    assert_int_equal(block_before, 0);
+    /* scrubbing changes the face: pixels of the face area that differ between frames */
+    int changed = 0;
+    for (int y = 40; y < 180; y++)
+        for (int x = 60; x < 260; x++) changed += diff(at(&a, x, y), at(&b, x, y)) > 8;
+    print_message("face pixels changed by scrubbing: %d\n", changed);
+    assert_true(changed > 50);
+    free(r.px);
+    free(s.px);
+    free(a.px);
+    free(b.px);
+}
+
 static void write_recording(void)
 {
-    /* Leap joints CSV, one right hand: pose A on the left cheek (x about 40 mm), pose B 15 mm
-     * up and 15 mm toward the performer, 1.5 s later. Fingers point at the face (-z). */
+    /* Leap joints CSV, one right hand: pose A on the left cheek (x about 40 mm), pose B 35 mm
+     * up and 35 mm toward the performer, 1.5 s later. Fingers point at the face (-z). */
     snprintf(rec, sizeof rec, "%s/two-poses_joints_mm.csv", tmp);
     FILE *f = fopen(rec, "w");
     assert_non_null(f);
@@ -222,7 +305,7 @@ static void write_recording(void)
                                              fingers[fi], joints[j], fingers[fi], joints[j]);
     fputs("\n", f);
     for (int row = 0; row < 2; row++) {
-        double dy = row ? 15 : 0, dz = row ? 15 : 0;
+        double dy = row ? 35 : 0, dz = row ? 35 : 0;
         fprintf(f, "%d,%d,7,right,40,%.1f,%.1f,0,-1,0,0,0,-1", row, row ? 1500000 : 0, 200 + dy, -40 + dz);
         for (int fi = 0; fi < 5; fi++) {
             double x = 22 + 9 * fi, y = (fi ? 212 : 200) + dy;
@@ -261,9 +344,11 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_screenshot_shows_face),
         cmocka_unit_test(test_deform_commit_undo),
+        cmocka_unit_test(test_hud_follows_undo_reset_drop),
         cmocka_unit_test(test_close_button_and_esc),
         cmocka_unit_test(test_drop_mesh_and_mapping_keys),
         cmocka_unit_test(test_command_line_errors),
+        cmocka_unit_test(test_take_rec_timeline_scrub),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

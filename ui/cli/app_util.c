@@ -2,8 +2,10 @@
 
 #include "command.h"
 #include "fp_error.h"
+#include "fp_session_take.h"
 
 #include <errno.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -74,11 +76,50 @@ bool fp_app_session_defaults(fp_session_options *so, double speed, fp_app_inputs
     if (!so->mapping) so->mapping = "anchored";
     for (size_t i = 0; i < so->input_count; i++) {
         const char *in = so->inputs[i];
-        if (speed != 1 && !strncmp(in, "replay", 6) && (in[6] == ':' || in[6] == ',' || !in[6]) &&
-            !strstr(in, ",speed=")) {
+        bool paced = (!strncmp(in, "replay", 6) && (in[6] == ':' || in[6] == ',' || !in[6])) ||
+                     (!strncmp(in, "take", 4) && (in[4] == ':' || in[4] == ','));
+        if (speed != 1 && paced && !strstr(in, ",speed=")) {
             snprintf(buf->specs[i], sizeof buf->specs[i], "%s,speed=%g", in, speed);
             so->inputs[i] = buf->specs[i];
         }
     }
+    /* A take performed again: its hands where the take had them (the recorded calibration). */
+    for (size_t i = 0; i < so->input_count && !so->calibration; i++) {
+        fp_spec spec;
+        char err[512];
+        if (strncmp(so->inputs[i], "take:", 5) || fp_spec_parse(so->inputs[i], &spec, err, sizeof err))
+            continue;
+        fp_take_reader *r = NULL;
+        if (spec.arg && !fp_take_reader_open(spec.arg, &r, err, sizeof err)) {
+            const fp_take_header *h = fp_take_reader_header(r);
+            for (int hand = FP_HANDS - 1; hand >= 0 && !so->calibration; hand--) {
+                const fp_take_calibration *c = &h->calibration[hand];
+                if (!c->present || !(c->scale > 0)) continue;
+                buf->take_calibration.scale = c->scale;
+                memcpy(buf->take_calibration.offset, c->offset, sizeof c->offset);
+                so->calibration = &buf->take_calibration;
+            }
+            fp_take_reader_close(&r);
+        }
+        fp_spec_clear(&spec);
+    }
     return demo;
+}
+
+fp_take_rate fp_app_take_rate(double fps)
+{
+    if (fps == floor(fps)) return (fp_take_rate){(uint32_t)fps, 1};
+    if (fabs(fps * 1001 - floor(fps * 1001 + 0.5)) < 1e-6 * fps && fabs(fps - round(fps) * 1000 / 1001) < 1e-3)
+        return (fp_take_rate){(uint32_t)round(fps) * 1000, 1001};
+    return (fp_take_rate){(uint32_t)llround(fps * 1000), 1000};
+}
+
+void fp_app_print_take(FILE *f, const char *prefix, const fp_session_take_result *r)
+{
+    char in[32], out[32];
+    fp_timecode_format(&r->timecode_in, in, sizeof in);
+    fp_timecode_format(&r->timecode_out, out, sizeof out);
+    fprintf(f, "%s: take %s: %llu frames, %llu dropped, timecode %s - %s%s\n", prefix, r->path,
+            (unsigned long long)r->frames, (unsigned long long)r->dropped, in, out,
+            r->error ? " (stopped by an error)" : "");
 }

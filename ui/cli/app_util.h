@@ -4,8 +4,10 @@
 
 #include "fp_plugin_host.h"
 #include "fp_session.h"
+#include "fp_session_take.h"
 
 #include <stdbool.h>
+#include <stdio.h>
 
 /** The plugin path: --plugin-dir folders, FACEPUPPET_PLUGIN_PATH, the built-in folder. */
 void fp_app_plugin_path(fp_plugin_path *path, const char *const *dirs, size_t ndirs);
@@ -46,17 +48,32 @@ typedef struct fp_app_inputs {
     char demo_mesh[4096];
     char demo_input[4200];
     char specs[FP_SESSION_MAX_INPUTS][4300];
+    fp_calibration take_calibration;   /* a take input's recorded calibration */
 } fp_app_inputs;
 
 /** Defaults shared by `run` and `live`. With neither a mesh nor an input the session is the
  *  demo: the ICT face and the three-claps recording (returns true). Without a mesh: the ICT
  *  face. Without a mapping: "anchored". A speed other than 1 is appended as `,speed=X` to
- *  every replay input that sets none. Strings point into *buf. */
+ *  every replay or take input that sets none. With no calibration and a `take:FILE` input,
+ *  the calibration the take recorded (so that a take performed again sees its hands where
+ *  they were). Strings point into *buf. */
 bool fp_app_session_defaults(fp_session_options *so, double speed, fp_app_inputs *buf);
 
 /** `facepuppet info RIG.json` (cmd_pose.c): describe the rig and check it against its mesh
  *  (the mesh the rig names under the shared data folder, when it is there). Returns an exit
  *  code. */
 int fp_app_rig_info(const char *path);
+
+/** `facepuppet info TAKE.fptake` (cmd_takes.c): header, summary, the cut warning. Returns an
+ *  exit code. */
+int fp_app_take_info(const char *path);
+
+/** The take frame rate of a session loop at fps frames per second: N/1 for a whole number,
+ *  else fps*1000/1000 (29.97 -> 30000/1001). */
+fp_take_rate fp_app_take_rate(double fps);
+
+/** One line about a finished take to f: "PREFIX: take PATH: N frames, D dropped, timecode
+ *  IN - OUT" (and its error, if it stopped on one). */
+void fp_app_print_take(FILE *f, const char *prefix, const fp_session_take_result *r);
 
 #endif

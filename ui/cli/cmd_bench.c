@@ -26,6 +26,12 @@ static void usage(FILE *f)
             "           grid at R = 10 and 80, 1M and 1.8M grids with about 1%% in support\n"
             "  take     the take recorder's cost on the session thread per frame (median, p99)\n"
             "           and a take's size per minute at 60 fps\n"
+            "  frame    the session's whole frame through the session API: the ICT face and\n"
+            "           ICT subdivided in memory (3 midpoint levels, about 1.7M vertices), the\n"
+            "           three-claps recording at its own pace, 60 frames a second, anchored;\n"
+            "           medians and p99 of each stage (events, hands, distances, mapping,\n"
+            "           solve, evaluate, commit), of the frame, and of the brute-force\n"
+            "           fingertip distances on the same frame's hands (about 15 s)\n"
             "Columns: pairs = (vertex, centre) pairs inside the support (paper: its count);\n"
             "ms_ref = the brute-force loop (all pairs, scalar double, one thread) for the same\n"
             "update, or for 'reused' the fresh factor-and-solve; ratio = ms_ref / ms_median.\n"
@@ -65,7 +71,12 @@ static int bench_main(int argc, char **argv)
             return FP_EXIT_USAGE;
         }
     }
-    return fp_app_exit_code(fp_bench_run(&o), FP_APP_INPUT);
+    fp_plugin_path path;
+    fp_app_plugin_path(&path, NULL, 0); /* the replay and anchored plugins, for 'frame' */
+    o.plugin_path = &path;
+    int rc = fp_bench_run(&o);
+    fp_plugin_path_clear(&path);
+    return fp_app_exit_code(rc, FP_APP_INPUT);
 }
 
 const fp_command fp_command_bench = {

@@ -10,6 +10,19 @@
 #include <string.h>
 #include <strings.h>
 
+/* A take: its extension (.fptake) or its signature's first bytes ("\x89FPTAKE\n"). */
+static bool is_take(const char *path)
+{
+    const char *dot = strrchr(path, '.');
+    if (dot && !strcasecmp(dot, ".fptake")) return true;
+    char sig[8] = "";
+    FILE *f = fopen(path, "rb");
+    if (!f) return false;
+    size_t n = fread(sig, 1, sizeof sig, f);
+    fclose(f);
+    return n == sizeof sig && !memcmp(sig, "\x89" "FPTAKE\n", sizeof sig);
+}
+
 static bool is_mesh(const char *path)
 {
     static const char *exts[] = {".obj", ".ply", ".off", ".stl", ".gltf", ".glb"};
@@ -93,12 +106,14 @@ static int info_main(int argc, char **argv)
         fprintf(f, "usage: facepuppet info FILE\n\n"
                    "A mesh (OBJ, PLY, OFF, STL, glTF): vertices, triangles, bounds, units.\n"
                    "A recording (joints CSV, angles CSV, event log): frames, rate, hands, duration.\n"
-                   "A rig (RIG.json): regions, landmarks, hinge, channels; checked against its mesh.\n");
+                   "A rig (RIG.json): regions, landmarks, hinge, channels; checked against its mesh.\n"
+                   "A take (.fptake): its header, frames, timecode, and where it was cut if it was.\n");
         return argc == 2 ? FP_EXIT_OK : FP_EXIT_USAGE;
     }
     const char *dot = strrchr(argv[1], '.');
     if (dot && !strcasecmp(dot, ".json")) return fp_app_rig_info(argv[1]);
+    if (is_take(argv[1])) return fp_app_take_info(argv[1]);
     return is_mesh(argv[1]) ? mesh_info(argv[1]) : recording_info(argv[1]);
 }
 
-const fp_command fp_command_info = {"info", "what a mesh or a recording holds", info_main};
+const fp_command fp_command_info = {"info", "what a mesh, recording, rig or take holds", info_main};

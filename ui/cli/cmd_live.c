@@ -44,10 +44,15 @@ static void usage(FILE *f)
         "      --gpu-warp         evaluate the warp in the vertex shader; checked against the\n"
         "                         CPU engine by transform feedback (reported at exit)\n"
         "      --vsync            wait for the display (default: never, swap interval 0)\n"
+        "      --take-dir DIR     T (or the pedal's middle button) records takes in DIR\n"
+        "      --slate NAME       the takes' slate (default \"take\"); numbers go up per slate\n"
+        "      --countdown S      count S seconds down before a take starts\n"
         "  -h, --help             this text\n\n"
         "Keys: space pause, E engage, C commit, X cancel, Z undo, R reset, 1 anchored,\n"
         "2 unanchored, [ ] radius, W wireframe, S screenshot, F frame, H hands, Tab HUD,\n"
-        "? keys, Esc quit. Mouse: left orbit, right pan, wheel zoom. Drop a mesh to load it.\n"
+        "? keys, Esc quit, T take start/stop, P play/pause the last take, , . a frame back/on.\n"
+        "Mouse: left orbit (on the take strip: scrub), right pan, wheel zoom. Drop a mesh.\n"
+        "Script: also 'scrub F' (the take strip at fraction F).\n"
         "At exit it prints the frame time and the input-event-to-frame latency (median, p99).\n\n"
         "Exit status: 0 done, 64 usage, 65 bad input data, 66 input or display missing,\n"
         "73 output not writable, 78 plugin missing or incompatible, 1 other failure\n"
@@ -80,12 +85,14 @@ static char *read_file(const char *path)
 static int live_main(int argc, char **argv)
 {
     enum { OPT_SIZE = FP_SESSION_OPTS_FIRST_FREE, OPT_FRAMES, OPT_SHOT, OPT_SCRIPT, OPT_GPU,
-           OPT_VSYNC };
+           OPT_VSYNC, OPT_TAKE_DIR, OPT_SLATE, OPT_COUNTDOWN };
     static const struct option own[] = {
         {"out", required_argument, 0, 'o'},
         {"size", required_argument, 0, OPT_SIZE},  {"frames", required_argument, 0, OPT_FRAMES},
         {"screenshot", required_argument, 0, OPT_SHOT}, {"script", required_argument, 0, OPT_SCRIPT},
         {"gpu-warp", no_argument, 0, OPT_GPU},     {"vsync", no_argument, 0, OPT_VSYNC},
+        {"take-dir", required_argument, 0, OPT_TAKE_DIR}, {"slate", required_argument, 0, OPT_SLATE},
+        {"countdown", required_argument, 0, OPT_COUNTDOWN},
         {"help", no_argument, 0, 'h'},             {0, 0, 0, 0}};
     struct option opts[FP_SESSION_OPTS_COUNT + sizeof own / sizeof own[0]];
     memcpy(opts + fp_session_opts_longopts(opts), own, sizeof own);
@@ -122,6 +129,23 @@ static int live_main(int argc, char **argv)
         case OPT_SCRIPT: script_arg = optarg; break;
         case OPT_GPU: vo.gpu_warp = true; break;
         case OPT_VSYNC: vo.vsync = true; break;
+        case OPT_TAKE_DIR: vo.take_dir = optarg; break;
+        case OPT_SLATE:
+            if (!fp_take_slate_valid(optarg)) {
+                fprintf(stderr, "facepuppet live: --slate '%s': use 1-63 of A-Z a-z 0-9 . _ -\n", optarg);
+                return FP_EXIT_USAGE;
+            }
+            vo.slate = optarg;
+            break;
+        case OPT_COUNTDOWN: {
+            char *end;
+            vo.countdown_s = strtod(optarg, &end);
+            if (end == optarg || *end || !(vo.countdown_s >= 0 && vo.countdown_s <= 60)) {
+                fprintf(stderr, "facepuppet live: --countdown must be 0..60 seconds, got '%s'\n", optarg);
+                return FP_EXIT_USAGE;
+            }
+            break;
+        }
         case 'h': usage(stdout); return FP_EXIT_OK;
         default: usage(stderr); return FP_EXIT_USAGE;
         }

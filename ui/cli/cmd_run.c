@@ -3,6 +3,8 @@
 #include "app_util.h"
 #include "command.h"
 #include "fp_session.h"
+#include "fp_session_take.h"
+#include "app_export.h"
 #include "session_opts.h"
 #include "fp_stats.h"
 
@@ -48,6 +50,12 @@ static void usage(FILE *f)
         "      --frames-out DIR   also write one mesh per frame, every frame at --fps\n"
         "                         (DIR/frame_000123_t2.050s.obj: number, time on the input clock)\n"
         "      --fps N            frames per second of the session loop (default 60)\n"
+        "      --export FILE      every frame into FILE: .gltf/.glb (morph-target animation,\n"
+        "                         0.1 mm), .pc2/.mdd (point caches); see facepuppet export\n"
+        "      --take-dir DIR     record the run as a take in DIR (SLATE_TNNN.fptake; see\n"
+        "                         facepuppet takes, play, --input take:FILE)\n"
+        "      --slate NAME       the take's slate (default \"take\"); numbers go up per slate\n"
+        "      --take-description TEXT  a line stored in the take's header\n"
         "      --budget MS        report a mapping process() slower than MS (default 2)\n\n"
         "The run steps on the recordings' own clock (frame k at t0 + k/fps), not the wall\n"
         "clock: the same inputs and options give bit-identical meshes whatever --speed,\n"
@@ -97,11 +105,15 @@ static int check_out(const char *out)
 
 static int run_main(int argc, char **argv)
 {
-    enum { OPT_FRAMES_OUT = FP_SESSION_OPTS_FIRST_FREE, OPT_FPS, OPT_BUDGET };
+    enum { OPT_FRAMES_OUT = FP_SESSION_OPTS_FIRST_FREE, OPT_FPS, OPT_BUDGET, OPT_TAKE_DIR,
+           OPT_SLATE, OPT_TAKE_DESC, OPT_EXPORT };
     static const struct option own[] = {
         {"out", required_argument, 0, 'o'},        {"frames-out", required_argument, 0, OPT_FRAMES_OUT},
         {"fps", required_argument, 0, OPT_FPS},    {"help", no_argument, 0, 'h'},
         {"budget", required_argument, 0, OPT_BUDGET},
+        {"take-dir", required_argument, 0, OPT_TAKE_DIR}, {"slate", required_argument, 0, OPT_SLATE},
+        {"take-description", required_argument, 0, OPT_TAKE_DESC},
+        {"export", required_argument, 0, OPT_EXPORT},
         {0, 0, 0, 0}};
     struct option opts[FP_SESSION_OPTS_COUNT + sizeof own / sizeof own[0]];
     memcpy(opts + fp_session_opts_longopts(opts), own, sizeof own);
@@ -110,6 +122,7 @@ static int run_main(int argc, char **argv)
     fp_session_opts sopt;
     fp_session_opts_init(&sopt, &so);
     const char *out = NULL, *frames_out = NULL;
+    const char *take_dir = NULL, *slate = NULL, *take_desc = NULL, *export_file = NULL;
     double fps = 60;
     char *end;
     optind = 1;
@@ -127,6 +140,10 @@ static int run_main(int argc, char **argv)
                 return FP_EXIT_USAGE;
             }
             break;
+        case OPT_TAKE_DIR: take_dir = optarg; break;
+        case OPT_SLATE: slate = optarg; break;
+        case OPT_TAKE_DESC: take_desc = optarg; break;
+        case OPT_EXPORT: export_file = optarg; break;
         case OPT_BUDGET:
             so.mapping_budget_ms = strtod(optarg, &end);
             if (*end || !(so.mapping_budget_ms > 0 && so.mapping_budget_ms <= 1000)) {
@@ -171,11 +188,37 @@ static int run_main(int argc, char **argv)
         }
     }
 
+    fp_export_format export_fmt;
+    if (export_file && fp_export_format_from_path(export_file, &export_fmt)) {
+        fprintf(stderr, "facepuppet run: --export %s: give a file ending in .gltf, .glb, .pc2 "
+                "or .mdd\n", export_file);
+        return FP_EXIT_USAGE;
+    }
+    if ((slate || take_desc) && !take_dir) {
+        fprintf(stderr, "facepuppet run: --slate and --take-description need --take-dir\n");
+        return FP_EXIT_USAGE;
+    }
+    if (slate && !fp_take_slate_valid(slate)) {
+        fprintf(stderr, "facepuppet run: --slate '%s': use 1-63 of A-Z a-z 0-9 . _ - (not "
+                "starting with '.')\n", slate);
+        return FP_EXIT_USAGE;
+    }
+    /* --take-dir: the session's record sink feeds the take recorder (fp_session_take.h). */
+    fp_session_take take;
+    fp_session_take_options take_opt = {.dir = take_dir, .slate = slate,
+                                        .description = take_desc, .rate = fp_app_take_rate(fps)};
+    fp_session_take_init(&take, &take_opt, &so);
+    if (take_dir) {
+        so.record = fp_session_take_sink;
+        so.record_user = &take;
+    }
+
     fp_plugin_path path;
     fp_app_plugin_path(&path, sopt.plugin_dirs, sopt.nplugin_dirs);
     so.plugin_path = &path;
     so.log = log_line;
     so.input_clock = true;
+    so.measure_jacobian = true; /* min det J in the summary (the same shape, a slower path) */
     char err[2048];
     fp_session *s = NULL;
     rc = fp_session_create(&so, &s, err, sizeof err);
@@ -189,8 +232,17 @@ static int run_main(int argc, char **argv)
                 "scale: %.4g mm per mesh unit (%s)\n", so.mesh_path, fp_session_vertex_count(s),
                 fp_session_rig_how(s), so.mapping, fp_session_radius(s), so.input_count, fp_session_head(s)->mm_per_unit, fp_session_head(s)->how);
     }
+    /* --export: every frame into one animation file (core/export), finished after the run */
+    fp_exporter *ex = NULL;
+    if (export_file && (rc = fp_app_export_open("facepuppet run", export_file, fp_session_mesh(s),
+                                                fp_session_head(s)->mm_per_unit, "run", &ex))) {
+        fp_session_destroy(&s);
+        fp_plugin_path_clear(&path);
+        return rc;
+    }
     if ((rc = fp_session_start(s, err, sizeof err))) {
         fprintf(stderr, "facepuppet run: %s\n", err);
+        fp_export_abort(&ex);
         fp_session_destroy(&s);
         fp_plugin_path_clear(&path);
         return fp_app_exit_code(rc, FP_APP_INPUT);
@@ -200,7 +252,9 @@ static int run_main(int argc, char **argv)
 
     size_t cap = 1024, nupdates = 0;
     double *update_ms = malloc(cap * sizeof *update_ms);
-    uint64_t frames = 0, commits = 0, engages = 0, active_frames = 0;
+    uint64_t frames = 0, commits = 0, engages = 0, active_frames = 0, guarded = 0, limited = 0;
+    double min_det_j = INFINITY, collide_t = 1.0;
+    uint64_t collided = 0;
     int status = FP_EXIT_OK;
     /* The clock: the recordings' own (frame k at t0 + k/fps, each step only once every
      * recording has delivered past it), else the wall clock (live devices only). */
@@ -209,6 +263,12 @@ static int run_main(int argc, char **argv)
     while ((clock = fp_session_input_start(s, &t0)) == 0 && !interrupted) sleep_until(fp_now_ns() + 200000);
     bool input_clock = clock == 1;
     if (!input_clock) t0 = wall0;
+    /* The take's time origin (timecode in) is the first frame's time. */
+    if (take_dir && !interrupted && (rc = fp_session_take_start(&take, s, t0, err, sizeof err))) {
+        fprintf(stderr, "facepuppet run: take: %s\n", err);
+        status = fp_app_exit_code(rc, FP_APP_OUTPUT);
+        interrupted = 1;
+    }
     for (uint64_t k = 0; !interrupted; k++) {
         int64_t now = t0 + (int64_t)llround((double)k * 1e9 / fps);
         if (input_clock) {
@@ -224,11 +284,26 @@ static int run_main(int argc, char **argv)
         engages += st.engaged;
         active_frames += st.active;
         if (st.active) {
+            guarded += st.guard_limited > 0 || st.guard_substeps > 1;
+            limited += st.guard_reached < 1.0;
+            if (st.min_det_j < min_det_j) min_det_j = st.min_det_j;
+        }
+        if (st.collide_t < 1.0) {
+            collided++;
+            if (st.collide_t < collide_t) collide_t = st.collide_t;
+        }
+        if (st.active) {
             if (nupdates == cap) {
                 double *grown = realloc(update_ms, 2 * cap * sizeof *update_ms);
                 if (grown) { update_ms = grown; cap *= 2; }
             }
             if (nupdates < cap) update_ms[nupdates++] = st.update_ms;
+        }
+        if (ex && (rc = fp_export_add(ex, fp_session_positions(s), (double)(now - t0) * 1e-9, err,
+                                      sizeof err))) {
+            fprintf(stderr, "facepuppet run: export: %s\n", err);
+            status = fp_app_exit_code(rc, FP_APP_OUTPUT);
+            break;
         }
         if (frames_out) {
             char file[4400];
@@ -251,6 +326,14 @@ static int run_main(int argc, char **argv)
         if (duration > 0 && now - t0 >= (int64_t)(duration * 1e9)) break;
     }
     if (interrupted && !quiet) fprintf(stderr, "facepuppet run: interrupted; saving what was done\n");
+    /* Close the take: a failed write (ENOSPC) fails the run with 73. */
+    int take_rc = 0;
+    char take_err[1024] = "";
+    if (fp_session_take_recording(&take)) {
+        fp_session_take_result tr;
+        take_rc = fp_session_take_stop(&take, &tr, take_err, sizeof take_err);
+        fp_app_print_take(stderr, "facepuppet run", &tr);
+    }
     /* Close the record=FILE recordings: a failed write must fail the run. */
     char record_err[1024] = "";
     bool record_failed = fp_session_stop(s, record_err, sizeof record_err) != 0;
@@ -267,22 +350,35 @@ static int run_main(int argc, char **argv)
         if (d > max) max = d;
         if (d > 0) moved++;
     }
-    if (status == FP_EXIT_OK && (rc = fp_session_save(s, out, err, sizeof err))) {
+    unsigned dropped = 0;
+    if (status == FP_EXIT_OK && (rc = fp_session_save_ex(s, out, &dropped, err, sizeof err))) {
         fprintf(stderr, "facepuppet run: %s\n", err);
         status = fp_app_exit_code(rc, FP_APP_OUTPUT);
     }
+    fp_app_print_dropped("facepuppet run", out, dropped, quiet);
+    if (ex && status == FP_EXIT_OK)
+        status = fp_app_export_close("facepuppet run", &ex, export_fmt, export_file, 0.1, quiet,
+                                     stderr);
+    fp_export_abort(&ex);
     double med = fp_median(update_ms, nupdates);
     printf("frames %llu, deforming %llu, engaged %llu, committed %llu; vertices moved %zu of %zu; "
            "displacement mean %.6g max %.6g (mesh units); update median %.3f ms over %zu updates; "
-           "events dropped %lu%s%s\n",
+           "fold-over guard acted on %llu frames (stopped short on %llu), min det J %.3g; "
+           "contact guard scaled back %llu frames (least kept %.0f%%); events dropped %lu%s%s\n",
            (unsigned long long)frames, (unsigned long long)active_frames, (unsigned long long)engages,
            (unsigned long long)commits, moved, n, n ? sum / n : 0.0, max, med, nupdates,
+           (unsigned long long)guarded, (unsigned long long)limited,
+           active_frames ? min_det_j : 1.0, (unsigned long long)collided, 100.0 * collide_t,
            fp_session_dropped(s), status == FP_EXIT_OK ? "; wrote " : "",
            status == FP_EXIT_OK ? out : "");
     const char *input_error;
     if (fp_session_input_errors(s, &input_error) && status == FP_EXIT_OK) {
         fprintf(stderr, "facepuppet run: an input reported an error: %s\n", input_error);
         status = FP_EXIT_DATAERR;
+    }
+    if (take_rc) {
+        fprintf(stderr, "facepuppet run: the take was not written whole: %s\n", take_err);
+        if (status == FP_EXIT_OK) status = fp_app_exit_code(take_rc, FP_APP_OUTPUT);
     }
     if (record_failed && status == FP_EXIT_OK) {
         fprintf(stderr, "facepuppet run: %s\n", record_err);

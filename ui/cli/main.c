@@ -15,10 +15,14 @@
 /* The subcommands, in --help order. Each is defined in its cmd_NAME.c; `live` exists in
  * every build and says so when the viewer was not built (FP_BUILD_UI off). */
 extern const fp_command fp_command_run, fp_command_live, fp_command_monitor, fp_command_info,
-    fp_command_bench, fp_command_pose, fp_command_plugins;
+    fp_command_bench, fp_command_pose, fp_command_plugins, fp_command_takes, fp_command_play,
+    fp_command_export, fp_command_calibrate;
 static const fp_command *const commands[] = {&fp_command_run, &fp_command_live,
+                                             &fp_command_calibrate,
                                              &fp_command_monitor, &fp_command_info,
-                                             &fp_command_pose, &fp_command_plugins,
+                                             &fp_command_pose, &fp_command_takes,
+                                             &fp_command_play, &fp_command_export,
+                                             &fp_command_plugins,
                                              &fp_command_bench};
 enum { NCOMMANDS = sizeof commands / sizeof commands[0] };
 

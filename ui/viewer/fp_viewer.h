@@ -27,6 +27,9 @@
  *   shot FILE    write this frame as PNG
  *   radius R     set the support radius (mesh units)
  *   drop FILE    as a file dropped on the window
+ *   print mapping | print hud   one stdout line: the mapping (name, id, version, active,
+ *                control vectors, reloads) / the HUD (state ENGAGED|committed|idle|PAUSED,
+ *                commits in the base, mm per mesh unit and how it was found)
  *   close        as the window's close button (glfwSetWindowShouldClose)
  *
  * Thread rules: call from the process's main thread (GLFW's rule); one viewer at a time.
@@ -56,6 +59,9 @@ typedef struct fp_viewer_options {
                                     against the CPU engine by transform feedback) */
     bool vsync;                  /* swap interval 1 (default 0: never wait for the display) */
     bool quiet;                  /* no messages on stderr except errors */
+    const char *take_dir;        /* T records takes here (ui/viewer/takes.h); NULL: no takes */
+    const char *slate;           /* the takes' slate; NULL: "take" */
+    double countdown_s;          /* seconds counted down before a take starts; 0: none */
 } fp_viewer_options;
 
 /** What a run measured. Times in milliseconds. */

@@ -403,3 +403,25 @@ float fp_render_text(fp_render *r, int fbw, int fbh, float x, float y, float sca
     free(buf);
     return (float)stb_easy_font_height((char *)text) * scale;
 }
+
+void fp_render_rect(fp_render *r, int fbw, int fbh, float x, float y, float w, float h,
+                    const float color[4])
+{
+    /* The text program's layout (x y z + 4 colour bytes, 16 bytes a vertex), one fan. */
+    float v[16] = {x, y, 0, 0, x + w, y, 0, 0, x + w, y + h, 0, 0, x, y + h, 0, 0};
+    glBindVertexArray(r->vao_text);
+    glBindBuffer(GL_ARRAY_BUFFER, r->vbo_text);
+    glBufferData(GL_ARRAY_BUFFER, sizeof v, v, GL_STREAM_DRAW);
+    float proj[16];
+    m4_ortho(proj, 0, (float)fbw, (float)fbh, 0);
+    glUseProgram(r->prog_text);
+    glUniformMatrix4fv(glGetUniformLocation(r->prog_text, "u_proj"), 1, GL_FALSE, proj);
+    glUniform4fv(glGetUniformLocation(r->prog_text, "u_color"), 1, color);
+    glDisable(GL_DEPTH_TEST);
+    glEnable(GL_BLEND);
+    glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+    glDrawArrays(GL_TRIANGLE_FAN, 0, 4);
+    glDisable(GL_BLEND);
+    glEnable(GL_DEPTH_TEST);
+    glBindVertexArray(0);
+}

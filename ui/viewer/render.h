@@ -58,4 +58,9 @@ void fp_render_lines(fp_render *r, const float mvp[16], const float *verts, size
 float fp_render_text(fp_render *r, int fbw, int fbh, float x, float y, float scale,
                      const char *text, const float color[4]);
 
+/** A filled rectangle at pixel (x, y) from the top left, w x h pixels, in color (A < 1
+ *  blends): the HUD's boxes (the take timeline). */
+void fp_render_rect(fp_render *r, int fbw, int fbh, float x, float y, float w, float h,
+                    const float color[4]);
+
 #endif

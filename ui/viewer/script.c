@@ -22,7 +22,9 @@ int fp_script_key(const char *name)
         if (!strcasecmp(name, named[i].name)) return named[i].key;
     if (strlen(name) == 1) {
         int c = toupper((unsigned char)name[0]);
-        if (strchr("ECXZRWSFH", c)) return GLFW_KEY_A + (c - 'A');
+        if (strchr("ECXZRWSFHTP", c)) return GLFW_KEY_A + (c - 'A');
+        if (c == ',') return GLFW_KEY_COMMA;
+        if (c == '.') return GLFW_KEY_PERIOD;
         if (c == '1' || c == '2') return GLFW_KEY_0 + (c - '0');
     }
     return -1;
@@ -76,12 +78,20 @@ int fp_script_parse(const char *text, fp_script *s, char *err, size_t errlen)
             c.op = word[0] == 's' ? FP_SCRIPT_SHOT : FP_SCRIPT_DROP;
             if (!arg[0]) rc = -EINVAL;
             else if (!(c.text = strdup(arg))) rc = -ENOMEM;
+        } else if (!strcmp(word, "scrub")) {
+            /* scrub F: as the mouse on the timeline strip at fraction F of the take */
+            c.op = FP_SCRIPT_SCRUB;
+            char *end;
+            c.number = strtod(arg, &end);
+            if (end == arg || *end || !(c.number >= 0 && c.number <= 1)) rc = -EINVAL;
         } else if (!strcmp(word, "radius")) {
             c.op = FP_SCRIPT_RADIUS;
             c.number = strtod(arg, &end);
             if (end == arg || *end || !(c.number > 0) || !isfinite(c.number)) rc = -EINVAL;
         } else if (!strcmp(word, "print") && !strcmp(arg, "mapping")) {
             c.op = FP_SCRIPT_PRINT_MAPPING;
+        } else if (!strcmp(word, "print") && !strcmp(arg, "hud")) {
+            c.op = FP_SCRIPT_PRINT_HUD;
         } else if (!strcmp(word, "close")) {
             c.op = FP_SCRIPT_CLOSE;
             if (arg[0]) rc = -EINVAL;
@@ -90,7 +100,7 @@ int fp_script_parse(const char *text, fp_script *s, char *err, size_t errlen)
         }
         if (rc == -EINVAL)
             snprintf(err, errlen, "--script: command %d '%s %s' is not one of: wait hands|end|reload|frames N, "
-                     "key NAME, shot FILE, radius R, drop FILE, print mapping, close", index, word, arg);
+                     "key NAME, shot FILE, radius R, drop FILE, scrub F, print mapping|hud, close", index, word, arg);
         if (!rc) rc = add(s, c);
         else free(c.text);
     }

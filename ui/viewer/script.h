@@ -9,7 +9,9 @@ typedef enum fp_script_op {
     FP_SCRIPT_WAIT_HANDS, FP_SCRIPT_WAIT_END, FP_SCRIPT_WAIT_FRAMES, FP_SCRIPT_KEY,
     FP_SCRIPT_SHOT, FP_SCRIPT_RADIUS, FP_SCRIPT_DROP, FP_SCRIPT_CLOSE,
     FP_SCRIPT_WAIT_RELOAD,   /* wait reload: until the mapping's file was reloaded (or failed to) */
-    FP_SCRIPT_PRINT_MAPPING  /* print mapping: one stdout line, the mapping's name, id, version */
+    FP_SCRIPT_PRINT_MAPPING, /* print mapping: one stdout line, the mapping's name, id, version */
+    FP_SCRIPT_SCRUB,         /* scrub F: the take review's playhead to fraction F (the mouse) */
+    FP_SCRIPT_PRINT_HUD      /* print hud: one stdout line, the HUD's state, commits and scale */
 } fp_script_op;
 
 typedef struct fp_script_cmd {

@@ -7,6 +7,7 @@
 #include "fp_stats.h"
 #include "render.h"
 #include "script.h"
+#include "takes.h"
 #include "vmath.h"
 
 #define GLFW_INCLUDE_NONE
@@ -97,12 +98,13 @@ typedef struct viewer {
     double recent_frame_ms[64];
     int recent_n;
     double last_update_ms;
+    fp_frame_stats last_active;   /* the last deforming frame's stats (the HUD's guard line) */
     size_t events_window;
     int64_t window_start;
     double input_rate;
-    unsigned commits;
     bool committed_shown;     /* last frame committed (HUD) */
     fp_viewer_report rep;
+    fp_vtakes takes;          /* T: takes, REC, the review strip (takes.h) */
     int error;                /* a failure that ends the run (screenshot not written) */
     char *err;
     size_t errlen;
@@ -236,7 +238,15 @@ static void load_dropped(viewer *v)
     }
     free(v->mesh_path);
     v->mesh_path = path;
+    v->committed_shown = false;
     say(v, "loaded %s (%zu vertices)", path, v->n);
+}
+
+/* The HUD's state word: the session's, so that undo, reset and a new mesh show at once. */
+static const char *hud_state(const viewer *v)
+{
+    const fp_control_set *cs = fp_session_control_set(v->s);
+    return v->paused ? "PAUSED" : cs->active ? "ENGAGED" : v->committed_shown ? "committed" : "idle";
 }
 
 /* ---- keys ------------------------------------------------------------------------------- */
@@ -253,6 +263,14 @@ static void set_mapping(viewer *v, const char *spec)
     say(v, "mapping %s", spec);
 }
 
+/* T or the pedal's middle button: start or stop a take. */
+static void take_toggle(viewer *v)
+{
+    char msg[1200];
+    fp_vtakes_toggle(&v->takes, v->s, fp_now_ns(), msg, sizeof msg);
+    if (msg[0]) say(v, "%s", msg);
+}
+
 static void act(viewer *v, int key)
 {
     switch (key) {
@@ -262,8 +280,12 @@ static void act(viewer *v, int key)
     case GLFW_KEY_X: fp_session_request(v->s, FP_INTENT_CANCEL); break;
     case GLFW_KEY_Z:
         if (!fp_session_undo(v->s)) say(v, "nothing to undo");
+        v->committed_shown = false;
         break;
-    case GLFW_KEY_R: fp_session_reset(v->s); break;
+    case GLFW_KEY_R:
+        fp_session_reset(v->s);
+        v->committed_shown = false;
+        break;
     case GLFW_KEY_J: /* fall through: the jaw, 0.1 per press (the session clamps to [0, 1]) */
     case GLFW_KEY_K: {
         double j = fp_session_channel(v->s, "jaw.open");
@@ -287,6 +309,10 @@ static void act(viewer *v, int key)
     case GLFW_KEY_TAB: v->hud_on = !v->hud_on; break;
     case GLFW_KEY_SLASH: v->help_on = !v->help_on; break;
     case GLFW_KEY_ESCAPE: glfwSetWindowShouldClose(v->win, GLFW_TRUE); break;
+    case GLFW_KEY_T: take_toggle(v); break;
+    case GLFW_KEY_P: fp_vtakes_play_pause(&v->takes, fp_now_ns()); break;
+    case GLFW_KEY_COMMA: fp_vtakes_step(&v->takes, -1); break;
+    case GLFW_KEY_PERIOD: fp_vtakes_step(&v->takes, 1); break;
     default: break;
     }
 }
@@ -310,6 +336,17 @@ static void on_button(GLFWwindow *w, int button, int action, int mods)
     }
     glfwGetCursorPos(w, &v->mx, &v->my);
     v->drag = button == GLFW_MOUSE_BUTTON_LEFT ? 1 : 2;
+    /* the left button on the take strip scrubs (drag 3) */
+    int ww, wh, fw, fh;
+    glfwGetWindowSize(w, &ww, &wh);
+    glfwGetFramebufferSize(w, &fw, &fh);
+    float sx, sy, sw, sh, px = (float)(v->mx * fw / (ww > 0 ? ww : 1)), py = (float)(v->my * fh / (wh > 0 ? wh : 1));
+    fp_vtakes_strip_rect(fw, fh, &sx, &sy, &sw, &sh);
+    if (button == GLFW_MOUSE_BUTTON_LEFT && v->takes.frames && px >= sx && px <= sx + sw &&
+        py >= sy && py <= sy + sh) {
+        v->drag = 3;
+        fp_vtakes_scrub(&v->takes, (px - sx) / sw);
+    }
 }
 
 static void on_cursor(GLFWwindow *w, double x, double y)
@@ -318,7 +355,11 @@ static void on_cursor(GLFWwindow *w, double x, double y)
     double dx = x - v->mx, dy = y - v->my;
     v->mx = x;
     v->my = y;
-    if (v->drag == 1) {
+    if (v->drag == 3) {
+        int ww, wh;
+        glfwGetWindowSize(w, &ww, &wh);
+        fp_vtakes_scrub(&v->takes, (x - 8) / fmax(1, ww - 16));
+    } else if (v->drag == 1) {
         v->cam.yaw -= (float)dx * 0.01f;
         v->cam.pitch += (float)dy * 0.01f;
         v->cam.pitch = fmaxf(-1.5f, fminf(1.5f, v->cam.pitch));
@@ -456,6 +497,7 @@ static void run_script(viewer *v)
         switch (c->op) {
         case FP_SCRIPT_KEY: act(v, c->key); break;
         case FP_SCRIPT_RADIUS: fp_session_set_radius(v->s, c->number); break;
+        case FP_SCRIPT_SCRUB: fp_vtakes_scrub(&v->takes, c->number); break;
         case FP_SCRIPT_CLOSE: glfwSetWindowShouldClose(v->win, GLFW_TRUE); return;
         case FP_SCRIPT_PRINT_MAPPING: {
             const fp_plugin *p = fp_session_mapping_plugin(v->s);
@@ -467,6 +509,12 @@ static void run_script(viewer *v)
             fflush(stdout);
             break;
         }
+        case FP_SCRIPT_PRINT_HUD:
+            printf("hud frame %llu state %s commits %lu scale %.4g mm per mesh unit (%s)\n",
+                   (unsigned long long)v->frames, hud_state(v), fp_session_commits(v->s),
+                   fp_session_head(v->s)->mm_per_unit, fp_session_head(v->s)->how);
+            fflush(stdout);
+            break;
         case FP_SCRIPT_DROP:
             free(v->drop_path);
             v->drop_path = strdup(c->text);
@@ -568,32 +616,40 @@ static const char help_text[] =
     " [ / ]  radius down / up\n"
     " W wireframe  S screenshot  F frame\n"
     " H hands  Tab HUD  ? this list\n"
+    " T      record a take (start / stop)\n"
+    " P      play / pause the last take\n"
+    " , / .  a frame back / on; mouse on the strip scrubs\n"
     " Esc    quit\n"
     "mouse: left orbit, right pan, wheel zoom\n"
     "drop a mesh file on the window to load it";
 
 static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
 {
-    const fp_control_set *cs = fp_session_control_set(v->s);
     double recent = 0;
     for (int i = 0; i < v->recent_n; i++) recent += v->recent_frame_ms[i];
     recent = v->recent_n ? recent / v->recent_n : 0;
-    const char *state = v->paused ? "PAUSED" : cs->active ? "ENGAGED" : v->committed_shown ? "committed" : "idle";
+    const fp_head *head = fp_session_head(v->s);
     char text[1024];
     snprintf(text, sizeof text,
              "%s  %zu vertices  mapping %s\n"
-             "%s   commits %u   radius %.4g\n"
-             "%.1f fps (%.2f ms)   engine %.3f ms   input %.0f ev/s%s",
-             v->mesh_path ? (strrchr(v->mesh_path, '/') ? strrchr(v->mesh_path, '/') + 1 : v->mesh_path) : "", v->n, v->mapping, state, v->commits,
+             "%.3g mm per mesh unit, %.*s\n"
+             "%s   commits %lu   radius %.4g\n"
+             "%.1f fps (%.2f ms)   engine %.3f ms   input %.0f ev/s%s\n"
+             "fold-over guard: bound %.2f  reach %.0f%%  sub-steps %d%s",
+             v->mesh_path ? (strrchr(v->mesh_path, '/') ? strrchr(v->mesh_path, '/') + 1 : v->mesh_path) : "", v->n, v->mapping,
+             head->mm_per_unit, (int)strcspn(head->how, ":"), head->how, hud_state(v), fp_session_commits(v->s),
              fp_session_radius(v->s), recent > 0 ? 1000.0 / recent : 0.0, recent,
              st->active ? st->update_ms : v->last_update_ms, v->input_rate,
-             v->opt->gpu_warp ? "   gpu-warp" : "");
+             v->opt->gpu_warp ? "   gpu-warp" : "", v->last_active.guard_bound,
+             100.0 * v->last_active.guard_reached, v->last_active.guard_substeps,
+             v->last_active.guard_reached < 1.0 ? "  LIMITED" : "");
     const float white[4] = {0.95f, 0.95f, 0.92f, 1.f}, dim[4] = {0.8f, 0.85f, 0.9f, 1.f};
     float scale = h >= 600 ? 2.f : 1.f;
     float y = 8;
     y += fp_render_text(&v->r, w, h, 8, y, scale, text, white) + 6 * scale;
     if (v->status[0] && fp_now_ns() < v->status_until)
         y += fp_render_text(&v->r, w, h, 8, y, scale, v->status, dim) + 6 * scale;
+    fp_vtakes_draw(&v->takes, &v->r, w, h, fp_now_ns());
     if (v->help_on) fp_render_text(&v->r, w, h, 8, y, scale, help_text, dim);
     else fp_render_text(&v->r, w, h, 8, (float)h - 14 * scale, scale, "? keys", dim);
 }
@@ -611,7 +667,8 @@ static void upload(viewer *v, bool warp_on_gpu)
         v->have_base = true;
     }
     if (warp_on_gpu) return;
-    const float *shown = fp_session_positions(v->s);
+    const float *review = fp_vtakes_shown(&v->takes);
+    const float *shown = review ? review : fp_session_positions(v->s);
     if (!v->have_pos || memcmp(shown, v->pos, bytes)) {
         memcpy(v->pos, shown, bytes);
         fp_mesh_normals(m->triangles, v->t, v->pos, v->n, v->nrm);
@@ -669,9 +726,12 @@ static void draw(viewer *v, const fp_frame_stats *st, int w, int h)
     camera_matrices(v, w, h, view, proj);
     m4_mul(proj, view, pv);
     static const float skin[4] = {0.86f, 0.7f, 0.6f, 1.f}, ghost[4] = {0.6f, 0.8f, 1.f, 0.22f};
-    bool deformed = fp_session_positions(v->s) != fp_session_base(v->s);
+    bool reviewing = fp_vtakes_shown(&v->takes) != NULL;
+    bool deformed = !reviewing && fp_session_positions(v->s) != fp_session_base(v->s);
     /* with a rig the shape is the posed base blended by mobility: drawn from the CPU */
-    if (v->opt->gpu_warp && !fp_session_rig(v->s)) {
+    if (reviewing) {
+        fp_render_mesh(&v->r, pv, view, false, NULL, skin, v->wireframe);
+    } else if (v->opt->gpu_warp && !fp_session_rig(v->s)) {
         /* The engine step's own coefficients (no second solve); the identity when nothing
          * is deformed or they cannot be drawn. */
         fp_warp_coeffs c;
@@ -684,7 +744,7 @@ static void draw(viewer *v, const fp_frame_stats *st, int w, int h)
         fp_render_mesh(&v->r, pv, view, false, NULL, skin, v->wireframe);
     }
     if (deformed && (st->active || !fp_session_rig(v->s))) fp_render_mesh(&v->r, pv, view, true, NULL, ghost, false);
-    if (v->hands_on) draw_hands(v, pv, view);
+    if (v->hands_on && !reviewing) draw_hands(v, pv, view);
     if (v->hud_on) draw_hud(v, w, h, st);
 }
 
@@ -706,14 +766,18 @@ static void frame(viewer *v)
     fp_frame_stats st;
     memset(&st, 0, sizeof st);
     int64_t now = fp_now_ns();
+    char take_msg[1200];
+    fp_vtakes_tick(&v->takes, v->s, now, take_msg, sizeof take_msg);
+    if (take_msg[0]) say(v, "%s", take_msg);
     if (!v->paused) {
         fp_session_step(v->s, now, &st);
-        if (st.committed) v->commits++;
+        for (unsigned k = fp_session_record_toggles(v->s); k > 0; k--) take_toggle(v);
         if (st.committed) v->committed_shown = true;
         if (st.engaged || st.cancelled) v->committed_shown = false;
         if (st.active) {
             samples_add(&v->engine_ms, st.update_ms);
             v->last_update_ms = st.update_ms;
+            v->last_active = st;
         }
         v->events_window += st.events;
         for (int h = 0; h < FP_HANDS; h++) {
@@ -768,9 +832,12 @@ int fp_viewer_run(const fp_viewer_options *opt, fp_viewer_report *report, char *
     v->so = opt->session;
     v->so.log = on_session_log;
     v->so.log_user = v;
+    fp_vtakes_init(&v->takes, opt->take_dir, opt->slate, opt->countdown_s, &v->so);
     v->err = err;
     v->errlen = errlen;
     v->hands_on = v->hud_on = true;
+    v->last_active.guard_reached = 1.0;
+    v->last_active.guard_substeps = 1;
     int rc = 0;
     bool glfw = false;
     if (opt->script && (rc = fp_script_parse(opt->script, &v->script, err, errlen))) goto out;
@@ -824,6 +891,15 @@ int fp_viewer_run(const fp_viewer_options *opt, fp_viewer_report *report, char *
         if (opt->duration_s > 0 && fp_now_ns() - t0 >= (int64_t)(opt->duration_s * 1e9)) break;
     }
     if (!v->error && opt->out && fp_session_save(v->s, opt->out, err, errlen)) v->error = -EIO;
+    {   /* a take still recording ends with the run; a failed one fails it */
+        char msg[1200];
+        int trc = fp_vtakes_stop(&v->takes, v->s, msg, sizeof msg);
+        if (msg[0] && (trc || !opt->quiet)) fprintf(stderr, "facepuppet live: %s\n", msg);
+        if (trc && !v->error) {
+            v->error = trc;
+            snprintf(err, errlen, "%s", msg);
+        }
+    }
     char stop_err[1024]; /* record=FILE: a failed write fails the run */
     int stop_rc = fp_session_stop(v->s, stop_err, sizeof stop_err);
     if (!v->error && stop_rc) {
@@ -844,6 +920,7 @@ out:
     double unused;
     fp_viewer_percentiles(v->engine_ms.v, v->engine_ms.n, &v->rep.engine_ms_median, &unused);
     if (report) *report = v->rep;
+    fp_vtakes_free(&v->takes);
     fp_session_destroy(&v->s);
     if (v->win) {
         fp_gpuwarp_destroy(&v->gw);

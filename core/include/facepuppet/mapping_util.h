@@ -35,6 +35,53 @@ static inline void fp_hand_tips(const fp_frame_input *in, int hand, float tips[F
         memcpy(tips[f], in->hands[hand].joints[FP_JOINT_TIP(f)], sizeof tips[f]);
 }
 
+/** Points of contact of one hand (the `points=` key of the anchored and unanchored
+ *  mappings; the paper's fingertips, or more "to cover the palm of a hand", sec. 4):
+ *   FP_POINTS_TIPS       the five fingertips (the paper's; 10 for two hands),
+ *   FP_POINTS_TIPS_PALM  the tips, the palm centre and the five knuckles (the four fingers'
+ *                        MCP joints and the thumb's MCP),
+ *   FP_POINTS_ALL        every joint of the hand (FP_HAND_JOINTS; 42 for two hands).
+ *  The tips always come first, thumb to little, so the first five points of every mode are
+ *  those of FP_POINTS_TIPS. FP_POINTS_CHOICES is the key's choices in enum order. */
+typedef enum fp_points { FP_POINTS_TIPS = 0, FP_POINTS_TIPS_PALM = 1, FP_POINTS_ALL = 2 } fp_points;
+#define FP_POINTS_CHOICES "tips|tips+palm|all"
+/** Points per hand in each mode; FP_POINTS_MAX is the largest (two hands: 2 x it, within
+ *  FP_CONTROL_CAPACITY). */
+#define FP_POINTS_TIPS_COUNT FP_FINGERS
+#define FP_POINTS_TIPS_PALM_COUNT (2 * FP_FINGERS + 1)
+#define FP_POINTS_ALL_COUNT FP_HAND_JOINTS
+#define FP_POINTS_MAX FP_HAND_JOINTS
+
+/** The joints (fp_hand_joint indices) of `mode` into joints[FP_POINTS_MAX]; returns how
+ *  many (FP_POINTS_*_COUNT; 0 for an unknown mode). */
+static inline size_t fp_points_joints(int mode, int joints[FP_POINTS_MAX])
+{
+    size_t n = 0;
+    for (int f = 0; f < FP_FINGERS; f++) joints[n++] = FP_JOINT_TIP(f);
+    if (mode == FP_POINTS_TIPS_PALM) {
+        joints[n++] = FP_JOINT_PALM;
+        joints[n++] = FP_JOINT(0, 1);                 /* the thumb's MCP */
+        for (int f = 1; f < FP_FINGERS; f++) joints[n++] = FP_JOINT(f, 0);
+    } else if (mode == FP_POINTS_ALL) {
+        for (int j = 0; j < FP_HAND_JOINTS; j++)
+            if (j < FP_JOINT(0, 0) || (j - FP_JOINT(0, 0)) % 4 != 3) joints[n++] = j;
+    } else if (mode != FP_POINTS_TIPS) {
+        return 0;
+    }
+    return n;
+}
+
+/** Copy hand `hand`'s points of contact of `mode` into pts (at least FP_POINTS_MAX rows),
+ *  mesh units; returns how many (as fp_points_joints). */
+static inline size_t fp_hand_points(const fp_frame_input *in, int hand, int mode,
+                                    float pts[][3])
+{
+    int joints[FP_POINTS_MAX];
+    size_t n = fp_points_joints(mode, joints);
+    for (size_t i = 0; i < n; i++) memcpy(pts[i], in->hands[hand].joints[joints[i]], sizeof pts[i]);
+    return n;
+}
+
 /** Shorten the control vector start -> end to at most max_len (mesh units); max_len <= 0
  *  leaves it. Keeps the warp injective when max_len < 0.47 R for psi_{3,1}
  *  (shared/docs/csrbf.md, pitfall 4). */

@@ -148,7 +148,11 @@ typedef struct fp_event_wrist_pose {
 enum fp_button {
     FP_BUTTON_LEFT = 1u << 0,
     FP_BUTTON_MIDDLE = 1u << 1,
-    FP_BUTTON_RIGHT = 1u << 2
+    FP_BUTTON_RIGHT = 1u << 2,
+    /** Not a physical button: a request for the intents in `mask` (fp_intent bits), as the
+     *  performer's keys make them (down = 1; no release follows). The take input pushes it
+     *  to perform a take's key requests again; the host binds it like a key (ABI 1.1). */
+    FP_BUTTON_REQUEST = 1u << 8
 };
 
 /** A button went down or up. `mask` is every button held after this change (chords). */

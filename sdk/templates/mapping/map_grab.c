@@ -2,7 +2,8 @@
  * map-grab: a complete facepuppet mapping plugin, a template to copy.
  *
  * The face is grabbed by the fingertips of one or both hands: on engage (pedal, key E, or a
- * fingertip within R of the surface when auto=1) each fingertip's position becomes a start
+ * fingertip within R/2 of the surface when auto=1: a start point at the support's edge would
+ * hold the surface where the Wendland function is ~0) each fingertip's position becomes a start
  * point; every frame the end points are start + gain x (fingertip now - fingertip at engage).
  * The start points stay fixed for the whole gesture, so the host reuses its factorization.
  * Commit (pedal, key C) folds the shape into the base; cancel (X) drops it.
@@ -51,7 +52,7 @@ static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *o
         g->count = 0;
         for (int h = 0; h < FP_HANDS; h++) {
             if (!(g->hands & (1u << h)) || !in->hands[h].present) continue;
-            if (!asked && !(g->automatic && fp_hand_is_near(in, h, 1.0))) continue;
+            if (!asked && !(g->automatic && fp_hand_is_near(in, h, 0.5))) continue;
             float tips[FP_FINGERS][3];
             fp_hand_tips(in, h, tips);
             for (int f = 0; f < FP_FINGERS; f++, g->count++) {

@@ -1,7 +1,9 @@
-/* fp-selfx BEFORE AFTER: the triangle pairs that cross in AFTER but not in BEFORE (two
- * meshes with the same vertices and triangles, e.g. a face and its deformation written by
- * `facepuppet run --out`). Prints the counts and the first new pairs; exit 0 when there is
- * no new crossing, 1 when there are, 2 on an error (unreadable file, different topology). */
+/* fp-selfx [--away RINGS] BEFORE AFTER: the triangle pairs that cross in AFTER but not in
+ * BEFORE (two meshes with the same vertices and triangles, e.g. a face and its deformation
+ * written by `facepuppet run --out`); with --away, only the pairs away from BEFORE's own
+ * crossings (the trust issue's measure, fp_selfx_count_new_away). Prints the counts and the
+ * first new pairs; exit 0 when there is no new crossing, 1 when there are, 2 on an error
+ * (unreadable file, different topology). */
 #include "fp_mesh.h"
 #include "selfx.h"
 
@@ -11,12 +13,26 @@
 
 int main(int argc, char **argv)
 {
+    int rings = -1; /* -1: every new pair */
+    if (argc == 5 && !strcmp(argv[1], "--away")) {
+        char *end;
+        long r = strtol(argv[2], &end, 10);
+        if (*end || r < 0 || r > 8) {
+            fprintf(stderr, "fp-selfx: --away takes a ring count 0..8, got '%s'\n", argv[2]);
+            return 2;
+        }
+        rings = (int)r;
+        argv += 2;
+        argc -= 2;
+    }
     if (argc != 3 || !strcmp(argv[1], "--help")) {
         fprintf(argc == 2 ? stdout : stderr,
-                "usage: fp-selfx BEFORE AFTER\n"
+                "usage: fp-selfx [--away RINGS] BEFORE AFTER\n"
                 "Counts the triangle pairs that cross (exactly, CGAL) in AFTER but not in\n"
                 "BEFORE; adjacent triangles (a shared vertex or edge, vertices welded by\n"
-                "position) are not crossings. Exit 0: none new, 1: new crossings, 2: error.\n");
+                "position) are not crossings. --away RINGS leaves out pairs within RINGS vertex\n"
+                "rings of a triangle that crosses in BEFORE (the input's own crossings move\n"
+                "under any deformation). Exit 0: none new, 1: new crossings, 2: error.\n");
         return argc == 2 ? 0 : 2;
     }
     char err[512];
@@ -38,17 +54,22 @@ int main(int argc, char **argv)
     }
     enum { SHOW = 20 };
     uint32_t pairs[2 * SHOW];
-    long own = 0;
-    long n = fp_selfx_count_new(a->positions, b->positions, a->vertex_count, a->triangles,
-                                a->triangle_count, pairs, SHOW, &own);
+    long own = 0, near_own = 0;
+    long n = rings < 0 ? fp_selfx_count_new(a->positions, b->positions, a->vertex_count,
+                                            a->triangles, a->triangle_count, pairs, SHOW, &own)
+                       : fp_selfx_count_new_away(a->positions, b->positions, a->vertex_count,
+                                                 a->triangles, a->triangle_count, rings, pairs,
+                                                 SHOW, &own, &near_own);
     if (n < 0) {
         fprintf(stderr, "fp-selfx: counting failed (%ld)\n", n);
         fp_mesh_free(&a);
         fp_mesh_free(&b);
         return 2;
     }
-    printf("new crossings: %ld (BEFORE's own crossings: %ld; %zu triangles)\n", n, own,
+    printf("new crossings: %ld (BEFORE's own crossings: %ld; %zu triangles", n, own,
            a->triangle_count);
+    if (rings >= 0) printf("; %ld more within %d rings of BEFORE's own", near_own, rings);
+    printf(")\n");
     for (long k = 0; k < n && k < SHOW; k++)
         printf("  triangles %u and %u\n", pairs[2 * k], pairs[2 * k + 1]);
     if (n > SHOW) printf("  ... %ld more\n", n - SHOW);

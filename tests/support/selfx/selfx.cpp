@@ -121,3 +121,52 @@ extern "C" long fp_selfx_count_new(const float *before, const float *after, size
         return -ENOMEM;
     }
 }
+
+extern "C" long fp_selfx_count_new_away(const float *before, const float *after, size_t nv,
+                                        const uint32_t *tris, size_t nt, int rings,
+                                        uint32_t *pairs, size_t max_pairs, long *own_before,
+                                        long *near_own)
+{
+    if (!valid(before, nv, tris, nt) || !after || rings < 0) return -EINVAL;
+    try {
+        std::vector<uint32_t> canon = weld(before, nv);
+        std::vector<Pair> b = crossings(before, tris, nt, canon);
+        std::vector<Pair> a = crossings(after, tris, nt, canon);
+        std::vector<Pair> fresh;
+        std::set_difference(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(fresh));
+        if (own_before) *own_before = (long)b.size();
+        /* the welded vertices of the input's own crossing triangles, grown by `rings` rings */
+        std::vector<char> mark(nv, 0);
+        for (const Pair &p : b)
+            for (uint32_t t : {p.first, p.second})
+                for (int k = 0; k < 3; k++) mark[canon[tris[3 * (size_t)t + k]]] = 1;
+        for (int r = 0; r < rings; r++) {
+            std::vector<char> next = mark;
+            for (size_t t = 0; t < nt; t++) {
+                const uint32_t *v = tris + 3 * t;
+                if (mark[canon[v[0]]] || mark[canon[v[1]]] || mark[canon[v[2]]])
+                    for (int k = 0; k < 3; k++) next[canon[v[k]]] = 1;
+            }
+            mark.swap(next);
+        }
+        auto near = [&](uint32_t t) {
+            const uint32_t *v = tris + 3 * (size_t)t;
+            return mark[canon[v[0]]] || mark[canon[v[1]]] || mark[canon[v[2]]];
+        };
+        long nnear = 0;
+        std::vector<Pair> away;
+        for (const Pair &p : fresh) {
+            if (near(p.first) || near(p.second)) nnear++;
+            else away.push_back(p);
+        }
+        if (near_own) *near_own = nnear;
+        if (pairs)
+            for (size_t k = 0; k < away.size() && k < max_pairs; k++) {
+                pairs[2 * k] = away[k].first;
+                pairs[2 * k + 1] = away[k].second;
+            }
+        return (long)away.size();
+    } catch (const std::bad_alloc &) {
+        return -ENOMEM;
+    }
+}

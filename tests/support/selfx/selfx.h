@@ -36,6 +36,18 @@ long fp_selfx_count_new(const float *before, const float *after, size_t n_vertic
                         const uint32_t *tris, size_t n_tris, uint32_t *pairs, size_t max_pairs,
                         long *own_before);
 
+/** fp_selfx_count_new restricted to pairs away from the input's own crossings (the trust
+ *  issue's measure): a new pair is left out (and counted in *near_own, may be NULL) when
+ *  either triangle has a vertex within `rings` vertex rings (through welded vertices) of a
+ *  triangle that crosses in `before`. Surfaces that already interpenetrate in the input (the
+ *  ICT face's eyes and mouth interior: 6,935 crossings) move their intersection curve under
+ *  any deformation, however injective; those pairs are not fold-overs. rings = 0 leaves out
+ *  only pairs with a triangle that itself crosses in before. Returns the pairs away from
+ *  them (written to pairs as fp_selfx_count_new) or a negative errno. */
+long fp_selfx_count_new_away(const float *before, const float *after, size_t n_vertices,
+                             const uint32_t *tris, size_t n_tris, int rings, uint32_t *pairs,
+                             size_t max_pairs, long *own_before, long *near_own);
+
 #ifdef __cplusplus
 }
 #endif

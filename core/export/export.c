@@ -1,0 +1,790 @@
+/* fp_export: a take's frames as glTF morph-target animation, PC2 and MDD point caches, or a
+ * sequence of meshes (fp_export.h, docs/export.md). */
+#define _GNU_SOURCE
+#include "fp_export.h"
+#include "fp_error.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+/* LAPACK (Debian liblapack-dev): symmetric eigen-decomposition, Fortran calling convention */
+extern void dsyev_(const char *jobz, const char *uplo, const int *n, double *a, const int *lda,
+                   double *w, double *work, const int *lwork, int *info);
+
+struct fp_exporter {
+    fp_export_options opt;
+    const fp_mesh *base;
+    size_t n;
+    uint64_t frames;
+    double first_time, last_time;
+    char path[4096];          /* the target */
+    char tmp[4200];           /* pc2/mdd: the temporary file being written, "" when none */
+    char data_tmp[4200];      /* mdd: the frames before the header is known */
+    FILE *f;
+    float *scratch;           /* n x 3 */
+    /* mdd: times; glTF: times and sparse displacements per frame */
+    double *times;
+    size_t times_cap;
+    uint32_t *idx;            /* glTF: moved vertex indices, all frames back to back */
+    float *disp;              /* glTF: their displacements (x 3) */
+    size_t used, cap;         /* entries in idx (disp has 3x) */
+    size_t *frame_start;      /* frames + 1 offsets into idx */
+    size_t fs_cap;
+    uint64_t seq_bytes;
+    unsigned dropped;
+};
+
+static const char *const names[] = {"gltf", "glb", "pc2", "mdd", "obj-seq"};
+static const char *const exts[] = {"gltf", "glb", "pc2", "mdd", ""};
+
+int fp_export_format_parse(const char *name, fp_export_format *f)
+{
+    for (int i = 0; name && i < 5; i++)
+        if (strcmp(name, names[i]) == 0) {
+            *f = (fp_export_format)i;
+            return 0;
+        }
+    return -EINVAL;
+}
+
+int fp_export_format_from_path(const char *path, fp_export_format *f)
+{
+    const char *dot = path ? strrchr(path, '.') : NULL;
+    const char *slash = path ? strrchr(path, '/') : NULL;
+    if (!dot || (slash && dot < slash))
+        return -EINVAL;
+    for (int i = 0; i < 4; i++)
+        if (strcasecmp(dot + 1, exts[i]) == 0) {
+            *f = (fp_export_format)i;
+            return 0;
+        }
+    return -EINVAL;
+}
+
+const char *fp_export_format_name(fp_export_format f)
+{
+    return (unsigned)f < 5 ? names[f] : "?";
+}
+
+const char *fp_export_format_extension(fp_export_format f)
+{
+    return (unsigned)f < 5 ? exts[f] : "";
+}
+
+/* ---- files ----------------------------------------------------------------------------- */
+
+static int errno_code(int e)
+{
+    switch (e) {
+    case ENOENT: case ENOTDIR: return -ENOENT;
+    case EACCES: case EPERM: case EROFS: return -EACCES;
+    case ENOSPC: case EDQUOT: return -ENOSPC;
+    case ENOMEM: return -ENOMEM;
+    default: return -EIO;
+    }
+}
+
+/* A temporary file ".NAME.XXXXXX" beside `path`. */
+static int temp_beside(const char *path, const char *tag, char *tmp, size_t n, FILE **f,
+                       char *err, size_t errlen)
+{
+    const char *slash = strrchr(path, '/');
+    int dl = slash ? (int)(slash - path) : 0;
+    const char *base = slash ? slash + 1 : path;
+    snprintf(tmp, n, "%.*s%s.%s%s.XXXXXX", dl, path, slash ? "/" : "", base, tag);
+    int fd = mkostemp(tmp, O_CLOEXEC);
+    if (fd < 0) {
+        int e = errno;
+        tmp[0] = '\0';
+        return fp_errorf(err, errlen, errno_code(e), "%s: cannot create a file in its folder: %s",
+                         path, strerror(e));
+    }
+    /* the mode a new file would get: 0666 & ~umask */
+    mode_t mask = umask(0);
+    umask(mask);
+    (void)fchmod(fd, 0666 & ~mask);
+    *f = fdopen(fd, "w+b");
+    if (!*f) {
+        int e = errno;
+        close(fd);
+        unlink(tmp);
+        tmp[0] = '\0';
+        return fp_errorf(err, errlen, errno_code(e), "%s: %s", path, strerror(e));
+    }
+    return 0;
+}
+
+static int put(fp_exporter *x, const void *p, size_t n, char *err, size_t errlen)
+{
+    if (fwrite(p, 1, n, x->f) != n) {
+        int e = errno ? errno : EIO;
+        return fp_errorf(err, errlen, errno_code(e), "%s: write failed: %s", x->path,
+                         strerror(e));
+    }
+    return 0;
+}
+
+static void be32(void *dst, const void *src)
+{
+    const unsigned char *s = src;
+    unsigned char *d = dst;
+    d[0] = s[3]; d[1] = s[2]; d[2] = s[1]; d[3] = s[0];
+}
+
+static void le32(void *dst, const void *src)
+{
+    uint32_t v;
+    memcpy(&v, src, 4);
+    unsigned char *d = dst;
+    d[0] = (unsigned char)v; d[1] = (unsigned char)(v >> 8);
+    d[2] = (unsigned char)(v >> 16); d[3] = (unsigned char)(v >> 24);
+}
+
+/* fsync, close, rename the temporary file over the target. */
+static int commit_file(fp_exporter *x, const char *tmp, FILE **f, char *err, size_t errlen)
+{
+    int rc = 0;
+    if (fflush(*f) != 0 || fsync(fileno(*f)) != 0)
+        rc = errno_code(errno);
+    if (fclose(*f) != 0 && !rc)
+        rc = errno_code(errno);
+    *f = NULL;
+    if (!rc && rename(tmp, x->path) != 0)
+        rc = errno_code(errno);
+    if (rc) {
+        unlink(tmp);
+        return fp_errorf(err, errlen, rc, "%s: cannot write: %s (nothing written)", x->path,
+                         fp_strerror(rc));
+    }
+    return 0;
+}
+
+/* ---- begin / add ----------------------------------------------------------------------- */
+
+int fp_export_begin(const fp_mesh *base, const fp_export_options *opt, fp_exporter **out,
+                    char *err, size_t errlen)
+{
+    if (out)
+        *out = NULL;
+    if (!base || !opt || !out || !opt->path || !opt->path[0] || base->vertex_count == 0 ||
+        !base->positions)
+        return fp_errorf(err, errlen, -EINVAL, "export: no mesh, options or output path");
+    if ((unsigned)opt->format > FP_EXPORT_OBJ_SEQ)
+        return fp_errorf(err, errlen, -EINVAL, "export: unknown format %d", (int)opt->format);
+    if (opt->max_error_mm < 0 || !isfinite(opt->max_error_mm) || opt->mm_per_unit < 0 ||
+        !isfinite(opt->mm_per_unit))
+        return fp_errorf(err, errlen, -EINVAL, "export: max error and mm per unit must be >= 0");
+    if (strlen(opt->path) >= 4000)
+        return fp_errorf(err, errlen, -EINVAL, "export: output path too long");
+    fp_exporter *x = calloc(1, sizeof *x);
+    if (!x)
+        return fp_errorf(err, errlen, -ENOMEM, "export: out of memory");
+    x->opt = *opt;
+    if (x->opt.max_error_mm == 0)
+        x->opt.max_error_mm = 0.1;
+    if (x->opt.mm_per_unit == 0)
+        x->opt.mm_per_unit = 1;
+    x->base = base;
+    x->n = base->vertex_count;
+    snprintf(x->path, sizeof x->path, "%s", opt->path);
+    x->scratch = malloc(x->n * 3 * sizeof(float));
+    if (!x->scratch) {
+        free(x);
+        return fp_errorf(err, errlen, -ENOMEM, "export: out of memory");
+    }
+    int rc = 0;
+    switch (opt->format) {
+    case FP_EXPORT_PC2: {
+        rc = temp_beside(x->path, "", x->tmp, sizeof x->tmp, &x->f, err, errlen);
+        if (rc)
+            break;
+        unsigned char h[32] = "POINTCACHE2";
+        const int32_t version = 1, points = (int32_t)x->n, samples = 0;
+        const float start = 0.0f, sampling = 1.0f;
+        le32(h + 12, &version);
+        le32(h + 16, &points);
+        le32(h + 20, &start);
+        le32(h + 24, &sampling);
+        le32(h + 28, &samples);
+        rc = put(x, h, sizeof h, err, errlen);
+        break;
+    }
+    case FP_EXPORT_MDD:
+        rc = temp_beside(x->path, "frames", x->data_tmp, sizeof x->data_tmp, &x->f, err, errlen);
+        break;
+    case FP_EXPORT_GLTF:
+    case FP_EXPORT_GLB: {
+        /* the folder must take a file now, not after the whole take was played */
+        FILE *probe = NULL;
+        rc = temp_beside(x->path, "probe", x->tmp, sizeof x->tmp, &probe, err, errlen);
+        if (!rc) {
+            fclose(probe);
+            unlink(x->tmp);
+            x->tmp[0] = '\0';
+        }
+        break;
+    }
+    case FP_EXPORT_OBJ_SEQ:
+        if (mkdir(x->path, 0777) != 0 && errno != EEXIST)
+            rc = fp_errorf(err, errlen, errno_code(errno), "%s: cannot create the folder: %s",
+                           x->path, strerror(errno));
+        else {
+            struct stat st;
+            if (stat(x->path, &st) != 0 || !S_ISDIR(st.st_mode))
+                rc = fp_errorf(err, errlen, -ENOTDIR, "%s: not a folder", x->path);
+        }
+        break;
+    }
+    if (rc) {
+        fp_export_abort(&x);
+        return rc;
+    }
+    *out = x;
+    return 0;
+}
+
+static int grow(void **p, size_t *cap, size_t need, size_t elem)
+{
+    if (need <= *cap)
+        return 0;
+    size_t c = *cap ? *cap : 1024;
+    while (c < need)
+        c *= 2;
+    void *q = realloc(*p, c * elem);
+    if (!q)
+        return -ENOMEM;
+    *p = q;
+    *cap = c;
+    return 0;
+}
+
+static int keep_time(fp_exporter *x, double t)
+{
+    if (grow((void **)&x->times, &x->times_cap, x->frames + 1, sizeof(double)))
+        return -ENOMEM;
+    x->times[x->frames] = t;
+    return 0;
+}
+
+int fp_export_add(fp_exporter *x, const float *positions, double time_s, char *err,
+                  size_t errlen)
+{
+    if (!x || !positions)
+        return fp_errorf(err, errlen, -EINVAL, "export: NULL exporter or positions");
+    if (!isfinite(time_s) || (x->frames > 0 && !(time_s > x->last_time)))
+        return fp_errorf(err, errlen, -EINVAL,
+                         "%s: frame %llu: time %.9g s is not after the previous frame's",
+                         x->path, (unsigned long long)x->frames, time_s);
+    const size_t n = x->n;
+    for (size_t i = 0; i < 3 * n; i++)
+        if (!isfinite(positions[i]))
+            return fp_errorf(err, errlen, -EINVAL, "%s: frame %llu: vertex %zu is not finite",
+                             x->path, (unsigned long long)x->frames, i / 3);
+    if (x->frames == 0)
+        x->first_time = time_s;
+    int rc = 0;
+    switch (x->opt.format) {
+    case FP_EXPORT_PC2:
+        for (size_t i = 0; i < 3 * n; i++)
+            le32(x->scratch + i, positions + i);
+        rc = put(x, x->scratch, 12 * n, err, errlen);
+        break;
+    case FP_EXPORT_MDD:
+        for (size_t i = 0; i < 3 * n; i++)
+            be32(x->scratch + i, positions + i);
+        rc = put(x, x->scratch, 12 * n, err, errlen);
+        if (!rc && keep_time(x, time_s - x->first_time))
+            rc = fp_errorf(err, errlen, -ENOMEM, "export: out of memory");
+        break;
+    case FP_EXPORT_GLTF:
+    case FP_EXPORT_GLB: {
+        if (keep_time(x, time_s - x->first_time) ||
+            grow((void **)&x->frame_start, &x->fs_cap, x->frames + 2, sizeof(size_t))) {
+            rc = fp_errorf(err, errlen, -ENOMEM, "export: out of memory");
+            break;
+        }
+        if (x->frames == 0)
+            x->frame_start[0] = 0;
+        const float *b = x->base->positions;
+        for (size_t v = 0; v < n; v++) {
+            const float *p = positions + 3 * v, *q = b + 3 * v;
+            if (memcmp(p, q, 3 * sizeof(float)) == 0)
+                continue;
+            if (x->used + 1 > x->cap) {
+                size_t cap = x->cap;
+                if (grow((void **)&x->idx, &cap, x->used + 1, sizeof(uint32_t))) {
+                    rc = fp_errorf(err, errlen, -ENOMEM, "export: out of memory");
+                    break;
+                }
+                float *d = realloc(x->disp, cap * 3 * sizeof(float));
+                if (!d) {
+                    rc = fp_errorf(err, errlen, -ENOMEM, "export: out of memory");
+                    break;
+                }
+                x->disp = d;
+                x->cap = cap;
+            }
+            x->idx[x->used] = (uint32_t)v;
+            for (int k = 0; k < 3; k++)
+                x->disp[3 * x->used + (size_t)k] = (float)((double)p[k] - (double)q[k]);
+            x->used++;
+        }
+        x->frame_start[x->frames + 1] = x->used;
+        break;
+    }
+    case FP_EXPORT_OBJ_SEQ: {
+        char file[4400];
+        const char *ext = x->opt.seq_ext ? x->opt.seq_ext : "obj";
+        if (!x->opt.seq_ext && x->base->source_path) {
+            const char *dot = strrchr(x->base->source_path, '.');
+            if (dot && !strchr(dot, '/'))
+                ext = dot + 1;
+        }
+        snprintf(file, sizeof file, "%s/%s_%06llu.%s", x->path,
+                 x->opt.stem ? x->opt.stem : "frame", (unsigned long long)x->frames, ext);
+        fp_mesh m = *x->base;  /* the base's triangles, UVs and source; these positions */
+        m.positions = (float *)positions;
+        m.normals = x->scratch;
+        fp_mesh_normals(m.triangles, m.triangle_count, m.positions, m.vertex_count, m.normals);
+        unsigned dropped = 0;
+        rc = fp_mesh_save_ex(&m, file, &dropped, err, errlen);
+        x->dropped |= dropped;
+        struct stat st;
+        if (!rc && stat(file, &st) == 0)
+            x->seq_bytes += (uint64_t)st.st_size;
+        break;
+    }
+    }
+    if (rc)
+        return rc;
+    x->last_time = time_s;
+    x->frames++;
+    return 0;
+}
+
+uint64_t fp_export_frames(const fp_exporter *x)
+{
+    return x ? x->frames : 0;
+}
+
+/* ---- compression ------------------------------------------------------------------------ */
+
+/* Largest per-vertex error of weights x targets (float32 values, double sums) against D. */
+static double recon_error(const float *D, size_t F, size_t m, const float *T, const float *W,
+                          size_t K)
+{
+    double worst = 0;
+    for (size_t f = 0; f < F; f++)
+        for (size_t j = 0; j + 2 < m; j += 3) {
+            double e2 = 0;
+            for (int c = 0; c < 3; c++) {
+                double r = D[f * m + j + (size_t)c];
+                for (size_t k = 0; k < K; k++)
+                    r -= (double)W[f * K + k] * (double)T[k * m + j + (size_t)c];
+                e2 += r * r;
+            }
+            if (e2 > worst)
+                worst = e2;
+        }
+    return sqrt(worst);
+}
+
+/* The F x m float matrix version (what the exporter holds). */
+static int compress_f(const float *D, size_t F, size_t m, double tol, size_t kmax, size_t *k_out,
+                      float **targets, float **weights, double *max_err, char *err,
+                      size_t errlen)
+{
+    *targets = NULL;
+    *weights = NULL;
+    if (F == 0 || m == 0 || F > 46340)
+        return fp_errorf(err, errlen, -EINVAL, "export: %zu frames of %zu values", F, m);
+    if (kmax == 0 || kmax > F)
+        kmax = F;
+    double *G = calloc(F * F, sizeof(double)), *ev = calloc(F, sizeof(double));
+    float *R = malloc(F * m * sizeof(float));
+    float *T = calloc(kmax * m, sizeof(float)), *W = calloc(F * kmax, sizeof(float));
+    double *v = malloc(m * sizeof(double));
+    int rc = 0;
+    if (!G || !ev || !R || !T || !W || !v) {
+        rc = fp_errorf(err, errlen, -ENOMEM, "export: out of memory (%zu frames x %zu values)",
+                       F, m);
+        goto out;
+    }
+    /* Gram matrix G = D D^T (symmetric; both triangles filled) */
+    for (size_t i = 0; i < F; i++)
+        for (size_t j = 0; j <= i; j++) {
+            double s = 0;
+            const float *a = D + i * m, *b = D + j * m;
+            for (size_t c = 0; c < m; c++)
+                s += (double)a[c] * (double)b[c];
+            G[i * F + j] = G[j * F + i] = s;
+        }
+    {
+        int n = (int)F, lwork = -1, info = 0;
+        double q;
+        dsyev_("V", "U", &n, G, &n, ev, &q, &lwork, &info);
+        lwork = info == 0 ? (int)q : 3 * n;
+        double *work = malloc((size_t)lwork * sizeof(double));
+        if (!work) {
+            rc = fp_errorf(err, errlen, -ENOMEM, "export: out of memory");
+            goto out;
+        }
+        dsyev_("V", "U", &n, G, &n, ev, work, &lwork, &info);
+        free(work);
+        if (info != 0) {
+            rc = fp_errorf(err, errlen, FP_ENUMERIC, "export: LAPACK dsyev failed (info %d)",
+                           info);
+            goto out;
+        }
+    }
+    memcpy(R, D, F * m * sizeof(float));
+    double res = recon_error(D, F, m, T, W, 0);
+    size_t K = 0;
+    const double top = ev[F - 1] > 0 ? ev[F - 1] : 0;
+    while (K < kmax) {
+        if (res <= tol && K > 0)
+            break;
+        if (res <= tol && K == 0 && top == 0)
+            break;
+        /* component K: the (K+1)-th largest eigenpair; column F-1-K of G (column-major) */
+        const double lambda = ev[F - 1 - K];
+        const double *u = G + (F - 1 - K) * F;
+        if (!(lambda > top * 1e-14) || lambda <= 0)
+            break;   /* what is left is rounding: no more directions */
+        const double sigma = sqrt(lambda);
+        for (size_t c = 0; c < m; c++)
+            v[c] = 0;
+        for (size_t f = 0; f < F; f++) {
+            const double uf = u[f];
+            if (uf == 0)
+                continue;
+            const float *a = D + f * m;
+            for (size_t c = 0; c < m; c++)
+                v[c] += uf * a[c];
+        }
+        double wmax = 0;
+        for (size_t f = 0; f < F; f++)
+            if (fabs(sigma * u[f]) > wmax)
+                wmax = fabs(sigma * u[f]);
+        if (!(wmax > 0))
+            break;
+        /* weights in [-1, 1]: target = D^T u / sigma * wmax, weight = sigma u / wmax */
+        for (size_t c = 0; c < m; c++)
+            T[K * m + c] = (float)(v[c] / sigma * wmax);
+        /* weights from the float32 target by least squares against the residual: the
+         * stored values then fit what a reader computes as well as they can */
+        double tt = 0;
+        for (size_t c = 0; c < m; c++)
+            tt += (double)T[K * m + c] * (double)T[K * m + c];
+        for (size_t f = 0; f < F; f++) {
+            double s = 0;
+            const float *r = R + f * m, *t = T + K * m;
+            for (size_t c = 0; c < m; c++)
+                s += (double)r[c] * (double)t[c];
+            const float w = (float)(tt > 0 ? s / tt : 0);
+            /* weights are set for every earlier component already; fold this one in */
+            W[f * kmax + K] = w;
+            float *rr = R + f * m;
+            for (size_t c = 0; c < m; c++)
+                rr[c] = (float)((double)rr[c] - (double)w * (double)t[c]);
+        }
+        K++;
+        /* the residual's largest vertex norm (float residual: a close estimate) */
+        double worst = 0;
+        for (size_t i = 0; i + 2 < F * m; i += 3) {
+            double e2 = (double)R[i] * R[i] + (double)R[i + 1] * R[i + 1] +
+                        (double)R[i + 2] * R[i + 2];
+            if (e2 > worst)
+                worst = e2;
+        }
+        res = sqrt(worst);
+    }
+    if (K == 0) {   /* nothing moved: one zero target keeps the file well-formed */
+        K = 1;
+    }
+    /* pack W (F x kmax) into F x K and measure exactly from the float32 values */
+    float *Wk = malloc(F * K * sizeof(float)), *Tk = malloc(K * m * sizeof(float));
+    if (!Wk || !Tk) {
+        free(Wk);
+        free(Tk);
+        rc = fp_errorf(err, errlen, -ENOMEM, "export: out of memory");
+        goto out;
+    }
+    for (size_t f = 0; f < F; f++)
+        for (size_t k = 0; k < K; k++)
+            Wk[f * K + k] = W[f * kmax + k];
+    memcpy(Tk, T, K * m * sizeof(float));
+    *max_err = recon_error(D, F, m, Tk, Wk, K);
+    *k_out = K;
+    *targets = Tk;
+    *weights = Wk;
+out:
+    free(G);
+    free(ev);
+    free(R);
+    free(T);
+    free(W);
+    free(v);
+    return rc;
+}
+
+int fp_export_compress(const double *D, size_t F, size_t m, double tol, size_t kmax,
+                       size_t *k_out, float **targets, float **weights, double *max_err,
+                       char *err, size_t errlen)
+{
+    if (!D || !k_out || !targets || !weights || !max_err || !(tol >= 0))
+        return fp_errorf(err, errlen, -EINVAL, "export: bad arguments");
+    float *Df = malloc(F * m * sizeof(float));
+    if (!Df)
+        return fp_errorf(err, errlen, -ENOMEM, "export: out of memory");
+    for (size_t i = 0; i < F * m; i++)
+        Df[i] = (float)D[i];
+    int rc = compress_f(Df, F, m, tol, kmax, k_out, targets, weights, max_err, err, errlen);
+    free(Df);
+    if (rc == 0) {   /* the error against D as given (double), not its float32 copy */
+        const size_t K = *k_out;
+        double worst = 0;
+        for (size_t f = 0; f < F; f++)
+            for (size_t j = 0; j + 2 < m; j += 3) {
+                double e2 = 0;
+                for (int c = 0; c < 3; c++) {
+                    double r = D[f * m + j + (size_t)c];
+                    for (size_t k = 0; k < K; k++)
+                        r -= (double)(*weights)[f * K + k] * (double)(*targets)[k * m + j + (size_t)c];
+                    e2 += r * r;
+                }
+                if (e2 > worst) worst = e2;
+            }
+        *max_err = sqrt(worst);
+    }
+    return rc;
+}
+
+/* ---- finish ------------------------------------------------------------------------------ */
+
+static uint64_t file_size(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0 ? (uint64_t)st.st_size : 0;
+}
+
+static int finish_gltf(fp_exporter *x, fp_export_result *res, char *err, size_t errlen)
+{
+    const size_t F = (size_t)x->frames, n = x->n;
+    /* the vertices any frame moved, and the dense F x 3M displacement matrix over them */
+    uint32_t *col = malloc(n * sizeof(uint32_t));
+    if (!col)
+        return fp_errorf(err, errlen, -ENOMEM, "export: out of memory");
+    for (size_t v = 0; v < n; v++)
+        col[v] = UINT32_MAX;
+    size_t M = 0;
+    for (size_t e = 0; e < x->used; e++)
+        if (col[x->idx[e]] == UINT32_MAX)
+            col[x->idx[e]] = 1;
+    uint32_t *moved = malloc((n ? n : 1) * sizeof(uint32_t));
+    if (!moved) {
+        free(col);
+        return fp_errorf(err, errlen, -ENOMEM, "export: out of memory");
+    }
+    for (size_t v = 0; v < n; v++)
+        if (col[v] != UINT32_MAX) {
+            col[v] = (uint32_t)M;
+            moved[M++] = (uint32_t)v;
+        }
+    const size_t m = 3 * (M ? M : 1);
+    float *D = calloc(F * m, sizeof(float));
+    int rc = 0;
+    float *T = NULL, *W = NULL, *targets = NULL;
+    char **tnames = NULL;
+    if (!D) {
+        rc = fp_errorf(err, errlen, -ENOMEM, "export: out of memory (%zu frames x %zu moved "
+                       "vertices)", F, M);
+        goto out;
+    }
+    for (size_t f = 0; f < F; f++)
+        for (size_t e = x->frame_start[f]; e < x->frame_start[f + 1]; e++)
+            for (int c = 0; c < 3; c++)
+                D[f * m + 3 * col[x->idx[e]] + (size_t)c] = x->disp[3 * e + (size_t)c];
+    const double tol = x->opt.max_error_mm / x->opt.mm_per_unit;
+    size_t K = 0;
+    double max_err = 0;
+    rc = compress_f(D, F, m, tol, x->opt.max_targets > 0 ? (size_t)x->opt.max_targets : 0, &K,
+                    &T, &W, &max_err, err, errlen);
+    if (rc)
+        goto out;
+    targets = calloc(K * n * 3, sizeof(float));
+    tnames = calloc(K, sizeof(char *));
+    float *times = malloc(F * sizeof(float));
+    if (!targets || !tnames || !times) {
+        free(times);
+        rc = fp_errorf(err, errlen, -ENOMEM, "export: out of memory");
+        goto out;
+    }
+    for (size_t k = 0; k < K; k++)
+        for (size_t j = 0; j < M; j++)
+            for (int c = 0; c < 3; c++)
+                targets[k * n * 3 + 3 * moved[j] + (size_t)c] = T[k * m + 3 * j + (size_t)c];
+    for (size_t k = 0; k < K; k++) {
+        tnames[k] = malloc(32);
+        if (tnames[k])
+            snprintf(tnames[k], 32, "pc%02zu", k + 1);
+    }
+    for (size_t f = 0; f < F; f++)
+        times[f] = (float)x->times[f];
+    /* float32 times must stay increasing */
+    for (size_t f = 1; f < F; f++)
+        if (!(times[f] > times[f - 1])) {
+            free(times);
+            rc = fp_errorf(err, errlen, -EINVAL, "%s: frames %zu and %zu are closer in time "
+                           "than float32 seconds resolve", x->path, f - 1, f);
+            goto out;
+        }
+    fp_mesh_morph_animation anim = {.target_count = K, .targets = targets,
+                                    .target_names = (const char *const *)tnames,
+                                    .frame_count = F, .times = times, .weights = W,
+                                    .step = x->opt.step, .name = x->opt.name};
+    unsigned dropped = 0;
+    rc = fp_mesh_save_animation(x->base, &anim, x->path, &dropped, err, errlen);
+    free(times);
+    if (rc)
+        goto out;
+    if (res) {
+        res->targets = K;
+        res->max_error_units = max_err;
+        res->max_error_mm = max_err * x->opt.mm_per_unit;
+        res->dropped = dropped;
+        res->bytes = file_size(x->path);
+    }
+out:
+    if (tnames)
+        for (size_t k = 0; k < K; k++)
+            free(tnames[k]);
+    free(tnames);
+    free(targets);
+    free(T);
+    free(W);
+    free(D);
+    free(col);
+    free(moved);
+    return rc;
+}
+
+static int finish_mdd(fp_exporter *x, char *err, size_t errlen)
+{
+    FILE *out = NULL;
+    int rc = temp_beside(x->path, "", x->tmp, sizeof x->tmp, &out, err, errlen);
+    if (rc)
+        return rc;
+    FILE *data = x->f;
+    x->f = out;
+    unsigned char h[8];
+    const int32_t frames = (int32_t)x->frames, points = (int32_t)x->n;
+    be32(h, &frames);
+    be32(h + 4, &points);
+    rc = put(x, h, 8, err, errlen);
+    for (uint64_t f = 0; !rc && f < x->frames; f++) {
+        float t = (float)x->times[f];
+        unsigned char b[4];
+        be32(b, &t);
+        rc = put(x, b, 4, err, errlen);
+    }
+    if (!rc && (fflush(data) != 0 || fseek(data, 0, SEEK_SET) != 0))
+        rc = fp_errorf(err, errlen, errno_code(errno), "%s: %s", x->data_tmp, strerror(errno));
+    char buf[1 << 16];
+    size_t got;
+    while (!rc && (got = fread(buf, 1, sizeof buf, data)) > 0)
+        rc = put(x, buf, got, err, errlen);
+    if (!rc && ferror(data))
+        rc = fp_errorf(err, errlen, -EIO, "%s: read failed", x->data_tmp);
+    fclose(data);
+    unlink(x->data_tmp);
+    x->data_tmp[0] = '\0';
+    if (rc)
+        return rc;
+    rc = commit_file(x, x->tmp, &x->f, err, errlen);
+    x->tmp[0] = '\0';
+    return rc;
+}
+
+int fp_export_finish(fp_exporter **xp, fp_export_result *res, char *err, size_t errlen)
+{
+    if (res)
+        memset(res, 0, sizeof *res);
+    if (!xp || !*xp)
+        return fp_errorf(err, errlen, -EINVAL, "export: NULL exporter");
+    fp_exporter *x = *xp;
+    int rc = 0;
+    if (x->frames == 0) {
+        rc = fp_errorf(err, errlen, -EINVAL, "%s: no frames to export (nothing written)",
+                       x->path);
+        fp_export_abort(xp);
+        return rc;
+    }
+    if (x->frames > INT32_MAX / 2) {
+        rc = fp_errorf(err, errlen, -EINVAL, "%s: too many frames", x->path);
+        fp_export_abort(xp);
+        return rc;
+    }
+    switch (x->opt.format) {
+    case FP_EXPORT_PC2: {
+        unsigned char b[4];
+        const int32_t samples = (int32_t)x->frames;
+        le32(b, &samples);
+        if (fflush(x->f) != 0 || pwrite(fileno(x->f), b, 4, 28) != 4)
+            rc = fp_errorf(err, errlen, errno_code(errno), "%s: write failed: %s", x->path,
+                           strerror(errno));
+        if (!rc) {
+            rc = commit_file(x, x->tmp, &x->f, err, errlen);
+            x->tmp[0] = '\0';
+        }
+        break;
+    }
+    case FP_EXPORT_MDD:
+        rc = finish_mdd(x, err, errlen);
+        break;
+    case FP_EXPORT_GLTF:
+    case FP_EXPORT_GLB:
+        rc = finish_gltf(x, res, err, errlen);
+        break;
+    case FP_EXPORT_OBJ_SEQ:
+        break;
+    }
+    if (res && !rc) {
+        res->frames = x->frames;
+        if (x->opt.format == FP_EXPORT_OBJ_SEQ) {
+            res->bytes = x->seq_bytes;
+            res->dropped = x->dropped;
+        } else if (x->opt.format == FP_EXPORT_PC2 || x->opt.format == FP_EXPORT_MDD) {
+            res->bytes = file_size(x->path);
+        }
+    }
+    fp_export_abort(xp);
+    return rc;
+}
+
+void fp_export_abort(fp_exporter **xp)
+{
+    if (!xp || !*xp)
+        return;
+    fp_exporter *x = *xp;
+    if (x->f)
+        fclose(x->f);
+    if (x->tmp[0])
+        unlink(x->tmp);
+    if (x->data_tmp[0])
+        unlink(x->data_tmp);
+    free(x->scratch);
+    free(x->times);
+    free(x->idx);
+    free(x->disp);
+    free(x->frame_start);
+    free(x);
+    *xp = NULL;
+}

@@ -1,0 +1,121 @@
+/*
+ * fp_export.h: a take's frames out as files an animator's tools read (docs/export.md).
+ *
+ * An exporter is fed the frames of a take (or of a run) one at a time, each as the mesh's
+ * positions at a time, and writes one of:
+ *   - gltf / glb: glTF 2.0 with the base mesh (UVs, OBJ materials), K morph targets and one
+ *     animation whose `weights` channel has a key at every frame. The frames' displacements
+ *     from the base are compressed into their K leading principal components (eigenvectors
+ *     of the frames x frames Gram matrix D D^T of the (frames x 3n) displacement matrix D,
+ *     LAPACK dsyev; K the smallest whose largest per-vertex error, measured with the float32
+ *     targets and weights written, is within max_error_mm). Written by
+ *     fp_mesh_save_animation (core/mesh).
+ *   - pc2: Point Cache 2 (little-endian; header "POINTCACHE2\0", version 1, points, start
+ *     frame, sampling 1, samples; then samples x points x 3 float32).
+ *   - mdd: LightWave MDD (big-endian; frames, points, frames float32 times in seconds, then
+ *     frames x points x 3 float32).
+ *   - obj-seq: one mesh file per frame in a folder (PATH/STEM_NNNNNN.obj), each written back
+ *     as the input came in (fp_mesh_save_ex).
+ * Point caches hold every frame's positions exactly (the float32 given), in the mesh's vertex
+ * order. Files appear whole or not at all: pc2/mdd/gltf are written to a temporary file in
+ * the target's folder and renamed at fp_export_finish; an aborted export leaves nothing
+ * (obj-seq files already written stay, each whole).
+ *
+ * Errors: 0 or a negative errno-style code (core/common/fp_error.h) with a message in err:
+ * -EINVAL bad options or frames (non-finite, times not increasing), -ENOENT/-EACCES/-ENOSPC/
+ * -EIO for the output, -ENOMEM, -ENOTSUP an unknown format, FP_ENUMERIC the eigensolver
+ * failed. Nothing is printed. Threads: one exporter belongs to one thread.
+ */
+#ifndef FP_EXPORT_H
+#define FP_EXPORT_H
+
+#include "fp_mesh.h"
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum fp_export_format {
+    FP_EXPORT_GLTF = 0,
+    FP_EXPORT_GLB,
+    FP_EXPORT_PC2,
+    FP_EXPORT_MDD,
+    FP_EXPORT_OBJ_SEQ
+} fp_export_format;
+
+/** "gltf", "glb", "pc2", "mdd", "obj-seq" -> *f. Returns 0 or -EINVAL. */
+int fp_export_format_parse(const char *name, fp_export_format *f);
+/** The format of a file name's extension (.gltf .glb .pc2 .mdd). Returns 0 or -EINVAL. */
+int fp_export_format_from_path(const char *path, fp_export_format *f);
+/** The format's name ("gltf" ...) and its file extension without the dot ("" for obj-seq). */
+const char *fp_export_format_name(fp_export_format f);
+const char *fp_export_format_extension(fp_export_format f);
+
+typedef struct fp_export_options {
+    fp_export_format format;
+    const char *path;        /* the file (gltf, glb, pc2, mdd) or folder (obj-seq) */
+    double max_error_mm;     /* glTF: the largest per-vertex error allowed; 0: 0.1 mm */
+    double mm_per_unit;      /* millimetres per mesh unit (> 0); 0: 1 */
+    int max_targets;         /* glTF: at most this many targets; 0: no limit but frames */
+    int step;                /* glTF: STEP sampler instead of LINEAR */
+    const char *name;        /* the animation's name (glTF); NULL: "take" */
+    const char *stem;        /* obj-seq file names' stem; NULL: "frame" */
+    const char *seq_ext;     /* obj-seq mesh format by extension; NULL: the base mesh's own,
+                                else "obj" */
+} fp_export_options;
+
+typedef struct fp_export_result {
+    uint64_t frames;         /* frames written */
+    size_t targets;          /* glTF: K */
+    uint64_t bytes;          /* size of the file written (obj-seq: all files) */
+    double max_error_mm;     /* glTF: the largest per-vertex distance, mm, between a frame
+                                as the glTF's float32 values give it and the frame given;
+                                0 for point caches (exact) */
+    double max_error_units;  /* the same in mesh units */
+    unsigned dropped;        /* FP_MESH_DROPPED_* bits: what the format could not keep */
+} fp_export_result;
+
+typedef struct fp_exporter fp_exporter;
+
+/** Start an export of frames of `base` (its vertex count, triangles, UVs and source are
+ *  used; the mesh must outlive the exporter). Checks the output's folder (pc2/mdd/glTF:
+ *  creates the temporary file; obj-seq: creates the folder). Returns 0 and *out. */
+int fp_export_begin(const fp_mesh *base, const fp_export_options *opt, fp_exporter **out,
+                    char *err, size_t errlen);
+
+/** Add one frame: positions (vertex_count x 3 float32, mesh units) at time_s seconds from
+ *  the export's start (strictly increasing; the first frame's time is taken as 0 in files
+ *  that store times relative to the start: glTF keys and MDD times are time_s - first).
+ *  Returns 0 or a negative code (the export is then only to be aborted). */
+int fp_export_add(fp_exporter *x, const float *positions, double time_s, char *err,
+                  size_t errlen);
+
+/** Frames added so far. */
+uint64_t fp_export_frames(const fp_exporter *x);
+
+/** Write what is left (glTF: the compression and the file; pc2/mdd: the header, times) and
+ *  rename it into place; *res (may be NULL) says what was written. Frees *x. An export with
+ *  no frame fails with -EINVAL and leaves nothing. Returns 0 or a negative code. */
+int fp_export_finish(fp_exporter **x, fp_export_result *res, char *err, size_t errlen);
+
+/** Give up: remove the temporary file, free *x. NULL or *x == NULL is a no-op. */
+void fp_export_abort(fp_exporter **x);
+
+/** The morph-target compression alone (what the glTF export uses), for tests and tools:
+ *  D is F x m (row-major, double: frame f's displacement over m = 3 x vertices), tol the
+ *  largest per-vertex Euclidean error allowed (same units as D), kmax the most components
+ *  (0: F). On success *k_out components, targets (K x m, float32, malloc()ed, caller frees)
+ *  and weights (F x K, float32, malloc()ed), *max_err the largest per-vertex error of
+ *  weights x targets against D measured in double from the float32 values. Returns 0,
+ *  -EINVAL, -ENOMEM or FP_ENUMERIC. */
+int fp_export_compress(const double *D, size_t F, size_t m, double tol, size_t kmax,
+                       size_t *k_out, float **targets, float **weights, double *max_err,
+                       char *err, size_t errlen);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,330 @@
+/* Calibrations from a short recording: hold and touch (fp_calib_fit.h says how). */
+#include "fp_calib_fit.h"
+
+#include "fp_error.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* Per-axis median of joint `joint` over the samples [from, to) of `hand` (-1: any). Returns
+ * the number of samples used. */
+static size_t median_joint(const fp_calib_sample *s, size_t from, size_t to, int hand, int joint,
+                           double out[3])
+{
+    size_t m = 0;
+    for (size_t i = from; i < to; i++) m += hand < 0 || s[i].hand == hand;
+    if (!m) return 0;
+    double *v = malloc(m * sizeof *v);
+    if (!v) return 0;
+    for (int k = 0; k < 3; k++) {
+        size_t c = 0;
+        for (size_t i = from; i < to; i++)
+            if (hand < 0 || s[i].hand == hand) v[c++] = s[i].joints[joint][k];
+        qsort(v, c, sizeof *v, cmp_double);
+        out[k] = c % 2 ? v[c / 2] : 0.5 * (v[c / 2 - 1] + v[c / 2]);
+    }
+    free(v);
+    return m;
+}
+
+static void nose_tip(const float *pos, size_t n, const fp_head *head, float out[3])
+{
+    float best = -INFINITY;
+    memset(out, 0, 3 * sizeof *out);
+    for (size_t v = 0; v < n; v++)
+        if (pos[3 * v + 1] >= head->neck_y && pos[3 * v + 2] > best) {
+            best = pos[3 * v + 2];
+            memcpy(out, pos + 3 * v, 3 * sizeof *out);
+        }
+}
+
+void fp_calib_hold_target(const float *pos, size_t n, const fp_head *head, int hand, float out[3])
+{
+    float nose[3];
+    nose_tip(pos, n, head, nose);
+    float w = head->max[0] - head->min[0], cx = 0.5f * (head->min[0] + head->max[0]);
+    float r = (float)(15.0 / (head->mm_per_unit > 0 ? head->mm_per_unit : 1));
+    out[0] = cx + (hand == FP_HAND_LEFT ? -0.25f : 0.25f) * w;
+    out[1] = nose[1];
+    if (!fp_head_surface_z(pos, n, out[0], out[1], r, head->neck_y, INFINITY, &out[2])) out[2] = head->max[2];
+}
+
+int fp_calib_fit_hold(const fp_calib_sample *samples, size_t n, const float *pos, size_t nv,
+                      const fp_head *head, fp_calibration *out, char *err, size_t errlen)
+{
+    if (!samples || !pos || !head || !out) return fp_errorf(err, errlen, -EINVAL, "calibrate: NULL argument");
+    double s = 1.0 / (head->mm_per_unit > 0 ? head->mm_per_unit : 1);
+    double off[FP_HANDS][3];
+    bool have[FP_HANDS] = {false, false};
+    for (int h = 0; h < FP_HANDS; h++) {
+        double palm[3];
+        if (median_joint(samples, 0, n, h, FP_JOINT_PALM, palm) < 3) continue;
+        float target[3];
+        fp_calib_hold_target(pos, nv, head, h, target);
+        for (int k = 0; k < 3; k++) off[h][k] = target[k] - s * palm[k];
+        have[h] = true;
+    }
+    if (!have[0] && !have[1])
+        return fp_errorf(err, errlen, -EINVAL, "calibrate: no hand held still: %zu sample(s) of joint "
+                         "positions (hold mode needs a tracker's palm positions)", n);
+    memset(out, 0, sizeof *out);
+    out->scale = s;
+    out->rotation[0] = 1;
+    for (int k = 0; k < 3; k++) {
+        out->offset[k] = have[0] && have[1] ? 0.5 * (off[0][k] + off[1][k]) : have[0] ? off[0][k] : off[1][k];
+        for (int h = 0; h < FP_HANDS; h++) out->hand_offset[h][k] = have[h] ? off[h][k] - out->offset[k] : 0;
+    }
+    return 0;
+}
+
+void fp_calib_head_landmarks(const float *pos, size_t n, const fp_head *head,
+                             float out[FP_CALIB_LANDMARKS][3])
+{
+    float nose[3];
+    nose_tip(pos, n, head, nose);
+    memcpy(out[FP_CALIB_NOSE_TIP], nose, sizeof nose);
+    double cm = 10.0 / (head->mm_per_unit > 0 ? head->mm_per_unit : 1);
+    float y_hi = head->neck_y + 0.25f * (nose[1] - head->neck_y), best = -INFINITY;
+    memcpy(out[FP_CALIB_CHIN], nose, sizeof nose);
+    out[FP_CALIB_CHIN][1] = head->neck_y;
+    for (size_t v = 0; v < n; v++) {
+        const float *p = pos + 3 * v;
+        if (p[1] < head->neck_y || p[1] > y_hi || fabs(p[0] - nose[0]) > cm || p[2] <= best) continue;
+        best = p[2];
+        memcpy(out[FP_CALIB_CHIN], p, 3 * sizeof *p);
+    }
+    float *fh = out[FP_CALIB_FOREHEAD];
+    fh[0] = nose[0];
+    fh[1] = nose[1] + 0.45f * (head->max[1] - nose[1]);
+    if (!fp_head_surface_z(pos, n, fh[0], fh[1], (float)(1.5 * cm), head->neck_y, INFINITY, &fh[2]))
+        fh[2] = nose[2];
+}
+
+typedef struct still { size_t from, to; int64_t t0, t1; } still;
+
+static int by_length(const void *a, const void *b)
+{
+    const still *x = a, *y = b;
+    int64_t lx = x->t1 - x->t0, ly = y->t1 - y->t0;
+    return (lx < ly) - (lx > ly);
+}
+
+static int by_start(const void *a, const void *b)
+{
+    const still *x = a, *y = b;
+    return (x->t0 > y->t0) - (x->t0 < y->t0);
+}
+
+int fp_calib_find_touches(const fp_calib_sample *samples, size_t n, int finger,
+                          double touched[FP_CALIB_LANDMARKS][3], int64_t t_ns[FP_CALIB_LANDMARKS][2],
+                          char *err, size_t errlen)
+{
+    size_t count[FP_HANDS] = {0, 0};
+    for (size_t i = 0; i < n; i++)
+        if (samples[i].hand == FP_HAND_LEFT || samples[i].hand == FP_HAND_RIGHT) count[samples[i].hand]++;
+    int hand = count[1] > count[0] ? 1 : 0;
+    if (!count[hand]) return fp_errorf(err, errlen, -EINVAL, "calibrate: no hand samples");
+    /* This hand's samples, in order. */
+    fp_calib_sample *h = malloc(count[hand] * sizeof *h);
+    still *st = malloc(count[hand] * sizeof *st);
+    if (!h || !st) {
+        free(h);
+        free(st);
+        return fp_errorf(err, errlen, -ENOMEM, "calibrate: out of memory");
+    }
+    size_t m = 0, ns = 0;
+    for (size_t i = 0; i < n; i++)
+        if (samples[i].hand == hand) h[m++] = samples[i];
+    int joint = FP_JOINT_TIP(finger);
+    for (size_t i = 0; i < m;) {
+        const float *a = h[i].joints[joint];
+        size_t j = i + 1;
+        while (j < m) {
+            const float *p = h[j].joints[joint];
+            double d = sqrt(pow(p[0] - a[0], 2) + pow(p[1] - a[1], 2) + pow(p[2] - a[2], 2));
+            if (!(d < FP_CALIB_STILL_MM)) break;
+            j++;
+        }
+        if ((double)(h[j - 1].t_ns - h[i].t_ns) >= FP_CALIB_MIN_STILL_S * 1e9) {
+            st[ns++] = (still){i, j, h[i].t_ns, h[j - 1].t_ns};
+            i = j;
+        } else {
+            i++;
+        }
+    }
+    int rc = 0;
+    if (ns < FP_CALIB_LANDMARKS) {
+        rc = fp_errorf(err, errlen, -EDOM, "calibrate: found %zu still moment(s) of the %s hand's "
+                       "fingertip (at least %.2f s within %.0f mm), need 3: touch chin, nose tip and "
+                       "forehead in turn, holding each", ns, hand ? "right" : "left",
+                       FP_CALIB_MIN_STILL_S, FP_CALIB_STILL_MM);
+    } else {
+        qsort(st, ns, sizeof *st, by_length);
+        qsort(st, FP_CALIB_LANDMARKS, sizeof *st, by_start);
+        for (int k = 0; k < FP_CALIB_LANDMARKS; k++) {
+            median_joint(h, st[k].from, st[k].to, hand, joint, touched[k]);
+            if (t_ns) t_ns[k][0] = st[k].t0, t_ns[k][1] = st[k].t1;
+        }
+    }
+    free(h);
+    free(st);
+    return rc;
+}
+
+/* Eigenvector of the largest eigenvalue of a symmetric 4x4 matrix (cyclic Jacobi). */
+static void top_eigenvector(double a[4][4], double v[4])
+{
+    double e[4][4] = {{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}};
+    for (int sweep = 0; sweep < 64; sweep++) {
+        double off = 0;
+        for (int p = 0; p < 4; p++)
+            for (int q = p + 1; q < 4; q++) off += a[p][q] * a[p][q];
+        if (off < 1e-30) break;
+        for (int p = 0; p < 4; p++)
+            for (int q = p + 1; q < 4; q++) {
+                if (fabs(a[p][q]) < 1e-300) continue;
+                double theta = 0.5 * (a[q][q] - a[p][p]) / a[p][q];
+                double t = (theta >= 0 ? 1 : -1) / (fabs(theta) + sqrt(theta * theta + 1));
+                double c = 1 / sqrt(t * t + 1), s = t * c;
+                for (int k = 0; k < 4; k++) { /* columns p, q */
+                    double akp = a[k][p], akq = a[k][q];
+                    a[k][p] = c * akp - s * akq;
+                    a[k][q] = s * akp + c * akq;
+                }
+                for (int k = 0; k < 4; k++) { /* rows p, q */
+                    double apk = a[p][k], aqk = a[q][k];
+                    a[p][k] = c * apk - s * aqk;
+                    a[q][k] = s * apk + c * aqk;
+                }
+                for (int k = 0; k < 4; k++) {
+                    double ekp = e[k][p], ekq = e[k][q];
+                    e[k][p] = c * ekp - s * ekq;
+                    e[k][q] = s * ekp + c * ekq;
+                }
+            }
+    }
+    int best = 0;
+    for (int i = 1; i < 4; i++)
+        if (a[i][i] > a[best][best]) best = i;
+    for (int k = 0; k < 4; k++) v[k] = e[k][best];
+}
+
+static void qrot(const double q[4], const double v[3], double out[3])
+{
+    double w = q[0], x = q[1], y = q[2], z = q[3];
+    double tx = 2 * (y * v[2] - z * v[1]), ty = 2 * (z * v[0] - x * v[2]), tz = 2 * (x * v[1] - y * v[0]);
+    out[0] = v[0] + w * tx + (y * tz - z * ty);
+    out[1] = v[1] + w * ty + (z * tx - x * tz);
+    out[2] = v[2] + w * tz + (x * ty - y * tx);
+}
+
+/* Whether the points span a plane: the largest triangle with the first point, against the
+ * spread. */
+static bool spans_plane(const double (*p)[3], size_t n)
+{
+    double spread = 0, area = 0;
+    for (size_t i = 1; i < n; i++) {
+        double d[3] = {p[i][0] - p[0][0], p[i][1] - p[0][1], p[i][2] - p[0][2]};
+        spread = fmax(spread, d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        for (size_t j = i + 1; j < n; j++) {
+            double e[3] = {p[j][0] - p[0][0], p[j][1] - p[0][1], p[j][2] - p[0][2]};
+            double c[3] = {d[1] * e[2] - d[2] * e[1], d[2] * e[0] - d[0] * e[2], d[0] * e[1] - d[1] * e[0]};
+            area = fmax(area, sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]));
+        }
+    }
+    return spread > 0 && area > 1e-3 * spread;
+}
+
+int fp_calib_similarity(const double (*a)[3], const double (*b)[3], size_t n, double *s,
+                        double q[4], double t[3])
+{
+    if (n < 3 || !spans_plane(a, n) || !spans_plane(b, n)) return -EDOM;
+    double ma[3] = {0, 0, 0}, mb[3] = {0, 0, 0};
+    for (size_t i = 0; i < n; i++)
+        for (int k = 0; k < 3; k++) ma[k] += a[i][k] / (double)n, mb[k] += b[i][k] / (double)n;
+    double S[3][3] = {{0}}, va = 0;
+    for (size_t i = 0; i < n; i++) {
+        double pa[3], pb[3];
+        for (int k = 0; k < 3; k++) pa[k] = a[i][k] - ma[k], pb[k] = b[i][k] - mb[k];
+        for (int r = 0; r < 3; r++)
+            for (int c = 0; c < 3; c++) S[r][c] += pa[r] * pb[c];
+        va += pa[0] * pa[0] + pa[1] * pa[1] + pa[2] * pa[2];
+    }
+    /* Horn's N matrix (Sxy = sum a_x b_y); its top eigenvector is the rotation a -> b. */
+    double N[4][4] = {
+        {S[0][0] + S[1][1] + S[2][2], S[1][2] - S[2][1], S[2][0] - S[0][2], S[0][1] - S[1][0]},
+        {S[1][2] - S[2][1], S[0][0] - S[1][1] - S[2][2], S[0][1] + S[1][0], S[2][0] + S[0][2]},
+        {S[2][0] - S[0][2], S[0][1] + S[1][0], -S[0][0] + S[1][1] - S[2][2], S[1][2] + S[2][1]},
+        {S[0][1] - S[1][0], S[2][0] + S[0][2], S[1][2] + S[2][1], -S[0][0] - S[1][1] + S[2][2]}};
+    top_eigenvector(N, q);
+    double nq = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    for (int k = 0; k < 4; k++) q[k] /= nq;
+    if (q[0] < 0)
+        for (int k = 0; k < 4; k++) q[k] = -q[k];
+    /* Umeyama's scale: sum b' . R a' / sum |a'|^2. */
+    double num = 0;
+    for (size_t i = 0; i < n; i++) {
+        double pa[3], r[3];
+        for (int k = 0; k < 3; k++) pa[k] = a[i][k] - ma[k];
+        qrot(q, pa, r);
+        for (int k = 0; k < 3; k++) num += r[k] * (b[i][k] - mb[k]);
+    }
+    *s = num / va;
+    if (!(*s > 0) || !isfinite(*s)) return -EDOM;
+    double rm[3];
+    qrot(q, ma, rm);
+    for (int k = 0; k < 3; k++) t[k] = mb[k] - *s * rm[k];
+    return 0;
+}
+
+int fp_calib_fit_touch(const fp_calib_sample *samples, size_t n,
+                       const float landmarks[FP_CALIB_LANDMARKS][3], fp_calibration *out,
+                       double touched[FP_CALIB_LANDMARKS][3], double *rms, char *err, size_t errlen)
+{
+    if (!samples || !landmarks || !out) return fp_errorf(err, errlen, -EINVAL, "calibrate: NULL argument");
+    double a[FP_CALIB_LANDMARKS][3], b[FP_CALIB_LANDMARKS][3];
+    int rc = fp_calib_find_touches(samples, n, 1, a, NULL, err, errlen);
+    if (rc) return rc;
+    for (int i = 0; i < FP_CALIB_LANDMARKS; i++)
+        for (int k = 0; k < 3; k++) b[i][k] = landmarks[i][k];
+    for (int i = 0; i < FP_CALIB_LANDMARKS; i++)
+        for (int j = i + 1; j < FP_CALIB_LANDMARKS; j++) {
+            double d = sqrt(pow(a[i][0] - a[j][0], 2) + pow(a[i][1] - a[j][1], 2) + pow(a[i][2] - a[j][2], 2));
+            if (d < FP_CALIB_MIN_APART_MM)
+                return fp_errorf(err, errlen, -EDOM, "calibrate: touches %d and %d are %.0f mm apart "
+                                 "(under %.0f mm): touch chin, nose tip and forehead in turn",
+                                 i + 1, j + 1, d, FP_CALIB_MIN_APART_MM);
+        }
+    double s, q[4], t[3];
+    if (fp_calib_similarity((const double (*)[3])a, (const double (*)[3])b, FP_CALIB_LANDMARKS, &s, q, t))
+        return fp_errorf(err, errlen, -EDOM, "calibrate: the three touches (%.0f %.0f %.0f), (%.0f %.0f "
+                         "%.0f), (%.0f %.0f %.0f) mm lie on a line: touch chin, nose tip and forehead",
+                         a[0][0], a[0][1], a[0][2], a[1][0], a[1][1], a[1][2], a[2][0], a[2][1], a[2][2]);
+    double e = 0;
+    for (int i = 0; i < FP_CALIB_LANDMARKS; i++) {
+        double r[3];
+        qrot(q, a[i], r);
+        for (int k = 0; k < 3; k++) e += pow(s * r[k] + t[k] - b[i][k], 2);
+    }
+    e = sqrt(e / FP_CALIB_LANDMARKS);
+    if (e / s > FP_CALIB_MAX_RESIDUAL_MM)
+        return fp_errorf(err, errlen, -EDOM, "calibrate: the touches do not have the shape of chin, "
+                         "nose tip and forehead (residual %.0f mm, over %.0f mm)", e / s,
+                         FP_CALIB_MAX_RESIDUAL_MM);
+    memset(out, 0, sizeof *out);
+    out->scale = s;
+    memcpy(out->rotation, q, sizeof out->rotation);
+    memcpy(out->offset, t, sizeof out->offset);
+    if (touched) memcpy(touched, a, sizeof a);
+    if (rms) *rms = e;
+    return 0;
+}

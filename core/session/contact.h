@@ -1,0 +1,92 @@
+/*
+ * contact.h: the contact guard (issue 10): a discrete check that a candidate shape adds no
+ * self-crossings of the surface to a reference shape, and a bisection that scales the
+ * motion back until it adds none.
+ *
+ * fp_contact_create also finds the weld shape's own crossings (a full scan, once) and its
+ * triangle normals. Only what moved is checked: the triangles with a vertex whose position differs (bitwise)
+ * between reference and candidate, against the triangles near them, found through a uniform
+ * hash grid over the moved region (cell: the largest moved triangle's extent in the
+ * candidate). Two triangles cross when they share a point (closed triangles) and no vertex;
+ * vertices at identical positions in the shape given to fp_contact_create are welded, so
+ * OBJ seams (duplicated vertices) are adjacency, as in tests/support/selfx. Degenerate
+ * (zero-area) triangles are skipped. A pair is new when it crosses in the candidate and not
+ * in the reference, so crossings the input already has (the ICT face's eyes and mouth
+ * interior) never count. The triangle-triangle test: two closed triangles meet iff an edge
+ * of one meets the other (their intersection is convex, its boundary lies on an edge), each
+ * segment-triangle test from the signs of orient3d determinants in double (float inputs),
+ * with a 2D test for coplanar segments. Not exact: a determinant within rounding of zero
+ * (touching to ~1e-16 relative) may be decided either way; CGAL's exact test agrees on
+ * the real faces (tests/unit/test_contact.c).
+ *
+ * Errors: negative errno (-EINVAL for NULL or a triangle index >= n, -ENOMEM). Threads: one
+ * fp_contact per thread (it keeps scratch buffers).
+ */
+#ifndef FP_CONTACT_H
+#define FP_CONTACT_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef struct fp_contact fp_contact;
+
+/** Index a mesh: tris (t x 3 indices < n, kept by pointer: must outlive c), weld positions
+ *  weld (n x 3 floats, copied into a weld map; vertices at identical positions are one).
+ *  Returns 0, -EINVAL or -ENOMEM; *out owned by the caller (fp_contact_destroy). */
+int fp_contact_create(const uint32_t *tris, size_t t, size_t n, const float *weld, fp_contact **out);
+void fp_contact_destroy(fp_contact **c);
+
+/** Widen the input's own crossings by `rings` vertex rings (through welded vertices): a
+ *  pair with a triangle that has a vertex within `rings` rings of an own-crossing triangle
+ *  is left out as well (fp_selfx_count_new_away's rings; the intersection curve of surfaces
+ *  that interpenetrate in the input, the ICT face's eyes, moves onto the neighbouring
+ *  triangles under the smallest motion). Cumulative. Returns 0 or -ENOMEM. */
+int fp_contact_dilate_own(fp_contact *c, int rings);
+
+/** What fp_contact_count_new saw besides the new pairs. */
+typedef struct fp_contact_count {
+    size_t moved_tris;   /* triangles with a moved vertex */
+    size_t flipped;      /* moved triangles turned over (normal against the weld shape's, more
+                            than 90 degrees) in cand and not in ref, own-crossing ones left out */
+    long near_own;       /* new pairs left out: a triangle crosses in the weld shape */
+} fp_contact_count;
+
+/** New crossing pairs of cand against ref (both n x 3 floats): pairs with a moved triangle
+ *  that cross in cand and not in ref, away from the input's own crossings (a pair with a
+ *  triangle that crosses another in the weld shape given to fp_contact_create is left out,
+ *  as fp_selfx_count_new_away with 0 rings: the ICT face's eyes and mouth interior
+ *  interpenetrate, and their intersection curves move under any deformation). Up to
+ *  max_pairs pairs (a < b) go to pairs[2k], pairs[2k+1] (may be NULL), unordered. info may
+ *  be NULL. Returns the number of new pairs (>= 0) or -ENOMEM. */
+long fp_contact_count_new(fp_contact *c, const float *ref, const float *cand, uint32_t *pairs,
+                          size_t max_pairs, fp_contact_count *info);
+
+/** What fp_contact_guard did. */
+typedef struct fp_contact_result {
+    double t;            /* the fraction of the motion kept (1: all, 0: the reference) */
+    long pairs;          /* new pairs of the full candidate */
+    size_t flipped;      /* newly flipped triangles of the full candidate (these block too) */
+    int checks;          /* fp_contact_count_new calls */
+    size_t moved_tris;   /* moved triangles of the full candidate */
+} fp_contact_result;
+
+/** The guard: out = ref + t (cand - ref) per vertex (float), with the largest t of the
+ *  bisection over [0, 1] (`iters` halvings after a failed t = 1) for which out adds no new
+ *  pair and no newly flipped triangle to ref (fp_contact_count_new); t = 1 (out = cand bit for bit) when cand adds none, t = 0 (out = ref) when
+ *  every tried t adds some. out (n x 3) may not alias ref or cand. Returns 0 or -ENOMEM
+ *  (out then holds ref). */
+int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *out, int iters,
+                     fp_contact_result *res);
+
+/** The triangle-triangle test alone (closed triangles, 3 x 3 doubles each): 1 when they
+ *  share a point, else 0. Exposed for tests. */
+int fp_contact_tri_tri(const double a[3][3], const double b[3][3]);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,104 @@
+/* fp_take_player: the frame loop of play and export (fp_take_player.h). */
+#include "fp_take_player.h"
+#include "fp_session_take.h"
+#include "fp_error.h"
+#include "fp_mesh.h"
+
+#include <errno.h>
+#include <stdlib.h>
+
+struct fp_take_player {
+    fp_take_reader *reader;
+    fp_session *session;
+    const char *mesh;
+};
+
+int fp_take_player_open(const char *take_path, const char *mesh_path,
+                        const fp_plugin_path *plugin_path, fp_take_player **out, char *err,
+                        size_t errlen)
+{
+    if (out)
+        *out = NULL;
+    if (!take_path || !out)
+        return fp_errorf(err, errlen, -EINVAL, "play: no take");
+    fp_take_player *p = calloc(1, sizeof *p);
+    if (!p)
+        return fp_errorf(err, errlen, -ENOMEM, "play: out of memory");
+    int rc = fp_take_reader_open(take_path, &p->reader, err, errlen);
+    if (rc) {
+        free(p);
+        return rc;
+    }
+    const fp_take_header *h = fp_take_reader_header(p->reader);
+    p->mesh = mesh_path ? mesh_path : h->mesh_path;
+    if (!p->mesh) {
+        rc = fp_errorf(err, errlen, -EINVAL, "%s names no mesh: give the mesh", take_path);
+        goto fail;
+    }
+    /* the mesh first: the take's (checksum) before any rig is bound to it */
+    {
+        fp_mesh *m = NULL;
+        if ((rc = fp_mesh_load(p->mesh, &m, err, errlen)))
+            goto fail;
+        char why[1024];
+        rc = fp_take_check_positions(m->positions, m->vertex_count, p->mesh, h, why, sizeof why);
+        fp_mesh_free(&m);
+        if (rc) {
+            fp_errorf(err, errlen, rc, "%s: %s", take_path, why);
+            goto fail;
+        }
+    }
+    /* a session on the take's mesh with no inputs; its mapping is never called */
+    fp_session_options so = {.mesh_path = p->mesh, .mapping = "anchored", .radius = h->radius,
+                             .plugin_path = plugin_path,
+                             .rig_path = h->rig_path ? h->rig_path : "none"};
+    if ((rc = fp_session_create(&so, &p->session, err, errlen)))
+        goto fail;
+    if ((rc = fp_session_take_check_mesh(p->session, p->mesh, h, err, errlen)))
+        goto fail;
+    *out = p;
+    return 0;
+fail:
+    fp_take_player_close(&p);
+    return rc;
+}
+
+int fp_take_player_next(fp_take_player *p, fp_take_frame *frame, fp_frame_stats *st,
+                        char *err, size_t errlen)
+{
+    int rc = fp_take_reader_next(p->reader, frame, err, errlen);
+    if (rc != 1)
+        return rc;
+    fp_frame_stats local;
+    fp_session_play_frame(p->session, frame, st ? st : &local);
+    return 1;
+}
+
+fp_session *fp_take_player_session(fp_take_player *p) { return p->session; }
+fp_take_reader *fp_take_player_reader(fp_take_player *p) { return p->reader; }
+const fp_take_header *fp_take_player_header(const fp_take_player *p)
+{
+    return fp_take_reader_header(p->reader);
+}
+const char *fp_take_player_mesh_path(const fp_take_player *p) { return p->mesh; }
+
+double fp_take_player_mm_per_unit(const fp_take_player *p)
+{
+    const fp_take_header *h = fp_take_reader_header(p->reader);
+    for (int k = 0; k < FP_HANDS; k++)
+        if (h->calibration[k].present && h->calibration[k].scale > 0)
+            return 1.0 / h->calibration[k].scale;
+    const fp_head *head = fp_session_head(p->session);
+    return head && head->mm_per_unit > 0 ? head->mm_per_unit : 1.0;
+}
+
+void fp_take_player_close(fp_take_player **pp)
+{
+    if (!pp || !*pp)
+        return;
+    fp_take_player *p = *pp;
+    fp_session_destroy(&p->session);
+    fp_take_reader_close(&p->reader);
+    free(p);
+    *pp = NULL;
+}

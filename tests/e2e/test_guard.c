@@ -1,0 +1,424 @@
+/* The fold-over guard in the session (issue 10 item 1): every map the session applies is
+ * injective, so the output surface never crosses itself where the input did not.
+ *  - test_fold_fixture_*: a mapping known to fold (two close points pulled apart, the
+ *    fixture map-fixture-fold) through the session, anchored and unanchored: without the
+ *    guard the same control vectors fold (min det J < 0 and new crossings, checked with the
+ *    engine directly); with it no new crossing (CGAL, fp_selfx_count_new against the loaded
+ *    face), min det J > 0, the stats say what the guard did and the log says it once per
+ *    gesture.
+ *  - test_recordings_*: the three faces x the four Leap joints recordings, both mappings,
+ *    replayed through the session: no new crossing at the end and every few deforming
+ *    frames, and the face still deforms (moved share and max displacement printed). */
+#define _GNU_SOURCE
+#include "csrbf.h"
+#include "fp_mesh.h"
+#include "fp_session.h"
+#include "fp_test_support.h"
+#include "selfx.h"
+
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <cmocka.h>
+
+/* ---- a session on any face, with the test fixtures' plugin folder too -------------------- */
+
+static const fp_plugin_path *plugin_path(void)
+{
+    static fp_plugin_path path;
+    static bool done;
+    static char fixtures[4200];
+    if (!done) {
+        snprintf(fixtures, sizeof fixtures, "%s/tests/plugins", fp_test_build_dir());
+        const char *dirs[] = {fp_test_plugin_dir(), fixtures};
+        fp_plugin_path_init(&path, dirs, 2, NULL);
+        done = true;
+    }
+    return &path;
+}
+
+typedef struct logbook {
+    unsigned guard_lines;
+    char last[512];
+} logbook;
+
+static void on_log(void *user, int level, const char *source, const char *message)
+{
+    logbook *lb = user;
+    (void)level;
+    if (!strcmp(source, "engine") && strstr(message, "fold-over guard")) {
+        lb->guard_lines++;
+        snprintf(lb->last, sizeof lb->last, "%s", message);
+    }
+    if (getenv("FP_TEST_VERBOSE")) fprintf(stderr, "  [%s] %s\n", source, message);
+}
+
+static fp_session *open_session(const char *mesh, const char *mapping, const char *input,
+                                logbook *lb)
+{
+    char err[2048];
+    fp_session_options so = {0};
+    so.mesh_path = mesh;
+    if (input) {
+        so.inputs[0] = input;
+        so.input_count = 1;
+    }
+    so.mapping = mapping;
+    so.plugin_path = plugin_path();
+    so.measure_jacobian = true;
+    so.log = on_log;
+    so.log_user = lb;
+    fp_session *s = NULL;
+    int rc = fp_session_create(&so, &s, err, sizeof err);
+    if (rc) fprintf(stderr, "%s\n", err);
+    assert_int_equal(rc, 0);
+    rc = fp_session_start(s, err, sizeof err);
+    if (rc) fprintf(stderr, "%s\n", err);
+    assert_int_equal(rc, 0);
+    return s;
+}
+
+/* Crossings of `after` that the loaded face does not have, away from the face's own ones
+ * (fp_selfx_count_new_away with 0 rings: a pair is left out only when one of its triangles
+ * itself crosses in the input: the ICT face's eyes and mouth interior interpenetrate, 6,935
+ * crossings, and their intersection curves move under any deformation, however injective).
+ * Pairs next to the input's own crossings go to *near. */
+static long crossings_of(fp_session *s, const float *after, long *near)
+{
+    const struct fp_mesh *m = fp_session_mesh(s);
+    long own = 0, nn = 0;
+    long k = fp_selfx_count_new_away(fp_session_loaded(s), after, fp_session_vertex_count(s),
+                                     m->triangles, m->triangle_count, 0, NULL, 0, &own, &nn);
+    assert_true(k >= 0);
+    if (near) *near += nn;
+    return k;
+}
+
+static long new_crossings(fp_session *s) { return crossings_of(s, fp_session_positions(s), NULL); }
+
+/* Triangles whose normal turned more than 90 degrees from the loaded face's: an inverted
+ * (folded) piece of surface, which need not cross any other triangle. */
+static size_t flipped(fp_session *s, const float *after)
+{
+    const struct fp_mesh *m = fp_session_mesh(s);
+    const float *a = fp_session_loaded(s);
+    size_t k = 0;
+    for (size_t t = 0; t < m->triangle_count; t++) {
+        const uint32_t *v = m->triangles + 3 * t;
+        double na[3], nb[3];
+        for (int w = 0; w < 2; w++) {
+            const float *p = w ? after : a;
+            double e1[3], e2[3];
+            for (int c = 0; c < 3; c++) {
+                e1[c] = (double)p[3 * v[1] + c] - p[3 * v[0] + c];
+                e2[c] = (double)p[3 * v[2] + c] - p[3 * v[0] + c];
+            }
+            double *n = w ? nb : na;
+            n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+            n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+            n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+        }
+        k += na[0] * nb[0] + na[1] * nb[1] + na[2] * nb[2] < 0;
+    }
+    return k;
+}
+
+static void displacement(fp_session *s, size_t *moved, double *maxd)
+{
+    const float *a = fp_session_loaded(s), *b = fp_session_positions(s);
+    size_t n = fp_session_vertex_count(s);
+    *moved = 0;
+    *maxd = 0;
+    for (size_t v = 0; v < n; v++) {
+        double d2 = 0;
+        for (int k = 0; k < 3; k++) d2 += pow((double)b[3 * v + k] - a[3 * v + k], 2);
+        *moved += d2 > 0;
+        *maxd = fmax(*maxd, sqrt(d2));
+    }
+}
+
+/* ---- a configuration known to fold -------------------------------------------------------- */
+
+/* The fixture's control set without the guard: the plain engine on the loaded face folds. */
+static void assert_folds_without_guard(fp_session *s, const fp_control_set *cs)
+{
+    const struct fp_mesh *m = fp_session_mesh(s);
+    size_t n = fp_session_vertex_count(s);
+    csrbf_options o = {0};
+    o.radius = cs->radius;
+    o.threads = 1;
+    csrbf_solver *sol;
+    csrbf_points *pts;
+    assert_int_equal(csrbf_solver_create(&o, &sol), 0);
+    assert_int_equal(csrbf_points_create(n, fp_session_loaded(s), &pts), 0);
+    assert_true(csrbf_solver_solve(sol, cs->count, &cs->start[0][0], &cs->end[0][0]) >= 0);
+    float *out = malloc(n * 3 * sizeof *out);
+    csrbf_eval_stats es;
+    assert_int_equal(csrbf_evaluate(sol, pts, out, CSRBF_EVAL_JACOBIAN, &es), 0);
+    long k = fp_selfx_count_new(fp_session_loaded(s), out, n, m->triangles, m->triangle_count,
+                                NULL, 0, NULL);
+    size_t fl = flipped(s, out);
+    printf("  without the guard: min det J %.3g, %ld new crossings, %zu triangles flipped\n",
+           es.min_jacobian_det, k, fl);
+    assert_true(es.min_jacobian_det < 0);
+    assert_true(k > 0 || fl > 0);
+    free(out);
+    csrbf_points_destroy(&pts);
+    csrbf_solver_destroy(&sol);
+}
+
+static void fold_fixture(const char *mapping, bool unanchored)
+{
+    logbook lb = {0};
+    fp_session *s = open_session(fp_test_face_path(), mapping, NULL, &lb);
+    unsigned limited = 0, composed = 0, commits = 0;
+    double min_det = INFINITY, min_reached = 1;
+    bool checked_unguarded = false;
+    for (int f = 0; f < 28; f++) { /* two gestures of 10 frames and their idle frames */
+        fp_frame_stats st;
+        fp_session_step(s, fp_now_ns(), &st);
+        if (!st.active) continue;
+        commits += st.committed;
+        limited += st.guard_limited > 0;
+        composed += st.guard_substeps > 1;
+        min_reached = fmin(min_reached, st.guard_reached);
+        assert_true(st.guard_bound > 0);
+        assert_false(isnan(st.min_det_j));
+        min_det = fmin(min_det, st.min_det_j);
+        if (f % 14 == 9 && !checked_unguarded && !unanchored) {
+            assert_folds_without_guard(s, fp_session_control_set(s));
+            checked_unguarded = true;
+        }
+        if (f % 3 == 0 || st.committed) {
+            assert_int_equal(new_crossings(s), 0);
+            assert_int_equal(flipped(s, fp_session_positions(s)), 0);
+        }
+    }
+    size_t moved;
+    double maxd;
+    displacement(s, &moved, &maxd);
+    printf("%s: %u frames limited, %u composed, smallest reach %.2f, min det J %.3g, "
+           "%u commits, moved %zu, max displacement %.4g (R %.4g); log: %s\n", mapping, limited,
+           composed, min_reached, min_det, commits, moved, maxd, fp_session_radius(s), lb.last);
+    assert_true(min_det > 0);
+    assert_true(moved > 0);
+    assert_int_equal(new_crossings(s), 0);
+    if (unanchored) {
+        assert_true(composed > 0);      /* split into injective sub-steps */
+        assert_true(min_reached == 1.0); /* and every end point reached */
+        assert_int_equal(commits, 20);
+        /* the two start points went 0.44 R each way: the face followed them */
+        assert_true(maxd > 0.3 * fp_session_radius(s));
+    } else {
+        assert_true(limited > 0);
+        assert_true(min_reached < 1.0);
+        assert_int_equal(commits, 2);
+    }
+    /* one line per gesture, not per frame: 2 gestures */
+    fp_session_destroy(&s);
+    assert_int_equal(lb.guard_lines, 2);
+    assert_non_null(strstr(lb.last, unanchored ? "composed" : "limited the deformation to"));
+}
+
+static void test_fold_fixture_anchored(void **state)
+{
+    (void)state;
+    fold_fixture("fixture-fold", false);
+}
+
+static void test_fold_fixture_unanchored(void **state)
+{
+    (void)state;
+    fold_fixture("fixture-fold,commit=1", true);
+}
+
+/* ---- the host's surface service (FP_HOST_EXT_SURFACE) ------------------------------------ */
+
+/* The fixture mapping asks the service; its answers equal a brute force over the base
+ * (vertex, distance bit for bit) and fp_mesh_normals' normal at that vertex; also after a
+ * commit changed the base (the service reads the current base). */
+static void check_surface_answers(fp_session *s)
+{
+    const fp_control_set *cs = fp_session_control_set(s);
+    const struct fp_mesh *m = fp_session_mesh(s);
+    size_t n = fp_session_vertex_count(s);
+    const float *b = fp_session_base(s);
+    float *nrm = malloc(n * 3 * sizeof *nrm);
+    fp_mesh_normals(m->triangles, m->triangle_count, b, n, nrm);
+    assert_int_equal(cs->count, 7);
+    for (int i = 0; i < 6; i++) {
+        const float *v = b + 3 * ((4409u * (unsigned)i + 17u) % n);
+        float q[3] = {v[0] + 0.05f * i, v[1] - 0.02f * i, v[2] + 0.1f * i};
+        float best = INFINITY;
+        size_t bi = 0;
+        for (size_t k = 0; k < n; k++) {
+            float dx = b[3 * k] - q[0], dy = b[3 * k + 1] - q[1], dz = b[3 * k + 2] - q[2];
+            float d2 = dx * dx + dy * dy + dz * dz;
+            if (d2 < best) {
+                best = d2;
+                bi = k;
+            }
+        }
+        assert_true(cs->channels[2 * i].value == (float)bi);
+        assert_true(cs->channels[2 * i + 1].value == sqrtf(best));
+        assert_memory_equal(cs->start[i], b + 3 * bi, 3 * sizeof(float));
+        for (int k = 0; k < 3; k++) assert_true(fabsf(cs->end[i][k] - nrm[3 * bi + k]) < 1e-5f);
+    }
+    assert_true(cs->channels[12].value == -1.f); /* beyond max_distance */
+    assert_true(isinf(cs->channels[13].value));
+    free(nrm);
+}
+
+static void test_surface_service(void **state)
+{
+    (void)state;
+    logbook lb = {0};
+    fp_session *s = open_session(fp_test_face_path(), "fixture-surface", NULL, &lb);
+    fp_session_step(s, fp_now_ns(), NULL);
+    check_surface_answers(s);
+    /* a new base: the fold fixture's committed gesture, then the service again */
+    char err[512];
+    assert_int_equal(fp_session_set_mapping(s, plugin_path(), "fixture-fold,commit=1", err, sizeof err), 0);
+    for (int f = 0; f < 10; f++) fp_session_step(s, fp_now_ns(), NULL);
+    assert_int_equal(fp_session_set_mapping(s, plugin_path(), "fixture-surface", err, sizeof err), 0);
+    fp_session_step(s, fp_now_ns(), NULL);
+    assert_true(memcmp(fp_session_base(s), fp_session_loaded(s),
+                       fp_session_vertex_count(s) * 3 * sizeof(float)));
+    check_surface_answers(s);
+    fp_session_destroy(&s);
+}
+
+/* ---- the real faces and recordings --------------------------------------------------------- */
+
+static const char *faces[] = {"ict-facekit/generic_neutral_mesh.obj",
+                              "lee-perry-smith/LeePerrySmith.obj",
+                              "mediapipe-canonical/canonical_face_model.obj"};
+static const char *takes[] = {"HandSplay-110fps", "Waiting-110fps", "grab", "three-claps"};
+
+/* Both mappings, strictly: no new crossing away from the input's own, at the end and at the
+ * snapshots. The fold-over guard alone (injective maps) does not give that: unanchored drags
+ * compose hundreds of injective steps that squeeze near-touching surfaces (lips, eyelids)
+ * together, the flat triangles between moved vertices are not the smooth mapped surface,
+ * and a rig's mobility blend is no CSRBF map. The contact guard (core/session/contact.h)
+ * checks every shown shape against the last one and scales the motion back. */
+static unsigned long total_collide_frames;
+
+static int cmp_d(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static double pctl(double *v, size_t n, double p)
+{
+    if (!n) return 0;
+    qsort(v, n, sizeof *v, cmp_d);
+    return v[(size_t)(p * (double)(n - 1) + 0.5)];
+}
+
+static void recordings(const char *mapping)
+{
+    for (size_t fi = 0; fi < sizeof faces / sizeof faces[0]; fi++) {
+        char mesh[4300];
+        snprintf(mesh, sizeof mesh, "%s/faces/%s", fp_test_data_dir(), faces[fi]);
+        for (size_t ti = 0; ti < sizeof takes / sizeof takes[0]; ti++) {
+            char input[4400];
+            snprintf(input, sizeof input, "replay:%s/hands/leap-motion/%s_joints_mm.csv,speed=4",
+                     fp_test_data_dir(), takes[ti]);
+            logbook lb = {0};
+            fp_session *s = open_session(mesh, mapping, input, &lb);
+            unsigned long frames = 0, active = 0, limited = 0, composed = 0, collided = 0;
+            double collide_t = 1, collide_ms = 0, cms[4096];
+            size_t ncms = 0;
+            double min_det = INFINITY;
+            /* snapshots of the 40th and 80th deforming frames, checked after the run so
+             * that the exact counts do not hold up the paced replay */
+            size_t n = fp_session_vertex_count(s), nsnap = 0;
+            float *snap[2];
+            int64_t deadline = fp_now_ns() + 60LL * 1000000000LL;
+            while (!fp_session_finished(s) && fp_now_ns() < deadline) {
+                fp_frame_stats st;
+                fp_session_step(s, fp_now_ns(), &st);
+                frames++;
+                if (st.active) {
+                    active++;
+                    limited += st.guard_reached < 1;
+                    composed += st.guard_substeps > 1;
+                    min_det = fmin(min_det, st.min_det_j);
+                    collided += st.collide_t < 1;
+                    collide_t = fmin(collide_t, st.collide_t);
+                    collide_ms = fmax(collide_ms, st.collide_ms);
+                    if (st.collide_ms > 0 && ncms < 4096) cms[ncms++] = st.collide_ms;
+                    if (active % 40 == 0 && nsnap < 2) {
+                        snap[nsnap] = malloc(n * 3 * sizeof(float));
+                        memcpy(snap[nsnap++], fp_session_positions(s), n * 3 * sizeof(float));
+                    }
+                }
+                struct timespec ts = {0, 2000000};
+                nanosleep(&ts, NULL);
+            }
+            assert_true(fp_session_finished(s));
+            long k = 0, near = 0;
+            size_t fl = 0;
+            for (size_t i = 0; i < nsnap; i++) {
+                k += crossings_of(s, snap[i], &near);
+                fl += flipped(s, snap[i]);
+                free(snap[i]);
+            }
+            k += crossings_of(s, fp_session_positions(s), &near);
+            fl += flipped(s, fp_session_positions(s));
+            size_t moved;
+            double maxd;
+            displacement(s, &moved, &maxd);
+            printf("%-13.13s %-16s %-10s frames %4lu deforming %4lu guard stopped short %3lu "
+                   "composed %3lu min det J %.3g; contact guard on %3lu frames (least kept %3.0f%%, "
+                   "check median %.2f ms p99 %.2f ms); moved %5zu of %5zu (%5.2f%%), max displacement "
+                   "%.4g (R %.4g); new crossings %ld (+%ld next to the input's own), flipped %zu "
+                   "(%zu checks)\n",
+                   faces[fi], takes[ti], mapping, frames, active, limited, composed,
+                   active ? min_det : 1.0, collided, 100.0 * collide_t, pctl(cms, ncms, 0.5), pctl(cms, ncms, 0.99), moved, n, 100.0 * moved / n, maxd,
+                   fp_session_radius(s), k, near, fl, nsnap + 1);
+            fflush(stdout);
+            /* every map applied is injective (the guard's guarantee) */
+            assert_true(!active || min_det > 0);
+            total_collide_frames += collided;
+            assert_int_equal(k, 0);
+            assert_int_equal(fl, 0);
+            /* the face still deforms (MediaPipe's mask is not reached by three-claps, with
+             * or without the guards) */
+            if (fi < 2) assert_true(moved > 0);
+            fp_session_destroy(&s);
+        }
+    }
+}
+
+static void test_recordings_anchored(void **state)
+{
+    (void)state;
+    recordings("anchored");
+}
+
+static void test_recordings_unanchored(void **state)
+{
+    (void)state;
+    recordings("unanchored");
+    printf("contact guard scaled back %lu frames over both mappings\n", total_collide_frames);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_fold_fixture_anchored),
+        cmocka_unit_test(test_fold_fixture_unanchored),
+        cmocka_unit_test(test_surface_service),
+        cmocka_unit_test(test_recordings_anchored),
+        cmocka_unit_test(test_recordings_unanchored),
+    };
+    if (getenv("FP_TEST_FILTER")) cmocka_set_test_filter(getenv("FP_TEST_FILTER"));
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

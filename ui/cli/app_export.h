@@ -1,0 +1,28 @@
+/* The export side of run, play and export (ui/cli): one exporter fed after each frame, and
+ * the summary line all three print (core/export, fp_export.h). */
+#ifndef FP_APP_EXPORT_H
+#define FP_APP_EXPORT_H
+
+#include "fp_export.h"
+
+#include <stdbool.h>
+#include <stdio.h>
+
+/** `--export FILE` of run and play: the format from FILE's extension (.gltf .glb .pc2 .mdd),
+ *  the exporter begun on `mesh` (the session's loaded mesh). Prints "CMD: ..." on error and
+ *  returns the exit status (64 an unknown extension, 73 an output not writable); 0 and *x. */
+int fp_app_export_open(const char *cmd, const char *file, const struct fp_mesh *mesh,
+                       double mm_per_unit, const char *name, fp_exporter **x);
+
+/** Finish *x and print the summary ("CMD: exported N frames to FILE (FORMAT): K targets,
+ *  SIZE, largest error E mm (limit L mm)"; what the format dropped as a note) to f unless
+ *  quiet. Returns the exit status (0, or 73/65/70 by fp_app_exit_code). */
+int fp_app_export_close(const char *cmd, fp_exporter **x, fp_export_format format,
+                        const char *file, double limit_mm, bool quiet, FILE *f);
+
+/** "CMD: note: FILE cannot hold the input's polygons, UV seams, ..." on stderr where a mesh
+ *  written to another format lost something (fp_mesh_save_ex's dropped bits); nothing when
+ *  dropped is 0 or quiet. */
+void fp_app_print_dropped(const char *cmd, const char *file, unsigned dropped, bool quiet);
+
+#endif

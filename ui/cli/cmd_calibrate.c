@@ -1,0 +1,257 @@
+/* facepuppet calibrate: a calibration file from a short recording (docs/calibration.md). */
+#define _GNU_SOURCE
+#include "app_util.h"
+#include "command.h"
+#include "fp_calib_file.h"
+#include "fp_calib_fit.h"
+#include "fp_head.h"
+#include "fp_mesh.h"
+#include "fp_plugin_host.h"
+#include "fp_rig.h"
+
+#include <errno.h>
+#include <getopt.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+static void usage(FILE *f)
+{
+    fprintf(f,
+        "usage: facepuppet calibrate --mesh FILE --input SPEC --out FILE.json\n"
+        "                            [--mode hold|touch] [--mm-per-unit X] [--duration S]\n"
+        "                            [--rig FILE] [--plugin-dir DIR]\n\n"
+        "Make a calibration file for `run --calibration` / `live --calibration` from a short\n"
+        "recording of the performer's hands (a tracker's joint positions):\n"
+        "  hold   (default) hold both hands where the face is, palms to the face, for a few\n"
+        "         seconds: each hand's median palm goes onto the face in front of its half,\n"
+        "         life-size (the mesh's unit as `run` detects it, or --mm-per-unit)\n"
+        "  touch  touch chin, nose tip and forehead in turn with the index fingertip,\n"
+        "         holding each for half a second: the three longest still moments are\n"
+        "         matched to those landmarks (from the mesh's rig when one is found, else\n"
+        "         estimated from the head) and scale, rotation and offset are fitted\n"
+        "The input is read to its end (a recording; add fast=1 to read it at once) or for\n"
+        "--duration seconds. The file is written atomically.\n"
+        "  -m, --mesh FILE        the face (default: the ICT face of the demo)\n"
+        "  -i, --input SPEC       the recording or device (required)\n"
+        "  -o, --out FILE         the calibration file to write (required)\n"
+        "      --mode hold|touch  see above (default hold)\n"
+        "      --mm-per-unit X    the mesh's unit, mm (hold; default: detected from the head)\n"
+        "      --rig FILE         the rig whose landmarks touch uses (default: found by mesh)\n"
+        "  -d, --duration S       stop reading after S seconds\n"
+        "  -P, --plugin-dir DIR   more plugin folders\n"
+        "  -h, --help             this text\n\n"
+        "Exit status: 0 written, 64 usage, 65 the recording does not allow a calibration\n"
+        "(no joint positions, touches not found), 66 input missing, 73 output not writable,\n"
+        "78 plugin missing.\n");
+}
+
+/* Read every joint-position sample of the input until its end or `duration` seconds. */
+static int read_samples(fp_input_instance *inst, double duration, fp_calib_sample **out, size_t *n,
+                        size_t *angles_seen)
+{
+    size_t cap = 1024;
+    fp_calib_sample *s = malloc(cap * sizeof *s);
+    if (!s) return -ENOMEM;
+    *n = 0;
+    int64_t t0 = fp_now_ns();
+    for (bool ended = false; !ended;) {
+        fp_event ev;
+        bool any = false;
+        while (!ended && fp_input_instance_poll(inst, &ev)) {
+            any = true;
+            if (ev.header.type == FP_EVENT_STATUS && ev.status.code == FP_STATUS_END_OF_STREAM) ended = true;
+            if (ev.header.type == FP_EVENT_JOINT_ANGLES) (*angles_seen)++;
+            if (ev.header.type != FP_EVENT_JOINT_POSITIONS) continue;
+            if (ev.header.hand != FP_HAND_LEFT && ev.header.hand != FP_HAND_RIGHT) continue;
+            if (*n == cap) {
+                fp_calib_sample *g = realloc(s, 2 * cap * sizeof *s);
+                if (!g) {
+                    free(s);
+                    return -ENOMEM;
+                }
+                s = g, cap *= 2;
+            }
+            s[*n].t_ns = ev.header.time_ns;
+            s[*n].hand = ev.header.hand;
+            memcpy(s[*n].joints, ev.positions.mm, sizeof s[*n].joints);
+            (*n)++;
+        }
+        if (duration > 0 && fp_now_ns() - t0 > (int64_t)(duration * 1e9)) break;
+        if (!any) {
+            struct timespec ts = {0, 2000000};
+            nanosleep(&ts, NULL);
+        }
+    }
+    *out = s;
+    return 0;
+}
+
+/* Landmarks for touch: the rig's chin and nose_tip (and forehead when it has one) where a rig
+ * is found, the head's estimate for the rest. Prints where they came from. */
+static void landmarks(const fp_mesh *m, const fp_head *head, const char *rig_path,
+                      float lm[FP_CALIB_LANDMARKS][3])
+{
+    fp_calib_head_landmarks(m->positions, m->vertex_count, head, lm);
+    char found[4096], err[1024];
+    if (!rig_path) {
+        char dir[4096];
+        fp_rig_default_dir(fp_app_exe_dir(), dir, sizeof dir);
+        if (!fp_rig_find(dir, m->vertex_count, m->positions, found, sizeof found, err, sizeof err))
+            rig_path = found;
+    }
+    fp_rig *rig = NULL;
+    if (!rig_path || fp_rig_load_for_mesh(rig_path, m->vertex_count, m->positions, &rig, err, sizeof err)) {
+        printf("landmarks: estimated from the head%s%s\n", rig_path ? " (rig: " : "", rig_path ? err : "");
+        if (rig_path) printf(")\n");
+        return;
+    }
+    static const char *names[FP_CALIB_LANDMARKS] = {"chin", "nose_tip", "forehead"};
+    printf("landmarks: rig %s:", rig_path);
+    for (int i = 0; i < FP_CALIB_LANDMARKS; i++) {
+        long v = fp_rig_landmark_index(rig, names[i]);
+        if (v >= 0 && (size_t)v < m->vertex_count) {
+            memcpy(lm[i], m->positions + 3 * v, sizeof lm[i]);
+            printf(" %s = vertex %ld", names[i], v);
+        } else {
+            printf(" %s estimated", names[i]);
+        }
+    }
+    printf("\n");
+    fp_rig_free(&rig);
+}
+
+static int calibrate_main(int argc, char **argv)
+{
+    static const struct option opts[] = {
+        {"mesh", required_argument, 0, 'm'},     {"input", required_argument, 0, 'i'},
+        {"out", required_argument, 0, 'o'},      {"mode", required_argument, 0, 'M'},
+        {"mm-per-unit", required_argument, 0, 'u'}, {"duration", required_argument, 0, 'd'},
+        {"rig", required_argument, 0, 'r'},      {"plugin-dir", required_argument, 0, 'P'},
+        {"help", no_argument, 0, 'h'},           {0, 0, 0, 0}};
+    const char *mesh_path = NULL, *input = NULL, *out = NULL, *mode = "hold", *rig_path = NULL;
+    const char *dirs[8];
+    size_t ndirs = 0;
+    double mm_per_unit = 0, duration = 0;
+    char *end;
+    optind = 1;
+    for (int c; (c = getopt_long(argc, argv, "m:i:o:d:P:h", opts, NULL)) != -1;) {
+        switch (c) {
+        case 'm': mesh_path = optarg; break;
+        case 'i': input = optarg; break;
+        case 'o': out = optarg; break;
+        case 'M': mode = optarg; break;
+        case 'r': rig_path = optarg; break;
+        case 'u':
+            mm_per_unit = strtod(optarg, &end);
+            if (*end || !(mm_per_unit > 0) || !isfinite(mm_per_unit)) {
+                fprintf(stderr, "facepuppet calibrate: --mm-per-unit must be > 0, got '%s'\n", optarg);
+                return FP_EXIT_USAGE;
+            }
+            break;
+        case 'd':
+            duration = strtod(optarg, &end);
+            if (*end || !(duration > 0)) {
+                fprintf(stderr, "facepuppet calibrate: --duration must be > 0 s, got '%s'\n", optarg);
+                return FP_EXIT_USAGE;
+            }
+            break;
+        case 'P': if (ndirs < 8) dirs[ndirs++] = optarg; break;
+        case 'h': usage(stdout); return FP_EXIT_OK;
+        default: usage(stderr); return FP_EXIT_USAGE;
+        }
+    }
+    bool touch = !strcmp(mode, "touch");
+    if (!touch && strcmp(mode, "hold")) {
+        fprintf(stderr, "facepuppet calibrate: --mode must be hold or touch, got '%s'\n", mode);
+        return FP_EXIT_USAGE;
+    }
+    if (!input || !out || optind != argc) {
+        usage(stderr);
+        return FP_EXIT_USAGE;
+    }
+    char demo[4096];
+    if (!mesh_path) mesh_path = fp_app_data_path("faces/ict-facekit/generic_neutral_mesh.obj", demo, sizeof demo);
+    char err[2048];
+    fp_mesh *m = NULL;
+    int rc = fp_mesh_load(mesh_path, &m, err, sizeof err);
+    if (rc != FP_MESH_OK) {
+        fprintf(stderr, "facepuppet calibrate: %s\n", err);
+        return rc == FP_MESH_ERR_IO ? FP_EXIT_NOINPUT : FP_EXIT_DATAERR;
+    }
+    fp_head head;
+    if (fp_head_detect(m->positions, m->vertex_count, &head)) {
+        fprintf(stderr, "facepuppet calibrate: %s: cannot find a head (flat or non-finite mesh)\n", mesh_path);
+        fp_mesh_free(&m);
+        return FP_EXIT_DATAERR;
+    }
+    if (mm_per_unit > 0) {
+        head.mm_per_unit = mm_per_unit;
+        snprintf(head.how, sizeof head.how, "from --mm-per-unit");
+    }
+    fp_plugin_path path;
+    fp_app_plugin_path(&path, dirs, ndirs);
+    fp_input_instance inst;
+    memset(&inst, 0, sizeof inst);
+    rc = fp_input_instance_open(&inst, &path, input, 0, err, sizeof err);
+    if (!rc) rc = fp_input_instance_start(&inst, err, sizeof err);
+    fp_calib_sample *smp = NULL;
+    size_t n = 0, angles = 0;
+    if (!rc) rc = read_samples(&inst, duration, &smp, &n, &angles);
+    fp_input_instance_close(&inst);
+    fp_plugin_path_clear(&path);
+    int status = FP_EXIT_OK;
+    if (rc) {
+        fprintf(stderr, "facepuppet calibrate: %s\n", err[0] ? err : strerror(-rc));
+        status = fp_app_exit_code(rc, FP_APP_INPUT);
+        goto done;
+    }
+    if (!n) {
+        fprintf(stderr, "facepuppet calibrate: %s: no joint positions%s: calibrate needs a tracker's "
+                "positions (a glove alone is placed by default, docs/calibration.md)\n", input,
+                angles ? " (only joint angles)" : "");
+        status = FP_EXIT_DATAERR;
+        goto done;
+    }
+    fp_calibration c;
+    double touched[FP_CALIB_LANDMARKS][3], rms = 0;
+    if (touch) {
+        float lm[FP_CALIB_LANDMARKS][3];
+        landmarks(m, &head, rig_path, lm);
+        rc = fp_calib_fit_touch(smp, n, (const float(*)[3])lm, &c, touched, &rms, err, sizeof err);
+    } else {
+        rc = fp_calib_fit_hold(smp, n, m->positions, m->vertex_count, &head, &c, err, sizeof err);
+    }
+    if (rc) {
+        fprintf(stderr, "facepuppet calibrate: %s: %s\n", input, strncmp(err, "calibrate: ", 11) ? err : err + 11);
+        status = rc == -ENOMEM ? 1 : FP_EXIT_DATAERR;
+        goto done;
+    }
+    char comment[512];
+    if (touch)
+        snprintf(comment, sizeof comment, "facepuppet calibrate --mode touch: %zu samples; touches "
+                 "(mm) chin %.0f %.0f %.0f, nose tip %.0f %.0f %.0f, forehead %.0f %.0f %.0f; "
+                 "residual %.3g mm", n, touched[0][0], touched[0][1], touched[0][2], touched[1][0],
+                 touched[1][1], touched[1][2], touched[2][0], touched[2][1], touched[2][2], rms / c.scale);
+    else
+        snprintf(comment, sizeof comment, "facepuppet calibrate --mode hold: %zu samples; "
+                 "%.4g mm per mesh unit, %s", n, head.mm_per_unit, head.how);
+    rc = fp_calibration_save(out, &c, comment, err, sizeof err);
+    if (rc) {
+        fprintf(stderr, "facepuppet calibrate: %s\n", err);
+        status = fp_app_exit_code(rc, FP_APP_OUTPUT);
+        goto done;
+    }
+    printf("wrote %s: %.4g mm per mesh unit%s; %s\n", out, 1.0 / c.scale,
+           touch ? " (fitted)" : "", comment);
+done:
+    free(smp);
+    fp_mesh_free(&m);
+    return status;
+}
+
+const fp_command fp_command_calibrate = {"calibrate",
+                                         "make a calibration file from a short recording (hold or touch)",
+                                         calibrate_main};

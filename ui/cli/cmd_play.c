@@ -1,0 +1,167 @@
+/* facepuppet play: a take's frames again, from its stored control sets (no input devices,
+ * no mapping): bit-identical to the frames the recording session showed. */
+#define _GNU_SOURCE
+#include "app_util.h"
+#include "command.h"
+#include "fp_session.h"
+#include "fp_session_take.h"
+#include "fp_take_player.h"
+#include "app_export.h"
+#include "fp_mesh.h"
+
+#include <errno.h>
+#include <getopt.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+static void usage(FILE *f)
+{
+    fprintf(f,
+        "usage: facepuppet play TAKE [--frames-out DIR] [--out FILE] [--export FILE] [--mesh FILE]\n\n"
+        "Reproduce a take's frames from the control sets it stored (no input devices, no\n"
+        "mapping): the take's mesh (checked against the crc32 in the take), each frame's\n"
+        "control set through the same engine step (fold-over guard included), commits,\n"
+        "undo and reset as recorded. The meshes are bit-identical to the recording run's.\n\n"
+        "  -o, --out FILE         the last frame's mesh (default: none); format by extension\n"
+        "      --frames-out DIR   one mesh per frame, DIR/frame_NNNNNN_tS.SSSs.obj (session\n"
+        "                         frame number, time since the take's timecode in)\n"
+        "      --export FILE      every frame into FILE: .gltf/.glb (morph-target animation,\n"
+        "                         0.1 mm), .pc2/.mdd (point caches); see facepuppet export\n"
+        "  -m, --mesh FILE        the take's mesh from another path (its crc32 must match)\n"
+        "      --plugin-dir DIR   look for plugins in DIR first\n"
+        "  -q, --quiet            no summary line\n"
+        "  -h, --help             this text\n\n"
+        "Exit status: 0 done, 64 usage, 65 a damaged take or another mesh, 66 missing,\n"
+        "73 an output not written (facepuppet --help has the whole table).\n");
+}
+
+static int play_main(int argc, char **argv)
+{
+    enum { OPT_FRAMES_OUT = 0x200, OPT_PLUGIN_DIR, OPT_EXPORT };
+    static const struct option opts[] = {
+        {"out", required_argument, 0, 'o'},      {"frames-out", required_argument, 0, OPT_FRAMES_OUT},
+        {"mesh", required_argument, 0, 'm'},     {"plugin-dir", required_argument, 0, OPT_PLUGIN_DIR},
+        {"export", required_argument, 0, OPT_EXPORT},
+        {"quiet", no_argument, 0, 'q'},          {"help", no_argument, 0, 'h'},
+        {0, 0, 0, 0}};
+    const char *out = NULL, *frames_out = NULL, *mesh = NULL, *export_file = NULL, *dirs[8];
+    size_t ndirs = 0;
+    bool quiet = false;
+    optind = 1;
+    for (int c; (c = getopt_long(argc, argv, "o:m:qh", opts, NULL)) != -1;) {
+        switch (c) {
+        case 'o': out = optarg; break;
+        case OPT_FRAMES_OUT: frames_out = optarg; break;
+        case OPT_EXPORT: export_file = optarg; break;
+        case 'm': mesh = optarg; break;
+        case OPT_PLUGIN_DIR:
+            if (ndirs < 8) dirs[ndirs++] = optarg;
+            break;
+        case 'q': quiet = true; break;
+        case 'h': usage(stdout); return FP_EXIT_OK;
+        default: usage(stderr); return FP_EXIT_USAGE;
+        }
+    }
+    if (argc - optind != 1) {
+        fprintf(stderr, "facepuppet play: give one TAKE file (see --help)\n");
+        return FP_EXIT_USAGE;
+    }
+    const char *take_path = argv[optind];
+    char err[2048];
+    fp_export_format export_fmt;
+    if (export_file && fp_export_format_from_path(export_file, &export_fmt)) {
+        fprintf(stderr, "facepuppet play: --export %s: give a file ending in .gltf, .glb, .pc2 "
+                "or .mdd\n", export_file);
+        return FP_EXIT_USAGE;
+    }
+    if (frames_out && mkdir(frames_out, 0777) && errno != EEXIST) {
+        fprintf(stderr, "facepuppet play: --frames-out %s: %s\n", frames_out, strerror(errno));
+        return fp_app_exit_code(-errno, FP_APP_OUTPUT);
+    }
+    /* The take's session and frame loop (fp_take_player, shared with export). */
+    fp_plugin_path path;
+    fp_app_plugin_path(&path, dirs, ndirs);
+    fp_take_player *player = NULL;
+    fp_exporter *ex = NULL;
+    int status = FP_EXIT_OK;
+    int rc = fp_take_player_open(take_path, mesh, &path, &player, err, sizeof err);
+    if (rc) {
+        fprintf(stderr, "facepuppet play: %s\n", err);
+        fp_plugin_path_clear(&path);
+        return fp_app_exit_code(rc, FP_APP_INPUT);
+    }
+    fp_take_reader *r = fp_take_player_reader(player);
+    fp_session *s = fp_take_player_session(player);
+    const fp_take_header *h = fp_take_reader_header(r);
+    if (fp_take_reader_warning(r)[0])
+        fprintf(stderr, "facepuppet play: warning: %s; playing the %zu intact frames\n",
+                fp_take_reader_warning(r), fp_take_reader_frames(r));
+    if (export_file && (status = fp_app_export_open("facepuppet play", export_file,
+                                                    fp_session_mesh(s),
+                                                    fp_take_player_mm_per_unit(player),
+                                                    h->slate, &ex)))
+        goto done;
+    uint64_t frames = 0, commits = 0, active = 0;
+    fp_frame_stats st;
+    fp_take_frame f;
+    int64_t first_ns = 0;
+    while ((rc = fp_take_player_next(player, &f, &st, err, sizeof err)) == 1) {
+        if (frames == 0)
+            first_ns = f.time_ns;
+        if (ex && (rc = fp_export_add(ex, fp_session_positions(s),
+                                      (double)(f.time_ns - first_ns) * 1e-9, err, sizeof err))) {
+            fprintf(stderr, "facepuppet play: export: %s\n", err);
+            status = fp_app_exit_code(rc, FP_APP_OUTPUT);
+            goto done;
+        }
+        frames++;
+        commits += st.committed;
+        active += st.active;
+        if (frames_out) {
+            char file[4400];
+            snprintf(file, sizeof file, "%s/frame_%06llu_t%.3fs.obj", frames_out,
+                     (unsigned long long)f.frame, (double)(f.time_ns - h->time_origin_ns) * 1e-9);
+            if ((rc = fp_session_save(s, file, err, sizeof err))) {
+                fprintf(stderr, "facepuppet play: %s\n", err);
+                status = fp_app_exit_code(rc, FP_APP_OUTPUT);
+                goto done;
+            }
+        }
+    }
+    if (rc < 0) {
+        fprintf(stderr, "facepuppet play: %s\n", err);
+        status = fp_app_exit_code(rc, FP_APP_INPUT);
+        goto done;
+    }
+    unsigned dropped = 0;
+    if (out && (rc = fp_session_save_ex(s, out, &dropped, err, sizeof err))) {
+        fprintf(stderr, "facepuppet play: %s\n", err);
+        status = fp_app_exit_code(rc, FP_APP_OUTPUT);
+        goto done;
+    }
+    if (out)
+        fp_app_print_dropped("facepuppet play", out, dropped, quiet);
+    if (ex && (status = fp_app_export_close("facepuppet play", &ex, export_fmt, export_file, 0.1,
+                                            quiet, stdout)))
+        goto done;
+    if (!quiet) {
+        char in[32], tcout[32];
+        fp_timecode_format(&h->timecode_in, in, sizeof in);
+        fp_timecode_format(&fp_take_reader_summary(r)->timecode_out, tcout, sizeof tcout);
+        printf("played %s (%s take %u, %s - %s): frames %llu, deforming %llu, committed %llu%s%s\n",
+               take_path, h->slate, h->take, in, tcout, (unsigned long long)frames,
+               (unsigned long long)active, (unsigned long long)commits, out ? "; wrote " : "",
+               out ? out : "");
+    }
+done:
+    fp_export_abort(&ex);
+    fp_take_player_close(&player);
+    fp_plugin_path_clear(&path);
+    return status;
+}
+
+const fp_command fp_command_play = {"play", "reproduce a take's frames from its control sets",
+                                    play_main};

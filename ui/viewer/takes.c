@@ -1,0 +1,275 @@
+/* Takes in the live viewer: record toggle, countdown, REC, review on a timeline strip. */
+#define _GNU_SOURCE
+#include "takes.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+void fp_vtakes_init(fp_vtakes *t, const char *dir, const char *slate, double countdown_s,
+                    fp_session_options *so)
+{
+    memset(t, 0, sizeof *t);
+    t->playhead = -1;
+    t->countdown_s = countdown_s;
+    fp_session_take_options o = {.dir = dir, .slate = slate};
+    fp_session_take_init(&t->take, &o, so);
+    snprintf(t->slate, sizeof t->slate, "%s", t->take.opt.slate);
+    t->enabled = dir != NULL;
+    if (t->enabled) {
+        so->record = fp_session_take_sink;
+        so->record_user = &t->take;
+    }
+}
+
+static void review_close(fp_vtakes *t)
+{
+    fp_session_destroy(&t->rs);
+    fp_take_reader_close(&t->reader);
+    t->frames = t->applied = 0;
+    t->playhead = -1;
+    t->playing = false;
+}
+
+void fp_vtakes_free(fp_vtakes *t) { review_close(t); }
+
+/* Open the take just written for review, on a session of the same mesh (no inputs). */
+static int review_open(fp_vtakes *t, const fp_session_take_result *res, char *msg, size_t n)
+{
+    review_close(t);
+    char err[1024];
+    int rc = fp_take_reader_open(res->path, &t->reader, err, sizeof err);
+    if (rc) {
+        snprintf(msg, n, "review: %.900s", err);
+        return rc;
+    }
+    const fp_session_options *so = t->take.so;
+    fp_session_options ro = {.mesh_path = so->mesh_path, .mapping = "anchored",
+                             .radius = fp_take_reader_header(t->reader)->radius,
+                             .plugin_path = so->plugin_path,
+                             .rig_path = fp_take_reader_header(t->reader)->rig_path
+                                             ? fp_take_reader_header(t->reader)->rig_path : "none"};
+    if ((rc = fp_session_create(&ro, &t->rs, err, sizeof err))) {
+        snprintf(msg, n, "review: %.900s", err);
+        fp_take_reader_close(&t->reader);
+        return rc;
+    }
+    t->frames = fp_take_reader_frames(t->reader);
+    t->review_take = res->take;
+    return 0;
+}
+
+static int start(fp_vtakes *t, fp_session *s, int64_t now, char *msg, size_t n)
+{
+    char err[1024];
+    fp_vtakes_leave(t);
+    int rc = fp_session_take_start(&t->take, s, now, err, sizeof err);
+    if (rc) snprintf(msg, n, "take: %s", err);
+    else snprintf(msg, n, "recording %s take %u", t->slate, t->take.header.take);
+    return rc;
+}
+
+int fp_vtakes_stop(fp_vtakes *t, fp_session *s, char *msg, size_t n)
+{
+    (void)s;
+    msg[0] = '\0';
+    t->countdown_until = 0;
+    if (!fp_session_take_recording(&t->take)) return 0;
+    fp_session_take_result res;
+    char err[1024] = "";
+    int rc = fp_session_take_stop(&t->take, &res, err, sizeof err);
+    char in[32], out[32];
+    fp_timecode_format(&res.timecode_in, in, sizeof in);
+    fp_timecode_format(&res.timecode_out, out, sizeof out);
+    if (rc) {
+        snprintf(msg, n, "take %u not written whole: %s", res.take, err);
+        return rc;
+    }
+    snprintf(msg, n, "take %u: %llu frames, %llu dropped, %s - %s", res.take,
+             (unsigned long long)res.frames, (unsigned long long)res.dropped, in, out);
+    if (t->nblocks == FP_VTAKES_BLOCKS) {
+        memmove(t->blocks, t->blocks + 1, sizeof t->blocks - sizeof t->blocks[0]);
+        t->nblocks--;
+    }
+    t->blocks[t->nblocks].take = res.take;
+    t->blocks[t->nblocks].frames = res.frames;
+    t->nblocks++;
+    if (res.frames && !review_open(t, &res, err, sizeof err)) fp_vtakes_scrub(t, 0);
+    return 0;
+}
+
+int fp_vtakes_toggle(fp_vtakes *t, fp_session *s, int64_t now, char *msg, size_t n)
+{
+    msg[0] = '\0';
+    if (!t->enabled) {
+        snprintf(msg, n, "no take folder: give --take-dir DIR to record takes");
+        return -EINVAL;
+    }
+    if (fp_session_take_recording(&t->take)) return fp_vtakes_stop(t, s, msg, n);
+    if (t->countdown_until) {       /* a second press cancels the countdown */
+        t->countdown_until = 0;
+        snprintf(msg, n, "countdown cancelled");
+        return 0;
+    }
+    if (t->countdown_s > 0) {
+        t->countdown_until = now + (int64_t)(t->countdown_s * 1e9);
+        fp_vtakes_leave(t);
+        return 0;
+    }
+    return start(t, s, now, msg, n);
+}
+
+/* Apply frames to the review session until `index` is shown (replaying from the start when
+ * going back: commits accumulate). */
+static void show(fp_vtakes *t, long index)
+{
+    if (!t->rs || !t->frames) return;
+    if (index < 0) index = 0;
+    if ((size_t)index >= t->frames) index = (long)t->frames - 1;
+    if ((size_t)index + 1 < t->applied) {
+        fp_session_reset(t->rs);
+        t->applied = 0;
+    }
+    char err[512];
+    while (t->applied <= (size_t)index) {
+        fp_take_frame f;
+        if (fp_take_reader_read(t->reader, t->applied, &f, err, sizeof err)) break;
+        fp_session_play_frame(t->rs, &f, NULL);
+        t->applied++;
+    }
+    t->playhead = index;
+}
+
+int fp_vtakes_tick(fp_vtakes *t, fp_session *s, int64_t now, char *msg, size_t n)
+{
+    msg[0] = '\0';
+    if (t->countdown_until && now >= t->countdown_until) {
+        t->countdown_until = 0;
+        return start(t, s, now, msg, n);
+    }
+    if (t->playing && t->rs) {
+        fp_take_frame f;
+        char err[512];
+        long i = t->playhead < 0 ? 0 : t->playhead;
+        /* the last frame whose take time is within the time played */
+        while ((size_t)i + 1 < t->frames &&
+               !fp_take_reader_read(t->reader, (size_t)i + 1, &f, err, sizeof err) &&
+               f.time_ns - t->play_origin_ns <= now - t->play_start_ns)
+            i++;
+        show(t, i);
+        if ((size_t)i + 1 >= t->frames) t->playing = false;
+    }
+    return 0;
+}
+
+const float *fp_vtakes_shown(const fp_vtakes *t)
+{
+    return t->rs && t->playhead >= 0 ? fp_session_positions(t->rs) : NULL;
+}
+
+void fp_vtakes_play_pause(fp_vtakes *t, int64_t now)
+{
+    if (!t->rs || !t->frames) return;
+    if (t->playing) {
+        t->playing = false;
+        return;
+    }
+    if (t->playhead < 0 || (size_t)t->playhead + 1 >= t->frames) show(t, 0);
+    fp_take_frame f;
+    char err[512];
+    if (fp_take_reader_read(t->reader, (size_t)t->playhead, &f, err, sizeof err)) return;
+    t->play_origin_ns = f.time_ns;
+    t->play_start_ns = now;
+    t->playing = true;
+}
+
+void fp_vtakes_step(fp_vtakes *t, long delta)
+{
+    if (!t->rs) return;
+    t->playing = false;
+    show(t, (t->playhead < 0 ? 0 : t->playhead) + delta);
+}
+
+void fp_vtakes_scrub(fp_vtakes *t, double fraction)
+{
+    if (!t->rs || !t->frames) return;
+    t->playing = false;
+    fraction = fmin(1.0, fmax(0.0, fraction));
+    show(t, lround(fraction * (double)(t->frames - 1)));
+}
+
+void fp_vtakes_leave(fp_vtakes *t)
+{
+    t->playing = false;
+    t->playhead = -1;
+}
+
+void fp_vtakes_strip_rect(int w, int h, float *x, float *y, float *sw, float *sh)
+{
+    float scale = h >= 600 ? 2.f : 1.f;
+    *sh = 18 * scale;
+    *x = 8;
+    *sw = (float)w - 16;
+    *y = (float)h - *sh - 28 * scale;
+}
+
+void fp_vtakes_draw(fp_vtakes *t, fp_render *r, int w, int h, int64_t now)
+{
+    if (!t->enabled) return;
+    float scale = h >= 600 ? 2.f : 1.f;
+    static const float red[4] = {0.95f, 0.15f, 0.12f, 1.f}, white[4] = {0.95f, 0.95f, 0.92f, 1.f},
+                       dim[4] = {0.8f, 0.85f, 0.9f, 1.f};
+    char text[160];
+    /* top right, under the HUD's first line (stb_easy_font: about 6 pixels a character) */
+    float ty = 8 + 14 * scale;
+#define RIGHT(s) ((float)w - 8 - (float)(strlen(s) * 6 + 20) * scale)
+    if (fp_session_take_recording(&t->take)) {
+        fp_timecode tc;
+        char tcs[32] = "";
+        if (!fp_session_take_timecode(&t->take, now, &tc)) fp_timecode_format(&tc, tcs, sizeof tcs);
+        snprintf(text, sizeof text, "REC  %s  %s take %u", tcs, t->slate, t->take.header.take);
+        float tx = RIGHT(text);
+        fp_render_rect(r, w, h, tx, ty, 12 * scale, 12 * scale, red);
+        fp_render_text(r, w, h, tx + 18 * scale, ty + 2 * scale, scale, text, red);
+    } else if (t->countdown_until) {
+        double left = (double)(t->countdown_until - now) * 1e-9;
+        snprintf(text, sizeof text, "recording in %.0f ...", ceil(left > 0 ? left : 0));
+        fp_render_text(r, w, h, RIGHT(text), ty, scale, text, red);
+    } else {
+        uint32_t next = 0;
+        char err[256];
+        if (fp_take_next_number(t->take.opt.dir, t->slate, &next, err, sizeof err)) next = 0;
+        snprintf(text, sizeof text, "T: record  %s take %u", t->slate, next);
+        fp_render_text(r, w, h, RIGHT(text), ty, scale, text, dim);
+    }
+    if (!t->nblocks) return;
+    /* the strip: one block per take of this session, the reviewed one lit, a playhead */
+    float x, y, sw, sh;
+    fp_vtakes_strip_rect(w, h, &x, &y, &sw, &sh);
+    static const float bg[4] = {0.05f, 0.05f, 0.07f, 0.8f}, block[4] = {0.35f, 0.45f, 0.6f, 1.f},
+                       lit[4] = {0.45f, 0.7f, 1.f, 1.f}, head[4] = {1.f, 0.85f, 0.2f, 1.f};
+    fp_render_rect(r, w, h, x, y, sw, sh, bg);
+    /* the reviewed take fills most of the strip; earlier takes are small blocks on the left */
+    size_t others = t->nblocks - 1;
+    float small = others ? fminf(60 * scale, 0.3f * sw / (float)others) : 0;
+    float bx = x + 2;
+    for (size_t i = 0; i < t->nblocks; i++) {
+        bool reviewed = t->blocks[i].take == t->review_take && i + 1 == t->nblocks;
+        float bw = reviewed ? x + sw - 2 - bx : small - 3;
+        fp_render_rect(r, w, h, bx, y + 2, bw, sh - 4, reviewed ? lit : block);
+        snprintf(text, sizeof text, "T%u", t->blocks[i].take);
+        fp_render_text(r, w, h, bx + 3, y + 3, scale * 0.9f, text, white);
+        if (reviewed && t->frames) {
+            float px = bx + bw * (t->playhead < 0 ? 0.f : (float)t->playhead / (float)(t->frames > 1 ? t->frames - 1 : 1));
+            fp_render_rect(r, w, h, px - 1.5f * scale, y - 3 * scale, 3 * scale, sh + 6 * scale, head);
+        }
+        bx += bw + 3;
+    }
+    if (t->frames) {
+        snprintf(text, sizeof text, "review take %u: frame %ld / %zu %s   P play/pause  , . step  mouse: scrub",
+                 t->review_take, t->playhead + 1, t->frames, t->playing ? "playing" : t->playhead >= 0 ? "paused" : "live");
+        fp_render_text(r, w, h, x, y - 14 * scale, scale, text, dim);
+    }
+}

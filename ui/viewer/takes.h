@@ -1,0 +1,69 @@
+/* takes.h: takes in the live viewer (internal to ui/viewer): T (or the pedal's middle
+ * button) starts and stops recording (optional countdown), the HUD's red REC with the running
+ * timecode and take number, and the review of the last take on a timeline strip at the
+ * bottom of the window (takes of this session as blocks, a playhead; P play/pause, the mouse
+ * on the strip scrubs, , and . step a frame). The review plays the take's stored control
+ * sets through a second session on the same mesh (fp_session_play_frame, as `facepuppet
+ * play`), so the live session goes on untouched.
+ *
+ * Threads: the viewer's (the session thread). Recording: core/session/fp_session_take.h. */
+#ifndef FP_UI_TAKES_H
+#define FP_UI_TAKES_H
+
+#include "fp_session_take.h"
+#include "render.h"
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#define FP_VTAKES_BLOCKS 64
+
+typedef struct fp_vtakes {
+    bool enabled;                 /* a take folder was given */
+    fp_session_take take;
+    double countdown_s;
+    int64_t countdown_until;      /* > 0 while counting down to a start */
+    /* the review: the last take, played through its own session */
+    fp_take_reader *reader;
+    fp_session *rs;
+    size_t frames, applied;       /* frames in the take; frames applied to rs so far */
+    long playhead;                /* frame shown (-1: the live session is shown) */
+    bool playing;
+    int64_t play_start_ns, play_origin_ns;   /* host time and take time playing began at */
+    struct { uint32_t take; uint64_t frames; } blocks[FP_VTAKES_BLOCKS];
+    size_t nblocks;
+    uint32_t review_take;
+    char slate[FP_TAKE_SLATE_MAX];
+} fp_vtakes;
+
+/** Set up: the options' take folder, slate, countdown; puts the record sink into *so (the
+ *  session options the viewer creates sessions from). */
+void fp_vtakes_init(fp_vtakes *t, const char *dir, const char *slate, double countdown_s,
+                    fp_session_options *so);
+void fp_vtakes_free(fp_vtakes *t);
+
+/** T or the middle pedal: start (after the countdown) or stop the take; msg gets a line for
+ *  the HUD ("" when none). Returns 0 or the recorder's code (msg says why). */
+int fp_vtakes_toggle(fp_vtakes *t, fp_session *s, int64_t now, char *msg, size_t n);
+/** Each frame before the session's step: a countdown that ran out starts the take; a
+ *  review that plays advances with the clock. */
+int fp_vtakes_tick(fp_vtakes *t, fp_session *s, int64_t now, char *msg, size_t n);
+/** Stop a take recording (end of the run). */
+int fp_vtakes_stop(fp_vtakes *t, fp_session *s, char *msg, size_t n);
+
+/** The review's shape to show, or NULL (show the live session). */
+const float *fp_vtakes_shown(const fp_vtakes *t);
+/** Review: P (play/pause), frame step by delta (, and .), scrub to a fraction of the take. */
+void fp_vtakes_play_pause(fp_vtakes *t, int64_t now);
+void fp_vtakes_step(fp_vtakes *t, long delta);
+void fp_vtakes_scrub(fp_vtakes *t, double fraction);
+/** Leave the review (show the live session again). */
+void fp_vtakes_leave(fp_vtakes *t);
+
+/** The strip's rectangle in a w x h framebuffer (pixels from the top left). */
+void fp_vtakes_strip_rect(int w, int h, float *x, float *y, float *sw, float *sh);
+/** Draw REC / countdown / take number (top right) and the strip (bottom). */
+void fp_vtakes_draw(fp_vtakes *t, fp_render *r, int w, int h, int64_t now);
+
+#endif
