@@ -24,6 +24,35 @@ function(fp_add_plugin name)
   install(TARGETS ${name} LIBRARY DESTINATION ${FP_PLUGIN_SUBDIR})
 endfunction()
 
+# Sanitizer builds (FP_SANITIZE=ON, set by the sanitizers preset, build-asan/): every test
+# gets the ASan/LSan/UBSan options below (LSan suppressions for Mesa, X and LLVM in
+# tests/lsan.supp; verify_asan_link_order=0 so that umockdev's and the tests' LD_PRELOAD
+# libraries may come before ASan; UBSan findings fail the test) and FP_TEST_TIMEOUT_SCALE
+# times its timeout.
+set(FP_TEST_TIMEOUT_SCALE 1)
+set(FP_SANITIZER_ENV "")
+if(FP_SANITIZE)
+  set(FP_TEST_TIMEOUT_SCALE 3)
+  set(FP_SANITIZER_ENV
+      "ASAN_OPTIONS=verify_asan_link_order=0:detect_leaks=1"
+      "LSAN_OPTIONS=suppressions=${CMAKE_SOURCE_DIR}/tests/lsan.supp:print_suppressions=0"
+      "UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1")
+endif()
+
+# fp_test_env(NAME [TIMEOUT seconds] [ENV VAR=value...]): the one place a test's timeout
+# (default 300 s, times FP_TEST_TIMEOUT_SCALE) and environment are set: FP_SHARED_DATA,
+# FP_BUILD_DIR, the sanitizer options of a sanitizer build, then ENV. For tests made with
+# add_test (shell scripts, wrappers); fp_add_test calls it.
+function(fp_test_env name)
+  cmake_parse_arguments(E "" "TIMEOUT" "ENV" ${ARGN})
+  if(NOT E_TIMEOUT)
+    set(E_TIMEOUT 300)
+  endif()
+  math(EXPR t "${E_TIMEOUT} * ${FP_TEST_TIMEOUT_SCALE}")
+  set_tests_properties(${name} PROPERTIES TIMEOUT ${t} ENVIRONMENT
+    "FP_SHARED_DATA=${FP_SHARED_DATA};FP_BUILD_DIR=${CMAKE_BINARY_DIR};${FP_SANITIZER_ENV};${E_ENV}")
+endfunction()
+
 # fp_add_test(NAME SOURCES... [LIBS libs...]): a cmocka test run by ctest from the source tree
 # root, so that ../shared/data resolves as everywhere else.
 function(fp_add_test name)
@@ -36,8 +65,7 @@ function(fp_add_test name)
   if(NOT T_TIMEOUT)
     set(T_TIMEOUT 300)
   endif()
-  set_tests_properties(${name} PROPERTIES TIMEOUT ${T_TIMEOUT}
-    ENVIRONMENT "FP_SHARED_DATA=${FP_SHARED_DATA};FP_BUILD_DIR=${CMAKE_BINARY_DIR}")
+  fp_test_env(${name} TIMEOUT ${T_TIMEOUT})
 endfunction()
 
 # fp_add_fuzz(NAME SOURCES... [LIBS libs...] [CORPUS dirs...]): a libFuzzer target (clang,

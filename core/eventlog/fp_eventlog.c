@@ -8,6 +8,7 @@
 #include "fp_error.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <inttypes.h>
 #include <limits.h>
 #include <locale.h>
@@ -16,6 +17,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #define LINE_MAX_BYTES 4096 /* the longest line the writer makes is about 1.1 kB */
 #define TEXT_BYTES ((int)sizeof(((fp_event_status *)0)->text))
@@ -59,46 +61,77 @@ static locale_t c_locale_new(void)
 /* Writer                                                                                 */
 
 struct fp_eventlog_writer {
-    FILE *f;
+    int fd;
+    off_t whole;            /* bytes of whole lines written: a failed write is cut back to it */
     char *path;
     locale_t c_locale;
     char error[512];
     char line[LINE_MAX_BYTES];
 };
 
-fp_eventlog_writer *fp_eventlog_writer_open(const char *path, char *err, size_t errlen)
+/* Write all of s[0..n) or fail with -errno (-EIO for errors without a better code). */
+static int write_all(int fd, const char *s, size_t n)
 {
-    if (!path) {
-        put_msg(err, errlen, "(null): no path given");
-        return NULL;
+    while (n) {
+        ssize_t put = write(fd, s, n);
+        if (put < 0 && errno == EINTR) continue;
+        if (put <= 0) {
+            int e = put < 0 ? errno : ENOSPC;
+            return e == ENOSPC || e == EDQUOT || e == EFBIG ? -e : -EIO;
+        }
+        s += put;
+        n -= (size_t)put;
     }
+    return 0;
+}
+
+int fp_eventlog_writer_create(const char *path, unsigned flags, fp_eventlog_writer **out,
+                              char *err, size_t errlen)
+{
+    *out = NULL;
+    if (!path) return fp_errorf(err, errlen, -EINVAL, "(null): no path given");
     fp_eventlog_writer *w = calloc(1, sizeof *w);
     if (w) w->path = strdup(path);
     if (w) w->c_locale = c_locale_new();
     if (!w || !w->path || w->c_locale == (locale_t)0) {
-        put_msg(err, errlen, "%s: out of memory", path);
         if (w && w->c_locale != (locale_t)0) freelocale(w->c_locale);
         if (w) free(w->path);
         free(w);
-        return NULL;
+        return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", path);
     }
-    w->f = fopen(path, "w");
-    if (!w->f) {
-        put_msg(err, errlen, "%s: cannot create: %s", path, strerror(errno));
+    int oflags = O_WRONLY | O_CREAT | O_CLOEXEC | O_NOCTTY |
+                 (flags & FP_EVENTLOG_EXCL ? O_EXCL : O_TRUNC);
+    w->fd = open(path, oflags, 0666);
+    int rc = 0;
+    if (w->fd < 0) {
+        int e = errno;
+        rc = fp_errorf(err, errlen, e == EEXIST ? -EEXIST : -e, "%s: cannot create: %s", path,
+                       strerror(e));
+    } else {
+        char head[64];
+        int n = snprintf(head, sizeof head, "# %s %d\n", FP_EVENTLOG_MAGIC, FP_EVENTLOG_VERSION);
+        rc = write_all(w->fd, head, (size_t)n);
+        if (rc) {
+            fp_errorf(err, errlen, rc, "%s: cannot write: %s", path, strerror(-rc));
+            if (ftruncate(w->fd, 0)) {} /* nothing half-written, not even the header */
+        }
+        w->whole = n;
+    }
+    if (rc) {
+        if (w->fd >= 0) close(w->fd);
         freelocale(w->c_locale);
         free(w->path);
         free(w);
-        return NULL;
+        return rc;
     }
-    if (fprintf(w->f, "# %s %d\n", FP_EVENTLOG_MAGIC, FP_EVENTLOG_VERSION) < 0 ||
-        fflush(w->f) != 0) {
-        put_msg(err, errlen, "%s: cannot write: %s", path, strerror(errno));
-        fclose(w->f);
-        freelocale(w->c_locale);
-        free(w->path);
-        free(w);
-        return NULL;
-    }
+    *out = w;
+    return 0;
+}
+
+fp_eventlog_writer *fp_eventlog_writer_open(const char *path, char *err, size_t errlen)
+{
+    fp_eventlog_writer *w = NULL;
+    fp_eventlog_writer_create(path, 0, &w, err, errlen);
     return w;
 }
 
@@ -141,10 +174,16 @@ static int writer_fail(fp_eventlog_writer *w, int code, const char *fmt, ...)
     return fp_error_prefix(w->error, sizeof w->error, code, "%s", w->path);
 }
 
+/* One write() per line where the kernel takes it whole; a line the disk took only part of is
+ * cut off again, so the file always ends with a whole line. */
 static int write_line(fp_eventlog_writer *w, const char *s, size_t n)
 {
-    if (fwrite(s, 1, n, w->f) != n || fflush(w->f) != 0)
-        return writer_fail(w, -EIO, "cannot write: %s", strerror(errno));
+    int rc = write_all(w->fd, s, n);
+    if (rc) {
+        if (ftruncate(w->fd, w->whole) == 0) lseek(w->fd, w->whole, SEEK_SET);
+        return writer_fail(w, rc, "cannot write: %s", strerror(-rc));
+    }
+    w->whole += (off_t)n;
     return 0;
 }
 
@@ -160,6 +199,9 @@ static int format_event(fp_eventlog_writer *w, const fp_event *e, line_buf *b)
         return writer_fail(w, -EINVAL, "%s event with hand %d (not -1, 0 or 1)", name,
                            (int)h->hand);
     const char *hand = h->hand == FP_HAND_LEFT ? "left" : h->hand == FP_HAND_RIGHT ? "right" : "-";
+    if (h->time_ns > FP_EVENTLOG_TIME_MAX || h->time_ns < -FP_EVENTLOG_TIME_MAX)
+        return writer_fail(w, -EINVAL, "%s event at time %" PRId64 " ns, beyond +-%lld", name,
+                           h->time_ns, (long long)FP_EVENTLOG_TIME_MAX);
     lb_printf(b, "%" PRId64 " %s %s", h->time_ns, name, hand);
     int bad = 0;
     switch (h->type) {
@@ -250,11 +292,12 @@ int fp_eventlog_writer_close(fp_eventlog_writer **pw, char *err, size_t errlen)
     fp_eventlog_writer *w = *pw;
     *pw = NULL;
     int rc = 0;
-    if (fflush(w->f) != 0) {
-        put_msg(err, errlen, "%s: cannot write: %s", w->path, strerror(errno));
-        rc = -EIO;
+    if (fsync(w->fd) != 0 && errno != EINVAL && errno != EROFS) {
+        int e = errno;
+        rc = e == ENOSPC || e == EDQUOT ? -e : -EIO;
+        put_msg(err, errlen, "%s: cannot write: %s", w->path, strerror(e));
     }
-    if (fclose(w->f) != 0 && rc == 0) {
+    if (close(w->fd) != 0 && rc == 0) {
         put_msg(err, errlen, "%s: cannot close: %s", w->path, strerror(errno));
         rc = -EIO;
     }
@@ -542,9 +585,14 @@ static int parse_event(fp_eventlog_reader *r, char *line, fp_event *out)
     char *end;
     errno = 0;
     long long t = strtoll(tok, &end, 10);
-    if (end == tok || *end || errno)
+    if (end == tok || *end || (errno && errno != ERANGE))
         return reader_fail(r, -EBADMSG, col_of(&c, tok),
                            "bad time \"%s\" (a signed 64-bit integer of ns)", tok);
+    if (errno == ERANGE || t > FP_EVENTLOG_TIME_MAX || t < -FP_EVENTLOG_TIME_MAX)
+        return reader_fail(r, -EBADMSG, col_of(&c, tok),
+                           "time %s out of range (at most %lld ns either side of 0, so that "
+                           "differences of times never overflow)", tok,
+                           (long long)FP_EVENTLOG_TIME_MAX);
     h->time_ns = (int64_t)t;
 
     if ((rc = need_token(&c, &tok, "the event type"))) return rc;

@@ -39,10 +39,25 @@ extern "C" {
 #define FP_EVENTLOG_MAGIC "facepuppet-eventlog"
 #define FP_EVENTLOG_VERSION 1
 
+/** The largest |TIME| in ns the format holds (10^18 ns, about 31.7 years): the difference of
+ *  any two times, and a loop period of twice a duration, fit in int64_t. The writer refuses
+ *  a time beyond it (-EINVAL), the reader a line with one (-EBADMSG, FILE:LINE:COLUMN). */
+#define FP_EVENTLOG_TIME_MAX 1000000000000000000LL
+
 /* ------------------------------------------------------------------------------------- */
 /* Writer                                                                                 */
 
 typedef struct fp_eventlog_writer fp_eventlog_writer;
+
+/** Flags of fp_eventlog_writer_create. */
+#define FP_EVENTLOG_EXCL 1u /* refuse an existing file (-EEXIST) instead of truncating it */
+
+/** Create the file at `path` (truncate it, or with FP_EVENTLOG_EXCL refuse one that exists)
+ *  and write the header line. Returns 0 and the writer in *out, or a negative errno
+ *  (-EEXIST, -EACCES, -ENOENT, -ENOSPC, -EIO, -ENOMEM) with "PATH: reason" in err (errlen
+ *  bytes; may be NULL). Owned by the caller: close it with fp_eventlog_writer_close. */
+int fp_eventlog_writer_create(const char *path, unsigned flags, fp_eventlog_writer **out,
+                              char *err, size_t errlen);
 
 /** Create (or truncate) the file at `path` and write the header line.
  *  Returns the writer, or NULL after writing "PATH: reason" to err (errlen bytes; err may be
@@ -50,25 +65,27 @@ typedef struct fp_eventlog_writer fp_eventlog_writer;
 fp_eventlog_writer *fp_eventlog_writer_open(const char *path, char *err, size_t errlen);
 
 /** Append one event as one line. The line is formatted in full, checked, and only then
- *  written and flushed to the kernel (one write per line), so a crash of the process at any
- *  moment loses at most the line being written, and a rejected event writes nothing.
+ *  written to the kernel (one write per line, no user-space buffer), so a crash of the
+ *  process at any moment loses at most the line being written, and a rejected event writes
+ *  nothing. A write the disk takes only in part (full) is cut back to the last whole line.
  *  Events: every fp_event_type of plugin.h; header.size must be at least the size of its
  *  type's struct (fields past it are not recorded); hand must be -1, 0 or 1; floats must be
  *  finite; angles.valid may use only the low FP_GLOVE_SENSORS bits; status text is recorded
- *  up to its NUL (at most 115 bytes). time_ns, source and flags are recorded as they are.
- *  Returns 0, -EINVAL (the file is unchanged) or -EIO; the message is
+ *  up to its NUL (at most 115 bytes); |time_ns| <= FP_EVENTLOG_TIME_MAX. source and flags
+ *  are recorded as they are. Returns 0, -EINVAL (the file is unchanged), -ENOSPC, -EDQUOT,
+ *  -EFBIG (disk full: the file ends with the line before) or -EIO; the message is
  *  in fp_eventlog_writer_error. Not for the [session-thread]: it does I/O. */
 int fp_eventlog_writer_write(fp_eventlog_writer *w, const fp_event *event);
 
 /** Append a comment line `# TEXT` (a slate, a note). Line breaks in text become spaces.
- *  Returns 0 or -EIO. */
+ *  Returns 0 or a write's code (-ENOSPC, -EIO, ...). */
 int fp_eventlog_writer_comment(fp_eventlog_writer *w, const char *text);
 
 /** The message of the writer's last error ("" when none). Valid until the next call. */
 const char *fp_eventlog_writer_error(const fp_eventlog_writer *w);
 
-/** Flush, close the file and free the writer; sets *w to NULL. NULL or *w NULL is a no-op.
- *  Returns 0, or -EIO when the final flush or close failed (the writer is freed
+/** Sync (fsync), close the file and free the writer; sets *w to NULL. NULL or *w NULL is a
+ *  no-op. Returns 0, or -EIO / -ENOSPC when the final sync or close failed (the writer is freed
  *  anyway; err, if not NULL, receives the message). */
 int fp_eventlog_writer_close(fp_eventlog_writer **w, char *err, size_t errlen);
 

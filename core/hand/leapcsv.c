@@ -145,8 +145,12 @@ static int parse_row(reader *r, fp_leapcsv_format fmt, long line, char *text, fp
     long long frame, ts, id;
     if (parse_int64(f.s[0], &frame) || (long long)(long)frame != frame)
         return fail(r, -EBADMSG, line, f.col[0], "bad frame number \"%s\"", f.s[0]);
-    if (parse_int64(f.s[1], &ts) || ts > INT64_MAX / 1000 || ts < INT64_MIN / 1000)
+    if (parse_int64(f.s[1], &ts))
         return fail(r, -EBADMSG, line, f.col[1], "bad timestamp_us \"%s\"", f.s[1]);
+    if (ts > FP_LEAPCSV_TIME_MAX_US || ts < -FP_LEAPCSV_TIME_MAX_US)
+        return fail(r, -EBADMSG, line, f.col[1],
+                    "timestamp_us %lld out of range (at most %lld either side of 0)", ts,
+                    (long long)FP_LEAPCSV_TIME_MAX_US);
     if (parse_int64(f.s[2], &id) || (long long)(long)id != id)
         return fail(r, -EBADMSG, line, f.col[2], "bad hand_id \"%s\"", f.s[2]);
     fp_hand_side side;

@@ -9,7 +9,8 @@
  * names); every row the header's number of fields; frame, timestamp_us, hand_id integers;
  * hand_type "left" or "right"; every number finite as a float (C locale, whatever the
  * process's locale); empty fields only in the angles format; timestamp_us never smaller
- * than the row before's and within +-INT64_MAX/1000 (so that it converts to ns); no NUL
+ * than the row before's and within +-FP_LEAPCSV_TIME_MAX_US (so that it converts to ns and
+ * differences of times never overflow, as for the event log's times); no NUL
  * byte. Blank lines are skipped; a CR before the newline is dropped. A last line without a
  * newline (a recording cut off) is dropped and reported through *truncated_line.
  *
@@ -33,6 +34,10 @@ typedef enum fp_leapcsv_format {
     FP_LEAPCSV_ANGLES = 2  /* *_cyberglove_like_angles_deg.csv: 4 lead columns, then the 22
                               sensors in fp_glove_sensor order, in degrees, may be empty */
 } fp_leapcsv_format;
+
+/** The largest |timestamp_us| (10^15 us, about 31.7 years; in ns the event log's
+ *  FP_EVENTLOG_TIME_MAX). */
+#define FP_LEAPCSV_TIME_MAX_US 1000000000000000LL
 
 enum {
     FP_LEAPCSV_LEAD = 4,                                          /* frame..hand_type */

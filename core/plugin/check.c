@@ -505,12 +505,12 @@ static void check_mapping(checker *c, creator *cr)
     double *ta = calloc(FRAMES, sizeof *ta), *tb = calloc(FRAMES, sizeof *tb);
     fault faults[6] = {{.what = "process"}, {.what = "capacity"}, {.what = "overrun"},
                        {.what = "finite points"}, {.what = "radius"}, {.what = "channels"}};
+    bool dead = false; /* read after `out` too */
     if (!s || !a || !b || !ta || !tb) {
         report(c, FP_CHECK_FAIL, "memory", "out of memory");
         goto out;
     }
     scene_init(s);
-    bool dead = false;
     run_sequence(c, m, s, a, ta, faults, &dead);
     bool ran_twice = false;
     if (!dead) {

@@ -128,6 +128,14 @@ int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
     snprintf(inst->name, sizeof inst->name, "%s", spec.name);
     inst->source = source;
     const char *record = fp_spec_take(&spec, "record");
+    /* force=1 (only beside record=): overwrite the recording's file instead of taking the
+     * next free name. */
+    const char *force = record ? fp_spec_take(&spec, "force") : NULL;
+    if (force && strcmp(force, "0") && strcmp(force, "1")) {
+        snprintf(err, errlen, "input '%s': force=%s: expected 0 or 1", spec_text, force);
+        rc = -EINVAL;
+        goto out;
+    }
     rc = fp_plugin_load(path, FP_PLUGIN_INPUT, spec.name, &inst->plugin, err, errlen);
     if (rc) goto out;
     rc = fp_event_queue_init(&inst->queue, FP_INPUT_QUEUE_CAPACITY);
@@ -148,9 +156,20 @@ int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
         if (!rc) rc = FP_EPLUGIN_FAULT;
         goto out;
     }
-    if (record && (rc = fp_event_recorder_open(record, &inst->record, perr, sizeof perr))) {
-        snprintf(err, errlen, "input '%s': record=%s: %s", spec_text, record, perr);
-        goto out;
+    if (record) {
+        char used[4096];
+        rc = fp_event_recorder_create(record, force && !strcmp(force, "1") ? FP_RECORD_OVERWRITE : 0,
+                                      used, sizeof used, &inst->record, perr, sizeof perr);
+        if (rc) {
+            snprintf(err, errlen, "input '%s': record=%s: %s", spec_text, record, perr);
+            goto out;
+        }
+        if (strcmp(used, record)) {
+            char msg[8400];
+            snprintf(msg, sizeof msg, "record=%s exists: recording to %s instead (force=1 "
+                     "overwrites)", record, used);
+            inst->host.log(&inst->host, FP_LOG_WARNING, msg);
+        }
     }
 out:
     fp_spec_clear(&spec);

@@ -14,6 +14,7 @@
 #include <time.h>
 
 #define FP_RECORD_QUEUE_CAPACITY 16384   /* events; the input queues hold 4096 */
+#define FP_RECORD_MAX_SUFFIX 999         /* FILE-1.ext .. FILE-999.ext */
 
 struct fp_event_recorder {
     fp_event_queue queue;
@@ -23,7 +24,7 @@ struct fp_event_recorder {
     atomic_int error;                /* first error; message valid once it is non-zero */
     char message[512];
     atomic_ulong dropped;            /* pushes refused: the queue was full */
-    char path[256];
+    char path[4096];                 /* the file written (a free name, see create) */
 };
 
 static void fail(fp_event_recorder *r, int code, const char *msg)
@@ -57,31 +58,64 @@ static void *writer_main(void *arg)
     return NULL;
 }
 
-int fp_event_recorder_open(const char *path, fp_event_recorder **out, char *err, size_t errlen)
+/* Candidate n of a free name: PATH itself for n = 0, else STEM-n.EXT (STEM-n without an
+ * extension). Returns false when it does not fit. */
+static bool candidate(const char *path, unsigned n, char *out, size_t len)
+{
+    if (n == 0) return (size_t)snprintf(out, len, "%s", path) < len;
+    const char *slash = strrchr(path, '/');
+    const char *dot = strrchr(slash ? slash + 1 : path, '.');
+    if (dot && (dot == (slash ? slash + 1 : path))) dot = NULL; /* ".hidden": no extension */
+    int stem = dot ? (int)(dot - path) : (int)strlen(path);
+    return (size_t)snprintf(out, len, "%.*s-%u%s", stem, path, n, dot ? dot : "") < len;
+}
+
+int fp_event_recorder_create(const char *path, unsigned flags, char *used, size_t usedlen,
+                             fp_event_recorder **out, char *err, size_t errlen)
 {
     *out = NULL;
+    if (used && usedlen) used[0] = '\0';
     fp_event_recorder *r = calloc(1, sizeof *r);
     if (!r || fp_event_queue_init(&r->queue, FP_RECORD_QUEUE_CAPACITY)) {
         free(r);
         snprintf(err, errlen, "%s: out of memory", path);
         return -ENOMEM;
     }
-    snprintf(r->path, sizeof r->path, "%s", path);
-    r->writer = fp_eventlog_writer_open(path, err, errlen);
-    if (!r->writer) {
+    int rc = -EEXIST;
+    for (unsigned n = 0; rc == -EEXIST && n <= FP_RECORD_MAX_SUFFIX; n++) {
+        if (!candidate(path, n, r->path, sizeof r->path)) {
+            rc = -ENAMETOOLONG;
+            snprintf(err, errlen, "%s: name too long", path);
+            break;
+        }
+        rc = fp_eventlog_writer_create(r->path, flags & FP_RECORD_OVERWRITE ? 0 : FP_EVENTLOG_EXCL,
+                                       &r->writer, err, errlen);
+    }
+    if (rc == -EEXIST)
+        snprintf(err, errlen, "%s: it and %s-1 .. -%u exist (force=1 overwrites it)", path, path,
+                 FP_RECORD_MAX_SUFFIX);
+    if (rc) {
         fp_event_queue_destroy(&r->queue);
         free(r);
-        return -EIO;
+        /* an output that cannot be created (exit 73 in the commands): -EIO unless the code
+         * says more (full disk, no memory, every name taken) */
+        return rc == -ENOMEM || rc == -ENOSPC || rc == -EDQUOT || rc == -EEXIST ? rc : -EIO;
     }
     if (pthread_create(&r->thread, NULL, writer_main, r)) {
         fp_eventlog_writer_close(&r->writer, NULL, 0);
         fp_event_queue_destroy(&r->queue);
+        snprintf(err, errlen, "%s: cannot start the writer thread", r->path);
         free(r);
-        snprintf(err, errlen, "%s: cannot start the writer thread", path);
         return -EAGAIN;
     }
+    if (used && usedlen) snprintf(used, usedlen, "%s", r->path);
     *out = r;
     return 0;
+}
+
+int fp_event_recorder_open(const char *path, fp_event_recorder **out, char *err, size_t errlen)
+{
+    return fp_event_recorder_create(path, FP_RECORD_OVERWRITE, NULL, 0, out, err, errlen);
 }
 
 bool fp_event_recorder_push(fp_event_recorder *r, const fp_event *ev)

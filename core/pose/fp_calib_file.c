@@ -96,10 +96,23 @@ int fp_calibration_load(const char *path, fp_calibration *out, char *err, size_t
         goto done;
     }
     c.scale = mpu ? 1.0 / one->valuedouble : one->valuedouble;
+    /* both the scale and its inverse (what save writes) must be normal finite numbers: a
+     * subnormal mm_per_unit would give an infinite scale (found by tests/fuzz/fuzz_calib) */
+    if (!isnormal(c.scale) || !isnormal(1.0 / c.scale)) {
+        rc = fp_errorf(err, errlen, -ERANGE, "%s: field %s: %g is out of range", path, name,
+                       one->valuedouble);
+        goto done;
+    }
     if ((rc = numbers(path, root, "", "rotation", c.rotation, 4, err, errlen)) < 0) goto done;
-    double qn = sqrt(c.rotation[0] * c.rotation[0] + c.rotation[1] * c.rotation[1] +
-                     c.rotation[2] * c.rotation[2] + c.rotation[3] * c.rotation[3]);
-    if (!(qn > 1e-6)) {
+    /* the norm scaled by the largest component, so that squares never overflow */
+    double qmax = 0;
+    for (int i = 0; i < 4; i++) qmax = fmax(qmax, fabs(c.rotation[i]));
+    double qn = 0;
+    if (qmax > 0) {
+        for (int i = 0; i < 4; i++) qn += (c.rotation[i] / qmax) * (c.rotation[i] / qmax);
+        qn = qmax * sqrt(qn);
+    }
+    if (!(qn > 1e-6) || !isfinite(qn)) {
         rc = fp_errorf(err, errlen, -ERANGE, "%s: field rotation: a quaternion of norm %g", path, qn);
         goto done;
     }

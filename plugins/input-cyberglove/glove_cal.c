@@ -217,8 +217,13 @@ int fpg_cal_inverse(const fpg_cal *cal, int i, double radians, double scale, int
     if (!(cal->used & (1u << i)) || cal->gain[i] == 0.0f)
         return (lo + hi) / 2;
     double raw = (radians - cal->offset[i]) / cal->gain[i] * scale;
-    long r = lround(raw);
-    if (!(raw > lo - 0.5) || r < lo) {
+    if (raw >= hi + 0.5) { /* before lround, which has no answer for |raw| beyond long */
+        if (clamped)
+            *clamped = 1;
+        return hi;
+    }
+    long r = !(raw > lo - 0.5) ? lo - 1 : lround(raw);
+    if (r < lo) {
         if (clamped)
             *clamped = 1;
         return lo;

@@ -223,9 +223,26 @@ static bool check_types(osc_input *o, const char *types, const char *want)
     return false;
 }
 
+/* liblo's argv points into the message at 4-byte alignment, while lo_arg (a union with
+ * 64-bit members) asks for 8: read the 32-bit values through memcpy, never through the union
+ * (tests/fuzz/fuzz_osc found the misaligned access). */
+static float arg_f(lo_arg *a)
+{
+    float v;
+    memcpy(&v, a, sizeof v);
+    return v;
+}
+
+static int32_t arg_i(lo_arg *a)
+{
+    int32_t v;
+    memcpy(&v, a, sizeof v);
+    return v;
+}
+
 static void floats_of(lo_arg **argv, int first, int n, float *out)
 {
-    for (int i = 0; i < n; i++) out[i] = argv[first + i]->f;
+    for (int i = 0; i < n; i++) out[i] = arg_f(argv[first + i]);
 }
 
 static bool hand_wanted(const osc_input *o, int h) { return o->hands & (1 << h); }
@@ -277,7 +294,7 @@ static void fmt_facepuppet(osc_input *o, const char *path, const char *types, lo
 {
     if (strcmp(path, "/facepuppet/button") == 0) {
         if (!check_types(o, types, "ii")) return;
-        int32_t index = argv[0]->i, down = argv[1]->i;
+        int32_t index = arg_i(argv[0]), down = arg_i(argv[1]);
         if (index < 0 || index > 2 || (down != 0 && down != 1)) {
             count(o, FP_OSC_OUT_OF_RANGE);
             return;
@@ -334,7 +351,7 @@ static void fmt_facepuppet(osc_input *o, const char *path, const char *types, lo
                 return;
             }
             first = 1;
-            valid = (uint32_t)argv[0]->i & ((1u << FP_GLOVE_SENSORS) - 1);
+            valid = (uint32_t)arg_i(argv[0]) & ((1u << FP_GLOVE_SENSORS) - 1);
         } else if (!check_types(o, types, want)) {
             return;
         }
@@ -456,12 +473,12 @@ static void fmt_leap(osc_input *o, const char *path, const char *types, lo_arg *
     if (kind == 1) {
         if (ls->have_palm && ls->tips) count(o, FP_OSC_INCOMPLETE);
         ls->have_palm = true;
-        ls->hand_id = argv[0]->i;
+        ls->hand_id = arg_i(argv[0]);
         ls->tips = 0;
         memcpy(ls->palm, v, sizeof v);
         return;
     }
-    if (!ls->have_palm || argv[0]->i != ls->hand_id) {
+    if (!ls->have_palm || arg_i(argv[0]) != ls->hand_id) {
         count(o, FP_OSC_INCOMPLETE);
         ls->have_palm = false;
         ls->tips = 0;

@@ -158,6 +158,13 @@ static void *replay_thread(void *arg)
                 return NULL;
         }
         if (!r->loop) break;
+        /* Times keep increasing over passes: stop before the next pass's would overflow
+         * (after centuries for a real recording; at once for hostile times). */
+        int64_t next;
+        if (__builtin_mul_overflow((int64_t)(pass + 1), r->rec.loop_period_ns, &next) ||
+            __builtin_add_overflow(next, host_t0, &next) ||
+            __builtin_add_overflow(next, r->rec.duration_ns, &next))
+            break;
     }
     push_status(r, last_time, FP_STATUS_END_OF_STREAM, "end of %s", base_name(r->path));
     return NULL;

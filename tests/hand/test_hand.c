@@ -396,6 +396,13 @@ static void test_csv_errors(void **state)
     fp_test_write_file(path, text);
     assert_int_equal(fp_leapcsv_read_angles(path, &rows, &n, err, sizeof err), -EBADMSG);
     assert_non_null(strstr(err, "a.csv:3:3: timestamp_us 4 goes backwards"));
+    /* times whose span would overflow int64 ns are refused (|timestamp_us| <= 10^15) */
+    snprintf(text, sizeof text, "%s%s%s", hdr,
+             "0,-1000000000000000,1,right,,1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,,,\n",
+             "1,9223372036854775,1,right,,1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,,,\n");
+    fp_test_write_file(path, text);
+    assert_int_equal(fp_leapcsv_read_angles(path, &rows, &n, err, sizeof err), -EBADMSG);
+    assert_non_null(strstr(err, "a.csv:3:3: timestamp_us 9223372036854775 out of range"));
     snprintf(text, sizeof text, "%s%s", hdr, good);
     fp_test_write_file(path, text);
     assert_int_equal(fp_leapcsv_read_angles(path, &rows, &n, err, sizeof err), 0);

@@ -740,7 +740,12 @@ static void flood_keeps_memory_bounded(void **state)
     assert_true(st.packets > 10000);
     assert_true(st.problems[FP_OSC_QUEUE_FULL] > 0);
     assert_int_equal(st.problems[FP_OSC_QUEUE_FULL], f.h->refused_poses);
+#ifndef __SANITIZE_ADDRESS__
     assert_true(rss1 - rss0 < 4096); /* under 4 MiB of growth for 100,000 packets */
+#else
+    printf("flood: RSS bound not checked under AddressSanitizer (its quarantine holds freed "
+           "memory)\n");
+#endif
     close_fixture(&f);
 }
 

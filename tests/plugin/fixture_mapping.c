@@ -46,7 +46,7 @@ static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *o
 #endif
 #ifdef FIXTURE_SEGV
     if (in->frame >= 3) {
-        volatile int *volatile nowhere = NULL;
+        volatile int *volatile nowhere = (int *)16; /* not NULL: UBSan would stop that first */
         *nowhere = 1;
     }
 #endif

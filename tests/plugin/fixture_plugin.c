@@ -15,7 +15,9 @@
 #if defined(FIXTURE_CRASH_INIT) || defined(FIXTURE_CRASH_THREAD)
 static void crash(void)
 {
-    volatile int *volatile nowhere = NULL;
+    /* a store to an unmapped address in this plugin's code (not NULL: UBSan, in sanitizer
+     * builds, would stop a NULL store before it faults) */
+    volatile int *volatile nowhere = (int *)16;
     *nowhere = 1;
 }
 #endif

@@ -22,6 +22,9 @@
 
 #include <cmocka.h>
 
+/* The extreme times the format holds (fp_eventlog.h). */
+#define FP_EVENT_TIME_MAX_FOR_TEST FP_EVENTLOG_TIME_MAX
+
 static char tmpdir[256];
 
 static int rm_entry(const char *path, const struct stat *sb, int flag, struct FTW *ftw)
@@ -96,7 +99,7 @@ static size_t build_events(fp_event *ev, size_t cap)
     static const float odd[] = {0.0f, -0.0f, 1e-45f, -1e-45f, FLT_MIN, FLT_MAX, -FLT_MAX,
                                 0.1f, 3.14159265f, 1.0f / 3.0f, 16777217.0f, -123.456f};
     /* angles: full mask with odd values, a partial mask with zeros where invalid */
-    ev[n] = make(FP_EVENT_JOINT_ANGLES, INT64_MIN, FP_HAND_LEFT);
+    ev[n] = make(FP_EVENT_JOINT_ANGLES, -FP_EVENT_TIME_MAX_FOR_TEST, FP_HAND_LEFT);
     ev[n].angles.valid = (1u << FP_GLOVE_SENSORS) - 1;
     for (int i = 0; i < FP_GLOVE_SENSORS; i++)
         ev[n].angles.radians[i] = odd[i % (sizeof odd / sizeof odd[0])];
@@ -136,7 +139,7 @@ static size_t build_events(fp_event *ev, size_t cap)
         "ctl \x01\x02\x1f del \x7f", "utf-8 caf\xc3\xa9 \xe2\x86\x92 # not a comment",
         "  leading and trailing  "};
     for (uint32_t code = 1; code <= 7; code++) {
-        ev[n] = make(FP_EVENT_STATUS, INT64_MAX - 7 + code, code == 7 ? FP_HAND_LEFT : -1);
+        ev[n] = make(FP_EVENT_STATUS, FP_EVENT_TIME_MAX_FOR_TEST - 7 + code, code == 7 ? FP_HAND_LEFT : -1);
         ev[n].status.code = code == 7 ? 99 : code;
         snprintf(ev[n].status.text, sizeof ev[n].status.text, "%s", texts[code % 6]);
         n++;
@@ -365,7 +368,81 @@ static void reader_errors_name_line_and_column(void **state)
     expect_read_error("e12", "100 button - 1 1 1 flags=70000\n", 2, 26, "flags 70000 beyond 16 bits");
     expect_read_error("e13", "100 angles left 0x400000 0\n", 2, 17, "valid mask 0x400000 has bits beyond");
     expect_read_error("e14", "100 button - 1 1 1 source=1 source=2\n", 2, 29, "unexpected \"source=2\"");
-    expect_read_error("e15", "99999999999999999999 button - 1 1 1\n", 2, 1, "bad time");
+    expect_read_error("e15", "99999999999999999999 button - 1 1 1\n", 2, 1, "time 99999999999999999999 out of range");
+}
+
+/* Times near the int64 limits: before, INT64_MIN and INT64_MAX read back, and the replay's
+ * "time minus the first time" overflowed (signed overflow, then times running backwards).
+ * Now the reader refuses |TIME| > FP_EVENTLOG_TIME_MAX with FILE:LINE:COLUMN, the writer
+ * refuses to write one, and the extremes that are accepted differ without overflow. */
+static void times_near_int64_limits_refused(void **state)
+{
+    (void)state;
+    expect_read_error("t1", "0 button - 1 1 1\n9223372036854775807 button - 1 1 1\n", 3, 1,
+                      "time 9223372036854775807 out of range");
+    expect_read_error("t2", "-9223372036854775808 button - 1 1 1\n", 2, 1,
+                      "time -9223372036854775808 out of range");
+    expect_read_error("t3", "  1000000000000000001 button - 1 1 1\n", 2, 3,
+                      "time 1000000000000000001 out of range");
+    expect_read_error("t4", "-1000000000000000001\tstatus - connected \"\"\n", 2, 1,
+                      "time -1000000000000000001 out of range");
+    expect_read_error("t5", "-99999999999999999999 button - 1 1 1\n", 2, 1,
+                      "time -99999999999999999999 out of range");
+
+    /* the extremes themselves read, and their difference is exact */
+    char path[512], err[512];
+    tmp_path(path, sizeof path, "t_ok.fplog");
+    write_text(path, "# facepuppet-eventlog 1\n-1000000000000000000 button - 1 1 1\n"
+                     "1000000000000000000 button - 1 0 0\n");
+    fp_eventlog_reader *r = fp_eventlog_reader_open(path, err, sizeof err);
+    assert_non_null(r);
+    fp_event a, b;
+    assert_int_equal(fp_eventlog_reader_next(r, &a), 1);
+    assert_int_equal(fp_eventlog_reader_next(r, &b), 1);
+    assert_int_equal(fp_eventlog_reader_next(r, &b), 0);
+    fp_eventlog_reader_close(&r);
+    assert_true(a.header.time_ns == -FP_EVENTLOG_TIME_MAX);
+    assert_true(b.header.time_ns - a.header.time_ns == 2 * FP_EVENTLOG_TIME_MAX);
+
+    /* the writer refuses what the reader would refuse, and writes nothing for it */
+    tmp_path(path, sizeof path, "t_w.fplog");
+    fp_eventlog_writer *w = fp_eventlog_writer_open(path, err, sizeof err);
+    assert_non_null(w);
+    fp_event ev = make(FP_EVENT_BUTTON, INT64_MAX, -1);
+    assert_int_equal(fp_eventlog_writer_write(w, &ev), -EINVAL);
+    assert_non_null(strstr(fp_eventlog_writer_error(w), "beyond"));
+    ev.header.time_ns = INT64_MIN;
+    assert_int_equal(fp_eventlog_writer_write(w, &ev), -EINVAL);
+    ev.header.time_ns = FP_EVENTLOG_TIME_MAX;
+    assert_int_equal(fp_eventlog_writer_write(w, &ev), 0);
+    assert_int_equal(fp_eventlog_writer_close(&w, err, sizeof err), 0);
+    r = fp_eventlog_reader_open(path, err, sizeof err);
+    assert_non_null(r);
+    assert_int_equal(fp_eventlog_reader_next(r, &a), 1);
+    assert_true(a.header.time_ns == FP_EVENTLOG_TIME_MAX);
+    assert_int_equal(fp_eventlog_reader_next(r, &a), 0);
+    fp_eventlog_reader_close(&r);
+}
+
+/* FP_EVENTLOG_EXCL: an existing file is refused with -EEXIST and left as it was. */
+static void writer_exclusive_create(void **state)
+{
+    (void)state;
+    char path[512], err[512];
+    tmp_path(path, sizeof path, "excl.fplog");
+    write_text(path, "precious\n");
+    fp_eventlog_writer *w = NULL;
+    assert_int_equal(fp_eventlog_writer_create(path, FP_EVENTLOG_EXCL, &w, err, sizeof err),
+                     -EEXIST);
+    assert_null(w);
+    assert_non_null(strstr(err, path));
+    FILE *f = fopen(path, "r");
+    char line[64] = "";
+    assert_non_null(fgets(line, sizeof line, f));
+    fclose(f);
+    assert_string_equal(line, "precious\n");
+    assert_int_equal(fp_eventlog_writer_create(path, 0, &w, err, sizeof err), 0);
+    assert_int_equal(fp_eventlog_writer_close(&w, err, sizeof err), 0);
 }
 
 static void reader_rejects_other_files(void **state)
@@ -411,6 +488,8 @@ int main(void)
         cmocka_unit_test(crash_safety),
         cmocka_unit_test(comments_blank_lines_crlf_tabs),
         cmocka_unit_test(reader_errors_name_line_and_column),
+        cmocka_unit_test(times_near_int64_limits_refused),
+        cmocka_unit_test(writer_exclusive_create),
         cmocka_unit_test(reader_rejects_other_files),
         cmocka_unit_test(type_and_status_names),
     };

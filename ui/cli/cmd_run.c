@@ -335,7 +335,8 @@ static int run_main(int argc, char **argv)
         fp_app_print_take(stderr, "facepuppet run", &tr);
     }
     /* Close the record=FILE recordings: a failed write must fail the run. */
-    bool record_failed = fp_session_stop(s, err, sizeof err) != 0;
+    char record_err[1024] = "";
+    bool record_failed = fp_session_stop(s, record_err, sizeof record_err) != 0;
     /* The summary: displacement of the final shape from the loaded one. */
     const float *a = fp_session_loaded(s), *b = fp_session_positions(s);
     size_t n = fp_session_vertex_count(s), moved = 0;
@@ -380,7 +381,7 @@ static int run_main(int argc, char **argv)
         if (status == FP_EXIT_OK) status = fp_app_exit_code(take_rc, FP_APP_OUTPUT);
     }
     if (record_failed && status == FP_EXIT_OK) {
-        fprintf(stderr, "facepuppet run: %s\n", err);
+        fprintf(stderr, "facepuppet run: %s\n", record_err);
         status = FP_EXIT_CANTCREAT;
     }
     if (fp_session_mapping_fault(s, err, sizeof err)) {

@@ -1,0 +1,66 @@
+/* fuzz_spec.c: libFuzzer target for SPEC strings (core/plugin/spec.c: NAME[:ARG][,key=value],
+ * what --input, --mapping and the viewer's scripts pass). The input up to its first NUL is
+ * parsed. A parse must give a valid name, at most FP_SPEC_MAX_PARAMS unique valid keys, and
+ * the same text when put back together; fp_spec_take gives each value once. A refusal: -EINVAL
+ * and a message. Seeds: tests/fuzz/corpus/fuzz_spec. */
+#define _POSIX_C_SOURCE 200809L
+#include "fp_plugin_host.h"
+
+#include <errno.h>
+#include <stdio.h>
+
+#include <ctype.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+static int valid_key(const char *k)
+{
+    if (!*k) return 0;
+    for (; *k; k++)
+        if (!isalnum((unsigned char)*k) && *k != '_' && *k != '-') return 0;
+    return 1;
+}
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    char *text = malloc(size + 1), *back = malloc(size + 2);
+    if (!text || !back) abort();
+    memcpy(text, data, size);
+    text[size] = '\0';
+    fp_spec s;
+    char err[256];
+    err[0] = '\0';
+    int rc = fp_spec_parse(text, &s, err, sizeof err);
+    if (rc) {
+        if (rc != -EINVAL || !err[0] || s.buffer) abort();
+    } else {
+        if (!s.name || !valid_key(s.name) || s.nparams > FP_SPEC_MAX_PARAMS) abort();
+        size_t n = 0;
+        n += (size_t)snprintf(back + n, size + 2 - n, "%s", s.name);
+        if (s.arg) n += (size_t)snprintf(back + n, size + 2 - n, ":%s", s.arg);
+        for (size_t i = 0; i < s.nparams; i++) {
+            if (!valid_key(s.params[i].key) || !s.params[i].value) abort();
+            for (size_t j = 0; j < i; j++)
+                if (!strcmp(s.params[i].key, s.params[j].key)) abort();
+            if (n > size) abort();
+            n += (size_t)snprintf(back + n, size + 2 - n, ",%s=%s", s.params[i].key,
+                                  s.params[i].value);
+        }
+        if (n != strlen(text) || strcmp(back, text) != 0) abort();
+        size_t np = s.nparams;
+        for (size_t i = 0; i < np; i++) {
+            char *key = strdup(s.params[0].key);
+            if (!key) abort();
+            if (!fp_spec_take(&s, key) || fp_spec_take(&s, key) || s.nparams != np - i - 1)
+                abort();
+            free(key);
+        }
+        fp_spec_clear(&s);
+    }
+    free(text);
+    free(back);
+    return 0;
+}
