@@ -13,6 +13,7 @@
 #include "replay_load.h"
 
 #include <facepuppet/plugin.h>
+#include "fp_pacer.h"
 
 #include <errno.h>
 #include <locale.h>
@@ -26,7 +27,6 @@
 #include <string.h>
 #include <time.h>
 
-#define RETRY_WAIT_NS 1000000 /* fast mode: wait 1 ms before pushing again into a full queue */
 
 typedef struct replay {
     fp_input input;
@@ -38,9 +38,7 @@ typedef struct replay {
 
     pthread_t thread;
     bool running;
-    pthread_mutex_t mutex;
-    pthread_cond_t cond;     /* CLOCK_MONOTONIC; signalled by stop() */
-    atomic_bool stop;
+    fp_pacer pacer;          /* waits stop() interrupts, lossless pushes (fp_pacer.h) */
 } replay;
 
 static const char usage_text[] =
@@ -66,50 +64,6 @@ static const char usage_text[] =
 /* ------------------------------------------------------------------------------------- */
 /* Thread                                                                                 */
 
-static int64_t mono_ns(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
-}
-
-/* Waits until CLOCK_MONOTONIC reaches `deadline` or stop is asked. Returns false on stop. */
-static bool wait_until(replay *r, int64_t deadline)
-{
-    struct timespec ts = {(time_t)(deadline / 1000000000), (long)(deadline % 1000000000)};
-    pthread_mutex_lock(&r->mutex);
-    while (!atomic_load(&r->stop) && mono_ns() < deadline)
-        if (pthread_cond_timedwait(&r->cond, &r->mutex, &ts) == ETIMEDOUT) break;
-    bool go_on = !atomic_load(&r->stop);
-    pthread_mutex_unlock(&r->mutex);
-    return go_on;
-}
-
-/* Pushes one event. A full queue is retried every RETRY_WAIT_NS until the event goes in or
- * stop is asked, in every mode: a recording holds every sample, and a headless run that
- * steps on the recording's clock must see each one whatever the pacing or the machine's
- * load. Returns false on stop. */
-static bool push(replay *r, const fp_event *ev)
-{
-    while (!r->host->push_event(r->host, &ev->header))
-        if (!wait_until(r, mono_ns() + RETRY_WAIT_NS)) return false;
-    return true;
-}
-
-static bool push_status(replay *r, int64_t time_ns, uint32_t code, const char *fmt, ...)
-{
-    fp_event ev;
-    memset(&ev, 0, sizeof ev);
-    ev.status.header = (fp_event_header){.size = sizeof ev.status, .type = FP_EVENT_STATUS,
-                                         .time_ns = time_ns, .hand = -1};
-    ev.status.code = code;
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(ev.status.text, sizeof ev.status.text, fmt, ap);
-    va_end(ap);
-    return push(r, &ev);
-}
-
 /* Emulated offset, in host ns after the start, of recording time t in pass `pass`. */
 static int64_t emulated_offset(const replay *r, uint64_t pass, int64_t t)
 {
@@ -128,10 +82,10 @@ static void *replay_thread(void *arg)
 {
     replay *r = arg;
     const int64_t host_t0 = r->host->now_ns(r->host);
-    const int64_t mono_t0 = mono_ns();
+    const int64_t mono_t0 = fp_pacer_now_ns();
     int64_t last_time = host_t0;
     bool warned = false;
-    if (!push_status(r, host_t0, FP_STATUS_CONNECTED, "replaying %s: %zu frames, %.3f s",
+    if (!fp_pacer_push_status(&r->pacer, host_t0, FP_STATUS_CONNECTED, "replaying %s: %zu frames, %.3f s",
                      base_name(r->path), r->rec.frames, (double)r->rec.duration_ns * 1e-9))
         return NULL;
     for (uint64_t pass = 0;; pass++) {
@@ -139,8 +93,8 @@ static void *replay_thread(void *arg)
             const replay_item *it = &r->rec.items[i];
             int64_t off = emulated_offset(r, pass, it->t_ns);
             if (r->fast) {
-                if (atomic_load(&r->stop)) return NULL;
-            } else if (!wait_until(r, mono_t0 + off)) {
+                if (fp_pacer_stopped(&r->pacer)) return NULL;
+            } else if (!fp_pacer_wait_until(&r->pacer, mono_t0 + off)) {
                 return NULL;
             }
             fp_event ev = it->event;
@@ -148,11 +102,11 @@ static void *replay_thread(void *arg)
              * of speed and of when it is pushed): a run steps on it deterministically. */
             ev.header.time_ns = last_time =
                 host_t0 + (int64_t)pass * r->rec.loop_period_ns + it->t_ns;
-            if (!push(r, &ev)) return NULL;
+            if (!fp_pacer_push(&r->pacer, &ev)) return NULL;
         }
         if (r->rec.truncated_line && !warned) {
             warned = true;
-            if (!push_status(r, last_time, FP_STATUS_ERROR,
+            if (!fp_pacer_push_status(&r->pacer, last_time, FP_STATUS_ERROR,
                              "%s:%ld: last line cut short (no newline), not replayed",
                              base_name(r->path), r->rec.truncated_line))
                 return NULL;
@@ -166,7 +120,7 @@ static void *replay_thread(void *arg)
             __builtin_add_overflow(next, r->rec.duration_ns, &next))
             break;
     }
-    push_status(r, last_time, FP_STATUS_END_OF_STREAM, "end of %s", base_name(r->path));
+    fp_pacer_push_status(&r->pacer, last_time, FP_STATUS_END_OF_STREAM, "end of %s", base_name(r->path));
     return NULL;
 }
 
@@ -180,7 +134,7 @@ static int replay_start(fp_input *self, char *err, size_t errlen)
         snprintf(err, errlen, "replay: already started");
         return -EBUSY;
     }
-    atomic_store(&r->stop, false);
+    fp_pacer_rearm(&r->pacer);
     int rc = pthread_create(&r->thread, NULL, replay_thread, r);
     if (rc) {
         snprintf(err, errlen, "replay: cannot start its thread: %s", strerror(rc));
@@ -194,10 +148,7 @@ static void replay_stop(fp_input *self)
 {
     replay *r = self->plugin_data;
     if (!r->running) return;
-    pthread_mutex_lock(&r->mutex);
-    atomic_store(&r->stop, true);
-    pthread_cond_broadcast(&r->cond);
-    pthread_mutex_unlock(&r->mutex);
+    fp_pacer_stop(&r->pacer);
     pthread_join(r->thread, NULL);
     r->running = false;
 }
@@ -207,8 +158,7 @@ static void replay_destroy(fp_input *self)
     if (!self) return;
     replay *r = self->plugin_data;
     replay_stop(self);
-    pthread_cond_destroy(&r->cond);
-    pthread_mutex_destroy(&r->mutex);
+    fp_pacer_destroy(&r->pacer);
     replay_recording_free(&r->rec);
     free(r->path);
     free(r);
@@ -357,13 +307,13 @@ static int replay_create(const fp_host *host, const char *arg, const fp_param *p
         free(r);
         return rc;
     }
-    pthread_condattr_t ca;
-    pthread_condattr_init(&ca);
-    pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
-    pthread_cond_init(&r->cond, &ca);
-    pthread_condattr_destroy(&ca);
-    pthread_mutex_init(&r->mutex, NULL);
-    atomic_init(&r->stop, false);
+    if ((rc = fp_pacer_init(&r->pacer, host))) {
+        replay_recording_free(&r->rec);
+        free(r->path);
+        free(r);
+        snprintf(err, errlen, "replay: cannot set up its thread's clock: %s", strerror(-rc));
+        return rc;
+    }
     r->host = host;
     r->speed = speed;
     r->loop = loop;

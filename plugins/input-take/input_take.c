@@ -26,6 +26,7 @@
 #include "fp_take.h"
 
 #include <facepuppet/plugin.h>
+#include "fp_pacer.h"
 
 #include <errno.h>
 #include <locale.h>
@@ -39,7 +40,6 @@
 #include <string.h>
 #include <time.h>
 
-#define RETRY_WAIT_NS 1000000
 
 typedef struct take_item {
     int64_t t_ns;        /* offset from the take's first event (or frame) */
@@ -62,9 +62,7 @@ typedef struct take_input {
 
     pthread_t thread;
     bool running;
-    pthread_mutex_t mutex;
-    pthread_cond_t cond;
-    atomic_bool stop;
+    fp_pacer pacer;          /* waits stop() interrupts, lossless pushes (fp_pacer.h) */
 } take_input;
 
 static const char usage_text[] =
@@ -78,45 +76,6 @@ static const char usage_text[] =
     "  the take), whatever the speed. A take cut short plays its intact frames (a warning\n"
     "  status first). Ends with an end-of-stream status.\n";
 
-static int64_t mono_ns(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
-}
-
-static bool wait_until(take_input *r, int64_t deadline)
-{
-    struct timespec ts = {(time_t)(deadline / 1000000000), (long)(deadline % 1000000000)};
-    pthread_mutex_lock(&r->mutex);
-    while (!atomic_load(&r->stop) && mono_ns() < deadline)
-        if (pthread_cond_timedwait(&r->cond, &r->mutex, &ts) == ETIMEDOUT) break;
-    bool go_on = !atomic_load(&r->stop);
-    pthread_mutex_unlock(&r->mutex);
-    return go_on;
-}
-
-static bool push(take_input *r, const fp_event *ev)
-{
-    while (!r->host->push_event(r->host, &ev->header))
-        if (!wait_until(r, mono_ns() + RETRY_WAIT_NS)) return false;
-    return true;
-}
-
-static bool push_status(take_input *r, int64_t time_ns, uint32_t code, const char *fmt, ...)
-{
-    fp_event ev;
-    memset(&ev, 0, sizeof ev);
-    ev.status.header = (fp_event_header){.size = sizeof ev.status, .type = FP_EVENT_STATUS,
-                                         .time_ns = time_ns, .hand = -1};
-    ev.status.code = code;
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(ev.status.text, sizeof ev.status.text, fmt, ap);
-    va_end(ap);
-    return push(r, &ev);
-}
-
 static const char *base_name(const char *path)
 {
     const char *slash = strrchr(path, '/');
@@ -127,23 +86,23 @@ static void *take_thread(void *arg)
 {
     take_input *r = arg;
     const int64_t host_t0 = r->host->now_ns(r->host);
-    const int64_t mono_t0 = mono_ns();
+    const int64_t mono_t0 = fp_pacer_now_ns();
     int64_t last = host_t0;
-    if (r->warning[0] && !push_status(r, host_t0, FP_STATUS_WARNING, "%.*s", 100, r->warning))
+    if (r->warning[0] && !fp_pacer_push_status(&r->pacer, host_t0, FP_STATUS_WARNING, "%.*s", 100, r->warning))
         return NULL;
     for (size_t i = 0; i < r->count; i++) {
         const take_item *it = &r->items[i];
         if (r->fast) {
-            if (atomic_load(&r->stop)) return NULL;
+            if (fp_pacer_stopped(&r->pacer)) return NULL;
         } else {
             int64_t off = r->speed == 1.0 ? it->t_ns : (int64_t)llround((double)it->t_ns / r->speed);
-            if (!wait_until(r, mono_t0 + off)) return NULL;
+            if (!fp_pacer_wait_until(&r->pacer, mono_t0 + off)) return NULL;
         }
         fp_event ev = it->event;
         ev.header.time_ns = last = host_t0 + it->t_ns;
-        if (!push(r, &ev)) return NULL;
+        if (!fp_pacer_push(&r->pacer, &ev)) return NULL;
     }
-    push_status(r, last, FP_STATUS_END_OF_STREAM, "end of %s", base_name(r->path));
+    fp_pacer_push_status(&r->pacer, last, FP_STATUS_END_OF_STREAM, "end of %s", base_name(r->path));
     return NULL;
 }
 
@@ -154,7 +113,7 @@ static int take_start(fp_input *self, char *err, size_t errlen)
         snprintf(err, errlen, "take: already started");
         return -EBUSY;
     }
-    atomic_store(&r->stop, false);
+    fp_pacer_rearm(&r->pacer);
     int rc = pthread_create(&r->thread, NULL, take_thread, r);
     if (rc) {
         snprintf(err, errlen, "take: cannot start its thread: %s", strerror(rc));
@@ -168,10 +127,7 @@ static void take_stop(fp_input *self)
 {
     take_input *r = self->plugin_data;
     if (!r->running) return;
-    pthread_mutex_lock(&r->mutex);
-    atomic_store(&r->stop, true);
-    pthread_cond_broadcast(&r->cond);
-    pthread_mutex_unlock(&r->mutex);
+    fp_pacer_stop(&r->pacer);
     pthread_join(r->thread, NULL);
     r->running = false;
 }
@@ -181,8 +137,7 @@ static void take_destroy(fp_input *self)
     if (!self) return;
     take_input *r = self->plugin_data;
     take_stop(self);
-    pthread_cond_destroy(&r->cond);
-    pthread_mutex_destroy(&r->mutex);
+    fp_pacer_destroy(&r->pacer);
     free(r->items);
     free(r->path);
     free(r);
@@ -359,13 +314,13 @@ static int take_create(const fp_host *host, const char *arg, const fp_param *par
         free(r);
         return rc;
     }
-    pthread_condattr_t ca;
-    pthread_condattr_init(&ca);
-    pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
-    pthread_cond_init(&r->cond, &ca);
-    pthread_condattr_destroy(&ca);
-    pthread_mutex_init(&r->mutex, NULL);
-    atomic_init(&r->stop, false);
+    if ((rc = fp_pacer_init(&r->pacer, host))) {
+        free(r->items);
+        free(r->path);
+        free(r);
+        snprintf(err, errlen, "take: cannot set up its thread's clock: %s", strerror(-rc));
+        return rc;
+    }
     r->host = host;
     r->speed = speed;
     r->fast = fast;
