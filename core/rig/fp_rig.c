@@ -63,6 +63,9 @@ struct fp_rig {
     /* bound */
     float *w;                   /* n jaw weights */
     float *m;                   /* n mobility */
+    float *g;                   /* n |grad m| (per mesh unit), 0 where m is flat */
+    uint32_t *slope_v;          /* the vertices with g > 0, ascending */
+    size_t slope_count;
     double axis[3];             /* unit hinge axis, right -> left */
 };
 
@@ -715,9 +718,11 @@ int fp_rig_bind(fp_rig *r, size_t n, const float *pos, char *err, size_t errlen)
             return bad(&c, hn[s], "no vertex within 60 mm (nearest %.1f mm): not near the head",
                        sqrt(best) * r->mm_per_unit);
     }
-    float *w = malloc(n * sizeof *w), *m = malloc(n * sizeof *m);
-    if (!w || !m) {
-        free(w), free(m);
+    float *w = malloc(n * sizeof *w), *m = malloc(n * sizeof *m), *g = calloc(n, sizeof *g);
+    uint32_t *slope_v = malloc(n * sizeof *slope_v);
+    size_t slope_count = 0;
+    if (!w || !m || !g || !slope_v) {
+        free(w), free(m), free(g), free(slope_v);
         return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", r->source);
     }
     /* sagittal-plane points of the jaw outline and the mouth line in face coordinates */
@@ -751,7 +756,7 @@ int fp_rig_bind(fp_rig *r, size_t n, const float *pos, char *err, size_t errlen)
     size_t ncell = (size_t)(dims[0] * dims[1] * dims[2]);
     size_t *start = calloc(ncell + 1, sizeof *start), *items = malloc(n * sizeof *items);
     if (!start || !items) {
-        free(w), free(m), free(start), free(items);
+        free(w), free(m), free(g), free(slope_v), free(start), free(items);
         return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", r->source);
     }
 #define CELL(v, i) ((long)fmin((double)(dims[i] - 1), floor((pos[3 * (v) + (i)] - lo[i]) / csz[i])))
@@ -760,7 +765,7 @@ int fp_rig_bind(fp_rig *r, size_t n, const float *pos, char *err, size_t errlen)
     for (size_t i = 0; i < ncell; i++) start[i + 1] += start[i];
     size_t *fill = calloc(ncell, sizeof *fill);
     if (!fill) {
-        free(w), free(m), free(start), free(items);
+        free(w), free(m), free(g), free(slope_v), free(start), free(items);
         return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", r->source);
     }
     for (size_t v = 0; v < n; v++)
@@ -788,11 +793,15 @@ int fp_rig_bind(fp_rig *r, size_t n, const float *pos, char *err, size_t errlen)
                     }
                 }
         m[v] = (float)smoothstep(0, r->ramp, sqrt(best));
+        /* |grad m| = smoothstep'(d) |grad d| = 6 t (1 - t) / ramp (t = d / ramp; |grad d| = 1) */
+        double t = sqrt(best) / r->ramp;
+        g[v] = t > 0 && t < 1 ? (float)(6 * t * (1 - t) / r->ramp) : 0.0f;
+        if (g[v] > 0) slope_v[slope_count++] = (uint32_t)v;
     }
 #undef CELL
     free(start), free(items), free(fill);
-    free(r->w), free(r->m);
-    r->w = w, r->m = m;
+    free(r->w), free(r->m), free(r->g), free(r->slope_v);
+    r->w = w, r->m = m, r->g = g, r->slope_v = slope_v, r->slope_count = slope_count;
     return 0;
 }
 
@@ -811,6 +820,8 @@ void fp_rig_free(fp_rig **rig)
     free((*rig)->kind);
     free((*rig)->w);
     free((*rig)->m);
+    free((*rig)->g);
+    free((*rig)->slope_v);
     free(*rig);
     *rig = NULL;
 }
@@ -1081,6 +1092,21 @@ int fp_rig_apply_mobility(const fp_rig *r, const float *posed, const float *warp
 double fp_rig_max_finger_displacement(const fp_rig *r)
 {
     return r ? r->ramp / 3 : 0;
+}
+
+const float *fp_rig_mobility_slope(const fp_rig *r) { return r ? r->g : NULL; }
+
+double fp_rig_finger_limit(const fp_rig *r, const float *posed, const float start[3], double radius)
+{
+    if (!r || !posed || !start || !r->g || !(radius > 0)) return r && r->g ? r->ramp / 3 : 0;
+    double gmax = 0, r2 = radius * radius;
+    for (size_t k = 0; k < r->slope_count; k++) {
+        uint32_t v = r->slope_v[k];
+        if (r->g[v] <= gmax) continue;
+        double d0 = posed[3 * v] - start[0], d1 = posed[3 * v + 1] - start[1], d2 = posed[3 * v + 2] - start[2];
+        if (d0 * d0 + d1 * d1 + d2 * d2 < r2) gmax = r->g[v];
+    }
+    return gmax > 0 ? FP_RIG_FINGER_MARGIN / gmax : INFINITY;
 }
 
 size_t fp_rig_describe(const fp_rig *r, size_t n, const float *pos, char *buf, size_t len)

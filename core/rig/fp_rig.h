@@ -30,9 +30,13 @@
  *    and the blend is one multiply-add per vertex;
  *  - injectivity: centres of zero displacement next to a finger force steep coefficients
  *    (the fold-over guard trips); the blend's Jacobian is I + m J_T + (T - x) grad(m)^T,
- *    whose extra term is bounded by |T - x| / ramp * 1.5 (max slope of smoothstep), so a
- *    session that keeps finger displacements below ramp / 3 (and the engine's own 0.45 R
- *    guard) keeps the blended map injective. fp_rig_max_finger_displacement() gives it.
+ *    whose extra term is bounded by |T - x| |grad m|. T - x vanishes outside the fingers'
+ *    supports (radius R about each start point), so the bound is local: a finger whose
+ *    support reaches vertices of slope at most G = max |grad m| keeps the extra term below
+ *    FP_RIG_FINGER_MARGIN (1/2) when its control vector is at most 1/2 / G
+ *    (fp_rig_finger_limit; no limit where m is flat, i.e. soft tissue farther than the ramp
+ *    from bone, where only the engine's own 0.45 R guard applies). The worst case anywhere
+ *    is ramp / 3 (smoothstep's steepest slope 1.5 / ramp): fp_rig_max_finger_displacement().
  * The rig's pose itself (the jaw about its hinge, rotated by a smooth fraction of the angle)
  * is applied before the fingers, so a finger's start point is taken on the posed base.
  *
@@ -216,9 +220,29 @@ int fp_rig_apply_mobility(const fp_rig *rig, const float *posed, const float *wa
                           float *out);
 
 /** The largest finger displacement (mesh units) for which the blended map stays injective
- *  by the bound above: mobility.ramp / 3. The session clamps control vectors to the smaller
- *  of this and the engine's fold-over bound. */
+ *  anywhere on the mesh by the bound above: mobility.ramp / 3 (the worst case of
+ *  fp_rig_finger_limit; the session clamps each finger by fp_rig_finger_limit instead). */
 double fp_rig_max_finger_displacement(const fp_rig *rig);
+
+/** The margin of the local finger clamp: |control vector| * max |grad m| <= this. */
+#define FP_RIG_FINGER_MARGIN 0.5
+
+/** The slope of the mobility, |grad m| per mesh unit, per vertex after fp_rig_bind (NULL
+ *  before): 6 t (1 - t) / ramp with t = d / ramp (d: distance to the nearest skull or jaw
+ *  vertex) for soft vertices within the ramp, 0 elsewhere (rigid, or m == 1). n floats,
+ *  owned by the rig. */
+const float *fp_rig_mobility_slope(const fp_rig *rig);
+
+/** The local finger clamp: the largest control vector (mesh units) for a finger starting at
+ *  `start` with support radius `radius` (mesh units) that keeps the mobility blend injective
+ *  by the bound at the top of this file: FP_RIG_FINGER_MARGIN / G, G the largest
+ *  fp_rig_mobility_slope over the vertices of `posed` (n x 3, the posed base the finger
+ *  starts on) within `radius` of `start`; INFINITY when every such vertex has slope 0 (the
+ *  support reaches no bone's ramp: only the engine's 0.45 R applies). Returns ramp / 3
+ *  (the global bound) for NULL posed/start or radius <= 0, 0 for an unbound rig.
+ *  O(vertices with slope > 0). [any-thread], no allocation. */
+double fp_rig_finger_limit(const fp_rig *rig, const float *posed, const float start[3],
+                           double radius);
 
 /** The folder of the rig files: $FACEPUPPET_RIGS when set; else <exe_dir>/../share/
  *  facepuppet/rigs when it exists (installed); else the source tree's rigs/ (compiled in as

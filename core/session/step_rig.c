@@ -137,9 +137,9 @@ const fp_control_set *fp_rig_step_run(fp_rig_step *st, const fp_control_set *cs)
     o->end = end;
     o->count = cs->count < FP_RIG_STEP_MAX_CONTROL ? cs->count : FP_RIG_STEP_MAX_CONTROL;
     o->capacity = FP_RIG_STEP_MAX_CONTROL;
-    double limit = 0.45 * cs->radius;
-    if (st->max_displacement > 0 && st->max_displacement < limit) limit = st->max_displacement;
     for (size_t i = 0; i < o->count; i++) {
+        /* the engine's 0.45 R, and the rig's local bound where the support reaches a ramp */
+        double limit = fmin(0.45 * cs->radius, fp_rig_finger_limit(st->rig, st->posed, cs->start[i], cs->radius));
         double d[3], len = 0;
         for (int k = 0; k < 3; k++) {
             d[k] = (double)cs->end[i][k] - cs->start[i][k];

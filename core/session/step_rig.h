@@ -49,7 +49,7 @@ typedef struct fp_rig_step {
     float *posed;                                 /* n x 3: the base posed by the channels */
     float *shown;                                 /* n x 3: posed + fingers (mobility blend) */
     float *commit;                                /* n x 3: the shape a commit folds in */
-    double max_displacement;                      /* finger clamp, mesh units (0: none) */
+    double max_displacement;                      /* worst-case finger clamp (ramp / 3), for reports */
     fp_control_set cs;                            /* the clamped copy the engine takes */
     float start[FP_RIG_STEP_MAX_CONTROL][3], end[FP_RIG_STEP_MAX_CONTROL][3];
     fp_rig_view view;                             /* for mappings */

@@ -4,7 +4,8 @@
  * four brow landmarks (0, 1.5 and 3 cm up, nearest base vertex), end points `depth` mm into
  * the face along -forward; it drives jaw.open = `jaw` and, with bogus=1, a channel the rig
  * lacks. Engages on its first frame; commits on frame `commit` (-1: never).
- * Keys: jaw=F, depth=F (mm), commit=N, bogus=0|1. */
+ * With at=lips, one finger on each lip middle and mouth corner instead.
+ * Keys: jaw=F, depth=F (mm), commit=N, bogus=0|1, at=forehead|lips. */
 #include <facepuppet/plugin.h>
 
 #include <errno.h>
@@ -18,6 +19,7 @@ typedef struct press {
     float jaw, depth_mm;
     long commit;
     int bogus;
+    int lips; /* at=lips: one finger on each lip middle and mouth corner */
     const fp_rig_view *rig;
     long frames;
 } press;
@@ -28,13 +30,16 @@ static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *o
     const fp_rig_view *rig = in->rig;
     if (!rig || rig != p->rig || in->mm_per_unit <= 0) return -ENODEV;
     static const char *const brows[] = {"brow_left", "brow_right", "brow_inner_left", "brow_inner_right"};
+    static const char *const lips[] = {"upper_lip", "lower_lip", "mouth_corner_left", "mouth_corner_right"};
+    const char *const *targets = p->lips ? lips : brows;
+    int rows = p->lips ? 1 : 3;
     out->count = 0;
     for (size_t b = 0; b < 4; b++) {
         const fp_rig_landmark *l = NULL;
         for (size_t i = 0; i < rig->landmark_count; i++)
-            if (!strcmp(rig->landmarks[i].name, brows[b])) l = &rig->landmarks[i];
+            if (!strcmp(rig->landmarks[i].name, targets[b])) l = &rig->landmarks[i];
         if (!l) return -ENOENT;
-        for (int k = 0; k < 3; k++) {
+        for (int k = 0; k < rows; k++) {
             float q[3], best = INFINITY;
             size_t bi = 0;
             for (int c = 0; c < 3; c++) q[c] = l->position[c] + in->face_up[c] * 15.0f * k / (float)in->mm_per_unit;
@@ -86,6 +91,8 @@ static int create(const fp_host *host, const fp_param *params, size_t nparams, f
         else if (!strcmp(params[i].key, "depth")) p->depth_mm = strtof(params[i].value, NULL);
         else if (!strcmp(params[i].key, "commit")) p->commit = strtol(params[i].value, NULL, 10);
         else if (!strcmp(params[i].key, "bogus")) p->bogus = atoi(params[i].value);
+        else if (!strcmp(params[i].key, "at") && (!strcmp(params[i].value, "lips") || !strcmp(params[i].value, "forehead")))
+            p->lips = !strcmp(params[i].value, "lips");
         else {
             snprintf(err, errlen, "press: unknown key %s", params[i].key);
             free(p);
@@ -105,7 +112,7 @@ static const fp_mapping_factory factory = {
     .size = sizeof(fp_mapping_factory),
     .name = "press",
     .description = "test fixture: fingers pressing into the forehead, jaw.open driven",
-    .usage = "press[,jaw=F][,depth=MM][,commit=N][,bogus=0|1]",
+    .usage = "press[,jaw=F][,depth=MM][,commit=N][,bogus=0|1][,at=forehead|lips]",
     .create = create,
 };
 

@@ -246,6 +246,94 @@ static void test_ict_fingers(void **state)
     fp_mesh_free(&m);
 }
 
+/* The local finger clamp: |grad m| per vertex against a brute-force distance to the nearest
+ * rigid vertex; a finger on the cheek (its support reaches no bone's ramp) is free up to the
+ * engine's 0.45 R and moves the skin that far; a finger on the lower lip, near the teeth, is
+ * limited to 1/2 over the steepest slope its support reaches. */
+static double ref_limit(const fp_rig *r, const float *pos, size_t n, const double *slope, const float c[3], double R)
+{
+    (void)r;
+    double g = 0;
+    for (size_t v = 0; v < n; v++) {
+        double d = 0;
+        for (int i = 0; i < 3; i++) d += (pos[3 * v + i] - c[i]) * (pos[3 * v + i] - c[i]);
+        if (d < R * R) g = fmax(g, slope[v]);
+    }
+    return g > 0 ? FP_RIG_FINGER_MARGIN / g : INFINITY;
+}
+
+static void test_ict_finger_limit(void **state)
+{
+    (void)state;
+    fp_mesh *m = load_face("ict-facekit/generic_neutral_mesh.obj");
+    fp_rig *r = find_rig(m);
+    size_t n = m->vertex_count;
+    const float *pos = m->positions, *g = fp_rig_mobility_slope(r);
+    const uint8_t *kind = fp_rig_vertex_kinds(r);
+    double ramp = 3 * fp_rig_max_finger_displacement(r);
+    /* reference slopes: 6 t (1 - t) / ramp of the brute-force distance to the nearest rigid vertex */
+    size_t nrigid = 0;
+    uint32_t *rigid = malloc(n * sizeof *rigid);
+    double *slope = calloc(n, sizeof *slope);
+    for (size_t v = 0; v < n; v++)
+        if (kind[v] != FP_RIG_SOFT) rigid[nrigid++] = (uint32_t)v;
+    for (size_t v = 0; v < n; v++) {
+        if (kind[v] != FP_RIG_SOFT) continue;
+        double best = INFINITY;
+        for (size_t k = 0; k < nrigid; k++) {
+            double d = 0;
+            for (int i = 0; i < 3; i++) d += pow(pos[3 * rigid[k] + i] - pos[3 * v + i], 2);
+            best = fmin(best, d);
+        }
+        double t = sqrt(best) / ramp;
+        slope[v] = t > 0 && t < 1 ? 6 * t * (1 - t) / ramp : 0;
+        assert_true(fabs(g[v] - slope[v]) < 1e-4 / ramp);
+    }
+    double R = 1.5; /* cm */
+    /* the cheek: the skin vertex nearest (4.5, -1.5, 8.5) cm, 2 cm beside the mouth corner */
+    float q[3] = {4.5f, -1.5f, 8.5f};
+    size_t cheek = 0;
+    double best = INFINITY;
+    for (size_t v = 0; v < 9409; v++) {
+        double d = pow(pos[3 * v] - q[0], 2) + pow(pos[3 * v + 1] - q[1], 2) + pow(pos[3 * v + 2] - q[2], 2);
+        if (d < best) best = d, cheek = v;
+    }
+    double lim_cheek = fp_rig_finger_limit(r, pos, &pos[3 * cheek], R);
+    assert_true(isinf(ref_limit(r, pos, n, slope, &pos[3 * cheek], R)));
+    assert_true(isinf(lim_cheek));
+    /* the lower lip's inner edge, a few mm from the lower teeth */
+    long lip = fp_rig_landmark_index(r, "lower_lip_inner");
+    double lim_lip = fp_rig_finger_limit(r, pos, &pos[3 * lip], R), ref_lip = ref_limit(r, pos, n, slope, &pos[3 * lip], R);
+    printf("finger limit (R = %.1f cm): cheek vertex %zu unlimited (0.45 R = %.3f cm applies); lower lip %.4f cm "
+           "(reference %.4f, global ramp/3 %.4f)\n", R, cheek, 0.45 * R, lim_lip, ref_lip, ramp / 3);
+    assert_true(fabs(lim_lip - ref_lip) < 1e-4 * ref_lip);
+    assert_true(lim_lip < 0.45 * R && lim_lip >= ramp / 3 * (1 - 1e-6));
+    /* the cheek finger pushed 0.45 R into the face: the skin under it moves that far */
+    float fwd[3];
+    fp_rig_axes(r, NULL, fwd, NULL);
+    float start[3], end[3];
+    for (int i = 0; i < 3; i++) start[i] = pos[3 * cheek + i], end[i] = start[i] - (float)(0.45 * R) * fwd[i];
+    csrbf_options o = {0};
+    o.radius = R;
+    csrbf_solver *s = NULL;
+    csrbf_points *pts = NULL;
+    float *warped = malloc(n * 3 * sizeof *warped), *out = malloc(n * 3 * sizeof *out);
+    assert_int_equal(csrbf_solver_create(&o, &s), 0);
+    assert_true(csrbf_solver_solve(s, 1, start, end) >= 0);
+    assert_int_equal(csrbf_points_create(n, pos, &pts), 0);
+    assert_int_equal(csrbf_evaluate(s, pts, warped, 0, NULL), 0);
+    assert_int_equal(fp_rig_apply_mobility(r, pos, warped, out), 0);
+    double d = 0;
+    for (int i = 0; i < 3; i++) d += pow(out[3 * cheek + i] - pos[3 * cheek + i], 2);
+    printf("cheek finger: the skin under it moved %.4f cm (0.45 R = %.4f)\n", sqrt(d), 0.45 * R);
+    assert_true(fabs(sqrt(d) - 0.45 * R) < 1e-4);
+    csrbf_points_destroy(&pts);
+    csrbf_solver_destroy(&s);
+    free(warped), free(out), free(rigid), free(slope);
+    fp_rig_free(&r);
+    fp_mesh_free(&m);
+}
+
 static void other_face(const char *rel, const char *name)
 {
     fp_mesh *m = load_face(rel);
@@ -389,6 +477,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_ict_pose),         cmocka_unit_test(test_ict_fingers),
+        cmocka_unit_test(test_ict_finger_limit),
         cmocka_unit_test(test_lee_perry_smith),  cmocka_unit_test(test_mediapipe),
         cmocka_unit_test(test_broken_files),
     };

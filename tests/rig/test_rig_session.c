@@ -178,8 +178,9 @@ static void test_ict_press_forehead_jaw_open(void **state)
     long fingers = fp_selfx_count_new(posed, shown, n, m->triangles, m->triangle_count, pairs, 64, &own);
     long pose = fp_selfx_count_new(base, posed, n, m->triangles, m->triangle_count, NULL, 0, NULL);
     printf("self-crossings: input %ld; new with the jaw open %ld; added by the fingers %ld\n", own, pose, fingers);
-    /* The fingers add none, except between eyelash cards (ICT 25351..26718: hair cards a
-     * fraction of a millimetre apart, which any non-rigid motion of the lids makes cross). */
+    /* OPEN (issue 11): the fingers add none, except between eyelash cards (ICT 25351..26718:
+     * hair cards a fraction of a millimetre apart, which any non-rigid motion of the lids
+     * makes cross); not yet shown to be the input's own crossings. */
     assert_true(fingers >= 0 && fingers <= 64);
     for (long k = 0; k < fingers; k++) {
         uint32_t a = m->triangles[3 * pairs[2 * k]], b = m->triangles[3 * pairs[2 * k + 1]];
@@ -188,6 +189,48 @@ static void test_ict_press_forehead_jaw_open(void **state)
     }
     free(posed);
     fp_session_destroy(&s);
+}
+
+/* Fingers pressing 8 mm into the lips and the mouth corners (near the teeth: the local clamp
+ * limits them) at jaw.open 0 and 1: no crossings added to the posed shape, the skull still. */
+static void test_ict_press_lips(void **state)
+{
+    (void)state;
+    const char *specs[] = {"press,at=lips,jaw=0,depth=8", "press,at=lips,jaw=1,depth=8"};
+    for (int j = 0; j < 2; j++) {
+        fp_session *s = open_session(fp_test_face_path(), specs[j], NULL, 0);
+        const fp_rig *rig = fp_session_rig(s);
+        steps(s, 3);
+        size_t n = fp_session_vertex_count(s);
+        const float *base = fp_session_base(s), *shown = fp_session_positions(s);
+        assert_skull_still(rig, base, shown, n);
+        float *posed = posed_copy(rig, base, n, (float)j);
+        double moved = 0;
+        for (size_t v = 0; v < n; v++) {
+            double d = 0;
+            for (int i = 0; i < 3; i++) d += pow(shown[3 * v + i] - posed[3 * v + i], 2);
+            moved = fmax(moved, sqrt(d));
+        }
+        const fp_mesh *m = fp_session_mesh(s);
+        uint32_t pairs[2 * 16];
+        long fingers = fp_selfx_count_new(posed, shown, n, m->triangles, m->triangle_count, pairs, 16, NULL);
+        printf("%s: fingers moved the lips by up to %.3f cm; crossings added %ld\n", specs[j], moved, fingers);
+        for (long k = 0; k < fingers && k < 16; k++)
+            printf("  crossing: triangles %u and %u (vertices %u, %u)\n", pairs[2 * k], pairs[2 * k + 1],
+                   m->triangles[3 * pairs[2 * k]], m->triangles[3 * pairs[2 * k + 1]]);
+        assert_true(moved > 0.05);
+        /* OPEN (issue 11): the ICT lips are joined, their skins touching, from |x| = 1.3 cm to
+         * the corners; any non-rigid motion there (the jaw pose too) makes upper and lower lip
+         * triangles cross. Until that is solved, crossings are allowed only between those
+         * lip triangles (first vertices within 5550..6550, the ICT lip block), at most 8. */
+        assert_true(fingers >= 0 && fingers <= 8);
+        for (long k = 0; k < fingers && k < 16; k++) {
+            uint32_t a = m->triangles[3 * pairs[2 * k]], b = m->triangles[3 * pairs[2 * k + 1]];
+            assert_true(a >= 5550 && a <= 6550 && b >= 5550 && b <= 6550);
+        }
+        free(posed);
+        fp_session_destroy(&s);
+    }
 }
 
 static void test_ict_commit_undo_reset(void **state)
@@ -295,7 +338,8 @@ static void test_other_faces(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_ict_press_forehead_jaw_open), cmocka_unit_test(test_ict_commit_undo_reset),
+        cmocka_unit_test(test_ict_press_forehead_jaw_open), cmocka_unit_test(test_ict_press_lips),
+        cmocka_unit_test(test_ict_commit_undo_reset),
         cmocka_unit_test(test_ict_channels),                cmocka_unit_test(test_unknown_channel_once),
         cmocka_unit_test(test_rig_that_does_not_fit),       cmocka_unit_test(test_other_faces),
     };
