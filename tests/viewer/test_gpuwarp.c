@@ -180,8 +180,20 @@ static void test_script_parse(void **state)
     assert_int_equal(s.cmds[8].key, GLFW_KEY_SLASH);
     assert_int_equal(s.cmds[9].op, FP_SCRIPT_CLOSE);
     fp_script_free(&s);
+    /* the rig's keys and the camera (yaw, pitch in degrees, zoom 1 unless given) */
+    assert_int_equal(fp_script_parse("key J; key k; key G; camera -35 10; camera 20 -5 1.5", &s, err,
+                                     sizeof err), 0);
+    assert_int_equal(s.count, 5);
+    assert_int_equal(s.cmds[0].key, GLFW_KEY_J);
+    assert_int_equal(s.cmds[1].key, GLFW_KEY_K);
+    assert_int_equal(s.cmds[2].key, GLFW_KEY_G);
+    assert_int_equal(s.cmds[3].op, FP_SCRIPT_CAMERA);
+    assert_true(s.cmds[3].number == -35 && s.cmds[3].pitch == 10 && s.cmds[3].zoom == 1);
+    assert_true(s.cmds[4].number == 20 && s.cmds[4].pitch == -5 && s.cmds[4].zoom == 1.5);
+    fp_script_free(&s);
     const char *bad[] = {"jump 3", "key Q", "wait forever", "radius -1", "shot", "close now",
-                         "wait frames x"};
+                         "wait frames x", "camera", "camera 10", "camera 10 95", "camera 1 2 0",
+                         "camera 1 2 3 4", "camera nan 0"};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         err[0] = '\0';
         assert_int_equal(fp_script_parse(bad[i], &s, err, sizeof err), -EINVAL);

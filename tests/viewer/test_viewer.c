@@ -14,6 +14,7 @@
 
 #include <stb_image.h>
 
+#include <math.h>
 #include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -289,6 +290,94 @@ static void test_take_rec_timeline_scrub(void **state)
     free(b.px);
 }
 
+/* Pixels of the rig overlay's colours (ui/viewer/viewer.c, key G) in an image: shaded region
+ * colours told apart from the skin (which has r > g > b, r - g under 50), the hinge axis and
+ * the landmarks in their exact colours (lines and points are not shaded). */
+typedef struct rig_pixels {
+    int skull, jaw, soft, hinge, landmark;
+    double skull_y, jaw_y, hinge_x, hinge_y;   /* mean rows and columns */
+} rig_pixels;
+
+static rig_pixels count_rig(const image *im)
+{
+    rig_pixels c = {0};
+    for (int y = 0; y < im->h; y++)
+        for (int x = 0; x < im->w; x++) {
+            const unsigned char *p = at(im, x, y);
+            int r = p[0], g = p[1], b = p[2];
+            if (b > r + 50 && b > g + 30) {
+                c.skull++;
+                c.skull_y += y;
+            } else if (r > g + 70 && r > b + 70) {
+                c.jaw++;
+                c.jaw_y += y;
+            } else if (g > r + 50 && g > b + 50 && r > 8) {
+                c.soft++;
+            }
+            if (diff(p, (const unsigned char[]){0, 230, 255}) < 6) {
+                c.hinge++;
+                c.hinge_x += x;
+                c.hinge_y += y;
+            }
+            c.landmark += r >= 250 && g >= 250 && b >= 250;
+        }
+    if (c.skull) c.skull_y /= c.skull;
+    if (c.jaw) c.jaw_y /= c.jaw;
+    if (c.hinge) c.hinge_x /= c.hinge, c.hinge_y /= c.hinge;
+    print_message("rig colours: skull %d (mean row %.1f), jaw %d (mean row %.1f), soft %d, hinge %d "
+                  "(mean %.1f, %.1f), landmarks %d\n", c.skull, c.skull_y, c.jaw, c.jaw_y, c.soft,
+                  c.hinge, c.hinge_x, c.hinge_y, c.landmark);
+    return c;
+}
+
+/* G shows the rig (issue 11): regions coloured (skull above the jaw), the hinge axis across
+ * the head between them, the landmarks; J opens the jaw (its colour moves down), K closes it
+ * again (the same image), G again hides it all (the plain face again). */
+static void test_rig_overlay_and_jaw_keys(void **state)
+{
+    (void)state;
+    assert_int_equal(live("--frames 100 --script 'key H; key Tab; wait frames 1; shot %s/off.png; "
+                          "key G; wait frames 1; shot %s/on.png; key J; key J; key J; key J; key J; "
+                          "wait frames 1; shot %s/open.png; key K; key K; key K; key K; key K; "
+                          "wait frames 1; shot %s/closed.png; key G; wait frames 1; shot %s/off2.png; "
+                          "close'", tmp, tmp, tmp, tmp, tmp), 0);
+    image off = load("off.png"), on = load("on.png"), open = load("open.png"), closed = load("closed.png"),
+          off2 = load("off2.png");
+    rig_pixels a = count_rig(&off), b = count_rig(&on), o = count_rig(&open);
+    /* off: none of the overlay's colours on the skin */
+    assert_true(a.skull + a.jaw + a.soft < 10);
+    assert_int_equal(a.hinge, 0);
+    assert_int_equal(a.landmark, 0);
+    /* on: every colour, in place: the cranium above the jaw, the hinge between, centred */
+    assert_true(b.skull > 1000);
+    assert_true(b.jaw > 100);
+    assert_true(b.soft > 3000);
+    assert_true(b.hinge > 40);
+    assert_true(b.landmark > 40);
+    assert_true(b.skull_y + 20 < b.jaw_y);
+    assert_true(b.hinge_y > b.skull_y && b.hinge_y < b.jaw_y);
+    assert_true(fabs(b.hinge_x - on.w / 2.0) < on.w / 10.0);
+    /* J x5: jaw.open 0.5, the chin goes down; K x5 closes it: the image before J again */
+    assert_true(o.jaw_y > b.jaw_y + 2);
+    int open_changed = 0, closed_off = 0, off_off = 0;
+    for (int y = 0; y < on.h; y++)
+        for (int x = 0; x < on.w; x++) {
+            open_changed += diff(at(&on, x, y), at(&open, x, y)) > 8;
+            closed_off += diff(at(&on, x, y), at(&closed, x, y)) > 1;
+            off_off += diff(at(&off, x, y), at(&off2, x, y)) > 1;
+        }
+    print_message("jaw open changed %d pixels; closed again: %d differ; G off again: %d differ\n",
+                  open_changed, closed_off, off_off);
+    assert_true(open_changed > 200);
+    assert_int_equal(closed_off, 0);
+    assert_int_equal(off_off, 0);
+    free(off.px);
+    free(on.px);
+    free(open.px);
+    free(closed.px);
+    free(off2.px);
+}
+
 static void write_recording(void)
 {
     /* Leap joints CSV, one right hand: pose A on the left cheek (x about 40 mm), pose B 35 mm
@@ -349,6 +438,7 @@ int main(void)
         cmocka_unit_test(test_drop_mesh_and_mapping_keys),
         cmocka_unit_test(test_command_line_errors),
         cmocka_unit_test(test_take_rec_timeline_scrub),
+        cmocka_unit_test(test_rig_overlay_and_jaw_keys),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

@@ -15,6 +15,10 @@
  * Keys: space pause, E engage, C commit, X cancel, Z undo, R reset to the loaded shape,
  * 1 anchored, 2 unanchored, [ ] radius down / up (x 1/1.1, 1.1), W wireframe, S screenshot
  * (facepuppet-shot-NNN.png), F frame the mesh, H hands and supports on/off, Tab HUD on/off,
+ * J / K open / close the jaw by 0.1 (a rig's jaw.open), G the rig on/off (regions coloured:
+ * skull blue, jaw red, soft tissue green blending to red by its jaw weight; landmarks as
+ * white points, the hinge axis as a cyan line through the two joints; a legend in the HUD),
+ * T take start/stop, P play/pause the last take, , . a frame back/on,
  * ? (or /) the key list, Esc quit. Mouse: left drag orbit, right or middle drag pan, wheel
  * zoom. A mesh file dropped on the window is loaded (the session is created anew on it).
  *
@@ -23,9 +27,11 @@
  * frame's commands (the shot shows this frame):
  *   wait hands | wait end | wait frames N    a hand is present / every input ended / N frames
  *                                            passed since the wait began
- *   key NAME     as the key: E C X Z R 1 2 [ ] W S F H Tab ? space Esc
+ *   key NAME     as the key: E C X Z R 1 2 [ ] W S F H J K G T P , . Tab ? space Esc
  *   shot FILE    write this frame as PNG
  *   radius R     set the support radius (mesh units)
+ *   camera YAW PITCH [ZOOM]   the framed view (F) turned by yaw (degrees, about +y, positive
+ *                to the face's left) and pitch (degrees, from above), the distance / ZOOM
  *   drop FILE    as a file dropped on the window
  *   print mapping | print hud   one stdout line: the mapping (name, id, version, active,
  *                control vectors, reloads) / the HUD (state ENGAGED|committed|idle|PAUSED,

@@ -18,12 +18,15 @@
 static const char mesh_vs[] =
     "layout(location = 0) in vec3 a_pos;\n"
     "layout(location = 1) in vec3 a_nrm;\n"
+    "layout(location = 2) in vec3 a_col;\n"
     "uniform mat4 u_mvp;\n"
     "uniform mat4 u_view;\n"
     "uniform int u_warp_on;\n"
     "out vec3 v_nrm;\n"
     "out vec3 v_posv;\n"
+    "out vec3 v_col;\n"
     "void main() {\n"
+    "    v_col = a_col;\n"
     "    vec3 p = a_pos, n = a_nrm;\n"
     "    if (u_warp_on != 0) {\n"
     "        mat3 j;\n"
@@ -39,8 +42,10 @@ static const char mesh_vs[] =
 static const char mesh_fs[] =
     "in vec3 v_nrm;\n"
     "in vec3 v_posv;\n"
+    "in vec3 v_col;\n"
     "uniform vec4 u_color;\n"
     "uniform int u_flat;\n"
+    "uniform int u_vcolor;\n"
     "out vec4 o_color;\n"
     "void main() {\n"
     "    if (u_flat != 0) { o_color = u_color; return; }\n"
@@ -51,7 +56,8 @@ static const char mesh_fs[] =
     "    float diff = max(dot(n, l), 0.0);\n"
     "    float fill = 0.35 * max(dot(n, v), 0.0);\n"
     "    float spec = pow(max(dot(n, normalize(l + v)), 0.0), 40.0) * 0.18;\n"
-    "    o_color = vec4(u_color.rgb * (0.16 + 0.62 * diff + fill) + vec3(spec), u_color.a);\n"
+    "    vec3 c = u_vcolor != 0 ? v_col : u_color.rgb;\n"
+    "    o_color = vec4(c * (0.16 + 0.62 * diff + fill) + vec3(spec), u_color.a);\n"
     "}\n";
 
 static const char lines_vs[] =
@@ -201,7 +207,7 @@ void fp_render_free(fp_render *r)
     glDeleteProgram(r->prog_text);
     GLuint bufs[] = {r->vbo_shape_pos, r->vbo_shape_nrm, r->vbo_base_pos, r->vbo_base_nrm,
                      r->ebo_tris, r->vbo_sphere, r->ebo_sphere, r->vbo_lines, r->vbo_text,
-                     r->ebo_text};
+                     r->ebo_text, r->vbo_shape_col};
     glDeleteBuffers(sizeof bufs / sizeof bufs[0], bufs);
     GLuint vaos[] = {r->vao_shape, r->vao_base, r->vao_sphere, r->vao_lines, r->vao_text};
     glDeleteVertexArrays(sizeof vaos / sizeof vaos[0], vaos);
@@ -238,6 +244,7 @@ int fp_render_set_topology(fp_render *r, size_t n, const uint32_t *tris, size_t 
     face_vao(&r->vao_base, &r->vbo_base_pos, &r->vbo_base_nrm, r->ebo_tris, n);
     r->vertex_count = n;
     r->index_count = t * 3;
+    r->shape_colors = false; /* colours were for the old vertices */
     return glGetError() == GL_OUT_OF_MEMORY ? -ENOMEM : 0;
 }
 
@@ -248,6 +255,22 @@ void fp_render_upload(fp_render *r, bool base, const float *pos, const float *nr
     glBufferSubData(GL_ARRAY_BUFFER, 0, bytes, pos);
     glBindBuffer(GL_ARRAY_BUFFER, base ? r->vbo_base_nrm : r->vbo_shape_nrm);
     glBufferSubData(GL_ARRAY_BUFFER, 0, bytes, nrm);
+}
+
+int fp_render_set_colors(fp_render *r, const float *rgb)
+{
+    r->shape_colors = false;
+    if (!rgb || !r->vao_shape) return 0;
+    if (!r->vbo_shape_col) glGenBuffers(1, &r->vbo_shape_col);
+    glBindVertexArray(r->vao_shape);
+    glBindBuffer(GL_ARRAY_BUFFER, r->vbo_shape_col);
+    glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(r->vertex_count * 3 * sizeof(float)), rgb, GL_STATIC_DRAW);
+    glEnableVertexAttribArray(2);
+    glVertexAttribPointer(2, 3, GL_FLOAT, GL_FALSE, 0, NULL);
+    glBindVertexArray(0);
+    if (glGetError() == GL_OUT_OF_MEMORY) return -ENOMEM;
+    r->shape_colors = true;
+    return 0;
 }
 
 /* ---- drawing ---------------------------------------------------------------------------- */
@@ -275,6 +298,7 @@ void fp_render_mesh(fp_render *r, const float mvp[16], const float view[16], boo
     if (warp) fp_warp_set_uniforms(r->prog_mesh, warp);
     glUniform4fv(glGetUniformLocation(r->prog_mesh, "u_color"), 1, color);
     glUniform1i(glGetUniformLocation(r->prog_mesh, "u_flat"), 0);
+    glUniform1i(glGetUniformLocation(r->prog_mesh, "u_vcolor"), !base && r->shape_colors);
     glBindVertexArray(base ? r->vao_base : r->vao_shape);
     bool translucent = color[3] < 1.f;
     begin_blend(translucent);
@@ -304,6 +328,7 @@ void fp_render_spheres(fp_render *r, const float proj_view[16], const float view
     glUseProgram(r->prog_mesh);
     glUniform1i(glGetUniformLocation(r->prog_mesh, "u_warp_on"), 0);
     glUniform1i(glGetUniformLocation(r->prog_mesh, "u_flat"), 0);
+    glUniform1i(glGetUniformLocation(r->prog_mesh, "u_vcolor"), 0);
     glUniform4fv(glGetUniformLocation(r->prog_mesh, "u_color"), 1, color);
     GLint lmvp = glGetUniformLocation(r->prog_mesh, "u_mvp");
     GLint lview = glGetUniformLocation(r->prog_mesh, "u_view");

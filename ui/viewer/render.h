@@ -18,6 +18,9 @@ typedef struct fp_render {
     GLuint vao_base, vbo_base_pos, vbo_base_nrm;
     GLuint ebo_tris;
     size_t vertex_count, index_count;
+    /* per-vertex colours of the shown shape (the rig's regions), attribute 2 of vao_shape */
+    GLuint vbo_shape_col;
+    bool shape_colors;
     /* a unit sphere */
     GLuint vao_sphere, vbo_sphere, ebo_sphere;
     GLsizei sphere_indices;
@@ -37,6 +40,11 @@ void fp_render_free(fp_render *r);
 int fp_render_set_topology(fp_render *r, size_t n, const uint32_t *tris, size_t t);
 /** Upload the shown shape, or the base shape (base = true): positions and normals, n x 3. */
 void fp_render_upload(fp_render *r, bool base, const float *pos, const float *nrm);
+
+/** Colour the shown shape per vertex: rgb, vertex_count x 3 floats in [0, 1], replaces the
+ *  flat colour of fp_render_mesh (base = false; its alpha stays) until called with NULL or
+ *  the topology changes. Shaded as the face. Returns 0 or -ENOMEM. */
+int fp_render_set_colors(fp_render *r, const float *rgb);
 
 /** Draw the face from the shown (base = false) or base buffers. warp: NULL, or coefficients
  *  applied in the vertex shader (then base must be true). color: RGBA (A < 1: translucent,

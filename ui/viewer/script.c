@@ -22,7 +22,7 @@ int fp_script_key(const char *name)
         if (!strcasecmp(name, named[i].name)) return named[i].key;
     if (strlen(name) == 1) {
         int c = toupper((unsigned char)name[0]);
-        if (strchr("ECXZRWSFHTP", c)) return GLFW_KEY_A + (c - 'A');
+        if (strchr("ECXZRWSFHTPJKG", c)) return GLFW_KEY_A + (c - 'A');
         if (c == ',') return GLFW_KEY_COMMA;
         if (c == '.') return GLFW_KEY_PERIOD;
         if (c == '1' || c == '2') return GLFW_KEY_0 + (c - '0');
@@ -88,6 +88,15 @@ int fp_script_parse(const char *text, fp_script *s, char *err, size_t errlen)
             c.op = FP_SCRIPT_RADIUS;
             c.number = strtod(arg, &end);
             if (end == arg || *end || !(c.number > 0) || !isfinite(c.number)) rc = -EINVAL;
+        } else if (!strcmp(word, "camera")) {
+            /* camera YAW PITCH [ZOOM]: as export's --camera (fp_frame_render.h) */
+            c.op = FP_SCRIPT_CAMERA;
+            c.zoom = 1;
+            char extra;
+            int m = sscanf(arg, "%lf %lf %lf %c", &c.number, &c.pitch, &c.zoom, &extra);
+            if ((m != 2 && m != 3) || !isfinite(c.number) || !(fabs(c.pitch) <= 89) ||
+                !(c.zoom > 0 && c.zoom <= 100))
+                rc = -EINVAL;
         } else if (!strcmp(word, "print") && !strcmp(arg, "mapping")) {
             c.op = FP_SCRIPT_PRINT_MAPPING;
         } else if (!strcmp(word, "print") && !strcmp(arg, "hud")) {
@@ -100,7 +109,7 @@ int fp_script_parse(const char *text, fp_script *s, char *err, size_t errlen)
         }
         if (rc == -EINVAL)
             snprintf(err, errlen, "--script: command %d '%s %s' is not one of: wait hands|end|reload|frames N, "
-                     "key NAME, shot FILE, radius R, drop FILE, scrub F, print mapping|hud, close", index, word, arg);
+                     "key NAME, shot FILE, radius R, drop FILE, scrub F, camera YAW PITCH [ZOOM], print mapping|hud, close", index, word, arg);
         if (!rc) rc = add(s, c);
         else free(c.text);
     }

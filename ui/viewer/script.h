@@ -11,13 +11,15 @@ typedef enum fp_script_op {
     FP_SCRIPT_WAIT_RELOAD,   /* wait reload: until the mapping's file was reloaded (or failed to) */
     FP_SCRIPT_PRINT_MAPPING, /* print mapping: one stdout line, the mapping's name, id, version */
     FP_SCRIPT_SCRUB,         /* scrub F: the take review's playhead to fraction F (the mouse) */
-    FP_SCRIPT_PRINT_HUD      /* print hud: one stdout line, the HUD's state, commits and scale */
+    FP_SCRIPT_PRINT_HUD,     /* print hud: one stdout line, the HUD's state, commits and scale */
+    FP_SCRIPT_CAMERA         /* camera YAW PITCH [ZOOM]: the framed view turned (degrees), zoomed */
 } fp_script_op;
 
 typedef struct fp_script_cmd {
     fp_script_op op;
     int key;            /* GLFW key code for FP_SCRIPT_KEY */
-    double number;      /* frames, radius */
+    double number;      /* frames, radius; camera: yaw (degrees) */
+    double pitch, zoom; /* camera: pitch (degrees), zoom (> 0) */
     char *text;         /* file for SHOT and DROP (owned) */
 } fp_script_cmd;
 

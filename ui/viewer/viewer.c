@@ -4,6 +4,7 @@
 
 #include "fp_gpuwarp.h"
 #include "fp_mesh.h"
+#include "fp_rig.h"
 #include "fp_stats.h"
 #include "render.h"
 #include "script.h"
@@ -80,6 +81,7 @@ typedef struct viewer {
 
     /* interaction */
     bool paused, wireframe, hands_on, hud_on, help_on;
+    bool rig_on;              /* G: the rig's regions, landmarks and hinge axis */
     bool quit;
     int shot_counter;
     char *shot_path;          /* screenshot wanted for this frame */
@@ -295,6 +297,10 @@ static void act(viewer *v, int key)
             say(v, "jaw.open %.1f", fmin(1, fmax(0, j + (key == GLFW_KEY_J ? 0.1 : -0.1))));
         break;
     }
+    case GLFW_KEY_G:
+        if (!fp_session_rig(v->s) && !v->rig_on) say(v, "no rig to show");
+        else v->rig_on = !v->rig_on;
+        break;
     case GLFW_KEY_1: set_mapping(v, "anchored"); break;
     case GLFW_KEY_2: set_mapping(v, "unanchored"); break;
     case GLFW_KEY_LEFT_BRACKET: fp_session_set_radius(v->s, fp_session_radius(v->s) / 1.1); break;
@@ -498,6 +504,12 @@ static void run_script(viewer *v)
         case FP_SCRIPT_KEY: act(v, c->key); break;
         case FP_SCRIPT_RADIUS: fp_session_set_radius(v->s, c->number); break;
         case FP_SCRIPT_SCRUB: fp_vtakes_scrub(&v->takes, c->number); break;
+        case FP_SCRIPT_CAMERA: /* the framed view (F), turned and zoomed */
+            frame_mesh(v);
+            v->cam.yaw = (float)(c->number * M_PI / 180);
+            v->cam.pitch = (float)(c->pitch * M_PI / 180);
+            v->cam.dist /= (float)c->zoom;
+            break;
         case FP_SCRIPT_CLOSE: glfwSetWindowShouldClose(v->win, GLFW_TRUE); return;
         case FP_SCRIPT_PRINT_MAPPING: {
             const fp_plugin *p = fp_session_mapping_plugin(v->s);
@@ -605,6 +617,90 @@ static void draw_hands(viewer *v, const float pv[16], const float view[16])
     free(arrows.v);
 }
 
+/* The rig overlay's colours (G): skull, jaw, soft tissue at jaw weight 0 (it blends towards
+ * the jaw's colour as the weight rises to 1), landmarks, the hinge axis. */
+static const float rig_skull[3] = {0.3f, 0.45f, 1.f}, rig_jaw[3] = {1.f, 0.3f, 0.15f},
+                   rig_soft[3] = {0.3f, 0.8f, 0.3f}, rig_landmark[4] = {1.f, 1.f, 1.f, 1.f},
+                   rig_hinge[4] = {0.f, 0.9f, 1.f, 1.f};
+
+/* Upload the per-vertex region colours of the session's rig (kinds, jaw weights). */
+static void rig_colors(viewer *v)
+{
+    const fp_rig *rig = fp_session_rig(v->s);
+    const uint8_t *kind = rig ? fp_rig_vertex_kinds(rig) : NULL;
+    const float *w = rig ? fp_rig_jaw_weights(rig) : NULL;
+    float *rgb = kind && w && fp_rig_vertex_count(rig) == v->n ? malloc(v->n * 3 * sizeof *rgb) : NULL;
+    if (!rgb) return;
+    for (size_t i = 0; i < v->n; i++) {
+        float t = fminf(1.f, fmaxf(0.f, w[i]));
+        for (int k = 0; k < 3; k++)
+            rgb[3 * i + k] = kind[i] == FP_RIG_SKULL ? rig_skull[k]
+                           : kind[i] == FP_RIG_JAW   ? rig_jaw[k]
+                                                     : rig_soft[k] + t * (rig_jaw[k] - rig_soft[k]);
+    }
+    fp_render_set_colors(&v->r, rgb);
+    free(rgb);
+}
+
+/* The landmarks on the shape shown (points) and the hinge axis (the line through the two
+ * temporomandibular joints, drawn a quarter of its length beyond each, and the joints as
+ * points), over the face (no depth test: the joints are inside the head). */
+static void draw_rig(viewer *v, const float pv[16], int w, int h)
+{
+    const fp_rig *rig = fp_session_rig(v->s);
+    if (!rig || !v->have_pos) return;
+    vbuf pts = {0}, axis = {0};
+    for (size_t i = 0, n = fp_rig_landmark_count(rig); i < n; i++) {
+        const char *name;
+        uint32_t vi;
+        if (!fp_rig_landmark_get(rig, i, &name, &vi) && vi < v->n) vb_add(&pts, v->pos + 3 * (size_t)vi, rig_landmark);
+    }
+    float jr[3], jl[3], d[3], a[3], b[3];
+    fp_rig_hinge(rig, jr, jl, NULL, NULL);
+    v3_sub(jl, jr, d);
+    for (int k = 0; k < 3; k++) {
+        a[k] = jr[k] - 0.25f * d[k];
+        b[k] = jl[k] + 0.25f * d[k];
+    }
+    vb_add(&axis, a, rig_hinge);
+    vb_add(&axis, b, rig_hinge);
+    /* 2 pixels wide (core profiles draw 1-pixel lines): again shifted a pixel right, up */
+    for (int pass = 0; pass < 3; pass++) {
+        float m[16];
+        memcpy(m, pv, sizeof m);
+        int row = pass - 1; /* clip x (pass 1) or y (pass 2) += one pixel's NDC times w */
+        for (int c = 0; pass && c < 4; c++) m[4 * c + row] += 2.f / (float)(row ? h : w) * m[4 * c + 3];
+        fp_render_lines(&v->r, m, axis.v, axis.n, GL_LINES, 1.f, false);
+    }
+    axis.n = 0;
+    vb_add(&axis, jr, rig_hinge);
+    vb_add(&axis, jl, rig_hinge);
+    fp_render_lines(&v->r, pv, axis.v, axis.n, GL_POINTS, 9.f, false);
+    fp_render_lines(&v->r, pv, pts.v, pts.n, GL_POINTS, 5.f, false);
+    free(pts.v);
+    free(axis.v);
+}
+
+/* The overlay's legend, each name in its colour; returns the height drawn. */
+static float draw_rig_legend(viewer *v, int w, int h, float y, float scale)
+{
+    char jaw[64];
+    double j = fp_session_channel(v->s, "jaw.open");
+    snprintf(jaw, sizeof jaw, "jaw (jaw.open %.1f)", isnan(j) ? 0.0 : j);
+    const struct { const char *text; const float *c; } rows[] = {
+        {"rig (G):", NULL}, {"skull", rig_skull}, {jaw, rig_jaw},
+        {"soft: jaw weight 0 .. 1", rig_soft}, {"landmarks", rig_landmark}, {"hinge axis", rig_hinge}};
+    const float dim[4] = {0.8f, 0.85f, 0.9f, 1.f};
+    float y0 = y;
+    for (size_t i = 0; i < sizeof rows / sizeof rows[0]; i++) {
+        float c[4] = {1, 1, 1, 1};
+        if (rows[i].c) memcpy(c, rows[i].c, 3 * sizeof *c);
+        y += fp_render_text(&v->r, w, h, 8 + (rows[i].c ? 10 * scale : 0), y, scale, rows[i].text,
+                            rows[i].c ? c : dim) + 2 * scale;
+    }
+    return y - y0;
+}
+
 static const char help_text[] =
     "keys\n"
     " space  pause / run\n"
@@ -612,6 +708,7 @@ static const char help_text[] =
     " X      cancel      Z  undo commit\n"
     " R      back to the loaded shape\n"
     " J / K  open / close the jaw (rig)\n"
+    " G      rig: regions, landmarks, hinge axis\n"
     " 1 / 2  anchored / unanchored\n"
     " [ / ]  radius down / up\n"
     " W wireframe  S screenshot  F frame\n"
@@ -649,6 +746,7 @@ static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
     y += fp_render_text(&v->r, w, h, 8, y, scale, text, white) + 6 * scale;
     if (v->status[0] && fp_now_ns() < v->status_until)
         y += fp_render_text(&v->r, w, h, 8, y, scale, v->status, dim) + 6 * scale;
+    if (v->rig_on && fp_session_rig(v->s)) y += draw_rig_legend(v, w, h, y, scale) + 6 * scale;
     fp_vtakes_draw(&v->takes, &v->r, w, h, fp_now_ns());
     if (v->help_on) fp_render_text(&v->r, w, h, 8, y, scale, help_text, dim);
     else fp_render_text(&v->r, w, h, 8, (float)h - 14 * scale, scale, "? keys", dim);
@@ -725,6 +823,11 @@ static void draw(viewer *v, const fp_frame_stats *st, int w, int h)
     float view[16], proj[16], pv[16];
     camera_matrices(v, w, h, view, proj);
     m4_mul(proj, view, pv);
+    bool rig_on = v->rig_on && fp_session_rig(v->s);
+    if (rig_on != v->r.shape_colors) {
+        if (rig_on) rig_colors(v);
+        else fp_render_set_colors(&v->r, NULL);
+    }
     static const float skin[4] = {0.86f, 0.7f, 0.6f, 1.f}, ghost[4] = {0.6f, 0.8f, 1.f, 0.22f};
     bool reviewing = fp_vtakes_shown(&v->takes) != NULL;
     bool deformed = !reviewing && fp_session_positions(v->s) != fp_session_base(v->s);
@@ -744,6 +847,7 @@ static void draw(viewer *v, const fp_frame_stats *st, int w, int h)
         fp_render_mesh(&v->r, pv, view, false, NULL, skin, v->wireframe);
     }
     if (deformed && (st->active || !fp_session_rig(v->s))) fp_render_mesh(&v->r, pv, view, true, NULL, ghost, false);
+    if (rig_on) draw_rig(v, pv, w, h);
     if (v->hands_on && !reviewing) draw_hands(v, pv, view);
     if (v->hud_on) draw_hud(v, w, h, st);
 }
