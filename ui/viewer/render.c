@@ -303,9 +303,10 @@ void fp_render_mesh(fp_render *r, const float mvp[16], const float view[16], boo
     bool translucent = color[3] < 1.f;
     begin_blend(translucent);
     glEnable(GL_DEPTH_TEST);
-    if (wireframe && !translucent) {
+    if (wireframe || translucent) {
+        /* behind the lines; a ghost behind the face where they coincide (no z-fighting) */
         glEnable(GL_POLYGON_OFFSET_FILL);
-        glPolygonOffset(1.f, 1.f);
+        glPolygonOffset(translucent ? 2.f : 1.f, translucent ? 8.f : 1.f);
     }
     glDrawElements(GL_TRIANGLES, (GLsizei)r->index_count, GL_UNSIGNED_INT, NULL);
     glDisable(GL_POLYGON_OFFSET_FILL);
