@@ -37,6 +37,10 @@ void fp_render_free(fp_render *r);
 int fp_render_set_topology(fp_render *r, size_t n, const uint32_t *tris, size_t t);
 /** Upload the shown shape, or the base shape (base = true): positions and normals, n x 3. */
 void fp_render_upload(fp_render *r, bool base, const float *pos, const float *nrm);
+/** The same for some vertices only: `count` (first, count) vertex ranges, increasing, of the
+ *  full n x 3 arrays pos and nrm (glBufferSubData per range and buffer). */
+void fp_render_upload_ranges(fp_render *r, bool base, const float *pos, const float *nrm,
+                             const uint32_t *ranges, size_t count);
 
 /** Draw the face from the shown (base = false) or base buffers. warp: NULL, or coefficients
  *  applied in the vertex shader (then base must be true). color: RGBA (A < 1: translucent,
