@@ -82,6 +82,7 @@ typedef struct fp_viewer_report {
     unsigned long dropped;                     /* input events dropped (queues full) */
     size_t uploads;                            /* frames that uploaded a shape (changed) */
     double upload_ms_median, upload_ms_p99;    /* their normals + GL upload, CPU side */
+    double upload_all_ms_median, upload_all_ms_p99; /* the same over every frame */
     unsigned long upload_checked;              /* FACEPUPPET_VIEWER_UPLOAD=check: partial */
     unsigned long upload_mismatches;           /* uploads compared whole, and those that
                                                   differed from the whole computation */

@@ -84,7 +84,7 @@ typedef struct viewer {
     fp_vnormals vn;
     enum { UPLOAD_PARTIAL, UPLOAD_FULL, UPLOAD_CHECK } upload_mode;
     bool showed_review;       /* the last upload showed a take's frame */
-    samples upload_ms;        /* upload() of frames that uploaded something */
+    samples upload_ms, upload_all_ms; /* upload() of frames that uploaded something, of all */
     unsigned long upload_checked, upload_mismatches;
 
     /* interaction */
@@ -724,7 +724,9 @@ static void upload(viewer *v, bool warp_on_gpu)
         did |= upload_shape(v, false, fp_session_positions(v->s), ranges, nr);
     }
     v->showed_review = review != NULL;
-    if (did) samples_add(&v->upload_ms, (double)(fp_now_ns() - t0) / 1e6);
+    double ms = (double)(fp_now_ns() - t0) / 1e6;
+    samples_add(&v->upload_all_ms, ms);
+    if (did) samples_add(&v->upload_ms, ms);
 }
 
 /* Compare the GPU warp (transform feedback) with the CPU engine's shape this frame. */
@@ -974,6 +976,8 @@ out:
     fp_viewer_percentiles(v->engine_ms.v, v->engine_ms.n, &v->rep.engine_ms_median, &unused);
     fp_viewer_percentiles(v->upload_ms.v, v->upload_ms.n, &v->rep.upload_ms_median, &v->rep.upload_ms_p99);
     v->rep.uploads = v->upload_ms.n;
+    fp_viewer_percentiles(v->upload_all_ms.v, v->upload_all_ms.n, &v->rep.upload_all_ms_median,
+                          &v->rep.upload_all_ms_p99);
     v->rep.upload_checked = v->upload_checked;
     v->rep.upload_mismatches = v->upload_mismatches;
     if (report) *report = v->rep;
@@ -990,6 +994,7 @@ out:
     free(v->latency_ms.v);
     free(v->engine_ms.v);
     free(v->upload_ms.v);
+    free(v->upload_all_ms.v);
     fp_vnormals_free(&v->vn);
     free(v->pos); free(v->nrm); free(v->base); free(v->base_nrm); free(v->check);
     free(v->shot_path);
