@@ -690,15 +690,13 @@ static const char *fp_bench_data_dir(void)
     return root && *root ? root : "../shared/data";
 }
 
-/* Midpoint subdivision: every triangle into four, edge midpoints shared. New vertices follow
- * the old ones, in the order of their edges' (smaller, larger) vertex pairs. */
 static int edge_cmp(const void *a, const void *b)
 {
     uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
     return x < y ? -1 : x > y;
 }
 
-static fp_mesh *subdivide(const fp_mesh *m)
+fp_mesh *fp_bench_subdivide(const fp_mesh *m)
 {
     size_t nv = m->vertex_count, nt = m->triangle_count;
     uint64_t *e = malloc(3 * nt * sizeof *e); /* key << 24 | ... : sort key, then look up */
@@ -861,7 +859,7 @@ static int case_frame(const bench_opts *o)
     int rc = frame_run(o, frame_bo, "ict", m);
     fp_mesh *sub = m;
     for (int l = 0; l < 3 && !rc; l++) {
-        fp_mesh *next = subdivide(sub);
+        fp_mesh *next = fp_bench_subdivide(sub);
         if (sub != m) fp_mesh_free(&sub);
         if (!next) rc = -ENOMEM;
         sub = next;

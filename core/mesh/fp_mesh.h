@@ -220,6 +220,27 @@ int fp_mesh_save_animation(const fp_mesh *mesh, const fp_mesh_morph_animation *a
 int fp_mesh_normals(const uint32_t *tris, size_t t, const float *pos, size_t n,
                     float *normals_out);
 
+/** Vertex -> triangle adjacency (compressed rows) for fp_mesh_normals_at: vertex v's
+ *  triangles are (*vt)[(*vt_start)[v] .. (*vt_start)[v + 1]), in increasing triangle order (a
+ *  triangle naming v twice is listed twice). Shapes: tris t x 3, *vt_start n + 1, *vt 3t
+ *  uint32; both malloc()ed, the caller frees them. Returns FP_MESH_OK, FP_MESH_ERR_INVALID
+ *  (NULL, an index >= n, n or 3t beyond uint32) or FP_MESH_ERR_NOMEM (*vt_start and *vt are
+ *  then NULL). O(n + t). Reentrant. */
+int fp_mesh_vertex_triangles(const uint32_t *tris, size_t t, size_t n, uint32_t **vt_start,
+                             uint32_t **vt);
+
+/** The normals of the `count` vertices verts[i] only, bit for bit what fp_mesh_normals
+ *  writes for them (each vertex's cross products summed in triangle order, normalised in
+ *  double), from fp_mesh_vertex_triangles' adjacency of the same triangles. A vertex's
+ *  normal depends on its triangles only: after positions changed at a set of vertices, the
+ *  normals to recompute are those of every vertex of a triangle that has a changed vertex
+ *  (ui/viewer's partial uploads). normals_out is n x 3; other entries are left alone.
+ *  O(sum of the vertices' triangle counts); no allocation; no checks (indices come from
+ *  the adjacency). Reentrant. */
+void fp_mesh_normals_at(const uint32_t *tris, const uint32_t *vt_start, const uint32_t *vt,
+                        const float *pos, const uint32_t *verts, size_t count,
+                        float *normals_out);
+
 /** fp_mesh_normals() on the mesh's own arrays, allocating mesh->normals if it is NULL.
  *  Returns as fp_mesh_normals(), or FP_MESH_ERR_NOMEM. */
 int fp_mesh_compute_normals(fp_mesh *mesh);

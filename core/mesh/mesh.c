@@ -128,6 +128,33 @@ fp_mesh *fp_mesh_copy(const fp_mesh *mesh)
 
 /* ---- normals and bounds -------------------------------------------------------------- */
 
+/* Triangle tri's (pb - pa) x (pc - pa): length = twice its area, so that sums of them are
+ * area-weighted. fp_mesh_normals and fp_mesh_normals_at share it, and unit_normal, so that
+ * both give the same bits. */
+static inline void tri_cross(const uint32_t *tri, const float *pos, float c[3])
+{
+    const float *pa = pos + 3 * (size_t)tri[0], *pb = pos + 3 * (size_t)tri[1],
+                *pc = pos + 3 * (size_t)tri[2];
+    float e1x = pb[0] - pa[0], e1y = pb[1] - pa[1], e1z = pb[2] - pa[2];
+    float e2x = pc[0] - pa[0], e2y = pc[1] - pa[1], e2z = pc[2] - pa[2];
+    c[0] = e1y * e2z - e1z * e2y;
+    c[1] = e1z * e2x - e1x * e2z;
+    c[2] = e1x * e2y - e1y * e2x;
+}
+
+/* A vertex's sum of cross products, normalised in place. */
+static inline void unit_normal(float *v)
+{
+    /* in double: the sums of tiny (denormal) triangles would lose their unit length */
+    const double x = v[0], y = v[1], z = v[2];
+    const double len = sqrt(x * x + y * y + z * z);
+    if (len > 0.0 && isfinite(len)) {
+        v[0] = (float)(x / len); v[1] = (float)(y / len); v[2] = (float)(z / len);
+    } else {
+        v[0] = v[1] = v[2] = 0.0f; /* no area around it (or non-finite input) */
+    }
+}
+
 int fp_mesh_normals(const uint32_t *tris, size_t t, const float *pos, size_t n,
                     float *normals_out)
 {
@@ -142,32 +169,63 @@ int fp_mesh_normals(const uint32_t *tris, size_t t, const float *pos, size_t n,
             memset(normals_out, 0, n * 3 * sizeof(float));
             return FP_MESH_ERR_INVALID;
         }
-        const float *pa = pos + 3 * (size_t)a, *pb = pos + 3 * (size_t)b,
-                    *pc = pos + 3 * (size_t)c;
-        float e1x = pb[0] - pa[0], e1y = pb[1] - pa[1], e1z = pb[2] - pa[2];
-        float e2x = pc[0] - pa[0], e2y = pc[1] - pa[1], e2z = pc[2] - pa[2];
-        /* (pb - pa) x (pc - pa): length = twice the area, so the sum is area-weighted */
-        float cx = e1y * e2z - e1z * e2y;
-        float cy = e1z * e2x - e1x * e2z;
-        float cz = e1x * e2y - e1y * e2x;
+        float cr[3];
+        tri_cross(tris + 3 * k, pos, cr);
         float *na = normals_out + 3 * (size_t)a, *nb = normals_out + 3 * (size_t)b,
               *nc = normals_out + 3 * (size_t)c;
-        na[0] += cx; na[1] += cy; na[2] += cz;
-        nb[0] += cx; nb[1] += cy; nb[2] += cz;
-        nc[0] += cx; nc[1] += cy; nc[2] += cz;
+        na[0] += cr[0]; na[1] += cr[1]; na[2] += cr[2];
+        nb[0] += cr[0]; nb[1] += cr[1]; nb[2] += cr[2];
+        nc[0] += cr[0]; nc[1] += cr[1]; nc[2] += cr[2];
     }
-    for (size_t i = 0; i < n; i++) {
-        float *v = normals_out + 3 * i;
-        /* in double: the sums of tiny (denormal) triangles would lose their unit length */
-        const double x = v[0], y = v[1], z = v[2];
-        const double len = sqrt(x * x + y * y + z * z);
-        if (len > 0.0 && isfinite(len)) {
-            v[0] = (float)(x / len); v[1] = (float)(y / len); v[2] = (float)(z / len);
-        } else {
-            v[0] = v[1] = v[2] = 0.0f; /* no area around it (or non-finite input) */
-        }
-    }
+    for (size_t i = 0; i < n; i++)
+        unit_normal(normals_out + 3 * i);
     return FP_MESH_OK;
+}
+
+int fp_mesh_vertex_triangles(const uint32_t *tris, size_t t, size_t n, uint32_t **vt_start,
+                             uint32_t **vt)
+{
+    if (!vt_start || !vt)
+        return FP_MESH_ERR_INVALID;
+    *vt_start = *vt = NULL;
+    if ((t > 0 && !tris) || n >= UINT32_MAX || 3 * t >= UINT32_MAX)
+        return FP_MESH_ERR_INVALID;
+    for (size_t i = 0; i < 3 * t; i++)
+        if (tris[i] >= n)
+            return FP_MESH_ERR_INVALID;
+    uint32_t *st = calloc(n + 1, sizeof *st), *v = malloc((t ? 3 * t : 1) * sizeof *v);
+    if (!st || !v) {
+        free(st);
+        free(v);
+        return FP_MESH_ERR_NOMEM;
+    }
+    for (size_t i = 0; i < 3 * t; i++) st[tris[i] + 1]++;
+    for (size_t i = 0; i < n; i++) st[i + 1] += st[i];
+    /* in triangle order, corner by corner: each vertex's list increases, as the sums of
+     * fp_mesh_normals do */
+    for (size_t i = 0; i < 3 * t; i++) v[st[tris[i]]++] = (uint32_t)(i / 3);
+    for (size_t i = n; i > 0; i--) st[i] = st[i - 1]; /* the fill moved each start on */
+    st[0] = 0;
+    *vt_start = st;
+    *vt = v;
+    return FP_MESH_OK;
+}
+
+void fp_mesh_normals_at(const uint32_t *tris, const uint32_t *vt_start, const uint32_t *vt,
+                        const float *pos, const uint32_t *verts, size_t count,
+                        float *normals_out)
+{
+    for (size_t i = 0; i < count; i++) {
+        uint32_t v = verts[i];
+        float sum[3] = {0.0f, 0.0f, 0.0f};
+        for (uint32_t k = vt_start[v]; k < vt_start[v + 1]; k++) {
+            float cr[3];
+            tri_cross(tris + 3 * (size_t)vt[k], pos, cr);
+            sum[0] += cr[0]; sum[1] += cr[1]; sum[2] += cr[2];
+        }
+        unit_normal(sum);
+        memcpy(normals_out + 3 * (size_t)v, sum, sizeof sum);
+    }
 }
 
 int fp_mesh_compute_normals(fp_mesh *mesh)

@@ -229,6 +229,21 @@ void fp_session_apply_controls(fp_session *s, int64_t now_ns, const fp_control_s
 const float *fp_session_positions(const fp_session *s);
 /** The committed shape (the base). */
 const float *fp_session_base(const fp_session *s);
+
+/** For a partial upload (the viewer): the vertex ranges, (*ranges)[2k] = first vertex,
+ *  [2k+1] = count, increasing and disjoint, in which fp_session_positions may differ from
+ *  what it was at this function's previous call; outside them it is bit for bit the same.
+ *  Returns their number, 0 when nothing changed, or SIZE_MAX (*ranges NULL) when anything
+ *  may have: the first call (which starts the record: a session nobody asks records
+ *  nothing), undo, reset, a commit with a rig or the contact guard, a rig pose (channels),
+ *  the contact guard's shape, an engine error, a mapping swap. Otherwise the ranges are the
+ *  union of the engine's per frame (fp_engine_step_touched: blocks of 16 vertices in a
+ *  support now or at its last run). *ranges is the session's, valid until the next call.
+ *  Session thread. */
+size_t fp_session_touched(fp_session *s, const uint32_t **ranges);
+/** The same for fp_session_base: a commit's ranges (the engine's), SIZE_MAX after undo,
+ *  reset, a commit with a rig or through the contact guard. */
+size_t fp_session_base_touched(fp_session *s, const uint32_t **ranges);
 /** The shape as loaded. */
 const float *fp_session_loaded(const fp_session *s);
 size_t fp_session_vertex_count(const fp_session *s);

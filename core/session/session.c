@@ -3,6 +3,7 @@
 #define _GNU_SOURCE
 #include "fp_session.h"
 
+#include "changed.h"
 #include "contact.h"
 #include "csrbf.h"
 #include "fp_plugin_crash.h"
@@ -68,6 +69,17 @@ struct fp_session {
     float *guarded;               /* n x 3: the shape shown when the guard scaled back */
     unsigned long cg_frames, cg_limited; /* this gesture: frames checked, scaled back */
     double cg_t;                  /* this gesture: smallest fraction kept */
+
+    /* what changed since the viewer last asked (fp_session_touched, changed.h) */
+    fp_changed shown_changed, base_changed;
+    int shown_kind;               /* what s->shown held at the end of the last frame: */
+};
+
+enum {
+    SHOWN_POSED,    /* the posed base */
+    SHOWN_ENGINE,   /* the engine's output (through the rig's blend): differs from the posed
+                       base only inside the engine's touched ranges */
+    SHOWN_OTHER     /* the contact guard's shape */
 };
 
 #define FP_CONTACT_BISECTIONS 6
@@ -352,6 +364,9 @@ static void on_event(void *user, size_t input, const fp_event *ev)
  * base, which is shown. */
 static void base_changed(fp_session *s)
 {
+    fp_changed_all(&s->shown_changed);
+    fp_changed_all(&s->base_changed);
+    s->shown_kind = SHOWN_POSED;
     fp_rig_step_base_changed(&s->rig);
     fp_rig_step_update(&s->rig, NULL, s->base, &s->log);
     s->shown = fp_rig_step_posed(&s->rig, s->base);
@@ -398,7 +413,10 @@ static void contact_end_gesture(fp_session *s)
  * and fp_session_apply_controls (takes played back). */
 static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame_stats *st)
 {
+    int was = s->shown_kind;
+    const uint32_t *ranges;
     s->shown = fp_rig_step_posed(&s->rig, s->base);
+    s->shown_kind = SHOWN_POSED;
     if (cs->active && cs->count > 0) {
         fp_engine_result er;
         int rc = fp_engine_step_run(&s->engine, cs, s->deformed, &er, &s->log);
@@ -419,6 +437,13 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame
             const float *ref = s->shown; /* the posed base */
             s->shown = fp_rig_step_finish(&s->rig, s->deformed);
             contact_guard(s, ref, st);
+            /* the output differs from the last only in the engine's ranges (blocks in a
+             * support now or at its last run), unless the guard's shape is or was shown */
+            s->shown_kind = s->shown == s->guarded ? SHOWN_OTHER : SHOWN_ENGINE;
+            if (s->shown_kind == SHOWN_OTHER || was == SHOWN_OTHER)
+                fp_changed_all(&s->shown_changed);
+            else
+                fp_changed_add(&s->shown_changed, ranges, fp_engine_step_touched(&s->engine, &ranges));
             if (cs->intents & FP_INTENT_COMMIT) {
                 int64_t t0 = fp_now_ns();
                 if (s->rig.rig) {
@@ -432,18 +457,31 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame
                     fp_history_commit(&s->history, s->deformed);
                     fp_engine_step_set_base(&s->engine, s->base);
                     s->shown = s->base;
+                    s->shown_kind = SHOWN_POSED;
+                    fp_changed_all(&s->shown_changed);
+                    fp_changed_all(&s->base_changed);
                 } else {
                     fp_history_commit(&s->history, s->deformed);
+                    /* the base changed where the output did (the shown shape is the same) */
+                    fp_changed_add(&s->base_changed, ranges, fp_engine_step_touched(&s->engine, &ranges));
                     /* the anchored gesture ended; unanchored restarts anyway. Only the blocks
                      * the engine rewrote are re-indexed. */
                     fp_engine_step_commit(&s->engine, s->base);
                     s->shown = s->base;
+                    s->shown_kind = SHOWN_POSED;
                 }
                 st->stage_ms[FP_STAGE_COMMIT] = (double)(fp_now_ns() - t0) / 1e6;
                 st->committed = true;
             }
+        } else {
+            fp_changed_all(&s->shown_changed); /* the posed base again, after an error */
         }
     } else {
+        /* the posed base: where the engine's last output differed from it, if shown */
+        if (was == SHOWN_OTHER)
+            fp_changed_all(&s->shown_changed);
+        else if (was == SHOWN_ENGINE)
+            fp_changed_add(&s->shown_changed, ranges, fp_engine_step_touched(&s->engine, &ranges));
         fp_history_end_gesture(&s->history);
         fp_engine_step_end_gesture(&s->engine, &s->log);
         contact_end_gesture(s);
@@ -509,8 +547,10 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     }
 
     /* 4: the rig: channels pose the base; the engine works on the posed base. */
-    if (fp_rig_step_update(&s->rig, &s->cs, s->base, &s->log))
+    if (fp_rig_step_update(&s->rig, &s->cs, s->base, &s->log)) {
         fp_engine_step_set_base(&s->engine, fp_rig_step_posed(&s->rig, s->base));
+        fp_changed_all(&s->shown_changed);
+    }
     const fp_control_set *cs = fp_rig_step_run(&s->rig, &s->cs);
     FP_STAGE_END(FP_STAGE_MAPPING);
 
@@ -538,8 +578,10 @@ void fp_session_apply_controls(fp_session *s, int64_t now_ns, const fp_control_s
     st->cancelled = cs->intents & FP_INTENT_CANCEL;
     /* 4: the rig poses the base from the stored channels; the stored set is already the
      * one the rig's clamp returned, so it goes to the engine as it is. */
-    if (fp_rig_step_update(&s->rig, cs, s->base, &s->log))
+    if (fp_rig_step_update(&s->rig, cs, s->base, &s->log)) {
         fp_engine_step_set_base(&s->engine, fp_rig_step_posed(&s->rig, s->base));
+        fp_changed_all(&s->shown_changed);
+    }
     engine_and_history(s, cs, st);
     fp_record_step_end(&s->record, s->frame, now_ns, requested | s->actions, cs, s->inputs,
                        s->input_count, &s->log);
@@ -571,6 +613,16 @@ unsigned fp_session_record_toggles(fp_session *s)
 }
 const float *fp_session_positions(const fp_session *s) { return s->shown; }
 const float *fp_session_base(const fp_session *s) { return s->base; }
+
+size_t fp_session_touched(fp_session *s, const uint32_t **ranges)
+{
+    return fp_changed_take(&s->shown_changed, ranges);
+}
+
+size_t fp_session_base_touched(fp_session *s, const uint32_t **ranges)
+{
+    return fp_changed_take(&s->base_changed, ranges);
+}
 const float *fp_session_loaded(const fp_session *s) { return s->loaded; }
 size_t fp_session_vertex_count(const fp_session *s) { return s->n; }
 const struct fp_mesh *fp_session_mesh(const fp_session *s) { return s->mesh; }
@@ -688,6 +740,8 @@ static int swap_mapping(fp_session *s, const fp_plugin_path *path, const char *s
     fp_mapping_step_flush(&s->mapping_step, &s->log);
     fp_plugin_unload(&old_plugin);
     s->shown = fp_rig_step_posed(&s->rig, s->base);
+    s->shown_kind = SHOWN_POSED;
+    fp_changed_all(&s->shown_changed);
     s->engaged = false;
     fp_history_end_gesture(&s->history);
     fp_engine_step_end_gesture(&s->engine, &s->log);
@@ -801,6 +855,8 @@ void fp_session_destroy(fp_session **sp)
     fp_engine_step_free(&s->engine);
     fp_contact_destroy(&s->contact);
     free(s->guarded);
+    fp_changed_free(&s->shown_changed);
+    fp_changed_free(&s->base_changed);
     fp_rig_step_free(&s->rig);
     fp_history_free(&s->history);
     fp_intents_free(&s->intents);

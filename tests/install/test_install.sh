@@ -8,6 +8,7 @@ trap 'rm -rf "$prefix"' EXIT
 cmake --install "$build" --prefix "$prefix" >/dev/null
 test -x "$prefix/bin/facepuppet"
 test -f "$prefix/include/facepuppet/plugin.h"
+test -x "$prefix/share/facepuppet/plot_fig3.py" # bench --plot finds it there
 cd "$prefix"
 FACEPUPPET_PLUGIN_PATH= "$prefix/bin/facepuppet" run -q \
   --mesh "$data/faces/mediapipe-canonical/canonical_face_model.obj" \

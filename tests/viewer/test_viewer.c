@@ -163,6 +163,54 @@ static void test_deform_commit_undo(void **state)
     stbi_image_free(c.px);
 }
 
+/* Partial uploads (fp_session_touched, ui/viewer/vnormals.c) show the same pixels as whole
+ * ones (FACEPUPPET_VIEWER_UPLOAD=full, the viewer before them) while engaged, committed and
+ * undone; =check compares every partial upload with the whole computation in the run. */
+static void test_partial_upload_same_pixels(void **state)
+{
+    (void)state;
+    const char *modes[2] = {"full", "check"};
+    for (int m = 0; m < 2; m++) {
+        setenv("FACEPUPPET_VIEWER_UPLOAD", modes[m], 1);
+        int rc = live("--rig none -i 'replay:%s' -M anchored,auto=0 --frames 2000 --script "
+                      "'key H; key Tab; wait hands; key E; wait end; wait frames 2; shot %s/%s-e.png; "
+                      "key C; wait frames 2; shot %s/%s-c.png; key Z; wait frames 2; shot %s/%s-z.png; key Esc'",
+                      rec, tmp, modes[m], tmp, modes[m], tmp, modes[m]);
+        unsetenv("FACEPUPPET_VIEWER_UPLOAD");
+        assert_int_equal(rc, 0);
+        if (m == 1) {
+            assert_true(out_contains(" partial uploads checked, 0 differ from the whole"));
+            assert_false(out_contains("; 0 partial uploads checked"));
+        }
+    }
+    const char *shots[3] = {"e", "c", "z"};
+    for (int k = 0; k < 3; k++) {
+        char a[64], b[64];
+        snprintf(a, sizeof a, "full-%s.png", shots[k]);
+        snprintf(b, sizeof b, "check-%s.png", shots[k]);
+        image full = load(a), part = load(b);
+        int differ = 0;
+        for (int i = 0; i < full.w * full.h * 3; i++) differ += full.px[i] != part.px[i];
+        print_message("%s: %d bytes differ between whole and partial uploads\n", shots[k], differ);
+        assert_int_equal(differ, 0);
+        stbi_image_free(full.px);
+        stbi_image_free(part.px);
+    }
+}
+
+/* The same check with the ICT face's rig (its mobility blend, the commit re-posing the base). */
+static void test_partial_upload_rig(void **state)
+{
+    (void)state;
+    setenv("FACEPUPPET_VIEWER_UPLOAD", "check", 1);
+    int rc = live("-i 'replay:%s' -M anchored,auto=0 --frames 2000 --script "
+                  "'wait hands; key E; wait end; wait frames 2; key C; wait frames 2; key E; "
+                  "wait frames 2; key Z; wait frames 2; key R; wait frames 2; key Esc'", rec);
+    unsetenv("FACEPUPPET_VIEWER_UPLOAD");
+    assert_int_equal(rc, 0);
+    assert_true(out_contains(" partial uploads checked, 0 differ from the whole"));
+}
+
 /* The HUD follows the session (issue 10): ENGAGED clears and the commit count goes back on
  * undo, reset and a dropped mesh; `print hud` prints what the HUD shows. */
 static void test_hud_follows_undo_reset_drop(void **state)
@@ -433,6 +481,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_screenshot_shows_face),
         cmocka_unit_test(test_deform_commit_undo),
+        cmocka_unit_test(test_partial_upload_same_pixels),
+        cmocka_unit_test(test_partial_upload_rig),
         cmocka_unit_test(test_hud_follows_undo_reset_drop),
         cmocka_unit_test(test_close_button_and_esc),
         cmocka_unit_test(test_drop_mesh_and_mapping_keys),

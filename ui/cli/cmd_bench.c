@@ -1,15 +1,28 @@
-/* facepuppet bench: the command line of the CSRBF engine benchmarks (bodies in bench/). */
+/* facepuppet bench: the command line of the CSRBF engine benchmarks (bodies in bench/), and
+ * --plot: the paper's Figure 3 remade from the table1 case by bench/plot_fig3.py. */
+#define _GNU_SOURCE
 #include "app_util.h"
 #include "command.h"
 #include "fp_bench.h"
 
+#include <errno.h>
+#include <fcntl.h>
+#include <spawn.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#ifndef FP_BENCH_SOURCE_DIR
+#define FP_BENCH_SOURCE_DIR "bench"
+#endif
 
 static void usage(FILE *f)
 {
     fprintf(f,
-            "usage: facepuppet bench [--quick] [--json] [--case NAME] [--help]\n\n"
+            "usage: facepuppet bench [--quick] [--json] [--case NAME] [--plot FILE.png] [--help]\n\n"
             "Times the CSRBF engine (medians over repeated updates; the lowest median of 3\n"
             "rounds, 2 with --quick, as the machine may be shared) beside references measured\n"
             "in the same run. Cases:\n"
@@ -38,13 +51,182 @@ static void usage(FILE *f)
             "  --quick  fewer repetitions (under 40 s)\n"
             "  --json   one JSON object per line: case, mode, vertices, centres, radius, pairs,\n"
             "           paper_pairs, ms_median, ms_bruteforce, ms_fresh, paper_fps (null: none)\n"
-            "  --case NAME  run one case only\n\n"
-            "Exit status: 0 done, 64 usage, 70 out of memory, 1 an engine call failed.\n");
+            "  --case NAME  run one case only\n"
+            "  --plot FILE.png  the paper's Figure 3 remade: run table1 (--quick respected; with\n"
+            "           --json its rows on stdout too) and draw updates per second (log) against\n"
+            "           R for the four meshes, anchored and unanchored, ours beside the paper's,\n"
+            "           with plot_fig3.py (share/facepuppet/ when installed, else the source\n"
+            "           tree's bench/) and matplotlib; python3 is $FACEPUPPET_PYTHON, else\n"
+            "           /usr/bin/python3, else the PATH's. FILE.png is written whole or not at all\n\n"
+            "Exit status: 0 done, 64 usage, 69 --plot without python3, matplotlib or the script,\n"
+            "70 out of memory, 73 FILE.png not writable, 1 an engine call failed.\n");
+}
+
+/* ---- --plot: Figure 3 ------------------------------------------------------------------- */
+
+extern char **environ;
+
+/* The plot script: <exe dir>/../share/facepuppet/plot_fig3.py when installed, else the
+ * source tree's bench/plot_fig3.py (as the rig files are found). NULL when neither exists;
+ * `tried` names both. */
+static const char *plot_script(char *buf, size_t len, char *tried, size_t tried_len)
+{
+    snprintf(buf, len, "%s/../share/facepuppet/plot_fig3.py", fp_app_exe_dir());
+    snprintf(tried, tried_len, "%s", buf);
+    if (access(buf, R_OK) == 0) return buf;
+    snprintf(buf, len, "%s/plot_fig3.py", FP_BENCH_SOURCE_DIR);
+    snprintf(tried + strlen(tried), tried_len - strlen(tried), ", %s", buf);
+    return access(buf, R_OK) == 0 ? buf : NULL;
+}
+
+/* The interpreter: $FACEPUPPET_PYTHON, else Debian's /usr/bin/python3 (where
+ * python3-matplotlib installs), else python3 on the PATH. */
+static const char *plot_python(void)
+{
+    const char *env = getenv("FACEPUPPET_PYTHON");
+    if (env && *env) return env;
+    return access("/usr/bin/python3", X_OK) == 0 ? "/usr/bin/python3" : "python3";
+}
+
+/* Run argv (argv[0] through the PATH when it has no slash) with stdin from in_fd (-1: as
+ * ours) and stdout to /dev/null when quiet. Returns its exit status (128 + signal when
+ * killed), or a negative errno when it could not be started (-ENOENT: no such program). */
+static int spawn_wait(char *const argv[], int in_fd, bool quiet)
+{
+    posix_spawn_file_actions_t fa;
+    if (posix_spawn_file_actions_init(&fa)) return -ENOMEM;
+    if (in_fd >= 0) posix_spawn_file_actions_adddup2(&fa, in_fd, STDIN_FILENO);
+    if (quiet) posix_spawn_file_actions_addopen(&fa, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
+    pid_t pid;
+    int rc = posix_spawnp(&pid, argv[0], &fa, NULL, argv, environ);
+    posix_spawn_file_actions_destroy(&fa);
+    if (rc) return -rc;
+    int st;
+    while (waitpid(pid, &st, 0) < 0)
+        if (errno != EINTR) return -errno;
+    return WIFEXITED(st) ? WEXITSTATUS(st) : 128 + (WIFSIGNALED(st) ? WTERMSIG(st) : 0);
+}
+
+/* The umask, read without changing it (as core/mesh's atomic writes do). */
+static mode_t new_file_mode(void)
+{
+    mode_t mask = 022;
+    FILE *f = fopen("/proc/self/status", "re");
+    if (f) {
+        char line[256];
+        unsigned m;
+        while (fgets(line, sizeof line, f))
+            if (sscanf(line, "Umask: %o", &m) == 1) mask = (mode_t)m;
+        fclose(f);
+    }
+    return 0666 & ~mask;
+}
+
+/* `bench --plot FILE.png`: check python3, matplotlib and the output's folder first, run the
+ * table1 case into an unlinked temporary file (JSON lines; echoed to stdout with --json),
+ * give it to plot_fig3.py as its stdin, which writes .FILE.png.XXXXXX beside FILE.png; fsync,
+ * rename. Never a half-written FILE.png. Returns an exit status. */
+static int bench_plot(fp_bench_options *o, const char *png)
+{
+    char script[4200], tried[8500];
+    if (!plot_script(script, sizeof script, tried, sizeof tried)) {
+        fprintf(stderr, "facepuppet bench: the plot script plot_fig3.py is missing (looked for %s)\n",
+                tried);
+        return FP_EXIT_UNAVAILABLE;
+    }
+    const char *py = plot_python();
+    char *check[] = {(char *)py, script, "--check", NULL};
+    int rc = spawn_wait(check, -1, true);
+    if (rc < 0 || rc == 127) {
+        fprintf(stderr, "facepuppet bench: --plot needs python3 with matplotlib: cannot run '%s'%s%s "
+                        "(on Debian: apt-get install python3-matplotlib; or set FACEPUPPET_PYTHON)\n",
+                py, rc < 0 ? ": " : "", rc < 0 ? strerror(-rc) : "");
+        return FP_EXIT_UNAVAILABLE;
+    }
+    if (rc == 3) { /* the script said which: matplotlib */
+        fprintf(stderr, "facepuppet bench: --plot needs matplotlib for '%s' (on Debian: apt-get "
+                        "install python3-matplotlib)\n", py);
+        return FP_EXIT_UNAVAILABLE;
+    }
+    if (rc) {
+        fprintf(stderr, "facepuppet bench: '%s %s --check' failed (exit %d)\n", py, script, rc);
+        return FP_EXIT_FAILURE;
+    }
+    /* the temporary PNG beside the target (so the rename is atomic), made before the bench
+     * runs so that an unwritable folder fails at once */
+    const char *slash = strrchr(png, '/');
+    char tmp[4200];
+    if (slash)
+        snprintf(tmp, sizeof tmp, "%.*s/.%s.XXXXXX", (int)(slash - png), png, slash + 1);
+    else
+        snprintf(tmp, sizeof tmp, ".%s.XXXXXX", png);
+    int png_fd = mkostemp(tmp, O_CLOEXEC);
+    if (png_fd < 0) {
+        int e = errno;
+        fprintf(stderr, "facepuppet bench: %s: cannot create a file beside it: %s\n", png, strerror(e));
+        return fp_app_exit_code(-e, FP_APP_OUTPUT);
+    }
+    const char *tmpdir = getenv("TMPDIR");
+    char json_path[4200];
+    snprintf(json_path, sizeof json_path, "%s/facepuppet-fig3-XXXXXX", tmpdir && *tmpdir ? tmpdir : "/tmp");
+    int json_fd = mkostemp(json_path, O_CLOEXEC);
+    if (json_fd >= 0) unlink(json_path);
+    int saved = -1, exit_code = FP_EXIT_OK;
+    if (json_fd < 0 || fflush(stdout) || (saved = dup(STDOUT_FILENO)) < 0 ||
+        dup2(json_fd, STDOUT_FILENO) < 0) {
+        fprintf(stderr, "facepuppet bench: cannot make a temporary file for the JSON: %s\n", strerror(errno));
+        exit_code = FP_EXIT_CANTCREAT;
+        goto done;
+    }
+    bool echo = o->json;
+    o->json = true;
+    o->only = "table1";
+    rc = fp_bench_run(o);
+    fflush(stdout);
+    dup2(saved, STDOUT_FILENO);
+    if (rc) {
+        exit_code = fp_app_exit_code(rc, FP_APP_INPUT);
+        goto done;
+    }
+    if (echo) { /* --json: the rows on stdout too */
+        char buf[65536];
+        ssize_t got;
+        lseek(json_fd, 0, SEEK_SET);
+        while ((got = read(json_fd, buf, sizeof buf)) > 0) fwrite(buf, 1, (size_t)got, stdout);
+        fflush(stdout);
+    }
+    lseek(json_fd, 0, SEEK_SET);
+    char *plot[] = {(char *)py, script, "--out", tmp, NULL};
+    rc = spawn_wait(plot, json_fd, false);
+    if (rc) {
+        fprintf(stderr, "facepuppet bench: %s failed (exit %d); %s not written\n", script, rc, png);
+        exit_code = rc < 0 ? fp_app_exit_code(rc, FP_APP_INPUT) : rc == 3 ? FP_EXIT_UNAVAILABLE
+                    : rc == 73 ? FP_EXIT_CANTCREAT : FP_EXIT_FAILURE;
+        goto done;
+    }
+    struct stat st;
+    errno = 0;
+    if (fstat(png_fd, &st) || st.st_size == 0 || fchmod(png_fd, new_file_mode()) || fsync(png_fd) ||
+        rename(tmp, png)) {
+        int e = errno ? errno : EIO;
+        fprintf(stderr, "facepuppet bench: %s: cannot write it: %s\n", png, strerror(e));
+        exit_code = fp_app_exit_code(-e, FP_APP_OUTPUT);
+        goto done;
+    }
+    tmp[0] = '\0'; /* renamed: nothing to remove */
+    fprintf(stderr, "facepuppet bench: wrote %s (Figure 3: table1%s)\n", png, o->quick ? ", --quick" : "");
+done:
+    if (saved >= 0) close(saved);
+    if (json_fd >= 0) close(json_fd);
+    close(png_fd);
+    if (tmp[0]) unlink(tmp);
+    return exit_code;
 }
 
 static int bench_main(int argc, char **argv)
 {
     fp_bench_options o = {0};
+    const char *plot = NULL;
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--quick")) {
             o.quick = true;
@@ -52,6 +234,8 @@ static int bench_main(int argc, char **argv)
             o.json = true;
         } else if (!strcmp(argv[i], "--case") && i + 1 < argc) {
             o.only = argv[++i];
+        } else if (!strcmp(argv[i], "--plot") && i + 1 < argc) {
+            plot = argv[++i];
         } else if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
             usage(stdout);
             return FP_EXIT_OK;
@@ -70,6 +254,13 @@ static int bench_main(int argc, char **argv)
             fprintf(stderr, ")\n");
             return FP_EXIT_USAGE;
         }
+    }
+    if (plot) {
+        if (o.only && strcmp(o.only, "table1")) {
+            fprintf(stderr, "facepuppet bench: --plot draws the table1 case, not '%s'\n", o.only);
+            return FP_EXIT_USAGE;
+        }
+        return bench_plot(&o, plot);
     }
     fp_plugin_path path;
     fp_app_plugin_path(&path, NULL, 0); /* the replay and anchored plugins, for 'frame' */

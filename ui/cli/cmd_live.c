@@ -197,6 +197,13 @@ static int live_main(int argc, char **argv)
                (unsigned long long)rep.frames, rep.frame_ms_median, rep.frame_ms_p99,
                rep.latency_ms_median, rep.latency_ms_p99, rep.latency_samples, rep.engine_ms_median,
                rep.dropped);
+        printf("upload (normals + GL) median %.3f ms, p99 %.3f ms over %zu frames that changed "
+               "(all frames: median %.3f ms, p99 %.3f ms)", rep.upload_ms_median, rep.upload_ms_p99,
+               rep.uploads, rep.upload_all_ms_median, rep.upload_all_ms_p99);
+        if (rep.upload_checked)
+            printf("; %lu partial uploads checked, %lu differ from the whole", rep.upload_checked,
+                   rep.upload_mismatches);
+        printf("\n");
         if (vo.gpu_warp)
             printf("gpu-warp: %zu checks against the CPU engine; max |GPU - CPU| %.3g mesh units, "
                    "%.3g of the max displacement %.4g\n", rep.warp_checks, rep.warp_max_error,

@@ -8,7 +8,12 @@
  * Frame loop: poll window events, run due script commands, step the session once with the
  * current time (inputs run on their own threads, so the frame always shows the latest pose
  * and never queues: swap interval 0 unless vsync is asked, glFinish after each swap), upload,
- * draw, swap. Timing is measured inside: frame time (swap to swap) and the latency from a
+ * draw, swap. The upload follows the supports: positions and normals are recomputed and
+ * uploaded only inside the vertex ranges the session reports (fp_session_touched,
+ * fp_session_base_touched; normals of the vertices of triangles with a changed vertex, bit for
+ * bit the whole computation's), the base only when it changed. FACEPUPPET_VIEWER_UPLOAD=full
+ * uploads whole meshes on any change (for comparisons), =check compares every partial upload
+ * with the whole computation (fp_viewer_report.upload_mismatches). Timing is measured inside: frame time (swap to swap) and the latency from a
  * hand event's time (fp_hand_pose.time_ns, the host clock when the input pushed it) to the
  * swap of the first frame showing it.
  *
@@ -81,6 +86,12 @@ typedef struct fp_viewer_report {
     double warp_max_error;                     /* max |GPU - CPU| over vertices, mesh units */
     double warp_max_displacement;              /* max |CPU - base| in those frames */
     unsigned long dropped;                     /* input events dropped (queues full) */
+    size_t uploads;                            /* frames that uploaded a shape (changed) */
+    double upload_ms_median, upload_ms_p99;    /* their normals + GL upload, CPU side */
+    double upload_all_ms_median, upload_all_ms_p99; /* the same over every frame */
+    unsigned long upload_checked;              /* FACEPUPPET_VIEWER_UPLOAD=check: partial */
+    unsigned long upload_mismatches;           /* uploads compared whole, and those that
+                                                  differed from the whole computation */
 } fp_viewer_report;
 
 /** Open the window, create and start the session from opt->session, run until the window

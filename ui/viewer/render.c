@@ -273,6 +273,23 @@ int fp_render_set_colors(fp_render *r, const float *rgb)
     return 0;
 }
 
+void fp_render_upload_ranges(fp_render *r, bool base, const float *pos, const float *nrm,
+                             const uint32_t *ranges, size_t count)
+{
+    const float *src[2] = {pos, nrm};
+    GLuint buf[2] = {base ? r->vbo_base_pos : r->vbo_shape_pos, base ? r->vbo_base_nrm : r->vbo_shape_nrm};
+    for (int b = 0; b < 2; b++) {
+        glBindBuffer(GL_ARRAY_BUFFER, buf[b]);
+        for (size_t k = 0; k < count; k++) {
+            size_t first = ranges[2 * k], n = ranges[2 * k + 1];
+            if (first >= r->vertex_count) break;
+            if (n > r->vertex_count - first) n = r->vertex_count - first;
+            glBufferSubData(GL_ARRAY_BUFFER, (GLintptr)(first * 3 * sizeof(float)),
+                            (GLsizeiptr)(n * 3 * sizeof(float)), src[b] + 3 * first);
+        }
+    }
+}
+
 /* ---- drawing ---------------------------------------------------------------------------- */
 
 static void begin_blend(bool translucent)

@@ -40,6 +40,10 @@ void fp_render_free(fp_render *r);
 int fp_render_set_topology(fp_render *r, size_t n, const uint32_t *tris, size_t t);
 /** Upload the shown shape, or the base shape (base = true): positions and normals, n x 3. */
 void fp_render_upload(fp_render *r, bool base, const float *pos, const float *nrm);
+/** The same for some vertices only: `count` (first, count) vertex ranges, increasing, of the
+ *  full n x 3 arrays pos and nrm (glBufferSubData per range and buffer). */
+void fp_render_upload_ranges(fp_render *r, bool base, const float *pos, const float *nrm,
+                             const uint32_t *ranges, size_t count);
 
 /** Colour the shown shape per vertex: rgb, vertex_count x 3 floats in [0, 1], replaces the
  *  flat colour of fp_render_mesh (base = false; its alpha stays) until called with NULL or

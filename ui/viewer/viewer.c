@@ -10,6 +10,7 @@
 #include "script.h"
 #include "takes.h"
 #include "vmath.h"
+#include "vnormals.h"
 
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
@@ -78,6 +79,14 @@ typedef struct viewer {
     float *base, *base_nrm;   /* last uploaded base and its normals */
     bool have_pos, have_base;
     float *check;             /* GPU warp read-back */
+    /* partial uploads (upload()): normals and buffers only where the session says the shape
+     * changed; FACEPUPPET_VIEWER_UPLOAD=full: the whole mesh on any change (compared whole),
+     * =check: partial, then compared with the whole every frame */
+    fp_vnormals vn;
+    enum { UPLOAD_PARTIAL, UPLOAD_FULL, UPLOAD_CHECK } upload_mode;
+    bool showed_review;       /* the last upload showed a take's frame */
+    samples upload_ms, upload_all_ms; /* upload() of frames that uploaded something, of all */
+    unsigned long upload_checked, upload_mismatches;
 
     /* interaction */
     bool paused, wireframe, hands_on, hud_on, help_on;
@@ -194,7 +203,9 @@ static int geometry_alloc(viewer *v)
     v->pos = p[0]; v->nrm = p[1]; v->base = p[2]; v->base_nrm = p[3]; v->check = p[4];
     v->have_pos = v->have_base = false;
     if (!v->pos || !v->nrm || !v->base || !v->base_nrm || !v->check) return -ENOMEM;
-    return fp_render_set_topology(&v->r, v->n, m->triangles, v->t);
+    fp_vnormals_free(&v->vn);
+    int rc = fp_vnormals_init(&v->vn, m->triangles, v->t, v->n);
+    return rc ? rc : fp_render_set_topology(&v->r, v->n, m->triangles, v->t);
 }
 
 static void mapping_name(viewer *v, const char *spec)
@@ -752,27 +763,68 @@ static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
     else fp_render_text(&v->r, w, h, 8, (float)h - 14 * scale, scale, "? keys", dim);
 }
 
-/* Upload the shape to show and the base when they changed (normals recomputed). */
-static void upload(viewer *v, bool warp_on_gpu)
+/* Bring one of the face's GPU copies (base: the ghost and the GPU warp's input; else the
+ * shown shape) and its CPU mirror up to src: whole on the first upload or when anything may
+ * have changed (nr SIZE_MAX), else only the nr ranges the session reports, with the normals
+ * that depend on them (vnormals.h). Returns whether it uploaded. */
+static bool upload_shape(viewer *v, bool base, const float *src, const uint32_t *ranges, size_t nr)
 {
     const fp_mesh *m = fp_session_mesh(v->s);
+    float *pos = base ? v->base : v->pos, *nrm = base ? v->base_nrm : v->nrm;
+    bool *have = base ? &v->have_base : &v->have_pos;
     size_t bytes = v->n * 3 * sizeof(float);
-    const float *base = fp_session_base(v->s);
-    if (!v->have_base || memcmp(base, v->base, bytes)) {
-        memcpy(v->base, base, bytes);
-        fp_mesh_normals(m->triangles, v->t, v->base, v->n, v->base_nrm);
-        fp_render_upload(&v->r, true, v->base, v->base_nrm);
-        v->have_base = true;
+    if (v->upload_mode == UPLOAD_FULL) /* as before partial uploads: compared whole */
+        nr = !*have || memcmp(src, pos, bytes) ? SIZE_MAX : 0;
+    if (!nr && *have) return false;
+    if (!*have || nr == SIZE_MAX) {
+        memcpy(pos, src, bytes);
+        fp_mesh_normals(m->triangles, v->t, pos, v->n, nrm);
+        fp_render_upload(&v->r, base, pos, nrm);
+        *have = true;
+        return true;
     }
-    if (warp_on_gpu) return;
+    for (size_t k = 0; k < nr; k++)
+        memcpy(pos + 3 * (size_t)ranges[2 * k], src + 3 * (size_t)ranges[2 * k],
+               ranges[2 * k + 1] * 3 * sizeof(float));
+    const uint32_t *up;
+    size_t nu = fp_vnormals_update(&v->vn, pos, ranges, nr, nrm, &up);
+    fp_render_upload_ranges(&v->r, base, pos, nrm, up, nu);
+    if (v->upload_mode == UPLOAD_CHECK) { /* the mirror against the whole computation */
+        float *full = malloc(bytes);
+        v->upload_checked++;
+        if (!full || memcmp(src, pos, bytes) ||
+            (fp_mesh_normals(m->triangles, v->t, pos, v->n, full), memcmp(full, nrm, bytes)))
+            v->upload_mismatches++;
+        free(full);
+    }
+    return true;
+}
+
+/* Upload the base and the shape to show where they changed (fp_session_base_touched,
+ * fp_session_touched; a take's frame under review is compared whole). */
+static void upload(viewer *v, bool warp_on_gpu)
+{
+    int64_t t0 = fp_now_ns();
+    const uint32_t *ranges;
+    size_t nr = fp_session_base_touched(v->s, &ranges);
+    bool did = upload_shape(v, true, fp_session_base(v->s), ranges, nr);
+    nr = fp_session_touched(v->s, &ranges); /* taken every frame, so the record stays short */
     const float *review = fp_vtakes_shown(&v->takes);
-    const float *shown = review ? review : fp_session_positions(v->s);
-    if (!v->have_pos || memcmp(shown, v->pos, bytes)) {
-        memcpy(v->pos, shown, bytes);
-        fp_mesh_normals(m->triangles, v->t, v->pos, v->n, v->nrm);
-        fp_render_upload(&v->r, false, v->pos, v->nrm);
-        v->have_pos = true;
+    if (warp_on_gpu) {
+        v->have_pos = false; /* the shown buffers are not kept */
+    } else if (review || v->showed_review) {
+        const float *src = review ? review : fp_session_positions(v->s);
+        if (!v->have_pos || memcmp(src, v->pos, v->n * 3 * sizeof(float))) {
+            v->have_pos = false;
+            did |= upload_shape(v, false, src, NULL, SIZE_MAX);
+        }
+    } else {
+        did |= upload_shape(v, false, fp_session_positions(v->s), ranges, nr);
     }
+    v->showed_review = review != NULL;
+    double ms = (double)(fp_now_ns() - t0) / 1e6;
+    samples_add(&v->upload_all_ms, ms);
+    if (did) samples_add(&v->upload_ms, ms);
 }
 
 /* Compare the GPU warp (transform feedback) with the CPU engine's shape this frame. */
@@ -942,6 +994,9 @@ int fp_viewer_run(const fp_viewer_options *opt, fp_viewer_report *report, char *
     v->hands_on = v->hud_on = true;
     v->last_active.guard_reached = 1.0;
     v->last_active.guard_substeps = 1;
+    const char *um = getenv("FACEPUPPET_VIEWER_UPLOAD");
+    v->upload_mode = um && !strcmp(um, "full") ? UPLOAD_FULL : um && !strcmp(um, "check") ? UPLOAD_CHECK
+                                                                                      : UPLOAD_PARTIAL;
     int rc = 0;
     bool glfw = false;
     if (opt->script && (rc = fp_script_parse(opt->script, &v->script, err, errlen))) goto out;
@@ -1023,6 +1078,12 @@ out:
     v->rep.latency_samples = v->latency_ms.n;
     double unused;
     fp_viewer_percentiles(v->engine_ms.v, v->engine_ms.n, &v->rep.engine_ms_median, &unused);
+    fp_viewer_percentiles(v->upload_ms.v, v->upload_ms.n, &v->rep.upload_ms_median, &v->rep.upload_ms_p99);
+    v->rep.uploads = v->upload_ms.n;
+    fp_viewer_percentiles(v->upload_all_ms.v, v->upload_all_ms.n, &v->rep.upload_all_ms_median,
+                          &v->rep.upload_all_ms_p99);
+    v->rep.upload_checked = v->upload_checked;
+    v->rep.upload_mismatches = v->upload_mismatches;
     if (report) *report = v->rep;
     fp_vtakes_free(&v->takes);
     fp_session_destroy(&v->s);
@@ -1036,6 +1097,9 @@ out:
     free(v->frame_ms.v);
     free(v->latency_ms.v);
     free(v->engine_ms.v);
+    free(v->upload_ms.v);
+    free(v->upload_all_ms.v);
+    fp_vnormals_free(&v->vn);
     free(v->pos); free(v->nrm); free(v->base); free(v->base_nrm); free(v->check);
     free(v->shot_path);
     free(v->drop_path);

@@ -1,0 +1,285 @@
+/* What changed since the viewer last asked (changed.h, fp_session_touched,
+ * fp_session_base_touched): the range union against a bitmap reference on random lists, and
+ * the session's contract on the ICT face with and without its rig, driven by control sets
+ * (fp_session_apply_controls): outside the reported ranges the shown shape and the base are
+ * bit for bit what they were at the previous call, through gestures, commits, idle frames,
+ * cancels, undo, reset, a jaw channel and calls that skip frames; and the ranges stay small
+ * where the engine's supports are (not "everything" in disguise). */
+#define _GNU_SOURCE
+#include "changed.h"
+#include "fp_mesh.h"
+#include "fp_session.h"
+#include "fp_test_support.h"
+
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cmocka.h>
+
+/* ---- the union ------------------------------------------------------------------------- */
+
+static uint64_t rng = 88172645463325252ull;
+static uint32_t next_u32(void)
+{
+    rng ^= rng << 13;
+    rng ^= rng >> 7;
+    rng ^= rng << 17;
+    return (uint32_t)(rng >> 11);
+}
+
+/* A random increasing, disjoint list (adjacent pairs allowed) below n; its pairs into r. */
+static size_t random_ranges(uint32_t *r, size_t max_pairs, uint32_t n, unsigned char *mark)
+{
+    size_t k = 0;
+    uint32_t at = next_u32() % 50;
+    while (k < max_pairs && at < n) {
+        uint32_t len = 1 + next_u32() % 40;
+        if (at + len > n) len = n - at;
+        r[2 * k] = at;
+        r[2 * k + 1] = len;
+        for (uint32_t v = at; v < at + len; v++) mark[v] = 1;
+        k++;
+        at += len + next_u32() % 60; /* sometimes 0: adjacent */
+    }
+    return k;
+}
+
+static void test_changed_union(void **state)
+{
+    (void)state;
+    enum { N = 5000 };
+    static unsigned char ref[N];
+    static uint32_t r[2 * 400];
+    fp_changed c = {0};
+    const uint32_t *out;
+    /* nothing is recorded before the first take, which says "anything" */
+    fp_changed_add(&c, (const uint32_t[]){1, 2}, 1);
+    assert_int_equal(fp_changed_take(&c, &out), SIZE_MAX);
+    assert_null(out);
+    assert_int_equal(fp_changed_take(&c, &out), 0);
+    for (int round = 0; round < 200; round++) {
+        memset(ref, 0, sizeof ref);
+        int adds = 1 + (int)(next_u32() % 5);
+        for (int a = 0; a < adds; a++) {
+            size_t k = random_ranges(r, 400, N, ref);
+            fp_changed_add(&c, r, k);
+        }
+        bool all = round % 17 == 3;
+        if (all) fp_changed_all(&c);
+        fp_changed_add(&c, r, 0);
+        size_t k = fp_changed_take(&c, &out);
+        if (all) {
+            assert_int_equal(k, SIZE_MAX);
+            continue;
+        }
+        unsigned char got[N] = {0};
+        uint64_t last_end = 0;
+        for (size_t i = 0; i < k; i++) {
+            assert_true(out[2 * i + 1] > 0);
+            if (i) assert_true(out[2 * i] > last_end); /* disjoint, not adjacent: joined */
+            last_end = (uint64_t)out[2 * i] + out[2 * i + 1];
+            assert_true(last_end <= N);
+            for (uint32_t v = out[2 * i]; v < last_end; v++) got[v] = 1;
+        }
+        assert_memory_equal(got, ref, N);
+    }
+    fp_changed_add(&c, NULL, SIZE_MAX);
+    assert_int_equal(fp_changed_take(&c, &out), SIZE_MAX);
+    fp_changed_free(&c);
+}
+
+/* ---- the session ----------------------------------------------------------------------- */
+
+typedef struct fixture {
+    fp_session *s;
+    size_t n;
+    float *shown, *base;     /* as at the last take */
+    unsigned char *cover;
+    float start[3][3], end[3][3];
+    fp_control_set cs;
+    double radius;
+    int64_t t;
+} fixture;
+
+/* Take both records and check them against the last; returns the shown shape's count and
+ * writes the covered fraction to *frac (1 for SIZE_MAX). */
+static size_t take_one(fixture *f, bool base, double *frac, size_t *bcount)
+{
+    const uint32_t *r;
+    size_t k = base ? fp_session_base_touched(f->s, &r) : fp_session_touched(f->s, &r);
+    const float *now = base ? fp_session_base(f->s) : fp_session_positions(f->s);
+    float *prev = base ? f->base : f->shown;
+    if (k != SIZE_MAX) {
+        memset(f->cover, 0, f->n);
+        size_t covered = 0;
+        for (size_t i = 0; i < k; i++) {
+            assert_true((size_t)r[2 * i] + r[2 * i + 1] <= f->n);
+            for (uint32_t v = r[2 * i]; v < r[2 * i] + r[2 * i + 1]; v++) f->cover[v] = 1, covered++;
+        }
+        for (size_t v = 0; v < f->n; v++)
+            if (!f->cover[v] && memcmp(&now[3 * v], &prev[3 * v], 3 * sizeof(float)))
+                fail_msg("%s: vertex %zu changed outside the %zu reported ranges", base ? "base" : "shown", v, k);
+        *frac = (double)covered / (double)f->n;
+    } else {
+        *frac = 1;
+    }
+    memcpy(prev, now, f->n * 3 * sizeof(float));
+    if (bcount) *bcount = k;
+    return k;
+}
+
+static size_t take(fixture *f, double *frac, size_t *base_k)
+{
+    double bf;
+    take_one(f, true, &bf, base_k);
+    return take_one(f, false, frac, NULL);
+}
+
+static void frame(fixture *f, bool active, uint32_t intents, double phase)
+{
+    f->cs.active = active;
+    f->cs.intents = intents;
+    f->cs.count = active ? 3 : 0;
+    for (int i = 0; i < 3; i++)
+        for (int k = 0; k < 3; k++)
+            f->end[i][k] = f->start[i][k] + (float)(0.08 * f->radius * sin(phase + i + 2.1 * k));
+    fp_session_apply_controls(f->s, f->t += 16666667, &f->cs, intents, NULL);
+}
+
+/* Start points at three vertices of the face (cheek, chin, forehead area by index). */
+static void place(fixture *f, uint32_t a, uint32_t b, uint32_t c)
+{
+    const float *p = fp_session_base(f->s);
+    uint32_t v[3] = {a, b, c};
+    for (int i = 0; i < 3; i++) memcpy(f->start[i], &p[3 * v[i]], sizeof f->start[i]);
+}
+
+static void run_contract(const char *rig_path)
+{
+    fixture f = {0};
+    char err[2048];
+    fp_session_options so = {0};
+    so.mesh_path = fp_test_face_path();
+    so.mapping = "anchored";
+    so.plugin_path = fp_test_plugin_path();
+    so.rig_path = rig_path;
+    so.rig_dir = FP_TEST_RIGS_DIR;
+    int rc = fp_session_create(&so, &f.s, err, sizeof err);
+    if (rc) fprintf(stderr, "%s\n", err);
+    assert_int_equal(rc, 0);
+    f.n = fp_session_vertex_count(f.s);
+    f.shown = malloc(f.n * 3 * sizeof(float));
+    f.base = malloc(f.n * 3 * sizeof(float));
+    f.cover = malloc(f.n);
+    assert_true(f.shown && f.base && f.cover);
+    float lo[3], hi[3];
+    fp_mesh_bounds(fp_session_mesh(f.s), lo, hi);
+    f.radius = 0.06 * sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                           (hi[2] - lo[2]) * (hi[2] - lo[2]));
+    f.cs.size = sizeof f.cs;
+    f.cs.radius = f.radius;
+    f.cs.capacity = 3;
+    f.cs.start = f.start;
+    f.cs.end = f.end;
+    bool rig = fp_session_rig(f.s) != NULL;
+    double frac;
+    size_t bk;
+
+    assert_int_equal(take(&f, &frac, &bk), SIZE_MAX); /* the first call */
+    assert_int_equal(bk, SIZE_MAX);
+    frame(&f, false, 0, 0);
+    assert_int_equal(take(&f, &frac, &bk), 0);          /* idle: nothing */
+    assert_int_equal(bk, 0);
+
+    /* a gesture: each frame a few blocks; the commit moves the base there too */
+    place(&f, 3000, 8000, 12000);
+    int partial = 0;
+    for (int i = 0; i < 8; i++) {
+        frame(&f, true, i == 0 ? FP_INTENT_ENGAGE : 0, 0.4 * i);
+        size_t k = take(&f, &frac, &bk);
+        assert_int_equal(bk, 0);
+        if (i == 0) continue; /* the engine's first run writes its whole output */
+        if (!(k != SIZE_MAX && k > 0 && frac < 0.5)) fail_msg("frame %d: %zu ranges, %.3f of the vertices", i, k, frac);
+        partial++;
+    }
+    assert_int_equal(partial, 7);
+    frame(&f, true, FP_INTENT_COMMIT, 3.2);
+    size_t k = take(&f, &frac, &bk);
+    if (!rig) {
+        assert_true(k != SIZE_MAX && frac < 0.5);
+        assert_true(bk > 0 && bk != SIZE_MAX); /* the commit's ranges */
+    } else {
+        assert_int_equal(bk, SIZE_MAX); /* with a rig the commit re-poses the base */
+    }
+    frame(&f, false, 0, 0);
+    take(&f, &frac, &bk);
+    frame(&f, false, 0, 0);
+    assert_int_equal(take(&f, &frac, &bk), 0);
+    assert_int_equal(bk, 0);
+
+    /* frames not asked about: the union covers them all; a cancelled gesture goes back */
+    place(&f, 500, 15000, 20000);
+    for (int i = 0; i < 5; i++) frame(&f, true, i == 0 ? FP_INTENT_ENGAGE : 0, 0.3 * i);
+    k = take(&f, &frac, &bk);
+    /* (with a rig the commit re-posed the base: the engine's first run after it writes all) */
+    assert_true(k != SIZE_MAX && k > 0 && (rig || frac < 0.5));
+    frame(&f, true, FP_INTENT_CANCEL, 2);
+    take(&f, &frac, &bk);
+    frame(&f, false, 0, 0); /* the base again: where the last output differed */
+    k = take(&f, &frac, &bk);
+    assert_true(k != SIZE_MAX && k > 0);
+    assert_memory_equal(fp_session_positions(f.s), fp_session_base(f.s), rig ? 0 : f.n * 3 * sizeof(float));
+
+    /* undo and reset: everything */
+    assert_true(fp_session_undo(f.s));
+    assert_int_equal(take(&f, &frac, &bk), SIZE_MAX);
+    assert_int_equal(bk, SIZE_MAX);
+    frame(&f, false, 0, 0);
+    assert_int_equal(take(&f, &frac, &bk), 0);
+    fp_session_reset(f.s);
+    assert_int_equal(take(&f, &frac, &bk), SIZE_MAX);
+
+    if (rig) { /* a channel poses the face: everything, then gestures are partial again */
+        assert_int_equal(fp_session_set_channel(f.s, "jaw.open", 0.5), 0);
+        frame(&f, false, 0, 0);
+        assert_int_equal(take(&f, &frac, &bk), SIZE_MAX);
+        place(&f, 3000, 8000, 12000);
+        for (int i = 0; i < 4; i++) {
+            frame(&f, true, i == 0 ? FP_INTENT_ENGAGE : 0, 0.5 * i);
+            k = take(&f, &frac, &bk);
+            if (i) assert_true(k != SIZE_MAX && frac < 0.5);
+        }
+    }
+    fp_session_destroy(&f.s);
+    free(f.shown);
+    free(f.base);
+    free(f.cover);
+}
+
+static void test_session_contract_no_rig(void **state)
+{
+    (void)state;
+    run_contract("none");
+}
+
+static void test_session_contract_rig(void **state)
+{
+    (void)state;
+    run_contract(NULL); /* the ICT face's rig, found by its checksum */
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_changed_union),
+        cmocka_unit_test(test_session_contract_no_rig),
+        cmocka_unit_test(test_session_contract_rig),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
