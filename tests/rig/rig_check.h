@@ -1,6 +1,7 @@
 /* Checks shared by the rig tests (tests/rig): the best rigid fit of a vertex set (Horn's
  * quaternion method, an independent reference for "the lower teeth move rigidly") and folds
- * of a posed surface. Test-only, header-only (static functions). */
+ * of a posed surface (left out with RIG_CHECK_NO_FOLDS). Test-only, header-only (static
+ * functions). */
 #ifndef FP_TEST_RIG_CHECK_H
 #define FP_TEST_RIG_CHECK_H
 
@@ -96,6 +97,7 @@ static size_t rig_check_rigid_fit(const float *a, const float *b, const uint8_t 
     return k;
 }
 
+#ifndef RIG_CHECK_NO_FOLDS
 static void rig_check_normal(const float *p, const uint32_t *t, double nrm[3])
 {
     double u[3], v[3];
@@ -158,5 +160,6 @@ static long rig_check_folds(const float *rest, const float *after, const uint32_
     free(e);
     return folds;
 }
+#endif
 
 #endif
