@@ -474,8 +474,16 @@ static int parse_weights(const ctx *c, fp_rig *r, const cJSON *wj)
     size_t nv = (size_t)cJSON_GetArraySize(vals);
     weight_pair *pairs = nv ? malloc(nv * sizeof *pairs) : NULL;
     if (nv && !pairs) return fp_errorf(c->err, c->errlen, -ENOMEM, "%s: out of memory", c->file);
-    size_t k = 0;
     int i = 0;
+    for (const cJSON *e = vals->child; e && !rc; e = e->next, i++) {
+        char ep[64];
+        snprintf(ep, sizeof ep, "jaw.weights.values[%d]", i);
+        if (!cJSON_IsNumber(e)) rc = bad(c, ep, "expected a number, got %s", type_name(e));
+        else if (!(e->valuedouble >= 0 && e->valuedouble <= 1)) rc = bad(c, ep, "%g is outside [0, 1]", e->valuedouble);
+        else pairs[i].w = (float)e->valuedouble;
+    }
+    size_t k = 0;
+    i = 0;
     for (const cJSON *e = vs->child; e && !rc; e = e->next, i++) {
         char ep[64];
         snprintf(ep, sizeof ep, "jaw.weights.vertices[%d]", i);
@@ -502,20 +510,12 @@ static int parse_weights(const ctx *c, fp_rig *r, const cJSON *wj)
                          r->kind[v] == FP_RIG_SKULL ? "in a skull region" : "in a jaw region");
                 break;
             }
-            pairs[k].v = v, pairs[k].at = i, k++;
+            pairs[k].v = v, pairs[k].at = i, k++; /* pairs[k].w: the k-th value */
             if (v == b) break;
         }
     }
     if (!rc && k != nv)
         rc = bad(c, "jaw.weights", "%zu vertices listed but %zu values: one value per vertex", k, nv);
-    i = 0;
-    for (const cJSON *e = vals->child; e && !rc; e = e->next, i++) {
-        char ep[64];
-        snprintf(ep, sizeof ep, "jaw.weights.values[%d]", i);
-        if (!cJSON_IsNumber(e)) rc = bad(c, ep, "expected a number, got %s", type_name(e));
-        else if (!(e->valuedouble >= 0 && e->valuedouble <= 1)) rc = bad(c, ep, "%g is outside [0, 1]", e->valuedouble);
-        else pairs[i].w = (float)e->valuedouble;
-    }
     if (!rc && nv) {
         qsort(pairs, nv, sizeof *pairs, by_vertex);
         for (size_t j = 1; j < nv && !rc; j++)

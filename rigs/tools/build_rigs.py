@@ -283,9 +283,13 @@ def ict_jaw_weights(V, F, rig_obj, lm):
             fix(m, w_fall)
     fix(~(skin | inter), w_fall)  # eyes, lashes, teeth: the falloff (0 there)
     for loop, is_up in ((floop, f_up), (sloop, s_up)):
-        s = 1 - smoothstep(ICT_LIP_FULL, x_tip, np.abs(X[loop]))
+        # s: 0 at the corners, 1 within ICT_LIP_FULL of the midline; smooth (flat) on the upper
+        # lip, which lies on the upper incisors, linear on the lower lip (the least shear)
+        ax = np.abs(X[loop])
+        s_upper = 1 - smoothstep(ICT_LIP_FULL, x_tip, ax)
+        s_lower = np.clip((x_tip - ax) / (x_tip - ICT_LIP_FULL), 0, 1)
         fixed[loop] = True
-        val[loop] = np.where(is_up, 0.5 * (1 - s), 0.5 * (1 + s))
+        val[loop] = np.where(is_up, 0.5 * (1 - s_upper), 0.5 * (1 + s_lower))
     fix(skin & (d_loop > ICT_LIP_ZONE), w_fall)
     fix(face & (np.abs(X) < ICT_LIP_KEEP) & (np.abs(Vd[:, 1] - ym) > ICT_LIP_KEEP_BAND) & ((w_fall == 0) | (w_fall == 1)), w_fall)
     near = np.minimum(du, dl) < ICT_TEETH_NEAR

@@ -377,9 +377,9 @@ static void test_broken_files(void **state)
         /* jaw.weights */
         {"\"weights\": {", "\"weights\": {\"x\": 1, ", "jaw.weights.x"},
         {"\"glide\": [0.6, 0.3],", "\"glide\": [0.6, 0.3], \"weights\": 3,", "jaw.weights"},
-        {"\"values\": [\n    0.1627", "\"values\": [\n    1.5", "jaw.weights.values[0]"},
-        {"\"values\": [\n    0.1627", "\"values\": [\n    \"a\"", "jaw.weights.values[0]"},
-        {"\"values\": [\n    0.1627, ", "\"values\": [\n    ", "jaw.weights"}, /* one value short */
+        {"\"values\": [\n    ", "\"values\": [\n    1.5, ", "jaw.weights.values[0]"},
+        {"\"values\": [\n    ", "\"values\": [\n    \"a\", ", "jaw.weights.values[0]"},
+        {"\"weights\": {\n   \"vertices\": [", "\"weights\": {\n   \"vertices\": [26718, ", "jaw.weights"}, /* a value short */
         {"\"weights\": {\n   \"vertices\": [", "\"weights\": {\n   \"vertices\": [17040, ", "jaw.weights.vertices[0]"},
         {"\"weights\": {\n   \"vertices\": [", "\"weights\": {\n   \"vertices\": [19300, ", "jaw.weights.vertices[0]"},
         {"\"weights\": {\n   \"vertices\": [\n    [18, 28]", "\"weights\": {\n   \"vertices\": [\n    [28, 18]",
