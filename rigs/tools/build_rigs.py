@@ -133,7 +133,7 @@ ICT_INNER_DEPTH = 0.8
 ICT_NECK_BAND = 7.0
 ICT_BACK_BAND = 4.0
 ICT_OPEN_DEGREES = 26.0
-ICT_GLIDE = [0.6, 0.3]    # condyle forward and down at jaw.open = 1, cm
+ICT_GLIDE = [0.8, 0.3]    # condyle forward and down at jaw.open = 1, cm
 # Mobility ramp: fingers act fully this far from bone; the finger clamp is ramp / 3 (fp_rig.h).
 ICT_RAMP = 1.0
 # Jaw weights of the lips and the mouth's inside (rigs/README.md "ICT: the jaw weights").

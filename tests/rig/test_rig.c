@@ -376,7 +376,7 @@ static void test_broken_files(void **state)
         {"{", "[", ""},
         /* jaw.weights */
         {"\"weights\": {", "\"weights\": {\"x\": 1, ", "jaw.weights.x"},
-        {"\"glide\": [0.6, 0.3],", "\"glide\": [0.6, 0.3], \"weights\": 3,", "jaw.weights"},
+        {"\"glide\": [", "\"weights\": 3, \"glide\": [", "jaw.weights"},
         {"\"values\": [\n    ", "\"values\": [\n    1.5, ", "jaw.weights.values[0]"},
         {"\"values\": [\n    ", "\"values\": [\n    \"a\", ", "jaw.weights.values[0]"},
         {"\"weights\": {\n   \"vertices\": [", "\"weights\": {\n   \"vertices\": [26718, ", "jaw.weights"}, /* a value short */
