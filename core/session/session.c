@@ -499,7 +499,9 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     in.rig = fp_rig_step_view(&s->rig);
     const float *surface = fp_rig_step_posed(&s->rig, s->base); /* what the fingers touch */
     s->view.base = surface;
-    fp_engine_step_tip_distances(&s->engine, s->pose.poses, in.tip_distance); /* on its base: the posed surface */
+    /* on its base (the posed surface), within the fingers' reach only (plugin.h) */
+    fp_engine_step_tip_distances(&s->engine, s->pose.poses, (float)(FP_TIP_DISTANCE_REACH * s->radius),
+                                 in.tip_distance);
     FP_STAGE_END(FP_STAGE_DISTANCES);
     fp_mapping_step_run(&s->mapping_step, s->mapping, s->mapping_name, &in, &s->cs, &s->log);
     st->engaged = s->cs.intents & FP_INTENT_ENGAGE;
