@@ -51,6 +51,12 @@ typedef struct fp_rig_step {
     float *commit;                                /* n x 3: the shape a commit folds in */
     double max_displacement;                      /* worst-case finger clamp (ramp / 3), for reports */
     fp_control_set cs;                            /* the clamped copy the engine takes */
+    /* fp_rig_finger_limit per control point, kept while the posed base, the radius and that
+     * start point (bitwise) stay: an anchored gesture computes it once, not every frame */
+    double limit[FP_RIG_STEP_MAX_CONTROL];
+    float limit_start[FP_RIG_STEP_MAX_CONTROL][3];
+    double limit_radius;
+    size_t limit_count;                           /* entries valid; 0 after posing anew */
     float start[FP_RIG_STEP_MAX_CONTROL][3], end[FP_RIG_STEP_MAX_CONTROL][3];
     fp_rig_view view;                             /* for mappings */
     fp_rig_landmark landmarks[FP_RIG_MAX_LANDMARKS];

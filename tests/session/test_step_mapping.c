@@ -1,5 +1,6 @@
 /* core/session/step_mapping (the control set's check, errors reported once with a count),
  * step_rig (the pass-through) and session_log's repeat counter. */
+#include "fp_mesh.h"
 #include "log_capture.h"
 #include "step_mapping.h"
 #include "step_rig.h"
@@ -9,6 +10,8 @@
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <cmocka.h>
 
@@ -119,12 +122,83 @@ static void test_rig_pass_through(void **state)
     assert_memory_equal(&copy, &cs, sizeof cs);
 }
 
+/* The rig's finger clamp on the ICT face: every frame's clamped control set equals one made
+ * with fp_rig_finger_limit computed afresh on the current posed base, while the step keeps
+ * the limits of unmoved start points (an anchored gesture), after a start point moves, the
+ * radius changes, and the jaw is posed anew (the posed base changed). */
+static void expect_clamped(const fp_rig_step *r, const fp_control_set *in, const fp_control_set *out)
+{
+    assert_int_equal(out->count, in->count);
+    for (size_t i = 0; i < in->count; i++) {
+        double limit = fmin(0.45 * in->radius, fp_rig_finger_limit(r->rig, r->posed, in->start[i], in->radius));
+        double d[3], len = 0;
+        for (int k = 0; k < 3; k++) {
+            d[k] = (double)in->end[i][k] - in->start[i][k];
+            len += d[k] * d[k];
+        }
+        len = sqrt(len);
+        double f = len > limit ? limit / len : 1;
+        for (int k = 0; k < 3; k++) {
+            float e = f == 1 ? in->end[i][k] : (float)(in->start[i][k] + f * d[k]);
+            assert_memory_equal(&out->start[i][k], &in->start[i][k], sizeof(float));
+            assert_memory_equal(&out->end[i][k], &e, sizeof(float));
+        }
+    }
+}
+
+static void test_rig_clamp_kept(void **state)
+{
+    (void)state;
+    const char *dir = getenv("FP_SHARED_DATA") ? getenv("FP_SHARED_DATA") : "../shared/data";
+    char path[4200], err[512];
+    snprintf(path, sizeof path, "%s/faces/ict-facekit/generic_neutral_mesh.obj", dir);
+    fp_mesh *m = NULL;
+    assert_int_equal(fp_mesh_load(path, &m, err, sizeof err), 0);
+    fp_rig *rig = NULL;
+    assert_int_equal(fp_rig_load_for_mesh("rigs/ict-facekit.json", m->vertex_count, m->positions, &rig, err,
+                                          sizeof err), 0);
+    fp_rig_step r;
+    assert_int_equal(fp_rig_step_init(&r, rig, m->vertex_count, m->positions), 0);
+    /* start points on vertices all over the face (some near the jaw's ramp), long vectors */
+    float st[4][3], en[4][3];
+    fp_control_set cs;
+    setup_cs(&cs);
+    cs.start = st;
+    cs.end = en;
+    cs.count = 4;
+    cs.radius = 2.0;
+    cs.active = true;
+    size_t n = m->vertex_count;
+    unsigned limited = 0;
+    for (int frame = 0; frame < 40; frame++) {
+        if (frame == 0 || frame == 25) /* a new gesture: new start points */
+            for (int i = 0; i < 4; i++)
+                memcpy(st[i], m->positions + 3 * ((size_t)(frame * 97 + i * 6151) % n), sizeof st[i]);
+        if (frame == 10) st[2][1] += 0.01f; /* one start point moves */
+        if (frame == 15) cs.radius = 3.0;
+        if (frame == 20) { /* the jaw opens: the posed base changes */
+            assert_int_equal(fp_rig_step_set_channel(&r, "jaw.open", 0.8f), 0);
+            assert_true(fp_rig_step_update(&r, NULL, m->positions, NULL));
+        }
+        for (int i = 0; i < 4; i++)
+            for (int k = 0; k < 3; k++) en[i][k] = st[i][k] + (k == 2 ? 1.5f : 0.3f) * (float)(frame % 5 + 1);
+        const fp_control_set *out = fp_rig_step_run(&r, &cs);
+        expect_clamped(&r, &cs, out);
+        for (size_t i = 0; i < 4; i++)
+            limited += fp_rig_finger_limit(r.rig, r.posed, st[i], cs.radius) < 0.45 * cs.radius;
+    }
+    assert_true(limited > 0); /* the rig's own limit acted somewhere, not only the 0.45 R */
+    fp_rig_step_free(&r);
+    fp_mesh_free(&m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_check),
         cmocka_unit_test(test_errors_once_with_count),
         cmocka_unit_test(test_rig_pass_through),
+        cmocka_unit_test(test_rig_clamp_kept),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
