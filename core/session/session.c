@@ -279,7 +279,10 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
     int threads = opt->engine_threads ? opt->engine_threads : (s->n < 200000 ? 1 : 0);
     fp_intents_init(&s->intents);
     fp_pose_init(&s->pose, opt->hand_size, NULL);
-    fp_history_init(&s->history, s->n, s->base);
+    if ((rc = fp_history_init(&s->history, s->n, s->base))) {
+        snprintf(err, errlen, "session: out of memory for the undo history");
+        goto fail;
+    }
     fp_record_step_init(&s->record, opt->record, opt->record_user);
     if ((rc = fp_engine_step_init(&s->engine, s->n, s->shown, threads))) {
         snprintf(err, errlen, "session: cannot index %zu vertices", s->n);
@@ -393,6 +396,32 @@ static void contact_end_gesture(fp_session *s)
     s->cg_frames = s->cg_limited = 0;
 }
 
+/* dst = src on the ranges the engine's last evaluation wrote (everywhere when it does not
+ * know them). */
+static void copy_touched(fp_session *s, float *dst, const float *src)
+{
+    const uint32_t *r;
+    size_t nr = fp_engine_step_touched(&s->engine, &r);
+    if (nr == SIZE_MAX) {
+        memcpy(dst, src, s->n * 3 * sizeof(float));
+        return;
+    }
+    for (size_t i = 0; i < nr; i++)
+        memcpy(dst + 3 * (size_t)r[2 * i], src + 3 * (size_t)r[2 * i], 3 * (size_t)r[2 * i + 1] * sizeof(float));
+}
+
+/* A commit of the engine's output buffer: into the base (and the gesture's undo level) on the
+ * touched ranges, outside which it equals the base; the whole buffer where they are unknown. */
+static void commit_touched(fp_session *s)
+{
+    const uint32_t *r;
+    size_t nr = fp_engine_step_touched(&s->engine, &r);
+    if (nr == SIZE_MAX)
+        fp_history_commit(&s->history, s->deformed);
+    else
+        fp_history_commit_ranges(&s->history, s->deformed, r, nr);
+}
+
 /* Steps 5 and 6 on the control set the engine is given (after the rig's clamp), on the
  * posed base: evaluate, the rig's mobility blend, show, commit. Shared by fp_session_step
  * and fp_session_apply_controls (takes played back). */
@@ -414,10 +443,13 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame
         st->guard_substeps = er.substeps;
         st->guard_reached = er.reached;
         st->min_det_j = er.min_det_j;
+        if (rc) s->rig.shown_valid = false; /* the output buffer may have changed unseen */
         if (!rc) {
             st->active = true;
             const float *ref = s->shown; /* the posed base */
-            s->shown = fp_rig_step_finish(&s->rig, s->deformed);
+            const uint32_t *touched;
+            size_t ntouched = fp_engine_step_touched(&s->engine, &touched);
+            s->shown = fp_rig_step_finish(&s->rig, s->deformed, touched, ntouched);
             contact_guard(s, ref, st);
             if (cs->intents & FP_INTENT_COMMIT) {
                 int64_t t0 = fp_now_ns();
@@ -425,17 +457,15 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame
                     /* with a rig only the fingers' part goes into the base */
                     fp_history_commit(&s->history, fp_rig_step_commit_shape(&s->rig, s->base, s->shown));
                     base_changed(s); /* the anchored gesture ended; unanchored restarts anyway */
-                } else if (s->shown == s->guarded) {
-                    /* the guard scaled the motion back: its shape goes into the base and
-                     * the output buffer; the engine re-indexes the whole base */
-                    memcpy(s->deformed, s->guarded, s->n * 3 * sizeof(float));
-                    fp_history_commit(&s->history, s->deformed);
-                    fp_engine_step_set_base(&s->engine, s->base);
-                    s->shown = s->base;
                 } else {
-                    fp_history_commit(&s->history, s->deformed);
-                    /* the anchored gesture ended; unanchored restarts anyway. Only the blocks
-                     * the engine rewrote are re-indexed. */
+                    /* the guard scaled the motion back: its shape goes into the output
+                     * buffer first (it equals the base outside the touched ranges, as the
+                     * output does: fp_contact_guard's out = ref + t (cand - ref)) */
+                    if (s->shown == s->guarded) copy_touched(s, s->deformed, s->guarded);
+                    /* the output buffer becomes the base on the touched ranges only, and
+                     * only those are re-indexed; the anchored gesture ended, unanchored
+                     * restarts anyway */
+                    commit_touched(s);
                     fp_engine_step_commit(&s->engine, s->base);
                     s->shown = s->base;
                 }

@@ -116,7 +116,8 @@ bool fp_rig_step_update(fp_rig_step *st, const fp_control_set *cs, const float *
     size_t nc = fp_rig_channel_count(st->rig);
     if (!st->dirty && !memcmp(st->values, st->posed_values, nc * sizeof(float))) return false;
     fp_rig_pose(st->rig, base, st->values, st->posed);
-    st->limit_count = 0; /* the finger limits depend on the posed base */
+    st->limit_count = 0; /* the finger limits and the blend depend on the posed base */
+    st->shown_valid = false;
     memcpy(st->posed_values, st->values, nc * sizeof(float));
     st->dirty = false;
     refresh_view(st);
@@ -164,10 +165,18 @@ const fp_control_set *fp_rig_step_run(fp_rig_step *st, const fp_control_set *cs)
     return o;
 }
 
-const float *fp_rig_step_finish(fp_rig_step *st, const float *deformed)
+const float *fp_rig_step_finish(fp_rig_step *st, const float *deformed, const uint32_t *ranges,
+                                size_t nranges)
 {
     if (!st->rig) return deformed;
-    fp_rig_apply_mobility(st->rig, st->posed, deformed, st->shown);
+    if (nranges == SIZE_MAX || !st->shown_valid) {
+        fp_rig_apply_mobility(st->rig, st->posed, deformed, st->shown);
+        st->shown_valid = true;
+        return st->shown;
+    }
+    /* elsewhere deformed is posed now and was at the last call: shown holds its blend */
+    for (size_t r = 0; r < nranges; r++)
+        fp_rig_apply_mobility_range(st->rig, st->posed, deformed, st->shown, ranges[2 * r], ranges[2 * r + 1]);
     return st->shown;
 }
 

@@ -1,5 +1,6 @@
 /* core/session/step_mapping (the control set's check, errors reported once with a count),
  * step_rig (the pass-through) and session_log's repeat counter. */
+#include "csrbf.h"
 #include "fp_mesh.h"
 #include "log_capture.h"
 #include "step_mapping.h"
@@ -192,6 +193,69 @@ static void test_rig_clamp_kept(void **state)
     fp_mesh_free(&m);
 }
 
+/* The mobility blend over the engine's touched ranges only equals the whole blend bit for bit,
+ * frame after frame: a real engine (csrbf, touched evaluation) on the ICT face's posed base
+ * moving over it, the jaw posed anew halfway (the blend starts over). */
+static void test_rig_finish_ranges(void **state)
+{
+    (void)state;
+    const char *dir = getenv("FP_SHARED_DATA") ? getenv("FP_SHARED_DATA") : "../shared/data";
+    char path[4200], err[512];
+    snprintf(path, sizeof path, "%s/faces/ict-facekit/generic_neutral_mesh.obj", dir);
+    fp_mesh *m = NULL;
+    assert_int_equal(fp_mesh_load(path, &m, err, sizeof err), 0);
+    size_t n = m->vertex_count, bytes = n * 3 * sizeof(float);
+    fp_rig *rig = NULL;
+    assert_int_equal(fp_rig_load_for_mesh("rigs/ict-facekit.json", n, m->positions, &rig, err, sizeof err), 0);
+    fp_rig_step r;
+    assert_int_equal(fp_rig_step_init(&r, rig, n, m->positions), 0);
+    csrbf_points *pts = NULL;
+    csrbf_touch *touch = NULL;
+    csrbf_solver *sol = NULL;
+    assert_int_equal(csrbf_points_create(n, r.posed, &pts), CSRBF_OK);
+    assert_int_equal(csrbf_touch_create(pts, &touch), CSRBF_OK);
+    csrbf_options o = {0};
+    o.radius = 2.0;
+    o.threads = 1;
+    assert_true(csrbf_solver_create(&o, &sol) >= 0);
+    float *out = malloc(bytes), *want = malloc(bytes);
+    memcpy(out, r.posed, bytes);
+    unsigned partial = 0;
+    for (int frame = 0; frame < 30; frame++) {
+        if (frame == 15) { /* the jaw: a new posed base, re-indexed */
+            assert_int_equal(fp_rig_step_set_channel(&r, "jaw.open", 0.5f), 0);
+            assert_true(fp_rig_step_update(&r, NULL, m->positions, NULL));
+            assert_int_equal(csrbf_points_update(pts, r.posed), CSRBF_OK);
+            csrbf_touch_reset(touch);
+        }
+        float st[2][3], en[2][3];
+        for (int i = 0; i < 2; i++) { /* two fingers walking over the face */
+            memcpy(st[i], r.posed + 3 * ((size_t)(frame * 211 + i * 9001) % n), sizeof st[i]);
+            for (int k = 0; k < 3; k++) en[i][k] = st[i][k] + 0.3f;
+        }
+        assert_true(csrbf_solver_set_start_points(sol, 2, &st[0][0]) >= 0);
+        assert_true(csrbf_solver_set_end_points(sol, &en[0][0]) >= 0);
+        assert_true(csrbf_evaluate_touched(sol, pts, touch, out, 0u, NULL) >= 0);
+        const uint32_t *ranges;
+        size_t nr = csrbf_touch_ranges(touch, &ranges);
+        const float *shown = fp_rig_step_finish(&r, out, ranges, nr);
+        assert_ptr_equal(shown, r.shown);
+        assert_int_equal(fp_rig_apply_mobility(rig, r.posed, out, want), 0);
+        assert_memory_equal(shown, want, bytes);
+        size_t covered = 0;
+        for (size_t i = 0; i < nr; i++) covered += ranges[2 * i + 1];
+        partial += covered < n;
+    }
+    assert_true(partial >= 20); /* most frames blended a part of the face only */
+    free(out);
+    free(want);
+    csrbf_solver_destroy(&sol);
+    csrbf_touch_destroy(&touch);
+    csrbf_points_destroy(&pts);
+    fp_rig_step_free(&r);
+    fp_mesh_free(&m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -199,6 +263,7 @@ int main(void)
         cmocka_unit_test(test_errors_once_with_count),
         cmocka_unit_test(test_rig_pass_through),
         cmocka_unit_test(test_rig_clamp_kept),
+        cmocka_unit_test(test_rig_finish_ranges),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
