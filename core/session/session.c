@@ -288,6 +288,10 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
         snprintf(err, errlen, "session: cannot index %zu vertices", s->n);
         goto fail;
     }
+    /* the output buffer starts as the surface the engine indexes (the posed base), so the
+     * first run writes only the blocks in a support, not the whole mesh */
+    memcpy(s->deformed, s->shown, bytes);
+    fp_engine_step_output_is_base(&s->engine);
     s->mapping_budget_ms = opt->mapping_budget_ms;
     s->engine.jacobian = opt->measure_jacobian;
     if ((rc = fp_engine_step_set_topology(&s->engine, s->mesh->triangles, s->mesh->triangle_count))) {

@@ -53,6 +53,12 @@ void fp_engine_step_commit(fp_engine_step *e, const float *base)
     e->factored = false;
 }
 
+void fp_engine_step_output_is_base(fp_engine_step *e)
+{
+    csrbf_touch_commit(e->touch);
+    e->touched_valid = true;
+}
+
 size_t fp_engine_step_touched(const fp_engine_step *e, const uint32_t **ranges)
 {
     if (!e->touched_valid) {

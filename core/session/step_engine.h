@@ -109,6 +109,11 @@ void fp_engine_step_free(fp_engine_step *e);
  *  base): re-index it whole, forget the factor, and the next run rewrites the whole output. */
 void fp_engine_step_set_base(fp_engine_step *e, const float *base);
 
+/** The caller's output buffer equals the indexed base bit for bit (a fresh copy of it, at
+ *  creation): no block differs from the base, so a run writes only the blocks in a support
+ *  (csrbf_touch_commit) and the touched ranges are known from the first run on. */
+void fp_engine_step_output_is_base(fp_engine_step *e);
+
 /** A commit: base is now the output buffer of the last run (deformed copied into it).
  *  Re-indexes only the vertex ranges that run wrote (csrbf_points_update_ranges; all after a
  *  composed step), csrbf_touch_commit, forgets the factor. */
