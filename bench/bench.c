@@ -748,8 +748,11 @@ fp_mesh *fp_bench_subdivide(const fp_mesh *m)
 static double pct(double *v, size_t n, double p) { return n ? fp_percentile(v, n, p / 100.0) : 0.0; }
 
 /* One replay of three-claps at its own pace through the session API, 60 frames a second:
- * per-stage times (fp_frame_stats.stage_ms), the whole frame, and the brute-force fingertip
- * distances on the same frame's hands for reference. */
+ * per-stage times (fp_frame_stats.stage_ms), the whole frame, the frames a slow one made the
+ * loop skip, the committing frames. For reference, the brute-force fingertip distances on
+ * every 8th frame's hands, computed after the replay (on the last base: during it, 40 ms at
+ * 1.7M vertices would make the paced loop skip frames), beside the indexed ones on the same
+ * base, which must equal them within the session's reach and say "far" beyond it. */
 static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char *label,
                      const fp_mesh *mesh)
 {
@@ -771,73 +774,106 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
         fp_session_destroy(&s);
         return rc;
     }
-    size_t cap = 4096, nf = 0, nact = 0, nbrute = 0;
-    double *st_ms[FP_STAGE_COUNT], *total = malloc(cap * sizeof *total),
-           *brute = malloc(cap * sizeof *brute), *act = malloc(cap * sizeof *act);
-    for (int k = 0; k < FP_STAGE_COUNT; k++) st_ms[k] = malloc(cap * sizeof(double));
-    int64_t period = 1000000000LL / 60, next = fp_now_ns();
+    enum { CAP = 4096 };
+    size_t nf = 0, nact = 0, ncommit = 0, dropped = 0;
+    double *st_ms[FP_STAGE_COUNT], *total = malloc(CAP * sizeof *total),
+           *act = malloc(CAP * sizeof *act), *com = malloc(CAP * sizeof *com);
+    fp_hand_pose(*hands)[FP_HANDS] = calloc(CAP, sizeof *hands);
+    for (int k = 0; k < FP_STAGE_COUNT; k++) st_ms[k] = malloc(CAP * sizeof(double));
+    int64_t period = 1000000000LL / 60, start = fp_now_ns(), next = start;
     size_t n = fp_session_vertex_count(s);
-    unsigned commits = 0;
-    while (!fp_session_finished(s) && nf < cap) {
+    while (!fp_session_finished(s) && nf < CAP) {
         fp_frame_stats st;
         int64_t a = fp_now_ns();
         fp_session_step(s, a, &st);
         int64_t b = fp_now_ns();
         total[nf] = (double)(b - a) / 1e6;
         if (st.active) act[nact++] = total[nf];
-        commits += st.committed;
+        if (st.committed) com[ncommit++] = total[nf];
         for (int k = 0; k < FP_STAGE_COUNT; k++) st_ms[k][nf] = st.stage_ms[k];
-        fp_hand_pose hands[FP_HANDS];
-        memset(hands, 0, sizeof hands);
         for (int h = 0; h < FP_HANDS; h++)
-            if (fp_session_hand(s, h)) hands[h] = *fp_session_hand(s, h);
-        /* the reference on every 8th frame (it costs as much as the rest of the frame) */
-        if (nf % 8 == 0) {
-            float d[FP_HANDS][FP_FINGERS];
-            int64_t c = fp_now_ns();
-            fp_engine_tip_distances(fp_session_base(s), n, hands, d);
-            brute[nbrute++] = (double)(fp_now_ns() - c) / 1e6;
-        }
+            if (fp_session_hand(s, h)) hands[nf][h] = *fp_session_hand(s, h);
         nf++;
         next += period;
         int64_t now = fp_now_ns();
         if (next > now) {
             struct timespec ts = {(time_t)((next - now) / 1000000000LL), (long)((next - now) % 1000000000LL)};
             nanosleep(&ts, NULL);
-        } else {
+        } else { /* late: the frames whose time passed meanwhile are skipped */
+            dropped += (size_t)((now - next) / period);
             next = now;
         }
     }
-    (void)o;
+    double seconds = (double)(fp_now_ns() - start) / 1e9;
+    /* the reference, and the indexed distances checked against it (same base, same hands) */
+    size_t nbrute = 0, within = 0, far = 0, wrong = 0;
+    double *brute = malloc((nf / 8 + 1) * sizeof *brute), *indexed = malloc((nf / 8 + 1) * sizeof *indexed);
+    const float reach = (float)(FP_TIP_DISTANCE_REACH * fp_session_radius(s));
+    fp_engine_step e;
+    if (fp_engine_step_init(&e, n, fp_session_base(s), 1)) rc = -ENOMEM;
+    for (size_t f = 0; f < nf && !rc; f += 8) {
+        float d[FP_HANDS][FP_FINGERS], q[FP_HANDS][FP_FINGERS];
+        int64_t c = fp_now_ns();
+        fp_engine_tip_distances(fp_session_base(s), n, hands[f], d);
+        int64_t c1 = fp_now_ns();
+        fp_engine_step_tip_distances(&e, hands[f], reach, q);
+        indexed[nbrute] = (double)(fp_now_ns() - c1) / 1e6;
+        brute[nbrute++] = (double)(c1 - c) / 1e6;
+        for (int h = 0; h < FP_HANDS; h++)
+            for (int t = 0; t < FP_FINGERS && hands[f][h].present; t++) {
+                bool in = d[h][t] <= reach;
+                within += in;
+                far += !in;
+                wrong += in ? memcmp(&d[h][t], &q[h][t], sizeof(float)) != 0 : !isinf(q[h][t]);
+            }
+    }
+    if (!rc) fp_engine_step_free(&e);
     static const char *names[FP_STAGE_COUNT] = {"events", "hands", "distances", "mapping",
                                                 "solve", "evaluate", "commit"};
     if (o->json) {
-        printf("{\"case\":\"frame\",\"mesh\":\"%s\",\"vertices\":%zu,\"frames\":%zu,\"deforming\":%zu,"
-               "\"commits\":%u,\"ms_median\":%.6g,\"ms_p99\":%.6g,\"ms_deforming_median\":%.6g,"
-               "\"ms_deforming_p99\":%.6g,\"ms_distances_bruteforce_median\":%.6g",
-               label, n, nf, nact, commits, pct(total, nf, 50), pct(total, nf, 99),
-               pct(act, nact, 50), pct(act, nact, 99), pct(brute, nbrute, 50));
+        printf("{\"case\":\"frame\",\"mesh\":\"%s\",\"vertices\":%zu,\"frames\":%zu,\"frames_dropped\":%zu,"
+               "\"seconds\":%.4g,\"deforming\":%zu,\"commits\":%zu,\"ms_median\":%.6g,\"ms_p99\":%.6g,"
+               "\"ms_deforming_median\":%.6g,\"ms_deforming_p99\":%.6g,\"ms_commit_median\":%.6g,"
+               "\"ms_commit_max\":%.6g,\"ms_distances_bruteforce_median\":%.6g,"
+               "\"ms_distances_indexed_median\":%.6g,\"distances_within_reach\":%zu,"
+               "\"distances_far\":%zu,\"distances_wrong\":%zu",
+               label, n, nf, dropped, seconds, nact, ncommit, pct(total, nf, 50), pct(total, nf, 99),
+               pct(act, nact, 50), pct(act, nact, 99), pct(com, ncommit, 50), pct(com, ncommit, 100),
+               pct(brute, nbrute, 50), pct(indexed, nbrute, 50), within, far, wrong);
         for (int k = 0; k < FP_STAGE_COUNT; k++)
             printf(",\"%s_median\":%.6g,\"%s_p99\":%.6g", names[k], pct(st_ms[k], nf, 50),
                    names[k], pct(st_ms[k], nf, 99));
         printf("}\n");
     } else {
-        printf("frame %-14s %8zu vertices, %zu frames (%zu deforming, %u commits)\n", label, n, nf,
-               nact, commits);
+        printf("frame %-14s %8zu vertices, %zu frames in %.2f s (%zu skipped: a late frame's "
+               "periods), %zu deforming, %zu commits\n",
+               label, n, nf, seconds, dropped, nact, ncommit);
         printf("  %-22s %10s %10s\n", "stage", "median_ms", "p99_ms");
         for (int k = 0; k < FP_STAGE_COUNT; k++)
             printf("  %-22s %10.4f %10.4f\n", names[k], pct(st_ms[k], nf, 50), pct(st_ms[k], nf, 99));
         printf("  %-22s %10.4f %10.4f\n", "whole frame", pct(total, nf, 50), pct(total, nf, 99));
         printf("  %-22s %10.4f %10.4f\n", "whole frame, deforming", pct(act, nact, 50), pct(act, nact, 99));
+        printf("  %-22s %10.4f %10.4f (max)\n", "whole frame, commit", pct(com, ncommit, 50), pct(com, ncommit, 100));
         printf("  %-22s %10.4f %10.4f\n", "distances, brute force", pct(brute, nbrute, 50), pct(brute, nbrute, 99));
+        printf("  %-22s %10.4f %10.4f (%zu tips within %.2g R equal to the brute force, %zu far, "
+               "%zu wrong)\n", "distances, indexed", pct(indexed, nbrute, 50), pct(indexed, nbrute, 99),
+               within, FP_TIP_DISTANCE_REACH, far, wrong);
     }
     fflush(stdout);
     for (int k = 0; k < FP_STAGE_COUNT; k++) free(st_ms[k]);
     free(total);
     free(brute);
+    free(indexed);
     free(act);
+    free(com);
+    free(hands);
     fp_session_destroy(&s);
-    return 0;
+    if (rc) fprintf(stderr, "bench: frame: out of memory for the reference\n");
+    if (!rc && wrong) {
+        fprintf(stderr, "bench: frame: %zu indexed fingertip distances differ from the brute force\n", wrong);
+        rc = -EIO;
+    }
+    return rc;
 }
 
 static const fp_bench_options *frame_bo;

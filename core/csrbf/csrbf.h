@@ -221,10 +221,12 @@ size_t csrbf_points_count(const csrbf_points *points);
  *  max_dist (mesh units; INFINITY for no limit), computed in float as
  *  sqrtf(dx*dx + dy*dy + dz*dz) so that it equals a scalar brute-force loop bit for bit;
  *  out_index[i] (may be NULL) the vertex (the smallest index among equals). Where no vertex
- *  is within max_dist: INFINITY and UINT32_MAX. queries: nq x 3 floats, finite.
- *  Work: the blocks whose boxes are within reach of a query's best so far (a first candidate
- *  from the nearest box), all queries in one pass over the block boxes, 16 vertices per
- *  vectorised step; O(blocks x queries) box tests plus the blocks read.
+ *  is within max_dist (sqrtf of the squared distance > max_dist): INFINITY and UINT32_MAX.
+ *  queries: nq x 3 floats, finite.
+ *  Work, per query: one vectorised pass over the superblock boxes (64 blocks each), then the
+ *  superblocks and blocks whose boxes are within both max_dist and the best so far (the
+ *  nearest box first), 16 vertices per vectorised step. A finite max_dist is what keeps it
+ *  cheap: a query farther than it opens nothing.
  *  Errors: CSRBF_ERR_INVALID (NULL, a non-finite query, a NaN or negative max_dist).
  *  Thread-safe on const points; no allocation. */
 int csrbf_points_nearest(const csrbf_points *points, const float *queries, size_t nq,

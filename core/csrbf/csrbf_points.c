@@ -150,28 +150,46 @@ int csrbf_points_update_ranges(csrbf_points *p, const float *xyz, const uint32_t
 
 size_t csrbf_points_count(const csrbf_points *p) { return p ? p->n : 0; }
 
-/* Squared distance from q to block b's box (0 inside), float, the same rounding as a vertex
- * of the block would see on each axis (|q - v| >= |q - box| exactly, and float squares and
- * sums round monotonically), so it never exceeds a vertex's own squared distance. */
-static inline float box_d2_of(const float *const lo3[3], const float *const hi3[3], size_t b,
-                              const float q[3])
+/* SIMD clones of the box pass (AVX-512, AVX2, baseline), as csrbf_eval.c's kernels. No
+ * multiply-add contraction in this file (-ffp-contract=off): distances equal a plain loop's. */
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__ELF__)
+#define PTS_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))
+#else
+#define PTS_CLONES
+#endif
+
+/* Squared distances from q to the boxes k0..k1-1 of (lo, hi) into out[0..k1-k0) (0 inside),
+ * in float with the same rounding a vertex of the box would see on each axis (|q - v| >=
+ * |q - box| exactly, and float squares and sums round monotonically), so a box's value never
+ * exceeds one of its vertices' own squared distance. Returns the index (from 0) of the
+ * smallest, the first among equals. One vectorised pass. */
+PTS_CLONES static size_t boxes_d2(const float *const lo[3], const float *const hi[3], size_t k0,
+                                  size_t k1, const float q[3], float *restrict out)
 {
-    float d[3];
-    for (int a = 0; a < 3; a++) {
-        float lo = lo3[a][b], hi = hi3[a][b];
-        d[a] = q[a] < lo ? q[a] - lo : q[a] > hi ? q[a] - hi : 0.0f;
+    const float *restrict lx = lo[0] + k0, *restrict ly = lo[1] + k0, *restrict lz = lo[2] + k0;
+    const float *restrict hx = hi[0] + k0, *restrict hy = hi[1] + k0, *restrict hz = hi[2] + k0;
+    const float qx = q[0], qy = q[1], qz = q[2];
+    size_t k = k1 - k0;
+    uint32_t least = UINT32_MAX; /* non-negative floats order as their bit patterns */
+    for (size_t i = 0; i < k; i++) {
+        float ax = lx[i] - qx, bx = qx - hx[i], ay = ly[i] - qy, by = qy - hy[i];
+        float az = lz[i] - qz, bz = qz - hz[i];
+        float dx = ax > bx ? ax : bx, dy = ay > by ? ay : by, dz = az > bz ? az : bz;
+        dx = dx > 0.0f ? dx : 0.0f;
+        dy = dy > 0.0f ? dy : 0.0f;
+        dz = dz > 0.0f ? dz : 0.0f;
+        float d = dx * dx + dy * dy + dz * dz;
+        out[i] = d;
+        uint32_t u;
+        memcpy(&u, &d, sizeof u);
+        least = u < least ? u : least;
     }
-    return d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-}
-
-static inline float box_d2(const csrbf_points *p, size_t b, const float q[3])
-{
-    return box_d2_of((const float *const *)p->lo, (const float *const *)p->hi, b, q);
-}
-
-static inline float super_d2(const csrbf_points *p, size_t sb, const float q[3])
-{
-    return box_d2_of((const float *const *)p->slo, (const float *const *)p->shi, sb, q);
+    for (size_t i = 0; i < k; i++) {
+        uint32_t u;
+        memcpy(&u, &out[i], sizeof u);
+        if (u == least) return i;
+    }
+    return 0;
 }
 
 /* Block b against query q: improves *best / *idx (ties: the smaller vertex index). */
@@ -180,11 +198,13 @@ static inline void scan_block(const csrbf_points *p, size_t b, const float q[3],
 {
     size_t k0 = b * CSRBF_BLOCK, nv = k0 + CSRBF_BLOCK <= p->n ? CSRBF_BLOCK : p->n - k0;
     const float *x = p->s[0] + k0, *y = p->s[1] + k0, *z = p->s[2] + k0;
-    float d2[CSRBF_BLOCK];
-    for (size_t l = 0; l < CSRBF_BLOCK; l++) { /* vectorised: 16 lanes */
+    float d2[CSRBF_BLOCK], least = INFINITY;
+    for (size_t l = 0; l < CSRBF_BLOCK; l++) { /* vectorised: 16 lanes (padding: copies) */
         float dx = x[l] - q[0], dy = y[l] - q[1], dz = z[l] - q[2];
         d2[l] = dx * dx + dy * dy + dz * dz;
+        least = d2[l] < least ? d2[l] : least;
     }
+    if (least > *best) return;
     for (size_t l = 0; l < nv; l++)
         if (d2[l] < *best || (d2[l] == *best && (uint32_t)(k0 + l) < *idx)) {
             *best = d2[l];
@@ -192,66 +212,53 @@ static inline void scan_block(const csrbf_points *p, size_t b, const float q[3],
         }
 }
 
+/* Superblock sb against query q: its nearest block first, then every block whose box may
+ * hold a vertex as near as *best and within lim. */
+static void scan_super(const csrbf_points *p, size_t sb, const float q[3], float lim, float *best,
+                       uint32_t *idx)
+{
+    float bd[CSRBF_SUPER];
+    size_t b0 = sb * CSRBF_SUPER, b1 = b0 + CSRBF_SUPER < p->nblocks ? b0 + CSRBF_SUPER : p->nblocks;
+    size_t first = boxes_d2((const float *const *)p->lo, (const float *const *)p->hi, b0, b1, q, bd);
+    if (bd[first] > lim || bd[first] > *best) return;
+    scan_block(p, b0 + first, q, best, idx);
+    for (size_t i = 0; i < b1 - b0; i++)
+        if (i != first && bd[i] <= *best && bd[i] <= lim) scan_block(p, b0 + i, q, best, idx);
+}
+
 int csrbf_points_nearest(const csrbf_points *p, const float *queries, size_t nq, float max_dist,
                          float *out_dist, uint32_t *out_index)
 {
     if (!p || (nq && (!queries || !out_dist)) || isnan(max_dist) || max_dist < 0)
         return CSRBF_ERR_INVALID;
-    enum { QMAX = 64 };
-    for (size_t q0 = 0; q0 < nq; q0 += QMAX) {
-        size_t m = nq - q0 < QMAX ? nq - q0 : QMAX;
-        float best[QMAX], q[QMAX][3];
-        uint32_t idx[QMAX];
-        float lim = max_dist * max_dist; /* +inf stays +inf */
-        for (size_t i = 0; i < m; i++) {
-            memcpy(q[i], queries + 3 * (q0 + i), sizeof q[i]);
-            best[i] = INFINITY;
-            idx[i] = UINT32_MAX;
-            if (!(isfinite(q[i][0]) && isfinite(q[i][1]) && isfinite(q[i][2])))
-                return CSRBF_ERR_INVALID;
-            /* a first candidate: the nearest block of the nearest superblock */
-            size_t sbb = 0, bb = 0;
-            float bd = INFINITY;
-            for (size_t sb = 0; sb < p->nsuper; sb++) {
-                float d = super_d2(p, sb, q[i]);
-                if (d < bd) {
-                    bd = d;
-                    sbb = sb;
-                }
-            }
-            bd = INFINITY;
-            size_t k1 = (sbb + 1) * CSRBF_SUPER < p->nblocks ? (sbb + 1) * CSRBF_SUPER : p->nblocks;
-            for (size_t b = sbb * CSRBF_SUPER; b < k1; b++) {
-                float d = box_d2(p, b, q[i]);
-                if (d < bd) {
-                    bd = d;
-                    bb = b;
-                }
-            }
-            if (bd <= lim) scan_block(p, bb, q[i], &best[i], &idx[i]);
+    for (size_t i = 0; i < nq; i++)
+        for (int a = 0; a < 3; a++)
+            if (!isfinite(queries[3 * i + a])) return CSRBF_ERR_INVALID;
+    enum { SCHUNK = 1024 }; /* superblock distances per pass (on the stack) */
+    /* the pruning bound on squared distances: above every d2 whose sqrtf is <= max_dist
+     * (a relative margin of 1e-6, far beyond float rounding); +inf stays +inf */
+    const double md = (double)max_dist * (1.0 + 1e-6);
+    const float lim = (float)(md * md);
+    float sd[SCHUNK];
+    for (size_t i = 0; i < nq; i++) {
+        const float *q = queries + 3 * i;
+        float best = INFINITY;
+        uint32_t idx = UINT32_MAX;
+        /* per chunk of superblocks: the nearest first (a good first candidate), then those
+         * whose boxes may still hold a nearer vertex */
+        for (size_t c0 = 0; c0 < p->nsuper; c0 += SCHUNK) {
+            size_t c1 = c0 + SCHUNK < p->nsuper ? c0 + SCHUNK : p->nsuper;
+            size_t first = boxes_d2((const float *const *)p->slo, (const float *const *)p->shi, c0,
+                                    c1, q, sd);
+            if (sd[first] > lim || sd[first] > best) continue;
+            scan_super(p, c0 + first, q, lim, &best, &idx);
+            for (size_t k = 0; k < c1 - c0; k++)
+                if (k != first && sd[k] <= best && sd[k] <= lim) scan_super(p, c0 + k, q, lim, &best, &idx);
         }
-        /* one pass over the superblocks and blocks for all queries: a box is opened only by
-         * the queries whose current best it may improve */
-        for (size_t sb = 0; sb < p->nsuper; sb++) {
-            uint64_t want = 0;
-            for (size_t i = 0; i < m; i++) {
-                float d = super_d2(p, sb, q[i]);
-                if (d <= best[i] && d <= lim) want |= 1ull << i;
-            }
-            if (!want) continue;
-            size_t k1 = (sb + 1) * CSRBF_SUPER < p->nblocks ? (sb + 1) * CSRBF_SUPER : p->nblocks;
-            for (size_t b = sb * CSRBF_SUPER; b < k1; b++)
-                for (uint64_t w = want; w; w &= w - 1) {
-                    size_t i = (size_t)__builtin_ctzll(w);
-                    float d = box_d2(p, b, q[i]);
-                    if (d <= best[i] && d <= lim) scan_block(p, b, q[i], &best[i], &idx[i]);
-                }
-        }
-        for (size_t i = 0; i < m; i++) {
-            int hit = idx[i] != UINT32_MAX && best[i] <= lim;
-            out_dist[q0 + i] = hit ? sqrtf(best[i]) : INFINITY;
-            if (out_index) out_index[q0 + i] = hit ? idx[i] : UINT32_MAX;
-        }
+        float d = idx != UINT32_MAX ? sqrtf(best) : INFINITY;
+        int hit = d <= max_dist;
+        out_dist[i] = hit ? d : INFINITY;
+        if (out_index) out_index[i] = hit ? idx : UINT32_MAX;
     }
     return CSRBF_OK;
 }

@@ -374,7 +374,8 @@ static void make_frame(scene *s, size_t f, fp_frame_input *in, const char **what
                 double d = dx * dx + dy * dy + dz * dz;
                 if (d < best) best = d;
             }
-            in->tip_distance[h][t] = (float)sqrt(best);
+            /* as the session gives it: exact within its reach, "far" beyond (plugin.h) */
+            in->tip_distance[h][t] = sqrt(best) <= FP_TIP_DISTANCE_REACH * in->radius ? (float)sqrt(best) : INFINITY;
             p = NULL;
         }
     /* Pedal presses now and then: the left button down and up. */

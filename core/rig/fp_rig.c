@@ -1179,8 +1179,14 @@ int fp_rig_unpose(const fp_rig *r, const float *base, const float *values, const
 
 int fp_rig_apply_mobility(const fp_rig *r, const float *posed, const float *warped, float *out)
 {
-    if (!r || !posed || !warped || !out || !r->m) return -EINVAL;
-    for (size_t v = 0; v < r->n; v++) {
+    return fp_rig_apply_mobility_range(r, posed, warped, out, 0, r ? r->n : 0);
+}
+
+int fp_rig_apply_mobility_range(const fp_rig *r, const float *posed, const float *warped, float *out,
+                                size_t v0, size_t count)
+{
+    if (!r || !posed || !warped || !out || !r->m || v0 > r->n || count > r->n - v0) return -EINVAL;
+    for (size_t v = v0; v < v0 + count; v++) {
         float m = r->m[v];
         for (int i = 0; i < 3; i++) {
             size_t k = 3 * v + i;

@@ -221,6 +221,12 @@ int fp_rig_unpose(const fp_rig *rig, const float *base, const float *values, con
  *  n x 3 floats; out may alias posed or warped. Returns 0 or -EINVAL. [any-thread]. */
 int fp_rig_apply_mobility(const fp_rig *rig, const float *posed, const float *warped,
                           float *out);
+/** fp_rig_apply_mobility on vertices v0 .. v0 + count - 1 only (the same arithmetic, bit for
+ *  bit); the arrays are still whole n x 3 arrays, the rest untouched. For a caller that knows
+ *  where warped moved (the engine's touched ranges). Returns 0 or -EINVAL (also for a range
+ *  beyond n). [any-thread]. */
+int fp_rig_apply_mobility_range(const fp_rig *rig, const float *posed, const float *warped,
+                                float *out, size_t v0, size_t count);
 
 /** The largest finger displacement (mesh units) for which the blended map stays injective
  *  anywhere on the mesh by the bound above: mobility.ramp / 3 (the worst case of

@@ -291,12 +291,19 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
     int threads = opt->engine_threads ? opt->engine_threads : (s->n < 200000 ? 1 : 0);
     fp_intents_init(&s->intents);
     fp_pose_init(&s->pose, opt->hand_size, NULL);
-    fp_history_init(&s->history, s->n, s->base);
+    if ((rc = fp_history_init(&s->history, s->n, s->base))) {
+        snprintf(err, errlen, "session: out of memory for the undo history");
+        goto fail;
+    }
     fp_record_step_init(&s->record, opt->record, opt->record_user);
     if ((rc = fp_engine_step_init(&s->engine, s->n, s->shown, threads))) {
         snprintf(err, errlen, "session: cannot index %zu vertices", s->n);
         goto fail;
     }
+    /* the output buffer starts as the surface the engine indexes (the posed base), so the
+     * first run writes only the blocks in a support, not the whole mesh */
+    memcpy(s->deformed, s->shown, bytes);
+    fp_engine_step_output_is_base(&s->engine);
     s->mapping_budget_ms = opt->mapping_budget_ms;
     s->engine.jacobian = opt->measure_jacobian;
     if ((rc = fp_engine_step_set_topology(&s->engine, s->mesh->triangles, s->mesh->triangle_count))) {
@@ -408,6 +415,32 @@ static void contact_end_gesture(fp_session *s)
     s->cg_frames = s->cg_limited = 0;
 }
 
+/* dst = src on the ranges the engine's last evaluation wrote (everywhere when it does not
+ * know them). */
+static void copy_touched(fp_session *s, float *dst, const float *src)
+{
+    const uint32_t *r;
+    size_t nr = fp_engine_step_touched(&s->engine, &r);
+    if (nr == SIZE_MAX) {
+        memcpy(dst, src, s->n * 3 * sizeof(float));
+        return;
+    }
+    for (size_t i = 0; i < nr; i++)
+        memcpy(dst + 3 * (size_t)r[2 * i], src + 3 * (size_t)r[2 * i], 3 * (size_t)r[2 * i + 1] * sizeof(float));
+}
+
+/* A commit of the engine's output buffer: into the base (and the gesture's undo level) on the
+ * touched ranges, outside which it equals the base; the whole buffer where they are unknown. */
+static void commit_touched(fp_session *s)
+{
+    const uint32_t *r;
+    size_t nr = fp_engine_step_touched(&s->engine, &r);
+    if (nr == SIZE_MAX)
+        fp_history_commit(&s->history, s->deformed);
+    else
+        fp_history_commit_ranges(&s->history, s->deformed, r, nr);
+}
+
 /* Steps 5 and 6 on the control set the engine is given (after the rig's clamp), on the
  * posed base: evaluate, the rig's mobility blend, show, commit. Shared by fp_session_step
  * and fp_session_apply_controls (takes played back). */
@@ -432,10 +465,13 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame
         st->guard_substeps = er.substeps;
         st->guard_reached = er.reached;
         st->min_det_j = er.min_det_j;
+        if (rc) s->rig.shown_valid = false; /* the output buffer may have changed unseen */
         if (!rc) {
             st->active = true;
             const float *ref = s->shown; /* the posed base */
-            s->shown = fp_rig_step_finish(&s->rig, s->deformed);
+            const uint32_t *touched;
+            size_t ntouched = fp_engine_step_touched(&s->engine, &touched);
+            s->shown = fp_rig_step_finish(&s->rig, s->deformed, touched, ntouched);
             contact_guard(s, ref, st);
             /* the output differs from the last only in the engine's ranges (blocks in a
              * support now or at its last run), unless the guard's shape is or was shown */
@@ -450,22 +486,18 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame
                     /* with a rig only the fingers' part goes into the base */
                     fp_history_commit(&s->history, fp_rig_step_commit_shape(&s->rig, s->base, s->shown));
                     base_changed(s); /* the anchored gesture ended; unanchored restarts anyway */
-                } else if (s->shown == s->guarded) {
-                    /* the guard scaled the motion back: its shape goes into the base and
-                     * the output buffer; the engine re-indexes the whole base */
-                    memcpy(s->deformed, s->guarded, s->n * 3 * sizeof(float));
-                    fp_history_commit(&s->history, s->deformed);
-                    fp_engine_step_set_base(&s->engine, s->base);
-                    s->shown = s->base;
-                    s->shown_kind = SHOWN_POSED;
-                    fp_changed_all(&s->shown_changed);
-                    fp_changed_all(&s->base_changed);
                 } else {
-                    fp_history_commit(&s->history, s->deformed);
-                    /* the base changed where the output did (the shown shape is the same) */
+                    /* the guard scaled the motion back: its shape goes into the output
+                     * buffer first (it equals the base outside the touched ranges, as the
+                     * output does: fp_contact_guard's out = ref + t (cand - ref)) */
+                    bool guarded = s->shown == s->guarded;
+                    if (guarded) copy_touched(s, s->deformed, s->guarded);
+                    /* the output buffer becomes the base on the touched ranges only, and
+                     * only those are re-indexed; the anchored gesture ended, unanchored
+                     * restarts anyway. The base changed where the output did. */
+                    commit_touched(s);
                     fp_changed_add(&s->base_changed, ranges, fp_engine_step_touched(&s->engine, &ranges));
-                    /* the anchored gesture ended; unanchored restarts anyway. Only the blocks
-                     * the engine rewrote are re-indexed. */
+                    if (guarded) fp_changed_all(&s->shown_changed);
                     fp_engine_step_commit(&s->engine, s->base);
                     s->shown = s->base;
                     s->shown_kind = SHOWN_POSED;
@@ -537,7 +569,9 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     in.rig = fp_rig_step_view(&s->rig);
     const float *surface = fp_rig_step_posed(&s->rig, s->base); /* what the fingers touch */
     s->view.base = surface;
-    fp_engine_step_tip_distances(&s->engine, s->pose.poses, in.tip_distance); /* on its base: the posed surface */
+    /* on its base (the posed surface), within the fingers' reach only (plugin.h) */
+    fp_engine_step_tip_distances(&s->engine, s->pose.poses, (float)(FP_TIP_DISTANCE_REACH * s->radius),
+                                 in.tip_distance);
     FP_STAGE_END(FP_STAGE_DISTANCES);
     fp_mapping_step_run(&s->mapping_step, s->mapping, s->mapping_name, &in, &s->cs, &s->log);
     st->engaged = s->cs.intents & FP_INTENT_ENGAGE;

@@ -53,6 +53,12 @@ void fp_engine_step_commit(fp_engine_step *e, const float *base)
     e->factored = false;
 }
 
+void fp_engine_step_output_is_base(fp_engine_step *e)
+{
+    csrbf_touch_commit(e->touch);
+    e->touched_valid = true;
+}
+
 size_t fp_engine_step_touched(const fp_engine_step *e, const uint32_t **ranges)
 {
     if (!e->touched_valid) {
@@ -267,7 +273,7 @@ void fp_engine_tip_distances(const float *base, size_t n, const fp_hand_pose han
 }
 
 void fp_engine_step_tip_distances(const fp_engine_step *e, const fp_hand_pose hands[FP_HANDS],
-                                  float d[FP_HANDS][FP_FINGERS])
+                                  float reach, float d[FP_HANDS][FP_FINGERS])
 {
     float tips[FP_HANDS * FP_FINGERS][3], best[FP_HANDS * FP_FINGERS];
     size_t nt = 0;
@@ -276,7 +282,7 @@ void fp_engine_step_tip_distances(const fp_engine_step *e, const fp_hand_pose ha
             d[h][f] = INFINITY;
             if (hands[h].present) memcpy(tips[nt++], hands[h].joints[FP_JOINT_TIP(f)], sizeof tips[0]);
         }
-    if (!nt || csrbf_points_nearest(e->points, &tips[0][0], nt, INFINITY, best, NULL) < 0) return;
+    if (!nt || csrbf_points_nearest(e->points, &tips[0][0], nt, reach, best, NULL) < 0) return;
     nt = 0;
     for (int h = 0; h < FP_HANDS; h++)
         for (int f = 0; f < FP_FINGERS; f++)

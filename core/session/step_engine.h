@@ -109,6 +109,11 @@ void fp_engine_step_free(fp_engine_step *e);
  *  base): re-index it whole, forget the factor, and the next run rewrites the whole output. */
 void fp_engine_step_set_base(fp_engine_step *e, const float *base);
 
+/** The caller's output buffer equals the indexed base bit for bit (a fresh copy of it, at
+ *  creation): no block differs from the base, so a run writes only the blocks in a support
+ *  (csrbf_touch_commit) and the touched ranges are known from the first run on. */
+void fp_engine_step_output_is_base(fp_engine_step *e);
+
 /** A commit: base is now the output buffer of the last run (deformed copied into it).
  *  Re-indexes only the vertex ranges that run wrote (csrbf_points_update_ranges; all after a
  *  composed step), csrbf_touch_commit, forgets the factor. */
@@ -148,11 +153,13 @@ void fp_engine_step_end_gesture(fp_engine_step *e, const fp_slog *log);
 void fp_engine_step_flush(fp_engine_step *e, const fp_slog *log);
 
 /** Distance from each fingertip (FP_JOINT_TIP) of each present hand to the nearest base
- *  vertex (mesh units), +INFINITY for an absent hand: csrbf_points_nearest on the engine's
- *  own blocks (all tips in one pass over the blocks within reach), equal bit for bit to
- *  fp_engine_tip_distances on the same base. */
+ *  vertex (mesh units) where it is at most `reach` (mesh units; the session passes
+ *  FP_TIP_DISTANCE_REACH x radius), +INFINITY beyond it and for an absent hand:
+ *  csrbf_points_nearest on the engine's own blocks, visiting only blocks whose boxes are
+ *  within reach; equal bit for bit to fp_engine_tip_distances on the same base wherever that
+ *  is <= reach. reach: >= 0, +INFINITY for no bound. No allocation. */
 void fp_engine_step_tip_distances(const fp_engine_step *e, const fp_hand_pose hands[FP_HANDS],
-                                  float d[FP_HANDS][FP_FINGERS]);
+                                  float reach, float d[FP_HANDS][FP_FINGERS]);
 
 /** Give the engine the mesh's triangles (t x 3, kept by pointer, must outlive e) for
  *  fp_engine_step_surface: builds each vertex's triangle list. Returns 0 or -ENOMEM. */

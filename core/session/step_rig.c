@@ -116,6 +116,8 @@ bool fp_rig_step_update(fp_rig_step *st, const fp_control_set *cs, const float *
     size_t nc = fp_rig_channel_count(st->rig);
     if (!st->dirty && !memcmp(st->values, st->posed_values, nc * sizeof(float))) return false;
     fp_rig_pose(st->rig, base, st->values, st->posed);
+    st->limit_count = 0; /* the finger limits and the blend depend on the posed base */
+    st->shown_valid = false;
     memcpy(st->posed_values, st->values, nc * sizeof(float));
     st->dirty = false;
     refresh_view(st);
@@ -137,9 +139,16 @@ const fp_control_set *fp_rig_step_run(fp_rig_step *st, const fp_control_set *cs)
     o->end = end;
     o->count = cs->count < FP_RIG_STEP_MAX_CONTROL ? cs->count : FP_RIG_STEP_MAX_CONTROL;
     o->capacity = FP_RIG_STEP_MAX_CONTROL;
+    if (cs->radius != st->limit_radius) st->limit_count = 0;
+    st->limit_radius = cs->radius;
     for (size_t i = 0; i < o->count; i++) {
-        /* the engine's 0.45 R, and the rig's local bound where the support reaches a ramp */
-        double limit = fmin(0.45 * cs->radius, fp_rig_finger_limit(st->rig, st->posed, cs->start[i], cs->radius));
+        /* the engine's 0.45 R, and the rig's local bound where the support reaches a ramp
+         * (computed again only where the start point moved) */
+        if (i >= st->limit_count || memcmp(st->limit_start[i], cs->start[i], sizeof st->limit_start[i])) {
+            st->limit[i] = fp_rig_finger_limit(st->rig, st->posed, cs->start[i], cs->radius);
+            memcpy(st->limit_start[i], cs->start[i], sizeof st->limit_start[i]);
+        }
+        double limit = fmin(0.45 * cs->radius, st->limit[i]);
         double d[3], len = 0;
         for (int k = 0; k < 3; k++) {
             d[k] = (double)cs->end[i][k] - cs->start[i][k];
@@ -152,13 +161,22 @@ const fp_control_set *fp_rig_step_run(fp_rig_step *st, const fp_control_set *cs)
             end[i][k] = f == 1 ? cs->end[i][k] : (float)(cs->start[i][k] + f * d[k]);
         }
     }
+    st->limit_count = o->count;
     return o;
 }
 
-const float *fp_rig_step_finish(fp_rig_step *st, const float *deformed)
+const float *fp_rig_step_finish(fp_rig_step *st, const float *deformed, const uint32_t *ranges,
+                                size_t nranges)
 {
     if (!st->rig) return deformed;
-    fp_rig_apply_mobility(st->rig, st->posed, deformed, st->shown);
+    if (nranges == SIZE_MAX || !st->shown_valid) {
+        fp_rig_apply_mobility(st->rig, st->posed, deformed, st->shown);
+        st->shown_valid = true;
+        return st->shown;
+    }
+    /* elsewhere deformed is posed now and was at the last call: shown holds its blend */
+    for (size_t r = 0; r < nranges; r++)
+        fp_rig_apply_mobility_range(st->rig, st->posed, deformed, st->shown, ranges[2 * r], ranges[2 * r + 1]);
     return st->shown;
 }
 

@@ -32,6 +32,7 @@
 
 #include <stdbool.h>
 #include <stddef.h>
+#include <stdint.h>
 
 #ifdef __cplusplus
 extern "C" {
@@ -48,9 +49,17 @@ typedef struct fp_rig_step {
     bool dirty;                                   /* base or values changed since posing */
     float *posed;                                 /* n x 3: the base posed by the channels */
     float *shown;                                 /* n x 3: posed + fingers (mobility blend) */
+    bool shown_valid;                             /* shown is the blend of the current posed
+                                                   * base (false after posing anew) */
     float *commit;                                /* n x 3: the shape a commit folds in */
     double max_displacement;                      /* worst-case finger clamp (ramp / 3), for reports */
     fp_control_set cs;                            /* the clamped copy the engine takes */
+    /* fp_rig_finger_limit per control point, kept while the posed base, the radius and that
+     * start point (bitwise) stay: an anchored gesture computes it once, not every frame */
+    double limit[FP_RIG_STEP_MAX_CONTROL];
+    float limit_start[FP_RIG_STEP_MAX_CONTROL][3];
+    double limit_radius;
+    size_t limit_count;                           /* entries valid; 0 after posing anew */
     float start[FP_RIG_STEP_MAX_CONTROL][3], end[FP_RIG_STEP_MAX_CONTROL][3];
     fp_rig_view view;                             /* for mappings */
     fp_rig_landmark landmarks[FP_RIG_MAX_LANDMARKS];
@@ -88,8 +97,12 @@ const float *fp_rig_step_posed(const fp_rig_step *st, const float *base);
 const fp_control_set *fp_rig_step_run(fp_rig_step *st, const fp_control_set *cs);
 
 /** After the engine wrote deformed = T(posed): the shape to show (the mobility blend), or
- *  deformed itself without a rig. */
-const float *fp_rig_step_finish(fp_rig_step *st, const float *deformed);
+ *  deformed itself without a rig. ranges (pairs first vertex, count; nranges of them): where
+ *  deformed may differ from what the last call saw (the engine's touched ranges: deformed
+ *  equals posed outside them), so only they are blended again; nranges SIZE_MAX: unknown,
+ *  every vertex is. Bit for bit fp_rig_apply_mobility(posed, deformed) either way. */
+const float *fp_rig_step_finish(fp_rig_step *st, const float *deformed, const uint32_t *ranges,
+                                size_t nranges);
 
 /** The shape a commit folds into the base: `shown` itself without a rig, else its fingers'
  *  part taken back to the rest pose (fp_rig_unpose). */

@@ -11,7 +11,9 @@
  * fingertips are farther than release x R from the base (the hand has let go). The start
  * points are the fingertips at engage: engaging at the support's edge (engage=1) would hold
  * the surface where the Wendland function is ~0 and move nothing, so the default engages at
- * half the radius (psi_{3,1}(0.5) = 0.19 there) and releases at R (hysteresis).
+ * half the radius (psi_{3,1}(0.5) = 0.19 there) and releases at R (hysteresis). The host's
+ * fp_frame_input.tip_distance is exact up to FP_TIP_DISTANCE_REACH x R; an engage or release
+ * factor beyond it asks the host's surface service (FP_HOST_EXT_SURFACE) for that reach.
  *
  * Keys: hands=left|right|both (both), auto=0|1 (1), engage=F (0.5, in R), release=F (1.0, in R),
  *       clamp=F (0.45, longest control vector in R; 0 = no limit; keeps the warp
@@ -39,14 +41,33 @@ typedef struct anchored {
     size_t count;
     float start[FP_CONTROL_CAPACITY][3];
     float last_end[FP_CONTROL_CAPACITY][3];
+    const fp_host *host;
+    const fp_host_surface *surface; /* FP_HOST_EXT_SURFACE, or NULL (a 1.0 host) */
 } anchored;
+
+/* The paper's rule with `factor` x R: the host's tip distances where they reach that far,
+ * else the surface service with that reach (a 1.0 host's distances are exact anyway). */
+static bool hand_near(const anchored *a, const fp_frame_input *in, int h, double factor)
+{
+    if (factor <= FP_TIP_DISTANCE_REACH || !a->surface || !a->surface->nearest)
+        return fp_hand_is_near(in, h, factor);
+    if (!in->hands[h].present) return false;
+    float tips[FP_FINGERS][3];
+    fp_surface_hit hit[FP_FINGERS];
+    fp_hand_tips(in, h, tips);
+    if (a->surface->nearest(a->host, (const float (*)[3])tips, FP_FINGERS, (float)(factor * in->radius), hit))
+        return fp_hand_is_near(in, h, factor);
+    for (int f = 0; f < FP_FINGERS; f++)
+        if (hit[f].distance < factor * in->radius) return true;
+    return false;
+}
 
 static int engage(anchored *a, const fp_frame_input *in, bool requested)
 {
     unsigned which = 0;
     for (int h = 0; h < FP_HANDS; h++) {
         if (!(a->hands & (1u << h)) || !in->hands[h].present) continue;
-        if (requested || fp_hand_is_near(in, h, a->engage)) which |= 1u << h;
+        if (requested || hand_near(a, in, h, a->engage)) which |= 1u << h;
     }
     if (!which) return 0;
     a->engaged = true;
@@ -87,7 +108,7 @@ static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *o
         if (!(a->engaged_hands & (1u << h))) continue;
         if (in->hands[h].present) {
             fp_hand_points(in, h, a->points, &a->last_end[k]);
-            if (fp_hand_is_near(in, h, a->release)) still_near = true;
+            if (hand_near(a, in, h, a->release)) still_near = true;
         }
         k += a->per_hand;
     }
@@ -141,7 +162,6 @@ static const unsigned hand_masks[] = {FP_HANDMASK_LEFT, FP_HANDMASK_RIGHT, FP_HA
 static int create(const fp_host *host, const fp_param *params, size_t nparams,
                   fp_mapping **out, char *err, size_t errlen)
 {
-    (void)host;
     fpmu_value v[KEY_COUNT];
     int rc = fpmu_params_parse("anchored", keys, params, nparams, v, err, errlen);
     if (rc) return rc;
@@ -155,6 +175,8 @@ static int create(const fp_host *host, const fp_param *params, size_t nparams,
     a->points = (int)v[KEY_POINTS].number;
     int joints[FP_POINTS_MAX];
     a->per_hand = fp_points_joints(a->points, joints);
+    a->host = host;
+    a->surface = host && host->get_extension ? host->get_extension(host, FP_HOST_EXT_SURFACE) : NULL;
     a->mapping.size = sizeof a->mapping;
     a->mapping.plugin_data = a;
     a->mapping.process = process;

@@ -105,11 +105,79 @@ static void test_unanchored_on_real_data(void **state)
     assert_true(o.checked_outside > 0);
 }
 
+/* Commits write only the engine's touched ranges into the base and keep only the changed
+ * pieces for undo (core/session/history.h): through the session on the ICT face without a rig
+ * (so every commit takes that path), the real recording, each mapping: after every frame the
+ * shown shape of a committing frame is the base; at the end every gesture is undone in turn
+ * and the base equals the one before that gesture bit for bit, down to the loaded face. */
+static void undo_all_exact(const char *mapping)
+{
+    char input[4300], err[2048];
+    snprintf(input, sizeof input, "replay:%s/hands/leap-motion/three-claps_joints_mm.csv,speed=4",
+             fp_test_data_dir());
+    fp_session_options so = {0};
+    so.mesh_path = fp_test_face_path();
+    so.inputs[0] = input;
+    so.input_count = 1;
+    so.mapping = mapping;
+    so.plugin_path = fp_test_plugin_path();
+    so.rig_path = "none";
+    fp_session *s = NULL;
+    int rc = fp_session_create(&so, &s, err, sizeof err);
+    if (!rc) rc = fp_session_start(s, err, sizeof err);
+    if (rc) fprintf(stderr, "%s\n", err);
+    assert_int_equal(rc, 0);
+    size_t n = fp_session_vertex_count(s), bytes = n * 3 * sizeof(float);
+    enum { KEEP = FP_SESSION_UNDO_LEVELS };
+    float *before = malloc(bytes), *snap[KEEP];
+    for (int i = 0; i < KEEP; i++) snap[i] = malloc(bytes);
+    unsigned long gestures = 0, commits = 0;
+    int64_t deadline = fp_now_ns() + 60LL * 1000000000LL;
+    while (!fp_session_finished(s) && fp_now_ns() < deadline) {
+        memcpy(before, fp_session_base(s), bytes);
+        fp_frame_stats st;
+        fp_session_step(s, fp_now_ns(), &st);
+        if (st.committed) {
+            commits++;
+            assert_ptr_equal(fp_session_positions(s), fp_session_base(s));
+        }
+        if (fp_session_commits(s) > gestures) { /* a gesture opened: the base before it */
+            assert_int_equal(fp_session_commits(s), gestures + 1);
+            memcpy(snap[gestures % KEEP], before, bytes);
+            gestures++;
+        }
+        struct timespec ts = {0, 2000000};
+        nanosleep(&ts, NULL);
+    }
+    assert_true(gestures > 0 && commits >= gestures);
+    for (unsigned long g = gestures; g > 0 && gestures - g < KEEP; g--) {
+        assert_true(fp_session_undo(s));
+        assert_memory_equal(fp_session_base(s), snap[(g - 1) % KEEP], bytes);
+        assert_memory_equal(fp_session_positions(s), snap[(g - 1) % KEEP], bytes);
+    }
+    if (gestures <= KEEP) {
+        assert_memory_equal(fp_session_base(s), fp_session_loaded(s), bytes);
+        assert_false(fp_session_undo(s));
+    }
+    printf("%s: %lu commits in %lu gestures, undone bit for bit\n", mapping, commits, gestures);
+    for (int i = 0; i < KEEP; i++) free(snap[i]);
+    free(before);
+    fp_session_destroy(&s);
+}
+
+static void test_undo_after_ranged_commits(void **state)
+{
+    (void)state;
+    undo_all_exact("anchored");
+    undo_all_exact("unanchored");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_anchored_on_real_data),
         cmocka_unit_test(test_unanchored_on_real_data),
+        cmocka_unit_test(test_undo_after_ranged_commits),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

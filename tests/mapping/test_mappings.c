@@ -153,6 +153,89 @@ static void test_anchored_requests(void **state)
     close_mapping(&r);
 }
 
+/* A surface service over the plane z = 0 (every query's nearest point straight below it),
+ * counting its calls: what a 1.1 host offers as FP_HOST_EXT_SURFACE. */
+static int plane_calls;
+static int plane_nearest(const fp_host *host, const float (*points)[3], size_t count, float max_distance,
+                         fp_surface_hit *out)
+{
+    (void)host;
+    plane_calls++;
+    for (size_t i = 0; i < count; i++) {
+        float d = fabsf(points[i][2]);
+        memset(&out[i], 0, sizeof out[i]);
+        out[i].vertex = d <= max_distance ? (uint32_t)i : UINT32_MAX;
+        out[i].distance = d <= max_distance ? d : INFINITY;
+        out[i].normal[2] = 1.f;
+    }
+    return 0;
+}
+
+/* Factors beyond the host's tip distances (FP_TIP_DISTANCE_REACH x R; +INFINITY farther out):
+ * engage=1.5 and release=3 ask the surface service with their own reach, so a hand at 1.2 R
+ * engages and one at 2.5 R is still held although tip_distance says "far"; within the reach
+ * (the defaults) the service is never asked. */
+static void test_anchored_beyond_reach(void **state)
+{
+    (void)state;
+    assert_true(FP_TIP_DISTANCE_REACH < 1.5);
+    rig r;
+    char err[1024];
+    fp_param p[] = {{"engage", "1.5"}, {"release", "3"}};
+    memset(&r, 0, sizeof r);
+    assert_int_equal(fp_plugin_load(fp_test_plugin_path(), FP_PLUGIN_MAPPING, "anchored", &r.plugin, err, 1024), 0);
+    static fp_mapping_services services;
+    services.surface.nearest = plane_nearest;
+    static fp_mapping_host mh;
+    fp_mapping_host_init(&mh, "anchored", NULL, NULL);
+    mh.services = &services;
+    const fp_mapping_factory *f = r.plugin.factory;
+    assert_int_equal(f->create(&mh.host, p, 2, &r.m, err, 1024), 0);
+    r.cs.size = sizeof r.cs;
+    r.cs.capacity = 64;
+    r.cs.start = r.start;
+    r.cs.end = r.end;
+    r.cs.channels = r.ch;
+    r.cs.channel_capacity = 4;
+    r.in.size = sizeof r.in;
+    r.in.radius = R;
+    plane_calls = 0;
+    place_right(&r, 0, 0, 1.6f, INFINITY); /* beyond 1.5 R: nothing */
+    step(&r, 0);
+    assert_false(r.cs.active);
+    assert_true(plane_calls > 0);
+    place_right(&r, 0, 0, 1.2f, INFINITY); /* within 1.5 R, beyond the host's reach */
+    step(&r, 0);
+    assert_true(r.cs.active);
+    assert_true(r.cs.intents & FP_INTENT_ENGAGE);
+    place_right(&r, 0, 0, 2.5f, INFINITY); /* within release = 3 R: held */
+    step(&r, 0);
+    assert_true(r.cs.active);
+    assert_false(r.cs.intents & FP_INTENT_COMMIT);
+    place_right(&r, 0, 0, 3.5f, INFINITY); /* let go */
+    step(&r, 0);
+    assert_true(r.cs.intents & FP_INTENT_COMMIT);
+    r.m->destroy(r.m);
+    r.m = NULL;
+    fp_plugin_unload(&r.plugin);
+
+    /* the defaults (0.5 and 1.0 R) read the host's distances only */
+    fp_mapping_host_init(&mh, "anchored", NULL, NULL);
+    mh.services = &services;
+    assert_int_equal(fp_plugin_load(fp_test_plugin_path(), FP_PLUGIN_MAPPING, "anchored", &r.plugin, err, 1024), 0);
+    f = r.plugin.factory;
+    assert_int_equal(f->create(&mh.host, NULL, 0, &r.m, err, 1024), 0);
+    plane_calls = 0;
+    place_right(&r, 0, 0, 0.4f, 0.4f);
+    step(&r, 0);
+    assert_true(r.cs.active);
+    place_right(&r, 0, 0, 1.4f, INFINITY);
+    step(&r, 0);
+    assert_true(r.cs.intents & FP_INTENT_COMMIT);
+    assert_int_equal(plane_calls, 0);
+    close_mapping(&r);
+}
+
 static void test_unanchored(void **state)
 {
     (void)state;
@@ -299,7 +382,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_anchored_auto), cmocka_unit_test(test_anchored_requests),
         cmocka_unit_test(test_unanchored), cmocka_unit_test(test_bad_keys),
-        cmocka_unit_test(test_points),
+        cmocka_unit_test(test_points), cmocka_unit_test(test_anchored_beyond_reach),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

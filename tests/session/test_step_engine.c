@@ -153,7 +153,7 @@ static void test_tip_distances_indexed_ict(void **state)
     float lo[3], hi[3];
     fp_mesh_bounds(m, lo, hi);
     srand(7);
-    unsigned checked = 0;
+    unsigned checked = 0, near_checked = 0, far_checked = 0;
     for (int trial = 0; trial < 60; trial++) {
         fp_hand_pose hands[FP_HANDS];
         memset(hands, 0, sizeof hands);
@@ -171,11 +171,34 @@ static void test_tip_distances_indexed_ict(void **state)
         if (trial % 7 == 0) /* a tip on a vertex, all three coordinates */
             memcpy(hands[0].joints[FP_JOINT_TIP(1)], m->positions + 3 * (size_t)(trial * 311 % n), 12);
         float a[FP_HANDS][FP_FINGERS], b[FP_HANDS][FP_FINGERS];
-        fp_engine_step_tip_distances(&e, hands, a);
+        fp_engine_step_tip_distances(&e, hands, INFINITY, a);
         fp_engine_tip_distances(m->positions, n, hands, b);
         assert_memory_equal(a, b, sizeof a);
+        /* bounded (the session's reach): the brute force's value where it is within the
+         * reach, bit for bit, "far" (+INFINITY) beyond it; a reach exactly at a tip's distance
+         * still holds it */
+        for (int h = 0; h < FP_HANDS; h++)
+            for (int f = 0; f < FP_FINGERS; f++) {
+                float reaches[4] = {0.f, 0.02f * (hi[1] - lo[1]), 0.1f * (hi[1] - lo[1]), b[h][f]};
+                for (int r = 0; r < 4; r++) {
+                    if (isinf(reaches[r])) continue;
+                    float c[FP_HANDS][FP_FINGERS];
+                    fp_engine_step_tip_distances(&e, hands, reaches[r], c);
+                    for (int h2 = 0; h2 < FP_HANDS; h2++)
+                        for (int f2 = 0; f2 < FP_FINGERS; f2++) {
+                            if (b[h2][f2] <= reaches[r]) {
+                                assert_memory_equal(&c[h2][f2], &b[h2][f2], sizeof(float));
+                                near_checked++;
+                            } else {
+                                assert_true(isinf(c[h2][f2]) && c[h2][f2] > 0);
+                                far_checked++;
+                            }
+                        }
+                }
+            }
         checked++;
     }
+    assert_true(near_checked > 100 && far_checked > 100);
     /* the index: a vertex at the reported distance; max_dist cuts */
     float q[2][3] = {{0, 0, 0}, {hi[0] + 100, hi[1], hi[2]}}, d[2];
     uint32_t idx[2];
@@ -191,10 +214,68 @@ static void test_tip_distances_indexed_ict(void **state)
     assert_int_equal(idx[1], UINT32_MAX);
     float bad[3] = {NAN, 0, 0};
     assert_int_equal(csrbf_points_nearest(e.points, bad, 1, INFINITY, d, idx), CSRBF_ERR_INVALID);
-    printf("indexed fingertip distances equal the brute force on %u tip sets (ICT, %zu vertices)\n",
-           checked, n);
+    printf("indexed fingertip distances equal the brute force on %u tip sets (ICT, %zu vertices); "
+           "bounded: %u within reach equal, %u beyond it far\n", checked, n, near_checked, far_checked);
     fp_engine_step_free(&e);
     fp_mesh_free(&m);
+}
+
+/* csrbf_points_nearest against a brute force (distance bit for bit, the smallest index among
+ * equals) on a scrambled vertex order with duplicate vertices (ties), 150 queries in one
+ * call (beyond any chunk), and bounds from 0 to none. */
+static void test_nearest_scrambled_ties(void **state)
+{
+    (void)state;
+    enum { N = 40000, Q = 150 };
+    float *v = malloc(N * 3 * sizeof *v);
+    srand(11);
+    for (size_t i = 0; i < N; i++) {
+        if (i > 100 && i % 9 == 0) { /* a copy of an earlier vertex: a tie */
+            memcpy(v + 3 * i, v + 3 * ((size_t)rand() % i), 3 * sizeof *v);
+            continue;
+        }
+        for (int k = 0; k < 3; k++) v[3 * i + k] = (float)rand() / (float)RAND_MAX * 10.f - 5.f;
+    }
+    csrbf_points *p = NULL;
+    assert_int_equal(csrbf_points_create(N, v, &p), CSRBF_OK);
+    float q[Q][3], d[Q];
+    uint32_t idx[Q];
+    for (int i = 0; i < Q; i++)
+        for (int k = 0; k < 3; k++)
+            q[i][k] = i % 4 == 0 ? v[3 * (size_t)(i * 263 % N) + k] /* on a vertex */
+                                 : (float)rand() / (float)RAND_MAX * 16.f - 8.f;
+    const float bounds[] = {0.f, 0.05f, 0.3f, 1.f, INFINITY};
+    unsigned hits = 0, far = 0;
+    for (size_t bi = 0; bi < sizeof bounds / sizeof bounds[0]; bi++) {
+        assert_int_equal(csrbf_points_nearest(p, &q[0][0], Q, bounds[bi], d, idx), CSRBF_OK);
+        for (int i = 0; i < Q; i++) {
+            float best = INFINITY;
+            uint32_t bidx = UINT32_MAX;
+            for (size_t j = 0; j < N; j++) {
+                float dx = v[3 * j] - q[i][0], dy = v[3 * j + 1] - q[i][1], dz = v[3 * j + 2] - q[i][2];
+                float e = dx * dx + dy * dy + dz * dz;
+                if (e < best) {
+                    best = e;
+                    bidx = (uint32_t)j;
+                }
+            }
+            float bd = sqrtf(best);
+            if (bd <= bounds[bi]) {
+                assert_memory_equal(&d[i], &bd, sizeof bd);
+                assert_int_equal(idx[i], bidx);
+                hits++;
+            } else {
+                assert_true(isinf(d[i]));
+                assert_int_equal(idx[i], UINT32_MAX);
+                far++;
+            }
+        }
+    }
+    assert_true(hits > 200 && far > 200);
+    assert_int_equal(csrbf_points_nearest(p, &q[0][0], 1, -1.f, d, idx), CSRBF_ERR_INVALID);
+    assert_int_equal(csrbf_points_nearest(p, &q[0][0], 1, NAN, d, idx), CSRBF_ERR_INVALID);
+    csrbf_points_destroy(&p);
+    free(v);
 }
 
 /* The engine's persistent output (touched blocks only, partial re-index at commits, the
@@ -298,6 +379,7 @@ int main(void)
         cmocka_unit_test(test_engine_error_once),
         cmocka_unit_test(test_tip_distances),
         cmocka_unit_test(test_tip_distances_indexed_ict),
+        cmocka_unit_test(test_nearest_scrambled_ties),
         cmocka_unit_test(test_touched_equals_full),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

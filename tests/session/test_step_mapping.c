@@ -1,5 +1,7 @@
 /* core/session/step_mapping (the control set's check, errors reported once with a count),
  * step_rig (the pass-through) and session_log's repeat counter. */
+#include "csrbf.h"
+#include "fp_mesh.h"
 #include "log_capture.h"
 #include "step_mapping.h"
 #include "step_rig.h"
@@ -9,6 +11,8 @@
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <cmocka.h>
 
@@ -119,12 +123,147 @@ static void test_rig_pass_through(void **state)
     assert_memory_equal(&copy, &cs, sizeof cs);
 }
 
+/* The rig's finger clamp on the ICT face: every frame's clamped control set equals one made
+ * with fp_rig_finger_limit computed afresh on the current posed base, while the step keeps
+ * the limits of unmoved start points (an anchored gesture), after a start point moves, the
+ * radius changes, and the jaw is posed anew (the posed base changed). */
+static void expect_clamped(const fp_rig_step *r, const fp_control_set *in, const fp_control_set *out)
+{
+    assert_int_equal(out->count, in->count);
+    for (size_t i = 0; i < in->count; i++) {
+        double limit = fmin(0.45 * in->radius, fp_rig_finger_limit(r->rig, r->posed, in->start[i], in->radius));
+        double d[3], len = 0;
+        for (int k = 0; k < 3; k++) {
+            d[k] = (double)in->end[i][k] - in->start[i][k];
+            len += d[k] * d[k];
+        }
+        len = sqrt(len);
+        double f = len > limit ? limit / len : 1;
+        for (int k = 0; k < 3; k++) {
+            float e = f == 1 ? in->end[i][k] : (float)(in->start[i][k] + f * d[k]);
+            assert_memory_equal(&out->start[i][k], &in->start[i][k], sizeof(float));
+            assert_memory_equal(&out->end[i][k], &e, sizeof(float));
+        }
+    }
+}
+
+static void test_rig_clamp_kept(void **state)
+{
+    (void)state;
+    const char *dir = getenv("FP_SHARED_DATA") ? getenv("FP_SHARED_DATA") : "../shared/data";
+    char path[4200], err[512];
+    snprintf(path, sizeof path, "%s/faces/ict-facekit/generic_neutral_mesh.obj", dir);
+    fp_mesh *m = NULL;
+    assert_int_equal(fp_mesh_load(path, &m, err, sizeof err), 0);
+    fp_rig *rig = NULL;
+    assert_int_equal(fp_rig_load_for_mesh("rigs/ict-facekit.json", m->vertex_count, m->positions, &rig, err,
+                                          sizeof err), 0);
+    fp_rig_step r;
+    assert_int_equal(fp_rig_step_init(&r, rig, m->vertex_count, m->positions), 0);
+    /* start points on vertices all over the face (some near the jaw's ramp), long vectors */
+    float st[4][3], en[4][3];
+    fp_control_set cs;
+    setup_cs(&cs);
+    cs.start = st;
+    cs.end = en;
+    cs.count = 4;
+    cs.radius = 2.0;
+    cs.active = true;
+    size_t n = m->vertex_count;
+    unsigned limited = 0;
+    for (int frame = 0; frame < 40; frame++) {
+        if (frame == 0 || frame == 25) /* a new gesture: new start points */
+            for (int i = 0; i < 4; i++)
+                memcpy(st[i], m->positions + 3 * ((size_t)(frame * 97 + i * 6151) % n), sizeof st[i]);
+        if (frame == 10) st[2][1] += 0.01f; /* one start point moves */
+        if (frame == 15) cs.radius = 3.0;
+        if (frame == 20) { /* the jaw opens: the posed base changes */
+            assert_int_equal(fp_rig_step_set_channel(&r, "jaw.open", 0.8f), 0);
+            assert_true(fp_rig_step_update(&r, NULL, m->positions, NULL));
+        }
+        for (int i = 0; i < 4; i++)
+            for (int k = 0; k < 3; k++) en[i][k] = st[i][k] + (k == 2 ? 1.5f : 0.3f) * (float)(frame % 5 + 1);
+        const fp_control_set *out = fp_rig_step_run(&r, &cs);
+        expect_clamped(&r, &cs, out);
+        for (size_t i = 0; i < 4; i++)
+            limited += fp_rig_finger_limit(r.rig, r.posed, st[i], cs.radius) < 0.45 * cs.radius;
+    }
+    assert_true(limited > 0); /* the rig's own limit acted somewhere, not only the 0.45 R */
+    fp_rig_step_free(&r);
+    fp_mesh_free(&m);
+}
+
+/* The mobility blend over the engine's touched ranges only equals the whole blend bit for bit,
+ * frame after frame: a real engine (csrbf, touched evaluation) on the ICT face's posed base
+ * moving over it, the jaw posed anew halfway (the blend starts over). */
+static void test_rig_finish_ranges(void **state)
+{
+    (void)state;
+    const char *dir = getenv("FP_SHARED_DATA") ? getenv("FP_SHARED_DATA") : "../shared/data";
+    char path[4200], err[512];
+    snprintf(path, sizeof path, "%s/faces/ict-facekit/generic_neutral_mesh.obj", dir);
+    fp_mesh *m = NULL;
+    assert_int_equal(fp_mesh_load(path, &m, err, sizeof err), 0);
+    size_t n = m->vertex_count, bytes = n * 3 * sizeof(float);
+    fp_rig *rig = NULL;
+    assert_int_equal(fp_rig_load_for_mesh("rigs/ict-facekit.json", n, m->positions, &rig, err, sizeof err), 0);
+    fp_rig_step r;
+    assert_int_equal(fp_rig_step_init(&r, rig, n, m->positions), 0);
+    csrbf_points *pts = NULL;
+    csrbf_touch *touch = NULL;
+    csrbf_solver *sol = NULL;
+    assert_int_equal(csrbf_points_create(n, r.posed, &pts), CSRBF_OK);
+    assert_int_equal(csrbf_touch_create(pts, &touch), CSRBF_OK);
+    csrbf_options o = {0};
+    o.radius = 2.0;
+    o.threads = 1;
+    assert_true(csrbf_solver_create(&o, &sol) >= 0);
+    float *out = malloc(bytes), *want = malloc(bytes);
+    memcpy(out, r.posed, bytes);
+    unsigned partial = 0;
+    for (int frame = 0; frame < 30; frame++) {
+        if (frame == 15) { /* the jaw: a new posed base, re-indexed */
+            assert_int_equal(fp_rig_step_set_channel(&r, "jaw.open", 0.5f), 0);
+            assert_true(fp_rig_step_update(&r, NULL, m->positions, NULL));
+            assert_int_equal(csrbf_points_update(pts, r.posed), CSRBF_OK);
+            csrbf_touch_reset(touch);
+        }
+        float st[2][3], en[2][3];
+        for (int i = 0; i < 2; i++) { /* two fingers walking over the face */
+            memcpy(st[i], r.posed + 3 * ((size_t)(frame * 211 + i * 9001) % n), sizeof st[i]);
+            for (int k = 0; k < 3; k++) en[i][k] = st[i][k] + 0.3f;
+        }
+        assert_true(csrbf_solver_set_start_points(sol, 2, &st[0][0]) >= 0);
+        assert_true(csrbf_solver_set_end_points(sol, &en[0][0]) >= 0);
+        assert_true(csrbf_evaluate_touched(sol, pts, touch, out, 0u, NULL) >= 0);
+        const uint32_t *ranges;
+        size_t nr = csrbf_touch_ranges(touch, &ranges);
+        const float *shown = fp_rig_step_finish(&r, out, ranges, nr);
+        assert_ptr_equal(shown, r.shown);
+        assert_int_equal(fp_rig_apply_mobility(rig, r.posed, out, want), 0);
+        assert_memory_equal(shown, want, bytes);
+        size_t covered = 0;
+        for (size_t i = 0; i < nr; i++) covered += ranges[2 * i + 1];
+        partial += covered < n;
+    }
+    assert_true(partial >= 20); /* most frames blended a part of the face only */
+    free(out);
+    free(want);
+    csrbf_solver_destroy(&sol);
+    csrbf_touch_destroy(&touch);
+    csrbf_points_destroy(&pts);
+    fp_rig_step_free(&r);
+    fp_mesh_free(&m);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_check),
         cmocka_unit_test(test_errors_once_with_count),
         cmocka_unit_test(test_rig_pass_through),
+        cmocka_unit_test(test_rig_clamp_kept),
+        cmocka_unit_test(test_rig_finish_ranges),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

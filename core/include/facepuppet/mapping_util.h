@@ -19,7 +19,9 @@
 /* Which hands a mapping listens to: FP_HANDMASK_* and fp_parse_hands, in plugin_util.h. */
 
 /** The paper's activation rule (Sato et al. 2004, sec. 2.3): a hand is active while one of
- *  its fingertips is within `factor` x the support radius of the surface. */
+ *  its fingertips is within `factor` x the support radius of the surface. Exact for factor
+ *  <= FP_TIP_DISTANCE_REACH (the host's tip distances are +INFINITY beyond it); farther out,
+ *  ask FP_HOST_EXT_SURFACE with that reach (map-anchored does). */
 static inline bool fp_hand_is_near(const fp_frame_input *in, int hand, double factor)
 {
     if (!in->hands[hand].present) return false;

@@ -40,6 +40,12 @@ extern "C" {
 #define FP_PLUGIN_ABI_MINOR 1   /* 1.1: capacities, face frame, rig and surface services,
                                    typed parameters; 1.0 plugins still load */
 
+/** How far fp_frame_input.tip_distance is exact, in support radii: beyond it the host reports
+ *  +INFINITY. A fingertip farther than the support radius from every vertex moves none
+ *  (the Wendland function is 0 there), and the host's search stops there, so its cost follows
+ *  the fingers' reach, not the mesh (ABI 1.1; a 1.0 host reported every distance). */
+#define FP_TIP_DISTANCE_REACH 1.0
+
 /** Capacities the host guarantees (ABI 1.1). A mapping may rely on at least this many
  *  control vectors and channels in every fp_control_set (fp_control_set.capacity and
  *  channel_capacity say the exact figure, never less than these). */
@@ -340,8 +346,10 @@ typedef struct fp_frame_input {
     double radius;                 /* the session's support radius, mesh units */
     uint32_t requested;            /* fp_intent bits asked for by the performer (keys, pedal) */
     /** Distance from each fingertip (FP_JOINT_TIP) of each present hand to the nearest
-     *  vertex of the base, mesh units; +INFINITY for an absent hand. The paper's rule "a hand
-     *  is active while its fingertips are within the support radius of the surface" reads it. */
+     *  vertex of the base, mesh units, exact up to FP_TIP_DISTANCE_REACH x radius; +INFINITY
+     *  beyond it ("far") and for an absent hand. The paper's rule "a hand is active while its
+     *  fingertips are within the support radius of the surface" reads it. A mapping that
+     *  needs distances farther out asks FP_HOST_EXT_SURFACE with its own max_distance. */
     float tip_distance[FP_HANDS][FP_FINGERS];
 
     /* ---- ABI 1.1 (read only where size covers them; a 1.0 host does not fill them) --- */
