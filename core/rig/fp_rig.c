@@ -59,6 +59,9 @@ struct fp_rig {
     double lip_band, cheek_band, cheek_distance, corner_inset, inner_depth;
     double menton[3], gonion[3];
     double neck_band, back_band;
+    size_t weight_count;        /* jaw.weights: soft vertices whose weight the file gives */
+    uint32_t *weight_v;         /* their indices, ascending */
+    float *weight_w;            /* their weights in [0, 1] */
     double ramp;                /* mobility ramp, mesh units */
     /* bound */
     float *w;                   /* n jaw weights */
@@ -440,13 +443,106 @@ static int parse_channels(const ctx *c, fp_rig *r, const cJSON *root)
     return 0;
 }
 
+typedef struct weight_pair {
+    uint32_t v;
+    float w;
+    int at; /* element of jaw.weights.vertices it came from */
+} weight_pair;
+
+static int by_vertex(const void *a, const void *b)
+{
+    uint32_t x = ((const weight_pair *)a)->v, y = ((const weight_pair *)b)->v;
+    return x < y ? -1 : x > y;
+}
+
+/* jaw.weights: {"vertices": [index or [first, last], ...], "values": [w, ...]}: one weight in
+ * [0, 1] per listed vertex, in the listed order; only soft vertices; none twice. Memory is
+ * bounded by the number of values in the file (a range may not list more vertices). */
+static int parse_weights(const ctx *c, fp_rig *r, const cJSON *wj)
+{
+    const char *path = "jaw.weights";
+    static const char *const fw[] = {"vertices", "values", NULL};
+    int rc = check_fields(c, wj, path, fw);
+    if (rc) return rc;
+    char p[512];
+    const cJSON *vs, *vals;
+    if ((rc = get_member(c, wj, path, "values", true, &vals, p, sizeof p))) return rc;
+    if (!cJSON_IsArray(vals)) return bad(c, p, "expected an array of numbers in [0, 1], got %s", type_name(vals));
+    if ((rc = get_member(c, wj, path, "vertices", true, &vs, p, sizeof p))) return rc;
+    if (!cJSON_IsArray(vs)) return bad(c, p, "expected an array of vertex indices and [first, last] ranges, got %s",
+                                       type_name(vs));
+    size_t nv = (size_t)cJSON_GetArraySize(vals);
+    weight_pair *pairs = nv ? malloc(nv * sizeof *pairs) : NULL;
+    if (nv && !pairs) return fp_errorf(c->err, c->errlen, -ENOMEM, "%s: out of memory", c->file);
+    int i = 0;
+    for (const cJSON *e = vals->child; e && !rc; e = e->next, i++) {
+        char ep[64];
+        snprintf(ep, sizeof ep, "jaw.weights.values[%d]", i);
+        if (!cJSON_IsNumber(e)) rc = bad(c, ep, "expected a number, got %s", type_name(e));
+        else if (!(e->valuedouble >= 0 && e->valuedouble <= 1)) rc = bad(c, ep, "%g is outside [0, 1]", e->valuedouble);
+        else pairs[i].w = (float)e->valuedouble;
+    }
+    size_t k = 0;
+    i = 0;
+    for (const cJSON *e = vs->child; e && !rc; e = e->next, i++) {
+        char ep[64];
+        snprintf(ep, sizeof ep, "jaw.weights.vertices[%d]", i);
+        uint32_t a, b;
+        if (cJSON_IsArray(e)) {
+            if (cJSON_GetArraySize(e) != 2) { rc = bad(c, ep, "a range is [first, last]"); break; }
+            char q[80];
+            snprintf(q, sizeof q, "%s[0]", ep);
+            if ((rc = vertex_index(c, e->child, q, r->n, &a))) break;
+            snprintf(q, sizeof q, "%s[1]", ep);
+            if ((rc = vertex_index(c, e->child->next, q, r->n, &b))) break;
+            if (b < a) { rc = bad(c, ep, "range [%u, %u] runs backwards", a, b); break; }
+        } else {
+            if ((rc = vertex_index(c, e, ep, r->n, &a))) break;
+            b = a;
+        }
+        if ((size_t)(b - a) + 1 > nv - k) {
+            rc = bad(c, ep, "more vertices listed than jaw.weights.values has numbers (%zu)", nv);
+            break;
+        }
+        for (uint32_t v = a;; v++) {
+            if (r->kind[v] != FP_RIG_SOFT) {
+                rc = bad(c, ep, "vertex %u is %s: only soft vertices take a weight (skull 0, jaw 1)", v,
+                         r->kind[v] == FP_RIG_SKULL ? "in a skull region" : "in a jaw region");
+                break;
+            }
+            pairs[k].v = v, pairs[k].at = i, k++; /* pairs[k].w: the k-th value */
+            if (v == b) break;
+        }
+    }
+    if (!rc && k != nv)
+        rc = bad(c, "jaw.weights", "%zu vertices listed but %zu values: one value per vertex", k, nv);
+    if (!rc && nv) {
+        qsort(pairs, nv, sizeof *pairs, by_vertex);
+        for (size_t j = 1; j < nv && !rc; j++)
+            if (pairs[j].v == pairs[j - 1].v) {
+                char ep[64];
+                snprintf(ep, sizeof ep, "jaw.weights.vertices[%d]", pairs[j].at > pairs[j - 1].at ? pairs[j].at : pairs[j - 1].at);
+                rc = bad(c, ep, "vertex %u is listed twice", pairs[j].v);
+            }
+    }
+    if (!rc && nv) {
+        r->weight_v = malloc(nv * sizeof *r->weight_v);
+        r->weight_w = malloc(nv * sizeof *r->weight_w);
+        if (!r->weight_v || !r->weight_w) rc = fp_errorf(c->err, c->errlen, -ENOMEM, "%s: out of memory", c->file);
+        for (size_t j = 0; j < nv && !rc; j++) r->weight_v[j] = pairs[j].v, r->weight_w[j] = pairs[j].w;
+        if (!rc) r->weight_count = nv;
+    }
+    free(pairs);
+    return rc;
+}
+
 static int parse_jaw(const ctx *c, fp_rig *r, const cJSON *root)
 {
     char p[512];
     const cJSON *jaw, *h, *fo;
     int rc = get_object(c, root, "", "jaw", true, &jaw, p, sizeof p);
     if (rc) return rc;
-    static const char *const fj[] = {"hinge", "open_degrees", "glide", "falloff", NULL};
+    static const char *const fj[] = {"hinge", "open_degrees", "glide", "falloff", "weights", NULL};
     if ((rc = check_fields(c, jaw, "jaw", fj))) return rc;
     if ((rc = get_object(c, jaw, "jaw", "hinge", true, &h, p, sizeof p))) return rc;
     static const char *const fh[] = {"right", "left", NULL};
@@ -510,7 +606,9 @@ static int parse_jaw(const ctx *c, fp_rig *r, const cJSON *root)
     if (!(r->lip_band > 0) || !(r->cheek_band > 0) || !(r->neck_band > 0) || !(r->back_band > 0) ||
         !(r->cheek_distance > 0))
         return bad(c, "jaw.falloff", "the bands and cheek_distance must be > 0");
-    return 0;
+    const cJSON *wj;
+    if ((rc = get_object(c, jaw, "jaw", "weights", false, &wj, p, sizeof p))) return rc;
+    return wj ? parse_weights(c, r, wj) : 0;
 }
 
 int fp_rig_parse(const char *json, size_t len, const char *name, fp_rig **out, char *err, size_t errlen)
@@ -743,6 +841,7 @@ int fp_rig_bind(fp_rig *r, size_t n, const float *pos, char *err, size_t errlen)
             w[v] = (float)falloff(r, p, mouth, C, G, M);
         }
     }
+    for (size_t k = 0; k < r->weight_count; k++) w[r->weight_v[k]] = r->weight_w[k]; /* jaw.weights */
     /* mobility: smoothstep of the distance to the nearest rigid vertex, through a grid */
     double cell = r->ramp;
     long dims[3];
@@ -822,6 +921,8 @@ void fp_rig_free(fp_rig **rig)
     free((*rig)->m);
     free((*rig)->g);
     free((*rig)->slope_v);
+    free((*rig)->weight_v);
+    free((*rig)->weight_w);
     free(*rig);
     *rig = NULL;
 }
@@ -1139,6 +1240,8 @@ size_t fp_rig_describe(const fp_rig *r, size_t n, const float *pos, char *buf, s
     OUT("  falloff    lip band %g, cheek band %g from %g inside the corners to %g beyond, inner depth %g, neck band %g,"
         " back band %g; mobility ramp %g\n", r->lip_band, r->cheek_band, r->corner_inset, r->cheek_distance,
         r->inner_depth, r->neck_band, r->back_band, r->ramp);
+    if (r->weight_count) OUT("  weights    %zu soft vertices take their jaw weight from the file (jaw.weights), the rest the falloff\n",
+                             r->weight_count);
     OUT("  channels   %zu\n", r->channel_count);
     for (size_t i = 0; i < r->channel_count; i++)
         OUT("    %-22s [%g, %g], neutral %g\n", r->channels[i].name, r->channels[i].min, r->channels[i].max,

@@ -91,8 +91,9 @@ typedef struct fp_rig_channel_desc {
 /** Parse a rig from `len` bytes of JSON (need not be NUL-terminated). `name` (e.g. the file
  *  path) starts every message. Checks the structure, every type, unknown fields, ranges,
  *  index ranges against the file's own mesh.vertex_count, overlapping regions, landmark and
- *  channel names, axes (unit, orthogonal, right-handed: left = up x forward), and that the
- *  hinge axis runs along the left axis (within 30 degrees). The rig is not yet bound to a
+ *  channel names, axes (unit, orthogonal, right-handed: left = up x forward), that the
+ *  hinge axis runs along the left axis (within 30 degrees), and jaw.weights (soft vertices
+ *  only, none twice, one value in [0, 1] each; memory bounded by the values in the file). The rig is not yet bound to a
  *  mesh: fp_rig_bind() must follow before posing.
  *  Returns 0 and *out (free with fp_rig_free), or -EBADMSG (malformed or invalid; message
  *  "NAME: json.path: reason"), -ENOMEM, -EINVAL (NULL arguments). Never crashes on any bytes
@@ -106,7 +107,8 @@ int fp_rig_load(const char *path, fp_rig **out, char *err, size_t errlen);
 /** Bind a parsed rig to its mesh's rest positions (n x 3 floats, mesh units): checks that
  *  n equals the rig's mesh.vertex_count and that each hinge point lies inside the mesh's
  *  bounding box and within 60 mm of a vertex (a hinge "inside nothing" is refused), then
- *  computes the per-vertex jaw weights (the falloff) and mobility weights. The checksum
+ *  computes the per-vertex jaw weights (the falloff, or the file's jaw.weights for the soft
+ *  vertices it lists) and mobility weights. The checksum
  *  (mesh.positions_crc32) need not match: a rig fits any shape of its topology (an identity
  *  morph, a committed base); fp_rig_checksum_matches() tells. O(n) plus a grid search.
  *  Returns 0, -EBADMSG (does not fit; message names the field), -ENOMEM, -EINVAL. */
@@ -185,7 +187,8 @@ void fp_rig_hinge(const fp_rig *rig, float right[3], float left[3], double *open
                   double glide[2]);
 
 /** Per-vertex weights after fp_rig_bind (NULL before): the jaw weight w (fraction of the
- *  jaw's motion a vertex takes: 1 on the jaw, 0 on the skull, the falloff in soft tissue)
+ *  jaw's motion a vertex takes: 1 on the jaw, 0 on the skull, in soft tissue the file's
+ *  jaw.weights where it lists the vertex, else the falloff; rigs/README.md)
  *  and the mobility m (see the top of this file). n floats each, owned by the rig. */
 const float *fp_rig_jaw_weights(const fp_rig *rig);
 const float *fp_rig_mobility(const fp_rig *rig);

@@ -23,6 +23,9 @@ import json, sys, zlib
 from pathlib import Path
 import numpy as np
 from scipy.spatial import cKDTree
+import scipy.sparse as sp
+import scipy.sparse.csgraph as csg
+from scipy.sparse.linalg import spsolve
 
 
 def load_obj(path):
@@ -85,7 +88,14 @@ def rig(name, desc, mesh_name, V, mm, regions, landmarks, hinge, open_deg, glide
 
 
 def write(path, obj):
+    values = obj.get("jaw", {}).get("weights", {}).get("values")
+    if values is not None:  # 16 numbers a line
+        obj["jaw"]["weights"]["values"] = "@VALUES@"
     text = json.dumps(obj, indent=1, separators=(',', ': '))
+    if values is not None:
+        obj["jaw"]["weights"]["values"] = values
+        rows = [', '.join(json.dumps(v) for v in values[i:i + 16]) for i in range(0, len(values), 16)]
+        text = text.replace('"@VALUES@"', '[\n    ' + ',\n    '.join(rows) + ']')
     # keep vertex lists on one line each: collapse the innermost number arrays
     import re
     text = re.sub(r'\[\s+(-?[\d.]+),\s+(-?[\d.]+)\s+\]', r'[\1, \2]', text)
@@ -116,15 +126,197 @@ def ict_landmarks():
 
 
 # The soft-tissue falloff (rigs/README.md "ICT: how the hinge and falloff were chosen").
-ICT_CHEEK_BAND = float(__import__('os').environ.get('FP_CHEEK_BAND', 2.2))
-ICT_CHEEK_DISTANCE = float(__import__('os').environ.get('FP_CHEEK_DISTANCE', 1.0))
-ICT_CORNER_INSET = float(__import__('os').environ.get('FP_CORNER_INSET', 1.0))
-ICT_INNER_DEPTH = float(__import__('os').environ.get('FP_INNER_DEPTH', 0.8))
-ICT_NECK_BAND = float(__import__('os').environ.get('FP_NECK_BAND', 7.0))
-ICT_SOCKET_RATIO = float(__import__('os').environ.get('FP_SOCKET_RATIO', 0.5))
+ICT_CHEEK_BAND = 2.5      # half-width of the cheek blend about the mouth line's height, cm
+ICT_CHEEK_DISTANCE = 1.0
+ICT_CORNER_INSET = 1.0
+ICT_INNER_DEPTH = 0.8
+ICT_NECK_BAND = 7.0
+ICT_BACK_BAND = 4.0
+ICT_OPEN_DEGREES = 26.0
+ICT_GLIDE = [0.8, 0.3]    # condyle forward and down at jaw.open = 1, cm
 # Mobility ramp: fingers act fully this far from bone; the finger clamp is ramp / 3 (fp_rig.h).
 ICT_RAMP = 1.0
-ICT_BACK_BAND = float(__import__('os').environ.get('FP_BACK_BAND', 4.0))
+# Jaw weights of the lips and the mouth's inside (rigs/README.md "ICT: the jaw weights").
+ICT_LIP_ZONE = 4.5        # cm along the skin from the lips' inner edge: solved, not the falloff
+ICT_LIP_FULL = 0.4        # cm from the midline: the inner lip edges' weights leave 0 / 1 here ...
+ICT_LIP_KEEP = 1.0        # ... lip skin nearer the midline than this and farther than
+ICT_LIP_KEEP_BAND = 0.5   # this from the mouth line keeps the falloff's 0 (upper) / 1 (lower)
+ICT_TEETH_T = (0.3, 0.6)  # t = d_upper / (d_upper + d_lower) teeth: weight 0 below, 1 above
+ICT_TEETH_NEAR = 0.5      # cm: lining and gums this near a tooth take smoothstep(t)
+ICT_LOOP_CLEAR = 1.0      # cm: ... but not the lining this near its opening (the lips decide there)
+ICT_KNN = 6               # nearest neighbours joining the mouth's separate surfaces
+
+
+def smoothstep(a, b, x):
+    t = np.clip((np.asarray(x, dtype=float) - a) / (b - a), 0, 1)
+    return t * t * (3 - 2 * t)
+
+
+def expand(vs):
+    out = []
+    for e in vs:
+        out.extend(range(e[0], e[1] + 1) if isinstance(e, list) else [e])
+    return np.array(out, dtype=int)
+
+
+def falloff_weights(rig_obj, V):
+    """The jaw weight of every vertex by the rig's falloff, as fp_rig_bind computes it
+    (rigs/README.md "Jaw and falloff"); skull 0, jaw 1; jaw.weights not applied."""
+    j = rig_obj["jaw"]
+    f = j["falloff"]
+    ax = rig_obj["axes"]
+    up, fwd, left = (np.array(ax[k], dtype=float) for k in ("up", "forward", "left"))
+    H = 0.5 * (np.array(j["hinge"]["right"]) + np.array(j["hinge"]["left"]))
+    fc = lambda P: ((P - H) @ left, (P - H) @ up, (P - H) @ fwd)
+    x, y, z = fc(np.asarray(V, dtype=float))
+    mx, my, mz = fc(np.array(f["mouth_line"], dtype=float))
+    ym, zm = np.interp(x, mx, my), np.interp(x, mx, mz)
+    e = np.where(x <= mx[0], mx[0] - x, np.where(x >= mx[-1], x - mx[-1], -np.minimum(x - mx[0], mx[-1] - x)))
+    s = smoothstep(-f.get("corner_inset", 0.0), f["cheek_distance"], e)
+    if f.get("inner_depth", 0.0) > 0:
+        s = np.maximum(s, smoothstep(f["inner_depth"], 2 * f["inner_depth"], zm - z))
+    b = f["lip_band"] + (f["cheek_band"] - f["lip_band"]) * s
+    w_mouth = 1 - smoothstep(-b, b, y - ym)
+
+    def side(a, b_, o):  # signed distance from the line a -> b_ in (z, y), positive away from o
+        d = np.array([b_[0] - a[0], b_[1] - a[1]])
+        nrm = np.array([d[1], -d[0]]) / np.hypot(*d)
+        if (o[0] - a[0]) * nrm[0] + (o[1] - a[1]) * nrm[1] > 0:
+            nrm = -nrm
+        return (z - a[0]) * nrm[0] + (y - a[1]) * nrm[1]
+    _, gy, gz = fc(np.array([f["gonion"]], dtype=float))
+    _, ny, nz = fc(np.array([f["menton"]], dtype=float))
+    C, G, M = (0.0, 0.0), (gz[0], gy[0]), (nz[0], ny[0])
+    w = w_mouth * (1 - smoothstep(0, f["back_band"], side(C, G, M))) * (1 - smoothstep(0, f["neck_band"], side(G, M, C)))
+    for g in rig_obj["regions"]:
+        if g["kind"] != "soft":
+            w[expand(g["vertices"])] = 0.0 if g["kind"] == "skull" else 1.0
+    return w
+
+
+def weld(V):
+    """canon[v]: the first vertex at v's exact position (OBJ seams are one point)."""
+    _, first, inv = np.unique(V, axis=0, return_index=True, return_inverse=True)
+    return first[inv.ravel()]
+
+
+def edge_graph(V, F, lengths=True):
+    E = np.r_[F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]
+    val = np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1) if lengths else np.ones(len(E))
+    G = sp.coo_matrix((val, (E[:, 0], E[:, 1])), shape=(len(V), len(V))).tocsr()
+    return G.maximum(G.T)
+
+
+def cotan_weights(V, F):
+    """Symmetric cotangent weights (the surface Laplacian's), clamped to >= 1e-3 so the
+    maximum principle holds on obtuse triangles."""
+    I, J, W = [], [], []
+    for k in range(3):
+        a, b, c = F[:, k], F[:, (k + 1) % 3], F[:, (k + 2) % 3]
+        u, v = V[b] - V[a], V[c] - V[a]
+        I.append(b), J.append(c)
+        W.append(0.5 * (u * v).sum(1) / np.maximum(np.linalg.norm(np.cross(u, v), axis=1), 1e-12))
+    A = sp.coo_matrix((np.concatenate(W), (np.concatenate(I), np.concatenate(J))), shape=(len(V), len(V))).tocsr()
+    A = A + A.T
+    A.data = np.maximum(A.data, 1e-3)
+    return A
+
+
+def boundary_vertices(F, n):
+    """Vertices on an edge that only one triangle of F has."""
+    E = np.sort(np.r_[F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]], axis=1)
+    key = E[:, 0].astype(np.int64) * n + E[:, 1]
+    u, cnt = np.unique(key, return_counts=True)
+    once = u[cnt == 1]
+    return np.unique(np.r_[once // n, once % n]).astype(int)
+
+
+def ict_jaw_weights(V, F, rig_obj, lm):
+    """Jaw weights of the ICT head's lips and mouth inside (rigs/README.md "ICT: the jaw
+    weights"): a harmonic interpolation (cotangent weights on the skin, lining, gums and
+    tongue; their separate surfaces joined by nearest neighbours) between fixed values:
+    the skull 0 and the lower teeth 1; the lips' inner edges (upper 0, lower 1 near the
+    midline, both 1/2 at the corners); the lip skin near the midline and all skin farther
+    than ICT_LIP_ZONE from the lips' inner edge keep the falloff; lining and gums near the
+    teeth take smoothstep(t) of their distances to the upper and lower teeth.
+    Returns (w, exact): w for every vertex, exact: the interior vertices fixed at 0 or 1
+    by the teeth (rigid with the skull or the jaw)."""
+    n = len(V)
+    Vd = V.astype(float)
+    canon = weld(V)
+    idx = np.arange(n)
+    face, skin = idx < 9409, idx < 11248
+    sock, gums = (idx >= 11248) & (idx < 13294), (idx >= 14062) & (idx < 17039)
+    inter = sock | gums
+    upper_teeth, lower_teeth = np.arange(17039, 19247), np.arange(19247, 21451)
+    w_fall = falloff_weights(rig_obj, V)
+    X = Vd[:, 0]
+    ML = np.array(rig_obj["jaw"]["falloff"]["mouth_line"])
+    ym, zm = np.interp(X, ML[:, 0], ML[:, 1]), np.interp(X, ML[:, 0], ML[:, 2])
+    # the lips' inner edges: the face's and the lining's boundary loops at the mouth
+    near_mouth = lambda b: b[(np.abs(X[b]) < ML[-1, 0] + 0.5) & (np.abs(Vd[b, 1] - ym[b]) < 0.8) & (Vd[b, 2] > zm[b] - 1.5)]
+    floop = near_mouth(boundary_vertices(F[np.all(face[F], axis=1)], n))
+    sloop = near_mouth(boundary_vertices(F[np.all(sock[F], axis=1)], n))
+    # upper or lower lip: nearer (along the face) to the upper or the lower inner lip landmark
+    Gf = edge_graph(Vd, canon[F[np.all(face[F], axis=1)]])
+    d_up, d_lo = csg.dijkstra(Gf, directed=False, indices=[canon[lm["upper_lip_inner"]], canon[lm["lower_lip_inner"]]])
+    f_up = (d_up[canon] < d_lo[canon])[floop]
+    s_up = f_up[cKDTree(Vd[floop]).query(Vd[sloop])[1]]
+    x_tip = np.abs(X[floop]).max()
+    Gs = edge_graph(Vd, canon[F[np.all(skin[F], axis=1)]])
+    d_loop = csg.dijkstra(Gs, directed=False, indices=np.unique(canon[floop])).min(0)[canon]
+    du = cKDTree(Vd[upper_teeth]).query(Vd)[0]
+    dl = cKDTree(Vd[lower_teeth]).query(Vd)[0]
+    t_teeth = smoothstep(*ICT_TEETH_T, du / (du + dl))
+    d_sloop = cKDTree(Vd[sloop]).query(Vd)[0]
+
+    fixed, val = np.zeros(n, bool), np.zeros(n)
+
+    def fix(mask, v):
+        m = mask & ~fixed
+        fixed[m] = True
+        val[m] = v[m] if isinstance(v, np.ndarray) else v
+    for g in rig_obj["regions"]:  # the skull 0, the jaw 1
+        if g["kind"] != "soft":
+            m = np.zeros(n, bool)
+            m[expand(g["vertices"])] = True
+            fix(m, w_fall)
+    fix(~(skin | inter), w_fall)  # eyes, lashes, teeth: the falloff (0 there)
+    for loop, is_up in ((floop, f_up), (sloop, s_up)):
+        # s: 0 at the corners, 1 within ICT_LIP_FULL of the midline; smooth (flat) on the upper
+        # lip, which lies on the upper incisors, linear on the lower lip (the least shear)
+        ax = np.abs(X[loop])
+        s_upper = 1 - smoothstep(ICT_LIP_FULL, x_tip, ax)
+        s_lower = np.clip((x_tip - ax) / (x_tip - ICT_LIP_FULL), 0, 1)
+        fixed[loop] = True
+        val[loop] = np.where(is_up, 0.5 * (1 - s_upper), 0.5 * (1 + s_lower))
+    fix(skin & (d_loop > ICT_LIP_ZONE), w_fall)
+    fix(face & (np.abs(X) < ICT_LIP_KEEP) & (np.abs(Vd[:, 1] - ym) > ICT_LIP_KEEP_BAND) & ((w_fall == 0) | (w_fall == 1)), w_fall)
+    near = np.minimum(du, dl) < ICT_TEETH_NEAR
+    fix(gums & near, t_teeth)
+    fix(sock & near & (d_sloop > ICT_LOOP_CLEAR), t_teeth)
+    exact = inter & fixed & ((val == 0) | (val == 1))
+    # the graph: cotangent weights on the surfaces, nearest neighbours across the mouth's parts
+    tri = F[np.all((skin | inter)[F], axis=1)]
+    A = cotan_weights(Vd, canon[tri])
+    iv = idx[inter]
+    _, nb = cKDTree(Vd[iv]).query(Vd[iv], k=ICT_KNN + 1)
+    K = sp.coo_matrix((np.ones(len(iv) * ICT_KNN), (canon[np.repeat(iv, ICT_KNN)], canon[iv[nb[:, 1:].ravel()]])), shape=(n, n)).tocsr()
+    A = (A + K + K.T).tocsr()
+    A = (A - sp.diags(A.diagonal())).tocsr()
+    # solve on the welded vertices: L_ff w_f = -L_fc w_c
+    fc, vc = np.zeros(n, bool), np.zeros(n)
+    fc[canon[fixed]], vc[canon[fixed]] = True, val[fixed]
+    used = np.zeros(n, bool)
+    used[canon[tri]] = used[canon[iv]] = True
+    fc |= ~used | (canon != idx)
+    L = sp.diags(np.asarray(A.sum(1)).ravel()) - A
+    free, con = np.where(~fc)[0], np.where(fc)[0]
+    w = vc.copy()
+    w[free] = spsolve(L[free][:, free].tocsc(), -L[free][:, con] @ vc[con])
+    w = np.clip(w[canon], 0, 1)
+    w[fixed] = val[fixed]
+    return w, exact
 
 
 def build_ict(data):
@@ -139,29 +331,8 @@ def build_ict(data):
     upper_teeth = np.arange(17039, 19247)
     lower_teeth = np.arange(19247, 21451)
     gums = np.arange(14062, 17039)
-    du, _ = cKDTree(V[upper_teeth]).query(V[gums])
-    dl, _ = cKDTree(V[lower_teeth]).query(V[gums])
     eyeballs = np.arange(21451, 24591)
-    # The mouth's lining: the part next to the lower gums and teeth is the floor of the mouth
-    # and moves with the mandible (jaw), the part next to the upper ones is the palate and the
-    # upper vestibule (skull); the band between stays soft and takes the falloff.
     socket = np.arange(11248, 13294)
-    upper = np.r_[upper_teeth, gums[du < dl]]
-    lower = np.r_[lower_teeth, gums[du >= dl]]
-    su, _ = cKDTree(V[upper]).query(V[socket])
-    sl, _ = cKDTree(V[lower]).query(V[socket])
-    socket_jaw = socket[sl < ICT_SOCKET_RATIO * su]
-    socket_skull = socket[su < ICT_SOCKET_RATIO * sl]
-    regions = [
-        ("cranium", "skull", cranium), ("ears", "skull", ears),
-        ("upper_teeth", "skull", upper_teeth), ("upper_gums", "skull", gums[du < dl]),
-        ("eyeballs", "skull", eyeballs),
-        ("lower_teeth", "jaw", lower_teeth), ("lower_gums_tongue", "jaw", gums[du >= dl]),
-        ("mouth_floor", "jaw", socket_jaw), ("palate", "skull", socket_skull),
-        ("face", "soft", np.arange(0, 9409)), ("head_neck", "soft", np.arange(9409, 11248)),
-        ("mouth_socket", "soft", np.arange(11248, 13294)), ("eye_sockets", "soft", np.arange(13294, 14062)),
-        ("eye_surfaces", "soft", np.arange(24591, 25351)), ("eyelashes", "soft", np.arange(25351, 26719)),
-    ]
     # Hinge: the condyles, 1.3 cm in front of the ear canal at its height, 1.9 cm under the
     # skin (intercondylar distance about 10 cm).
     hinge = ([-5.0, 0.5, 2.3], [5.0, 0.5, 2.3])
@@ -172,8 +343,31 @@ def build_ict(data):
                "cheek_distance": ICT_CHEEK_DISTANCE, "corner_inset": ICT_CORNER_INSET,
                "inner_depth": ICT_INNER_DEPTH, "menton": [0.0, -8.0, 9.2], "gonion": [5.3, -5.0, 1.6],
                "neck_band": ICT_NECK_BAND, "back_band": ICT_BACK_BAND}
-    return rig("ict-facekit", "ICT FaceKit generic neutral head (cm): skull, jaw, falloff from anatomy",
-               mesh, V, 10.0, regions, lm, hinge, 26.0, [0.0, 0.0], falloff, ICT_RAMP), V, F
+    bone = [("cranium", "skull", cranium), ("ears", "skull", ears), ("upper_teeth", "skull", upper_teeth),
+            ("eyeballs", "skull", eyeballs), ("lower_teeth", "jaw", lower_teeth)]
+    first = rig("ict-facekit", "", mesh, V, 10.0, bone, lm, hinge, ICT_OPEN_DEGREES, ICT_GLIDE, falloff, ICT_RAMP)
+    w, exact = ict_jaw_weights(V, F, first, lm)
+    # gums and lining that the teeth fix at 0 or 1 are rigid with the skull or the jaw
+    rigid = lambda part, v: part[exact[part] & (w[part] == v)]
+    regions = bone[:4] + [
+        ("upper_gums", "skull", rigid(gums, 0)), ("palate", "skull", rigid(socket, 0)),
+        bone[4], ("lower_gums", "jaw", rigid(gums, 1)), ("mouth_floor", "jaw", rigid(socket, 1)),
+        ("face", "soft", np.arange(0, 9409)), ("head_neck", "soft", np.arange(9409, 11248)),
+        ("mouth_lining", "soft", socket), ("tongue_gums", "soft", gums),
+        ("eye_sockets", "soft", np.arange(13294, 14062)),
+        ("eye_surfaces", "soft", np.arange(24591, 25351)), ("eyelashes", "soft", np.arange(25351, 26719)),
+    ]
+    r = rig("ict-facekit", "ICT FaceKit generic neutral head (cm): skull, jaw, falloff from anatomy, "
+            "jaw weights of the lips and the mouth's inside", mesh, V, 10.0, regions, lm, hinge,
+            ICT_OPEN_DEGREES, ICT_GLIDE, falloff, ICT_RAMP)
+    # the weights that differ from the falloff, soft vertices only, 4 decimals
+    w_fall = falloff_weights(r, V)
+    kind = np.zeros(len(V), int)
+    for g in r["regions"]:
+        kind[expand(g["vertices"])] = {"soft": 0, "skull": 1, "jaw": 2}[g["kind"]]
+    listed = np.where((kind == 0) & (np.abs(w - w_fall) > 5e-5))[0]
+    r["jaw"]["weights"] = {"vertices": ranges(listed), "values": [round(float(x), 4) for x in w[listed]]}
+    return r, V, F
 
 
 def build_mediapipe(data):
@@ -197,7 +391,7 @@ def build_mediapipe(data):
                "cheek_distance": 2.0, "menton": [0.0, -9.2, 4.0], "gonion": [5.9, -6.0, -0.8],
                "neck_band": 2.5, "back_band": 1.2}
     return rig("mediapipe-canonical", "MediaPipe canonical face mask (cm); hinge behind the mask",
-               mesh, V, 10.0, regions, lm, hinge, 26.0, [0.0, 0.0], falloff, ICT_RAMP), V, F
+               mesh, V, 10.0, regions, lm, hinge, ICT_OPEN_DEGREES, ICT_GLIDE, falloff, ICT_RAMP), V, F
 
 
 def build_lps(data, ict_rig, Vi):
@@ -230,7 +424,8 @@ def build_lps(data, ict_rig, Vi):
     for k in ("lip_band", "cheek_band", "cheek_distance", "corner_inset", "inner_depth", "neck_band", "back_band"):
         fo[k] = round(fo[k] * s, 4)
     return rig("lee-perry-smith", "Lee Perry-Smith head scan; landmarks and hinge carried over from ICT by a similarity",
-               mesh, V, round(mm, 4), regions, lm, (T(h["right"]), T(h["left"])), 26.0, [0.0, 0.0], fo,
+               mesh, V, round(mm, 4), regions, lm, (T(h["right"]), T(h["left"])), ICT_OPEN_DEGREES,
+               [round(g * s, 4) for g in ict_rig["jaw"]["glide"]], fo,
                round(ICT_RAMP * s, 4)), V, F
 
 

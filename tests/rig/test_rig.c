@@ -9,6 +9,8 @@
 #include "csrbf.h"
 #include "fp_mesh.h"
 #include "fp_rig.h"
+#define RIG_CHECK_NO_FOLDS
+#include "rig_check.h"
 
 #include <errno.h>
 #include <math.h>
@@ -48,83 +50,15 @@ static fp_rig *find_rig(const fp_mesh *m)
     return r;
 }
 
-/* Jacobi eigen-decomposition of a symmetric 4x4 matrix: largest eigenvector. */
-static void eig4_max(double A[4][4], double v[4])
-{
-    double V[4][4] = {{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}};
-    for (int sweep = 0; sweep < 100; sweep++) {
-        double off = 0;
-        for (int p = 0; p < 4; p++)
-            for (int q = p + 1; q < 4; q++) off += A[p][q] * A[p][q];
-        if (off < 1e-30) break;
-        for (int p = 0; p < 4; p++)
-            for (int q = p + 1; q < 4; q++) {
-                if (fabs(A[p][q]) < 1e-300) continue;
-                double th = 0.5 * atan2(2 * A[p][q], A[q][q] - A[p][p]);
-                double c = cos(th), s = sin(th);
-                for (int k = 0; k < 4; k++) {
-                    double akp = A[k][p], akq = A[k][q];
-                    A[k][p] = c * akp - s * akq, A[k][q] = s * akp + c * akq;
-                }
-                for (int k = 0; k < 4; k++) {
-                    double apk = A[p][k], aqk = A[q][k];
-                    A[p][k] = c * apk - s * aqk, A[q][k] = s * apk + c * aqk;
-                }
-                for (int k = 0; k < 4; k++) {
-                    double vkp = V[k][p], vkq = V[k][q];
-                    V[k][p] = c * vkp - s * vkq, V[k][q] = s * vkp + c * vkq;
-                }
-            }
-    }
-    int best = 0;
-    for (int i = 1; i < 4; i++)
-        if (A[i][i] > A[best][best]) best = i;
-    for (int i = 0; i < 4; i++) v[i] = V[i][best];
-}
-
-/* Best rigid fit (Horn's quaternion method) of vertices `sel` from a to b: returns the RMS
- * residual, the RMS displacement and the rotation angle in degrees. */
+/* Best rigid fit of the vertices of one kind (rig_check.h, Horn's method). */
 static void rigid_fit(const float *a, const float *b, const uint8_t *kinds, int kind, size_t n, double *resid,
                       double *disp, double *angle_deg)
 {
-    double ca[3] = {0}, cb[3] = {0};
-    size_t k = 0;
-    for (size_t v = 0; v < n; v++)
-        if (kinds[v] == kind) {
-            for (int i = 0; i < 3; i++) ca[i] += a[3 * v + i], cb[i] += b[3 * v + i];
-            k++;
-        }
-    assert_true(k > 3);
-    for (int i = 0; i < 3; i++) ca[i] /= (double)k, cb[i] /= (double)k;
-    double S[3][3] = {{0}};
-    for (size_t v = 0; v < n; v++)
-        if (kinds[v] == kind)
-            for (int i = 0; i < 3; i++)
-                for (int j = 0; j < 3; j++) S[i][j] += (a[3 * v + i] - ca[i]) * (b[3 * v + j] - cb[j]);
-    double N[4][4] = {
-        {S[0][0] + S[1][1] + S[2][2], S[1][2] - S[2][1], S[2][0] - S[0][2], S[0][1] - S[1][0]},
-        {S[1][2] - S[2][1], S[0][0] - S[1][1] - S[2][2], S[0][1] + S[1][0], S[2][0] + S[0][2]},
-        {S[2][0] - S[0][2], S[0][1] + S[1][0], -S[0][0] + S[1][1] - S[2][2], S[1][2] + S[2][1]},
-        {S[0][1] - S[1][0], S[2][0] + S[0][2], S[1][2] + S[2][1], -S[0][0] - S[1][1] + S[2][2]}};
-    double q[4];
-    eig4_max(N, q);
-    double w = q[0], x = q[1], y = q[2], z = q[3];
-    double R[9] = {w * w + x * x - y * y - z * z, 2 * (x * y - w * z), 2 * (x * z + w * y),
-                   2 * (x * y + w * z), w * w - x * x + y * y - z * z, 2 * (y * z - w * x),
-                   2 * (x * z - w * y), 2 * (y * z + w * x), w * w - x * x - y * y + z * z};
-    double r2 = 0, d2 = 0;
-    for (size_t v = 0; v < n; v++)
-        if (kinds[v] == kind) {
-            double p[3] = {a[3 * v] - ca[0], a[3 * v + 1] - ca[1], a[3 * v + 2] - ca[2]};
-            for (int i = 0; i < 3; i++) {
-                double t = cb[i] + R[3 * i] * p[0] + R[3 * i + 1] * p[1] + R[3 * i + 2] * p[2];
-                r2 += (t - b[3 * v + i]) * (t - b[3 * v + i]);
-                d2 += (b[3 * v + i] - a[3 * v + i]) * (b[3 * v + i] - a[3 * v + i]);
-            }
-        }
-    *resid = sqrt(r2 / (double)k);
-    *disp = sqrt(d2 / (double)k);
-    *angle_deg = acos(fmin(1, fmax(-1, (R[0] + R[4] + R[8] - 1) / 2))) * 180 / M_PI;
+    uint8_t *sel = malloc(n);
+    assert_non_null(sel);
+    for (size_t v = 0; v < n; v++) sel[v] = kinds[v] == kind;
+    assert_true(rig_check_rigid_fit(a, b, sel, n, resid, disp, angle_deg, NULL) > 3);
+    free(sel);
 }
 
 static void assert_skull_still(const fp_rig *r, const float *ref, const float *out)
@@ -428,7 +362,7 @@ static void test_broken_files(void **state)
         {"\"vertices\": [", "\"vertices\": [99999999, ", "regions[0].vertices[0]"},
         {"\"vertices\": [", "\"vertices\": [[10, 5], ", "regions[0].vertices[0]"},
         {"\"vertices\": [", "\"vertices\": [-1, ", "regions[0].vertices[0]"},
-        {"\"vertices\": [", "\"vertices\": [19300, ", "regions[5].vertices"}, /* a lower tooth: overlaps jaw */
+        {"\"vertices\": [", "\"vertices\": [19300, ", "regions[6].vertices"}, /* a lower tooth: overlaps jaw */
         {"\"chin\": ", "\"chin\": 26719, \"x\": ", "landmarks.chin"},
         {"\"nose_tip\": ", "\"nose tip\": ", "landmarks.nose tip"},
         {"\"right\": [", "\"right\": [\"a\", ", "jaw.hinge.right"},
@@ -440,6 +374,18 @@ static void test_broken_files(void **state)
         {"\"max\": 1", "\"max\": -1", "channels[0]"},
         {"\"mobility\": {", "\"extra\": 1, \"mobility\": {", "extra"},
         {"{", "[", ""},
+        /* jaw.weights */
+        {"\"weights\": {", "\"weights\": {\"x\": 1, ", "jaw.weights.x"},
+        {"\"glide\": [", "\"weights\": 3, \"glide\": [", "jaw.weights"},
+        {"\"values\": [\n    ", "\"values\": [\n    1.5, ", "jaw.weights.values[0]"},
+        {"\"values\": [\n    ", "\"values\": [\n    \"a\", ", "jaw.weights.values[0]"},
+        {"\"weights\": {\n   \"vertices\": [", "\"weights\": {\n   \"vertices\": [26718, ", "jaw.weights"}, /* a value short */
+        {"\"weights\": {\n   \"vertices\": [", "\"weights\": {\n   \"vertices\": [17040, ", "jaw.weights.vertices[0]"},
+        {"\"weights\": {\n   \"vertices\": [", "\"weights\": {\n   \"vertices\": [19300, ", "jaw.weights.vertices[0]"},
+        {"\"weights\": {\n   \"vertices\": [\n    [18, 28]", "\"weights\": {\n   \"vertices\": [\n    [28, 18]",
+         "jaw.weights.vertices[0]"},
+        {"\"weights\": {\n   \"vertices\": [", "\"weights\": {\n   \"vertices\": [[0, 99999], ", "jaw.weights.vertices[0]"},
+        {"\"weights\": {\n   \"vertices\": [", "\"weights\": {\n   \"vertices\": [26719, ", "jaw.weights.vertices[0]"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         char *bad = edit(good, cases[i].from, cases[i].to);
@@ -451,6 +397,53 @@ static void test_broken_files(void **state)
         assert_non_null(strstr(err, "broken.json"));
         assert_non_null(strstr(err, cases[i].field));
         free(bad);
+    }
+    /* jaw.weights replaced by small objects: refused with the field named, or accepted */
+    const char *wbeg = strstr(good, "\"weights\": {"), *wval = wbeg ? strstr(wbeg, "\"values\": [") : NULL;
+    const char *wend = wval ? strstr(wval, "]\n  }") : NULL;
+    assert_non_null(wend);
+    wend += strlen("]\n  }");
+    static const struct {
+        const char *obj, *field; /* field NULL: accepted */
+    } wcases[] = {
+        {"{\"vertices\": 7, \"values\": []}", "jaw.weights.vertices"},
+        {"{\"vertices\": [], \"values\": 0}", "jaw.weights.values"},
+        {"{\"values\": [0.5]}", "jaw.weights.vertices"},
+        {"{\"vertices\": [18]}", "jaw.weights.values"},
+        {"{\"vertices\": [[18, 19]], \"values\": [0.5]}", "jaw.weights.vertices[0]"},
+        {"{\"vertices\": [18, 19], \"values\": [0.5, 0.5, 0.5]}", "jaw.weights"},
+        {"{\"vertices\": [18, [17, 19]], \"values\": [0.5, 0.5, 0.5, 0.5]}", "jaw.weights.vertices[1]"},
+        {"{\"vertices\": [18, \"x\"], \"values\": [0.5, 0.5]}", "jaw.weights.vertices[1]"},
+        {"{\"vertices\": [18, 19], \"values\": [0.5, -0.01]}", "jaw.weights.values[1]"},
+        {"{\"vertices\": [18, 19], \"values\": [0.5, 0.25]}", NULL},
+        {"{\"vertices\": [], \"values\": []}", NULL},
+    };
+    for (size_t i = 0; i < sizeof wcases / sizeof wcases[0]; i++) {
+        size_t pre = (size_t)(wbeg - good), lo = strlen(wcases[i].obj), post = strlen(wend);
+        char *txt = malloc(pre + 11 + lo + post + 1);
+        memcpy(txt, good, pre);
+        memcpy(txt + pre, "\"weights\": ", 11);
+        memcpy(txt + pre + 11, wcases[i].obj, lo);
+        memcpy(txt + pre + 11 + lo, wend, post + 1);
+        err[0] = 0;
+        int rc = fp_rig_parse(txt, strlen(txt), "weights.json", &r, err, sizeof err);
+        printf("weights %s: %s\n", wcases[i].obj, rc ? err : "accepted");
+        if (wcases[i].field) {
+            assert_int_equal(rc, -EBADMSG);
+            assert_null(r);
+            assert_non_null(strstr(err, "weights.json"));
+            assert_non_null(strstr(err, wcases[i].field));
+        } else {
+            assert_int_equal(rc, 0);
+            fp_mesh *mm = load_face("ict-facekit/generic_neutral_mesh.obj");
+            assert_int_equal(fp_rig_bind(r, mm->vertex_count, mm->positions, err, sizeof err), 0);
+            if (strstr(wcases[i].obj, "0.25")) { /* the file's weights win over the falloff */
+                assert_true(fp_rig_jaw_weights(r)[18] == 0.5f && fp_rig_jaw_weights(r)[19] == 0.25f);
+            }
+            fp_rig_free(&r);
+            fp_mesh_free(&mm);
+        }
+        free(txt);
     }
     /* truncations at every 997th byte never crash and always fail */
     for (size_t cut = 0; cut < len - 2; cut += 997) {

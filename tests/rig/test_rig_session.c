@@ -1,13 +1,17 @@
 /* The rig step through the session (issue 11's "Done when"): fingers pressing on the forehead
  * with the jaw fully open (the fixture mapping map-press.so) on the ICT face: every skull vertex
- * bit-identical to the base, the lower teeth rigid and turned by the rig's angle, no crossings
- * added by the fingers (CGAL, fp_selfx); commits keep only the fingers' part; undo, reset;
+ * bit-identical to the base, the lower teeth rigid and turned by the rig's angle, no new
+ * crossings, neither from the jaw nor from the fingers (CGAL, fp_selfx, away from the face's
+ * own crossings as every session test counts them); the same with fingers pressing the lips
+ * and the mouth corners; commits keep only the fingers' part; undo, reset;
  * channels from the viewer's API; a rig that does not fit; the other two faces. */
 #define _GNU_SOURCE
 #include "fp_mesh.h"
 #include "fp_rig.h"
 #include "fp_session.h"
 #include "fp_test_support.h"
+#define RIG_CHECK_NO_FOLDS
+#include "rig_check.h"
 #include "selfx.h"
 
 #include <errno.h>
@@ -84,46 +88,19 @@ static void assert_skull_still(const fp_rig *rig, const float *a, const float *b
     assert_true(skull > 0);
 }
 
-/* The angle (degrees) about the hinge axis from p to q, independent of fp_rig_pose. */
-static double angle_about(const float hr[3], const double ax[3], const float *p, const float *q)
-{
-    double a[3], b[3];
-    for (int i = 0; i < 3; i++) a[i] = p[i] - hr[i], b[i] = q[i] - hr[i];
-    double pa = a[0] * ax[0] + a[1] * ax[1] + a[2] * ax[2], pb = b[0] * ax[0] + b[1] * ax[1] + b[2] * ax[2];
-    for (int i = 0; i < 3; i++) a[i] -= pa * ax[i], b[i] -= pb * ax[i];
-    double c[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-    double sn = c[0] * ax[0] + c[1] * ax[1] + c[2] * ax[2], cs = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    return atan2(sn, cs) * 180 / M_PI;
-}
-
-/* Lower teeth: the mean angle about the hinge and the residual of the rigid rotation by that
- * angle (an upper bound of the best rigid fit's residual), relative to the RMS displacement. */
+/* Lower teeth: the rotation angle of their best rigid fit from rest to moved (rig_check.h,
+ * Horn's method; degrees) and its residual relative to their RMS displacement. */
 static void teeth_motion(const fp_rig *rig, const float *rest, const float *moved, double *deg, double *rel)
 {
-    float hr[3], hl[3];
-    fp_rig_hinge(rig, hr, hl, NULL, NULL);
-    double ax[3] = {hl[0] - hr[0], hl[1] - hr[1], hl[2] - hr[2]};
-    double l = sqrt(ax[0] * ax[0] + ax[1] * ax[1] + ax[2] * ax[2]);
-    for (int i = 0; i < 3; i++) ax[i] /= l;
-    double sum = 0;
-    size_t n = 0;
-    for (size_t v = LOWER_TEETH_FIRST; v <= LOWER_TEETH_LAST; v++, n++) sum += angle_about(hr, ax, &rest[3 * v], &moved[3 * v]);
-    *deg = sum / (double)n;
-    /* the rotation by -deg (the sense of angle_about: a -> b positive about the axis) */
-    double t = *deg * M_PI / 180, c = cos(t), s = sin(t), k1 = 1 - c;
-    double R[9] = {k1 * ax[0] * ax[0] + c, k1 * ax[0] * ax[1] - s * ax[2], k1 * ax[0] * ax[2] + s * ax[1],
-                   k1 * ax[0] * ax[1] + s * ax[2], k1 * ax[1] * ax[1] + c, k1 * ax[1] * ax[2] - s * ax[0],
-                   k1 * ax[0] * ax[2] - s * ax[1], k1 * ax[1] * ax[2] + s * ax[0], k1 * ax[2] * ax[2] + c};
-    double res = 0, disp = 0;
-    for (size_t v = LOWER_TEETH_FIRST; v <= LOWER_TEETH_LAST; v++) {
-        double d[3] = {rest[3 * v] - hr[0], rest[3 * v + 1] - hr[1], rest[3 * v + 2] - hr[2]};
-        for (int i = 0; i < 3; i++) {
-            double fit = hr[i] + R[3 * i] * d[0] + R[3 * i + 1] * d[1] + R[3 * i + 2] * d[2];
-            res += (moved[3 * v + i] - fit) * (moved[3 * v + i] - fit);
-            disp += (moved[3 * v + i] - rest[3 * v + i]) * (moved[3 * v + i] - rest[3 * v + i]);
-        }
-    }
-    *rel = sqrt(res / disp);
+    (void)rig;
+    size_t n = LOWER_TEETH_LAST + 1;
+    uint8_t *sel = calloc(n, 1);
+    assert_non_null(sel);
+    for (size_t v = LOWER_TEETH_FIRST; v <= LOWER_TEETH_LAST; v++) sel[v] = 1;
+    double resid, disp;
+    assert_true(rig_check_rigid_fit(rest, moved, sel, n, &resid, &disp, deg, NULL) > 3);
+    *rel = disp > 0 ? resid / disp : 0;
+    free(sel);
 }
 
 static float *posed_copy(const fp_rig *rig, const float *base, size_t n, float jaw)
@@ -171,28 +148,27 @@ static void test_ict_press_forehead_jaw_open(void **state)
            fabs(deg), open_deg, 100 * rel);
     assert_true(fabs(fabs(deg) - open_deg) < 0.5);
     assert_true(rel < 0.01);
-    /* crossings: the fingers add none to the posed shape; the pose's own are reported */
+    /* crossings, away from the face's own (as every session test counts them, fp_selfx): none
+     * added by the jaw and the fingers to the loaded face, none by the fingers to the pose */
     const fp_mesh *m = fp_session_mesh(s);
-    long own = 0;
-    uint32_t pairs[2 * 64];
-    long fingers = fp_selfx_count_new(posed, shown, n, m->triangles, m->triangle_count, pairs, 64, &own);
-    long pose = fp_selfx_count_new(base, posed, n, m->triangles, m->triangle_count, NULL, 0, NULL);
-    printf("self-crossings: input %ld; new with the jaw open %ld; added by the fingers %ld\n", own, pose, fingers);
-    /* OPEN (issue 11): the fingers add none, except between eyelash cards (ICT 25351..26718:
-     * hair cards a fraction of a millimetre apart, which any non-rigid motion of the lids
-     * makes cross); not yet shown to be the input's own crossings. */
-    assert_true(fingers >= 0 && fingers <= 64);
-    for (long k = 0; k < fingers; k++) {
-        uint32_t a = m->triangles[3 * pairs[2 * k]], b = m->triangles[3 * pairs[2 * k + 1]];
-        printf("  finger crossing: triangles %u and %u (vertices %u, %u)\n", pairs[2 * k], pairs[2 * k + 1], a, b);
-        assert_true(a >= 25351 && b >= 25351);
-    }
+    long own = 0, near = 0;
+    long total = fp_selfx_count_new_away(fp_session_loaded(s), shown, n, m->triangles, m->triangle_count, 0, NULL, 0,
+                                         &own, &near);
+    long fingers = fp_selfx_count_new_away(posed, shown, n, m->triangles, m->triangle_count, 0, NULL, 0, NULL, NULL);
+    long all = fp_selfx_count_new(fp_session_loaded(s), shown, n, m->triangles, m->triangle_count, NULL, 0, NULL);
+    printf("self-crossings: input %ld; new with the jaw open and the fingers %ld (%ld more next to the input's own; "
+           "all new pairs %ld); added by the fingers to the pose %ld\n", own, total, near, all, fingers);
+    assert_int_equal(total, 0);
+    assert_int_equal(fingers, 0);
     free(posed);
     fp_session_destroy(&s);
 }
 
 /* Fingers pressing 8 mm into the lips and the mouth corners (near the teeth: the local clamp
- * limits them) at jaw.open 0 and 1: no crossings added to the posed shape, the skull still. */
+ * limits them) at jaw.open 0 and 1: they move the lips, add no crossing to the posed shape and
+ * the shape none to the loaded face (away from the face's own crossings: its lips interpenetrate
+ * from |x| = 1.3 cm to the corners, so any motion of one lip against the other moves that
+ * intersection; those pairs are printed, not counted); the skull still. */
 static void test_ict_press_lips(void **state)
 {
     (void)state;
@@ -212,22 +188,16 @@ static void test_ict_press_lips(void **state)
             moved = fmax(moved, sqrt(d));
         }
         const fp_mesh *m = fp_session_mesh(s);
-        uint32_t pairs[2 * 16];
-        long fingers = fp_selfx_count_new(posed, shown, n, m->triangles, m->triangle_count, pairs, 16, NULL);
-        printf("%s: fingers moved the lips by up to %.3f cm; crossings added %ld\n", specs[j], moved, fingers);
-        for (long k = 0; k < fingers && k < 16; k++)
-            printf("  crossing: triangles %u and %u (vertices %u, %u)\n", pairs[2 * k], pairs[2 * k + 1],
-                   m->triangles[3 * pairs[2 * k]], m->triangles[3 * pairs[2 * k + 1]]);
+        long near = 0;
+        long total = fp_selfx_count_new_away(fp_session_loaded(s), shown, n, m->triangles, m->triangle_count, 0, NULL,
+                                             0, NULL, &near);
+        long fingers = fp_selfx_count_new_away(posed, shown, n, m->triangles, m->triangle_count, 0, NULL, 0, NULL, NULL);
+        long all = fp_selfx_count_new(posed, shown, n, m->triangles, m->triangle_count, NULL, 0, NULL);
+        printf("%s: fingers moved the lips by up to %.3f cm; new crossings %ld (%ld next to the face's own), "
+               "added by the fingers to the pose %ld (all new pairs %ld)\n", specs[j], moved, total, near, fingers, all);
         assert_true(moved > 0.05);
-        /* OPEN (issue 11): the ICT lips are joined, their skins touching, from |x| = 1.3 cm to
-         * the corners; any non-rigid motion there (the jaw pose too) makes upper and lower lip
-         * triangles cross. Until that is solved, crossings are allowed only between those
-         * lip triangles (first vertices within 5550..6550, the ICT lip block), at most 8. */
-        assert_true(fingers >= 0 && fingers <= 8);
-        for (long k = 0; k < fingers && k < 16; k++) {
-            uint32_t a = m->triangles[3 * pairs[2 * k]], b = m->triangles[3 * pairs[2 * k + 1]];
-            assert_true(a >= 5550 && a <= 6550 && b >= 5550 && b <= 6550);
-        }
+        assert_int_equal(total, 0);
+        assert_int_equal(fingers, 0);
         free(posed);
         fp_session_destroy(&s);
     }
