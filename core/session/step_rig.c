@@ -136,12 +136,12 @@ const fp_control_set *fp_rig_step_run(fp_rig_step *st, const fp_control_set *cs)
     *o = *cs;
     o->start = start;
     o->end = end;
-    o->count = cs->count < FP_RIG_STEP_MAX_CONTROL ? cs->count : FP_RIG_STEP_MAX_CONTROL;
-    o->capacity = FP_RIG_STEP_MAX_CONTROL;
     /* the channels as posed, all of them: what a take records and plays back */
     o->channels = st->applied;
     o->channel_count = o->channel_capacity = st->view.channel_count;
     for (size_t i = 0; i < o->channel_count; i++) st->applied[i].value = st->posed_values[i];
+    o->count = cs->count < FP_RIG_STEP_MAX_CONTROL ? cs->count : FP_RIG_STEP_MAX_CONTROL;
+    o->capacity = FP_RIG_STEP_MAX_CONTROL;
     for (size_t i = 0; i < o->count; i++) {
         /* the engine's 0.45 R, and the rig's local bound where the support reaches a ramp */
         double limit = fmin(0.45 * cs->radius, fp_rig_finger_limit(st->rig, st->posed, cs->start[i], cs->radius));

@@ -54,11 +54,11 @@ typedef struct fp_rig_step {
     float *commit;                                /* n x 3: the shape a commit folds in */
     double max_displacement;                      /* worst-case finger clamp (ramp / 3), for reports */
     fp_control_set cs;                            /* the clamped copy the engine takes */
-    fp_channel applied[FP_RIG_MAX_CHANNELS];      /* cs.channels: every channel, posed values */
     float start[FP_RIG_STEP_MAX_CONTROL][3], end[FP_RIG_STEP_MAX_CONTROL][3];
     fp_rig_view view;                             /* for mappings */
     fp_rig_landmark landmarks[FP_RIG_MAX_LANDMARKS];
     fp_rig_channel_info channels[FP_RIG_MAX_CHANNELS];
+    fp_channel applied[FP_RIG_MAX_CHANNELS];      /* cs.channels: every channel, posed values */
     char unknown[FP_RIG_STEP_UNKNOWN][32];        /* unknown channel names already reported */
     size_t unknown_count;
 } fp_rig_step;
