@@ -233,6 +233,11 @@ int csrbf_points_nearest(const csrbf_points *points, const float *queries, size_
 /** Free a vertex set; sets *points to NULL. NULL and *NULL are no-ops. */
 void csrbf_points_destroy(csrbf_points **points);
 
+/** Up to this many (merged) centres csrbf_evaluate selects blocks and their centres through
+ *  the points' block tree with one 64-bit mask per block and runs the fused AVX-512 path;
+ *  beyond, it searches the centre grid per block (a slower general path, still correct). */
+#define CSRBF_FAST_MAX_CENTRES 64
+
 /** Flags for csrbf_evaluate. */
 enum {
     CSRBF_EVAL_JACOBIAN = 1u   /* also compute stats->min_jacobian_det (slower path) */

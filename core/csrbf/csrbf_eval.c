@@ -164,8 +164,10 @@ __attribute__((target("avx512f"))) static void write_block_avx512(
                       _mm512_add_ps(_mm512_loadu_ps(z), _mm512_loadu_ps(accz)));
 }
 
-/* One centre's contribution to the 16 lanes (shared by the fused drivers below). */
-#define AVX512_PAIR(PSI, J)                                                                    \
+/* One centre's contribution to the 16 lanes (shared by the fused driver below). With SKIP (a
+ * compile-time constant) a centre whose support holds none of the 16 vertices costs only the
+ * distance test (blocks whose box meets a support they do not reach: the ends of grid rows). */
+#define AVX512_PAIR(PSI, J, SKIP)                                                              \
     do {                                                                                       \
         __m512 dx = _mm512_sub_ps(X, _mm512_set1_ps(cx[J]));                                   \
         __m512 dy = _mm512_sub_ps(Y, _mm512_set1_ps(cy[J]));                                   \
@@ -175,6 +177,7 @@ __attribute__((target("avx512f"))) static void write_block_avx512(
         r2 = _mm512_fmadd_ps(dz, dz, r2);                                                      \
         r2 = _mm512_mul_ps(r2, ir2);                                                           \
         __mmask16 in = _mm512_cmp_ps_mask(r2, one, _CMP_LT_OQ);                                \
+        if ((SKIP) && !in) break;                                                              \
         __m512 q = _mm512_max_ps(r2, tiny);                                                    \
         __m512 e = _mm512_rsqrt14_ps(q);                                                       \
         __m512 hq = _mm512_mul_ps(half, q);                                                    \
@@ -185,7 +188,7 @@ __attribute__((target("avx512f"))) static void write_block_avx512(
         sx = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(ax[J]), sx, in);                          \
         sy = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(ay[J]), sy, in);                          \
         sz = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(az[J]), sz, in);                          \
-        if (stats_on) cntv = _mm512_mask_add_epi32(cntv, in, cntv, ione);                       \
+        if (stats_on) cntv = _mm512_mask_add_epi32(cntv, in, cntv, ione);                      \
     } while (0)
 
 /* Statistics of a run of blocks (the fast path counts them per block, in registers). */
@@ -194,19 +197,29 @@ typedef struct {
     float maxd2;
 } block_stats;
 
-/* The fast path without polynomial: blocks b0..b1 end to end. mask (centres j < 32 whose
- * support meets the block) or, with mask NULL, all m centres. Untouched blocks are copied;
- * touched ones computed in registers and stored interleaved. With STATS (a compile-time
- * constant: a second copy of the driver) the pairs in support are counted per lane with one
- * masked add per pair, and moved vertices and the largest squared displacement per block,
- * into *bs (padding lanes excluded). */
+/* The base positions of blocks b0..b1-1 into the output (a plain copy: the points keep the
+ * vertices as given). */
+static inline void copy_base(const csrbf_points *P, float *out, size_t b0, size_t b1)
+{
+    size_t v0 = b0 * B, v1 = b1 * B < P->n ? b1 * B : P->n;
+    if (v1 > v0) memcpy(out + 3 * v0, P->xyz + 3 * v0, (v1 - v0) * 3 * sizeof(float));
+}
+
+/* The fast path without polynomial. With blk NULL: blocks i0..i1-1, each with all m centres.
+ * Else the work items i0..i1-1: block blk[i] with the centres of the bit mask msk[i] (bit j:
+ * centre j, j < 64), or restored to the base where msk[i] is 0; with g0 < g1 the blocks of
+ * [g0, g1) that no item names are copied from the base too (a full evaluation: items and
+ * gaps cover the range in order). Blocks are computed in registers and stored interleaved.
+ * With STATS (a compile-time constant: a second copy of the driver) the pairs in support are
+ * counted per lane with one masked add per pair, and moved vertices and the largest squared
+ * displacement per block, into *bs (padding lanes excluded). */
 #define AVX512_DRIVER(NAME, PSI, STATS)                                                        \
     __attribute__((target("avx512f,fma"))) static void NAME(                                   \
-        const csrbf_points *P, float *restrict out, size_t b0, size_t b1,                      \
-        const uint32_t *restrict mask, size_t m, const float *restrict cx,                     \
-        const float *restrict cy, const float *restrict cz, const float *restrict ax,          \
-        const float *restrict ay, const float *restrict az, float inv_r2, block_stats *bs,     \
-        uint8_t *restrict cur, const uint8_t *restrict prev)                                   \
+        const csrbf_points *P, float *restrict out, const uint32_t *restrict blk,              \
+        const uint64_t *restrict msk, size_t i0, size_t i1, size_t g0, size_t g1, size_t m,    \
+        const float *restrict cx, const float *restrict cy, const float *restrict cz,          \
+        const float *restrict ax, const float *restrict ay, const float *restrict az,          \
+        float inv_r2, block_stats *bs)                                                         \
     {                                                                                          \
         const __m512 one = _mm512_set1_ps(1.0f), half = _mm512_set1_ps(0.5f),                 \
                      three_half = _mm512_set1_ps(1.5f), tiny = _mm512_set1_ps(1e-30f),         \
@@ -217,33 +230,33 @@ typedef struct {
         __m512 maxd = _mm512_setzero_ps();                                                     \
         size_t nmoved = 0;                                                                     \
         const size_t n = P->n;                                                                 \
-        for (size_t b = b0; b < b1; b++) {                                                     \
+        const int gaps = g0 < g1;                                                              \
+        size_t pos = g0;                                                                       \
+        for (size_t i = i0; i < i1; i++) {                                                     \
+            const size_t b = blk ? blk[i] : i;                                                 \
+            uint64_t mk = blk ? msk[i] : 0;                                                    \
+            if (blk) {                                                                         \
+                if (gaps && pos < b) copy_base(P, out, pos, b);                                \
+                pos = b + 1;                                                                   \
+                if (!mk) { /* in a support last call, in none now: the base */                 \
+                    copy_base(P, out, b, b + 1);                                               \
+                    continue;                                                                  \
+                }                                                                              \
+            }                                                                                  \
             const size_t k0 = b * B, nv = k0 + B <= n ? B : n - k0;                            \
             float *o = out + 3 * k0;                                                           \
-            uint32_t mk = mask ? mask[b] : 0;                                                  \
-            if (cur) cur[b] = !mask || mk;                                                     \
-            if (mask && !mk) {                                                                 \
-                if (prev && !prev[b]) continue; /* the output holds the base already */        \
-                if (nv == B)                                                                   \
-                    interleave_avx512(o, _mm512_loadu_ps(P->s[0] + k0),                        \
-                                      _mm512_loadu_ps(P->s[1] + k0),                           \
-                                      _mm512_loadu_ps(P->s[2] + k0));                          \
-                else                                                                           \
-                    memcpy(o, P->xyz + 3 * k0, nv * 3 * sizeof(float));                        \
-                continue;                                                                      \
-            }                                                                                  \
             const __m512 X = _mm512_loadu_ps(P->s[0] + k0), Y = _mm512_loadu_ps(P->s[1] + k0), \
                          Z = _mm512_loadu_ps(P->s[2] + k0);                                    \
             __m512 sx = _mm512_set1_ps(-0.0f), sy = sx, sz = sx;                               \
             __m512i cntv = izero;                                                              \
-            if (mask) {                                                                        \
+            if (blk) {                                                                         \
                 while (mk) {                                                                   \
-                    const unsigned j = (unsigned)__builtin_ctz(mk);                            \
+                    const unsigned j = (unsigned)__builtin_ctzll(mk);                          \
                     mk &= mk - 1;                                                              \
-                    AVX512_PAIR(PSI, j);                                                       \
+                    AVX512_PAIR(PSI, j, 1);                                                    \
                 }                                                                              \
             } else {                                                                           \
-                for (size_t j = 0; j < m; j++) AVX512_PAIR(PSI, j);                            \
+                for (size_t j = 0; j < m; j++) AVX512_PAIR(PSI, j, 0);                         \
             }                                                                                  \
             if (STATS) {                                                                       \
                 const __mmask16 valid = nv == B ? (__mmask16)0xFFFF                            \
@@ -256,20 +269,22 @@ typedef struct {
                 d2 = _mm512_fmadd_ps(sz, sz, d2);                                              \
                 maxd = _mm512_mask_max_ps(maxd, valid, maxd, d2);                              \
             }                                                                                  \
-            _Alignas(64) float acc[3][B];                                                      \
-            _mm512_store_ps(acc[0], sx);                                                       \
-            _mm512_store_ps(acc[1], sy);                                                       \
-            _mm512_store_ps(acc[2], sz);                                                       \
-            if (nv == B)                                                                       \
+            if (nv == B) {                                                                     \
                 interleave_avx512(o, _mm512_add_ps(X, sx), _mm512_add_ps(Y, sy),               \
                                   _mm512_add_ps(Z, sz));                                       \
-            else                                                                               \
+            } else {                                                                           \
+                _Alignas(64) float acc[3][B];                                                  \
+                _mm512_store_ps(acc[0], sx);                                                   \
+                _mm512_store_ps(acc[1], sy);                                                   \
+                _mm512_store_ps(acc[2], sz);                                                   \
                 for (size_t v = 0; v < nv; v++) {                                              \
                     o[3 * v] = P->s[0][k0 + v] + acc[0][v];                                    \
                     o[3 * v + 1] = P->s[1][k0 + v] + acc[1][v];                                \
                     o[3 * v + 2] = P->s[2][k0 + v] + acc[2][v];                                \
                 }                                                                              \
+            }                                                                                  \
         }                                                                                      \
+        if (gaps && pos < g1) copy_base(P, out, pos, g1);                                      \
         if (STATS) {                                                                           \
             bs->pairs += (size_t)(uint32_t)_mm512_reduce_add_epi32(pairv);                     \
             bs->moved += nmoved;                                                               \
@@ -296,10 +311,44 @@ AVX512_DRIVER(drive_psi32_avx512_stats, PSI32_AVX512, 1)
 #undef PSI32_AVX512
 #undef T2
 
-typedef void (*drive_fn)(const csrbf_points *, float *, size_t, size_t, const uint32_t *,
-                         size_t, const float *, const float *, const float *, const float *,
-                         const float *, const float *, float, block_stats *, uint8_t *,
-                         const uint8_t *);
+typedef void (*drive_fn)(const csrbf_points *, float *, const uint32_t *, const uint64_t *,
+                         size_t, size_t, size_t, size_t, size_t, const float *, const float *,
+                         const float *, const float *, const float *, const float *, float,
+                         block_stats *);
+
+/* The centres of mask (bit j: centre j) whose support meets each of the CSRBF_FAN boxes
+ * lo/hi[first ..]: cm[l] gets bit j. Float, with the conservative margin r2c; the same
+ * operations as the kernel's distance (per-axis gaps to the box never exceed a vertex's, and
+ * the squares and sums round monotonically), so a block holding a vertex in a support always
+ * meets it. */
+__attribute__((target("avx512f,fma"))) static void group_masks_avx512(
+    const float *const lo[3], const float *const hi[3], size_t first, uint64_t mask,
+    const float *cx, const float *cy, const float *cz, float r2c, uint64_t cm[CSRBF_FAN])
+{
+    const __m512 lx = _mm512_loadu_ps(lo[0] + first), ly = _mm512_loadu_ps(lo[1] + first),
+                 lz = _mm512_loadu_ps(lo[2] + first), hx = _mm512_loadu_ps(hi[0] + first),
+                 hy = _mm512_loadu_ps(hi[1] + first), hz = _mm512_loadu_ps(hi[2] + first),
+                 zero = _mm512_setzero_ps(), lim = _mm512_set1_ps(r2c);
+    __m512i c0 = _mm512_setzero_si512(), c1 = c0;
+    while (mask) {
+        const unsigned j = (unsigned)__builtin_ctzll(mask);
+        mask &= mask - 1;
+        const __m512 px = _mm512_set1_ps(cx[j]), py = _mm512_set1_ps(cy[j]),
+                     pz = _mm512_set1_ps(cz[j]);
+        __m512 ex = _mm512_max_ps(_mm512_max_ps(_mm512_sub_ps(lx, px), _mm512_sub_ps(px, hx)), zero);
+        __m512 ey = _mm512_max_ps(_mm512_max_ps(_mm512_sub_ps(ly, py), _mm512_sub_ps(py, hy)), zero);
+        __m512 ez = _mm512_max_ps(_mm512_max_ps(_mm512_sub_ps(lz, pz), _mm512_sub_ps(pz, hz)), zero);
+        __m512 d2 = _mm512_mul_ps(ex, ex);
+        d2 = _mm512_fmadd_ps(ey, ey, d2);
+        d2 = _mm512_fmadd_ps(ez, ez, d2);
+        const __mmask16 t = _mm512_cmp_ps_mask(d2, lim, _CMP_LT_OQ);
+        const __m512i bit = _mm512_set1_epi64((long long)(1ull << j));
+        c0 = _mm512_mask_or_epi64(c0, (__mmask8)t, c0, bit);
+        c1 = _mm512_mask_or_epi64(c1, (__mmask8)(t >> 8), c1, bit);
+    }
+    _mm512_storeu_si512(cm, c0);
+    _mm512_storeu_si512(cm + 8, c1);
+}
 
 static int have_avx512(void)
 {
@@ -337,27 +386,69 @@ CSRBF_CLONES static void write_block(float *restrict out, const float *restrict 
     }
 }
 
-/* Masks of the centres (m <= 32) whose support meets each block's box, in float with a
- * conservative margin (the kernel decides each pair exactly). Vectorised over blocks. */
-CSRBF_CLONES static void block_masks(const csrbf_points *P, size_t b0, size_t b1, size_t m,
-                                     const float *cx, const float *cy, const float *cz,
-                                     float r2c, uint32_t *restrict mask)
+/* Portable group_masks_avx512 (same operations, same decisions). */
+CSRBF_CLONES static void group_masks_c(const float *const lo[3], const float *const hi[3],
+                                       size_t first, uint64_t mask, const float *cx,
+                                       const float *cy, const float *cz, float r2c,
+                                       uint64_t cm[CSRBF_FAN])
 {
-    const float *lx = P->lo[0], *ly = P->lo[1], *lz = P->lo[2];
-    const float *hx = P->hi[0], *hy = P->hi[1], *hz = P->hi[2];
-    for (size_t b = b0; b < b1; b++) mask[b] = 0;
-    for (size_t j = 0; j < m; j++) {
+    float d2[CSRBF_FAN];
+    for (int l = 0; l < CSRBF_FAN; l++) cm[l] = 0;
+    while (mask) {
+        const unsigned j = (unsigned)__builtin_ctzll(mask);
+        mask &= mask - 1;
         const float px = cx[j], py = cy[j], pz = cz[j];
-        const uint32_t bit = 1u << j;
 #pragma omp simd
-        for (size_t b = b0; b < b1; b++) {
-            float ex = lx[b] - px > px - hx[b] ? lx[b] - px : px - hx[b];
-            float ey = ly[b] - py > py - hy[b] ? ly[b] - py : py - hy[b];
-            float ez = lz[b] - pz > pz - hz[b] ? lz[b] - pz : pz - hz[b];
+        for (int l = 0; l < CSRBF_FAN; l++) {
+            const size_t b = first + (size_t)l;
+            float ex = lo[0][b] - px > px - hi[0][b] ? lo[0][b] - px : px - hi[0][b];
+            float ey = lo[1][b] - py > py - hi[1][b] ? lo[1][b] - py : py - hi[1][b];
+            float ez = lo[2][b] - pz > pz - hi[2][b] ? lo[2][b] - pz : pz - hi[2][b];
             ex = ex > 0.0f ? ex : 0.0f;
             ey = ey > 0.0f ? ey : 0.0f;
             ez = ez > 0.0f ? ez : 0.0f;
-            mask[b] |= ex * ex + ey * ey + ez * ez < r2c ? bit : 0u;
+            d2[l] = ex * ex + ey * ey + ez * ez;
+        }
+        for (int l = 0; l < CSRBF_FAN; l++) cm[l] |= d2[l] < r2c ? 1ull << j : 0ull;
+    }
+}
+
+/* The blocks whose box meets a support, found through the block tree (csrbf_points) for all
+ * centres at once: a node is opened only for the centres whose support meets its box, so the
+ * cost follows the supports (nodes near a support), not the mesh. Output in increasing block
+ * order: blk[k], msk[k] (bit j: centre j meets block blk[k]). */
+typedef struct {
+    const csrbf_points *P;
+    const float *cx, *cy, *cz;
+    float r2c;
+    int avx512;
+    uint32_t *blk;
+    uint64_t *msk;
+    size_t k, evals; /* blocks listed, sum of their mask bits */
+} block_select;
+
+static void select_visit(block_select *S, int level, size_t first, uint64_t mask)
+{
+    uint64_t cm[CSRBF_FAN];
+    const csrbf_points *P = S->P;
+    const float *const *lo = (const float *const *)P->tlo[level];
+    const float *const *hi = (const float *const *)P->thi[level];
+#if CSRBF_AVX512 && CSRBF_BLOCK == 16
+    if (S->avx512)
+        group_masks_avx512(lo, hi, first, mask, S->cx, S->cy, S->cz, S->r2c, cm);
+    else
+#endif
+        group_masks_c(lo, hi, first, mask, S->cx, S->cy, S->cz, S->r2c, cm);
+    for (int l = 0; l < CSRBF_FAN; l++) {
+        if (!cm[l]) continue;
+        size_t node = first + (size_t)l;
+        if (level > 0) {
+            select_visit(S, level - 1, node * CSRBF_FAN, cm[l]);
+        } else {
+            S->blk[S->k] = (uint32_t)node;
+            S->msk[S->k] = cm[l];
+            S->k++;
+            S->evals += (size_t)__builtin_popcountll(cm[l]);
         }
     }
 }
@@ -444,7 +535,9 @@ static double jacobian_det(const csrbf_solver *s, const double x[3], const uint3
 struct csrbf_touch {
     const csrbf_points *points; /* the points it was made for */
     size_t nblocks;
-    uint8_t *cur, *prev;        /* per block: rewritten from the kernel this call / last call */
+    uint32_t *prev;             /* blocks the last call computed from the kernel, increasing */
+    size_t nprev;
+    uint32_t *next;             /* the list a call builds (then swapped with prev) */
     int full;                   /* the next call writes every block */
     uint32_t *ranges;           /* 2 x nranges: first vertex, count */
     size_t nranges;
@@ -468,10 +561,10 @@ int csrbf_touch_create(const csrbf_points *points, csrbf_touch **out)
     if (!t) return CSRBF_ERR_NOMEM;
     t->points = points;
     t->nblocks = points->nblocks;
-    t->cur = calloc(t->nblocks, 1);
-    t->prev = calloc(t->nblocks, 1);
+    t->prev = malloc(t->nblocks * sizeof *t->prev);
+    t->next = malloc(t->nblocks * sizeof *t->next);
     t->ranges = malloc((t->nblocks + 1) * 2 * sizeof *t->ranges);
-    if (!t->cur || !t->prev || !t->ranges) {
+    if (!t->prev || !t->next || !t->ranges) {
         csrbf_touch_destroy(&t);
         return CSRBF_ERR_NOMEM;
     }
@@ -483,8 +576,8 @@ int csrbf_touch_create(const csrbf_points *points, csrbf_touch **out)
 void csrbf_touch_destroy(csrbf_touch **tp)
 {
     if (!tp || !*tp) return;
-    free((*tp)->cur);
     free((*tp)->prev);
+    free((*tp)->next);
     free((*tp)->ranges);
     free(*tp);
     *tp = NULL;
@@ -498,7 +591,7 @@ void csrbf_touch_reset(csrbf_touch *t)
 void csrbf_touch_commit(csrbf_touch *t)
 {
     if (!t) return;
-    memset(t->prev, 0, t->nblocks);
+    t->nprev = 0;
     t->nranges = 0;
 }
 
@@ -516,18 +609,55 @@ int csrbf_evaluate_touched(const csrbf_solver *cs, const csrbf_points *P, csrbf_
     return evaluate_impl(cs, P, out, flags, st, touch);
 }
 
+/* touch->ranges from k increasing blocks: runs of consecutive blocks as vertex ranges. */
+static void ranges_of_blocks(csrbf_touch *t, size_t n, const uint32_t *blk, size_t k)
+{
+    size_t nr = 0;
+    for (size_t i = 0; i < k;) {
+        size_t b0 = blk[i], b1 = b0 + 1;
+        for (i++; i < k && blk[i] == b1; i++) b1++;
+        size_t v1 = b1 * B < n ? b1 * B : n;
+        t->ranges[2 * nr] = (uint32_t)(b0 * B);
+        t->ranges[2 * nr + 1] = (uint32_t)(v1 - b0 * B);
+        nr++;
+    }
+    t->nranges = nr;
+}
+
+static void ranges_all(csrbf_touch *t, size_t n)
+{
+    t->ranges[0] = 0;
+    t->ranges[1] = (uint32_t)n;
+    t->nranges = 1;
+}
+
+/* First index i in blk[0..k) with blk[i] >= b. */
+static size_t lower_bound(const uint32_t *blk, size_t k, size_t b)
+{
+    size_t lo = 0, hi = k;
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (blk[mid] < b) lo = mid + 1;
+        else hi = mid;
+    }
+    return lo;
+}
+
+/* Work (vertex-centre lane pairs) above which an evaluation forks its threads: below it a
+ * fork/join costs more than it saves, and a frame loop's sleeping workers wake slowly. */
+#define PARALLEL_WORK 50000
+
 static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *out,
                          unsigned flags, csrbf_eval_stats *st, csrbf_touch *touch)
 {
     if (!cs || !P || !out || (flags & ~(unsigned)CSRBF_EVAL_JACOBIAN)) return CSRBF_ERR_INVALID;
     if (!cs->have_start) return CSRBF_ERR_STATE;
-    uint8_t *tcur = touch ? touch->cur : NULL;
-    const uint8_t *tprev = touch && !touch->full ? touch->prev : NULL;
     /* The scratch buffer is the only state evaluate touches; a concurrent caller that finds it
      * busy allocates its own. The solver itself is read-only here. */
     csrbf_solver *s = (csrbf_solver *)cs;
     const size_t n = P->n, nb = P->nblocks, m = s->m;
     const int poly = s->k > 0, want_jac = st && (flags & CSRBF_EVAL_JACOBIAN);
+    const int full_write = !touch || touch->full; /* every block is written */
     int nt = s->opt.threads > 0 ? s->opt.threads : omp_get_max_threads();
     if (nt < 1) nt = 1;
 
@@ -543,7 +673,9 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
         }
         all_in = d2 < R2 * (1.0 - 1e-6);
     }
-    const int use_mask = !all_in && m <= 32;
+    /* up to CSRBF_FAST_MAX_CENTRES centres: blocks and their centre masks from the block
+     * tree; beyond, the centre grid per block (general path) */
+    const int use_tree = !all_in && m <= CSRBF_FAST_MAX_CENTRES;
     block_fn kern = s->opt.kernel == CSRBF_PSI30   ? block_psi30
                     : s->opt.kernel == CSRBF_PSI32 ? block_psi32
                                                    : block_psi31;
@@ -555,10 +687,21 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
                : s->opt.kernel == CSRBF_PSI32 ? block_psi32_avx512
                                               : block_psi31_avx512;
 #endif
+    /* the fused AVX-512 path: no polynomial, no Jacobian, all centres or tree masks
+     * (statistics are counted inside it) */
+    const int fast = avx512 && !want_jac && !poly && (all_in || use_tree);
 
+    /* scratch: the selection (masks, blocks), the merged work list of a touched call, and
+     * for the general path dense masks, block flags and a centre list per thread */
     size_t per_thread = align64(m * sizeof(uint32_t));
-    size_t mask_bytes = use_mask ? align64(nb * sizeof(uint32_t)) : 0;
-    size_t need = mask_bytes + (size_t)nt * per_thread;
+    size_t sel_m = use_tree ? align64(nb * sizeof(uint64_t)) : 0;
+    size_t sel_b = use_tree ? align64(nb * sizeof(uint32_t)) : 0;
+    size_t mrg_m = fast && use_tree && !full_write ? sel_m : 0;
+    size_t mrg_b = fast && use_tree && !full_write ? sel_b : 0;
+    size_t gen_m = !fast && use_tree ? align64(nb * sizeof(uint64_t)) : 0;
+    size_t gen_f = !fast && touch ? align64(2 * nb) : 0;
+    size_t gen_t = !fast ? (size_t)nt * per_thread : 0;
+    size_t need = sel_m + sel_b + mrg_m + mrg_b + gen_m + gen_f + gen_t + 64;
     void *mem = NULL;
     int own = 0;
     if (!atomic_flag_test_and_set(&s->scratch_busy)) {
@@ -577,156 +720,220 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
         if (!mem) return CSRBF_ERR_NOMEM;
         own = 1;
     }
-    uint32_t *mask = mem;
-    unsigned char *tbase = (unsigned char *)mem + mask_bytes;
+    unsigned char *sp = (unsigned char *)(((uintptr_t)mem + 63) & ~(uintptr_t)63);
+    uint64_t *sel_msk = (uint64_t *)sp;
+    uint32_t *sel_blk = (uint32_t *)(sp += sel_m);
+    uint64_t *mrg_msk = (uint64_t *)(sp += sel_b);
+    uint32_t *mrg_blk = (uint32_t *)(sp += mrg_m);
+    uint64_t *gen_mask = (uint64_t *)(sp += mrg_b);
+    uint8_t *tcur = (uint8_t *)(sp += gen_m);
+    uint8_t *tprev = tcur + nb;
+    unsigned char *tbase = (sp += gen_f);
 
-    /* work estimate: vertex-centre pairs, each centre counting the fraction of the vertex
-     * box its support's bounding cube covers (axis by axis); small work stays on the
-     * calling thread, where a fork/join would cost more than it saves */
-    double est = 0.0;
-    for (size_t i = 0; i < m; i++) {
-        double frac = 1.0;
-        for (int a = 0; a < 3; a++) {
-            double ext = P->bhi[a] - P->blo[a], c = s->c[3 * i + a];
-            if (ext <= 0.0) continue;
-            double ov = fmin(c + s->R, P->bhi[a]) - fmax(c - s->R, P->blo[a]);
-            frac *= ov > 0.0 ? ov / ext : 0.0;
-        }
-        est += frac;
-    }
-    size_t work = (size_t)((double)n * est);
-    int threads = work > 50000 ? nt : 1;
-
-    /* the fused AVX-512 path: no polynomial, no Jacobian, all centres or a mask (statistics
-     * are counted inside it) */
-    const int fast = avx512 && !want_jac && !poly && (all_in || use_mask);
-    size_t pairs = 0, moved = 0;
-    double maxd = 0.0, minjac = 1.0;
     const float inv_r2 = (float)(1.0 / R2), r2c = (float)(R2 * (1.0 + 1e-5)) + 1e-30f;
-    const float pc0 = s->fpc[0], pc1 = s->fpc[1], pc2 = s->fpc[2];
-    const float *G = s->fG, *g0 = s->fg0;
     const float *fcx = s->fc[0], *fcy = s->fc[1], *fcz = s->fc[2];
     const float *fax = s->fa[0], *fay = s->fa[1], *faz = s->fa[2];
 
-#pragma omp parallel num_threads(threads) reduction(+ : pairs, moved) reduction(max : maxd) \
-    reduction(min : minjac)
-    {
-        int tid = omp_get_thread_num();
-        uint32_t *list = (uint32_t *)(tbase + (size_t)tid * per_thread);
-        if (use_mask) {
-            /* phase 1: masks, in chunks of 1024 blocks */
-#pragma omp for schedule(static)
-            for (size_t c = 0; c < (nb + 1023) / 1024; c++) {
-                size_t b0 = c * 1024, b1 = b0 + 1024 < nb ? b0 + 1024 : nb;
-                block_masks(P, b0, b1, m, fcx, fcy, fcz, r2c, mask);
+    block_select S = {P, fcx, fcy, fcz, r2c, avx512, sel_blk, sel_msk, 0, 0};
+    if (use_tree)
+        select_visit(&S, P->tlevels - 1, 0, m >= 64 ? ~0ull : (1ull << m) - 1);
+
+    size_t pairs = 0, moved = 0;
+    double maxd = 0.0, minjac = 1.0;
+#if CSRBF_AVX512 && CSRBF_BLOCK == 16
+    if (fast) {
+        drive_fn drive = s->opt.kernel == CSRBF_PSI30   ? drive_psi30_avx512
+                         : s->opt.kernel == CSRBF_PSI32 ? drive_psi32_avx512
+                                                        : drive_psi31_avx512;
+        if (st)
+            drive = s->opt.kernel == CSRBF_PSI30   ? drive_psi30_avx512_stats
+                    : s->opt.kernel == CSRBF_PSI32 ? drive_psi32_avx512_stats
+                                                   : drive_psi31_avx512_stats;
+        /* the work list: every block (all in), the selected blocks with the gaps between
+         * them copied (a full write), or the selected blocks merged with the last call's
+         * (restored where no support holds them now) */
+        const uint32_t *ib = NULL;
+        const uint64_t *im = NULL;
+        size_t ni = nb, work = nb * m * B;
+        int gaps = 0;
+        if (use_tree) {
+            work = S.evals * B;
+            if (full_write) {
+                ib = S.blk;
+                im = S.msk;
+                ni = S.k;
+                gaps = 1;
+            } else {
+                const uint32_t *pv = touch->prev;
+                size_t a = 0, c = 0, k = 0, np = touch->nprev;
+                while (a < S.k || c < np) {
+                    if (c >= np || (a < S.k && S.blk[a] < pv[c])) {
+                        mrg_blk[k] = S.blk[a];
+                        mrg_msk[k++] = S.msk[a++];
+                    } else if (a >= S.k || pv[c] < S.blk[a]) {
+                        mrg_blk[k] = pv[c++];
+                        mrg_msk[k++] = 0;
+                    } else {
+                        mrg_blk[k] = S.blk[a];
+                        mrg_msk[k++] = S.msk[a++];
+                        c++;
+                    }
+                }
+                ib = mrg_blk;
+                im = mrg_msk;
+                ni = k;
             }
         }
-        if (all_in)
-            for (size_t i = 0; i < m; i++) list[i] = (uint32_t)i;
-#if CSRBF_AVX512 && CSRBF_BLOCK == 16
-        if (fast) {
-            drive_fn drive = s->opt.kernel == CSRBF_PSI30   ? drive_psi30_avx512
-                             : s->opt.kernel == CSRBF_PSI32 ? drive_psi32_avx512
-                                                            : drive_psi31_avx512;
-            if (st)
-                drive = s->opt.kernel == CSRBF_PSI30   ? drive_psi30_avx512_stats
-                        : s->opt.kernel == CSRBF_PSI32 ? drive_psi32_avx512_stats
-                                                       : drive_psi31_avx512_stats;
-            block_stats bs = {0, 0, 0.0f};
+        block_stats bs = {0, 0, 0.0f};
+        if (work <= PARALLEL_WORK || nt == 1) {
+            drive(P, out, ib, im, 0, ni, 0, gaps ? nb : 0, m, fcx, fcy, fcz, fax, fay, faz,
+                  inv_r2, &bs);
+        } else {
+            /* chunks of 64 blocks (or 64 work items), dynamically scheduled */
+            const size_t chunks = ((gaps ? nb : ni) + 63) / 64;
+            float maxd2 = 0.0f;
+#pragma omp parallel num_threads(nt) reduction(+ : pairs, moved) reduction(max : maxd2)
+            {
+                block_stats ts = {0, 0, 0.0f};
 #pragma omp for schedule(dynamic, 1)
-            for (size_t c = 0; c < (nb + 63) / 64; c++) {
-                size_t b0 = c * 64, b1 = b0 + 64 < nb ? b0 + 64 : nb;
-                drive(P, out, b0, b1, use_mask ? mask : NULL, m, fcx, fcy, fcz, fax, fay, faz,
-                      inv_r2, &bs, tcur, tprev);
+                for (size_t c = 0; c < chunks; c++) {
+                    size_t lo = c * 64, hi = lo + 64 < (gaps ? nb : ni) ? lo + 64 : (gaps ? nb : ni);
+                    if (gaps)
+                        drive(P, out, ib, im, lower_bound(ib, ni, lo), lower_bound(ib, ni, hi), lo,
+                              hi, m, fcx, fcy, fcz, fax, fay, faz, inv_r2, &ts);
+                    else
+                        drive(P, out, ib, im, lo, hi, 0, 0, m, fcx, fcy, fcz, fax, fay, faz,
+                              inv_r2, &ts);
+                }
+                pairs += ts.pairs;
+                moved += ts.moved;
+                if (ts.maxd2 > maxd2) maxd2 = ts.maxd2;
             }
-            pairs += bs.pairs;
-            moved += bs.moved;
-            if ((double)bs.maxd2 > maxd) maxd = bs.maxd2;
-        } else
+            bs.maxd2 = maxd2;
+        }
+        pairs += bs.pairs;
+        moved += bs.moved;
+        maxd = bs.maxd2;
+        if (touch) { /* this call's computed blocks become the last call's */
+            if (full_write || all_in) ranges_all(touch, n);
+            else ranges_of_blocks(touch, n, mrg_blk, ni);
+            if (all_in) {
+                for (size_t b = 0; b < nb; b++) touch->next[b] = (uint32_t)b;
+                touch->nprev = nb;
+            } else {
+                memcpy(touch->next, S.blk, S.k * sizeof *S.blk);
+                touch->nprev = S.k;
+            }
+        }
+    } else
 #endif
+    {
+        /* the general path: every block, its centres from the tree masks, all of them (all
+         * in), or the centre grid (many centres) */
+        if (use_tree) {
+            memset(gen_mask, 0, nb * sizeof *gen_mask);
+            for (size_t i = 0; i < S.k; i++) gen_mask[S.blk[i]] = S.msk[i];
+        }
+        if (touch) {
+            memset(tprev, full_write, nb);
+            if (!full_write)
+                for (size_t i = 0; i < touch->nprev; i++) tprev[touch->prev[i]] = 1;
+        }
+        const float pc0 = s->fpc[0], pc1 = s->fpc[1], pc2 = s->fpc[2];
+        const float *G = s->fG, *g0 = s->fg0;
+        size_t work = use_tree ? S.evals * B : all_in ? n * m : n;
+        int threads = work > PARALLEL_WORK || (m > CSRBF_FAST_MAX_CENTRES && !all_in) ? nt : 1;
+#pragma omp parallel num_threads(threads) reduction(+ : pairs, moved) reduction(max : maxd) \
+    reduction(min : minjac)
         {
-        _Alignas(64) float accx[B], accy[B], accz[B];
-        _Alignas(64) int cnt[B];
-#pragma omp for schedule(static, 64)
-        for (size_t b = 0; b < nb; b++) {
-            size_t k0 = b * B, nv = b + 1 < nb ? B : n - k0;
-            float *o = out + 3 * k0;
-            size_t k = m;
-            if (use_mask) {
-                uint32_t mk = mask[b];
-                if (!mk && !poly && !want_jac) { /* outside every support: the base */
-                    if (tcur) tcur[b] = 0;
-                    if (!tprev || tprev[b]) memcpy(o, P->xyz + 3 * k0, nv * 3 * sizeof(float));
-                    continue;
+            int tid = omp_get_thread_num();
+            uint32_t *list = (uint32_t *)(tbase + (size_t)tid * per_thread);
+            if (all_in)
+                for (size_t i = 0; i < m; i++) list[i] = (uint32_t)i;
+            _Alignas(64) float accx[B], accy[B], accz[B];
+            _Alignas(64) int cnt[B];
+#pragma omp for schedule(dynamic, 64)
+            for (size_t b = 0; b < nb; b++) {
+                size_t k0 = b * B, nv = b + 1 < nb ? B : n - k0;
+                float *o = out + 3 * k0;
+                size_t k = m;
+                if (!all_in) {
+                    if (use_tree) {
+                        uint64_t mk = gen_mask[b];
+                        k = 0;
+                        while (mk) {
+                            list[k++] = (uint32_t)__builtin_ctzll(mk);
+                            mk &= mk - 1;
+                        }
+                    } else {
+                        k = select_centres(s, P, b, list, 0);
+                    }
+                    if (!k && !poly && !want_jac) { /* outside every support: the base */
+                        if (touch) tcur[b] = 0;
+                        if (!touch || tprev[b]) memcpy(o, P->xyz + 3 * k0, nv * 3 * sizeof(float));
+                        continue;
+                    }
                 }
-                k = 0;
-                while (mk) {
-                    list[k++] = (uint32_t)__builtin_ctz(mk);
-                    mk &= mk - 1;
-                }
-            } else if (!all_in) {
-                k = select_centres(s, P, b, list, 0);
-                if (!k && !poly && !want_jac) {
-                    if (tcur) tcur[b] = 0;
-                    if (!tprev || tprev[b]) memcpy(o, P->xyz + 3 * k0, nv * 3 * sizeof(float));
-                    continue;
-                }
-            }
-            if (tcur) tcur[b] = 1;
-            const float *x = P->s[0] + k0, *y = P->s[1] + k0, *z = P->s[2] + k0;
-            kern(x, y, z, list, k, fcx, fcy, fcz, fax, fay, faz, inv_r2, accx, accy, accz, cnt);
-            if (poly)
-                for (int v = 0; v < B; v++) {
-                    float ex = x[v] - pc0, ey = y[v] - pc1, ez = z[v] - pc2;
-                    accx[v] += g0[0] + G[0] * ex + G[1] * ey + G[2] * ez;
-                    accy[v] += g0[1] + G[3] * ex + G[4] * ey + G[5] * ez;
-                    accz[v] += g0[2] + G[6] * ex + G[7] * ey + G[8] * ez;
-                }
+                if (touch) tcur[b] = 1;
+                const float *x = P->s[0] + k0, *y = P->s[1] + k0, *z = P->s[2] + k0;
+                kern(x, y, z, list, k, fcx, fcy, fcz, fax, fay, faz, inv_r2, accx, accy, accz,
+                     cnt);
+                if (poly)
+                    for (int v = 0; v < B; v++) {
+                        float ex = x[v] - pc0, ey = y[v] - pc1, ez = z[v] - pc2;
+                        accx[v] += g0[0] + G[0] * ex + G[1] * ey + G[2] * ez;
+                        accy[v] += g0[1] + G[3] * ex + G[4] * ey + G[5] * ez;
+                        accz[v] += g0[2] + G[6] * ex + G[7] * ey + G[8] * ez;
+                    }
 #if CSRBF_AVX512 && CSRBF_BLOCK == 16
-            if (avx512 && nv == B)
-                write_block_avx512(o, x, y, z, accx, accy, accz);
-            else
+                if (avx512 && nv == B)
+                    write_block_avx512(o, x, y, z, accx, accy, accz);
+                else
 #endif
-                write_block(o, x, y, z, accx, accy, accz, nv);
-            if (st) {
-                for (size_t v = 0; v < nv; v++) {
-                    pairs += (size_t)cnt[v];
-                    moved += poly || cnt[v] > 0;
-                    double d = (double)accx[v] * accx[v] + (double)accy[v] * accy[v] +
-                               (double)accz[v] * accz[v];
-                    if (d > maxd) maxd = d;
-                    if (want_jac && (poly || cnt[v] > 0)) {
-                        double xv[3] = {x[v], y[v], z[v]};
-                        double det = jacobian_det(s, xv, list, k);
-                        if (det < minjac) minjac = det;
+                    write_block(o, x, y, z, accx, accy, accz, nv);
+                if (st) {
+                    for (size_t v = 0; v < nv; v++) {
+                        pairs += (size_t)cnt[v];
+                        moved += poly || cnt[v] > 0;
+                        double d = (double)accx[v] * accx[v] + (double)accy[v] * accy[v] +
+                                   (double)accz[v] * accz[v];
+                        if (d > maxd) maxd = d;
+                        if (want_jac && (poly || cnt[v] > 0)) {
+                            double xv[3] = {x[v], y[v], z[v]};
+                            double det = jacobian_det(s, xv, list, k);
+                            if (det < minjac) minjac = det;
+                        }
                     }
                 }
             }
         }
+        if (touch) { /* the written blocks (computed now or restored) as ranges */
+            size_t k = 0, nr = 0;
+            for (size_t b = 0; b < nb;) {
+                if (!(tcur[b] || tprev[b])) {
+                    b++;
+                    continue;
+                }
+                size_t b0 = b;
+                for (; b < nb && (tcur[b] || tprev[b]); b++)
+                    if (tcur[b]) touch->next[k++] = (uint32_t)b;
+                size_t v1 = b * B < n ? b * B : n;
+                touch->ranges[2 * nr] = (uint32_t)(b0 * B);
+                touch->ranges[2 * nr + 1] = (uint32_t)(v1 - b0 * B);
+                nr++;
+            }
+            touch->nranges = nr;
+            touch->nprev = k;
         }
     }
     if (own)
         free(mem);
     else
         atomic_flag_clear(&s->scratch_busy);
-    if (touch) { /* the rewritten blocks as vertex ranges, then this call becomes the last */
-        size_t nr = 0;
-        for (size_t b = 0; b < nb;) {
-            if (!(touch->full || touch->cur[b] || touch->prev[b])) {
-                b++;
-                continue;
-            }
-            size_t b0 = b;
-            while (b < nb && (touch->full || touch->cur[b] || touch->prev[b])) b++;
-            size_t v1 = b * B < n ? b * B : n;
-            touch->ranges[2 * nr] = (uint32_t)(b0 * B);
-            touch->ranges[2 * nr + 1] = (uint32_t)(v1 - b0 * B);
-            nr++;
-        }
-        touch->nranges = nr;
-        uint8_t *tmp = touch->prev;
-        touch->prev = touch->cur;
-        touch->cur = tmp;
+    if (touch) {
+        uint32_t *tmp = touch->prev;
+        touch->prev = touch->next;
+        touch->next = tmp;
         touch->full = 0;
     }
     if (st) {

@@ -15,6 +15,11 @@
  * width. Blocks are runs of consecutive vertex indices, so output stays contiguous. */
 #define CSRBF_BLOCK 16
 
+/* Fan-out of the block tree (csrbf_points: one AVX-512 vector of boxes holds a node's
+ * children) and its deepest possible level count (nblocks < 2^28 = CSRBF_FAN^7). */
+#define CSRBF_FAN 16
+#define CSRBF_TREE_MAX 8
+
 /* A hash grid over points (double, AoS n x 3) with cubic cells of side h. Cells hash into a
  * power-of-two table; each point keeps its integer cell so that colliding cells are told
  * apart. */
@@ -110,6 +115,14 @@ struct csrbf_points {
     float blo[3], bhi[3];    /* bounding box of all vertices */
     size_t nsuper;           /* superblocks of CSRBF_SUPER blocks (csrbf_points_nearest) */
     float *slo[3], *shi[3];  /* nsuper each: superblock boxes */
+    /* box tree over the blocks (csrbf_evaluate's block selection): level 0 is lo/hi (the
+     * blocks), node i of level l + 1 bounds nodes CSRBF_FAN i .. CSRBF_FAN i + CSRBF_FAN - 1
+     * of level l; the top level has at most CSRBF_FAN nodes. Every level is allocated to a
+     * multiple of CSRBF_FAN, the padding holding empty boxes (lo = +inf, hi = -inf), so that
+     * a node's children are always one full group. tlo[0] / thi[0] alias lo / hi. */
+    int tlevels;             /* levels including the blocks' (1 when nblocks <= CSRBF_FAN) */
+    size_t tcount[CSRBF_TREE_MAX];            /* nodes per level (unpadded) */
+    float *tlo[CSRBF_TREE_MAX][3], *thi[CSRBF_TREE_MAX][3];
 };
 
 /* Blocks per superblock: csrbf_points_nearest skips a superblock's blocks with one box test. */
