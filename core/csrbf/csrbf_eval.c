@@ -169,9 +169,9 @@ __attribute__((target("avx512f"))) static void write_block_avx512(
  * distance test (blocks whose box meets a support they do not reach: the ends of grid rows). */
 #define AVX512_PAIR(PSI, J, SKIP)                                                              \
     do {                                                                                       \
-        __m512 dx = _mm512_sub_ps(X, _mm512_set1_ps(cx[J]));                                   \
-        __m512 dy = _mm512_sub_ps(Y, _mm512_set1_ps(cy[J]));                                   \
-        __m512 dz = _mm512_sub_ps(Z, _mm512_set1_ps(cz[J]));                                   \
+        __m512 dx = _mm512_sub_ps(X, _mm512_set1_ps(cp[8 * (J)]));                                   \
+        __m512 dy = _mm512_sub_ps(Y, _mm512_set1_ps(cp[8 * (J) + 1]));                                   \
+        __m512 dz = _mm512_sub_ps(Z, _mm512_set1_ps(cp[8 * (J) + 2]));                                   \
         __m512 r2 = _mm512_mul_ps(dx, dx);                                                     \
         r2 = _mm512_fmadd_ps(dy, dy, r2);                                                      \
         r2 = _mm512_fmadd_ps(dz, dz, r2);                                                      \
@@ -185,9 +185,9 @@ __attribute__((target("avx512f"))) static void write_block_avx512(
         __m512 r = _mm512_mul_ps(q, e);                                                        \
         __m512 t1 = _mm512_sub_ps(one, r);                                                     \
         __m512 w = PSI;                                                                        \
-        sx = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(ax[J]), sx, in);                          \
-        sy = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(ay[J]), sy, in);                          \
-        sz = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(az[J]), sz, in);                          \
+        sx = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(cp[8 * (J) + 3]), sx, in);                          \
+        sy = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(cp[8 * (J) + 4]), sy, in);                          \
+        sz = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(cp[8 * (J) + 5]), sz, in);                          \
         if (stats_on) cntv = _mm512_mask_add_epi32(cntv, in, cntv, ione);                      \
     } while (0)
 
@@ -217,9 +217,7 @@ static inline void copy_base(const csrbf_points *P, float *out, size_t b0, size_
     __attribute__((target("avx512f,fma"))) static void NAME(                                   \
         const csrbf_points *P, float *restrict out, const uint32_t *restrict blk,              \
         const uint64_t *restrict msk, size_t i0, size_t i1, size_t g0, size_t g1, size_t m,    \
-        const float *restrict cx, const float *restrict cy, const float *restrict cz,          \
-        const float *restrict ax, const float *restrict ay, const float *restrict az,          \
-        float inv_r2, block_stats *bs)                                                         \
+        const float *restrict cp, float inv_r2, block_stats *bs)                               \
     {                                                                                          \
         const __m512 one = _mm512_set1_ps(1.0f), half = _mm512_set1_ps(0.5f),                 \
                      three_half = _mm512_set1_ps(1.5f), tiny = _mm512_set1_ps(1e-30f),         \
@@ -312,24 +310,25 @@ AVX512_DRIVER(drive_psi32_avx512_stats, PSI32_AVX512, 1)
 #undef T2
 
 typedef void (*drive_fn)(const csrbf_points *, float *, const uint32_t *, const uint64_t *,
-                         size_t, size_t, size_t, size_t, size_t, const float *, const float *,
-                         const float *, const float *, const float *, const float *, float,
+                         size_t, size_t, size_t, size_t, size_t, const float *, float,
                          block_stats *);
 
 /* The centres of mask (bit j: centre j) whose support meets each of the CSRBF_FAN boxes
- * lo/hi[first ..]: cm[l] gets bit j. Float, with the conservative margin r2c; the same
- * operations as the kernel's distance (per-axis gaps to the box never exceed a vertex's, and
- * the squares and sums round monotonically), so a block holding a vertex in a support always
- * meets it. */
-__attribute__((target("avx512f,fma"))) static void group_masks_avx512(
-    const float *const lo[3], const float *const hi[3], size_t first, uint64_t mask,
-    const float *cx, const float *cy, const float *cz, float r2c, uint64_t cm[CSRBF_FAN])
+ * lo/hi[first ..]: lane l of (c0, c1) gets bit j. Float, with the conservative margin r2c;
+ * the same operations as the kernel's distance (per-axis gaps to the box never exceed a
+ * vertex's, and the squares and sums round monotonically), so a block holding a vertex in a
+ * support always meets it. Returns the lanes with a centre. */
+static inline __attribute__((target("avx512f,fma"), always_inline)) __mmask16
+group_masks_avx512(const float *const lo[3], const float *const hi[3], size_t first,
+                   uint64_t mask, const float *cx, const float *cy, const float *cz, float r2c,
+                   __m512i *c0out, __m512i *c1out)
 {
     const __m512 lx = _mm512_loadu_ps(lo[0] + first), ly = _mm512_loadu_ps(lo[1] + first),
                  lz = _mm512_loadu_ps(lo[2] + first), hx = _mm512_loadu_ps(hi[0] + first),
                  hy = _mm512_loadu_ps(hi[1] + first), hz = _mm512_loadu_ps(hi[2] + first),
                  zero = _mm512_setzero_ps(), lim = _mm512_set1_ps(r2c);
     __m512i c0 = _mm512_setzero_si512(), c1 = c0;
+    __mmask16 any = 0;
     while (mask) {
         const unsigned j = (unsigned)__builtin_ctzll(mask);
         mask &= mask - 1;
@@ -345,9 +344,11 @@ __attribute__((target("avx512f,fma"))) static void group_masks_avx512(
         const __m512i bit = _mm512_set1_epi64((long long)(1ull << j));
         c0 = _mm512_mask_or_epi64(c0, (__mmask8)t, c0, bit);
         c1 = _mm512_mask_or_epi64(c1, (__mmask8)(t >> 8), c1, bit);
+        any |= t;
     }
-    _mm512_storeu_si512(cm, c0);
-    _mm512_storeu_si512(cm + 8, c1);
+    *c0out = c0;
+    *c1out = c1;
+    return any;
 }
 
 static int have_avx512(void)
@@ -417,40 +418,100 @@ CSRBF_CLONES static void group_masks_c(const float *const lo[3], const float *co
  * centres at once: a node is opened only for the centres whose support meets its box, so the
  * cost follows the supports (nodes near a support), not the mesh. Output in increasing block
  * order: blk[k], msk[k] (bit j: centre j meets block blk[k]). */
-typedef struct {
+typedef struct block_select {
     const csrbf_points *P;
     const float *cx, *cy, *cz;
     float r2c;
-    int avx512;
     uint32_t *blk;
     uint64_t *msk;
     size_t k, evals; /* blocks listed, sum of their mask bits */
 } block_select;
 
-static void select_visit(block_select *S, int level, size_t first, uint64_t mask)
+static void select_emit(block_select *S, size_t first, const uint64_t cm[CSRBF_FAN])
+{
+    for (int l = 0; l < CSRBF_FAN; l++)
+        if (cm[l]) {
+            S->blk[S->k] = (uint32_t)(first + (size_t)l);
+            S->msk[S->k++] = cm[l];
+        }
+}
+
+static void select_visit_c(block_select *S, int level, size_t first, uint64_t mask)
 {
     uint64_t cm[CSRBF_FAN];
     const csrbf_points *P = S->P;
-    const float *const *lo = (const float *const *)P->tlo[level];
-    const float *const *hi = (const float *const *)P->thi[level];
-#if CSRBF_AVX512 && CSRBF_BLOCK == 16
-    if (S->avx512)
-        group_masks_avx512(lo, hi, first, mask, S->cx, S->cy, S->cz, S->r2c, cm);
-    else
-#endif
-        group_masks_c(lo, hi, first, mask, S->cx, S->cy, S->cz, S->r2c, cm);
-    for (int l = 0; l < CSRBF_FAN; l++) {
-        if (!cm[l]) continue;
-        size_t node = first + (size_t)l;
-        if (level > 0) {
-            select_visit(S, level - 1, node * CSRBF_FAN, cm[l]);
-        } else {
-            S->blk[S->k] = (uint32_t)node;
-            S->msk[S->k] = cm[l];
-            S->k++;
-            S->evals += (size_t)__builtin_popcountll(cm[l]);
-        }
+    group_masks_c((const float *const *)P->tlo[level], (const float *const *)P->thi[level],
+                  first, mask, S->cx, S->cy, S->cz, S->r2c, cm);
+    if (level == 0) {
+        select_emit(S, first, cm);
+        return;
     }
+    for (int l = 0; l < CSRBF_FAN; l++)
+        if (cm[l]) select_visit_c(S, level - 1, (first + (size_t)l) * CSRBF_FAN, cm[l]);
+}
+
+#if CSRBF_AVX512 && CSRBF_BLOCK == 16
+/* select_visit_c with AVX-512: the leaves' masks and block numbers compress-stored. */
+__attribute__((target("avx512f,fma,popcnt"))) static void
+select_visit_avx512(block_select *S, int level, size_t first, uint64_t mask)
+{
+    const csrbf_points *P = S->P;
+    __m512i c0, c1;
+    __mmask16 any = group_masks_avx512((const float *const *)P->tlo[level],
+                                       (const float *const *)P->thi[level], first, mask, S->cx,
+                                       S->cy, S->cz, S->r2c, &c0, &c1);
+    if (!any) return;
+    if (level == 0) {
+        size_t k = S->k;
+        const __mmask8 a0 = (__mmask8)any, a1 = (__mmask8)(any >> 8);
+        _mm512_mask_compressstoreu_epi64(S->msk + k, a0, c0);
+        _mm512_mask_compressstoreu_epi64(S->msk + k + __builtin_popcount(a0), a1, c1);
+        const __m512i idx = _mm512_add_epi32(
+            _mm512_set1_epi32((int)first),
+            _mm512_set_epi32(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0));
+        _mm512_mask_compressstoreu_epi32(S->blk + k, any, idx);
+        S->k = k + (size_t)__builtin_popcount(any);
+        return;
+    }
+    _Alignas(64) uint64_t cm[CSRBF_FAN];
+    _mm512_store_si512(cm, c0);
+    _mm512_store_si512(cm + 8, c1);
+    for (unsigned a = any; a; a &= a - 1) {
+        const unsigned l = (unsigned)__builtin_ctz(a);
+        select_visit_avx512(S, level - 1, (first + l) * CSRBF_FAN, cm[l]);
+    }
+}
+
+__attribute__((target("popcnt"))) static size_t count_bits_popcnt(const uint64_t *msk, size_t k)
+{
+    size_t e = 0;
+    for (size_t i = 0; i < k; i++) e += (size_t)__builtin_popcountll(msk[i]);
+    return e;
+}
+#endif
+
+static size_t count_bits(const uint64_t *msk, size_t k)
+{
+    size_t e = 0;
+    for (size_t i = 0; i < k; i++) e += (size_t)__builtin_popcountll(msk[i]);
+    return e;
+}
+
+/* Walk the tree for the solver's centres into S (blk / msk with room for every block). */
+static void select_blocks(block_select *S, int avx512, size_t m)
+{
+    const uint64_t all = m >= 64 ? ~0ull : (1ull << m) - 1;
+    S->k = 0;
+#if CSRBF_AVX512 && CSRBF_BLOCK == 16
+    if (avx512) {
+        select_visit_avx512(S, S->P->tlevels - 1, 0, all);
+        S->evals = count_bits_popcnt(S->msk, S->k);
+        return;
+    }
+#endif
+    (void)avx512;
+    select_visit_c(S, S->P->tlevels - 1, 0, all);
+    S->evals = count_bits(S->msk, S->k);
 }
 
 /* Does the support of centre c (radius R) meet the box [lo, hi]? Conservative by a hair. */
@@ -537,8 +598,10 @@ struct csrbf_touch {
     size_t nblocks;
     uint32_t *prev;             /* blocks the last call computed from the kernel, increasing */
     size_t nprev;
-    uint32_t *next;             /* the list a call builds (then swapped with prev) */
     int full;                   /* the next call writes every block */
+    uint64_t sel_pts, sel_ctr;  /* prev is exactly the solver's block selection for these
+                                   points and centres stamps (0: it is not) */
+    int ranges_sel;             /* and the ranges are exactly that selection's */
     uint32_t *ranges;           /* 2 x nranges: first vertex, count */
     size_t nranges;
 };
@@ -562,9 +625,8 @@ int csrbf_touch_create(const csrbf_points *points, csrbf_touch **out)
     t->points = points;
     t->nblocks = points->nblocks;
     t->prev = malloc(t->nblocks * sizeof *t->prev);
-    t->next = malloc(t->nblocks * sizeof *t->next);
     t->ranges = malloc((t->nblocks + 1) * 2 * sizeof *t->ranges);
-    if (!t->prev || !t->next || !t->ranges) {
+    if (!t->prev || !t->ranges) {
         csrbf_touch_destroy(&t);
         return CSRBF_ERR_NOMEM;
     }
@@ -577,7 +639,6 @@ void csrbf_touch_destroy(csrbf_touch **tp)
 {
     if (!tp || !*tp) return;
     free((*tp)->prev);
-    free((*tp)->next);
     free((*tp)->ranges);
     free(*tp);
     *tp = NULL;
@@ -593,6 +654,8 @@ void csrbf_touch_commit(csrbf_touch *t)
     if (!t) return;
     t->nprev = 0;
     t->nranges = 0;
+    t->sel_pts = t->sel_ctr = 0;
+    t->ranges_sel = 0;
 }
 
 size_t csrbf_touch_ranges(const csrbf_touch *t, const uint32_t **ranges)
@@ -643,9 +706,20 @@ static size_t lower_bound(const uint32_t *blk, size_t k, size_t b)
     return lo;
 }
 
-/* Work (vertex-centre lane pairs) above which an evaluation forks its threads: below it a
- * fork/join costs more than it saves, and a frame loop's sleeping workers wake slowly. */
-#define PARALLEL_WORK 50000
+/* The touch's last-call list becomes blk[0..k) (copied, unless it is the list itself). */
+static void touch_set_prev(csrbf_touch *t, const uint32_t *blk, size_t k)
+{
+    if (blk != t->prev) memcpy(t->prev, blk, k * sizeof *blk);
+    t->nprev = k;
+}
+
+/* Work (vector evaluations: 16 vertices x 1 centre, a block's write counting half of one)
+ * above which an evaluation forks its threads: below it a fork/join costs more than it saves
+ * (and a frame loop's sleeping workers wake slowly). */
+#define PARALLEL_WORK 2000
+/* Blocks or work items per chunk of the parallel loop (guided schedule: a late thread finds
+ * work left, and there are few chunk grabs, each a cache-line transfer between cores). */
+#define EVAL_CHUNK 32
 
 static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *out,
                          unsigned flags, csrbf_eval_stats *st, csrbf_touch *touch)
@@ -691,17 +765,17 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
      * (statistics are counted inside it) */
     const int fast = avx512 && !want_jac && !poly && (all_in || use_tree);
 
-    /* scratch: the selection (masks, blocks), the merged work list of a touched call, and
-     * for the general path dense masks, block flags and a centre list per thread */
+    /* scratch: the merged work list of a touched call, and for the general path dense masks,
+     * block flags and a centre list per thread; a concurrent caller (without the solver's
+     * scratch) also holds its own block selection */
     size_t per_thread = align64(m * sizeof(uint32_t));
-    size_t sel_m = use_tree ? align64(nb * sizeof(uint64_t)) : 0;
-    size_t sel_b = use_tree ? align64(nb * sizeof(uint32_t)) : 0;
-    size_t mrg_m = fast && use_tree && !full_write ? sel_m : 0;
-    size_t mrg_b = fast && use_tree && !full_write ? sel_b : 0;
-    size_t gen_m = !fast && use_tree ? align64(nb * sizeof(uint64_t)) : 0;
+    size_t blk_m = align64(nb * sizeof(uint64_t)), blk_b = align64(nb * sizeof(uint32_t));
+    size_t mrg = fast && use_tree && !full_write ? blk_m + blk_b : 0;
+    size_t gen_m = !fast && use_tree ? blk_m : 0;
     size_t gen_f = !fast && touch ? align64(2 * nb) : 0;
     size_t gen_t = !fast ? (size_t)nt * per_thread : 0;
-    size_t need = sel_m + sel_b + mrg_m + mrg_b + gen_m + gen_f + gen_t + 64;
+    size_t pack = fast ? align64(m * 8 * sizeof(float)) : 0;
+    size_t need = pack + mrg + gen_m + gen_f + gen_t + 64;
     void *mem = NULL;
     int own = 0;
     if (!atomic_flag_test_and_set(&s->scratch_busy)) {
@@ -714,18 +788,30 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
             s->scratch = q;
             s->scratch_cap = need;
         }
+        if (use_tree && s->sel_cap < nb) {
+            uint32_t *b2 = realloc(s->sel_blk, nb * sizeof *b2);
+            if (b2) s->sel_blk = b2;
+            uint64_t *m2 = b2 ? realloc(s->sel_msk, nb * sizeof *m2) : NULL;
+            if (m2) s->sel_msk = m2;
+            if (!b2 || !m2) {
+                atomic_flag_clear(&s->scratch_busy);
+                return CSRBF_ERR_NOMEM;
+            }
+            s->sel_cap = nb;
+            s->sel_pts = s->sel_ctr = 0;
+        }
         mem = s->scratch;
     } else {
+        need += use_tree ? blk_m + blk_b : 0;
         mem = malloc(need);
         if (!mem) return CSRBF_ERR_NOMEM;
         own = 1;
     }
     unsigned char *sp = (unsigned char *)(((uintptr_t)mem + 63) & ~(uintptr_t)63);
-    uint64_t *sel_msk = (uint64_t *)sp;
-    uint32_t *sel_blk = (uint32_t *)(sp += sel_m);
-    uint64_t *mrg_msk = (uint64_t *)(sp += sel_b);
-    uint32_t *mrg_blk = (uint32_t *)(sp += mrg_m);
-    uint64_t *gen_mask = (uint64_t *)(sp += mrg_b);
+    float *cpack = (float *)sp; /* fast path: centre j's x, y, z, alpha x, y, z at 8 j */
+    uint64_t *mrg_msk = (uint64_t *)(sp += pack);
+    uint32_t *mrg_blk = (uint32_t *)(sp + (mrg ? blk_m : 0));
+    uint64_t *gen_mask = (uint64_t *)(sp += mrg);
     uint8_t *tcur = (uint8_t *)(sp += gen_m);
     uint8_t *tprev = tcur + nb;
     unsigned char *tbase = (sp += gen_f);
@@ -734,9 +820,27 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
     const float *fcx = s->fc[0], *fcy = s->fc[1], *fcz = s->fc[2];
     const float *fax = s->fa[0], *fay = s->fa[1], *faz = s->fa[2];
 
-    block_select S = {P, fcx, fcy, fcz, r2c, avx512, sel_blk, sel_msk, 0, 0};
-    if (use_tree)
-        select_visit(&S, P->tlevels - 1, 0, m >= 64 ? ~0ull : (1ull << m) - 1);
+    /* the block selection: cached in the solver for these points and centres (anchored
+     * frames reuse it), else a walk of the block tree */
+    block_select S = {P, fcx, fcy, fcz, r2c, NULL, NULL, 0, 0};
+    if (use_tree && own) {
+        S.msk = (uint64_t *)(sp += gen_t);
+        S.blk = (uint32_t *)(sp + blk_m);
+        select_blocks(&S, avx512, m);
+    } else if (use_tree) {
+        S.blk = s->sel_blk;
+        S.msk = s->sel_msk;
+        if (s->sel_pts == P->stamp && s->sel_ctr == s->centres_stamp) {
+            S.k = s->sel_k;
+            S.evals = s->sel_evals;
+        } else {
+            select_blocks(&S, avx512, m);
+            s->sel_k = S.k;
+            s->sel_evals = S.evals;
+            s->sel_pts = P->stamp;
+            s->sel_ctr = s->centres_stamp;
+        }
+    }
 
     size_t pairs = 0, moved = 0;
     double maxd = 0.0, minjac = 1.0;
@@ -752,17 +856,25 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
         /* the work list: every block (all in), the selected blocks with the gaps between
          * them copied (a full write), or the selected blocks merged with the last call's
          * (restored where no support holds them now) */
+        for (size_t j = 0; j < m; j++) {
+            float *q = cpack + 8 * j;
+            q[0] = fcx[j], q[1] = fcy[j], q[2] = fcz[j];
+            q[3] = fax[j], q[4] = fay[j], q[5] = faz[j];
+            q[6] = q[7] = 0.0f;
+        }
         const uint32_t *ib = NULL;
         const uint64_t *im = NULL;
-        size_t ni = nb, work = nb * m * B;
-        int gaps = 0;
+        size_t ni = nb, work = nb * m + nb / 2;
+        int gaps = 0, same = 0;
         if (use_tree) {
-            work = S.evals * B;
+            work = S.evals + S.k / 2;
+            ib = S.blk;
+            im = S.msk;
+            ni = S.k;
             if (full_write) {
-                ib = S.blk;
-                im = S.msk;
-                ni = S.k;
                 gaps = 1;
+            } else if (touch->sel_pts == P->stamp && touch->sel_ctr == s->centres_stamp) {
+                same = 1; /* the last call computed exactly these blocks: nothing to restore */
             } else {
                 const uint32_t *pv = touch->prev;
                 size_t a = 0, c = 0, k = 0, np = touch->nprev;
@@ -786,24 +898,23 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
         }
         block_stats bs = {0, 0, 0.0f};
         if (work <= PARALLEL_WORK || nt == 1) {
-            drive(P, out, ib, im, 0, ni, 0, gaps ? nb : 0, m, fcx, fcy, fcz, fax, fay, faz,
-                  inv_r2, &bs);
+            drive(P, out, ib, im, 0, ni, 0, gaps ? nb : 0, m, cpack, inv_r2, &bs);
         } else {
-            /* chunks of 64 blocks (or 64 work items), dynamically scheduled */
-            const size_t chunks = ((gaps ? nb : ni) + 63) / 64;
+            /* chunks of EVAL_CHUNK blocks (or work items), dynamically scheduled */
+            const size_t chunks = ((gaps ? nb : ni) + EVAL_CHUNK - 1) / EVAL_CHUNK;
             float maxd2 = 0.0f;
 #pragma omp parallel num_threads(nt) reduction(+ : pairs, moved) reduction(max : maxd2)
             {
                 block_stats ts = {0, 0, 0.0f};
-#pragma omp for schedule(dynamic, 1)
+#pragma omp for schedule(guided)
                 for (size_t c = 0; c < chunks; c++) {
-                    size_t lo = c * 64, hi = lo + 64 < (gaps ? nb : ni) ? lo + 64 : (gaps ? nb : ni);
+                    size_t end = gaps ? nb : ni, lo = c * EVAL_CHUNK,
+                           hi = lo + EVAL_CHUNK < end ? lo + EVAL_CHUNK : end;
                     if (gaps)
                         drive(P, out, ib, im, lower_bound(ib, ni, lo), lower_bound(ib, ni, hi), lo,
-                              hi, m, fcx, fcy, fcz, fax, fay, faz, inv_r2, &ts);
+                              hi, m, cpack, inv_r2, &ts);
                     else
-                        drive(P, out, ib, im, lo, hi, 0, 0, m, fcx, fcy, fcz, fax, fay, faz,
-                              inv_r2, &ts);
+                        drive(P, out, ib, im, lo, hi, 0, 0, m, cpack, inv_r2, &ts);
                 }
                 pairs += ts.pairs;
                 moved += ts.moved;
@@ -815,14 +926,24 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
         moved += bs.moved;
         maxd = bs.maxd2;
         if (touch) { /* this call's computed blocks become the last call's */
-            if (full_write || all_in) ranges_all(touch, n);
-            else ranges_of_blocks(touch, n, mrg_blk, ni);
             if (all_in) {
-                for (size_t b = 0; b < nb; b++) touch->next[b] = (uint32_t)b;
+                ranges_all(touch, n);
+                for (size_t b = 0; b < nb; b++) touch->prev[b] = (uint32_t)b;
                 touch->nprev = nb;
+                touch->sel_pts = touch->sel_ctr = 0;
+                touch->ranges_sel = 0;
             } else {
-                memcpy(touch->next, S.blk, S.k * sizeof *S.blk);
-                touch->nprev = S.k;
+                if (full_write) {
+                    ranges_all(touch, n);
+                    touch->ranges_sel = 0;
+                } else if (!same || !touch->ranges_sel) {
+                    ranges_of_blocks(touch, n, ib, ni);
+                    touch->ranges_sel = ni == S.k;
+                }
+                if (!same) touch_set_prev(touch, S.blk, S.k);
+                /* a selection computed into the caller's own memory is not the solver's */
+                touch->sel_pts = own ? 0 : P->stamp;
+                touch->sel_ctr = own ? 0 : s->centres_stamp;
             }
         }
     } else
@@ -841,7 +962,7 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
         }
         const float pc0 = s->fpc[0], pc1 = s->fpc[1], pc2 = s->fpc[2];
         const float *G = s->fG, *g0 = s->fg0;
-        size_t work = use_tree ? S.evals * B : all_in ? n * m : n;
+        size_t work = use_tree ? S.evals + S.k / 2 : all_in ? nb * m : nb;
         int threads = work > PARALLEL_WORK || (m > CSRBF_FAST_MAX_CENTRES && !all_in) ? nt : 1;
 #pragma omp parallel num_threads(threads) reduction(+ : pairs, moved) reduction(max : maxd) \
     reduction(min : minjac)
@@ -916,7 +1037,7 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
                 }
                 size_t b0 = b;
                 for (; b < nb && (tcur[b] || tprev[b]); b++)
-                    if (tcur[b]) touch->next[k++] = (uint32_t)b;
+                    if (tcur[b]) touch->prev[k++] = (uint32_t)b; /* tprev holds the old list */
                 size_t v1 = b * B < n ? b * B : n;
                 touch->ranges[2 * nr] = (uint32_t)(b0 * B);
                 touch->ranges[2 * nr + 1] = (uint32_t)(v1 - b0 * B);
@@ -924,18 +1045,15 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
             }
             touch->nranges = nr;
             touch->nprev = k;
+            touch->sel_pts = touch->sel_ctr = 0;
+            touch->ranges_sel = 0;
         }
     }
     if (own)
         free(mem);
     else
         atomic_flag_clear(&s->scratch_busy);
-    if (touch) {
-        uint32_t *tmp = touch->prev;
-        touch->prev = touch->next;
-        touch->next = tmp;
-        touch->full = 0;
-    }
+    if (touch) touch->full = 0;
     if (st) {
         st->pairs = pairs;
         st->moved = moved;

@@ -10,6 +10,12 @@
 #include <stdlib.h>
 #include <string.h>
 
+uint64_t csrbf_new_stamp(void)
+{
+    static _Atomic uint64_t counter = 0;
+    return atomic_fetch_add(&counter, 1) + 1;
+}
+
 static int check(size_t n, const float *xyz)
 {
     for (size_t i = 0; i < 3 * n; i++)
@@ -173,6 +179,7 @@ int csrbf_points_create(size_t n, const float *xyz, csrbf_points **out)
     }
     memcpy(p->xyz, xyz, n * 3 * sizeof(float));
     fill_blocks(p);
+    p->stamp = csrbf_new_stamp();
     *out = p;
     return CSRBF_OK;
 }
@@ -182,6 +189,7 @@ int csrbf_points_update(csrbf_points *p, const float *xyz)
     if (!p || !xyz || check(p->n, xyz)) return CSRBF_ERR_INVALID;
     memcpy(p->xyz, xyz, p->n * 3 * sizeof(float));
     fill_blocks(p);
+    p->stamp = csrbf_new_stamp();
     return CSRBF_OK;
 }
 
@@ -201,6 +209,7 @@ int csrbf_points_update_ranges(csrbf_points *p, const float *xyz, const uint32_t
         fill_super_range(p, v0 / CSRBF_BLOCK, (v0 + c + CSRBF_BLOCK - 1) / CSRBF_BLOCK);
         fill_tree_range(p, v0 / CSRBF_BLOCK, (v0 + c + CSRBF_BLOCK - 1) / CSRBF_BLOCK);
     }
+    p->stamp = csrbf_new_stamp();
     return CSRBF_OK;
 }
 

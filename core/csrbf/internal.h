@@ -100,6 +100,15 @@ struct csrbf_solver {
     size_t g_cap;
     csrbf_points *g_tmp;     /* guarded step: index of the intermediate shape */
 
+    /* csrbf_evaluate's block selection (blocks meeting a support, centre masks), kept for
+     * the points stamp sel_pts and the centres stamp sel_ctr: anchored frames (same centres,
+     * same points) reuse it. Used only by the holder of scratch_busy. */
+    uint64_t centres_stamp;  /* a fresh csrbf_new_stamp() at every set_start_points */
+    uint64_t sel_pts, sel_ctr;
+    uint32_t *sel_blk;       /* sel_cap each: blocks, increasing */
+    uint64_t *sel_msk;       /* their centre masks (bit j: centre j) */
+    size_t sel_k, sel_evals, sel_cap; /* blocks listed, sum of their mask bits */
+
     /* evaluation scratch: one user at a time; concurrent callers allocate their own */
     atomic_flag scratch_busy;
     void *scratch;
@@ -108,6 +117,7 @@ struct csrbf_solver {
 
 struct csrbf_points {
     size_t n, nblocks;
+    uint64_t stamp;          /* a fresh csrbf_new_stamp() at every create / update */
     float *xyz;              /* n x 3, original order */
     float *s[3];             /* nblocks * CSRBF_BLOCK each: coordinates, structure of arrays,
                                 the last block padded with copies of its first vertex */
@@ -127,6 +137,10 @@ struct csrbf_points {
 
 /* Blocks per superblock: csrbf_points_nearest skips a superblock's blocks with one box test. */
 #define CSRBF_SUPER 64
+
+/* A process-wide increasing counter (thread-safe, never 0): stamps of point contents and
+ * centre sets, so that a cached block selection is never taken for another one. */
+uint64_t csrbf_new_stamp(void);
 
 /* Build the guard's neighbour lists and clusters for the current centres (solver.c calls it
  * from set_start_points); free them (destroy). */
