@@ -424,8 +424,14 @@ typedef struct block_select {
     float r2c;
     uint32_t *blk;
     uint64_t *msk;
+    size_t *cum;     /* k + 1: cum[i] = cost (ITEM_COST) of items 0..i-1, for splitting */
     size_t k, evals; /* blocks listed, sum of their mask bits */
 } block_select;
+
+/* The cost of a work item in half vector evaluations (16 vertices x 1 centre): a computed
+ * block costs about two evaluations (loads, statistics, the interleaved store) besides one
+ * per centre; a block restored to the base, one. A copied gap block (full writes) costs 1. */
+#define ITEM_COST(bits) ((bits) ? 4 + 2 * (size_t)(bits) : 2)
 
 static void select_emit(block_select *S, size_t first, const uint64_t cm[CSRBF_FAN])
 {
@@ -482,18 +488,31 @@ select_visit_avx512(block_select *S, int level, size_t first, uint64_t mask)
     }
 }
 
-__attribute__((target("popcnt"))) static size_t count_bits_popcnt(const uint64_t *msk, size_t k)
+__attribute__((target("popcnt"))) static size_t count_bits_popcnt(const uint64_t *msk, size_t k,
+                                                                   size_t *cum)
 {
-    size_t e = 0;
-    for (size_t i = 0; i < k; i++) e += (size_t)__builtin_popcountll(msk[i]);
+    size_t e = 0, c = 0;
+    for (size_t i = 0; i < k; i++) {
+        size_t bits = (size_t)__builtin_popcountll(msk[i]);
+        cum[i] = c;
+        c += ITEM_COST(bits);
+        e += bits;
+    }
+    cum[k] = c;
     return e;
 }
 #endif
 
-static size_t count_bits(const uint64_t *msk, size_t k)
+static size_t count_bits(const uint64_t *msk, size_t k, size_t *cum)
 {
-    size_t e = 0;
-    for (size_t i = 0; i < k; i++) e += (size_t)__builtin_popcountll(msk[i]);
+    size_t e = 0, c = 0;
+    for (size_t i = 0; i < k; i++) {
+        size_t bits = (size_t)__builtin_popcountll(msk[i]);
+        cum[i] = c;
+        c += ITEM_COST(bits);
+        e += bits;
+    }
+    cum[k] = c;
     return e;
 }
 
@@ -505,13 +524,13 @@ static void select_blocks(block_select *S, int avx512, size_t m)
 #if CSRBF_AVX512 && CSRBF_BLOCK == 16
     if (avx512) {
         select_visit_avx512(S, S->P->tlevels - 1, 0, all);
-        S->evals = count_bits_popcnt(S->msk, S->k);
+        S->evals = count_bits_popcnt(S->msk, S->k, S->cum);
         return;
     }
 #endif
     (void)avx512;
     select_visit_c(S, S->P->tlevels - 1, 0, all);
-    S->evals = count_bits(S->msk, S->k);
+    S->evals = count_bits(S->msk, S->k, S->cum);
 }
 
 /* Does the support of centre c (radius R) meet the box [lo, hi]? Conservative by a hair. */
@@ -713,13 +732,48 @@ static void touch_set_prev(csrbf_touch *t, const uint32_t *blk, size_t k)
     t->nprev = k;
 }
 
-/* Work (vector evaluations: 16 vertices x 1 centre, a block's write counting half of one)
- * above which an evaluation forks its threads: below it a fork/join costs more than it saves
- * (and a frame loop's sleeping workers wake slowly). */
-#define PARALLEL_WORK 2000
-/* Blocks or work items per chunk of the parallel loop (guided schedule: a late thread finds
- * work left, and there are few chunk grabs, each a cache-line transfer between cores). */
-#define EVAL_CHUNK 32
+/* Cost (ITEM_COST units, half a vector evaluation) above which an evaluation forks its
+ * threads: below it (about 8 us of work on one core) a fork/join costs more than it saves,
+ * and a frame loop's sleeping workers wake slowly. */
+#define PARALLEL_COST 6000
+
+/* Split the work into parts of equal cost: part t is items isplit[t] .. isplit[t+1]-1 and,
+ * with gaps (a full write), blocks bsplit[t] .. bsplit[t+1]-1 (a copied gap block costs 1,
+ * so the split may fall inside a gap). ib NULL: ni blocks of equal cost. cum: prefix costs
+ * of the items (ni + 1); total: the whole cost. */
+static void split_work(const uint32_t *ib, const size_t *cum, size_t ni, int gaps, size_t nb,
+                       size_t parts, size_t total, size_t *isplit, size_t *bsplit)
+{
+    isplit[0] = bsplit[0] = 0;
+    for (size_t t = 1; t < parts; t++) {
+        size_t target = total / parts * t + total % parts * t / parts;
+        if (!ib) {
+            isplit[t] = bsplit[t] = ni * t / parts;
+        } else if (!gaps) {
+            size_t lo = 0, hi = ni; /* first item whose prefix cost reaches the target */
+            while (lo < hi) {
+                size_t mid = lo + (hi - lo) / 2;
+                if (cum[mid] < target) lo = mid + 1;
+                else hi = mid;
+            }
+            isplit[t] = lo;
+        } else {
+            /* cost of blocks 0..b-1: items before b plus the gap blocks among them */
+            size_t lo = 0, hi = nb;
+            while (lo < hi) {
+                size_t mid = lo + (hi - lo) / 2, i = lower_bound(ib, ni, mid);
+                if (cum[i] + (mid - i) < target) lo = mid + 1;
+                else hi = mid;
+            }
+            bsplit[t] = lo;
+            isplit[t] = lower_bound(ib, ni, lo);
+        }
+        if (isplit[t] < isplit[t - 1]) isplit[t] = isplit[t - 1];
+        if (bsplit[t] < bsplit[t - 1]) bsplit[t] = bsplit[t - 1];
+    }
+    isplit[parts] = ni;
+    bsplit[parts] = gaps ? nb : ni;
+}
 
 static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *out,
                          unsigned flags, csrbf_eval_stats *st, csrbf_touch *touch)
@@ -770,12 +824,14 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
      * scratch) also holds its own block selection */
     size_t per_thread = align64(m * sizeof(uint32_t));
     size_t blk_m = align64(nb * sizeof(uint64_t)), blk_b = align64(nb * sizeof(uint32_t));
-    size_t mrg = fast && use_tree && !full_write ? blk_m + blk_b : 0;
+    size_t blk_c = align64((nb + 1) * sizeof(size_t));
+    size_t mrg = fast && use_tree && !full_write ? blk_m + blk_b + blk_c : 0;
+    size_t splits = fast ? align64(2 * ((size_t)nt + 1) * sizeof(size_t)) : 0;
     size_t gen_m = !fast && use_tree ? blk_m : 0;
     size_t gen_f = !fast && touch ? align64(2 * nb) : 0;
     size_t gen_t = !fast ? (size_t)nt * per_thread : 0;
     size_t pack = fast ? align64(m * 8 * sizeof(float)) : 0;
-    size_t need = pack + mrg + gen_m + gen_f + gen_t + 64;
+    size_t need = pack + splits + mrg + gen_m + gen_f + gen_t + 64;
     void *mem = NULL;
     int own = 0;
     if (!atomic_flag_test_and_set(&s->scratch_busy)) {
@@ -793,7 +849,9 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
             if (b2) s->sel_blk = b2;
             uint64_t *m2 = b2 ? realloc(s->sel_msk, nb * sizeof *m2) : NULL;
             if (m2) s->sel_msk = m2;
-            if (!b2 || !m2) {
+            size_t *c2 = m2 ? realloc(s->sel_cum, (nb + 1) * sizeof *c2) : NULL;
+            if (c2) s->sel_cum = c2;
+            if (!b2 || !m2 || !c2) {
                 atomic_flag_clear(&s->scratch_busy);
                 return CSRBF_ERR_NOMEM;
             }
@@ -802,15 +860,17 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
         }
         mem = s->scratch;
     } else {
-        need += use_tree ? blk_m + blk_b : 0;
+        need += use_tree ? blk_m + blk_b + blk_c : 0;
         mem = malloc(need);
         if (!mem) return CSRBF_ERR_NOMEM;
         own = 1;
     }
     unsigned char *sp = (unsigned char *)(((uintptr_t)mem + 63) & ~(uintptr_t)63);
     float *cpack = (float *)sp; /* fast path: centre j's x, y, z, alpha x, y, z at 8 j */
-    uint64_t *mrg_msk = (uint64_t *)(sp += pack);
+    size_t *isplit = (size_t *)(sp += pack), *bsplit = isplit + nt + 1;
+    uint64_t *mrg_msk = (uint64_t *)(sp += splits);
     uint32_t *mrg_blk = (uint32_t *)(sp + (mrg ? blk_m : 0));
+    size_t *mrg_cum = (size_t *)(sp + (mrg ? blk_m + blk_b : 0));
     uint64_t *gen_mask = (uint64_t *)(sp += mrg);
     uint8_t *tcur = (uint8_t *)(sp += gen_m);
     uint8_t *tprev = tcur + nb;
@@ -822,14 +882,16 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
 
     /* the block selection: cached in the solver for these points and centres (anchored
      * frames reuse it), else a walk of the block tree */
-    block_select S = {P, fcx, fcy, fcz, r2c, NULL, NULL, 0, 0};
+    block_select S = {P, fcx, fcy, fcz, r2c, NULL, NULL, NULL, 0, 0};
     if (use_tree && own) {
         S.msk = (uint64_t *)(sp += gen_t);
         S.blk = (uint32_t *)(sp + blk_m);
+        S.cum = (size_t *)(sp + blk_m + blk_b);
         select_blocks(&S, avx512, m);
     } else if (use_tree) {
         S.blk = s->sel_blk;
         S.msk = s->sel_msk;
+        S.cum = s->sel_cum;
         if (s->sel_pts == P->stamp && s->sel_ctr == s->centres_stamp) {
             S.k = s->sel_k;
             S.evals = s->sel_evals;
@@ -864,12 +926,13 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
         }
         const uint32_t *ib = NULL;
         const uint64_t *im = NULL;
-        size_t ni = nb, work = nb * m + nb / 2;
+        const size_t *ic = NULL;
+        size_t ni = nb, cost = nb * ITEM_COST(m);
         int gaps = 0, same = 0;
         if (use_tree) {
-            work = S.evals + S.k / 2;
             ib = S.blk;
             im = S.msk;
+            ic = S.cum;
             ni = S.k;
             if (full_write) {
                 gaps = 1;
@@ -877,45 +940,47 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
                 same = 1; /* the last call computed exactly these blocks: nothing to restore */
             } else {
                 const uint32_t *pv = touch->prev;
-                size_t a = 0, c = 0, k = 0, np = touch->nprev;
+                size_t a = 0, c = 0, k = 0, np = touch->nprev, cc = 0;
                 while (a < S.k || c < np) {
+                    mrg_cum[k] = cc;
                     if (c >= np || (a < S.k && S.blk[a] < pv[c])) {
+                        cc += S.cum[a + 1] - S.cum[a];
                         mrg_blk[k] = S.blk[a];
                         mrg_msk[k++] = S.msk[a++];
                     } else if (a >= S.k || pv[c] < S.blk[a]) {
+                        cc += ITEM_COST(0);
                         mrg_blk[k] = pv[c++];
                         mrg_msk[k++] = 0;
                     } else {
+                        cc += S.cum[a + 1] - S.cum[a];
                         mrg_blk[k] = S.blk[a];
                         mrg_msk[k++] = S.msk[a++];
                         c++;
                     }
                 }
+                mrg_cum[k] = cc;
                 ib = mrg_blk;
                 im = mrg_msk;
+                ic = mrg_cum;
                 ni = k;
             }
+            cost = ic[ni] + (gaps ? nb - ni : 0);
         }
         block_stats bs = {0, 0, 0.0f};
-        if (work <= PARALLEL_WORK || nt == 1) {
+        if (cost <= PARALLEL_COST || nt == 1) {
             drive(P, out, ib, im, 0, ni, 0, gaps ? nb : 0, m, cpack, inv_r2, &bs);
         } else {
-            /* chunks of EVAL_CHUNK blocks (or work items), dynamically scheduled */
-            const size_t chunks = ((gaps ? nb : ni) + EVAL_CHUNK - 1) / EVAL_CHUNK;
+            /* one contiguous part per thread, of equal cost: no scheduling during the loop,
+             * and a frame loop with the same supports keeps each part in its core's cache */
+            split_work(ib, ic, ni, gaps, nb, (size_t)nt, cost, isplit, bsplit);
             float maxd2 = 0.0f;
 #pragma omp parallel num_threads(nt) reduction(+ : pairs, moved) reduction(max : maxd2)
             {
                 block_stats ts = {0, 0, 0.0f};
-#pragma omp for schedule(guided)
-                for (size_t c = 0; c < chunks; c++) {
-                    size_t end = gaps ? nb : ni, lo = c * EVAL_CHUNK,
-                           hi = lo + EVAL_CHUNK < end ? lo + EVAL_CHUNK : end;
-                    if (gaps)
-                        drive(P, out, ib, im, lower_bound(ib, ni, lo), lower_bound(ib, ni, hi), lo,
-                              hi, m, cpack, inv_r2, &ts);
-                    else
-                        drive(P, out, ib, im, lo, hi, 0, 0, m, cpack, inv_r2, &ts);
-                }
+                /* a smaller team than asked for takes the parts round robin */
+                for (int t = omp_get_thread_num(); t < nt; t += omp_get_num_threads())
+                    drive(P, out, ib, im, isplit[t], isplit[t + 1], gaps ? bsplit[t] : 0,
+                          gaps ? bsplit[t + 1] : 0, m, cpack, inv_r2, &ts);
                 pairs += ts.pairs;
                 moved += ts.moved;
                 if (ts.maxd2 > maxd2) maxd2 = ts.maxd2;
@@ -962,8 +1027,8 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
         }
         const float pc0 = s->fpc[0], pc1 = s->fpc[1], pc2 = s->fpc[2];
         const float *G = s->fG, *g0 = s->fg0;
-        size_t work = use_tree ? S.evals + S.k / 2 : all_in ? nb * m : nb;
-        int threads = work > PARALLEL_WORK || (m > CSRBF_FAST_MAX_CENTRES && !all_in) ? nt : 1;
+        size_t cost = use_tree ? S.cum[S.k] : all_in ? nb * ITEM_COST(m) : nb * ITEM_COST(1);
+        int threads = cost > PARALLEL_COST || (m > CSRBF_FAST_MAX_CENTRES && !all_in) ? nt : 1;
 #pragma omp parallel num_threads(threads) reduction(+ : pairs, moved) reduction(max : maxd) \
     reduction(min : minjac)
         {

@@ -289,6 +289,7 @@ void csrbf_solver_destroy(csrbf_solver **sp)
     free(s->scratch);
     free(s->sel_blk);
     free(s->sel_msk);
+    free(s->sel_cum);
     free(s);
     *sp = NULL;
 }

@@ -107,6 +107,7 @@ struct csrbf_solver {
     uint64_t sel_pts, sel_ctr;
     uint32_t *sel_blk;       /* sel_cap each: blocks, increasing */
     uint64_t *sel_msk;       /* their centre masks (bit j: centre j) */
+    size_t *sel_cum;         /* sel_cap + 1: prefix costs of the blocks (csrbf_eval.c) */
     size_t sel_k, sel_evals, sel_cap; /* blocks listed, sum of their mask bits */
 
     /* evaluation scratch: one user at a time; concurrent callers allocate their own */

@@ -34,10 +34,14 @@ static void usage(FILE *f)
             "           fingertip distances on the same frame's hands (about 15 s)\n"
             "Columns: pairs = (vertex, centre) pairs inside the support (paper: its count);\n"
             "ms_ref = the brute-force loop (all pairs, scalar double, one thread) for the same\n"
-            "update, or for 'reused' the fresh factor-and-solve; ratio = ms_ref / ms_median.\n"
+            "update, or for 'reused' the fresh factor-and-solve; ratio = ms_ref / ms_median;\n"
+            "ms_touch (table1) = the same update through csrbf_evaluate_touched with statistics\n"
+            "(persistent output: only blocks in a support now or last update are written, the\n"
+            "session's evaluation), checked bit for bit against csrbf_evaluate.\n"
             "  --quick  fewer repetitions (under 40 s)\n"
             "  --json   one JSON object per line: case, mode, vertices, centres, radius, pairs,\n"
-            "           paper_pairs, ms_median, ms_bruteforce, ms_fresh, paper_fps (null: none)\n"
+            "           paper_pairs, ms_median, ms_bruteforce, ms_fresh, ms_touched, paper_fps\n"
+            "           (null: none)\n"
             "  --case NAME  run one case only\n\n"
             "Exit status: 0 done, 64 usage, 70 out of memory, 1 an engine call failed.\n");
 }
