@@ -205,15 +205,17 @@ static inline void copy_base(const csrbf_points *P, float *out, size_t b0, size_
     if (v1 > v0) memcpy(out + 3 * v0, P->xyz + 3 * v0, (v1 - v0) * 3 * sizeof(float));
 }
 
-/* The fast path without polynomial. With blk NULL: blocks i0..i1-1, each with all m centres.
- * Else the work items i0..i1-1: block blk[i] with the centres of the bit mask msk[i] (bit j:
- * centre j, j < 64), or restored to the base where msk[i] is 0; with g0 < g1 the blocks of
- * [g0, g1) that no item names are copied from the base too (a full evaluation: items and
- * gaps cover the range in order). Blocks are computed in registers and stored interleaved.
- * With STATS (a compile-time constant: a second copy of the driver) the pairs in support are
- * counted per lane with one masked add per pair, and moved vertices and the largest squared
- * displacement per block, into *bs (padding lanes excluded). */
-#define AVX512_DRIVER(NAME, PSI, STATS)                                                        \
+/* The fast path without polynomial, one copy per MODE (compile-time): DRIVE_ALL: blocks
+ * i0..i1-1, each with all m centres (blk, msk unused). DRIVE_LIST: the work items i0..i1-1,
+ * block blk[i] with the centres of the bit mask msk[i] (bit j: centre j, j < 64), or restored
+ * to the base where msk[i] is 0. DRIVE_GAPS: as DRIVE_LIST, and the blocks of [g0, g1) that
+ * no item names are copied from the base (a full evaluation: items and gaps cover the range
+ * in order). Blocks are computed in registers and stored interleaved. With STATS (also
+ * compile-time) the pairs in support are counted per lane with one masked add per pair, and
+ * moved vertices and the largest squared displacement per block, into *bs (padding lanes
+ * excluded; the lane counts are flushed every 2^16 blocks so that they cannot overflow). */
+enum { DRIVE_ALL = 0, DRIVE_LIST = 1, DRIVE_GAPS = 2 };
+#define AVX512_DRIVER(NAME, PSI, STATS, MODE)                                                  \
     __attribute__((target("avx512f,fma"))) static void NAME(                                   \
         const csrbf_points *P, float *restrict out, const uint32_t *restrict blk,              \
         const uint64_t *restrict msk, size_t i0, size_t i1, size_t g0, size_t g1, size_t m,    \
@@ -226,15 +228,16 @@ static inline void copy_base(const csrbf_points *P, float *out, size_t b0, size_
         enum { stats_on = STATS };                                                             \
         __m512i pairv = izero;                                                                 \
         __m512 maxd = _mm512_setzero_ps();                                                     \
-        size_t nmoved = 0;                                                                     \
+        size_t nmoved = 0, nflush = 0;                                                         \
         const size_t n = P->n;                                                                 \
-        const int gaps = g0 < g1;                                                              \
         size_t pos = g0;                                                                       \
+        (void)g1;                                                                              \
+        (void)m;                                                                               \
         for (size_t i = i0; i < i1; i++) {                                                     \
-            const size_t b = blk ? blk[i] : i;                                                 \
-            uint64_t mk = blk ? msk[i] : 0;                                                    \
-            if (blk) {                                                                         \
-                if (gaps && pos < b) copy_base(P, out, pos, b);                                \
+            const size_t b = MODE != DRIVE_ALL ? blk[i] : i;                                   \
+            uint64_t mk = MODE != DRIVE_ALL ? msk[i] : 0;                                      \
+            if (MODE != DRIVE_ALL) {                                                           \
+                if (MODE == DRIVE_GAPS && pos < b) copy_base(P, out, pos, b);                  \
                 pos = b + 1;                                                                   \
                 if (!mk) { /* in a support last call, in none now: the base */                 \
                     copy_base(P, out, b, b + 1);                                               \
@@ -247,7 +250,7 @@ static inline void copy_base(const csrbf_points *P, float *out, size_t b0, size_
                          Z = _mm512_loadu_ps(P->s[2] + k0);                                    \
             __m512 sx = _mm512_set1_ps(-0.0f), sy = sx, sz = sx;                               \
             __m512i cntv = izero;                                                              \
-            if (blk) {                                                                         \
+            if (MODE != DRIVE_ALL) {                                                           \
                 while (mk) {                                                                   \
                     const unsigned j = (unsigned)__builtin_ctzll(mk);                          \
                     mk &= mk - 1;                                                              \
@@ -260,6 +263,10 @@ static inline void copy_base(const csrbf_points *P, float *out, size_t b0, size_
                 const __mmask16 valid = nv == B ? (__mmask16)0xFFFF                            \
                                                 : (__mmask16)((1u << nv) - 1u);                \
                 pairv = _mm512_mask_add_epi32(pairv, valid, pairv, cntv);                      \
+                if (!(++nflush & 0xFFFF)) {                                                    \
+                    bs->pairs += (size_t)(uint32_t)_mm512_reduce_add_epi32(pairv);             \
+                    pairv = izero;                                                             \
+                }                                                                              \
                 nmoved += (size_t)__builtin_popcount(                                          \
                     (unsigned)_mm512_mask_cmpgt_epi32_mask(valid, cntv, izero));               \
                 __m512 d2 = _mm512_mul_ps(sx, sx);                                             \
@@ -282,7 +289,7 @@ static inline void copy_base(const csrbf_points *P, float *out, size_t b0, size_
                 }                                                                              \
             }                                                                                  \
         }                                                                                      \
-        if (gaps && pos < g1) copy_base(P, out, pos, g1);                                      \
+        if (MODE == DRIVE_GAPS && pos < g1) copy_base(P, out, pos, g1);                        \
         if (STATS) {                                                                           \
             bs->pairs += (size_t)(uint32_t)_mm512_reduce_add_epi32(pairv);                     \
             bs->moved += nmoved;                                                               \
@@ -299,12 +306,17 @@ static inline void copy_base(const csrbf_points *P, float *out, size_t b0, size_
                   _mm512_fmadd_ps(_mm512_fmadd_ps(_mm512_set1_ps(35.0f / 3.0f), r,             \
                                                   _mm512_set1_ps(6.0f)),                       \
                                   r, one))
-AVX512_DRIVER(drive_psi31_avx512, PSI31_AVX512, 0)
-AVX512_DRIVER(drive_psi30_avx512, T2, 0)
-AVX512_DRIVER(drive_psi32_avx512, PSI32_AVX512, 0)
-AVX512_DRIVER(drive_psi31_avx512_stats, PSI31_AVX512, 1)
-AVX512_DRIVER(drive_psi30_avx512_stats, T2, 1)
-AVX512_DRIVER(drive_psi32_avx512_stats, PSI32_AVX512, 1)
+#define AVX512_DRIVERS(NAME, PSI)                                                              \
+    AVX512_DRIVER(NAME##_all, PSI, 0, DRIVE_ALL)                                               \
+    AVX512_DRIVER(NAME##_list, PSI, 0, DRIVE_LIST)                                             \
+    AVX512_DRIVER(NAME##_gaps, PSI, 0, DRIVE_GAPS)                                             \
+    AVX512_DRIVER(NAME##_all_stats, PSI, 1, DRIVE_ALL)                                         \
+    AVX512_DRIVER(NAME##_list_stats, PSI, 1, DRIVE_LIST)                                       \
+    AVX512_DRIVER(NAME##_gaps_stats, PSI, 1, DRIVE_GAPS)
+AVX512_DRIVERS(drive_psi31, PSI31_AVX512)
+AVX512_DRIVERS(drive_psi30, T2)
+AVX512_DRIVERS(drive_psi32, PSI32_AVX512)
+#undef AVX512_DRIVERS
 #undef PSI31_AVX512
 #undef PSI32_AVX512
 #undef T2
@@ -312,6 +324,15 @@ AVX512_DRIVER(drive_psi32_avx512_stats, PSI32_AVX512, 1)
 typedef void (*drive_fn)(const csrbf_points *, float *, const uint32_t *, const uint64_t *,
                          size_t, size_t, size_t, size_t, size_t, const float *, float,
                          block_stats *);
+
+/* drivers[kernel][stats][mode] */
+static const drive_fn drivers[3][2][3] = {
+    {{drive_psi31_all, drive_psi31_list, drive_psi31_gaps},
+     {drive_psi31_all_stats, drive_psi31_list_stats, drive_psi31_gaps_stats}},
+    {{drive_psi30_all, drive_psi30_list, drive_psi30_gaps},
+     {drive_psi30_all_stats, drive_psi30_list_stats, drive_psi30_gaps_stats}},
+    {{drive_psi32_all, drive_psi32_list, drive_psi32_gaps},
+     {drive_psi32_all_stats, drive_psi32_list_stats, drive_psi32_gaps_stats}}};
 
 /* The centres of mask (bit j: centre j) whose support meets each of the CSRBF_FAN boxes
  * lo/hi[first ..]: lane l of (c0, c1) gets bit j. Float, with the conservative margin r2c;
@@ -908,13 +929,6 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
     double maxd = 0.0, minjac = 1.0;
 #if CSRBF_AVX512 && CSRBF_BLOCK == 16
     if (fast) {
-        drive_fn drive = s->opt.kernel == CSRBF_PSI30   ? drive_psi30_avx512
-                         : s->opt.kernel == CSRBF_PSI32 ? drive_psi32_avx512
-                                                        : drive_psi31_avx512;
-        if (st)
-            drive = s->opt.kernel == CSRBF_PSI30   ? drive_psi30_avx512_stats
-                    : s->opt.kernel == CSRBF_PSI32 ? drive_psi32_avx512_stats
-                                                   : drive_psi31_avx512_stats;
         /* the work list: every block (all in), the selected blocks with the gaps between
          * them copied (a full write), or the selected blocks merged with the last call's
          * (restored where no support holds them now) */
@@ -966,6 +980,8 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
             }
             cost = ic[ni] + (gaps ? nb - ni : 0);
         }
+        const int ki = s->opt.kernel == CSRBF_PSI30 ? 1 : s->opt.kernel == CSRBF_PSI32 ? 2 : 0;
+        const drive_fn drive = drivers[ki][st != NULL][!ib ? DRIVE_ALL : gaps ? DRIVE_GAPS : DRIVE_LIST];
         block_stats bs = {0, 0, 0.0f};
         if (cost <= PARALLEL_COST || nt == 1) {
             drive(P, out, ib, im, 0, ni, 0, gaps ? nb : 0, m, cpack, inv_r2, &bs);
