@@ -978,17 +978,20 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
                 ic = mrg_cum;
                 ni = k;
             }
-            cost = ic[ni] + (gaps ? nb - ni : 0);
+            cost = ic[ni];
         }
         const int ki = s->opt.kernel == CSRBF_PSI30 ? 1 : s->opt.kernel == CSRBF_PSI32 ? 2 : 0;
         const drive_fn drive = drivers[ki][st != NULL][!ib ? DRIVE_ALL : gaps ? DRIVE_GAPS : DRIVE_LIST];
         block_stats bs = {0, 0, 0.0f};
+        /* threads by the computed blocks' cost; copying the gaps (a full write) is bound by
+         * memory and does not count, but is shared out when threads run */
         if (cost <= PARALLEL_COST || nt == 1) {
             drive(P, out, ib, im, 0, ni, 0, gaps ? nb : 0, m, cpack, inv_r2, &bs);
         } else {
             /* one contiguous part per thread, of equal cost: no scheduling during the loop,
              * and a frame loop with the same supports keeps each part in its core's cache */
-            split_work(ib, ic, ni, gaps, nb, (size_t)nt, cost, isplit, bsplit);
+            split_work(ib, ic, ni, gaps, nb, (size_t)nt, cost + (gaps ? nb - ni : 0), isplit,
+                       bsplit);
             float maxd2 = 0.0f;
 #pragma omp parallel num_threads(nt) reduction(+ : pairs, moved) reduction(max : maxd2)
             {
