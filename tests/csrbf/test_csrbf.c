@@ -553,11 +553,11 @@ static void test_selection_cache(void **state)
     for (int round = 0; round < 4; round++) {
         const float *pos = round < 2 ? w : v; /* rounds 2, 3: b holds v's positions */
         if (round == 2) assert_int_equal(csrbf_points_update(b, v), CSRBF_OK);
-        if (round == 3) { /* move one row of b back to w's positions */
+        if (round == 3) { /* move one row of b by 3 in y, under other supports */
             uint32_t rg[2] = {(uint32_t)(nx * 40), (uint32_t)nx};
             float *mix = malloc(nv * 3 * sizeof *mix);
             memcpy(mix, v, nv * 3 * sizeof *mix);
-            memcpy(mix + 3 * nx * 40, w + 3 * nx * 40, nx * 3 * sizeof *mix);
+            for (size_t i = nx * 40; i < nx * 41; i++) mix[3 * i + 1] += 3.0f;
             assert_int_equal(csrbf_points_update_ranges(b, mix, rg, 1), CSRBF_OK);
             assert_int_equal(csrbf_points_create(nv, mix, &fresh), CSRBF_OK);
             free(mix);
