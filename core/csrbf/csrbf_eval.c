@@ -1,7 +1,11 @@
-/* csrbf_evaluate: T(x) at every vertex. Blocks of CSRBF_BLOCK Morton-sorted vertices are
- * matched against the centres whose support meets the block's box; within a block the loop
- * runs over the selected centres and vectorises over the vertices (SIMD clones for AVX-512,
- * AVX2+FMA and the baseline, picked at load time). Blocks run in parallel with OpenMP. */
+/* csrbf_evaluate: T(x) at every vertex. Blocks of CSRBF_BLOCK consecutive vertices are
+ * matched against the centres whose support meets the block's box, found through the points'
+ * block tree for all centres at once (64-bit masks, kept in the solver while the centres and
+ * the points stay) or, beyond 64 centres, the centre grid; within a block the loop runs over
+ * the selected centres and vectorises over the vertices (AVX-512 intrinsics, else SIMD clones
+ * for AVX2+FMA and the baseline, picked at load time). Blocks run in parallel with OpenMP,
+ * one contiguous part of equal cost per thread. csrbf_evaluate_touched writes only the blocks
+ * in a support now or at its last call. */
 #include "internal.h"
 
 #include <math.h>
