@@ -209,6 +209,33 @@ static inline void copy_base(const csrbf_points *P, float *out, size_t b0, size_
     if (v1 > v0) memcpy(out + 3 * v0, P->xyz + 3 * v0, (v1 - v0) * 3 * sizeof(float));
 }
 
+/* A partial block (the mesh's last, nv < B vertices): base + displacement, and with stats its
+ * pairs, moved vertices and largest squared displacement straight into *bs. Kept out of the
+ * drivers' loop (and its registers). */
+__attribute__((target("avx512f,fma"), noinline, cold)) static void
+finish_partial(float *o, const float *x, const float *y, const float *z, size_t nv, __m512 sx,
+               __m512 sy, __m512 sz, __m512i cntv, int stats, block_stats *bs)
+{
+    _Alignas(64) float acc[3][B];
+    _Alignas(64) int32_t cnt[B];
+    _mm512_store_ps(acc[0], sx);
+    _mm512_store_ps(acc[1], sy);
+    _mm512_store_ps(acc[2], sz);
+    _mm512_store_si512(cnt, cntv);
+    for (size_t v = 0; v < nv; v++) {
+        o[3 * v] = x[v] + acc[0][v];
+        o[3 * v + 1] = y[v] + acc[1][v];
+        o[3 * v + 2] = z[v] + acc[2][v];
+        if (stats) {
+            bs->pairs += (size_t)cnt[v];
+            bs->moved += cnt[v] > 0;
+            /* the same operations as the full blocks' (mul, fma, fma), lane by lane */
+            float d2 = fmaf(acc[2][v], acc[2][v], fmaf(acc[1][v], acc[1][v], acc[0][v] * acc[0][v]));
+            if (d2 > bs->maxd2) bs->maxd2 = d2;
+        }
+    }
+}
+
 /* The fast path without polynomial, one copy per MODE (compile-time): DRIVE_ALL: blocks
  * i0..i1-1, each with all m centres (blk, msk unused). DRIVE_LIST: the work items i0..i1-1,
  * block blk[i] with the centres of the bit mask msk[i] (bit j: centre j, j < 64), or restored
@@ -232,8 +259,9 @@ enum { DRIVE_ALL = 0, DRIVE_LIST = 1, DRIVE_GAPS = 2 };
         enum { stats_on = STATS };                                                             \
         __m512i pairv = izero;                                                                 \
         __m512 maxd = _mm512_setzero_ps();                                                     \
-        size_t nmoved = 0, nflush = 0;                                                         \
+        size_t nmoved = 0;                                                                     \
         const size_t n = P->n;                                                                 \
+        const float *const px = P->s[0], *const py = P->s[1], *const pz = P->s[2];             \
         size_t pos = g0;                                                                       \
         (void)g1;                                                                              \
         (void)m;                                                                               \
@@ -250,8 +278,8 @@ enum { DRIVE_ALL = 0, DRIVE_LIST = 1, DRIVE_GAPS = 2 };
             }                                                                                  \
             const size_t k0 = b * B, nv = k0 + B <= n ? B : n - k0;                            \
             float *o = out + 3 * k0;                                                           \
-            const __m512 X = _mm512_loadu_ps(P->s[0] + k0), Y = _mm512_loadu_ps(P->s[1] + k0), \
-                         Z = _mm512_loadu_ps(P->s[2] + k0);                                    \
+            const __m512 X = _mm512_loadu_ps(px + k0), Y = _mm512_loadu_ps(py + k0),           \
+                         Z = _mm512_loadu_ps(pz + k0);                                         \
             __m512 sx = _mm512_set1_ps(-0.0f), sy = sx, sz = sx;                               \
             __m512i cntv = izero;                                                              \
             if (MODE != DRIVE_ALL) {                                                           \
@@ -263,34 +291,24 @@ enum { DRIVE_ALL = 0, DRIVE_LIST = 1, DRIVE_GAPS = 2 };
             } else {                                                                           \
                 for (size_t j = 0; j < m; j++) AVX512_PAIR(PSI, j, 0);                         \
             }                                                                                  \
-            if (STATS) {                                                                       \
-                const __mmask16 valid = nv == B ? (__mmask16)0xFFFF                            \
-                                                : (__mmask16)((1u << nv) - 1u);                \
-                pairv = _mm512_mask_add_epi32(pairv, valid, pairv, cntv);                      \
-                if (!(++nflush & 0xFFFF)) {                                                    \
-                    bs->pairs += (size_t)(uint32_t)_mm512_reduce_add_epi32(pairv);             \
-                    pairv = izero;                                                             \
-                }                                                                              \
-                nmoved += (size_t)__builtin_popcount(                                          \
-                    (unsigned)_mm512_mask_cmpgt_epi32_mask(valid, cntv, izero));               \
-                __m512 d2 = _mm512_mul_ps(sx, sx);                                             \
-                d2 = _mm512_fmadd_ps(sy, sy, d2);                                              \
-                d2 = _mm512_fmadd_ps(sz, sz, d2);                                              \
-                maxd = _mm512_mask_max_ps(maxd, valid, maxd, d2);                              \
-            }                                                                                  \
             if (nv == B) {                                                                     \
+                if (STATS) {                                                                   \
+                    pairv = _mm512_add_epi32(pairv, cntv);                                     \
+                    nmoved += (size_t)__builtin_popcount(                                      \
+                        (unsigned)_mm512_cmpgt_epi32_mask(cntv, izero));                       \
+                    __m512 d2 = _mm512_mul_ps(sx, sx);                                         \
+                    d2 = _mm512_fmadd_ps(sy, sy, d2);                                          \
+                    d2 = _mm512_fmadd_ps(sz, sz, d2);                                          \
+                    maxd = _mm512_max_ps(maxd, d2);                                            \
+                }                                                                              \
                 interleave_avx512(o, _mm512_add_ps(X, sx), _mm512_add_ps(Y, sy),               \
                                   _mm512_add_ps(Z, sz));                                       \
             } else {                                                                           \
-                _Alignas(64) float acc[3][B];                                                  \
-                _mm512_store_ps(acc[0], sx);                                                   \
-                _mm512_store_ps(acc[1], sy);                                                   \
-                _mm512_store_ps(acc[2], sz);                                                   \
-                for (size_t v = 0; v < nv; v++) {                                              \
-                    o[3 * v] = P->s[0][k0 + v] + acc[0][v];                                    \
-                    o[3 * v + 1] = P->s[1][k0 + v] + acc[1][v];                                \
-                    o[3 * v + 2] = P->s[2][k0 + v] + acc[2][v];                                \
-                }                                                                              \
+                finish_partial(o, px + k0, py + k0, pz + k0, nv, sx, sy, sz, cntv, STATS, bs); \
+            }                                                                                  \
+            if (STATS && !((i - i0 + 1) & 0xFFFF)) { /* lane counts stay far from 2^32 */      \
+                bs->pairs += (size_t)(uint32_t)_mm512_reduce_add_epi32(pairv);                 \
+                pairv = izero;                                                                 \
             }                                                                                  \
         }                                                                                      \
         if (MODE == DRIVE_GAPS && pos < g1) copy_base(P, out, pos, g1);                        \
@@ -446,7 +464,7 @@ CSRBF_CLONES static void group_masks_c(const float *const lo[3], const float *co
 typedef struct block_select {
     const csrbf_points *P;
     const float *cx, *cy, *cz;
-    float r2c;
+    float r2c, inv_r2; /* box test limit; the kernel's 1 / R^2 (AVX-512 refinement) */
     uint32_t *blk;
     uint64_t *msk;
     size_t *cum;     /* k + 1: cum[i] = cost (ITEM_COST) of items 0..i-1, for splitting */
@@ -524,6 +542,49 @@ __attribute__((target("popcnt"))) static size_t count_bits_popcnt(const uint64_t
         e += bits;
     }
     cum[k] = c;
+    return e;
+}
+
+/* Refine the selection to the pairs the kernel uses: a centre whose support holds none of a
+ * block's 16 vertices (its box meets the support, its vertices do not: the ends of grid rows,
+ * the rims of supports) is dropped from the block's mask, and a block left with none from the
+ * list. The test is the AVX-512 kernels' own (same operations on the same floats), so the
+ * dropped pairs are exactly those the kernels would mask off entirely: results are unchanged
+ * (such a block's output is its base bit for bit either way), the kernels skip fewer empty
+ * pairs. Done once on a kept selection's second use (anchored frames), not on a selection
+ * used once (unanchored frames), where it would cost about a third of the evaluation. Then
+ * the prefix costs; returns the pairs kept. */
+__attribute__((target("avx512f,fma,popcnt"))) static size_t refine_avx512(block_select *S)
+{
+    const csrbf_points *P = S->P;
+    const __m512 one = _mm512_set1_ps(1.0f), ir2 = _mm512_set1_ps(S->inv_r2);
+    size_t e = 0, c = 0, k = 0;
+    for (size_t i = 0; i < S->k; i++) {
+        const size_t k0 = (size_t)S->blk[i] * B;
+        const __m512 X = _mm512_loadu_ps(P->s[0] + k0), Y = _mm512_loadu_ps(P->s[1] + k0),
+                     Z = _mm512_loadu_ps(P->s[2] + k0);
+        uint64_t keep = 0;
+        for (uint64_t mk = S->msk[i]; mk; mk &= mk - 1) {
+            const unsigned j = (unsigned)__builtin_ctzll(mk);
+            __m512 dx = _mm512_sub_ps(X, _mm512_set1_ps(S->cx[j]));
+            __m512 dy = _mm512_sub_ps(Y, _mm512_set1_ps(S->cy[j]));
+            __m512 dz = _mm512_sub_ps(Z, _mm512_set1_ps(S->cz[j]));
+            __m512 r2 = _mm512_mul_ps(dx, dx);
+            r2 = _mm512_fmadd_ps(dy, dy, r2);
+            r2 = _mm512_fmadd_ps(dz, dz, r2);
+            r2 = _mm512_mul_ps(r2, ir2);
+            if (_mm512_cmp_ps_mask(r2, one, _CMP_LT_OQ)) keep |= 1ull << j;
+        }
+        if (!keep) continue;
+        const size_t bits = (size_t)__builtin_popcountll(keep);
+        S->blk[k] = S->blk[i];
+        S->msk[k] = keep;
+        S->cum[k++] = c;
+        c += ITEM_COST(bits);
+        e += bits;
+    }
+    S->k = k;
+    S->cum[k] = c;
     return e;
 }
 #endif
@@ -643,8 +704,8 @@ struct csrbf_touch {
     uint32_t *prev;             /* blocks the last call computed from the kernel, increasing */
     size_t nprev;
     int full;                   /* the next call writes every block */
-    uint64_t sel_pts, sel_ctr;  /* prev is exactly the solver's block selection for these
-                                   points and centres stamps (0: it is not) */
+    uint64_t sel_id;            /* prev is exactly the solver's kept selection of this id
+                                   (0: it is not) */
     int ranges_sel;             /* and the ranges are exactly that selection's */
     uint32_t *ranges;           /* 2 x nranges: first vertex, count */
     size_t nranges;
@@ -698,7 +759,7 @@ void csrbf_touch_commit(csrbf_touch *t)
     if (!t) return;
     t->nprev = 0;
     t->nranges = 0;
-    t->sel_pts = t->sel_ctr = 0;
+    t->sel_id = 0;
     t->ranges_sel = 0;
 }
 
@@ -761,6 +822,9 @@ static void touch_set_prev(csrbf_touch *t, const uint32_t *blk, size_t k)
  * threads: below it (about 8 us of work on one core) a fork/join costs more than it saves,
  * and a frame loop's sleeping workers wake slowly. */
 #define PARALLEL_COST 6000
+
+/* Parts per thread when a selection's costs are estimates (scheduled dynamically). */
+#define SPLIT_PARTS 8
 
 /* Split the work into parts of equal cost: part t is items isplit[t] .. isplit[t+1]-1 and,
  * with gaps (a full write), blocks bsplit[t] .. bsplit[t+1]-1 (a copied gap block costs 1,
@@ -851,7 +915,7 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
     size_t blk_m = align64(nb * sizeof(uint64_t)), blk_b = align64(nb * sizeof(uint32_t));
     size_t blk_c = align64((nb + 1) * sizeof(size_t));
     size_t mrg = fast && use_tree && !full_write ? blk_m + blk_b + blk_c : 0;
-    size_t splits = fast ? align64(2 * ((size_t)nt + 1) * sizeof(size_t)) : 0;
+    size_t splits = fast ? align64(2 * (SPLIT_PARTS * (size_t)nt + 1) * sizeof(size_t)) : 0;
     size_t gen_m = !fast && use_tree ? blk_m : 0;
     size_t gen_f = !fast && touch ? align64(2 * nb) : 0;
     size_t gen_t = !fast ? (size_t)nt * per_thread : 0;
@@ -892,7 +956,7 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
     }
     unsigned char *sp = (unsigned char *)(((uintptr_t)mem + 63) & ~(uintptr_t)63);
     float *cpack = (float *)sp; /* fast path: centre j's x, y, z, alpha x, y, z at 8 j */
-    size_t *isplit = (size_t *)(sp += pack), *bsplit = isplit + nt + 1;
+    size_t *isplit = (size_t *)(sp += pack), *bsplit = isplit + SPLIT_PARTS * (size_t)nt + 1;
     uint64_t *mrg_msk = (uint64_t *)(sp += splits);
     uint32_t *mrg_blk = (uint32_t *)(sp + (mrg ? blk_m : 0));
     size_t *mrg_cum = (size_t *)(sp + (mrg ? blk_m + blk_b : 0));
@@ -907,7 +971,7 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
 
     /* the block selection: cached in the solver for these points and centres (anchored
      * frames reuse it), else a walk of the block tree */
-    block_select S = {P, fcx, fcy, fcz, r2c, NULL, NULL, NULL, 0, 0};
+    block_select S = {P, fcx, fcy, fcz, r2c, inv_r2, NULL, NULL, NULL, 0, 0};
     if (use_tree && own) {
         S.msk = (uint64_t *)(sp += gen_t);
         S.blk = (uint32_t *)(sp + blk_m);
@@ -920,12 +984,23 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
         if (s->sel_pts == P->stamp && s->sel_ctr == s->centres_stamp) {
             S.k = s->sel_k;
             S.evals = s->sel_evals;
+#if CSRBF_AVX512 && CSRBF_BLOCK == 16
+            if (avx512 && !s->sel_refined) { /* used twice: worth refining once */
+                S.evals = refine_avx512(&S);
+                s->sel_k = S.k;
+                s->sel_evals = S.evals;
+                s->sel_refined = 1;
+                s->sel_id = csrbf_new_stamp();
+            }
+#endif
         } else {
             select_blocks(&S, avx512, m);
             s->sel_k = S.k;
             s->sel_evals = S.evals;
             s->sel_pts = P->stamp;
             s->sel_ctr = s->centres_stamp;
+            s->sel_refined = 0;
+            s->sel_id = csrbf_new_stamp();
         }
     }
 
@@ -954,7 +1029,7 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
             ni = S.k;
             if (full_write) {
                 gaps = 1;
-            } else if (touch->sel_pts == P->stamp && touch->sel_ctr == s->centres_stamp) {
+            } else if (!own && touch->sel_id == s->sel_id) {
                 same = 1; /* the last call computed exactly these blocks: nothing to restore */
             } else {
                 const uint32_t *pv = touch->prev;
@@ -992,18 +1067,30 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
         if (cost <= PARALLEL_COST || nt == 1) {
             drive(P, out, ib, im, 0, ni, 0, gaps ? nb : 0, m, cpack, inv_r2, &bs);
         } else {
-            /* one contiguous part per thread, of equal cost: no scheduling during the loop,
-             * and a frame loop with the same supports keeps each part in its core's cache */
-            split_work(ib, ic, ni, gaps, nb, (size_t)nt, cost + (gaps ? nb - ni : 0), isplit,
+            /* parts of equal cost. With a refined selection (anchored frames: the costs are
+             * exact) or all centres everywhere, one contiguous part per thread: no scheduling
+             * during the loop, and frame after frame the same blocks stay in the same core's
+             * cache. A selection used once (unanchored) still counts the pairs its boxes only
+             * suggest: SPLIT_PARTS parts per thread, taken dynamically. */
+            const int steady = !use_tree || s->sel_refined || own;
+            const size_t parts = steady ? (size_t)nt : SPLIT_PARTS * (size_t)nt;
+            split_work(ib, ic, ni, gaps, nb, parts, cost + (gaps ? nb - ni : 0), isplit,
                        bsplit);
             float maxd2 = 0.0f;
 #pragma omp parallel num_threads(nt) reduction(+ : pairs, moved) reduction(max : maxd2)
             {
                 block_stats ts = {0, 0, 0.0f};
-                /* a smaller team than asked for takes the parts round robin */
-                for (int t = omp_get_thread_num(); t < nt; t += omp_get_num_threads())
-                    drive(P, out, ib, im, isplit[t], isplit[t + 1], gaps ? bsplit[t] : 0,
-                          gaps ? bsplit[t + 1] : 0, m, cpack, inv_r2, &ts);
+                if (steady) { /* a smaller team than asked for takes the parts round robin */
+                    for (size_t t = (size_t)omp_get_thread_num(); t < parts;
+                         t += (size_t)omp_get_num_threads())
+                        drive(P, out, ib, im, isplit[t], isplit[t + 1], gaps ? bsplit[t] : 0,
+                              gaps ? bsplit[t + 1] : 0, m, cpack, inv_r2, &ts);
+                } else {
+#pragma omp for schedule(dynamic, 1)
+                    for (size_t t = 0; t < parts; t++)
+                        drive(P, out, ib, im, isplit[t], isplit[t + 1], gaps ? bsplit[t] : 0,
+                              gaps ? bsplit[t + 1] : 0, m, cpack, inv_r2, &ts);
+                }
                 pairs += ts.pairs;
                 moved += ts.moved;
                 if (ts.maxd2 > maxd2) maxd2 = ts.maxd2;
@@ -1018,7 +1105,7 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
                 ranges_all(touch, n);
                 for (size_t b = 0; b < nb; b++) touch->prev[b] = (uint32_t)b;
                 touch->nprev = nb;
-                touch->sel_pts = touch->sel_ctr = 0;
+                touch->sel_id = 0;
                 touch->ranges_sel = 0;
             } else {
                 if (full_write) {
@@ -1030,8 +1117,7 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
                 }
                 if (!same) touch_set_prev(touch, S.blk, S.k);
                 /* a selection computed into the caller's own memory is not the solver's */
-                touch->sel_pts = own ? 0 : P->stamp;
-                touch->sel_ctr = own ? 0 : s->centres_stamp;
+                touch->sel_id = own ? 0 : s->sel_id;
             }
         }
     } else
@@ -1133,7 +1219,7 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
             }
             touch->nranges = nr;
             touch->nprev = k;
-            touch->sel_pts = touch->sel_ctr = 0;
+            touch->sel_id = 0;
             touch->ranges_sel = 0;
         }
     }

@@ -105,6 +105,8 @@ struct csrbf_solver {
      * same points) reuse it. Used only by the holder of scratch_busy. */
     uint64_t centres_stamp;  /* a fresh csrbf_new_stamp() at every set_start_points */
     uint64_t sel_pts, sel_ctr;
+    uint64_t sel_id;         /* a fresh stamp whenever the kept selection changes */
+    int sel_refined;         /* the kept selection has been refined (csrbf_eval.c) */
     uint32_t *sel_blk;       /* sel_cap each: blocks, increasing */
     uint64_t *sel_msk;       /* their centre masks (bit j: centre j) */
     size_t *sel_cum;         /* sel_cap + 1: prefix costs of the blocks (csrbf_eval.c) */
