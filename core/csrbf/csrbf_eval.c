@@ -500,15 +500,25 @@ static void select_visit_c(block_select *S, int level, size_t first, uint64_t ma
 }
 
 #if CSRBF_AVX512 && CSRBF_BLOCK == 16
-/* select_visit_c with AVX-512: the leaves' masks and block numbers compress-stored. */
+/* select_visit_c with AVX-512, restricted to the blocks [lo, hi): the leaves' masks and
+ * block numbers compress-stored. */
 __attribute__((target("avx512f,fma,popcnt"))) static void
-select_visit_avx512(block_select *S, int level, size_t first, uint64_t mask)
+select_visit_avx512(block_select *S, int level, size_t first, uint64_t mask, size_t lo,
+                    size_t hi)
 {
     const csrbf_points *P = S->P;
+    /* the children (nodes first..first+15 of this level) holding blocks of [lo, hi) */
+    _Static_assert(CSRBF_FAN == 16, "node n of level l holds blocks n 16^l .. (n+1) 16^l - 1");
+    const unsigned sh = 4u * (unsigned)level;
+    const size_t n0 = lo >> sh, n1 = ((hi - 1) >> sh) + 1; /* nodes n0..n1-1 hold [lo, hi) */
+    if (n1 <= first || n0 >= first + CSRBF_FAN) return;
+    const size_t l0 = n0 > first ? n0 - first : 0,
+                 l1 = n1 - first < CSRBF_FAN ? n1 - first : CSRBF_FAN;
+    const __mmask16 range = (__mmask16)(((1u << l1) - 1u) & ~((1u << l0) - 1u));
     __m512i c0, c1;
     __mmask16 any = group_masks_avx512((const float *const *)P->tlo[level],
                                        (const float *const *)P->thi[level], first, mask, S->cx,
-                                       S->cy, S->cz, S->r2c, &c0, &c1);
+                                       S->cy, S->cz, S->r2c, &c0, &c1) & range;
     if (!any) return;
     if (level == 0) {
         size_t k = S->k;
@@ -527,7 +537,7 @@ select_visit_avx512(block_select *S, int level, size_t first, uint64_t mask)
     _mm512_store_si512(cm + 8, c1);
     for (unsigned a = any; a; a &= a - 1) {
         const unsigned l = (unsigned)__builtin_ctz(a);
-        select_visit_avx512(S, level - 1, (first + l) * CSRBF_FAN, cm[l]);
+        select_visit_avx512(S, level - 1, (first + l) * CSRBF_FAN, cm[l], lo, hi);
     }
 }
 
@@ -609,7 +619,7 @@ static void select_blocks(block_select *S, int avx512, size_t m)
     S->k = 0;
 #if CSRBF_AVX512 && CSRBF_BLOCK == 16
     if (avx512) {
-        select_visit_avx512(S, S->P->tlevels - 1, 0, all);
+        select_visit_avx512(S, S->P->tlevels - 1, 0, all, 0, S->P->nblocks);
         S->evals = count_bits_popcnt(S->msk, S->k, S->cum);
         return;
     }
@@ -823,8 +833,36 @@ static void touch_set_prev(csrbf_touch *t, const uint32_t *blk, size_t k)
  * and a frame loop's sleeping workers wake slowly. */
 #define PARALLEL_COST 6000
 
-/* Parts per thread when a selection's costs are estimates (scheduled dynamically). */
-#define SPLIT_PARTS 8
+/* Parts per thread of a fused walk-and-evaluate (scheduled dynamically: the costs of the
+ * parts are not known before their walks). */
+#ifndef SPLIT_PARTS
+#define SPLIT_PARTS 4
+#endif
+
+/* Vertex-centre lane pairs (estimated, support_share) above which a full write whose
+ * selection is not kept walks the tree and evaluates in parallel parts. */
+#define PARALLEL_LANES 50000
+
+/* sel_k of a selection seen once and not kept (the next use with the same key keeps it). */
+#define SEL_PENDING SIZE_MAX
+
+/* The summed share of the vertex box that the centres' support cubes cover, axis by axis: n
+ * times it estimates the vertex-centre pairs to test before any selection. O(m). */
+static double support_share(const csrbf_solver *s, const csrbf_points *P)
+{
+    double est = 0.0;
+    for (size_t i = 0; i < s->m; i++) {
+        double frac = 1.0;
+        for (int a = 0; a < 3; a++) {
+            double ext = P->bhi[a] - P->blo[a], c = s->c[3 * i + a];
+            if (ext <= 0.0) continue;
+            double ov = fmin(c + s->R, P->bhi[a]) - fmax(c - s->R, P->blo[a]);
+            frac *= ov > 0.0 ? ov / ext : 0.0;
+        }
+        est += frac;
+    }
+    return est;
+}
 
 /* Split the work into parts of equal cost: part t is items isplit[t] .. isplit[t+1]-1 and,
  * with gaps (a full write), blocks bsplit[t] .. bsplit[t+1]-1 (a copied gap block costs 1,
@@ -915,12 +953,17 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
     size_t blk_m = align64(nb * sizeof(uint64_t)), blk_b = align64(nb * sizeof(uint32_t));
     size_t blk_c = align64((nb + 1) * sizeof(size_t));
     size_t mrg = fast && use_tree && !full_write ? blk_m + blk_b + blk_c : 0;
-    size_t splits = fast ? align64(2 * (SPLIT_PARTS * (size_t)nt + 1) * sizeof(size_t)) : 0;
+    size_t splits = fast ? align64(2 * ((size_t)nt + 1) * sizeof(size_t)) : 0;
     size_t gen_m = !fast && use_tree ? blk_m : 0;
     size_t gen_f = !fast && touch ? align64(2 * nb) : 0;
     size_t gen_t = !fast ? (size_t)nt * per_thread : 0;
     size_t pack = fast ? align64(m * 8 * sizeof(float)) : 0;
-    size_t need = pack + splits + mrg + gen_m + gen_f + gen_t + 64;
+    /* a fused walk-and-evaluate (full writes, selection not kept): per thread, the selection
+     * of one part of the mesh */
+    const size_t fparts = SPLIT_PARTS * (size_t)nt, fmax = nb / fparts + 2;
+    size_t fthr = align64(fmax * sizeof(uint64_t)) + align64(fmax * sizeof(uint32_t));
+    size_t fsz = fast && use_tree && !touch && nt > 1 ? (size_t)nt * fthr : 0;
+    size_t need = pack + splits + mrg + gen_m + gen_f + gen_t + fsz + 64;
     void *mem = NULL;
     int own = 0;
     if (!atomic_flag_test_and_set(&s->scratch_busy)) {
@@ -956,7 +999,7 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
     }
     unsigned char *sp = (unsigned char *)(((uintptr_t)mem + 63) & ~(uintptr_t)63);
     float *cpack = (float *)sp; /* fast path: centre j's x, y, z, alpha x, y, z at 8 j */
-    size_t *isplit = (size_t *)(sp += pack), *bsplit = isplit + SPLIT_PARTS * (size_t)nt + 1;
+    size_t *isplit = (size_t *)(sp += pack), *bsplit = isplit + (size_t)nt + 1;
     uint64_t *mrg_msk = (uint64_t *)(sp += splits);
     uint32_t *mrg_blk = (uint32_t *)(sp + (mrg ? blk_m : 0));
     size_t *mrg_cum = (size_t *)(sp + (mrg ? blk_m + blk_b : 0));
@@ -964,6 +1007,8 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
     uint8_t *tcur = (uint8_t *)(sp += gen_m);
     uint8_t *tprev = tcur + nb;
     unsigned char *tbase = (sp += gen_f);
+    unsigned char *fbuf = tbase + gen_t;  /* fused walk: fthr bytes per thread */
+    unsigned char *fbase = fbuf + fsz;    /* a concurrent caller's own selection */
 
     const float inv_r2 = (float)(1.0 / R2), r2c = (float)(R2 * (1.0 + 1e-5)) + 1e-30f;
     const float *fcx = s->fc[0], *fcy = s->fc[1], *fcz = s->fc[2];
@@ -972,8 +1017,9 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
     /* the block selection: cached in the solver for these points and centres (anchored
      * frames reuse it), else a walk of the block tree */
     block_select S = {P, fcx, fcy, fcz, r2c, inv_r2, NULL, NULL, NULL, 0, 0};
+    int fused = 0;
     if (use_tree && own) {
-        S.msk = (uint64_t *)(sp += gen_t);
+        S.msk = (uint64_t *)(sp = fbase);
         S.blk = (uint32_t *)(sp + blk_m);
         S.cum = (size_t *)(sp + blk_m + blk_b);
         select_blocks(&S, avx512, m);
@@ -981,27 +1027,37 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
         S.blk = s->sel_blk;
         S.msk = s->sel_msk;
         S.cum = s->sel_cum;
-        if (s->sel_pts == P->stamp && s->sel_ctr == s->centres_stamp) {
+        const int seen = s->sel_pts == P->stamp && s->sel_ctr == s->centres_stamp;
+        int changed = 1;
+        if (seen && s->sel_k != SEL_PENDING) {
             S.k = s->sel_k;
             S.evals = s->sel_evals;
-#if CSRBF_AVX512 && CSRBF_BLOCK == 16
-            if (avx512 && !s->sel_refined) { /* used twice: worth refining once */
-                S.evals = refine_avx512(&S);
-                s->sel_k = S.k;
-                s->sel_evals = S.evals;
-                s->sel_refined = 1;
-                s->sel_id = csrbf_new_stamp();
-            }
-#endif
+            changed = 0;
+        } else if (!seen && fast && fsz &&
+                   (double)n * support_share(s, P) > (double)PARALLEL_LANES) {
+            /* a full write with a selection not seen before (unanchored frames): each thread
+             * walks the tree for its parts of the mesh and evaluates them at once (below);
+             * the selection is kept only if it is used again */
+            fused = 1;
+            s->sel_k = SEL_PENDING;
         } else {
             select_blocks(&S, avx512, m);
             s->sel_k = S.k;
             s->sel_evals = S.evals;
-            s->sel_pts = P->stamp;
-            s->sel_ctr = s->centres_stamp;
             s->sel_refined = 0;
-            s->sel_id = csrbf_new_stamp();
         }
+#if CSRBF_AVX512 && CSRBF_BLOCK == 16
+        if (seen && avx512 && !s->sel_refined && !fused) { /* used twice: refine it once */
+            S.evals = refine_avx512(&S);
+            s->sel_k = S.k;
+            s->sel_evals = S.evals;
+            s->sel_refined = 1;
+            changed = 1;
+        }
+#endif
+        if (changed) s->sel_id = csrbf_new_stamp();
+        s->sel_pts = P->stamp;
+        s->sel_ctr = s->centres_stamp;
     }
 
     size_t pairs = 0, moved = 0;
@@ -1017,107 +1073,125 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
             q[3] = fax[j], q[4] = fay[j], q[5] = faz[j];
             q[6] = q[7] = 0.0f;
         }
-        const uint32_t *ib = NULL;
-        const uint64_t *im = NULL;
-        const size_t *ic = NULL;
-        size_t ni = nb, cost = nb * ITEM_COST(m);
-        int gaps = 0, same = 0;
-        if (use_tree) {
-            ib = S.blk;
-            im = S.msk;
-            ic = S.cum;
-            ni = S.k;
-            if (full_write) {
-                gaps = 1;
-            } else if (!own && touch->sel_id == s->sel_id) {
-                same = 1; /* the last call computed exactly these blocks: nothing to restore */
-            } else {
-                const uint32_t *pv = touch->prev;
-                size_t a = 0, c = 0, k = 0, np = touch->nprev, cc = 0;
-                while (a < S.k || c < np) {
-                    mrg_cum[k] = cc;
-                    if (c >= np || (a < S.k && S.blk[a] < pv[c])) {
-                        cc += S.cum[a + 1] - S.cum[a];
-                        mrg_blk[k] = S.blk[a];
-                        mrg_msk[k++] = S.msk[a++];
-                    } else if (a >= S.k || pv[c] < S.blk[a]) {
-                        cc += ITEM_COST(0);
-                        mrg_blk[k] = pv[c++];
-                        mrg_msk[k++] = 0;
-                    } else {
-                        cc += S.cum[a + 1] - S.cum[a];
-                        mrg_blk[k] = S.blk[a];
-                        mrg_msk[k++] = S.msk[a++];
-                        c++;
-                    }
-                }
-                mrg_cum[k] = cc;
-                ib = mrg_blk;
-                im = mrg_msk;
-                ic = mrg_cum;
-                ni = k;
-            }
-            cost = ic[ni];
-        }
         const int ki = s->opt.kernel == CSRBF_PSI30 ? 1 : s->opt.kernel == CSRBF_PSI32 ? 2 : 0;
-        const drive_fn drive = drivers[ki][st != NULL][!ib ? DRIVE_ALL : gaps ? DRIVE_GAPS : DRIVE_LIST];
-        block_stats bs = {0, 0, 0.0f};
-        /* threads by the computed blocks' cost; copying the gaps (a full write) is bound by
-         * memory and does not count, but is shared out when threads run */
-        if (cost <= PARALLEL_COST || nt == 1) {
-            drive(P, out, ib, im, 0, ni, 0, gaps ? nb : 0, m, cpack, inv_r2, &bs);
-        } else {
-            /* parts of equal cost. With a refined selection (anchored frames: the costs are
-             * exact) or all centres everywhere, one contiguous part per thread: no scheduling
-             * during the loop, and frame after frame the same blocks stay in the same core's
-             * cache. A selection used once (unanchored) still counts the pairs its boxes only
-             * suggest: SPLIT_PARTS parts per thread, taken dynamically. */
-            const int steady = !use_tree || s->sel_refined || own;
-            const size_t parts = steady ? (size_t)nt : SPLIT_PARTS * (size_t)nt;
-            split_work(ib, ic, ni, gaps, nb, parts, cost + (gaps ? nb - ni : 0), isplit,
-                       bsplit);
+        if (fused) {
+            const drive_fn drive = drivers[ki][st != NULL][DRIVE_GAPS];
+            const int top = P->tlevels - 1;
+            const uint64_t all = m >= 64 ? ~0ull : (1ull << m) - 1;
             float maxd2 = 0.0f;
 #pragma omp parallel num_threads(nt) reduction(+ : pairs, moved) reduction(max : maxd2)
             {
                 block_stats ts = {0, 0, 0.0f};
-                if (steady) { /* a smaller team than asked for takes the parts round robin */
-                    for (size_t t = (size_t)omp_get_thread_num(); t < parts;
-                         t += (size_t)omp_get_num_threads())
-                        drive(P, out, ib, im, isplit[t], isplit[t + 1], gaps ? bsplit[t] : 0,
-                              gaps ? bsplit[t + 1] : 0, m, cpack, inv_r2, &ts);
-                } else {
+                unsigned char *mine = fbuf + (size_t)omp_get_thread_num() * fthr;
+                block_select L = S;
+                L.msk = (uint64_t *)mine;
+                L.blk = (uint32_t *)(mine + align64(fmax * sizeof(uint64_t)));
 #pragma omp for schedule(dynamic, 1)
-                    for (size_t t = 0; t < parts; t++)
-                        drive(P, out, ib, im, isplit[t], isplit[t + 1], gaps ? bsplit[t] : 0,
-                              gaps ? bsplit[t + 1] : 0, m, cpack, inv_r2, &ts);
+                for (size_t q = 0; q < fparts; q++) {
+                    size_t lo = nb * q / fparts, hi = nb * (q + 1) / fparts;
+                    if (hi <= lo) continue;
+                    L.k = 0;
+                    select_visit_avx512(&L, top, 0, all, lo, hi);
+                    drive(P, out, L.blk, L.msk, 0, L.k, lo, hi, m, cpack, inv_r2, &ts);
                 }
                 pairs += ts.pairs;
                 moved += ts.moved;
                 if (ts.maxd2 > maxd2) maxd2 = ts.maxd2;
             }
-            bs.maxd2 = maxd2;
-        }
-        pairs += bs.pairs;
-        moved += bs.moved;
-        maxd = bs.maxd2;
-        if (touch) { /* this call's computed blocks become the last call's */
-            if (all_in) {
-                ranges_all(touch, n);
-                for (size_t b = 0; b < nb; b++) touch->prev[b] = (uint32_t)b;
-                touch->nprev = nb;
-                touch->sel_id = 0;
-                touch->ranges_sel = 0;
-            } else {
+            maxd = maxd2;
+        } else {
+            const uint32_t *ib = NULL;
+            const uint64_t *im = NULL;
+            const size_t *ic = NULL;
+            size_t ni = nb, cost = nb * ITEM_COST(m);
+            int gaps = 0, same = 0;
+            if (use_tree) {
+                ib = S.blk;
+                im = S.msk;
+                ic = S.cum;
+                ni = S.k;
                 if (full_write) {
-                    ranges_all(touch, n);
-                    touch->ranges_sel = 0;
-                } else if (!same || !touch->ranges_sel) {
-                    ranges_of_blocks(touch, n, ib, ni);
-                    touch->ranges_sel = ni == S.k;
+                    gaps = 1;
+                } else if (!own && touch->sel_id == s->sel_id) {
+                    same = 1; /* the last call computed exactly these blocks: nothing to restore */
+                } else {
+                    const uint32_t *pv = touch->prev;
+                    size_t a = 0, c = 0, k = 0, np = touch->nprev, cc = 0;
+                    while (a < S.k || c < np) {
+                        mrg_cum[k] = cc;
+                        if (c >= np || (a < S.k && S.blk[a] < pv[c])) {
+                            cc += S.cum[a + 1] - S.cum[a];
+                            mrg_blk[k] = S.blk[a];
+                            mrg_msk[k++] = S.msk[a++];
+                        } else if (a >= S.k || pv[c] < S.blk[a]) {
+                            cc += ITEM_COST(0);
+                            mrg_blk[k] = pv[c++];
+                            mrg_msk[k++] = 0;
+                        } else {
+                            cc += S.cum[a + 1] - S.cum[a];
+                            mrg_blk[k] = S.blk[a];
+                            mrg_msk[k++] = S.msk[a++];
+                            c++;
+                        }
+                    }
+                    mrg_cum[k] = cc;
+                    ib = mrg_blk;
+                    im = mrg_msk;
+                    ic = mrg_cum;
+                    ni = k;
                 }
-                if (!same) touch_set_prev(touch, S.blk, S.k);
-                /* a selection computed into the caller's own memory is not the solver's */
-                touch->sel_id = own ? 0 : s->sel_id;
+                cost = ic[ni];
+            }
+            const drive_fn drive = drivers[ki][st != NULL][!ib ? DRIVE_ALL : gaps ? DRIVE_GAPS : DRIVE_LIST];
+            block_stats bs = {0, 0, 0.0f};
+            /* threads by the computed blocks' cost; copying the gaps (a full write) is bound by
+             * memory and does not count, but is shared out when threads run */
+            if (cost <= PARALLEL_COST || nt == 1) {
+                drive(P, out, ib, im, 0, ni, 0, gaps ? nb : 0, m, cpack, inv_r2, &bs);
+            } else {
+                /* one contiguous part of equal cost per thread: no scheduling during the loop
+                 * (a chunk grab is a cache-line transfer between cores), and frame after frame
+                 * the same blocks stay in the same core's cache */
+                const size_t parts = (size_t)nt;
+                split_work(ib, ic, ni, gaps, nb, parts, cost + (gaps ? nb - ni : 0), isplit,
+                           bsplit);
+                float maxd2 = 0.0f;
+#pragma omp parallel num_threads(nt) reduction(+ : pairs, moved) reduction(max : maxd2)
+                {
+                    block_stats ts = {0, 0, 0.0f};
+                    /* a smaller team than asked for takes the parts round robin */
+                    for (size_t t = (size_t)omp_get_thread_num(); t < parts;
+                         t += (size_t)omp_get_num_threads())
+                        drive(P, out, ib, im, isplit[t], isplit[t + 1], gaps ? bsplit[t] : 0,
+                              gaps ? bsplit[t + 1] : 0, m, cpack, inv_r2, &ts);
+                    pairs += ts.pairs;
+                    moved += ts.moved;
+                    if (ts.maxd2 > maxd2) maxd2 = ts.maxd2;
+                }
+                bs.maxd2 = maxd2;
+            }
+            pairs += bs.pairs;
+            moved += bs.moved;
+            maxd = bs.maxd2;
+            if (touch) { /* this call's computed blocks become the last call's */
+                if (all_in) {
+                    ranges_all(touch, n);
+                    for (size_t b = 0; b < nb; b++) touch->prev[b] = (uint32_t)b;
+                    touch->nprev = nb;
+                    touch->sel_id = 0;
+                    touch->ranges_sel = 0;
+                } else {
+                    if (full_write) {
+                        ranges_all(touch, n);
+                        touch->ranges_sel = 0;
+                    } else if (!same || !touch->ranges_sel) {
+                        ranges_of_blocks(touch, n, ib, ni);
+                        touch->ranges_sel = ni == S.k;
+                    }
+                    if (!same) touch_set_prev(touch, S.blk, S.k);
+                    /* a selection computed into the caller's own memory is not the solver's */
+                    touch->sel_id = own ? 0 : s->sel_id;
+                }
             }
         }
     } else
