@@ -835,9 +835,7 @@ static void touch_set_prev(csrbf_touch *t, const uint32_t *blk, size_t k)
 
 /* Parts per thread of a fused walk-and-evaluate (scheduled dynamically: the costs of the
  * parts are not known before their walks). */
-#ifndef SPLIT_PARTS
 #define SPLIT_PARTS 4
-#endif
 
 /* Vertex-centre lane pairs (estimated, support_share) above which a full write whose
  * selection is not kept walks the tree and evaluates in parallel parts. */
