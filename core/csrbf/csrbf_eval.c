@@ -407,7 +407,6 @@ static int have_avx512(void)
 #define CSRBF_AVX512 0
 #endif
 
-
 /* out[3v + a] = base + acc (+ p(x)) for the nv <= B vertices of a block: contiguous stores. */
 CSRBF_CLONES static void write_block(float *restrict out, const float *restrict x,
                                      const float *restrict y, const float *restrict z,
@@ -787,6 +786,41 @@ int csrbf_evaluate_touched(const csrbf_solver *cs, const csrbf_points *P, csrbf_
     return evaluate_impl(cs, P, out, flags, st, touch);
 }
 
+/* The summed share of the vertex box that the centres' support cubes cover, axis by axis: n
+ * times it estimates the vertex-centre pairs to test before any selection. O(m). */
+static double support_share(const csrbf_solver *s, const csrbf_points *P)
+{
+    double est = 0.0;
+    for (size_t i = 0; i < s->m; i++) {
+        double frac = 1.0;
+        for (int a = 0; a < 3; a++) {
+            double ext = P->bhi[a] - P->blo[a], c = s->c[3 * i + a];
+            if (ext <= 0.0) continue;
+            double ov = fmin(c + s->R, P->bhi[a]) - fmax(c - s->R, P->blo[a]);
+            frac *= ov > 0.0 ? ov / ext : 0.0;
+        }
+        est += frac;
+    }
+    return est;
+}
+
+/* Cost (ITEM_COST units, half a vector evaluation) above which an evaluation forks its
+ * threads: below it (about 8 us of work on one core) a fork/join costs more than it saves,
+ * and a frame loop's sleeping workers wake slowly. */
+#define PARALLEL_COST 6000
+
+/* Parts per thread of a fused walk-and-evaluate (scheduled dynamically: the costs of the
+ * parts are not known before their walks). */
+#define SPLIT_PARTS 4
+
+/* Vertex-centre lane pairs (estimated, support_share) above which a full write whose
+ * selection is not kept walks the tree and evaluates in parallel parts. */
+#define PARALLEL_LANES 50000
+
+/* sel_k of a selection seen once and not kept (the next use with the same key keeps it). */
+#define SEL_PENDING SIZE_MAX
+
+#if CSRBF_AVX512 && CSRBF_BLOCK == 16 /* helpers of the fused AVX-512 path */
 /* touch->ranges from k increasing blocks: runs of consecutive blocks as vertex ranges. */
 static void ranges_of_blocks(csrbf_touch *t, size_t n, const uint32_t *blk, size_t k)
 {
@@ -828,40 +862,6 @@ static void touch_set_prev(csrbf_touch *t, const uint32_t *blk, size_t k)
     t->nprev = k;
 }
 
-/* Cost (ITEM_COST units, half a vector evaluation) above which an evaluation forks its
- * threads: below it (about 8 us of work on one core) a fork/join costs more than it saves,
- * and a frame loop's sleeping workers wake slowly. */
-#define PARALLEL_COST 6000
-
-/* Parts per thread of a fused walk-and-evaluate (scheduled dynamically: the costs of the
- * parts are not known before their walks). */
-#define SPLIT_PARTS 4
-
-/* Vertex-centre lane pairs (estimated, support_share) above which a full write whose
- * selection is not kept walks the tree and evaluates in parallel parts. */
-#define PARALLEL_LANES 50000
-
-/* sel_k of a selection seen once and not kept (the next use with the same key keeps it). */
-#define SEL_PENDING SIZE_MAX
-
-/* The summed share of the vertex box that the centres' support cubes cover, axis by axis: n
- * times it estimates the vertex-centre pairs to test before any selection. O(m). */
-static double support_share(const csrbf_solver *s, const csrbf_points *P)
-{
-    double est = 0.0;
-    for (size_t i = 0; i < s->m; i++) {
-        double frac = 1.0;
-        for (int a = 0; a < 3; a++) {
-            double ext = P->bhi[a] - P->blo[a], c = s->c[3 * i + a];
-            if (ext <= 0.0) continue;
-            double ov = fmin(c + s->R, P->bhi[a]) - fmax(c - s->R, P->blo[a]);
-            frac *= ov > 0.0 ? ov / ext : 0.0;
-        }
-        est += frac;
-    }
-    return est;
-}
-
 /* Split the work into parts of equal cost: part t is items isplit[t] .. isplit[t+1]-1 and,
  * with gaps (a full write), blocks bsplit[t] .. bsplit[t+1]-1 (a copied gap block costs 1,
  * so the split may fall inside a gap). ib NULL: ni blocks of equal cost. cum: prefix costs
@@ -899,6 +899,7 @@ static void split_work(const uint32_t *ib, const size_t *cum, size_t ni, int gap
     isplit[parts] = ni;
     bsplit[parts] = gaps ? nb : ni;
 }
+#endif
 
 static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *out,
                          unsigned flags, csrbf_eval_stats *st, csrbf_touch *touch)
@@ -1060,7 +1061,10 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
 
     size_t pairs = 0, moved = 0;
     double maxd = 0.0, minjac = 1.0;
-#if CSRBF_AVX512 && CSRBF_BLOCK == 16
+#if !(CSRBF_AVX512 && CSRBF_BLOCK == 16)
+    (void)cpack, (void)isplit, (void)bsplit, (void)mrg_msk, (void)mrg_blk, (void)mrg_cum,
+        (void)fused, (void)fbuf, (void)fthr, (void)fparts;
+#else
     if (fast) {
         /* the work list: every block (all in), the selected blocks with the gaps between
          * them copied (a full write), or the selected blocks merged with the last call's
