@@ -262,8 +262,9 @@ typedef struct csrbf_eval_stats {
  *  overlap the solver's or the points' memory). Only (vertex, centre) pairs whose block boxes
  *  meet the support are visited: with up to CSRBF_FAST_MAX_CENTRES centres the blocks and a
  *  64-bit mask of their centres come from a walk of the points' block tree for all centres at
- *  once (cost: the tree nodes near a support, not the mesh), kept in the solver and reused
- *  while the centres and the points are unchanged (anchored frames); blocks outside every
+ *  once (cost: the tree nodes near a support, not the mesh), kept in the solver from its
+ *  second use on while the centres and the points are unchanged (anchored frames), then
+ *  trimmed to the pairs whose support holds a vertex of the block; blocks outside every
  *  support are copied from the base. The arithmetic is float (positions, coefficients), the
  *  coefficients having been solved in double. Without a polynomial a vertex outside every
  *  support gets exactly its base position, bit for bit. Vectorised (AVX-512 intrinsics with
