@@ -582,6 +582,55 @@ static void test_selection_cache(void **state)
     free(o2);
 }
 
+/* The paths a selection takes: new (a full write with large supports walks and evaluates per
+ * part of the mesh in the threads), seen twice (kept and trimmed), kept (reused), touched;
+ * all give the same output bit for bit, close to the dense reference, with equal statistics. */
+static void test_selection_paths(void **state)
+{
+    (void)state;
+    size_t nx = 301, ny = 299, nv = nx * ny, n = 42;
+    double h = 0.1, R = 6.0;
+    float *v = wavy_grid(nx, ny, h);
+    float *o[4], st[3 * 42], en[3 * 42];
+    for (int i = 0; i < 4; i++) o[i] = malloc(nv * 3 * sizeof *o[i]);
+    scatter_centres(n, h * (double)(nx - 1), h * (double)(ny - 1), 0.3, st, en);
+    csrbf_options opt = {0};
+    opt.radius = R;
+    opt.threads = 2;
+    csrbf_solver *s = NULL;
+    assert_int_equal(csrbf_solver_create(&opt, &s), CSRBF_OK);
+    int rc = csrbf_solver_solve(s, n, st, en);
+    assert_true(rc == CSRBF_OK || rc == CSRBF_WARN_FOLDOVER);
+    csrbf_points *p = NULL;
+    csrbf_touch *tc = NULL;
+    assert_int_equal(csrbf_points_create(nv, v, &p), CSRBF_OK);
+    assert_int_equal(csrbf_touch_create(p, &tc), CSRBF_OK);
+    csrbf_eval_stats es[4];
+    for (int i = 0; i < 3; i++) assert_int_equal(csrbf_evaluate(s, p, o[i], 0, &es[i]), CSRBF_OK);
+    assert_int_equal(csrbf_evaluate_touched(s, p, tc, o[3], 0, &es[3]), CSRBF_OK);
+    for (int i = 1; i < 4; i++) {
+        assert_memory_equal(o[0], o[i], nv * 3 * sizeof *o[0]);
+        assert_int_equal(es[0].pairs, es[i].pairs);
+        assert_int_equal(es[0].moved, es[i].moved);
+        assert_double_equal(es[0].max_displacement, es[i].max_displacement, 0);
+    }
+    assert_true(es[0].pairs > 10 * nv / 10); /* large supports: about 10 per vertex */
+    double *coef = malloc((n + 4) * 3 * sizeof *coef), worst = 0;
+    reference_solve(CSRBF_PSI31, R, 0, n, st, en, coef);
+    for (size_t i = 0; i < nv; i += 7) {
+        double x[3] = {v[3 * i], v[3 * i + 1], v[3 * i + 2]}, y[3];
+        reference_map(CSRBF_PSI31, R, n, st, coef, x, y);
+        for (int a = 0; a < 3; a++) worst = fmax(worst, fabs(o[0][3 * i + a] - y[a]));
+    }
+    assert_true(worst < 2e-5 * 30);
+    free(coef);
+    csrbf_touch_destroy(&tc);
+    csrbf_points_destroy(&p);
+    csrbf_solver_destroy(&s);
+    for (int i = 0; i < 4; i++) free(o[i]);
+    free(v);
+}
+
 /* Statistics from the fast path (counted per block inside the vectorised kernel) equal the
  * general path's (taken with the Jacobian flag), with a padded last block, for the masked
  * (some centres) and the all-in (every vertex in every support) cases. */
@@ -1125,6 +1174,7 @@ int main(void)
         cmocka_unit_test(test_concurrent_evaluate), cmocka_unit_test(test_stats_fast_path),
         cmocka_unit_test(test_touched),             cmocka_unit_test(test_many_centres),
         cmocka_unit_test(test_touched_frames),      cmocka_unit_test(test_selection_cache),
+        cmocka_unit_test(test_selection_paths),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
