@@ -141,6 +141,8 @@ typedef struct {
     long pairs, paper_pairs;      /* -1: none */
     double ms, ms_brute, paper_fps; /* < 0: none */
     double ms_ref;                /* centres case: fresh factor-and-solve, else < 0 */
+    double ms_touched;            /* the same update through csrbf_evaluate_touched with
+                                     statistics (the session's evaluation); < 0: none */
 } row;
 
 static void json_num(const char *key, double v, int last)
@@ -154,8 +156,9 @@ static void json_num(const char *key, double v, int last)
 static void print_header(const bench_opts *o)
 {
     if (o->json) return;
-    printf("%-8s %-10s %8s %7s %6s %9s %9s %10s %10s %8s %9s %9s\n", "case", "mode", "vertices",
-           "centres", "R", "pairs", "paper", "ms_median", "ms_ref", "ratio", "paper_fps", "fps");
+    printf("%-8s %-10s %8s %7s %6s %9s %9s %10s %10s %8s %9s %9s %9s %9s\n", "case", "mode",
+           "vertices", "centres", "R", "pairs", "paper", "ms_median", "ms_ref", "ratio",
+           "paper_fps", "fps", "ms_touch", "fps_touch");
 }
 
 static void print_row(const bench_opts *o, const row *r)
@@ -176,6 +179,7 @@ static void print_row(const bench_opts *o, const row *r)
         json_num("ms_median", r->ms, 0);
         json_num("ms_bruteforce", r->ms_brute, 0);
         json_num("ms_fresh", r->ms_ref, 0);
+        json_num("ms_touched", r->ms_touched, 0);
         json_num("paper_fps", r->paper_fps, 1);
         printf("}\n");
     } else {
@@ -187,9 +191,14 @@ static void print_row(const bench_opts *o, const row *r)
             snprintf(ratio, sizeof ratio, "%.1fx", ref / r->ms);
         }
         if (r->paper_fps >= 0) snprintf(pf, sizeof pf, "%.1f", r->paper_fps);
-        printf("%-8s %-10s %8zu %7zu %6g %9s %9s %10.4f %10s %8s %9s %9.0f\n", r->name, r->mode,
-               r->vertices, r->centres, r->radius, pairs, paper, r->ms, refs, ratio, pf,
-               1000.0 / r->ms);
+        char mt[32] = "-", ft[32] = "-";
+        if (r->ms_touched >= 0) {
+            snprintf(mt, sizeof mt, "%.4f", r->ms_touched);
+            snprintf(ft, sizeof ft, "%.0f", 1000.0 / r->ms_touched);
+        }
+        printf("%-8s %-10s %8zu %7zu %6g %9s %9s %10.4f %10s %8s %9s %9.0f %9s %9s\n", r->name,
+               r->mode, r->vertices, r->centres, r->radius, pairs, paper, r->ms, refs, ratio, pf,
+               1000.0 / r->ms, mt, ft);
     }
     fflush(stdout);
 }
@@ -201,21 +210,26 @@ enum { NCTRL = 10, FRAMES = 64 };
 typedef struct {
     csrbf_solver *s;
     csrbf_points *pts;
+    csrbf_touch *touch; /* persistent output out2 (TIME_TOUCHED) */
     size_t nv;
     const float *base;
-    float *out;
+    float *out, *out2;
     double R;
     int anchored;
     float rest[3 * NCTRL];
 } deform_case;
 
+enum { TIME_ENGINE = 0, TIME_BRUTE = 1, TIME_TOUCHED = 2 };
+
 /* Median ms of count timed updates (after warm-up ones): [set_start +] set_end + evaluate
- * (brute = 0) or + the brute-force loop (brute = 1). -1 on an engine error. */
+ * (TIME_ENGINE: csrbf_evaluate writing every vertex, no statistics), + the brute-force loop
+ * (TIME_BRUTE), or + csrbf_evaluate_touched with statistics into a persistent output
+ * (TIME_TOUCHED: the session's evaluation). -1 on an engine error. */
 static double time_updates(deform_case *c, int count, int brute, double *times)
 {
     float st[3 * NCTRL], en[3 * NCTRL];
     double cbuf[3 * NCTRL], abuf[3 * NCTRL];
-    int warm = brute ? 1 : (count < 20 ? 2 : count / 10);
+    int warm = brute == TIME_BRUTE ? 1 : (count < 20 ? 2 : count / 10);
     for (int it = -warm; it < count; it++) {
         int f = (it + warm) % FRAMES;
         motion(c->rest, en, NCTRL, f, 0.6);
@@ -226,8 +240,11 @@ static double time_updates(deform_case *c, int count, int brute, double *times)
         double t0 = now_ms();
         if (!c->anchored && csrbf_solver_set_start_points(c->s, NCTRL, st) < 0) return -1;
         if (csrbf_solver_set_end_points(c->s, en) < 0) return -1;
-        if (!brute) {
+        if (brute == TIME_ENGINE) {
             if (csrbf_evaluate(c->s, c->pts, c->out, 0, NULL) < 0) return -1;
+        } else if (brute == TIME_TOUCHED) {
+            csrbf_eval_stats es;
+            if (csrbf_evaluate_touched(c->s, c->pts, c->touch, c->out2, 0, &es) < 0) return -1;
         } else {
             bruteforce(c->s, c->nv, c->base, c->out, cbuf, abuf, c->R);
         }
@@ -237,9 +254,13 @@ static double time_updates(deform_case *c, int count, int brute, double *times)
     return fp_median(times, (size_t)count);
 }
 
+/* The row run_deform printed last. */
+static row last_row;
+
 /* One (grid, R, mode) measurement: engine median, brute-force median, one row. */
 static int run_deform(const bench_opts *o, const char *name, size_t nv, double R, int anchored,
-                      int reps, int brute_reps, double paper_fps, long paper_pair_count)
+                      int reps, int brute_reps, double paper_fps, long paper_pair_count,
+                      int touched)
 {
     int rc = 0;
     deform_case c = {0};
@@ -253,8 +274,9 @@ static int run_deform(const bench_opts *o, const char *name, size_t nv, double R
     double *times = malloc((size_t)(reps > brute_reps ? reps : brute_reps) * sizeof *times);
     csrbf_options opt = {0};
     opt.radius = R;
-    if (!base || !c.out || !times || csrbf_solver_create(&opt, &c.s) ||
-        csrbf_points_create(nv, base, &c.pts)) {
+    if (touched) c.out2 = malloc(nv * 3 * sizeof *c.out2);
+    if (!base || !c.out || !times || (touched && !c.out2) || csrbf_solver_create(&opt, &c.s) ||
+        csrbf_points_create(nv, base, &c.pts) || (touched && csrbf_touch_create(c.pts, &c.touch))) {
         fprintf(stderr, "bench: set-up failed for %s (%zu vertices)\n", name, nv);
         rc = -ENOMEM;
         goto done;
@@ -269,25 +291,41 @@ static int run_deform(const bench_opts *o, const char *name, size_t nv, double R
         fprintf(stderr, "bench: R = %g leaves %zu of %zu pairs outside the support\n", R,
                 nv * NCTRL - stats.pairs, nv * NCTRL);
     /* rounds: the machine is shared; each figure is the lowest of the rounds' medians */
-    double ms = -1, msb = -1;
+    double ms = -1, msb = -1, mst = -1;
     for (int round = 0; round < o->rounds; round++) {
-        double a = time_updates(&c, reps, 0, times);
+        double a = time_updates(&c, reps, TIME_ENGINE, times);
         if (a < 0) goto engine_fail;
         if (ms < 0 || a < ms) ms = a;
         if (brute_reps > 0) {
-            double b = time_updates(&c, brute_reps, 1, times);
+            double b = time_updates(&c, brute_reps, TIME_BRUTE, times);
             if (b < 0) goto engine_fail;
             if (msb < 0 || b < msb) msb = b;
         }
+        if (touched) {
+            double t = time_updates(&c, reps, TIME_TOUCHED, times);
+            if (t < 0) goto engine_fail;
+            if (mst < 0 || t < mst) mst = t;
+        }
+    }
+    if (touched) { /* the persistent output equals a full evaluation of the last update */
+        if (csrbf_evaluate(c.s, c.pts, c.out, 0, NULL) < 0) goto engine_fail;
+        if (memcmp(c.out, c.out2, nv * 3 * sizeof *c.out)) {
+            fprintf(stderr, "bench: touched output differs from the full evaluation\n");
+            rc = FP_ENUMERIC;
+            goto done;
+        }
     }
     row r = {name, anchored ? "anchored" : "unanchored", nv, NCTRL, R, (long)stats.pairs,
-             paper_pair_count, ms, msb, paper_fps, -1};
+             paper_pair_count, ms, msb, paper_fps, -1, mst};
     print_row(o, &r);
+    last_row = r;
 done:
+    csrbf_touch_destroy(&c.touch);
     csrbf_points_destroy(&c.pts);
     csrbf_solver_destroy(&c.s);
     free(base);
     free(c.out);
+    free(c.out2);
     free(times);
     return rc;
 engine_fail:
@@ -299,6 +337,7 @@ engine_fail:
 static int case_table1(const bench_opts *o)
 {
     print_header(o);
+    double r10[2] = {-1, -1}, r80[2] = {-1, -1}; /* 33,025 anchored: evaluate, touched */
     for (int g = 0; g < 4; g++)
         for (int anchored = 1; anchored >= 0; anchored--)
             for (int ri = 0; ri < 5; ri++) {
@@ -310,9 +349,18 @@ static int case_table1(const bench_opts *o)
                         anchored ? "anchored" : "unanchored");
                 double fps = anchored ? paper_anchored_fps[g][ri] : paper_unanchored_fps[g][ri];
                 int rc = run_deform(o, "table1", nv, table_radius[ri], anchored, reps, brute, fps,
-                                    paper_pairs[g][ri]);
+                                    paper_pairs[g][ri], 1);
                 if (rc) return rc;
+                if (g == 3 && anchored && (ri == 0 || ri == 4)) {
+                    double *d = ri == 0 ? r10 : r80;
+                    d[0] = last_row.ms;
+                    d[1] = last_row.ms_touched;
+                }
             }
+    if (!o->json && r10[0] > 0 && r10[1] > 0)
+        printf("table1 33025 anchored: R=80 / R=10 time = %.2fx (csrbf_evaluate), %.2fx "
+               "(touched, statistics)\n",
+               r80[0] / r10[0], r80[1] / r10[1]);
     return 0;
 }
 
@@ -321,7 +369,7 @@ static int case_scale(const bench_opts *o)
     print_header(o);
     fprintf(stderr, "bench: scale, 1000 x 1000 grid, 10 control vectors, R = 80\n");
     return run_deform(o, "scale", 1000000, 80.0, 1, o->quick ? 40 : 200, o->quick ? 3 : 5, -1,
-                      -1);
+                      -1, 0);
 }
 
 /* Large centre sets (rig-like constraints): random centres at a density giving about 27
@@ -375,10 +423,12 @@ static int case_centres(const bench_opts *o)
             free(times);
             return FP_ENUMERIC;
         }
-        row f = {"centres", "factor", 0, csrbf_solver_centres(s), R, -1, -1, ms_factor, -1, -1, -1};
+        row f = {"centres", "factor", 0, csrbf_solver_centres(s), R, -1, -1, ms_factor, -1, -1,
+                 -1, -1};
         row u = {"centres", "reused", 0, csrbf_solver_centres(s), R, -1, -1, ms_reused, -1, -1,
-                 ms_fresh};
-        row fr = {"centres", "fresh", 0, csrbf_solver_centres(s), R, -1, -1, ms_fresh, -1, -1, -1};
+                 ms_fresh, -1};
+        row fr = {"centres", "fresh", 0, csrbf_solver_centres(s), R, -1, -1, ms_fresh, -1, -1,
+                  -1, -1};
         print_row(o, &f);
         print_row(o, &fr);
         print_row(o, &u);

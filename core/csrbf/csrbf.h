@@ -94,7 +94,8 @@ const char *csrbf_strerror(int result);
  *    fill is high). 0 selects CSRBF_DEFAULT_DENSE_LIMIT (200); a negative value always uses
  *    CHOLMOD.
  *  - threads: OpenMP threads for csrbf_evaluate; 0 = the OpenMP default (omp_get_max_threads).
- *    Small work runs on one thread regardless. */
+ *    Work below about 8 us on one core (counted from the blocks actually visited) runs on the
+ *    calling thread regardless. */
 typedef struct csrbf_options {
     csrbf_kernel kernel;
     csrbf_poly poly;
@@ -196,20 +197,24 @@ int csrbf_solver_map_point(const csrbf_solver *solver, const double x[3], double
                            double jac[9]);
 
 /** Create a vertex set: copies n x 3 floats (finite, |coord| <= CSRBF_MAX_COORD) and cuts
- *  them into blocks of 16 consecutive vertices (structure of arrays) with bounding boxes.
+ *  them into blocks of 16 consecutive vertices (structure of arrays) with bounding boxes, and
+ *  a tree of boxes over the blocks (each node bounds 16 consecutive nodes of the level below)
+ *  through which csrbf_evaluate finds the blocks a support meets without scanning them all.
  *  Locality comes from the vertex order (grids, scanned and modelled meshes keep neighbours
  *  close in index); a scrambled order stays correct but skips fewer blocks.
  *  1 <= n < 2^32. Errors: CSRBF_ERR_INVALID (*out = NULL), CSRBF_ERR_NOMEM. */
 int csrbf_points_create(size_t n, const float *xyz, csrbf_points **out);
 
 /** Replace the positions (same n, same vertex order), e.g. after a commit in unanchored mode;
- *  block boxes are recomputed (O(n)). Errors: CSRBF_ERR_INVALID (points unchanged). */
+ *  block boxes and the tree are recomputed (O(n)). Errors: CSRBF_ERR_INVALID (points
+ *  unchanged). */
 int csrbf_points_update(csrbf_points *points, const float *xyz);
 
 /** Replace the positions of some vertices only: the ranges (first vertex, count) pairs,
  *  e.g. those csrbf_touch_ranges reports after a commit; xyz is the full n x 3 array, of
  *  which only the listed vertices are read. Their blocks' boxes are recomputed (O(vertices
- *  listed)); the whole-set box only grows, which keeps every test conservative.
+ *  listed)), and the tree nodes above them; the whole-set box only grows, which keeps every
+ *  test conservative.
  *  Errors: CSRBF_ERR_INVALID (NULL, a range beyond n, a bad coordinate: nothing changed). */
 int csrbf_points_update_ranges(csrbf_points *points, const float *xyz, const uint32_t *ranges,
                                size_t nranges);
@@ -235,6 +240,11 @@ int csrbf_points_nearest(const csrbf_points *points, const float *queries, size_
 /** Free a vertex set; sets *points to NULL. NULL and *NULL are no-ops. */
 void csrbf_points_destroy(csrbf_points **points);
 
+/** Up to this many (merged) centres csrbf_evaluate selects blocks and their centres through
+ *  the points' block tree with one 64-bit mask per block and runs the fused AVX-512 path;
+ *  beyond, it searches the centre grid per block (a slower general path, still correct). */
+#define CSRBF_FAST_MAX_CENTRES 64
+
 /** Flags for csrbf_evaluate. */
 enum {
     CSRBF_EVAL_JACOBIAN = 1u   /* also compute stats->min_jacobian_det (slower path) */
@@ -252,17 +262,25 @@ typedef struct csrbf_eval_stats {
 
 /** deformed[v] = T(base[v]) for every vertex v (n x 3 floats, original vertex order; must not
  *  overlap the solver's or the points' memory). Only (vertex, centre) pairs whose block boxes
- *  meet the support are visited; the arithmetic is float (positions, coefficients), the
+ *  meet the support are visited: with up to CSRBF_FAST_MAX_CENTRES centres the blocks and a
+ *  64-bit mask of their centres come from a walk of the points' block tree for all centres at
+ *  once (cost: the tree nodes near a support, not the mesh), kept in the solver from its
+ *  second use on while the centres and the points are unchanged (anchored frames), then
+ *  trimmed to the pairs whose support holds a vertex of the block; blocks outside every
+ *  support are copied from the base. The arithmetic is float (positions, coefficients), the
  *  coefficients having been solved in double. Without a polynomial a vertex outside every
  *  support gets exactly its base position, bit for bit. Vectorised (AVX-512 intrinsics with
  *  r from rsqrt14 + one Newton step where the CPU has it, else target_clones of portable C
  *  for x86-64-v3 / baseline, chosen at run time) and parallel over blocks with OpenMP
- *  (options.threads; one thread below about 50k vertex-centre tests).
+ *  (options.threads), one contiguous part of equal cost per thread; work below about 8 us on
+ *  one core, counted from the blocks visited, stays on the calling thread.
  *  stats may be NULL; with stats the pair count, moved count and maximum
  *  displacement are filled in, counted per block inside the vectorised kernel (the fast path
- *  stays: a few per cent at most), and with flags & CSRBF_EVAL_JACOBIAN the minimum Jacobian
- *  determinant too (a slower general path). Errors: CSRBF_ERR_INVALID (NULL, unknown flag), CSRBF_ERR_STATE (no start
- *  points). Thread-safe on a const solver and const points. Source: the map T above. */
+ *  stays: about 10% more), and with flags & CSRBF_EVAL_JACOBIAN the minimum Jacobian
+ *  determinant too (a slower general path, as are the polynomial and more than
+ *  CSRBF_FAST_MAX_CENTRES centres). Errors: CSRBF_ERR_INVALID (NULL, unknown flag),
+ *  CSRBF_ERR_STATE (no start points), CSRBF_ERR_NOMEM. Thread-safe on a const solver and const
+ *  points (a concurrent caller works in its own memory). Source: the map T above. */
 int csrbf_evaluate(const csrbf_solver *solver, const csrbf_points *base, float *deformed,
                    unsigned flags, csrbf_eval_stats *stats);
 
@@ -298,8 +316,10 @@ size_t csrbf_touch_ranges(const csrbf_touch *touch, const uint32_t **ranges);
 
 /** csrbf_evaluate with a persistent output (contract above): deformed equals T(base) on return,
  *  bit for bit what csrbf_evaluate writes, but only the blocks in a support now or at the last
- *  call are written, so the cost follows the supports, not the mesh (the per-block centre
- *  masks are still one vectorised pass over the block boxes). Statistics as csrbf_evaluate.
+ *  call are written, so the cost follows the supports, not the mesh: the blocks come from the
+ *  block tree (or the solver's kept selection), the bookkeeping is O(blocks written), and a
+ *  call whose blocks are those of the last call (anchored frames) skips it. Statistics as
+ *  csrbf_evaluate.
  *  With the linear polynomial every vertex moves and every block is written.
  *  Errors: as csrbf_evaluate, and CSRBF_ERR_INVALID when touch was made for other points.
  *  Not thread-safe on one touch. */

@@ -1,7 +1,11 @@
-/* csrbf_evaluate: T(x) at every vertex. Blocks of CSRBF_BLOCK Morton-sorted vertices are
- * matched against the centres whose support meets the block's box; within a block the loop
- * runs over the selected centres and vectorises over the vertices (SIMD clones for AVX-512,
- * AVX2+FMA and the baseline, picked at load time). Blocks run in parallel with OpenMP. */
+/* csrbf_evaluate: T(x) at every vertex. Blocks of CSRBF_BLOCK consecutive vertices are
+ * matched against the centres whose support meets the block's box, found through the points'
+ * block tree for all centres at once (64-bit masks, kept in the solver while the centres and
+ * the points stay) or, beyond 64 centres, the centre grid; within a block the loop runs over
+ * the selected centres and vectorises over the vertices (AVX-512 intrinsics, else SIMD clones
+ * for AVX2+FMA and the baseline, picked at load time). Blocks run in parallel with OpenMP,
+ * one contiguous part of equal cost per thread. csrbf_evaluate_touched writes only the blocks
+ * in a support now or at its last call. */
 #include "internal.h"
 
 #include <math.h>
@@ -164,17 +168,20 @@ __attribute__((target("avx512f"))) static void write_block_avx512(
                       _mm512_add_ps(_mm512_loadu_ps(z), _mm512_loadu_ps(accz)));
 }
 
-/* One centre's contribution to the 16 lanes (shared by the fused drivers below). */
-#define AVX512_PAIR(PSI, J)                                                                    \
+/* One centre's contribution to the 16 lanes (shared by the fused driver below). With SKIP (a
+ * compile-time constant) a centre whose support holds none of the 16 vertices costs only the
+ * distance test (blocks whose box meets a support they do not reach: the ends of grid rows). */
+#define AVX512_PAIR(PSI, J, SKIP)                                                              \
     do {                                                                                       \
-        __m512 dx = _mm512_sub_ps(X, _mm512_set1_ps(cx[J]));                                   \
-        __m512 dy = _mm512_sub_ps(Y, _mm512_set1_ps(cy[J]));                                   \
-        __m512 dz = _mm512_sub_ps(Z, _mm512_set1_ps(cz[J]));                                   \
+        __m512 dx = _mm512_sub_ps(X, _mm512_set1_ps(cp[8 * (J)]));                                   \
+        __m512 dy = _mm512_sub_ps(Y, _mm512_set1_ps(cp[8 * (J) + 1]));                                   \
+        __m512 dz = _mm512_sub_ps(Z, _mm512_set1_ps(cp[8 * (J) + 2]));                                   \
         __m512 r2 = _mm512_mul_ps(dx, dx);                                                     \
         r2 = _mm512_fmadd_ps(dy, dy, r2);                                                      \
         r2 = _mm512_fmadd_ps(dz, dz, r2);                                                      \
         r2 = _mm512_mul_ps(r2, ir2);                                                           \
         __mmask16 in = _mm512_cmp_ps_mask(r2, one, _CMP_LT_OQ);                                \
+        if ((SKIP) && !in) break;                                                              \
         __m512 q = _mm512_max_ps(r2, tiny);                                                    \
         __m512 e = _mm512_rsqrt14_ps(q);                                                       \
         __m512 hq = _mm512_mul_ps(half, q);                                                    \
@@ -182,10 +189,10 @@ __attribute__((target("avx512f"))) static void write_block_avx512(
         __m512 r = _mm512_mul_ps(q, e);                                                        \
         __m512 t1 = _mm512_sub_ps(one, r);                                                     \
         __m512 w = PSI;                                                                        \
-        sx = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(ax[J]), sx, in);                          \
-        sy = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(ay[J]), sy, in);                          \
-        sz = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(az[J]), sz, in);                          \
-        if (stats_on) cntv = _mm512_mask_add_epi32(cntv, in, cntv, ione);                       \
+        sx = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(cp[8 * (J) + 3]), sx, in);                          \
+        sy = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(cp[8 * (J) + 4]), sy, in);                          \
+        sz = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(cp[8 * (J) + 5]), sz, in);                          \
+        if (stats_on) cntv = _mm512_mask_add_epi32(cntv, in, cntv, ione);                      \
     } while (0)
 
 /* Statistics of a run of blocks (the fast path counts them per block, in registers). */
@@ -194,19 +201,56 @@ typedef struct {
     float maxd2;
 } block_stats;
 
-/* The fast path without polynomial: blocks b0..b1 end to end. mask (centres j < 32 whose
- * support meets the block) or, with mask NULL, all m centres. Untouched blocks are copied;
- * touched ones computed in registers and stored interleaved. With STATS (a compile-time
- * constant: a second copy of the driver) the pairs in support are counted per lane with one
- * masked add per pair, and moved vertices and the largest squared displacement per block,
- * into *bs (padding lanes excluded). */
-#define AVX512_DRIVER(NAME, PSI, STATS)                                                        \
+/* The base positions of blocks b0..b1-1 into the output (a plain copy: the points keep the
+ * vertices as given). */
+static inline void copy_base(const csrbf_points *P, float *out, size_t b0, size_t b1)
+{
+    size_t v0 = b0 * B, v1 = b1 * B < P->n ? b1 * B : P->n;
+    if (v1 > v0) memcpy(out + 3 * v0, P->xyz + 3 * v0, (v1 - v0) * 3 * sizeof(float));
+}
+
+/* A partial block (the mesh's last, nv < B vertices): base + displacement, and with stats its
+ * pairs, moved vertices and largest squared displacement straight into *bs. Kept out of the
+ * drivers' loop (and its registers). */
+__attribute__((target("avx512f,fma"), noinline, cold)) static void
+finish_partial(float *o, const float *x, const float *y, const float *z, size_t nv, __m512 sx,
+               __m512 sy, __m512 sz, __m512i cntv, int stats, block_stats *bs)
+{
+    _Alignas(64) float acc[3][B];
+    _Alignas(64) int32_t cnt[B];
+    _mm512_store_ps(acc[0], sx);
+    _mm512_store_ps(acc[1], sy);
+    _mm512_store_ps(acc[2], sz);
+    _mm512_store_si512(cnt, cntv);
+    for (size_t v = 0; v < nv; v++) {
+        o[3 * v] = x[v] + acc[0][v];
+        o[3 * v + 1] = y[v] + acc[1][v];
+        o[3 * v + 2] = z[v] + acc[2][v];
+        if (stats) {
+            bs->pairs += (size_t)cnt[v];
+            bs->moved += cnt[v] > 0;
+            /* the same operations as the full blocks' (mul, fma, fma), lane by lane */
+            float d2 = fmaf(acc[2][v], acc[2][v], fmaf(acc[1][v], acc[1][v], acc[0][v] * acc[0][v]));
+            if (d2 > bs->maxd2) bs->maxd2 = d2;
+        }
+    }
+}
+
+/* The fast path without polynomial, one copy per MODE (compile-time): DRIVE_ALL: blocks
+ * i0..i1-1, each with all m centres (blk, msk unused). DRIVE_LIST: the work items i0..i1-1,
+ * block blk[i] with the centres of the bit mask msk[i] (bit j: centre j, j < 64), or restored
+ * to the base where msk[i] is 0. DRIVE_GAPS: as DRIVE_LIST, and the blocks of [g0, g1) that
+ * no item names are copied from the base (a full evaluation: items and gaps cover the range
+ * in order). Blocks are computed in registers and stored interleaved. With STATS (also
+ * compile-time) the pairs in support are counted per lane with one masked add per pair, and
+ * moved vertices and the largest squared displacement per block, into *bs (padding lanes
+ * excluded; the lane counts are flushed every 2^16 blocks so that they cannot overflow). */
+enum { DRIVE_ALL = 0, DRIVE_LIST = 1, DRIVE_GAPS = 2 };
+#define AVX512_DRIVER(NAME, PSI, STATS, MODE)                                                  \
     __attribute__((target("avx512f,fma"))) static void NAME(                                   \
-        const csrbf_points *P, float *restrict out, size_t b0, size_t b1,                      \
-        const uint32_t *restrict mask, size_t m, const float *restrict cx,                     \
-        const float *restrict cy, const float *restrict cz, const float *restrict ax,          \
-        const float *restrict ay, const float *restrict az, float inv_r2, block_stats *bs,     \
-        uint8_t *restrict cur, const uint8_t *restrict prev)                                   \
+        const csrbf_points *P, float *restrict out, const uint32_t *restrict blk,              \
+        const uint64_t *restrict msk, size_t i0, size_t i1, size_t g0, size_t g1, size_t m,    \
+        const float *restrict cp, float inv_r2, block_stats *bs)                               \
     {                                                                                          \
         const __m512 one = _mm512_set1_ps(1.0f), half = _mm512_set1_ps(0.5f),                 \
                      three_half = _mm512_set1_ps(1.5f), tiny = _mm512_set1_ps(1e-30f),         \
@@ -217,59 +261,57 @@ typedef struct {
         __m512 maxd = _mm512_setzero_ps();                                                     \
         size_t nmoved = 0;                                                                     \
         const size_t n = P->n;                                                                 \
-        for (size_t b = b0; b < b1; b++) {                                                     \
+        const float *const px = P->s[0], *const py = P->s[1], *const pz = P->s[2];             \
+        size_t pos = g0;                                                                       \
+        (void)g1;                                                                              \
+        (void)m;                                                                               \
+        for (size_t i = i0; i < i1; i++) {                                                     \
+            const size_t b = MODE != DRIVE_ALL ? blk[i] : i;                                   \
+            uint64_t mk = MODE != DRIVE_ALL ? msk[i] : 0;                                      \
+            if (MODE != DRIVE_ALL) {                                                           \
+                if (MODE == DRIVE_GAPS && pos < b) copy_base(P, out, pos, b);                  \
+                pos = b + 1;                                                                   \
+                if (!mk) { /* in a support last call, in none now: the base */                 \
+                    copy_base(P, out, b, b + 1);                                               \
+                    continue;                                                                  \
+                }                                                                              \
+            }                                                                                  \
             const size_t k0 = b * B, nv = k0 + B <= n ? B : n - k0;                            \
             float *o = out + 3 * k0;                                                           \
-            uint32_t mk = mask ? mask[b] : 0;                                                  \
-            if (cur) cur[b] = !mask || mk;                                                     \
-            if (mask && !mk) {                                                                 \
-                if (prev && !prev[b]) continue; /* the output holds the base already */        \
-                if (nv == B)                                                                   \
-                    interleave_avx512(o, _mm512_loadu_ps(P->s[0] + k0),                        \
-                                      _mm512_loadu_ps(P->s[1] + k0),                           \
-                                      _mm512_loadu_ps(P->s[2] + k0));                          \
-                else                                                                           \
-                    memcpy(o, P->xyz + 3 * k0, nv * 3 * sizeof(float));                        \
-                continue;                                                                      \
-            }                                                                                  \
-            const __m512 X = _mm512_loadu_ps(P->s[0] + k0), Y = _mm512_loadu_ps(P->s[1] + k0), \
-                         Z = _mm512_loadu_ps(P->s[2] + k0);                                    \
+            const __m512 X = _mm512_loadu_ps(px + k0), Y = _mm512_loadu_ps(py + k0),           \
+                         Z = _mm512_loadu_ps(pz + k0);                                         \
             __m512 sx = _mm512_set1_ps(-0.0f), sy = sx, sz = sx;                               \
             __m512i cntv = izero;                                                              \
-            if (mask) {                                                                        \
+            if (MODE != DRIVE_ALL) {                                                           \
                 while (mk) {                                                                   \
-                    const unsigned j = (unsigned)__builtin_ctz(mk);                            \
+                    const unsigned j = (unsigned)__builtin_ctzll(mk);                          \
                     mk &= mk - 1;                                                              \
-                    AVX512_PAIR(PSI, j);                                                       \
+                    AVX512_PAIR(PSI, j, 1);                                                    \
                 }                                                                              \
             } else {                                                                           \
-                for (size_t j = 0; j < m; j++) AVX512_PAIR(PSI, j);                            \
+                for (size_t j = 0; j < m; j++) AVX512_PAIR(PSI, j, 0);                         \
             }                                                                                  \
-            if (STATS) {                                                                       \
-                const __mmask16 valid = nv == B ? (__mmask16)0xFFFF                            \
-                                                : (__mmask16)((1u << nv) - 1u);                \
-                pairv = _mm512_mask_add_epi32(pairv, valid, pairv, cntv);                      \
-                nmoved += (size_t)__builtin_popcount(                                          \
-                    (unsigned)_mm512_mask_cmpgt_epi32_mask(valid, cntv, izero));               \
-                __m512 d2 = _mm512_mul_ps(sx, sx);                                             \
-                d2 = _mm512_fmadd_ps(sy, sy, d2);                                              \
-                d2 = _mm512_fmadd_ps(sz, sz, d2);                                              \
-                maxd = _mm512_mask_max_ps(maxd, valid, maxd, d2);                              \
-            }                                                                                  \
-            _Alignas(64) float acc[3][B];                                                      \
-            _mm512_store_ps(acc[0], sx);                                                       \
-            _mm512_store_ps(acc[1], sy);                                                       \
-            _mm512_store_ps(acc[2], sz);                                                       \
-            if (nv == B)                                                                       \
+            if (nv == B) {                                                                     \
+                if (STATS) {                                                                   \
+                    pairv = _mm512_add_epi32(pairv, cntv);                                     \
+                    nmoved += (size_t)__builtin_popcount(                                      \
+                        (unsigned)_mm512_cmpgt_epi32_mask(cntv, izero));                       \
+                    __m512 d2 = _mm512_mul_ps(sx, sx);                                         \
+                    d2 = _mm512_fmadd_ps(sy, sy, d2);                                          \
+                    d2 = _mm512_fmadd_ps(sz, sz, d2);                                          \
+                    maxd = _mm512_max_ps(maxd, d2);                                            \
+                }                                                                              \
                 interleave_avx512(o, _mm512_add_ps(X, sx), _mm512_add_ps(Y, sy),               \
                                   _mm512_add_ps(Z, sz));                                       \
-            else                                                                               \
-                for (size_t v = 0; v < nv; v++) {                                              \
-                    o[3 * v] = P->s[0][k0 + v] + acc[0][v];                                    \
-                    o[3 * v + 1] = P->s[1][k0 + v] + acc[1][v];                                \
-                    o[3 * v + 2] = P->s[2][k0 + v] + acc[2][v];                                \
-                }                                                                              \
+            } else {                                                                           \
+                finish_partial(o, px + k0, py + k0, pz + k0, nv, sx, sy, sz, cntv, STATS, bs); \
+            }                                                                                  \
+            if (STATS && !((i - i0 + 1) & 0xFFFF)) { /* lane counts stay far from 2^32 */      \
+                bs->pairs += (size_t)(uint32_t)_mm512_reduce_add_epi32(pairv);                 \
+                pairv = izero;                                                                 \
+            }                                                                                  \
         }                                                                                      \
+        if (MODE == DRIVE_GAPS && pos < g1) copy_base(P, out, pos, g1);                        \
         if (STATS) {                                                                           \
             bs->pairs += (size_t)(uint32_t)_mm512_reduce_add_epi32(pairv);                     \
             bs->moved += nmoved;                                                               \
@@ -286,20 +328,71 @@ typedef struct {
                   _mm512_fmadd_ps(_mm512_fmadd_ps(_mm512_set1_ps(35.0f / 3.0f), r,             \
                                                   _mm512_set1_ps(6.0f)),                       \
                                   r, one))
-AVX512_DRIVER(drive_psi31_avx512, PSI31_AVX512, 0)
-AVX512_DRIVER(drive_psi30_avx512, T2, 0)
-AVX512_DRIVER(drive_psi32_avx512, PSI32_AVX512, 0)
-AVX512_DRIVER(drive_psi31_avx512_stats, PSI31_AVX512, 1)
-AVX512_DRIVER(drive_psi30_avx512_stats, T2, 1)
-AVX512_DRIVER(drive_psi32_avx512_stats, PSI32_AVX512, 1)
+#define AVX512_DRIVERS(NAME, PSI)                                                              \
+    AVX512_DRIVER(NAME##_all, PSI, 0, DRIVE_ALL)                                               \
+    AVX512_DRIVER(NAME##_list, PSI, 0, DRIVE_LIST)                                             \
+    AVX512_DRIVER(NAME##_gaps, PSI, 0, DRIVE_GAPS)                                             \
+    AVX512_DRIVER(NAME##_all_stats, PSI, 1, DRIVE_ALL)                                         \
+    AVX512_DRIVER(NAME##_list_stats, PSI, 1, DRIVE_LIST)                                       \
+    AVX512_DRIVER(NAME##_gaps_stats, PSI, 1, DRIVE_GAPS)
+AVX512_DRIVERS(drive_psi31, PSI31_AVX512)
+AVX512_DRIVERS(drive_psi30, T2)
+AVX512_DRIVERS(drive_psi32, PSI32_AVX512)
+#undef AVX512_DRIVERS
 #undef PSI31_AVX512
 #undef PSI32_AVX512
 #undef T2
 
-typedef void (*drive_fn)(const csrbf_points *, float *, size_t, size_t, const uint32_t *,
-                         size_t, const float *, const float *, const float *, const float *,
-                         const float *, const float *, float, block_stats *, uint8_t *,
-                         const uint8_t *);
+typedef void (*drive_fn)(const csrbf_points *, float *, const uint32_t *, const uint64_t *,
+                         size_t, size_t, size_t, size_t, size_t, const float *, float,
+                         block_stats *);
+
+/* drivers[kernel][stats][mode] */
+static const drive_fn drivers[3][2][3] = {
+    {{drive_psi31_all, drive_psi31_list, drive_psi31_gaps},
+     {drive_psi31_all_stats, drive_psi31_list_stats, drive_psi31_gaps_stats}},
+    {{drive_psi30_all, drive_psi30_list, drive_psi30_gaps},
+     {drive_psi30_all_stats, drive_psi30_list_stats, drive_psi30_gaps_stats}},
+    {{drive_psi32_all, drive_psi32_list, drive_psi32_gaps},
+     {drive_psi32_all_stats, drive_psi32_list_stats, drive_psi32_gaps_stats}}};
+
+/* The centres of mask (bit j: centre j) whose support meets each of the CSRBF_FAN boxes
+ * lo/hi[first ..]: lane l of (c0, c1) gets bit j. Float, with the conservative margin r2c;
+ * the same operations as the kernel's distance (per-axis gaps to the box never exceed a
+ * vertex's, and the squares and sums round monotonically), so a block holding a vertex in a
+ * support always meets it. Returns the lanes with a centre. */
+static inline __attribute__((target("avx512f,fma"), always_inline)) __mmask16
+group_masks_avx512(const float *const lo[3], const float *const hi[3], size_t first,
+                   uint64_t mask, const float *cx, const float *cy, const float *cz, float r2c,
+                   __m512i *c0out, __m512i *c1out)
+{
+    const __m512 lx = _mm512_loadu_ps(lo[0] + first), ly = _mm512_loadu_ps(lo[1] + first),
+                 lz = _mm512_loadu_ps(lo[2] + first), hx = _mm512_loadu_ps(hi[0] + first),
+                 hy = _mm512_loadu_ps(hi[1] + first), hz = _mm512_loadu_ps(hi[2] + first),
+                 zero = _mm512_setzero_ps(), lim = _mm512_set1_ps(r2c);
+    __m512i c0 = _mm512_setzero_si512(), c1 = c0;
+    __mmask16 any = 0;
+    while (mask) {
+        const unsigned j = (unsigned)__builtin_ctzll(mask);
+        mask &= mask - 1;
+        const __m512 px = _mm512_set1_ps(cx[j]), py = _mm512_set1_ps(cy[j]),
+                     pz = _mm512_set1_ps(cz[j]);
+        __m512 ex = _mm512_max_ps(_mm512_max_ps(_mm512_sub_ps(lx, px), _mm512_sub_ps(px, hx)), zero);
+        __m512 ey = _mm512_max_ps(_mm512_max_ps(_mm512_sub_ps(ly, py), _mm512_sub_ps(py, hy)), zero);
+        __m512 ez = _mm512_max_ps(_mm512_max_ps(_mm512_sub_ps(lz, pz), _mm512_sub_ps(pz, hz)), zero);
+        __m512 d2 = _mm512_mul_ps(ex, ex);
+        d2 = _mm512_fmadd_ps(ey, ey, d2);
+        d2 = _mm512_fmadd_ps(ez, ez, d2);
+        const __mmask16 t = _mm512_cmp_ps_mask(d2, lim, _CMP_LT_OQ);
+        const __m512i bit = _mm512_set1_epi64((long long)(1ull << j));
+        c0 = _mm512_mask_or_epi64(c0, (__mmask8)t, c0, bit);
+        c1 = _mm512_mask_or_epi64(c1, (__mmask8)(t >> 8), c1, bit);
+        any |= t;
+    }
+    *c0out = c0;
+    *c1out = c1;
+    return any;
+}
 
 static int have_avx512(void)
 {
@@ -313,7 +406,6 @@ static int have_avx512(void)
 #else
 #define CSRBF_AVX512 0
 #endif
-
 
 /* out[3v + a] = base + acc (+ p(x)) for the nv <= B vertices of a block: contiguous stores. */
 CSRBF_CLONES static void write_block(float *restrict out, const float *restrict x,
@@ -337,29 +429,203 @@ CSRBF_CLONES static void write_block(float *restrict out, const float *restrict 
     }
 }
 
-/* Masks of the centres (m <= 32) whose support meets each block's box, in float with a
- * conservative margin (the kernel decides each pair exactly). Vectorised over blocks. */
-CSRBF_CLONES static void block_masks(const csrbf_points *P, size_t b0, size_t b1, size_t m,
-                                     const float *cx, const float *cy, const float *cz,
-                                     float r2c, uint32_t *restrict mask)
+/* Portable group_masks_avx512 (same operations, same decisions). */
+CSRBF_CLONES static void group_masks_c(const float *const lo[3], const float *const hi[3],
+                                       size_t first, uint64_t mask, const float *cx,
+                                       const float *cy, const float *cz, float r2c,
+                                       uint64_t cm[CSRBF_FAN])
 {
-    const float *lx = P->lo[0], *ly = P->lo[1], *lz = P->lo[2];
-    const float *hx = P->hi[0], *hy = P->hi[1], *hz = P->hi[2];
-    for (size_t b = b0; b < b1; b++) mask[b] = 0;
-    for (size_t j = 0; j < m; j++) {
+    float d2[CSRBF_FAN];
+    for (int l = 0; l < CSRBF_FAN; l++) cm[l] = 0;
+    while (mask) {
+        const unsigned j = (unsigned)__builtin_ctzll(mask);
+        mask &= mask - 1;
         const float px = cx[j], py = cy[j], pz = cz[j];
-        const uint32_t bit = 1u << j;
 #pragma omp simd
-        for (size_t b = b0; b < b1; b++) {
-            float ex = lx[b] - px > px - hx[b] ? lx[b] - px : px - hx[b];
-            float ey = ly[b] - py > py - hy[b] ? ly[b] - py : py - hy[b];
-            float ez = lz[b] - pz > pz - hz[b] ? lz[b] - pz : pz - hz[b];
+        for (int l = 0; l < CSRBF_FAN; l++) {
+            const size_t b = first + (size_t)l;
+            float ex = lo[0][b] - px > px - hi[0][b] ? lo[0][b] - px : px - hi[0][b];
+            float ey = lo[1][b] - py > py - hi[1][b] ? lo[1][b] - py : py - hi[1][b];
+            float ez = lo[2][b] - pz > pz - hi[2][b] ? lo[2][b] - pz : pz - hi[2][b];
             ex = ex > 0.0f ? ex : 0.0f;
             ey = ey > 0.0f ? ey : 0.0f;
             ez = ez > 0.0f ? ez : 0.0f;
-            mask[b] |= ex * ex + ey * ey + ez * ez < r2c ? bit : 0u;
+            d2[l] = ex * ex + ey * ey + ez * ez;
         }
+        for (int l = 0; l < CSRBF_FAN; l++) cm[l] |= d2[l] < r2c ? 1ull << j : 0ull;
     }
+}
+
+/* The blocks whose box meets a support, found through the block tree (csrbf_points) for all
+ * centres at once: a node is opened only for the centres whose support meets its box, so the
+ * cost follows the supports (nodes near a support), not the mesh. Output in increasing block
+ * order: blk[k], msk[k] (bit j: centre j meets block blk[k]). */
+typedef struct block_select {
+    const csrbf_points *P;
+    const float *cx, *cy, *cz;
+    float r2c, inv_r2; /* box test limit; the kernel's 1 / R^2 (AVX-512 refinement) */
+    uint32_t *blk;
+    uint64_t *msk;
+    size_t *cum;     /* k + 1: cum[i] = cost (ITEM_COST) of items 0..i-1, for splitting */
+    size_t k, evals; /* blocks listed, sum of their mask bits */
+} block_select;
+
+/* The cost of a work item in half vector evaluations (16 vertices x 1 centre): a computed
+ * block costs about two evaluations (loads, statistics, the interleaved store) besides one
+ * per centre; a block restored to the base, one. A copied gap block (full writes) costs 1. */
+#define ITEM_COST(bits) ((bits) ? 4 + 2 * (size_t)(bits) : 2)
+
+static void select_emit(block_select *S, size_t first, const uint64_t cm[CSRBF_FAN])
+{
+    for (int l = 0; l < CSRBF_FAN; l++)
+        if (cm[l]) {
+            S->blk[S->k] = (uint32_t)(first + (size_t)l);
+            S->msk[S->k++] = cm[l];
+        }
+}
+
+static void select_visit_c(block_select *S, int level, size_t first, uint64_t mask)
+{
+    uint64_t cm[CSRBF_FAN];
+    const csrbf_points *P = S->P;
+    group_masks_c((const float *const *)P->tlo[level], (const float *const *)P->thi[level],
+                  first, mask, S->cx, S->cy, S->cz, S->r2c, cm);
+    if (level == 0) {
+        select_emit(S, first, cm);
+        return;
+    }
+    for (int l = 0; l < CSRBF_FAN; l++)
+        if (cm[l]) select_visit_c(S, level - 1, (first + (size_t)l) * CSRBF_FAN, cm[l]);
+}
+
+#if CSRBF_AVX512 && CSRBF_BLOCK == 16
+/* select_visit_c with AVX-512, restricted to the blocks [lo, hi): the leaves' masks and
+ * block numbers compress-stored. */
+__attribute__((target("avx512f,fma,popcnt"))) static void
+select_visit_avx512(block_select *S, int level, size_t first, uint64_t mask, size_t lo,
+                    size_t hi)
+{
+    const csrbf_points *P = S->P;
+    /* the children (nodes first..first+15 of this level) holding blocks of [lo, hi) */
+    _Static_assert(CSRBF_FAN == 16, "node n of level l holds blocks n 16^l .. (n+1) 16^l - 1");
+    const unsigned sh = 4u * (unsigned)level;
+    const size_t n0 = lo >> sh, n1 = ((hi - 1) >> sh) + 1; /* nodes n0..n1-1 hold [lo, hi) */
+    if (n1 <= first || n0 >= first + CSRBF_FAN) return;
+    const size_t l0 = n0 > first ? n0 - first : 0,
+                 l1 = n1 - first < CSRBF_FAN ? n1 - first : CSRBF_FAN;
+    const __mmask16 range = (__mmask16)(((1u << l1) - 1u) & ~((1u << l0) - 1u));
+    __m512i c0, c1;
+    __mmask16 any = group_masks_avx512((const float *const *)P->tlo[level],
+                                       (const float *const *)P->thi[level], first, mask, S->cx,
+                                       S->cy, S->cz, S->r2c, &c0, &c1) & range;
+    if (!any) return;
+    if (level == 0) {
+        size_t k = S->k;
+        const __mmask8 a0 = (__mmask8)any, a1 = (__mmask8)(any >> 8);
+        _mm512_mask_compressstoreu_epi64(S->msk + k, a0, c0);
+        _mm512_mask_compressstoreu_epi64(S->msk + k + __builtin_popcount(a0), a1, c1);
+        const __m512i idx = _mm512_add_epi32(
+            _mm512_set1_epi32((int)first),
+            _mm512_set_epi32(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0));
+        _mm512_mask_compressstoreu_epi32(S->blk + k, any, idx);
+        S->k = k + (size_t)__builtin_popcount(any);
+        return;
+    }
+    _Alignas(64) uint64_t cm[CSRBF_FAN];
+    _mm512_store_si512(cm, c0);
+    _mm512_store_si512(cm + 8, c1);
+    for (unsigned a = any; a; a &= a - 1) {
+        const unsigned l = (unsigned)__builtin_ctz(a);
+        select_visit_avx512(S, level - 1, (first + l) * CSRBF_FAN, cm[l], lo, hi);
+    }
+}
+
+__attribute__((target("popcnt"))) static size_t count_bits_popcnt(const uint64_t *msk, size_t k,
+                                                                   size_t *cum)
+{
+    size_t e = 0, c = 0;
+    for (size_t i = 0; i < k; i++) {
+        size_t bits = (size_t)__builtin_popcountll(msk[i]);
+        cum[i] = c;
+        c += ITEM_COST(bits);
+        e += bits;
+    }
+    cum[k] = c;
+    return e;
+}
+
+/* Refine the selection to the pairs the kernel uses: a centre whose support holds none of a
+ * block's 16 vertices (its box meets the support, its vertices do not: the ends of grid rows,
+ * the rims of supports) is dropped from the block's mask, and a block left with none from the
+ * list. The test is the AVX-512 kernels' own (same operations on the same floats), so the
+ * dropped pairs are exactly those the kernels would mask off entirely: results are unchanged
+ * (such a block's output is its base bit for bit either way), the kernels skip fewer empty
+ * pairs. Done once on a kept selection's second use (anchored frames), not on a selection
+ * used once (unanchored frames), where it would cost about a third of the evaluation. Then
+ * the prefix costs; returns the pairs kept. */
+__attribute__((target("avx512f,fma,popcnt"))) static size_t refine_avx512(block_select *S)
+{
+    const csrbf_points *P = S->P;
+    const __m512 one = _mm512_set1_ps(1.0f), ir2 = _mm512_set1_ps(S->inv_r2);
+    size_t e = 0, c = 0, k = 0;
+    for (size_t i = 0; i < S->k; i++) {
+        const size_t k0 = (size_t)S->blk[i] * B;
+        const __m512 X = _mm512_loadu_ps(P->s[0] + k0), Y = _mm512_loadu_ps(P->s[1] + k0),
+                     Z = _mm512_loadu_ps(P->s[2] + k0);
+        uint64_t keep = 0;
+        for (uint64_t mk = S->msk[i]; mk; mk &= mk - 1) {
+            const unsigned j = (unsigned)__builtin_ctzll(mk);
+            __m512 dx = _mm512_sub_ps(X, _mm512_set1_ps(S->cx[j]));
+            __m512 dy = _mm512_sub_ps(Y, _mm512_set1_ps(S->cy[j]));
+            __m512 dz = _mm512_sub_ps(Z, _mm512_set1_ps(S->cz[j]));
+            __m512 r2 = _mm512_mul_ps(dx, dx);
+            r2 = _mm512_fmadd_ps(dy, dy, r2);
+            r2 = _mm512_fmadd_ps(dz, dz, r2);
+            r2 = _mm512_mul_ps(r2, ir2);
+            if (_mm512_cmp_ps_mask(r2, one, _CMP_LT_OQ)) keep |= 1ull << j;
+        }
+        if (!keep) continue;
+        const size_t bits = (size_t)__builtin_popcountll(keep);
+        S->blk[k] = S->blk[i];
+        S->msk[k] = keep;
+        S->cum[k++] = c;
+        c += ITEM_COST(bits);
+        e += bits;
+    }
+    S->k = k;
+    S->cum[k] = c;
+    return e;
+}
+#endif
+
+static size_t count_bits(const uint64_t *msk, size_t k, size_t *cum)
+{
+    size_t e = 0, c = 0;
+    for (size_t i = 0; i < k; i++) {
+        size_t bits = (size_t)__builtin_popcountll(msk[i]);
+        cum[i] = c;
+        c += ITEM_COST(bits);
+        e += bits;
+    }
+    cum[k] = c;
+    return e;
+}
+
+/* Walk the tree for the solver's centres into S (blk / msk with room for every block). */
+static void select_blocks(block_select *S, int avx512, size_t m)
+{
+    const uint64_t all = m >= 64 ? ~0ull : (1ull << m) - 1;
+    S->k = 0;
+#if CSRBF_AVX512 && CSRBF_BLOCK == 16
+    if (avx512) {
+        select_visit_avx512(S, S->P->tlevels - 1, 0, all, 0, S->P->nblocks);
+        S->evals = count_bits_popcnt(S->msk, S->k, S->cum);
+        return;
+    }
+#endif
+    (void)avx512;
+    select_visit_c(S, S->P->tlevels - 1, 0, all);
+    S->evals = count_bits(S->msk, S->k, S->cum);
 }
 
 /* Does the support of centre c (radius R) meet the box [lo, hi]? Conservative by a hair. */
@@ -444,8 +710,12 @@ static double jacobian_det(const csrbf_solver *s, const double x[3], const uint3
 struct csrbf_touch {
     const csrbf_points *points; /* the points it was made for */
     size_t nblocks;
-    uint8_t *cur, *prev;        /* per block: rewritten from the kernel this call / last call */
+    uint32_t *prev;             /* blocks the last call computed from the kernel, increasing */
+    size_t nprev;
     int full;                   /* the next call writes every block */
+    uint64_t sel_id;            /* prev is exactly the solver's kept selection of this id
+                                   (0: it is not) */
+    int ranges_sel;             /* and the ranges are exactly that selection's */
     uint32_t *ranges;           /* 2 x nranges: first vertex, count */
     size_t nranges;
 };
@@ -468,10 +738,9 @@ int csrbf_touch_create(const csrbf_points *points, csrbf_touch **out)
     if (!t) return CSRBF_ERR_NOMEM;
     t->points = points;
     t->nblocks = points->nblocks;
-    t->cur = calloc(t->nblocks, 1);
-    t->prev = calloc(t->nblocks, 1);
+    t->prev = malloc(t->nblocks * sizeof *t->prev);
     t->ranges = malloc((t->nblocks + 1) * 2 * sizeof *t->ranges);
-    if (!t->cur || !t->prev || !t->ranges) {
+    if (!t->prev || !t->ranges) {
         csrbf_touch_destroy(&t);
         return CSRBF_ERR_NOMEM;
     }
@@ -483,7 +752,6 @@ int csrbf_touch_create(const csrbf_points *points, csrbf_touch **out)
 void csrbf_touch_destroy(csrbf_touch **tp)
 {
     if (!tp || !*tp) return;
-    free((*tp)->cur);
     free((*tp)->prev);
     free((*tp)->ranges);
     free(*tp);
@@ -498,8 +766,10 @@ void csrbf_touch_reset(csrbf_touch *t)
 void csrbf_touch_commit(csrbf_touch *t)
 {
     if (!t) return;
-    memset(t->prev, 0, t->nblocks);
+    t->nprev = 0;
     t->nranges = 0;
+    t->sel_id = 0;
+    t->ranges_sel = 0;
 }
 
 size_t csrbf_touch_ranges(const csrbf_touch *t, const uint32_t **ranges)
@@ -516,18 +786,132 @@ int csrbf_evaluate_touched(const csrbf_solver *cs, const csrbf_points *P, csrbf_
     return evaluate_impl(cs, P, out, flags, st, touch);
 }
 
+/* The summed share of the vertex box that the centres' support cubes cover, axis by axis: n
+ * times it estimates the vertex-centre pairs to test before any selection. O(m). */
+static double support_share(const csrbf_solver *s, const csrbf_points *P)
+{
+    double est = 0.0;
+    for (size_t i = 0; i < s->m; i++) {
+        double frac = 1.0;
+        for (int a = 0; a < 3; a++) {
+            double ext = P->bhi[a] - P->blo[a], c = s->c[3 * i + a];
+            if (ext <= 0.0) continue;
+            double ov = fmin(c + s->R, P->bhi[a]) - fmax(c - s->R, P->blo[a]);
+            frac *= ov > 0.0 ? ov / ext : 0.0;
+        }
+        est += frac;
+    }
+    return est;
+}
+
+/* Cost (ITEM_COST units, half a vector evaluation) above which an evaluation forks its
+ * threads: below it (about 8 us of work on one core) a fork/join costs more than it saves,
+ * and a frame loop's sleeping workers wake slowly. */
+#define PARALLEL_COST 6000
+
+/* Parts per thread of a fused walk-and-evaluate (scheduled dynamically: the costs of the
+ * parts are not known before their walks). */
+#define SPLIT_PARTS 4
+
+/* Vertex-centre lane pairs (estimated, support_share) above which a full write whose
+ * selection is not kept walks the tree and evaluates in parallel parts. */
+#define PARALLEL_LANES 50000
+
+/* sel_k of a selection seen once and not kept (the next use with the same key keeps it). */
+#define SEL_PENDING SIZE_MAX
+
+#if CSRBF_AVX512 && CSRBF_BLOCK == 16 /* helpers of the fused AVX-512 path */
+/* touch->ranges from k increasing blocks: runs of consecutive blocks as vertex ranges. */
+static void ranges_of_blocks(csrbf_touch *t, size_t n, const uint32_t *blk, size_t k)
+{
+    size_t nr = 0;
+    for (size_t i = 0; i < k;) {
+        size_t b0 = blk[i], b1 = b0 + 1;
+        for (i++; i < k && blk[i] == b1; i++) b1++;
+        size_t v1 = b1 * B < n ? b1 * B : n;
+        t->ranges[2 * nr] = (uint32_t)(b0 * B);
+        t->ranges[2 * nr + 1] = (uint32_t)(v1 - b0 * B);
+        nr++;
+    }
+    t->nranges = nr;
+}
+
+static void ranges_all(csrbf_touch *t, size_t n)
+{
+    t->ranges[0] = 0;
+    t->ranges[1] = (uint32_t)n;
+    t->nranges = 1;
+}
+
+/* First index i in blk[0..k) with blk[i] >= b. */
+static size_t lower_bound(const uint32_t *blk, size_t k, size_t b)
+{
+    size_t lo = 0, hi = k;
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (blk[mid] < b) lo = mid + 1;
+        else hi = mid;
+    }
+    return lo;
+}
+
+/* The touch's last-call list becomes blk[0..k) (copied, unless it is the list itself). */
+static void touch_set_prev(csrbf_touch *t, const uint32_t *blk, size_t k)
+{
+    if (blk != t->prev) memcpy(t->prev, blk, k * sizeof *blk);
+    t->nprev = k;
+}
+
+/* Split the work into parts of equal cost: part t is items isplit[t] .. isplit[t+1]-1 and,
+ * with gaps (a full write), blocks bsplit[t] .. bsplit[t+1]-1 (a copied gap block costs 1,
+ * so the split may fall inside a gap). ib NULL: ni blocks of equal cost. cum: prefix costs
+ * of the items (ni + 1); total: the whole cost. */
+static void split_work(const uint32_t *ib, const size_t *cum, size_t ni, int gaps, size_t nb,
+                       size_t parts, size_t total, size_t *isplit, size_t *bsplit)
+{
+    isplit[0] = bsplit[0] = 0;
+    for (size_t t = 1; t < parts; t++) {
+        size_t target = total / parts * t + total % parts * t / parts;
+        if (!ib) {
+            isplit[t] = bsplit[t] = ni * t / parts;
+        } else if (!gaps) {
+            size_t lo = 0, hi = ni; /* first item whose prefix cost reaches the target */
+            while (lo < hi) {
+                size_t mid = lo + (hi - lo) / 2;
+                if (cum[mid] < target) lo = mid + 1;
+                else hi = mid;
+            }
+            isplit[t] = lo;
+        } else {
+            /* cost of blocks 0..b-1: items before b plus the gap blocks among them */
+            size_t lo = 0, hi = nb;
+            while (lo < hi) {
+                size_t mid = lo + (hi - lo) / 2, i = lower_bound(ib, ni, mid);
+                if (cum[i] + (mid - i) < target) lo = mid + 1;
+                else hi = mid;
+            }
+            bsplit[t] = lo;
+            isplit[t] = lower_bound(ib, ni, lo);
+        }
+        if (isplit[t] < isplit[t - 1]) isplit[t] = isplit[t - 1];
+        if (bsplit[t] < bsplit[t - 1]) bsplit[t] = bsplit[t - 1];
+    }
+    isplit[parts] = ni;
+    bsplit[parts] = gaps ? nb : ni;
+}
+#endif
+
 static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *out,
                          unsigned flags, csrbf_eval_stats *st, csrbf_touch *touch)
 {
     if (!cs || !P || !out || (flags & ~(unsigned)CSRBF_EVAL_JACOBIAN)) return CSRBF_ERR_INVALID;
     if (!cs->have_start) return CSRBF_ERR_STATE;
-    uint8_t *tcur = touch ? touch->cur : NULL;
-    const uint8_t *tprev = touch && !touch->full ? touch->prev : NULL;
     /* The scratch buffer is the only state evaluate touches; a concurrent caller that finds it
      * busy allocates its own. The solver itself is read-only here. */
     csrbf_solver *s = (csrbf_solver *)cs;
     const size_t n = P->n, nb = P->nblocks, m = s->m;
     const int poly = s->k > 0, want_jac = st && (flags & CSRBF_EVAL_JACOBIAN);
+    const int full_write = !touch || touch->full; /* every block is written */
     int nt = s->opt.threads > 0 ? s->opt.threads : omp_get_max_threads();
     if (nt < 1) nt = 1;
 
@@ -543,7 +927,9 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
         }
         all_in = d2 < R2 * (1.0 - 1e-6);
     }
-    const int use_mask = !all_in && m <= 32;
+    /* up to CSRBF_FAST_MAX_CENTRES centres: blocks and their centre masks from the block
+     * tree; beyond, the centre grid per block (general path) */
+    const int use_tree = !all_in && m <= CSRBF_FAST_MAX_CENTRES;
     block_fn kern = s->opt.kernel == CSRBF_PSI30   ? block_psi30
                     : s->opt.kernel == CSRBF_PSI32 ? block_psi32
                                                    : block_psi31;
@@ -555,10 +941,28 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
                : s->opt.kernel == CSRBF_PSI32 ? block_psi32_avx512
                                               : block_psi31_avx512;
 #endif
+    /* the fused AVX-512 path: no polynomial, no Jacobian, all centres or tree masks
+     * (statistics are counted inside it) */
+    const int fast = avx512 && !want_jac && !poly && (all_in || use_tree);
 
+    /* scratch: the merged work list of a touched call, and for the general path dense masks,
+     * block flags and a centre list per thread; a concurrent caller (without the solver's
+     * scratch) also holds its own block selection */
     size_t per_thread = align64(m * sizeof(uint32_t));
-    size_t mask_bytes = use_mask ? align64(nb * sizeof(uint32_t)) : 0;
-    size_t need = mask_bytes + (size_t)nt * per_thread;
+    size_t blk_m = align64(nb * sizeof(uint64_t)), blk_b = align64(nb * sizeof(uint32_t));
+    size_t blk_c = align64((nb + 1) * sizeof(size_t));
+    size_t mrg = fast && use_tree && !full_write ? blk_m + blk_b + blk_c : 0;
+    size_t splits = fast ? align64(2 * ((size_t)nt + 1) * sizeof(size_t)) : 0;
+    size_t gen_m = !fast && use_tree ? blk_m : 0;
+    size_t gen_f = !fast && touch ? align64(2 * nb) : 0;
+    size_t gen_t = !fast ? (size_t)nt * per_thread : 0;
+    size_t pack = fast ? align64(m * 8 * sizeof(float)) : 0;
+    /* a fused walk-and-evaluate (full writes, selection not kept): per thread, the selection
+     * of one part of the mesh */
+    const size_t fparts = SPLIT_PARTS * (size_t)nt, fmax = nb / fparts + 2;
+    size_t fthr = align64(fmax * sizeof(uint64_t)) + align64(fmax * sizeof(uint32_t));
+    size_t fsz = fast && use_tree && !touch && nt > 1 ? (size_t)nt * fthr : 0;
+    size_t need = pack + splits + mrg + gen_m + gen_f + gen_t + fsz + 64;
     void *mem = NULL;
     int own = 0;
     if (!atomic_flag_test_and_set(&s->scratch_busy)) {
@@ -571,164 +975,335 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
             s->scratch = q;
             s->scratch_cap = need;
         }
+        if (use_tree && s->sel_cap < nb) {
+            uint32_t *b2 = realloc(s->sel_blk, nb * sizeof *b2);
+            if (b2) s->sel_blk = b2;
+            uint64_t *m2 = b2 ? realloc(s->sel_msk, nb * sizeof *m2) : NULL;
+            if (m2) s->sel_msk = m2;
+            size_t *c2 = m2 ? realloc(s->sel_cum, (nb + 1) * sizeof *c2) : NULL;
+            if (c2) s->sel_cum = c2;
+            if (!b2 || !m2 || !c2) {
+                atomic_flag_clear(&s->scratch_busy);
+                return CSRBF_ERR_NOMEM;
+            }
+            s->sel_cap = nb;
+            s->sel_pts = s->sel_ctr = 0;
+        }
         mem = s->scratch;
     } else {
+        need += use_tree ? blk_m + blk_b + blk_c : 0;
         mem = malloc(need);
         if (!mem) return CSRBF_ERR_NOMEM;
         own = 1;
     }
-    uint32_t *mask = mem;
-    unsigned char *tbase = (unsigned char *)mem + mask_bytes;
+    unsigned char *sp = (unsigned char *)(((uintptr_t)mem + 63) & ~(uintptr_t)63);
+    float *cpack = (float *)sp; /* fast path: centre j's x, y, z, alpha x, y, z at 8 j */
+    size_t *isplit = (size_t *)(sp += pack), *bsplit = isplit + (size_t)nt + 1;
+    uint64_t *mrg_msk = (uint64_t *)(sp += splits);
+    uint32_t *mrg_blk = (uint32_t *)(sp + (mrg ? blk_m : 0));
+    size_t *mrg_cum = (size_t *)(sp + (mrg ? blk_m + blk_b : 0));
+    uint64_t *gen_mask = (uint64_t *)(sp += mrg);
+    uint8_t *tcur = (uint8_t *)(sp += gen_m);
+    uint8_t *tprev = tcur + nb;
+    unsigned char *tbase = (sp += gen_f);
+    unsigned char *fbuf = tbase + gen_t;  /* fused walk: fthr bytes per thread */
+    unsigned char *fbase = fbuf + fsz;    /* a concurrent caller's own selection */
 
-    /* work estimate: vertex-centre pairs, each centre counting the fraction of the vertex
-     * box its support's bounding cube covers (axis by axis); small work stays on the
-     * calling thread, where a fork/join would cost more than it saves */
-    double est = 0.0;
-    for (size_t i = 0; i < m; i++) {
-        double frac = 1.0;
-        for (int a = 0; a < 3; a++) {
-            double ext = P->bhi[a] - P->blo[a], c = s->c[3 * i + a];
-            if (ext <= 0.0) continue;
-            double ov = fmin(c + s->R, P->bhi[a]) - fmax(c - s->R, P->blo[a]);
-            frac *= ov > 0.0 ? ov / ext : 0.0;
-        }
-        est += frac;
-    }
-    size_t work = (size_t)((double)n * est);
-    int threads = work > 50000 ? nt : 1;
-
-    /* the fused AVX-512 path: no polynomial, no Jacobian, all centres or a mask (statistics
-     * are counted inside it) */
-    const int fast = avx512 && !want_jac && !poly && (all_in || use_mask);
-    size_t pairs = 0, moved = 0;
-    double maxd = 0.0, minjac = 1.0;
     const float inv_r2 = (float)(1.0 / R2), r2c = (float)(R2 * (1.0 + 1e-5)) + 1e-30f;
-    const float pc0 = s->fpc[0], pc1 = s->fpc[1], pc2 = s->fpc[2];
-    const float *G = s->fG, *g0 = s->fg0;
     const float *fcx = s->fc[0], *fcy = s->fc[1], *fcz = s->fc[2];
     const float *fax = s->fa[0], *fay = s->fa[1], *faz = s->fa[2];
 
-#pragma omp parallel num_threads(threads) reduction(+ : pairs, moved) reduction(max : maxd) \
-    reduction(min : minjac)
-    {
-        int tid = omp_get_thread_num();
-        uint32_t *list = (uint32_t *)(tbase + (size_t)tid * per_thread);
-        if (use_mask) {
-            /* phase 1: masks, in chunks of 1024 blocks */
-#pragma omp for schedule(static)
-            for (size_t c = 0; c < (nb + 1023) / 1024; c++) {
-                size_t b0 = c * 1024, b1 = b0 + 1024 < nb ? b0 + 1024 : nb;
-                block_masks(P, b0, b1, m, fcx, fcy, fcz, r2c, mask);
-            }
+    /* the block selection: cached in the solver for these points and centres (anchored
+     * frames reuse it), else a walk of the block tree */
+    block_select S = {P, fcx, fcy, fcz, r2c, inv_r2, NULL, NULL, NULL, 0, 0};
+    int fused = 0;
+    if (use_tree && own) {
+        S.msk = (uint64_t *)(sp = fbase);
+        S.blk = (uint32_t *)(sp + blk_m);
+        S.cum = (size_t *)(sp + blk_m + blk_b);
+        select_blocks(&S, avx512, m);
+    } else if (use_tree) {
+        S.blk = s->sel_blk;
+        S.msk = s->sel_msk;
+        S.cum = s->sel_cum;
+        const int seen = s->sel_pts == P->stamp && s->sel_ctr == s->centres_stamp;
+        int changed = 1;
+        if (seen && s->sel_k != SEL_PENDING) {
+            S.k = s->sel_k;
+            S.evals = s->sel_evals;
+            changed = 0;
+        } else if (!seen && fast && fsz &&
+                   (double)n * support_share(s, P) > (double)PARALLEL_LANES) {
+            /* a full write with a selection not seen before (unanchored frames): each thread
+             * walks the tree for its parts of the mesh and evaluates them at once (below);
+             * the selection is kept only if it is used again */
+            fused = 1;
+            s->sel_k = SEL_PENDING;
+        } else {
+            select_blocks(&S, avx512, m);
+            s->sel_k = S.k;
+            s->sel_evals = S.evals;
+            s->sel_refined = 0;
         }
-        if (all_in)
-            for (size_t i = 0; i < m; i++) list[i] = (uint32_t)i;
 #if CSRBF_AVX512 && CSRBF_BLOCK == 16
-        if (fast) {
-            drive_fn drive = s->opt.kernel == CSRBF_PSI30   ? drive_psi30_avx512
-                             : s->opt.kernel == CSRBF_PSI32 ? drive_psi32_avx512
-                                                            : drive_psi31_avx512;
-            if (st)
-                drive = s->opt.kernel == CSRBF_PSI30   ? drive_psi30_avx512_stats
-                        : s->opt.kernel == CSRBF_PSI32 ? drive_psi32_avx512_stats
-                                                       : drive_psi31_avx512_stats;
-            block_stats bs = {0, 0, 0.0f};
+        if (seen && avx512 && !s->sel_refined && !fused) { /* used twice: refine it once */
+            S.evals = refine_avx512(&S);
+            s->sel_k = S.k;
+            s->sel_evals = S.evals;
+            s->sel_refined = 1;
+            changed = 1;
+        }
+#endif
+        if (changed) s->sel_id = csrbf_new_stamp();
+        s->sel_pts = P->stamp;
+        s->sel_ctr = s->centres_stamp;
+    }
+
+    size_t pairs = 0, moved = 0;
+    double maxd = 0.0, minjac = 1.0;
+#if !(CSRBF_AVX512 && CSRBF_BLOCK == 16)
+    (void)cpack, (void)isplit, (void)bsplit, (void)mrg_msk, (void)mrg_blk, (void)mrg_cum,
+        (void)fused, (void)fbuf, (void)fthr, (void)fparts;
+#else
+    if (fast) {
+        /* the work list: every block (all in), the selected blocks with the gaps between
+         * them copied (a full write), or the selected blocks merged with the last call's
+         * (restored where no support holds them now) */
+        for (size_t j = 0; j < m; j++) {
+            float *q = cpack + 8 * j;
+            q[0] = fcx[j], q[1] = fcy[j], q[2] = fcz[j];
+            q[3] = fax[j], q[4] = fay[j], q[5] = faz[j];
+            q[6] = q[7] = 0.0f;
+        }
+        const int ki = s->opt.kernel == CSRBF_PSI30 ? 1 : s->opt.kernel == CSRBF_PSI32 ? 2 : 0;
+        if (fused) {
+            const drive_fn drive = drivers[ki][st != NULL][DRIVE_GAPS];
+            const int top = P->tlevels - 1;
+            const uint64_t all = m >= 64 ? ~0ull : (1ull << m) - 1;
+            float maxd2 = 0.0f;
+#pragma omp parallel num_threads(nt) reduction(+ : pairs, moved) reduction(max : maxd2)
+            {
+                block_stats ts = {0, 0, 0.0f};
+                unsigned char *mine = fbuf + (size_t)omp_get_thread_num() * fthr;
+                block_select L = S;
+                L.msk = (uint64_t *)mine;
+                L.blk = (uint32_t *)(mine + align64(fmax * sizeof(uint64_t)));
 #pragma omp for schedule(dynamic, 1)
-            for (size_t c = 0; c < (nb + 63) / 64; c++) {
-                size_t b0 = c * 64, b1 = b0 + 64 < nb ? b0 + 64 : nb;
-                drive(P, out, b0, b1, use_mask ? mask : NULL, m, fcx, fcy, fcz, fax, fay, faz,
-                      inv_r2, &bs, tcur, tprev);
+                for (size_t q = 0; q < fparts; q++) {
+                    size_t lo = nb * q / fparts, hi = nb * (q + 1) / fparts;
+                    if (hi <= lo) continue;
+                    L.k = 0;
+                    select_visit_avx512(&L, top, 0, all, lo, hi);
+                    drive(P, out, L.blk, L.msk, 0, L.k, lo, hi, m, cpack, inv_r2, &ts);
+                }
+                pairs += ts.pairs;
+                moved += ts.moved;
+                if (ts.maxd2 > maxd2) maxd2 = ts.maxd2;
+            }
+            maxd = maxd2;
+        } else {
+            const uint32_t *ib = NULL;
+            const uint64_t *im = NULL;
+            const size_t *ic = NULL;
+            size_t ni = nb, cost = nb * ITEM_COST(m);
+            int gaps = 0, same = 0;
+            if (use_tree) {
+                ib = S.blk;
+                im = S.msk;
+                ic = S.cum;
+                ni = S.k;
+                if (full_write) {
+                    gaps = 1;
+                } else if (!own && touch->sel_id == s->sel_id) {
+                    same = 1; /* the last call computed exactly these blocks: nothing to restore */
+                } else {
+                    const uint32_t *pv = touch->prev;
+                    size_t a = 0, c = 0, k = 0, np = touch->nprev, cc = 0;
+                    while (a < S.k || c < np) {
+                        mrg_cum[k] = cc;
+                        if (c >= np || (a < S.k && S.blk[a] < pv[c])) {
+                            cc += S.cum[a + 1] - S.cum[a];
+                            mrg_blk[k] = S.blk[a];
+                            mrg_msk[k++] = S.msk[a++];
+                        } else if (a >= S.k || pv[c] < S.blk[a]) {
+                            cc += ITEM_COST(0);
+                            mrg_blk[k] = pv[c++];
+                            mrg_msk[k++] = 0;
+                        } else {
+                            cc += S.cum[a + 1] - S.cum[a];
+                            mrg_blk[k] = S.blk[a];
+                            mrg_msk[k++] = S.msk[a++];
+                            c++;
+                        }
+                    }
+                    mrg_cum[k] = cc;
+                    ib = mrg_blk;
+                    im = mrg_msk;
+                    ic = mrg_cum;
+                    ni = k;
+                }
+                cost = ic[ni];
+            }
+            const drive_fn drive = drivers[ki][st != NULL][!ib ? DRIVE_ALL : gaps ? DRIVE_GAPS : DRIVE_LIST];
+            block_stats bs = {0, 0, 0.0f};
+            /* threads by the computed blocks' cost; copying the gaps (a full write) is bound by
+             * memory and does not count, but is shared out when threads run */
+            if (cost <= PARALLEL_COST || nt == 1) {
+                drive(P, out, ib, im, 0, ni, 0, gaps ? nb : 0, m, cpack, inv_r2, &bs);
+            } else {
+                /* one contiguous part of equal cost per thread: no scheduling during the loop
+                 * (a chunk grab is a cache-line transfer between cores), and frame after frame
+                 * the same blocks stay in the same core's cache */
+                const size_t parts = (size_t)nt;
+                split_work(ib, ic, ni, gaps, nb, parts, cost + (gaps ? nb - ni : 0), isplit,
+                           bsplit);
+                float maxd2 = 0.0f;
+#pragma omp parallel num_threads(nt) reduction(+ : pairs, moved) reduction(max : maxd2)
+                {
+                    block_stats ts = {0, 0, 0.0f};
+                    /* a smaller team than asked for takes the parts round robin */
+                    for (size_t t = (size_t)omp_get_thread_num(); t < parts;
+                         t += (size_t)omp_get_num_threads())
+                        drive(P, out, ib, im, isplit[t], isplit[t + 1], gaps ? bsplit[t] : 0,
+                              gaps ? bsplit[t + 1] : 0, m, cpack, inv_r2, &ts);
+                    pairs += ts.pairs;
+                    moved += ts.moved;
+                    if (ts.maxd2 > maxd2) maxd2 = ts.maxd2;
+                }
+                bs.maxd2 = maxd2;
             }
             pairs += bs.pairs;
             moved += bs.moved;
-            if ((double)bs.maxd2 > maxd) maxd = bs.maxd2;
-        } else
-#endif
-        {
-        _Alignas(64) float accx[B], accy[B], accz[B];
-        _Alignas(64) int cnt[B];
-#pragma omp for schedule(static, 64)
-        for (size_t b = 0; b < nb; b++) {
-            size_t k0 = b * B, nv = b + 1 < nb ? B : n - k0;
-            float *o = out + 3 * k0;
-            size_t k = m;
-            if (use_mask) {
-                uint32_t mk = mask[b];
-                if (!mk && !poly && !want_jac) { /* outside every support: the base */
-                    if (tcur) tcur[b] = 0;
-                    if (!tprev || tprev[b]) memcpy(o, P->xyz + 3 * k0, nv * 3 * sizeof(float));
-                    continue;
-                }
-                k = 0;
-                while (mk) {
-                    list[k++] = (uint32_t)__builtin_ctz(mk);
-                    mk &= mk - 1;
-                }
-            } else if (!all_in) {
-                k = select_centres(s, P, b, list, 0);
-                if (!k && !poly && !want_jac) {
-                    if (tcur) tcur[b] = 0;
-                    if (!tprev || tprev[b]) memcpy(o, P->xyz + 3 * k0, nv * 3 * sizeof(float));
-                    continue;
+            maxd = bs.maxd2;
+            if (touch) { /* this call's computed blocks become the last call's */
+                if (all_in) {
+                    ranges_all(touch, n);
+                    for (size_t b = 0; b < nb; b++) touch->prev[b] = (uint32_t)b;
+                    touch->nprev = nb;
+                    touch->sel_id = 0;
+                    touch->ranges_sel = 0;
+                } else {
+                    if (full_write) {
+                        ranges_all(touch, n);
+                        touch->ranges_sel = 0;
+                    } else if (!same || !touch->ranges_sel) {
+                        ranges_of_blocks(touch, n, ib, ni);
+                        touch->ranges_sel = ni == S.k;
+                    }
+                    if (!same) touch_set_prev(touch, S.blk, S.k);
+                    /* a selection computed into the caller's own memory is not the solver's */
+                    touch->sel_id = own ? 0 : s->sel_id;
                 }
             }
-            if (tcur) tcur[b] = 1;
-            const float *x = P->s[0] + k0, *y = P->s[1] + k0, *z = P->s[2] + k0;
-            kern(x, y, z, list, k, fcx, fcy, fcz, fax, fay, faz, inv_r2, accx, accy, accz, cnt);
-            if (poly)
-                for (int v = 0; v < B; v++) {
-                    float ex = x[v] - pc0, ey = y[v] - pc1, ez = z[v] - pc2;
-                    accx[v] += g0[0] + G[0] * ex + G[1] * ey + G[2] * ez;
-                    accy[v] += g0[1] + G[3] * ex + G[4] * ey + G[5] * ez;
-                    accz[v] += g0[2] + G[6] * ex + G[7] * ey + G[8] * ez;
-                }
-#if CSRBF_AVX512 && CSRBF_BLOCK == 16
-            if (avx512 && nv == B)
-                write_block_avx512(o, x, y, z, accx, accy, accz);
-            else
+        }
+    } else
 #endif
-                write_block(o, x, y, z, accx, accy, accz, nv);
-            if (st) {
-                for (size_t v = 0; v < nv; v++) {
-                    pairs += (size_t)cnt[v];
-                    moved += poly || cnt[v] > 0;
-                    double d = (double)accx[v] * accx[v] + (double)accy[v] * accy[v] +
-                               (double)accz[v] * accz[v];
-                    if (d > maxd) maxd = d;
-                    if (want_jac && (poly || cnt[v] > 0)) {
-                        double xv[3] = {x[v], y[v], z[v]};
-                        double det = jacobian_det(s, xv, list, k);
-                        if (det < minjac) minjac = det;
+    {
+        /* the general path: every block, its centres from the tree masks, all of them (all
+         * in), or the centre grid (many centres) */
+        if (use_tree) {
+            memset(gen_mask, 0, nb * sizeof *gen_mask);
+            for (size_t i = 0; i < S.k; i++) gen_mask[S.blk[i]] = S.msk[i];
+        }
+        if (touch) {
+            memset(tprev, full_write, nb);
+            if (!full_write)
+                for (size_t i = 0; i < touch->nprev; i++) tprev[touch->prev[i]] = 1;
+        }
+        const float pc0 = s->fpc[0], pc1 = s->fpc[1], pc2 = s->fpc[2];
+        const float *G = s->fG, *g0 = s->fg0;
+        size_t cost = use_tree ? S.cum[S.k] : all_in ? nb * ITEM_COST(m) : nb * ITEM_COST(1);
+        int threads = cost > PARALLEL_COST || (m > CSRBF_FAST_MAX_CENTRES && !all_in) ? nt : 1;
+#pragma omp parallel num_threads(threads) reduction(+ : pairs, moved) reduction(max : maxd) \
+    reduction(min : minjac)
+        {
+            int tid = omp_get_thread_num();
+            uint32_t *list = (uint32_t *)(tbase + (size_t)tid * per_thread);
+            if (all_in)
+                for (size_t i = 0; i < m; i++) list[i] = (uint32_t)i;
+            _Alignas(64) float accx[B], accy[B], accz[B];
+            _Alignas(64) int cnt[B];
+#pragma omp for schedule(dynamic, 64)
+            for (size_t b = 0; b < nb; b++) {
+                size_t k0 = b * B, nv = b + 1 < nb ? B : n - k0;
+                float *o = out + 3 * k0;
+                size_t k = m;
+                if (!all_in) {
+                    if (use_tree) {
+                        uint64_t mk = gen_mask[b];
+                        k = 0;
+                        while (mk) {
+                            list[k++] = (uint32_t)__builtin_ctzll(mk);
+                            mk &= mk - 1;
+                        }
+                    } else {
+                        k = select_centres(s, P, b, list, 0);
+                    }
+                    if (!k && !poly && !want_jac) { /* outside every support: the base */
+                        if (touch) tcur[b] = 0;
+                        if (!touch || tprev[b]) memcpy(o, P->xyz + 3 * k0, nv * 3 * sizeof(float));
+                        continue;
+                    }
+                }
+                if (touch) tcur[b] = 1;
+                const float *x = P->s[0] + k0, *y = P->s[1] + k0, *z = P->s[2] + k0;
+                kern(x, y, z, list, k, fcx, fcy, fcz, fax, fay, faz, inv_r2, accx, accy, accz,
+                     cnt);
+                if (poly)
+                    for (int v = 0; v < B; v++) {
+                        float ex = x[v] - pc0, ey = y[v] - pc1, ez = z[v] - pc2;
+                        accx[v] += g0[0] + G[0] * ex + G[1] * ey + G[2] * ez;
+                        accy[v] += g0[1] + G[3] * ex + G[4] * ey + G[5] * ez;
+                        accz[v] += g0[2] + G[6] * ex + G[7] * ey + G[8] * ez;
+                    }
+#if CSRBF_AVX512 && CSRBF_BLOCK == 16
+                if (avx512 && nv == B)
+                    write_block_avx512(o, x, y, z, accx, accy, accz);
+                else
+#endif
+                    write_block(o, x, y, z, accx, accy, accz, nv);
+                if (st) {
+                    for (size_t v = 0; v < nv; v++) {
+                        pairs += (size_t)cnt[v];
+                        moved += poly || cnt[v] > 0;
+                        double d = (double)accx[v] * accx[v] + (double)accy[v] * accy[v] +
+                                   (double)accz[v] * accz[v];
+                        if (d > maxd) maxd = d;
+                        if (want_jac && (poly || cnt[v] > 0)) {
+                            double xv[3] = {x[v], y[v], z[v]};
+                            double det = jacobian_det(s, xv, list, k);
+                            if (det < minjac) minjac = det;
+                        }
                     }
                 }
             }
         }
+        if (touch) { /* the written blocks (computed now or restored) as ranges */
+            size_t k = 0, nr = 0;
+            for (size_t b = 0; b < nb;) {
+                if (!(tcur[b] || tprev[b])) {
+                    b++;
+                    continue;
+                }
+                size_t b0 = b;
+                for (; b < nb && (tcur[b] || tprev[b]); b++)
+                    if (tcur[b]) touch->prev[k++] = (uint32_t)b; /* tprev holds the old list */
+                size_t v1 = b * B < n ? b * B : n;
+                touch->ranges[2 * nr] = (uint32_t)(b0 * B);
+                touch->ranges[2 * nr + 1] = (uint32_t)(v1 - b0 * B);
+                nr++;
+            }
+            touch->nranges = nr;
+            touch->nprev = k;
+            touch->sel_id = 0;
+            touch->ranges_sel = 0;
         }
     }
     if (own)
         free(mem);
     else
         atomic_flag_clear(&s->scratch_busy);
-    if (touch) { /* the rewritten blocks as vertex ranges, then this call becomes the last */
-        size_t nr = 0;
-        for (size_t b = 0; b < nb;) {
-            if (!(touch->full || touch->cur[b] || touch->prev[b])) {
-                b++;
-                continue;
-            }
-            size_t b0 = b;
-            while (b < nb && (touch->full || touch->cur[b] || touch->prev[b])) b++;
-            size_t v1 = b * B < n ? b * B : n;
-            touch->ranges[2 * nr] = (uint32_t)(b0 * B);
-            touch->ranges[2 * nr + 1] = (uint32_t)(v1 - b0 * B);
-            nr++;
-        }
-        touch->nranges = nr;
-        uint8_t *tmp = touch->prev;
-        touch->prev = touch->cur;
-        touch->cur = tmp;
-        touch->full = 0;
-    }
+    if (touch) touch->full = 0;
     if (st) {
         st->pairs = pairs;
         st->moved = moved;

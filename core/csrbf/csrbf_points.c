@@ -10,6 +10,12 @@
 #include <stdlib.h>
 #include <string.h>
 
+uint64_t csrbf_new_stamp(void)
+{
+    static _Atomic uint64_t counter = 0;
+    return atomic_fetch_add(&counter, 1) + 1;
+}
+
 static int check(size_t n, const float *xyz)
 {
     for (size_t i = 0; i < 3 * n; i++)
@@ -59,6 +65,32 @@ static void fill_super_range(csrbf_points *p, size_t b0, size_t b1)
     }
 }
 
+static size_t pad_fan(size_t n) { return (n + CSRBF_FAN - 1) / CSRBF_FAN * CSRBF_FAN; }
+
+/* Recompute the block tree's nodes above blocks b0..b1-1 from their children (exact: a
+ * node's box is the union of its children's, padding boxes being empty). */
+static void fill_tree_range(csrbf_points *p, size_t b0, size_t b1)
+{
+    if (b1 <= b0) return;
+    size_t i0 = b0, i1 = b1 - 1; /* inclusive node range at the current level */
+    for (int l = 1; l < p->tlevels; l++) {
+        i0 /= CSRBF_FAN;
+        i1 /= CSRBF_FAN;
+        for (int a = 0; a < 3; a++) {
+            const float *clo = p->tlo[l - 1][a], *chi = p->thi[l - 1][a];
+            for (size_t i = i0; i <= i1; i++) {
+                float lo = INFINITY, hi = -INFINITY;
+                for (size_t c = CSRBF_FAN * i; c < CSRBF_FAN * i + CSRBF_FAN; c++) {
+                    lo = clo[c] < lo ? clo[c] : lo;
+                    hi = chi[c] > hi ? chi[c] : hi;
+                }
+                p->tlo[l][a][i] = lo;
+                p->thi[l][a][i] = hi;
+            }
+        }
+    }
+}
+
 static void fill_blocks(csrbf_points *p)
 {
     for (int a = 0; a < 3; a++) {
@@ -67,6 +99,7 @@ static void fill_blocks(csrbf_points *p)
     }
     fill_block_range(p, 0, p->nblocks);
     fill_super_range(p, 0, p->nblocks);
+    fill_tree_range(p, 0, p->nblocks);
 }
 
 void csrbf_points_destroy(csrbf_points **pp)
@@ -80,6 +113,10 @@ void csrbf_points_destroy(csrbf_points **pp)
         free(p->hi[a]);
         free(p->slo[a]);
         free(p->shi[a]);
+        for (int l = 1; l < p->tlevels; l++) {
+            free(p->tlo[l][a]);
+            free(p->thi[l][a]);
+        }
     }
     free(p);
     *pp = NULL;
@@ -103,14 +140,38 @@ int csrbf_points_create(size_t n, const float *xyz, csrbf_points **out)
     size_t padded = p->nblocks * CSRBF_BLOCK;
     p->xyz = malloc(n * 3 * sizeof(float));
     int ok = p->xyz != NULL;
+    /* the block tree's levels: counts down to at most CSRBF_FAN nodes at the top */
+    p->tcount[0] = p->nblocks;
+    p->tlevels = 1;
+    while (p->tcount[p->tlevels - 1] > CSRBF_FAN) {
+        p->tcount[p->tlevels] = (p->tcount[p->tlevels - 1] + CSRBF_FAN - 1) / CSRBF_FAN;
+        p->tlevels++;
+    }
     for (int a = 0; a < 3 && ok; a++) {
         p->s[a] = alloc64(padded * sizeof(float));
-        p->lo[a] = alloc64(p->nblocks * sizeof(float));
-        p->hi[a] = alloc64(p->nblocks * sizeof(float));
+        p->lo[a] = alloc64(pad_fan(p->nblocks) * sizeof(float));
+        p->hi[a] = alloc64(pad_fan(p->nblocks) * sizeof(float));
+        p->tlo[0][a] = p->lo[a];
+        p->thi[0][a] = p->hi[a];
+        for (int l = 0; l < p->tlevels && p->lo[a] && p->hi[a]; l++) {
+            size_t np = pad_fan(p->tcount[l]);
+            if (l > 0) {
+                p->tlo[l][a] = alloc64(np * sizeof(float));
+                p->thi[l][a] = alloc64(np * sizeof(float));
+                if (!p->tlo[l][a] || !p->thi[l][a]) {
+                    ok = 0;
+                    break;
+                }
+            }
+            for (size_t i = p->tcount[l]; i < np; i++) { /* padding: empty boxes */
+                p->tlo[l][a][i] = INFINITY;
+                p->thi[l][a][i] = -INFINITY;
+            }
+        }
         p->nsuper = (p->nblocks + CSRBF_SUPER - 1) / CSRBF_SUPER;
         p->slo[a] = malloc(p->nsuper * sizeof(float));
         p->shi[a] = malloc(p->nsuper * sizeof(float));
-        ok = p->s[a] && p->lo[a] && p->hi[a] && p->slo[a] && p->shi[a];
+        ok = ok && p->s[a] && p->lo[a] && p->hi[a] && p->slo[a] && p->shi[a];
     }
     if (!ok) {
         csrbf_points_destroy(&p);
@@ -118,6 +179,7 @@ int csrbf_points_create(size_t n, const float *xyz, csrbf_points **out)
     }
     memcpy(p->xyz, xyz, n * 3 * sizeof(float));
     fill_blocks(p);
+    p->stamp = csrbf_new_stamp();
     *out = p;
     return CSRBF_OK;
 }
@@ -127,6 +189,7 @@ int csrbf_points_update(csrbf_points *p, const float *xyz)
     if (!p || !xyz || check(p->n, xyz)) return CSRBF_ERR_INVALID;
     memcpy(p->xyz, xyz, p->n * 3 * sizeof(float));
     fill_blocks(p);
+    p->stamp = csrbf_new_stamp();
     return CSRBF_OK;
 }
 
@@ -144,7 +207,9 @@ int csrbf_points_update_ranges(csrbf_points *p, const float *xyz, const uint32_t
         memcpy(p->xyz + 3 * v0, xyz + 3 * v0, c * 3 * sizeof(float));
         fill_block_range(p, v0 / CSRBF_BLOCK, (v0 + c + CSRBF_BLOCK - 1) / CSRBF_BLOCK);
         fill_super_range(p, v0 / CSRBF_BLOCK, (v0 + c + CSRBF_BLOCK - 1) / CSRBF_BLOCK);
+        fill_tree_range(p, v0 / CSRBF_BLOCK, (v0 + c + CSRBF_BLOCK - 1) / CSRBF_BLOCK);
     }
+    p->stamp = csrbf_new_stamp();
     return CSRBF_OK;
 }
 

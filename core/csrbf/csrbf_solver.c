@@ -287,6 +287,9 @@ void csrbf_solver_destroy(csrbf_solver **sp)
     csrbf_grid_free(&s->cgrid);
     csrbf_guard_free(s);
     free(s->scratch);
+    free(s->sel_blk);
+    free(s->sel_msk);
+    free(s->sel_cum);
     free(s);
     *sp = NULL;
 }
@@ -337,18 +340,25 @@ static int dense_cholesky(double *L, size_t m)
 /* Solve L L^T X = B in place; B column-major m x ncol. */
 static void dense_solve(const double *L, size_t m, double *B, size_t ncol)
 {
-    for (size_t c = 0; c < ncol; c++) {
-        double *b = B + c * m;
+    /* up to 4 columns at a time, interleaved: each column's arithmetic is the plain forward
+     * and back substitution (same operations, same order), but the columns' dependency
+     * chains overlap instead of running one after the other */
+    for (size_t c0 = 0; c0 < ncol; c0 += 4) {
+        const size_t nc = ncol - c0 < 4 ? ncol - c0 : 4;
+        double *b[4];
+        for (size_t c = 0; c < 4; c++) b[c] = B + (c0 + (c < nc ? c : 0)) * m;
         for (size_t i = 0; i < m; i++) {
-            double v = b[i];
             const double *li = L + i * m;
-            for (size_t k = 0; k < i; k++) v -= li[k] * b[k];
-            b[i] = v / li[i];
+            double v[4] = {b[0][i], b[1][i], b[2][i], b[3][i]};
+            for (size_t k = 0; k < i; k++)
+                for (size_t c = 0; c < 4; c++) v[c] -= li[k] * b[c][k];
+            for (size_t c = nc; c-- > 0;) b[c][i] = v[c] / li[i];
         }
         for (size_t i = m; i-- > 0;) {
-            double v = b[i];
-            for (size_t k = i + 1; k < m; k++) v -= L[k * m + i] * b[k];
-            b[i] = v / L[i * m + i];
+            double v[4] = {b[0][i], b[1][i], b[2][i], b[3][i]};
+            for (size_t k = i + 1; k < m; k++)
+                for (size_t c = 0; c < 4; c++) v[c] -= L[k * m + i] * b[c][k];
+            for (size_t c = nc; c-- > 0;) b[c][i] = v[c] / L[i * m + i];
         }
     }
 }
@@ -733,6 +743,7 @@ int csrbf_solver_set_start_points(csrbf_solver *s, size_t n, const float *start)
     s->msg[0] = '\0';
     s->warnings = 0;
     s->have_start = 0;
+    s->centres_stamp = csrbf_new_stamp(); /* a cached block selection no longer applies */
     if (!start) return fail(s, CSRBF_ERR_INVALID, "start is NULL");
     if (n == 0) return fail(s, CSRBF_ERR_INVALID, "n is 0: at least one start point is needed");
     if (n >= UINT32_MAX) return fail(s, CSRBF_ERR_INVALID, "n %zu is too large (< 2^32 - 1)", n);

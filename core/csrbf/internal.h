@@ -15,6 +15,11 @@
  * width. Blocks are runs of consecutive vertex indices, so output stays contiguous. */
 #define CSRBF_BLOCK 16
 
+/* Fan-out of the block tree (csrbf_points: one AVX-512 vector of boxes holds a node's
+ * children) and its deepest possible level count (nblocks < 2^28 = CSRBF_FAN^7). */
+#define CSRBF_FAN 16
+#define CSRBF_TREE_MAX 8
+
 /* A hash grid over points (double, AoS n x 3) with cubic cells of side h. Cells hash into a
  * power-of-two table; each point keeps its integer cell so that colliding cells are told
  * apart. */
@@ -95,6 +100,18 @@ struct csrbf_solver {
     size_t g_cap;
     csrbf_points *g_tmp;     /* guarded step: index of the intermediate shape */
 
+    /* csrbf_evaluate's block selection (blocks meeting a support, centre masks), kept for
+     * the points stamp sel_pts and the centres stamp sel_ctr: anchored frames (same centres,
+     * same points) reuse it. Used only by the holder of scratch_busy. */
+    uint64_t centres_stamp;  /* a fresh csrbf_new_stamp() at every set_start_points */
+    uint64_t sel_pts, sel_ctr;
+    uint64_t sel_id;         /* a fresh stamp whenever the kept selection changes */
+    int sel_refined;         /* the kept selection has been refined (csrbf_eval.c) */
+    uint32_t *sel_blk;       /* sel_cap each: blocks, increasing */
+    uint64_t *sel_msk;       /* their centre masks (bit j: centre j) */
+    size_t *sel_cum;         /* sel_cap + 1: prefix costs of the blocks (csrbf_eval.c) */
+    size_t sel_k, sel_evals, sel_cap; /* blocks listed, sum of their mask bits */
+
     /* evaluation scratch: one user at a time; concurrent callers allocate their own */
     atomic_flag scratch_busy;
     void *scratch;
@@ -103,6 +120,7 @@ struct csrbf_solver {
 
 struct csrbf_points {
     size_t n, nblocks;
+    uint64_t stamp;          /* a fresh csrbf_new_stamp() at every create / update */
     float *xyz;              /* n x 3, original order */
     float *s[3];             /* nblocks * CSRBF_BLOCK each: coordinates, structure of arrays,
                                 the last block padded with copies of its first vertex */
@@ -110,10 +128,22 @@ struct csrbf_points {
     float blo[3], bhi[3];    /* bounding box of all vertices */
     size_t nsuper;           /* superblocks of CSRBF_SUPER blocks (csrbf_points_nearest) */
     float *slo[3], *shi[3];  /* nsuper each: superblock boxes */
+    /* box tree over the blocks (csrbf_evaluate's block selection): level 0 is lo/hi (the
+     * blocks), node i of level l + 1 bounds nodes CSRBF_FAN i .. CSRBF_FAN i + CSRBF_FAN - 1
+     * of level l; the top level has at most CSRBF_FAN nodes. Every level is allocated to a
+     * multiple of CSRBF_FAN, the padding holding empty boxes (lo = +inf, hi = -inf), so that
+     * a node's children are always one full group. tlo[0] / thi[0] alias lo / hi. */
+    int tlevels;             /* levels including the blocks' (1 when nblocks <= CSRBF_FAN) */
+    size_t tcount[CSRBF_TREE_MAX];            /* nodes per level (unpadded) */
+    float *tlo[CSRBF_TREE_MAX][3], *thi[CSRBF_TREE_MAX][3];
 };
 
 /* Blocks per superblock: csrbf_points_nearest skips a superblock's blocks with one box test. */
 #define CSRBF_SUPER 64
+
+/* A process-wide increasing counter (thread-safe, never 0): stamps of point contents and
+ * centre sets, so that a cached block selection is never taken for another one. */
+uint64_t csrbf_new_stamp(void);
 
 /* Build the guard's neighbour lists and clusters for the current centres (solver.c calls it
  * from set_start_points); free them (destroy). */

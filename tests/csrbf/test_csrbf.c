@@ -342,6 +342,295 @@ static void test_touched(void **state)
     free(last);
 }
 
+/* ------------------------------------------------- many centres, frames, block selection */
+
+/* A wavy grid of nx x ny vertices (row by row, as scanned meshes come), spacing h. */
+static float *wavy_grid(size_t nx, size_t ny, double h)
+{
+    float *v = malloc(nx * ny * 3 * sizeof *v);
+    for (size_t j = 0; j < ny; j++)
+        for (size_t i = 0; i < nx; i++) {
+            float *q = v + 3 * (j * nx + i);
+            q[0] = (float)(h * (double)i);
+            q[1] = (float)(h * (double)j);
+            q[2] = (float)(0.3 * sin(0.37 * (double)i) * cos(0.23 * (double)j));
+        }
+    return v;
+}
+
+/* n centres scattered over the grid's [0, w] x [0, h] just above its surface, displaced by amp. */
+static void scatter_centres(size_t n, double w, double h, double amp, float *st, float *en)
+{
+    for (size_t i = 0; i < n; i++) {
+        st[3 * i] = (float)(urand() * w);
+        st[3 * i + 1] = (float)(urand() * h);
+        st[3 * i + 2] = (float)(urand() * 0.4 - 0.2);
+        for (int a = 0; a < 3; a++) en[3 * i + a] = st[3 * i + a] + (float)((urand() * 2 - 1) * amp);
+    }
+}
+
+/* More than 32 centres (42: two hands of 21 joints; 64: the fast path's capacity; 65 and 100:
+ * the general path) against the independent dense solve and map in double; the fast path
+ * with and without statistics and the general path (Jacobian flag) agree bit for bit, the
+ * statistics with a brute-force count, and every vertex outside all supports keeps its base
+ * position exactly. */
+static void test_many_centres(void **state)
+{
+    (void)state;
+    size_t nx = 181, ny = 97, nv = nx * ny;
+    double h = 0.25, R = 3.0;
+    float *v = wavy_grid(nx, ny, h);
+    float *o1 = malloc(nv * 3 * sizeof *o1), *o2 = malloc(nv * 3 * sizeof *o2),
+          *o3 = malloc(nv * 3 * sizeof *o3);
+    csrbf_points *p = NULL;
+    assert_int_equal(csrbf_points_create(nv, v, &p), CSRBF_OK);
+    static const size_t counts[4] = {42, 64, 65, 100};
+    for (int c = 0; c < 4; c++) {
+        size_t n = counts[c];
+        float *st = malloc(n * 3 * sizeof *st), *en = malloc(n * 3 * sizeof *en);
+        scatter_centres(n, h * (double)(nx - 1), h * (double)(ny - 1), 0.15, st, en);
+        csrbf_solver *s = make_solver(R, CSRBF_PSI31, CSRBF_POLY_NONE, 0);
+        int rc = csrbf_solver_solve(s, n, st, en);
+        assert_true(rc == CSRBF_OK || rc == CSRBF_WARN_FOLDOVER);
+        assert_int_equal(csrbf_solver_centres(s), n);
+        csrbf_eval_stats a, b;
+        assert_int_equal(csrbf_evaluate(s, p, o1, 0, NULL), CSRBF_OK);
+        assert_int_equal(csrbf_evaluate(s, p, o2, 0, &a), CSRBF_OK);
+        assert_int_equal(csrbf_evaluate(s, p, o3, CSRBF_EVAL_JACOBIAN, &b), CSRBF_OK);
+        assert_memory_equal(o1, o2, nv * 3 * sizeof *o1);
+        assert_memory_equal(o1, o3, nv * 3 * sizeof *o1);
+        assert_int_equal(a.pairs, b.pairs);
+        assert_int_equal(a.moved, b.moved);
+        double *coef = malloc((n + 4) * 3 * sizeof *coef);
+        reference_solve(CSRBF_PSI31, R, 0, n, st, en, coef);
+        size_t pairs = 0, outside = 0;
+        double worst = 0, dmax = 0;
+        for (size_t i = 0; i < nv; i++) {
+            double x[3] = {v[3 * i], v[3 * i + 1], v[3 * i + 2]}, y[3];
+            reference_map(CSRBF_PSI31, R, n, st, coef, x, y);
+            size_t in = 0;
+            for (size_t j = 0; j < n; j++) {
+                double d2 = 0;
+                for (int k = 0; k < 3; k++) d2 += pow(x[k] - st[3 * j + k], 2);
+                in += d2 < R * R;
+            }
+            pairs += in;
+            double d2 = 0;
+            for (int k = 0; k < 3; k++) {
+                worst = fmax(worst, fabs(o1[3 * i + k] - y[k]));
+                d2 += pow(y[k] - x[k], 2);
+            }
+            dmax = fmax(dmax, sqrt(d2));
+            if (!in) {
+                outside++;
+                assert_memory_equal(o1 + 3 * i, v + 3 * i, 3 * sizeof(float));
+            }
+        }
+        assert_true(outside > 0);
+        assert_true(worst < 2e-5 * 25); /* float evaluation of coordinates up to 45 */
+        assert_true(a.pairs + 4 >= pairs && a.pairs <= pairs + 4);
+        assert_double_equal(a.max_displacement, dmax, 1e-4);
+        free(coef);
+        csrbf_solver_destroy(&s);
+        free(st);
+        free(en);
+    }
+    csrbf_points_destroy(&p);
+    free(v);
+    free(o1);
+    free(o2);
+    free(o3);
+}
+
+/* Touched evaluation over many frames: 42 fingertips that press, slide, leave the mesh
+ * altogether and come back; anchored stretches (same start points: the cached selection),
+ * unanchored ones (new start points every frame), a switch to 100 centres (general path) and
+ * back, and a polynomial frame (every vertex moves). Every frame equals csrbf_evaluate bit for
+ * bit, vertices outside every support equal the base exactly (supports that moved away are
+ * restored), and outside the reported ranges nothing changed since the last frame. */
+static void test_touched_frames(void **state)
+{
+    (void)state;
+    size_t nx = 157, ny = 131, nv = nx * ny; /* not a multiple of 16 */
+    double h = 0.2, R = 1.5, W = h * (double)(nx - 1), H = h * (double)(ny - 1);
+    float *v = wavy_grid(nx, ny, h);
+    float *out = malloc(nv * 3 * sizeof *out), *ref = malloc(nv * 3 * sizeof *ref),
+          *last = malloc(nv * 3 * sizeof *last);
+    enum { NMAX = 100 };
+    float st0[3 * NMAX], en0[3 * NMAX], st[3 * NMAX], en[3 * NMAX];
+    scatter_centres(NMAX, W, H, 0.1, st0, en0);
+    csrbf_points *p = NULL;
+    csrbf_touch *tc = NULL;
+    assert_int_equal(csrbf_points_create(nv, v, &p), CSRBF_OK);
+    assert_int_equal(csrbf_touch_create(p, &tc), CSRBF_OK);
+    csrbf_solver *s = make_solver(R, CSRBF_PSI31, CSRBF_POLY_NONE, 0);
+    csrbf_solver *sp = make_solver(R, CSRBF_PSI31, CSRBF_POLY_LINEAR, 0);
+    size_t n_last = 0;
+    for (int frame = 0; frame < 60; frame++) {
+        /* 0-9 anchored 42; 10-19 unanchored 42 sliding; 20-24 all away (far off the mesh);
+         * 25-29 back, anchored; 30-34 100 centres; 35 polynomial; 36-59 anchored 42 again
+         * with a jump at 45 */
+        size_t n = frame >= 30 && frame < 35 ? NMAX : 42;
+        double dx = 0, dy = 0;
+        if (frame >= 10 && frame < 20) dx = 0.35 * (frame - 9);
+        if (frame >= 20 && frame < 25) dx = 4 * W;
+        if (frame >= 45) dy = 2.0;
+        for (size_t i = 0; i < n; i++) {
+            st[3 * i] = st0[3 * i] + (float)dx;
+            st[3 * i + 1] = st0[3 * i + 1] + (float)dy;
+            st[3 * i + 2] = st0[3 * i + 2];
+            double ph = 0.3 * frame + (double)i;
+            for (int a = 0; a < 3; a++)
+                en[3 * i + a] = st[3 * i + a] + (en0[3 * i + a] - st0[3 * i + a]) * (float)cos(ph + a);
+        }
+        csrbf_solver *cur = frame == 35 ? sp : s;
+        int anchored = n == n_last && frame != 10 && frame != 20 && frame != 25 &&
+                       frame != 45 && frame != 36 && !(frame > 10 && frame < 20);
+        if (anchored)
+            assert_true(csrbf_solver_set_end_points(cur, en) >= 0);
+        else
+            assert_true(csrbf_solver_solve(cur, n, st, en) >= 0);
+        if (frame == 35) assert_true(csrbf_solver_solve(sp, n, st, en) >= 0);
+        n_last = frame == 35 ? 0 : n;
+        csrbf_eval_stats a, b;
+        assert_int_equal(csrbf_evaluate(cur, p, ref, 0, &a), CSRBF_OK);
+        if (frame > 0) memcpy(last, out, nv * 3 * sizeof *out);
+        assert_int_equal(csrbf_evaluate_touched(cur, p, tc, out, 0, &b), CSRBF_OK);
+        assert_memory_equal(out, ref, nv * 3 * sizeof *out);
+        assert_int_equal(a.pairs, b.pairs);
+        assert_int_equal(a.moved, b.moved);
+        assert_double_equal(a.max_displacement, b.max_displacement, 0);
+        if (frame >= 20 && frame < 25) { /* every support is off the mesh: the base exactly */
+            assert_int_equal(b.pairs, 0);
+            assert_memory_equal(out, v, nv * 3 * sizeof *out);
+        }
+        const uint32_t *rg;
+        size_t nr = csrbf_touch_ranges(tc, &rg), prev_end = 0, covered = 0;
+        for (size_t r = 0; r < nr; r++) {
+            assert_true(rg[2 * r] >= prev_end);
+            assert_true(rg[2 * r + 1] > 0);
+            if (frame > 0)
+                assert_memory_equal(out + 3 * prev_end, last + 3 * prev_end,
+                                    (rg[2 * r] - prev_end) * 3 * sizeof(float));
+            prev_end = rg[2 * r] + rg[2 * r + 1];
+            covered += rg[2 * r + 1];
+            assert_true(prev_end <= nv);
+        }
+        if (frame > 0)
+            assert_memory_equal(out + 3 * prev_end, last + 3 * prev_end,
+                                (nv - prev_end) * 3 * sizeof(float));
+        if (frame == 0 || frame == 35 || frame == 36) assert_int_equal(covered, nv);
+        if (frame == 21 || frame == 22) assert_int_equal(nr, 0); /* nothing left to restore */
+        if (frame > 2 && frame < 10) assert_true(covered < nv);
+    }
+    csrbf_touch_destroy(&tc);
+    csrbf_points_destroy(&p);
+    csrbf_solver_destroy(&s);
+    csrbf_solver_destroy(&sp);
+    free(v);
+    free(out);
+    free(ref);
+    free(last);
+}
+
+/* The cached block selection follows the points: one solver alternates between two vertex
+ * sets and one of them is moved (csrbf_points_update, then csrbf_points_update_ranges);
+ * every result equals a fresh vertex set's through a fresh solver. */
+static void test_selection_cache(void **state)
+{
+    (void)state;
+    size_t nx = 120, ny = 90, nv = nx * ny;
+    float *v = wavy_grid(nx, ny, 0.1), *w = wavy_grid(nx, ny, 0.1);
+    for (size_t i = 0; i < nv; i++) w[3 * i] += 3.0f; /* shifted by 3 in x */
+    float *o1 = malloc(nv * 3 * sizeof *o1), *o2 = malloc(nv * 3 * sizeof *o2);
+    float st[3 * 42], en[3 * 42];
+    scatter_centres(42, 11.9, 8.9, 0.05, st, en);
+    csrbf_solver *s = make_solver(0.8, CSRBF_PSI32, CSRBF_POLY_NONE, 0);
+    assert_true(csrbf_solver_solve(s, 42, st, en) >= 0);
+    csrbf_points *a = NULL, *b = NULL, *fresh = NULL;
+    assert_int_equal(csrbf_points_create(nv, v, &a), CSRBF_OK);
+    assert_int_equal(csrbf_points_create(nv, w, &b), CSRBF_OK);
+    for (int round = 0; round < 4; round++) {
+        const float *pos = round < 2 ? w : v; /* rounds 2, 3: b holds v's positions */
+        if (round == 2) assert_int_equal(csrbf_points_update(b, v), CSRBF_OK);
+        if (round == 3) { /* move one row of b by 3 in y, under other supports */
+            uint32_t rg[2] = {(uint32_t)(nx * 40), (uint32_t)nx};
+            float *mix = malloc(nv * 3 * sizeof *mix);
+            memcpy(mix, v, nv * 3 * sizeof *mix);
+            for (size_t i = nx * 40; i < nx * 41; i++) mix[3 * i + 1] += 3.0f;
+            assert_int_equal(csrbf_points_update_ranges(b, mix, rg, 1), CSRBF_OK);
+            assert_int_equal(csrbf_points_create(nv, mix, &fresh), CSRBF_OK);
+            free(mix);
+        } else {
+            assert_int_equal(csrbf_points_create(nv, pos, &fresh), CSRBF_OK);
+        }
+        assert_int_equal(csrbf_evaluate(s, a, o1, 0, NULL), CSRBF_OK);
+        assert_int_equal(csrbf_evaluate(s, b, o1, 0, NULL), CSRBF_OK);
+        csrbf_solver *s2 = make_solver(0.8, CSRBF_PSI32, CSRBF_POLY_NONE, 0);
+        assert_true(csrbf_solver_solve(s2, 42, st, en) >= 0);
+        assert_int_equal(csrbf_evaluate(s2, fresh, o2, 0, NULL), CSRBF_OK);
+        assert_memory_equal(o1, o2, nv * 3 * sizeof *o1);
+        csrbf_solver_destroy(&s2);
+        csrbf_points_destroy(&fresh);
+    }
+    csrbf_points_destroy(&a);
+    csrbf_points_destroy(&b);
+    csrbf_solver_destroy(&s);
+    free(v);
+    free(w);
+    free(o1);
+    free(o2);
+}
+
+/* The paths a selection takes: new (a full write with large supports walks and evaluates per
+ * part of the mesh in the threads), seen twice (kept and trimmed), kept (reused), touched;
+ * all give the same output bit for bit, close to the dense reference, with equal statistics. */
+static void test_selection_paths(void **state)
+{
+    (void)state;
+    size_t nx = 301, ny = 299, nv = nx * ny, n = 42;
+    double h = 0.1, R = 6.0;
+    float *v = wavy_grid(nx, ny, h);
+    float *o[4], st[3 * 42], en[3 * 42];
+    for (int i = 0; i < 4; i++) o[i] = malloc(nv * 3 * sizeof *o[i]);
+    scatter_centres(n, h * (double)(nx - 1), h * (double)(ny - 1), 0.3, st, en);
+    csrbf_options opt = {0};
+    opt.radius = R;
+    opt.threads = 2;
+    csrbf_solver *s = NULL;
+    assert_int_equal(csrbf_solver_create(&opt, &s), CSRBF_OK);
+    int rc = csrbf_solver_solve(s, n, st, en);
+    assert_true(rc == CSRBF_OK || rc == CSRBF_WARN_FOLDOVER);
+    csrbf_points *p = NULL;
+    csrbf_touch *tc = NULL;
+    assert_int_equal(csrbf_points_create(nv, v, &p), CSRBF_OK);
+    assert_int_equal(csrbf_touch_create(p, &tc), CSRBF_OK);
+    csrbf_eval_stats es[4];
+    for (int i = 0; i < 3; i++) assert_int_equal(csrbf_evaluate(s, p, o[i], 0, &es[i]), CSRBF_OK);
+    assert_int_equal(csrbf_evaluate_touched(s, p, tc, o[3], 0, &es[3]), CSRBF_OK);
+    for (int i = 1; i < 4; i++) {
+        assert_memory_equal(o[0], o[i], nv * 3 * sizeof *o[0]);
+        assert_int_equal(es[0].pairs, es[i].pairs);
+        assert_int_equal(es[0].moved, es[i].moved);
+        assert_double_equal(es[0].max_displacement, es[i].max_displacement, 0);
+    }
+    assert_true(es[0].pairs > 10 * nv / 10); /* large supports: about 10 per vertex */
+    double *coef = malloc((n + 4) * 3 * sizeof *coef), worst = 0;
+    reference_solve(CSRBF_PSI31, R, 0, n, st, en, coef);
+    for (size_t i = 0; i < nv; i += 7) {
+        double x[3] = {v[3 * i], v[3 * i + 1], v[3 * i + 2]}, y[3];
+        reference_map(CSRBF_PSI31, R, n, st, coef, x, y);
+        for (int a = 0; a < 3; a++) worst = fmax(worst, fabs(o[0][3 * i + a] - y[a]));
+    }
+    assert_true(worst < 2e-5 * 30);
+    free(coef);
+    csrbf_touch_destroy(&tc);
+    csrbf_points_destroy(&p);
+    csrbf_solver_destroy(&s);
+    for (int i = 0; i < 4; i++) free(o[i]);
+    free(v);
+}
+
 /* Statistics from the fast path (counted per block inside the vectorised kernel) equal the
  * general path's (taken with the Jacobian flag), with a padded last block, for the masked
  * (some centres) and the all-in (every vertex in every support) cases. */
@@ -883,7 +1172,9 @@ int main(void)
         cmocka_unit_test(test_points_update),       cmocka_unit_test(test_jacobian_fd),
         cmocka_unit_test(test_foldover),            cmocka_unit_test(test_invalid),
         cmocka_unit_test(test_concurrent_evaluate), cmocka_unit_test(test_stats_fast_path),
-        cmocka_unit_test(test_touched),
+        cmocka_unit_test(test_touched),             cmocka_unit_test(test_many_centres),
+        cmocka_unit_test(test_touched_frames),      cmocka_unit_test(test_selection_cache),
+        cmocka_unit_test(test_selection_paths),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
