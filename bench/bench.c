@@ -777,6 +777,7 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
     double *st_ms[FP_STAGE_COUNT], *total = malloc(cap * sizeof *total),
            *brute = malloc(cap * sizeof *brute), *act = malloc(cap * sizeof *act);
     for (int k = 0; k < FP_STAGE_COUNT; k++) st_ms[k] = malloc(cap * sizeof(double));
+    double *contact_ms = malloc(cap * sizeof *contact_ms); /* the contact guard (collide_ms) */
     int64_t period = 1000000000LL / 60, next = fp_now_ns();
     size_t n = fp_session_vertex_count(s);
     unsigned commits = 0;
@@ -789,6 +790,7 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
         if (st.active) act[nact++] = total[nf];
         commits += st.committed;
         for (int k = 0; k < FP_STAGE_COUNT; k++) st_ms[k][nf] = st.stage_ms[k];
+        contact_ms[nf] = st.collide_ms;
         fp_hand_pose hands[FP_HANDS];
         memset(hands, 0, sizeof hands);
         for (int h = 0; h < FP_HANDS; h++)
@@ -822,6 +824,8 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
         for (int k = 0; k < FP_STAGE_COUNT; k++)
             printf(",\"%s_median\":%.6g,\"%s_p99\":%.6g", names[k], pct(st_ms[k], nf, 50),
                    names[k], pct(st_ms[k], nf, 99));
+        printf(",\"contact_median\":%.6g,\"contact_p99\":%.6g", pct(contact_ms, nf, 50),
+               pct(contact_ms, nf, 99));
         printf("}\n");
     } else {
         printf("frame %-14s %8zu vertices, %zu frames (%zu deforming, %u commits)\n", label, n, nf,
@@ -829,12 +833,14 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
         printf("  %-22s %10s %10s\n", "stage", "median_ms", "p99_ms");
         for (int k = 0; k < FP_STAGE_COUNT; k++)
             printf("  %-22s %10.4f %10.4f\n", names[k], pct(st_ms[k], nf, 50), pct(st_ms[k], nf, 99));
+        printf("  %-22s %10.4f %10.4f\n", "contact", pct(contact_ms, nf, 50), pct(contact_ms, nf, 99));
         printf("  %-22s %10.4f %10.4f\n", "whole frame", pct(total, nf, 50), pct(total, nf, 99));
         printf("  %-22s %10.4f %10.4f\n", "whole frame, deforming", pct(act, nact, 50), pct(act, nact, 99));
         printf("  %-22s %10.4f %10.4f\n", "distances, brute force", pct(brute, nbrute, 50), pct(brute, nbrute, 99));
     }
     fflush(stdout);
     for (int k = 0; k < FP_STAGE_COUNT; k++) free(st_ms[k]);
+    free(contact_ms);
     free(total);
     free(brute);
     free(act);

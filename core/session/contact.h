@@ -70,8 +70,10 @@ typedef struct fp_contact_result {
     double t;            /* the fraction of the motion kept (1: all, 0: the reference) */
     long pairs;          /* new pairs of the full candidate */
     size_t flipped;      /* newly flipped triangles of the full candidate (these block too) */
-    int checks;          /* fp_contact_count_new calls */
-    size_t moved_tris;   /* moved triangles of the full candidate */
+    int checks;          /* checks of a shape (fp_contact_count_new calls) */
+    size_t moved_tris;   /* moved triangles of the full candidate (fp_contact_step: not own) */
+    size_t moved_verts;  /* fp_contact_step: vertices where the candidate differs from P */
+    size_t renewed;      /* fp_contact_step: envelopes renewed */
 } fp_contact_result;
 
 /** The guard: out = ref + t (cand - ref) per vertex (float), with the largest t of the
@@ -81,6 +83,68 @@ typedef struct fp_contact_result {
  *  (out then holds ref). */
 int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *out, int iters,
                      fp_contact_result *res);
+
+/*
+ * The incremental guard (fp_contact_reference, fp_contact_step): what a session calls per
+ * frame. It keeps P, the shape it last accepted (n x 3, fp_contact_shape), and checks each
+ * candidate against P instead of the reference, so its work follows this frame's motion,
+ * not the gesture's, nor the mesh's size.
+ *
+ * Why this is exactly the check above. Let new(S) be the pairs fp_contact_count_new(ref, S)
+ * counts (cross in S, not in ref, neither triangle own, not adjacent) and flip(S) its
+ * newly flipped triangles. Invariant: new(P) and flip(P) are empty; it holds for P = ref
+ * (after fp_contact_reference) and for every shape fp_contact_step accepts.
+ *  (1) A pair with no vertex that moved from P to the candidate C has the same triangles
+ *      in P and in C, so it crosses in C iff in P; if it were in new(C) it would be in new(P).
+ *      So new(C) = the pairs in new(C) with a moved triangle (one whose vertex differs
+ *      bitwise between P and C), and likewise flip(C) = its moved triangles in flip(C).
+ *  (2) The moved vertices are found without looking at all n: P differs from ref only at
+ *      D_P (a vertex list kept with P) and C from ref only in the caller's ranges (the
+ *      engine's touched blocks), so C differs from P only within D_P and the ranges.
+ *  (3) Pairs (A, B) with A moved whose boxes in C meet are all tested, by the same
+ *      triangle-triangle test as fp_contact_count_new, in C and then in ref. The candidates
+ *      come from envelopes: every triangle (own ones left out) has one that holds its box in
+ *      P: static triangles (never moved from the weld shape) their box there, in a static
+ *      hash grid built once; the others an envelope (box grown by FP_TRACK_SKIN of its
+ *      extent) in a dynamic hash grid, renewed only when the box leaves it, with a list of
+ *      the triangles whose envelopes met its own (kept by both sides at every renewal,
+ *      stale entries allowed). Before a check each moved triangle's envelope is made to hold
+ *      its box in P and in C, hence in every shape P + t (C - P) between them (rounding is
+ *      monotonic), so two boxes that meet in the checked shape lie in envelopes that meet,
+ *      and the pair is in the moved triangle's list. A pair of two moved triangles is
+ *      tested once, from the lower index.
+ * So the candidate is accepted exactly when fp_contact_count_new(ref, C) would find no new
+ * pair and no newly flipped triangle, and the bisection (shape P + t (C - P) at the moved
+ * vertices, t the largest of `iters` halvings that adds none) keeps the invariant. What
+ * changes against fp_contact_guard: t scales this frame's motion (P -> C), not the gesture's
+ * (ref -> C); the shape shown after a scaled frame is P's, and the next frame goes on from it.
+ */
+
+/** Start (or restart) the incremental guard on reference ref (n x 3): P := ref. ranges:
+ *  (first vertex, count) pairs where ref may differ from the shape P held so far (besides
+ *  D_P, which the guard adds), nranges of them; nranges == SIZE_MAX: anywhere (all n are
+ *  compared). Call it when the reference changes (commit, undo, a new pose) and when the
+ *  shape shown went back to the reference (a gesture ended, a cancel): then ranges may be
+ *  empty (0), only D_P is restored. The first call builds the static grid (O(t)). Returns
+ *  0, -EINVAL (NULL) or -ENOMEM (the guard is then unusable: destroy it). */
+int fp_contact_reference(fp_contact *c, const float *ref, const uint32_t *ranges, size_t nranges);
+
+/** One frame: the candidate cand (n x 3) against the last accepted shape P, on the reference
+ *  given to fp_contact_reference (the same ref, unchanged since). ranges / nranges: where
+ *  cand may differ from ref (e.g. fp_engine_step_touched: (first, count) pairs; SIZE_MAX:
+ *  anywhere). Accepts cand (res->t = 1, P := cand, bit for bit) when it adds no new pair and
+ *  no newly flipped triangle to ref (the argument above), else P := P + t (cand - P) at the
+ *  moved vertices with the largest t of the bisection (`iters` halvings, 0: P stays).
+ *  Nothing moved (cand = P where looked): no work. The shape to show is cand when
+ *  res->t == 1, else fp_contact_shape. Work: the vertices in ranges and D_P, the moved
+ *  triangles and their lists; envelopes renewed where a box left its own. Returns 0,
+ *  -EINVAL or -ENOMEM (P then unchanged or partly lerped: call fp_contact_reference). */
+int fp_contact_step(fp_contact *c, const float *ref, const float *cand, const uint32_t *ranges,
+                    size_t nranges, int iters, fp_contact_result *res);
+
+/** P, the shape fp_contact_step last accepted (n x 3, owned by c, valid until its next
+ *  call), or NULL before the first fp_contact_reference. */
+const float *fp_contact_shape(const fp_contact *c);
 
 /** The triangle-triangle test alone (closed triangles, 3 x 3 doubles each): 1 when they
  *  share a point, else 0. Exposed for tests. */

@@ -63,14 +63,20 @@ struct fp_session {
 
     fp_control_set cs;            /* its arrays are the mapping step's (with canaries) */
 
-    /* the contact guard (contact.h); NULL with no_contact_guard */
+    /* the contact guard (contact.h, its incremental form); NULL with no_contact_guard */
     fp_contact *contact;
-    float *guarded;               /* n x 3: the shape shown when the guard scaled back */
+    int cg_sync;                  /* FP_CG_*: what the guard's P must catch up with */
     unsigned long cg_frames, cg_limited; /* this gesture: frames checked, scaled back */
     double cg_t;                  /* this gesture: smallest fraction kept */
 };
 
 #define FP_CONTACT_BISECTIONS 6
+/* The guard's P (the shape it last accepted) and the frame's reference, the posed base: */
+enum {
+    FP_CG_SYNCED = 0,   /* P is the shape shown, on the current reference */
+    FP_CG_SHOWN_REF,    /* the reference was shown since (a gesture ended): P := ref at D_P */
+    FP_CG_REF_CHANGED   /* the reference changed (a pose, undo, reset): compare all n */
+};
 /* pairs within this many vertex rings of the input's own crossings are not the guard's
  * business (fp_contact_dilate_own): the eyes' intersection curves move under any motion */
 #define FP_CONTACT_OWN_RINGS 1
@@ -292,11 +298,10 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
         goto fail;
     }
     if (!opt->no_contact_guard) {
-        s->guarded = malloc(bytes);
-        if (!s->guarded ||
-            (rc = fp_contact_create(s->mesh->triangles, s->mesh->triangle_count, s->n, s->loaded,
+        if ((rc = fp_contact_create(s->mesh->triangles, s->mesh->triangle_count, s->n, s->loaded,
                                     &s->contact)) ||
-            (rc = fp_contact_dilate_own(s->contact, FP_CONTACT_OWN_RINGS))) {
+            (rc = fp_contact_dilate_own(s->contact, FP_CONTACT_OWN_RINGS)) ||
+            (rc = fp_contact_reference(s->contact, s->shown, NULL, SIZE_MAX))) {
             rc = rc ? rc : -ENOMEM;
             snprintf(err, errlen, "session: out of memory for the contact guard");
             goto fail;
@@ -356,26 +361,48 @@ static void base_changed(fp_session *s)
     fp_rig_step_update(&s->rig, NULL, s->base, &s->log);
     s->shown = fp_rig_step_posed(&s->rig, s->base);
     fp_engine_step_set_base(&s->engine, s->shown);
+    s->cg_sync = FP_CG_REF_CHANGED;
 }
 
-/* The contact guard: the frame's shape (s->shown) against the shape it starts from (ref: the
- * posed base; for a gesture the posed base, for an unanchored step the current base): when
- * it adds self-crossings or flipped triangles, the fingers' motion is scaled back
- * (fp_contact_guard) and s->shown becomes s->guarded. Without a rig, by induction over
- * commits, the shown surface never crosses itself where the loaded face did not; a rig's
- * own pose (its channels) is not checked. */
+/* The shape shown is the reference again (a frame without a deformation, an engine error):
+ * the contact guard's P catches up before its next check. */
+static void shown_ref(fp_session *s)
+{
+    if (s->cg_sync == FP_CG_SYNCED) s->cg_sync = FP_CG_SHOWN_REF;
+}
+
+/* The contact guard (contact.h, incremental): the frame's shape (s->shown) against the shape
+ * shown last (the guard's P), on the reference ref (the posed base): when it adds
+ * self-crossings or flipped triangles against ref, this frame's motion is scaled back
+ * (fp_contact_step) and s->shown becomes the guard's shape. Without a rig, by induction
+ * over commits, the shown surface never crosses itself where the loaded face did not; a
+ * rig's own pose (its channels) is not checked. The guard looks only where the shape may
+ * have changed: the engine's touched ranges (the rig's blend moves no vertex the fingers
+ * did not). */
 static void contact_guard(fp_session *s, const float *ref, fp_frame_stats *st)
 {
     if (!s->contact || s->shown == ref) return;
     int64_t t0 = fp_now_ns();
+    int rc = 0;
+    if (s->cg_sync != FP_CG_SYNCED)
+        rc = fp_contact_reference(s->contact, ref, NULL, s->cg_sync == FP_CG_REF_CHANGED ? SIZE_MAX : 0);
+    s->cg_sync = FP_CG_SYNCED;
+    const uint32_t *ranges;
+    size_t nranges = fp_engine_step_touched(&s->engine, &ranges);
     fp_contact_result r;
-    fp_contact_guard(s->contact, ref, s->shown, s->guarded, FP_CONTACT_BISECTIONS, &r);
+    if (!rc) rc = fp_contact_step(s->contact, ref, s->shown, ranges, nranges, FP_CONTACT_BISECTIONS, &r);
     st->collide_ms += (double)(fp_now_ns() - t0) / 1e6;
+    if (rc) { /* out of memory: show the reference, try afresh next frame */
+        s->shown = ref;
+        s->cg_sync = FP_CG_REF_CHANGED;
+        fp_slog_printf(&s->log, FP_LOG_ERROR, "contact", "contact guard: out of memory; showing the base");
+        return;
+    }
     st->collide_pairs += r.pairs;
     if (!s->cg_frames) s->cg_t = 1.0;
     s->cg_frames++;
     if (r.t < 1) {
-        s->shown = s->guarded;
+        s->shown = fp_contact_shape(s->contact);
         s->cg_limited++;
         if (r.t < s->cg_t) s->cg_t = r.t;
         if (r.t < st->collide_t) st->collide_t = r.t;
@@ -425,28 +452,36 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame
                     /* with a rig only the fingers' part goes into the base */
                     fp_history_commit(&s->history, fp_rig_step_commit_shape(&s->rig, s->base, s->shown));
                     base_changed(s); /* the anchored gesture ended; unanchored restarts anyway */
-                } else if (s->shown == s->guarded) {
+                } else if (s->contact && s->shown == fp_contact_shape(s->contact)) {
                     /* the guard scaled the motion back: its shape goes into the base and
-                     * the output buffer; the engine re-indexes the whole base */
-                    memcpy(s->deformed, s->guarded, s->n * 3 * sizeof(float));
+                     * the output buffer; the engine re-indexes the whole base. The guard's
+                     * P is that shape: nothing to catch up. */
+                    memcpy(s->deformed, s->shown, s->n * 3 * sizeof(float));
                     fp_history_commit(&s->history, s->deformed);
                     fp_engine_step_set_base(&s->engine, s->base);
                     s->shown = s->base;
+                    s->cg_sync = FP_CG_SHOWN_REF;
                 } else {
                     fp_history_commit(&s->history, s->deformed);
                     /* the anchored gesture ended; unanchored restarts anyway. Only the blocks
                      * the engine rewrote are re-indexed. */
                     fp_engine_step_commit(&s->engine, s->base);
                     s->shown = s->base;
+                    /* the guard's P is the shape committed, the new reference: only D_P
+                     * to compare */
+                    s->cg_sync = FP_CG_SHOWN_REF;
                 }
                 st->stage_ms[FP_STAGE_COMMIT] = (double)(fp_now_ns() - t0) / 1e6;
                 st->committed = true;
             }
+        } else {
+            shown_ref(s); /* the engine failed: the posed base is shown */
         }
     } else {
         fp_history_end_gesture(&s->history);
         fp_engine_step_end_gesture(&s->engine, &s->log);
         contact_end_gesture(s);
+        shown_ref(s);
     }
     s->engaged = cs->active && !(cs->intents & (FP_INTENT_COMMIT | FP_INTENT_CANCEL));
 }
@@ -509,8 +544,10 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     }
 
     /* 4: the rig: channels pose the base; the engine works on the posed base. */
-    if (fp_rig_step_update(&s->rig, &s->cs, s->base, &s->log))
+    if (fp_rig_step_update(&s->rig, &s->cs, s->base, &s->log)) {
         fp_engine_step_set_base(&s->engine, fp_rig_step_posed(&s->rig, s->base));
+        s->cg_sync = FP_CG_REF_CHANGED;
+    }
     const fp_control_set *cs = fp_rig_step_run(&s->rig, &s->cs);
     FP_STAGE_END(FP_STAGE_MAPPING);
 
@@ -538,8 +575,10 @@ void fp_session_apply_controls(fp_session *s, int64_t now_ns, const fp_control_s
     st->cancelled = cs->intents & FP_INTENT_CANCEL;
     /* 4: the rig poses the base from the stored channels; the stored set is already the
      * one the rig's clamp returned, so it goes to the engine as it is. */
-    if (fp_rig_step_update(&s->rig, cs, s->base, &s->log))
+    if (fp_rig_step_update(&s->rig, cs, s->base, &s->log)) {
         fp_engine_step_set_base(&s->engine, fp_rig_step_posed(&s->rig, s->base));
+        s->cg_sync = FP_CG_REF_CHANGED;
+    }
     engine_and_history(s, cs, st);
     fp_record_step_end(&s->record, s->frame, now_ns, requested | s->actions, cs, s->inputs,
                        s->input_count, &s->log);
@@ -582,7 +621,7 @@ const fp_control_set *fp_session_control_set(const fp_session *s) { return &s->c
 const struct csrbf_solver *fp_session_solver(const fp_session *s)
 {
     /* not when the contact guard scaled the shape back: the solver's map is not what is shown */
-    return s->shown != s->base && s->shown != s->guarded && !s->rig.rig
+    return s->shown != s->base && (!s->contact || s->shown != fp_contact_shape(s->contact)) && !s->rig.rig
                ? fp_engine_step_solver(&s->engine) : NULL;
 }
 
@@ -688,6 +727,7 @@ static int swap_mapping(fp_session *s, const fp_plugin_path *path, const char *s
     fp_mapping_step_flush(&s->mapping_step, &s->log);
     fp_plugin_unload(&old_plugin);
     s->shown = fp_rig_step_posed(&s->rig, s->base);
+    shown_ref(s);
     s->engaged = false;
     fp_history_end_gesture(&s->history);
     fp_engine_step_end_gesture(&s->engine, &s->log);
@@ -800,7 +840,6 @@ void fp_session_destroy(fp_session **sp)
     fp_plugin_unload(&s->mapping_plugin);
     fp_engine_step_free(&s->engine);
     fp_contact_destroy(&s->contact);
-    free(s->guarded);
     fp_rig_step_free(&s->rig);
     fp_history_free(&s->history);
     fp_intents_free(&s->intents);
