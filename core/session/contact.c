@@ -562,6 +562,11 @@ static int dyn_push(dyn *d, uint32_t y)
     return 0;
 }
 
+typedef struct rq_cell {          /* a cell of a renewed envelope */
+    int64_t key[3];
+    uint32_t r;                   /* the request (index into rq) */
+} rq_cell;
+
 typedef struct cellvec {          /* a cell of the dynamic grid */
     int64_t key[3];
     uint32_t *ids, len, cap;
@@ -585,6 +590,7 @@ struct track {
     uint32_t *qstamp, qclock;     /* t: == qclock when seen by this query */
     double h;                     /* the grid cell */
     uint32_t *sg_start, *sg_ids;  /* the static grid: the weld shape's boxes by hashed cell */
+    uint16_t *sg_dead;            /* entries of triangles gone dynamic, cut from the bucket's end */
     size_t sg_nb;
     uint32_t *sbig;               /* ... and those over FP_TRACK_BIG_CELLS cells */
     size_t nsbig;
@@ -597,6 +603,12 @@ struct track {
     size_t ndbig, cap_dbig;
     uint32_t *q;                  /* one query's triangles */
     size_t nq, cap_q;
+    uint32_t *rq;                 /* triangles with a new envelope, their lists to make */
+    size_t nrq, cap_rq;
+    struct rq_cell *rc, *rcs;     /* (cell, request) of the batch, and sorted by hashed cell */
+    size_t cap_rc, cap_rcs;
+    uint32_t *rcb, *rr;           /* the sort's buckets; one cell's requests */
+    size_t cap_rcb, cap_rr;
     size_t renewed;               /* envelopes renewed, for fp_contact_result */
 };
 
@@ -617,6 +629,7 @@ static void track_free(struct track *k)
     free(k->qstamp);
     free(k->sg_start);
     free(k->sg_ids);
+    free(k->sg_dead);
     free(k->sbig);
     free(k->slot);
     for (size_t i = 0; i < k->ndyn; i++)
@@ -626,6 +639,11 @@ static void track_free(struct track *k)
     free(k->cells);
     free(k->dbig);
     free(k->q);
+    free(k->rq);
+    free(k->rc);
+    free(k->rcs);
+    free(k->rcb);
+    free(k->rr);
     free(k);
 }
 
@@ -816,7 +834,7 @@ static int query(fp_contact *c, const float q[6], uint32_t x)
             for (int64_t cy = lo[1]; cy <= hi[1]; cy++)
                 for (int64_t cz = lo[2]; cz <= hi[2]; cz++) {
                     size_t bkt = key_hash(cx, cy, cz) & m;
-                    for (uint32_t e = k->sg_start[bkt]; e < k->sg_start[bkt + 1]; e++)
+                    for (uint32_t e = k->sg_start[bkt]; e < k->sg_start[bkt + 1] - k->sg_dead[bkt]; e++)
                         FP_STATIC(k->sg_ids[e]);
                     int64_t key[3] = {cx, cy, cz};
                     const cellvec *cv = cell_find(k, key, false);
@@ -831,9 +849,41 @@ static int query(fp_contact *c, const float q[6], uint32_t x)
     return 0;
 }
 
-/* Give triangle x (not own) the envelope box + skin: into the dynamic grid, its list from a
- * query, and itself into the lists of the dynamic triangles it meets. */
-static int renew(fp_contact *c, uint32_t x, const float box[6])
+/* Static triangle x (P still the weld shape there) out of the static grid: each of its
+ * entries cut out of its bucket (order kept, so a triangle's copies stay next to each other) */
+static void static_remove(fp_contact *c, uint32_t x)
+{
+    struct track *k = c->tk;
+    float b[6];
+    int64_t lo[3], hi[3];
+    tri_box(k->p, c->tris + 3 * (size_t)x, b);
+    if (cells_of(k->h, b, lo, hi) > FP_TRACK_BIG_CELLS) {
+        for (size_t i = 0; i < k->nsbig; i++)
+            if (k->sbig[i] == x) {
+                memmove(k->sbig + i, k->sbig + i + 1, (k->nsbig - i - 1) * sizeof *k->sbig);
+                k->nsbig--;
+                break;
+            }
+        return;
+    }
+    for (int64_t cx = lo[0]; cx <= hi[0]; cx++)
+        for (int64_t cy = lo[1]; cy <= hi[1]; cy++)
+            for (int64_t cz = lo[2]; cz <= hi[2]; cz++) {
+                size_t bkt = key_hash(cx, cy, cz) & (k->sg_nb - 1);
+                uint32_t s0 = k->sg_start[bkt], e = k->sg_start[bkt + 1] - k->sg_dead[bkt];
+                for (uint32_t i = s0; i < e; i++)
+                    if (k->sg_ids[i] == x) {
+                        memmove(k->sg_ids + i, k->sg_ids + i + 1, (e - i - 1) * sizeof *k->sg_ids);
+                        k->sg_dead[bkt]++;
+                        break;
+                    }
+            }
+}
+
+/* Give triangle x (not own; a static one already out of the static grid) the envelope box +
+ * skin in the dynamic grid and an empty list (renew_lists fills it); x joins the requests
+ * k->rq. */
+static int envelope(fp_contact *c, uint32_t x, const float box[6])
 {
     struct track *k = c->tk;
     if (k->slot[x] == FP_TRACK_NONE) {
@@ -852,20 +902,173 @@ static int renew(fp_contact *c, uint32_t x, const float box[6])
         d->env[i] = box[i] - skin;
         d->env[3 + i] = box[3 + i] + skin;
     }
-    if (grid_add(k, d) || query(c, d->env, x)) return -ENOMEM;
     d->len = 0;
-    for (size_t i = 0; i < k->nq; i++)
-        if (dyn_push(d, k->q[i])) return -ENOMEM;
-    for (size_t i = 0; i < k->nq; i++) {
-        uint32_t y = k->q[i];
-        if (k->slot[y] == FP_TRACK_NONE) continue;
-        dyn *e = &k->dyn[k->slot[y]];
-        const uint32_t *el = dyn_list(e);
-        bool have = false;
-        for (uint32_t j = 0; j < e->len && !have; j++) have = el[j] == x;
-        if (!have && dyn_push(e, x)) return -ENOMEM;
+    if (grid_add(k, d)) return -ENOMEM;
+    return push_u32(&k->rq, &k->nrq, &k->cap_rq, x);
+}
+
+/* y into d's list unless there */
+static int list_add(dyn *d, uint32_t y)
+{
+    const uint32_t *l = dyn_list(d);
+    for (uint32_t j = 0; j < d->len; j++)
+        if (l[j] == y) return 0;
+    return dyn_push(d, y);
+}
+
+static bool adjacent(const fp_contact *c, uint32_t x, uint32_t y)
+{
+    const uint32_t *vx = c->tris + 3 * (size_t)x, *vy = c->tris + 3 * (size_t)y;
+    for (int i = 0; i < 3; i++) {
+        uint32_t w = c->weld[vx[i]];
+        if (w == c->weld[vy[0]] || w == c->weld[vy[1]] || w == c->weld[vy[2]]) return true;
     }
-    k->renewed++;
+    return false;
+}
+
+/* y into x's list, and x into y's unless y is being renewed too (its list is being made) or
+ * has x already; `clock` marks the requests in qstamp */
+static int link(fp_contact *c, uint32_t x, uint32_t y, uint32_t clock)
+{
+    struct track *k = c->tk;
+    if (dyn_push(&k->dyn[k->slot[x]], y)) return -ENOMEM;
+    if (k->slot[y] == FP_TRACK_NONE || k->qstamp[y] == clock) return 0;
+    return list_add(&k->dyn[k->slot[y]], x);
+}
+
+/* One cell of the batch: requests R (nr of them) against the triangles registered in the
+ * cell (static: the bucket's, whose boxes are the weld shape's; dynamic: the cell's). A
+ * pair is taken in the cell of its boxes' common lower corner only (so once). */
+static int renew_cell(fp_contact *c, const int64_t key[3], const uint32_t *R, size_t nr, uint32_t clock)
+{
+    struct track *k = c->tk;
+#define FP_TRY(Y, YBOX)                                                                         \
+    for (size_t i_ = 0; i_ < nr; i_++) {                                                        \
+        uint32_t x_ = k->rq[R[i_]];                                                             \
+        const float *ex_ = k->dyn[k->slot[x_]].env;                                             \
+        if ((Y) == x_ || !boxes_meet(ex_, (YBOX))) continue;                                    \
+        bool mine_ = true;                                                                      \
+        for (int a_ = 0; a_ < 3 && mine_; a_++) {                                               \
+            double l_ = floor((double)max_f(ex_[a_], (YBOX)[a_]) / k->h);                       \
+            mine_ = (int64_t)fmin(fmax(l_, -1e15), 1e15) == key[a_];                            \
+        }                                                                                       \
+        if (mine_ && !adjacent(c, x_, (Y)) && link(c, x_, (Y), clock)) return -ENOMEM;          \
+    }
+    size_t bkt = key_hash(key[0], key[1], key[2]) & (k->sg_nb - 1);
+    for (uint32_t e = k->sg_start[bkt]; e < k->sg_start[bkt + 1] - k->sg_dead[bkt]; e++) {
+        uint32_t y = k->sg_ids[e];
+        if ((e > k->sg_start[bkt] && k->sg_ids[e - 1] == y) || k->slot[y] != FP_TRACK_NONE || c->own[y])
+            continue;
+        float yb[6];
+        tri_box(k->p, c->tris + 3 * (size_t)y, yb);
+        FP_TRY(y, yb)
+    }
+    const cellvec *cv = cell_find(k, key, false);
+    for (uint32_t j = 0; cv && j < cv->len; j++) {
+        uint32_t y = cv->ids[j];
+        if (c->own[y]) continue;
+        FP_TRY(y, k->dyn[k->slot[y]].env)
+    }
+#undef FP_TRY
+    return 0;
+}
+
+/* The lists of the requests (k->rq, envelopes in the grid already), batched by cell: each
+ * cell's registered triangles are read once for all the requests that cover it. */
+static int renew_lists(fp_contact *c)
+{
+    struct track *k = c->tk;
+    size_t nrq = k->nrq;
+    if (!nrq) return 0;
+    if (++k->qclock == 0) {
+        memset(k->qstamp, 0, c->t * sizeof *k->qstamp);
+        k->qclock = 1;
+    }
+    uint32_t clock = k->qclock;
+    for (size_t r = 0; r < nrq; r++) k->qstamp[k->rq[r]] = clock;
+    /* the cells of every request's envelope (big ones go through query below) */
+    size_t ne = 0;
+    for (size_t r = 0; r < nrq; r++) {
+        const dyn *d = &k->dyn[k->slot[k->rq[r]]];
+        if (d->big) continue;
+        int64_t lo[3], hi[3];
+        ne += (size_t)cells_of(k->h, d->env, lo, hi);
+    }
+    size_t nb = 64;
+    while (nb < ne) nb *= 2;
+    if (reserve((void **)&k->rc, &k->cap_rc, ne, sizeof *k->rc) ||
+        reserve((void **)&k->rcs, &k->cap_rcs, ne, sizeof *k->rcs) ||
+        reserve((void **)&k->rcb, &k->cap_rcb, nb + 1, sizeof *k->rcb) ||
+        reserve((void **)&k->rr, &k->cap_rr, nrq, sizeof *k->rr))
+        return -ENOMEM;
+    size_t w = 0;
+    for (size_t r = 0; r < nrq; r++) {
+        const dyn *d = &k->dyn[k->slot[k->rq[r]]];
+        if (d->big) continue;
+        int64_t lo[3], hi[3];
+        cells_of(k->h, d->env, lo, hi);
+        for (int64_t x = lo[0]; x <= hi[0]; x++)
+            for (int64_t y = lo[1]; y <= hi[1]; y++)
+                for (int64_t z = lo[2]; z <= hi[2]; z++) {
+                    rq_cell *rc = &k->rc[w++];
+                    rc->key[0] = x;
+                    rc->key[1] = y;
+                    rc->key[2] = z;
+                    rc->r = (uint32_t)r;
+                }
+    }
+    /* counting sort by hashed cell */
+    memset(k->rcb, 0, (nb + 1) * sizeof *k->rcb);
+    for (size_t i = 0; i < ne; i++)
+        k->rcb[(key_hash(k->rc[i].key[0], k->rc[i].key[1], k->rc[i].key[2]) & (nb - 1)) + 1]++;
+    for (size_t b = 0; b < nb; b++) k->rcb[b + 1] += k->rcb[b];
+    for (size_t i = 0; i < ne; i++)
+        k->rcs[k->rcb[key_hash(k->rc[i].key[0], k->rc[i].key[1], k->rc[i].key[2]) & (nb - 1)]++] = k->rc[i];
+    memmove(k->rcb + 1, k->rcb, nb * sizeof *k->rcb);
+    k->rcb[0] = 0;
+    for (size_t b = 0; b < nb; b++) {
+        size_t s0 = k->rcb[b], s1 = k->rcb[b + 1];
+        for (size_t i = s0; i < s1; i++) {
+            const int64_t *key = k->rcs[i].key;
+            bool seen = false;
+            for (size_t j = s0; j < i && !seen; j++) seen = !memcmp(k->rcs[j].key, key, sizeof k->rcs[j].key);
+            if (seen) continue; /* that cell is done */
+            size_t nr = 0;
+            for (size_t j = i; j < s1; j++)
+                if (!memcmp(k->rcs[j].key, key, sizeof k->rcs[j].key)) k->rr[nr++] = k->rcs[j].r;
+            if (renew_cell(c, key, k->rr, nr, clock)) return -ENOMEM;
+        }
+    }
+    /* big triangles (in no cell) against every request in cells */
+    for (size_t i = 0; i < k->nsbig + k->ndbig; i++) {
+        uint32_t y = i < k->nsbig ? k->sbig[i] : k->dbig[i - k->nsbig];
+        if (c->own[y] || (i < k->nsbig && k->slot[y] != FP_TRACK_NONE)) continue;
+        float yb[6];
+        if (i < k->nsbig) tri_box(k->p, c->tris + 3 * (size_t)y, yb);
+        else memcpy(yb, k->dyn[k->slot[y]].env, sizeof yb);
+        for (size_t r = 0; r < nrq; r++) {
+            uint32_t x = k->rq[r];
+            const dyn *d = &k->dyn[k->slot[x]];
+            if (d->big || y == x || !boxes_meet(d->env, yb) || adjacent(c, x, y)) continue;
+            if (link(c, x, y, clock)) return -ENOMEM;
+        }
+    }
+    /* big requests: a query each (every registered triangle; links as above, but a request
+     * in a cell has found this one already: link checks y's list) */
+    for (size_t r = 0; r < nrq; r++) {
+        uint32_t x = k->rq[r];
+        if (!k->dyn[k->slot[x]].big) continue;
+        float env[6];
+        memcpy(env, k->dyn[k->slot[x]].env, sizeof env);
+        if (query(c, env, x)) return -ENOMEM;
+        for (size_t i = 0; i < k->nq; i++) {
+            uint32_t y = k->q[i];
+            if (list_add(&k->dyn[k->slot[x]], y)) return -ENOMEM; /* another big one may */
+            if (k->slot[y] != FP_TRACK_NONE && list_add(&k->dyn[k->slot[y]], x)) return -ENOMEM;
+        }
+    }
+    k->renewed += nrq;
+    k->nrq = 0;
     return 0;
 }
 
@@ -913,11 +1116,12 @@ static int track_build(fp_contact *c)
     for (int pass = 0; pass < 2; pass++) {
         if (pass) {
             size_t nb = 64;
-            while (nb < ne) nb *= 2;
+            while (2 * nb < ne) nb *= 2;
             k->sg_nb = nb;
             k->sg_start = calloc(nb + 1, sizeof *k->sg_start);
+            k->sg_dead = calloc(nb, sizeof *k->sg_dead);
             k->sg_ids = malloc((ne ? ne : 1) * sizeof *k->sg_ids);
-            if (!k->sg_start || !k->sg_ids) {
+            if (!k->sg_start || !k->sg_dead || !k->sg_ids) {
                 track_free(k);
                 return -ENOMEM;
             }
@@ -996,12 +1200,13 @@ int fp_contact_reference(fp_contact *c, const float *ref, const uint32_t *ranges
     tick(k, c->t);
     k->nmt = 0;
     /* P := ref where they differ: D_P, then the ranges (or everything) */
+    k->nmv = 0;
 #define FP_VISIT(v)                                                                             \
     do {                                                                                        \
         size_t v_ = (v);                                                                        \
         if (!vert_differs(ref, k->p, v_)) break;                                                \
-        memcpy(k->p + 3 * v_, ref + 3 * v_, 3 * sizeof(float));                                 \
-        if (mark_tris(c, (uint32_t)v_)) return -ENOMEM;                                         \
+        if (push_u32(&k->mv, &k->nmv, &k->cap_mv, (uint32_t)v_) || mark_tris(c, (uint32_t)v_))  \
+            return -ENOMEM;                                                                     \
     } while (0)
     for (size_t i = 0; i < k->ndp; i++) FP_VISIT(k->dp[i]);
     if (nranges == SIZE_MAX) {
@@ -1015,15 +1220,20 @@ int fp_contact_reference(fp_contact *c, const float *ref, const uint32_t *ranges
 #undef FP_VISIT
     for (size_t i = 0; i < k->ndp; i++) k->in_dp[k->dp[i]] = 0;
     k->ndp = 0;
+    /* the static triangles that change leave the static grid (P there still the weld shape) */
+    for (size_t i = 0; i < k->nmt; i++)
+        if (k->slot[k->mt[i]] == FP_TRACK_NONE) static_remove(c, k->mt[i]);
+    for (size_t i = 0; i < k->nmv; i++)
+        memcpy(k->p + 3 * (size_t)k->mv[i], ref + 3 * (size_t)k->mv[i], 3 * sizeof(float));
     /* the triangles that changed: an envelope that holds them */
     for (size_t i = 0; i < k->nmt; i++) {
         uint32_t a = k->mt[i];
         float b[6];
         tri_box(k->p, c->tris + 3 * (size_t)a, b);
-        if ((k->slot[a] == FP_TRACK_NONE || !box_holds(k->dyn[k->slot[a]].env, b)) && renew(c, a, b))
+        if ((k->slot[a] == FP_TRACK_NONE || !box_holds(k->dyn[k->slot[a]].env, b)) && envelope(c, a, b))
             return -ENOMEM;
     }
-    return 0;
+    return renew_lists(c);
 }
 
 /* New pairs and newly flipped triangles of shape s (P but for the moved vertices) against
@@ -1049,6 +1259,10 @@ static long track_check(fp_contact *c, const float *s, const float *ref, bool ca
         for (uint32_t j = 0; j < d->len; j++) {
             uint32_t b = list[j];
             if (b < a && k->tstamp[b] == k->tclock) continue; /* both moved: the lower one's */
+            /* b's envelope holds its box in s (a dynamic one's; a static one is the weld
+             * shape's): a filter that reads no vertex */
+            uint32_t sb = k->slot[b];
+            if (sb != FP_TRACK_NONE && !boxes_meet(ba, k->dyn[sb].env)) continue;
             const uint32_t *vb = c->tris + 3 * (size_t)b;
             float bb[6];
             tri_box(s, vb, bb);
@@ -1096,6 +1310,7 @@ int fp_contact_step(fp_contact *c, const float *ref, const float *cand, const ui
     k->nmv = k->nmt = 0;
     size_t renewed0 = k->renewed;
 
+
     /* the moved vertices: where cand differs from P, looked for where either may differ
      * from the reference (D_P and the ranges) */
 #define FP_VISIT(v)                                                                             \
@@ -1119,6 +1334,7 @@ int fp_contact_step(fp_contact *c, const float *ref, const float *cand, const ui
     if (!k->nmv) return 0; /* nothing moved: P is the candidate */
     for (size_t i = 0; i < k->nmv; i++)
         if (mark_tris(c, k->mv[i])) return -ENOMEM;
+
     res->moved_tris = k->nmt;
 
     /* envelopes that hold each moved triangle in P and in the candidate (so in every shape
@@ -1135,12 +1351,15 @@ int fp_contact_step(fp_contact *c, const float *ref, const float *cand, const ui
             hull[j] = min_f(bp[j], k->mbox[i][j]);
             hull[3 + j] = max_f(bp[3 + j], k->mbox[i][3 + j]);
         }
+        if (k->slot[a] == FP_TRACK_NONE) static_remove(c, a); /* P is still the weld shape */
         if ((k->slot[a] == FP_TRACK_NONE || !box_holds(k->dyn[k->slot[a]].env, hull)) &&
-            renew(c, a, hull))
+            envelope(c, a, hull))
             return -ENOMEM;
         if (flipped(c, cand, va, a) && !flipped(c, ref, va, a)) fl++;
     }
+    if (renew_lists(c)) return -ENOMEM;
     res->renewed = k->renewed - renewed0;
+
 
 
     long found = track_check(c, cand, ref, true, &fl);

@@ -358,6 +358,69 @@ static void test_track_sheets_slow(void **state)
     sheets_push(60);
 }
 
+/* a sheet pushed up into two big triangles above it (a tilted quad, each triangle over
+ * FP_TRACK_BIG_CELLS grid cells: the guard's lists of big ones), the quad lowered too when
+ * move_big */
+static void big_push(bool move_big)
+{
+    int k = 48, frames = 30;
+    size_t ns = (size_t)(k + 1) * (k + 1), n = ns + 4, t = 2 * (size_t)k * k + 2;
+    float *pos = malloc(n * 3 * sizeof(float)), *cand = malloc(n * 3 * sizeof(float));
+    uint32_t *tris = malloc(t * 3 * sizeof(uint32_t)), *ranges = malloc(n * sizeof(uint32_t));
+    size_t v = 0, f = 0;
+    for (int i = 0; i <= k; i++)
+        for (int j = 0; j <= k; j++, v++) {
+            pos[3 * v] = (float)i / k;
+            pos[3 * v + 1] = (float)j / k;
+            pos[3 * v + 2] = 0;
+        }
+    for (int i = 0; i < k; i++)
+        for (int j = 0; j < k; j++) {
+            uint32_t a = (uint32_t)(i * (k + 1) + j), b = a + 1, c = a + (uint32_t)(k + 1), d = c + 1;
+            uint32_t q[6] = {a, c, b, b, c, d};
+            memcpy(tris + 3 * f, q, sizeof q);
+            f += 2;
+        }
+    float quad[4][3] = {{-0.2f, -0.2f, 0.04f}, {1.2f, -0.2f, 0.6f}, {-0.2f, 1.2f, 0.04f}, {1.2f, 1.2f, 0.6f}};
+    memcpy(pos + 3 * ns, quad, sizeof quad);
+    uint32_t qt[6] = {(uint32_t)ns, (uint32_t)ns + 1, (uint32_t)ns + 2, (uint32_t)ns + 1, (uint32_t)ns + 3, (uint32_t)ns + 2};
+    memcpy(tris + 3 * f, qt, sizeof qt);
+    fp_contact *tk, *full;
+    assert_int_equal(fp_contact_create(tris, t, n, pos, &tk), 0);
+    assert_int_equal(fp_contact_create(tris, t, n, pos, &full), 0);
+    assert_int_equal(fp_contact_reference(tk, pos, NULL, SIZE_MAX), 0);
+    track_stats ts = {0, 0, 0, 1.0};
+    for (int fr = 1; fr <= frames; fr++) {
+        memcpy(cand, pos, n * 3 * sizeof(float));
+        double h = 0.3 * fr / frames;
+        for (size_t w = 0; w < ns; w++) {
+            double d = hypot(pos[3 * w] - 0.3, pos[3 * w + 1] - 0.5) / 0.25;
+            if (d < 1) cand[3 * w + 2] += (float)(h * (1 - d * d) * (1 - d * d));
+        }
+        if (move_big)
+            for (size_t w = ns; w < n; w++) cand[3 * w + 2] -= (float)(0.02 * fr / frames);
+        track_frame(tk, full, pos, cand, n, tris, t, ranges, true, 0, &ts);
+    }
+    assert_true(fp_contact_count_new(full, pos, cand, NULL, 0, NULL) > 0);
+    printf("a sheet pushed into big triangles%s over %d frames: %d scaled back (least t %.3f), "
+           "no new pair (full check and CGAL, every frame)\n",
+           move_big ? " (lowered too)" : "", frames, ts.scaled, ts.least_t);
+    assert_true(ts.scaled > 0);
+    fp_contact_destroy(&tk);
+    fp_contact_destroy(&full);
+    free(ranges);
+    free(tris);
+    free(cand);
+    free(pos);
+}
+
+static void test_track_big(void **state)
+{
+    (void)state;
+    big_push(false);
+    big_push(true);
+}
+
 /* the ICT lips: the lower lip's front pulled up and back through the upper lip (an anchored
  * CSRBF gesture, as test_ict_frame's third pull) over `frames` frames */
 static void lips_push(int frames)
@@ -521,6 +584,7 @@ int main(void)
         cmocka_unit_test(test_ict_frame),
         cmocka_unit_test(test_track_sheets_fast),
         cmocka_unit_test(test_track_sheets_slow),
+        cmocka_unit_test(test_track_big),
         cmocka_unit_test(test_track_lips_fast),
         cmocka_unit_test(test_track_lips_slow),
         cmocka_unit_test(test_track_recordings),
