@@ -609,6 +609,9 @@ struct track {
     size_t cap_rc, cap_rcs;
     uint32_t *rcb, *rr;           /* the sort's buckets; one cell's requests */
     size_t cap_rcb, cap_rr;
+    uint32_t *rx;                 /* one cell's requests: their triangles and envelopes */
+    float (*renv)[6];
+    size_t cap_rx, cap_renv;
     size_t renewed;               /* envelopes renewed, for fp_contact_result */
 };
 
@@ -644,6 +647,8 @@ static void track_free(struct track *k)
     free(k->rcs);
     free(k->rcb);
     free(k->rr);
+    free(k->rx);
+    free(k->renv);
     free(k);
 }
 
@@ -942,11 +947,19 @@ static int link(fp_contact *c, uint32_t x, uint32_t y, uint32_t clock)
 static int renew_cell(fp_contact *c, const int64_t key[3], const uint32_t *R, size_t nr, uint32_t clock)
 {
     struct track *k = c->tk;
+    /* the requests' triangles and envelopes, side by side */
+    if (reserve((void **)&k->renv, &k->cap_renv, nr, sizeof *k->renv) ||
+        reserve((void **)&k->rx, &k->cap_rx, nr, sizeof *k->rx))
+        return -ENOMEM;
+    for (size_t i = 0; i < nr; i++) {
+        k->rx[i] = k->rq[R[i]];
+        memcpy(k->renv[i], k->dyn[k->slot[k->rx[i]]].env, sizeof k->renv[i]);
+    }
 #define FP_TRY(Y, YBOX)                                                                         \
     for (size_t i_ = 0; i_ < nr; i_++) {                                                        \
-        uint32_t x_ = k->rq[R[i_]];                                                             \
-        const float *ex_ = k->dyn[k->slot[x_]].env;                                             \
-        if ((Y) == x_ || !boxes_meet(ex_, (YBOX))) continue;                                    \
+        uint32_t x_ = k->rx[i_];                                                                \
+        const float *ex_ = k->renv[i_];                                                         \
+        if (!boxes_meet(ex_, (YBOX)) || (Y) == x_) continue;                                    \
         bool mine_ = true;                                                                      \
         for (int a_ = 0; a_ < 3 && mine_; a_++) {                                               \
             double l_ = floor((double)max_f(ex_[a_], (YBOX)[a_]) / k->h);                       \
