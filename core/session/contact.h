@@ -1,26 +1,32 @@
 /*
  * contact.h: the contact guard (issue 10): a discrete check that a candidate shape adds no
  * self-crossings of the surface to a reference shape, and a bisection that scales the
- * motion back until it adds none.
+ * motion back until it adds none. Two forms over one test:
+ *  - the full check (fp_contact_count_new, fp_contact_guard): stateless, O(n + t) per call;
+ *    the reference the tests hold the incremental form to;
+ *  - the incremental guard (fp_contact_reference, fp_contact_step; issue 18): what the
+ *    session runs every frame; it checks each candidate against the shape it accepted last,
+ *    its work follows this frame's motion (argument below).
  *
  * fp_contact_create also finds the weld shape's own crossings (a full scan, once) and its
- * triangle normals. Only what moved is checked: the triangles with a vertex whose position differs (bitwise)
- * between reference and candidate, against the triangles near them, found through a uniform
- * hash grid over the moved region (cell: the largest moved triangle's extent in the
- * candidate). Two triangles cross when they share a point (closed triangles) and no vertex;
- * vertices at identical positions in the shape given to fp_contact_create are welded, so
- * OBJ seams (duplicated vertices) are adjacency, as in tests/support/selfx. Degenerate
- * (zero-area) triangles are skipped. A pair is new when it crosses in the candidate and not
- * in the reference, so crossings the input already has (the ICT face's eyes and mouth
- * interior) never count. The triangle-triangle test: two closed triangles meet iff an edge
- * of one meets the other (their intersection is convex, its boundary lies on an edge), each
- * segment-triangle test from the signs of orient3d determinants in double (float inputs),
- * with a 2D test for coplanar segments. Not exact: a determinant within rounding of zero
- * (touching to ~1e-16 relative) may be decided either way; CGAL's exact test agrees on
- * the real faces (tests/unit/test_contact.c).
+ * triangle normals. fp_contact_count_new checks only what moved: the triangles with a vertex
+ * whose position differs (bitwise) between reference and candidate, against the triangles
+ * near them, found through a uniform hash grid over the moved region (cell: the largest
+ * moved triangle's extent in the candidate). Two triangles cross when they share a point
+ * (closed triangles) and no vertex; vertices at identical positions in the shape given to
+ * fp_contact_create are welded, so OBJ seams (duplicated vertices) are adjacency, as in
+ * tests/support/selfx. Degenerate (zero-area) triangles are skipped. A pair is new when it
+ * crosses in the candidate and not in the reference, so crossings the input already has (the
+ * ICT face's eyes and mouth interior) never count. The triangle-triangle test: two closed
+ * triangles meet iff an edge of one meets the other (their intersection is convex, its
+ * boundary lies on an edge), each segment-triangle test from the signs of orient3d
+ * determinants in double (float inputs; each vertex against the other's plane computed
+ * once), with a 2D test for coplanar segments. Not exact: a determinant within rounding of
+ * zero (touching to ~1e-16 relative) may be decided either way; CGAL's exact test agrees on
+ * the real faces (tests/session/test_contact.c).
  *
  * Errors: negative errno (-EINVAL for NULL or a triangle index >= n, -ENOMEM). Threads: one
- * fp_contact per thread (it keeps scratch buffers).
+ * fp_contact per thread (it keeps scratch buffers and the incremental guard's state).
  */
 #ifndef FP_CONTACT_H
 #define FP_CONTACT_H
@@ -103,16 +109,20 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
  *      engine's touched blocks), so C differs from P only within D_P and the ranges.
  *  (3) Pairs (A, B) with A moved whose boxes in C meet are all tested, by the same
  *      triangle-triangle test as fp_contact_count_new, in C and then in ref. The candidates
- *      come from envelopes: every triangle (own ones left out) has one that holds its box in
- *      P: static triangles (never moved from the weld shape) their box there, in a static
- *      hash grid built once; the others an envelope (box grown by FP_TRACK_SKIN of its
- *      extent) in a dynamic hash grid, renewed only when the box leaves it, with a list of
- *      the triangles whose envelopes met its own (kept by both sides at every renewal,
- *      stale entries allowed). Before a check each moved triangle's envelope is made to hold
- *      its box in P and in C, hence in every shape P + t (C - P) between them (rounding is
+ *      come from envelopes: every triangle (own ones left out) has a box that holds its box
+ *      in P: a static triangle (never moved from the weld shape) its box there, in a static
+ *      hash grid built once (it leaves that grid when it first moves); the others an
+ *      envelope (their box grown by a tenth of its extent) in a dynamic hash grid, renewed
+ *      only when the box leaves it, with a list of the triangles whose envelopes met its own
+ *      at its renewal; a renewed triangle also joins the lists of those it meets (stale
+ *      entries are allowed: a list holds at least every triangle whose envelope meets its
+ *      owner's now). Before a check each moved triangle's envelope is made to hold its box
+ *      in P and in C, hence in every shape P + t (C - P) between them (rounding is
  *      monotonic), so two boxes that meet in the checked shape lie in envelopes that meet,
  *      and the pair is in the moved triangle's list. A pair of two moved triangles is
- *      tested once, from the lower index.
+ *      tested once, from the lower index. Renewals are batched by grid cell (each cell's
+ *      triangles read once for all the envelopes that cover it; a pair taken in the cell of
+ *      its boxes' common lower corner); boxes over 4096 cells live in lists of their own.
  * So the candidate is accepted exactly when fp_contact_count_new(ref, C) would find no new
  * pair and no newly flipped triangle, and the bisection (shape P + t (C - P) at the moved
  * vertices, t the largest of `iters` halvings that adds none) keeps the invariant. What

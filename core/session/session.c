@@ -414,9 +414,9 @@ static void contact_end_gesture(fp_session *s)
 {
     if (s->cg_limited)
         fp_slog_printf(&s->log, FP_LOG_WARNING, "contact",
-                       "contact guard stopped the surface from passing through itself: reached "
-                       "%.0f%% (%lu of %lu frames scaled back)",
-                       100.0 * s->cg_t, s->cg_limited, s->cg_frames);
+                       "contact guard stopped the surface from passing through itself: %lu of "
+                       "%lu frames scaled back (least share of a frame's motion kept %.0f%%)",
+                       s->cg_limited, s->cg_frames, 100.0 * s->cg_t);
     s->cg_frames = s->cg_limited = 0;
 }
 
