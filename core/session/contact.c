@@ -590,7 +590,7 @@ struct track {
     uint32_t *qstamp, qclock;     /* t: == qclock when seen by this query */
     double h;                     /* the grid cell */
     uint32_t *sg_start, *sg_ids;  /* the static grid: the weld shape's boxes by hashed cell */
-    uint16_t *sg_dead;            /* entries of triangles gone dynamic, cut from the bucket's end */
+    uint32_t *sg_dead;            /* entries of triangles gone dynamic, cut from the bucket's end */
     size_t sg_nb;
     uint32_t *sbig;               /* ... and those over FP_TRACK_BIG_CELLS cells */
     size_t nsbig;
@@ -613,6 +613,7 @@ struct track {
     float (*renv)[6];
     size_t cap_rx, cap_renv;
     size_t renewed;               /* envelopes renewed, for fp_contact_result */
+    bool broken;                  /* a call ran out of memory half way: unusable */
 };
 
 static void track_free(struct track *k)
@@ -1205,10 +1206,20 @@ static int mark_tris(fp_contact *c, uint32_t v)
     return 0;
 }
 
+static int reference(fp_contact *c, const float *ref, const uint32_t *ranges, size_t nranges);
+
 int fp_contact_reference(fp_contact *c, const float *ref, const uint32_t *ranges, size_t nranges)
 {
     if (!c || !ref || (nranges != SIZE_MAX && nranges && !ranges)) return -EINVAL;
     if (!c->tk && track_build(c)) return -ENOMEM;
+    if (c->tk->broken) return -ENOMEM;
+    int rc = reference(c, ref, ranges, nranges);
+    if (rc) c->tk->broken = true;
+    return rc;
+}
+
+static int reference(fp_contact *c, const float *ref, const uint32_t *ranges, size_t nranges)
+{
     struct track *k = c->tk;
     tick(k, c->t);
     k->nmt = 0;
@@ -1311,6 +1322,9 @@ static void track_lerp(struct track *k, double t)
     }
 }
 
+static int step(fp_contact *c, const float *ref, const float *cand, const uint32_t *ranges,
+                size_t nranges, int iters, fp_contact_result *res);
+
 int fp_contact_step(fp_contact *c, const float *ref, const float *cand, const uint32_t *ranges,
                     size_t nranges, int iters, fp_contact_result *res)
 {
@@ -1318,6 +1332,15 @@ int fp_contact_step(fp_contact *c, const float *ref, const float *cand, const ui
     res->t = 1;
     if (!c || !ref || !cand || (nranges != SIZE_MAX && nranges && !ranges)) return -EINVAL;
     if (!c->tk && track_build(c)) return -ENOMEM;
+    if (c->tk->broken) return -ENOMEM;
+    int rc = step(c, ref, cand, ranges, nranges, iters, res);
+    if (rc) c->tk->broken = true;
+    return rc;
+}
+
+static int step(fp_contact *c, const float *ref, const float *cand, const uint32_t *ranges,
+                size_t nranges, int iters, fp_contact_result *res)
+{
     struct track *k = c->tk;
     tick(k, c->t);
     k->nmv = k->nmt = 0;

@@ -148,7 +148,8 @@ int fp_contact_reference(fp_contact *c, const float *ref, const uint32_t *ranges
  *  Nothing moved (cand = P where looked): no work. The shape to show is cand when
  *  res->t == 1, else fp_contact_shape. Work: the vertices in ranges and D_P, the moved
  *  triangles and their lists; envelopes renewed where a box left its own. Returns 0,
- *  -EINVAL or -ENOMEM (P then unchanged or partly lerped: call fp_contact_reference). */
+ *  -EINVAL or -ENOMEM (the guard is then unusable, every later call says -ENOMEM: destroy
+ *  it; show the reference meanwhile). */
 int fp_contact_step(fp_contact *c, const float *ref, const float *cand, const uint32_t *ranges,
                     size_t nranges, int iters, fp_contact_result *res);
 

@@ -66,6 +66,8 @@ struct fp_session {
     /* the contact guard (contact.h, its incremental form); NULL with no_contact_guard */
     fp_contact *contact;
     int cg_sync;                  /* FP_CG_*: what the guard's P must catch up with */
+    bool cg_lost;                 /* the guard ran out of memory: made anew, the base shown
+                                     until then */
     unsigned long cg_frames, cg_limited; /* this gesture: frames checked, scaled back */
     double cg_t;                  /* this gesture: smallest fraction kept */
 };
@@ -84,6 +86,18 @@ enum {
 _Static_assert(FP_ENGINE_MAX_CONTROL >= FP_CONTROL_CAPACITY, "the engine takes a full control set");
 
 /* ---- creation -------------------------------------------------------------------------- */
+
+/* The contact guard on the loaded mesh (its own crossings widened by FP_CONTACT_OWN_RINGS),
+ * started on the shape shown. Returns 0 or -ENOMEM (s->contact NULL). */
+static int contact_open(fp_session *s)
+{
+    int rc = fp_contact_create(s->mesh->triangles, s->mesh->triangle_count, s->n, s->loaded, &s->contact);
+    if (!rc) rc = fp_contact_dilate_own(s->contact, FP_CONTACT_OWN_RINGS);
+    if (!rc) rc = fp_contact_reference(s->contact, s->shown, NULL, SIZE_MAX);
+    if (rc) fp_contact_destroy(&s->contact);
+    s->cg_sync = FP_CG_SYNCED;
+    return rc;
+}
 
 /* Load the mapping of SPEC `mapping` (from `file` where not NULL: a copy being hot-reloaded)
  * and create it with the SPEC's keys. */
@@ -298,10 +312,7 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
         goto fail;
     }
     if (!opt->no_contact_guard) {
-        if ((rc = fp_contact_create(s->mesh->triangles, s->mesh->triangle_count, s->n, s->loaded,
-                                    &s->contact)) ||
-            (rc = fp_contact_dilate_own(s->contact, FP_CONTACT_OWN_RINGS)) ||
-            (rc = fp_contact_reference(s->contact, s->shown, NULL, SIZE_MAX))) {
+        if ((rc = contact_open(s))) {
             rc = rc ? rc : -ENOMEM;
             snprintf(err, errlen, "session: out of memory for the contact guard");
             goto fail;
@@ -381,6 +392,13 @@ static void shown_ref(fp_session *s)
  * did not). */
 static void contact_guard(fp_session *s, const float *ref, fp_frame_stats *st)
 {
+    if (s->cg_lost && s->shown != ref) { /* the guard is made anew on the shape shown: ref */
+        const float *shown = s->shown;
+        s->shown = ref;
+        if (contact_open(s)) return; /* still no memory: the base stays */
+        s->cg_lost = false;
+        s->shown = shown;
+    }
     if (!s->contact || s->shown == ref) return;
     int64_t t0 = fp_now_ns();
     int rc = 0;
@@ -392,9 +410,10 @@ static void contact_guard(fp_session *s, const float *ref, fp_frame_stats *st)
     fp_contact_result r;
     if (!rc) rc = fp_contact_step(s->contact, ref, s->shown, ranges, nranges, FP_CONTACT_BISECTIONS, &r);
     st->collide_ms += (double)(fp_now_ns() - t0) / 1e6;
-    if (rc) { /* out of memory: show the reference, try afresh next frame */
+    if (rc) { /* out of memory: the guard is unusable; show the reference, a new guard next frame */
         s->shown = ref;
-        s->cg_sync = FP_CG_REF_CHANGED;
+        fp_contact_destroy(&s->contact);
+        s->cg_lost = true;
         fp_slog_printf(&s->log, FP_LOG_ERROR, "contact", "contact guard: out of memory; showing the base");
         return;
     }
