@@ -25,6 +25,7 @@ struct fp_contact {
     float (*nrm)[3];      /* t: the weld shape's triangle normals (unnormalised) */
     struct track *tk;     /* the incremental guard (fp_contact_step), made on first use */
     float *weld_copy;     /* n x 3: the weld shape, the tracker's first P (freed then) */
+    size_t prewarm;       /* fp_contact_set_prewarm */
 };
 
 /* ---- the triangle-triangle test ---------------------------------------------------------- */
@@ -147,6 +148,7 @@ int fp_contact_create(const uint32_t *tris, size_t t, size_t n, const float *wel
     c->tris = tris;
     c->t = t;
     c->n = n;
+    c->prewarm = FP_CONTACT_PREWARM;
     c->weld = malloc((n ? n : 1) * sizeof *c->weld);
     c->moved = malloc(n ? n : 1);
     c->mtris = malloc((t ? t : 1) * sizeof *c->mtris);
@@ -1180,7 +1182,25 @@ static int track_build(fp_contact *c)
     memmove(k->sg_start + 1, k->sg_start, k->sg_nb * sizeof *k->sg_start);
     k->sg_start[0] = 0;
     c->tk = k;
+    if (t > c->prewarm) return 0;
+    /* a face-sized mesh: every triangle gets its envelope and list now, in one batch (the
+     * static grid left empty), so that the first touch of a region costs its frame no more
+     * than the next (about 1 us a triangle) */
+    for (size_t b = 0; b < k->sg_nb; b++) k->sg_dead[b] = k->sg_start[b + 1] - k->sg_start[b];
+    k->nsbig = 0;
+    for (size_t i = 0; i < t; i++) {
+        if (c->own[i]) continue;
+        float b[6];
+        tri_box(k->p, c->tris + 3 * i, b);
+        if (envelope(c, (uint32_t)i, b)) goto fail;
+    }
+    if (renew_lists(c)) goto fail;
+    k->renewed = 0;
     return 0;
+fail:
+    track_free(k);
+    c->tk = NULL;
+    return -ENOMEM;
 }
 
 /* the next clock of the moved stamps */
@@ -1447,3 +1467,8 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
 }
 
 const float *fp_contact_shape(const fp_contact *c) { return c && c->tk ? c->tk->p : NULL; }
+
+void fp_contact_set_prewarm(fp_contact *c, size_t max_tris)
+{
+    if (c) c->prewarm = max_tris;
+}

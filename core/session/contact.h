@@ -153,6 +153,15 @@ int fp_contact_reference(fp_contact *c, const float *ref, const uint32_t *ranges
 int fp_contact_step(fp_contact *c, const float *ref, const float *cand, const uint32_t *ranges,
                     size_t nranges, int iters, fp_contact_result *res);
 
+/** Meshes with at most this many triangles get every envelope and list at the first
+ *  fp_contact_reference, in one batch (about 1 us a triangle: 85 ms for the ICT face), so
+ *  that a gesture's first touch of a region costs its frame no more than the next; larger
+ *  ones make them as triangles first move (a static grid of the weld shape finds their
+ *  partners). Default FP_CONTACT_PREWARM; 0: never (the tests run both ways). Call before
+ *  the first fp_contact_reference. */
+#define FP_CONTACT_PREWARM 262144
+void fp_contact_set_prewarm(fp_contact *c, size_t max_tris);
+
 /** P, the shape fp_contact_step last accepted (n x 3, owned by c, valid until its next
  *  call), or NULL before the first fp_contact_reference. */
 const float *fp_contact_shape(const fp_contact *c);

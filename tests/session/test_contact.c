@@ -307,7 +307,7 @@ static double max_move(const float *a, const float *b, size_t n)
 /* two sheets 0.05 apart; the lower one's middle pushed up by a bump of height 0.12 (through
  * the upper one) over `frames` frames: the guard lets it rise to the upper sheet and no
  * further */
-static void sheets_push(int frames)
+static void sheets_push(int frames, bool lazy)
 {
     float *pos;
     size_t n, t;
@@ -318,6 +318,7 @@ static void sheets_push(int frames)
     fp_contact *tk, *full;
     assert_int_equal(fp_contact_create(tris, t, n, pos, &tk), 0);
     assert_int_equal(fp_contact_create(tris, t, n, pos, &full), 0);
+    if (lazy) fp_contact_set_prewarm(tk, 0);
     assert_int_equal(fp_contact_reference(tk, pos, NULL, SIZE_MAX), 0);
     track_stats ts = {0, 0, 0, 1.0};
     for (int f = 1; f <= frames; f++) {
@@ -333,9 +334,9 @@ static void sheets_push(int frames)
     assert_true(fp_contact_count_new(full, pos, cand, NULL, 0, NULL) > 0);
     double top = 0;
     for (size_t v = 0; v < n / 2; v++) top = fmax(top, fp_contact_shape(tk)[3 * v + 2]);
-    printf("sheets pushed over %d frames: %d scaled back (least t %.3f); the bump rose to %.4f "
-           "of the 0.05 gap, no new pair (full check and CGAL, every frame)\n",
-           frames, ts.scaled, ts.least_t, top);
+    printf("sheets pushed over %d frames (%s): %d scaled back (least t %.3f); the bump rose to "
+           "%.5f (the gap: 0.05), no new pair (full check and CGAL, every frame)\n",
+           frames, lazy ? "lazy" : "prewarmed", ts.scaled, ts.least_t, top);
     assert_true(ts.scaled > 0);
     assert_true(top > 0.8 * 0.05 && top <= 0.05);
     fp_contact_destroy(&tk);
@@ -349,19 +350,21 @@ static void sheets_push(int frames)
 static void test_track_sheets_fast(void **state)
 {
     (void)state;
-    sheets_push(3);
+    sheets_push(3, false);
+    sheets_push(3, true);
 }
 
 static void test_track_sheets_slow(void **state)
 {
     (void)state;
-    sheets_push(60);
+    sheets_push(60, false);
+    sheets_push(60, true);
 }
 
 /* a sheet pushed up into two big triangles above it (a tilted quad, each triangle over
  * FP_TRACK_BIG_CELLS grid cells: the guard's lists of big ones), the quad lowered too when
  * move_big */
-static void big_push(bool move_big)
+static void big_push(bool move_big, bool lazy)
 {
     int k = 48, frames = 30;
     size_t ns = (size_t)(k + 1) * (k + 1), n = ns + 4, t = 2 * (size_t)k * k + 2;
@@ -388,6 +391,7 @@ static void big_push(bool move_big)
     fp_contact *tk, *full;
     assert_int_equal(fp_contact_create(tris, t, n, pos, &tk), 0);
     assert_int_equal(fp_contact_create(tris, t, n, pos, &full), 0);
+    if (lazy) fp_contact_set_prewarm(tk, 0);
     assert_int_equal(fp_contact_reference(tk, pos, NULL, SIZE_MAX), 0);
     track_stats ts = {0, 0, 0, 1.0};
     for (int fr = 1; fr <= frames; fr++) {
@@ -402,9 +406,9 @@ static void big_push(bool move_big)
         track_frame(tk, full, pos, cand, n, tris, t, ranges, true, 0, &ts);
     }
     assert_true(fp_contact_count_new(full, pos, cand, NULL, 0, NULL) > 0);
-    printf("a sheet pushed into big triangles%s over %d frames: %d scaled back (least t %.3f), "
-           "no new pair (full check and CGAL, every frame)\n",
-           move_big ? " (lowered too)" : "", frames, ts.scaled, ts.least_t);
+    printf("a sheet pushed into big triangles%s over %d frames (%s): %d scaled back (least t "
+           "%.3f), no new pair (full check and CGAL, every frame)\n",
+           move_big ? " (lowered too)" : "", frames, lazy ? "lazy" : "prewarmed", ts.scaled, ts.least_t);
     assert_true(ts.scaled > 0);
     fp_contact_destroy(&tk);
     fp_contact_destroy(&full);
@@ -417,13 +421,14 @@ static void big_push(bool move_big)
 static void test_track_big(void **state)
 {
     (void)state;
-    big_push(false);
-    big_push(true);
+    big_push(false, true);
+    big_push(true, true);
+    big_push(true, false);
 }
 
 /* the ICT lips: the lower lip's front pulled up and back through the upper lip (an anchored
  * CSRBF gesture, as test_ict_frame's third pull) over `frames` frames */
-static void lips_push(int frames)
+static void lips_push(int frames, bool lazy)
 {
     char err[512];
     fp_mesh *m;
@@ -449,6 +454,7 @@ static void lips_push(int frames)
     fp_contact *tk, *full;
     assert_int_equal(fp_contact_create(m->triangles, t, n, ref, &tk), 0);
     assert_int_equal(fp_contact_create(m->triangles, t, n, ref, &full), 0);
+    if (lazy) fp_contact_set_prewarm(tk, 0);
     assert_int_equal(fp_contact_reference(tk, ref, NULL, SIZE_MAX), 0);
     csrbf_options o = {0};
     o.radius = R;
@@ -472,10 +478,10 @@ static void lips_push(int frames)
     double ms = (double)(fp_now_ns() - t0) / 1e6;
     assert_true(fp_contact_count_new(full, ref, cand, NULL, 0, NULL) > 0); /* unguarded: through */
     double kept = max_move(ref, fp_contact_shape(tk), n), asked = max_move(ref, cand, n);
-    printf("ICT lips pushed over %d frames: %d scaled back (least t %.3f); kept %.3f of the %.3f "
+    printf("ICT lips pushed over %d frames (%s): %d scaled back (least t %.3f); kept %.3f of the %.3f "
            "asked (mesh units); no new pair (full check every frame, CGAL at the end)  [%.1f ms "
            "for the frames and their full checks]\n",
-           frames, ts.scaled, ts.least_t, kept, asked, ms);
+           frames, lazy ? "lazy" : "prewarmed", ts.scaled, ts.least_t, kept, asked, ms);
     assert_true(ts.scaled > 0);
     assert_true(kept > 0.3 * asked); /* stopped at the contact, not at the start */
     csrbf_points_destroy(&pts);
@@ -490,23 +496,25 @@ static void lips_push(int frames)
 static void test_track_lips_fast(void **state)
 {
     (void)state;
-    lips_push(3);
+    lips_push(3, false);
+    lips_push(3, true);
 }
 
 static void test_track_lips_slow(void **state)
 {
     (void)state;
-    lips_push(60);
+    lips_push(60, true);
 }
 
 /* Real frames: a session without the guard (no rig, the input's own clock) replays a
  * recording; each frame's shape is a candidate for an incremental guard on the base the
  * frame started from (commits and all: unanchored commits every frame), decided as the full
  * check decides. */
-static void recording_frames(const char *take, const char *mapping)
+static void recording_frames(const char *take, const char *mapping, bool lazy)
 {
     char input[4400], err[2048];
-    snprintf(input, sizeof input, "replay:%s/hands/leap-motion/%s_joints_mm.csv", fp_test_data_dir(), take);
+    snprintf(input, sizeof input, "replay:%s/hands/leap-motion/%s_joints_mm.csv,fast=1",
+             fp_test_data_dir(), take);
     const char *dirs[] = {fp_test_plugin_dir()};
     fp_plugin_path path;
     fp_plugin_path_init(&path, dirs, 1, NULL);
@@ -531,6 +539,7 @@ static void recording_frames(const char *take, const char *mapping)
     assert_int_equal(fp_contact_create(m->triangles, t, n, fp_session_loaded(s), &full), 0);
     assert_int_equal(fp_contact_dilate_own(tk, 1), 0);
     assert_int_equal(fp_contact_dilate_own(full, 1), 0);
+    if (lazy) fp_contact_set_prewarm(tk, 0);
     float *ref = malloc(n * 3 * sizeof(float));
     uint32_t *ranges = malloc(n * sizeof *ranges);
     memcpy(ref, fp_session_base(s), n * 3 * sizeof(float));
@@ -555,8 +564,8 @@ static void recording_frames(const char *take, const char *mapping)
         }
         track_frame(tk, full, ref, fp_session_positions(s), n, m->triangles, t, ranges, false, 1, &ts);
     }
-    printf("%s %s: %d frames checked, %d accepted, %d scaled back (least t %.3f), %u references; "
-           "every decision the full check's\n", take, mapping, ts.frames, ts.accepted, ts.scaled,
+    printf("%s %s (%s): %d frames checked, %d accepted, %d scaled back (least t %.3f), %u references; "
+           "every decision the full check's\n", take, mapping, lazy ? "lazy" : "prewarmed", ts.frames, ts.accepted, ts.scaled,
            ts.least_t, commits);
     assert_true(ts.frames > 20);
     free(ranges);
@@ -570,9 +579,10 @@ static void recording_frames(const char *take, const char *mapping)
 static void test_track_recordings(void **state)
 {
     (void)state;
-    recording_frames("Waiting-110fps", "unanchored");
-    recording_frames("three-claps", "unanchored");
-    recording_frames("grab", "anchored");
+    recording_frames("Waiting-110fps", "unanchored", true);
+    recording_frames("three-claps", "unanchored", true);
+    recording_frames("three-claps", "unanchored", false);
+    recording_frames("grab", "anchored", false);
 }
 
 int main(void)
