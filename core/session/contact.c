@@ -674,19 +674,31 @@ static int push_u32(uint32_t **p, size_t *len, size_t *cap, uint32_t v)
     return 0;
 }
 
+/* the grid cell of coordinate x: floor(x / h), clamped to +-1e15 (NaN: -1e15) */
+static inline int64_t cell_coord(double x, double h)
+{
+    double q = x / h;
+    if (!(q > -1e15)) q = -1e15;
+    if (q > 1e15) q = 1e15;
+    int64_t i = (int64_t)q;
+    return i - (q < (double)i);
+}
+
 /* the grid cells of box b; returns their number (as a double: it may be huge) */
 static double cells_of(double h, const float b[6], int64_t lo[3], int64_t hi[3])
 {
     double cnt = 1;
     for (int k = 0; k < 3; k++) {
-        double l = floor((double)b[k] / h), u = floor((double)b[3 + k] / h);
-        l = fmin(fmax(l, -1e15), 1e15);
-        u = fmin(fmax(u, -1e15), 1e15);
-        lo[k] = (int64_t)l;
-        hi[k] = (int64_t)u;
-        cnt *= u - l + 1;
+        lo[k] = cell_coord(b[k], h);
+        hi[k] = cell_coord(b[3 + k], h);
+        cnt *= (double)(hi[k] - lo[k] + 1);
     }
     return cnt;
+}
+
+static inline bool same_key(const int64_t a[3], const int64_t b[3])
+{
+    return a[0] == b[0] && a[1] == b[1] && a[2] == b[2];
 }
 
 static uint64_t key_hash(int64_t x, int64_t y, int64_t z)
@@ -742,7 +754,7 @@ static cellvec *cell_find(struct track *k, const int64_t key[3], bool create)
             k->used_cells++;
             return cv;
         }
-        if (cv->key[0] == key[0] && cv->key[1] == key[1] && cv->key[2] == key[2]) return cv;
+        if (same_key(cv->key, key)) return cv;
     }
 }
 
@@ -964,10 +976,8 @@ static int renew_cell(fp_contact *c, const int64_t key[3], const uint32_t *R, si
         const float *ex_ = k->renv[i_];                                                         \
         if (!boxes_meet(ex_, (YBOX)) || (Y) == x_) continue;                                    \
         bool mine_ = true;                                                                      \
-        for (int a_ = 0; a_ < 3 && mine_; a_++) {                                               \
-            double l_ = floor((double)max_f(ex_[a_], (YBOX)[a_]) / k->h);                       \
-            mine_ = (int64_t)fmin(fmax(l_, -1e15), 1e15) == key[a_];                            \
-        }                                                                                       \
+        for (int a_ = 0; a_ < 3 && mine_; a_++)                                                 \
+            mine_ = cell_coord(max_f(ex_[a_], (YBOX)[a_]), k->h) == key[a_];                    \
         if (mine_ && !adjacent(c, x_, (Y)) && link(c, x_, (Y), clock)) return -ENOMEM;          \
     }
     size_t bkt = key_hash(key[0], key[1], key[2]) & (k->sg_nb - 1);
@@ -1047,11 +1057,11 @@ static int renew_lists(fp_contact *c)
         for (size_t i = s0; i < s1; i++) {
             const int64_t *key = k->rcs[i].key;
             bool seen = false;
-            for (size_t j = s0; j < i && !seen; j++) seen = !memcmp(k->rcs[j].key, key, sizeof k->rcs[j].key);
+            for (size_t j = s0; j < i && !seen; j++) seen = same_key(k->rcs[j].key, key);
             if (seen) continue; /* that cell is done */
             size_t nr = 0;
             for (size_t j = i; j < s1; j++)
-                if (!memcmp(k->rcs[j].key, key, sizeof k->rcs[j].key)) k->rr[nr++] = k->rcs[j].r;
+                if (same_key(k->rcs[j].key, key)) k->rr[nr++] = k->rcs[j].r;
             if (renew_cell(c, key, k->rr, nr, clock)) return -ENOMEM;
         }
     }
