@@ -1403,28 +1403,21 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
 
     res->moved_tris = k->nmt;
 
-    /* envelopes that hold each moved triangle in P and in the candidate (so in every shape
-     * between them) */
+    /* envelopes that hold each moved triangle in the candidate (and, before a bisection,
+     * in P too, so in every shape between them) */
     if (reserve((void **)&k->mbox, &k->cap_mbox, k->nmt, sizeof *k->mbox)) return -ENOMEM;
     size_t fl = 0; /* newly flipped triangles of the candidate */
     for (size_t i = 0; i < k->nmt; i++) {
         uint32_t a = k->mt[i];
         const uint32_t *va = c->tris + 3 * (size_t)a;
-        float bp[6], hull[6];
-        tri_box(k->p, va, bp);
         tri_box(cand, va, k->mbox[i]);
-        for (int j = 0; j < 3; j++) {
-            hull[j] = min_f(bp[j], k->mbox[i][j]);
-            hull[3 + j] = max_f(bp[3 + j], k->mbox[i][3 + j]);
-        }
         if (k->slot[a] == FP_TRACK_NONE) static_remove(c, a); /* P is still the weld shape */
-        if ((k->slot[a] == FP_TRACK_NONE || !box_holds(k->dyn[k->slot[a]].env, hull)) &&
-            envelope(c, a, hull))
+        if ((k->slot[a] == FP_TRACK_NONE || !box_holds(k->dyn[k->slot[a]].env, k->mbox[i])) &&
+            envelope(c, a, k->mbox[i]))
             return -ENOMEM;
         if (flipped(c, cand, va, a) && !flipped(c, ref, va, a)) fl++;
     }
     if (renew_lists(c)) return -ENOMEM;
-    res->renewed = k->renewed - renewed0;
 
 
 
@@ -1433,7 +1426,18 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
     res->pairs = found;
     res->flipped = fl;
     if (found || fl) {
-        /* the bisection over P -> candidate */
+        /* the bisection over P -> candidate: envelopes that hold P's boxes too */
+        for (size_t i = 0; i < k->nmt; i++) {
+            uint32_t a = k->mt[i];
+            float hull[6];
+            tri_box(k->p, c->tris + 3 * (size_t)a, hull);
+            for (int j = 0; j < 3; j++) {
+                hull[j] = min_f(hull[j], k->mbox[i][j]);
+                hull[3 + j] = max_f(hull[3 + j], k->mbox[i][3 + j]);
+            }
+            if (!box_holds(k->dyn[k->slot[a]].env, hull) && envelope(c, a, hull)) return -ENOMEM;
+        }
+        if (renew_lists(c)) return -ENOMEM;
         size_t cap = k->cap_pv;
         if (reserve((void **)&k->pv, &cap, 3 * k->nmv, sizeof *k->pv) ||
             reserve((void **)&k->cv, &k->cap_pv, 3 * k->nmv, sizeof *k->cv))
@@ -1458,6 +1462,7 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
         for (size_t i = 0; i < k->nmv; i++)
             memcpy(k->p + 3 * (size_t)k->mv[i], cand + 3 * (size_t)k->mv[i], 3 * sizeof(float));
     }
+    res->renewed = k->renewed - renewed0;
     /* D_P: where P now differs from the reference */
     size_t w = 0;
     for (size_t i = 0; i < k->ndp; i++) {

@@ -116,10 +116,11 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
  *      only when the box leaves it, with a list of the triangles whose envelopes met its own
  *      at its renewal; a renewed triangle also joins the lists of those it meets (stale
  *      entries are allowed: a list holds at least every triangle whose envelope meets its
- *      owner's now). Before a check each moved triangle's envelope is made to hold its box
- *      in P and in C, hence in every shape P + t (C - P) between them (rounding is
- *      monotonic), so two boxes that meet in the checked shape lie in envelopes that meet,
- *      and the pair is in the moved triangle's list. A pair of two moved triangles is
+ *      owner's now). Before the check of C each moved triangle's envelope is made to hold
+ *      its box in C (unmoved ones hold theirs, P's), and before a bisection its box in P
+ *      too, hence in every shape P + t (C - P) between them (rounding is monotonic), so two
+ *      boxes that meet in the checked shape lie in envelopes that meet, and the pair is in
+ *      the moved triangle's list. A pair of two moved triangles is
  *      tested once, from the lower index. Renewals are batched by grid cell (each cell's
  *      triangles read once for all the envelopes that cover it; a pair taken in the cell of
  *      its boxes' common lower corner); boxes over 4096 cells live in lists of their own.
