@@ -129,6 +129,17 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
  * vertices, t the largest of `iters` halvings that adds none) keeps the invariant. What
  * changes against fp_contact_guard: t scales this frame's motion (P -> C), not the gesture's
  * (ref -> C); the shape shown after a scaled frame is P's, and the next frame goes on from it.
+ * tests/session/test_contact.c holds every decision to the full check's.
+ *
+ * Cost: per frame, the vertices in the ranges and D_P, then each moved triangle (boxes, its
+ * flip, its list) and each renewed envelope (about 1.5 us; renewed when a triangle moved a
+ * tenth of its size since its last renewal). Measured (CPU time, three-claps anchored on
+ * the input clock, 2-core machine): the ICT face (1,200 moved triangles a frame) 0.09 ms
+ * median, 0.35 ms p99 (the full check: about 2.7 ms); ICT subdivided to 1.68M vertices
+ * (55,000 moved triangles a frame, moving about their own size in a fast frame) 15.6 ms
+ * median, 90 ms p99 (full check: about 190 ms). What would take the large mesh further: the
+ * renewals and lists follow absolute motion, while neighbours on one sheet move together;
+ * certificates on relative motion (per vertex or per block) would skip most of both.
  */
 
 /** Start (or restart) the incremental guard on reference ref (n x 3): P := ref. ranges:
