@@ -830,6 +830,7 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
            *act = malloc(CAP * sizeof *act), *com = malloc(CAP * sizeof *com);
     fp_hand_pose(*hands)[FP_HANDS] = calloc(CAP, sizeof *hands);
     for (int k = 0; k < FP_STAGE_COUNT; k++) st_ms[k] = malloc(CAP * sizeof(double));
+    double *contact_ms = malloc(CAP * sizeof *contact_ms); /* the contact guard (collide_ms) */
     int64_t period = 1000000000LL / 60, start = fp_now_ns(), next = start;
     size_t n = fp_session_vertex_count(s);
     while (!fp_session_finished(s) && nf < CAP) {
@@ -841,6 +842,7 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
         if (st.active) act[nact++] = total[nf];
         if (st.committed) com[ncommit++] = total[nf];
         for (int k = 0; k < FP_STAGE_COUNT; k++) st_ms[k][nf] = st.stage_ms[k];
+        contact_ms[nf] = st.collide_ms;
         for (int h = 0; h < FP_HANDS; h++)
             if (fp_session_hand(s, h)) hands[nf][h] = *fp_session_hand(s, h);
         nf++;
@@ -893,6 +895,8 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
         for (int k = 0; k < FP_STAGE_COUNT; k++)
             printf(",\"%s_median\":%.6g,\"%s_p99\":%.6g", names[k], pct(st_ms[k], nf, 50),
                    names[k], pct(st_ms[k], nf, 99));
+        printf(",\"contact_median\":%.6g,\"contact_p99\":%.6g", pct(contact_ms, nf, 50),
+               pct(contact_ms, nf, 99));
         printf("}\n");
     } else {
         printf("frame %-14s %8zu vertices, %zu frames in %.2f s (%zu skipped: a late frame's "
@@ -901,6 +905,7 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
         printf("  %-22s %10s %10s\n", "stage", "median_ms", "p99_ms");
         for (int k = 0; k < FP_STAGE_COUNT; k++)
             printf("  %-22s %10.4f %10.4f\n", names[k], pct(st_ms[k], nf, 50), pct(st_ms[k], nf, 99));
+        printf("  %-22s %10.4f %10.4f\n", "contact", pct(contact_ms, nf, 50), pct(contact_ms, nf, 99));
         printf("  %-22s %10.4f %10.4f\n", "whole frame", pct(total, nf, 50), pct(total, nf, 99));
         printf("  %-22s %10.4f %10.4f\n", "whole frame, deforming", pct(act, nact, 50), pct(act, nact, 99));
         printf("  %-22s %10.4f %10.4f (max)\n", "whole frame, commit", pct(com, ncommit, 50), pct(com, ncommit, 100));
@@ -911,6 +916,7 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
     }
     fflush(stdout);
     for (int k = 0; k < FP_STAGE_COUNT; k++) free(st_ms[k]);
+    free(contact_ms);
     free(total);
     free(brute);
     free(indexed);

@@ -23,6 +23,9 @@ struct fp_contact {
     size_t bucket_cap, entry_cap;
     uint8_t *own;         /* t: the triangle crosses another in the weld shape */
     float (*nrm)[3];      /* t: the weld shape's triangle normals (unnormalised) */
+    struct track *tk;     /* the incremental guard (fp_contact_step), made on first use */
+    float *weld_copy;     /* n x 3: the weld shape, the tracker's first P (freed then) */
+    size_t prewarm;       /* fp_contact_set_prewarm */
 };
 
 /* ---- the triangle-triangle test ---------------------------------------------------------- */
@@ -89,10 +92,10 @@ static bool seg_tri_coplanar(const double *p, const double *q, const double t[3]
     return false;
 }
 
-/* closed segment pq against closed triangle t (not degenerate) */
-static bool seg_tri(const double *p, const double *q, const double t[3][3])
+/* closed segment pq against closed triangle t (not degenerate); op, oq: the signs of
+ * orient3d(t[0], t[1], t[2], p) and (..., q) */
+static bool seg_tri(const double *p, const double *q, const double t[3][3], int op, int oq)
 {
-    int op = sgn(orient3d(t[0], t[1], t[2], p)), oq = sgn(orient3d(t[0], t[1], t[2], q));
     if (op * oq > 0) return false;
     if (!op && !oq) return seg_tri_coplanar(p, q, t);
     int s1 = sgn(orient3d(p, q, t[0], t[1])), s2 = sgn(orient3d(p, q, t[1], t[2])),
@@ -102,12 +105,21 @@ static bool seg_tri(const double *p, const double *q, const double t[3][3])
 
 int fp_contact_tri_tri(const double a[3][3], const double b[3][3])
 {
-    for (int e = 0; e < 3; e++)
-        if (seg_tri(a[e], a[(e + 1) % 3], b) || seg_tri(b[e], b[(e + 1) % 3], a)) return 1;
+    /* each vertex against the other's plane, once (every edge test starts with these) */
+    int oa[3], ob[3];
+    for (int i = 0; i < 3; i++) {
+        oa[i] = sgn(orient3d(b[0], b[1], b[2], a[i]));
+        ob[i] = sgn(orient3d(a[0], a[1], a[2], b[i]));
+    }
+    for (int e = 0; e < 3; e++) {
+        int f = (e + 1) % 3;
+        if (seg_tri(a[e], a[f], b, oa[e], oa[f]) || seg_tri(b[e], b[f], a, ob[e], ob[f])) return 1;
+    }
     return 0;
 }
 
 typedef struct fp_contact_count fp_contact_count;
+static void track_free(struct track *k);
 static void tri_of(const float *pos, const uint32_t *v, double out[3][3]);
 static long scan(fp_contact *c, const float *ref, const float *cand, bool all, uint32_t *pairs,
                  size_t max_pairs, fp_contact_count *info);
@@ -136,6 +148,7 @@ int fp_contact_create(const uint32_t *tris, size_t t, size_t n, const float *wel
     c->tris = tris;
     c->t = t;
     c->n = n;
+    c->prewarm = FP_CONTACT_PREWARM;
     c->weld = malloc((n ? n : 1) * sizeof *c->weld);
     c->moved = malloc(n ? n : 1);
     c->mtris = malloc((t ? t : 1) * sizeof *c->mtris);
@@ -156,6 +169,12 @@ int fp_contact_create(const uint32_t *tris, size_t t, size_t n, const float *wel
         c->weld[order[i]] = same ? c->weld[order[i - 1]] : order[i];
     }
     free(order);
+    c->weld_copy = malloc((n ? n : 1) * 3 * sizeof(float));
+    if (!c->weld_copy) {
+        fp_contact_destroy(&c);
+        return -ENOMEM;
+    }
+    memcpy(c->weld_copy, weld, n * 3 * sizeof(float));
     c->own = calloc(t ? t : 1, 1);
     c->nrm = malloc((t ? t : 1) * sizeof *c->nrm);
     if (!c->own || !c->nrm) {
@@ -210,6 +229,8 @@ void fp_contact_destroy(fp_contact **cp)
     free(c->entries);
     free(c->own);
     free(c->nrm);
+    track_free(c->tk);
+    free(c->weld_copy);
     free(c);
     *cp = NULL;
 }
@@ -233,12 +254,16 @@ static bool degenerate(const double t[3][3])
            e1[0] * e2[1] - e1[1] * e2[0] == 0;
 }
 
+/* min and max of finite floats, inline (fminf and fmaxf are calls, for NaN's sake) */
+static inline float min_f(float a, float b) { return b < a ? b : a; }
+static inline float max_f(float a, float b) { return b > a ? b : a; }
+
 static void tri_box(const float *pos, const uint32_t *v, float b[6])
 {
+    const float *p0 = pos + 3 * (size_t)v[0], *p1 = pos + 3 * (size_t)v[1], *p2 = pos + 3 * (size_t)v[2];
     for (int k = 0; k < 3; k++) {
-        float a = pos[3 * (size_t)v[0] + k], m = pos[3 * (size_t)v[1] + k], z = pos[3 * (size_t)v[2] + k];
-        b[k] = fminf(a, fminf(m, z));
-        b[3 + k] = fmaxf(a, fmaxf(m, z));
+        b[k] = min_f(p0[k], min_f(p1[k], p2[k]));
+        b[3 + k] = max_f(p0[k], max_f(p1[k], p2[k]));
     }
 }
 
@@ -388,6 +413,9 @@ static long scan(fp_contact *c, const float *ref, const float *cand, bool all, u
                     uint32_t h = cell_hash(x, y, z) & (uint32_t)(nb - 1);
                     for (uint32_t e = bs[h]; e < bs[h + 1]; e++) {
                         const struct entry *en = &c->entries[e];
+                        /* two cells of one box in one bucket: one entry is enough (the
+                         * copies are next to each other, filled box by box) */
+                        if (e > bs[h] && en[-1].tri == en->tri) continue;
                         if (!boxes_meet(ba, en->box)) continue;
                         uint32_t b = en->tri;
                         if (b == a || (en->moved && b < a)) continue; /* a moved pair is the lower's */
@@ -492,4 +520,970 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
     lerp(c, ref, cand, lo, out);
     res->t = lo;
     return 0;
+}
+
+/* ---- the incremental guard (contact.h "The incremental guard") ------------------------------ */
+
+#define FP_TRACK_NONE UINT32_MAX
+#define FP_TRACK_BIG_CELLS 4096.0 /* a box over more grid cells goes to a list of its own */
+#define FP_TRACK_SKIN 0.1         /* an envelope: the box grown by this share of its extent */
+
+#define FP_TRACK_INLINE 6          /* list entries kept in the dyn itself (one cache line) */
+
+typedef struct dyn {              /* a triangle that has left the weld shape */
+    float env[6];                 /* its envelope: holds its box in P (and in the candidate) */
+    uint32_t tri;
+    uint32_t len, cap;            /* its list: every triangle whose envelope meets env (and
+                                     maybe some more); cap 0: in inl */
+    bool big;                     /* registered in the big list, not in the grid */
+    union {
+        uint32_t inl[FP_TRACK_INLINE];
+        uint32_t *heap;
+    } u;
+} dyn;
+
+static inline uint32_t *dyn_list(dyn *d) { return d->cap ? d->u.heap : d->u.inl; }
+
+/* append y to d's list (no check for duplicates) */
+static int dyn_push(dyn *d, uint32_t y)
+{
+    if (!d->cap && d->len < FP_TRACK_INLINE) {
+        d->u.inl[d->len++] = y;
+        return 0;
+    }
+    if (!d->cap || d->len == d->cap) {
+        uint32_t nc = d->cap ? 2 * d->cap : 2 * FP_TRACK_INLINE;
+        uint32_t *h = malloc(nc * sizeof *h);
+        if (!h) return -ENOMEM;
+        memcpy(h, dyn_list(d), d->len * sizeof *h);
+        if (d->cap) free(d->u.heap);
+        d->u.heap = h;
+        d->cap = nc;
+    }
+    d->u.heap[d->len++] = y;
+    return 0;
+}
+
+typedef struct rq_cell {          /* a cell of a renewed envelope */
+    int64_t key[3];
+    uint32_t r;                   /* the request (index into rq) */
+} rq_cell;
+
+typedef struct cellvec {          /* a cell of the dynamic grid */
+    int64_t key[3];
+    uint32_t *ids, len, cap;
+    bool used;
+} cellvec;
+
+struct track {
+    float *p;                     /* n x 3: P, the shape last accepted */
+    uint32_t *vt_start, *vt;      /* vertex v's triangles: vt[vt_start[v] .. vt_start[v + 1]) */
+    uint32_t *dp;                 /* D_P: every vertex where P may differ from the reference */
+    size_t ndp;
+    uint8_t *in_dp;               /* n */
+    uint32_t *mv;                 /* moved vertices (P -> candidate) */
+    size_t nmv, cap_mv;
+    float *pv, *cv;               /* their positions in P and in the candidate (3 each) */
+    size_t cap_pv;
+    uint32_t *mt;                 /* moved triangles, own ones left out */
+    float (*mbox)[6];             /* their boxes in the candidate */
+    size_t nmt, cap_mt, cap_mbox;
+    uint32_t *tstamp, tclock;     /* t: == tclock when in mt */
+    uint32_t *qstamp, qclock;     /* t: == qclock when seen by this query */
+    double h;                     /* the grid cell */
+    uint32_t *sg_start, *sg_ids;  /* the static grid: the weld shape's boxes by hashed cell */
+    uint32_t *sg_dead;            /* entries of triangles gone dynamic, cut from the bucket's end */
+    size_t sg_nb;
+    uint32_t *sbig;               /* ... and those over FP_TRACK_BIG_CELLS cells */
+    size_t nsbig;
+    uint32_t *slot;               /* t: index into dyn; FP_TRACK_NONE: static (P = weld shape) */
+    dyn *dyn;
+    size_t ndyn, cap_dyn;
+    cellvec *cells;               /* the dynamic grid: open addressing, cap a power of 2 */
+    size_t cap_cells, used_cells;
+    uint32_t *dbig;
+    size_t ndbig, cap_dbig;
+    uint32_t *q;                  /* one query's triangles */
+    size_t nq, cap_q;
+    uint32_t *rq;                 /* triangles with a new envelope, their lists to make */
+    size_t nrq, cap_rq;
+    struct rq_cell *rc, *rcs;     /* (cell, request) of the batch, and sorted by hashed cell */
+    size_t cap_rc, cap_rcs;
+    uint32_t *rcb, *rr;           /* the sort's buckets; one cell's requests */
+    size_t cap_rcb, cap_rr;
+    uint32_t *rx;                 /* one cell's requests: their triangles and envelopes */
+    float (*renv)[6];
+    size_t cap_rx, cap_renv;
+    size_t renewed;               /* envelopes renewed, for fp_contact_result */
+    bool broken;                  /* a call ran out of memory half way: unusable */
+};
+
+static void track_free(struct track *k)
+{
+    if (!k) return;
+    free(k->p);
+    free(k->vt_start);
+    free(k->vt);
+    free(k->dp);
+    free(k->in_dp);
+    free(k->mv);
+    free(k->pv);
+    free(k->cv);
+    free(k->mt);
+    free(k->mbox);
+    free(k->tstamp);
+    free(k->qstamp);
+    free(k->sg_start);
+    free(k->sg_ids);
+    free(k->sg_dead);
+    free(k->sbig);
+    free(k->slot);
+    for (size_t i = 0; i < k->ndyn; i++)
+        if (k->dyn[i].cap) free(k->dyn[i].u.heap);
+    free(k->dyn);
+    for (size_t i = 0; i < k->cap_cells; i++) free(k->cells[i].ids);
+    free(k->cells);
+    free(k->dbig);
+    free(k->q);
+    free(k->rq);
+    free(k->rc);
+    free(k->rcs);
+    free(k->rcb);
+    free(k->rr);
+    free(k->rx);
+    free(k->renv);
+    free(k);
+}
+
+/* grow *p (elements of size el) to hold need; 0 or -ENOMEM */
+static int reserve(void **p, size_t *cap, size_t need, size_t el)
+{
+    if (need <= *cap) return 0;
+    size_t nc = need < 16 ? 16 : need + need / 2;
+    void *q = realloc(*p, nc * el);
+    if (!q) return -ENOMEM;
+    *p = q;
+    *cap = nc;
+    return 0;
+}
+
+static int push_u32(uint32_t **p, size_t *len, size_t *cap, uint32_t v)
+{
+    if (reserve((void **)p, cap, *len + 1, sizeof **p)) return -ENOMEM;
+    (*p)[(*len)++] = v;
+    return 0;
+}
+
+/* the grid cell of coordinate x: floor(x / h), clamped to +-1e15 (NaN: -1e15) */
+static inline int64_t cell_coord(double x, double h)
+{
+    double q = x / h;
+    if (!(q > -1e15)) q = -1e15;
+    if (q > 1e15) q = 1e15;
+    int64_t i = (int64_t)q;
+    return i - (q < (double)i);
+}
+
+/* the grid cells of box b; returns their number (as a double: it may be huge) */
+static double cells_of(double h, const float b[6], int64_t lo[3], int64_t hi[3])
+{
+    double cnt = 1;
+    for (int k = 0; k < 3; k++) {
+        lo[k] = cell_coord(b[k], h);
+        hi[k] = cell_coord(b[3 + k], h);
+        cnt *= (double)(hi[k] - lo[k] + 1);
+    }
+    return cnt;
+}
+
+static inline bool same_key(const int64_t a[3], const int64_t b[3])
+{
+    return a[0] == b[0] && a[1] == b[1] && a[2] == b[2];
+}
+
+static uint64_t key_hash(int64_t x, int64_t y, int64_t z)
+{
+    uint64_t h = (uint64_t)x * 0x9E3779B97F4A7C15ull ^ (uint64_t)y * 0xC2B2AE3D27D4EB4Full ^
+                 (uint64_t)z * 0x165667B19E3779F9ull;
+    return h ^ (h >> 29);
+}
+
+static bool box_holds(const float *outer, const float *inner)
+{
+    return outer[0] <= inner[0] && outer[1] <= inner[1] && outer[2] <= inner[2] &&
+           inner[3] <= outer[3] && inner[4] <= outer[4] && inner[5] <= outer[5];
+}
+
+/* bitwise, as memcmp (inline: three words) */
+static inline bool vert_differs(const float *a, const float *b, size_t v)
+{
+    uint32_t x[3], y[3];
+    memcpy(x, a + 3 * v, sizeof x);
+    memcpy(y, b + 3 * v, sizeof y);
+    return ((x[0] ^ y[0]) | (x[1] ^ y[1]) | (x[2] ^ y[2])) != 0;
+}
+
+/* ---- the dynamic grid ---- */
+
+static cellvec *cell_find(struct track *k, const int64_t key[3], bool create)
+{
+    if (create && 2 * (k->used_cells + 1) > k->cap_cells) {
+        size_t nc = k->cap_cells ? 2 * k->cap_cells : 1024;
+        cellvec *nt = calloc(nc, sizeof *nt);
+        if (!nt) return NULL;
+        for (size_t i = 0; i < k->cap_cells; i++) {
+            cellvec *o = &k->cells[i];
+            if (!o->used) continue;
+            size_t j = key_hash(o->key[0], o->key[1], o->key[2]) & (nc - 1);
+            while (nt[j].used) j = (j + 1) & (nc - 1);
+            nt[j] = *o;
+        }
+        free(k->cells);
+        k->cells = nt;
+        k->cap_cells = nc;
+    }
+    if (!k->cap_cells) return NULL;
+    size_t m = k->cap_cells - 1;
+    for (size_t i = key_hash(key[0], key[1], key[2]) & m;; i = (i + 1) & m) {
+        cellvec *cv = &k->cells[i];
+        if (!cv->used) {
+            if (!create) return NULL;
+            memset(cv, 0, sizeof *cv);
+            cv->used = true;
+            memcpy(cv->key, key, sizeof cv->key);
+            k->used_cells++;
+            return cv;
+        }
+        if (same_key(cv->key, key)) return cv;
+    }
+}
+
+static int grid_add(struct track *k, dyn *d)
+{
+    int64_t lo[3], hi[3];
+    d->big = cells_of(k->h, d->env, lo, hi) > FP_TRACK_BIG_CELLS;
+    if (d->big) return push_u32(&k->dbig, &k->ndbig, &k->cap_dbig, d->tri);
+    for (int64_t x = lo[0]; x <= hi[0]; x++)
+        for (int64_t y = lo[1]; y <= hi[1]; y++)
+            for (int64_t z = lo[2]; z <= hi[2]; z++) {
+                int64_t key[3] = {x, y, z};
+                cellvec *cv = cell_find(k, key, true);
+                if (!cv) return -ENOMEM;
+                size_t len = cv->len, cap = cv->cap;
+                if (push_u32(&cv->ids, &len, &cap, d->tri)) return -ENOMEM;
+                cv->len = (uint32_t)len;
+                cv->cap = (uint32_t)cap;
+            }
+    return 0;
+}
+
+static void grid_remove(struct track *k, const dyn *d)
+{
+    if (d->big) {
+        for (size_t i = 0; i < k->ndbig; i++)
+            if (k->dbig[i] == d->tri) {
+                k->dbig[i] = k->dbig[--k->ndbig];
+                return;
+            }
+        return;
+    }
+    int64_t lo[3], hi[3];
+    cells_of(k->h, d->env, lo, hi);
+    for (int64_t x = lo[0]; x <= hi[0]; x++)
+        for (int64_t y = lo[1]; y <= hi[1]; y++)
+            for (int64_t z = lo[2]; z <= hi[2]; z++) {
+                int64_t key[3] = {x, y, z};
+                cellvec *cv = cell_find(k, key, false);
+                for (uint32_t i = 0; cv && i < cv->len; i++)
+                    if (cv->ids[i] == d->tri) {
+                        cv->ids[i] = cv->ids[--cv->len];
+                        break;
+                    }
+            }
+}
+
+/* ---- queries ---- */
+
+/* k->q = the triangles not own, other than x and not adjacent to it, whose envelope (a static
+ * one's: its box in P, which is the weld shape's) meets box q. */
+static int query(fp_contact *c, const float q[6], uint32_t x)
+{
+    struct track *k = c->tk;
+    k->nq = 0;
+    if (++k->qclock == 0) {
+        memset(k->qstamp, 0, c->t * sizeof *k->qstamp);
+        k->qclock = 1;
+    }
+    uint32_t clock = k->qclock;
+    k->qstamp[x] = clock;
+    const uint32_t *vx = c->tris + 3 * (size_t)x;
+    uint32_t w0 = c->weld[vx[0]], w1 = c->weld[vx[1]], w2 = c->weld[vx[2]];
+#define FP_NOT_ADJ(y)                                                                           \
+    (c->weld[c->tris[3 * (size_t)(y)]] != w0 && c->weld[c->tris[3 * (size_t)(y)]] != w1 &&      \
+     c->weld[c->tris[3 * (size_t)(y)]] != w2 && c->weld[c->tris[3 * (size_t)(y) + 1]] != w0 &&  \
+     c->weld[c->tris[3 * (size_t)(y) + 1]] != w1 && c->weld[c->tris[3 * (size_t)(y) + 1]] != w2 && \
+     c->weld[c->tris[3 * (size_t)(y) + 2]] != w0 && c->weld[c->tris[3 * (size_t)(y) + 2]] != w1 && \
+     c->weld[c->tris[3 * (size_t)(y) + 2]] != w2)
+#define FP_STATIC(y)                                                                            \
+    do {                                                                                        \
+        uint32_t y_ = (y);                                                                      \
+        if (k->slot[y_] != FP_TRACK_NONE || k->qstamp[y_] == clock || c->own[y_]) break;        \
+        k->qstamp[y_] = clock;                                                                  \
+        float b_[6];                                                                            \
+        tri_box(k->p, c->tris + 3 * (size_t)y_, b_);                                            \
+        if (boxes_meet(b_, q) && FP_NOT_ADJ(y_) && push_u32(&k->q, &k->nq, &k->cap_q, y_))      \
+            return -ENOMEM;                                                                     \
+    } while (0)
+#define FP_DYNAMIC(y)                                                                           \
+    do {                                                                                        \
+        uint32_t y_ = (y);                                                                      \
+        if (k->qstamp[y_] == clock || c->own[y_]) break;                                        \
+        k->qstamp[y_] = clock;                                                                  \
+        if (boxes_meet(k->dyn[k->slot[y_]].env, q) && FP_NOT_ADJ(y_) &&                         \
+            push_u32(&k->q, &k->nq, &k->cap_q, y_))                                             \
+            return -ENOMEM;                                                                     \
+    } while (0)
+    int64_t lo[3], hi[3];
+    bool huge = cells_of(k->h, q, lo, hi) > FP_TRACK_BIG_CELLS;
+    if (huge) {
+        for (size_t y = 0; y < c->t; y++) FP_STATIC((uint32_t)y);
+        for (size_t i = 0; i < k->ndyn; i++) FP_DYNAMIC(k->dyn[i].tri);
+    } else {
+        size_t m = k->sg_nb - 1;
+        for (int64_t cx = lo[0]; cx <= hi[0]; cx++)
+            for (int64_t cy = lo[1]; cy <= hi[1]; cy++)
+                for (int64_t cz = lo[2]; cz <= hi[2]; cz++) {
+                    size_t bkt = key_hash(cx, cy, cz) & m;
+                    for (uint32_t e = k->sg_start[bkt]; e < k->sg_start[bkt + 1] - k->sg_dead[bkt]; e++)
+                        FP_STATIC(k->sg_ids[e]);
+                    int64_t key[3] = {cx, cy, cz};
+                    const cellvec *cv = cell_find(k, key, false);
+                    for (uint32_t i = 0; cv && i < cv->len; i++) FP_DYNAMIC(cv->ids[i]);
+                }
+        for (size_t i = 0; i < k->nsbig; i++) FP_STATIC(k->sbig[i]);
+        for (size_t i = 0; i < k->ndbig; i++) FP_DYNAMIC(k->dbig[i]);
+    }
+#undef FP_STATIC
+#undef FP_DYNAMIC
+#undef FP_NOT_ADJ
+    return 0;
+}
+
+/* Static triangle x (P still the weld shape there) out of the static grid: each of its
+ * entries cut out of its bucket (order kept, so a triangle's copies stay next to each other) */
+static void static_remove(fp_contact *c, uint32_t x)
+{
+    struct track *k = c->tk;
+    float b[6];
+    int64_t lo[3], hi[3];
+    tri_box(k->p, c->tris + 3 * (size_t)x, b);
+    if (cells_of(k->h, b, lo, hi) > FP_TRACK_BIG_CELLS) {
+        for (size_t i = 0; i < k->nsbig; i++)
+            if (k->sbig[i] == x) {
+                memmove(k->sbig + i, k->sbig + i + 1, (k->nsbig - i - 1) * sizeof *k->sbig);
+                k->nsbig--;
+                break;
+            }
+        return;
+    }
+    for (int64_t cx = lo[0]; cx <= hi[0]; cx++)
+        for (int64_t cy = lo[1]; cy <= hi[1]; cy++)
+            for (int64_t cz = lo[2]; cz <= hi[2]; cz++) {
+                size_t bkt = key_hash(cx, cy, cz) & (k->sg_nb - 1);
+                uint32_t s0 = k->sg_start[bkt], e = k->sg_start[bkt + 1] - k->sg_dead[bkt];
+                for (uint32_t i = s0; i < e; i++)
+                    if (k->sg_ids[i] == x) {
+                        memmove(k->sg_ids + i, k->sg_ids + i + 1, (e - i - 1) * sizeof *k->sg_ids);
+                        k->sg_dead[bkt]++;
+                        break;
+                    }
+            }
+}
+
+/* Give triangle x (not own; a static one already out of the static grid) the envelope box +
+ * skin in the dynamic grid and an empty list (renew_lists fills it); x joins the requests
+ * k->rq. */
+static int envelope(fp_contact *c, uint32_t x, const float box[6])
+{
+    struct track *k = c->tk;
+    if (k->slot[x] == FP_TRACK_NONE) {
+        if (reserve((void **)&k->dyn, &k->cap_dyn, k->ndyn + 1, sizeof *k->dyn)) return -ENOMEM;
+        memset(&k->dyn[k->ndyn], 0, sizeof k->dyn[0]); /* an empty inline list */
+        k->dyn[k->ndyn].tri = x;
+        k->slot[x] = (uint32_t)k->ndyn++;
+    } else {
+        grid_remove(k, &k->dyn[k->slot[x]]);
+    }
+    dyn *d = &k->dyn[k->slot[x]];
+    double ext = 0;
+    for (int i = 0; i < 3; i++) ext = fmax(ext, (double)box[3 + i] - box[i]);
+    float skin = (float)(FP_TRACK_SKIN * ext);
+    for (int i = 0; i < 3; i++) {
+        d->env[i] = box[i] - skin;
+        d->env[3 + i] = box[3 + i] + skin;
+    }
+    d->len = 0;
+    if (grid_add(k, d)) return -ENOMEM;
+    return push_u32(&k->rq, &k->nrq, &k->cap_rq, x);
+}
+
+/* y into d's list unless there */
+static int list_add(dyn *d, uint32_t y)
+{
+    const uint32_t *l = dyn_list(d);
+    for (uint32_t j = 0; j < d->len; j++)
+        if (l[j] == y) return 0;
+    return dyn_push(d, y);
+}
+
+static bool adjacent(const fp_contact *c, uint32_t x, uint32_t y)
+{
+    const uint32_t *vx = c->tris + 3 * (size_t)x, *vy = c->tris + 3 * (size_t)y;
+    for (int i = 0; i < 3; i++) {
+        uint32_t w = c->weld[vx[i]];
+        if (w == c->weld[vy[0]] || w == c->weld[vy[1]] || w == c->weld[vy[2]]) return true;
+    }
+    return false;
+}
+
+/* y into x's list, and x into y's unless y is being renewed too (its list is being made) or
+ * has x already; `clock` marks the requests in qstamp */
+static int link(fp_contact *c, uint32_t x, uint32_t y, uint32_t clock)
+{
+    struct track *k = c->tk;
+    if (dyn_push(&k->dyn[k->slot[x]], y)) return -ENOMEM;
+    if (k->slot[y] == FP_TRACK_NONE || k->qstamp[y] == clock) return 0;
+    return list_add(&k->dyn[k->slot[y]], x);
+}
+
+/* One cell of the batch: requests R (nr of them) against the triangles registered in the
+ * cell (static: the bucket's, whose boxes are the weld shape's; dynamic: the cell's). A
+ * pair is taken in the cell of its boxes' common lower corner only (so once). */
+static int renew_cell(fp_contact *c, const int64_t key[3], const uint32_t *R, size_t nr, uint32_t clock)
+{
+    struct track *k = c->tk;
+    /* the requests' triangles and envelopes, side by side */
+    if (reserve((void **)&k->renv, &k->cap_renv, nr, sizeof *k->renv) ||
+        reserve((void **)&k->rx, &k->cap_rx, nr, sizeof *k->rx))
+        return -ENOMEM;
+    for (size_t i = 0; i < nr; i++) {
+        k->rx[i] = k->rq[R[i]];
+        memcpy(k->renv[i], k->dyn[k->slot[k->rx[i]]].env, sizeof k->renv[i]);
+    }
+#define FP_TRY(Y, YBOX)                                                                         \
+    for (size_t i_ = 0; i_ < nr; i_++) {                                                        \
+        uint32_t x_ = k->rx[i_];                                                                \
+        const float *ex_ = k->renv[i_];                                                         \
+        if (!boxes_meet(ex_, (YBOX)) || (Y) == x_) continue;                                    \
+        bool mine_ = true;                                                                      \
+        for (int a_ = 0; a_ < 3 && mine_; a_++)                                                 \
+            mine_ = cell_coord(max_f(ex_[a_], (YBOX)[a_]), k->h) == key[a_];                    \
+        if (mine_ && !adjacent(c, x_, (Y)) && link(c, x_, (Y), clock)) return -ENOMEM;          \
+    }
+    size_t bkt = key_hash(key[0], key[1], key[2]) & (k->sg_nb - 1);
+    for (uint32_t e = k->sg_start[bkt]; e < k->sg_start[bkt + 1] - k->sg_dead[bkt]; e++) {
+        uint32_t y = k->sg_ids[e];
+        if ((e > k->sg_start[bkt] && k->sg_ids[e - 1] == y) || k->slot[y] != FP_TRACK_NONE || c->own[y])
+            continue;
+        float yb[6];
+        tri_box(k->p, c->tris + 3 * (size_t)y, yb);
+        FP_TRY(y, yb)
+    }
+    const cellvec *cv = cell_find(k, key, false);
+    for (uint32_t j = 0; cv && j < cv->len; j++) {
+        uint32_t y = cv->ids[j];
+        if (c->own[y]) continue;
+        FP_TRY(y, k->dyn[k->slot[y]].env)
+    }
+#undef FP_TRY
+    return 0;
+}
+
+/* The lists of the requests (k->rq, envelopes in the grid already), batched by cell: each
+ * cell's registered triangles are read once for all the requests that cover it. */
+static int renew_lists(fp_contact *c)
+{
+    struct track *k = c->tk;
+    size_t nrq = k->nrq;
+    if (!nrq) return 0;
+    if (++k->qclock == 0) {
+        memset(k->qstamp, 0, c->t * sizeof *k->qstamp);
+        k->qclock = 1;
+    }
+    uint32_t clock = k->qclock;
+    for (size_t r = 0; r < nrq; r++) k->qstamp[k->rq[r]] = clock;
+    /* the cells of every request's envelope (big ones go through query below) */
+    size_t ne = 0;
+    for (size_t r = 0; r < nrq; r++) {
+        const dyn *d = &k->dyn[k->slot[k->rq[r]]];
+        if (d->big) continue;
+        int64_t lo[3], hi[3];
+        ne += (size_t)cells_of(k->h, d->env, lo, hi);
+    }
+    size_t nb = 64;
+    while (nb < ne) nb *= 2;
+    if (reserve((void **)&k->rc, &k->cap_rc, ne, sizeof *k->rc) ||
+        reserve((void **)&k->rcs, &k->cap_rcs, ne, sizeof *k->rcs) ||
+        reserve((void **)&k->rcb, &k->cap_rcb, nb + 1, sizeof *k->rcb) ||
+        reserve((void **)&k->rr, &k->cap_rr, nrq, sizeof *k->rr))
+        return -ENOMEM;
+    size_t w = 0;
+    for (size_t r = 0; r < nrq; r++) {
+        const dyn *d = &k->dyn[k->slot[k->rq[r]]];
+        if (d->big) continue;
+        int64_t lo[3], hi[3];
+        cells_of(k->h, d->env, lo, hi);
+        for (int64_t x = lo[0]; x <= hi[0]; x++)
+            for (int64_t y = lo[1]; y <= hi[1]; y++)
+                for (int64_t z = lo[2]; z <= hi[2]; z++) {
+                    rq_cell *rc = &k->rc[w++];
+                    rc->key[0] = x;
+                    rc->key[1] = y;
+                    rc->key[2] = z;
+                    rc->r = (uint32_t)r;
+                }
+    }
+    /* counting sort by hashed cell */
+    memset(k->rcb, 0, (nb + 1) * sizeof *k->rcb);
+    for (size_t i = 0; i < ne; i++)
+        k->rcb[(key_hash(k->rc[i].key[0], k->rc[i].key[1], k->rc[i].key[2]) & (nb - 1)) + 1]++;
+    for (size_t b = 0; b < nb; b++) k->rcb[b + 1] += k->rcb[b];
+    for (size_t i = 0; i < ne; i++)
+        k->rcs[k->rcb[key_hash(k->rc[i].key[0], k->rc[i].key[1], k->rc[i].key[2]) & (nb - 1)]++] = k->rc[i];
+    memmove(k->rcb + 1, k->rcb, nb * sizeof *k->rcb);
+    k->rcb[0] = 0;
+    for (size_t b = 0; b < nb; b++) {
+        size_t s0 = k->rcb[b], s1 = k->rcb[b + 1];
+        for (size_t i = s0; i < s1; i++) {
+            const int64_t *key = k->rcs[i].key;
+            bool seen = false;
+            for (size_t j = s0; j < i && !seen; j++) seen = same_key(k->rcs[j].key, key);
+            if (seen) continue; /* that cell is done */
+            size_t nr = 0;
+            for (size_t j = i; j < s1; j++)
+                if (same_key(k->rcs[j].key, key)) k->rr[nr++] = k->rcs[j].r;
+            if (renew_cell(c, key, k->rr, nr, clock)) return -ENOMEM;
+        }
+    }
+    /* big triangles (in no cell) against every request in cells */
+    for (size_t i = 0; i < k->nsbig + k->ndbig; i++) {
+        uint32_t y = i < k->nsbig ? k->sbig[i] : k->dbig[i - k->nsbig];
+        if (c->own[y] || (i < k->nsbig && k->slot[y] != FP_TRACK_NONE)) continue;
+        float yb[6];
+        if (i < k->nsbig) tri_box(k->p, c->tris + 3 * (size_t)y, yb);
+        else memcpy(yb, k->dyn[k->slot[y]].env, sizeof yb);
+        for (size_t r = 0; r < nrq; r++) {
+            uint32_t x = k->rq[r];
+            const dyn *d = &k->dyn[k->slot[x]];
+            if (d->big || y == x || !boxes_meet(d->env, yb) || adjacent(c, x, y)) continue;
+            if (link(c, x, y, clock)) return -ENOMEM;
+        }
+    }
+    /* big requests: a query each (every registered triangle; links as above, but a request
+     * in a cell has found this one already: link checks y's list) */
+    for (size_t r = 0; r < nrq; r++) {
+        uint32_t x = k->rq[r];
+        if (!k->dyn[k->slot[x]].big) continue;
+        float env[6];
+        memcpy(env, k->dyn[k->slot[x]].env, sizeof env);
+        if (query(c, env, x)) return -ENOMEM;
+        for (size_t i = 0; i < k->nq; i++) {
+            uint32_t y = k->q[i];
+            if (list_add(&k->dyn[k->slot[x]], y)) return -ENOMEM; /* another big one may */
+            if (k->slot[y] != FP_TRACK_NONE && list_add(&k->dyn[k->slot[y]], x)) return -ENOMEM;
+        }
+    }
+    k->renewed += nrq;
+    k->nrq = 0;
+    return 0;
+}
+
+/* ---- building ---- */
+
+static int track_build(fp_contact *c)
+{
+    struct track *k = calloc(1, sizeof *k);
+    if (!k) return -ENOMEM;
+    size_t n = c->n, t = c->t;
+    k->p = c->weld_copy; /* P starts as the weld shape: every triangle static */
+    k->vt_start = calloc(n + 1, sizeof *k->vt_start);
+    k->vt = malloc((t ? 3 * t : 1) * sizeof *k->vt);
+    k->dp = malloc((n ? n : 1) * sizeof *k->dp);
+    k->in_dp = calloc(n ? n : 1, 1);
+    k->tstamp = calloc(t ? t : 1, sizeof *k->tstamp);
+    k->qstamp = calloc(t ? t : 1, sizeof *k->qstamp);
+    k->slot = malloc((t ? t : 1) * sizeof *k->slot);
+    if (!k->p || !k->vt_start || !k->vt || !k->dp || !k->in_dp || !k->tstamp || !k->qstamp || !k->slot) {
+        if (k->p) c->weld_copy = NULL;
+        track_free(k);
+        return -ENOMEM;
+    }
+    c->weld_copy = NULL;
+    memset(k->slot, 0xff, t * sizeof *k->slot);
+    for (size_t i = 0; i < 3 * t; i++) k->vt_start[c->tris[i] + 1]++;
+    for (size_t v = 0; v < n; v++) k->vt_start[v + 1] += k->vt_start[v];
+    for (size_t i = 0; i < t; i++)
+        for (int j = 0; j < 3; j++) k->vt[k->vt_start[c->tris[3 * i + j]]++] = (uint32_t)i;
+    for (size_t v = n; v > 0; v--) k->vt_start[v] = k->vt_start[v - 1];
+    k->vt_start[0] = 0;
+    /* the cell: twice the mean extent of a triangle not own */
+    double sum = 0;
+    size_t cnt = 0;
+    for (size_t i = 0; i < t; i++) {
+        if (c->own[i]) continue;
+        float b[6];
+        tri_box(k->p, c->tris + 3 * i, b);
+        sum += fmax(fmax((double)b[3] - b[0], (double)b[4] - b[1]), (double)b[5] - b[2]);
+        cnt++;
+    }
+    k->h = cnt && sum > 0 ? 2.0 * sum / (double)cnt : 1.0;
+    /* the static grid: counting sort of (cell, triangle) entries by hashed cell */
+    size_t ne = 0;
+    for (int pass = 0; pass < 2; pass++) {
+        if (pass) {
+            size_t nb = 64;
+            while (2 * nb < ne) nb *= 2;
+            k->sg_nb = nb;
+            k->sg_start = calloc(nb + 1, sizeof *k->sg_start);
+            k->sg_dead = calloc(nb, sizeof *k->sg_dead);
+            k->sg_ids = malloc((ne ? ne : 1) * sizeof *k->sg_ids);
+            if (!k->sg_start || !k->sg_dead || !k->sg_ids) {
+                track_free(k);
+                return -ENOMEM;
+            }
+            for (size_t i = 0; i < t; i++) { /* counts */
+                if (c->own[i]) continue;
+                float b[6];
+                int64_t lo[3], hi[3];
+                tri_box(k->p, c->tris + 3 * i, b);
+                if (cells_of(k->h, b, lo, hi) > FP_TRACK_BIG_CELLS) continue;
+                for (int64_t x = lo[0]; x <= hi[0]; x++)
+                    for (int64_t y = lo[1]; y <= hi[1]; y++)
+                        for (int64_t z = lo[2]; z <= hi[2]; z++)
+                            k->sg_start[(key_hash(x, y, z) & (nb - 1)) + 1]++;
+            }
+            for (size_t b = 0; b < nb; b++) k->sg_start[b + 1] += k->sg_start[b];
+        }
+        size_t cap_big = 0;
+        for (size_t i = 0; i < t; i++) {
+            if (c->own[i]) continue;
+            float b[6];
+            int64_t lo[3], hi[3];
+            tri_box(k->p, c->tris + 3 * i, b);
+            double nc = cells_of(k->h, b, lo, hi);
+            if (nc > FP_TRACK_BIG_CELLS) {
+                if (pass && push_u32(&k->sbig, &k->nsbig, &cap_big, (uint32_t)i)) {
+                    track_free(k);
+                    return -ENOMEM;
+                }
+                continue;
+            }
+            if (!pass) {
+                ne += (size_t)nc;
+                continue;
+            }
+            for (int64_t x = lo[0]; x <= hi[0]; x++)
+                for (int64_t y = lo[1]; y <= hi[1]; y++)
+                    for (int64_t z = lo[2]; z <= hi[2]; z++)
+                        k->sg_ids[k->sg_start[key_hash(x, y, z) & (k->sg_nb - 1)]++] = (uint32_t)i;
+        }
+    }
+    /* the fill moved each start to the next bucket's */
+    memmove(k->sg_start + 1, k->sg_start, k->sg_nb * sizeof *k->sg_start);
+    k->sg_start[0] = 0;
+    c->tk = k;
+    if (t > c->prewarm) return 0;
+    /* a face-sized mesh: every triangle gets its envelope and list now, in one batch (the
+     * static grid left empty), so that the first touch of a region costs its frame no more
+     * than the next (about 1 us a triangle) */
+    for (size_t b = 0; b < k->sg_nb; b++) k->sg_dead[b] = k->sg_start[b + 1] - k->sg_start[b];
+    k->nsbig = 0;
+    for (size_t i = 0; i < t; i++) {
+        if (c->own[i]) continue;
+        float b[6];
+        tri_box(k->p, c->tris + 3 * i, b);
+        if (envelope(c, (uint32_t)i, b)) goto fail;
+    }
+    if (renew_lists(c)) goto fail;
+    k->renewed = 0;
+    return 0;
+fail:
+    track_free(k);
+    c->tk = NULL;
+    return -ENOMEM;
+}
+
+/* the next clock of the moved stamps */
+static void tick(struct track *k, size_t t)
+{
+    if (++k->tclock == 0) {
+        memset(k->tstamp, 0, t * sizeof *k->tstamp);
+        k->tclock = 1;
+    }
+}
+
+/* the triangles (not own) of vertex v into mt, once per clock */
+static int mark_tris(fp_contact *c, uint32_t v)
+{
+    struct track *k = c->tk;
+    for (uint32_t j = k->vt_start[v]; j < k->vt_start[v + 1]; j++) {
+        uint32_t a = k->vt[j];
+        if (c->own[a] || k->tstamp[a] == k->tclock) continue;
+        k->tstamp[a] = k->tclock;
+        if (reserve((void **)&k->mt, &k->cap_mt, k->nmt + 1, sizeof *k->mt)) return -ENOMEM;
+        k->mt[k->nmt++] = a;
+    }
+    return 0;
+}
+
+static int reference(fp_contact *c, const float *ref, const uint32_t *ranges, size_t nranges);
+
+int fp_contact_reference(fp_contact *c, const float *ref, const uint32_t *ranges, size_t nranges)
+{
+    if (!c || !ref || (nranges != SIZE_MAX && nranges && !ranges)) return -EINVAL;
+    if (!c->tk && track_build(c)) return -ENOMEM;
+    if (c->tk->broken) return -ENOMEM;
+    int rc = reference(c, ref, ranges, nranges);
+    if (rc) c->tk->broken = true;
+    return rc;
+}
+
+static int reference(fp_contact *c, const float *ref, const uint32_t *ranges, size_t nranges)
+{
+    struct track *k = c->tk;
+    tick(k, c->t);
+    k->nmt = 0;
+    /* P := ref where they differ: D_P, then the ranges (or everything) */
+    k->nmv = 0;
+#define FP_VISIT(v)                                                                             \
+    do {                                                                                        \
+        size_t v_ = (v);                                                                        \
+        if (!vert_differs(ref, k->p, v_)) break;                                                \
+        if (push_u32(&k->mv, &k->nmv, &k->cap_mv, (uint32_t)v_) || mark_tris(c, (uint32_t)v_))  \
+            return -ENOMEM;                                                                     \
+    } while (0)
+    for (size_t i = 0; i < k->ndp; i++) FP_VISIT(k->dp[i]);
+    if (nranges == SIZE_MAX) {
+        for (size_t v = 0; v < c->n; v++)
+            if (!k->in_dp[v]) FP_VISIT(v);
+    } else {
+        for (size_t r = 0; r < nranges; r++)
+            for (size_t v = ranges[2 * r]; v < (size_t)ranges[2 * r] + ranges[2 * r + 1] && v < c->n; v++)
+                if (!k->in_dp[v]) FP_VISIT(v);
+    }
+#undef FP_VISIT
+    for (size_t i = 0; i < k->ndp; i++) k->in_dp[k->dp[i]] = 0;
+    k->ndp = 0;
+    /* the static triangles that change leave the static grid (P there still the weld shape) */
+    for (size_t i = 0; i < k->nmt; i++)
+        if (k->slot[k->mt[i]] == FP_TRACK_NONE) static_remove(c, k->mt[i]);
+    for (size_t i = 0; i < k->nmv; i++)
+        memcpy(k->p + 3 * (size_t)k->mv[i], ref + 3 * (size_t)k->mv[i], 3 * sizeof(float));
+    /* the triangles that changed: an envelope that holds them */
+    for (size_t i = 0; i < k->nmt; i++) {
+        uint32_t a = k->mt[i];
+        float b[6];
+        tri_box(k->p, c->tris + 3 * (size_t)a, b);
+        if ((k->slot[a] == FP_TRACK_NONE || !box_holds(k->dyn[k->slot[a]].env, b)) && envelope(c, a, b))
+            return -ENOMEM;
+    }
+    return renew_lists(c);
+}
+
+/* New pairs and newly flipped triangles of shape s (P but for the moved vertices) against
+ * ref, among the pairs with a moved triangle (mt); cand_boxes: s is the candidate (mbox). */
+static long track_check(fp_contact *c, const float *s, const float *ref, bool cand_boxes,
+                        size_t *flips)
+{
+    struct track *k = c->tk;
+    long found = 0;
+    if (!cand_boxes) *flips = 0; /* else counted with the candidate's boxes (fp_contact_step) */
+    for (size_t i = 0; i < k->nmt; i++) {
+        uint32_t a = k->mt[i];
+        const uint32_t *va = c->tris + 3 * (size_t)a;
+        if (!cand_boxes && flipped(c, s, va, a) && !flipped(c, ref, va, a)) (*flips)++;
+        dyn *d = &k->dyn[k->slot[a]];
+        if (!d->len) continue;
+        float ba[6];
+        if (cand_boxes) memcpy(ba, k->mbox[i], sizeof ba);
+        else tri_box(s, va, ba);
+        const uint32_t *list = dyn_list(d);
+        double ta[3][3], ra[3][3];
+        int deg_a = -1, rdeg_a = -1; /* not yet known */
+        for (uint32_t j = 0; j < d->len; j++) {
+            uint32_t b = list[j];
+            if (b < a && k->tstamp[b] == k->tclock) continue; /* both moved: the lower one's */
+            /* b's envelope holds its box in s (a dynamic one's; a static one is the weld
+             * shape's): a filter that reads no vertex */
+            uint32_t sb = k->slot[b];
+            if (sb != FP_TRACK_NONE && !boxes_meet(ba, k->dyn[sb].env)) continue;
+            const uint32_t *vb = c->tris + 3 * (size_t)b;
+            float bb[6];
+            tri_box(s, vb, bb);
+            if (!boxes_meet(ba, bb)) continue;
+            if (deg_a < 0) {
+                tri_of(s, va, ta);
+                deg_a = degenerate(ta);
+            }
+            if (deg_a) break;
+            double tb[3][3], rb[3][3];
+            tri_of(s, vb, tb);
+            if (degenerate(tb) || !fp_contact_tri_tri(ta, tb)) continue;
+            if (rdeg_a < 0) {
+                tri_of(ref, va, ra);
+                rdeg_a = degenerate(ra);
+            }
+            tri_of(ref, vb, rb);
+            if (!rdeg_a && !degenerate(rb) && fp_contact_tri_tri(ra, rb)) continue;
+            found++;
+        }
+    }
+    return found;
+}
+
+/* P at the moved vertices := P + t (candidate - P), as fp_contact_guard's lerp */
+static void track_lerp(struct track *k, double t)
+{
+    for (size_t i = 0; i < k->nmv; i++) {
+        float *p = k->p + 3 * (size_t)k->mv[i];
+        const float *a = k->pv + 3 * i, *b = k->cv + 3 * i;
+        for (int j = 0; j < 3; j++)
+            p[j] = t >= 1 ? b[j] : t <= 0 || a[j] == b[j] ? a[j] : (float)((double)a[j] + t * ((double)b[j] - a[j]));
+    }
+}
+
+static int step(fp_contact *c, const float *ref, const float *cand, const uint32_t *ranges,
+                size_t nranges, int iters, fp_contact_result *res);
+
+int fp_contact_step(fp_contact *c, const float *ref, const float *cand, const uint32_t *ranges,
+                    size_t nranges, int iters, fp_contact_result *res)
+{
+    memset(res, 0, sizeof *res);
+    res->t = 1;
+    if (!c || !ref || !cand || (nranges != SIZE_MAX && nranges && !ranges)) return -EINVAL;
+    if (!c->tk && track_build(c)) return -ENOMEM;
+    if (c->tk->broken) return -ENOMEM;
+    int rc = step(c, ref, cand, ranges, nranges, iters, res);
+    if (rc) c->tk->broken = true;
+    return rc;
+}
+
+static int step(fp_contact *c, const float *ref, const float *cand, const uint32_t *ranges,
+                size_t nranges, int iters, fp_contact_result *res)
+{
+    struct track *k = c->tk;
+    tick(k, c->t);
+    k->nmv = k->nmt = 0;
+    size_t renewed0 = k->renewed;
+
+
+    /* the moved vertices: where cand differs from P, looked for where either may differ
+     * from the reference (D_P and the ranges) */
+#define FP_VISIT(v)                                                                             \
+    do {                                                                                        \
+        size_t v_ = (v);                                                                        \
+        if (vert_differs(cand, k->p, v_) &&                                                     \
+            push_u32(&k->mv, &k->nmv, &k->cap_mv, (uint32_t)v_))                                \
+            return -ENOMEM;                                                                     \
+    } while (0)
+    for (size_t i = 0; i < k->ndp; i++) FP_VISIT(k->dp[i]);
+    if (nranges == SIZE_MAX) {
+        for (size_t v = 0; v < c->n; v++)
+            if (!k->in_dp[v]) FP_VISIT(v);
+    } else {
+        for (size_t r = 0; r < nranges; r++)
+            for (size_t v = ranges[2 * r]; v < (size_t)ranges[2 * r] + ranges[2 * r + 1] && v < c->n; v++)
+                if (!k->in_dp[v]) FP_VISIT(v);
+    }
+#undef FP_VISIT
+    res->moved_verts = k->nmv;
+    if (!k->nmv) return 0; /* nothing moved: P is the candidate */
+    for (size_t i = 0; i < k->nmv; i++)
+        if (mark_tris(c, k->mv[i])) return -ENOMEM;
+
+    res->moved_tris = k->nmt;
+
+    /* envelopes that hold each moved triangle in the candidate (and, before a bisection,
+     * in P too, so in every shape between them) */
+    if (reserve((void **)&k->mbox, &k->cap_mbox, k->nmt, sizeof *k->mbox)) return -ENOMEM;
+    size_t fl = 0; /* newly flipped triangles of the candidate */
+    for (size_t i = 0; i < k->nmt; i++) {
+        uint32_t a = k->mt[i];
+        const uint32_t *va = c->tris + 3 * (size_t)a;
+        tri_box(cand, va, k->mbox[i]);
+        if (k->slot[a] == FP_TRACK_NONE) static_remove(c, a); /* P is still the weld shape */
+        if ((k->slot[a] == FP_TRACK_NONE || !box_holds(k->dyn[k->slot[a]].env, k->mbox[i])) &&
+            envelope(c, a, k->mbox[i]))
+            return -ENOMEM;
+        if (flipped(c, cand, va, a) && !flipped(c, ref, va, a)) fl++;
+    }
+    if (renew_lists(c)) return -ENOMEM;
+
+
+
+    long found = track_check(c, cand, ref, true, &fl);
+    res->checks = 1;
+    res->pairs = found;
+    res->flipped = fl;
+    if (found || fl) {
+        /* the bisection over P -> candidate: envelopes that hold P's boxes too */
+        for (size_t i = 0; i < k->nmt; i++) {
+            uint32_t a = k->mt[i];
+            float hull[6];
+            tri_box(k->p, c->tris + 3 * (size_t)a, hull);
+            for (int j = 0; j < 3; j++) {
+                hull[j] = min_f(hull[j], k->mbox[i][j]);
+                hull[3 + j] = max_f(hull[3 + j], k->mbox[i][3 + j]);
+            }
+            if (!box_holds(k->dyn[k->slot[a]].env, hull) && envelope(c, a, hull)) return -ENOMEM;
+        }
+        if (renew_lists(c)) return -ENOMEM;
+        size_t cap = k->cap_pv;
+        if (reserve((void **)&k->pv, &cap, 3 * k->nmv, sizeof *k->pv) ||
+            reserve((void **)&k->cv, &k->cap_pv, 3 * k->nmv, sizeof *k->cv))
+            return -ENOMEM;
+        float *pv = k->pv, *cv = k->cv;
+        for (size_t i = 0; i < k->nmv; i++) {
+            memcpy(pv + 3 * i, k->p + 3 * (size_t)k->mv[i], 3 * sizeof(float));
+            memcpy(cv + 3 * i, cand + 3 * (size_t)k->mv[i], 3 * sizeof(float));
+        }
+        double lo = 0, hi = 1;
+        for (int i = 0; i < iters; i++) {
+            double mid = 0.5 * (lo + hi);
+            track_lerp(k, mid);
+            long m = track_check(c, k->p, ref, false, &fl);
+            res->checks++;
+            if (m || fl) hi = mid;
+            else lo = mid;
+        }
+        track_lerp(k, lo);
+        res->t = lo;
+    } else {
+        for (size_t i = 0; i < k->nmv; i++)
+            memcpy(k->p + 3 * (size_t)k->mv[i], cand + 3 * (size_t)k->mv[i], 3 * sizeof(float));
+    }
+    res->renewed = k->renewed - renewed0;
+    /* D_P: where P now differs from the reference */
+    size_t w = 0;
+    for (size_t i = 0; i < k->ndp; i++) {
+        uint32_t v = k->dp[i];
+        if (vert_differs(k->p, ref, v)) k->dp[w++] = v;
+        else k->in_dp[v] = 0;
+    }
+    k->ndp = w;
+    for (size_t i = 0; i < k->nmv; i++) {
+        uint32_t v = k->mv[i];
+        if (!k->in_dp[v] && vert_differs(k->p, ref, v)) {
+            k->in_dp[v] = 1;
+            k->dp[k->ndp++] = v;
+        }
+    }
+    return 0;
+}
+
+const float *fp_contact_shape(const fp_contact *c) { return c && c->tk ? c->tk->p : NULL; }
+
+void fp_contact_set_prewarm(fp_contact *c, size_t max_tris)
+{
+    if (c) c->prewarm = max_tris;
 }

@@ -64,9 +64,11 @@ struct fp_session {
 
     fp_control_set cs;            /* its arrays are the mapping step's (with canaries) */
 
-    /* the contact guard (contact.h); NULL with no_contact_guard */
+    /* the contact guard (contact.h, its incremental form); NULL with no_contact_guard */
     fp_contact *contact;
-    float *guarded;               /* n x 3: the shape shown when the guard scaled back */
+    int cg_sync;                  /* FP_CG_*: what the guard's P must catch up with */
+    bool cg_lost;                 /* the guard ran out of memory: made anew, the base shown
+                                     until then */
     unsigned long cg_frames, cg_limited; /* this gesture: frames checked, scaled back */
     double cg_t;                  /* this gesture: smallest fraction kept */
 
@@ -83,6 +85,12 @@ enum {
 };
 
 #define FP_CONTACT_BISECTIONS 6
+/* The guard's P (the shape it last accepted) and the frame's reference, the posed base: */
+enum {
+    FP_CG_SYNCED = 0,   /* P is the shape shown, on the current reference */
+    FP_CG_SHOWN_REF,    /* the reference was shown since (a gesture ended): P := ref at D_P */
+    FP_CG_REF_CHANGED   /* the reference changed (a pose, undo, reset): compare all n */
+};
 /* pairs within this many vertex rings of the input's own crossings are not the guard's
  * business (fp_contact_dilate_own): the eyes' intersection curves move under any motion */
 #define FP_CONTACT_OWN_RINGS 1
@@ -90,6 +98,18 @@ enum {
 _Static_assert(FP_ENGINE_MAX_CONTROL >= FP_CONTROL_CAPACITY, "the engine takes a full control set");
 
 /* ---- creation -------------------------------------------------------------------------- */
+
+/* The contact guard on the loaded mesh (its own crossings widened by FP_CONTACT_OWN_RINGS),
+ * started on the shape shown. Returns 0 or -ENOMEM (s->contact NULL). */
+static int contact_open(fp_session *s)
+{
+    int rc = fp_contact_create(s->mesh->triangles, s->mesh->triangle_count, s->n, s->loaded, &s->contact);
+    if (!rc) rc = fp_contact_dilate_own(s->contact, FP_CONTACT_OWN_RINGS);
+    if (!rc) rc = fp_contact_reference(s->contact, s->shown, NULL, SIZE_MAX);
+    if (rc) fp_contact_destroy(&s->contact);
+    s->cg_sync = FP_CG_SYNCED;
+    return rc;
+}
 
 /* Load the mapping of SPEC `mapping` (from `file` where not NULL: a copy being hot-reloaded)
  * and create it with the SPEC's keys. */
@@ -311,11 +331,7 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
         goto fail;
     }
     if (!opt->no_contact_guard) {
-        s->guarded = malloc(bytes);
-        if (!s->guarded ||
-            (rc = fp_contact_create(s->mesh->triangles, s->mesh->triangle_count, s->n, s->loaded,
-                                    &s->contact)) ||
-            (rc = fp_contact_dilate_own(s->contact, FP_CONTACT_OWN_RINGS))) {
+        if ((rc = contact_open(s))) {
             rc = rc ? rc : -ENOMEM;
             snprintf(err, errlen, "session: out of memory for the contact guard");
             goto fail;
@@ -378,26 +394,56 @@ static void base_changed(fp_session *s)
     fp_rig_step_update(&s->rig, NULL, s->base, &s->log);
     s->shown = fp_rig_step_posed(&s->rig, s->base);
     fp_engine_step_set_base(&s->engine, s->shown);
+    s->cg_sync = FP_CG_REF_CHANGED;
 }
 
-/* The contact guard: the frame's shape (s->shown) against the shape it starts from (ref: the
- * posed base; for a gesture the posed base, for an unanchored step the current base): when
- * it adds self-crossings or flipped triangles, the fingers' motion is scaled back
- * (fp_contact_guard) and s->shown becomes s->guarded. Without a rig, by induction over
- * commits, the shown surface never crosses itself where the loaded face did not; a rig's
- * own pose (its channels) is not checked. */
+/* The shape shown is the reference again (a frame without a deformation, an engine error):
+ * the contact guard's P catches up before its next check. */
+static void shown_ref(fp_session *s)
+{
+    if (s->cg_sync == FP_CG_SYNCED) s->cg_sync = FP_CG_SHOWN_REF;
+}
+
+/* The contact guard (contact.h, incremental): the frame's shape (s->shown) against the shape
+ * shown last (the guard's P), on the reference ref (the posed base): when it adds
+ * self-crossings or flipped triangles against ref, this frame's motion is scaled back
+ * (fp_contact_step) and s->shown becomes the guard's shape. Without a rig, by induction
+ * over commits, the shown surface never crosses itself where the loaded face did not; a
+ * rig's own pose (its channels) is not checked. The guard looks only where the shape may
+ * have changed: the engine's touched ranges (the rig's blend moves no vertex the fingers
+ * did not). */
 static void contact_guard(fp_session *s, const float *ref, fp_frame_stats *st)
 {
+    if (s->cg_lost && s->shown != ref) { /* the guard is made anew on the shape shown: ref */
+        const float *shown = s->shown;
+        s->shown = ref;
+        if (contact_open(s)) return; /* still no memory: the base stays */
+        s->cg_lost = false;
+        s->shown = shown;
+    }
     if (!s->contact || s->shown == ref) return;
     int64_t t0 = fp_now_ns();
+    int rc = 0;
+    if (s->cg_sync != FP_CG_SYNCED)
+        rc = fp_contact_reference(s->contact, ref, NULL, s->cg_sync == FP_CG_REF_CHANGED ? SIZE_MAX : 0);
+    s->cg_sync = FP_CG_SYNCED;
+    const uint32_t *ranges;
+    size_t nranges = fp_engine_step_touched(&s->engine, &ranges);
     fp_contact_result r;
-    fp_contact_guard(s->contact, ref, s->shown, s->guarded, FP_CONTACT_BISECTIONS, &r);
+    if (!rc) rc = fp_contact_step(s->contact, ref, s->shown, ranges, nranges, FP_CONTACT_BISECTIONS, &r);
     st->collide_ms += (double)(fp_now_ns() - t0) / 1e6;
+    if (rc) { /* out of memory: the guard is unusable; show the reference, a new guard next frame */
+        s->shown = ref;
+        fp_contact_destroy(&s->contact);
+        s->cg_lost = true;
+        fp_slog_printf(&s->log, FP_LOG_ERROR, "contact", "contact guard: out of memory; showing the base");
+        return;
+    }
     st->collide_pairs += r.pairs;
     if (!s->cg_frames) s->cg_t = 1.0;
     s->cg_frames++;
     if (r.t < 1) {
-        s->shown = s->guarded;
+        s->shown = fp_contact_shape(s->contact);
         s->cg_limited++;
         if (r.t < s->cg_t) s->cg_t = r.t;
         if (r.t < st->collide_t) st->collide_t = r.t;
@@ -409,24 +455,10 @@ static void contact_end_gesture(fp_session *s)
 {
     if (s->cg_limited)
         fp_slog_printf(&s->log, FP_LOG_WARNING, "contact",
-                       "contact guard stopped the surface from passing through itself: reached "
-                       "%.0f%% (%lu of %lu frames scaled back)",
-                       100.0 * s->cg_t, s->cg_limited, s->cg_frames);
+                       "contact guard stopped the surface from passing through itself: %lu of "
+                       "%lu frames scaled back (least share of a frame's motion kept %.0f%%)",
+                       s->cg_limited, s->cg_frames, 100.0 * s->cg_t);
     s->cg_frames = s->cg_limited = 0;
-}
-
-/* dst = src on the ranges the engine's last evaluation wrote (everywhere when it does not
- * know them). */
-static void copy_touched(fp_session *s, float *dst, const float *src)
-{
-    const uint32_t *r;
-    size_t nr = fp_engine_step_touched(&s->engine, &r);
-    if (nr == SIZE_MAX) {
-        memcpy(dst, src, s->n * 3 * sizeof(float));
-        return;
-    }
-    for (size_t i = 0; i < nr; i++)
-        memcpy(dst + 3 * (size_t)r[2 * i], src + 3 * (size_t)r[2 * i], 3 * (size_t)r[2 * i + 1] * sizeof(float));
 }
 
 /* A commit of the engine's output buffer: into the base (and the gesture's undo level) on the
@@ -475,7 +507,7 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame
             contact_guard(s, ref, st);
             /* the output differs from the last only in the engine's ranges (blocks in a
              * support now or at its last run), unless the guard's shape is or was shown */
-            s->shown_kind = s->shown == s->guarded ? SHOWN_OTHER : SHOWN_ENGINE;
+            s->shown_kind = s->contact && s->shown == fp_contact_shape(s->contact) ? SHOWN_OTHER : SHOWN_ENGINE;
             if (s->shown_kind == SHOWN_OTHER || was == SHOWN_OTHER)
                 fp_changed_all(&s->shown_changed);
             else
@@ -486,27 +518,38 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame
                     /* with a rig only the fingers' part goes into the base */
                     fp_history_commit(&s->history, fp_rig_step_commit_shape(&s->rig, s->base, s->shown));
                     base_changed(s); /* the anchored gesture ended; unanchored restarts anyway */
+                } else if (s->contact && s->shown == fp_contact_shape(s->contact)) {
+                    /* the guard scaled the motion back: its shape goes into the base and
+                     * the output buffer (it may differ from the base outside this frame's
+                     * touched ranges: earlier frames scaled back); the engine re-indexes the
+                     * whole base. The guard's P is that shape: nothing to catch up. */
+                    memcpy(s->deformed, s->shown, s->n * 3 * sizeof(float));
+                    fp_history_commit(&s->history, s->deformed);
+                    fp_engine_step_set_base(&s->engine, s->base);
+                    s->shown = s->base;
+                    s->shown_kind = SHOWN_POSED;
+                    fp_changed_all(&s->shown_changed);
+                    fp_changed_all(&s->base_changed);
+                    s->cg_sync = FP_CG_SHOWN_REF;
                 } else {
-                    /* the guard scaled the motion back: its shape goes into the output
-                     * buffer first (it equals the base outside the touched ranges, as the
-                     * output does: fp_contact_guard's out = ref + t (cand - ref)) */
-                    bool guarded = s->shown == s->guarded;
-                    if (guarded) copy_touched(s, s->deformed, s->guarded);
                     /* the output buffer becomes the base on the touched ranges only, and
                      * only those are re-indexed; the anchored gesture ended, unanchored
                      * restarts anyway. The base changed where the output did. */
                     commit_touched(s);
                     fp_changed_add(&s->base_changed, ranges, fp_engine_step_touched(&s->engine, &ranges));
-                    if (guarded) fp_changed_all(&s->shown_changed);
                     fp_engine_step_commit(&s->engine, s->base);
                     s->shown = s->base;
                     s->shown_kind = SHOWN_POSED;
+                    /* the guard's P is the shape committed, the new reference: only D_P
+                     * to compare */
+                    s->cg_sync = FP_CG_SHOWN_REF;
                 }
                 st->stage_ms[FP_STAGE_COMMIT] = (double)(fp_now_ns() - t0) / 1e6;
                 st->committed = true;
             }
         } else {
             fp_changed_all(&s->shown_changed); /* the posed base again, after an error */
+            shown_ref(s); /* the engine failed: the posed base is shown */
         }
     } else {
         /* the posed base: where the engine's last output differed from it, if shown */
@@ -517,6 +560,7 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame
         fp_history_end_gesture(&s->history);
         fp_engine_step_end_gesture(&s->engine, &s->log);
         contact_end_gesture(s);
+        shown_ref(s);
     }
     s->engaged = cs->active && !(cs->intents & (FP_INTENT_COMMIT | FP_INTENT_CANCEL));
 }
@@ -584,6 +628,7 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     if (fp_rig_step_update(&s->rig, &s->cs, s->base, &s->log)) {
         fp_engine_step_set_base(&s->engine, fp_rig_step_posed(&s->rig, s->base));
         fp_changed_all(&s->shown_changed);
+        s->cg_sync = FP_CG_REF_CHANGED;
     }
     const fp_control_set *cs = fp_rig_step_run(&s->rig, &s->cs);
     FP_STAGE_END(FP_STAGE_MAPPING);
@@ -615,6 +660,7 @@ void fp_session_apply_controls(fp_session *s, int64_t now_ns, const fp_control_s
     if (fp_rig_step_update(&s->rig, cs, s->base, &s->log)) {
         fp_engine_step_set_base(&s->engine, fp_rig_step_posed(&s->rig, s->base));
         fp_changed_all(&s->shown_changed);
+        s->cg_sync = FP_CG_REF_CHANGED;
     }
     engine_and_history(s, cs, st);
     fp_record_step_end(&s->record, s->frame, now_ns, requested | s->actions, cs, s->inputs,
@@ -668,7 +714,7 @@ const fp_control_set *fp_session_control_set(const fp_session *s) { return &s->c
 const struct csrbf_solver *fp_session_solver(const fp_session *s)
 {
     /* not when the contact guard scaled the shape back: the solver's map is not what is shown */
-    return s->shown != s->base && s->shown != s->guarded && !s->rig.rig
+    return s->shown != s->base && (!s->contact || s->shown != fp_contact_shape(s->contact)) && !s->rig.rig
                ? fp_engine_step_solver(&s->engine) : NULL;
 }
 
@@ -776,6 +822,7 @@ static int swap_mapping(fp_session *s, const fp_plugin_path *path, const char *s
     s->shown = fp_rig_step_posed(&s->rig, s->base);
     s->shown_kind = SHOWN_POSED;
     fp_changed_all(&s->shown_changed);
+    shown_ref(s);
     s->engaged = false;
     fp_history_end_gesture(&s->history);
     fp_engine_step_end_gesture(&s->engine, &s->log);
@@ -888,7 +935,6 @@ void fp_session_destroy(fp_session **sp)
     fp_plugin_unload(&s->mapping_plugin);
     fp_engine_step_free(&s->engine);
     fp_contact_destroy(&s->contact);
-    free(s->guarded);
     fp_changed_free(&s->shown_changed);
     fp_changed_free(&s->base_changed);
     fp_rig_step_free(&s->rig);

@@ -1,11 +1,17 @@
 /* The contact guard (core/session/contact.h) against CGAL's exact counter (fp_selfx):
  * constructed cases (crossing, touching, coplanar, shared vertex, a welded seam), random
  * triangle soups moved at random, and a real deformed ICT frame (an unguarded CSRBF pull that
- * folds the lips through each other): the counts of new pairs agree; then the bisection. */
+ * folds the lips through each other): the counts of new pairs agree; then the bisection.
+ * The incremental guard (fp_contact_step): synthetic pushes of one surface through another
+ * over several frames, fast and slow (two sheets, the ICT lips), and the frames of real
+ * recordings: at every frame it accepts exactly when the full check (fp_contact_count_new
+ * against the reference) finds nothing, the shape it keeps has no new pair by the full check
+ * (and CGAL's), and the push is stopped. */
 #include "contact.h"
 #include "fp_plugin_host.h"
 #include "csrbf.h"
 #include "fp_mesh.h"
+#include "fp_session.h"
 #include "fp_test_support.h"
 #include "selfx.h"
 
@@ -221,6 +227,364 @@ static void test_ict_frame(void **state)
     fp_mesh_free(&m);
 }
 
+
+/* ---- the incremental guard -------------------------------------------------------------- */
+
+/* (first, count) ranges of the 16-vertex blocks where a differs from b (as the engine's
+ * touched blocks: a superset of the vertices that differ); returns their number */
+static size_t diff_ranges(const float *a, const float *b, size_t n, uint32_t *ranges)
+{
+    size_t nr = 0;
+    for (size_t b0 = 0; b0 < n; b0 += 16) {
+        size_t e = b0 + 16 < n ? b0 + 16 : n;
+        if (!memcmp(a + 3 * b0, b + 3 * b0, (e - b0) * 3 * sizeof(float))) continue;
+        if (nr && ranges[2 * nr - 2] + ranges[2 * nr - 1] == b0) ranges[2 * nr - 1] += (uint32_t)(e - b0);
+        else {
+            ranges[2 * nr] = (uint32_t)b0;
+            ranges[2 * nr + 1] = (uint32_t)(e - b0);
+            nr++;
+        }
+    }
+    return nr;
+}
+
+typedef struct track_stats {
+    int frames, scaled, accepted;
+    double least_t;
+} track_stats;
+
+/* One frame of the incremental guard on cand, checked against the full guard: accepted
+ * exactly when fp_contact_count_new(ref, cand) finds no new pair and no new flip, and the
+ * shape kept has none (by the full check; by CGAL too when cgal). */
+static void track_frame(fp_contact *tk, fp_contact *full, const float *ref, const float *cand,
+                        size_t n, const uint32_t *tris, size_t t, uint32_t *ranges, bool cgal,
+                        int rings, track_stats *ts)
+{
+    size_t nr = diff_ranges(cand, ref, n, ranges);
+    fp_contact_result r;
+    assert_int_equal(fp_contact_step(tk, ref, cand, ranges, nr, 6, &r), 0);
+    fp_contact_count info;
+    long k = fp_contact_count_new(full, ref, cand, NULL, 0, &info);
+    assert_true(k >= 0);
+    bool clean = !k && !info.flipped;
+    if (clean != (r.t == 1)) fprintf(stderr, "frame %d: full %ld new, %zu flipped; t %.3f\n", ts->frames, k, info.flipped, r.t);
+    assert_int_equal(clean, r.t == 1);
+    if (r.pairs != k) {
+        uint32_t pr[64];
+        long kk = fp_contact_count_new(full, ref, cand, pr, 32, NULL);
+        long cg = fp_selfx_count_new_away(ref, cand, n, tris, t, rings, NULL, 0, NULL, NULL);
+        fprintf(stderr, "pairs: incremental %ld, full %ld, CGAL %ld\n", r.pairs, kk, cg);
+        for (long i = 0; i < kk && i < 32; i++) {
+            const uint32_t *a = tris + 3 * pr[2 * i], *b = tris + 3 * pr[2 * i + 1];
+            fprintf(stderr, "  %u %u: a %u %u %u b %u %u %u\n", pr[2 * i], pr[2 * i + 1], a[0], a[1], a[2], b[0], b[1], b[2]);
+        }
+    }
+    assert_int_equal(r.pairs, k);
+    assert_int_equal(r.flipped, info.flipped);
+    const float *kept = fp_contact_shape(tk);
+    if (r.t == 1) assert_memory_equal(kept, cand, n * 3 * sizeof(float));
+    long left = fp_contact_count_new(full, ref, kept, NULL, 0, &info);
+    assert_int_equal(left, 0);
+    assert_int_equal(info.flipped, 0);
+    if (cgal)
+        assert_int_equal(fp_selfx_count_new_away(ref, kept, n, tris, t, rings, NULL, 0, NULL, NULL), 0);
+    ts->frames++;
+    ts->accepted += r.t == 1;
+    if (r.t < 1) ts->scaled++;
+    if (r.t < ts->least_t) ts->least_t = r.t;
+}
+
+/* the largest distance between two shapes' vertices */
+static double max_move(const float *a, const float *b, size_t n)
+{
+    double m = 0;
+    for (size_t i = 0; i < n; i++)
+        m = fmax(m, sqrt(pow(a[3 * i] - b[3 * i], 2) + pow(a[3 * i + 1] - b[3 * i + 1], 2) +
+                         pow(a[3 * i + 2] - b[3 * i + 2], 2)));
+    return m;
+}
+
+/* two sheets 0.05 apart; the lower one's middle pushed up by a bump of height 0.12 (through
+ * the upper one) over `frames` frames: the guard lets it rise to the upper sheet and no
+ * further */
+static void sheets_push(int frames, bool lazy)
+{
+    float *pos;
+    size_t n, t;
+    uint32_t *tris;
+    sheets(24, 0.05f, &pos, &n, &tris, &t);
+    float *cand = malloc(n * 3 * sizeof(float));
+    uint32_t *ranges = malloc(n * sizeof *ranges);
+    fp_contact *tk, *full;
+    assert_int_equal(fp_contact_create(tris, t, n, pos, &tk), 0);
+    assert_int_equal(fp_contact_create(tris, t, n, pos, &full), 0);
+    if (lazy) fp_contact_set_prewarm(tk, 0);
+    assert_int_equal(fp_contact_reference(tk, pos, NULL, SIZE_MAX), 0);
+    track_stats ts = {0, 0, 0, 1.0};
+    for (int f = 1; f <= frames; f++) {
+        memcpy(cand, pos, n * 3 * sizeof(float));
+        double h = 0.12 * f / frames;
+        for (size_t v = 0; v < n / 2; v++) {
+            double d = hypot(pos[3 * v] - 0.5, pos[3 * v + 1] - 0.5) / 0.3;
+            if (d < 1) cand[3 * v + 2] += (float)(h * (1 - d * d) * (1 - d * d));
+        }
+        track_frame(tk, full, pos, cand, n, tris, t, ranges, true, 0, &ts);
+    }
+    /* the unguarded push crosses; the kept one rose to within a few per cent of the gap */
+    assert_true(fp_contact_count_new(full, pos, cand, NULL, 0, NULL) > 0);
+    double top = 0;
+    for (size_t v = 0; v < n / 2; v++) top = fmax(top, fp_contact_shape(tk)[3 * v + 2]);
+    printf("sheets pushed over %d frames (%s): %d scaled back (least t %.3f); the bump rose to "
+           "%.5f (the gap: 0.05), no new pair (full check and CGAL, every frame)\n",
+           frames, lazy ? "lazy" : "prewarmed", ts.scaled, ts.least_t, top);
+    assert_true(ts.scaled > 0);
+    assert_true(top > 0.8 * 0.05 && top <= 0.05);
+    fp_contact_destroy(&tk);
+    fp_contact_destroy(&full);
+    free(ranges);
+    free(cand);
+    free(pos);
+    free(tris);
+}
+
+static void test_track_sheets_fast(void **state)
+{
+    (void)state;
+    sheets_push(3, false);
+    sheets_push(3, true);
+}
+
+static void test_track_sheets_slow(void **state)
+{
+    (void)state;
+    sheets_push(60, false);
+    sheets_push(60, true);
+}
+
+/* a sheet pushed up into two big triangles above it (a tilted quad, each triangle over
+ * FP_TRACK_BIG_CELLS grid cells: the guard's lists of big ones), the quad lowered too when
+ * move_big */
+static void big_push(bool move_big, bool lazy)
+{
+    int k = 48, frames = 30;
+    size_t ns = (size_t)(k + 1) * (k + 1), n = ns + 4, t = 2 * (size_t)k * k + 2;
+    float *pos = malloc(n * 3 * sizeof(float)), *cand = malloc(n * 3 * sizeof(float));
+    uint32_t *tris = malloc(t * 3 * sizeof(uint32_t)), *ranges = malloc(n * sizeof(uint32_t));
+    size_t v = 0, f = 0;
+    for (int i = 0; i <= k; i++)
+        for (int j = 0; j <= k; j++, v++) {
+            pos[3 * v] = (float)i / k;
+            pos[3 * v + 1] = (float)j / k;
+            pos[3 * v + 2] = 0;
+        }
+    for (int i = 0; i < k; i++)
+        for (int j = 0; j < k; j++) {
+            uint32_t a = (uint32_t)(i * (k + 1) + j), b = a + 1, c = a + (uint32_t)(k + 1), d = c + 1;
+            uint32_t q[6] = {a, c, b, b, c, d};
+            memcpy(tris + 3 * f, q, sizeof q);
+            f += 2;
+        }
+    float quad[4][3] = {{-0.2f, -0.2f, 0.04f}, {1.2f, -0.2f, 0.6f}, {-0.2f, 1.2f, 0.04f}, {1.2f, 1.2f, 0.6f}};
+    memcpy(pos + 3 * ns, quad, sizeof quad);
+    uint32_t qt[6] = {(uint32_t)ns, (uint32_t)ns + 1, (uint32_t)ns + 2, (uint32_t)ns + 1, (uint32_t)ns + 3, (uint32_t)ns + 2};
+    memcpy(tris + 3 * f, qt, sizeof qt);
+    fp_contact *tk, *full;
+    assert_int_equal(fp_contact_create(tris, t, n, pos, &tk), 0);
+    assert_int_equal(fp_contact_create(tris, t, n, pos, &full), 0);
+    if (lazy) fp_contact_set_prewarm(tk, 0);
+    assert_int_equal(fp_contact_reference(tk, pos, NULL, SIZE_MAX), 0);
+    track_stats ts = {0, 0, 0, 1.0};
+    for (int fr = 1; fr <= frames; fr++) {
+        memcpy(cand, pos, n * 3 * sizeof(float));
+        double h = 0.3 * fr / frames;
+        for (size_t w = 0; w < ns; w++) {
+            double d = hypot(pos[3 * w] - 0.3, pos[3 * w + 1] - 0.5) / 0.25;
+            if (d < 1) cand[3 * w + 2] += (float)(h * (1 - d * d) * (1 - d * d));
+        }
+        if (move_big)
+            for (size_t w = ns; w < n; w++) cand[3 * w + 2] -= (float)(0.02 * fr / frames);
+        track_frame(tk, full, pos, cand, n, tris, t, ranges, true, 0, &ts);
+    }
+    assert_true(fp_contact_count_new(full, pos, cand, NULL, 0, NULL) > 0);
+    printf("a sheet pushed into big triangles%s over %d frames (%s): %d scaled back (least t "
+           "%.3f), no new pair (full check and CGAL, every frame)\n",
+           move_big ? " (lowered too)" : "", frames, lazy ? "lazy" : "prewarmed", ts.scaled, ts.least_t);
+    assert_true(ts.scaled > 0);
+    fp_contact_destroy(&tk);
+    fp_contact_destroy(&full);
+    free(ranges);
+    free(tris);
+    free(cand);
+    free(pos);
+}
+
+static void test_track_big(void **state)
+{
+    (void)state;
+    big_push(false, true);
+    big_push(true, true);
+    big_push(true, false);
+}
+
+/* the ICT lips: the lower lip's front pulled up and back through the upper lip (an anchored
+ * CSRBF gesture, as test_ict_frame's third pull) over `frames` frames */
+static void lips_push(int frames, bool lazy)
+{
+    char err[512];
+    fp_mesh *m;
+    assert_int_equal(fp_mesh_load(fp_test_face_path(), &m, err, sizeof err), 0);
+    size_t n = m->vertex_count, t = m->triangle_count;
+    float mn[3], mx[3];
+    fp_mesh_bounds(m, mn, mx);
+    double diag = sqrt(pow(mx[0] - mn[0], 2) + pow(mx[1] - mn[1], 2) + pow(mx[2] - mn[2], 2));
+    double R = 0.06 * diag;
+    size_t best = 0;
+    double cx = 0.5 * (mn[0] + mx[0]), bestz = -INFINITY;
+    for (size_t v = 0; v < n; v++) {
+        const float *p = m->positions + 3 * v;
+        if (fabs(p[0] - cx) < 0.02 * diag && p[1] < 0.5 * (mn[1] + mx[1]) &&
+            p[1] > mn[1] + 0.25 * (mx[1] - mn[1]) && p[2] > bestz) {
+            bestz = p[2];
+            best = v;
+        }
+    }
+    const float *ref = m->positions;
+    float *cand = malloc(n * 3 * sizeof(float));
+    uint32_t *ranges = malloc(n * sizeof *ranges);
+    fp_contact *tk, *full;
+    assert_int_equal(fp_contact_create(m->triangles, t, n, ref, &tk), 0);
+    assert_int_equal(fp_contact_create(m->triangles, t, n, ref, &full), 0);
+    if (lazy) fp_contact_set_prewarm(tk, 0);
+    assert_int_equal(fp_contact_reference(tk, ref, NULL, SIZE_MAX), 0);
+    csrbf_options o = {0};
+    o.radius = R;
+    o.threads = 1;
+    csrbf_solver *sol;
+    csrbf_points *pts;
+    assert_int_equal(csrbf_solver_create(&o, &sol), 0);
+    assert_int_equal(csrbf_points_create(n, ref, &pts), 0);
+    const float *s0 = ref + 3 * best;
+    float start[3] = {s0[0], s0[1], s0[2]};
+    assert_true(csrbf_solver_set_start_points(sol, 1, start) >= 0);
+    track_stats ts = {0, 0, 0, 1.0};
+    int64_t t0 = fp_now_ns();
+    for (int f = 1; f <= frames; f++) {
+        double a = (double)f / frames;
+        float end[3] = {s0[0], s0[1] + (float)(a * 0.9 * R), s0[2] - (float)(a * 0.2 * R)};
+        assert_true(csrbf_solver_set_end_points(sol, end) >= 0);
+        assert_int_equal(csrbf_evaluate(sol, pts, cand, 0u, NULL), 0);
+        track_frame(tk, full, ref, cand, n, m->triangles, t, ranges, f == frames || f % 20 == 0, 0, &ts);
+    }
+    double ms = (double)(fp_now_ns() - t0) / 1e6;
+    assert_true(fp_contact_count_new(full, ref, cand, NULL, 0, NULL) > 0); /* unguarded: through */
+    double kept = max_move(ref, fp_contact_shape(tk), n), asked = max_move(ref, cand, n);
+    printf("ICT lips pushed over %d frames (%s): %d scaled back (least t %.3f); kept %.3f of the %.3f "
+           "asked (mesh units); no new pair (full check every frame, CGAL at the end)  [%.1f ms "
+           "for the frames and their full checks]\n",
+           frames, lazy ? "lazy" : "prewarmed", ts.scaled, ts.least_t, kept, asked, ms);
+    assert_true(ts.scaled > 0);
+    assert_true(kept > 0.3 * asked); /* stopped at the contact, not at the start */
+    csrbf_points_destroy(&pts);
+    csrbf_solver_destroy(&sol);
+    fp_contact_destroy(&tk);
+    fp_contact_destroy(&full);
+    free(ranges);
+    free(cand);
+    fp_mesh_free(&m);
+}
+
+static void test_track_lips_fast(void **state)
+{
+    (void)state;
+    lips_push(3, false);
+    lips_push(3, true);
+}
+
+static void test_track_lips_slow(void **state)
+{
+    (void)state;
+    lips_push(60, true);
+}
+
+/* Real frames: a session without the guard (no rig, the input's own clock) replays a
+ * recording; each frame's shape is a candidate for an incremental guard on the base the
+ * frame started from (commits and all: unanchored commits every frame), decided as the full
+ * check decides. */
+static void recording_frames(const char *take, const char *mapping, bool lazy)
+{
+    char input[4400], err[2048];
+    snprintf(input, sizeof input, "replay:%s/hands/leap-motion/%s_joints_mm.csv,fast=1",
+             fp_test_data_dir(), take);
+    const char *dirs[] = {fp_test_plugin_dir()};
+    fp_plugin_path path;
+    fp_plugin_path_init(&path, dirs, 1, NULL);
+    fp_session_options so = {0};
+    so.mesh_path = fp_test_face_path();
+    so.inputs[0] = input;
+    so.input_count = 1;
+    so.mapping = mapping;
+    so.plugin_path = &path;
+    so.input_clock = true;
+    so.rig_path = "none";
+    so.no_contact_guard = true;
+    fp_session *s = NULL;
+    int rc = fp_session_create(&so, &s, err, sizeof err);
+    if (!rc) rc = fp_session_start(s, err, sizeof err);
+    if (rc) fprintf(stderr, "%s\n", err);
+    assert_int_equal(rc, 0);
+    const fp_mesh *m = fp_session_mesh(s);
+    size_t n = fp_session_vertex_count(s), t = m->triangle_count;
+    fp_contact *tk, *full;
+    assert_int_equal(fp_contact_create(m->triangles, t, n, fp_session_loaded(s), &tk), 0);
+    assert_int_equal(fp_contact_create(m->triangles, t, n, fp_session_loaded(s), &full), 0);
+    assert_int_equal(fp_contact_dilate_own(tk, 1), 0);
+    assert_int_equal(fp_contact_dilate_own(full, 1), 0);
+    if (lazy) fp_contact_set_prewarm(tk, 0);
+    float *ref = malloc(n * 3 * sizeof(float));
+    uint32_t *ranges = malloc(n * sizeof *ranges);
+    memcpy(ref, fp_session_base(s), n * 3 * sizeof(float));
+    assert_int_equal(fp_contact_reference(tk, ref, NULL, SIZE_MAX), 0);
+    int64_t t0;
+    while (fp_session_input_start(s, &t0) == 0) fp_test_nap_ms(1);
+    track_stats ts = {0, 0, 0, 1.0};
+    unsigned commits = 0;
+    for (uint64_t k = 0; !fp_session_finished(s); k++) {
+        int64_t now = t0 + (int64_t)llround((double)k * 1e9 / 60);
+        while (!fp_session_inputs_ready(s, now)) fp_test_nap_ms(1);
+        if (memcmp(ref, fp_session_base(s), n * 3 * sizeof(float))) { /* a commit */
+            memcpy(ref, fp_session_base(s), n * 3 * sizeof(float));
+            assert_int_equal(fp_contact_reference(tk, ref, NULL, SIZE_MAX), 0);
+            commits++;
+        }
+        fp_frame_stats st;
+        fp_session_step(s, now, &st);
+        if (!st.active) {
+            assert_int_equal(fp_contact_reference(tk, ref, NULL, 0), 0); /* shown: the base */
+            continue;
+        }
+        track_frame(tk, full, ref, fp_session_positions(s), n, m->triangles, t, ranges, false, 1, &ts);
+    }
+    printf("%s %s (%s): %d frames checked, %d accepted, %d scaled back (least t %.3f), %u references; "
+           "every decision the full check's\n", take, mapping, lazy ? "lazy" : "prewarmed", ts.frames, ts.accepted, ts.scaled,
+           ts.least_t, commits);
+    assert_true(ts.frames > 20);
+    free(ranges);
+    free(ref);
+    fp_contact_destroy(&tk);
+    fp_contact_destroy(&full);
+    fp_session_destroy(&s);
+    fp_plugin_path_clear(&path);
+}
+
+static void test_track_recordings(void **state)
+{
+    (void)state;
+    recording_frames("Waiting-110fps", "unanchored", true);
+    recording_frames("three-claps", "unanchored", true);
+    recording_frames("three-claps", "unanchored", false);
+    recording_frames("grab", "anchored", false);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -228,6 +592,12 @@ int main(void)
         cmocka_unit_test(test_seam),
         cmocka_unit_test(test_sheets_random),
         cmocka_unit_test(test_ict_frame),
+        cmocka_unit_test(test_track_sheets_fast),
+        cmocka_unit_test(test_track_sheets_slow),
+        cmocka_unit_test(test_track_big),
+        cmocka_unit_test(test_track_lips_fast),
+        cmocka_unit_test(test_track_lips_slow),
+        cmocka_unit_test(test_track_recordings),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
