@@ -53,6 +53,10 @@ int fp_rig_step_init(fp_rig_step *st, fp_rig *rig, size_t n, const float *base)
     v->channels = st->channels;
     fp_rig_hinge(rig, v->hinge[0], v->hinge[1], NULL, NULL);
     fp_rig_step_update(st, NULL, base, NULL);
+    /* touch every page now, not in a frame's commit or first blend (the ranged commit
+     * writes a few scattered pages of these; a first touch costs a page fault each) */
+    memcpy(st->shown, st->posed, bytes);
+    memcpy(st->commit, base, bytes);
     return 0;
 }
 
