@@ -1235,12 +1235,20 @@ double fp_rig_finger_limit(const fp_rig *r, const float *posed, const float star
  * vertex order keeps neighbours close, as the engine's blocks assume). */
 #define SLOPE_BLOCK 32
 
+typedef struct {
+    float lo[3], hi[3];  /* box of the block's vertices in the posed base */
+    float gmax;          /* the block's largest slope (the rig's, fixed) */
+    uint32_t count;      /* slope vertices in it (SLOPE_BLOCK but for one) */
+} slope_block;
+
 struct fp_rig_slope_index {
     const fp_rig *rig;
-    size_t nb;          /* blocks: slope_v[b * SLOPE_BLOCK .. min((b + 1) * SLOPE_BLOCK, count)) */
-    float *box;         /* nb x 6: lo[3], hi[3] of the block's vertices in the posed base */
-    float *gmax;        /* nb: the block's largest slope (the rig's, fixed) */
-    uint32_t *order;    /* nb: blocks by gmax, largest first */
+    size_t nb;           /* blocks */
+    slope_block *block;  /* nb, steepest first */
+    float *p;            /* nb x SLOPE_BLOCK x 4: each block's vertices (x, y, z of the posed
+                            base, slope), block after block in that order */
+    uint32_t *slot;      /* slope_count: where entry k of slope_v sits in p (block = slot /
+                            SLOPE_BLOCK) */
 };
 
 typedef struct {
@@ -1264,11 +1272,11 @@ int fp_rig_slope_index_create(const fp_rig *r, fp_rig_slope_index **out)
     ix->rig = r;
     ix->nb = (r->slope_count + SLOPE_BLOCK - 1) / SLOPE_BLOCK;
     size_t nb = ix->nb ? ix->nb : 1;
-    ix->box = malloc(nb * 6 * sizeof *ix->box);
-    ix->gmax = malloc(nb * sizeof *ix->gmax);
-    ix->order = malloc(nb * sizeof *ix->order);
+    ix->block = calloc(nb, sizeof *ix->block);
+    ix->p = calloc(nb * SLOPE_BLOCK * 4, sizeof *ix->p);
+    ix->slot = malloc((r->slope_count ? r->slope_count : 1) * sizeof *ix->slot);
     block_key *keys = malloc(nb * sizeof *keys);
-    if (!ix->box || !ix->gmax || !ix->order || !keys) {
+    if (!ix->block || !ix->p || !ix->slot || !keys) {
         free(keys);
         fp_rig_slope_index_destroy(&ix);
         return -ENOMEM;
@@ -1277,15 +1285,21 @@ int fp_rig_slope_index_create(const fp_rig *r, fp_rig_slope_index **out)
         size_t k1 = (b + 1) * SLOPE_BLOCK < r->slope_count ? (b + 1) * SLOPE_BLOCK : r->slope_count;
         float g = 0;
         for (size_t k = b * SLOPE_BLOCK; k < k1; k++) g = r->g[r->slope_v[k]] > g ? r->g[r->slope_v[k]] : g;
-        ix->gmax[b] = g;
         keys[b] = (block_key){g, (uint32_t)b};
-        for (int i = 0; i < 3; i++) { /* empty boxes until fp_rig_slope_index_set */
-            ix->box[6 * b + i] = INFINITY;
-            ix->box[6 * b + 3 + i] = -INFINITY;
-        }
     }
     qsort(keys, ix->nb, sizeof *keys, by_gmax_desc);
-    for (size_t b = 0; b < ix->nb; b++) ix->order[b] = keys[b].b;
+    for (size_t o = 0; o < ix->nb; o++) {
+        size_t b = keys[o].b, k0 = b * SLOPE_BLOCK;
+        size_t k1 = k0 + SLOPE_BLOCK < r->slope_count ? k0 + SLOPE_BLOCK : r->slope_count;
+        slope_block *bl = &ix->block[o];
+        bl->gmax = keys[o].g;
+        bl->count = (uint32_t)(k1 - k0);
+        for (int i = 0; i < 3; i++) bl->lo[i] = INFINITY, bl->hi[i] = -INFINITY; /* until _set */
+        for (size_t k = k0; k < k1; k++) {
+            ix->slot[k] = (uint32_t)(o * SLOPE_BLOCK + (k - k0));
+            ix->p[4 * (size_t)ix->slot[k] + 3] = r->g[r->slope_v[k]];
+        }
+    }
     free(keys);
     *out = ix;
     return 0;
@@ -1294,34 +1308,33 @@ int fp_rig_slope_index_create(const fp_rig *r, fp_rig_slope_index **out)
 void fp_rig_slope_index_destroy(fp_rig_slope_index **ix)
 {
     if (!ix || !*ix) return;
-    free((*ix)->box);
-    free((*ix)->gmax);
-    free((*ix)->order);
+    free((*ix)->block);
+    free((*ix)->p);
+    free((*ix)->slot);
     free(*ix);
     *ix = NULL;
 }
 
-/* Grow block b's box by vertex v of posed. */
-static void box_grow(fp_rig_slope_index *ix, size_t b, const float *p)
+/* Slope entry k takes vertex v's position in posed; its block's box grows to hold it. */
+static void slope_put(fp_rig_slope_index *ix, size_t k, const float *posed)
 {
-    float *lo = &ix->box[6 * b], *hi = lo + 3;
+    uint32_t sl = ix->slot[k];
+    const float *q = &posed[3 * (size_t)ix->rig->slope_v[k]];
+    float *p = &ix->p[4 * (size_t)sl];
+    slope_block *bl = &ix->block[sl / SLOPE_BLOCK];
     for (int i = 0; i < 3; i++) {
-        lo[i] = p[i] < lo[i] ? p[i] : lo[i];
-        hi[i] = p[i] > hi[i] ? p[i] : hi[i];
+        p[i] = q[i];
+        bl->lo[i] = q[i] < bl->lo[i] ? q[i] : bl->lo[i];
+        bl->hi[i] = q[i] > bl->hi[i] ? q[i] : bl->hi[i];
     }
 }
 
 void fp_rig_slope_index_set(fp_rig_slope_index *ix, const float *posed)
 {
     if (!ix || !posed) return;
-    const fp_rig *r = ix->rig;
-    for (size_t b = 0; b < ix->nb; b++) {
-        size_t k1 = (b + 1) * SLOPE_BLOCK < r->slope_count ? (b + 1) * SLOPE_BLOCK : r->slope_count;
-        const float *p = &posed[3 * (size_t)r->slope_v[b * SLOPE_BLOCK]];
-        memcpy(&ix->box[6 * b], p, 3 * sizeof(float));
-        memcpy(&ix->box[6 * b + 3], p, 3 * sizeof(float));
-        for (size_t k = b * SLOPE_BLOCK + 1; k < k1; k++) box_grow(ix, b, &posed[3 * (size_t)r->slope_v[k]]);
-    }
+    for (size_t b = 0; b < ix->nb; b++)
+        for (int i = 0; i < 3; i++) ix->block[b].lo[i] = INFINITY, ix->block[b].hi[i] = -INFINITY;
+    for (size_t k = 0; k < ix->rig->slope_count; k++) slope_put(ix, k, posed);
 }
 
 void fp_rig_slope_index_update_ranges(fp_rig_slope_index *ix, const float *posed, const uint32_t *ranges,
@@ -1337,35 +1350,31 @@ void fp_rig_slope_index_update_ranges(fp_rig_slope_index *ix, const float *posed
             if (r->slope_v[mid] < a) lo = mid + 1;
             else hi = mid;
         }
-        for (size_t k = lo; k < r->slope_count && r->slope_v[k] < e; k++)
-            box_grow(ix, k / SLOPE_BLOCK, &posed[3 * (size_t)r->slope_v[k]]);
+        for (size_t k = lo; k < r->slope_count && r->slope_v[k] < e; k++) slope_put(ix, k, posed);
     }
 }
 
-double fp_rig_finger_limit_indexed(const fp_rig_slope_index *ix, const float *posed, const float start[3],
-                                   double radius)
+double fp_rig_finger_limit_indexed(const fp_rig_slope_index *ix, const float start[3], double radius)
 {
     const fp_rig *r = ix ? ix->rig : NULL;
-    if (!r || !posed || !start || !r->g || !(radius > 0)) return r && r->g ? r->ramp / 3 : 0;
+    if (!r || !start || !r->g || !(radius > 0)) return r && r->g ? r->ramp / 3 : 0;
     double gmax = 0, r2 = radius * radius;
-    for (size_t o = 0; o < ix->nb; o++) {
-        size_t b = ix->order[o];
-        if (ix->gmax[b] <= gmax) break; /* this block and every later one: nothing steeper */
+    for (size_t b = 0; b < ix->nb; b++) {
+        const slope_block *bl = &ix->block[b];
+        if (bl->gmax <= gmax) break; /* this block and every later one: nothing steeper */
         /* a lower bound of every vertex's squared distance below, in the same arithmetic
          * (float differences, double squares): rounding is monotone */
-        const float *lo = &ix->box[6 * b], *hi = lo + 3;
         double q = 0;
         for (int i = 0; i < 3; i++) {
-            float d = start[i] < lo[i] ? lo[i] - start[i] : start[i] > hi[i] ? start[i] - hi[i] : 0.f;
+            float d = start[i] < bl->lo[i] ? bl->lo[i] - start[i] : start[i] > bl->hi[i] ? start[i] - bl->hi[i] : 0.f;
             q += (double)d * d;
         }
         if (!(q < r2)) continue;
-        size_t k1 = (b + 1) * SLOPE_BLOCK < r->slope_count ? (b + 1) * SLOPE_BLOCK : r->slope_count;
-        for (size_t k = b * SLOPE_BLOCK; k < k1; k++) {
-            uint32_t v = r->slope_v[k];
-            if (r->g[v] <= gmax) continue;
-            double d0 = posed[3 * v] - start[0], d1 = posed[3 * v + 1] - start[1], d2 = posed[3 * v + 2] - start[2];
-            if (d0 * d0 + d1 * d1 + d2 * d2 < r2) gmax = r->g[v];
+        const float *p = &ix->p[4 * b * SLOPE_BLOCK];
+        for (uint32_t k = 0; k < bl->count; k++, p += 4) {
+            if (p[3] <= gmax) continue;
+            double d0 = p[0] - start[0], d1 = p[1] - start[1], d2 = p[2] - start[2];
+            if (d0 * d0 + d1 * d1 + d2 * d2 < r2) gmax = p[3];
         }
     }
     return gmax > 0 ? FP_RIG_FINGER_MARGIN / gmax : INFINITY;

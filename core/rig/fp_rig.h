@@ -272,29 +272,29 @@ double fp_rig_finger_limit(const fp_rig *rig, const float *posed, const float st
 /** The finger limit by blocks (the same result as fp_rig_finger_limit, bit for bit, for a
  *  fraction of its cost): the slope vertices in blocks of 32 consecutive ones (ascending
  *  vertex index), each with its largest slope (fixed by the rig) and its box in the posed
- *  base. A query visits the blocks steepest first, skips those whose box is at least
+ *  base, stored steepest block first with a copy of its vertices' posed positions and
+ *  slopes. A query visits the blocks steepest first, skips those whose box is at least
  *  `radius` away (a lower bound in the same float arithmetic as the full scan, so nothing
  *  within reach is skipped) and stops at the first block no steeper than the slope found.
- *  The index refers to the rig (which must outlive it) and holds boxes only; the positions
- *  are the caller's posed base:
- *    - fp_rig_slope_index_set(ix, posed): boxes from a whole posed base (O(slope vertices)),
- *      required before the first query and after the posed base changed unknown where;
+ *  The index refers to the rig (which must outlive it):
+ *    - fp_rig_slope_index_set(ix, posed): positions and boxes from a whole posed base (n x
+ *      3; O(slope vertices)), required before the first query and after the posed base
+ *      changed unknown where;
  *    - fp_rig_slope_index_update_ranges(ix, posed, ranges, n): the posed base changed only
- *      on these vertex ranges ((first, count) pairs, increasing): the blocks of their slope
- *      vertices grow to hold the new positions (O(log + slope vertices in the ranges));
- *      boxes only grow, which keeps every skip exact;
- *    - fp_rig_finger_limit_indexed(ix, posed, start, radius): fp_rig_finger_limit(rig,
- *      posed, start, radius) for the posed base the boxes were made for.
- *  create: 0, -EINVAL (NULL, rig not bound), -ENOMEM. Queries [any-thread] on an index not
- *  being updated; no allocation after create. */
+ *      on these vertex ranges ((first, count) pairs): their slope vertices take their new
+ *      positions, their blocks' boxes grow to hold them (O(log + slope vertices in the
+ *      ranges)); boxes only grow, which keeps every skip exact;
+ *    - fp_rig_finger_limit_indexed(ix, start, radius): fp_rig_finger_limit(rig, posed,
+ *      start, radius) for the posed base given last.
+ *  create: 0, -EINVAL (NULL, rig not bound), -ENOMEM (16 bytes per slope vertex). Queries
+ *  [any-thread] on an index not being updated; no allocation after create. */
 typedef struct fp_rig_slope_index fp_rig_slope_index;
 int fp_rig_slope_index_create(const fp_rig *rig, fp_rig_slope_index **out);
 void fp_rig_slope_index_destroy(fp_rig_slope_index **ix);
 void fp_rig_slope_index_set(fp_rig_slope_index *ix, const float *posed);
 void fp_rig_slope_index_update_ranges(fp_rig_slope_index *ix, const float *posed,
                                       const uint32_t *ranges, size_t nranges);
-double fp_rig_finger_limit_indexed(const fp_rig_slope_index *ix, const float *posed,
-                                   const float start[3], double radius);
+double fp_rig_finger_limit_indexed(const fp_rig_slope_index *ix, const float start[3], double radius);
 
 /** The folder of the rig files: $FACEPUPPET_RIGS when set; else <exe_dir>/../share/
  *  facepuppet/rigs when it exists (installed); else the source tree's rigs/ (compiled in as

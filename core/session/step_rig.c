@@ -122,7 +122,7 @@ bool fp_rig_step_update(fp_rig_step *st, const fp_control_set *cs, const float *
     if (!st->dirty && !memcmp(st->values, st->posed_values, nc * sizeof(float))) return false;
     fp_rig_pose(st->rig, base, st->values, st->posed);
     st->limit_count = 0; /* the finger limits and the blend depend on the posed base */
-    st->slopes_set = false;
+    fp_rig_slope_index_set(st->slopes, st->posed); /* O(slope vertices), under the pose's O(n) */
     st->shown_valid = false;
     memcpy(st->posed_values, st->values, nc * sizeof(float));
     st->dirty = false;
@@ -151,11 +151,7 @@ const fp_control_set *fp_rig_step_run(fp_rig_step *st, const fp_control_set *cs)
         /* the engine's 0.45 R, and the rig's local bound where the support reaches a ramp
          * (computed again only where the start point moved) */
         if (i >= st->limit_count || memcmp(st->limit_start[i], cs->start[i], sizeof st->limit_start[i])) {
-            if (!st->slopes_set) {
-                fp_rig_slope_index_set(st->slopes, st->posed);
-                st->slopes_set = true;
-            }
-            st->limit[i] = fp_rig_finger_limit_indexed(st->slopes, st->posed, cs->start[i], cs->radius);
+            st->limit[i] = fp_rig_finger_limit_indexed(st->slopes, cs->start[i], cs->radius);
             memcpy(st->limit_start[i], cs->start[i], sizeof st->limit_start[i]);
         }
         double limit = fmin(0.45 * cs->radius, st->limit[i]);
@@ -223,7 +219,7 @@ void fp_rig_step_rebase_ranges(fp_rig_step *st, const float *base, float *deform
         memcpy(deformed + 3 * v0, st->posed + 3 * v0, 3 * c * sizeof(float));
         if (st->shown_valid) fp_rig_apply_mobility_range(st->rig, st->posed, deformed, st->shown, v0, c);
     }
-    if (st->slopes_set) fp_rig_slope_index_update_ranges(st->slopes, st->posed, ranges, nranges);
+    fp_rig_slope_index_update_ranges(st->slopes, st->posed, ranges, nranges);
     st->limit_count = 0;
     refresh_view(st);
 }

@@ -64,8 +64,8 @@ typedef struct fp_rig_step {
     float limit_start[FP_RIG_STEP_MAX_CONTROL][3];
     double limit_radius;
     size_t limit_count;                           /* entries valid; 0 after posing anew */
-    fp_rig_slope_index *slopes;                   /* the limits' blocks (fp_rig.h) */
-    bool slopes_set;                              /* their boxes hold the posed base */
+    fp_rig_slope_index *slopes;                   /* the limits' blocks on the posed base
+                                                   * (fp_rig.h), set with each pose */
     float start[FP_RIG_STEP_MAX_CONTROL][3], end[FP_RIG_STEP_MAX_CONTROL][3];
     fp_rig_view view;                             /* for mappings */
     fp_rig_landmark landmarks[FP_RIG_MAX_LANDMARKS];
