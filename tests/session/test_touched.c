@@ -4,7 +4,9 @@
  * (fp_session_apply_controls): outside the reported ranges the shown shape and the base are
  * bit for bit what they were at the previous call, through gestures, commits, idle frames,
  * cancels, undo, reset, a jaw channel and calls that skip frames; and the ranges stay small
- * where the engine's supports are (not "everything" in disguise). */
+ * where the engine's supports are (not "everything" in disguise), commits with a rig
+ * included. And a rig commit through the touched ranges against the whole-mesh commit
+ * (fp_session_options.whole_rig_commit), two sessions bit for bit. */
 #define _GNU_SOURCE
 #include "changed.h"
 #include "fp_mesh.h"
@@ -323,7 +325,7 @@ typedef struct pair {
     fixture *f;
     fp_session *w;
     float *tmp;
-    size_t commits, ranged_commits;
+    size_t commits, ranged_commits, guarded, guarded_ranged;
     double ms_ranged, ms_whole;
 } pair;
 
@@ -336,7 +338,7 @@ static void both(pair *p, bool active, uint32_t intents, double phase, double am
     f->cs.active = active;
     f->cs.intents = intents;
     f->cs.count = active ? 3 : 0;
-    for (int i = 0; i < 3; i++)
+    for (int i = 0; i < 3 && amp >= 0; i++) /* amp < 0: the end points as the caller set them */
         for (int k = 0; k < 3; k++)
             f->end[i][k] = f->start[i][k] + (float)(amp * f->radius * sin(phase + i + 2.1 * k));
     fp_frame_stats a, b;
@@ -346,16 +348,17 @@ static void both(pair *p, bool active, uint32_t intents, double phase, double am
     assert_memory_equal(fp_session_base(f->s), fp_session_base(p->w), bytes);
     assert_memory_equal(fp_session_positions(f->s), fp_session_positions(p->w), bytes);
     assert_int_equal(a.committed, b.committed);
+    p->guarded += a.collide_t < 1;
     double frac;
     size_t bk;
     take(f, &frac, &bk); /* the ranged session's ranges cover every change */
+    p->guarded_ranged += a.collide_t < 1 && a.committed && bk != SIZE_MAX;
     if (a.committed) {
         p->commits++;
         p->ms_ranged += a.stage_ms[FP_STAGE_COMMIT];
         p->ms_whole += b.stage_ms[FP_STAGE_COMMIT];
         expect_posed(f->s, p->tmp, "after a commit");
         p->ranged_commits += bk != SIZE_MAX;
-        if (getenv("FP_TEST_VERBOSE")) printf("commit %zu: ranged %.4f ms (%s), whole %.4f ms\n", p->commits, a.stage_ms[FP_STAGE_COMMIT], bk == SIZE_MAX ? "all" : "ranges", b.stage_ms[FP_STAGE_COMMIT]);
     }
 }
 
@@ -365,7 +368,8 @@ static void both(pair *p, bool active, uint32_t intents, double phase, double am
  * index, the blend and the finger limits are too, or the next frames would differ), through
  * anchored commits at rest and with the jaw open, a second commit over the first one's
  * region, one-shot committed steps, undo, reset; the shown shape after a commit is the pose
- * of the base computed afresh; the ranged session's reported ranges cover every change. */
+ * of the base computed afresh; the ranged session's reported ranges cover every change;
+ * commits of the contact guard's shape among them. */
 static void test_rig_commit_ranged_equals_whole(void **state)
 {
     (void)state;
@@ -390,7 +394,7 @@ static void test_rig_commit_ranged_equals_whole(void **state)
     f.cs.end = f.end;
     double frac;
     size_t bk;
-    pair p = {&f, w, tmp, 0, 0, 0, 0};
+    pair p = {&f, w, tmp, 0, 0, 0, 0, 0, 0};
     take(&f, &frac, &bk);
     static const uint32_t spots[][3] = {{3000, 8000, 12000}, {3010, 8020, 12005}, {500, 15000, 20000},
                                         {5000, 9000, 14000}, {3000, 8000, 12000}};
@@ -405,6 +409,27 @@ static void test_rig_commit_ranged_equals_whole(void **state)
         both(&p, true, FP_INTENT_COMMIT, 2.5 + g, 0.08);
         both(&p, false, 0, 0, 0.0);
         expect_posed(f.s, tmp, "idle after a commit");
+    }
+    /* one-shot steps pressing the mouth's and the eyes' landmarks along the face's axes
+     * (upper down, lower up, the third in): the contact guard scales several back, and
+     * commits of its shape are ranged too */
+    {
+        float up[3], fwd[3];
+        fp_rig_axes(fp_session_rig(f.s), up, fwd, NULL);
+        static const struct {
+            uint32_t v[3];
+            double amp;
+        } push[] = {{{6213, 5708, 3742}, 0.25}, {{1507, 5517, 0}, 0.15}, {{1528, 0, 5518}, 0.10},
+                    {{3742, 3742, 1528}, 0.15}, {{4857, 1528, 4857}, 0.30}};
+        for (size_t t = 0; t < sizeof push / sizeof push[0]; t++) {
+            place(&f, push[t].v[0], push[t].v[1], push[t].v[2]);
+            for (int i = 0; i < 3; i++)
+                for (int k = 0; k < 3; k++)
+                    f.end[i][k] = f.start[i][k] + (float)(push[t].amp * f.radius *
+                                                          (i == 0 ? -up[k] : i == 1 ? up[k] : -fwd[k]));
+            both(&p, true, FP_INTENT_COMMIT, 0, -1);
+            both(&p, false, 0, 0, 0.0);
+        }
     }
     /* one-shot committed steps (unanchored): fresh start points each frame, small and large */
     for (int i = 0; i < 4; i++) {
@@ -431,8 +456,9 @@ static void test_rig_commit_ranged_equals_whole(void **state)
     assert_memory_equal(fp_session_positions(f.s), fp_session_positions(w), bytes);
     both(&p, false, 0, 0, 0.0);
     printf("rig commits: %zu, %zu of them ranged (the rest: composed one-shot steps), commit stage "
-           "%.3f ms ranged vs %.3f ms whole (sum)\n", p.commits, p.ranged_commits, p.ms_ranged, p.ms_whole);
-    assert_true(p.commits >= 10 && p.ranged_commits >= 6);
+           "%.3f ms ranged vs %.3f ms whole (sum); the contact guard scaled back %zu frames, %zu "
+           "of them ranged commits\n", p.commits, p.ranged_commits, p.ms_ranged, p.ms_whole, p.guarded, p.guarded_ranged);
+    assert_true(p.commits >= 15 && p.ranged_commits >= 10 && p.guarded_ranged >= 2);
     fp_session_destroy(&w);
     fp_session_destroy(&f.s);
     free(f.shown);
