@@ -53,9 +53,12 @@ int fp_rig_step_init(fp_rig_step *st, fp_rig *rig, size_t n, const float *base)
     v->channels = st->channels;
     fp_rig_hinge(rig, v->hinge[0], v->hinge[1], NULL, NULL);
     fp_rig_step_update(st, NULL, base, NULL);
-    /* touch every page now, not in a frame's commit or first blend (the ranged commit
-     * writes a few scattered pages of these; a first touch costs a page fault each) */
-    memcpy(st->shown, st->posed, bytes);
+    /* the blend of an engine output that equals the posed base (the session's output buffer
+     * starts as a copy of it), so the first gesture blends its touched ranges only; and
+     * every page of the commit buffer touched now, not in a frame (a ranged commit writes
+     * a few scattered pages; a first touch costs a page fault each) */
+    fp_rig_apply_mobility(rig, st->posed, st->posed, st->shown);
+    st->shown_valid = true;
     memcpy(st->commit, base, bytes);
     return 0;
 }

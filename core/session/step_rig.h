@@ -75,7 +75,9 @@ typedef struct fp_rig_step {
 } fp_rig_step;
 
 /** Attach `rig` (bound to the session's mesh, n vertices; owned by the step from here on,
- *  even on error) or NULL for none. base: the base, n x 3 floats. Returns 0 or -ENOMEM. */
+ *  even on error) or NULL for none. base: the base, n x 3 floats. The blend starts as that
+ *  of an engine output equal to the posed base (fp_rig_step_finish's ranges then need cover
+ *  only where the output differs from it). Returns 0 or -ENOMEM. */
 int fp_rig_step_init(fp_rig_step *st, fp_rig *rig, size_t n, const float *base);
 void fp_rig_step_free(fp_rig_step *st);
 
