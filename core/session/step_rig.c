@@ -49,6 +49,7 @@ int fp_rig_step_init(fp_rig_step *st, fp_rig *rig, size_t n, const float *base)
         fp_rig_channel_desc d;
         fp_rig_channel_get(rig, i, &d);
         st->channels[i] = (fp_rig_channel_info){d.name, d.min, d.max, d.neutral, d.neutral};
+        snprintf(st->applied[i].name, sizeof st->applied[i].name, "%s", d.name); /* <= FP_RIG_NAME_MAX */
     }
     v->channels = st->channels;
     fp_rig_hinge(rig, v->hinge[0], v->hinge[1], NULL, NULL);
@@ -146,6 +147,10 @@ const fp_control_set *fp_rig_step_run(fp_rig_step *st, const fp_control_set *cs)
     *o = *cs;
     o->start = start;
     o->end = end;
+    /* the channels as posed, all of them: what a take records and plays back */
+    o->channels = st->applied;
+    o->channel_count = o->channel_capacity = st->view.channel_count;
+    for (size_t i = 0; i < o->channel_count; i++) st->applied[i].value = st->posed_values[i];
     o->count = cs->count < FP_RIG_STEP_MAX_CONTROL ? cs->count : FP_RIG_STEP_MAX_CONTROL;
     o->capacity = FP_RIG_STEP_MAX_CONTROL;
     if (cs->radius != st->limit_radius) st->limit_count = 0;

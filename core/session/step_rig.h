@@ -9,7 +9,10 @@
  *     the rig's falloff), recomputed only when the base or a value changed; the engine's
  *     points follow it (the session re-indexes them), so fingers start on the posed surface;
  *   - the fingers' control vectors are clamped to min(0.45 R, fp_rig_max_finger_displacement)
- *     (the mobility blend stays injective, fp_rig.h), in a copy of the control set;
+ *     (the mobility blend stays injective, fp_rig.h), in a copy of the control set; the copy's
+ *     channels are every channel of the rig with the value posed this frame (whoever set it:
+ *     the viewer's keys, the host's API, the mapping), so that the frame's record (step 7, a
+ *     take) holds the pose and playing it (fp_session_apply_controls) poses the same;
  *   - after the engine: shown = fp_rig_apply_mobility(posed, T(posed)): skull and jaw
  *     vertices exactly as posed (the skull bit-identical to the base), soft tissue moved by
  *     the fingers weighted by its mobility;
@@ -70,6 +73,7 @@ typedef struct fp_rig_step {
     fp_rig_view view;                             /* for mappings */
     fp_rig_landmark landmarks[FP_RIG_MAX_LANDMARKS];
     fp_rig_channel_info channels[FP_RIG_MAX_CHANNELS];
+    fp_channel applied[FP_RIG_MAX_CHANNELS];      /* cs.channels: every channel, posed values */
     char unknown[FP_RIG_STEP_UNKNOWN][32];        /* unknown channel names already reported */
     size_t unknown_count;
 } fp_rig_step;
@@ -101,7 +105,8 @@ bool fp_rig_step_update(fp_rig_step *st, const fp_control_set *cs, const float *
 const float *fp_rig_step_posed(const fp_rig_step *st, const float *base);
 
 /** The control set the engine takes: cs itself without a rig, else a copy with every control
- *  vector end - start clamped to max_displacement (same direction). */
+ *  vector end - start clamped to max_displacement (same direction) and, as its channels, all
+ *  the rig's channels with the values posed (call after fp_rig_step_update). */
 const fp_control_set *fp_rig_step_run(fp_rig_step *st, const fp_control_set *cs);
 
 /** After the engine wrote deformed = T(posed): the shape to show (the mobility blend), or

@@ -49,7 +49,7 @@ extern "C" {
 /** Format version written (docs/take-format.md). A reader accepts files of the same major
  *  and any minor (unknown chunk types, event types and trailing fields are skipped). */
 #define FP_TAKE_VERSION_MAJOR 1
-#define FP_TAKE_VERSION_MINOR 0
+#define FP_TAKE_VERSION_MINOR 1   /* 1.1: a frame's channels are every rig channel as posed */
 #define FP_TAKE_EXTENSION ".fptake"
 #define FP_TAKE_SLATE_MAX 64      /* bytes of a slate name, NUL included */
 
@@ -157,8 +157,10 @@ typedef struct fp_take_frame {
     const fp_event *events;         /* raw events drained this frame (header.source = input) */
     size_t event_count;
     uint32_t requested;             /* fp_intent bits the performer asked for (keys, pedal) */
-    /** The control set the engine used (its `intents` are those the mapping returned);
-     *  NULL where the frame had none (mapping failed): recorded as inactive, no vectors. */
+    /** The control set the engine used (its `intents` are those the mapping returned; with a
+     *  rig, its channels are every channel of the rig with the value posed that frame, from
+     *  keys, the host's API or the mapping: format 1.1); NULL where the frame had none
+     *  (mapping failed): recorded as inactive, no vectors. */
     const fp_control_set *control;
 } fp_take_frame;
 
@@ -296,6 +298,7 @@ typedef struct fp_take_summary {
     bool cut;                  /* the file is damaged or truncated after the intact part */
     uint64_t cut_offset;       /* byte offset of the first damaged or missing byte */
     uint64_t file_size;
+    unsigned version_major, version_minor;   /* the file's format version (signature) */
 } fp_take_summary;
 
 /** Open a take: check the signature and header chunk, then scan every chunk (magic, type,

@@ -230,6 +230,8 @@ static int open_common(fp_take_reader *r, char *err, size_t errlen)
     if (major != FP_TAKE_VERSION_MAJOR)
         return fp_errorf(err, errlen, -ENOTSUP, "%s: byte 8: take format version %u.%u; this "
                          "reader knows %d.x", r->name, major, minor, FP_TAKE_VERSION_MAJOR);
+    r->sum.version_major = major;
+    r->sum.version_minor = minor;
 
     chunk_view cv;
     uint64_t off = TAKE_SIG_SIZE;

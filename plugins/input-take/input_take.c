@@ -21,6 +21,11 @@
  * (plugin.h) at the frame's time, after the frame's events; the pedal's own button events
  * are in the raw events and bind as before. The take's end-of-stream statuses are left out;
  * the plugin ends with its own.
+ *
+ * Not performed again: rig channels the performer set by key or the host's API (jaw.open by
+ * J/K). The take holds them (docs/take-format.md 1.1: each frame's channels as posed), and
+ * `play` applies them, but an input can only push events; the new session's own keys and
+ * mapping set its channels.
  */
 #define _GNU_SOURCE
 #include "fp_take.h"

@@ -7,7 +7,8 @@
  * and as a share of the chin's displacement at jaw.open = 1, computed by core/rig's
  * fp_rig_pose), the mouth corners' displacement beyond what the jaw's pose gives them (the
  * fingers' part), and no new self-crossing (CGAL, tests/support/selfx) against the face
- * posed by the rig alone with the same jaw.open, on every fifth deforming frame.
+ * posed by the rig alone with the same jaw.open, nor against the loaded face (the jaw's pose
+ * adds none either), on every fifth deforming frame.
  *
  * The session needs the rig integration (the rig step serving fp_frame_input.rig): without
  * it the mapping logs "onehand needs a rig (--rig)" at create and the test is skipped with
@@ -47,6 +48,7 @@ typedef struct clip_result {
     double chin_max, chin_full;               /* mesh units: measured, and at jaw.open = 1 */
     double corner_max;                        /* the fingers' part at the mouth corners */
     long new_crossings;
+    long new_vs_loaded;                       /* the whole frame (jaw and fingers) vs the input */
     bool skipped;
 } clip_result;
 
@@ -147,6 +149,11 @@ static void run_clip(const char *clip, clip_result *r)
                                              0, NULL, 0, NULL, NULL);
             assert_true(x >= 0);
             r->new_crossings += x;
+            /* and the whole shape (the rig's jaw and the fingers) against the loaded face */
+            long y = fp_selfx_count_new_away(loaded, shown, n, mesh->triangles, mesh->triangle_count,
+                                             0, NULL, 0, NULL, NULL);
+            assert_true(y >= 0);
+            r->new_vs_loaded += y;
             r->checked++;
         }
     }
@@ -154,10 +161,10 @@ static void run_clip(const char *clip, clip_result *r)
     printf("%s: %lu frames, %lu deforming; jaw.open up to %.3f, then down to %.3f; chin moved up "
            "to %.4f mesh units = %.0f%% of its %.4f at jaw.open 1; mouth corners moved by the "
            "fingers up to %.4f mesh units (%.0f%% of the chin's full range); %lu frames checked: "
-           "%ld new crossings\n",
+           "%ld new crossings vs the posed face, %ld vs the loaded face\n",
            clip, r->frames, r->active, r->jaw_max, r->jaw_min_after_max, r->chin_max,
            100 * r->chin_max / r->chin_full, r->chin_full, r->corner_max,
-           100 * r->corner_max / r->chin_full, r->checked, r->new_crossings);
+           100 * r->corner_max / r->chin_full, r->checked, r->new_crossings, r->new_vs_loaded);
     free(posed);
     fp_rig_free(&rig);
     fp_session_destroy(&s);
@@ -178,6 +185,7 @@ static void check_clip(const char *clip)
     assert_true(r.corner_max > 0.05);                  /* the fingers moved the corners */
     assert_true(r.checked > 0);
     assert_int_equal(r.new_crossings, 0);
+    assert_int_equal(r.new_vs_loaded, 0);
 }
 
 static void test_handsplay(void **state)

@@ -2,10 +2,11 @@
  * session's rig through FP_HOST_EXT_RIG at create (refusing to work without one) and, every
  * frame, presses control vectors into the forehead: start points on the surface above the
  * four brow landmarks (0, 1.5 and 3 cm up, nearest base vertex), end points `depth` mm into
- * the face along -forward; it drives jaw.open = `jaw` and, with bogus=1, a channel the rig
- * lacks. Engages on its first frame; commits on frame `commit` (-1: never).
+ * the face along -forward; it drives jaw.open = `jaw` (jaw=none: leaves the channel to the
+ * host) and, with bogus=1, a channel the rig lacks. Engages on its first frame; commits on
+ * frame `commit` (-1: never).
  * With at=lips, one finger on each lip middle and mouth corner instead.
- * Keys: jaw=F, depth=F (mm), commit=N, bogus=0|1, at=forehead|lips. */
+ * Keys: jaw=F|none, depth=F (mm), commit=N, bogus=0|1, at=forehead|lips. */
 #include <facepuppet/plugin.h>
 
 #include <errno.h>
@@ -61,8 +62,10 @@ static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *o
     out->intents = p->frames == 0 ? FP_INTENT_ENGAGE : 0;
     if (p->frames == p->commit) out->intents |= FP_INTENT_COMMIT;
     out->channel_count = 0;
-    snprintf(out->channels[out->channel_count].name, sizeof out->channels[0].name, "jaw.open");
-    out->channels[out->channel_count++].value = p->jaw;
+    if (!isnan(p->jaw)) {
+        snprintf(out->channels[out->channel_count].name, sizeof out->channels[0].name, "jaw.open");
+        out->channels[out->channel_count++].value = p->jaw;
+    }
     if (p->bogus && out->channel_capacity > 1) {
         snprintf(out->channels[out->channel_count].name, sizeof out->channels[0].name, "brow.raise");
         out->channels[out->channel_count++].value = 1;
@@ -87,7 +90,7 @@ static int create(const fp_host *host, const fp_param *params, size_t nparams, f
     if (!p) return -ENOMEM;
     p->jaw = 1, p->depth_mm = 8, p->commit = -1, p->rig = rig;
     for (size_t i = 0; i < nparams; i++) {
-        if (!strcmp(params[i].key, "jaw")) p->jaw = strtof(params[i].value, NULL);
+        if (!strcmp(params[i].key, "jaw")) p->jaw = !strcmp(params[i].value, "none") ? NAN : strtof(params[i].value, NULL);
         else if (!strcmp(params[i].key, "depth")) p->depth_mm = strtof(params[i].value, NULL);
         else if (!strcmp(params[i].key, "commit")) p->commit = strtol(params[i].value, NULL, 10);
         else if (!strcmp(params[i].key, "bogus")) p->bogus = atoi(params[i].value);

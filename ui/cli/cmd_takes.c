@@ -138,10 +138,10 @@ int fp_app_take_info(const char *path)
     char in[32], out[32];
     fp_timecode_format(&h->timecode_in, in, sizeof in);
     fp_timecode_format(&s->timecode_out, out, sizeof out);
-    printf("%s\n  format       facepuppet take %d.%d\n  slate        %s\n  take         %u\n"
+    printf("%s\n  format       facepuppet take %u.%u\n  slate        %s\n  take         %u\n"
            "  date         %s\n  frame rate   %u/%u (%.3f fps)\n  timecode     %s - %s\n"
            "  frames       %llu (session frames %llu..%llu)\n  duration     %.3f s\n",
-           path, FP_TAKE_VERSION_MAJOR, FP_TAKE_VERSION_MINOR, h->slate, h->take, h->date,
+           path, s->version_major, s->version_minor, h->slate, h->take, h->date,
            h->rate.num, h->rate.den, (double)h->rate.num / h->rate.den, in, out,
            (unsigned long long)s->frames, (unsigned long long)s->first_frame,
            (unsigned long long)s->last_frame, s->duration_s);
