@@ -815,6 +815,7 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
     so.input_count = 1;
     so.mapping = "anchored";
     so.plugin_path = bo->plugin_path;
+    so.no_contact_guard = bo->no_contact_guard;
     char err[1024];
     fp_session *s = NULL;
     int rc = fp_session_create(&so, &s, err, sizeof err);
@@ -825,9 +826,10 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
         return rc;
     }
     enum { CAP = 4096 };
-    size_t nf = 0, nact = 0, ncommit = 0, dropped = 0;
+    size_t nf = 0, nact = 0, ncommit = 0, nengage = 0, dropped = 0;
     double *st_ms[FP_STAGE_COUNT], *total = malloc(CAP * sizeof *total),
-           *act = malloc(CAP * sizeof *act), *com = malloc(CAP * sizeof *com);
+           *act = malloc(CAP * sizeof *act), *com = malloc(CAP * sizeof *com),
+           *eng = malloc(CAP * sizeof *eng);
     fp_hand_pose(*hands)[FP_HANDS] = calloc(CAP, sizeof *hands);
     for (int k = 0; k < FP_STAGE_COUNT; k++) st_ms[k] = malloc(CAP * sizeof(double));
     double *contact_ms = malloc(CAP * sizeof *contact_ms); /* the contact guard (collide_ms) */
@@ -841,6 +843,7 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
         total[nf] = (double)(b - a) / 1e6;
         if (st.active) act[nact++] = total[nf];
         if (st.committed) com[ncommit++] = total[nf];
+        if (st.engaged) eng[nengage++] = total[nf];
         for (int k = 0; k < FP_STAGE_COUNT; k++) st_ms[k][nf] = st.stage_ms[k];
         contact_ms[nf] = st.collide_ms;
         for (int h = 0; h < FP_HANDS; h++)
@@ -886,12 +889,14 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
         printf("{\"case\":\"frame\",\"mesh\":\"%s\",\"vertices\":%zu,\"frames\":%zu,\"frames_dropped\":%zu,"
                "\"seconds\":%.4g,\"deforming\":%zu,\"commits\":%zu,\"ms_median\":%.6g,\"ms_p99\":%.6g,"
                "\"ms_deforming_median\":%.6g,\"ms_deforming_p99\":%.6g,\"ms_commit_median\":%.6g,"
-               "\"ms_commit_max\":%.6g,\"ms_distances_bruteforce_median\":%.6g,"
+               "\"ms_commit_max\":%.6g,\"ms_engage_median\":%.6g,\"ms_engage_max\":%.6g,"
+               "\"ms_distances_bruteforce_median\":%.6g,"
                "\"ms_distances_indexed_median\":%.6g,\"distances_within_reach\":%zu,"
-               "\"distances_far\":%zu,\"distances_wrong\":%zu",
+               "\"distances_far\":%zu,\"distances_wrong\":%zu,\"contact_guard\":%s",
                label, n, nf, dropped, seconds, nact, ncommit, pct(total, nf, 50), pct(total, nf, 99),
                pct(act, nact, 50), pct(act, nact, 99), pct(com, ncommit, 50), pct(com, ncommit, 100),
-               pct(brute, nbrute, 50), pct(indexed, nbrute, 50), within, far, wrong);
+               pct(eng, nengage, 50), pct(eng, nengage, 100), pct(brute, nbrute, 50), pct(indexed, nbrute, 50), within, far, wrong,
+               bo->no_contact_guard ? "false" : "true");
         for (int k = 0; k < FP_STAGE_COUNT; k++)
             printf(",\"%s_median\":%.6g,\"%s_p99\":%.6g", names[k], pct(st_ms[k], nf, 50),
                    names[k], pct(st_ms[k], nf, 99));
@@ -900,8 +905,8 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
         printf("}\n");
     } else {
         printf("frame %-14s %8zu vertices, %zu frames in %.2f s (%zu skipped: a late frame's "
-               "periods), %zu deforming, %zu commits\n",
-               label, n, nf, seconds, dropped, nact, ncommit);
+               "periods), %zu deforming, %zu commits, contact guard %s\n",
+               label, n, nf, seconds, dropped, nact, ncommit, bo->no_contact_guard ? "off" : "on");
         printf("  %-22s %10s %10s\n", "stage", "median_ms", "p99_ms");
         for (int k = 0; k < FP_STAGE_COUNT; k++)
             printf("  %-22s %10.4f %10.4f\n", names[k], pct(st_ms[k], nf, 50), pct(st_ms[k], nf, 99));
@@ -909,6 +914,8 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
         printf("  %-22s %10.4f %10.4f\n", "whole frame", pct(total, nf, 50), pct(total, nf, 99));
         printf("  %-22s %10.4f %10.4f\n", "whole frame, deforming", pct(act, nact, 50), pct(act, nact, 99));
         printf("  %-22s %10.4f %10.4f (max)\n", "whole frame, commit", pct(com, ncommit, 50), pct(com, ncommit, 100));
+        printf("  %-22s %10.4f %10.4f (max; %zu frames)\n", "whole frame, engage", pct(eng, nengage, 50),
+               pct(eng, nengage, 100), nengage);
         printf("  %-22s %10.4f %10.4f\n", "distances, brute force", pct(brute, nbrute, 50), pct(brute, nbrute, 99));
         printf("  %-22s %10.4f %10.4f (%zu tips within %.2g R equal to the brute force, %zu far, "
                "%zu wrong)\n", "distances, indexed", pct(indexed, nbrute, 50), pct(indexed, nbrute, 99),
@@ -922,6 +929,7 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
     free(indexed);
     free(act);
     free(com);
+    free(eng);
     free(hands);
     fp_session_destroy(&s);
     if (rc) fprintf(stderr, "bench: frame: out of memory for the reference\n");

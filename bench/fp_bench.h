@@ -10,6 +10,9 @@ typedef struct fp_bench_options {
     bool quick;        /* fewer repetitions (2 rounds instead of 3, about a fifth of the updates) */
     bool json;         /* one JSON object per line instead of the table */
     const char *only;  /* run this case only (one of fp_bench_cases), or NULL for all */
+    bool no_contact_guard; /* case frame: sessions with fp_session_options.no_contact_guard
+                              (`bench --no-contact-guard`: the frame without the guard's
+                              collide time) */
     const struct fp_plugin_path *plugin_path; /* where the replay and mapping plugins are
                                                  (case frame; NULL: that case is skipped) */
 } fp_bench_options;

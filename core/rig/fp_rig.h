@@ -205,6 +205,13 @@ const float *fp_rig_mobility(const fp_rig *rig);
  *  allocation. Source: rigs/README.md "Jaw" (rotation about a fixed axis, Rodrigues). */
 int fp_rig_pose(const fp_rig *rig, const float *base, const float *values, float *out);
 
+/** fp_rig_pose on vertices v0 .. v0 + count - 1 only (the same arithmetic, bit for bit): the
+ *  arrays are whole n x 3 arrays, the rest of out untouched. For a caller whose base changed
+ *  only there (a ranged commit: the posed base refreshed where the fingers moved). Returns 0
+ *  or -EINVAL (also for a range beyond n). [any-thread], no allocation. */
+int fp_rig_pose_range(const fp_rig *rig, const float *base, const float *values, float *out,
+                      size_t v0, size_t count);
+
 /** The inverse of fp_rig_pose for a committed shape: each vertex v of `shown` (the posed
  *  base plus the fingers' work) is taken back by the inverse of its own pose,
  *  out[v] = J_r + R(w_v theta)^T (shown[v] - J_r - w_v jaw.open glide), so that posing `out`
@@ -215,6 +222,15 @@ int fp_rig_pose(const fp_rig *rig, const float *base, const float *values, float
  *  [any-thread], no allocation. */
 int fp_rig_unpose(const fp_rig *rig, const float *base, const float *values, const float *shown,
                   float *out);
+/** fp_rig_unpose on vertices v0 .. v0 + count - 1 only (the same arithmetic), the rest of out
+ *  untouched; with `posed` (the posed base `shown` was made on, n x 3; NULL: as
+ *  fp_rig_unpose) a vertex whose shown position equals its posed one (==, per coordinate:
+ *  the fingers did not move it) is copied from `base` bit for bit, so a commit changes no
+ *  vertex the fingers left (the pose's float round trip would otherwise move them by a
+ *  rounding when the jaw is open). Returns 0 or -EINVAL (also for a range beyond n).
+ *  [any-thread], no allocation. */
+int fp_rig_unpose_range(const fp_rig *rig, const float *base, const float *posed, const float *values,
+                        const float *shown, float *out, size_t v0, size_t count);
 
 /** Blend the fingers' result into the posed shape: out[v] = posed[v] + m_v (warped[v] -
  *  posed[v]); vertices with m_v == 0 (skull, jaw) are copied from posed bit for bit. Arrays
@@ -252,6 +268,33 @@ const float *fp_rig_mobility_slope(const fp_rig *rig);
  *  O(vertices with slope > 0). [any-thread], no allocation. */
 double fp_rig_finger_limit(const fp_rig *rig, const float *posed, const float start[3],
                            double radius);
+
+/** The finger limit by blocks (the same result as fp_rig_finger_limit, bit for bit, for a
+ *  fraction of its cost): the slope vertices in blocks of 32 consecutive ones (ascending
+ *  vertex index), each with its largest slope (fixed by the rig) and its box in the posed
+ *  base, stored steepest block first with a copy of its vertices' posed positions and
+ *  slopes. A query visits the blocks steepest first, skips those whose box is at least
+ *  `radius` away (a lower bound in the same float arithmetic as the full scan, so nothing
+ *  within reach is skipped) and stops at the first block no steeper than the slope found.
+ *  The index refers to the rig (which must outlive it):
+ *    - fp_rig_slope_index_set(ix, posed): positions and boxes from a whole posed base (n x
+ *      3; O(slope vertices)), required before the first query and after the posed base
+ *      changed unknown where;
+ *    - fp_rig_slope_index_update_ranges(ix, posed, ranges, n): the posed base changed only
+ *      on these vertex ranges ((first, count) pairs): their slope vertices take their new
+ *      positions, their blocks' boxes grow to hold them (O(log + slope vertices in the
+ *      ranges)); boxes only grow, which keeps every skip exact;
+ *    - fp_rig_finger_limit_indexed(ix, start, radius): fp_rig_finger_limit(rig, posed,
+ *      start, radius) for the posed base given last.
+ *  create: 0, -EINVAL (NULL, rig not bound), -ENOMEM (16 bytes per slope vertex). Queries
+ *  [any-thread] on an index not being updated; no allocation after create. */
+typedef struct fp_rig_slope_index fp_rig_slope_index;
+int fp_rig_slope_index_create(const fp_rig *rig, fp_rig_slope_index **out);
+void fp_rig_slope_index_destroy(fp_rig_slope_index **ix);
+void fp_rig_slope_index_set(fp_rig_slope_index *ix, const float *posed);
+void fp_rig_slope_index_update_ranges(fp_rig_slope_index *ix, const float *posed,
+                                      const uint32_t *ranges, size_t nranges);
+double fp_rig_finger_limit_indexed(const fp_rig_slope_index *ix, const float start[3], double radius);
 
 /** The folder of the rig files: $FACEPUPPET_RIGS when set; else <exe_dir>/../share/
  *  facepuppet/rigs when it exists (installed); else the source tree's rigs/ (compiled in as

@@ -108,6 +108,11 @@ typedef struct fp_session_options {
                                                        default (false): every shown shape is
                                                        checked for new self-crossings
                                                        (contact.h) and its motion scaled back */
+    bool whole_rig_commit;                          /* true: a commit with a rig unposes,
+                                                       commits, poses and re-indexes the whole
+                                                       mesh (the reference that tests compare
+                                                       the default with); default (false):
+                                                       only the engine's touched ranges */
 } fp_session_options;
 
 /** The frame's stages, for fp_frame_stats.stage_ms (`bench --case frame`). */

@@ -75,6 +75,7 @@ struct fp_session {
     /* what changed since the viewer last asked (fp_session_touched, changed.h) */
     fp_changed shown_changed, base_changed;
     int shown_kind;               /* what s->shown held at the end of the last frame: */
+    bool whole_rig_commit;        /* fp_session_options.whole_rig_commit */
 };
 
 enum {
@@ -325,6 +326,7 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
     memcpy(s->deformed, s->shown, bytes);
     fp_engine_step_output_is_base(&s->engine);
     s->mapping_budget_ms = opt->mapping_budget_ms;
+    s->whole_rig_commit = opt->whole_rig_commit;
     s->engine.jacobian = opt->measure_jacobian;
     if ((rc = fp_engine_step_set_topology(&s->engine, s->mesh->triangles, s->mesh->triangle_count))) {
         snprintf(err, errlen, "session: out of memory for %zu triangles", s->mesh->triangle_count);
@@ -514,11 +516,18 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame
                 fp_changed_add(&s->shown_changed, ranges, fp_engine_step_touched(&s->engine, &ranges));
             if (cs->intents & FP_INTENT_COMMIT) {
                 int64_t t0 = fp_now_ns();
-                if (s->rig.rig) {
-                    /* with a rig only the fingers' part goes into the base */
+                const uint32_t *tr;
+                size_t nt = fp_engine_step_touched(&s->engine, &tr);
+                /* the contact guard's shape may differ from the posed base outside this
+                 * frame's touched ranges (earlier frames scaled back): committed whole */
+                bool guard_shown = s->contact && s->shown == fp_contact_shape(s->contact);
+                if (s->rig.rig && (nt == SIZE_MAX || s->whole_rig_commit || guard_shown ||
+                                   !fp_rig_step_posed_current(&s->rig))) {
+                    /* with a rig only the fingers' part goes into the base; here the whole
+                     * mesh is unposed, committed, posed and re-indexed */
                     fp_history_commit(&s->history, fp_rig_step_commit_shape(&s->rig, s->base, s->shown));
                     base_changed(s); /* the anchored gesture ended; unanchored restarts anyway */
-                } else if (s->contact && s->shown == fp_contact_shape(s->contact)) {
+                } else if (guard_shown) {
                     /* the guard scaled the motion back: its shape goes into the base and
                      * the output buffer (it may differ from the base outside this frame's
                      * touched ranges: earlier frames scaled back); the engine re-indexes the
@@ -531,6 +540,21 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame
                     fp_changed_all(&s->shown_changed);
                     fp_changed_all(&s->base_changed);
                     s->cg_sync = FP_CG_SHOWN_REF;
+                } else if (s->rig.rig) {
+                    /* the same on the touched ranges only: the shown shape (the blend; the
+                     * guard's shape went the whole way above) equals the posed base outside them, so the commit shape
+                     * equals the base there (fp_rig_unpose_range keeps unmoved vertices), and
+                     * the base, the posed base, the engine's output and index change there
+                     * only. Bit for bit the whole path. */
+                    fp_history_commit_ranges(&s->history, fp_rig_step_commit_ranges(&s->rig, s->base, s->shown, tr, nt),
+                                             tr, nt);
+                    fp_changed_add(&s->base_changed, tr, nt);
+                    fp_changed_add(&s->shown_changed, tr, nt); /* the posed base is shown */
+                    fp_rig_step_rebase_ranges(&s->rig, s->base, s->deformed, tr, nt);
+                    fp_engine_step_commit(&s->engine, fp_rig_step_posed(&s->rig, s->base));
+                    s->shown = fp_rig_step_posed(&s->rig, s->base);
+                    s->shown_kind = SHOWN_POSED;
+                    s->cg_sync = FP_CG_REF_CHANGED; /* the reference changed on the ranges */
                 } else {
                     /* the output buffer becomes the base on the touched ranges only, and
                      * only those are re-indexed; the anchored gesture ended, unanchored

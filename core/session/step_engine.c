@@ -8,6 +8,29 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* One tiny evaluation on 16 points of our own: the engine's first use in a process pays
+ * for its code pages and the OpenMP runtime's first parallel region (measured about 0.05 ms
+ * on the ICT face's first gesture); here, at creation, not in a frame. Errors are ignored
+ * (the real runs report their own). */
+static void warm_up(int threads)
+{
+    float p[16][3] = {{0}}, c[3] = {0.5f, 0, 0}, d[3] = {0.6f, 0, 0}, out[16][3];
+    for (int i = 0; i < 16; i++) p[i][0] = (float)i / 16;
+    csrbf_points *pts = NULL;
+    csrbf_touch *t = NULL;
+    csrbf_solver *s = NULL;
+    csrbf_options o = {0};
+    o.radius = 0.25;
+    o.threads = threads;
+    if (csrbf_points_create(16, &p[0][0], &pts) == CSRBF_OK && csrbf_touch_create(pts, &t) == CSRBF_OK &&
+        csrbf_solver_create(&o, &s) >= 0 && csrbf_solver_set_start_points(s, 1, c) >= 0 &&
+        csrbf_solver_set_end_points(s, d) >= 0)
+        csrbf_evaluate_touched(s, pts, t, &out[0][0], 0u, NULL);
+    csrbf_solver_destroy(&s);
+    csrbf_touch_destroy(&t);
+    csrbf_points_destroy(&pts);
+}
+
 int fp_engine_step_init(fp_engine_step *e, size_t n, const float *base, int threads)
 {
     memset(e, 0, sizeof *e);
@@ -17,6 +40,7 @@ int fp_engine_step_init(fp_engine_step *e, size_t n, const float *base, int thre
         fp_engine_step_free(e);
         return -ENOMEM;
     }
+    warm_up(threads);
     return 0;
 }
 

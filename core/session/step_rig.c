@@ -24,7 +24,7 @@ int fp_rig_step_init(fp_rig_step *st, fp_rig *rig, size_t n, const float *base)
     st->posed = malloc(bytes);
     st->shown = malloc(bytes);
     st->commit = malloc(bytes);
-    if (!st->posed || !st->shown || !st->commit) {
+    if (!st->posed || !st->shown || !st->commit || fp_rig_slope_index_create(rig, &st->slopes)) {
         fp_rig_step_free(st);
         return -ENOMEM;
     }
@@ -54,11 +54,19 @@ int fp_rig_step_init(fp_rig_step *st, fp_rig *rig, size_t n, const float *base)
     v->channels = st->channels;
     fp_rig_hinge(rig, v->hinge[0], v->hinge[1], NULL, NULL);
     fp_rig_step_update(st, NULL, base, NULL);
+    /* the blend of an engine output that equals the posed base (the session's output buffer
+     * starts as a copy of it), so the first gesture blends its touched ranges only; and
+     * every page of the commit buffer touched now, not in a frame (a ranged commit writes
+     * a few scattered pages; a first touch costs a page fault each) */
+    fp_rig_apply_mobility(rig, st->posed, st->posed, st->shown);
+    st->shown_valid = true;
+    memcpy(st->commit, base, bytes);
     return 0;
 }
 
 void fp_rig_step_free(fp_rig_step *st)
 {
+    fp_rig_slope_index_destroy(&st->slopes);
     fp_rig_free(&st->rig);
     free(st->posed);
     free(st->shown);
@@ -118,6 +126,7 @@ bool fp_rig_step_update(fp_rig_step *st, const fp_control_set *cs, const float *
     if (!st->dirty && !memcmp(st->values, st->posed_values, nc * sizeof(float))) return false;
     fp_rig_pose(st->rig, base, st->values, st->posed);
     st->limit_count = 0; /* the finger limits and the blend depend on the posed base */
+    fp_rig_slope_index_set(st->slopes, st->posed); /* O(slope vertices), under the pose's O(n) */
     st->shown_valid = false;
     memcpy(st->posed_values, st->values, nc * sizeof(float));
     st->dirty = false;
@@ -150,7 +159,7 @@ const fp_control_set *fp_rig_step_run(fp_rig_step *st, const fp_control_set *cs)
         /* the engine's 0.45 R, and the rig's local bound where the support reaches a ramp
          * (computed again only where the start point moved) */
         if (i >= st->limit_count || memcmp(st->limit_start[i], cs->start[i], sizeof st->limit_start[i])) {
-            st->limit[i] = fp_rig_finger_limit(st->rig, st->posed, cs->start[i], cs->radius);
+            st->limit[i] = fp_rig_finger_limit_indexed(st->slopes, cs->start[i], cs->radius);
             memcpy(st->limit_start[i], cs->start[i], sizeof st->limit_start[i]);
         }
         double limit = fmin(0.45 * cs->radius, st->limit[i]);
@@ -188,8 +197,39 @@ const float *fp_rig_step_finish(fp_rig_step *st, const float *deformed, const ui
 const float *fp_rig_step_commit_shape(fp_rig_step *st, const float *base, const float *shown)
 {
     if (!st->rig) return shown;
-    fp_rig_unpose(st->rig, base, st->posed_values, shown, st->commit);
+    fp_rig_unpose_range(st->rig, base, st->posed, st->posed_values, shown, st->commit, 0, st->n);
     return st->commit;
+}
+
+const float *fp_rig_step_commit_ranges(fp_rig_step *st, const float *base, const float *shown,
+                                       const uint32_t *ranges, size_t nranges)
+{
+    if (!st->rig) return shown;
+    for (size_t r = 0; r < nranges; r++)
+        fp_rig_unpose_range(st->rig, base, st->posed, st->posed_values, shown, st->commit, ranges[2 * r],
+                            ranges[2 * r + 1]);
+    return st->commit;
+}
+
+bool fp_rig_step_posed_current(const fp_rig_step *st)
+{
+    return st->rig && !st->dirty &&
+           !memcmp(st->values, st->posed_values, fp_rig_channel_count(st->rig) * sizeof(float));
+}
+
+void fp_rig_step_rebase_ranges(fp_rig_step *st, const float *base, float *deformed, const uint32_t *ranges,
+                               size_t nranges)
+{
+    if (!st->rig) return;
+    for (size_t r = 0; r < nranges; r++) {
+        size_t v0 = ranges[2 * r], c = ranges[2 * r + 1];
+        fp_rig_pose_range(st->rig, base, st->posed_values, st->posed, v0, c);
+        memcpy(deformed + 3 * v0, st->posed + 3 * v0, 3 * c * sizeof(float));
+        if (st->shown_valid) fp_rig_apply_mobility_range(st->rig, st->posed, deformed, st->shown, v0, c);
+    }
+    fp_rig_slope_index_update_ranges(st->slopes, st->posed, ranges, nranges);
+    st->limit_count = 0;
+    refresh_view(st);
 }
 
 const fp_rig_view *fp_rig_step_view(fp_rig_step *st) { return st->rig ? &st->view : NULL; }

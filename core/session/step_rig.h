@@ -17,7 +17,11 @@
  *     vertices exactly as posed (the skull bit-identical to the base), soft tissue moved by
  *     the fingers weighted by its mobility;
  *   - a commit keeps only the fingers' part: the base becomes fp_rig_unpose(shown) (the jaw
- *     does not turn twice; skull and jaw vertices keep their base values bit for bit).
+ *     does not turn twice; skull and jaw vertices, and every vertex the fingers did not
+ *     move, keep their base values bit for bit). Ranged (fp_rig_step_commit_ranges,
+ *     fp_rig_step_rebase_ranges): where the engine knows its touched ranges, only they are
+ *     unposed, committed, posed again and re-indexed, so a commit costs what the fingers
+ *     moved, not the mesh; bit for bit the whole commit.
  * Without a rig (rig == NULL) the step passes the control set through and shows T(base).
  *
  * For mappings: an fp_rig_view (plugin.h, ABI 1.1) built once from the rig; landmark
@@ -63,6 +67,8 @@ typedef struct fp_rig_step {
     float limit_start[FP_RIG_STEP_MAX_CONTROL][3];
     double limit_radius;
     size_t limit_count;                           /* entries valid; 0 after posing anew */
+    fp_rig_slope_index *slopes;                   /* the limits' blocks on the posed base
+                                                   * (fp_rig.h), set with each pose */
     float start[FP_RIG_STEP_MAX_CONTROL][3], end[FP_RIG_STEP_MAX_CONTROL][3];
     fp_rig_view view;                             /* for mappings */
     fp_rig_landmark landmarks[FP_RIG_MAX_LANDMARKS];
@@ -73,7 +79,9 @@ typedef struct fp_rig_step {
 } fp_rig_step;
 
 /** Attach `rig` (bound to the session's mesh, n vertices; owned by the step from here on,
- *  even on error) or NULL for none. base: the base, n x 3 floats. Returns 0 or -ENOMEM. */
+ *  even on error) or NULL for none. base: the base, n x 3 floats. The blend starts as that
+ *  of an engine output equal to the posed base (fp_rig_step_finish's ranges then need cover
+ *  only where the output differs from it). Returns 0 or -ENOMEM. */
 int fp_rig_step_init(fp_rig_step *st, fp_rig *rig, size_t n, const float *base);
 void fp_rig_step_free(fp_rig_step *st);
 
@@ -112,6 +120,27 @@ const float *fp_rig_step_finish(fp_rig_step *st, const float *deformed, const ui
 /** The shape a commit folds into the base: `shown` itself without a rig, else its fingers'
  *  part taken back to the rest pose (fp_rig_unpose). */
 const float *fp_rig_step_commit_shape(fp_rig_step *st, const float *base, const float *shown);
+
+/** The ranged commit, bit for bit fp_rig_step_commit_shape on those ranges: the commit shape
+ *  (fp_rig_unpose_range of shown) on the vertex ranges only, for fp_history_commit_ranges.
+ *  The caller guarantees shown equals the posed base outside the ranges (the engine's
+ *  touched ranges: the blend and the contact guard's shape do). Returns the step's commit
+ *  buffer (n x 3; valid on the ranges), or shown without a rig. O(vertices in the ranges). */
+const float *fp_rig_step_commit_ranges(fp_rig_step *st, const float *base, const float *shown,
+                                       const uint32_t *ranges, size_t nranges);
+
+/** Whether the posed base is current for ranged updates: posed with the current channel
+ *  values from the current base (no re-pose pending). False without a rig. */
+bool fp_rig_step_posed_current(const fp_rig_step *st);
+
+/** After a ranged commit (base changed only on the ranges, fp_rig_step_posed_current before
+ *  it): the posed base is posed again there (fp_rig_pose_range; elsewhere it already equals
+ *  the pose of the base), `deformed` (the engine's output buffer, n x 3) is set to it there
+ *  (the engine's output equals its base after a commit: fp_engine_step_commit), the blend
+ *  buffer there too, the limits' boxes grow there, the kept finger limits are forgotten and
+ *  the landmarks refreshed. No-op without a rig. O(vertices in the ranges + landmarks). */
+void fp_rig_step_rebase_ranges(fp_rig_step *st, const float *base, float *deformed,
+                               const uint32_t *ranges, size_t nranges);
 
 /** The view for mappings (NULL without a rig), landmarks at the posed base, channel values. */
 const fp_rig_view *fp_rig_step_view(fp_rig_step *st);

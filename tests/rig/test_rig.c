@@ -13,10 +13,12 @@
 #include "rig_check.h"
 
 #include <errno.h>
+#include <stdbool.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 static const char *data_dir(void)
 {
@@ -297,6 +299,130 @@ static void other_face(const char *rel, const char *name)
     fp_mesh_free(&m);
 }
 
+/* The blocked finger limit (fp_rig_slope_index) against the full scan, bit for bit: the ICT
+ * face at rest and with the jaw open, start points on the surface and off it, radii from a
+ * few millimetres to beyond the head, and after ranged moves of the posed base (the boxes
+ * grow: a session's ranged commits); also the ranged pose and unpose against the whole ones. */
+static uint64_t lrng = 0x9e3779b97f4a7c15ull;
+static double lrand(void)
+{
+    lrng ^= lrng << 13;
+    lrng ^= lrng >> 7;
+    lrng ^= lrng << 17;
+    return (double)(lrng >> 11) / 9007199254740992.0;
+}
+
+static size_t check_limits(const fp_rig *r, const fp_rig_slope_index *ix, const float *posed, size_t n)
+{
+    static const double radii[] = {0.3, 0.8, 1.5, 2.5, 4.0, 40.0};
+    size_t finite = 0;
+    for (int q = 0; q < 400; q++) {
+        size_t v = (size_t)(lrand() * (double)n) % n;
+        float start[3];
+        for (int i = 0; i < 3; i++) start[i] = posed[3 * v + i] + (q % 2 ? (float)(lrand() - 0.5) : 0.f);
+        for (size_t k = 0; k < sizeof radii / sizeof radii[0]; k++) {
+            double full = fp_rig_finger_limit(r, posed, start, radii[k]);
+            double fast = fp_rig_finger_limit_indexed(ix, start, radii[k]);
+            if (memcmp(&full, &fast, sizeof full))
+                fail_msg("vertex %zu, R %g: indexed %.17g, full scan %.17g", v, radii[k], fast, full);
+            finite += isfinite(full);
+        }
+    }
+    return finite;
+}
+
+static void test_ict_finger_limit_indexed(void **state)
+{
+    (void)state;
+    fp_mesh *m = load_face("ict-facekit/generic_neutral_mesh.obj");
+    fp_rig *r = find_rig(m);
+    size_t n = m->vertex_count;
+    float *posed = malloc(n * 3 * sizeof *posed), *ranged = malloc(n * 3 * sizeof *ranged);
+    float *un = malloc(n * 3 * sizeof *un), *un_ranged = malloc(n * 3 * sizeof *un_ranged);
+    assert_true(posed && ranged && un && un_ranged);
+    fp_rig_slope_index *ix = NULL;
+    assert_int_equal(fp_rig_slope_index_create(NULL, &ix), -EINVAL);
+    assert_int_equal(fp_rig_slope_index_create(r, &ix), 0);
+    float vals[FP_RIG_MAX_CHANNELS] = {0};
+    long jo = fp_rig_channel_index(r, "jaw.open");
+    assert_true(jo >= 0);
+    static const float opens[] = {0.f, 0.7f};
+    for (int o = 0; o < 2; o++) {
+        vals[jo] = opens[o];
+        assert_int_equal(fp_rig_pose(r, m->positions, vals, posed), 0);
+        /* the ranged pose in uneven pieces = the whole pose */
+        memset(ranged, 0xff, n * 3 * sizeof *ranged);
+        for (size_t v0 = 0; v0 < n;) {
+            size_t c = 1 + (size_t)(lrand() * 700);
+            if (c > n - v0) c = n - v0;
+            assert_int_equal(fp_rig_pose_range(r, m->positions, vals, ranged, v0, c), 0);
+            v0 += c;
+        }
+        assert_memory_equal(ranged, posed, n * 3 * sizeof *posed);
+        assert_int_equal(fp_rig_pose_range(r, m->positions, vals, ranged, n, 1), -EINVAL);
+        struct timespec t0, t1, t2;
+        clock_gettime(CLOCK_MONOTONIC, &t0);
+        fp_rig_slope_index_set(ix, posed);
+        clock_gettime(CLOCK_MONOTONIC, &t1);
+        double full_ms = 0, fast_ms = 0, sink = 0;
+        for (int q = 0; q < 300; q++) { /* the cost, for the record (not asserted) */
+            const float *st = &posed[3 * ((size_t)(lrand() * (double)n) % n)];
+            clock_gettime(CLOCK_MONOTONIC, &t1);
+            sink += fp_rig_finger_limit(r, posed, st, 1.2);
+            clock_gettime(CLOCK_MONOTONIC, &t2);
+            full_ms += (double)(t2.tv_sec - t1.tv_sec) * 1e3 + (double)(t2.tv_nsec - t1.tv_nsec) / 1e6;
+            sink += fp_rig_finger_limit_indexed(ix, st, 1.2);
+            clock_gettime(CLOCK_MONOTONIC, &t1);
+            fast_ms += (double)(t1.tv_sec - t2.tv_sec) * 1e3 + (double)(t1.tv_nsec - t2.tv_nsec) / 1e6;
+        }
+        printf("finger limit, jaw.open %.1f, R 1.2 cm: full scan %.4f ms, indexed %.4f ms per query (%g)\n",
+               opens[o], full_ms / 300, fast_ms / 300, sink > 0 ? 1.0 : 0.0);
+        size_t finite = check_limits(r, ix, posed, n);
+        printf("finger limit, jaw.open %.1f: indexed = full scan on 2400 queries (%zu limited)\n", opens[o], finite);
+        assert_true(finite > 100);
+        /* ranged moves of the posed base (a commit's pieces): boxes grow, limits still equal */
+        uint32_t rg[2 * 6];
+        for (int j = 0; j < 6; j++) {
+            rg[2 * j] = (uint32_t)(j * (n / 6) + (size_t)(lrand() * 1000));
+            rg[2 * j + 1] = 64 + (uint32_t)(lrand() * 400);
+            for (uint32_t v = rg[2 * j]; v < rg[2 * j] + rg[2 * j + 1]; v++)
+                for (int i = 0; i < 3; i++) posed[3 * v + i] += (float)(0.3 * (lrand() - 0.5));
+        }
+        fp_rig_slope_index_update_ranges(ix, posed, rg, 6);
+        check_limits(r, ix, posed, n);
+        /* the ranged unpose = the whole one where shown moved, the base where it did not */
+        assert_int_equal(fp_rig_pose(r, m->positions, vals, ranged), 0); /* unmoved posed */
+        assert_int_equal(fp_rig_unpose(r, m->positions, vals, posed, un), 0);
+        memcpy(un_ranged, un, n * 3 * sizeof *un);
+        for (int j = 0; j < 6; j++)
+            assert_int_equal(fp_rig_unpose_range(r, m->positions, ranged, vals, posed, un_ranged, rg[2 * j],
+                                                 rg[2 * j + 1]), 0);
+        assert_memory_equal(un_ranged, un, n * 3 * sizeof *un);
+        size_t drift = 0;
+        assert_int_equal(fp_rig_unpose_range(r, m->positions, ranged, vals, posed, un_ranged, 0, n), 0);
+        for (size_t v = 0; v < n; v++) {
+            bool moved = memcmp(&posed[3 * v], &ranged[3 * v], 3 * sizeof(float)) != 0;
+            if (!moved) {
+                assert_memory_equal(&un_ranged[3 * v], &m->positions[3 * v], 3 * sizeof(float));
+                drift += memcmp(&un[3 * v], &m->positions[3 * v], 3 * sizeof(float)) != 0;
+            } else {
+                assert_memory_equal(&un_ranged[3 * v], &un[3 * v], 3 * sizeof(float));
+            }
+        }
+        printf("unpose, jaw.open %.1f: %zu unmoved vertices the plain unpose moves by its round trip, "
+               "kept by the posed-aware one\n", opens[o], drift);
+        if (o == 0) assert_int_equal(drift, 0);
+    }
+    fp_rig_slope_index_destroy(&ix);
+    assert_null(ix);
+    free(posed);
+    free(ranged);
+    free(un);
+    free(un_ranged);
+    fp_rig_free(&r);
+    fp_mesh_free(&m);
+}
+
 static void test_lee_perry_smith(void **state)
 {
     (void)state;
@@ -470,7 +596,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_ict_pose),         cmocka_unit_test(test_ict_fingers),
-        cmocka_unit_test(test_ict_finger_limit),
+        cmocka_unit_test(test_ict_finger_limit), cmocka_unit_test(test_ict_finger_limit_indexed),
         cmocka_unit_test(test_lee_perry_smith),  cmocka_unit_test(test_mediapipe),
         cmocka_unit_test(test_broken_files),
     };

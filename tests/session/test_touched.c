@@ -4,10 +4,13 @@
  * (fp_session_apply_controls): outside the reported ranges the shown shape and the base are
  * bit for bit what they were at the previous call, through gestures, commits, idle frames,
  * cancels, undo, reset, a jaw channel and calls that skip frames; and the ranges stay small
- * where the engine's supports are (not "everything" in disguise). */
+ * where the engine's supports are (not "everything" in disguise), commits with a rig
+ * included. And a rig commit through the touched ranges against the whole-mesh commit
+ * (fp_session_options.whole_rig_commit), two sessions bit for bit. */
 #define _GNU_SOURCE
 #include "changed.h"
 #include "fp_mesh.h"
+#include "fp_rig.h"
 #include "fp_session.h"
 #include "fp_test_support.h"
 
@@ -211,12 +214,9 @@ static void run_contract(const char *rig_path)
     assert_int_equal(partial, 7);
     frame(&f, true, FP_INTENT_COMMIT, 3.2);
     size_t k = take(&f, &frac, &bk);
-    if (!rig) {
-        assert_true(k != SIZE_MAX && frac < 0.5);
-        assert_true(bk > 0 && bk != SIZE_MAX); /* the commit's ranges */
-    } else {
-        assert_int_equal(bk, SIZE_MAX); /* with a rig the commit re-poses the base */
-    }
+    /* the commit's ranges (with a rig too: unposed, posed and re-indexed there only) */
+    assert_true(k != SIZE_MAX && frac < 0.5);
+    assert_true(bk > 0 && bk != SIZE_MAX);
     frame(&f, false, 0, 0);
     take(&f, &frac, &bk);
     frame(&f, false, 0, 0);
@@ -227,8 +227,7 @@ static void run_contract(const char *rig_path)
     place(&f, 500, 15000, 20000);
     for (int i = 0; i < 5; i++) frame(&f, true, i == 0 ? FP_INTENT_ENGAGE : 0, 0.3 * i);
     k = take(&f, &frac, &bk);
-    /* (with a rig the commit re-posed the base: the engine's first run after it writes all) */
-    assert_true(k != SIZE_MAX && k > 0 && (rig || frac < 0.5));
+    assert_true(k != SIZE_MAX && k > 0 && frac < 0.5);
     frame(&f, true, FP_INTENT_CANCEL, 2);
     take(&f, &frac, &bk);
     frame(&f, false, 0, 0); /* the base again: where the last output differed */
@@ -255,6 +254,20 @@ static void run_contract(const char *rig_path)
             k = take(&f, &frac, &bk);
             if (i) assert_true(k != SIZE_MAX && frac < 0.5);
         }
+        /* a commit with the jaw open: the base and the posed base change on its ranges only
+         * (vertices the fingers did not move keep their base bit for bit) */
+        frame(&f, true, FP_INTENT_COMMIT, 2.0);
+        k = take(&f, &frac, &bk);
+        assert_true(k != SIZE_MAX && frac < 0.5);
+        assert_true(bk > 0 && bk != SIZE_MAX);
+        frame(&f, false, 0, 0);
+        take(&f, &frac, &bk);
+        place(&f, 5000, 9000, 14000);
+        for (int i = 0; i < 3; i++) {
+            frame(&f, true, i == 0 ? FP_INTENT_ENGAGE : 0, 0.5 * i);
+            k = take(&f, &frac, &bk);
+            assert_true(k != SIZE_MAX && frac < 0.5); /* partial from the first run after it */
+        }
     }
     fp_session_destroy(&f.s);
     free(f.shown);
@@ -274,12 +287,195 @@ static void test_session_contract_rig(void **state)
     run_contract(NULL); /* the ICT face's rig, found by its checksum */
 }
 
+/* ---- a rig commit: ranged = whole ------------------------------------------------------ */
+
+static fp_session *rig_session(bool whole)
+{
+    char err[2048];
+    fp_session_options so = {0};
+    so.mesh_path = fp_test_face_path();
+    so.mapping = "anchored";
+    so.plugin_path = fp_test_plugin_path();
+    so.rig_dir = FP_TEST_RIGS_DIR;
+    so.whole_rig_commit = whole;
+    fp_session *s = NULL;
+    int rc = fp_session_create(&so, &s, err, sizeof err);
+    if (rc) fprintf(stderr, "%s\n", err);
+    assert_int_equal(rc, 0);
+    assert_non_null(fp_session_rig(s));
+    return s;
+}
+
+/* The posed base computed here from the session's base and jaw.open (fp_rig_pose, whole). */
+static void expect_posed(fp_session *s, float *tmp, const char *when)
+{
+    const fp_rig *rig = fp_session_rig(s);
+    float vals[FP_RIG_MAX_CHANNELS];
+    for (size_t c = 0; c < fp_rig_channel_count(rig); c++) {
+        fp_rig_channel_desc d;
+        fp_rig_channel_get(rig, c, &d);
+        vals[c] = (float)fp_session_channel(s, d.name);
+    }
+    assert_int_equal(fp_rig_pose(rig, fp_session_base(s), vals, tmp), 0);
+    if (memcmp(tmp, fp_session_positions(s), fp_session_vertex_count(s) * 3 * sizeof(float)))
+        fail_msg("%s: the shown shape is not the pose of the base", when);
+}
+
+typedef struct pair {
+    fixture *f;
+    fp_session *w;
+    float *tmp;
+    size_t commits, ranged_commits, guarded, guarded_ranged;
+    double ms_ranged, ms_whole;
+} pair;
+
+/* One frame of both sessions on the same control set, compared; amp scales the control
+ * vectors (fractions of R). */
+static void both(pair *p, bool active, uint32_t intents, double phase, double amp)
+{
+    fixture *f = p->f;
+    size_t bytes = f->n * 3 * sizeof(float);
+    f->cs.active = active;
+    f->cs.intents = intents;
+    f->cs.count = active ? 3 : 0;
+    for (int i = 0; i < 3 && amp >= 0; i++) /* amp < 0: the end points as the caller set them */
+        for (int k = 0; k < 3; k++)
+            f->end[i][k] = f->start[i][k] + (float)(amp * f->radius * sin(phase + i + 2.1 * k));
+    fp_frame_stats a, b;
+    f->t += 16666667;
+    fp_session_apply_controls(f->s, f->t, &f->cs, intents, &a);
+    fp_session_apply_controls(p->w, f->t, &f->cs, intents, &b);
+    assert_memory_equal(fp_session_base(f->s), fp_session_base(p->w), bytes);
+    assert_memory_equal(fp_session_positions(f->s), fp_session_positions(p->w), bytes);
+    assert_int_equal(a.committed, b.committed);
+    p->guarded += a.collide_t < 1;
+    double frac;
+    size_t bk;
+    take(f, &frac, &bk); /* the ranged session's ranges cover every change */
+    /* commits of the guard's shape (the whole way: it may differ from the posed base outside
+     * this frame's ranges, earlier frames scaled back) */
+    p->guarded_ranged += a.collide_t < 1 && a.committed;
+    if (a.committed) {
+        p->commits++;
+        p->ms_ranged += a.stage_ms[FP_STAGE_COMMIT];
+        p->ms_whole += b.stage_ms[FP_STAGE_COMMIT];
+        expect_posed(f->s, p->tmp, "after a commit");
+        p->ranged_commits += bk != SIZE_MAX;
+    }
+}
+
+/* Two sessions on the ICT face with its rig, the same control sets: one commits through the
+ * touched ranges (the default), the other the whole mesh (whole_rig_commit). Base and shown
+ * shape bit for bit equal after every frame (so the posed base, the engine's output and its
+ * index, the blend and the finger limits are too, or the next frames would differ), through
+ * anchored commits at rest and with the jaw open, a second commit over the first one's
+ * region, one-shot committed steps, undo, reset; the shown shape after a commit is the pose
+ * of the base computed afresh; the ranged session's reported ranges cover every change;
+ * commits of the contact guard's shape among them. */
+static void test_rig_commit_ranged_equals_whole(void **state)
+{
+    (void)state;
+    fixture f = {0};
+    fp_session *w = rig_session(true);
+    f.s = rig_session(false);
+    f.n = fp_session_vertex_count(f.s);
+    size_t bytes = f.n * 3 * sizeof(float);
+    f.shown = malloc(bytes);
+    f.base = malloc(bytes);
+    f.cover = malloc(f.n);
+    float *tmp = malloc(bytes);
+    assert_true(f.shown && f.base && f.cover && tmp);
+    float lo[3], hi[3];
+    fp_mesh_bounds(fp_session_mesh(f.s), lo, hi);
+    f.radius = 0.06 * sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                           (hi[2] - lo[2]) * (hi[2] - lo[2]));
+    f.cs.size = sizeof f.cs;
+    f.cs.radius = f.radius;
+    f.cs.capacity = 3;
+    f.cs.start = f.start;
+    f.cs.end = f.end;
+    double frac;
+    size_t bk;
+    pair p = {&f, w, tmp, 0, 0, 0, 0, 0, 0};
+    take(&f, &frac, &bk);
+    static const uint32_t spots[][3] = {{3000, 8000, 12000}, {3010, 8020, 12005}, {500, 15000, 20000},
+                                        {5000, 9000, 14000}, {3000, 8000, 12000}};
+    for (int g = 0; g < 5; g++) {
+        if (g == 3) { /* the jaw opens: both pose their base anew */
+            assert_int_equal(fp_session_set_channel(f.s, "jaw.open", 0.6), 0);
+            assert_int_equal(fp_session_set_channel(w, "jaw.open", 0.6), 0);
+            both(&p, false, 0, 0, 0.0);
+        }
+        place(&f, spots[g][0], spots[g][1], spots[g][2]);
+        for (int i = 0; i < 6; i++) both(&p, true, i == 0 ? FP_INTENT_ENGAGE : 0, 0.4 * i + g, 0.08);
+        both(&p, true, FP_INTENT_COMMIT, 2.5 + g, 0.08);
+        both(&p, false, 0, 0, 0.0);
+        expect_posed(f.s, tmp, "idle after a commit");
+    }
+    /* one-shot steps pressing the mouth's and the eyes' landmarks along the face's axes
+     * (upper down, lower up, the third in): the contact guard scales several back, and
+     * commits of its shape are ranged too */
+    {
+        float up[3], fwd[3];
+        fp_rig_axes(fp_session_rig(f.s), up, fwd, NULL);
+        static const struct {
+            uint32_t v[3];
+            double amp;
+        } push[] = {{{6213, 5708, 3742}, 0.25}, {{1507, 5517, 0}, 0.15}, {{1528, 0, 5518}, 0.10},
+                    {{3742, 3742, 1528}, 0.15}, {{4857, 1528, 4857}, 0.30}};
+        for (size_t t = 0; t < sizeof push / sizeof push[0]; t++) {
+            place(&f, push[t].v[0], push[t].v[1], push[t].v[2]);
+            for (int i = 0; i < 3; i++)
+                for (int k = 0; k < 3; k++)
+                    f.end[i][k] = f.start[i][k] + (float)(push[t].amp * f.radius *
+                                                          (i == 0 ? -up[k] : i == 1 ? up[k] : -fwd[k]));
+            both(&p, true, FP_INTENT_COMMIT, 0, -1);
+            both(&p, false, 0, 0, 0.0);
+        }
+    }
+    /* one-shot committed steps (unanchored): fresh start points each frame, small and large */
+    for (int i = 0; i < 4; i++) {
+        place(&f, (uint32_t)(4000 + 900 * i), (uint32_t)(11000 + 700 * i), (uint32_t)(16000 + 300 * i));
+        both(&p, true, FP_INTENT_COMMIT, 0.7 * i, i % 2 ? 0.4 : 0.05);
+    }
+    both(&p, false, 0, 0, 0.0);
+    for (int u = 0; u < 3; u++) {
+        assert_true(fp_session_undo(f.s));
+        assert_true(fp_session_undo(w));
+        assert_memory_equal(fp_session_base(f.s), fp_session_base(w), bytes);
+        assert_memory_equal(fp_session_positions(f.s), fp_session_positions(w), bytes);
+        expect_posed(f.s, tmp, "after undo");
+        take(&f, &frac, &bk);
+        both(&p, false, 0, 0, 0.0);
+    }
+    place(&f, 3000, 8000, 12000); /* a gesture after undo */
+    for (int i = 0; i < 4; i++) both(&p, true, i == 0 ? FP_INTENT_ENGAGE : 0, 0.3 * i, 0.1);
+    both(&p, true, FP_INTENT_COMMIT, 1.5, 0.1);
+    both(&p, false, 0, 0, 0.0);
+    fp_session_reset(f.s);
+    fp_session_reset(w);
+    assert_memory_equal(fp_session_base(f.s), fp_session_loaded(f.s), bytes);
+    assert_memory_equal(fp_session_positions(f.s), fp_session_positions(w), bytes);
+    both(&p, false, 0, 0, 0.0);
+    printf("rig commits: %zu, %zu of them ranged (the rest: composed one-shot steps), commit stage "
+           "%.3f ms ranged vs %.3f ms whole (sum); the contact guard scaled back %zu frames, %zu "
+           "of them commits (of the guard's shape, the whole way)\n", p.commits, p.ranged_commits, p.ms_ranged, p.ms_whole, p.guarded, p.guarded_ranged);
+    assert_true(p.commits >= 15 && p.ranged_commits >= 10 && p.guarded_ranged >= 2);
+    fp_session_destroy(&w);
+    fp_session_destroy(&f.s);
+    free(f.shown);
+    free(f.base);
+    free(f.cover);
+    free(tmp);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_changed_union),
         cmocka_unit_test(test_session_contract_no_rig),
         cmocka_unit_test(test_session_contract_rig),
+        cmocka_unit_test(test_rig_commit_ranged_equals_whole),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

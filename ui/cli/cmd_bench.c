@@ -22,7 +22,8 @@
 static void usage(FILE *f)
 {
     fprintf(f,
-            "usage: facepuppet bench [--quick] [--json] [--case NAME] [--plot FILE.png] [--help]\n\n"
+            "usage: facepuppet bench [--quick] [--json] [--case NAME] [--no-contact-guard]\n"
+            "                        [--plot FILE.png] [--help]\n\n"
             "Times the CSRBF engine (medians over repeated updates; the lowest median of 3\n"
             "rounds, 2 with --quick, as the machine may be shared) beside references measured\n"
             "in the same run. Cases:\n"
@@ -56,6 +57,8 @@ static void usage(FILE *f)
             "           paper_pairs, ms_median, ms_bruteforce, ms_fresh, ms_touched, paper_fps\n"
             "           (null: none)\n"
             "  --case NAME  run one case only\n"
+            "  --no-contact-guard  case frame: sessions without the contact guard (its\n"
+            "           collide time leaves the frame; the rest of the frame alone)\n"
             "  --plot FILE.png  the paper's Figure 3 remade: run table1 (--quick respected; with\n"
             "           --json its rows on stdout too) and draw updates per second (log) against\n"
             "           R for the four meshes, anchored and unanchored, ours beside the paper's,\n"
@@ -236,6 +239,8 @@ static int bench_main(int argc, char **argv)
             o.quick = true;
         } else if (!strcmp(argv[i], "--json")) {
             o.json = true;
+        } else if (!strcmp(argv[i], "--no-contact-guard")) {
+            o.no_contact_guard = true;
         } else if (!strcmp(argv[i], "--case") && i + 1 < argc) {
             o.only = argv[++i];
         } else if (!strcmp(argv[i], "--plot") && i + 1 < argc) {
