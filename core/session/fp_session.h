@@ -73,8 +73,8 @@ typedef struct fp_session_options {
                                                        for the scale line ("--mm-per-unit",
                                                        "rig FILE"); NULL: "given" */
     const fp_plugin_path *plugin_path;              /* required */
-    int engine_threads;                             /* 0: 1 below 200k vertices, else all
-                                                       cores; -1: all cores; N: N threads */
+    int engine_threads;                             /* 0: 1 (a frame's work follows the
+                                                       supports); -1: all cores; N: N threads */
     fp_session_log_fn log;                          /* NULL: silent. Called on the session
                                                        thread (and in create/destroy) with an
                                                        fp_log_level, a source (input SPEC

@@ -305,11 +305,15 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
      * holds hardly a vertex. */
     s->radius = opt->radius > 0 ? opt->radius
                                 : fmax(0.06 * sqrt(diag), FP_SESSION_MIN_RADIUS_MM / s->head.mm_per_unit);
-    /* One engine thread for face-sized meshes: the ICT face (27k vertices) takes about
-     * 0.1 ms on one core, and a second OpenMP thread that the input and display threads
-     * keep off its core can cost a whole scheduler time slice (measured: 13.7 ms median
-     * update with the other core busy, against 0.11 ms on one thread). */
-    int threads = opt->engine_threads ? opt->engine_threads : (s->n < 200000 ? 1 : 0);
+    /* One engine thread by default, at any size: a frame's evaluation writes only the blocks
+     * in a support (a 1% frame on 1.7M vertices is about 0.1 ms on one core), and a second
+     * OpenMP thread that the input and display threads (or the machine's other work) keep
+     * off its core can cost a whole scheduler time slice, its spin-wait after a region the
+     * main thread's core: measured on 2 cores with `bench --case frame --no-contact-guard`,
+     * ICT subdivided to 1.7M vertices, deforming frames 4.06 ms median with all cores
+     * against 0.33 ms on one (the ICT face: 13.7 ms against 0.11 ms with the other core
+     * busy). Whole-mesh writes (a base change) are slower on one thread; -1 asks for all. */
+    int threads = opt->engine_threads ? opt->engine_threads : 1;
     fp_intents_init(&s->intents);
     fp_pose_init(&s->pose, opt->hand_size, NULL);
     if ((rc = fp_history_init(&s->history, s->n, s->base))) {
