@@ -22,7 +22,9 @@ struct fp_contact {
     struct entry { float box[6]; uint32_t tri, moved; } *entries; /* the grid, by bucket */
     size_t bucket_cap, entry_cap;
     uint8_t *own;         /* t: the triangle crosses another in the weld shape */
-    float (*nrm)[3];      /* t: the weld shape's triangle normals (unnormalised) */
+    float (*nrm)[3];      /* t: the rest normals (flips are against them): the weld shape's
+                             triangle normals (unnormalised), carried by fp_contact_set_pose */
+    float (*nrm_weld)[3]; /* t: the weld shape's, kept at the first fp_contact_set_pose */
     struct track *tk;     /* the incremental guard (fp_contact_step), made on first use */
     float *weld_copy;     /* n x 3: the weld shape, the tracker's first P (freed then) */
     size_t prewarm;       /* fp_contact_set_prewarm */
@@ -229,6 +231,7 @@ void fp_contact_destroy(fp_contact **cp)
     free(c->entries);
     free(c->own);
     free(c->nrm);
+    free(c->nrm_weld);
     track_free(c->tk);
     free(c->weld_copy);
     free(c);
@@ -1486,4 +1489,65 @@ const float *fp_contact_shape(const fp_contact *c) { return c && c->tk ? c->tk->
 void fp_contact_set_prewarm(fp_contact *c, size_t max_tris)
 {
     if (c) c->prewarm = max_tris;
+}
+
+/* the unnormalised normal of triangle v in pos */
+static void tri_normal(const float *pos, const uint32_t *v, double n[3])
+{
+    double t[3][3], e1[3], e2[3];
+    tri_of(pos, v, t);
+    for (int k = 0; k < 3; k++) {
+        e1[k] = t[1][k] - t[0][k];
+        e2[k] = t[2][k] - t[0][k];
+    }
+    n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+}
+
+static void cross3(const double a[3], const double b[3], double o[3])
+{
+    o[0] = a[1] * b[2] - a[2] * b[1];
+    o[1] = a[2] * b[0] - a[0] * b[2];
+    o[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+int fp_contact_set_pose(fp_contact *c, const float *base, const float *posed)
+{
+    if (!c || (!base) != (!posed)) return -EINVAL;
+    if (!c->nrm_weld) {
+        if (!base || posed == base) return 0; /* the weld shape's, as made */
+        c->nrm_weld = malloc((c->t ? c->t : 1) * sizeof *c->nrm_weld);
+        if (!c->nrm_weld) return -ENOMEM;
+        memcpy(c->nrm_weld, c->nrm, c->t * sizeof *c->nrm);
+    }
+    for (size_t i = 0; i < c->t; i++) {
+        const uint32_t *v = c->tris + 3 * i;
+        double w[3] = {c->nrm_weld[i][0], c->nrm_weld[i][1], c->nrm_weld[i][2]};
+        if (base && posed != base) {
+            double a[3], b[3], la = 0, lb = 0;
+            tri_normal(base, v, a);
+            tri_normal(posed, v, b);
+            for (int k = 0; k < 3; k++) la += a[k] * a[k], lb += b[k] * b[k];
+            la = sqrt(la);
+            lb = sqrt(lb);
+            if (la > 0 && lb > 0) {
+                for (int k = 0; k < 3; k++) a[k] /= la, b[k] /= lb;
+                double cs = a[0] * b[0] + a[1] * b[1] + a[2] * b[2], ax[3], t1[3], t2[3];
+                if (cs > -0.999999) { /* w rotated by the least rotation taking a to b */
+                    cross3(a, b, ax);
+                    cross3(ax, w, t1);
+                    cross3(ax, t1, t2);
+                    for (int k = 0; k < 3; k++) w[k] += t1[k] + t2[k] / (1 + cs);
+                } else { /* turned over by the pose: the posed normal's side */
+                    double s = 0;
+                    for (int k = 0; k < 3; k++) s += w[k] * w[k];
+                    s = sqrt(s);
+                    for (int k = 0; k < 3; k++) w[k] = b[k] * s;
+                }
+            }
+        }
+        for (int k = 0; k < 3; k++) c->nrm[i][k] = (float)w[k];
+    }
+    return 0;
 }

@@ -56,8 +56,9 @@ int fp_contact_dilate_own(fp_contact *c, int rings);
 /** What fp_contact_count_new saw besides the new pairs. */
 typedef struct fp_contact_count {
     size_t moved_tris;   /* triangles with a moved vertex */
-    size_t flipped;      /* moved triangles turned over (normal against the weld shape's, more
-                            than 90 degrees) in cand and not in ref, own-crossing ones left out */
+    size_t flipped;      /* moved triangles turned over (normal against the rest normal, the
+                            weld shape's or fp_contact_set_pose's, more than 90 degrees) in
+                            cand and not in ref, own-crossing ones left out */
     long near_own;       /* new pairs left out: a triangle crosses in the weld shape */
 } fp_contact_count;
 
@@ -173,6 +174,18 @@ int fp_contact_step(fp_contact *c, const float *ref, const float *cand, const ui
  *  the first fp_contact_reference. */
 #define FP_CONTACT_PREWARM 262144
 void fp_contact_set_prewarm(fp_contact *c, size_t max_tris);
+
+/** Flips are judged against rest normals: the weld shape's (as made), or, after this call
+ *  with a rig's pose (base: the unposed reference, posed: the reference the rig made of it,
+ *  both n x 3), the weld shape's normals carried by the pose: each triangle's turned by the
+ *  least rotation that takes its normal in base to its normal in posed (a triangle the pose
+ *  turned over: posed's normal). So a triangle the pose itself turned (the ICT mouth corners
+ *  turn 89 degrees with the jaw open) is judged from where the pose put it, not from the
+ *  neutral face: the pose is the rig's business, not the guard's. base == posed or both
+ *  NULL: the weld shape's normals again. Call it when the reference changes, before
+ *  fp_contact_reference (whose P := ref keeps the invariant below: a pair or flip of ref is
+ *  never new). O(t). Returns 0, -EINVAL (NULL c, one of base / posed NULL) or -ENOMEM. */
+int fp_contact_set_pose(fp_contact *c, const float *base, const float *posed);
 
 /** P, the shape fp_contact_step last accepted (n x 3, owned by c, valid until its next
  *  call), or NULL before the first fp_contact_reference. */

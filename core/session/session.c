@@ -420,11 +420,15 @@ static void contact_guard(fp_session *s, const float *ref, fp_frame_stats *st)
         if (contact_open(s)) return; /* still no memory: the base stays */
         s->cg_lost = false;
         s->shown = shown;
+        s->cg_sync = FP_CG_REF_CHANGED; /* the rig's pose below */
     }
     if (!s->contact || s->shown == ref) return;
     int64_t t0 = fp_now_ns();
     int rc = 0;
-    if (s->cg_sync != FP_CG_SYNCED)
+    /* flips are judged from where the rig's pose put each triangle (fp_contact_set_pose):
+     * the open jaw turns the ICT mouth corners 89 degrees from the neutral face */
+    if (s->cg_sync == FP_CG_REF_CHANGED) rc = fp_contact_set_pose(s->contact, s->base, ref);
+    if (!rc && s->cg_sync != FP_CG_SYNCED)
         rc = fp_contact_reference(s->contact, ref, NULL, s->cg_sync == FP_CG_REF_CHANGED ? SIZE_MAX : 0);
     s->cg_sync = FP_CG_SYNCED;
     const uint32_t *ranges;
