@@ -424,6 +424,7 @@ static void contact_guard(fp_session *s, const float *ref, fp_frame_stats *st)
     }
     if (!s->contact || s->shown == ref) return;
     int64_t t0 = fp_now_ns();
+    fp_contact_set_local(s->contact, s->radius); /* a blocked finger stops alone */
     int rc = 0;
     /* flips are judged from where the rig's pose put each triangle (fp_contact_set_pose):
      * the open jaw turns the ICT mouth corners 89 degrees from the neutral face */
