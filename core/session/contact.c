@@ -1392,10 +1392,20 @@ static int add_off(fp_contact *c, const uint32_t *v)
 static void local_ramp(fp_contact *c)
 {
     struct track *k = c->tk;
-    double r = c->local_r, r2 = r * r, r4 = 4 * r2;
+    double r = c->local_r, r2 = r * r, r4 = 4 * r2, lo[3] = {INFINITY, INFINITY, INFINITY},
+           hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t j = 0; j < k->noff; j++) /* their box grown by 2r: beyond it, ramp 1 */
+        for (int a = 0; a < 3; a++) {
+            lo[a] = fmin(lo[a], k->p[3 * (size_t)k->off[j] + a] - 2 * r);
+            hi[a] = fmax(hi[a], k->p[3 * (size_t)k->off[j] + a] + 2 * r);
+        }
     for (size_t i = 0; i < k->nmv; i++) {
         const float *p = k->pv + 3 * i;
         double d2 = INFINITY;
+        if (p[0] < lo[0] || p[1] < lo[1] || p[2] < lo[2] || p[0] > hi[0] || p[1] > hi[1] || p[2] > hi[2]) {
+            k->ramp[i] = 1;
+            continue;
+        }
         for (size_t j = 0; j < k->noff && d2 > r2; j++) {
             const float *q = k->p + 3 * (size_t)k->off[j];
             double dx = (double)p[0] - q[0], dy = (double)p[1] - q[1], dz = (double)p[2] - q[2];

@@ -204,7 +204,9 @@ int fp_contact_set_pose(fp_contact *c, const float *base, const float *posed);
 /** fp_contact_step scales back locally (the argument above): radius r > 0 in mesh units
  *  (the session gives its support radius: the motion within r of a blocking triangle comes
  *  from control points whose supports reach it); 0 (default), NaN or negative: the whole
- *  frame's motion by one t. Extra cost of a scale-back: moved vertices x blocking vertices. */
+ *  frame's motion by one t. Extra cost of a scale-back: up to 4 more checks, and the moved
+ *  vertices inside the blocking vertices' box grown by 2r x the blocking vertices (test_guard,
+ *  unanchored ICT three-claps: check p99 3.1 ms against 2.7 ms global; noisy, 2 cores). */
 void fp_contact_set_local(fp_contact *c, double radius);
 
 /** P, the shape fp_contact_step last accepted (n x 3, owned by c, valid until its next
