@@ -22,10 +22,13 @@ struct fp_contact {
     struct entry { float box[6]; uint32_t tri, moved; } *entries; /* the grid, by bucket */
     size_t bucket_cap, entry_cap;
     uint8_t *own;         /* t: the triangle crosses another in the weld shape */
-    float (*nrm)[3];      /* t: the weld shape's triangle normals (unnormalised) */
+    float (*nrm)[3];      /* t: the rest normals (flips are against them): the weld shape's
+                             triangle normals (unnormalised), carried by fp_contact_set_pose */
+    float (*nrm_weld)[3]; /* t: the weld shape's, kept at the first fp_contact_set_pose */
     struct track *tk;     /* the incremental guard (fp_contact_step), made on first use */
     float *weld_copy;     /* n x 3: the weld shape, the tracker's first P (freed then) */
     size_t prewarm;       /* fp_contact_set_prewarm */
+    double local_r;       /* fp_contact_set_local: 0, a scale-back is global */
 };
 
 /* ---- the triangle-triangle test ---------------------------------------------------------- */
@@ -229,6 +232,7 @@ void fp_contact_destroy(fp_contact **cp)
     free(c->entries);
     free(c->own);
     free(c->nrm);
+    free(c->nrm_weld);
     track_free(c->tk);
     free(c->weld_copy);
     free(c);
@@ -528,6 +532,7 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
 #define FP_TRACK_BIG_CELLS 4096.0 /* a box over more grid cells goes to a list of its own */
 #define FP_TRACK_SKIN 0.1         /* an envelope: the box grown by this share of its extent */
 
+#define FP_CONTACT_LOCAL_ROUNDS 3 /* a local scale-back: times its blocking set may grow */
 #define FP_TRACK_INLINE 6          /* list entries kept in the dyn itself (one cache line) */
 
 typedef struct dyn {              /* a triangle that has left the weld shape */
@@ -615,6 +620,11 @@ struct track {
     float (*renv)[6];
     size_t cap_rx, cap_renv;
     size_t renewed;               /* envelopes renewed, for fp_contact_result */
+    uint32_t *off;                /* a local scale-back: the blocking triangles' vertices */
+    size_t noff, cap_off;
+    uint8_t *off_mark;            /* n: in off */
+    double *ramp;                 /* per moved vertex: the share of its motion always kept */
+    size_t cap_ramp;
     bool broken;                  /* a call ran out of memory half way: unusable */
 };
 
@@ -652,6 +662,9 @@ static void track_free(struct track *k)
     free(k->rr);
     free(k->rx);
     free(k->renv);
+    free(k->off);
+    free(k->off_mark);
+    free(k->ramp);
     free(k);
 }
 
@@ -1110,10 +1123,11 @@ static int track_build(fp_contact *c)
     k->vt = malloc((t ? 3 * t : 1) * sizeof *k->vt);
     k->dp = malloc((n ? n : 1) * sizeof *k->dp);
     k->in_dp = calloc(n ? n : 1, 1);
+    k->off_mark = calloc(n ? n : 1, 1);
     k->tstamp = calloc(t ? t : 1, sizeof *k->tstamp);
     k->qstamp = calloc(t ? t : 1, sizeof *k->qstamp);
     k->slot = malloc((t ? t : 1) * sizeof *k->slot);
-    if (!k->p || !k->vt_start || !k->vt || !k->dp || !k->in_dp || !k->tstamp || !k->qstamp || !k->slot) {
+    if (!k->p || !k->vt_start || !k->vt || !k->dp || !k->in_dp || !k->off_mark || !k->tstamp || !k->qstamp || !k->slot) {
         if (k->p) c->weld_copy = NULL;
         track_free(k);
         return -ENOMEM;
@@ -1292,8 +1306,10 @@ static int reference(fp_contact *c, const float *ref, const uint32_t *ranges, si
 
 /* New pairs and newly flipped triangles of shape s (P but for the moved vertices) against
  * ref, among the pairs with a moved triangle (mt); cand_boxes: s is the candidate (mbox). */
+static int add_off(fp_contact *c, const uint32_t *v);
+
 static long track_check(fp_contact *c, const float *s, const float *ref, bool cand_boxes,
-                        size_t *flips)
+                        size_t *flips, bool record)
 {
     struct track *k = c->tk;
     long found = 0;
@@ -1301,7 +1317,10 @@ static long track_check(fp_contact *c, const float *s, const float *ref, bool ca
     for (size_t i = 0; i < k->nmt; i++) {
         uint32_t a = k->mt[i];
         const uint32_t *va = c->tris + 3 * (size_t)a;
-        if (!cand_boxes && flipped(c, s, va, a) && !flipped(c, ref, va, a)) (*flips)++;
+        if (!cand_boxes && flipped(c, s, va, a) && !flipped(c, ref, va, a)) {
+            (*flips)++;
+            if (record && add_off(c, va)) return -ENOMEM;
+        }
         dyn *d = &k->dyn[k->slot[a]];
         if (!d->len) continue;
         float ba[6];
@@ -1335,20 +1354,65 @@ static long track_check(fp_contact *c, const float *s, const float *ref, bool ca
             }
             tri_of(ref, vb, rb);
             if (!rdeg_a && !degenerate(rb) && fp_contact_tri_tri(ra, rb)) continue;
+            if (record && (add_off(c, va) || add_off(c, vb))) return -ENOMEM;
             found++;
         }
     }
     return found;
 }
 
-/* P at the moved vertices := P + t (candidate - P), as fp_contact_guard's lerp */
-static void track_lerp(struct track *k, double t)
+/* P at the moved vertices := P + t (candidate - P), as fp_contact_guard's lerp; ramp (not
+ * NULL): vertex i's share is t + (1 - t) ramp[i] (a local scale-back) */
+static void track_lerp(struct track *k, double t, const double *ramp)
 {
     for (size_t i = 0; i < k->nmv; i++) {
         float *p = k->p + 3 * (size_t)k->mv[i];
         const float *a = k->pv + 3 * i, *b = k->cv + 3 * i;
+        double w = ramp ? t + (1 - t) * ramp[i] : t;
         for (int j = 0; j < 3; j++)
-            p[j] = t >= 1 ? b[j] : t <= 0 || a[j] == b[j] ? a[j] : (float)((double)a[j] + t * ((double)b[j] - a[j]));
+            p[j] = w >= 1 ? b[j] : w <= 0 || a[j] == b[j] ? a[j] : (float)((double)a[j] + w * ((double)b[j] - a[j]));
+    }
+}
+
+/* the vertices of triangle v into off, once each */
+static int add_off(fp_contact *c, const uint32_t *v)
+{
+    struct track *k = c->tk;
+    for (int j = 0; j < 3; j++) {
+        uint32_t x = v[j];
+        if (k->off_mark[x]) continue;
+        if (push_u32(&k->off, &k->noff, &k->cap_off, x)) return -ENOMEM;
+        k->off_mark[x] = 1;
+    }
+    return 0;
+}
+
+/* ramp[i] for the moved vertices: 0 within local_r of a vertex in off (positions in P, as
+ * pv holds them), 1 beyond 2 local_r, smooth between */
+static void local_ramp(fp_contact *c)
+{
+    struct track *k = c->tk;
+    double r = c->local_r, r2 = r * r, r4 = 4 * r2, lo[3] = {INFINITY, INFINITY, INFINITY},
+           hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t j = 0; j < k->noff; j++) /* their box grown by 2r: beyond it, ramp 1 */
+        for (int a = 0; a < 3; a++) {
+            lo[a] = fmin(lo[a], k->p[3 * (size_t)k->off[j] + a] - 2 * r);
+            hi[a] = fmax(hi[a], k->p[3 * (size_t)k->off[j] + a] + 2 * r);
+        }
+    for (size_t i = 0; i < k->nmv; i++) {
+        const float *p = k->pv + 3 * i;
+        double d2 = INFINITY;
+        if (p[0] < lo[0] || p[1] < lo[1] || p[2] < lo[2] || p[0] > hi[0] || p[1] > hi[1] || p[2] > hi[2]) {
+            k->ramp[i] = 1;
+            continue;
+        }
+        for (size_t j = 0; j < k->noff && d2 > r2; j++) {
+            const float *q = k->p + 3 * (size_t)k->off[j];
+            double dx = (double)p[0] - q[0], dy = (double)p[1] - q[1], dz = (double)p[2] - q[2];
+            d2 = fmin(d2, dx * dx + dy * dy + dz * dz);
+        }
+        double u = d2 <= r2 ? 0 : d2 >= r4 ? 1 : (sqrt(d2) - r) / r;
+        k->ramp[i] = u * u * (3 - 2 * u);
     }
 }
 
@@ -1421,7 +1485,7 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
 
 
 
-    long found = track_check(c, cand, ref, true, &fl);
+    long found = track_check(c, cand, ref, true, &fl, false);
     res->checks = 1;
     res->pairs = found;
     res->flipped = fl;
@@ -1447,17 +1511,40 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
             memcpy(pv + 3 * i, k->p + 3 * (size_t)k->mv[i], 3 * sizeof(float));
             memcpy(cv + 3 * i, cand + 3 * (size_t)k->mv[i], 3 * sizeof(float));
         }
+        /* a local scale-back first: the motion near the blocking triangles is scaled, the
+         * rest kept (ramp); the shape with none of the near motion must pass (else the
+         * triangles it blocks join, FP_CONTACT_LOCAL_ROUNDS times), else the global one */
+        const double *ramp = NULL;
+        if (c->local_r > 0 && iters > 0) {
+            if (reserve((void **)&k->ramp, &k->cap_ramp, k->nmv, sizeof *k->ramp)) return -ENOMEM;
+            for (size_t i = 0; i < k->noff; i++) k->off_mark[k->off[i]] = 0;
+            k->noff = 0;
+            long m = track_check(c, cand, ref, false, &fl, true);
+            for (int round = 0; m > 0 || fl; round++) {
+                if (m < 0) return -ENOMEM;
+                if (round == FP_CONTACT_LOCAL_ROUNDS) break;
+                track_lerp(k, 0, NULL); /* P, where the distances are taken */
+                local_ramp(c);
+                track_lerp(k, 0, k->ramp);
+                m = track_check(c, k->p, ref, false, &fl, true);
+                res->checks++;
+                if (!m && !fl) ramp = k->ramp;
+            }
+            track_lerp(k, 0, NULL);
+        }
         double lo = 0, hi = 1;
         for (int i = 0; i < iters; i++) {
             double mid = 0.5 * (lo + hi);
-            track_lerp(k, mid);
-            long m = track_check(c, k->p, ref, false, &fl);
+            track_lerp(k, mid, ramp);
+            long m = track_check(c, k->p, ref, false, &fl, false);
             res->checks++;
+            if (m < 0) return -ENOMEM;
             if (m || fl) hi = mid;
             else lo = mid;
         }
-        track_lerp(k, lo);
+        track_lerp(k, lo, ramp);
         res->t = lo;
+        res->local = ramp != NULL;
     } else {
         for (size_t i = 0; i < k->nmv; i++)
             memcpy(k->p + 3 * (size_t)k->mv[i], cand + 3 * (size_t)k->mv[i], 3 * sizeof(float));
@@ -1486,4 +1573,70 @@ const float *fp_contact_shape(const fp_contact *c) { return c && c->tk ? c->tk->
 void fp_contact_set_prewarm(fp_contact *c, size_t max_tris)
 {
     if (c) c->prewarm = max_tris;
+}
+
+/* the unnormalised normal of triangle v in pos */
+static void tri_normal(const float *pos, const uint32_t *v, double n[3])
+{
+    double t[3][3], e1[3], e2[3];
+    tri_of(pos, v, t);
+    for (int k = 0; k < 3; k++) {
+        e1[k] = t[1][k] - t[0][k];
+        e2[k] = t[2][k] - t[0][k];
+    }
+    n[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    n[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    n[2] = e1[0] * e2[1] - e1[1] * e2[0];
+}
+
+static void cross3(const double a[3], const double b[3], double o[3])
+{
+    o[0] = a[1] * b[2] - a[2] * b[1];
+    o[1] = a[2] * b[0] - a[0] * b[2];
+    o[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+int fp_contact_set_pose(fp_contact *c, const float *base, const float *posed)
+{
+    if (!c || (!base) != (!posed)) return -EINVAL;
+    if (!c->nrm_weld) {
+        if (!base || posed == base) return 0; /* the weld shape's, as made */
+        c->nrm_weld = malloc((c->t ? c->t : 1) * sizeof *c->nrm_weld);
+        if (!c->nrm_weld) return -ENOMEM;
+        memcpy(c->nrm_weld, c->nrm, c->t * sizeof *c->nrm);
+    }
+    for (size_t i = 0; i < c->t; i++) {
+        const uint32_t *v = c->tris + 3 * i;
+        double w[3] = {c->nrm_weld[i][0], c->nrm_weld[i][1], c->nrm_weld[i][2]};
+        if (base && posed != base) {
+            double a[3], b[3], la = 0, lb = 0;
+            tri_normal(base, v, a);
+            tri_normal(posed, v, b);
+            for (int k = 0; k < 3; k++) la += a[k] * a[k], lb += b[k] * b[k];
+            la = sqrt(la);
+            lb = sqrt(lb);
+            if (la > 0 && lb > 0) {
+                for (int k = 0; k < 3; k++) a[k] /= la, b[k] /= lb;
+                double cs = a[0] * b[0] + a[1] * b[1] + a[2] * b[2], ax[3], t1[3], t2[3];
+                if (cs > -0.999999) { /* w rotated by the least rotation taking a to b */
+                    cross3(a, b, ax);
+                    cross3(ax, w, t1);
+                    cross3(ax, t1, t2);
+                    for (int k = 0; k < 3; k++) w[k] += t1[k] + t2[k] / (1 + cs);
+                } else { /* turned over by the pose: the posed normal's side */
+                    double s = 0;
+                    for (int k = 0; k < 3; k++) s += w[k] * w[k];
+                    s = sqrt(s);
+                    for (int k = 0; k < 3; k++) w[k] = b[k] * s;
+                }
+            }
+        }
+        for (int k = 0; k < 3; k++) c->nrm[i][k] = (float)w[k];
+    }
+    return 0;
+}
+
+void fp_contact_set_local(fp_contact *c, double radius)
+{
+    if (c) c->local_r = radius > 0 && isfinite(radius) ? radius : 0;
 }

@@ -56,8 +56,9 @@ int fp_contact_dilate_own(fp_contact *c, int rings);
 /** What fp_contact_count_new saw besides the new pairs. */
 typedef struct fp_contact_count {
     size_t moved_tris;   /* triangles with a moved vertex */
-    size_t flipped;      /* moved triangles turned over (normal against the weld shape's, more
-                            than 90 degrees) in cand and not in ref, own-crossing ones left out */
+    size_t flipped;      /* moved triangles turned over (normal against the rest normal, the
+                            weld shape's or fp_contact_set_pose's, more than 90 degrees) in
+                            cand and not in ref, own-crossing ones left out */
     long near_own;       /* new pairs left out: a triangle crosses in the weld shape */
 } fp_contact_count;
 
@@ -73,13 +74,16 @@ long fp_contact_count_new(fp_contact *c, const float *ref, const float *cand, ui
 
 /** What fp_contact_guard did. */
 typedef struct fp_contact_result {
-    double t;            /* the fraction of the motion kept (1: all, 0: the reference) */
+    double t;            /* the fraction of the motion kept (1: all, 0: the reference); with
+                            local: near the blocking triangles (the rest more, see
+                            fp_contact_set_local) */
     long pairs;          /* new pairs of the full candidate */
     size_t flipped;      /* newly flipped triangles of the full candidate (these block too) */
     int checks;          /* checks of a shape (fp_contact_count_new calls) */
     size_t moved_tris;   /* moved triangles of the full candidate (fp_contact_step: not own) */
     size_t moved_verts;  /* fp_contact_step: vertices where the candidate differs from P */
     size_t renewed;      /* fp_contact_step: envelopes renewed */
+    int local;           /* fp_contact_step: 1 when the scale-back was local */
 } fp_contact_result;
 
 /** The guard: out = ref + t (cand - ref) per vertex (float), with the largest t of the
@@ -129,6 +133,17 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
  * vertices, t the largest of `iters` halvings that adds none) keeps the invariant. What
  * changes against fp_contact_guard: t scales this frame's motion (P -> C), not the gesture's
  * (ref -> C); the shape shown after a scaled frame is P's, and the next frame goes on from it.
+ *
+ * A local scale-back (fp_contact_set_local, radius r): instead of one t for the frame, vertex
+ * v keeps the share w(v) = t + (1 - t) s(v) of its motion, s(v) = 0 within r of a vertex of
+ * a blocking triangle (a triangle of a new pair or a newly flipped one, positions in P),
+ * smoothstep up to 1 at 2r, so a finger stopped at the lips does not freeze a brow. The
+ * shape with t = 0 must pass the check; when it does not, the triangles it blocks join the
+ * blocking set (up to FP_CONTACT_LOCAL_ROUNDS = 3 times), then the global t as above. The
+ * bisection is then over t with w. Every vertex still lies on its segment P -> C (w in
+ * [0, 1]), so (3) holds unchanged; every shape kept passed the same check, so the
+ * invariant holds, and a fold at the border between scaled and kept motion is a flip or a
+ * crossing that check sees.
  * tests/session/test_contact.c holds every decision to the full check's.
  *
  * Cost: per frame, the vertices in the ranges and D_P, then each moved triangle (boxes, its
@@ -173,6 +188,26 @@ int fp_contact_step(fp_contact *c, const float *ref, const float *cand, const ui
  *  the first fp_contact_reference. */
 #define FP_CONTACT_PREWARM 262144
 void fp_contact_set_prewarm(fp_contact *c, size_t max_tris);
+
+/** Flips are judged against rest normals: the weld shape's (as made), or, after this call
+ *  with a rig's pose (base: the unposed reference, posed: the reference the rig made of it,
+ *  both n x 3), the weld shape's normals carried by the pose: each triangle's turned by the
+ *  least rotation that takes its normal in base to its normal in posed (a triangle the pose
+ *  turned over: posed's normal). So a triangle the pose itself turned (the ICT mouth corners
+ *  turn 89 degrees with the jaw open) is judged from where the pose put it, not from the
+ *  neutral face: the pose is the rig's business, not the guard's. base == posed or both
+ *  NULL: the weld shape's normals again. Call it when the reference changes, before
+ *  fp_contact_reference (whose P := ref keeps the invariant below: a pair or flip of ref is
+ *  never new). O(t). Returns 0, -EINVAL (NULL c, one of base / posed NULL) or -ENOMEM. */
+int fp_contact_set_pose(fp_contact *c, const float *base, const float *posed);
+
+/** fp_contact_step scales back locally (the argument above): radius r > 0 in mesh units
+ *  (the session gives its support radius: the motion within r of a blocking triangle comes
+ *  from control points whose supports reach it); 0 (default), NaN or negative: the whole
+ *  frame's motion by one t. Extra cost of a scale-back: up to 4 more checks, and the moved
+ *  vertices inside the blocking vertices' box grown by 2r x the blocking vertices (test_guard,
+ *  unanchored ICT three-claps: check p99 3.1 ms against 2.7 ms global; noisy, 2 cores). */
+void fp_contact_set_local(fp_contact *c, double radius);
 
 /** P, the shape fp_contact_step last accepted (n x 3, owned by c, valid until its next
  *  call), or NULL before the first fp_contact_reference. */

@@ -67,6 +67,8 @@ struct fp_session {
     /* the contact guard (contact.h, its incremental form); NULL with no_contact_guard */
     fp_contact *contact;
     int cg_sync;                  /* FP_CG_*: what the guard's P must catch up with */
+    float cg_pose[FP_RIG_MAX_CHANNELS]; /* the channel values its rest normals were posed by */
+    bool cg_posed;                /* cg_pose is set (fp_contact_set_pose was called) */
     bool cg_lost;                 /* the guard ran out of memory: made anew, the base shown
                                      until then */
     unsigned long cg_frames, cg_limited; /* this gesture: frames checked, scaled back */
@@ -426,11 +428,23 @@ static void contact_guard(fp_session *s, const float *ref, fp_frame_stats *st)
         if (contact_open(s)) return; /* still no memory: the base stays */
         s->cg_lost = false;
         s->shown = shown;
+        s->cg_sync = FP_CG_REF_CHANGED; /* the rig's pose below */
+        s->cg_posed = false;
     }
     if (!s->contact || s->shown == ref) return;
     int64_t t0 = fp_now_ns();
+    fp_contact_set_local(s->contact, s->radius); /* a blocked finger stops alone */
     int rc = 0;
-    if (s->cg_sync != FP_CG_SYNCED)
+    /* flips are judged from where the rig's pose put each triangle (fp_contact_set_pose,
+     * O(t): when the channels changed, not at every commit): the open jaw turns the ICT
+     * mouth corners 89 degrees from the neutral face */
+    if (s->cg_sync == FP_CG_REF_CHANGED && s->rig.rig &&
+        (!s->cg_posed || memcmp(s->cg_pose, s->rig.posed_values, sizeof s->cg_pose))) {
+        rc = fp_contact_set_pose(s->contact, s->base, ref);
+        memcpy(s->cg_pose, s->rig.posed_values, sizeof s->cg_pose);
+        s->cg_posed = true;
+    }
+    if (!rc && s->cg_sync != FP_CG_SYNCED)
         rc = fp_contact_reference(s->contact, ref, NULL, s->cg_sync == FP_CG_REF_CHANGED ? SIZE_MAX : 0);
     s->cg_sync = FP_CG_SYNCED;
     const uint32_t *ranges;

@@ -585,6 +585,120 @@ static void test_track_recordings(void **state)
     recording_frames("grab", "anchored", false);
 }
 
+/* Two fingers in one frame (issue: a finger stopped at the lips froze a brow): one pushes the
+ * lower sheet up through the upper one, one pulls it down far away, in free space. With a
+ * local scale-back (fp_contact_set_local) the far finger's motion is kept bit for bit and the
+ * near one is stopped short of the upper sheet; the global one scales both. Over frames, every
+ * kept shape passes the full check and CGAL (track_frame). */
+static void two_fingers(int frames, double local, float *far_kept, float *near_top)
+{
+    float *pos;
+    size_t n, t;
+    uint32_t *tris;
+    sheets(40, 0.05f, &pos, &n, &tris, &t);
+    float *cand = malloc(n * 3 * sizeof(float));
+    uint32_t *ranges = malloc(n * sizeof *ranges);
+    fp_contact *tk, *full;
+    assert_int_equal(fp_contact_create(tris, t, n, pos, &tk), 0);
+    assert_int_equal(fp_contact_create(tris, t, n, pos, &full), 0);
+    fp_contact_set_local(tk, local);
+    assert_int_equal(fp_contact_reference(tk, pos, NULL, SIZE_MAX), 0);
+    track_stats ts = {0, 0, 0, 1.0};
+    fp_contact_result r = {0};
+    for (int f = 1; f <= frames; f++) {
+        memcpy(cand, pos, n * 3 * sizeof(float));
+        double h = 0.12 * f / frames;
+        for (size_t v = 0; v < n / 2; v++) { /* the lower sheet: z = 0 */
+            double da = hypot(pos[3 * v] - 0.2, pos[3 * v + 1] - 0.5) / 0.12,
+                   db = hypot(pos[3 * v] - 0.8, pos[3 * v + 1] - 0.5) / 0.12;
+            if (da < 1) cand[3 * v + 2] += (float)(h * (1 - da * da) * (1 - da * da));
+            if (db < 1) cand[3 * v + 2] -= (float)(h * (1 - db * db) * (1 - db * db));
+        }
+        track_frame(tk, full, pos, cand, n, tris, t, ranges, true, 0, &ts);
+    }
+    /* the last frame once more on its own, for the result */
+    assert_int_equal(fp_contact_step(tk, pos, cand, NULL, SIZE_MAX, 6, &r), 0);
+    const float *kept = fp_contact_shape(tk);
+    *far_kept = 1, *near_top = 0;
+    double far_max = 0, far_got = 0;
+    for (size_t v = 0; v < n / 2; v++) {
+        double db = hypot(pos[3 * v] - 0.8, pos[3 * v + 1] - 0.5) / 0.12;
+        if (db < 1 && cand[3 * v + 2] < far_max) far_max = cand[3 * v + 2], far_got = kept[3 * v + 2];
+        *near_top = fmaxf(*near_top, kept[3 * v + 2]);
+    }
+    *far_kept = (float)(far_got / far_max);
+    assert_true(fp_contact_count_new(full, pos, cand, NULL, 0, NULL) > 0); /* unguarded: crosses */
+    printf("two fingers over %d frames, local %.2g: %d scaled back (least t %.3f); the far finger "
+           "kept %.1f%% of its pull, the near bump rose to %.4f (gap 0.05)\n",
+           frames, local, ts.scaled, ts.least_t, 100.0 * *far_kept, *near_top);
+    assert_true(ts.scaled > 0);
+    assert_true(*near_top <= 0.05f);
+    if (local > 0) { /* the far finger's whole motion, bit for bit */
+        for (size_t v = 0; v < n / 2; v++)
+            if (hypot(pos[3 * v] - 0.8, pos[3 * v + 1] - 0.5) < 0.3)
+                assert_memory_equal(kept + 3 * v, cand + 3 * v, 3 * sizeof(float));
+        assert_int_equal(r.local, 1);
+    }
+    fp_contact_destroy(&tk);
+    fp_contact_destroy(&full);
+    free(ranges);
+    free(cand);
+    free(pos);
+    free(tris);
+}
+
+static void test_track_local(void **state)
+{
+    (void)state;
+    float far, top;
+    two_fingers(1, 0.15, &far, &top);
+    assert_true(far == 1 && top > 0.5f * 0.05f);
+    two_fingers(8, 0.15, &far, &top);
+    assert_true(far == 1 && top > 0.8f * 0.05f);
+    two_fingers(8, 0, &far, &top); /* global: the far finger stops with the near one */
+    assert_true(far < 0.9f);
+}
+
+/* fp_contact_set_pose: a triangle a rig's pose turned 89 degrees from the weld shape (the
+ * ICT mouth corners with the jaw open) is judged from where the pose put it: a 2-degree
+ * nudge beyond is no flip, a fold (turned 180 degrees from the posed shape) still is. */
+static void turn_x(const float *in, float *out, size_t n, double deg)
+{
+    double a = deg * 3.14159265358979323846 / 180, c = cos(a), s = sin(a);
+    for (size_t v = 0; v < n; v++) {
+        const float *p = in + 3 * v;
+        out[3 * v] = p[0];
+        out[3 * v + 1] = (float)(c * p[1] - s * p[2]);
+        out[3 * v + 2] = (float)(s * p[1] + c * p[2]);
+    }
+}
+
+static void test_set_pose(void **state)
+{
+    (void)state;
+    const float weld[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    const uint32_t tri[3] = {0, 1, 2};
+    float posed[9], nudged[9], folded[9];
+    turn_x(weld, posed, 3, 89);
+    turn_x(weld, nudged, 3, 91);
+    turn_x(weld, folded, 3, 89 + 150);
+    fp_contact *c;
+    assert_int_equal(fp_contact_create(tri, 1, 3, weld, &c), 0);
+    fp_contact_count info;
+    assert_int_equal(fp_contact_count_new(c, posed, nudged, NULL, 0, &info), 0);
+    assert_int_equal(info.flipped, 1); /* against the weld shape's normal: the artefact */
+    assert_int_equal(fp_contact_set_pose(c, weld, posed), 0);
+    assert_int_equal(fp_contact_count_new(c, posed, nudged, NULL, 0, &info), 0);
+    assert_int_equal(info.flipped, 0);
+    assert_int_equal(fp_contact_count_new(c, posed, folded, NULL, 0, &info), 0);
+    assert_int_equal(info.flipped, 1);
+    assert_int_equal(fp_contact_set_pose(c, NULL, NULL), 0); /* the weld shape's again */
+    assert_int_equal(fp_contact_count_new(c, posed, nudged, NULL, 0, &info), 0);
+    assert_int_equal(info.flipped, 1);
+    assert_int_equal(fp_contact_set_pose(c, weld, NULL), -EINVAL);
+    fp_contact_destroy(&c);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -595,6 +709,8 @@ int main(void)
         cmocka_unit_test(test_track_sheets_fast),
         cmocka_unit_test(test_track_sheets_slow),
         cmocka_unit_test(test_track_big),
+        cmocka_unit_test(test_track_local),
+        cmocka_unit_test(test_set_pose),
         cmocka_unit_test(test_track_lips_fast),
         cmocka_unit_test(test_track_lips_slow),
         cmocka_unit_test(test_track_recordings),
