@@ -1250,6 +1250,32 @@ static int mark_tris(fp_contact *c, uint32_t v)
     return 0;
 }
 
+/* k->mv := the vertices where a differs (bitwise) from P, looked for where either may differ
+ * from the reference: D_P, then the ranges (every vertex for nranges == SIZE_MAX). Returns 0
+ * or -ENOMEM. */
+static int collect_moved(fp_contact *c, const float *a, const uint32_t *ranges, size_t nranges)
+{
+    struct track *k = c->tk;
+    k->nmv = 0;
+#define FP_VISIT(v)                                                                             \
+    do {                                                                                        \
+        size_t v_ = (v);                                                                        \
+        if (vert_differs(a, k->p, v_) && push_u32(&k->mv, &k->nmv, &k->cap_mv, (uint32_t)v_))   \
+            return -ENOMEM;                                                                     \
+    } while (0)
+    for (size_t i = 0; i < k->ndp; i++) FP_VISIT(k->dp[i]);
+    if (nranges == SIZE_MAX) {
+        for (size_t v = 0; v < c->n; v++)
+            if (!k->in_dp[v]) FP_VISIT(v);
+    } else {
+        for (size_t r = 0; r < nranges; r++)
+            for (size_t v = ranges[2 * r]; v < (size_t)ranges[2 * r] + ranges[2 * r + 1] && v < c->n; v++)
+                if (!k->in_dp[v]) FP_VISIT(v);
+    }
+#undef FP_VISIT
+    return 0;
+}
+
 static int reference(fp_contact *c, const float *ref, const uint32_t *ranges, size_t nranges);
 
 int fp_contact_reference(fp_contact *c, const float *ref, const uint32_t *ranges, size_t nranges)
@@ -1268,24 +1294,9 @@ static int reference(fp_contact *c, const float *ref, const uint32_t *ranges, si
     tick(k, c->t);
     k->nmt = 0;
     /* P := ref where they differ: D_P, then the ranges (or everything) */
-    k->nmv = 0;
-#define FP_VISIT(v)                                                                             \
-    do {                                                                                        \
-        size_t v_ = (v);                                                                        \
-        if (!vert_differs(ref, k->p, v_)) break;                                                \
-        if (push_u32(&k->mv, &k->nmv, &k->cap_mv, (uint32_t)v_) || mark_tris(c, (uint32_t)v_))  \
-            return -ENOMEM;                                                                     \
-    } while (0)
-    for (size_t i = 0; i < k->ndp; i++) FP_VISIT(k->dp[i]);
-    if (nranges == SIZE_MAX) {
-        for (size_t v = 0; v < c->n; v++)
-            if (!k->in_dp[v]) FP_VISIT(v);
-    } else {
-        for (size_t r = 0; r < nranges; r++)
-            for (size_t v = ranges[2 * r]; v < (size_t)ranges[2 * r] + ranges[2 * r + 1] && v < c->n; v++)
-                if (!k->in_dp[v]) FP_VISIT(v);
-    }
-#undef FP_VISIT
+    if (collect_moved(c, ref, ranges, nranges)) return -ENOMEM;
+    for (size_t i = 0; i < k->nmv; i++)
+        if (mark_tris(c, k->mv[i])) return -ENOMEM;
     for (size_t i = 0; i < k->ndp; i++) k->in_dp[k->dp[i]] = 0;
     k->ndp = 0;
     /* the static triangles that change leave the static grid (P there still the weld shape) */
@@ -1441,25 +1452,8 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
     size_t renewed0 = k->renewed;
 
 
-    /* the moved vertices: where cand differs from P, looked for where either may differ
-     * from the reference (D_P and the ranges) */
-#define FP_VISIT(v)                                                                             \
-    do {                                                                                        \
-        size_t v_ = (v);                                                                        \
-        if (vert_differs(cand, k->p, v_) &&                                                     \
-            push_u32(&k->mv, &k->nmv, &k->cap_mv, (uint32_t)v_))                                \
-            return -ENOMEM;                                                                     \
-    } while (0)
-    for (size_t i = 0; i < k->ndp; i++) FP_VISIT(k->dp[i]);
-    if (nranges == SIZE_MAX) {
-        for (size_t v = 0; v < c->n; v++)
-            if (!k->in_dp[v]) FP_VISIT(v);
-    } else {
-        for (size_t r = 0; r < nranges; r++)
-            for (size_t v = ranges[2 * r]; v < (size_t)ranges[2 * r] + ranges[2 * r + 1] && v < c->n; v++)
-                if (!k->in_dp[v]) FP_VISIT(v);
-    }
-#undef FP_VISIT
+    /* the moved vertices: where cand differs from P */
+    if (collect_moved(c, cand, ranges, nranges)) return -ENOMEM;
     res->moved_verts = k->nmv;
     if (!k->nmv) return 0; /* nothing moved: P is the candidate */
     for (size_t i = 0; i < k->nmv; i++)
