@@ -219,6 +219,26 @@ static int vertex_index(const ctx *c, const cJSON *e, const char *p, size_t n, u
     return 0;
 }
 
+/* One entry of a vertex list: an index, or a range [first, last] (inclusive) at path p;
+ * *a..*b the vertices. */
+static int vertex_span(const ctx *c, const cJSON *e, const char *p, size_t n, uint32_t *a, uint32_t *b)
+{
+    int rc;
+    if (!cJSON_IsArray(e)) {
+        if ((rc = vertex_index(c, e, p, n, a))) return rc;
+        *b = *a;
+        return 0;
+    }
+    if (cJSON_GetArraySize(e) != 2) return bad(c, p, "a range is [first, last]");
+    char q[160];
+    snprintf(q, sizeof q, "%s[0]", p);
+    if ((rc = vertex_index(c, e->child, q, n, a))) return rc;
+    snprintf(q, sizeof q, "%s[1]", p);
+    if ((rc = vertex_index(c, e->child->next, q, n, b))) return rc;
+    if (*b < *a) return bad(c, p, "range [%u, %u] runs backwards", *a, *b);
+    return 0;
+}
+
 static void normalize(double v[3])
 {
     double l = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
@@ -333,18 +353,7 @@ static int parse_regions(const ctx *c, fp_rig *r, const cJSON *root)
             char ep[128];
             snprintf(ep, sizeof ep, "%s[%d]", vp, k);
             uint32_t a, b;
-            if (cJSON_IsArray(e)) {
-                if (cJSON_GetArraySize(e) != 2) { rc = bad(c, ep, "a range is [first, last]"); break; }
-                char q[140];
-                snprintf(q, sizeof q, "%s[0]", ep);
-                if ((rc = vertex_index(c, e->child, q, r->n, &a))) break;
-                snprintf(q, sizeof q, "%s[1]", ep);
-                if ((rc = vertex_index(c, e->child->next, q, r->n, &b))) break;
-                if (b < a) { rc = bad(c, ep, "range [%u, %u] runs backwards", a, b); break; }
-            } else {
-                if ((rc = vertex_index(c, e, ep, r->n, &a))) break;
-                b = a;
-            }
+            if ((rc = vertex_span(c, e, ep, r->n, &a, &b))) break;
             for (uint32_t v = a; v <= b; v++) {
                 if (owner[v] == (uint8_t)(i + 1)) continue; /* repeated in the same region */
                 if (owner[v]) {
@@ -488,18 +497,7 @@ static int parse_weights(const ctx *c, fp_rig *r, const cJSON *wj)
         char ep[64];
         snprintf(ep, sizeof ep, "jaw.weights.vertices[%d]", i);
         uint32_t a, b;
-        if (cJSON_IsArray(e)) {
-            if (cJSON_GetArraySize(e) != 2) { rc = bad(c, ep, "a range is [first, last]"); break; }
-            char q[80];
-            snprintf(q, sizeof q, "%s[0]", ep);
-            if ((rc = vertex_index(c, e->child, q, r->n, &a))) break;
-            snprintf(q, sizeof q, "%s[1]", ep);
-            if ((rc = vertex_index(c, e->child->next, q, r->n, &b))) break;
-            if (b < a) { rc = bad(c, ep, "range [%u, %u] runs backwards", a, b); break; }
-        } else {
-            if ((rc = vertex_index(c, e, ep, r->n, &a))) break;
-            b = a;
-        }
+        if ((rc = vertex_span(c, e, ep, r->n, &a, &b))) break;
         if ((size_t)(b - a) + 1 > nv - k) {
             rc = bad(c, ep, "more vertices listed than jaw.weights.values has numbers (%zu)", nv);
             break;
