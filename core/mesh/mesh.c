@@ -844,7 +844,8 @@ int fp__ply_scan(const char *path, const char *text, size_t len, size_t *vertice
         if (memchr(p, '\0', (size_t)(eol - p)))
             PLY_FAIL("line %zu: NUL byte in the PLY header", line_no);
         const int crlf = eol > p && eol[-1] == '\r';
-        const int trailing = eol > p && is_blank(eol[crlf ? -2 : -1]);
+        /* a blank before the line end ("\r\n" alone has none: eol[-2] would be before p) */
+        const int trailing = eol - p > crlf && is_blank(eol[crlf ? -2 : -1]);
         obj_line l = {p, eol};
         p = eol + 1;
         const char *tok[6];
