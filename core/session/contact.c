@@ -331,8 +331,9 @@ static long scan(fp_contact *c, const float *ref, const float *cand, bool all, u
         }
         cell = fmax(cell, ext);
         sum += ext;
-        /* a triangle turned over against the weld shape (and not already in ref) */
-        if (info && ref && !c->own[i] && flipped(c, cand, v, i) && !flipped(c, ref, v, i))
+        /* a triangle turned over against its rest normal (and not already in ref); own
+         * triangles too: a flip is no crossing, the input's own crossings do not excuse it */
+        if (info && ref && flipped(c, cand, v, i) && !flipped(c, ref, v, i))
             info->flipped++;
     }
     if (info) info->moved_tris = nm;
@@ -593,6 +594,8 @@ struct track {
     uint32_t *mt;                 /* moved triangles, own ones left out */
     float (*mbox)[6];             /* their boxes in the candidate */
     size_t nmt, cap_mt, cap_mbox;
+    uint32_t *mo;                 /* moved own triangles: checked for flips only */
+    size_t nmo, cap_mo;
     uint32_t *tstamp, tclock;     /* t: == tclock when in mt */
     uint32_t *qstamp, qclock;     /* t: == qclock when seen by this query */
     double h;                     /* the grid cell */
@@ -640,6 +643,7 @@ static void track_free(struct track *k)
     free(k->pv);
     free(k->cv);
     free(k->mt);
+    free(k->mo);
     free(k->mbox);
     free(k->tstamp);
     free(k->qstamp);
@@ -1236,18 +1240,39 @@ static void tick(struct track *k, size_t t)
     }
 }
 
-/* the triangles (not own) of vertex v into mt, once per clock */
+static int add_off(fp_contact *c, const uint32_t *v);
+
+/* the triangles of vertex v into mt (own ones into mo), once per clock */
 static int mark_tris(fp_contact *c, uint32_t v)
 {
     struct track *k = c->tk;
     for (uint32_t j = k->vt_start[v]; j < k->vt_start[v + 1]; j++) {
         uint32_t a = k->vt[j];
-        if (c->own[a] || k->tstamp[a] == k->tclock) continue;
+        if (k->tstamp[a] == k->tclock) continue;
         k->tstamp[a] = k->tclock;
+        if (c->own[a]) {
+            if (push_u32(&k->mo, &k->nmo, &k->cap_mo, a)) return -ENOMEM;
+            continue;
+        }
         if (reserve((void **)&k->mt, &k->cap_mt, k->nmt + 1, sizeof *k->mt)) return -ENOMEM;
         k->mt[k->nmt++] = a;
     }
     return 0;
+}
+
+/* newly flipped moved own triangles of shape s (their vertices into off when record) */
+static long own_flips(fp_contact *c, const float *s, const float *ref, bool record)
+{
+    struct track *k = c->tk;
+    long f = 0;
+    for (size_t i = 0; i < k->nmo; i++) {
+        const uint32_t *v = c->tris + 3 * (size_t)k->mo[i];
+        if (flipped(c, s, v, k->mo[i]) && !flipped(c, ref, v, k->mo[i])) {
+            f++;
+            if (record && add_off(c, v)) return -ENOMEM;
+        }
+    }
+    return f;
 }
 
 /* k->mv := the vertices where a differs (bitwise) from P, looked for where either may differ
@@ -1292,7 +1317,7 @@ static int reference(fp_contact *c, const float *ref, const uint32_t *ranges, si
 {
     struct track *k = c->tk;
     tick(k, c->t);
-    k->nmt = 0;
+    k->nmt = k->nmo = 0;
     /* P := ref where they differ: D_P, then the ranges (or everything) */
     if (collect_moved(c, ref, ranges, nranges)) return -ENOMEM;
     for (size_t i = 0; i < k->nmv; i++)
@@ -1317,7 +1342,6 @@ static int reference(fp_contact *c, const float *ref, const uint32_t *ranges, si
 
 /* New pairs and newly flipped triangles of shape s (P but for the moved vertices) against
  * ref, among the pairs with a moved triangle (mt); cand_boxes: s is the candidate (mbox). */
-static int add_off(fp_contact *c, const uint32_t *v);
 
 static long track_check(fp_contact *c, const float *s, const float *ref, bool cand_boxes,
                         size_t *flips, bool record)
@@ -1368,6 +1392,11 @@ static long track_check(fp_contact *c, const float *s, const float *ref, bool ca
             if (record && (add_off(c, va) || add_off(c, vb))) return -ENOMEM;
             found++;
         }
+    }
+    if (!cand_boxes) {
+        long f = own_flips(c, s, ref, record);
+        if (f < 0) return -ENOMEM;
+        *flips += (size_t)f;
     }
     return found;
 }
@@ -1448,7 +1477,7 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
 {
     struct track *k = c->tk;
     tick(k, c->t);
-    k->nmv = k->nmt = 0;
+    k->nmv = k->nmt = k->nmo = 0;
     size_t renewed0 = k->renewed;
 
 
@@ -1475,6 +1504,7 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
             return -ENOMEM;
         if (flipped(c, cand, va, a) && !flipped(c, ref, va, a)) fl++;
     }
+    fl += (size_t)own_flips(c, cand, ref, false);
     if (renew_lists(c)) return -ENOMEM;
 
 

@@ -58,7 +58,8 @@ typedef struct fp_contact_count {
     size_t moved_tris;   /* triangles with a moved vertex */
     size_t flipped;      /* moved triangles turned over (normal against the rest normal, the
                             weld shape's or fp_contact_set_pose's, more than 90 degrees) in
-                            cand and not in ref, own-crossing ones left out */
+                            cand and not in ref, own-crossing ones included: the input's
+                            own crossings excuse pairs, not a triangle turned over */
     long near_own;       /* new pairs left out: a triangle crosses in the weld shape */
 } fp_contact_count;
 
@@ -102,7 +103,8 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
  *
  * Why this is exactly the check above. Let new(S) be the pairs fp_contact_count_new(ref, S)
  * counts (cross in S, not in ref, neither triangle own, not adjacent) and flip(S) its
- * newly flipped triangles. Invariant: new(P) and flip(P) are empty; it holds for P = ref
+ * newly flipped triangles (own triangles included: they are checked for flips, from a list
+ * of their own, and for nothing else). Invariant: new(P) and flip(P) are empty; it holds for P = ref
  * (after fp_contact_reference) and for every shape fp_contact_step accepts.
  *  (1) A pair with no vertex that moved from P to the candidate C has the same triangles
  *      in P and in C, so it crosses in C iff in P; if it were in new(C) it would be in new(P).

@@ -699,6 +699,75 @@ static void test_set_pose(void **state)
     fp_contact_destroy(&c);
 }
 
+/* Flips count on the input's own crossings too: a crossing the input already has excuses
+ * the pairs near it, not a triangle turned over. Two sheets, the upper one tilted through
+ * the lower one (column 4 of 9 crosses: own), own widened by 1 ring; a vertex of the lower
+ * sheet on that column's edge pushed 1.5 columns sideways turns over triangles that are all
+ * own. The full check and the incremental guard see the flips (before this, neither did:
+ * the session's test_guard found one such flip in the ICT face's eye region); the shape
+ * kept has none, by this test's own count of reversed normals. */
+static size_t reversed(const float *a, const float *b, const uint32_t *tris, size_t t)
+{
+    size_t k = 0;
+    for (size_t i = 0; i < t; i++) {
+        const uint32_t *v = tris + 3 * i;
+        double n[2][3];
+        for (int w = 0; w < 2; w++) {
+            const float *p = w ? b : a;
+            double e1[3], e2[3];
+            for (int c = 0; c < 3; c++) {
+                e1[c] = (double)p[3 * v[1] + c] - p[3 * v[0] + c];
+                e2[c] = (double)p[3 * v[2] + c] - p[3 * v[0] + c];
+            }
+            n[w][0] = e1[1] * e2[2] - e1[2] * e2[1];
+            n[w][1] = e1[2] * e2[0] - e1[0] * e2[2];
+            n[w][2] = e1[0] * e2[1] - e1[1] * e2[0];
+        }
+        k += n[0][0] * n[1][0] + n[0][1] * n[1][1] + n[0][2] * n[1][2] < 0;
+    }
+    return k;
+}
+
+static void test_own_flip(void **state)
+{
+    (void)state;
+    float *pos;
+    size_t n, t;
+    uint32_t *tris;
+    sheets(9, 0.f, &pos, &n, &tris, &t);
+    for (size_t v = n / 2; v < n; v++) pos[3 * v + 2] = 0.4f * (pos[3 * v] - 0.5f); /* tilted */
+    float *cand = malloc(n * 3 * sizeof(float));
+    memcpy(cand, pos, n * 3 * sizeof(float));
+    size_t mv = 4 * 10 + 5; /* lower sheet, x = 4/9, y = 5/9: on column 4's edge */
+    cand[3 * mv] += 1.5f / 9;
+    size_t rev = reversed(pos, cand, tris, t);
+    assert_true(rev > 0);
+    fp_contact *full, *tk;
+    assert_int_equal(fp_contact_create(tris, t, n, pos, &full), 0);
+    assert_int_equal(fp_contact_create(tris, t, n, pos, &tk), 0);
+    assert_int_equal(fp_contact_dilate_own(full, 1), 0);
+    assert_int_equal(fp_contact_dilate_own(tk, 1), 0);
+    fp_contact_count info;
+    assert_int_equal(fp_contact_count_new(full, pos, cand, NULL, 0, &info), 0);
+    assert_int_equal(info.flipped, rev);
+    assert_int_equal(fp_contact_reference(tk, pos, NULL, SIZE_MAX), 0);
+    fp_contact_set_local(tk, 0.1);
+    fp_contact_result r;
+    assert_int_equal(fp_contact_step(tk, pos, cand, NULL, SIZE_MAX, 6, &r), 0);
+    assert_int_equal(r.flipped, rev);
+    assert_true(r.t < 1);
+    const float *kept = fp_contact_shape(tk);
+    assert_int_equal(reversed(pos, kept, tris, t), 0);
+    assert_true(kept[3 * mv] > pos[3 * mv]); /* it still moved some */
+    printf("own flip: %zu triangles turned over by the candidate, kept %.3f of the motion\n",
+           rev, (kept[3 * mv] - pos[3 * mv]) / (1.5 / 9));
+    fp_contact_destroy(&full);
+    fp_contact_destroy(&tk);
+    free(cand);
+    free(pos);
+    free(tris);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -711,6 +780,7 @@ int main(void)
         cmocka_unit_test(test_track_big),
         cmocka_unit_test(test_track_local),
         cmocka_unit_test(test_set_pose),
+        cmocka_unit_test(test_own_flip),
         cmocka_unit_test(test_track_lips_fast),
         cmocka_unit_test(test_track_lips_slow),
         cmocka_unit_test(test_track_recordings),
