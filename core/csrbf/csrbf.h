@@ -306,7 +306,8 @@ int csrbf_touch_create(const csrbf_points *points, csrbf_touch **out);
 void csrbf_touch_destroy(csrbf_touch **touch);
 /** The next csrbf_evaluate_touched writes every block (the base changed). */
 void csrbf_touch_reset(csrbf_touch *touch);
-/** The output buffer has become the base: no block differs from it any more. */
+/** The output buffer has become the base: no block differs from it any more (also after a
+ *  csrbf_touch_reset or a fresh touch: the next call writes only the blocks in a support). */
 void csrbf_touch_commit(csrbf_touch *touch);
 /** The vertex ranges the last csrbf_evaluate_touched wrote, as *ranges[2k] = first vertex,
  *  [2k+1] = count, increasing and disjoint; returns their number (0 before any call and after

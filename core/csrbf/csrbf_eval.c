@@ -766,6 +766,7 @@ void csrbf_touch_reset(csrbf_touch *t)
 void csrbf_touch_commit(csrbf_touch *t)
 {
     if (!t) return;
+    t->full = 0; /* the output is the base: a reset before it is answered too */
     t->nprev = 0;
     t->nranges = 0;
     t->sel_id = 0;

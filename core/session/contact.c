@@ -1632,7 +1632,12 @@ int fp_contact_set_pose(fp_contact *c, const float *base, const float *posed)
     for (size_t i = 0; i < c->t; i++) {
         const uint32_t *v = c->tris + 3 * i;
         double w[3] = {c->nrm_weld[i][0], c->nrm_weld[i][1], c->nrm_weld[i][2]};
-        if (base && posed != base) {
+        /* a triangle the pose left in place keeps its normal (bit for bit what the rotation
+         * below gives: the least rotation taking a to a is the identity), without its cost */
+        if (base && posed != base &&
+            (memcmp(base + 3 * (size_t)v[0], posed + 3 * (size_t)v[0], 3 * sizeof(float)) ||
+             memcmp(base + 3 * (size_t)v[1], posed + 3 * (size_t)v[1], 3 * sizeof(float)) ||
+             memcmp(base + 3 * (size_t)v[2], posed + 3 * (size_t)v[2], 3 * sizeof(float)))) {
             double a[3], b[3], la = 0, lb = 0;
             tri_normal(base, v, a);
             tri_normal(posed, v, b);

@@ -108,6 +108,13 @@ static int contact_open(fp_session *s)
 {
     int rc = fp_contact_create(s->mesh->triangles, s->mesh->triangle_count, s->n, s->loaded, &s->contact);
     if (!rc) rc = fp_contact_dilate_own(s->contact, FP_CONTACT_OWN_RINGS);
+    /* flips judged from where the rig's pose put each triangle (O(t): here, once, not at the
+     * first commit of a performance) */
+    if (!rc && s->rig.rig) {
+        rc = fp_contact_set_pose(s->contact, s->base, s->shown);
+        memcpy(s->cg_pose, s->rig.posed_values, sizeof s->cg_pose);
+        s->cg_posed = !rc;
+    }
     if (!rc) rc = fp_contact_reference(s->contact, s->shown, NULL, SIZE_MAX);
     if (rc) fp_contact_destroy(&s->contact);
     s->cg_sync = FP_CG_SYNCED;
@@ -427,9 +434,7 @@ static void contact_guard(fp_session *s, const float *ref, fp_frame_stats *st)
         s->shown = ref;
         if (contact_open(s)) return; /* still no memory: the base stays */
         s->cg_lost = false;
-        s->shown = shown;
-        s->cg_sync = FP_CG_REF_CHANGED; /* the rig's pose below */
-        s->cg_posed = false;
+        s->shown = shown; /* P is ref, shown last frame; the rig's pose set by contact_open */
     }
     if (!s->contact || s->shown == ref) return;
     int64_t t0 = fp_now_ns();

@@ -326,6 +326,18 @@ static void test_touched(void **state)
     assert_int_equal(csrbf_evaluate_touched(s, p, tc, out, 0, NULL), CSRBF_OK);
     size_t nr = csrbf_touch_ranges(tc, NULL);
     assert_int_equal(nr, 1);
+    /* a reset (or a fresh touch) then a commit over an output equal to the base: the next
+     * call writes only the blocks in a support, and the output is still csrbf_evaluate's */
+    memcpy(out, v, nv * 3 * sizeof *out);
+    csrbf_touch_reset(tc);
+    csrbf_touch_commit(tc);
+    assert_int_equal(csrbf_evaluate_touched(s, p, tc, out, 0, NULL), CSRBF_OK);
+    assert_int_equal(csrbf_evaluate(s, p, ref, 0, NULL), CSRBF_OK);
+    assert_memory_equal(out, ref, nv * 3 * sizeof *out);
+    const uint32_t *rg2;
+    size_t nr2 = csrbf_touch_ranges(tc, &rg2), covered2 = 0;
+    for (size_t r = 0; r < nr2; r++) covered2 += rg2[2 * r + 1];
+    assert_true(covered2 > 0 && covered2 < nv / 2);
     /* a touch of other points is refused */
     csrbf_points *q = NULL;
     assert_int_equal(csrbf_points_create(nv, v, &q), CSRBF_OK);
