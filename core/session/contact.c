@@ -191,9 +191,10 @@ int fp_contact_create(const uint32_t *tris, size_t t, size_t n, const float *wel
             e1[k] = tr[1][k] - tr[0][k];
             e2[k] = tr[2][k] - tr[0][k];
         }
-        c->nrm[i][0] = (float)(e1[1] * e2[2] - e1[2] * e2[1]);
-        c->nrm[i][1] = (float)(e1[2] * e2[0] - e1[0] * e2[2]);
-        c->nrm[i][2] = (float)(e1[0] * e2[1] - e1[1] * e2[0]);
+        double nr[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                        e1[0] * e2[1] - e1[1] * e2[0]};
+        double l = sqrt(nr[0] * nr[0] + nr[1] * nr[1] + nr[2] * nr[2]);
+        for (int k = 0; k < 3; k++) c->nrm[i][k] = l > 0 ? (float)(nr[k] / l) : 0.f; /* unit */
     }
     if (scan(c, NULL, weld, true, NULL, 0, NULL) < 0) {
         fp_contact_destroy(&c);
@@ -303,7 +304,10 @@ static bool flipped(const fp_contact *c, const float *pos, const uint32_t *v, si
     }
     double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
                    e1[0] * e2[1] - e1[1] * e2[0]};
-    return n[0] * c->nrm[i][0] + n[1] * c->nrm[i][1] + n[2] * c->nrm[i][2] < 0;
+    double d = n[0] * c->nrm[i][0] + n[1] * c->nrm[i][1] + n[2] * c->nrm[i][2];
+    /* turned by more than acos(FP_CONTACT_FLIP_COS) (the rest normal is a unit vector): d <
+     * FP_CONTACT_FLIP_COS |n|, without a square root */
+    return d < 0 || d * d < FP_CONTACT_FLIP_COS * FP_CONTACT_FLIP_COS * (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
 }
 
 /* The pairs of a moved triangle and a triangle near it that cross in cand and (ref not NULL)

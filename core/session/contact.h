@@ -53,11 +53,18 @@ void fp_contact_destroy(fp_contact **c);
  *  triangles under the smallest motion). Cumulative. Returns 0 or -ENOMEM. */
 int fp_contact_dilate_own(fp_contact *c, int rings);
 
+/** A triangle is turned over (flipped) when its normal is more than acos(this) from its rest
+ *  normal: 90 degrees less 0.0006 of a degree, a margin over the rest normal's rounding to float. The
+ *  bisection drives a turning triangle to that edge; at exactly 90 degrees the rounding
+ *  decided the sign, and an independent check in double (tests/e2e/test_guard) saw a flip
+ *  the guard had let through (tests/session/test_contact.c test_flip_boundary). */
+#define FP_CONTACT_FLIP_COS 1e-5
+
 /** What fp_contact_count_new saw besides the new pairs. */
 typedef struct fp_contact_count {
     size_t moved_tris;   /* triangles with a moved vertex */
     size_t flipped;      /* moved triangles turned over (normal against the rest normal, the
-                            weld shape's or fp_contact_set_pose's, more than 90 degrees) in
+                            weld shape's or fp_contact_set_pose's, FP_CONTACT_FLIP_COS) in
                             cand and not in ref, own-crossing ones included: the input's
                             own crossings excuse pairs, not a triangle turned over */
     long near_own;       /* new pairs left out: a triangle crosses in the weld shape */

@@ -768,6 +768,64 @@ static void test_own_flip(void **state)
     free(tris);
 }
 
+/* A flip is judged with a margin: the bisection drives a turning triangle to the edge of
+ * 90 degrees, where the rest normal's rounding to float decided the sign either way, and an
+ * independent check in double (this test's reversed(), test_guard's) saw a flip the guard
+ * had let through (test_guard failed once in CI on ICT three-claps unanchored: "flipped 1").
+ * Single triangles at random places and sizes, turned 100..170 degrees about an axis in
+ * their plane, scaled back by 40 halvings: none reversed in double (the old test, a sign
+ * against the float rest normal, failed here within 30 trials), and every kept turn within
+ * 0.06 degrees of 90 (the margin is no real limit). */
+static void test_flip_boundary(void **state)
+{
+    (void)state;
+    const uint32_t tri[3] = {0, 1, 2};
+    int trials = 2000;
+    double worst = 0; /* the largest cosine of the kept turn: how far short of 90 degrees */
+    for (int k = 0; k < trials; k++) {
+        float w[9], cand[9], out[9];
+        double sc = pow(10.0, 3 * urand() - 1), o[3] = {urand() * 10 - 5, urand() * 10 - 5, urand() * 10 - 5};
+        for (int i = 0; i < 9; i++) w[i] = (float)(o[i % 3] + sc * (urand() - 0.5));
+        /* turn about the edge v0 -> v1 by a angle in (100, 170) degrees (Rodrigues) */
+        double ax[3], l = 0, a = (100 + 70 * urand()) * 3.14159265358979323846 / 180;
+        for (int i = 0; i < 3; i++) ax[i] = (double)w[3 + i] - w[i], l += ax[i] * ax[i];
+        l = sqrt(l);
+        for (int i = 0; i < 3; i++) ax[i] /= l;
+        for (int v = 0; v < 3; v++) {
+            double p[3], c = cos(a), sn = sin(a), d = 0, x[3];
+            for (int i = 0; i < 3; i++) p[i] = (double)w[3 * v + i] - w[i], d += p[i] * ax[i];
+            x[0] = ax[1] * p[2] - ax[2] * p[1];
+            x[1] = ax[2] * p[0] - ax[0] * p[2];
+            x[2] = ax[0] * p[1] - ax[1] * p[0];
+            for (int i = 0; i < 3; i++)
+                cand[3 * v + i] = (float)(w[i] + p[i] * c + x[i] * sn + ax[i] * d * (1 - c));
+        }
+        fp_contact *c;
+        assert_int_equal(fp_contact_create(tri, 1, 3, w, &c), 0);
+        fp_contact_result r;
+        assert_int_equal(fp_contact_guard(c, w, cand, out, 40, &r), 0);
+        assert_int_equal(r.flipped, 1);
+        if (reversed(w, out, tri, 1)) fprintf(stderr, "trial %d: kept t %.12f reverses the triangle\n", k, r.t);
+        assert_int_equal(reversed(w, out, tri, 1), 0);
+        double n[2][3], e[2][3];
+        for (int s2 = 0; s2 < 2; s2++) {
+            const float *p = s2 ? out : w;
+            for (int i = 0; i < 3; i++) e[0][i] = (double)p[3 + i] - p[i], e[1][i] = (double)p[6 + i] - p[i];
+            n[s2][0] = e[0][1] * e[1][2] - e[0][2] * e[1][1];
+            n[s2][1] = e[0][2] * e[1][0] - e[0][0] * e[1][2];
+            n[s2][2] = e[0][0] * e[1][1] - e[0][1] * e[1][0];
+        }
+        double cs = (n[0][0] * n[1][0] + n[0][1] * n[1][1] + n[0][2] * n[1][2]) /
+                    sqrt((n[0][0] * n[0][0] + n[0][1] * n[0][1] + n[0][2] * n[0][2]) *
+                         (n[1][0] * n[1][0] + n[1][1] * n[1][1] + n[1][2] * n[1][2]));
+        worst = fmax(worst, cs);
+        fp_contact_destroy(&c);
+    }
+    printf("flip boundary: %d triangles turned over and scaled back, none reversed in double; "
+           "kept turns within %.2g degrees of 90\n", trials, 90 - acos(worst) * 180 / 3.14159265358979323846);
+    assert_true(worst < 1e-3); /* the margin is no real limit: within 0.06 degrees of 90 */
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -781,6 +839,7 @@ int main(void)
         cmocka_unit_test(test_track_local),
         cmocka_unit_test(test_set_pose),
         cmocka_unit_test(test_own_flip),
+        cmocka_unit_test(test_flip_boundary),
         cmocka_unit_test(test_track_lips_fast),
         cmocka_unit_test(test_track_lips_slow),
         cmocka_unit_test(test_track_recordings),
