@@ -33,41 +33,52 @@ struct fp_contact {
 
 /* ---- the triangle-triangle test ---------------------------------------------------------- */
 
-static double orient3d(const double *p, const double *q, const double *r, const double *s)
+/* Signs of orientation determinants, filtered: a determinant within its rounding error
+ * bound (Shewchuk, "Adaptive precision floating-point arithmetic and fast robust geometric
+ * predicates", 1997: errboundA, which covers the differences too) has sign 0, as if exactly
+ * degenerate. Every decision below treats 0 as "may touch", so an uncertain case counts as
+ * meeting: the test is exact where the signs are certain and errs towards a crossing where
+ * they are not. The guard's bisection drives triangles towards touching, frame after frame
+ * (each frame keeps the largest passing share), until within rounding; there a plain sign
+ * could let through what an exact test (CGAL, in the tests) sees as touching. */
+#define FP_EPS 1.1102230246251565e-16 /* 2^-53 */
+
+static int orient3d(const double *p, const double *q, const double *r, const double *s)
 {
     double ax = q[0] - p[0], ay = q[1] - p[1], az = q[2] - p[2];
     double bx = r[0] - p[0], by = r[1] - p[1], bz = r[2] - p[2];
     double cx = s[0] - p[0], cy = s[1] - p[1], cz = s[2] - p[2];
-    return ax * (by * cz - bz * cy) - ay * (bx * cz - bz * cx) + az * (bx * cy - by * cx);
+    double m1 = by * cz, m2 = bz * cy, m3 = bx * cz, m4 = bz * cx, m5 = bx * cy, m6 = by * cx;
+    double det = ax * (m1 - m2) - ay * (m3 - m4) + az * (m5 - m6);
+    double perm = fabs(ax) * (fabs(m1) + fabs(m2)) + fabs(ay) * (fabs(m3) + fabs(m4)) +
+                  fabs(az) * (fabs(m5) + fabs(m6));
+    double bound = (7.0 + 56.0 * FP_EPS) * FP_EPS * perm;
+    return det > bound ? 1 : det < -bound ? -1 : 0;
 }
 
-static double orient2d(const double *p, const double *q, const double *r)
+static int orient2d(const double *p, const double *q, const double *r)
 {
-    return (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0]);
+    double l = (q[0] - p[0]) * (r[1] - p[1]), rr = (q[1] - p[1]) * (r[0] - p[0]), det = l - rr;
+    double bound = (3.0 + 16.0 * FP_EPS) * FP_EPS * (fabs(l) + fabs(rr));
+    return det > bound ? 1 : det < -bound ? -1 : 0;
 }
 
-static int sgn(double x) { return (x > 0) - (x < 0); }
-
-/* r on the closed segment pq, given collinear */
-static bool on_seg2(const double *p, const double *q, const double *r)
-{
-    return fmin(p[0], q[0]) <= r[0] && r[0] <= fmax(p[0], q[0]) && fmin(p[1], q[1]) <= r[1] &&
-           r[1] <= fmax(p[1], q[1]);
-}
-
+/* closed segments pq and ab in a plane: they meet iff each one's endpoints are not strictly
+ * on one side of the other's line, or, collinear, their boxes overlap (an uncertain sign is 0:
+ * a meeting) */
 static bool seg_seg2(const double *p, const double *q, const double *a, const double *b)
 {
-    int d1 = sgn(orient2d(p, q, a)), d2 = sgn(orient2d(p, q, b));
-    int d3 = sgn(orient2d(a, b, p)), d4 = sgn(orient2d(a, b, q));
-    if (d1 * d2 < 0 && d3 * d4 < 0) return true;
-    return (!d1 && on_seg2(p, q, a)) || (!d2 && on_seg2(p, q, b)) || (!d3 && on_seg2(a, b, p)) ||
-           (!d4 && on_seg2(a, b, q));
+    int d1 = orient2d(p, q, a), d2 = orient2d(p, q, b);
+    int d3 = orient2d(a, b, p), d4 = orient2d(a, b, q);
+    if ((!d1 && !d2) || (!d3 && !d4))
+        return fmax(p[0], q[0]) >= fmin(a[0], b[0]) && fmax(a[0], b[0]) >= fmin(p[0], q[0]) &&
+               fmax(p[1], q[1]) >= fmin(a[1], b[1]) && fmax(a[1], b[1]) >= fmin(p[1], q[1]);
+    return d1 * d2 <= 0 && d3 * d4 <= 0;
 }
 
 static bool in_tri2(const double *p, const double t[3][2])
 {
-    int s1 = sgn(orient2d(t[0], t[1], p)), s2 = sgn(orient2d(t[1], t[2], p)),
-        s3 = sgn(orient2d(t[2], t[0], p));
+    int s1 = orient2d(t[0], t[1], p), s2 = orient2d(t[1], t[2], p), s3 = orient2d(t[2], t[0], p);
     return !((s1 > 0 || s2 > 0 || s3 > 0) && (s1 < 0 || s2 < 0 || s3 < 0));
 }
 
@@ -101,8 +112,7 @@ static bool seg_tri(const double *p, const double *q, const double t[3][3], int 
 {
     if (op * oq > 0) return false;
     if (!op && !oq) return seg_tri_coplanar(p, q, t);
-    int s1 = sgn(orient3d(p, q, t[0], t[1])), s2 = sgn(orient3d(p, q, t[1], t[2])),
-        s3 = sgn(orient3d(p, q, t[2], t[0]));
+    int s1 = orient3d(p, q, t[0], t[1]), s2 = orient3d(p, q, t[1], t[2]), s3 = orient3d(p, q, t[2], t[0]);
     return !((s1 > 0 || s2 > 0 || s3 > 0) && (s1 < 0 || s2 < 0 || s3 < 0));
 }
 
@@ -111,8 +121,8 @@ int fp_contact_tri_tri(const double a[3][3], const double b[3][3])
     /* each vertex against the other's plane, once (every edge test starts with these) */
     int oa[3], ob[3];
     for (int i = 0; i < 3; i++) {
-        oa[i] = sgn(orient3d(b[0], b[1], b[2], a[i]));
-        ob[i] = sgn(orient3d(a[0], a[1], a[2], b[i]));
+        oa[i] = orient3d(b[0], b[1], b[2], a[i]);
+        ob[i] = orient3d(a[0], a[1], a[2], b[i]);
     }
     for (int e = 0; e < 3; e++) {
         int f = (e + 1) % 3;

@@ -21,9 +21,11 @@
  * triangles meet iff an edge of one meets the other (their intersection is convex, its
  * boundary lies on an edge), each segment-triangle test from the signs of orient3d
  * determinants in double (float inputs; each vertex against the other's plane computed
- * once), with a 2D test for coplanar segments. Not exact: a determinant within rounding of
- * zero (touching to ~1e-16 relative) may be decided either way; CGAL's exact test agrees on
- * the real faces (tests/session/test_contact.c).
+ * once), with a 2D test for coplanar segments. A determinant within its rounding error
+ * bound (Shewchuk's errboundA) counts as zero, i.e. touching: the test is exact where the
+ * signs are certain and errs towards a crossing, never away from one, where they are not
+ * (the bisection drives pairs towards touching frame after frame). CGAL's exact test agrees
+ * on the real faces (tests/session/test_contact.c).
  *
  * Errors: negative errno (-EINVAL for NULL or a triangle index >= n, -ENOMEM). Threads: one
  * fp_contact per thread (it keeps scratch buffers and the incremental guard's state).
