@@ -273,7 +273,7 @@ static bool degenerate(const double t[3][3])
 static inline float min_f(float a, float b) { return b < a ? b : a; }
 static inline float max_f(float a, float b) { return b > a ? b : a; }
 
-static void tri_box(const float *pos, const uint32_t *v, float b[6])
+static inline void tri_box(const float *pos, const uint32_t *v, float b[6])
 {
     const float *p0 = pos + 3 * (size_t)v[0], *p1 = pos + 3 * (size_t)v[1], *p2 = pos + 3 * (size_t)v[2];
     for (int k = 0; k < 3; k++) {
@@ -589,9 +589,16 @@ typedef struct rq_cell {          /* a cell of a renewed envelope */
     uint32_t r;                   /* the request (index into rq) */
 } rq_cell;
 
+typedef struct centry {           /* a triangle registered in a cell, with a copy of its
+                                     envelope (read in order, not through slot and dyn) */
+    float env[6];
+    uint32_t tri;
+} centry;
+
 typedef struct cellvec {          /* a cell of the dynamic grid */
     int64_t key[3];
-    uint32_t *ids, len, cap;
+    centry *ids;
+    uint32_t len, cap;
     bool used;
 } cellvec;
 
@@ -612,7 +619,7 @@ struct track {
     size_t nmo, cap_mo;
     uint32_t *tstamp, tclock;     /* t: == tclock when in mt */
     uint32_t *qstamp, qclock;     /* t: == qclock when seen by this query */
-    double h;                     /* the grid cell */
+    double ih;                    /* the grid cell's inverse (cell_coord) */
     uint32_t *sg_start, *sg_ids;  /* the static grid: the weld shape's boxes by hashed cell */
     uint32_t *sg_dead;            /* entries of triangles gone dynamic, cut from the bucket's end */
     size_t sg_nb;
@@ -705,10 +712,12 @@ static int push_u32(uint32_t **p, size_t *len, size_t *cap, uint32_t v)
     return 0;
 }
 
-/* the grid cell of coordinate x: floor(x / h), clamped to +-1e15 (NaN: -1e15) */
-static inline int64_t cell_coord(double x, double h)
+/* the grid cell of coordinate x: floor(x ih), ih the cell's inverse (a product, not a
+ * quotient: monotonic in x all the same, which is all the grid needs), clamped to +-1e15
+ * (NaN: -1e15) */
+static inline int64_t cell_coord(double x, double ih)
 {
-    double q = x / h;
+    double q = x * ih;
     if (!(q > -1e15)) q = -1e15;
     if (q > 1e15) q = 1e15;
     int64_t i = (int64_t)q;
@@ -716,12 +725,12 @@ static inline int64_t cell_coord(double x, double h)
 }
 
 /* the grid cells of box b; returns their number (as a double: it may be huge) */
-static double cells_of(double h, const float b[6], int64_t lo[3], int64_t hi[3])
+static inline double cells_of(double ih, const float b[6], int64_t lo[3], int64_t hi[3])
 {
     double cnt = 1;
     for (int k = 0; k < 3; k++) {
-        lo[k] = cell_coord(b[k], h);
-        hi[k] = cell_coord(b[3 + k], h);
+        lo[k] = cell_coord(b[k], ih);
+        hi[k] = cell_coord(b[3 + k], ih);
         cnt *= (double)(hi[k] - lo[k] + 1);
     }
     return cnt;
@@ -792,7 +801,7 @@ static cellvec *cell_find(struct track *k, const int64_t key[3], bool create)
 static int grid_add(struct track *k, dyn *d)
 {
     int64_t lo[3], hi[3];
-    d->big = cells_of(k->h, d->env, lo, hi) > FP_TRACK_BIG_CELLS;
+    d->big = cells_of(k->ih, d->env, lo, hi) > FP_TRACK_BIG_CELLS;
     if (d->big) return push_u32(&k->dbig, &k->ndbig, &k->cap_dbig, d->tri);
     for (int64_t x = lo[0]; x <= hi[0]; x++)
         for (int64_t y = lo[1]; y <= hi[1]; y++)
@@ -800,10 +809,12 @@ static int grid_add(struct track *k, dyn *d)
                 int64_t key[3] = {x, y, z};
                 cellvec *cv = cell_find(k, key, true);
                 if (!cv) return -ENOMEM;
-                size_t len = cv->len, cap = cv->cap;
-                if (push_u32(&cv->ids, &len, &cap, d->tri)) return -ENOMEM;
-                cv->len = (uint32_t)len;
+                size_t cap = cv->cap;
+                if (reserve((void **)&cv->ids, &cap, (size_t)cv->len + 1, sizeof *cv->ids)) return -ENOMEM;
                 cv->cap = (uint32_t)cap;
+                centry *en = &cv->ids[cv->len++];
+                memcpy(en->env, d->env, sizeof en->env);
+                en->tri = d->tri;
             }
     return 0;
 }
@@ -819,14 +830,14 @@ static void grid_remove(struct track *k, const dyn *d)
         return;
     }
     int64_t lo[3], hi[3];
-    cells_of(k->h, d->env, lo, hi);
+    cells_of(k->ih, d->env, lo, hi);
     for (int64_t x = lo[0]; x <= hi[0]; x++)
         for (int64_t y = lo[1]; y <= hi[1]; y++)
             for (int64_t z = lo[2]; z <= hi[2]; z++) {
                 int64_t key[3] = {x, y, z};
                 cellvec *cv = cell_find(k, key, false);
                 for (uint32_t i = 0; cv && i < cv->len; i++)
-                    if (cv->ids[i] == d->tri) {
+                    if (cv->ids[i].tri == d->tri) {
                         cv->ids[i] = cv->ids[--cv->len];
                         break;
                     }
@@ -875,7 +886,7 @@ static int query(fp_contact *c, const float q[6], uint32_t x)
             return -ENOMEM;                                                                     \
     } while (0)
     int64_t lo[3], hi[3];
-    bool huge = cells_of(k->h, q, lo, hi) > FP_TRACK_BIG_CELLS;
+    bool huge = cells_of(k->ih, q, lo, hi) > FP_TRACK_BIG_CELLS;
     if (huge) {
         for (size_t y = 0; y < c->t; y++) FP_STATIC((uint32_t)y);
         for (size_t i = 0; i < k->ndyn; i++) FP_DYNAMIC(k->dyn[i].tri);
@@ -889,7 +900,7 @@ static int query(fp_contact *c, const float q[6], uint32_t x)
                         FP_STATIC(k->sg_ids[e]);
                     int64_t key[3] = {cx, cy, cz};
                     const cellvec *cv = cell_find(k, key, false);
-                    for (uint32_t i = 0; cv && i < cv->len; i++) FP_DYNAMIC(cv->ids[i]);
+                    for (uint32_t i = 0; cv && i < cv->len; i++) FP_DYNAMIC(cv->ids[i].tri);
                 }
         for (size_t i = 0; i < k->nsbig; i++) FP_STATIC(k->sbig[i]);
         for (size_t i = 0; i < k->ndbig; i++) FP_DYNAMIC(k->dbig[i]);
@@ -908,7 +919,7 @@ static void static_remove(fp_contact *c, uint32_t x)
     float b[6];
     int64_t lo[3], hi[3];
     tri_box(k->p, c->tris + 3 * (size_t)x, b);
-    if (cells_of(k->h, b, lo, hi) > FP_TRACK_BIG_CELLS) {
+    if (cells_of(k->ih, b, lo, hi) > FP_TRACK_BIG_CELLS) {
         for (size_t i = 0; i < k->nsbig; i++)
             if (k->sbig[i] == x) {
                 memmove(k->sbig + i, k->sbig + i + 1, (k->nsbig - i - 1) * sizeof *k->sbig);
@@ -1008,7 +1019,7 @@ static int renew_cell(fp_contact *c, const int64_t key[3], const uint32_t *R, si
         if (!boxes_meet(ex_, (YBOX)) || (Y) == x_) continue;                                    \
         bool mine_ = true;                                                                      \
         for (int a_ = 0; a_ < 3 && mine_; a_++)                                                 \
-            mine_ = cell_coord(max_f(ex_[a_], (YBOX)[a_]), k->h) == key[a_];                    \
+            mine_ = cell_coord(max_f(ex_[a_], (YBOX)[a_]), k->ih) == key[a_];                    \
         if (mine_ && !adjacent(c, x_, (Y)) && link(c, x_, (Y), clock)) return -ENOMEM;          \
     }
     size_t bkt = key_hash(key[0], key[1], key[2]) & (k->sg_nb - 1);
@@ -1021,10 +1032,9 @@ static int renew_cell(fp_contact *c, const int64_t key[3], const uint32_t *R, si
         FP_TRY(y, yb)
     }
     const cellvec *cv = cell_find(k, key, false);
-    for (uint32_t j = 0; cv && j < cv->len; j++) {
-        uint32_t y = cv->ids[j];
-        if (c->own[y]) continue;
-        FP_TRY(y, k->dyn[k->slot[y]].env)
+    for (uint32_t j = 0; cv && j < cv->len; j++) { /* (own triangles have no envelope) */
+        uint32_t y = cv->ids[j].tri;
+        FP_TRY(y, cv->ids[j].env)
     }
 #undef FP_TRY
     return 0;
@@ -1049,7 +1059,7 @@ static int renew_lists(fp_contact *c)
         const dyn *d = &k->dyn[k->slot[k->rq[r]]];
         if (d->big) continue;
         int64_t lo[3], hi[3];
-        ne += (size_t)cells_of(k->h, d->env, lo, hi);
+        ne += (size_t)cells_of(k->ih, d->env, lo, hi);
     }
     size_t nb = 64;
     while (nb < ne) nb *= 2;
@@ -1063,7 +1073,7 @@ static int renew_lists(fp_contact *c)
         const dyn *d = &k->dyn[k->slot[k->rq[r]]];
         if (d->big) continue;
         int64_t lo[3], hi[3];
-        cells_of(k->h, d->env, lo, hi);
+        cells_of(k->ih, d->env, lo, hi);
         for (int64_t x = lo[0]; x <= hi[0]; x++)
             for (int64_t y = lo[1]; y <= hi[1]; y++)
                 for (int64_t z = lo[2]; z <= hi[2]; z++) {
@@ -1168,7 +1178,7 @@ static int track_build(fp_contact *c)
         sum += fmax(fmax((double)b[3] - b[0], (double)b[4] - b[1]), (double)b[5] - b[2]);
         cnt++;
     }
-    k->h = cnt && sum > 0 ? 2.0 * sum / (double)cnt : 1.0;
+    k->ih = cnt && sum > 0 ? 1.0 / (2.0 * sum / (double)cnt) : 1.0;
     /* the static grid: counting sort of (cell, triangle) entries by hashed cell */
     size_t ne = 0;
     for (int pass = 0; pass < 2; pass++) {
@@ -1188,7 +1198,7 @@ static int track_build(fp_contact *c)
                 float b[6];
                 int64_t lo[3], hi[3];
                 tri_box(k->p, c->tris + 3 * i, b);
-                if (cells_of(k->h, b, lo, hi) > FP_TRACK_BIG_CELLS) continue;
+                if (cells_of(k->ih, b, lo, hi) > FP_TRACK_BIG_CELLS) continue;
                 for (int64_t x = lo[0]; x <= hi[0]; x++)
                     for (int64_t y = lo[1]; y <= hi[1]; y++)
                         for (int64_t z = lo[2]; z <= hi[2]; z++)
@@ -1202,7 +1212,7 @@ static int track_build(fp_contact *c)
             float b[6];
             int64_t lo[3], hi[3];
             tri_box(k->p, c->tris + 3 * i, b);
-            double nc = cells_of(k->h, b, lo, hi);
+            double nc = cells_of(k->ih, b, lo, hi);
             if (nc > FP_TRACK_BIG_CELLS) {
                 if (pass && push_u32(&k->sbig, &k->nsbig, &cap_big, (uint32_t)i)) {
                     track_free(k);
@@ -1381,10 +1391,9 @@ static long track_check(fp_contact *c, const float *s, const float *ref, bool ca
         for (uint32_t j = 0; j < d->len; j++) {
             uint32_t b = list[j];
             if (b < a && k->tstamp[b] == k->tclock) continue; /* both moved: the lower one's */
-            /* b's envelope holds its box in s (a dynamic one's; a static one is the weld
-             * shape's): a filter that reads no vertex */
-            uint32_t sb = k->slot[b];
-            if (sb != FP_TRACK_NONE && !boxes_meet(ba, k->dyn[sb].env)) continue;
+            /* b's box in s straight away: its triangle and vertices lie near a's in memory
+             * on a mesh numbered by region (the envelope, k->dyn[k->slot[b]], would be a
+             * filter that reads no vertex, but a cache miss per entry on a large mesh) */
             const uint32_t *vb = c->tris + 3 * (size_t)b;
             float bb[6];
             tri_box(s, vb, bb);

@@ -158,12 +158,16 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
  * tests/session/test_contact.c holds every decision to the full check's.
  *
  * Cost: per frame, the vertices in the ranges and D_P, then each moved triangle (boxes, its
- * flip, its list) and each renewed envelope (about 1.5 us; renewed when a triangle moved a
- * tenth of its size since its last renewal). Measured (CPU time, three-claps anchored on
- * the input clock, 2-core machine): the ICT face (1,200 moved triangles a frame) 0.09 ms
- * median, 0.35 ms p99 (the full check: about 2.7 ms); ICT subdivided to 1.68M vertices
- * (55,000 moved triangles a frame, moving about their own size in a fast frame) 15.6 ms
- * median, 90 ms p99 (full check: about 190 ms). What would take the large mesh further: the
+ * flip, its list: about 100 ns on a large mesh, mostly cache misses) and each renewed
+ * envelope (about 1.5 us; renewed when a triangle moved a tenth of its size since its last
+ * renewal; a cell of the dynamic grid keeps a copy of each envelope in it, so a renewal
+ * reads its cells in order). Measured (`facepuppet bench --case frame`, contact row,
+ * three-claps anchored, 2-core machine, shared): the ICT face (1,100 moved triangles a
+ * frame) 0.08 ms median, 0.4 ms p99 (the full check: about 2.7 ms); ICT subdivided to
+ * 1.68M vertices (50,000 moved triangles a frame, moving about their own size in a fast
+ * frame, when up to all of them renew) 5.4 ms median, 94 ms p99 (full check: about 190
+ * ms). Larger skins (a fixed share or one ahead of the motion) renew less but lengthen the
+ * lists and each renewal: no gain measured. What would take the large mesh further: the
  * renewals and lists follow absolute motion, while neighbours on one sheet move together;
  * certificates on relative motion (per vertex or per block) would skip most of both.
  */
