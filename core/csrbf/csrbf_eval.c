@@ -173,10 +173,9 @@ __attribute__((target("avx512f"))) static void write_block_avx512(
  * distance test (blocks whose box meets a support they do not reach: the ends of grid rows). */
 #define AVX512_PAIR(PSI, J, SKIP)                                                              \
     do {                                                                                       \
-        const float *const cj = cp + 8 * (size_t)(J); /* size_t: no 32-bit index arithmetic */ \
-        __m512 dx = _mm512_sub_ps(X, _mm512_set1_ps(cj[0]));                                   \
-        __m512 dy = _mm512_sub_ps(Y, _mm512_set1_ps(cj[1]));                                   \
-        __m512 dz = _mm512_sub_ps(Z, _mm512_set1_ps(cj[2]));                                   \
+        __m512 dx = _mm512_sub_ps(X, _mm512_set1_ps(cp[8 * (J)]));                                   \
+        __m512 dy = _mm512_sub_ps(Y, _mm512_set1_ps(cp[8 * (J) + 1]));                                   \
+        __m512 dz = _mm512_sub_ps(Z, _mm512_set1_ps(cp[8 * (J) + 2]));                                   \
         __m512 r2 = _mm512_mul_ps(dx, dx);                                                     \
         r2 = _mm512_fmadd_ps(dy, dy, r2);                                                      \
         r2 = _mm512_fmadd_ps(dz, dz, r2);                                                      \
@@ -190,9 +189,9 @@ __attribute__((target("avx512f"))) static void write_block_avx512(
         __m512 r = _mm512_mul_ps(q, e);                                                        \
         __m512 t1 = _mm512_sub_ps(one, r);                                                     \
         __m512 w = PSI;                                                                        \
-        sx = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(cj[3]), sx, in);                          \
-        sy = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(cj[4]), sy, in);                          \
-        sz = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(cj[5]), sz, in);                          \
+        sx = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(cp[8 * (J) + 3]), sx, in);                          \
+        sy = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(cp[8 * (J) + 4]), sy, in);                          \
+        sz = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(cp[8 * (J) + 5]), sz, in);                          \
         if (stats_on) cntv = _mm512_mask_add_epi32(cntv, in, cntv, ione);                      \
     } while (0)
 
@@ -208,24 +207,6 @@ static inline void copy_base(const csrbf_points *P, float *out, size_t b0, size_
 {
     size_t v0 = b0 * B, v1 = b1 * B < P->n ? b1 * B : P->n;
     if (v1 > v0) memcpy(out + 3 * v0, P->xyz + 3 * v0, (v1 - v0) * 3 * sizeof(float));
-}
-
-/* Block b's base positions into the output, inline (a full block: three 64-byte loads and
- * stores; the mesh's last, partial block: copy_base). */
-static inline __attribute__((target("avx512f"), always_inline)) void
-copy_base_block(const csrbf_points *P, float *out, size_t b)
-{
-    if ((b + 1) * B > P->n) {
-        copy_base(P, out, b, b + 1);
-        return;
-    }
-    const float *src = P->xyz + 3 * B * b;
-    float *dst = out + 3 * B * b;
-    const __m512 a0 = _mm512_loadu_ps(src), a1 = _mm512_loadu_ps(src + 16),
-                 a2 = _mm512_loadu_ps(src + 32);
-    _mm512_storeu_ps(dst, a0);
-    _mm512_storeu_ps(dst + 16, a1);
-    _mm512_storeu_ps(dst + 32, a2);
 }
 
 /* A partial block (the mesh's last, nv < B vertices): base + displacement, and with stats its
@@ -255,46 +236,12 @@ finish_partial(float *o, const float *x, const float *y, const float *z, size_t 
     }
 }
 
-/* One block b of the fast path (inside AVX512_DRIVER): its 16 lanes from the SoA base, the
- * centres' contributions by PAIRS (AVX512_PAIR statements), statistics, the interleaved store
- * (the mesh's last, partial block: finish_partial). */
-#define AVX512_BLOCK(STATS, PAIRS)                                                             \
-    do {                                                                                       \
-        const size_t k0 = b * B, nv = k0 + B <= n ? B : n - k0;                                \
-        float *o = out + 3 * k0;                                                               \
-        const __m512 X = _mm512_loadu_ps(px + k0), Y = _mm512_loadu_ps(py + k0),               \
-                     Z = _mm512_loadu_ps(pz + k0);                                             \
-        __m512 sx = _mm512_set1_ps(-0.0f), sy = sx, sz = sx;                                   \
-        __m512i cntv = izero;                                                                  \
-        PAIRS;                                                                                 \
-        if (nv == B) {                                                                         \
-            if (STATS) {                                                                       \
-                pairv = _mm512_add_epi32(pairv, cntv);                                         \
-                nmoved += (size_t)__builtin_popcount(                                          \
-                    (unsigned)_mm512_cmpgt_epi32_mask(cntv, izero));                           \
-                __m512 d2 = _mm512_mul_ps(sx, sx);                                             \
-                d2 = _mm512_fmadd_ps(sy, sy, d2);                                              \
-                d2 = _mm512_fmadd_ps(sz, sz, d2);                                              \
-                maxd = _mm512_max_ps(maxd, d2);                                                \
-            }                                                                                  \
-            interleave_avx512(o, _mm512_add_ps(X, sx), _mm512_add_ps(Y, sy),                   \
-                              _mm512_add_ps(Z, sz));                                           \
-        } else {                                                                               \
-            finish_partial(o, px + k0, py + k0, pz + k0, nv, sx, sy, sz, cntv, STATS, bs);     \
-        }                                                                                      \
-    } while (0)
-
 /* The fast path without polynomial, one copy per MODE (compile-time): DRIVE_ALL: blocks
  * i0..i1-1, each with all m centres (blk, msk unused). DRIVE_LIST: the work items i0..i1-1,
  * block blk[i] with the centres of the bit mask msk[i] (bit j: centre j, j < 64), or restored
  * to the base where msk[i] is 0. DRIVE_GAPS: as DRIVE_LIST, and the blocks of [g0, g1) that
- * no item names are copied from the base (a full evaluation: items and gaps cover the range).
- * The gap blocks are copied in increasing order a fixed quota at a time between the computed
- * blocks (ceil(gaps / items) per item until none is left; a constant trip count, so no
- * mispredicted branches, which a Bresenham spread cost): the copies are bound by the L2
- * bandwidth and the kernels by the vector ports, so interleaved they overlap where runs of
- * each add up (R = 10 on Table 1's 33,025 vertices: 38% of the blocks are gaps, their copy
- * 40% cheaper so). Blocks are computed in registers and stored interleaved. With STATS (also
+ * no item names are copied from the base (a full evaluation: items and gaps cover the range
+ * in order). Blocks are computed in registers and stored interleaved. With STATS (also
  * compile-time) the pairs in support are counted per lane with one masked add per pair, and
  * moved vertices and the largest squared displacement per block, into *bs (padding lanes
  * excluded; the lane counts are flushed every 2^16 blocks so that they cannot overflow). */
@@ -315,57 +262,56 @@ enum { DRIVE_ALL = 0, DRIVE_LIST = 1, DRIVE_GAPS = 2 };
         size_t nmoved = 0;                                                                     \
         const size_t n = P->n;                                                                 \
         const float *const px = P->s[0], *const py = P->s[1], *const pz = P->s[2];             \
+        size_t pos = g0;                                                                       \
+        (void)g1;                                                                              \
         (void)m;                                                                               \
-        if (MODE == DRIVE_ALL) {                                                               \
-            for (size_t b = i0; b < i1; b++) {                                                 \
-                AVX512_BLOCK(STATS, for (size_t j = 0; j < m; j++) AVX512_PAIR(PSI, j, 0));    \
-                if (STATS && !((b - i0 + 1) & 0xFFFF)) { /* lane counts stay far from 2^32 */  \
-                    bs->pairs += (size_t)(uint32_t)_mm512_reduce_add_epi32(pairv);             \
-                    pairv = izero;                                                             \
-                }                                                                              \
-            }                                                                                  \
-        } else {                                                                               \
-            /* gaps: gc the next block to copy, [gc, gend) the current run of gap blocks, gi  \
-             * the first item with blk[gi] >= gc; a quota of them per item, left in all */     \
-            size_t gc = g0, gi = i0, gend = g0;                                                \
-            const size_t nitem = i1 - i0, ngap = MODE == DRIVE_GAPS ? (g1 - g0) - nitem : 0;  \
-            size_t left = ngap, quota = nitem ? (ngap + nitem - 1) / nitem : 0;                \
-            for (size_t i = i0; i < i1; i++) {                                                 \
-                const size_t b = blk[i];                                                       \
-                uint64_t mk = msk[i];                                                          \
-                if (MODE == DRIVE_GAPS && left) {                                              \
-                    for (size_t q = 0; q < quota; q++) {                                       \
-                        if (gc == gend) { /* the next run of gap blocks */                     \
-                            while (gi < i1 && blk[gi] == gc) gi++, gc++;                       \
-                            gend = gi < i1 ? blk[gi] : g1;                                     \
-                        }                                                                      \
-                        copy_base_block(P, out, gc++);                                         \
-                    }                                                                          \
-                    left -= quota;                                                             \
-                    if (left < quota) quota = left;                                            \
-                }                                                                              \
+        for (size_t i = i0; i < i1; i++) {                                                     \
+            const size_t b = MODE != DRIVE_ALL ? blk[i] : i;                                   \
+            uint64_t mk = MODE != DRIVE_ALL ? msk[i] : 0;                                      \
+            if (MODE != DRIVE_ALL) {                                                           \
+                if (MODE == DRIVE_GAPS && pos < b) copy_base(P, out, pos, b);                  \
+                pos = b + 1;                                                                   \
                 if (!mk) { /* in a support last call, in none now: the base */                 \
-                    copy_base_block(P, out, b);                                                \
+                    copy_base(P, out, b, b + 1);                                               \
                     continue;                                                                  \
                 }                                                                              \
-                AVX512_BLOCK(STATS, while (mk) {                                               \
+            }                                                                                  \
+            const size_t k0 = b * B, nv = k0 + B <= n ? B : n - k0;                            \
+            float *o = out + 3 * k0;                                                           \
+            const __m512 X = _mm512_loadu_ps(px + k0), Y = _mm512_loadu_ps(py + k0),           \
+                         Z = _mm512_loadu_ps(pz + k0);                                         \
+            __m512 sx = _mm512_set1_ps(-0.0f), sy = sx, sz = sx;                               \
+            __m512i cntv = izero;                                                              \
+            if (MODE != DRIVE_ALL) {                                                           \
+                while (mk) {                                                                   \
                     const unsigned j = (unsigned)__builtin_ctzll(mk);                          \
                     mk &= mk - 1;                                                              \
                     AVX512_PAIR(PSI, j, 1);                                                    \
-                });                                                                            \
-                if (STATS && !((i - i0 + 1) & 0xFFFF)) { /* lane counts stay far from 2^32 */  \
-                    bs->pairs += (size_t)(uint32_t)_mm512_reduce_add_epi32(pairv);             \
-                    pairv = izero;                                                             \
                 }                                                                              \
+            } else {                                                                           \
+                for (size_t j = 0; j < m; j++) AVX512_PAIR(PSI, j, 0);                         \
             }                                                                                  \
-            if (MODE == DRIVE_GAPS) /* the rest (all of them without items), runs at once */ \
-                while (gc < g1) {                                                              \
-                    while (gi < i1 && blk[gi] == gc) gi++, gc++;                               \
-                    const size_t e = gi < i1 ? blk[gi] : g1;                                   \
-                    copy_base(P, out, gc, e);                                                  \
-                    gc = e;                                                                    \
+            if (nv == B) {                                                                     \
+                if (STATS) {                                                                   \
+                    pairv = _mm512_add_epi32(pairv, cntv);                                     \
+                    nmoved += (size_t)__builtin_popcount(                                      \
+                        (unsigned)_mm512_cmpgt_epi32_mask(cntv, izero));                       \
+                    __m512 d2 = _mm512_mul_ps(sx, sx);                                         \
+                    d2 = _mm512_fmadd_ps(sy, sy, d2);                                          \
+                    d2 = _mm512_fmadd_ps(sz, sz, d2);                                          \
+                    maxd = _mm512_max_ps(maxd, d2);                                            \
                 }                                                                              \
+                interleave_avx512(o, _mm512_add_ps(X, sx), _mm512_add_ps(Y, sy),               \
+                                  _mm512_add_ps(Z, sz));                                       \
+            } else {                                                                           \
+                finish_partial(o, px + k0, py + k0, pz + k0, nv, sx, sy, sz, cntv, STATS, bs); \
+            }                                                                                  \
+            if (STATS && !((i - i0 + 1) & 0xFFFF)) { /* lane counts stay far from 2^32 */      \
+                bs->pairs += (size_t)(uint32_t)_mm512_reduce_add_epi32(pairv);                 \
+                pairv = izero;                                                                 \
+            }                                                                                  \
         }                                                                                      \
+        if (MODE == DRIVE_GAPS && pos < g1) copy_base(P, out, pos, g1);                        \
         if (STATS) {                                                                           \
             bs->pairs += (size_t)(uint32_t)_mm512_reduce_add_epi32(pairv);                     \
             bs->moved += nmoved;                                                               \
