@@ -498,6 +498,22 @@ static void select_visit_c(block_select *S, int level, size_t first, uint64_t ma
         if (cm[l]) select_visit_c(S, level - 1, (first + (size_t)l) * CSRBF_FAN, cm[l]);
 }
 
+/* The selection's prefix costs: cum[i] = the cost of items 0..i-1 (cum[k]: all), the pairs
+ * returned. */
+static inline __attribute__((always_inline)) size_t count_bits(const uint64_t *msk, size_t k,
+                                                              size_t *cum)
+{
+    size_t e = 0, c = 0;
+    for (size_t i = 0; i < k; i++) {
+        size_t bits = (size_t)__builtin_popcountll(msk[i]);
+        cum[i] = c;
+        c += ITEM_COST(bits);
+        e += bits;
+    }
+    cum[k] = c;
+    return e;
+}
+
 #if CSRBF_AVX512 && CSRBF_BLOCK == 16
 /* select_visit_c with AVX-512, restricted to the blocks [lo, hi): the leaves' masks and
  * block numbers compress-stored. */
@@ -540,18 +556,11 @@ select_visit_avx512(block_select *S, int level, size_t first, uint64_t mask, siz
     }
 }
 
+/* count_bits with the popcnt instruction (count_bits inlined under this target) */
 __attribute__((target("popcnt"))) static size_t count_bits_popcnt(const uint64_t *msk, size_t k,
                                                                    size_t *cum)
 {
-    size_t e = 0, c = 0;
-    for (size_t i = 0; i < k; i++) {
-        size_t bits = (size_t)__builtin_popcountll(msk[i]);
-        cum[i] = c;
-        c += ITEM_COST(bits);
-        e += bits;
-    }
-    cum[k] = c;
-    return e;
+    return count_bits(msk, k, cum);
 }
 
 /* Refine the selection to the pairs the kernel uses: a centre whose support holds none of a
@@ -597,19 +606,6 @@ __attribute__((target("avx512f,fma,popcnt"))) static size_t refine_avx512(block_
     return e;
 }
 #endif
-
-static size_t count_bits(const uint64_t *msk, size_t k, size_t *cum)
-{
-    size_t e = 0, c = 0;
-    for (size_t i = 0; i < k; i++) {
-        size_t bits = (size_t)__builtin_popcountll(msk[i]);
-        cum[i] = c;
-        c += ITEM_COST(bits);
-        e += bits;
-    }
-    cum[k] = c;
-    return e;
-}
 
 /* Walk the tree for the solver's centres into S (blk / msk with room for every block). */
 static void select_blocks(block_select *S, int avx512, size_t m)
