@@ -12,6 +12,7 @@
 #include "fp_mesh.h"
 #include "fp_rig.h"
 #include "fp_session.h"
+#include "fp_stats.h"
 #include "fp_test_support.h"
 #include "selfx.h"
 
@@ -28,19 +29,6 @@ static const char *faces[] = {"ict-facekit/generic_neutral_mesh.obj",
                               "lee-perry-smith/LeePerrySmith.obj",
                               "mediapipe-canonical/canonical_face_model.obj"};
 static const char *takes[] = {"HandSplay-110fps", "Waiting-110fps", "grab", "three-claps"};
-
-static int cmp_d(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double pctl(double *v, size_t n, double p)
-{
-    if (!n) return 0;
-    qsort(v, n, sizeof *v, cmp_d);
-    return v[(size_t)(p * (double)(n - 1) + 0.5)];
-}
 
 /* the frame's reference: the base posed by the rig at the session's channel values */
 static void reference(fp_session *s, float *out)
@@ -134,8 +122,8 @@ static void run(const char *face, const char *take, const char *mapping)
         moved += memcmp(fp_session_positions(s) + 3 * v, fp_session_loaded(s) + 3 * v, 3 * sizeof(float)) != 0;
     printf("%-13.13s %-16s %-10s deforming %4lu, scaled back %3lu (least %3.0f%%); contact guard "
            "median %.4f ms p99 %.4f ms; moved %5.2f%%; CGAL new crossings %ld\n",
-           face, take, mapping, active, scaled, 100 * least, pctl(cms, ncms, 0.5),
-           pctl(cms, ncms, 0.99), 100.0 * (double)moved / (double)n, cg);
+           face, take, mapping, active, scaled, 100 * least, fp_median(cms, ncms),
+           fp_percentile(cms, ncms, 0.99), 100.0 * (double)moved / (double)n, cg);
     fflush(stdout);
     assert_int_equal(cg, 0);
     total_frames += active;

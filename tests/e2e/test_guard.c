@@ -13,6 +13,7 @@
 #include "csrbf.h"
 #include "fp_mesh.h"
 #include "fp_session.h"
+#include "fp_stats.h"
 #include "fp_test_support.h"
 #include "selfx.h"
 
@@ -106,26 +107,7 @@ static long new_crossings(fp_session *s) { return crossings_of(s, fp_session_pos
 static size_t flipped(fp_session *s, const float *after)
 {
     const struct fp_mesh *m = fp_session_mesh(s);
-    const float *a = fp_session_loaded(s);
-    size_t k = 0;
-    for (size_t t = 0; t < m->triangle_count; t++) {
-        const uint32_t *v = m->triangles + 3 * t;
-        double na[3], nb[3];
-        for (int w = 0; w < 2; w++) {
-            const float *p = w ? after : a;
-            double e1[3], e2[3];
-            for (int c = 0; c < 3; c++) {
-                e1[c] = (double)p[3 * v[1] + c] - p[3 * v[0] + c];
-                e2[c] = (double)p[3 * v[2] + c] - p[3 * v[0] + c];
-            }
-            double *n = w ? nb : na;
-            n[0] = e1[1] * e2[2] - e1[2] * e2[1];
-            n[1] = e1[2] * e2[0] - e1[0] * e2[2];
-            n[2] = e1[0] * e2[1] - e1[1] * e2[0];
-        }
-        k += na[0] * nb[0] + na[1] * nb[1] + na[2] * nb[2] < 0;
-    }
-    return k;
+    return fp_test_reversed(fp_session_loaded(s), after, m->triangles, m->triangle_count);
 }
 
 static void displacement(fp_session *s, size_t *moved, double *maxd)
@@ -308,19 +290,6 @@ static const char *takes[] = {"HandSplay-110fps", "Waiting-110fps", "grab", "thr
  * checks every shown shape against the last one and scales the motion back. */
 static unsigned long total_collide_frames;
 
-static int cmp_d(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double pctl(double *v, size_t n, double p)
-{
-    if (!n) return 0;
-    qsort(v, n, sizeof *v, cmp_d);
-    return v[(size_t)(p * (double)(n - 1) + 0.5)];
-}
-
 static void recordings(const char *mapping)
 {
     for (size_t fi = 0; fi < sizeof faces / sizeof faces[0]; fi++) {
@@ -381,7 +350,7 @@ static void recordings(const char *mapping)
                    "%.4g (R %.4g); new crossings %ld (+%ld next to the input's own), flipped %zu "
                    "(%zu checks)\n",
                    faces[fi], takes[ti], mapping, frames, active, limited, composed,
-                   active ? min_det : 1.0, collided, 100.0 * collide_t, pctl(cms, ncms, 0.5), pctl(cms, ncms, 0.99), moved, n, 100.0 * moved / n, maxd,
+                   active ? min_det : 1.0, collided, 100.0 * collide_t, fp_median(cms, ncms), fp_percentile(cms, ncms, 0.99), moved, n, 100.0 * moved / n, maxd,
                    fp_session_radius(s), k, near, fl, nsnap + 1);
             fflush(stdout);
             /* every map applied is injective (the guard's guarantee) */

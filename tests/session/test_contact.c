@@ -703,31 +703,9 @@ static void test_set_pose(void **state)
  * the pairs near it, not a triangle turned over. Two sheets, the upper one tilted through
  * the lower one (column 4 of 9 crosses: own), own widened by 1 ring; a vertex of the lower
  * sheet on that column's edge pushed 1.5 columns sideways turns over triangles that are all
- * own. The full check and the incremental guard see the flips (before this, neither did:
- * the session's test_guard found one such flip in the ICT face's eye region); the shape
- * kept has none, by this test's own count of reversed normals. */
-static size_t reversed(const float *a, const float *b, const uint32_t *tris, size_t t)
-{
-    size_t k = 0;
-    for (size_t i = 0; i < t; i++) {
-        const uint32_t *v = tris + 3 * i;
-        double n[2][3];
-        for (int w = 0; w < 2; w++) {
-            const float *p = w ? b : a;
-            double e1[3], e2[3];
-            for (int c = 0; c < 3; c++) {
-                e1[c] = (double)p[3 * v[1] + c] - p[3 * v[0] + c];
-                e2[c] = (double)p[3 * v[2] + c] - p[3 * v[0] + c];
-            }
-            n[w][0] = e1[1] * e2[2] - e1[2] * e2[1];
-            n[w][1] = e1[2] * e2[0] - e1[0] * e2[2];
-            n[w][2] = e1[0] * e2[1] - e1[1] * e2[0];
-        }
-        k += n[0][0] * n[1][0] + n[0][1] * n[1][1] + n[0][2] * n[1][2] < 0;
-    }
-    return k;
-}
-
+ * own. The full check and the incremental guard see the flips (before this, neither did;
+ * the recordings hardly turn own triangles, this is for the faces and gestures that do);
+ * the shape kept has none, by fp_test_reversed (reversed normals, in double). */
 static void test_own_flip(void **state)
 {
     (void)state;
@@ -740,7 +718,7 @@ static void test_own_flip(void **state)
     memcpy(cand, pos, n * 3 * sizeof(float));
     size_t mv = 4 * 10 + 5; /* lower sheet, x = 4/9, y = 5/9: on column 4's edge */
     cand[3 * mv] += 1.5f / 9;
-    size_t rev = reversed(pos, cand, tris, t);
+    size_t rev = fp_test_reversed(pos, cand, tris, t);
     assert_true(rev > 0);
     fp_contact *full, *tk;
     assert_int_equal(fp_contact_create(tris, t, n, pos, &full), 0);
@@ -757,7 +735,7 @@ static void test_own_flip(void **state)
     assert_int_equal(r.flipped, rev);
     assert_true(r.t < 1);
     const float *kept = fp_contact_shape(tk);
-    assert_int_equal(reversed(pos, kept, tris, t), 0);
+    assert_int_equal(fp_test_reversed(pos, kept, tris, t), 0);
     assert_true(kept[3 * mv] > pos[3 * mv]); /* it still moved some */
     printf("own flip: %zu triangles turned over by the candidate, kept %.3f of the motion\n",
            rev, (kept[3 * mv] - pos[3 * mv]) / (1.5 / 9));
@@ -770,7 +748,7 @@ static void test_own_flip(void **state)
 
 /* A flip is judged with a margin: the bisection drives a turning triangle to the edge of
  * 90 degrees, where the rest normal's rounding to float decided the sign either way, and an
- * independent check in double (this test's reversed(), test_guard's) saw a flip the guard
+ * independent check in double (fp_test_reversed(), test_guard's) saw a flip the guard
  * had let through (test_guard failed once in CI on ICT three-claps unanchored: "flipped 1").
  * Single triangles at random places and sizes, turned 100..170 degrees about an axis in
  * their plane, scaled back by 40 halvings: none reversed in double (the old test, a sign
@@ -805,8 +783,8 @@ static void test_flip_boundary(void **state)
         fp_contact_result r;
         assert_int_equal(fp_contact_guard(c, w, cand, out, 40, &r), 0);
         assert_int_equal(r.flipped, 1);
-        if (reversed(w, out, tri, 1)) fprintf(stderr, "trial %d: kept t %.12f reverses the triangle\n", k, r.t);
-        assert_int_equal(reversed(w, out, tri, 1), 0);
+        if (fp_test_reversed(w, out, tri, 1)) fprintf(stderr, "trial %d: kept t %.12f reverses the triangle\n", k, r.t);
+        assert_int_equal(fp_test_reversed(w, out, tri, 1), 0);
         double n[2][3], e[2][3];
         for (int s2 = 0; s2 < 2; s2++) {
             const float *p = s2 ? out : w;

@@ -1,6 +1,7 @@
 /* core/session/step_engine: factor or reuse (bitwise start points), solve, evaluate, the
  * engine's codes unchanged and logged once, fingertip distances against a double brute
  * force. */
+#include "fp_test_support.h"
 #include "log_capture.h"
 #include "step_engine.h"
 #include "fp_mesh.h"
@@ -142,9 +143,8 @@ static void test_tip_distances(void **state)
 static void test_tip_distances_indexed_ict(void **state)
 {
     (void)state;
-    const char *dir = getenv("FP_SHARED_DATA") ? getenv("FP_SHARED_DATA") : "../shared/data";
-    char path[4200], err[512];
-    snprintf(path, sizeof path, "%s/faces/ict-facekit/generic_neutral_mesh.obj", dir);
+    const char *path = fp_test_face_path();
+    char err[512];
     fp_mesh *m = NULL;
     assert_int_equal(fp_mesh_load(path, &m, err, sizeof err), 0);
     size_t n = m->vertex_count;

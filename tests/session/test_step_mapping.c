@@ -1,5 +1,6 @@
 /* core/session/step_mapping (the control set's check, errors reported once with a count),
  * step_rig (the pass-through) and session_log's repeat counter. */
+#include "fp_test_support.h"
 #include "csrbf.h"
 #include "fp_mesh.h"
 #include "log_capture.h"
@@ -150,9 +151,8 @@ static void expect_clamped(const fp_rig_step *r, const fp_control_set *in, const
 static void test_rig_clamp_kept(void **state)
 {
     (void)state;
-    const char *dir = getenv("FP_SHARED_DATA") ? getenv("FP_SHARED_DATA") : "../shared/data";
-    char path[4200], err[512];
-    snprintf(path, sizeof path, "%s/faces/ict-facekit/generic_neutral_mesh.obj", dir);
+    const char *path = fp_test_face_path();
+    char err[512];
     fp_mesh *m = NULL;
     assert_int_equal(fp_mesh_load(path, &m, err, sizeof err), 0);
     fp_rig *rig = NULL;
@@ -199,9 +199,8 @@ static void test_rig_clamp_kept(void **state)
 static void test_rig_finish_ranges(void **state)
 {
     (void)state;
-    const char *dir = getenv("FP_SHARED_DATA") ? getenv("FP_SHARED_DATA") : "../shared/data";
-    char path[4200], err[512];
-    snprintf(path, sizeof path, "%s/faces/ict-facekit/generic_neutral_mesh.obj", dir);
+    const char *path = fp_test_face_path();
+    char err[512];
     fp_mesh *m = NULL;
     assert_int_equal(fp_mesh_load(path, &m, err, sizeof err), 0);
     size_t n = m->vertex_count, bytes = n * 3 * sizeof(float);

@@ -110,6 +110,26 @@ typedef struct fixture {
     int64_t t;
 } fixture;
 
+/* The fixture around its session f->s: buffers, the support radius (0.06 x the mesh's
+ * diagonal) and a control set of 3 over start and end. */
+static void fixture_ready(fixture *f)
+{
+    f->n = fp_session_vertex_count(f->s);
+    f->shown = malloc(f->n * 3 * sizeof(float));
+    f->base = malloc(f->n * 3 * sizeof(float));
+    f->cover = malloc(f->n);
+    assert_true(f->shown && f->base && f->cover);
+    float lo[3], hi[3];
+    fp_mesh_bounds(fp_session_mesh(f->s), lo, hi);
+    f->radius = 0.06 * sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                            (hi[2] - lo[2]) * (hi[2] - lo[2]));
+    f->cs.size = sizeof f->cs;
+    f->cs.radius = f->radius;
+    f->cs.capacity = 3;
+    f->cs.start = f->start;
+    f->cs.end = f->end;
+}
+
 /* Take both records and check them against the last; returns the shown shape's count and
  * writes the covered fraction to *frac (1 for SIZE_MAX). */
 static size_t take_one(fixture *f, bool base, double *frac, size_t *bcount)
@@ -176,20 +196,7 @@ static void run_contract(const char *rig_path)
     int rc = fp_session_create(&so, &f.s, err, sizeof err);
     if (rc) fprintf(stderr, "%s\n", err);
     assert_int_equal(rc, 0);
-    f.n = fp_session_vertex_count(f.s);
-    f.shown = malloc(f.n * 3 * sizeof(float));
-    f.base = malloc(f.n * 3 * sizeof(float));
-    f.cover = malloc(f.n);
-    assert_true(f.shown && f.base && f.cover);
-    float lo[3], hi[3];
-    fp_mesh_bounds(fp_session_mesh(f.s), lo, hi);
-    f.radius = 0.06 * sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
-                           (hi[2] - lo[2]) * (hi[2] - lo[2]));
-    f.cs.size = sizeof f.cs;
-    f.cs.radius = f.radius;
-    f.cs.capacity = 3;
-    f.cs.start = f.start;
-    f.cs.end = f.end;
+    fixture_ready(&f);
     bool rig = fp_session_rig(f.s) != NULL;
     double frac;
     size_t bk;
@@ -378,22 +385,10 @@ static void test_rig_commit_ranged_equals_whole(void **state)
     fixture f = {0};
     fp_session *w = rig_session(true);
     f.s = rig_session(false);
-    f.n = fp_session_vertex_count(f.s);
+    fixture_ready(&f);
     size_t bytes = f.n * 3 * sizeof(float);
-    f.shown = malloc(bytes);
-    f.base = malloc(bytes);
-    f.cover = malloc(f.n);
     float *tmp = malloc(bytes);
-    assert_true(f.shown && f.base && f.cover && tmp);
-    float lo[3], hi[3];
-    fp_mesh_bounds(fp_session_mesh(f.s), lo, hi);
-    f.radius = 0.06 * sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
-                           (hi[2] - lo[2]) * (hi[2] - lo[2]));
-    f.cs.size = sizeof f.cs;
-    f.cs.radius = f.radius;
-    f.cs.capacity = 3;
-    f.cs.start = f.start;
-    f.cs.end = f.end;
+    assert_non_null(tmp);
     double frac;
     size_t bk;
     pair p = {&f, w, tmp, 0, 0, 0, 0, 0, 0};

@@ -59,6 +59,28 @@ int64_t fp_test_mono_ns(void)
     return (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
 }
 
+size_t fp_test_reversed(const float *a, const float *b, const uint32_t *tris, size_t t)
+{
+    size_t k = 0;
+    for (size_t i = 0; i < t; i++) {
+        const uint32_t *v = tris + 3 * i;
+        double n[2][3];
+        for (int w = 0; w < 2; w++) {
+            const float *p = w ? b : a;
+            double e1[3], e2[3];
+            for (int c = 0; c < 3; c++) {
+                e1[c] = (double)p[3 * v[1] + c] - p[3 * v[0] + c];
+                e2[c] = (double)p[3 * v[2] + c] - p[3 * v[0] + c];
+            }
+            n[w][0] = e1[1] * e2[2] - e1[2] * e2[1];
+            n[w][1] = e1[2] * e2[0] - e1[0] * e2[2];
+            n[w][2] = e1[0] * e2[1] - e1[1] * e2[0];
+        }
+        k += n[0][0] * n[1][0] + n[0][1] * n[1][1] + n[0][2] * n[1][2] < 0;
+    }
+    return k;
+}
+
 void fp_test_nap_ms(int ms)
 {
     struct timespec ts = {ms / 1000, (long)(ms % 1000) * 1000000L};

@@ -31,6 +31,11 @@ const char *fp_test_face_path(void);
 /** Write text to path (created or truncated). Fails the test when it cannot. */
 void fp_test_write_file(const char *path, const char *text);
 
+/** Triangles (t x 3 indices into both shapes, n x 3 floats each) whose normal in b points
+ *  against its normal in a (dot < 0, computed in double): turned over, a fold, whether or not
+ *  it crosses another triangle. A degenerate triangle in either shape does not count. */
+size_t fp_test_reversed(const float *a, const float *b, const uint32_t *tris, size_t t);
+
 /** CLOCK_MONOTONIC in ns. */
 int64_t fp_test_mono_ns(void);
 /** Sleep ms milliseconds. */
