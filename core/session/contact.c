@@ -28,6 +28,7 @@ struct fp_contact {
     struct track *tk;     /* the incremental guard (fp_contact_step), made on first use */
     float *weld_copy;     /* n x 3: the weld shape, the tracker's first P (freed then) */
     size_t prewarm;       /* fp_contact_set_prewarm */
+    bool certify;         /* fp_contact_set_certify */
     double local_r;       /* fp_contact_set_local: 0, a scale-back is global */
 };
 
@@ -133,6 +134,7 @@ int fp_contact_tri_tri(const double a[3][3], const double b[3][3])
 
 typedef struct fp_contact_count fp_contact_count;
 static void track_free(struct track *k);
+static void cross3(const double a[3], const double b[3], double o[3]);
 static void tri_of(const float *pos, const uint32_t *v, double out[3][3]);
 static long scan(fp_contact *c, const float *ref, const float *cand, bool all, uint32_t *pairs,
                  size_t max_pairs, fp_contact_count *info);
@@ -162,6 +164,7 @@ int fp_contact_create(const uint32_t *tris, size_t t, size_t n, const float *wel
     c->t = t;
     c->n = n;
     c->prewarm = FP_CONTACT_PREWARM;
+    c->certify = true;
     c->weld = malloc((n ? n : 1) * sizeof *c->weld);
     c->moved = malloc(n ? n : 1);
     c->mtris = malloc((t ? t : 1) * sizeof *c->mtris);
@@ -302,6 +305,14 @@ static int grow(uint32_t **p, size_t *cap, size_t need)
     *p = q;
     *cap = nc;
     return 0;
+}
+
+/* n (e1 x e2 in double) turned by more than acos(FP_CONTACT_FLIP_COS) from triangle i's rest
+ * normal (a unit vector): d < FP_CONTACT_FLIP_COS |n|, without a square root */
+static inline bool flipped_n(const fp_contact *c, const double n[3], size_t i)
+{
+    double d = n[0] * c->nrm[i][0] + n[1] * c->nrm[i][1] + n[2] * c->nrm[i][2];
+    return d < 0 || d * d < FP_CONTACT_FLIP_COS * FP_CONTACT_FLIP_COS * (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
 }
 
 static bool flipped(const fp_contact *c, const float *pos, const uint32_t *v, size_t i)
@@ -550,6 +561,25 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
 #define FP_CONTACT_LOCAL_ROUNDS 3 /* a local scale-back: times its blocking set may grow */
 #define FP_TRACK_INLINE 6          /* list entries kept in the dyn itself (one cache line) */
 
+#define FP_BVH_LEAF 8             /* triangles in a leaf of the hierarchy, at most */
+#define FP_CERT_MIN 48            /* a patch (node) with this many triangles or more ... */
+#define FP_CERT_MAX 65536         /* ... and no more may be certified (its boundary made once) */
+
+typedef struct bnode {            /* a node of the hierarchy: a patch of triangles */
+    float box[6];                 /* its triangles' box in P (in the shape checked, in a check) */
+    uint32_t first, count;        /* its triangles: order[first .. first + count) */
+    uint32_t right;               /* its right child (the left one is the next node); 0: leaf */
+    uint32_t parent;              /* FP_TRACK_NONE: the root */
+    uint32_t cert;                /* its boundary cycle (index into cert); FP_TRACK_NONE: none */
+    uint32_t stamp;               /* == tclock: holds a moved triangle */
+    float nlo[3], nhi[3];         /* a box that holds its triangles' unit normals (in P) */
+} bnode;
+
+typedef struct cert {             /* a patch whose boundary is one simple cycle */
+    uint32_t start, len;          /* the cycle's vertices: cyc[start .. start + len) */
+} cert;
+
+
 typedef struct dyn {              /* a triangle that has left the weld shape */
     float env[6];                 /* its envelope: holds its box in P (and in the candidate) */
     uint32_t tri;
@@ -644,6 +674,24 @@ struct track {
     float (*renv)[6];
     size_t cap_rx, cap_renv;
     size_t renewed;               /* envelopes renewed, for fp_contact_result */
+    bool tree;                    /* the hierarchy (below), not envelopes (a large mesh) */
+    bnode *node;                  /* the hierarchy over the triangles not own, root node[0] */
+    size_t nnode;
+    uint32_t *order;              /* its triangles, by node */
+    uint32_t *tpos;               /* t: a triangle's place in order (FP_TRACK_NONE: own) */
+    uint32_t *leaf;               /* by place in order: its leaf */
+    float (*tn)[3];               /* by place in order: its normal in P (tri_normal_f) */
+    float (*tbox)[6];             /* by place in order: its box in P */
+    uint32_t *pstamp;             /* by place in order: == tclock when moved */
+    cert *cert;
+    size_t ncert;
+    uint32_t *cyc;                /* the certifiable patches' boundary cycles */
+    bool certify;                 /* fp_contact_set_certify */
+    double *xy;                   /* a contour's projection (2 per vertex) */
+    size_t cap_xy;
+    uint32_t *gcount, *gseg;      /* its segments by grid cell */
+    size_t cap_gcount, cap_gseg;
+    size_t certified, tested;     /* this step: patches certified, triangle pairs tested */
     uint32_t *off;                /* a local scale-back: the blocking triangles' vertices */
     size_t noff, cap_off;
     uint8_t *off_mark;            /* n: in off */
@@ -687,6 +735,18 @@ static void track_free(struct track *k)
     free(k->rr);
     free(k->rx);
     free(k->renv);
+    free(k->node);
+    free(k->order);
+    free(k->tpos);
+    free(k->leaf);
+    free(k->tn);
+    free(k->tbox);
+    free(k->pstamp);
+    free(k->cert);
+    free(k->cyc);
+    free(k->xy);
+    free(k->gcount);
+    free(k->gseg);
     free(k->off);
     free(k->off_mark);
     free(k->ramp);
@@ -1139,7 +1199,888 @@ static int renew_lists(fp_contact *c)
     return 0;
 }
 
+/* ==== the hierarchy (contact.h, "The hierarchy"): a large mesh's broad phase ==== */
+
+/* ---- a patch's certificate (contact.h, "(3)") ---- */
+
+/* Triangle v's normal in pos (e1 x e2, as flipped, computed in double) into out as floats,
+ * or 0 when it is within 1e-10 |e1|_1 |e2|_1 of 0 (degenerate: its direction there is
+ * rounding), NaN or beyond float's range. A certificate's test (n . a against 1e-5 |n|_1
+ * |a|_1) then errs only towards "not facing a". Returns n (double) in nd for the flip test. */
+static inline void tri_normal_f(const float *pos, const uint32_t *v, float out[3], double nd[3])
+{
+    const float *p0 = pos + 3 * (size_t)v[0], *p1 = pos + 3 * (size_t)v[1], *p2 = pos + 3 * (size_t)v[2];
+    double e1[3], e2[3];
+    for (int j = 0; j < 3; j++) {
+        e1[j] = (double)p1[j] - p0[j];
+        e2[j] = (double)p2[j] - p0[j];
+    }
+    nd[0] = e1[1] * e2[2] - e1[2] * e2[1];
+    nd[1] = e1[2] * e2[0] - e1[0] * e2[2];
+    nd[2] = e1[0] * e2[1] - e1[1] * e2[0];
+    double l1 = fabs(nd[0]) + fabs(nd[1]) + fabs(nd[2]);
+    double m = 1e-10 * (fabs(e1[0]) + fabs(e1[1]) + fabs(e1[2])) * (fabs(e2[0]) + fabs(e2[1]) + fabs(e2[2]));
+    if (!(l1 > m) || !(l1 < 1e30)) {
+        out[0] = out[1] = out[2] = 0.f;
+        return;
+    }
+    for (int j = 0; j < 3; j++) out[j] = (float)nd[j];
+}
+
+/* min and max of finite doubles, inline */
+static inline double dmin(double a, double b) { return b < a ? b : a; }
+static inline double dmax(double a, double b) { return b > a ? b : a; }
+
+/* 2D orientation of (a, b, c): twice the signed area */
+static inline double orient2(const double *a, const double *b, const double *c)
+{
+    return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+}
+
+/* closed segments ab and cd may meet: not certainly apart (signs beyond the margin e) */
+static bool segs_may_meet(const double *a, const double *b, const double *c, const double *d, double e,
+                          double el)
+{
+    if (dmax(a[0], b[0]) + el < dmin(c[0], d[0]) || dmax(c[0], d[0]) + el < dmin(a[0], b[0]) ||
+        dmax(a[1], b[1]) + el < dmin(c[1], d[1]) || dmax(c[1], d[1]) + el < dmin(a[1], b[1]))
+        return false;
+    double d1 = orient2(a, b, c), d2 = orient2(a, b, d);
+    if ((d1 > e && d2 > e) || (d1 < -e && d2 < -e)) return false;
+    double d3 = orient2(c, d, a), d4 = orient2(c, d, b);
+    if ((d3 > e && d4 > e) || (d3 < -e && d4 < -e)) return false;
+    return true;
+}
+
+/* The cycle cyc (len vertices, positions in s) projected along direction d is certainly a
+ * simple polygon: no two segments meet but neighbours at their shared vertex, and neighbours
+ * do not fold back over each other. Projections in double; a sign within a margin far over
+ * their rounding counts as uncertain, and uncertain is "not simple". Segments meet only in
+ * grid cells they share (a grid of about len cells over the polygon's box). 0: simple, 1: not,
+ * -ENOMEM. */
+static int contour_tangled(struct track *k, const float *s, const uint32_t *cyc, uint32_t len, const double *u,
+                           const double *w)
+{
+    if (len < 3) return 1;
+    if (reserve((void **)&k->xy, &k->cap_xy, 2 * (size_t)len, sizeof *k->xy)) return -ENOMEM;
+    double *xy = k->xy, lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY}, big = 0;
+    for (uint32_t i = 0; i < len; i++) {
+        const float *p = s + 3 * (size_t)cyc[i];
+        double x = p[0] * u[0] + p[1] * u[1] + p[2] * u[2], y = p[0] * w[0] + p[1] * w[1] + p[2] * w[2];
+        xy[2 * i] = x;
+        xy[2 * i + 1] = y;
+        lo[0] = dmin(lo[0], x), hi[0] = dmax(hi[0], x);
+        lo[1] = dmin(lo[1], y), hi[1] = dmax(hi[1], y);
+        big = dmax(big, dmax(fabs(p[0]), dmax(fabs(p[1]), fabs(p[2]))));
+    }
+    double ext = dmax(hi[0] - lo[0], hi[1] - lo[1]);
+    if (!(ext > 0) || !isfinite(big)) return 1;
+    double scale = ext + big, el = 1e-9 * scale, e = 1e-9 * scale * scale;
+    /* neighbours: not folded back (collinear with the next one turned around) */
+    for (uint32_t i = 0; i < len; i++) {
+        const double *a = xy + 2 * (size_t)(i ? i - 1 : len - 1), *b = xy + 2 * (size_t)i,
+                     *c = xy + 2 * (size_t)(i + 1 < len ? i + 1 : 0);
+        if (fabs(orient2(a, b, c)) <= e &&
+            (b[0] - a[0]) * (c[0] - b[0]) + (b[1] - a[1]) * (c[1] - b[1]) <= e)
+            return 1;
+    }
+    if (len == 3) return 0;
+    /* the others, by grid cell */
+    uint32_t g = 1;
+    while ((size_t)g * g < len) g++;
+    double ic = g / ext;
+#define FP_CELL(x, a) ((uint32_t)dmin((double)(g - 1), dmax(0.0, ((x) - lo[a]) * ic)))
+    size_t ne = 0;
+    for (uint32_t i = 0; i < len; i++) {
+        const double *a = xy + 2 * (size_t)i, *b = xy + 2 * (size_t)(i + 1 < len ? i + 1 : 0);
+        uint32_t x0 = FP_CELL(dmin(a[0], b[0]) - el, 0), x1 = FP_CELL(dmax(a[0], b[0]) + el, 0),
+                 y0 = FP_CELL(dmin(a[1], b[1]) - el, 1), y1 = FP_CELL(dmax(a[1], b[1]) + el, 1);
+        ne += (size_t)(x1 - x0 + 1) * (y1 - y0 + 1);
+    }
+    if (ne > 16 * (size_t)len) return 1; /* segments long against the polygon: not worth it */
+    if (reserve((void **)&k->gcount, &k->cap_gcount, (size_t)g * g + 1, sizeof *k->gcount) ||
+        reserve((void **)&k->gseg, &k->cap_gseg, ne, sizeof *k->gseg))
+        return -ENOMEM;
+    uint32_t *cnt = k->gcount, *seg = k->gseg;
+    memset(cnt, 0, ((size_t)g * g + 1) * sizeof *cnt);
+    for (int pass = 0; pass < 2; pass++) {
+        for (uint32_t i = 0; i < len; i++) {
+            const double *a = xy + 2 * (size_t)i, *b = xy + 2 * (size_t)(i + 1 < len ? i + 1 : 0);
+            uint32_t x0 = FP_CELL(dmin(a[0], b[0]) - el, 0), x1 = FP_CELL(dmax(a[0], b[0]) + el, 0),
+                     y0 = FP_CELL(dmin(a[1], b[1]) - el, 1), y1 = FP_CELL(dmax(a[1], b[1]) + el, 1);
+            for (uint32_t x = x0; x <= x1; x++)
+                for (uint32_t y = y0; y <= y1; y++) {
+                    if (!pass) cnt[(size_t)y * g + x + 1]++;
+                    else seg[cnt[(size_t)y * g + x]++] = i;
+                }
+        }
+        if (!pass)
+            for (size_t q = 0; q < (size_t)g * g; q++) cnt[q + 1] += cnt[q];
+    }
+#undef FP_CELL
+    /* the fill moved each start to the next cell's: cell q is seg[(q ? cnt[q - 1] : 0) .. cnt[q]) */
+    for (size_t q = 0; q < (size_t)g * g; q++) {
+        uint32_t b0 = q ? cnt[q - 1] : 0, b1 = cnt[q];
+        for (uint32_t i = b0; i < b1; i++)
+            for (uint32_t j = i + 1; j < b1; j++) {
+                uint32_t x = seg[i], y = seg[j];
+                if (x > y) {
+                    uint32_t z = x;
+                    x = y;
+                    y = z;
+                }
+                if (y == x + 1 || (x == 0 && y == len - 1)) continue; /* neighbours: above */
+                const double *a = xy + 2 * (size_t)x, *b = xy + 2 * (size_t)(x + 1),
+                             *c = xy + 2 * (size_t)y, *dd = xy + 2 * (size_t)(y + 1 < len ? y + 1 : 0);
+                if (segs_may_meet(a, b, c, dd, e, el)) return 1;
+            }
+    }
+    return 0;
+}
+
+/* Node x's certificate in s: every triangle of it faces a = the sum of their normals
+ * (n . a > 1e-5 |n|_1 |a|_1, float) and its boundary cycle, projected along a, is a simple
+ * polygon. Then the projection is one to one on the patch (contact.h, "(3)"), so no two of
+ * its triangles meet but where they share a vertex. 1: certified, 0: not, -ENOMEM. */
+static int certified(struct track *k, const float *s, const bnode *x)
+{
+    /* the axis: the normals' box centre; every unit normal n in the box has n . a at least
+     * the box's least corner value, which must clear 1e-4 (over the unit normals' float
+     * rounding, tri_normal_f's and normalising's) */
+    double ad[3], l = 0, mn = 0;
+    for (int j = 0; j < 3; j++) {
+        ad[j] = 0.5 * ((double)x->nlo[j] + x->nhi[j]);
+        l += ad[j] * ad[j];
+    }
+    l = sqrt(l);
+    if (!(l > 1e-3)) {
+        return 0;
+    }
+    for (int j = 0; j < 3; j++) {
+        ad[j] /= l;
+        mn += ad[j] >= 0 ? ad[j] * x->nlo[j] : ad[j] * x->nhi[j];
+    }
+    if (!(mn > 1e-4)) {
+        return 0;
+    }
+    /* a basis (u, w) of the plane across the axis */
+    double h[3] = {fabs(ad[0]) < 0.6 ? 1 : 0, fabs(ad[0]) < 0.6 ? 0 : 1, 0}, u[3], w[3];
+    cross3(ad, h, u);
+    double lu = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+    for (int j = 0; j < 3; j++) u[j] /= lu;
+    cross3(ad, u, w);
+    const cert *ct = &k->cert[x->cert];
+    int r = contour_tangled(k, s, k->cyc + ct->start, ct->len, u, w);
+    return r < 0 ? r : !r;
+}
+
+/* ---- the hierarchy: building ---- */
+
+static const float *cent_of; /* quickselect's keys (centroids, 3 per triangle) */
+
+/* order[lo .. hi) partially sorted so that order[mid] has the mid-th key on axis a (keys
+ * cent_of[3 t + a]; Hoare partitions, median of three) */
+static void select_mid(uint32_t *order, size_t lo, size_t hi, size_t mid, int a)
+{
+#define KEY(i) cent_of[3 * (size_t)order[i] + a]
+    while (hi - lo > 1) {
+        size_t m = lo + (hi - lo) / 2;
+        float x = KEY(lo), y = KEY(m), z = KEY(hi - 1);
+        float piv = x < y ? (y < z ? y : (x < z ? z : x)) : (x < z ? x : (y < z ? z : y));
+        size_t i = lo, j = hi - 1;
+        for (;;) {
+            while (KEY(i) < piv) i++;
+            while (piv < KEY(j)) j--;
+            if (i >= j) break;
+            uint32_t tmp = order[i];
+            order[i] = order[j];
+            order[j] = tmp;
+            i++;
+            j--;
+        }
+        if (i == j) { /* [lo, j) <= piv == order[j] <= (j, hi): order[j] is in place */
+            if (mid == j) return;
+            if (mid < j) hi = j;
+            else lo = j + 1;
+            continue;
+        }
+        /* i > j: [lo, j] <= piv <= [j + 1, hi), both sides non-empty */
+        if (mid <= j) hi = j + 1;
+        else lo = j + 1;
+    }
+#undef KEY
+}
+
+/* ---- the hierarchy, bottom up ---- */
+
+typedef struct cbuild {           /* cluster_build's state */
+    size_t m;                     /* triangles not own; clusters 0 .. m - 1 are them */
+    uint32_t *list;               /* cluster i < m: triangle list[i] */
+    uint32_t *idx;                /* t: a triangle's cluster < m (FP_TRACK_NONE: own) */
+    uint32_t *tw;                 /* 3 t: a half-edge's twin (3 b + q), FP_TRACK_NONE: none */
+    uint32_t *cnt, *lc, *rc, *uf; /* per cluster: triangles, children, union-find parent */
+    uint32_t **bnd, *nbnd;        /* clusters >= m: the half-edges whose twin is outside */
+    uint32_t *round;              /* the round a cluster was paired in */
+    float *cen;                   /* per cluster: its triangles' centroid sum (3) */
+    float *nb;                    /* per cluster: a box of its unit normals (lo 3, hi 3) */
+    size_t nc;                    /* clusters made */
+} cbuild;
+
+static uint32_t cfind(cbuild *b, uint32_t x)
+{
+    while (b->uf[x] != x) {
+        b->uf[x] = b->uf[b->uf[x]];
+        x = b->uf[x];
+    }
+    return x;
+}
+
+/* cluster x's boundary half-edges */
+static const uint32_t *cbnd(const cbuild *b, uint32_t x, uint32_t tmp[3], uint32_t *len)
+{
+    if (x < b->m) {
+        for (int j = 0; j < 3; j++) tmp[j] = 3 * b->list[x] + (uint32_t)j;
+        *len = 3;
+        return tmp;
+    }
+    *len = b->nbnd[x];
+    return b->bnd[x];
+}
+
+/* a new cluster over x and y (children); 0 or -ENOMEM */
+static int cjoin(cbuild *b, uint32_t x, uint32_t y, uint32_t *out)
+{
+    uint32_t z = (uint32_t)b->nc++;
+    b->cnt[z] = b->cnt[x] + b->cnt[y];
+    b->lc[z] = x;
+    b->rc[z] = y;
+    b->uf[z] = z;
+    b->uf[x] = b->uf[y] = z;
+    for (int j = 0; j < 3; j++) {
+        b->cen[3 * z + j] = b->cen[3 * x + j] + b->cen[3 * y + j];
+        b->nb[6 * z + j] = min_f(b->nb[6 * x + j], b->nb[6 * y + j]);
+        b->nb[6 * z + 3 + j] = max_f(b->nb[6 * x + 3 + j], b->nb[6 * y + 3 + j]);
+    }
+    uint32_t tx[3], ty[3], lx, ly;
+    const uint32_t *ex = cbnd(b, x, tx, &lx), *ey = cbnd(b, y, ty, &ly);
+    uint32_t *e = malloc(((size_t)lx + ly + 1) * sizeof *e), ne = 0;
+    if (!e) return -ENOMEM;
+    for (int h = 0; h < 2; h++) {
+        const uint32_t *src = h ? ey : ex;
+        for (uint32_t i = 0, l = h ? ly : lx; i < l; i++) {
+            uint32_t w = b->tw[src[i]];
+            if (w == FP_TRACK_NONE || cfind(b, b->idx[w / 3]) != z) e[ne++] = src[i];
+        }
+    }
+    if (x >= b->m) free(b->bnd[x]), b->bnd[x] = NULL;
+    if (y >= b->m) free(b->bnd[y]), b->bnd[y] = NULL;
+    b->bnd[z] = e;
+    b->nbnd[z] = ne;
+    *out = z;
+    return 0;
+}
+
+/* the clusters items[0 .. n) joined by median splits of their centroids (cen: the mean, for
+ * the items); the root in *out */
+static int top_split(cbuild *b, uint32_t *items, size_t n, uint32_t *out)
+{
+    if (n == 1) {
+        *out = items[0];
+        return 0;
+    }
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t i = 0; i < n; i++)
+        for (int a = 0; a < 3; a++) {
+            float v = b->cen[3 * (size_t)items[i] + a];
+            lo[a] = min_f(lo[a], v);
+            hi[a] = max_f(hi[a], v);
+        }
+    int a = 0;
+    for (int j = 1; j < 3; j++)
+        if (hi[j] - lo[j] > hi[a] - lo[a]) a = j;
+    cent_of = b->cen;
+    select_mid(items, 0, n, n / 2, a);
+    uint32_t l, r;
+    if (top_split(b, items, n / 2, &l) || top_split(b, items + n / 2, n - n / 2, &r)) return -ENOMEM;
+    return cjoin(b, l, r, out);
+}
+
+/* the preorder layout of cluster z's subtree into k->node (a cluster of FP_BVH_LEAF
+ * triangles or fewer is a leaf), its triangles into k->order */
+static void lay_tris(const cbuild *b, struct track *k, uint32_t z, uint32_t *pos)
+{
+    if (z < b->m) {
+        k->order[(*pos)++] = b->list[z];
+        return;
+    }
+    lay_tris(b, k, b->lc[z], pos);
+    lay_tris(b, k, b->rc[z], pos);
+}
+
+static void lay(const cbuild *b, struct track *k, uint32_t z, uint32_t parent, uint32_t *pos)
+{
+    uint32_t x = (uint32_t)k->nnode++;
+    bnode *nd = &k->node[x];
+    memset(nd, 0, sizeof *nd);
+    nd->first = *pos;
+    nd->count = b->cnt[z];
+    nd->parent = parent;
+    nd->cert = FP_TRACK_NONE;
+    if (z < b->m || b->cnt[z] <= FP_BVH_LEAF) {
+        lay_tris(b, k, z, pos);
+        for (uint32_t i = nd->first; i < *pos; i++) k->leaf[i] = x;
+        return;
+    }
+    lay(b, k, b->lc[z], x, pos);
+    k->node[x].right = (uint32_t)k->nnode;
+    lay(b, k, b->rc[z], x, pos);
+}
+
+/* the union of two boxes of unit normals (lo 3, hi 3) faces a direction (certified's test) */
+static bool faces(const float *p, const float *q)
+{
+    double lo[3], hi[3], ad[3], l = 0, mn = 0;
+    for (int j = 0; j < 3; j++) {
+        lo[j] = min_f(p[j], q[j]);
+        hi[j] = max_f(p[3 + j], q[3 + j]);
+        ad[j] = 0.5 * (lo[j] + hi[j]);
+        l += ad[j] * ad[j];
+    }
+    l = sqrt(l);
+    if (!(l > 1e-3)) return false;
+    for (int j = 0; j < 3; j++) mn += ad[j] >= 0 ? ad[j] / l * lo[j] : ad[j] / l * hi[j];
+    return mn > 1e-4;
+}
+
+/* The hierarchy over the m triangles not own (k->order holds them): clusters grown across
+ * edges, bottom up. The triangles are the first clusters; each round pairs every cluster not
+ * yet paired with the unpaired neighbour (across an edge (u, v) / (v, u)) it shares most
+ * edges with. Clusters grown so stay connected and mostly discs, which a certificate needs;
+ * what finds no partner (separate components: an eyeball, the teeth) is joined at the top by
+ * median splits. 0 or -ENOMEM. */
+static int cluster_build(fp_contact *c, struct track *k, size_t m)
+{
+    cbuild b = {0};
+    size_t t = c->t, cap = 2 * m + 1;
+    int rc = -ENOMEM;
+    b.m = m;
+    b.list = malloc((m + 1) * sizeof *b.list);
+    b.idx = malloc((t + 1) * sizeof *b.idx);
+    b.tw = malloc((3 * t + 1) * sizeof *b.tw);
+    b.cnt = malloc(cap * sizeof *b.cnt);
+    b.lc = malloc(cap * sizeof *b.lc);
+    b.rc = malloc(cap * sizeof *b.rc);
+    b.uf = malloc(cap * sizeof *b.uf);
+    b.bnd = calloc(cap, sizeof *b.bnd);
+    b.nbnd = calloc(cap, sizeof *b.nbnd);
+    b.round = calloc(cap, sizeof *b.round);
+    b.cen = malloc(3 * cap * sizeof *b.cen);
+    b.nb = malloc(6 * cap * sizeof *b.nb);
+    uint32_t *act = malloc((m + 1) * sizeof *act), *nxt = malloc((m + 1) * sizeof *nxt);
+    uint32_t *vmark = calloc(c->n + 1, sizeof *vmark), *vseen = calloc(c->n + 1, sizeof *vseen), vclock = 0;
+    if (!b.list || !b.idx || !b.tw || !b.cnt || !b.lc || !b.rc || !b.uf || !b.bnd || !b.nbnd || !b.round ||
+        !b.cen || !b.nb || !act || !nxt || !vmark || !vseen)
+        goto done;
+    memcpy(b.list, k->order, m * sizeof *b.list);
+    for (size_t i = 0; i < t; i++) b.idx[i] = FP_TRACK_NONE;
+    for (size_t i = 0; i < m; i++) {
+        uint32_t a = b.list[i];
+        const uint32_t *v = c->tris + 3 * (size_t)a;
+        b.idx[a] = (uint32_t)i;
+        b.cnt[i] = 1;
+        b.uf[i] = (uint32_t)i;
+        for (int j = 0; j < 3; j++)
+            b.cen[3 * i + j] = (k->p[3 * (size_t)v[0] + j] + k->p[3 * (size_t)v[1] + j] + k->p[3 * (size_t)v[2] + j]) / 3.f;
+        double nd[3];
+        float nf[3];
+        tri_normal_f(k->p, v, nf, nd);
+        float l = sqrtf(nf[0] * nf[0] + nf[1] * nf[1] + nf[2] * nf[2]);
+        for (int j = 0; j < 3; j++) {
+            b.nb[6 * i + j] = l > 0.f ? nf[j] / l : -1.f;
+            b.nb[6 * i + 3 + j] = l > 0.f ? nf[j] / l : 1.f;
+        }
+        act[i] = (uint32_t)i;
+    }
+    b.nc = m;
+    /* twins: (u, v) of a, (v, u) of the one other triangle not own that has it */
+    for (size_t i = 0; i < m; i++) {
+        uint32_t a = b.list[i];
+        const uint32_t *v = c->tris + 3 * (size_t)a;
+        for (int j = 0; j < 3; j++) {
+            uint32_t u = v[j], w = v[(j + 1) % 3], found = FP_TRACK_NONE, nf = 0;
+            for (uint32_t q = k->vt_start[w]; q < k->vt_start[w + 1]; q++) {
+                uint32_t o = k->vt[q];
+                if (o == a || b.idx[o] == FP_TRACK_NONE) continue;
+                const uint32_t *vo = c->tris + 3 * (size_t)o;
+                for (int r = 0; r < 3; r++)
+                    if (vo[r] == w && vo[(r + 1) % 3] == u) {
+                        found = 3 * o + (uint32_t)r;
+                        nf++;
+                    }
+            }
+            b.tw[3 * (size_t)a + j] = nf == 1 ? found : FP_TRACK_NONE;
+        }
+    }
+    size_t nact = m;
+    for (uint32_t r = 1; nact > 1; r++) {
+        size_t nn = 0, joined = 0;
+        for (size_t i = 0; i < nact; i++) {
+            uint32_t x = act[i];
+            if (b.round[x] == r) continue;
+            uint32_t nb[32], nbc[32], nnb = 0, tmp[3], len;
+            const uint32_t *e = cbnd(&b, x, tmp, &len);
+            for (uint32_t h = 0; h < len; h++) {
+                uint32_t w = b.tw[e[h]];
+                if (w == FP_TRACK_NONE) continue;
+                uint32_t y = cfind(&b, b.idx[w / 3]);
+                if (y == x || b.round[y] == r) continue;
+                uint32_t q = 0;
+                while (q < nnb && nb[q] != y) q++;
+                if (q == nnb) {
+                    if (nnb == 32) continue;
+                    nb[nnb] = y;
+                    nbc[nnb++] = 0;
+                }
+                nbc[q]++;
+            }
+            b.round[x] = r;
+            if (!nnb) {
+                nxt[nn++] = x;
+                continue;
+            }
+            /* a partner whose union with x stays a disc: they share one arc, i.e. the
+             * vertices on both boundaries are one more than the edges (a union of discs
+             * glued along k arcs has k - 1 holes) */
+            if (++vclock == 0) {
+                memset(vmark, 0, c->n * sizeof *vmark);
+                memset(vseen, 0, c->n * sizeof *vseen);
+                vclock = 1;
+            }
+            uint32_t vx = vclock;
+            for (uint32_t h = 0; h < len; h++) vmark[c->tris[e[h]]] = vx;
+            uint32_t best = FP_TRACK_NONE;
+            for (int tier = 2; tier >= 0 && best == FP_TRACK_NONE; tier--)
+                for (uint32_t q = 0; q < nnb; q++) {
+                    if (tier == 2 && !faces(b.nb + 6 * (size_t)x, b.nb + 6 * (size_t)nb[q])) continue;
+                    if (tier >= 1) {
+                        if (++vclock == 0) vclock = 1; /* (a wrap here only costs a disc) */
+                        uint32_t ty[3], ly, vs = 0;
+                        const uint32_t *ey = cbnd(&b, nb[q], ty, &ly);
+                        for (uint32_t h = 0; h < ly; h++) {
+                            uint32_t v = c->tris[ey[h]];
+                            if (vmark[v] == vx && vseen[v] != vclock) {
+                                vseen[v] = vclock;
+                                vs++;
+                            }
+                        }
+                        if (vs != nbc[q] + 1) continue;
+                    }
+                    if (best == FP_TRACK_NONE || nbc[q] > nbc[best] || (nbc[q] == nbc[best] && b.cnt[nb[q]] < b.cnt[nb[best]]))
+                        best = q;
+                }
+            uint32_t z;
+            if (cjoin(&b, x, nb[best], &z)) goto done;
+            b.round[nb[best]] = b.round[z] = r;
+            nxt[nn++] = z;
+            joined++;
+        }
+        uint32_t *sw = act;
+        act = nxt;
+        nxt = sw;
+        nact = nn;
+        if (!joined || joined < nact / 64) break; /* no partners left (or hardly any) */
+    }
+    for (size_t i = 0; i < nact; i++) /* the items' centroids: sums to means */
+        for (int j = 0; j < 3; j++) b.cen[3 * (size_t)act[i] + j] /= (float)b.cnt[act[i]];
+    uint32_t root;
+    if (top_split(&b, act, nact, &root)) goto done;
+    uint32_t pos = 0;
+    lay(&b, k, root, FP_TRACK_NONE, &pos);
+    rc = 0;
+done:
+    if (b.bnd)
+        for (size_t i = m; i < b.nc; i++) free(b.bnd[i]);
+    free(b.list);
+    free(b.idx);
+    free(b.tw);
+    free(b.cnt);
+    free(b.lc);
+    free(b.rc);
+    free(b.uf);
+    free(b.bnd);
+    free(b.nbnd);
+    free(b.round);
+    free(b.cen);
+    free(b.nb);
+    free(act);
+    free(nxt);
+    free(vmark);
+    free(vseen);
+    return rc;
+}
+
+static int cmp_edge(const void *x, const void *y)
+{
+    uint64_t a = *(const uint64_t *)x, b = *(const uint64_t *)y;
+    uint32_t a0 = (uint32_t)(a >> 32), a1 = (uint32_t)a, b0 = (uint32_t)(b >> 32), b1 = (uint32_t)b;
+    uint64_t ka = a0 < a1 ? (uint64_t)a0 << 32 | a1 : (uint64_t)a1 << 32 | a0;
+    uint64_t kb = b0 < b1 ? (uint64_t)b0 << 32 | b1 : (uint64_t)b1 << 32 | b0;
+    return ka < kb ? -1 : ka > kb ? 1 : a < b ? -1 : a > b;
+}
+
+static int cmp_u64(const void *x, const void *y)
+{
+    uint64_t a = *(const uint64_t *)x, b = *(const uint64_t *)y;
+    return a < b ? -1 : a > b;
+}
+
+/* The boundary of node x as a chain: its triangles' directed edges (u, v) (vertex indices,
+ * as stored: a seam is boundary) summed, (u, v) and (v, u) cancelling. Made from its
+ * children's; *len edges in *out (malloc'd; NULL for nodes over FP_CERT_MAX). A node with
+ * FP_CERT_MIN .. FP_CERT_MAX triangles whose chain is one cycle through distinct vertices
+ * (each edge once) gets it as its cert. 0 or -ENOMEM. */
+static int boundary(fp_contact *c, struct track *k, uint32_t x, uint64_t **out, size_t *len, size_t *cap_cyc,
+                    size_t *cap_cert)
+{
+    bnode *b = &k->node[x];
+    *out = NULL;
+    *len = 0;
+    uint64_t *e = NULL;
+    size_t ne = 0;
+    if (!b->right) {
+        e = malloc(3 * (size_t)b->count * sizeof *e);
+        if (!e) return -ENOMEM;
+        for (uint32_t i = b->first; i < b->first + b->count; i++) {
+            const uint32_t *v = c->tris + 3 * (size_t)k->order[i];
+            for (int j = 0; j < 3; j++) e[ne++] = (uint64_t)v[j] << 32 | v[(j + 1) % 3];
+        }
+    } else {
+        uint64_t *l, *r;
+        size_t nl, nr;
+        if (boundary(c, k, x + 1, &l, &nl, cap_cyc, cap_cert)) return -ENOMEM;
+        if (boundary(c, k, b->right, &r, &nr, cap_cyc, cap_cert)) {
+            free(l);
+            return -ENOMEM;
+        }
+        if (b->count > FP_CERT_MAX || !l || !r) {
+            free(l);
+            free(r);
+            return 0;
+        }
+        e = realloc(l, (nl + nr ? nl + nr : 1) * sizeof *e);
+        if (!e) {
+            free(l);
+            free(r);
+            return -ENOMEM;
+        }
+        memcpy(e + nl, r, nr * sizeof *e);
+        free(r);
+        ne = nl + nr;
+    }
+    /* sum: sorted by undirected edge, each run's +1 (low to high) and -1 counted */
+    qsort(e, ne, sizeof *e, cmp_edge);
+    size_t w = 0;
+    for (size_t i = 0; i < ne;) {
+        uint32_t u = (uint32_t)(e[i] >> 32), v = (uint32_t)e[i];
+        uint32_t lo = u < v ? u : v, hi = u < v ? v : u;
+        long coef = 0;
+        size_t j = i;
+        for (; j < ne; j++) {
+            uint32_t a = (uint32_t)(e[j] >> 32), bb = (uint32_t)e[j];
+            if ((a < bb ? a : bb) != lo || (a < bb ? bb : a) != hi) break;
+            coef += a < bb ? 1 : -1;
+        }
+        for (long m = 0; m < labs(coef); m++) e[w++] = coef > 0 ? (uint64_t)lo << 32 | hi : (uint64_t)hi << 32 | lo;
+        i = j;
+    }
+    ne = w;
+    *out = e;
+    *len = ne;
+    if (b->count < FP_CERT_MIN || b->count > FP_CERT_MAX || ne < 3) return 0;
+    /* one cycle through distinct vertices: sources distinct, the walk from the first edge
+     * back to it covers all */
+    uint64_t *srt = malloc(ne * sizeof *srt);
+    if (!srt) return -ENOMEM;
+    memcpy(srt, e, ne * sizeof *srt);
+    qsort(srt, ne, sizeof *srt, cmp_u64);
+    bool ok = true;
+    for (size_t i = 1; i < ne && ok; i++)
+        if (srt[i] >> 32 == srt[i - 1] >> 32) ok = false;
+    if (ok) {
+        if (reserve((void **)&k->cyc, cap_cyc, k->ncert ? k->cert[k->ncert - 1].start + k->cert[k->ncert - 1].len + ne : ne,
+                    sizeof *k->cyc) ||
+            reserve((void **)&k->cert, cap_cert, k->ncert + 1, sizeof *k->cert)) {
+            free(srt);
+            return -ENOMEM;
+        }
+        uint32_t start = k->ncert ? k->cert[k->ncert - 1].start + k->cert[k->ncert - 1].len : 0;
+        size_t steps = 0, at = 0;
+        uint64_t first = srt[0];
+        uint64_t cur = first;
+        do {
+            k->cyc[start + steps++] = (uint32_t)(cur >> 32);
+            uint64_t key = (uint64_t)(uint32_t)cur << 32;
+            size_t lo = 0, hi = ne; /* the edge leaving cur's end */
+            while (lo < hi) {
+                size_t mid = (lo + hi) / 2;
+                if (srt[mid] < key) lo = mid + 1;
+                else hi = mid;
+            }
+            if (lo == ne || srt[lo] >> 32 != (uint32_t)cur) {
+                ok = false;
+                break;
+            }
+            cur = srt[lo];
+            at = lo;
+        } while (cur != first && steps < ne);
+        (void)at;
+        if (ok && cur == first && steps == ne) {
+            cert *ct = &k->cert[k->ncert];
+            ct->start = start;
+            ct->len = (uint32_t)ne;
+            b->cert = (uint32_t)k->ncert++;
+        }
+    }
+    free(srt);
+    return 0;
+}
+
+/* ---- the hierarchy: the check ---- */
+
+/* node x and those below it that hold a moved triangle: box and directions in s */
+static void refit(const fp_contact *c, struct track *k, const float *s, uint32_t x)
+{
+    bnode *b = &k->node[x];
+    float box[6] = {INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY};
+    if (!b->right) {
+        float nlo[3] = {1.f, 1.f, 1.f}, nhi[3] = {-1.f, -1.f, -1.f};
+        for (uint32_t i = b->first; i < b->first + b->count; i++) {
+            float *tb = k->tbox[i];
+            if (k->pstamp[i] == k->tclock) tri_box(s, c->tris + 3 * (size_t)k->order[i], tb);
+            for (int j = 0; j < 3; j++) {
+                box[j] = min_f(box[j], tb[j]);
+                box[3 + j] = max_f(box[3 + j], tb[3 + j]);
+            }
+            const float *n = k->tn[i];
+            float l = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+            for (int j = 0; j < 3; j++) {
+                float u = l > 0.f ? n[j] / l : 0.f; /* degenerate: the box spans 0 */
+                nlo[j] = min_f(nlo[j], l > 0.f ? u : -1.f);
+                nhi[j] = max_f(nhi[j], l > 0.f ? u : 1.f);
+            }
+        }
+        memcpy(b->nlo, nlo, sizeof nlo);
+        memcpy(b->nhi, nhi, sizeof nhi);
+    } else {
+        float nlo[3] = {1.f, 1.f, 1.f}, nhi[3] = {-1.f, -1.f, -1.f};
+        uint32_t ch[2] = {x + 1, b->right};
+        for (int h = 0; h < 2; h++) {
+            bnode *d = &k->node[ch[h]];
+            if (d->stamp == k->tclock) refit(c, k, s, ch[h]);
+            for (int j = 0; j < 3; j++) {
+                box[j] = min_f(box[j], d->box[j]);
+                box[3 + j] = max_f(box[3 + j], d->box[3 + j]);
+            }
+            for (int j = 0; j < 3; j++) {
+                nlo[j] = min_f(nlo[j], d->nlo[j]);
+                nhi[j] = max_f(nhi[j], d->nhi[j]);
+            }
+        }
+        memcpy(b->nlo, nlo, sizeof nlo);
+        memcpy(b->nhi, nhi, sizeof nhi);
+    }
+    memcpy(b->box, box, sizeof box);
+}
+
+/* the nodes above the moved triangles (mt) stamped */
+static void mark_nodes(struct track *k)
+{
+    for (size_t i = 0; i < k->nmt; i++) {
+        uint32_t q = k->tpos[k->mt[i]];
+        k->pstamp[q] = k->tclock;
+        for (uint32_t x = k->leaf[q]; x != FP_TRACK_NONE && k->node[x].stamp != k->tclock; x = k->node[x].parent)
+            k->node[x].stamp = k->tclock;
+    }
+}
+
+static int add_off(fp_contact *c, const uint32_t *v);
+static long own_flips(fp_contact *c, const float *s, const float *ref, bool record);
+
+/* the pair (a, b), not both unmoved: 1 when it is new in s (crosses in s, not in ref; not
+ * adjacent, neither degenerate; their vertices into off when record), 0, -ENOMEM */
+static int test_pair(fp_contact *c, const float *s, const float *ref, uint32_t a, uint32_t b, bool record)
+{
+    if (adjacent(c, a, b)) return 0;
+    const uint32_t *va = c->tris + 3 * (size_t)a, *vb = c->tris + 3 * (size_t)b;
+    double ta[3][3], tb[3][3];
+    c->tk->tested++;
+    tri_of(s, va, ta);
+    tri_of(s, vb, tb);
+    if (degenerate(ta) || degenerate(tb) || !fp_contact_tri_tri(ta, tb)) return 0;
+    tri_of(ref, va, ta);
+    tri_of(ref, vb, tb);
+    if (!degenerate(ta) && !degenerate(tb) && fp_contact_tri_tri(ta, tb)) return 0;
+    if (record && (add_off(c, va) || add_off(c, vb))) return -ENOMEM;
+    return 1;
+}
+
+/* the pairs between leaves x and y (x == y: within x) with a moved triangle whose boxes meet
+ * in s: new ones counted (test_pair) */
+static long leaf_pairs(fp_contact *c, const float *s, const float *ref, uint32_t x, uint32_t y, bool record)
+{
+    struct track *k = c->tk;
+    const bnode *bx = &k->node[x], *by = &k->node[y];
+    uint32_t jy[FP_BVH_LEAF], ny = 0;
+    for (uint32_t j = by->first; j < by->first + by->count; j++)
+        if (x == y || boxes_meet(k->tbox[j], bx->box)) jy[ny++] = j;
+    long found = 0;
+    for (uint32_t i = bx->first; i < bx->first + bx->count; i++) {
+        const float *ba = k->tbox[i];
+        bool ma = k->pstamp[i] == k->tclock;
+        if (x != y && !boxes_meet(ba, by->box)) continue;
+        for (uint32_t q = 0; q < ny; q++) {
+            uint32_t j = jy[q];
+            if ((x == y && j <= i) || !(ma || k->pstamp[j] == k->tclock) || !boxes_meet(ba, k->tbox[j])) continue;
+            int r = test_pair(c, s, ref, k->order[i], k->order[j], record);
+            if (r < 0) return r;
+            found += r;
+        }
+    }
+    return found;
+}
+
+/* the pairs between nodes x and y with a moved triangle: new ones counted */
+static long node_pairs(fp_contact *c, const float *s, const float *ref, uint32_t x, uint32_t y, bool record)
+{
+    struct track *k = c->tk;
+    const bnode *bx = &k->node[x], *by = &k->node[y];
+    if ((bx->stamp != k->tclock && by->stamp != k->tclock) || !boxes_meet(bx->box, by->box)) return 0;
+    if (!bx->right && !by->right) return leaf_pairs(c, s, ref, x, y, record);
+    if (!bx->right || (by->right && by->count > bx->count)) { /* into the larger */
+        uint32_t t = x;
+        x = y;
+        y = t;
+        bx = by;
+    }
+    long a = node_pairs(c, s, ref, x + 1, y, record);
+    if (a < 0) return a;
+    long b = node_pairs(c, s, ref, bx->right, y, record);
+    return b < 0 ? b : a + b;
+}
+
+/* the pairs within node x with a moved triangle: new ones counted; a certified patch has none */
+static long node_self(fp_contact *c, const float *s, const float *ref, uint32_t x, bool record)
+{
+    struct track *k = c->tk;
+    const bnode *b = &k->node[x];
+    if (b->stamp != k->tclock) return 0;
+    if (k->certify && b->cert != FP_TRACK_NONE) {
+        int r = certified(k, s, b);
+        if (r < 0) return r;
+        if (r) {
+            k->certified++;
+            return 0;
+        }
+    }
+    if (!b->right) return leaf_pairs(c, s, ref, x, x, record);
+    long l = node_self(c, s, ref, x + 1, record);
+    if (l < 0) return l;
+    long r = node_self(c, s, ref, b->right, record);
+    if (r < 0) return r;
+    long p = node_pairs(c, s, ref, x + 1, b->right, record);
+    return p < 0 ? p : l + r + p;
+}
+
+
+/* The moved triangles' directions in s, the nodes above them refit; ref not NULL: the newly
+ * flipped moved triangles (own ones too) counted, their vertices into off when record.
+ * Returns the count, or -ENOMEM. */
+static long tree_update(fp_contact *c, const float *s, const float *ref, bool record)
+{
+    struct track *k = c->tk;
+    long f = 0;
+    for (size_t i = 0; i < k->nmt; i++) {
+        uint32_t a = k->mt[i];
+        const uint32_t *va = c->tris + 3 * (size_t)a;
+        double nd[3];
+        tri_normal_f(s, va, k->tn[k->tpos[a]], nd);
+        if (ref && flipped_n(c, nd, a) && !flipped(c, ref, va, a)) {
+            f++;
+            if (record && add_off(c, va)) return -ENOMEM;
+        }
+    }
+    if (k->nnode && k->node[0].stamp == k->tclock) refit(c, k, s, 0);
+    if (ref) {
+        long g = own_flips(c, s, ref, record);
+        if (g < 0) return g;
+        f += g;
+    }
+    return f;
+}
+
+/* New pairs and newly flipped triangles (*flips) of shape s (P but for the moved vertices)
+ * against ref, among the pairs with a moved triangle: update, then the hierarchy from its
+ * root. Returns the new pairs or -ENOMEM. */
+static long tree_check(fp_contact *c, const float *s, const float *ref, size_t *flips, bool record)
+{
+    long f = tree_update(c, s, ref, record);
+    if (f < 0) return f;
+    *flips = (size_t)f;
+    long r = c->tk->nnode ? node_self(c, s, ref, 0, record) : 0;
+    return r;
+}
+
 /* ---- building ---- */
+
+/* The hierarchy over the triangles not own (k: the parts common to both broad phases made);
+ * c->tk = k. 0 or -ENOMEM (k freed). */
+static int tree_build(fp_contact *c, struct track *k)
+{
+    size_t t = c->t;
+    k->tree = true;
+    k->certify = c->certify;
+    k->tpos = malloc((t ? t : 1) * sizeof *k->tpos);
+    k->order = malloc((t ? t : 1) * sizeof *k->order);
+    k->leaf = malloc((t ? t : 1) * sizeof *k->leaf);
+    k->tn = malloc((t ? t : 1) * sizeof *k->tn);
+    k->tbox = malloc((t ? t : 1) * sizeof *k->tbox);
+    k->pstamp = calloc(t ? t : 1, sizeof *k->pstamp);
+    k->node = malloc((t ? 2 * t : 1) * sizeof *k->node);
+    if (!k->tpos || !k->order || !k->leaf || !k->tn || !k->tbox || !k->pstamp || !k->node) {
+        track_free(k);
+        return -ENOMEM;
+    }
+    /* the hierarchy over the triangles not own */
+    size_t m = 0;
+    for (size_t i = 0; i < t; i++) {
+        k->tpos[i] = FP_TRACK_NONE;
+        if (!c->own[i]) k->order[m++] = (uint32_t)i;
+    }
+    if (m && cluster_build(c, k, m)) {
+        track_free(k);
+        return -ENOMEM;
+    }
+    for (size_t i = 0; i < m; i++) k->tpos[k->order[i]] = (uint32_t)i;
+    if (m) {
+        uint64_t *e;
+        size_t ne, cap_cyc = 0, cap_cert = 0;
+        if (boundary(c, k, 0, &e, &ne, &cap_cyc, &cap_cert)) {
+            track_free(k);
+            return -ENOMEM;
+        }
+        free(e);
+    }
+    /* every triangle's normal and every node's boxes in P */
+    k->tclock = 1;
+    for (size_t i = 0; i < m; i++) {
+        double nd[3];
+        tri_normal_f(k->p, c->tris + 3 * (size_t)k->order[i], k->tn[i], nd);
+    }
+    for (size_t x = 0; x < k->nnode; x++) k->node[x].stamp = 1;
+    for (size_t i = 0; i < m; i++) k->pstamp[i] = 1;
+    if (k->nnode) refit(c, k, k->p, 0);
+    c->tk = k;
+    return 0;
+}
 
 static int track_build(fp_contact *c)
 {
@@ -1168,6 +2109,7 @@ static int track_build(fp_contact *c)
         for (int j = 0; j < 3; j++) k->vt[k->vt_start[c->tris[3 * i + j]]++] = (uint32_t)i;
     for (size_t v = n; v > 0; v--) k->vt_start[v] = k->vt_start[v - 1];
     k->vt_start[0] = 0;
+    if (t > c->prewarm) return tree_build(c, k); /* a large mesh: the hierarchy */
     /* the cell: twice the mean extent of a triangle not own */
     double sum = 0;
     size_t cnt = 0;
@@ -1234,7 +2176,6 @@ static int track_build(fp_contact *c)
     memmove(k->sg_start + 1, k->sg_start, k->sg_nb * sizeof *k->sg_start);
     k->sg_start[0] = 0;
     c->tk = k;
-    if (t > c->prewarm) return 0;
     /* a face-sized mesh: every triangle gets its envelope and list now, in one batch (the
      * static grid left empty), so that the first touch of a region costs its frame no more
      * than the next (about 1 us a triangle) */
@@ -1260,6 +2201,8 @@ static void tick(struct track *k, size_t t)
 {
     if (++k->tclock == 0) {
         memset(k->tstamp, 0, t * sizeof *k->tstamp);
+        for (size_t x = 0; x < k->nnode; x++) k->node[x].stamp = 0;
+        if (k->pstamp) memset(k->pstamp, 0, t * sizeof *k->pstamp);
         k->tclock = 1;
     }
 }
@@ -1348,6 +2291,12 @@ static int reference(fp_contact *c, const float *ref, const uint32_t *ranges, si
         if (mark_tris(c, k->mv[i])) return -ENOMEM;
     for (size_t i = 0; i < k->ndp; i++) k->in_dp[k->dp[i]] = 0;
     k->ndp = 0;
+    if (k->tree) { /* the triangles that changed: their normals and the boxes above them */
+        for (size_t i = 0; i < k->nmv; i++)
+            memcpy(k->p + 3 * (size_t)k->mv[i], ref + 3 * (size_t)k->mv[i], 3 * sizeof(float));
+        mark_nodes(k);
+        return tree_update(c, k->p, NULL, false) < 0 ? -ENOMEM : 0;
+    }
     /* the static triangles that change leave the static grid (P there still the weld shape) */
     for (size_t i = 0; i < k->nmt; i++)
         if (k->slot[k->mt[i]] == FP_TRACK_NONE) static_remove(c, k->mt[i]);
@@ -1479,6 +2428,12 @@ static void local_ramp(fp_contact *c)
     }
 }
 
+/* New pairs and newly flipped triangles of shape s, by the mesh's broad phase */
+static long check(fp_contact *c, const float *s, const float *ref, size_t *flips, bool record)
+{
+    return c->tk->tree ? tree_check(c, s, ref, flips, record) : track_check(c, s, ref, false, flips, record);
+}
+
 static int step(fp_contact *c, const float *ref, const float *cand, const uint32_t *ranges,
                 size_t nranges, int iters, fp_contact_result *res);
 
@@ -1502,7 +2457,7 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
     tick(k, c->t);
     k->nmv = k->nmt = k->nmo = 0;
     size_t renewed0 = k->renewed;
-
+    k->certified = 0;
 
     /* the moved vertices: where cand differs from P */
     if (collect_moved(c, cand, ranges, nranges)) return -ENOMEM;
@@ -1513,10 +2468,16 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
 
     res->moved_tris = k->nmt;
 
+    size_t fl = 0; /* newly flipped triangles of the candidate */
+    long found;
+    if (k->tree) {
+        mark_nodes(k);
+        found = tree_check(c, cand, ref, &fl, false);
+        if (found < 0) return -ENOMEM;
+    } else {
     /* envelopes that hold each moved triangle in the candidate (and, before a bisection,
      * in P too, so in every shape between them) */
     if (reserve((void **)&k->mbox, &k->cap_mbox, k->nmt, sizeof *k->mbox)) return -ENOMEM;
-    size_t fl = 0; /* newly flipped triangles of the candidate */
     for (size_t i = 0; i < k->nmt; i++) {
         uint32_t a = k->mt[i];
         const uint32_t *va = c->tris + 3 * (size_t)a;
@@ -1529,16 +2490,14 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
     }
     fl += (size_t)own_flips(c, cand, ref, false);
     if (renew_lists(c)) return -ENOMEM;
-
-
-
-    long found = track_check(c, cand, ref, true, &fl, false);
+    found = track_check(c, cand, ref, true, &fl, false);
+    }
     res->checks = 1;
     res->pairs = found;
     res->flipped = fl;
     if (found || fl) {
         /* the bisection over P -> candidate: envelopes that hold P's boxes too */
-        for (size_t i = 0; i < k->nmt; i++) {
+        for (size_t i = 0; !k->tree && i < k->nmt; i++) {
             uint32_t a = k->mt[i];
             float hull[6];
             tri_box(k->p, c->tris + 3 * (size_t)a, hull);
@@ -1548,7 +2507,7 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
             }
             if (!box_holds(k->dyn[k->slot[a]].env, hull) && envelope(c, a, hull)) return -ENOMEM;
         }
-        if (renew_lists(c)) return -ENOMEM;
+        if (!k->tree && renew_lists(c)) return -ENOMEM;
         size_t cap = k->cap_pv;
         if (reserve((void **)&k->pv, &cap, 3 * k->nmv, sizeof *k->pv) ||
             reserve((void **)&k->cv, &k->cap_pv, 3 * k->nmv, sizeof *k->cv))
@@ -1566,14 +2525,14 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
             if (reserve((void **)&k->ramp, &k->cap_ramp, k->nmv, sizeof *k->ramp)) return -ENOMEM;
             for (size_t i = 0; i < k->noff; i++) k->off_mark[k->off[i]] = 0;
             k->noff = 0;
-            long m = track_check(c, cand, ref, false, &fl, true);
+            long m = check(c, cand, ref, &fl, true);
             for (int round = 0; m > 0 || fl; round++) {
                 if (m < 0) return -ENOMEM;
                 if (round == FP_CONTACT_LOCAL_ROUNDS) break;
                 track_lerp(k, 0, NULL); /* P, where the distances are taken */
                 local_ramp(c);
                 track_lerp(k, 0, k->ramp);
-                m = track_check(c, k->p, ref, false, &fl, true);
+                m = check(c, k->p, ref, &fl, true);
                 res->checks++;
                 if (!m && !fl) ramp = k->ramp;
             }
@@ -1583,7 +2542,7 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
         for (int i = 0; i < iters; i++) {
             double mid = 0.5 * (lo + hi);
             track_lerp(k, mid, ramp);
-            long m = track_check(c, k->p, ref, false, &fl, false);
+            long m = check(c, k->p, ref, &fl, false);
             res->checks++;
             if (m < 0) return -ENOMEM;
             if (m || fl) hi = mid;
@@ -1592,11 +2551,15 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
         track_lerp(k, lo, ramp);
         res->t = lo;
         res->local = ramp != NULL;
+        /* the hierarchy: the normals and boxes of the shape kept (the last check's may be
+         * another) */
+        if (k->tree && tree_update(c, k->p, NULL, false) < 0) return -ENOMEM;
     } else {
         for (size_t i = 0; i < k->nmv; i++)
             memcpy(k->p + 3 * (size_t)k->mv[i], cand + 3 * (size_t)k->mv[i], 3 * sizeof(float));
     }
     res->renewed = k->renewed - renewed0;
+    res->certified = k->certified;
     /* D_P: where P now differs from the reference */
     size_t w = 0;
     for (size_t i = 0; i < k->ndp; i++) {
@@ -1620,6 +2583,13 @@ const float *fp_contact_shape(const fp_contact *c) { return c && c->tk ? c->tk->
 void fp_contact_set_prewarm(fp_contact *c, size_t max_tris)
 {
     if (c) c->prewarm = max_tris;
+}
+
+void fp_contact_set_certify(fp_contact *c, bool on)
+{
+    if (!c) return;
+    c->certify = on;
+    if (c->tk) c->tk->certify = on;
 }
 
 /* the unnormalised normal of triangle v in pos */

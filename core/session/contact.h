@@ -33,6 +33,7 @@
 #ifndef FP_CONTACT_H
 #define FP_CONTACT_H
 
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -93,6 +94,8 @@ typedef struct fp_contact_result {
     size_t moved_tris;   /* moved triangles of the full candidate (fp_contact_step: not own) */
     size_t moved_verts;  /* fp_contact_step: vertices where the candidate differs from P */
     size_t renewed;      /* fp_contact_step: envelopes renewed */
+    size_t certified;    /* fp_contact_step, the hierarchy: patches certified (their pairs
+                            not tested) */
     int local;           /* fp_contact_step: 1 when the scale-back was local */
 } fp_contact_result;
 
@@ -203,6 +206,10 @@ int fp_contact_step(fp_contact *c, const float *ref, const float *cand, const ui
  *  the first fp_contact_reference. */
 #define FP_CONTACT_PREWARM 262144
 void fp_contact_set_prewarm(fp_contact *c, size_t max_tris);
+
+/** The hierarchy's patch certificates on (default) or off: off, every pair of triangles
+ *  whose boxes meet is tested, as if no patch were certified (the tests run both ways). */
+void fp_contact_set_certify(fp_contact *c, bool on);
 
 /** Flips are judged against rest normals: the weld shape's (as made), or, after this call
  *  with a rig's pose (base: the unposed reference, posed: the reference the rig made of it,

@@ -336,7 +336,7 @@ static void sheets_push(int frames, bool lazy)
     for (size_t v = 0; v < n / 2; v++) top = fmax(top, fp_contact_shape(tk)[3 * v + 2]);
     printf("sheets pushed over %d frames (%s): %d scaled back (least t %.3f); the bump rose to "
            "%.5f (the gap: 0.05), no new pair (full check and CGAL, every frame)\n",
-           frames, lazy ? "lazy" : "prewarmed", ts.scaled, ts.least_t, top);
+           frames, lazy ? "hierarchy" : "envelopes", ts.scaled, ts.least_t, top);
     assert_true(ts.scaled > 0);
     assert_true(top > 0.8 * 0.05 && top <= 0.05);
     fp_contact_destroy(&tk);
@@ -408,7 +408,7 @@ static void big_push(bool move_big, bool lazy)
     assert_true(fp_contact_count_new(full, pos, cand, NULL, 0, NULL) > 0);
     printf("a sheet pushed into big triangles%s over %d frames (%s): %d scaled back (least t "
            "%.3f), no new pair (full check and CGAL, every frame)\n",
-           move_big ? " (lowered too)" : "", frames, lazy ? "lazy" : "prewarmed", ts.scaled, ts.least_t);
+           move_big ? " (lowered too)" : "", frames, lazy ? "hierarchy" : "envelopes", ts.scaled, ts.least_t);
     assert_true(ts.scaled > 0);
     fp_contact_destroy(&tk);
     fp_contact_destroy(&full);
@@ -481,7 +481,7 @@ static void lips_push(int frames, bool lazy)
     printf("ICT lips pushed over %d frames (%s): %d scaled back (least t %.3f); kept %.3f of the %.3f "
            "asked (mesh units); no new pair (full check every frame, CGAL at the end)  [%.1f ms "
            "for the frames and their full checks]\n",
-           frames, lazy ? "lazy" : "prewarmed", ts.scaled, ts.least_t, kept, asked, ms);
+           frames, lazy ? "hierarchy" : "envelopes", ts.scaled, ts.least_t, kept, asked, ms);
     assert_true(ts.scaled > 0);
     assert_true(kept > 0.3 * asked); /* stopped at the contact, not at the start */
     csrbf_points_destroy(&pts);
@@ -510,8 +510,11 @@ static void test_track_lips_slow(void **state)
  * recording; each frame's shape is a candidate for an incremental guard on the base the
  * frame started from (commits and all: unanchored commits every frame), decided as the full
  * check decides. */
-static void recording_frames(const char *take, const char *mapping, bool lazy)
+/* mode 0: envelopes, 1: the hierarchy, 2: the hierarchy with no patch certificates (every
+ * pair whose boxes meet tested: the certificates may only skip pairs that do not cross) */
+static void recording_frames(const char *take, const char *mapping, int mode)
 {
+    bool lazy = mode > 0;
     char input[4400], err[2048];
     snprintf(input, sizeof input, "replay:%s/hands/leap-motion/%s_joints_mm.csv,fast=1",
              fp_test_data_dir(), take);
@@ -540,6 +543,7 @@ static void recording_frames(const char *take, const char *mapping, bool lazy)
     assert_int_equal(fp_contact_dilate_own(tk, 1), 0);
     assert_int_equal(fp_contact_dilate_own(full, 1), 0);
     if (lazy) fp_contact_set_prewarm(tk, 0);
+    if (mode == 2) fp_contact_set_certify(tk, false);
     float *ref = malloc(n * 3 * sizeof(float));
     uint32_t *ranges = malloc(n * sizeof *ranges);
     memcpy(ref, fp_session_base(s), n * 3 * sizeof(float));
@@ -565,7 +569,7 @@ static void recording_frames(const char *take, const char *mapping, bool lazy)
         track_frame(tk, full, ref, fp_session_positions(s), n, m->triangles, t, ranges, false, 1, &ts);
     }
     printf("%s %s (%s): %d frames checked, %d accepted, %d scaled back (least t %.3f), %u references; "
-           "every decision the full check's\n", take, mapping, lazy ? "lazy" : "prewarmed", ts.frames, ts.accepted, ts.scaled,
+           "every decision the full check's\n", take, mapping, mode == 2 ? "hierarchy, no certificates" : lazy ? "hierarchy" : "envelopes", ts.frames, ts.accepted, ts.scaled,
            ts.least_t, commits);
     assert_true(ts.frames > 20);
     free(ranges);
@@ -579,10 +583,11 @@ static void recording_frames(const char *take, const char *mapping, bool lazy)
 static void test_track_recordings(void **state)
 {
     (void)state;
-    recording_frames("Waiting-110fps", "unanchored", true);
-    recording_frames("three-claps", "unanchored", true);
-    recording_frames("three-claps", "unanchored", false);
-    recording_frames("grab", "anchored", false);
+    recording_frames("Waiting-110fps", "unanchored", 1);
+    recording_frames("three-claps", "unanchored", 1);
+    recording_frames("three-claps", "unanchored", 2);
+    recording_frames("three-claps", "unanchored", 0);
+    recording_frames("grab", "anchored", 0);
 }
 
 /* Two fingers in one frame (issue: a finger stopped at the lips froze a brow): one pushes the
