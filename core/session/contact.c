@@ -1203,10 +1203,11 @@ static int renew_lists(fp_contact *c)
 
 /* ---- a patch's certificate (contact.h, "(3)") ---- */
 
-/* Triangle v's normal in pos (e1 x e2, as flipped, computed in double) into out as floats,
- * or 0 when it is within 1e-10 |e1|_1 |e2|_1 of 0 (degenerate: its direction there is
- * rounding), NaN or beyond float's range. A certificate's test (n . a against 1e-5 |n|_1
- * |a|_1) then errs only towards "not facing a". Returns n (double) in nd for the flip test. */
+/* Triangle v's unit normal in pos (e1 x e2 normalised, as flipped; in double, stored as
+ * floats) into out, or 0 when e1 x e2 is within 1e-10 |e1|_1 |e2|_1 of 0 (degenerate: its
+ * direction there is rounding), NaN or beyond float's range. e1 x e2 (double) into nd for
+ * the flip test. A certificate's test (certified: 1e-4 over a unit normal) then errs only
+ * towards "not facing". */
 static inline void tri_normal_f(const float *pos, const uint32_t *v, float out[3], double nd[3])
 {
     const float *p0 = pos + 3 * (size_t)v[0], *p1 = pos + 3 * (size_t)v[1], *p2 = pos + 3 * (size_t)v[2];
@@ -1224,7 +1225,8 @@ static inline void tri_normal_f(const float *pos, const uint32_t *v, float out[3
         out[0] = out[1] = out[2] = 0.f;
         return;
     }
-    for (int j = 0; j < 3; j++) out[j] = (float)nd[j];
+    double l = sqrt(nd[0] * nd[0] + nd[1] * nd[1] + nd[2] * nd[2]);
+    for (int j = 0; j < 3; j++) out[j] = (float)(nd[j] / l);
 }
 
 /* min and max of finite doubles, inline */
@@ -1593,10 +1595,10 @@ static int cluster_build(fp_contact *c, struct track *k, size_t m)
         double nd[3];
         float nf[3];
         tri_normal_f(k->p, v, nf, nd);
-        float l = sqrtf(nf[0] * nf[0] + nf[1] * nf[1] + nf[2] * nf[2]);
+        bool deg = nf[0] == 0.f && nf[1] == 0.f && nf[2] == 0.f;
         for (int j = 0; j < 3; j++) {
-            b.nb[6 * i + j] = l > 0.f ? nf[j] / l : -1.f;
-            b.nb[6 * i + 3 + j] = l > 0.f ? nf[j] / l : 1.f;
+            b.nb[6 * i + j] = deg ? -1.f : nf[j];
+            b.nb[6 * i + 3 + j] = deg ? 1.f : nf[j];
         }
         act[i] = (uint32_t)i;
     }
@@ -1846,64 +1848,89 @@ static int boundary(fp_contact *c, struct track *k, uint32_t x, uint64_t **out, 
 
 /* ---- the hierarchy: the check ---- */
 
-/* node x and those below it that hold a moved triangle: box and directions in s */
-static void refit(const fp_contact *c, struct track *k, const float *s, uint32_t x)
+static int add_off(fp_contact *c, const uint32_t *v);
+static long own_flips(fp_contact *c, const float *s, const float *ref, bool record);
+
+typedef struct refit_ctx {         /* what refit counts besides boxes (tree_update) */
+    const float *ref;              /* NULL: no flips counted */
+    bool record;                   /* the flipped ones' vertices into off */
+    long flips;                    /* newly flipped moved triangles; -ENOMEM */
+} refit_ctx;
+
+/* Node x and those below it that hold a moved triangle, in s: the moved triangles' unit
+ * normals and boxes (and newly flipped ones, ctx), then every such node's box and normal box */
+static void refit(fp_contact *c, struct track *k, const float *s, uint32_t x, refit_ctx *ctx)
 {
     bnode *b = &k->node[x];
     float box[6] = {INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY};
+    float nlo[3] = {1.f, 1.f, 1.f}, nhi[3] = {-1.f, -1.f, -1.f};
     if (!b->right) {
-        float nlo[3] = {1.f, 1.f, 1.f}, nhi[3] = {-1.f, -1.f, -1.f};
         for (uint32_t i = b->first; i < b->first + b->count; i++) {
-            float *tb = k->tbox[i];
-            if (k->pstamp[i] == k->tclock) tri_box(s, c->tris + 3 * (size_t)k->order[i], tb);
+            float *tb = k->tbox[i], *n = k->tn[i];
+            if (k->pstamp[i] == k->tclock) {
+                uint32_t a = k->order[i];
+                const uint32_t *va = c->tris + 3 * (size_t)a;
+                double nd[3];
+                tri_box(s, va, tb);
+                tri_normal_f(s, va, n, nd);
+                if (ctx->ref && flipped_n(c, nd, a) && !flipped(c, ctx->ref, va, a)) {
+                    if (ctx->flips >= 0) ctx->flips++;
+                    if (ctx->record && add_off(c, va)) ctx->flips = -ENOMEM;
+                }
+            }
             for (int j = 0; j < 3; j++) {
                 box[j] = min_f(box[j], tb[j]);
                 box[3 + j] = max_f(box[3 + j], tb[3 + j]);
             }
-            const float *n = k->tn[i];
-            float l = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+            bool deg = n[0] == 0.f && n[1] == 0.f && n[2] == 0.f; /* its box spans all */
             for (int j = 0; j < 3; j++) {
-                float u = l > 0.f ? n[j] / l : 0.f; /* degenerate: the box spans 0 */
-                nlo[j] = min_f(nlo[j], l > 0.f ? u : -1.f);
-                nhi[j] = max_f(nhi[j], l > 0.f ? u : 1.f);
+                nlo[j] = min_f(nlo[j], deg ? -1.f : n[j]);
+                nhi[j] = max_f(nhi[j], deg ? 1.f : n[j]);
             }
         }
-        memcpy(b->nlo, nlo, sizeof nlo);
-        memcpy(b->nhi, nhi, sizeof nhi);
     } else {
-        float nlo[3] = {1.f, 1.f, 1.f}, nhi[3] = {-1.f, -1.f, -1.f};
         uint32_t ch[2] = {x + 1, b->right};
         for (int h = 0; h < 2; h++) {
             bnode *d = &k->node[ch[h]];
-            if (d->stamp == k->tclock) refit(c, k, s, ch[h]);
+            if (d->stamp == k->tclock) refit(c, k, s, ch[h], ctx);
             for (int j = 0; j < 3; j++) {
                 box[j] = min_f(box[j], d->box[j]);
                 box[3 + j] = max_f(box[3 + j], d->box[3 + j]);
-            }
-            for (int j = 0; j < 3; j++) {
                 nlo[j] = min_f(nlo[j], d->nlo[j]);
                 nhi[j] = max_f(nhi[j], d->nhi[j]);
             }
         }
-        memcpy(b->nlo, nlo, sizeof nlo);
-        memcpy(b->nhi, nhi, sizeof nhi);
     }
     memcpy(b->box, box, sizeof box);
+    memcpy(b->nlo, nlo, sizeof nlo);
+    memcpy(b->nhi, nhi, sizeof nhi);
 }
 
-/* the nodes above the moved triangles (mt) stamped */
-static void mark_nodes(struct track *k)
+/* The hierarchy's moved triangles: those of the moved vertices (mv), stamped by place
+ * (pstamp) with the nodes above them; own ones into mo (flips only); nmt counts the rest */
+static int tree_mark(fp_contact *c)
 {
-    for (size_t i = 0; i < k->nmt; i++) {
-        uint32_t q = k->tpos[k->mt[i]];
-        k->pstamp[q] = k->tclock;
-        for (uint32_t x = k->leaf[q]; x != FP_TRACK_NONE && k->node[x].stamp != k->tclock; x = k->node[x].parent)
-            k->node[x].stamp = k->tclock;
+    struct track *k = c->tk;
+    for (size_t i = 0; i < k->nmv; i++) {
+        uint32_t v = k->mv[i];
+        for (uint32_t j = k->vt_start[v]; j < k->vt_start[v + 1]; j++) {
+            uint32_t a = k->vt[j];
+            if (k->tstamp[a] == k->tclock) continue;
+            k->tstamp[a] = k->tclock;
+            uint32_t q = k->tpos[a];
+            if (q == FP_TRACK_NONE) { /* own */
+                if (push_u32(&k->mo, &k->nmo, &k->cap_mo, a)) return -ENOMEM;
+                continue;
+            }
+            k->nmt++;
+            k->pstamp[q] = k->tclock;
+            for (uint32_t x = k->leaf[q]; x != FP_TRACK_NONE && k->node[x].stamp != k->tclock; x = k->node[x].parent)
+                k->node[x].stamp = k->tclock;
+        }
     }
+    return 0;
 }
 
-static int add_off(fp_contact *c, const uint32_t *v);
-static long own_flips(fp_contact *c, const float *s, const float *ref, bool record);
 
 /* the pair (a, b), not both unmoved: 1 when it is new in s (crosses in s, not in ref; not
  * adjacent, neither degenerate; their vertices into off when record), 0, -ENOMEM */
@@ -1997,24 +2024,11 @@ static long node_self(fp_contact *c, const float *s, const float *ref, uint32_t 
 static long tree_update(fp_contact *c, const float *s, const float *ref, bool record)
 {
     struct track *k = c->tk;
-    long f = 0;
-    for (size_t i = 0; i < k->nmt; i++) {
-        uint32_t a = k->mt[i];
-        const uint32_t *va = c->tris + 3 * (size_t)a;
-        double nd[3];
-        tri_normal_f(s, va, k->tn[k->tpos[a]], nd);
-        if (ref && flipped_n(c, nd, a) && !flipped(c, ref, va, a)) {
-            f++;
-            if (record && add_off(c, va)) return -ENOMEM;
-        }
-    }
-    if (k->nnode && k->node[0].stamp == k->tclock) refit(c, k, s, 0);
-    if (ref) {
-        long g = own_flips(c, s, ref, record);
-        if (g < 0) return g;
-        f += g;
-    }
-    return f;
+    refit_ctx ctx = {ref, record, 0};
+    if (k->nnode && k->node[0].stamp == k->tclock) refit(c, k, s, 0, &ctx);
+    if (ctx.flips < 0 || !ref) return ctx.flips;
+    long g = own_flips(c, s, ref, record);
+    return g < 0 ? g : ctx.flips + g;
 }
 
 /* New pairs and newly flipped triangles (*flips) of shape s (P but for the moved vertices)
@@ -2071,13 +2085,10 @@ static int tree_build(fp_contact *c, struct track *k)
     }
     /* every triangle's normal and every node's boxes in P */
     k->tclock = 1;
-    for (size_t i = 0; i < m; i++) {
-        double nd[3];
-        tri_normal_f(k->p, c->tris + 3 * (size_t)k->order[i], k->tn[i], nd);
-    }
     for (size_t x = 0; x < k->nnode; x++) k->node[x].stamp = 1;
     for (size_t i = 0; i < m; i++) k->pstamp[i] = 1;
-    if (k->nnode) refit(c, k, k->p, 0);
+    refit_ctx ctx = {NULL, false, 0};
+    if (k->nnode) refit(c, k, k->p, 0, &ctx);
     c->tk = k;
     return 0;
 }
@@ -2287,16 +2298,16 @@ static int reference(fp_contact *c, const float *ref, const uint32_t *ranges, si
     k->nmt = k->nmo = 0;
     /* P := ref where they differ: D_P, then the ranges (or everything) */
     if (collect_moved(c, ref, ranges, nranges)) return -ENOMEM;
-    for (size_t i = 0; i < k->nmv; i++)
-        if (mark_tris(c, k->mv[i])) return -ENOMEM;
     for (size_t i = 0; i < k->ndp; i++) k->in_dp[k->dp[i]] = 0;
     k->ndp = 0;
     if (k->tree) { /* the triangles that changed: their normals and the boxes above them */
         for (size_t i = 0; i < k->nmv; i++)
             memcpy(k->p + 3 * (size_t)k->mv[i], ref + 3 * (size_t)k->mv[i], 3 * sizeof(float));
-        mark_nodes(k);
+        if (tree_mark(c)) return -ENOMEM;
         return tree_update(c, k->p, NULL, false) < 0 ? -ENOMEM : 0;
     }
+    for (size_t i = 0; i < k->nmv; i++)
+        if (mark_tris(c, k->mv[i])) return -ENOMEM;
     /* the static triangles that change leave the static grid (P there still the weld shape) */
     for (size_t i = 0; i < k->nmt; i++)
         if (k->slot[k->mt[i]] == FP_TRACK_NONE) static_remove(c, k->mt[i]);
@@ -2463,15 +2474,14 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
     if (collect_moved(c, cand, ranges, nranges)) return -ENOMEM;
     res->moved_verts = k->nmv;
     if (!k->nmv) return 0; /* nothing moved: P is the candidate */
-    for (size_t i = 0; i < k->nmv; i++)
+    if (k->tree ? tree_mark(c) != 0 : false) return -ENOMEM;
+    for (size_t i = 0; !k->tree && i < k->nmv; i++)
         if (mark_tris(c, k->mv[i])) return -ENOMEM;
-
     res->moved_tris = k->nmt;
 
     size_t fl = 0; /* newly flipped triangles of the candidate */
     long found;
     if (k->tree) {
-        mark_nodes(k);
         found = tree_check(c, cand, ref, &fl, false);
         if (found < 0) return -ENOMEM;
     } else {
