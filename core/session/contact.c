@@ -2039,8 +2039,7 @@ static long tree_check(fp_contact *c, const float *s, const float *ref, size_t *
     long f = tree_update(c, s, ref, record);
     if (f < 0) return f;
     *flips = (size_t)f;
-    long r = c->tk->nnode ? node_self(c, s, ref, 0, record) : 0;
-    return r;
+    return c->tk->nnode ? node_self(c, s, ref, 0, record) : 0;
 }
 
 /* ---- building ---- */
