@@ -809,6 +809,79 @@ static void test_flip_boundary(void **state)
     assert_true(worst < 1e-3); /* the margin is no real limit: within 0.06 degrees of 90 */
 }
 
+/* A strip (2 x 200 quads, 1 long, 0.02 wide) curled in its own plane, a little more each
+ * frame, up to a turn and a fifth: past one turn its end lies on its start (coplanar
+ * triangles that overlap cross). Every normal keeps facing +z, so the hierarchy's patch
+ * certificates pass their direction test throughout; only the contour test (the boundary,
+ * projected, no longer a simple polygon) keeps a patch over both ends from being skipped.
+ * The guard, certificates on, must decide every frame as the full check does, and must have
+ * certified patches on the way (else the test would not test them). */
+static void test_cert_contour(void **state)
+{
+    (void)state;
+    const int len = 200;
+    size_t n = 3 * (size_t)(len + 1), t = 4 * (size_t)len;
+    float *pos = malloc(n * 3 * sizeof(float)), *cand = malloc(n * 3 * sizeof(float));
+    uint32_t *tris = malloc(t * 3 * sizeof(uint32_t)), *ranges = malloc(n * sizeof *ranges);
+    for (int i = 0; i <= len; i++)
+        for (int j = 0; j < 3; j++) {
+            float *p = pos + 3 * (size_t)(3 * i + j);
+            p[0] = (float)i / len;
+            p[1] = 0.01f * (float)j;
+            p[2] = 0.f;
+        }
+    size_t f = 0;
+    for (int i = 0; i < len; i++)
+        for (int j = 0; j < 2; j++) {
+            uint32_t a = (uint32_t)(3 * i + j), b = a + 1, c = a + 3, d = c + 1;
+            uint32_t q[6] = {a, c, b, b, c, d};
+            memcpy(tris + 3 * f, q, sizeof q);
+            f += 2;
+        }
+    fp_contact *tk, *full;
+    assert_int_equal(fp_contact_create(tris, t, n, pos, &tk), 0);
+    assert_int_equal(fp_contact_create(tris, t, n, pos, &full), 0);
+    fp_contact_set_prewarm(tk, 0); /* the hierarchy, small as the mesh is */
+    assert_int_equal(fp_contact_reference(tk, pos, NULL, SIZE_MAX), 0);
+    track_stats ts = {0, 0, 0, 1.0};
+    size_t certified = 0;
+    const int frames = 48;
+    for (int fr = 1; fr <= frames; fr++) {
+        double turns = 1.2 * fr / frames, rc = 1.0 / (6.283185307179586 * turns);
+        for (int i = 0; i <= len; i++)
+            for (int j = 0; j < 3; j++) {
+                double phi = 6.283185307179586 * turns * i / len, r = rc - 0.01 * (j - 1); /* keeps the orientation */
+                float *p = cand + 3 * (size_t)(3 * i + j);
+                p[0] = (float)(r * sin(phi));
+                p[1] = (float)(rc - r * cos(phi));
+                p[2] = 0.f;
+            }
+        if (fr <= frames / 2) { /* the first half: no contact yet; the certificates' share */
+            size_t nr = diff_ranges(cand, pos, n, ranges);
+            fp_contact_result r;
+            assert_int_equal(fp_contact_step(tk, pos, cand, ranges, nr, 6, &r), 0);
+            assert_true(r.t == 1);
+            assert_int_equal(fp_contact_count_new(full, pos, cand, NULL, 0, NULL), 0);
+            certified += r.certified;
+            continue;
+        }
+        track_frame(tk, full, pos, cand, n, tris, t, ranges, false, 0, &ts);
+    }
+    printf("strip curled past a turn over %d frames: %zu patches certified in the first half; "
+           "%d frames scaled back (least t %.3f), every decision the full check's\n",
+           frames, certified, ts.scaled, ts.least_t);
+    assert_true(certified > 0);
+    assert_true(ts.scaled > 0);
+    assert_true(fp_contact_count_new(full, pos, cand, NULL, 0, NULL) > 0); /* unguarded: through */
+    fp_contact_destroy(&tk);
+    fp_contact_destroy(&full);
+    free(pos);
+    free(cand);
+    free(tris);
+    free(ranges);
+}
+
+
 /* Pushed into contact frame after frame, a pair approaches touching without end (each frame
  * keeps the largest passing share of its motion): within a few dozen frames the gap is at
  * the rounding of the orientation determinants. Random triangle pairs, one pushed through
@@ -867,6 +940,7 @@ int main(void)
         cmocka_unit_test(test_own_flip),
         cmocka_unit_test(test_flip_boundary),
         cmocka_unit_test(test_contact_boundary),
+        cmocka_unit_test(test_cert_contour),
         cmocka_unit_test(test_track_lips_fast),
         cmocka_unit_test(test_track_lips_slow),
         cmocka_unit_test(test_track_recordings),
