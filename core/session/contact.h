@@ -6,7 +6,9 @@
  *    the reference the tests hold the incremental form to;
  *  - the incremental guard (fp_contact_reference, fp_contact_step; issue 18): what the
  *    session runs every frame; it checks each candidate against the shape it accepted last,
- *    its work follows this frame's motion (argument below).
+ *    its work follows this frame's motion (argument below). Its candidate pairs come from
+ *    per-triangle envelopes on face-sized meshes, from a hierarchy of certified patches on
+ *    larger ones ("(3a)", "(3b)" below).
  *
  * fp_contact_create also finds the weld shape's own crossings (a full scan, once) and its
  * triangle normals. fp_contact_count_new checks only what moved: the triangles with a vertex
@@ -126,22 +128,57 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
  *      D_P (a vertex list kept with P) and C from ref only in the caller's ranges (the
  *      engine's touched blocks), so C differs from P only within D_P and the ranges.
  *  (3) Pairs (A, B) with A moved whose boxes in C meet are all tested, by the same
- *      triangle-triangle test as fp_contact_count_new, in C and then in ref. The candidates
- *      come from envelopes: every triangle (own ones left out) has a box that holds its box
- *      in P: a static triangle (never moved from the weld shape) its box there, in a static
- *      hash grid built once (it leaves that grid when it first moves); the others an
- *      envelope (their box grown by a tenth of its extent) in a dynamic hash grid, renewed
- *      only when the box leaves it, with a list of the triangles whose envelopes met its own
- *      at its renewal; a renewed triangle also joins the lists of those it meets (stale
- *      entries are allowed: a list holds at least every triangle whose envelope meets its
- *      owner's now). Before the check of C each moved triangle's envelope is made to hold
- *      its box in C (unmoved ones hold theirs, P's), and before a bisection its box in P
- *      too, hence in every shape P + t (C - P) between them (rounding is monotonic), so two
- *      boxes that meet in the checked shape lie in envelopes that meet, and the pair is in
- *      the moved triangle's list. A pair of two moved triangles is
- *      tested once, from the lower index. Renewals are batched by grid cell (each cell's
- *      triangles read once for all the envelopes that cover it; a pair taken in the cell of
- *      its boxes' common lower corner); boxes over 4096 cells live in lists of their own.
+ *      triangle-triangle test as fp_contact_count_new, in C and then in ref, but for the
+ *      pairs within a certified patch (3b), which cannot cross. The candidates come from one
+ *      of two broad phases, chosen by the mesh's size (fp_contact_set_prewarm).
+ * (3a) Envelopes (meshes up to FP_CONTACT_PREWARM triangles): every triangle (own ones left
+ *      out) has an envelope (its box grown by a tenth of its extent) in a hash grid, all made
+ *      at the first fp_contact_reference, renewed only when the box leaves it, with a list of
+ *      the triangles whose envelopes met its own at its renewal; a renewed triangle also
+ *      joins the lists of those it meets (stale entries are allowed: a list holds at least
+ *      every triangle whose envelope meets its owner's now). Before the check of C each
+ *      moved triangle's envelope is made to hold its box in C (unmoved ones hold theirs,
+ *      P's), and before a bisection its box in P too, hence in every shape P + t (C - P)
+ *      between them (rounding is monotonic), so two boxes that meet in the checked shape lie
+ *      in envelopes that meet, and the pair is in the moved triangle's list. A pair of two
+ *      moved triangles is tested once, from the lower index. Renewals are batched by grid
+ *      cell (each cell's triangles read once for all the envelopes that cover it; a pair
+ *      taken in the cell of its boxes' common lower corner); boxes over 4096 cells live in
+ *      lists of their own.
+ * (3b) The hierarchy (larger meshes): a binary tree of patches over the triangles not own,
+ *      built at the first fp_contact_reference from the weld shape's edges, bottom up: the
+ *      triangles are the first clusters; each round pairs each cluster with the neighbour
+ *      (across an edge (u, v) / (v, u)) it shares most edges with, first among those whose
+ *      union stays a disc (they share one arc: one vertex more on both boundaries than
+ *      shared edges) and faces a direction, then among discs, then any; what finds no
+ *      partner (a separate component) is joined at the top by median splits. A node of at
+ *      most 8 triangles is a leaf. Every node keeps its box and a box holding its triangles'
+ *      unit normals, in the shape checked: before each check the moved triangles' normals
+ *      and boxes are made, and the nodes above them refit (the others hold P's, which the
+ *      checked shape equals there). The check walks the tree as a self-collision test:
+ *      within a node that holds a moved triangle, its children's own pairs and the pairs
+ *      between them; between two nodes, nothing when neither holds a moved triangle or their
+ *      boxes do not meet, else down the larger; between two leaves, every pair with a moved
+ *      triangle whose boxes meet. Each pair is reached once, so with (1) every pair with a
+ *      moved triangle whose boxes meet is tested, but for a certified node's own pairs:
+ *      A node of 48 to 65,536 triangles whose boundary chain (its triangles' directed edges
+ *      summed, (u, v) cancelling (v, u); vertex indices as stored, so a seam is boundary) is
+ *      one cycle through distinct vertices may be certified. It is, in the shape checked,
+ *      when (i) a, the centre of its normals' box (normalised), has n . a > 1e-4 for every
+ *      unit normal n in that box, so every triangle keeps a positive area projected along a
+ *      (a degenerate triangle, whose normal is rounding, fills the whole box: never), and
+ *      (ii) the cycle projected along a is a simple polygon (every segment pair sharing a
+ *      grid cell tested; a sign within a margin far over the projection's rounding counts as
+ *      touching, i.e. not simple). Then the projection p is one to one on the patch: for a
+ *      point y off the projected edges, the triangles over y number the winding number of
+ *      the projected cycle around y (all triangles positive, their boundaries summing to the
+ *      cycle), 0 or 1 for a simple polygon; and two points with one image would make a
+ *      region covered twice (two points off the cycle: their neighbourhoods' images are
+ *      open and meet; one on it: the other's neighbourhood reaches outside the polygon,
+ *      where nothing lies; both on it: the polygon is not simple). No two points of the
+ *      patch meet in C then, so no two of its triangles cross. (The patches' normals
+ *      boxes use unit normals rounded to float, within 1e-6 of the true direction: the
+ *      1e-4 margin holds.)
  * So the candidate is accepted exactly when fp_contact_count_new(ref, C) would find no new
  * pair and no newly flipped triangle, and the bisection (shape P + t (C - P) at the moved
  * vertices, t the largest of `iters` halvings that adds none) keeps the invariant. What
@@ -160,19 +197,25 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
  * crossing that check sees.
  * tests/session/test_contact.c holds every decision to the full check's.
  *
- * Cost: per frame, the vertices in the ranges and D_P, then each moved triangle (boxes, its
- * flip, its list: about 100 ns on a large mesh, mostly cache misses) and each renewed
- * envelope (about 1.5 us; renewed when a triangle moved a tenth of its size since its last
- * renewal; a cell of the dynamic grid keeps a copy of each envelope in it, so a renewal
- * reads its cells in order). Measured (`facepuppet bench --case frame`, contact row,
- * three-claps anchored, 2-core machine, shared): the ICT face (1,100 moved triangles a
- * frame) 0.08 ms median, 0.4 ms p99 (the full check: about 2.7 ms); ICT subdivided to
- * 1.68M vertices (50,000 moved triangles a frame, moving about their own size in a fast
- * frame, when up to all of them renew) 5.4 ms median, 94 ms p99 (full check: about 190
- * ms). Larger skins (a fixed share or one ahead of the motion) renew less but lengthen the
- * lists and each renewal: no gain measured. What would take the large mesh further: the
- * renewals and lists follow absolute motion, while neighbours on one sheet move together;
- * certificates on relative motion (per vertex or per block) would skip most of both.
+ * Cost: per frame, the vertices in the ranges and D_P, then
+ *  - envelopes: each moved triangle (boxes, its flip, its list: about 100 ns on a large
+ *    mesh, mostly cache misses) and each renewed envelope (about 1.5 us; renewed when a
+ *    triangle moved a tenth of its size since its last renewal). Measured (`facepuppet
+ *    bench --case frame`, contact row, three-claps anchored, 2-core machine, shared): the
+ *    ICT face (1,100 moved triangles a frame) 0.07-0.12 ms median, 0.25-0.45 ms p99 (the
+ *    full check: about 2.7 ms). On ICT subdivided to 1.68M vertices (50,000-66,000 moved
+ *    triangles a frame, moving about their own size in a fast frame) up to all of them
+ *    renew: 5.4-7.3 ms median, 47-103 ms p99, 15-25 frames of 225 skipped. Larger skins
+ *    renew less but lengthen the lists and each renewal: no gain measured.
+ *  - the hierarchy: each moved triangle's marks (about 17 ns), normal, flip and box (about
+ *    26 ns), the walk (along the borders of the certified patches: about 38,000 node pairs
+ *    and 4,600 leaf pairs, 2.1 ms, on the 1.68M face) and the certificates (about 17 ns a
+ *    cycle vertex: 1.1 ms). Nothing is renewed, so a fast frame costs what a slow one does:
+ *    1.68M vertices 6.2-7.5 ms median, 9.3-15 ms p99, no frame skipped. On the ICT face it
+ *    is 3-4 times slower than envelopes (0.36-0.45 ms: its patches, 32 to 1,000 triangles
+ *    of a strongly curved face, certify less and their borders are most of the walk),
+ *    hence the size threshold. Building it: about 5 s for 1.68M vertices (the clusters 3.6
+ *    s, the boundary cycles 1.3 s), at the first fp_contact_reference.
  */
 
 /** Start (or restart) the incremental guard on reference ref (n x 3): P := ref. ranges:
@@ -180,7 +223,7 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
  *  D_P, which the guard adds), nranges of them; nranges == SIZE_MAX: anywhere (all n are
  *  compared). Call it when the reference changes (commit, undo, a new pose) and when the
  *  shape shown went back to the reference (a gesture ended, a cancel): then ranges may be
- *  empty (0), only D_P is restored. The first call builds the static grid (O(t)). Returns
+ *  empty (0), only D_P is restored. The first call builds the broad phase (O(t)). Returns
  *  0, -EINVAL (NULL) or -ENOMEM (the guard is then unusable: destroy it). */
 int fp_contact_reference(fp_contact *c, const float *ref, const uint32_t *ranges, size_t nranges);
 
@@ -198,12 +241,12 @@ int fp_contact_reference(fp_contact *c, const float *ref, const uint32_t *ranges
 int fp_contact_step(fp_contact *c, const float *ref, const float *cand, const uint32_t *ranges,
                     size_t nranges, int iters, fp_contact_result *res);
 
-/** Meshes with at most this many triangles get every envelope and list at the first
- *  fp_contact_reference, in one batch (about 1 us a triangle: 85 ms for the ICT face), so
- *  that a gesture's first touch of a region costs its frame no more than the next; larger
- *  ones make them as triangles first move (a static grid of the weld shape finds their
- *  partners). Default FP_CONTACT_PREWARM; 0: never (the tests run both ways). Call before
- *  the first fp_contact_reference. */
+/** Meshes with at most this many triangles use envelopes ("(3a)"), every envelope and list
+ *  made at the first fp_contact_reference, in one batch (about 1 us a triangle: 85 ms for
+ *  the ICT face), so that a gesture's first touch of a region costs its frame no more than
+ *  the next; larger ones use the hierarchy ("(3b)"), also built then. Default
+ *  FP_CONTACT_PREWARM; 0: the hierarchy for every mesh (the tests run both ways). Call
+ *  before the first fp_contact_reference. */
 #define FP_CONTACT_PREWARM 262144
 void fp_contact_set_prewarm(fp_contact *c, size_t max_tris);
 
