@@ -1663,7 +1663,8 @@ static int cluster_build(fp_contact *c, struct track *k, size_t m)
             for (int tier = 2; tier >= 0 && best == FP_TRACK_NONE; tier--)
                 for (uint32_t q = 0; q < nnb; q++) {
                     if (tier == 2 && !faces(b.nb + 6 * (size_t)x, b.nb + 6 * (size_t)nb[q])) continue;
-                    if (tier >= 1) {
+                    /* (small unions: any; a pinch there is mostly healed by the next rounds) */
+                    if (tier >= 1 && b.cnt[x] + b.cnt[nb[q]] >= FP_CERT_MIN / 2) {
                         if (++vclock == 0) vclock = 1; /* (a wrap here only costs a disc) */
                         uint32_t ty[3], ly, vs = 0;
                         const uint32_t *ey = cbnd(&b, nb[q], ty, &ly);
@@ -1720,19 +1721,57 @@ done:
     return rc;
 }
 
-static int cmp_edge(const void *x, const void *y)
-{
-    uint64_t a = *(const uint64_t *)x, b = *(const uint64_t *)y;
-    uint32_t a0 = (uint32_t)(a >> 32), a1 = (uint32_t)a, b0 = (uint32_t)(b >> 32), b1 = (uint32_t)b;
-    uint64_t ka = a0 < a1 ? (uint64_t)a0 << 32 | a1 : (uint64_t)a1 << 32 | a0;
-    uint64_t kb = b0 < b1 ? (uint64_t)b0 << 32 | b1 : (uint64_t)b1 << 32 | b0;
-    return ka < kb ? -1 : ka > kb ? 1 : a < b ? -1 : a > b;
-}
-
 static int cmp_u64(const void *x, const void *y)
 {
     uint64_t a = *(const uint64_t *)x, b = *(const uint64_t *)y;
     return a < b ? -1 : a > b;
+}
+
+/* e[0 .. n) (directed edges u << 32 | v) with every (u, v) cancelled against one (v, u):
+ * what is left in place, its count returned (SIZE_MAX: out of memory). Pairs found by a
+ * scan for short lists, else through an open-addressing table of the edges not yet paired. */
+static size_t chain_sum(uint64_t *e, size_t n)
+{
+#define FP_REV(x) ((x) << 32 | (x) >> 32)
+    uint8_t *dead = calloc(n ? n : 1, 1);
+    if (!dead) return SIZE_MAX;
+    if (n <= 48) {
+        for (size_t i = 0; i < n; i++)
+            for (size_t j = i + 1; j < n && !dead[i]; j++)
+                if (!dead[j] && e[j] == FP_REV(e[i])) dead[i] = dead[j] = 1;
+    } else {
+        size_t cap = 64;
+        while (cap < 2 * n) cap *= 2;
+        uint32_t *tab = malloc(cap * sizeof *tab); /* index + 1, 0: empty */
+        if (!tab) {
+            free(dead);
+            return SIZE_MAX;
+        }
+        memset(tab, 0, cap * sizeof *tab);
+        for (size_t i = 0; i < n; i++) {
+            uint64_t r = FP_REV(e[i]);
+            size_t h = (size_t)((r * 0x9E3779B97F4A7C15ull) >> 32) & (cap - 1), hit = SIZE_MAX;
+            for (size_t q = h; tab[q]; q = (q + 1) & (cap - 1))
+                if (!dead[tab[q] - 1] && e[tab[q] - 1] == r) {
+                    hit = tab[q] - 1;
+                    break;
+                }
+            if (hit != SIZE_MAX) {
+                dead[hit] = dead[i] = 1;
+                continue;
+            }
+            size_t q = (size_t)((e[i] * 0x9E3779B97F4A7C15ull) >> 32) & (cap - 1);
+            while (tab[q]) q = (q + 1) & (cap - 1);
+            tab[q] = (uint32_t)i + 1;
+        }
+        free(tab);
+    }
+    size_t w = 0;
+    for (size_t i = 0; i < n; i++)
+        if (!dead[i]) e[w++] = e[i];
+    free(dead);
+    return w;
+#undef FP_REV
 }
 
 /* The boundary of node x as a chain: its triangles' directed edges (u, v) (vertex indices,
@@ -1778,23 +1817,12 @@ static int boundary(fp_contact *c, struct track *k, uint32_t x, uint64_t **out, 
         free(r);
         ne = nl + nr;
     }
-    /* sum: sorted by undirected edge, each run's +1 (low to high) and -1 counted */
-    qsort(e, ne, sizeof *e, cmp_edge);
-    size_t w = 0;
-    for (size_t i = 0; i < ne;) {
-        uint32_t u = (uint32_t)(e[i] >> 32), v = (uint32_t)e[i];
-        uint32_t lo = u < v ? u : v, hi = u < v ? v : u;
-        long coef = 0;
-        size_t j = i;
-        for (; j < ne; j++) {
-            uint32_t a = (uint32_t)(e[j] >> 32), bb = (uint32_t)e[j];
-            if ((a < bb ? a : bb) != lo || (a < bb ? bb : a) != hi) break;
-            coef += a < bb ? 1 : -1;
-        }
-        for (long m = 0; m < labs(coef); m++) e[w++] = coef > 0 ? (uint64_t)lo << 32 | hi : (uint64_t)hi << 32 | lo;
-        i = j;
+    /* sum: each (u, v) cancels one (v, u) */
+    ne = chain_sum(e, ne);
+    if (ne == SIZE_MAX) {
+        free(e);
+        return -ENOMEM;
     }
-    ne = w;
     *out = e;
     *len = ne;
     if (b->count < FP_CERT_MIN || b->count > FP_CERT_MAX || ne < 3) return 0;
