@@ -675,6 +675,7 @@ struct track {
     size_t cap_rx, cap_renv;
     size_t renewed;               /* envelopes renewed, for fp_contact_result */
     bool tree;                    /* the hierarchy (below), not envelopes (a large mesh) */
+    size_t nv;                    /* vertices (for tick) */
     bnode *node;                  /* the hierarchy over the triangles not own, root node[0] */
     size_t nnode;
     uint32_t *order;              /* its triangles, by node */
@@ -682,7 +683,10 @@ struct track {
     uint32_t *leaf;               /* by place in order: its leaf */
     float (*tn)[3];               /* by place in order: its normal in P (tri_normal_f) */
     float (*tbox)[6];             /* by place in order: its box in P */
-    uint32_t *pstamp;             /* by place in order: == tclock when moved */
+    uint32_t *pstamp;             /* by place in order: == tclock when moved (refit sets it) */
+    uint32_t *vleaf_start, *vleaf; /* vertex v's leaves: vleaf[vleaf_start[v] .. [v + 1]) */
+    uint32_t *vmov;               /* n: == tclock when moved (tree_mark) */
+    uint8_t *vown;                /* n: the vertex has an own triangle */
     cert *cert;
     size_t ncert;
     uint32_t *cyc;                /* the certifiable patches' boundary cycles */
@@ -742,6 +746,10 @@ static void track_free(struct track *k)
     free(k->tn);
     free(k->tbox);
     free(k->pstamp);
+    free(k->vleaf_start);
+    free(k->vleaf);
+    free(k->vmov);
+    free(k->vown);
     free(k->cert);
     free(k->cyc);
     free(k->xy);
@@ -1883,6 +1891,7 @@ typedef struct refit_ctx {         /* what refit counts besides boxes (tree_upda
     const float *ref;              /* NULL: no flips counted */
     bool record;                   /* the flipped ones' vertices into off */
     long flips;                    /* newly flipped moved triangles; -ENOMEM */
+    size_t moved;                  /* moved triangles met */
 } refit_ctx;
 
 /* Node x and those below it that hold a moved triangle, in s: the moved triangles' unit
@@ -1895,9 +1904,11 @@ static void refit(fp_contact *c, struct track *k, const float *s, uint32_t x, re
     if (!b->right) {
         for (uint32_t i = b->first; i < b->first + b->count; i++) {
             float *tb = k->tbox[i], *n = k->tn[i];
-            if (k->pstamp[i] == k->tclock) {
-                uint32_t a = k->order[i];
-                const uint32_t *va = c->tris + 3 * (size_t)a;
+            uint32_t a = k->order[i];
+            const uint32_t *va = c->tris + 3 * (size_t)a;
+            if (k->vmov[va[0]] == k->tclock || k->vmov[va[1]] == k->tclock || k->vmov[va[2]] == k->tclock) {
+                k->pstamp[i] = k->tclock;
+                ctx->moved++;
                 double nd[3];
                 tri_box(s, va, tb);
                 tri_normal_f(s, va, n, nd);
@@ -1934,31 +1945,28 @@ static void refit(fp_contact *c, struct track *k, const float *s, uint32_t x, re
     memcpy(b->nhi, nhi, sizeof nhi);
 }
 
-/* The hierarchy's moved triangles: those of the moved vertices (mv), stamped by place
- * (pstamp) with the nodes above them; own ones into mo (flips only); nmt counts the rest */
+/* The hierarchy's moved vertices (mv) stamped (vmov) with the nodes above their leaves
+ * (refit finds the moved triangles in them); the own triangles of moved vertices into mo
+ * (flips only) */
 static int tree_mark(fp_contact *c)
 {
     struct track *k = c->tk;
     for (size_t i = 0; i < k->nmv; i++) {
         uint32_t v = k->mv[i];
+        k->vmov[v] = k->tclock;
+        for (uint32_t j = k->vleaf_start[v]; j < k->vleaf_start[v + 1]; j++)
+            for (uint32_t x = k->vleaf[j]; x != FP_TRACK_NONE && k->node[x].stamp != k->tclock; x = k->node[x].parent)
+                k->node[x].stamp = k->tclock;
+        if (!k->vown[v]) continue;
         for (uint32_t j = k->vt_start[v]; j < k->vt_start[v + 1]; j++) {
             uint32_t a = k->vt[j];
-            if (k->tstamp[a] == k->tclock) continue;
+            if (!c->own[a] || k->tstamp[a] == k->tclock) continue;
             k->tstamp[a] = k->tclock;
-            uint32_t q = k->tpos[a];
-            if (q == FP_TRACK_NONE) { /* own */
-                if (push_u32(&k->mo, &k->nmo, &k->cap_mo, a)) return -ENOMEM;
-                continue;
-            }
-            k->nmt++;
-            k->pstamp[q] = k->tclock;
-            for (uint32_t x = k->leaf[q]; x != FP_TRACK_NONE && k->node[x].stamp != k->tclock; x = k->node[x].parent)
-                k->node[x].stamp = k->tclock;
+            if (push_u32(&k->mo, &k->nmo, &k->cap_mo, a)) return -ENOMEM;
         }
     }
     return 0;
 }
-
 
 /* the pair (a, b), not both unmoved: 1 when it is new in s (crosses in s, not in ref; not
  * adjacent, neither degenerate; their vertices into off when record), 0, -ENOMEM */
@@ -2052,8 +2060,9 @@ static long node_self(fp_contact *c, const float *s, const float *ref, uint32_t 
 static long tree_update(fp_contact *c, const float *s, const float *ref, bool record)
 {
     struct track *k = c->tk;
-    refit_ctx ctx = {ref, record, 0};
+    refit_ctx ctx = {ref, record, 0, 0};
     if (k->nnode && k->node[0].stamp == k->tclock) refit(c, k, s, 0, &ctx);
+    k->nmt = ctx.moved;
     if (ctx.flips < 0 || !ref) return ctx.flips;
     long g = own_flips(c, s, ref, record);
     return g < 0 ? g : ctx.flips + g;
@@ -2086,7 +2095,12 @@ static int tree_build(fp_contact *c, struct track *k)
     k->tbox = malloc((t ? t : 1) * sizeof *k->tbox);
     k->pstamp = calloc(t ? t : 1, sizeof *k->pstamp);
     k->node = malloc((t ? 2 * t : 1) * sizeof *k->node);
-    if (!k->tpos || !k->order || !k->leaf || !k->tn || !k->tbox || !k->pstamp || !k->node) {
+    k->vmov = calloc(c->n + 1, sizeof *k->vmov);
+    k->vown = calloc(c->n + 1, 1);
+    k->vleaf_start = calloc(c->n + 1, sizeof *k->vleaf_start);
+    k->nv = c->n;
+    if (!k->tpos || !k->order || !k->leaf || !k->tn || !k->tbox || !k->pstamp || !k->node || !k->vmov || !k->vown ||
+        !k->vleaf_start) {
         track_free(k);
         return -ENOMEM;
     }
@@ -2101,6 +2115,34 @@ static int tree_build(fp_contact *c, struct track *k)
         return -ENOMEM;
     }
     for (size_t i = 0; i < m; i++) k->tpos[k->order[i]] = (uint32_t)i;
+    /* each vertex's leaves (its triangles' not own, once each), and whether it has own ones */
+    for (int pass = 0; pass < 2; pass++) {
+        size_t w = 0;
+        for (size_t v = 0; v < c->n; v++) {
+            uint32_t first = (uint32_t)w;
+            for (uint32_t j = k->vt_start[v]; j < k->vt_start[v + 1]; j++) {
+                uint32_t q = k->tpos[k->vt[j]];
+                if (q == FP_TRACK_NONE) {
+                    k->vown[v] = 1;
+                    continue;
+                }
+                uint32_t x = k->leaf[q];
+                bool seen = false;
+                for (uint32_t z = first; z < w && !seen; z++) seen = pass ? k->vleaf[z] == x : false;
+                if (pass && seen) continue;
+                if (pass) k->vleaf[w] = x;
+                w++;
+            }
+            if (pass) k->vleaf_start[v + 1] = (uint32_t)w;
+        }
+        if (!pass) {
+            k->vleaf = malloc((w ? w : 1) * sizeof *k->vleaf);
+            if (!k->vleaf) {
+                track_free(k);
+                return -ENOMEM;
+            }
+        }
+    }
     if (m) {
         uint64_t *e;
         size_t ne, cap_cyc = 0, cap_cert = 0;
@@ -2114,7 +2156,8 @@ static int tree_build(fp_contact *c, struct track *k)
     k->tclock = 1;
     for (size_t x = 0; x < k->nnode; x++) k->node[x].stamp = 1;
     for (size_t i = 0; i < m; i++) k->pstamp[i] = 1;
-    refit_ctx ctx = {NULL, false, 0};
+    refit_ctx ctx = {NULL, false, 0, 0};
+    for (size_t v = 0; v < c->n; v++) k->vmov[v] = 1;
     if (k->nnode) refit(c, k, k->p, 0, &ctx);
     c->tk = k;
     return 0;
@@ -2241,6 +2284,7 @@ static void tick(struct track *k, size_t t)
         memset(k->tstamp, 0, t * sizeof *k->tstamp);
         for (size_t x = 0; x < k->nnode; x++) k->node[x].stamp = 0;
         if (k->pstamp) memset(k->pstamp, 0, t * sizeof *k->pstamp);
+        if (k->vmov) memset(k->vmov, 0, k->nv * sizeof *k->vmov);
         k->tclock = 1;
     }
 }
@@ -2511,6 +2555,7 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
     if (k->tree) {
         found = tree_check(c, cand, ref, &fl, false);
         if (found < 0) return -ENOMEM;
+        res->moved_tris = k->nmt; /* counted by the check's refit */
     } else {
     /* envelopes that hold each moved triangle in the candidate (and, before a bisection,
      * in P too, so in every shape between them) */
