@@ -650,11 +650,6 @@ struct track {
     uint32_t *tstamp, tclock;     /* t: == tclock when in mt */
     uint32_t *qstamp, qclock;     /* t: == qclock when seen by this query */
     double ih;                    /* the grid cell's inverse (cell_coord) */
-    uint32_t *sg_start, *sg_ids;  /* the static grid: the weld shape's boxes by hashed cell */
-    uint32_t *sg_dead;            /* entries of triangles gone dynamic, cut from the bucket's end */
-    size_t sg_nb;
-    uint32_t *sbig;               /* ... and those over FP_TRACK_BIG_CELLS cells */
-    size_t nsbig;
     uint32_t *slot;               /* t: index into dyn; FP_TRACK_NONE: static (P = weld shape) */
     dyn *dyn;
     size_t ndyn, cap_dyn;
@@ -720,10 +715,6 @@ static void track_free(struct track *k)
     free(k->mbox);
     free(k->tstamp);
     free(k->qstamp);
-    free(k->sg_start);
-    free(k->sg_ids);
-    free(k->sg_dead);
-    free(k->sbig);
     free(k->slot);
     for (size_t i = 0; i < k->ndyn; i++)
         if (k->dyn[i].cap) free(k->dyn[i].u.heap);
@@ -914,8 +905,8 @@ static void grid_remove(struct track *k, const dyn *d)
 
 /* ---- queries ---- */
 
-/* k->q = the triangles not own, other than x and not adjacent to it, whose envelope (a static
- * one's: its box in P, which is the weld shape's) meets box q. */
+/* k->q = the triangles not own, other than x and not adjacent to it, whose envelope meets
+ * box q. */
 static int query(fp_contact *c, const float q[6], uint32_t x)
 {
     struct track *k = c->tk;
@@ -934,16 +925,6 @@ static int query(fp_contact *c, const float q[6], uint32_t x)
      c->weld[c->tris[3 * (size_t)(y) + 1]] != w1 && c->weld[c->tris[3 * (size_t)(y) + 1]] != w2 && \
      c->weld[c->tris[3 * (size_t)(y) + 2]] != w0 && c->weld[c->tris[3 * (size_t)(y) + 2]] != w1 && \
      c->weld[c->tris[3 * (size_t)(y) + 2]] != w2)
-#define FP_STATIC(y)                                                                            \
-    do {                                                                                        \
-        uint32_t y_ = (y);                                                                      \
-        if (k->slot[y_] != FP_TRACK_NONE || k->qstamp[y_] == clock || c->own[y_]) break;        \
-        k->qstamp[y_] = clock;                                                                  \
-        float b_[6];                                                                            \
-        tri_box(k->p, c->tris + 3 * (size_t)y_, b_);                                            \
-        if (boxes_meet(b_, q) && FP_NOT_ADJ(y_) && push_u32(&k->q, &k->nq, &k->cap_q, y_))      \
-            return -ENOMEM;                                                                     \
-    } while (0)
 #define FP_DYNAMIC(y)                                                                           \
     do {                                                                                        \
         uint32_t y_ = (y);                                                                      \
@@ -956,61 +937,23 @@ static int query(fp_contact *c, const float q[6], uint32_t x)
     int64_t lo[3], hi[3];
     bool huge = cells_of(k->ih, q, lo, hi) > FP_TRACK_BIG_CELLS;
     if (huge) {
-        for (size_t y = 0; y < c->t; y++) FP_STATIC((uint32_t)y);
         for (size_t i = 0; i < k->ndyn; i++) FP_DYNAMIC(k->dyn[i].tri);
     } else {
-        size_t m = k->sg_nb - 1;
         for (int64_t cx = lo[0]; cx <= hi[0]; cx++)
             for (int64_t cy = lo[1]; cy <= hi[1]; cy++)
                 for (int64_t cz = lo[2]; cz <= hi[2]; cz++) {
-                    size_t bkt = key_hash(cx, cy, cz) & m;
-                    for (uint32_t e = k->sg_start[bkt]; e < k->sg_start[bkt + 1] - k->sg_dead[bkt]; e++)
-                        FP_STATIC(k->sg_ids[e]);
                     int64_t key[3] = {cx, cy, cz};
                     const cellvec *cv = cell_find(k, key, false);
                     for (uint32_t i = 0; cv && i < cv->len; i++) FP_DYNAMIC(cv->ids[i].tri);
                 }
-        for (size_t i = 0; i < k->nsbig; i++) FP_STATIC(k->sbig[i]);
         for (size_t i = 0; i < k->ndbig; i++) FP_DYNAMIC(k->dbig[i]);
     }
-#undef FP_STATIC
 #undef FP_DYNAMIC
 #undef FP_NOT_ADJ
     return 0;
 }
 
-/* Static triangle x (P still the weld shape there) out of the static grid: each of its
- * entries cut out of its bucket (order kept, so a triangle's copies stay next to each other) */
-static void static_remove(fp_contact *c, uint32_t x)
-{
-    struct track *k = c->tk;
-    float b[6];
-    int64_t lo[3], hi[3];
-    tri_box(k->p, c->tris + 3 * (size_t)x, b);
-    if (cells_of(k->ih, b, lo, hi) > FP_TRACK_BIG_CELLS) {
-        for (size_t i = 0; i < k->nsbig; i++)
-            if (k->sbig[i] == x) {
-                memmove(k->sbig + i, k->sbig + i + 1, (k->nsbig - i - 1) * sizeof *k->sbig);
-                k->nsbig--;
-                break;
-            }
-        return;
-    }
-    for (int64_t cx = lo[0]; cx <= hi[0]; cx++)
-        for (int64_t cy = lo[1]; cy <= hi[1]; cy++)
-            for (int64_t cz = lo[2]; cz <= hi[2]; cz++) {
-                size_t bkt = key_hash(cx, cy, cz) & (k->sg_nb - 1);
-                uint32_t s0 = k->sg_start[bkt], e = k->sg_start[bkt + 1] - k->sg_dead[bkt];
-                for (uint32_t i = s0; i < e; i++)
-                    if (k->sg_ids[i] == x) {
-                        memmove(k->sg_ids + i, k->sg_ids + i + 1, (e - i - 1) * sizeof *k->sg_ids);
-                        k->sg_dead[bkt]++;
-                        break;
-                    }
-            }
-}
-
-/* Give triangle x (not own; a static one already out of the static grid) the envelope box +
+/* Give triangle x (not own) the envelope box +
  * skin in the dynamic grid and an empty list (renew_lists fills it); x joins the requests
  * k->rq. */
 static int envelope(fp_contact *c, uint32_t x, const float box[6])
@@ -1090,15 +1033,6 @@ static int renew_cell(fp_contact *c, const int64_t key[3], const uint32_t *R, si
             mine_ = cell_coord(max_f(ex_[a_], (YBOX)[a_]), k->ih) == key[a_];                    \
         if (mine_ && !adjacent(c, x_, (Y)) && link(c, x_, (Y), clock)) return -ENOMEM;          \
     }
-    size_t bkt = key_hash(key[0], key[1], key[2]) & (k->sg_nb - 1);
-    for (uint32_t e = k->sg_start[bkt]; e < k->sg_start[bkt + 1] - k->sg_dead[bkt]; e++) {
-        uint32_t y = k->sg_ids[e];
-        if ((e > k->sg_start[bkt] && k->sg_ids[e - 1] == y) || k->slot[y] != FP_TRACK_NONE || c->own[y])
-            continue;
-        float yb[6];
-        tri_box(k->p, c->tris + 3 * (size_t)y, yb);
-        FP_TRY(y, yb)
-    }
     const cellvec *cv = cell_find(k, key, false);
     for (uint32_t j = 0; cv && j < cv->len; j++) { /* (own triangles have no envelope) */
         uint32_t y = cv->ids[j].tri;
@@ -1175,12 +1109,11 @@ static int renew_lists(fp_contact *c)
         }
     }
     /* big triangles (in no cell) against every request in cells */
-    for (size_t i = 0; i < k->nsbig + k->ndbig; i++) {
-        uint32_t y = i < k->nsbig ? k->sbig[i] : k->dbig[i - k->nsbig];
-        if (c->own[y] || (i < k->nsbig && k->slot[y] != FP_TRACK_NONE)) continue;
+    for (size_t i = 0; i < k->ndbig; i++) {
+        uint32_t y = k->dbig[i];
+        if (c->own[y]) continue;
         float yb[6];
-        if (i < k->nsbig) tri_box(k->p, c->tris + 3 * (size_t)y, yb);
-        else memcpy(yb, k->dyn[k->slot[y]].env, sizeof yb);
+        memcpy(yb, k->dyn[k->slot[y]].env, sizeof yb);
         for (size_t r = 0; r < nrq; r++) {
             uint32_t x = k->rq[r];
             const dyn *d = &k->dyn[k->slot[x]];
@@ -2202,66 +2135,9 @@ static int track_build(fp_contact *c)
         cnt++;
     }
     k->ih = cnt && sum > 0 ? 1.0 / (2.0 * sum / (double)cnt) : 1.0;
-    /* the static grid: counting sort of (cell, triangle) entries by hashed cell */
-    size_t ne = 0;
-    for (int pass = 0; pass < 2; pass++) {
-        if (pass) {
-            size_t nb = 64;
-            while (2 * nb < ne) nb *= 2;
-            k->sg_nb = nb;
-            k->sg_start = calloc(nb + 1, sizeof *k->sg_start);
-            k->sg_dead = calloc(nb, sizeof *k->sg_dead);
-            k->sg_ids = malloc((ne ? ne : 1) * sizeof *k->sg_ids);
-            if (!k->sg_start || !k->sg_dead || !k->sg_ids) {
-                track_free(k);
-                return -ENOMEM;
-            }
-            for (size_t i = 0; i < t; i++) { /* counts */
-                if (c->own[i]) continue;
-                float b[6];
-                int64_t lo[3], hi[3];
-                tri_box(k->p, c->tris + 3 * i, b);
-                if (cells_of(k->ih, b, lo, hi) > FP_TRACK_BIG_CELLS) continue;
-                for (int64_t x = lo[0]; x <= hi[0]; x++)
-                    for (int64_t y = lo[1]; y <= hi[1]; y++)
-                        for (int64_t z = lo[2]; z <= hi[2]; z++)
-                            k->sg_start[(key_hash(x, y, z) & (nb - 1)) + 1]++;
-            }
-            for (size_t b = 0; b < nb; b++) k->sg_start[b + 1] += k->sg_start[b];
-        }
-        size_t cap_big = 0;
-        for (size_t i = 0; i < t; i++) {
-            if (c->own[i]) continue;
-            float b[6];
-            int64_t lo[3], hi[3];
-            tri_box(k->p, c->tris + 3 * i, b);
-            double nc = cells_of(k->ih, b, lo, hi);
-            if (nc > FP_TRACK_BIG_CELLS) {
-                if (pass && push_u32(&k->sbig, &k->nsbig, &cap_big, (uint32_t)i)) {
-                    track_free(k);
-                    return -ENOMEM;
-                }
-                continue;
-            }
-            if (!pass) {
-                ne += (size_t)nc;
-                continue;
-            }
-            for (int64_t x = lo[0]; x <= hi[0]; x++)
-                for (int64_t y = lo[1]; y <= hi[1]; y++)
-                    for (int64_t z = lo[2]; z <= hi[2]; z++)
-                        k->sg_ids[k->sg_start[key_hash(x, y, z) & (k->sg_nb - 1)]++] = (uint32_t)i;
-        }
-    }
-    /* the fill moved each start to the next bucket's */
-    memmove(k->sg_start + 1, k->sg_start, k->sg_nb * sizeof *k->sg_start);
-    k->sg_start[0] = 0;
     c->tk = k;
-    /* a face-sized mesh: every triangle gets its envelope and list now, in one batch (the
-     * static grid left empty), so that the first touch of a region costs its frame no more
-     * than the next (about 1 us a triangle) */
-    for (size_t b = 0; b < k->sg_nb; b++) k->sg_dead[b] = k->sg_start[b + 1] - k->sg_start[b];
-    k->nsbig = 0;
+    /* every triangle gets its envelope and list now, in one batch, so that a gesture's first
+     * touch of a region costs its frame no more than the next (about 1 us a triangle) */
     for (size_t i = 0; i < t; i++) {
         if (c->own[i]) continue;
         float b[6];
@@ -2379,9 +2255,6 @@ static int reference(fp_contact *c, const float *ref, const uint32_t *ranges, si
     }
     for (size_t i = 0; i < k->nmv; i++)
         if (mark_tris(c, k->mv[i])) return -ENOMEM;
-    /* the static triangles that change leave the static grid (P there still the weld shape) */
-    for (size_t i = 0; i < k->nmt; i++)
-        if (k->slot[k->mt[i]] == FP_TRACK_NONE) static_remove(c, k->mt[i]);
     for (size_t i = 0; i < k->nmv; i++)
         memcpy(k->p + 3 * (size_t)k->mv[i], ref + 3 * (size_t)k->mv[i], 3 * sizeof(float));
     /* the triangles that changed: an envelope that holds them */
@@ -2564,7 +2437,6 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
         uint32_t a = k->mt[i];
         const uint32_t *va = c->tris + 3 * (size_t)a;
         tri_box(cand, va, k->mbox[i]);
-        if (k->slot[a] == FP_TRACK_NONE) static_remove(c, a); /* P is still the weld shape */
         if ((k->slot[a] == FP_TRACK_NONE || !box_holds(k->dyn[k->slot[a]].env, k->mbox[i])) &&
             envelope(c, a, k->mbox[i]))
             return -ENOMEM;
