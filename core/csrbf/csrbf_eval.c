@@ -557,10 +557,17 @@ typedef struct block_select {
  * cached pair: three fused multiply-adds and a 64-byte load). */
 #define ITEM_COST_CACHED(i, p) (4 * (size_t)(i) + (size_t)(p))
 
-/* Bytes of weight cache a solver keeps for its selection (about 16,000 pairs: L2-resident). */
-#ifndef CSRBF_WCACHE_BYTES
-#define CSRBF_WCACHE_BYTES (1u << 30)
+/* The weight cache pays while a frame's data stays in the cores' caches: it trades about 20
+ * vector operations per pair for a 66-byte read, which a frame that streams its data from
+ * memory (a full write of a large mesh) pays for dearly. So a frame uses it only when the
+ * bytes it moves (24 per written vertex: base in, output out; 66 per cached pair) come to at
+ * most CSRBF_WCACHE_THREAD_BYTES per thread (measured on a 2-core machine with 2 MiB of L2 per
+ * core: 33,025 vertices, 0.8-2.1 MB, 1.5-2.7x faster; 100,000 vertices, 2.5-2.9 MB on one
+ * thread, 10-25% slower; 1M vertices, 6-20% slower). */
+#ifndef CSRBF_WCACHE_THREAD_BYTES
+#define CSRBF_WCACHE_THREAD_BYTES ((size_t)2 << 20)
 #endif
+#define WCACHE_PAIR_BYTES (B * sizeof(float) + sizeof(uint16_t))
 
 static void select_emit(block_select *S, size_t first, const uint64_t cm[CSRBF_FAN])
 {
@@ -1011,14 +1018,12 @@ static wcache_parts wcache_at(const csrbf_solver *s)
                           (size_t *)(mem + o[2])};
 }
 
-/* Fill the weight cache of the solver's kept (refined) selection; 0 when it does not fit
- * CSRBF_WCACHE_BYTES or memory runs out (the kernels then compute the weights). Its prefix
- * costs count cached pairs. */
+/* Fill the weight cache of the solver's kept (refined) selection; 0 when memory runs out (the
+ * kernels then compute the weights). Its prefix costs count cached pairs. */
 static int wcache_fill(csrbf_solver *s, const csrbf_points *P, int ki, const float *cp,
                        float inv_r2)
 {
     size_t o[3], bytes = wcache_bytes(s->sel_k, s->sel_evals, o);
-    if (bytes > CSRBF_WCACHE_BYTES) return 0;
     if (bytes > s->sel_wbytes) {
         void *q = aligned_alloc(64, bytes);
         if (!q) return 0;
@@ -1289,12 +1294,18 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
                 cost = ic[ni];
             }
             /* the kept selection's weight cache, for frames whose items are exactly that
-             * selection (full writes and unchanged touched ones): filled once it is refined
-             * (its second use) if it fits CSRBF_WCACHE_BYTES */
+             * selection (full writes and unchanged touched ones) and whose bytes stay within
+             * CSRBF_WCACHE_THREAD_BYTES per thread: filled at the first such frame after the
+             * selection is refined (its second use) */
             weight_cache wcv = {NULL, NULL, NULL}, *wc = NULL;
-            if (use_tree && !own && ib == S.blk && s->sel_refined && S.k &&
-                (s->sel_w_id == s->sel_id || wcache_fill(s, P, ki, cpack, inv_r2)))
-                wc = wcache_get(s, &wcv, &ic);
+            if (use_tree && !own && ib == S.blk && s->sel_refined && S.k) {
+                const size_t ccost = ITEM_COST_CACHED(S.k, S.evals);
+                const size_t cthreads = ccost <= PARALLEL_COST ? 1 : (size_t)nt;
+                const size_t bytes = 24 * (full_write ? n : S.k * B) + WCACHE_PAIR_BYTES * S.evals;
+                if (bytes <= cthreads * CSRBF_WCACHE_THREAD_BYTES &&
+                    (s->sel_w_id == s->sel_id || wcache_fill(s, P, ki, cpack, inv_r2)))
+                    wc = wcache_get(s, &wcv, &ic);
+            }
             if (wc) cost = ic[ni];
             const int mode = !ib ? DRIVE_ALL : gaps ? DRIVE_GAPS : DRIVE_LIST;
             const drive_fn drive =

@@ -111,8 +111,8 @@ struct csrbf_solver {
     uint64_t *sel_msk;       /* their centre masks (bit j: centre j) */
     size_t *sel_cum;         /* sel_cap + 1: prefix costs of the blocks (csrbf_eval.c) */
     size_t sel_k, sel_evals, sel_cap; /* blocks listed, sum of their mask bits */
-    /* the kept selection's weight cache (csrbf_eval.c), once it is refined and if it fits
-     * CSRBF_WCACHE_BYTES: valid while sel_w_id == sel_id. One aligned block of sel_wbytes:
+    /* the kept selection's weight cache (csrbf_eval.c), filled once it is refined, for frames
+     * small enough to stay in cache: valid while sel_w_id == sel_id. One aligned block of sel_wbytes:
      * the pairs' weights (16 floats each), their support masks (uint16), the items' first
      * pairs (uint32, sel_k + 1) and prefix costs (size_t, sel_k + 1). */
     uint64_t sel_w_id;
