@@ -111,6 +111,11 @@ struct csrbf_solver {
     uint64_t *sel_msk;       /* their centre masks (bit j: centre j) */
     size_t *sel_cum;         /* sel_cap + 1: prefix costs of the blocks (csrbf_eval.c) */
     size_t sel_k, sel_evals, sel_cap; /* blocks listed, sum of their mask bits */
+
+    /* evaluation scratch: one user at a time; concurrent callers allocate their own */
+    atomic_flag scratch_busy;
+    void *scratch;
+    size_t scratch_cap;
     /* the kept selection's weight cache (csrbf_eval.c), filled once it is refined, for frames
      * small enough to stay in cache: valid while sel_w_id == sel_id. One aligned block of sel_wbytes:
      * the pairs' weights (16 floats each), their support masks (uint16), the items' first
@@ -118,11 +123,6 @@ struct csrbf_solver {
     uint64_t sel_w_id;
     void *sel_wmem;
     size_t sel_wbytes;
-
-    /* evaluation scratch: one user at a time; concurrent callers allocate their own */
-    atomic_flag scratch_busy;
-    void *scratch;
-    size_t scratch_cap;
 };
 
 struct csrbf_points {
