@@ -168,30 +168,39 @@ __attribute__((target("avx512f"))) static void write_block_avx512(
                       _mm512_add_ps(_mm512_loadu_ps(z), _mm512_loadu_ps(accz)));
 }
 
+/* The support mask `in` (lanes within the support of the centre packed at cp[8 J]) and, from
+ * the squared scaled distance r2, the kernel weight `w` at the 16 lanes X, Y, Z: declarations,
+ * shared by the fused driver and the weight cache (the same expressions, so the same
+ * operations and roundings). */
+#define AVX512_DIST(J)                                                                         \
+    __m512 dx = _mm512_sub_ps(X, _mm512_set1_ps(cp[8 * (J)]));                                 \
+    __m512 dy = _mm512_sub_ps(Y, _mm512_set1_ps(cp[8 * (J) + 1]));                             \
+    __m512 dz = _mm512_sub_ps(Z, _mm512_set1_ps(cp[8 * (J) + 2]));                             \
+    __m512 r2 = _mm512_mul_ps(dx, dx);                                                         \
+    r2 = _mm512_fmadd_ps(dy, dy, r2);                                                          \
+    r2 = _mm512_fmadd_ps(dz, dz, r2);                                                          \
+    r2 = _mm512_mul_ps(r2, ir2);                                                               \
+    __mmask16 in = _mm512_cmp_ps_mask(r2, one, _CMP_LT_OQ)
+#define AVX512_WEIGHT(PSI)                                                                     \
+    __m512 q = _mm512_max_ps(r2, tiny);                                                        \
+    __m512 e = _mm512_rsqrt14_ps(q);                                                           \
+    __m512 hq = _mm512_mul_ps(half, q);                                                        \
+    e = _mm512_mul_ps(e, _mm512_fnmadd_ps(_mm512_mul_ps(hq, e), e, three_half));               \
+    __m512 r = _mm512_mul_ps(q, e);                                                            \
+    __m512 t1 = _mm512_sub_ps(one, r);                                                         \
+    __m512 w = PSI
+
 /* One centre's contribution to the 16 lanes (shared by the fused driver below). With SKIP (a
  * compile-time constant) a centre whose support holds none of the 16 vertices costs only the
  * distance test (blocks whose box meets a support they do not reach: the ends of grid rows). */
 #define AVX512_PAIR(PSI, J, SKIP)                                                              \
     do {                                                                                       \
-        __m512 dx = _mm512_sub_ps(X, _mm512_set1_ps(cp[8 * (J)]));                                   \
-        __m512 dy = _mm512_sub_ps(Y, _mm512_set1_ps(cp[8 * (J) + 1]));                                   \
-        __m512 dz = _mm512_sub_ps(Z, _mm512_set1_ps(cp[8 * (J) + 2]));                                   \
-        __m512 r2 = _mm512_mul_ps(dx, dx);                                                     \
-        r2 = _mm512_fmadd_ps(dy, dy, r2);                                                      \
-        r2 = _mm512_fmadd_ps(dz, dz, r2);                                                      \
-        r2 = _mm512_mul_ps(r2, ir2);                                                           \
-        __mmask16 in = _mm512_cmp_ps_mask(r2, one, _CMP_LT_OQ);                                \
+        AVX512_DIST(J);                                                                        \
         if ((SKIP) && !in) break;                                                              \
-        __m512 q = _mm512_max_ps(r2, tiny);                                                    \
-        __m512 e = _mm512_rsqrt14_ps(q);                                                       \
-        __m512 hq = _mm512_mul_ps(half, q);                                                    \
-        e = _mm512_mul_ps(e, _mm512_fnmadd_ps(_mm512_mul_ps(hq, e), e, three_half));           \
-        __m512 r = _mm512_mul_ps(q, e);                                                        \
-        __m512 t1 = _mm512_sub_ps(one, r);                                                     \
-        __m512 w = PSI;                                                                        \
-        sx = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(cp[8 * (J) + 3]), sx, in);                          \
-        sy = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(cp[8 * (J) + 4]), sy, in);                          \
-        sz = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(cp[8 * (J) + 5]), sz, in);                          \
+        AVX512_WEIGHT(PSI);                                                                    \
+        sx = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(cp[8 * (J) + 3]), sx, in);                \
+        sy = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(cp[8 * (J) + 4]), sy, in);                \
+        sz = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(cp[8 * (J) + 5]), sz, in);                \
         if (stats_on) cntv = _mm512_mask_add_epi32(cntv, in, cntv, ione);                      \
     } while (0)
 
@@ -200,6 +209,13 @@ typedef struct {
     size_t pairs, moved;
     float maxd2;
 } block_stats;
+
+/* A kept selection's kernel weights (see AVX512_FILL). */
+typedef struct {
+    const float *w;
+    const uint16_t *in;
+    const uint32_t *off;
+} weight_cache;
 
 /* The base positions of blocks b0..b1-1 into the output (a plain copy: the points keep the
  * vertices as given). */
@@ -244,13 +260,16 @@ finish_partial(float *o, const float *x, const float *y, const float *z, size_t 
  * in order). Blocks are computed in registers and stored interleaved. With STATS (also
  * compile-time) the pairs in support are counted per lane with one masked add per pair, and
  * moved vertices and the largest squared displacement per block, into *bs (padding lanes
- * excluded; the lane counts are flushed every 2^16 blocks so that they cannot overflow). */
+ * excluded; the lane counts are flushed every 2^16 blocks so that they cannot overflow). With
+ * CACHED (compile-time; LIST and GAPS, any kernel: PSI unused) the items are the kept
+ * selection's and each pair's weights and support mask come from its weight cache *wc instead
+ * of the kernel (the same values, added by the same masked fused multiply-adds). */
 enum { DRIVE_ALL = 0, DRIVE_LIST = 1, DRIVE_GAPS = 2 };
-#define AVX512_DRIVER(NAME, PSI, STATS, MODE)                                                  \
+#define AVX512_DRIVER(NAME, PSI, STATS, MODE, CACHED)                                          \
     __attribute__((target("avx512f,fma"))) static void NAME(                                   \
         const csrbf_points *P, float *restrict out, const uint32_t *restrict blk,              \
         const uint64_t *restrict msk, size_t i0, size_t i1, size_t g0, size_t g1, size_t m,    \
-        const float *restrict cp, float inv_r2, block_stats *bs)                               \
+        const float *restrict cp, float inv_r2, const weight_cache *wc, block_stats *bs)       \
     {                                                                                          \
         const __m512 one = _mm512_set1_ps(1.0f), half = _mm512_set1_ps(0.5f),                 \
                      three_half = _mm512_set1_ps(1.5f), tiny = _mm512_set1_ps(1e-30f),         \
@@ -265,6 +284,7 @@ enum { DRIVE_ALL = 0, DRIVE_LIST = 1, DRIVE_GAPS = 2 };
         size_t pos = g0;                                                                       \
         (void)g1;                                                                              \
         (void)m;                                                                               \
+        (void)wc;                                                                              \
         for (size_t i = i0; i < i1; i++) {                                                     \
             const size_t b = MODE != DRIVE_ALL ? blk[i] : i;                                   \
             uint64_t mk = MODE != DRIVE_ALL ? msk[i] : 0;                                      \
@@ -282,7 +302,21 @@ enum { DRIVE_ALL = 0, DRIVE_LIST = 1, DRIVE_GAPS = 2 };
                          Z = _mm512_loadu_ps(pz + k0);                                         \
             __m512 sx = _mm512_set1_ps(-0.0f), sy = sx, sz = sx;                               \
             __m512i cntv = izero;                                                              \
-            if (MODE != DRIVE_ALL) {                                                           \
+            if (CACHED) {                                                                      \
+                const float *restrict wv = wc->w + (size_t)wc->off[i] * B;                     \
+                const uint16_t *restrict wi = wc->in + wc->off[i];                             \
+                while (mk) {                                                                   \
+                    const unsigned j = (unsigned)__builtin_ctzll(mk);                          \
+                    mk &= mk - 1;                                                              \
+                    const __m512 w = _mm512_load_ps(wv);                                       \
+                    const __mmask16 in = (__mmask16)*wi++;                                     \
+                    wv += B;                                                                   \
+                    sx = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(cp[8 * j + 3]), sx, in);      \
+                    sy = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(cp[8 * j + 4]), sy, in);      \
+                    sz = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(cp[8 * j + 5]), sz, in);      \
+                    if (stats_on) cntv = _mm512_mask_add_epi32(cntv, in, cntv, ione);          \
+                }                                                                              \
+            } else if (MODE != DRIVE_ALL) {                                                    \
                 while (mk) {                                                                   \
                     const unsigned j = (unsigned)__builtin_ctzll(mk);                          \
                     mk &= mk - 1;                                                              \
@@ -329,23 +363,68 @@ enum { DRIVE_ALL = 0, DRIVE_LIST = 1, DRIVE_GAPS = 2 };
                                                   _mm512_set1_ps(6.0f)),                       \
                                   r, one))
 #define AVX512_DRIVERS(NAME, PSI)                                                              \
-    AVX512_DRIVER(NAME##_all, PSI, 0, DRIVE_ALL)                                               \
-    AVX512_DRIVER(NAME##_list, PSI, 0, DRIVE_LIST)                                             \
-    AVX512_DRIVER(NAME##_gaps, PSI, 0, DRIVE_GAPS)                                             \
-    AVX512_DRIVER(NAME##_all_stats, PSI, 1, DRIVE_ALL)                                         \
-    AVX512_DRIVER(NAME##_list_stats, PSI, 1, DRIVE_LIST)                                       \
-    AVX512_DRIVER(NAME##_gaps_stats, PSI, 1, DRIVE_GAPS)
+    AVX512_DRIVER(NAME##_all, PSI, 0, DRIVE_ALL, 0)                                            \
+    AVX512_DRIVER(NAME##_list, PSI, 0, DRIVE_LIST, 0)                                          \
+    AVX512_DRIVER(NAME##_gaps, PSI, 0, DRIVE_GAPS, 0)                                          \
+    AVX512_DRIVER(NAME##_all_stats, PSI, 1, DRIVE_ALL, 0)                                      \
+    AVX512_DRIVER(NAME##_list_stats, PSI, 1, DRIVE_LIST, 0)                                    \
+    AVX512_DRIVER(NAME##_gaps_stats, PSI, 1, DRIVE_GAPS, 0)
 AVX512_DRIVERS(drive_psi31, PSI31_AVX512)
 AVX512_DRIVERS(drive_psi30, T2)
 AVX512_DRIVERS(drive_psi32, PSI32_AVX512)
+AVX512_DRIVER(drive_cached_list, T2, 0, DRIVE_LIST, 1)
+AVX512_DRIVER(drive_cached_gaps, T2, 0, DRIVE_GAPS, 1)
+AVX512_DRIVER(drive_cached_list_stats, T2, 1, DRIVE_LIST, 1)
+AVX512_DRIVER(drive_cached_gaps_stats, T2, 1, DRIVE_GAPS, 1)
 #undef AVX512_DRIVERS
+
+/* The weight cache of a kept, refined selection (solver fields sel_w*): for each pair (item
+ * i, centre j of msk[i], in increasing j), its 16 lanes' kernel weights and its support mask,
+ * as AVX512_DIST / AVX512_WEIGHT compute them; item i's pairs are off[i] .. off[i+1]-1. The
+ * weights depend on the vertices and the centres (the start points) only, so anchored frames
+ * (only the end points, hence the coefficients, move) reuse them. */
+#define AVX512_FILL(NAME, PSI)                                                                 \
+    __attribute__((target("avx512f,fma"))) static void NAME(                                   \
+        const csrbf_points *P, const uint32_t *restrict blk, const uint64_t *restrict msk,     \
+        size_t k, const float *restrict cp, float inv_r2, float *restrict wv,                  \
+        uint16_t *restrict win, uint32_t *restrict off)                                        \
+    {                                                                                          \
+        const __m512 one = _mm512_set1_ps(1.0f), half = _mm512_set1_ps(0.5f),                 \
+                     three_half = _mm512_set1_ps(1.5f), tiny = _mm512_set1_ps(1e-30f),         \
+                     ir2 = _mm512_set1_ps(inv_r2);                                             \
+        uint32_t p = 0;                                                                        \
+        for (size_t i = 0; i < k; i++) {                                                       \
+            const size_t k0 = (size_t)blk[i] * B;                                              \
+            const __m512 X = _mm512_loadu_ps(P->s[0] + k0), Y = _mm512_loadu_ps(P->s[1] + k0), \
+                         Z = _mm512_loadu_ps(P->s[2] + k0);                                    \
+            off[i] = p;                                                                        \
+            for (uint64_t mk = msk[i]; mk; mk &= mk - 1, p++) {                                \
+                const unsigned j = (unsigned)__builtin_ctzll(mk);                              \
+                AVX512_DIST(j);                                                                \
+                AVX512_WEIGHT(PSI);                                                            \
+                _mm512_store_ps(wv + (size_t)p * B, w);                                        \
+                win[p] = (uint16_t)in;                                                         \
+            }                                                                                  \
+        }                                                                                      \
+        off[k] = p;                                                                            \
+    }
+AVX512_FILL(fill_psi31, PSI31_AVX512)
+AVX512_FILL(fill_psi30, T2)
+AVX512_FILL(fill_psi32, PSI32_AVX512)
+#undef AVX512_FILL
 #undef PSI31_AVX512
 #undef PSI32_AVX512
 #undef T2
 
 typedef void (*drive_fn)(const csrbf_points *, float *, const uint32_t *, const uint64_t *,
                          size_t, size_t, size_t, size_t, size_t, const float *, float,
-                         block_stats *);
+                         const weight_cache *, block_stats *);
+typedef void (*fill_fn)(const csrbf_points *, const uint32_t *, const uint64_t *, size_t,
+                        const float *, float, float *, uint16_t *, uint32_t *);
+static const fill_fn fills[3] = {fill_psi31, fill_psi30, fill_psi32};
+/* cached_drivers[stats][mode - DRIVE_LIST] */
+static const drive_fn cached_drivers[2][2] = {{drive_cached_list, drive_cached_gaps},
+                                              {drive_cached_list_stats, drive_cached_gaps_stats}};
 
 /* drivers[kernel][stats][mode] */
 static const drive_fn drivers[3][2][3] = {
@@ -474,6 +553,21 @@ typedef struct block_select {
  * block costs about two evaluations (loads, statistics, the interleaved store) besides one
  * per centre; a block restored to the base, one. A copied gap block (full writes) costs 1. */
 #define ITEM_COST(bits) ((bits) ? 4 + 2 * (size_t)(bits) : 2)
+/* The prefix cost of the first i items of a cached selection with p pairs among them (a
+ * cached pair: three fused multiply-adds and a 64-byte load). */
+#define ITEM_COST_CACHED(i, p) (4 * (size_t)(i) + (size_t)(p))
+
+/* The weight cache pays while a frame's data stays in the cores' caches: it trades about 20
+ * vector operations per pair for a 66-byte read, which a frame that streams its data from
+ * memory (a full write of a large mesh) pays for dearly. So a frame uses it only when the
+ * bytes it moves (24 per written vertex: base in, output out; 66 per cached pair) come to at
+ * most CSRBF_WCACHE_THREAD_BYTES per thread (measured on a 2-core machine with 2 MiB of L2 per
+ * core: 33,025 vertices, 0.8-2.1 MB, 1.5-2.7x faster; 100,000 vertices, 2.5-2.9 MB on one
+ * thread, 10-25% slower; 1M vertices, 6-20% slower). */
+#ifndef CSRBF_WCACHE_THREAD_BYTES
+#define CSRBF_WCACHE_THREAD_BYTES ((size_t)2 << 20)
+#endif
+#define WCACHE_PAIR_BYTES (B * sizeof(float) + sizeof(uint16_t))
 
 static void select_emit(block_select *S, size_t first, const uint64_t cm[CSRBF_FAN])
 {
@@ -896,6 +990,64 @@ static void split_work(const uint32_t *ib, const size_t *cum, size_t ni, int gap
     isplit[parts] = ni;
     bsplit[parts] = gaps ? nb : ni;
 }
+
+/* The weight cache's parts in s->sel_wmem for k items and e pairs (see internal.h). */
+typedef struct {
+    float *w;
+    uint16_t *in;
+    uint32_t *off;
+    size_t *cum;
+} wcache_parts;
+
+/* Byte offsets of the parts (o[0]: masks, o[1]: first pairs, o[2]: costs); returns the size
+ * of the whole. */
+static size_t wcache_bytes(size_t k, size_t e, size_t o[3])
+{
+    o[0] = e * B * sizeof(float);
+    o[1] = align64(o[0] + e * sizeof(uint16_t));
+    o[2] = align64(o[1] + (k + 1) * sizeof(uint32_t));
+    return align64(o[2] + (k + 1) * sizeof(size_t));
+}
+
+static wcache_parts wcache_at(const csrbf_solver *s)
+{
+    size_t o[3];
+    wcache_bytes(s->sel_k, s->sel_evals, o);
+    unsigned char *mem = s->sel_wmem;
+    return (wcache_parts){(float *)mem, (uint16_t *)(mem + o[0]), (uint32_t *)(mem + o[1]),
+                          (size_t *)(mem + o[2])};
+}
+
+/* Fill the weight cache of the solver's kept (refined) selection; 0 when memory runs out (the
+ * kernels then compute the weights). Its prefix costs count cached pairs. */
+static int wcache_fill(csrbf_solver *s, const csrbf_points *P, int ki, const float *cp,
+                       float inv_r2)
+{
+    size_t o[3], bytes = wcache_bytes(s->sel_k, s->sel_evals, o);
+    if (bytes > s->sel_wbytes) {
+        void *q = aligned_alloc(64, bytes);
+        if (!q) return 0;
+        free(s->sel_wmem);
+        s->sel_wmem = q;
+        s->sel_wbytes = bytes;
+    }
+    wcache_parts c = wcache_at(s);
+    fills[ki](P, s->sel_blk, s->sel_msk, s->sel_k, cp, inv_r2, c.w, c.in, c.off);
+    for (size_t i = 0; i <= s->sel_k; i++) c.cum[i] = ITEM_COST_CACHED(i, c.off[i]);
+    s->sel_w_id = s->sel_id;
+    return 1;
+}
+
+/* The filled weight cache into *wc, its prefix costs into *cum; returns wc. */
+static weight_cache *wcache_get(const csrbf_solver *s, weight_cache *wc, const size_t **cum)
+{
+    wcache_parts c = wcache_at(s);
+    wc->w = c.w;
+    wc->in = c.in;
+    wc->off = c.off;
+    *cum = c.cum;
+    return wc;
+}
 #endif
 
 static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *out,
@@ -1091,7 +1243,7 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
                     if (hi <= lo) continue;
                     L.k = 0;
                     select_visit_avx512(&L, top, 0, all, lo, hi);
-                    drive(P, out, L.blk, L.msk, 0, L.k, lo, hi, m, cpack, inv_r2, &ts);
+                    drive(P, out, L.blk, L.msk, 0, L.k, lo, hi, m, cpack, inv_r2, NULL, &ts);
                 }
                 pairs += ts.pairs;
                 moved += ts.moved;
@@ -1141,12 +1293,28 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
                 }
                 cost = ic[ni];
             }
-            const drive_fn drive = drivers[ki][st != NULL][!ib ? DRIVE_ALL : gaps ? DRIVE_GAPS : DRIVE_LIST];
+            /* the kept selection's weight cache, for frames whose items are exactly that
+             * selection (full writes and unchanged touched ones) and whose bytes stay within
+             * CSRBF_WCACHE_THREAD_BYTES per thread: filled at the first such frame after the
+             * selection is refined (its second use) */
+            weight_cache wcv = {NULL, NULL, NULL}, *wc = NULL;
+            if (use_tree && !own && ib == S.blk && s->sel_refined && S.k) {
+                const size_t ccost = ITEM_COST_CACHED(S.k, S.evals);
+                const size_t cthreads = ccost <= PARALLEL_COST ? 1 : (size_t)nt;
+                const size_t bytes = 24 * (full_write ? n : S.k * B) + WCACHE_PAIR_BYTES * S.evals;
+                if (bytes <= cthreads * CSRBF_WCACHE_THREAD_BYTES &&
+                    (s->sel_w_id == s->sel_id || wcache_fill(s, P, ki, cpack, inv_r2)))
+                    wc = wcache_get(s, &wcv, &ic);
+            }
+            if (wc) cost = ic[ni];
+            const int mode = !ib ? DRIVE_ALL : gaps ? DRIVE_GAPS : DRIVE_LIST;
+            const drive_fn drive =
+                wc ? cached_drivers[st != NULL][mode - DRIVE_LIST] : drivers[ki][st != NULL][mode];
             block_stats bs = {0, 0, 0.0f};
             /* threads by the computed blocks' cost; copying the gaps (a full write) is bound by
              * memory and does not count, but is shared out when threads run */
             if (cost <= PARALLEL_COST || nt == 1) {
-                drive(P, out, ib, im, 0, ni, 0, gaps ? nb : 0, m, cpack, inv_r2, &bs);
+                drive(P, out, ib, im, 0, ni, 0, gaps ? nb : 0, m, cpack, inv_r2, wc, &bs);
             } else {
                 /* one contiguous part of equal cost per thread: no scheduling during the loop
                  * (a chunk grab is a cache-line transfer between cores), and frame after frame
@@ -1162,7 +1330,7 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
                     for (size_t t = (size_t)omp_get_thread_num(); t < parts;
                          t += (size_t)omp_get_num_threads())
                         drive(P, out, ib, im, isplit[t], isplit[t + 1], gaps ? bsplit[t] : 0,
-                              gaps ? bsplit[t + 1] : 0, m, cpack, inv_r2, &ts);
+                              gaps ? bsplit[t + 1] : 0, m, cpack, inv_r2, wc, &ts);
                     pairs += ts.pairs;
                     moved += ts.moved;
                     if (ts.maxd2 > maxd2) maxd2 = ts.maxd2;

@@ -290,6 +290,7 @@ void csrbf_solver_destroy(csrbf_solver **sp)
     free(s->sel_blk);
     free(s->sel_msk);
     free(s->sel_cum);
+    free(s->sel_wmem);
     free(s);
     *sp = NULL;
 }

@@ -116,6 +116,13 @@ struct csrbf_solver {
     atomic_flag scratch_busy;
     void *scratch;
     size_t scratch_cap;
+    /* the kept selection's weight cache (csrbf_eval.c), filled once it is refined, for frames
+     * small enough to stay in cache: valid while sel_w_id == sel_id. One aligned block of sel_wbytes:
+     * the pairs' weights (16 floats each), their support masks (uint16), the items' first
+     * pairs (uint32, sel_k + 1) and prefix costs (size_t, sel_k + 1). */
+    uint64_t sel_w_id;
+    void *sel_wmem;
+    size_t sel_wbytes;
 };
 
 struct csrbf_points {

@@ -1173,6 +1173,76 @@ static void test_concurrent_evaluate(void **state)
     free(v);
 }
 
+/* Anchored frames (start points kept, end points moving) reuse the kept selection's kernel
+ * weights from the second use on: every frame, full and touched, with and without statistics,
+ * on one thread and two, equals a fresh solver's first evaluation (weights from the kernels)
+ * bit for bit, for each kernel; and a new set of start points is never served old weights. */
+static void test_weight_cache(void **state)
+{
+    (void)state;
+    size_t nx = 157, ny = 131, nv = nx * ny, n = 42; /* not a multiple of 16 */
+    double h = 0.2, W = h * (double)(nx - 1), H = h * (double)(ny - 1);
+    float *v = wavy_grid(nx, ny, h);
+    float *o1 = malloc(nv * 3 * sizeof *o1), *o2 = malloc(nv * 3 * sizeof *o2),
+          *o3 = malloc(nv * 3 * sizeof *o3);
+    float st[3 * 42], en[3 * 42], st2[3 * 42], en2[3 * 42];
+    scatter_centres(n, W, H, 0.1, st, en);
+    scatter_centres(n, W, H, 0.1, st2, en2);
+    csrbf_points *p = NULL;
+    assert_int_equal(csrbf_points_create(nv, v, &p), CSRBF_OK);
+    const csrbf_kernel kernels[3] = {CSRBF_PSI31, CSRBF_PSI30, CSRBF_PSI32};
+    for (int kk = 0; kk < 3; kk++)
+        for (int threads = 1; threads <= 2; threads++) {
+            csrbf_options o = {0};
+            o.radius = 1.5;
+            o.kernel = kernels[kk];
+            o.threads = threads;
+            csrbf_solver *s = NULL;
+            csrbf_touch *tc = NULL;
+            assert_int_equal(csrbf_solver_create(&o, &s), CSRBF_OK);
+            assert_int_equal(csrbf_touch_create(p, &tc), CSRBF_OK);
+            for (int f = 0; f < 12; f++) {
+                const float *sp = f < 8 ? st : st2; /* frame 8: new start points */
+                float e[3 * 42];
+                for (size_t i = 0; i < 3 * n; i++)
+                    e[i] = (f < 8 ? en : en2)[i] + 0.02f * (float)sin(0.9 * f + (double)i);
+                if (f == 0 || f == 8) {
+                    int rc = csrbf_solver_set_start_points(s, n, sp);
+                    assert_true(rc >= 0);
+                }
+                int rc = csrbf_solver_set_end_points(s, e);
+                assert_true(rc == CSRBF_OK || rc == CSRBF_WARN_FOLDOVER);
+                csrbf_eval_stats a, b, c;
+                assert_int_equal(csrbf_evaluate(s, p, o1, 0, f % 2 ? &a : NULL), CSRBF_OK);
+                assert_int_equal(csrbf_evaluate_touched(s, p, tc, o3, 0, &c), CSRBF_OK);
+                csrbf_solver *fresh = NULL;
+                assert_int_equal(csrbf_solver_create(&o, &fresh), CSRBF_OK);
+                rc = csrbf_solver_solve(fresh, n, sp, e);
+                assert_true(rc == CSRBF_OK || rc == CSRBF_WARN_FOLDOVER);
+                assert_int_equal(csrbf_evaluate(fresh, p, o2, 0, &b), CSRBF_OK);
+                assert_memory_equal(o1, o2, nv * 3 * sizeof *o1);
+                assert_memory_equal(o3, o2, nv * 3 * sizeof *o3);
+                assert_int_equal(c.pairs, b.pairs);
+                assert_int_equal(c.moved, b.moved);
+                assert_double_equal(c.max_displacement, b.max_displacement, 0);
+                if (f % 2) {
+                    assert_int_equal(a.pairs, b.pairs);
+                    assert_int_equal(a.moved, b.moved);
+                    assert_double_equal(a.max_displacement, b.max_displacement, 0);
+                }
+                assert_true(b.pairs > 0);
+                csrbf_solver_destroy(&fresh);
+            }
+            csrbf_touch_destroy(&tc);
+            csrbf_solver_destroy(&s);
+        }
+    csrbf_points_destroy(&p);
+    free(v);
+    free(o1);
+    free(o2);
+    free(o3);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1186,7 +1256,7 @@ int main(void)
         cmocka_unit_test(test_concurrent_evaluate), cmocka_unit_test(test_stats_fast_path),
         cmocka_unit_test(test_touched),             cmocka_unit_test(test_many_centres),
         cmocka_unit_test(test_touched_frames),      cmocka_unit_test(test_selection_cache),
-        cmocka_unit_test(test_selection_paths),
+        cmocka_unit_test(test_selection_paths),     cmocka_unit_test(test_weight_cache),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
