@@ -882,6 +882,91 @@ static void test_cert_contour(void **state)
 }
 
 
+/* The hierarchy on a hostile mesh: a grid sheet (patches to certify) with duplicated
+ * triangles (both windings), zero-area ones, an edge shared by three triangles, and a soup
+ * of loose triangles above it; each frame a random bump moves part of the sheet through the
+ * soup and some soup vertices jitter. Every decision must be the full check's (the
+ * certificates must never pass on a patch made of such parts and hide a pair). */
+static void test_tree_hostile(void **state)
+{
+    (void)state;
+    const int k = 30, soup = 300;
+    size_t ns = (size_t)(k + 1) * (k + 1), n = ns + 3 * soup + 2, cap_t = 2 * (size_t)k * k + 64 + soup;
+    float *pos = malloc(n * 3 * sizeof(float)), *cand = malloc(n * 3 * sizeof(float));
+    uint32_t *tris = malloc(cap_t * 3 * sizeof(uint32_t)), *ranges = malloc(n * sizeof *ranges);
+    size_t t = 0;
+    for (int i = 0; i <= k; i++)
+        for (int j = 0; j <= k; j++) {
+            float *p = pos + 3 * (size_t)(i * (k + 1) + j);
+            p[0] = (float)i / k;
+            p[1] = (float)j / k;
+            p[2] = 0.f;
+        }
+    for (int i = 0; i < k; i++)
+        for (int j = 0; j < k; j++) {
+            uint32_t a = (uint32_t)(i * (k + 1) + j), b = a + 1, c = a + (uint32_t)(k + 1), d = c + 1;
+            uint32_t q[6] = {a, c, b, b, c, d};
+            memcpy(tris + 3 * t, q, sizeof q);
+            t += 2;
+        }
+    for (int m = 0; m < 16; m++) { /* duplicates, both windings, and zero-area triangles */
+        uint32_t a = tris[3 * (size_t)(37 * m)], b = tris[3 * (size_t)(37 * m) + 1], c = tris[3 * (size_t)(37 * m) + 2];
+        uint32_t q[9] = {a, b, c, a, c, b, a, a, b};
+        memcpy(tris + 3 * t, q, sizeof q);
+        t += 3;
+    }
+    { /* an edge shared by three triangles: two extra apexes above the sheet's middle */
+        uint32_t a = (uint32_t)(15 * (k + 1) + 15), b = a + 1, x = (uint32_t)(n - 2), y = (uint32_t)(n - 1);
+        float *px = pos + 3 * (size_t)x, *py = pos + 3 * (size_t)y;
+        px[0] = 0.5f, px[1] = 0.52f, px[2] = 0.03f;
+        py[0] = 0.5f, py[1] = 0.48f, py[2] = 0.05f;
+        uint32_t q[6] = {a, b, x, b, a, y};
+        memcpy(tris + 3 * t, q, sizeof q);
+        t += 2;
+    }
+    for (int m = 0; m < soup; m++) { /* loose triangles 0.02 .. 0.1 above the sheet */
+        double cx = 0.1 + 0.8 * urand(), cy = 0.1 + 0.8 * urand(), cz = 0.02 + 0.08 * urand();
+        for (int v = 0; v < 3; v++) {
+            float *p = pos + 3 * (ns + 3 * (size_t)m + v);
+            p[0] = (float)(cx + 0.03 * (urand() - 0.5));
+            p[1] = (float)(cy + 0.03 * (urand() - 0.5));
+            p[2] = (float)(cz + 0.01 * (urand() - 0.5));
+        }
+        uint32_t q[3] = {(uint32_t)(ns + 3 * m), (uint32_t)(ns + 3 * m + 1), (uint32_t)(ns + 3 * m + 2)};
+        memcpy(tris + 3 * t, q, sizeof q);
+        t++;
+    }
+    fp_contact *tk, *full;
+    assert_int_equal(fp_contact_create(tris, t, n, pos, &tk), 0);
+    assert_int_equal(fp_contact_create(tris, t, n, pos, &full), 0);
+    fp_contact_set_prewarm(tk, 0);
+    assert_int_equal(fp_contact_reference(tk, pos, NULL, SIZE_MAX), 0);
+    track_stats ts = {0, 0, 0, 1.0};
+    for (int f = 0; f < 40; f++) {
+        memcpy(cand, fp_contact_shape(tk), n * 3 * sizeof(float));
+        double bx = 0.2 + 0.6 * urand(), by = 0.2 + 0.6 * urand(), h = 0.03 * (f % 8), r = 0.1 + 0.1 * urand();
+        for (size_t v = 0; v < ns; v++) {
+            double d = hypot(pos[3 * v] - bx, pos[3 * v + 1] - by) / r;
+            if (d < 1) cand[3 * v + 2] = pos[3 * v + 2] + (float)(h * (1 - d * d) * (1 - d * d));
+        }
+        for (int m = 0; m < 20; m++) {
+            size_t v = ns + (size_t)(urand() * 3 * soup);
+            cand[3 * v + 2] += (float)(0.01 * (urand() - 0.5));
+        }
+        track_frame(tk, full, pos, cand, n, tris, t, ranges, false, 0, &ts);
+    }
+    printf("hierarchy on a hostile mesh (%zu triangles: duplicates, zero-area, a 3-way edge, a "
+           "soup): %d frames, %d scaled back, every decision the full check's\n", t, ts.frames, ts.scaled);
+    assert_true(ts.scaled > 0);
+    fp_contact_destroy(&tk);
+    fp_contact_destroy(&full);
+    free(pos);
+    free(cand);
+    free(tris);
+    free(ranges);
+}
+
+
 /* Pushed into contact frame after frame, a pair approaches touching without end (each frame
  * keeps the largest passing share of its motion): within a few dozen frames the gap is at
  * the rounding of the orientation determinants. Random triangle pairs, one pushed through
@@ -941,6 +1026,7 @@ int main(void)
         cmocka_unit_test(test_flip_boundary),
         cmocka_unit_test(test_contact_boundary),
         cmocka_unit_test(test_cert_contour),
+        cmocka_unit_test(test_tree_hostile),
         cmocka_unit_test(test_track_lips_fast),
         cmocka_unit_test(test_track_lips_slow),
         cmocka_unit_test(test_track_recordings),
