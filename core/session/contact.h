@@ -149,13 +149,13 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
  *      built at the first fp_contact_reference from the weld shape's edges, bottom up: the
  *      triangles are the first clusters; each round pairs each cluster with the neighbour
  *      (across an edge (u, v) / (v, u)) it shares most edges with, first among those whose
- *      union stays a disc (they share one arc: one vertex more on both boundaries than
- *      shared edges) and faces a direction, then among discs, then any; what finds no
- *      partner (a separate component) is joined at the top by median splits. A node of at
- *      most 8 triangles is a leaf. Every node keeps its box and a box holding its triangles'
- *      unit normals, in the shape checked: before each check the moved triangles' normals
- *      and boxes are made, and the nodes above them refit (the others hold P's, which the
- *      checked shape equals there). The check walks the tree as a self-collision test:
+ *      union faces a direction and (from 24 triangles on) stays a disc (they share one arc:
+ *      one vertex more on both boundaries than shared edges), then among discs, then any;
+ *      what finds no partner (a separate component) is joined at the top by median splits. A
+ *      node of at most 8 triangles is a leaf. Every node keeps its box and a box holding its
+ *      triangles' unit normals, in the shape checked: before each check the moved
+ *      triangles' normals and boxes are made, and the nodes above them refit (the others
+ *      hold P's, which the checked shape equals there). The check walks the tree as a self-collision test:
  *      within a node that holds a moved triangle, its children's own pairs and the pairs
  *      between them; between two nodes, nothing when neither holds a moved triangle or their
  *      boxes do not meet, else down the larger; between two leaves, every pair with a moved
@@ -207,11 +207,12 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
  *    triangles a frame, moving about their own size in a fast frame) up to all of them
  *    renew: 5.4-7.3 ms median, 47-103 ms p99, 15-25 frames of 225 skipped. Larger skins
  *    renew less but lengthen the lists and each renewal: no gain measured.
- *  - the hierarchy: each moved triangle's marks (about 17 ns), normal, flip and box (about
- *    26 ns), the walk (along the borders of the certified patches: about 38,000 node pairs
- *    and 4,600 leaf pairs, 2.1 ms, on the 1.68M face) and the certificates (about 17 ns a
- *    cycle vertex: 1.1 ms). Nothing is renewed, so a fast frame costs what a slow one does:
- *    1.68M vertices 6.2-7.5 ms median, 9.3-15 ms p99, no frame skipped. On the ICT face it
+ *  - the hierarchy: each moved vertex's leaves and the nodes above them marked (about 20
+ *    ns), each moved triangle's normal, flip and box (about 26 ns), the walk (along the
+ *    borders of the certified patches: about 38,000 node pairs and 4,600 leaf pairs, 2.1
+ *    ms, on the 1.68M face) and the certificates (about 17 ns a cycle vertex: 1.1 ms).
+ *    Nothing is renewed, so a fast frame costs what a slow one does: 1.68M vertices 6.2-6.3
+ *    ms median, 7.5-11.7 ms p99, no frame skipped. On the ICT face it
  *    is 3-4 times slower than envelopes (0.36-0.45 ms: its patches, 32 to 1,000 triangles
  *    of a strongly curved face, certify less and their borders are most of the walk),
  *    hence the size threshold. Building it: about 5 s for 1.68M vertices (the clusters 3.6
