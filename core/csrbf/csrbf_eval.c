@@ -82,6 +82,30 @@ typedef void (*block_fn)(const float *, const float *, const float *, const uint
 /* AVX-512 kernels (B = 16 = one vector). r = r2 * rsqrt(r2): the 14-bit estimate plus one
  * Newton step (relative error below 1e-7) replaces the slower vsqrtps; lanes outside the
  * support are masked off (their accumulators keep their bits). */
+/* The support mask `in` (lanes within the support of the centre (CX, CY, CZ)) and, from
+ * the squared scaled distance r2, the kernel weight `w` at the 16 lanes X, Y, Z: declarations,
+ * shared by the per-block kernel, the fused driver and the weight cache (the same
+ * expressions, so the same operations and roundings). AVX512_DIST(J): the centre packed at
+ * cp[8 J]. */
+#define AVX512_DIST_AT(CX, CY, CZ)                                                             \
+    __m512 dx = _mm512_sub_ps(X, _mm512_set1_ps(CX));                                          \
+    __m512 dy = _mm512_sub_ps(Y, _mm512_set1_ps(CY));                                          \
+    __m512 dz = _mm512_sub_ps(Z, _mm512_set1_ps(CZ));                                          \
+    __m512 r2 = _mm512_mul_ps(dx, dx);                                                         \
+    r2 = _mm512_fmadd_ps(dy, dy, r2);                                                          \
+    r2 = _mm512_fmadd_ps(dz, dz, r2);                                                          \
+    r2 = _mm512_mul_ps(r2, ir2);                                                               \
+    __mmask16 in = _mm512_cmp_ps_mask(r2, one, _CMP_LT_OQ)
+#define AVX512_DIST(J) AVX512_DIST_AT(cp[8 * (J)], cp[8 * (J) + 1], cp[8 * (J) + 2])
+#define AVX512_WEIGHT(PSI)                                                                     \
+    __m512 q = _mm512_max_ps(r2, tiny);                                                        \
+    __m512 e = _mm512_rsqrt14_ps(q);                                                           \
+    __m512 hq = _mm512_mul_ps(half, q);                                                        \
+    e = _mm512_mul_ps(e, _mm512_fnmadd_ps(_mm512_mul_ps(hq, e), e, three_half));               \
+    __m512 r = _mm512_mul_ps(q, e);                                                            \
+    __m512 t1 = _mm512_sub_ps(one, r);                                                         \
+    __m512 w = PSI
+
 #define AVX512_KERNEL(NAME, PSI)                                                               \
     __attribute__((target("avx512f,fma"))) static void NAME(                                   \
         const float *restrict x, const float *restrict y, const float *restrict z,            \
@@ -99,22 +123,9 @@ typedef void (*block_fn)(const float *, const float *, const float *, const uint
         const __m512i ione = _mm512_set1_epi32(1);                                             \
         for (size_t t = 0; t < k; t++) {                                                       \
             const uint32_t j = list[t];                                                        \
-            __m512 dx = _mm512_sub_ps(X, _mm512_set1_ps(cx[j]));                               \
-            __m512 dy = _mm512_sub_ps(Y, _mm512_set1_ps(cy[j]));                               \
-            __m512 dz = _mm512_sub_ps(Z, _mm512_set1_ps(cz[j]));                               \
-            __m512 r2 = _mm512_mul_ps(dx, dx);                                                 \
-            r2 = _mm512_fmadd_ps(dy, dy, r2);                                                  \
-            r2 = _mm512_fmadd_ps(dz, dz, r2);                                                  \
-            r2 = _mm512_mul_ps(r2, ir2);                                                       \
-            __mmask16 in = _mm512_cmp_ps_mask(r2, one, _CMP_LT_OQ);                            \
+            AVX512_DIST_AT(cx[j], cy[j], cz[j]);                                               \
             if (!in) continue;                                                                 \
-            __m512 q = _mm512_max_ps(r2, tiny);                                                \
-            __m512 e = _mm512_rsqrt14_ps(q);                                                   \
-            __m512 hq = _mm512_mul_ps(half, q);                                                \
-            e = _mm512_mul_ps(e, _mm512_fnmadd_ps(_mm512_mul_ps(hq, e), e, three_half));       \
-            __m512 r = _mm512_mul_ps(q, e);                                                    \
-            __m512 t1 = _mm512_sub_ps(one, r);                                                 \
-            __m512 w = PSI;                                                                    \
+            AVX512_WEIGHT(PSI);                                                                \
             sx = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(ax[j]), sx, in);                      \
             sy = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(ay[j]), sy, in);                      \
             sz = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(az[j]), sz, in);                      \
@@ -167,28 +178,6 @@ __attribute__((target("avx512f"))) static void write_block_avx512(
                       _mm512_add_ps(_mm512_loadu_ps(y), _mm512_loadu_ps(accy)),
                       _mm512_add_ps(_mm512_loadu_ps(z), _mm512_loadu_ps(accz)));
 }
-
-/* The support mask `in` (lanes within the support of the centre packed at cp[8 J]) and, from
- * the squared scaled distance r2, the kernel weight `w` at the 16 lanes X, Y, Z: declarations,
- * shared by the fused driver and the weight cache (the same expressions, so the same
- * operations and roundings). */
-#define AVX512_DIST(J)                                                                         \
-    __m512 dx = _mm512_sub_ps(X, _mm512_set1_ps(cp[8 * (J)]));                                 \
-    __m512 dy = _mm512_sub_ps(Y, _mm512_set1_ps(cp[8 * (J) + 1]));                             \
-    __m512 dz = _mm512_sub_ps(Z, _mm512_set1_ps(cp[8 * (J) + 2]));                             \
-    __m512 r2 = _mm512_mul_ps(dx, dx);                                                         \
-    r2 = _mm512_fmadd_ps(dy, dy, r2);                                                          \
-    r2 = _mm512_fmadd_ps(dz, dz, r2);                                                          \
-    r2 = _mm512_mul_ps(r2, ir2);                                                               \
-    __mmask16 in = _mm512_cmp_ps_mask(r2, one, _CMP_LT_OQ)
-#define AVX512_WEIGHT(PSI)                                                                     \
-    __m512 q = _mm512_max_ps(r2, tiny);                                                        \
-    __m512 e = _mm512_rsqrt14_ps(q);                                                           \
-    __m512 hq = _mm512_mul_ps(half, q);                                                        \
-    e = _mm512_mul_ps(e, _mm512_fnmadd_ps(_mm512_mul_ps(hq, e), e, three_half));               \
-    __m512 r = _mm512_mul_ps(q, e);                                                            \
-    __m512 t1 = _mm512_sub_ps(one, r);                                                         \
-    __m512 w = PSI
 
 /* One centre's contribution to the 16 lanes (shared by the fused driver below). With SKIP (a
  * compile-time constant) a centre whose support holds none of the 16 vertices costs only the
