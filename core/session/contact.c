@@ -325,10 +325,7 @@ static bool flipped(const fp_contact *c, const float *pos, const uint32_t *v, si
     }
     double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
                    e1[0] * e2[1] - e1[1] * e2[0]};
-    double d = n[0] * c->nrm[i][0] + n[1] * c->nrm[i][1] + n[2] * c->nrm[i][2];
-    /* turned by more than acos(FP_CONTACT_FLIP_COS) (the rest normal is a unit vector): d <
-     * FP_CONTACT_FLIP_COS |n|, without a square root */
-    return d < 0 || d * d < FP_CONTACT_FLIP_COS * FP_CONTACT_FLIP_COS * (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    return flipped_n(c, n, i);
 }
 
 /* The pairs of a moved triangle and a triangle near it that cross in cand and (ref not NULL)
@@ -685,7 +682,6 @@ struct track {
     cert *cert;
     size_t ncert;
     uint32_t *cyc;                /* the certifiable patches' boundary cycles */
-    bool certify;                 /* fp_contact_set_certify */
     double *xy;                   /* a contour's projection (2 per vertex) */
     size_t cap_xy;
     uint32_t *gcount, *gseg;      /* its segments by grid cell */
@@ -1318,10 +1314,10 @@ static int certified(struct track *k, const float *s, const bnode *x)
 
 /* ---- the hierarchy: building ---- */
 
-static const float *cent_of; /* quickselect's keys (centroids, 3 per triangle) */
+static const float *cent_of; /* select_mid's keys (3 per item: a cluster's mean centroid) */
 
 /* order[lo .. hi) partially sorted so that order[mid] has the mid-th key on axis a (keys
- * cent_of[3 t + a]; Hoare partitions, median of three) */
+ * cent_of[3 item + a]; Hoare partitions, median of three) */
 static void select_mid(uint32_t *order, size_t lo, size_t hi, size_t mid, int a)
 {
 #define KEY(i) cent_of[3 * (size_t)order[i] + a]
@@ -1969,7 +1965,7 @@ static long node_self(fp_contact *c, const float *s, const float *ref, uint32_t 
     struct track *k = c->tk;
     const bnode *b = &k->node[x];
     if (b->stamp != k->tclock) return 0;
-    if (k->certify && b->cert != FP_TRACK_NONE) {
+    if (c->certify && b->cert != FP_TRACK_NONE) {
         int r = certified(k, s, b);
         if (r < 0) return r;
         if (r) {
@@ -2020,7 +2016,6 @@ static int tree_build(fp_contact *c, struct track *k)
 {
     size_t t = c->t;
     k->tree = true;
-    k->certify = c->certify;
     k->tpos = malloc((t ? t : 1) * sizeof *k->tpos);
     k->order = malloc((t ? t : 1) * sizeof *k->order);
     k->leaf = malloc((t ? t : 1) * sizeof *k->leaf);
@@ -2165,7 +2160,6 @@ static void tick(struct track *k, size_t t)
     }
 }
 
-static int add_off(fp_contact *c, const uint32_t *v);
 
 /* the triangles of vertex v into mt (own ones into mo), once per clock */
 static int mark_tris(fp_contact *c, uint32_t v)
@@ -2418,17 +2412,17 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
     if (collect_moved(c, cand, ranges, nranges)) return -ENOMEM;
     res->moved_verts = k->nmv;
     if (!k->nmv) return 0; /* nothing moved: P is the candidate */
-    if (k->tree ? tree_mark(c) != 0 : false) return -ENOMEM;
+    if (k->tree && tree_mark(c)) return -ENOMEM;
     for (size_t i = 0; !k->tree && i < k->nmv; i++)
         if (mark_tris(c, k->mv[i])) return -ENOMEM;
-    res->moved_tris = k->nmt;
+    res->moved_tris = k->nmt; /* (the hierarchy counts them in its check's refit) */
 
     size_t fl = 0; /* newly flipped triangles of the candidate */
     long found;
     if (k->tree) {
         found = tree_check(c, cand, ref, &fl, false);
         if (found < 0) return -ENOMEM;
-        res->moved_tris = k->nmt; /* counted by the check's refit */
+        res->moved_tris = k->nmt;
     } else {
     /* envelopes that hold each moved triangle in the candidate (and, before a bisection,
      * in P too, so in every shape between them) */
@@ -2541,9 +2535,7 @@ void fp_contact_set_prewarm(fp_contact *c, size_t max_tris)
 
 void fp_contact_set_certify(fp_contact *c, bool on)
 {
-    if (!c) return;
-    c->certify = on;
-    if (c->tk) c->tk->certify = on;
+    if (c) c->certify = on;
 }
 
 /* the unnormalised normal of triangle v in pos */

@@ -251,8 +251,11 @@ int fp_contact_step(fp_contact *c, const float *ref, const float *cand, const ui
 #define FP_CONTACT_PREWARM 262144
 void fp_contact_set_prewarm(fp_contact *c, size_t max_tris);
 
-/** The hierarchy's patch certificates on (default) or off: off, every pair of triangles
- *  whose boxes meet is tested, as if no patch were certified (the tests run both ways). */
+/** The hierarchy's patch certificates ("(3b)") on (default) or off: off, every pair of
+ *  triangles whose boxes meet is tested, as if no patch were certified (the tests run both
+ *  ways); decisions are the same either way, only the work differs. Takes effect at the next
+ *  check; no effect on envelopes. c NULL: nothing. No errors. Threads: as every call on c
+ *  (one thread at a time). */
 void fp_contact_set_certify(fp_contact *c, bool on);
 
 /** Flips are judged against rest normals: the weld shape's (as made), or, after this call
