@@ -573,6 +573,24 @@ static int off_binary_scan(const char *path, const char *text, size_t len, const
     return FP_MESH_OK;
 }
 
+/* How OpenMesh's OFF reader counts the colour values in the rest of a line (getColorType):
+ * the text trimmed of white space at both ends, then one more than its single spaces (0 for
+ * an empty rest). It prints to stderr for a count it does not know, so the scan refuses
+ * those (the caller subtracts ST's two texture values first, as OpenMesh does). */
+static int om_color_items(const char *p, const char *end)
+{
+    while (p < end && isspace((unsigned char)*p))
+        p++;
+    while (end > p && isspace((unsigned char)end[-1]))
+        end--;
+    if (p == end)
+        return 0;
+    int count = 1;
+    for (; p < end; p++)
+        count += *p == ' ' && count < 1000;
+    return count;
+}
+
 int fp__off_scan(const char *path, const char *text, size_t len, size_t *nv_out,
                  size_t *nf_out, char *err, size_t errlen)
 {
@@ -614,7 +632,6 @@ int fp__off_scan(const char *path, const char *text, size_t len, size_t *nv_out,
                               "line %zu: put the vertex and face counts on their own line",
                               t.line_no);
     }
-    (void)c;
     unsigned long counts[3];
     if (!next_nonblank_line(&t, &l))
         return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path, "no vertex/face counts");
@@ -634,6 +651,7 @@ int fp__off_scan(const char *path, const char *text, size_t len, size_t *nv_out,
             return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
                                   "file ends after %lu of %lu vertices", i, nv);
         size_t have = 0;
+        const char *rest = NULL; /* after the values OpenMesh reads as a stream */
         while (next_token(&l, &tok, &toklen)) {
             double d;
             if (!parse_number(tok, toklen, &d))
@@ -644,12 +662,20 @@ int fp__off_scan(const char *path, const char *text, size_t len, size_t *nv_out,
                 return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
                                       "line %zu: non-finite value " TOK_FMT " in vertex %lu",
                                       t.line_no, TOK_ARG(tok, toklen), i);
-            have++;
+            if (++have == 3u + (n ? 3u : 0u))
+                rest = l.p;
         }
         if (have < need)
             return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
                                   "line %zu: vertex %lu has %zu numbers, expected %zu",
                                   t.line_no, i, have, need);
+        int items = om_color_items(rest, l.end);
+        if (c && items > 0 && st)
+            items -= 2;
+        if (c && (items < 0 || items > 6))
+            return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                                  "line %zu: vertex %lu: a COFF colour has 1 to 4 values "
+                                  "(single spaces between them)", t.line_no, i);
     }
     for (unsigned long i = 0; i < nf; i++) {
         if (!next_nonblank_line(&t, &l))
@@ -670,6 +696,18 @@ int fp__off_scan(const char *path, const char *text, size_t len, size_t *nv_out,
                                       "line %zu: face %lu references vertex %lu, but the file "
                                       "has %lu vertices", t.line_no, i, idx, nv);
         }
+        /* OpenMesh reads a face's tokens as a stream and only skips the rest of the line
+         * for a colour header (COFF): elsewhere a value after the indices would be read as
+         * the next face's corner count, which it then allocates for. */
+        if (c && om_color_items(l.p, l.end) > 6)
+            return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                                  "line %zu: face %lu: a COFF colour has 1 to 4 values "
+                                  "(single spaces between them)", t.line_no, i);
+        if (!c && next_token(&l, &tok, &toklen))
+            return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                                  "line %zu: face %lu has " TOK_FMT " after its %lu indices "
+                                  "(face colours need a COFF header)",
+                                  t.line_no, i, TOK_ARG(tok, toklen), k);
     }
     *nv_out = nv;
     *nf_out = nf;

@@ -32,7 +32,8 @@ int fp__obj_scan(const char *path, const char *text, size_t len, fp__obj_info *i
 
 /** Check OFF text the way OpenMesh's reader consumes it. ASCII: header line, a line of three
  *  counts (which must fit the file's size), one vertex per line with finite numbers, one
- *  face per line "k i1 .. ik" with indices < vertex count. Binary ("[ST][N]OFF BINARY"):
+ *  face per line "k i1 .. ik" with indices < vertex count and nothing after them unless the
+ *  header has colours (COFF: colours of 1 to 4 values as OpenMesh counts them). Binary ("[ST][N]OFF BINARY"):
  *  counts, finite floats, corner counts and indices walked exactly to the file's end.
  *  *nv and *nf get the header's counts. "path: line N: reason" errors.
  *  Returns FP_MESH_OK, FP_MESH_ERR_FORMAT or FP_MESH_ERR_UNSUPPORTED (binary COFF). */
