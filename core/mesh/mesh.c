@@ -640,6 +640,15 @@ int fp__off_scan(const char *path, const char *text, size_t len, size_t *nv_out,
             return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
                                   "line %zu: expected three counts: vertices faces edges",
                                   t.line_no);
+    /* OpenMesh reads the counts, vertices' coordinates and faces as one stream: a fourth
+     * value here would be read as the first vertex's x, and so on out of step */
+    if (next_token(&l, &tok, &toklen))
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                              "line %zu: " TOK_FMT " after the three counts (vertices faces "
+                              "edges)", t.line_no, TOK_ARG(tok, toklen));
+    if (counts[2] > UINT32_MAX)
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                              "line %zu: edge count %lu is beyond 32 bits", t.line_no, counts[2]);
     const unsigned long nv = counts[0], nf = counts[1];
     const size_t need = 3 + (n ? 3u : 0u) + (st ? 2u : 0u);
     if (nv > UINT32_MAX || nf > UINT32_MAX || nv * need + nf * 4 > len)
