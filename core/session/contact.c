@@ -617,9 +617,11 @@ typedef struct rq_cell {          /* a cell of a renewed envelope */
 } rq_cell;
 
 typedef struct centry {           /* a triangle registered in a cell, with a copy of its
-                                     envelope (read in order, not through slot and dyn) */
+                                     envelope and welded vertices (read in order, not through
+                                     slot, dyn and the mesh) */
     float env[6];
     uint32_t tri;
+    uint32_t w[3];
 } centry;
 
 typedef struct cellvec {          /* a cell of the dynamic grid */
@@ -662,12 +664,13 @@ struct track {
     size_t cap_rc, cap_rcs;
     uint32_t *rcb, *rr;           /* the sort's buckets; one cell's requests */
     size_t cap_rcb, cap_rr;
-    uint32_t *rx;                 /* one cell's requests: their triangles and envelopes */
+    uint32_t *rx;                 /* one cell's requests: their triangles, envelopes and
+                                     welded vertices */
     float (*renv)[6];
-    size_t cap_rx, cap_renv;
+    uint32_t (*rw)[3];
+    size_t cap_rx, cap_renv, cap_rw;
     size_t renewed;               /* envelopes renewed, for fp_contact_result */
     bool tree;                    /* the hierarchy (below), not envelopes (a large mesh) */
-    size_t nv;                    /* vertices (for tick) */
     bnode *node;                  /* the hierarchy over the triangles not own, root node[0] */
     size_t nnode;
     uint32_t *order;              /* its triangles, by node */
@@ -676,9 +679,11 @@ struct track {
     float (*tn)[3];               /* by place in order: its normal in P (tri_normal_f) */
     float (*tbox)[6];             /* by place in order: its box in P */
     uint32_t *pstamp;             /* by place in order: == tclock when moved (refit sets it) */
-    uint32_t *vleaf_start, *vleaf; /* vertex v's leaves: vleaf[vleaf_start[v] .. [v + 1]) */
-    uint32_t *vmov;               /* n: == tclock when moved (tree_mark) */
-    uint8_t *vown;                /* n: the vertex has an own triangle */
+    uint32_t *vtp;                /* beside vt: the triangle's place in order (tpos) */
+    uint32_t (*ow)[3];            /* by place in order: its vertices welded (adjacency) */
+    uint32_t (*ov)[3];            /* by place in order: its vertices */
+    uint32_t *mq;                 /* the moved triangles' places (tree_mark) */
+    size_t nmq, cap_mq;
     cert *cert;
     size_t ncert;
     uint32_t *cyc;                /* the certifiable patches' boundary cycles */
@@ -725,6 +730,7 @@ static void track_free(struct track *k)
     free(k->rcb);
     free(k->rr);
     free(k->rx);
+    free(k->rw);
     free(k->renv);
     free(k->node);
     free(k->order);
@@ -733,10 +739,10 @@ static void track_free(struct track *k)
     free(k->tn);
     free(k->tbox);
     free(k->pstamp);
-    free(k->vleaf_start);
-    free(k->vleaf);
-    free(k->vmov);
-    free(k->vown);
+    free(k->vtp);
+    free(k->ow);
+    free(k->ov);
+    free(k->mq);
     free(k->cert);
     free(k->cyc);
     free(k->xy);
@@ -853,8 +859,11 @@ static cellvec *cell_find(struct track *k, const int64_t key[3], bool create)
     }
 }
 
-static int grid_add(struct track *k, dyn *d)
+static int grid_add(fp_contact *c, dyn *d)
 {
+    struct track *k = c->tk;
+    const uint32_t *v = c->tris + 3 * (size_t)d->tri;
+    const uint32_t w[3] = {c->weld[v[0]], c->weld[v[1]], c->weld[v[2]]};
     int64_t lo[3], hi[3];
     d->big = cells_of(k->ih, d->env, lo, hi) > FP_TRACK_BIG_CELLS;
     if (d->big) return push_u32(&k->dbig, &k->ndbig, &k->cap_dbig, d->tri);
@@ -870,6 +879,7 @@ static int grid_add(struct track *k, dyn *d)
                 centry *en = &cv->ids[cv->len++];
                 memcpy(en->env, d->env, sizeof en->env);
                 en->tri = d->tri;
+                memcpy(en->w, w, sizeof w);
             }
     return 0;
 }
@@ -972,7 +982,7 @@ static int envelope(fp_contact *c, uint32_t x, const float box[6])
         d->env[3 + i] = box[3 + i] + skin;
     }
     d->len = 0;
-    if (grid_add(k, d)) return -ENOMEM;
+    if (grid_add(c, d)) return -ENOMEM;
     return push_u32(&k->rq, &k->nrq, &k->cap_rq, x);
 }
 
@@ -983,6 +993,13 @@ static int list_add(dyn *d, uint32_t y)
     for (uint32_t j = 0; j < d->len; j++)
         if (l[j] == y) return 0;
     return dyn_push(d, y);
+}
+
+/* two triangles given by their welded vertices share one */
+static inline bool welded_adjacent(const uint32_t a[3], const uint32_t b[3])
+{
+    return a[0] == b[0] || a[0] == b[1] || a[0] == b[2] || a[1] == b[0] || a[1] == b[1] || a[1] == b[2] ||
+           a[2] == b[0] || a[2] == b[1] || a[2] == b[2];
 }
 
 static bool adjacent(const fp_contact *c, uint32_t x, uint32_t y)
@@ -1013,28 +1030,27 @@ static int renew_cell(fp_contact *c, const int64_t key[3], const uint32_t *R, si
     struct track *k = c->tk;
     /* the requests' triangles and envelopes, side by side */
     if (reserve((void **)&k->renv, &k->cap_renv, nr, sizeof *k->renv) ||
-        reserve((void **)&k->rx, &k->cap_rx, nr, sizeof *k->rx))
+        reserve((void **)&k->rx, &k->cap_rx, nr, sizeof *k->rx) ||
+        reserve((void **)&k->rw, &k->cap_rw, nr, sizeof *k->rw))
         return -ENOMEM;
     for (size_t i = 0; i < nr; i++) {
         k->rx[i] = k->rq[R[i]];
         memcpy(k->renv[i], k->dyn[k->slot[k->rx[i]]].env, sizeof k->renv[i]);
-    }
-#define FP_TRY(Y, YBOX)                                                                         \
-    for (size_t i_ = 0; i_ < nr; i_++) {                                                        \
-        uint32_t x_ = k->rx[i_];                                                                \
-        const float *ex_ = k->renv[i_];                                                         \
-        if (!boxes_meet(ex_, (YBOX)) || (Y) == x_) continue;                                    \
-        bool mine_ = true;                                                                      \
-        for (int a_ = 0; a_ < 3 && mine_; a_++)                                                 \
-            mine_ = cell_coord(max_f(ex_[a_], (YBOX)[a_]), k->ih) == key[a_];                    \
-        if (mine_ && !adjacent(c, x_, (Y)) && link(c, x_, (Y), clock)) return -ENOMEM;          \
+        for (int j = 0; j < 3; j++) k->rw[i][j] = c->weld[c->tris[3 * (size_t)k->rx[i] + j]];
     }
     const cellvec *cv = cell_find(k, key, false);
     for (uint32_t j = 0; cv && j < cv->len; j++) { /* (own triangles have no envelope) */
-        uint32_t y = cv->ids[j].tri;
-        FP_TRY(y, cv->ids[j].env)
+        const centry *en = &cv->ids[j];
+        for (size_t i = 0; i < nr; i++) {
+            uint32_t x = k->rx[i];
+            const float *ex = k->renv[i];
+            if (!boxes_meet(ex, en->env) || en->tri == x) continue;
+            bool mine = true;
+            for (int a = 0; a < 3 && mine; a++)
+                mine = cell_coord(max_f(ex[a], en->env[a]), k->ih) == key[a];
+            if (mine && !welded_adjacent(k->rw[i], en->w) && link(c, x, en->tri, clock)) return -ENOMEM;
+        }
     }
-#undef FP_TRY
     return 0;
 }
 
@@ -1162,8 +1178,8 @@ static inline void tri_normal_f(const float *pos, const uint32_t *v, float out[3
         out[0] = out[1] = out[2] = 0.f;
         return;
     }
-    double l = sqrt(nd[0] * nd[0] + nd[1] * nd[1] + nd[2] * nd[2]);
-    for (int j = 0; j < 3; j++) out[j] = (float)(nd[j] / l);
+    double il = 1 / sqrt(nd[0] * nd[0] + nd[1] * nd[1] + nd[2] * nd[2]);
+    for (int j = 0; j < 3; j++) out[j] = (float)(nd[j] * il);
 }
 
 /* min and max of finite doubles, inline */
@@ -1203,6 +1219,7 @@ static int contour_tangled(struct track *k, const float *s, const uint32_t *cyc,
     if (reserve((void **)&k->xy, &k->cap_xy, 2 * (size_t)len, sizeof *k->xy)) return -ENOMEM;
     double *xy = k->xy, lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY}, big = 0;
     for (uint32_t i = 0; i < len; i++) {
+        if (i + 12 < len) __builtin_prefetch(s + 3 * (size_t)cyc[i + 12]);
         const float *p = s + 3 * (size_t)cyc[i];
         double x = p[0] * u[0] + p[1] * u[1] + p[2] * u[2], y = p[0] * w[0] + p[1] * w[1] + p[2] * w[2];
         xy[2 * i] = x;
@@ -1816,36 +1833,17 @@ static int boundary(fp_contact *c, struct track *k, uint32_t x, uint64_t **out, 
 static int add_off(fp_contact *c, const uint32_t *v);
 static long own_flips(fp_contact *c, const float *s, const float *ref, bool record);
 
-typedef struct refit_ctx {         /* what refit counts besides boxes (tree_update) */
-    const float *ref;              /* NULL: no flips counted */
-    bool record;                   /* the flipped ones' vertices into off */
-    long flips;                    /* newly flipped moved triangles; -ENOMEM */
-    size_t moved;                  /* moved triangles met */
-} refit_ctx;
 
-/* Node x and those below it that hold a moved triangle, in s: the moved triangles' unit
- * normals and boxes (and newly flipped ones, ctx), then every such node's box and normal box */
-static void refit(fp_contact *c, struct track *k, const float *s, uint32_t x, refit_ctx *ctx)
+/* Node x and those below it that hold a moved triangle: their boxes and normal boxes from
+ * their triangles' (tree_update) */
+static void refit(struct track *k, uint32_t x)
 {
     bnode *b = &k->node[x];
     float box[6] = {INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY};
     float nlo[3] = {1.f, 1.f, 1.f}, nhi[3] = {-1.f, -1.f, -1.f};
     if (!b->right) {
         for (uint32_t i = b->first; i < b->first + b->count; i++) {
-            float *tb = k->tbox[i], *n = k->tn[i];
-            uint32_t a = k->order[i];
-            const uint32_t *va = c->tris + 3 * (size_t)a;
-            if (k->vmov[va[0]] == k->tclock || k->vmov[va[1]] == k->tclock || k->vmov[va[2]] == k->tclock) {
-                k->pstamp[i] = k->tclock;
-                ctx->moved++;
-                double nd[3];
-                tri_box(s, va, tb);
-                tri_normal_f(s, va, n, nd);
-                if (ctx->ref && flipped_n(c, nd, a) && !flipped(c, ctx->ref, va, a)) {
-                    if (ctx->flips >= 0) ctx->flips++;
-                    if (ctx->record && add_off(c, va)) ctx->flips = -ENOMEM;
-                }
-            }
+            const float *tb = k->tbox[i], *n = k->tn[i];
             for (int j = 0; j < 3; j++) {
                 box[j] = min_f(box[j], tb[j]);
                 box[3 + j] = max_f(box[3 + j], tb[3 + j]);
@@ -1860,7 +1858,7 @@ static void refit(fp_contact *c, struct track *k, const float *s, uint32_t x, re
         uint32_t ch[2] = {x + 1, b->right};
         for (int h = 0; h < 2; h++) {
             bnode *d = &k->node[ch[h]];
-            if (d->stamp == k->tclock) refit(c, k, s, ch[h], ctx);
+            if (d->stamp == k->tclock) refit(k, ch[h]);
             for (int j = 0; j < 3; j++) {
                 box[j] = min_f(box[j], d->box[j]);
                 box[3 + j] = max_f(box[3 + j], d->box[3 + j]);
@@ -1874,34 +1872,37 @@ static void refit(fp_contact *c, struct track *k, const float *s, uint32_t x, re
     memcpy(b->nhi, nhi, sizeof nhi);
 }
 
-/* The hierarchy's moved vertices (mv) stamped (vmov) with the nodes above their leaves
- * (refit finds the moved triangles in them); the own triangles of moved vertices into mo
- * (flips only) */
+/* The hierarchy's triangles of the moved vertices (mv) stamped (pstamp) with the nodes above
+ * their leaves (refit recomputes the stamped triangles); the own triangles of moved vertices
+ * into mo (flips only) */
 static int tree_mark(fp_contact *c)
 {
     struct track *k = c->tk;
     for (size_t i = 0; i < k->nmv; i++) {
         uint32_t v = k->mv[i];
-        k->vmov[v] = k->tclock;
-        for (uint32_t j = k->vleaf_start[v]; j < k->vleaf_start[v + 1]; j++)
-            for (uint32_t x = k->vleaf[j]; x != FP_TRACK_NONE && k->node[x].stamp != k->tclock; x = k->node[x].parent)
-                k->node[x].stamp = k->tclock;
-        if (!k->vown[v]) continue;
         for (uint32_t j = k->vt_start[v]; j < k->vt_start[v + 1]; j++) {
-            uint32_t a = k->vt[j];
-            if (!c->own[a] || k->tstamp[a] == k->tclock) continue;
-            k->tstamp[a] = k->tclock;
-            if (push_u32(&k->mo, &k->nmo, &k->cap_mo, a)) return -ENOMEM;
+            uint32_t q = k->vtp[j];
+            if (q == FP_TRACK_NONE) { /* an own triangle */
+                uint32_t a = k->vt[j];
+                if (k->tstamp[a] == k->tclock) continue;
+                k->tstamp[a] = k->tclock;
+                if (push_u32(&k->mo, &k->nmo, &k->cap_mo, a)) return -ENOMEM;
+                continue;
+            }
+            if (k->pstamp[q] == k->tclock) continue;
+            k->pstamp[q] = k->tclock;
+            if (push_u32(&k->mq, &k->nmq, &k->cap_mq, q)) return -ENOMEM;
+            for (uint32_t x = k->leaf[q]; x != FP_TRACK_NONE && k->node[x].stamp != k->tclock; x = k->node[x].parent)
+                k->node[x].stamp = k->tclock;
         }
     }
     return 0;
 }
 
-/* the pair (a, b), not both unmoved: 1 when it is new in s (crosses in s, not in ref; not
- * adjacent, neither degenerate; their vertices into off when record), 0, -ENOMEM */
+/* the pair (a, b), not adjacent, not both unmoved: 1 when it is new in s (crosses in s, not in
+ * ref; neither degenerate; their vertices into off when record), 0, -ENOMEM */
 static int test_pair(fp_contact *c, const float *s, const float *ref, uint32_t a, uint32_t b, bool record)
 {
-    if (adjacent(c, a, b)) return 0;
     const uint32_t *va = c->tris + 3 * (size_t)a, *vb = c->tris + 3 * (size_t)b;
     double ta[3][3], tb[3][3];
     c->tk->tested++;
@@ -1932,6 +1933,7 @@ static long leaf_pairs(fp_contact *c, const float *s, const float *ref, uint32_t
         for (uint32_t q = 0; q < ny; q++) {
             uint32_t j = jy[q];
             if ((x == y && j <= i) || !(ma || k->pstamp[j] == k->tclock) || !boxes_meet(ba, k->tbox[j])) continue;
+            if (welded_adjacent(k->ow[i], k->ow[j])) continue;
             int r = test_pair(c, s, ref, k->order[i], k->order[j], record);
             if (r < 0) return r;
             found += r;
@@ -1989,12 +1991,34 @@ static long node_self(fp_contact *c, const float *s, const float *ref, uint32_t 
 static long tree_update(fp_contact *c, const float *s, const float *ref, bool record)
 {
     struct track *k = c->tk;
-    refit_ctx ctx = {ref, record, 0, 0};
-    if (k->nnode && k->node[0].stamp == k->tclock) refit(c, k, s, 0, &ctx);
-    k->nmt = ctx.moved;
-    if (ctx.flips < 0 || !ref) return ctx.flips;
+    long flips = 0;
+    /* the moved triangles, in one pass with their vertices fetched ahead: three dependent
+     * loads each (place, vertices, positions) that would otherwise miss the cache in turn */
+    const uint32_t *mq = k->mq;
+    const size_t nmq = k->nmq;
+    for (size_t i = 0; i < nmq; i++) {
+        if (i + 16 < nmq) __builtin_prefetch(k->ov[mq[i + 16]]);
+        if (i + 8 < nmq) {
+            const uint32_t *w = k->ov[mq[i + 8]];
+            __builtin_prefetch(s + 3 * (size_t)w[0]);
+            __builtin_prefetch(s + 3 * (size_t)w[1]);
+            __builtin_prefetch(s + 3 * (size_t)w[2]);
+        }
+        uint32_t q = mq[i];
+        const uint32_t *va = k->ov[q];
+        double nd[3];
+        tri_box(s, va, k->tbox[q]);
+        tri_normal_f(s, va, k->tn[q], nd);
+        if (ref && flipped_n(c, nd, k->order[q]) && !flipped(c, ref, va, k->order[q])) {
+            flips++;
+            if (record && add_off(c, va)) return -ENOMEM;
+        }
+    }
+    if (k->nnode && k->node[0].stamp == k->tclock) refit(k, 0);
+    k->nmt = nmq;
+    if (!ref) return flips;
     long g = own_flips(c, s, ref, record);
-    return g < 0 ? g : ctx.flips + g;
+    return g < 0 ? g : flips + g;
 }
 
 /* New pairs and newly flipped triangles (*flips) of shape s (P but for the moved vertices)
@@ -2023,12 +2047,8 @@ static int tree_build(fp_contact *c, struct track *k)
     k->tbox = malloc((t ? t : 1) * sizeof *k->tbox);
     k->pstamp = calloc(t ? t : 1, sizeof *k->pstamp);
     k->node = malloc((t ? 2 * t : 1) * sizeof *k->node);
-    k->vmov = calloc(c->n + 1, sizeof *k->vmov);
-    k->vown = calloc(c->n + 1, 1);
-    k->vleaf_start = calloc(c->n + 1, sizeof *k->vleaf_start);
-    k->nv = c->n;
-    if (!k->tpos || !k->order || !k->leaf || !k->tn || !k->tbox || !k->pstamp || !k->node || !k->vmov || !k->vown ||
-        !k->vleaf_start) {
+    k->vtp = malloc((t ? 3 * t : 1) * sizeof *k->vtp);
+    if (!k->tpos || !k->order || !k->leaf || !k->tn || !k->tbox || !k->pstamp || !k->node || !k->vtp) {
         track_free(k);
         return -ENOMEM;
     }
@@ -2043,34 +2063,20 @@ static int tree_build(fp_contact *c, struct track *k)
         return -ENOMEM;
     }
     for (size_t i = 0; i < m; i++) k->tpos[k->order[i]] = (uint32_t)i;
-    /* each vertex's leaves (its triangles' not own, once each), and whether it has own ones */
-    for (int pass = 0; pass < 2; pass++) {
-        size_t w = 0;
-        for (size_t v = 0; v < c->n; v++) {
-            uint32_t first = (uint32_t)w;
-            for (uint32_t j = k->vt_start[v]; j < k->vt_start[v + 1]; j++) {
-                uint32_t q = k->tpos[k->vt[j]];
-                if (q == FP_TRACK_NONE) {
-                    k->vown[v] = 1;
-                    continue;
-                }
-                uint32_t x = k->leaf[q];
-                bool seen = false;
-                for (uint32_t z = first; z < w && !seen; z++) seen = pass ? k->vleaf[z] == x : false;
-                if (pass && seen) continue;
-                if (pass) k->vleaf[w] = x;
-                w++;
-            }
-            if (pass) k->vleaf_start[v + 1] = (uint32_t)w;
-        }
-        if (!pass) {
-            k->vleaf = malloc((w ? w : 1) * sizeof *k->vleaf);
-            if (!k->vleaf) {
-                track_free(k);
-                return -ENOMEM;
-            }
-        }
+    for (size_t j = 0; j < 3 * t; j++) k->vtp[j] = k->tpos[k->vt[j]]; /* vt's places */
+    k->ow = malloc((m ? m : 1) * sizeof *k->ow);
+    k->ov = malloc((m ? m : 1) * sizeof *k->ov);
+    k->mq = malloc((m ? m : 1) * sizeof *k->mq);
+    if (!k->ow || !k->ov || !k->mq) {
+        track_free(k);
+        return -ENOMEM;
     }
+    k->cap_mq = m ? m : 1;
+    for (size_t i = 0; i < m; i++)
+        for (int j = 0; j < 3; j++) {
+            k->ov[i][j] = c->tris[3 * (size_t)k->order[i] + j];
+            k->ow[i][j] = c->weld[k->ov[i][j]];
+        }
     if (m) {
         uint64_t *e;
         size_t ne, cap_cyc = 0, cap_cert = 0;
@@ -2084,10 +2090,11 @@ static int tree_build(fp_contact *c, struct track *k)
     k->tclock = 1;
     for (size_t x = 0; x < k->nnode; x++) k->node[x].stamp = 1;
     for (size_t i = 0; i < m; i++) k->pstamp[i] = 1;
-    refit_ctx ctx = {NULL, false, 0, 0};
-    for (size_t v = 0; v < c->n; v++) k->vmov[v] = 1;
-    if (k->nnode) refit(c, k, k->p, 0, &ctx);
+    for (size_t i = 0; i < m; i++) k->mq[i] = (uint32_t)i;
+    k->nmq = m;
     c->tk = k;
+    tree_update(c, k->p, NULL, false); /* no flips counted: no failure */
+    k->nmq = 0;
     return 0;
 }
 
@@ -2155,7 +2162,6 @@ static void tick(struct track *k, size_t t)
         memset(k->tstamp, 0, t * sizeof *k->tstamp);
         for (size_t x = 0; x < k->nnode; x++) k->node[x].stamp = 0;
         if (k->pstamp) memset(k->pstamp, 0, t * sizeof *k->pstamp);
-        if (k->vmov) memset(k->vmov, 0, k->nv * sizeof *k->vmov);
         k->tclock = 1;
     }
 }
@@ -2236,7 +2242,7 @@ static int reference(fp_contact *c, const float *ref, const uint32_t *ranges, si
 {
     struct track *k = c->tk;
     tick(k, c->t);
-    k->nmt = k->nmo = 0;
+    k->nmt = k->nmo = k->nmq = 0;
     /* P := ref where they differ: D_P, then the ranges (or everything) */
     if (collect_moved(c, ref, ranges, nranges)) return -ENOMEM;
     for (size_t i = 0; i < k->ndp; i++) k->in_dp[k->dp[i]] = 0;
@@ -2404,7 +2410,7 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
 {
     struct track *k = c->tk;
     tick(k, c->t);
-    k->nmv = k->nmt = k->nmo = 0;
+    k->nmv = k->nmt = k->nmo = k->nmq = 0;
     size_t renewed0 = k->renewed;
     k->certified = 0;
 
