@@ -119,12 +119,13 @@ static bool seg_tri(const double *p, const double *q, const double t[3][3], int 
 
 int fp_contact_tri_tri(const double a[3][3], const double b[3][3])
 {
-    /* each vertex against the other's plane, once (every edge test starts with these) */
+    /* each vertex against the other's plane, once (every edge test starts with these); a
+     * triangle certainly on one side of the other's plane shares no point with it */
     int oa[3], ob[3];
-    for (int i = 0; i < 3; i++) {
-        oa[i] = orient3d(b[0], b[1], b[2], a[i]);
-        ob[i] = orient3d(a[0], a[1], a[2], b[i]);
-    }
+    for (int i = 0; i < 3; i++) oa[i] = orient3d(b[0], b[1], b[2], a[i]);
+    if (oa[0] && oa[0] == oa[1] && oa[1] == oa[2]) return 0;
+    for (int i = 0; i < 3; i++) ob[i] = orient3d(a[0], a[1], a[2], b[i]);
+    if (ob[0] && ob[0] == ob[1] && ob[1] == ob[2]) return 0;
     for (int e = 0; e < 3; e++) {
         int f = (e + 1) % 3;
         if (seg_tri(a[e], a[f], b, oa[e], oa[f]) || seg_tri(b[e], b[f], a, ob[e], ob[f])) return 1;
@@ -562,15 +563,16 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
 #define FP_CERT_MIN 48            /* a patch (node) with this many triangles or more ... */
 #define FP_CERT_MAX 65536         /* ... and no more may be certified (its boundary made once) */
 
-typedef struct bnode {            /* a node of the hierarchy: a patch of triangles */
+typedef struct bnode {            /* a node of the hierarchy: a patch of triangles (64 bytes,
+                                     one cache line; its parent and stamp are in nparent and
+                                     nstamp, which the marking walks densely) */
     float box[6];                 /* its triangles' box in P (in the shape checked, in a check) */
     uint32_t first, count;        /* its triangles: order[first .. first + count) */
     uint32_t right;               /* its right child (the left one is the next node); 0: leaf */
-    uint32_t parent;              /* FP_TRACK_NONE: the root */
     uint32_t cert;                /* its boundary cycle (index into cert); FP_TRACK_NONE: none */
-    uint32_t stamp;               /* == tclock: holds a moved triangle */
     float nlo[3], nhi[3];         /* a box that holds its triangles' unit normals (in P) */
 } bnode;
+_Static_assert(sizeof(bnode) == 64, "a node is one cache line");
 
 typedef struct cert {             /* a patch whose boundary is one simple cycle */
     uint32_t start, len;          /* the cycle's vertices: cyc[start .. start + len) */
@@ -672,6 +674,8 @@ struct track {
     size_t renewed;               /* envelopes renewed, for fp_contact_result */
     bool tree;                    /* the hierarchy (below), not envelopes (a large mesh) */
     bnode *node;                  /* the hierarchy over the triangles not own, root node[0] */
+    uint32_t *nparent;            /* by node: its parent; FP_TRACK_NONE: the root */
+    uint32_t *nstamp;             /* by node: == tclock when it holds a moved triangle */
     size_t nnode;
     uint32_t *order;              /* its triangles, by node */
     uint32_t *tpos;               /* t: a triangle's place in order (FP_TRACK_NONE: own) */
@@ -733,6 +737,8 @@ static void track_free(struct track *k)
     free(k->rw);
     free(k->renv);
     free(k->node);
+    free(k->nparent);
+    free(k->nstamp);
     free(k->order);
     free(k->tpos);
     free(k->leaf);
@@ -1479,7 +1485,7 @@ static void lay(const cbuild *b, struct track *k, uint32_t z, uint32_t parent, u
     memset(nd, 0, sizeof *nd);
     nd->first = *pos;
     nd->count = b->cnt[z];
-    nd->parent = parent;
+    k->nparent[x] = parent;
     nd->cert = FP_TRACK_NONE;
     if (z < b->m || b->cnt[z] <= FP_BVH_LEAF) {
         lay_tris(b, k, z, pos);
@@ -1858,7 +1864,7 @@ static void refit(struct track *k, uint32_t x)
         uint32_t ch[2] = {x + 1, b->right};
         for (int h = 0; h < 2; h++) {
             bnode *d = &k->node[ch[h]];
-            if (d->stamp == k->tclock) refit(k, ch[h]);
+            if (k->nstamp[ch[h]] == k->tclock) refit(k, ch[h]);
             for (int j = 0; j < 3; j++) {
                 box[j] = min_f(box[j], d->box[j]);
                 box[3 + j] = max_f(box[3 + j], d->box[3 + j]);
@@ -1892,8 +1898,8 @@ static int tree_mark(fp_contact *c)
             if (k->pstamp[q] == k->tclock) continue;
             k->pstamp[q] = k->tclock;
             if (push_u32(&k->mq, &k->nmq, &k->cap_mq, q)) return -ENOMEM;
-            for (uint32_t x = k->leaf[q]; x != FP_TRACK_NONE && k->node[x].stamp != k->tclock; x = k->node[x].parent)
-                k->node[x].stamp = k->tclock;
+            for (uint32_t x = k->leaf[q]; x != FP_TRACK_NONE && k->nstamp[x] != k->tclock; x = k->nparent[x])
+                k->nstamp[x] = k->tclock;
         }
     }
     return 0;
@@ -1947,7 +1953,7 @@ static long node_pairs(fp_contact *c, const float *s, const float *ref, uint32_t
 {
     struct track *k = c->tk;
     const bnode *bx = &k->node[x], *by = &k->node[y];
-    if ((bx->stamp != k->tclock && by->stamp != k->tclock) || !boxes_meet(bx->box, by->box)) return 0;
+    if ((k->nstamp[x] != k->tclock && k->nstamp[y] != k->tclock) || !boxes_meet(bx->box, by->box)) return 0;
     if (!bx->right && !by->right) return leaf_pairs(c, s, ref, x, y, record);
     if (!bx->right || (by->right && by->count > bx->count)) { /* into the larger */
         uint32_t t = x;
@@ -1966,7 +1972,7 @@ static long node_self(fp_contact *c, const float *s, const float *ref, uint32_t 
 {
     struct track *k = c->tk;
     const bnode *b = &k->node[x];
-    if (b->stamp != k->tclock) return 0;
+    if (k->nstamp[x] != k->tclock) return 0;
     if (c->certify && b->cert != FP_TRACK_NONE) {
         int r = certified(k, s, b);
         if (r < 0) return r;
@@ -1997,12 +2003,16 @@ static long tree_update(fp_contact *c, const float *s, const float *ref, bool re
     const uint32_t *mq = k->mq;
     const size_t nmq = k->nmq;
     for (size_t i = 0; i < nmq; i++) {
-        if (i + 16 < nmq) __builtin_prefetch(k->ov[mq[i + 16]]);
+        if (i + 16 < nmq) {
+            __builtin_prefetch(k->ov[mq[i + 16]]);
+            if (ref) __builtin_prefetch(k->order + mq[i + 16]);
+        }
         if (i + 8 < nmq) {
             const uint32_t *w = k->ov[mq[i + 8]];
             __builtin_prefetch(s + 3 * (size_t)w[0]);
             __builtin_prefetch(s + 3 * (size_t)w[1]);
             __builtin_prefetch(s + 3 * (size_t)w[2]);
+            if (ref) __builtin_prefetch(c->nrm[k->order[mq[i + 8]]]);
         }
         uint32_t q = mq[i];
         const uint32_t *va = k->ov[q];
@@ -2014,7 +2024,7 @@ static long tree_update(fp_contact *c, const float *s, const float *ref, bool re
             if (record && add_off(c, va)) return -ENOMEM;
         }
     }
-    if (k->nnode && k->node[0].stamp == k->tclock) refit(k, 0);
+    if (k->nnode && k->nstamp[0] == k->tclock) refit(k, 0);
     k->nmt = nmq;
     if (!ref) return flips;
     long g = own_flips(c, s, ref, record);
@@ -2046,9 +2056,12 @@ static int tree_build(fp_contact *c, struct track *k)
     k->tn = malloc((t ? t : 1) * sizeof *k->tn);
     k->tbox = malloc((t ? t : 1) * sizeof *k->tbox);
     k->pstamp = calloc(t ? t : 1, sizeof *k->pstamp);
-    k->node = malloc((t ? 2 * t : 1) * sizeof *k->node);
+    k->node = aligned_alloc(64, (t ? 2 * t : 1) * sizeof *k->node);
+    k->nparent = malloc((t ? 2 * t : 1) * sizeof *k->nparent);
+    k->nstamp = calloc(t ? 2 * t : 1, sizeof *k->nstamp);
     k->vtp = malloc((t ? 3 * t : 1) * sizeof *k->vtp);
-    if (!k->tpos || !k->order || !k->leaf || !k->tn || !k->tbox || !k->pstamp || !k->node || !k->vtp) {
+    if (!k->tpos || !k->order || !k->leaf || !k->tn || !k->tbox || !k->pstamp || !k->node || !k->nparent ||
+        !k->nstamp || !k->vtp) {
         track_free(k);
         return -ENOMEM;
     }
@@ -2088,7 +2101,7 @@ static int tree_build(fp_contact *c, struct track *k)
     }
     /* every triangle's normal and every node's boxes in P */
     k->tclock = 1;
-    for (size_t x = 0; x < k->nnode; x++) k->node[x].stamp = 1;
+    for (size_t x = 0; x < k->nnode; x++) k->nstamp[x] = 1;
     for (size_t i = 0; i < m; i++) k->pstamp[i] = 1;
     for (size_t i = 0; i < m; i++) k->mq[i] = (uint32_t)i;
     k->nmq = m;
@@ -2160,7 +2173,7 @@ static void tick(struct track *k, size_t t)
 {
     if (++k->tclock == 0) {
         memset(k->tstamp, 0, t * sizeof *k->tstamp);
-        for (size_t x = 0; x < k->nnode; x++) k->node[x].stamp = 0;
+        if (k->nstamp) memset(k->nstamp, 0, k->nnode * sizeof *k->nstamp);
         if (k->pstamp) memset(k->pstamp, 0, t * sizeof *k->pstamp);
         k->tclock = 1;
     }
