@@ -1,11 +1,16 @@
 /* The contact guard: new self-crossings among moved triangles, and the bisection (contact.h). */
+#define _POSIX_C_SOURCE 200809L /* clock_gettime */
 #include "contact.h"
 
 #include <errno.h>
 #include <math.h>
+#include <pthread.h>
+#include <sched.h>
+#include <stdatomic.h>
 #include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #define FP_CONTACT_CELL 1.0 /* the grid cell over the mean moved triangle extent */
 
 
@@ -29,6 +34,8 @@ struct fp_contact {
     float *weld_copy;     /* n x 3: the weld shape, the tracker's first P (freed then) */
     size_t prewarm;       /* fp_contact_set_prewarm */
     bool certify;         /* fp_contact_set_certify */
+    int threads;          /* fp_contact_set_threads: 1 or 2 */
+    size_t share_min;     /* fp_contact_set_threads: moved triangles from which a check is shared */
     double local_r;       /* fp_contact_set_local: 0, a scale-back is global */
 };
 
@@ -166,6 +173,8 @@ int fp_contact_create(const uint32_t *tris, size_t t, size_t n, const float *wel
     c->n = n;
     c->prewarm = FP_CONTACT_PREWARM;
     c->certify = true;
+    c->threads = 1;
+    c->share_min = FP_CONTACT_SHARE_MIN;
     c->weld = malloc((n ? n : 1) * sizeof *c->weld);
     c->moved = malloc(n ? n : 1);
     c->mtris = malloc((t ? t : 1) * sizeof *c->mtris);
@@ -559,6 +568,7 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
 #define FP_CONTACT_LOCAL_ROUNDS 3 /* a local scale-back: times its blocking set may grow */
 #define FP_TRACK_INLINE 6          /* list entries kept in the dyn itself (one cache line) */
 
+#define FP_CONTACT_MAX_THREADS 2  /* the caller and one worker (fp_contact_set_threads) */
 #define FP_BVH_LEAF 8             /* triangles in a leaf of the hierarchy, at most */
 #define FP_CERT_MIN 48            /* a patch (node) with this many triangles or more ... */
 #define FP_CERT_MAX 65536         /* ... and no more may be certified (its boundary made once) */
@@ -633,6 +643,15 @@ typedef struct cellvec {          /* a cell of the dynamic grid */
     bool used;
 } cellvec;
 
+typedef struct lane {             /* one thread's part of a hierarchy check: scratch and counts */
+    double *xy;                   /* a contour's projection (2 per vertex) */
+    size_t cap_xy;
+    uint32_t *gcount, *gseg;      /* its segments by grid cell */
+    size_t cap_gcount, cap_gseg;
+    size_t certified, tested;     /* patches certified, triangle pairs tested */
+    long found, flips;            /* its tasks' new pairs and flips; -ENOMEM sticks */
+} lane;
+
 struct track {
     float *p;                     /* n x 3: P, the shape last accepted */
     uint32_t *vt_start, *vt;      /* vertex v's triangles: vt[vt_start[v] .. vt_start[v + 1]) */
@@ -691,11 +710,9 @@ struct track {
     cert *cert;
     size_t ncert;
     uint32_t *cyc;                /* the certifiable patches' boundary cycles */
-    double *xy;                   /* a contour's projection (2 per vertex) */
-    size_t cap_xy;
-    uint32_t *gcount, *gseg;      /* its segments by grid cell */
-    size_t cap_gcount, cap_gseg;
-    size_t certified, tested;     /* this step: patches certified, triangle pairs tested */
+    lane lane[FP_CONTACT_MAX_THREADS]; /* [0]: the caller's thread; [1]: the pool's worker */
+    struct pool *pool;            /* the worker (fp_contact_set_threads), made on first use */
+    size_t shared;                /* this step: checks shared with the worker */
     uint32_t *off;                /* a local scale-back: the blocking triangles' vertices */
     size_t noff, cap_off;
     uint8_t *off_mark;            /* n: in off */
@@ -704,9 +721,12 @@ struct track {
     bool broken;                  /* a call ran out of memory half way: unusable */
 };
 
+static void pool_free(struct pool *p);
+
 static void track_free(struct track *k)
 {
     if (!k) return;
+    pool_free(k->pool);
     free(k->p);
     free(k->vt_start);
     free(k->vt);
@@ -751,9 +771,11 @@ static void track_free(struct track *k)
     free(k->mq);
     free(k->cert);
     free(k->cyc);
-    free(k->xy);
-    free(k->gcount);
-    free(k->gseg);
+    for (int i = 0; i < FP_CONTACT_MAX_THREADS; i++) {
+        free(k->lane[i].xy);
+        free(k->lane[i].gcount);
+        free(k->lane[i].gseg);
+    }
     free(k->off);
     free(k->off_mark);
     free(k->ramp);
@@ -1218,7 +1240,7 @@ static bool segs_may_meet(const double *a, const double *b, const double *c, con
  * their rounding counts as uncertain, and uncertain is "not simple". Segments meet only in
  * grid cells they share (a grid of about len cells over the polygon's box). 0: simple, 1: not,
  * -ENOMEM. */
-static int contour_tangled(struct track *k, const float *s, const uint32_t *cyc, uint32_t len, const double *u,
+static int contour_tangled(lane *k, const float *s, const uint32_t *cyc, uint32_t len, const double *u,
                            const double *w)
 {
     if (len < 3) return 1;
@@ -1303,27 +1325,30 @@ static int contour_tangled(struct track *k, const float *s, const uint32_t *cyc,
  * (n . a > 1e-5 |n|_1 |a|_1, float) and its boundary cycle, projected along a, is a simple
  * polygon. Then the projection is one to one on the patch (contact.h, "(3)"), so no two of
  * its triangles meet but where they share a vertex. 1: certified, 0: not, -ENOMEM. */
-static int certified(struct track *k, const float *s, const bnode *x)
+/* Node x's certificate axis ad (unit): the centre of its normals' box, when every unit
+ * normal n in the box has n . ad at least the box's least corner value, clearing 1e-4 (over
+ * the unit normals' float rounding, tri_normal_f's and normalising's); false: none (no
+ * certificate) */
+static bool cert_axis(const bnode *x, double ad[3])
 {
-    /* the axis: the normals' box centre; every unit normal n in the box has n . a at least
-     * the box's least corner value, which must clear 1e-4 (over the unit normals' float
-     * rounding, tri_normal_f's and normalising's) */
-    double ad[3], l = 0, mn = 0;
+    double l = 0, mn = 0;
     for (int j = 0; j < 3; j++) {
         ad[j] = 0.5 * ((double)x->nlo[j] + x->nhi[j]);
         l += ad[j] * ad[j];
     }
     l = sqrt(l);
-    if (!(l > 1e-3)) {
-        return 0;
-    }
+    if (!(l > 1e-3)) return false;
     for (int j = 0; j < 3; j++) {
         ad[j] /= l;
         mn += ad[j] >= 0 ? ad[j] * x->nlo[j] : ad[j] * x->nhi[j];
     }
-    if (!(mn > 1e-4)) {
-        return 0;
-    }
+    return mn > 1e-4;
+}
+
+static int certified(const struct track *k, lane *ln, const float *s, const bnode *x)
+{
+    double ad[3];
+    if (!cert_axis(x, ad)) return 0;
     /* a basis (u, w) of the plane across the axis */
     double h[3] = {fabs(ad[0]) < 0.6 ? 1 : 0, fabs(ad[0]) < 0.6 ? 0 : 1, 0}, u[3], w[3];
     cross3(ad, h, u);
@@ -1331,7 +1356,7 @@ static int certified(struct track *k, const float *s, const bnode *x)
     for (int j = 0; j < 3; j++) u[j] /= lu;
     cross3(ad, u, w);
     const cert *ct = &k->cert[x->cert];
-    int r = contour_tangled(k, s, k->cyc + ct->start, ct->len, u, w);
+    int r = contour_tangled(ln, s, k->cyc + ct->start, ct->len, u, w);
     return r < 0 ? r : !r;
 }
 
@@ -1841,8 +1866,9 @@ static long own_flips(fp_contact *c, const float *s, const float *ref, bool reco
 
 
 /* Node x and those below it that hold a moved triangle: their boxes and normal boxes from
- * their triangles' (tree_update) */
-static void refit(struct track *k, uint32_t x)
+ * their triangles' (tree_update); cut > 0: not below nodes of cut triangles or fewer (done
+ * already, by the refit job's tasks) */
+static void refit(struct track *k, uint32_t x, size_t cut)
 {
     bnode *b = &k->node[x];
     float box[6] = {INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY};
@@ -1864,7 +1890,7 @@ static void refit(struct track *k, uint32_t x)
         uint32_t ch[2] = {x + 1, b->right};
         for (int h = 0; h < 2; h++) {
             bnode *d = &k->node[ch[h]];
-            if (k->nstamp[ch[h]] == k->tclock) refit(k, ch[h]);
+            if (k->nstamp[ch[h]] == k->tclock && d->count > cut) refit(k, ch[h], cut);
             for (int j = 0; j < 3; j++) {
                 box[j] = min_f(box[j], d->box[j]);
                 box[3 + j] = max_f(box[3 + j], d->box[3 + j]);
@@ -1886,6 +1912,15 @@ static int tree_mark(fp_contact *c)
     struct track *k = c->tk;
     for (size_t i = 0; i < k->nmv; i++) {
         uint32_t v = k->mv[i];
+        if (i + 6 < k->nmv) { /* a later vertex's triangles' stamps and leaves, ahead */
+            uint32_t w = k->mv[i + 6];
+            for (uint32_t j = k->vt_start[w]; j < k->vt_start[w + 1]; j++) {
+                uint32_t q = k->vtp[j];
+                if (q == FP_TRACK_NONE) continue;
+                __builtin_prefetch(k->pstamp + q);
+                __builtin_prefetch(k->leaf + q);
+            }
+        }
         for (uint32_t j = k->vt_start[v]; j < k->vt_start[v + 1]; j++) {
             uint32_t q = k->vtp[j];
             if (q == FP_TRACK_NONE) { /* an own triangle */
@@ -1907,11 +1942,11 @@ static int tree_mark(fp_contact *c)
 
 /* the pair (a, b), not adjacent, not both unmoved: 1 when it is new in s (crosses in s, not in
  * ref; neither degenerate; their vertices into off when record), 0, -ENOMEM */
-static int test_pair(fp_contact *c, const float *s, const float *ref, uint32_t a, uint32_t b, bool record)
+static int test_pair(fp_contact *c, lane *ln, const float *s, const float *ref, uint32_t a, uint32_t b, bool record)
 {
     const uint32_t *va = c->tris + 3 * (size_t)a, *vb = c->tris + 3 * (size_t)b;
     double ta[3][3], tb[3][3];
-    c->tk->tested++;
+    ln->tested++;
     tri_of(s, va, ta);
     tri_of(s, vb, tb);
     if (degenerate(ta) || degenerate(tb) || !fp_contact_tri_tri(ta, tb)) return 0;
@@ -1924,7 +1959,8 @@ static int test_pair(fp_contact *c, const float *s, const float *ref, uint32_t a
 
 /* the pairs between leaves x and y (x == y: within x) with a moved triangle whose boxes meet
  * in s: new ones counted (test_pair) */
-static long leaf_pairs(fp_contact *c, const float *s, const float *ref, uint32_t x, uint32_t y, bool record)
+static long leaf_pairs(fp_contact *c, lane *ln, const float *s, const float *ref, uint32_t x, uint32_t y,
+                       bool record)
 {
     struct track *k = c->tk;
     const bnode *bx = &k->node[x], *by = &k->node[y];
@@ -1940,7 +1976,7 @@ static long leaf_pairs(fp_contact *c, const float *s, const float *ref, uint32_t
             uint32_t j = jy[q];
             if ((x == y && j <= i) || !(ma || k->pstamp[j] == k->tclock) || !boxes_meet(ba, k->tbox[j])) continue;
             if (welded_adjacent(k->ow[i], k->ow[j])) continue;
-            int r = test_pair(c, s, ref, k->order[i], k->order[j], record);
+            int r = test_pair(c, ln, s, ref, k->order[i], k->order[j], record);
             if (r < 0) return r;
             found += r;
         }
@@ -1949,60 +1985,61 @@ static long leaf_pairs(fp_contact *c, const float *s, const float *ref, uint32_t
 }
 
 /* the pairs between nodes x and y with a moved triangle: new ones counted */
-static long node_pairs(fp_contact *c, const float *s, const float *ref, uint32_t x, uint32_t y, bool record)
+static long node_pairs(fp_contact *c, lane *ln, const float *s, const float *ref, uint32_t x, uint32_t y,
+                       bool record)
 {
     struct track *k = c->tk;
     const bnode *bx = &k->node[x], *by = &k->node[y];
     if ((k->nstamp[x] != k->tclock && k->nstamp[y] != k->tclock) || !boxes_meet(bx->box, by->box)) return 0;
-    if (!bx->right && !by->right) return leaf_pairs(c, s, ref, x, y, record);
+    if (!bx->right && !by->right) return leaf_pairs(c, ln, s, ref, x, y, record);
     if (!bx->right || (by->right && by->count > bx->count)) { /* into the larger */
         uint32_t t = x;
         x = y;
         y = t;
         bx = by;
     }
-    long a = node_pairs(c, s, ref, x + 1, y, record);
+    long a = node_pairs(c, ln, s, ref, x + 1, y, record);
     if (a < 0) return a;
-    long b = node_pairs(c, s, ref, bx->right, y, record);
+    long b = node_pairs(c, ln, s, ref, bx->right, y, record);
     return b < 0 ? b : a + b;
 }
 
 /* the pairs within node x with a moved triangle: new ones counted; a certified patch has none */
-static long node_self(fp_contact *c, const float *s, const float *ref, uint32_t x, bool record)
+static long node_self(fp_contact *c, lane *ln, const float *s, const float *ref, uint32_t x, bool record)
 {
     struct track *k = c->tk;
     const bnode *b = &k->node[x];
     if (k->nstamp[x] != k->tclock) return 0;
     if (c->certify && b->cert != FP_TRACK_NONE) {
-        int r = certified(k, s, b);
+        int r = certified(k, ln, s, b);
         if (r < 0) return r;
         if (r) {
-            k->certified++;
+            ln->certified++;
             return 0;
         }
     }
-    if (!b->right) return leaf_pairs(c, s, ref, x, x, record);
-    long l = node_self(c, s, ref, x + 1, record);
+    if (!b->right) return leaf_pairs(c, ln, s, ref, x, x, record);
+    long l = node_self(c, ln, s, ref, x + 1, record);
     if (l < 0) return l;
-    long r = node_self(c, s, ref, b->right, record);
+    long r = node_self(c, ln, s, ref, b->right, record);
     if (r < 0) return r;
-    long p = node_pairs(c, s, ref, x + 1, b->right, record);
+    long p = node_pairs(c, ln, s, ref, x + 1, b->right, record);
     return p < 0 ? p : l + r + p;
 }
 
 
-/* The moved triangles' directions in s, the nodes above them refit; ref not NULL: the newly
- * flipped moved triangles (own ones too) counted, their vertices into off when record.
- * Returns the count, or -ENOMEM. */
-static long tree_update(fp_contact *c, const float *s, const float *ref, bool record)
+/* Moved triangles mq[from .. to): boxes and unit normals in s, their vertices fetched ahead
+ * (three dependent loads each: place, vertices, positions, that would otherwise miss the
+ * cache in turn); ref not NULL: the newly flipped ones counted (their vertices into off when
+ * record). Returns the count or -ENOMEM. Writes only those triangles' tbox and tn: ranges
+ * run on separate threads. */
+static long flat_range(fp_contact *c, const float *s, const float *ref, bool record, size_t from, size_t to)
 {
     struct track *k = c->tk;
     long flips = 0;
-    /* the moved triangles, in one pass with their vertices fetched ahead: three dependent
-     * loads each (place, vertices, positions) that would otherwise miss the cache in turn */
     const uint32_t *mq = k->mq;
-    const size_t nmq = k->nmq;
-    for (size_t i = 0; i < nmq; i++) {
+    const size_t nmq = to;
+    for (size_t i = from; i < nmq; i++) {
         if (i + 16 < nmq) {
             __builtin_prefetch(k->ov[mq[i + 16]]);
             if (ref) __builtin_prefetch(k->order + mq[i + 16]);
@@ -2024,8 +2061,290 @@ static long tree_update(fp_contact *c, const float *s, const float *ref, bool re
             if (record && add_off(c, va)) return -ENOMEM;
         }
     }
-    if (k->nnode && k->nstamp[0] == k->tclock) refit(k, 0);
-    k->nmt = nmq;
+    return flips;
+}
+
+/* ---- the worker: a check's flat pass and walk on two threads ---- */
+
+/* A job is a list of tasks that both threads claim one at a time (a CAS on next, which
+ * carries the job's number, so a late worker claims nothing of a newer job); the caller
+ * works too and then waits only for a task the worker holds (busy), never for a worker
+ * that has not started: a worker kept off its core costs nothing but its share. Tasks
+ * read the shapes and the hierarchy and write their own lane (and, in the flat pass, their
+ * own triangles' tbox and tn); the caller's writes before a job are published by the job's
+ * number (release), the worker's by busy's clearing. */
+#define FP_FLAT_GRAIN 2048        /* moved triangles in a task of the flat pass, at most */
+#define FP_POOL_IDLE_NS 3000000   /* the worker polls (yielding) this long for the next job */
+#define FP_WALK_GRAIN 4096        /* triangles of a node (pair) walked whole by one task, at most */
+
+typedef struct wtask {            /* a task: the flat pass on mq[x .. y), the refit of node x,
+                                     or the walk's node_self(x) (y == FP_TRACK_NONE) or
+                                     node_pairs(x, y) */
+    uint32_t x, y;
+} wtask;
+
+enum { FP_JOB_FLAT, FP_JOB_REFIT, FP_JOB_WALK };
+
+typedef struct pool {
+    pthread_t th;
+    pthread_mutex_t mu;
+    pthread_cond_t cv;
+    bool quit;                    /* under mu */
+    bool warm;                    /* under mu: a step is coming, start polling */
+    uint32_t gen;                 /* under mu: the newest job's number */
+    atomic_uint agen;             /* gen, for the worker's polling */
+    _Atomic uint64_t next;        /* gen << 32 | the next task */
+    atomic_uint ntask;            /* the job's tasks */
+    atomic_int busy;              /* the worker may hold a task */
+    fp_contact *c;                /* the job (written before its number is published) */
+    int kind;
+    const float *s, *ref;
+    wtask *task;
+    size_t cap_task;
+} pool;
+
+static void run_task(pool *p, lane *ln, uint32_t i)
+{
+    const wtask *t = &p->task[i];
+    long r;
+    if (ln->found < 0 || ln->flips < 0) return; /* out of memory: the job fails anyway */
+    if (p->kind == FP_JOB_FLAT) {
+        r = flat_range(p->c, p->s, p->ref, false, t->x, t->y);
+        ln->flips = r < 0 ? r : ln->flips + r;
+    } else if (p->kind == FP_JOB_REFIT) {
+        refit(p->c->tk, t->x, 0);
+    } else {
+        r = t->y == FP_TRACK_NONE ? node_self(p->c, ln, p->s, p->ref, t->x, false)
+                                  : node_pairs(p->c, ln, p->s, p->ref, t->x, t->y, false);
+        ln->found = r < 0 ? r : ln->found + r;
+    }
+}
+
+/* claim and run job gen's tasks until none is left */
+static void run_tasks(pool *p, lane *ln, uint32_t gen)
+{
+    for (;;) {
+        uint64_t cur = atomic_load(&p->next);
+        if ((uint32_t)(cur >> 32) != gen || (uint32_t)cur >= atomic_load(&p->ntask)) return;
+        if (atomic_compare_exchange_weak(&p->next, &cur, cur + 1)) run_task(p, ln, (uint32_t)cur);
+    }
+}
+
+static int64_t mono_ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
+}
+
+/* The worker: asleep until a job or a warning (pool_warm) comes, then it polls for jobs,
+ * yielding its core between polls, until none has come for FP_POOL_IDLE_NS (waking from a
+ * sleep can take a millisecond on a virtual machine: a step warns it before its first job) */
+static void *pool_main(void *arg)
+{
+    pool *p = arg;
+    uint32_t seen = 0;
+    for (;;) {
+        pthread_mutex_lock(&p->mu);
+        while (!p->quit && p->gen == seen && !p->warm) pthread_cond_wait(&p->cv, &p->mu);
+        bool quit = p->quit;
+        p->warm = false;
+        pthread_mutex_unlock(&p->mu);
+        if (quit) return NULL;
+        for (int64_t idle = mono_ns();;) {
+            uint32_t g = atomic_load(&p->agen);
+            if (g != seen) {
+                seen = g;
+                atomic_store(&p->busy, 1);
+                run_tasks(p, &p->c->tk->lane[1], g);
+                atomic_store(&p->busy, 0);
+                idle = mono_ns();
+                continue;
+            }
+            if (mono_ns() - idle > FP_POOL_IDLE_NS) break;
+            sched_yield();
+        }
+    }
+}
+
+/* a step with work for the worker is coming: it starts polling now */
+static void pool_warm(pool *p)
+{
+    pthread_mutex_lock(&p->mu);
+    p->warm = true;
+    pthread_cond_signal(&p->cv);
+    pthread_mutex_unlock(&p->mu);
+}
+
+static void pool_free(pool *p)
+{
+    if (!p) return;
+    pthread_mutex_lock(&p->mu);
+    p->quit = true;
+    pthread_cond_signal(&p->cv);
+    pthread_mutex_unlock(&p->mu);
+    pthread_join(p->th, NULL);
+    pthread_mutex_destroy(&p->mu);
+    pthread_cond_destroy(&p->cv);
+    free(p->task);
+    free(p);
+}
+
+/* c's worker, started on first use; NULL: one thread (fp_contact_set_threads 1, or no
+ * thread could be made: the check runs on the caller's alone) */
+static pool *pool_get(fp_contact *c)
+{
+    struct track *k = c->tk;
+    if (c->threads < 2) return NULL;
+    if (k->pool) return k->pool;
+    pool *p = calloc(1, sizeof *p);
+    if (!p) return NULL;
+    atomic_init(&p->next, 0);
+    atomic_init(&p->ntask, 0);
+    atomic_init(&p->busy, 0);
+    atomic_init(&p->agen, 0);
+    p->c = c;
+    if (pthread_mutex_init(&p->mu, NULL)) {
+        free(p);
+        return NULL;
+    }
+    if (pthread_cond_init(&p->cv, NULL)) {
+        pthread_mutex_destroy(&p->mu);
+        free(p);
+        return NULL;
+    }
+    if (pthread_create(&p->th, NULL, pool_main, p)) {
+        pthread_cond_destroy(&p->cv);
+        pthread_mutex_destroy(&p->mu);
+        free(p);
+        c->threads = 1; /* not again every frame */
+        return NULL;
+    }
+    k->pool = p;
+    return p;
+}
+
+/* a task into the job's list; 0 or -ENOMEM */
+static int add_task(pool *p, uint32_t x, uint32_t y)
+{
+    uint32_t n = atomic_load_explicit(&p->ntask, memory_order_relaxed);
+    if (reserve((void **)&p->task, &p->cap_task, (size_t)n + 1, sizeof *p->task)) return -ENOMEM;
+    p->task[n].x = x;
+    p->task[n].y = y;
+    atomic_store_explicit(&p->ntask, n + 1, memory_order_relaxed);
+    return 0;
+}
+
+/* run the job in p's task list on both threads; the lanes' counts hold its results */
+static void run_job(fp_contact *c, pool *p, int kind, const float *s, const float *ref)
+{
+    struct track *k = c->tk;
+    p->kind = kind;
+    p->s = s;
+    p->ref = ref;
+    for (int i = 0; i < FP_CONTACT_MAX_THREADS; i++) k->lane[i].found = k->lane[i].flips = 0;
+    pthread_mutex_lock(&p->mu);
+    uint32_t gen = ++p->gen;
+    atomic_store(&p->next, (uint64_t)gen << 32);
+    atomic_store(&p->agen, gen);
+    pthread_cond_signal(&p->cv);
+    pthread_mutex_unlock(&p->mu);
+    run_tasks(p, &k->lane[0], gen);
+    /* closed: a worker that wakes late claims nothing while the next job's list is made */
+    atomic_store(&p->next, (uint64_t)gen << 32 | UINT32_MAX);
+    for (unsigned spins = 0; atomic_load(&p->busy); spins++)
+        if (spins > 256) sched_yield(); /* the worker finishes its task */
+}
+
+/* the lanes' sum of a job's results (found or flips), or -ENOMEM */
+static long lanes_sum(const struct track *k, bool flips)
+{
+    long sum = 0;
+    for (int i = 0; i < FP_CONTACT_MAX_THREADS; i++) {
+        long r = flips ? k->lane[i].flips : k->lane[i].found;
+        if (r < 0) return r;
+        sum += r;
+    }
+    return sum;
+}
+
+/* a check's task sizes: about 8 tasks a thread, within the grains (a small check, as in the
+ * tests, still splits) */
+static size_t grain(const struct track *k, size_t most)
+{
+    size_t g = k->nmq / 16;
+    return g < 64 ? 64 : g > most ? most : g;
+}
+
+/* the walk's tasks from node x (y == FP_TRACK_NONE: node_self(x); else node_pairs(x, y)),
+ * split as those functions recurse down to nodes of `grain` triangles or fewer, a
+ * certifiable node whose normals face one way (its contour, then maybe its children, in the
+ * task) or leaves; 0 or -ENOMEM */
+static int walk_tasks(fp_contact *c, pool *p, uint32_t x, uint32_t y, size_t g)
+{
+    struct track *k = c->tk;
+    const bnode *bx = &k->node[x];
+    if (y == FP_TRACK_NONE) {
+        if (k->nstamp[x] != k->tclock) return 0;
+        double ad[3]; /* a patch whose normals already fail its certificate: split further */
+        if (!bx->right || bx->count <= g ||
+            (c->certify && bx->cert != FP_TRACK_NONE && cert_axis(bx, ad)))
+            return add_task(p, x, y);
+        int rc = walk_tasks(c, p, x + 1, FP_TRACK_NONE, g);
+        if (!rc) rc = walk_tasks(c, p, bx->right, FP_TRACK_NONE, g);
+        return rc ? rc : walk_tasks(c, p, x + 1, bx->right, g);
+    }
+    const bnode *by = &k->node[y];
+    if ((k->nstamp[x] != k->tclock && k->nstamp[y] != k->tclock) || !boxes_meet(bx->box, by->box)) return 0;
+    if ((!bx->right && !by->right) || (size_t)bx->count + by->count <= g) return add_task(p, x, y);
+    if (!bx->right || (by->right && by->count > bx->count)) { /* into the larger, as node_pairs */
+        uint32_t t = x;
+        x = y;
+        y = t;
+        bx = by;
+    }
+    int rc = walk_tasks(c, p, x + 1, y, g);
+    return rc ? rc : walk_tasks(c, p, bx->right, y, g);
+}
+
+/* the refit's tasks: the stamped nodes of g triangles or fewer right below larger ones (the
+ * caller refits the nodes above them); 0 or -ENOMEM */
+static int refit_tasks(struct track *k, pool *p, uint32_t x, size_t g)
+{
+    const bnode *b = &k->node[x];
+    if (k->nstamp[x] != k->tclock) return 0;
+    if (!b->right || b->count <= g) return add_task(p, x, 0);
+    int rc = refit_tasks(k, p, x + 1, g);
+    return rc ? rc : refit_tasks(k, p, b->right, g);
+}
+
+/* The moved triangles' directions in s, the nodes above them refit; ref not NULL: the newly
+ * flipped moved triangles (own ones too) counted, their vertices into off when record.
+ * Returns the count, or -ENOMEM. */
+static long tree_update(fp_contact *c, const float *s, const float *ref, bool record)
+{
+    struct track *k = c->tk;
+    long flips;
+    pool *p = record || k->nmq < c->share_min ? NULL : pool_get(c);
+    if (p) {
+        size_t g = grain(k, FP_FLAT_GRAIN);
+        atomic_store_explicit(&p->ntask, 0, memory_order_relaxed);
+        for (size_t i = 0; i < k->nmq; i += g)
+            if (add_task(p, (uint32_t)i, (uint32_t)(i + g < k->nmq ? i + g : k->nmq))) return -ENOMEM;
+        run_job(c, p, FP_JOB_FLAT, s, ref);
+        flips = lanes_sum(k, true);
+        if (flips < 0) return flips;
+        size_t cut = grain(k, FP_WALK_GRAIN); /* subtrees of cut triangles, then the top */
+        atomic_store_explicit(&p->ntask, 0, memory_order_relaxed);
+        if (k->nnode && refit_tasks(k, p, 0, cut)) return -ENOMEM;
+        run_job(c, p, FP_JOB_REFIT, s, ref);
+        if (k->nnode && k->nstamp[0] == k->tclock && k->node[0].count > cut) refit(k, 0, cut);
+    } else {
+        flips = flat_range(c, s, ref, record, 0, k->nmq);
+        if (flips < 0) return flips;
+        if (k->nnode && k->nstamp[0] == k->tclock) refit(k, 0, 0);
+    }
+    k->nmt = k->nmq;
     if (!ref) return flips;
     long g = own_flips(c, s, ref, record);
     return g < 0 ? g : flips + g;
@@ -2039,7 +2358,15 @@ static long tree_check(fp_contact *c, const float *s, const float *ref, size_t *
     long f = tree_update(c, s, ref, record);
     if (f < 0) return f;
     *flips = (size_t)f;
-    return c->tk->nnode ? node_self(c, s, ref, 0, record) : 0;
+    struct track *k = c->tk;
+    if (!k->nnode) return 0;
+    pool *p = record || k->nmq < c->share_min ? NULL : pool_get(c);
+    if (!p) return node_self(c, &k->lane[0], s, ref, 0, record);
+    atomic_store_explicit(&p->ntask, 0, memory_order_relaxed);
+    if (walk_tasks(c, p, 0, FP_TRACK_NONE, grain(k, FP_WALK_GRAIN))) return -ENOMEM;
+    run_job(c, p, FP_JOB_WALK, s, ref);
+    k->shared++;
+    return lanes_sum(k, false);
 }
 
 /* ---- building ---- */
@@ -2425,12 +2752,17 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
     tick(k, c->t);
     k->nmv = k->nmt = k->nmo = k->nmq = 0;
     size_t renewed0 = k->renewed;
-    k->certified = 0;
+    for (int i = 0; i < FP_CONTACT_MAX_THREADS; i++) k->lane[i].certified = k->lane[i].tested = 0;
+    k->shared = 0;
 
     /* the moved vertices: where cand differs from P */
     if (collect_moved(c, cand, ranges, nranges)) return -ENOMEM;
     res->moved_verts = k->nmv;
     if (!k->nmv) return 0; /* nothing moved: P is the candidate */
+    if (k->tree && k->nmv >= c->share_min / 2) { /* the worker wakes while the marking runs */
+        pool *p = pool_get(c);
+        if (p) pool_warm(p);
+    }
     if (k->tree && tree_mark(c)) return -ENOMEM;
     for (size_t i = 0; !k->tree && i < k->nmv; i++)
         if (mark_tris(c, k->mv[i])) return -ENOMEM;
@@ -2526,7 +2858,9 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
             memcpy(k->p + 3 * (size_t)k->mv[i], cand + 3 * (size_t)k->mv[i], 3 * sizeof(float));
     }
     res->renewed = k->renewed - renewed0;
-    res->certified = k->certified;
+    res->shared = k->shared;
+    res->certified = 0;
+    for (int i = 0; i < FP_CONTACT_MAX_THREADS; i++) res->certified += k->lane[i].certified;
     /* D_P: where P now differs from the reference */
     size_t w = 0;
     for (size_t i = 0; i < k->ndp; i++) {
@@ -2555,6 +2889,13 @@ void fp_contact_set_prewarm(fp_contact *c, size_t max_tris)
 void fp_contact_set_certify(fp_contact *c, bool on)
 {
     if (c) c->certify = on;
+}
+
+void fp_contact_set_threads(fp_contact *c, int threads, size_t min_moved)
+{
+    if (!c) return;
+    c->threads = threads >= 2 ? 2 : 1;
+    c->share_min = min_moved ? min_moved : FP_CONTACT_SHARE_MIN;
 }
 
 /* the unnormalised normal of triangle v in pos */

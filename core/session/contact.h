@@ -99,6 +99,8 @@ typedef struct fp_contact_result {
     size_t certified;    /* fp_contact_step, the hierarchy: patches certified (their pairs
                             not tested) */
     int local;           /* fp_contact_step: 1 when the scale-back was local */
+    size_t shared;       /* fp_contact_step, the hierarchy: checks whose flat pass and walk
+                            two threads shared (fp_contact_set_threads) */
 } fp_contact_result;
 
 /** The guard: out = ref + t (cand - ref) per vertex (float), with the largest t of the
@@ -257,6 +259,21 @@ void fp_contact_set_prewarm(fp_contact *c, size_t max_tris);
  *  check; no effect on envelopes. c NULL: nothing. No errors. Threads: as every call on c
  *  (one thread at a time). */
 void fp_contact_set_certify(fp_contact *c, bool on);
+
+/** Threads for the hierarchy's checks ("(3b)"): 1 (default) or 2 (more count as 2). With 2,
+ *  a worker thread, started at the first check that needs it and joined by
+ *  fp_contact_destroy, takes a share of a check's flat pass (the moved triangles' boxes and
+ *  normals) and of its walk, when a check moves min_moved triangles or more (0: the
+ *  default, FP_CONTACT_SHARE_MIN; the tests pass 1); a step that moves half as many vertices
+ *  wakes it before its marking, and it then polls, yielding its core between polls, for up
+ *  to 3 ms. Tasks are claimed one at a time and the caller waits only for a task the worker
+ *  holds, never for a worker that has not started, so a busy machine costs the worker's
+ *  share, not a time slice. Decisions, counts and P are the same with 1 or 2; the checks
+ *  that record blocking triangles (a local scale-back) run on one. No effect on envelopes
+ *  (small meshes: a check there is too short to share). No thread could be made: 1,
+ *  silently. c NULL: nothing. Threads: as every call on c (one thread at a time). */
+#define FP_CONTACT_SHARE_MIN 4096
+void fp_contact_set_threads(fp_contact *c, int threads, size_t min_moved);
 
 /** Flips are judged against rest normals: the weld shape's (as made), or, after this call
  *  with a rig's pose (base: the unposed reference, posed: the reference the rig made of it,

@@ -22,6 +22,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 _Static_assert(FP_INTENTS_MAX_INPUTS == FP_SESSION_MAX_INPUTS, "one input limit");
 _Static_assert(FP_HISTORY_LEVELS == FP_SESSION_UNDO_LEVELS, "one undo depth");
@@ -108,6 +109,9 @@ static int contact_open(fp_session *s)
 {
     int rc = fp_contact_create(s->mesh->triangles, s->mesh->triangle_count, s->n, s->loaded, &s->contact);
     if (!rc) rc = fp_contact_dilate_own(s->contact, FP_CONTACT_OWN_RINGS);
+    /* a large mesh's checks on two threads where there are two cores (contact.h: the
+     * caller never waits for a worker that has not started; small meshes stay on one) */
+    if (!rc) fp_contact_set_threads(s->contact, sysconf(_SC_NPROCESSORS_ONLN) >= 2 ? 2 : 1, 0);
     /* flips judged from where the rig's pose put each triangle (O(t): here, once, not at the
      * first commit of a performance) */
     if (!rc && s->rig.rig) {

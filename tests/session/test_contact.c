@@ -251,6 +251,7 @@ static size_t diff_ranges(const float *a, const float *b, size_t n, uint32_t *ra
 typedef struct track_stats {
     int frames, scaled, accepted;
     double least_t;
+    size_t shared; /* checks on two threads (fp_contact_result.shared) */
 } track_stats;
 
 /* One frame of the incremental guard on cand, checked against the full guard: accepted
@@ -289,6 +290,7 @@ static void track_frame(fp_contact *tk, fp_contact *full, const float *ref, cons
     if (cgal)
         assert_int_equal(fp_selfx_count_new_away(ref, kept, n, tris, t, rings, NULL, 0, NULL, NULL), 0);
     ts->frames++;
+    ts->shared += r.shared;
     ts->accepted += r.t == 1;
     if (r.t < 1) ts->scaled++;
     if (r.t < ts->least_t) ts->least_t = r.t;
@@ -307,7 +309,7 @@ static double max_move(const float *a, const float *b, size_t n)
 /* two sheets 0.05 apart; the lower one's middle pushed up by a bump of height 0.12 (through
  * the upper one) over `frames` frames: the guard lets it rise to the upper sheet and no
  * further */
-static void sheets_push(int frames, bool lazy)
+static void sheets_push(int frames, int lazy)
 {
     float *pos;
     size_t n, t;
@@ -319,8 +321,9 @@ static void sheets_push(int frames, bool lazy)
     assert_int_equal(fp_contact_create(tris, t, n, pos, &tk), 0);
     assert_int_equal(fp_contact_create(tris, t, n, pos, &full), 0);
     if (lazy) fp_contact_set_prewarm(tk, 0);
+    if (lazy == 2) fp_contact_set_threads(tk, 2, 1); /* every check shared */
     assert_int_equal(fp_contact_reference(tk, pos, NULL, SIZE_MAX), 0);
-    track_stats ts = {0, 0, 0, 1.0};
+    track_stats ts = {0, 0, 0, 1.0, 0};
     for (int f = 1; f <= frames; f++) {
         memcpy(cand, pos, n * 3 * sizeof(float));
         double h = 0.12 * f / frames;
@@ -336,8 +339,10 @@ static void sheets_push(int frames, bool lazy)
     for (size_t v = 0; v < n / 2; v++) top = fmax(top, fp_contact_shape(tk)[3 * v + 2]);
     printf("sheets pushed over %d frames (%s): %d scaled back (least t %.3f); the bump rose to "
            "%.5f (the gap: 0.05), no new pair (full check and CGAL, every frame)\n",
-           frames, lazy ? "hierarchy" : "envelopes", ts.scaled, ts.least_t, top);
+           frames, lazy == 2 ? "hierarchy, two threads" : lazy ? "hierarchy" : "envelopes", ts.scaled, ts.least_t,
+           top);
     assert_true(ts.scaled > 0);
+    if (lazy == 2) assert_true(ts.shared > 0); /* the worker's path ran */
     assert_true(top > 0.8 * 0.05 && top <= 0.05);
     fp_contact_destroy(&tk);
     fp_contact_destroy(&full);
@@ -350,15 +355,17 @@ static void sheets_push(int frames, bool lazy)
 static void test_track_sheets_fast(void **state)
 {
     (void)state;
-    sheets_push(3, false);
-    sheets_push(3, true);
+    sheets_push(3, 0);
+    sheets_push(3, 1);
+    sheets_push(3, 2);
 }
 
 static void test_track_sheets_slow(void **state)
 {
     (void)state;
-    sheets_push(60, false);
-    sheets_push(60, true);
+    sheets_push(60, 0);
+    sheets_push(60, 1);
+    sheets_push(60, 2);
 }
 
 /* a sheet pushed up into two big triangles above it (a tilted quad, each triangle over
@@ -393,7 +400,7 @@ static void big_push(bool move_big, bool lazy)
     assert_int_equal(fp_contact_create(tris, t, n, pos, &full), 0);
     if (lazy) fp_contact_set_prewarm(tk, 0);
     assert_int_equal(fp_contact_reference(tk, pos, NULL, SIZE_MAX), 0);
-    track_stats ts = {0, 0, 0, 1.0};
+    track_stats ts = {0, 0, 0, 1.0, 0};
     for (int fr = 1; fr <= frames; fr++) {
         memcpy(cand, pos, n * 3 * sizeof(float));
         double h = 0.3 * fr / frames;
@@ -428,7 +435,7 @@ static void test_track_big(void **state)
 
 /* the ICT lips: the lower lip's front pulled up and back through the upper lip (an anchored
  * CSRBF gesture, as test_ict_frame's third pull) over `frames` frames */
-static void lips_push(int frames, bool lazy)
+static void lips_push(int frames, int lazy)
 {
     char err[512];
     fp_mesh *m;
@@ -455,6 +462,7 @@ static void lips_push(int frames, bool lazy)
     assert_int_equal(fp_contact_create(m->triangles, t, n, ref, &tk), 0);
     assert_int_equal(fp_contact_create(m->triangles, t, n, ref, &full), 0);
     if (lazy) fp_contact_set_prewarm(tk, 0);
+    if (lazy == 2) fp_contact_set_threads(tk, 2, 1); /* every check shared */
     assert_int_equal(fp_contact_reference(tk, ref, NULL, SIZE_MAX), 0);
     csrbf_options o = {0};
     o.radius = R;
@@ -466,7 +474,7 @@ static void lips_push(int frames, bool lazy)
     const float *s0 = ref + 3 * best;
     float start[3] = {s0[0], s0[1], s0[2]};
     assert_true(csrbf_solver_set_start_points(sol, 1, start) >= 0);
-    track_stats ts = {0, 0, 0, 1.0};
+    track_stats ts = {0, 0, 0, 1.0, 0};
     int64_t t0 = fp_now_ns();
     for (int f = 1; f <= frames; f++) {
         double a = (double)f / frames;
@@ -481,8 +489,10 @@ static void lips_push(int frames, bool lazy)
     printf("ICT lips pushed over %d frames (%s): %d scaled back (least t %.3f); kept %.3f of the %.3f "
            "asked (mesh units); no new pair (full check every frame, CGAL at the end)  [%.1f ms "
            "for the frames and their full checks]\n",
-           frames, lazy ? "hierarchy" : "envelopes", ts.scaled, ts.least_t, kept, asked, ms);
+           frames, lazy == 2 ? "hierarchy, two threads" : lazy ? "hierarchy" : "envelopes", ts.scaled, ts.least_t,
+           kept, asked, ms);
     assert_true(ts.scaled > 0);
+    if (lazy == 2) assert_true(ts.shared > 0); /* the worker's path ran */
     assert_true(kept > 0.3 * asked); /* stopped at the contact, not at the start */
     csrbf_points_destroy(&pts);
     csrbf_solver_destroy(&sol);
@@ -496,14 +506,16 @@ static void lips_push(int frames, bool lazy)
 static void test_track_lips_fast(void **state)
 {
     (void)state;
-    lips_push(3, false);
-    lips_push(3, true);
+    lips_push(3, 0);
+    lips_push(3, 1);
+    lips_push(3, 2);
 }
 
 static void test_track_lips_slow(void **state)
 {
     (void)state;
-    lips_push(60, true);
+    lips_push(60, 1);
+    lips_push(60, 2);
 }
 
 /* Real frames: a session without the guard (no rig, the input's own clock) replays a
@@ -511,7 +523,8 @@ static void test_track_lips_slow(void **state)
  * frame started from (commits and all: unanchored commits every frame), decided as the full
  * check decides. */
 /* mode 0: envelopes, 1: the hierarchy, 2: the hierarchy with no patch certificates (every
- * pair whose boxes meet tested: the certificates may only skip pairs that do not cross) */
+ * pair whose boxes meet tested: the certificates may only skip pairs that do not cross),
+ * 3: the hierarchy with every check shared by two threads */
 static void recording_frames(const char *take, const char *mapping, int mode)
 {
     bool lazy = mode > 0;
@@ -544,13 +557,14 @@ static void recording_frames(const char *take, const char *mapping, int mode)
     assert_int_equal(fp_contact_dilate_own(full, 1), 0);
     if (lazy) fp_contact_set_prewarm(tk, 0);
     if (mode == 2) fp_contact_set_certify(tk, false);
+    if (mode == 3) fp_contact_set_threads(tk, 2, 1);
     float *ref = malloc(n * 3 * sizeof(float));
     uint32_t *ranges = malloc(n * sizeof *ranges);
     memcpy(ref, fp_session_base(s), n * 3 * sizeof(float));
     assert_int_equal(fp_contact_reference(tk, ref, NULL, SIZE_MAX), 0);
     int64_t t0;
     while (fp_session_input_start(s, &t0) == 0) fp_test_nap_ms(1);
-    track_stats ts = {0, 0, 0, 1.0};
+    track_stats ts = {0, 0, 0, 1.0, 0};
     unsigned commits = 0;
     for (uint64_t k = 0; !fp_session_finished(s); k++) {
         int64_t now = t0 + (int64_t)llround((double)k * 1e9 / 60);
@@ -569,9 +583,10 @@ static void recording_frames(const char *take, const char *mapping, int mode)
         track_frame(tk, full, ref, fp_session_positions(s), n, m->triangles, t, ranges, false, 1, &ts);
     }
     printf("%s %s (%s): %d frames checked, %d accepted, %d scaled back (least t %.3f), %u references; "
-           "every decision the full check's\n", take, mapping, mode == 2 ? "hierarchy, no certificates" : lazy ? "hierarchy" : "envelopes", ts.frames, ts.accepted, ts.scaled,
+           "every decision the full check's\n", take, mapping, mode == 3 ? "hierarchy, two threads" : mode == 2 ? "hierarchy, no certificates" : lazy ? "hierarchy" : "envelopes", ts.frames, ts.accepted, ts.scaled,
            ts.least_t, commits);
     assert_true(ts.frames > 20);
+    if (mode == 3) assert_true(ts.shared > 0); /* the worker's path ran */
     free(ranges);
     free(ref);
     fp_contact_destroy(&tk);
@@ -587,7 +602,9 @@ static void test_track_recordings(void **state)
     recording_frames("three-claps", "unanchored", 1);
     recording_frames("three-claps", "unanchored", 2);
     recording_frames("three-claps", "unanchored", 0);
+    recording_frames("three-claps", "unanchored", 3);
     recording_frames("grab", "anchored", 0);
+    recording_frames("grab", "anchored", 3);
 }
 
 /* Two fingers in one frame (issue: a finger stopped at the lips froze a brow): one pushes the
@@ -608,7 +625,7 @@ static void two_fingers(int frames, double local, float *far_kept, float *near_t
     assert_int_equal(fp_contact_create(tris, t, n, pos, &full), 0);
     fp_contact_set_local(tk, local);
     assert_int_equal(fp_contact_reference(tk, pos, NULL, SIZE_MAX), 0);
-    track_stats ts = {0, 0, 0, 1.0};
+    track_stats ts = {0, 0, 0, 1.0, 0};
     fp_contact_result r = {0};
     for (int f = 1; f <= frames; f++) {
         memcpy(cand, pos, n * 3 * sizeof(float));
@@ -843,7 +860,7 @@ static void test_cert_contour(void **state)
     assert_int_equal(fp_contact_create(tris, t, n, pos, &full), 0);
     fp_contact_set_prewarm(tk, 0); /* the hierarchy, small as the mesh is */
     assert_int_equal(fp_contact_reference(tk, pos, NULL, SIZE_MAX), 0);
-    track_stats ts = {0, 0, 0, 1.0};
+    track_stats ts = {0, 0, 0, 1.0, 0};
     size_t certified = 0;
     const int frames = 48;
     for (int fr = 1; fr <= frames; fr++) {
@@ -941,7 +958,7 @@ static void test_tree_hostile(void **state)
     assert_int_equal(fp_contact_create(tris, t, n, pos, &full), 0);
     fp_contact_set_prewarm(tk, 0);
     assert_int_equal(fp_contact_reference(tk, pos, NULL, SIZE_MAX), 0);
-    track_stats ts = {0, 0, 0, 1.0};
+    track_stats ts = {0, 0, 0, 1.0, 0};
     for (int f = 0; f < 40; f++) {
         memcpy(cand, fp_contact_shape(tk), n * 3 * sizeof(float));
         double bx = 0.2 + 0.6 * urand(), by = 0.2 + 0.6 * urand(), h = 0.03 * (f % 8), r = 0.1 + 0.1 * urand();

@@ -45,7 +45,7 @@ static void usage(FILE *f)
             "           three-claps recording at its own pace, 60 frames a second, anchored;\n"
             "           medians and p99 of each stage (events, hands, distances, mapping,\n"
             "           solve, evaluate, commit), of the frame, and of the brute-force\n"
-            "           fingertip distances on the same frame's hands (about 15 s)\n"
+            "           fingertip distances on the same frame's hands (about 30 s)\n"
             "Columns: pairs = (vertex, centre) pairs inside the support (paper: its count);\n"
             "ms_ref = the brute-force loop (all pairs, scalar double, one thread) for the same\n"
             "update, or for 'reused' the fresh factor-and-solve; ratio = ms_ref / ms_median;\n"
