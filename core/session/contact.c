@@ -2064,15 +2064,16 @@ static long flat_range(fp_contact *c, const float *s, const float *ref, bool rec
     return flips;
 }
 
-/* ---- the worker: a check's flat pass and walk on two threads ---- */
+/* ---- the worker: a check's flat pass, refit and walk on two threads ---- */
 
 /* A job is a list of tasks that both threads claim one at a time (a CAS on next, which
  * carries the job's number, so a late worker claims nothing of a newer job); the caller
  * works too and then waits only for a task the worker holds (busy), never for a worker
  * that has not started: a worker kept off its core costs nothing but its share. Tasks
  * read the shapes and the hierarchy and write their own lane (and, in the flat pass, their
- * own triangles' tbox and tn); the caller's writes before a job are published by the job's
- * number (release), the worker's by busy's clearing. */
+ * own triangles' tbox and tn; in the refit, their own subtree's nodes); the caller's writes
+ * before a job are published by the job's number (release), the worker's by busy's
+ * clearing. */
 #define FP_FLAT_GRAIN 2048        /* moved triangles in a task of the flat pass, at most */
 #define FP_POOL_IDLE_NS 3000000   /* the worker polls (yielding) this long for the next job */
 #define FP_WALK_GRAIN 4096        /* triangles of a node (pair) walked whole by one task, at most */

@@ -263,15 +263,17 @@ void fp_contact_set_certify(fp_contact *c, bool on);
 /** Threads for the hierarchy's checks ("(3b)"): 1 (default) or 2 (more count as 2). With 2,
  *  a worker thread, started at the first check that needs it and joined by
  *  fp_contact_destroy, takes a share of a check's flat pass (the moved triangles' boxes and
- *  normals) and of its walk, when a check moves min_moved triangles or more (0: the
- *  default, FP_CONTACT_SHARE_MIN; the tests pass 1); a step that moves half as many vertices
- *  wakes it before its marking, and it then polls, yielding its core between polls, for up
- *  to 3 ms. Tasks are claimed one at a time and the caller waits only for a task the worker
- *  holds, never for a worker that has not started, so a busy machine costs the worker's
- *  share, not a time slice. Decisions, counts and P are the same with 1 or 2; the checks
- *  that record blocking triangles (a local scale-back) run on one. No effect on envelopes
- *  (small meshes: a check there is too short to share). No thread could be made: 1,
- *  silently. c NULL: nothing. Threads: as every call on c (one thread at a time). */
+ *  normals), of the refit below its top nodes and of its walk, when the check moves
+ *  min_moved triangles or more (0: the default, FP_CONTACT_SHARE_MIN; the tests pass 1). A
+ *  step that moves half as many vertices wakes it before its marking; it then polls,
+ *  yielding its core between polls, for up to 3 ms. Tasks are claimed one at a time and the
+ *  caller waits only for a task the worker holds, never for a worker that has not started,
+ *  so a busy machine costs the worker's share, not a time slice. Decisions, counts and P
+ *  are the same with 1 or 2; the checks that record blocking triangles (a local scale-back)
+ *  run on one. No effect on envelopes (small meshes: a check there is too short to share).
+ *  No thread could be made: 1, silently. c NULL: nothing. Threads: as every call on c (one
+ *  thread at a time); the worker is internal. Measured (`bench --case frame`, 1.7M
+ *  vertices, 2 cores): contact 6.1-6.2 ms median on one thread, 3.8-3.9 on two. */
 #define FP_CONTACT_SHARE_MIN 4096
 void fp_contact_set_threads(fp_contact *c, int threads, size_t min_moved);
 
