@@ -274,7 +274,7 @@ void fp_contact_set_certify(fp_contact *c, bool on);
  *  run on one. No effect on envelopes (small meshes: a check there is too short to share).
  *  No thread could be made: 1, silently. c NULL: nothing. Threads: as every call on c (one
  *  thread at a time); the worker is internal. Measured (`bench --case frame`, 1.7M
- *  vertices, 2 cores): contact 6.1-6.2 ms median on one thread, 3.8-3.9 on two. */
+ *  vertices, 2 cores): contact 6.1-6.2 ms median on one thread, 3.5-3.8 on two. */
 #define FP_CONTACT_SHARE_MIN 4096
 void fp_contact_set_threads(fp_contact *c, int threads, size_t min_moved);
 
