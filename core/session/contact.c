@@ -1,6 +1,7 @@
 /* The contact guard: new self-crossings among moved triangles, and the bisection (contact.h). */
-#define _POSIX_C_SOURCE 200809L /* clock_gettime */
+#define _POSIX_C_SOURCE 200809L /* sched_yield */
 #include "contact.h"
+#include "fp_plugin_host.h" /* fp_now_ns, the host's clock */
 
 #include <errno.h>
 #include <math.h>
@@ -10,7 +11,6 @@
 #include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 #define FP_CONTACT_CELL 1.0 /* the grid cell over the mean moved triangle extent */
 
 
@@ -1984,6 +1984,20 @@ static long leaf_pairs(fp_contact *c, lane *ln, const float *s, const float *ref
     return found;
 }
 
+/* Of nodes *x and *y, not both leaves: the one to split (the larger internal one) into *x,
+ * the other into *y; returns *x's node */
+static const bnode *into_larger(const struct track *k, uint32_t *x, uint32_t *y)
+{
+    const bnode *bx = &k->node[*x], *by = &k->node[*y];
+    if (!bx->right || (by->right && by->count > bx->count)) {
+        uint32_t t = *x;
+        *x = *y;
+        *y = t;
+        return by;
+    }
+    return bx;
+}
+
 /* the pairs between nodes x and y with a moved triangle: new ones counted */
 static long node_pairs(fp_contact *c, lane *ln, const float *s, const float *ref, uint32_t x, uint32_t y,
                        bool record)
@@ -1992,12 +2006,7 @@ static long node_pairs(fp_contact *c, lane *ln, const float *s, const float *ref
     const bnode *bx = &k->node[x], *by = &k->node[y];
     if ((k->nstamp[x] != k->tclock && k->nstamp[y] != k->tclock) || !boxes_meet(bx->box, by->box)) return 0;
     if (!bx->right && !by->right) return leaf_pairs(c, ln, s, ref, x, y, record);
-    if (!bx->right || (by->right && by->count > bx->count)) { /* into the larger */
-        uint32_t t = x;
-        x = y;
-        y = t;
-        bx = by;
-    }
+    bx = into_larger(k, &x, &y);
     long a = node_pairs(c, ln, s, ref, x + 1, y, record);
     if (a < 0) return a;
     long b = node_pairs(c, ln, s, ref, bx->right, y, record);
@@ -2038,13 +2047,12 @@ static long flat_range(fp_contact *c, const float *s, const float *ref, bool rec
     struct track *k = c->tk;
     long flips = 0;
     const uint32_t *mq = k->mq;
-    const size_t nmq = to;
-    for (size_t i = from; i < nmq; i++) {
-        if (i + 16 < nmq) {
+    for (size_t i = from; i < to; i++) {
+        if (i + 16 < to) {
             __builtin_prefetch(k->ov[mq[i + 16]]);
             if (ref) __builtin_prefetch(k->order + mq[i + 16]);
         }
-        if (i + 8 < nmq) {
+        if (i + 8 < to) {
             const uint32_t *w = k->ov[mq[i + 8]];
             __builtin_prefetch(s + 3 * (size_t)w[0]);
             __builtin_prefetch(s + 3 * (size_t)w[1]);
@@ -2132,13 +2140,6 @@ static void run_tasks(pool *p, lane *ln, uint32_t gen)
     }
 }
 
-static int64_t mono_ns(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
-}
-
 /* The worker: asleep until a job or a warning (pool_warm) comes, then it polls for jobs,
  * yielding its core between polls, until none has come for FP_POOL_IDLE_NS: through a
  * deformation at 60 frames a second it does not sleep between frames. Waking it from a sleep
@@ -2156,17 +2157,17 @@ static void *pool_main(void *arg)
         p->warm = false;
         pthread_mutex_unlock(&p->mu);
         if (quit) return NULL;
-        for (int64_t idle = mono_ns();;) {
+        for (int64_t idle = fp_now_ns();;) {
             uint32_t g = atomic_load(&p->agen);
             if (g != seen) {
                 seen = g;
                 atomic_store(&p->busy, 1);
                 run_tasks(p, &p->c->tk->lane[1], g);
                 atomic_store(&p->busy, 0);
-                idle = mono_ns();
+                idle = fp_now_ns();
                 continue;
             }
-            if (mono_ns() - idle > FP_POOL_IDLE_NS || atomic_load(&p->stop)) break;
+            if (fp_now_ns() - idle > FP_POOL_IDLE_NS || atomic_load(&p->stop)) break;
             sched_yield();
         }
     }
@@ -2304,12 +2305,7 @@ static int walk_tasks(fp_contact *c, pool *p, uint32_t x, uint32_t y, size_t g)
     const bnode *by = &k->node[y];
     if ((k->nstamp[x] != k->tclock && k->nstamp[y] != k->tclock) || !boxes_meet(bx->box, by->box)) return 0;
     if ((!bx->right && !by->right) || (size_t)bx->count + by->count <= g) return add_task(p, x, y);
-    if (!bx->right || (by->right && by->count > bx->count)) { /* into the larger, as node_pairs */
-        uint32_t t = x;
-        x = y;
-        y = t;
-        bx = by;
-    }
+    bx = into_larger(k, &x, &y);
     int rc = walk_tasks(c, p, x + 1, y, g);
     return rc ? rc : walk_tasks(c, p, bx->right, y, g);
 }
