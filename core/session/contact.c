@@ -574,8 +574,7 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
 #define FP_CERT_MAX 65536         /* ... and no more may be certified (its boundary made once) */
 
 typedef struct bnode {            /* a node of the hierarchy: a patch of triangles (64 bytes,
-                                     one cache line; its parent and stamp are in nparent and
-                                     nstamp, which the marking walks densely) */
+                                     one cache line; its stamp is in nstamp) */
     float box[6];                 /* its triangles' box in P (in the shape checked, in a check) */
     uint32_t first, count;        /* its triangles: order[first .. first + count) */
     uint32_t right;               /* its right child (the left one is the next node); 0: leaf */
@@ -649,6 +648,12 @@ typedef struct lane {             /* one thread's part of a hierarchy check: scr
     uint32_t *gcount, *gseg;      /* its segments by grid cell */
     size_t cap_gcount, cap_gseg;
     size_t certified, tested;     /* patches certified, triangle pairs tested */
+    size_t moved;                 /* moved triangles its refit tasks met */
+    uint32_t *mq;                 /* one refit task's moved places (gather) */
+    size_t nmq, cap_mq;
+    uint32_t *mv, *mo;            /* its share of the marking (collect_mark): moved vertices,
+                                     moved own triangles */
+    size_t nmv, nmo, cap_mv, cap_mo;
     long found, flips;            /* its tasks' new pairs and flips; -ENOMEM sticks */
 } lane;
 
@@ -693,20 +698,20 @@ struct track {
     size_t renewed;               /* envelopes renewed, for fp_contact_result */
     bool tree;                    /* the hierarchy (below), not envelopes (a large mesh) */
     bnode *node;                  /* the hierarchy over the triangles not own, root node[0] */
-    uint32_t *nparent;            /* by node: its parent; FP_TRACK_NONE: the root */
     uint32_t *nstamp;             /* by node: == tclock when it holds a moved triangle */
     size_t nnode;
     uint32_t *order;              /* its triangles, by node */
     uint32_t *tpos;               /* t: a triangle's place in order (FP_TRACK_NONE: own) */
-    uint32_t *leaf;               /* by place in order: its leaf */
     float (*tn)[3];               /* by place in order: its normal in P (tri_normal_f) */
     float (*tbox)[6];             /* by place in order: its box in P */
-    uint32_t *pstamp;             /* by place in order: == tclock when moved (refit sets it) */
+    uint32_t *pstamp;             /* by place in order: == tclock when moved (mark_range) */
+    uint32_t *bstamp, *sbstamp;   /* by block of 64 and of 4096 places: == tclock when one of
+                                     them may be stamped (mark_range; the refit finds the
+                                     moved nodes through them, maybe_moved) */
     uint32_t *vtp;                /* beside vt: the triangle's place in order (tpos) */
     uint32_t (*ow)[3];            /* by place in order: its vertices welded (adjacency) */
     uint32_t (*ov)[3];            /* by place in order: its vertices */
-    uint32_t *mq;                 /* the moved triangles' places (tree_mark) */
-    size_t nmq, cap_mq;
+    size_t nmq;                   /* the hierarchy's moved triangles (counted by the refit) */
     cert *cert;
     size_t ncert;
     uint32_t *cyc;                /* the certifiable patches' boundary cycles */
@@ -757,24 +762,26 @@ static void track_free(struct track *k)
     free(k->rw);
     free(k->renv);
     free(k->node);
-    free(k->nparent);
     free(k->nstamp);
     free(k->order);
     free(k->tpos);
-    free(k->leaf);
     free(k->tn);
     free(k->tbox);
     free(k->pstamp);
     free(k->vtp);
     free(k->ow);
     free(k->ov);
-    free(k->mq);
+    free(k->bstamp);
+    free(k->sbstamp);
     free(k->cert);
     free(k->cyc);
     for (int i = 0; i < FP_CONTACT_MAX_THREADS; i++) {
         free(k->lane[i].xy);
         free(k->lane[i].gcount);
         free(k->lane[i].gseg);
+        free(k->lane[i].mq);
+        free(k->lane[i].mv);
+        free(k->lane[i].mo);
     }
     free(k->off);
     free(k->off_mark);
@@ -1503,23 +1510,21 @@ static void lay_tris(const cbuild *b, struct track *k, uint32_t z, uint32_t *pos
     lay_tris(b, k, b->rc[z], pos);
 }
 
-static void lay(const cbuild *b, struct track *k, uint32_t z, uint32_t parent, uint32_t *pos)
+static void lay(const cbuild *b, struct track *k, uint32_t z, uint32_t *pos)
 {
     uint32_t x = (uint32_t)k->nnode++;
     bnode *nd = &k->node[x];
     memset(nd, 0, sizeof *nd);
     nd->first = *pos;
     nd->count = b->cnt[z];
-    k->nparent[x] = parent;
     nd->cert = FP_TRACK_NONE;
     if (z < b->m || b->cnt[z] <= FP_BVH_LEAF) {
         lay_tris(b, k, z, pos);
-        for (uint32_t i = nd->first; i < *pos; i++) k->leaf[i] = x;
         return;
     }
-    lay(b, k, b->lc[z], x, pos);
+    lay(b, k, b->lc[z], pos);
     k->node[x].right = (uint32_t)k->nnode;
-    lay(b, k, b->rc[z], x, pos);
+    lay(b, k, b->rc[z], pos);
 }
 
 /* the union of two boxes of unit normals (lo 3, hi 3) faces a direction (certified's test) */
@@ -1682,7 +1687,7 @@ static int cluster_build(fp_contact *c, struct track *k, size_t m)
     uint32_t root;
     if (top_split(&b, act, nact, &root)) goto done;
     uint32_t pos = 0;
-    lay(&b, k, root, FP_TRACK_NONE, &pos);
+    lay(&b, k, root, &pos);
     rc = 0;
 done:
     if (b.bnd)
@@ -1865,9 +1870,93 @@ static int add_off(fp_contact *c, const uint32_t *v);
 static long own_flips(fp_contact *c, const float *s, const float *ref, bool record);
 
 
-/* Node x and those below it that hold a moved triangle: their boxes and normal boxes from
- * their triangles' (tree_update); cut > 0: not below nodes of cut triangles or fewer (done
- * already, by the refit job's tasks) */
+#define FP_BLOCK_SHIFT 6  /* bstamp: blocks of 64 places */
+#define FP_SUPER_SHIFT 12 /* sbstamp: blocks of 4096 places */
+
+/* node b's places may hold a moved triangle (a stamped block meets them; a node the size of
+ * a few super blocks or more reads those) */
+static bool maybe_moved(const struct track *k, const bnode *b)
+{
+    if (!b->count) return false;
+    uint32_t lo = b->first, hi = b->first + b->count - 1;
+    const uint32_t *st = k->bstamp;
+    int sh = FP_BLOCK_SHIFT;
+    if (b->count >> FP_SUPER_SHIFT >= 4) {
+        st = k->sbstamp;
+        sh = FP_SUPER_SHIFT;
+    }
+    for (uint32_t i = lo >> sh; i <= hi >> sh; i++)
+        if (st[i] == k->tclock) return true;
+    return false;
+}
+
+/* Node x (one whose places may hold a moved triangle) and those below it that hold one:
+ * stamped (nstamp), the moved triangles' places into ln->mq in order (ln->moved counts
+ * them). cut > 0: not below nodes of cut triangles or fewer (their tasks did those; their
+ * stamps say). Returns whether x holds a moved triangle. Writes only x's subtree. */
+static bool gather(struct track *k, lane *ln, uint32_t x, size_t cut)
+{
+    const uint32_t clk = k->tclock;
+    const bnode *b = &k->node[x];
+    bool any = false;
+    if (!b->right) {
+        for (uint32_t i = b->first; i < b->first + b->count; i++)
+            if (k->pstamp[i] == clk) {
+                any = true;
+                if (push_u32(&ln->mq, &ln->nmq, &ln->cap_mq, i)) {
+                    ln->flips = -ENOMEM;
+                    return true;
+                }
+            }
+    } else {
+        uint32_t ch[2] = {x + 1, b->right};
+        for (int h = 0; h < 2; h++) {
+            const bnode *d = &k->node[ch[h]];
+            if (cut && d->count <= cut) any |= k->nstamp[ch[h]] == clk;
+            else if (maybe_moved(k, d)) any |= gather(k, ln, ch[h], cut);
+        }
+    }
+    if (any) k->nstamp[x] = clk;
+    return any;
+}
+
+/* The moved triangles at places mq[0 .. n): boxes and unit normals in s, their vertices
+ * fetched ahead (place, vertices, positions: three dependent loads that would otherwise
+ * miss the cache in turn); ref not NULL: the newly flipped ones counted (their vertices
+ * into off when record). Returns the count or -ENOMEM. Writes only those places' tbox and
+ * tn. */
+static long flat_pass(fp_contact *c, const float *s, const float *ref, bool record, const uint32_t *mq, size_t n)
+{
+    struct track *k = c->tk;
+    long flips = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (i + 16 < n) {
+            __builtin_prefetch(k->ov[mq[i + 16]]);
+            if (ref) __builtin_prefetch(k->order + mq[i + 16]);
+        }
+        if (i + 8 < n) {
+            const uint32_t *w = k->ov[mq[i + 8]];
+            __builtin_prefetch(s + 3 * (size_t)w[0]);
+            __builtin_prefetch(s + 3 * (size_t)w[1]);
+            __builtin_prefetch(s + 3 * (size_t)w[2]);
+            if (ref) __builtin_prefetch(c->nrm[k->order[mq[i + 8]]]);
+        }
+        uint32_t q = mq[i];
+        const uint32_t *va = k->ov[q];
+        double nd[3];
+        tri_box(s, va, k->tbox[q]);
+        tri_normal_f(s, va, k->tn[q], nd);
+        if (ref && flipped_n(c, nd, k->order[q]) && !flipped(c, ref, va, k->order[q])) {
+            flips++;
+            if (record && add_off(c, va)) return -ENOMEM;
+        }
+    }
+    return flips;
+}
+
+/* Node x and those below it stamped (gather): their boxes and normal boxes from their
+ * triangles'; cut > 0: not below nodes of cut triangles or fewer (done already, by the
+ * refit job's tasks) */
 static void refit(struct track *k, uint32_t x, size_t cut)
 {
     bnode *b = &k->node[x];
@@ -1904,37 +1993,52 @@ static void refit(struct track *k, uint32_t x, size_t cut)
     memcpy(b->nhi, nhi, sizeof nhi);
 }
 
-/* The hierarchy's triangles of the moved vertices (mv) stamped (pstamp) with the nodes above
- * their leaves (refit recomputes the stamped triangles); the own triangles of moved vertices
- * into mo (flips only) */
-static int tree_mark(fp_contact *c)
+/* Node x's subtree brought to shape s, where it may hold a moved triangle: gather, the flat
+ * pass on what it found, refit; new flips into ln->flips (-ENOMEM sticks there), moved
+ * triangles into ln->moved. cut as gather's. */
+static void update_subtree(fp_contact *c, lane *ln, const float *s, const float *ref, bool record, uint32_t x,
+                           size_t cut)
 {
     struct track *k = c->tk;
-    for (size_t i = 0; i < k->nmv; i++) {
-        uint32_t v = k->mv[i];
-        if (i + 6 < k->nmv) { /* a later vertex's triangles' stamps and leaves, ahead */
-            uint32_t w = k->mv[i + 6];
-            for (uint32_t j = k->vt_start[w]; j < k->vt_start[w + 1]; j++) {
-                uint32_t q = k->vtp[j];
-                if (q == FP_TRACK_NONE) continue;
-                __builtin_prefetch(k->pstamp + q);
-                __builtin_prefetch(k->leaf + q);
-            }
-        }
+    ln->nmq = 0;
+    if (!gather(k, ln, x, cut) || ln->flips < 0) return;
+    ln->moved += ln->nmq;
+    long f = flat_pass(c, s, ref, record, ln->mq, ln->nmq);
+    ln->flips = f < 0 ? f : ln->flips + f;
+    refit(k, x, cut);
+}
+
+/* One task of the hierarchy's marking (collect_mark): of the vertices dp[x .. y) (z == 0)
+ * or x .. y - 1 not in D_P (z == 1), those where a differs from P into ln->mv, their
+ * triangles in the hierarchy stamped (pstamp) with their blocks of places (bstamp,
+ * sbstamp): stores only, the same value from either thread, no list (the refit finds them
+ * by place); own triangles claimed (tstamp, atomically) into ln->mo. 0 or -ENOMEM. */
+static int mark_range(fp_contact *c, lane *ln, const float *a, uint32_t x, uint32_t y, uint32_t z)
+{
+    struct track *k = c->tk;
+    const uint32_t clk = k->tclock;
+    for (uint32_t i = x; i < y; i++) {
+        uint32_t v = z ? i : k->dp[i];
+        if ((z && k->in_dp[v]) || !vert_differs(a, k->p, v)) continue;
+        if (push_u32(&ln->mv, &ln->nmv, &ln->cap_mv, v)) return -ENOMEM;
         for (uint32_t j = k->vt_start[v]; j < k->vt_start[v + 1]; j++) {
             uint32_t q = k->vtp[j];
-            if (q == FP_TRACK_NONE) { /* an own triangle */
-                uint32_t a = k->vt[j];
-                if (k->tstamp[a] == k->tclock) continue;
-                k->tstamp[a] = k->tclock;
-                if (push_u32(&k->mo, &k->nmo, &k->cap_mo, a)) return -ENOMEM;
+            if (q == FP_TRACK_NONE) { /* an own triangle: flips only */
+                uint32_t o = k->vt[j];
+                if (__atomic_load_n(&k->tstamp[o], __ATOMIC_RELAXED) == clk ||
+                    __atomic_exchange_n(&k->tstamp[o], clk, __ATOMIC_RELAXED) == clk)
+                    continue;
+                if (push_u32(&ln->mo, &ln->nmo, &ln->cap_mo, o)) return -ENOMEM;
                 continue;
             }
-            if (k->pstamp[q] == k->tclock) continue;
-            k->pstamp[q] = k->tclock;
-            if (push_u32(&k->mq, &k->nmq, &k->cap_mq, q)) return -ENOMEM;
-            for (uint32_t x = k->leaf[q]; x != FP_TRACK_NONE && k->nstamp[x] != k->tclock; x = k->nparent[x])
-                k->nstamp[x] = k->tclock;
+            /* a store only where the stamp is not there yet: the blocks' lines, which both
+             * threads read, then stay shared instead of passing between the cores */
+            if (__atomic_load_n(&k->pstamp[q], __ATOMIC_RELAXED) == clk) continue;
+            __atomic_store_n(&k->pstamp[q], clk, __ATOMIC_RELAXED);
+            if (__atomic_load_n(&k->bstamp[q >> FP_BLOCK_SHIFT], __ATOMIC_RELAXED) != clk)
+                __atomic_store_n(&k->bstamp[q >> FP_BLOCK_SHIFT], clk, __ATOMIC_RELAXED);
+            if (__atomic_load_n(&k->sbstamp[q >> FP_SUPER_SHIFT], __ATOMIC_RELAXED) != clk)
+                __atomic_store_n(&k->sbstamp[q >> FP_SUPER_SHIFT], clk, __ATOMIC_RELAXED);
         }
     }
     return 0;
@@ -2037,73 +2141,40 @@ static long node_self(fp_contact *c, lane *ln, const float *s, const float *ref,
 }
 
 
-/* Moved triangles mq[from .. to): boxes and unit normals in s, their vertices fetched ahead
- * (three dependent loads each: place, vertices, positions, that would otherwise miss the
- * cache in turn); ref not NULL: the newly flipped ones counted (their vertices into off when
- * record). Returns the count or -ENOMEM. Writes only those triangles' tbox and tn: ranges
- * run on separate threads. */
-static long flat_range(fp_contact *c, const float *s, const float *ref, bool record, size_t from, size_t to)
-{
-    struct track *k = c->tk;
-    long flips = 0;
-    const uint32_t *mq = k->mq;
-    for (size_t i = from; i < to; i++) {
-        if (i + 16 < to) {
-            __builtin_prefetch(k->ov[mq[i + 16]]);
-            if (ref) __builtin_prefetch(k->order + mq[i + 16]);
-        }
-        if (i + 8 < to) {
-            const uint32_t *w = k->ov[mq[i + 8]];
-            __builtin_prefetch(s + 3 * (size_t)w[0]);
-            __builtin_prefetch(s + 3 * (size_t)w[1]);
-            __builtin_prefetch(s + 3 * (size_t)w[2]);
-            if (ref) __builtin_prefetch(c->nrm[k->order[mq[i + 8]]]);
-        }
-        uint32_t q = mq[i];
-        const uint32_t *va = k->ov[q];
-        double nd[3];
-        tri_box(s, va, k->tbox[q]);
-        tri_normal_f(s, va, k->tn[q], nd);
-        if (ref && flipped_n(c, nd, k->order[q]) && !flipped(c, ref, va, k->order[q])) {
-            flips++;
-            if (record && add_off(c, va)) return -ENOMEM;
-        }
-    }
-    return flips;
-}
-
-/* ---- the worker: a check's flat pass, refit and walk on two threads ---- */
+/* ---- the worker: a step's marking, and a check's refit and walk, on two threads ---- */
 
 /* A job is a list of tasks that both threads claim one at a time (a CAS on next, which
- * carries the job's number, so a late worker claims nothing of a newer job); the caller
- * works too and then waits only for a task the worker holds (busy), never for a worker
- * that has not started: a worker kept off its core costs nothing but its share. Tasks
- * read the shapes and the hierarchy and write their own lane (and, in the flat pass, their
- * own triangles' tbox and tn; in the refit, their own subtree's nodes); the caller's writes
- * before a job are published by the job's number (release), the worker's by busy's
- * clearing. */
-#define FP_FLAT_GRAIN 2048        /* moved triangles in a task of the flat pass, at most */
+ * carries the job's number, so a late worker claims nothing of a newer job). The caller
+ * opens the job and adds its tasks while the worker may already run them (each task is
+ * written before the count that publishes it; the worker waits for more while the caller
+ * is filling); then the caller works too and waits only for a task the worker holds
+ * (busy), never for a worker that has not started: a worker kept off its core costs
+ * nothing but its share. Tasks read the shapes and the hierarchy and write their own lane
+ * and, in the marking, the stamps (the same value from either thread; own triangles are
+ * claimed by an exchange), in the refit their own subtree's triangles and nodes; the
+ * caller's writes before a job are published by the job's number (release), the worker's
+ * by busy's clearing. */
 #define FP_POOL_IDLE_NS 20000000  /* the worker polls (yielding) this long for the next job */
 #define FP_WALK_GRAIN 4096        /* triangles of a node (pair) walked whole by one task, at most */
 
-typedef struct wtask {            /* a task: the flat pass on mq[x .. y), the refit of node x,
-                                     or the walk's node_self(x) (y == FP_TRACK_NONE) or
-                                     node_pairs(x, y) */
-    uint32_t x, y;
+typedef struct wtask {            /* a task: the marking's mark_range(x, y, z), the refit of
+                                     node x (update_subtree), or the walk's node_self(x) (y ==
+                                     FP_TRACK_NONE) or node_pairs(x, y) */
+    uint32_t x, y, z;
 } wtask;
 
-enum { FP_JOB_FLAT, FP_JOB_REFIT, FP_JOB_WALK };
+enum { FP_JOB_MARK, FP_JOB_REFIT, FP_JOB_WALK };
 
 typedef struct pool {
     pthread_t th;
     pthread_mutex_t mu;
     pthread_cond_t cv;
     bool quit;                    /* under mu */
-    bool warm;                    /* under mu: a step is coming, start polling */
     uint32_t gen;                 /* under mu: the newest job's number */
     atomic_uint agen;             /* gen, for the worker's polling */
     _Atomic uint64_t next;        /* gen << 32 | the next task */
-    atomic_uint ntask;            /* the job's tasks */
+    atomic_uint ntask;            /* the job's tasks so far */
+    atomic_bool filling;          /* the caller is still adding tasks to the job */
     atomic_int busy;              /* the worker may hold a task */
     atomic_bool stop;             /* quit, for the worker's polling */
     fp_contact *c;                /* the job (written before its number is published) */
@@ -2113,34 +2184,52 @@ typedef struct pool {
     size_t cap_task;
 } pool;
 
-static void run_task(pool *p, lane *ln, uint32_t i)
+static void run_task(pool *p, lane *ln, const wtask *t)
 {
-    const wtask *t = &p->task[i];
     long r;
     if (ln->found < 0 || ln->flips < 0) return; /* out of memory: the job fails anyway */
-    if (p->kind == FP_JOB_FLAT) {
-        r = flat_range(p->c, p->s, p->ref, false, t->x, t->y);
-        ln->flips = r < 0 ? r : ln->flips + r;
+    if (p->kind == FP_JOB_MARK) {
+        if (mark_range(p->c, ln, p->s, t->x, t->y, t->z)) ln->flips = -ENOMEM;
     } else if (p->kind == FP_JOB_REFIT) {
-        refit(p->c->tk, t->x, 0);
+        update_subtree(p->c, ln, p->s, p->ref, false, t->x, 0);
     } else {
+
         r = t->y == FP_TRACK_NONE ? node_self(p->c, ln, p->s, p->ref, t->x, false)
                                   : node_pairs(p->c, ln, p->s, p->ref, t->x, t->y, false);
+
         ln->found = r < 0 ? r : ln->found + r;
     }
 }
 
-/* claim and run job gen's tasks until none is left */
+static inline void cpu_pause(void)
+{
+#if defined(__x86_64__) || defined(__i386__)
+    __builtin_ia32_pause();
+#elif defined(__aarch64__)
+    __asm__ __volatile__("yield");
+#endif
+}
+
+/* claim and run job gen's tasks until none is left and none is coming */
 static void run_tasks(pool *p, lane *ln, uint32_t gen)
 {
-    for (;;) {
+    for (unsigned spins = 0;;) {
         uint64_t cur = atomic_load(&p->next);
-        if ((uint32_t)(cur >> 32) != gen || (uint32_t)cur >= atomic_load(&p->ntask)) return;
-        if (atomic_compare_exchange_weak(&p->next, &cur, cur + 1)) run_task(p, ln, (uint32_t)cur);
+        if ((uint32_t)(cur >> 32) != gen) return;
+        if ((uint32_t)cur >= atomic_load(&p->ntask)) {
+            if (!atomic_load(&p->filling)) {
+                if ((uint32_t)cur >= atomic_load(&p->ntask)) return; /* (one added before) */
+                continue;
+            }
+            if (++spins > 1024) sched_yield(); /* the caller is making the next task */
+            else cpu_pause();
+            continue;
+        }
+        if (atomic_compare_exchange_weak(&p->next, &cur, cur + 1)) run_task(p, ln, &p->task[(uint32_t)cur]);
     }
 }
 
-/* The worker: asleep until a job or a warning (pool_warm) comes, then it polls for jobs,
+/* The worker: asleep until a job comes (a step's first is its marking), then it polls for jobs,
  * yielding its core between polls, until none has come for FP_POOL_IDLE_NS: through a
  * deformation at 60 frames a second it does not sleep between frames. Waking it from a sleep
  * took over a millisecond on a 2-core virtual machine, and now and then a whole step: with a
@@ -2152,9 +2241,8 @@ static void *pool_main(void *arg)
     uint32_t seen = 0;
     for (;;) {
         pthread_mutex_lock(&p->mu);
-        while (!p->quit && p->gen == seen && !p->warm) pthread_cond_wait(&p->cv, &p->mu);
+        while (!p->quit && p->gen == seen) pthread_cond_wait(&p->cv, &p->mu);
         bool quit = p->quit;
-        p->warm = false;
         pthread_mutex_unlock(&p->mu);
         if (quit) return NULL;
         for (int64_t idle = fp_now_ns();;) {
@@ -2171,15 +2259,6 @@ static void *pool_main(void *arg)
             sched_yield();
         }
     }
-}
-
-/* a step with work for the worker is coming: it starts polling now */
-static void pool_warm(pool *p)
-{
-    pthread_mutex_lock(&p->mu);
-    p->warm = true;
-    pthread_cond_signal(&p->cv);
-    pthread_mutex_unlock(&p->mu);
 }
 
 static void pool_free(pool *p)
@@ -2232,31 +2311,46 @@ static pool *pool_get(fp_contact *c)
     return p;
 }
 
-/* a task into the job's list; 0 or -ENOMEM */
-static int add_task(pool *p, uint32_t x, uint32_t y)
+/* Open a job of this kind on shape s (and ref): the worker may start on its tasks as the
+ * caller adds them (add_task), then job_finish. The list holds what was reserved at the
+ * open: a task beyond it runs on the caller's thread at once. 0 or -ENOMEM. */
+static int job_open(pool *p, int kind, const float *s, const float *ref)
 {
-    uint32_t n = atomic_load_explicit(&p->ntask, memory_order_relaxed);
-    if (reserve((void **)&p->task, &p->cap_task, (size_t)n + 1, sizeof *p->task)) return -ENOMEM;
-    p->task[n].x = x;
-    p->task[n].y = y;
-    atomic_store_explicit(&p->ntask, n + 1, memory_order_relaxed);
-    return 0;
-}
-
-/* run the job in p's task list on both threads; the lanes' counts hold its results */
-static void run_job(fp_contact *c, pool *p, int kind, const float *s, const float *ref)
-{
-    struct track *k = c->tk;
+    if (reserve((void **)&p->task, &p->cap_task, 1024, sizeof *p->task)) return -ENOMEM;
     p->kind = kind;
     p->s = s;
     p->ref = ref;
-    for (int i = 0; i < FP_CONTACT_MAX_THREADS; i++) k->lane[i].found = k->lane[i].flips = 0;
+    atomic_store(&p->ntask, 0);
+    atomic_store(&p->filling, true);
     pthread_mutex_lock(&p->mu);
     uint32_t gen = ++p->gen;
     atomic_store(&p->next, (uint64_t)gen << 32);
     atomic_store(&p->agen, gen);
     pthread_cond_signal(&p->cv);
     pthread_mutex_unlock(&p->mu);
+    return 0;
+}
+
+/* a task (x, y) into the open job (written, then counted: the count publishes it), or run
+ * on the caller's lane now when the list is full */
+static void add_task(fp_contact *c, pool *p, uint32_t x, uint32_t y, uint32_t z)
+{
+    wtask t = {x, y, z};
+    uint32_t n = atomic_load_explicit(&p->ntask, memory_order_relaxed);
+    if (n >= p->cap_task) {
+        run_task(p, &c->tk->lane[0], &t);
+        return;
+    }
+    p->task[n] = t;
+    atomic_store_explicit(&p->ntask, n + 1, memory_order_release);
+}
+
+/* the open job's tasks run on both threads to the last; the lanes' counts hold its results */
+static void job_finish(fp_contact *c, pool *p)
+{
+    struct track *k = c->tk;
+    uint32_t gen = p->gen;
+    atomic_store(&p->filling, false);
     run_tasks(p, &k->lane[0], gen);
     /* closed: a worker that wakes late claims nothing while the next job's list is made */
     atomic_store(&p->next, (uint64_t)gen << 32 | UINT32_MAX);
@@ -2280,73 +2374,80 @@ static long lanes_sum(const struct track *k, bool flips)
  * tests, still splits) */
 static size_t grain(const struct track *k, size_t most)
 {
-    size_t g = k->nmq / 16;
+    size_t g = (k->nmq ? k->nmq : 2 * k->nmv) / 16; /* before the refit: about 2 a vertex */
     return g < 64 ? 64 : g > most ? most : g;
 }
 
 /* the walk's tasks from node x (y == FP_TRACK_NONE: node_self(x); else node_pairs(x, y)),
  * split as those functions recurse down to nodes of `grain` triangles or fewer, a
  * certifiable node whose normals face one way (its contour, then maybe its children, in the
- * task) or leaves; 0 or -ENOMEM */
-static int walk_tasks(fp_contact *c, pool *p, uint32_t x, uint32_t y, size_t g)
+ * task) or leaves, into the open job (the worker starts on them as they come) */
+static void walk_tasks(fp_contact *c, pool *p, uint32_t x, uint32_t y, size_t g)
 {
     struct track *k = c->tk;
     const bnode *bx = &k->node[x];
     if (y == FP_TRACK_NONE) {
-        if (k->nstamp[x] != k->tclock) return 0;
+        if (k->nstamp[x] != k->tclock) return;
         double ad[3]; /* a patch whose normals already fail its certificate: split further */
         if (!bx->right || bx->count <= g ||
-            (c->certify && bx->cert != FP_TRACK_NONE && cert_axis(bx, ad)))
-            return add_task(p, x, y);
-        int rc = walk_tasks(c, p, x + 1, FP_TRACK_NONE, g);
-        if (!rc) rc = walk_tasks(c, p, bx->right, FP_TRACK_NONE, g);
-        return rc ? rc : walk_tasks(c, p, x + 1, bx->right, g);
+            (c->certify && bx->cert != FP_TRACK_NONE && cert_axis(bx, ad))) {
+            add_task(c, p, x, y, 0);
+            return;
+        }
+        walk_tasks(c, p, x + 1, FP_TRACK_NONE, g);
+        walk_tasks(c, p, bx->right, FP_TRACK_NONE, g);
+        walk_tasks(c, p, x + 1, bx->right, g);
+        return;
     }
     const bnode *by = &k->node[y];
-    if ((k->nstamp[x] != k->tclock && k->nstamp[y] != k->tclock) || !boxes_meet(bx->box, by->box)) return 0;
-    if ((!bx->right && !by->right) || (size_t)bx->count + by->count <= g) return add_task(p, x, y);
+    if ((k->nstamp[x] != k->tclock && k->nstamp[y] != k->tclock) || !boxes_meet(bx->box, by->box)) return;
+    if ((!bx->right && !by->right) || (size_t)bx->count + by->count <= g) {
+        add_task(c, p, x, y, 0);
+        return;
+    }
     bx = into_larger(k, &x, &y);
-    int rc = walk_tasks(c, p, x + 1, y, g);
-    return rc ? rc : walk_tasks(c, p, bx->right, y, g);
+    walk_tasks(c, p, x + 1, y, g);
+    walk_tasks(c, p, bx->right, y, g);
 }
 
-/* the refit's tasks: the stamped nodes of g triangles or fewer right below larger ones (the
- * caller refits the nodes above them); 0 or -ENOMEM */
-static int refit_tasks(struct track *k, pool *p, uint32_t x, size_t g)
+/* the refit's tasks: the nodes of g triangles or fewer right below larger ones, where a
+ * moved triangle may be (the caller refits the nodes above them), into the open job */
+static void refit_tasks(fp_contact *c, pool *p, uint32_t x, size_t g)
 {
-    const bnode *b = &k->node[x];
-    if (k->nstamp[x] != k->tclock) return 0;
-    if (!b->right || b->count <= g) return add_task(p, x, 0);
-    int rc = refit_tasks(k, p, x + 1, g);
-    return rc ? rc : refit_tasks(k, p, b->right, g);
+    const bnode *b = &c->tk->node[x];
+    if (!maybe_moved(c->tk, b)) return;
+    if (!b->right || b->count <= g) {
+        add_task(c, p, x, 0, 0);
+        return;
+    }
+    refit_tasks(c, p, x + 1, g);
+    refit_tasks(c, p, b->right, g);
 }
 
-/* The moved triangles' directions in s, the nodes above them refit; ref not NULL: the newly
- * flipped moved triangles (own ones too) counted, their vertices into off when record.
- * Returns the count, or -ENOMEM. */
+/* The moved triangles' boxes and directions in s, the nodes above them refit (refit; on
+ * two threads for a large check); ref not NULL: the newly flipped moved triangles (own ones
+ * too) counted, their vertices into off when record. Returns the count, or -ENOMEM. */
 static long tree_update(fp_contact *c, const float *s, const float *ref, bool record)
 {
     struct track *k = c->tk;
-    long flips;
-    pool *p = record || k->nmq < c->share_min ? NULL : pool_get(c);
-    if (p) {
-        size_t g = grain(k, FP_FLAT_GRAIN);
-        atomic_store_explicit(&p->ntask, 0, memory_order_relaxed);
-        for (size_t i = 0; i < k->nmq; i += g)
-            if (add_task(p, (uint32_t)i, (uint32_t)(i + g < k->nmq ? i + g : k->nmq))) return -ENOMEM;
-        run_job(c, p, FP_JOB_FLAT, s, ref);
-        flips = lanes_sum(k, true);
-        if (flips < 0) return flips;
-        size_t cut = grain(k, FP_WALK_GRAIN); /* subtrees of cut triangles, then the top */
-        atomic_store_explicit(&p->ntask, 0, memory_order_relaxed);
-        if (k->nnode && refit_tasks(k, p, 0, cut)) return -ENOMEM;
-        run_job(c, p, FP_JOB_REFIT, s, ref);
-        if (k->nnode && k->nstamp[0] == k->tclock && k->node[0].count > cut) refit(k, 0, cut);
-    } else {
-        flips = flat_range(c, s, ref, record, 0, k->nmq);
-        if (flips < 0) return flips;
-        if (k->nnode && k->nstamp[0] == k->tclock) refit(k, 0, 0);
+    for (int i = 0; i < FP_CONTACT_MAX_THREADS; i++) {
+        k->lane[i].flips = k->lane[i].found = 0;
+        k->lane[i].moved = 0;
     }
+    k->nmq = 0;
+    pool *p = record || 2 * k->nmv < c->share_min ? NULL : pool_get(c);
+    size_t cut = 0; /* on two threads: subtrees of cut triangles first, then the top */
+    if (p && k->nnode) {
+        cut = grain(k, FP_WALK_GRAIN);
+        if (job_open(p, FP_JOB_REFIT, s, ref)) return -ENOMEM;
+        refit_tasks(c, p, 0, cut);
+        job_finish(c, p);
+    }
+    if (k->nnode && k->node[0].count > cut && maybe_moved(k, &k->node[0]))
+        update_subtree(c, &k->lane[0], s, ref, record, 0, cut);
+    long flips = lanes_sum(k, true);
+    if (flips < 0) return flips;
+    k->nmq = k->lane[0].moved + k->lane[1].moved;
     k->nmt = k->nmq;
     if (!ref) return flips;
     long g = own_flips(c, s, ref, record);
@@ -2364,10 +2465,11 @@ static long tree_check(fp_contact *c, const float *s, const float *ref, size_t *
     struct track *k = c->tk;
     if (!k->nnode) return 0;
     pool *p = record || k->nmq < c->share_min ? NULL : pool_get(c);
+    for (int i = 0; i < FP_CONTACT_MAX_THREADS; i++) k->lane[i].found = 0;
     if (!p) return node_self(c, &k->lane[0], s, ref, 0, record);
-    atomic_store_explicit(&p->ntask, 0, memory_order_relaxed);
-    if (walk_tasks(c, p, 0, FP_TRACK_NONE, grain(k, FP_WALK_GRAIN))) return -ENOMEM;
-    run_job(c, p, FP_JOB_WALK, s, ref);
+    if (job_open(p, FP_JOB_WALK, s, ref)) return -ENOMEM;
+    walk_tasks(c, p, 0, FP_TRACK_NONE, grain(k, FP_WALK_GRAIN));
+    job_finish(c, p);
     k->shared++;
     return lanes_sum(k, false);
 }
@@ -2382,15 +2484,15 @@ static int tree_build(fp_contact *c, struct track *k)
     k->tree = true;
     k->tpos = malloc((t ? t : 1) * sizeof *k->tpos);
     k->order = malloc((t ? t : 1) * sizeof *k->order);
-    k->leaf = malloc((t ? t : 1) * sizeof *k->leaf);
     k->tn = malloc((t ? t : 1) * sizeof *k->tn);
     k->tbox = malloc((t ? t : 1) * sizeof *k->tbox);
     k->pstamp = calloc(t ? t : 1, sizeof *k->pstamp);
     k->node = aligned_alloc(64, (t ? 2 * t : 1) * sizeof *k->node);
-    k->nparent = malloc((t ? 2 * t : 1) * sizeof *k->nparent);
     k->nstamp = calloc(t ? 2 * t : 1, sizeof *k->nstamp);
     k->vtp = malloc((t ? 3 * t : 1) * sizeof *k->vtp);
-    if (!k->tpos || !k->order || !k->leaf || !k->tn || !k->tbox || !k->pstamp || !k->node || !k->nparent ||
+    k->bstamp = calloc(((t ? t : 1) >> FP_BLOCK_SHIFT) + 1, sizeof *k->bstamp);
+    k->sbstamp = calloc(((t ? t : 1) >> FP_SUPER_SHIFT) + 1, sizeof *k->sbstamp);
+    if (!k->tpos || !k->order || !k->tn || !k->tbox || !k->pstamp || !k->node || !k->bstamp || !k->sbstamp ||
         !k->nstamp || !k->vtp) {
         track_free(k);
         return -ENOMEM;
@@ -2409,12 +2511,10 @@ static int tree_build(fp_contact *c, struct track *k)
     for (size_t j = 0; j < 3 * t; j++) k->vtp[j] = k->tpos[k->vt[j]]; /* vt's places */
     k->ow = malloc((m ? m : 1) * sizeof *k->ow);
     k->ov = malloc((m ? m : 1) * sizeof *k->ov);
-    k->mq = malloc((m ? m : 1) * sizeof *k->mq);
-    if (!k->ow || !k->ov || !k->mq) {
+    if (!k->ow || !k->ov) {
         track_free(k);
         return -ENOMEM;
     }
-    k->cap_mq = m ? m : 1;
     for (size_t i = 0; i < m; i++)
         for (int j = 0; j < 3; j++) {
             k->ov[i][j] = c->tris[3 * (size_t)k->order[i] + j];
@@ -2433,8 +2533,8 @@ static int tree_build(fp_contact *c, struct track *k)
     k->tclock = 1;
     for (size_t x = 0; x < k->nnode; x++) k->nstamp[x] = 1;
     for (size_t i = 0; i < m; i++) k->pstamp[i] = 1;
-    for (size_t i = 0; i < m; i++) k->mq[i] = (uint32_t)i;
-    k->nmq = m;
+    for (size_t i = 0; i <= (t ? t : 1) >> FP_BLOCK_SHIFT; i++) k->bstamp[i] = 1;
+    for (size_t i = 0; i <= (t ? t : 1) >> FP_SUPER_SHIFT; i++) k->sbstamp[i] = 1;
     c->tk = k;
     tree_update(c, k->p, NULL, false); /* no flips counted: no failure */
     k->nmq = 0;
@@ -2499,12 +2599,16 @@ fail:
 }
 
 /* the next clock of the moved stamps */
-static void tick(struct track *k, size_t t)
+static void tick(fp_contact *c)
 {
+    struct track *k = c->tk;
+    size_t t = c->t;
     if (++k->tclock == 0) {
         memset(k->tstamp, 0, t * sizeof *k->tstamp);
         if (k->nstamp) memset(k->nstamp, 0, k->nnode * sizeof *k->nstamp);
         if (k->pstamp) memset(k->pstamp, 0, t * sizeof *k->pstamp);
+        if (k->bstamp) memset(k->bstamp, 0, (((t ? t : 1) >> FP_BLOCK_SHIFT) + 1) * sizeof *k->bstamp);
+        if (k->sbstamp) memset(k->sbstamp, 0, (((t ? t : 1) >> FP_SUPER_SHIFT) + 1) * sizeof *k->sbstamp);
         k->tclock = 1;
     }
 }
@@ -2569,6 +2673,66 @@ static int collect_moved(fp_contact *c, const float *a, const uint32_t *ranges, 
     return 0;
 }
 
+#define FP_MARK_GRAIN 8192 /* vertices looked at by one task of the marking, at most */
+
+/* n values appended to the list (*p, *len, *cap); 0 or -ENOMEM */
+static int append_u32(uint32_t **p, size_t *len, size_t *cap, const uint32_t *src, size_t n)
+{
+    if (reserve((void **)p, cap, *len + n, sizeof **p)) return -ENOMEM;
+    if (n) memcpy(*p + *len, src, n * sizeof *src);
+    *len += n;
+    return 0;
+}
+
+/* The hierarchy's collect_moved and marking at once (mark_range): the vertices where a
+ * differs from P, looked for in D_P and the ranges, into k->mv, their own triangles into
+ * k->mo, the others stamped; on two threads when there are many to look at (each thread's
+ * lists in its lane, then joined). Returns 0 or -ENOMEM. */
+static int collect_mark(fp_contact *c, const float *a, const uint32_t *ranges, size_t nranges)
+{
+    struct track *k = c->tk;
+    size_t nvisit = k->ndp;
+    if (nranges == SIZE_MAX) nvisit += c->n;
+    else
+        for (size_t r = 0; r < nranges; r++)
+            if (ranges[2 * r] < c->n)
+                nvisit += ranges[2 * r + 1] < c->n - ranges[2 * r] ? ranges[2 * r + 1] : c->n - ranges[2 * r];
+    for (int i = 0; i < FP_CONTACT_MAX_THREADS; i++) {
+        lane *ln = &k->lane[i];
+        ln->nmv = ln->nmo = 0;
+        ln->flips = ln->found = 0;
+    }
+    pool *p = 2 * nvisit >= c->share_min ? pool_get(c) : NULL;
+    size_t g = nvisit / 16 < 256 ? 256 : nvisit / 16 > FP_MARK_GRAIN ? FP_MARK_GRAIN : nvisit / 16;
+    if (p && job_open(p, FP_JOB_MARK, a, NULL)) return -ENOMEM;
+#define FP_SPAN(x0, x1, z)                                                                      \
+    for (size_t i_ = (x0); i_ < (x1); i_ += g) {                                                \
+        uint32_t e_ = (uint32_t)(i_ + g < (x1) ? i_ + g : (x1));                                \
+        if (p) add_task(c, p, (uint32_t)i_, e_, (z));                                           \
+        else if (mark_range(c, &k->lane[0], a, (uint32_t)i_, e_, (z))) return -ENOMEM;          \
+    }
+    FP_SPAN(0, k->ndp, 0)
+    if (nranges == SIZE_MAX) {
+        FP_SPAN(0, c->n, 1)
+    } else {
+        for (size_t r = 0; r < nranges; r++) {
+            size_t f = ranges[2 * r], e = f + ranges[2 * r + 1];
+            FP_SPAN(f, e < c->n ? e : c->n, 1)
+        }
+    }
+#undef FP_SPAN
+    if (p) job_finish(c, p);
+    if (lanes_sum(k, true) < 0) return -ENOMEM;
+    lane *l0 = &k->lane[0], *l1 = &k->lane[1];
+    k->nmv = k->nmo = 0;
+    if (append_u32(&k->mv, &k->nmv, &k->cap_mv, l0->mv, l0->nmv) ||
+        append_u32(&k->mv, &k->nmv, &k->cap_mv, l1->mv, l1->nmv) ||
+        append_u32(&k->mo, &k->nmo, &k->cap_mo, l0->mo, l0->nmo) ||
+        append_u32(&k->mo, &k->nmo, &k->cap_mo, l1->mo, l1->nmo))
+        return -ENOMEM;
+    return 0;
+}
+
 static int reference(fp_contact *c, const float *ref, const uint32_t *ranges, size_t nranges);
 
 int fp_contact_reference(fp_contact *c, const float *ref, const uint32_t *ranges, size_t nranges)
@@ -2584,16 +2748,17 @@ int fp_contact_reference(fp_contact *c, const float *ref, const uint32_t *ranges
 static int reference(fp_contact *c, const float *ref, const uint32_t *ranges, size_t nranges)
 {
     struct track *k = c->tk;
-    tick(k, c->t);
+    tick(c);
     k->nmt = k->nmo = k->nmq = 0;
-    /* P := ref where they differ: D_P, then the ranges (or everything) */
-    if (collect_moved(c, ref, ranges, nranges)) return -ENOMEM;
+    /* P := ref where they differ: D_P, then the ranges (or everything); the hierarchy's
+     * triangles there marked */
+    if (k->tree ? collect_mark(c, ref, ranges, nranges) : collect_moved(c, ref, ranges, nranges))
+        return -ENOMEM;
     for (size_t i = 0; i < k->ndp; i++) k->in_dp[k->dp[i]] = 0;
     k->ndp = 0;
     if (k->tree) { /* the triangles that changed: their normals and the boxes above them */
         for (size_t i = 0; i < k->nmv; i++)
             memcpy(k->p + 3 * (size_t)k->mv[i], ref + 3 * (size_t)k->mv[i], 3 * sizeof(float));
-        if (tree_mark(c)) return -ENOMEM;
         return tree_update(c, k->p, NULL, false) < 0 ? -ENOMEM : 0;
     }
     for (size_t i = 0; i < k->nmv; i++)
@@ -2752,21 +2917,17 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
                 size_t nranges, int iters, fp_contact_result *res)
 {
     struct track *k = c->tk;
-    tick(k, c->t);
+    tick(c);
     k->nmv = k->nmt = k->nmo = k->nmq = 0;
     size_t renewed0 = k->renewed;
     for (int i = 0; i < FP_CONTACT_MAX_THREADS; i++) k->lane[i].certified = k->lane[i].tested = 0;
     k->shared = 0;
 
     /* the moved vertices: where cand differs from P */
-    if (collect_moved(c, cand, ranges, nranges)) return -ENOMEM;
+    if (k->tree ? collect_mark(c, cand, ranges, nranges) : collect_moved(c, cand, ranges, nranges))
+        return -ENOMEM;
     res->moved_verts = k->nmv;
     if (!k->nmv) return 0; /* nothing moved: P is the candidate */
-    if (k->tree && k->nmv >= c->share_min / 2) { /* the worker wakes while the marking runs */
-        pool *p = pool_get(c);
-        if (p) pool_warm(p);
-    }
-    if (k->tree && tree_mark(c)) return -ENOMEM;
     for (size_t i = 0; !k->tree && i < k->nmv; i++)
         if (mark_tris(c, k->mv[i])) return -ENOMEM;
     res->moved_tris = k->nmt; /* (the hierarchy counts them in its check's refit) */
@@ -2864,14 +3025,10 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
     res->shared = k->shared;
     res->certified = 0;
     for (int i = 0; i < FP_CONTACT_MAX_THREADS; i++) res->certified += k->lane[i].certified;
-    /* D_P: where P now differs from the reference */
-    size_t w = 0;
-    for (size_t i = 0; i < k->ndp; i++) {
-        uint32_t v = k->dp[i];
-        if (vert_differs(k->p, ref, v)) k->dp[w++] = v;
-        else k->in_dp[v] = 0;
-    }
-    k->ndp = w;
+    /* D_P: where P may differ from the reference. P changed only at the moved vertices, so
+     * only they may join it; one that went back to the reference stays in it (a superset is
+     * enough for (2); fp_contact_reference empties it), so the step costs its motion, not
+     * the whole gesture's */
     for (size_t i = 0; i < k->nmv; i++) {
         uint32_t v = k->mv[i];
         if (!k->in_dp[v] && vert_differs(k->p, ref, v)) {

@@ -99,7 +99,7 @@ typedef struct fp_contact_result {
     size_t certified;    /* fp_contact_step, the hierarchy: patches certified (their pairs
                             not tested) */
     int local;           /* fp_contact_step: 1 when the scale-back was local */
-    size_t shared;       /* fp_contact_step, the hierarchy: checks whose flat pass and walk
+    size_t shared;       /* fp_contact_step, the hierarchy: checks whose refit and walk
                             two threads shared (fp_contact_set_threads) */
 } fp_contact_result;
 
@@ -209,10 +209,13 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
  *    triangles a frame, moving about their own size in a fast frame) up to all of them
  *    renew: 5.4-7.3 ms median, 47-103 ms p99, 15-25 frames of 225 skipped. Larger skins
  *    renew less but lengthen the lists and each renewal: no gain measured.
- *  - the hierarchy: each moved vertex's leaves and the nodes above them marked (about 20
- *    ns), each moved triangle's normal, flip and box (about 26 ns), the walk (along the
- *    borders of the certified patches: about 38,000 node pairs and 4,600 leaf pairs, 2.1
- *    ms, on the 1.68M face) and the certificates (about 17 ns a cycle vertex: 1.1 ms).
+ *  - the hierarchy: each moved vertex's triangles stamped, with their blocks of 64 and
+ *    4096 places in the tree's order (plain stores, about 15 ns a vertex), the nodes that
+ *    hold them found from the root through the blocks, each moved triangle's normal, flip
+ *    and box (about 17 ns), the walk (along the borders of the certified patches: about
+ *    43,000 node pairs and 4,600 leaf pairs, 2.1 ms, on the 1.68M face) and the
+ *    certificates (about 65 ns a cycle vertex: 1.2 ms; 28 patches a frame, 18,600 cycle
+ *    vertices). Figures are one thread's; see fp_contact_set_threads for two.
  *    Nothing is renewed, so a fast frame costs what a slow one does: 1.68M vertices 6.2-6.3
  *    ms median, 7.5-11.7 ms p99, no frame skipped. On the ICT face it
  *    is 3-4 times slower than envelopes (0.36-0.45 ms: its patches, 32 to 1,000 triangles
@@ -262,19 +265,21 @@ void fp_contact_set_certify(fp_contact *c, bool on);
 
 /** Threads for the hierarchy's checks ("(3b)"): 1 (default) or 2 (more count as 2). With 2,
  *  a worker thread, started at the first check that needs it and joined by
- *  fp_contact_destroy, takes a share of a check's flat pass (the moved triangles' boxes and
- *  normals), of the refit below its top nodes and of its walk, when the check moves
- *  min_moved triangles or more (0: the default, FP_CONTACT_SHARE_MIN; the tests pass 1). A
- *  step that moves half as many vertices wakes it before its marking; it then polls,
- *  yielding its core between polls, until no job has come for 20 ms (through a deformation
- *  at 60 fps it does not sleep between frames). Tasks are claimed one at a time and the
+ *  fp_contact_destroy, takes a share of a step's marking (looking for the moved vertices
+ *  and stamping their triangles) when it looks at min_moved / 2 vertices or more, and of a
+ *  check's refit below its top nodes (with the moved triangles' boxes and normals) and its
+ *  walk when the check moves min_moved triangles or more (0: the default,
+ *  FP_CONTACT_SHARE_MIN; the tests pass 1). After a job it polls, yielding its core between
+ *  polls, until no job has come for 20 ms (through a deformation at 60 fps it does not sleep
+ *  between frames). Tasks are claimed one at a time, as the caller adds them, and the
  *  caller waits only for a task the worker holds, never for a worker that has not started,
  *  so a busy machine costs the worker's share, not a time slice. Decisions, counts and P
  *  are the same with 1 or 2; the checks that record blocking triangles (a local scale-back)
  *  run on one. No effect on envelopes (small meshes: a check there is too short to share).
  *  No thread could be made: 1, silently. c NULL: nothing. Threads: as every call on c (one
  *  thread at a time); the worker is internal. Measured (`bench --case frame`, 1.7M
- *  vertices, 2 cores): contact 6.1-6.2 ms median on one thread, 3.5-3.8 on two. */
+ *  vertices, 2 cores): contact 3.1-3.3 ms median on two threads (6.1-6.2 ms when the
+ *  marking, refit and walk all ran on one). */
 #define FP_CONTACT_SHARE_MIN 4096
 void fp_contact_set_threads(fp_contact *c, int threads, size_t min_moved);
 
