@@ -569,7 +569,7 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
 #define FP_TRACK_INLINE 6          /* list entries kept in the dyn itself (one cache line) */
 
 #define FP_CONTACT_MAX_THREADS 2  /* the caller and one worker (fp_contact_set_threads) */
-#define FP_BVH_LEAF 8             /* triangles in a leaf of the hierarchy, at most */
+#define FP_BVH_LEAF 24            /* triangles in a leaf of the hierarchy, at most */
 #define FP_CERT_MIN 48            /* a patch (node) with this many triangles or more ... */
 #define FP_CERT_MAX 65536         /* ... and no more may be certified (its boundary made once) */
 

@@ -154,7 +154,7 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
  *      union faces a direction and (from 24 triangles on) stays a disc (they share one arc:
  *      one vertex more on both boundaries than shared edges), then among discs, then any;
  *      what finds no partner (a separate component) is joined at the top by median splits. A
- *      node of at most 8 triangles is a leaf. Every node keeps its box and a box holding its
+ *      node of at most 24 triangles is a leaf. Every node keeps its box and a box holding its
  *      triangles' unit normals, in the shape checked: before each check the moved
  *      triangles' normals and boxes are made, and the nodes above them refit (the others
  *      hold P's, which the checked shape equals there). The check walks the tree as a self-collision test:
@@ -212,8 +212,10 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
  *  - the hierarchy: each moved vertex's triangles stamped, with their blocks of 64 and
  *    4096 places in the tree's order (plain stores, about 15 ns a vertex), the nodes that
  *    hold them found from the root through the blocks, each moved triangle's normal, flip
- *    and box (about 17 ns), the walk (along the borders of the certified patches: about
- *    43,000 node pairs and 4,600 leaf pairs, 2.1 ms, on the 1.68M face) and the
+ *    and box (about 17 ns), the walk (along the borders of the certified patches: with
+ *    leaves of 8 triangles about 43,000 node pairs and 4,600 leaf pairs, 2.1 ms, on the
+ *    1.68M face; leaves of 24 visit fewer node pairs for more box tests in each, the
+ *    frame's contact 2.9-3.1 ms median on two threads against 3.2-3.3) and the
  *    certificates (about 65 ns a cycle vertex: 1.2 ms; 28 patches a frame, 18,600 cycle
  *    vertices). Figures are one thread's; see fp_contact_set_threads for two.
  *    Nothing is renewed, so a fast frame costs what a slow one does: 1.68M vertices 6.2-6.3
