@@ -2062,23 +2062,39 @@ static int test_pair(fp_contact *c, lane *ln, const float *s, const float *ref, 
 }
 
 /* the pairs between leaves x and y (x == y: within x) with a moved triangle whose boxes meet
- * in s: new ones counted (test_pair) */
+ * in s: new ones counted (test_pair). y's boxes are copied by axis first, so that each of
+ * x's triangles meets them all in one loop the compiler vectorises. */
 static long leaf_pairs(fp_contact *c, lane *ln, const float *s, const float *ref, uint32_t x, uint32_t y,
                        bool record)
 {
     struct track *k = c->tk;
+    const uint32_t clk = k->tclock;
     const bnode *bx = &k->node[x], *by = &k->node[y];
+    float lo[3][FP_BVH_LEAF], hi[3][FP_BVH_LEAF];
     uint32_t jy[FP_BVH_LEAF], ny = 0;
-    for (uint32_t j = by->first; j < by->first + by->count; j++)
-        if (x == y || boxes_meet(k->tbox[j], bx->box)) jy[ny++] = j;
+    bool jm[FP_BVH_LEAF];
+    for (uint32_t j = by->first; j < by->first + by->count; j++) {
+        const float *b = k->tbox[j];
+        if (x != y && !boxes_meet(b, bx->box)) continue;
+        for (int a = 0; a < 3; a++) {
+            lo[a][ny] = b[a];
+            hi[a][ny] = b[3 + a];
+        }
+        jm[ny] = k->pstamp[j] == clk;
+        jy[ny++] = j;
+    }
     long found = 0;
-    for (uint32_t i = bx->first; i < bx->first + bx->count; i++) {
+    for (uint32_t i = bx->first; ny && i < bx->first + bx->count; i++) {
         const float *ba = k->tbox[i];
-        bool ma = k->pstamp[i] == k->tclock;
+        bool ma = k->pstamp[i] == clk;
         if (x != y && !boxes_meet(ba, by->box)) continue;
+        unsigned char hit[FP_BVH_LEAF];
+        for (uint32_t q = 0; q < ny; q++)
+            hit[q] = (ba[0] <= hi[0][q]) & (lo[0][q] <= ba[3]) & (ba[1] <= hi[1][q]) & (lo[1][q] <= ba[4]) &
+                     (ba[2] <= hi[2][q]) & (lo[2][q] <= ba[5]);
         for (uint32_t q = 0; q < ny; q++) {
             uint32_t j = jy[q];
-            if ((x == y && j <= i) || !(ma || k->pstamp[j] == k->tclock) || !boxes_meet(ba, k->tbox[j])) continue;
+            if (!hit[q] || (x == y && j <= i) || !(ma || jm[q])) continue;
             if (welded_adjacent(k->ow[i], k->ow[j])) continue;
             int r = test_pair(c, ln, s, ref, k->order[i], k->order[j], record);
             if (r < 0) return r;
