@@ -2171,7 +2171,7 @@ static long node_self(fp_contact *c, lane *ln, const float *s, const float *ref,
  * caller's writes before a job are published by the job's number (release), the worker's
  * by busy's clearing. */
 #define FP_POOL_IDLE_NS 20000000  /* the worker polls (yielding) this long for the next job */
-#define FP_WALK_GRAIN 4096        /* triangles of a node (pair) walked whole by one task, at most */
+#define FP_WALK_GRAIN 16384       /* triangles of a node (pair) walked whole by one task, at most */
 
 typedef struct wtask {            /* a task: the marking's mark_range(x, y, z), the refit of
                                      node x (update_subtree), or the walk's node_self(x) (y ==
@@ -2386,11 +2386,13 @@ static long lanes_sum(const struct track *k, bool flips)
     return sum;
 }
 
-/* a check's task sizes: about 8 tasks a thread, within the grains (a small check, as in the
- * tests, still splits) */
+/* a check's task sizes: a quarter of its moved triangles, within the grains (a small check,
+ * as in the tests, still splits). The walk's split also makes a task of each certifiable
+ * patch and leaf pair on its way, so there are still many; a finer split cost the caller
+ * more in making the tasks than it saved the walk. */
 static size_t grain(const struct track *k, size_t most)
 {
-    size_t g = (k->nmq ? k->nmq : 2 * k->nmv) / 16; /* before the refit: about 2 a vertex */
+    size_t g = (k->nmq ? k->nmq : 2 * k->nmv) / 4; /* before the refit: about 2 a vertex */
     return g < 64 ? 64 : g > most ? most : g;
 }
 
