@@ -647,6 +647,8 @@ typedef struct lane {             /* one thread's part of a hierarchy check: scr
     size_t cap_xy;
     uint32_t *gcount, *gseg;      /* its segments by grid cell */
     size_t cap_gcount, cap_gseg;
+    uint16_t (*grange)[4];        /* each segment's cells (x0, x1, y0, y1) */
+    size_t cap_grange;
     size_t certified, tested;     /* patches certified, triangle pairs tested */
     size_t moved;                 /* moved triangles its refit tasks met */
     uint32_t *mq;                 /* one refit task's moved places (gather) */
@@ -779,6 +781,7 @@ static void track_free(struct track *k)
         free(k->lane[i].xy);
         free(k->lane[i].gcount);
         free(k->lane[i].gseg);
+        free(k->lane[i].grange);
         free(k->lane[i].mq);
         free(k->lane[i].mv);
         free(k->lane[i].mo);
@@ -1279,14 +1282,19 @@ static int contour_tangled(lane *k, const float *s, const uint32_t *cyc, uint32_
     uint32_t g = 1;
     while ((size_t)g * g < len) g++;
     double ic = g / ext;
-#define FP_CELL(x, a) ((uint32_t)dmin((double)(g - 1), dmax(0.0, ((x) - lo[a]) * ic)))
+#define FP_CELL(x, a) ((uint16_t)dmin((double)(g - 1), dmax(0.0, ((x) - lo[a]) * ic)))
+    if (g > 65536 || reserve((void **)&k->grange, &k->cap_grange, len, sizeof *k->grange)) return g > 65536 ? 1 : -ENOMEM;
+    uint16_t(*gr)[4] = k->grange; /* each segment's cells, made once */
     size_t ne = 0;
     for (uint32_t i = 0; i < len; i++) {
         const double *a = xy + 2 * (size_t)i, *b = xy + 2 * (size_t)(i + 1 < len ? i + 1 : 0);
-        uint32_t x0 = FP_CELL(dmin(a[0], b[0]) - el, 0), x1 = FP_CELL(dmax(a[0], b[0]) + el, 0),
-                 y0 = FP_CELL(dmin(a[1], b[1]) - el, 1), y1 = FP_CELL(dmax(a[1], b[1]) + el, 1);
-        ne += (size_t)(x1 - x0 + 1) * (y1 - y0 + 1);
+        gr[i][0] = FP_CELL(dmin(a[0], b[0]) - el, 0);
+        gr[i][1] = FP_CELL(dmax(a[0], b[0]) + el, 0);
+        gr[i][2] = FP_CELL(dmin(a[1], b[1]) - el, 1);
+        gr[i][3] = FP_CELL(dmax(a[1], b[1]) + el, 1);
+        ne += (size_t)(gr[i][1] - gr[i][0] + 1) * (gr[i][3] - gr[i][2] + 1);
     }
+#undef FP_CELL
     if (ne > 16 * (size_t)len) return 1; /* segments long against the polygon: not worth it */
     if (reserve((void **)&k->gcount, &k->cap_gcount, (size_t)g * g + 1, sizeof *k->gcount) ||
         reserve((void **)&k->gseg, &k->cap_gseg, ne, sizeof *k->gseg))
@@ -1294,20 +1302,15 @@ static int contour_tangled(lane *k, const float *s, const uint32_t *cyc, uint32_
     uint32_t *cnt = k->gcount, *seg = k->gseg;
     memset(cnt, 0, ((size_t)g * g + 1) * sizeof *cnt);
     for (int pass = 0; pass < 2; pass++) {
-        for (uint32_t i = 0; i < len; i++) {
-            const double *a = xy + 2 * (size_t)i, *b = xy + 2 * (size_t)(i + 1 < len ? i + 1 : 0);
-            uint32_t x0 = FP_CELL(dmin(a[0], b[0]) - el, 0), x1 = FP_CELL(dmax(a[0], b[0]) + el, 0),
-                     y0 = FP_CELL(dmin(a[1], b[1]) - el, 1), y1 = FP_CELL(dmax(a[1], b[1]) + el, 1);
-            for (uint32_t x = x0; x <= x1; x++)
-                for (uint32_t y = y0; y <= y1; y++) {
+        for (uint32_t i = 0; i < len; i++)
+            for (uint32_t x = gr[i][0]; x <= gr[i][1]; x++)
+                for (uint32_t y = gr[i][2]; y <= gr[i][3]; y++) {
                     if (!pass) cnt[(size_t)y * g + x + 1]++;
                     else seg[cnt[(size_t)y * g + x]++] = i;
                 }
-        }
         if (!pass)
             for (size_t q = 0; q < (size_t)g * g; q++) cnt[q + 1] += cnt[q];
     }
-#undef FP_CELL
     /* the fill moved each start to the next cell's: cell q is seg[(q ? cnt[q - 1] : 0) .. cnt[q]) */
     for (size_t q = 0; q < (size_t)g * g; q++) {
         uint32_t b0 = q ? cnt[q - 1] : 0, b1 = cnt[q];
