@@ -216,7 +216,7 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
  *    leaves of 8 triangles about 43,000 node pairs and 4,600 leaf pairs, 2.1 ms, on the
  *    1.68M face; leaves of 24 visit fewer node pairs for more box tests in each, the
  *    frame's contact 2.9-3.1 ms median on two threads against 3.2-3.3) and the
- *    certificates (about 65 ns a cycle vertex: 1.2 ms; 28 patches a frame, 18,600 cycle
+ *    certificates (about 60 ns a cycle vertex: 1.1 ms; 28 patches a frame, 18,600 cycle
  *    vertices). Figures are one thread's; see fp_contact_set_threads for two.
  *    Nothing is renewed, so a fast frame costs what a slow one does: 1.68M vertices 6.2-6.3
  *    ms median, 7.5-11.7 ms p99, no frame skipped. On the ICT face it
@@ -280,8 +280,8 @@ void fp_contact_set_certify(fp_contact *c, bool on);
  *  run on one. No effect on envelopes (small meshes: a check there is too short to share).
  *  No thread could be made: 1, silently. c NULL: nothing. Threads: as every call on c (one
  *  thread at a time); the worker is internal. Measured (`bench --case frame`, 1.7M
- *  vertices, 2 cores): contact 3.1-3.3 ms median on two threads (6.1-6.2 ms when the
- *  marking, refit and walk all ran on one). */
+ *  vertices, 2 cores): contact 2.7-3.2 ms median on two threads, varying with the
+ *  machine's load (6.1-6.2 ms when the marking, refit and walk all ran on one). */
 #define FP_CONTACT_SHARE_MIN 4096
 void fp_contact_set_threads(fp_contact *c, int threads, size_t min_moved);
 
