@@ -1043,11 +1043,9 @@ static inline bool welded_adjacent(const uint32_t a[3], const uint32_t b[3])
 static bool adjacent(const fp_contact *c, uint32_t x, uint32_t y)
 {
     const uint32_t *vx = c->tris + 3 * (size_t)x, *vy = c->tris + 3 * (size_t)y;
-    for (int i = 0; i < 3; i++) {
-        uint32_t w = c->weld[vx[i]];
-        if (w == c->weld[vy[0]] || w == c->weld[vy[1]] || w == c->weld[vy[2]]) return true;
-    }
-    return false;
+    const uint32_t wx[3] = {c->weld[vx[0]], c->weld[vx[1]], c->weld[vx[2]]},
+                   wy[3] = {c->weld[vy[0]], c->weld[vy[1]], c->weld[vy[2]]};
+    return welded_adjacent(wx, wy);
 }
 
 /* y into x's list, and x into y's unless y is being renewed too (its list is being made) or
@@ -1283,7 +1281,8 @@ static int contour_tangled(lane *k, const float *s, const uint32_t *cyc, uint32_
     while ((size_t)g * g < len) g++;
     double ic = g / ext;
 #define FP_CELL(x, a) ((uint16_t)dmin((double)(g - 1), dmax(0.0, ((x) - lo[a]) * ic)))
-    if (g > 65536 || reserve((void **)&k->grange, &k->cap_grange, len, sizeof *k->grange)) return g > 65536 ? 1 : -ENOMEM;
+    /* (g - 1 < 65536 for len < 2^32: a cell index fits 16 bits) */
+    if (reserve((void **)&k->grange, &k->cap_grange, len, sizeof *k->grange)) return -ENOMEM;
     uint16_t(*gr)[4] = k->grange; /* each segment's cells, made once */
     size_t ne = 0;
     for (uint32_t i = 0; i < len; i++) {
@@ -1331,10 +1330,6 @@ static int contour_tangled(lane *k, const float *s, const uint32_t *cyc, uint32_
     return 0;
 }
 
-/* Node x's certificate in s: every triangle of it faces a = the sum of their normals
- * (n . a > 1e-5 |n|_1 |a|_1, float) and its boundary cycle, projected along a, is a simple
- * polygon. Then the projection is one to one on the patch (contact.h, "(3)"), so no two of
- * its triangles meet but where they share a vertex. 1: certified, 0: not, -ENOMEM. */
 /* Node x's certificate axis ad (unit): the centre of its normals' box, when every unit
  * normal n in the box has n . ad at least the box's least corner value, clearing 1e-4 (over
  * the unit normals' float rounding, tri_normal_f's and normalising's); false: none (no
@@ -1355,6 +1350,9 @@ static bool cert_axis(const bnode *x, double ad[3])
     return mn > 1e-4;
 }
 
+/* Node x's certificate in s: every triangle of it faces the axis a of cert_axis and its
+ * boundary cycle, projected along a, is a simple polygon (contour_tangled). Then the projection is one to one on the patch (contact.h, "(3)"), so no two of
+ * its triangles meet but where they share a vertex. 1: certified, 0: not, -ENOMEM. */
 static int certified(const struct track *k, lane *ln, const float *s, const bnode *x)
 {
     double ad[3];
@@ -1872,7 +1870,6 @@ static int boundary(fp_contact *c, struct track *k, uint32_t x, uint64_t **out, 
 static int add_off(fp_contact *c, const uint32_t *v);
 static long own_flips(fp_contact *c, const float *s, const float *ref, bool record);
 
-
 #define FP_BLOCK_SHIFT 6  /* bstamp: blocks of 64 places */
 #define FP_SUPER_SHIFT 12 /* sbstamp: blocks of 4096 places */
 
@@ -2212,10 +2209,8 @@ static void run_task(pool *p, lane *ln, const wtask *t)
     } else if (p->kind == FP_JOB_REFIT) {
         update_subtree(p->c, ln, p->s, p->ref, false, t->x, 0);
     } else {
-
         r = t->y == FP_TRACK_NONE ? node_self(p->c, ln, p->s, p->ref, t->x, false)
                                   : node_pairs(p->c, ln, p->s, p->ref, t->x, t->y, false);
-
         ln->found = r < 0 ? r : ln->found + r;
     }
 }
@@ -2486,7 +2481,6 @@ static long tree_check(fp_contact *c, const float *s, const float *ref, size_t *
     struct track *k = c->tk;
     if (!k->nnode) return 0;
     pool *p = record || k->nmq < c->share_min ? NULL : pool_get(c);
-    for (int i = 0; i < FP_CONTACT_MAX_THREADS; i++) k->lane[i].found = 0;
     if (!p) return node_self(c, &k->lane[0], s, ref, 0, record);
     if (job_open(p, FP_JOB_WALK, s, ref)) return -ENOMEM;
     walk_tasks(c, p, 0, FP_TRACK_NONE, grain(k, FP_WALK_GRAIN));
