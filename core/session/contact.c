@@ -804,6 +804,18 @@ static int reserve(void **p, size_t *cap, size_t need, size_t el)
     return 0;
 }
 
+/* n zeroed elements of size el, every page written now, or NULL: calloc's fresh pages fault
+ * at their first read and again at their first write (microseconds each on a virtual
+ * machine: 10 such faults made the ICT face's first deforming frame 0.4-1.3 ms), which
+ * belongs to the build, not to a gesture's first frames. (A volatile store per page: a
+ * memset after malloc is folded into calloc.) */
+static void *zalloc(size_t n, size_t el)
+{
+    volatile char *p = calloc(n, el);
+    for (size_t i = 0; p && i < n * el; i += 4096) p[i] = 0;
+    return (void *)p;
+}
+
 static int push_u32(uint32_t **p, size_t *len, size_t *cap, uint32_t v)
 {
     if (reserve((void **)p, cap, *len + 1, sizeof **p)) return -ENOMEM;
@@ -2501,12 +2513,12 @@ static int tree_build(fp_contact *c, struct track *k)
     k->order = malloc((t ? t : 1) * sizeof *k->order);
     k->tn = malloc((t ? t : 1) * sizeof *k->tn);
     k->tbox = malloc((t ? t : 1) * sizeof *k->tbox);
-    k->pstamp = calloc(t ? t : 1, sizeof *k->pstamp);
+    k->pstamp = zalloc(t ? t : 1, sizeof *k->pstamp);
     k->node = aligned_alloc(64, (t ? 2 * t : 1) * sizeof *k->node);
-    k->nstamp = calloc(t ? 2 * t : 1, sizeof *k->nstamp);
+    k->nstamp = zalloc(t ? 2 * t : 1, sizeof *k->nstamp);
     k->vtp = malloc((t ? 3 * t : 1) * sizeof *k->vtp);
-    k->bstamp = calloc(((t ? t : 1) >> FP_BLOCK_SHIFT) + 1, sizeof *k->bstamp);
-    k->sbstamp = calloc(((t ? t : 1) >> FP_SUPER_SHIFT) + 1, sizeof *k->sbstamp);
+    k->bstamp = zalloc(((t ? t : 1) >> FP_BLOCK_SHIFT) + 1, sizeof *k->bstamp);
+    k->sbstamp = zalloc(((t ? t : 1) >> FP_SUPER_SHIFT) + 1, sizeof *k->sbstamp);
     if (!k->tpos || !k->order || !k->tn || !k->tbox || !k->pstamp || !k->node || !k->bstamp || !k->sbstamp ||
         !k->nstamp || !k->vtp) {
         track_free(k);
@@ -2564,11 +2576,11 @@ static int track_build(fp_contact *c)
     k->p = c->weld_copy; /* P starts as the weld shape: every triangle static */
     k->vt_start = calloc(n + 1, sizeof *k->vt_start);
     k->vt = malloc((t ? 3 * t : 1) * sizeof *k->vt);
-    k->dp = malloc((n ? n : 1) * sizeof *k->dp);
-    k->in_dp = calloc(n ? n : 1, 1);
-    k->off_mark = calloc(n ? n : 1, 1);
-    k->tstamp = calloc(t ? t : 1, sizeof *k->tstamp);
-    k->qstamp = calloc(t ? t : 1, sizeof *k->qstamp);
+    k->dp = zalloc(n ? n : 1, sizeof *k->dp);
+    k->in_dp = zalloc(n ? n : 1, 1);
+    k->off_mark = zalloc(n ? n : 1, 1);
+    k->tstamp = zalloc(t ? t : 1, sizeof *k->tstamp);
+    k->qstamp = zalloc(t ? t : 1, sizeof *k->qstamp);
     k->slot = malloc((t ? t : 1) * sizeof *k->slot);
     if (!k->p || !k->vt_start || !k->vt || !k->dp || !k->in_dp || !k->off_mark || !k->tstamp || !k->qstamp || !k->slot) {
         if (k->p) c->weld_copy = NULL;
