@@ -2210,6 +2210,7 @@ typedef struct pool {
     const float *s, *ref;
     wtask *task;
     size_t cap_task;
+    size_t ntask_max;             /* the open job's list: tasks beyond it run on the caller */
 } pool;
 
 static void run_task(pool *p, lane *ln, const wtask *t)
@@ -2338,11 +2339,15 @@ static pool *pool_get(fp_contact *c)
 }
 
 /* Open a job of this kind on shape s (and ref): the worker may start on its tasks as the
- * caller adds them (add_task), then job_finish. The list holds what was reserved at the
- * open: a task beyond it runs on the caller's thread at once. 0 or -ENOMEM. */
-static int job_open(pool *p, int kind, const float *s, const float *ref)
+ * caller adds them (add_task), then job_finish. The list holds a quarter of c's share_min
+ * tasks, 16 to 1,024 (1,024 by default; 16 for the tests, which share every check, so that
+ * their jobs go beyond it): a task beyond it runs on the caller's thread at once. 0 or
+ * -ENOMEM. */
+static int job_open(fp_contact *c, pool *p, int kind, const float *s, const float *ref)
 {
-    if (reserve((void **)&p->task, &p->cap_task, 1024, sizeof *p->task)) return -ENOMEM;
+    size_t most = c->share_min / 4 < 16 ? 16 : c->share_min / 4 > 1024 ? 1024 : c->share_min / 4;
+    if (reserve((void **)&p->task, &p->cap_task, most, sizeof *p->task)) return -ENOMEM;
+    p->ntask_max = most;
     p->kind = kind;
     p->s = s;
     p->ref = ref;
@@ -2363,7 +2368,7 @@ static void add_task(fp_contact *c, pool *p, uint32_t x, uint32_t y, uint32_t z)
 {
     wtask t = {x, y, z};
     uint32_t n = atomic_load_explicit(&p->ntask, memory_order_relaxed);
-    if (n >= p->cap_task) {
+    if (n >= p->ntask_max) {
         run_task(p, &c->tk->lane[0], &t);
         return;
     }
@@ -2467,7 +2472,7 @@ static long tree_update(fp_contact *c, const float *s, const float *ref, bool re
     size_t cut = 0; /* on two threads: subtrees of cut triangles first, then the top */
     if (p && k->nnode) {
         cut = grain(k, FP_WALK_GRAIN);
-        if (job_open(p, FP_JOB_REFIT, s, ref)) return -ENOMEM;
+        if (job_open(c, p, FP_JOB_REFIT, s, ref)) return -ENOMEM;
         refit_tasks(c, p, 0, cut);
         job_finish(c, p);
     }
@@ -2494,7 +2499,7 @@ static long tree_check(fp_contact *c, const float *s, const float *ref, size_t *
     if (!k->nnode) return 0;
     pool *p = record || k->nmq < c->share_min ? NULL : pool_get(c);
     if (!p) return node_self(c, &k->lane[0], s, ref, 0, record);
-    if (job_open(p, FP_JOB_WALK, s, ref)) return -ENOMEM;
+    if (job_open(c, p, FP_JOB_WALK, s, ref)) return -ENOMEM;
     walk_tasks(c, p, 0, FP_TRACK_NONE, grain(k, FP_WALK_GRAIN));
     job_finish(c, p);
     k->shared++;
@@ -2731,7 +2736,7 @@ static int collect_mark(fp_contact *c, const float *a, const uint32_t *ranges, s
     }
     pool *p = 2 * nvisit >= c->share_min ? pool_get(c) : NULL;
     size_t g = nvisit / 16 < 256 ? 256 : nvisit / 16 > FP_MARK_GRAIN ? FP_MARK_GRAIN : nvisit / 16;
-    if (p && job_open(p, FP_JOB_MARK, a, NULL)) return -ENOMEM;
+    if (p && job_open(c, p, FP_JOB_MARK, a, NULL)) return -ENOMEM;
 #define FP_SPAN(x0, x1, z)                                                                      \
     for (size_t i_ = (x0); i_ < (x1); i_ += g) {                                                \
         uint32_t e_ = (uint32_t)(i_ + g < (x1) ? i_ + g : (x1));                                \
