@@ -816,6 +816,14 @@ static void *zalloc(size_t n, size_t el)
     return (void *)p;
 }
 
+/* reserve, then every page of the room written: room made now, not in a frame (see zalloc) */
+static int reserve_written(void **p, size_t *cap, size_t need, size_t el)
+{
+    if (reserve(p, cap, need, el)) return -ENOMEM;
+    for (size_t i = 0; i < *cap * el; i += 4096) ((volatile char *)*p)[i] = 0;
+    return 0;
+}
+
 static int push_u32(uint32_t **p, size_t *len, size_t *cap, uint32_t v)
 {
     if (reserve((void **)p, cap, *len + 1, sizeof **p)) return -ENOMEM;
@@ -2570,6 +2578,31 @@ static int tree_build(fp_contact *c, struct track *k)
     c->tk = k;
     tree_update(c, k->p, NULL, false); /* no flips counted: no failure */
     k->nmq = 0;
+    /* the room a check's scratch grows to, made now (a gesture's first frame on the 1.7M
+     * face grew it with about 70 page faults): each lane's contour for the longest cycle,
+     * its moved places for a task of the walk's grain, its share of the marking's moved
+     * vertices for a support of up to a sixteenth of the mesh; more still grows as needed */
+    size_t maxcyc = 3, g = 1, nmv = c->n / 16 + 1;
+    for (size_t i = 0; i < k->ncert; i++) maxcyc = k->cert[i].len > maxcyc ? k->cert[i].len : maxcyc;
+    while (g * g < maxcyc) g++;
+    for (int i = 0; i < FP_CONTACT_MAX_THREADS; i++) {
+        lane *ln = &k->lane[i];
+        if (reserve_written((void **)&ln->xy, &ln->cap_xy, 2 * maxcyc, sizeof *ln->xy) ||
+            reserve_written((void **)&ln->grange, &ln->cap_grange, maxcyc, sizeof *ln->grange) ||
+            reserve_written((void **)&ln->gcount, &ln->cap_gcount, g * g + 1, sizeof *ln->gcount) ||
+            reserve_written((void **)&ln->gseg, &ln->cap_gseg, 16 * maxcyc, sizeof *ln->gseg) ||
+            reserve_written((void **)&ln->mq, &ln->cap_mq, m < FP_WALK_GRAIN ? m + 1 : FP_WALK_GRAIN, sizeof *ln->mq) ||
+            reserve_written((void **)&ln->mv, &ln->cap_mv, nmv / 2 + 1, sizeof *ln->mv)) {
+            c->tk = NULL;
+            track_free(k);
+            return -ENOMEM;
+        }
+    }
+    if (reserve_written((void **)&k->mv, &k->cap_mv, nmv, sizeof *k->mv)) {
+        c->tk = NULL;
+        track_free(k);
+        return -ENOMEM;
+    }
     return 0;
 }
 
