@@ -804,23 +804,29 @@ static int reserve(void **p, size_t *cap, size_t need, size_t el)
     return 0;
 }
 
-/* n zeroed elements of size el, every page written now, or NULL: calloc's fresh pages fault
- * at their first read and again at their first write (microseconds each on a virtual
- * machine: 10 such faults made the ICT face's first deforming frame 0.4-1.3 ms), which
- * belongs to the build, not to a gesture's first frames. (A volatile store per page: a
- * memset after malloc is folded into calloc.) */
-static void *zalloc(size_t n, size_t el)
+/* A zero stored on every page of p's n bytes (volatile: a memset of fresh memory may be
+ * folded into calloc, which leaves the pages untouched). Fresh pages fault at their first
+ * read and again at their first write, microseconds each on a virtual machine (10 such
+ * faults made the ICT face's first deforming frame 0.4-1.3 ms): memory a step writes is
+ * written here, at the build, not in a gesture's first frames. */
+static void write_pages(void *p, size_t n)
 {
-    volatile char *p = calloc(n, el);
-    for (size_t i = 0; p && i < n * el; i += 4096) p[i] = 0;
-    return (void *)p;
+    for (size_t i = 0; p && i < n; i += 4096) ((volatile char *)p)[i] = 0;
 }
 
-/* reserve, then every page of the room written: room made now, not in a frame (see zalloc) */
+/* n zeroed elements of size el, every page written now (write_pages), or NULL */
+static void *zalloc(size_t n, size_t el)
+{
+    void *p = calloc(n, el);
+    write_pages(p, n * el);
+    return p;
+}
+
+/* reserve, then every page of the room written (write_pages) */
 static int reserve_written(void **p, size_t *cap, size_t need, size_t el)
 {
     if (reserve(p, cap, need, el)) return -ENOMEM;
-    for (size_t i = 0; i < *cap * el; i += 4096) ((volatile char *)*p)[i] = 0;
+    write_pages(*p, *cap * el);
     return 0;
 }
 
@@ -1371,8 +1377,9 @@ static bool cert_axis(const bnode *x, double ad[3])
 }
 
 /* Node x's certificate in s: every triangle of it faces the axis a of cert_axis and its
- * boundary cycle, projected along a, is a simple polygon (contour_tangled). Then the projection is one to one on the patch (contact.h, "(3)"), so no two of
- * its triangles meet but where they share a vertex. 1: certified, 0: not, -ENOMEM. */
+ * boundary cycle, projected along a, is a simple polygon (contour_tangled). Then the
+ * projection is one to one on the patch (contact.h, "(3)"), so no two of its triangles meet
+ * but where they share a vertex. 1: certified, 0: not, -ENOMEM. */
 static int certified(const struct track *k, lane *ln, const float *s, const bnode *x)
 {
     double ad[3];
@@ -2526,12 +2533,13 @@ static int tree_build(fp_contact *c, struct track *k)
     k->order = malloc((t ? t : 1) * sizeof *k->order);
     k->tn = malloc((t ? t : 1) * sizeof *k->tn);
     k->tbox = malloc((t ? t : 1) * sizeof *k->tbox);
-    k->pstamp = zalloc(t ? t : 1, sizeof *k->pstamp);
+    /* (the stamps: calloc, not zalloc: the build below writes every one in use) */
+    k->pstamp = calloc(t ? t : 1, sizeof *k->pstamp);
     k->node = aligned_alloc(64, (t ? 2 * t : 1) * sizeof *k->node);
-    k->nstamp = zalloc(t ? 2 * t : 1, sizeof *k->nstamp);
+    k->nstamp = calloc(t ? 2 * t : 1, sizeof *k->nstamp);
     k->vtp = malloc((t ? 3 * t : 1) * sizeof *k->vtp);
-    k->bstamp = zalloc(((t ? t : 1) >> FP_BLOCK_SHIFT) + 1, sizeof *k->bstamp);
-    k->sbstamp = zalloc(((t ? t : 1) >> FP_SUPER_SHIFT) + 1, sizeof *k->sbstamp);
+    k->bstamp = calloc(((t ? t : 1) >> FP_BLOCK_SHIFT) + 1, sizeof *k->bstamp);
+    k->sbstamp = calloc(((t ? t : 1) >> FP_SUPER_SHIFT) + 1, sizeof *k->sbstamp);
     if (!k->tpos || !k->order || !k->tn || !k->tbox || !k->pstamp || !k->node || !k->bstamp || !k->sbstamp ||
         !k->nstamp || !k->vtp) {
         track_free(k);
@@ -2585,20 +2593,18 @@ static int tree_build(fp_contact *c, struct track *k)
     size_t maxcyc = 3, g = 1, nmv = c->n / 16 + 1;
     for (size_t i = 0; i < k->ncert; i++) maxcyc = k->cert[i].len > maxcyc ? k->cert[i].len : maxcyc;
     while (g * g < maxcyc) g++;
-    for (int i = 0; i < FP_CONTACT_MAX_THREADS; i++) {
+    int rc = reserve_written((void **)&k->mv, &k->cap_mv, nmv, sizeof *k->mv);
+    for (int i = 0; i < FP_CONTACT_MAX_THREADS && !rc; i++) {
         lane *ln = &k->lane[i];
-        if (reserve_written((void **)&ln->xy, &ln->cap_xy, 2 * maxcyc, sizeof *ln->xy) ||
-            reserve_written((void **)&ln->grange, &ln->cap_grange, maxcyc, sizeof *ln->grange) ||
-            reserve_written((void **)&ln->gcount, &ln->cap_gcount, g * g + 1, sizeof *ln->gcount) ||
-            reserve_written((void **)&ln->gseg, &ln->cap_gseg, 16 * maxcyc, sizeof *ln->gseg) ||
-            reserve_written((void **)&ln->mq, &ln->cap_mq, m < FP_WALK_GRAIN ? m + 1 : FP_WALK_GRAIN, sizeof *ln->mq) ||
-            reserve_written((void **)&ln->mv, &ln->cap_mv, nmv / 2 + 1, sizeof *ln->mv)) {
-            c->tk = NULL;
-            track_free(k);
-            return -ENOMEM;
-        }
+        rc = reserve_written((void **)&ln->xy, &ln->cap_xy, 2 * maxcyc, sizeof *ln->xy) ||
+             reserve_written((void **)&ln->grange, &ln->cap_grange, maxcyc, sizeof *ln->grange) ||
+             reserve_written((void **)&ln->gcount, &ln->cap_gcount, g * g + 1, sizeof *ln->gcount) ||
+             reserve_written((void **)&ln->gseg, &ln->cap_gseg, 16 * maxcyc, sizeof *ln->gseg) ||
+             reserve_written((void **)&ln->mq, &ln->cap_mq, m < FP_WALK_GRAIN ? m + 1 : FP_WALK_GRAIN,
+                             sizeof *ln->mq) ||
+             reserve_written((void **)&ln->mv, &ln->cap_mv, nmv / 2 + 1, sizeof *ln->mv);
     }
-    if (reserve_written((void **)&k->mv, &k->cap_mv, nmv, sizeof *k->mv)) {
+    if (rc) {
         c->tk = NULL;
         track_free(k);
         return -ENOMEM;
