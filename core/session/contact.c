@@ -720,6 +720,11 @@ struct track {
     lane lane[FP_CONTACT_MAX_THREADS]; /* [0]: the caller's thread; [1]: the pool's worker */
     struct pool *pool;            /* the worker (fp_contact_set_threads), made on first use */
     size_t shared;                /* this step: checks shared with the worker */
+    bool accept_ahead;            /* this check is the step's first, of the candidate: its walk
+                                     job also takes P := candidate at the moved vertices
+                                     (accept_range), the old P into pv */
+    bool accepted_ahead;          /* it did: P holds the candidate there, lanes' mv the
+                                     vertices that join D_P */
     uint32_t *off;                /* a local scale-back: the blocking triangles' vertices */
     size_t noff, cap_off;
     uint8_t *off_mark;            /* n: in off */
@@ -2199,10 +2204,12 @@ static long node_self(fp_contact *c, lane *ln, const float *s, const float *ref,
  * by busy's clearing. */
 #define FP_POOL_IDLE_NS 20000000  /* the worker polls (yielding) this long for the next job */
 #define FP_WALK_GRAIN 16384       /* triangles of a node (pair) walked whole by one task, at most */
+#define FP_ACCEPT_GRAIN 2048      /* moved vertices of one accept_range task */
 
 typedef struct wtask {            /* a task: the marking's mark_range(x, y, z), the refit of
                                      node x (update_subtree), or the walk's node_self(x) (y ==
-                                     FP_TRACK_NONE) or node_pairs(x, y) */
+                                     FP_TRACK_NONE) or node_pairs(x, y) (z == 0) or its
+                                     accept_range(x, y) (z == 1) */
     uint32_t x, y, z;
 } wtask;
 
@@ -2228,6 +2235,25 @@ typedef struct pool {
     size_t ntask_max;             /* the open job's list: tasks beyond it run on the caller */
 } pool;
 
+/* The acceptance of the step's candidate s, ahead of its check's verdict, on the moved
+ * vertices mv[x .. y): P's old positions into pv, P := s there, and those that now differ
+ * from ref and are not in D_P into ln->mv (they join it). The walk reads s and ref, never
+ * P, so its tasks may run beside these; a candidate that fails gets P back from pv. 0 or
+ * -ENOMEM. */
+static int accept_range(fp_contact *c, lane *ln, const float *s, const float *ref, uint32_t x, uint32_t y)
+{
+    struct track *k = c->tk;
+    for (uint32_t i = x; i < y; i++) {
+        uint32_t v = k->mv[i];
+        float *pp = k->p + 3 * (size_t)v;
+        memcpy(k->pv + 3 * (size_t)i, pp, 3 * sizeof(float));
+        memcpy(pp, s + 3 * (size_t)v, 3 * sizeof(float));
+        if (!k->in_dp[v] && vert_differs(s, ref, v) && push_u32(&ln->mv, &ln->nmv, &ln->cap_mv, v))
+            return -ENOMEM;
+    }
+    return 0;
+}
+
 static void run_task(pool *p, lane *ln, const wtask *t)
 {
     long r;
@@ -2236,6 +2262,8 @@ static void run_task(pool *p, lane *ln, const wtask *t)
         if (mark_range(p->c, ln, p->s, t->x, t->y, t->z)) ln->flips = -ENOMEM;
     } else if (p->kind == FP_JOB_REFIT) {
         update_subtree(p->c, ln, p->s, p->ref, false, t->x, 0);
+    } else if (t->z) {
+        if (accept_range(p->c, ln, p->s, p->ref, t->x, t->y)) ln->found = -ENOMEM;
     } else {
         r = t->y == FP_TRACK_NONE ? node_self(p->c, ln, p->s, p->ref, t->x, false)
                                   : node_pairs(p->c, ln, p->s, p->ref, t->x, t->y, false);
@@ -2516,6 +2544,12 @@ static long tree_check(fp_contact *c, const float *s, const float *ref, size_t *
     if (!p) return node_self(c, &k->lane[0], s, ref, 0, record);
     if (job_open(c, p, FP_JOB_WALK, s, ref)) return -ENOMEM;
     walk_tasks(c, p, 0, FP_TRACK_NONE, grain(k, FP_WALK_GRAIN));
+    if (k->accept_ahead) { /* last: they fill the threads' ends of the walk */
+        for (int i = 0; i < FP_CONTACT_MAX_THREADS; i++) k->lane[i].nmv = 0;
+        for (size_t i = 0; i < k->nmv; i += FP_ACCEPT_GRAIN)
+            add_task(c, p, (uint32_t)i, (uint32_t)(i + FP_ACCEPT_GRAIN < k->nmv ? i + FP_ACCEPT_GRAIN : k->nmv), 1);
+        k->accepted_ahead = true;
+    }
     job_finish(c, p);
     k->shared++;
     return lanes_sum(k, false);
@@ -3006,9 +3040,21 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
     size_t fl = 0; /* newly flipped triangles of the candidate */
     long found;
     if (k->tree) {
+        /* the walk job accepts the candidate ahead (accept_range), so that P's copy costs
+         * the threads' idle ends, not a serial tail; pv holds the old P */
+        size_t cap = k->cap_pv;
+        if (reserve((void **)&k->pv, &cap, 3 * k->nmv, sizeof *k->pv) ||
+            reserve((void **)&k->cv, &k->cap_pv, 3 * k->nmv, sizeof *k->cv))
+            return -ENOMEM;
+        k->accept_ahead = true;
+        k->accepted_ahead = false;
         found = tree_check(c, cand, ref, &fl, false);
+        k->accept_ahead = false;
         if (found < 0) return -ENOMEM;
         res->moved_tris = k->nmt;
+        if (k->accepted_ahead && (found || fl)) /* it fails: P back */
+            for (size_t i = 0; i < k->nmv; i++)
+                memcpy(k->p + 3 * (size_t)k->mv[i], k->pv + 3 * i, 3 * sizeof(float));
     } else {
     /* envelopes that hold each moved triangle in the candidate (and, before a bisection,
      * in P too, so in every shape between them) */
@@ -3088,7 +3134,7 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
         /* the hierarchy: the normals and boxes of the shape kept (the last check's may be
          * another) */
         if (k->tree && tree_update(c, k->p, NULL, false) < 0) return -ENOMEM;
-    } else {
+    } else if (!k->accepted_ahead) {
         for (size_t i = 0; i < k->nmv; i++)
             memcpy(k->p + 3 * (size_t)k->mv[i], cand + 3 * (size_t)k->mv[i], 3 * sizeof(float));
     }
@@ -3100,6 +3146,14 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
      * only they may join it; one that went back to the reference stays in it (a superset is
      * enough for (2); fp_contact_reference empties it), so the step costs its motion, not
      * the whole gesture's */
+    if (k->accepted_ahead && !found && !fl) { /* accept_range found them */
+        for (int j = 0; j < FP_CONTACT_MAX_THREADS; j++)
+            for (size_t i = 0; i < k->lane[j].nmv; i++) {
+                k->in_dp[k->lane[j].mv[i]] = 1;
+                k->dp[k->ndp++] = k->lane[j].mv[i];
+            }
+        return 0;
+    }
     for (size_t i = 0; i < k->nmv; i++) {
         uint32_t v = k->mv[i];
         if (!k->in_dp[v] && vert_differs(k->p, ref, v)) {
