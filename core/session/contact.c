@@ -706,10 +706,14 @@ struct track {
     uint32_t *tpos;               /* t: a triangle's place in order (FP_TRACK_NONE: own) */
     float (*tn)[3];               /* by place in order: its normal in P (tri_normal_f) */
     float (*tbox)[6];             /* by place in order: its box in P */
-    uint32_t *pstamp;             /* by place in order: == tclock when moved (mark_range) */
-    uint32_t *bstamp, *sbstamp;   /* by block of 64 and of 4096 places: == tclock when one of
-                                     them may be stamped (mark_range; the refit finds the
-                                     moved nodes through them, maybe_moved) */
+    uint32_t *pstamp;             /* by place in order: == tclock when moved (gather) */
+    uint32_t *vstamp;             /* n: == tclock when the vertex moved (mark_range) */
+    uint8_t *has_own;             /* n: the vertex has an own triangle */
+    uint32_t *bstamp, *sbstamp;   /* by block of 64 and of 4096 places: == rclock when one of
+                                     them has a vertex in D_P (the region: every moved
+                                     triangle is in it; the refit looks for them there,
+                                     maybe_moved) */
+    uint32_t rclock;              /* the region's clock: a new one when D_P is emptied */
     uint32_t *vtp;                /* beside vt: the triangle's place in order (tpos) */
     uint32_t (*ow)[3];            /* by place in order: its vertices welded (adjacency) */
     uint32_t (*ov)[3];            /* by place in order: its vertices */
@@ -780,6 +784,8 @@ static void track_free(struct track *k)
     free(k->ov);
     free(k->bstamp);
     free(k->sbstamp);
+    free(k->vstamp);
+    free(k->has_own);
     free(k->cert);
     free(k->cyc);
     for (int i = 0; i < FP_CONTACT_MAX_THREADS; i++) {
@@ -1905,8 +1911,8 @@ static long own_flips(fp_contact *c, const float *s, const float *ref, bool reco
 #define FP_BLOCK_SHIFT 6  /* bstamp: blocks of 64 places */
 #define FP_SUPER_SHIFT 12 /* sbstamp: blocks of 4096 places */
 
-/* node b's places may hold a moved triangle (a stamped block meets them; a node the size of
- * a few super blocks or more reads those) */
+/* node b's places may hold a moved triangle (a block of the region meets them; a node the
+ * size of a few super blocks or more reads those) */
 static bool maybe_moved(const struct track *k, const bnode *b)
 {
     if (!b->count) return false;
@@ -1918,22 +1924,25 @@ static bool maybe_moved(const struct track *k, const bnode *b)
         sh = FP_SUPER_SHIFT;
     }
     for (uint32_t i = lo >> sh; i <= hi >> sh; i++)
-        if (st[i] == k->tclock) return true;
+        if (st[i] == k->rclock) return true;
     return false;
 }
 
 /* Node x (one whose places may hold a moved triangle) and those below it that hold one:
- * stamped (nstamp), the moved triangles' places into ln->mq in order (ln->moved counts
- * them). cut > 0: not below nodes of cut triangles or fewer (their tasks did those; their
- * stamps say). Returns whether x holds a moved triangle. Writes only x's subtree. */
+ * stamped (nstamp), the moved triangles (a vertex stamped in vstamp) stamped (pstamp) and
+ * their places into ln->mq in order (ln->moved counts them). cut > 0: not below nodes of
+ * cut triangles or fewer (their tasks did those; their stamps say). Returns whether x
+ * holds a moved triangle. Writes only x's subtree. */
 static bool gather(struct track *k, lane *ln, uint32_t x, size_t cut)
 {
     const uint32_t clk = k->tclock;
     const bnode *b = &k->node[x];
     bool any = false;
     if (!b->right) {
+        const uint32_t *vs = k->vstamp;
         for (uint32_t i = b->first; i < b->first + b->count; i++)
-            if (k->pstamp[i] == clk) {
+            if (vs[k->ov[i][0]] == clk || vs[k->ov[i][1]] == clk || vs[k->ov[i][2]] == clk) {
+                k->pstamp[i] = clk;
                 any = true;
                 if (push_u32(&ln->mq, &ln->nmq, &ln->cap_mq, i)) {
                     ln->flips = -ENOMEM;
@@ -2041,18 +2050,22 @@ static void update_subtree(fp_contact *c, lane *ln, const float *s, const float 
 }
 
 /* One task of the hierarchy's marking (collect_mark): of the vertices dp[x .. y) (z == 0)
- * or x .. y - 1 not in D_P (z == 1), those where a differs from P into ln->mv, their
- * triangles in the hierarchy stamped (pstamp) with their blocks of places (bstamp,
- * sbstamp): stores only, the same value from either thread, no list (the refit finds them
- * by place); own triangles claimed (tstamp, atomically) into ln->mo. 0 or -ENOMEM. */
+ * or x .. y - 1 not in D_P (z == 1), those where a differs from P into ln->mv and stamped
+ * (vstamp; the refit finds their triangles from it, gather). Those not in D_P join the
+ * region: their triangles' blocks of places stamped (bstamp, sbstamp: stores only, the
+ * same value from either thread; a vertex of D_P joined it so when it joined D_P, hence the
+ * region holds every moved triangle). Own triangles claimed (tstamp, atomically) into
+ * ln->mo. 0 or -ENOMEM. */
 static int mark_range(fp_contact *c, lane *ln, const float *a, uint32_t x, uint32_t y, uint32_t z)
 {
     struct track *k = c->tk;
-    const uint32_t clk = k->tclock;
+    const uint32_t clk = k->tclock, rclk = k->rclock;
     for (uint32_t i = x; i < y; i++) {
         uint32_t v = z ? i : k->dp[i];
         if ((z && k->in_dp[v]) || !vert_differs(a, k->p, v)) continue;
         if (push_u32(&ln->mv, &ln->nmv, &ln->cap_mv, v)) return -ENOMEM;
+        k->vstamp[v] = clk;
+        if (!z && !k->has_own[v]) continue;
         for (uint32_t j = k->vt_start[v]; j < k->vt_start[v + 1]; j++) {
             uint32_t q = k->vtp[j];
             if (q == FP_TRACK_NONE) { /* an own triangle: flips only */
@@ -2063,14 +2076,13 @@ static int mark_range(fp_contact *c, lane *ln, const float *a, uint32_t x, uint3
                 if (push_u32(&ln->mo, &ln->nmo, &ln->cap_mo, o)) return -ENOMEM;
                 continue;
             }
+            if (!z) continue;
             /* a store only where the stamp is not there yet: the blocks' lines, which both
              * threads read, then stay shared instead of passing between the cores */
-            if (__atomic_load_n(&k->pstamp[q], __ATOMIC_RELAXED) == clk) continue;
-            __atomic_store_n(&k->pstamp[q], clk, __ATOMIC_RELAXED);
-            if (__atomic_load_n(&k->bstamp[q >> FP_BLOCK_SHIFT], __ATOMIC_RELAXED) != clk)
-                __atomic_store_n(&k->bstamp[q >> FP_BLOCK_SHIFT], clk, __ATOMIC_RELAXED);
-            if (__atomic_load_n(&k->sbstamp[q >> FP_SUPER_SHIFT], __ATOMIC_RELAXED) != clk)
-                __atomic_store_n(&k->sbstamp[q >> FP_SUPER_SHIFT], clk, __ATOMIC_RELAXED);
+            if (__atomic_load_n(&k->bstamp[q >> FP_BLOCK_SHIFT], __ATOMIC_RELAXED) != rclk)
+                __atomic_store_n(&k->bstamp[q >> FP_BLOCK_SHIFT], rclk, __ATOMIC_RELAXED);
+            if (__atomic_load_n(&k->sbstamp[q >> FP_SUPER_SHIFT], __ATOMIC_RELAXED) != rclk)
+                __atomic_store_n(&k->sbstamp[q >> FP_SUPER_SHIFT], rclk, __ATOMIC_RELAXED);
         }
     }
     return 0;
@@ -2574,8 +2586,10 @@ static int tree_build(fp_contact *c, struct track *k)
     k->vtp = malloc((t ? 3 * t : 1) * sizeof *k->vtp);
     k->bstamp = calloc(((t ? t : 1) >> FP_BLOCK_SHIFT) + 1, sizeof *k->bstamp);
     k->sbstamp = calloc(((t ? t : 1) >> FP_SUPER_SHIFT) + 1, sizeof *k->sbstamp);
+    k->vstamp = malloc((c->n ? c->n : 1) * sizeof *k->vstamp);
+    k->has_own = calloc(c->n ? c->n : 1, 1);
     if (!k->tpos || !k->order || !k->tn || !k->tbox || !k->pstamp || !k->node || !k->bstamp || !k->sbstamp ||
-        !k->nstamp || !k->vtp) {
+        !k->nstamp || !k->vtp || !k->vstamp || !k->has_own) {
         track_free(k);
         return -ENOMEM;
     }
@@ -2591,6 +2605,9 @@ static int tree_build(fp_contact *c, struct track *k)
     }
     for (size_t i = 0; i < m; i++) k->tpos[k->order[i]] = (uint32_t)i;
     for (size_t j = 0; j < 3 * t; j++) k->vtp[j] = k->tpos[k->vt[j]]; /* vt's places */
+    for (size_t v = 0; v < c->n; v++)
+        for (uint32_t j = k->vt_start[v]; j < k->vt_start[v + 1]; j++)
+            if (k->vtp[j] == FP_TRACK_NONE) k->has_own[v] = 1;
     k->ow = malloc((m ? m : 1) * sizeof *k->ow);
     k->ov = malloc((m ? m : 1) * sizeof *k->ov);
     if (!k->ow || !k->ov) {
@@ -2612,14 +2629,14 @@ static int tree_build(fp_contact *c, struct track *k)
         free(e);
     }
     /* every triangle's normal and every node's boxes in P */
-    k->tclock = 1;
-    for (size_t x = 0; x < k->nnode; x++) k->nstamp[x] = 1;
-    for (size_t i = 0; i < m; i++) k->pstamp[i] = 1;
+    k->tclock = k->rclock = 1;
+    for (size_t v = 0; v < c->n; v++) k->vstamp[v] = 1; /* (vstamp's pages written here) */
     for (size_t i = 0; i <= (t ? t : 1) >> FP_BLOCK_SHIFT; i++) k->bstamp[i] = 1;
     for (size_t i = 0; i <= (t ? t : 1) >> FP_SUPER_SHIFT; i++) k->sbstamp[i] = 1;
     c->tk = k;
     tree_update(c, k->p, NULL, false); /* no flips counted: no failure */
     k->nmq = 0;
+    k->rclock = 2; /* the region: empty, as D_P */
     /* the room a check's scratch grows to, made now (a gesture's first frame on the 1.7M
      * face grew it with about 70 page faults): each lane's contour for the longest cycle,
      * its moved places for a task of the walk's grain, its share of the marking's moved
@@ -2712,8 +2729,7 @@ static void tick(fp_contact *c)
         memset(k->tstamp, 0, t * sizeof *k->tstamp);
         if (k->nstamp) memset(k->nstamp, 0, k->nnode * sizeof *k->nstamp);
         if (k->pstamp) memset(k->pstamp, 0, t * sizeof *k->pstamp);
-        if (k->bstamp) memset(k->bstamp, 0, (((t ? t : 1) >> FP_BLOCK_SHIFT) + 1) * sizeof *k->bstamp);
-        if (k->sbstamp) memset(k->sbstamp, 0, (((t ? t : 1) >> FP_SUPER_SHIFT) + 1) * sizeof *k->sbstamp);
+        if (k->vstamp) memset(k->vstamp, 0, c->n * sizeof *k->vstamp);
         k->tclock = 1;
     }
 }
@@ -2864,7 +2880,14 @@ static int reference(fp_contact *c, const float *ref, const uint32_t *ranges, si
     if (k->tree) { /* the triangles that changed: their normals and the boxes above them */
         for (size_t i = 0; i < k->nmv; i++)
             memcpy(k->p + 3 * (size_t)k->mv[i], ref + 3 * (size_t)k->mv[i], 3 * sizeof(float));
-        return tree_update(c, k->p, NULL, false) < 0 ? -ENOMEM : 0;
+        if (tree_update(c, k->p, NULL, false) < 0) return -ENOMEM;
+        if (++k->rclock == 0) { /* the region empty, as D_P */
+            size_t t = c->t ? c->t : 1;
+            memset(k->bstamp, 0, ((t >> FP_BLOCK_SHIFT) + 1) * sizeof *k->bstamp);
+            memset(k->sbstamp, 0, ((t >> FP_SUPER_SHIFT) + 1) * sizeof *k->sbstamp);
+            k->rclock = 1;
+        }
+        return 0;
     }
     for (size_t i = 0; i < k->nmv; i++)
         if (mark_tris(c, k->mv[i])) return -ENOMEM;
