@@ -209,15 +209,23 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
  *    triangles a frame, moving about their own size in a fast frame) up to all of them
  *    renew: 5.4-7.3 ms median, 47-103 ms p99, 15-25 frames of 225 skipped. Larger skins
  *    renew less but lengthen the lists and each renewal: no gain measured.
- *  - the hierarchy: each moved vertex's triangles stamped, with their blocks of 64 and
- *    4096 places in the tree's order (plain stores, about 15 ns a vertex), the nodes that
- *    hold them found from the root through the blocks, each moved triangle's normal, flip
+ *  - the hierarchy: each moved vertex stamped (one store; a vertex that joins D_P also
+ *    stamps its triangles' blocks of 64 and 4096 places in the tree's order: the region,
+ *    which holds every triangle with a vertex in D_P and is emptied with it), the nodes that
+ *    may hold a moved triangle found from the root through the region's blocks, the moved
+ *    triangles there by their vertices' stamps (the marking of the 1.68M face's 31,000
+ *    moved vertices: 0.21-0.23 ms on two threads against 0.54-0.57 when each stamped its
+ *    six triangles' places; the refit 0.1-0.15 ms more), each moved triangle's normal, flip
  *    and box (about 17 ns), the walk (along the borders of the certified patches: with
  *    leaves of 8 triangles about 43,000 node pairs and 4,600 leaf pairs, 2.1 ms, on the
  *    1.68M face; leaves of 24 visit fewer node pairs for more box tests in each, the
  *    frame's contact 2.9-3.1 ms median on two threads against 3.2-3.3) and the
  *    certificates (about 60 ns a cycle vertex: 1.1 ms; 28 patches a frame, 18,600 cycle
- *    vertices). Figures are one thread's; see fp_contact_set_threads for two.
+ *    vertices: a sixth their projection, the rest the grid's segment pairs). P := the
+ *    candidate and D_P's update run as the walk job's last tasks, ahead of its verdict (the
+ *    walk reads the candidate and ref, never P; a candidate that fails gets P back), so they
+ *    fill the threads' ends of the walk instead of a serial tail (0.08-0.12 ms on the 1.68M
+ *    face). Figures are one thread's; see fp_contact_set_threads for two.
  *    Nothing is renewed, so a fast frame costs what a slow one does: 1.68M vertices 6.2-6.3
  *    ms median, 7.5-11.7 ms p99, no frame skipped. On the ICT face it
  *    is 3-4 times slower than envelopes (0.36-0.45 ms: its patches, 32 to 1,000 triangles
@@ -285,7 +293,7 @@ void fp_contact_set_certify(fp_contact *c, bool on);
  *  run on one. No effect on envelopes (small meshes: a check there is too short to share).
  *  No thread could be made: 1, silently. c NULL: nothing. Threads: as every call on c (one
  *  thread at a time); the worker is internal. Measured (`bench --case frame`, 1.7M
- *  vertices, 2 cores): contact 2.7-3.2 ms median on two threads, varying with the
+ *  vertices, 2 cores): contact 2.5-2.65 ms median on two threads, varying with the
  *  machine's load (6.1-6.2 ms when the marking, refit and walk all ran on one). */
 #define FP_CONTACT_SHARE_MIN 4096
 void fp_contact_set_threads(fp_contact *c, int threads, size_t min_moved);
