@@ -719,6 +719,21 @@ static void test_set_pose(void **state)
     assert_int_equal(info.flipped, 1);
     assert_int_equal(fp_contact_set_pose(c, weld, NULL), -EINVAL);
     fp_contact_destroy(&c);
+    /* the incremental guard's hierarchy keeps the rest normals by place: a pose set after it
+     * was built reaches that copy too */
+    assert_int_equal(fp_contact_create(tri, 1, 3, weld, &c), 0);
+    fp_contact_set_prewarm(c, 0);
+    assert_int_equal(fp_contact_reference(c, weld, NULL, SIZE_MAX), 0); /* built */
+    assert_int_equal(fp_contact_set_pose(c, weld, posed), 0);
+    assert_int_equal(fp_contact_reference(c, posed, NULL, SIZE_MAX), 0);
+    fp_contact_result r;
+    assert_int_equal(fp_contact_step(c, posed, nudged, NULL, SIZE_MAX, 6, &r), 0);
+    assert_int_equal(r.flipped, 0);
+    assert_true(r.t == 1);
+    assert_int_equal(fp_contact_step(c, posed, folded, NULL, SIZE_MAX, 6, &r), 0);
+    assert_int_equal(r.flipped, 1);
+    assert_true(r.t < 1);
+    fp_contact_destroy(&c);
 }
 
 /* Flips count on the input's own crossings too: a crossing the input already has excuses
