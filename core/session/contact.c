@@ -2587,7 +2587,7 @@ static int tree_build(fp_contact *c, struct track *k)
     k->bstamp = calloc(((t ? t : 1) >> FP_BLOCK_SHIFT) + 1, sizeof *k->bstamp);
     k->sbstamp = calloc(((t ? t : 1) >> FP_SUPER_SHIFT) + 1, sizeof *k->sbstamp);
     k->vstamp = malloc((c->n ? c->n : 1) * sizeof *k->vstamp);
-    k->has_own = calloc(c->n ? c->n : 1, 1);
+    k->has_own = malloc(c->n ? c->n : 1);
     if (!k->tpos || !k->order || !k->tn || !k->tbox || !k->pstamp || !k->node || !k->bstamp || !k->sbstamp ||
         !k->nstamp || !k->vtp || !k->vstamp || !k->has_own) {
         track_free(k);
@@ -2605,9 +2605,11 @@ static int tree_build(fp_contact *c, struct track *k)
     }
     for (size_t i = 0; i < m; i++) k->tpos[k->order[i]] = (uint32_t)i;
     for (size_t j = 0; j < 3 * t; j++) k->vtp[j] = k->tpos[k->vt[j]]; /* vt's places */
-    for (size_t v = 0; v < c->n; v++)
-        for (uint32_t j = k->vt_start[v]; j < k->vt_start[v + 1]; j++)
-            if (k->vtp[j] == FP_TRACK_NONE) k->has_own[v] = 1;
+    for (size_t v = 0; v < c->n; v++) { /* (every byte written: no page faults in a frame) */
+        uint8_t own = 0;
+        for (uint32_t j = k->vt_start[v]; j < k->vt_start[v + 1]; j++) own |= k->vtp[j] == FP_TRACK_NONE;
+        k->has_own[v] = own;
+    }
     k->ow = malloc((m ? m : 1) * sizeof *k->ow);
     k->ov = malloc((m ? m : 1) * sizeof *k->ov);
     if (!k->ow || !k->ov) {
