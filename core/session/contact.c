@@ -1112,16 +1112,31 @@ static int renew_cell(fp_contact *c, const int64_t key[3], const uint32_t *R, si
         for (int j = 0; j < 3; j++) k->rw[i][j] = c->weld[c->tris[3 * (size_t)k->rx[i] + j]];
     }
     const cellvec *cv = cell_find(k, key, false);
-    for (uint32_t j = 0; cv && j < cv->len; j++) { /* (own triangles have no envelope) */
-        const centry *en = &cv->ids[j];
-        for (size_t i = 0; i < nr; i++) {
-            uint32_t x = k->rx[i];
-            const float *ex = k->renv[i];
-            if (!boxes_meet(ex, en->env) || en->tri == x) continue;
-            bool mine = true;
-            for (int a = 0; a < 3 && mine; a++)
-                mine = cell_coord(max_f(ex[a], en->env[a]), k->ih) == key[a];
-            if (mine && !welded_adjacent(k->rw[i], en->w) && link(c, x, en->tri, clock)) return -ENOMEM;
+    if (!cv) return 0;
+    /* up to 64 requests at a time: each registered triangle's envelope against all of them
+     * in one branch-free loop (a mask of hits), then the hits */
+    for (size_t i0 = 0; i0 < nr; i0 += 64) {
+        size_t i1 = nr - i0 > 64 ? i0 + 64 : nr;
+        for (uint32_t j = 0; j < cv->len; j++) { /* (own triangles have no envelope) */
+            const centry *en = &cv->ids[j];
+            const float *b = en->env;
+            uint64_t m = 0;
+            for (size_t i = i0; i < i1; i++) {
+                const float *ex = k->renv[i];
+                m |= (uint64_t)((ex[0] <= b[3]) & (b[0] <= ex[3]) & (ex[1] <= b[4]) & (b[1] <= ex[4]) &
+                                (ex[2] <= b[5]) & (b[2] <= ex[5]))
+                     << (i - i0);
+            }
+            for (; m; m &= m - 1) {
+                size_t i = i0 + (size_t)__builtin_ctzll(m);
+                uint32_t x = k->rx[i];
+                const float *ex = k->renv[i];
+                if (en->tri == x) continue;
+                bool mine = true;
+                for (int a = 0; a < 3 && mine; a++)
+                    mine = cell_coord(max_f(ex[a], b[a]), k->ih) == key[a];
+                if (mine && !welded_adjacent(k->rw[i], en->w) && link(c, x, en->tri, clock)) return -ENOMEM;
+            }
         }
     }
     return 0;
