@@ -724,11 +724,6 @@ struct track {
     lane lane[FP_CONTACT_MAX_THREADS]; /* [0]: the caller's thread; [1]: the pool's worker */
     struct pool *pool;            /* the worker (fp_contact_set_threads), made on first use */
     size_t shared;                /* this step: checks shared with the worker */
-    bool accept_ahead;            /* this check is the step's first, of the candidate: its walk
-                                     job also takes P := candidate at the moved vertices
-                                     (accept_range), the old P into pv */
-    bool accepted_ahead;          /* it did: P holds the candidate there, lanes' mv the
-                                     vertices that join D_P */
     uint32_t *off;                /* a local scale-back: the blocking triangles' vertices */
     size_t noff, cap_off;
     uint8_t *off_mark;            /* n: in off */
@@ -2559,8 +2554,12 @@ static long tree_update(fp_contact *c, const float *s, const float *ref, bool re
 
 /* New pairs and newly flipped triangles (*flips) of shape s (P but for the moved vertices)
  * against ref, among the pairs with a moved triangle: update, then the hierarchy from its
- * root. Returns the new pairs or -ENOMEM. */
-static long tree_check(fp_contact *c, const float *s, const float *ref, size_t *flips, bool record)
+ * root. accepted not NULL (a step's first check, s its candidate): when the walk is shared,
+ * its job also makes P := s at the moved vertices ahead of the verdict (accept_range: the
+ * old P into pv, the vertices that join D_P into the lanes' mv), and *accepted = true.
+ * Returns the new pairs or -ENOMEM. */
+static long tree_check(fp_contact *c, const float *s, const float *ref, size_t *flips, bool record,
+                       bool *accepted)
 {
     long f = tree_update(c, s, ref, record);
     if (f < 0) return f;
@@ -2571,11 +2570,11 @@ static long tree_check(fp_contact *c, const float *s, const float *ref, size_t *
     if (!p) return node_self(c, &k->lane[0], s, ref, 0, record);
     if (job_open(c, p, FP_JOB_WALK, s, ref)) return -ENOMEM;
     walk_tasks(c, p, 0, FP_TRACK_NONE, grain(k, FP_WALK_GRAIN));
-    if (k->accept_ahead) { /* last: they fill the threads' ends of the walk */
+    if (accepted) { /* last: they fill the threads' ends of the walk */
         for (int i = 0; i < FP_CONTACT_MAX_THREADS; i++) k->lane[i].nmv = 0;
         for (size_t i = 0; i < k->nmv; i += FP_ACCEPT_GRAIN)
             add_task(c, p, (uint32_t)i, (uint32_t)(i + FP_ACCEPT_GRAIN < k->nmv ? i + FP_ACCEPT_GRAIN : k->nmv), 1);
-        k->accepted_ahead = true;
+        *accepted = true;
     }
     job_finish(c, p);
     k->shared++;
@@ -3039,7 +3038,7 @@ static void local_ramp(fp_contact *c)
 /* New pairs and newly flipped triangles of shape s, by the mesh's broad phase */
 static long check(fp_contact *c, const float *s, const float *ref, size_t *flips, bool record)
 {
-    return c->tk->tree ? tree_check(c, s, ref, flips, record) : track_check(c, s, ref, false, flips, record);
+    return c->tk->tree ? tree_check(c, s, ref, flips, record, NULL) : track_check(c, s, ref, false, flips, record);
 }
 
 static int step(fp_contact *c, const float *ref, const float *cand, const uint32_t *ranges,
@@ -3079,6 +3078,7 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
 
     size_t fl = 0; /* newly flipped triangles of the candidate */
     long found;
+    bool accepted = false; /* the walk job made P the candidate ahead (tree_check) */
     if (k->tree) {
         /* the walk job accepts the candidate ahead (accept_range), so that P's copy costs
          * the threads' idle ends, not a serial tail; pv holds the old P */
@@ -3086,13 +3086,10 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
         if (reserve((void **)&k->pv, &cap, 3 * k->nmv, sizeof *k->pv) ||
             reserve((void **)&k->cv, &k->cap_pv, 3 * k->nmv, sizeof *k->cv))
             return -ENOMEM;
-        k->accept_ahead = true;
-        k->accepted_ahead = false;
-        found = tree_check(c, cand, ref, &fl, false);
-        k->accept_ahead = false;
+        found = tree_check(c, cand, ref, &fl, false, &accepted);
         if (found < 0) return -ENOMEM;
         res->moved_tris = k->nmt;
-        if (k->accepted_ahead && (found || fl)) /* it fails: P back */
+        if (accepted && (found || fl)) /* it fails: P back */
             for (size_t i = 0; i < k->nmv; i++)
                 memcpy(k->p + 3 * (size_t)k->mv[i], k->pv + 3 * i, 3 * sizeof(float));
     } else {
@@ -3174,7 +3171,7 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
         /* the hierarchy: the normals and boxes of the shape kept (the last check's may be
          * another) */
         if (k->tree && tree_update(c, k->p, NULL, false) < 0) return -ENOMEM;
-    } else if (!k->accepted_ahead) {
+    } else if (!accepted) {
         for (size_t i = 0; i < k->nmv; i++)
             memcpy(k->p + 3 * (size_t)k->mv[i], cand + 3 * (size_t)k->mv[i], 3 * sizeof(float));
     }
@@ -3186,7 +3183,7 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
      * only they may join it; one that went back to the reference stays in it (a superset is
      * enough for (2); fp_contact_reference empties it), so the step costs its motion, not
      * the whole gesture's */
-    if (k->accepted_ahead && !found && !fl) { /* accept_range found them */
+    if (accepted && !found && !fl) { /* accept_range found them */
         for (int j = 0; j < FP_CONTACT_MAX_THREADS; j++)
             for (size_t i = 0; i < k->lane[j].nmv; i++) {
                 k->in_dp[k->lane[j].mv[i]] = 1;
