@@ -694,9 +694,11 @@ struct track {
     size_t cap_rcb, cap_rr;
     uint32_t *rx;                 /* one cell's requests: their triangles, envelopes and
                                      welded vertices */
-    float (*renv)[6];
+    float *renv;                  /* their envelopes by coordinate: renv[a nr + i] (nr of them) */
     uint32_t (*rw)[3];
-    size_t cap_rx, cap_renv, cap_rw;
+    uint32_t *rlo;                /* the axes (bits 0-2) where its envelope's lower corner is
+                                     in the cell */
+    size_t cap_rx, cap_renv, cap_rw, cap_rlo;
     size_t renewed;               /* envelopes renewed, for fp_contact_result */
     bool tree;                    /* the hierarchy (below), not envelopes (a large mesh) */
     bnode *node;                  /* the hierarchy over the triangles not own, root node[0] */
@@ -766,6 +768,7 @@ static void track_free(struct track *k)
     free(k->rr);
     free(k->rx);
     free(k->rw);
+    free(k->rlo);
     free(k->renv);
     free(k->node);
     free(k->nstamp);
@@ -1090,6 +1093,15 @@ static int link(fp_contact *c, uint32_t x, uint32_t y, uint32_t clock)
     return list_add(&k->dyn[k->slot[y]], x);
 }
 
+#define FP_RENEW_BATCH 64 /* requests tested at once against a registered envelope */
+
+/* the axes (bit a for axis a) on which box b's lower corner lies in the cell key */
+static inline uint32_t lower_in(const struct track *k, const float *b, const int64_t key[3])
+{
+    return (uint32_t)(cell_coord(b[0], k->ih) == key[0]) | (uint32_t)(cell_coord(b[1], k->ih) == key[1]) << 1 |
+           (uint32_t)(cell_coord(b[2], k->ih) == key[2]) << 2;
+}
+
 /* One cell of the batch: requests R (nr of them) against the triangles registered in the
  * cell (static: the bucket's, whose boxes are the weld shape's; dynamic: the cell's). A
  * pair is taken in the cell of its boxes' common lower corner only (so once). */
@@ -1097,40 +1109,46 @@ static int renew_cell(fp_contact *c, const int64_t key[3], const uint32_t *R, si
 {
     struct track *k = c->tk;
     /* the requests' triangles and envelopes, side by side */
-    if (reserve((void **)&k->renv, &k->cap_renv, nr, sizeof *k->renv) ||
+    if (reserve((void **)&k->renv, &k->cap_renv, 6 * nr, sizeof *k->renv) ||
         reserve((void **)&k->rx, &k->cap_rx, nr, sizeof *k->rx) ||
-        reserve((void **)&k->rw, &k->cap_rw, nr, sizeof *k->rw))
+        reserve((void **)&k->rw, &k->cap_rw, nr, sizeof *k->rw) ||
+        reserve((void **)&k->rlo, &k->cap_rlo, nr, sizeof *k->rlo))
         return -ENOMEM;
     for (size_t i = 0; i < nr; i++) {
         k->rx[i] = k->rq[R[i]];
-        memcpy(k->renv[i], k->dyn[k->slot[k->rx[i]]].env, sizeof k->renv[i]);
+        const float *env = k->dyn[k->slot[k->rx[i]]].env;
+        for (int a = 0; a < 6; a++) k->renv[a * nr + i] = env[a];
         for (int j = 0; j < 3; j++) k->rw[i][j] = c->weld[c->tris[3 * (size_t)k->rx[i] + j]];
+        k->rlo[i] = lower_in(k, env, key);
     }
     const cellvec *cv = cell_find(k, key, false);
     if (!cv) return 0;
-    /* up to 64 requests at a time: each registered triangle's envelope against all of them
-     * in one branch-free loop (a mask of hits), then the hits */
-    for (size_t i0 = 0; i0 < nr; i0 += 64) {
-        size_t i1 = nr - i0 > 64 ? i0 + 64 : nr;
+    /* each registered triangle's envelope against every request in one branch-free loop
+     * (vectorised: the hits whose pair is this cell's), then those.
+     * The pair's cell is that of its boxes' common lower corner, max(ex, b) on each axis:
+     * cell_coord is monotonic, so that is this cell (which holds both lower corners or
+     * cells beyond them) iff on each axis one of the two lower corners is in it. */
+    const float *lx = k->renv, *ly = lx + nr, *lz = ly + nr, *hx = lz + nr, *hy = hx + nr, *hz = hy + nr;
+    const uint32_t *rlo = k->rlo;
+    for (size_t i0 = 0; i0 < nr; i0 += FP_RENEW_BATCH) {
+        size_t i1 = nr - i0 > FP_RENEW_BATCH ? i0 + FP_RENEW_BATCH : nr;
         for (uint32_t j = 0; j < cv->len; j++) { /* (own triangles have no envelope) */
             const centry *en = &cv->ids[j];
-            const float *b = en->env;
-            uint64_t m = 0;
+            const float b0 = en->env[0], b1 = en->env[1], b2 = en->env[2], b3 = en->env[3],
+                        b4 = en->env[4], b5 = en->env[5];
+            uint32_t blo = lower_in(k, en->env, key), any = 0, hit[FP_RENEW_BATCH];
             for (size_t i = i0; i < i1; i++) {
-                const float *ex = k->renv[i];
-                m |= (uint64_t)((ex[0] <= b[3]) & (b[0] <= ex[3]) & (ex[1] <= b[4]) & (b[1] <= ex[4]) &
-                                (ex[2] <= b[5]) & (b[2] <= ex[5]))
-                     << (i - i0);
+                uint32_t h = (uint32_t)(lx[i] <= b3) & (uint32_t)(b0 <= hx[i]) & (uint32_t)(ly[i] <= b4) &
+                             (uint32_t)(b1 <= hy[i]) & (uint32_t)(lz[i] <= b5) & (uint32_t)(b2 <= hz[i]) &
+                             (uint32_t)((rlo[i] | blo) == 7);
+                hit[i - i0] = h;
+                any |= h;
             }
-            for (; m; m &= m - 1) {
-                size_t i = i0 + (size_t)__builtin_ctzll(m);
+            for (size_t i = i0; any && i < i1; i++) {
+                if (!hit[i - i0]) continue;
                 uint32_t x = k->rx[i];
-                const float *ex = k->renv[i];
-                if (en->tri == x) continue;
-                bool mine = true;
-                for (int a = 0; a < 3 && mine; a++)
-                    mine = cell_coord(max_f(ex[a], b[a]), k->ih) == key[a];
-                if (mine && !welded_adjacent(k->rw[i], en->w) && link(c, x, en->tri, clock)) return -ENOMEM;
+                if (en->tri != x && !welded_adjacent(k->rw[i], en->w) && link(c, x, en->tri, clock))
+                    return -ENOMEM;
             }
         }
     }
