@@ -78,11 +78,16 @@ static double now_ms(void)
     return ts.tv_sec * 1e3 + ts.tv_nsec / 1e6;
 }
 
+static const char *source_of(char buf[96], const char *name)
+{
+    snprintf(buf, 96, "mapping '%s'", name ? name : "?");
+    return buf;
+}
+
 int fp_mapping_step_run(fp_mapping_step *st, fp_mapping *mapping, const char *name,
                         const fp_frame_input *in, fp_control_set *cs, const fp_slog *log)
 {
-    char source[96];
-    snprintf(source, sizeof source, "mapping '%s'", name ? name : "?");
+    char source[96]; /* the reports' source, "mapping 'NAME'", made only for a report */
     unsigned long long frame = (unsigned long long)in->frame;
     if (st->stopped) {
         cs->active = false;
@@ -99,7 +104,7 @@ int fp_mapping_step_run(fp_mapping_step *st, fp_mapping *mapping, const char *na
     if (ms > budget) {
         st->slow_calls++;
         if (ms > st->slow_max_ms) st->slow_max_ms = ms;
-        fp_slog_repeat_report(&st->slow, log, FP_LOG_WARNING, source, -ETIME,
+        fp_slog_repeat_report(&st->slow, log, FP_LOG_WARNING, source_of(source, name), -ETIME,
                               "process took %.2f ms on frame %llu, over the budget of %g ms "
                               "(frames may be dropped)", ms, frame, budget);
     }
@@ -109,7 +114,7 @@ int fp_mapping_step_run(fp_mapping_step *st, fp_mapping *mapping, const char *na
         snprintf(st->fault_message, sizeof st->fault_message,
                  "wrote past the capacity of the host's %s array (%zu entries) on frame %llu; "
                  "the mapping is stopped, the base stays shown", which, cap, frame);
-        fp_slog_printf(log, FP_LOG_ERROR, source, "%s", st->fault_message);
+        fp_slog_printf(log, FP_LOG_ERROR, source_of(source, name), "%s", st->fault_message);
         fill_canaries(st);
         st->stopped = true;
         st->fault = FP_EPLUGIN_FAULT;
@@ -128,12 +133,12 @@ int fp_mapping_step_run(fp_mapping_step *st, fp_mapping *mapping, const char *na
     }
     if (rc < 0) {
         if (rc == -ERANGE && what[0] == 'c')
-            fp_slog_repeat_report(&st->errors, log, FP_LOG_ERROR, source, rc,
+            fp_slog_repeat_report(&st->errors, log, FP_LOG_ERROR, source_of(source, name), rc,
                                   "%s %zu > capacity %zu (or channel_count %zu > %zu) on frame %llu; "
                                   "keeping the last shape", what, cs->count, cs->capacity,
                                   cs->channel_count, cs->channel_capacity, frame);
         else
-            fp_slog_repeat_report(&st->errors, log, FP_LOG_ERROR, source, rc,
+            fp_slog_repeat_report(&st->errors, log, FP_LOG_ERROR, source_of(source, name), rc,
                                   "%s %d (%s) on frame %llu; keeping the last shape", what, rc,
                                   fp_strerror(rc), frame);
         cs->active = false;
