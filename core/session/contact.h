@@ -201,14 +201,17 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
  *
  * Cost: per frame, the vertices in the ranges and D_P, then
  *  - envelopes: each moved triangle (boxes, its flip, its list: about 100 ns on a large
- *    mesh, mostly cache misses) and each renewed envelope (about 1.5 us; renewed when a
- *    triangle moved a tenth of its size since its last renewal). Measured (`facepuppet
- *    bench --case frame`, contact row, three-claps anchored, 2-core machine, shared): the
- *    ICT face (1,100 moved triangles a frame) 0.07-0.12 ms median, 0.25-0.45 ms p99 (the
- *    full check: about 2.7 ms). On ICT subdivided to 1.68M vertices (50,000-66,000 moved
- *    triangles a frame, moving about their own size in a fast frame) up to all of them
- *    renew: 5.4-7.3 ms median, 47-103 ms p99, 15-25 frames of 225 skipped. Larger skins
- *    renew less but lengthen the lists and each renewal: no gain measured.
+ *    mesh, mostly cache misses) and each renewed envelope (about 1 us on ICT: 0.3 in its
+ *    cells, 0.6-0.7 making its list, by cell, each registered envelope tested against
+ *    the cell's requests in one vectorised loop; renewed when a triangle moved a tenth of
+ *    its size since its last renewal). Measured (`facepuppet bench --case frame`, contact
+ *    row, three-claps anchored, 2-core machine, shared): the ICT face (1,100 moved
+ *    triangles a frame, up to 125 renewed in a gesture's first frames and a fast clap's)
+ *    0.06-0.12 ms median, 0.2-0.45 ms p99 (the full check: about 2.7 ms). On ICT
+ *    subdivided to 1.68M vertices (50,000-66,000 moved triangles a frame, moving about
+ *    their own size in a fast frame) up to all of them renew: 5.4-7.3 ms median, 47-103
+ *    ms p99, 15-25 frames of 225 skipped. Larger skins renew less but lengthen the lists
+ *    and each renewal: no gain measured.
  *  - the hierarchy: each moved vertex stamped (one store; a vertex that joins D_P also
  *    stamps its triangles' blocks of 64 and 4096 places in the tree's order: the region,
  *    which holds every triangle with a vertex in D_P and is emptied with it), the nodes that
