@@ -649,6 +649,9 @@ typedef struct lane {             /* one thread's part of a hierarchy check: scr
     size_t cap_gcount, cap_gseg;
     uint16_t (*grange)[4];        /* each segment's cells (x0, x1, y0, y1) */
     size_t cap_grange;
+    float (*sbox)[4];             /* each segment's box in float, rounded outwards (x0, x1,
+                                     y0, y1; the upper corner over the margin el) */
+    size_t cap_sbox;
     size_t certified, tested;     /* patches certified, triangle pairs tested */
     size_t moved;                 /* moved triangles its refit tasks met */
     uint32_t *mq;                 /* one refit task's moved places (gather) */
@@ -791,6 +794,7 @@ static void track_free(struct track *k)
         free(k->lane[i].gcount);
         free(k->lane[i].gseg);
         free(k->lane[i].grange);
+        free(k->lane[i].sbox);
         free(k->lane[i].mq);
         free(k->lane[i].mv);
         free(k->lane[i].mo);
@@ -1293,6 +1297,17 @@ static inline double orient2(const double *a, const double *b, const double *c)
     return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
 }
 
+/* finite x as a float not above it, and not below it: moved out by 2^-22 of itself (over
+ * the 2^-24 of rounding to float) and 2^-126 (where float is subnormal) before rounding */
+static inline float f_down(double x) { return (float)(x - fabs(x) * 0x1p-22 - 0x1p-126); }
+static inline float f_up(double x) { return (float)(x + fabs(x) * 0x1p-22 + 0x1p-126); }
+
+/* two boxes (x0, x1, y0, y1) meet */
+static inline bool boxes2_meet(const float *a, const float *b)
+{
+    return (a[0] <= b[1]) & (b[0] <= a[1]) & (a[2] <= b[3]) & (b[2] <= a[3]);
+}
+
 /* closed segments ab and cd may meet: not certainly apart (signs beyond the margin e) */
 static bool segs_may_meet(const double *a, const double *b, const double *c, const double *d, double e,
                           double el)
@@ -1347,16 +1362,24 @@ static int contour_tangled(lane *k, const float *s, const uint32_t *cyc, uint32_
     double ic = g / ext;
 #define FP_CELL(x, a) ((uint16_t)dmin((double)(g - 1), dmax(0.0, ((x) - lo[a]) * ic)))
     /* (g - 1 < 65536 for len < 2^32: a cell index fits 16 bits) */
-    if (reserve((void **)&k->grange, &k->cap_grange, len, sizeof *k->grange)) return -ENOMEM;
+    if (reserve((void **)&k->grange, &k->cap_grange, len, sizeof *k->grange) ||
+        reserve((void **)&k->sbox, &k->cap_sbox, len, sizeof *k->sbox))
+        return -ENOMEM;
     uint16_t(*gr)[4] = k->grange; /* each segment's cells, made once */
+    float(*sb)[4] = k->sbox;
     size_t ne = 0;
     for (uint32_t i = 0; i < len; i++) {
         const double *a = xy + 2 * (size_t)i, *b = xy + 2 * (size_t)(i + 1 < len ? i + 1 : 0);
-        gr[i][0] = FP_CELL(dmin(a[0], b[0]) - el, 0);
-        gr[i][1] = FP_CELL(dmax(a[0], b[0]) + el, 0);
-        gr[i][2] = FP_CELL(dmin(a[1], b[1]) - el, 1);
-        gr[i][3] = FP_CELL(dmax(a[1], b[1]) + el, 1);
+        double x0 = dmin(a[0], b[0]), x1 = dmax(a[0], b[0]) + el, y0 = dmin(a[1], b[1]), y1 = dmax(a[1], b[1]) + el;
+        gr[i][0] = FP_CELL(x0 - el, 0);
+        gr[i][1] = FP_CELL(x1, 0);
+        gr[i][2] = FP_CELL(y0 - el, 1);
+        gr[i][3] = FP_CELL(y1, 1);
         ne += (size_t)(gr[i][1] - gr[i][0] + 1) * (gr[i][3] - gr[i][2] + 1);
+        sb[i][0] = f_down(x0);
+        sb[i][1] = f_up(x1);
+        sb[i][2] = f_down(y0);
+        sb[i][3] = f_up(y1);
     }
 #undef FP_CELL
     if (ne > 16 * (size_t)len) return 1; /* segments long against the polygon: not worth it */
@@ -1375,11 +1398,15 @@ static int contour_tangled(lane *k, const float *s, const uint32_t *cyc, uint32_
         if (!pass)
             for (size_t q = 0; q < (size_t)g * g; q++) cnt[q + 1] += cnt[q];
     }
-    /* the fill moved each start to the next cell's: cell q is seg[(q ? cnt[q - 1] : 0) .. cnt[q]) */
+    /* the fill moved each start to the next cell's: cell q is seg[(q ? cnt[q - 1] : 0) .. cnt[q]).
+     * A pair whose float boxes are apart is apart in segs_may_meet's first test (the boxes
+     * hold the double ones, the upper corners over el): only the others are tested. */
     for (size_t q = 0; q < (size_t)g * g; q++) {
         uint32_t b0 = q ? cnt[q - 1] : 0, b1 = cnt[q];
-        for (uint32_t i = b0; i < b1; i++)
+        for (uint32_t i = b0; i < b1; i++) {
+            const float *bi = sb[seg[i]];
             for (uint32_t j = i + 1; j < b1; j++) {
+                if (!boxes2_meet(bi, sb[seg[j]])) continue;
                 uint32_t x = seg[i], y = seg[j];
                 if (x > y) {
                     uint32_t z = x;
@@ -1391,6 +1418,7 @@ static int contour_tangled(lane *k, const float *s, const uint32_t *cyc, uint32_
                              *c = xy + 2 * (size_t)y, *dd = xy + 2 * (size_t)(y + 1 < len ? y + 1 : 0);
                 if (segs_may_meet(a, b, c, dd, e, el)) return 1;
             }
+        }
     }
     return 0;
 }
@@ -2683,6 +2711,7 @@ static int tree_build(fp_contact *c, struct track *k)
         lane *ln = &k->lane[i];
         rc = reserve_written((void **)&ln->xy, &ln->cap_xy, 2 * maxcyc, sizeof *ln->xy) ||
              reserve_written((void **)&ln->grange, &ln->cap_grange, maxcyc, sizeof *ln->grange) ||
+             reserve_written((void **)&ln->sbox, &ln->cap_sbox, maxcyc, sizeof *ln->sbox) ||
              reserve_written((void **)&ln->gcount, &ln->cap_gcount, g * g + 1, sizeof *ln->gcount) ||
              reserve_written((void **)&ln->gseg, &ln->cap_gseg, 16 * maxcyc, sizeof *ln->gseg) ||
              reserve_written((void **)&ln->mq, &ln->cap_mq, m < FP_WALK_GRAIN ? m + 1 : FP_WALK_GRAIN,
