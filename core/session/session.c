@@ -407,6 +407,14 @@ static void on_event(void *user, size_t input, const fp_event *ev)
     fp_record_step_event(&s->record, ev);
 }
 
+/* The contact guard's reference (the posed base) changed on ranges (count SIZE_MAX:
+ * anywhere): its next call compares P there and at D_P (fp_contact_reference). */
+static void reference_changed(fp_session *s, const uint32_t *ranges, size_t count)
+{
+    fp_changed_add(&s->cg_ref, ranges, count);
+    s->cg_sync = FP_CG_REF_CHANGED;
+}
+
 /* The base changed (commit, undo, reset): the rig poses it, the engine re-indexes the posed
  * base, which is shown. */
 static void base_changed(fp_session *s)
@@ -418,8 +426,7 @@ static void base_changed(fp_session *s)
     fp_rig_step_update(&s->rig, NULL, s->base, &s->log);
     s->shown = fp_rig_step_posed(&s->rig, s->base);
     fp_engine_step_set_base(&s->engine, s->shown);
-    fp_changed_all(&s->cg_ref);
-    s->cg_sync = FP_CG_REF_CHANGED;
+    reference_changed(s, NULL, SIZE_MAX);
 }
 
 /* The shape shown is the reference again (a frame without a deformation, an engine error):
@@ -593,8 +600,7 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame
                     fp_engine_step_commit(&s->engine, fp_rig_step_posed(&s->rig, s->base));
                     s->shown = fp_rig_step_posed(&s->rig, s->base);
                     s->shown_kind = SHOWN_POSED;
-                    fp_changed_add(&s->cg_ref, tr, nt);
-                    s->cg_sync = FP_CG_REF_CHANGED; /* the reference changed on the ranges */
+                    reference_changed(s, tr, nt);
                 } else {
                     /* the output buffer becomes the base on the touched ranges only, and
                      * only those are re-indexed; the anchored gesture ended, unanchored
@@ -692,8 +698,7 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     if (fp_rig_step_update(&s->rig, &s->cs, s->base, &s->log)) {
         fp_engine_step_set_base(&s->engine, fp_rig_step_posed(&s->rig, s->base));
         fp_changed_all(&s->shown_changed);
-        fp_changed_all(&s->cg_ref);
-        s->cg_sync = FP_CG_REF_CHANGED;
+        reference_changed(s, NULL, SIZE_MAX);
     }
     const fp_control_set *cs = fp_rig_step_run(&s->rig, &s->cs);
     FP_STAGE_END(FP_STAGE_MAPPING);
@@ -725,8 +730,7 @@ void fp_session_apply_controls(fp_session *s, int64_t now_ns, const fp_control_s
     if (fp_rig_step_update(&s->rig, cs, s->base, &s->log)) {
         fp_engine_step_set_base(&s->engine, fp_rig_step_posed(&s->rig, s->base));
         fp_changed_all(&s->shown_changed);
-        fp_changed_all(&s->cg_ref);
-        s->cg_sync = FP_CG_REF_CHANGED;
+        reference_changed(s, NULL, SIZE_MAX);
     }
     engine_and_history(s, cs, st);
     fp_record_step_end(&s->record, s->frame, now_ns, requested | s->actions, cs, s->inputs,
