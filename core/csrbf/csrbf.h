@@ -273,8 +273,9 @@ typedef struct csrbf_eval_stats {
  *  The arithmetic is float (positions, coefficients), the coefficients having been solved in
  *  double. Without a polynomial a vertex outside every
  *  support gets exactly its base position, bit for bit. Vectorised (AVX-512 intrinsics with
- *  r from rsqrt14 + one Newton step where the CPU has it, else target_clones of portable C
- *  for x86-64-v3 / baseline, chosen at run time) and parallel over blocks with OpenMP
+ *  r from rsqrt14 + one Newton step where the CPU has it, else the same code on AVX2 + FMA
+ *  (rsqrt + one Newton step), else target_clones of portable C; chosen at run time, and the
+ *  environment variable CSRBF_ISA=avx2 or =none asks for less) and parallel over blocks with OpenMP
  *  (options.threads), one contiguous part of equal cost per thread; work below about 8 us on
  *  one core, counted from the blocks visited, stays on the calling thread.
  *  stats may be NULL; with stats the pair count, moved count and maximum

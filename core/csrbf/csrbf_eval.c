@@ -2,8 +2,8 @@
  * matched against the centres whose support meets the block's box, found through the points'
  * block tree for all centres at once (64-bit masks, kept in the solver while the centres and
  * the points stay) or, beyond 64 centres, the centre grid; within a block the loop runs over
- * the selected centres and vectorises over the vertices (AVX-512 intrinsics, else SIMD clones
- * for AVX2+FMA and the baseline, picked at load time). Blocks run in parallel with OpenMP,
+ * the selected centres and vectorises over the vertices (eval_simd.h: AVX-512, else AVX2 +
+ * FMA, picked at run time by isa_pick; else the general path's SIMD clones). Blocks run in parallel with OpenMP,
  * one contiguous part of equal cost per thread. csrbf_evaluate_touched writes only the blocks
  * in a support now or at its last call. */
 #include "internal.h"
@@ -76,130 +76,22 @@ typedef void (*block_fn)(const float *, const float *, const float *, const uint
                          const float *, const float *, const float *, const float *,
                          const float *, const float *, float, float *, float *, float *, int *);
 
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && CSRBF_BLOCK == 16
 #include <immintrin.h>
-#define CSRBF_AVX512 1
-/* AVX-512 kernels (B = 16 = one vector). r = r2 * rsqrt(r2): the 14-bit estimate plus one
- * Newton step (relative error below 1e-7) replaces the slower vsqrtps; lanes outside the
- * support are masked off (their accumulators keep their bits). */
-/* The support mask `in` (lanes within the support of the centre (CX, CY, CZ)) and, from
- * the squared scaled distance r2, the kernel weight `w` at the 16 lanes X, Y, Z: declarations,
- * shared by the per-block kernel, the fused driver and the weight cache (the same
- * expressions, so the same operations and roundings). AVX512_DIST(J): the centre packed at
- * cp[8 J]. */
-#define AVX512_DIST_AT(CX, CY, CZ)                                                             \
-    __m512 dx = _mm512_sub_ps(X, _mm512_set1_ps(CX));                                          \
-    __m512 dy = _mm512_sub_ps(Y, _mm512_set1_ps(CY));                                          \
-    __m512 dz = _mm512_sub_ps(Z, _mm512_set1_ps(CZ));                                          \
-    __m512 r2 = _mm512_mul_ps(dx, dx);                                                         \
-    r2 = _mm512_fmadd_ps(dy, dy, r2);                                                          \
-    r2 = _mm512_fmadd_ps(dz, dz, r2);                                                          \
-    r2 = _mm512_mul_ps(r2, ir2);                                                               \
-    __mmask16 in = _mm512_cmp_ps_mask(r2, one, _CMP_LT_OQ)
-#define AVX512_DIST(J) AVX512_DIST_AT(cp[8 * (J)], cp[8 * (J) + 1], cp[8 * (J) + 2])
-#define AVX512_WEIGHT(PSI)                                                                     \
-    __m512 q = _mm512_max_ps(r2, tiny);                                                        \
-    __m512 e = _mm512_rsqrt14_ps(q);                                                           \
-    __m512 hq = _mm512_mul_ps(half, q);                                                        \
-    e = _mm512_mul_ps(e, _mm512_fnmadd_ps(_mm512_mul_ps(hq, e), e, three_half));               \
-    __m512 r = _mm512_mul_ps(q, e);                                                            \
-    __m512 t1 = _mm512_sub_ps(one, r);                                                         \
-    __m512 w = PSI
+/* the fast path: AVX-512 or AVX2 + FMA kernels (eval_simd.h), picked at run time */
+#define CSRBF_SIMD 1
+#else
+#define CSRBF_SIMD 0
+#endif
 
-#define AVX512_KERNEL(NAME, PSI)                                                               \
-    __attribute__((target("avx512f,fma"))) static void NAME(                                   \
-        const float *restrict x, const float *restrict y, const float *restrict z,            \
-        const uint32_t *restrict list, size_t k, const float *restrict cx,                     \
-        const float *restrict cy, const float *restrict cz, const float *restrict ax,          \
-        const float *restrict ay, const float *restrict az, float inv_r2,                      \
-        float *restrict accx, float *restrict accy, float *restrict accz, int *restrict cnt)   \
-    {                                                                                          \
-        const __m512 X = _mm512_loadu_ps(x), Y = _mm512_loadu_ps(y), Z = _mm512_loadu_ps(z);   \
-        const __m512 one = _mm512_set1_ps(1.0f), half = _mm512_set1_ps(0.5f),                  \
-                     three_half = _mm512_set1_ps(1.5f), tiny = _mm512_set1_ps(1e-30f),         \
-                     ir2 = _mm512_set1_ps(inv_r2);                                             \
-        __m512 sx = _mm512_set1_ps(-0.0f), sy = sx, sz = sx;                                   \
-        __m512i sc = _mm512_setzero_si512();                                                   \
-        const __m512i ione = _mm512_set1_epi32(1);                                             \
-        for (size_t t = 0; t < k; t++) {                                                       \
-            const uint32_t j = list[t];                                                        \
-            AVX512_DIST_AT(cx[j], cy[j], cz[j]);                                               \
-            if (!in) continue;                                                                 \
-            AVX512_WEIGHT(PSI);                                                                \
-            sx = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(ax[j]), sx, in);                      \
-            sy = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(ay[j]), sy, in);                      \
-            sz = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(az[j]), sz, in);                      \
-            sc = _mm512_mask_add_epi32(sc, in, sc, ione);                                      \
-        }                                                                                      \
-        _mm512_storeu_ps(accx, sx);                                                            \
-        _mm512_storeu_ps(accy, sy);                                                            \
-        _mm512_storeu_ps(accz, sz);                                                            \
-        _mm512_storeu_si512(cnt, sc);                                                          \
-    }
-
-#define T2 _mm512_mul_ps(t1, t1)
-AVX512_KERNEL(block_psi31_avx512,
-              _mm512_mul_ps(_mm512_mul_ps(T2, T2), _mm512_fmadd_ps(_mm512_set1_ps(4.0f), r, one)))
-AVX512_KERNEL(block_psi30_avx512, T2)
-AVX512_KERNEL(block_psi32_avx512,
-              _mm512_mul_ps(_mm512_mul_ps(_mm512_mul_ps(T2, T2), T2),
-                            _mm512_fmadd_ps(_mm512_fmadd_ps(_mm512_set1_ps(35.0f / 3.0f), r,
-                                                            _mm512_set1_ps(6.0f)),
-                                            r, one)))
-#undef T2
-
-/* Interleave 16 x, y, z (+ displacement) into 48 contiguous floats. */
-static inline __attribute__((target("avx512f"), always_inline)) void
-interleave_avx512(float *restrict out, __m512 X, __m512 Y, __m512 Z)
-{
-    /* output float f = 16 k + i holds component f % 3 of vertex f / 3: first pick x or y
-     * (index < 16: X, >= 16: Y; z lanes are placeholders), then insert z (16 + v) */
-    static const int32_t ixy[3][16] = {
-        {0, 16, 0, 1, 17, 1, 2, 18, 2, 3, 19, 3, 4, 20, 4, 5},
-        {21, 5, 6, 22, 6, 7, 23, 7, 8, 24, 8, 9, 25, 9, 10, 26},
-        {10, 11, 27, 11, 12, 28, 12, 13, 29, 13, 14, 30, 14, 15, 31, 15}};
-    static const int32_t iz[3][16] = {
-        {0, 1, 16, 3, 4, 17, 6, 7, 18, 9, 10, 19, 12, 13, 20, 15},
-        {0, 21, 2, 3, 22, 5, 6, 23, 8, 9, 24, 11, 12, 25, 14, 15},
-        {26, 1, 2, 27, 4, 5, 28, 7, 8, 29, 10, 11, 30, 13, 14, 31}};
-    for (int k = 0; k < 3; k++) {
-        __m512 xy = _mm512_permutex2var_ps(X, _mm512_loadu_si512(ixy[k]), Y);
-        __m512 o = _mm512_permutex2var_ps(xy, _mm512_loadu_si512(iz[k]), Z);
-        _mm512_storeu_ps(out + 16 * k, o);
-    }
-}
-
-__attribute__((target("avx512f"))) static void write_block_avx512(
-    float *restrict out, const float *restrict x, const float *restrict y,
-    const float *restrict z, const float *restrict accx, const float *restrict accy,
-    const float *restrict accz)
-{
-    interleave_avx512(out, _mm512_add_ps(_mm512_loadu_ps(x), _mm512_loadu_ps(accx)),
-                      _mm512_add_ps(_mm512_loadu_ps(y), _mm512_loadu_ps(accy)),
-                      _mm512_add_ps(_mm512_loadu_ps(z), _mm512_loadu_ps(accz)));
-}
-
-/* One centre's contribution to the 16 lanes (shared by the fused driver below). With SKIP (a
- * compile-time constant) a centre whose support holds none of the 16 vertices costs only the
- * distance test (blocks whose box meets a support they do not reach: the ends of grid rows). */
-#define AVX512_PAIR(PSI, J, SKIP)                                                              \
-    do {                                                                                       \
-        AVX512_DIST(J);                                                                        \
-        if ((SKIP) && !in) break;                                                              \
-        AVX512_WEIGHT(PSI);                                                                    \
-        sx = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(cp[8 * (J) + 3]), sx, in);                \
-        sy = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(cp[8 * (J) + 4]), sy, in);                \
-        sz = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(cp[8 * (J) + 5]), sz, in);                \
-        if (stats_on) cntv = _mm512_mask_add_epi32(cntv, in, cntv, ione);                      \
-    } while (0)
-
+#if CSRBF_SIMD
 /* Statistics of a run of blocks (the fast path counts them per block, in registers). */
 typedef struct {
     size_t pairs, moved;
     float maxd2;
 } block_stats;
 
-/* A kept selection's kernel weights (see AVX512_FILL). */
+/* A kept selection's kernel weights (see eval_simd.h's SIMD_FILL). */
 typedef struct {
     const float *w;
     const uint16_t *in;
@@ -214,265 +106,15 @@ static inline void copy_base(const csrbf_points *P, float *out, size_t b0, size_
     if (v1 > v0) memcpy(out + 3 * v0, P->xyz + 3 * v0, (v1 - v0) * 3 * sizeof(float));
 }
 
-/* A partial block (the mesh's last, nv < B vertices): base + displacement, and with stats its
- * pairs, moved vertices and largest squared displacement straight into *bs. Kept out of the
- * drivers' loop (and its registers). */
-__attribute__((target("avx512f,fma"), noinline, cold)) static void
-finish_partial(float *o, const float *x, const float *y, const float *z, size_t nv, __m512 sx,
-               __m512 sy, __m512 sz, __m512i cntv, int stats, block_stats *bs)
-{
-    _Alignas(64) float acc[3][B];
-    _Alignas(64) int32_t cnt[B];
-    _mm512_store_ps(acc[0], sx);
-    _mm512_store_ps(acc[1], sy);
-    _mm512_store_ps(acc[2], sz);
-    _mm512_store_si512(cnt, cntv);
-    for (size_t v = 0; v < nv; v++) {
-        o[3 * v] = x[v] + acc[0][v];
-        o[3 * v + 1] = y[v] + acc[1][v];
-        o[3 * v + 2] = z[v] + acc[2][v];
-        if (stats) {
-            bs->pairs += (size_t)cnt[v];
-            bs->moved += cnt[v] > 0;
-            /* the same operations as the full blocks' (mul, fma, fma), lane by lane */
-            float d2 = fmaf(acc[2][v], acc[2][v], fmaf(acc[1][v], acc[1][v], acc[0][v] * acc[0][v]));
-            if (d2 > bs->maxd2) bs->maxd2 = d2;
-        }
-    }
-}
-
-/* The fast path without polynomial, one copy per MODE (compile-time): DRIVE_ALL: blocks
- * i0..i1-1, each with all m centres (blk, msk unused). DRIVE_LIST: the work items i0..i1-1,
- * block blk[i] with the centres of the bit mask msk[i] (bit j: centre j, j < 64), or restored
- * to the base where msk[i] is 0. DRIVE_GAPS: as DRIVE_LIST, and the blocks of [g0, g1) that
- * no item names are copied from the base (a full evaluation: items and gaps cover the range
- * in order). Blocks are computed in registers and stored interleaved. With STATS (also
- * compile-time) the pairs in support are counted per lane with one masked add per pair, and
- * moved vertices and the largest squared displacement per block, into *bs (padding lanes
- * excluded; the lane counts are flushed every 2^16 blocks so that they cannot overflow). With
- * CACHED (compile-time; LIST and GAPS, any kernel: PSI unused) the items are the kept
- * selection's and each pair's weights and support mask come from its weight cache *wc instead
- * of the kernel (the same values, added by the same masked fused multiply-adds). */
+/* The fast path's modes (see eval_simd.h's SIMD_DRIVER): every block with every centre; the
+ * listed blocks with their centre masks; the listed blocks and the gaps between them. */
 enum { DRIVE_ALL = 0, DRIVE_LIST = 1, DRIVE_GAPS = 2 };
-#define AVX512_DRIVER(NAME, PSI, STATS, MODE, CACHED)                                          \
-    __attribute__((target("avx512f,fma"))) static void NAME(                                   \
-        const csrbf_points *P, float *restrict out, const uint32_t *restrict blk,              \
-        const uint64_t *restrict msk, size_t i0, size_t i1, size_t g0, size_t g1, size_t m,    \
-        const float *restrict cp, float inv_r2, const weight_cache *wc, block_stats *bs)       \
-    {                                                                                          \
-        const __m512 one = _mm512_set1_ps(1.0f), half = _mm512_set1_ps(0.5f),                 \
-                     three_half = _mm512_set1_ps(1.5f), tiny = _mm512_set1_ps(1e-30f),         \
-                     ir2 = _mm512_set1_ps(inv_r2);                                             \
-        const __m512i ione = _mm512_set1_epi32(1), izero = _mm512_setzero_si512();             \
-        enum { stats_on = STATS };                                                             \
-        __m512i pairv = izero;                                                                 \
-        __m512 maxd = _mm512_setzero_ps();                                                     \
-        size_t nmoved = 0;                                                                     \
-        const size_t n = P->n;                                                                 \
-        const float *const px = P->s[0], *const py = P->s[1], *const pz = P->s[2];             \
-        size_t pos = g0;                                                                       \
-        (void)g1;                                                                              \
-        (void)m;                                                                               \
-        (void)wc;                                                                              \
-        for (size_t i = i0; i < i1; i++) {                                                     \
-            const size_t b = MODE != DRIVE_ALL ? blk[i] : i;                                   \
-            uint64_t mk = MODE != DRIVE_ALL ? msk[i] : 0;                                      \
-            if (MODE != DRIVE_ALL) {                                                           \
-                if (MODE == DRIVE_GAPS && pos < b) copy_base(P, out, pos, b);                  \
-                pos = b + 1;                                                                   \
-                if (!mk) { /* in a support last call, in none now: the base */                 \
-                    copy_base(P, out, b, b + 1);                                               \
-                    continue;                                                                  \
-                }                                                                              \
-            }                                                                                  \
-            const size_t k0 = b * B, nv = k0 + B <= n ? B : n - k0;                            \
-            float *o = out + 3 * k0;                                                           \
-            const __m512 X = _mm512_loadu_ps(px + k0), Y = _mm512_loadu_ps(py + k0),           \
-                         Z = _mm512_loadu_ps(pz + k0);                                         \
-            __m512 sx = _mm512_set1_ps(-0.0f), sy = sx, sz = sx;                               \
-            __m512i cntv = izero;                                                              \
-            if (CACHED) {                                                                      \
-                const float *restrict wv = wc->w + (size_t)wc->off[i] * B;                     \
-                const uint16_t *restrict wi = wc->in + wc->off[i];                             \
-                while (mk) {                                                                   \
-                    const unsigned j = (unsigned)__builtin_ctzll(mk);                          \
-                    mk &= mk - 1;                                                              \
-                    const __m512 w = _mm512_load_ps(wv);                                       \
-                    const __mmask16 in = (__mmask16)*wi++;                                     \
-                    wv += B;                                                                   \
-                    sx = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(cp[8 * j + 3]), sx, in);      \
-                    sy = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(cp[8 * j + 4]), sy, in);      \
-                    sz = _mm512_mask3_fmadd_ps(w, _mm512_set1_ps(cp[8 * j + 5]), sz, in);      \
-                    if (stats_on) cntv = _mm512_mask_add_epi32(cntv, in, cntv, ione);          \
-                }                                                                              \
-            } else if (MODE != DRIVE_ALL) {                                                    \
-                while (mk) {                                                                   \
-                    const unsigned j = (unsigned)__builtin_ctzll(mk);                          \
-                    mk &= mk - 1;                                                              \
-                    AVX512_PAIR(PSI, j, 1);                                                    \
-                }                                                                              \
-            } else {                                                                           \
-                for (size_t j = 0; j < m; j++) AVX512_PAIR(PSI, j, 0);                         \
-            }                                                                                  \
-            if (nv == B) {                                                                     \
-                if (STATS) {                                                                   \
-                    pairv = _mm512_add_epi32(pairv, cntv);                                     \
-                    nmoved += (size_t)__builtin_popcount(                                      \
-                        (unsigned)_mm512_cmpgt_epi32_mask(cntv, izero));                       \
-                    __m512 d2 = _mm512_mul_ps(sx, sx);                                         \
-                    d2 = _mm512_fmadd_ps(sy, sy, d2);                                          \
-                    d2 = _mm512_fmadd_ps(sz, sz, d2);                                          \
-                    maxd = _mm512_max_ps(maxd, d2);                                            \
-                }                                                                              \
-                interleave_avx512(o, _mm512_add_ps(X, sx), _mm512_add_ps(Y, sy),               \
-                                  _mm512_add_ps(Z, sz));                                       \
-            } else {                                                                           \
-                finish_partial(o, px + k0, py + k0, pz + k0, nv, sx, sy, sz, cntv, STATS, bs); \
-            }                                                                                  \
-            if (STATS && !((i - i0 + 1) & 0xFFFF)) { /* lane counts stay far from 2^32 */      \
-                bs->pairs += (size_t)(uint32_t)_mm512_reduce_add_epi32(pairv);                 \
-                pairv = izero;                                                                 \
-            }                                                                                  \
-        }                                                                                      \
-        if (MODE == DRIVE_GAPS && pos < g1) copy_base(P, out, pos, g1);                        \
-        if (STATS) {                                                                           \
-            bs->pairs += (size_t)(uint32_t)_mm512_reduce_add_epi32(pairv);                     \
-            bs->moved += nmoved;                                                               \
-            float mx = _mm512_reduce_max_ps(maxd);                                             \
-            if (mx > bs->maxd2) bs->maxd2 = mx;                                                \
-        }                                                                                      \
-        (void)bs;                                                                              \
-    }
-
-#define T2 _mm512_mul_ps(t1, t1)
-#define PSI31_AVX512 _mm512_mul_ps(_mm512_mul_ps(T2, T2), _mm512_fmadd_ps(_mm512_set1_ps(4.0f), r, one))
-#define PSI32_AVX512                                                                           \
-    _mm512_mul_ps(_mm512_mul_ps(_mm512_mul_ps(T2, T2), T2),                                    \
-                  _mm512_fmadd_ps(_mm512_fmadd_ps(_mm512_set1_ps(35.0f / 3.0f), r,             \
-                                                  _mm512_set1_ps(6.0f)),                       \
-                                  r, one))
-#define AVX512_DRIVERS(NAME, PSI)                                                              \
-    AVX512_DRIVER(NAME##_all, PSI, 0, DRIVE_ALL, 0)                                            \
-    AVX512_DRIVER(NAME##_list, PSI, 0, DRIVE_LIST, 0)                                          \
-    AVX512_DRIVER(NAME##_gaps, PSI, 0, DRIVE_GAPS, 0)                                          \
-    AVX512_DRIVER(NAME##_all_stats, PSI, 1, DRIVE_ALL, 0)                                      \
-    AVX512_DRIVER(NAME##_list_stats, PSI, 1, DRIVE_LIST, 0)                                    \
-    AVX512_DRIVER(NAME##_gaps_stats, PSI, 1, DRIVE_GAPS, 0)
-AVX512_DRIVERS(drive_psi31, PSI31_AVX512)
-AVX512_DRIVERS(drive_psi30, T2)
-AVX512_DRIVERS(drive_psi32, PSI32_AVX512)
-AVX512_DRIVER(drive_cached_list, T2, 0, DRIVE_LIST, 1)
-AVX512_DRIVER(drive_cached_gaps, T2, 0, DRIVE_GAPS, 1)
-AVX512_DRIVER(drive_cached_list_stats, T2, 1, DRIVE_LIST, 1)
-AVX512_DRIVER(drive_cached_gaps_stats, T2, 1, DRIVE_GAPS, 1)
-#undef AVX512_DRIVERS
-
-/* The weight cache of a kept, refined selection (solver fields sel_w*): for each pair (item
- * i, centre j of msk[i], in increasing j), its 16 lanes' kernel weights and its support mask,
- * as AVX512_DIST / AVX512_WEIGHT compute them; item i's pairs are off[i] .. off[i+1]-1. The
- * weights depend on the vertices and the centres (the start points) only, so anchored frames
- * (only the end points, hence the coefficients, move) reuse them. */
-#define AVX512_FILL(NAME, PSI)                                                                 \
-    __attribute__((target("avx512f,fma"))) static void NAME(                                   \
-        const csrbf_points *P, const uint32_t *restrict blk, const uint64_t *restrict msk,     \
-        size_t k, const float *restrict cp, float inv_r2, float *restrict wv,                  \
-        uint16_t *restrict win, uint32_t *restrict off)                                        \
-    {                                                                                          \
-        const __m512 one = _mm512_set1_ps(1.0f), half = _mm512_set1_ps(0.5f),                 \
-                     three_half = _mm512_set1_ps(1.5f), tiny = _mm512_set1_ps(1e-30f),         \
-                     ir2 = _mm512_set1_ps(inv_r2);                                             \
-        uint32_t p = 0;                                                                        \
-        for (size_t i = 0; i < k; i++) {                                                       \
-            const size_t k0 = (size_t)blk[i] * B;                                              \
-            const __m512 X = _mm512_loadu_ps(P->s[0] + k0), Y = _mm512_loadu_ps(P->s[1] + k0), \
-                         Z = _mm512_loadu_ps(P->s[2] + k0);                                    \
-            off[i] = p;                                                                        \
-            for (uint64_t mk = msk[i]; mk; mk &= mk - 1, p++) {                                \
-                const unsigned j = (unsigned)__builtin_ctzll(mk);                              \
-                AVX512_DIST(j);                                                                \
-                AVX512_WEIGHT(PSI);                                                            \
-                _mm512_store_ps(wv + (size_t)p * B, w);                                        \
-                win[p] = (uint16_t)in;                                                         \
-            }                                                                                  \
-        }                                                                                      \
-        off[k] = p;                                                                            \
-    }
-AVX512_FILL(fill_psi31, PSI31_AVX512)
-AVX512_FILL(fill_psi30, T2)
-AVX512_FILL(fill_psi32, PSI32_AVX512)
-#undef AVX512_FILL
-#undef PSI31_AVX512
-#undef PSI32_AVX512
-#undef T2
 
 typedef void (*drive_fn)(const csrbf_points *, float *, const uint32_t *, const uint64_t *,
                          size_t, size_t, size_t, size_t, size_t, const float *, float,
                          const weight_cache *, block_stats *);
 typedef void (*fill_fn)(const csrbf_points *, const uint32_t *, const uint64_t *, size_t,
                         const float *, float, float *, uint16_t *, uint32_t *);
-static const fill_fn fills[3] = {fill_psi31, fill_psi30, fill_psi32};
-/* cached_drivers[stats][mode - DRIVE_LIST] */
-static const drive_fn cached_drivers[2][2] = {{drive_cached_list, drive_cached_gaps},
-                                              {drive_cached_list_stats, drive_cached_gaps_stats}};
-
-/* drivers[kernel][stats][mode] */
-static const drive_fn drivers[3][2][3] = {
-    {{drive_psi31_all, drive_psi31_list, drive_psi31_gaps},
-     {drive_psi31_all_stats, drive_psi31_list_stats, drive_psi31_gaps_stats}},
-    {{drive_psi30_all, drive_psi30_list, drive_psi30_gaps},
-     {drive_psi30_all_stats, drive_psi30_list_stats, drive_psi30_gaps_stats}},
-    {{drive_psi32_all, drive_psi32_list, drive_psi32_gaps},
-     {drive_psi32_all_stats, drive_psi32_list_stats, drive_psi32_gaps_stats}}};
-
-/* The centres of mask (bit j: centre j) whose support meets each of the CSRBF_FAN boxes
- * lo/hi[first ..]: lane l of (c0, c1) gets bit j. Float, with the conservative margin r2c;
- * the same operations as the kernel's distance (per-axis gaps to the box never exceed a
- * vertex's, and the squares and sums round monotonically), so a block holding a vertex in a
- * support always meets it. Returns the lanes with a centre. */
-static inline __attribute__((target("avx512f,fma"), always_inline)) __mmask16
-group_masks_avx512(const float *const lo[3], const float *const hi[3], size_t first,
-                   uint64_t mask, const float *cx, const float *cy, const float *cz, float r2c,
-                   __m512i *c0out, __m512i *c1out)
-{
-    const __m512 lx = _mm512_loadu_ps(lo[0] + first), ly = _mm512_loadu_ps(lo[1] + first),
-                 lz = _mm512_loadu_ps(lo[2] + first), hx = _mm512_loadu_ps(hi[0] + first),
-                 hy = _mm512_loadu_ps(hi[1] + first), hz = _mm512_loadu_ps(hi[2] + first),
-                 zero = _mm512_setzero_ps(), lim = _mm512_set1_ps(r2c);
-    __m512i c0 = _mm512_setzero_si512(), c1 = c0;
-    __mmask16 any = 0;
-    while (mask) {
-        const unsigned j = (unsigned)__builtin_ctzll(mask);
-        mask &= mask - 1;
-        const __m512 px = _mm512_set1_ps(cx[j]), py = _mm512_set1_ps(cy[j]),
-                     pz = _mm512_set1_ps(cz[j]);
-        __m512 ex = _mm512_max_ps(_mm512_max_ps(_mm512_sub_ps(lx, px), _mm512_sub_ps(px, hx)), zero);
-        __m512 ey = _mm512_max_ps(_mm512_max_ps(_mm512_sub_ps(ly, py), _mm512_sub_ps(py, hy)), zero);
-        __m512 ez = _mm512_max_ps(_mm512_max_ps(_mm512_sub_ps(lz, pz), _mm512_sub_ps(pz, hz)), zero);
-        __m512 d2 = _mm512_mul_ps(ex, ex);
-        d2 = _mm512_fmadd_ps(ey, ey, d2);
-        d2 = _mm512_fmadd_ps(ez, ez, d2);
-        const __mmask16 t = _mm512_cmp_ps_mask(d2, lim, _CMP_LT_OQ);
-        const __m512i bit = _mm512_set1_epi64((long long)(1ull << j));
-        c0 = _mm512_mask_or_epi64(c0, (__mmask8)t, c0, bit);
-        c1 = _mm512_mask_or_epi64(c1, (__mmask8)(t >> 8), c1, bit);
-        any |= t;
-    }
-    *c0out = c0;
-    *c1out = c1;
-    return any;
-}
-
-static int have_avx512(void)
-{
-    static int known = -1;
-    if (known < 0) {
-        __builtin_cpu_init();
-        known = __builtin_cpu_supports("avx512f") != 0; /* benign race: same value */
-    }
-    return known;
-}
-#else
-#define CSRBF_AVX512 0
 #endif
 
 /* out[3v + a] = base + acc (+ p(x)) for the nv <= B vertices of a block: contiguous stores. */
@@ -567,18 +209,29 @@ static void select_emit(block_select *S, size_t first, const uint64_t cm[CSRBF_F
         }
 }
 
-static void select_visit_c(block_select *S, int level, size_t first, uint64_t mask)
+/* The blocks of [lo, hi) whose box meets a support of mask, from node group first of level
+ * down (portable; select_visit_avx512 is the same walk with AVX-512). */
+static void select_visit_c(block_select *S, int level, size_t first, uint64_t mask, size_t lo,
+                           size_t hi)
 {
+    _Static_assert(CSRBF_FAN == 16, "node n of level l holds blocks n 16^l .. (n+1) 16^l - 1");
+    const unsigned sh = 4u * (unsigned)level;
+    const size_t n0 = lo >> sh, n1 = ((hi - 1) >> sh) + 1; /* nodes n0..n1-1 hold [lo, hi) */
+    if (n1 <= first || n0 >= first + CSRBF_FAN) return;
+    const size_t l0 = n0 > first ? n0 - first : 0,
+                 l1 = n1 - first < CSRBF_FAN ? n1 - first : CSRBF_FAN;
     uint64_t cm[CSRBF_FAN];
     const csrbf_points *P = S->P;
     group_masks_c((const float *const *)P->tlo[level], (const float *const *)P->thi[level],
                   first, mask, S->cx, S->cy, S->cz, S->r2c, cm);
+    for (size_t l = 0; l < CSRBF_FAN; l++)
+        if (l < l0 || l >= l1) cm[l] = 0;
     if (level == 0) {
         select_emit(S, first, cm);
         return;
     }
     for (int l = 0; l < CSRBF_FAN; l++)
-        if (cm[l]) select_visit_c(S, level - 1, (first + (size_t)l) * CSRBF_FAN, cm[l]);
+        if (cm[l]) select_visit_c(S, level - 1, (first + (size_t)l) * CSRBF_FAN, cm[l], lo, hi);
 }
 
 /* The selection's prefix costs: cum[i] = the cost of items 0..i-1 (cum[k]: all), the pairs
@@ -597,7 +250,87 @@ static inline __attribute__((always_inline)) size_t count_bits(const uint64_t *m
     return e;
 }
 
-#if CSRBF_AVX512 && CSRBF_BLOCK == 16
+#if CSRBF_SIMD
+/* The fast path's functions for one instruction set (eval_simd.h defines one per inclusion). */
+typedef struct eval_isa {
+    block_fn kern[3];          /* per-block kernels, [ki]: psi31, psi30, psi32 */
+    drive_fn drivers[3][2][3]; /* [ki][stats][mode] */
+    drive_fn cached[2][2];     /* weight-cache drivers, [stats][mode - DRIVE_LIST] */
+    fill_fn fills[3];          /* weight cache fills, [ki] */
+    size_t (*refine)(block_select *S);
+    void (*write_block)(float *out, const float *x, const float *y, const float *z,
+                        const float *accx, const float *accy, const float *accz);
+} eval_isa;
+
+/* Interleave 16 x, y, z (+ displacement) into 48 contiguous floats. */
+static inline __attribute__((target("avx512f"), always_inline)) void
+interleave_avx512(float *restrict out, __m512 X, __m512 Y, __m512 Z)
+{
+    /* output float f = 16 k + i holds component f % 3 of vertex f / 3: first pick x or y
+     * (index < 16: X, >= 16: Y; z lanes are placeholders), then insert z (16 + v) */
+    static const int32_t ixy[3][16] = {
+        {0, 16, 0, 1, 17, 1, 2, 18, 2, 3, 19, 3, 4, 20, 4, 5},
+        {21, 5, 6, 22, 6, 7, 23, 7, 8, 24, 8, 9, 25, 9, 10, 26},
+        {10, 11, 27, 11, 12, 28, 12, 13, 29, 13, 14, 30, 14, 15, 31, 15}};
+    static const int32_t iz[3][16] = {
+        {0, 1, 16, 3, 4, 17, 6, 7, 18, 9, 10, 19, 12, 13, 20, 15},
+        {0, 21, 2, 3, 22, 5, 6, 23, 8, 9, 24, 11, 12, 25, 14, 15},
+        {26, 1, 2, 27, 4, 5, 28, 7, 8, 29, 10, 11, 30, 13, 14, 31}};
+    for (int k = 0; k < 3; k++) {
+        __m512 xy = _mm512_permutex2var_ps(X, _mm512_loadu_si512(ixy[k]), Y);
+        __m512 o = _mm512_permutex2var_ps(xy, _mm512_loadu_si512(iz[k]), Z);
+        _mm512_storeu_ps(out + 16 * k, o);
+    }
+}
+
+#define CSRBF_ISA_AVX512 1
+#define CSRBF_ISA_AVX2 2
+#define CSRBF_ISA CSRBF_ISA_AVX512
+#include "eval_simd.h"
+#undef CSRBF_ISA
+#include "simd16_avx2.h"
+#define CSRBF_ISA CSRBF_ISA_AVX2
+#include "eval_simd.h"
+#undef CSRBF_ISA
+
+/* The centres of mask (bit j: centre j) whose support meets each of the CSRBF_FAN boxes
+ * lo/hi[first ..]: lane l of (c0, c1) gets bit j. Float, with the conservative margin r2c;
+ * the same operations as the kernel's distance (per-axis gaps to the box never exceed a
+ * vertex's, and the squares and sums round monotonically), so a block holding a vertex in a
+ * support always meets it. Returns the lanes with a centre. */
+static inline __attribute__((target("avx512f,fma"), always_inline)) __mmask16
+group_masks_avx512(const float *const lo[3], const float *const hi[3], size_t first,
+                   uint64_t mask, const float *cx, const float *cy, const float *cz, float r2c,
+                   __m512i *c0out, __m512i *c1out)
+{
+    const __m512 lx = _mm512_loadu_ps(lo[0] + first), ly = _mm512_loadu_ps(lo[1] + first),
+                 lz = _mm512_loadu_ps(lo[2] + first), hx = _mm512_loadu_ps(hi[0] + first),
+                 hy = _mm512_loadu_ps(hi[1] + first), hz = _mm512_loadu_ps(hi[2] + first),
+                 zero = _mm512_setzero_ps(), lim = _mm512_set1_ps(r2c);
+    __m512i c0 = _mm512_setzero_si512(), c1 = c0;
+    __mmask16 any = 0;
+    while (mask) {
+        const unsigned j = (unsigned)__builtin_ctzll(mask);
+        mask &= mask - 1;
+        const __m512 px = _mm512_set1_ps(cx[j]), py = _mm512_set1_ps(cy[j]),
+                     pz = _mm512_set1_ps(cz[j]);
+        __m512 ex = _mm512_max_ps(_mm512_max_ps(_mm512_sub_ps(lx, px), _mm512_sub_ps(px, hx)), zero);
+        __m512 ey = _mm512_max_ps(_mm512_max_ps(_mm512_sub_ps(ly, py), _mm512_sub_ps(py, hy)), zero);
+        __m512 ez = _mm512_max_ps(_mm512_max_ps(_mm512_sub_ps(lz, pz), _mm512_sub_ps(pz, hz)), zero);
+        __m512 d2 = _mm512_mul_ps(ex, ex);
+        d2 = _mm512_fmadd_ps(ey, ey, d2);
+        d2 = _mm512_fmadd_ps(ez, ez, d2);
+        const __mmask16 t = _mm512_cmp_ps_mask(d2, lim, _CMP_LT_OQ);
+        const __m512i bit = _mm512_set1_epi64((long long)(1ull << j));
+        c0 = _mm512_mask_or_epi64(c0, (__mmask8)t, c0, bit);
+        c1 = _mm512_mask_or_epi64(c1, (__mmask8)(t >> 8), c1, bit);
+        any |= t;
+    }
+    *c0out = c0;
+    *c1out = c1;
+    return any;
+}
+
 /* select_visit_c with AVX-512, restricted to the blocks [lo, hi): the leaves' masks and
  * block numbers compress-stored. */
 __attribute__((target("avx512f,fma,popcnt"))) static void
@@ -646,47 +379,26 @@ __attribute__((target("popcnt"))) static size_t count_bits_popcnt(const uint64_t
     return count_bits(msk, k, cum);
 }
 
-/* Refine the selection to the pairs the kernel uses: a centre whose support holds none of a
- * block's 16 vertices (its box meets the support, its vertices do not: the ends of grid rows,
- * the rims of supports) is dropped from the block's mask, and a block left with none from the
- * list. The test is the AVX-512 kernels' own (same operations on the same floats), so the
- * dropped pairs are exactly those the kernels would mask off entirely: results are unchanged
- * (such a block's output is its base bit for bit either way), the kernels skip fewer empty
- * pairs. Done once on a kept selection's second use (anchored frames), not on a selection
- * used once (unanchored frames), where it would cost about a third of the evaluation. Then
- * the prefix costs; returns the pairs kept. */
-__attribute__((target("avx512f,fma,popcnt"))) static size_t refine_avx512(block_select *S)
+/* The instruction set of the fast path: AVX-512 where the CPU has it, else AVX2 with FMA,
+ * else none (the portable general path). The environment variable CSRBF_ISA=avx2 or =none
+ * asks for less than the CPU has (tests run every path on one machine). */
+static const eval_isa *isa_pick(void)
 {
-    const csrbf_points *P = S->P;
-    const __m512 one = _mm512_set1_ps(1.0f), ir2 = _mm512_set1_ps(S->inv_r2);
-    size_t e = 0, c = 0, k = 0;
-    for (size_t i = 0; i < S->k; i++) {
-        const size_t k0 = (size_t)S->blk[i] * B;
-        const __m512 X = _mm512_loadu_ps(P->s[0] + k0), Y = _mm512_loadu_ps(P->s[1] + k0),
-                     Z = _mm512_loadu_ps(P->s[2] + k0);
-        uint64_t keep = 0;
-        for (uint64_t mk = S->msk[i]; mk; mk &= mk - 1) {
-            const unsigned j = (unsigned)__builtin_ctzll(mk);
-            __m512 dx = _mm512_sub_ps(X, _mm512_set1_ps(S->cx[j]));
-            __m512 dy = _mm512_sub_ps(Y, _mm512_set1_ps(S->cy[j]));
-            __m512 dz = _mm512_sub_ps(Z, _mm512_set1_ps(S->cz[j]));
-            __m512 r2 = _mm512_mul_ps(dx, dx);
-            r2 = _mm512_fmadd_ps(dy, dy, r2);
-            r2 = _mm512_fmadd_ps(dz, dz, r2);
-            r2 = _mm512_mul_ps(r2, ir2);
-            if (_mm512_cmp_ps_mask(r2, one, _CMP_LT_OQ)) keep |= 1ull << j;
-        }
-        if (!keep) continue;
-        const size_t bits = (size_t)__builtin_popcountll(keep);
-        S->blk[k] = S->blk[i];
-        S->msk[k] = keep;
-        S->cum[k++] = c;
-        c += ITEM_COST(bits);
-        e += bits;
+    static const eval_isa *_Atomic picked;
+    static _Atomic int known;
+    if (!atomic_load(&known)) { /* benign race: every thread finds the same */
+        __builtin_cpu_init();
+        const char *want = getenv("CSRBF_ISA");
+        const int cap = __builtin_cpu_supports("avx512f") ? 2
+                        : __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") ? 1
+                                                                                          : 0;
+        int use = cap;
+        if (want && !strcmp(want, "avx2") && use > 1) use = 1;
+        if (want && !strcmp(want, "none")) use = 0;
+        atomic_store(&picked, use == 2 ? &isa_avx512 : use == 1 ? &isa_avx2 : NULL);
+        atomic_store(&known, 1);
     }
-    S->k = k;
-    S->cum[k] = c;
-    return e;
+    return atomic_load(&picked);
 }
 #endif
 
@@ -695,7 +407,7 @@ static void select_blocks(block_select *S, int avx512, size_t m)
 {
     const uint64_t all = m >= 64 ? ~0ull : (1ull << m) - 1;
     S->k = 0;
-#if CSRBF_AVX512 && CSRBF_BLOCK == 16
+#if CSRBF_SIMD
     if (avx512) {
         select_visit_avx512(S, S->P->tlevels - 1, 0, all, 0, S->P->nblocks);
         S->evals = count_bits_popcnt(S->msk, S->k, S->cum);
@@ -703,7 +415,7 @@ static void select_blocks(block_select *S, int avx512, size_t m)
     }
 #endif
     (void)avx512;
-    select_visit_c(S, S->P->tlevels - 1, 0, all);
+    select_visit_c(S, S->P->tlevels - 1, 0, all, 0, S->P->nblocks);
     S->evals = count_bits(S->msk, S->k, S->cum);
 }
 
@@ -900,7 +612,7 @@ static double support_share(const csrbf_solver *s, const csrbf_points *P)
 /* sel_k of a selection seen once and not kept (the next use with the same key keeps it). */
 #define SEL_PENDING SIZE_MAX
 
-#if CSRBF_AVX512 && CSRBF_BLOCK == 16 /* helpers of the fused AVX-512 path */
+#if CSRBF_SIMD /* helpers of the fused path */
 /* touch->ranges from k increasing blocks: runs of consecutive blocks as vertex ranges. */
 static void ranges_of_blocks(csrbf_touch *t, size_t n, const uint32_t *blk, size_t k)
 {
@@ -1009,8 +721,8 @@ static wcache_parts wcache_at(const csrbf_solver *s)
 
 /* Fill the weight cache of the solver's kept (refined) selection; 0 when memory runs out (the
  * kernels then compute the weights). Its prefix costs count cached pairs. */
-static int wcache_fill(csrbf_solver *s, const csrbf_points *P, int ki, const float *cp,
-                       float inv_r2)
+static int wcache_fill(csrbf_solver *s, const csrbf_points *P, const eval_isa *isa, int ki,
+                       const float *cp, float inv_r2)
 {
     size_t o[3], bytes = wcache_bytes(s->sel_k, s->sel_evals, o);
     if (bytes > s->sel_wbytes) {
@@ -1021,7 +733,7 @@ static int wcache_fill(csrbf_solver *s, const csrbf_points *P, int ki, const flo
         s->sel_wbytes = bytes;
     }
     wcache_parts c = wcache_at(s);
-    fills[ki](P, s->sel_blk, s->sel_msk, s->sel_k, cp, inv_r2, c.w, c.in, c.off);
+    isa->fills[ki](P, s->sel_blk, s->sel_msk, s->sel_k, cp, inv_r2, c.w, c.in, c.off);
     for (size_t i = 0; i <= s->sel_k; i++) c.cum[i] = ITEM_COST_CACHED(i, c.off[i]);
     s->sel_w_id = s->sel_id;
     return 1;
@@ -1071,17 +783,19 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
     block_fn kern = s->opt.kernel == CSRBF_PSI30   ? block_psi30
                     : s->opt.kernel == CSRBF_PSI32 ? block_psi32
                                                    : block_psi31;
+    const int ki = s->opt.kernel == CSRBF_PSI30 ? 1 : s->opt.kernel == CSRBF_PSI32 ? 2 : 0;
     int avx512 = 0;
-#if CSRBF_AVX512 && CSRBF_BLOCK == 16
-    avx512 = have_avx512();
-    if (avx512)
-        kern = s->opt.kernel == CSRBF_PSI30   ? block_psi30_avx512
-               : s->opt.kernel == CSRBF_PSI32 ? block_psi32_avx512
-                                              : block_psi31_avx512;
+#if CSRBF_SIMD
+    const eval_isa *isa = isa_pick();
+    avx512 = isa == &isa_avx512;
+    if (isa) kern = isa->kern[ki];
+#else
+    const void *isa = NULL;
+    (void)ki;
 #endif
     /* the fused AVX-512 path: no polynomial, no Jacobian, all centres or tree masks
      * (statistics are counted inside it) */
-    const int fast = avx512 && !want_jac && !poly && (all_in || use_tree);
+    const int fast = isa && !want_jac && !poly && (all_in || use_tree);
 
     /* scratch: the merged work list of a touched call, and for the general path dense masks,
      * block flags and a centre list per thread; a concurrent caller (without the solver's
@@ -1183,9 +897,9 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
             s->sel_evals = S.evals;
             s->sel_refined = 0;
         }
-#if CSRBF_AVX512 && CSRBF_BLOCK == 16
-        if (seen && avx512 && !s->sel_refined && !fused) { /* used twice: refine it once */
-            S.evals = refine_avx512(&S);
+#if CSRBF_SIMD
+        if (seen && isa && !s->sel_refined && !fused) { /* used twice: refine it once */
+            S.evals = isa->refine(&S);
             s->sel_k = S.k;
             s->sel_evals = S.evals;
             s->sel_refined = 1;
@@ -1199,7 +913,7 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
 
     size_t pairs = 0, moved = 0;
     double maxd = 0.0, minjac = 1.0;
-#if !(CSRBF_AVX512 && CSRBF_BLOCK == 16)
+#if !CSRBF_SIMD
     (void)cpack, (void)isplit, (void)bsplit, (void)mrg_msk, (void)mrg_blk, (void)mrg_cum,
         (void)fused, (void)fbuf, (void)fthr, (void)fparts;
 #else
@@ -1213,9 +927,8 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
             q[3] = fax[j], q[4] = fay[j], q[5] = faz[j];
             q[6] = q[7] = 0.0f;
         }
-        const int ki = s->opt.kernel == CSRBF_PSI30 ? 1 : s->opt.kernel == CSRBF_PSI32 ? 2 : 0;
         if (fused) {
-            const drive_fn drive = drivers[ki][st != NULL][DRIVE_GAPS];
+            const drive_fn drive = isa->drivers[ki][st != NULL][DRIVE_GAPS];
             const int top = P->tlevels - 1;
             const uint64_t all = m >= 64 ? ~0ull : (1ull << m) - 1;
             float maxd2 = 0.0f;
@@ -1231,7 +944,8 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
                     size_t lo = nb * q / fparts, hi = nb * (q + 1) / fparts;
                     if (hi <= lo) continue;
                     L.k = 0;
-                    select_visit_avx512(&L, top, 0, all, lo, hi);
+                    if (avx512) select_visit_avx512(&L, top, 0, all, lo, hi);
+                    else select_visit_c(&L, top, 0, all, lo, hi);
                     drive(P, out, L.blk, L.msk, 0, L.k, lo, hi, m, cpack, inv_r2, NULL, &ts);
                 }
                 pairs += ts.pairs;
@@ -1292,13 +1006,13 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
                 const size_t cthreads = ccost <= PARALLEL_COST ? 1 : (size_t)nt;
                 const size_t bytes = 24 * (full_write ? n : S.k * B) + WCACHE_PAIR_BYTES * S.evals;
                 if (bytes <= cthreads * CSRBF_WCACHE_THREAD_BYTES &&
-                    (s->sel_w_id == s->sel_id || wcache_fill(s, P, ki, cpack, inv_r2)))
+                    (s->sel_w_id == s->sel_id || wcache_fill(s, P, isa, ki, cpack, inv_r2)))
                     wc = wcache_get(s, &wcv, &ic);
             }
             if (wc) cost = ic[ni];
             const int mode = !ib ? DRIVE_ALL : gaps ? DRIVE_GAPS : DRIVE_LIST;
             const drive_fn drive =
-                wc ? cached_drivers[st != NULL][mode - DRIVE_LIST] : drivers[ki][st != NULL][mode];
+                wc ? isa->cached[st != NULL][mode - DRIVE_LIST] : isa->drivers[ki][st != NULL][mode];
             block_stats bs = {0, 0, 0.0f};
             /* threads by the computed blocks' cost; copying the gaps (a full write) is bound by
              * memory and does not count, but is shared out when threads run */
@@ -1410,9 +1124,9 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
                         accy[v] += g0[1] + G[3] * ex + G[4] * ey + G[5] * ez;
                         accz[v] += g0[2] + G[6] * ex + G[7] * ey + G[8] * ez;
                     }
-#if CSRBF_AVX512 && CSRBF_BLOCK == 16
-                if (avx512 && nv == B)
-                    write_block_avx512(o, x, y, z, accx, accy, accz);
+#if CSRBF_SIMD
+                if (isa && nv == B)
+                    isa->write_block(o, x, y, z, accx, accy, accz);
                 else
 #endif
                     write_block(o, x, y, z, accx, accy, accz, nv);
