@@ -213,10 +213,12 @@ int csrbf_solver_limit_end_points(csrbf_solver *s, double margin, csrbf_guard_st
     if (margin == 0.0) margin = CSRBF_GUARD_MARGIN;
     if (!(margin > 0.0 && margin < 1.0)) {
         snprintf(s->msg, sizeof s->msg, "margin %g must be in (0, 1)", margin);
+        s->lim_note.pending = 0;
         return CSRBF_ERR_INVALID;
     }
     if (!s->have_start) {
         snprintf(s->msg, sizeof s->msg, "limit_end_points before start points");
+        s->lim_note.pending = 0;
         return CSRBF_ERR_STATE;
     }
     size_t nc = s->nclusters, limited = 0;
@@ -264,12 +266,14 @@ int csrbf_solver_limit_end_points(csrbf_solver *s, double margin, csrbf_guard_st
         st->eval.min_jacobian_det = 1.0;
     }
     if (!limited) return CSRBF_OK;
-    size_t used = strlen(s->msg);
-    if (used < sizeof s->msg)
-        snprintf(s->msg + used, sizeof s->msg - used,
-                 "%sthe fold-over guard scaled %zu of %zu clusters back (bound %.3g > %.3g; "
-                 "smallest scale %.3g)",
-                 used ? "; " : "", limited, nc, before, margin, tmin);
+    csrbf_msg_flush(s); /* an earlier call's note first */
+    /* the sentence is written when the message is read (csrbf_msg_flush) */
+    s->lim_note.pending = 1;
+    s->lim_note.limited = limited;
+    s->lim_note.clusters = nc;
+    s->lim_note.before = before;
+    s->lim_note.margin = margin;
+    s->lim_note.tmin = tmin;
     s->warnings |= 1u << CSRBF_WARN_LIMITED;
     return CSRBF_WARN_LIMITED;
 }
@@ -280,6 +284,7 @@ int csrbf_guarded_step(csrbf_solver *s, const csrbf_points *shape, size_t n, con
 {
     if (!s) return CSRBF_ERR_INVALID;
     if (!shape || !start || !end || !deformed || n == 0) {
+        s->lim_note.pending = 0;
         snprintf(s->msg, sizeof s->msg, "guarded_step: %s",
                  !shape ? "shape is NULL" : !start ? "start is NULL" : !end ? "end is NULL"
                  : !deformed ? "deformed is NULL" : "n is 0");
@@ -289,6 +294,7 @@ int csrbf_guarded_step(csrbf_solver *s, const csrbf_points *shape, size_t n, con
     int maxk = guard && guard->max_substeps != 0 ? guard->max_substeps : CSRBF_GUARD_MAX_SUBSTEPS;
     unsigned flags = guard ? guard->eval_flags : 0u;
     if (!(margin > 0.0 && margin < 1.0) || maxk < 1) {
+        s->lim_note.pending = 0;
         snprintf(s->msg, sizeof s->msg,
                  "guarded_step: margin %g must be in (0, 1) and max_substeps %d >= 1", margin, maxk);
         return CSRBF_ERR_INVALID;

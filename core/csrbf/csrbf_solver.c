@@ -39,7 +39,21 @@ static int fail(csrbf_solver *s, int code, const char *fmt, ...)
     va_start(ap, fmt);
     vsnprintf(s->msg, sizeof s->msg, fmt, ap);
     va_end(ap);
+    s->lim_note.pending = 0;
     return code;
+}
+
+void csrbf_msg_flush(csrbf_solver *s)
+{
+    if (!s->lim_note.pending) return;
+    s->lim_note.pending = 0;
+    size_t used = strlen(s->msg);
+    if (used < sizeof s->msg)
+        snprintf(s->msg + used, sizeof s->msg - used,
+                 "%sthe fold-over guard scaled %zu of %zu clusters back (bound %.3g > %.3g; "
+                 "smallest scale %.3g)",
+                 used ? "; " : "", s->lim_note.limited, s->lim_note.clusters, s->lim_note.before,
+                 s->lim_note.margin, s->lim_note.tmin);
 }
 
 /* Append a warning sentence to the message. */
@@ -47,6 +61,7 @@ static void warn(csrbf_solver *s, int code, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
 static void warn(csrbf_solver *s, int code, const char *fmt, ...)
 {
+    csrbf_msg_flush(s);
     size_t used = strlen(s->msg);
     if (used && used + 2 < sizeof s->msg) {
         strcpy(s->msg + used, "; ");
@@ -66,7 +81,12 @@ static int first_warning(unsigned w)
     return CSRBF_OK;
 }
 
-const char *csrbf_solver_message(const csrbf_solver *s) { return s ? s->msg : "no solver"; }
+const char *csrbf_solver_message(const csrbf_solver *s)
+{
+    if (!s) return "no solver";
+    csrbf_msg_flush((csrbf_solver *)s); /* the solver is the caller's, not const storage */
+    return s->msg;
+}
 unsigned csrbf_solver_warnings(const csrbf_solver *s) { return s ? s->warnings : 0; }
 size_t csrbf_solver_centres(const csrbf_solver *s) { return s && s->have_start ? s->m : 0; }
 
@@ -742,6 +762,7 @@ int csrbf_solver_set_start_points(csrbf_solver *s, size_t n, const float *start)
 {
     if (!s) return CSRBF_ERR_INVALID;
     s->msg[0] = '\0';
+    s->lim_note.pending = 0;
     s->warnings = 0;
     s->have_start = 0;
     s->centres_stamp = csrbf_new_stamp(); /* a cached block selection no longer applies */
@@ -782,6 +803,7 @@ int csrbf_solver_set_end_points(csrbf_solver *s, const float *end)
 {
     if (!s) return CSRBF_ERR_INVALID;
     s->msg[0] = '\0';
+    s->lim_note.pending = 0;
     s->warnings = 0;
     if (!s->have_start)
         return fail(s, CSRBF_ERR_STATE, "end points set before start points (or the last "
@@ -868,6 +890,7 @@ int csrbf_solver_solve(csrbf_solver *s, size_t n, const float *start, const floa
     int r1 = csrbf_solver_set_start_points(s, n, start);
     if (r1 < 0) return r1;
     unsigned w1 = s->warnings;
+    csrbf_msg_flush(s);
     char m1[sizeof s->msg];
     memcpy(m1, s->msg, sizeof m1);
     int r2 = csrbf_solver_set_end_points(s, end);
@@ -875,6 +898,7 @@ int csrbf_solver_solve(csrbf_solver *s, size_t n, const float *start, const floa
     s->warnings |= w1;
     if (m1[0]) { /* keep both messages */
         char m2[sizeof s->msg];
+        csrbf_msg_flush(s);
         memcpy(m2, s->msg, sizeof m2);
         snprintf(s->msg, sizeof s->msg, "%.126s%s%.126s", m1, m2[0] ? "; " : "", m2);
     }

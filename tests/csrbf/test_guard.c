@@ -321,6 +321,14 @@ static void test_limit_per_cluster(void **state)
     assert_int_equal(csrbf_solver_limit_end_points(s, 0.9, &gs), CSRBF_WARN_LIMITED);
     assert_int_equal(gs.clusters, 2);
     assert_int_equal(gs.clusters_limited, 1);
+    /* the message names the scale-back (written when read), after what was there before */
+    char want[160];
+    snprintf(want, sizeof want, "the fold-over guard scaled 1 of 2 clusters back (bound %.3g > 0.9; smallest scale %.3g)",
+             gs.bound_before, gs.min_scale);
+    if (!strstr(csrbf_solver_message(s), want))
+        fail_msg("message '%s' lacks '%s'", csrbf_solver_message(s), want);
+    const char *once = strstr(csrbf_solver_message(s), "fold-over guard scaled"); /* once */
+    assert_null(strstr(once + 1, "fold-over guard scaled"));
     assert_int_equal(csrbf_solver_get_coefficients(s, NULL, a1, NULL), CSRBF_OK);
     assert_memory_equal(a0 + 6, a1 + 6, 6 * sizeof(double)); /* the gentle cluster */
     double t = gs.min_scale;
@@ -338,6 +346,7 @@ static void test_limit_per_cluster(void **state)
     /* a map within the margin is left alone: CSRBF_OK and bit-identical coefficients */
     assert_true(csrbf_solver_set_end_points(s, st) >= 0); /* identity */
     assert_int_equal(csrbf_solver_limit_end_points(s, 0.9, &gs), CSRBF_OK);
+    assert_null(strstr(csrbf_solver_message(s), "fold-over guard")); /* the old note is gone */
     assert_int_equal(gs.clusters_limited, 0);
     assert_true(gs.min_scale == 1.0);
     /* with the polynomial the whole map is scaled by one factor */
