@@ -3,6 +3,7 @@
  * sets, each beside a reference measured in the same run (a plain scalar brute-force loop,
  * or a fresh factorisation). */
 #define _POSIX_C_SOURCE 200809L
+#define _DEFAULT_SOURCE /* getloadavg */
 #include "fp_bench.h"
 
 #include "csrbf.h"
@@ -18,6 +19,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <unistd.h>
 
 typedef struct {
     int quick, json, rounds;
@@ -976,6 +978,37 @@ static int case_frame(const bench_opts *o)
 /* The recorder's cost on the session thread (bench_take.c). */
 static int case_take(const bench_opts *o) { return fp_bench_take(stdout, o->quick, o->json); }
 
+/* The machine the figures come from, one line on stderr (stdout stays the table or the
+ * JSON): the CPU's model (Linux's /proc/cpuinfo), its cores, the second-level cache of a
+ * core, the engine's instruction set (csrbf_simd_path) and the load average. */
+static void print_machine(void)
+{
+    char model[128] = "unknown CPU";
+    FILE *f = fopen("/proc/cpuinfo", "r");
+    if (f) {
+        char line[256];
+        while (fgets(line, sizeof line, f))
+            if (!strncmp(line, "model name", 10)) {
+                const char *c = strchr(line, ':');
+                if (c) {
+                    snprintf(model, sizeof model, "%s", c + 1 + (c[1] == ' '));
+                    model[strcspn(model, "\n")] = '\0';
+                }
+                break;
+            }
+        fclose(f);
+    }
+    long cores = sysconf(_SC_NPROCESSORS_ONLN), l2 = sysconf(_SC_LEVEL2_CACHE_SIZE);
+    double la[3] = {-1, -1, -1};
+    int nla = getloadavg(la, 3);
+    char l2s[32] = "unknown";
+    if (l2 > 0) snprintf(l2s, sizeof l2s, "%ld KiB", l2 / 1024);
+    fprintf(stderr, "bench: machine: %s, %ld cores, L2 %s a core; engine fast path: %s; load average ",
+            model, cores, l2s, csrbf_simd_path());
+    if (nla == 3) fprintf(stderr, "%.2f %.2f %.2f\n", la[0], la[1], la[2]);
+    else fprintf(stderr, "unknown\n");
+}
+
 const char *const fp_bench_cases[] = {"table1", "scale", "centres", "guard", "support", "take", "frame", NULL};
 
 int fp_bench_run(const fp_bench_options *opt)
@@ -985,6 +1018,11 @@ int fp_bench_run(const fp_bench_options *opt)
     frame_bo = opt;
     bench_opts o = {opt->quick, opt->json, opt->quick ? 2 : 3};
     int found = 0;
+    for (size_t c = 0; fp_bench_cases[c] && !found; c++)
+        found = !opt->only || !strcmp(opt->only, fp_bench_cases[c]);
+    if (!found) return -EINVAL;
+    print_machine();
+    found = 0;
     for (size_t c = 0; fp_bench_cases[c]; c++) {
         if (opt->only && strcmp(opt->only, fp_bench_cases[c])) continue;
         found = 1;

@@ -497,6 +497,16 @@ static double jacobian_det(const csrbf_solver *s, const double x[3], const uint3
            J[2] * (J[3] * J[7] - J[4] * J[6]);
 }
 
+const char *csrbf_simd_path(void)
+{
+#if CSRBF_SIMD
+    const eval_isa *isa = isa_pick();
+    return isa == &isa_avx512 ? "avx512" : isa ? "avx2" : "portable";
+#else
+    return "portable";
+#endif
+}
+
 /* Persistent-output state of csrbf_evaluate_touched (see csrbf.h). */
 struct csrbf_touch {
     const csrbf_points *points; /* the points it was made for */

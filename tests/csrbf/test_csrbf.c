@@ -1142,6 +1142,18 @@ static void test_invalid(void **state)
     csrbf_solver_destroy(NULL);
 }
 
+/* csrbf_simd_path names the path this process runs: what CSRBF_ISA asks for, at most (this
+ * file runs as test_csrbf, test_csrbf_avx2 and test_csrbf_portable). */
+static void test_simd_path(void **state)
+{
+    (void)state;
+    const char *path = csrbf_simd_path(), *want = getenv("CSRBF_ISA");
+    assert_true(!strcmp(path, "avx512") || !strcmp(path, "avx2") || !strcmp(path, "portable"));
+    if (want && !strcmp(want, "none")) assert_string_equal(path, "portable");
+    if (want && !strcmp(want, "avx2")) assert_true(strcmp(path, "avx512") != 0);
+    assert_ptr_equal(csrbf_simd_path(), path); /* chosen once */
+}
+
 /* Two threads evaluating the same const solver at once get the same result as one. */
 static void test_concurrent_evaluate(void **state)
 {
@@ -1257,6 +1269,7 @@ int main(void)
         cmocka_unit_test(test_touched),             cmocka_unit_test(test_many_centres),
         cmocka_unit_test(test_touched_frames),      cmocka_unit_test(test_selection_cache),
         cmocka_unit_test(test_selection_paths),     cmocka_unit_test(test_weight_cache),
+        cmocka_unit_test(test_simd_path),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
