@@ -124,20 +124,80 @@ static bool seg_tri(const double *p, const double *q, const double t[3][3], int 
     return !((s1 > 0 || s2 > 0 || s3 > 0) && (s1 < 0 || s2 < 0 || s3 < 0));
 }
 
-int fp_contact_tri_tri(const double a[3][3], const double b[3][3])
+/* A triangle t's plane for the tests of points against it: e1 = t[1] - t[0], e2 = t[2] - t[0],
+ * the six products of orient3d's minors made once (n: e1 x e2 with the sign convention of
+ * orient3d's expansion, f: the permanent's factors). plane_side(pl, q) is then
+ * orient3d(t[0], q, t[1], t[2]) bit for bit (same operations in the same order), whose exact
+ * sign is orient3d(t[0], t[1], t[2], q)'s (a cyclic permutation of the determinant's rows);
+ * deg is degenerate(t) bit for bit (the same three differences of the same products). */
+typedef struct tplane {
+    const double *o;
+    double n[3], f[3];
+    bool deg;
+} tplane;
+
+static inline void plane_of(const double t[3][3], tplane *pl)
+{
+    double ux = t[1][0] - t[0][0], uy = t[1][1] - t[0][1], uz = t[1][2] - t[0][2];
+    double vx = t[2][0] - t[0][0], vy = t[2][1] - t[0][1], vz = t[2][2] - t[0][2];
+    double m1 = uy * vz, m2 = uz * vy, m3 = ux * vz, m4 = uz * vx, m5 = ux * vy, m6 = uy * vx;
+    pl->o = t[0];
+    pl->n[0] = m1 - m2;
+    pl->n[1] = m3 - m4;
+    pl->n[2] = m5 - m6;
+    pl->f[0] = fabs(m1) + fabs(m2);
+    pl->f[1] = fabs(m3) + fabs(m4);
+    pl->f[2] = fabs(m5) + fabs(m6);
+    pl->deg = pl->n[0] == 0 && pl->n[1] == 0 && pl->n[2] == 0;
+}
+
+static inline int plane_side(const tplane *pl, const double *q)
+{
+    double cx = q[0] - pl->o[0], cy = q[1] - pl->o[1], cz = q[2] - pl->o[2];
+    double det = cx * pl->n[0] - cy * pl->n[1] + cz * pl->n[2];
+    double perm = fabs(cx) * pl->f[0] + fabs(cy) * pl->f[1] + fabs(cz) * pl->f[2];
+    double bound = (7.0 + 56.0 * FP_EPS) * FP_EPS * perm;
+    return (det > bound) - (det < -bound);
+}
+
+/* fp_contact_tri_tri with the planes made (pa NULL: made here when needed) */
+static int tri_tri_pl(const double a[3][3], const tplane *pa, const double b[3][3], const tplane *pb)
 {
     /* each vertex against the other's plane, once (every edge test starts with these); a
      * triangle certainly on one side of the other's plane shares no point with it */
     int oa[3], ob[3];
-    for (int i = 0; i < 3; i++) oa[i] = orient3d(b[0], b[1], b[2], a[i]);
+    for (int i = 0; i < 3; i++) oa[i] = plane_side(pb, a[i]);
     if (oa[0] && oa[0] == oa[1] && oa[1] == oa[2]) return 0;
-    for (int i = 0; i < 3; i++) ob[i] = orient3d(a[0], a[1], a[2], b[i]);
+    tplane own;
+    if (!pa) {
+        plane_of(a, &own);
+        pa = &own;
+    }
+    for (int i = 0; i < 3; i++) ob[i] = plane_side(pa, b[i]);
     if (ob[0] && ob[0] == ob[1] && ob[1] == ob[2]) return 0;
     for (int e = 0; e < 3; e++) {
         int f = (e + 1) % 3;
         if (seg_tri(a[e], a[f], b, oa[e], oa[f]) || seg_tri(b[e], b[f], a, ob[e], ob[f])) return 1;
     }
     return 0;
+}
+
+int fp_contact_tri_tri(const double a[3][3], const double b[3][3])
+{
+    tplane pb;
+    plane_of(b, &pb);
+    return tri_tri_pl(a, NULL, b, &pb);
+}
+
+/* neither triangle degenerate and they share a point: !degenerate(a) && !degenerate(b) &&
+ * fp_contact_tri_tri(a, b), with each plane made once */
+static bool tris_meet(const double a[3][3], const double b[3][3])
+{
+    tplane pa, pb;
+    plane_of(a, &pa);
+    if (pa.deg) return false;
+    plane_of(b, &pb);
+    return !pb.deg && tri_tri_pl(a, &pa, b, &pb);
 }
 
 typedef struct fp_contact_count fp_contact_count;
@@ -476,14 +536,14 @@ static long scan(fp_contact *c, const float *ref, const float *cand, bool all, u
                         if (adjacent) continue;
                         double tb[3][3], rb[3][3];
                         tri_of(cand, vb, tb);
-                        if (degenerate(tb) || !fp_contact_tri_tri(ta, tb)) continue;
+                        if (!tris_meet(ta, tb)) continue; /* ta is not degenerate */
                         if (!ref) { /* the weld shape's own crossings */
                             c->own[a] = c->own[b] = 1;
                             found++;
                             continue;
                         }
                         tri_of(ref, vb, rb);
-                        if (!rdeg_a && !degenerate(rb) && fp_contact_tri_tri(ra, rb)) continue;
+                        if (!rdeg_a && tris_meet(ra, rb)) continue;
                         if (c->own[a] || c->own[b]) { /* next to the input's own crossings */
                             if (info) info->near_own++;
                             continue;
@@ -2153,10 +2213,10 @@ static int test_pair(fp_contact *c, lane *ln, const float *s, const float *ref, 
     ln->tested++;
     tri_of(s, va, ta);
     tri_of(s, vb, tb);
-    if (degenerate(ta) || degenerate(tb) || !fp_contact_tri_tri(ta, tb)) return 0;
+    if (!tris_meet(ta, tb)) return 0;
     tri_of(ref, va, ta);
     tri_of(ref, vb, tb);
-    if (!degenerate(ta) && !degenerate(tb) && fp_contact_tri_tri(ta, tb)) return 0;
+    if (tris_meet(ta, tb)) return 0;
     if (record && (add_off(c, va) || add_off(c, vb))) return -ENOMEM;
     return 1;
 }
@@ -3007,6 +3067,7 @@ static long track_check(fp_contact *c, const float *s, const float *ref, bool ca
         else tri_box(s, va, ba);
         const uint32_t *list = dyn_list(d);
         double ta[3][3], ra[3][3];
+        tplane pa, pra;
         int deg_a = -1, rdeg_a = -1; /* not yet known */
         /* The list in chunks: first a filter without a branch, keeping the entries that
          * need the exact test (the two tests below were each decided about half the time
@@ -3031,20 +3092,25 @@ static long track_check(fp_contact *c, const float *s, const float *ref, bool ca
             for (uint32_t j = 0; j < nn; j++) {
                 uint32_t b = near[j];
                 const uint32_t *vb = c->tris + 3 * (size_t)b;
-                if (deg_a < 0) {
+                if (deg_a < 0) { /* a's plane, once for its list */
                     tri_of(s, va, ta);
-                    deg_a = degenerate(ta);
+                    plane_of(ta, &pa);
+                    deg_a = pa.deg;
                 }
                 if (deg_a) break;
                 double tb[3][3], rb[3][3];
+                tplane pb, prb;
                 tri_of(s, vb, tb);
-                if (degenerate(tb) || !fp_contact_tri_tri(ta, tb)) continue;
+                plane_of(tb, &pb);
+                if (pb.deg || !tri_tri_pl(ta, &pa, tb, &pb)) continue;
                 if (rdeg_a < 0) {
                     tri_of(ref, va, ra);
-                    rdeg_a = degenerate(ra);
+                    plane_of(ra, &pra);
+                    rdeg_a = pra.deg;
                 }
                 tri_of(ref, vb, rb);
-                if (!rdeg_a && !degenerate(rb) && fp_contact_tri_tri(ra, rb)) continue;
+                plane_of(rb, &prb);
+                if (!rdeg_a && !prb.deg && tri_tri_pl(ra, &pra, rb, &prb)) continue;
                 if (record && (add_off(c, va) || add_off(c, vb))) return -ENOMEM;
                 found++;
             }
