@@ -205,10 +205,16 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
  *    mesh, mostly cache misses) and each renewed envelope (about 1 us on ICT: 0.3 in its
  *    cells, 0.6-0.7 making its list, by cell, each registered envelope tested against
  *    the cell's requests in one vectorised loop; renewed when a triangle moved a tenth of
- *    its size since its last renewal). Measured (`facepuppet bench --case frame`, contact
- *    row, three-claps anchored, 2-core machine, shared): the ICT face (1,100 moved
- *    triangles a frame, up to 125 renewed in a gesture's first frames and a fast clap's)
- *    0.06-0.12 ms median, 0.2-0.45 ms p99 (the full check: about 2.7 ms). On ICT
+ *    its size since its last renewal). The per-frame loops store and add where a test
+ *    would be decided by the data (the moved vertices, their triangles' stamps, a list's
+ *    both-moved rule and box test: a misprediction an entry had cost a third of the
+ *    check), and the exact test makes each triangle's plane once (tplane). A frame on ICT:
+ *    about 480 moved vertices, 1,100 moved triangles, 2,400 list entries, 200 exact tests;
+ *    its step 60-100 us (collect 5-12, mark 8-23, envelopes 13-25, renew 2-5, check 33-45),
+ *    varying with the machine's load. Measured (`facepuppet bench --case frame`, contact
+ *    row, three-claps anchored, 2-core machine, shared): the ICT face (up to 125 renewed
+ *    in a gesture's first frames and a fast clap's) 0.058-0.11 ms median, 0.16-0.25 ms
+ *    p99 (the full check: about 2.7 ms). On ICT
  *    subdivided to 1.68M vertices (50,000-66,000 moved triangles a frame, moving about
  *    their own size in a fast frame) up to all of them renew: 5.4-7.3 ms median, 47-103
  *    ms p99, 15-25 frames of 225 skipped. Larger skins renew less but lengthen the lists
