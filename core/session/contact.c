@@ -2826,9 +2826,9 @@ static int track_build(fp_contact *c)
     }
     k->ih = cnt && sum > 0 ? 1.0 / (2.0 * sum / (double)cnt) : 1.0;
     c->tk = k;
-    /* the moved triangles' list has room for every triangle (mark_tris stores without a
-     * test) */
-    if (reserve_written((void **)&k->mt, &k->cap_mt, t ? t : 1, sizeof *k->mt)) goto fail;
+    /* the moved triangles' list has room for every triangle and one more (mark_tris
+     * stores at nmt without a test, also a seen triangle, when nmt may be t) */
+    if (reserve_written((void **)&k->mt, &k->cap_mt, t + 1, sizeof *k->mt)) goto fail;
     /* every triangle gets its envelope and list now, in one batch, so that a gesture's first
      * touch of a region costs its frame no more than the next (about 1 us a triangle) */
     for (size_t i = 0; i < t; i++) {
@@ -2862,8 +2862,8 @@ static void tick(fp_contact *c)
 
 
 /* the triangles of vertex v into mt (own ones into mo), once per clock. mt has room for
- * every triangle (track_build), so the stamp's test is a store and an add, no branch: each
- * triangle is met from its three vertices, so "seen" is decided by the data */
+ * every triangle and one more (track_build), so the stamp's test is a store and an add, no
+ * branch: each triangle is met from its three vertices, so "seen" is decided by the data */
 static int mark_tris(fp_contact *c, uint32_t v)
 {
     struct track *k = c->tk;
