@@ -129,7 +129,7 @@ static bool seg_tri(const double *p, const double *q, const double t[3][3], int 
  * orient3d's expansion, f: the permanent's factors). plane_side(pl, q) is then
  * orient3d(t[0], q, t[1], t[2]) bit for bit (same operations in the same order), whose exact
  * sign is orient3d(t[0], t[1], t[2], q)'s (a cyclic permutation of the determinant's rows);
- * deg is degenerate(t) bit for bit (the same three differences of the same products). */
+ * deg: e1 x e2 is exactly 0 in double (a degenerate triangle, which meets nothing here). */
 typedef struct tplane {
     const double *o;
     double n[3], f[3];
@@ -189,15 +189,21 @@ int fp_contact_tri_tri(const double a[3][3], const double b[3][3])
     return tri_tri_pl(a, NULL, b, &pb);
 }
 
-/* neither triangle degenerate and they share a point: !degenerate(a) && !degenerate(b) &&
- * fp_contact_tri_tri(a, b), with each plane made once */
+/* b is not degenerate and shares a point with a, whose plane pa is made (a not degenerate) */
+static inline bool meets_pl(const double a[3][3], const tplane *pa, const double b[3][3])
+{
+    tplane pb;
+    plane_of(b, &pb);
+    return !pb.deg && tri_tri_pl(a, pa, b, &pb);
+}
+
+/* neither triangle degenerate (tplane.deg) and fp_contact_tri_tri(a, b), each plane made
+ * once */
 static bool tris_meet(const double a[3][3], const double b[3][3])
 {
-    tplane pa, pb;
+    tplane pa;
     plane_of(a, &pa);
-    if (pa.deg) return false;
-    plane_of(b, &pb);
-    return !pb.deg && tri_tri_pl(a, &pa, b, &pb);
+    return !pa.deg && meets_pl(a, &pa, b);
 }
 
 typedef struct fp_contact_count fp_contact_count;
@@ -331,17 +337,6 @@ static void tri_of(const float *pos, const uint32_t *v, double out[3][3])
         for (int k = 0; k < 3; k++) out[i][k] = pos[3 * (size_t)v[i] + k];
 }
 
-static bool degenerate(const double t[3][3])
-{
-    double e1[3], e2[3];
-    for (int k = 0; k < 3; k++) {
-        e1[k] = t[1][k] - t[0][k];
-        e2[k] = t[2][k] - t[0][k];
-    }
-    return e1[1] * e2[2] - e1[2] * e2[1] == 0 && e1[2] * e2[0] - e1[0] * e2[2] == 0 &&
-           e1[0] * e2[1] - e1[1] * e2[0] == 0;
-}
-
 /* min and max of finite floats, inline (fminf and fmaxf are calls, for NaN's sake) */
 static inline float min_f(float a, float b) { return b < a ? b : a; }
 static inline float max_f(float a, float b) { return b > a ? b : a; }
@@ -355,9 +350,10 @@ static inline void tri_box(const float *pos, const uint32_t *v, float b[6])
     }
 }
 
-static bool boxes_meet(const float *a, const float *b)
+/* the closed boxes meet; without a branch (track_check's filter takes it by the data) */
+static inline bool boxes_meet(const float *a, const float *b)
 {
-    return a[0] <= b[3] && b[0] <= a[3] && a[1] <= b[4] && b[1] <= a[4] && a[2] <= b[5] && b[2] <= a[5];
+    return (a[0] <= b[3]) & (b[0] <= a[3]) & (a[1] <= b[4]) & (b[1] <= a[4]) & (a[2] <= b[5]) & (b[2] <= a[5]);
 }
 
 static uint32_t cell_hash(long x, long y, long z)
@@ -494,12 +490,15 @@ static long scan(fp_contact *c, const float *ref, const float *cand, bool all, u
         uint32_t a = c->mtris[j];
         const uint32_t *va = c->tris + 3 * (size_t)a;
         double ta[3][3], ra[3][3];
+        tplane pa, pra; /* a's planes, once for its candidates */
         tri_of(cand, va, ta);
-        if (degenerate(ta)) continue;
+        plane_of(ta, &pa);
+        if (pa.deg) continue;
         bool rdeg_a = true;
         if (ref) {
             tri_of(ref, va, ra);
-            rdeg_a = degenerate(ra);
+            plane_of(ra, &pra);
+            rdeg_a = pra.deg;
         }
         long lo[3], hi[3];
         const float *ba = c->box[a];
@@ -536,14 +535,14 @@ static long scan(fp_contact *c, const float *ref, const float *cand, bool all, u
                         if (adjacent) continue;
                         double tb[3][3], rb[3][3];
                         tri_of(cand, vb, tb);
-                        if (!tris_meet(ta, tb)) continue; /* ta is not degenerate */
+                        if (!meets_pl(ta, &pa, tb)) continue;
                         if (!ref) { /* the weld shape's own crossings */
                             c->own[a] = c->own[b] = 1;
                             found++;
                             continue;
                         }
                         tri_of(ref, vb, rb);
-                        if (!rdeg_a && tris_meet(ra, rb)) continue;
+                        if (!rdeg_a && meets_pl(ra, &pra, rb)) continue;
                         if (c->own[a] || c->own[b]) { /* next to the input's own crossings */
                             if (info) info->near_own++;
                             continue;
@@ -2900,19 +2899,36 @@ static long own_flips(fp_contact *c, const float *s, const float *ref, bool reco
     return f;
 }
 
+/* the vertices looked at for moved ones: D_P and the ranges (all n for SIZE_MAX), clipped to n */
+static size_t visits(const fp_contact *c, const uint32_t *ranges, size_t nranges)
+{
+    size_t m = c->tk->ndp;
+    if (nranges == SIZE_MAX) return m + c->n;
+    for (size_t r = 0; r < nranges; r++)
+        if (ranges[2 * r] < c->n)
+            m += ranges[2 * r + 1] < c->n - ranges[2 * r] ? ranges[2 * r + 1] : c->n - ranges[2 * r];
+    return m;
+}
+
+/* the vertices v in [f, e) not in D_P where a differs from P, appended to mv at nmv, whose
+ * room is made: a store and an add, no branch (where a motion's support ends, "differs"
+ * turns with the data); returns the new count */
+static size_t moved_in(const struct track *k, const float *a, size_t f, size_t e, uint32_t *mv, size_t nmv)
+{
+    for (size_t v = f; v < e; v++) {
+        mv[nmv] = (uint32_t)v;
+        nmv += !k->in_dp[v] & vert_differs(a, k->p, v);
+    }
+    return nmv;
+}
+
 /* k->mv := the vertices where a differs (bitwise) from P, looked for where either may differ
- * from the reference: D_P, then the ranges (every vertex for nranges == SIZE_MAX). Room for
- * every vertex looked at is made first, so the test is a store and an add, no branch (where
- * a motion's support ends, "differs" turns with the data). Returns 0 or -ENOMEM. */
+ * from the reference: D_P, then the ranges (every vertex for nranges == SIZE_MAX), with room
+ * for every vertex looked at made first. Returns 0 or -ENOMEM. */
 static int collect_moved(fp_contact *c, const float *a, const uint32_t *ranges, size_t nranges)
 {
     struct track *k = c->tk;
-    size_t most = k->ndp;
-    if (nranges == SIZE_MAX) most += c->n;
-    else
-        for (size_t r = 0; r < nranges; r++)
-            if (ranges[2 * r] < c->n)
-                most += ranges[2 * r + 1] < c->n - ranges[2 * r] ? ranges[2 * r + 1] : c->n - ranges[2 * r];
+    size_t most = visits(c, ranges, nranges);
     if (reserve((void **)&k->mv, &k->cap_mv, most ? most : 1, sizeof *k->mv)) return -ENOMEM;
     uint32_t *mv = k->mv;
     size_t nmv = 0;
@@ -2920,14 +2936,12 @@ static int collect_moved(fp_contact *c, const float *a, const uint32_t *ranges, 
         mv[nmv] = k->dp[i];
         nmv += vert_differs(a, k->p, k->dp[i]);
     }
-    for (size_t r = 0; r < (nranges == SIZE_MAX ? 1 : nranges); r++) {
-        size_t f = nranges == SIZE_MAX ? 0 : ranges[2 * r];
-        size_t e = nranges == SIZE_MAX ? c->n : f + ranges[2 * r + 1];
-        for (size_t v = f; v < e && v < c->n; v++) {
-            mv[nmv] = (uint32_t)v;
-            nmv += !k->in_dp[v] & vert_differs(a, k->p, v);
+    if (nranges == SIZE_MAX) nmv = moved_in(k, a, 0, c->n, mv, nmv);
+    else
+        for (size_t r = 0; r < nranges; r++) {
+            size_t f = ranges[2 * r], e = f + ranges[2 * r + 1];
+            nmv = moved_in(k, a, f, e < c->n ? e : c->n, mv, nmv);
         }
-    }
     k->nmv = nmv;
     return 0;
 }
@@ -2950,12 +2964,7 @@ static int append_u32(uint32_t **p, size_t *len, size_t *cap, const uint32_t *sr
 static int collect_mark(fp_contact *c, const float *a, const uint32_t *ranges, size_t nranges)
 {
     struct track *k = c->tk;
-    size_t nvisit = k->ndp;
-    if (nranges == SIZE_MAX) nvisit += c->n;
-    else
-        for (size_t r = 0; r < nranges; r++)
-            if (ranges[2 * r] < c->n)
-                nvisit += ranges[2 * r + 1] < c->n - ranges[2 * r] ? ranges[2 * r + 1] : c->n - ranges[2 * r];
+    size_t nvisit = visits(c, ranges, nranges);
     for (int i = 0; i < FP_CONTACT_MAX_THREADS; i++) {
         lane *ln = &k->lane[i];
         ln->nmv = ln->nmo = 0;
@@ -3083,9 +3092,7 @@ static long track_check(fp_contact *c, const float *s, const float *ref, bool ca
                 uint32_t b = list[j];
                 float bb[6];
                 tri_box(s, c->tris + 3 * (size_t)b, bb);
-                unsigned keep = !((b < a) & (k->tstamp[b] == k->tclock)) & (ba[0] <= bb[3]) &
-                                (bb[0] <= ba[3]) & (ba[1] <= bb[4]) & (bb[1] <= ba[4]) &
-                                (ba[2] <= bb[5]) & (bb[2] <= ba[5]);
+                unsigned keep = !((b < a) & (k->tstamp[b] == k->tclock)) & boxes_meet(ba, bb);
                 near[nn] = b;
                 nn += keep;
             }
@@ -3099,18 +3106,15 @@ static long track_check(fp_contact *c, const float *s, const float *ref, bool ca
                 }
                 if (deg_a) break;
                 double tb[3][3], rb[3][3];
-                tplane pb, prb;
                 tri_of(s, vb, tb);
-                plane_of(tb, &pb);
-                if (pb.deg || !tri_tri_pl(ta, &pa, tb, &pb)) continue;
+                if (!meets_pl(ta, &pa, tb)) continue;
                 if (rdeg_a < 0) {
                     tri_of(ref, va, ra);
                     plane_of(ra, &pra);
                     rdeg_a = pra.deg;
                 }
                 tri_of(ref, vb, rb);
-                plane_of(rb, &prb);
-                if (!rdeg_a && !prb.deg && tri_tri_pl(ra, &pra, rb, &prb)) continue;
+                if (!rdeg_a && meets_pl(ra, &pra, rb)) continue;
                 if (record && (add_off(c, va) || add_off(c, vb))) return -ENOMEM;
                 found++;
             }
