@@ -14,6 +14,7 @@
 #include "step_engine.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -799,6 +800,19 @@ fp_mesh *fp_bench_subdivide(const fp_mesh *m)
 
 static double pct(double *v, size_t n, double p) { return n ? fp_percentile(v, n, p / 100.0) : 0.0; }
 
+/* The time this thread has waited on a run queue, ms (Linux's /proc/thread-self/schedstat,
+ * its second field, ns; fd opened on it, or -1: NaN): the frames' "waiting for a CPU" row
+ * tells a frame the system held off its core from one the session itself made slow. */
+static double runqueue_ms(int fd)
+{
+    char buf[96];
+    ssize_t k = fd < 0 ? -1 : pread(fd, buf, sizeof buf - 1, 0);
+    if (k <= 0) return NAN;
+    buf[k] = '\0';
+    unsigned long long run, wait;
+    return sscanf(buf, "%llu %llu", &run, &wait) == 2 ? (double)wait / 1e6 : NAN;
+}
+
 /* One replay of three-claps at its own pace through the session API, 60 frames a second:
  * per-stage times (fp_frame_stats.stage_ms), the whole frame, the frames a slow one made the
  * loop skip, the committing frames. For reference, the brute-force fingertip distances on
@@ -837,13 +851,29 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
     fp_hand_pose(*hands)[FP_HANDS] = calloc(CAP, sizeof *hands);
     for (int k = 0; k < FP_STAGE_COUNT; k++) st_ms[k] = malloc(CAP * sizeof(double));
     double *contact_ms = malloc(CAP * sizeof *contact_ms); /* the contact guard (collide_ms) */
+    double *held = malloc(CAP * sizeof *held); /* the frame's wait for a CPU (runqueue_ms) */
+    bool oom = !total || !act || !com || !eng || !hands || !contact_ms || !held;
+    for (int k = 0; k < FP_STAGE_COUNT; k++) oom |= !st_ms[k];
+    if (oom) {
+        for (int k = 0; k < FP_STAGE_COUNT; k++) free(st_ms[k]);
+        free(total), free(act), free(com), free(eng), free(hands), free(contact_ms), free(held);
+        fp_session_destroy(&s);
+        fprintf(stderr, "bench: frame: out of memory\n");
+        return -ENOMEM;
+    }
+    int sched_fd = open("/proc/thread-self/schedstat", O_RDONLY | O_CLOEXEC);
+    size_t nheld = 0;
     int64_t period = 1000000000LL / 60, start = fp_now_ns(), next = start;
     size_t n = fp_session_vertex_count(s);
     while (!fp_session_finished(s) && nf < CAP) {
         fp_frame_stats st;
+        double w0 = runqueue_ms(sched_fd);
         int64_t a = fp_now_ns();
         fp_session_step(s, a, &st);
         int64_t b = fp_now_ns();
+        double h = runqueue_ms(sched_fd) - w0;
+        held[nf] = h == h ? h : 0.0; /* (NaN: no schedstat) */
+        nheld += held[nf] >= 1.0;
         total[nf] = (double)(b - a) / 1e6;
         if (st.active) act[nact++] = total[nf];
         if (st.committed) com[ncommit++] = total[nf];
@@ -906,6 +936,9 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
                    names[k], pct(st_ms[k], nf, 99));
         printf(",\"contact_median\":%.6g,\"contact_p99\":%.6g", pct(contact_ms, nf, 50),
                pct(contact_ms, nf, 99));
+        if (sched_fd >= 0)
+            printf(",\"cpu_wait_median\":%.6g,\"cpu_wait_p99\":%.6g,\"frames_cpu_wait_1ms\":%zu",
+                   pct(held, nf, 50), pct(held, nf, 99), nheld);
         printf("}\n");
     } else {
         printf("frame %-14s %8zu vertices, opened in %.2f s, %zu frames in %.2f s (%zu skipped: a late "
@@ -916,6 +949,9 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
             printf("  %-22s %10.4f %10.4f\n", names[k], pct(st_ms[k], nf, 50), pct(st_ms[k], nf, 99));
         printf("  %-22s %10.4f %10.4f\n", "contact", pct(contact_ms, nf, 50), pct(contact_ms, nf, 99));
         printf("  %-22s %10.4f %10.4f\n", "whole frame", pct(total, nf, 50), pct(total, nf, 99));
+        if (sched_fd >= 0)
+            printf("  %-22s %10.4f %10.4f (%zu frames 1 ms or more: the system ran something else "
+                   "on this thread's core)\n", "waiting for a CPU", pct(held, nf, 50), pct(held, nf, 99), nheld);
         printf("  %-22s %10.4f %10.4f\n", "whole frame, deforming", pct(act, nact, 50), pct(act, nact, 99));
         printf("  %-22s %10.4f %10.4f (max)\n", "whole frame, commit", pct(com, ncommit, 50), pct(com, ncommit, 100));
         printf("  %-22s %10.4f %10.4f (max; %zu frames)\n", "whole frame, engage", pct(eng, nengage, 50),
@@ -928,6 +964,8 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
     fflush(stdout);
     for (int k = 0; k < FP_STAGE_COUNT; k++) free(st_ms[k]);
     free(contact_ms);
+    free(held);
+    if (sched_fd >= 0) close(sched_fd);
     free(total);
     free(brute);
     free(indexed);
@@ -980,7 +1018,8 @@ static int case_take(const bench_opts *o) { return fp_bench_take(stdout, o->quic
 
 /* The machine the figures come from, one line on stderr (stdout stays the table or the
  * JSON): the CPU's model (Linux's /proc/cpuinfo), its cores, the second-level cache of a
- * core, the engine's instruction set (csrbf_simd_path) and the load average. */
+ * core, the engine's instruction set (csrbf_simd_path), the kernel's transparent huge pages
+ * mode and DAMON monitors (kdamond) running, and the load average. */
 static void print_machine(void)
 {
     char model[128] = "unknown CPU";
@@ -1003,8 +1042,30 @@ static void print_machine(void)
     int nla = getloadavg(la, 3);
     char l2s[32] = "unknown";
     if (l2 > 0) snprintf(l2s, sizeof l2s, "%ld KiB", l2 / 1024);
-    fprintf(stderr, "bench: machine: %s, %ld cores, L2 %s a core; engine fast path: %s; load average ",
-            model, cores, l2s, csrbf_simd_path());
+    /* the kernel's memory settings that move a frame's tail on a virtual machine: the
+     * transparent huge pages mode (the bracketed word) and DAMON's monitors running
+     * (kdamond: its scans of physical memory held a 1.7M-vertex frame up for 4-29 ms now
+     * and then, none over 6 ms with it off; docs/architecture.md, bench) */
+    char thp[16] = "unknown", line[64];
+    f = fopen("/sys/kernel/mm/transparent_hugepage/enabled", "r");
+    if (f) {
+        if (fgets(line, sizeof line, f)) {
+            const char *lb = strchr(line, '['), *rb = lb ? strchr(lb, ']') : NULL;
+            if (lb && rb && rb - lb - 1 < (long)sizeof thp) snprintf(thp, sizeof thp, "%.*s", (int)(rb - lb - 1), lb + 1);
+        }
+        fclose(f);
+    }
+    int damon = 0;
+    for (int i = 0; i < 64; i++) {
+        char path[96];
+        snprintf(path, sizeof path, "/sys/kernel/mm/damon/admin/kdamonds/%d/state", i);
+        if (!(f = fopen(path, "r"))) break;
+        damon += fgets(line, sizeof line, f) && !strncmp(line, "on", 2);
+        fclose(f);
+    }
+    fprintf(stderr, "bench: machine: %s, %ld cores, L2 %s a core; engine fast path: %s; transparent huge "
+            "pages %s; DAMON monitors running %d; load average ",
+            model, cores, l2s, csrbf_simd_path(), thp, damon);
     if (nla == 3) fprintf(stderr, "%.2f %.2f %.2f\n", la[0], la[1], la[2]);
     else fprintf(stderr, "unknown\n");
 }
