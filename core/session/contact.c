@@ -630,7 +630,9 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
 #define FP_CONTACT_MAX_THREADS 2  /* the caller and one worker (fp_contact_set_threads) */
 #define FP_BVH_LEAF 24            /* triangles in a leaf of the hierarchy, at most */
 #define FP_CERT_MIN 48            /* a patch (node) with this many triangles or more ... */
-#define FP_CERT_MAX 65536         /* ... and no more may be certified (its boundary made once) */
+#define FP_CERT_MAX 65536         /* ... and no more may be certified (its boundary made once;
+                                     262,144 or 1,048,576 certified no more patches of the
+                                     1.68M face, 28 a frame, and its failed tries cost more) */
 
 typedef struct bnode {            /* a node of the hierarchy: a patch of triangles (64 bytes,
                                      one cache line; its stamp is in nstamp) */
