@@ -802,6 +802,7 @@ static double pct(double *v, size_t n, double p) { return n ? fp_percentile(v, n
 
 /* The time this thread has waited on a run queue, ms (Linux's /proc/thread-self/schedstat,
  * its second field, ns; fd opened on it, or -1: NaN): the frames' "waiting for a CPU" row
+ * (since the end of the frame before: the wait to wake from the pacing sleep counts too)
  * tells a frame the system held off its core from one the session itself made slow. */
 static double runqueue_ms(int fd)
 {
@@ -863,15 +864,17 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
     }
     int sched_fd = open("/proc/thread-self/schedstat", O_RDONLY | O_CLOEXEC);
     size_t nheld = 0;
+    double w0 = runqueue_ms(sched_fd); /* read after each frame only: a read just before one
+                                          made the ICT frame about 7% slower */
     int64_t period = 1000000000LL / 60, start = fp_now_ns(), next = start;
     size_t n = fp_session_vertex_count(s);
     while (!fp_session_finished(s) && nf < CAP) {
         fp_frame_stats st;
-        double w0 = runqueue_ms(sched_fd);
         int64_t a = fp_now_ns();
         fp_session_step(s, a, &st);
         int64_t b = fp_now_ns();
-        double h = runqueue_ms(sched_fd) - w0;
+        double w1 = runqueue_ms(sched_fd), h = w1 - w0;
+        w0 = w1;
         held[nf] = h == h ? h : 0.0; /* (NaN: no schedstat) */
         nheld += held[nf] >= 1.0;
         total[nf] = (double)(b - a) / 1e6;
