@@ -853,17 +853,19 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
     for (int k = 0; k < FP_STAGE_COUNT; k++) st_ms[k] = malloc(CAP * sizeof(double));
     double *contact_ms = malloc(CAP * sizeof *contact_ms); /* the contact guard (collide_ms) */
     double *held = malloc(CAP * sizeof *held); /* the frame's wait for a CPU (runqueue_ms) */
-    bool oom = !total || !act || !com || !eng || !hands || !contact_ms || !held;
+    double *wwait = malloc(CAP * sizeof *wwait); /* its wait for the contact worker */
+    bool oom = !total || !act || !com || !eng || !hands || !contact_ms || !held || !wwait;
     for (int k = 0; k < FP_STAGE_COUNT; k++) oom |= !st_ms[k];
     if (oom) {
         for (int k = 0; k < FP_STAGE_COUNT; k++) free(st_ms[k]);
         free(total), free(act), free(com), free(eng), free(hands), free(contact_ms), free(held);
+        free(wwait);
         fp_session_destroy(&s);
         fprintf(stderr, "bench: frame: out of memory\n");
         return -ENOMEM;
     }
     int sched_fd = open("/proc/thread-self/schedstat", O_RDONLY | O_CLOEXEC);
-    size_t nheld = 0;
+    size_t nheld = 0, nwwait = 0;
     double w0 = runqueue_ms(sched_fd); /* read after each frame only: a read just before one
                                           made the ICT frame about 7% slower */
     int64_t period = 1000000000LL / 60, start = fp_now_ns(), next = start;
@@ -883,6 +885,8 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
         if (st.engaged) eng[nengage++] = total[nf];
         for (int k = 0; k < FP_STAGE_COUNT; k++) st_ms[k][nf] = st.stage_ms[k];
         contact_ms[nf] = st.collide_ms;
+        wwait[nf] = st.collide_wait_ms;
+        nwwait += wwait[nf] >= 1.0;
         for (int h = 0; h < FP_HANDS; h++)
             if (fp_session_hand(s, h)) hands[nf][h] = *fp_session_hand(s, h);
         nf++;
@@ -942,6 +946,8 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
         if (sched_fd >= 0)
             printf(",\"cpu_wait_median\":%.6g,\"cpu_wait_p99\":%.6g,\"frames_cpu_wait_1ms\":%zu",
                    pct(held, nf, 50), pct(held, nf, 99), nheld);
+        printf(",\"contact_worker_wait_median\":%.6g,\"contact_worker_wait_p99\":%.6g,"
+               "\"frames_contact_worker_wait_1ms\":%zu", pct(wwait, nf, 50), pct(wwait, nf, 99), nwwait);
         printf("}\n");
     } else {
         printf("frame %-14s %8zu vertices, opened in %.2f s, %zu frames in %.2f s (%zu skipped: a late "
@@ -955,6 +961,9 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
         if (sched_fd >= 0)
             printf("  %-22s %10.4f %10.4f (%zu frames 1 ms or more: the system ran something else "
                    "on this thread's core)\n", "waiting for a CPU", pct(held, nf, 50), pct(held, nf, 99), nheld);
+        printf("  %-22s %10.4f %10.4f (%zu frames 1 ms or more: the contact guard's worker thread "
+               "was held off its core mid-task)\n", "waiting for the worker", pct(wwait, nf, 50),
+               pct(wwait, nf, 99), nwwait);
         printf("  %-22s %10.4f %10.4f\n", "whole frame, deforming", pct(act, nact, 50), pct(act, nact, 99));
         printf("  %-22s %10.4f %10.4f (max)\n", "whole frame, commit", pct(com, ncommit, 50), pct(com, ncommit, 100));
         printf("  %-22s %10.4f %10.4f (max; %zu frames)\n", "whole frame, engage", pct(eng, nengage, 50),
@@ -968,6 +977,7 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
     for (int k = 0; k < FP_STAGE_COUNT; k++) free(st_ms[k]);
     free(contact_ms);
     free(held);
+    free(wwait);
     if (sched_fd >= 0) close(sched_fd);
     free(total);
     free(brute);

@@ -790,6 +790,8 @@ struct track {
     lane lane[FP_CONTACT_MAX_THREADS]; /* [0]: the caller's thread; [1]: the pool's worker */
     struct pool *pool;            /* the worker (fp_contact_set_threads), made on first use */
     size_t shared;                /* this step: checks shared with the worker */
+    int64_t waited_ns;            /* the caller's waits for the worker's tasks (job_finish), ns,
+                                     all told */
     uint32_t *off;                /* a local scale-back: the blocking triangles' vertices */
     size_t noff, cap_off;
     uint8_t *off_mark;            /* n: in off */
@@ -2557,8 +2559,11 @@ static void job_finish(fp_contact *c, pool *p)
     run_tasks(p, &k->lane[0], gen);
     /* closed: a worker that wakes late claims nothing while the next job's list is made */
     atomic_store(&p->next, (uint64_t)gen << 32 | UINT32_MAX);
+    if (!atomic_load(&p->busy)) return;
+    int64_t w0 = fp_now_ns(); /* timed only when there is a wait */
     for (unsigned spins = 0; atomic_load(&p->busy); spins++)
         if (spins > 256) sched_yield(); /* the worker finishes its task */
+    k->waited_ns += fp_now_ns() - w0;
 }
 
 /* the lanes' sum of a job's results (found or flips), or -ENOMEM */
@@ -3202,7 +3207,9 @@ int fp_contact_step(fp_contact *c, const float *ref, const float *cand, const ui
     if (!c || !ref || !cand || (nranges != SIZE_MAX && nranges && !ranges)) return -EINVAL;
     if (!c->tk && track_build(c)) return -ENOMEM;
     if (c->tk->broken) return -ENOMEM;
+    int64_t w0 = c->tk->waited_ns;
     int rc = step(c, ref, cand, ranges, nranges, iters, res);
+    res->worker_wait_ms = (double)(c->tk->waited_ns - w0) / 1e6;
     if (rc) c->tk->broken = true;
     return rc;
 }

@@ -101,6 +101,9 @@ typedef struct fp_contact_result {
     int local;           /* fp_contact_step: 1 when the scale-back was local */
     size_t shared;       /* fp_contact_step, the hierarchy: checks whose refit and walk
                             two threads shared (fp_contact_set_threads) */
+    double worker_wait_ms; /* fp_contact_step: how long the caller waited, at the ends of
+                            its shared jobs, for a task the worker held (a worker the
+                            system took off its core holds the step up until it is back) */
 } fp_contact_result;
 
 /** The guard: out = ref + t (cand - ref) per vertex (float), with the largest t of the

@@ -154,6 +154,8 @@ typedef struct fp_frame_stats {
     double collide_t;         /* fraction of this frame's motion kept (1: all; 0: none) */
     long collide_pairs;       /* new crossing pairs the full motion would have added */
     double collide_ms;        /* the guard's checks, milliseconds */
+    double collide_wait_ms;   /* of those, the guard's waits for its worker thread to finish a
+                                 task (contact.h, fp_contact_result.worker_wait_ms), ms */
     double stage_ms[FP_STAGE_COUNT]; /* wall time of each stage (fp_frame_stage), ms */
 } fp_frame_stats;
 

@@ -488,6 +488,7 @@ static void contact_guard(fp_session *s, const float *ref, fp_frame_stats *st)
         return;
     }
     st->collide_pairs += r.pairs;
+    st->collide_wait_ms += r.worker_wait_ms;
     if (!s->cg_frames) s->cg_t = 1.0;
     s->cg_frames++;
     if (r.t < 1) {

@@ -252,6 +252,7 @@ typedef struct track_stats {
     int frames, scaled, accepted;
     double least_t;
     size_t shared; /* checks on two threads (fp_contact_result.shared) */
+    double waited; /* the caller's waits for the worker, ms (fp_contact_result.worker_wait_ms) */
 } track_stats;
 
 /* One frame of the incremental guard on cand, checked against the full guard: accepted
@@ -291,6 +292,8 @@ static void track_frame(fp_contact *tk, fp_contact *full, const float *ref, cons
         assert_int_equal(fp_selfx_count_new_away(ref, kept, n, tris, t, rings, NULL, 0, NULL, NULL), 0);
     ts->frames++;
     ts->shared += r.shared;
+    assert_true(isfinite(r.worker_wait_ms) && r.worker_wait_ms >= 0);
+    ts->waited += r.worker_wait_ms;
     ts->accepted += r.t == 1;
     if (r.t < 1) ts->scaled++;
     if (r.t < ts->least_t) ts->least_t = r.t;
@@ -323,7 +326,7 @@ static void sheets_push(int frames, int lazy)
     if (lazy) fp_contact_set_prewarm(tk, 0);
     if (lazy == 2) fp_contact_set_threads(tk, 2, 1); /* every check shared */
     assert_int_equal(fp_contact_reference(tk, pos, NULL, SIZE_MAX), 0);
-    track_stats ts = {0, 0, 0, 1.0, 0};
+    track_stats ts = {0, 0, 0, 1.0, 0, 0};
     for (int f = 1; f <= frames; f++) {
         memcpy(cand, pos, n * 3 * sizeof(float));
         double h = 0.12 * f / frames;
@@ -343,6 +346,7 @@ static void sheets_push(int frames, int lazy)
            top);
     assert_true(ts.scaled > 0);
     if (lazy == 2) assert_true(ts.shared > 0); /* the worker's path ran */
+    else assert_true(ts.waited == 0);           /* one thread: nothing to wait for */
     assert_true(top > 0.8 * 0.05 && top <= 0.05);
     fp_contact_destroy(&tk);
     fp_contact_destroy(&full);
@@ -400,7 +404,7 @@ static void big_push(bool move_big, bool lazy)
     assert_int_equal(fp_contact_create(tris, t, n, pos, &full), 0);
     if (lazy) fp_contact_set_prewarm(tk, 0);
     assert_int_equal(fp_contact_reference(tk, pos, NULL, SIZE_MAX), 0);
-    track_stats ts = {0, 0, 0, 1.0, 0};
+    track_stats ts = {0, 0, 0, 1.0, 0, 0};
     for (int fr = 1; fr <= frames; fr++) {
         memcpy(cand, pos, n * 3 * sizeof(float));
         double h = 0.3 * fr / frames;
@@ -474,7 +478,7 @@ static void lips_push(int frames, int lazy)
     const float *s0 = ref + 3 * best;
     float start[3] = {s0[0], s0[1], s0[2]};
     assert_true(csrbf_solver_set_start_points(sol, 1, start) >= 0);
-    track_stats ts = {0, 0, 0, 1.0, 0};
+    track_stats ts = {0, 0, 0, 1.0, 0, 0};
     int64_t t0 = fp_now_ns();
     for (int f = 1; f <= frames; f++) {
         double a = (double)f / frames;
@@ -493,6 +497,7 @@ static void lips_push(int frames, int lazy)
            kept, asked, ms);
     assert_true(ts.scaled > 0);
     if (lazy == 2) assert_true(ts.shared > 0); /* the worker's path ran */
+    else assert_true(ts.waited == 0);           /* one thread: nothing to wait for */
     assert_true(kept > 0.3 * asked); /* stopped at the contact, not at the start */
     csrbf_points_destroy(&pts);
     csrbf_solver_destroy(&sol);
@@ -564,7 +569,7 @@ static void recording_frames(const char *take, const char *mapping, int mode)
     assert_int_equal(fp_contact_reference(tk, ref, NULL, SIZE_MAX), 0);
     int64_t t0;
     while (fp_session_input_start(s, &t0) == 0) fp_test_nap_ms(1);
-    track_stats ts = {0, 0, 0, 1.0, 0};
+    track_stats ts = {0, 0, 0, 1.0, 0, 0};
     unsigned commits = 0;
     for (uint64_t k = 0; !fp_session_finished(s); k++) {
         int64_t now = t0 + (int64_t)llround((double)k * 1e9 / 60);
@@ -587,6 +592,7 @@ static void recording_frames(const char *take, const char *mapping, int mode)
            ts.least_t, commits);
     assert_true(ts.frames > 20);
     if (mode == 3) assert_true(ts.shared > 0); /* the worker's path ran */
+    else assert_true(ts.waited == 0);          /* one thread: nothing to wait for */
     free(ranges);
     free(ref);
     fp_contact_destroy(&tk);
@@ -625,7 +631,7 @@ static void two_fingers(int frames, double local, float *far_kept, float *near_t
     assert_int_equal(fp_contact_create(tris, t, n, pos, &full), 0);
     fp_contact_set_local(tk, local);
     assert_int_equal(fp_contact_reference(tk, pos, NULL, SIZE_MAX), 0);
-    track_stats ts = {0, 0, 0, 1.0, 0};
+    track_stats ts = {0, 0, 0, 1.0, 0, 0};
     fp_contact_result r = {0};
     for (int f = 1; f <= frames; f++) {
         memcpy(cand, pos, n * 3 * sizeof(float));
@@ -875,7 +881,7 @@ static void test_cert_contour(void **state)
     assert_int_equal(fp_contact_create(tris, t, n, pos, &full), 0);
     fp_contact_set_prewarm(tk, 0); /* the hierarchy, small as the mesh is */
     assert_int_equal(fp_contact_reference(tk, pos, NULL, SIZE_MAX), 0);
-    track_stats ts = {0, 0, 0, 1.0, 0};
+    track_stats ts = {0, 0, 0, 1.0, 0, 0};
     size_t certified = 0;
     const int frames = 48;
     for (int fr = 1; fr <= frames; fr++) {
@@ -973,7 +979,7 @@ static void test_tree_hostile(void **state)
     assert_int_equal(fp_contact_create(tris, t, n, pos, &full), 0);
     fp_contact_set_prewarm(tk, 0);
     assert_int_equal(fp_contact_reference(tk, pos, NULL, SIZE_MAX), 0);
-    track_stats ts = {0, 0, 0, 1.0, 0};
+    track_stats ts = {0, 0, 0, 1.0, 0, 0};
     for (int f = 0; f < 40; f++) {
         memcpy(cand, fp_contact_shape(tk), n * 3 * sizeof(float));
         double bx = 0.2 + 0.6 * urand(), by = 0.2 + 0.6 * urand(), h = 0.03 * (f % 8), r = 0.1 + 0.1 * urand();
