@@ -214,7 +214,11 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
  *    check), and the exact test makes each triangle's plane once (tplane). A frame on ICT:
  *    about 480 moved vertices, 1,100 moved triangles, 2,400 list entries, 200 exact tests;
  *    its step 60-100 us (collect 5-12, mark 8-23, envelopes 13-25, renew 2-5, check 33-45),
- *    varying with the machine's load. Measured (`facepuppet bench --case frame`, contact
+ *    varying with the machine's load. In its slow minutes one step in three took 150-330
+ *    us: a gesture's first frames and a fast clap's renew 40-125 envelopes (about 2 us each
+ *    with their cells and lists, the caches cold after the replay's sleep), and in the
+ *    others one phase alone stalled 60-120 us with the usual counts and list lengths (the
+ *    lists do not grow over a gesture: 2,300-2,900 entries, 7 at most). Measured (`facepuppet bench --case frame`, contact
  *    row, three-claps anchored, 2-core machine, shared): the ICT face (up to 125 renewed
  *    in a gesture's first frames and a fast clap's) 0.058-0.11 ms median, 0.16-0.25 ms
  *    p99 (the full check: about 2.7 ms). On ICT
@@ -309,7 +313,10 @@ void fp_contact_set_certify(fp_contact *c, bool on);
  *  caller waits only for a task the worker holds, never for a worker that has not started,
  *  so a busy machine costs the worker's share, not a time slice. Decisions, counts and P
  *  are the same with 1 or 2; the checks that record blocking triangles (a local scale-back)
- *  run on one. No effect on envelopes (small meshes: a check there is too short to share).
+ *  run on one. No effect on envelopes (small meshes: a check there is too short to share;
+ *  measured: the ICT face's envelope check shared, its boxes and pairs in tasks, cut its
+ *  contact median 12-20% but raised the frame's p99 8-30%, the caller waiting up to 0.2-0.7
+ *  ms for a worker held off its core mid-task; see fp_contact_result.worker_wait_ms).
  *  No thread could be made: 1, silently. c NULL: nothing. Threads: as every call on c (one
  *  thread at a time); the worker is internal. Measured (`bench --case frame`, 1.7M
  *  vertices, 2 cores): contact 2.5-2.65 ms median on two threads, varying with the
