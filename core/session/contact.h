@@ -218,10 +218,10 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
  *    us: a gesture's first frames and a fast clap's renew 40-125 envelopes (about 2 us each
  *    with their cells and lists, the caches cold after the replay's sleep), and in the
  *    others one phase alone stalled 60-120 us with the usual counts and list lengths (the
- *    lists do not grow over a gesture: 2,300-2,900 entries, 7 at most). Measured (`facepuppet bench --case frame`, contact
- *    row, three-claps anchored, 2-core machine, shared): the ICT face (up to 125 renewed
- *    in a gesture's first frames and a fast clap's) 0.058-0.11 ms median, 0.16-0.25 ms
- *    p99 (the full check: about 2.7 ms). On ICT
+ *    lists do not grow over a gesture: 2,300-2,900 entries, 7 at most). Measured
+ *    (`facepuppet bench --case frame`, contact row, three-claps anchored, 2-core machine,
+ *    shared): the ICT face (up to 125 renewed in a gesture's first frames and a fast
+ *    clap's) 0.058-0.11 ms median, 0.16-0.25 ms p99 (the full check: about 2.7 ms). On ICT
  *    subdivided to 1.68M vertices (50,000-66,000 moved triangles a frame, moving about
  *    their own size in a fast frame) up to all of them renew: 5.4-7.3 ms median, 47-103
  *    ms p99, 15-25 frames of 225 skipped. Larger skins renew less but lengthen the lists
