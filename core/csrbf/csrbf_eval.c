@@ -91,11 +91,13 @@ typedef struct {
     float maxd2;
 } block_stats;
 
-/* A kept selection's kernel weights (see eval_simd.h's SIMD_FILL). */
+/* A kept selection's kernel weights (see eval_simd.h's SIMD_FILL), and its pairs in support
+ * and moved vertices (the drivers do not count them from the cache). */
 typedef struct {
     const float *w;
     const uint16_t *in;
     const uint32_t *off;
+    size_t pairs, moved;
 } weight_cache;
 
 /* The base positions of blocks b0..b1-1 into the output (a plain copy: the points keep the
@@ -745,6 +747,20 @@ static int wcache_fill(csrbf_solver *s, const csrbf_points *P, const eval_isa *i
     wcache_parts c = wcache_at(s);
     isa->fills[ki](P, s->sel_blk, s->sel_msk, s->sel_k, cp, inv_r2, c.w, c.in, c.off);
     for (size_t i = 0; i <= s->sel_k; i++) c.cum[i] = ITEM_COST_CACHED(i, c.off[i]);
+    /* the statistics the cached drivers leave out: a lane past the mesh's end (its last,
+     * partial block) is no vertex */
+    size_t pairs = 0, moved = 0;
+    for (size_t i = 0; i < s->sel_k; i++) {
+        size_t k0 = (size_t)s->sel_blk[i] * B, nv = k0 + B <= P->n ? B : P->n - k0;
+        unsigned lanes = (unsigned)((1u << nv) - 1), any = 0;
+        for (uint32_t q = c.off[i]; q < c.off[i + 1]; q++) {
+            pairs += (size_t)__builtin_popcount(c.in[q] & lanes);
+            any |= c.in[q];
+        }
+        moved += (size_t)__builtin_popcount(any & lanes);
+    }
+    s->sel_w_pairs = pairs;
+    s->sel_w_moved = moved;
     s->sel_w_id = s->sel_id;
     return 1;
 }
@@ -756,6 +772,8 @@ static weight_cache *wcache_get(const csrbf_solver *s, weight_cache *wc, const s
     wc->w = c.w;
     wc->in = c.in;
     wc->off = c.off;
+    wc->pairs = s->sel_w_pairs;
+    wc->moved = s->sel_w_moved;
     *cum = c.cum;
     return wc;
 }
@@ -1010,7 +1028,7 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
              * selection (full writes and unchanged touched ones) and whose bytes stay within
              * CSRBF_WCACHE_THREAD_BYTES per thread: filled at the first such frame after the
              * selection is refined (its second use) */
-            weight_cache wcv = {NULL, NULL, NULL}, *wc = NULL;
+            weight_cache wcv = {NULL, NULL, NULL, 0, 0}, *wc = NULL;
             if (use_tree && !own && ib == S.blk && s->sel_refined && S.k) {
                 const size_t ccost = ITEM_COST_CACHED(S.k, S.evals);
                 const size_t cthreads = ccost <= PARALLEL_COST ? 1 : (size_t)nt;
@@ -1050,8 +1068,8 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
                 }
                 bs.maxd2 = maxd2;
             }
-            pairs += bs.pairs;
-            moved += bs.moved;
+            pairs += bs.pairs + (wc ? wc->pairs : 0);
+            moved += bs.moved + (wc ? wc->moved : 0);
             maxd = bs.maxd2;
             if (touch) { /* this call's computed blocks become the last call's */
                 if (all_in) {

@@ -179,11 +179,11 @@ V_TARGET static void SFX(write_block)(float *restrict out, const float *restrict
     } while (0)
 
 /* A partial block (the mesh's last, nv < B vertices): base + displacement, and with stats its
- * pairs, moved vertices and largest squared displacement straight into *bs. Kept out of the
- * drivers' loop (and its registers). */
+ * largest squared displacement and (count) its pairs and moved vertices straight into *bs.
+ * Kept out of the drivers' loop (and its registers). */
 V_TARGET __attribute__((noinline, cold)) static void
 SFX(finish_partial)(float *o, const float *x, const float *y, const float *z, size_t nv, VF sx,
-                    VF sy, VF sz, VI cntv, int stats, block_stats *bs)
+                    VF sy, VF sz, VI cntv, int stats, int count, block_stats *bs)
 {
     _Alignas(64) float acc[3][B];
     _Alignas(64) int32_t cnt[B];
@@ -195,9 +195,11 @@ SFX(finish_partial)(float *o, const float *x, const float *y, const float *z, si
         o[3 * v] = x[v] + acc[0][v];
         o[3 * v + 1] = y[v] + acc[1][v];
         o[3 * v + 2] = z[v] + acc[2][v];
-        if (stats) {
+        if (stats && count) {
             bs->pairs += (size_t)cnt[v];
             bs->moved += cnt[v] > 0;
+        }
+        if (stats) {
             /* the same operations as the full blocks' (mul, fma, fma), lane by lane */
             float d2 = fmaf(acc[2][v], acc[2][v], fmaf(acc[1][v], acc[1][v], acc[0][v] * acc[0][v]));
             if (d2 > bs->maxd2) bs->maxd2 = d2;
@@ -216,7 +218,8 @@ SFX(finish_partial)(float *o, const float *x, const float *y, const float *z, si
  * excluded; the lane counts are flushed every 2^16 blocks so that they cannot overflow). With
  * CACHED (compile-time; LIST and GAPS, any kernel: PSI unused) the items are the kept
  * selection's and each pair's weights and support mask come from its weight cache *wc instead
- * of the kernel (the same values, added by the same masked fused multiply-adds). */
+ * of the kernel (the same values, added by the same masked fused multiply-adds); its pairs
+ * and moved vertices are not counted (the cache holds them: wc->pairs, wc->moved). */
 #define SIMD_DRIVER(NAME, PSI, STATS, MODE, CACHED)                                            \
     V_TARGET static void NAME(                                                                 \
         const csrbf_points *P, float *restrict out, const uint32_t *restrict blk,              \
@@ -226,13 +229,18 @@ SFX(finish_partial)(float *o, const float *x, const float *y, const float *z, si
         const VF one = V_set1_ps(1.0f), half = V_set1_ps(0.5f), three_half = V_set1_ps(1.5f), \
                  tiny = V_set1_ps(1e-30f), ir2 = V_set1_ps(inv_r2);                            \
         const VI ione = V_set1_epi32(1), izero = V_setzero_si();                               \
-        enum { stats_on = STATS };                                                             \
+        enum { stats_on = STATS, count_on = STATS && !CACHED };                                \
         VI pairv = izero;                                                                      \
         VF maxd = V_setzero_ps();                                                              \
         size_t nmoved = 0;                                                                     \
         const size_t n = P->n;                                                                 \
         const float *const px = P->s[0], *const py = P->s[1], *const pz = P->s[2];             \
         size_t pos = g0;                                                                       \
+        /* CACHED: the items' pairs lie in order from item i0's first on */                   \
+        const float *restrict wv = CACHED ? wc->w + (size_t)wc->off[i0] * B : NULL;            \
+        const uint16_t *restrict wi = CACHED ? wc->in + wc->off[i0] : NULL;                    \
+        (void)wv;                                                                              \
+        (void)wi;                                                                              \
         (void)g1;                                                                              \
         (void)m;                                                                               \
         (void)wc;                                                                              \
@@ -253,8 +261,6 @@ SFX(finish_partial)(float *o, const float *x, const float *y, const float *z, si
             VF sx = V_set1_ps(-0.0f), sy = sx, sz = sx;                                        \
             VI cntv = izero;                                                                   \
             if (CACHED) {                                                                      \
-                const float *restrict wv = wc->w + (size_t)wc->off[i] * B;                     \
-                const uint16_t *restrict wi = wc->in + wc->off[i];                             \
                 while (mk) {                                                                   \
                     const unsigned j = (unsigned)__builtin_ctzll(mk);                          \
                     mk &= mk - 1;                                                              \
@@ -264,7 +270,7 @@ SFX(finish_partial)(float *o, const float *x, const float *y, const float *z, si
                     sx = V_mask3_fmadd_ps(w, V_set1_ps(cp[8 * j + 3]), sx, in);                \
                     sy = V_mask3_fmadd_ps(w, V_set1_ps(cp[8 * j + 4]), sy, in);                \
                     sz = V_mask3_fmadd_ps(w, V_set1_ps(cp[8 * j + 5]), sz, in);                \
-                    if (stats_on) cntv = V_mask_inc_epi32(cntv, in, ione);                     \
+                    if (count_on) cntv = V_mask_inc_epi32(cntv, in, ione);                     \
                 }                                                                              \
             } else if (MODE != DRIVE_ALL) {                                                    \
                 while (mk) {                                                                   \
@@ -276,9 +282,11 @@ SFX(finish_partial)(float *o, const float *x, const float *y, const float *z, si
                 for (size_t j = 0; j < m; j++) SIMD_PAIR(PSI, j, 0);                           \
             }                                                                                  \
             if (nv == B) {                                                                     \
-                if (STATS) {                                                                   \
+                if (count_on) {                                                                \
                     pairv = V_add_epi32(pairv, cntv);                                          \
                     nmoved += (size_t)V_count_gt0(cntv, izero);                                \
+                }                                                                              \
+                if (STATS) {                                                                   \
                     VF d2 = V_mul_ps(sx, sx);                                                  \
                     d2 = V_fmadd_ps(sy, sy, d2);                                               \
                     d2 = V_fmadd_ps(sz, sz, d2);                                               \
@@ -287,9 +295,9 @@ SFX(finish_partial)(float *o, const float *x, const float *y, const float *z, si
                 V_interleave(o, V_add_ps(X, sx), V_add_ps(Y, sy), V_add_ps(Z, sz));            \
             } else {                                                                           \
                 SFX(finish_partial)(o, px + k0, py + k0, pz + k0, nv, sx, sy, sz, cntv, STATS, \
-                                    bs);                                                       \
+                                    count_on, bs);                                             \
             }                                                                                  \
-            if (STATS && !((i - i0 + 1) & 0xFFFF)) { /* lane counts stay far from 2^32 */      \
+            if (count_on && !((i - i0 + 1) & 0xFFFF)) { /* lane counts stay far from 2^32 */   \
                 bs->pairs += (size_t)(uint32_t)V_reduce_add_epi32(pairv);                      \
                 pairv = izero;                                                                 \
             }                                                                                  \

@@ -131,8 +131,11 @@ struct csrbf_solver {
     /* the kept selection's weight cache (csrbf_eval.c), filled once it is refined, for frames
      * small enough to stay in cache: valid while sel_w_id == sel_id. One aligned block of sel_wbytes:
      * the pairs' weights (16 floats each), their support masks (uint16), the items' first
-     * pairs (uint32, sel_k + 1) and prefix costs (size_t, sel_k + 1). */
+     * pairs (uint32, sel_k + 1) and prefix costs (size_t, sel_k + 1); and the selection's
+     * statistics that do not change while the centres stay (vertex-centre pairs in support,
+     * vertices with one or more), counted once at the fill instead of every frame. */
     uint64_t sel_w_id;
+    size_t sel_w_pairs, sel_w_moved;
     void *sel_wmem;
     size_t sel_wbytes;
 };
