@@ -2,8 +2,7 @@
  * set-up (Sato, Savchenko, Ohbuchi, Cyberworlds 2004), a 1M-vertex grid and large centre
  * sets, each beside a reference measured in the same run (a plain scalar brute-force loop,
  * or a fresh factorisation). */
-#define _POSIX_C_SOURCE 200809L
-#define _DEFAULT_SOURCE /* getloadavg */
+#define _GNU_SOURCE /* getloadavg, sched_setaffinity */
 #include "fp_bench.h"
 
 #include "csrbf.h"
@@ -16,6 +15,8 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
+#include <sched.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -1033,6 +1034,63 @@ static int case_take(const bench_opts *o) { return fp_bench_take(stdout, o->quic
  * JSON): the CPU's model (Linux's /proc/cpuinfo), its cores, the second-level cache of a
  * core, the engine's instruction set (csrbf_simd_path), the kernel's transparent huge pages
  * mode and DAMON monitors (kdamond) running, and the load average. */
+/* Nanoseconds a load of a pointer chase (one random cycle through every 64-byte line) over
+ * `bytes`, on the calling thread's CPU: 2^21 loads after one warm lap. -1 without memory. */
+static double chase_ns(size_t bytes)
+{
+    size_t n = bytes / 64;
+    size_t *a = aligned_alloc(64, n * 64), *perm = malloc(n * sizeof *perm);
+    double ns = -1;
+    if (a && perm && n > 1) {
+        uint64_t x = 88172645463325252ull; /* xorshift: the same cycle every run */
+        for (size_t i = 0; i < n; i++) perm[i] = i;
+        for (size_t i = n - 1; i > 0; i--) {
+            x ^= x << 13, x ^= x >> 7, x ^= x << 17;
+            size_t j = (size_t)(x % (i + 1)), t = perm[i];
+            perm[i] = perm[j];
+            perm[j] = t;
+        }
+        for (size_t i = 0; i < n; i++) a[8 * perm[i]] = 8 * perm[(i + 1) % n];
+        volatile size_t sink;
+        size_t q = 0;
+        for (size_t i = 0; i < n; i++) q = a[q];
+        const long loads = 1L << 21;
+        double t0 = now_ms();
+        for (long i = 0; i < loads; i++) q = a[q];
+        ns = (now_ms() - t0) * 1e6 / (double)loads;
+        sink = q;
+        (void)sink;
+    }
+    free(a);
+    free(perm);
+    return ns;
+}
+
+/* The chase over 3/4 of a core's L2 on each CPU the bench may run on, into line (the
+ * calling thread's CPUs are restored). On a shared virtual machine a CPU whose core's L2 is
+ * also another guest's is slower here (6.3 against 11.5 ns a load, compute loops equal) and
+ * so is the frame whose thread runs there: the figure tells such a minute. */
+static void probe_cpus(long l2, char *line, size_t cap)
+{
+    cpu_set_t old;
+    size_t len = 0;
+    line[0] = '\0';
+    if (sched_getaffinity(0, sizeof old, &old)) return;
+    size_t bytes = (size_t)(l2 > 0 ? l2 : 1 << 20) / 4 * 3;
+    len += (size_t)snprintf(line, cap, "chase over %zu KiB, ns a load:", bytes / 1024);
+    for (int c = 0, shown = 0; c < CPU_SETSIZE && shown < 16 && len < cap; c++) {
+        if (!CPU_ISSET(c, &old)) continue;
+        cpu_set_t one;
+        CPU_ZERO(&one);
+        CPU_SET(c, &one);
+        if (sched_setaffinity(0, sizeof one, &one)) continue;
+        double ns = chase_ns(bytes);
+        len += (size_t)snprintf(line + len, cap - len, " cpu%d %.1f", c, ns);
+        shown++;
+    }
+    sched_setaffinity(0, sizeof old, &old);
+}
+
 static void print_machine(void)
 {
     char model[128] = "unknown CPU";
@@ -1076,11 +1134,14 @@ static void print_machine(void)
         damon += fgets(line, sizeof line, f) && !strncmp(line, "on", 2);
         fclose(f);
     }
+    char probe[256];
+    probe_cpus(l2, probe, sizeof probe);
     fprintf(stderr, "bench: machine: %s, %ld cores, L2 %s a core; engine fast path: %s; transparent huge "
             "pages %s; DAMON monitors running %d; load average ",
             model, cores, l2s, csrbf_simd_path(), thp, damon);
-    if (nla == 3) fprintf(stderr, "%.2f %.2f %.2f\n", la[0], la[1], la[2]);
-    else fprintf(stderr, "unknown\n");
+    if (nla == 3) fprintf(stderr, "%.2f %.2f %.2f", la[0], la[1], la[2]);
+    else fprintf(stderr, "unknown");
+    fprintf(stderr, "; L2 %s\n", probe[0] ? probe : "probe not run");
 }
 
 const char *const fp_bench_cases[] = {"table1", "scale", "centres", "guard", "support", "take", "frame", NULL};
