@@ -855,12 +855,15 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
     double *contact_ms = malloc(CAP * sizeof *contact_ms); /* the contact guard (collide_ms) */
     double *held = malloc(CAP * sizeof *held); /* the frame's wait for a CPU (runqueue_ms) */
     double *wwait = malloc(CAP * sizeof *wwait); /* its wait for the contact worker */
-    bool oom = !total || !act || !com || !eng || !hands || !contact_ms || !held || !wwait;
+    int *cpu = malloc(CAP * sizeof *cpu);        /* the CPU it ended on (sched_getcpu) */
+    double *on_cpu = malloc(CAP * sizeof *on_cpu); /* the frames that ended on one CPU */
+    bool oom = !total || !act || !com || !eng || !hands || !contact_ms || !held || !wwait || !cpu ||
+               !on_cpu;
     for (int k = 0; k < FP_STAGE_COUNT; k++) oom |= !st_ms[k];
     if (oom) {
         for (int k = 0; k < FP_STAGE_COUNT; k++) free(st_ms[k]);
         free(total), free(act), free(com), free(eng), free(hands), free(contact_ms), free(held);
-        free(wwait);
+        free(wwait), free(cpu), free(on_cpu);
         fp_session_destroy(&s);
         fprintf(stderr, "bench: frame: out of memory\n");
         return -ENOMEM;
@@ -876,6 +879,7 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
         int64_t a = fp_now_ns();
         fp_session_step(s, a, &st);
         int64_t b = fp_now_ns();
+        cpu[nf] = sched_getcpu();
         double w1 = runqueue_ms(sched_fd), h = w1 - w0;
         w0 = w1;
         held[nf] = h == h ? h : 0.0; /* (NaN: no schedstat) */
@@ -927,6 +931,19 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
     if (!rc) fp_engine_step_free(&e);
     static const char *names[FP_STAGE_COUNT] = {"events", "hands", "distances", "mapping",
                                                 "solve", "evaluate", "commit"};
+    /* the whole frame by the CPU it ended on (the first FRAME_CPUS CPUs; -1: none there):
+     * on a shared VM one CPU's caches may be another guest's too (print_machine's chase) */
+    enum { FRAME_CPUS = 4 };
+    size_t ncpu[FRAME_CPUS] = {0};
+    double cpu_med[FRAME_CPUS];
+    for (int c = 0; c < FRAME_CPUS; c++) {
+        for (size_t f = 0; f < nf; f++)
+            if (cpu[f] == c) on_cpu[ncpu[c]++] = total[f];
+        cpu_med[c] = ncpu[c] ? pct(on_cpu, ncpu[c], 50) : -1;
+    }
+    int cpus_seen = 0;
+    for (int c = 0; c < FRAME_CPUS; c++)
+        if (ncpu[c]) cpus_seen = c + 1;
     if (o->json) {
         printf("{\"case\":\"frame\",\"mesh\":\"%s\",\"vertices\":%zu,\"frames\":%zu,\"frames_dropped\":%zu,"
                "\"seconds_open\":%.4g,\"seconds\":%.4g,\"deforming\":%zu,\"commits\":%zu,\"ms_median\":%.6g,\"ms_p99\":%.6g,"
@@ -949,7 +966,14 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
                    pct(held, nf, 50), pct(held, nf, 99), nheld);
         printf(",\"contact_worker_wait_median\":%.6g,\"contact_worker_wait_p99\":%.6g,"
                "\"frames_contact_worker_wait_1ms\":%zu", pct(wwait, nf, 50), pct(wwait, nf, 99), nwwait);
-        printf("}\n");
+        printf(",\"frames_by_cpu\":[");
+        for (int c = 0; c < cpus_seen; c++) printf("%s%zu", c ? "," : "", ncpu[c]);
+        printf("],\"ms_median_by_cpu\":[");
+        for (int c = 0; c < cpus_seen; c++) {
+            if (cpu_med[c] < 0) printf("%snull", c ? "," : "");
+            else printf("%s%.6g", c ? "," : "", cpu_med[c]);
+        }
+        printf("]}\n");
     } else {
         printf("frame %-14s %8zu vertices, opened in %.2f s, %zu frames in %.2f s (%zu skipped: a late "
                "frame's periods), %zu deforming, %zu commits, contact guard %s\n",
@@ -965,6 +989,10 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
         printf("  %-22s %10.4f %10.4f (%zu frames 1 ms or more: the contact guard's worker thread "
                "was held off its core mid-task)\n", "waiting for the worker", pct(wwait, nf, 50),
                pct(wwait, nf, 99), nwwait);
+        for (int c = 0; c < cpus_seen; c++)
+            if (ncpu[c])
+                printf("  whole frame, on cpu%-3d %10.4f %10s (%zu frames ended there)\n", c, cpu_med[c],
+                       "-", ncpu[c]);
         printf("  %-22s %10.4f %10.4f\n", "whole frame, deforming", pct(act, nact, 50), pct(act, nact, 99));
         printf("  %-22s %10.4f %10.4f (max)\n", "whole frame, commit", pct(com, ncommit, 50), pct(com, ncommit, 100));
         printf("  %-22s %10.4f %10.4f (max; %zu frames)\n", "whole frame, engage", pct(eng, nengage, 50),
@@ -979,6 +1007,8 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
     free(contact_ms);
     free(held);
     free(wwait);
+    free(cpu);
+    free(on_cpu);
     if (sched_fd >= 0) close(sched_fd);
     free(total);
     free(brute);
