@@ -1065,8 +1065,8 @@ static int case_take(const bench_opts *o) { return fp_bench_take(stdout, o->quic
  * core, the engine's instruction set (csrbf_simd_path), the kernel's transparent huge pages
  * mode and DAMON monitors (kdamond) running, and the load average. */
 /* Nanoseconds a load of a pointer chase (one random cycle through every 64-byte line) over
- * `bytes`, on the calling thread's CPU: 2^21 loads after one warm lap. -1 without memory. */
-static double chase_ns(size_t bytes)
+ * `bytes`, on the calling thread's CPU: `loads` loads after one warm lap. -1 without memory. */
+static double chase_ns(size_t bytes, long loads)
 {
     size_t n = bytes / 64;
     size_t *a = aligned_alloc(64, n * 64), *perm = malloc(n * sizeof *perm);
@@ -1084,7 +1084,6 @@ static double chase_ns(size_t bytes)
         volatile size_t sink;
         size_t q = 0;
         for (size_t i = 0; i < n; i++) q = a[q];
-        const long loads = 1L << 21;
         double t0 = now_ms();
         for (long i = 0; i < loads; i++) q = a[q];
         ns = (now_ms() - t0) * 1e6 / (double)loads;
@@ -1096,29 +1095,39 @@ static double chase_ns(size_t bytes)
     return ns;
 }
 
-/* The chase over 3/4 of a core's L2 on each CPU the bench may run on, into line (the
- * calling thread's CPUs are restored). On a shared virtual machine a CPU whose core's L2 is
- * also another guest's is slower here (6.3 against 11.5 ns a load, compute loops equal) and
- * so is the frame whose thread runs there: the figure tells such a minute. */
+/* Chases on each CPU the bench may run on (at most 8), into line (the calling thread's CPUs
+ * are restored): over 3/4 of a core's L2, and over 8 MiB (past L2: the shared cache, or
+ * memory). On a shared virtual machine other guests take these caches minute by minute:
+ * 6.3 against 11.5 ns a load over 768 KiB on the two CPUs in one minute, 22-64 against
+ * 117-127 ns over 8 MiB in another (memory's latency: the shared cache held nothing of
+ * ours), compute loops equal. A snapshot at the run's start: the state changes within
+ * seconds, so it tells a run's conditions roughly (5 frame runs: ICT medians 0.078-0.146
+ * ms against 8 MiB chases of 22-75 ns on the frames' CPU, no clear order). */
 static void probe_cpus(long l2, char *line, size_t cap)
 {
     cpu_set_t old;
-    size_t len = 0;
     line[0] = '\0';
     if (sched_getaffinity(0, sizeof old, &old)) return;
-    size_t bytes = (size_t)(l2 > 0 ? l2 : 1 << 20) / 4 * 3;
-    len += (size_t)snprintf(line, cap, "chase over %zu KiB, ns a load:", bytes / 1024);
-    for (int c = 0, shown = 0; c < CPU_SETSIZE && shown < 16 && len < cap; c++) {
+    const size_t sizes[2] = {(size_t)(l2 > 0 ? l2 : 1 << 20) / 4 * 3, (size_t)8 << 20};
+    const long loads[2] = {1L << 21, 1L << 18};
+    double ns[2][8];
+    int cpus[8], nc = 0;
+    for (int c = 0; c < CPU_SETSIZE && nc < 8; c++) {
         if (!CPU_ISSET(c, &old)) continue;
         cpu_set_t one;
         CPU_ZERO(&one);
         CPU_SET(c, &one);
         if (sched_setaffinity(0, sizeof one, &one)) continue;
-        double ns = chase_ns(bytes);
-        len += (size_t)snprintf(line + len, cap - len, " cpu%d %.1f", c, ns);
-        shown++;
+        for (int k = 0; k < 2; k++) ns[k][nc] = chase_ns(sizes[k], loads[k]);
+        cpus[nc++] = c;
     }
     sched_setaffinity(0, sizeof old, &old);
+    size_t len = (size_t)snprintf(line, cap, "chases, ns a load:");
+    for (int k = 0; k < 2 && len < cap; k++) {
+        len += (size_t)snprintf(line + len, cap - len, "%s %zu KiB", k ? ";" : "", sizes[k] / 1024);
+        for (int i = 0; i < nc && len < cap; i++)
+            len += (size_t)snprintf(line + len, cap - len, " cpu%d %.1f", cpus[i], ns[k][i]);
+    }
 }
 
 static void print_machine(void)
@@ -1171,7 +1180,7 @@ static void print_machine(void)
             model, cores, l2s, csrbf_simd_path(), thp, damon);
     if (nla == 3) fprintf(stderr, "%.2f %.2f %.2f", la[0], la[1], la[2]);
     else fprintf(stderr, "unknown");
-    fprintf(stderr, "; L2 %s\n", probe[0] ? probe : "probe not run");
+    fprintf(stderr, "; %s\n", probe[0] ? probe : "chases not run");
 }
 
 const char *const fp_bench_cases[] = {"table1", "scale", "centres", "guard", "support", "take", "frame", NULL};
