@@ -1060,10 +1060,6 @@ static int case_frame(const bench_opts *o)
 /* The recorder's cost on the session thread (bench_take.c). */
 static int case_take(const bench_opts *o) { return fp_bench_take(stdout, o->quick, o->json); }
 
-/* The machine the figures come from, one line on stderr (stdout stays the table or the
- * JSON): the CPU's model (Linux's /proc/cpuinfo), its cores, the second-level cache of a
- * core, the engine's instruction set (csrbf_simd_path), the kernel's transparent huge pages
- * mode and DAMON monitors (kdamond) running, and the load average. */
 /* Nanoseconds a load of a pointer chase (one random cycle through every 64-byte line) over
  * `bytes`, on the calling thread's CPU: `loads` loads after one warm lap. -1 without memory. */
 static double chase_ns(size_t bytes, long loads)
@@ -1130,6 +1126,11 @@ static void probe_cpus(long l2, char *line, size_t cap)
     }
 }
 
+/* The machine the figures come from, one line on stderr (stdout stays the table or the
+ * JSON): the CPU's model (Linux's /proc/cpuinfo), its cores, the second-level cache of a
+ * core, the engine's instruction set (csrbf_simd_path), the kernel's transparent huge pages
+ * mode and DAMON monitors (kdamond) running, the load average, and the chases of each CPU
+ * (probe_cpus). */
 static void print_machine(void)
 {
     char model[128] = "unknown CPU";

@@ -91,13 +91,11 @@ typedef struct {
     float maxd2;
 } block_stats;
 
-/* A kept selection's kernel weights (see eval_simd.h's SIMD_FILL), and its pairs in support
- * and moved vertices (the drivers do not count them from the cache). */
+/* A kept selection's kernel weights (see eval_simd.h's SIMD_FILL). */
 typedef struct {
     const float *w;
     const uint16_t *in;
     const uint32_t *off;
-    size_t pairs, moved;
 } weight_cache;
 
 /* The base positions of blocks b0..b1-1 into the output (a plain copy: the points keep the
@@ -772,8 +770,6 @@ static weight_cache *wcache_get(const csrbf_solver *s, weight_cache *wc, const s
     wc->w = c.w;
     wc->in = c.in;
     wc->off = c.off;
-    wc->pairs = s->sel_w_pairs;
-    wc->moved = s->sel_w_moved;
     *cum = c.cum;
     return wc;
 }
@@ -1028,7 +1024,7 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
              * selection (full writes and unchanged touched ones) and whose bytes stay within
              * CSRBF_WCACHE_THREAD_BYTES per thread: filled at the first such frame after the
              * selection is refined (its second use) */
-            weight_cache wcv = {NULL, NULL, NULL, 0, 0}, *wc = NULL;
+            weight_cache wcv = {NULL, NULL, NULL}, *wc = NULL;
             if (use_tree && !own && ib == S.blk && s->sel_refined && S.k) {
                 const size_t ccost = ITEM_COST_CACHED(S.k, S.evals);
                 const size_t cthreads = ccost <= PARALLEL_COST ? 1 : (size_t)nt;
@@ -1068,8 +1064,9 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
                 }
                 bs.maxd2 = maxd2;
             }
-            pairs += bs.pairs + (wc ? wc->pairs : 0);
-            moved += bs.moved + (wc ? wc->moved : 0);
+            /* the cached drivers leave the pairs and moved vertices to the cache's counts */
+            pairs += bs.pairs + (wc ? s->sel_w_pairs : 0);
+            moved += bs.moved + (wc ? s->sel_w_moved : 0);
             maxd = bs.maxd2;
             if (touch) { /* this call's computed blocks become the last call's */
                 if (all_in) {

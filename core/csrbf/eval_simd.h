@@ -219,7 +219,8 @@ SFX(finish_partial)(float *o, const float *x, const float *y, const float *z, si
  * CACHED (compile-time; LIST and GAPS, any kernel: PSI unused) the items are the kept
  * selection's and each pair's weights and support mask come from its weight cache *wc instead
  * of the kernel (the same values, added by the same masked fused multiply-adds); its pairs
- * and moved vertices are not counted (the cache holds them: wc->pairs, wc->moved). */
+ * and moved vertices are not counted (counted once at the cache's fill: the solver's
+ * sel_w_pairs, sel_w_moved). */
 #define SIMD_DRIVER(NAME, PSI, STATS, MODE, CACHED)                                            \
     V_TARGET static void NAME(                                                                 \
         const csrbf_points *P, float *restrict out, const uint32_t *restrict blk,              \
