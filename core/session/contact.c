@@ -2935,8 +2935,9 @@ static size_t moved_in(const struct track *k, const float *a, size_t f, size_t e
 static int collect_moved(fp_contact *c, const float *a, const uint32_t *ranges, size_t nranges)
 {
     struct track *k = c->tk;
-    size_t most = visits(c, ranges, nranges);
+    size_t most = visits(c, ranges, nranges), cap0 = k->cap_mv;
     if (reserve((void **)&k->mv, &k->cap_mv, most ? most : 1, sizeof *k->mv)) return -ENOMEM;
+    if (k->cap_mv != cap0) write_pages(k->mv, k->cap_mv * sizeof *k->mv); /* grown: no fault later */
     uint32_t *mv = k->mv;
     size_t nmv = 0;
     for (size_t i = 0; i < k->ndp; i++) {

@@ -18,11 +18,16 @@
 #include "step_rig.h"
 
 #include <errno.h>
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
+#if defined(__GLIBC__)
+#include <malloc.h> /* mallopt: fp_session_realtime_memory */
+#endif
+#include <sys/mman.h> /* madvise: fp_session_realtime_memory */
 
 _Static_assert(FP_INTENTS_MAX_INPUTS == FP_SESSION_MAX_INPUTS, "one input limit");
 _Static_assert(FP_HISTORY_LEVELS == FP_SESSION_UNDO_LEVELS, "one undo depth");
@@ -394,6 +399,94 @@ int fp_session_start(fp_session *s, char *err, size_t errlen)
         if (rc) return rc;
     }
     return 0;
+}
+
+/* Real-time memory (fp_session.h). A page fault took about 10 us on the 2-core VM
+ * (a first write to fresh anonymous pages, 64 at a time); before this the ICT replay's
+ * renewing and committing frames took 1 to 9 each (the undo level's arrays growing, the
+ * contact guard's renewed lists), and they were its slowest frames. glibc's malloc gives
+ * freed memory back to the system (trim, munmap of large chunks) and maps new memory for
+ * growth (brk, mmap, a thread's own arena); with these settings it keeps what it has, serves
+ * large blocks from the heap and one arena, so the reserve touched here is what a frame's
+ * allocations reuse. */
+#define FP_RT_RESERVE_BASE (32u << 20)  /* bytes: the reserve, at least */
+#define FP_RT_RESERVE_PER_VERTEX 32u    /* bytes a vertex more (an undo level of the whole
+                                           mesh is 12 a vertex, with its pieces' list) */
+#define FP_RT_BLOCK 4096u               /* bytes: the reserve's blocks */
+#define FP_RT_STACK (512u << 10)        /* bytes of the calling thread's stack touched */
+
+/* The process's code mapped in (MADV_POPULATE_READ, Linux 5.14, on every executable file
+ * mapping: the program, the libraries, the plugins loaded): a code page first run in a frame
+ * (a gesture's first contact check) faults otherwise. Best effort: without /proc or that
+ * advice the first run of a page still faults. */
+static void populate_code(void)
+{
+#if defined(MADV_POPULATE_READ)
+    FILE *f = fopen("/proc/self/maps", "re");
+    if (!f) return;
+    char line[4352];
+    while (fgets(line, sizeof line, f)) {
+        unsigned long lo, hi;
+        char perm[8];
+        int path_at = 0;
+        if (sscanf(line, "%lx-%lx %7s %*s %*s %*s %n", &lo, &hi, perm, &path_at) < 3 || !path_at) continue;
+        if (strcmp(perm, "r-xp") || line[path_at] != '/' || hi <= lo) continue; /* a file's code */
+        (void)madvise((void *)lo, hi - lo, MADV_POPULATE_READ);
+    }
+    fclose(f);
+#endif
+}
+
+/* touch `bytes` of this thread's stack below the caller's frame (not inlined: its array is
+ * the stack touched) */
+static __attribute__((noinline)) void touch_stack(void)
+{
+    volatile unsigned char pad[FP_RT_STACK];
+    for (size_t i = 0; i < sizeof pad; i += 1024) pad[i] = 0;
+}
+
+int fp_session_realtime_memory(fp_session *s, size_t reserve_bytes, char *err, size_t errlen)
+{
+    if (!s) {
+        if (err && errlen) snprintf(err, errlen, "real-time memory: no session");
+        return -EINVAL;
+    }
+#if defined(__GLIBC__)
+    if (!reserve_bytes) reserve_bytes = FP_RT_RESERVE_BASE + FP_RT_RESERVE_PER_VERTEX * s->n;
+    if (!mallopt(M_TRIM_THRESHOLD, INT_MAX) || !mallopt(M_MMAP_MAX, 0) || !mallopt(M_ARENA_MAX, 1)) {
+        if (err && errlen) snprintf(err, errlen, "real-time memory: the C library refused a malloc setting (mallopt)");
+        return -ENOTSUP;
+    }
+    /* in blocks, so that free memory inside the heap that nothing wrote yet (calloc's fresh
+     * pages, blocks freed untouched: glibc serves a request from those before its top) is
+     * written too, then the top */
+    size_t nb = (reserve_bytes + FP_RT_BLOCK - 1) / FP_RT_BLOCK;
+    volatile unsigned char **b = malloc(nb * sizeof *b);
+    if (!b) {
+        if (err && errlen) snprintf(err, errlen, "real-time memory: out of memory for a reserve of %zu MiB", reserve_bytes >> 20);
+        return -ENOMEM;
+    }
+    size_t got = 0;
+    for (; got < nb; got++) {
+        if (!(b[got] = malloc(FP_RT_BLOCK))) break;
+        b[got][0] = 0; /* a block spans two pages at most */
+        b[got][FP_RT_BLOCK - 1] = 0;
+    }
+    bool short_of = got < nb;
+    while (got > 0) free((void *)b[--got]);
+    free(b);
+    if (short_of) {
+        if (err && errlen) snprintf(err, errlen, "real-time memory: out of memory for a reserve of %zu MiB", reserve_bytes >> 20);
+        return -ENOMEM;
+    }
+    touch_stack();
+    populate_code();
+    return 0;
+#else
+    (void)reserve_bytes;
+    if (err && errlen) snprintf(err, errlen, "real-time memory: not supported by this C library (glibc only)");
+    return -ENOTSUP;
+#endif
 }
 
 /* ---- one frame ------------------------------------------------------------------------- */

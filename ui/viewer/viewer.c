@@ -220,8 +220,14 @@ static int open_session(viewer *v, char *err, size_t errlen)
 {
     fp_session *s = NULL;
     int rc = fp_session_create(&v->so, &s, err, errlen);
-    if (!rc && (rc = fp_session_start(s, err, errlen))) fp_session_destroy(&s);
-    if (rc) return rc;
+    /* no page faults in the frames (fp_session_realtime_memory); where the C library is
+     * not glibc the session runs without */
+    if (!rc && (rc = fp_session_realtime_memory(s, 0, err, errlen)) == -ENOTSUP) rc = 0;
+    if (!rc) rc = fp_session_start(s, err, errlen);
+    if (rc) {
+        fp_session_destroy(&s);
+        return rc;
+    }
     fp_session_destroy(&v->s);
     v->s = s;
     for (int h = 0; h < FP_HANDS; h++) v->seen_time[h] = v->pending_time[h] = 0;
