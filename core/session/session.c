@@ -437,8 +437,8 @@ static void populate_code(void)
 #endif
 }
 
-/* touch `bytes` of this thread's stack below the caller's frame (not inlined: its array is
- * the stack touched) */
+/* FP_RT_STACK bytes of this thread's stack below the caller's frame written (not inlined:
+ * its array is the stack touched) */
 static __attribute__((noinline)) void touch_stack(void)
 {
     volatile unsigned char pad[FP_RT_STACK];
@@ -460,22 +460,16 @@ int fp_session_realtime_memory(fp_session *s, size_t reserve_bytes, char *err, s
     /* in blocks, so that free memory inside the heap that nothing wrote yet (calloc's fresh
      * pages, blocks freed untouched: glibc serves a request from those before its top) is
      * written too, then the top */
-    size_t nb = (reserve_bytes + FP_RT_BLOCK - 1) / FP_RT_BLOCK;
+    size_t nb = (reserve_bytes + FP_RT_BLOCK - 1) / FP_RT_BLOCK, got = 0;
     volatile unsigned char **b = malloc(nb * sizeof *b);
-    if (!b) {
-        if (err && errlen) snprintf(err, errlen, "real-time memory: out of memory for a reserve of %zu MiB", reserve_bytes >> 20);
-        return -ENOMEM;
-    }
-    size_t got = 0;
-    for (; got < nb; got++) {
-        if (!(b[got] = malloc(FP_RT_BLOCK))) break;
+    while (b && got < nb && (b[got] = malloc(FP_RT_BLOCK))) {
         b[got][0] = 0; /* a block spans two pages at most */
-        b[got][FP_RT_BLOCK - 1] = 0;
+        b[got++][FP_RT_BLOCK - 1] = 0;
     }
-    bool short_of = got < nb;
+    bool whole = b && got == nb;
     while (got > 0) free((void *)b[--got]);
     free(b);
-    if (short_of) {
+    if (!whole) {
         if (err && errlen) snprintf(err, errlen, "real-time memory: out of memory for a reserve of %zu MiB", reserve_bytes >> 20);
         return -ENOMEM;
     }
