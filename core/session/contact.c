@@ -3230,8 +3230,17 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
         return -ENOMEM;
     res->moved_verts = k->nmv;
     if (!k->nmv) return 0; /* nothing moved: P is the candidate */
-    for (size_t i = 0; !k->tree && i < k->nmv; i++)
+    for (size_t i = 0; !k->tree && i < k->nmv; i++) {
+        /* the vertex's triangle range, its triangles and their stamps fetched ahead: three
+         * dependent loads that would otherwise miss the cache in turn (the marking of the
+         * ICT replay's 480 moved vertices: 15-21 us against 19-28) */
+        if (i + 16 < k->nmv) __builtin_prefetch(k->vt_start + k->mv[i + 16]);
+        if (i + 8 < k->nmv) __builtin_prefetch(k->vt + k->vt_start[k->mv[i + 8]]);
+        if (i + 4 < k->nmv)
+            for (uint32_t j = k->vt_start[k->mv[i + 4]]; j < k->vt_start[k->mv[i + 4] + 1]; j++)
+                __builtin_prefetch(k->tstamp + k->vt[j], 1);
         if (mark_tris(c, k->mv[i])) return -ENOMEM;
+    }
     res->moved_tris = k->nmt; /* (the hierarchy counts them in its check's refit) */
 
     size_t fl = 0; /* newly flipped triangles of the candidate */
