@@ -438,6 +438,30 @@ int csrbf_guarded_step(csrbf_solver *solver, const csrbf_points *shape, size_t n
                        const float *start, const float *end, const csrbf_guard *guard,
                        float *deformed, csrbf_guard_stats *stats);
 
+/** csrbf_guarded_step with a persistent output whose work follows the supports, as
+ *  csrbf_evaluate_touched does for one map (the contract above: touch made for shape, the
+ *  same output buffer deformed on every call with it, nobody else writing it). The first map
+ *  is csrbf_evaluate_touched on shape; each further map T_j is evaluated, through
+ *  inter_touch, on inter holding the shape so far, and rewrites only the blocks inside its
+ *  supports (T_j is the identity outside them, so the other blocks already hold T_j of the
+ *  shape so far). inter: a csrbf_points of shape's vertex count holding shape's vertices bit
+ *  for bit on entry (the caller keeps it so: csrbf_points_update(_ranges) on both); the call
+ *  rewrites its blocks in the supports and restores them before it returns, also on error.
+ *  inter_touch: a touch made for inter, used by this call only. deformed on return: bit for
+ *  bit csrbf_guarded_step's; touch then lists the blocks any map computed (where deformed
+ *  may differ from shape: the next call, or csrbf_evaluate_touched, restores those outside
+ *  its supports), and csrbf_touch_ranges gives them with the blocks the first map restored.
+ *  Cost: csrbf_guarded_step's solves; its evaluations and re-indexing follow the supports,
+ *  O(blocks in the maps' supports) instead of O(n_vertices) per map. Returns as
+ *  csrbf_guarded_step, and CSRBF_ERR_INVALID when a touch was made for other points or
+ *  inter is shape or of another count; on error the touch is reset (the next call writes
+ *  every block) and inter restored. Not thread-safe (the solver, the touches, inter).
+ *  Source: csrbf.md pitfall 4 (compose or scale), as csrbf_guarded_step. */
+int csrbf_guarded_step_touched(csrbf_solver *solver, const csrbf_points *shape, csrbf_touch *touch,
+                               csrbf_points *inter, csrbf_touch *inter_touch, size_t n,
+                               const float *start, const float *end, const csrbf_guard *guard,
+                               float *deformed, csrbf_guard_stats *stats);
+
 #ifdef __cplusplus
 }
 #endif

@@ -580,6 +580,62 @@ size_t csrbf_touch_ranges(const csrbf_touch *t, const uint32_t **ranges)
     return t ? t->nranges : 0;
 }
 
+const uint32_t *csrbf_touch_prev(const csrbf_touch *t, size_t *k, int *full)
+{
+    *k = t->nprev;
+    if (full) *full = t->full;
+    return t->prev;
+}
+
+int csrbf_touch_for(const csrbf_touch *t, const csrbf_points *p)
+{
+    return t && p && t->points == p && t->nblocks == p->nblocks;
+}
+
+void csrbf_touch_set(csrbf_touch *t, const uint32_t *blk, size_t k, const uint32_t *wr, size_t kw,
+                     int all)
+{
+    if (blk != t->prev) memcpy(t->prev, blk, k * sizeof *blk);
+    t->nprev = k;
+    t->full = 0;
+    t->sel_id = 0;
+    t->ranges_sel = 0;
+    size_t n = t->points->n, nr = 0;
+    if (all) {
+        t->ranges[0] = 0;
+        t->ranges[1] = (uint32_t)n;
+        t->nranges = 1;
+        return;
+    }
+    /* the union of the two increasing lists, as runs of consecutive blocks */
+    size_t i = 0, j = 0, r0 = 0, r1 = 0; /* the open run: blocks r0 .. r1 - 1 (none: r0 == r1) */
+    while (i < kw || j < k) {
+        size_t b;
+        if (j == k || (i < kw && wr[i] < blk[j])) b = wr[i++];
+        else {
+            b = blk[j++];
+            if (i < kw && wr[i] == b) i++;
+        }
+        if (r1 > r0 && b == r1) {
+            r1++;
+            continue;
+        }
+        if (r1 > r0) {
+            t->ranges[2 * nr] = (uint32_t)(r0 * B);
+            t->ranges[2 * nr + 1] = (uint32_t)((r1 * B < n ? r1 * B : n) - r0 * B);
+            nr++;
+        }
+        r0 = b;
+        r1 = b + 1;
+    }
+    if (r1 > r0) {
+        t->ranges[2 * nr] = (uint32_t)(r0 * B);
+        t->ranges[2 * nr + 1] = (uint32_t)((r1 * B < n ? r1 * B : n) - r0 * B);
+        nr++;
+    }
+    t->nranges = nr;
+}
+
 int csrbf_evaluate_touched(const csrbf_solver *cs, const csrbf_points *P, csrbf_touch *touch,
                            float *out, unsigned flags, csrbf_eval_stats *st)
 {

@@ -49,6 +49,7 @@ void csrbf_guard_free(csrbf_solver *s)
     free(s->anorm);
     free(s->g_p);
     free(s->g_e);
+    free(s->g_blk);
     csrbf_points_destroy(&s->g_tmp);
     s->gn_start = NULL;
     s->gn_idx = NULL;
@@ -56,7 +57,8 @@ void csrbf_guard_free(csrbf_solver *s)
     s->cluster = NULL;
     s->cl_L = s->cl_t = s->anorm = NULL;
     s->g_p = s->g_e = NULL;
-    s->gn_cap = s->g_cap = 0;
+    s->g_blk = NULL;
+    s->gn_cap = s->g_cap = s->g_bcap = 0;
 }
 
 static uint32_t uf_find(uint32_t *par, uint32_t i)
@@ -278,18 +280,56 @@ int csrbf_solver_limit_end_points(csrbf_solver *s, double margin, csrbf_guard_st
     return CSRBF_WARN_LIMITED;
 }
 
-int csrbf_guarded_step(csrbf_solver *s, const csrbf_points *shape, size_t n, const float *start,
-                       const float *end, const csrbf_guard *guard, float *deformed,
-                       csrbf_guard_stats *st)
+/* The support-following form's state (csrbf_guarded_step_touched): U, the blocks where the
+ * output may differ from the shape (increasing); C, the blocks the last sub-step computed;
+ * W, the blocks the touch's last call had computed (written again: restored or computed);
+ * M, a merge's scratch; R, vertex ranges. */
+typedef struct follow {
+    csrbf_touch *touch, *itouch;
+    csrbf_points *inter;
+    uint32_t *U, *C, *W, *M, *R;
+    size_t ku, kc, kw;
+    int wall;      /* the touch's last call was to write every block */
+    int inter_set; /* inter holds an intermediate shape at U's blocks */
+} follow;
+
+/* blocks blk[0 .. k) as vertex ranges into R; returns their number */
+static size_t block_ranges(const uint32_t *blk, size_t k, size_t nv, uint32_t *R)
 {
-    if (!s) return CSRBF_ERR_INVALID;
-    if (!shape || !start || !end || !deformed || n == 0) {
-        s->lim_note.pending = 0;
-        snprintf(s->msg, sizeof s->msg, "guarded_step: %s",
-                 !shape ? "shape is NULL" : !start ? "start is NULL" : !end ? "end is NULL"
-                 : !deformed ? "deformed is NULL" : "n is 0");
-        return CSRBF_ERR_INVALID;
+    size_t nr = 0;
+    for (size_t i = 0; i < k;) {
+        size_t b0 = blk[i], b1 = b0 + 1;
+        for (i++; i < k && blk[i] == b1; i++) b1++;
+        R[2 * nr] = (uint32_t)(b0 * CSRBF_BLOCK);
+        R[2 * nr + 1] = (uint32_t)((b1 * CSRBF_BLOCK < nv ? b1 * CSRBF_BLOCK : nv) - b0 * CSRBF_BLOCK);
+        nr++;
     }
+    return nr;
+}
+
+/* U := U and C (both increasing), through M */
+static void follow_union(follow *f)
+{
+    size_t i = 0, j = 0, k = 0;
+    while (i < f->ku || j < f->kc) {
+        uint32_t b;
+        if (j == f->kc || (i < f->ku && f->U[i] < f->C[j])) b = f->U[i++];
+        else {
+            b = f->C[j++];
+            if (i < f->ku && f->U[i] == b) i++;
+        }
+        f->M[k++] = b;
+    }
+    uint32_t *t = f->U;
+    f->U = f->M;
+    f->M = t;
+    f->ku = k;
+}
+
+static int guarded(csrbf_solver *s, const csrbf_points *shape, follow *fw, size_t n,
+                   const float *start, const float *end, const csrbf_guard *guard, float *deformed,
+                   csrbf_guard_stats *st)
+{
     double margin = guard && guard->margin != 0.0 ? guard->margin : CSRBF_GUARD_MARGIN;
     int maxk = guard && guard->max_substeps != 0 ? guard->max_substeps : CSRBF_GUARD_MAX_SUBSTEPS;
     unsigned flags = guard ? guard->eval_flags : 0u;
@@ -339,7 +379,23 @@ int csrbf_guarded_step(csrbf_solver *s, const csrbf_points *shape, size_t n, con
         }
         if (ls.bound_after > out.bound_after) out.bound_after = ls.bound_after;
         csrbf_eval_stats es;
-        rc = csrbf_evaluate(s, cur, deformed, flags, st ? &es : NULL);
+        if (!fw) {
+            rc = csrbf_evaluate(s, cur, deformed, flags, st ? &es : NULL);
+        } else if (j == 0) { /* the shape's own touch: its blocks of the last call restored */
+            const uint32_t *w = csrbf_touch_prev(fw->touch, &fw->kw, &fw->wall);
+            memcpy(fw->W, w, fw->kw * sizeof *w);
+            rc = csrbf_evaluate_touched(s, shape, fw->touch, deformed, flags, st ? &es : NULL);
+            const uint32_t *c = csrbf_touch_prev(fw->touch, &fw->kc, NULL);
+            memcpy(fw->C, c, fw->kc * sizeof *c);
+            memcpy(fw->U, c, fw->kc * sizeof *c);
+            fw->ku = fw->kc;
+        } else { /* on inter, the shape so far: only the blocks in this map's supports */
+            csrbf_touch_commit(fw->itouch);
+            rc = csrbf_evaluate_touched(s, fw->inter, fw->itouch, deformed, flags, st ? &es : NULL);
+            const uint32_t *c = csrbf_touch_prev(fw->itouch, &fw->kc, NULL);
+            memcpy(fw->C, c, fw->kc * sizeof *c);
+            follow_union(fw);
+        }
         if (rc < 0) return rc;
         out.substeps = j + 1;
         if (st) {
@@ -360,6 +416,12 @@ int csrbf_guarded_step(csrbf_solver *s, const csrbf_points *shape, size_t n, con
         }
         if (ls.clusters_limited == 0 || j + 1 >= maxk) break;
         /* the next map acts on the shape so far */
+        if (fw) { /* which differs from inter only where this map computed */
+            fw->inter_set = 1;
+            rc = csrbf_points_update_ranges(fw->inter, deformed, fw->R, block_ranges(fw->C, fw->kc, nv, fw->R));
+            if (rc < 0) return rc;
+            continue;
+        }
         if (s->g_tmp && csrbf_points_count(s->g_tmp) != nv) csrbf_points_destroy(&s->g_tmp);
         rc = s->g_tmp ? csrbf_points_update(s->g_tmp, deformed)
                       : csrbf_points_create(nv, deformed, &s->g_tmp);
@@ -383,17 +445,22 @@ int csrbf_guarded_step(csrbf_solver *s, const csrbf_points *shape, size_t n, con
     }
     out.reached = reached;
     if (st) {
-        if (out.substeps > 1) { /* moved and max displacement against the input shape */
+        if (out.substeps > 1) { /* moved and max displacement against the input shape: where
+                                   the output may differ from it (every vertex, or U) */
             const float *b = shape->xyz;
-            size_t moved = 0;
+            size_t moved = 0, nb = fw ? fw->ku : 1;
             double md = 0.0;
-            for (size_t v = 0; v < nv; v++) {
-                double d0 = (double)deformed[3 * v] - b[3 * v],
-                       d1 = (double)deformed[3 * v + 1] - b[3 * v + 1],
-                       d2 = (double)deformed[3 * v + 2] - b[3 * v + 2];
-                double d = d0 * d0 + d1 * d1 + d2 * d2;
-                moved += d > 0.0;
-                if (d > md) md = d;
+            for (size_t k = 0; k < nb; k++) {
+                size_t v0 = fw ? (size_t)fw->U[k] * CSRBF_BLOCK : 0,
+                       v1 = fw ? (v0 + CSRBF_BLOCK < nv ? v0 + CSRBF_BLOCK : nv) : nv;
+                for (size_t v = v0; v < v1; v++) {
+                    double d0 = (double)deformed[3 * v] - b[3 * v],
+                           d1 = (double)deformed[3 * v + 1] - b[3 * v + 1],
+                           d2 = (double)deformed[3 * v + 2] - b[3 * v + 2];
+                    double d = d0 * d0 + d1 * d1 + d2 * d2;
+                    moved += d > 0.0;
+                    if (d > md) md = d;
+                }
             }
             out.eval.moved = moved;
             out.eval.max_displacement = sqrt(md);
@@ -409,4 +476,67 @@ int csrbf_guarded_step(csrbf_solver *s, const csrbf_points *shape, size_t n, con
         return CSRBF_WARN_SUBSTEPS;
     }
     return CSRBF_OK;
+}
+
+/* the common argument checks of the two forms; 0 or CSRBF_ERR_INVALID (message set) */
+static int guarded_args(csrbf_solver *s, const csrbf_points *shape, size_t n, const float *start,
+                        const float *end, const float *deformed)
+{
+    if (!shape || !start || !end || !deformed || n == 0) {
+        s->lim_note.pending = 0;
+        snprintf(s->msg, sizeof s->msg, "guarded_step: %s",
+                 !shape ? "shape is NULL" : !start ? "start is NULL" : !end ? "end is NULL"
+                 : !deformed ? "deformed is NULL" : "n is 0");
+        return CSRBF_ERR_INVALID;
+    }
+    return CSRBF_OK;
+}
+
+int csrbf_guarded_step(csrbf_solver *s, const csrbf_points *shape, size_t n, const float *start,
+                       const float *end, const csrbf_guard *guard, float *deformed,
+                       csrbf_guard_stats *st)
+{
+    if (!s) return CSRBF_ERR_INVALID;
+    int rc = guarded_args(s, shape, n, start, end, deformed);
+    return rc < 0 ? rc : guarded(s, shape, NULL, n, start, end, guard, deformed, st);
+}
+
+int csrbf_guarded_step_touched(csrbf_solver *s, const csrbf_points *shape, csrbf_touch *touch,
+                               csrbf_points *inter, csrbf_touch *inter_touch, size_t n,
+                               const float *start, const float *end, const csrbf_guard *guard,
+                               float *deformed, csrbf_guard_stats *st)
+{
+    if (!s) return CSRBF_ERR_INVALID;
+    int rc = guarded_args(s, shape, n, start, end, deformed);
+    if (rc < 0) return rc;
+    if (!csrbf_touch_for(touch, shape) || !csrbf_touch_for(inter_touch, inter) || inter == shape ||
+        csrbf_points_count(inter) != csrbf_points_count(shape)) {
+        s->lim_note.pending = 0;
+        snprintf(s->msg, sizeof s->msg, "guarded_step_touched: %s",
+                 !csrbf_touch_for(touch, shape) ? "touch was not made for shape"
+                 : !csrbf_touch_for(inter_touch, inter) ? "inter_touch was not made for inter"
+                 : "inter must be another csrbf_points of shape's vertex count");
+        return CSRBF_ERR_INVALID;
+    }
+    size_t nb = shape->nblocks;
+    if (s->g_bcap != nb) {
+        uint32_t *b = realloc(s->g_blk, (4 * nb + 2 * (nb + 1)) * sizeof *b);
+        if (!b) return CSRBF_ERR_NOMEM;
+        s->g_blk = b;
+        s->g_bcap = nb;
+    }
+    follow f = {touch, inter_touch, inter, s->g_blk, s->g_blk + nb, s->g_blk + 2 * nb,
+                s->g_blk + 3 * nb, s->g_blk + 4 * nb, 0, 0, 0, 0, 0};
+    rc = guarded(s, shape, &f, n, start, end, guard, deformed, st);
+    /* inter back to the shape where a sub-step wrote it (a superset: U) */
+    if (f.inter_set) {
+        int r2 = csrbf_points_update_ranges(inter, shape->xyz, f.R, block_ranges(f.U, f.ku, shape->n, f.R));
+        if (r2 < 0 && rc >= 0) rc = r2;
+    }
+    if (rc < 0) {
+        csrbf_touch_reset(touch); /* the output is unspecified: the next call writes it whole */
+        return rc;
+    }
+    csrbf_touch_set(touch, f.U, f.ku, f.W, f.kw, f.wall);
+    return rc;
 }

@@ -111,6 +111,9 @@ struct csrbf_solver {
     float *g_p, *g_e;        /* guarded step: current start and end points, n x 3 */
     size_t g_cap;
     csrbf_points *g_tmp;     /* guarded step: index of the intermediate shape */
+    uint32_t *g_blk;         /* csrbf_guarded_step_touched: block lists (4 x nblocks) and
+                                vertex ranges (2 x (nblocks + 1)) */
+    size_t g_bcap;           /* nblocks they were made for */
 
     /* csrbf_evaluate's block selection (blocks meeting a support, centre masks), kept for
      * the points stamp sel_pts and the centres stamp sel_ctr: anchored frames (same centres,
@@ -166,6 +169,17 @@ struct csrbf_points {
 /* A process-wide increasing counter (thread-safe, never 0): stamps of point contents and
  * centre sets, so that a cached block selection is never taken for another one. */
 uint64_t csrbf_new_stamp(void);
+
+/* csrbf_guarded_step_touched's access to a touch (csrbf_eval.c). csrbf_touch_prev: the
+ * blocks the last call computed from the kernel (increasing; *k of them) and, in *full (may
+ * be NULL), whether the next call writes every block. csrbf_touch_set: the state a composed
+ * step leaves: the blocks computed := blk[0 .. k) (increasing: where the output may differ
+ * from the base), the blocks written := those and wr[0 .. kw) (increasing), or every block
+ * when all; the kept-selection shortcut is dropped. csrbf_touch_for: t was made for p. */
+const uint32_t *csrbf_touch_prev(const csrbf_touch *t, size_t *k, int *full);
+void csrbf_touch_set(csrbf_touch *t, const uint32_t *blk, size_t k, const uint32_t *wr, size_t kw,
+                     int all);
+int csrbf_touch_for(const csrbf_touch *t, const csrbf_points *p);
 
 /* Build the guard's neighbour lists and clusters for the current centres (solver.c calls it
  * from set_start_points); free them (destroy). */

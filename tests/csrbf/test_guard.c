@@ -409,6 +409,104 @@ static void test_guarded_step_gentle(void **state)
     free(o2);
 }
 
+/* csrbf_guarded_step_touched against csrbf_guarded_step, frame after frame on one persistent
+ * output, as an unanchored session runs it: folding and gentle steps at random places, some
+ * committed (the shape := the output on the touched ranges, inter kept with it). Each frame's
+ * output is the full form's bit for bit, its statistics too; the touched ranges hold every
+ * vertex that differs from the shape, and follow the supports. */
+static void test_guarded_step_touched(void **state)
+{
+    (void)state;
+    const double lo[3] = {-2, -2, -0.2}, hi[3] = {2, 2, 0.2};
+    size_t nv;
+    float *grid = lattice(48, lo, hi, &nv); /* 49 x 49 x 49 over a slab: many blocks */
+    float *shape = malloc(nv * 3 * sizeof *shape), *out = malloc(nv * 3 * sizeof *out),
+          *ref = malloc(nv * 3 * sizeof *ref);
+    memcpy(shape, grid, nv * 3 * sizeof *shape);
+    memcpy(out, grid, nv * 3 * sizeof *out);
+    csrbf_points *pts, *inter, *full;
+    csrbf_touch *touch, *itouch;
+    assert_int_equal(csrbf_points_create(nv, grid, &pts), CSRBF_OK);
+    assert_int_equal(csrbf_points_create(nv, grid, &inter), CSRBF_OK);
+    assert_int_equal(csrbf_points_create(nv, grid, &full), CSRBF_OK);
+    assert_int_equal(csrbf_touch_create(pts, &touch), CSRBF_OK);
+    assert_int_equal(csrbf_touch_create(inter, &itouch), CSRBF_OK);
+    csrbf_touch_commit(touch); /* out is the shape */
+    const double R = 0.35;
+    csrbf_solver *sa = make_solver(R, CSRBF_PSI31, CSRBF_POLY_NONE),
+                 *sb = make_solver(R, CSRBF_PSI31, CSRBF_POLY_NONE);
+    csrbf_guard g = {0};
+    int composed = 0;
+    for (int f = 0; f < 14; f++) {
+        /* 2 or 3 centres near one place, pulled apart or together past the bound (or gently) */
+        float st[3][3], en[3][3];
+        size_t n = 2 + f % 2;
+        double cx = -1.4 + 2.8 * urand(), cy = -1.4 + 2.8 * urand(), reach = f % 4 == 3 ? 0.1 : 0.55;
+        for (size_t i = 0; i < n; i++) {
+            st[i][0] = (float)(cx + 0.3 * R * (double)i);
+            st[i][1] = (float)(cy + 0.1 * R * urand());
+            st[i][2] = (float)(0.1 * urand());
+            double a = 6.2831853 * urand();
+            en[i][0] = (float)(st[i][0] + reach * R * cos(a));
+            en[i][1] = (float)(st[i][1] + reach * R * sin(a));
+            en[i][2] = st[i][2];
+        }
+        csrbf_guard_stats ga, gb;
+        int ra = csrbf_guarded_step_touched(sa, pts, touch, inter, itouch, n, &st[0][0], &en[0][0], &g,
+                                            out, &ga);
+        int rb = csrbf_guarded_step(sb, full, n, &st[0][0], &en[0][0], &g, ref, &gb);
+        assert_true(ra >= 0);
+        assert_int_equal(ra, rb);
+        assert_memory_equal(out, ref, nv * 3 * sizeof *out);
+        assert_int_equal(ga.substeps, gb.substeps);
+        assert_int_equal(ga.eval.moved, gb.eval.moved);
+        assert_true(ga.eval.max_displacement == gb.eval.max_displacement);
+        assert_true(ga.eval.pairs == gb.eval.pairs);
+        composed += ga.substeps > 1;
+        /* every vertex that differs from the shape is in a touched range; the ranges follow
+         * the supports */
+        const uint32_t *r;
+        size_t nr = csrbf_touch_ranges(touch, &r), inside = 0;
+        char *in = calloc(nv, 1);
+        for (size_t k = 0; k < nr; k++) {
+            inside += r[2 * k + 1];
+            for (uint32_t v = r[2 * k]; v < r[2 * k] + r[2 * k + 1]; v++) in[v] = 1;
+        }
+        for (size_t v = 0; v < nv; v++)
+            if (!in[v] && memcmp(out + 3 * v, shape + 3 * v, 3 * sizeof(float)))
+                fail_msg("frame %d: vertex %zu differs from the shape outside the touched ranges", f, v);
+        if (f < 3) printf("  frame %d: %d map(s), touched %zu of %zu vertices\n", f, ga.substeps, inside, nv);
+        assert_true(inside < nv / 2);
+        free(in);
+        if (f % 3 == 2) { /* a commit: the shape := the output on the ranges written */
+            memcpy(shape, out, nv * 3 * sizeof *shape);
+            assert_int_equal(csrbf_points_update_ranges(pts, shape, r, nr), CSRBF_OK);
+            assert_int_equal(csrbf_points_update_ranges(inter, shape, r, nr), CSRBF_OK);
+            assert_int_equal(csrbf_points_update(full, shape), CSRBF_OK);
+            csrbf_touch_commit(touch);
+        }
+    }
+    printf("  %d of 14 steps composed\n", composed);
+    assert_true(composed >= 6);
+    /* arguments: a touch of other points, inter the shape itself */
+    float st1[3] = {0, 0, 0}, en1[3] = {0.1f, 0, 0};
+    assert_int_equal(csrbf_guarded_step_touched(sa, pts, itouch, inter, touch, 1, st1, en1, NULL, out, NULL),
+                     CSRBF_ERR_INVALID);
+    assert_int_equal(csrbf_guarded_step_touched(sa, pts, touch, pts, touch, 1, st1, en1, NULL, out, NULL),
+                     CSRBF_ERR_INVALID);
+    csrbf_touch_destroy(&touch);
+    csrbf_touch_destroy(&itouch);
+    csrbf_points_destroy(&pts);
+    csrbf_points_destroy(&inter);
+    csrbf_points_destroy(&full);
+    csrbf_solver_destroy(&sa);
+    csrbf_solver_destroy(&sb);
+    free(grid);
+    free(shape);
+    free(out);
+    free(ref);
+}
+
 /* Error codes follow the project's convention: negative errno values. */
 static void test_error_codes(void **state)
 {
@@ -426,6 +524,7 @@ int main(void)
         cmocka_unit_test(test_error_codes),          cmocka_unit_test(test_pair_pulled_apart),
         cmocka_unit_test(test_single_centre_beyond_bound), cmocka_unit_test(test_bound_random),
         cmocka_unit_test(test_limit_per_cluster),    cmocka_unit_test(test_guarded_step_gentle),
+        cmocka_unit_test(test_guarded_step_touched),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
