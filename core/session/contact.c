@@ -3385,6 +3385,12 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
 
 const float *fp_contact_shape(const fp_contact *c) { return c && c->tk ? c->tk->p : NULL; }
 
+size_t fp_contact_differs(const fp_contact *c, const uint32_t **verts)
+{
+    *verts = c && c->tk ? c->tk->dp : NULL;
+    return c && c->tk ? c->tk->ndp : 0;
+}
+
 void fp_contact_set_prewarm(fp_contact *c, size_t max_tris)
 {
     if (c) c->prewarm = max_tris;

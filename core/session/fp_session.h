@@ -110,9 +110,13 @@ typedef struct fp_session_options {
                                                        (contact.h) and its motion scaled back */
     bool whole_rig_commit;                          /* true: a commit with a rig unposes,
                                                        commits, poses and re-indexes the whole
-                                                       mesh (the reference that tests compare
-                                                       the default with); default (false):
-                                                       only the engine's touched ranges */
+                                                       mesh, and one of the contact guard's
+                                                       shape without a rig copies and
+                                                       re-indexes the whole mesh (the
+                                                       references that tests compare the
+                                                       default with); default (false): only
+                                                       the engine's touched ranges (and the
+                                                       guard's D_P) */
 } fp_session_options;
 
 /** The frame's stages, for fp_frame_stats.stage_ms (`bench --case frame`). */

@@ -84,6 +84,8 @@ struct fp_session {
     fp_changed shown_changed, base_changed;
     fp_changed cg_ref;            /* where the reference changed since the guard last took it
                                      (FP_CG_REF_CHANGED: fp_contact_reference compares there) */
+    uint8_t *gc_mark;             /* guard_ranges: a byte per block of 16 vertices (zero */
+    uint32_t *gc_blk, *gc_ranges; /*   between calls), the blocks listed, their ranges */
     int shown_kind;               /* what s->shown held at the end of the last frame: */
     bool whole_rig_commit;        /* fp_session_options.whole_rig_commit */
 };
@@ -597,6 +599,61 @@ static void contact_end_gesture(fp_session *s)
     s->cg_frames = s->cg_limited = 0;
 }
 
+#define FP_GC_SHIFT 4 /* guard_ranges: blocks of 16 vertices */
+
+static int cmp_u32(const void *a, const void *b)
+{
+    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* Where the contact guard's shape (P) and the engine's output may differ from the base: the
+ * blocks of 16 vertices holding the guard's D_P (fp_contact_differs) or a touched range (tr,
+ * nt), as increasing, disjoint vertex ranges in s->gc_ranges; returns their number, SIZE_MAX
+ * when unknown (nt == SIZE_MAX) or out of memory. O(D_P + touched), no pass over n. */
+static size_t guard_ranges(fp_session *s, const uint32_t *tr, size_t nt, const uint32_t **out)
+{
+    size_t nb = (s->n >> FP_GC_SHIFT) + 1;
+    if (nt == SIZE_MAX) return SIZE_MAX;
+    if (!s->gc_mark) {
+        s->gc_mark = calloc(nb, 1);
+        s->gc_blk = malloc(nb * sizeof *s->gc_blk);
+        s->gc_ranges = malloc(2 * nb * sizeof *s->gc_ranges);
+        if (!s->gc_mark || !s->gc_blk || !s->gc_ranges) {
+            free(s->gc_mark), free(s->gc_blk), free(s->gc_ranges);
+            s->gc_mark = NULL, s->gc_blk = s->gc_ranges = NULL;
+            return SIZE_MAX;
+        }
+    }
+    const uint32_t *dp;
+    size_t ndp = fp_contact_differs(s->contact, &dp), k = 0;
+    for (size_t i = 0; i < ndp; i++) {
+        uint32_t b = dp[i] >> FP_GC_SHIFT;
+        s->gc_blk[k] = b;
+        k += !s->gc_mark[b];
+        s->gc_mark[b] = 1;
+    }
+    for (size_t r = 0; r < nt; r++)
+        for (size_t b = tr[2 * r] >> FP_GC_SHIFT; tr[2 * r + 1] && b <= (tr[2 * r] + tr[2 * r + 1] - 1) >> FP_GC_SHIFT; b++) {
+            s->gc_blk[k] = (uint32_t)b;
+            k += !s->gc_mark[b];
+            s->gc_mark[b] = 1;
+        }
+    qsort(s->gc_blk, k, sizeof *s->gc_blk, cmp_u32);
+    size_t nr = 0;
+    for (size_t i = 0; i < k;) {
+        size_t b0 = s->gc_blk[i], b1 = b0 + 1;
+        s->gc_mark[b0] = 0;
+        for (i++; i < k && s->gc_blk[i] == b1; i++) s->gc_mark[b1++] = 0;
+        size_t v0 = b0 << FP_GC_SHIFT, v1 = b1 << FP_GC_SHIFT;
+        s->gc_ranges[2 * nr] = (uint32_t)v0;
+        s->gc_ranges[2 * nr + 1] = (uint32_t)((v1 < s->n ? v1 : s->n) - v0);
+        nr++;
+    }
+    *out = s->gc_ranges;
+    return nr;
+}
+
 /* A commit of the engine's output buffer: into the base (and the gesture's undo level) on the
  * touched ranges, outside which it equals the base; the whole buffer where they are unknown. */
 static void commit_touched(fp_session *s)
@@ -655,12 +712,30 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame
                 /* the contact guard's shape may differ from the posed base outside this
                  * frame's touched ranges (earlier frames scaled back): committed whole */
                 bool guard_shown = s->contact && s->shown == fp_contact_shape(s->contact);
+                const uint32_t *gr;
+                size_t ng;
                 if (s->rig.rig && (nt == SIZE_MAX || s->whole_rig_commit || guard_shown ||
                                    !fp_rig_step_posed_current(&s->rig))) {
                     /* with a rig only the fingers' part goes into the base; here the whole
                      * mesh is unposed, committed, posed and re-indexed */
                     fp_history_commit(&s->history, fp_rig_step_commit_shape(&s->rig, s->base, s->shown));
                     base_changed(s); /* the anchored gesture ended; unanchored restarts anyway */
+                } else if (guard_shown && !s->whole_rig_commit &&
+                           (ng = guard_ranges(s, tr, nt, &gr)) != SIZE_MAX) {
+                    /* the guard scaled the motion back: its shape goes into the output
+                     * buffer and the base where either may differ from the base (D_P and
+                     * this frame's touched ranges; bit for bit the whole path below), and
+                     * only those ranges are re-indexed. The guard's P is that shape. */
+                    for (size_t r = 0; r < ng; r++)
+                        memcpy(s->deformed + 3 * (size_t)gr[2 * r], s->shown + 3 * (size_t)gr[2 * r],
+                               3 * (size_t)gr[2 * r + 1] * sizeof(float));
+                    fp_history_commit_ranges(&s->history, s->deformed, gr, ng);
+                    fp_engine_step_commit_ranges(&s->engine, s->base, gr, ng);
+                    s->shown = s->base;
+                    s->shown_kind = SHOWN_POSED;
+                    fp_changed_add(&s->shown_changed, gr, ng);
+                    fp_changed_add(&s->base_changed, gr, ng);
+                    s->cg_sync = FP_CG_SHOWN_REF;
                 } else if (guard_shown) {
                     /* the guard scaled the motion back: its shape goes into the base and
                      * the output buffer (it may differ from the base outside this frame's
@@ -1096,6 +1171,9 @@ void fp_session_destroy(fp_session **sp)
     fp_changed_free(&s->shown_changed);
     fp_changed_free(&s->cg_ref);
     fp_changed_free(&s->base_changed);
+    free(s->gc_mark);
+    free(s->gc_blk);
+    free(s->gc_ranges);
     fp_rig_step_free(&s->rig);
     fp_history_free(&s->history);
     fp_intents_free(&s->intents);

@@ -36,7 +36,9 @@ int fp_engine_step_init(fp_engine_step *e, size_t n, const float *base, int thre
     memset(e, 0, sizeof *e);
     e->threads = threads;
     if (csrbf_points_create(n, base, &e->points) != CSRBF_OK ||
-        csrbf_touch_create(e->points, &e->touch) != CSRBF_OK) {
+        csrbf_touch_create(e->points, &e->touch) != CSRBF_OK ||
+        csrbf_points_create(n, base, &e->inter) != CSRBF_OK ||
+        csrbf_touch_create(e->inter, &e->inter_touch) != CSRBF_OK) {
         fp_engine_step_free(e);
         return -ENOMEM;
     }
@@ -52,13 +54,16 @@ void fp_engine_step_free(fp_engine_step *e)
     e->vt_start = e->vt = NULL;
     e->scratch = NULL;
     csrbf_touch_destroy(&e->touch);
+    csrbf_touch_destroy(&e->inter_touch);
     csrbf_solver_destroy(&e->solver);
     csrbf_points_destroy(&e->points);
+    csrbf_points_destroy(&e->inter);
 }
 
 void fp_engine_step_set_base(fp_engine_step *e, const float *base)
 {
     csrbf_points_update(e->points, base);
+    csrbf_points_update(e->inter, base);
     csrbf_touch_reset(e->touch); /* the output buffer no longer matches the base */
     e->touched_valid = false;
     e->factored = false;
@@ -68,10 +73,22 @@ void fp_engine_step_commit(fp_engine_step *e, const float *base)
 {
     const uint32_t *ranges;
     size_t nr = csrbf_touch_ranges(e->touch, &ranges);
-    if (e->touched_valid) /* only the blocks the last evaluation wrote differ */
+    if (e->touched_valid) { /* only the blocks the last evaluation wrote differ */
         csrbf_points_update_ranges(e->points, base, ranges, nr);
-    else
+        csrbf_points_update_ranges(e->inter, base, ranges, nr);
+    } else {
         csrbf_points_update(e->points, base);
+        csrbf_points_update(e->inter, base);
+    }
+    csrbf_touch_commit(e->touch); /* the output buffer is the base now */
+    e->touched_valid = true;
+    e->factored = false;
+}
+
+void fp_engine_step_commit_ranges(fp_engine_step *e, const float *base, const uint32_t *ranges, size_t nr)
+{
+    csrbf_points_update_ranges(e->points, base, ranges, nr);
+    csrbf_points_update_ranges(e->inter, base, ranges, nr);
     csrbf_touch_commit(e->touch); /* the output buffer is the base now */
     e->touched_valid = true;
     e->factored = false;
@@ -164,15 +181,16 @@ static int run(fp_engine_step *e, const fp_control_set *cs, float *deformed, fp_
                 }
                 res->min_det_j = js.eval.min_jacobian_det;
             }
-            /* the whole buffer is written: the touched blocks are unknown from here */
-            csrbf_touch_reset(e->touch);
-            e->touched_valid = false;
+            /* each map rewrites only the blocks in its supports; the touch then lists every
+             * block any of them computed */
             int64_t ev0 = fp_now_ns();
-            rc = csrbf_guarded_step(e->solver, e->points, cs->count, &cs->start[0][0],
-                                    &cs->end[0][0], &g, deformed, &gs);
+            rc = csrbf_guarded_step_touched(e->solver, e->points, e->touch, e->inter, e->inter_touch,
+                                            cs->count, &cs->start[0][0], &cs->end[0][0], &g, deformed,
+                                            &gs);
             res->eval_ms = (double)(fp_now_ns() - ev0) / 1e6; /* sub-steps' solves included */
             /* the solver holds the last sub-step's start points */
             e->factored = false;
+            e->touched_valid = rc >= 0; /* (on error the touch was reset) */
             if (rc < 0) return rc;
             es = gs.eval;
             goto done;

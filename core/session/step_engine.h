@@ -64,6 +64,9 @@ typedef struct fp_engine_step {
     double solver_radius;         /* the radius the solver was made for */
     csrbf_points *points;         /* the base vertices, blocked for evaluation */
     csrbf_touch *touch;           /* which blocks of the (persistent) output differ from the base */
+    csrbf_points *inter;          /* a composed step's shape so far (csrbf_guarded_step_touched):
+                                     the base's vertices between runs, kept with points */
+    csrbf_touch *inter_touch;     /* its touch */
     bool touched_valid;           /* the last write of the output was csrbf_evaluate_touched */
     float *scratch;               /* n x 3: the Jacobian evaluation's output (e->jacobian) */
     int threads;                  /* csrbf_options.threads */
@@ -115,13 +118,19 @@ void fp_engine_step_set_base(fp_engine_step *e, const float *base);
 void fp_engine_step_output_is_base(fp_engine_step *e);
 
 /** A commit: base is now the output buffer of the last run (deformed copied into it).
- *  Re-indexes only the vertex ranges that run wrote (csrbf_points_update_ranges; all after a
- *  composed step), csrbf_touch_commit, forgets the factor. */
+ *  Re-indexes only the vertex ranges that run wrote (csrbf_points_update_ranges, on points
+ *  and inter), csrbf_touch_commit, forgets the factor. */
 void fp_engine_step_commit(fp_engine_step *e, const float *base);
+
+/** A commit of another shape on known ranges: base (the caller's, changed only there) and
+ *  the output buffer both hold it now (the caller copied it into both); re-indexes those
+ *  ranges ((first, count) pairs, increasing, disjoint) on points and inter,
+ *  csrbf_touch_commit, forgets the factor. */
+void fp_engine_step_commit_ranges(fp_engine_step *e, const float *base, const uint32_t *ranges, size_t nr);
 
 /** The vertex ranges ((first, count) pairs) of the output that the last run rewrote, for a
  *  viewer's partial upload; SIZE_MAX (and *ranges NULL) when the whole output may have
- *  changed (after a composed step or a new base). */
+ *  changed (a new base, an engine error). */
 size_t fp_engine_step_touched(const fp_engine_step *e, const uint32_t **ranges);
 
 /** Forget the factor (a new gesture, a new mapping): the next run factors anew. */
