@@ -833,7 +833,7 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
     so.mesh = mesh;
     so.inputs[0] = input;
     so.input_count = 1;
-    so.mapping = "anchored";
+    so.mapping = bo->mapping ? bo->mapping : "anchored";
     so.plugin_path = bo->plugin_path;
     so.no_contact_guard = bo->no_contact_guard;
     char err[1024];
@@ -1045,7 +1045,8 @@ static int case_frame(const bench_opts *o)
         fprintf(stderr, "bench: %s\n", err);
         return -ENOENT;
     }
-    fprintf(stderr, "bench: frame (the session's whole frame; three-claps at its own pace, 60 fps, anchored)\n");
+    fprintf(stderr, "bench: frame (the session's whole frame; three-claps at its own pace, 60 fps, %s)\n",
+            frame_bo->mapping ? frame_bo->mapping : "anchored");
     int rc = frame_run(o, frame_bo, "ict", m);
     fp_mesh *sub = m;
     for (int l = 0; l < 3 && !rc; l++) {

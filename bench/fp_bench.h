@@ -13,6 +13,8 @@ typedef struct fp_bench_options {
     bool no_contact_guard; /* case frame: sessions with fp_session_options.no_contact_guard
                               (`bench --no-contact-guard`: the frame without the guard's
                               collide time) */
+    const char *mapping;   /* case frame: the sessions' mapping (`bench --mapping NAME`);
+                              NULL: anchored */
     const struct fp_plugin_path *plugin_path; /* where the replay and mapping plugins are
                                                  (case frame; NULL: that case is skipped) */
 } fp_bench_options;

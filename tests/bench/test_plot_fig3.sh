@@ -80,4 +80,12 @@ fi
 [ $? = 73 ] || fail "unwritable folder: not 73: $(cat "$tmp/err")"
 "$fp" bench --quick --case scale --plot "$tmp/d.png" 2>"$tmp/err"
 [ $? = 64 ] && [ ! -e "$tmp/d.png" ] || fail "--case scale --plot: not 64"
+# the frame case's mapping: a name no plugin has is an error of its own (78), named, before
+# any frame is timed
+"$fp" bench --case frame --mapping nosuch >"$tmp/out" 2>"$tmp/err"
+[ $? = 78 ] || fail "--mapping nosuch: not 78: $(tail -2 "$tmp/err")"
+grep -q "no mapping plugin named 'nosuch'" "$tmp/err" || fail "--mapping nosuch: the name not in: $(cat "$tmp/err")"
+grep -q '^frame' "$tmp/out" && fail "--mapping nosuch: a frame was timed"
+"$fp" bench --mapping >/dev/null 2>&1
+[ $? = 64 ] || fail "--mapping without a name: not 64"
 echo "test_plot_fig3: ok"

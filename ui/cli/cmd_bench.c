@@ -23,7 +23,7 @@ static void usage(FILE *f)
 {
     fprintf(f,
             "usage: facepuppet bench [--quick] [--json] [--case NAME] [--no-contact-guard]\n"
-            "                        [--plot FILE.png] [--help]\n\n"
+            "                        [--mapping NAME] [--plot FILE.png] [--help]\n\n"
             "Times the CSRBF engine (medians over repeated updates; the lowest median of 3\n"
             "rounds, 2 with --quick, as the machine may be shared) beside references measured\n"
             "in the same run. Cases:\n"
@@ -66,6 +66,9 @@ static void usage(FILE *f)
             "  --case NAME  run one case only\n"
             "  --no-contact-guard  case frame: sessions without the contact guard (its\n"
             "           collide time leaves the frame; the rest of the frame alone)\n"
+            "  --mapping NAME  case frame: the sessions' mapping (default anchored; e.g.\n"
+            "           unanchored: a one-shot step committed every frame, composed by the\n"
+            "           fold-over guard where one map would fold)\n"
             "  --plot FILE.png  the paper's Figure 3 remade: run table1 (--quick respected; with\n"
             "           --json its rows on stdout too) and draw updates per second (log) against\n"
             "           R for the four meshes, anchored and unanchored, ours beside the paper's,\n"
@@ -73,7 +76,8 @@ static void usage(FILE *f)
             "           tree's bench/) and matplotlib; python3 is $FACEPUPPET_PYTHON, else\n"
             "           /usr/bin/python3, else the PATH's. FILE.png is written whole or not at all\n\n"
             "Exit status: 0 done, 64 usage, 69 --plot without python3, matplotlib or the script,\n"
-            "70 out of memory, 73 FILE.png not writable, 1 an engine call failed.\n");
+            "70 out of memory, 73 FILE.png not writable, 78 a plugin missing or failing\n"
+            "(case frame: --mapping names no mapping plugin), 1 an engine call failed.\n");
 }
 
 /* ---- --plot: Figure 3 ------------------------------------------------------------------- */
@@ -248,6 +252,8 @@ static int bench_main(int argc, char **argv)
             o.json = true;
         } else if (!strcmp(argv[i], "--no-contact-guard")) {
             o.no_contact_guard = true;
+        } else if (!strcmp(argv[i], "--mapping") && i + 1 < argc) {
+            o.mapping = argv[++i];
         } else if (!strcmp(argv[i], "--case") && i + 1 < argc) {
             o.only = argv[++i];
         } else if (!strcmp(argv[i], "--plot") && i + 1 < argc) {
