@@ -2669,6 +2669,7 @@ static long tree_update(fp_contact *c, const float *s, const float *ref, bool re
  * root. accepted not NULL (a step's first check, s its candidate): when the walk is shared,
  * its job also makes P := s at the moved vertices ahead of the verdict (accept_range: the
  * old P into pv, the vertices that join D_P into the lanes' mv), and *accepted = true.
+ * Neither accepted nor record (a bisection's check): a flip decides, no walk (check).
  * Returns the new pairs or -ENOMEM. */
 static long tree_check(fp_contact *c, const float *s, const float *ref, size_t *flips, bool record,
                        bool *accepted)
@@ -2677,7 +2678,7 @@ static long tree_check(fp_contact *c, const float *s, const float *ref, size_t *
     if (f < 0) return f;
     *flips = (size_t)f;
     struct track *k = c->tk;
-    if (!k->nnode) return 0;
+    if (!k->nnode || (f && !record && !accepted)) return 0; /* a bisection's: a flip decides */
     pool *p = record || k->nmq < c->share_min ? NULL : pool_get(c);
     if (!p) return node_self(c, &k->lane[0], s, ref, 0, record);
     if (job_open(c, p, FP_JOB_WALK, s, ref)) return -ENOMEM;
@@ -3075,7 +3076,8 @@ static long track_check(fp_contact *c, const float *s, const float *ref, bool ca
         const uint32_t *va = c->tris + 3 * (size_t)a;
         if (!cand_boxes && flipped(c, s, va, a) && !flipped(c, ref, va, a)) {
             (*flips)++;
-            if (record && add_off(c, va)) return -ENOMEM;
+            if (!record) return 0; /* a bisection's check: a flip decides (check) */
+            if (add_off(c, va)) return -ENOMEM;
         }
         dyn *d = &k->dyn[k->slot[a]];
         if (!d->len) continue;
@@ -3192,6 +3194,10 @@ static void local_ramp(fp_contact *c)
 }
 
 /* New pairs and newly flipped triangles of shape s, by the mesh's broad phase */
+/* A shape's check inside a step (s: P at the moved vertices): the new pairs and (*flips) the
+ * newly flipped triangles; record: their vertices into off (a local scale-back's blocking
+ * set), every one counted. Without record (the bisection, which asks only whether the shape
+ * adds any) a flip decides it: the pairs are not looked for (0, *flips >= 1). */
 static long check(fp_contact *c, const float *s, const float *ref, size_t *flips, bool record)
 {
     return c->tk->tree ? tree_check(c, s, ref, flips, record, NULL) : track_check(c, s, ref, false, flips, record);
