@@ -617,7 +617,7 @@ static size_t guard_ranges(fp_session *s, const uint32_t *tr, size_t nt, const u
     if (nt == SIZE_MAX) return SIZE_MAX;
     if (!s->gc_mark) {
         s->gc_mark = calloc(nb, 1);
-        s->gc_blk = malloc(nb * sizeof *s->gc_blk);
+        s->gc_blk = malloc((nb + 1) * sizeof *s->gc_blk); /* (+1: the store before the test) */
         s->gc_ranges = malloc(2 * nb * sizeof *s->gc_ranges);
         if (!s->gc_mark || !s->gc_blk || !s->gc_ranges) {
             free(s->gc_mark), free(s->gc_blk), free(s->gc_ranges);
