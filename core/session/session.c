@@ -712,15 +712,20 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame
                 /* the contact guard's shape may differ from the posed base outside this
                  * frame's touched ranges (earlier frames scaled back): committed whole */
                 bool guard_shown = s->contact && s->shown == fp_contact_shape(s->contact);
-                const uint32_t *gr;
-                size_t ng;
-                if (s->rig.rig && (nt == SIZE_MAX || s->whole_rig_commit || guard_shown ||
-                                   !fp_rig_step_posed_current(&s->rig))) {
+                const uint32_t *gr = tr;
+                size_t ng = nt;
+                /* with a rig, the guard's shape is committed on its D_P and the touched ranges
+                 * (guard_ranges) as the blend is on the touched ranges */
+                bool rig_whole = s->rig.rig && (nt == SIZE_MAX || s->whole_rig_commit ||
+                                                !fp_rig_step_posed_current(&s->rig));
+                if (s->rig.rig && !rig_whole && guard_shown)
+                    rig_whole = (ng = guard_ranges(s, tr, nt, &gr)) == SIZE_MAX;
+                if (rig_whole) {
                     /* with a rig only the fingers' part goes into the base; here the whole
                      * mesh is unposed, committed, posed and re-indexed */
                     fp_history_commit(&s->history, fp_rig_step_commit_shape(&s->rig, s->base, s->shown));
                     base_changed(s); /* the anchored gesture ended; unanchored restarts anyway */
-                } else if (guard_shown && !s->whole_rig_commit &&
+                } else if (!s->rig.rig && guard_shown && !s->whole_rig_commit &&
                            (ng = guard_ranges(s, tr, nt, &gr)) != SIZE_MAX) {
                     /* the guard scaled the motion back: its shape goes into the output
                      * buffer and the base where either may differ from the base (D_P and
@@ -736,7 +741,7 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame
                     fp_changed_add(&s->shown_changed, gr, ng);
                     fp_changed_add(&s->base_changed, gr, ng);
                     s->cg_sync = FP_CG_SHOWN_REF;
-                } else if (guard_shown) {
+                } else if (!s->rig.rig && guard_shown) {
                     /* the guard scaled the motion back: its shape goes into the base and
                      * the output buffer (it may differ from the base outside this frame's
                      * touched ranges: earlier frames scaled back); the engine re-indexes the
@@ -750,20 +755,21 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame
                     fp_changed_all(&s->base_changed);
                     s->cg_sync = FP_CG_SHOWN_REF;
                 } else if (s->rig.rig) {
-                    /* the same on the touched ranges only: the shown shape (the blend; the
-                     * guard's shape went the whole way above) equals the posed base outside them, so the commit shape
-                     * equals the base there (fp_rig_unpose_range keeps unmoved vertices), and
-                     * the base, the posed base, the engine's output and index change there
-                     * only. Bit for bit the whole path. */
-                    fp_history_commit_ranges(&s->history, fp_rig_step_commit_ranges(&s->rig, s->base, s->shown, tr, nt),
-                                             tr, nt);
-                    fp_changed_add(&s->base_changed, tr, nt);
-                    fp_changed_add(&s->shown_changed, tr, nt); /* the posed base is shown */
-                    fp_rig_step_rebase_ranges(&s->rig, s->base, s->deformed, tr, nt);
-                    fp_engine_step_commit(&s->engine, fp_rig_step_posed(&s->rig, s->base));
+                    /* the same on the ranges gr only: the touched ranges, where the blend
+                     * may differ from the posed base, and with the guard's shape shown its D_P
+                     * too (guard_ranges), so the commit shape equals the base outside them
+                     * (fp_rig_unpose_range keeps unmoved vertices), and the base, the posed
+                     * base, the engine's output and index change there only. Bit for bit the
+                     * whole path. */
+                    fp_history_commit_ranges(&s->history, fp_rig_step_commit_ranges(&s->rig, s->base, s->shown, gr, ng),
+                                             gr, ng);
+                    fp_changed_add(&s->base_changed, gr, ng);
+                    fp_changed_add(&s->shown_changed, gr, ng); /* the posed base is shown */
+                    fp_rig_step_rebase_ranges(&s->rig, s->base, s->deformed, gr, ng);
+                    fp_engine_step_commit_ranges(&s->engine, fp_rig_step_posed(&s->rig, s->base), gr, ng);
                     s->shown = fp_rig_step_posed(&s->rig, s->base);
                     s->shown_kind = SHOWN_POSED;
-                    reference_changed(s, tr, nt);
+                    reference_changed(s, gr, ng);
                 } else {
                     /* the output buffer becomes the base on the touched ranges only, and
                      * only those are re-indexed; the anchored gesture ended, unanchored
