@@ -124,7 +124,7 @@ const float *fp_rig_step_commit_shape(fp_rig_step *st, const float *base, const 
 /** The ranged commit, bit for bit fp_rig_step_commit_shape on those ranges: the commit shape
  *  (fp_rig_unpose_range of shown) on the vertex ranges only, for fp_history_commit_ranges.
  *  The caller guarantees shown equals the posed base outside the ranges (the engine's
- *  touched ranges: the blend and the contact guard's shape do). Returns the step's commit
+ *  touched ranges for the blend; with the contact guard's shape, its D_P too). Returns the step's commit
  *  buffer (n x 3; valid on the ranges), or shown without a rig. O(vertices in the ranges). */
 const float *fp_rig_step_commit_ranges(fp_rig_step *st, const float *base, const float *shown,
                                        const uint32_t *ranges, size_t nranges);
