@@ -418,7 +418,8 @@ static int guarded(csrbf_solver *s, const csrbf_points *shape, follow *fw, size_
         /* the next map acts on the shape so far */
         if (fw) { /* which differs from inter only where this map computed */
             fw->inter_set = 1;
-            rc = csrbf_points_update_ranges(fw->inter, deformed, fw->R, block_ranges(fw->C, fw->kc, nv, fw->R));
+            size_t nr = block_ranges(fw->C, fw->kc, nv, fw->R);
+            rc = csrbf_points_update_ranges(fw->inter, deformed, fw->R, nr);
             if (rc < 0) return rc;
             continue;
         }

@@ -633,12 +633,15 @@ static size_t guard_ranges(fp_session *s, const uint32_t *tr, size_t nt, const u
         k += !s->gc_mark[b];
         s->gc_mark[b] = 1;
     }
-    for (size_t r = 0; r < nt; r++)
-        for (size_t b = tr[2 * r] >> FP_GC_SHIFT; tr[2 * r + 1] && b <= (tr[2 * r] + tr[2 * r + 1] - 1) >> FP_GC_SHIFT; b++) {
+    for (size_t r = 0; r < nt; r++) {
+        if (!tr[2 * r + 1]) continue;
+        size_t b0 = tr[2 * r] >> FP_GC_SHIFT, b1 = (tr[2 * r] + tr[2 * r + 1] - 1) >> FP_GC_SHIFT;
+        for (size_t b = b0; b <= b1; b++) {
             s->gc_blk[k] = (uint32_t)b;
             k += !s->gc_mark[b];
             s->gc_mark[b] = 1;
         }
+    }
     qsort(s->gc_blk, k, sizeof *s->gc_blk, cmp_u32);
     size_t nr = 0;
     for (size_t i = 0; i < k;) {
@@ -710,7 +713,8 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame
                 const uint32_t *tr;
                 size_t nt = fp_engine_step_touched(&s->engine, &tr);
                 /* the contact guard's shape may differ from the posed base outside this
-                 * frame's touched ranges (earlier frames scaled back): committed whole */
+                 * frame's touched ranges (earlier frames scaled back), within its D_P:
+                 * committed on both (guard_ranges) */
                 bool guard_shown = s->contact && s->shown == fp_contact_shape(s->contact);
                 const uint32_t *gr = tr;
                 size_t ng = nt;
@@ -761,8 +765,8 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame
                      * (fp_rig_unpose_range keeps unmoved vertices), and the base, the posed
                      * base, the engine's output and index change there only. Bit for bit the
                      * whole path. */
-                    fp_history_commit_ranges(&s->history, fp_rig_step_commit_ranges(&s->rig, s->base, s->shown, gr, ng),
-                                             gr, ng);
+                    const float *cshape = fp_rig_step_commit_ranges(&s->rig, s->base, s->shown, gr, ng);
+                    fp_history_commit_ranges(&s->history, cshape, gr, ng);
                     fp_changed_add(&s->base_changed, gr, ng);
                     fp_changed_add(&s->shown_changed, gr, ng); /* the posed base is shown */
                     fp_rig_step_rebase_ranges(&s->rig, s->base, s->deformed, gr, ng);

@@ -460,7 +460,8 @@ static void test_rig_commit_ranged_equals_whole(void **state)
     both(&p, false, 0, 0, 0.0);
     printf("rig commits: %zu, %zu of them ranged, commit stage "
            "%.3f ms ranged vs %.3f ms whole (sum); the contact guard scaled back %zu frames, %zu "
-           "of them commits (of the guard's shape)\n", p.commits, p.ranged_commits, p.ms_ranged, p.ms_whole, p.guarded, p.guarded_ranged);
+           "of them commits (of the guard's shape)\n",
+           p.commits, p.ranged_commits, p.ms_ranged, p.ms_whole, p.guarded, p.guarded_ranged);
     assert_true(p.commits >= 15 && p.ranged_commits == p.commits && p.guarded_ranged >= 2);
     fp_session_destroy(&w);
     fp_session_destroy(&f.s);
@@ -498,7 +499,8 @@ static void test_guard_commit_ranged_equals_whole(void **state)
             double amp = 0.1 + 0.08 * r;
             for (int i = 0; i < 3; i++)
                 for (int k = 0; k < 3; k++)
-                    f.end[i][k] = f.start[i][k] + (float)(amp * f.radius * (dir[i][k] + 0.3 * sin(r + i + k)));
+                    f.end[i][k] = f.start[i][k] +
+                                  (float)(amp * f.radius * (dir[i][k] + 0.3 * sin(r + i + k)));
             both(&p, true, FP_INTENT_COMMIT, 0, -1);
         }
     both(&p, false, 0, 0, 0.0);
