@@ -230,6 +230,16 @@ int csrbf_points_update_ranges(csrbf_points *points, const float *xyz, const uin
 /** Number of vertices. */
 size_t csrbf_points_count(const csrbf_points *points);
 
+/** A new csrbf_points holding src's vertices, as csrbf_points_create on them; *out owned by
+ *  the caller (csrbf_points_destroy). Errors: CSRBF_ERR_INVALID (NULL), CSRBF_ERR_NOMEM.
+ *  O(n). Thread-safe on a const src. */
+int csrbf_points_clone(const csrbf_points *src, csrbf_points **out);
+
+/** dst := src's vertices, their blocks, boxes and tree copied (one memcpy per array, no box
+ *  recomputed), for two csrbf_points of one vertex count. Errors: CSRBF_ERR_INVALID (NULL,
+ *  other counts). O(n) copies. Not thread-safe on dst. */
+int csrbf_points_copy(csrbf_points *dst, const csrbf_points *src);
+
 /** Nearest vertex of each query point: out_dist[i] = min over vertices v of |v - q_i| within
  *  max_dist (mesh units; INFINITY for no limit), computed in float as
  *  sqrtf(dx*dx + dy*dy + dz*dz) so that it equals a scalar brute-force loop bit for bit;

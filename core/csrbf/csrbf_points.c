@@ -215,6 +215,36 @@ int csrbf_points_update_ranges(csrbf_points *p, const float *xyz, const uint32_t
 
 size_t csrbf_points_count(const csrbf_points *p) { return p ? p->n : 0; }
 
+int csrbf_points_clone(const csrbf_points *src, csrbf_points **out)
+{
+    if (!out) return CSRBF_ERR_INVALID;
+    *out = NULL;
+    return src ? csrbf_points_create(src->n, src->xyz, out) : CSRBF_ERR_INVALID;
+}
+
+int csrbf_points_copy(csrbf_points *dst, const csrbf_points *src)
+{
+    if (!dst || !src || dst->n != src->n) return CSRBF_ERR_INVALID;
+    if (dst == src) return CSRBF_OK;
+    size_t nf = pad_fan(src->nblocks);
+    memcpy(dst->xyz, src->xyz, src->n * 3 * sizeof(float));
+    for (int a = 0; a < 3; a++) {
+        memcpy(dst->s[a], src->s[a], src->nblocks * CSRBF_BLOCK * sizeof(float));
+        memcpy(dst->lo[a], src->lo[a], nf * sizeof(float));
+        memcpy(dst->hi[a], src->hi[a], nf * sizeof(float));
+        memcpy(dst->slo[a], src->slo[a], src->nsuper * sizeof(float));
+        memcpy(dst->shi[a], src->shi[a], src->nsuper * sizeof(float));
+        for (int l = 1; l < src->tlevels; l++) {
+            memcpy(dst->tlo[l][a], src->tlo[l][a], pad_fan(src->tcount[l]) * sizeof(float));
+            memcpy(dst->thi[l][a], src->thi[l][a], pad_fan(src->tcount[l]) * sizeof(float));
+        }
+        dst->blo[a] = src->blo[a];
+        dst->bhi[a] = src->bhi[a];
+    }
+    dst->stamp = csrbf_new_stamp();
+    return CSRBF_OK;
+}
+
 /* SIMD clones of the box pass (AVX-512, AVX2, baseline), as csrbf_eval.c's kernels. No
  * multiply-add contraction in this file (-ffp-contract=off): distances equal a plain loop's. */
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__ELF__)

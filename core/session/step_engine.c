@@ -36,9 +36,7 @@ int fp_engine_step_init(fp_engine_step *e, size_t n, const float *base, int thre
     memset(e, 0, sizeof *e);
     e->threads = threads;
     if (csrbf_points_create(n, base, &e->points) != CSRBF_OK ||
-        csrbf_touch_create(e->points, &e->touch) != CSRBF_OK ||
-        csrbf_points_create(n, base, &e->inter) != CSRBF_OK ||
-        csrbf_touch_create(e->inter, &e->inter_touch) != CSRBF_OK) {
+        csrbf_touch_create(e->points, &e->touch) != CSRBF_OK) {
         fp_engine_step_free(e);
         return -ENOMEM;
     }
@@ -63,7 +61,7 @@ void fp_engine_step_free(fp_engine_step *e)
 void fp_engine_step_set_base(fp_engine_step *e, const float *base)
 {
     csrbf_points_update(e->points, base);
-    csrbf_points_update(e->inter, base);
+    e->inter_stale = true; /* (a rig's channel changes the base every frame it moves) */
     csrbf_touch_reset(e->touch); /* the output buffer no longer matches the base */
     e->touched_valid = false;
     e->factored = false;
@@ -75,10 +73,10 @@ void fp_engine_step_commit(fp_engine_step *e, const float *base)
     size_t nr = csrbf_touch_ranges(e->touch, &ranges);
     if (e->touched_valid) { /* only the blocks the last evaluation wrote differ */
         csrbf_points_update_ranges(e->points, base, ranges, nr);
-        csrbf_points_update_ranges(e->inter, base, ranges, nr);
+        if (e->inter && !e->inter_stale) csrbf_points_update_ranges(e->inter, base, ranges, nr);
     } else {
         csrbf_points_update(e->points, base);
-        csrbf_points_update(e->inter, base);
+        e->inter_stale = true;
     }
     csrbf_touch_commit(e->touch); /* the output buffer is the base now */
     e->touched_valid = true;
@@ -88,7 +86,7 @@ void fp_engine_step_commit(fp_engine_step *e, const float *base)
 void fp_engine_step_commit_ranges(fp_engine_step *e, const float *base, const uint32_t *ranges, size_t nr)
 {
     csrbf_points_update_ranges(e->points, base, ranges, nr);
-    csrbf_points_update_ranges(e->inter, base, ranges, nr);
+    if (e->inter && !e->inter_stale) csrbf_points_update_ranges(e->inter, base, ranges, nr);
     csrbf_touch_commit(e->touch); /* the output buffer is the base now */
     e->touched_valid = true;
     e->factored = false;
@@ -182,8 +180,20 @@ static int run(fp_engine_step *e, const fp_control_set *cs, float *deformed, fp_
                 res->min_det_j = js.eval.min_jacobian_det;
             }
             /* each map rewrites only the blocks in its supports; the touch then lists every
-             * block any of them computed */
+             * block any of them computed. inter: made at the first composed step, copied
+             * after the base changed whole (both O(n), once) */
             int64_t ev0 = fp_now_ns();
+            if (!e->inter) {
+                if ((rc = csrbf_points_clone(e->points, &e->inter)) < 0 ||
+                    (rc = csrbf_touch_create(e->inter, &e->inter_touch)) < 0) {
+                    csrbf_points_destroy(&e->inter);
+                    return rc;
+                }
+                e->inter_stale = false;
+            } else if (e->inter_stale) {
+                if ((rc = csrbf_points_copy(e->inter, e->points)) < 0) return rc;
+                e->inter_stale = false;
+            }
             rc = csrbf_guarded_step_touched(e->solver, e->points, e->touch, e->inter, e->inter_touch,
                                             cs->count, &cs->start[0][0], &cs->end[0][0], &g, deformed,
                                             &gs);

@@ -65,8 +65,11 @@ typedef struct fp_engine_step {
     csrbf_points *points;         /* the base vertices, blocked for evaluation */
     csrbf_touch *touch;           /* which blocks of the (persistent) output differ from the base */
     csrbf_points *inter;          /* a composed step's shape so far (csrbf_guarded_step_touched):
-                                     the base's vertices between runs, kept with points */
+                                     the base's vertices between runs, kept with points; made
+                                     at the first composed step (NULL until then) */
     csrbf_touch *inter_touch;     /* its touch */
+    bool inter_stale;             /* the base changed whole since (set_base): copied from
+                                     points at the next composed step, not at each change */
     bool touched_valid;           /* the last write of the output was csrbf_evaluate_touched */
     float *scratch;               /* n x 3: the Jacobian evaluation's output (e->jacobian) */
     int threads;                  /* csrbf_options.threads */

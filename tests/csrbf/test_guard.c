@@ -427,7 +427,7 @@ static void test_guarded_step_touched(void **state)
     csrbf_points *pts, *inter, *full;
     csrbf_touch *touch, *itouch;
     assert_int_equal(csrbf_points_create(nv, grid, &pts), CSRBF_OK);
-    assert_int_equal(csrbf_points_create(nv, grid, &inter), CSRBF_OK);
+    assert_int_equal(csrbf_points_clone(pts, &inter), CSRBF_OK);
     assert_int_equal(csrbf_points_create(nv, grid, &full), CSRBF_OK);
     assert_int_equal(csrbf_touch_create(pts, &touch), CSRBF_OK);
     assert_int_equal(csrbf_touch_create(inter, &itouch), CSRBF_OK);
@@ -481,14 +481,37 @@ static void test_guarded_step_touched(void **state)
         if (f % 3 == 2) { /* a commit: the shape := the output on the ranges written */
             memcpy(shape, out, nv * 3 * sizeof *shape);
             assert_int_equal(csrbf_points_update_ranges(pts, shape, r, nr), CSRBF_OK);
-            assert_int_equal(csrbf_points_update_ranges(inter, shape, r, nr), CSRBF_OK);
+            if (f % 2) /* inter kept with pts on the ranges, or copied whole */
+                assert_int_equal(csrbf_points_update_ranges(inter, shape, r, nr), CSRBF_OK);
+            else
+                assert_int_equal(csrbf_points_copy(inter, pts), CSRBF_OK);
+            /* inter mirrors pts: the last map (its supports where the shape just changed)
+             * evaluates alike on both, and the nearest vertices agree */
+            float *o1 = malloc(nv * 3 * sizeof *o1), *o2 = malloc(nv * 3 * sizeof *o2);
+            assert_int_equal(csrbf_evaluate(sb, inter, o1, 0, NULL), CSRBF_OK);
+            assert_int_equal(csrbf_evaluate(sb, pts, o2, 0, NULL), CSRBF_OK);
+            assert_memory_equal(o1, o2, nv * 3 * sizeof *o1);
+            float q[3] = {(float)cx, (float)cy, 0.3f}, d1, d2;
+            uint32_t i1, i2;
+            assert_int_equal(csrbf_points_nearest(inter, q, 1, 1.0f, &d1, &i1), CSRBF_OK);
+            assert_int_equal(csrbf_points_nearest(pts, q, 1, 1.0f, &d2, &i2), CSRBF_OK);
+            assert_true(d1 == d2 && i1 == i2);
+            free(o1);
+            free(o2);
             assert_int_equal(csrbf_points_update(full, shape), CSRBF_OK);
             csrbf_touch_commit(touch);
         }
     }
     printf("  %d of 14 steps composed\n", composed);
     assert_true(composed >= 6);
-    /* arguments: a touch of other points, inter the shape itself */
+    /* arguments: a touch of other points, inter the shape itself; a copy between counts */
+    csrbf_points *small;
+    assert_int_equal(csrbf_points_create(1, grid, &small), CSRBF_OK);
+    assert_int_equal(csrbf_points_copy(small, pts), CSRBF_ERR_INVALID);
+    assert_int_equal(csrbf_points_copy(NULL, pts), CSRBF_ERR_INVALID);
+    csrbf_points_destroy(&small);
+    assert_int_equal(csrbf_points_clone(NULL, &small), CSRBF_ERR_INVALID);
+    assert_null(small);
     float st1[3] = {0, 0, 0}, en1[3] = {0.1f, 0, 0};
     assert_int_equal(csrbf_guarded_step_touched(sa, pts, itouch, inter, touch, 1, st1, en1, NULL, out, NULL),
                      CSRBF_ERR_INVALID);
