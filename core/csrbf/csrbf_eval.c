@@ -592,6 +592,20 @@ int csrbf_touch_for(const csrbf_touch *t, const csrbf_points *p)
     return t && p && t->points == p && t->nblocks == p->nblocks;
 }
 
+size_t csrbf_block_ranges(const uint32_t *blk, size_t k, size_t n, uint32_t *ranges)
+{
+    size_t nr = 0;
+    for (size_t i = 0; i < k;) {
+        size_t b0 = blk[i], b1 = b0 + 1;
+        for (i++; i < k && blk[i] == b1; i++) b1++;
+        size_t v1 = b1 * B < n ? b1 * B : n;
+        ranges[2 * nr] = (uint32_t)(b0 * B);
+        ranges[2 * nr + 1] = (uint32_t)(v1 - b0 * B);
+        nr++;
+    }
+    return nr;
+}
+
 void csrbf_touch_set(csrbf_touch *t, const uint32_t *blk, size_t k, const uint32_t *wr, size_t kw,
                      int all)
 {
@@ -600,40 +614,13 @@ void csrbf_touch_set(csrbf_touch *t, const uint32_t *blk, size_t k, const uint32
     t->full = 0;
     t->sel_id = 0;
     t->ranges_sel = 0;
-    size_t n = t->points->n, nr = 0;
     if (all) {
         t->ranges[0] = 0;
-        t->ranges[1] = (uint32_t)n;
+        t->ranges[1] = (uint32_t)t->points->n;
         t->nranges = 1;
-        return;
+    } else {
+        t->nranges = csrbf_block_ranges(wr, kw, t->points->n, t->ranges);
     }
-    /* the union of the two increasing lists, as runs of consecutive blocks */
-    size_t i = 0, j = 0, r0 = 0, r1 = 0; /* the open run: blocks r0 .. r1 - 1 (none: r0 == r1) */
-    while (i < kw || j < k) {
-        size_t b;
-        if (j == k || (i < kw && wr[i] < blk[j])) b = wr[i++];
-        else {
-            b = blk[j++];
-            if (i < kw && wr[i] == b) i++;
-        }
-        if (r1 > r0 && b == r1) {
-            r1++;
-            continue;
-        }
-        if (r1 > r0) {
-            t->ranges[2 * nr] = (uint32_t)(r0 * B);
-            t->ranges[2 * nr + 1] = (uint32_t)((r1 * B < n ? r1 * B : n) - r0 * B);
-            nr++;
-        }
-        r0 = b;
-        r1 = b + 1;
-    }
-    if (r1 > r0) {
-        t->ranges[2 * nr] = (uint32_t)(r0 * B);
-        t->ranges[2 * nr + 1] = (uint32_t)((r1 * B < n ? r1 * B : n) - r0 * B);
-        nr++;
-    }
-    t->nranges = nr;
 }
 
 int csrbf_evaluate_touched(const csrbf_solver *cs, const csrbf_points *P, csrbf_touch *touch,
@@ -682,16 +669,7 @@ static double support_share(const csrbf_solver *s, const csrbf_points *P)
 /* touch->ranges from k increasing blocks: runs of consecutive blocks as vertex ranges. */
 static void ranges_of_blocks(csrbf_touch *t, size_t n, const uint32_t *blk, size_t k)
 {
-    size_t nr = 0;
-    for (size_t i = 0; i < k;) {
-        size_t b0 = blk[i], b1 = b0 + 1;
-        for (i++; i < k && blk[i] == b1; i++) b1++;
-        size_t v1 = b1 * B < n ? b1 * B : n;
-        t->ranges[2 * nr] = (uint32_t)(b0 * B);
-        t->ranges[2 * nr + 1] = (uint32_t)(v1 - b0 * B);
-        nr++;
-    }
-    t->nranges = nr;
+    t->nranges = csrbf_block_ranges(blk, k, n, t->ranges);
 }
 
 static void ranges_all(csrbf_touch *t, size_t n)

@@ -293,33 +293,25 @@ typedef struct follow {
     int inter_set; /* inter holds an intermediate shape at U's blocks */
 } follow;
 
-/* blocks blk[0 .. k) as vertex ranges into R; returns their number */
-static size_t block_ranges(const uint32_t *blk, size_t k, size_t nv, uint32_t *R)
-{
-    size_t nr = 0;
-    for (size_t i = 0; i < k;) {
-        size_t b0 = blk[i], b1 = b0 + 1;
-        for (i++; i < k && blk[i] == b1; i++) b1++;
-        R[2 * nr] = (uint32_t)(b0 * CSRBF_BLOCK);
-        R[2 * nr + 1] = (uint32_t)((b1 * CSRBF_BLOCK < nv ? b1 * CSRBF_BLOCK : nv) - b0 * CSRBF_BLOCK);
-        nr++;
-    }
-    return nr;
-}
-
-/* U := U and C (both increasing), through M */
-static void follow_union(follow *f)
+/* out := the increasing lists a[0 .. ka) and b[0 .. kb) merged, each block once; returns
+ * its length */
+static size_t merge_blocks(const uint32_t *a, size_t ka, const uint32_t *b, size_t kb, uint32_t *out)
 {
     size_t i = 0, j = 0, k = 0;
-    while (i < f->ku || j < f->kc) {
-        uint32_t b;
-        if (j == f->kc || (i < f->ku && f->U[i] < f->C[j])) b = f->U[i++];
+    while (i < ka || j < kb) {
+        if (j == kb || (i < ka && a[i] < b[j])) out[k++] = a[i++];
         else {
-            b = f->C[j++];
-            if (i < f->ku && f->U[i] == b) i++;
+            if (i < ka && a[i] == b[j]) i++;
+            out[k++] = b[j++];
         }
-        f->M[k++] = b;
     }
+    return k;
+}
+
+/* U := U and C, through M */
+static void follow_union(follow *f)
+{
+    size_t k = merge_blocks(f->U, f->ku, f->C, f->kc, f->M);
     uint32_t *t = f->U;
     f->U = f->M;
     f->M = t;
@@ -418,7 +410,7 @@ static int guarded(csrbf_solver *s, const csrbf_points *shape, follow *fw, size_
         /* the next map acts on the shape so far */
         if (fw) { /* which differs from inter only where this map computed */
             fw->inter_set = 1;
-            size_t nr = block_ranges(fw->C, fw->kc, nv, fw->R);
+            size_t nr = csrbf_block_ranges(fw->C, fw->kc, nv, fw->R);
             rc = csrbf_points_update_ranges(fw->inter, deformed, fw->R, nr);
             if (rc < 0) return rc;
             continue;
@@ -531,13 +523,15 @@ int csrbf_guarded_step_touched(csrbf_solver *s, const csrbf_points *shape, csrbf
     rc = guarded(s, shape, &f, n, start, end, guard, deformed, st);
     /* inter back to the shape where a sub-step wrote it (a superset: U) */
     if (f.inter_set) {
-        int r2 = csrbf_points_update_ranges(inter, shape->xyz, f.R, block_ranges(f.U, f.ku, shape->n, f.R));
+        size_t nr = csrbf_block_ranges(f.U, f.ku, shape->n, f.R);
+        int r2 = csrbf_points_update_ranges(inter, shape->xyz, f.R, nr);
         if (r2 < 0 && rc >= 0) rc = r2;
     }
     if (rc < 0) {
         csrbf_touch_reset(touch); /* the output is unspecified: the next call writes it whole */
         return rc;
     }
-    csrbf_touch_set(touch, f.U, f.ku, f.W, f.kw, f.wall);
+    /* written: the blocks the first map restored or computed (W), and every map's (U) */
+    csrbf_touch_set(touch, f.U, f.ku, f.M, merge_blocks(f.W, f.kw, f.U, f.ku, f.M), f.wall);
     return rc;
 }

@@ -174,8 +174,11 @@ uint64_t csrbf_new_stamp(void);
  * blocks the last call computed from the kernel (increasing; *k of them) and, in *full (may
  * be NULL), whether the next call writes every block. csrbf_touch_set: the state a composed
  * step leaves: the blocks computed := blk[0 .. k) (increasing: where the output may differ
- * from the base), the blocks written := those and wr[0 .. kw) (increasing), or every block
- * when all; the kept-selection shortcut is dropped. csrbf_touch_for: t was made for p. */
+ * from the base), the blocks written := wr[0 .. kw) (increasing; they hold blk), or every
+ * block when all; the kept-selection shortcut is dropped. csrbf_touch_for: t was made for p.
+ * csrbf_block_ranges: increasing blocks blk[0 .. k) of n vertices as vertex ranges (first,
+ * count) in ranges (room for 2 k), runs of consecutive blocks joined; returns their number. */
+size_t csrbf_block_ranges(const uint32_t *blk, size_t k, size_t n, uint32_t *ranges);
 const uint32_t *csrbf_touch_prev(const csrbf_touch *t, size_t *k, int *full);
 void csrbf_touch_set(csrbf_touch *t, const uint32_t *blk, size_t k, const uint32_t *wr, size_t kw,
                      int all);
