@@ -115,12 +115,10 @@ static void undo_all_exact(const char *mapping)
     char input[4300], err[2048];
     snprintf(input, sizeof input, "replay:%s/hands/leap-motion/three-claps_joints_mm.csv,speed=4",
              fp_test_data_dir());
-    fp_session_options so = {0};
-    so.mesh_path = fp_test_face_path();
+    fp_session_options so;
+    fp_test_face_options(&so, mapping, NULL);
     so.inputs[0] = input;
     so.input_count = 1;
-    so.mapping = mapping;
-    so.plugin_path = fp_test_plugin_path();
     so.rig_path = "none";
     fp_session *s = NULL;
     int rc = fp_session_create(&so, &s, err, sizeof err);

@@ -63,12 +63,10 @@ static void run_clip(const char *clip, clip_result *r)
     g_log[0] = 0;
     char input[4300], err[2048];
     snprintf(input, sizeof input, "replay:%s/hands/leap-motion/%s_joints_mm.csv", fp_test_data_dir(), clip);
-    fp_session_options so = {0};
-    so.mesh_path = fp_test_face_path();
+    fp_session_options so;
+    fp_test_face_options(&so, "onehand", NULL);
     so.inputs[0] = input;
     so.input_count = 1;
-    so.mapping = "onehand";
-    so.plugin_path = fp_test_plugin_path();
     so.input_clock = true;
     so.log = on_log;
     fp_session *s = NULL;

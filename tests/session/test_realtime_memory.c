@@ -46,11 +46,8 @@ static outcome run(bool realtime)
 {
     outcome o = {0};
     char err[2048];
-    fp_session_options so = {0};
-    so.mesh_path = fp_test_face_path();
-    so.mapping = "anchored";
-    so.plugin_path = fp_test_plugin_path();
-    so.rig_dir = FP_TEST_RIGS_DIR;
+    fp_session_options so;
+    fp_test_face_options(&so, "anchored", FP_TEST_RIGS_DIR);
     fp_session *s = NULL;
     o.rc = fp_session_create(&so, &s, err, sizeof err);
     if (o.rc) {

@@ -183,19 +183,26 @@ static void place(fixture *f, uint32_t a, uint32_t b, uint32_t c)
     for (int i = 0; i < 3; i++) memcpy(f->start[i], &p[3 * v[i]], sizeof f->start[i]);
 }
 
+/* A session on the ICT face, anchored, rigs from the source tree (rig_path: fp_session_options;
+ * whole: whole_rig_commit) */
+static fp_session *rig_session_of(bool whole, const char *rig_path)
+{
+    char err[2048];
+    fp_session_options so;
+    fp_test_face_options(&so, "anchored", FP_TEST_RIGS_DIR);
+    so.rig_path = rig_path;
+    so.whole_rig_commit = whole;
+    fp_session *s = NULL;
+    int rc = fp_session_create(&so, &s, err, sizeof err);
+    if (rc) fprintf(stderr, "%s\n", err);
+    assert_int_equal(rc, 0);
+    return s;
+}
+
 static void run_contract(const char *rig_path)
 {
     fixture f = {0};
-    char err[2048];
-    fp_session_options so = {0};
-    so.mesh_path = fp_test_face_path();
-    so.mapping = "anchored";
-    so.plugin_path = fp_test_plugin_path();
-    so.rig_path = rig_path;
-    so.rig_dir = FP_TEST_RIGS_DIR;
-    int rc = fp_session_create(&so, &f.s, err, sizeof err);
-    if (rc) fprintf(stderr, "%s\n", err);
-    assert_int_equal(rc, 0);
+    f.s = rig_session_of(false, rig_path);
     fixture_ready(&f);
     bool rig = fp_session_rig(f.s) != NULL;
     double frac;
@@ -295,23 +302,6 @@ static void test_session_contract_rig(void **state)
 }
 
 /* ---- a rig commit: ranged = whole ------------------------------------------------------ */
-
-static fp_session *rig_session_of(bool whole, const char *rig_path)
-{
-    char err[2048];
-    fp_session_options so = {0};
-    so.mesh_path = fp_test_face_path();
-    so.mapping = "anchored";
-    so.plugin_path = fp_test_plugin_path();
-    so.rig_dir = FP_TEST_RIGS_DIR;
-    so.rig_path = rig_path;
-    so.whole_rig_commit = whole;
-    fp_session *s = NULL;
-    int rc = fp_session_create(&so, &s, err, sizeof err);
-    if (rc) fprintf(stderr, "%s\n", err);
-    assert_int_equal(rc, 0);
-    return s;
-}
 
 static fp_session *rig_session(bool whole)
 {

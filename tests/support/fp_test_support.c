@@ -333,16 +333,23 @@ const struct fp_plugin_path *fp_test_plugin_path(void)
     return &path;
 }
 
+void fp_test_face_options(fp_session_options *so, const char *mapping, const char *rig_dir)
+{
+    memset(so, 0, sizeof *so);
+    so->mesh_path = fp_test_face_path();
+    so->mapping = mapping;
+    so->plugin_path = fp_test_plugin_path();
+    so->rig_dir = rig_dir;
+}
+
 fp_session *fp_test_session_start(const char *mapping, const char *const *inputs, int n)
 {
     char err[2048];
-    fp_session_options so = {0};
-    so.mesh_path = fp_test_face_path();
+    fp_session_options so;
+    fp_test_face_options(&so, mapping, NULL);
     assert_true(n >= 0 && n <= (int)(sizeof so.inputs / sizeof so.inputs[0]));
     for (int i = 0; i < n; i++) so.inputs[i] = inputs[i];
     so.input_count = n;
-    so.mapping = mapping;
-    so.plugin_path = fp_test_plugin_path();
     fp_session *s = NULL;
     int rc = fp_session_create(&so, &s, err, sizeof err);
     if (rc) fprintf(stderr, "%s\n", err);

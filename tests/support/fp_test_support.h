@@ -110,6 +110,12 @@ struct fp_plugin_path;
 /** The plugin search path of the build's plugins (one for the whole test program). */
 const struct fp_plugin_path *fp_test_plugin_path(void);
 
+struct fp_session_options;
+/** *so := the options of a session on the ICT face (fp_test_face_path) with the mapping SPEC
+ *  mapping and the build's plugins (fp_test_plugin_path), rigs looked for in rig_dir (NULL:
+ *  none given); every other field zero. */
+void fp_test_face_options(struct fp_session_options *so, const char *mapping, const char *rig_dir);
+
 /** Create and start a session on the ICT face with n input SPECs and a mapping SPEC, plugins
  *  from the build. Fails the test (printing the error) when create or start fails. */
 struct fp_session *fp_test_session_start(const char *mapping, const char *const *inputs, int n);
