@@ -349,10 +349,11 @@ void fp_contact_set_local(fp_contact *c, double radius);
 const float *fp_contact_shape(const fp_contact *c);
 
 /** D_P: the vertices where P (fp_contact_shape) may differ from the reference last given to
- *  fp_contact_reference (a superset: a vertex that went back stays listed), no repeats, in
- *  no order; *verts owned by c, valid until its next call. Returns their number (0 before
- *  the first fp_contact_reference, and c NULL). So a caller that makes P its new reference
- *  (a commit) copies these vertices only. */
+ *  fp_contact_reference (a superset: a vertex that went back stays listed), indices < n, no
+ *  repeats, in no order; *verts owned by c, valid until its next call. Returns their number
+ *  (0, *verts NULL, before the first fp_contact_reference and for c NULL). No errors.
+ *  Threads: as every call on c. So a caller that makes P its new reference (a commit)
+ *  copies these vertices only. */
 size_t fp_contact_differs(const fp_contact *c, const uint32_t **verts);
 
 /** The triangle-triangle test alone (closed triangles, 3 x 3 doubles each): 1 when they

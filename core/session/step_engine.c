@@ -67,27 +67,26 @@ void fp_engine_step_set_base(fp_engine_step *e, const float *base)
     e->factored = false;
 }
 
-void fp_engine_step_commit(fp_engine_step *e, const float *base)
-{
-    const uint32_t *ranges;
-    size_t nr = csrbf_touch_ranges(e->touch, &ranges);
-    if (e->touched_valid) { /* only the blocks the last evaluation wrote differ */
-        csrbf_points_update_ranges(e->points, base, ranges, nr);
-        if (e->inter && !e->inter_stale) csrbf_points_update_ranges(e->inter, base, ranges, nr);
-    } else {
-        csrbf_points_update(e->points, base);
-        e->inter_stale = true;
-    }
-    csrbf_touch_commit(e->touch); /* the output buffer is the base now */
-    e->touched_valid = true;
-    e->factored = false;
-}
-
 void fp_engine_step_commit_ranges(fp_engine_step *e, const float *base, const uint32_t *ranges, size_t nr)
 {
     csrbf_points_update_ranges(e->points, base, ranges, nr);
     if (e->inter && !e->inter_stale) csrbf_points_update_ranges(e->inter, base, ranges, nr);
     csrbf_touch_commit(e->touch); /* the output buffer is the base now */
+    e->touched_valid = true;
+    e->factored = false;
+}
+
+void fp_engine_step_commit(fp_engine_step *e, const float *base)
+{
+    const uint32_t *ranges;
+    size_t nr = csrbf_touch_ranges(e->touch, &ranges);
+    if (e->touched_valid) { /* only the blocks the last evaluation wrote differ */
+        fp_engine_step_commit_ranges(e, base, ranges, nr);
+        return;
+    }
+    csrbf_points_update(e->points, base);
+    e->inter_stale = true;
+    csrbf_touch_commit(e->touch);
     e->touched_valid = true;
     e->factored = false;
 }

@@ -125,10 +125,12 @@ void fp_engine_step_output_is_base(fp_engine_step *e);
  *  and inter), csrbf_touch_commit, forgets the factor. */
 void fp_engine_step_commit(fp_engine_step *e, const float *base);
 
-/** A commit of another shape on known ranges: base (the caller's, changed only there) and
- *  the output buffer both hold it now (the caller copied it into both); re-indexes those
- *  ranges ((first, count) pairs, increasing, disjoint) on points and inter,
- *  csrbf_touch_commit, forgets the factor. */
+/** A commit of another shape on known ranges: base (n x 3 floats, the caller's, changed only
+ *  there) and the output buffer both hold it now (the caller copied it into both); re-indexes
+ *  those ranges ((first, count) vertex pairs, increasing, disjoint, within n) on points and
+ *  inter, csrbf_touch_commit, forgets the factor. No errors reported: ranges outside n or
+ *  positions past CSRBF_MAX_COORD are refused by csrbf_points_update_ranges, which then
+ *  re-indexes nothing, as in fp_engine_step_commit. Threads: the session thread. */
 void fp_engine_step_commit_ranges(fp_engine_step *e, const float *base, const uint32_t *ranges, size_t nr);
 
 /** The vertex ranges ((first, count) pairs) of the output that the last run rewrote, for a
