@@ -3193,9 +3193,8 @@ static void local_ramp(fp_contact *c)
     }
 }
 
-/* New pairs and newly flipped triangles of shape s, by the mesh's broad phase */
-/* A shape's check inside a step (s: P at the moved vertices): the new pairs and (*flips) the
- * newly flipped triangles; record: their vertices into off (a local scale-back's blocking
+/* A shape's check inside a step (s: P at the moved vertices), by the mesh's broad phase: the
+ * new pairs and (*flips) the newly flipped triangles; record: their vertices into off (a local scale-back's blocking
  * set), every one counted. Without record (the bisection, which asks only whether the shape
  * adds any) a flip decides it: the pairs are not looked for (0, *flips >= 1). */
 static long check(fp_contact *c, const float *s, const float *ref, size_t *flips, bool record)
