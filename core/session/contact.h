@@ -200,7 +200,12 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
  * bisection is then over t with w. Every vertex still lies on its segment P -> C (w in
  * [0, 1]), so (3) holds unchanged; every shape kept passed the same check, so the
  * invariant holds, and a fold at the border between scaled and kept motion is a flip or a
- * crossing that check sees.
+ * crossing that check sees. s(v) looks only at the blocking vertices in the 27 grid cells
+ * (2r wide) around v, which hold every one nearer than 2r, so it is the brute force's.
+ * On the hierarchy, when the candidate's check found no new pair, its newly flipped
+ * triangles are the blocking set (no second check of the candidate), and a bisection's
+ * check first tests the triangles the last failing check found flipped: one still flipped
+ * decides it (as the full check would: P has none) before the refit.
  * tests/session/test_contact.c holds every decision to the full check's.
  *
  * Cost: per frame, the vertices in the ranges and D_P, then
@@ -312,8 +317,8 @@ void fp_contact_set_certify(fp_contact *c, bool on);
  *  between frames). Tasks are claimed one at a time, as the caller adds them, and the
  *  caller waits only for a task the worker holds, never for a worker that has not started,
  *  so a busy machine costs the worker's share, not a time slice. Decisions, counts and P
- *  are the same with 1 or 2; the checks that record blocking triangles (a local scale-back)
- *  run on one. No effect on envelopes (small meshes: a check there is too short to share;
+ *  are the same with 1 or 2, the checks that record blocking triangles (a local scale-back)
+ *  included (each thread keeps its own list, merged after the job). No effect on envelopes (small meshes: a check there is too short to share;
  *  measured: the ICT face's envelope check shared, its boxes and pairs in tasks, cut its
  *  contact median 12-20% but raised the frame's p99 8-30%, the caller waiting up to 0.2-0.7
  *  ms for a worker held off its core mid-task; see fp_contact_result.worker_wait_ms).

@@ -613,6 +613,96 @@ static void test_track_recordings(void **state)
     recording_frames("grab", "anchored", 3);
 }
 
+/* The local scale-back on real frames, three ways (issue 18): envelopes on one thread, the
+ * hierarchy on one and on two threads (its record checks shared, the first check's flips
+ * taken as the blocking set when it found no pair): the same shape kept every frame, bit for
+ * bit, and each shape passes the full check. */
+static void test_track_local_paths(void **state)
+{
+    (void)state;
+    char input[4400], err[2048];
+    snprintf(input, sizeof input, "replay:%s/hands/leap-motion/three-claps_joints_mm.csv,fast=1",
+             fp_test_data_dir());
+    const char *dirs[] = {fp_test_plugin_dir()};
+    fp_plugin_path path;
+    fp_plugin_path_init(&path, dirs, 1, NULL);
+    fp_session_options so = {0};
+    so.mesh_path = fp_test_face_path();
+    so.inputs[0] = input;
+    so.input_count = 1;
+    so.mapping = "unanchored";
+    so.plugin_path = &path;
+    so.input_clock = true;
+    so.rig_path = "none";
+    so.no_contact_guard = true;
+    fp_session *s = NULL;
+    int rc = fp_session_create(&so, &s, err, sizeof err);
+    if (!rc) rc = fp_session_start(s, err, sizeof err);
+    if (rc) fprintf(stderr, "%s\n", err);
+    assert_int_equal(rc, 0);
+    const fp_mesh *m = fp_session_mesh(s);
+    size_t n = fp_session_vertex_count(s), t = m->triangle_count;
+    fp_contact *tk[3], *full;
+    for (int w = 0; w < 3; w++) {
+        assert_int_equal(fp_contact_create(m->triangles, t, n, fp_session_loaded(s), &tk[w]), 0);
+        assert_int_equal(fp_contact_dilate_own(tk[w], 1), 0);
+        fp_contact_set_local(tk[w], fp_session_radius(s));
+        if (w) fp_contact_set_prewarm(tk[w], 0);
+        if (w == 2) fp_contact_set_threads(tk[w], 2, 1);
+    }
+    assert_int_equal(fp_contact_create(m->triangles, t, n, fp_session_loaded(s), &full), 0);
+    assert_int_equal(fp_contact_dilate_own(full, 1), 0);
+    float *ref = malloc(n * 3 * sizeof(float));
+    uint32_t *ranges = malloc(n * sizeof *ranges);
+    memcpy(ref, fp_session_base(s), n * 3 * sizeof(float));
+    for (int w = 0; w < 3; w++) assert_int_equal(fp_contact_reference(tk[w], ref, NULL, SIZE_MAX), 0);
+    int64_t t0;
+    while (fp_session_input_start(s, &t0) == 0) fp_test_nap_ms(1);
+    int frames = 0, local = 0, scaled = 0;
+    size_t shared = 0;
+    for (uint64_t f = 0; !fp_session_finished(s); f++) {
+        int64_t now = t0 + (int64_t)llround((double)f * 1e9 / 60);
+        while (!fp_session_inputs_ready(s, now)) fp_test_nap_ms(1);
+        if (memcmp(ref, fp_session_base(s), n * 3 * sizeof(float))) { /* a commit */
+            memcpy(ref, fp_session_base(s), n * 3 * sizeof(float));
+            for (int w = 0; w < 3; w++) assert_int_equal(fp_contact_reference(tk[w], ref, NULL, SIZE_MAX), 0);
+        }
+        fp_frame_stats st;
+        fp_session_step(s, now, &st);
+        if (!st.active) {
+            for (int w = 0; w < 3; w++) assert_int_equal(fp_contact_reference(tk[w], ref, NULL, 0), 0);
+            continue;
+        }
+        const float *cand = fp_session_positions(s);
+        size_t nr = diff_ranges(cand, ref, n, ranges);
+        fp_contact_result r[3];
+        for (int w = 0; w < 3; w++) assert_int_equal(fp_contact_step(tk[w], ref, cand, ranges, nr, 6, &r[w]), 0);
+        for (int w = 1; w < 3; w++) {
+            assert_true(r[w].t == r[0].t);
+            assert_int_equal(r[w].local, r[0].local);
+            assert_int_equal(r[w].checks, r[0].checks);
+            assert_memory_equal(fp_contact_shape(tk[w]), fp_contact_shape(tk[0]), n * 3 * sizeof(float));
+        }
+        fp_contact_count info;
+        assert_int_equal(fp_contact_count_new(full, ref, fp_contact_shape(tk[0]), NULL, 0, &info), 0);
+        assert_int_equal(info.flipped, 0);
+        frames++;
+        scaled += r[0].t < 1;
+        local += r[0].local;
+        shared += r[2].shared;
+    }
+    printf("three-claps unanchored, local scale-back: %d frames, %d scaled back (%d locally); envelopes, "
+           "hierarchy and hierarchy on two threads (%zu checks shared) kept the same shapes\n",
+           frames, scaled, local, shared);
+    assert_true(local > 0 && shared > 0);
+    free(ranges);
+    free(ref);
+    for (int w = 0; w < 3; w++) fp_contact_destroy(&tk[w]);
+    fp_contact_destroy(&full);
+    fp_session_destroy(&s);
+    fp_plugin_path_clear(&path);
+}
+
 /* Two fingers in one frame (issue: a finger stopped at the lips froze a brow): one pushes the
  * lower sheet up through the upper one, one pulls it down far away, in free space. With a
  * local scale-back (fp_contact_set_local) the far finger's motion is kept bit for bit and the
@@ -685,6 +775,88 @@ static void test_track_local(void **state)
     assert_true(far == 1 && top > 0.8f * 0.05f);
     two_fingers(8, 0, &far, &top); /* global: the far finger stops with the near one */
     assert_true(far < 0.9f);
+}
+
+/* The local scale-back's shares against a brute force (its grid over the blocking vertices,
+ * issue 18, must find the nearest one within 2r as a scan of them all does): one frame pushes
+ * a bump of the lower sheet through the upper one, the guard keeps t of the motion plus, away
+ * from the blocking triangles (those of the new pairs), the smoothstep of the distance to
+ * their nearest vertex (r to 2r); every vertex of the kept shape must be what that formula
+ * gives, bit for bit, with envelopes and with the hierarchy.  r is small against the sheet: many cells. */
+static void test_track_local_ramp(void **state)
+{
+    (void)state;
+    float *pos;
+    size_t n, t;
+    uint32_t *tris;
+    sheets(40, 0.05f, &pos, &n, &tris, &t);
+    float *cand = malloc(n * 3 * sizeof(float)), *want = malloc(n * 3 * sizeof(float));
+    uint32_t pairs[2 * 4096];
+    const double r = 0.05;
+    memcpy(cand, pos, n * 3 * sizeof(float));
+    for (size_t v = 0; v < n / 2; v++) { /* a bump of 0.08 (the gap is 0.05) and a far dip */
+        double da = hypot(pos[3 * v] - 0.3, pos[3 * v + 1] - 0.5) / 0.15,
+               db = hypot(pos[3 * v] - 0.75, pos[3 * v + 1] - 0.4) / 0.12;
+        if (da < 1) cand[3 * v + 2] += (float)(0.08 * (1 - da * da) * (1 - da * da));
+        if (db < 1) cand[3 * v + 2] -= (float)(0.05 * (1 - db * db) * (1 - db * db));
+    }
+    fp_contact *full;
+    assert_int_equal(fp_contact_create(tris, t, n, pos, &full), 0);
+    fp_contact_count info;
+    long np = fp_contact_count_new(full, pos, cand, pairs, sizeof pairs / sizeof *pairs / 2, &info);
+    assert_true(np > 0 && (size_t)np <= sizeof pairs / sizeof *pairs / 2);
+    assert_int_equal(info.flipped, 0);
+    uint8_t *off = calloc(n, 1);
+    for (long i = 0; i < 2 * np; i++)
+        for (int j = 0; j < 3; j++) off[tris[3 * (size_t)pairs[i] + j]] = 1;
+    for (int tree = 0; tree < 2; tree++) {
+        fp_contact *tk;
+        assert_int_equal(fp_contact_create(tris, t, n, pos, &tk), 0);
+        if (tree) fp_contact_set_prewarm(tk, 0);
+        fp_contact_set_local(tk, r);
+        assert_int_equal(fp_contact_reference(tk, pos, NULL, SIZE_MAX), 0);
+        fp_contact_result res;
+        assert_int_equal(fp_contact_step(tk, pos, cand, NULL, SIZE_MAX, 6, &res), 0);
+        assert_int_equal(res.local, 1);
+        assert_int_equal(res.checks, 2 + 6); /* one round of the ramp passed */
+        for (size_t v = 0; v < n; v++) {
+            double d2 = INFINITY; /* the brute force: every blocking vertex */
+            for (size_t q = 0; q < n; q++)
+                if (off[q]) {
+                    double dx = (double)pos[3 * v] - pos[3 * q], dy = (double)pos[3 * v + 1] - pos[3 * q + 1],
+                           dz = (double)pos[3 * v + 2] - pos[3 * q + 2];
+                    d2 = fmin(d2, dx * dx + dy * dy + dz * dz);
+                }
+            double u = d2 <= r * r ? 0 : d2 >= 4 * r * r ? 1 : (sqrt(d2) - r) / r;
+            double w = res.t + (1 - res.t) * (u * u * (3 - 2 * u));
+            for (int j = 0; j < 3; j++) {
+                float a = pos[3 * v + j], b = cand[3 * v + j];
+                want[3 * v + j] = w >= 1 ? b : w <= 0 || a == b ? a : (float)((double)a + w * ((double)b - a));
+            }
+        }
+        const float *kept = fp_contact_shape(tk);
+        size_t kept_whole = 0, kept_none = 0;
+        for (size_t v = 0; v < n / 2; v++) {
+            assert_memory_equal(kept + 3 * v, want + 3 * v, 3 * sizeof(float));
+            if (cand[3 * v + 2] != pos[3 * v + 2]) {
+                kept_whole += kept[3 * v + 2] == cand[3 * v + 2];
+                kept_none += kept[3 * v + 2] == pos[3 * v + 2];
+            }
+        }
+        assert_memory_equal(kept + 3 * (n / 2), pos + 3 * (n / 2), (n - n / 2) * 3 * sizeof(float));
+        printf("local ramp (%s): %ld new pairs, t %.4f; of the moved vertices %zu kept whole, %zu "
+               "none; every share as the brute force\n",
+               tree ? "hierarchy" : "envelopes", np, res.t, kept_whole, kept_none);
+        assert_true(kept_whole > 0 && res.t < 1);
+        assert_int_equal(fp_contact_count_new(full, pos, kept, NULL, 0, NULL), 0);
+        fp_contact_destroy(&tk);
+    }
+    fp_contact_destroy(&full);
+    free(off);
+    free(want);
+    free(cand);
+    free(pos);
+    free(tris);
 }
 
 /* fp_contact_set_pose: a triangle a rig's pose turned 89 degrees from the weld shape (the
@@ -1059,6 +1231,8 @@ int main(void)
         cmocka_unit_test(test_track_sheets_slow),
         cmocka_unit_test(test_track_big),
         cmocka_unit_test(test_track_local),
+        cmocka_unit_test(test_track_local_ramp),
+        cmocka_unit_test(test_track_local_paths),
         cmocka_unit_test(test_set_pose),
         cmocka_unit_test(test_own_flip),
         cmocka_unit_test(test_flip_boundary),
