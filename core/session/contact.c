@@ -3442,6 +3442,15 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
             }
             track_lerp(k, 0, NULL);
         }
+        if (ramp && k->tree) {
+            /* the shape with t = 0 passed: a vertex kept whole there (share 1) is in place for
+             * every t, so a pair of triangles without one that depends on t is as it was in
+             * that shape, which has no new pair or flip; the bisection's checks look only at
+             * the triangles of the vertices whose place depends on t (a new stamp) */
+            tick(c);
+            for (size_t i = 0; i < k->nmv; i++)
+                if (ramp[i] < 1) k->vstamp[k->mv[i]] = k->tclock;
+        }
         double lo = 0, hi = 1;
         for (int i = 0; i < iters; i++) {
             double mid = 0.5 * (lo + hi);

@@ -205,7 +205,10 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
  * On the hierarchy, when the candidate's check found no new pair, its newly flipped
  * triangles are the blocking set (no second check of the candidate), and a bisection's
  * check first tests the triangles the last failing check found flipped: one still flipped
- * decides it (as the full check would: P has none) before the refit.
+ * decides it (as the full check would: P has none) before the refit. When the shape with
+ * t = 0 passed, a vertex kept whole there (s(v) = 1) is in place for every t, so a pair of
+ * triangles with no vertex whose place depends on t is as in that shape: the bisection's
+ * checks on the hierarchy look only at the triangles of the others.
  * tests/session/test_contact.c holds every decision to the full check's.
  *
  * Cost: per frame, the vertices in the ranges and D_P, then
