@@ -804,9 +804,10 @@ struct track {
     uint32_t *probe;              /* the hierarchy: triangles newly flipped in the step's last
                                      check that had any (a bisection's check tries them first) */
     size_t nprobe, cap_probe;
-    uint32_t *rg_start, *rg_off;  /* local_ramp's grid over off: each cell's first entry (cells
-                                     + 1), off's entries by cell */
-    size_t cap_rg_start, cap_rg_off;
+    double (*kd_pt)[3];           /* local_ramp: off's positions, in its k-d tree's order */
+    size_t cap_kd_pt;
+    struct kdnode *kd;            /* local_ramp's k-d tree over them (node 0 the root) */
+    size_t cap_kd;
     bool broken;                  /* a call ran out of memory half way: unusable */
 };
 
@@ -877,8 +878,8 @@ static void track_free(struct track *k)
     free(k->off_mark);
     free(k->ramp);
     free(k->probe);
-    free(k->rg_start);
-    free(k->rg_off);
+    free(k->kd_pt);
+    free(k->kd);
     free(k);
 }
 
@@ -3214,77 +3215,128 @@ static int add_off(fp_contact *c, const uint32_t *v)
     return 0;
 }
 
+/* local_ramp's k-d tree over the blocking vertices: a node's points' box, and its points
+ * (leaf: at most FP_KD_LEAF) or its children */
+#define FP_KD_LEAF 8
+typedef struct kdnode {
+    double lo[3], hi[3];
+    uint32_t first, count, left, right; /* left == 0: a leaf (node 0 is the root) */
+} kdnode;
+
+/* points pt[0 .. n) partially sorted on axis a so that pt[m] is the m-th (Hoare, median of
+ * three) */
+static void kd_select(double (*pt)[3], size_t n, size_t m, int a)
+{
+    size_t lo = 0, hi = n;
+    while (hi - lo > 2) {
+        double x = pt[lo][a], y = pt[lo + (hi - lo) / 2][a], z = pt[hi - 1][a];
+        double piv = x < y ? (y < z ? y : x < z ? z : x) : (x < z ? x : y < z ? z : y);
+        size_t i = lo, j = hi - 1;
+        for (;;) {
+            while (pt[i][a] < piv) i++;
+            while (pt[j][a] > piv) j--;
+            if (i >= j) break;
+            double t[3];
+            memcpy(t, pt[i], sizeof t);
+            memcpy(pt[i], pt[j], sizeof t);
+            memcpy(pt[j], t, sizeof t);
+            i++, j--;
+        }
+        if (m <= j) hi = j + 1;
+        else lo = j + 1;
+    }
+    if (hi - lo == 2 && pt[lo][a] > pt[lo + 1][a]) {
+        double t[3];
+        memcpy(t, pt[lo], sizeof t);
+        memcpy(pt[lo], pt[lo + 1], sizeof t);
+        memcpy(pt[lo + 1], t, sizeof t);
+    }
+}
+
+/* the node over pt[first .. first + n) and those below it into kd[*len ..); its index */
+static uint32_t kd_build(kdnode *kd, size_t *len, double (*pt)[3], uint32_t first, uint32_t n)
+{
+    uint32_t x = (uint32_t)(*len)++;
+    kdnode *d = &kd[x];
+    for (int a = 0; a < 3; a++) d->lo[a] = INFINITY, d->hi[a] = -INFINITY;
+    for (uint32_t i = first; i < first + n; i++)
+        for (int a = 0; a < 3; a++) d->lo[a] = dmin(d->lo[a], pt[i][a]), d->hi[a] = dmax(d->hi[a], pt[i][a]);
+    d->first = first;
+    d->count = n;
+    d->left = d->right = 0;
+    if (n <= FP_KD_LEAF) return x;
+    int ax = 0; /* split at the median of the longest side */
+    for (int a = 1; a < 3; a++)
+        if (d->hi[a] - d->lo[a] > d->hi[ax] - d->lo[ax]) ax = a;
+    kd_select(pt + first, n, n / 2, ax);
+    uint32_t l = kd_build(kd, len, pt, first, n / 2), r = kd_build(kd, len, pt, first + n / 2, n - n / 2);
+    kd[x].left = l;
+    kd[x].right = r;
+    return x;
+}
+
+static inline double kd_lb2(const kdnode *d, const double *p)
+{
+    double s = 0;
+    for (int a = 0; a < 3; a++) {
+        double e = dmax(dmax(d->lo[a] - p[a], p[a] - d->hi[a]), 0.0);
+        s += e * e;
+    }
+    return s;
+}
+
 /* ramp[i] for the moved vertices: 0 within local_r of a vertex in off (positions in P, as
- * pv holds them), 1 beyond 2 local_r, smooth between. The off vertices are put in a grid of
- * cells at least 2 local_r wide, so each moved vertex looks only at the 27 cells around its
- * own, which hold every off vertex nearer than 2 local_r: the nearest, where it matters, as
- * the brute force finds it (a blocked frame on the 1.7M face, 114,000 moved vertices against
- * 2,600 off, took 74 ms in the brute force). 0 or -ENOMEM. */
+ * pv holds them), 1 beyond 2 local_r, smooth between. The nearest off vertex within 2r comes
+ * from a k-d tree over them, the search bounded first by the previous moved vertex's nearest
+ * (its neighbour in memory, mostly on the surface): the brute force's distance where it
+ * matters (a blocked frame on the 1.7M face, 114,000 moved vertices against 2,600 off, took
+ * 74 ms in the brute force, and a grid of 2r cells helps nothing there: every moved vertex
+ * is within 2r). 0 or -ENOMEM. */
 static int local_ramp(fp_contact *c)
 {
     struct track *k = c->tk;
-    double r = c->local_r, r2 = r * r, r4 = 4 * r2, lo[3] = {INFINITY, INFINITY, INFINITY},
-           hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (size_t j = 0; j < k->noff; j++) /* their box grown by 2r: beyond it, ramp 1 */
-        for (int a = 0; a < 3; a++) {
-            lo[a] = fmin(lo[a], k->p[3 * (size_t)k->off[j] + a] - 2 * r);
-            hi[a] = fmax(hi[a], k->p[3 * (size_t)k->off[j] + a] + 2 * r);
-        }
-    /* cells h >= 2r wide (over 2r by far more than the rounding of a cell's index, so an off
-     * vertex within 2r is at most one cell away), at most about 8 per off vertex */
-    double h = 2 * r * (1 + 1e-9);
-    size_t dim[3] = {1, 1, 1}, cells = 0, most = 8 * k->noff + 64;
-    for (int grow = 0; grow < 64; grow++, h *= 2) {
-        cells = 1;
-        for (int a = 0; a < 3; a++) {
-            double e = k->noff ? (hi[a] - lo[a]) / h : 0;
-            dim[a] = !(e >= 1) ? 1 : e > (double)most ? most + 1 : (size_t)e + 1;
-            cells = dim[a] > most ? most + 1 : cells * dim[a];
-            if (cells > most) break;
-        }
-        if (cells <= most) break;
+    double r = c->local_r, r2 = r * r, r4 = 4 * r2;
+    if (!k->noff) {
+        for (size_t i = 0; i < k->nmv; i++) k->ramp[i] = 1;
+        return 0;
     }
-    if (cells > most || reserve((void **)&k->rg_start, &k->cap_rg_start, cells + 1, sizeof *k->rg_start) ||
-        reserve((void **)&k->rg_off, &k->cap_rg_off, k->noff ? k->noff : 1, sizeof *k->rg_off))
+    if (reserve((void **)&k->kd_pt, &k->cap_kd_pt, k->noff, sizeof *k->kd_pt) ||
+        reserve((void **)&k->kd, &k->cap_kd, 2 * k->noff, sizeof *k->kd))
         return -ENOMEM;
-    uint32_t *start = k->rg_start, *ent = k->rg_off;
-#define FP_RAMP_CELL(q, a) ((size_t)fmin((double)(dim[a] - 1), fmax(0.0, floor(((q)[a] - lo[a]) / h))))
-#define FP_RAMP_INDEX(x, y, z) (((z) * dim[1] + (y)) * dim[0] + (x))
-    memset(start, 0, (cells + 1) * sizeof *start);
-    for (size_t j = 0; j < k->noff; j++) {
-        const float *q = k->p + 3 * (size_t)k->off[j];
-        start[FP_RAMP_INDEX(FP_RAMP_CELL(q, 0), FP_RAMP_CELL(q, 1), FP_RAMP_CELL(q, 2)) + 1]++;
-    }
-    for (size_t i = 0; i < cells; i++) start[i + 1] += start[i];
-    for (size_t j = 0; j < k->noff; j++) { /* (start[cell] moves to the next cell's start) */
-        const float *q = k->p + 3 * (size_t)k->off[j];
-        ent[start[FP_RAMP_INDEX(FP_RAMP_CELL(q, 0), FP_RAMP_CELL(q, 1), FP_RAMP_CELL(q, 2))]++] = k->off[j];
-    }
-    for (size_t i = cells; i > 0; i--) start[i] = start[i - 1];
-    start[0] = 0;
+    double(*pt)[3] = k->kd_pt;
+    for (size_t j = 0; j < k->noff; j++)
+        for (int a = 0; a < 3; a++) pt[j][a] = k->p[3 * (size_t)k->off[j] + a];
+    size_t len = 0;
+    kd_build(k->kd, &len, pt, 0, (uint32_t)k->noff);
+    const kdnode *kd = k->kd;
+    uint32_t stack[64], w = 0; /* w: the last nearest point (a bound for the next search) */
     for (size_t i = 0; i < k->nmv; i++) {
-        const float *p = k->pv + 3 * i;
-        double d2 = INFINITY;
-        if (p[0] < lo[0] || p[1] < lo[1] || p[2] < lo[2] || p[0] > hi[0] || p[1] > hi[1] || p[2] > hi[2]) {
-            k->ramp[i] = 1;
-            continue;
-        }
-        size_t cx = FP_RAMP_CELL(p, 0), cy = FP_RAMP_CELL(p, 1), cz = FP_RAMP_CELL(p, 2);
-        for (size_t z = cz ? cz - 1 : 0; z <= cz + 1 && z < dim[2] && d2 > r2; z++)
-            for (size_t y = cy ? cy - 1 : 0; y <= cy + 1 && y < dim[1] && d2 > r2; y++) {
-                size_t row = FP_RAMP_INDEX(0, y, z);
-                size_t x0 = cx ? cx - 1 : 0, x1 = cx + 1 < dim[0] ? cx + 1 : dim[0] - 1;
-                for (uint32_t j = start[row + x0]; j < start[row + x1 + 1] && d2 > r2; j++) {
-                    const float *q = k->p + 3 * (size_t)ent[j];
-                    double dx = (double)p[0] - q[0], dy = (double)p[1] - q[1], dz = (double)p[2] - q[2];
-                    d2 = fmin(d2, dx * dx + dy * dy + dz * dz);
+        const float *pf = k->pv + 3 * i;
+        double p[3] = {pf[0], pf[1], pf[2]};
+        double best = r4, dx = p[0] - pt[w][0], dy = p[1] - pt[w][1], dz = p[2] - pt[w][2];
+        double dw = dx * dx + dy * dy + dz * dz;
+        if (dw < best) best = dw;
+        uint32_t top = 0;
+        stack[top++] = 0;
+        while (top && best > r2) {
+            const kdnode *d = &kd[stack[--top]];
+            if (kd_lb2(d, p) >= best) continue;
+            if (!d->left) {
+                for (uint32_t j = d->first; j < d->first + d->count; j++) {
+                    dx = p[0] - pt[j][0], dy = p[1] - pt[j][1], dz = p[2] - pt[j][2];
+                    double d2 = dx * dx + dy * dy + dz * dz;
+                    if (d2 < best) best = d2, w = j;
                 }
+                continue;
             }
-        double u = d2 <= r2 ? 0 : d2 >= r4 ? 1 : (sqrt(d2) - r) / r;
+            double ll = kd_lb2(&kd[d->left], p), lr = kd_lb2(&kd[d->right], p);
+            uint32_t nearer = ll <= lr ? d->left : d->right, farther = ll <= lr ? d->right : d->left;
+            if ((ll <= lr ? lr : ll) < best) stack[top++] = farther; /* (depth <= 40: < 64) */
+            if ((ll <= lr ? ll : lr) < best) stack[top++] = nearer;
+        }
+        double u = best <= r2 ? 0 : best >= r4 ? 1 : (sqrt(best) - r) / r;
         k->ramp[i] = u * u * (3 - 2 * u);
     }
-#undef FP_RAMP_CELL
-#undef FP_RAMP_INDEX
     return 0;
 }
 
@@ -3436,20 +3488,28 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
                 track_lerp(k, 0, NULL); /* P, where the distances are taken */
                 if (local_ramp(c)) return -ENOMEM;
                 track_lerp(k, 0, k->ramp);
+                if (k->tree) {
+                    /* a vertex kept whole (share 1) is where the candidate has it, and a
+                     * triangle of such vertices is not a blocking one, so a pair of them, or
+                     * with unmoved ones, added nothing in the candidate: the check looks only
+                     * at the triangles of the others (a new stamp; the rest hold the
+                     * candidate's boxes and normals from its check) */
+                    tick(c);
+                    for (size_t i = 0; i < k->nmv; i++)
+                        if (k->ramp[i] < 1) k->vstamp[k->mv[i]] = k->tclock;
+                }
                 m = check(c, k->p, ref, &fl, true);
                 res->checks++;
                 if (!m && !fl) ramp = k->ramp;
             }
             track_lerp(k, 0, NULL);
         }
-        if (ramp && k->tree) {
-            /* the shape with t = 0 passed: a vertex kept whole there (share 1) is in place for
-             * every t, so a pair of triangles without one that depends on t is as it was in
-             * that shape, which has no new pair or flip; the bisection's checks look only at
-             * the triangles of the vertices whose place depends on t (a new stamp) */
+        /* with a ramp the stamps stay the last round's: a vertex kept whole (share 1) is in
+         * place for every t, and its triangles as in the candidate; without one (the rounds
+         * failed) every moved vertex depends on t */
+        if (!ramp && k->tree && c->local_r > 0) {
             tick(c);
-            for (size_t i = 0; i < k->nmv; i++)
-                if (ramp[i] < 1) k->vstamp[k->mv[i]] = k->tclock;
+            for (size_t i = 0; i < k->nmv; i++) k->vstamp[k->mv[i]] = k->tclock;
         }
         double lo = 0, hi = 1;
         for (int i = 0; i < iters; i++) {

@@ -200,15 +200,16 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
  * bisection is then over t with w. Every vertex still lies on its segment P -> C (w in
  * [0, 1]), so (3) holds unchanged; every shape kept passed the same check, so the
  * invariant holds, and a fold at the border between scaled and kept motion is a flip or a
- * crossing that check sees. s(v) looks only at the blocking vertices in the 27 grid cells
- * (2r wide) around v, which hold every one nearer than 2r, so it is the brute force's.
+ * crossing that check sees. s(v) takes the nearest blocking vertex from a k-d tree over
+ * them (exact: the brute force's distance wherever it is under 2r).
  * On the hierarchy, when the candidate's check found no new pair, its newly flipped
  * triangles are the blocking set (no second check of the candidate), and a bisection's
  * check first tests the triangles the last failing check found flipped: one still flipped
- * decides it (as the full check would: P has none) before the refit. When the shape with
- * t = 0 passed, a vertex kept whole there (s(v) = 1) is in place for every t, so a pair of
- * triangles with no vertex whose place depends on t is as in that shape: the bisection's
- * checks on the hierarchy look only at the triangles of the others.
+ * decides it (as the full check would: P has none) before the refit. A vertex with
+ * s(v) = 1 is where C has it, in every shape of the scale-back, and a triangle of such
+ * vertices is not a blocking one: a pair of them (or with unmoved ones) is as in C, where it
+ * added nothing. So on the hierarchy the check of each ramp and, once one passed, the
+ * bisection's look only at the triangles of the vertices with s(v) < 1.
  * tests/session/test_contact.c holds every decision to the full check's.
  *
  * Cost: per frame, the vertices in the ranges and D_P, then
