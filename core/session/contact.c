@@ -801,6 +801,7 @@ struct track {
     uint8_t *off_mark;            /* n: in off */
     double *ramp;                 /* per moved vertex: the share of its motion always kept */
     size_t cap_ramp;
+    size_t updates;               /* the hierarchy: tree_update calls so far */
     uint32_t *probe;              /* the hierarchy: triangles newly flipped in the step's last
                                      check that had any (a bisection's check tries them first) */
     size_t nprobe, cap_probe;
@@ -2672,6 +2673,7 @@ static void refit_tasks(fp_contact *c, pool *p, uint32_t x, size_t g)
 static long tree_update(fp_contact *c, const float *s, const float *ref, bool record)
 {
     struct track *k = c->tk;
+    k->updates++;
     for (int i = 0; i < FP_CONTACT_MAX_THREADS; i++) {
         k->lane[i].flips = k->lane[i].found = 0;
         k->lane[i].moved = 0;
@@ -3511,22 +3513,25 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
             tick(c);
             for (size_t i = 0; i < k->nmv; i++) k->vstamp[k->mv[i]] = k->tclock;
         }
-        double lo = 0, hi = 1;
+        double lo = 0, hi = 1, held = ramp ? 0 : NAN; /* the t whose shape the hierarchy holds
+                                                           (the passed ramp's: 0) */
         for (int i = 0; i < iters; i++) {
             double mid = 0.5 * (lo + hi);
             track_lerp(k, mid, ramp);
+            size_t u0 = k->updates;
             long m = check(c, k->p, ref, &fl, false);
             res->checks++;
             if (m < 0) return -ENOMEM;
+            if (k->updates != u0) held = mid; /* (not a probe's) */
             if (m || fl) hi = mid;
             else lo = mid;
         }
         track_lerp(k, lo, ramp);
         res->t = lo;
         res->local = ramp != NULL;
-        /* the hierarchy: the normals and boxes of the shape kept (the last check's may be
-         * another) */
-        if (k->tree && tree_update(c, k->p, NULL, false) < 0) return -ENOMEM;
+        /* the hierarchy: the normals and boxes of the shape kept, unless the last check that
+         * updated them had it */
+        if (k->tree && !(held == lo) && tree_update(c, k->p, NULL, false) < 0) return -ENOMEM;
     } else if (!accepted) {
         for (size_t i = 0; i < k->nmv; i++)
             memcpy(k->p + 3 * (size_t)k->mv[i], cand + 3 * (size_t)k->mv[i], 3 * sizeof(float));

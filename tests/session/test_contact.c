@@ -722,7 +722,7 @@ static void test_track_local_random(void **state)
     assert_int_equal(fp_contact_create(tris, t, n, pos, &full), 0);
     unsigned seed = 12345;
 #define RND() ((seed = seed * 1103515245u + 12345u) >> 8 & 0xffff) / 65535.0
-    int steps = 0, local = 0, partial = 0, flips = 0;
+    int steps = 0, local = 0, partial = 0, flips = 0, down = 0;
     for (int trial = 0; trial < 24; trial++) {
         for (size_t v = 0; v < 3 * n; v++) field[v] = 0;
         for (int b = 0; b < 4; b++) {
@@ -762,12 +762,32 @@ static void test_track_local_random(void **state)
             local += res[0].local;
             partial += res[0].local && res[0].t > 0 && res[0].t < 1;
         }
+        /* then only the upper sheet moves, down onto what the lower one kept: the lower
+         * triangles are judged by what the trackers hold of the shape last kept */
+        memcpy(cand, fp_contact_shape(tk[0]), n * 3 * sizeof(float));
+        for (size_t v = n / 2; v < n; v++) {
+            double d = hypot(pos[3 * v] - 0.5, pos[3 * v + 1] - 0.5) / 0.6;
+            if (d < 1) cand[3 * v + 2] -= (float)(0.06 * (1 - d * d) * (1 - d * d));
+        }
+        size_t nr = diff_ranges(cand, pos, n, ranges);
+        fp_contact_result res[3];
+        for (int w = 0; w < 3; w++) assert_int_equal(fp_contact_step(tk[w], pos, cand, ranges, nr, 6, &res[w]), 0);
+        for (int w = 1; w < 3; w++) {
+            assert_int_equal(res[w].pairs, res[0].pairs);
+            assert_true(res[w].t == res[0].t);
+            assert_memory_equal(fp_contact_shape(tk[w]), fp_contact_shape(tk[0]), n * 3 * sizeof(float));
+        }
+        fp_contact_count info;
+        assert_int_equal(fp_contact_count_new(full, pos, fp_contact_shape(tk[0]), NULL, 0, &info), 0);
+        assert_int_equal(info.flipped, 0);
+        down += res[0].pairs > 0;
         for (int w = 0; w < 3; w++) fp_contact_destroy(&tk[w]);
     }
 #undef RND
-    printf("random pushes: %d steps, %d with flips, %d scaled back locally (%d with 0 < t < 1); the "
-           "three ways kept the same shapes, none adds a pair or a flip\n", steps, flips, local, partial);
-    assert_true(partial > 4 && flips > 4);
+    printf("random pushes: %d steps, %d with flips, %d scaled back locally (%d with 0 < t < 1), then "
+           "the upper sheet alone down onto the kept shape (%d of %d meet it); the three ways kept the "
+           "same shapes, none adds a pair or a flip\n", steps, flips, local, partial, down, 24);
+    assert_true(partial > 4 && flips > 4 && down > 4);
     fp_contact_destroy(&full);
     free(ranges);
     free(field);
