@@ -2249,7 +2249,8 @@ static int test_pair(fp_contact *c, lane *ln, const float *s, const float *ref, 
     tri_of(ref, va, ta);
     tri_of(ref, vb, tb);
     if (tris_meet(ta, tb)) return 0;
-    if (record && (push_u32(&ln->rec, &ln->nrec, &ln->cap_rec, a) || push_u32(&ln->rec, &ln->nrec, &ln->cap_rec, b)))
+    if (record &&
+        (push_u32(&ln->rec, &ln->nrec, &ln->cap_rec, a) || push_u32(&ln->rec, &ln->nrec, &ln->cap_rec, b)))
         return -ENOMEM;
     return 1;
 }
@@ -2699,7 +2700,8 @@ static long tree_update(fp_contact *c, const float *s, const float *ref, bool re
     if (!record && flips) { /* the next bisection's checks try these first */
         k->nprobe = 0;
         for (int i = 0; i < FP_CONTACT_MAX_THREADS; i++)
-            if (append_u32(&k->probe, &k->nprobe, &k->cap_probe, k->lane[i].rec, k->lane[i].nrec)) return -ENOMEM;
+            if (append_u32(&k->probe, &k->nprobe, &k->cap_probe, k->lane[i].rec, k->lane[i].nrec))
+                return -ENOMEM;
     }
     long g = own_flips(c, s, ref, record);
     return g < 0 ? g : flips + g;
