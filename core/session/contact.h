@@ -322,7 +322,8 @@ void fp_contact_set_certify(fp_contact *c, bool on);
  *  caller waits only for a task the worker holds, never for a worker that has not started,
  *  so a busy machine costs the worker's share, not a time slice. Decisions, counts and P
  *  are the same with 1 or 2, the checks that record blocking triangles (a local scale-back)
- *  included (each thread keeps its own list, merged after the job). No effect on envelopes (small meshes: a check there is too short to share;
+ *  included (each thread keeps its own list, merged after the job). No effect on envelopes
+ *  (small meshes: a check there is too short to share;
  *  measured: the ICT face's envelope check shared, its boxes and pairs in tasks, cut its
  *  contact median 12-20% but raised the frame's p99 8-30%, the caller waiting up to 0.2-0.7
  *  ms for a worker held off its core mid-task; see fp_contact_result.worker_wait_ms).
