@@ -805,8 +805,8 @@ struct track {
     uint32_t *probe;              /* the hierarchy: triangles newly flipped in the step's last
                                      check that had any (a bisection's check tries them first) */
     size_t nprobe, cap_probe;
-    double (*kd_pt)[3];           /* local_ramp: off's positions, in its k-d tree's order */
-    size_t cap_kd_pt;
+    uint32_t *kd_ix;              /* local_ramp: off's vertices, in its k-d tree's order */
+    size_t cap_kd_ix;
     struct kdnode *kd;            /* local_ramp's k-d tree over them (node 0 the root) */
     size_t cap_kd;
     bool broken;                  /* a call ran out of memory half way: unusable */
@@ -879,7 +879,7 @@ static void track_free(struct track *k)
     free(k->off_mark);
     free(k->ramp);
     free(k->probe);
-    free(k->kd_pt);
+    free(k->kd_ix);
     free(k->kd);
     free(k);
 }
@@ -1543,13 +1543,12 @@ static int certified(const struct track *k, lane *ln, const float *s, const bnod
 
 /* ---- the hierarchy: building ---- */
 
-static const float *cent_of; /* select_mid's keys (3 per item: a cluster's mean centroid) */
-
 /* order[lo .. hi) partially sorted so that order[mid] has the mid-th key on axis a (keys
- * cent_of[3 item + a]; Hoare partitions, median of three) */
-static void select_mid(uint32_t *order, size_t lo, size_t hi, size_t mid, int a)
+ * key[3 item + a], 3 per item: a cluster's mean centroid, a vertex's position; Hoare
+ * partitions, median of three) */
+static void select_mid(uint32_t *order, size_t lo, size_t hi, size_t mid, int a, const float *key)
 {
-#define KEY(i) cent_of[3 * (size_t)order[i] + a]
+#define KEY(i) key[3 * (size_t)order[i] + a]
     while (hi - lo > 1) {
         size_t m = lo + (hi - lo) / 2;
         float x = KEY(lo), y = KEY(m), z = KEY(hi - 1);
@@ -1665,8 +1664,7 @@ static int top_split(cbuild *b, uint32_t *items, size_t n, uint32_t *out)
     int a = 0;
     for (int j = 1; j < 3; j++)
         if (hi[j] - lo[j] > hi[a] - lo[a]) a = j;
-    cent_of = b->cen;
-    select_mid(items, 0, n, n / 2, a);
+    select_mid(items, 0, n, n / 2, a, b->cen);
     uint32_t l, r;
     if (top_split(b, items, n / 2, &l) || top_split(b, items + n / 2, n - n / 2, &r)) return -ENOMEM;
     return cjoin(b, l, r, out);
@@ -3227,44 +3225,19 @@ typedef struct kdnode {
     uint32_t first, count, left, right; /* left == 0: a leaf (node 0 is the root) */
 } kdnode;
 
-/* points pt[0 .. n) partially sorted on axis a so that pt[m] is the m-th (Hoare, median of
- * three) */
-static void kd_select(double (*pt)[3], size_t n, size_t m, int a)
-{
-    size_t lo = 0, hi = n;
-    while (hi - lo > 2) {
-        double x = pt[lo][a], y = pt[lo + (hi - lo) / 2][a], z = pt[hi - 1][a];
-        double piv = x < y ? (y < z ? y : x < z ? z : x) : (x < z ? x : y < z ? z : y);
-        size_t i = lo, j = hi - 1;
-        for (;;) {
-            while (pt[i][a] < piv) i++;
-            while (pt[j][a] > piv) j--;
-            if (i >= j) break;
-            double t[3];
-            memcpy(t, pt[i], sizeof t);
-            memcpy(pt[i], pt[j], sizeof t);
-            memcpy(pt[j], t, sizeof t);
-            i++, j--;
-        }
-        if (m <= j) hi = j + 1;
-        else lo = j + 1;
-    }
-    if (hi - lo == 2 && pt[lo][a] > pt[lo + 1][a]) {
-        double t[3];
-        memcpy(t, pt[lo], sizeof t);
-        memcpy(pt[lo], pt[lo + 1], sizeof t);
-        memcpy(pt[lo + 1], t, sizeof t);
-    }
-}
-
-/* the node over pt[first .. first + n) and those below it into kd[*len ..); its index */
-static uint32_t kd_build(kdnode *kd, size_t *len, double (*pt)[3], uint32_t first, uint32_t n)
+/* the node over the vertices ix[first .. first + n) (positions in pos) and those below it
+ * into kd[*len ..); its index */
+static uint32_t kd_build(kdnode *kd, size_t *len, uint32_t *ix, const float *pos, uint32_t first,
+                         uint32_t n)
 {
     uint32_t x = (uint32_t)(*len)++;
     kdnode *d = &kd[x];
     for (int a = 0; a < 3; a++) d->lo[a] = INFINITY, d->hi[a] = -INFINITY;
     for (uint32_t i = first; i < first + n; i++)
-        for (int a = 0; a < 3; a++) d->lo[a] = dmin(d->lo[a], pt[i][a]), d->hi[a] = dmax(d->hi[a], pt[i][a]);
+        for (int a = 0; a < 3; a++) {
+            d->lo[a] = dmin(d->lo[a], pos[3 * (size_t)ix[i] + a]);
+            d->hi[a] = dmax(d->hi[a], pos[3 * (size_t)ix[i] + a]);
+        }
     d->first = first;
     d->count = n;
     d->left = d->right = 0;
@@ -3272,8 +3245,9 @@ static uint32_t kd_build(kdnode *kd, size_t *len, double (*pt)[3], uint32_t firs
     int ax = 0; /* split at the median of the longest side */
     for (int a = 1; a < 3; a++)
         if (d->hi[a] - d->lo[a] > d->hi[ax] - d->lo[ax]) ax = a;
-    kd_select(pt + first, n, n / 2, ax);
-    uint32_t l = kd_build(kd, len, pt, first, n / 2), r = kd_build(kd, len, pt, first + n / 2, n - n / 2);
+    select_mid(ix, first, first + n, first + n / 2, ax, pos);
+    uint32_t l = kd_build(kd, len, ix, pos, first, n / 2);
+    uint32_t r = kd_build(kd, len, ix, pos, first + n / 2, n - n / 2);
     kd[x].left = l;
     kd[x].right = r;
     return x;
@@ -3287,6 +3261,16 @@ static inline double kd_lb2(const kdnode *d, const double *p)
         s += e * e;
     }
     return s;
+}
+
+/* a new clock (tick), and the moved vertices whose share of the motion is below 1 (ramp
+ * NULL: all) stamped with it: the hierarchy's next checks look at their triangles only */
+static void stamp_scaled(fp_contact *c, const double *ramp)
+{
+    struct track *k = c->tk;
+    tick(c);
+    for (size_t i = 0; i < k->nmv; i++)
+        if (!ramp || ramp[i] < 1) k->vstamp[k->mv[i]] = k->tclock;
 }
 
 /* ramp[i] for the moved vertices: 0 within local_r of a vertex in off (positions in P, as
@@ -3305,20 +3289,21 @@ static int local_ramp(fp_contact *c)
         for (size_t i = 0; i < k->nmv; i++) k->ramp[i] = 1;
         return 0;
     }
-    if (reserve((void **)&k->kd_pt, &k->cap_kd_pt, k->noff, sizeof *k->kd_pt) ||
+    if (reserve((void **)&k->kd_ix, &k->cap_kd_ix, k->noff, sizeof *k->kd_ix) ||
         reserve((void **)&k->kd, &k->cap_kd, 2 * k->noff, sizeof *k->kd))
         return -ENOMEM;
-    double(*pt)[3] = k->kd_pt;
-    for (size_t j = 0; j < k->noff; j++)
-        for (int a = 0; a < 3; a++) pt[j][a] = k->p[3 * (size_t)k->off[j] + a];
+    uint32_t *ix = k->kd_ix;
+    memcpy(ix, k->off, k->noff * sizeof *ix);
     size_t len = 0;
-    kd_build(k->kd, &len, pt, 0, (uint32_t)k->noff);
+    kd_build(k->kd, &len, ix, k->p, 0, (uint32_t)k->noff);
     const kdnode *kd = k->kd;
+    const float *q = k->p;
     uint32_t stack[64], w = 0; /* w: the last nearest point (a bound for the next search) */
     for (size_t i = 0; i < k->nmv; i++) {
         const float *pf = k->pv + 3 * i;
         double p[3] = {pf[0], pf[1], pf[2]};
-        double best = r4, dx = p[0] - pt[w][0], dy = p[1] - pt[w][1], dz = p[2] - pt[w][2];
+        const float *qw = q + 3 * (size_t)ix[w];
+        double best = r4, dx = p[0] - qw[0], dy = p[1] - qw[1], dz = p[2] - qw[2];
         double dw = dx * dx + dy * dy + dz * dz;
         if (dw < best) best = dw;
         uint32_t top = 0;
@@ -3328,7 +3313,8 @@ static int local_ramp(fp_contact *c)
             if (kd_lb2(d, p) >= best) continue;
             if (!d->left) {
                 for (uint32_t j = d->first; j < d->first + d->count; j++) {
-                    dx = p[0] - pt[j][0], dy = p[1] - pt[j][1], dz = p[2] - pt[j][2];
+                    const float *qj = q + 3 * (size_t)ix[j];
+                    dx = p[0] - qj[0], dy = p[1] - qj[1], dz = p[2] - qj[2];
                     double d2 = dx * dx + dy * dy + dz * dz;
                     if (d2 < best) best = d2, w = j;
                 }
@@ -3499,9 +3485,7 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
                      * with unmoved ones, added nothing in the candidate: the check looks only
                      * at the triangles of the others (a new stamp; the rest hold the
                      * candidate's boxes and normals from its check) */
-                    tick(c);
-                    for (size_t i = 0; i < k->nmv; i++)
-                        if (k->ramp[i] < 1) k->vstamp[k->mv[i]] = k->tclock;
+                    stamp_scaled(c, k->ramp);
                 }
                 m = check(c, k->p, ref, &fl, true);
                 res->checks++;
@@ -3512,10 +3496,7 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
         /* with a ramp the stamps stay the last round's: a vertex kept whole (share 1) is in
          * place for every t, and its triangles as in the candidate; without one (the rounds
          * failed) every moved vertex depends on t */
-        if (!ramp && k->tree && c->local_r > 0) {
-            tick(c);
-            for (size_t i = 0; i < k->nmv; i++) k->vstamp[k->mv[i]] = k->tclock;
-        }
+        if (!ramp && k->tree && c->local_r > 0) stamp_scaled(c, NULL);
         double lo = 0, hi = 1, held = ramp ? 0 : NAN; /* the t whose shape the hierarchy holds
                                                            (the passed ramp's: 0) */
         for (int i = 0; i < iters; i++) {
