@@ -149,7 +149,13 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
  *      moved triangles is tested once, from the lower index. Renewals are batched by grid
  *      cell (each cell's triangles read once for all the envelopes that cover it; a pair
  *      taken in the cell of its boxes' common lower corner); boxes over 4096 cells live in
- *      lists of their own.
+ *      lists of their own. With a worker (fp_contact_set_threads 2), after each step the
+ *      worker re-centres the envelopes of the step's moved triangles whose box in P came
+ *      within half the skin of a side (a new envelope around that box, as a renewal makes
+ *      it): a motion that goes on then leaves fewer envelopes in the next step. The job
+ *      writes the grid, envelopes and lists only, never P or D_P, and every later call on c
+ *      first waits for it, or drops it when the worker has not started it (the step then
+ *      renews what it needs, as on one thread).
  * (3b) The hierarchy (larger meshes): a binary tree of patches over the triangles not own,
  *      built at the first fp_contact_reference from the weld shape's edges, bottom up: the
  *      triangles are the first clusters; each round pairs each cluster with the neighbour
@@ -230,7 +236,14 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
  *    lists do not grow over a gesture: 2,300-2,900 entries, 7 at most). Measured
  *    (`facepuppet bench --case frame`, contact row, three-claps anchored, 2-core machine,
  *    shared): the ICT face (up to 125 renewed in a gesture's first frames and a fast
- *    clap's) 0.058-0.11 ms median, 0.16-0.25 ms p99 (the full check: about 2.7 ms). On ICT
+ *    clap's) 0.058-0.11 ms median, 0.16-0.25 ms p99 (the full check: about 2.7 ms). With
+ *    the worker re-centring, the replay's steps renewed 698-757 envelopes in 16-17
+ *    frames, against 1,856-1,872 in 75-78 on one thread; the deforming frames' contact
+ *    was about a fifth lower at the median and a third at the 90th percentile (6 runs
+ *    each, alternated), for about 0.12 ms of the worker's time a frame (median); the
+ *    frame's median and p99 about an eighth lower (8 alternated runs). The worker polls
+ *    between frames as for the hierarchy: one that slept after each re-centring (woken by
+ *    the next) made the frame slower than no re-centring (0.170 ms median against 0.149). On ICT
  *    subdivided to 1.68M vertices (50,000-66,000 moved triangles a frame, moving about
  *    their own size in a fast frame) up to all of them renew: 5.4-7.3 ms median, 47-103
  *    ms p99, 15-25 frames of 225 skipped. Larger skins renew less but lengthen the lists
@@ -288,7 +301,8 @@ int fp_contact_reference(fp_contact *c, const float *ref, const uint32_t *ranges
  *  moved vertices with the largest t of the bisection (`iters` halvings, 0: P stays).
  *  Nothing moved (cand = P where looked): no work. The shape to show is cand when
  *  res->t == 1, else fp_contact_shape. Work: the vertices in ranges and D_P, the moved
- *  triangles and their lists; envelopes renewed where a box left its own. Returns 0,
+ *  triangles and their lists; envelopes renewed where a box left its own (with a worker,
+ *  the step then posts the re-centring of (3a) and returns without waiting). Returns 0,
  *  -EINVAL or -ENOMEM (the guard is then unusable, every later call says -ENOMEM: destroy
  *  it; show the reference meanwhile). */
 int fp_contact_step(fp_contact *c, const float *ref, const float *cand, const uint32_t *ranges,
@@ -310,8 +324,10 @@ void fp_contact_set_prewarm(fp_contact *c, size_t max_tris);
  *  (one thread at a time). */
 void fp_contact_set_certify(fp_contact *c, bool on);
 
-/** Threads for the hierarchy's checks ("(3b)"): 1 (default) or 2 (more count as 2). With 2,
- *  a worker thread, started at the first check that needs it and joined by
+/** Threads for the hierarchy's checks ("(3b)") and the envelopes' re-centring ("(3a)"): 1
+ *  (default) or 2 (more count as 2). With 2, a worker thread, started at the first check
+ *  that needs it (with envelopes: when they are made, at the first fp_contact_reference)
+ *  and joined by
  *  fp_contact_destroy, takes a share of a step's marking (looking for the moved vertices
  *  and stamping their triangles) when it looks at min_moved / 2 vertices or more, and of a
  *  check's refit below its top nodes (with the moved triangles' boxes and normals) and its
@@ -322,11 +338,14 @@ void fp_contact_set_certify(fp_contact *c, bool on);
  *  caller waits only for a task the worker holds, never for a worker that has not started,
  *  so a busy machine costs the worker's share, not a time slice. Decisions, counts and P
  *  are the same with 1 or 2, the checks that record blocking triangles (a local scale-back)
- *  included (each thread keeps its own list, merged after the job). No effect on envelopes
- *  (small meshes: a check there is too short to share;
- *  measured: the ICT face's envelope check shared, its boxes and pairs in tasks, cut its
- *  contact median 12-20% but raised the frame's p99 8-30%, the caller waiting up to 0.2-0.7
- *  ms for a worker held off its core mid-task; see fp_contact_result.worker_wait_ms).
+ *  included (each thread keeps its own list, merged after the job). With envelopes the
+ *  worker only re-centres them after each step ("(3a)"), between the frames; a check there
+ *  is too short to share (measured: the ICT face's envelope check shared, its boxes and
+ *  pairs in tasks, cut its contact median 12-20% but raised the frame's p99 8-30%, the
+ *  caller waiting up to 0.2-0.7 ms for a worker held off its core mid-task; see
+ *  fp_contact_result.worker_wait_ms, which also counts a wait for the re-centring). The
+ *  decisions, counts and P are the same with or without it (only which envelopes are
+ *  renewed, fp_contact_result.renewed, differs).
  *  No thread could be made: 1, silently. c NULL: nothing. Threads: as every call on c (one
  *  thread at a time); the worker is internal. Measured (`bench --case frame`, 1.7M
  *  vertices, 2 cores): contact 2.5-2.65 ms median on two threads, varying with the

@@ -592,7 +592,7 @@ static void replay_close(replay *rp)
 
 static void recording_frames(const char *take, const char *mapping, int mode)
 {
-    bool lazy = mode > 0;
+    bool lazy = mode > 0 && mode < 4; /* 4: envelopes on two threads (re-centred by the worker) */
     replay rp;
     replay_open(&rp, take, mapping);
     size_t n = rp.n, t = rp.t;
@@ -603,7 +603,7 @@ static void recording_frames(const char *take, const char *mapping, int mode)
     assert_int_equal(fp_contact_dilate_own(full, 1), 0);
     if (lazy) fp_contact_set_prewarm(tk, 0);
     if (mode == 2) fp_contact_set_certify(tk, false);
-    if (mode == 3) fp_contact_set_threads(tk, 2, 1);
+    if (mode >= 3) fp_contact_set_threads(tk, 2, 1);
     uint32_t *ranges = malloc(n * sizeof *ranges);
     assert_int_equal(fp_contact_reference(tk, rp.ref, NULL, SIZE_MAX), 0);
     track_stats ts = {0, 0, 0, 1.0, 0, 0};
@@ -621,11 +621,11 @@ static void recording_frames(const char *take, const char *mapping, int mode)
                     &ts);
     }
     printf("%s %s (%s): %d frames checked, %d accepted, %d scaled back (least t %.3f), %u references; "
-           "every decision the full check's\n", take, mapping, mode == 3 ? "hierarchy, two threads" : mode == 2 ? "hierarchy, no certificates" : lazy ? "hierarchy" : "envelopes", ts.frames, ts.accepted, ts.scaled,
+           "every decision the full check's\n", take, mapping, mode == 4 ? "envelopes, two threads" : mode == 3 ? "hierarchy, two threads" : mode == 2 ? "hierarchy, no certificates" : lazy ? "hierarchy" : "envelopes", ts.frames, ts.accepted, ts.scaled,
            ts.least_t, commits);
     assert_true(ts.frames > 20);
     if (mode == 3) assert_true(ts.shared > 0); /* the worker's path ran */
-    else assert_true(ts.waited == 0);          /* one thread: nothing to wait for */
+    else if (mode < 3) assert_true(ts.waited == 0); /* one thread: nothing to wait for */
     free(ranges);
     fp_contact_destroy(&tk);
     fp_contact_destroy(&full);
@@ -640,46 +640,51 @@ static void test_track_recordings(void **state)
     recording_frames("three-claps", "unanchored", 2);
     recording_frames("three-claps", "unanchored", 0);
     recording_frames("three-claps", "unanchored", 3);
+    recording_frames("three-claps", "unanchored", 4);
     recording_frames("grab", "anchored", 0);
     recording_frames("grab", "anchored", 3);
+    recording_frames("grab", "anchored", 4);
 }
 
-/* The local scale-back on real frames, three ways (issue 18): envelopes on one thread, the
+/* The local scale-back on real frames, four ways (issue 18): envelopes on one thread, the
  * hierarchy on one and on two threads (its record checks shared, the first check's flips
- * taken as the blocking set when it found no pair): the same shape kept every frame, bit for
- * bit, and each shape passes the full check. */
+ * taken as the blocking set when it found no pair), and envelopes on two threads (the worker
+ * re-centres them after each step, so the steps renew fewer): the same shape kept every
+ * frame, bit for bit, and each shape passes the full check. */
 static void test_track_local_paths(void **state)
 {
     (void)state;
     replay rp;
     replay_open(&rp, "three-claps", "unanchored");
     size_t n = rp.n, t = rp.t;
-    fp_contact *tk[3], *full;
-    for (int w = 0; w < 3; w++) {
+    fp_contact *tk[4], *full;
+    for (int w = 0; w < 4; w++) {
         assert_int_equal(fp_contact_create(rp.m->triangles, t, n, fp_session_loaded(rp.s), &tk[w]), 0);
         assert_int_equal(fp_contact_dilate_own(tk[w], 1), 0);
         fp_contact_set_local(tk[w], fp_session_radius(rp.s));
-        if (w) fp_contact_set_prewarm(tk[w], 0);
-        if (w == 2) fp_contact_set_threads(tk[w], 2, 1);
+        if (w == 1 || w == 2) fp_contact_set_prewarm(tk[w], 0);
+        if (w >= 2) fp_contact_set_threads(tk[w], 2, 1);
         assert_int_equal(fp_contact_reference(tk[w], rp.ref, NULL, SIZE_MAX), 0);
     }
     assert_int_equal(fp_contact_create(rp.m->triangles, t, n, fp_session_loaded(rp.s), &full), 0);
     assert_int_equal(fp_contact_dilate_own(full, 1), 0);
     uint32_t *ranges = malloc(n * sizeof *ranges);
     int frames = 0, local = 0, scaled = 0;
-    size_t shared = 0;
+    size_t shared = 0, renewed[4] = {0};
     for (int f; (f = replay_next(&rp)) >= 0;) {
-        for (int w = 0; w < 3; w++) {
+        for (int w = 0; w < 4; w++) {
             if (rp.committed) assert_int_equal(fp_contact_reference(tk[w], rp.ref, NULL, SIZE_MAX), 0);
             if (!f) assert_int_equal(fp_contact_reference(tk[w], rp.ref, NULL, 0), 0); /* the base shown */
         }
         if (!f) continue;
         const float *cand = fp_session_positions(rp.s);
         size_t nr = diff_ranges(cand, rp.ref, n, ranges);
-        fp_contact_result r[3];
-        for (int w = 0; w < 3; w++)
+        fp_contact_result r[4];
+        for (int w = 0; w < 4; w++) {
             assert_int_equal(fp_contact_step(tk[w], rp.ref, cand, ranges, nr, 6, &r[w]), 0);
-        for (int w = 1; w < 3; w++) {
+            renewed[w] += r[w].renewed;
+        }
+        for (int w = 1; w < 4; w++) {
             assert_true(r[w].t == r[0].t);
             assert_int_equal(r[w].local, r[0].local);
             assert_int_equal(r[w].checks, r[0].checks);
@@ -694,20 +699,23 @@ static void test_track_local_paths(void **state)
         shared += r[2].shared;
     }
     printf("three-claps unanchored, local scale-back: %d frames, %d scaled back (%d locally); envelopes, "
-           "hierarchy and hierarchy on two threads (%zu checks shared) kept the same shapes\n",
-           frames, scaled, local, shared);
+           "hierarchy and hierarchy on two threads (%zu checks shared) and envelopes on two threads "
+           "kept the same shapes; the steps renewed %zu envelopes on one thread, %zu with the worker "
+           "re-centring them\n",
+           frames, scaled, local, shared, renewed[0], renewed[3]);
     assert_true(local > 0 && shared > 0);
+    assert_true(renewed[3] < renewed[0]); /* the worker's re-centring ran */
     free(ranges);
-    for (int w = 0; w < 3; w++) fp_contact_destroy(&tk[w]);
+    for (int w = 0; w < 4; w++) fp_contact_destroy(&tk[w]);
     fp_contact_destroy(&full);
     replay_close(&rp);
 }
 
-/* The local scale-back on synthetic pushes, three ways as above: bumps of random height,
+/* The local scale-back on synthetic pushes, four ways as above: bumps of random height,
  * sideways push and width on both sheets (a push folds a sheet over: flips, also at some
  * shares only), a random local radius, three frames each, then the upper sheet alone down
  * onto the shape kept (the lower sheet's triangles judged by what the trackers hold of it);
- * every frame the three trackers keep the same shape, bit for bit, and it adds no new pair
+ * every frame the four trackers keep the same shape, bit for bit, and it adds no new pair
  * and no flip by the full check. On the hierarchy the ramps' and bisection's checks look
  * only at the vertices with a share below 1 (a tracker that looked at none fails here). */
 static void test_track_local_random(void **state)
@@ -737,22 +745,22 @@ static void test_track_local_random(void **state)
             }
         }
         double r = 0.03 + 0.12 * RND();
-        fp_contact *tk[3];
-        for (int w = 0; w < 3; w++) {
+        fp_contact *tk[4];
+        for (int w = 0; w < 4; w++) {
             assert_int_equal(fp_contact_create(tris, t, n, pos, &tk[w]), 0);
             fp_contact_set_local(tk[w], r);
-            if (w) fp_contact_set_prewarm(tk[w], 0);
-            if (w == 2) fp_contact_set_threads(tk[w], 2, 1);
+            if (w == 1 || w == 2) fp_contact_set_prewarm(tk[w], 0);
+            if (w >= 2) fp_contact_set_threads(tk[w], 2, 1);
             assert_int_equal(fp_contact_reference(tk[w], pos, NULL, SIZE_MAX), 0);
         }
         for (int f = 1; f <= 3; f++) {
             memcpy(cand, pos, n * 3 * sizeof(float));
             for (size_t v = 0; v < 3 * n; v++) cand[v] += field[v] * (float)f / 3;
             size_t nr = diff_ranges(cand, pos, n, ranges);
-            fp_contact_result res[3];
-            for (int w = 0; w < 3; w++)
+            fp_contact_result res[4];
+            for (int w = 0; w < 4; w++)
                 assert_int_equal(fp_contact_step(tk[w], pos, cand, ranges, nr, 6, &res[w]), 0);
-            for (int w = 1; w < 3; w++) {
+            for (int w = 1; w < 4; w++) {
                 assert_true(res[w].t == res[0].t);
                 assert_memory_equal(fp_contact_shape(tk[w]), fp_contact_shape(tk[0]), n * 3 * sizeof(float));
             }
@@ -772,10 +780,10 @@ static void test_track_local_random(void **state)
             if (d < 1) cand[3 * v + 2] -= (float)(0.06 * (1 - d * d) * (1 - d * d));
         }
         size_t nr = diff_ranges(cand, pos, n, ranges);
-        fp_contact_result res[3];
-        for (int w = 0; w < 3; w++)
+        fp_contact_result res[4];
+        for (int w = 0; w < 4; w++)
             assert_int_equal(fp_contact_step(tk[w], pos, cand, ranges, nr, 6, &res[w]), 0);
-        for (int w = 1; w < 3; w++) {
+        for (int w = 1; w < 4; w++) {
             assert_int_equal(res[w].pairs, res[0].pairs);
             assert_true(res[w].t == res[0].t);
             assert_memory_equal(fp_contact_shape(tk[w]), fp_contact_shape(tk[0]), n * 3 * sizeof(float));
@@ -784,11 +792,11 @@ static void test_track_local_random(void **state)
         assert_int_equal(fp_contact_count_new(full, pos, fp_contact_shape(tk[0]), NULL, 0, &info), 0);
         assert_int_equal(info.flipped, 0);
         down += res[0].pairs > 0;
-        for (int w = 0; w < 3; w++) fp_contact_destroy(&tk[w]);
+        for (int w = 0; w < 4; w++) fp_contact_destroy(&tk[w]);
     }
 #undef RND
     printf("random pushes: %d steps, %d with flips, %d scaled back locally (%d with 0 < t < 1), then "
-           "the upper sheet alone down onto the kept shape (%d of %d meet it); the three ways kept the "
+           "the upper sheet alone down onto the kept shape (%d of %d meet it); the four ways kept the "
            "same shapes, none adds a pair or a flip\n", steps, flips, local, partial, down, 24);
     assert_true(partial > 4 && flips > 4 && down > 4);
     fp_contact_destroy(&full);
