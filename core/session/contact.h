@@ -240,10 +240,14 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
  *    the worker re-centring, the replay's steps renewed 698-757 envelopes in 16-17
  *    frames, against 1,856-1,872 in 75-78 on one thread; the deforming frames' contact
  *    was about a fifth lower at the median and a third at the 90th percentile (6 runs
- *    each, alternated), for about 0.12 ms of the worker's time a frame (median); the
- *    frame's median and p99 about an eighth lower (8 alternated runs). The worker polls
- *    between frames as for the hierarchy: one that slept after each re-centring (woken by
- *    the next) made the frame slower than no re-centring (0.170 ms median against 0.149). On ICT
+ *    each, alternated), for about 0.12 ms of the worker's time a frame (median). The
+ *    frame: median 0.129 against 0.149 ms, p99 0.310 against 0.351 in 8 alternated runs;
+ *    with the session's thread pinned, 0.12 against 0.13 and 0.29 against 0.33 (12 runs
+ *    each, half on each CPU); unpinned, the polling worker moves the session's thread to
+ *    the other CPU, whichever is slower that minute (12 more runs: no difference). The
+ *    worker polls between frames as for the hierarchy: one that slept after each
+ *    re-centring (woken by the next) made the frame slower than no re-centring (0.170 ms
+ *    median against 0.149). On ICT
  *    subdivided to 1.68M vertices (50,000-66,000 moved triangles a frame, moving about
  *    their own size in a fast frame) up to all of them renew: 5.4-7.3 ms median, 47-103
  *    ms p99, 15-25 frames of 225 skipped. Larger skins renew less but lengthen the lists

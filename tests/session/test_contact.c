@@ -620,8 +620,10 @@ static void recording_frames(const char *take, const char *mapping, int mode)
         track_frame(tk, full, rp.ref, fp_session_positions(rp.s), n, rp.m->triangles, t, ranges, false, 1,
                     &ts);
     }
+    static const char *const way[] = {"envelopes", "hierarchy", "hierarchy, no certificates",
+                                      "hierarchy, two threads", "envelopes, two threads"};
     printf("%s %s (%s): %d frames checked, %d accepted, %d scaled back (least t %.3f), %u references; "
-           "every decision the full check's\n", take, mapping, mode == 4 ? "envelopes, two threads" : mode == 3 ? "hierarchy, two threads" : mode == 2 ? "hierarchy, no certificates" : lazy ? "hierarchy" : "envelopes", ts.frames, ts.accepted, ts.scaled,
+           "every decision the full check's\n", take, mapping, way[mode], ts.frames, ts.accepted, ts.scaled,
            ts.least_t, commits);
     assert_true(ts.frames > 20);
     if (mode == 3) assert_true(ts.shared > 0); /* the worker's path ran */
