@@ -974,6 +974,21 @@ static uint64_t key_hash(int64_t x, int64_t y, int64_t z)
     return h ^ (h >> 29);
 }
 
+/* box b's largest side, in double */
+static inline double box_extent(const float b[6])
+{
+    return fmax(fmax((double)b[3] - b[0], (double)b[4] - b[1]), (double)b[5] - b[2]);
+}
+
+/* box b grown by m on every side into out */
+static inline void box_grown(const float b[6], float m, float out[6])
+{
+    for (int i = 0; i < 3; i++) {
+        out[i] = b[i] - m;
+        out[3 + i] = b[3 + i] + m;
+    }
+}
+
 static bool box_holds(const float *outer, const float *inner)
 {
     return outer[0] <= inner[0] && outer[1] <= inner[1] && outer[2] <= inner[2] &&
@@ -1139,13 +1154,7 @@ static int envelope(fp_contact *c, uint32_t x, const float box[6])
         grid_remove(k, &k->dyn[k->slot[x]]);
     }
     dyn *d = &k->dyn[k->slot[x]];
-    double ext = 0;
-    for (int i = 0; i < 3; i++) ext = fmax(ext, (double)box[3 + i] - box[i]);
-    float skin = (float)(FP_TRACK_SKIN * ext);
-    for (int i = 0; i < 3; i++) {
-        d->env[i] = box[i] - skin;
-        d->env[3 + i] = box[3 + i] + skin;
-    }
+    box_grown(box, (float)(FP_TRACK_SKIN * box_extent(box)), d->env);
     d->len = 0;
     if (grid_add(c, d)) return -ENOMEM;
     return push_u32(&k->rq, &k->nrq, &k->cap_rq, x);
@@ -2594,20 +2603,27 @@ static void add_task(fp_contact *c, pool *p, uint32_t x, uint32_t y, uint32_t z)
     atomic_store_explicit(&p->ntask, n + 1, memory_order_release);
 }
 
-/* the open job's tasks run on both threads to the last; the lanes' counts hold its results */
-static void job_finish(fp_contact *c, pool *p)
+/* the open job closed: a task not claimed yet is never run (a worker that wakes late claims
+ * nothing while the next job's list is made); the caller waits for the one the worker
+ * holds, if any */
+static void job_close(fp_contact *c, pool *p)
 {
     struct track *k = c->tk;
-    uint32_t gen = p->gen;
     atomic_store(&p->filling, false);
-    run_tasks(p, &k->lane[0], gen);
-    /* closed: a worker that wakes late claims nothing while the next job's list is made */
-    atomic_store(&p->next, (uint64_t)gen << 32 | UINT32_MAX);
+    atomic_store(&p->next, (uint64_t)p->gen << 32 | UINT32_MAX);
     if (!atomic_load(&p->busy)) return;
     int64_t w0 = fp_now_ns(); /* timed only when there is a wait */
     for (unsigned spins = 0; atomic_load(&p->busy); spins++)
         if (spins > 256) sched_yield(); /* the worker finishes its task */
     k->waited_ns += fp_now_ns() - w0;
+}
+
+/* the open job's tasks run on both threads to the last; the lanes' counts hold its results */
+static void job_finish(fp_contact *c, pool *p)
+{
+    atomic_store(&p->filling, false);
+    run_tasks(p, &c->tk->lane[0], p->gen);
+    job_close(c, p);
 }
 
 /* the lanes' sum of a job's results (found or flips), or -ENOMEM */
@@ -2894,7 +2910,7 @@ static int track_build(fp_contact *c)
         if (c->own[i]) continue;
         float b[6];
         tri_box(k->p, c->tris + 3 * i, b);
-        sum += fmax(fmax((double)b[3] - b[0], (double)b[4] - b[1]), (double)b[5] - b[2]);
+        sum += box_extent(b);
         cnt++;
     }
     k->ih = cnt && sum > 0 ? 1.0 / (2.0 * sum / (double)cnt) : 1.0;
@@ -3226,13 +3242,8 @@ static int recentre(fp_contact *c)
         float b[6];
         tri_box(k->p, c->tris + 3 * (size_t)a, b);
         if (k->slot[a] != FP_TRACK_NONE) {
-            double ext = 0;
-            for (int j = 0; j < 3; j++) ext = fmax(ext, (double)b[3 + j] - b[j]);
-            float m = (float)(FP_TRACK_RECENTRE * FP_TRACK_SKIN * ext), in[6];
-            for (int j = 0; j < 3; j++) {
-                in[j] = b[j] - m;
-                in[3 + j] = b[3 + j] + m;
-            }
+            float in[6];
+            box_grown(b, (float)(FP_TRACK_RECENTRE * FP_TRACK_SKIN * box_extent(b)), in);
             if (box_holds(k->dyn[k->slot[a]].env, in)) continue; /* (it holds b too) */
         }
         if (envelope(c, a, b)) return -ENOMEM;
@@ -3266,11 +3277,7 @@ static void bg_join(fp_contact *c)
     struct track *k = c ? c->tk : NULL;
     if (!k || !k->bg) return;
     k->bg = false;
-    pool *p = k->pool;
-    uint64_t cur = atomic_load(&p->next);
-    if ((uint32_t)(cur >> 32) == p->gen && (uint32_t)cur < atomic_load(&p->ntask))
-        atomic_compare_exchange_strong(&p->next, &cur, cur + 1); /* claimed: not run */
-    job_finish(c, p); /* (a task the worker holds is waited for) */
+    job_close(c, k->pool); /* not started: dropped; started: waited for */
     if (lanes_sum(k, true) < 0) k->broken = true;
 }
 

@@ -648,6 +648,36 @@ static void test_track_recordings(void **state)
     recording_frames("grab", "anchored", 4);
 }
 
+/* The local scale-back's trackers, four ways: envelopes; the hierarchy; the hierarchy on two
+ * threads (every check shared); envelopes on two threads (the worker re-centres them after
+ * each step). Each made on (tris, weld), own triangles widened by rings, scaling back within
+ * radius, referenced to ref. */
+#define WAYS 4
+static void ways_open(fp_contact *tk[WAYS], const uint32_t *tris, size_t t, size_t n, const float *weld,
+                      int rings, double radius, const float *ref)
+{
+    for (int w = 0; w < WAYS; w++) {
+        assert_int_equal(fp_contact_create(tris, t, n, weld, &tk[w]), 0);
+        if (rings) assert_int_equal(fp_contact_dilate_own(tk[w], rings), 0);
+        fp_contact_set_local(tk[w], radius);
+        if (w == 1 || w == 2) fp_contact_set_prewarm(tk[w], 0);
+        if (w >= 2) fp_contact_set_threads(tk[w], 2, 1);
+        assert_int_equal(fp_contact_reference(tk[w], ref, NULL, SIZE_MAX), 0);
+    }
+}
+
+/* One step of every way on cand (6 bisections): the same t and the same shape kept as the
+ * first way's, bit for bit; the results into res */
+static void ways_step(fp_contact *tk[WAYS], const float *ref, const float *cand, const uint32_t *ranges,
+                      size_t nr, size_t n, fp_contact_result res[WAYS])
+{
+    for (int w = 0; w < WAYS; w++) assert_int_equal(fp_contact_step(tk[w], ref, cand, ranges, nr, 6, &res[w]), 0);
+    for (int w = 1; w < WAYS; w++) {
+        assert_true(res[w].t == res[0].t);
+        assert_memory_equal(fp_contact_shape(tk[w]), fp_contact_shape(tk[0]), n * 3 * sizeof(float));
+    }
+}
+
 /* The local scale-back on real frames, four ways (issue 18): envelopes on one thread, the
  * hierarchy on one and on two threads (its record checks shared, the first check's flips
  * taken as the blocking set when it found no pair), and envelopes on two threads (the worker
@@ -659,38 +689,27 @@ static void test_track_local_paths(void **state)
     replay rp;
     replay_open(&rp, "three-claps", "unanchored");
     size_t n = rp.n, t = rp.t;
-    fp_contact *tk[4], *full;
-    for (int w = 0; w < 4; w++) {
-        assert_int_equal(fp_contact_create(rp.m->triangles, t, n, fp_session_loaded(rp.s), &tk[w]), 0);
-        assert_int_equal(fp_contact_dilate_own(tk[w], 1), 0);
-        fp_contact_set_local(tk[w], fp_session_radius(rp.s));
-        if (w == 1 || w == 2) fp_contact_set_prewarm(tk[w], 0);
-        if (w >= 2) fp_contact_set_threads(tk[w], 2, 1);
-        assert_int_equal(fp_contact_reference(tk[w], rp.ref, NULL, SIZE_MAX), 0);
-    }
+    fp_contact *tk[WAYS], *full;
+    ways_open(tk, rp.m->triangles, t, n, fp_session_loaded(rp.s), 1, fp_session_radius(rp.s), rp.ref);
     assert_int_equal(fp_contact_create(rp.m->triangles, t, n, fp_session_loaded(rp.s), &full), 0);
     assert_int_equal(fp_contact_dilate_own(full, 1), 0);
     uint32_t *ranges = malloc(n * sizeof *ranges);
     int frames = 0, local = 0, scaled = 0;
-    size_t shared = 0, renewed[4] = {0};
+    size_t shared = 0, renewed[WAYS] = {0};
     for (int f; (f = replay_next(&rp)) >= 0;) {
-        for (int w = 0; w < 4; w++) {
+        for (int w = 0; w < WAYS; w++) {
             if (rp.committed) assert_int_equal(fp_contact_reference(tk[w], rp.ref, NULL, SIZE_MAX), 0);
             if (!f) assert_int_equal(fp_contact_reference(tk[w], rp.ref, NULL, 0), 0); /* the base shown */
         }
         if (!f) continue;
         const float *cand = fp_session_positions(rp.s);
         size_t nr = diff_ranges(cand, rp.ref, n, ranges);
-        fp_contact_result r[4];
-        for (int w = 0; w < 4; w++) {
-            assert_int_equal(fp_contact_step(tk[w], rp.ref, cand, ranges, nr, 6, &r[w]), 0);
+        fp_contact_result r[WAYS];
+        ways_step(tk, rp.ref, cand, ranges, nr, n, r);
+        for (int w = 0; w < WAYS; w++) {
             renewed[w] += r[w].renewed;
-        }
-        for (int w = 1; w < 4; w++) {
-            assert_true(r[w].t == r[0].t);
             assert_int_equal(r[w].local, r[0].local);
             assert_int_equal(r[w].checks, r[0].checks);
-            assert_memory_equal(fp_contact_shape(tk[w]), fp_contact_shape(tk[0]), n * 3 * sizeof(float));
         }
         fp_contact_count info;
         assert_int_equal(fp_contact_count_new(full, rp.ref, fp_contact_shape(tk[0]), NULL, 0, &info), 0);
@@ -708,7 +727,7 @@ static void test_track_local_paths(void **state)
     assert_true(local > 0 && shared > 0);
     assert_true(renewed[3] < renewed[0]); /* the worker's re-centring ran */
     free(ranges);
-    for (int w = 0; w < 4; w++) fp_contact_destroy(&tk[w]);
+    for (int w = 0; w < WAYS; w++) fp_contact_destroy(&tk[w]);
     fp_contact_destroy(&full);
     replay_close(&rp);
 }
@@ -747,25 +766,14 @@ static void test_track_local_random(void **state)
             }
         }
         double r = 0.03 + 0.12 * RND();
-        fp_contact *tk[4];
-        for (int w = 0; w < 4; w++) {
-            assert_int_equal(fp_contact_create(tris, t, n, pos, &tk[w]), 0);
-            fp_contact_set_local(tk[w], r);
-            if (w == 1 || w == 2) fp_contact_set_prewarm(tk[w], 0);
-            if (w >= 2) fp_contact_set_threads(tk[w], 2, 1);
-            assert_int_equal(fp_contact_reference(tk[w], pos, NULL, SIZE_MAX), 0);
-        }
+        fp_contact *tk[WAYS];
+        ways_open(tk, tris, t, n, pos, 0, r, pos);
         for (int f = 1; f <= 3; f++) {
             memcpy(cand, pos, n * 3 * sizeof(float));
             for (size_t v = 0; v < 3 * n; v++) cand[v] += field[v] * (float)f / 3;
             size_t nr = diff_ranges(cand, pos, n, ranges);
-            fp_contact_result res[4];
-            for (int w = 0; w < 4; w++)
-                assert_int_equal(fp_contact_step(tk[w], pos, cand, ranges, nr, 6, &res[w]), 0);
-            for (int w = 1; w < 4; w++) {
-                assert_true(res[w].t == res[0].t);
-                assert_memory_equal(fp_contact_shape(tk[w]), fp_contact_shape(tk[0]), n * 3 * sizeof(float));
-            }
+            fp_contact_result res[WAYS];
+            ways_step(tk, pos, cand, ranges, nr, n, res);
             fp_contact_count info;
             assert_int_equal(fp_contact_count_new(full, pos, fp_contact_shape(tk[0]), NULL, 0, &info), 0);
             assert_int_equal(info.flipped, 0);
@@ -782,19 +790,14 @@ static void test_track_local_random(void **state)
             if (d < 1) cand[3 * v + 2] -= (float)(0.06 * (1 - d * d) * (1 - d * d));
         }
         size_t nr = diff_ranges(cand, pos, n, ranges);
-        fp_contact_result res[4];
-        for (int w = 0; w < 4; w++)
-            assert_int_equal(fp_contact_step(tk[w], pos, cand, ranges, nr, 6, &res[w]), 0);
-        for (int w = 1; w < 4; w++) {
-            assert_int_equal(res[w].pairs, res[0].pairs);
-            assert_true(res[w].t == res[0].t);
-            assert_memory_equal(fp_contact_shape(tk[w]), fp_contact_shape(tk[0]), n * 3 * sizeof(float));
-        }
+        fp_contact_result res[WAYS];
+        ways_step(tk, pos, cand, ranges, nr, n, res);
+        for (int w = 1; w < WAYS; w++) assert_int_equal(res[w].pairs, res[0].pairs);
         fp_contact_count info;
         assert_int_equal(fp_contact_count_new(full, pos, fp_contact_shape(tk[0]), NULL, 0, &info), 0);
         assert_int_equal(info.flipped, 0);
         down += res[0].pairs > 0;
-        for (int w = 0; w < 4; w++) fp_contact_destroy(&tk[w]);
+        for (int w = 0; w < WAYS; w++) fp_contact_destroy(&tk[w]);
     }
 #undef RND
     printf("random pushes: %d steps, %d with flips, %d scaled back locally (%d with 0 < t < 1), then "
