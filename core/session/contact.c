@@ -2273,7 +2273,10 @@ static int test_pair(fp_contact *c, lane *ln, const float *s, const float *ref, 
 
 /* the pairs between leaves x and y (x == y: within x) with a moved triangle whose boxes meet
  * in s: new ones counted (test_pair). y's boxes are copied by axis first, so that each of
- * x's triangles meets them all in one loop the compiler vectorises. */
+ * x's triangles meets them all in one loop the compiler vectorises; the pairs to test are
+ * then the set bits of a mask (boxes meet, a moved triangle, within x each pair once), not a
+ * branch for each of y's triangles. */
+_Static_assert(FP_BVH_LEAF <= 32, "a leaf's triangles are the bits of a uint32_t");
 static long leaf_pairs(fp_contact *c, lane *ln, const float *s, const float *ref, uint32_t x, uint32_t y,
                        bool record)
 {
@@ -2281,8 +2284,7 @@ static long leaf_pairs(fp_contact *c, lane *ln, const float *s, const float *ref
     const uint32_t clk = k->tclock;
     const bnode *bx = &k->node[x], *by = &k->node[y];
     float lo[3][FP_BVH_LEAF], hi[3][FP_BVH_LEAF];
-    uint32_t jy[FP_BVH_LEAF], ny = 0;
-    bool jm[FP_BVH_LEAF];
+    uint32_t jy[FP_BVH_LEAF], ny = 0, jm = 0; /* jm: y's moved ones, by bit */
     for (uint32_t j = by->first; j < by->first + by->count; j++) {
         const float *b = k->tbox[j];
         if (x != y && !boxes_meet(b, bx->box)) continue;
@@ -2290,21 +2292,24 @@ static long leaf_pairs(fp_contact *c, lane *ln, const float *s, const float *ref
             lo[a][ny] = b[a];
             hi[a][ny] = b[3 + a];
         }
-        jm[ny] = k->pstamp[j] == clk;
+        jm |= (uint32_t)(k->pstamp[j] == clk) << ny;
         jy[ny++] = j;
     }
     long found = 0;
     for (uint32_t i = bx->first; ny && i < bx->first + bx->count; i++) {
         const float *ba = k->tbox[i];
-        bool ma = k->pstamp[i] == clk;
         if (x != y && !boxes_meet(ba, by->box)) continue;
+        /* within x: only y's triangles after i (y's are x's, in order) */
+        uint32_t q0 = x == y ? i - bx->first + 1 : 0;
         unsigned char hit[FP_BVH_LEAF];
-        for (uint32_t q = 0; q < ny; q++)
+        for (uint32_t q = q0; q < ny; q++)
             hit[q] = (ba[0] <= hi[0][q]) & (lo[0][q] <= ba[3]) & (ba[1] <= hi[1][q]) & (lo[1][q] <= ba[4]) &
                      (ba[2] <= hi[2][q]) & (lo[2][q] <= ba[5]);
-        for (uint32_t q = 0; q < ny; q++) {
-            uint32_t j = jy[q];
-            if (!hit[q] || (x == y && j <= i) || !(ma || jm[q])) continue;
+        uint32_t m = 0;
+        for (uint32_t q = q0; q < ny; q++) m |= (uint32_t)hit[q] << q;
+        if (k->pstamp[i] != clk) m &= jm; /* neither moved: nothing new */
+        for (; m; m &= m - 1) {
+            uint32_t j = jy[__builtin_ctz(m)];
             if (welded_adjacent(k->ow[i], k->ow[j])) continue;
             int r = test_pair(c, ln, s, ref, k->order[i], k->order[j], record);
             if (r < 0) return r;
