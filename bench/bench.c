@@ -873,7 +873,7 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
         return -ENOMEM;
     }
     int sched_fd = open("/proc/thread-self/schedstat", O_RDONLY | O_CLOEXEC);
-    size_t nheld = 0, nwwait = 0;
+    size_t nheld = 0, nwwait = 0, nthere = 0; /* nthere: frames run on the frame thread */
     double w0 = runqueue_ms(sched_fd); /* read after each frame only: a read just before one
                                           made the ICT frame about 7% slower */
     int64_t period = 1000000000LL / 60, start = fp_now_ns(), next = start;
@@ -896,6 +896,7 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
         contact_ms[nf] = st.collide_ms;
         wwait[nf] = st.collide_wait_ms;
         nwwait += wwait[nf] >= 1.0;
+        nthere += st.frame_thread;
         for (int h = 0; h < FP_HANDS; h++)
             if (fp_session_hand(s, h)) hands[nf][h] = *fp_session_hand(s, h);
         nf++;
@@ -955,11 +956,11 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
                "\"ms_commit_max\":%.6g,\"ms_engage_median\":%.6g,\"ms_engage_max\":%.6g,"
                "\"ms_distances_bruteforce_median\":%.6g,"
                "\"ms_distances_indexed_median\":%.6g,\"distances_within_reach\":%zu,"
-               "\"distances_far\":%zu,\"distances_wrong\":%zu,\"contact_guard\":%s",
+               "\"distances_far\":%zu,\"distances_wrong\":%zu,\"contact_guard\":%s,\"frames_on_frame_thread\":%zu",
                label, n, nf, dropped, open_s, seconds, nact, ncommit, pct(total, nf, 50), pct(total, nf, 99),
                pct(act, nact, 50), pct(act, nact, 99), pct(com, ncommit, 50), pct(com, ncommit, 100),
                pct(eng, nengage, 50), pct(eng, nengage, 100), pct(brute, nbrute, 50), pct(indexed, nbrute, 50), within, far, wrong,
-               bo->no_contact_guard ? "false" : "true");
+               bo->no_contact_guard ? "false" : "true", nthere);
         for (int k = 0; k < FP_STAGE_COUNT; k++)
             printf(",\"%s_median\":%.6g,\"%s_p99\":%.6g", names[k], pct(st_ms[k], nf, 50),
                    names[k], pct(st_ms[k], nf, 99));
@@ -980,8 +981,10 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
         printf("]}\n");
     } else {
         printf("frame %-14s %8zu vertices, opened in %.2f s, %zu frames in %.2f s (%zu skipped: a late "
-               "frame's periods), %zu deforming, %zu commits, contact guard %s\n",
-               label, n, open_s, nf, seconds, dropped, nact, ncommit, bo->no_contact_guard ? "off" : "on");
+               "frame's periods), %zu deforming, %zu commits, contact guard %s, %zu run on the frame "
+               "thread\n",
+               label, n, open_s, nf, seconds, dropped, nact, ncommit, bo->no_contact_guard ? "off" : "on",
+               nthere);
         printf("  %-22s %10s %10s\n", "stage", "median_ms", "p99_ms");
         for (int k = 0; k < FP_STAGE_COUNT; k++)
             printf("  %-22s %10.4f %10.4f\n", names[k], pct(st_ms[k], nf, 50), pct(st_ms[k], nf, 99));

@@ -19,8 +19,12 @@
  *
  * Thread rules: a session is used from one thread (the session thread: the frame loop of
  * `facepuppet run` or the viewer); every function here is [session-thread] unless noted.
- * Input plugins run on their own threads and reach it only through the lock-free queues of
- * core/plugin; record=FILE recordings are written by threads of their own.
+ * fp_session_step may run the frame on the session's frame thread (frame_thread.h; options
+ * .frame_thread) while the caller waits: then the frame's calls into the mapping plugin and
+ * the log and record callbacks are made there, one frame at a time, ordered with the
+ * caller's own calls as if on one thread (the session thread, taking turns). Input plugins
+ * run on their own threads and reach it only through the lock-free queues of core/plugin;
+ * record=FILE recordings are written by threads of their own.
  */
 #ifndef FP_SESSION_H
 #define FP_SESSION_H
@@ -117,6 +121,13 @@ typedef struct fp_session_options {
                                                        default with); default (false): only
                                                        the engine's touched ranges (and the
                                                        guard's D_P) */
+    int frame_thread;                               /* 0 (default): fp_session_start makes
+                                                       a frame thread when the machine has
+                                                       2 or more CPUs and the mesh at most
+                                                       FP_CONTACT_PREWARM (262,144)
+                                                       triangles; 1: whenever (tests); -1:
+                                                       never. fp_session_step, frame
+                                                       thread */
 } fp_session_options;
 
 /** The frame's stages, for fp_frame_stats.stage_ms (`bench --case frame`). */
@@ -161,6 +172,7 @@ typedef struct fp_frame_stats {
     double collide_wait_ms;   /* of those, the guard's waits for its worker thread to finish a
                                  task (contact.h, fp_contact_result.worker_wait_ms), ms */
     double stage_ms[FP_STAGE_COUNT]; /* wall time of each stage (fp_frame_stage), ms */
+    bool frame_thread;        /* the frame ran on the session's frame thread (fp_session_step) */
 } fp_frame_stats;
 
 typedef struct fp_session fp_session;
@@ -201,7 +213,13 @@ int fp_session_realtime_memory(fp_session *s, size_t reserve_bytes, char *err, s
 
 /** One frame at host time now_ns (fp_now_ns()): the seven steps above. Never fails the
  *  session: an engine or mapping error keeps the base shown for this frame and is sent to
- *  the log (once, then counted). stats may be NULL. */
+ *  the log (once, then counted). stats may be NULL. With a frame thread (made by
+ *  fp_session_start, options .frame_thread) the frame runs there when that thread polls,
+ *  which it does for 20 ms after each frame (a core kept busy through a performance), and
+ *  on the caller's thread when it sleeps or has not taken the frame within 20 us; either
+ *  way it is done when this returns (stats->frame_thread says where). Why: a thread that
+ *  slept since the last frame finds its caches cold (the ICT frame 0.12-0.13 ms median
+ *  stepped on the bench's sleeping loop, 0.08 on the frame thread; frame_thread.h). */
 void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *stats);
 
 /** The engine step's solver (core/csrbf) whose coefficients made fp_session_positions, for

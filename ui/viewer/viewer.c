@@ -144,7 +144,8 @@ static void say(viewer *v, const char *fmt, ...)
 
 /* The session's log lines (input status, mapping and engine errors, recordings): the
  * latest in the HUD's status line, every one to stderr (debug lines only with
- * FACEPUPPET_DEBUG). Called on this (the session) thread, from fp_session_step. */
+ * FACEPUPPET_DEBUG). Called from fp_session_step, on this thread or on the session's frame
+ * thread while this one waits in it (fp_session.h): never beside the drawing. */
 static void on_session_log(void *user, int level, const char *source, const char *message)
 {
     viewer *v = user;

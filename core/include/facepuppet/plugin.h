@@ -18,7 +18,10 @@
  *   [main-thread]    the thread that loaded the plugin (the host's control thread);
  *   [input-thread]   a thread the input plugin creates and owns;
  *   [session-thread] the host's frame loop; a call marked so must not allocate, block, do
- *                    I/O or take locks, and must return within a small part of a frame;
+ *                    I/O or take locks, and must return within a small part of a frame.
+ *                    Calls come one at a time and in order, but not always from the same
+ *                    OS thread (a frame runs on the host's frame thread or its caller's):
+ *                    keep no thread-local state between them;
  *   [any-thread]     any thread, concurrently.
  *
  * Units: hands in millimetres in the device frame before calibration; the mapping sees them
