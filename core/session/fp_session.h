@@ -218,8 +218,8 @@ int fp_session_realtime_memory(fp_session *s, size_t reserve_bytes, char *err, s
  *  which it does for 20 ms after each frame (a core kept busy through a performance), and
  *  on the caller's thread when it sleeps or has not taken the frame within 20 us; either
  *  way it is done when this returns (stats->frame_thread says where). Why: a thread that
- *  slept since the last frame finds its caches cold (the ICT frame 0.12-0.13 ms median
- *  stepped on the bench's sleeping loop, 0.08 on the frame thread; frame_thread.h). */
+ *  slept since the last frame finds its caches cold (the ICT frame's median 0.126 ms
+ *  stepped on the bench's sleeping loop, 0.088 on the frame thread; frame_thread.h). */
 void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *stats);
 
 /** The engine step's solver (core/csrbf) whose coefficients made fp_session_positions, for

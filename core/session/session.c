@@ -408,7 +408,8 @@ int fp_session_start(fp_session *s, char *err, size_t errlen)
     /* the frame thread (fp_session_options.frame_thread): a frame whose data fit in a core's
      * caches runs on a core that stayed awake. Larger meshes do not fit; their contact guard
      * shares its check between the caller and its own worker, which a third busy thread
-     * would slow down (the 1.7M face's frame: 4.9 ms median with one, 2.6 without). None
+     * would slow down (the 1.7M face's frame, one trial run: 4.9 ms median with one, 2.6
+     * without). None
      * could be made: the frames run on the caller's. */
     bool want = s->frame_thread_opt > 0 ||
                 (s->frame_thread_opt == 0 && sysconf(_SC_NPROCESSORS_ONLN) >= 2 &&
