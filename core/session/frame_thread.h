@@ -2,10 +2,11 @@
  * frame_thread.h: the session's frame thread (issue 18): a thread that stays on its core
  * between frames during a performance and runs each frame while the caller waits.
  *
- * Why. A thread that sleeps between frames wakes with its caches cold: on the 2-core VM,
- * 16.7 ms asleep left a 200 KiB working set at 48-72 ns a line against 15-23 for a thread
- * that polled (sched_yield) meanwhile, and the ICT frame, whose data fit in one core's L2,
- * ran at 0.12-0.14 ms median stepped by a sleeping loop (the bench's, the viewer's behind its
+ * Why. A thread that sleeps between frames wakes with its caches cold: on the 2-core VM, a
+ * pointer chase over 100-600 KiB after 16 ms asleep ran at 48-72 ns a line, against 19-44
+ * for a thread that polled (sched_yield) meanwhile (and data another core had just read
+ * came no faster than memory), and the ICT frame, whose data fit in one core's L2, ran at
+ * 0.12-0.14 ms median stepped by a sleeping loop (the bench's, the viewer's behind its
  * vsync) against 0.06-0.10 on a thread that polled. The caller's loop should not have to
  * spin for that: the frame runs on this thread instead, which polls (yielding its core)
  * for FP_FRAME_THREAD_IDLE_NS after each frame, then sleeps until the next one. Measured
