@@ -125,9 +125,12 @@ typedef struct fp_session_options {
                                                        a frame thread when the machine has
                                                        2 or more CPUs and the mesh at most
                                                        FP_CONTACT_PREWARM (262,144)
-                                                       triangles; 1: whenever (tests); -1:
-                                                       never. fp_session_step, frame
-                                                       thread */
+                                                       triangles; 1: whenever; 2: whenever,
+                                                       and a frame waits up to 1 s for the
+                                                       thread to take it (tests: on a busy
+                                                       machine a 20 us grace may pass every
+                                                       frame); -1: never. fp_session_step,
+                                                       frame_thread.h */
 } fp_session_options;
 
 /** The frame's stages, for fp_frame_stats.stage_ms (`bench --case frame`). */

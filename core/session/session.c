@@ -844,7 +844,9 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     fp_frame_stats local;
     if (!st) st = &local;
     frame_call f = {s, now_ns, st};
-    bool there = fp_frame_thread_run(s->ft, frame_call_run, &f, FP_FRAME_THREAD_GRACE_NS) == 1;
+    bool there = fp_frame_thread_run(s->ft, frame_call_run, &f,
+                                      s->frame_thread_opt == 2 ? 1000000000
+                                                               : FP_FRAME_THREAD_GRACE_NS) == 1;
     st->frame_thread = there;
 }
 

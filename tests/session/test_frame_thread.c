@@ -131,7 +131,10 @@ static void test_session_same_frames(void **state)
     const char *dirs[] = {fp_test_plugin_dir()};
     fp_plugin_path path;
     fp_plugin_path_init(&path, dirs, 1, NULL);
-    fp_session *a = open_session(-1, &path), *b = open_session(1, &path);
+    /* b: its frames wait for the frame thread (a 1 s grace), so that they run there even on a
+     * busy machine (CI's, its 2 cores shared with other tests: with the 20 us grace, none of
+     * 225 did); only a frame after the thread fell asleep (20 ms without one) runs here */
+    fp_session *a = open_session(-1, &path), *b = open_session(2, &path);
     size_t n = fp_session_vertex_count(a);
     assert_int_equal(fp_session_vertex_count(b), n);
     int64_t t0a, t0b;
@@ -164,7 +167,7 @@ static void test_session_same_frames(void **state)
            "equal bit for bit; %lu ran on the frame thread\n",
            frames, active, committed, scaled, there);
     assert_true(active > 50 && committed > 0);
-    assert_true(there > 0);
+    assert_true(there >= frames / 4);
     fp_session_destroy(&a);
     fp_session_destroy(&b);
 }
