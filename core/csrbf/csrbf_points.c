@@ -2,7 +2,9 @@
  * vertices with bounding boxes, so that csrbf_evaluate skips blocks outside every support
  * and still writes its output contiguously. Locality comes from the mesh's own vertex order
  * (scanned and modelled meshes, grids: consecutive vertices are neighbours); a scrambled
- * order stays correct but gains nothing from the boxes. */
+ * order stays correct but gains nothing from the boxes. The nearest-vertex queries can have
+ * blocks of their own in Morton order (csrbf_points_index_nearest), compact whatever the
+ * mesh's order: they write nothing contiguous, so their places need not be the vertices'. */
 #define _POSIX_C_SOURCE 200112L
 #include "internal.h"
 
@@ -23,47 +25,56 @@ static int check(size_t n, const float *xyz)
     return CSRBF_OK;
 }
 
-/* Recompute blocks b0..b1 from p->xyz; the global box grows to hold them (it never
- * shrinks here, which only makes csrbf_evaluate's whole-box test more conservative). */
-static void fill_block_range(csrbf_points *p, size_t b0, size_t b1)
+/* Recompute block b from p->xyz; the global box grows to hold it (it never shrinks here,
+ * which only makes csrbf_evaluate's whole-box test more conservative). x: p's nearest index
+ * (or NULL; a constant in each caller's loop, so the inlined copies differ): the block's
+ * vertices whose position changed (bitwise: their old positions are still in s) go to their
+ * places there, their blocks to refit (near_refit_dirty, by the caller). */
+static inline __attribute__((always_inline)) void fill_block(csrbf_points *p, size_t b, struct csrbf_near *x)
 {
-    size_t n = p->n;
-    for (size_t b = b0; b < b1; b++) {
-        size_t k0 = b * CSRBF_BLOCK, k1 = k0 + CSRBF_BLOCK < n ? k0 + CSRBF_BLOCK : n;
-        for (int a = 0; a < 3; a++) {
-            float lo = INFINITY, hi = -INFINITY;
-            for (size_t k = k0; k < k1; k++) {
-                float v = p->xyz[3 * k + a];
-                p->s[a][k] = v;
-                lo = v < lo ? v : lo;
-                hi = v > hi ? v : hi;
+    size_t n = p->n, k0 = b * CSRBF_BLOCK, k1 = k0 + CSRBF_BLOCK < n ? k0 + CSRBF_BLOCK : n;
+    uint32_t moved = 0; /* by bit */
+    for (int a = 0; a < 3; a++) {
+        float lo = INFINITY, hi = -INFINITY;
+        for (size_t k = k0; k < k1; k++) {
+            float v = p->xyz[3 * k + a];
+            if (x) {
+                uint32_t u, o;
+                memcpy(&u, &v, sizeof u);
+                memcpy(&o, &p->s[a][k], sizeof o);
+                moved |= (uint32_t)(u != o) << (k - k0);
             }
-            for (size_t k = k1; k < k0 + CSRBF_BLOCK; k++) p->s[a][k] = p->s[a][k0]; /* padding */
-            p->lo[a][b] = lo;
-            p->hi[a][b] = hi;
-            if (lo < p->blo[a]) p->blo[a] = lo;
-            if (hi > p->bhi[a]) p->bhi[a] = hi;
+            p->s[a][k] = v;
+            lo = v < lo ? v : lo;
+            hi = v > hi ? v : hi;
         }
+        for (size_t k = k1; k < k0 + CSRBF_BLOCK; k++) p->s[a][k] = p->s[a][k0]; /* padding */
+        p->lo[a][b] = lo;
+        p->hi[a][b] = hi;
+        if (lo < p->blo[a]) p->blo[a] = lo;
+        if (hi > p->bhi[a]) p->bhi[a] = hi;
+    }
+    for (; x && moved; moved &= moved - 1) {
+        size_t k = k0 + (size_t)__builtin_ctz(moved);
+        uint32_t q = x->place[k];
+        for (int a = 0; a < 3; a++) x->s[a][q] = p->s[a][k];
+        x->dirty[0][q / CSRBF_BLOCK] = 1;
     }
 }
 
-/* Recompute the superblock boxes that hold blocks b0..b1-1. */
-static void fill_super_range(csrbf_points *p, size_t b0, size_t b1)
+/* Recompute blocks b0..b1 (fill_block) */
+static void fill_block_range(csrbf_points *p, size_t b0, size_t b1)
 {
-    if (b1 <= b0) return;
-    for (size_t sb = b0 / CSRBF_SUPER; sb <= (b1 - 1) / CSRBF_SUPER; sb++) {
-        size_t k0 = sb * CSRBF_SUPER, k1 = k0 + CSRBF_SUPER < p->nblocks ? k0 + CSRBF_SUPER : p->nblocks;
-        for (int a = 0; a < 3; a++) {
-            float lo = INFINITY, hi = -INFINITY;
-            for (size_t b = k0; b < k1; b++) {
-                lo = p->lo[a][b] < lo ? p->lo[a][b] : lo;
-                hi = p->hi[a][b] > hi ? p->hi[a][b] : hi;
-            }
-            p->slo[a][sb] = lo;
-            p->shi[a][sb] = hi;
-        }
-    }
+    if (p->near)
+        for (size_t b = b0; b < b1; b++) fill_block(p, b, p->near);
+    else
+        for (size_t b = b0; b < b1; b++) fill_block(p, b, NULL);
 }
+
+/* csrbf_points_index_nearest's index (below) */
+static void near_free(struct csrbf_near *x);
+static void near_fill(struct csrbf_near *x, size_t n, const float *xyz);
+static void near_refit_dirty(struct csrbf_near *x, size_t n);
 
 static size_t pad_fan(size_t n) { return (n + CSRBF_FAN - 1) / CSRBF_FAN * CSRBF_FAN; }
 
@@ -98,7 +109,6 @@ static void fill_blocks(csrbf_points *p)
         p->bhi[a] = -INFINITY;
     }
     fill_block_range(p, 0, p->nblocks);
-    fill_super_range(p, 0, p->nblocks);
     fill_tree_range(p, 0, p->nblocks);
 }
 
@@ -107,12 +117,11 @@ void csrbf_points_destroy(csrbf_points **pp)
     if (!pp || !*pp) return;
     csrbf_points *p = *pp;
     free(p->xyz);
+    near_free(p->near);
     for (int a = 0; a < 3; a++) {
         free(p->s[a]);
         free(p->lo[a]);
         free(p->hi[a]);
-        free(p->slo[a]);
-        free(p->shi[a]);
         for (int l = 1; l < p->tlevels; l++) {
             free(p->tlo[l][a]);
             free(p->thi[l][a]);
@@ -168,10 +177,7 @@ int csrbf_points_create(size_t n, const float *xyz, csrbf_points **out)
                 p->thi[l][a][i] = -INFINITY;
             }
         }
-        p->nsuper = (p->nblocks + CSRBF_SUPER - 1) / CSRBF_SUPER;
-        p->slo[a] = malloc(p->nsuper * sizeof(float));
-        p->shi[a] = malloc(p->nsuper * sizeof(float));
-        ok = ok && p->s[a] && p->lo[a] && p->hi[a] && p->slo[a] && p->shi[a];
+        ok = ok && p->s[a] && p->lo[a] && p->hi[a];
     }
     if (!ok) {
         csrbf_points_destroy(&p);
@@ -189,6 +195,7 @@ int csrbf_points_update(csrbf_points *p, const float *xyz)
     if (!p || !xyz || check(p->n, xyz)) return CSRBF_ERR_INVALID;
     memcpy(p->xyz, xyz, p->n * 3 * sizeof(float));
     fill_blocks(p);
+    if (p->near) near_refit_dirty(p->near, p->n);
     p->stamp = csrbf_new_stamp();
     return CSRBF_OK;
 }
@@ -206,9 +213,9 @@ int csrbf_points_update_ranges(csrbf_points *p, const float *xyz, const uint32_t
         if (!c) continue;
         memcpy(p->xyz + 3 * v0, xyz + 3 * v0, c * 3 * sizeof(float));
         fill_block_range(p, v0 / CSRBF_BLOCK, (v0 + c + CSRBF_BLOCK - 1) / CSRBF_BLOCK);
-        fill_super_range(p, v0 / CSRBF_BLOCK, (v0 + c + CSRBF_BLOCK - 1) / CSRBF_BLOCK);
         fill_tree_range(p, v0 / CSRBF_BLOCK, (v0 + c + CSRBF_BLOCK - 1) / CSRBF_BLOCK);
     }
+    if (p->near) near_refit_dirty(p->near, p->n);
     p->stamp = csrbf_new_stamp();
     return CSRBF_OK;
 }
@@ -232,8 +239,6 @@ int csrbf_points_copy(csrbf_points *dst, const csrbf_points *src)
         memcpy(dst->s[a], src->s[a], src->nblocks * CSRBF_BLOCK * sizeof(float));
         memcpy(dst->lo[a], src->lo[a], nf * sizeof(float));
         memcpy(dst->hi[a], src->hi[a], nf * sizeof(float));
-        memcpy(dst->slo[a], src->slo[a], src->nsuper * sizeof(float));
-        memcpy(dst->shi[a], src->shi[a], src->nsuper * sizeof(float));
         for (int l = 1; l < src->tlevels; l++) {
             memcpy(dst->tlo[l][a], src->tlo[l][a], pad_fan(src->tcount[l]) * sizeof(float));
             memcpy(dst->thi[l][a], src->thi[l][a], pad_fan(src->tcount[l]) * sizeof(float));
@@ -241,6 +246,7 @@ int csrbf_points_copy(csrbf_points *dst, const csrbf_points *src)
         dst->blo[a] = src->blo[a];
         dst->bhi[a] = src->bhi[a];
     }
+    if (dst->near) near_fill(dst->near, dst->n, dst->xyz);
     dst->stamp = csrbf_new_stamp();
     return CSRBF_OK;
 }
@@ -287,12 +293,22 @@ PTS_CLONES static size_t boxes_d2(const float *const lo[3], const float *const h
     return 0;
 }
 
+/* What csrbf_points_nearest walks: a box tree over blocks of CSRBF_BLOCK places (csrbf_points'
+ * own, places = vertices, or its index's, places in Morton order) and the places' coordinates
+ * and vertices (vert NULL: the place is the vertex). Places n and beyond are padding. */
+typedef struct near_view {
+    const size_t *count;
+    float *const (*lo)[3], *const (*hi)[3];
+    float *const *s;
+    const uint32_t *vert;
+    size_t n;
+} near_view;
+
 /* Block b against query q: improves *best / *idx (ties: the smaller vertex index). */
-static inline void scan_block(const csrbf_points *p, size_t b, const float q[3], float *best,
-                              uint32_t *idx)
+static inline void scan_block(const near_view *v, size_t b, const float q[3], float *best, uint32_t *idx)
 {
-    size_t k0 = b * CSRBF_BLOCK, nv = k0 + CSRBF_BLOCK <= p->n ? CSRBF_BLOCK : p->n - k0;
-    const float *x = p->s[0] + k0, *y = p->s[1] + k0, *z = p->s[2] + k0;
+    size_t k0 = b * CSRBF_BLOCK, nv = k0 + CSRBF_BLOCK <= v->n ? CSRBF_BLOCK : v->n - k0;
+    const float *x = v->s[0] + k0, *y = v->s[1] + k0, *z = v->s[2] + k0;
     float d2[CSRBF_BLOCK], least = INFINITY;
     for (size_t l = 0; l < CSRBF_BLOCK; l++) { /* vectorised: 16 lanes (padding: copies) */
         float dx = x[l] - q[0], dy = y[l] - q[1], dz = z[l] - q[2];
@@ -300,25 +316,33 @@ static inline void scan_block(const csrbf_points *p, size_t b, const float q[3],
         least = d2[l] < least ? d2[l] : least;
     }
     if (least > *best) return;
-    for (size_t l = 0; l < nv; l++)
-        if (d2[l] < *best || (d2[l] == *best && (uint32_t)(k0 + l) < *idx)) {
+    for (size_t l = 0; l < nv; l++) {
+        uint32_t id = v->vert ? v->vert[k0 + l] : (uint32_t)(k0 + l);
+        if (d2[l] < *best || (d2[l] == *best && id < *idx)) {
             *best = d2[l];
-            *idx = (uint32_t)(k0 + l);
+            *idx = id;
         }
+    }
 }
 
-/* Superblock sb against query q: its nearest block first, then every block whose box may
- * hold a vertex as near as *best and within lim. */
-static void scan_super(const csrbf_points *p, size_t sb, const float q[3], float lim, float *best,
-                       uint32_t *idx)
+/* The group of nodes g .. g + CSRBF_FAN - 1 of level l (blocks when l == 0) against query q:
+ * the nearest box first, then, in order, every one that may hold a vertex as near as *best
+ * and within lim; a node's children are the group CSRBF_FAN times its index on the level
+ * below. Padding nodes (empty boxes, +inf) and those beyond the level's count are never
+ * opened. Recursion depth: the tree's levels (at most CSRBF_TREE_MAX). */
+static void visit_group(const near_view *v, int l, size_t g, const float q[3], float lim, float *best,
+                        uint32_t *idx)
 {
-    float bd[CSRBF_SUPER];
-    size_t b0 = sb * CSRBF_SUPER, b1 = b0 + CSRBF_SUPER < p->nblocks ? b0 + CSRBF_SUPER : p->nblocks;
-    size_t first = boxes_d2((const float *const *)p->lo, (const float *const *)p->hi, b0, b1, q, bd);
-    if (bd[first] > lim || bd[first] > *best) return;
-    scan_block(p, b0 + first, q, best, idx);
-    for (size_t i = 0; i < b1 - b0; i++)
-        if (i != first && bd[i] <= *best && bd[i] <= lim) scan_block(p, b0 + i, q, best, idx);
+    float d2[CSRBF_FAN];
+    size_t first = boxes_d2((const float *const *)v->lo[l], (const float *const *)v->hi[l], g, g + CSRBF_FAN,
+                            q, d2);
+    size_t end = v->count[l] - g < CSRBF_FAN ? v->count[l] - g : CSRBF_FAN;
+    for (size_t k = 0; k < end; k++) {
+        size_t c = k == 0 ? first : k == first ? 0 : k; /* the nearest first, then the others */
+        if (d2[c] > lim || d2[c] > *best) continue;
+        if (l == 0) scan_block(v, g + c, q, best, idx);
+        else visit_group(v, l - 1, CSRBF_FAN * (g + c), q, lim, best, idx);
+    }
 }
 
 int csrbf_points_nearest(const csrbf_points *p, const float *queries, size_t nq, float max_dist,
@@ -329,31 +353,180 @@ int csrbf_points_nearest(const csrbf_points *p, const float *queries, size_t nq,
     for (size_t i = 0; i < nq; i++)
         for (int a = 0; a < 3; a++)
             if (!isfinite(queries[3 * i + a])) return CSRBF_ERR_INVALID;
-    enum { SCHUNK = 1024 }; /* superblock distances per pass (on the stack) */
     /* the pruning bound on squared distances: above every d2 whose sqrtf is <= max_dist
      * (a relative margin of 1e-6, far beyond float rounding); +inf stays +inf */
     const double md = (double)max_dist * (1.0 + 1e-6);
     const float lim = (float)(md * md);
-    float sd[SCHUNK];
+    const struct csrbf_near *x = p->near;
+    near_view v = x ? (near_view){x->count, x->lo, x->hi, x->s, x->vert, p->n}
+                    : (near_view){p->tcount, p->tlo, p->thi, p->s, NULL, p->n};
+    int top = (x ? x->levels : p->tlevels) - 1;
     for (size_t i = 0; i < nq; i++) {
         const float *q = queries + 3 * i;
         float best = INFINITY;
         uint32_t idx = UINT32_MAX;
-        /* per chunk of superblocks: the nearest first (a good first candidate), then those
-         * whose boxes may still hold a nearer vertex */
-        for (size_t c0 = 0; c0 < p->nsuper; c0 += SCHUNK) {
-            size_t c1 = c0 + SCHUNK < p->nsuper ? c0 + SCHUNK : p->nsuper;
-            size_t first = boxes_d2((const float *const *)p->slo, (const float *const *)p->shi, c0,
-                                    c1, q, sd);
-            if (sd[first] > lim || sd[first] > best) continue;
-            scan_super(p, c0 + first, q, lim, &best, &idx);
-            for (size_t k = 0; k < c1 - c0; k++)
-                if (k != first && sd[k] <= best && sd[k] <= lim) scan_super(p, c0 + k, q, lim, &best, &idx);
-        }
+        visit_group(&v, top, 0, q, lim, &best, &idx);
         float d = idx != UINT32_MAX ? sqrtf(best) : INFINITY;
         int hit = d <= max_dist;
         out_dist[i] = hit ? d : INFINITY;
         if (out_index) out_index[i] = hit ? idx : UINT32_MAX;
     }
+    return CSRBF_OK;
+}
+
+/* ---- csrbf_points_index_nearest: blocks in Morton order ---- */
+
+static void near_free(struct csrbf_near *x)
+{
+    if (!x) return;
+    free(x->vert);
+    free(x->place);
+    for (int a = 0; a < 3; a++) {
+        free(x->s[a]);
+        for (int l = 0; l < x->levels; l++) {
+            free(x->lo[l][a]);
+            free(x->hi[l][a]);
+        }
+    }
+    for (int l = 0; l < x->levels; l++) free(x->dirty[l]);
+    free(x);
+}
+
+/* Node i of level l refit: a block's box from its places (the last block's padding copied
+ * from its first place first), a node's from its children's. */
+static void near_refit_node(struct csrbf_near *x, size_t n, int l, size_t i)
+{
+    for (int a = 0; a < 3; a++) {
+        float lo = INFINITY, hi = -INFINITY;
+        if (l == 0) {
+            float *c = x->s[a] + i * CSRBF_BLOCK;
+            for (size_t k = n > i * CSRBF_BLOCK ? n - i * CSRBF_BLOCK : 0; k < CSRBF_BLOCK; k++) c[k] = c[0];
+            for (size_t k = 0; k < CSRBF_BLOCK; k++) {
+                lo = c[k] < lo ? c[k] : lo;
+                hi = c[k] > hi ? c[k] : hi;
+            }
+        } else {
+            const float *clo = x->lo[l - 1][a] + CSRBF_FAN * i, *chi = x->hi[l - 1][a] + CSRBF_FAN * i;
+            for (size_t k = 0; k < CSRBF_FAN; k++) {
+                lo = clo[k] < lo ? clo[k] : lo;
+                hi = chi[k] > hi ? chi[k] : hi;
+            }
+        }
+        x->lo[l][a][i] = lo;
+        x->hi[l][a][i] = hi;
+    }
+}
+
+/* Every place's coordinates from xyz (n x 3) and every box */
+static void near_fill(struct csrbf_near *x, size_t n, const float *xyz)
+{
+    for (size_t k = 0; k < n; k++)
+        for (int a = 0; a < 3; a++) x->s[a][k] = xyz[3 * (size_t)x->vert[k] + a];
+    for (int l = 0; l < x->levels; l++)
+        for (size_t i = 0; i < x->count[l]; i++) near_refit_node(x, n, l, i);
+}
+
+/* The dirty nodes refit, level by level (a refit node marks its parent) */
+static void near_refit_dirty(struct csrbf_near *x, size_t n)
+{
+    for (int l = 0; l < x->levels; l++) {
+        uint8_t *d = x->dirty[l];
+        for (size_t i = 0; i < x->count[l]; i++) {
+            uint64_t w;
+            if (i % 8 == 0 && i + 8 <= x->count[l] && (memcpy(&w, d + i, 8), w == 0)) {
+                i += 7;
+                continue;
+            }
+            if (!d[i]) continue;
+            d[i] = 0;
+            near_refit_node(x, n, l, i);
+            if (l + 1 < x->levels) x->dirty[l + 1][i / CSRBF_FAN] = 1;
+        }
+    }
+}
+
+/* x's bits spread to every third place (21 bits) */
+static uint64_t spread3(uint64_t x)
+{
+    x &= 0x1fffff;
+    x = (x | x << 32) & 0x1f00000000ffffULL;
+    x = (x | x << 16) & 0x1f0000ff0000ffULL;
+    x = (x | x << 8) & 0x100f00f00f00f00fULL;
+    x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
+    x = (x | x << 2) & 0x1249249249249249ULL;
+    return x;
+}
+
+typedef struct { uint64_t key; uint32_t v; } morton_item;
+
+static int morton_cmp(const void *a, const void *b)
+{
+    const morton_item *x = a, *y = b;
+    if (x->key != y->key) return x->key < y->key ? -1 : 1;
+    return x->v < y->v ? -1 : x->v > y->v;
+}
+
+int csrbf_points_index_nearest(csrbf_points *p)
+{
+    if (!p) return CSRBF_ERR_INVALID;
+    if (p->near) return CSRBF_OK;
+    size_t n = p->n, nb = (n + CSRBF_BLOCK - 1) / CSRBF_BLOCK, np = nb * CSRBF_BLOCK;
+    struct csrbf_near *x = calloc(1, sizeof *x);
+    morton_item *it = malloc(n * sizeof *it);
+    if (!x || !it) {
+        free(x);
+        free(it);
+        return CSRBF_ERR_NOMEM;
+    }
+    x->nblocks = nb;
+    x->count[0] = nb;
+    x->levels = 1;
+    while (x->count[x->levels - 1] > CSRBF_FAN) {
+        x->count[x->levels] = (x->count[x->levels - 1] + CSRBF_FAN - 1) / CSRBF_FAN;
+        x->levels++;
+    }
+    int ok = (x->vert = malloc(np * sizeof *x->vert)) && (x->place = malloc(n * sizeof *x->place));
+    for (int a = 0; a < 3 && ok; a++) ok = (x->s[a] = alloc64(np * sizeof(float))) != NULL;
+    for (int l = 0; l < x->levels && ok; l++) {
+        size_t m = pad_fan(x->count[l]);
+        ok = (x->dirty[l] = calloc(m, 1)) != NULL;
+        for (int a = 0; a < 3 && ok; a++) {
+            ok = (x->lo[l][a] = alloc64(m * sizeof(float))) && (x->hi[l][a] = alloc64(m * sizeof(float)));
+            for (size_t i = x->count[l]; ok && i < m; i++) { /* padding: empty boxes */
+                x->lo[l][a][i] = INFINITY;
+                x->hi[l][a][i] = -INFINITY;
+            }
+        }
+    }
+    if (!ok) {
+        near_free(x);
+        free(it);
+        return CSRBF_ERR_NOMEM;
+    }
+    /* the places: vertices by the Morton code of their position in the set's box (21 bits an
+     * axis), ties by index */
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t v = 0; v < n; v++)
+        for (int a = 0; a < 3; a++) {
+            lo[a] = p->xyz[3 * v + a] < lo[a] ? p->xyz[3 * v + a] : lo[a];
+            hi[a] = p->xyz[3 * v + a] > hi[a] ? p->xyz[3 * v + a] : hi[a];
+        }
+    double ext = 0;
+    for (int a = 0; a < 3; a++) ext = (double)hi[a] - lo[a] > ext ? (double)hi[a] - lo[a] : ext;
+    double sc = ext > 0 ? 2097151.0 / ext : 0;
+    for (size_t v = 0; v < n; v++) {
+        uint64_t key = 0;
+        for (int a = 0; a < 3; a++) {
+            double q = ((double)p->xyz[3 * v + a] - lo[a]) * sc;
+            key |= spread3((uint64_t)(q < 0 ? 0 : q > 2097151.0 ? 2097151.0 : q)) << a;
+        }
+        it[v] = (morton_item){key, (uint32_t)v};
+    }
+    qsort(it, n, sizeof *it, morton_cmp);
+    for (size_t k = 0; k < np; k++) x->vert[k] = it[k < n ? k : (nb - 1) * CSRBF_BLOCK].v;
+    for (size_t k = 0; k < n; k++) x->place[x->vert[k]] = (uint32_t)k;
+    free(it);
+    near_fill(x, n, p->xyz);
+    p->near = x;
     return CSRBF_OK;
 }

@@ -151,8 +151,6 @@ struct csrbf_points {
                                 the last block padded with copies of its first vertex */
     float *lo[3], *hi[3];    /* nblocks each: block bounding boxes */
     float blo[3], bhi[3];    /* bounding box of all vertices */
-    size_t nsuper;           /* superblocks of CSRBF_SUPER blocks (csrbf_points_nearest) */
-    float *slo[3], *shi[3];  /* nsuper each: superblock boxes */
     /* box tree over the blocks (csrbf_evaluate's block selection): level 0 is lo/hi (the
      * blocks), node i of level l + 1 bounds nodes CSRBF_FAN i .. CSRBF_FAN i + CSRBF_FAN - 1
      * of level l; the top level has at most CSRBF_FAN nodes. Every level is allocated to a
@@ -161,10 +159,26 @@ struct csrbf_points {
     int tlevels;             /* levels including the blocks' (1 when nblocks <= CSRBF_FAN) */
     size_t tcount[CSRBF_TREE_MAX];            /* nodes per level (unpadded) */
     float *tlo[CSRBF_TREE_MAX][3], *thi[CSRBF_TREE_MAX][3];
+    struct csrbf_near *near; /* csrbf_points_index_nearest's index, or NULL */
 };
 
-/* Blocks per superblock: csrbf_points_nearest skips a superblock's blocks with one box test. */
-#define CSRBF_SUPER 64
+/* csrbf_points_index_nearest's index: the vertices in Morton order of their positions when it
+ * was made (kept since: positions change, places do not), cut into blocks of CSRBF_BLOCK
+ * places with a box tree laid out as csrbf_points' own (level 0 the blocks, each node of
+ * level l + 1 bounding CSRBF_FAN of level l, every level padded to a multiple of CSRBF_FAN
+ * with empty boxes). A mesh's own order may scatter 16 consecutive vertices over the face;
+ * these blocks stay compact whatever it is. */
+struct csrbf_near {
+    size_t nblocks;
+    uint32_t *vert;          /* nblocks * CSRBF_BLOCK: the vertex at each place (the last
+                                block padded with its first place's vertex) */
+    uint32_t *place;         /* n: each vertex's place */
+    float *s[3];             /* by place: coordinates */
+    int levels;
+    size_t count[CSRBF_TREE_MAX];
+    float *lo[CSRBF_TREE_MAX][3], *hi[CSRBF_TREE_MAX][3];
+    uint8_t *dirty[CSRBF_TREE_MAX]; /* by node: to refit (csrbf_points_update_ranges) */
+};
 
 /* A process-wide increasing counter (thread-safe, never 0): stamps of point contents and
  * centre sets, so that a cached block selection is never taken for another one. */

@@ -36,6 +36,7 @@ int fp_engine_step_init(fp_engine_step *e, size_t n, const float *base, int thre
     memset(e, 0, sizeof *e);
     e->threads = threads;
     if (csrbf_points_create(n, base, &e->points) != CSRBF_OK ||
+        csrbf_points_index_nearest(e->points) != CSRBF_OK || /* the fingertips' distances */
         csrbf_touch_create(e->points, &e->touch) != CSRBF_OK) {
         fp_engine_step_free(e);
         return -ENOMEM;

@@ -106,8 +106,9 @@ typedef struct fp_engine_result {
 } fp_engine_result;
 
 /** Index n base vertices (n x 3 floats, mesh units; not copied: csrbf_points copies them
- *  into blocks) for `threads` engine threads (csrbf_options.threads). Returns 0 or
- *  -ENOMEM. Free with fp_engine_step_free. */
+ *  into blocks, and into Morton-ordered blocks for the fingertips' distances,
+ *  csrbf_points_index_nearest) for `threads` engine threads (csrbf_options.threads). Returns
+ *  0 or -ENOMEM. Free with fp_engine_step_free. */
 int fp_engine_step_init(fp_engine_step *e, size_t n, const float *base, int threads);
 void fp_engine_step_free(fp_engine_step *e);
 
@@ -169,8 +170,8 @@ void fp_engine_step_flush(fp_engine_step *e, const fp_slog *log);
 /** Distance from each fingertip (FP_JOINT_TIP) of each present hand to the nearest base
  *  vertex (mesh units) where it is at most `reach` (mesh units; the session passes
  *  FP_TIP_DISTANCE_REACH x radius), +INFINITY beyond it and for an absent hand:
- *  csrbf_points_nearest on the engine's own blocks, visiting only blocks whose boxes are
- *  within reach; equal bit for bit to fp_engine_tip_distances on the same base wherever that
+ *  csrbf_points_nearest on the engine's nearest index (Morton-ordered blocks), visiting only
+ *  blocks whose boxes are within reach; equal bit for bit to fp_engine_tip_distances on the same base wherever that
  *  is <= reach. reach: >= 0, +INFINITY for no bound. No allocation. */
 void fp_engine_step_tip_distances(const fp_engine_step *e, const fp_hand_pose hands[FP_HANDS],
                                   float reach, float d[FP_HANDS][FP_FINGERS]);

@@ -220,38 +220,20 @@ static void test_tip_distances_indexed_ict(void **state)
     fp_mesh_free(&m);
 }
 
-/* csrbf_points_nearest against a brute force (distance bit for bit, the smallest index among
- * equals) on a scrambled vertex order with duplicate vertices (ties), 150 queries in one
- * call (beyond any chunk), and bounds from 0 to none. */
-static void test_nearest_scrambled_ties(void **state)
+/* p's nearest vertices of the queries q (nq x 3) equal a brute force over v (n x 3) bit for
+ * bit (the smallest index among equals), for bounds from 0 to none; counts into *hits / *far */
+static void check_nearest(const csrbf_points *p, const float *v, size_t n, const float (*q)[3], size_t nq,
+                          unsigned *hits, unsigned *far)
 {
-    (void)state;
-    enum { N = 40000, Q = 150 };
-    float *v = malloc(N * 3 * sizeof *v);
-    srand(11);
-    for (size_t i = 0; i < N; i++) {
-        if (i > 100 && i % 9 == 0) { /* a copy of an earlier vertex: a tie */
-            memcpy(v + 3 * i, v + 3 * ((size_t)rand() % i), 3 * sizeof *v);
-            continue;
-        }
-        for (int k = 0; k < 3; k++) v[3 * i + k] = (float)rand() / (float)RAND_MAX * 10.f - 5.f;
-    }
-    csrbf_points *p = NULL;
-    assert_int_equal(csrbf_points_create(N, v, &p), CSRBF_OK);
-    float q[Q][3], d[Q];
-    uint32_t idx[Q];
-    for (int i = 0; i < Q; i++)
-        for (int k = 0; k < 3; k++)
-            q[i][k] = i % 4 == 0 ? v[3 * (size_t)(i * 263 % N) + k] /* on a vertex */
-                                 : (float)rand() / (float)RAND_MAX * 16.f - 8.f;
     const float bounds[] = {0.f, 0.05f, 0.3f, 1.f, INFINITY};
-    unsigned hits = 0, far = 0;
+    float *d = malloc(nq * sizeof *d);
+    uint32_t *idx = malloc(nq * sizeof *idx);
     for (size_t bi = 0; bi < sizeof bounds / sizeof bounds[0]; bi++) {
-        assert_int_equal(csrbf_points_nearest(p, &q[0][0], Q, bounds[bi], d, idx), CSRBF_OK);
-        for (int i = 0; i < Q; i++) {
+        assert_int_equal(csrbf_points_nearest(p, &q[0][0], nq, bounds[bi], d, idx), CSRBF_OK);
+        for (size_t i = 0; i < nq; i++) {
             float best = INFINITY;
             uint32_t bidx = UINT32_MAX;
-            for (size_t j = 0; j < N; j++) {
+            for (size_t j = 0; j < n; j++) {
                 float dx = v[3 * j] - q[i][0], dy = v[3 * j + 1] - q[i][1], dz = v[3 * j + 2] - q[i][2];
                 float e = dx * dx + dy * dy + dz * dz;
                 if (e < best) {
@@ -263,19 +245,127 @@ static void test_nearest_scrambled_ties(void **state)
             if (bd <= bounds[bi]) {
                 assert_memory_equal(&d[i], &bd, sizeof bd);
                 assert_int_equal(idx[i], bidx);
-                hits++;
+                (*hits)++;
             } else {
                 assert_true(isinf(d[i]));
                 assert_int_equal(idx[i], UINT32_MAX);
-                far++;
+                (*far)++;
             }
         }
     }
-    assert_true(hits > 200 && far > 200);
+    free(d);
+    free(idx);
+}
+
+/* csrbf_points_nearest against a brute force (distance bit for bit, the smallest index among
+ * equals) on a scrambled vertex order with duplicate vertices (ties), 150 queries in one
+ * call, and bounds from 0 to none: through the points' own blocks, through the Morton index
+ * (csrbf_points_index_nearest), and with the index after csrbf_points_update_ranges (some
+ * ranges moved, the last vertex, whose block has padding, among them), csrbf_points_update
+ * (all moved, then a few) and csrbf_points_copy. A vertex count that is not a multiple of 16. */
+static void test_nearest_scrambled_ties(void **state)
+{
+    (void)state;
+    enum { N = 40003, Q = 150 };
+    float *v = malloc(N * 3 * sizeof *v), *w = malloc(N * 3 * sizeof *w);
+    srand(11);
+    for (size_t i = 0; i < N; i++) {
+        if (i > 100 && i % 9 == 0) { /* a copy of an earlier vertex: a tie */
+            memcpy(v + 3 * i, v + 3 * ((size_t)rand() % i), 3 * sizeof *v);
+            continue;
+        }
+        for (int k = 0; k < 3; k++) v[3 * i + k] = (float)rand() / (float)RAND_MAX * 10.f - 5.f;
+    }
+    csrbf_points *p = NULL, *ix = NULL;
+    assert_int_equal(csrbf_points_create(N, v, &p), CSRBF_OK);
+    assert_int_equal(csrbf_points_create(N, v, &ix), CSRBF_OK);
+    assert_int_equal(csrbf_points_index_nearest(ix), CSRBF_OK);
+    assert_int_equal(csrbf_points_index_nearest(ix), CSRBF_OK); /* again: nothing */
+    assert_int_equal(csrbf_points_index_nearest(NULL), CSRBF_ERR_INVALID);
+    float q[Q][3];
+    for (int i = 0; i < Q; i++)
+        for (int k = 0; k < 3; k++)
+            q[i][k] = i % 4 == 0 ? v[3 * (size_t)(i * 263 % N) + k] /* on a vertex */
+                                 : (float)rand() / (float)RAND_MAX * 16.f - 8.f;
+    unsigned hits = 0, far = 0;
+    check_nearest(p, v, N, q, Q, &hits, &far);
+    check_nearest(ix, v, N, q, Q, &hits, &far);
+    /* some ranges moved (by up to 3 units: out of their blocks), the last vertex included;
+     * half the queries on moved vertices */
+    memcpy(w, v, N * 3 * sizeof *w);
+    uint32_t ranges[] = {0, 5, 977, 300, 20000, 1, 39990, 13};
+    for (size_t r = 0; r < 4; r++)
+        for (uint32_t i = ranges[2 * r]; i < ranges[2 * r] + ranges[2 * r + 1]; i++)
+            for (int k = 0; k < 3; k++) w[3 * (size_t)i + k] += (float)rand() / (float)RAND_MAX * 6.f - 3.f;
+    for (int i = 0; i < Q; i += 2)
+        memcpy(q[i], w + 3 * (size_t)(ranges[2 * (i % 4)] + (uint32_t)i % ranges[2 * (i % 4) + 1]), sizeof q[i]);
+    assert_int_equal(csrbf_points_update_ranges(ix, w, ranges, 4), CSRBF_OK);
+    check_nearest(ix, w, N, q, Q, &hits, &far);
+    /* all moved */
+    for (size_t i = 0; i < 3 * (size_t)N; i++) w[i] = w[i] * 0.5f + 1.f;
+    assert_int_equal(csrbf_points_update(ix, w), CSRBF_OK);
+    check_nearest(ix, w, N, q, Q, &hits, &far);
+    /* a full update that changes a few vertices only (a rig's pose): they move far (half of
+     * them along z only), some queries on them */
+    for (int i = 0; i < 40; i++) {
+        size_t j = (size_t)rand() % N;
+        for (int k = i % 2 ? 0 : 2; k < 3; k++) w[3 * j + k] = -w[3 * j + k] + (float)(i % 3) + 1.f;
+        if (i < Q / 3) memcpy(q[3 * i + 1], w + 3 * j, sizeof q[0]);
+    }
+    assert_int_equal(csrbf_points_update(ix, w), CSRBF_OK);
+    check_nearest(ix, w, N, q, Q, &hits, &far);
+    /* copied from a set without an index: the index follows */
+    assert_int_equal(csrbf_points_copy(ix, p), CSRBF_OK);
+    check_nearest(ix, v, N, q, Q, &hits, &far);
+    assert_true(hits > 1000 && far > 1000);
+    float d[1];
+    uint32_t idx[1];
     assert_int_equal(csrbf_points_nearest(p, &q[0][0], 1, -1.f, d, idx), CSRBF_ERR_INVALID);
-    assert_int_equal(csrbf_points_nearest(p, &q[0][0], 1, NAN, d, idx), CSRBF_ERR_INVALID);
+    assert_int_equal(csrbf_points_nearest(ix, &q[0][0], 1, NAN, d, idx), CSRBF_ERR_INVALID);
     csrbf_points_destroy(&p);
+    csrbf_points_destroy(&ix);
     free(v);
+    free(w);
+}
+
+/* Ties at a distance: a scrambled integer grid (20 x 20 x 20) and queries at cell centres
+ * and edge midpoints, whose 8 or 2 nearest vertices are exactly equidistant, in different
+ * blocks (Morton blocks are aligned cubes of the grid): the smallest index among them, bit
+ * for bit as the brute force, through the own blocks and the index. A box exactly at the
+ * best distance must still be opened. */
+static void test_nearest_grid_ties(void **state)
+{
+    (void)state;
+    enum { S = 20, N = S * S * S, Q = 200 };
+    float *v = malloc(N * 3 * sizeof *v);
+    uint32_t *perm = malloc(N * sizeof *perm);
+    for (uint32_t i = 0; i < N; i++) perm[i] = i;
+    srand(5);
+    for (uint32_t i = N - 1; i > 0; i--) { /* a random order of the grid's points */
+        uint32_t j = (uint32_t)rand() % (i + 1), t = perm[i];
+        perm[i] = perm[j];
+        perm[j] = t;
+    }
+    for (size_t i = 0; i < N; i++) {
+        uint32_t g = perm[i];
+        v[3 * i] = (float)(g % S), v[3 * i + 1] = (float)(g / S % S), v[3 * i + 2] = (float)(g / (S * S));
+    }
+    float q[Q][3];
+    for (int i = 0; i < Q; i++)
+        for (int k = 0; k < 3; k++)
+            q[i][k] = (float)(rand() % (S - 1)) + (i % 2 == 0 || k == 0 ? 0.5f : 0.f);
+    csrbf_points *p = NULL, *ix = NULL;
+    assert_int_equal(csrbf_points_create(N, v, &p), CSRBF_OK);
+    assert_int_equal(csrbf_points_create(N, v, &ix), CSRBF_OK);
+    assert_int_equal(csrbf_points_index_nearest(ix), CSRBF_OK);
+    unsigned hits = 0, far = 0;
+    check_nearest(p, v, N, q, Q, &hits, &far);
+    check_nearest(ix, v, N, q, Q, &hits, &far);
+    assert_true(hits == 2 * 2 * Q && far == 2 * 3 * Q); /* every query 0.5 or 0.87 away: far within 0.3 */
+    csrbf_points_destroy(&p);
+    csrbf_points_destroy(&ix);
+    free(v);
+    free(perm);
 }
 
 /* The engine's persistent output (touched blocks only, partial re-index at commits, the
@@ -380,6 +470,7 @@ int main(void)
         cmocka_unit_test(test_tip_distances),
         cmocka_unit_test(test_tip_distances_indexed_ict),
         cmocka_unit_test(test_nearest_scrambled_ties),
+        cmocka_unit_test(test_nearest_grid_ties),
         cmocka_unit_test(test_touched_equals_full),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
