@@ -308,7 +308,8 @@ typedef struct csrbf_eval_stats {
  *  overlap the solver's or the points' memory). Only (vertex, centre) pairs whose block boxes
  *  meet the support are visited: with up to CSRBF_FAST_MAX_CENTRES centres the blocks and a
  *  64-bit mask of their centres come from a walk of the points' block tree for all centres at
- *  once (cost: the tree nodes near a support, not the mesh), kept in the solver from its
+ *  once (cost: the tree nodes near a support, not the mesh; where every support holds every
+ *  vertex, no walk at the first use: every pair is computed), kept in the solver from its
  *  second use on while the centres and the points are unchanged (anchored frames), then
  *  trimmed to the pairs whose support holds a vertex of the block, and then with each pair's
  *  kernel weights cached (they depend on the centres and the vertices only: an anchored frame

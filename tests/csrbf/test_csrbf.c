@@ -1203,11 +1203,13 @@ static void test_weight_cache(void **state)
     csrbf_points *p = NULL;
     assert_int_equal(csrbf_points_create(nv, v, &p), CSRBF_OK);
     const csrbf_kernel kernels[3] = {CSRBF_PSI31, CSRBF_PSI30, CSRBF_PSI32};
-    for (int kk = 0; kk < 3; kk++)
+    /* R = 1.5: a selection of blocks; R = 60: every support holds the whole grid (41 across),
+     * whose anchored frames go from computing every pair to the kept selection's weights */
+    for (int kk = 0; kk < 6; kk++)
         for (int threads = 1; threads <= 2; threads++) {
             csrbf_options o = {0};
-            o.radius = 1.5;
-            o.kernel = kernels[kk];
+            o.radius = kk < 3 ? 1.5 : 60.0;
+            o.kernel = kernels[kk % 3];
             o.threads = threads;
             csrbf_solver *s = NULL;
             csrbf_touch *tc = NULL;
