@@ -170,6 +170,7 @@ static void test_session_same_frames(void **state)
     assert_true(there >= frames / 4);
     fp_session_destroy(&a);
     fp_session_destroy(&b);
+    fp_plugin_path_clear(&path);
 }
 
 int main(void)
