@@ -836,6 +836,7 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
     so.mapping = bo->mapping ? bo->mapping : "anchored";
     so.plugin_path = bo->plugin_path;
     so.no_contact_guard = bo->no_contact_guard;
+    so.exact_frames = bo->exact_frames;
     char err[1024];
     fp_session *s = NULL;
     int64_t open0 = fp_now_ns(); /* the session's index and contact guard, the input */
@@ -874,6 +875,7 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
     }
     int sched_fd = open("/proc/thread-self/schedstat", O_RDONLY | O_CLOEXEC);
     size_t nheld = 0, nwwait = 0, nthere = 0; /* nthere: frames run on the frame thread */
+    size_t nhold = 0; /* vertices the contact guard's hold kept in place, all frames */
     double w0 = runqueue_ms(sched_fd); /* read after each frame only: a read just before one
                                           made the ICT frame about 7% slower */
     int64_t period = 1000000000LL / 60, start = fp_now_ns(), next = start;
@@ -895,6 +897,7 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
         for (int k = 0; k < FP_STAGE_COUNT; k++) st_ms[k][nf] = st.stage_ms[k];
         contact_ms[nf] = st.collide_ms;
         wwait[nf] = st.collide_wait_ms;
+        nhold += st.collide_held;
         nwwait += wwait[nf] >= 1.0;
         nthere += st.frame_thread;
         for (int h = 0; h < FP_HANDS; h++)
@@ -956,11 +959,13 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
                "\"ms_commit_max\":%.6g,\"ms_engage_median\":%.6g,\"ms_engage_max\":%.6g,"
                "\"ms_distances_bruteforce_median\":%.6g,"
                "\"ms_distances_indexed_median\":%.6g,\"distances_within_reach\":%zu,"
-               "\"distances_far\":%zu,\"distances_wrong\":%zu,\"contact_guard\":%s,\"frames_on_frame_thread\":%zu",
+               "\"distances_far\":%zu,\"distances_wrong\":%zu,\"contact_guard\":%s,\"frames_on_frame_thread\":%zu,"
+               "\"contact_hold\":%s,\"held_vertices_per_deforming_frame\":%.6g",
                label, n, nf, dropped, open_s, seconds, nact, ncommit, pct(total, nf, 50), pct(total, nf, 99),
                pct(act, nact, 50), pct(act, nact, 99), pct(com, ncommit, 50), pct(com, ncommit, 100),
                pct(eng, nengage, 50), pct(eng, nengage, 100), pct(brute, nbrute, 50), pct(indexed, nbrute, 50), within, far, wrong,
-               bo->no_contact_guard ? "false" : "true", nthere);
+               bo->no_contact_guard ? "false" : "true", nthere,
+               bo->no_contact_guard || bo->exact_frames ? "false" : "true", nact ? (double)nhold / nact : 0.0);
         for (int k = 0; k < FP_STAGE_COUNT; k++)
             printf(",\"%s_median\":%.6g,\"%s_p99\":%.6g", names[k], pct(st_ms[k], nf, 50),
                    names[k], pct(st_ms[k], nf, 99));
@@ -985,6 +990,10 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
                "thread\n",
                label, n, open_s, nf, seconds, dropped, nact, ncommit, bo->no_contact_guard ? "off" : "on",
                nthere);
+        if (!bo->no_contact_guard)
+            printf("  contact hold %s: %.0f vertices a deforming frame kept in place (moved under "
+                   "1e-5 of the face's diagonal since the last frame)\n",
+                   bo->exact_frames ? "off (--exact-frames)" : "on", nact ? (double)nhold / nact : 0.0);
         printf("  %-22s %10s %10s\n", "stage", "median_ms", "p99_ms");
         for (int k = 0; k < FP_STAGE_COUNT; k++)
             printf("  %-22s %10.4f %10.4f\n", names[k], pct(st_ms[k], nf, 50), pct(st_ms[k], nf, 99));

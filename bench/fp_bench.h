@@ -13,6 +13,9 @@ typedef struct fp_bench_options {
     bool no_contact_guard; /* case frame: sessions with fp_session_options.no_contact_guard
                               (`bench --no-contact-guard`: the frame without the guard's
                               collide time) */
+    bool exact_frames;     /* case frame: sessions with fp_session_options.exact_frames
+                              (`bench --exact-frames`: no contact hold, every shown frame the
+                              engine's shape bit for bit) */
     const char *mapping;   /* case frame: the sessions' mapping (`bench --mapping NAME`);
                               NULL: anchored */
     const struct fp_plugin_path *plugin_path; /* where the replay and mapping plugins are

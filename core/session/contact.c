@@ -3643,6 +3643,37 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
     return 0;
 }
 
+/* the vertices v in [f, e) where cand moved from P by less than eps in every coordinate,
+ * and differs from ref: P's vertex back into cand (fp_contact_hold); returns their number */
+static size_t hold_in(const float *p, const float *ref, float *cand, size_t f, size_t e, float eps)
+{
+    size_t held = 0;
+    for (size_t v = f; v < e; v++) {
+        float *q = cand + 3 * v;
+        const float *a = p + 3 * v, *r = ref + 3 * v;
+        bool near = fabsf(q[0] - a[0]) < eps && fabsf(q[1] - a[1]) < eps &&
+                    fabsf(q[2] - a[2]) < eps; /* (false with a NaN) */
+        if (!near || !memcmp(q, a, 3 * sizeof(float)) || !memcmp(q, r, 3 * sizeof(float))) continue;
+        memcpy(q, a, 3 * sizeof(float));
+        held++;
+    }
+    return held;
+}
+
+size_t fp_contact_hold(fp_contact *c, const float *ref, float *cand, const uint32_t *ranges,
+                       size_t nranges, float eps)
+{
+    if (!c || !c->tk || !ref || !cand || !(eps > 0) || (!ranges && nranges != SIZE_MAX)) return 0;
+    const float *p = c->tk->p;
+    if (nranges == SIZE_MAX) return hold_in(p, ref, cand, 0, c->n, eps);
+    size_t held = 0;
+    for (size_t r = 0; r < nranges; r++) {
+        size_t f = ranges[2 * r], e = f + ranges[2 * r + 1];
+        if (f < c->n) held += hold_in(p, ref, cand, f, e < c->n ? e : c->n, eps);
+    }
+    return held;
+}
+
 const float *fp_contact_shape(const fp_contact *c) { return c && c->tk ? c->tk->p : NULL; }
 
 size_t fp_contact_differs(const fp_contact *c, const uint32_t **verts)

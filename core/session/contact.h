@@ -315,6 +315,27 @@ int fp_contact_reference(fp_contact *c, const float *ref, const uint32_t *ranges
 int fp_contact_step(fp_contact *c, const float *ref, const float *cand, const uint32_t *ranges,
                     size_t nranges, int iters, fp_contact_result *res);
 
+/** The hold (issue 18): before fp_contact_step, where the candidate cand (n x 3, written)
+ *  moved less than eps (mesh units, in every coordinate) from P (fp_contact_shape) since the
+ *  last step, it gets P's vertex back, bit for bit, so that vertex is no moved vertex of the
+ *  step and its triangles need no check. A vertex where cand equals the reference ref (bit
+ *  for bit) is never held: it returns exactly (so a held vertex lies where an engine wrote a
+ *  displacement this frame, which it writes again next frame: the engine's buffer may be
+ *  cand). The shape shown then differs from the engine's by less than eps at each vertex,
+ *  and by nothing where it moved eps or more; what fp_contact_step decides about cand is as
+ *  exact as ever (it checks the held shape). Why: most vertices in a support's outer ring
+ *  move by far less than a pixel from frame to frame (the Wendland function's tail), yet
+ *  each one makes its triangles moved ones: on the ICT three-claps replay, 1e-5 of the
+ *  face's diagonal (4.75 um) held 414 of 485 moved vertices a step and left 286 of 1,089
+ *  moved triangles (1.7M face: 18,512 of 60,054; contact 2.25-2.53 ms median against
+ *  4.63-4.86 there, a replay of the session's calls). Looks at the vertices in ranges
+ *  (first, count pairs, clipped to n; nranges SIZE_MAX: every vertex), as fp_contact_step
+ *  does. eps <= 0 or NaN, c NULL, or before the first fp_contact_reference: nothing (a
+ *  caller about to commit passes 0, so a commit is the engine's shape). Returns how many
+ *  vertices were held. Threads: as every call on c. */
+size_t fp_contact_hold(fp_contact *c, const float *ref, float *cand, const uint32_t *ranges,
+                       size_t nranges, float eps);
+
 /** Meshes with at most this many triangles use envelopes ("(3a)"), every envelope and list
  *  made at the first fp_contact_reference, in one batch (about 1 us a triangle: 85 ms for
  *  the ICT face), so that a gesture's first touch of a region costs its frame no more than

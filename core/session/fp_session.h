@@ -121,6 +121,14 @@ typedef struct fp_session_options {
                                                        default with); default (false): only
                                                        the engine's touched ranges (and the
                                                        guard's D_P) */
+    bool exact_frames;                              /* true: every shown frame is the
+                                                       engine's shape bit for bit (where the
+                                                       contact guard accepts it); default
+                                                       (false): the guard's hold
+                                                       (fp_contact_hold): a vertex that moved
+                                                       less than 1e-5 of the face's diagonal
+                                                       since the last frame keeps its place
+                                                       until it moves more (commits exact) */
     int frame_thread;                               /* 0 (default): fp_session_start makes
                                                        a frame thread when the machine has
                                                        2 or more CPUs and the mesh at most
@@ -174,6 +182,8 @@ typedef struct fp_frame_stats {
     double collide_ms;        /* the guard's checks, milliseconds */
     double collide_wait_ms;   /* of those, the guard's waits for its worker thread to finish a
                                  task (contact.h, fp_contact_result.worker_wait_ms), ms */
+    size_t collide_held;      /* vertices the guard's hold kept in place (fp_contact_hold:
+                                 they moved less than its eps since the last frame) */
     double stage_ms[FP_STAGE_COUNT]; /* wall time of each stage (fp_frame_stage), ms */
     bool frame_thread;        /* the frame ran on the session's frame thread (fp_session_step) */
 } fp_frame_stats;

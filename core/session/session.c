@@ -80,6 +80,8 @@ struct fp_session {
                                      until then */
     unsigned long cg_frames, cg_limited; /* this gesture: frames checked, scaled back */
     double cg_t;                  /* this gesture: smallest fraction kept */
+    float cg_hold;                /* fp_contact_hold's eps (mesh units): FP_CONTACT_HOLD of the
+                                     loaded face's diagonal; 0: none (options.exact_frames) */
 
     /* what changed since the viewer last asked (fp_session_touched, changed.h) */
     fp_changed shown_changed, base_changed;
@@ -112,6 +114,11 @@ enum {
 /* pairs within this many vertex rings of the input's own crossings are not the guard's
  * business (fp_contact_dilate_own): the eyes' intersection curves move under any motion */
 #define FP_CONTACT_OWN_RINGS 1
+/* fp_contact_hold's eps, a fraction of the loaded face's bounding-box diagonal: a vertex
+ * that moved less than this since the last frame keeps its place until it moves more or a
+ * commit (4.75 um on the ICT face, 47.5 cm across: about 1/25 of a pixel where the face
+ * fills a 4K screen) */
+#define FP_CONTACT_HOLD 1e-5
 
 _Static_assert(FP_ENGINE_MAX_CONTROL >= FP_CONTROL_CAPACITY, "the engine takes a full control set");
 
@@ -135,6 +142,19 @@ static int contact_open(fp_session *s)
     }
     if (!rc) rc = fp_contact_reference(s->contact, s->shown, NULL, SIZE_MAX);
     if (rc) fp_contact_destroy(&s->contact);
+    if (!rc && s->cg_hold < 0) { /* the hold's eps, once: the loaded face's diagonal */
+        double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+        for (size_t v = 0; v < s->n; v++)
+            for (int k = 0; k < 3; k++) {
+                double x = s->loaded[3 * v + k];
+                if (x < lo[k]) lo[k] = x;
+                if (x > hi[k]) hi[k] = x;
+            }
+        double d = s->n ? sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                               (hi[2] - lo[2]) * (hi[2] - lo[2]))
+                        : 0.0;
+        s->cg_hold = isfinite(d) ? (float)(FP_CONTACT_HOLD * d) : 0.0f;
+    }
     const uint32_t *r;
     fp_changed_take(&s->cg_ref, &r); /* from here: where the reference changes */
     s->cg_sync = FP_CG_SYNCED;
@@ -361,6 +381,7 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
     s->mapping_budget_ms = opt->mapping_budget_ms;
     s->whole_rig_commit = opt->whole_rig_commit;
     s->frame_thread_opt = opt->frame_thread;
+    s->cg_hold = opt->exact_frames ? 0.0f : -1.0f; /* (-1: made by contact_open) */
     s->engine.jacobian = opt->measure_jacobian;
     if ((rc = fp_engine_step_set_topology(&s->engine, s->mesh->triangles, s->mesh->triangle_count))) {
         snprintf(err, errlen, "session: out of memory for %zu triangles", s->mesh->triangle_count);
@@ -549,7 +570,7 @@ static void shown_ref(fp_session *s)
  * rig's own pose (its channels) is not checked. The guard looks only where the shape may
  * have changed: the engine's touched ranges (the rig's blend moves no vertex the fingers
  * did not). */
-static void contact_guard(fp_session *s, const float *ref, fp_frame_stats *st)
+static void contact_guard(fp_session *s, const float *ref, bool commit, fp_frame_stats *st)
 {
     if (s->cg_lost && s->shown != ref) { /* the guard is made anew on the shape shown: ref */
         const float *shown = s->shown;
@@ -583,6 +604,15 @@ static void contact_guard(fp_session *s, const float *ref, fp_frame_stats *st)
     const uint32_t *ranges;
     size_t nranges = fp_engine_step_touched(&s->engine, &ranges);
     fp_contact_result r;
+    /* the hold (fp_contact_hold): vertices that moved less than cg_hold keep their place;
+     * never in a commit's frame, so the base gets the engine's shape. The candidate is the
+     * engine's output or the rig's blend of it, each rewritten next frame wherever it
+     * differs from the posed base now (the engine's touched ranges then hold this frame's
+     * supports), so a held vertex is never left behind */
+    float *cand = s->shown == s->deformed ? s->deformed
+                  : s->rig.rig && s->shown == s->rig.shown ? s->rig.shown : NULL;
+    if (!rc && !commit && s->cg_hold > 0 && cand)
+        st->collide_held = fp_contact_hold(s->contact, ref, cand, ranges, nranges, s->cg_hold);
     if (!rc) rc = fp_contact_step(s->contact, ref, s->shown, ranges, nranges, FP_CONTACT_BISECTIONS, &r);
     st->collide_ms += (double)(fp_now_ns() - t0) / 1e6;
     if (rc) { /* out of memory: the guard is unusable; show the reference, a new guard next frame */
@@ -716,7 +746,7 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame
             const uint32_t *touched;
             size_t ntouched = fp_engine_step_touched(&s->engine, &touched);
             s->shown = fp_rig_step_finish(&s->rig, s->deformed, touched, ntouched);
-            contact_guard(s, ref, st);
+            contact_guard(s, ref, (cs->intents & FP_INTENT_COMMIT) != 0, st);
             /* the output differs from the last only in the engine's ranges (blocks in a
              * support now or at its last run), unless the guard's shape is or was shown */
             s->shown_kind = s->contact && s->shown == fp_contact_shape(s->contact) ? SHOWN_OTHER : SHOWN_ENGINE;

@@ -1330,10 +1330,166 @@ static void test_contact_boundary(void **state)
     assert_true(touching > pairs / 4);
 }
 
+/* fp_contact_hold against its rule, checked per vertex in double: held (P's vertex back,
+ * bit for bit) exactly where the candidate differs from P and from ref and moved less than
+ * eps from P in every coordinate, inside the ranges; nothing else written */
+static void test_hold_rule(void **state)
+{
+    (void)state;
+    float *ref;
+    size_t n, t;
+    uint32_t *tris;
+    sheets(16, 0.2f, &ref, &n, &tris, &t);
+    const float eps = 1e-3f;
+    fp_contact *c;
+    assert_int_equal(fp_contact_create(tris, t, n, ref, &c), 0);
+    float *cand = malloc(n * 3 * sizeof(float)), *before = malloc(n * 3 * sizeof(float));
+    assert_int_equal(fp_contact_hold(c, ref, cand, NULL, SIZE_MAX, eps), 0); /* no reference yet */
+    assert_int_equal(fp_contact_reference(c, ref, NULL, SIZE_MAX), 0);
+    /* P: every third vertex raised by 0.3 eps (accepted: no crossing, no flip) */
+    memcpy(cand, ref, n * 3 * sizeof(float));
+    for (size_t v = 0; v < n; v += 3) cand[3 * v + 2] += 0.3f * eps;
+    fp_contact_result r;
+    assert_int_equal(fp_contact_step(c, ref, cand, NULL, SIZE_MAX, 6, &r), 0);
+    assert_true(r.t == 1.0);
+    const float *P = fp_contact_shape(c);
+    assert_memory_equal(P, cand, n * 3 * sizeof(float));
+    /* the candidate: per vertex one of the cases, by a random draw */
+    size_t cases[6] = {0};
+    for (size_t v = 0; v < n; v++) {
+        int k = (int)(urand() * 6);
+        float *q = cand + 3 * v;
+        const float *p = P + 3 * v;
+        int axis = (int)(urand() * 3);
+        memcpy(q, p, 3 * sizeof(float));
+        switch (k) {
+        case 0: break;                                                  /* unmoved */
+        case 1: q[axis] += (float)(urand() * 0.9) * eps; break;         /* small */
+        case 2: q[axis] += (float)(1.0 + urand()) * eps; break;         /* large */
+        case 3: memcpy(q, ref + 3 * v, 3 * sizeof(float)); break;       /* back to ref */
+        case 4: q[axis] -= (float)(urand() * 0.9) * eps; q[(axis + 1) % 3] += 0.5f * eps; break;
+        case 5: q[axis] = NAN; break;                                   /* not a number */
+        }
+        cases[k]++;
+    }
+    memcpy(before, cand, n * 3 * sizeof(float));
+    /* ranges: the first half of the vertices and a stretch of the second, clipped past n */
+    uint32_t ranges[4] = {0, (uint32_t)(n / 2), (uint32_t)(3 * n / 4), (uint32_t)n};
+    size_t held = fp_contact_hold(c, ref, cand, ranges, 2, eps), want = 0;
+    for (size_t v = 0; v < n; v++) {
+        const float *q = before + 3 * v, *p = P + 3 * v, *f = ref + 3 * v;
+        bool in = v < n / 2 || v >= 3 * n / 4;
+        double d = 0;
+        for (int k = 0; k < 3; k++) d = fmax(d, fabs((double)q[k] - p[k]));
+        bool nan = isnan(q[0]) || isnan(q[1]) || isnan(q[2]);
+        bool hold = in && !nan && d < eps && memcmp(q, p, 12) && memcmp(q, f, 12);
+        want += hold;
+        if (hold) assert_memory_equal(cand + 3 * v, p, 3 * sizeof(float));
+        else assert_memory_equal(cand + 3 * v, q, 3 * sizeof(float));
+    }
+    assert_int_equal(held, want);
+    assert_true(held > n / 8 && cases[2] > 0 && cases[3] > 0 && cases[5] > 0);
+    /* eps 0 or NaN: nothing */
+    memcpy(cand, before, n * 3 * sizeof(float));
+    assert_int_equal(fp_contact_hold(c, ref, cand, NULL, SIZE_MAX, 0.0f), 0);
+    assert_int_equal(fp_contact_hold(c, ref, cand, NULL, SIZE_MAX, NAN), 0);
+    assert_memory_equal(cand, before, n * 3 * sizeof(float));
+    printf("# %zu of %zu vertices held (%zu small moves drawn)\n", held, n, cases[1] + cases[4]);
+    fp_contact_destroy(&c);
+    free(cand), free(before), free(ref), free(tris);
+}
+
+/* A session with the hold (the default) against one with exact_frames, on the same
+ * recording: each shown frame within the hold's eps (1e-5 of the face's diagonal) of the
+ * exact one in every coordinate, commits bit for bit the same, the hold used; with the ICT
+ * rig (its blend is the candidate) and without */
+static void session_hold(const char *rig)
+{
+    char input[4400], err[2048];
+    snprintf(input, sizeof input, "replay:%s/hands/leap-motion/three-claps_joints_mm.csv,fast=1",
+             fp_test_data_dir());
+    fp_session *s[2];
+    for (int i = 0; i < 2; i++) {
+        fp_session_options so;
+        fp_test_face_options(&so, "anchored", FP_TEST_RIGS_DIR);
+        so.inputs[0] = input;
+        so.input_count = 1;
+        so.input_clock = true;
+        so.rig_path = rig;
+        so.frame_thread = -1;
+        so.exact_frames = i == 1;
+        s[i] = NULL;
+        int rc = fp_session_create(&so, &s[i], err, sizeof err);
+        if (!rc) rc = fp_session_start(s[i], err, sizeof err);
+        if (rc) fprintf(stderr, "%s\n", err);
+        assert_int_equal(rc, 0);
+    }
+    size_t n = fp_session_vertex_count(s[0]);
+    const float *loaded = fp_session_base(s[0]);
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t v = 0; v < n; v++)
+        for (int k = 0; k < 3; k++) {
+            lo[k] = fmin(lo[k], loaded[3 * v + k]);
+            hi[k] = fmax(hi[k], loaded[3 * v + k]);
+        }
+    double eps = 1e-5 * sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                             (hi[2] - lo[2]) * (hi[2] - lo[2]));
+    int64_t t0[2];
+    for (int i = 0; i < 2; i++)
+        while (fp_session_input_start(s[i], &t0[i]) == 0) fp_test_nap_ms(1);
+    size_t held = 0, frames = 0, active = 0, commits = 0, differ = 0;
+    double worst = 0;
+    bool scaled = false;
+    for (uint64_t k = 0; !fp_session_finished(s[0]) || !fp_session_finished(s[1]); k++) {
+        assert_true(k < 100000);
+        int64_t dt = (int64_t)llround((double)k * 1e9 / 60);
+        while (!fp_session_inputs_ready(s[0], t0[0] + dt) || !fp_session_inputs_ready(s[1], t0[1] + dt))
+            fp_test_nap_ms(1);
+        fp_frame_stats st[2];
+        for (int i = 0; i < 2; i++) fp_session_step(s[i], t0[i] + dt, &st[i]);
+        assert_int_equal(st[0].active, st[1].active);
+        assert_int_equal(st[0].committed, st[1].committed);
+        assert_int_equal(st[1].collide_held, 0);
+        scaled |= st[0].collide_t < 1 || st[1].collide_t < 1;
+        frames++;
+        active += st[0].active;
+        commits += st[0].committed;
+        if (st[0].committed) assert_int_equal(st[0].collide_held, 0); /* a commit is exact */
+        held += st[0].collide_held;
+        if (scaled) continue; /* the two may take different paths from a scale-back on */
+        const float *a = fp_session_positions(s[0]), *b = fp_session_positions(s[1]);
+        bool same = true;
+        for (size_t v = 0; v < 3 * n; v++) {
+            double d = fabs((double)a[v] - b[v]);
+            worst = fmax(worst, d);
+            same &= a[v] == b[v];
+            if (!(d < eps)) fail_msg("frame %llu: coordinate %zu differs by %g (eps %g)", (unsigned long long)k, v, d, eps);
+        }
+        differ += !same;
+        if (memcmp(fp_session_base(s[0]), fp_session_base(s[1]), n * 3 * sizeof(float)))
+            fail_msg("frame %llu: the bases differ", (unsigned long long)k);
+    }
+    printf("# rig %s: %zu frames, %zu deforming, %zu commits, %zu held vertex-frames, %zu frames "
+           "differing (worst %.3g, eps %.3g)%s\n", rig, frames, active, commits, held, differ, worst, eps,
+           scaled ? ", a scale-back (compared up to it)" : "");
+    assert_true(active > 50 && commits > 0);
+    assert_true(held > 1000 && differ > 0);
+    for (int i = 0; i < 2; i++) fp_session_destroy(&s[i]);
+}
+
+static void test_session_hold(void **state)
+{
+    (void)state;
+    session_hold("none");
+    session_hold(NULL); /* the ICT rig, found in the rigs */
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_tri_tri),
+        cmocka_unit_test(test_hold_rule),
+        cmocka_unit_test(test_session_hold),
         cmocka_unit_test(test_seam),
         cmocka_unit_test(test_sheets_random),
         cmocka_unit_test(test_ict_frame),
