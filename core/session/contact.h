@@ -315,7 +315,7 @@ int fp_contact_reference(fp_contact *c, const float *ref, const uint32_t *ranges
 int fp_contact_step(fp_contact *c, const float *ref, const float *cand, const uint32_t *ranges,
                     size_t nranges, int iters, fp_contact_result *res);
 
-/** The hold (issue 18): before fp_contact_step, where the candidate cand (n x 3, written)
+/** The hold (issue 18): before fp_contact_step, where the candidate cand (n x 3 floats, the caller's, written in place, not kept)
  *  moved less than eps (mesh units, in every coordinate) from P (fp_contact_shape) since the
  *  last step, it gets P's vertex back, bit for bit, so that vertex is no moved vertex of the
  *  step and its triangles need no check. A vertex where cand equals the reference ref (bit

@@ -81,7 +81,8 @@ struct fp_session {
     unsigned long cg_frames, cg_limited; /* this gesture: frames checked, scaled back */
     double cg_t;                  /* this gesture: smallest fraction kept */
     float cg_hold;                /* fp_contact_hold's eps (mesh units): FP_CONTACT_HOLD of the
-                                     loaded face's diagonal; 0: none (options.exact_frames) */
+                                     loaded face's diagonal (view.bounds); 0: none
+                                     (options.exact_frames) */
 
     /* what changed since the viewer last asked (fp_session_touched, changed.h) */
     fp_changed shown_changed, base_changed;
@@ -142,19 +143,6 @@ static int contact_open(fp_session *s)
     }
     if (!rc) rc = fp_contact_reference(s->contact, s->shown, NULL, SIZE_MAX);
     if (rc) fp_contact_destroy(&s->contact);
-    if (!rc && s->cg_hold < 0) { /* the hold's eps, once: the loaded face's diagonal */
-        double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-        for (size_t v = 0; v < s->n; v++)
-            for (int k = 0; k < 3; k++) {
-                double x = s->loaded[3 * v + k];
-                if (x < lo[k]) lo[k] = x;
-                if (x > hi[k]) hi[k] = x;
-            }
-        double d = s->n ? sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
-                               (hi[2] - lo[2]) * (hi[2] - lo[2]))
-                        : 0.0;
-        s->cg_hold = isfinite(d) ? (float)(FP_CONTACT_HOLD * d) : 0.0f;
-    }
     const uint32_t *r;
     fp_changed_take(&s->cg_ref, &r); /* from here: where the reference changes */
     s->cg_sync = FP_CG_SYNCED;
@@ -381,7 +369,8 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
     s->mapping_budget_ms = opt->mapping_budget_ms;
     s->whole_rig_commit = opt->whole_rig_commit;
     s->frame_thread_opt = opt->frame_thread;
-    s->cg_hold = opt->exact_frames ? 0.0f : -1.0f; /* (-1: made by contact_open) */
+    /* the hold's eps from the loaded face's diagonal (diag: its square, above) */
+    s->cg_hold = opt->exact_frames || !isfinite(diag) ? 0.0f : (float)(FP_CONTACT_HOLD * sqrt(diag));
     s->engine.jacobian = opt->measure_jacobian;
     if ((rc = fp_engine_step_set_topology(&s->engine, s->mesh->triangles, s->mesh->triangle_count))) {
         snprintf(err, errlen, "session: out of memory for %zu triangles", s->mesh->triangle_count);

@@ -1425,15 +1425,14 @@ static void session_hold(const char *rig)
         assert_int_equal(rc, 0);
     }
     size_t n = fp_session_vertex_count(s[0]);
-    const float *loaded = fp_session_base(s[0]);
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (size_t v = 0; v < n; v++)
-        for (int k = 0; k < 3; k++) {
-            lo[k] = fmin(lo[k], loaded[3 * v + k]);
-            hi[k] = fmax(hi[k], loaded[3 * v + k]);
-        }
-    double eps = 1e-5 * sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
-                             (hi[2] - lo[2]) * (hi[2] - lo[2]));
+    float lo[3], hi[3];
+    fp_mesh_bounds(fp_session_mesh(s[0]), lo, hi);
+    double diag2 = 0; /* as the session makes its eps */
+    for (int k = 0; k < 3; k++) {
+        double e = hi[k] - lo[k];
+        diag2 += e * e;
+    }
+    double eps = (float)(1e-5 * sqrt(diag2));
     int64_t t0[2];
     for (int i = 0; i < 2; i++)
         while (fp_session_input_start(s[i], &t0[i]) == 0) fp_test_nap_ms(1);
