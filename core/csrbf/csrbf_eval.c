@@ -83,6 +83,8 @@ typedef void (*block_fn)(const float *, const float *, const float *, const uint
 #else
 #define CSRBF_SIMD 0
 #endif
+/* The instruction set a call runs on (isa_pick): the tree walk and the kernels follow it. */
+enum { SIMD_NONE = 0, SIMD_AVX2 = 1, SIMD_AVX512 = 2 };
 
 #if CSRBF_SIMD
 /* Statistics of a run of blocks (the fast path counts them per block, in registers). */
@@ -372,6 +374,78 @@ select_visit_avx512(block_select *S, int level, size_t first, uint64_t mask, siz
     }
 }
 
+/* group_masks_c with AVX2 (the 16 boxes as two halves of 8; the same operations as
+ * group_masks_avx512: max, max, mul, fmadd, fmadd, compare, so the same decisions): cm[l] gets
+ * bit j where centre j of mask meets box first + l. Returns the lanes with a centre. */
+static inline __attribute__((target("avx2,fma"), always_inline)) unsigned
+group_masks_avx2(const float *const lo[3], const float *const hi[3], size_t first, uint64_t mask,
+                 const float *cx, const float *cy, const float *cz, float r2c,
+                 uint64_t cm[CSRBF_FAN])
+{
+    const __m256 zero = _mm256_setzero_ps(), lim = _mm256_set1_ps(r2c);
+    unsigned any = 0;
+    for (int h = 0; h < 2; h++) { /* lanes 8h .. 8h + 7 */
+        const size_t f = first + 8 * (size_t)h;
+        const __m256 lx = _mm256_loadu_ps(lo[0] + f), ly = _mm256_loadu_ps(lo[1] + f),
+                     lz = _mm256_loadu_ps(lo[2] + f), hx = _mm256_loadu_ps(hi[0] + f),
+                     hy = _mm256_loadu_ps(hi[1] + f), hz = _mm256_loadu_ps(hi[2] + f);
+        __m256i c0 = _mm256_setzero_si256(), c1 = c0; /* lanes 8h .. 8h + 3, 8h + 4 .. 8h + 7 */
+        for (uint64_t mk = mask; mk; mk &= mk - 1) {
+            const unsigned j = (unsigned)__builtin_ctzll(mk);
+            const __m256 px = _mm256_set1_ps(cx[j]), py = _mm256_set1_ps(cy[j]),
+                         pz = _mm256_set1_ps(cz[j]);
+            __m256 ex = _mm256_max_ps(_mm256_max_ps(_mm256_sub_ps(lx, px), _mm256_sub_ps(px, hx)), zero);
+            __m256 ey = _mm256_max_ps(_mm256_max_ps(_mm256_sub_ps(ly, py), _mm256_sub_ps(py, hy)), zero);
+            __m256 ez = _mm256_max_ps(_mm256_max_ps(_mm256_sub_ps(lz, pz), _mm256_sub_ps(pz, hz)), zero);
+            __m256 d2 = _mm256_mul_ps(ex, ex);
+            d2 = _mm256_fmadd_ps(ey, ey, d2);
+            d2 = _mm256_fmadd_ps(ez, ez, d2);
+            const __m256 t = _mm256_cmp_ps(d2, lim, _CMP_LT_OQ);
+            const __m256i ti = _mm256_castps_si256(t), bit = _mm256_set1_epi64x((long long)(1ull << j));
+            /* the 8 32-bit lane masks widened to 64 bits, four at a time */
+            c0 = _mm256_or_si256(c0, _mm256_and_si256(_mm256_cvtepi32_epi64(_mm256_castsi256_si128(ti)), bit));
+            c1 = _mm256_or_si256(c1, _mm256_and_si256(_mm256_cvtepi32_epi64(_mm256_extracti128_si256(ti, 1)), bit));
+            any |= (unsigned)_mm256_movemask_ps(t) << (8 * h);
+        }
+        _mm256_storeu_si256((__m256i *)(cm + 8 * h), c0);
+        _mm256_storeu_si256((__m256i *)(cm + 8 * h + 4), c1);
+    }
+    return any;
+}
+
+/* select_visit_c with AVX2 (group_masks_avx2), restricted to the blocks [lo, hi). */
+__attribute__((target("avx2,fma,popcnt"))) static void
+select_visit_avx2(block_select *S, int level, size_t first, uint64_t mask, size_t lo, size_t hi)
+{
+    _Static_assert(CSRBF_FAN == 16, "node n of level l holds blocks n 16^l .. (n+1) 16^l - 1");
+    const unsigned sh = 4u * (unsigned)level;
+    const size_t n0 = lo >> sh, n1 = ((hi - 1) >> sh) + 1; /* nodes n0..n1-1 hold [lo, hi) */
+    if (n1 <= first || n0 >= first + CSRBF_FAN) return;
+    const size_t l0 = n0 > first ? n0 - first : 0,
+                 l1 = n1 - first < CSRBF_FAN ? n1 - first : CSRBF_FAN;
+    const unsigned range = ((1u << l1) - 1u) & ~((1u << l0) - 1u);
+    const csrbf_points *P = S->P;
+    uint64_t cm[CSRBF_FAN];
+    unsigned any = group_masks_avx2((const float *const *)P->tlo[level],
+                                    (const float *const *)P->thi[level], first, mask, S->cx,
+                                    S->cy, S->cz, S->r2c, cm) &
+                   range;
+    if (level == 0) {
+        size_t k = S->k;
+        for (; any; any &= any - 1) {
+            const unsigned l = (unsigned)__builtin_ctz(any);
+            S->blk[k] = (uint32_t)(first + l);
+            S->msk[k++] = cm[l];
+        }
+        S->k = k;
+        return;
+    }
+    for (; any; any &= any - 1) {
+        const unsigned l = (unsigned)__builtin_ctz(any);
+        select_visit_avx2(S, level - 1, (first + l) * CSRBF_FAN, cm[l], lo, hi);
+    }
+}
+
 /* count_bits with the popcnt instruction (count_bits inlined under this target) */
 __attribute__((target("popcnt"))) static size_t count_bits_popcnt(const uint64_t *msk, size_t k,
                                                                    size_t *cum)
@@ -402,19 +476,21 @@ static const eval_isa *isa_pick(void)
 }
 #endif
 
-/* Walk the tree for the solver's centres into S (blk / msk with room for every block). */
-static void select_blocks(block_select *S, int avx512, size_t m)
+/* Walk the tree for the solver's centres into S (blk / msk with room for every block); simd:
+ * SIMD_AVX512, SIMD_AVX2 or 0 (the portable walk). */
+static void select_blocks(block_select *S, int simd, size_t m)
 {
     const uint64_t all = m >= 64 ? ~0ull : (1ull << m) - 1;
     S->k = 0;
 #if CSRBF_SIMD
-    if (avx512) {
-        select_visit_avx512(S, S->P->tlevels - 1, 0, all, 0, S->P->nblocks);
+    if (simd) {
+        if (simd == SIMD_AVX512) select_visit_avx512(S, S->P->tlevels - 1, 0, all, 0, S->P->nblocks);
+        else select_visit_avx2(S, S->P->tlevels - 1, 0, all, 0, S->P->nblocks);
         S->evals = count_bits_popcnt(S->msk, S->k, S->cum);
         return;
     }
 #endif
-    (void)avx512;
+    (void)simd;
     select_visit_c(S, S->P->tlevels - 1, 0, all, 0, S->P->nblocks);
     S->evals = count_bits(S->msk, S->k, S->cum);
 }
@@ -447,7 +523,7 @@ static size_t select_centres(const csrbf_solver *s, const csrbf_points *P, size_
         c1[a] = csrbf_grid_coord(g, hi[a] + s->R, a);
         cells *= (double)(c1[a] - c0[a] + 1);
     }
-    if (m <= 32 || cells > (double)m) {
+    if (m <= CSRBF_SCAN_ALL_MAX || cells > (double)m) {
         for (size_t i = 0; i < m; i++)
             if (meets(s->c + 3 * i, lo, hi, R2)) {
                 if (any) return 1;
@@ -843,10 +919,10 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
                     : s->opt.kernel == CSRBF_PSI32 ? block_psi32
                                                    : block_psi31;
     const int ki = s->opt.kernel == CSRBF_PSI30 ? 1 : s->opt.kernel == CSRBF_PSI32 ? 2 : 0;
-    int avx512 = 0;
+    int simd = SIMD_NONE;
 #if CSRBF_SIMD
     const eval_isa *isa = isa_pick();
-    avx512 = isa == &isa_avx512;
+    simd = isa == &isa_avx512 ? SIMD_AVX512 : isa ? SIMD_AVX2 : SIMD_NONE;
     if (isa) kern = isa->kern[ki];
 #else
     const void *isa = NULL;
@@ -955,7 +1031,7 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
         S.msk = (uint64_t *)(sp = fbase);
         S.blk = (uint32_t *)(sp + blk_m);
         S.cum = (size_t *)(sp + blk_m + blk_b);
-        select_blocks(&S, avx512, m);
+        select_blocks(&S, simd, m);
     } else if (use_tree) {
         S.blk = s->sel_blk;
         S.msk = s->sel_msk;
@@ -974,7 +1050,7 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
             fused = 1;
             s->sel_k = SEL_PENDING;
         } else {
-            select_blocks(&S, avx512, m);
+            select_blocks(&S, simd, m);
             s->sel_k = S.k;
             s->sel_evals = S.evals;
             s->sel_refined = 0;
@@ -1026,8 +1102,8 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
                     size_t lo = nb * q / fparts, hi = nb * (q + 1) / fparts;
                     if (hi <= lo) continue;
                     L.k = 0;
-                    if (avx512) select_visit_avx512(&L, top, 0, all, lo, hi);
-                    else select_visit_c(&L, top, 0, all, lo, hi);
+                    if (simd == SIMD_AVX512) select_visit_avx512(&L, top, 0, all, lo, hi);
+                    else select_visit_avx2(&L, top, 0, all, lo, hi);
                     drive(P, out, L.blk, L.msk, 0, L.k, lo, hi, m, cpack, inv_r2, NULL, &ts);
                 }
                 pairs += ts.pairs;

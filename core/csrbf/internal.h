@@ -31,6 +31,12 @@ typedef struct csrbf_grid {
     int64_t *cell;          /* n x 3 cell coordinates */
 } csrbf_grid;
 
+/* Up to this many points a neighbour search (the solver's merge, its matrix, the guard's
+ * neighbour lists, the general path's centres of a block) tests every pair instead of probing
+ * the grid's 27 or 125 hashed cells per point: 10 centres, 7 us a set_start_points call by the
+ * grid, 1 by the scan. The pairs found are the same (cells are at least as wide as the reach). */
+#define CSRBF_SCAN_ALL_MAX 32
+
 int csrbf_grid_build(csrbf_grid *g, const double *p, size_t n, double h);
 void csrbf_grid_free(csrbf_grid *g);
 static inline size_t csrbf_grid_bucket(const csrbf_grid *g, int64_t x, int64_t y, int64_t z)
