@@ -117,6 +117,7 @@ void csrbf_points_destroy(csrbf_points **pp)
     if (!pp || !*pp) return;
     csrbf_points *p = *pp;
     free(p->xyz);
+    free(p->pend);
     near_free(p->near);
     for (int a = 0; a < 3; a++) {
         free(p->s[a]);
@@ -190,9 +191,29 @@ int csrbf_points_create(size_t n, const float *xyz, csrbf_points **out)
     return CSRBF_OK;
 }
 
+/* The pending ranges' positions (p->xyz) into the nearest index, its boxes refit. */
+static void near_take_pending(csrbf_points *p)
+{
+    struct csrbf_near *x = p->near;
+    for (size_t r = 0; x && r < p->npend; r++)
+        for (size_t k = p->pend[2 * r], e = k + p->pend[2 * r + 1]; k < e; k++) {
+            uint32_t q = x->place[k];
+            for (int a = 0; a < 3; a++) x->s[a][q] = p->xyz[3 * k + a];
+            x->dirty[0][q / CSRBF_BLOCK] = 1;
+        }
+    if (x && p->npend) near_refit_dirty(x, p->n);
+    p->npend = 0;
+}
+
+void csrbf_points_sync_nearest(csrbf_points *p)
+{
+    if (p) near_take_pending(p);
+}
+
 int csrbf_points_update(csrbf_points *p, const float *xyz)
 {
     if (!p || !xyz || check(p->n, xyz)) return CSRBF_ERR_INVALID;
+    near_take_pending(p); /* (the index learns what moved by comparing with the blocks) */
     memcpy(p->xyz, xyz, p->n * 3 * sizeof(float));
     fill_blocks(p);
     if (p->near) near_refit_dirty(p->near, p->n);
@@ -200,24 +221,56 @@ int csrbf_points_update(csrbf_points *p, const float *xyz)
     return CSRBF_OK;
 }
 
-int csrbf_points_update_ranges(csrbf_points *p, const float *xyz, const uint32_t *ranges,
-                               size_t nranges)
+/* csrbf_points_update_ranges and _later: later, the index's part is left to
+ * near_take_pending (the ranges kept in p->pend), else done now. */
+static int update_ranges(csrbf_points *p, const float *xyz, const uint32_t *ranges, size_t nranges,
+                         int later)
 {
     if (!p || !xyz || (!ranges && nranges)) return CSRBF_ERR_INVALID;
     for (size_t r = 0; r < nranges; r++) {
         size_t v0 = ranges[2 * r], c = ranges[2 * r + 1];
         if (v0 > p->n || c > p->n - v0 || check(c, xyz + 3 * v0)) return CSRBF_ERR_INVALID;
     }
+    near_take_pending(p); /* one update pending at most */
+    if (later && p->near && nranges > p->pend_cap) {
+        uint32_t *q = realloc(p->pend, 2 * nranges * sizeof *q);
+        if (q) {
+            p->pend = q;
+            p->pend_cap = nranges;
+        }
+    }
+    later = later && p->near && nranges <= p->pend_cap; /* (out of memory: now) */
     for (size_t r = 0; r < nranges; r++) {
         size_t v0 = ranges[2 * r], c = ranges[2 * r + 1];
         if (!c) continue;
         memcpy(p->xyz + 3 * v0, xyz + 3 * v0, c * 3 * sizeof(float));
-        fill_block_range(p, v0 / CSRBF_BLOCK, (v0 + c + CSRBF_BLOCK - 1) / CSRBF_BLOCK);
-        fill_tree_range(p, v0 / CSRBF_BLOCK, (v0 + c + CSRBF_BLOCK - 1) / CSRBF_BLOCK);
+        size_t b0 = v0 / CSRBF_BLOCK, b1 = (v0 + c + CSRBF_BLOCK - 1) / CSRBF_BLOCK;
+        if (later)
+            for (size_t b = b0; b < b1; b++) fill_block(p, b, NULL);
+        else
+            fill_block_range(p, b0, b1);
+        fill_tree_range(p, b0, b1);
     }
-    if (p->near) near_refit_dirty(p->near, p->n);
+    if (later) {
+        memcpy(p->pend, ranges, 2 * nranges * sizeof *ranges);
+        p->npend = nranges;
+    } else if (p->near) {
+        near_refit_dirty(p->near, p->n);
+    }
     p->stamp = csrbf_new_stamp();
     return CSRBF_OK;
+}
+
+int csrbf_points_update_ranges(csrbf_points *p, const float *xyz, const uint32_t *ranges,
+                               size_t nranges)
+{
+    return update_ranges(p, xyz, ranges, nranges, 0);
+}
+
+int csrbf_points_update_ranges_later(csrbf_points *p, const float *xyz, const uint32_t *ranges,
+                                     size_t nranges)
+{
+    return update_ranges(p, xyz, ranges, nranges, 1);
 }
 
 size_t csrbf_points_count(const csrbf_points *p) { return p ? p->n : 0; }
@@ -247,6 +300,7 @@ int csrbf_points_copy(csrbf_points *dst, const csrbf_points *src)
         dst->bhi[a] = src->bhi[a];
     }
     if (dst->near) near_fill(dst->near, dst->n, dst->xyz);
+    dst->npend = 0; /* (the index was made from every position) */
     dst->stamp = csrbf_new_stamp();
     return CSRBF_OK;
 }
@@ -357,7 +411,8 @@ int csrbf_points_nearest(const csrbf_points *p, const float *queries, size_t nq,
      * (a relative margin of 1e-6, far beyond float rounding); +inf stays +inf */
     const double md = (double)max_dist * (1.0 + 1e-6);
     const float lim = (float)(md * md);
-    const struct csrbf_near *x = p->near;
+    /* an index that has not taken the last update yet: the own blocks (the same answers) */
+    const struct csrbf_near *x = p->npend ? NULL : p->near;
     near_view v = x ? (near_view){x->count, x->lo, x->hi, x->s, x->vert, p->n}
                     : (near_view){p->tcount, p->tlo, p->thi, p->s, NULL, p->n};
     int top = (x ? x->levels : p->tlevels) - 1;
@@ -469,7 +524,10 @@ static int morton_cmp(const void *a, const void *b)
 int csrbf_points_index_nearest(csrbf_points *p)
 {
     if (!p) return CSRBF_ERR_INVALID;
-    if (p->near) return CSRBF_OK;
+    if (p->near) {
+        near_take_pending(p);
+        return CSRBF_OK;
+    }
     size_t n = p->n, nb = (n + CSRBF_BLOCK - 1) / CSRBF_BLOCK, np = nb * CSRBF_BLOCK;
     struct csrbf_near *x = calloc(1, sizeof *x);
     morton_item *it = malloc(n * sizeof *it);

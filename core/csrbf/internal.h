@@ -166,6 +166,9 @@ struct csrbf_points {
     size_t tcount[CSRBF_TREE_MAX];            /* nodes per level (unpadded) */
     float *tlo[CSRBF_TREE_MAX][3], *thi[CSRBF_TREE_MAX][3];
     struct csrbf_near *near; /* csrbf_points_index_nearest's index, or NULL */
+    uint32_t *pend;          /* ranges (first, count) whose new positions the index has not
+                                taken yet (csrbf_points_update_ranges_later); npend of them */
+    size_t npend, pend_cap;
 };
 
 /* csrbf_points_index_nearest's index: the vertices in Morton order of their positions when it

@@ -916,7 +916,9 @@ static void step_frame(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     in.rig = fp_rig_step_view(&s->rig);
     const float *surface = fp_rig_step_posed(&s->rig, s->base); /* what the fingers touch */
     s->view.base = surface;
-    /* on its base (the posed surface), within the fingers' reach only (plugin.h) */
+    /* on its base (the posed surface), within the fingers' reach only (plugin.h); the index
+     * first takes a commit of the last frame */
+    fp_engine_step_sync(&s->engine);
     fp_engine_step_tip_distances(&s->engine, s->pose.poses, (float)(FP_TIP_DISTANCE_REACH * s->radius),
                                  in.tip_distance);
     FP_STAGE_END(FP_STAGE_DISTANCES);

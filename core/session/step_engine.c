@@ -70,7 +70,8 @@ void fp_engine_step_set_base(fp_engine_step *e, const float *base)
 
 void fp_engine_step_commit_ranges(fp_engine_step *e, const float *base, const uint32_t *ranges, size_t nr)
 {
-    csrbf_points_update_ranges(e->points, base, ranges, nr);
+    /* the nearest index takes the commit at the next frame's distances (fp_engine_step_sync) */
+    csrbf_points_update_ranges_later(e->points, base, ranges, nr);
     if (e->inter && !e->inter_stale) csrbf_points_update_ranges(e->inter, base, ranges, nr);
     csrbf_touch_commit(e->touch); /* the output buffer is the base now */
     e->touched_valid = true;
@@ -323,6 +324,8 @@ void fp_engine_tip_distances(const float *base, size_t n, const fp_hand_pose han
         for (int f = 0; f < FP_FINGERS; f++)
             if (hands[h].present) d[h][f] = best[nt++];
 }
+
+void fp_engine_step_sync(fp_engine_step *e) { csrbf_points_sync_nearest(e->points); }
 
 void fp_engine_step_tip_distances(const fp_engine_step *e, const fp_hand_pose hands[FP_HANDS],
                                   float reach, float d[FP_HANDS][FP_FINGERS])

@@ -167,6 +167,12 @@ void fp_engine_step_end_gesture(fp_engine_step *e, const fp_slog *log);
 /** Report a pending repeated error and the gesture's guard line; call at destruction. */
 void fp_engine_step_flush(fp_engine_step *e, const fp_slog *log);
 
+/** The nearest index takes the last commit's positions (fp_engine_step_commit_ranges leaves
+ *  it to the next frame: csrbf_points_update_ranges_later); the session calls this before
+ *  fp_engine_step_tip_distances. Until then the distances are the same, from the engine's own
+ *  blocks. Same thread as the rest of e. */
+void fp_engine_step_sync(fp_engine_step *e);
+
 /** Distance from each fingertip (FP_JOINT_TIP) of each present hand to the nearest base
  *  vertex (mesh units) where it is at most `reach` (mesh units; the session passes
  *  FP_TIP_DISTANCE_REACH x radius), +INFINITY beyond it and for an absent hand:

@@ -328,6 +328,110 @@ static void test_nearest_scrambled_ties(void **state)
     free(w);
 }
 
+/* csrbf_points_update_ranges_later (the session's commit): the nearest index takes the
+ * positions at csrbf_points_sync_nearest, and meanwhile csrbf_points_nearest answers from the
+ * own blocks; every answer as the brute force's, before and after the sync, after a second
+ * later update (the first is taken first), after an update_ranges, after a whole update that
+ * leaves the pending vertices where the later update put them (the index must still learn
+ * them), after csrbf_points_index_nearest (it syncs) and after csrbf_points_copy. The blocks
+ * (evaluation) are current at once: bit for bit as a set made from the new positions. */
+static void test_update_ranges_later(void **state)
+{
+    (void)state;
+    enum { N = 30011, Q = 120 };
+    float *v = malloc(N * 3 * sizeof *v), *w = malloc(N * 3 * sizeof *w);
+    float *o1 = malloc(N * 3 * sizeof *o1), *o2 = malloc(N * 3 * sizeof *o2);
+    assert_non_null(v);
+    assert_non_null(w);
+    assert_non_null(o1);
+    assert_non_null(o2);
+    srand(29);
+    for (size_t i = 0; i < 3 * (size_t)N; i++) v[i] = (float)rand() / (float)RAND_MAX * 10.f - 5.f;
+    memcpy(w, v, N * 3 * sizeof *w);
+    csrbf_points *ix = NULL, *fresh = NULL;
+    assert_int_equal(csrbf_points_create(N, v, &ix), CSRBF_OK);
+    assert_int_equal(csrbf_points_index_nearest(ix), CSRBF_OK);
+    float q[Q][3];
+    unsigned hits = 0, far = 0;
+    /* moves the ranges' vertices by up to 3 units; queries: every third on a moved vertex */
+    uint32_t rg[] = {0, 40, 1000, 700, 15000, 3, 29990, 21};
+    const size_t nr = 4;
+#define MOVE_AND_QUERY()                                                                          \
+    do {                                                                                          \
+        for (size_t r = 0; r < nr; r++)                                                           \
+            for (uint32_t i = rg[2 * r]; i < rg[2 * r] + rg[2 * r + 1]; i++)                      \
+                for (int k = 0; k < 3; k++) w[3 * (size_t)i + k] += (float)rand() / (float)RAND_MAX * 6.f - 3.f; \
+        for (int i = 0; i < Q; i++)                                                               \
+            for (int k = 0; k < 3; k++)                                                           \
+                q[i][k] = i % 3 == 0 ? w[3 * (size_t)(rg[2 * (i % 4)] + (uint32_t)i % rg[2 * (i % 4) + 1]) + k] \
+                                     : (float)rand() / (float)RAND_MAX * 12.f - 6.f;              \
+    } while (0)
+    MOVE_AND_QUERY();
+    assert_int_equal(csrbf_points_update_ranges_later(ix, w, rg, nr), CSRBF_OK);
+    check_nearest(ix, w, N, q, Q, &hits, &far); /* pending: the own blocks */
+    csrbf_points_sync_nearest(ix);
+    check_nearest(ix, w, N, q, Q, &hits, &far);
+    csrbf_points_sync_nearest(ix); /* nothing pending: nothing */
+    check_nearest(ix, w, N, q, Q, &hits, &far);
+    /* two later updates in a row on different ranges (the first taken first), then a later
+     * and an immediate one */
+    MOVE_AND_QUERY();
+    assert_int_equal(csrbf_points_update_ranges_later(ix, w, rg, 2), CSRBF_OK);
+    assert_int_equal(csrbf_points_update_ranges_later(ix, w, rg + 4, 2), CSRBF_OK);
+    csrbf_points_sync_nearest(ix);
+    check_nearest(ix, w, N, q, Q, &hits, &far);
+    MOVE_AND_QUERY();
+    assert_int_equal(csrbf_points_update_ranges_later(ix, w, rg, 2), CSRBF_OK);
+    assert_int_equal(csrbf_points_update_ranges(ix, w, rg + 4, 2), CSRBF_OK);
+    check_nearest(ix, w, N, q, Q, &hits, &far);
+    /* the blocks are current: evaluation as on a set made afresh */
+    assert_int_equal(csrbf_points_create(N, w, &fresh), CSRBF_OK);
+    csrbf_options opt = {0};
+    opt.radius = 2.0;
+    csrbf_solver *s = NULL;
+    assert_int_equal(csrbf_solver_create(&opt, &s), CSRBF_OK);
+    float st[24], en[24];
+    for (int i = 0; i < 8; i++)
+        for (int k = 0; k < 3; k++) {
+            st[3 * i + k] = w[3 * (size_t)(rg[2 * (i % 4)] + (uint32_t)i % rg[2 * (i % 4) + 1]) + k];
+            en[3 * i + k] = st[3 * i + k] + 0.05f * (float)(k + 1);
+        }
+    assert_true(csrbf_solver_set_start_points(s, 8, st) >= 0);
+    assert_true(csrbf_solver_set_end_points(s, en) >= 0);
+    MOVE_AND_QUERY();
+    assert_int_equal(csrbf_points_update_ranges_later(ix, w, rg, nr), CSRBF_OK);
+    assert_int_equal(csrbf_points_update(fresh, w), CSRBF_OK);
+    assert_true(csrbf_evaluate(s, fresh, o1, 0, NULL) >= 0);
+    assert_true(csrbf_evaluate(s, ix, o2, 0, NULL) >= 0);
+    assert_memory_equal(o1, o2, N * 3 * sizeof *o1);
+    /* a whole update that leaves the pending vertices where they are and moves others */
+    for (size_t i = 5000; i < 5100; i++) w[3 * i] += 2.5f;
+    for (int i = 0; i < Q; i += 5) memcpy(q[i], w + 3 * (5000 + (size_t)i % 100), sizeof q[i]);
+    assert_int_equal(csrbf_points_update(ix, w), CSRBF_OK);
+    check_nearest(ix, w, N, q, Q, &hits, &far);
+    /* csrbf_points_index_nearest takes what is pending */
+    MOVE_AND_QUERY();
+    assert_int_equal(csrbf_points_update_ranges_later(ix, w, rg, nr), CSRBF_OK);
+    assert_int_equal(csrbf_points_index_nearest(ix), CSRBF_OK);
+    check_nearest(ix, w, N, q, Q, &hits, &far);
+    /* a copy into a set with a pending update: the copy's positions */
+    MOVE_AND_QUERY();
+    assert_int_equal(csrbf_points_update_ranges_later(ix, w, rg, nr), CSRBF_OK);
+    assert_int_equal(csrbf_points_update(fresh, v), CSRBF_OK);
+    assert_int_equal(csrbf_points_copy(ix, fresh), CSRBF_OK);
+    check_nearest(ix, v, N, q, Q, &hits, &far);
+    csrbf_points_sync_nearest(NULL);
+    assert_true(hits > 100 && far > 100);
+#undef MOVE_AND_QUERY
+    csrbf_solver_destroy(&s);
+    csrbf_points_destroy(&ix);
+    csrbf_points_destroy(&fresh);
+    free(v);
+    free(w);
+    free(o1);
+    free(o2);
+}
+
 /* Ties at a distance: a scrambled integer grid (20 x 20 x 20) and queries at cell centres
  * and edge midpoints, whose 8 or 2 nearest vertices are exactly equidistant, in different
  * blocks (Morton blocks are aligned cubes of the grid): the smallest index among them, bit
@@ -471,6 +575,7 @@ int main(void)
         cmocka_unit_test(test_tip_distances_indexed_ict),
         cmocka_unit_test(test_nearest_scrambled_ties),
         cmocka_unit_test(test_nearest_grid_ties),
+        cmocka_unit_test(test_update_ranges_later),
         cmocka_unit_test(test_touched_equals_full),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
