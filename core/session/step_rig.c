@@ -7,6 +7,14 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* slopes takes the posed base on the ranges a commit left to it (slope_pend) */
+static void slopes_take(fp_rig_step *st)
+{
+    if (!st->slope_npend) return;
+    fp_rig_slope_index_update_ranges(st->slopes, st->posed, st->slope_pend, st->slope_npend);
+    st->slope_npend = 0;
+}
+
 static void refresh_view(fp_rig_step *st)
 {
     for (size_t i = 0; i < st->view.landmark_count; i++)
@@ -67,6 +75,7 @@ int fp_rig_step_init(fp_rig_step *st, fp_rig *rig, size_t n, const float *base)
 void fp_rig_step_free(fp_rig_step *st)
 {
     fp_rig_slope_index_destroy(&st->slopes);
+    free(st->slope_pend);
     fp_rig_free(&st->rig);
     free(st->posed);
     free(st->shown);
@@ -127,6 +136,7 @@ bool fp_rig_step_update(fp_rig_step *st, const fp_control_set *cs, const float *
     fp_rig_pose(st->rig, base, st->values, st->posed);
     st->limit_count = 0; /* the finger limits and the blend depend on the posed base */
     fp_rig_slope_index_set(st->slopes, st->posed); /* O(slope vertices), under the pose's O(n) */
+    st->slope_npend = 0;                           /* (the whole posed base taken) */
     st->shown_valid = false;
     memcpy(st->posed_values, st->values, nc * sizeof(float));
     st->dirty = false;
@@ -155,6 +165,7 @@ const fp_control_set *fp_rig_step_run(fp_rig_step *st, const fp_control_set *cs)
     o->capacity = FP_RIG_STEP_MAX_CONTROL;
     if (cs->radius != st->limit_radius) st->limit_count = 0;
     st->limit_radius = cs->radius;
+    slopes_take(st);
     for (size_t i = 0; i < o->count; i++) {
         /* the engine's 0.45 R, and the rig's local bound where the support reaches a ramp
          * (computed again only where the start point moved) */
@@ -227,7 +238,21 @@ void fp_rig_step_rebase_ranges(fp_rig_step *st, const float *base, float *deform
         memcpy(deformed + 3 * v0, st->posed + 3 * v0, 3 * c * sizeof(float));
         if (st->shown_valid) fp_rig_apply_mobility_range(st->rig, st->posed, deformed, st->shown, v0, c);
     }
-    fp_rig_slope_index_update_ranges(st->slopes, st->posed, ranges, nranges);
+    /* the slope index later (slopes_take): its scattered writes are not the commit's */
+    slopes_take(st);
+    if (nranges > st->slope_pend_cap) {
+        uint32_t *q = realloc(st->slope_pend, 2 * nranges * sizeof *q);
+        if (q) {
+            st->slope_pend = q;
+            st->slope_pend_cap = nranges;
+        }
+    }
+    if (nranges <= st->slope_pend_cap) {
+        if (nranges) memcpy(st->slope_pend, ranges, 2 * nranges * sizeof *ranges);
+        st->slope_npend = nranges;
+    } else { /* out of memory for them: now */
+        fp_rig_slope_index_update_ranges(st->slopes, st->posed, ranges, nranges);
+    }
     st->limit_count = 0;
     refresh_view(st);
 }

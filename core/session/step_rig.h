@@ -69,6 +69,12 @@ typedef struct fp_rig_step {
     size_t limit_count;                           /* entries valid; 0 after posing anew */
     fp_rig_slope_index *slopes;                   /* the limits' blocks on the posed base
                                                    * (fp_rig.h), set with each pose */
+    uint32_t *slope_pend;                         /* ranges (first, count) of the posed base
+                                                   * that a commit changed (rebase_ranges) and
+                                                   * slopes has not taken yet: taken before the
+                                                   * next limits (fp_rig_step_run), out of the
+                                                   * commit's frame */
+    size_t slope_npend, slope_pend_cap;
     float start[FP_RIG_STEP_MAX_CONTROL][3], end[FP_RIG_STEP_MAX_CONTROL][3];
     fp_rig_view view;                             /* for mappings */
     fp_rig_landmark landmarks[FP_RIG_MAX_LANDMARKS];
@@ -137,8 +143,9 @@ bool fp_rig_step_posed_current(const fp_rig_step *st);
  *  it): the posed base is posed again there (fp_rig_pose_range; elsewhere it already equals
  *  the pose of the base), `deformed` (the engine's output buffer, n x 3) is set to it there
  *  (the engine's output equals its base after a commit: fp_engine_step_commit), the blend
- *  buffer there too, the limits' boxes grow there, the kept finger limits are forgotten and
- *  the landmarks refreshed. No-op without a rig. O(vertices in the ranges + landmarks). */
+ *  buffer there too, the kept finger limits are forgotten and the landmarks refreshed; the
+ *  limits' boxes grow there at the next fp_rig_step_run (the ranges kept until then, out of
+ *  the commit's frame). No-op without a rig. O(vertices in the ranges + landmarks). */
 void fp_rig_step_rebase_ranges(fp_rig_step *st, const float *base, float *deformed,
                                const uint32_t *ranges, size_t nranges);
 

@@ -127,7 +127,9 @@ static void test_rig_pass_through(void **state)
 /* The rig's finger clamp on the ICT face: every frame's clamped control set equals one made
  * with fp_rig_finger_limit computed afresh on the current posed base, while the step keeps
  * the limits of unmoved start points (an anchored gesture), after a start point moves, the
- * radius changes, and the jaw is posed anew (the posed base changed). */
+ * radius changes, the jaw is posed anew (the posed base changed), and after commits that
+ * move the base on ranges (fp_rig_step_rebase_ranges, whose slope index update waits for the
+ * next limits). */
 static void expect_clamped(const fp_rig_step *r, const fp_control_set *in, const fp_control_set *out)
 {
     assert_int_equal(out->count, in->count);
@@ -170,6 +172,9 @@ static void test_rig_clamp_kept(void **state)
     cs.radius = 2.0;
     cs.active = true;
     size_t n = m->vertex_count;
+    float *moved = malloc(n * 3 * sizeof *moved), *scratch = malloc(n * 3 * sizeof *scratch);
+    assert_non_null(moved);
+    assert_non_null(scratch);
     unsigned limited = 0;
     for (int frame = 0; frame < 40; frame++) {
         if (frame == 0 || frame == 25) /* a new gesture: new start points */
@@ -181,6 +186,13 @@ static void test_rig_clamp_kept(void **state)
             assert_int_equal(fp_rig_step_set_channel(&r, "jaw.open", 0.8f), 0);
             assert_true(fp_rig_step_update(&r, NULL, m->positions, NULL));
         }
+        if (frame == 30 || frame == 35) { /* commits: the base moves on ranges (rebase_ranges),
+                                             a third of the face, then all of it */
+            for (size_t v = 0; v < n; v++)
+                for (int k = 0; k < 3; k++) moved[3 * v + k] = m->positions[3 * v + k] + (k == 0 ? 0.2f * (float)(frame - 29) : 0.f);
+            uint32_t rg[2] = {frame == 30 ? (uint32_t)(n / 3) : 0, frame == 30 ? (uint32_t)(n / 3) : (uint32_t)n};
+            fp_rig_step_rebase_ranges(&r, moved, scratch, rg, 1);
+        }
         for (int i = 0; i < 4; i++)
             for (int k = 0; k < 3; k++) en[i][k] = st[i][k] + (k == 2 ? 1.5f : 0.3f) * (float)(frame % 5 + 1);
         const fp_control_set *out = fp_rig_step_run(&r, &cs);
@@ -191,6 +203,8 @@ static void test_rig_clamp_kept(void **state)
     assert_true(limited > 0); /* the rig's own limit acted somewhere, not only the 0.45 R */
     fp_rig_step_free(&r);
     fp_mesh_free(&m);
+    free(moved);
+    free(scratch);
 }
 
 /* The mobility blend over the engine's touched ranges only equals the whole blend bit for bit,
