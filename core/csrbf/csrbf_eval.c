@@ -141,11 +141,12 @@ CSRBF_CLONES static void write_block(float *restrict out, const float *restrict 
     }
 }
 
-/* Portable group_masks_avx512 (same operations, same decisions). */
-CSRBF_CLONES static void group_masks_c(const float *const lo[3], const float *const hi[3],
-                                       size_t first, uint64_t mask, const float *cx,
-                                       const float *cy, const float *cz, float r2c,
-                                       uint64_t cm[CSRBF_FAN])
+/* Portable group_masks_avx512 (same operations, same decisions): cm[l] gets bit j where
+ * centre j of mask meets box first + l. Returns the lanes with a centre. */
+CSRBF_CLONES static unsigned group_masks_c(const float *const lo[3], const float *const hi[3],
+                                           size_t first, uint64_t mask, const float *cx,
+                                           const float *cy, const float *cz, float r2c,
+                                           uint64_t cm[CSRBF_FAN])
 {
     float d2[CSRBF_FAN];
     for (int l = 0; l < CSRBF_FAN; l++) cm[l] = 0;
@@ -166,6 +167,9 @@ CSRBF_CLONES static void group_masks_c(const float *const lo[3], const float *co
         }
         for (int l = 0; l < CSRBF_FAN; l++) cm[l] |= d2[l] < r2c ? 1ull << j : 0ull;
     }
+    unsigned any = 0;
+    for (int l = 0; l < CSRBF_FAN; l++) any |= (unsigned)(cm[l] != 0) << l;
+    return any;
 }
 
 /* The blocks whose box meets a support, found through the block tree (csrbf_points) for all
@@ -202,39 +206,47 @@ typedef struct block_select {
 #endif
 #define WCACHE_PAIR_BYTES (B * sizeof(float) + sizeof(uint16_t))
 
-static void select_emit(block_select *S, size_t first, const uint64_t cm[CSRBF_FAN])
-{
-    for (int l = 0; l < CSRBF_FAN; l++)
-        if (cm[l]) {
-            S->blk[S->k] = (uint32_t)(first + (size_t)l);
-            S->msk[S->k++] = cm[l];
-        }
-}
-
-/* The blocks of [lo, hi) whose box meets a support of mask, from node group first of level
- * down (portable; select_visit_avx512 is the same walk with AVX-512). */
-static void select_visit_c(block_select *S, int level, size_t first, uint64_t mask, size_t lo,
-                           size_t hi)
+/* The children of node group `first` of `level` (nodes first .. first + 15) that hold blocks
+ * of [lo, hi): bit l for node first + l (0: none). */
+static inline unsigned walk_range(int level, size_t first, size_t lo, size_t hi)
 {
     _Static_assert(CSRBF_FAN == 16, "node n of level l holds blocks n 16^l .. (n+1) 16^l - 1");
     const unsigned sh = 4u * (unsigned)level;
     const size_t n0 = lo >> sh, n1 = ((hi - 1) >> sh) + 1; /* nodes n0..n1-1 hold [lo, hi) */
-    if (n1 <= first || n0 >= first + CSRBF_FAN) return;
+    if (n1 <= first || n0 >= first + CSRBF_FAN) return 0;
     const size_t l0 = n0 > first ? n0 - first : 0,
                  l1 = n1 - first < CSRBF_FAN ? n1 - first : CSRBF_FAN;
-    uint64_t cm[CSRBF_FAN];
-    const csrbf_points *P = S->P;
-    group_masks_c((const float *const *)P->tlo[level], (const float *const *)P->thi[level],
-                  first, mask, S->cx, S->cy, S->cz, S->r2c, cm);
-    for (size_t l = 0; l < CSRBF_FAN; l++)
-        if (l < l0 || l >= l1) cm[l] = 0;
-    if (level == 0) {
-        select_emit(S, first, cm);
-        return;
-    }
-    for (int l = 0; l < CSRBF_FAN; l++)
-        if (cm[l]) select_visit_c(S, level - 1, (first + (size_t)l) * CSRBF_FAN, cm[l], lo, hi);
+    return ((1u << l1) - 1u) & ~((1u << l0) - 1u);
 }
+
+/* The blocks of [lo, hi) whose box meets a support of mask, from node group first of level
+ * down: NAME walks with GROUP_MASKS (a group_masks_*: cm[l], bit j for centre j of mask
+ * meeting child l; returns the children with a centre) under ATTR. select_visit_c (portable)
+ * and select_visit_avx2; select_visit_avx512 is the same walk with compress stores. */
+#define DEFINE_SELECT_VISIT(NAME, ATTR, GROUP_MASKS)                                           \
+    ATTR static void NAME(block_select *S, int level, size_t first, uint64_t mask, size_t lo,  \
+                          size_t hi)                                                           \
+    {                                                                                          \
+        const unsigned range = walk_range(level, first, lo, hi);                               \
+        if (!range) return;                                                                    \
+        const csrbf_points *P = S->P;                                                          \
+        uint64_t cm[CSRBF_FAN];                                                                \
+        unsigned any = GROUP_MASKS((const float *const *)P->tlo[level],                        \
+                                   (const float *const *)P->thi[level], first, mask, S->cx,    \
+                                   S->cy, S->cz, S->r2c, cm) &                                 \
+                       range;                                                                  \
+        for (; any; any &= any - 1) {                                                          \
+            const unsigned l = (unsigned)__builtin_ctz(any);                                   \
+            if (level == 0) {                                                                  \
+                S->blk[S->k] = (uint32_t)(first + l);                                          \
+                S->msk[S->k++] = cm[l];                                                        \
+            } else {                                                                           \
+                NAME(S, level - 1, (first + l) * CSRBF_FAN, cm[l], lo, hi);                    \
+            }                                                                                  \
+        }                                                                                      \
+    }
+
+DEFINE_SELECT_VISIT(select_visit_c, , group_masks_c)
 
 /* The selection's prefix costs: cum[i] = the cost of items 0..i-1 (cum[k]: all), the pairs
  * returned. */
@@ -340,14 +352,8 @@ select_visit_avx512(block_select *S, int level, size_t first, uint64_t mask, siz
                     size_t hi)
 {
     const csrbf_points *P = S->P;
-    /* the children (nodes first..first+15 of this level) holding blocks of [lo, hi) */
-    _Static_assert(CSRBF_FAN == 16, "node n of level l holds blocks n 16^l .. (n+1) 16^l - 1");
-    const unsigned sh = 4u * (unsigned)level;
-    const size_t n0 = lo >> sh, n1 = ((hi - 1) >> sh) + 1; /* nodes n0..n1-1 hold [lo, hi) */
-    if (n1 <= first || n0 >= first + CSRBF_FAN) return;
-    const size_t l0 = n0 > first ? n0 - first : 0,
-                 l1 = n1 - first < CSRBF_FAN ? n1 - first : CSRBF_FAN;
-    const __mmask16 range = (__mmask16)(((1u << l1) - 1u) & ~((1u << l0) - 1u));
+    const __mmask16 range = (__mmask16)walk_range(level, first, lo, hi);
+    if (!range) return;
     __m512i c0, c1;
     __mmask16 any = group_masks_avx512((const float *const *)P->tlo[level],
                                        (const float *const *)P->thi[level], first, mask, S->cx,
@@ -413,38 +419,7 @@ group_masks_avx2(const float *const lo[3], const float *const hi[3], size_t firs
     return any;
 }
 
-/* select_visit_c with AVX2 (group_masks_avx2), restricted to the blocks [lo, hi). */
-__attribute__((target("avx2,fma,popcnt"))) static void
-select_visit_avx2(block_select *S, int level, size_t first, uint64_t mask, size_t lo, size_t hi)
-{
-    _Static_assert(CSRBF_FAN == 16, "node n of level l holds blocks n 16^l .. (n+1) 16^l - 1");
-    const unsigned sh = 4u * (unsigned)level;
-    const size_t n0 = lo >> sh, n1 = ((hi - 1) >> sh) + 1; /* nodes n0..n1-1 hold [lo, hi) */
-    if (n1 <= first || n0 >= first + CSRBF_FAN) return;
-    const size_t l0 = n0 > first ? n0 - first : 0,
-                 l1 = n1 - first < CSRBF_FAN ? n1 - first : CSRBF_FAN;
-    const unsigned range = ((1u << l1) - 1u) & ~((1u << l0) - 1u);
-    const csrbf_points *P = S->P;
-    uint64_t cm[CSRBF_FAN];
-    unsigned any = group_masks_avx2((const float *const *)P->tlo[level],
-                                    (const float *const *)P->thi[level], first, mask, S->cx,
-                                    S->cy, S->cz, S->r2c, cm) &
-                   range;
-    if (level == 0) {
-        size_t k = S->k;
-        for (; any; any &= any - 1) {
-            const unsigned l = (unsigned)__builtin_ctz(any);
-            S->blk[k] = (uint32_t)(first + l);
-            S->msk[k++] = cm[l];
-        }
-        S->k = k;
-        return;
-    }
-    for (; any; any &= any - 1) {
-        const unsigned l = (unsigned)__builtin_ctz(any);
-        select_visit_avx2(S, level - 1, (first + l) * CSRBF_FAN, cm[l], lo, hi);
-    }
-}
+DEFINE_SELECT_VISIT(select_visit_avx2, __attribute__((target("avx2,fma,popcnt"))), group_masks_avx2)
 
 /* count_bits with the popcnt instruction (count_bits inlined under this target) */
 __attribute__((target("popcnt"))) static size_t count_bits_popcnt(const uint64_t *msk, size_t k,
@@ -523,7 +498,7 @@ static size_t select_centres(const csrbf_solver *s, const csrbf_points *P, size_
         c1[a] = csrbf_grid_coord(g, hi[a] + s->R, a);
         cells *= (double)(c1[a] - c0[a] + 1);
     }
-    if (m <= CSRBF_SCAN_ALL_MAX || cells > (double)m) {
+    if (!g->tsize || cells > (double)m) { /* (no table: a grid of few centres) */
         for (size_t i = 0; i < m; i++)
             if (meets(s->c + 3 * i, lo, hi, R2)) {
                 if (any) return 1;

@@ -70,15 +70,24 @@ static uint32_t uf_find(uint32_t *par, uint32_t i)
     return i;
 }
 
-/* csrbf_guard_prepare's test of centre j as a neighbour of centre i (within 2R, R2x4 = 4R^2):
- * appended to the lists (gn_idx, gn_w from *nnz on) and joined to i's cluster. */
-static int neighbour_try(csrbf_solver *s, size_t i, uint32_t j, double R2x4, size_t *nnz)
+/* csrbf_guard_prepare's test of centre j as a neighbour of centre i (csrbf_grid_near; within
+ * 2R, R2x4 = 4R^2): appended to the lists (gn_idx, gn_w from nnz on) and joined to i's
+ * cluster. 0 or CSRBF_ERR_NOMEM. */
+typedef struct {
+    csrbf_solver *s;
+    size_t i, nnz;
+    double R2x4;
+} neighbour_ctx;
+
+static int neighbour_try(void *ctx, uint32_t j)
 {
-    const double *ci = s->c + 3 * i, *cj = s->c + 3 * (size_t)j;
+    neighbour_ctx *q = ctx;
+    csrbf_solver *s = q->s;
+    const double *ci = s->c + 3 * q->i, *cj = s->c + 3 * (size_t)j;
     double d0 = ci[0] - cj[0], d1 = ci[1] - cj[1], d2 = ci[2] - cj[2];
     double r2 = d0 * d0 + d1 * d1 + d2 * d2;
-    if (r2 >= R2x4) return CSRBF_OK;
-    if (*nnz == s->gn_cap) {
+    if (r2 >= q->R2x4) return CSRBF_OK;
+    if (q->nnz == s->gn_cap) {
         size_t cap = 2 * s->gn_cap;
         uint32_t *ni = realloc(s->gn_idx, cap * sizeof *ni);
         if (!ni) return CSRBF_ERR_NOMEM;
@@ -88,10 +97,10 @@ static int neighbour_try(csrbf_solver *s, size_t i, uint32_t j, double R2x4, siz
         s->gn_w = nw;
         s->gn_cap = cap;
     }
-    s->gn_idx[*nnz] = j;
-    s->gn_w[*nnz] = dpsi_max_from(s->opt.kernel, sqrt(r2) * s->inv_R - 1.0) * s->inv_R;
-    (*nnz)++;
-    uint32_t *cl = s->cluster, ri = uf_find(cl, (uint32_t)i), rj = uf_find(cl, j);
+    s->gn_idx[q->nnz] = j;
+    s->gn_w[q->nnz] = dpsi_max_from(s->opt.kernel, sqrt(r2) * s->inv_R - 1.0) * s->inv_R;
+    q->nnz++;
+    uint32_t *cl = s->cluster, ri = uf_find(cl, (uint32_t)q->i), rj = uf_find(cl, j);
     if (ri != rj) cl[ri > rj ? ri : rj] = ri < rj ? ri : rj;
     return CSRBF_OK;
 }
@@ -125,35 +134,15 @@ int csrbf_guard_prepare(csrbf_solver *s)
         }
     }
     for (size_t i = 0; i < m; i++) cl[i] = (uint32_t)i; /* union-find parents */
-    const csrbf_grid *g = &s->cgrid;
-    const double R2x4 = 4.0 * s->R * s->R;
-    size_t nnz = 0;
+    neighbour_ctx q = {s, 0, 0, 4.0 * s->R * s->R};
     for (size_t i = 0; i < m; i++) {
-        st[i] = nnz;
-        int rc = CSRBF_OK;
-        if (m <= CSRBF_SCAN_ALL_MAX) {
-            for (size_t j = 0; j < m && !rc; j++) rc = neighbour_try(s, i, (uint32_t)j, R2x4, &nnz);
-        } else {
-            const double *ci = s->c + 3 * i;
-            int64_t cx = csrbf_grid_coord(g, ci[0], 0), cy = csrbf_grid_coord(g, ci[1], 1),
-                    cz = csrbf_grid_coord(g, ci[2], 2);
-            /* cells have side h >= R: neighbours within 2R lie within two cells */
-            for (int dz = -2; dz <= 2; dz++)
-                for (int dy = -2; dy <= 2; dy++)
-                    for (int dx = -2; dx <= 2; dx++) {
-                        int64_t x = cx + dx, y = cy + dy, z = cz + dz;
-                        size_t b = csrbf_grid_bucket(g, x, y, z);
-                        for (size_t t = g->start[b]; t < g->start[b + 1] && !rc; t++) {
-                            uint32_t j = g->items[t];
-                            if (g->cell[3 * j] != x || g->cell[3 * j + 1] != y ||
-                                g->cell[3 * j + 2] != z)
-                                continue;
-                            rc = neighbour_try(s, i, j, R2x4, &nnz);
-                        }
-                    }
-        }
+        st[i] = q.nnz;
+        q.i = i;
+        /* cells have side h >= R: neighbours within 2R lie within two cells */
+        int rc = csrbf_grid_near(&s->cgrid, s->c + 3 * i, 2, neighbour_try, &q);
         if (rc) return rc;
     }
+    size_t nnz = q.nnz;
     st[m] = nnz;
     /* number the clusters 0..nclusters-1 in order of their smallest centre */
     size_t nc = 0;

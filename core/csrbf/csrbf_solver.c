@@ -187,6 +187,7 @@ int csrbf_grid_build(csrbf_grid *g, const double *p, size_t n, double h)
     g->inv_h = 1.0 / h;
     memcpy(g->origin, lo, sizeof lo);
     g->n = n;
+    if (n <= CSRBF_SCAN_ALL_MAX) return CSRBF_OK; /* no table: every point is a candidate */
     size_t ts = 16;
     while (ts < 2 * n) ts *= 2;
     g->tsize = ts;
@@ -498,17 +499,30 @@ static int ensure_capacity(csrbf_solver *s, size_t n)
     return 0;
 }
 
-/* merge_points' test of an earlier point j (j < the point p's index): if j leads its centre
- * (its position is the centre's) and p lies within the tolerance, the smaller centre wins. */
-static inline void merge_try(const csrbf_solver *s, const double *p, uint32_t j, double tol2,
-                             uint32_t *best)
+/* merge_points' test of point j (csrbf_grid_near): an earlier point (j < i) that leads its
+ * centre (its position is the centre's) within the tolerance of point i: the smaller centre
+ * wins. */
+typedef struct {
+    const csrbf_solver *s;
+    const double *p; /* point i */
+    uint32_t i, best;
+    double tol2;
+} merge_ctx;
+
+static int merge_try(void *ctx, uint32_t j)
 {
+    merge_ctx *q = ctx;
+    const csrbf_solver *s = q->s;
+    if (j >= q->i) return 0;
+    const double *p = q->p;
+    uint32_t *best = &q->best;
     uint32_t gj = s->group[j];
     const double *cj = s->c + 3 * (size_t)gj;
     if (cj[0] != s->s_in[3 * j] || cj[1] != s->s_in[3 * j + 1] || cj[2] != s->s_in[3 * j + 2])
-        return;
+        return 0;
     double d0 = p[0] - cj[0], d1 = p[1] - cj[1], d2 = p[2] - cj[2];
-    if (d0 * d0 + d1 * d1 + d2 * d2 <= tol2 && (*best == UINT32_MAX || gj < *best)) *best = gj;
+    if (d0 * d0 + d1 * d1 + d2 * d2 <= q->tol2 && (*best == UINT32_MAX || gj < *best)) *best = gj;
+    return 0;
 }
 
 /* Greedy merge of start points within merge_abs: fills group[], c[], inv_count[], m. */
@@ -516,8 +530,7 @@ static int merge_points(csrbf_solver *s)
 {
     size_t n = s->n;
     csrbf_grid g = {0};
-    const int scan = n <= CSRBF_SCAN_ALL_MAX; /* every earlier point, no grid */
-    int rc = scan ? CSRBF_OK : csrbf_grid_build(&g, s->s_in, n, s->merge_abs);
+    int rc = csrbf_grid_build(&g, s->s_in, n, s->merge_abs);
     if (rc) return rc;
     const uint32_t NONE = UINT32_MAX;
     for (size_t i = 0; i < n; i++) s->group[i] = NONE;
@@ -526,25 +539,9 @@ static int merge_points(csrbf_solver *s)
     double tol2 = s->merge_abs * s->merge_abs;
     for (size_t i = 0; i < n; i++) {
         const double *p = s->s_in + 3 * i;
-        uint32_t best = NONE;
-        if (scan) {
-            for (size_t j = 0; j < i; j++) merge_try(s, p, (uint32_t)j, tol2, &best);
-        } else {
-            const int64_t *ci = g.cell + 3 * i;
-            for (int dz = -1; dz <= 1; dz++)
-                for (int dy = -1; dy <= 1; dy++)
-                    for (int dx = -1; dx <= 1; dx++) {
-                        int64_t x = ci[0] + dx, y = ci[1] + dy, z = ci[2] + dz;
-                        size_t b = csrbf_grid_bucket(&g, x, y, z);
-                        for (size_t t = g.start[b]; t < g.start[b + 1]; t++) {
-                            uint32_t j = g.items[t];
-                            if (j >= i || g.cell[3 * j] != x || g.cell[3 * j + 1] != y ||
-                                g.cell[3 * j + 2] != z)
-                                continue;
-                            merge_try(s, p, j, tol2, &best);
-                        }
-                    }
-        }
+        merge_ctx q = {s, p, (uint32_t)i, NONE, tol2};
+        csrbf_grid_near(&g, p, 1, merge_try, &q);
+        uint32_t best = q.best;
         if (best == NONE) {
             best = (uint32_t)m++;
             memcpy(s->c + 3 * (size_t)best, p, 3 * sizeof(double));
@@ -567,31 +564,40 @@ static int cmp_entry(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-/* Entry (i, j), i >= j, of A where centres i and j lie within R: into the dense factor's
- * lower triangle, or appended to column j's entries col[*ncol] (sparse). */
-static inline void a_entry(csrbf_solver *s, uint32_t i, size_t j, double R2, entry *col,
-                           size_t *ncol)
+/* factor_A's entry (i, j) of column j (csrbf_grid_near), for i >= j where centres i and j
+ * lie within R: into the dense factor's lower triangle, or appended to the column's entries
+ * col[ncol] (sparse). */
+typedef struct {
+    csrbf_solver *s;
+    size_t j, ncol;
+    double R2;
+    entry *col;
+} a_ctx;
+
+static int a_entry(void *ctx, uint32_t i)
 {
-    const double *ci = s->c + 3 * (size_t)i, *cj = s->c + 3 * j;
+    a_ctx *q = ctx;
+    csrbf_solver *s = q->s;
+    if (i < q->j) return 0;
+    const double *ci = s->c + 3 * (size_t)i, *cj = s->c + 3 * q->j;
     double d0 = ci[0] - cj[0], d1 = ci[1] - cj[1], d2 = ci[2] - cj[2];
     double r2 = d0 * d0 + d1 * d1 + d2 * d2;
-    if (r2 >= R2) return;
+    if (r2 >= q->R2) return 0;
     double v = csrbf_psi(s->opt.kernel, sqrt(r2) * s->inv_R);
     if (s->dense) {
-        s->L[(size_t)i * s->m + j] = v;
+        s->L[(size_t)i * s->m + q->j] = v;
     } else {
-        col[*ncol].row = i;
-        col[*ncol].v = v;
-        (*ncol)++;
+        q->col[q->ncol].row = i;
+        q->col[q->ncol].v = v;
+        q->ncol++;
     }
+    return 0;
 }
 
-/* Assemble A over the centre grid (or, up to CSRBF_SCAN_ALL_MAX centres, every pair) and
- * factor it. */
+/* Assemble A over the centre grid and factor it. */
 static int factor_A(csrbf_solver *s)
 {
     size_t m = s->m;
-    const csrbf_grid *g = &s->cgrid;
     double R2 = s->R * s->R;
     s->dense = s->opt.dense_limit > 0 && m <= (size_t)s->opt.dense_limit;
     if (s->dense) {
@@ -613,27 +619,9 @@ static int factor_A(csrbf_solver *s)
         if (!rows || !vals || !colp || !col) goto nomem;
     }
     for (size_t j = 0; j < m; j++) {
-        const double *cj = s->c + 3 * j;
-        size_t ncol = 0;
-        if (m <= CSRBF_SCAN_ALL_MAX) {
-            for (size_t i = j; i < m; i++) a_entry(s, (uint32_t)i, j, R2, col, &ncol);
-        } else {
-            int64_t cx = csrbf_grid_coord(g, cj[0], 0), cy = csrbf_grid_coord(g, cj[1], 1),
-                    cz = csrbf_grid_coord(g, cj[2], 2);
-            for (int dz = -1; dz <= 1; dz++)
-                for (int dy = -1; dy <= 1; dy++)
-                    for (int dx = -1; dx <= 1; dx++) {
-                        int64_t x = cx + dx, y = cy + dy, z = cz + dz;
-                        size_t b = csrbf_grid_bucket(g, x, y, z);
-                        for (size_t t = g->start[b]; t < g->start[b + 1]; t++) {
-                            uint32_t i = g->items[t];
-                            if (i < j || g->cell[3 * i] != x || g->cell[3 * i + 1] != y ||
-                                g->cell[3 * i + 2] != z)
-                                continue;
-                            a_entry(s, i, j, R2, col, &ncol);
-                        }
-                    }
-        }
+        a_ctx q = {s, j, 0, R2, col};
+        csrbf_grid_near(&s->cgrid, s->c + 3 * j, 1, a_entry, &q);
+        size_t ncol = q.ncol;
         if (!s->dense) {
             qsort(col, ncol, sizeof *col, cmp_entry);
             if (nnz + ncol > cap) {

@@ -25,20 +25,26 @@
  * apart. */
 typedef struct csrbf_grid {
     double origin[3], h, inv_h;
-    size_t n, tsize;        /* points, table size (power of two) */
+    size_t n, tsize;        /* points, table size (power of two; 0: no table, n at most
+                               CSRBF_SCAN_ALL_MAX) */
     size_t *start;          /* tsize + 1: bucket b holds items[start[b] .. start[b+1]) */
     uint32_t *items;        /* n point indices, grouped by bucket */
     int64_t *cell;          /* n x 3 cell coordinates */
 } csrbf_grid;
 
-/* Up to this many points a neighbour search (the solver's merge, its matrix, the guard's
- * neighbour lists, the general path's centres of a block) tests every pair instead of probing
- * the grid's 27 or 125 hashed cells per point: 10 centres, 7 us a set_start_points call by the
- * grid, 1 by the scan. The pairs found are the same (cells are at least as wide as the reach). */
+/* A grid of at most this many points has no table (tsize 0): its neighbour searches
+ * (csrbf_grid_near; the general path's centres of a block) test every point instead of
+ * probing 27 or 125 hashed cells per point: 10 centres, 7 us a set_start_points call by the
+ * table, 1.7 by the scan. The pairs a caller keeps by distance are the same (its cells are at
+ * least as wide as its reach). */
 #define CSRBF_SCAN_ALL_MAX 32
 
 int csrbf_grid_build(csrbf_grid *g, const double *p, size_t n, double h);
 void csrbf_grid_free(csrbf_grid *g);
+/* visit(ctx, i) for every point i of g in the cells within `reach` cells (each axis) of the
+ * cell holding x, each once (without a table: every point, in index order); the first
+ * non-zero result stops the walk and is returned, else 0. */
+typedef int (*csrbf_grid_visit)(void *ctx, uint32_t i);
 static inline size_t csrbf_grid_bucket(const csrbf_grid *g, int64_t x, int64_t y, int64_t z)
 {
     uint64_t k = (uint64_t)x * 73856093u ^ (uint64_t)y * 19349663u ^ (uint64_t)z * 83492791u;
@@ -50,6 +56,31 @@ static inline size_t csrbf_grid_bucket(const csrbf_grid *g, int64_t x, int64_t y
 static inline int64_t csrbf_grid_coord(const csrbf_grid *g, double x, int axis)
 {
     return (int64_t)floor((x - g->origin[axis]) * g->inv_h);
+}
+/* (inlined, so that each caller's visit is too) */
+static inline __attribute__((always_inline)) int csrbf_grid_near(const csrbf_grid *g, const double x[3], int reach,
+                                                                 csrbf_grid_visit visit, void *ctx)
+{
+    int rc = 0;
+    if (!g->tsize) {
+        for (size_t i = 0; i < g->n && !rc; i++) rc = visit(ctx, (uint32_t)i);
+        return rc;
+    }
+    const int64_t cx = csrbf_grid_coord(g, x[0], 0), cy = csrbf_grid_coord(g, x[1], 1),
+                  cz = csrbf_grid_coord(g, x[2], 2);
+    for (int dz = -reach; dz <= reach; dz++)
+        for (int dy = -reach; dy <= reach; dy++)
+            for (int dx = -reach; dx <= reach; dx++) {
+                int64_t cxd = cx + dx, cyd = cy + dy, czd = cz + dz;
+                size_t b = csrbf_grid_bucket(g, cxd, cyd, czd);
+                for (size_t t = g->start[b]; t < g->start[b + 1]; t++) {
+                    uint32_t i = g->items[t];
+                    if (g->cell[3 * i] != cxd || g->cell[3 * i + 1] != cyd || g->cell[3 * i + 2] != czd)
+                        continue; /* (another cell in the same bucket) */
+                    if ((rc = visit(ctx, i))) return rc;
+                }
+            }
+    return 0;
 }
 
 /* Appends the solver's pending guard sentence (lim_note) to msg; the message functions call
