@@ -337,7 +337,8 @@ typedef struct csrbf_eval_stats {
  *  r from rsqrt14 + one Newton step where the CPU has it, else the same code on AVX2 + FMA
  *  (rsqrt + one Newton step), else target_clones of portable C; chosen at run time, and the
  *  environment variable CSRBF_ISA=avx2 or =none asks for less) and parallel over blocks with OpenMP
- *  (options.threads), one contiguous part of equal cost per thread; work below about 8 us on
+ *  (options.threads), one contiguous part of equal cost per thread (a thread done with its
+ *  own takes what is left of the others'); work below about 8 us on
  *  one core, counted from the blocks visited, stays on the calling thread.
  *  stats may be NULL; with stats the pair count, moved count and maximum
  *  displacement are filled in, counted per block inside the vectorised kernel (the fast path

@@ -705,6 +705,35 @@ static double support_share(const csrbf_solver *s, const csrbf_points *P)
  * and a frame loop's sleeping workers wake slowly. */
 #define PARALLEL_COST 6000
 
+/* Chunks a thread's part of a parallel drive is cut into (split_work), for steal_take. */
+#ifndef STEAL_CHUNKS
+#define STEAL_CHUNKS 8
+#endif
+
+/* A thread's part of a parallel drive: its chunks [lo, hi) not yet taken, as lo | hi << 32,
+ * on a cache line of its own. */
+typedef struct {
+    _Alignas(64) _Atomic uint64_t span;
+} steal_part;
+
+/* The next chunk of part *sp: its first (the part's own thread takes them in order) or, with
+ * back, its last (a thread done with its own part steals from the other end); SIZE_MAX when
+ * none is left. One compare-and-swap a chunk, on the owner's cache line: no transfer between
+ * cores until a thread steals. Relaxed: the chunks' bounds are written before the parallel
+ * region, its outputs are disjoint, and its end is a barrier. */
+static size_t steal_take(steal_part *sp, int back)
+{
+    uint64_t v = atomic_load_explicit(&sp->span, memory_order_relaxed);
+    for (;;) {
+        const uint64_t lo = (uint32_t)v, hi = v >> 32;
+        if (lo >= hi) return SIZE_MAX;
+        const uint64_t nv = back ? lo | (hi - 1) << 32 : (lo + 1) | hi << 32;
+        if (atomic_compare_exchange_weak_explicit(&sp->span, &v, nv, memory_order_relaxed,
+                                                  memory_order_relaxed))
+            return (size_t)(back ? hi - 1 : lo);
+    }
+}
+
 /* Parts per thread of a fused walk-and-evaluate (scheduled dynamically: the costs of the
  * parts are not known before their walks). */
 #define SPLIT_PARTS 4
@@ -923,7 +952,8 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
     size_t blk_m = align64(nb * sizeof(uint64_t)), blk_b = align64(nb * sizeof(uint32_t));
     size_t blk_c = align64((nb + 1) * sizeof(size_t));
     size_t mrg = fast && (use_tree || all_in_kept) && !full_write ? blk_m + blk_b + blk_c : 0;
-    size_t splits = fast ? align64(2 * ((size_t)nt + 1) * sizeof(size_t)) : 0;
+    const size_t nchunks = (size_t)nt * STEAL_CHUNKS, chunk_b = align64(2 * (nchunks + 1) * sizeof(size_t));
+    size_t splits = fast ? chunk_b + (size_t)nt * sizeof(steal_part) : 0;
     size_t gen_m = !fast && use_tree ? blk_m : 0;
     size_t gen_f = !fast && touch ? align64(2 * nb) : 0;
     size_t gen_t = !fast ? (size_t)nt * per_thread : 0;
@@ -969,7 +999,8 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
     }
     unsigned char *sp = (unsigned char *)(((uintptr_t)mem + 63) & ~(uintptr_t)63);
     float *cpack = (float *)sp; /* fast path: centre j's x, y, z, alpha x, y, z at 8 j */
-    size_t *isplit = (size_t *)(sp += pack), *bsplit = isplit + (size_t)nt + 1;
+    size_t *isplit = (size_t *)(sp += pack), *bsplit = isplit + nchunks + 1;
+    steal_part *spans = (steal_part *)(sp + chunk_b);
     uint64_t *mrg_msk = (uint64_t *)(sp += splits);
     uint32_t *mrg_blk = (uint32_t *)(sp + (mrg ? blk_m : 0));
     size_t *mrg_cum = (size_t *)(sp + (mrg ? blk_m + blk_b : 0));
@@ -1152,21 +1183,31 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
             if (cost <= PARALLEL_COST || nt == 1) {
                 drive(P, out, ib, im, 0, ni, 0, gaps ? nb : 0, m, cpack, inv_r2, wc, &bs);
             } else {
-                /* one contiguous part of equal cost per thread: no scheduling during the loop
-                 * (a chunk grab is a cache-line transfer between cores), and frame after frame
-                 * the same blocks stay in the same core's cache */
+                /* one contiguous part of equal cost per thread, in STEAL_CHUNKS chunks: a
+                 * thread takes its own part's chunks in order, so that frame after frame the
+                 * same blocks stay in the same core's cache, and then steals from the far end
+                 * of the others' (a core that the host slows, or a thread that starts late,
+                 * no longer holds the frame back: on the 2-core VM one core ran the same part
+                 * 1.4x slower than the other for minutes at a time) */
                 const size_t parts = (size_t)nt;
-                split_work(ib, ic, ni, gaps, nb, parts, cost + (gaps ? nb - ni : 0), isplit,
+                split_work(ib, ic, ni, gaps, nb, nchunks, cost + (gaps ? nb - ni : 0), isplit,
                            bsplit);
+                for (size_t t = 0; t < parts; t++)
+                    atomic_init(&spans[t].span, (uint64_t)(t * STEAL_CHUNKS) |
+                                                    (uint64_t)((t + 1) * STEAL_CHUNKS) << 32);
                 float maxd2 = 0.0f;
 #pragma omp parallel num_threads(nt) reduction(+ : pairs, moved) reduction(max : maxd2)
                 {
                     block_stats ts = {0, 0, 0.0f};
-                    /* a smaller team than asked for takes the parts round robin */
-                    for (size_t t = (size_t)omp_get_thread_num(); t < parts;
-                         t += (size_t)omp_get_num_threads())
-                        drive(P, out, ib, im, isplit[t], isplit[t + 1], gaps ? bsplit[t] : 0,
-                              gaps ? bsplit[t + 1] : 0, m, cpack, inv_r2, wc, &ts);
+                    /* its own part, then the others' (a smaller team than asked for takes
+                     * the parts of the missing threads this way too) */
+                    const size_t me = (size_t)omp_get_thread_num();
+                    for (size_t q = 0; q < parts; q++) {
+                        const size_t t = (me + q) % parts;
+                        for (size_t c; (c = steal_take(&spans[t], q != 0)) != SIZE_MAX;)
+                            drive(P, out, ib, im, isplit[c], isplit[c + 1], gaps ? bsplit[c] : 0,
+                                  gaps ? bsplit[c + 1] : 0, m, cpack, inv_r2, wc, &ts);
+                    }
                     pairs += ts.pairs;
                     moved += ts.moved;
                     if (ts.maxd2 > maxd2) maxd2 = ts.maxd2;

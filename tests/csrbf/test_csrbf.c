@@ -1257,6 +1257,64 @@ static void test_weight_cache(void **state)
     free(o3);
 }
 
+/* A parallel evaluation whose threads steal each other's chunks (8 threads on fewer cores:
+ * threads start late and are preempted, so their parts are taken from the far end) writes
+ * every block once: full writes (NaN beforehand) and touched updates, with the kept
+ * selection's weights and without, bit for bit as one thread, with equal statistics. */
+static void test_threads_steal(void **state)
+{
+    (void)state;
+    size_t nx = 181, ny = 183, nv = nx * ny, n = 10; /* costs well above one thread's share */
+    float *v = wavy_grid(nx, ny, 0.1);
+    float *o[4];
+    for (int i = 0; i < 4; i++) o[i] = malloc(nv * 3 * sizeof *o[i]);
+    float st[3 * 10], en[3 * 10];
+    scatter_centres(n, 18.0, 18.2, 0.2, st, en);
+    csrbf_points *p = NULL;
+    assert_int_equal(csrbf_points_create(nv, v, &p), CSRBF_OK);
+    csrbf_solver *s[2] = {NULL, NULL};
+    csrbf_touch *tc[2] = {NULL, NULL};
+    for (int k = 0; k < 2; k++) {
+        csrbf_options opt = {0};
+        opt.radius = 3.0; /* about 40% of the grid in a support */
+        opt.threads = k ? 8 : 1;
+        assert_int_equal(csrbf_solver_create(&opt, &s[k]), CSRBF_OK);
+        assert_int_equal(csrbf_touch_create(p, &tc[k]), CSRBF_OK);
+    }
+    for (int f = 0; f < 40; f++) {
+        float e[3 * 10];
+        for (size_t i = 0; i < 3 * n; i++) e[i] = en[i] + 0.1f * (float)sin(0.7 * f + (double)i);
+        csrbf_eval_stats es[4];
+        if (f % 20 == 0) /* new start points: a new selection, then kept */
+            for (size_t i = 0; i < 3 * n; i++) st[i] += 0.05f;
+        for (int k = 0; k < 2; k++) {
+            if (f % 20 == 0) assert_true(csrbf_solver_set_start_points(s[k], n, st) >= 0);
+            int rc = csrbf_solver_set_end_points(s[k], e);
+            assert_true(rc == CSRBF_OK || rc == CSRBF_WARN_FOLDOVER);
+            for (size_t i = 0; i < 3 * nv; i++) o[k][i] = NAN;
+            assert_int_equal(csrbf_evaluate(s[k], p, o[k], 0, &es[k]), CSRBF_OK);
+            assert_int_equal(csrbf_evaluate_touched(s[k], p, tc[k], o[2 + k], 0, &es[2 + k]),
+                             CSRBF_OK);
+        }
+        assert_memory_equal(o[0], o[1], nv * 3 * sizeof *o[0]);
+        assert_memory_equal(o[2], o[3], nv * 3 * sizeof *o[2]);
+        assert_memory_equal(o[0], o[2], nv * 3 * sizeof *o[0]);
+        for (int k = 1; k < 4; k++) {
+            assert_int_equal(es[0].pairs, es[k].pairs);
+            assert_int_equal(es[0].moved, es[k].moved);
+            assert_double_equal(es[0].max_displacement, es[k].max_displacement, 0);
+        }
+        assert_true(es[0].moved > nv / 5 && es[0].moved < nv);
+    }
+    for (int k = 0; k < 2; k++) {
+        csrbf_touch_destroy(&tc[k]);
+        csrbf_solver_destroy(&s[k]);
+    }
+    csrbf_points_destroy(&p);
+    for (int i = 0; i < 4; i++) free(o[i]);
+    free(v);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1271,7 +1329,7 @@ int main(void)
         cmocka_unit_test(test_touched),             cmocka_unit_test(test_many_centres),
         cmocka_unit_test(test_touched_frames),      cmocka_unit_test(test_selection_cache),
         cmocka_unit_test(test_selection_paths),     cmocka_unit_test(test_weight_cache),
-        cmocka_unit_test(test_simd_path),
+        cmocka_unit_test(test_simd_path),           cmocka_unit_test(test_threads_steal),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
