@@ -705,7 +705,7 @@ static double support_share(const csrbf_solver *s, const csrbf_points *P)
  * and a frame loop's sleeping workers wake slowly. */
 #define PARALLEL_COST 6000
 
-/* Chunks a thread's part of a parallel drive is cut into (split_work), for steal_take. */
+/* Chunks a thread's part of a parallel drive is cut into (chunk_work), for steal_take. */
 #ifndef STEAL_CHUNKS
 #define STEAL_CHUNKS 8
 #endif
@@ -716,17 +716,19 @@ typedef struct {
     _Alignas(64) _Atomic uint64_t span;
 } steal_part;
 
-/* The next chunk of part *sp: its first (the part's own thread takes them in order) or, with
- * back, its last (a thread done with its own part steals from the other end); SIZE_MAX when
- * none is left. One compare-and-swap a chunk, on the owner's cache line: no transfer between
- * cores until a thread steals. Relaxed: the chunks' bounds are written before the parallel
- * region, its outputs are disjoint, and its end is a barrier. */
+/* The next chunk of part *sp: its first (the part's own thread takes them in order, or any
+ * thread a part no thread owns) or, with back, its last (a thread done with its own part
+ * steals from the other end, and leaves the owner its next chunk: where the threads are even,
+ * no chunk changes core, so none runs from another core's cache); SIZE_MAX when none is left
+ * to take. One compare-and-swap a chunk, on the owner's cache line: no transfer between cores
+ * until a thread steals. Relaxed: the chunks' bounds are written before the parallel region,
+ * its outputs are disjoint, and its end is a barrier. */
 static size_t steal_take(steal_part *sp, int back)
 {
     uint64_t v = atomic_load_explicit(&sp->span, memory_order_relaxed);
     for (;;) {
         const uint64_t lo = (uint32_t)v, hi = v >> 32;
-        if (lo >= hi) return SIZE_MAX;
+        if (lo + (back ? 1 : 0) >= hi) return SIZE_MAX;
         const uint64_t nv = back ? lo | (hi - 1) << 32 : (lo + 1) | hi << 32;
         if (atomic_compare_exchange_weak_explicit(&sp->span, &v, nv, memory_order_relaxed,
                                                   memory_order_relaxed))
@@ -814,6 +816,42 @@ static void split_work(const uint32_t *ib, const size_t *cum, size_t ni, int gap
     }
     isplit[parts] = ni;
     bsplit[parts] = gaps ? nb : ni;
+}
+
+/* Each of split_work's parts (items ps_i[t] .. ps_i[t+1]-1, blocks ps_b[t] .. ps_b[t+1]-1)
+ * cut into nc chunks of about equal item cost: chunk c = t nc + j is items isplit[c] ..
+ * isplit[c+1]-1 and, with gaps, blocks bsplit[c] .. bsplit[c+1]-1 (a chunk copies the gap
+ * blocks after its last item up to the next chunk's first item). A binary search on the
+ * prefix costs a chunk, within its part (split_work's search over blocks does a search over
+ * items at each step, about ten times the steps). ib NULL: blocks of equal cost. */
+static void chunk_work(const uint32_t *ib, const size_t *cum, const size_t *ps_i,
+                       const size_t *ps_b, size_t parts, size_t nc, size_t *isplit,
+                       size_t *bsplit)
+{
+    for (size_t t = 0; t < parts; t++) {
+        const size_t a = ps_i[t], e = ps_i[t + 1];
+        isplit[t * nc] = a;
+        bsplit[t * nc] = ps_b[t];
+        for (size_t j = 1; j < nc; j++) {
+            size_t i;
+            if (!ib) {
+                i = a + (e - a) * j / nc;
+            } else {
+                const size_t target = cum[a] + (cum[e] - cum[a]) * j / nc;
+                size_t lo = a, hi = e; /* the first item whose prefix cost reaches it */
+                while (lo < hi) {
+                    size_t mid = lo + (hi - lo) / 2;
+                    if (cum[mid] < target) lo = mid + 1;
+                    else hi = mid;
+                }
+                i = lo;
+            }
+            isplit[t * nc + j] = i;
+            bsplit[t * nc + j] = !ib ? i : i < e ? ib[i] : ps_b[t + 1];
+        }
+    }
+    isplit[parts * nc] = ps_i[parts];
+    bsplit[parts * nc] = ps_b[parts];
 }
 
 /* The weight cache's parts in s->sel_wmem for k items and e pairs (see internal.h). */
@@ -952,7 +990,8 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
     size_t blk_m = align64(nb * sizeof(uint64_t)), blk_b = align64(nb * sizeof(uint32_t));
     size_t blk_c = align64((nb + 1) * sizeof(size_t));
     size_t mrg = fast && (use_tree || all_in_kept) && !full_write ? blk_m + blk_b + blk_c : 0;
-    const size_t nchunks = (size_t)nt * STEAL_CHUNKS, chunk_b = align64(2 * (nchunks + 1) * sizeof(size_t));
+    const size_t nchunks = (size_t)nt * STEAL_CHUNKS,
+                 chunk_b = align64(2 * (nchunks + (size_t)nt + 2) * sizeof(size_t));
     size_t splits = fast ? chunk_b + (size_t)nt * sizeof(steal_part) : 0;
     size_t gen_m = !fast && use_tree ? blk_m : 0;
     size_t gen_f = !fast && touch ? align64(2 * nb) : 0;
@@ -1000,6 +1039,7 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
     unsigned char *sp = (unsigned char *)(((uintptr_t)mem + 63) & ~(uintptr_t)63);
     float *cpack = (float *)sp; /* fast path: centre j's x, y, z, alpha x, y, z at 8 j */
     size_t *isplit = (size_t *)(sp += pack), *bsplit = isplit + nchunks + 1;
+    size_t *psplit = bsplit + nchunks + 1; /* split_work's parts: items, then blocks */
     steal_part *spans = (steal_part *)(sp + chunk_b);
     uint64_t *mrg_msk = (uint64_t *)(sp += splits);
     uint32_t *mrg_blk = (uint32_t *)(sp + (mrg ? blk_m : 0));
@@ -1190,8 +1230,9 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
                  * no longer holds the frame back: on the 2-core VM one core ran the same part
                  * 1.4x slower than the other for minutes at a time) */
                 const size_t parts = (size_t)nt;
-                split_work(ib, ic, ni, gaps, nb, nchunks, cost + (gaps ? nb - ni : 0), isplit,
-                           bsplit);
+                split_work(ib, ic, ni, gaps, nb, parts, cost + (gaps ? nb - ni : 0), psplit,
+                           psplit + parts + 1);
+                chunk_work(ib, ic, psplit, psplit + parts + 1, parts, STEAL_CHUNKS, isplit, bsplit);
                 for (size_t t = 0; t < parts; t++)
                     atomic_init(&spans[t].span, (uint64_t)(t * STEAL_CHUNKS) |
                                                     (uint64_t)((t + 1) * STEAL_CHUNKS) << 32);
@@ -1199,12 +1240,13 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
 #pragma omp parallel num_threads(nt) reduction(+ : pairs, moved) reduction(max : maxd2)
                 {
                     block_stats ts = {0, 0, 0.0f};
-                    /* its own part, then the others' (a smaller team than asked for takes
-                     * the parts of the missing threads this way too) */
-                    const size_t me = (size_t)omp_get_thread_num();
+                    /* its own part, then the others' (those of threads missing from a
+                     * smaller team than asked for whole, from the front) */
+                    const size_t me = (size_t)omp_get_thread_num(),
+                                 team = (size_t)omp_get_num_threads();
                     for (size_t q = 0; q < parts; q++) {
                         const size_t t = (me + q) % parts;
-                        for (size_t c; (c = steal_take(&spans[t], q != 0)) != SIZE_MAX;)
+                        for (size_t c; (c = steal_take(&spans[t], q && t < team)) != SIZE_MAX;)
                             drive(P, out, ib, im, isplit[c], isplit[c + 1], gaps ? bsplit[c] : 0,
                                   gaps ? bsplit[c + 1] : 0, m, cpack, inv_r2, wc, &ts);
                     }
