@@ -706,9 +706,7 @@ static double support_share(const csrbf_solver *s, const csrbf_points *P)
 #define PARALLEL_COST 6000
 
 /* Chunks a thread's part of a parallel drive is cut into (chunk_work), for steal_take. */
-#ifndef STEAL_CHUNKS
 #define STEAL_CHUNKS 8
-#endif
 
 /* A thread's part of a parallel drive: its chunks [lo, hi) not yet taken, as lo | hi << 32,
  * on a cache line of its own. */
@@ -773,6 +771,17 @@ static size_t lower_bound(const uint32_t *blk, size_t k, size_t b)
     return lo;
 }
 
+/* The first item i in [lo, hi] whose prefix cost cum[i] reaches target (hi if none before). */
+static size_t cost_reach(const size_t *cum, size_t lo, size_t hi, size_t target)
+{
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (cum[mid] < target) lo = mid + 1;
+        else hi = mid;
+    }
+    return lo;
+}
+
 /* The touch's last-call list becomes blk[0..k) (copied, unless it is the list itself). */
 static void touch_set_prev(csrbf_touch *t, const uint32_t *blk, size_t k)
 {
@@ -793,13 +802,7 @@ static void split_work(const uint32_t *ib, const size_t *cum, size_t ni, int gap
         if (!ib) {
             isplit[t] = bsplit[t] = ni * t / parts;
         } else if (!gaps) {
-            size_t lo = 0, hi = ni; /* first item whose prefix cost reaches the target */
-            while (lo < hi) {
-                size_t mid = lo + (hi - lo) / 2;
-                if (cum[mid] < target) lo = mid + 1;
-                else hi = mid;
-            }
-            isplit[t] = lo;
+            isplit[t] = cost_reach(cum, 0, ni, target);
         } else {
             /* cost of blocks 0..b-1: items before b plus the gap blocks among them */
             size_t lo = 0, hi = nb;
@@ -833,19 +836,8 @@ static void chunk_work(const uint32_t *ib, const size_t *cum, const size_t *ps_i
         isplit[t * nc] = a;
         bsplit[t * nc] = ps_b[t];
         for (size_t j = 1; j < nc; j++) {
-            size_t i;
-            if (!ib) {
-                i = a + (e - a) * j / nc;
-            } else {
-                const size_t target = cum[a] + (cum[e] - cum[a]) * j / nc;
-                size_t lo = a, hi = e; /* the first item whose prefix cost reaches it */
-                while (lo < hi) {
-                    size_t mid = lo + (hi - lo) / 2;
-                    if (cum[mid] < target) lo = mid + 1;
-                    else hi = mid;
-                }
-                i = lo;
-            }
+            const size_t i = !ib ? a + (e - a) * j / nc
+                                 : cost_reach(cum, a, e, cum[a] + (cum[e] - cum[a]) * j / nc);
             isplit[t * nc + j] = i;
             bsplit[t * nc + j] = !ib ? i : i < e ? ib[i] : ps_b[t + 1];
         }
