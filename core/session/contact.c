@@ -15,17 +15,34 @@
 
 
 
+/* One triangle in one cell of the check's grid (scan): the cell's index x + dx (y + dy z) in
+ * the region's grid; sorted by it, a cell's triangles lie together. */
+typedef struct cellrec {
+    uint64_t key;
+    uint32_t tri;
+    uint32_t flags; /* bit 0: the triangle moved; bits 1-3: on which axes (bit k + 1 for axis
+                       k) its box's lower corner lies in this cell */
+} cellrec;
+
+/* A triangle of the cell the sweep is in (scan): its box, and on which axes its box's lower
+ * corner lies in this cell (bit k for axis k) */
+typedef struct cellrun {
+    float box[6];
+    uint32_t tri, moved, lo;
+    uint32_t w[3]; /* its welded vertices */
+} cellrun;
+
 struct fp_contact {
     const uint32_t *tris;
     size_t t, n;
     uint32_t *weld;       /* n: the first vertex at the same position */
     uint8_t *moved;       /* n: vertex moved this check */
-    uint32_t *mtris;      /* moved triangles */
     uint32_t *ins;        /* triangles in the grid */
     float (*box)[6];      /* t: candidate bounding box (min xyz, max xyz) of inserted ones */
-    uint32_t *bucket_start;
-    struct entry { float box[6]; uint32_t tri, moved; } *entries; /* the grid, by bucket */
-    size_t bucket_cap, entry_cap;
+    struct cellrec *rec, *rec_tmp; /* the check's grid: (cell, triangle), sorted by cell */
+    size_t rec_cap;
+    struct cellrun *run;  /* one cell's triangles, as the check's sweep reads them */
+    size_t run_cap;
     uint8_t *own;         /* t: the triangle crosses another in the weld shape */
     float (*nrm)[3];      /* t: the rest normals (flips are against them): the weld shape's
                              triangle normals (unnormalised), carried by fp_contact_set_pose */
@@ -212,6 +229,7 @@ static void cross3(const double a[3], const double b[3], double o[3]);
 static void tri_of(const float *pos, const uint32_t *v, double out[3][3]);
 static long scan(fp_contact *c, const float *ref, const float *cand, bool all, uint32_t *pairs,
                  size_t max_pairs, fp_contact_count *info);
+static inline bool welded_adjacent(const uint32_t a[3], const uint32_t b[3]);
 
 /* ---- the index ------------------------------------------------------------------------------ */
 
@@ -243,11 +261,10 @@ int fp_contact_create(const uint32_t *tris, size_t t, size_t n, const float *wel
     c->share_min = FP_CONTACT_SHARE_MIN;
     c->weld = malloc((n ? n : 1) * sizeof *c->weld);
     c->moved = malloc(n ? n : 1);
-    c->mtris = malloc((t ? t : 1) * sizeof *c->mtris);
     c->ins = malloc((t ? t : 1) * sizeof *c->ins);
     c->box = malloc((t ? t : 1) * sizeof *c->box);
     uint32_t *order = malloc((n ? n : 1) * sizeof *order);
-    if (!c->weld || !c->moved || !c->mtris || !c->ins || !c->box || !order) {
+    if (!c->weld || !c->moved || !c->ins || !c->box || !order) {
         free(order);
         fp_contact_destroy(&c);
         return -ENOMEM;
@@ -319,11 +336,11 @@ void fp_contact_destroy(fp_contact **cp)
     bg_join(c);
     free(c->weld);
     free(c->moved);
-    free(c->mtris);
     free(c->ins);
     free(c->box);
-    free(c->bucket_start);
-    free(c->entries);
+    free(c->rec);
+    free(c->rec_tmp);
+    free(c->run);
     free(c->own);
     free(c->nrm);
     free(c->nrm_weld);
@@ -360,21 +377,36 @@ static inline bool boxes_meet(const float *a, const float *b)
     return (a[0] <= b[3]) & (b[0] <= a[3]) & (a[1] <= b[4]) & (b[1] <= a[4]) & (a[2] <= b[5]) & (b[2] <= a[5]);
 }
 
-static uint32_t cell_hash(long x, long y, long z)
+/* a coordinate's cell along one axis of the check's grid: x = (coordinate - region's lower
+ * side) / cell, clamped to [0, 2^21] (NaN to 0); monotonic in x */
+static inline uint64_t cell_ix(double x)
 {
-    uint64_t h = (uint64_t)x * 73856093u ^ (uint64_t)y * 19349663u ^ (uint64_t)z * 83492791u;
-    return (uint32_t)(h ^ (h >> 29));
+    return x > 0 ? (x < 0x1p21 ? (uint64_t)x : (uint64_t)1 << 21) : 0;
 }
 
-static int grow(uint32_t **p, size_t *cap, size_t need)
+/* LSD radix sort of (*r)[0, m) by key, whose set bits lie below `bits`, through tmp (room for
+ * m): stable; the sorted records end in *r (the buffers swapped when an odd number of passes
+ * ran). A digit every record shares is skipped. */
+static void sort_cells(cellrec **r, cellrec **tmp, size_t m, int bits)
 {
-    if (need <= *cap) return 0;
-    size_t nc = need + need / 2;
-    uint32_t *q = realloc(*p, nc * sizeof *q);
-    if (!q) return -ENOMEM;
-    *p = q;
-    *cap = nc;
-    return 0;
+    enum { D = 11, B = 1 << D };
+    size_t cnt[B];
+    for (int sh = 0; sh < bits; sh += D) {
+        const cellrec *src = *r;
+        cellrec *dst = *tmp;
+        memset(cnt, 0, B * sizeof *cnt);
+        for (size_t i = 0; i < m; i++) cnt[(src[i].key >> sh) & (B - 1)]++;
+        if (cnt[(src[0].key >> sh) & (B - 1)] == m) continue;
+        size_t sum = 0;
+        for (size_t d = 0; d < B; d++) {
+            size_t n = cnt[d];
+            cnt[d] = sum;
+            sum += n;
+        }
+        for (size_t i = 0; i < m; i++) dst[cnt[(src[i].key >> sh) & (B - 1)]++] = src[i];
+        *tmp = *r;
+        *r = dst;
+    }
 }
 
 /* n (e1 x e2 in double) turned by more than acos(FP_CONTACT_FLIP_COS) from triangle i's rest
@@ -398,9 +430,51 @@ static bool flipped(const fp_contact *c, const float *pos, const uint32_t *v, si
     return flipped_n(c, n, i);
 }
 
+/* One pair of the check (scan): a moved, b near it (both moved: a the lower), their boxes
+ * meeting in cand, not adjacent. Adds to *found when they cross in cand and (ref not NULL) not in ref, away
+ * from the input's own crossings; ref NULL: marks both own. */
+static void scan_pair(fp_contact *c, const float *ref, const float *cand, uint32_t a, uint32_t b,
+                      uint32_t *pairs, size_t max_pairs, long *found, fp_contact_count *info)
+{
+    const uint32_t *va = c->tris + 3 * (size_t)a, *vb = c->tris + 3 * (size_t)b;
+    double ta[3][3], tb[3][3];
+    tplane pa;
+    tri_of(cand, va, ta);
+    plane_of(ta, &pa);
+    if (pa.deg) return;
+    tri_of(cand, vb, tb);
+    if (!meets_pl(ta, &pa, tb)) return;
+    if (!ref) { /* the weld shape's own crossings */
+        c->own[a] = c->own[b] = 1;
+        ++*found;
+        return;
+    }
+    double ra[3][3], rb[3][3];
+    tplane pra;
+    tri_of(ref, va, ra);
+    plane_of(ra, &pra);
+    tri_of(ref, vb, rb);
+    if (!pra.deg && meets_pl(ra, &pra, rb)) return;
+    if (c->own[a] || c->own[b]) { /* next to the input's own crossings */
+        if (info) info->near_own++;
+        return;
+    }
+    if (pairs && (size_t)*found < max_pairs) {
+        pairs[2 * *found] = a < b ? a : b;
+        pairs[2 * *found + 1] = a < b ? b : a;
+    }
+    ++*found;
+}
+
+#define FP_SCAN_BATCH 64 /* pairs of a cell filtered at once (scan) */
+
 /* The pairs of a moved triangle and a triangle near it that cross in cand and (ref not NULL)
  * not in ref; all: every triangle counts as moved (ref NULL: the weld shape's own crossings,
- * marked in c->own). */
+ * marked in c->own). The broad phase: a uniform grid over the moved region (cell: the mean
+ * moved extent), each triangle whose box meets the region recorded in every cell its box
+ * covers, the records sorted by cell (no hashing: a cell's triangles are read together, in
+ * the order of the cells); in each cell every pair with a moved triangle whose boxes meet is
+ * taken, once: in the cell of its boxes' common lower corner. */
 static long scan(fp_contact *c, const float *ref, const float *cand, bool all, uint32_t *pairs,
                  size_t max_pairs, fp_contact_count *info)
 {
@@ -412,7 +486,7 @@ static long scan(fp_contact *c, const float *ref, const float *cand, bool all, u
     for (size_t i = 0; i < c->t; i++) {
         const uint32_t *v = c->tris + 3 * i;
         if (!(c->moved[v[0]] | c->moved[v[1]] | c->moved[v[2]])) continue;
-        c->mtris[nm++] = (uint32_t)i;
+        nm++;
         float b[6];
         tri_box(cand, v, b);
         double ext = 0;
@@ -431,10 +505,23 @@ static long scan(fp_contact *c, const float *ref, const float *cand, bool all, u
     if (info) info->moved_tris = nm;
     if (!nm) return 0;
     /* the cell: the mean moved extent, at most 32 cells across the largest one (a few
-     * large triangles, the back of a head, must not make one cell of the whole region) */
+     * large triangles, the back of a head, must not make one cell of the whole region), at
+     * most 2^20 cells along an axis (a cell's index fits 64 bits) */
     cell = fmax(FP_CONTACT_CELL * sum / (double)nm, cell / 32.0);
+    for (int k = 0; k < 3; k++) cell = fmax(cell, ((double)reg[3 + k] - reg[k]) * 0x1p-20);
     if (!(cell > 0)) cell = 1e-9;
-    /* the triangles whose candidate box meets the moved region, into the grid */
+    const double ic = 1.0 / cell;
+    /* cells of a box (clamped to the region: every moved box lies inside it) */
+#define CELL_RANGE(b, lo, hi)                                                                  \
+    for (int k = 0; k < 3; k++) {                                                              \
+        lo[k] = cell_ix(((double)fmaxf((b)[k], reg[k]) - reg[k]) * ic);                         \
+        hi[k] = cell_ix(((double)fminf((b)[3 + k], reg[3 + k]) - reg[k]) * ic);                 \
+    }
+    uint64_t dim[3];
+    for (int k = 0; k < 3; k++) dim[k] = cell_ix(((double)reg[3 + k] - reg[k]) * ic) + 1;
+    int bits = 0;
+    while (bits < 64 && (dim[0] * dim[1] * dim[2] - 1) >> bits) bits++;
+    /* the triangles whose candidate box meets the moved region, and their cells */
     size_t ni = 0, ne = 0;
     for (size_t i = 0; i < c->t; i++) {
         float b[6];
@@ -442,122 +529,87 @@ static long scan(fp_contact *c, const float *ref, const float *cand, bool all, u
         if (!boxes_meet(b, reg)) continue;
         memcpy(c->box[i], b, sizeof b);
         c->ins[ni++] = (uint32_t)i;
+        uint64_t lo[3], hi[3];
+        CELL_RANGE(b, lo, hi)
+        ne += (size_t)((hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1));
     }
-    /* cells of a box, clamped to the region (every query box lies inside it) */
-#define CELL_RANGE(b, lo, hi)                                                                  \
-    for (int k = 0; k < 3; k++) {                                                              \
-        lo[k] = (long)floor(((double)fmaxf((b)[k], reg[k]) - reg[k]) / cell);                   \
-        hi[k] = (long)floor(((double)fminf((b)[3 + k], reg[3 + k]) - reg[k]) / cell);           \
+    if (ne > c->rec_cap) {
+        free(c->rec);
+        free(c->rec_tmp);
+        c->rec_cap = ne + ne / 4;
+        c->rec = malloc(c->rec_cap * sizeof *c->rec);
+        c->rec_tmp = malloc(c->rec_cap * sizeof *c->rec_tmp);
+        if (!c->rec || !c->rec_tmp) {
+            free(c->rec);
+            free(c->rec_tmp);
+            c->rec = c->rec_tmp = NULL;
+            c->rec_cap = 0;
+            return -ENOMEM;
+        }
     }
+    cellrec *rec = c->rec;
+    size_t w = 0;
     for (size_t j = 0; j < ni; j++) {
-        long lo[3], hi[3];
-        CELL_RANGE(c->box[c->ins[j]], lo, hi)
-        ne += (size_t)(hi[0] - lo[0] + 1) * (size_t)(hi[1] - lo[1] + 1) * (size_t)(hi[2] - lo[2] + 1);
+        uint32_t i = c->ins[j];
+        const uint32_t *v = c->tris + 3 * (size_t)i;
+        uint32_t moved = c->moved[v[0]] | c->moved[v[1]] | c->moved[v[2]];
+        uint64_t lo[3], hi[3];
+        CELL_RANGE(c->box[i], lo, hi)
+        for (uint64_t z = lo[2]; z <= hi[2]; z++)
+            for (uint64_t y = lo[1]; y <= hi[1]; y++)
+                for (uint64_t x = lo[0]; x <= hi[0]; x++)
+                    rec[w++] = (cellrec){x + dim[0] * (y + dim[1] * z), i,
+                                         moved | (uint32_t)(x == lo[0]) << 1 | (uint32_t)(y == lo[1]) << 2 |
+                                             (uint32_t)(z == lo[2]) << 3};
     }
-    size_t nb = 64;
-    while (nb < 2 * ne) nb *= 2;
-    if (grow(&c->bucket_start, &c->bucket_cap, nb + 1)) return -ENOMEM;
-    if (ne > c->entry_cap) {
-        void *q = realloc(c->entries, (ne + ne / 2) * sizeof *c->entries);
-        if (!q) return -ENOMEM;
-        c->entries = q;
-        c->entry_cap = ne + ne / 2;
-    }
-    uint32_t *bs = c->bucket_start;
-    memset(bs, 0, (nb + 1) * sizeof *bs);
-    for (int pass = 0; pass < 2; pass++) {
-        for (size_t j = 0; j < ni; j++) {
-            long lo[3], hi[3];
-            CELL_RANGE(c->box[c->ins[j]], lo, hi)
-            for (long x = lo[0]; x <= hi[0]; x++)
-                for (long y = lo[1]; y <= hi[1]; y++)
-                    for (long z = lo[2]; z <= hi[2]; z++) {
-                        uint32_t h = cell_hash(x, y, z) & (uint32_t)(nb - 1);
-                        if (!pass) bs[h + 1]++;
-                        else {
-                            struct entry *en = &c->entries[bs[h]++];
-                            uint32_t i = c->ins[j];
-                            const uint32_t *v = c->tris + 3 * (size_t)i;
-                            memcpy(en->box, c->box[i], sizeof en->box);
-                            en->tri = i;
-                            en->moved = c->moved[v[0]] | c->moved[v[1]] | c->moved[v[2]];
-                        }
-                    }
-        }
-        if (!pass)
-            for (size_t h = 0; h < nb; h++) bs[h + 1] += bs[h];
-        else /* the fill moved each start to the next bucket's */
-            memmove(bs + 1, bs, nb * sizeof *bs), bs[0] = 0;
-    }
+    sort_cells(&c->rec, &c->rec_tmp, ne, bits);
+    rec = c->rec;
+    /* the sweep: each cell's triangles, every pair once */
     long found = 0;
-    for (size_t j = 0; j < nm; j++) {
-        uint32_t a = c->mtris[j];
-        const uint32_t *va = c->tris + 3 * (size_t)a;
-        double ta[3][3], ra[3][3];
-        tplane pa, pra; /* a's planes, once for its candidates */
-        tri_of(cand, va, ta);
-        plane_of(ta, &pa);
-        if (pa.deg) continue;
-        bool rdeg_a = true;
-        if (ref) {
-            tri_of(ref, va, ra);
-            plane_of(ra, &pra);
-            rdeg_a = pra.deg;
+    for (size_t r0 = 0, r1; r0 < ne; r0 = r1) {
+        uint64_t key = rec[r0].key;
+        for (r1 = r0 + 1; r1 < ne && rec[r1].key == key; r1++) {
         }
-        long lo[3], hi[3];
-        const float *ba = c->box[a];
-        CELL_RANGE(ba, lo, hi)
-        for (long x = lo[0]; x <= hi[0]; x++)
-            for (long y = lo[1]; y <= hi[1]; y++)
-                for (long z = lo[2]; z <= hi[2]; z++) {
-                    uint32_t h = cell_hash(x, y, z) & (uint32_t)(nb - 1);
-                    for (uint32_t e = bs[h]; e < bs[h + 1]; e++) {
-                        const struct entry *en = &c->entries[e];
-                        /* two cells of one box in one bucket: one entry is enough (the
-                         * copies are next to each other, filled box by box) */
-                        if (e > bs[h] && en[-1].tri == en->tri) continue;
-                        if (!boxes_meet(ba, en->box)) continue;
-                        uint32_t b = en->tri;
-                        if (b == a || (en->moved && b < a)) continue; /* a moved pair is the lower's */
-                        /* a pair once: in the cell of its boxes' common lower corner */
-                        long own[3], cur[3] = {x, y, z};
-                        bool mine = true;
-                        for (int k = 0; k < 3 && mine; k++) {
-                            float l = fmaxf(fmaxf(ba[k], en->box[k]), reg[k]);
-                            own[k] = (long)floor(((double)l - reg[k]) / cell);
-                            mine = own[k] == cur[k];
-                        }
-                        if (!mine) continue;
-                        const uint32_t *vb = c->tris + 3 * (size_t)b;
-                        bool adjacent = false;
-                        for (int p = 0; p < 3 && !adjacent; p++)
-                            for (int q = 0; q < 3; q++)
-                                if (c->weld[va[p]] == c->weld[vb[q]]) {
-                                    adjacent = true;
-                                    break;
-                                }
-                        if (adjacent) continue;
-                        double tb[3][3], rb[3][3];
-                        tri_of(cand, vb, tb);
-                        if (!meets_pl(ta, &pa, tb)) continue;
-                        if (!ref) { /* the weld shape's own crossings */
-                            c->own[a] = c->own[b] = 1;
-                            found++;
-                            continue;
-                        }
-                        tri_of(ref, vb, rb);
-                        if (!rdeg_a && meets_pl(ra, &pra, rb)) continue;
-                        if (c->own[a] || c->own[b]) { /* next to the input's own crossings */
-                            if (info) info->near_own++;
-                            continue;
-                        }
-                        if (pairs && (size_t)found < max_pairs) {
-                            pairs[2 * found] = a < b ? a : b;
-                            pairs[2 * found + 1] = a < b ? b : a;
-                        }
-                        found++;
-                    }
+        size_t m = r1 - r0;
+        if (m < 2) continue;
+        if (m > c->run_cap) {
+            void *q = realloc(c->run, (m + m / 2) * sizeof *c->run);
+            if (!q) return -ENOMEM;
+            c->run = q;
+            c->run_cap = m + m / 2;
+        }
+        cellrun *run = c->run;
+        for (size_t i = 0; i < m; i++) {
+            cellrun *u = &run[i];
+            u->tri = rec[r0 + i].tri;
+            u->moved = rec[r0 + i].flags & 1;
+            u->lo = rec[r0 + i].flags >> 1;
+            memcpy(u->box, c->box[u->tri], sizeof u->box);
+            for (int k = 0; k < 3; k++) u->w[k] = c->weld[c->tris[3 * (size_t)u->tri + k]];
+        }
+        /* (i, j), i < j, with a moved triangle, boxes meeting, their common lower corner in
+         * this cell (cell_ix is monotonic: on each axis one of the two lower corners is
+         * here, both boxes covering this cell), filtered without a branch */
+        for (size_t i = 0; i + 1 < m; i++) {
+            const cellrun *u = &run[i];
+            for (size_t j0 = i + 1; j0 < m; j0 += FP_SCAN_BATCH) {
+                size_t j1 = m - j0 > FP_SCAN_BATCH ? j0 + FP_SCAN_BATCH : m, nh = 0;
+                uint32_t hit[FP_SCAN_BATCH];
+                for (size_t j = j0; j < j1; j++) {
+                    hit[nh] = (uint32_t)j;
+                    nh += (u->moved | run[j].moved) & (uint32_t)boxes_meet(u->box, run[j].box) &
+                          (uint32_t)((u->lo | run[j].lo) == 7);
                 }
+                for (size_t h = 0; h < nh; h++) {
+                    const cellrun *q = &run[hit[h]];
+                    if (welded_adjacent(u->w, q->w)) continue;
+                    /* a: the moved one (both: the lower) */
+                    bool lower = u->moved && (!q->moved || u->tri < q->tri);
+                    uint32_t a = lower ? u->tri : q->tri, b = lower ? q->tri : u->tri;
+                    scan_pair(c, ref, cand, a, b, pairs, max_pairs, &found, info);
+                }
+            }
+        }
     }
 #undef CELL_RANGE
     return found;

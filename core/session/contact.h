@@ -13,8 +13,9 @@
  * fp_contact_create also finds the weld shape's own crossings (a full scan, once) and its
  * triangle normals. fp_contact_count_new checks only what moved: the triangles with a vertex
  * whose position differs (bitwise) between reference and candidate, against the triangles
- * near them, found through a uniform hash grid over the moved region (cell: the largest
- * moved triangle's extent in the candidate). Two triangles cross when they share a point
+ * near them, found through a uniform grid over the moved region (cell: the mean moved
+ * triangle's extent in the candidate), its (cell, triangle) records sorted by cell so that
+ * each cell's pairs are taken in one sweep, every pair once. Two triangles cross when they share a point
  * (closed triangles) and no vertex; vertices at identical positions in the shape given to
  * fp_contact_create are welded, so OBJ seams (duplicated vertices) are adjacency, as in
  * tests/support/selfx. Degenerate (zero-area) triangles are skipped. A pair is new when it
