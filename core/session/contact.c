@@ -230,6 +230,7 @@ static void tri_of(const float *pos, const uint32_t *v, double out[3][3]);
 static long scan(fp_contact *c, const float *ref, const float *cand, bool all, uint32_t *pairs,
                  size_t max_pairs, fp_contact_count *info);
 static inline bool welded_adjacent(const uint32_t a[3], const uint32_t b[3]);
+static int reserve(void **p, size_t *cap, size_t need, size_t el);
 
 /* ---- the index ------------------------------------------------------------------------------ */
 
@@ -431,8 +432,8 @@ static bool flipped(const fp_contact *c, const float *pos, const uint32_t *v, si
 }
 
 /* One pair of the check (scan): a moved, b near it (both moved: a the lower), their boxes
- * meeting in cand, not adjacent. Adds to *found when they cross in cand and (ref not NULL) not in ref, away
- * from the input's own crossings; ref NULL: marks both own. */
+ * meeting in cand, not adjacent. Adds to *found when they cross in cand and (ref not NULL)
+ * not in ref, away from the input's own crossings; ref NULL: marks both own. */
 static void scan_pair(fp_contact *c, const float *ref, const float *cand, uint32_t a, uint32_t b,
                       uint32_t *pairs, size_t max_pairs, long *found, fp_contact_count *info)
 {
@@ -533,7 +534,8 @@ static long scan(fp_contact *c, const float *ref, const float *cand, bool all, u
         CELL_RANGE(b, lo, hi)
         ne += (size_t)((hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1));
     }
-    if (ne > c->rec_cap) {
+    if (ne > c->rec_cap) { /* (not reserve: the two buffers trade places in the sort, so
+                            * they share one capacity, and neither's records need keeping) */
         free(c->rec);
         free(c->rec_tmp);
         c->rec_cap = ne + ne / 4;
@@ -572,12 +574,7 @@ static long scan(fp_contact *c, const float *ref, const float *cand, bool all, u
         }
         size_t m = r1 - r0;
         if (m < 2) continue;
-        if (m > c->run_cap) {
-            void *q = realloc(c->run, (m + m / 2) * sizeof *c->run);
-            if (!q) return -ENOMEM;
-            c->run = q;
-            c->run_cap = m + m / 2;
-        }
+        if (reserve((void **)&c->run, &c->run_cap, m, sizeof *c->run)) return -ENOMEM;
         cellrun *run = c->run;
         for (size_t i = 0; i < m; i++) {
             cellrun *u = &run[i];
