@@ -330,7 +330,8 @@ typedef struct csrbf_eval_stats {
  *  trimmed to the pairs whose support holds a vertex of the block, and then with each pair's
  *  kernel weights cached (they depend on the centres and the vertices only: an anchored frame
  *  adds alpha_j w, bit for bit what the kernel gives; used while the frame's data stays in
- *  cache, at most 66 bytes per pair); blocks outside every support are copied from the base.
+ *  cache, at most 66 bytes per pair); blocks outside every support are copied from the base. A selection used once (new
+ *  centres: unanchored frames) is walked and evaluated part by part inside the threads.
  *  The arithmetic is float (positions, coefficients), the coefficients having been solved in
  *  double. Without a polynomial a vertex outside every
  *  support gets exactly its base position, bit for bit. Vectorised (AVX-512 intrinsics with

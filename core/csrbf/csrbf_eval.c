@@ -741,6 +741,8 @@ static size_t steal_take(steal_part *sp, int back)
 /* Vertex-centre lane pairs (estimated, support_share) above which a full write whose
  * selection is not kept walks the tree and evaluates in parallel parts. */
 #define PARALLEL_LANES 50000
+/* The same for a touched call (which writes only the selected blocks, so forks for less). */
+#define PARALLEL_LANES_TOUCHED 20000
 
 /* sel_k of a selection seen once and not kept (the next use with the same key keeps it). */
 #define SEL_PENDING SIZE_MAX
@@ -989,11 +991,17 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
     size_t gen_f = !fast && touch ? align64(2 * nb) : 0;
     size_t gen_t = !fast ? (size_t)nt * per_thread : 0;
     size_t pack = fast ? align64(m * 8 * sizeof(float)) : 0;
-    /* a fused walk-and-evaluate (full writes, selection not kept): per thread, the selection
-     * of one part of the mesh */
+    /* a fused walk-and-evaluate (a selection not kept): per thread, the selection of one
+     * part of the mesh (its masks, and its blocks unless a touch keeps them per part), and
+     * with a touch the masks of the part's work list; per part with a touch, its selected
+     * blocks (the next call's last-call list) and its written ones (the ranges) */
     const size_t fparts = SPLIT_PARTS * (size_t)nt, fmax = nb / fparts + 2;
-    size_t fthr = align64(fmax * sizeof(uint64_t)) + align64(fmax * sizeof(uint32_t));
-    size_t fsz = fast && use_tree && !touch && nt > 1 ? (size_t)nt * fthr : 0;
+    size_t fthr = align64(fmax * sizeof(uint64_t)) +
+                  (touch ? align64(fmax * sizeof(uint64_t)) : align64(fmax * sizeof(uint32_t)));
+    size_t fpart = touch ? 2 * align64(fparts * fmax * sizeof(uint32_t)) +
+                               align64(2 * fparts * sizeof(size_t))
+                         : 0;
+    size_t fsz = fast && use_tree && nt > 1 ? (size_t)nt * fthr + fpart : 0;
     size_t need = pack + splits + mrg + gen_m + gen_f + gen_t + fsz + 64;
     void *mem = NULL;
     int own = 0;
@@ -1081,10 +1089,11 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
             S.evals = s->sel_evals;
             changed = 0;
         } else if (!seen && fast && fsz &&
-                   (double)n * support_share(s, P) > (double)PARALLEL_LANES) {
-            /* a full write with a selection not seen before (unanchored frames): each thread
-             * walks the tree for its parts of the mesh and evaluates them at once (below);
-             * the selection is kept only if it is used again */
+                   (double)n * support_share(s, P) >
+                       (double)(full_write ? PARALLEL_LANES : PARALLEL_LANES_TOUCHED)) {
+            /* a selection not seen before (unanchored frames): each thread walks the tree for
+             * its parts of the mesh and evaluates them at once (below); the selection is kept
+             * only if it is used again */
             fused = 1;
             s->sel_k = SEL_PENDING;
         } else {
@@ -1124,9 +1133,19 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
             q[6] = q[7] = 0.0f;
         }
         if (fused) {
-            const drive_fn drive = isa->drivers[ki][st != NULL][DRIVE_GAPS];
+            /* a full write copies each part's gaps; a touched call's work list is the part's
+             * selection merged with the last call's blocks there (restored where no support
+             * holds them now), as the merge below */
+            const drive_fn drive = isa->drivers[ki][st != NULL][full_write ? DRIVE_GAPS : DRIVE_LIST];
             const int top = P->tlevels - 1;
             const uint64_t all = m >= 64 ? ~0ull : (1ull << m) - 1;
+            uint32_t *psel = (uint32_t *)(fbuf + (size_t)nt * fthr),
+                     *pwr = psel + align64(fparts * fmax * sizeof(uint32_t)) / sizeof(uint32_t);
+            size_t *nsel = (size_t *)(pwr + align64(fparts * fmax * sizeof(uint32_t)) /
+                                                sizeof(uint32_t)),
+                   *nwr = nsel + fparts;
+            const uint32_t *pv = touch ? touch->prev : NULL;
+            const size_t np = touch ? touch->nprev : 0;
             float maxd2 = 0.0f;
 #pragma omp parallel num_threads(nt) reduction(+ : pairs, moved) reduction(max : maxd2)
             {
@@ -1135,20 +1154,58 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
                 block_select L = S;
                 L.msk = (uint64_t *)mine;
                 L.blk = (uint32_t *)(mine + align64(fmax * sizeof(uint64_t)));
+                uint64_t *wm = (uint64_t *)(mine + align64(fmax * sizeof(uint64_t)));
 #pragma omp for schedule(dynamic, 1)
                 for (size_t q = 0; q < fparts; q++) {
                     size_t lo = nb * q / fparts, hi = nb * (q + 1) / fparts;
+                    if (touch) nsel[q] = nwr[q] = 0;
                     if (hi <= lo) continue;
+                    if (touch) L.blk = psel + q * fmax;
                     L.k = 0;
                     if (simd == SIMD_AVX512) select_visit_avx512(&L, top, 0, all, lo, hi);
                     else select_visit_avx2(&L, top, 0, all, lo, hi);
-                    drive(P, out, L.blk, L.msk, 0, L.k, lo, hi, m, cpack, inv_r2, NULL, &ts);
+                    if (full_write) {
+                        drive(P, out, L.blk, L.msk, 0, L.k, lo, hi, m, cpack, inv_r2, NULL, &ts);
+                    } else {
+                        uint32_t *wb = pwr + q * fmax;
+                        size_t a = 0, c = lower_bound(pv, np, lo), k = 0;
+                        while (a < L.k || (c < np && pv[c] < hi)) {
+                            if (c >= np || pv[c] >= hi || (a < L.k && L.blk[a] < pv[c])) {
+                                wb[k] = L.blk[a];
+                                wm[k++] = L.msk[a++];
+                            } else if (a >= L.k || pv[c] < L.blk[a]) {
+                                wb[k] = pv[c++];
+                                wm[k++] = 0;
+                            } else {
+                                wb[k] = L.blk[a];
+                                wm[k++] = L.msk[a++];
+                                c++;
+                            }
+                        }
+                        drive(P, out, wb, wm, 0, k, 0, 0, m, cpack, inv_r2, NULL, &ts);
+                        nwr[q] = k;
+                    }
+                    if (touch) nsel[q] = L.k;
                 }
                 pairs += ts.pairs;
                 moved += ts.moved;
                 if (ts.maxd2 > maxd2) maxd2 = ts.maxd2;
             }
             maxd = maxd2;
+            if (touch) { /* the parts' lists in order: the last-call list and the ranges */
+                size_t k = 0, w = 0;
+                for (size_t q = 0; q < fparts; q++) {
+                    memcpy(touch->prev + k, psel + q * fmax, nsel[q] * sizeof *psel);
+                    k += nsel[q];
+                    memmove(pwr + w, pwr + q * fmax, nwr[q] * sizeof *pwr);
+                    w += nwr[q];
+                }
+                touch->nprev = k;
+                if (full_write) ranges_all(touch, n);
+                else ranges_of_blocks(touch, n, pwr, w);
+                touch->sel_id = 0;
+                touch->ranges_sel = 0;
+            }
         } else {
             const uint32_t *ib = NULL;
             const uint64_t *im = NULL;

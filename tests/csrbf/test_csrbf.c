@@ -545,6 +545,100 @@ static void test_touched_frames(void **state)
     free(last);
 }
 
+/* Touched calls whose selection is new at each call (unanchored frames, with enough pairs
+ * that the threads fork) walk the block tree and evaluate in the same parallel parts, each
+ * part merging its selection with the last call's blocks there (or, writing every block,
+ * copying its gaps). On 2 and 3 threads, at two radii, every
+ * frame equals a full evaluation by a second solver (given the same points: its own
+ * selection) bit for bit, with equal statistics; outside the reported ranges the output is
+ * unchanged since the last frame. The frames slide the start points, jump them (blocks left
+ * behind restored to the base), keep them (the kept selection's merge, after a call that
+ * kept none), take every support off the mesh and back, and follow a reset (a full write). */
+static void test_touched_fused(void **state)
+{
+    (void)state;
+    size_t nx = 203, ny = 151, nv = nx * ny; /* not a multiple of 16 */
+    double h = 0.5, W = h * (double)(nx - 1), H = h * (double)(ny - 1);
+    float *v = wavy_grid(nx, ny, h);
+    float *out = malloc(nv * 3 * sizeof *out), *ref = malloc(nv * 3 * sizeof *ref),
+          *last = malloc(nv * 3 * sizeof *last);
+    csrbf_points *p = NULL;
+    assert_int_equal(csrbf_points_create(nv, v, &p), CSRBF_OK);
+    enum { N = 10 };
+    for (int cfg = 0; cfg < 4; cfg++) {
+        csrbf_options o = {0};
+        /* ten supports of 28 x 28 over 101 x 75 (about 30,000 lanes: touched calls fork), or
+         * of 44 x 44 (about 60,000: full writes, the first call and a reset's, fork too) */
+        o.radius = cfg < 2 ? 14.0 : 22.0;
+        o.threads = 2 + cfg % 2;
+        csrbf_solver *s = NULL, *r = NULL;
+        csrbf_touch *tc = NULL;
+        assert_int_equal(csrbf_solver_create(&o, &s), CSRBF_OK);
+        assert_int_equal(csrbf_solver_create(&o, &r), CSRBF_OK);
+        assert_int_equal(csrbf_touch_create(p, &tc), CSRBF_OK);
+        float st[3 * N], en[3 * N];
+        for (int frame = 0; frame < 24; frame++) {
+            /* 0-7 slide; 8 jumps by a third of the grid; 9-11 slide; 12-13 keep 11's start
+             * points; 14-15 slide; 16 after a reset; 17-19 slide; 20 every support off the
+             * mesh; 21-23 back, sliding */
+            int keep = frame == 12 || frame == 13;
+            double dx = 1.3 * frame - (frame >= 8 ? 8.0 : 0.0), dy = frame >= 8 ? H / 3 : 0.0;
+            if (frame == 20) dx += 4 * W;
+            for (int i = 0; i < N && !keep; i++) {
+                st[3 * i] = (float)(0.1 * W + 0.17 * W * (i % 5) + dx);
+                st[3 * i + 1] = (float)(0.2 * H + 0.4 * H * (i / 5) + dy);
+                st[3 * i + 2] = (float)(0.05 * i);
+            }
+            for (int i = 0; i < N; i++)
+                for (int a = 0; a < 3; a++)
+                    en[3 * i + a] = st[3 * i + a] + (float)(0.4 * cos(0.7 * frame + i + 2.0 * a));
+            if (frame == 16) csrbf_touch_reset(tc);
+            if (keep) {
+                assert_true(csrbf_solver_set_end_points(s, en) >= 0);
+            } else {
+                assert_true(csrbf_solver_solve(s, N, st, en) >= 0);
+            }
+            assert_true(csrbf_solver_solve(r, N, st, en) >= 0);
+            csrbf_eval_stats a, b;
+            if (frame > 0) memcpy(last, out, nv * 3 * sizeof *out);
+            assert_int_equal(csrbf_evaluate_touched(s, p, tc, out, 0, &b), CSRBF_OK);
+            assert_int_equal(csrbf_evaluate(r, p, ref, 0, &a), CSRBF_OK);
+            assert_memory_equal(out, ref, nv * 3 * sizeof *out);
+            assert_int_equal(a.pairs, b.pairs);
+            assert_int_equal(a.moved, b.moved);
+            assert_double_equal(a.max_displacement, b.max_displacement, 0);
+            if (frame == 20) assert_int_equal(b.pairs, 0);
+            else assert_true(b.pairs > 15000);
+            const uint32_t *rg;
+            size_t nr = csrbf_touch_ranges(tc, &rg), prev_end = 0, covered = 0;
+            for (size_t q = 0; q < nr; q++) {
+                assert_true(rg[2 * q] >= prev_end);
+                assert_true(rg[2 * q + 1] > 0);
+                if (q > 0) assert_true(rg[2 * q] > prev_end); /* runs joined across parts */
+                if (frame > 0)
+                    assert_memory_equal(out + 3 * prev_end, last + 3 * prev_end,
+                                        (rg[2 * q] - prev_end) * 3 * sizeof(float));
+                prev_end = rg[2 * q] + rg[2 * q + 1];
+                covered += rg[2 * q + 1];
+                assert_true(prev_end <= nv);
+            }
+            if (frame > 0)
+                assert_memory_equal(out + 3 * prev_end, last + 3 * prev_end,
+                                    (nv - prev_end) * 3 * sizeof(float));
+            if (frame == 0 || frame == 16) assert_int_equal(covered, nv);
+            else if (frame != 8) assert_true(covered < nv); /* 8: the old blocks and the new */
+        }
+        csrbf_touch_destroy(&tc);
+        csrbf_solver_destroy(&s);
+        csrbf_solver_destroy(&r);
+    }
+    csrbf_points_destroy(&p);
+    free(v);
+    free(out);
+    free(ref);
+    free(last);
+}
+
 /* The cached block selection follows the points: one solver alternates between two vertex
  * sets and one of them is moved (csrbf_points_update, then csrbf_points_update_ranges);
  * every result equals a fresh vertex set's through a fresh solver. */
@@ -1327,7 +1421,7 @@ int main(void)
         cmocka_unit_test(test_foldover),            cmocka_unit_test(test_invalid),
         cmocka_unit_test(test_concurrent_evaluate), cmocka_unit_test(test_stats_fast_path),
         cmocka_unit_test(test_touched),             cmocka_unit_test(test_many_centres),
-        cmocka_unit_test(test_touched_frames),      cmocka_unit_test(test_selection_cache),
+        cmocka_unit_test(test_touched_frames),      cmocka_unit_test(test_touched_fused),      cmocka_unit_test(test_selection_cache),
         cmocka_unit_test(test_selection_paths),     cmocka_unit_test(test_weight_cache),
         cmocka_unit_test(test_simd_path),           cmocka_unit_test(test_threads_steal),
     };
