@@ -773,6 +773,36 @@ static size_t lower_bound(const uint32_t *blk, size_t k, size_t b)
     return lo;
 }
 
+/* A touched call's work list: the selection (blocks sb, masks sm, k of them, increasing)
+ * merged with the last call's blocks pv (np, increasing; those not selected now get mask 0:
+ * restored to the base) into ob, om; with cum, the prefix costs too (scum: the selection's,
+ * into ocum, k + 1 of them). Returns the items. */
+static inline __attribute__((always_inline)) size_t
+merge_last(const uint32_t *sb, const uint64_t *sm, const size_t *scum, size_t k,
+           const uint32_t *pv, size_t np, uint32_t *ob, uint64_t *om, size_t *ocum)
+{
+    size_t a = 0, c = 0, o = 0, cc = 0;
+    while (a < k || c < np) {
+        if (ocum) ocum[o] = cc;
+        if (c >= np || (a < k && sb[a] < pv[c])) {
+            if (ocum) cc += scum[a + 1] - scum[a];
+            ob[o] = sb[a];
+            om[o++] = sm[a++];
+        } else if (a >= k || pv[c] < sb[a]) {
+            if (ocum) cc += ITEM_COST(0);
+            ob[o] = pv[c++];
+            om[o++] = 0;
+        } else {
+            if (ocum) cc += scum[a + 1] - scum[a];
+            ob[o] = sb[a];
+            om[o++] = sm[a++];
+            c++;
+        }
+    }
+    if (ocum) ocum[o] = cc;
+    return o;
+}
+
 /* The first item i in [lo, hi] whose prefix cost cum[i] reaches target (hi if none before). */
 static size_t cost_reach(const size_t *cum, size_t lo, size_t hi, size_t target)
 {
@@ -1134,8 +1164,7 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
         }
         if (fused) {
             /* a full write copies each part's gaps; a touched call's work list is the part's
-             * selection merged with the last call's blocks there (restored where no support
-             * holds them now), as the merge below */
+             * selection merged with the last call's blocks there (merge_last) */
             const drive_fn drive = isa->drivers[ki][st != NULL][full_write ? DRIVE_GAPS : DRIVE_LIST];
             const int top = P->tlevels - 1;
             const uint64_t all = m >= 64 ? ~0ull : (1ull << m) - 1;
@@ -1168,20 +1197,9 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
                         drive(P, out, L.blk, L.msk, 0, L.k, lo, hi, m, cpack, inv_r2, NULL, &ts);
                     } else {
                         uint32_t *wb = pwr + q * fmax;
-                        size_t a = 0, c = lower_bound(pv, np, lo), k = 0;
-                        while (a < L.k || (c < np && pv[c] < hi)) {
-                            if (c >= np || pv[c] >= hi || (a < L.k && L.blk[a] < pv[c])) {
-                                wb[k] = L.blk[a];
-                                wm[k++] = L.msk[a++];
-                            } else if (a >= L.k || pv[c] < L.blk[a]) {
-                                wb[k] = pv[c++];
-                                wm[k++] = 0;
-                            } else {
-                                wb[k] = L.blk[a];
-                                wm[k++] = L.msk[a++];
-                                c++;
-                            }
-                        }
+                        const size_t c0 = lower_bound(pv, np, lo), c1 = lower_bound(pv, np, hi);
+                        const size_t k =
+                            merge_last(L.blk, L.msk, NULL, L.k, pv + c0, c1 - c0, wb, wm, NULL);
                         drive(P, out, wb, wm, 0, k, 0, 0, m, cpack, inv_r2, NULL, &ts);
                         nwr[q] = k;
                     }
@@ -1222,30 +1240,11 @@ static int evaluate_impl(const csrbf_solver *cs, const csrbf_points *P, float *o
                 } else if (!own && touch->sel_id == s->sel_id) {
                     same = 1; /* the last call computed exactly these blocks: nothing to restore */
                 } else {
-                    const uint32_t *pv = touch->prev;
-                    size_t a = 0, c = 0, k = 0, np = touch->nprev, cc = 0;
-                    while (a < S.k || c < np) {
-                        mrg_cum[k] = cc;
-                        if (c >= np || (a < S.k && S.blk[a] < pv[c])) {
-                            cc += S.cum[a + 1] - S.cum[a];
-                            mrg_blk[k] = S.blk[a];
-                            mrg_msk[k++] = S.msk[a++];
-                        } else if (a >= S.k || pv[c] < S.blk[a]) {
-                            cc += ITEM_COST(0);
-                            mrg_blk[k] = pv[c++];
-                            mrg_msk[k++] = 0;
-                        } else {
-                            cc += S.cum[a + 1] - S.cum[a];
-                            mrg_blk[k] = S.blk[a];
-                            mrg_msk[k++] = S.msk[a++];
-                            c++;
-                        }
-                    }
-                    mrg_cum[k] = cc;
+                    ni = merge_last(S.blk, S.msk, S.cum, S.k, touch->prev, touch->nprev, mrg_blk,
+                                    mrg_msk, mrg_cum);
                     ib = mrg_blk;
                     im = mrg_msk;
                     ic = mrg_cum;
-                    ni = k;
                 }
                 cost = ic[ni];
             }

@@ -247,6 +247,29 @@ static void test_interpolation(void **state)
     }
 }
 
+/* A touch's ranges rg (nr of them): increasing, apart (runs of adjacent blocks joined), non-empty
+ * and within nv vertices; with last (the output before the call), out equals it outside them
+ * (nothing changed there). Returns the vertices they cover. */
+static size_t check_ranges(const float *out, const float *last, size_t nv, const uint32_t *rg,
+                           size_t nr)
+{
+    size_t prev_end = 0, covered = 0;
+    for (size_t r = 0; r < nr; r++) {
+        assert_true(rg[2 * r] >= prev_end);
+        if (r > 0) assert_true(rg[2 * r] > prev_end);
+        assert_true(rg[2 * r + 1] > 0);
+        if (last)
+            assert_memory_equal(out + 3 * prev_end, last + 3 * prev_end,
+                                (rg[2 * r] - prev_end) * 3 * sizeof(float));
+        prev_end = rg[2 * r] + rg[2 * r + 1];
+        covered += rg[2 * r + 1];
+        assert_true(prev_end <= nv);
+    }
+    if (last)
+        assert_memory_equal(out + 3 * prev_end, last + 3 * prev_end, (nv - prev_end) * 3 * sizeof(float));
+    return covered;
+}
+
 /* The persistent-output evaluation: on a grid, fingertips that move (and jump away) give
  * bit-identical output to csrbf_evaluate every frame; vertices outside the reported ranges are
  * unchanged from the last frame; a commit through csrbf_points_update_ranges and
@@ -293,19 +316,8 @@ static void test_touched(void **state)
         const uint32_t *rg;
         size_t nr = csrbf_touch_ranges(tc, &rg);
         assert_true(nr > 0);
-        size_t covered = 0, prev_end = 0;
-        for (size_t r = 0; r < nr; r++) {
-            assert_true(rg[2 * r] >= prev_end);
-            assert_true(rg[2 * r] + rg[2 * r + 1] <= nv);
-            if (frame > 0) /* outside the ranges nothing changed since the last frame */
-                assert_memory_equal(out + 3 * prev_end, last + 3 * prev_end,
-                                    (rg[2 * r] - prev_end) * 3 * sizeof(float));
-            prev_end = rg[2 * r] + rg[2 * r + 1];
-            covered += rg[2 * r + 1];
-        }
-        if (frame > 0)
-            assert_memory_equal(out + 3 * prev_end, last + 3 * prev_end,
-                                (nv - prev_end) * 3 * sizeof(float));
+        /* outside the ranges nothing changed since the last frame */
+        size_t covered = check_ranges(out, frame > 0 ? last : NULL, nv, rg, nr);
         if (frame == 0) assert_int_equal(covered, nv); /* the first call writes everything */
         else assert_true(covered < nv / 2);
         if (frame == 9) { /* commit: the output becomes the base, only touched blocks re-indexed */
@@ -517,20 +529,8 @@ static void test_touched_frames(void **state)
             assert_memory_equal(out, v, nv * 3 * sizeof *out);
         }
         const uint32_t *rg;
-        size_t nr = csrbf_touch_ranges(tc, &rg), prev_end = 0, covered = 0;
-        for (size_t r = 0; r < nr; r++) {
-            assert_true(rg[2 * r] >= prev_end);
-            assert_true(rg[2 * r + 1] > 0);
-            if (frame > 0)
-                assert_memory_equal(out + 3 * prev_end, last + 3 * prev_end,
-                                    (rg[2 * r] - prev_end) * 3 * sizeof(float));
-            prev_end = rg[2 * r] + rg[2 * r + 1];
-            covered += rg[2 * r + 1];
-            assert_true(prev_end <= nv);
-        }
-        if (frame > 0)
-            assert_memory_equal(out + 3 * prev_end, last + 3 * prev_end,
-                                (nv - prev_end) * 3 * sizeof(float));
+        size_t nr = csrbf_touch_ranges(tc, &rg);
+        size_t covered = check_ranges(out, frame > 0 ? last : NULL, nv, rg, nr);
         if (frame == 0 || frame == 35 || frame == 36) assert_int_equal(covered, nv);
         if (frame == 21 || frame == 22) assert_int_equal(nr, 0); /* nothing left to restore */
         if (frame > 2 && frame < 10) assert_true(covered < nv);
@@ -610,21 +610,9 @@ static void test_touched_fused(void **state)
             if (frame == 20) assert_int_equal(b.pairs, 0);
             else assert_true(b.pairs > 15000);
             const uint32_t *rg;
-            size_t nr = csrbf_touch_ranges(tc, &rg), prev_end = 0, covered = 0;
-            for (size_t q = 0; q < nr; q++) {
-                assert_true(rg[2 * q] >= prev_end);
-                assert_true(rg[2 * q + 1] > 0);
-                if (q > 0) assert_true(rg[2 * q] > prev_end); /* runs joined across parts */
-                if (frame > 0)
-                    assert_memory_equal(out + 3 * prev_end, last + 3 * prev_end,
-                                        (rg[2 * q] - prev_end) * 3 * sizeof(float));
-                prev_end = rg[2 * q] + rg[2 * q + 1];
-                covered += rg[2 * q + 1];
-                assert_true(prev_end <= nv);
-            }
-            if (frame > 0)
-                assert_memory_equal(out + 3 * prev_end, last + 3 * prev_end,
-                                    (nv - prev_end) * 3 * sizeof(float));
+            /* (runs joined across the parts as well) */
+            size_t nr = csrbf_touch_ranges(tc, &rg);
+            size_t covered = check_ranges(out, frame > 0 ? last : NULL, nv, rg, nr);
             if (frame == 0 || frame == 16) assert_int_equal(covered, nv);
             else if (frame != 8) assert_true(covered < nv); /* 8: the old blocks and the new */
         }
