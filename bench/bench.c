@@ -13,6 +13,7 @@
 #include "step_engine.h"
 
 #include <errno.h>
+#include <inttypes.h>
 #include <fcntl.h>
 #include <math.h>
 #include <sched.h>
@@ -865,13 +866,15 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
     double *wwait = malloc(CAP * sizeof *wwait); /* its wait for the contact worker */
     int *cpu = malloc(CAP * sizeof *cpu);        /* the CPU it ended on (sched_getcpu) */
     double *on_cpu = malloc(CAP * sizeof *on_cpu); /* the frames that ended on one CPU */
+    fp_frame_stats *fst = bo->trace ? malloc(CAP * sizeof *fst) : NULL; /* --trace's rows */
+    size_t *skipped = bo->trace ? malloc(CAP * sizeof *skipped) : NULL;
     bool oom = !total || !act || !com || !eng || !hands || !contact_ms || !held || !wwait || !cpu ||
-               !on_cpu;
+               !on_cpu || (bo->trace && (!fst || !skipped));
     for (int k = 0; k < FP_STAGE_COUNT; k++) oom |= !st_ms[k];
     if (oom) {
         for (int k = 0; k < FP_STAGE_COUNT; k++) free(st_ms[k]);
         free(total), free(act), free(com), free(eng), free(hands), free(contact_ms), free(held);
-        free(wwait), free(cpu), free(on_cpu);
+        free(wwait), free(cpu), free(on_cpu), free(fst), free(skipped);
         fp_session_destroy(&s);
         fprintf(stderr, "bench: frame: out of memory\n");
         return -ENOMEM;
@@ -905,6 +908,10 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
         nthere += st.frame_thread;
         for (int h = 0; h < FP_HANDS; h++)
             if (fp_session_hand(s, h)) hands[nf][h] = *fp_session_hand(s, h);
+        if (fst) {
+            fst[nf] = st;
+            skipped[nf] = 0;
+        }
         nf++;
         next += period;
         int64_t now = fp_now_ns();
@@ -913,10 +920,24 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
             nanosleep(&ts, NULL);
         } else { /* late: the frames whose time passed meanwhile are skipped */
             dropped += (size_t)((now - next) / period);
+            if (skipped) skipped[nf - 1] = (size_t)((now - next) / period);
             next = now;
         }
     }
     double seconds = (double)(fp_now_ns() - start) / 1e9;
+    if (bo->trace) /* after the replay (a write in the paced loop would be timed with
+                       it), before pct sorts the columns */
+        for (size_t f = 0; f < nf; f++) {
+            const fp_frame_stats *t = &fst[f];
+            fprintf(bo->trace, "%s,%zu,%.6g", label, f, total[f]);
+            for (int k = 0; k < FP_STAGE_COUNT; k++) fprintf(bo->trace, ",%.6g", t->stage_ms[k]);
+            fprintf(bo->trace, ",%.6g,%.6g,", t->collide_ms, t->collide_wait_ms);
+            if (sched_fd >= 0) fprintf(bo->trace, "%.6g", held[f]);
+            fprintf(bo->trace, ",%d,%d,%d,%d,%d,%zu,%" PRIu64 ",%d,%.6g,%ld,%zu,%d,%zu,%zu\n",
+                    cpu[f], t->active, t->engaged, t->committed, t->refactored, t->control_vectors,
+                    t->pairs, t->guard_substeps, t->collide_t, t->collide_pairs, t->collide_held,
+                    t->collide_checks, t->collide_moved, skipped[f]);
+        }
     /* the reference, and the indexed distances checked against it (same base, same hands) */
     size_t nbrute = 0, within = 0, far = 0, wrong = 0;
     double *brute = malloc((nf / 8 + 1) * sizeof *brute), *indexed = malloc((nf / 8 + 1) * sizeof *indexed);
@@ -1023,6 +1044,8 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
     }
     fflush(stdout);
     for (int k = 0; k < FP_STAGE_COUNT; k++) free(st_ms[k]);
+    free(fst);
+    free(skipped);
     free(contact_ms);
     free(held);
     free(wwait);
@@ -1062,6 +1085,7 @@ static int case_frame(const bench_opts *o)
     }
     fprintf(stderr, "bench: frame (the session's whole frame; three-claps at its own pace, 60 fps, %s)\n",
             frame_bo->mapping ? frame_bo->mapping : "anchored");
+    if (frame_bo->trace) fputs(FP_BENCH_TRACE_HEADER, frame_bo->trace);
     int rc = frame_run(o, frame_bo, "ict", m);
     fp_mesh *sub = m;
     for (int l = 0; l < 3 && !rc; l++) {

@@ -4,6 +4,7 @@
 #define FP_BENCH_H
 
 #include <stdbool.h>
+#include <stdio.h>
 
 /** What to run. Zeroed: every case, full repetitions, a text table. */
 typedef struct fp_bench_options {
@@ -20,7 +21,19 @@ typedef struct fp_bench_options {
                               NULL: anchored */
     const struct fp_plugin_path *plugin_path; /* where the replay and mapping plugins are
                                                  (case frame; NULL: that case is skipped) */
+    FILE *trace;             /* case frame: one CSV row per frame of each mesh written here
+                                (`bench --trace FILE.csv`; FP_BENCH_TRACE_HEADER first), or
+                                NULL; borrowed, left open */
 } fp_bench_options;
+
+/** The trace's header line (fp_bench_options.trace): the columns, in order. Times in ms;
+ *  cpu_wait_ms empty where /proc/thread-self/schedstat is missing; skipped_after: the
+ *  60 fps periods that passed while the frame ran (frames the paced loop skipped after it). */
+#define FP_BENCH_TRACE_HEADER                                                                  \
+    "mesh,frame,frame_ms,events_ms,hands_ms,distances_ms,mapping_ms,solve_ms,evaluate_ms,"     \
+    "commit_ms,contact_ms,contact_worker_wait_ms,cpu_wait_ms,cpu,active,engaged,committed,"    \
+    "refactored,control_vectors,pairs,guard_substeps,contact_t,contact_pairs,contact_held,"    \
+    "contact_checks,contact_moved,skipped_after\n"
 
 /** The case names, in the order they run; NULL-terminated. */
 extern const char *const fp_bench_cases[];
@@ -29,8 +42,6 @@ extern const char *const fp_bench_cases[];
  *  Returns 0, -EINVAL (o->only names no case), -ENOMEM (a set-up allocation failed) or
  *  FP_ENUMERIC (an engine call failed; its message is on stderr). Not thread-safe. */
 int fp_bench_run(const fp_bench_options *o);
-
-#include <stdio.h>
 
 struct fp_mesh;
 /** Midpoint subdivision: every triangle into four, edge midpoints shared (3 levels make the

@@ -184,6 +184,9 @@ typedef struct fp_frame_stats {
                                  task (contact.h, fp_contact_result.worker_wait_ms), ms */
     size_t collide_held;      /* vertices the guard's hold kept in place (fp_contact_hold:
                                  they moved less than its eps since the last frame) */
+    int collide_checks;       /* shapes the guard checked (fp_contact_result.checks: 1 when the
+                                 motion passed whole; more when it scaled it back) */
+    size_t collide_moved;     /* vertices the guard found moved (fp_contact_result.moved_verts) */
     double stage_ms[FP_STAGE_COUNT]; /* wall time of each stage (fp_frame_stage), ms */
     bool frame_thread;        /* the frame ran on the session's frame thread (fp_session_step) */
 } fp_frame_stats;

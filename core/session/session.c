@@ -613,6 +613,8 @@ static void contact_guard(fp_session *s, const float *ref, bool commit, fp_frame
     }
     st->collide_pairs += r.pairs;
     st->collide_wait_ms += r.worker_wait_ms;
+    st->collide_checks += r.checks;
+    st->collide_moved += r.moved_verts;
     if (!s->cg_frames) s->cg_t = 1.0;
     s->cg_frames++;
     if (r.t < 1) {

@@ -23,8 +23,8 @@ static void usage(FILE *f)
 {
     fprintf(f,
             "usage: facepuppet bench [--quick] [--json] [--case NAME] [--no-contact-guard]\n"
-            "                        [--exact-frames] [--mapping NAME] [--plot FILE.png]\n"
-            "                        [--help]\n\n"
+            "                        [--exact-frames] [--mapping NAME] [--trace FILE.csv]\n"
+            "                        [--plot FILE.png] [--help]\n\n"
             "Times the CSRBF engine (medians over repeated updates; the lowest median of 3\n"
             "rounds, 2 with --quick, as the machine may be shared) beside references measured\n"
             "in the same run. Cases:\n"
@@ -76,6 +76,10 @@ static void usage(FILE *f)
             "  --mapping NAME  case frame: the sessions' mapping (default anchored; e.g.\n"
             "           unanchored: a one-shot step committed every frame, composed by the\n"
             "           fold-over guard where one map would fold)\n"
+            "  --trace FILE.csv  case frame: one row per frame of each mesh (stage times,\n"
+            "           contact guard, commits, the 60 fps periods a slow frame made the loop\n"
+            "           skip; the columns on the first line), to find what makes the p99;\n"
+            "           written whole or not at all\n"
             "  --plot FILE.png  the paper's Figure 3 remade: run table1 (--quick respected; with\n"
             "           --json its rows on stdout too) and draw updates per second (log) against\n"
             "           R for the four meshes, anchored and unanchored, ours beside the paper's,\n"
@@ -83,7 +87,7 @@ static void usage(FILE *f)
             "           tree's bench/) and matplotlib; python3 is $FACEPUPPET_PYTHON, else\n"
             "           /usr/bin/python3, else the PATH's. FILE.png is written whole or not at all\n\n"
             "Exit status: 0 done, 64 usage, 69 --plot without python3, matplotlib or the script,\n"
-            "70 out of memory, 73 FILE.png not writable, 78 a plugin missing or failing\n"
+            "70 out of memory, 73 FILE.png or FILE.csv not writable, 78 a plugin missing or failing\n"
             "(case frame: --mapping names no mapping plugin), 1 an engine call failed.\n");
 }
 
@@ -147,6 +151,38 @@ static mode_t new_file_mode(void)
     return 0666 & ~mask;
 }
 
+/* A temporary file beside path (so that the rename is atomic): .NAME.XXXXXX in its folder,
+ * its name into tmp. Returns the descriptor, or a negative errno (a message printed). */
+static int temp_beside(const char *path, char *tmp, size_t len)
+{
+    const char *slash = strrchr(path, '/');
+    if (slash)
+        snprintf(tmp, len, "%.*s/.%s.XXXXXX", (int)(slash - path), path, slash + 1);
+    else
+        snprintf(tmp, len, ".%s.XXXXXX", path);
+    int fd = mkostemp(tmp, O_CLOEXEC);
+    if (fd < 0) {
+        int e = errno;
+        fprintf(stderr, "facepuppet bench: %s: cannot create a file beside it: %s\n", path, strerror(e));
+        tmp[0] = '\0';
+        return -e;
+    }
+    return fd;
+}
+
+/* fd's file (the temporary tmp) made path: the umask's mode, fsync, rename. Returns 0 or a
+ * negative errno (a message printed). */
+static int commit_beside(int fd, const char *tmp, const char *path)
+{
+    errno = 0;
+    if (fchmod(fd, new_file_mode()) || fsync(fd) || rename(tmp, path)) {
+        int e = errno ? errno : EIO;
+        fprintf(stderr, "facepuppet bench: %s: cannot write it: %s\n", path, strerror(e));
+        return -e;
+    }
+    return 0;
+}
+
 /* `bench --plot FILE.png`: check python3, matplotlib and the output's folder first, run the
  * table1 case into an unlinked temporary file (JSON lines; echoed to stdout with --json),
  * give it to plot_fig3.py as its stdin, which writes .FILE.png.XXXXXX beside FILE.png; fsync,
@@ -179,18 +215,9 @@ static int bench_plot(fp_bench_options *o, const char *png)
     }
     /* the temporary PNG beside the target (so the rename is atomic), made before the bench
      * runs so that an unwritable folder fails at once */
-    const char *slash = strrchr(png, '/');
     char tmp[4200];
-    if (slash)
-        snprintf(tmp, sizeof tmp, "%.*s/.%s.XXXXXX", (int)(slash - png), png, slash + 1);
-    else
-        snprintf(tmp, sizeof tmp, ".%s.XXXXXX", png);
-    int png_fd = mkostemp(tmp, O_CLOEXEC);
-    if (png_fd < 0) {
-        int e = errno;
-        fprintf(stderr, "facepuppet bench: %s: cannot create a file beside it: %s\n", png, strerror(e));
-        return fp_app_exit_code(-e, FP_APP_OUTPUT);
-    }
+    int png_fd = temp_beside(png, tmp, sizeof tmp);
+    if (png_fd < 0) return fp_app_exit_code(png_fd, FP_APP_OUTPUT);
     const char *tmpdir = getenv("TMPDIR");
     char json_path[4200];
     snprintf(json_path, sizeof json_path, "%s/facepuppet-fig3-XXXXXX", tmpdir && *tmpdir ? tmpdir : "/tmp");
@@ -230,12 +257,15 @@ static int bench_plot(fp_bench_options *o, const char *png)
         goto done;
     }
     struct stat st;
-    errno = 0;
-    if (fstat(png_fd, &st) || st.st_size == 0 || fchmod(png_fd, new_file_mode()) || fsync(png_fd) ||
-        rename(tmp, png)) {
-        int e = errno ? errno : EIO;
-        fprintf(stderr, "facepuppet bench: %s: cannot write it: %s\n", png, strerror(e));
-        exit_code = fp_app_exit_code(-e, FP_APP_OUTPUT);
+    int fs = fstat(png_fd, &st);
+    if (fs || st.st_size == 0) {
+        fprintf(stderr, "facepuppet bench: %s: cannot write it: %s\n", png,
+                fs ? strerror(errno) : "the script wrote nothing");
+        exit_code = FP_EXIT_CANTCREAT;
+        goto done;
+    }
+    if ((rc = commit_beside(png_fd, tmp, png))) {
+        exit_code = fp_app_exit_code(rc, FP_APP_OUTPUT);
         goto done;
     }
     tmp[0] = '\0'; /* renamed: nothing to remove */
@@ -251,7 +281,7 @@ done:
 static int bench_main(int argc, char **argv)
 {
     fp_bench_options o = {0};
-    const char *plot = NULL;
+    const char *plot = NULL, *trace = NULL;
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--quick")) {
             o.quick = true;
@@ -267,6 +297,8 @@ static int bench_main(int argc, char **argv)
             o.only = argv[++i];
         } else if (!strcmp(argv[i], "--plot") && i + 1 < argc) {
             plot = argv[++i];
+        } else if (!strcmp(argv[i], "--trace") && i + 1 < argc) {
+            trace = argv[++i];
         } else if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
             usage(stdout);
             return FP_EXIT_OK;
@@ -287,18 +319,55 @@ static int bench_main(int argc, char **argv)
         }
     }
     if (plot) {
+        if (trace) {
+            fprintf(stderr, "facepuppet bench: --plot draws the table1 case; --trace records the frame case\n");
+            return FP_EXIT_USAGE;
+        }
         if (o.only && strcmp(o.only, "table1")) {
             fprintf(stderr, "facepuppet bench: --plot draws the table1 case, not '%s'\n", o.only);
             return FP_EXIT_USAGE;
         }
         return bench_plot(&o, plot);
     }
+    if (trace && o.only && strcmp(o.only, "frame")) {
+        fprintf(stderr, "facepuppet bench: --trace records the frame case, not '%s'\n", o.only);
+        return FP_EXIT_USAGE;
+    }
+    /* the trace's temporary file first, so that an unwritable folder fails before the work */
+    char tmp[4200] = "";
+    int trace_fd = -1;
+    if (trace) {
+        if ((trace_fd = temp_beside(trace, tmp, sizeof tmp)) < 0)
+            return fp_app_exit_code(trace_fd, FP_APP_OUTPUT);
+        if (!(o.trace = fdopen(trace_fd, "w"))) {
+            fprintf(stderr, "facepuppet bench: %s: %s\n", trace, strerror(errno));
+            close(trace_fd);
+            unlink(tmp);
+            return FP_EXIT_SOFTWARE;
+        }
+    }
     fp_plugin_path path;
     fp_app_plugin_path(&path, NULL, 0); /* the replay and anchored plugins, for 'frame' */
     o.plugin_path = &path;
     int rc = fp_bench_run(&o);
     fp_plugin_path_clear(&path);
-    return fp_app_exit_code(rc, FP_APP_INPUT);
+    int exit_code = fp_app_exit_code(rc, FP_APP_INPUT);
+    if (o.trace) {
+        int wrc = 0;
+        if (!rc && (fflush(o.trace) || ferror(o.trace))) {
+            wrc = -(errno ? errno : EIO);
+            fprintf(stderr, "facepuppet bench: %s: cannot write it: %s\n", trace, strerror(-wrc));
+        }
+        if (!rc && !wrc) wrc = commit_beside(fileno(o.trace), tmp, trace);
+        if (!rc && !wrc) {
+            tmp[0] = '\0';
+            fprintf(stderr, "facepuppet bench: wrote %s (the frame case, a row per frame)\n", trace);
+        }
+        if (wrc) exit_code = fp_app_exit_code(wrc, FP_APP_OUTPUT);
+        fclose(o.trace);
+        if (tmp[0]) unlink(tmp);
+    }
+    return exit_code;
 }
 
 const fp_command fp_command_bench = {

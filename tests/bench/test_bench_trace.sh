@@ -1,0 +1,71 @@
+#!/usr/bin/env bash
+# test_bench_trace.sh FACEPUPPET: `facepuppet bench --case frame --trace FILE.csv` (see
+# CMakeLists.txt). Run from the source root, with ../shared/data beside it (FP_SHARED_DATA).
+set -u
+fp=$1
+py=/usr/bin/python3
+[ -x "$py" ] || py=python3
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+mkdir "$tmp/o" # where the traces go (the logs stay in $tmp)
+fail() { echo "FAIL: $*" >&2; exit 1; }
+
+# 1. errors before any work, nothing written
+"$fp" bench --case frame --trace "$tmp/o/no/such/dir/t.csv" >"$tmp/out" 2>"$tmp/err"
+rc=$?
+[ $rc = 73 ] || fail "--trace into a missing folder: exit $rc, expected 73"
+grep -q "t.csv: cannot create a file beside it" "$tmp/err" || fail "no message naming the file: $(cat "$tmp/err")"
+grep -q "^frame" "$tmp/out" && fail "the frame case ran before the trace's folder was checked"
+"$fp" bench --case table1 --trace "$tmp/o/t.csv" >/dev/null 2>"$tmp/err"
+rc=$?
+[ $rc = 64 ] || fail "--trace with --case table1: exit $rc, expected 64"
+grep -q "records the frame case" "$tmp/err" || fail "no reason for --case table1: $(cat "$tmp/err")"
+"$fp" bench --plot "$tmp/o/f.png" --trace "$tmp/o/t.csv" >/dev/null 2>&1
+rc=$?
+[ $rc = 64 ] || fail "--trace with --plot: exit $rc, expected 64"
+[ -z "$(ls -A "$tmp/o")" ] || fail "files left behind by the failed calls: $(ls -A "$tmp/o")"
+
+# 2. a real run: one row per frame of each mesh, agreeing with the table it printed
+"$fp" bench --case frame --trace "$tmp/o/t.csv" >"$tmp/out" 2>"$tmp/err" ||
+    fail "bench --case frame --trace exited $?: $(tail -3 "$tmp/err")"
+grep -q "wrote $tmp/o/t.csv" "$tmp/err" || fail "no 'wrote' line: $(tail -2 "$tmp/err")"
+ls -A "$tmp/o" | grep -q '^\.t\.csv\.' && fail "a temporary file was left behind"
+"$py" - "$tmp/o/t.csv" "$tmp/out" <<'PY' || fail "the trace does not match the run's table"
+import csv, math, re, sys
+header = ("mesh,frame,frame_ms,events_ms,hands_ms,distances_ms,mapping_ms,solve_ms,evaluate_ms,"
+          "commit_ms,contact_ms,contact_worker_wait_ms,cpu_wait_ms,cpu,active,engaged,committed,"
+          "refactored,control_vectors,pairs,guard_substeps,contact_t,contact_pairs,contact_held,"
+          "contact_checks,contact_moved,skipped_after")
+lines = open(sys.argv[1]).read().splitlines()
+assert lines[0] == header, f"header: {lines[0]}"
+rows = list(csv.DictReader(lines))
+table = {}
+for line in open(sys.argv[2]):
+    m = re.match(r"frame (\S+)\s+(\d+) vertices, .*?, (\d+) frames in [\d.]+ s \((\d+) skipped"
+                 r".*?, (\d+) deforming, (\d+) commits", line)
+    if m:
+        table[m.group(1)] = [int(g) for g in m.groups()[1:]]
+assert set(table) == {"ict", "ict-subdiv3"}, f"meshes in the table: {sorted(table)}"
+stages = ["events_ms", "hands_ms", "distances_ms", "mapping_ms", "solve_ms", "evaluate_ms", "commit_ms"]
+for mesh, (nv, frames, skipped, deforming, commits) in table.items():
+    rs = [r for r in rows if r["mesh"] == mesh]
+    assert len(rs) == frames, f"{mesh}: {len(rs)} rows, the table says {frames} frames"
+    assert [int(r["frame"]) for r in rs] == list(range(frames)), f"{mesh}: frame numbers"
+    assert sum(int(r["skipped_after"]) for r in rs) == skipped, f"{mesh}: skipped"
+    assert sum(r["active"] == "1" for r in rs) == deforming, f"{mesh}: deforming"
+    assert sum(r["committed"] == "1" for r in rs) == commits, f"{mesh}: commits"
+    for r in rs:
+        f = float(r["frame_ms"])
+        assert math.isfinite(f) and f > 0, f"{mesh} frame {r['frame']}: frame_ms {f}"
+        for s in stages + ["contact_ms"]:  # each stage is a part of the frame
+            assert 0 <= float(r[s]) <= f + 1e-3, f"{mesh} frame {r['frame']}: {s} {r[s]} > {f}"
+        t = float(r["contact_t"])
+        assert 0 <= t <= 1, f"{mesh} frame {r['frame']}: contact_t {t}"
+        moved, checks = int(r["contact_moved"]), int(r["contact_checks"])
+        assert moved <= nv, f"{mesh} frame {r['frame']}: {moved} moved of {nv}"
+        assert (checks > 1) >= (t < 1), f"{mesh} frame {r['frame']}: scaled back after {checks} check"
+        if r["active"] == "0":
+            assert int(r["pairs"]) == 0 and r["committed"] == "0", f"{mesh} frame {r['frame']}: idle frame"
+print("trace:", {m: len([r for r in rows if r["mesh"] == m]) for m in table}, "rows")
+PY
+exit 0
