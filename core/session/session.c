@@ -21,6 +21,7 @@
 #include <errno.h>
 #include <limits.h>
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -29,6 +30,7 @@
 #include <malloc.h> /* mallopt: fp_session_realtime_memory */
 #endif
 #include <sys/mman.h> /* madvise: fp_session_realtime_memory */
+#include <sys/stat.h> /* stat: the mesh file's size for progress */
 
 _Static_assert(FP_INTENTS_MAX_INPUTS == FP_SESSION_MAX_INPUTS, "one input limit");
 _Static_assert(FP_HISTORY_LEVELS == FP_SESSION_UNDO_LEVELS, "one undo depth");
@@ -257,6 +259,25 @@ static int attach_rig(fp_session *s, const fp_session_options *opt, char *err, s
     return 0;
 }
 
+/* fp_session_options.progress: one line, printf-style */
+static void progress(const fp_session_options *opt, const char *fmt, ...)
+{
+    if (!opt->progress) return;
+    char line[512];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(line, sizeof line, fmt, ap);
+    va_end(ap);
+    opt->progress(opt->progress_user, line);
+}
+
+/* The last component of a path. */
+static const char *file_name(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    return slash && slash[1] ? slash + 1 : path;
+}
+
 int fp_session_create(const fp_session_options *opt, fp_session **out, char *err, size_t errlen)
 {
     *out = NULL;
@@ -286,8 +307,12 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
             snprintf(err, errlen, "session: out of memory for the mesh");
             goto fail;
         }
-    } else if ((rc = fp_mesh_load(opt->mesh_path, &s->mesh, err, errlen))) { /* its code */
-        goto fail;
+    } else {
+        struct stat fst;
+        if (opt->progress && !stat(opt->mesh_path, &fst))
+            progress(opt, "loading %s (%.0f MiB)", file_name(opt->mesh_path),
+                     ceil((double)fst.st_size / 1048576.0));
+        if ((rc = fp_mesh_load(opt->mesh_path, &s->mesh, err, errlen))) goto fail; /* its code */
     }
     s->n = s->mesh->vertex_count;
     size_t bytes = s->n * 3 * sizeof(float);
@@ -358,6 +383,7 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
         goto fail;
     }
     fp_record_step_init(&s->record, opt->record, opt->record_user);
+    progress(opt, "indexing %zu vertices", s->n);
     if ((rc = fp_engine_step_init(&s->engine, s->n, s->shown, threads))) {
         snprintf(err, errlen, "session: cannot index %zu vertices", s->n);
         goto fail;
@@ -377,6 +403,7 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
         goto fail;
     }
     if (!opt->no_contact_guard) {
+        progress(opt, "building the contact guard over %zu triangles", s->mesh->triangle_count);
         if ((rc = contact_open(s))) {
             rc = rc ? rc : -ENOMEM;
             snprintf(err, errlen, "session: out of memory for the contact guard");
@@ -385,6 +412,7 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
     }
     s->services.surface.nearest = surface_nearest;
     s->services.user = s;
+    progress(opt, "loading the mapping and %zu input%s", opt->input_count, opt->input_count == 1 ? "" : "s");
     if ((rc = load_mapping(s, opt->mapping, opt->plugin_path, NULL, err, errlen))) goto fail;
     for (size_t i = 0; i < opt->input_count; i++) {
         rc = fp_input_instance_open(&s->inputs[i], opt->plugin_path, opt->inputs[i], (uint32_t)i,
@@ -402,9 +430,11 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
         s->intents.waited[i] = ri && ri->get && ri->get(in, &info);
     }
     fp_mapping_step_init(&s->mapping_step, &s->cs, s->mapping_budget_ms);
+    if (opt->progress) opt->progress(opt->progress_user, NULL);
     *out = s;
     return 0;
 fail:
+    if (opt->progress) opt->progress(opt->progress_user, NULL);
     fp_session_destroy(&s);
     return rc ? rc : -EINVAL;
 }

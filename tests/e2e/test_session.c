@@ -2,6 +2,7 @@
  * each mapping, in-process, checking every frame: no NaN, and no displacement outside every
  * support (the engine runs without the polynomial, so T is exactly the identity there). */
 #define _GNU_SOURCE
+#include "fp_mesh.h"
 #include "fp_session.h"
 #include "fp_test_support.h"
 
@@ -170,12 +171,71 @@ static void test_undo_after_ranged_commits(void **state)
     undo_all_exact("unanchored");
 }
 
+/* fp_session_options.progress: the opening's steps in order, each naming its size, then NULL
+ * once; on a failed create (a mesh that is not there, a mapping that is not there) NULL once
+ * too, after the steps reached. */
+typedef struct progress_log {
+    char lines[8][512];
+    int n, ends;
+} progress_log;
+
+static void on_progress(void *user, const char *stage)
+{
+    progress_log *p = user;
+    if (!stage) {
+        p->ends++;
+        return;
+    }
+    assert_int_equal(p->ends, 0); /* no step after the end */
+    assert_true(p->n < 8);
+    snprintf(p->lines[p->n++], sizeof p->lines[0], "%s", stage);
+}
+
+static void test_open_progress(void **state)
+{
+    (void)state;
+    char err[2048];
+    fp_session_options so;
+    fp_test_face_options(&so, "anchored", NULL);
+    progress_log p = {0};
+    so.progress = on_progress;
+    so.progress_user = &p;
+    fp_session *s = NULL;
+    assert_int_equal(fp_session_create(&so, &s, err, sizeof err), 0);
+    assert_int_equal(p.ends, 1);
+    assert_int_equal(p.n, 4);
+    assert_string_equal(p.lines[0], "loading generic_neutral_mesh.obj (3 MiB)"); /* 2,555,599 bytes */
+    char want[256];
+    snprintf(want, sizeof want, "indexing %zu vertices", fp_session_vertex_count(s));
+    assert_string_equal(p.lines[1], want);
+    snprintf(want, sizeof want, "building the contact guard over %zu triangles",
+             fp_session_mesh(s)->triangle_count);
+    assert_string_equal(p.lines[2], want);
+    assert_string_equal(p.lines[3], "loading the mapping and 0 inputs");
+    fp_session_destroy(&s);
+
+    /* failures: the end is still reported, once */
+    p = (progress_log){0};
+    so.mapping = "no-such-mapping";
+    assert_true(fp_session_create(&so, &s, err, sizeof err) < 0);
+    assert_null(s);
+    assert_int_equal(p.ends, 1);
+    assert_int_equal(p.n, 4);
+    p = (progress_log){0};
+    so.mapping = "anchored";
+    so.mesh_path = "/nonexistent/face.obj";
+    assert_true(fp_session_create(&so, &s, err, sizeof err) < 0);
+    assert_int_equal(p.ends, 1);
+    assert_int_equal(p.n, 0); /* no size to give: no loading line */
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_anchored_on_real_data),
         cmocka_unit_test(test_unanchored_on_real_data),
         cmocka_unit_test(test_undo_after_ranged_commits),
+        cmocka_unit_test(test_open_progress),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -9,6 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #ifndef FP_PLUGIN_RELDIR
 #define FP_PLUGIN_RELDIR "../lib/facepuppet"
@@ -122,4 +123,29 @@ void fp_app_print_take(FILE *f, const char *prefix, const fp_session_take_result
     fprintf(f, "%s: take %s: %llu frames, %llu dropped, timecode %s - %s%s\n", prefix, r->path,
             (unsigned long long)r->frames, (unsigned long long)r->dropped, in, out,
             r->error ? " (stopped by an error)" : "");
+}
+
+void fp_app_open_progress_init(fp_app_open_progress *p, const char *cmd, bool quiet)
+{
+    *p = (fp_app_open_progress){cmd, !quiet && isatty(STDERR_FILENO), false, 0};
+}
+
+void fp_app_open_progress_fn(void *user, const char *stage)
+{
+    fp_app_open_progress *p = user;
+    if (!p->on) return;
+    if (stage) {
+        if (!p->shown) p->t0 = fp_now_ns();
+        /* \r and "erase to the end of the line" (ECMA-48 EL): the last step's text goes */
+        fprintf(stderr, "\r\033[K%s: opening: %s ...", p->cmd, stage);
+        fflush(stderr);
+        p->shown = true;
+        return;
+    }
+    if (!p->shown) return;
+    double s = (double)(fp_now_ns() - p->t0) / 1e9;
+    fprintf(stderr, "\r\033[K");
+    if (s >= 1.0) fprintf(stderr, "%s: opened in %.1f s\n", p->cmd, s);
+    fflush(stderr);
+    p->shown = false;
 }

@@ -7,7 +7,28 @@
 #include "fp_session_take.h"
 
 #include <stdbool.h>
+#include <stdint.h>
 #include <stdio.h>
+
+/** A session's opening shown on a terminal (fp_session_options.progress): while
+ *  fp_session_create works, one status line on stderr, "CMD: opening: STAGE ...", rewritten
+ *  as each step begins; when it returns the line is cleared, or replaced by "CMD: opened in
+ *  N.N s" when that took a second or more (a large face: loading and the contact guard take
+ *  tens of seconds). Where stderr is not a terminal (a pipe, a log), or quiet: nothing. */
+typedef struct fp_app_open_progress {
+    const char *cmd;  /* "facepuppet run" */
+    bool on;          /* stderr is a terminal and not quiet */
+    bool shown;       /* a status line is on the screen */
+    int64_t t0;       /* the first step's start, ns (fp_now_ns) */
+} fp_app_open_progress;
+
+/** Set up *p for `cmd`; then so->progress = fp_app_open_progress_fn, so->progress_user = p.
+ *  p must outlive fp_session_create (and, for live, every reopening of the session). */
+void fp_app_open_progress_init(fp_app_open_progress *p, const char *cmd, bool quiet);
+
+/** fp_session_progress_fn for fp_app_open_progress (user: the struct). [the thread that
+ *  calls fp_session_create]. */
+void fp_app_open_progress_fn(void *user, const char *stage);
 
 /** The plugin path: --plugin-dir folders, FACEPUPPET_PLUGIN_PATH, the built-in folder. */
 void fp_app_plugin_path(fp_plugin_path *path, const char *const *dirs, size_t ndirs);

@@ -181,6 +181,10 @@ static int live_main(int argc, char **argv)
     fp_plugin_path path;
     fp_app_plugin_path(&path, sopt.plugin_dirs, sopt.nplugin_dirs);
     so->plugin_path = &path;
+    fp_app_open_progress opening; /* a large face takes a while: its steps on a terminal */
+    fp_app_open_progress_init(&opening, "facepuppet live", sopt.quiet);
+    so->progress = fp_app_open_progress_fn;
+    so->progress_user = &opening;
     char err[2048] = "";
     fp_viewer_report rep = {0};
     int rc = fp_viewer_run(&vo, &rep, err, sizeof err);

@@ -219,6 +219,10 @@ static int run_main(int argc, char **argv)
     so.log = log_line;
     so.input_clock = true;
     so.measure_jacobian = true; /* min det J in the summary (the same shape, a slower path) */
+    fp_app_open_progress opening; /* a large face takes a while: its steps on a terminal */
+    fp_app_open_progress_init(&opening, "facepuppet run", quiet);
+    so.progress = fp_app_open_progress_fn;
+    so.progress_user = &opening;
     char err[2048];
     fp_session *s = NULL;
     rc = fp_session_create(&so, &s, err, sizeof err);

@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# test_open_progress.sh FACEPUPPET: `facepuppet run` shows its session's opening on a terminal
+# (fp_app_open_progress: one status line rewritten per step, cleared when the session is open)
+# and nowhere else. The terminal is a pseudo-terminal made by script(1) (util-linux).
+set -u
+fp=$1
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+fail() { echo "FAIL: $*" >&2; exit 1; }
+command -v script >/dev/null || { echo "SKIP: no script(1)"; exit 77; }
+esc=$(printf '\033')
+cr=$(printf '\r')
+
+# 1. on a terminal: each step's line, each one erasing the last, the last erased before the
+#    run's own header line
+script -qec "$fp run --out $tmp/a.obj" "$tmp/tty.txt" >/dev/null 2>&1 || fail "run on a terminal failed: $(tail -3 "$tmp/tty.txt")"
+for step in "loading generic_neutral_mesh.obj (3 MiB)" "indexing 26719 vertices" \
+            "building the contact guard over" "loading the mapping and 1 input"; do
+    grep -qF "${cr}${esc}[Kfacepuppet run: opening: $step" "$tmp/tty.txt" ||
+        fail "no status line for '$step': $(head -c 600 "$tmp/tty.txt" | cat -v)"
+done
+grep -qF "loading the mapping and 1 input ...${cr}${esc}[Kfacepuppet run: ../shared" "$tmp/tty.txt" ||
+grep -qF "loading the mapping and 1 input ...${cr}${esc}[Kfacepuppet run: /" "$tmp/tty.txt" ||
+    fail "the status line was not erased before the run's header: $(head -c 800 "$tmp/tty.txt" | cat -v)"
+[ -s "$tmp/a.obj" ] || fail "no output mesh"
+
+# 2. --quiet on a terminal, and stderr on a pipe: no status line
+script -qec "$fp run -q --out $tmp/b.obj" "$tmp/quiet.txt" >/dev/null 2>&1 || fail "run -q failed"
+grep -q "opening:" "$tmp/quiet.txt" && fail "--quiet printed the opening"
+"$fp" run --out "$tmp/c.obj" 2>"$tmp/pipe.txt" >/dev/null || fail "run on a pipe failed"
+grep -q "opening:" "$tmp/pipe.txt" && fail "a pipe got the terminal's status line"
+grep -q "facepuppet run: .*26719 vertices" "$tmp/pipe.txt" || fail "no header on the pipe"
+cmp -s "$tmp/a.obj" "$tmp/c.obj" || fail "the terminal's run wrote another mesh than the pipe's"
+exit 0
