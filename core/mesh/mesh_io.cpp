@@ -944,7 +944,12 @@ int load_openmesh(const char *path, const std::string &ext, const std::string &d
     src->format = ext;
     if (ext == "obj") {
         src->obj_text = data;
-        obj_materials(data, *src);
+        if (obj.usemtl) {
+            obj_materials(data, *src);
+        } else { // no material: every face kept has none, without another pass over the text
+            src->groups = obj.groups > 0;
+            src->face_material.assign(soup.faces(), -1);
+        }
         if (src->face_material.size() != soup.faces()) { // should not happen: same rule
             src->face_material.clear();
             src->materials.clear();

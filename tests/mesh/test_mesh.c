@@ -956,6 +956,47 @@ static void test_obj_mtllib_not_opened(void **state)
     assert_true(now_s() - t0 < 2.0);
 }
 
+/* The OBJ scan's fast paths keep what the slow ones did: a corner index read as strtol reads
+ * it ([+-]digits; beyond LONG_MAX malformed), and groups known without the materials pass when
+ * the file has no usemtl (a save that cannot keep them says so). */
+static void test_obj_scan_fast_paths(void **state)
+{
+    (void)state;
+    fp_mesh *m = NULL;
+    const char *tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+    char text[256];
+    snprintf(text, sizeof text, "%sf +1 +2 -1\n", tri);
+    assert_int_equal(fp_mesh_load(write_tmp("plus.obj", text), &m, NULL, 0), FP_MESH_OK);
+    assert_int_equal(m->triangle_count, 1);
+    assert_int_equal(m->triangles[0] + m->triangles[1] + m->triangles[2], 0 + 1 + 2);
+    fp_mesh_free(&m);
+    snprintf(text, sizeof text, "%sf 1 2 9223372036854775807\n", tri); /* LONG_MAX: a number */
+    expect_load_error(write_tmp("longmax.obj", text), FP_MESH_ERR_FORMAT,
+                      "line 4: face vertex index 9223372036854775807 out of range");
+    snprintf(text, sizeof text, "%sf 1 2 9223372036854775808\n", tri); /* one more: not */
+    expect_load_error(write_tmp("longmax1.obj", text), FP_MESH_ERR_FORMAT,
+                      "line 4: malformed face corner '9223372036854775808'");
+    snprintf(text, sizeof text, "%sf 1 2 +\n", tri);
+    expect_load_error(write_tmp("sign.obj", text), FP_MESH_ERR_FORMAT, "line 4: malformed face corner '+'");
+    snprintf(text, sizeof text, "%sf 1 2 -/1\n", tri);
+    expect_load_error(write_tmp("signslash.obj", text), FP_MESH_ERR_FORMAT, "line 4: malformed face corner");
+    /* groups without materials, materials without groups, neither */
+    const char *cases[][2] = {{"g head\n", "groups"}, {"o face\n", "groups"},
+                              {"usemtl skin\n", "materials"}, {"", ""}};
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        snprintf(text, sizeof text, "%s%sf 1 2 3\n", tri, cases[i][0]);
+        char name[32];
+        snprintf(name, sizeof name, "grp%zu.obj", i);
+        assert_int_equal(fp_mesh_load(write_tmp(name, text), &m, NULL, 0), FP_MESH_OK);
+        unsigned dropped = 0;
+        assert_int_equal(fp_mesh_save_ex(m, tmp_path("grp.ply"), &dropped, NULL, 0), FP_MESH_OK);
+        int groups = (dropped & FP_MESH_DROPPED_GROUPS) != 0, mats = (dropped & FP_MESH_DROPPED_MATERIALS) != 0;
+        assert_int_equal(groups, !strcmp(cases[i][1], "groups"));
+        assert_int_equal(mats, !strcmp(cases[i][1], "materials"));
+        fp_mesh_free(&m);
+    }
+}
+
 /* The codes are the project's negative errno values; a missing and an unreadable file. */
 static void test_error_codes(void **state)
 {
@@ -1216,6 +1257,7 @@ int main(void)
         cmocka_unit_test(test_gltf_uri_fifo_symlink),
         cmocka_unit_test(test_error_codes),
         cmocka_unit_test(test_obj_mtllib_not_opened),
+        cmocka_unit_test(test_obj_scan_fast_paths),
         cmocka_unit_test(test_save_failure_keeps_old_file),
         cmocka_unit_test(test_save_survives_sigkill),
     };
