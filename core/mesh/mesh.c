@@ -391,6 +391,7 @@ int fp__obj_scan(const char *path, const char *text, size_t len, fp__obj_info *i
                                       TOK_ARG(kw, kwlen));
             if (pass == 0 && kwlen == 6 && !memcmp(kw, "usemtl", 6)) seen.usemtl++;
             if (pass == 0 && kwlen == 1 && (kw[0] == 'g' || kw[0] == 'o')) seen.groups++;
+            if (pass == 0 && kwlen == 6 && !memcmp(kw, "mtllib", 6)) seen.mtllib++;
             if (is_v || is_vt || is_vn) {
                 size_t lo = is_v ? 3 : is_vt ? 1 : 3, hi = is_v ? 7 : 3, count = 0;
                 const char *tok;
@@ -480,6 +481,7 @@ int fp__obj_scan(const char *path, const char *text, size_t len, fp__obj_info *i
         else {
             seen.usemtl = total.usemtl;
             seen.groups = total.groups;
+            seen.mtllib = total.mtllib;
             total = seen;
         }
     }

@@ -23,6 +23,7 @@ typedef struct fp__obj_info {
     size_t degenerate; /* f lines with fewer than 3 distinct vertices (OpenMesh drops them) */
     size_t usemtl;     /* usemtl lines */
     size_t groups;     /* g and o lines */
+    size_t mtllib;     /* mtllib lines */
 } fp__obj_info;
 
 /** Check OBJ text (NUL-terminated, len bytes) line by line: known statements only; v, vt, vn
