@@ -882,7 +882,8 @@ void obj_materials(const std::string &text, fp_mesh_source &src)
     }
 }
 
-int load_openmesh(const char *path, const std::string &ext, const std::string &data,
+// data: the file's bytes, taken (an OBJ's text is moved into the mesh's source).
+int load_openmesh(const char *path, const std::string &ext, std::string &data,
                   fp_mesh **out, char *err, size_t errlen)
 {
     fp__obj_info obj{};
@@ -974,13 +975,13 @@ int load_openmesh(const char *path, const std::string &ext, const std::string &d
     auto src = std::make_unique<fp_mesh_source>();
     src->format = ext;
     if (ext == "obj") {
-        src->obj_text = data;
         if (obj.usemtl) {
             obj_materials(data, *src);
         } else { // no material: every face kept has none, without another pass over the text
             src->groups = obj.groups > 0;
             src->face_material.assign(soup.faces(), -1);
         }
+        src->obj_text = std::move(data); // the caller's last use: kept, not copied
         if (src->face_material.size() != soup.faces()) { // should not happen: same rule
             src->face_material.clear();
             src->materials.clear();
