@@ -234,15 +234,20 @@ static int reserve(void **p, size_t *cap, size_t need, size_t el);
 
 /* ---- the index ------------------------------------------------------------------------------ */
 
-static const float *weld_pos;
+/* A vertex with its position, for the weld's sort: the comparison needs no state outside
+ * its arguments (qsort has no context argument in C11; a file-scope pointer to the positions
+ * would make two fp_contact_create calls on two threads race) */
+typedef struct weld_item {
+    float p[3];
+    uint32_t v;
+} weld_item;
 
 static int cmp_pos(const void *x, const void *y)
 {
-    const float *a = weld_pos + 3 * (size_t)*(const uint32_t *)x,
-                *b = weld_pos + 3 * (size_t)*(const uint32_t *)y;
+    const weld_item *a = x, *b = y;
     for (int k = 0; k < 3; k++)
-        if (a[k] != b[k]) return a[k] < b[k] ? -1 : 1;
-    return *(const uint32_t *)x < *(const uint32_t *)y ? -1 : 1;
+        if (a->p[k] != b->p[k]) return a->p[k] < b->p[k] ? -1 : 1;
+    return a->v < b->v ? -1 : 1;
 }
 
 int fp_contact_create(const uint32_t *tris, size_t t, size_t n, const float *weld, fp_contact **out)
@@ -264,19 +269,20 @@ int fp_contact_create(const uint32_t *tris, size_t t, size_t n, const float *wel
     c->moved = malloc(n ? n : 1);
     c->ins = malloc((t ? t : 1) * sizeof *c->ins);
     c->box = malloc((t ? t : 1) * sizeof *c->box);
-    uint32_t *order = malloc((n ? n : 1) * sizeof *order);
+    weld_item *order = malloc((n ? n : 1) * sizeof *order);
     if (!c->weld || !c->moved || !c->ins || !c->box || !order) {
         free(order);
         fp_contact_destroy(&c);
         return -ENOMEM;
     }
-    for (size_t v = 0; v < n; v++) order[v] = (uint32_t)v;
-    weld_pos = weld; /* qsort has no context argument in C11 */
+    for (size_t v = 0; v < n; v++) {
+        memcpy(order[v].p, weld + 3 * v, sizeof order[v].p);
+        order[v].v = (uint32_t)v;
+    }
     qsort(order, n, sizeof *order, cmp_pos);
     for (size_t i = 0; i < n; i++) {
-        bool same = i && !memcmp(weld + 3 * (size_t)order[i], weld + 3 * (size_t)order[i - 1],
-                                 3 * sizeof(float));
-        c->weld[order[i]] = same ? c->weld[order[i - 1]] : order[i];
+        bool same = i && !memcmp(order[i].p, order[i - 1].p, sizeof order[i].p);
+        c->weld[order[i].v] = same ? c->weld[order[i - 1].v] : order[i].v;
     }
     free(order);
     c->weld_copy = malloc((n ? n : 1) * 3 * sizeof(float));
