@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# test_open_progress.sh FACEPUPPET: `facepuppet run` shows its session's opening on a terminal
+# test_open_progress.sh FACEPUPPET: `facepuppet run` (and `info`) show a face's opening on a terminal
 # (fp_app_open_progress: one status line rewritten per step, cleared when the session is open)
 # and nowhere else. The terminal is a pseudo-terminal made by script(1) (util-linux).
 set -u
@@ -31,4 +31,14 @@ grep -q "opening:" "$tmp/quiet.txt" && fail "--quiet printed the opening"
 grep -q "opening:" "$tmp/pipe.txt" && fail "a pipe got the terminal's status line"
 grep -q "facepuppet run: .*26719 vertices" "$tmp/pipe.txt" || fail "no header on the pipe"
 cmp -s "$tmp/a.obj" "$tmp/c.obj" || fail "the terminal's run wrote another mesh than the pipe's"
+
+# 3. a command that loads a face without a session (info): the same line, erased before its
+#    output; none on a pipe
+face=../shared/data/faces/ict-facekit/generic_neutral_mesh.obj
+script -qec "$fp info $face" "$tmp/info.txt" >/dev/null 2>&1 || fail "info on a terminal failed"
+grep -qF "${cr}${esc}[Kfacepuppet info: opening: loading generic_neutral_mesh.obj (3 MiB) ...${cr}${esc}[K$face" \
+    "$tmp/info.txt" || fail "info: no erased status line before its output: $(head -c 400 "$tmp/info.txt" | cat -v)"
+"$fp" info "$face" >"$tmp/info.out" 2>"$tmp/info.err" || fail "info on a pipe failed"
+[ -s "$tmp/info.err" ] && fail "info on a pipe wrote to stderr: $(cat "$tmp/info.err")"
+grep -q "vertices  26719" "$tmp/info.out" || fail "info: no vertex count"
 exit 0

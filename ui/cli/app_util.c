@@ -2,6 +2,7 @@
 
 #include "command.h"
 #include "fp_error.h"
+#include "fp_mesh.h"
 #include "fp_session_take.h"
 
 #include <errno.h>
@@ -10,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
+#include <sys/stat.h>
 
 #ifndef FP_PLUGIN_RELDIR
 #define FP_PLUGIN_RELDIR "../lib/facepuppet"
@@ -148,4 +150,22 @@ void fp_app_open_progress_fn(void *user, const char *stage)
     if (s >= 1.0) fprintf(stderr, "%s: opened in %.1f s\n", p->cmd, s);
     fflush(stderr);
     p->shown = false;
+}
+
+int fp_app_load_mesh(const char *cmd, bool quiet, const char *path, fp_mesh **out, char *err,
+                     size_t errlen)
+{
+    fp_app_open_progress p;
+    fp_app_open_progress_init(&p, cmd, quiet);
+    struct stat st;
+    if (p.on && !stat(path, &st)) {
+        const char *slash = strrchr(path, '/');
+        char line[600];
+        snprintf(line, sizeof line, "loading %s (%.0f MiB)", slash && slash[1] ? slash + 1 : path,
+                 ceil((double)st.st_size / 1048576.0));
+        fp_app_open_progress_fn(&p, line);
+    }
+    int rc = fp_mesh_load(path, out, err, errlen);
+    fp_app_open_progress_fn(&p, NULL);
+    return rc;
 }

@@ -30,6 +30,14 @@ void fp_app_open_progress_init(fp_app_open_progress *p, const char *cmd, bool qu
  *  calls fp_session_create]. */
 void fp_app_open_progress_fn(void *user, const char *stage);
 
+struct fp_mesh;
+/** fp_mesh_load (same results) shown on a terminal as fp_app_open_progress shows a session's
+ *  opening: "CMD: opening: loading NAME (N MiB) ...", erased when it returns ("opened in
+ *  N.N s" after a second or more); nothing on a pipe or when quiet. For the commands that
+ *  load a face without a session (info, pose, calibrate). */
+int fp_app_load_mesh(const char *cmd, bool quiet, const char *path, struct fp_mesh **out,
+                     char *err, size_t errlen);
+
 /** The plugin path: --plugin-dir folders, FACEPUPPET_PLUGIN_PATH, the built-in folder. */
 void fp_app_plugin_path(fp_plugin_path *path, const char *const *dirs, size_t ndirs);
 

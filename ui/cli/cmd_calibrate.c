@@ -176,7 +176,7 @@ static int calibrate_main(int argc, char **argv)
     if (!mesh_path) mesh_path = fp_app_data_path("faces/ict-facekit/generic_neutral_mesh.obj", demo, sizeof demo);
     char err[2048];
     fp_mesh *m = NULL;
-    int rc = fp_mesh_load(mesh_path, &m, err, sizeof err);
+    int rc = fp_app_load_mesh("facepuppet calibrate", false, mesh_path, &m, err, sizeof err);
     if (rc != FP_MESH_OK) {
         fprintf(stderr, "facepuppet calibrate: %s\n", err);
         return rc == FP_MESH_ERR_IO ? FP_EXIT_NOINPUT : FP_EXIT_DATAERR;

@@ -45,7 +45,7 @@ static int mesh_info(const char *path)
 {
     fp_mesh *m = NULL;
     char err[1024];
-    int rc = fp_mesh_load(path, &m, err, sizeof err);
+    int rc = fp_app_load_mesh("facepuppet info", false, path, &m, err, sizeof err);
     if (rc < 0) {
         fprintf(stderr, "facepuppet info: %s\n", err);
         return fp_app_exit_code(rc, FP_APP_INPUT);

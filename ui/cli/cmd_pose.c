@@ -57,7 +57,7 @@ static int pose_main(int argc, char **argv)
     }
     char err[2048];
     fp_mesh *m = NULL;
-    int rc = fp_mesh_load(mesh_path, &m, err, sizeof err);
+    int rc = fp_app_load_mesh("facepuppet pose", false, mesh_path, &m, err, sizeof err);
     if (rc != FP_MESH_OK) {
         fprintf(stderr, "facepuppet pose: %s\n", err);
         return rc == FP_MESH_ERR_IO ? FP_EXIT_NOINPUT : FP_EXIT_DATAERR;
