@@ -22,13 +22,15 @@ done
 grep -qF "loading the mapping and 1 input ...${cr}${esc}[Kfacepuppet run: ../shared" "$tmp/tty.txt" ||
 grep -qF "loading the mapping and 1 input ...${cr}${esc}[Kfacepuppet run: /" "$tmp/tty.txt" ||
     fail "the status line was not erased before the run's header: $(head -c 800 "$tmp/tty.txt" | cat -v)"
+grep -qF "${cr}${esc}[Kfacepuppet run: writing: $tmp/a.obj (26719 vertices) ...${cr}${esc}[K" "$tmp/tty.txt" ||
+    fail "no erased status line while the mesh was written: $(tail -c 600 "$tmp/tty.txt" | cat -v)"
 [ -s "$tmp/a.obj" ] || fail "no output mesh"
 
-# 2. --quiet on a terminal, and stderr on a pipe: no status line
+# 2. --quiet on a terminal, and stderr on a pipe: no status line (opening or writing)
 script -qec "$fp run -q --out $tmp/b.obj" "$tmp/quiet.txt" >/dev/null 2>&1 || fail "run -q failed"
-grep -q "opening:" "$tmp/quiet.txt" && fail "--quiet printed the opening"
+grep -qE "opening:|writing:" "$tmp/quiet.txt" && fail "--quiet printed a status line"
 "$fp" run --out "$tmp/c.obj" 2>"$tmp/pipe.txt" >/dev/null || fail "run on a pipe failed"
-grep -q "opening:" "$tmp/pipe.txt" && fail "a pipe got the terminal's status line"
+grep -qE "opening:|writing:" "$tmp/pipe.txt" && fail "a pipe got the terminal's status line"
 grep -q "facepuppet run: .*26719 vertices" "$tmp/pipe.txt" || fail "no header on the pipe"
 cmp -s "$tmp/a.obj" "$tmp/c.obj" || fail "the terminal's run wrote another mesh than the pipe's"
 

@@ -129,7 +129,7 @@ void fp_app_print_take(FILE *f, const char *prefix, const fp_session_take_result
 
 void fp_app_open_progress_init(fp_app_open_progress *p, const char *cmd, bool quiet)
 {
-    *p = (fp_app_open_progress){cmd, !quiet && isatty(STDERR_FILENO), false, 0};
+    *p = (fp_app_open_progress){cmd, !quiet && isatty(STDERR_FILENO), false, 0, "opening", "opened"};
 }
 
 void fp_app_open_progress_fn(void *user, const char *stage)
@@ -139,7 +139,7 @@ void fp_app_open_progress_fn(void *user, const char *stage)
     if (stage) {
         if (!p->shown) p->t0 = fp_now_ns();
         /* \r and "erase to the end of the line" (ECMA-48 EL): the last step's text goes */
-        fprintf(stderr, "\r\033[K%s: opening: %s ...", p->cmd, stage);
+        fprintf(stderr, "\r\033[K%s: %s: %s ...", p->cmd, p->phase, stage);
         fflush(stderr);
         p->shown = true;
         return;
@@ -147,7 +147,7 @@ void fp_app_open_progress_fn(void *user, const char *stage)
     if (!p->shown) return;
     double s = (double)(fp_now_ns() - p->t0) / 1e9;
     fprintf(stderr, "\r\033[K");
-    if (s >= 1.0) fprintf(stderr, "%s: opened in %.1f s\n", p->cmd, s);
+    if (s >= 1.0) fprintf(stderr, "%s: %s in %.1f s\n", p->cmd, p->done, s);
     fflush(stderr);
     p->shown = false;
 }

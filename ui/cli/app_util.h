@@ -20,6 +20,8 @@ typedef struct fp_app_open_progress {
     bool on;          /* stderr is a terminal and not quiet */
     bool shown;       /* a status line is on the screen */
     int64_t t0;       /* the first step's start, ns (fp_now_ns) */
+    const char *phase; /* the status line's word: "opening" (init), e.g. "writing" */
+    char done[512];   /* the closing line's words: "opened" (init), e.g. "wrote out.obj" */
 } fp_app_open_progress;
 
 /** Set up *p for `cmd`; then so->progress = fp_app_open_progress_fn, so->progress_user = p.

@@ -355,9 +355,21 @@ static int run_main(int argc, char **argv)
         if (d > 0) moved++;
     }
     unsigned dropped = 0;
-    if (status == FP_EXIT_OK && (rc = fp_session_save_ex(s, out, &dropped, err, sizeof err))) {
-        fprintf(stderr, "facepuppet run: %s\n", err);
-        status = fp_app_exit_code(rc, FP_APP_OUTPUT);
+    if (status == FP_EXIT_OK) {
+        /* a large face takes seconds to write: a status line on a terminal (as its opening) */
+        fp_app_open_progress writing;
+        fp_app_open_progress_init(&writing, "facepuppet run", quiet);
+        writing.phase = "writing";
+        snprintf(writing.done, sizeof writing.done, "wrote %s", out);
+        char what[600];
+        snprintf(what, sizeof what, "%s (%zu vertices)", out, n);
+        fp_app_open_progress_fn(&writing, what);
+        rc = fp_session_save_ex(s, out, &dropped, err, sizeof err);
+        fp_app_open_progress_fn(&writing, NULL);
+        if (rc) {
+            fprintf(stderr, "facepuppet run: %s\n", err);
+            status = fp_app_exit_code(rc, FP_APP_OUTPUT);
+        }
     }
     fp_app_print_dropped("facepuppet run", out, dropped, quiet);
     if (ex && status == FP_EXIT_OK)
