@@ -54,7 +54,8 @@ extern "C" {
 
 /** fp_session_options.progress: `stage` is a line without newline, e.g. "loading face.obj
  *  (279 MiB)", valid during the call only; NULL once, when fp_session_create returns
- *  (opened or failed), so that a status line can be cleared. */
+ *  (opened or failed; not when it refuses its options before any work), so that a status
+ *  line can be cleared. */
 typedef void (*fp_session_progress_fn)(void *user, const char *stage);
 
 typedef struct fp_session_options {
