@@ -64,6 +64,7 @@ typedef struct camera {
 typedef struct viewer {
     const fp_viewer_options *opt;
     fp_session_options so;
+    bool r_ready;             /* the renderer is up (opening_progress may draw) */
     char *mesh_path;          /* owned copy of the current mesh path */
     char mapping[64];         /* the current mapping spec's name, for the HUD */
     fp_session *s;
@@ -214,6 +215,29 @@ static void mapping_name(viewer *v, const char *spec)
     snprintf(v->mapping, sizeof v->mapping, "%s", spec ? spec : "anchored");
     char *comma = strchr(v->mapping, ',');
     if (comma) *comma = '\0';
+}
+
+/* fp_session_options.progress while a session opens (a large face: tens of seconds of
+ * loading, indexing and building the contact guard): the caller's callback (opt->session's,
+ * `live`'s status line on a terminal), then the step's line drawn alone in the window, where
+ * the renderer is up. No events are handled meanwhile (a key's handler would find no
+ * session). [the viewer's thread: the one that owns the GL context] */
+static void opening_progress(void *user, const char *stage)
+{
+    viewer *v = user;
+    const fp_session_options *caller = &v->opt->session;
+    if (caller->progress) caller->progress(caller->progress_user, stage);
+    if (!stage || !v->win || !v->r_ready) return;
+    int w, h;
+    glfwGetFramebufferSize(v->win, &w, &h);
+    glViewport(0, 0, w, h);
+    glClearColor(0.11f, 0.12f, 0.15f, 1.f);
+    glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    char text[600];
+    snprintf(text, sizeof text, "opening: %s ...", stage);
+    const float white[4] = {0.95f, 0.95f, 0.92f, 1.f};
+    fp_render_text(&v->r, w, h, 8, 8, h >= 600 ? 2.f : 1.f, text, white);
+    glfwSwapBuffers(v->win);
 }
 
 /* Create and start a session on the current options; on success replace the old one. */
@@ -995,6 +1019,8 @@ int fp_viewer_run(const fp_viewer_options *opt, fp_viewer_report *report, char *
     v->so = opt->session;
     v->so.log = on_session_log;
     v->so.log_user = v;
+    v->so.progress = opening_progress; /* the window shows the opening; the caller's still runs */
+    v->so.progress_user = v;
     fp_vtakes_init(&v->takes, opt->take_dir, opt->slate, opt->countdown_s, &v->so);
     v->err = err;
     v->errlen = errlen;
@@ -1042,6 +1068,7 @@ int fp_viewer_run(const fp_viewer_options *opt, fp_viewer_report *report, char *
     glfwSetScrollCallback(v->win, on_scroll);
     glfwSetDropCallback(v->win, on_drop);
     if ((rc = fp_render_init(&v->r, err, errlen))) goto out;
+    v->r_ready = true;
     if (opt->gpu_warp && (rc = fp_gpuwarp_create(&v->gw, err, errlen))) goto out;
     if ((rc = open_session(v, err, errlen))) goto out;
     if (!opt->quiet) {
