@@ -4,12 +4,16 @@
  *   FIXTURE_INIT_FAILS  init returns false
  *   FIXTURE_CRASH_INIT  init dereferences a null pointer
  *   FIXTURE_CRASH_THREAD start() runs a thread of its own that dereferences a null pointer
- *   FIXTURE_GOOD        a working input that pushes FIXTURE_EVENTS events then ends */
+ *   FIXTURE_GOOD        a working input that pushes FIXTURE_EVENTS events then ends;
+ *                       key open_ms=N: its create takes N ms (a slow device's open: the
+ *                       viewer's opening screen is read while it waits) */
+#define _POSIX_C_SOURCE 200809L /* nanosleep */
 #include <facepuppet/plugin.h>
 
 #include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #ifndef FIXTURE_NO_ENTRY
 #if defined(FIXTURE_CRASH_INIT) || defined(FIXTURE_CRASH_THREAD)
@@ -55,11 +59,17 @@ static void destroy(fp_input *self) { free(self); }
 static int create(const fp_host *host, const char *arg, const fp_param *params, size_t nparams,
                   fp_input **out, char *err, size_t errlen)
 {
-    for (size_t i = 0; i < nparams; i++)
-        if (strcmp(params[i].key, "ok")) {
+    for (size_t i = 0; i < nparams; i++) {
+        if (!strcmp(params[i].key, "open_ms")) {
+            long ms = strtol(params[i].value, NULL, 10);
+            struct timespec ts = {ms / 1000, (ms % 1000) * 1000000L};
+            while (ms > 0 && nanosleep(&ts, &ts)) {
+            }
+        } else if (strcmp(params[i].key, "ok")) {
             strncpy(err, "unknown key", errlen);
             return -22;
         }
+    }
     fp_input *in = calloc(1, sizeof *in);
     in->size = sizeof *in;
     in->plugin_data = (void *)host;
