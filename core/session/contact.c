@@ -234,20 +234,46 @@ static int reserve(void **p, size_t *cap, size_t need, size_t el);
 
 /* ---- the index ------------------------------------------------------------------------------ */
 
-/* A vertex with its position, for the weld's sort: the comparison needs no state outside
- * its arguments (qsort has no context argument in C11; a file-scope pointer to the positions
- * would make two fp_contact_create calls on two threads race) */
+/* A vertex with its position's sort keys, for the weld: keys ordered as the floats' values
+ * under < (sign bit flipped, or every bit for a negative; -0 as +0, which < does not tell
+ * apart), so that the order is that of (x, y, z) by value, then the index. */
 typedef struct weld_item {
-    float p[3];
+    uint32_t key[3];
     uint32_t v;
 } weld_item;
 
-static int cmp_pos(const void *x, const void *y)
+static uint32_t float_key(float f)
 {
-    const weld_item *a = x, *b = y;
-    for (int k = 0; k < 3; k++)
-        if (a->p[k] != b->p[k]) return a->p[k] < b->p[k] ? -1 : 1;
-    return a->v < b->v ? -1 : 1;
+    uint32_t u;
+    if (f == 0) f = 0; /* -0 as +0 */
+    memcpy(&u, &f, sizeof u);
+    return u & 0x80000000u ? ~u : u | 0x80000000u;
+}
+
+/* LSD radix sort of (*r)[0, m) by (key[0], key[1], key[2]), ties in their order (stable),
+ * through tmp (room for m); the sorted items end in *r. No state outside the arguments: two
+ * creates on two threads do not meet (contact.h: one fp_contact per thread). */
+static void sort_weld(weld_item **r, weld_item **tmp, size_t m)
+{
+    enum { D = 11, B = 1 << D };
+    size_t cnt[B];
+    for (int axis = 2; axis >= 0; axis--)
+        for (int sh = 0; sh < 32; sh += D) {
+            const weld_item *src = *r;
+            weld_item *dst = *tmp;
+            memset(cnt, 0, B * sizeof *cnt);
+            for (size_t i = 0; i < m; i++) cnt[(src[i].key[axis] >> sh) & (B - 1)]++;
+            if (!m || cnt[(src[0].key[axis] >> sh) & (B - 1)] == m) continue; /* one digit */
+            size_t sum = 0;
+            for (size_t d = 0; d < B; d++) {
+                size_t n = cnt[d];
+                cnt[d] = sum;
+                sum += n;
+            }
+            for (size_t i = 0; i < m; i++) dst[cnt[(src[i].key[axis] >> sh) & (B - 1)]++] = src[i];
+            *tmp = *r;
+            *r = dst;
+        }
 }
 
 int fp_contact_create(const uint32_t *tris, size_t t, size_t n, const float *weld, fp_contact **out)
@@ -269,22 +295,28 @@ int fp_contact_create(const uint32_t *tris, size_t t, size_t n, const float *wel
     c->moved = malloc(n ? n : 1);
     c->ins = malloc((t ? t : 1) * sizeof *c->ins);
     c->box = malloc((t ? t : 1) * sizeof *c->box);
-    weld_item *order = malloc((n ? n : 1) * sizeof *order);
-    if (!c->weld || !c->moved || !c->ins || !c->box || !order) {
-        free(order);
+    /* the items and the sort's spare room in one block: at 1.7M vertices (54 MB) over glibc's
+     * largest dynamic mmap threshold (32 MB), so freeing it leaves the threshold alone. Two
+     * blocks of 27 MB raised it, and fp_contact_reference on the 1.7M face then took 0.3-0.8
+     * s longer (not with the threshold fixed through GLIBC_TUNABLES) */
+    weld_item *items = malloc(2 * (n ? n : 1) * sizeof *items), *order = items, *spare = items + (n ? n : 1);
+    if (!c->weld || !c->moved || !c->ins || !c->box || !items) {
+        free(items);
         fp_contact_destroy(&c);
         return -ENOMEM;
     }
     for (size_t v = 0; v < n; v++) {
-        memcpy(order[v].p, weld + 3 * v, sizeof order[v].p);
+        for (int k = 0; k < 3; k++) order[v].key[k] = float_key(weld[3 * v + k]);
         order[v].v = (uint32_t)v;
     }
-    qsort(order, n, sizeof *order, cmp_pos);
+    sort_weld(&order, &spare, n);
+    /* a vertex welds to the first of the run of its position's bits (same value, same sign) */
     for (size_t i = 0; i < n; i++) {
-        bool same = i && !memcmp(order[i].p, order[i - 1].p, sizeof order[i].p);
+        bool same = i && !memcmp(weld + 3 * (size_t)order[i].v, weld + 3 * (size_t)order[i - 1].v,
+                                 3 * sizeof(float));
         c->weld[order[i].v] = same ? c->weld[order[i - 1].v] : order[i].v;
     }
-    free(order);
+    free(items);
     c->weld_copy = malloc((n ? n : 1) * 3 * sizeof(float));
     if (!c->weld_copy) {
         fp_contact_destroy(&c);
