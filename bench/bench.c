@@ -148,6 +148,7 @@ typedef struct {
     double ms_ref;                /* centres case: fresh factor-and-solve, else < 0 */
     double ms_touched;            /* the same update through csrbf_evaluate_touched with
                                      statistics (the session's evaluation); < 0: none */
+    size_t written;               /* vertices the last touched update wrote (0: none) */
 } row;
 
 static void json_num(const char *key, double v, int last)
@@ -320,8 +321,14 @@ static int run_deform(const bench_opts *o, const char *name, size_t nv, double R
             goto done;
         }
     }
+    size_t written = 0; /* by the last touched update: its ranges */
+    if (touched) {
+        const uint32_t *rg;
+        size_t nr = csrbf_touch_ranges(c.touch, &rg);
+        for (size_t i = 0; i < nr; i++) written += rg[2 * i + 1];
+    }
     row r = {name, anchored ? "anchored" : "unanchored", nv, NCTRL, R, (long)stats.pairs,
-             paper_pair_count, ms, msb, paper_fps, -1, mst};
+             paper_pair_count, ms, msb, paper_fps, -1, mst, written};
     print_row(o, &r);
     last_row = r;
 done:
@@ -344,6 +351,8 @@ static int case_table1(const bench_opts *o)
     print_header(o);
     /* 33,025 vertices, [unanchored, anchored]: evaluate, touched (whole updates) */
     double r10[2][2] = {{-1, -1}, {-1, -1}}, r80[2][2] = {{-1, -1}, {-1, -1}};
+    /* pairs and vertices written by the touched update, [anchored][R = 10, 80] */
+    double p10[2][2] = {{0, 0}, {0, 0}}, w10[2][2] = {{0, 0}, {0, 0}};
     for (int g = 0; g < 4; g++)
         for (int anchored = 1; anchored >= 0; anchored--)
             for (int ri = 0; ri < 5; ri++) {
@@ -361,14 +370,18 @@ static int case_table1(const bench_opts *o)
                     double *d = ri == 0 ? r10[anchored] : r80[anchored];
                     d[0] = last_row.ms;
                     d[1] = last_row.ms_touched;
+                    p10[anchored][ri == 0 ? 0 : 1] = (double)last_row.pairs;
+                    w10[anchored][ri == 0 ? 0 : 1] = (double)last_row.written;
                 }
             }
     for (int anchored = 1; anchored >= 0; anchored--)
         if (!o->json && r10[anchored][0] > 0 && r10[anchored][1] > 0)
             printf("table1 33025 %s: R=80 / R=10 time = %.2fx (csrbf_evaluate), %.2fx "
-                   "(touched, statistics)\n",
+                   "(touched, statistics); pairs %.1fx, vertices written (touched) %.2fx\n",
                    anchored ? "anchored" : "unanchored", r80[anchored][0] / r10[anchored][0],
-                   r80[anchored][1] / r10[anchored][1]);
+                   r80[anchored][1] / r10[anchored][1],
+                   p10[anchored][0] > 0 ? p10[anchored][1] / p10[anchored][0] : 0.0,
+                   w10[anchored][0] > 0 ? w10[anchored][1] / w10[anchored][0] : 0.0);
     return 0;
 }
 
@@ -432,11 +445,11 @@ static int case_centres(const bench_opts *o)
             return FP_ENUMERIC;
         }
         row f = {"centres", "factor", 0, csrbf_solver_centres(s), R, -1, -1, ms_factor, -1, -1,
-                 -1, -1};
+                 -1, -1, 0};
         row u = {"centres", "reused", 0, csrbf_solver_centres(s), R, -1, -1, ms_reused, -1, -1,
-                 ms_fresh, -1};
+                 ms_fresh, -1, 0};
         row fr = {"centres", "fresh", 0, csrbf_solver_centres(s), R, -1, -1, ms_fresh, -1, -1,
-                  -1, -1};
+                  -1, -1, 0};
         print_row(o, &f);
         print_row(o, &fr);
         print_row(o, &u);
