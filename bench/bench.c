@@ -349,10 +349,7 @@ engine_fail:
 static int case_table1(const bench_opts *o)
 {
     print_header(o);
-    /* 33,025 vertices, [unanchored, anchored]: evaluate, touched (whole updates) */
-    double r10[2][2] = {{-1, -1}, {-1, -1}}, r80[2][2] = {{-1, -1}, {-1, -1}};
-    /* pairs and vertices written by the touched update, [anchored][R = 10, 80] */
-    double p10[2][2] = {{0, 0}, {0, 0}}, w10[2][2] = {{0, 0}, {0, 0}};
+    row at[2][2] = {{{0}}}; /* 33,025 vertices, [unanchored, anchored][R = 10, R = 80] */
     for (int g = 0; g < 4; g++)
         for (int anchored = 1; anchored >= 0; anchored--)
             for (int ri = 0; ri < 5; ri++) {
@@ -366,22 +363,18 @@ static int case_table1(const bench_opts *o)
                 int rc = run_deform(o, "table1", nv, table_radius[ri], anchored, reps, brute, fps,
                                     paper_pairs[g][ri], 1);
                 if (rc) return rc;
-                if (g == 3 && (ri == 0 || ri == 4)) {
-                    double *d = ri == 0 ? r10[anchored] : r80[anchored];
-                    d[0] = last_row.ms;
-                    d[1] = last_row.ms_touched;
-                    p10[anchored][ri == 0 ? 0 : 1] = (double)last_row.pairs;
-                    w10[anchored][ri == 0 ? 0 : 1] = (double)last_row.written;
-                }
+                if (g == 3 && (ri == 0 || ri == 4)) at[anchored][ri == 4] = last_row;
             }
-    for (int anchored = 1; anchored >= 0; anchored--)
-        if (!o->json && r10[anchored][0] > 0 && r10[anchored][1] > 0)
+    for (int anchored = 1; anchored >= 0; anchored--) {
+        const row *r10 = &at[anchored][0], *r80 = &at[anchored][1];
+        if (!o->json && r10->ms > 0 && r10->ms_touched > 0)
             printf("table1 33025 %s: R=80 / R=10 time = %.2fx (csrbf_evaluate), %.2fx "
                    "(touched, statistics); pairs %.1fx, vertices written (touched) %.2fx\n",
-                   anchored ? "anchored" : "unanchored", r80[anchored][0] / r10[anchored][0],
-                   r80[anchored][1] / r10[anchored][1],
-                   p10[anchored][0] > 0 ? p10[anchored][1] / p10[anchored][0] : 0.0,
-                   w10[anchored][0] > 0 ? w10[anchored][1] / w10[anchored][0] : 0.0);
+                   anchored ? "anchored" : "unanchored", r80->ms / r10->ms,
+                   r80->ms_touched / r10->ms_touched,
+                   r10->pairs > 0 ? (double)r80->pairs / (double)r10->pairs : 0.0,
+                   r10->written ? (double)r80->written / (double)r10->written : 0.0);
+    }
     return 0;
 }
 
