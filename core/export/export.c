@@ -3,6 +3,7 @@
 #define _GNU_SOURCE
 #include "fp_export.h"
 #include "fp_error.h"
+#include "fp_file.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -91,25 +92,15 @@ static int errno_code(int e)
     }
 }
 
-/* A temporary file ".NAME.XXXXXX" beside `path`. */
+/* A temporary file ".NAME<tag>.XXXXXX" beside `path` (fp_file_temp_beside), open in *f. */
 static int temp_beside(const char *path, const char *tag, char *tmp, size_t n, FILE **f,
                        char *err, size_t errlen)
 {
-    const char *slash = strrchr(path, '/');
-    int dl = slash ? (int)(slash - path) : 0;
-    const char *base = slash ? slash + 1 : path;
-    snprintf(tmp, n, "%.*s%s.%s%s.XXXXXX", dl, path, slash ? "/" : "", base, tag);
-    int fd = mkostemp(tmp, O_CLOEXEC);
-    if (fd < 0) {
-        int e = errno;
-        tmp[0] = '\0';
-        return fp_errorf(err, errlen, errno_code(e), "%s: cannot create a file in its folder: %s",
-                         path, strerror(e));
-    }
-    /* the mode a new file would get: 0666 & ~umask */
-    mode_t mask = umask(0);
-    umask(mask);
-    (void)fchmod(fd, 0666 & ~mask);
+    int fd = fp_file_temp_beside(path, tag, tmp, n);
+    if (fd < 0)
+        return fp_errorf(err, errlen, errno_code(-fd), "%s: cannot create a file in its folder: %s",
+                         path, strerror(-fd));
+    (void)fchmod(fd, (mode_t)fp_file_new_mode()); /* the mode a new file would get */
     *f = fdopen(fd, "w+b");
     if (!*f) {
         int e = errno;

@@ -4,6 +4,7 @@
 // vertex order stays the file's). glTF 2.0 goes through tinygltf (Debian's shared build).
 // Nothing here throws past the C API: every entry point catches.
 #include "mesh_internal.h"
+#include "fp_file.h"
 
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/IO/exporter/BaseExporter.hh>
@@ -543,7 +544,7 @@ int read_whole_file(const char *path, std::string &data, char *err, size_t errle
 }
 
 // Write `bytes` to `path` so that the file is never half-written: a temporary file in the
-// same folder (mkostemp), every write checked, fsync, then rename over the target (and an
+// same folder (fp_file_temp_beside), every write checked, fsync, then rename over the target (and an
 // fsync of the folder). On any failure the temporary file is removed and the old file, if
 // any, is left as it was. A new file gets mode 0666 & ~umask; a replaced one keeps its mode.
 int write_atomically(const char *path, const std::string &bytes, char *err, size_t errlen)
@@ -552,32 +553,15 @@ int write_atomically(const char *path, const std::string &bytes, char *err, size
     const size_t slash = target.find_last_of('/');
     const std::string dir = slash == std::string::npos ? std::string(".")
                             : slash == 0 ? std::string("/") : target.substr(0, slash);
-    const std::string base = slash == std::string::npos ? target : target.substr(slash + 1);
-    std::string tmpl = (dir == "/" ? std::string() : dir) + "/." + base + ".XXXXXX";
-    std::vector<char> name(tmpl.begin(), tmpl.end());
-    name.push_back('\0');
-    int fd = mkostemp(name.data(), O_CLOEXEC);
+    std::vector<char> name(target.size() + 16); // "/." and ".XXXXXX" beside the path
+    int fd = fp_file_temp_beside(path, "", name.data(), name.size());
     if (fd < 0)
-        return fp__mesh_error(err, errlen, errno_code(errno), path,
+        return fp__mesh_error(err, errlen, errno_code(-fd), path,
                               "cannot create a temporary file in %s: %s", dir.c_str(),
-                              std::strerror(errno));
-    mode_t mode = 0644;
+                              std::strerror(-fd));
     struct stat st;
-    if (::stat(path, &st) == 0 && S_ISREG(st.st_mode)) {
-        mode = st.st_mode & 07777;
-    } else {
-        // the umask, read without changing it (umask() is process-wide and racy)
-        mode_t mask = 022;
-        if (FILE *f = std::fopen("/proc/self/status", "re")) {
-            char line[256];
-            unsigned m;
-            while (std::fgets(line, sizeof line, f))
-                if (std::sscanf(line, "Umask: %o", &m) == 1)
-                    mask = mode_t(m);
-            std::fclose(f);
-        }
-        mode = 0666 & ~mask;
-    }
+    const mode_t mode = ::stat(path, &st) == 0 && S_ISREG(st.st_mode) ? st.st_mode & 07777
+                                                                       : mode_t(fp_file_new_mode());
     auto give_up = [&](const char *what, int e) {
         ::close(fd);
         ::unlink(name.data());

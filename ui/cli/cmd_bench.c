@@ -4,6 +4,7 @@
 #include "app_util.h"
 #include "command.h"
 #include "fp_bench.h"
+#include "fp_file.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -136,37 +137,13 @@ static int spawn_wait(char *const argv[], int in_fd, bool quiet)
     return WIFEXITED(st) ? WEXITSTATUS(st) : 128 + (WIFSIGNALED(st) ? WTERMSIG(st) : 0);
 }
 
-/* The umask, read without changing it (as core/mesh's atomic writes do). */
-static mode_t new_file_mode(void)
-{
-    mode_t mask = 022;
-    FILE *f = fopen("/proc/self/status", "re");
-    if (f) {
-        char line[256];
-        unsigned m;
-        while (fgets(line, sizeof line, f))
-            if (sscanf(line, "Umask: %o", &m) == 1) mask = (mode_t)m;
-        fclose(f);
-    }
-    return 0666 & ~mask;
-}
-
 /* A temporary file beside path (so that the rename is atomic): .NAME.XXXXXX in its folder,
  * its name into tmp. Returns the descriptor, or a negative errno (a message printed). */
 static int temp_beside(const char *path, char *tmp, size_t len)
 {
-    const char *slash = strrchr(path, '/');
-    if (slash)
-        snprintf(tmp, len, "%.*s/.%s.XXXXXX", (int)(slash - path), path, slash + 1);
-    else
-        snprintf(tmp, len, ".%s.XXXXXX", path);
-    int fd = mkostemp(tmp, O_CLOEXEC);
-    if (fd < 0) {
-        int e = errno;
-        fprintf(stderr, "facepuppet bench: %s: cannot create a file beside it: %s\n", path, strerror(e));
-        tmp[0] = '\0';
-        return -e;
-    }
+    int fd = fp_file_temp_beside(path, "", tmp, len);
+    if (fd < 0)
+        fprintf(stderr, "facepuppet bench: %s: cannot create a file beside it: %s\n", path, strerror(-fd));
     return fd;
 }
 
@@ -175,7 +152,7 @@ static int temp_beside(const char *path, char *tmp, size_t len)
 static int commit_beside(int fd, const char *tmp, const char *path)
 {
     errno = 0;
-    if (fchmod(fd, new_file_mode()) || fsync(fd) || rename(tmp, path)) {
+    if (fchmod(fd, (mode_t)fp_file_new_mode()) || fsync(fd) || rename(tmp, path)) {
         int e = errno ? errno : EIO;
         fprintf(stderr, "facepuppet bench: %s: cannot write it: %s\n", path, strerror(e));
         return -e;
