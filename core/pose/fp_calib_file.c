@@ -3,6 +3,7 @@
 #include "fp_calib_file.h"
 
 #include "fp_error.h"
+#include "fp_file.h"
 
 #include <cJSON.h>
 #include <errno.h>
@@ -10,6 +11,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 /* Reads a JSON array of n finite numbers at obj[key] (absent: returns 0, untouched). */
@@ -143,9 +145,11 @@ int fp_calibration_save(const char *path, const fp_calibration *c, const char *c
 {
     if (!(c->scale > 0)) return fp_errorf(err, errlen, -EINVAL, "%s: scale must be > 0", path);
     char tmp[4200];
-    snprintf(tmp, sizeof tmp, "%s.tmp.XXXXXX", path);
-    int fd = mkstemp(tmp);
-    if (fd < 0) return fp_errorf(err, errlen, -errno, "%s: cannot create %s: %s", path, tmp, strerror(errno));
+    int fd = fp_file_temp_beside(path, "", tmp, sizeof tmp);
+    if (fd < 0)
+        return fp_errorf(err, errlen, fd, "%s: cannot create a file in its folder: %s", path,
+                         strerror(-fd));
+    (void)fchmod(fd, (mode_t)fp_file_new_mode()); /* the mode a new file would get */
     FILE *f = fdopen(fd, "w");
     if (!f) {
         int e = errno;

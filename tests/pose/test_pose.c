@@ -7,6 +7,7 @@
 
 #include <stdio.h>
 #include <stdlib.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <errno.h>
@@ -212,7 +213,13 @@ static void test_calibration_file(void **state)
     assert_non_null(mkdtemp(dir));
     snprintf(path, sizeof path, "%s/c.json", dir);
     fp_calibration c = {0.1, {1, 2, 3}, {0, 0, 0, 1}, {{0.5, 0, 0}, {0, -0.5, 0}}}, back;
+    /* the mode a new file gets (0666 under the umask), not the temporary file's 0600 */
+    mode_t um = umask(027);
     assert_int_equal(fp_calibration_save(path, &c, "test", err, sizeof err), 0);
+    umask(um);
+    struct stat sb;
+    assert_int_equal(stat(path, &sb), 0);
+    assert_int_equal(sb.st_mode & 0777, 0640);
     assert_int_equal(fp_calibration_load(path, &back, err, sizeof err), 0);
     assert_true(fabs(back.scale - 0.1) < 1e-15 && back.offset[2] == 3 && back.rotation[3] == 1 &&
                 back.hand_offset[1][1] == -0.5);
@@ -236,10 +243,16 @@ static void test_calibration_file(void **state)
     assert_int_equal(fp_calibration_load(path, &back, err, sizeof err), -ENOENT);
     /* An unwritable place: an error, nothing half-written. */
     snprintf(path, sizeof path, "%s/no/such/dir/c.json", dir);
+    assert_int_equal(fp_calibration_save(path, &c, NULL, err, sizeof err), -ENOENT);
+    assert_non_null(strstr(err, path));
+    /* a rename that fails (the target is a folder): the temporary file goes, the folder stays */
+    snprintf(path, sizeof path, "%s/sub", dir);
+    assert_int_equal(mkdir(path, 0755), 0);
     assert_true(fp_calibration_save(path, &c, NULL, err, sizeof err) < 0);
+    assert_int_equal(rmdir(path), 0);
     snprintf(path, sizeof path, "%s/c.json", dir);
     unlink(path);
-    rmdir(dir);
+    assert_int_equal(rmdir(dir), 0); /* (fails with a temporary file left in it) */
 }
 
 /* No input tells a workspace: false, box untouched. */

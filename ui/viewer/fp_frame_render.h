@@ -10,8 +10,8 @@
  * face's left) and pitch (degrees, positive from above), the distance divided by zoom.
  *
  * Errors: 0 or a negative code with err: -ENODEV (no display, no GL 3.3 context),
- * -EINVAL (bad size), -ENOMEM, -EIO (a PNG not written). Thread rules: the process's main
- * thread (GLFW's rule); one renderer at a time.
+ * -EINVAL (bad size), -ENOMEM, a PNG's write errors (fp_frame_renderer_png). Thread rules:
+ * the process's main thread (GLFW's rule); one renderer at a time.
  */
 #ifndef FP_FRAME_RENDER_H
 #define FP_FRAME_RENDER_H
@@ -36,7 +36,9 @@ int fp_frame_renderer_open(const fp_mesh *mesh, const fp_frame_render_options *o
                            fp_frame_renderer **out, char *err, size_t errlen);
 
 /** Draw the mesh at `positions` (vertex_count x 3, normals recomputed) and write PNG `path`
- *  (written beside as PATH.tmp, then renamed: whole or not at all). Returns 0 or -EIO. */
+ *  (png_file.h: a temporary file beside it, renamed over it: whole or not at all; an
+ *  existing PNG is left as it was on failure). Returns 0 or fp_png_write's negative errno:
+ *  -ENOENT (no such folder), -EACCES, -ENOSPC, -ENOMEM, -EIO. */
 int fp_frame_renderer_png(fp_frame_renderer *r, const float *positions, const char *path,
                           char *err, size_t errlen);
 

@@ -4,6 +4,7 @@
 #include "render.h"
 #include "vmath.h"
 #include "fp_error.h"
+#include "png_file.h"
 
 #include <GLFW/glfw3.h>
 #include <errno.h>
@@ -11,7 +12,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <stb_image_write.h>
 
 struct fp_frame_renderer {
     const fp_mesh *mesh;
@@ -127,15 +127,9 @@ int fp_frame_renderer_png(fp_frame_renderer *f, const float *positions, const ch
     glPixelStorei(GL_PACK_ALIGNMENT, 1);
     glReadBuffer(GL_COLOR_ATTACHMENT0);
     glReadPixels(0, 0, f->w, f->h, GL_RGB, GL_UNSIGNED_BYTE, f->px);
-    char tmp[4200];
-    snprintf(tmp, sizeof tmp, "%s.tmp", path);
-    /* GL's rows go bottom-up; PNG's top-down: a negative stride */
-    int ok = stbi_write_png(tmp, f->w, f->h, 3, f->px + (size_t)(f->h - 1) * (size_t)f->w * 3,
-                            -f->w * 3);
-    if (!ok || rename(tmp, path) != 0) {
-        remove(tmp);
-        return fp_errorf(err, errlen, -EIO, "%s: cannot write the PNG", path);
-    }
+    /* GL's rows go bottom-up */
+    int rc = fp_png_write(path, f->w, f->h, f->px, 1, err, errlen);
+    if (rc < 0) return rc;
     return 0;
 }
 

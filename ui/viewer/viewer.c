@@ -5,7 +5,9 @@
 #include "fp_gpuwarp.h"
 #include "fp_mesh.h"
 #include "fp_rig.h"
+#include "fp_error.h"
 #include "fp_stats.h"
+#include "png_file.h"
 #include "render.h"
 #include "script.h"
 #include "takes.h"
@@ -15,7 +17,6 @@
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
 #include <epoxy/gl.h>
-#include <stb_image_write.h>
 
 #include <errno.h>
 #include <math.h>
@@ -879,20 +880,18 @@ static void check_warp(viewer *v, const fp_warp_coeffs *c)
     v->rep.warp_max_displacement = fmax(v->rep.warp_max_displacement, disp);
 }
 
-static int screenshot(viewer *v, const char *path, int w, int h)
+/* The back buffer as the PNG `path` (whole or not at all, png_file.h). A failure's message
+ * goes to err: the run's error for --screenshot, the status line for the S key's. */
+static int screenshot(viewer *v, const char *path, int w, int h, char *err, size_t errlen)
 {
     unsigned char *px = malloc((size_t)w * h * 3);
-    if (!px) return -ENOMEM;
+    if (!px) return fp_errorf(err, errlen, -ENOMEM, "%s: no memory for the screenshot", path);
     glPixelStorei(GL_PACK_ALIGNMENT, 1);
     glReadBuffer(GL_BACK);
     glReadPixels(0, 0, w, h, GL_RGB, GL_UNSIGNED_BYTE, px);
-    /* GL's rows go bottom-up; PNG's top-down: write with a negative stride. */
-    int ok = stbi_write_png(path, w, h, 3, px + (size_t)(h - 1) * w * 3, -w * 3);
+    int rc = fp_png_write(path, w, h, px, 1, err, errlen); /* (GL's rows go bottom-up) */
     free(px);
-    if (!ok) {
-        snprintf(v->err, v->errlen, "cannot write the screenshot %s", path);
-        return -EIO;
-    }
+    if (rc < 0) return rc;
     if (!v->opt->quiet) fprintf(stderr, "facepuppet live: wrote %s (%dx%d)\n", path, w, h);
     return 0;
 }
@@ -987,10 +986,17 @@ static void frame(viewer *v)
     bool last = v->opt->frames && v->frames + 1 >= v->opt->frames;
     if (last && v->opt->screenshot && !v->shot_path) v->shot_path = strdup(v->opt->screenshot);
     if (v->shot_path) {
-        int rc = screenshot(v, v->shot_path, w, h);
+        char msg[1200];
+        int rc = screenshot(v, v->shot_path, w, h, msg, sizeof msg);
         free(v->shot_path);
         v->shot_path = NULL;
-        if (rc && v->opt->screenshot) v->error = rc;
+        if (rc && v->opt->screenshot) { /* --screenshot's: the run fails with it, -EIO as
+                                          * any output's (fp_viewer_run) */
+            v->error = rc == -ENOMEM ? rc : -EIO;
+            snprintf(v->err, v->errlen, "%s", msg);
+        } else if (rc) {
+            say(v, "%s", msg); /* the S key's: said, the performance goes on */
+        }
     }
     glfwSwapBuffers(v->win);
     glFinish(); /* never queue frames: the next frame starts when this one is shown */
