@@ -24,7 +24,7 @@ static const struct {
      "NAME[:ARG][,key=value...] (repeatable), e.g.\n"
      "replay:../shared/data/hands/leap-motion/grab_joints_mm.csv\n"
      "any input also takes record=FILE (an event log of it)"},
-    {"mapping", required_argument, 'M', "SPEC", "anchored (default) or unanchored, [,key=value...]"},
+    {"mapping", required_argument, 'M', "SPEC", "anchored (default), unanchored, onehand or a plugin's NAME [,key=value...]"},
     {"radius", required_argument, 'r', "R",
      "support radius in mesh units (default 6% of the mesh's\nbounding-box diagonal, at least 25 mm)"},
     {"mm-per-unit", required_argument, OPT_MM_PER_UNIT, "X",
