@@ -10,6 +10,7 @@
 #define FP_PLUGIN_HOST_H
 
 #include "fp_error.h"
+#include "log_relay.h"
 
 #include <facepuppet/plugin.h>
 #include <stdatomic.h>
@@ -160,6 +161,10 @@ bool fp_event_queue_pop(fp_event_queue *q, fp_event *out);
 
 struct fp_event_recorder;
 
+/** A log callback with the signature of the session's (fp_session_log_fn): level is an
+ *  fp_log_level, source names who speaks. */
+typedef void (*fp_host_log_fn)(void *user, int level, const char *source, const char *message);
+
 /** One running input: its plugin, the fp_host given to it, its queue. */
 typedef struct fp_input_instance {
     fp_plugin plugin;
@@ -172,6 +177,10 @@ typedef struct fp_input_instance {
                                             its writer thread (fp_record.h) */
     bool started;
     bool stopped;                        /* stop() was called (it is called once) */
+    fp_log_relay log;                    /* the plugin's log lines, from any thread, until
+                                            drained on the owner's (log_relay.h) */
+    fp_host_log_fn log_fn;               /* where they are drained to (fp_input_instance_set_log) */
+    void *log_user;
 } fp_input_instance;
 
 /** Load the plugin for `spec` and create the instance (not yet started). The host strips
@@ -180,8 +189,21 @@ typedef struct fp_input_instance {
  *  err names the SPEC and reason. */
 int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
                            const char *spec_text, uint32_t source, char *err, size_t errlen);
+/** Call the plugin's start(): its threads or device run from here. Returns 0 or the plugin's
+ *  negative errno (err "input 'NAME': REASON"). [main-thread], once, after a successful open. */
 int fp_input_instance_start(fp_input_instance *inst, char *err, size_t errlen);
-/** Stop (if started), destroy, close the recording, unload. Safe on a zeroed instance. */
+/** Where the plugin's log lines go (its fp_host.log, from any thread, is kept in inst->log):
+ *  fn(user, level, NAME, message) on the thread that calls fp_input_instance_drain_log or
+ *  fp_input_instance_close. fn NULL (the default): drained lines are discarded. Lines the
+ *  plugin logs before this (in create) wait for the first drain. [owner's thread]. */
+void fp_input_instance_set_log(fp_input_instance *inst, fp_host_log_fn fn, void *user);
+/** Hand the lines the plugin logged since the last drain to the set_log callback, oldest
+ *  first, with a line counting any dropped (over 32 kept at a time). Returns the lines handed.
+ *  [owner's thread]: the session drains its inputs every frame; monitor and calibrate in
+ *  their loops. Safe on a zeroed instance. */
+size_t fp_input_instance_drain_log(fp_input_instance *inst);
+/** Stop (if started), destroy, close the recording, unload; the lines logged until then are
+ *  drained to the set_log callback last. Safe on a zeroed instance. */
 void fp_input_instance_close(fp_input_instance *inst);
 /** Pop one event; queues it for the recording if any (no I/O on the caller's thread).
  *  [session-thread]. */
@@ -208,15 +230,14 @@ typedef struct fp_mapping_services {
     void *user;                /* the provider's data, for the service's implementation */
 } fp_mapping_services;
 
-/** A log callback with the signature of the session's (fp_session_log_fn): level is an
- *  fp_log_level, source names who speaks. */
-typedef void (*fp_host_log_fn)(void *user, int level, const char *source, const char *message);
 
 /** The fp_host of a mapping instance, with its log target: plugin log lines go to `log`
  *  (NULL: stderr, "facepuppet: mapping 'NAME': LEVEL: MESSAGE") with the source
  *  "mapping 'NAME'"; FP_LOG_DEBUG lines only when FACEPUPPET_DEBUG is set in the
- *  environment. Pass &mh->host to the factory; mh must stay in place while the instance
- *  lives. */
+ *  environment. With `relay` set (the session's), a line is kept there from whatever thread
+ *  the mapping logs on and handed to `log` by fp_mapping_host_drain_log on the owner's
+ *  thread; without, `log` is called at once on the plugin's thread. Pass &mh->host to the
+ *  factory; mh must stay in place while the instance lives. */
 typedef struct fp_mapping_host {
     fp_host host;
     char source[96];
@@ -226,8 +247,13 @@ typedef struct fp_mapping_host {
                                         session sets it after fp_mapping_host_init */
     const fp_mapping_services *services; /* FP_HOST_EXT_SURFACE (ABI 1.1); NULL: not offered.
                                         Kept by pointer: it must outlive the host */
+    fp_log_relay *relay;             /* NULL: none; else the owner's, set after init, which
+                                        must outlive the instance */
 } fp_mapping_host;
 void fp_mapping_host_init(fp_mapping_host *mh, const char *name, fp_host_log_fn log, void *log_user);
+/** Hand the lines kept in mh->relay to mh->log with mh's source, oldest first (a line counts
+ *  any dropped). Returns their number; 0 without a relay. [owner's thread]. */
+size_t fp_mapping_host_drain_log(fp_mapping_host *mh);
 
 #ifdef __cplusplus
 }

@@ -29,13 +29,23 @@ static int64_t host_now(const fp_host *host)
     return fp_now_ns();
 }
 
+/* Any thread: the line waits in the instance's relay for its owner (log_relay.h). */
 static void host_log(const fp_host *host, fp_log_level level, const char *message)
 {
-    static const char *names[] = {"error", "warning", "info", "debug"};
-    const char *who = host->host_data ? ((fp_input_instance *)host->host_data)->name : "plugin";
-    if (level > FP_LOG_INFO && !getenv("FACEPUPPET_DEBUG")) return;
-    fprintf(stderr, "facepuppet: %s: %s: %s\n", who,
-            names[level <= FP_LOG_DEBUG ? level : FP_LOG_DEBUG], message ? message : "");
+    fp_input_instance *inst = host ? host->host_data : NULL;
+    if (!inst || (level > FP_LOG_INFO && !getenv("FACEPUPPET_DEBUG"))) return;
+    fp_log_relay_push(&inst->log, (int)level, message);
+}
+
+void fp_input_instance_set_log(fp_input_instance *inst, fp_host_log_fn fn, void *user)
+{
+    inst->log_fn = fn;
+    inst->log_user = user;
+}
+
+size_t fp_input_instance_drain_log(fp_input_instance *inst)
+{
+    return fp_log_relay_drain(&inst->log, inst->name, inst->log_fn, inst->log_user);
 }
 
 /* Inputs are offered no host extension; a mapping's host answers through mapping_extension. */
@@ -78,6 +88,10 @@ static void mapping_log(const fp_host *host, fp_log_level level, const char *mes
 {
     const fp_mapping_host *mh = (const fp_mapping_host *)host;
     if (level > FP_LOG_INFO && !getenv("FACEPUPPET_DEBUG")) return;
+    if (mh->relay) { /* any thread: the owner hands it over on its own */
+        fp_log_relay_push(mh->relay, (int)level, message);
+        return;
+    }
     if (mh->log) {
         mh->log(mh->log_user, (int)level, mh->source, message ? message : "");
         return;
@@ -118,6 +132,11 @@ void fp_mapping_host_init(fp_mapping_host *mh, const char *name, fp_host_log_fn 
     mh->log_user = log_user;
 }
 
+size_t fp_mapping_host_drain_log(fp_mapping_host *mh)
+{
+    return mh->relay ? fp_log_relay_drain(mh->relay, mh->source, mh->log, mh->log_user) : 0;
+}
+
 int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
                            const char *spec_text, uint32_t source, char *err, size_t errlen)
 {
@@ -125,6 +144,10 @@ int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
     fp_spec spec;
     int rc = fp_spec_parse(spec_text, &spec, err, errlen);
     if (rc) return rc;
+    if (fp_log_relay_init(&inst->log)) {
+        fp_spec_clear(&spec);
+        return fp_errorf(err, errlen, -ENOMEM, "input '%s': out of memory", spec_text);
+    }
     snprintf(inst->name, sizeof inst->name, "%s", spec.name);
     inst->source = source;
     const char *record = fp_spec_take(&spec, "record");
@@ -241,4 +264,6 @@ void fp_input_instance_close(fp_input_instance *inst)
     fp_event_queue_destroy(&inst->queue);
     fp_plugin_unload(&inst->plugin);
     inst->started = false;
+    fp_input_instance_drain_log(inst); /* (the plugin's threads are gone) */
+    fp_log_relay_destroy(&inst->log);
 }

@@ -49,6 +49,7 @@ struct fp_session {
     fp_plugin mapping_plugin;
     fp_mapping *mapping;
     fp_mapping_host mapping_host;
+    fp_log_relay mapping_relay; /* the mapping's log lines until the session thread hands them over */
     fp_mapping_services services;     /* the host extensions the mapping may ask for */
     char mapping_name[64];
     char mapping_spec[1024];      /* the SPEC it was made from (keys kept for a reload) */
@@ -170,11 +171,13 @@ static int load_mapping(fp_session *s, const char *mapping, const fp_plugin_path
         fp_mapping_host_init(&s->mapping_host, spec.name, s->log.fn, s->log.user);
         s->mapping_host.rig = fp_rig_step_view(&s->rig); /* FP_HOST_EXT_RIG */
         s->mapping_host.services = &s->services; /* FP_HOST_EXT_SURFACE */
+        s->mapping_host.relay = &s->mapping_relay;
         const fp_mapping_factory *f = s->mapping_plugin.factory;
         char perr[512] = "";
         fp_plugin_call_enter(s->mapping_name, "create", s->frame);
         rc = f->create(&s->mapping_host.host, spec.params, spec.nparams, &s->mapping, perr, sizeof perr);
         fp_plugin_call_leave();
+        fp_mapping_host_drain_log(&s->mapping_host); /* what its create said */
         if (rc || !s->mapping) {
             snprintf(err, errlen, "mapping '%s': %s", mapping,
                      perr[0] ? perr : rc ? "create failed" : "create returned 0 without an instance");
@@ -278,6 +281,13 @@ static const char *file_name(const char *path)
     return slash && slash[1] ? slash + 1 : path;
 }
 
+/* An input plugin's log line (its fp_host.log from any thread, relayed: fp_input_instance_
+ * drain_log) into the session's log, on the thread that drains: the session's. */
+static void input_log(void *user, int level, const char *source, const char *message)
+{
+    fp_slog_printf(&((fp_session *)user)->log, level, source, "%s", message);
+}
+
 int fp_session_create(const fp_session_options *opt, fp_session **out, char *err, size_t errlen)
 {
     *out = NULL;
@@ -301,6 +311,10 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
     if (!s) return -ENOMEM;
     s->log = (fp_slog){opt->log, opt->log_user};
     int rc = 0;
+    if (fp_log_relay_init(&s->mapping_relay)) {
+        free(s);
+        return -ENOMEM;
+    }
     if (opt->mesh) {
         if (!(s->mesh = fp_mesh_copy(opt->mesh))) {
             rc = -ENOMEM;
@@ -419,6 +433,8 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
                                     err, errlen);
         if (rc) goto fail;
         s->input_count = i + 1;
+        fp_input_instance_set_log(&s->inputs[i], input_log, s);
+        fp_input_instance_drain_log(&s->inputs[i]); /* what its create said */
     }
     if ((rc = calibrate(s, opt, err, errlen))) goto fail;
     s->intents.clocked = opt->input_clock;
@@ -443,6 +459,7 @@ int fp_session_start(fp_session *s, char *err, size_t errlen)
 {
     for (size_t i = 0; i < s->input_count; i++) {
         int rc = fp_input_instance_start(&s->inputs[i], err, errlen);
+        fp_input_instance_drain_log(&s->inputs[i]); /* what its start said */
         if (rc) return rc;
     }
     /* the frame thread (fp_session_options.frame_thread): a frame whose data fit in a core's
@@ -920,6 +937,8 @@ static void step_frame(fp_session *s, int64_t now_ns, fp_frame_stats *st)
                                               s->engaged, &s->log, on_event, s)
                      : fp_intents_drain(&s->intents, s->inputs, s->input_count, s->engaged,
                                         &s->log, on_event, s);
+    for (size_t i = 0; i < s->input_count; i++) /* (one load each when none logged) */
+        fp_input_instance_drain_log(&s->inputs[i]);
     FP_STAGE_END(FP_STAGE_EVENTS);
     /* 2: hand poses in mesh units. */
     fp_pose_build(&s->pose);
@@ -955,6 +974,7 @@ static void step_frame(fp_session *s, int64_t now_ns, fp_frame_stats *st)
                                  in.tip_distance);
     FP_STAGE_END(FP_STAGE_DISTANCES);
     fp_mapping_step_run(&s->mapping_step, s->mapping, s->mapping_name, &in, &s->cs, &s->log);
+    fp_mapping_host_drain_log(&s->mapping_host); /* (one load when it logged nothing) */
     st->engaged = s->cs.intents & FP_INTENT_ENGAGE;
     if (s->cs.intents & FP_INTENT_CANCEL) {
         st->cancelled = true;
@@ -1153,6 +1173,7 @@ static int swap_mapping(fp_session *s, const fp_plugin_path *path, const char *s
     fp_mapping_host new_host = s->mapping_host;
     s->mapping_host = old_host;
     destroy_mapping(s, old, old_name);
+    fp_mapping_host_drain_log(&s->mapping_host); /* the old one's last lines, under its name */
     s->mapping_host = new_host;
     fp_mapping_step_flush(&s->mapping_step, &s->log);
     fp_plugin_unload(&old_plugin);
@@ -1247,6 +1268,7 @@ int fp_session_stop(fp_session *s, char *err, size_t errlen)
     for (size_t i = 0; i < s->input_count; i++) {
         char msg[512] = "";
         int rc = fp_input_instance_close_record(&s->inputs[i], msg, sizeof msg);
+        fp_input_instance_drain_log(&s->inputs[i]);
         if (rc) {
             fp_slog_printf(&s->log, FP_LOG_ERROR, s->inputs[i].name, "record: %s", msg);
             if (!first) {
@@ -1270,6 +1292,8 @@ void fp_session_destroy(fp_session **sp)
     contact_end_gesture(s);
     for (size_t i = 0; i < s->input_count; i++) fp_input_instance_close(&s->inputs[i]);
     destroy_mapping(s, s->mapping, s->mapping_name);
+    fp_mapping_host_drain_log(&s->mapping_host);
+    fp_log_relay_destroy(&s->mapping_relay);
     fp_plugin_unload(&s->mapping_plugin);
     fp_engine_step_free(&s->engine);
     fp_contact_destroy(&s->contact);

@@ -252,7 +252,7 @@ int fp_engine_step_run(fp_engine_step *e, const fp_control_set *cs, float *defor
     int rc = run(e, cs, deformed, res);
     res->update_ms = (double)(fp_now_ns() - t0) / 1e6 - res->jacobian_ms;
     if (rc < 0) {
-        fp_slog_repeat_report(&e->errors, log, FP_LOG_ERROR, "engine", rc, "%s%s%s; keeping the last shape",
+        fp_slog_repeat_report(&e->errors, log, FP_LOG_ERROR, "engine", rc, "%s%s%s; the base shown",
                               csrbf_strerror(rc), e->solver ? ": " : "",
                               e->solver ? csrbf_solver_message(e->solver) : "");
         return rc;

@@ -135,11 +135,11 @@ int fp_mapping_step_run(fp_mapping_step *st, fp_mapping *mapping, const char *na
         if (rc == -ERANGE && what[0] == 'c')
             fp_slog_repeat_report(&st->errors, log, FP_LOG_ERROR, source_of(source, name), rc,
                                   "%s %zu > capacity %zu (or channel_count %zu > %zu) on frame %llu; "
-                                  "keeping the last shape", what, cs->count, cs->capacity,
+                                  "the base shown", what, cs->count, cs->capacity,
                                   cs->channel_count, cs->channel_capacity, frame);
         else
             fp_slog_repeat_report(&st->errors, log, FP_LOG_ERROR, source_of(source, name), rc,
-                                  "%s %d (%s) on frame %llu; keeping the last shape", what, rc,
+                                  "%s %d (%s) on frame %llu; the base shown", what, rc,
                                   fp_strerror(rc), frame);
         cs->active = false;
         cs->intents = 0;

@@ -3,10 +3,12 @@
  * support (the engine runs without the polynomial, so T is exactly the identity there). */
 #define _GNU_SOURCE
 #include "fp_mesh.h"
+#include "fp_plugin_host.h"
 #include "fp_session.h"
 #include "fp_test_support.h"
 
 #include <math.h>
+#include <pthread.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -229,6 +231,71 @@ static void test_open_progress(void **state)
     assert_int_equal(p.n, 0); /* no size to give: no loading line */
 }
 
+/* An input plugin's log lines reach the session's log callback with the input's name, on the
+ * thread that runs the frames, never the plugin's own (the fixture logs from a thread). */
+typedef struct relayed {
+    pthread_t runner;
+    int n, on_runner, mapping_lines, mapping_on_runner;
+    char lines[8][64];
+    char mapping_line[64];
+} relayed;
+
+static void on_log(void *user, int level, const char *source, const char *message)
+{
+    (void)level;
+    relayed *r = user;
+    if (!strcmp(source, "mapping 'fixture'")) { /* the mapping's, relayed the same way */
+        r->mapping_on_runner += pthread_equal(pthread_self(), r->runner) != 0;
+        snprintf(r->mapping_line, sizeof r->mapping_line, "%s", message);
+        r->mapping_lines++;
+        return;
+    }
+    if (strcmp(source, "fixture")) return; /* (the session's own lines) */
+    r->on_runner += pthread_equal(pthread_self(), r->runner) != 0;
+    if (r->n < 8) snprintf(r->lines[r->n], sizeof r->lines[0], "%s", message);
+    r->n++;
+}
+
+static void test_input_log_relayed(void **state)
+{
+    (void)state;
+    char err[2048], fixtures[4200];
+    snprintf(fixtures, sizeof fixtures, "%s/tests/plugins", fp_test_build_dir());
+    const char *dirs[] = {fp_test_plugin_dir(), fixtures};
+    fp_plugin_path path;
+    fp_plugin_path_init(&path, dirs, 2, NULL);
+    fp_session_options so;
+    fp_test_face_options(&so, "fixture", NULL); /* (tests/plugin/fixture_mapping.c) */
+    so.plugin_path = &path;
+    so.inputs[0] = "fixture,log=3";
+    so.input_count = 1;
+    so.frame_thread = -1; /* the frames on this thread */
+    relayed r = {.runner = pthread_self()};
+    so.log = on_log;
+    so.log_user = &r;
+    fp_session *s = NULL;
+    assert_int_equal(fp_session_create(&so, &s, err, sizeof err), 0);
+    assert_int_equal(r.n, 1); /* create's line, at create */
+    assert_string_equal(r.lines[0], "created");
+    assert_int_equal(r.mapping_lines, 1);
+    assert_int_equal(r.mapping_on_runner, 1);
+    assert_string_equal(r.mapping_line, "fixture A created");
+    assert_int_equal(fp_session_start(s, err, sizeof err), 0);
+    /* the plugin's thread logs meanwhile; the frames hand its lines over */
+    for (int i = 0; i < 200 && r.n < 4; i++) {
+        fp_frame_stats st;
+        fp_session_step(s, fp_now_ns(), &st);
+        fp_test_nap_ms(2);
+    }
+    assert_int_equal(r.n, 4); /* (before destroy, which hands over what is left) */
+    fp_session_destroy(&s);
+    assert_int_equal(r.n, 4);
+    assert_int_equal(r.on_runner, 4);
+    assert_string_equal(r.lines[1], "line 0");
+    assert_string_equal(r.lines[3], "line 2");
+    fp_plugin_path_clear(&path);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -236,6 +303,7 @@ int main(void)
         cmocka_unit_test(test_unanchored_on_real_data),
         cmocka_unit_test(test_undo_after_ranged_commits),
         cmocka_unit_test(test_open_progress),
+        cmocka_unit_test(test_input_log_relayed),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -6,11 +6,14 @@
  *   FIXTURE_CRASH_THREAD start() runs a thread of its own that dereferences a null pointer
  *   FIXTURE_GOOD        a working input that pushes FIXTURE_EVENTS events then ends;
  *                       key open_ms=N: its create takes N ms (a slow device's open: the
- *                       viewer's opening screen is read while it waits) */
+ *                       viewer's opening screen is read while it waits); key log=N:
+ *                       create logs "created", start runs a thread of its own that logs
+ *                       "line 0" .. "line N-1" (warnings) and ends (joined by stop) */
 #define _POSIX_C_SOURCE 200809L /* nanosleep */
 #include <facepuppet/plugin.h>
 
 #include <stddef.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -25,8 +28,8 @@ static void crash(void)
     *nowhere = 1;
 }
 #endif
-#ifdef FIXTURE_CRASH_THREAD
 #include <pthread.h>
+#ifdef FIXTURE_CRASH_THREAD
 #include <unistd.h>
 static void *crashing_thread(void *arg)
 {
@@ -35,6 +38,25 @@ static void *crashing_thread(void *arg)
     return NULL;
 }
 #endif
+typedef struct fixture {
+    fp_input in; /* first: the fp_input the host sees */
+    const fp_host *host;
+    int log_lines;
+    pthread_t logger;
+    int logging;
+} fixture;
+
+static void *logger(void *arg)
+{
+    fixture *f = arg;
+    char line[32];
+    for (int i = 0; i < f->log_lines; i++) {
+        snprintf(line, sizeof line, "line %d", i);
+        f->host->log(f->host, FP_LOG_WARNING, line);
+    }
+    return NULL;
+}
+
 static int start(fp_input *self, char *err, size_t errlen)
 {
 #ifdef FIXTURE_CRASH_THREAD
@@ -42,7 +64,9 @@ static int start(fp_input *self, char *err, size_t errlen)
     pthread_create(&t, NULL, crashing_thread, NULL);
     pthread_join(t, NULL);
 #endif
-    const fp_host *host = self->plugin_data;
+    fixture *fx = (fixture *)self;
+    const fp_host *host = fx->host;
+    if (fx->log_lines > 0) fx->logging = !pthread_create(&fx->logger, NULL, logger, fx);
     for (int i = 0; i < 3; i++) {
         fp_event_button b = {{sizeof b, FP_EVENT_BUTTON, 0, host->now_ns(host), 0, -1},
                              FP_BUTTON_LEFT, (uint32_t)(i % 2 == 0), (uint32_t)(i % 2 == 0)};
@@ -53,24 +77,36 @@ static int start(fp_input *self, char *err, size_t errlen)
     host->push_event(host, &st.header);
     return 0;
 }
-static void stop(fp_input *self) { (void)self; }
+static void stop(fp_input *self)
+{
+    fixture *fx = (fixture *)self;
+    if (fx->logging) pthread_join(fx->logger, NULL);
+    fx->logging = 0;
+}
 static void destroy(fp_input *self) { free(self); }
 
 static int create(const fp_host *host, const char *arg, const fp_param *params, size_t nparams,
                   fp_input **out, char *err, size_t errlen)
 {
+    int log_lines = 0;
     for (size_t i = 0; i < nparams; i++) {
         if (!strcmp(params[i].key, "open_ms")) {
             long ms = strtol(params[i].value, NULL, 10);
             struct timespec ts = {ms / 1000, (ms % 1000) * 1000000L};
             while (ms > 0 && nanosleep(&ts, &ts)) {
             }
+        } else if (!strcmp(params[i].key, "log")) {
+            log_lines = atoi(params[i].value);
         } else if (strcmp(params[i].key, "ok")) {
             strncpy(err, "unknown key", errlen);
             return -22;
         }
     }
-    fp_input *in = calloc(1, sizeof *in);
+    fixture *fx = calloc(1, sizeof *fx);
+    fx->host = host;
+    fx->log_lines = log_lines;
+    if (log_lines > 0) host->log(host, FP_LOG_INFO, "created");
+    fp_input *in = &fx->in;
     in->size = sizeof *in;
     in->plugin_data = (void *)host;
     in->start = start;

@@ -69,7 +69,7 @@ expect 0 "mapping 'fixture-slow': process took [0-9]+\.[0-9]+ ms on frame [0-9]+
 expect 0 "mapping 'fixture-nan': invalid control set .* on frame [0-9]+" run --mapping fixture-nan
 expect 78 "mapping 'fixture-noinstance': create returned 0 without an instance" run --mapping fixture-noinstance
 # An engine error on every frame (the engine refuses the radius) is one line, then its count.
-expect 0 "engine: invalid argument; keeping the last shape \(repeated [0-9]+ more times\)" run --mapping fixture-enginefail
+expect 0 "engine: invalid argument; the base shown \(repeated [0-9]+ more times\)" run --mapping fixture-enginefail
 n=$(grep -c "engine: " "$tmp/out")
 [ "$n" = 2 ] && echo "ok: the repeated engine error: 2 lines" || { fail "engine error lines: $n, wanted 2"; sed 's/^/    /' "$tmp/out"; }
 # Mapping log lines carry the instance's name.

@@ -120,6 +120,71 @@ static void test_env_path_and_instance(void **state)
     unsetenv("FACEPUPPET_PLUGIN_PATH");
 }
 
+/* ---- an input's log lines: kept from its own thread, handed over on the owner's ---- */
+
+typedef struct log_seen {
+    pthread_t owner;
+    int n, on_owner, warnings;
+    char lines[40][128];
+    char source[64];
+} log_seen;
+
+static void seen_log(void *user, int level, const char *source, const char *message)
+{
+    log_seen *l = user;
+    l->on_owner += pthread_equal(pthread_self(), l->owner) != 0;
+    l->warnings += level == FP_LOG_WARNING;
+    if (l->n < 40) snprintf(l->lines[l->n], sizeof l->lines[0], "%s", message);
+    snprintf(l->source, sizeof l->source, "%s", source);
+    l->n++;
+}
+
+static void test_log_relayed(void **state)
+{
+    (void)state;
+    const char *dirs[] = {fixture_dir};
+    fp_plugin_path path;
+    fp_plugin_path_init(&path, dirs, 1, NULL);
+    fp_input_instance inst;
+    char err[1024];
+    log_seen seen = {.owner = pthread_self()};
+    /* 40 lines from the plugin's thread before any drain: 32 kept, 8 counted */
+    assert_int_equal(fp_input_instance_open(&inst, &path, "fixture,log=40", 0, err, sizeof err), 0);
+    assert_int_equal(fp_input_instance_drain_log(&inst), 1); /* "created", no callback: discarded */
+    fp_input_instance_set_log(&inst, seen_log, &seen);
+    assert_int_equal(fp_input_instance_start(&inst, err, sizeof err), 0);
+    assert_int_equal(seen.n, 0); /* nothing is handed over until a drain */
+    inst.input->stop(inst.input);  /* joins the plugin's logging thread */
+    inst.stopped = true;
+    assert_int_equal(fp_input_instance_drain_log(&inst), 33);
+    assert_int_equal(seen.n, 33);
+    assert_int_equal(seen.on_owner, 33); /* every line on the draining thread */
+    assert_string_equal(seen.source, "fixture");
+    for (int i = 0; i < 32; i++) {
+        char want[32];
+        snprintf(want, sizeof want, "line %d", i);
+        assert_string_equal(seen.lines[i], want); /* oldest first */
+    }
+    assert_non_null(strstr(seen.lines[32], "8 log lines dropped"));
+    assert_int_equal(seen.warnings, 33);
+    assert_int_equal(fp_input_instance_drain_log(&inst), 0); /* emptied */
+    fp_input_instance_close(&inst);
+    assert_int_equal(seen.n, 33);
+
+    /* create's line waits for the first drain; lines still held at close are handed then */
+    seen = (log_seen){.owner = pthread_self()};
+    assert_int_equal(fp_input_instance_open(&inst, &path, "fixture,log=3", 0, err, sizeof err), 0);
+    fp_input_instance_set_log(&inst, seen_log, &seen);
+    assert_int_equal(fp_input_instance_start(&inst, err, sizeof err), 0);
+    fp_input_instance_close(&inst); /* stop joins the thread; close drains */
+    assert_int_equal(seen.n, 4);
+    assert_string_equal(seen.lines[0], "created");
+    assert_string_equal(seen.lines[3], "line 2");
+    assert_int_equal(seen.on_owner, 4);
+    assert_int_equal(seen.warnings, 3);
+    fp_plugin_path_clear(&path);
+}
+
 /* ---- plugin folders that could be hijacked are skipped, with the reason ---- */
 
 /* A fresh folder holding a copy of the good fixture plugin as input-NAME.so. */
@@ -339,7 +404,8 @@ int main(void)
     snprintf(builtin_dir, sizeof builtin_dir, "%s/lib/facepuppet", build ? build : "build");
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_spec_parse),        cmocka_unit_test(test_loader_errors),
-        cmocka_unit_test(test_env_path_and_instance), cmocka_unit_test(test_queue_mpsc),
+        cmocka_unit_test(test_env_path_and_instance),
+        cmocka_unit_test(test_log_relayed), cmocka_unit_test(test_queue_mpsc),
         cmocka_unit_test(test_queue_full),        cmocka_unit_test(test_unsafe_folders_skipped),
         cmocka_unit_test(test_builtin_first),     cmocka_unit_test(test_crash_names_plugin),
     };

@@ -169,3 +169,10 @@ int fp_app_load_mesh(const char *cmd, bool quiet, const char *path, fp_mesh **ou
     fp_app_open_progress_fn(&p, NULL);
     return rc;
 }
+
+void fp_app_log_line(void *user, int level, const char *source, const char *message)
+{
+    (void)user;
+    if (level > FP_LOG_INFO && !getenv("FACEPUPPET_DEBUG")) return;
+    fprintf(stderr, "facepuppet: %s: %s\n", source, message);
+}

@@ -56,6 +56,10 @@ typedef enum fp_app_io {
     FP_APP_OUTPUT   /* creating or writing an output file */
 } fp_app_io;
 
+/** A log callback (fp_session_log_fn, fp_host_log_fn) for the commands: "facepuppet: SOURCE:
+ *  MESSAGE" on stderr; FP_LOG_DEBUG lines only with FACEPUPPET_DEBUG set. user unused. */
+void fp_app_log_line(void *user, int level, const char *source, const char *message);
+
 /** The one map from an error code (fp_error.h: 0, a negative errno or an FP_E* code) to the
  *  command's exit status (enum fp_exit, sysexits.h); every subcommand uses it, never the
  *  message text. The table (docs/architecture.md, "Errors"; `facepuppet --help`):

@@ -60,6 +60,7 @@ static int read_samples(fp_input_instance *inst, double duration, fp_calib_sampl
     for (bool ended = false; !ended;) {
         fp_event ev;
         bool any = false;
+        fp_input_instance_drain_log(inst);
         while (!ended && fp_input_instance_poll(inst, &ev)) {
             any = true;
             if (ev.header.type == FP_EVENT_STATUS && ev.status.code == FP_STATUS_END_OF_STREAM) ended = true;
@@ -196,6 +197,7 @@ static int calibrate_main(int argc, char **argv)
     fp_input_instance inst;
     memset(&inst, 0, sizeof inst);
     rc = fp_input_instance_open(&inst, &path, input, 0, err, sizeof err);
+    if (!rc) fp_input_instance_set_log(&inst, fp_app_log_line, NULL); /* its log lines */
     if (!rc) rc = fp_input_instance_start(&inst, err, sizeof err);
     fp_calib_sample *smp = NULL;
     size_t n = 0, angles = 0;

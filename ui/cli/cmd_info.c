@@ -74,6 +74,8 @@ static int recording_info(const char *path)
         fp_plugin_path_clear(&pp);
         return fp_app_exit_code(rc, FP_APP_INPUT);
     }
+    fp_input_instance_set_log(&inst, fp_app_log_line, NULL);
+    fp_input_instance_drain_log(&inst); /* what its create said */
     const fp_input_recording *ext =
         inst.input->get_extension ? inst.input->get_extension(inst.input, FP_EXT_RECORDING_INFO) : NULL;
     fp_recording_info ri;

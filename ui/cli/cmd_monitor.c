@@ -122,6 +122,7 @@ static int monitor_main(int argc, char **argv)
     fp_input_instance inst;
     char err[2048];
     int rc = fp_input_instance_open(&inst, &path, argv[optind], 0, err, sizeof err);
+    if (!rc) fp_input_instance_set_log(&inst, fp_app_log_line, NULL); /* its log lines */
     if (!rc) rc = fp_input_instance_start(&inst, err, sizeof err);
     if (rc) {
         fprintf(stderr, "facepuppet monitor: %s\n", err);
@@ -143,6 +144,7 @@ static int monitor_main(int argc, char **argv)
             any = true;
             if (ev.header.type == FP_EVENT_STATUS && ev.status.code == FP_STATUS_END_OF_STREAM) ended = true;
         }
+        fp_input_instance_drain_log(&inst);
         if (duration > 0 && fp_now_ns() - t0 > (int64_t)(duration * 1e9)) break;
         if (!any) {
             fflush(stdout);

@@ -23,15 +23,6 @@
 static volatile sig_atomic_t interrupted;
 static void on_signal(int sig) { (void)sig; interrupted = 1; }
 
-/* The session's log lines (input status, mapping and engine errors, recordings) to stderr;
- * debug lines only with FACEPUPPET_DEBUG set. */
-static void log_line(void *user, int level, const char *source, const char *message)
-{
-    (void)user;
-    if (level > FP_LOG_INFO && !getenv("FACEPUPPET_DEBUG")) return;
-    fprintf(stderr, "facepuppet: %s: %s\n", source, message);
-}
-
 static void usage(FILE *f)
 {
     fprintf(f,
@@ -216,7 +207,7 @@ static int run_main(int argc, char **argv)
     fp_plugin_path path;
     fp_app_plugin_path(&path, sopt.plugin_dirs, sopt.nplugin_dirs);
     so.plugin_path = &path;
-    so.log = log_line;
+    so.log = fp_app_log_line; /* (input status, mapping and engine errors, recordings) */
     so.input_clock = true;
     so.measure_jacobian = true; /* min det J in the summary (the same shape, a slower path) */
     fp_app_open_progress opening; /* a large face takes a while: its steps on a terminal */

@@ -217,7 +217,10 @@ typedef struct fp_host {
     /** [any-thread] The host clock: CLOCK_MONOTONIC in nanoseconds. */
     int64_t (*now_ns)(const struct fp_host *host);
 
-    /** [any-thread] Report a message; the host prefixes the instance's name. Not for
+    /** [any-thread] Report a message; the host prefixes the instance's name. The line is
+     *  kept (up to 32 at a time; more are counted and reported as dropped) and handed to the
+     *  session's log on the session's thread at its next frame (the host prints nothing
+     *  itself: `run` prints the line, `live` shows it in its status line). Not for
      *  [session-thread] calls, which must not do I/O. */
     void (*log)(const struct fp_host *host, fp_log_level level, const char *message);
 
@@ -471,7 +474,9 @@ typedef struct fp_mapping {
     void *plugin_data;
 
     /** [session-thread] Turn this frame's input into a control set. No allocation, I/O or
-     *  locks. Returns 0, or a negative code (the host keeps the last shape and logs it). */
+     *  locks. Returns 0, or a negative code: the host shows the base for this frame (a
+     *  gesture in progress ends) and logs the code once, then counts it. A control set
+     *  written past out's capacities stops the mapping for good (FP_EPLUGIN_FAULT). */
     int (*process)(struct fp_mapping *self, const fp_frame_input *in, fp_control_set *out);
 
     /** [session-thread] Forget any gesture in progress (the host reset the mesh). */
