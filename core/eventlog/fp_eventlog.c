@@ -6,6 +6,7 @@
 #define _GNU_SOURCE
 #include "fp_eventlog.h"
 #include "fp_error.h"
+#include "fp_file.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -397,9 +398,10 @@ fp_eventlog_reader *fp_eventlog_reader_open(const char *path, char *err, size_t 
         fp_eventlog_reader_close(&r);
         return NULL;
     }
-    r->f = fopen(path, "r");
+    int code;
+    r->f = fp_file_fopen_regular(path, &code); /* a FIFO or a device cannot hold it */
     if (!r->f) {
-        put_msg(err, errlen, "%s: cannot open: %s", path, strerror(errno));
+        put_msg(err, errlen, "%s: cannot open: %s", path, fp_file_error_text(code));
         fp_eventlog_reader_close(&r);
         return NULL;
     }

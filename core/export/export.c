@@ -185,6 +185,14 @@ int fp_export_begin(const fp_mesh *base, const fp_export_options *opt, fp_export
     x->base = base;
     x->n = base->vertex_count;
     snprintf(x->path, sizeof x->path, "%s", opt->path);
+    if (opt->format != FP_EXPORT_OBJ_SEQ) { /* the file replaced: a link's end, no device */
+        int tr = fp_file_target(opt->path, x->path, sizeof x->path);
+        if (tr < 0) {
+            free(x);
+            return fp_errorf(err, errlen, tr == -EISDIR || tr == -ENXIO ? -EEXIST : errno_code(-tr),
+                             "%s: cannot replace it: %s", opt->path, fp_file_error_text(tr));
+        }
+    }
     x->scratch = malloc(x->n * 3 * sizeof(float));
     if (!x->scratch) {
         free(x);

@@ -37,10 +37,11 @@ extern "C" {
  *  (core/common/fp_error.h; fp_strerror() gives the text of any of them). */
 typedef enum fp_mesh_result {
     FP_MESH_OK = 0,
-    FP_MESH_ERR_NOENT = -ENOENT,        /* the file is not there */
+    FP_MESH_ERR_NOENT = -ENOENT,        /* the file is not there (or what is there is no
+                                           regular file: a folder, FIFO, device) */
     FP_MESH_ERR_ACCESS = -EACCES,       /* the file (or its folder) may not be read/written */
-    FP_MESH_ERR_IO = -EIO,              /* a read or write failed (or the path is no regular
-                                           file) */
+    FP_MESH_ERR_IO = -EIO,              /* a read or write failed (or a save's target is no
+                                           regular file: never replaced) */
     FP_MESH_ERR_NOSPACE = -ENOSPC,      /* a save ran out of disk space (old file kept) */
     FP_MESH_ERR_FORMAT = -EBADMSG,      /* malformed content: syntax, NaN/inf, index out of
                                            range, counts that do not fit the file's size, no

@@ -475,21 +475,24 @@ int errno_code(int e)
     }
 }
 
-// Open a file for reading only if it is a regular file: O_NONBLOCK so that a FIFO or a
-// device cannot block the open, then fstat. Returns the fd, or -1 with *code and *why set.
+// Open a file for reading only if it is a regular file (fp_file_open_regular: a FIFO or a
+// device cannot block the open; a folder, FIFO or device is "not there", NOENT, as an input
+// that cannot be opened). Returns the fd, or -1 with *code and *why set.
 int open_regular(const char *path, size_t max_bytes, off_t *size, int *code, std::string *why)
 {
-    int fd = ::open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOCTTY);
+    int fd = fp_file_open_regular(path);
     if (fd < 0) {
-        *code = errno_code(errno);
-        *why = std::string("cannot open: ") + std::strerror(errno);
+        *code = fd == -EISDIR || fd == -ENXIO ? FP_MESH_ERR_NOENT : errno_code(-fd);
+        *why = std::string(fd == -EISDIR || fd == -ENXIO ? "" : "cannot open: ") +
+               fp_file_error_text(fd);
         return -1;
     }
     struct stat st;
-    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    if (fstat(fd, &st) != 0) {
+        const int e = errno;
         ::close(fd);
-        *code = FP_MESH_ERR_IO;
-        *why = "not a regular file";
+        *code = errno_code(e);
+        *why = std::string("cannot read: ") + std::strerror(e);
         return -1;
     }
     if (uint64_t(st.st_size) > max_bytes) {
@@ -547,8 +550,15 @@ int read_whole_file(const char *path, std::string &data, char *err, size_t errle
 // same folder (fp_file_temp_beside), every write checked, fsync, then rename over the target (and an
 // fsync of the folder). On any failure the temporary file is removed and the old file, if
 // any, is left as it was. A new file gets mode 0666 & ~umask; a replaced one keeps its mode.
-int write_atomically(const char *path, const std::string &bytes, char *err, size_t errlen)
+int write_atomically(const char *given, const std::string &bytes, char *err, size_t errlen)
 {
+    // the file replaced: a link's end (written through), never a folder, FIFO or device
+    char real[4096];
+    const int tr = fp_file_target(given, real, sizeof real);
+    if (tr < 0)
+        return fp__mesh_error(err, errlen, tr == -EISDIR || tr == -ENXIO ? FP_MESH_ERR_IO : errno_code(-tr),
+                              given, "cannot replace it: %s", fp_file_error_text(tr));
+    const char *path = real;
     const std::string target = path;
     const size_t slash = target.find_last_of('/');
     const std::string dir = slash == std::string::npos ? std::string(".")

@@ -37,8 +37,9 @@ static int numbers(const char *path, const cJSON *obj, const char *prefix, const
 
 int fp_calibration_load(const char *path, fp_calibration *out, char *err, size_t errlen)
 {
-    FILE *f = fopen(path, "rb");
-    if (!f) return fp_errorf(err, errlen, -errno, "%s: %s", path, strerror(errno));
+    int code;
+    FILE *f = fp_file_fopen_regular(path, &code); /* (a folder, FIFO or device: refused) */
+    if (!f) return fp_errorf(err, errlen, code, "%s: %s", path, fp_file_error_text(code));
     char *text = NULL;
     size_t len = 0, cap = 0;
     for (;;) {
@@ -144,7 +145,12 @@ int fp_calibration_save(const char *path, const fp_calibration *c, const char *c
                         size_t errlen)
 {
     if (!(c->scale > 0)) return fp_errorf(err, errlen, -EINVAL, "%s: scale must be > 0", path);
-    char tmp[4200];
+    char tmp[4200], real[4096];
+    int tr = fp_file_target(path, real, sizeof real); /* a link's end; no folder or device */
+    if (tr < 0)
+        return fp_errorf(err, errlen, tr == -EISDIR || tr == -ENXIO ? -EEXIST : tr,
+                         "%s: cannot replace it: %s", path, fp_file_error_text(tr));
+    path = real;
     int fd = fp_file_temp_beside(path, "", tmp, sizeof tmp);
     if (fd < 0)
         return fp_errorf(err, errlen, fd, "%s: cannot create a file in its folder: %s", path,

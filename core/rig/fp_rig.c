@@ -3,6 +3,7 @@
 #include "fp_rig.h"
 
 #include "fp_error.h"
+#include "fp_file.h"
 
 #include <cjson/cJSON.h>
 #include <dirent.h>
@@ -679,8 +680,9 @@ int fp_rig_load(const char *path, fp_rig **out, char *err, size_t errlen)
 {
     if (out) *out = NULL;
     if (!path || !out) return fp_errorf(err, errlen, -EINVAL, "fp_rig_load: NULL argument");
-    FILE *f = fopen(path, "rb");
-    if (!f) return fp_errorf(err, errlen, -errno, "%s: %s", path, strerror(errno));
+    int code;
+    FILE *f = fp_file_fopen_regular(path, &code); /* (a folder, FIFO or device: refused) */
+    if (!f) return fp_errorf(err, errlen, code, "%s: %s", path, fp_file_error_text(code));
     char *buf = NULL;
     size_t len = 0, cap = 0;
     for (;;) {

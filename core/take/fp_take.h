@@ -306,7 +306,8 @@ typedef struct fp_take_summary {
  *  A damaged tail is not an error: open succeeds, summary.cut is set and
  *  fp_take_reader_warning says "FILE: cut at byte N: reason". A damaged signature or header
  *  fails with -EBADMSG ("FILE: byte N: reason"); -ENOTSUP for another major version;
- *  -ENOENT/-EACCES/-EIO for the file. */
+ *  -ENOENT/-EACCES/-EIO for the file, -EISDIR (a folder), -ENXIO (a FIFO or device: refused
+ *  at once, never read from; fp_file_open_regular). */
 int fp_take_reader_open(const char *path, fp_take_reader **out, char *err, size_t errlen);
 
 /** The same from memory (`data`, n bytes, copied); `name` names it in messages. */

@@ -3,6 +3,7 @@
 #include "take_internal.h"
 
 #include "fp_error.h"
+#include "fp_file.h"
 
 #include <cjson/cJSON.h>
 #include <errno.h>
@@ -311,8 +312,9 @@ uint32_t fp_take_crc32_positions(const float *pos, size_t n)
 
 int fp_take_crc32_file(const char *path, uint32_t *out, char *err, size_t errlen)
 {
-    FILE *f = fopen(path, "rb");
-    if (!f) return fp_errorf(err, errlen, -errno, "%s: %s", path, strerror(errno));
+    int code;
+    FILE *f = fp_file_fopen_regular(path, &code); /* (a FIFO cannot hold it) */
+    if (!f) return fp_errorf(err, errlen, code, "%s: %s", path, fp_file_error_text(code));
     uLong crc = crc32(0L, Z_NULL, 0);
     unsigned char buf[65536];
     size_t n;

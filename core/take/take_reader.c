@@ -3,6 +3,7 @@
 #include "take_internal.h"
 
 #include "fp_error.h"
+#include "fp_file.h"
 
 #include <cjson/cJSON.h>
 #include <dirent.h>
@@ -319,13 +320,14 @@ int fp_take_reader_open(const char *path, fp_take_reader **out, char *err, size_
     if (!path) return fp_errorf(err, errlen, -EINVAL, "take: no file given");
     fp_take_reader *r = new_reader(path);
     if (!r) return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", path);
-    r->fd = open(path, O_RDONLY | O_CLOEXEC);
+    r->fd = fp_file_open_regular(path); /* a FIFO or a device cannot hold the open */
     struct stat st;
     int rc;
-    if (r->fd < 0 || fstat(r->fd, &st) < 0) {
+    if (r->fd < 0) {
+        rc = fp_errorf(err, errlen, r->fd, "%s: %s", path, fp_file_error_text(r->fd));
+        r->fd = -1;
+    } else if (fstat(r->fd, &st) < 0) {
         rc = fp_errorf(err, errlen, -errno, "%s: %s", path, strerror(errno));
-    } else if (!S_ISREG(st.st_mode)) {
-        rc = fp_errorf(err, errlen, -EINVAL, "%s: not a regular file", path);
     } else {
         r->size = (uint64_t)st.st_size;
         rc = open_common(r, err, errlen);

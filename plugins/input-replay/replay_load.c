@@ -8,6 +8,7 @@
 #include "replay_load.h"
 
 #include "fp_error.h"
+#include "fp_file.h"
 #include "fp_eventlog.h"
 #include "fp_hand.h"
 #include "leapcsv.h"
@@ -191,11 +192,9 @@ void replay_recording_free(replay_recording *rec)
 /* The first bytes of the file, NUL-terminated, to tell the formats apart. */
 static int read_head(loader *L, char *head, size_t len)
 {
-    FILE *f = fopen(L->path, "rb");
-    if (!f) {
-        int e = errno;
-        return fail(L, -e, 0, 0, "cannot open: %s", strerror(e));
-    }
+    int code;
+    FILE *f = fp_file_fopen_regular(L->path, &code); /* a FIFO or a device cannot hold it */
+    if (!f) return fail(L, code, 0, 0, "cannot open: %s", fp_file_error_text(code));
     size_t n = fread(head, 1, len - 1, f);
     int bad = ferror(f);
     fclose(f);

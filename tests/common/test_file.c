@@ -117,6 +117,91 @@ static void test_new_mode(void **state)
     umask(was);
 }
 
+/* fp_file_target: the file a save replaces. A new name or a regular file: itself; a link
+ * chain: its end (relative links beside the link, absolute ones as written, a dangling one's
+ * missing file); a folder, a FIFO: refused; a loop: -ELOOP. */
+static void test_target(void **state)
+{
+    (void)state;
+    char p[256], q[256], real[256];
+    snprintf(p, sizeof p, "%s/new.obj", dir);
+    assert_int_equal(fp_file_target(p, real, sizeof real), 0);
+    assert_string_equal(real, p);
+    snprintf(q, sizeof q, "%s/file.obj", dir);
+    FILE *f = fopen(q, "w");
+    assert_non_null(f);
+    fclose(f);
+    assert_int_equal(fp_file_target(q, real, sizeof real), 0);
+    assert_string_equal(real, q);
+    /* relative link -> link -> file */
+    snprintf(p, sizeof p, "%s/l1", dir);
+    assert_int_equal(symlink("file.obj", p), 0);
+    snprintf(p, sizeof p, "%s/l2", dir);
+    assert_int_equal(symlink("l1", p), 0);
+    assert_int_equal(fp_file_target(p, real, sizeof real), 0);
+    assert_string_equal(real, q);
+    /* absolute dangling link: its missing file */
+    snprintf(p, sizeof p, "%s/l3", dir);
+    snprintf(q, sizeof q, "%s/absent.obj", dir);
+    assert_int_equal(symlink(q, p), 0);
+    assert_int_equal(fp_file_target(p, real, sizeof real), 0);
+    assert_string_equal(real, q);
+    /* a folder, a FIFO (also through a link), a loop, too small a buffer */
+    assert_int_equal(fp_file_target(dir, real, sizeof real), -EISDIR);
+    snprintf(q, sizeof q, "%s/fifo", dir);
+    assert_int_equal(mkfifo(q, 0600), 0);
+    assert_int_equal(fp_file_target(q, real, sizeof real), -ENXIO);
+    snprintf(p, sizeof p, "%s/l4", dir);
+    assert_int_equal(symlink("fifo", p), 0);
+    assert_int_equal(fp_file_target(p, real, sizeof real), -ENXIO);
+    snprintf(p, sizeof p, "%s/loop", dir);
+    assert_int_equal(symlink("loop", p), 0);
+    assert_int_equal(fp_file_target(p, real, sizeof real), -ELOOP);
+    snprintf(p, sizeof p, "%s/file.obj", dir);
+    assert_int_equal(fp_file_target(p, real, 8), -ENAMETOOLONG);
+    assert_int_equal(fp_file_target(NULL, real, sizeof real), -EINVAL);
+    assert_non_null(strstr(fp_file_error_text(-ENXIO), "not a regular file"));
+    assert_non_null(strstr(fp_file_error_text(-EISDIR), "folder"));
+    static const char *made[] = {"l1", "l2", "l3", "l4", "loop", "fifo", "file.obj"};
+    for (size_t i = 0; i < sizeof made / sizeof made[0]; i++) {
+        snprintf(p, sizeof p, "%s/%s", dir, made[i]);
+        assert_int_equal(unlink(p), 0);
+    }
+}
+
+/* fp_file_open_regular: a file opens (blocking again); a FIFO with no writer is refused at
+ * once instead of holding the open (a blocking open would never return here); a folder too. */
+static void test_open_regular(void **state)
+{
+    (void)state;
+    char p[256];
+    snprintf(p, sizeof p, "%s/r.txt", dir);
+    FILE *f = fopen(p, "w");
+    assert_non_null(f);
+    fputs("abc", f);
+    fclose(f);
+    int fd = fp_file_open_regular(p);
+    assert_true(fd >= 0);
+    assert_int_equal(fcntl(fd, F_GETFL) & O_NONBLOCK, 0);
+    assert_true((fcntl(fd, F_GETFD) & FD_CLOEXEC) != 0);
+    char buf[4];
+    assert_int_equal(read(fd, buf, sizeof buf), 3);
+    close(fd);
+    int code = 0;
+    f = fp_file_fopen_regular(p, &code);
+    assert_non_null(f);
+    fclose(f);
+    assert_int_equal(unlink(p), 0);
+    assert_int_equal(fp_file_open_regular(p), -ENOENT);
+    assert_null(fp_file_fopen_regular(p, &code));
+    assert_int_equal(code, -ENOENT);
+    snprintf(p, sizeof p, "%s/fifo", dir);
+    assert_int_equal(mkfifo(p, 0600), 0);
+    assert_int_equal(fp_file_open_regular(p), -ENXIO);
+    assert_int_equal(unlink(p), 0);
+    assert_int_equal(fp_file_open_regular(dir), -EISDIR);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -124,6 +209,8 @@ int main(void)
         cmocka_unit_test(test_working_folder),
         cmocka_unit_test(test_errors),
         cmocka_unit_test(test_new_mode),
+        cmocka_unit_test(test_target),
+        cmocka_unit_test(test_open_regular),
     };
     return cmocka_run_group_tests(tests, make_dir, remove_dir);
 }

@@ -11,6 +11,9 @@
 #  4. FACEPUPPET_PLUGIN_PATH naming a world-writable folder that holds input-x.so: the
 #     folder is skipped with a warning naming it and "writable by others"; `monitor x` exits
 #     78; the same folder at 0755 is searched.
+#  5. a FIFO (and, as root, a device node) given as --out of run, pose and calibrate: 73 before
+#     the work, the FIFO kept; a symbolic link written through (the link kept); a FIFO given
+#     as an input (info, replay:, a take in `takes`' folder): refused at once, never waited on.
 # Run from the repository root by ctest (FP_BUILD_DIR, FP_SHARED_DATA).
 # SPDX-License-Identifier: GPL-3.0-or-later
 set -u
@@ -113,6 +116,53 @@ grep -q "input-x.so" "$tmp/list0777.out" && fail "plugins lists input-x.so from 
 grep -q "input-x.so" "$tmp/list0755.out" || fail "plugins does not list input-x.so from the same folder at 0755: $(cat "$tmp/list0755.out")"
 echo "4. world-writable plugin folder: monitor x exit $rc; stderr:"
 grep -m1 "writable" "$tmp/mon.err"
+
+# ---- 5. what is not a regular file: never replaced, never waited on -----------------------
+sp=$tmp/special
+mkdir -p "$sp/takes"
+mkfifo "$sp/fifo.obj" "$sp/fifo.json" "$sp/takes/x_T001.fptake"
+ict=$data/faces/ict-facekit/generic_neutral_mesh.obj
+for cmd in "run --quiet --mesh $ict --input replay:$rec,fast=1 --duration 0.2 --out $sp/fifo.obj" \
+           "pose --mesh $ict --set jaw.open=0.3 --out $sp/fifo.obj" \
+           "calibrate --input replay:$rec,fast=1 --out $sp/fifo.json"; do
+    timeout 60 "$fp" $cmd >/dev/null 2>"$tmp/sp.err"
+    rc=$?
+    [[ $rc == 73 ]] || fail "'$cmd' over a FIFO: exit $rc, expected 73: $(cat "$tmp/sp.err")"
+    grep -q "fifo.*not a regular file" "$tmp/sp.err" || fail "'$cmd': no message naming the FIFO: $(cat "$tmp/sp.err")"
+done
+[[ -p $sp/fifo.obj && -p $sp/fifo.json ]] || fail "a FIFO given as --out was replaced"
+if mknod "$sp/dev.obj" c 1 3 2>/dev/null; then # (root only: a device node, /dev/null's numbers)
+    "$fp" run --quiet --mesh "$ict" --input "replay:$rec,fast=1" --duration 0.2 --out "$sp/dev.obj" \
+        >/dev/null 2>&1
+    rc=$?
+    [[ $rc == 73 && -c $sp/dev.obj ]] || fail "--out over a device node: exit $rc, node kept: $([[ -c $sp/dev.obj ]] && echo yes || echo no)"
+    devnode="a device node kept (73)"
+else
+    devnode="no device node (not root)"
+fi
+# a symbolic link is written through: the link stays, its file (existing or not) is written
+echo old >"$sp/real.obj"
+ln -s real.obj "$sp/link.obj"
+ln -s new.obj "$sp/dangling.obj"
+for l in link dangling; do
+    "$fp" run --quiet --mesh "$ict" --input "replay:$rec,fast=1" --duration 0.2 --out "$sp/$l.obj" \
+        >/dev/null 2>"$tmp/sp.err" || fail "--out $l.obj: $(cat "$tmp/sp.err")"
+    [[ -L $sp/$l.obj ]] || fail "--out $l.obj replaced the symbolic link"
+done
+[[ $(vertices "$sp/real.obj") == 26719 ]] || fail "--out link.obj did not write real.obj"
+[[ $(vertices "$sp/new.obj") == 26719 ]] || fail "--out dangling.obj did not write new.obj"
+# inputs: a FIFO is refused at once (66), never opened for reading and waited on
+timeout 20 "$fp" info "$sp/fifo.obj" >/dev/null 2>&1
+rc=$?
+[[ $rc == 66 ]] || fail "info on a FIFO: exit $rc, expected 66 (124: it waited)"
+timeout 20 "$fp" run --quiet --mesh "$ict" --input "replay:$sp/fifo.json" --out "$sp/o.obj" >/dev/null 2>&1
+rc=$?
+[[ $rc == 66 ]] || fail "replay: of a FIFO: exit $rc, expected 66 (124: it waited)"
+timeout 20 "$fp" takes "$sp/takes" >"$tmp/takes.out" 2>&1
+rc=$?
+[[ $rc == 0 ]] && grep -q "not a regular file" "$tmp/takes.out" ||
+    fail "takes over a folder holding a FIFO: exit $rc (124: it waited): $(cat "$tmp/takes.out")"
+echo "5. FIFOs as --out of run, pose, calibrate: 73, kept; $devnode; links written through; FIFO inputs 66"
 
 if (( fails )); then echo "$fails failure(s)"; exit 1; fi
 echo "ok"

@@ -2,6 +2,7 @@
 
 #include "command.h"
 #include "fp_error.h"
+#include "fp_file.h"
 #include "fp_mesh.h"
 #include "fp_session_take.h"
 
@@ -175,4 +176,25 @@ void fp_app_log_line(void *user, int level, const char *source, const char *mess
     (void)user;
     if (level > FP_LOG_INFO && !getenv("FACEPUPPET_DEBUG")) return;
     fprintf(stderr, "facepuppet: %s: %s\n", source, message);
+}
+
+int fp_app_check_output(const char *cmd, const char *option, const char *path)
+{
+    char real[4096];
+    int rc = fp_file_target(path, real, sizeof real);
+    if (rc < 0) {
+        fprintf(stderr, "%s: %s %s: cannot replace it: %s\n", cmd, option, path, fp_file_error_text(rc));
+        return FP_EXIT_CANTCREAT;
+    }
+    const char *slash = strrchr(real, '/');
+    char dir[4096];
+    snprintf(dir, sizeof dir, "%.*s", slash ? (int)(slash - real) + 1 : 1, slash ? real : ".");
+    struct stat st;
+    errno = 0;
+    if (stat(dir, &st) || !S_ISDIR(st.st_mode) || access(dir, W_OK | X_OK)) {
+        fprintf(stderr, "%s: %s %s: cannot write in %s: %s\n", cmd, option, path, dir,
+                errno ? strerror(errno) : "not a folder");
+        return FP_EXIT_CANTCREAT;
+    }
+    return 0;
 }

@@ -60,6 +60,11 @@ typedef enum fp_app_io {
  *  MESSAGE" on stderr; FP_LOG_DEBUG lines only with FACEPUPPET_DEBUG set. user unused. */
 void fp_app_log_line(void *user, int level, const char *source, const char *message);
 
+/** An output file, checked before any work: what a save would replace (fp_file_target: a
+ *  folder, FIFO or device never is) and that its folder takes files. Returns 0, or an exit
+ *  status (73) with "CMD: OPTION PATH: REASON" printed. */
+int fp_app_check_output(const char *cmd, const char *option, const char *path);
+
 /** The one map from an error code (fp_error.h: 0, a negative errno or an FP_E* code) to the
  *  command's exit status (enum fp_exit, sysexits.h); every subcommand uses it, never the
  *  message text. The table (docs/architecture.md, "Errors"; `facepuppet --help`):

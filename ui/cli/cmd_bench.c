@@ -137,6 +137,16 @@ static int spawn_wait(char *const argv[], int in_fd, bool quiet)
     return WIFEXITED(st) ? WEXITSTATUS(st) : 128 + (WIFSIGNALED(st) ? WTERMSIG(st) : 0);
 }
 
+/* The file an output `path` replaces (fp_file_target: a link's end; never a folder, FIFO or
+ * device), into real. Returns 0 or a negative errno (a message printed). */
+static int output_target(const char *path, char *real, size_t n)
+{
+    int rc = fp_file_target(path, real, n);
+    if (rc < 0)
+        fprintf(stderr, "facepuppet bench: %s: cannot replace it: %s\n", path, fp_file_error_text(rc));
+    return rc == -EISDIR || rc == -ENXIO ? -EEXIST : rc; /* (73: an output) */
+}
+
 /* A temporary file beside path (so that the rename is atomic): .NAME.XXXXXX in its folder,
  * its name into tmp. Returns the descriptor, or a negative errno (a message printed). */
 static int temp_beside(const char *path, char *tmp, size_t len)
@@ -192,7 +202,10 @@ static int bench_plot(fp_bench_options *o, const char *png)
     }
     /* the temporary PNG beside the target (so the rename is atomic), made before the bench
      * runs so that an unwritable folder fails at once */
-    char tmp[4200];
+    char tmp[4200], png_real[4096];
+    if ((rc = output_target(png, png_real, sizeof png_real)) < 0)
+        return fp_app_exit_code(rc, FP_APP_OUTPUT);
+    png = png_real;
     int png_fd = temp_beside(png, tmp, sizeof tmp);
     if (png_fd < 0) return fp_app_exit_code(png_fd, FP_APP_OUTPUT);
     const char *tmpdir = getenv("TMPDIR");
@@ -311,9 +324,12 @@ static int bench_main(int argc, char **argv)
         return FP_EXIT_USAGE;
     }
     /* the trace's temporary file first, so that an unwritable folder fails before the work */
-    char tmp[4200] = "";
+    char tmp[4200] = "", trace_real[4096];
     int trace_fd = -1;
     if (trace) {
+        int tr = output_target(trace, trace_real, sizeof trace_real);
+        if (tr < 0) return fp_app_exit_code(tr, FP_APP_OUTPUT);
+        trace = trace_real;
         if ((trace_fd = temp_beside(trace, tmp, sizeof tmp)) < 0)
             return fp_app_exit_code(trace_fd, FP_APP_OUTPUT);
         if (!(o.trace = fdopen(trace_fd, "w"))) {

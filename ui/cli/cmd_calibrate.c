@@ -173,6 +173,8 @@ static int calibrate_main(int argc, char **argv)
         usage(stderr);
         return FP_EXIT_USAGE;
     }
+    int oc = fp_app_check_output("facepuppet calibrate", "--out", out);
+    if (oc) return oc;
     char demo[4096];
     if (!mesh_path) mesh_path = fp_app_data_path("faces/ict-facekit/generic_neutral_mesh.obj", demo, sizeof demo);
     char err[2048];
@@ -180,7 +182,7 @@ static int calibrate_main(int argc, char **argv)
     int rc = fp_app_load_mesh("facepuppet calibrate", false, mesh_path, &m, err, sizeof err);
     if (rc != FP_MESH_OK) {
         fprintf(stderr, "facepuppet calibrate: %s\n", err);
-        return rc == FP_MESH_ERR_IO ? FP_EXIT_NOINPUT : FP_EXIT_DATAERR;
+        return fp_app_exit_code(rc, FP_APP_INPUT);
     }
     fp_head head;
     if (fp_head_detect(m->positions, m->vertex_count, &head)) {

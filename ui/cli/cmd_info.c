@@ -2,6 +2,7 @@
 #define _GNU_SOURCE
 #include "app_util.h"
 #include "command.h"
+#include "fp_file.h"
 #include "fp_mesh.h"
 
 #include <getopt.h>
@@ -16,7 +17,8 @@ static bool is_take(const char *path)
     const char *dot = strrchr(path, '.');
     if (dot && !strcasecmp(dot, ".fptake")) return true;
     char sig[8] = "";
-    FILE *f = fopen(path, "rb");
+    int code;
+    FILE *f = fp_file_fopen_regular(path, &code); /* (a FIFO cannot hold it) */
     if (!f) return false;
     size_t n = fread(sig, 1, sizeof sig, f);
     fclose(f);

@@ -55,12 +55,14 @@ static int pose_main(int argc, char **argv)
         pose_usage(stderr);
         return FP_EXIT_USAGE;
     }
+    int oc = fp_app_check_output("facepuppet pose", "--out", out_path);
+    if (oc) return oc;
     char err[2048];
     fp_mesh *m = NULL;
     int rc = fp_app_load_mesh("facepuppet pose", false, mesh_path, &m, err, sizeof err);
     if (rc != FP_MESH_OK) {
         fprintf(stderr, "facepuppet pose: %s\n", err);
-        return rc == FP_MESH_ERR_IO ? FP_EXIT_NOINPUT : FP_EXIT_DATAERR;
+        return fp_app_exit_code(rc, FP_APP_INPUT);
     }
     char found[4096];
     if (!rig_path) {

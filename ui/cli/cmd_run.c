@@ -78,20 +78,7 @@ static int check_out(const char *out)
                 ".stl, .gltf or .glb)\n", out);
         return FP_EXIT_USAGE;
     }
-    char dir[4096];
-    snprintf(dir, sizeof dir, "%.*s", slash ? (int)(slash - out) + 1 : 1, slash ? out : ".");
-    struct stat st;
-    if (stat(dir, &st) || !S_ISDIR(st.st_mode) || access(dir, W_OK | X_OK)) {
-        fprintf(stderr, "facepuppet run: --out %s: cannot write in %s: %s\n", out, dir,
-                errno ? strerror(errno) : "not a folder");
-        return FP_EXIT_CANTCREAT;
-    }
-    if (!stat(out, &st) && (S_ISDIR(st.st_mode) || access(out, W_OK))) {
-        fprintf(stderr, "facepuppet run: --out %s: %s\n", out,
-                S_ISDIR(st.st_mode) ? "is a folder" : strerror(errno));
-        return FP_EXIT_CANTCREAT;
-    }
-    return 0;
+    return fp_app_check_output("facepuppet run", "--out", out);
 }
 
 static int run_main(int argc, char **argv)

@@ -42,7 +42,12 @@ int fp_png_write(const char *path, int w, int h, const unsigned char *rgb, int b
     if (!path || !rgb || w < 1 || h < 1)
         return fp_errorf(err, errlen, -EINVAL, "%s: cannot write the PNG: no image (%d x %d)",
                          path ? path : "(no path)", w, h);
-    char tmp[4200];
+    char tmp[4200], real[4096];
+    int tr = fp_file_target(path, real, sizeof real); /* a link's end; no folder or device */
+    if (tr < 0)
+        return fp_errorf(err, errlen, tr == -EISDIR || tr == -ENXIO ? -EEXIST : errno_code(-tr),
+                         "%s: cannot write the PNG: %s", path, fp_file_error_text(tr));
+    path = real;
     int fd = fp_file_temp_beside(path, "", tmp, sizeof tmp);
     if (fd < 0)
         return fp_errorf(err, errlen, errno_code(-fd), "%s: cannot write the PNG: %s", path,
