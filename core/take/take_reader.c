@@ -143,6 +143,7 @@ static int index_frames(fp_take_reader *r, uint64_t off, chunk_view *cv)
     size_t pos = 0, n = cv->length;
     uint32_t i = 0;
     size_t start = r->frames;
+    const fp_take_summary before = r->sum; /* (restored if this chunk is damaged) */
     for (; pos < n; i++) {
         uint64_t at = off + TAKE_CHUNK_HEAD_SIZE + pos;
         if (n - pos < 4) {
@@ -162,6 +163,25 @@ static int index_frames(fp_take_reader *r, uint64_t off, chunk_view *cv)
             cv->bad_at = at + bad_at;
             snprintf(cv->why, sizeof cv->why, "frame record at byte %" PRIu64 ": %s", at, why);
             goto bad;
+        }
+        {   /* frames in order: numbers and times never go back (a clock's jump or a patched
+             * record would play out of order, or end a replay early) */
+            const uint64_t fn = le_get64(cv->payload + pos + 8);
+            const int64_t t = (int64_t)le_get64(cv->payload + pos + 16);
+            if (r->frames > 0 && fn < r->sum.last_frame) {
+                cv->bad_at = at + 8;
+                snprintf(cv->why, sizeof cv->why,
+                         "frame record at byte %" PRIu64 ": frame %" PRIu64 " after frame %" PRIu64,
+                         at, fn, r->sum.last_frame);
+                goto bad;
+            }
+            if (r->frames > 0 && t < r->sum.last_time_ns) {
+                cv->bad_at = at + 16;
+                snprintf(cv->why, sizeof cv->why,
+                         "frame record at byte %" PRIu64 ": time %" PRId64 " ns goes back from %" PRId64,
+                         at, t, r->sum.last_time_ns);
+                goto bad;
+            }
         }
         if (r->frames == r->index_cap) {
             size_t c = r->index_cap ? 2 * r->index_cap : 1024;
@@ -191,7 +211,8 @@ static int index_frames(fp_take_reader *r, uint64_t off, chunk_view *cv)
     }
     return 0;
 bad:
-    r->frames = start;   /* none of a damaged chunk's frames are played */
+    r->frames = start;   /* none of a damaged chunk's frames are played, nor summed */
+    r->sum = before;
     return -EBADMSG;
 }
 

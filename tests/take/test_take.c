@@ -612,6 +612,68 @@ static void test_bad_files(void **state)
     rm_rf(dir);
 }
 
+/* A chunk's crc32 again after a patch (chunk at off: 16-byte head, payload, crc32). */
+static void rechunk(uint8_t *b, size_t off)
+{
+    uint32_t len;
+    memcpy(&len, b + off + 8, 4);
+    uint32_t crc = (uint32_t)crc32(0, b + off, 16 + len);
+    memcpy(b + off + 16 + len, &crc, 4);
+}
+
+/* Frames out of order (a patched or clock-jumped record, crc32 intact): the take is cut at the
+ * chunk that holds it, with the reason; the summary counts only the frames kept. */
+static void test_frames_out_of_order(void **state)
+{
+    (void)state;
+    char dir[512], path[1024], err[512];
+    make_dir(dir, sizeof dir, "order");
+    write_take(dir, "O", 9, 3, path, sizeof path); /* HEAD, 3 x FRMS(3), TAIL */
+    size_t n;
+    uint8_t *b = slurp(path, &n);
+    uint64_t starts[16];
+    uint32_t frames[16];
+    char types[16][5];
+    assert_int_equal(chunk_starts(b, n, starts, frames, types, 16), 5);
+    fp_take_reader *r;
+    assert_int_equal(fp_take_reader_open_memory(b, n, "o.fptake", &r, err, sizeof err), 0);
+    assert_int_equal(fp_take_reader_frames(r), 9);
+    fp_take_frame f;
+    assert_int_equal(fp_take_reader_read(r, 5, &f, err, sizeof err), 0);
+    const uint64_t fn6 = f.frame;
+    const int64_t t6 = f.time_ns;
+    fp_take_reader_close(&r);
+    static const struct { size_t field; const char *why; } cases[] = {
+        {16, "goes back"},  /* the 7th frame's time: INT64_MIN */
+        {8, "after frame"}, /* the 7th frame's number: the 6th's less one */
+    };
+    for (size_t c = 0; c < 2; c++) {
+        uint8_t *p = malloc(n);
+        memcpy(p, b, n);
+        uint8_t *rec = p + starts[3] + 16; /* the third FRMS chunk's first frame record */
+        if (cases[c].field == 16) {
+            int64_t t = INT64_MIN;
+            memcpy(rec + 16, &t, 8);
+        } else {
+            const uint64_t back = fn6 - 1;
+            memcpy(rec + 8, &back, 8);
+        }
+        rechunk(p, starts[3]);
+        assert_int_equal(fp_take_reader_open_memory(p, n, "o.fptake", &r, err, sizeof err), 0);
+        assert_int_equal(fp_take_reader_frames(r), 6);
+        if (!strstr(fp_take_reader_warning(r), cases[c].why))
+            fail_msg("case %zu: \"%s\"", c, fp_take_reader_warning(r));
+        const fp_take_summary *sm = fp_take_reader_summary(r);
+        assert_int_equal(sm->frames, 6);
+        assert_int_equal(sm->last_frame, fn6);
+        assert_int_equal(sm->last_time_ns, t6);
+        fp_take_reader_close(&r);
+        free(p);
+    }
+    free(b);
+    rm_rf(dir);
+}
+
 /* ---- numbering ---------------------------------------------------------------------- */
 
 static uint32_t record_one(const char *dir, const char *slate)
@@ -876,6 +938,7 @@ int main(void)
         cmocka_unit_test(test_recorder_drops),
         cmocka_unit_test(test_sigkill_mid_take),
         cmocka_unit_test(test_truncated_every_offset),
+        cmocka_unit_test(test_frames_out_of_order),
         cmocka_unit_test(test_random_flips),
         cmocka_unit_test(test_bad_files),
         cmocka_unit_test(test_numbering),

@@ -269,6 +269,13 @@ static int export_main(int argc, char **argv)
     float *held = NULL;
     const fp_take_header *h = fp_take_player_header(p);
     fp_take_reader *r = fp_take_player_reader(p);
+    if (!fp_take_reader_frames(r)) { /* nothing to export: an error, before any output */
+        fprintf(stderr, "facepuppet export: %s: no intact frame to export%s%s%s\n", take_path,
+                fp_take_reader_warning(r)[0] ? " (" : "", fp_take_reader_warning(r),
+                fp_take_reader_warning(r)[0] ? ")" : "");
+        status = FP_EXIT_DATAERR;
+        goto done;
+    }
     if (fp_take_reader_warning(r)[0])
         fprintf(stderr, "facepuppet export: warning: %s; exporting the %zu intact frames\n",
                 fp_take_reader_warning(r), fp_take_reader_frames(r));
@@ -407,8 +414,8 @@ static int export_main(int argc, char **argv)
             }
     }
     if (!started) {
-        fprintf(stderr, "facepuppet export: --range %s holds none of the take's %zu frames\n",
-                range ? range : "", total);
+        fprintf(stderr, "facepuppet export: %s%s%sholds none of the take's %zu frames\n",
+                range ? "--range " : "the take ", range ? range : "", range ? " " : "", total);
         status = FP_EXIT_USAGE;
         goto done;
     }
