@@ -386,10 +386,20 @@ static int reader_fail(fp_eventlog_reader *r, int code, long col, const char *fm
 
 fp_eventlog_reader *fp_eventlog_reader_open(const char *path, char *err, size_t errlen)
 {
+    return fp_eventlog_reader_open_code(path, NULL, err, errlen);
+}
+
+fp_eventlog_reader *fp_eventlog_reader_open_code(const char *path, int *code_out, char *err,
+                                                 size_t errlen)
+{
+    int dummy;
+    int *cd = code_out ? code_out : &dummy;
+    *cd = -EINVAL;
     if (!path) {
         put_msg(err, errlen, "(null): no path given");
         return NULL;
     }
+    *cd = -ENOMEM;
     fp_eventlog_reader *r = calloc(1, sizeof *r);
     if (r) r->path = strdup(path);
     if (r) r->c_locale = c_locale_new();
@@ -401,6 +411,7 @@ fp_eventlog_reader *fp_eventlog_reader_open(const char *path, char *err, size_t 
     int code;
     r->f = fp_file_fopen_regular(path, &code); /* a FIFO or a device cannot hold it */
     if (!r->f) {
+        *cd = code;
         put_msg(err, errlen, "%s: cannot open: %s", path, fp_file_error_text(code));
         fp_eventlog_reader_close(&r);
         return NULL;
@@ -408,10 +419,12 @@ fp_eventlog_reader *fp_eventlog_reader_open(const char *path, char *err, size_t 
     size_t len = 0;
     int rc = read_line(r, &len);
     if (rc < 0) {
+        *cd = -EIO;
         put_msg(err, errlen, "%s: cannot read: %s", path, strerror(errno));
         fp_eventlog_reader_close(&r);
         return NULL;
     }
+    *cd = -EBADMSG;
     const char *magic = "# " FP_EVENTLOG_MAGIC " ";
     size_t mlen = strlen(magic);
     if (rc == 0 || strncmp(r->line, magic, mlen) != 0) {
@@ -426,11 +439,13 @@ fp_eventlog_reader *fp_eventlog_reader_open(const char *path, char *err, size_t 
     long version = strtol(v, &end, 10);
     while (*end == ' ' || *end == '\t') end++;
     if (end == v || *end || errno || version != FP_EVENTLOG_VERSION) {
+        if (end != v && !*end && !errno) *cd = -ENOTSUP; /* a number, not this one */
         put_msg(err, errlen, "%s:1:%ld: unsupported event-log version \"%s\" (this reader "
                 "knows %d)", path, (long)mlen + 1, v, FP_EVENTLOG_VERSION);
         fp_eventlog_reader_close(&r);
         return NULL;
     }
+    *cd = 0;
     return r;
 }
 

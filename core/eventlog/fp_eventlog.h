@@ -101,6 +101,13 @@ typedef struct fp_eventlog_reader fp_eventlog_reader;
  *  Close it with fp_eventlog_reader_close. */
 fp_eventlog_reader *fp_eventlog_reader_open(const char *path, char *err, size_t errlen);
 
+/** fp_eventlog_reader_open, with the failure's code in *code (0 on success): -ENOMEM, the
+ *  open's (-ENOENT, -EACCES, -EISDIR a folder, -ENXIO a FIFO or device: fp_file_open_regular),
+ *  -EIO (a read failed), -EBADMSG (not an event log), -ENOTSUP (a version this code does not
+ *  read). code may be NULL. */
+fp_eventlog_reader *fp_eventlog_reader_open_code(const char *path, int *code, char *err,
+                                                 size_t errlen);
+
 /** Read the next event into *out (the whole union is zeroed first; header.size is the size
  *  of the type's struct, status text is NUL-padded).
  *  Returns 1 for an event, 0 at the end of the file, or a negative errno (fp_error.h)

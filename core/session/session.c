@@ -350,9 +350,10 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
         double d = s->view.bounds_max[i] - s->view.bounds_min[i];
         diag += d * d;
     }
-    if ((rc = fp_head_detect(s->loaded, s->n, &s->head))) {
+    if (fp_head_detect(s->loaded, s->n, &s->head)) {
         snprintf(err, errlen, "%s: cannot find a head in %zu vertices (flat or non-finite mesh)",
                  opt->mesh_path, s->n);
+        rc = -EBADMSG; /* the mesh's fault: bad input data (65), as calibrate says */
         goto fail;
     }
     if ((rc = attach_rig(s, opt, err, errlen))) goto fail;

@@ -307,7 +307,10 @@ static int open_port(const glove *g, char *err, size_t errlen)
     if (tcgetattr(fd, &t) != 0) {
         int e = errno;
         close(fd);
-        return fp_errorf(err, errlen, -e, "%s is not a serial port: %s", g->path, strerror(e));
+        /* (ENOTTY: a file or another device; -ENODEV: an input device that cannot be
+         * opened as one, exit 66) */
+        return fp_errorf(err, errlen, e == ENOTTY ? -ENODEV : -e, "%s is not a serial port: %s",
+                         g->path, strerror(e));
     }
     t.c_iflag &= ~(tcflag_t)(IGNBRK | BRKINT | PARMRK | ISTRIP | INLCR | IGNCR | ICRNL | IXON |
                              IXOFF | IXANY | INPCK);

@@ -64,6 +64,7 @@ typedef struct loader {
     int hands;
     replay_recording *rec;
     size_t cap;
+    size_t seen; /* events or rows read, whatever their hand */
     char *err;
     size_t errlen;
 } loader;
@@ -99,6 +100,7 @@ static int csv_row(void *user, const fp_leapcsv_row *row, char *err, size_t errl
     (void)err, (void)errlen; /* the loader's own buffer */
     loader *L = user;
     int hand = row->side;
+    L->seen++;
     if (!(L->hands & (1 << hand))) return 0; /* parsed for errors, not kept */
     int64_t t_ns = row->timestamp_us * 1000; /* made relative to the first kept item later */
     const double *v = row->value;
@@ -144,15 +146,16 @@ static int csv_row(void *user, const fp_leapcsv_row *row, char *err, size_t errl
 
 static int load_eventlog(loader *L)
 {
-    fp_eventlog_reader *r = fp_eventlog_reader_open(L->path, L->err, L->errlen);
-    if (!r) return -EINVAL;
+    int code;
+    fp_eventlog_reader *r = fp_eventlog_reader_open_code(L->path, &code, L->err, L->errlen);
+    if (!r) return code; /* (-EBADMSG, -ENOTSUP: 65; the file's own: 66) */
     fp_event ev;
     int rc, own = 0; /* own: rc is this loader's -errno, with its message in err */
     int64_t last = 0;
     int have = 0;
     while ((rc = fp_eventlog_reader_next(r, &ev)) == 1) {
         if (have && ev.header.time_ns < last) {
-            rc = fail(L, -EINVAL, fp_eventlog_reader_line(r), 1,
+            rc = fail(L, -EBADMSG, fp_eventlog_reader_line(r), 1,
                       "time %lld goes backwards (the event before has %lld)",
                       (long long)ev.header.time_ns, (long long)last);
             own = 1;
@@ -160,6 +163,7 @@ static int load_eventlog(loader *L)
         }
         last = ev.header.time_ns;
         have = 1;
+        L->seen++;
         if (ev.header.hand >= 0 && !(L->hands & (1 << ev.header.hand))) continue;
         replay_item *it = push_item(L);
         if (!it) {
@@ -206,7 +210,7 @@ static int read_head(loader *L, char *head, size_t len)
 int replay_load(const char *path, int hands, replay_recording *out, char *err, size_t errlen)
 {
     memset(out, 0, sizeof *out);
-    loader L = {path, hands, out, 0, err, errlen};
+    loader L = {.path = path, .hands = hands, .rec = out, .err = err, .errlen = errlen};
     static const char csv_lead[] = "frame,timestamp_us,hand_id,hand_type,";
     static const char log_lead[] = "# " FP_EVENTLOG_MAGIC;
     char head[64];
@@ -226,7 +230,9 @@ int replay_load(const char *path, int hands, replay_recording *out, char *err, s
                   "(header \"%s...\")", FP_EVENTLOG_MAGIC, csv_lead);
     }
     if (!rc && out->count == 0)
-        rc = fail(&L, -EINVAL, 0, 0, "no events to replay (hands=%s)", fp_hands_name((unsigned)hands));
+        rc = L.seen ? fail(&L, -EINVAL, 0, 0, "no events to replay (hands=%s)", /* the option's */
+                           fp_hands_name((unsigned)hands))
+                    : fail(&L, -EBADMSG, 0, 0, "the recording holds no events");
     if (rc) {
         replay_recording_free(out);
         return rc;

@@ -251,6 +251,18 @@ static void test_refused_up_front(void **state)
     assert_non_null(strstr(out, "mm_per_unit"));
     snprintf(args, sizeof args, "run --mesh %s %s --calibration missing-cal.json", face(), rec);
     assert_int_equal(fp(args), 66);
+    /* Each by its kind, whatever the command: a folder as an input 66; a flat mesh is bad
+     * data 65 (as calibrate says); an output mesh without a known extension is usage 64. */
+    snprintf(args, sizeof args, "run --mesh %s %s --calibration .", face(), rec);
+    assert_int_equal(fp(args), 66);
+    assert_non_null(strstr(out, "folder"));
+    write_file("flat.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    snprintf(args, sizeof args, "run --mesh flat.obj %s --out f.obj", rec);
+    assert_int_equal(fp(args), 65);
+    assert_non_null(strstr(out, "cannot find a head"));
+    snprintf(args, sizeof args, "pose --mesh %s --set jaw.open=0.2 --out noext", face());
+    assert_int_equal(fp(args), 64);
+    assert_non_null(strstr(out, "noext"));
     /* A good one and --mm-per-unit: the scale line says where the scale came from. */
     write_file("cal.json", "{\"mm_per_unit\": 10, \"offset\": [0, 0, 5]}\n");
     snprintf(args, sizeof args, "run --mesh %s %s --calibration cal.json --out c.obj", face(), rec);

@@ -762,6 +762,40 @@ static void eventlog_replays_as_recorded(void **state)
     expect_create_error(path, NULL, 8, 35, "line ends where a quaternion component was expected");
 }
 
+/* Event logs that are bad data give bad-data codes (exit 65), each naming the file and line:
+ * another version -ENOTSUP, time going back -EBADMSG, a header with no events -EBADMSG; a
+ * hands= choice that leaves nothing stays the option's fault (-EINVAL, as for a CSV). */
+static void eventlog_bad_data_codes(void **state)
+{
+    (void)state;
+    static const struct { const char *name, *text; int code; const char *want; } cases[] = {
+        {"v2.log", "# facepuppet-eventlog 2\n", -ENOTSUP, "v2.log:1:23: unsupported event-log version"},
+        {"back.log",
+         "# facepuppet-eventlog 1\n"
+         "2000 button - 1 1 1\n"
+         "1000 button - 1 0 0\n",
+         -EBADMSG, "back.log:3:1: time 1000 goes backwards"},
+        {"empty.log", "# facepuppet-eventlog 1\n", -EBADMSG, "the recording holds no events"},
+        {"none.log", "# facepuppet-eventlog 1\n2000 wrist left 1 2 3 1 0 0 0\n", -EINVAL,
+         "no events to replay (hands=right)"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        char path[600];
+        snprintf(path, sizeof path, "%s/%s", tmpdir, cases[i].name);
+        fp_test_write_file(path, cases[i].text);
+        fp_test_host *h = fp_test_host_new(4);
+        fp_input *in = NULL;
+        char err[1024];
+        int rc = create(h, path, i == 3 ? "hands=right" : NULL, &in, err, sizeof err);
+        if (rc != cases[i].code || !strstr(err, cases[i].want))
+            fail_msg("%s: %d \"%s\", expected %d \"%s\"", cases[i].name, rc, err, cases[i].code,
+                     cases[i].want);
+        assert_null(in);
+        fp_test_host_free(h);
+        unlink(path);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -779,6 +813,7 @@ int main(void)
         cmocka_unit_test(truncated_file_replays_to_last_full_row),
         cmocka_unit_test(spec_errors),
         cmocka_unit_test(eventlog_replays_as_recorded),
+        cmocka_unit_test(eventlog_bad_data_codes),
     };
     return cmocka_run_group_tests(tests, group_setup, group_teardown);
 }

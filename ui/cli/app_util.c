@@ -11,6 +11,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <unistd.h>
 #include <sys/stat.h>
 
@@ -197,4 +198,17 @@ int fp_app_check_output(const char *cmd, const char *option, const char *path)
         return FP_EXIT_CANTCREAT;
     }
     return 0;
+}
+
+int fp_app_check_mesh_name(const char *cmd, const char *option, const char *path)
+{
+    static const char *exts[] = {".obj", ".ply", ".off", ".stl", ".gltf", ".glb"};
+    const char *dot = strrchr(path, '.'), *slash = strrchr(path, '/');
+    bool known = false;
+    for (size_t i = 0; dot && (!slash || dot > slash) && i < sizeof exts / sizeof exts[0]; i++)
+        known |= !strcasecmp(dot, exts[i]);
+    if (known) return 0;
+    fprintf(stderr, "%s: %s %s: unknown mesh format (give .obj, .ply, .off, .stl, .gltf or .glb)\n",
+            cmd, option, path);
+    return FP_EXIT_USAGE;
 }

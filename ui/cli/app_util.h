@@ -60,6 +60,11 @@ typedef enum fp_app_io {
  *  MESSAGE" on stderr; FP_LOG_DEBUG lines only with FACEPUPPET_DEBUG set. user unused. */
 void fp_app_log_line(void *user, int level, const char *source, const char *message);
 
+/** An output mesh's name: an extension the mesh writer knows (.obj .ply .off .stl .gltf .glb,
+ *  any case). Returns 0, or 64 (usage) with "CMD: OPTION PATH: unknown mesh format ..."
+ *  printed. */
+int fp_app_check_mesh_name(const char *cmd, const char *option, const char *path);
+
 /** An output file, checked before any work: what a save would replace (fp_file_target: a
  *  folder, FIFO or device never is) and that its folder takes files. Returns 0, or an exit
  *  status (73) with "CMD: OPTION PATH: REASON" printed. */

@@ -17,6 +17,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -313,6 +314,15 @@ static int export_main(int argc, char **argv)
             snprintf(def_out, sizeof def_out, "%.*s.%s", stem, take_path,
                      fp_export_format_extension(fmt));
         out = def_out;
+    }
+    if (fmt == FP_EXPORT_GLTF || fmt == FP_EXPORT_GLB) { /* the mesh writer goes by the name */
+        const char *dot = strrchr(out, '.'), *slash = strrchr(out, '/');
+        if (!dot || (slash && dot < slash) || strcasecmp(dot + 1, fp_export_format_extension(fmt))) {
+            fprintf(stderr, "facepuppet export: --out %s: give a name ending .%s for --format %s\n",
+                    out, fp_export_format_extension(fmt), fp_export_format_extension(fmt));
+            status = FP_EXIT_USAGE;
+            goto done;
+        }
     }
     const double mm_per_unit = fp_take_player_mm_per_unit(p);
     fp_session *s = fp_take_player_session(p);

@@ -55,7 +55,8 @@ static int pose_main(int argc, char **argv)
         pose_usage(stderr);
         return FP_EXIT_USAGE;
     }
-    int oc = fp_app_check_output("facepuppet pose", "--out", out_path);
+    int oc = fp_app_check_mesh_name("facepuppet pose", "--out", out_path);
+    if (!oc) oc = fp_app_check_output("facepuppet pose", "--out", out_path);
     if (oc) return oc;
     char err[2048];
     fp_mesh *m = NULL;

@@ -68,16 +68,8 @@ static void sleep_until(int64_t t_ns)
  * Returns 0 or the exit status (64 unknown extension, 73 folder missing or not writable). */
 static int check_out(const char *out)
 {
-    static const char *exts[] = {".obj", ".ply", ".off", ".stl", ".gltf", ".glb"};
-    const char *dot = strrchr(out, '.'), *slash = strrchr(out, '/');
-    bool known = false;
-    for (size_t i = 0; dot && (!slash || dot > slash) && i < sizeof exts / sizeof exts[0]; i++)
-        known |= !strcasecmp(dot, exts[i]);
-    if (!known) {
-        fprintf(stderr, "facepuppet run: --out %s: unknown mesh format (give .obj, .ply, .off, "
-                ".stl, .gltf or .glb)\n", out);
-        return FP_EXIT_USAGE;
-    }
+    int rc = fp_app_check_mesh_name("facepuppet run", "--out", out);
+    if (rc) return rc;
     return fp_app_check_output("facepuppet run", "--out", out);
 }
 
