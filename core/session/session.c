@@ -370,6 +370,26 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
         s->head.method = FP_HEAD_GIVEN;
         snprintf(s->head.how, sizeof s->head.how, "from the rig %s", fp_rig_source(s->rig.rig));
     }
+    if (opt->radius > 0 && opt->radius < 1e-6 * sqrt(diag)) {
+        rc = -EINVAL;
+        snprintf(err, errlen, "--radius %g is below a millionth of the mesh's bounding-box "
+                 "diagonal (%.4g mesh units): no vertex would move; give a radius in mesh units",
+                 opt->radius, sqrt(diag));
+        goto fail;
+    }
+    {   /* a given scale that makes the face under a millimetre or over a kilometre across is
+         * a slip (mm per unit for units per mm, a unit's power of ten): no hand would reach it */
+        const double across_mm = sqrt(diag) * s->head.mm_per_unit;
+        if ((opt->mm_per_unit > 0 || (opt->calibration && opt->calibration->scale > 0)) &&
+            !(across_mm >= 1.0 && across_mm <= 1e6)) {
+            rc = -EINVAL;
+            snprintf(err, errlen, "%s: %g mm per mesh unit makes the face %.3g mm across "
+                     "(its diagonal %.4g mesh units); give millimetres per mesh unit",
+                     opt->mm_per_unit > 0 ? "--mm-per-unit" : "the calibration's scale",
+                     s->head.mm_per_unit, across_mm, sqrt(diag));
+            goto fail;
+        }
+    }
     if (opt->radius > 10 * sqrt(diag)) {
         rc = -EINVAL;
         snprintf(err, errlen, "--radius %g is beyond 10x the mesh's bounding-box diagonal (%.4g "

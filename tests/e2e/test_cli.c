@@ -263,6 +263,17 @@ static void test_refused_up_front(void **state)
     snprintf(args, sizeof args, "pose --mesh %s --set jaw.open=0.2 --out noext", face());
     assert_int_equal(fp(args), 64);
     assert_non_null(strstr(out, "noext"));
+    /* Numbers that would wrap or make nothing move: usage errors naming the option (a
+     * --duration of 9.3e9 s wrapped the nanoseconds around and stopped after one frame) */
+    static const char *const silly[] = {"--duration 9.3e9", "--radius 1e-300", "--mm-per-unit 1e300",
+                                        "--mm-per-unit 1e-300"};
+    for (size_t i = 0; i < sizeof silly / sizeof silly[0]; i++) {
+        snprintf(args, sizeof args, "run --mesh %s %s %s --out s.obj", face(), rec, silly[i]);
+        assert_int_equal(fp(args), 64);
+        char opt[32];
+        snprintf(opt, sizeof opt, "%.*s", (int)strcspn(silly[i], " "), silly[i]);
+        if (!strstr(out, opt)) fail_msg("%s: \"%s\"", silly[i], out);
+    }
     /* A good one and --mm-per-unit: the scale line says where the scale came from. */
     write_file("cal.json", "{\"mm_per_unit\": 10, \"offset\": [0, 0, 5]}\n");
     snprintf(args, sizeof args, "run --mesh %s %s --calibration cal.json --out c.obj", face(), rec);

@@ -60,6 +60,10 @@ typedef enum fp_app_io {
  *  MESSAGE" on stderr; FP_LOG_DEBUG lines only with FACEPUPPET_DEBUG set. user unused. */
 void fp_app_log_line(void *user, int level, const char *source, const char *message);
 
+/** The longest --duration a command takes, seconds (116 days: its nanoseconds fit an
+ *  int64 with room; 9.3e9 s wrapped around and stopped after one frame). */
+#define FP_APP_MAX_DURATION_S 1e7
+
 /** An output mesh's name: an extension the mesh writer knows (.obj .ply .off .stl .gltf .glb,
  *  any case). Returns 0, or 64 (usage) with "CMD: OPTION PATH: unknown mesh format ..."
  *  printed. */

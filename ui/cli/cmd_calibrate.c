@@ -154,8 +154,9 @@ static int calibrate_main(int argc, char **argv)
             break;
         case 'd':
             duration = strtod(optarg, &end);
-            if (*end || !(duration > 0)) {
-                fprintf(stderr, "facepuppet calibrate: --duration must be > 0 s, got '%s'\n", optarg);
+            if (end == optarg || *end || !(duration > 0 && duration < FP_APP_MAX_DURATION_S)) {
+                fprintf(stderr, "facepuppet calibrate: --duration must be > 0 s and under 1e7, got "
+                        "'%s'\n", optarg);
                 return FP_EXIT_USAGE;
             }
             break;

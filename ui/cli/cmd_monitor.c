@@ -3,6 +3,7 @@
 #include "app_util.h"
 #include "command.h"
 
+#include <errno.h>
 #include <getopt.h>
 #include <inttypes.h>
 #include <signal.h>
@@ -106,8 +107,27 @@ static int monitor_main(int argc, char **argv)
     optind = 1;
     for (int c; (c = getopt_long(argc, argv, "n:d:h", opts, NULL)) != -1;) {
         switch (c) {
-        case 'n': count = atoll(optarg); break;
-        case 'd': duration = atof(optarg); break;
+        case 'n': {
+            char *end;
+            errno = 0;
+            count = strtoll(optarg, &end, 10);
+            if (end == optarg || *end || errno || count < 1) {
+                fprintf(stderr, "facepuppet monitor: --count must be a whole number > 0, got '%s'\n",
+                        optarg);
+                return FP_EXIT_USAGE;
+            }
+            break;
+        }
+        case 'd': {
+            char *end;
+            duration = strtod(optarg, &end);
+            if (end == optarg || *end || !(duration > 0 && duration < FP_APP_MAX_DURATION_S)) {
+                fprintf(stderr, "facepuppet monitor: --duration must be > 0 seconds and under "
+                                "1e7, got '%s'\n", optarg);
+                return FP_EXIT_USAGE;
+            }
+            break;
+        }
         case 'P': if (ndirs < 8) dirs[ndirs++] = optarg; break;
         case 'h': usage(stdout); return FP_EXIT_OK;
         default: usage(stderr); return FP_EXIT_USAGE;

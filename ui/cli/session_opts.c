@@ -1,6 +1,7 @@
 /* The options `run` and `live` share: one table for getopt, parsing and --help. */
 #define _GNU_SOURCE
 #include "session_opts.h"
+#include "app_util.h"
 
 #include "command.h"
 #include "fp_rig.h"
@@ -91,8 +92,8 @@ int fp_session_opts_parse(fp_session_opts *o, int c, const char *arg, const char
     case 's':
         return number(arg, 0, INFINITY, &o->speed) ? 1 : bad(cmd, "--speed must be a number > 0", arg);
     case OPT_DURATION:
-        return number(arg, 0, INFINITY, &o->duration_s) ? 1
-               : bad(cmd, "--duration must be > 0 seconds", arg);
+        return number(arg, 0, FP_APP_MAX_DURATION_S, &o->duration_s) ? 1
+               : bad(cmd, "--duration must be > 0 seconds and under 1e7 (116 days)", arg);
     case OPT_HAND_SIZE:
         return number(arg, 0.3, 3, &so->hand_size) ? 1 : bad(cmd, "--hand-size must be in 0.3..3", arg);
     case OPT_PLUGIN_DIR:
