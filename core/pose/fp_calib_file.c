@@ -7,6 +7,7 @@
 
 #include <cJSON.h>
 #include <errno.h>
+#include <stdbool.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -67,12 +68,48 @@ int fp_calibration_load(const char *path, fp_calibration *out, char *err, size_t
     text[len] = 0;
     cJSON *root = cJSON_ParseWithLength(text, len);
     int rc = 0;
-    if (!root || !cJSON_IsObject(root)) {
-        long line = 1;
-        const char *at = root ? text : cJSON_GetErrorPtr();
-        for (const char *p = text; at && p < at && *p; p++) line += *p == '\n';
-        rc = fp_errorf(err, errlen, -EBADMSG, "%s:%ld: not a JSON object", path, line);
+    if (!root) { /* where the parse stopped, as line:column */
+        long line = 1, col = 1;
+        const char *at = cJSON_GetErrorPtr();
+        if (!(at >= text && at <= text + len)) at = text;
+        for (const char *p = text; p < at; p++) {
+            if (*p == '\n') line++, col = 1;
+            else col++;
+        }
+        rc = fp_errorf(err, errlen, -EBADMSG, "%s:%ld:%ld: not valid JSON%s", path, line, col,
+                       at == text + len ? " (it ends too soon)" : "");
         goto done;
+    }
+    if (!cJSON_IsObject(root)) {
+        rc = fp_errorf(err, errlen, -EBADMSG, "%s:1: not a JSON object (a calibration is one)", path);
+        goto done;
+    }
+    /* every field known, once: a misspelt "rotaton" would otherwise be ignored in silence */
+    static const char *const known[] = {"comment", "mm_per_unit", "scale", "rotation", "offset",
+                                        "left", "right"};
+    for (const cJSON *a = root->child; a; a = a->next) {
+        bool ok = false;
+        for (size_t i = 0; i < sizeof known / sizeof known[0]; i++) ok |= !strcmp(a->string, known[i]);
+        if (!ok) {
+            rc = fp_errorf(err, errlen, -EBADMSG, "%s: unknown field \"%s\" (comment, mm_per_unit "
+                           "or scale, rotation, offset, left, right)", path, a->string);
+            goto done;
+        }
+        for (const cJSON *b = root->child; b != a; b = b->next)
+            if (!strcmp(a->string, b->string)) {
+                rc = fp_errorf(err, errlen, -EBADMSG, "%s: field %s given twice", path, a->string);
+                goto done;
+            }
+    }
+    for (int h = 0; h < 2; h++) { /* left and right hold an offset only */
+        const cJSON *o = cJSON_GetObjectItemCaseSensitive(root, h ? "right" : "left");
+        for (const cJSON *a = o && cJSON_IsObject(o) ? o->child : NULL; a; a = a->next)
+            if (strcmp(a->string, "offset") || a != o->child) {
+                rc = fp_errorf(err, errlen, -EBADMSG, "%s: field %s.%s: %s", path,
+                               h ? "right" : "left", a->string,
+                               strcmp(a->string, "offset") ? "unknown (only offset)" : "given twice");
+                goto done;
+            }
     }
     fp_calibration c;
     memset(&c, 0, sizeof c);

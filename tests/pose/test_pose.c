@@ -229,7 +229,12 @@ static void test_calibration_file(void **state)
         {"{\"scale\": 0.1, \"rotation\": [1, 0, 0]}", "rotation", -EBADMSG},
         {"{\"scale\": 0.1, \"right\": {\"offset\": [1, \"a\", 0]}}", "right.offset[1]", -EBADMSG},
         {"{\"scale\": 0.1, \"rotation\": [0, 0, 0, 0]}", "rotation", -ERANGE},
-        {"not json", "not a JSON object", -EBADMSG},
+        {"not json", "not valid JSON", -EBADMSG},
+        {"{\"scale\": 0.1,\n \"rotation\": [1, 0, 0, 0]", ":2:", -EBADMSG}, /* cut: the line */
+        {"[1, 2]", "not a JSON object", -EBADMSG},
+        {"{\"scale\": 0.1, \"rotaton\": [1, 0, 0, 0]}", "unknown field \"rotaton\"", -EBADMSG},
+        {"{\"scale\": 0.1, \"offset\": [0, 0, 0], \"offset\": [1, 1, 1]}", "offset given twice", -EBADMSG},
+        {"{\"scale\": 0.1, \"left\": {\"offst\": [0, 0, 0]}}", "left.offst", -EBADMSG},
     };
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         FILE *f = fopen(path, "w");
