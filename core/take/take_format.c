@@ -3,6 +3,7 @@
 #include "take_internal.h"
 
 #include "fp_error.h"
+#include "fp_text.h"
 #include "fp_file.h"
 
 #include <cjson/cJSON.h>
@@ -372,6 +373,9 @@ int take_header_check(const fp_take_header *h, char *err, size_t errlen)
             return fp_errorf(err, errlen, -EINVAL, "take header: input %zu is NULL", i);
     if (h->rating < 0 || h->rating > 5)
         return fp_errorf(err, errlen, -EINVAL, "take header: rating %d not in 0..5", h->rating);
+    if (!fp_text_ok(h->description, true)) /* (stored in the header's JSON, shown by info) */
+        return fp_errorf(err, errlen, -EINVAL, "take header: the description is not UTF-8 text "
+                         "without control characters (tabs and line breaks allowed)");
     if (!isfinite(h->radius) || h->radius < 0)
         return fp_errorf(err, errlen, -EINVAL, "take header: radius not finite and >= 0");
     for (int k = 0; k < FP_HANDS; k++) {

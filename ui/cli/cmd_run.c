@@ -1,6 +1,7 @@
 /* facepuppet run: a headless session (the main job). */
 #define _GNU_SOURCE
 #include "app_util.h"
+#include "fp_text.h"
 #include "command.h"
 #include "fp_session.h"
 #include "fp_session_take.h"
@@ -112,7 +113,14 @@ static int run_main(int argc, char **argv)
             break;
         case OPT_TAKE_DIR: take_dir = optarg; break;
         case OPT_SLATE: slate = optarg; break;
-        case OPT_TAKE_DESC: take_desc = optarg; break;
+        case OPT_TAKE_DESC:
+            if (!fp_text_ok(optarg, true)) {
+                fprintf(stderr, "facepuppet run: --take-description must be UTF-8 text without "
+                                "control characters (tabs and line breaks allowed)\n");
+                return FP_EXIT_USAGE;
+            }
+            take_desc = optarg;
+            break;
         case OPT_EXPORT: export_file = optarg; break;
         case OPT_BUDGET:
             so.mapping_budget_ms = strtod(optarg, &end);

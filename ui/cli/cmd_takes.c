@@ -6,6 +6,7 @@
 #include "fp_take.h"
 
 #include <cjson/cJSON.h>
+#include "fp_text.h"
 #include <errno.h>
 #include <getopt.h>
 #include <stdio.h>
@@ -40,12 +41,18 @@ static void print_table(const fp_take_info *v, size_t n)
         }
         if (t->rating) snprintf(rate, sizeof rate, "%d/5", t->rating);
         const char *mesh = strrchr(t->mesh, '/') ? strrchr(t->mesh, '/') + 1 : t->mesh;
+        char cm[1024], cp[256]; /* shown as UTF-8 text: a terminal obeys no byte of a file */
+        fp_text_clean(mesh, cm, sizeof cm);
+        fp_text_clean(t->mapping, cp, sizeof cp);
         printf("%-16s %4u  %-11s  %-11s  %8.2fs  %7llu  %-6s  %-10s  %-28.28s  %s\n", t->slate,
                t->take, in, out, t->duration_s, (unsigned long long)t->frames, rate,
-               t->mapping[0] ? t->mapping : "-", mesh[0] ? mesh : "-", state_of(t));
+               cp[0] ? cp : "-", cm[0] ? cm : "-", state_of(t));
     }
     for (size_t i = 0; i < n; i++)
-        if (v[i].message[0]) printf("  %s_T%03u: %s\n", v[i].slate, v[i].take, v[i].message);
+        if (v[i].message[0]) {
+            char cmsg[1024];
+            printf("  %s_T%03u: %s\n", v[i].slate, v[i].take, fp_text_clean(v[i].message, cmsg, sizeof cmsg));
+        }
 }
 
 static int print_json(const fp_take_info *v, size_t n)
@@ -54,13 +61,13 @@ static int print_json(const fp_take_info *v, size_t n)
     for (size_t i = 0; arr && i < n; i++) {
         const fp_take_info *t = &v[i];
         cJSON *o = cJSON_CreateObject();
-        char in[32] = "", out[32] = "";
+        char in[32] = "", out[32] = "", c[4 * 4096]; /* c: a string made UTF-8 text (fp_text.h) */
         if (!t->error) {
             fp_timecode_format(&t->timecode_in, in, sizeof in);
             fp_timecode_format(&t->timecode_out, out, sizeof out);
         }
-        cJSON_AddStringToObject(o, "path", t->path);
-        cJSON_AddStringToObject(o, "slate", t->slate);
+        cJSON_AddStringToObject(o, "path", fp_text_clean(t->path, c, sizeof c));
+        cJSON_AddStringToObject(o, "slate", fp_text_clean(t->slate, c, sizeof c));
         cJSON_AddNumberToObject(o, "take", t->take);
         cJSON_AddStringToObject(o, "timecode_in", in);
         cJSON_AddStringToObject(o, "timecode_out", out);
@@ -69,12 +76,12 @@ static int print_json(const fp_take_info *v, size_t n)
         char rate[32];
         snprintf(rate, sizeof rate, "%u/%u", t->rate.num, t->rate.den);
         cJSON_AddStringToObject(o, "frame_rate", t->error ? "" : rate);
-        cJSON_AddStringToObject(o, "mesh", t->mesh);
-        cJSON_AddStringToObject(o, "mapping", t->mapping);
+        cJSON_AddStringToObject(o, "mesh", fp_text_clean(t->mesh, c, sizeof c));
+        cJSON_AddStringToObject(o, "mapping", fp_text_clean(t->mapping, c, sizeof c));
         cJSON_AddNumberToObject(o, "rating", t->rating);
-        cJSON_AddStringToObject(o, "date", t->date);
+        cJSON_AddStringToObject(o, "date", fp_text_clean(t->date, c, sizeof c));
         cJSON_AddStringToObject(o, "state", state_of(t));
-        cJSON_AddStringToObject(o, "message", t->message);
+        cJSON_AddStringToObject(o, "message", fp_text_clean(t->message, c, sizeof c));
         cJSON_AddItemToArray(arr, o);
     }
     char *text = arr ? cJSON_Print(arr) : NULL;
@@ -135,32 +142,36 @@ int fp_app_take_info(const char *path)
     }
     const fp_take_header *h = fp_take_reader_header(r);
     const fp_take_summary *s = fp_take_reader_summary(r);
-    char in[32], out[32];
+    char in[32], out[32], a[4096], b[4096]; /* a, b: the file's strings made UTF-8 text */
     fp_timecode_format(&h->timecode_in, in, sizeof in);
     fp_timecode_format(&s->timecode_out, out, sizeof out);
     printf("%s\n  format       facepuppet take %u.%u\n  slate        %s\n  take         %u\n"
            "  date         %s\n  frame rate   %u/%u (%.3f fps)\n  timecode     %s - %s\n"
            "  frames       %llu (session frames %llu..%llu)\n  duration     %.3f s\n",
-           path, s->version_major, s->version_minor, h->slate, h->take, h->date,
+           path, s->version_major, s->version_minor, h->slate, h->take, fp_text_clean(h->date, a, sizeof a),
            h->rate.num, h->rate.den, (double)h->rate.num / h->rate.den, in, out,
            (unsigned long long)s->frames, (unsigned long long)s->first_frame,
            (unsigned long long)s->last_frame, s->duration_s);
     printf("  mesh         %s (%llu vertices, crc32 %08x of its %s)\n",
-           h->mesh_path ? h->mesh_path : "-", (unsigned long long)h->mesh_vertices, h->mesh_crc32,
-           h->mesh_crc_of ? h->mesh_crc_of : "?");
-    printf("  rig          %s\n  mapping      %s", h->rig_path ? h->rig_path : "-",
-           h->mapping ? h->mapping : "-");
+           h->mesh_path ? fp_text_clean(h->mesh_path, a, sizeof a) : "-",
+           (unsigned long long)h->mesh_vertices, h->mesh_crc32,
+           h->mesh_crc_of ? fp_text_clean(h->mesh_crc_of, b, sizeof b) : "?");
+    printf("  rig          %s\n", h->rig_path ? fp_text_clean(h->rig_path, a, sizeof a) : "-");
+    printf("  mapping      %s", h->mapping ? fp_text_clean(h->mapping, a, sizeof a) : "-");
     for (size_t i = 0; i < h->mapping_key_count; i++)
-        printf(",%s=%s", h->mapping_keys[i].key, h->mapping_keys[i].value);
+        printf(",%s=%s", fp_text_clean(h->mapping_keys[i].key, a, sizeof a),
+               fp_text_clean(h->mapping_keys[i].value, b, sizeof b));
     printf("\n  radius       %.6g mesh units\n", h->radius);
-    for (size_t i = 0; i < h->input_count; i++) printf("  input %-6zu %s\n", i, h->inputs[i]);
+    for (size_t i = 0; i < h->input_count; i++)
+        printf("  input %-6zu %s\n", i, fp_text_clean(h->inputs[i], a, sizeof a));
     for (int hand = 0; hand < FP_HANDS; hand++) {
         const fp_take_calibration *c = &h->calibration[hand];
         if (c->present)
             printf("  calibration  %s: scale %.6g mesh units/mm, offset %.6g %.6g %.6g\n",
                    hand ? "right" : "left", c->scale, c->offset[0], c->offset[1], c->offset[2]);
     }
-    if (h->description && h->description[0]) printf("  description  %s\n", h->description);
+    if (h->description && h->description[0])
+        printf("  description  %s\n", fp_text_clean(h->description, a, sizeof a));
     printf("  rating       %d/5\n", h->rating);
     printf("  end          %s", s->complete ? "closed normally" : "no end chunk (not closed)");
     if (s->complete) printf(", %llu dropped, status %d%s%s", (unsigned long long)s->dropped,

@@ -1,0 +1,32 @@
+/*
+ * fp_text.h: text from outside (a take's description, names from a folder, header strings of
+ * a file someone else wrote) checked or made safe before it is stored or shown: well-formed
+ * UTF-8 (no overlong forms, no surrogates, nothing past U+10FFFF) and no control characters,
+ * which a terminal would obey (ESC [31m recolours it) and JSON must not carry raw.
+ * Link: the static library `fp_common`.
+ */
+#ifndef FP_TEXT_H
+#define FP_TEXT_H
+
+#include <stdbool.h>
+#include <stddef.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** True when s (NUL-terminated; NULL: true) is well-formed UTF-8 with no control character
+ *  (U+0000..U+001F, U+007F..U+009F; tab and line feed allowed when lines is true: a note of
+ *  several lines). Thread-safe. */
+bool fp_text_ok(const char *s, bool lines);
+
+/** s copied into out (n bytes, always NUL-terminated when n > 0) with every byte of an
+ *  ill-formed sequence and every control character (tab and line feed too) replaced by U+FFFD, so that the result
+ *  passes fp_text_ok. Returns out; a result that does not fit is cut at a whole character.
+ *  s NULL: "". Thread-safe. */
+char *fp_text_clean(const char *s, char *out, size_t n);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

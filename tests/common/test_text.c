@@ -1,0 +1,71 @@
+/* test_text.c: fp_text_ok and fp_text_clean (core/common/fp_text.h) against RFC 3629's
+ * ill-formed sequences, control characters, and a result cut at a whole character. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <string.h>
+
+#include "fp_text.h"
+
+#define FFFD "\xEF\xBF\xBD"
+
+static void test_ok(void **state)
+{
+    (void)state;
+    static const char *const good[] = {"", "take 1", "caf\xC3\xA9", "\xE2\x82\xAC 5",
+                                       "\xF0\x9F\x98\x80", "\xF4\x8F\xBF\xBF" /* U+10FFFF */,
+                                       "\xED\x9F\xBF" /* U+D7FF */};
+    for (size_t i = 0; i < sizeof good / sizeof good[0]; i++) assert_true(fp_text_ok(good[i], false));
+    static const char *const bad[] = {
+        "\xC0\x80",         /* overlong NUL */
+        "\xC1\xBF",         /* overlong */
+        "\xE0\x9F\xBF",     /* overlong 3-byte */
+        "\xF0\x8F\xBF\xBF", /* overlong 4-byte */
+        "\xED\xA0\x80",     /* surrogate U+D800 */
+        "\xF4\x90\x80\x80", /* U+110000 */
+        "\xF5\x80\x80\x80", /* no such lead byte */
+        "\xE2\x82",         /* cut short */
+        "\x80",             /* a lone continuation */
+        "a\xFF" "b",        /* never in UTF-8 */
+        "red \x1B[31m",     /* ESC: a terminal would obey it */
+        "\x7F",             /* DEL */
+        "\xC2\x9F",         /* C1 control U+009F */
+        "carriage\rreturn",
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++)
+        if (fp_text_ok(bad[i], true)) fail_msg("bad[%zu] passed", i);
+    assert_false(fp_text_ok("a\tb", false));
+    assert_true(fp_text_ok("a\tb", true));
+    assert_false(fp_text_ok("two\nlines", false));
+    assert_true(fp_text_ok("two\nlines", true));
+    assert_string_equal(fp_text_clean("two\nlines", (char[32]){0}, 32), "two" FFFD "lines");
+    assert_true(fp_text_ok(NULL, false));
+}
+
+static void test_clean(void **state)
+{
+    (void)state;
+    char out[64];
+    assert_string_equal(fp_text_clean("a\xFF" "b", out, sizeof out), "a" FFFD "b");
+    assert_string_equal(fp_text_clean("\x1B[31mred", out, sizeof out), FFFD "[31mred");
+    assert_string_equal(fp_text_clean("caf\xC3\xA9", out, sizeof out), "caf\xC3\xA9");
+    assert_string_equal(fp_text_clean("\xED\xA0\x80x", out, sizeof out), FFFD FFFD FFFD "x");
+    assert_string_equal(fp_text_clean("\xE2\x82", out, sizeof out), FFFD FFFD);
+    assert_string_equal(fp_text_clean(NULL, out, sizeof out), "");
+    assert_true(fp_text_ok(fp_text_clean("\xC0\x80\x7F\t\xF4\x90\x80\x80", out, sizeof out), false));
+    /* cut at a whole character: "ab" then no room for the 3 bytes of U+20AC */
+    assert_string_equal(fp_text_clean("ab\xE2\x82\xAC", out, 5), "ab");
+    assert_string_equal(fp_text_clean("ab\xE2\x82\xAC", out, 6), "ab\xE2\x82\xAC");
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_ok),
+        cmocka_unit_test(test_clean),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
