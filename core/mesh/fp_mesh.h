@@ -19,8 +19,8 @@
  *
  * Errors: functions return an fp_mesh_result (0 = success, negative = error) and, where they
  * take `err`/`errlen`, write a one-line, NUL-terminated message naming the file and the reason
- * ("path: line N: reason" for OBJ text errors). err may be NULL or errlen 0. The library never
- * prints.
+ * ("path: line N: reason" for OBJ text errors; "path: byte N: reason" in a binary PLY's
+ * body). err may be NULL or errlen 0. The library never prints.
  */
 #ifndef FP_MESH_H
 #define FP_MESH_H
@@ -48,7 +48,8 @@ typedef enum fp_mesh_result {
                                            vertices or no faces, bad glTF accessor or buffer,
                                            a glTF URI that leaves the file's folder */
     FP_MESH_ERR_UNSUPPORTED = -ENOTSUP, /* unknown file extension, or a feature not handled
-                                           (sparse glTF accessors, a glTF with no triangles) */
+                                           (sparse glTF accessors, a glTF with no triangles,
+                                           glTF 1.0, KHR_mesh_quantization) */
     FP_MESH_ERR_NOMEM = -ENOMEM,        /* out of memory */
     FP_MESH_ERR_INVALID = -EINVAL       /* bad argument: NULL pointer, inconsistent mesh */
 } fp_mesh_result;
@@ -125,10 +126,15 @@ fp_mesh *fp_mesh_copy(const fp_mesh *mesh);
  *
  *  Hostile files are refused before any third-party parser sees them, in time and memory
  *  bounded by the file's size: PLY headers are checked strictly (element before property,
- *  known types, numeric counts, a real end_header) and every value walked; OFF (ASCII and
+ *  known types, numeric counts, vertex x, y and z once each, a real end_header; comment and
+ *  obj_info lines anywhere after the first) and every value walked; OFF (ASCII and
  *  binary) and STL counts must fit the file's size; every number must be finite as a float;
  *  glTF buffers and images are read only from data URIs or relative paths that stay inside
- *  the file's folder (after normalisation and symlinks) and name regular files. The path
+ *  the file's folder (after normalisation and symlinks) and name regular files; glTF 2.0
+ *  only (GLB header version 2, asset.version 2.x); every index in the JSON an integer from
+ *  0 (a negative "indices" is refused, not read as absent); POSITION and NORMAL FLOAT,
+ *  TEXCOORD_0 FLOAT or normalised unsigned byte/short; node matrix 16 numbers, translation
+ *  3, rotation 4, scale 3, a matrix or TRS, not both. The path
  *  itself must name a regular file (a FIFO or device is refused, never opened blocking).
  *
  *  On success *out is a new mesh (free with fp_mesh_free()) with source_path set and
@@ -136,7 +142,9 @@ fp_mesh *fp_mesh_copy(const fp_mesh *mesh);
  *  a message "path: [line N: ]reason": NOENT (missing), ACCESS (unreadable), IO (read error,
  *  not a regular file), FORMAT (empty file, syntax, NaN/inf values, counts beyond the file's
  *  size, face index out of range, no vertices, no faces, glTF buffer missing, refused or
- *  accessor out of bounds), UNSUPPORTED (extension, sparse accessors, binary COFF, > 2 GiB),
+ *  accessor out of bounds, an index or component type glTF 2.0 does not allow, a node
+ *  transform of the wrong length, a PLY vertex without x, y or z), UNSUPPORTED (extension,
+ *  sparse accessors, binary COFF, > 2 GiB, glTF 1.0, KHR_mesh_quantization),
  *  NOMEM, INVALID (NULL path or out).
  *  Thread rules: see the top of this file. */
 int fp_mesh_load(const char *path, fp_mesh **out, char *err, size_t errlen);

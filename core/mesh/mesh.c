@@ -780,6 +780,7 @@ typedef struct ply_element {
     int nprops;
     ply_prop props[PLY_MAX_PROPS];
     size_t line;
+    size_t xyz_line[3]; /* vertex: the lines of its x, y, z properties (0: none) */
 } ply_element;
 
 static int ply_type(const char *tok, size_t len)
@@ -888,6 +889,19 @@ static void ply_binary_value(const unsigned char *p, int t, int big, long long *
     }
 }
 
+/* Where a value of the body is, for a message: "line N" in ASCII; "byte N" (its offset in
+ * the file) in a binary body, which has no lines (its errors used to cite the header's last). */
+typedef struct ply_where {
+    char text[32];
+} ply_where;
+
+static ply_where ply_at(int binary, size_t line, size_t byte)
+{
+    ply_where w;
+    snprintf(w.text, sizeof w.text, binary ? "byte %zu" : "line %zu", binary ? byte : line);
+    return w;
+}
+
 int fp__ply_scan(const char *path, const char *text, size_t len, size_t *vertices,
                  size_t *faces, char *err, size_t errlen)
 {
@@ -933,8 +947,13 @@ int fp__ply_scan(const char *path, const char *text, size_t len, size_t *vertice
         int decl = 0;
         if (nt == 0) {
             PLY_FAIL("line %zu: empty line in the PLY header", line_no);
-        } else if (token_is(tok[0], tl[0], "comment")) {
-            /* skipped */
+        } else if (token_is(tok[0], tl[0], "comment") || token_is(tok[0], tl[0], "obj_info")) {
+            /* free text, allowed anywhere after line 1 (Turk's PLY). OpenMesh mishandles them
+             * (it reads obj_info's words as keywords; after a comment it finds a binary body
+             * one byte late), so the loader hands it the text without these lines
+             * (mesh_io.cpp's ply_without_notes): prev_was_decl and prev_crlf stay those of
+             * the line before them. */
+            continue;
         } else if (token_is(tok[0], tl[0], "format")) {
             if (format >= 0 || nel > 0)
                 PLY_FAIL("line %zu: 'format' must come once, before any element", line_no);
@@ -1024,6 +1043,15 @@ int fp__ply_scan(const char *path, const char *text, size_t len, size_t *vertice
             if (ply_type(name, namelen) >= 0 || token_is(name, namelen, "list"))
                 PLY_FAIL("line %zu: property name " TOK_FMT " is a type name", line_no,
                          TOK_ARG(name, namelen));
+            /* OpenMesh reads a vertex's position from x, y and z by name, 0 for one that is
+             * missing, the last one for a repeated one: the file's positions would be lost */
+            const int axis = namelen == 1 && *name >= 'x' && *name <= 'z' ? *name - 'x' : -1;
+            if (e->kind == PLY_VERTEX && axis >= 0 && pr.count_type < 0) {
+                if (e->xyz_line[axis])
+                    PLY_FAIL("line %zu: vertex property '%c' again (first on line %zu)", line_no,
+                             *name, e->xyz_line[axis]);
+                e->xyz_line[axis] = line_no;
+            }
             e->props[e->nprops++] = pr;
             decl = 1;
         } else if (token_is(tok[0], tl[0], "end_header")) {
@@ -1049,6 +1077,10 @@ int fp__ply_scan(const char *path, const char *text, size_t len, size_t *vertice
         ply_element *e = &el[i];
         if (e->count > 0 && e->nprops == 0)
             PLY_FAIL("line %zu: element with %llu rows but no properties", e->line, e->count);
+        for (int k = 0; k < 3 && e->kind == PLY_VERTEX; k++)
+            if (!e->xyz_line[k])
+                PLY_FAIL("line %zu: the vertex element has no property '%c' (x, y and z are "
+                         "required)", e->line, 'x' + k);
         unsigned long long row = 0;
         for (int k = 0; k < e->nprops; k++)
             row += format == 0 ? 1u
@@ -1079,6 +1111,7 @@ int fp__ply_scan(const char *path, const char *text, size_t len, size_t *vertice
                 long long n = 1;
                 if (pr->count_type >= 0) {
                     long long cnt;
+                    const size_t cnt_byte = (size_t)((const char *)b - text);
                     if (format == 0) {
                         const char *t;
                         size_t tlen;
@@ -1098,29 +1131,31 @@ int fp__ply_scan(const char *path, const char *text, size_t len, size_t *vertice
                         ply_binary_value(b, pr->count_type, big, &cnt, &dv);
                         b += cs;
                     }
+                    const ply_where at = ply_at(format != 0, c.line, cnt_byte);
                     if (cnt < 0)
-                        PLY_FAIL("line %zu: negative list count in row %llu", c.line, r);
+                        PLY_FAIL("%s: negative list count in row %llu", at.text, r);
                     if (pr->role == PLY_ROLE_VINDEX) {
                         if (cnt < 3)
-                            PLY_FAIL("line %zu: face %llu has %lld corners (at least 3)", c.line,
-                                     r, cnt);
+                            PLY_FAIL("%s: face %llu has %lld corners (at least 3)", at.text, r,
+                                     cnt);
                         corners = cnt;
                     } else if (pr->role == PLY_ROLE_TEXCOORD && cnt != 2 * corners &&
                                cnt != 3 * corners) {
-                        PLY_FAIL("face %llu: %lld texture coordinates for %lld corners", r, cnt,
-                                 corners);
+                        PLY_FAIL("%s: face %llu: %lld texture coordinates for %lld corners",
+                                 at.text, r, cnt, corners);
                     }
                     n = cnt;
                     if (format != 0 &&
                         (unsigned long long)n * (unsigned)ply_types[pr->type].size >
                             (size_t)(bend - b))
-                        PLY_FAIL("face %llu: a list of %lld values runs past the file's end", r,
-                                 n);
+                        PLY_FAIL("%s: face %llu: a list of %lld values runs past the file's end",
+                                 at.text, r, n);
                 }
                 for (long long j = 0; j < n; j++) {
                     long long iv = 0;
                     double dv = 0;
                     size_t at = c.line;
+                    const size_t at_byte = (size_t)((const char *)b - text);
                     if (format == 0) {
                         const char *t;
                         size_t tlen;
@@ -1139,12 +1174,13 @@ int fp__ply_scan(const char *path, const char *text, size_t len, size_t *vertice
                         ply_binary_value(b, pr->type, big, &iv, &dv);
                         b += sz;
                         if (!ply_types[pr->type].is_int && (!isfinite(dv) || fabs(dv) > FLT_MAX))
-                            PLY_FAIL("non-finite value in row %llu of element %d (byte %zu)", r,
-                                     i, (size_t)((const char *)b - text) - (size_t)sz);
+                            PLY_FAIL("byte %zu: non-finite value in row %llu of element %d",
+                                     at_byte, r, i);
                     }
                     if (pr->role == PLY_ROLE_VINDEX && (iv < 0 || (unsigned long long)iv >= nverts))
-                        PLY_FAIL("line %zu: face %llu references vertex %lld, but the file has "
-                                 "%llu vertices", at, r, iv, nverts);
+                        PLY_FAIL("%s: face %llu references vertex %lld, but the file has "
+                                 "%llu vertices", ply_at(format != 0, at, at_byte).text, r, iv,
+                                 nverts);
                 }
             }
         }

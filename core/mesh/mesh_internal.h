@@ -45,10 +45,12 @@ int fp__off_scan(const char *path, const char *text, size_t len, size_t *nv, siz
 
 /** PLY, before OpenMesh sees it (its reader crashes or loops on bad headers): a strict
  *  header ("ply", one format line, 'element NAME COUNT' before its 'property TYPE NAME' or
- *  'property list CTYPE TYPE NAME' lines, known types, numeric counts, a real end_header),
- *  counts against the file's size, then every value walked: ASCII tokens of the right type
- *  and range (floats finite), binary sizes exact to the file's end, list counts, face indices
- *  < vertex count. *nv and *nf get the header's vertex and face counts.
+ *  'property list CTYPE TYPE NAME' lines, known types, numeric counts, vertex x, y, z once
+ *  each, a real end_header; comment and obj_info lines anywhere after line 1, which the
+ *  loader leaves out of what OpenMesh reads), counts against the file's size, then every
+ *  value walked: ASCII tokens of the right type and range (floats finite), binary sizes
+ *  exact to the file's end, list counts, face indices < vertex count. *nv and *nf get the
+ *  header's vertex and face counts. Errors in a binary body say "byte N" (the offset).
  *  ASCII STL: solid / facet normal / outer loop / 3 vertex / endloop / endfacet / endsolid in
  *  order, 3 finite numbers where numbers belong.
  *  "path: line N: reason" errors. Return FP_MESH_OK, FP_MESH_ERR_FORMAT or NOMEM. */

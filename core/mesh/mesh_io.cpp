@@ -12,6 +12,7 @@
 #include <OpenMesh/Core/Mesh/BaseKernel.hh>
 #include <OpenMesh/Core/System/omstream.hh>
 #include <tiny_gltf.h>
+#include <nlohmann/json.hpp> // tinygltf's JSON library (it includes it too)
 
 #include <fcntl.h>
 #include <limits.h>
@@ -778,6 +779,45 @@ struct MemBuf : std::streambuf {
     }
 };
 
+// PLY bytes with the header's comment and obj_info lines left out (the body unchanged), for
+// OpenMesh's reader: it takes obj_info's words for keywords, and after a comment line it
+// looks for a binary body one byte too far (it finds the body from where its last token
+// read ended, and a comment is read with getline, to the next line). fp__ply_scan accepted
+// the header with them, and checked it as OpenMesh will see it. Empty when there are none
+// (the bytes are used as they are).
+std::string ply_without_notes(const std::string &data)
+{
+    std::string out;
+    size_t p = 0, kept = 0; // kept: data[0, kept) is in out or still to be copied as a block
+    bool any = false;
+    while (p < data.size()) {
+        size_t eol = data.find('\n', p);
+        if (eol == std::string::npos)
+            break; // no end_header: the scan refused that
+        size_t b = p;
+        while (b < eol && std::strchr(" \t\r\v\f", data[b]))
+            b++;
+        size_t e = b;
+        while (e < eol && !std::strchr(" \t\r\v\f", data[e]))
+            e++;
+        const std::string word = data.substr(b, e - b);
+        if (p > 0 && (word == "comment" || word == "obj_info")) {
+            if (!any)
+                out.reserve(data.size());
+            any = true;
+            out.append(data, kept, p - kept);
+            kept = eol + 1;
+        }
+        p = eol + 1;
+        if (word == "end_header")
+            break;
+    }
+    if (!any)
+        return std::string();
+    out.append(data, kept, std::string::npos);
+    return out;
+}
+
 // One line of OBJ text split into whitespace tokens (the text passed fp__obj_scan).
 struct ObjLine {
     size_t begin, end;                 // the line without its '\n' (and '\r')
@@ -927,9 +967,11 @@ int load_openmesh(const char *path, const std::string &ext, std::string &data,
     {
         std::lock_guard<std::mutex> guard(openmesh_lock);
         OmLogCapture capture;
-        // PLY/OFF/STL by file name, not from `data`: OpenMesh's stream readers skip the
-        // header probe (can_u_read) and would use the flags of the previous file (OFF's
-        // ST/N/C, STL's binary). The file was just read whole and checked.
+        // OFF/STL by file name, not from `data`: their stream readers skip the header probe
+        // (can_u_read) and would use the flags of the previous file (OFF's ST/N/C, STL's
+        // binary). The file was just read whole and checked.
+        // PLY from memory (its stream reader parses the header itself): the bytes the scan
+        // checked, less the header's comment and obj_info lines (ply_without_notes).
         // OBJ from memory, with its `mtllib` lines commented out: OpenMesh would open the
         // named material files itself, wherever they point (outside the folder, a FIFO
         // that blocks for ever), and materials are not used.
@@ -938,6 +980,12 @@ int load_openmesh(const char *path, const std::string &ext, std::string &data,
             // the text as it is unless it names material files (a copy with them commented)
             const std::string masked = obj.mtllib ? obj_without_mtllib(data) : std::string();
             const std::string &text = obj.mtllib ? masked : data;
+            MemBuf buf(text.data(), text.size());
+            std::istream in(&buf);
+            ok = IO::IOManager().read(in, ext, collector, opt);
+        } else if (ext == "ply") {
+            const std::string stripped = ply_without_notes(data);
+            const std::string &text = stripped.empty() ? data : stripped;
             MemBuf buf(text.data(), text.size());
             std::istream in(&buf);
             ok = IO::IOManager().read(in, ext, collector, opt);
@@ -1079,11 +1127,58 @@ struct GltfReader {
         return false;
     }
 
-    // Read accessor `ai` as `want` components per element into out (as float; integers
-    // normalised when the accessor says so).
-    bool read_floats(int ai, int want, const char *what, std::vector<float> &out)
+    static std::string component_name(int t)
     {
-        const std::string name = std::string(what) + " accessor " + std::to_string(ai);
+        switch (t) {
+        case TINYGLTF_COMPONENT_TYPE_BYTE: return "5120 (BYTE)";
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return "5121 (UNSIGNED_BYTE)";
+        case TINYGLTF_COMPONENT_TYPE_SHORT: return "5122 (SHORT)";
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return "5123 (UNSIGNED_SHORT)";
+        case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: return "5125 (UNSIGNED_INT)";
+        case TINYGLTF_COMPONENT_TYPE_FLOAT: return "5126 (FLOAT)";
+        default: return std::to_string(t);
+        }
+    }
+
+    bool uses_extension(const char *name) const
+    {
+        for (const auto *list : {&model.extensionsUsed, &model.extensionsRequired})
+            if (std::find(list->begin(), list->end(), name) != list->end())
+                return true;
+        return false;
+    }
+
+    // The component types glTF 2.0 allows for the attributes read (section 3.7.2.1):
+    // POSITION and NORMAL FLOAT, TEXCOORD_0 FLOAT or normalised UNSIGNED_BYTE/SHORT. Other
+    // integer types are KHR_mesh_quantization's (not supported: its positions need the
+    // node's dequantising transform) or invalid: a BYTE POSITION used to load its raw
+    // values, garbage coordinates, without a word.
+    bool component_ok(const tinygltf::Accessor &a, const char *what, const std::string &name)
+    {
+        const int t = a.componentType;
+        if (t == TINYGLTF_COMPONENT_TYPE_FLOAT)
+            return true;
+        const bool uv = std::strcmp(what, "TEXCOORD_0") == 0;
+        if (uv && a.normalized && (t == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE ||
+                                   t == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT))
+            return true;
+        const std::string allowed = uv ? "5126 (FLOAT), or 5121 (UNSIGNED_BYTE) or 5123 "
+                                         "(UNSIGNED_SHORT) normalized"
+                                       : "5126 (FLOAT)";
+        const std::string what_is = name + " has component type " + component_name(t) +
+                                    (a.normalized ? " normalized" : "");
+        if (uses_extension("KHR_mesh_quantization"))
+            return bad(FP_MESH_ERR_UNSUPPORTED, what_is + ": KHR_mesh_quantization is not "
+                                                          "supported (" + allowed + ")");
+        return bad(FP_MESH_ERR_FORMAT, what_is + "; glTF 2.0 requires " + allowed);
+    }
+
+    // Read accessor `ai` of attribute `what` of `where` as `want` components per element
+    // into out (as float; normalised integers as glTF defines them).
+    bool read_floats(int ai, int want, const char *what, const std::string &where,
+                     std::vector<float> &out)
+    {
+        const std::string name = where + " " + what + " accessor " + std::to_string(ai);
         if (ai < 0 || size_t(ai) >= model.accessors.size())
             return bad(FP_MESH_ERR_FORMAT, name + " does not exist");
         const tinygltf::Accessor &a = model.accessors[size_t(ai)];
@@ -1091,6 +1186,8 @@ struct GltfReader {
         if (ncomp != want)
             return bad(FP_MESH_ERR_FORMAT, name + " has " + std::to_string(ncomp) +
                                                 " components, expected " + std::to_string(want));
+        if (!component_ok(a, what, name))
+            return false;
         const uint8_t *base;
         size_t stride;
         if (!locate(a, name, &base, &stride))
@@ -1102,22 +1199,11 @@ struct GltfReader {
                 const uint8_t *p = base + i * stride + size_t(k * csize);
                 float v;
                 switch (a.componentType) {
+                // the types component_ok lets through (the integers normalised)
                 case TINYGLTF_COMPONENT_TYPE_FLOAT: std::memcpy(&v, p, 4); break;
-                case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
-                    v = float(*p); if (a.normalized) v /= 255.0f; break;
-                case TINYGLTF_COMPONENT_TYPE_BYTE: {
-                    v = float(int8_t(*p));
-                    if (a.normalized) v = std::fmax(v / 127.0f, -1.0f);
-                    break;
-                }
+                case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: v = float(*p) / 255.0f; break;
                 case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: {
-                    uint16_t u; std::memcpy(&u, p, 2); v = float(u);
-                    if (a.normalized) v /= 65535.0f;
-                    break;
-                }
-                case TINYGLTF_COMPONENT_TYPE_SHORT: {
-                    int16_t u; std::memcpy(&u, p, 2); v = float(u);
-                    if (a.normalized) v = std::fmax(v / 32767.0f, -1.0f);
+                    uint16_t u; std::memcpy(&u, p, 2); v = float(u) / 65535.0f;
                     break;
                 }
                 default:
@@ -1133,11 +1219,12 @@ struct GltfReader {
         return true;
     }
 
-    bool read_indices(int ai, std::vector<uint32_t> &out)
+    bool read_indices(int ai, const std::string &where, std::vector<uint32_t> &out)
     {
-        const std::string name = "index accessor " + std::to_string(ai);
+        const std::string name = where + " indices: accessor " + std::to_string(ai);
         if (ai < 0 || size_t(ai) >= model.accessors.size())
-            return bad(FP_MESH_ERR_FORMAT, name + " does not exist");
+            return bad(FP_MESH_ERR_FORMAT, name + " does not exist (the file has " +
+                                               std::to_string(model.accessors.size()) + ")");
         const tinygltf::Accessor &a = model.accessors[size_t(ai)];
         if (a.type != TINYGLTF_TYPE_SCALAR)
             return bad(FP_MESH_ERR_FORMAT, name + " is not SCALAR");
@@ -1227,13 +1314,13 @@ struct GltfReader {
             if (pos_it == prim.attributes.end())
                 return bad(FP_MESH_ERR_FORMAT, where + " has no POSITION");
             std::vector<float> pos, nrm, uv;
-            if (!read_floats(pos_it->second, 3, "POSITION", pos))
+            if (!read_floats(pos_it->second, 3, "POSITION", where, pos))
                 return false;
             const size_t count = pos.size() / 3;
             auto n_it = prim.attributes.find("NORMAL");
             auto t_it = prim.attributes.find("TEXCOORD_0");
             if (n_it != prim.attributes.end()) {
-                if (!read_floats(n_it->second, 3, "NORMAL", nrm))
+                if (!read_floats(n_it->second, 3, "NORMAL", where, nrm))
                     return false;
                 if (nrm.size() != pos.size())
                     return bad(FP_MESH_ERR_FORMAT, where + ": NORMAL count differs from POSITION");
@@ -1241,15 +1328,15 @@ struct GltfReader {
                 all_normals = false;
             }
             if (t_it != prim.attributes.end()) {
-                if (!read_floats(t_it->second, 2, "TEXCOORD_0", uv))
+                if (!read_floats(t_it->second, 2, "TEXCOORD_0", where, uv))
                     return false;
                 if (uv.size() / 2 != count)
                     return bad(FP_MESH_ERR_FORMAT, where + ": TEXCOORD_0 count differs from POSITION");
                 any_uv = true;
             }
             std::vector<uint32_t> idx;
-            if (prim.indices >= 0) {
-                if (!read_indices(prim.indices, idx))
+            if (prim.indices >= 0) { // a negative one in the file: refused (GltfJsonCheck)
+                if (!read_indices(prim.indices, where, idx))
                     return false;
             } else {
                 idx.resize(count);
@@ -1426,6 +1513,194 @@ bool gltf_fs_read(std::vector<unsigned char> *out, std::string *err, const std::
     return true;
 }
 
+// What tinygltf does not check in the JSON it parsed, walked once more as SAX events (no
+// document built). It reads an index that is not an integer from 0 to INT_MAX as absent
+// (-1, or a wrapped int): "indices": -1 (or 0.5, or 4294967295) loaded a primitive as
+// non-indexed, "mesh": -1 dropped a node's mesh, without a word. It takes a node's matrix,
+// translation, rotation and scale at any length (node_local uses them at 16, 3, 4 and 3
+// numbers only: others were ignored) and ignores TRS beside a matrix. Checked here: every
+// index property of glTF 2.0's schema (index_key; attribute and morph target values; scene
+// nodes, children, joints) and each node's transform arrays. extras and extensions hold
+// free-form JSON: not looked into.
+class GltfJsonCheck : public nlohmann::json_sax<nlohmann::json> {
+public:
+    std::string error; // "PATH is ...": the first problem found, or ""
+
+    bool null() override { return scalar("null", false); }
+    bool boolean(bool) override { return scalar("a boolean", false); }
+    bool number_integer(number_integer_t v) override
+    {
+        return v >= 0 && v <= INT_MAX ? scalar(nullptr, true)
+                                      : scalar(std::to_string(v).c_str(), true);
+    }
+    bool number_unsigned(number_unsigned_t v) override
+    {
+        return v <= number_unsigned_t(INT_MAX) ? scalar(nullptr, true)
+                                               : scalar(std::to_string(v).c_str(), true);
+    }
+    bool number_float(number_float_t, const string_t &text) override
+    {
+        return scalar(text.c_str(), true);
+    }
+    bool string(string_t &) override { return scalar("a string", false); }
+    bool binary(binary_t &) override { return scalar("binary data", false); }
+    bool key(string_t &k) override
+    {
+        Frame &f = st_.back();
+        f.key = k;
+        if (f.node && (k == "matrix" || k == "translation" || k == "rotation" || k == "scale"))
+            (k == "matrix" ? f.has_matrix : f.has_trs) = true;
+        return true;
+    }
+    bool start_object(std::size_t) override { return open(false); }
+    bool start_array(std::size_t) override { return open(true); }
+    bool end_object() override { return close(); }
+    bool end_array() override { return close(); }
+    bool parse_error(std::size_t at, const std::string &,
+                     const nlohmann::detail::exception &x) override
+    {
+        return fail("JSON error at byte " + std::to_string(at) + ": " + x.what());
+    }
+
+private:
+    enum Slot { ANY, INDEX, TRANSFORM, TRANSFORM_NUMBER };
+    struct Frame {
+        bool array = false;
+        std::string key;           // object: the current member's name
+        size_t index = 0;          // array: the current element
+        bool free = false;         // inside extras or extensions
+        bool index_array = false;  // scenes[].nodes, children, joints
+        bool index_object = false; // a primitive's attributes, a morph target
+        bool node = false;         // an element of the top-level nodes array
+        bool has_matrix = false, has_trs = false;
+        size_t want = 0;           // a node's transform array: the length it must have
+    };
+    std::vector<Frame> st_;
+
+    static bool index_key(const std::string &k)
+    {
+        static const char *const keys[] = {"bufferView", "buffer", "indices", "material",
+                                           "mesh", "camera", "skin", "skeleton", "scene",
+                                           "source", "sampler", "index", "input", "output",
+                                           "node", "inverseBindMatrices"};
+        for (const char *x : keys)
+            if (k == x)
+                return true;
+        return false;
+    }
+
+    static bool transform_key(const std::string &k)
+    {
+        return k == "matrix" || k == "translation" || k == "rotation" || k == "scale";
+    }
+
+    // The key of the object below the top frame (the top frame's own name), or "".
+    const std::string &outer_key() const
+    {
+        static const std::string none;
+        return st_.size() >= 2 && !st_[st_.size() - 2].array ? st_[st_.size() - 2].key : none;
+    }
+
+    // What the next value (the top frame's current member or element) must be.
+    Slot slot() const
+    {
+        if (st_.empty() || st_.back().free)
+            return ANY;
+        const Frame &p = st_.back();
+        if (p.want)
+            return TRANSFORM_NUMBER;
+        if (p.array)
+            return p.index_array ? INDEX : ANY;
+        if (p.index_object || index_key(p.key))
+            return INDEX;
+        return p.node && transform_key(p.key) ? TRANSFORM : ANY;
+    }
+
+    // Where the next value is: "meshes[0].primitives[1].indices".
+    std::string path() const
+    {
+        std::string s;
+        for (const Frame &f : st_)
+            s += f.array ? "[" + std::to_string(f.index) + "]" : (s.empty() ? "" : ".") + f.key;
+        return s;
+    }
+
+    bool fail(const std::string &msg)
+    {
+        if (error.empty())
+            error = msg;
+        return false; // stops the parse
+    }
+
+    void next()
+    {
+        if (!st_.empty() && st_.back().array)
+            st_.back().index++;
+    }
+
+    // A scalar value: what is nullptr for an integer from 0 to INT_MAX, else what it is.
+    bool scalar(const char *what, bool number)
+    {
+        const Slot s = slot();
+        if (s == INDEX && what)
+            return fail(path() + " is " + what + ", not an index (an integer from 0 to " +
+                        std::to_string(INT_MAX) + ")");
+        if (s == TRANSFORM)
+            return fail(path() + " is not an array of numbers");
+        if (s == TRANSFORM_NUMBER && !number)
+            return fail(path() + " is " + what + ", not a number");
+        next();
+        return true;
+    }
+
+    bool open(bool array)
+    {
+        const Slot s = slot();
+        Frame f;
+        f.array = array;
+        if (!st_.empty()) {
+            const Frame &p = st_.back();
+            const std::string k = p.array ? std::string() : p.key;
+            f.free = p.free || k == "extras" || k == "extensions";
+            // an accessor's sparse.indices is an object (its bufferView and type)
+            const bool sparse_indices = k == "indices" && !array && outer_key() == "sparse";
+            if (!f.free && s == INDEX && !sparse_indices)
+                return fail(path() + " is " + (array ? "an array" : "an object") +
+                            ", not an index");
+            if (!f.free && s == TRANSFORM_NUMBER)
+                return fail(path() + " is " + (array ? "an array" : "an object") +
+                            ", not a number");
+            if (!f.free && s == TRANSFORM && !array)
+                return fail(path() + " is not an array of numbers");
+            if (!f.free && s == TRANSFORM)
+                f.want = k == "matrix" ? 16 : k == "rotation" ? 4 : 3;
+            // the top-level nodes array holds nodes; elsewhere nodes, children and joints
+            // list node indices
+            f.index_array = !f.free && array &&
+                            (k == "children" || k == "joints" || (k == "nodes" && st_.size() > 1));
+            f.index_object = !f.free && !array &&
+                             (k == "attributes" || (p.array && outer_key() == "targets"));
+            f.node = !f.free && !array && p.array && st_.size() == 2 && st_[0].key == "nodes";
+        }
+        st_.push_back(f);
+        return true;
+    }
+
+    bool close()
+    {
+        const Frame f = st_.back();
+        st_.pop_back(); // path() now names the value just closed
+        if (f.want && f.index != f.want)
+            return fail(path() + " has " + std::to_string(f.index) + " numbers, not " +
+                        std::to_string(f.want));
+        if (f.node && f.has_matrix && f.has_trs)
+            return fail(path() + " has both a matrix and translation, rotation or scale "
+                        "(one or the other)");
+        next();
+        return true;
+    }
+};
+
 int load_gltf(const char *path, const std::string &ext, const std::string &data,
               fp_mesh **out, char *err, size_t errlen)
 {
@@ -1441,6 +1716,22 @@ int load_gltf(const char *path, const std::string &ext, const std::string &data,
     loader.SetFsCallbacks({gltf_fs_exists, gltf_fs_expand, gltf_fs_read, gltf_fs_write, &fs});
     if (data.size() > UINT_MAX)
         return fp__mesh_error(err, errlen, FP_MESH_ERR_UNSUPPORTED, path, "file too large");
+    // GLB header: magic, version, length (glTF 2.0 section 4.4.2). tinygltf never reads the
+    // version: a version 1 file (glTF 1.0's KHR_binary_glTF, another layout) or any other
+    // number went on as if it were 2.
+    if (ext == "glb" && data.size() >= 12 && data.compare(0, 4, "glTF") == 0) {
+        const unsigned char *h = reinterpret_cast<const unsigned char *>(data.data()) + 4;
+        const uint32_t version = uint32_t(h[0]) | uint32_t(h[1]) << 8 | uint32_t(h[2]) << 16 |
+                                 uint32_t(h[3]) << 24;
+        if (version == 1)
+            return fp__mesh_error(err, errlen, FP_MESH_ERR_UNSUPPORTED, path,
+                                  "glTF: GLB header version 1 (glTF 1.0) is not supported "
+                                  "(glTF 2.0 only)");
+        if (version != 2)
+            return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                                  "glTF: GLB header version %u (a glTF 2.0 GLB has version 2)",
+                                  version);
+    }
     bool ok;
     if (ext == "glb")
         ok = loader.LoadBinaryFromMemory(&model, &gerr, &gwarn,
@@ -1454,6 +1745,27 @@ int load_gltf(const char *path, const std::string &ext, const std::string &data,
     if (!ok)
         return fail(err, errlen, FP_MESH_ERR_FORMAT, path,
                     "glTF: " + one_line(gerr.empty() ? std::string("cannot parse") : gerr));
+    // asset.version is "2.0" (or a later 2.x): a glTF 1.0 document differs throughout
+    if (model.asset.version.compare(0, 2, "2.") != 0)
+        return fp__mesh_error(err, errlen, FP_MESH_ERR_UNSUPPORTED, path,
+                              "glTF: asset.version '%.20s' is not supported (glTF 2.0 only)",
+                              model.asset.version.c_str());
+    {
+        // the JSON again, for what tinygltf took without a word (GltfJsonCheck); parsed
+        // already, so the GLB's JSON chunk is where its header says
+        const char *json = data.data();
+        size_t json_len = data.size();
+        if (ext == "glb") {
+            uint32_t chunk0;
+            std::memcpy(&chunk0, data.data() + 12, 4); // little-endian hosts, as tinygltf
+            json = data.data() + 20;
+            json_len = chunk0;
+        }
+        GltfJsonCheck check;
+        if (!nlohmann::json::sax_parse(json, json + json_len, &check) || !check.error.empty())
+            return fail(err, errlen, FP_MESH_ERR_FORMAT, path,
+                        "glTF: " + (check.error.empty() ? std::string("JSON error") : check.error));
+    }
     Soup soup;
     GltfReader r{model, soup, {}, FP_MESH_OK, 0, 0, true, false, {}};
     std::vector<char> visited(model.nodes.size(), 0);

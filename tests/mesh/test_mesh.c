@@ -517,7 +517,7 @@ static void test_bounds(void **state)
 
 /* glTF: node transforms are applied; the default scene is read. The node JSON replaces the
  * plain node of a saved one-triangle file (0,0,0) (1,0,0) (0,1,0). */
-static fp_mesh *load_transformed_triangle(const char *node_json)
+static const char *transformed_triangle_file(const char *name, const char *node_json)
 {
     fp_mesh *tri = fp_mesh_create(3, 1, 0);
     const float p[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
@@ -539,8 +539,14 @@ static fp_mesh *load_transformed_triangle(const char *node_json)
     char out[8400];
     snprintf(out, sizeof out, "%.*s\"nodes\":[%s]%s", (int)(node - json), json, node_json,
              node + strlen(plain_node));
+    return write_tmp(name, out);
+}
+
+static fp_mesh *load_transformed_triangle(const char *node_json)
+{
     fp_mesh *m = NULL;
-    int rc = fp_mesh_load(write_tmp("moved.gltf", out), &m, err, sizeof err);
+    int rc = fp_mesh_load(transformed_triangle_file("moved.gltf", node_json), &m, err,
+                          sizeof err);
     if (rc)
         fail_msg("%s", err);
     return m;
@@ -866,6 +872,11 @@ static void test_hostile_files_refused(void **state)
         {"gltf_percent_parent_uri.gltf", "URI '../../secret' refused"},
         {"gltf_absolute_uri.gltf", "URI '/etc/passwd' refused: absolute path"},
         {"gltf_image_parent_uri.gltf", "URI '../../secret.png' refused"},
+        {"ply_binary_no_x.ply", "line 3: the vertex element has no property 'x'"},
+        {"gltf_indices_negative.gltf", "meshes[0].primitives[0].indices is -1"},
+        {"gltf_position_byte.gltf", "POSITION accessor 0 has component type 5120 (BYTE)"},
+        {"gltf_matrix_15.gltf", "nodes[0].matrix has 15 numbers, not 16"},
+        {"glb_version_1.glb", "GLB header version 1"},
     };
     const char *dir = "tests/mesh/hostile";
     DIR *d = opendir(dir);
@@ -1220,6 +1231,363 @@ static void test_concurrent_loads(void **state)
     fp_mesh_free(&m);
 }
 
+
+/* ---- strictness (a second hostile-input sweep): wrong files that loaded without a word -- */
+
+static const char *write_bytes(const char *name, const void *data, size_t len)
+{
+    const char *p = tmp_path(name);
+    FILE *f = fopen(p, "wb");
+    assert_non_null(f);
+    assert_int_equal(fwrite(data, 1, len, f), len);
+    fclose(f);
+    return p;
+}
+
+/* buf (len bytes, room for `room`) with the first `from` replaced by `to`; the new length. */
+static size_t replace_once(char *buf, size_t len, size_t room, const char *from, const char *to)
+{
+    char *at = NULL;
+    for (size_t i = 0; i + strlen(from) <= len && !at; i++)
+        if (!memcmp(buf + i, from, strlen(from)))
+            at = buf + i;
+    if (!at)
+        fail_msg("'%s' not found", from);
+    const size_t fl = strlen(from), tl = strlen(to);
+    assert_true(len - fl + tl <= room);
+    memmove(at + tl, at + fl, len - (size_t)(at - buf) - fl);
+    memcpy(at, to, tl);
+    return len - fl + tl;
+}
+
+/* The canonical face (a real mesh) saved as a binary PLY: its bytes (malloc'ed) and the mesh. */
+static char *canonical_ply(size_t *len, fp_mesh **mesh)
+{
+    assert_int_equal(fp_mesh_load(face_path("mediapipe-canonical/canonical_face_model.obj"),
+                                  mesh, err, sizeof err),
+                     FP_MESH_OK);
+    assert_int_equal(fp_mesh_save(*mesh, tmp_path("canon.ply"), err, sizeof err), FP_MESH_OK);
+    char *b = slurp(tmp_path("canon.ply"), len);
+    char *room = realloc(b, *len + 512);
+    assert_non_null(room);
+    return room;
+}
+
+/* 1. A PLY vertex element without x, y or z: OpenMesh read the missing coordinate as 0 (a
+ * binary file loaded flattened). Refused naming the property; a repeated one too. */
+static void test_ply_vertex_needs_xyz(void **state)
+{
+    (void)state;
+    size_t len;
+    fp_mesh *ref = NULL;
+    char *ply = canonical_ply(&len, &ref);
+    const char *axes[] = {"x", "y", "z"};
+    for (int k = 0; k < 3; k++) {
+        char *b = malloc(len + 512);
+        memcpy(b, ply, len);
+        char from[32], to[32], want[64], name[32];
+        snprintf(from, sizeof from, "property float %s\n", axes[k]);
+        snprintf(to, sizeof to, "property float q\n");
+        size_t n = replace_once(b, len, len + 512, from, to);
+        snprintf(name, sizeof name, "no_%s.ply", axes[k]);
+        snprintf(want, sizeof want, "line 3: the vertex element has no property '%s'", axes[k]);
+        expect_load_error(write_bytes(name, b, n), FP_MESH_ERR_FORMAT, want);
+        free(b);
+    }
+    /* the same in ASCII, and a repeated property */
+    expect_load_error(write_tmp("no_z.ply", "ply\nformat ascii 1.0\nelement vertex 3\n"
+                                            "property float x\nproperty float y\n"
+                                            "property float w\nelement face 1\n"
+                                            "property list uchar int vertex_indices\n"
+                                            "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"),
+                      FP_MESH_ERR_FORMAT, "no property 'z'");
+    expect_load_error(write_tmp("two_x.ply", "ply\nformat ascii 1.0\nelement vertex 3\n"
+                                             "property float x\nproperty float y\n"
+                                             "property float z\nproperty float x\n"
+                                             "element face 1\n"
+                                             "property list uchar int vertex_indices\n"
+                                             "end_header\n0 0 0 0\n1 0 0 1\n0 1 0 0\n3 0 1 2\n"),
+                      FP_MESH_ERR_FORMAT, "line 7: vertex property 'x' again (first on line 4)");
+    /* the file as saved loads, with the face's coordinates */
+    fp_mesh *m = NULL;
+    assert_int_equal(fp_mesh_load(tmp_path("canon.ply"), &m, err, sizeof err), FP_MESH_OK);
+    assert_true(same_positions(m, ref));
+    fp_mesh_free(&m);
+    fp_mesh_free(&ref);
+    free(ply);
+}
+
+/* 6. PLY allows comment and obj_info lines anywhere in the header; before end_header of a
+ * binary file they were refused, obj_info anywhere. They load, to the same mesh. */
+static void test_ply_comments_anywhere(void **state)
+{
+    (void)state;
+    size_t len;
+    fp_mesh *ref = NULL;
+    char *b = canonical_ply(&len, &ref);
+    const size_t room = len + 512;
+    len = replace_once(b, len, room, "ply\n", "ply\ncomment before the format\n");
+    len = replace_once(b, len, room, "1.0\n",
+                       "1.0\nobj_info element vertex 99 end_header property\n");
+    len = replace_once(b, len, room, "property float y\n",
+                       "property float y\ncomment between properties\n");
+    len = replace_once(b, len, room, "end_header\n",
+                       "comment right before end_header\nobj_info scanned\nend_header\n");
+    fp_mesh *m = NULL;
+    int rc = fp_mesh_load(write_bytes("notes.ply", b, len), &m, err, sizeof err);
+    if (rc)
+        fail_msg("%s", err);
+    assert_true(same_positions(m, ref));
+    assert_memory_equal(m->uvs, ref->uvs, 2 * ref->vertex_count * sizeof(float));
+    fp_mesh_free(&m);
+    /* ASCII, a CRLF comment line before end_header */
+    rc = fp_mesh_load(write_tmp("notes_ascii.ply",
+                                "ply\nformat ascii 1.0\nobj_info by hand\nelement vertex 3\n"
+                                "property float x\nproperty float y\nproperty float z\n"
+                                "element face 1\nproperty list uchar int vertex_indices\n"
+                                "comment the end\r\nend_header\n0 0 0\n1 0 0\n0 2 0\n3 0 1 2\n"),
+                      &m, err, sizeof err);
+    if (rc)
+        fail_msg("%s", err);
+    assert_int_equal(m->vertex_count, 3);
+    assert_true(m->positions[3] == 1.0f && m->positions[7] == 2.0f);
+    fp_mesh_free(&m);
+    fp_mesh_free(&ref);
+    free(b);
+}
+
+/* 7. Binary PLY face errors name the byte where the bad value is (they cited the header's
+ * last line); ASCII ones keep their line. */
+static void test_ply_binary_errors_cite_bytes(void **state)
+{
+    (void)state;
+    static const char hdr[] = "ply\nformat binary_little_endian 1.0\nelement vertex 3\n"
+                              "property float x\nproperty float y\nproperty float z\n"
+                              "element face 2\nproperty list uchar int vertex_indices\n"
+                              "end_header\n";
+    const float v[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    unsigned char buf[256];
+    const size_t h = strlen(hdr);
+    memcpy(buf, hdr, h);
+    memcpy(buf + h, v, sizeof v);
+    size_t n = h + sizeof v;
+    const size_t face0 = n;
+    const int32_t good[3] = {0, 1, 2}, bad[3] = {0, 1, 7};
+    buf[n++] = 3;
+    memcpy(buf + n, good, sizeof good);
+    n += sizeof good;
+    const size_t face1 = n;
+    buf[n++] = 3;
+    memcpy(buf + n, bad, sizeof bad);
+    n += sizeof bad;
+    char want[128];
+    snprintf(want, sizeof want, "byte %zu: face 1 references vertex 7, but the file has 3",
+             face1 + 1 + 2 * sizeof(int32_t));
+    expect_load_error(write_bytes("badref.ply", buf, n), FP_MESH_ERR_FORMAT, want);
+    assert_null(strstr(err, "line"));
+    buf[face1] = 2; /* two corners: the last index becomes a trailing byte count problem */
+    snprintf(want, sizeof want, "byte %zu: face 1 has 2 corners", face1);
+    expect_load_error(write_bytes("twocorners.ply", buf, n), FP_MESH_ERR_FORMAT, want);
+    buf[face1] = 3;
+    memcpy(buf + face0 + 1, bad, sizeof bad); /* face 0 bad too: the first is named */
+    snprintf(want, sizeof want, "byte %zu: face 0 references vertex 7",
+             face0 + 1 + 2 * sizeof(int32_t));
+    expect_load_error(write_bytes("badref0.ply", buf, n), FP_MESH_ERR_FORMAT, want);
+    expect_load_error(write_tmp("badref.ply.txt.ply",
+                                "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                                "property float y\nproperty float z\nelement face 1\n"
+                                "property list uchar int vertex_indices\nend_header\n"
+                                "0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n"),
+                      FP_MESH_ERR_FORMAT, "line 13: face 0 references vertex 7");
+}
+
+/* A one-triangle glTF with indices, UVs and a node translation, its buffer in strict.bin;
+ * strict_gltf writes it with `from`/`to` replacements (NULL-terminated pairs). */
+static const char strict_json[] =
+    "{\"asset\":{\"version\":\"2.0\"},\"scene\":0,\"scenes\":[{\"nodes\":[0]}],"
+    "\"nodes\":[{\"mesh\":0,\"translation\":[1,2,3]}],"
+    "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"TEXCOORD_0\":2},"
+    "\"indices\":1}]}],"
+    "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"},"
+    "{\"bufferView\":1,\"componentType\":5123,\"count\":3,\"type\":\"SCALAR\"},"
+    "{\"bufferView\":2,\"componentType\":5126,\"count\":3,\"type\":\"VEC2\"}],"
+    "\"bufferViews\":[{\"buffer\":0,\"byteLength\":36},"
+    "{\"buffer\":0,\"byteOffset\":36,\"byteLength\":6},"
+    "{\"buffer\":0,\"byteOffset\":44,\"byteLength\":24}],"
+    "\"buffers\":[{\"byteLength\":68,\"uri\":\"strict.bin\"}]}";
+
+static const char *strict_gltf(const char *name, ...)
+{
+    unsigned char bin[68] = {0};
+    const float pos[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0}, uv[6] = {0.25f, 0.5f, 1, 0, 0, 1};
+    const uint16_t idx[3] = {0, 1, 2};
+    memcpy(bin, pos, sizeof pos);
+    memcpy(bin + 36, idx, sizeof idx);
+    memcpy(bin + 44, uv, sizeof uv);
+    write_bytes("strict.bin", bin, sizeof bin);
+    char json[4096];
+    size_t len = strlen(strict_json);
+    memcpy(json, strict_json, len);
+    va_list ap;
+    va_start(ap, name);
+    for (const char *from; (from = va_arg(ap, const char *));) {
+        const char *to = va_arg(ap, const char *);
+        len = replace_once(json, len, sizeof json - 1, from, to);
+    }
+    va_end(ap);
+    return write_bytes(name, json, len);
+}
+
+static void test_strict_gltf_loads(void **state)
+{
+    (void)state;
+    fp_mesh *m = NULL;
+    int rc = fp_mesh_load(strict_gltf("strict.gltf", NULL), &m, err, sizeof err);
+    if (rc)
+        fail_msg("%s", err);
+    const float want[9] = {1, 2, 3, 2, 2, 3, 1, 3, 3}; /* translated by (1, 2, 3) */
+    assert_int_equal(m->triangle_count, 1);
+    assert_memory_equal(m->positions, want, sizeof want);
+    assert_true(m->uvs[0] == 0.25f && m->uvs[1] == 0.5f);
+    fp_mesh_free(&m);
+    /* extras are free-form: an "indices": -1 there is no index */
+    rc = fp_mesh_load(strict_gltf("extras.gltf", "\"scene\":0",
+                                  "\"extras\":{\"indices\":-1,\"mesh\":\"x\"},\"scene\":0", NULL),
+                      &m, err, sizeof err);
+    if (rc)
+        fail_msg("%s", err);
+    fp_mesh_free(&m);
+    /* normalised unsigned byte UVs are glTF's: read as value / 255 */
+    static const char uv[] = "\"componentType\":5126,\"count\":3,\"type\":\"VEC2\"";
+    rc = fp_mesh_load(strict_gltf("uv8.gltf", uv,
+                                  "\"componentType\":5121,\"normalized\":true,\"count\":3,"
+                                  "\"type\":\"VEC2\"", NULL),
+                      &m, err, sizeof err);
+    if (rc)
+        fail_msg("%s", err);
+    const float u = 0.25f;
+    unsigned char first; /* the first byte of the UV view: the float 0.25's lowest */
+    memcpy(&first, &u, 1);
+    assert_true(m->uvs[0] == (float)first / 255.0f);
+    fp_mesh_free(&m);
+}
+
+/* 2. Vertex attributes of component types glTF 2.0 does not allow: a BYTE POSITION loaded
+ * its raw bytes as coordinates. FORMAT, or UNSUPPORTED where the file declares
+ * KHR_mesh_quantization (legal, not handled). */
+static void test_gltf_attribute_component_types(void **state)
+{
+    (void)state;
+    static const char pos[] = "\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"";
+    expect_load_error(strict_gltf("pos_byte.gltf", pos,
+                                  "\"componentType\":5120,\"count\":3,\"type\":\"VEC3\"", NULL),
+                      FP_MESH_ERR_FORMAT,
+                      "mesh 0 primitive 0 POSITION accessor 0 has component type 5120 (BYTE); "
+                      "glTF 2.0 requires 5126 (FLOAT)");
+    expect_load_error(strict_gltf("pos_short.gltf", pos,
+                                  "\"componentType\":5122,\"normalized\":true,\"count\":3,"
+                                  "\"type\":\"VEC3\"", NULL),
+                      FP_MESH_ERR_FORMAT, "component type 5122 (SHORT) normalized");
+    expect_load_error(strict_gltf("pos_quant.gltf", pos,
+                                  "\"componentType\":5120,\"count\":3,\"type\":\"VEC3\"",
+                                  "\"asset\":{", "\"extensionsUsed\":[\"KHR_mesh_quantization\"],"
+                                  "\"asset\":{", NULL),
+                      FP_MESH_ERR_UNSUPPORTED, "KHR_mesh_quantization is not supported");
+    /* UVs: unsigned byte/short only normalised */
+    static const char uv[] = "\"componentType\":5126,\"count\":3,\"type\":\"VEC2\"";
+    expect_load_error(strict_gltf("uv_raw.gltf", uv,
+                                  "\"componentType\":5121,\"count\":3,\"type\":\"VEC2\"", NULL),
+                      FP_MESH_ERR_FORMAT, "TEXCOORD_0 accessor 2 has component type 5121");
+}
+
+/* 3. An index that is no index: tinygltf read "indices": -1 (or -7, 0.5, 4294967295) as
+ * absent, and the primitive loaded non-indexed; "mesh": -1 dropped the node's mesh. */
+static void test_gltf_bad_index_fields(void **state)
+{
+    (void)state;
+    static const struct { const char *to, *want; } cases[] = {
+        {"\"indices\":-1", "meshes[0].primitives[0].indices is -1, not an index"},
+        {"\"indices\":-7", "meshes[0].primitives[0].indices is -7"},
+        {"\"indices\":0.5", "meshes[0].primitives[0].indices is 0.5"},
+        {"\"indices\":4294967295", "meshes[0].primitives[0].indices is 4294967295"},
+        {"\"indices\":\"1\"", "meshes[0].primitives[0].indices is a string"},
+        {"\"indices\":7", "indices accessor out of bounds"}, /* tinygltf's own check */
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        char name[32];
+        snprintf(name, sizeof name, "idx%zu.gltf", i);
+        expect_load_error(strict_gltf(name, "\"indices\":1", cases[i].to, NULL),
+                          FP_MESH_ERR_FORMAT, cases[i].want);
+    }
+    expect_load_error(strict_gltf("mesh_neg.gltf", "\"mesh\":0", "\"mesh\":-1", NULL),
+                      FP_MESH_ERR_FORMAT, "nodes[0].mesh is -1");
+    expect_load_error(strict_gltf("attr_neg.gltf", "\"POSITION\":0", "\"POSITION\":-1", NULL),
+                      FP_MESH_ERR_FORMAT, "meshes[0].primitives[0].attributes.POSITION is -1");
+    expect_load_error(strict_gltf("scene_neg.gltf", "\"nodes\":[0]", "\"nodes\":[-1]", NULL),
+                      FP_MESH_ERR_FORMAT, "scenes[0].nodes[0] is -1");
+    expect_load_error(strict_gltf("mat_neg.gltf", "\"indices\":1", "\"indices\":1,\"material\":-1",
+                                  NULL),
+                      FP_MESH_ERR_FORMAT, "meshes[0].primitives[0].material is -1");
+    expect_load_error(strict_gltf("uv1_neg.gltf", "\"TEXCOORD_0\":2",
+                                  "\"TEXCOORD_0\":2,\"TEXCOORD_1\":-3", NULL),
+                      FP_MESH_ERR_FORMAT, "meshes[0].primitives[0].attributes.TEXCOORD_1 is -3");
+}
+
+/* 4. GLB header version other than 2: tinygltf never looked. */
+static void test_glb_version(void **state)
+{
+    (void)state;
+    fp_mesh *m = icosahedron();
+    assert_int_equal(fp_mesh_save(m, tmp_path("v.glb"), err, sizeof err), FP_MESH_OK);
+    fp_mesh_free(&m);
+    size_t len;
+    unsigned char *b = (unsigned char *)slurp(tmp_path("v.glb"), &len);
+    assert_memory_equal(b, "glTF\2\0\0\0", 8);
+    assert_int_equal(fp_mesh_load(write_bytes("v2.glb", b, len), &m, err, sizeof err),
+                     FP_MESH_OK);
+    assert_int_equal(m->vertex_count, 12);
+    fp_mesh_free(&m);
+    b[4] = 1;
+    expect_load_error(write_bytes("v1.glb", b, len), FP_MESH_ERR_UNSUPPORTED,
+                      "GLB header version 1 (glTF 1.0) is not supported");
+    b[4] = 3;
+    expect_load_error(write_bytes("v3.glb", b, len), FP_MESH_ERR_FORMAT, "GLB header version 3");
+    b[4] = 2;
+    b[7] = 1; /* 2 + 2^24 */
+    expect_load_error(write_bytes("vbig.glb", b, len), FP_MESH_ERR_FORMAT,
+                      "GLB header version 16777218");
+    free(b);
+    /* a .gltf says its version in asset.version */
+    expect_load_error(strict_gltf("v1.gltf", "\"version\":\"2.0\"", "\"version\":\"1.0\"", NULL),
+                      FP_MESH_ERR_UNSUPPORTED, "asset.version '1.0' is not supported");
+}
+
+/* 5. Node transforms of the wrong length were ignored (the node untransformed), TRS beside a
+ * matrix too. Refused naming the node. */
+static void test_gltf_node_transform_lengths(void **state)
+{
+    (void)state;
+    static const struct { const char *node, *want; } cases[] = {
+        {"{\"mesh\":0,\"matrix\":[1,0,0,0, 0,1,0,0, 0,0,1,0, 5,0,0]}",
+         "nodes[0].matrix has 15 numbers, not 16"},
+        {"{\"mesh\":0,\"matrix\":[]}", "nodes[0].matrix has 0 numbers, not 16"},
+        {"{\"mesh\":0,\"translation\":[5,0]}", "nodes[0].translation has 2 numbers, not 3"},
+        {"{\"mesh\":0,\"rotation\":[0,0,0]}", "nodes[0].rotation has 3 numbers, not 4"},
+        {"{\"mesh\":0,\"scale\":[2,2,2,2]}", "nodes[0].scale has 4 numbers, not 3"},
+        {"{\"mesh\":0,\"scale\":2}", "nodes[0].scale is not an array of numbers"},
+        {"{\"mesh\":0,\"translation\":[5,\"0\",0]}", "nodes[0].translation[1] is a string"},
+        {"{\"children\":[1]},{\"mesh\":0,\"translation\":[1,2,3],"
+         "\"matrix\":[1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1]}",
+         "nodes[1] has both a matrix and translation, rotation or scale"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        char name[32];
+        snprintf(name, sizeof name, "node%zu.gltf", i);
+        expect_load_error(transformed_triangle_file(name, cases[i].node), FP_MESH_ERR_FORMAT,
+                          cases[i].want);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1260,6 +1628,14 @@ int main(void)
         cmocka_unit_test(test_obj_scan_fast_paths),
         cmocka_unit_test(test_save_failure_keeps_old_file),
         cmocka_unit_test(test_save_survives_sigkill),
+        cmocka_unit_test(test_ply_vertex_needs_xyz),
+        cmocka_unit_test(test_ply_comments_anywhere),
+        cmocka_unit_test(test_ply_binary_errors_cite_bytes),
+        cmocka_unit_test(test_strict_gltf_loads),
+        cmocka_unit_test(test_gltf_attribute_component_types),
+        cmocka_unit_test(test_gltf_bad_index_fields),
+        cmocka_unit_test(test_glb_version),
+        cmocka_unit_test(test_gltf_node_transform_lengths),
     };
     return cmocka_run_group_tests_name("mesh", tests, setup, teardown);
 }
