@@ -149,7 +149,8 @@ void csrbf_solver_destroy(csrbf_solver **solver);
  *  Owned by the solver; valid until the next call on it. */
 const char *csrbf_solver_message(const csrbf_solver *solver);
 
-/** Bit mask (1u << code) of the warnings raised by the last set_start/set_end/solve call. */
+/** Bit mask (1u << code) of the warnings raised by the last set_start_points, set_end_points,
+ *  solve, limit_end_points or guarded_step call (the last two add LIMITED and SUBSTEPS). */
 unsigned csrbf_solver_warnings(const csrbf_solver *solver);
 
 /** Set the control vectors' start points (the centres) and factor the system.

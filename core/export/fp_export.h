@@ -23,7 +23,7 @@
  *
  * Errors: 0 or a negative errno-style code (core/common/fp_error.h) with a message in err:
  * -EINVAL bad options or frames (non-finite, times not increasing), -ENOENT/-EACCES/-ENOSPC/
- * -EIO for the output, -ENOMEM, -ENOTSUP an unknown format, FP_ENUMERIC the eigensolver
+ * -EIO for the output, -ENOMEM, -EINVAL an unknown format or bad options, FP_ENUMERIC the eigensolver
  * failed. Nothing is printed. Threads: one exporter belongs to one thread.
  */
 #ifndef FP_EXPORT_H

@@ -110,7 +110,7 @@ int fp_hand_quat_to_mat(const float qf[4], double r[3][3])
     double w = qf[0], x = qf[1], y = qf[2], z = qf[3];
     double n = sqrt(w * w + x * x + y * y + z * z);
     if (!(n >= 1e-6) || !isfinite(n))
-        return -1;
+        return -EINVAL;
     w /= n, x /= n, y /= n, z /= n;
     r[0][0] = 1 - 2 * (y * y + z * z);
     r[0][1] = 2 * (x * y - w * z);

@@ -20,9 +20,9 @@
  * metacarpal. +y: out of the back of the hand; -z: toward the fingers (along the middle
  * metacarpal); +x = y cross z. So +x points toward the little finger of a RIGHT hand and
  * toward the thumb of a LEFT hand: the left hand is the mirror image (x -> -x) of the right.
- * (plugin.h's fp_event_wrist_pose says "+x toward the thumb side for a right hand"; with +y
- * and -z as given, that frame would be left-handed, which no rotation quaternion can
- * produce. This module reads the quaternion as a proper rotation of the frame above.)
+ * (plugin.h's fp_event_wrist_pose says the same since ABI 1.1; 1.0 said "+x toward the thumb
+ * side for a right hand", a left-handed frame with +y and -z as given, which no rotation
+ * quaternion can produce. This module reads the quaternion as a proper rotation of it.)
  *
  * ## Angles (radians, enum fp_glove_sensor order, 22 values)
  * Conventions are those of the "cyberglove_like" Leap recordings in shared/data
@@ -191,7 +191,7 @@ int fp_hand_fit_geometry(fp_hand_model *model, fp_hand_side side,
 
 /** [any-thread] Unit quaternion -> rotation matrix: q = (w, x, y, z) need not be unit (it is
  *  normalised in double); r[i][j] is row i, column j, so r's columns are the rotated axes.
- *  Returns 0, or -1 (r untouched) when |q| < 1e-6 or q is not finite. */
+ *  Returns 0, or -EINVAL (r untouched) when |q| < 1e-6 or q is not finite. */
 int fp_hand_quat_to_mat(const float q_wxyz[4], double r[3][3]);
 
 /** [any-thread] Rotation matrix -> unit quaternion (w, x, y, z) with w >= 0, by Shepperd's

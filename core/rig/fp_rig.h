@@ -11,7 +11,7 @@
  *     fp_rig *rig;
  *     fp_rig_load_for_mesh(path, n, rest_positions, &rig, err, sizeof err);  // load + bind
  *     float vals[FP_RIG_MAX_CHANNELS];
- *     fp_rig_channel_values(rig, control_set.channels, control_set.channel_count, vals);
+ *     fp_rig_channel_values(rig, names, values_in, control_set.channel_count, vals);
  *     fp_rig_pose(rig, base, vals, posed);          // the jaw about its hinge
  *     // the engine: csrbf_points on `posed`, fingers' control vectors start -> end,
  *     csrbf_evaluate(solver, posed_points, warped, 0, NULL);
@@ -176,7 +176,8 @@ int fp_rig_channel_check(const fp_rig *rig, const char *name, double value, char
 /** Fill values[fp_rig_channel_count] from named pairs (the control set's channels, plugin.h
  *  fp_channel is {char name[32]; float value;}: pass them as parallel arrays here to keep
  *  this library free of the plugin ABI): channels not named keep their neutral value; names
- *  the rig does not have are ignored and counted. Returns that count (>= 0). No allocation. */
+ *  the rig does not have are ignored and counted. Returns that count (>= 0), or -EINVAL (rig or
+ *  values NULL). No allocation. [any-thread]. */
 int fp_rig_channel_values(const fp_rig *rig, const char *const *names, const float *vals,
                           size_t n, float *values);
 
@@ -193,11 +194,12 @@ void fp_rig_hinge(const fp_rig *rig, float right[3], float left[3], double *open
 const float *fp_rig_jaw_weights(const fp_rig *rig);
 const float *fp_rig_mobility(const fp_rig *rig);
 
-/** Pose the base by the channels: out[v] = H + R(w_v * theta) (base[v] - H) + w_v * glide,
- *  where H is the right hinge point, R(a) the rotation by a about the hinge axis (right to
- *  left TMJ; positive opens the mouth: the chin goes down and back), theta = jaw.open *
- *  open_degrees and w_v the vertex's jaw weight. Skull vertices and every vertex with
- *  w_v == 0 are copied bit for bit; jaw vertices (w = 1) move rigidly. Computed in double.
+/** Pose the base by the channels: out[v] = H + R(w_v * theta) (base[v] - H)
+ *  + w_v * jaw.open * (glide[0] * forward - glide[1] * up), where H is the right hinge point,
+ *  R(a) the rotation by a about the hinge axis (right to left TMJ; positive opens the mouth:
+ *  the chin goes down and back), theta = jaw.open * open_degrees, w_v the vertex's jaw weight
+ *  and forward, up the rig's axes. Skull vertices, every vertex with w_v == 0 and every
+ *  vertex while theta == 0 (the glide too: a closed jaw does not slide) are copied bit for bit; jaw vertices (w = 1) move rigidly. Computed in double.
  *  base, out: n x 3 floats (n = fp_rig_vertex_count), may be the same array. values: the
  *  channel values in the rig's channel order (fp_rig_channel_values), NULL = neutral; values
  *  outside a channel's range are clamped to it (a mapping's noise must not fail a frame),

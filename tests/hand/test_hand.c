@@ -506,8 +506,8 @@ static void test_quaternion_matrix(void **state)
     }
     const float zero[4] = {0, 0, 0, 0}, nan4[4] = {NAN, 0, 0, 0};
     double r[3][3];
-    assert_int_equal(fp_hand_quat_to_mat(zero, r), -1);
-    assert_int_equal(fp_hand_quat_to_mat(nan4, r), -1);
+    assert_int_equal(fp_hand_quat_to_mat(zero, r), -EINVAL);
+    assert_int_equal(fp_hand_quat_to_mat(nan4, r), -EINVAL);
 }
 
 int main(void)

@@ -159,11 +159,15 @@ static inline bool fpmu_parse_value(const fp_param_info *info, const char *v, fp
     return false;
 }
 
-/** Parse a SPEC's keys against a factory's typed key list `info` (ended by a NULL name):
+/** The most keys fpmu_params_parse takes in one list. */
+#define FPMU_MAX_KEYS 64
+
+/** Parse a SPEC's keys against a factory's typed key list `info` (ended by a NULL name, at
+ *  most FPMU_MAX_KEYS entries, else -EINVAL naming the plugin's bug):
  *  out[i] receives info[i]'s value, its default where the key is absent. Errors (-EINVAL,
  *  a message in err that begins with `plugin`): an unknown key (the message lists the keys),
  *  a value of the wrong type or outside [min, max] (the message gives the range or the
- *  choices), a required key (default NULL) that is missing. out must have as many entries as
+ *  choices), a required key (default NULL) that is missing, a default that does not parse. out must have as many entries as
  *  info. [main-thread] (a create call); no allocation. */
 static inline int fpmu_params_parse(const char *plugin, const fp_param_info *info,
                                     const fp_param *params, size_t nparams, fpmu_value *out,
@@ -171,6 +175,11 @@ static inline int fpmu_params_parse(const char *plugin, const fp_param_info *inf
 {
     size_t n = 0;
     while (info[n].name) n++;
+    if (n > FPMU_MAX_KEYS) { /* (the keys given are marked in a fixed array) */
+        snprintf(err, errlen, "%s: %zu keys declared, at most %d (a bug in the plugin)", plugin, n,
+                 FPMU_MAX_KEYS);
+        return -EINVAL;
+    }
     for (size_t i = 0; i < n; i++) {
         out[i].number = 0;
         out[i].text = NULL;
@@ -180,7 +189,7 @@ static inline int fpmu_params_parse(const char *plugin, const fp_param_info *inf
             return -EINVAL;
         }
     }
-    bool given[64] = {false};
+    bool given[FPMU_MAX_KEYS] = {false};
     for (size_t p = 0; p < nparams; p++) {
         size_t i = 0;
         while (i < n && strcmp(info[i].name, params[p].key)) i++;
@@ -204,10 +213,10 @@ static inline int fpmu_params_parse(const char *plugin, const fp_param_info *inf
                          params[p].value);
             return -EINVAL;
         }
-        if (i < 64) given[i] = true;
+        given[i] = true;
     }
     for (size_t i = 0; i < n; i++)
-        if (!info[i].default_value && !(i < 64 && given[i])) {
+        if (!info[i].default_value && !given[i]) {
             snprintf(err, errlen, "%s: key '%s' is required (%s)", plugin, info[i].name,
                      info[i].description ? info[i].description : "no default");
             return -EINVAL;

@@ -211,7 +211,9 @@ typedef struct fp_host {
 
     /** [any-thread, lock-free, wait-free] Copy one event into this instance's queue. The host
      *  sets header.source. Returns false when the queue is full: the event is dropped and
-     *  counted by the host (the session thread always has the latest pose anyway). */
+     *  counted by the host (the session thread always has the latest pose anyway); false
+     *  too, and not counted, when header.size is below sizeof(fp_event_header) or above
+     *  sizeof(fp_event). The event is copied: it may live on the caller's stack. */
     bool (*push_event)(const struct fp_host *host, const fp_event_header *event);
 
     /** [any-thread] The host clock: CLOCK_MONOTONIC in nanoseconds. */
@@ -224,7 +226,9 @@ typedef struct fp_host {
      *  [session-thread] calls, which must not do I/O. */
     void (*log)(const struct fp_host *host, fp_log_level level, const char *message);
 
-    /** [main-thread] Optional host features by versioned id; NULL where not offered. */
+    /** [main-thread] Optional host features by versioned id; NULL where not offered. The
+     *  struct returned stays valid while the instance lives: ask in create and keep it, then
+     *  call its functions on the threads each documents (e.g. [session-thread]). */
     const void *(*get_extension)(const struct fp_host *host, const char *id);
 } fp_host;
 
@@ -340,7 +344,8 @@ enum fp_intent {
     FP_INTENT_CANCEL = 1u << 2    /* drop the current deformation, back to the base */
 };
 
-/** What the host gives a mapping each frame. */
+/** What the host gives a mapping each frame. It and everything it points to (events, mesh,
+ *  mesh->base, rig) are the host's, valid during the process call only: copy what is kept. */
 typedef struct fp_frame_input {
     uint32_t size;
     int64_t time_ns;               /* the frame's time */
@@ -420,8 +425,10 @@ typedef struct fp_host_rig {
 /** Host extension FP_HOST_EXT_SURFACE (ABI 1.1): nearest points of the base surface.
  *  For each of `count` query points (mesh units) the nearest base vertex within
  *  `max_distance` (mesh units; +INFINITY for no limit): out[i].vertex (UINT32_MAX where none
- *  is within reach), its position, its distance and its unit normal. Returns 0 or a negative
- *  errno. [session-thread]: no allocation, no lock; cost follows the queries, not the mesh. */
+ *  is within reach), its position, its distance and its unit normal. out: count entries of
+ *  the caller's, written during the call. Returns 0, -EINVAL (points or out NULL with count >
+ *  0), -ENODATA (the session has no surface index yet: no triangles), or the engine's negative
+ *  code. [session-thread]: no allocation, no lock; cost follows the queries, not the mesh. */
 #define FP_HOST_EXT_SURFACE "facepuppet.surface/1"
 typedef struct fp_surface_hit {
     uint32_t vertex;
@@ -511,11 +518,14 @@ typedef struct fp_plugin_entry {
     const char *id;          /* reverse-DNS, e.g. "org.facepuppet.input-replay" */
     const char *version;     /* the plugin's own version, free form */
 
-    /** [main-thread] Called once after loading, with the shared object's path. */
+    /** [main-thread] Called once after loading, with the shared object's path (the host's
+     *  string, valid during the call: copy it to keep it). false refuses the load: the host
+     *  unloads the plugin and reports FP_EPLUGIN_INIT (exit 78), naming it. */
     bool (*init)(const char *plugin_path);
     /** [main-thread] Called once before unloading. */
     void (*deinit)(void);
-    /** [main-thread] A factory by id (FP_INPUT_FACTORY_ID, FP_MAPPING_FACTORY_ID), or NULL. */
+    /** [main-thread] A factory by id (FP_INPUT_FACTORY_ID, FP_MAPPING_FACTORY_ID), or NULL.
+     *  The factory must stay valid until deinit (a static const struct, as the templates). */
     const void *(*get_factory)(const char *factory_id);
 } fp_plugin_entry;
 
