@@ -81,8 +81,13 @@ typedef struct fp_export_result {
 typedef struct fp_exporter fp_exporter;
 
 /** Start an export of frames of `base` (its vertex count, triangles, UVs and source are
- *  used; the mesh must outlive the exporter). Checks the output's folder (pc2/mdd/glTF:
- *  creates the temporary file; obj-seq: creates the folder). Returns 0 and *out. */
+ *  used; the mesh must outlive the exporter, and so must opt's name, stem and seq_ext, kept
+ *  by pointer; opt->path is copied). Checks the output before any frame (the file it would
+ *  replace, fp_file_target: a folder, FIFO or device is refused with -EEXIST; pc2/mdd/glTF:
+ *  creates the temporary file; obj-seq: creates the folder). Returns 0 and *out, which
+ *  fp_export_finish or fp_export_abort frees; or -EINVAL (NULL, an empty path, an unknown
+ *  format, bad limits), -EEXIST, -ENOENT/-EACCES/-ENOSPC/-EIO for the output, -ENOMEM, with
+ *  err. [main-thread]. */
 int fp_export_begin(const fp_mesh *base, const fp_export_options *opt, fp_exporter **out,
                     char *err, size_t errlen);
 

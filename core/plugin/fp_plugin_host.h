@@ -44,6 +44,7 @@ int fp_spec_parse(const char *text, fp_spec *spec, char *err, size_t errlen);
  *  buffer, valid until fp_spec_clear), or NULL where absent. */
 const char *fp_spec_take(fp_spec *spec, const char *key);
 
+/** Free the SPEC's buffer (its strings become invalid) and zero it; safe on a zeroed one. */
 void fp_spec_clear(fp_spec *spec);
 
 /* ---- finding and loading plugins ------------------------------------------------------ */
@@ -78,6 +79,7 @@ void fp_plugin_path_init(fp_plugin_path *path, const char *const *extra_dirs, si
  *  than the caller or root), into why (whylen bytes); false where it is safe. Follows
  *  symbolic links. [any-thread] */
 bool fp_plugin_path_unsafe(const char *file_or_dir, char *why, size_t whylen);
+/** Free the search path's folders and zero it; safe on a zeroed one. */
 void fp_plugin_path_clear(fp_plugin_path *path);
 
 /** A loaded shared object. */
@@ -151,6 +153,8 @@ typedef struct fp_event_queue {
 
 /** capacity is rounded up to a power of two (at least 2). Returns 0 or -ENOMEM. */
 int fp_event_queue_init(fp_event_queue *q, size_t capacity);
+/** Free the cells; no producer may push any more (the input stopped, its threads joined).
+ *  Safe on a zeroed queue. */
 void fp_event_queue_destroy(fp_event_queue *q);
 /** Copy ev (ev->size bytes, at most sizeof(fp_event)) in. False when full or too large. */
 bool fp_event_queue_push(fp_event_queue *q, const fp_event_header *ev);

@@ -309,7 +309,8 @@ void fp_session_apply_controls(fp_session *s, int64_t now_ns, const fp_control_s
 
 /** The shape to show: vertex_count x 3 floats, mesh units; valid until the next step. */
 const float *fp_session_positions(const fp_session *s);
-/** The committed shape (the base). */
+/** The committed shape (the base): vertex_count x 3 floats, mesh units, the session's; valid
+ *  until the next step, undo or reset (a commit rewrites it in place). */
 const float *fp_session_base(const fp_session *s);
 
 /** For a partial upload (the viewer): the vertex ranges, (*ranges)[2k] = first vertex,
@@ -326,12 +327,19 @@ size_t fp_session_touched(fp_session *s, const uint32_t **ranges);
 /** The same for fp_session_base: a commit's ranges (the engine's), SIZE_MAX after undo,
  *  reset, a commit with a rig or through the contact guard. */
 size_t fp_session_base_touched(fp_session *s, const uint32_t **ranges);
-/** The shape as loaded. */
+/** The shape as loaded: vertex_count x 3 floats, mesh units; the session's, unchanged while
+ *  it lives. */
 const float *fp_session_loaded(const fp_session *s);
 size_t fp_session_vertex_count(const fp_session *s);
-/** The loaded mesh (topology, UVs); its positions are the loaded shape. */
+/** The loaded mesh (topology, UVs); its positions are the loaded shape. The session's, valid
+ *  while it lives; do not free it. */
 const struct fp_mesh *fp_session_mesh(const fp_session *s);
+/** The support radius R of the Wendland functions the engine uses (Sato et al., section 3),
+ *  mesh units. */
 double fp_session_radius(const fp_session *s);
+/** Set the support radius, mesh units, from the next frame on (the viewer's [ and ] keys): a
+ *  value not finite or not > 0 is ignored (the radius stays). [session-thread] or between
+ *  frames. */
 void fp_session_set_radius(fp_session *s, double radius);
 const fp_calibration *fp_session_calibration(const fp_session *s);
 /** The head found in the loaded mesh and the mesh's unit: head->mm_per_unit is the one the
@@ -341,7 +349,8 @@ const fp_head *fp_session_head(const fp_session *s);
 /** The latest pose of a hand in mesh units (NULL if never seen, or its device is
  *  disconnected). Owned by the session; valid until the next fp_session_step. */
 const fp_hand_pose *fp_session_hand(const fp_session *s, int hand);
-/** The last control set (start/end points) the mapping made and the engine used. */
+/** The last control set (start/end points) the mapping made and the engine used; the
+ *  session's, rewritten by every step (copy what is kept). */
 const fp_control_set *fp_session_control_set(const fp_session *s);
 /** Replace the mapping by a new one from spec (NAME[,key=value...], as the mapping option),
  *  loaded from path: keeps the mesh, the base, the undo history, the inputs and the radius;
@@ -379,7 +388,7 @@ double fp_session_channel(const fp_session *s, const char *name);
 
 /** Committed gestures in the base since the loaded shape (one per undo level: an anchored
  *  commit, an unanchored drag): undo restores the count of the level it returns to, reset
- *  sets 0. [main-thread]. */
+ *  sets 0. [session-thread] or between frames, as every accessor here. */
 unsigned long fp_session_commits(const fp_session *s);
 /** Undo the last commit or reset (one level, up to FP_SESSION_UNDO_LEVELS): the base goes
  *  back, a deformation in progress is dropped, the mapping's gesture is reset. Returns false
@@ -391,7 +400,8 @@ void fp_session_reset(fp_session *s);
 unsigned long fp_session_dropped(const fp_session *s);
 
 /** How many FP_STATUS_ERROR events the inputs reported (a damaged recording, a device that
- *  needs the performer); *last gets the latest one's text. */
+ *  needs the performer); *last (may be NULL) gets the latest one's text, the session's, valid
+ *  until the next step. */
 unsigned fp_session_input_errors(const fp_session *s, const char **last);
 
 /** Write the shape to show (normals recomputed) to path; format by extension. Returns 0,

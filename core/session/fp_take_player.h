@@ -37,16 +37,20 @@ int fp_take_player_open(const char *take_path, const char *mesh_path,
 int fp_take_player_next(fp_take_player *p, fp_take_frame *frame, fp_frame_stats *st,
                         char *err, size_t errlen);
 
+/** The player's session, reader and the take's header: the player owns them (never destroy or
+ *  close them yourself); valid until fp_take_player_close. [main-thread]. */
 fp_session *fp_take_player_session(fp_take_player *p);
 fp_take_reader *fp_take_player_reader(fp_take_player *p);
 const fp_take_header *fp_take_player_header(const fp_take_player *p);
-/** The mesh path the session was made from (the take's or the one given). */
+/** The mesh path the session was made from (the take's or the one given); the player's,
+ *  valid until fp_take_player_close. */
 const char *fp_take_player_mesh_path(const fp_take_player *p);
 
 /** Millimetres per mesh unit of the take: 1 / the scale of its recorded calibration (the
  *  first hand that has one), else the session's (the rig's, or detected from the head). */
 double fp_take_player_mm_per_unit(const fp_take_player *p);
 
+/** Close the session and the reader, free the player, set *p to NULL. NULL-safe. */
 void fp_take_player_close(fp_take_player **p);
 
 #ifdef __cplusplus
