@@ -31,6 +31,14 @@ int fp_take_player_open(const char *take_path, const char *mesh_path,
                         const fp_plugin_path *plugin_path, fp_take_player **out, char *err,
                         size_t errlen);
 
+/** fp_take_player_open with the session's log (fp_session_options.log, on the thread that
+ *  plays): a frame whose stored control set the engine refuses (a vector not finite, a radius
+ *  not > 0) is said there ("engine: ...; the base shown", then counted), not skipped in
+ *  silence. log NULL: as fp_take_player_open. */
+int fp_take_player_open_logged(const char *take_path, const char *mesh_path,
+                               const fp_plugin_path *plugin_path, fp_session_log_fn log,
+                               void *log_user, fp_take_player **out, char *err, size_t errlen);
+
 /** Play the next frame: 1 and *frame (the reader's, valid until the next call), *st (may be
  *  NULL); 0 after the last; or the reader's negative code with err. The frame's positions
  *  are fp_session_positions(fp_take_player_session(p)). */

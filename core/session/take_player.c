@@ -17,6 +17,14 @@ int fp_take_player_open(const char *take_path, const char *mesh_path,
                         const fp_plugin_path *plugin_path, fp_take_player **out, char *err,
                         size_t errlen)
 {
+    return fp_take_player_open_logged(take_path, mesh_path, plugin_path, NULL, NULL, out, err,
+                                      errlen);
+}
+
+int fp_take_player_open_logged(const char *take_path, const char *mesh_path,
+                               const fp_plugin_path *plugin_path, fp_session_log_fn log,
+                               void *log_user, fp_take_player **out, char *err, size_t errlen)
+{
     if (out)
         *out = NULL;
     if (!take_path || !out)
@@ -51,7 +59,8 @@ int fp_take_player_open(const char *take_path, const char *mesh_path,
     /* a session on the take's mesh with no inputs; its mapping is never called */
     fp_session_options so = {.mesh_path = p->mesh, .mapping = "anchored", .radius = h->radius,
                              .plugin_path = plugin_path,
-                             .rig_path = h->rig_path ? h->rig_path : "none"};
+                             .rig_path = h->rig_path ? h->rig_path : "none",
+                             .log = log, .log_user = log_user};
     if ((rc = fp_session_create(&so, &p->session, err, errlen)))
         goto fail;
     if ((rc = fp_session_take_check_mesh(p->session, p->mesh, h, err, errlen)))

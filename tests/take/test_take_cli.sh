@@ -125,4 +125,41 @@ rc=$?
 cat "$tmp/full.err"
 [ $rc -eq 73 ] || fail "a failed take write exited $rc, want 73"
 grep -q "the take was not written whole" "$tmp/full.err" || fail "no message for the failed take"
+# ---- 5. damaged takes: a refused frame said, no intact frame refused -----------------------
+# a stored control vector made NaN (its chunk's crc32 fixed): play says the engine refused
+# that frame (the session's log), instead of skipping it in silence; a take cut before its
+# first frame chunk: play and export exit 65 naming it, before any output
+"$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv,fast=1" --take-dir "$tmp/nan-takes" \
+    -o "$tmp/nan-run.obj" -q >/dev/null 2>&1 || fail "the NaN test's run exited $?"
+patch=(python3 - "$tmp/nan-takes/take_T001.fptake" "$tmp/nan.fptake" "$tmp/cut.fptake")
+"${patch[@]}" <<'PY' || fail "could not patch the take"
+import struct, sys, zlib
+b = bytearray(open(sys.argv[1], 'rb').read())
+off, done, first = 16, False, None
+while off < len(b) and not done:
+    typ, ln = bytes(b[off + 4:off + 8]), struct.unpack_from('<I', b, off + 8)[0]
+    if typ == b'FRMS':
+        first = off if first is None else first
+        pos = off + 16
+        while pos < off + 16 + ln:
+            sz, flags = struct.unpack_from('<II', b, pos)
+            if flags & 1 and struct.unpack_from('<I', b, pos + 40)[0] > 0:
+                struct.pack_into('<f', b, pos + 56, float('nan'))
+                struct.pack_into('<I', b, off + 16 + ln, zlib.crc32(bytes(b[off:off + 16 + ln])))
+                done = True
+                break
+            pos += sz
+    off += 20 + ln
+assert done, "no active frame with a control vector"
+open(sys.argv[2], 'wb').write(b)
+open(sys.argv[3], 'wb').write(open(sys.argv[1], 'rb').read()[:first + 30])
+PY
+"$fp" play "$tmp/nan.fptake" -o "$tmp/nan.obj" 2>"$tmp/nan.err" || fail "play of the NaN take exited $?"
+grep -q "engine: .*NaN.*the base shown" "$tmp/nan.err" || fail "play said nothing of the refused frame: $(cat "$tmp/nan.err")"
+for cmd in "play $tmp/cut.fptake -o $tmp/cut.obj" "export $tmp/cut.fptake -f obj-seq -o $tmp/cut-seq"; do
+    "$fp" $cmd 2>"$tmp/cut.err"
+    rc=$?
+    [ $rc -eq 65 ] && grep -q "no intact frame" "$tmp/cut.err" || fail "$cmd: exit $rc: $(cat "$tmp/cut.err")"
+done
+[ ! -e "$tmp/cut.obj" ] && [ ! -e "$tmp/cut-seq" ] || fail "a take with no intact frame left an output"
 echo "PASS"

@@ -259,7 +259,8 @@ static int export_main(int argc, char **argv)
     fp_plugin_path path;
     fp_app_plugin_path(&path, dirs, ndirs);
     fp_take_player *p = NULL;
-    int rc = fp_take_player_open(take_path, mesh, &path, &p, err, sizeof err);
+    int rc = fp_take_player_open_logged(take_path, mesh, &path, fp_app_log_line, NULL, &p, err,
+                                        sizeof err);
     if (rc) {
         fprintf(stderr, "facepuppet export: %s\n", err);
         fp_plugin_path_clear(&path);

@@ -87,7 +87,8 @@ static int play_main(int argc, char **argv)
     fp_take_player *player = NULL;
     fp_exporter *ex = NULL;
     int status = FP_EXIT_OK;
-    int rc = fp_take_player_open(take_path, mesh, &path, &player, err, sizeof err);
+    int rc = fp_take_player_open_logged(take_path, mesh, &path, fp_app_log_line, NULL, &player, err,
+                                        sizeof err);
     if (rc) {
         fprintf(stderr, "facepuppet play: %s\n", err);
         fp_plugin_path_clear(&path);
