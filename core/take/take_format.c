@@ -349,6 +349,13 @@ static bool finite3(const double *v, int n)
     return true;
 }
 
+/* A frame rate a take may have: 1 to TAKE_RATE_MAX frames a second (run's --fps range). */
+#define TAKE_RATE_MAX 10000
+static bool take_rate_ok(fp_take_rate r)
+{
+    return r.den && (uint64_t)r.num >= r.den && (uint64_t)r.num <= (uint64_t)TAKE_RATE_MAX * r.den;
+}
+
 int take_header_check(const fp_take_header *h, char *err, size_t errlen)
 {
     if (!h) return fp_errorf(err, errlen, -EINVAL, "take header: NULL");
@@ -356,9 +363,9 @@ int take_header_check(const fp_take_header *h, char *err, size_t errlen)
         return fp_errorf(err, errlen, -EINVAL,
                          "take header: slate \"%.64s\" must be 1-63 characters of A-Z a-z 0-9 . _ - "
                          "not starting with '.'", h->slate);
-    if (!h->rate.num || !h->rate.den)
-        return fp_errorf(err, errlen, -EINVAL, "take header: frame rate %u/%u", h->rate.num,
-                         h->rate.den);
+    if (!h->rate.num || !h->rate.den || !take_rate_ok(h->rate))
+        return fp_errorf(err, errlen, -EINVAL, "take header: frame rate %u/%u (1 to %d fps)",
+                         h->rate.num, h->rate.den, TAKE_RATE_MAX);
     uint64_t f;
     if (fp_timecode_to_frames(&h->timecode_in, h->rate, &f))
         return fp_errorf(err, errlen, -EINVAL, "take header: timecode in out of range for %u/%u fps",
@@ -545,6 +552,9 @@ static int fill_header(const cJSON *o, fp_take_header *h, strstore *st, char *ms
         return fp_errorf(msg, msglen, -EBADMSG, "header: missing or invalid \"frame_rate\"");
     h->rate.num = (uint32_t)num;
     h->rate.den = (uint32_t)den;
+    if (!take_rate_ok(h->rate)) /* (2^31 fps made timecodes like 15:37:04:1109533224) */
+        return fp_errorf(msg, msglen, -EBADMSG, "header: \"frame_rate\" %u/%u is not 1 to %d fps",
+                         h->rate.num, h->rate.den, TAKE_RATE_MAX);
     s = jstr(o, "timecode_in");
     char tcerr[128];
     if (!s || fp_timecode_parse(s, h->rate, &h->timecode_in, tcerr, sizeof tcerr))

@@ -865,6 +865,47 @@ static void test_list(void **state)
     rm_rf(dir);
 }
 
+/* A header's frame rate outside 1..10000 fps is refused by the writer (-EINVAL) and by the
+ * reader (-EBADMSG: 2^31 fps made timecodes like 15:37:04:1109533224). */
+static void test_rate_range(void **state)
+{
+    (void)state;
+    char dir[512], err[512];
+    make_dir(dir, sizeof dir, "rate");
+    fp_take_header h;
+    tt_header(&h, "R");
+    fp_take_writer *w;
+    fp_take_writer_options o = {.no_sync = true};
+    h.rate = (fp_take_rate){10001, 1};
+    assert_int_equal(fp_take_writer_create(dir, &h, &o, &w, err, sizeof err), -EINVAL);
+    assert_non_null(strstr(err, "frame rate"));
+    h.rate = (fp_take_rate){10000, 1}; /* the fastest allowed, then patched past it */
+    assert_int_equal(fp_take_writer_create(dir, &h, &o, &w, err, sizeof err), 0);
+    char path[1024];
+    snprintf(path, sizeof path, "%s", fp_take_writer_path(w));
+    assert_int_equal(fp_take_writer_close(&w, 0, 0, err, sizeof err), 0);
+    size_t n;
+    uint8_t *b = slurp(path, &n);
+    uint64_t starts[16];
+    uint32_t frames[16];
+    char types[16][5];
+    chunk_starts(b, n, starts, frames, types, 16);
+    assert_string_equal(types[0], "HEAD");
+    uint8_t *at = memmem(b, n, "\"num\":10000", 11);
+    assert_non_null(at);
+    memcpy(at + 6, "99999", 5);
+    rechunk(b, starts[0]);
+    fp_take_reader *r;
+    assert_int_equal(fp_take_reader_open_memory(b, n, "r.fptake", &r, err, sizeof err), -EBADMSG);
+    assert_non_null(strstr(err, "frame_rate"));
+    memcpy(at + 6, "10000", 5); /* and back: it reads */
+    rechunk(b, starts[0]);
+    assert_int_equal(fp_take_reader_open_memory(b, n, "r.fptake", &r, err, sizeof err), 0);
+    fp_take_reader_close(&r);
+    free(b);
+    rm_rf(dir);
+}
+
 /* Timecode out follows frame times from the origin. */
 static void test_timecode_out(void **state)
 {
@@ -945,6 +986,7 @@ int main(void)
         cmocka_unit_test(test_enospc),
         cmocka_unit_test(test_list),
         cmocka_unit_test(test_timecode_out),
+        cmocka_unit_test(test_rate_range),
     };
     const char *corpus = getenv("FP_TAKE_WRITE_CORPUS");
     if (corpus) {
