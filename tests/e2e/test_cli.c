@@ -11,7 +11,7 @@
 #include <unistd.h>
 #include <cmocka.h>
 
-static char exe[8192], data[4096], build[4096], tmp[256];
+static char exe[8192], data[4096], build[4096], tmp[256], repo[2048]; /* repo: the source tree */
 static char out[65536];
 
 /* Run facepuppet with args (a shell fragment); capture stderr+stdout; return exit status. */
@@ -292,7 +292,7 @@ static void test_refused_up_front(void **state)
 static void test_calibrate(void **state)
 {
     (void)state;
-    char args[9000], rec[4300], ict[4300];
+    char args[16384], rec[4300], ict[4300];
     snprintf(rec, sizeof rec, "replay:%s/hands/leap-motion/three-claps_joints_mm.csv,fast=1", data);
     snprintf(ict, sizeof ict, "%s/faces/ict-facekit/generic_neutral_mesh.obj", data);
     snprintf(args, sizeof args, "calibrate --mesh %s --input %s --out cal-hold.json", ict, rec);
@@ -313,6 +313,16 @@ static void test_calibrate(void **state)
     assert_int_equal(fp(args), 73);
     assert_int_equal(fp("calibrate --mode poke --input x --out y.json"), 64);
     assert_int_equal(fp("calibrate --input x"), 64);
+    /* a --rig that does not fit the mesh: refused before the recording is read (it fell back
+     * to estimated landmarks in silence) */
+    snprintf(args, sizeof args, "calibrate --mesh %s --rig %s/rigs/ict-facekit.json --mode touch "
+             "--input %s --out r.json", face(), repo, rec);
+    assert_int_equal(fp(args), 65);
+    assert_non_null(strstr(out, "--rig"));
+    assert_non_null(strstr(out, "26719"));
+    snprintf(args, sizeof args, "pose --mesh %s --rig none --set jaw.open=0.3 --out p.obj", ict);
+    assert_int_equal(fp(args), 64);
+    assert_non_null(strstr(out, "needs a rig"));
 }
 
 static void test_robust_workspace(void **state)
@@ -375,6 +385,7 @@ int main(void)
         char cwd[2048];
         snprintf(data, sizeof data, "%s/%s", getcwd(cwd, sizeof cwd), d ? d : "../shared/data");
     }
+    if (!getcwd(repo, sizeof repo)) snprintf(repo, sizeof repo, "."); /* ctest: the repository root */
     snprintf(build, sizeof build, "%s", b ? b : "build");
     snprintf(exe, sizeof exe, "%s/bin/facepuppet", build);
     snprintf(tmp, sizeof tmp, "/tmp/fp-cli-XXXXXX");

@@ -91,20 +91,23 @@ static int read_samples(fp_input_instance *inst, double duration, fp_calib_sampl
 }
 
 /* Landmarks for touch: the rig's chin and nose_tip (and forehead when it has one) where a rig
- * is found, the head's estimate for the rest. Prints where they came from. */
-static void landmarks(const fp_mesh *m, const fp_head *head, const char *rig_path,
+ * is given (`given`, loaded up front) or found, the head's estimate for the rest. Prints
+ * where they came from. */
+static void landmarks(const fp_mesh *m, const fp_head *head, fp_rig *given, const char *given_path,
                       float lm[FP_CALIB_LANDMARKS][3])
 {
     fp_calib_head_landmarks(m->positions, m->vertex_count, head, lm);
     char found[4096], err[1024];
+    const char *rig_path = given ? given_path : NULL;
     if (!rig_path) {
         char dir[4096];
         fp_rig_default_dir(fp_app_exe_dir(), dir, sizeof dir);
         if (!fp_rig_find(dir, m->vertex_count, m->positions, found, sizeof found, err, sizeof err))
             rig_path = found;
     }
-    fp_rig *rig = NULL;
-    if (!rig_path || fp_rig_load_for_mesh(rig_path, m->vertex_count, m->positions, &rig, err, sizeof err)) {
+    fp_rig *rig = given;
+    if (!rig_path || (!rig && fp_rig_load_for_mesh(rig_path, m->vertex_count, m->positions, &rig, err,
+                                                   sizeof err))) {
         printf("landmarks: estimated from the head%s%s\n", rig_path ? " (rig: " : "", rig_path ? err : "");
         if (rig_path) printf(")\n");
         return;
@@ -121,7 +124,7 @@ static void landmarks(const fp_mesh *m, const fp_head *head, const char *rig_pat
         }
     }
     printf("\n");
-    fp_rig_free(&rig);
+    if (rig != given) fp_rig_free(&rig);
 }
 
 static int calibrate_main(int argc, char **argv)
@@ -195,6 +198,15 @@ static int calibrate_main(int argc, char **argv)
         head.mm_per_unit = mm_per_unit;
         snprintf(head.how, sizeof head.how, "from --mm-per-unit");
     }
+    /* a rig given is loaded (and bound to this mesh) before the recording is read: one that
+     * does not fit the mesh is an error, not a silent fall back to estimated landmarks */
+    fp_rig *given_rig = NULL;
+    if (rig_path && (rc = fp_rig_load_for_mesh(rig_path, m->vertex_count, m->positions, &given_rig,
+                                               err, sizeof err))) {
+        fprintf(stderr, "facepuppet calibrate: --rig %s\n", err);
+        fp_mesh_free(&m);
+        return fp_app_exit_code(rc, FP_APP_INPUT);
+    }
     fp_plugin_path path;
     fp_app_plugin_path(&path, dirs, ndirs);
     fp_input_instance inst;
@@ -224,7 +236,7 @@ static int calibrate_main(int argc, char **argv)
     double touched[FP_CALIB_LANDMARKS][3], rms = 0;
     if (touch) {
         float lm[FP_CALIB_LANDMARKS][3];
-        landmarks(m, &head, rig_path, lm);
+        landmarks(m, &head, given_rig, rig_path, lm);
         rc = fp_calib_fit_touch(smp, n, (const float(*)[3])lm, &c, touched, &rms, err, sizeof err);
     } else {
         rc = fp_calib_fit_hold(smp, n, m->positions, m->vertex_count, &head, &c, err, sizeof err);
@@ -253,6 +265,7 @@ static int calibrate_main(int argc, char **argv)
            touch ? " (fitted)" : "", comment);
 done:
     free(smp);
+    fp_rig_free(&given_rig);
     fp_mesh_free(&m);
     return status;
 }

@@ -55,6 +55,11 @@ static int pose_main(int argc, char **argv)
         pose_usage(stderr);
         return FP_EXIT_USAGE;
     }
+    if (rig_path && !strcmp(rig_path, "none")) { /* (run's word for no rig; pose needs one) */
+        fprintf(stderr, "facepuppet pose: --rig none: pose moves a rig's channels, it needs a rig "
+                        "(give RIG.json, or leave --rig out to find one by the mesh's checksum)\n");
+        return FP_EXIT_USAGE;
+    }
     int oc = fp_app_check_mesh_name("facepuppet pose", "--out", out_path);
     if (!oc) oc = fp_app_check_output("facepuppet pose", "--out", out_path);
     if (oc) return oc;
