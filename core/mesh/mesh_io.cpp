@@ -1423,11 +1423,26 @@ bool skip_image(tinygltf::Image *, const int, std::string *, std::string *, int,
     return true;
 }
 
+// tinygltf's messages on one line, a data URI's payload shortened to its first characters
+// and length (a byteLength mismatch quoted the whole base64 text: kilobytes of it), the
+// whole cut to 400 characters.
 std::string one_line(std::string s)
 {
     for (char &c : s)
         if (c == '\n' || c == '\r')
             c = ' ';
+    for (size_t at = s.find(";base64,"); at != std::string::npos; at = s.find(";base64,", at + 1)) {
+        const size_t from = at + 8;
+        size_t end = from;
+        while (end < s.size() && (isalnum((unsigned char)s[end]) || s[end] == '+' || s[end] == '/' ||
+                                  s[end] == '='))
+            end++;
+        if (end - from > 24)
+            s.replace(from + 16, end - from - 16,
+                      "... (" + std::to_string(end - from) + " base64 characters)");
+    }
+    if (s.size() > 400)
+        s = s.substr(0, 400) + "...";
     while (!s.empty() && s.back() == ' ')
         s.pop_back();
     return s;

@@ -877,6 +877,8 @@ static void test_hostile_files_refused(void **state)
         {"gltf_position_byte.gltf", "POSITION accessor 0 has component type 5120 (BYTE)"},
         {"gltf_matrix_15.gltf", "nodes[0].matrix has 15 numbers, not 16"},
         {"glb_version_1.glb", "GLB header version 1"},
+        /* a data URI's payload is not quoted whole (it was: kilobytes of base64) */
+        {"gltf_data_uri_bytelength.gltf", "base64,AAECAwQFBgcICQoL... (200 base64 characters)"},
     };
     const char *dir = "tests/mesh/hostile";
     DIR *d = opendir(dir);
