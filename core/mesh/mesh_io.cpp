@@ -1401,9 +1401,12 @@ struct GltfReader {
     {
         if (ni < 0 || size_t(ni) >= model.nodes.size())
             return bad(FP_MESH_ERR_FORMAT, "node " + std::to_string(ni) + " does not exist");
-        if (visited[size_t(ni)] || depth > 1000)
+        if (visited[size_t(ni)])
             return bad(FP_MESH_ERR_FORMAT, "node " + std::to_string(ni) +
                                                " appears twice in the hierarchy (cycle?)");
+        if (depth > 1000)
+            return bad(FP_MESH_ERR_UNSUPPORTED, "node " + std::to_string(ni) +
+                                                    " is more than 1000 levels deep in the hierarchy");
         visited[size_t(ni)] = 1;
         const tinygltf::Node &nd = model.nodes[size_t(ni)];
         const Mat4 xf = mat_mul(parent, node_local(nd));
@@ -1511,6 +1514,8 @@ bool gltf_fs_read(std::vector<unsigned char> *out, std::string *err, const std::
         return refuse(std::string("cannot resolve: ") + std::strerror(e));
     if (rb.back() != '/')
         rb += '/';
+    if (rp + '/' == rb)
+        return refuse("names the glTF file's folder, not a file");
     if (rp.compare(0, rb.size(), rb) != 0)
         return refuse("a symbolic link leads outside the glTF file's folder");
     off_t size = 0;

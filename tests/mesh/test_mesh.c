@@ -879,6 +879,8 @@ static void test_hostile_files_refused(void **state)
         {"glb_version_1.glb", "GLB header version 1"},
         /* a data URI's payload is not quoted whole (it was: kilobytes of base64) */
         {"gltf_data_uri_bytelength.gltf", "base64,AAECAwQFBgcICQoL... (200 base64 characters)"},
+        {"gltf_uri_dot.gltf", "URI '.' refused: names the glTF file's folder, not a file"},
+        {"gltf_nodes_too_deep.gltf", "node 1001 is more than 1000 levels deep"},
     };
     const char *dir = "tests/mesh/hostile";
     DIR *d = opendir(dir);
