@@ -881,6 +881,7 @@ static void test_hostile_files_refused(void **state)
         {"gltf_data_uri_bytelength.gltf", "base64,AAECAwQFBgcICQoL... (200 base64 characters)"},
         {"gltf_uri_dot.gltf", "URI '.' refused: names the glTF file's folder, not a file"},
         {"gltf_nodes_too_deep.gltf", "node 1001 is more than 1000 levels deep"},
+        {"gltf_requires_draco.gltf", "requires the extension KHR_draco_mesh_compression, not supported"},
     };
     const char *dir = "tests/mesh/hostile";
     DIR *d = opendir(dir);
