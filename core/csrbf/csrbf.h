@@ -128,8 +128,9 @@ typedef struct csrbf_points csrbf_points;
 int csrbf_kernel_eval(csrbf_kernel kernel, double r, double *psi, double *dpsi_dr);
 
 /** The fold-over bound of a kernel as a fraction of R: 1 / max_r |psi'(r)| (about 0.474 for
- *  psi31, 0.5 for psi30, 0.40 for psi32). A single centre with |alpha| below bound * R keeps
- *  T injective (det of the Jacobian > 0). Returns 0 for an unknown kernel. */
+ *  psi31, 0.5 for psi30, 0.40 for psi32, each in closed form). A single centre with |alpha|
+ *  below bound * R keeps T injective (det of the Jacobian > 0). Returns 0 for an unknown
+ *  kernel. Thread-safe. Source: docs/csrbf.md, pitfall 4 (fold-over). */
 double csrbf_kernel_foldover_bound(csrbf_kernel kernel);
 
 /** Create a solver. *out receives the solver (NULL on error); free it with

@@ -140,22 +140,16 @@ int csrbf_kernel_eval(csrbf_kernel kernel, double r, double *psi, double *dpsi_d
 double csrbf_kernel_foldover_bound(csrbf_kernel kernel)
 {
     /* 1 / max |psi'(r)| on [0, 1]: psi30 max 2 at r = 0; psi31 max 20 r (1-r)^3 at r = 1/4;
-     * psi32 max (56/3) r (1-r)^5 (5r+1), found numerically (golden section is overkill: a
-     * fine scan plus the analytic forms above agree to 1e-9 at 1e5 steps). */
-    static double b32 = 0.0;
+     * psi32 max (56/3) r (1-r)^5 (5r+1) where its derivative (1-r)^4 (1 + 4r - 35r^2) is 0:
+     * r = (2 + sqrt 39) / 35 (closed form; a scan of 1e5 steps agrees to 1e-10, and unlike
+     * the scan it kept in a static, nothing is shared between threads) */
     switch (kernel) {
     case CSRBF_PSI30: return 0.5;
     case CSRBF_PSI31: return 1.0 / (20.0 * 0.25 * 0.75 * 0.75 * 0.75);
-    case CSRBF_PSI32:
-        if (b32 == 0.0) {
-            double mx = 0.0;
-            for (int i = 0; i <= 100000; i++) {
-                double r = i / 100000.0, d = fabs(csrbf_dpsi_over_r(CSRBF_PSI32, r) * r);
-                if (d > mx) mx = d;
-            }
-            b32 = 1.0 / mx; /* benign race: every thread writes the same value */
-        }
-        return b32;
+    case CSRBF_PSI32: {
+        const double r = (2.0 + sqrt(39.0)) / 35.0;
+        return 1.0 / fabs(csrbf_dpsi_over_r(CSRBF_PSI32, r) * r);
+    }
     default: return 0.0;
     }
 }

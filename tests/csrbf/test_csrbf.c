@@ -214,6 +214,16 @@ static void test_kernel_values(void **state)
     assert_double_equal(csrbf_kernel_foldover_bound(CSRBF_PSI31), 0.474, 1e-3);
     assert_double_equal(csrbf_kernel_foldover_bound(CSRBF_PSI30), 0.5, 1e-12);
     assert_double_equal(csrbf_kernel_foldover_bound(CSRBF_PSI32), 0.40, 0.01);
+    /* each bound is 1 / max |psi'| on [0, 1]: against a fine scan of csrbf_kernel_eval */
+    for (int k = CSRBF_PSI31; k <= CSRBF_PSI32; k++) {
+        double mx = 0.0;
+        for (int i = 0; i <= 200000; i++) {
+            double p, d;
+            assert_int_equal(csrbf_kernel_eval((csrbf_kernel)k, i / 200000.0, &p, &d), CSRBF_OK);
+            mx = fmax(mx, fabs(d));
+        }
+        assert_double_equal(csrbf_kernel_foldover_bound((csrbf_kernel)k), 1.0 / mx, 1e-8);
+    }
 }
 
 /* -------------------------------------------------------------------------- interpolation */
