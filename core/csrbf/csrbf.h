@@ -217,7 +217,8 @@ int csrbf_points_create(size_t n, const float *xyz, csrbf_points **out);
 
 /** Replace the positions (same n, same vertex order), e.g. after a commit in unanchored mode;
  *  block boxes and the tree are recomputed (O(n)). Errors: CSRBF_ERR_INVALID (points
- *  unchanged). */
+ *  unchanged). Not while any other call (an evaluate, a nearest query) reads these points:
+ *  the caller orders them (the session does all on its thread). */
 int csrbf_points_update(csrbf_points *points, const float *xyz);
 
 /** Replace the positions of some vertices only: the ranges (first vertex, count) pairs,
@@ -368,8 +369,10 @@ int csrbf_evaluate(const csrbf_solver *solver, const csrbf_points *base, float *
 
 typedef struct csrbf_touch csrbf_touch;
 
-/** A touch state for `points` (which it refers to, not copies; the first evaluate writes
- *  everything). Errors: CSRBF_ERR_INVALID, CSRBF_ERR_NOMEM. */
+/** A touch state for `points` (which it refers to, not copies: the points must outlive the
+ *  touch; the first evaluate writes everything). Free with csrbf_touch_destroy. A touch is
+ *  used by one evaluate at a time (the thread rules of the solver it goes with). Errors:
+ *  CSRBF_ERR_INVALID, CSRBF_ERR_NOMEM. */
 int csrbf_touch_create(const csrbf_points *points, csrbf_touch **out);
 /** Free; sets *touch to NULL. NULL and *NULL are no-ops. */
 void csrbf_touch_destroy(csrbf_touch **touch);

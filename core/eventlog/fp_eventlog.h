@@ -78,7 +78,8 @@ fp_eventlog_writer *fp_eventlog_writer_open(const char *path, char *err, size_t 
 int fp_eventlog_writer_write(fp_eventlog_writer *w, const fp_event *event);
 
 /** Append a comment line `# TEXT` (a slate, a note). Line breaks in text become spaces.
- *  Returns 0 or a write's code (-ENOSPC, -EIO, ...). */
+ *  Returns 0 or a write's code (-ENOSPC, -EIO, ...). It writes to the file: not on the
+ *  session thread (the recorder's writer thread calls it, fp_record.h). */
 int fp_eventlog_writer_comment(fp_eventlog_writer *w, const char *text);
 
 /** The message of the writer's last error ("" when none). Valid until the next call. */
@@ -124,7 +125,8 @@ long fp_eventlog_reader_line(const fp_eventlog_reader *r);
 /** 0, or the number of the unterminated last line that next skipped (see next). */
 long fp_eventlog_reader_truncated_line(const fp_eventlog_reader *r);
 
-/** The message of the reader's last error ("" when none). */
+/** The message of the reader's last error ("" when none): the reader's, valid until its next
+ *  call or close. */
 const char *fp_eventlog_reader_error(const fp_eventlog_reader *r);
 
 /** Close the file and free the reader; sets *r to NULL. NULL or *r NULL is a no-op. */

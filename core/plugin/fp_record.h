@@ -38,7 +38,8 @@ typedef struct fp_event_recorder fp_event_recorder;
  *  recorders never share one. `used` (usedlen bytes; may be NULL) receives the path opened;
  *  the caller says so when it differs from path. Returns 0 or a negative code with
  *  "PATH: reason" in err: -EIO when the file cannot be created (the message says why),
- *  -ENOSPC, -EEXIST when all 1000 names exist, -ENOMEM. */
+ *  -ENOSPC or -EDQUOT (no room), -EEXIST when all 1000 names exist, -ENOMEM, -EAGAIN (its
+ *  writer thread could not be started). */
 int fp_event_recorder_create(const char *path, unsigned flags, char *used, size_t usedlen,
                              fp_event_recorder **out, char *err, size_t errlen);
 

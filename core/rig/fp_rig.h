@@ -157,12 +157,14 @@ const uint8_t *fp_rig_vertex_kinds(const fp_rig *rig);
 size_t fp_rig_region_count(const fp_rig *rig);
 int fp_rig_region_get(const fp_rig *rig, size_t i, fp_rig_region_desc *out);
 
-/** Landmarks: count, the i-th name and vertex, and lookup by name (vertex index, or -ENOENT). */
+/** Landmarks: count, the i-th name and vertex (*name the rig's, valid while it lives; -EINVAL
+ *  for i out of range or NULLs), and lookup by name (vertex index, or -ENOENT). */
 size_t fp_rig_landmark_count(const fp_rig *rig);
 int fp_rig_landmark_get(const fp_rig *rig, size_t i, const char **name, uint32_t *vertex);
 long fp_rig_landmark_index(const fp_rig *rig, const char *name);
 
-/** Channels: count, the i-th, lookup by name (index, or -ENOENT). */
+/** Channels: count, the i-th (-EINVAL for i out of range or NULLs; its strings the rig's),
+ *  lookup by name (index, or -ENOENT). */
 size_t fp_rig_channel_count(const fp_rig *rig);
 int fp_rig_channel_get(const fp_rig *rig, size_t i, fp_rig_channel_desc *out);
 long fp_rig_channel_index(const fp_rig *rig, const char *name);

@@ -98,7 +98,9 @@ int fp_timecode_parse(const char *text, fp_take_rate rate, fp_timecode *tc, char
 uint64_t fp_take_frames_in(int64_t ns, fp_take_rate rate);
 
 /** The timecode of the local time of day given as seconds + nanoseconds since the epoch
- *  (CLOCK_REALTIME), at `rate`: the "system clock" timecode source of Live Link. */
+ *  (CLOCK_REALTIME), at `rate`: the "system clock" timecode source of Live Link. The local
+ *  time is the process's time zone (TZ, localtime_r). Returns 0, or -EINVAL (a time
+ *  localtime_r cannot convert, a bad rate, drop frame where the rate allows none). */
 int fp_timecode_time_of_day(int64_t realtime_s, int64_t realtime_ns, fp_take_rate rate,
                             bool drop, fp_timecode *tc);
 
@@ -203,17 +205,20 @@ int fp_take_writer_create(const char *dir, const fp_take_header *header,
                           const fp_take_writer_options *opt, fp_take_writer **out,
                           char *err, size_t errlen);
 
-/** The file's path and take number. */
+/** The file's path (the writer's, valid until fp_take_writer_close) and take number. */
 const char *fp_take_writer_path(const fp_take_writer *w);
 uint32_t fp_take_writer_take(const fp_take_writer *w);
 
 /** Append one frame; the chunk goes to disk when full. Returns 0, -EINVAL (frame cannot be
  *  recorded), or the write error (-ENOSPC, -EIO, ...) after which the writer only closes. */
 int fp_take_writer_add(fp_take_writer *w, const fp_take_frame *frame, char *err, size_t errlen);
-/** Append an already encoded frame record (fp_take_frame_encode's bytes, `size` of them). */
+/** Append an already encoded frame record (fp_take_frame_encode's bytes, `size` of them).
+ *  Returns 0, -EINVAL (a record that fails take_frame_check), or the write error as
+ *  fp_take_writer_add. */
 int fp_take_writer_add_encoded(fp_take_writer *w, const void *record, size_t size, char *err,
                                size_t errlen);
-/** Write the frames buffered so far as one chunk (nothing if none). */
+/** Write the frames buffered so far as one chunk (nothing if none). Returns 0 or the write
+ *  error (-ENOSPC, -EIO, ...), after which the writer only closes. */
 int fp_take_writer_flush(fp_take_writer *w, char *err, size_t errlen);
 /** Frames buffered and not yet written. */
 size_t fp_take_writer_pending(const fp_take_writer *w);
@@ -269,7 +274,7 @@ void fp_take_recorder_status_get(const fp_take_recorder *rec, fp_take_recorder_s
 /** [any-thread] The message of status.error ("" while none). Valid until close. */
 const char *fp_take_recorder_error(const fp_take_recorder *rec);
 
-/** [any-thread] The take's path and number. */
+/** [any-thread] The take's path (the recorder's, valid until its close) and number. */
 const char *fp_take_recorder_path(const fp_take_recorder *rec);
 uint32_t fp_take_recorder_take(const fp_take_recorder *rec);
 
@@ -314,6 +319,7 @@ int fp_take_reader_open(const char *path, fp_take_reader **out, char *err, size_
 int fp_take_reader_open_memory(const void *data, size_t n, const char *name,
                                fp_take_reader **out, char *err, size_t errlen);
 
+/** The take's header and summary: the reader's, valid until fp_take_reader_close. */
 const fp_take_header *fp_take_reader_header(const fp_take_reader *r);
 const fp_take_summary *fp_take_reader_summary(const fp_take_reader *r);
 /** "" or the damaged-tail warning ("FILE: cut at byte N: reason"). */
