@@ -66,18 +66,31 @@ int fp_calibration_load(const char *path, fp_calibration *out, char *err, size_t
         return fp_errorf(err, errlen, -EIO, "%s: read error", path);
     }
     text[len] = 0;
-    cJSON *root = cJSON_ParseWithLength(text, len);
+    const char *end = NULL;
+    cJSON *root = cJSON_ParseWithLengthOpts(text, len, &end, false);
     int rc = 0;
+    const char *at = NULL; /* where the text stops being one JSON value and white space */
+    if (root) {
+        while (end && end < text + len && (*end == ' ' || *end == '\t' || *end == '\n' || *end == '\r'))
+            end++;
+        if (end && end < text + len) {
+            cJSON_Delete(root);
+            root = NULL;
+            at = end;
+        }
+    }
     if (!root) { /* where the parse stopped, as line:column */
         long line = 1, col = 1;
-        const char *at = cJSON_GetErrorPtr();
+        const bool after = at != NULL;
+        if (!at) at = cJSON_GetErrorPtr();
         if (!(at >= text && at <= text + len)) at = text;
         for (const char *p = text; p < at; p++) {
             if (*p == '\n') line++, col = 1;
             else col++;
         }
-        rc = fp_errorf(err, errlen, -EBADMSG, "%s:%ld:%ld: not valid JSON%s", path, line, col,
-                       at == text + len ? " (it ends too soon)" : "");
+        rc = fp_errorf(err, errlen, -EBADMSG, "%s:%ld:%ld: %s", path, line, col,
+                       after ? "text after the JSON object"
+                       : at == text + len ? "not valid JSON (it ends too soon)" : "not valid JSON");
         goto done;
     }
     if (!cJSON_IsObject(root)) {

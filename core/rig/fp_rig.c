@@ -567,6 +567,14 @@ static int parse_jaw(const ctx *c, fp_rig *r, const cJSON *root)
             char q[64];
             snprintf(q, sizeof q, "jaw.glide[%d]", k);
             if (!cJSON_IsNumber(e) || !isfinite(e->valuedouble)) return bad(c, q, "expected a number, got %s", type_name(e));
+            /* a jaw slides a few mm; half the joints' distance apart is already absurd (1e308
+             * made every jaw vertex infinite at the first pose) */
+            const double span = sqrt((r->hinge_l[0] - r->hinge_r[0]) * (r->hinge_l[0] - r->hinge_r[0]) +
+                                     (r->hinge_l[1] - r->hinge_r[1]) * (r->hinge_l[1] - r->hinge_r[1]) +
+                                     (r->hinge_l[2] - r->hinge_r[2]) * (r->hinge_l[2] - r->hinge_r[2]));
+            if (fabs(e->valuedouble) > 0.5 * span)
+                return bad(c, q, "%g mesh units is more than half the joints' distance apart (%g)",
+                           e->valuedouble, span);
             r->glide[k] = e->valuedouble;
         }
     }
@@ -615,7 +623,19 @@ int fp_rig_parse(const char *json, size_t len, const char *name, fp_rig **out, c
     if (out) *out = NULL;
     if (!json || !out) return fp_errorf(err, errlen, -EINVAL, "fp_rig_parse: NULL argument");
     ctx c = {name ? name : "(rig)", err, errlen};
-    cJSON *root = cJSON_ParseWithLength(json, len);
+    const char *end = NULL;
+    cJSON *root = cJSON_ParseWithLengthOpts(json, len, &end, false);
+    if (root) { /* one JSON value and only white space after it */
+        while (end && end < json + len && (*end == ' ' || *end == '\t' || *end == '\n' || *end == '\r'))
+            end++;
+        if (end && end < json + len && *end) {
+            size_t off = (size_t)(end - json), line = 1;
+            for (size_t i = 0; i < off; i++) line += json[i] == '\n';
+            cJSON_Delete(root);
+            return fp_errorf(err, errlen, -EBADMSG, "%s:%zu: text after the rig's JSON object (byte %zu)",
+                             c.file, line, off);
+        }
+    }
     if (!root) {
         const char *at = cJSON_GetErrorPtr();
         size_t off = at && at >= json && at <= json + len ? (size_t)(at - json) : 0;

@@ -51,7 +51,7 @@ static const char usage_text[] =
     "    Leap joint-angles CSV (*_cyberglove_like_angles_deg.csv): joint angles, degrees to\n"
     "      radians, empty fields marked not valid;\n"
     "    facepuppet event log (docs/eventlog.md): the events as recorded.\n"
-    "  speed=X  play X times as fast (X > 0, default 1)\n"
+    "  speed=X  play X times as fast (0.001 to 1e6, default 1)\n"
     "  loop=1   start over at the end; event times keep increasing (default 0)\n"
     "  fast=1   as fast as possible (a full queue is always retried, never dropped)\n"
     "  hands=H  left, right or both (default both)\n"
@@ -273,8 +273,9 @@ static int replay_create(const fp_host *host, const char *arg, const fp_param *p
             char *end = NULL;
             double s = c != (locale_t)0 ? strtod_l(v, &end, c) : NAN;
             if (c != (locale_t)0) freelocale(c);
-            if (!end || end == v || *end || !isfinite(s) || !(s > 0) || s > 1e6) {
-                snprintf(err, errlen, "replay: speed=%s: expected a number > 0 (at most 1e6)", v);
+            if (!end || end == v || *end || !isfinite(s) || !(s >= 1e-3) || s > 1e6) {
+                /* (1e-9 stretched a 3 s recording over a century; 1e-300 overflowed) */
+                snprintf(err, errlen, "replay: speed=%s: expected a number from 0.001 to 1e6", v);
                 return -EINVAL;
             }
             speed = s;
@@ -334,7 +335,7 @@ static int replay_create(const fp_host *host, const char *arg, const fp_param *p
 /* The keys, typed (ABI 1.1), for `facepuppet plugins` and `plugins check`; create parses
  * them itself. */
 static const fp_param_info replay_keys[] = {
-    {"speed", FP_PARAM_FLOAT, 0, 1e6, "1", NULL, "x", "play this many times as fast (> 0)"},
+    {"speed", FP_PARAM_FLOAT, 1e-3, 1e6, "1", NULL, "x", "play this many times as fast (0.001 to 1e6)"},
     {"loop", FP_PARAM_BOOL, 0, 1, "0", NULL, NULL, "start over at the end"},
     {"fast", FP_PARAM_BOOL, 0, 1, "0", NULL, NULL, "as fast as possible, retrying when the queue is full"},
     {"hands", FP_PARAM_ENUM, 0, 0, "both", "left|right|both", NULL, "which hands to replay"},

@@ -75,7 +75,7 @@ static const char usage_text[] =
     "  Performs a take (FILE.fptake, docs/take-format.md) again: its raw input events and the\n"
     "  performer's key requests, at the recorded pace, through this session's mapping, rig\n"
     "  and radius. Pedal buttons come back as buttons; key requests as FP_BUTTON_REQUEST.\n"
-    "  speed=X  play X times as fast (X > 0, default 1)\n"
+    "  speed=X  play X times as fast (0.001 to 1e6, default 1)\n"
     "  fast=1   as fast as possible\n"
     "  Event times are the take's own clock (the host clock at start + the event's offset in\n"
     "  the take), whatever the speed. A take cut short plays its intact frames (a warning\n"
@@ -294,8 +294,8 @@ static int take_create(const fp_host *host, const char *arg, const fp_param *par
             char *end = NULL;
             double s = c != (locale_t)0 ? strtod_l(v, &end, c) : NAN;
             if (c != (locale_t)0) freelocale(c);
-            if (!end || end == v || *end || !isfinite(s) || !(s > 0) || s > 1e6) {
-                snprintf(err, errlen, "take: speed=%s: expected a number > 0 (at most 1e6)", v);
+            if (!end || end == v || *end || !isfinite(s) || !(s >= 1e-3) || s > 1e6) {
+                snprintf(err, errlen, "take: speed=%s: expected a number from 0.001 to 1e6", v);
                 return -EINVAL;
             }
             speed = s;

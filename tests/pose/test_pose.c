@@ -232,6 +232,7 @@ static void test_calibration_file(void **state)
         {"not json", "not valid JSON", -EBADMSG},
         {"{\"scale\": 0.1,\n \"rotation\": [1, 0, 0, 0]", ":2:", -EBADMSG}, /* cut: the line */
         {"[1, 2]", "not a JSON object", -EBADMSG},
+        {"{\"scale\": 0.1}\n{}", ":2:1: text after the JSON object", -EBADMSG},
         {"{\"scale\": 0.1, \"rotaton\": [1, 0, 0, 0]}", "unknown field \"rotaton\"", -EBADMSG},
         {"{\"scale\": 0.1, \"offset\": [0, 0, 0], \"offset\": [1, 1, 1]}", "offset given twice", -EBADMSG},
         {"{\"scale\": 0.1, \"left\": {\"offst\": [0, 0, 0]}}", "left.offst", -EBADMSG},

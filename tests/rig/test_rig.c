@@ -500,6 +500,9 @@ static void test_broken_files(void **state)
         {"\"max\": 1", "\"max\": -1", "channels[0]"},
         {"\"mobility\": {", "\"extra\": 1, \"mobility\": {", "extra"},
         {"{", "[", ""},
+        /* a glide of more than half the joints' distance (1e308 made the posed jaw infinite) */
+        {"\"glide\": [0.8, 0.3]", "\"glide\": [1e308, 0.3]", "jaw.glide[0]"},
+        {"\"glide\": [0.8, 0.3]", "\"glide\": [0.8, -100]", "jaw.glide[1]"},
         /* jaw.weights */
         {"\"weights\": {", "\"weights\": {\"x\": 1, ", "jaw.weights.x"},
         {"\"glide\": [", "\"weights\": 3, \"glide\": [", "jaw.weights"},
@@ -523,6 +526,19 @@ static void test_broken_files(void **state)
         assert_non_null(strstr(err, "broken.json"));
         assert_non_null(strstr(err, cases[i].field));
         free(bad);
+    }
+    { /* one JSON value only: text after it is refused, white space is not */
+        size_t gl = strlen(good);
+        char *tail = malloc(gl + 16);
+        assert_non_null(tail);
+        memcpy(tail, good, gl);
+        memcpy(tail + gl, " \n\t", 4);
+        assert_int_equal(fp_rig_parse(tail, gl + 3, "ws.json", &r, err, sizeof err), 0);
+        fp_rig_free(&r);
+        memcpy(tail + gl, "\n{}", 4);
+        assert_int_equal(fp_rig_parse(tail, gl + 3, "tail.json", &r, err, sizeof err), -EBADMSG);
+        assert_non_null(strstr(err, "text after the rig's JSON object"));
+        free(tail);
     }
     /* jaw.weights replaced by small objects: refused with the field named, or accepted */
     const char *wbeg = strstr(good, "\"weights\": {"), *wval = wbeg ? strstr(wbeg, "\"values\": [") : NULL;

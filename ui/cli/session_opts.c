@@ -90,12 +90,14 @@ int fp_session_opts_parse(fp_session_opts *o, int c, const char *arg, const char
     case 'r':
         return number(arg, 0, INFINITY, &so->radius) ? 1 : bad(cmd, "--radius must be a number > 0", arg);
     case 's':
-        return number(arg, 0, INFINITY, &o->speed) ? 1 : bad(cmd, "--speed must be a number > 0", arg);
+        return number(arg, 0.999e-3, 1.000001e6, &o->speed) ? 1
+               : bad(cmd, "--speed must be a number from 0.001 to 1e6", arg);
     case OPT_DURATION:
         return number(arg, 0, FP_APP_MAX_DURATION_S, &o->duration_s) ? 1
                : bad(cmd, "--duration must be > 0 seconds and under 1e7 (116 days)", arg);
     case OPT_HAND_SIZE:
-        return number(arg, 0.3, 3, &so->hand_size) ? 1 : bad(cmd, "--hand-size must be in 0.3..3", arg);
+        return number(arg, 0.2999999, 3.0000001, &so->hand_size) ? 1
+               : bad(cmd, "--hand-size must be in 0.3..3", arg);
     case OPT_PLUGIN_DIR:
         if (o->nplugin_dirs == FP_SESSION_OPTS_MAX_PLUGIN_DIRS) {
             fprintf(stderr, "facepuppet %s: at most %d --plugin-dir\n", cmd,
