@@ -468,7 +468,7 @@ int fail(char *err, size_t errlen, int code, const char *path, const std::string
 int errno_code(int e)
 {
     switch (e) {
-    case ENOENT: case ENOTDIR: return FP_MESH_ERR_NOENT;
+    case ENOENT: case ENOTDIR: case ENAMETOOLONG: case ELOOP: return FP_MESH_ERR_NOENT;
     case EACCES: case EPERM: case EROFS: return FP_MESH_ERR_ACCESS;
     case ENOSPC: case EDQUOT: return FP_MESH_ERR_NOSPACE;
     case ENOMEM: return FP_MESH_ERR_NOMEM;

@@ -120,7 +120,11 @@ static bool check_keys(creator *cr, const fp_param_info *info, bool *device)
         return false;
     }
     if (rc) {
-        if (device_code(rc) && msg[0]) {
+        /* a file given with --arg that is not there is the caller's mistake, not a missing
+         * device (a recording checked against /nonexist passed as 'skipped') */
+        const char *arg = c->opt->arg;
+        const bool file_arg = arg && arg[0] && strncmp(arg, "/dev/", 5) != 0 && rc == -ENOENT;
+        if (device_code(rc) && msg[0] && !file_arg) {
             *device = true;
             report(c, FP_CHECK_SKIP, "create", "needs a device: create failed with %d (%s): %s", rc,
                    fp_strerror(rc), msg);
@@ -639,7 +643,7 @@ static bool finite_n(const float *v, size_t n)
     return true;
 }
 
-/* Why ev is malformed, or NULL. */
+/* Why ev is malformed, or NULL. latest: the last time_ns an event may have. */
 static const char *event_problem(const fp_event *ev, int64_t latest)
 {
     static const uint32_t sizes[] = {0, sizeof(fp_event_joint_angles), sizeof(fp_event_joint_positions),
@@ -650,7 +654,7 @@ static const char *event_problem(const fp_event *ev, int64_t latest)
     if (h->size != sizes[h->type]) return "size is not that of its type";
     if (h->hand < -1 || h->hand > 1) return "hand is not -1, 0 or 1";
     if (h->type <= FP_EVENT_WRIST_POSE && h->hand < 0) return "a pose event without a hand";
-    if (h->time_ns < 0 || h->time_ns > latest + 1000000000LL) return "time_ns in the future or negative";
+    if (h->time_ns < 0 || h->time_ns > latest) return "time_ns in the future or negative";
     switch (h->type) {
     case FP_EVENT_JOINT_ANGLES:
         if (!finite_n(ev->angles.radians, FP_GLOVE_SENSORS)) return "a joint angle is not finite";
@@ -735,7 +739,12 @@ static void check_input(checker *c, creator *cr)
             fp_plugin_call_leave();
         }
         atomic_store(&ih->stopped, true);
-        int64_t latest = now_ns();
+        /* a device's events are measured by now (1 s of leeway); a recording's are on its own
+         * clock (host time at start + the sample's time: plugin.h, FP_EXT_RECORDING_INFO), ahead
+         * of the host's with fast=1 or a high speed, by as much as the recording lasts */
+        const bool recording = in->size >= offsetof(fp_input, get_extension) + sizeof in->get_extension &&
+                               in->get_extension && in->get_extension(in, FP_EXT_RECORDING_INFO);
+        int64_t latest = recording ? INT64_MAX : now_ns() + 1000000000LL;
         fp_event ev;
         while (fp_event_queue_pop(&ih->queue, &ev)) {
             events++;

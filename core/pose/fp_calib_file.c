@@ -151,9 +151,11 @@ int fp_calibration_load(const char *path, fp_calibration *out, char *err, size_t
     c.scale = mpu ? 1.0 / one->valuedouble : one->valuedouble;
     /* both the scale and its inverse (what save writes) must be normal finite numbers: a
      * subnormal mm_per_unit would give an infinite scale (found by tests/fuzz/fuzz_calib) */
-    if (!isnormal(c.scale) || !isnormal(1.0 / c.scale)) {
-        rc = fp_errorf(err, errlen, -ERANGE, "%s: field %s: %g is out of range", path, name,
-                       one->valuedouble);
+    if (!isnormal(c.scale) || !isnormal(1.0 / c.scale) || !(1.0 / c.scale >= 1e-6 && 1.0 / c.scale <= 1e9)) {
+        /* (mm per mesh unit from a micrometre to a kilometre's thousand: beyond, a slip of
+         * units, and a face no hand reaches) */
+        rc = fp_errorf(err, errlen, -ERANGE, "%s: field %s: %g is out of range (mm_per_unit 1e-6 "
+                       "to 1e9)", path, name, one->valuedouble);
         goto done;
     }
     if ((rc = numbers(path, root, "", "rotation", c.rotation, 4, err, errlen)) < 0) goto done;

@@ -382,7 +382,7 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
         const double across_mm = sqrt(diag) * s->head.mm_per_unit;
         if ((opt->mm_per_unit > 0 || (opt->calibration && opt->calibration->scale > 0)) &&
             !(across_mm >= 1.0 && across_mm <= 1e6)) {
-            rc = -EINVAL;
+            rc = opt->mm_per_unit > 0 ? -EINVAL : -ERANGE; /* an option's, or a file's (65) */
             snprintf(err, errlen, "%s: %g mm per mesh unit makes the face %.3g mm across "
                      "(its diagonal %.4g mesh units); give millimetres per mesh unit",
                      opt->mm_per_unit > 0 ? "--mm-per-unit" : "the calibration's scale",

@@ -6,6 +6,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "glove_cal.h"
 #include "fp_error.h"
+#include "fp_file.h"
 
 #include <errno.h>
 #include <math.h>
@@ -88,11 +89,11 @@ static int parse_asr_line(char *s, double v[4])
 
 int fpg_cal_load(const char *path, fpg_cal *cal, char *err, size_t errlen)
 {
-    FILE *f = fopen(path, "r");
-    if (!f) {
-        int e = errno;
-        return fp_errorf(err, errlen, -e, "%s: cannot open calibration file: %s", path, strerror(e));
-    }
+    int code;
+    FILE *f = fp_file_fopen_regular(path, &code); /* (a folder or FIFO: refused, never read) */
+    if (!f)
+        return fp_errorf(err, errlen, code, "%s: cannot open calibration file: %s", path,
+                         fp_file_error_text(code));
     fpg_cal_default(cal);
     char buf[512];
     int lineno = 0, rows = 0, rc = 0;
@@ -101,7 +102,7 @@ int fpg_cal_load(const char *path, fpg_cal *cal, char *err, size_t errlen)
     while (fgets(buf, sizeof buf, f)) {
         lineno++;
         if (!strchr(buf, '\n') && !feof(f)) {
-            rc = fp_errorf(err, errlen, -EINVAL, "%s:%d: line too long", path, lineno);
+            rc = fp_errorf(err, errlen, -EBADMSG, "%s:%d: line too long", path, lineno);
             goto out;
         }
         char *s = trim_line(buf);
@@ -116,28 +117,28 @@ int fpg_cal_load(const char *path, fpg_cal *cal, char *err, size_t errlen)
         if (fmt == FPG_CAL_ASR) {
             double v[4];
             if (rows >= FPG_SENSORS) {
-                rc = fp_errorf(err, errlen, -EINVAL, "%s:%d: more than %d calibration lines (asr "
+                rc = fp_errorf(err, errlen, -EBADMSG, "%s:%d: more than %d calibration lines (asr "
                           "format)", path, lineno, FPG_SENSORS);
                 goto out;
             }
             if (parse_asr_line(s, v) != 0) {
-                rc = fp_errorf(err, errlen, -EINVAL, "%s:%d: expected `rad1:raw1 rad2:raw2` (asr "
+                rc = fp_errorf(err, errlen, -EBADMSG, "%s:%d: expected `rad1:raw1 rad2:raw2` (asr "
                           "format), got \"%.60s\"", path, lineno, s);
                 goto out;
             }
             if (v[1] < 0 || v[1] > 255 || v[3] < 0 || v[3] > 255) {
-                rc = fp_errorf(err, errlen, -EINVAL, "%s:%d: raw value outside 0..255", path, lineno);
+                rc = fp_errorf(err, errlen, -EBADMSG, "%s:%d: raw value outside 0..255", path, lineno);
                 goto out;
             }
             if (v[1] == v[3]) {
-                rc = fp_errorf(err, errlen, -EINVAL, "%s:%d: raw1 equals raw2 (%g): no slope", path,
+                rc = fp_errorf(err, errlen, -EBADMSG, "%s:%d: raw1 equals raw2 (%g): no slope", path,
                           lineno, v[1]);
                 goto out;
             }
             int s_idx = FPG_ASR_LINE_SENSOR[rows];
             double g = (v[2] - v[0]) / (v[3] - v[1]);
             if (!finite_float(g) || !finite_float(v[0] - g * v[1])) {
-                rc = fp_errorf(err, errlen, -EINVAL, "%s:%d: gain or offset beyond float range",
+                rc = fp_errorf(err, errlen, -EBADMSG, "%s:%d: gain or offset beyond float range",
                                path, lineno);
                 goto out;
             }
@@ -152,34 +153,34 @@ int fpg_cal_load(const char *path, fpg_cal *cal, char *err, size_t errlen)
             long idx = strtol(p, &end, 10);
             double g, o;
             if (end == p || errno || (*end != ' ' && *end != '\t')) {
-                rc = fp_errorf(err, errlen, -EINVAL, "%s:%d: expected `SENSOR GAIN OFFSET`, got "
+                rc = fp_errorf(err, errlen, -EBADMSG, "%s:%d: expected `SENSOR GAIN OFFSET`, got "
                           "\"%.60s\"", path, lineno, s);
                 goto out;
             }
             if (idx < 0 || idx >= FPG_SENSORS) {
-                rc = fp_errorf(err, errlen, -EINVAL, "%s:%d: sensor %ld outside 0..%d", path, lineno,
+                rc = fp_errorf(err, errlen, -EBADMSG, "%s:%d: sensor %ld outside 0..%d", path, lineno,
                           idx, FPG_SENSORS - 1);
                 goto out;
             }
             p = end;
             if (parse_num(&p, &g) != 0 || parse_num(&p, &o) != 0) {
-                rc = fp_errorf(err, errlen, -EINVAL, "%s:%d: expected finite GAIN and OFFSET after "
+                rc = fp_errorf(err, errlen, -EBADMSG, "%s:%d: expected finite GAIN and OFFSET after "
                           "sensor %ld", path, lineno, idx);
                 goto out;
             }
             while (*p == ' ' || *p == '\t')
                 p++;
             if (*p) {
-                rc = fp_errorf(err, errlen, -EINVAL, "%s:%d: unexpected text \"%.30s\"", path, lineno,
+                rc = fp_errorf(err, errlen, -EBADMSG, "%s:%d: unexpected text \"%.30s\"", path, lineno,
                           p);
                 goto out;
             }
             if (seen & (1u << idx)) {
-                rc = fp_errorf(err, errlen, -EINVAL, "%s:%d: sensor %ld given twice", path, lineno, idx);
+                rc = fp_errorf(err, errlen, -EBADMSG, "%s:%d: sensor %ld given twice", path, lineno, idx);
                 goto out;
             }
             if (!finite_float(g) || !finite_float(o)) {
-                rc = fp_errorf(err, errlen, -EINVAL, "%s:%d: GAIN or OFFSET beyond float range",
+                rc = fp_errorf(err, errlen, -EBADMSG, "%s:%d: GAIN or OFFSET beyond float range",
                                path, lineno);
                 goto out;
             }
@@ -196,11 +197,11 @@ int fpg_cal_load(const char *path, fpg_cal *cal, char *err, size_t errlen)
         goto out;
     }
     if (rows == 0) {
-        rc = fp_errorf(err, errlen, -EINVAL, "%s: no calibration lines", path);
+        rc = fp_errorf(err, errlen, -EBADMSG, "%s: no calibration lines", path);
         goto out;
     }
     if (fmt == FPG_CAL_ASR && rows != FPG_SENSORS) {
-        rc = fp_errorf(err, errlen, -EINVAL, "%s:%d: only %d of %d calibration lines (asr format)",
+        rc = fp_errorf(err, errlen, -EBADMSG, "%s:%d: only %d of %d calibration lines (asr format)",
                   path, lineno, rows, FPG_SENSORS);
         goto out;
     }

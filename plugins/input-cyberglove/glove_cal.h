@@ -49,8 +49,9 @@ extern const int FPG_ASR_LINE_SENSOR[FPG_SENSORS];
 void fpg_cal_default(fpg_cal *cal);
 
 /** Load a calibration file (format detected). Returns 0, or a negative errno code
- *  (-ENOENT and the like for I/O, -EINVAL for bad content, including a gain or offset that
- *  is not finite as a float) after writing "FILE:LINE: what" (or "FILE: what") to err.
+ *  (-ENOENT, -EISDIR, -ENXIO and the like for the file, -EBADMSG for bad content (exit 65),
+ *  including a gain or offset that is not finite as a float) after writing "FILE:LINE: what"
+ *  (or "FILE: what") to err.
  *  [any-thread, reentrant] */
 int fpg_cal_load(const char *path, fpg_cal *cal, char *err, size_t errlen);
 

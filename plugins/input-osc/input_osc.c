@@ -1007,7 +1007,9 @@ static int osc_create(const fp_host *host, const char *arg, const fp_param *para
         if (o->sock >= 0) close(o->sock);
         free(o->lat_us);
         free(o);
-        return -e;
+        /* the port taken, an address not this machine's: an input that cannot be opened
+         * (-EBUSY, -ENODEV: exit 66), not a failure of the run */
+        return e == EADDRINUSE ? -EBUSY : e == EADDRNOTAVAIL ? -ENODEV : -e;
     }
     socklen_t len = sizeof sa;
     getsockname(o->sock, (struct sockaddr *)&sa, &len);

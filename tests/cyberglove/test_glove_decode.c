@@ -254,16 +254,16 @@ static void test_cal_beyond_float(void **state)
     snprintf(path, sizeof path, "%s/g.cal", dir);
     fpg_cal cal;
     fp_test_write_file(path, "0 0.01 0\n3 1e39 0\n");
-    assert_int_equal(fpg_cal_load(path, &cal, err, sizeof err), -EINVAL);
+    assert_int_equal(fpg_cal_load(path, &cal, err, sizeof err), -EBADMSG);
     snprintf(want, sizeof want, "%s:2: GAIN or OFFSET beyond float range", path);
     assert_string_equal(err, want);
     fp_test_write_file(path, "# offsets too\n\n4 0.01 -5e38\n");
-    assert_int_equal(fpg_cal_load(path, &cal, err, sizeof err), -EINVAL);
+    assert_int_equal(fpg_cal_load(path, &cal, err, sizeof err), -EBADMSG);
     snprintf(want, sizeof want, "%s:3: GAIN or OFFSET beyond float range", path);
     assert_string_equal(err, want);
     /* asr two-point: a slope beyond float range on line 2 */
     fp_test_write_file(path, "0.3:46 -0.5:164\n0:46 1e39:47\n");
-    assert_int_equal(fpg_cal_load(path, &cal, err, sizeof err), -EINVAL);
+    assert_int_equal(fpg_cal_load(path, &cal, err, sizeof err), -EBADMSG);
     snprintf(want, sizeof want, "%s:2: gain or offset beyond float range", path);
     assert_string_equal(err, want);
     /* the largest float still loads */

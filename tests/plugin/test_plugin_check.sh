@@ -29,6 +29,10 @@ expect() {
 expect 0 'passed: 14 checks' "$fp" plugins check "$builtin/map-anchored.so"  # 14: a check per key (engage, points)
 expect 0 'PASS  determinism' "$fp" plugins check "$builtin/map-unanchored.so"
 expect 0 'PASS  events +[0-9]+ events well-formed' "$fp" plugins check "$builtin/input-replay.so" --arg "$rec"
+# fast=1 (the help's own example): a recording's events run ahead of the host clock, on its own
+expect 0 'PASS  events +[0-9]+ events well-formed' "$fp" plugins check "$builtin/input-replay.so" --arg "$rec" --key fast=1
+# a recording given with --arg that is not there: a failure, not a device to skip
+expect 1 'FAIL  create .*No such file' "$fp" plugins check "$builtin/input-replay.so" --arg /nonexistent/rec.csv
 expect 0 'PASS  cycle +5 x create' "$fp" plugins check "$builtin/input-pedal.so"
 expect 0 'SKIP  start +needs a device: .*cannot open /nonexistent/glove' \
     "$fp" plugins check "$builtin/input-cyberglove.so" --arg /nonexistent/glove

@@ -58,7 +58,7 @@ int fp_app_exit_code(int code, fp_app_io io)
     case EBADMSG: case ERANGE: case EDOM: case EPROTO: case ENOTSUP: case EILSEQ:
         return FP_EXIT_DATAERR;
     case ENOENT: case EACCES: case EPERM: case ENODEV: case ENXIO: case EBUSY: case ENOTDIR:
-    case EISDIR:
+    case EISDIR: case ENAMETOOLONG: case ELOOP:
         return io == FP_APP_OUTPUT ? FP_EXIT_CANTCREAT : FP_EXIT_NOINPUT;
     case EIO: case ENOSPC: case EROFS: case EDQUOT: case EFBIG: case EEXIST: return FP_EXIT_CANTCREAT;
     case ENOMEM: return FP_EXIT_SOFTWARE;

@@ -81,7 +81,8 @@ int fp_app_check_output(const char *cmd, const char *option, const char *path);
  *    -EINVAL (a bad option or SPEC key)         64 usage
  *    -EBADMSG -ERANGE -EDOM -EPROTO -ENOTSUP    65 bad input data (and -EILSEQ)
  *    -ENOENT -EACCES -EPERM -ENODEV -ENXIO      66 an input (file, device, display) that cannot
- *    -EBUSY -ENOTDIR -EISDIR                       be opened; 73 when io is FP_APP_OUTPUT
+ *    -EBUSY -ENOTDIR -EISDIR -ENAMETOOLONG      be opened; 73 when io is FP_APP_OUTPUT
+ *    -ELOOP
  *    -EIO -ENOSPC -EROFS -EDQUOT -EFBIG -EEXIST 73 an output that cannot be created or written
  *    -ENOMEM                                    70 internal
  *    FP_EPLUGIN_*                               78 a plugin missing, of another ABI, failing

@@ -194,7 +194,20 @@ static int calibrate_main(int argc, char **argv)
         fp_mesh_free(&m);
         return FP_EXIT_DATAERR;
     }
-    if (mm_per_unit > 0) {
+    if (mm_per_unit > 0) { /* as run checks it: a face under 1 mm or over 1 km is a slip */
+        float lo[3], hi[3];
+        fp_mesh_bounds(m, lo, hi);
+        const double diag = sqrt((double)(hi[0] - lo[0]) * (hi[0] - lo[0]) +
+                                 (double)(hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                                 (double)(hi[2] - lo[2]) * (hi[2] - lo[2])),
+                     across = diag * mm_per_unit;
+        if (!(across >= 1.0 && across <= 1e6)) {
+            fprintf(stderr, "facepuppet calibrate: --mm-per-unit %g makes the face %.3g mm across "
+                            "(its diagonal %.4g mesh units); give millimetres per mesh unit\n",
+                    mm_per_unit, across, diag);
+            fp_mesh_free(&m);
+            return FP_EXIT_USAGE;
+        }
         head.mm_per_unit = mm_per_unit;
         snprintf(head.how, sizeof head.how, "from --mm-per-unit");
     }
