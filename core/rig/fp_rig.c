@@ -3,6 +3,7 @@
 #include "fp_rig.h"
 
 #include "fp_error.h"
+#include "fp_text.h"
 #include "fp_file.h"
 
 #include <cjson/cJSON.h>
@@ -160,6 +161,8 @@ static int get_string(const ctx *c, const cJSON *obj, const char *path, const ch
     if (rc || !j) return rc;
     if (!cJSON_IsString(j)) return bad(c, p, "expected a string, got %s", type_name(j));
     if (strlen(j->valuestring) >= len) return bad(c, p, "longer than %zu bytes", len - 1);
+    if (!fp_text_ok(j->valuestring, false)) /* (an ESC in a name recoloured info's terminal) */
+        return bad(c, p, "not UTF-8 text without control characters");
     strcpy(out, j->valuestring);
     return 0;
 }

@@ -169,14 +169,12 @@ static void replay_destroy(fp_input *self)
 
 static int parse_bool(const fp_param *p, bool *out, char *err, size_t errlen)
 {
-    if (strcmp(p->value, "1") == 0 || strcmp(p->value, "true") == 0)
-        *out = true;
-    else if (strcmp(p->value, "0") == 0 || strcmp(p->value, "false") == 0)
-        *out = false;
-    else {
+    const int b = fp_parse_bool(p->value); /* (plugin_util.h: 1/true/yes/on, 0/false/no/off) */
+    if (b < 0) {
         snprintf(err, errlen, "replay: %s=%s: expected 0 or 1", p->key, p->value);
         return -EINVAL;
     }
+    *out = b == 1;
     return 0;
 }
 

@@ -31,6 +31,7 @@
 #include "fp_take.h"
 
 #include <facepuppet/plugin.h>
+#include <facepuppet/plugin_util.h>
 #include "fp_pacer.h"
 
 #include <errno.h>
@@ -264,12 +265,12 @@ static int load(take_input *r, const char *path, char *err, size_t errlen)
 
 static int parse_bool(const char *key, const char *v, bool *out, char *err, size_t errlen)
 {
-    if (!strcmp(v, "1") || !strcmp(v, "true")) *out = true;
-    else if (!strcmp(v, "0") || !strcmp(v, "false")) *out = false;
-    else {
+    const int b = fp_parse_bool(v); /* (plugin_util.h: 1/true/yes/on, 0/false/no/off) */
+    if (b < 0) {
         snprintf(err, errlen, "take: %s=%s: expected 0 or 1", key, v);
         return -EINVAL;
     }
+    *out = b == 1;
     return 0;
 }
 

@@ -695,11 +695,12 @@ static void spec_errors(void **state)
 {
     const char *file = LEAP "grab_joints_mm.csv";
     expect_create_error(file, "sped=2", 0, 0, "unknown key \"sped\"");
-    expect_create_error(file, "speed=0", 0, 0, "speed=0: expected a number > 0");
+    expect_create_error(file, "speed=0", 0, 0, "speed=0: expected a number from 0.001 to 1e6");
+    expect_create_error(file, "speed=1e-9", 0, 0, "speed=1e-9: expected a number from 0.001 to 1e6"); /* (a century) */
     expect_create_error(file, "speed=abc", 0, 0, "speed=abc");
     expect_create_error(file, "speed=nan", 0, 0, "speed=nan");
     expect_create_error(file, "loop=2", 0, 0, "loop=2: expected 0 or 1");
-    expect_create_error(file, "fast=yes", 0, 0, "fast=yes: expected 0 or 1");
+    expect_create_error(file, "fast=maybe", 0, 0, "fast=maybe: expected 0 or 1"); /* (yes, on: accepted, as every plugin's on/off keys) */
     expect_create_error(file, "hands=middle", 0, 0, "hands=middle: expected left, right or both");
     fp_test_host *h = fp_test_host_new(4);
     fp_input *in = NULL;

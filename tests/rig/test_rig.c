@@ -501,6 +501,7 @@ static void test_broken_files(void **state)
         {"\"mobility\": {", "\"extra\": 1, \"mobility\": {", "extra"},
         {"{", "[", ""},
         /* a glide of more than half the joints' distance (1e308 made the posed jaw infinite) */
+        {"\"name\": \"ict-facekit\"", "\"name\": \"ict\\u001b[31m\"", "name"}, /* an ESC: no text */
         {"\"glide\": [0.8, 0.3]", "\"glide\": [1e308, 0.3]", "jaw.glide[0]"},
         {"\"glide\": [0.8, 0.3]", "\"glide\": [0.8, -100]", "jaw.glide[1]"},
         /* jaw.weights */

@@ -33,6 +33,15 @@ void fp_app_plugin_path(fp_plugin_path *path, const char *const *dirs, size_t nd
     char builtin[4200];
     fp_app_builtin_plugin_dir(builtin, sizeof builtin);
     fp_plugin_path_init(path, dirs, ndirs, builtin);
+    /* a --plugin-dir that is no folder is said (it was searched in silence, and a plugin
+     * "not found" in it read as the plugin's fault) */
+    for (size_t i = 0; i < ndirs; i++) {
+        struct stat st;
+        const bool there = dirs[i] && !stat(dirs[i], &st);
+        if (dirs[i] && (!there || !S_ISDIR(st.st_mode)))
+            fprintf(stderr, "facepuppet: warning: --plugin-dir %s: %s\n", dirs[i],
+                    there ? "not a folder" : "no such folder");
+    }
     /* Folders skipped for safety are said once, each on its own line. */
     for (const char *w = path->warnings; *w;) {
         const char *nl = strchr(w, '\n');

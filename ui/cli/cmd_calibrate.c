@@ -94,12 +94,12 @@ static int read_samples(fp_input_instance *inst, double duration, fp_calib_sampl
  * is given (`given`, loaded up front) or found, the head's estimate for the rest. Prints
  * where they came from. */
 static void landmarks(const fp_mesh *m, const fp_head *head, fp_rig *given, const char *given_path,
-                      float lm[FP_CALIB_LANDMARKS][3])
+                      bool none, float lm[FP_CALIB_LANDMARKS][3])
 {
     fp_calib_head_landmarks(m->positions, m->vertex_count, head, lm);
     char found[4096], err[1024];
     const char *rig_path = given ? given_path : NULL;
-    if (!rig_path) {
+    if (!rig_path && !none) { /* (--rig none: no rig looked for) */
         char dir[4096];
         fp_rig_default_dir(fp_app_exe_dir(), dir, sizeof dir);
         if (!fp_rig_find(dir, m->vertex_count, m->positions, found, sizeof found, err, sizeof err))
@@ -136,6 +136,7 @@ static int calibrate_main(int argc, char **argv)
         {"rig", required_argument, 0, 'r'},      {"plugin-dir", required_argument, 0, 'P'},
         {"help", no_argument, 0, 'h'},           {0, 0, 0, 0}};
     const char *mesh_path = NULL, *input = NULL, *out = NULL, *mode = "hold", *rig_path = NULL;
+    bool no_rig = false; /* --rig none: the head's estimated landmarks, no rig looked for */
     const char *dirs[8];
     size_t ndirs = 0;
     double mm_per_unit = 0, duration = 0;
@@ -144,10 +145,16 @@ static int calibrate_main(int argc, char **argv)
     for (int c; (c = getopt_long(argc, argv, "m:i:o:d:P:h", opts, NULL)) != -1;) {
         switch (c) {
         case 'm': mesh_path = optarg; break;
-        case 'i': input = optarg; break;
+        case 'i':
+            if (input) {
+                fprintf(stderr, "facepuppet calibrate: one --input (given '%s' and '%s')\n", input, optarg);
+                return FP_EXIT_USAGE;
+            }
+            input = optarg;
+            break;
         case 'o': out = optarg; break;
         case 'M': mode = optarg; break;
-        case 'r': rig_path = optarg; break;
+        case 'r': rig_path = strcmp(optarg, "none") ? optarg : NULL, no_rig = !rig_path; break;
         case 'u':
             mm_per_unit = strtod(optarg, &end);
             if (*end || !(mm_per_unit > 0) || !isfinite(mm_per_unit)) {
@@ -249,7 +256,7 @@ static int calibrate_main(int argc, char **argv)
     double touched[FP_CALIB_LANDMARKS][3], rms = 0;
     if (touch) {
         float lm[FP_CALIB_LANDMARKS][3];
-        landmarks(m, &head, given_rig, rig_path, lm);
+        landmarks(m, &head, given_rig, rig_path, no_rig, lm);
         rc = fp_calib_fit_touch(smp, n, (const float(*)[3])lm, &c, touched, &rms, err, sizeof err);
     } else {
         rc = fp_calib_fit_hold(smp, n, m->positions, m->vertex_count, &head, &c, err, sizeof err);

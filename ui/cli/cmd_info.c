@@ -114,6 +114,11 @@ static int info_main(int argc, char **argv)
                    "A take (.fptake): its header, frames, timecode, and where it was cut if it was.\n");
         return argc == 2 ? FP_EXIT_OK : FP_EXIT_USAGE;
     }
+    if (argv[1][0] == '-' && argv[1][1]) { /* an option it does not have (a file: ./-name) */
+        fprintf(stderr, "facepuppet info: unknown option '%s' (info takes one FILE; see --help)\n",
+                argv[1]);
+        return FP_EXIT_USAGE;
+    }
     const char *dot = strrchr(argv[1], '.');
     if (dot && !strcasecmp(dot, ".json")) return fp_app_rig_info(argv[1]);
     if (is_take(argv[1])) return fp_app_take_info(argv[1]);

@@ -71,6 +71,11 @@ static int play_main(int argc, char **argv)
     }
     const char *take_path = argv[optind];
     char err[2048];
+    if (out) { /* the name and the place, before any work (as run and pose) */
+        int oc = fp_app_check_mesh_name("facepuppet play", "--out", out);
+        if (!oc) oc = fp_app_check_output("facepuppet play", "--out", out);
+        if (oc) return oc;
+    }
     fp_export_format export_fmt;
     if (export_file && fp_export_format_from_path(export_file, &export_fmt)) {
         fprintf(stderr, "facepuppet play: --export %s: give a file ending in .gltf, .glb, .pc2 "

@@ -26,6 +26,17 @@ static inline unsigned fp_parse_hands(const char *v)
     return 0;
 }
 
+/** The one parser of an on/off key's value (the same words as mapping_util.h's
+ *  FP_PARAM_BOOL): "1", "true", "yes", "on" -> 1; "0", "false", "no", "off" -> 0; anything
+ *  else (NULL too) -> -1 (the caller reports "KEY=V: expected 0 or 1"). */
+static inline int fp_parse_bool(const char *v)
+{
+    if (!v) return -1;
+    if (!strcmp(v, "1") || !strcmp(v, "true") || !strcmp(v, "yes") || !strcmp(v, "on")) return 1;
+    if (!strcmp(v, "0") || !strcmp(v, "false") || !strcmp(v, "no") || !strcmp(v, "off")) return 0;
+    return -1;
+}
+
 /** The `hands=` value naming mask: "left", "right" or "both" (any other mask). */
 static inline const char *fp_hands_name(unsigned mask)
 {
