@@ -31,6 +31,9 @@ static int numbers(const char *path, const cJSON *obj, const char *prefix, const
                              prefix, key, i);
         if (!isfinite(v->valuedouble))
             return fp_errorf(err, errlen, -ERANGE, "%s: field %s%s[%d]: not finite", path, prefix, key, i);
+        if (fabs(v->valuedouble) > 1e9) /* (1e308 made every hand point infinite downstream) */
+            return fp_errorf(err, errlen, -ERANGE, "%s: field %s%s[%d]: %g is beyond 1e9", path,
+                             prefix, key, i, v->valuedouble);
         out[i] = v->valuedouble;
     }
     return 1;

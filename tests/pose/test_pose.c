@@ -228,6 +228,7 @@ static void test_calibration_file(void **state)
         {"{\"mm_per_unit\": -3}", "mm_per_unit", -ERANGE},
         {"{\"mm_per_unit\": 1e-300}", "mm_per_unit 1e-6 to 1e9", -ERANGE},
         {"{\"scale\": 1e-300}", "scale", -ERANGE},
+        {"{\"scale\": 0.1, \"offset\": [0, 1e308, 0]}", "offset[1]: 1e+308 is beyond 1e9", -ERANGE},
         {"{\"scale\": 0.1, \"rotation\": [1, 0, 0]}", "rotation", -EBADMSG},
         {"{\"scale\": 0.1, \"right\": {\"offset\": [1, \"a\", 0]}}", "right.offset[1]", -EBADMSG},
         {"{\"scale\": 0.1, \"rotation\": [0, 0, 0, 0]}", "rotation", -ERANGE},

@@ -181,6 +181,8 @@ static int calibrate_main(int argc, char **argv)
         return FP_EXIT_USAGE;
     }
     if (!input || !out || optind != argc) {
+        fprintf(stderr, "facepuppet calibrate: %s\n\n", !input ? "--input SPEC is required"
+                        : !out ? "--out FILE is required" : "unexpected argument (see below)");
         usage(stderr);
         return FP_EXIT_USAGE;
     }

@@ -208,15 +208,16 @@ static int export_main(int argc, char **argv)
             break;
         case OPT_STEP: step = 1; break;
         case OPT_SIZE:
-            if (sscanf(optarg, "%dx%d", &width, &height) != 2 || width < 16 || height < 16 ||
-                width > 8192 || height > 8192) {
+            int used = 0; /* (and nothing after: "1280x720x3" was read as 1280x720) */
+            if (sscanf(optarg, "%dx%d%n", &width, &height, &used) != 2 || optarg[used] ||
+                width < 16 || height < 16 || width > 8192 || height > 8192) {
                 fprintf(stderr, "facepuppet export: --size WxH, 16..8192 each, got '%s'\n", optarg);
                 return FP_EXIT_USAGE;
             }
             break;
         case OPT_CAMERA: {
-            int k = sscanf(optarg, "%lf,%lf,%lf", &yaw, &pitch, &zoom);
-            if (k < 2 || !isfinite(yaw) || !isfinite(pitch) || !(zoom > 0 && zoom < 1000)) {
+            int used = 0, k = sscanf(optarg, "%lf,%lf%n,%lf%n", &yaw, &pitch, &used, &zoom, &used);
+            if (k < 2 || optarg[used] || !isfinite(yaw) || !isfinite(pitch) || !(zoom > 0 && zoom < 1000)) {
                 fprintf(stderr, "facepuppet export: --camera YAW,PITCH[,ZOOM] in degrees (zoom > 0), "
                         "got '%s'\n", optarg);
                 return FP_EXIT_USAGE;

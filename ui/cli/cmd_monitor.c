@@ -91,7 +91,10 @@ static void usage(FILE *f)
                "Stops at the end of a recording, after N events or S seconds, or on Ctrl-C.\n"
                "  e.g. facepuppet monitor replay:../shared/data/hands/leap-motion/grab_joints_mm.csv,fast=1\n"
                "       facepuppet monitor pedal\n"
-               "       facepuppet monitor cyberglove:/dev/ttyUSB0\n");
+               "       facepuppet monitor cyberglove:/dev/ttyUSB0\n\n"
+               "Exit status: 0 done (the end of a recording, N events, S seconds or Ctrl-C),\n"
+               "64 usage (a bad option or SPEC key), 65 a malformed recording, 66 an input that\n"
+               "cannot be opened (file, device, port), 78 a plugin missing or failing.\n");
 }
 
 static int monitor_main(int argc, char **argv)
@@ -134,6 +137,7 @@ static int monitor_main(int argc, char **argv)
         }
     }
     if (optind != argc - 1) {
+        fprintf(stderr, "facepuppet monitor: %s\n\n", optind >= argc ? "give one input SPEC" : "one SPEC only");
         usage(stderr);
         return FP_EXIT_USAGE;
     }

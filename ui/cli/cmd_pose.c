@@ -52,6 +52,8 @@ static int pose_main(int argc, char **argv)
         }
     }
     if (!mesh_path || !out_path || optind != argc) {
+        fprintf(stderr, "facepuppet pose: %s\n\n", !mesh_path ? "--mesh FILE is required"
+                        : !out_path ? "--out FILE is required" : "unexpected argument (see below)");
         pose_usage(stderr);
         return FP_EXIT_USAGE;
     }
