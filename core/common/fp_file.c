@@ -115,3 +115,14 @@ FILE *fp_file_fopen_regular(const char *path, int *code)
     }
     return f;
 }
+
+int fp_file_output_code(int e)
+{
+    switch (e) {
+    case ENOENT: case ENOTDIR: return -ENOENT;
+    case EACCES: case EPERM: case EROFS: return -EACCES;
+    case ENOSPC: case EDQUOT: return -ENOSPC;
+    case ENOMEM: return -ENOMEM;
+    default: return -EIO;
+    }
+}

@@ -51,6 +51,12 @@ int fp_file_target(const char *path, char *real, size_t n);
  *  symbolic links", others strerror's. Static text. */
 const char *fp_file_error_text(int code);
 
+/** The code an output file's failure is reported with, from the errno of the call that
+ *  failed (e > 0): -ENOENT (no such folder: ENOENT, ENOTDIR), -EACCES (EACCES, EPERM, EROFS),
+ *  -ENOSPC (ENOSPC, EDQUOT), -ENOMEM, else -EIO. The exports and PNG writers share it, so a
+ *  full disk or a read-only folder reads the same from each. Thread-safe. */
+int fp_file_output_code(int e);
+
 /** The mode a new file gets: 0666 & ~umask, the umask read from /proc/self/status without
  *  changing it (umask() is process-wide: setting it to read it races other threads); 022 when
  *  it cannot be read. Thread-safe. */

@@ -81,24 +81,13 @@ const char *fp_export_format_extension(fp_export_format f)
 
 /* ---- files ----------------------------------------------------------------------------- */
 
-static int errno_code(int e)
-{
-    switch (e) {
-    case ENOENT: case ENOTDIR: return -ENOENT;
-    case EACCES: case EPERM: case EROFS: return -EACCES;
-    case ENOSPC: case EDQUOT: return -ENOSPC;
-    case ENOMEM: return -ENOMEM;
-    default: return -EIO;
-    }
-}
-
 /* A temporary file ".NAME<tag>.XXXXXX" beside `path` (fp_file_temp_beside), open in *f. */
 static int temp_beside(const char *path, const char *tag, char *tmp, size_t n, FILE **f,
                        char *err, size_t errlen)
 {
     int fd = fp_file_temp_beside(path, tag, tmp, n);
     if (fd < 0)
-        return fp_errorf(err, errlen, errno_code(-fd), "%s: cannot create a file in its folder: %s",
+        return fp_errorf(err, errlen, fp_file_output_code(-fd), "%s: cannot create a file in its folder: %s",
                          path, strerror(-fd));
     (void)fchmod(fd, (mode_t)fp_file_new_mode()); /* the mode a new file would get */
     *f = fdopen(fd, "w+b");
@@ -107,7 +96,7 @@ static int temp_beside(const char *path, const char *tag, char *tmp, size_t n, F
         close(fd);
         unlink(tmp);
         tmp[0] = '\0';
-        return fp_errorf(err, errlen, errno_code(e), "%s: %s", path, strerror(e));
+        return fp_errorf(err, errlen, fp_file_output_code(e), "%s: %s", path, strerror(e));
     }
     return 0;
 }
@@ -116,7 +105,7 @@ static int put(fp_exporter *x, const void *p, size_t n, char *err, size_t errlen
 {
     if (fwrite(p, 1, n, x->f) != n) {
         int e = errno ? errno : EIO;
-        return fp_errorf(err, errlen, errno_code(e), "%s: write failed: %s", x->path,
+        return fp_errorf(err, errlen, fp_file_output_code(e), "%s: write failed: %s", x->path,
                          strerror(e));
     }
     return 0;
@@ -143,12 +132,12 @@ static int commit_file(fp_exporter *x, const char *tmp, FILE **f, char *err, siz
 {
     int rc = 0;
     if (fflush(*f) != 0 || fsync(fileno(*f)) != 0)
-        rc = errno_code(errno);
+        rc = fp_file_output_code(errno);
     if (fclose(*f) != 0 && !rc)
-        rc = errno_code(errno);
+        rc = fp_file_output_code(errno);
     *f = NULL;
     if (!rc && rename(tmp, x->path) != 0)
-        rc = errno_code(errno);
+        rc = fp_file_output_code(errno);
     if (rc) {
         unlink(tmp);
         return fp_errorf(err, errlen, rc, "%s: cannot write: %s (nothing written)", x->path,
@@ -189,7 +178,7 @@ int fp_export_begin(const fp_mesh *base, const fp_export_options *opt, fp_export
         int tr = fp_file_target(opt->path, x->path, sizeof x->path);
         if (tr < 0) {
             free(x);
-            return fp_errorf(err, errlen, tr == -EISDIR || tr == -ENXIO ? -EEXIST : errno_code(-tr),
+            return fp_errorf(err, errlen, tr == -EISDIR || tr == -ENXIO ? -EEXIST : fp_file_output_code(-tr),
                              "%s: cannot replace it: %s", opt->path, fp_file_error_text(tr));
         }
     }
@@ -232,7 +221,7 @@ int fp_export_begin(const fp_mesh *base, const fp_export_options *opt, fp_export
     }
     case FP_EXPORT_OBJ_SEQ:
         if (mkdir(x->path, 0777) != 0 && errno != EEXIST)
-            rc = fp_errorf(err, errlen, errno_code(errno), "%s: cannot create the folder: %s",
+            rc = fp_errorf(err, errlen, fp_file_output_code(errno), "%s: cannot create the folder: %s",
                            x->path, strerror(errno));
         else {
             struct stat st;
@@ -695,7 +684,7 @@ static int finish_mdd(fp_exporter *x, char *err, size_t errlen)
         rc = put(x, b, 4, err, errlen);
     }
     if (!rc && (fflush(data) != 0 || fseek(data, 0, SEEK_SET) != 0))
-        rc = fp_errorf(err, errlen, errno_code(errno), "%s: %s", x->data_tmp, strerror(errno));
+        rc = fp_errorf(err, errlen, fp_file_output_code(errno), "%s: %s", x->data_tmp, strerror(errno));
     char buf[1 << 16];
     size_t got;
     while (!rc && (got = fread(buf, 1, sizeof buf, data)) > 0)
@@ -737,7 +726,7 @@ int fp_export_finish(fp_exporter **xp, fp_export_result *res, char *err, size_t 
         const int32_t samples = (int32_t)x->frames;
         le32(b, &samples);
         if (fflush(x->f) != 0 || pwrite(fileno(x->f), b, 4, 28) != 4)
-            rc = fp_errorf(err, errlen, errno_code(errno), "%s: write failed: %s", x->path,
+            rc = fp_errorf(err, errlen, fp_file_output_code(errno), "%s: write failed: %s", x->path,
                            strerror(errno));
         if (!rc) {
             rc = commit_file(x, x->tmp, &x->f, err, errlen);

@@ -202,6 +202,18 @@ static void test_open_regular(void **state)
     assert_int_equal(fp_file_open_regular(dir), -EISDIR);
 }
 
+/* fp_file_output_code: the errno of a failed output call as the project reports it */
+static void test_output_code(void **state)
+{
+    (void)state;
+    static const int cases[][2] = {{ENOENT, -ENOENT}, {ENOTDIR, -ENOENT}, {EACCES, -EACCES},
+                                   {EPERM, -EACCES},  {EROFS, -EACCES},   {ENOSPC, -ENOSPC},
+                                   {EDQUOT, -ENOSPC}, {ENOMEM, -ENOMEM},  {EIO, -EIO},
+                                   {EFBIG, -EIO}};
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++)
+        assert_int_equal(fp_file_output_code(cases[i][0]), cases[i][1]);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -211,6 +223,7 @@ int main(void)
         cmocka_unit_test(test_new_mode),
         cmocka_unit_test(test_target),
         cmocka_unit_test(test_open_regular),
+        cmocka_unit_test(test_output_code),
     };
     return cmocka_run_group_tests(tests, make_dir, remove_dir);
 }

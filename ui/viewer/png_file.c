@@ -12,18 +12,6 @@
 #include <unistd.h>
 #include <stb_image_write.h>
 
-/* the project's codes for a file system's errno (as export.c's) */
-static int errno_code(int e)
-{
-    switch (e) {
-    case ENOENT: case ENOTDIR: return -ENOENT;
-    case EACCES: case EPERM: case EROFS: return -EACCES;
-    case ENOSPC: case EDQUOT: return -ENOSPC;
-    case ENOMEM: return -ENOMEM;
-    default: return -EIO;
-    }
-}
-
 typedef struct {
     FILE *f;
     int err; /* the first write's errno, 0 while all went */
@@ -45,12 +33,12 @@ int fp_png_write(const char *path, int w, int h, const unsigned char *rgb, int b
     char tmp[4200], real[4096];
     int tr = fp_file_target(path, real, sizeof real); /* a link's end; no folder or device */
     if (tr < 0)
-        return fp_errorf(err, errlen, tr == -EISDIR || tr == -ENXIO ? -EEXIST : errno_code(-tr),
+        return fp_errorf(err, errlen, tr == -EISDIR || tr == -ENXIO ? -EEXIST : fp_file_output_code(-tr),
                          "%s: cannot write the PNG: %s", path, fp_file_error_text(tr));
     path = real;
     int fd = fp_file_temp_beside(path, "", tmp, sizeof tmp);
     if (fd < 0)
-        return fp_errorf(err, errlen, errno_code(-fd), "%s: cannot write the PNG: %s", path,
+        return fp_errorf(err, errlen, fp_file_output_code(-fd), "%s: cannot write the PNG: %s", path,
                          strerror(-fd));
     (void)fchmod(fd, (mode_t)fp_file_new_mode()); /* the mode a new file would get */
     png_sink s = {fdopen(fd, "wb"), 0};
@@ -58,7 +46,7 @@ int fp_png_write(const char *path, int w, int h, const unsigned char *rgb, int b
         int e = errno;
         close(fd);
         unlink(tmp);
-        return fp_errorf(err, errlen, errno_code(e), "%s: cannot write the PNG: %s", path,
+        return fp_errorf(err, errlen, fp_file_output_code(e), "%s: cannot write the PNG: %s", path,
                          strerror(e));
     }
     const size_t stride = (size_t)w * 3;
@@ -72,7 +60,7 @@ int fp_png_write(const char *path, int w, int h, const unsigned char *rgb, int b
     if (!e && rename(tmp, path) != 0) e = errno;
     if (e) {
         unlink(tmp);
-        return fp_errorf(err, errlen, errno_code(e), "%s: cannot write the PNG: %s", path,
+        return fp_errorf(err, errlen, fp_file_output_code(e), "%s: cannot write the PNG: %s", path,
                          strerror(e));
     }
     return 0;
