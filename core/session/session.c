@@ -281,13 +281,6 @@ static const char *file_name(const char *path)
     return slash && slash[1] ? slash + 1 : path;
 }
 
-/* An input plugin's log line (its fp_host.log from any thread, relayed: fp_input_instance_
- * drain_log) into the session's log, on the thread that drains: the session's. */
-static void input_log(void *user, int level, const char *source, const char *message)
-{
-    fp_slog_printf(&((fp_session *)user)->log, level, source, "%s", message);
-}
-
 int fp_session_create(const fp_session_options *opt, fp_session **out, char *err, size_t errlen)
 {
     *out = NULL;
@@ -454,7 +447,9 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
                                     err, errlen);
         if (rc) goto fail;
         s->input_count = i + 1;
-        fp_input_instance_set_log(&s->inputs[i], input_log, s);
+        /* its log lines (relayed from any thread) straight to the session's callback, on the
+         * thread that drains them: the session's (as the mapping host's) */
+        fp_input_instance_set_log(&s->inputs[i], s->log.fn, s->log.user);
         fp_input_instance_drain_log(&s->inputs[i]); /* what its create said */
     }
     if ((rc = calibrate(s, opt, err, errlen))) goto fail;
