@@ -112,3 +112,10 @@ int fp_head_surface_z(const float *pos, size_t n, float x, float y, float r, flo
     if (found) *z = best;
     return found;
 }
+
+bool fp_head_scale_plausible(double diagonal, double mm_per_unit, double *across_mm)
+{
+    const double across = diagonal * mm_per_unit;
+    if (across_mm) *across_mm = across;
+    return across >= FP_HEAD_ACROSS_MIN_MM && across <= FP_HEAD_ACROSS_MAX_MM;
+}

@@ -28,6 +28,7 @@
 #ifndef FP_HEAD_H
 #define FP_HEAD_H
 
+#include <stdbool.h>
 #include <stddef.h>
 
 #ifdef __cplusplus
@@ -56,6 +57,16 @@ typedef struct fp_head {
  *  top of this file says. Returns 0, or -EINVAL (NULL, n < 4, a non-finite coordinate or a
  *  flat mesh), -ENOMEM. */
 int fp_head_detect(const float *pos, size_t n, fp_head *out);
+
+/** The face's size across, in millimetres, for a given scale: diagonal (the mesh's
+ *  bounding-box diagonal, mesh units) x mm_per_unit, into *across_mm (may be NULL). Returns
+ *  true when it is a face a hand can reach, 1 mm to 1 km (FP_HEAD_ACROSS_MIN_MM ..
+ *  FP_HEAD_ACROSS_MAX_MM); false for a slip of units (mm per unit for units per mm, a power
+ *  of ten too many), NaN included. The session checks a given scale with it, and calibrate
+ *  its --mm-per-unit. Thread-safe. */
+#define FP_HEAD_ACROSS_MIN_MM 1.0
+#define FP_HEAD_ACROSS_MAX_MM 1e6
+bool fp_head_scale_plausible(double diagonal, double mm_per_unit, double *across_mm);
 
 /** The frontmost surface at (x, y): the largest z of the vertices within r (in the x-y
  *  plane) of (x, y) whose y lies in [y_lo, y_hi]. Returns 1 with *z, or 0 where no vertex is

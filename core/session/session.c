@@ -372,9 +372,9 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
     }
     {   /* a given scale that makes the face under a millimetre or over a kilometre across is
          * a slip (mm per unit for units per mm, a unit's power of ten): no hand would reach it */
-        const double across_mm = sqrt(diag) * s->head.mm_per_unit;
+        double across_mm;
         if ((opt->mm_per_unit > 0 || (opt->calibration && opt->calibration->scale > 0)) &&
-            !(across_mm >= 1.0 && across_mm <= 1e6)) {
+            !fp_head_scale_plausible(sqrt(diag), s->head.mm_per_unit, &across_mm)) {
             rc = opt->mm_per_unit > 0 ? -EINVAL : -ERANGE; /* an option's, or a file's (65) */
             snprintf(err, errlen, "%s: %g mm per mesh unit makes the face %.3g mm across "
                      "(its diagonal %.4g mesh units); give millimetres per mesh unit",

@@ -264,6 +264,20 @@ static void test_calibration_file(void **state)
     assert_int_equal(rmdir(dir), 0); /* (fails with a temporary file left in it) */
 }
 
+/* A given scale is a face's: 1 mm to 1 km across (the session's and calibrate's check). */
+static void test_head_scale_plausible(void **state)
+{
+    (void)state;
+    double across = 0;
+    assert_true(fp_head_scale_plausible(47.5, 10, &across)); /* the ICT face at 10 mm per unit */
+    assert_true(fabs(across - 475) < 1e-9);
+    assert_true(fp_head_scale_plausible(1, FP_HEAD_ACROSS_MIN_MM, NULL));
+    assert_true(fp_head_scale_plausible(1, FP_HEAD_ACROSS_MAX_MM, NULL));
+    assert_false(fp_head_scale_plausible(47.5, 1e-300, NULL));
+    assert_false(fp_head_scale_plausible(47.5, 1e300, &across));
+    assert_false(fp_head_scale_plausible(47.5, NAN, NULL));
+}
+
 /* No input tells a workspace: false, box untouched. */
 static void test_inputs_workspace_unknown(void **state)
 {
@@ -383,6 +397,7 @@ int main(void)
         cmocka_unit_test(test_fit_workspace),
         cmocka_unit_test(test_head_detect),
         cmocka_unit_test(test_calibration_file),
+        cmocka_unit_test(test_head_scale_plausible),
         cmocka_unit_test(test_inputs_workspace_unknown),
         cmocka_unit_test(test_calibrate_touch),
         cmocka_unit_test(test_calibrate_hold),

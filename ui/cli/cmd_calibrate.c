@@ -208,9 +208,9 @@ static int calibrate_main(int argc, char **argv)
         fp_mesh_bounds(m, lo, hi);
         const double diag = sqrt((double)(hi[0] - lo[0]) * (hi[0] - lo[0]) +
                                  (double)(hi[1] - lo[1]) * (hi[1] - lo[1]) +
-                                 (double)(hi[2] - lo[2]) * (hi[2] - lo[2])),
-                     across = diag * mm_per_unit;
-        if (!(across >= 1.0 && across <= 1e6)) {
+                                 (double)(hi[2] - lo[2]) * (hi[2] - lo[2]));
+        double across;
+        if (!fp_head_scale_plausible(diag, mm_per_unit, &across)) {
             fprintf(stderr, "facepuppet calibrate: --mm-per-unit %g makes the face %.3g mm across "
                             "(its diagonal %.4g mesh units); give millimetres per mesh unit\n",
                     mm_per_unit, across, diag);
