@@ -221,3 +221,18 @@ int fp_app_check_mesh_name(const char *cmd, const char *option, const char *path
             cmd, option, path);
     return FP_EXIT_USAGE;
 }
+
+int fp_app_take_intact(const char *cmd, const char *verb, const char *path,
+                       const struct fp_take_reader *r)
+{
+    const char *cut = fp_take_reader_warning(r);
+    if (!fp_take_reader_frames(r)) {
+        fprintf(stderr, "%s: %s: no intact frame to %s%s%s%s\n", cmd, path, verb, cut[0] ? " (" : "",
+                cut, cut[0] ? ")" : "");
+        return FP_EXIT_DATAERR;
+    }
+    if (cut[0])
+        fprintf(stderr, "%s: warning: %s; %sing the %zu intact frames\n", cmd, cut, verb,
+                fp_take_reader_frames(r));
+    return FP_EXIT_OK;
+}

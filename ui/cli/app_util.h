@@ -64,6 +64,13 @@ void fp_app_log_line(void *user, int level, const char *source, const char *mess
  *  int64 with room; 9.3e9 s wrapped around and stopped after one frame). */
 #define FP_APP_MAX_DURATION_S 1e7
 
+/** Before play or export (verb) of the take at path: with no intact frame, "CMD: PATH: no
+ *  intact frame to VERB (the cut)" and 65, before any output; a damaged tail is warned about
+ *  ("CMD: warning: CUT; VERBing the N intact frames") and 0 returned. */
+struct fp_take_reader;
+int fp_app_take_intact(const char *cmd, const char *verb, const char *path,
+                       const struct fp_take_reader *r);
+
 /** An output mesh's name: an extension the mesh writer knows (.obj .ply .off .stl .gltf .glb,
  *  any case). Returns 0, or 64 (usage) with "CMD: OPTION PATH: unknown mesh format ..."
  *  printed. */

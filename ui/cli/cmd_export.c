@@ -272,16 +272,7 @@ static int export_main(int argc, char **argv)
     float *held = NULL;
     const fp_take_header *h = fp_take_player_header(p);
     fp_take_reader *r = fp_take_player_reader(p);
-    if (!fp_take_reader_frames(r)) { /* nothing to export: an error, before any output */
-        fprintf(stderr, "facepuppet export: %s: no intact frame to export%s%s%s\n", take_path,
-                fp_take_reader_warning(r)[0] ? " (" : "", fp_take_reader_warning(r),
-                fp_take_reader_warning(r)[0] ? ")" : "");
-        status = FP_EXIT_DATAERR;
-        goto done;
-    }
-    if (fp_take_reader_warning(r)[0])
-        fprintf(stderr, "facepuppet export: warning: %s; exporting the %zu intact frames\n",
-                fp_take_reader_warning(r), fp_take_reader_frames(r));
+    if ((status = fp_app_take_intact("facepuppet export", "export", take_path, r))) goto done;
     range_end in = {0}, outr = {0};
     if (range) {
         const char *dash = strchr(range, '-');

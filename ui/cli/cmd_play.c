@@ -102,16 +102,7 @@ static int play_main(int argc, char **argv)
     fp_take_reader *r = fp_take_player_reader(player);
     fp_session *s = fp_take_player_session(player);
     const fp_take_header *h = fp_take_reader_header(r);
-    if (!fp_take_reader_frames(r)) { /* nothing to play: an error, before any output */
-        fprintf(stderr, "facepuppet play: %s: no intact frame to play%s%s%s\n", take_path,
-                fp_take_reader_warning(r)[0] ? " (" : "", fp_take_reader_warning(r),
-                fp_take_reader_warning(r)[0] ? ")" : "");
-        status = FP_EXIT_DATAERR;
-        goto done;
-    }
-    if (fp_take_reader_warning(r)[0])
-        fprintf(stderr, "facepuppet play: warning: %s; playing the %zu intact frames\n",
-                fp_take_reader_warning(r), fp_take_reader_frames(r));
+    if ((status = fp_app_take_intact("facepuppet play", "play", take_path, r))) goto done;
     if (export_file && (status = fp_app_export_open("facepuppet play", export_file,
                                                     fp_session_mesh(s),
                                                     fp_take_player_mm_per_unit(player),
