@@ -138,11 +138,12 @@ static inline bool fpmu_parse_value(const fp_param_info *info, const char *v, fp
     char *end;
     out->text = v;
     switch (info->type) {
-    case FP_PARAM_BOOL:
-        if (!strcmp(v, "1") || !strcmp(v, "true") || !strcmp(v, "yes") || !strcmp(v, "on")) out->number = 1;
-        else if (!strcmp(v, "0") || !strcmp(v, "false") || !strcmp(v, "no") || !strcmp(v, "off")) out->number = 0;
-        else return false;
+    case FP_PARAM_BOOL: { /* plugin_util.h's words, as every on/off key */
+        const int b = fp_parse_bool(v);
+        if (b < 0) return false;
+        out->number = b;
         return true;
+    }
     case FP_PARAM_INT:
     case FP_PARAM_FLOAT:
         out->number = strtod(v, &end);

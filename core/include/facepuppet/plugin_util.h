@@ -26,9 +26,9 @@ static inline unsigned fp_parse_hands(const char *v)
     return 0;
 }
 
-/** The one parser of an on/off key's value (the same words as mapping_util.h's
- *  FP_PARAM_BOOL): "1", "true", "yes", "on" -> 1; "0", "false", "no", "off" -> 0; anything
- *  else (NULL too) -> -1 (the caller reports "KEY=V: expected 0 or 1"). */
+/** The one parser of an on/off key's value (mapping_util.h's FP_PARAM_BOOL uses it too):
+ *  "1", "true", "yes", "on" -> 1; "0", "false", "no", "off" -> 0; anything else (NULL too)
+ *  -> -1 (the caller reports "KEY=V: expected 0 or 1"). [any-thread], no allocation. */
 static inline int fp_parse_bool(const char *v)
 {
     if (!v) return -1;
