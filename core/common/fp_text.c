@@ -61,3 +61,20 @@ char *fp_text_clean(const char *s, char *out, size_t n)
     out[w] = '\0';
     return out;
 }
+
+const char *fp_text_after_space(const char *p, const char *stop)
+{
+    while (p && p < stop && (*p == ' ' || *p == '\t' || *p == '\n' || *p == '\r')) p++;
+    return p && p < stop ? p : NULL;
+}
+
+void fp_text_line_col(const char *text, const char *at, long *line, long *col)
+{
+    long l = 1, c = 1;
+    for (const char *p = text; p && p < at; p++) {
+        if (*p == '\n') l++, c = 1;
+        else c++;
+    }
+    if (line) *line = l;
+    if (col) *col = c;
+}

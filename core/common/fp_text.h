@@ -26,6 +26,15 @@ bool fp_text_ok(const char *s, bool lines);
  *  s NULL: "". Thread-safe. */
 char *fp_text_clean(const char *s, char *out, size_t n);
 
+/** Where the text [p, stop) holds more than JSON's white space (space, tab, line feed,
+ *  carriage return): the first other byte, or NULL when there is none (p NULL: NULL). For
+ *  the readers that take one JSON value per file (rigs, calibration files). Thread-safe. */
+const char *fp_text_after_space(const char *p, const char *stop);
+
+/** The 1-based line and column of `at` in text (at within text, or at its end), for
+ *  messages "FILE:LINE:COL". line or col may be NULL. Thread-safe. */
+void fp_text_line_col(const char *text, const char *at, long *line, long *col);
+
 #ifdef __cplusplus
 }
 #endif

@@ -4,6 +4,7 @@
 
 #include "fp_error.h"
 #include "fp_file.h"
+#include "fp_text.h"
 
 #include <cJSON.h>
 #include <errno.h>
@@ -72,25 +73,18 @@ int fp_calibration_load(const char *path, fp_calibration *out, char *err, size_t
     const char *end = NULL;
     cJSON *root = cJSON_ParseWithLengthOpts(text, len, &end, false);
     int rc = 0;
-    const char *at = NULL; /* where the text stops being one JSON value and white space */
-    if (root) {
-        while (end && end < text + len && (*end == ' ' || *end == '\t' || *end == '\n' || *end == '\r'))
-            end++;
-        if (end && end < text + len) {
-            cJSON_Delete(root);
-            root = NULL;
-            at = end;
-        }
+    /* where the text stops being one JSON value and white space */
+    const char *at = root ? fp_text_after_space(end, text + len) : NULL;
+    if (at) {
+        cJSON_Delete(root);
+        root = NULL;
     }
     if (!root) { /* where the parse stopped, as line:column */
-        long line = 1, col = 1;
+        long line, col;
         const bool after = at != NULL;
         if (!at) at = cJSON_GetErrorPtr();
         if (!(at >= text && at <= text + len)) at = text;
-        for (const char *p = text; p < at; p++) {
-            if (*p == '\n') line++, col = 1;
-            else col++;
-        }
+        fp_text_line_col(text, at, &line, &col);
         rc = fp_errorf(err, errlen, -EBADMSG, "%s:%ld:%ld: %s", path, line, col,
                        after ? "text after the JSON object"
                        : at == text + len ? "not valid JSON (it ends too soon)" : "not valid JSON");

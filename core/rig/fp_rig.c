@@ -628,23 +628,21 @@ int fp_rig_parse(const char *json, size_t len, const char *name, fp_rig **out, c
     ctx c = {name ? name : "(rig)", err, errlen};
     const char *end = NULL;
     cJSON *root = cJSON_ParseWithLengthOpts(json, len, &end, false);
-    if (root) { /* one JSON value and only white space after it */
-        while (end && end < json + len && (*end == ' ' || *end == '\t' || *end == '\n' || *end == '\r'))
-            end++;
-        if (end && end < json + len && *end) {
-            size_t off = (size_t)(end - json), line = 1;
-            for (size_t i = 0; i < off; i++) line += json[i] == '\n';
-            cJSON_Delete(root);
-            return fp_errorf(err, errlen, -EBADMSG, "%s:%zu: text after the rig's JSON object (byte %zu)",
-                             c.file, line, off);
-        }
+    const char *rest = root ? fp_text_after_space(end, json + len) : NULL;
+    if (rest && *rest) { /* one JSON value and only white space after it */
+        long line;
+        fp_text_line_col(json, rest, &line, NULL);
+        cJSON_Delete(root);
+        return fp_errorf(err, errlen, -EBADMSG, "%s:%ld: text after the rig's JSON object (byte %zu)",
+                         c.file, line, (size_t)(rest - json));
     }
     if (!root) {
         const char *at = cJSON_GetErrorPtr();
-        size_t off = at && at >= json && at <= json + len ? (size_t)(at - json) : 0;
-        size_t line = 1;
-        for (size_t i = 0; i < off; i++) line += json[i] == '\n';
-        return fp_errorf(err, errlen, -EBADMSG, "%s:%zu: not valid JSON (near byte %zu)", c.file, line, off);
+        if (!(at && at >= json && at <= json + len)) at = json;
+        long line;
+        fp_text_line_col(json, at, &line, NULL);
+        return fp_errorf(err, errlen, -EBADMSG, "%s:%ld: not valid JSON (near byte %zu)", c.file, line,
+                         (size_t)(at - json));
     }
     fp_rig *r = calloc(1, sizeof *r);
     if (!r) {

@@ -61,11 +61,29 @@ static void test_clean(void **state)
     assert_string_equal(fp_text_clean("ab\xE2\x82\xAC", out, 6), "ab\xE2\x82\xAC");
 }
 
+static void test_json_helpers(void **state)
+{
+    (void)state;
+    const char *t = "{}\n \t\r\n";
+    assert_null(fp_text_after_space(t + 2, t + strlen(t)));
+    const char *u = "{}\n  x";
+    assert_ptr_equal(fp_text_after_space(u + 2, u + strlen(u)), u + 5);
+    assert_null(fp_text_after_space(NULL, u));
+    long line, col;
+    fp_text_line_col(u, u + 5, &line, &col);
+    assert_int_equal(line, 2);
+    assert_int_equal(col, 3);
+    fp_text_line_col(u, u, &line, &col);
+    assert_int_equal(line, 1);
+    assert_int_equal(col, 1);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_ok),
         cmocka_unit_test(test_clean),
+        cmocka_unit_test(test_json_helpers),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
