@@ -1,4 +1,5 @@
-/* fp_file.c: temporary files beside their targets, new files' mode (fp_file.h). */
+/* fp_file.c: outputs written through a temporary file beside their targets, new files' mode,
+ * regular files opened for reading (fp_file.h). */
 #define _GNU_SOURCE /* mkostemp */
 #include "fp_file.h"
 
@@ -125,4 +126,96 @@ int fp_file_output_code(int e)
     case ENOMEM: return -ENOMEM;
     default: return -EIO;
     }
+}
+
+/* o emptied: nothing open, no temporary (o->path kept). */
+static void output_clear(fp_file_output *o)
+{
+    o->tmp[0] = '\0';
+    o->fd = -1;
+    o->f = NULL;
+}
+
+int fp_file_open_output(const char *path, const char *tag, const char *stdio_mode, unsigned flags,
+                        fp_file_output *o)
+{
+    if (!o) return -EINVAL;
+    output_clear(o);
+    o->flags = flags;
+    o->failed = FP_FILE_STEP_TARGET;
+    int rc = fp_file_target(path, o->path, sizeof o->path); /* (path may be o->path) */
+    if (rc < 0) return rc;
+    o->failed = FP_FILE_STEP_TEMP;
+    int fd = fp_file_temp_beside(o->path, tag, o->tmp, sizeof o->tmp);
+    if (fd < 0) return fd;
+    o->fd = fd;
+    mode_t mode = (mode_t)fp_file_new_mode();
+    struct stat st;
+    if ((flags & FP_FILE_OUTPUT_KEEP_MODE) && stat(o->path, &st) == 0 && S_ISREG(st.st_mode))
+        mode = st.st_mode & 07777;
+    int e = 0;
+    if (fchmod(fd, mode) != 0 && (flags & FP_FILE_OUTPUT_MODE_REQUIRED)) {
+        e = errno;
+        o->failed = FP_FILE_STEP_MODE;
+    } else if (stdio_mode && !(o->f = fdopen(fd, stdio_mode))) {
+        e = errno ? errno : ENOMEM;
+        o->failed = FP_FILE_STEP_STREAM;
+    }
+    if (e) {
+        close(fd);
+        unlink(o->tmp);
+        output_clear(o);
+        return -e;
+    }
+    o->failed = FP_FILE_STEP_NONE;
+    return 0;
+}
+
+int fp_file_output_commit(fp_file_output *o)
+{
+    if (!o || !o->tmp[0]) {
+        if (o) o->failed = FP_FILE_STEP_NONE;
+        return -EINVAL;
+    }
+    int e = 0;
+    fp_file_step step = FP_FILE_STEP_NONE;
+    if (o->f) {
+        if (fflush(o->f) != 0) e = errno ? errno : EIO;
+        else if (ferror(o->f)) e = EIO; /* a write that failed earlier, its data dropped */
+        else if (fsync(o->fd) != 0) e = errno;
+        if (e) step = FP_FILE_STEP_SYNC;
+        if (fclose(o->f) != 0 && !e) e = errno, step = FP_FILE_STEP_CLOSE;
+    } else {
+        if (fsync(o->fd) != 0) e = errno, step = FP_FILE_STEP_SYNC;
+        if (close(o->fd) != 0 && !e) e = errno, step = FP_FILE_STEP_CLOSE;
+    }
+    o->f = NULL;
+    o->fd = -1;
+    if (!e && rename(o->tmp, o->path) != 0) e = errno, step = FP_FILE_STEP_RENAME;
+    if (e) unlink(o->tmp);
+    o->tmp[0] = '\0';
+    o->failed = step;
+    if (e) return -e;
+    if (o->flags & FP_FILE_OUTPUT_SYNC_FOLDER) { /* the rename's durability */
+        char dir[4096];
+        const char *slash = strrchr(o->path, '/');
+        if (!slash) snprintf(dir, sizeof dir, ".");
+        else if (slash == o->path) snprintf(dir, sizeof dir, "/");
+        else snprintf(dir, sizeof dir, "%.*s", (int)(slash - o->path), o->path);
+        int dfd = open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+        if (dfd >= 0) {
+            (void)fsync(dfd);
+            close(dfd);
+        }
+    }
+    return 0;
+}
+
+void fp_file_output_abort(fp_file_output *o)
+{
+    if (!o || !o->tmp[0]) return;
+    if (o->f) fclose(o->f);
+    else if (o->fd >= 0) close(o->fd);
+    unlink(o->tmp);
+    output_clear(o);
 }

@@ -1,10 +1,12 @@
 /*
- * fp_file.h: the pieces every "write a temporary file beside the target, then rename it over"
- * of the project shares (mesh saves, exports, calibration files, PNGs, bench's --plot and
- * --trace): which file a save replaces (fp_file_target), the temporary file's name and
- * creation, and the mode a new file gets; and the one way readers open an input file
- * (fp_file_open_regular: a FIFO or a device never blocks or passes for a file). The callers keep their own writes,
- * fsync and rename (and their error messages). Link: the static library `fp_common` (PIC).
+ * fp_file.h: every "write a temporary file beside the target, then rename it over" of the
+ * project (mesh saves, exports, calibration files, PNGs, bench's --plot and --trace) goes
+ * through fp_file_open_output / fp_file_output_commit / fp_file_output_abort: which file a
+ * save replaces (fp_file_target), the temporary file beside it (fp_file_temp_beside) with the
+ * mode a new file gets (fp_file_new_mode), then fsync and rename. The callers keep their own
+ * writes and their error messages and codes (fp_file_output.failed says which step failed).
+ * And the one way readers open an input file (fp_file_open_regular: a FIFO or a device never
+ * blocks or passes for a file). Link: the static library `fp_common` (PIC).
  */
 #ifndef FP_FILE_H
 #define FP_FILE_H
@@ -61,6 +63,76 @@ int fp_file_output_code(int e);
  *  changing it (umask() is process-wide: setting it to read it races other threads); 022 when
  *  it cannot be read. Thread-safe. */
 unsigned fp_file_new_mode(void);
+
+/** The step of fp_file_open_output or fp_file_output_commit that failed (fp_file_output.failed),
+ *  so that a caller words each as it always has. */
+typedef enum fp_file_step {
+    FP_FILE_STEP_NONE = 0, /* nothing failed */
+    FP_FILE_STEP_TARGET,   /* fp_file_target refused the path (-EISDIR a folder, -ENXIO a FIFO,
+                              device or socket, -ELOOP ...: words from fp_file_error_text) */
+    FP_FILE_STEP_TEMP,     /* the temporary file could not be made (fp_file_temp_beside's codes:
+                              -ENOENT no folder, -EACCES, ...) */
+    FP_FILE_STEP_MODE,     /* its mode could not be set (only with FP_FILE_OUTPUT_MODE_REQUIRED) */
+    FP_FILE_STEP_STREAM,   /* fdopen failed (-ENOMEM) */
+    FP_FILE_STEP_SYNC,     /* commit: the stream's flush, a write it had failed (-EIO), or fsync */
+    FP_FILE_STEP_CLOSE,    /* commit: close (fclose) */
+    FP_FILE_STEP_RENAME    /* commit: the rename over the target */
+} fp_file_step;
+
+/** fp_file_open_output's flags (0: none). */
+enum {
+    FP_FILE_OUTPUT_KEEP_MODE = 1u,     /* a file replaced keeps its permission bits (a new one
+                                          gets fp_file_new_mode()); without it every save gets
+                                          fp_file_new_mode() */
+    FP_FILE_OUTPUT_MODE_REQUIRED = 2u, /* a mode that cannot be set fails the open
+                                          (FP_FILE_STEP_MODE); without it the mode is best effort
+                                          (a file system without modes keeps the temporary's) */
+    FP_FILE_OUTPUT_SYNC_FOLDER = 4u    /* commit also fsyncs the folder after the rename (best
+                                          effort: the data is already safe) */
+};
+
+/** An output being written whole or not at all: the temporary file beside its target, until
+ *  fp_file_output_commit renames it over the target or fp_file_output_abort removes it. A
+ *  zeroed one holds nothing (abort does nothing). */
+typedef struct fp_file_output {
+    char path[4096];     /* the file a commit replaces (fp_file_target's: a link's end); kept
+                            after commit and abort, for messages */
+    char tmp[4200];      /* the temporary file beside it; "" when there is none (not made,
+                            committed or aborted) */
+    int fd;              /* the temporary's descriptor (O_CLOEXEC), -1 when none; the one
+                            under f when there is a stream */
+    FILE *f;             /* a stream on fd when opened with a stdio mode, else NULL */
+    unsigned flags;      /* fp_file_open_output's */
+    fp_file_step failed; /* the step at which the last open or commit failed, else NONE */
+} fp_file_output;
+
+/** Start writing `path` whole or not at all: resolve the file it replaces (fp_file_target: a
+ *  symbolic link written through; a folder, FIFO or device refused), make the temporary file
+ *  ".NAME<tag>.XXXXXX" beside that file (tag: as fp_file_temp_beside's; NULL as ""), give it
+ *  the mode a new file gets (fp_file_new_mode(); flags FP_FILE_OUTPUT_*), and with
+ *  stdio_mode ("w", "wb", "w+b", ...; NULL: none) a stream on it. The caller writes through
+ *  o->f or o->fd (or has another program write o->tmp), then calls fp_file_output_commit or
+ *  fp_file_output_abort exactly once; o owns the descriptor, stream and temporary until then.
+ *  Returns 0, or a negative errno with o->failed saying which step failed (FP_FILE_STEP_TARGET:
+ *  fp_file_target's codes, o->path unusable; TEMP: fp_file_temp_beside's, o->path the
+ *  resolved target; MODE: fchmod's; STREAM: fdopen's) and nothing left behind (o->tmp "",
+ *  o->fd -1, o->f NULL); -EINVAL for a NULL path or o (o->failed then TARGET when o is
+ *  given). Thread-safe for distinct o. */
+int fp_file_open_output(const char *path, const char *tag, const char *stdio_mode, unsigned flags,
+                        fp_file_output *o);
+
+/** Finish o: flush its stream (a write the stream had failed before: -EIO), fsync, close,
+ *  rename the temporary over o->path, and with FP_FILE_OUTPUT_SYNC_FOLDER fsync the folder.
+ *  Returns 0 (o->tmp ""), or a negative errno of the first call that failed (o->failed: SYNC,
+ *  CLOSE or RENAME), the temporary removed and o->path left as it was; either way o holds
+ *  nothing afterwards. -EINVAL (o->failed NONE) when o holds no temporary. Thread-safe for
+ *  distinct o. */
+int fp_file_output_commit(fp_file_output *o);
+
+/** Give o up: close its stream or descriptor and remove the temporary; o->path is untouched.
+ *  Does nothing for NULL, a zeroed o, or one already committed or aborted. errno may change.
+ *  Thread-safe for distinct o. */
+void fp_file_output_abort(fp_file_output *o);
 
 #ifdef __cplusplus
 }

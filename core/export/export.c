@@ -25,10 +25,10 @@ struct fp_exporter {
     size_t n;
     uint64_t frames;
     double first_time, last_time;
-    char path[4096];          /* the target */
-    char tmp[4200];           /* pc2/mdd: the temporary file being written, "" when none */
-    char data_tmp[4200];      /* mdd: the frames before the header is known */
-    FILE *f;
+    char path[4096];          /* the target (pc2/mdd/glTF: the file replaced, a link's end) */
+    fp_file_output out;       /* pc2/mdd: the file being written (out.tmp "" when none) */
+    fp_file_output data;      /* mdd: the frames before the header is known (never committed) */
+    FILE *f;                  /* what put() writes: out's or data's stream */
     float *scratch;           /* n x 3 */
     /* mdd: times; glTF: times and sparse displacements per frame */
     double *times;
@@ -81,23 +81,22 @@ const char *fp_export_format_extension(fp_export_format f)
 
 /* ---- files ----------------------------------------------------------------------------- */
 
-/* A temporary file ".NAME<tag>.XXXXXX" beside `path` (fp_file_temp_beside), open in *f. */
-static int temp_beside(const char *path, const char *tag, char *tmp, size_t n, FILE **f,
+/* Start the output o of `path` (fp_file_open_output: the file it replaces, a temporary file
+ * ".NAME<tag>.XXXXXX" beside that file, open "w+b"); x->path becomes the file replaced.
+ * Returns 0 or the code, with err as every export words it. */
+static int open_output(fp_exporter *x, const char *path, const char *tag, fp_file_output *o,
                        char *err, size_t errlen)
 {
-    int fd = fp_file_temp_beside(path, tag, tmp, n);
-    if (fd < 0)
-        return fp_errorf(err, errlen, fp_file_output_code(-fd), "%s: cannot create a file in its folder: %s",
-                         path, strerror(-fd));
-    (void)fchmod(fd, (mode_t)fp_file_new_mode()); /* the mode a new file would get */
-    *f = fdopen(fd, "w+b");
-    if (!*f) {
-        int e = errno;
-        close(fd);
-        unlink(tmp);
-        tmp[0] = '\0';
-        return fp_errorf(err, errlen, fp_file_output_code(e), "%s: %s", path, strerror(e));
-    }
+    int rc = fp_file_open_output(path, tag, "w+b", 0, o);
+    if (rc < 0 && o->failed == FP_FILE_STEP_TARGET)
+        return fp_errorf(err, errlen, rc == -EISDIR || rc == -ENXIO ? -EEXIST : fp_file_output_code(-rc),
+                         "%s: cannot replace it: %s", path, fp_file_error_text(rc));
+    snprintf(x->path, sizeof x->path, "%s", o->path);
+    if (rc < 0 && o->failed == FP_FILE_STEP_TEMP)
+        return fp_errorf(err, errlen, fp_file_output_code(-rc), "%s: cannot create a file in its folder: %s",
+                         x->path, strerror(-rc));
+    if (rc < 0)
+        return fp_errorf(err, errlen, fp_file_output_code(-rc), "%s: %s", x->path, strerror(-rc));
     return 0;
 }
 
@@ -127,19 +126,13 @@ static void le32(void *dst, const void *src)
     d[2] = (unsigned char)(v >> 16); d[3] = (unsigned char)(v >> 24);
 }
 
-/* fsync, close, rename the temporary file over the target. */
-static int commit_file(fp_exporter *x, const char *tmp, FILE **f, char *err, size_t errlen)
+/* fsync, close, rename o's temporary file over the target (fp_file_output_commit). */
+static int commit_file(fp_exporter *x, fp_file_output *o, char *err, size_t errlen)
 {
-    int rc = 0;
-    if (fflush(*f) != 0 || fsync(fileno(*f)) != 0)
-        rc = fp_file_output_code(errno);
-    if (fclose(*f) != 0 && !rc)
-        rc = fp_file_output_code(errno);
-    *f = NULL;
-    if (!rc && rename(tmp, x->path) != 0)
-        rc = fp_file_output_code(errno);
-    if (rc) {
-        unlink(tmp);
+    int rc = fp_file_output_commit(o);
+    x->f = NULL;
+    if (rc < 0) {
+        rc = fp_file_output_code(-rc);
         return fp_errorf(err, errlen, rc, "%s: cannot write: %s (nothing written)", x->path,
                          fp_strerror(rc));
     }
@@ -173,15 +166,7 @@ int fp_export_begin(const fp_mesh *base, const fp_export_options *opt, fp_export
         x->opt.mm_per_unit = 1;
     x->base = base;
     x->n = base->vertex_count;
-    snprintf(x->path, sizeof x->path, "%s", opt->path);
-    if (opt->format != FP_EXPORT_OBJ_SEQ) { /* the file replaced: a link's end, no device */
-        int tr = fp_file_target(opt->path, x->path, sizeof x->path);
-        if (tr < 0) {
-            free(x);
-            return fp_errorf(err, errlen, tr == -EISDIR || tr == -ENXIO ? -EEXIST : fp_file_output_code(-tr),
-                             "%s: cannot replace it: %s", opt->path, fp_file_error_text(tr));
-        }
-    }
+    snprintf(x->path, sizeof x->path, "%s", opt->path); /* (pc2/mdd/glTF: open_output's) */
     x->scratch = malloc(x->n * 3 * sizeof(float));
     if (!x->scratch) {
         free(x);
@@ -190,9 +175,10 @@ int fp_export_begin(const fp_mesh *base, const fp_export_options *opt, fp_export
     int rc = 0;
     switch (opt->format) {
     case FP_EXPORT_PC2: {
-        rc = temp_beside(x->path, "", x->tmp, sizeof x->tmp, &x->f, err, errlen);
+        rc = open_output(x, opt->path, "", &x->out, err, errlen);
         if (rc)
             break;
+        x->f = x->out.f;
         unsigned char h[32] = "POINTCACHE2";
         const int32_t version = 1, points = (int32_t)x->n, samples = 0;
         const float start = 0.0f, sampling = 1.0f;
@@ -205,18 +191,15 @@ int fp_export_begin(const fp_mesh *base, const fp_export_options *opt, fp_export
         break;
     }
     case FP_EXPORT_MDD:
-        rc = temp_beside(x->path, "frames", x->data_tmp, sizeof x->data_tmp, &x->f, err, errlen);
+        rc = open_output(x, opt->path, "frames", &x->data, err, errlen);
+        x->f = x->data.f;
         break;
     case FP_EXPORT_GLTF:
     case FP_EXPORT_GLB: {
         /* the folder must take a file now, not after the whole take was played */
-        FILE *probe = NULL;
-        rc = temp_beside(x->path, "probe", x->tmp, sizeof x->tmp, &probe, err, errlen);
-        if (!rc) {
-            fclose(probe);
-            unlink(x->tmp);
-            x->tmp[0] = '\0';
-        }
+        fp_file_output probe;
+        rc = open_output(x, opt->path, "probe", &probe, err, errlen);
+        fp_file_output_abort(&probe);
         break;
     }
     case FP_EXPORT_OBJ_SEQ:
@@ -666,12 +649,11 @@ out:
 
 static int finish_mdd(fp_exporter *x, char *err, size_t errlen)
 {
-    FILE *out = NULL;
-    int rc = temp_beside(x->path, "", x->tmp, sizeof x->tmp, &out, err, errlen);
+    int rc = open_output(x, x->path, "", &x->out, err, errlen);
     if (rc)
         return rc;
-    FILE *data = x->f;
-    x->f = out;
+    FILE *data = x->data.f;
+    x->f = x->out.f;
     unsigned char h[8];
     const int32_t frames = (int32_t)x->frames, points = (int32_t)x->n;
     be32(h, &frames);
@@ -684,21 +666,17 @@ static int finish_mdd(fp_exporter *x, char *err, size_t errlen)
         rc = put(x, b, 4, err, errlen);
     }
     if (!rc && (fflush(data) != 0 || fseek(data, 0, SEEK_SET) != 0))
-        rc = fp_errorf(err, errlen, fp_file_output_code(errno), "%s: %s", x->data_tmp, strerror(errno));
+        rc = fp_errorf(err, errlen, fp_file_output_code(errno), "%s: %s", x->data.tmp, strerror(errno));
     char buf[1 << 16];
     size_t got;
     while (!rc && (got = fread(buf, 1, sizeof buf, data)) > 0)
         rc = put(x, buf, got, err, errlen);
     if (!rc && ferror(data))
-        rc = fp_errorf(err, errlen, -EIO, "%s: read failed", x->data_tmp);
-    fclose(data);
-    unlink(x->data_tmp);
-    x->data_tmp[0] = '\0';
+        rc = fp_errorf(err, errlen, -EIO, "%s: read failed", x->data.tmp);
+    fp_file_output_abort(&x->data); /* (only a scratch: never the target) */
     if (rc)
         return rc;
-    rc = commit_file(x, x->tmp, &x->f, err, errlen);
-    x->tmp[0] = '\0';
-    return rc;
+    return commit_file(x, &x->out, err, errlen);
 }
 
 int fp_export_finish(fp_exporter **xp, fp_export_result *res, char *err, size_t errlen)
@@ -728,10 +706,8 @@ int fp_export_finish(fp_exporter **xp, fp_export_result *res, char *err, size_t 
         if (fflush(x->f) != 0 || pwrite(fileno(x->f), b, 4, 28) != 4)
             rc = fp_errorf(err, errlen, fp_file_output_code(errno), "%s: write failed: %s", x->path,
                            strerror(errno));
-        if (!rc) {
-            rc = commit_file(x, x->tmp, &x->f, err, errlen);
-            x->tmp[0] = '\0';
-        }
+        if (!rc)
+            rc = commit_file(x, &x->out, err, errlen);
         break;
     }
     case FP_EXPORT_MDD:
@@ -762,12 +738,8 @@ void fp_export_abort(fp_exporter **xp)
     if (!xp || !*xp)
         return;
     fp_exporter *x = *xp;
-    if (x->f)
-        fclose(x->f);
-    if (x->tmp[0])
-        unlink(x->tmp);
-    if (x->data_tmp[0])
-        unlink(x->data_tmp);
+    fp_file_output_abort(&x->out); /* (x->f is one of their streams) */
+    fp_file_output_abort(&x->data);
     free(x->scratch);
     free(x->times);
     free(x->idx);

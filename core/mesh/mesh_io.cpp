@@ -548,44 +548,41 @@ int read_whole_file(const char *path, std::string &data, char *err, size_t errle
 }
 
 // Write `bytes` to `path` so that the file is never half-written: a temporary file in the
-// same folder (fp_file_temp_beside), every write checked, fsync, then rename over the target (and an
-// fsync of the folder). On any failure the temporary file is removed and the old file, if
-// any, is left as it was. A new file gets mode 0666 & ~umask; a replaced one keeps its mode.
+// same folder (fp_file_open_output), every write checked, fsync, then rename over the target
+// (and an fsync of the folder). On any failure the temporary file is removed and the old file,
+// if any, is left as it was. A new file gets mode 0666 & ~umask; a replaced one keeps its mode.
 int write_atomically(const char *given, const std::string &bytes, char *err, size_t errlen)
 {
     // the file replaced: a link's end (written through), never a folder, FIFO or device
-    char real[4096];
-    const int tr = fp_file_target(given, real, sizeof real);
-    if (tr < 0)
-        return fp__mesh_error(err, errlen, tr == -EISDIR || tr == -ENXIO ? FP_MESH_ERR_IO : errno_code(-tr),
-                              given, "cannot replace it: %s", fp_file_error_text(tr));
-    const char *path = real;
-    const std::string target = path;
-    const size_t slash = target.find_last_of('/');
-    const std::string dir = slash == std::string::npos ? std::string(".")
-                            : slash == 0 ? std::string("/") : target.substr(0, slash);
-    std::vector<char> name(target.size() + 16); // "/." and ".XXXXXX" beside the path
-    int fd = fp_file_temp_beside(path, "", name.data(), name.size());
-    if (fd < 0)
-        return fp__mesh_error(err, errlen, errno_code(-fd), path,
+    fp_file_output o;
+    const int rc = fp_file_open_output(given, "", nullptr,
+                                       FP_FILE_OUTPUT_KEEP_MODE | FP_FILE_OUTPUT_MODE_REQUIRED |
+                                           FP_FILE_OUTPUT_SYNC_FOLDER,
+                                       &o);
+    if (rc < 0 && o.failed == FP_FILE_STEP_TARGET)
+        return fp__mesh_error(err, errlen, rc == -EISDIR || rc == -ENXIO ? FP_MESH_ERR_IO : errno_code(-rc),
+                              given, "cannot replace it: %s", fp_file_error_text(rc));
+    const char *path = o.path;
+    if (rc < 0 && o.failed == FP_FILE_STEP_TEMP) {
+        const char *slash = std::strrchr(path, '/');
+        const std::string dir = !slash ? std::string(".") : slash == path ? std::string("/")
+                                                          : std::string(path, size_t(slash - path));
+        return fp__mesh_error(err, errlen, errno_code(-rc), path,
                               "cannot create a temporary file in %s: %s", dir.c_str(),
-                              std::strerror(-fd));
-    struct stat st;
-    const mode_t mode = ::stat(path, &st) == 0 && S_ISREG(st.st_mode) ? st.st_mode & 07777
-                                                                       : mode_t(fp_file_new_mode());
+                              std::strerror(-rc));
+    }
     auto give_up = [&](const char *what, int e) {
-        ::close(fd);
-        ::unlink(name.data());
+        fp_file_output_abort(&o);
         return fp__mesh_error(err, errlen, errno_code(e), path,
                               "%s: %s (the previous file, if any, is unchanged)", what,
                               std::strerror(e));
     };
-    if (fchmod(fd, mode) != 0)
-        return give_up("cannot set the mode of the temporary file", errno);
+    if (rc < 0) // FP_FILE_STEP_MODE
+        return give_up("cannot set the mode of the temporary file", -rc);
     const char *p = bytes.data();
     size_t left = bytes.size();
     while (left > 0) {
-        ssize_t put = ::write(fd, p, left);
+        ssize_t put = ::write(o.fd, p, left);
         if (put < 0 && errno == EINTR)
             continue;
         if (put <= 0)
@@ -593,27 +590,12 @@ int write_atomically(const char *given, const std::string &bytes, char *err, siz
         p += put;
         left -= size_t(put);
     }
-    if (fsync(fd) != 0)
-        return give_up("fsync failed", errno);
-    if (::close(fd) != 0) {
-        const int e = errno;
-        ::unlink(name.data());
-        return fp__mesh_error(err, errlen, errno_code(e), path,
-                              "close failed: %s (the previous file, if any, is unchanged)",
-                              std::strerror(e));
-    }
-    if (::rename(name.data(), path) != 0) {
-        const int e = errno;
-        ::unlink(name.data());
-        return fp__mesh_error(err, errlen, errno_code(e), path,
-                              "cannot replace the file: %s (the previous file, if any, is "
-                              "unchanged)", std::strerror(e));
-    }
-    int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
-    if (dfd >= 0) {
-        (void)fsync(dfd); // durability of the rename; the data is already safe
-        ::close(dfd);
-    }
+    const int cr = fp_file_output_commit(&o);
+    if (cr < 0)
+        return give_up(o.failed == FP_FILE_STEP_SYNC    ? "fsync failed"
+                       : o.failed == FP_FILE_STEP_CLOSE ? "close failed"
+                                                        : "cannot replace the file",
+                       -cr);
     return FP_MESH_OK;
 }
 

@@ -13,8 +13,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 /* Reads a JSON array of n finite numbers at obj[key] (absent: returns 0, untouched). */
 static int numbers(const char *path, const cJSON *obj, const char *prefix, const char *key,
@@ -194,24 +192,17 @@ int fp_calibration_save(const char *path, const fp_calibration *c, const char *c
                         size_t errlen)
 {
     if (!(c->scale > 0)) return fp_errorf(err, errlen, -EINVAL, "%s: scale must be > 0", path);
-    char tmp[4200], real[4096];
-    int tr = fp_file_target(path, real, sizeof real); /* a link's end; no folder or device */
-    if (tr < 0)
-        return fp_errorf(err, errlen, tr == -EISDIR || tr == -ENXIO ? -EEXIST : tr,
-                         "%s: cannot replace it: %s", path, fp_file_error_text(tr));
-    path = real;
-    int fd = fp_file_temp_beside(path, "", tmp, sizeof tmp);
-    if (fd < 0)
-        return fp_errorf(err, errlen, fd, "%s: cannot create a file in its folder: %s", path,
-                         strerror(-fd));
-    (void)fchmod(fd, (mode_t)fp_file_new_mode()); /* the mode a new file would get */
-    FILE *f = fdopen(fd, "w");
-    if (!f) {
-        int e = errno;
-        close(fd);
-        unlink(tmp);
-        return fp_errorf(err, errlen, -e, "%s: %s", path, strerror(e));
-    }
+    fp_file_output o;
+    int rc = fp_file_open_output(path, "", "w", 0, &o); /* a link's end; no folder or device */
+    if (rc < 0 && o.failed == FP_FILE_STEP_TARGET)
+        return fp_errorf(err, errlen, rc == -EISDIR || rc == -ENXIO ? -EEXIST : rc,
+                         "%s: cannot replace it: %s", path, fp_file_error_text(rc));
+    path = o.path;
+    if (rc < 0 && o.failed == FP_FILE_STEP_TEMP)
+        return fp_errorf(err, errlen, rc, "%s: cannot create a file in its folder: %s", path,
+                         strerror(-rc));
+    if (rc < 0) return fp_errorf(err, errlen, rc, "%s: %s", path, strerror(-rc));
+    FILE *f = o.f;
     fprintf(f, "{\n");
     if (comment) {
         cJSON *s = cJSON_CreateString(comment);
@@ -229,14 +220,9 @@ int fp_calibration_save(const char *path, const fp_calibration *c, const char *c
             c->hand_offset[0][1], c->hand_offset[0][2]);
     fprintf(f, "  \"right\": {\"offset\": [%.17g, %.17g, %.17g]}\n}\n", c->hand_offset[1][0],
             c->hand_offset[1][1], c->hand_offset[1][2]);
-    int bad = fflush(f) != 0 || fsync(fileno(f)) != 0;
-    int e = errno;
-    if (fclose(f) != 0 && !bad) bad = 1, e = errno;
-    if (bad || rename(tmp, path) != 0) {
-        if (!bad) e = errno;
-        unlink(tmp);
+    int e = -fp_file_output_commit(&o);
+    if (e)
         return fp_errorf(err, errlen, e == ENOSPC ? -ENOSPC : -EIO, "%s: cannot write: %s", path,
                          strerror(e));
-    }
     return 0;
 }

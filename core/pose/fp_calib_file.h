@@ -7,9 +7,9 @@
  *     "right": {"offset": [x, y, z]} }
  * Errors: -ENOENT / -EACCES (cannot read), -EBADMSG (not JSON, a field of the wrong type or
  * length), -ERANGE (a non-finite number, a scale <= 0, a rotation of norm ~0); err names
- * the file and the field. Writing is atomic (a temporary file in the same folder
- * (fp_file_temp_beside), the mode a new file gets under the umask, fsync, then rename; on
- * failure an existing file is left as it was): -EACCES, -ENOENT, -EIO, -ENOSPC with the path.
+ * the file and the field. Writing is atomic (a temporary file in the same folder with the
+ * mode a new file gets under the umask, fsync, then rename: fp_file_open_output; on failure
+ * an existing file is left as it was): -EACCES, -ENOENT, -EIO, -ENOSPC with the path.
  * Pure library: no printing, no shared state (any thread).
  */
 #ifndef FP_CALIB_FILE_H

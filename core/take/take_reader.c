@@ -347,7 +347,7 @@ int fp_take_reader_open(const char *path, fp_take_reader **out, char *err, size_
     if (r->fd < 0) {
         rc = fp_errorf(err, errlen, r->fd, "%s: %s", path, fp_file_error_text(r->fd));
         r->fd = -1;
-    } else if (fstat(r->fd, &st) < 0) {
+    } else if (fstat(r->fd, &st) < 0) { /* for the size (fp_file_open_regular checked the type) */
         rc = fp_errorf(err, errlen, -errno, "%s: %s", path, strerror(errno));
     } else {
         r->size = (uint64_t)st.st_size;

@@ -1,5 +1,7 @@
-/* test_file.c: fp_file_temp_beside and fp_file_new_mode (core/common/fp_file.h): the
- * temporary file's name, folder and flags, its errors, and the mode against umask(2). */
+/* test_file.c: core/common/fp_file.h: fp_file_temp_beside (the temporary file's name, folder
+ * and flags, its errors), fp_file_new_mode against umask(2), fp_file_target, the readers'
+ * fp_file_open_regular, and the writers' fp_file_open_output / commit / abort (the whole file
+ * with the new mode, nothing left by an abort or a failed commit, folders and FIFOs refused). */
 #define _GNU_SOURCE /* mkdtemp */
 #include <setjmp.h>
 #include <stdarg.h>
@@ -7,6 +9,7 @@
 #include <stdint.h>
 #include <cmocka.h>
 
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <stdio.h>
@@ -214,6 +217,187 @@ static void test_output_code(void **state)
         assert_int_equal(fp_file_output_code(cases[i][0]), cases[i][1]);
 }
 
+/* the names in dir that start with '.' (temporaries), "." and ".." aside */
+static int hidden_files(void)
+{
+    DIR *d = opendir(dir);
+    assert_non_null(d);
+    int n = 0;
+    for (struct dirent *e; (e = readdir(d));)
+        if (e->d_name[0] == '.' && strcmp(e->d_name, ".") && strcmp(e->d_name, ".."))
+            n++;
+    closedir(d);
+    return n;
+}
+
+static void write_file(const char *p, const char *text, mode_t mode)
+{
+    FILE *f = fopen(p, "w");
+    assert_non_null(f);
+    fputs(text, f);
+    assert_int_equal(fclose(f), 0);
+    assert_int_equal(chmod(p, mode), 0);
+}
+
+static void check_file(const char *p, const char *text, mode_t mode)
+{
+    char buf[256] = "";
+    FILE *f = fopen(p, "r");
+    assert_non_null(f);
+    size_t got = fread(buf, 1, sizeof buf - 1, f);
+    fclose(f);
+    buf[got] = '\0';
+    assert_string_equal(buf, text);
+    struct stat st;
+    assert_int_equal(stat(p, &st), 0);
+    assert_int_equal(st.st_mode & 07777, mode);
+}
+
+/* fp_file_open_output + commit: the temporary beside the target while it is written (the
+ * target as it was), then the whole content under the target's name with the mode a new file
+ * gets (a replaced file's own with FP_FILE_OUTPUT_KEEP_MODE), nothing left beside it; a
+ * symbolic link written through. */
+static void test_output_commit(void **state)
+{
+    (void)state;
+    mode_t was = umask(027);
+    char p[256], l[256];
+    snprintf(p, sizeof p, "%s/out.json", dir);
+    write_file(p, "old", 0600);
+    fp_file_output o;
+    assert_int_equal(fp_file_open_output(p, "", "wb", 0, &o), 0);
+    assert_int_equal(o.failed, FP_FILE_STEP_NONE);
+    assert_string_equal(o.path, p);
+    check_name(o.tmp, dir, "out.json", "");
+    assert_non_null(o.f);
+    assert_int_equal(fileno(o.f), o.fd);
+    assert_int_equal(fcntl(o.fd, F_GETFD) & FD_CLOEXEC, FD_CLOEXEC);
+    struct stat st;
+    assert_int_equal(fstat(o.fd, &st), 0);
+    assert_int_equal(st.st_mode & 07777, 0640); /* 0666 & ~027, already while written */
+    assert_int_equal(fputs("{\"whole\": 1}\n", o.f) >= 0, 1);
+    check_file(p, "old", 0600);
+    assert_int_equal(hidden_files(), 1);
+    assert_int_equal(fp_file_output_commit(&o), 0);
+    assert_int_equal(o.failed, FP_FILE_STEP_NONE);
+    assert_string_equal(o.tmp, "");
+    assert_int_equal(o.fd, -1);
+    assert_null(o.f);
+    assert_string_equal(o.path, p); /* kept for messages */
+    check_file(p, "{\"whole\": 1}\n", 0640);
+    assert_int_equal(hidden_files(), 0);
+    fp_file_output_abort(&o); /* after a commit: nothing, the file stays */
+    check_file(p, "{\"whole\": 1}\n", 0640);
+    /* through a link, on the descriptor, keeping the replaced file's mode, the folder synced */
+    assert_int_equal(chmod(p, 0604), 0);
+    snprintf(l, sizeof l, "%s/link.json", dir);
+    assert_int_equal(symlink("out.json", l), 0);
+    assert_int_equal(fp_file_open_output(l, "x", NULL,
+                                         FP_FILE_OUTPUT_KEEP_MODE | FP_FILE_OUTPUT_MODE_REQUIRED |
+                                             FP_FILE_OUTPUT_SYNC_FOLDER,
+                                         &o), 0);
+    assert_null(o.f);
+    assert_string_equal(o.path, p);
+    check_name(o.tmp, dir, "out.json", "x");
+    assert_int_equal(write(o.fd, "new", 3), 3);
+    assert_int_equal(fp_file_output_commit(&o), 0);
+    check_file(p, "new", 0604);
+    assert_int_equal(lstat(l, &st), 0);
+    assert_true(S_ISLNK(st.st_mode));
+    assert_int_equal(hidden_files(), 0);
+    /* a new file with KEEP_MODE: the new mode */
+    assert_int_equal(unlink(p), 0);
+    assert_int_equal(fp_file_open_output(p, "", NULL, FP_FILE_OUTPUT_KEEP_MODE, &o), 0);
+    assert_int_equal(fp_file_output_commit(&o), 0);
+    check_file(p, "", 0640);
+    assert_int_equal(unlink(l), 0);
+    assert_int_equal(unlink(p), 0);
+    umask(was);
+}
+
+/* fp_file_output_abort, and a commit that fails: the temporary removed, the target as it was */
+static void test_output_abort(void **state)
+{
+    (void)state;
+    char p[256];
+    snprintf(p, sizeof p, "%s/keep.csv", dir);
+    write_file(p, "precious", 0600);
+    fp_file_output o;
+    assert_int_equal(fp_file_open_output(p, "frames", "w+b", 0, &o), 0);
+    assert_int_equal(fputs("half a", o.f) >= 0, 1);
+    assert_int_equal(fflush(o.f), 0);
+    assert_int_equal(hidden_files(), 1);
+    fp_file_output_abort(&o);
+    assert_string_equal(o.tmp, "");
+    assert_int_equal(o.fd, -1);
+    assert_null(o.f);
+    assert_int_equal(hidden_files(), 0);
+    check_file(p, "precious", 0600);
+    fp_file_output_abort(&o);  /* twice: nothing */
+    fp_file_output_abort(NULL);
+    fp_file_output zero;
+    memset(&zero, 0, sizeof zero);
+    fp_file_output_abort(&zero); /* a zeroed one holds nothing (fd 0 is not closed) */
+    assert_int_not_equal(fcntl(0, F_GETFD), -1);
+    assert_int_equal(fp_file_output_commit(&zero), -EINVAL);
+    /* a write the stream failed before (a read on a write-only stream sets its error) */
+    assert_int_equal(fp_file_open_output(p, "", "wb", 0, &o), 0);
+    assert_int_equal(fputs("all", o.f) >= 0, 1);
+    assert_int_equal(fgetc(o.f), EOF);
+    assert_true(ferror(o.f));
+    assert_int_equal(fp_file_output_commit(&o), -EIO);
+    assert_int_equal(o.failed, FP_FILE_STEP_SYNC);
+    assert_int_equal(hidden_files(), 0);
+    check_file(p, "precious", 0600);
+    /* the rename fails: the target became a folder meanwhile */
+    char q[256];
+    snprintf(q, sizeof q, "%s/late.obj", dir);
+    assert_int_equal(fp_file_open_output(q, "", NULL, 0, &o), 0);
+    assert_int_equal(mkdir(q, 0700), 0);
+    assert_int_equal(fp_file_output_commit(&o), -EISDIR);
+    assert_int_equal(o.failed, FP_FILE_STEP_RENAME);
+    assert_int_equal(hidden_files(), 0);
+    assert_int_equal(rmdir(q), 0);
+    check_file(p, "precious", 0600);
+    assert_int_equal(unlink(p), 0);
+}
+
+/* what fp_file_open_output refuses, and with which step: a folder (-EISDIR) and a FIFO
+ * (-ENXIO) as the target, kept, no temporary made (the writers report both as -EEXIST, exit
+ * 73); no such folder (-ENOENT, the temporary's, with the path resolved); NULL (-EINVAL) */
+static void test_output_refused(void **state)
+{
+    (void)state;
+    char p[256], sub[256];
+    fp_file_output o;
+    snprintf(sub, sizeof sub, "%s/folder.png", dir);
+    assert_int_equal(mkdir(sub, 0700), 0);
+    assert_int_equal(fp_file_open_output(sub, "", "wb", 0, &o), -EISDIR);
+    assert_int_equal(o.failed, FP_FILE_STEP_TARGET);
+    assert_string_equal(o.tmp, "");
+    assert_int_equal(o.fd, -1);
+    assert_null(o.f);
+    fp_file_output_abort(&o); /* after a failed open: nothing */
+    snprintf(p, sizeof p, "%s/fifo.obj", dir);
+    assert_int_equal(mkfifo(p, 0600), 0);
+    assert_int_equal(fp_file_open_output(p, "", NULL, 0, &o), -ENXIO);
+    assert_int_equal(o.failed, FP_FILE_STEP_TARGET);
+    struct stat st;
+    assert_int_equal(lstat(p, &st), 0);
+    assert_true(S_ISFIFO(st.st_mode));
+    assert_int_equal(hidden_files(), 0);
+    assert_int_equal(unlink(p), 0);
+    assert_int_equal(rmdir(sub), 0);
+    snprintf(p, sizeof p, "%s/no/such/t.csv", dir);
+    assert_int_equal(fp_file_open_output(p, "", "w", 0, &o), -ENOENT);
+    assert_int_equal(o.failed, FP_FILE_STEP_TEMP);
+    assert_string_equal(o.path, p);
+    assert_string_equal(o.tmp, "");
+    assert_int_equal(fp_file_open_output(NULL, "", "w", 0, &o), -EINVAL);
+    assert_int_equal(o.failed, FP_FILE_STEP_TARGET);
+    assert_int_equal(fp_file_open_output(p, "", "w", 0, NULL), -EINVAL);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -224,6 +408,9 @@ int main(void)
         cmocka_unit_test(test_target),
         cmocka_unit_test(test_open_regular),
         cmocka_unit_test(test_output_code),
+        cmocka_unit_test(test_output_commit),
+        cmocka_unit_test(test_output_abort),
+        cmocka_unit_test(test_output_refused),
     };
     return cmocka_run_group_tests(tests, make_dir, remove_dir);
 }

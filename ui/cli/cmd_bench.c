@@ -139,37 +139,39 @@ static int spawn_wait(char *const argv[], int in_fd, bool quiet)
     return WIFEXITED(st) ? WEXITSTATUS(st) : 128 + (WIFSIGNALED(st) ? WTERMSIG(st) : 0);
 }
 
-/* The file an output `path` replaces (fp_file_target: a link's end; never a folder, FIFO or
- * device), into real. Returns 0 or a negative errno (a message printed). */
-static int output_target(const char *path, char *real, size_t n)
+/* Start the output `path` (fp_file_open_output: the file it replaces, a link's end, never a
+ * folder, FIFO or device; a temporary file beside it, so that the rename is atomic, with the
+ * mode a new file gets; a stream on it with stdio_mode, NULL: none). Returns 0, or an exit
+ * status with a message printed: 73 for the file (fp_app_exit_code maps -EISDIR and -ENXIO
+ * on an output to it), 70 when no stream could be made. */
+static int open_output(const char *path, const char *stdio_mode, fp_file_output *o)
 {
-    int rc = fp_file_target(path, real, n);
-    if (rc < 0)
+    int rc = fp_file_open_output(path, "", stdio_mode, FP_FILE_OUTPUT_MODE_REQUIRED, o);
+    switch (rc < 0 ? o->failed : FP_FILE_STEP_NONE) {
+    case FP_FILE_STEP_NONE: return FP_EXIT_OK;
+    case FP_FILE_STEP_TARGET:
         fprintf(stderr, "facepuppet bench: %s: cannot replace it: %s\n", path, fp_file_error_text(rc));
-    return rc == -EISDIR || rc == -ENXIO ? -EEXIST : rc; /* (73: an output) */
-}
-
-/* A temporary file beside path (so that the rename is atomic): .NAME.XXXXXX in its folder,
- * its name into tmp. Returns the descriptor, or a negative errno (a message printed). */
-static int temp_beside(const char *path, char *tmp, size_t len)
-{
-    int fd = fp_file_temp_beside(path, "", tmp, len);
-    if (fd < 0)
-        fprintf(stderr, "facepuppet bench: %s: cannot create a file beside it: %s\n", path, strerror(-fd));
-    return fd;
-}
-
-/* fd's file (the temporary tmp) made path: the umask's mode, fsync, rename. Returns 0 or a
- * negative errno (a message printed). */
-static int commit_beside(int fd, const char *tmp, const char *path)
-{
-    errno = 0;
-    if (fchmod(fd, (mode_t)fp_file_new_mode()) || fsync(fd) || rename(tmp, path)) {
-        int e = errno ? errno : EIO;
-        fprintf(stderr, "facepuppet bench: %s: cannot write it: %s\n", path, strerror(e));
-        return -e;
+        break;
+    case FP_FILE_STEP_TEMP:
+        fprintf(stderr, "facepuppet bench: %s: cannot create a file beside it: %s\n", o->path, strerror(-rc));
+        break;
+    case FP_FILE_STEP_STREAM:
+        fprintf(stderr, "facepuppet bench: %s: %s\n", o->path, strerror(-rc));
+        return FP_EXIT_SOFTWARE;
+    default: /* the mode */
+        fprintf(stderr, "facepuppet bench: %s: cannot write it: %s\n", o->path, strerror(-rc));
+        break;
     }
-    return 0;
+    return fp_app_exit_code(rc, FP_APP_OUTPUT);
+}
+
+/* o's temporary made o->path (fsync, rename: fp_file_output_commit). Returns 0 or a negative
+ * errno (a message printed). */
+static int commit_output(fp_file_output *o)
+{
+    int rc = fp_file_output_commit(o);
+    if (rc < 0) fprintf(stderr, "facepuppet bench: %s: cannot write it: %s\n", o->path, strerror(-rc));
+    return rc;
 }
 
 /* `bench --plot FILE.png`: check python3, matplotlib and the output's folder first, run the
@@ -204,12 +206,9 @@ static int bench_plot(fp_bench_options *o, const char *png)
     }
     /* the temporary PNG beside the target (so the rename is atomic), made before the bench
      * runs so that an unwritable folder fails at once */
-    char tmp[4200], png_real[4096];
-    if ((rc = output_target(png, png_real, sizeof png_real)) < 0)
-        return fp_app_exit_code(rc, FP_APP_OUTPUT);
-    png = png_real;
-    int png_fd = temp_beside(png, tmp, sizeof tmp);
-    if (png_fd < 0) return fp_app_exit_code(png_fd, FP_APP_OUTPUT);
+    fp_file_output out;
+    if ((rc = open_output(png, NULL, &out))) return rc;
+    png = out.path;
     const char *tmpdir = getenv("TMPDIR");
     char json_path[4200];
     snprintf(json_path, sizeof json_path, "%s/facepuppet-fig3-XXXXXX", tmpdir && *tmpdir ? tmpdir : "/tmp");
@@ -240,7 +239,7 @@ static int bench_plot(fp_bench_options *o, const char *png)
         fflush(stdout);
     }
     lseek(json_fd, 0, SEEK_SET);
-    char *plot[] = {(char *)py, script, "--out", tmp, NULL};
+    char *plot[] = {(char *)py, script, "--out", out.tmp, NULL};
     rc = spawn_wait(plot, json_fd, false);
     if (rc) {
         fprintf(stderr, "facepuppet bench: %s failed (exit %d); %s not written\n", script, rc, png);
@@ -249,24 +248,22 @@ static int bench_plot(fp_bench_options *o, const char *png)
         goto done;
     }
     struct stat st;
-    int fs = fstat(png_fd, &st);
+    int fs = fstat(out.fd, &st);
     if (fs || st.st_size == 0) {
         fprintf(stderr, "facepuppet bench: %s: cannot write it: %s\n", png,
                 fs ? strerror(errno) : "the script wrote nothing");
         exit_code = FP_EXIT_CANTCREAT;
         goto done;
     }
-    if ((rc = commit_beside(png_fd, tmp, png))) {
+    if ((rc = commit_output(&out))) {
         exit_code = fp_app_exit_code(rc, FP_APP_OUTPUT);
         goto done;
     }
-    tmp[0] = '\0'; /* renamed: nothing to remove */
     fprintf(stderr, "facepuppet bench: wrote %s (Figure 3: table1%s)\n", png, o->quick ? ", --quick" : "");
 done:
     if (saved >= 0) close(saved);
     if (json_fd >= 0) close(json_fd);
-    close(png_fd);
-    if (tmp[0]) unlink(tmp);
+    fp_file_output_abort(&out); /* (nothing left after a commit) */
     return exit_code;
 }
 
@@ -326,20 +323,12 @@ static int bench_main(int argc, char **argv)
         return FP_EXIT_USAGE;
     }
     /* the trace's temporary file first, so that an unwritable folder fails before the work */
-    char tmp[4200] = "", trace_real[4096];
-    int trace_fd = -1;
+    fp_file_output out = {.fd = -1};
     if (trace) {
-        int tr = output_target(trace, trace_real, sizeof trace_real);
-        if (tr < 0) return fp_app_exit_code(tr, FP_APP_OUTPUT);
-        trace = trace_real;
-        if ((trace_fd = temp_beside(trace, tmp, sizeof tmp)) < 0)
-            return fp_app_exit_code(trace_fd, FP_APP_OUTPUT);
-        if (!(o.trace = fdopen(trace_fd, "w"))) {
-            fprintf(stderr, "facepuppet bench: %s: %s\n", trace, strerror(errno));
-            close(trace_fd);
-            unlink(tmp);
-            return FP_EXIT_SOFTWARE;
-        }
+        int ec = open_output(trace, "w", &out);
+        if (ec) return ec;
+        trace = out.path;
+        o.trace = out.f;
     }
     fp_plugin_path path;
     fp_app_plugin_path(&path, NULL, 0); /* the replay and anchored plugins, for 'frame' */
@@ -353,14 +342,11 @@ static int bench_main(int argc, char **argv)
             wrc = -(errno ? errno : EIO);
             fprintf(stderr, "facepuppet bench: %s: cannot write it: %s\n", trace, strerror(-wrc));
         }
-        if (!rc && !wrc) wrc = commit_beside(fileno(o.trace), tmp, trace);
-        if (!rc && !wrc) {
-            tmp[0] = '\0';
+        if (!rc && !wrc) wrc = commit_output(&out);
+        if (!rc && !wrc)
             fprintf(stderr, "facepuppet bench: wrote %s (the frame case, a row per frame)\n", trace);
-        }
         if (wrc) exit_code = fp_app_exit_code(wrc, FP_APP_OUTPUT);
-        fclose(o.trace);
-        if (tmp[0]) unlink(tmp);
+        fp_file_output_abort(&out); /* (after a commit: nothing) */
     }
     return exit_code;
 }

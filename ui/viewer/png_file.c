@@ -8,8 +8,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
-#include <unistd.h>
 #include <stb_image_write.h>
 
 typedef struct {
@@ -30,38 +28,25 @@ int fp_png_write(const char *path, int w, int h, const unsigned char *rgb, int b
     if (!path || !rgb || w < 1 || h < 1)
         return fp_errorf(err, errlen, -EINVAL, "%s: cannot write the PNG: no image (%d x %d)",
                          path ? path : "(no path)", w, h);
-    char tmp[4200], real[4096];
-    int tr = fp_file_target(path, real, sizeof real); /* a link's end; no folder or device */
-    if (tr < 0)
-        return fp_errorf(err, errlen, tr == -EISDIR || tr == -ENXIO ? -EEXIST : fp_file_output_code(-tr),
-                         "%s: cannot write the PNG: %s", path, fp_file_error_text(tr));
-    path = real;
-    int fd = fp_file_temp_beside(path, "", tmp, sizeof tmp);
-    if (fd < 0)
-        return fp_errorf(err, errlen, fp_file_output_code(-fd), "%s: cannot write the PNG: %s", path,
-                         strerror(-fd));
-    (void)fchmod(fd, (mode_t)fp_file_new_mode()); /* the mode a new file would get */
-    png_sink s = {fdopen(fd, "wb"), 0};
-    if (!s.f) {
-        int e = errno;
-        close(fd);
-        unlink(tmp);
-        return fp_errorf(err, errlen, fp_file_output_code(e), "%s: cannot write the PNG: %s", path,
-                         strerror(e));
-    }
+    fp_file_output o;
+    int rc = fp_file_open_output(path, "", "wb", 0, &o); /* a link's end; no folder or device */
+    if (rc < 0 && o.failed == FP_FILE_STEP_TARGET)
+        return fp_errorf(err, errlen, rc == -EISDIR || rc == -ENXIO ? -EEXIST : fp_file_output_code(-rc),
+                         "%s: cannot write the PNG: %s", path, fp_file_error_text(rc));
+    if (rc < 0) /* the temporary beside the file: named by the file */
+        return fp_errorf(err, errlen, fp_file_output_code(-rc), "%s: cannot write the PNG: %s", o.path,
+                         strerror(-rc));
+    png_sink s = {o.f, 0};
     const size_t stride = (size_t)w * 3;
     /* bottom-up rows: start at the last row, a negative stride */
     const unsigned char *first = bottom_up ? rgb + (size_t)(h - 1) * stride : rgb;
     int ok = stbi_write_png_to_func(sink_write, &s, w, h, 3, first,
                                     bottom_up ? -(int)stride : (int)stride);
     int e = !ok ? ENOMEM : s.err; /* (the encoder fails only for its memory) */
-    if (!e && (fflush(s.f) != 0 || fsync(fileno(s.f)) != 0)) e = errno;
-    if (fclose(s.f) != 0 && !e) e = errno;
-    if (!e && rename(tmp, path) != 0) e = errno;
-    if (e) {
-        unlink(tmp);
-        return fp_errorf(err, errlen, fp_file_output_code(e), "%s: cannot write the PNG: %s", path,
+    if (e) fp_file_output_abort(&o);
+    else e = -fp_file_output_commit(&o);
+    if (e)
+        return fp_errorf(err, errlen, fp_file_output_code(e), "%s: cannot write the PNG: %s", o.path,
                          strerror(e));
-    }
     return 0;
 }

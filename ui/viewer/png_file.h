@@ -1,8 +1,8 @@
 /*
  * png_file.h: a PNG written whole or not at all, for the viewer's screenshots (viewer.c) and
  * the headless frames of `export --format png-seq` (frame_render.c): stb_image_write's
- * encoder into a temporary file beside the target (fp_file_temp_beside), given the mode a new
- * file gets (fp_file_new_mode), fsync'ed and renamed over the target. No GL needed.
+ * encoder into a temporary file beside the target with the mode a new file gets, fsync'ed and
+ * renamed over the target (fp_file_open_output, fp_file_output_commit). No GL needed.
  */
 #ifndef FP_PNG_FILE_H
 #define FP_PNG_FILE_H
