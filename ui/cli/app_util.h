@@ -5,6 +5,9 @@
 #include "fp_plugin_host.h"
 #include "fp_session.h"
 #include "fp_session_take.h"
+/* fp_parse_decimal, fp_decimal_span: the one syntax of a number in an option (decimal,
+ * finite: no hex, inf or nan), as in a plugin's keys */
+#include <facepuppet/plugin_util.h>
 
 #include <stdbool.h>
 #include <stdint.h>

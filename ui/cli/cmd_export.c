@@ -186,15 +186,13 @@ static int export_main(int argc, char **argv)
         case 'o': out = optarg; break;
         case OPT_RANGE: range = optarg; break;
         case OPT_FPS:
-            fps = strtod(optarg, &end);
-            if (*end || !(fps > 0 && fps <= 10000)) {
+            if (!fp_parse_decimal(optarg, &fps) || !(fps > 0 && fps <= 10000)) {
                 fprintf(stderr, "facepuppet export: --fps must be in (0, 10000], got '%s'\n", optarg);
                 return FP_EXIT_USAGE;
             }
             break;
         case OPT_MAX_ERROR:
-            max_error = strtod(optarg, &end);
-            if (*end || !(max_error > 0 && isfinite(max_error))) {
+            if (!fp_parse_decimal(optarg, &max_error) || !(max_error > 0)) {
                 fprintf(stderr, "facepuppet export: --max-error must be > 0 mm, got '%s'\n", optarg);
                 return FP_EXIT_USAGE;
             }
@@ -216,8 +214,10 @@ static int export_main(int argc, char **argv)
             }
             break;
         case OPT_CAMERA: {
-            int used = 0, k = sscanf(optarg, "%lf,%lf%n,%lf%n", &yaw, &pitch, &used, &zoom, &used);
-            if (k < 2 || optarg[used] || !isfinite(yaw) || !isfinite(pitch) || !(zoom > 0 && zoom < 1000)) {
+            double v[3] = {0, 0, 1};
+            const size_t k = fp_parse_decimal_list(optarg, ',', v, 3);
+            yaw = v[0], pitch = v[1], zoom = v[2];
+            if (k < 2 || !(zoom > 0 && zoom < 1000)) {
                 fprintf(stderr, "facepuppet export: --camera YAW,PITCH[,ZOOM] in degrees (zoom > 0), "
                         "got '%s'\n", optarg);
                 return FP_EXIT_USAGE;

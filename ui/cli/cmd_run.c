@@ -95,7 +95,6 @@ static int run_main(int argc, char **argv)
     const char *out = NULL, *frames_out = NULL;
     const char *take_dir = NULL, *slate = NULL, *take_desc = NULL, *export_file = NULL;
     double fps = 60;
-    char *end;
     optind = 1;
     for (int c; (c = getopt_long(argc, argv, FP_SESSION_OPTS_SHORT "o:h", opts, NULL)) != -1;) {
         int shared = fp_session_opts_parse(&sopt, c, optarg, "run");
@@ -105,8 +104,7 @@ static int run_main(int argc, char **argv)
         case 'o': out = optarg; break;
         case OPT_FRAMES_OUT: frames_out = optarg; break;
         case OPT_FPS:
-            fps = strtod(optarg, &end);
-            if (*end || !(fps >= 1 && fps <= 10000)) {
+            if (!fp_parse_decimal(optarg, &fps) || !(fps >= 1 && fps <= 10000)) {
                 fprintf(stderr, "facepuppet run: --fps must be in 1..10000, got '%s'\n", optarg);
                 return FP_EXIT_USAGE;
             }
@@ -123,8 +121,8 @@ static int run_main(int argc, char **argv)
             break;
         case OPT_EXPORT: export_file = optarg; break;
         case OPT_BUDGET:
-            so.mapping_budget_ms = strtod(optarg, &end);
-            if (*end || !(so.mapping_budget_ms > 0 && so.mapping_budget_ms <= 1000)) {
+            if (!fp_parse_decimal(optarg, &so.mapping_budget_ms) ||
+                !(so.mapping_budget_ms > 0 && so.mapping_budget_ms <= 1000)) {
                 fprintf(stderr, "facepuppet run: --budget must be in (0, 1000] ms, got '%s'\n", optarg);
                 return FP_EXIT_USAGE;
             }

@@ -57,12 +57,12 @@ size_t fp_session_opts_longopts(struct option *out)
     return FP_SESSION_OPTS_COUNT;
 }
 
-/* A finite number in (lo, hi) (exclusive bounds), the whole of arg. */
+/* A finite decimal number in (lo, hi) (exclusive bounds), the whole of arg (no hex, inf or
+ * nan: fp_parse_decimal). */
 static bool number(const char *arg, double lo, double hi, double *out)
 {
-    char *end;
-    double v = strtod(arg, &end);
-    if (end == arg || *end || !isfinite(v) || !(v > lo && v < hi)) return false;
+    double v;
+    if (!fp_parse_decimal(arg, &v) || !(v > lo && v < hi)) return false;
     *out = v;
     return true;
 }
