@@ -173,6 +173,11 @@ static void test_plugins(void **state)
              "--mapping nosuchmapping", face(), data);
     assert_int_equal(fp(args), 78);
     assert_non_null(strstr(out, "no mapping plugin named 'nosuchmapping'"));
+    /* a bad key's value: 64, as the anchored mapping's engage beyond its release */
+    snprintf(args, sizeof args, "run --mesh %s --input replay:%s/hands/leap-motion/grab_joints_mm.csv "
+             "--mapping anchored,engage=0.9,release=0.6", face(), data);
+    assert_int_equal(fp(args), 64);
+    assert_non_null(strstr(out, "anchored: key 'engage' (0.9) is beyond key 'release' (0.6)"));
 }
 
 static void test_info(void **state)

@@ -287,6 +287,22 @@ static void test_bad_keys(void **state)
     fp_param ok[] = {{"hands", "left"}, {"auto", "off"}, {"release", "2.5"}};
     assert_int_equal(open_mapping(&r, "anchored", ok, 3, err), 0);
     close_mapping(&r);
+    /* engage beyond release (the hysteresis upside down: a hand would let go as it engages),
+     * given or against the other's default, is refused naming both keys; equal is taken */
+    static const fp_param upside[][2] = {{{"engage", "0.8"}, {"release", "0.5"}},
+                                         {{"release", "0.3"}, {"engage", "0.5"}},
+                                         {{"engage", "1.5"}, {"auto", "1"}}};
+    for (size_t i = 0; i < 3; i++) {
+        assert_int_equal(open_mapping(&r, "anchored", upside[i], 2, err), -EINVAL);
+        assert_non_null(strstr(err, "anchored: key 'engage'"));
+        assert_non_null(strstr(err, "is beyond key 'release'"));
+        assert_non_null(strstr(err, "engage <= release"));
+        close_mapping(&r);
+    }
+    assert_non_null(strstr(err, "key 'engage' (1.5) is beyond key 'release' (1)"));
+    fp_param same[] = {{"engage", "0.7"}, {"release", "0.7"}};
+    assert_int_equal(open_mapping(&r, "anchored", same, 2, err), 0);
+    close_mapping(&r);
     assert_int_equal(open_mapping(&r, "no-such-mapping", NULL, 0, err), FP_EPLUGIN_NOT_FOUND);
     assert_non_null(strstr(err, "no mapping plugin named 'no-such-mapping'"));
     assert_non_null(strstr(err, "anchored"));
