@@ -162,4 +162,35 @@ for cmd in "play $tmp/cut.fptake -o $tmp/cut.obj" "export $tmp/cut.fptake -f obj
     [ $rc -eq 65 ] && grep -q "no intact frame" "$tmp/cut.err" || fail "$cmd: exit $rc: $(cat "$tmp/cut.err")"
 done
 [ ! -e "$tmp/cut.obj" ] && [ ! -e "$tmp/cut-seq" ] || fail "a take with no intact frame left an output"
+# ---- 6. takes: *.fptake files that are no takes ------------------------------------------
+# garbage, a take cut inside its header, an empty file: listed as unreadable with the reader's
+# reason, without the zeros of a take (0 frames, 0.00s, take 0); exit 0 (the folder listed)
+mkdir "$tmp/odd"
+cp "$take" "$tmp/odd/clap_T001.fptake"
+head -c 300 /dev/urandom >"$tmp/odd/junk.fptake"
+head -c 40 "$take" >"$tmp/odd/clap_T002.fptake"
+: >"$tmp/odd/empty.fptake"
+"$fp" takes "$tmp/odd" >"$tmp/odd.txt" 2>&1 || fail "takes of odd files exited $?: $(cat "$tmp/odd.txt")"
+cat "$tmp/odd.txt"
+grep -Eq "^clap +1 +[0-9:]{11} +[0-9:]{11} +[0-9.]+s +[0-9]+ .* ok$" "$tmp/odd.txt" || fail "takes: the good take's row"
+grep -Eq "^clap +2 +- +- +- +- +- +- +- +unreadable$" "$tmp/odd.txt" || fail "takes: the cut header's row"
+for f in junk empty; do
+    grep -Eq "^$f +- +- +- +- +- +- +- +- +unreadable$" "$tmp/odd.txt" || fail "takes: $f's row"
+    grep -q "^  $tmp/odd/$f.fptake: byte 0: not a facepuppet take (bad signature)$" "$tmp/odd.txt" ||
+        fail "takes: $f's reason"
+done
+grep -q "^  $tmp/odd/clap_T002.fptake: byte 16: header: .* runs past the end of the file" "$tmp/odd.txt" ||
+    fail "takes: the cut header's reason"
+"$fp" takes --json "$tmp/odd" >"$tmp/odd.json" || fail "takes --json of odd files exited $?"
+python3 - "$tmp/odd.json" <<'PY' || fail "takes --json of odd files"
+import json, sys
+t = {x['path'].rsplit('/', 1)[1]: x for x in json.load(open(sys.argv[1]))}
+assert t['clap_T001.fptake']['state'] == 'ok' and t['clap_T001.fptake']['frames'] > 0, t
+for name, take in (('junk.fptake', None), ('empty.fptake', None), ('clap_T002.fptake', 2)):
+    x = t[name]
+    assert x['state'] == 'unreadable' and x['message'], x
+    assert x['take'] == take and x['frames'] is None and x['duration_s'] is None, x
+PY
+"$fp" takes --help | grep -q "Exit status: 0 once the folder is listed" || fail "takes --help: exit status"
+
 echo "PASS"
