@@ -193,4 +193,31 @@ for name, take in (('junk.fptake', None), ('empty.fptake', None), ('clap_T002.fp
 PY
 "$fp" takes --help | grep -q "Exit status: 0 once the folder is listed" || fail "takes --help: exit status"
 
+# ---- 7. -q leaves out the engine's and contact guard's notes, as --help says ---------------
+# (unanchored three claps: the fold-over and contact guards act; notes without -q); an input's
+# warning (record= took another name) and the take's line still print with -q
+"$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv,fast=1" --mapping unanchored \
+    --take-dir "$tmp/q-takes" -o "$tmp/loud.obj" >/dev/null 2>"$tmp/loud.err" || fail "loud run exited $?"
+grep -q "^facepuppet: engine: fold-over guard" "$tmp/loud.err" && grep -q "^facepuppet: contact: " "$tmp/loud.err" ||
+    fail "no notes from the engine and contact guard without -q: $(cat "$tmp/loud.err")"
+echo kept >"$tmp/q.log"
+"$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv,fast=1,record=$tmp/q.log" --mapping unanchored \
+    --take-dir "$tmp/q-takes" -o "$tmp/quiet.obj" -q >"$tmp/quiet.out" 2>"$tmp/quiet.err" || fail "run -q exited $?"
+cat "$tmp/quiet.err"
+! grep -Eq "^facepuppet: (engine|contact): " "$tmp/quiet.err" || fail "run -q printed the engine's notes"
+grep -q "recording to $tmp/q-1.log instead" "$tmp/quiet.err" || fail "run -q left out an input's warning"
+grep -q "take $tmp/q-takes/take_T002.fptake: " "$tmp/quiet.err" || fail "run -q left out the take's line"
+grep -q "^frames [0-9]*, deforming" "$tmp/quiet.out" || fail "run -q left out the summary (stdout)"
+qt="$tmp/q-takes/take_T001.fptake"
+for cmd in "play $qt -o $tmp/qp.obj" "export $qt -f pc2 -o $tmp/qp.pc2"; do
+    "$fp" $cmd >/dev/null 2>"$tmp/qp.err" || fail "$cmd exited $?"
+    grep -q "^facepuppet: engine: " "$tmp/qp.err" || fail "$cmd: no engine notes without -q"
+    "$fp" $cmd -q >"$tmp/qp.out" 2>"$tmp/qp.err" || fail "$cmd -q exited $?"
+    [ ! -s "$tmp/qp.err" ] && [ ! -s "$tmp/qp.out" ] || fail "$cmd -q printed: $(cat "$tmp/qp.out" "$tmp/qp.err")"
+done
+for c in run play export; do
+    "$fp" $c --help | tr -s ' \n' ' ' | grep -q "nor the engine's and contact guard's notes on each gesture" ||
+        fail "$c --help does not say what -q leaves out"
+done
+
 echo "PASS"

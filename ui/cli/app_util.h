@@ -63,6 +63,11 @@ typedef enum fp_app_io {
  *  MESSAGE" on stderr; FP_LOG_DEBUG lines only with FACEPUPPET_DEBUG set. user unused. */
 void fp_app_log_line(void *user, int level, const char *source, const char *message);
 
+/** fp_app_log_line for a command given -q: the engine's and the contact guard's notes on
+ *  each gesture (fp_slog_is_note) are left out; the inputs', recordings', the mapping's and
+ *  the rig's lines and every error print as with fp_app_log_line. */
+void fp_app_log_line_quiet(void *user, int level, const char *source, const char *message);
+
 /** The longest --duration a command takes, seconds (116 days: its nanoseconds fit an
  *  int64 with room; 9.3e9 s wrapped around and stopped after one frame). */
 #define FP_APP_MAX_DURATION_S 1e7

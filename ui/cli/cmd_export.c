@@ -93,7 +93,9 @@ static void usage(FILE *f)
         "                        zoom Z (default 0,0,1: the face from the front)\n"
         "  -m, --mesh FILE       the take's mesh from another path (its crc32 must match)\n"
         "      --plugin-dir DIR  look for plugins in DIR first\n"
-        "  -q, --quiet           no progress and no summary\n"
+        "  -q, --quiet           no progress and no summary, nor the engine's and contact\n"
+        "                        guard's notes on each gesture; errors and a damaged take's\n"
+        "                        warning still print\n"
         "  -h, --help            this text\n\n"
         "Exit status: 0 done, 64 usage, 65 a damaged take or another mesh, 66 missing,\n"
         "66 no display for png-seq, 69 png-seq in a build without the viewer, 73 an output not written (facepuppet --help has the whole table).\n");
@@ -260,8 +262,9 @@ static int export_main(int argc, char **argv)
     fp_plugin_path path;
     fp_app_plugin_path(&path, dirs, ndirs);
     fp_take_player *p = NULL;
-    int rc = fp_take_player_open_logged(take_path, mesh, &path, fp_app_log_line, NULL, &p, err,
-                                        sizeof err);
+    int rc = fp_take_player_open_logged(take_path, mesh, &path,
+                                        quiet ? fp_app_log_line_quiet : fp_app_log_line, NULL, &p,
+                                        err, sizeof err);
     if (rc) {
         fprintf(stderr, "facepuppet export: %s\n", err);
         fp_plugin_path_clear(&path);

@@ -45,7 +45,8 @@ static void usage(FILE *f)
         "      --export FILE      every frame into FILE: .gltf/.glb (morph-target animation,\n"
         "                         0.1 mm), .pc2/.mdd (point caches); see facepuppet export\n"
         "      --take-dir DIR     record the run as a take in DIR (SLATE_TNNN.fptake; see\n"
-        "                         facepuppet takes, play, --input take:FILE)\n"
+        "                         facepuppet takes, play, --input take:FILE); its path,\n"
+        "                         frames and timecode are said at the end, -q or not\n"
         "      --slate NAME       the take's slate (default \"take\"); numbers go up per slate\n"
         "      --take-description TEXT  a line stored in the take's header\n"
         "      --budget MS        report a mapping process() slower than MS (default 2)\n\n"
@@ -192,7 +193,8 @@ static int run_main(int argc, char **argv)
     fp_plugin_path path;
     fp_app_plugin_path(&path, sopt.plugin_dirs, sopt.nplugin_dirs);
     so.plugin_path = &path;
-    so.log = fp_app_log_line; /* (input status, mapping and engine errors, recordings) */
+    /* (input status, mapping and engine errors, recordings; -q: without the engine's notes) */
+    so.log = quiet ? fp_app_log_line_quiet : fp_app_log_line;
     so.input_clock = true;
     so.measure_jacobian = true; /* min det J in the summary (the same shape, a slower path) */
     fp_app_open_progress opening; /* a large face takes a while: its steps on a terminal */

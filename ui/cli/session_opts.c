@@ -38,7 +38,9 @@ static const struct {
     {"plugin-dir", required_argument, OPT_PLUGIN_DIR, "DIR", "look for plugins in DIR first (repeatable)"},
     {"rig", required_argument, OPT_RIG, "R",
      "rig file (rigs/README.md); default: the mesh's rig found\nby checksum, else vertex count; 'none': no rig"},
-    {"quiet", no_argument, 'q', NULL, "no progress lines"},
+    {"quiet", no_argument, 'q', NULL,
+     "no progress or status lines, nor the engine's and\ncontact guard's notes on each gesture; the summary\n"
+     "(stdout), errors and the lines of the inputs,\nrecordings, mapping and rig still print"},
 };
 
 void fp_session_opts_init(fp_session_opts *o, fp_session_options *session)
