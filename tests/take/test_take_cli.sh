@@ -220,4 +220,21 @@ for c in run play export; do
         fail "$c --help does not say what -q leaves out"
 done
 
+# ---- 8. a damaged header (its crc32 right): info, play and export exit 65 naming the field --
+python3 - "$take" "$tmp/nul.fptake" <<'PY' || fail "could not patch the header"
+import struct, sys, zlib
+b = open(sys.argv[1], 'rb').read()
+ln = struct.unpack_from('<I', b, 24)[0]
+h = b[32:32 + ln].replace(b'"slate":"clap"', b'"slate":"cl\x00ap"', 1)
+head = b[16:24] + struct.pack('<II', len(h), 0)
+open(sys.argv[2], 'wb').write(b[:16] + head + h + struct.pack('<I', zlib.crc32(head + h)) + b[36 + ln:])
+PY
+for cmd in "info $tmp/nul.fptake" "play $tmp/nul.fptake -o $tmp/nul.obj" "export $tmp/nul.fptake -f pc2 -o $tmp/nul.pc2"; do
+    "$fp" $cmd >/dev/null 2>"$tmp/nul.err"
+    rc=$?
+    [ $rc -eq 65 ] && grep -q "nul.fptake: byte [0-9]*: header: a NUL in \"slate\"" "$tmp/nul.err" ||
+        fail "$cmd: exit $rc: $(cat "$tmp/nul.err")"
+done
+[ ! -e "$tmp/nul.obj" ] && [ ! -e "$tmp/nul.pc2" ] || fail "a damaged header left an output"
+
 echo "PASS"
