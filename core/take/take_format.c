@@ -579,19 +579,36 @@ static int fill_header(const cJSON *o, fp_take_header *h, strstore *st, char *ms
     h->mesh_crc_of = keep(st, jstr(mesh, "crc_of"));
     if (jnum(mesh, "vertices", &d) && d >= 0) h->mesh_vertices = (uint64_t)d;
     h->rig_path = keep(st, jstr(o, "rig"));
+    /* mapping: an object (or null) whose keys are an object of strings; inputs: an array of
+     * strings. (cJSON_ArrayForEach walks objects and arrays alike: "inputs" as an object was
+     * read, and "keys" as an array gave keys without a name.) */
     const cJSON *map = cJSON_GetObjectItemCaseSensitive(o, "mapping");
+    if (map && !cJSON_IsObject(map) && !cJSON_IsNull(map))
+        return fp_errorf(msg, msglen, -EBADMSG, "header: \"mapping\" is not an object");
     h->mapping = keep(st, jstr(map, "name"));
     const cJSON *keys = cJSON_GetObjectItemCaseSensitive(map, "keys"), *k;
+    if (keys && !cJSON_IsObject(keys))
+        return fp_errorf(msg, msglen, -EBADMSG, "header: \"mapping.keys\" is not an object");
     cJSON_ArrayForEach(k, keys) {
-        if (!cJSON_IsString(k) || h->mapping_key_count >= FP_TAKE_MAX_KEYS)
-            return fp_errorf(msg, msglen, -EBADMSG, "header: invalid \"mapping.keys\"");
+        if (h->mapping_key_count >= FP_TAKE_MAX_KEYS)
+            return fp_errorf(msg, msglen, -EBADMSG, "header: \"mapping.keys\" has more than %d "
+                             "keys", FP_TAKE_MAX_KEYS);
+        if (!cJSON_IsString(k))
+            return fp_errorf(msg, msglen, -EBADMSG, "header: \"mapping.keys\" key %zu is not a "
+                             "string", h->mapping_key_count);
         h->mapping_keys[h->mapping_key_count].key = keep(st, k->string);
         h->mapping_keys[h->mapping_key_count++].value = keep(st, k->valuestring);
     }
     const cJSON *inputs = cJSON_GetObjectItemCaseSensitive(o, "inputs");
+    if (inputs && !cJSON_IsArray(inputs))
+        return fp_errorf(msg, msglen, -EBADMSG, "header: \"inputs\" is not an array");
     cJSON_ArrayForEach(k, inputs) {
-        if (!cJSON_IsString(k) || h->input_count >= FP_TAKE_MAX_INPUTS)
-            return fp_errorf(msg, msglen, -EBADMSG, "header: invalid \"inputs\"");
+        if (h->input_count >= FP_TAKE_MAX_INPUTS)
+            return fp_errorf(msg, msglen, -EBADMSG, "header: \"inputs\" has more than %d entries",
+                             FP_TAKE_MAX_INPUTS);
+        if (!cJSON_IsString(k))
+            return fp_errorf(msg, msglen, -EBADMSG, "header: \"inputs[%zu]\" is not a string",
+                             h->input_count);
         h->inputs[h->input_count++] = keep(st, k->valuestring);
     }
     const cJSON *cal = cJSON_GetObjectItemCaseSensitive(o, "calibration");

@@ -652,7 +652,7 @@ static void test_bad_header(void **state)
     fp_take_reader *r;
     assert_int_equal(fp_take_reader_open_memory(b, n, "h.fptake", &r, err, sizeof err), 0);
     fp_take_reader_close(&r);
-    static const struct { const char *from, *to; size_t tl; const char *says; } cases[] = {
+    static const struct { const char *from, *to; size_t tl; const char *says; } cases[] = { /* tl 0: strlen */
         {"\"slate\":\"H\"", "\"slate\":\"H\0x\"", 13, "header: a NUL in \"slate\""},
         {"\"path\":\"", "\"path\":\"\0", 9, "header: a NUL in \"mesh.path\""},
         {"\"pedal\"", "\"ped\0al\"", 8, "header: a NUL in \"inputs[1]\""},
@@ -660,10 +660,18 @@ static void test_bad_header(void **state)
         {",\"take\"", ",\0\"take\"", 8, "header: a NUL between the fields of the header"},
         {"\"rating\":4}", "\"rating\":4}\0", 12, "header: a NUL outside the JSON object"},
         {"\"description\":\"", "\"description\":\"a\\u0000", 22, "header: a NUL in \"description\""},
-        {"\"rating\":4}", "\"rating\":4} x", 13, "header: text after the JSON object"},
+        {"\"rating\":4}", "\"rating\":4} x", 0, "header: text after the JSON object"},
+        /* inputs and mapping of the wrong JSON type: cJSON_ArrayForEach read an object's
+         * members as inputs and an array's entries as keys without a name */
+        {"\"inputs\":[", "\"inputs\":{\"a\":\"x\"},\"y\":[", 0, "header: \"inputs\" is not an array"},
+        {"\"inputs\":[", "\"inputs\":[\"x\",7,", 0, "header: \"inputs[1]\" is not a string"},
+        {"\"keys\":{", "\"keys\":[\"a\"],\"k\":{", 0, "header: \"mapping.keys\" is not an object"},
+        {"\"keys\":{", "\"keys\":{\"a\":1,", 0, "header: \"mapping.keys\" key 0 is not a string"},
+        {"\"mapping\":{", "\"mapping\":7,\"m\":{", 0, "header: \"mapping\" is not an object"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
-        uint8_t *c = rehead(b, n, cases[i].from, strlen(cases[i].from), cases[i].to, cases[i].tl, &m);
+        const size_t tl = cases[i].tl ? cases[i].tl : strlen(cases[i].to); /* (tl: with a NUL) */
+        uint8_t *c = rehead(b, n, cases[i].from, strlen(cases[i].from), cases[i].to, tl, &m);
         err[0] = '\0';
         assert_int_equal(fp_take_reader_open_memory(c, m, "h.fptake", &r, err, sizeof err), -EBADMSG);
         print_message("%s\n", err);
@@ -682,6 +690,14 @@ static void test_bad_header(void **state)
         fp_take_reader_close(&r);
         free(c);
     }
+    /* more inputs than a take holds (FP_TAKE_MAX_INPUTS) */
+    char many[16 * (FP_TAKE_MAX_INPUTS + 1) + 16];
+    size_t w = (size_t)snprintf(many, sizeof many, "\"inputs\":[");
+    for (int i = 0; i < FP_TAKE_MAX_INPUTS + 1; i++) w += (size_t)snprintf(many + w, sizeof many - w, "\"i%d\",", i);
+    uint8_t *c = rehead(b, n, "\"inputs\":[", 10, many, w, &m);
+    assert_int_equal(fp_take_reader_open_memory(c, m, "h.fptake", &r, err, sizeof err), -EBADMSG);
+    assert_non_null(strstr(err, "header: \"inputs\" has more than 16 entries"));
+    free(c);
     free(b);
     rm_rf(dir);
 }
