@@ -173,7 +173,7 @@ size_t fp_take_frame_encode(const fp_take_frame *f, void *buf, size_t cap)
     return n;
 }
 
-int take_frame_check(const uint8_t *rec, size_t n, size_t *bad_at, const char **why)
+int take_frame_check(const uint8_t *rec, size_t n, size_t inputs, size_t *bad_at, const char **why)
 {
 #define BAD(off, text) do { *bad_at = (off); *why = (text); return -EBADMSG; } while (0)
     if (n < TAKE_FRAME_FIXED) BAD(0, "frame record shorter than its fixed part (56 bytes)");
@@ -196,6 +196,8 @@ int take_frame_check(const uint8_t *rec, size_t n, size_t *bad_at, const char **
         if (body && es < TAKE_EVENT_HEAD + body) BAD(off, "event shorter than its type needs");
         int32_t hand = (int32_t)le_get32(rec + off + 20);
         if (hand < -1 || hand >= FP_HANDS) BAD(off + 20, "event hand out of range");
+        if (le_get32(rec + off + 16) >= inputs) /* (an input the header does not list) */
+            BAD(off + 16, "event source beyond the header's \"inputs\"");
         off += es;
     }
     if (off != n) BAD(off, "bytes left over after the frame's events");

@@ -764,6 +764,40 @@ static void test_frames_out_of_order(void **state)
     rm_rf(dir);
 }
 
+/* An event of an input the header does not list (source >= its inputs' count; crc32 right):
+ * its chunk is damage, the take cut there naming the field; the frames before it play. */
+static void test_event_source(void **state)
+{
+    (void)state;
+    char dir[512], err[512];
+    make_dir(dir, sizeof dir, "source");
+    fp_take_header h;
+    tt_header(&h, "S"); /* two inputs */
+    fp_take_writer_options o = {.chunk_frames = 3, .no_sync = true};
+    fp_take_writer *w;
+    assert_int_equal(fp_take_writer_create(dir, &h, &o, &w, err, sizeof err), 0);
+    char path[1024];
+    snprintf(path, sizeof path, "%s", fp_take_writer_path(w));
+    for (uint64_t i = 0; i < 9; i++) {
+        tt_frame t;
+        tt_make(&t, i, 0); /* 4 events, sources 0 and 1 */
+        if (i == 7) t.ev[3].header.source = 2;
+        assert_int_equal(fp_take_writer_add(w, &t.f, err, sizeof err), 0);
+    }
+    assert_int_equal(fp_take_writer_close(&w, 0, 0, err, sizeof err), 0);
+    fp_take_reader *r;
+    assert_int_equal(fp_take_reader_open(path, &r, err, sizeof err), 0);
+    print_message("%s\n", fp_take_reader_warning(r));
+    assert_int_equal(fp_take_reader_frames(r), 6);
+    assert_true(fp_take_reader_summary(r)->cut);
+    assert_non_null(strstr(fp_take_reader_warning(r), "event source beyond the header's \"inputs\""));
+    fp_take_frame f;
+    assert_int_equal(fp_take_reader_read(r, 5, &f, err, sizeof err), 0);
+    assert_int_equal(f.frame, 5);
+    fp_take_reader_close(&r);
+    rm_rf(dir);
+}
+
 /* ---- numbering ---------------------------------------------------------------------- */
 
 static uint32_t record_one(const char *dir, const char *slate)
@@ -1073,6 +1107,7 @@ int main(void)
         cmocka_unit_test(test_random_flips),
         cmocka_unit_test(test_bad_files),
         cmocka_unit_test(test_bad_header),
+        cmocka_unit_test(test_event_source),
         cmocka_unit_test(test_numbering),
         cmocka_unit_test(test_enospc),
         cmocka_unit_test(test_list),
