@@ -300,14 +300,14 @@ int fp_calib_fit_touch(const fp_calib_sample *samples, size_t n,
         for (int j = i + 1; j < FP_CALIB_LANDMARKS; j++) {
             double d = sqrt(pow(a[i][0] - a[j][0], 2) + pow(a[i][1] - a[j][1], 2) + pow(a[i][2] - a[j][2], 2));
             if (d < FP_CALIB_MIN_APART_MM)
-                return fp_errorf(err, errlen, -EDOM, "calibrate: touches %d and %d are %.0f mm apart "
+                return fp_errorf(err, errlen, -EDOM, "calibrate: touches %d and %d are %.3g mm apart "
                                  "(under %.0f mm): touch chin, nose tip and forehead in turn",
                                  i + 1, j + 1, d, FP_CALIB_MIN_APART_MM);
         }
     double s, q[4], t[3];
     if (fp_calib_similarity((const double (*)[3])a, (const double (*)[3])b, FP_CALIB_LANDMARKS, &s, q, t))
-        return fp_errorf(err, errlen, -EDOM, "calibrate: the three touches (%.0f %.0f %.0f), (%.0f %.0f "
-                         "%.0f), (%.0f %.0f %.0f) mm lie on a line: touch chin, nose tip and forehead",
+        return fp_errorf(err, errlen, -EDOM, "calibrate: the three touches (%.4g %.4g %.4g), (%.4g %.4g "
+                         "%.4g), (%.4g %.4g %.4g) mm lie on a line: touch chin, nose tip and forehead",
                          a[0][0], a[0][1], a[0][2], a[1][0], a[1][1], a[1][2], a[2][0], a[2][1], a[2][2]);
     double e = 0;
     for (int i = 0; i < FP_CALIB_LANDMARKS; i++) {
@@ -318,7 +318,7 @@ int fp_calib_fit_touch(const fp_calib_sample *samples, size_t n,
     e = sqrt(e / FP_CALIB_LANDMARKS);
     if (e / s > FP_CALIB_MAX_RESIDUAL_MM)
         return fp_errorf(err, errlen, -EDOM, "calibrate: the touches do not have the shape of chin, "
-                         "nose tip and forehead (residual %.0f mm, over %.0f mm)", e / s,
+                         "nose tip and forehead (residual %.4g mm, over %.0f mm)", e / s,
                          FP_CALIB_MAX_RESIDUAL_MM);
     memset(out, 0, sizeof *out);
     out->scale = s;

@@ -218,7 +218,8 @@ static int vertex_index(const ctx *c, const cJSON *e, const char *p, size_t n, u
     if (!cJSON_IsNumber(e)) return bad(c, p, "expected a vertex index, got %s", type_name(e));
     double v = e->valuedouble;
     if (!isfinite(v) || v != floor(v) || v < 0) return bad(c, p, "%g is not a vertex index", v);
-    if (v >= (double)n) return bad(c, p, "vertex %.0f is out of range (the mesh has %zu)", v, n);
+    if (v >= (double)n) /* (%g: %.0f wrote 1e308 as 309 digits) */
+        return bad(c, p, "vertex %.15g is out of range (the mesh has %zu)", v, n);
     *out = (uint32_t)v;
     return 0;
 }
@@ -834,7 +835,7 @@ int fp_rig_bind(fp_rig *r, size_t n, const float *pos, char *err, size_t errlen)
             best = fmin(best, d0 * d0 + d1 * d1 + d2 * d2);
         }
         if (sqrt(best) > reach)
-            return bad(&c, hn[s], "no vertex within 60 mm (nearest %.1f mm): not near the head",
+            return bad(&c, hn[s], "no vertex within 60 mm (nearest %.4g mm): not near the head",
                        sqrt(best) * r->mm_per_unit);
     }
     float *w = malloc(n * sizeof *w), *m = malloc(n * sizeof *m), *g = calloc(n, sizeof *g);

@@ -671,7 +671,7 @@ static void contact_guard(fp_session *s, const float *ref, bool commit, fp_frame
         s->shown = ref;
         fp_contact_destroy(&s->contact);
         s->cg_lost = true;
-        fp_slog_printf(&s->log, FP_LOG_ERROR, "contact", "contact guard: out of memory; showing the base");
+        fp_slog_printf(&s->log, FP_LOG_ERROR, FP_SLOG_CONTACT, "contact guard: out of memory; showing the base");
         return;
     }
     st->collide_pairs += r.pairs;
@@ -692,7 +692,7 @@ static void contact_guard(fp_session *s, const float *ref, bool commit, fp_frame
 static void contact_end_gesture(fp_session *s)
 {
     if (s->cg_limited)
-        fp_slog_printf(&s->log, FP_LOG_WARNING, "contact",
+        fp_slog_printf(&s->log, FP_LOG_WARNING, FP_SLOG_CONTACT,
                        "contact guard stopped the surface from passing through itself: %lu of "
                        "%lu frames scaled back (least share of a frame's motion kept %.0f%%)",
                        s->cg_limited, s->cg_frames, 100.0 * s->cg_t);

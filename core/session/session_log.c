@@ -1,6 +1,8 @@
 /* The session's log: one callback, repeated errors counted instead of repeated. */
 #include "session_log.h"
 
+#include <facepuppet/plugin.h>
+
 #include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
@@ -11,6 +13,12 @@ static void vsend(const fp_slog *log, int level, const char *source, const char 
     char msg[512];
     vsnprintf(msg, sizeof msg, fmt, ap);
     log->fn(log->user, level, source ? source : "session", msg);
+}
+
+bool fp_slog_is_note(int level, const char *source)
+{
+    return level > FP_LOG_ERROR && source &&
+           (!strcmp(source, FP_SLOG_ENGINE) || !strcmp(source, FP_SLOG_CONTACT));
 }
 
 void fp_slog_printf(const fp_slog *log, int level, const char *source, const char *fmt, ...)

@@ -22,6 +22,17 @@ extern "C" {
  *  Both strings are valid during the call only. */
 typedef void (*fp_session_log_fn)(void *user, int level, const char *source, const char *message);
 
+/** The sources of the steps that note how each gesture went: the engine (the fold-over
+ *  guard: "limited the deformation to N%", "composed N steps") and the contact guard
+ *  ("N frames scaled back"); their errors use them too. */
+#define FP_SLOG_ENGINE "engine"
+#define FP_SLOG_CONTACT "contact"
+
+/** Whether a line is one of those notes: below FP_LOG_ERROR and from FP_SLOG_ENGINE or
+ *  FP_SLOG_CONTACT. What a quiet program (-q) leaves out; the inputs', recordings', the
+ *  mapping's and the rig's lines, and every error, are none. */
+bool fp_slog_is_note(int level, const char *source);
+
 /** A log target: the callback (may be NULL: messages are dropped) and its user pointer. */
 typedef struct fp_slog {
     fp_session_log_fn fn;

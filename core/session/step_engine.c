@@ -252,7 +252,7 @@ int fp_engine_step_run(fp_engine_step *e, const fp_control_set *cs, float *defor
     int rc = run(e, cs, deformed, res);
     res->update_ms = (double)(fp_now_ns() - t0) / 1e6 - res->jacobian_ms;
     if (rc < 0) {
-        fp_slog_repeat_report(&e->errors, log, FP_LOG_ERROR, "engine", rc, "%s%s%s; the base shown",
+        fp_slog_repeat_report(&e->errors, log, FP_LOG_ERROR, FP_SLOG_ENGINE, rc, "%s%s%s; the base shown",
                               csrbf_strerror(rc), e->solver ? ": " : "",
                               e->solver ? csrbf_solver_message(e->solver) : "");
         return rc;
@@ -275,13 +275,13 @@ int fp_engine_step_run(fp_engine_step *e, const fp_control_set *cs, float *defor
 void fp_engine_step_end_gesture(fp_engine_step *e, const fp_slog *log)
 {
     if (e->g_limited)
-        fp_slog_printf(log, FP_LOG_WARNING, "engine",
+        fp_slog_printf(log, FP_LOG_WARNING, FP_SLOG_ENGINE,
                        "fold-over guard limited the deformation to %.0f%% this gesture (%lu of %lu "
                        "frames limited, largest fold-over bound %.2f > %.2f)",
                        100.0 * e->g_reached, e->g_limited, e->g_frames, e->g_bound,
                        FP_ENGINE_GUARD_MARGIN);
     else if (e->g_composed)
-        fp_slog_printf(log, FP_LOG_INFO, "engine",
+        fp_slog_printf(log, FP_LOG_INFO, FP_SLOG_ENGINE,
                        "fold-over guard composed %lu of %lu steps from up to %d injective maps this "
                        "gesture (largest fold-over bound %.2f)",
                        e->g_composed, e->g_frames, e->g_substeps, e->g_bound);

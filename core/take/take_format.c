@@ -173,7 +173,7 @@ size_t fp_take_frame_encode(const fp_take_frame *f, void *buf, size_t cap)
     return n;
 }
 
-int take_frame_check(const uint8_t *rec, size_t n, size_t *bad_at, const char **why)
+int take_frame_check(const uint8_t *rec, size_t n, size_t inputs, size_t *bad_at, const char **why)
 {
 #define BAD(off, text) do { *bad_at = (off); *why = (text); return -EBADMSG; } while (0)
     if (n < TAKE_FRAME_FIXED) BAD(0, "frame record shorter than its fixed part (56 bytes)");
@@ -196,6 +196,8 @@ int take_frame_check(const uint8_t *rec, size_t n, size_t *bad_at, const char **
         if (body && es < TAKE_EVENT_HEAD + body) BAD(off, "event shorter than its type needs");
         int32_t hand = (int32_t)le_get32(rec + off + 20);
         if (hand < -1 || hand >= FP_HANDS) BAD(off + 20, "event hand out of range");
+        if (le_get32(rec + off + 16) >= inputs) /* (an input the header does not list) */
+            BAD(off + 16, "event source beyond the header's \"inputs\"");
         off += es;
     }
     if (off != n) BAD(off, "bytes left over after the frame's events");
@@ -579,19 +581,36 @@ static int fill_header(const cJSON *o, fp_take_header *h, strstore *st, char *ms
     h->mesh_crc_of = keep(st, jstr(mesh, "crc_of"));
     if (jnum(mesh, "vertices", &d) && d >= 0) h->mesh_vertices = (uint64_t)d;
     h->rig_path = keep(st, jstr(o, "rig"));
+    /* mapping: an object (or null) whose keys are an object of strings; inputs: an array of
+     * strings. (cJSON_ArrayForEach walks objects and arrays alike: "inputs" as an object was
+     * read, and "keys" as an array gave keys without a name.) */
     const cJSON *map = cJSON_GetObjectItemCaseSensitive(o, "mapping");
+    if (map && !cJSON_IsObject(map) && !cJSON_IsNull(map))
+        return fp_errorf(msg, msglen, -EBADMSG, "header: \"mapping\" is not an object");
     h->mapping = keep(st, jstr(map, "name"));
     const cJSON *keys = cJSON_GetObjectItemCaseSensitive(map, "keys"), *k;
+    if (keys && !cJSON_IsObject(keys))
+        return fp_errorf(msg, msglen, -EBADMSG, "header: \"mapping.keys\" is not an object");
     cJSON_ArrayForEach(k, keys) {
-        if (!cJSON_IsString(k) || h->mapping_key_count >= FP_TAKE_MAX_KEYS)
-            return fp_errorf(msg, msglen, -EBADMSG, "header: invalid \"mapping.keys\"");
+        if (h->mapping_key_count >= FP_TAKE_MAX_KEYS)
+            return fp_errorf(msg, msglen, -EBADMSG, "header: \"mapping.keys\" has more than %d "
+                             "keys", FP_TAKE_MAX_KEYS);
+        if (!cJSON_IsString(k))
+            return fp_errorf(msg, msglen, -EBADMSG, "header: \"mapping.keys\" key %zu is not a "
+                             "string", h->mapping_key_count);
         h->mapping_keys[h->mapping_key_count].key = keep(st, k->string);
         h->mapping_keys[h->mapping_key_count++].value = keep(st, k->valuestring);
     }
     const cJSON *inputs = cJSON_GetObjectItemCaseSensitive(o, "inputs");
+    if (inputs && !cJSON_IsArray(inputs))
+        return fp_errorf(msg, msglen, -EBADMSG, "header: \"inputs\" is not an array");
     cJSON_ArrayForEach(k, inputs) {
-        if (!cJSON_IsString(k) || h->input_count >= FP_TAKE_MAX_INPUTS)
-            return fp_errorf(msg, msglen, -EBADMSG, "header: invalid \"inputs\"");
+        if (h->input_count >= FP_TAKE_MAX_INPUTS)
+            return fp_errorf(msg, msglen, -EBADMSG, "header: \"inputs\" has more than %d entries",
+                             FP_TAKE_MAX_INPUTS);
+        if (!cJSON_IsString(k))
+            return fp_errorf(msg, msglen, -EBADMSG, "header: \"inputs[%zu]\" is not a string",
+                             h->input_count);
         h->inputs[h->input_count++] = keep(st, k->valuestring);
     }
     const cJSON *cal = cJSON_GetObjectItemCaseSensitive(o, "calibration");
@@ -616,16 +635,115 @@ static int fill_header(const cJSON *o, fp_take_header *h, strstore *st, char *ms
     return 0;
 }
 
+/* Where the header's JSON (n bytes) holds a NUL: a NUL byte, which cJSON passes over (as
+ * white space between tokens; inside a string as a character that ends the C string early),
+ * or a \u0000 escape in a string (which cJSON decodes to one). Returns false when none; else
+ * true with *at its byte offset and in `where` the place, naming the field: "in \"mesh.path\"",
+ * "in \"inputs[1]\"", "in a key of \"mapping.keys\"", "between the fields of the header",
+ * "outside the JSON object". A scanner of the JSON's strings and brackets only: all a NUL's
+ * place needs (cJSON, after it, checks the rest). */
+static bool json_nul(const char *text, size_t n, size_t *at, char *where, size_t len)
+{
+    enum { DEPTH = 8 };
+    struct { bool object, expect_key; unsigned index; const char *key; size_t keylen; } st[DEPTH];
+    int depth = 0; /* (containers past DEPTH are counted, not named) */
+    bool in_key = false;
+    size_t i = 0;
+    for (; i < n; i++) {
+        const char c = text[i];
+        if (c == '\0') break;
+        if (c == '"') {
+            const size_t start = ++i;
+            bool nul = false;
+            for (; i < n && text[i] != '"'; i++) {
+                if (text[i] == '\0') { nul = true; break; }
+                if (text[i] == '\\') {
+                    if (n - i >= 6 && !memcmp(text + i + 1, "u0000", 5)) { nul = true; break; }
+                    i++;
+                }
+            }
+            in_key = depth > 0 && depth <= DEPTH && st[depth - 1].object && st[depth - 1].expect_key;
+            if (nul) break;
+            if (in_key) {
+                st[depth - 1].key = text + start;
+                st[depth - 1].keylen = i - start;
+                in_key = false;
+            }
+            continue;
+        }
+        if (c == '{' || c == '[') {
+            if (depth < DEPTH) {
+                st[depth].object = st[depth].expect_key = c == '{';
+                st[depth].index = 0;
+                st[depth].key = NULL;
+                st[depth].keylen = 0;
+            }
+            depth++;
+        } else if ((c == '}' || c == ']') && depth > 0) {
+            depth--;
+        } else if (c == ',' && depth > 0 && depth <= DEPTH) {
+            if (st[depth - 1].object) st[depth - 1].expect_key = true;
+            else st[depth - 1].index++;
+        } else if (c == ':' && depth > 0 && depth <= DEPTH) {
+            st[depth - 1].expect_key = false;
+        }
+    }
+    if (i >= n) return false;
+    *at = i;
+    if (depth == 0) {
+        snprintf(where, len, "outside the JSON object");
+        return true;
+    }
+    /* the path: each container's member that holds the next, and the innermost's, unless the
+     * NUL is in a key or between members (then the innermost container is the place) */
+    const int top = (depth < DEPTH ? depth : DEPTH) - 1;
+    const bool member = !(st[top].object && st[top].expect_key);
+    char path[128];
+    size_t w = 0;
+    for (int d = 0; d <= top - (member ? 0 : 1) && w + 1 < sizeof path; d++) {
+        if (st[d].object) {
+            if (w && w + 1 < sizeof path) path[w++] = '.';
+            for (size_t k = 0; k < st[d].keylen && k < 40 && w + 1 < sizeof path; k++) {
+                const unsigned char ch = (unsigned char)st[d].key[k]; /* as plain text */
+                path[w++] = ch >= 0x20 && ch < 0x7f && ch != '"' && ch != '\\' ? (char)ch : '?';
+            }
+        } else {
+            int k = snprintf(path + w, sizeof path - w, "[%u]", st[d].index);
+            w = k > 0 && (size_t)k < sizeof path - w ? w + (size_t)k : sizeof path - 1;
+        }
+    }
+    path[w] = '\0';
+    if (member)
+        snprintf(where, len, "in \"%s\"", path);
+    else if (w)
+        snprintf(where, len, "%s \"%s\"", in_key ? "in a key of" : "between the fields of", path);
+    else
+        snprintf(where, len, "%s the header", in_key ? "in a key of" : "between the fields of");
+    return true;
+}
+
 int take_header_from_json(const char *text, size_t n, fp_take_header *h, char **store,
                           size_t *bad_at, char *msg, size_t msglen)
 {
     *store = NULL;
     *bad_at = 0;
+    char where[200];
+    if (json_nul(text, n, bad_at, where, sizeof where)) /* (the format says: no NUL) */
+        return fp_errorf(msg, msglen, -EBADMSG, "header: a NUL %s", where);
     const char *end = NULL;
     cJSON *o = cJSON_ParseWithLengthOpts(text, n, &end, 0);
     if (!o) {
         *bad_at = (end && end >= text && end <= text + n) ? (size_t)(end - text) : 0;
         return fp_errorf(msg, msglen, -EBADMSG, "header: malformed JSON");
+    }
+    size_t rest = end && end >= text && end <= text + n ? (size_t)(end - text) : n;
+    while (rest < n && (text[rest] == ' ' || text[rest] == '\t' || text[rest] == '\n' ||
+                        text[rest] == '\r'))
+        rest++;
+    if (rest < n) { /* one JSON object: what follows it is damage, not more header */
+        cJSON_Delete(o);
+        *bad_at = rest;
+        return fp_errorf(msg, msglen, -EBADMSG, "header: text after the JSON object");
     }
     strstore st = {0};
     int rc = fill_header(o, h, &st, msg, msglen);   /* measuring pass */

@@ -60,9 +60,10 @@ typedef struct take_frame_buf {
     fp_control_set control;
 } take_frame_buf;
 
-/** Check a frame record's structure (rec, n bytes: exactly one record). Returns 0, or
- *  -EBADMSG with *bad_at the offset within the record and a reason in why. */
-int take_frame_check(const uint8_t *rec, size_t n, size_t *bad_at, const char **why);
+/** Check a frame record's structure (rec, n bytes: exactly one record), its events' sources
+ *  below `inputs` (the header's input count). Returns 0, or -EBADMSG with *bad_at the offset
+ *  within the record and a reason in why. */
+int take_frame_check(const uint8_t *rec, size_t n, size_t inputs, size_t *bad_at, const char **why);
 /** Decode a checked record into *frame, growing buf. Returns 0 or -ENOMEM. */
 int take_frame_decode(const uint8_t *rec, size_t n, take_frame_buf *buf, fp_take_frame *frame);
 void take_frame_buf_free(take_frame_buf *buf);

@@ -159,7 +159,7 @@ static int index_frames(fp_take_reader *r, uint64_t off, chunk_view *cv)
         }
         size_t bad_at;
         const char *why;
-        if (take_frame_check(cv->payload + pos, sz, &bad_at, &why)) {
+        if (take_frame_check(cv->payload + pos, sz, r->header.input_count, &bad_at, &why)) {
             cv->bad_at = at + bad_at;
             snprintf(cv->why, sizeof cv->why, "frame record at byte %" PRIu64 ": %s", at, why);
             goto bad;
@@ -397,7 +397,8 @@ int fp_take_reader_read(fp_take_reader *r, size_t index, fp_take_frame *frame, c
     if (k < 0) return fp_errorf(err, errlen, (int)k, "%s: %s", r->name, strerror((int)-k));
     size_t bad_at;
     const char *why = "record cut short";
-    if ((size_t)k != x->size || take_frame_check(r->buf, x->size, &bad_at, &why))
+    if ((size_t)k != x->size ||
+        take_frame_check(r->buf, x->size, r->header.input_count, &bad_at, &why))
         return fp_errorf(err, errlen, -EBADMSG, "%s: byte %" PRIu64 ": the file changed: %s",
                          r->name, x->offset, why);
     if (take_frame_decode(r->buf, x->size, &r->fb, frame))

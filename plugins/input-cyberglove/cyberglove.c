@@ -26,6 +26,7 @@
  *    DISCONNECTED, then as for a pulled cable.
  */
 #define _GNU_SOURCE
+#include <facepuppet/plugin_util.h> /* fp_parse_decimal: numbers as in every key */
 #include <errno.h>
 #include <fcntl.h>
 #include <limits.h>
@@ -887,10 +888,8 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
                 goto fail;
             }
         } else if (strcmp(k, "rate") == 0) {
-            char *end;
-            errno = 0;
-            double r = strtod(v, &end);
-            if (!*v || *end || errno || !(r >= 1.0 && r <= 10000.0)) {
+            double r;
+            if (!fp_parse_decimal(v, &r) || !(r >= 1.0 && r <= 10000.0)) {
                 rc = fp_errorf(err, errlen, -EINVAL, "cyberglove: rate=%s: expected 1..10000 Hz", v);
                 goto fail;
             }

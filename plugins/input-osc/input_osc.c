@@ -18,6 +18,7 @@
 #include "osc.h"
 
 #include <facepuppet/plugin.h>
+#include <facepuppet/plugin_util.h>
 
 #include <lo/lo.h>
 #include <lo/lo_lowlevel.h>
@@ -882,7 +883,8 @@ static int parse_number(const char *key, const char *v, double lo, double hi, do
     char *end = NULL;
     double x = c != (locale_t)0 ? strtod_l(v, &end, c) : NAN;
     if (c != (locale_t)0) freelocale(c);
-    if (!end || end == v || *end || !isfinite(x) || x < lo || x > hi) {
+    const size_t n = fp_decimal_span(v); /* a decimal: no hex, inf or nan */
+    if (!n || !end || end != v + n || *end || !isfinite(x) || x < lo || x > hi) {
         snprintf(err, errlen, "osc: %s=%s: expected a number in [%g, %g]", key, v, lo, hi);
         return -EINVAL;
     }
@@ -960,7 +962,7 @@ static int osc_create(const fp_host *host, const char *arg, const fp_param *para
             for (; got < 6 && c != (locale_t)0; got++) {
                 char *end = NULL;
                 double x = strtod_l(p, &end, c);
-                if (end == p || !isfinite(x) || fabs(x) > HUGE_MM) break;
+                if (end == p || end != p + fp_decimal_span(p) || !isfinite(x) || fabs(x) > HUGE_MM) break;
                 box[got] = (float)x;
                 p = end;
                 if (got < 5 && *p++ != '/') {

@@ -13,6 +13,7 @@
 #include "replay_load.h"
 
 #include <facepuppet/plugin.h>
+#include <facepuppet/plugin_util.h>
 #include "fp_pacer.h"
 
 #include <errno.h>
@@ -271,7 +272,8 @@ static int replay_create(const fp_host *host, const char *arg, const fp_param *p
             char *end = NULL;
             double s = c != (locale_t)0 ? strtod_l(v, &end, c) : NAN;
             if (c != (locale_t)0) freelocale(c);
-            if (!end || end == v || *end || !isfinite(s) || !(s >= 1e-3) || s > 1e6) {
+            const size_t n = fp_decimal_span(v); /* a decimal: no hex, inf or nan */
+            if (!n || !end || end != v + n || *end || !isfinite(s) || !(s >= 1e-3) || s > 1e6) {
                 /* (1e-9 stretched a 3 s recording over a century; 1e-300 overflowed) */
                 snprintf(err, errlen, "replay: speed=%s: expected a number from 0.001 to 1e6", v);
                 return -EINVAL;

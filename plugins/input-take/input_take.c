@@ -295,7 +295,8 @@ static int take_create(const fp_host *host, const char *arg, const fp_param *par
             char *end = NULL;
             double s = c != (locale_t)0 ? strtod_l(v, &end, c) : NAN;
             if (c != (locale_t)0) freelocale(c);
-            if (!end || end == v || *end || !isfinite(s) || !(s >= 1e-3) || s > 1e6) {
+            const size_t n = fp_decimal_span(v); /* a decimal: no hex, inf or nan */
+            if (!n || !end || end != v + n || *end || !isfinite(s) || !(s >= 1e-3) || s > 1e6) {
                 snprintf(err, errlen, "take: speed=%s: expected a number from 0.001 to 1e6", v);
                 return -EINVAL;
             }

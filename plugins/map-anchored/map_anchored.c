@@ -15,7 +15,8 @@
  * fp_frame_input.tip_distance is exact up to FP_TIP_DISTANCE_REACH x R; an engage or release
  * factor beyond it asks the host's surface service (FP_HOST_EXT_SURFACE) for that reach.
  *
- * Keys: hands=left|right|both (both), auto=0|1 (1), engage=F (0.5, in R), release=F (1.0, in R),
+ * Keys: hands=left|right|both (both), auto=0|1 (1), engage=F (0.5, in R), release=F (1.0, in R;
+ *       at least engage, else a hand would let go as it engages: refused at create),
  *       clamp=F (0.45, longest control vector in R; 0 = no limit; keeps the warp
  *       injective, shared/docs/csrbf.md pitfall 4), points=tips|tips+palm|all (tips: the
  *       paper's fingertips; tips+palm adds the palm centre and the knuckles, all every
@@ -148,7 +149,7 @@ static const fp_param_info keys[KEY_COUNT + 1] = {
     {"auto", FP_PARAM_BOOL, 0, 1, "1", NULL, NULL,
      "engage when a fingertip comes within engage x R of the surface, commit when the hand lets go"},
     {"release", FP_PARAM_FLOAT, 0.1, 100, "1.0", NULL, "R",
-     "auto commit once every engaged fingertip is farther than release x R"},
+     "auto commit once every engaged fingertip is farther than release x R (at least engage)"},
     {"clamp", FP_PARAM_FLOAT, 0, 100, "0.45", NULL, "R",
      "longest control vector (0: no limit)"},
     {"engage", FP_PARAM_FLOAT, 0.01, 100, "0.5", NULL, "R",
@@ -165,6 +166,12 @@ static int create(const fp_host *host, const fp_param *params, size_t nparams,
     fpmu_value v[KEY_COUNT];
     int rc = fpmu_params_parse("anchored", keys, params, nparams, v, err, errlen);
     if (rc) return rc;
+    if (v[KEY_ENGAGE].number > v[KEY_RELEASE].number) { /* (it would commit as it engages) */
+        snprintf(err, errlen, "anchored: key 'engage' (%g) is beyond key 'release' (%g): a hand "
+                 "engages within engage x R and lets go beyond release x R, so engage <= release",
+                 v[KEY_ENGAGE].number, v[KEY_RELEASE].number);
+        return -EINVAL;
+    }
     anchored *a = calloc(1, sizeof *a);
     if (!a) return -ENOMEM;
     a->hands = hand_masks[(int)v[KEY_HANDS].number];
@@ -193,8 +200,9 @@ static const fp_mapping_factory factory = {
     .usage = "anchored[,hands=left|right|both][,auto=0|1][,engage=F][,release=F][,clamp=F]\n"
              "        [,points=tips|tips+palm|all]\n"
              "  auto=1 engages when a fingertip comes within engage*R of the surface (0.5)\n"
-             "  and commits when the hand lets go (farther than release*R, 1.0); clamp limits\n"
-             "  each control vector to clamp*R (0.45 keeps the warp free of fold-over).\n"
+             "  and commits when the hand lets go (farther than release*R, 1.0; engage <=\n"
+             "  release); clamp limits each control vector to clamp*R (0.45 keeps the warp free\n"
+             "  of fold-over).\n"
              "  points: the fingertips (5 per hand, the paper's), tips+palm (+ palm centre and\n"
              "  knuckles: 11) or all (every joint: 21 per hand, 42 for two).",
     .create = create,

@@ -56,6 +56,68 @@ static void test_help_and_usage(void **state)
     assert_non_null(strstr(out, "--frames-out"));
 }
 
+/* Numbers in options and in plugin keys are decimals: hexadecimal ("0x10", "0x1p3"), "inf",
+ * "infinity" and "nan", which strtod reads, are refused with 64 and a message naming the
+ * option or key; every decimal form still works. */
+static void test_decimal_options(void **state)
+{
+    (void)state;
+    char args[16384], rec[4200];
+    snprintf(rec, sizeof rec, "replay:%s/hands/leap-motion/grab_joints_mm.csv,fast=1", data);
+    static const struct { const char *option, *value, *says; } bad[] = {
+        {"--radius", "0x10", "--radius must be a number > 0, got '0x10'"},
+        {"--radius", "0x1p3", "--radius must be a number > 0, got '0x1p3'"},
+        {"--radius", "inf", "--radius must be a number > 0, got 'inf'"},
+        {"--radius", "infinity", "--radius must be a number > 0, got 'infinity'"},
+        {"--mm-per-unit", "0x10", "--mm-per-unit must be a number > 0, got '0x10'"},
+        {"--speed", "0x1", "--speed must be a number from 0.001 to 1e6, got '0x1'"},
+        {"--duration", "0x1", "--duration must be > 0 seconds"},
+        {"--hand-size", "0x1", "--hand-size must be in 0.3..3, got '0x1'"},
+        {"--fps", "0x3c", "--fps must be in 1..10000, got '0x3c'"},
+        {"--budget", "0x1p1", "--budget must be in (0, 1000] ms, got '0x1p1'"},
+        {"--mapping", "anchored,clamp=0x1p-2", "anchored: key 'clamp': '0x1p-2' is not a number in [0, 100] R"},
+        {"--mapping", "onehand,gain=nan", "onehand: key 'gain': 'nan' is not a number in [0, 20] mm/mm"},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        snprintf(args, sizeof args, "run -q --mesh %s --input %s --out d.obj %s %s", face(), rec,
+                 bad[i].option, bad[i].value);
+        assert_int_equal(fp(args), 64);
+        if (!strstr(out, bad[i].says)) print_message("%s %s: %s", bad[i].option, bad[i].value, out);
+        assert_non_null(strstr(out, bad[i].says));
+    }
+    snprintf(args, sizeof args, "run -q --mesh %s --input %s,speed=0x10 --out d.obj", face(), rec);
+    assert_int_equal(fp(args), 64);
+    assert_non_null(strstr(out, "replay: speed=0x10: expected a number from 0.001 to 1e6"));
+    static const char *const others[][2] = {
+        {"monitor --duration 0x1 pedal", "--duration must be > 0 seconds"},
+        {"monitor --count 5 osc:0,timeout=0x1", "osc: timeout=0x1: expected a number in [0.01, 3600]"},
+        {"monitor --count 5 osc:0,box=0x0/0/0/1/1/1", "osc: box=0x0/0/0/1/1/1: expected x0/y0/z0/x1/y1/z1"},
+        {"calibrate --mm-per-unit 0x10", "--mm-per-unit must be > 0, got '0x10'"},
+        {"calibrate --duration inf", "--duration must be > 0 s and under 1e7, got 'inf'"},
+        {"plugins check x.so --budget 0x2", "--budget must be a time in ms > 0, got '0x2'"},
+        {"export x.fptake --format pc2 --fps 0x18", "--fps must be in (0, 10000], got '0x18'"},
+        {"export x.fptake --format pc2 --max-error 0x1p-4", "--max-error must be > 0 mm, got '0x1p-4'"},
+        {"export x.fptake --format png-seq --camera 0x10,5", "--camera YAW,PITCH[,ZOOM] in degrees"},
+        {"export x.fptake --format png-seq --camera 10,5,inf", "--camera YAW,PITCH[,ZOOM] in degrees"},
+    };
+    for (size_t i = 0; i < sizeof others / sizeof others[0]; i++) {
+        assert_int_equal(fp(others[i][0]), 64);
+        if (!strstr(out, others[i][1])) print_message("%s: %s", others[i][0], out);
+        assert_non_null(strstr(out, others[i][1]));
+    }
+    snprintf(args, sizeof args, "pose --mesh %s/faces/ict-facekit/generic_neutral_mesh.obj "
+             "--set jaw.open=0x1p-1 --out p.obj", data);
+    assert_int_equal(fp(args), 64);
+    assert_non_null(strstr(out, "--set jaw.open=0x1p-1: expected NAME=NUMBER"));
+    /* every decimal form still reads */
+    snprintf(args, sizeof args, "run -q --mesh %s --input %s,speed=2. --mapping anchored,clamp=.3 "
+             "--radius +5E-1 --fps 3e1 --duration 0.5 --out d.obj", face(), rec);
+    assert_int_equal(fp(args), 0);
+    snprintf(args, sizeof args, "pose --mesh %s/faces/ict-facekit/generic_neutral_mesh.obj "
+             "--set jaw.open=.5 --out p.obj", data);
+    assert_int_equal(fp(args), 0);
+}
+
 static void test_corrupt_obj(void **state)
 {
     (void)state;
@@ -111,6 +173,11 @@ static void test_plugins(void **state)
              "--mapping nosuchmapping", face(), data);
     assert_int_equal(fp(args), 78);
     assert_non_null(strstr(out, "no mapping plugin named 'nosuchmapping'"));
+    /* a bad key's value: 64, as the anchored mapping's engage beyond its release */
+    snprintf(args, sizeof args, "run --mesh %s --input replay:%s/hands/leap-motion/grab_joints_mm.csv "
+             "--mapping anchored,engage=0.9,release=0.6", face(), data);
+    assert_int_equal(fp(args), 64);
+    assert_non_null(strstr(out, "anchored: key 'engage' (0.9) is beyond key 'release' (0.6)"));
 }
 
 static void test_info(void **state)
@@ -391,7 +458,8 @@ int main(void)
     snprintf(tmp, sizeof tmp, "/tmp/fp-cli-XXXXXX");
     if (!mkdtemp(tmp)) return 1;
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_help_and_usage), cmocka_unit_test(test_corrupt_obj),
+        cmocka_unit_test(test_help_and_usage), cmocka_unit_test(test_decimal_options),
+        cmocka_unit_test(test_corrupt_obj),
         cmocka_unit_test(test_bad_csv),        cmocka_unit_test(test_plugins),
         cmocka_unit_test(test_info),           cmocka_unit_test(test_missing_mesh),
         cmocka_unit_test(test_frames_out_and_monitor),

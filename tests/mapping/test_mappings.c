@@ -3,6 +3,7 @@
 #define _GNU_SOURCE
 #include "fp_plugin_host.h"
 #include "fp_test_support.h"
+#include <facepuppet/mapping_util.h>
 
 #include <errno.h>
 #include <math.h>
@@ -286,10 +287,88 @@ static void test_bad_keys(void **state)
     fp_param ok[] = {{"hands", "left"}, {"auto", "off"}, {"release", "2.5"}};
     assert_int_equal(open_mapping(&r, "anchored", ok, 3, err), 0);
     close_mapping(&r);
+    /* engage beyond release (the hysteresis upside down: a hand would let go as it engages),
+     * given or against the other's default, is refused naming both keys; equal is taken */
+    static const fp_param upside[][2] = {{{"engage", "0.8"}, {"release", "0.5"}},
+                                         {{"release", "0.3"}, {"engage", "0.5"}},
+                                         {{"engage", "1.5"}, {"auto", "1"}}};
+    for (size_t i = 0; i < 3; i++) {
+        assert_int_equal(open_mapping(&r, "anchored", upside[i], 2, err), -EINVAL);
+        assert_non_null(strstr(err, "anchored: key 'engage'"));
+        assert_non_null(strstr(err, "is beyond key 'release'"));
+        assert_non_null(strstr(err, "engage <= release"));
+        close_mapping(&r);
+    }
+    assert_non_null(strstr(err, "key 'engage' (1.5) is beyond key 'release' (1)"));
+    fp_param same[] = {{"engage", "0.7"}, {"release", "0.7"}};
+    assert_int_equal(open_mapping(&r, "anchored", same, 2, err), 0);
+    close_mapping(&r);
     assert_int_equal(open_mapping(&r, "no-such-mapping", NULL, 0, err), FP_EPLUGIN_NOT_FOUND);
     assert_non_null(strstr(err, "no mapping plugin named 'no-such-mapping'"));
     assert_non_null(strstr(err, "anchored"));
     close_mapping(&r);
+}
+
+/* Numbers in keys are decimals (plugin_util.h's fp_parse_decimal, which fpmu_params_parse and
+ * fp_parse_double use): an optional sign, digits with at most one '.', an optional exponent;
+ * finite. strtod also reads hexadecimal, "inf", "infinity" and "nan": refused, by the helpers
+ * and by the mappings' keys, while every decimal form still reads. */
+static void test_decimal_keys(void **state)
+{
+    (void)state;
+    static const struct { const char *text; double value; } good[] = {
+        {"5", 5}, {"-0.5", -0.5}, {".5", 0.5}, {"5.", 5}, {"+2", 2}, {"1e-3", 1e-3},
+        {"2E+2", 200}, {"0", 0}, {"-0", 0}, {"007", 7}, {"1.5e1", 15}, {"1e-999", 0}};
+    for (size_t i = 0; i < sizeof good / sizeof good[0]; i++) {
+        double x = -1;
+        assert_true(fp_parse_decimal(good[i].text, &x));
+        assert_true(x == good[i].value);
+        assert_true(fp_parse_double(good[i].text, -1e9, 1e9, &x));
+        assert_int_equal(fp_decimal_span(good[i].text), strlen(good[i].text));
+    }
+    static const char *const bad[] = {"0x10", "0x1p3", "0X1P-2", "inf", "-inf", "infinity", "nan",
+                                      "NAN(1)", "1e999", "-1e999", "", " 5", "5 ", "+", ".", "e5",
+                                      "1e", "1e+", "1.2.3", "5x", "1,5", "--1", "\t1"};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        double x = 42;
+        assert_false(fp_parse_decimal(bad[i], &x));
+        assert_false(fp_parse_double(bad[i], -INFINITY, INFINITY, &x));
+        assert_true(x == 42);
+    }
+    assert_int_equal(fp_decimal_span("0x10"), 1);   /* "0", then the caller sees the x */
+    assert_int_equal(fp_decimal_span("1e"), 1);
+    assert_int_equal(fp_decimal_span("12/3"), 2);
+    double v[3] = {0, 0, 0};
+    assert_int_equal(fp_parse_decimal_list("1,-2.5,3e1", ',', v, 3), 3);
+    assert_true(v[0] == 1 && v[1] == -2.5 && v[2] == 30);
+    assert_int_equal(fp_parse_decimal_list("  -35 \t10 ", ' ', v, 3), 2);
+    assert_true(v[0] == -35 && v[1] == 10);
+    static const char *const badlist[] = {"1,0x2", "1,,2", "1,2,", "1,2,3,4", "0x1,2", "1,inf", "1;2"};
+    for (size_t i = 0; i < sizeof badlist / sizeof badlist[0]; i++)
+        assert_int_equal(fp_parse_decimal_list(badlist[i], ',', v, 3), 0);
+    assert_int_equal(fp_parse_decimal_list("1 2 3 4", ' ', v, 3), 0);
+
+    /* the mappings' number keys */
+    rig r;
+    char err[1024];
+    static const char *const keys[] = {"0x1p-2", "0x10", "inf", "infinity", "nan", "1e999"};
+    for (size_t i = 0; i < sizeof keys / sizeof keys[0]; i++) {
+        fp_param p[] = {{"clamp", keys[i]}};
+        assert_int_equal(open_mapping(&r, "anchored", p, 1, err), -EINVAL);
+        char want[128];
+        snprintf(want, sizeof want, "anchored: key 'clamp': '%s' is not a number in [0, 100] R", keys[i]);
+        assert_non_null(strstr(err, want));
+        close_mapping(&r);
+        assert_int_equal(open_mapping(&r, "unanchored", p, 1, err), -EINVAL);
+        assert_non_null(strstr(err, "unanchored: key 'clamp'"));
+        close_mapping(&r);
+    }
+    static const char *const fine[] = {"1.5", ".5", "2.", "+3", "1e-1", "1E+1"};
+    for (size_t i = 0; i < sizeof fine / sizeof fine[0]; i++) {
+        fp_param p[] = {{"release", fine[i]}, {"engage", "0.05"}};
+        assert_int_equal(open_mapping(&r, "anchored", p, 2, err), 0);
+        close_mapping(&r);
+    }
 }
 
 /* Put every joint of hand h at a distinct point: joint j at (base + j, 10 h, z). */
@@ -383,6 +462,7 @@ int main(void)
         cmocka_unit_test(test_anchored_auto), cmocka_unit_test(test_anchored_requests),
         cmocka_unit_test(test_unanchored), cmocka_unit_test(test_bad_keys),
         cmocka_unit_test(test_points), cmocka_unit_test(test_anchored_beyond_reach),
+        cmocka_unit_test(test_decimal_keys),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -355,6 +355,25 @@ static void test_calibrate_touch(void **state)
     /* Collinear landmarks are refused. */
     float line[3][3] = {{0, 0, 0}, {0, 1, 0}, {0, 2, 0}};
     assert_int_equal(fp_calib_fit_touch(smp, n, (const float(*)[3])line, &got, NULL, NULL, err, sizeof err), -EDOM);
+    assert_non_null(strstr(err, "lie on a line"));
+    /* ... its numbers as %g: touches 1e30 mm out print as 1e+30, not 31 digits each. Three
+     * rests of 0.8 s at far points, 0.2 s moves between them (no noise). */
+    const float far[4][3] = {{1e30f, 2e30f, 3e30f}, {2e30f, 4e30f, 6e30f}, {3e30f, 5e30f, 8e30f},
+                             {0, 0, 0}};
+    size_t m = 0;
+    for (int i = 0; i < 3; i++)
+        for (int f = 0; f < 100; f++, m++) {
+            float u = f < 80 ? 0.f : (float)(f - 79) / 20.f;
+            smp[m].t_ns = (int64_t)m * 10000000LL;
+            smp[m].hand = FP_HAND_RIGHT;
+            for (int j = 0; j < FP_HAND_JOINTS; j++)
+                for (int k = 0; k < 3; k++) smp[m].joints[j][k] = far[i][k] + u * (far[i + 1][k] - far[i][k]);
+        }
+    assert_int_equal(fp_calib_fit_touch(smp, m, (const float(*)[3])line, &got, NULL, NULL, err, sizeof err), -EDOM);
+    print_message("far touches: %s\n", err);
+    assert_non_null(strstr(err, "lie on a line"));
+    assert_non_null(strstr(err, "(1e+30 2e+30 3e+30)"));
+    for (const char *p = err; *p; p++) assert_false(strspn(p, "0123456789") > 12);
     free(smp);
 }
 

@@ -73,7 +73,7 @@ static inline void tt_make(tt_frame *t, uint64_t n, int rich)
         int type = rich ? 1 + (int)((h >> (40 + i)) + i) % 5 : (i < 2 ? 2 : 3);
         e->header.type = (uint16_t)type;
         e->header.time_ns = TT_ORIGIN + (int64_t)(n * 16666667 + i * 1000) - 5;
-        e->header.source = (uint32_t)(i % 3);
+        e->header.source = (uint32_t)(i % 2); /* (tt_header lists 2 inputs) */
         e->header.hand = type >= 4 ? -1 : (int)(i & 1);
         e->header.flags = 0;
         switch (type) {

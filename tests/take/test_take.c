@@ -612,6 +612,96 @@ static void test_bad_files(void **state)
     rm_rf(dir);
 }
 
+/* The take in b (n bytes) with its HEAD payload (the chunk at byte 16) replaced by the old one
+ * with the first `from` (nl bytes) replaced by `to` (tl bytes), the chunk's length and crc32
+ * made anew; *out_n its size. A new buffer. */
+static uint8_t *rehead(const uint8_t *b, size_t n, const char *from, size_t fl, const char *to,
+                       size_t tl, size_t *out_n)
+{
+    uint32_t len;
+    memcpy(&len, b + 16 + 8, 4);
+    const uint8_t *pay = b + 32;
+    const uint8_t *hit = memmem(pay, len, from, fl);
+    assert_non_null(hit);
+    const size_t pre = (size_t)(hit - pay), nl = len - fl + tl;
+    uint8_t *o = malloc(n - len + nl);
+    memcpy(o, b, 32);
+    memcpy(o + 32, pay, pre);
+    memcpy(o + 32 + pre, to, tl);
+    memcpy(o + 32 + pre + tl, hit + fl, len - pre - fl);
+    const uint32_t nl32 = (uint32_t)nl;
+    memcpy(o + 24, &nl32, 4);
+    const uint32_t crc = (uint32_t)crc32(0, o + 16, 16 + (uInt)nl);
+    memcpy(o + 32 + nl, &crc, 4);
+    memcpy(o + 36 + nl, b + 36 + len, n - 36 - len);
+    *out_n = n - len + nl;
+    return o;
+}
+
+/* A damaged HEAD is refused (-EBADMSG, the field named), though its crc32 is right: a NUL
+ * byte anywhere in its JSON or a \u0000 escape in a string (cJSON read them as white space or
+ * the string's end: "ta\0ke" was slate "ta"), text after the JSON object. */
+static void test_bad_header(void **state)
+{
+    (void)state;
+    char dir[512], tpath[1024], err[512];
+    make_dir(dir, sizeof dir, "badhead");
+    write_take(dir, "H", 3, 1, tpath, sizeof tpath);
+    size_t n, m;
+    uint8_t *b = slurp(tpath, &n);
+    fp_take_reader *r;
+    assert_int_equal(fp_take_reader_open_memory(b, n, "h.fptake", &r, err, sizeof err), 0);
+    fp_take_reader_close(&r);
+    static const struct { const char *from, *to; size_t tl; const char *says; } cases[] = { /* tl 0: strlen */
+        {"\"slate\":\"H\"", "\"slate\":\"H\0x\"", 13, "header: a NUL in \"slate\""},
+        {"\"path\":\"", "\"path\":\"\0", 9, "header: a NUL in \"mesh.path\""},
+        {"\"pedal\"", "\"ped\0al\"", 8, "header: a NUL in \"inputs[1]\""},
+        {"\"release\"", "\"rel\0ease\"", 10, "header: a NUL in a key of \"mapping.keys\""},
+        {",\"take\"", ",\0\"take\"", 8, "header: a NUL between the fields of the header"},
+        {"\"rating\":4}", "\"rating\":4}\0", 12, "header: a NUL outside the JSON object"},
+        {"\"description\":\"", "\"description\":\"a\\u0000", 22, "header: a NUL in \"description\""},
+        {"\"rating\":4}", "\"rating\":4} x", 0, "header: text after the JSON object"},
+        /* inputs and mapping of the wrong JSON type: cJSON_ArrayForEach read an object's
+         * members as inputs and an array's entries as keys without a name */
+        {"\"inputs\":[", "\"inputs\":{\"a\":\"x\"},\"y\":[", 0, "header: \"inputs\" is not an array"},
+        {"\"inputs\":[", "\"inputs\":[\"x\",7,", 0, "header: \"inputs[1]\" is not a string"},
+        {"\"keys\":{", "\"keys\":[\"a\"],\"k\":{", 0, "header: \"mapping.keys\" is not an object"},
+        {"\"keys\":{", "\"keys\":{\"a\":1,", 0, "header: \"mapping.keys\" key 0 is not a string"},
+        {"\"mapping\":{", "\"mapping\":7,\"m\":{", 0, "header: \"mapping\" is not an object"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        const size_t tl = cases[i].tl ? cases[i].tl : strlen(cases[i].to); /* (tl: with a NUL) */
+        uint8_t *c = rehead(b, n, cases[i].from, strlen(cases[i].from), cases[i].to, tl, &m);
+        err[0] = '\0';
+        assert_int_equal(fp_take_reader_open_memory(c, m, "h.fptake", &r, err, sizeof err), -EBADMSG);
+        print_message("%s\n", err);
+        assert_non_null(strstr(err, "h.fptake: byte "));
+        assert_non_null(strstr(err, cases[i].says));
+        assert_null(r);
+        free(c);
+    }
+    /* white space after the object, and an escaped backslash before "u0000", are no damage */
+    static const char *const fine[][2] = {{"\"rating\":4}", "\"rating\":4} \n"},
+                                          {"\"description\":\"", "\"description\":\"\\\\u0000"}};
+    for (size_t i = 0; i < 2; i++) {
+        uint8_t *c = rehead(b, n, fine[i][0], strlen(fine[i][0]), fine[i][1], strlen(fine[i][1]), &m);
+        assert_int_equal(fp_take_reader_open_memory(c, m, "h.fptake", &r, err, sizeof err), 0);
+        assert_int_equal(fp_take_reader_frames(r), 3);
+        fp_take_reader_close(&r);
+        free(c);
+    }
+    /* more inputs than a take holds (FP_TAKE_MAX_INPUTS) */
+    char many[16 * (FP_TAKE_MAX_INPUTS + 1) + 16];
+    size_t w = (size_t)snprintf(many, sizeof many, "\"inputs\":[");
+    for (int i = 0; i < FP_TAKE_MAX_INPUTS + 1; i++) w += (size_t)snprintf(many + w, sizeof many - w, "\"i%d\",", i);
+    uint8_t *c = rehead(b, n, "\"inputs\":[", 10, many, w, &m);
+    assert_int_equal(fp_take_reader_open_memory(c, m, "h.fptake", &r, err, sizeof err), -EBADMSG);
+    assert_non_null(strstr(err, "header: \"inputs\" has more than 16 entries"));
+    free(c);
+    free(b);
+    rm_rf(dir);
+}
+
 /* A chunk's crc32 again after a patch (chunk at off: 16-byte head, payload, crc32). */
 static void rechunk(uint8_t *b, size_t off)
 {
@@ -671,6 +761,40 @@ static void test_frames_out_of_order(void **state)
         free(p);
     }
     free(b);
+    rm_rf(dir);
+}
+
+/* An event of an input the header does not list (source >= its inputs' count; crc32 right):
+ * its chunk is damage, the take cut there naming the field; the frames before it play. */
+static void test_event_source(void **state)
+{
+    (void)state;
+    char dir[512], err[512];
+    make_dir(dir, sizeof dir, "source");
+    fp_take_header h;
+    tt_header(&h, "S"); /* two inputs */
+    fp_take_writer_options o = {.chunk_frames = 3, .no_sync = true};
+    fp_take_writer *w;
+    assert_int_equal(fp_take_writer_create(dir, &h, &o, &w, err, sizeof err), 0);
+    char path[1024];
+    snprintf(path, sizeof path, "%s", fp_take_writer_path(w));
+    for (uint64_t i = 0; i < 9; i++) {
+        tt_frame t;
+        tt_make(&t, i, 0); /* 4 events, sources 0 and 1 */
+        if (i == 7) t.ev[3].header.source = 2;
+        assert_int_equal(fp_take_writer_add(w, &t.f, err, sizeof err), 0);
+    }
+    assert_int_equal(fp_take_writer_close(&w, 0, 0, err, sizeof err), 0);
+    fp_take_reader *r;
+    assert_int_equal(fp_take_reader_open(path, &r, err, sizeof err), 0);
+    print_message("%s\n", fp_take_reader_warning(r));
+    assert_int_equal(fp_take_reader_frames(r), 6);
+    assert_true(fp_take_reader_summary(r)->cut);
+    assert_non_null(strstr(fp_take_reader_warning(r), "event source beyond the header's \"inputs\""));
+    fp_take_frame f;
+    assert_int_equal(fp_take_reader_read(r, 5, &f, err, sizeof err), 0);
+    assert_int_equal(f.frame, 5);
+    fp_take_reader_close(&r);
     rm_rf(dir);
 }
 
@@ -982,6 +1106,8 @@ int main(void)
         cmocka_unit_test(test_frames_out_of_order),
         cmocka_unit_test(test_random_flips),
         cmocka_unit_test(test_bad_files),
+        cmocka_unit_test(test_bad_header),
+        cmocka_unit_test(test_event_source),
         cmocka_unit_test(test_numbering),
         cmocka_unit_test(test_enospc),
         cmocka_unit_test(test_list),

@@ -162,4 +162,79 @@ for cmd in "play $tmp/cut.fptake -o $tmp/cut.obj" "export $tmp/cut.fptake -f obj
     [ $rc -eq 65 ] && grep -q "no intact frame" "$tmp/cut.err" || fail "$cmd: exit $rc: $(cat "$tmp/cut.err")"
 done
 [ ! -e "$tmp/cut.obj" ] && [ ! -e "$tmp/cut-seq" ] || fail "a take with no intact frame left an output"
+# ---- 6. takes: *.fptake files that are no takes ------------------------------------------
+# garbage, a take cut inside its header, an empty file: listed as unreadable with the reader's
+# reason, without the zeros of a take (0 frames, 0.00s, take 0); exit 0 (the folder listed)
+mkdir "$tmp/odd"
+cp "$take" "$tmp/odd/clap_T001.fptake"
+head -c 300 /dev/urandom >"$tmp/odd/junk.fptake"
+head -c 40 "$take" >"$tmp/odd/clap_T002.fptake"
+: >"$tmp/odd/empty.fptake"
+"$fp" takes "$tmp/odd" >"$tmp/odd.txt" 2>&1 || fail "takes of odd files exited $?: $(cat "$tmp/odd.txt")"
+cat "$tmp/odd.txt"
+grep -Eq "^clap +1 +[0-9:]{11} +[0-9:]{11} +[0-9.]+s +[0-9]+ .* ok$" "$tmp/odd.txt" || fail "takes: the good take's row"
+grep -Eq "^clap +2 +- +- +- +- +- +- +- +unreadable$" "$tmp/odd.txt" || fail "takes: the cut header's row"
+for f in junk empty; do
+    grep -Eq "^$f +- +- +- +- +- +- +- +- +unreadable$" "$tmp/odd.txt" || fail "takes: $f's row"
+    grep -q "^  $tmp/odd/$f.fptake: byte 0: not a facepuppet take (bad signature)$" "$tmp/odd.txt" ||
+        fail "takes: $f's reason"
+done
+grep -q "^  $tmp/odd/clap_T002.fptake: byte 16: header: .* runs past the end of the file" "$tmp/odd.txt" ||
+    fail "takes: the cut header's reason"
+"$fp" takes --json "$tmp/odd" >"$tmp/odd.json" || fail "takes --json of odd files exited $?"
+python3 - "$tmp/odd.json" <<'PY' || fail "takes --json of odd files"
+import json, sys
+t = {x['path'].rsplit('/', 1)[1]: x for x in json.load(open(sys.argv[1]))}
+assert t['clap_T001.fptake']['state'] == 'ok' and t['clap_T001.fptake']['frames'] > 0, t
+for name, take in (('junk.fptake', None), ('empty.fptake', None), ('clap_T002.fptake', 2)):
+    x = t[name]
+    assert x['state'] == 'unreadable' and x['message'], x
+    assert x['take'] == take and x['frames'] is None and x['duration_s'] is None, x
+PY
+"$fp" takes --help | grep -q "Exit status: 0 once the folder is listed" || fail "takes --help: exit status"
+
+# ---- 7. -q leaves out the engine's and contact guard's notes, as --help says ---------------
+# (unanchored three claps: the fold-over and contact guards act; notes without -q); an input's
+# warning (record= took another name) and the take's line still print with -q
+"$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv,fast=1" --mapping unanchored \
+    --take-dir "$tmp/q-takes" -o "$tmp/loud.obj" >/dev/null 2>"$tmp/loud.err" || fail "loud run exited $?"
+grep -q "^facepuppet: engine: fold-over guard" "$tmp/loud.err" && grep -q "^facepuppet: contact: " "$tmp/loud.err" ||
+    fail "no notes from the engine and contact guard without -q: $(cat "$tmp/loud.err")"
+echo kept >"$tmp/q.log"
+"$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv,fast=1,record=$tmp/q.log" --mapping unanchored \
+    --take-dir "$tmp/q-takes" -o "$tmp/quiet.obj" -q >"$tmp/quiet.out" 2>"$tmp/quiet.err" || fail "run -q exited $?"
+cat "$tmp/quiet.err"
+! grep -Eq "^facepuppet: (engine|contact): " "$tmp/quiet.err" || fail "run -q printed the engine's notes"
+grep -q "recording to $tmp/q-1.log instead" "$tmp/quiet.err" || fail "run -q left out an input's warning"
+grep -q "take $tmp/q-takes/take_T002.fptake: " "$tmp/quiet.err" || fail "run -q left out the take's line"
+grep -q "^frames [0-9]*, deforming" "$tmp/quiet.out" || fail "run -q left out the summary (stdout)"
+qt="$tmp/q-takes/take_T001.fptake"
+for cmd in "play $qt -o $tmp/qp.obj" "export $qt -f pc2 -o $tmp/qp.pc2"; do
+    "$fp" $cmd >/dev/null 2>"$tmp/qp.err" || fail "$cmd exited $?"
+    grep -q "^facepuppet: engine: " "$tmp/qp.err" || fail "$cmd: no engine notes without -q"
+    "$fp" $cmd -q >"$tmp/qp.out" 2>"$tmp/qp.err" || fail "$cmd -q exited $?"
+    [ ! -s "$tmp/qp.err" ] && [ ! -s "$tmp/qp.out" ] || fail "$cmd -q printed: $(cat "$tmp/qp.out" "$tmp/qp.err")"
+done
+for c in run play export; do
+    "$fp" $c --help | tr -s ' \n' ' ' | grep -q "nor the engine's and contact guard's notes on each gesture" ||
+        fail "$c --help does not say what -q leaves out"
+done
+
+# ---- 8. a damaged header (its crc32 right): info, play and export exit 65 naming the field --
+python3 - "$take" "$tmp/nul.fptake" <<'PY' || fail "could not patch the header"
+import struct, sys, zlib
+b = open(sys.argv[1], 'rb').read()
+ln = struct.unpack_from('<I', b, 24)[0]
+h = b[32:32 + ln].replace(b'"slate":"clap"', b'"slate":"cl\x00ap"', 1)
+head = b[16:24] + struct.pack('<II', len(h), 0)
+open(sys.argv[2], 'wb').write(b[:16] + head + h + struct.pack('<I', zlib.crc32(head + h)) + b[36 + ln:])
+PY
+for cmd in "info $tmp/nul.fptake" "play $tmp/nul.fptake -o $tmp/nul.obj" "export $tmp/nul.fptake -f pc2 -o $tmp/nul.pc2"; do
+    "$fp" $cmd >/dev/null 2>"$tmp/nul.err"
+    rc=$?
+    [ $rc -eq 65 ] && grep -q "nul.fptake: byte [0-9]*: header: a NUL in \"slate\"" "$tmp/nul.err" ||
+        fail "$cmd: exit $rc: $(cat "$tmp/nul.err")"
+done
+[ ! -e "$tmp/nul.obj" ] && [ ! -e "$tmp/nul.pc2" ] || fail "a damaged header left an output"
+
 echo "PASS"

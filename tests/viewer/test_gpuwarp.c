@@ -191,9 +191,19 @@ static void test_script_parse(void **state)
     assert_true(s.cmds[3].number == -35 && s.cmds[3].pitch == 10 && s.cmds[3].zoom == 1);
     assert_true(s.cmds[4].number == 20 && s.cmds[4].pitch == -5 && s.cmds[4].zoom == 1.5);
     fp_script_free(&s);
+    /* numbers are decimals in every form (no hex, inf or nan: below), blanks between them */
+    assert_int_equal(fp_script_parse("radius .5; scrub 1.; camera  -3e1\t+5  2E-1 ; wait frames 4", &s,
+                                     err, sizeof err), 0);
+    assert_int_equal(s.count, 4);
+    assert_true(s.cmds[0].number == 0.5 && s.cmds[1].number == 1);
+    assert_true(s.cmds[2].number == -30 && s.cmds[2].pitch == 5 && s.cmds[2].zoom == 0.2);
+    assert_true(s.cmds[3].op == FP_SCRIPT_WAIT_FRAMES && s.cmds[3].number == 4);
+    fp_script_free(&s);
     const char *bad[] = {"jump 3", "key Q", "wait forever", "radius -1", "shot", "close now",
                          "wait frames x", "camera", "camera 10", "camera 10 95", "camera 1 2 0",
-                         "camera 1 2 3 4", "camera nan 0"};
+                         "camera 1 2 3 4", "camera nan 0", "radius 0x10", "radius inf",
+                         "scrub 0x1p-1", "wait frames 0x3", "camera 0x10 5", "camera 10 5 0x1",
+                         "wait frames 3 x"};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         err[0] = '\0';
         assert_int_equal(fp_script_parse(bad[i], &s, err, sizeof err), -EINVAL);

@@ -188,6 +188,11 @@ void fp_app_log_line(void *user, int level, const char *source, const char *mess
     fprintf(stderr, "facepuppet: %s: %s\n", source, message);
 }
 
+void fp_app_log_line_quiet(void *user, int level, const char *source, const char *message)
+{
+    if (!fp_slog_is_note(level, source)) fp_app_log_line(user, level, source, message);
+}
+
 int fp_app_check_output(const char *cmd, const char *option, const char *path)
 {
     char real[4096];

@@ -5,6 +5,9 @@
 #include "fp_plugin_host.h"
 #include "fp_session.h"
 #include "fp_session_take.h"
+/* fp_parse_decimal, fp_decimal_span: the one syntax of a number in an option (decimal,
+ * finite: no hex, inf or nan), as in a plugin's keys */
+#include <facepuppet/plugin_util.h>
 
 #include <stdbool.h>
 #include <stdint.h>
@@ -59,6 +62,11 @@ typedef enum fp_app_io {
 /** A log callback (fp_session_log_fn, fp_host_log_fn) for the commands: "facepuppet: SOURCE:
  *  MESSAGE" on stderr; FP_LOG_DEBUG lines only with FACEPUPPET_DEBUG set. user unused. */
 void fp_app_log_line(void *user, int level, const char *source, const char *message);
+
+/** fp_app_log_line for a command given -q: the engine's and the contact guard's notes on
+ *  each gesture (fp_slog_is_note) are left out; the inputs', recordings', the mapping's and
+ *  the rig's lines and every error print as with fp_app_log_line. */
+void fp_app_log_line_quiet(void *user, int level, const char *source, const char *message);
 
 /** The longest --duration a command takes, seconds (116 days: its nanoseconds fit an
  *  int64 with room; 9.3e9 s wrapped around and stopped after one frame). */

@@ -140,7 +140,6 @@ static int calibrate_main(int argc, char **argv)
     const char *dirs[8];
     size_t ndirs = 0;
     double mm_per_unit = 0, duration = 0;
-    char *end;
     optind = 1;
     for (int c; (c = getopt_long(argc, argv, "m:i:o:d:P:h", opts, NULL)) != -1;) {
         switch (c) {
@@ -156,15 +155,13 @@ static int calibrate_main(int argc, char **argv)
         case 'M': mode = optarg; break;
         case 'r': rig_path = strcmp(optarg, "none") ? optarg : NULL, no_rig = !rig_path; break;
         case 'u':
-            mm_per_unit = strtod(optarg, &end);
-            if (*end || !(mm_per_unit > 0) || !isfinite(mm_per_unit)) {
+            if (!fp_parse_decimal(optarg, &mm_per_unit) || !(mm_per_unit > 0)) {
                 fprintf(stderr, "facepuppet calibrate: --mm-per-unit must be > 0, got '%s'\n", optarg);
                 return FP_EXIT_USAGE;
             }
             break;
         case 'd':
-            duration = strtod(optarg, &end);
-            if (end == optarg || *end || !(duration > 0 && duration < FP_APP_MAX_DURATION_S)) {
+            if (!fp_parse_decimal(optarg, &duration) || !(duration > 0 && duration < FP_APP_MAX_DURATION_S)) {
                 fprintf(stderr, "facepuppet calibrate: --duration must be > 0 s and under 1e7, got "
                         "'%s'\n", optarg);
                 return FP_EXIT_USAGE;

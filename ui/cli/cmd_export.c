@@ -93,7 +93,9 @@ static void usage(FILE *f)
         "                        zoom Z (default 0,0,1: the face from the front)\n"
         "  -m, --mesh FILE       the take's mesh from another path (its crc32 must match)\n"
         "      --plugin-dir DIR  look for plugins in DIR first\n"
-        "  -q, --quiet           no progress and no summary\n"
+        "  -q, --quiet           no progress and no summary, nor the engine's and contact\n"
+        "                        guard's notes on each gesture; errors and a damaged take's\n"
+        "                        warning still print\n"
         "  -h, --help            this text\n\n"
         "Exit status: 0 done, 64 usage, 65 a damaged take or another mesh, 66 missing,\n"
         "66 no display for png-seq, 69 png-seq in a build without the viewer, 73 an output not written (facepuppet --help has the whole table).\n");
@@ -186,15 +188,13 @@ static int export_main(int argc, char **argv)
         case 'o': out = optarg; break;
         case OPT_RANGE: range = optarg; break;
         case OPT_FPS:
-            fps = strtod(optarg, &end);
-            if (*end || !(fps > 0 && fps <= 10000)) {
+            if (!fp_parse_decimal(optarg, &fps) || !(fps > 0 && fps <= 10000)) {
                 fprintf(stderr, "facepuppet export: --fps must be in (0, 10000], got '%s'\n", optarg);
                 return FP_EXIT_USAGE;
             }
             break;
         case OPT_MAX_ERROR:
-            max_error = strtod(optarg, &end);
-            if (*end || !(max_error > 0 && isfinite(max_error))) {
+            if (!fp_parse_decimal(optarg, &max_error) || !(max_error > 0)) {
                 fprintf(stderr, "facepuppet export: --max-error must be > 0 mm, got '%s'\n", optarg);
                 return FP_EXIT_USAGE;
             }
@@ -216,8 +216,10 @@ static int export_main(int argc, char **argv)
             }
             break;
         case OPT_CAMERA: {
-            int used = 0, k = sscanf(optarg, "%lf,%lf%n,%lf%n", &yaw, &pitch, &used, &zoom, &used);
-            if (k < 2 || optarg[used] || !isfinite(yaw) || !isfinite(pitch) || !(zoom > 0 && zoom < 1000)) {
+            double v[3] = {0, 0, 1};
+            const size_t k = fp_parse_decimal_list(optarg, ',', v, 3);
+            yaw = v[0], pitch = v[1], zoom = v[2];
+            if (k < 2 || !(zoom > 0 && zoom < 1000)) {
                 fprintf(stderr, "facepuppet export: --camera YAW,PITCH[,ZOOM] in degrees (zoom > 0), "
                         "got '%s'\n", optarg);
                 return FP_EXIT_USAGE;
@@ -260,8 +262,9 @@ static int export_main(int argc, char **argv)
     fp_plugin_path path;
     fp_app_plugin_path(&path, dirs, ndirs);
     fp_take_player *p = NULL;
-    int rc = fp_take_player_open_logged(take_path, mesh, &path, fp_app_log_line, NULL, &p, err,
-                                        sizeof err);
+    int rc = fp_take_player_open_logged(take_path, mesh, &path,
+                                        quiet ? fp_app_log_line_quiet : fp_app_log_line, NULL, &p,
+                                        err, sizeof err);
     if (rc) {
         fprintf(stderr, "facepuppet export: %s\n", err);
         fp_plugin_path_clear(&path);

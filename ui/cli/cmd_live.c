@@ -140,9 +140,7 @@ static int live_main(int argc, char **argv)
             vo.slate = optarg;
             break;
         case OPT_COUNTDOWN: {
-            char *end;
-            vo.countdown_s = strtod(optarg, &end);
-            if (end == optarg || *end || !(vo.countdown_s >= 0 && vo.countdown_s <= 60)) {
+            if (!fp_parse_decimal(optarg, &vo.countdown_s) || !(vo.countdown_s >= 0 && vo.countdown_s <= 60)) {
                 fprintf(stderr, "facepuppet live: --countdown must be 0..60 seconds, got '%s'\n", optarg);
                 return FP_EXIT_USAGE;
             }

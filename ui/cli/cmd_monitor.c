@@ -122,9 +122,7 @@ static int monitor_main(int argc, char **argv)
             break;
         }
         case 'd': {
-            char *end;
-            duration = strtod(optarg, &end);
-            if (end == optarg || *end || !(duration > 0 && duration < FP_APP_MAX_DURATION_S)) {
+            if (!fp_parse_decimal(optarg, &duration) || !(duration > 0 && duration < FP_APP_MAX_DURATION_S)) {
                 fprintf(stderr, "facepuppet monitor: --duration must be > 0 seconds and under "
                                 "1e7, got '%s'\n", optarg);
                 return FP_EXIT_USAGE;

@@ -32,7 +32,9 @@ static void usage(FILE *f)
         "                         0.1 mm), .pc2/.mdd (point caches); see facepuppet export\n"
         "  -m, --mesh FILE        the take's mesh from another path (its crc32 must match)\n"
         "      --plugin-dir DIR   look for plugins in DIR first\n"
-        "  -q, --quiet            no summary line\n"
+        "  -q, --quiet            no summary line, nor the engine's and contact guard's\n"
+        "                         notes on each gesture; errors and a damaged take's\n"
+        "                         warning still print\n"
         "  -h, --help             this text\n\n"
         "Exit status: 0 done, 64 usage, 65 a damaged take or another mesh, 66 missing,\n"
         "73 an output not written (facepuppet --help has the whole table).\n");
@@ -92,8 +94,9 @@ static int play_main(int argc, char **argv)
     fp_take_player *player = NULL;
     fp_exporter *ex = NULL;
     int status = FP_EXIT_OK;
-    int rc = fp_take_player_open_logged(take_path, mesh, &path, fp_app_log_line, NULL, &player, err,
-                                        sizeof err);
+    int rc = fp_take_player_open_logged(take_path, mesh, &path,
+                                        quiet ? fp_app_log_line_quiet : fp_app_log_line, NULL,
+                                        &player, err, sizeof err);
     if (rc) {
         fprintf(stderr, "facepuppet play: %s\n", err);
         fp_plugin_path_clear(&path);

@@ -218,8 +218,7 @@ static int check_main(int argc, char **argv)
             break;
         }
         case 'b':
-            o.budget_ms = strtod(optarg, &end);
-            if (*end || !(o.budget_ms > 0 && o.budget_ms < 1e4)) {
+            if (!fp_parse_decimal(optarg, &o.budget_ms) || !(o.budget_ms > 0 && o.budget_ms < 1e4)) {
                 fprintf(stderr, "facepuppet plugins check: --budget must be a time in ms > 0, got '%s'\n", optarg);
                 status = FP_EXIT_USAGE;
                 goto out;

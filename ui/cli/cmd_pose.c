@@ -97,9 +97,8 @@ static int pose_main(int argc, char **argv)
     for (size_t i = 0; i < nsets && status == FP_EXIT_OK; i++) {
         char name[64];
         const char *eq = strchr(sets[i], '=');
-        char *end = NULL;
-        double v = eq ? strtod(eq + 1, &end) : 0;
-        if (!eq || (size_t)(eq - sets[i]) >= sizeof name || end == eq + 1 || *end) {
+        double v = 0;
+        if (!eq || (size_t)(eq - sets[i]) >= sizeof name || !fp_parse_decimal(eq + 1, &v)) {
             fprintf(stderr, "facepuppet pose: --set %s: expected NAME=NUMBER\n", sets[i]);
             status = FP_EXIT_USAGE;
             break;

@@ -45,7 +45,8 @@ static void usage(FILE *f)
         "      --export FILE      every frame into FILE: .gltf/.glb (morph-target animation,\n"
         "                         0.1 mm), .pc2/.mdd (point caches); see facepuppet export\n"
         "      --take-dir DIR     record the run as a take in DIR (SLATE_TNNN.fptake; see\n"
-        "                         facepuppet takes, play, --input take:FILE)\n"
+        "                         facepuppet takes, play, --input take:FILE); its path,\n"
+        "                         frames and timecode are said at the end, -q or not\n"
         "      --slate NAME       the take's slate (default \"take\"); numbers go up per slate\n"
         "      --take-description TEXT  a line stored in the take's header\n"
         "      --budget MS        report a mapping process() slower than MS (default 2)\n\n"
@@ -95,7 +96,6 @@ static int run_main(int argc, char **argv)
     const char *out = NULL, *frames_out = NULL;
     const char *take_dir = NULL, *slate = NULL, *take_desc = NULL, *export_file = NULL;
     double fps = 60;
-    char *end;
     optind = 1;
     for (int c; (c = getopt_long(argc, argv, FP_SESSION_OPTS_SHORT "o:h", opts, NULL)) != -1;) {
         int shared = fp_session_opts_parse(&sopt, c, optarg, "run");
@@ -105,8 +105,7 @@ static int run_main(int argc, char **argv)
         case 'o': out = optarg; break;
         case OPT_FRAMES_OUT: frames_out = optarg; break;
         case OPT_FPS:
-            fps = strtod(optarg, &end);
-            if (*end || !(fps >= 1 && fps <= 10000)) {
+            if (!fp_parse_decimal(optarg, &fps) || !(fps >= 1 && fps <= 10000)) {
                 fprintf(stderr, "facepuppet run: --fps must be in 1..10000, got '%s'\n", optarg);
                 return FP_EXIT_USAGE;
             }
@@ -123,8 +122,8 @@ static int run_main(int argc, char **argv)
             break;
         case OPT_EXPORT: export_file = optarg; break;
         case OPT_BUDGET:
-            so.mapping_budget_ms = strtod(optarg, &end);
-            if (*end || !(so.mapping_budget_ms > 0 && so.mapping_budget_ms <= 1000)) {
+            if (!fp_parse_decimal(optarg, &so.mapping_budget_ms) ||
+                !(so.mapping_budget_ms > 0 && so.mapping_budget_ms <= 1000)) {
                 fprintf(stderr, "facepuppet run: --budget must be in (0, 1000] ms, got '%s'\n", optarg);
                 return FP_EXIT_USAGE;
             }
@@ -194,7 +193,8 @@ static int run_main(int argc, char **argv)
     fp_plugin_path path;
     fp_app_plugin_path(&path, sopt.plugin_dirs, sopt.nplugin_dirs);
     so.plugin_path = &path;
-    so.log = fp_app_log_line; /* (input status, mapping and engine errors, recordings) */
+    /* (input status, mapping and engine errors, recordings; -q: without the engine's notes) */
+    so.log = quiet ? fp_app_log_line_quiet : fp_app_log_line;
     so.input_clock = true;
     so.measure_jacobian = true; /* min det J in the summary (the same shape, a slower path) */
     fp_app_open_progress opening; /* a large face takes a while: its steps on a terminal */

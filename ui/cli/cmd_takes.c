@@ -17,10 +17,15 @@ static void usage(FILE *f)
 {
     fprintf(f, "usage: facepuppet takes [DIR] [--json]\n\n"
                "The takes (SLATE_TNNN.fptake) in DIR (default: the current folder), by slate and\n"
-               "take number: timecode in and out, duration, frames, mesh, mapping, rating; a take\n"
-               "cut short (the recording process died) is marked \"cut\", one that cannot be\n"
-               "read \"unreadable\" with the reason.\n"
-               "  --json   one JSON array instead of the table\n");
+               "take number: timecode in and out, duration, frames, mesh, mapping, rating; STATE\n"
+               "says ok, \"cut\" (damaged or cut short, e.g. the recording process died: the\n"
+               "frames before the damage play) or \"open\" (no end chunk yet). A *.fptake file\n"
+               "that is no take, or whose signature or header is damaged, is \"unreadable\": its\n"
+               "slate and take number are what its name gives, it has no timecode, duration or\n"
+               "frames (\"-\"; null in JSON), and the reason is under the table (\"message\").\n"
+               "  --json   one JSON array instead of the table\n\n"
+               "Exit status: 0 once the folder is listed, whatever the files' states (see STATE),\n"
+               "64 usage, 66 the folder cannot be read.\n");
 }
 
 static const char *state_of(const fp_take_info *t)
@@ -34,24 +39,32 @@ static void print_table(const fp_take_info *v, size_t n)
            "TC IN", "TC OUT", "DURATION", "FRAMES", "RATING", "MAPPING", "MESH", "STATE");
     for (size_t i = 0; i < n; i++) {
         const fp_take_info *t = &v[i];
-        char in[32] = "-", out[32] = "-", rate[8] = "-";
-        if (!t->error) {
+        char in[32] = "-", out[32] = "-", rate[8] = "-", take[16] = "-", dur[32] = "-", fr[32] = "-";
+        if (!t->error) { /* (an unreadable file has none of these: "-", not zeros) */
             fp_timecode_format(&t->timecode_in, in, sizeof in);
             fp_timecode_format(&t->timecode_out, out, sizeof out);
+            snprintf(dur, sizeof dur, "%.2fs", t->duration_s);
+            snprintf(fr, sizeof fr, "%llu", (unsigned long long)t->frames);
         }
+        if (t->take) snprintf(take, sizeof take, "%u", t->take); /* (an unreadable one's: its name's) */
         if (t->rating) snprintf(rate, sizeof rate, "%d/5", t->rating);
         const char *mesh = strrchr(t->mesh, '/') ? strrchr(t->mesh, '/') + 1 : t->mesh;
         char cm[1024], cp[256]; /* shown as UTF-8 text: a terminal obeys no byte of a file */
         fp_text_clean(mesh, cm, sizeof cm);
         fp_text_clean(t->mapping, cp, sizeof cp);
-        printf("%-16s %4u  %-11s  %-11s  %8.2fs  %7llu  %-6s  %-10s  %-28.28s  %s\n", t->slate,
-               t->take, in, out, t->duration_s, (unsigned long long)t->frames, rate,
-               cp[0] ? cp : "-", cm[0] ? cm : "-", state_of(t));
+        char cs[4 * FP_TAKE_SLATE_MAX];
+        printf("%-16s %4s  %-11s  %-11s  %9s  %7s  %-6s  %-10s  %-28.28s  %s\n",
+               fp_text_clean(t->slate, cs, sizeof cs), take, in, out, dur, fr, rate, cp[0] ? cp : "-",
+               cm[0] ? cm : "-", state_of(t));
     }
     for (size_t i = 0; i < n; i++)
         if (v[i].message[0]) {
             char cmsg[1024];
-            printf("  %s_T%03u: %s\n", v[i].slate, v[i].take, fp_text_clean(v[i].message, cmsg, sizeof cmsg));
+            if (v[i].error) /* not a take: the reader's message names the file, not a slate */
+                printf("  %s\n", fp_text_clean(v[i].message, cmsg, sizeof cmsg));
+            else
+                printf("  %s_T%03u: %s\n", v[i].slate, v[i].take,
+                       fp_text_clean(v[i].message, cmsg, sizeof cmsg));
         }
 }
 
@@ -68,11 +81,17 @@ static int print_json(const fp_take_info *v, size_t n)
         }
         cJSON_AddStringToObject(o, "path", fp_text_clean(t->path, c, sizeof c));
         cJSON_AddStringToObject(o, "slate", fp_text_clean(t->slate, c, sizeof c));
-        cJSON_AddNumberToObject(o, "take", t->take);
+        if (t->take) cJSON_AddNumberToObject(o, "take", t->take); /* (unreadable: its name's) */
+        else cJSON_AddNullToObject(o, "take");
         cJSON_AddStringToObject(o, "timecode_in", in);
         cJSON_AddStringToObject(o, "timecode_out", out);
-        cJSON_AddNumberToObject(o, "duration_s", t->duration_s);
-        cJSON_AddNumberToObject(o, "frames", (double)t->frames);
+        if (t->error) { /* not read: unknown, not zero */
+            cJSON_AddNullToObject(o, "duration_s");
+            cJSON_AddNullToObject(o, "frames");
+        } else {
+            cJSON_AddNumberToObject(o, "duration_s", t->duration_s);
+            cJSON_AddNumberToObject(o, "frames", (double)t->frames);
+        }
         char rate[32];
         snprintf(rate, sizeof rate, "%u/%u", t->rate.num, t->rate.den);
         cJSON_AddStringToObject(o, "frame_rate", t->error ? "" : rate);

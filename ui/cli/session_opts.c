@@ -38,7 +38,9 @@ static const struct {
     {"plugin-dir", required_argument, OPT_PLUGIN_DIR, "DIR", "look for plugins in DIR first (repeatable)"},
     {"rig", required_argument, OPT_RIG, "R",
      "rig file (rigs/README.md); default: the mesh's rig found\nby checksum, else vertex count; 'none': no rig"},
-    {"quiet", no_argument, 'q', NULL, "no progress lines"},
+    {"quiet", no_argument, 'q', NULL,
+     "no progress or status lines, nor the engine's and\ncontact guard's notes on each gesture; the summary\n"
+     "(stdout), errors and the lines of the inputs,\nrecordings, mapping and rig still print"},
 };
 
 void fp_session_opts_init(fp_session_opts *o, fp_session_options *session)
@@ -57,12 +59,12 @@ size_t fp_session_opts_longopts(struct option *out)
     return FP_SESSION_OPTS_COUNT;
 }
 
-/* A finite number in (lo, hi) (exclusive bounds), the whole of arg. */
+/* A finite decimal number in (lo, hi) (exclusive bounds), the whole of arg (no hex, inf or
+ * nan: fp_parse_decimal). */
 static bool number(const char *arg, double lo, double hi, double *out)
 {
-    char *end;
-    double v = strtod(arg, &end);
-    if (end == arg || *end || !isfinite(v) || !(v > lo && v < hi)) return false;
+    double v;
+    if (!fp_parse_decimal(arg, &v) || !(v > lo && v < hi)) return false;
     *out = v;
     return true;
 }

@@ -22,7 +22,8 @@ typedef struct fp_session_opts {
     fp_session_options *session;  /* --mesh, --input (repeatable), --mapping, --radius, --hand-size */
     double speed;                 /* --speed: replay speed factor, default 1 */
     double duration_s;            /* --duration: stop after this many seconds; 0: no limit */
-    bool quiet;                   /* --quiet: no progress lines */
+    bool quiet;                   /* --quiet: no progress or status lines, nor the engine's
+                                     notes (fp_slog_is_note; fp_app_log_line_quiet) */
     const char *plugin_dirs[FP_SESSION_OPTS_MAX_PLUGIN_DIRS]; /* --plugin-dir (repeatable) */
     size_t nplugin_dirs;
     fp_calibration calibration;   /* --calibration FILE, loaded (session->calibration points here) */

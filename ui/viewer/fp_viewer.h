@@ -69,7 +69,9 @@ typedef struct fp_viewer_options {
     bool gpu_warp;               /* evaluate the warp in the vertex shader (and check it
                                     against the CPU engine by transform feedback) */
     bool vsync;                  /* swap interval 1 (default 0: never wait for the display) */
-    bool quiet;                  /* no messages on stderr except errors */
+    bool quiet;                  /* no status lines on stderr, nor the engine's and contact
+                                    guard's notes (fp_slog_is_note); errors and the inputs',
+                                    recordings', mapping's and rig's lines still print */
     const char *take_dir;        /* T records takes here (ui/viewer/takes.h); NULL: no takes */
     const char *slate;           /* the takes' slate; NULL: "take" */
     double countdown_s;          /* seconds counted down before a take starts; 0: none */

@@ -3,6 +3,7 @@
 #include "script.h"
 
 #include <GLFW/glfw3.h>
+#include <facepuppet/plugin_util.h> /* fp_parse_decimal(_list): numbers as in every option */
 
 #include <ctype.h>
 #include <errno.h>
@@ -56,11 +57,11 @@ int fp_script_parse(const char *text, fp_script *s, char *err, size_t errlen)
         index++;
         for (char *e = arg + strlen(arg); e > arg && isspace((unsigned char)e[-1]);) *--e = '\0';
         fp_script_cmd c = {0};
-        char *end;
         if (!strcmp(word, "wait")) {
             char what[16] = "";
             double k = 0;
-            int m = sscanf(arg, "%15s %lf", what, &k);
+            int used = 0, m = sscanf(arg, "%15s%n", what, &used);
+            if (m == 1) m += fp_parse_decimal_list(arg + used, ' ', &k, 1) == 1;
             if (m >= 1 && !strcmp(what, "hands")) c.op = FP_SCRIPT_WAIT_HANDS;
             else if (m >= 1 && !strcmp(what, "end")) c.op = FP_SCRIPT_WAIT_END;
             else if (m == 1 && !strcmp(what, "reload")) c.op = FP_SCRIPT_WAIT_RELOAD;
@@ -81,20 +82,17 @@ int fp_script_parse(const char *text, fp_script *s, char *err, size_t errlen)
         } else if (!strcmp(word, "scrub")) {
             /* scrub F: as the mouse on the timeline strip at fraction F of the take */
             c.op = FP_SCRIPT_SCRUB;
-            char *end;
-            c.number = strtod(arg, &end);
-            if (end == arg || *end || !(c.number >= 0 && c.number <= 1)) rc = -EINVAL;
+            if (!fp_parse_decimal(arg, &c.number) || !(c.number >= 0 && c.number <= 1)) rc = -EINVAL;
         } else if (!strcmp(word, "radius")) {
             c.op = FP_SCRIPT_RADIUS;
-            c.number = strtod(arg, &end);
-            if (end == arg || *end || !(c.number > 0) || !isfinite(c.number)) rc = -EINVAL;
+            if (!fp_parse_decimal(arg, &c.number) || !(c.number > 0)) rc = -EINVAL;
         } else if (!strcmp(word, "camera")) {
             /* camera YAW PITCH [ZOOM]: as export's --camera (fp_frame_render.h) */
             c.op = FP_SCRIPT_CAMERA;
-            c.zoom = 1;
-            char extra;
-            int m = sscanf(arg, "%lf %lf %lf %c", &c.number, &c.pitch, &c.zoom, &extra);
-            if ((m != 2 && m != 3) || !isfinite(c.number) || !(fabs(c.pitch) <= 89) ||
+            double v[3] = {0, 0, 1};
+            const size_t m = fp_parse_decimal_list(arg, ' ', v, 3);
+            c.number = v[0], c.pitch = v[1], c.zoom = v[2];
+            if (m < 2 || !(fabs(c.pitch) <= 89) ||
                 !(c.zoom > 0 && c.zoom <= 100))
                 rc = -EINVAL;
         } else if (!strcmp(word, "print") && !strcmp(arg, "mapping")) {

@@ -146,7 +146,7 @@ static void say(viewer *v, const char *fmt, ...)
 
 /* The session's log lines (input status, mapping and engine errors, recordings): the
  * latest in the HUD's status line, every one to stderr (debug lines only with
- * FACEPUPPET_DEBUG). Called from fp_session_step, on this thread or on the session's frame
+ * FACEPUPPET_DEBUG; with quiet, not the engine's and contact guard's notes: fp_slog_is_note). Called from fp_session_step, on this thread or on the session's frame
  * thread while this one waits in it (fp_session.h): never beside the drawing. */
 static void on_session_log(void *user, int level, const char *source, const char *message)
 {
@@ -154,7 +154,8 @@ static void on_session_log(void *user, int level, const char *source, const char
     if (level > FP_LOG_INFO && !getenv("FACEPUPPET_DEBUG")) return;
     snprintf(v->status, sizeof v->status, "%s: %s", source, message);
     v->status_until = fp_now_ns() + 5000000000LL;
-    fprintf(stderr, "facepuppet live: %s: %s\n", source, message);
+    if (!(v->opt->quiet && fp_slog_is_note(level, source)))
+        fprintf(stderr, "facepuppet live: %s: %s\n", source, message);
 }
 
 /* ---- camera ----------------------------------------------------------------------------- */

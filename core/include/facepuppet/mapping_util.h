@@ -97,12 +97,12 @@ static inline void fp_clamp_vector(const float start[3], float end[3], double ma
     for (int i = 0; i < 3; i++) end[i] = (float)(start[i] + d[i] * k);
 }
 
-/** Parse a finite double in [lo, hi]; false where the text is not one. */
+/** Parse a finite decimal number in [lo, hi] (plugin_util.h's fp_parse_decimal: no hex, inf
+ *  or nan); false where the text is not one. */
 static inline bool fp_parse_double(const char *v, double lo, double hi, double *out)
 {
-    char *end;
-    double x = strtod(v, &end);
-    if (end == v || *end || !isfinite(x) || x < lo || x > hi) return false;
+    double x;
+    if (!fp_parse_decimal(v, &x) || x < lo || x > hi) return false;
     *out = x;
     return true;
 }
@@ -135,7 +135,6 @@ static inline int fpmu_choice_index(const char *choices, const char *v)
 /* Parse one value of `info`'s type into *out; false where it is not one. */
 static inline bool fpmu_parse_value(const fp_param_info *info, const char *v, fpmu_value *out)
 {
-    char *end;
     out->text = v;
     switch (info->type) {
     case FP_PARAM_BOOL: { /* plugin_util.h's words, as every on/off key */
@@ -145,9 +144,8 @@ static inline bool fpmu_parse_value(const fp_param_info *info, const char *v, fp
         return true;
     }
     case FP_PARAM_INT:
-    case FP_PARAM_FLOAT:
-        out->number = strtod(v, &end);
-        if (end == v || *end || !isfinite(out->number)) return false;
+    case FP_PARAM_FLOAT: /* a decimal, as every number key (plugin_util.h) */
+        if (!fp_parse_decimal(v, &out->number)) return false;
         if (info->type == FP_PARAM_INT && out->number != floor(out->number)) return false;
         return out->number >= info->min && out->number <= info->max;
     case FP_PARAM_ENUM:

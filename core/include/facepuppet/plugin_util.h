@@ -8,6 +8,9 @@
 #define FACEPUPPET_PLUGIN_UTIL_H
 
 #include <facepuppet/plugin.h>
+#include <math.h>
+#include <stdbool.h>
+#include <stdlib.h>
 #include <string.h>
 
 /** A set of hands: a bit per fp_hand_side (the `hands=` key of mappings and of replay). */
@@ -35,6 +38,72 @@ static inline int fp_parse_bool(const char *v)
     if (!strcmp(v, "1") || !strcmp(v, "true") || !strcmp(v, "yes") || !strcmp(v, "on")) return 1;
     if (!strcmp(v, "0") || !strcmp(v, "false") || !strcmp(v, "no") || !strcmp(v, "off")) return 0;
     return -1;
+}
+
+/** The one syntax of a number in a key's value or a command-line option: a decimal, an
+ *  optional sign, digits with at most one '.' (at least one digit: "5", "-0.5", ".5", "5."),
+ *  then an optional exponent, 'e' or 'E', an optional sign and digits ("1e-3", "2E+2").
+ *  Returns the length of the longest such number at the start of v (0: none), so that a list
+ *  ("1/2/3") can be read number by number. Not what strtod also takes: blanks,
+ *  hexadecimal ("0x10", "0x1p3"), "inf", "infinity", "nan". [any-thread], no allocation. */
+static inline size_t fp_decimal_span(const char *v)
+{
+    if (!v) return 0;
+    size_t i = (v[0] == '+' || v[0] == '-') ? 1 : 0, digits = 0;
+    for (; v[i] >= '0' && v[i] <= '9'; i++) digits++;
+    if (v[i] == '.')
+        for (i++; v[i] >= '0' && v[i] <= '9'; i++) digits++;
+    if (!digits) return 0;
+    if (v[i] == 'e' || v[i] == 'E') {
+        size_t j = i + 1 + (v[i + 1] == '+' || v[i + 1] == '-');
+        if (v[j] >= '0' && v[j] <= '9') {
+            while (v[j] >= '0' && v[j] <= '9') j++;
+            i = j;
+        }
+    }
+    return i;
+}
+
+/** Parse v, the whole of it a number as fp_decimal_span reads it, into a finite double (the
+ *  nearest, as strtod gives it; '.' is the decimal point: facepuppet never changes the C
+ *  locale's LC_NUMERIC). false where v is no such number or its value overflows ("1e999");
+ *  the caller reports "KEY=V: expected a number ..." naming the key or option. [any-thread],
+ *  no allocation. */
+static inline bool fp_parse_decimal(const char *v, double *out)
+{
+    const size_t n = fp_decimal_span(v);
+    if (!n || v[n]) return false;
+    char *end;
+    const double x = strtod(v, &end);
+    if (end != v + n || !isfinite(x)) return false;
+    *out = x;
+    return true;
+}
+
+/** Parse v as 1 to max numbers as fp_parse_decimal reads one, each followed by `sep` but the
+ *  last ("10/20/30" with '/'; with ' ', any run of spaces and tabs separates, and may lead or
+ *  trail); returns how many (their values in out[0..]), 0 where v is no such list or has more
+ *  than max. [any-thread], no allocation. */
+static inline size_t fp_parse_decimal_list(const char *v, char sep, double *out, size_t max)
+{
+    size_t k = 0;
+    const char *p = v;
+    while (p && sep == ' ' && (*p == ' ' || *p == '\t')) p++;
+    while (p && k < max) {
+        const size_t n = fp_decimal_span(p);
+        char *end;
+        if (!n) return 0;
+        const double x = strtod(p, &end);
+        if (end != p + n || !isfinite(x)) return 0; /* ("0x10": strtod reads on past "0") */
+        out[k++] = x;
+        p += n;
+        const char *q = p;
+        while (sep == ' ' && (*q == ' ' || *q == '\t')) q++;
+        if (!*q) return k;
+        if (sep == ' ' ? q == p : *p != sep) return 0;
+        p = sep == ' ' ? q : p + 1;
+    }
+    return 0;
 }
 
 /** The `hands=` value naming mask: "left", "right" or "both" (any other mask). */
