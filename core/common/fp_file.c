@@ -154,10 +154,10 @@ int fp_file_open_output(const char *path, const char *tag, const char *stdio_mod
     if ((flags & FP_FILE_OUTPUT_KEEP_MODE) && stat(o->path, &st) == 0 && S_ISREG(st.st_mode))
         mode = st.st_mode & 07777;
     int e = 0;
-    if (fchmod(fd, mode) != 0 && (flags & FP_FILE_OUTPUT_MODE_REQUIRED)) {
-        e = errno;
-        o->failed = FP_FILE_STEP_MODE;
-    } else if (stdio_mode && !(o->f = fdopen(fd, stdio_mode))) {
+    /* best effort: a file system without Unix modes (vfat, exFAT, some network shares)
+     * refuses fchmod with EPERM, and a save there must still be made */
+    (void)fchmod(fd, mode);
+    if (stdio_mode && !(o->f = fdopen(fd, stdio_mode))) {
         e = errno ? errno : ENOMEM;
         o->failed = FP_FILE_STEP_STREAM;
     }

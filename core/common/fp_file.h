@@ -72,7 +72,6 @@ typedef enum fp_file_step {
                               device or socket, -ELOOP ...: words from fp_file_error_text) */
     FP_FILE_STEP_TEMP,     /* the temporary file could not be made (fp_file_temp_beside's codes:
                               -ENOENT no folder, -EACCES, ...) */
-    FP_FILE_STEP_MODE,     /* its mode could not be set (only with FP_FILE_OUTPUT_MODE_REQUIRED) */
     FP_FILE_STEP_STREAM,   /* fdopen failed (-ENOMEM) */
     FP_FILE_STEP_SYNC,     /* commit: the stream's flush, a write it had failed (-EIO), or fsync */
     FP_FILE_STEP_CLOSE,    /* commit: close (fclose) */
@@ -84,9 +83,6 @@ enum {
     FP_FILE_OUTPUT_KEEP_MODE = 1u,     /* a file replaced keeps its permission bits (a new one
                                           gets fp_file_new_mode()); without it every save gets
                                           fp_file_new_mode() */
-    FP_FILE_OUTPUT_MODE_REQUIRED = 2u, /* a mode that cannot be set fails the open
-                                          (FP_FILE_STEP_MODE); without it the mode is best effort
-                                          (a file system without modes keeps the temporary's) */
     FP_FILE_OUTPUT_SYNC_FOLDER = 4u    /* commit also fsyncs the folder after the rename (best
                                           effort: the data is already safe) */
 };
@@ -109,13 +105,14 @@ typedef struct fp_file_output {
 /** Start writing `path` whole or not at all: resolve the file it replaces (fp_file_target: a
  *  symbolic link written through; a folder, FIFO or device refused), make the temporary file
  *  ".NAME<tag>.XXXXXX" beside that file (tag: as fp_file_temp_beside's; NULL as ""), give it
- *  the mode a new file gets (fp_file_new_mode(); flags FP_FILE_OUTPUT_*), and with
+ *  the mode a new file gets (fp_file_new_mode(); flags FP_FILE_OUTPUT_*; best effort: a file
+ *  system without Unix modes, vfat or exFAT, refuses it and the save goes on), and with
  *  stdio_mode ("w", "wb", "w+b", ...; NULL: none) a stream on it. The caller writes through
  *  o->f or o->fd (or has another program write o->tmp), then calls fp_file_output_commit or
  *  fp_file_output_abort exactly once; o owns the descriptor, stream and temporary until then.
  *  Returns 0, or a negative errno with o->failed saying which step failed (FP_FILE_STEP_TARGET:
  *  fp_file_target's codes, o->path unusable; TEMP: fp_file_temp_beside's, o->path the
- *  resolved target; MODE: fchmod's; STREAM: fdopen's) and nothing left behind (o->tmp "",
+ *  resolved target; STREAM: fdopen's) and nothing left behind (o->tmp "",
  *  o->fd -1, o->f NULL); -EINVAL for a NULL path or o (o->failed then TARGET when o is
  *  given). Thread-safe for distinct o. */
 int fp_file_open_output(const char *path, const char *tag, const char *stdio_mode, unsigned flags,

@@ -556,8 +556,7 @@ int write_atomically(const char *given, const std::string &bytes, char *err, siz
     // the file replaced: a link's end (written through), never a folder, FIFO or device
     fp_file_output o;
     const int rc = fp_file_open_output(given, "", nullptr,
-                                       FP_FILE_OUTPUT_KEEP_MODE | FP_FILE_OUTPUT_MODE_REQUIRED |
-                                           FP_FILE_OUTPUT_SYNC_FOLDER,
+                                       FP_FILE_OUTPUT_KEEP_MODE | FP_FILE_OUTPUT_SYNC_FOLDER,
                                        &o);
     if (rc < 0 && o.failed == FP_FILE_STEP_TARGET)
         return fp__mesh_error(err, errlen, rc == -EISDIR || rc == -ENXIO ? FP_MESH_ERR_IO : errno_code(-rc),
@@ -577,8 +576,6 @@ int write_atomically(const char *given, const std::string &bytes, char *err, siz
                               "%s: %s (the previous file, if any, is unchanged)", what,
                               std::strerror(e));
     };
-    if (rc < 0) // FP_FILE_STEP_MODE
-        return give_up("cannot set the mode of the temporary file", -rc);
     const char *p = bytes.data();
     size_t left = bytes.size();
     while (left > 0) {

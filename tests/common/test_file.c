@@ -293,8 +293,7 @@ static void test_output_commit(void **state)
     snprintf(l, sizeof l, "%s/link.json", dir);
     assert_int_equal(symlink("out.json", l), 0);
     assert_int_equal(fp_file_open_output(l, "x", NULL,
-                                         FP_FILE_OUTPUT_KEEP_MODE | FP_FILE_OUTPUT_MODE_REQUIRED |
-                                             FP_FILE_OUTPUT_SYNC_FOLDER,
+                                         FP_FILE_OUTPUT_KEEP_MODE | FP_FILE_OUTPUT_SYNC_FOLDER,
                                          &o), 0);
     assert_null(o.f);
     assert_string_equal(o.path, p);

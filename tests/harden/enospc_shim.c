@@ -4,7 +4,7 @@
  * watched; all watched files together may receive $FP_ENOSPC_AFTER bytes through write(); a
  * write past that takes what still fits (a short count) and the next fails with ENOSPC, as a
  * full disk does. Every other file and fd is untouched. Test code only: not thread-safe beyond what the recorder
- * needs (one writer thread per file; a mutex guards the table). */
+ * needs (one writer thread per file; a mutex guards the table). fchmod: see below. */
 #define _GNU_SOURCE
 #include <dlfcn.h>
 #include <errno.h>
@@ -121,4 +121,18 @@ ssize_t write(int fd, const void *buf, size_t n)
     if (put > 0) used += put;
     pthread_mutex_unlock(&lock);
     return put;
+}
+
+/* With $FP_FCHMOD_EPERM set (non-empty), fchmod fails with EPERM for every descriptor, as on
+ * a file system without Unix modes (vfat, exFAT: a mode other than the mount's is refused). */
+int fchmod(int fd, mode_t mode)
+{
+    static int (*real)(int, mode_t);
+    const char *e = getenv("FP_FCHMOD_EPERM");
+    if (e && *e) {
+        errno = EPERM;
+        return -1;
+    }
+    if (!real) real = (int (*)(int, mode_t))dlsym(RTLD_NEXT, "fchmod");
+    return real(fd, mode);
 }

@@ -14,6 +14,8 @@
 #  5. a FIFO (and, as root, a device node) given as --out of run, pose and calibrate: 73 before
 #     the work, the FIFO kept; a symbolic link written through (the link kept); a FIFO given
 #     as an input (info, replay:, a take in `takes`' folder): refused at once, never waited on.
+#  6. a file system that refuses modes (vfat, exFAT: the shim's fchmod fails with EPERM): run
+#     --out, pose --out, calibrate --out and export -f pc2 still write their files whole.
 # Run from the repository root by ctest (FP_BUILD_DIR, FP_SHARED_DATA).
 # SPDX-License-Identifier: GPL-3.0-or-later
 set -u
@@ -163,6 +165,31 @@ rc=$?
 [[ $rc == 0 ]] && grep -q "not a regular file" "$tmp/takes.out" ||
     fail "takes over a folder holding a FIFO: exit $rc (124: it waited): $(cat "$tmp/takes.out")"
 echo "5. FIFOs as --out of run, pose, calibrate: 73, kept; $devnode; links written through; FIFO inputs 66"
+
+# ---- 6. no Unix modes (vfat): saves still made ------------------------------------------
+if [[ -f $shim ]]; then
+    nm=$tmp/nomodes
+    mkdir -p "$nm"
+    for cmd in "run --quiet --mesh $ict --input replay:$rec,fast=1 --duration 0.3 --out $nm/run.obj --take-dir $nm" \
+               "pose --mesh $ict --set jaw.open=0.3 --out $nm/pose.obj" \
+               "calibrate --input replay:$rec,fast=1 --out $nm/cal.json"; do
+        FP_FCHMOD_EPERM=1 LD_PRELOAD=$shim timeout 120 "$fp" $cmd >/dev/null 2>"$tmp/nm.err" ||
+            fail "'$cmd' where fchmod fails (EPERM): exit $?: $(cat "$tmp/nm.err")"
+    done
+    [[ $(vertices "$nm/run.obj") == 26719 && $(vertices "$nm/pose.obj") == 26719 ]] ||
+        fail "run/pose --out where fchmod fails: not the whole mesh"
+    grep -q '"mm_per_unit"' "$nm/cal.json" 2>/dev/null || fail "calibrate where fchmod fails: no file"
+    take=$(ls "$nm"/*.fptake 2>/dev/null | head -1)
+    if [[ -n $take ]]; then
+        FP_FCHMOD_EPERM=1 LD_PRELOAD=$shim "$fp" export "$take" -f pc2 -o "$nm/t.pc2" >/dev/null 2>"$tmp/nm.err" ||
+            fail "export pc2 where fchmod fails: exit $?: $(cat "$tmp/nm.err")"
+        [[ -s $nm/t.pc2 ]] || fail "export pc2 where fchmod fails: no file"
+    else
+        fail "run --take-dir where fchmod fails: no take"
+    fi
+    [[ -z $(find "$nm" -name '.*' -type f) ]] || fail "temporary files left where fchmod fails"
+    echo "6. fchmod refused (EPERM, as on vfat): run, pose, calibrate, export pc2 saved whole"
+fi
 
 if (( fails )); then echo "$fails failure(s)"; exit 1; fi
 echo "ok"

@@ -146,7 +146,7 @@ static int spawn_wait(char *const argv[], int in_fd, bool quiet)
  * on an output to it), 70 when no stream could be made. */
 static int open_output(const char *path, const char *stdio_mode, fp_file_output *o)
 {
-    int rc = fp_file_open_output(path, "", stdio_mode, FP_FILE_OUTPUT_MODE_REQUIRED, o);
+    int rc = fp_file_open_output(path, "", stdio_mode, 0, o);
     switch (rc < 0 ? o->failed : FP_FILE_STEP_NONE) {
     case FP_FILE_STEP_NONE: return FP_EXIT_OK;
     case FP_FILE_STEP_TARGET:
@@ -158,7 +158,7 @@ static int open_output(const char *path, const char *stdio_mode, fp_file_output 
     case FP_FILE_STEP_STREAM:
         fprintf(stderr, "facepuppet bench: %s: %s\n", o->path, strerror(-rc));
         return FP_EXIT_SOFTWARE;
-    default: /* the mode */
+    default:
         fprintf(stderr, "facepuppet bench: %s: cannot write it: %s\n", o->path, strerror(-rc));
         break;
     }
