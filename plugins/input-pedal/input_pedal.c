@@ -53,6 +53,7 @@ typedef struct pedal {
     /* The open pedal; only the thread touches these once started. */
     libusb_device_handle *handle;
     int iface;
+    bool detached;                   /* we took the interface from a kernel driver: give it back */
     uint8_t endpoint;
     fp_pedal_layout layout;
     uint16_t vid, pid;
@@ -253,6 +254,8 @@ static void close_pedal(pedal *p, bool report)
     } /* else: leak it rather than free memory libusb may still write (logged above) */
     p->transfer = NULL;
     libusb_release_interface(p->handle, p->iface); /* fails harmlessly when gone */
+    if (p->detached) libusb_attach_kernel_driver(p->handle, p->iface); /* the same */
+    p->detached = false;
     libusb_close(p->handle);
     p->handle = NULL;
     if (report) {
@@ -304,19 +307,34 @@ static int open_pedal(pedal *p, libusb_device *dev, uint16_t vid, uint16_t pid,
                  pid, bus, addr, libusb_strerror(r));
         return r;
     }
-    libusb_set_auto_detach_kernel_driver(h, 1);  /* NOT_SUPPORTED off Linux: harmless */
+    /* A kernel driver (usbhid) bound to the interface is detached by hand and given back at
+     * close, not through libusb_set_auto_detach_kernel_driver: that claims with
+     * USBDEVFS_DISCONNECT_CLAIM, then GETDRIVER and USBDEVFS_IOCTL(DISCONNECT), and fails the
+     * claim when the node answers those with ENOTTY, as umockdev's in-process handler of
+     * docs/devices.md's recipe does. A driver query that fails is taken as no driver. */
+    bool detached = false;
+    if (libusb_kernel_driver_active(h, iface) == 1) {
+        int d = libusb_detach_kernel_driver(h, iface);
+        if (d == 0)
+            detached = true;
+        else if (d != LIBUSB_ERROR_NOT_FOUND && d != LIBUSB_ERROR_NOT_SUPPORTED)
+            host_log(p, FP_LOG_WARNING, "cannot detach the kernel driver from interface %d of "
+                     "%04x:%04x: %s", iface, vid, pid, libusb_strerror(d));
+    }
     r = libusb_claim_interface(h, iface);
     if (r) {
         host_log(p, r == LIBUSB_ERROR_NO_DEVICE ? FP_LOG_DEBUG : FP_LOG_WARNING,
                  "cannot claim interface %d of %04x:%04x: %s%s", iface, vid, pid,
                  libusb_strerror(r),
                  r == LIBUSB_ERROR_BUSY ? " (is another program reading the pedal?)" : "");
+        if (detached) libusb_attach_kernel_driver(h, iface);
         libusb_close(h);
         return r;
     }
     struct libusb_transfer *t = libusb_alloc_transfer(0);
     if (!t) {
         libusb_release_interface(h, iface);
+        if (detached) libusb_attach_kernel_driver(h, iface);
         libusb_close(h);
         return LIBUSB_ERROR_NO_MEM;
     }
@@ -325,6 +343,7 @@ static int open_pedal(pedal *p, libusb_device *dev, uint16_t vid, uint16_t pid,
     p->handle = h;
     p->transfer = t;
     p->iface = iface;
+    p->detached = detached;
     p->endpoint = ep;
     p->layout = layout;
     p->vid = vid;
@@ -340,6 +359,7 @@ static int open_pedal(pedal *p, libusb_device *dev, uint16_t vid, uint16_t pid,
         libusb_free_transfer(t);
         p->transfer = NULL;
         libusb_release_interface(h, iface);
+        if (detached) libusb_attach_kernel_driver(h, iface);
         libusb_close(h);
         p->handle = NULL;
         return r;

@@ -32,6 +32,8 @@ struct emu {
     char devnode[64];
     char syspath[128];
     int unplugged;
+    int minimal;                   /* emu_set_minimal */
+    int driver_bound;              /* a kernel driver holds the interfaces (emu_plug: yes) */
 
     UMockdevIoctlData *flying[MAX_URBS];
     int nflying;
@@ -107,7 +109,27 @@ static gboolean handle_ioctl(UMockdevIoctlBase *handler, UMockdevIoctlClient *cl
         }
     }
 
+    if (e->minimal && request != USBDEVFS_SUBMITURB && request != USBDEVFS_REAPURB &&
+        request != USBDEVFS_REAPURBNDELAY && request != USBDEVFS_DISCARDURB &&
+        request != USBDEVFS_CLAIMINTERFACE) {
+        handled = FALSE; /* umockdev answers ENOTTY */
+        goto out;
+    }
     switch (request) {
+    case USBDEVFS_GETDRIVER: {
+        UMockdevIoctlData *d =
+            umockdev_ioctl_data_resolve(arg, 0, sizeof(struct usbdevfs_getdriver), NULL);
+        struct usbdevfs_getdriver *gd = (struct usbdevfs_getdriver *)d->data;
+        if (e->driver_bound) {
+            memset(gd->driver, 0, sizeof gd->driver);
+            memcpy(gd->driver, "usbhid", 6);
+            umockdev_ioctl_client_complete(client, 0, 0);
+        } else {
+            umockdev_ioctl_client_complete(client, -1, ENODATA);
+        }
+        g_object_unref(d);
+        break;
+    }
     case USBDEVFS_GET_CAPABILITIES: {
         UMockdevIoctlData *d = umockdev_ioctl_data_resolve(arg, 0, sizeof(uint32_t), NULL);
         uint32_t caps = USBDEVFS_CAP_BULK_CONTINUATION | USBDEVFS_CAP_NO_PACKET_SIZE_LIM |
@@ -125,6 +147,7 @@ static gboolean handle_ioctl(UMockdevIoctlBase *handler, UMockdevIoctlClient *cl
         e->stats.claim_flags = dc.flags;
         memcpy(e->stats.claim_driver, dc.driver, sizeof e->stats.claim_driver - 1);
         e->stats.claim_driver[sizeof e->stats.claim_driver - 1] = '\0';
+        e->driver_bound = 0;
         umockdev_ioctl_client_complete(client, 0, 0);
         break;
     }
@@ -142,9 +165,21 @@ static gboolean handle_ioctl(UMockdevIoctlBase *handler, UMockdevIoctlClient *cl
     case USBDEVFS_IOCTL: {
         struct usbdevfs_ioctl io;
         read_arg(arg, &io, sizeof io);
-        if (io.ioctl_code == (int)USBDEVFS_CONNECT)
+        if (io.ioctl_code == (int)USBDEVFS_CONNECT) {
             e->stats.reattaches++;
-        umockdev_ioctl_client_complete(client, 0, 0);
+            e->driver_bound = 1;
+            umockdev_ioctl_client_complete(client, 0, 0);
+        } else if (io.ioctl_code == (int)USBDEVFS_DISCONNECT) {
+            if (e->driver_bound) {
+                e->stats.detaches++;
+                e->driver_bound = 0;
+                umockdev_ioctl_client_complete(client, 0, 0);
+            } else {
+                umockdev_ioctl_client_complete(client, -1, ENODATA);
+            }
+        } else {
+            umockdev_ioctl_client_complete(client, -1, ENOTTY);
+        }
         break;
     }
     case USBDEVFS_CLEAR_HALT:
@@ -306,6 +341,7 @@ int emu_plug(emu *e, emu_kind kind, int devnum)
     e->devnum = devnum;
     snprintf(e->devnode, sizeof e->devnode, "%s", node);
     e->unplugged = 0;
+    e->driver_bound = 1;
     e->rhead = e->rcount = 0;
     memset(&e->stats, 0, sizeof e->stats);
     e->stats.claimed_interface = -1;
@@ -372,6 +408,13 @@ void emu_send(emu *e, const uint8_t *report, size_t len)
         e->rcount++;
         e->stats.queued = e->rcount;
     }
+    pthread_mutex_unlock(&e->lock);
+}
+
+void emu_set_minimal(emu *e, int on)
+{
+    pthread_mutex_lock(&e->lock);
+    e->minimal = on != 0;
     pthread_mutex_unlock(&e->lock);
 }
 

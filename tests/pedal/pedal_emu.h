@@ -5,8 +5,13 @@
  *
  * The testbed provides the sysfs device (descriptors, busnum, devnum) that libusb enumerates
  * and a usbfs node /dev/bus/usb/001/DDD whose ioctls (SUBMITURB, REAPURBNDELAY, DISCARDURB,
- * DISCONNECT_CLAIM, RELEASEINTERFACE, USBDEVFS_IOCTL(CONNECT), GET_CAPABILITIES) are answered
- * by a handler on umockdev's worker thread, as in libusb's own tests/umockdev.c. Reports
+ * CLAIMINTERFACE, DISCONNECT_CLAIM, RELEASEINTERFACE, GETDRIVER, USBDEVFS_IOCTL(DISCONNECT,
+ * CONNECT), GET_CAPABILITIES) are answered by a handler on umockdev's worker thread, as in
+ * libusb's own tests/umockdev.c; a kernel driver ("usbhid") is bound to the pedal's
+ * interfaces until the reader detaches it. With emu_set_minimal the handler answers only
+ * what docs/devices.md's in-process recipe covers (SUBMITURB, REAPURB(NDELAY), DISCARDURB,
+ * CLAIMINTERFACE), everything else failing with ENOTTY, as an outside emulator built from
+ * that recipe does. Reports
  * queued with emu_send complete the interrupt IN URB that the reader has in flight, one
  * report per URB. emu_unplug completes the in-flight URB with -ESHUTDOWN (as the kernel does
  * on disconnect), fails every later ioctl with ENODEV and removes the sysfs device.
@@ -33,6 +38,7 @@ typedef struct emu_stats {
     char claim_driver[16];     /* the driver named in DISCONNECT_CLAIM ("usbfs") */
     unsigned claim_flags;
     int releases;              /* USBDEVFS_RELEASEINTERFACE */
+    int detaches;              /* USBDEVFS_IOCTL(USBDEVFS_DISCONNECT): kernel driver off */
     int reattaches;            /* USBDEVFS_IOCTL(USBDEVFS_CONNECT): kernel driver back */
     int submits;               /* SUBMITURB accepted */
     int bad_submits;           /* SUBMITURB of the wrong type or endpoint */
@@ -59,6 +65,11 @@ void emu_send(emu *e, const uint8_t *report, size_t len);
 /** Take read and write permission on the plugged pedal's usbfs node away from everyone
  *  (mode 0000). Only effective on a process without CAP_DAC_OVERRIDE. Returns 0 or -1. */
 int emu_deny_access(emu *e);
+
+/** Answer only the ioctls of docs/devices.md's in-process recipe (SUBMITURB, REAPURB,
+ *  REAPURBNDELAY, DISCARDURB, CLAIMINTERFACE); every other one fails with ENOTTY. Takes
+ *  effect at once; off by default (emu_new). */
+void emu_set_minimal(emu *e, int on);
 
 /** A snapshot of the statistics. */
 emu_stats emu_get_stats(emu *e);
