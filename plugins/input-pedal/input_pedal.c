@@ -353,7 +353,21 @@ static int open_pedal(pedal *p, libusb_device *dev, uint16_t vid, uint16_t pid,
     p->mask = 0;
     p->errors = 0;
     p->gone = false;
-    r = libusb_submit_transfer(t);
+    /* The read's length: wMaxPacketSize (what the kernel and real pedals take). A umockdev
+     * replay (docs/devices.md) only completes a URB whose buffer length equals its script's
+     * buflen and fails any other submission with EIO, and a script written by hand may give
+     * the report's size or 64 instead: on EIO the other usual lengths are tried in turn (a
+     * real device never fails a submission that way, so this costs it nothing); the one
+     * taken stays for the resubmissions. */
+    const int lengths[] = {len, layout == FP_PEDAL_LAYOUT_VEC ? 2 : 9, 8, 64, 16, 32, 9, 2};
+    r = LIBUSB_ERROR_IO;
+    for (size_t i = 0; i < sizeof lengths / sizeof lengths[0] && r == LIBUSB_ERROR_IO; i++) {
+        bool tried = false;
+        for (size_t k = 0; k < i; k++) tried |= lengths[k] == lengths[i];
+        if (tried || lengths[i] > REPORT_MAX) continue;
+        t->length = lengths[i];
+        r = libusb_submit_transfer(t);
+    }
     if (r) {
         host_log(p, FP_LOG_WARNING, "cannot read %04x:%04x: %s", vid, pid, libusb_strerror(r));
         libusb_free_transfer(t);
