@@ -53,8 +53,8 @@
 #define REANCHOR_NS 1000000000LL   /* timetag mapping re-anchored beyond 1 s from arrival */
 #define STATUS_RETRY_NS 100000000LL /* a status event is retried for up to 100 ms */
 
-enum osc_format { FMT_FACEPUPPET, FMT_LEAP, FMT_MEDIAPIPE, FMT_VMC };
-static const char *const format_names[] = {"facepuppet", "leap", "mediapipe", "vmc"};
+enum osc_format { FMT_FACEPUPPET, FMT_LEAP, FMT_MEDIAPIPE, FMT_VMC, FMT_AUTO };
+static const char *const format_names[] = {"facepuppet", "leap", "mediapipe", "vmc", "auto"};
 enum { HANDS_LEFT = 1, HANDS_RIGHT = 2, HANDS_BOTH = 3 };
 
 static const char *const problem_names[FP_OSC_PROBLEMS] = {
@@ -608,7 +608,18 @@ static void handle_message(osc_input *o, unsigned char *data, size_t size, int64
     const char *types = lo_message_get_types(m);
     lo_arg **argv = lo_message_get_argv(m);
     if (!types) types = "";
-    switch (o->format) {
+    int fmt = o->format;
+    if (fmt == FMT_AUTO) { /* each message by its address space (they do not overlap) */
+        int slot, finger;
+        if (strncmp(path, "/facepuppet/", 12) == 0) fmt = FMT_FACEPUPPET;
+        else if (leap_address(path, &slot, &finger)) fmt = FMT_LEAP;
+        else if ((path[1] == 'l' || path[1] == 'r') && (path[2] == 'x' || path[2] == 'y' || path[2] == 'z') &&
+                 (path[3] == 0 || (path[3] == '/' && path[4] == 0)))
+            fmt = FMT_MEDIAPIPE;
+        else
+            count(o, FP_OSC_UNKNOWN_ADDRESS);
+    }
+    switch (fmt) {
     case FMT_FACEPUPPET: fmt_facepuppet(o, path, types, argv, t, recv_ns); break;
     case FMT_LEAP: fmt_leap(o, path, types, argv, t, recv_ns); break;
     case FMT_MEDIAPIPE: fmt_mediapipe(o, path, types, argv, t, recv_ns); break;
@@ -856,12 +867,13 @@ static const void *osc_get_extension(const fp_input *self, const char *id)
 /* Factory                                                                                */
 
 static const char usage_text[] =
-    "osc[:PORT][,format=facepuppet|leap|mediapipe][,bind=ADDR][,hand=left|right|both]\n"
+    "osc[:PORT][,format=auto|facepuppet|leap|mediapipe][,bind=ADDR][,hand=left|right|both]\n"
     "   [,timeout=SECONDS][,box=X0/Y0/Z0/X1/Y1/Z1][,width=MM][,aspect=H/W][,height=MM]\n"
     "   [,depth=MM][,mirror=1]\n"
     "  Hand tracking over OSC (UDP), decoded with liblo; address spaces in docs/osc.md.\n"
     "  PORT     UDP port (default 9000; 0 picks a free one, logged at start)\n"
-    "  format   facepuppet: /facepuppet/hand/{left,right}/{joints,angles,wrist}, /facepuppet/button\n"
+    "  format   auto (default): each message by its address, any of the three below\n"
+    "           facepuppet: /facepuppet/hand/{left,right}/{joints,angles,wrist}, /facepuppet/button\n"
     "           leap: /hand<s> i i f f f (palm), /finger<s>-<n> i i f f f (tips; the other\n"
     "             joints are estimated on the straight line from palm to tip)\n"
     "           mediapipe: /lx/ /ly/ [/lz/] /rx/ /ry/ [/rz/], 21 normalised floats each\n"
@@ -910,7 +922,7 @@ static int osc_create(const fp_host *host, const char *arg, const fp_param *para
             return -EINVAL;
         }
     }
-    int format = FMT_FACEPUPPET, hands = HANDS_BOTH;
+    int format = FMT_AUTO, hands = HANDS_BOTH;
     double timeout = 1.0, width = 400, aspect = 0.75, height = 200, depth = 0;
     bool mirror = false, have_box = false;
     float box[6] = {0};
@@ -920,15 +932,15 @@ static int osc_create(const fp_host *host, const char *arg, const fp_param *para
         int rc = 0;
         if (strcmp(k, "format") == 0) {
             format = -1;
-            for (int f = 0; f < 4; f++)
+            for (int f = 0; f <= FMT_AUTO; f++)
                 if (strcmp(v, format_names[f]) == 0) format = f;
             if (format == FMT_VMC) {
                 snprintf(err, errlen, "osc: format=vmc: the VMC protocol is not supported yet "
-                         "(see docs/osc.md); use facepuppet, leap or mediapipe");
+                         "(see docs/osc.md); use auto, facepuppet, leap or mediapipe");
                 return -ENOTSUP;
             }
             if (format < 0) {
-                snprintf(err, errlen, "osc: format=%s: expected facepuppet, leap or mediapipe", v);
+                snprintf(err, errlen, "osc: format=%s: expected auto, facepuppet, leap or mediapipe", v);
                 return -EINVAL;
             }
         } else if (strcmp(k, "bind") == 0) {

@@ -458,6 +458,46 @@ static void leap_palm_and_tips_equal_csv(void **state)
     close_fixture(&f);
 }
 
+/* The default format (auto) takes each message by its address: a Leap bridge's frame, a
+ * MediaPipe hand and a facepuppet button, as senders of docs/devices.md's formats send them
+ * to osc:PORT without a format key; an address of none of them is counted as unknown. */
+static void auto_format_takes_each_address_space(void **state)
+{
+    (void)state;
+    osc_fixture f;
+    open_fixture(&f, NULL, 256);
+    const fp_leap_joints_row *r = &rows[0];
+    lo_send(f.to, "/hand0", "iifff", 7, 0, r->palm_mm[0], r->palm_mm[1], r->palm_mm[2]);
+    for (int fi = 0; fi < FP_FINGERS; fi++) {
+        char path[32];
+        snprintf(path, sizeof path, "/finger0-%d", fi);
+        const float *tip = r->joints_mm[FP_JOINT_TIP(fi)];
+        lo_send(f.to, path, "iifff", 7, fi, tip[0], tip[1], tip[2]);
+    }
+    wait_packets(&f, 6);
+    assert_true(wait_type(f.h, FP_EVENT_JOINT_POSITIONS, -1, 1));
+    const fp_event *e = nth_positions(f.h, 0);
+    assert_memory_equal(e->positions.mm[FP_JOINT_PALM], r->palm_mm, sizeof r->palm_mm);
+    for (const char *axis = "xy"; *axis; axis++) { /* a right hand: 21 landmarks a coordinate */
+        lo_message m = lo_message_new();
+        for (int j = 0; j < 21; j++) lo_message_add_float(m, 0.3f + 0.01f * (float)j);
+        char path[8];
+        snprintf(path, sizeof path, "/r%c/", *axis);
+        assert_true(lo_send_message(f.to, path, m) > 0);
+        lo_message_free(m);
+    }
+    lo_send(f.to, "/facepuppet/button", "ii", 0, 1);
+    lo_send(f.to, "/somewhere/else", "f", 1.0f);
+    wait_packets(&f, 10);
+    assert_true(wait_type(f.h, FP_EVENT_JOINT_POSITIONS, -1, 2));
+    assert_true(wait_type(f.h, FP_EVENT_BUTTON, -1, 1));
+    fp_osc_stats st = stats(&f);
+    assert_int_equal(st.problems[FP_OSC_UNKNOWN_ADDRESS], 1);
+    for (int k = 0; k < FP_OSC_PROBLEMS; k++)
+        if (k != FP_OSC_UNKNOWN_ADDRESS) assert_int_equal(st.problems[k], 0);
+    close_fixture(&f);
+}
+
 /* format=mediapipe: landmarks made from CSV joints by the documented mapping (with
  * non-default keys) come back as those joints; the palm is the mean of wrist and MCPs. */
 static void mediapipe_landmarks_to_mm(void **state)
@@ -787,6 +827,7 @@ int main(void)
         cmocka_unit_test(facepuppet_angles_wrist_buttons),
         cmocka_unit_test(leap_palm_and_tips_equal_csv),
         cmocka_unit_test(mediapipe_landmarks_to_mm),
+        cmocka_unit_test(auto_format_takes_each_address_space),
         cmocka_unit_test(bundles_keep_timetags),
         cmocka_unit_test(stopped_sender_reported),
         cmocka_unit_test(hostile_packets_counted),
