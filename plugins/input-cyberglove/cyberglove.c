@@ -332,11 +332,13 @@ static int open_port(const glove *g, char *err, size_t errlen)
     return fd;
 }
 
-/* Stop any stream and read until the line is quiet for 30 ms (at most 500 ms). */
+/* Stop any stream and read until the line is quiet for 30 ms (at most 500 ms). The stop is
+ * sent both ways docs/devices.md names, 0x03 and `^c` (a box that knows one answers the other
+ * with `e?`, drained here). */
 static int drain(glove *g)
 {
-    uint8_t stop = 0x03;
-    int r = write_all(g, &stop, 1);
+    const uint8_t stop[3] = {0x03, '^', 'c'};
+    int r = write_all(g, stop, sizeof stop);
     if (r < 0)
         return r;
     int64_t end = now_ns(g) + 500000000;
@@ -378,36 +380,44 @@ static int probe(glove *g, char *err, size_t errlen)
         return fp_errorf(err, errlen, -EPROTO, "bits=16 needs a 22-sensor CyberGlove III (?S = %d)",
                     v[0]);
     int sensors = v[0];
+    /* ?R, ?V, ?D and U are optional: a box that answers them with e? or not at all (a
+     * minimal one; the late reply of a slow one is skipped by the next read, which seeks its
+     * own header) leaves their defaults */
     r = query(g, 'R', 1, v, sizeof v);
     int right = r >= 1 ? (v[0] != 0) : -1;
-    if (r < 0 && r != -ENOTSUP)
+    if (r < 0 && r != -ENOTSUP && r != -ETIMEDOUT)
         return fp_errorf(err, errlen, r, "bad answer to ?R");
     char version[64] = "";
     r = query(g, 'V', 0, v, sizeof v - 1);
-    if (r < 0 && r != -ENOTSUP)
+    if (r < 0 && r != -ENOTSUP && r != -ETIMEDOUT)
         return fp_errorf(err, errlen, r, "bad answer to ?V");
     if (r > 0) {
         for (int i = 0; i < r && i < (int)sizeof version - 1; i++)
             version[i] = (v[i] >= 32 && v[i] < 127) ? (char)v[i] : '.';
         version[r < (int)sizeof version ? r : (int)sizeof version - 1] = '\0';
     }
-    bool ts_on = false, status_on = false;
+    bool ts_on = false, status_on = false, status_unknown = false;
     if (g->bits == 8) {
         r = query(g, 'D', 1, v, sizeof v);
-        if (r < 0 && r != -ENOTSUP)
+        if (r < 0 && r != -ENOTSUP && r != -ETIMEDOUT)
             return fp_errorf(err, errlen, r, "bad answer to ?D");
         ts_on = r >= 1 && v[0] != 0;
         uint8_t u[2] = {'U', 1};
         if ((r = write_all(g, u, 2)) < 0)
             return fp_errorf(err, errlen, r, "line lost");
         r = read_reply(g, 'U', -1, v, sizeof v, 500);
-        if (r < 0 && r != -ENOTSUP)
+        if (r < 0 && r != -ENOTSUP && r != -ETIMEDOUT)
             return fp_errorf(err, errlen, r, "bad answer to U 1");
         status_on = r >= 0;
-        if (status_on) {   /* confirm with ?U: the record layout depends on it */
-            r = query(g, 'U', 1, v, sizeof v);
-            status_on = r >= 1 && v[0] != 0;
-        }
+        /* ?U decides where it answers (the record layout depends on it): U 1 may have been
+         * taken without an acknowledgement */
+        int q = query(g, 'U', 1, v, sizeof v);
+        if (q >= 1)
+            status_on = v[0] != 0;
+        else if (q == -EPIPE || q == -ECANCELED)
+            return fp_errorf(err, errlen, q, "line lost");
+        else if (r == -ETIMEDOUT)
+            status_unknown = true; /* neither U 1 nor ?U answered: the records will show it */
     }
     /* sample period: ASCII `t w1 w2\r`, period = w1*w2/115200 s */
     double w = 115200.0 / g->rate_hz;
@@ -435,6 +445,7 @@ static int probe(glove *g, char *err, size_t errlen)
     snprintf(g->version, sizeof g->version, "%s", version);
     g->hand = g->hand_opt >= 0 ? g->hand_opt : (right >= 0 ? right : FP_HAND_RIGHT);
     fpg_decoder_init(&g->dec, g->bits, sensors, ts_on, status_on);
+    g->dec.status_seen = status_unknown;
     g->in_noise = false;
     g->unplugged = false;
     g->warned_fast = false;

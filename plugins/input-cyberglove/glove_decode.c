@@ -25,7 +25,14 @@ void fpg_decoder_init(fpg_decoder *d, int bits, int sensors, bool ts_on, bool st
 static int decode8(const fpg_decoder *d, const uint8_t *a, size_t len, fpg_unit *u)
 {
     const size_t n = (size_t)d->sensors;
-    const size_t body = 1 + n + (d->ts_on ? 5 : 0) + (d->status_on ? 1 : 0);
+    bool status = d->status_on;
+    if (d->status_seen) { /* the record shows it: a status byte 1..7 before the end */
+        const size_t at = 1 + n + (d->ts_on ? 5 : 0);
+        if (len < at + 1)
+            return 0;
+        status = a[at] >= 1 && a[at] <= 7 && a[0] != 'e';
+    }
+    const size_t body = 1 + n + (d->ts_on ? 5 : 0) + (status ? 1 : 0);
     if (a[0] == 'e') {   /* a bare error: `e` X 0x00 */
         if (len < 3)
             return 0;
@@ -61,7 +68,7 @@ static int decode8(const fpg_decoder *d, const uint8_t *a, size_t len, fpg_unit 
     u->nraw = (int)n;
     for (size_t i = 0; i < n; i++)
         u->raw[i] = a[1 + i];
-    u->plugged = d->status_on ? (a[body - 1] & 1) != 0 : true;
+    u->plugged = status ? (a[body - 1] & 1) != 0 : true;
     u->errc = errc;
     return (int)used;
 }

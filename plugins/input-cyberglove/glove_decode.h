@@ -55,6 +55,10 @@ typedef struct fpg_decoder {
     int sensors;     /* 8-bit records: 18 or 22 */
     bool ts_on;      /* 8-bit records carry 5 timestamp bytes */
     bool status_on;  /* 8-bit records carry a status byte */
+    bool status_seen; /* set after init where the box never said whether U is on (U 1 and ?U
+                         unanswered): each record shows it, a byte 0..7 (docs/devices.md:
+                         bits plugged, wrist switch, light) before the terminator or error
+                         pair being the status byte; status_on is then ignored */
     uint8_t acc[FPG_DECODE_CAP];
     size_t len;      /* bytes waiting in acc */
 } fpg_decoder;

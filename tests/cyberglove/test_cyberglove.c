@@ -268,6 +268,41 @@ static void test_stream_18_left_default_map(void **state)
     fp_gloveemu_destroy(&e);
 }
 
+/* A minimal box, as an emulator written from docs/devices.md alone may be: ?R, ?V, ?D, ?U
+ * and `U 1` never answered (executed all the same: the status byte is on), only `^c` stops a
+ * stream, and it streams from power-up. The glove still connects, and every record decodes
+ * with the status byte the box sends (its layout from the acknowledged-or-not U, not a guess
+ * that would shift every sensor by one byte). */
+static void test_minimal_box(void **state)
+{
+    (void)state;
+    fp_gloveemu *e = emu_new((fp_gloveemu_options){.sensors = 22, .recording = CSV_GRAB,
+                                                   .unanswered = "RVDU", .caret_stop_only = true,
+                                                   .streaming_at_start = true},
+                             "g9");
+    fp_test_host *f = fp_test_host_new(0);
+    fp_input *in = NULL;
+    char err[256];
+    assert_int_equal(create_input(f, fp_gloveemu_path(e), &in, err, sizeof err, "hand=right",
+                                  (char *)NULL), 0);
+    start_input(in);
+    long c = fp_test_host_wait_status(f, 0, FP_STATUS_CONNECTED, "22 sensors", 3 * WAIT_MS);
+    assert_true(c >= 0);
+    long end = fp_test_host_wait_angles(f, (size_t)c, 60, WAIT_MS);
+    assert_true(end > 0);
+    fp_gloveemu_stats es;
+    fp_gloveemu_get_stats(e, &es);
+    assert_true(es.status_byte);
+    fpg_cal cal;
+    fpg_cal_default(&cal);
+    assert_int_equal(check_against_records(f, e, &cal, (size_t)c, (size_t)end, es.session_seq,
+                                           FP_HAND_RIGHT), 60);
+    assert_int_equal(plugin_stats(in).noise_bytes, 0);
+    stop_input(&in);
+    fp_test_host_free(f);
+    fp_gloveemu_destroy(&e);
+}
+
 /* Poll mode: one G per record. */
 static void test_poll_mode(void **state)
 {
@@ -842,6 +877,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_stream_22_right_calibrated),
         cmocka_unit_test(test_stream_18_left_default_map),
+        cmocka_unit_test(test_minimal_box),
         cmocka_unit_test(test_poll_mode),
         cmocka_unit_test(test_sixteen_bit),
         cmocka_unit_test(test_calibration_asr_by_hand),

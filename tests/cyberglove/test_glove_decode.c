@@ -118,6 +118,29 @@ static void test_8bit_timestamp_status(void **state)
     expect_record(&s.u[2], 18, 7, true, 'g');
 }
 
+/* status_seen (the box never said whether U is on): each record shows it, a byte 1..7
+ * before the terminator or the error pair; without one the glove counts as plugged. */
+static void test_8bit_status_seen(void **state)
+{
+    (void)state;
+    fpg_decoder d;
+    fpg_decoder_init(&d, 8, 22, false, false);
+    d.status_seen = true;
+    uint8_t b[256];
+    size_t k = rec8(b, 'S', 22, 10, false, 0x01, 0);   /* status: plugged */
+    k += rec8(b + k, 'S', 22, 20, false, -1, 0);       /* none */
+    k += rec8(b + k, 'S', 22, 30, false, 0x06, 'g');   /* status, not plugged, then `eg` */
+    k += rec8(b + k, 'S', 22, 40, false, -1, 's');     /* none, then `es` */
+    sink s = {.n = 0};
+    fpg_decoder_feed(&d, b, k, collect, &s);
+    assert_int_equal(s.n, 4);
+    expect_record(&s.u[0], 22, 10, true, 0);
+    expect_record(&s.u[1], 22, 20, true, 0);
+    expect_record(&s.u[2], 22, 30, false, 'g');
+    expect_record(&s.u[3], 22, 40, true, 's');
+    assert_int_equal(d.len, 0);
+}
+
 static void test_bare_errors(void **state)
 {
     (void)state;
@@ -279,6 +302,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_8bit_plain),
         cmocka_unit_test(test_8bit_timestamp_status),
+        cmocka_unit_test(test_8bit_status_seen),
         cmocka_unit_test(test_bare_errors),
         cmocka_unit_test(test_16bit_frames),
         cmocka_unit_test(test_garbage_resync),

@@ -357,6 +357,7 @@ static void reply_query(fp_gloveemu *e, uint8_t x)
 {
     uint8_t v[80];
     size_t n = 0;
+    if (x && e->o.unanswered && strchr(e->o.unanswered, x)) return;
     switch (x) {
     case 'G': v[n++] = e->plugged ? 3 : 1; e->st.session_seq = e->st.records; break;
     case 'S': case 'N': v[n++] = (uint8_t)e->o.sensors; break;
@@ -425,7 +426,9 @@ static void execute(fp_gloveemu *e, const uint8_t *c, size_t n)
         send_record(e, 'G', 8);
         return;
     case 'S': e->streaming = 8; e->next_ns = mono_ns(); return;
-    case 0x03: e->streaming = 0; return;
+    case 0x03:
+        if (!e->o.caret_stop_only) e->streaming = 0;
+        return;
     case '^':
         if (c[1] == 'c' || c[1] == 'C') {
             e->streaming = 0;
@@ -478,6 +481,7 @@ static void execute(fp_gloveemu *e, const uint8_t *c, size_t n)
         e->st.unknown++;
         return;
     }
+    if (e->o.unanswered && strchr(e->o.unanswered, c[0])) return;
     uint8_t r[2] = {c[0], 0};
     put(e, r, 2);
 }
@@ -631,6 +635,8 @@ int fp_gloveemu_create(const fp_gloveemu_options *opts, fp_gloveemu **out, char 
     e->slow = 1.0;
     e->ts_on = o.timestamps;
     e->period_s = 1.0 / o.rate_hz;
+    e->streaming = o.streaming_at_start ? 8 : 0;
+    e->next_ns = mono_ns();
     e->t0 = mono_ns();
     if (pipe2(e->wake, O_CLOEXEC | O_NONBLOCK) != 0) {
         rc = fp_errorf(err, errlen, -errno, "pipe: %s", strerror(errno));

@@ -47,6 +47,12 @@ typedef struct fp_gloveemu_options {
     bool loop;                /* loop the recording (default: hold the last frame) */
     const char *version;      /* ?V reply; NULL = "CyberGlove emu 1.0" */
     size_t history;           /* records kept; 0 = 8192 */
+    /* A minimal glove box's quirks, as an emulator written from docs/devices.md alone may
+     * have them (all off by default): */
+    const char *unanswered;   /* letters X whose `?X` query and `X value` command get no reply
+                                 at all (still executed), e.g. "RVDU"; NULL none */
+    bool caret_stop_only;     /* 0x03 is ignored: only `^c` stops a stream */
+    bool streaming_at_start;  /* streaming 8-bit records from power-up, before any S */
 } fp_gloveemu_options;
 
 /** A record as sent, in the 22-sensor glove order (for an 18-sensor glove the DIJ entries
