@@ -55,16 +55,18 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     if (size < 2) return 0;
     const int bits = data[0] & 1 ? 16 : 8, sensors = data[0] & 2 ? 22 : 18;
-    const bool ts_on = data[0] & 4, status_on = data[0] & 8;
+    const bool ts_on = data[0] & 4, status_on = data[0] & 8, status_seen = data[0] & 16;
     unsigned seed = data[1];
     data += 2;
     size -= 2;
     static fpg_decoder d;
     whole.n = whole.noise = chunked.n = chunked.noise = 0;
     fpg_decoder_init(&d, bits, sensors, ts_on, status_on);
+    d.status_seen = status_seen;
     fpg_decoder_feed(&d, data, size, on_unit, &whole);
     size_t pending_whole = d.len;
     fpg_decoder_init(&d, bits, sensors, ts_on, status_on);
+    d.status_seen = status_seen;
     for (size_t at = 0; at < size;) {
         seed = seed * 1103515245u + 12345u;
         size_t k = 1 + (seed >> 16) % 64;
