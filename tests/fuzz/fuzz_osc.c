@@ -41,9 +41,9 @@ static const fp_host host = {.size = sizeof(fp_host), .push_event = fake_push,
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     if (size < 1) return 0;
-    static const char *formats[3] = {"facepuppet", "leap", "mediapipe"};
+    static const char *formats[4] = {"facepuppet", "leap", "mediapipe", "auto"};
     static const char *hands[3] = {"both", "left", "right"};
-    fp_param params[3] = {{"format", formats[data[0] % 3]}, {"hand", hands[data[0] / 3 % 3]},
+    fp_param params[3] = {{"format", formats[data[0] % 4]}, {"hand", hands[data[0] / 4 % 3]},
                           {"mirror", data[0] & 0x80 ? "1" : "0"}};
     fp_input *in = NULL;
     char err[256];
