@@ -158,6 +158,51 @@ static void test_bad_csv(void **state)
     assert_int_equal(access(written, F_OK), 0); /* nothing lost: the result was saved */
 }
 
+/* Numbers in data files are decimals, as in options: strtod's hexadecimal ("0x1p3" read as
+ * 8) is refused with 65 and FILE:LINE:COLUMN and the column or field, in a Leap CSV (info
+ * and run), an event log and a CyberGlove calibration; the shared recordings still load. */
+static void test_decimal_data(void **state)
+{
+    (void)state;
+    char src[4200], line1[4096], line2[4096], text[16384], args[16384];
+    snprintf(src, sizeof src, "%s/hands/leap-motion/grab_joints_mm.csv", data);
+    FILE *in = fopen(src, "r");
+    assert_non_null(in);
+    assert_non_null(fgets(line1, sizeof line1, in));
+    assert_non_null(fgets(line2, sizeof line2, in));
+    fclose(in);
+    char *palm_x = line2; /* field 5 */
+    for (int k = 0; k < 4; k++) palm_x = strchr(palm_x, ',') + 1;
+    snprintf(text, sizeof text, "%s%.*s0x1p3%s", line1, (int)(palm_x - line2), line2,
+             strchr(palm_x, ','));
+    write_file("hex.csv", text);
+    char want[256];
+    snprintf(want, sizeof want, "hex.csv:2:%d: bad number \"0x1p3\" in column palm_x",
+             (int)(palm_x - line2) + 1);
+    assert_int_equal(fp("info hex.csv"), 65);
+    if (!strstr(out, want)) print_message("%s", out);
+    assert_non_null(strstr(out, want));
+    snprintf(args, sizeof args, "run -q --mesh %s --input replay:hex.csv,fast=1 --out d.obj", face());
+    assert_int_equal(fp(args), 65);
+    assert_non_null(strstr(out, want));
+    write_file("hex.fplog", "# facepuppet-eventlog 1\n100 wrist left 1 2 0x1p3 1 0 0 0\n");
+    assert_int_equal(fp("info hex.fplog"), 65);
+    if (!strstr(out, "hex.fplog:2:20: bad number \"0x1p3\" for a wrist coordinate in mm"))
+        print_message("%s", out);
+    assert_non_null(strstr(out, "hex.fplog:2:20: bad number \"0x1p3\" for a wrist coordinate in mm"));
+    write_file("hex.cal", "0 0.01 0\n3 0x1p-7 0\n");
+    assert_int_equal(fp("monitor --count 1 cyberglove:/dev/null,cal=hex.cal"), 65);
+    assert_non_null(strstr(out, "hex.cal:2: expected finite GAIN and OFFSET after sensor 3"));
+    /* the shared recordings read as before */
+    static const char *const recs[] = {"HandSplay-110fps", "Waiting-110fps", "grab", "three-claps"};
+    for (int r = 0; r < 4; r++)
+        for (int k = 0; k < 2; k++) {
+            snprintf(args, sizeof args, "info %s/hands/leap-motion/%s_%s.csv", data, recs[r],
+                     k ? "cyberglove_like_angles_deg" : "joints_mm");
+            assert_int_equal(fp(args), 0);
+        }
+}
+
 static void test_plugins(void **state)
 {
     (void)state;
@@ -460,7 +505,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_help_and_usage), cmocka_unit_test(test_decimal_options),
         cmocka_unit_test(test_corrupt_obj),
-        cmocka_unit_test(test_bad_csv),        cmocka_unit_test(test_plugins),
+        cmocka_unit_test(test_bad_csv),        cmocka_unit_test(test_decimal_data),
+        cmocka_unit_test(test_plugins),
         cmocka_unit_test(test_info),           cmocka_unit_test(test_missing_mesh),
         cmocka_unit_test(test_frames_out_and_monitor),
         cmocka_unit_test(test_deterministic),  cmocka_unit_test(test_refused_up_front),
