@@ -118,6 +118,37 @@ static void test_decimal_options(void **state)
     assert_int_equal(fp(args), 0);
 }
 
+/* Integer options are digits, with a '+' as fp_parse_decimal takes one: strtol/strtoull
+ * skipped a leading blank (and wrapped " -5" round to a huge count), (int) casts turned
+ * 4294967297 into 1, sscanf read "640x480x3" as 640x480. Each is 64 naming the option. */
+static void test_integer_options(void **state)
+{
+    (void)state;
+    static const char *const bad[][2] = {
+        {"live --frames ' 5'", "--frames must be a whole number > 0, got ' 5'"},
+        {"live --frames ' -5'", "--frames must be a whole number > 0, got ' -5'"},
+        {"live --frames 5e0", "--frames must be a whole number > 0, got '5e0'"},
+        {"live --size ' 640x480'", "--size must be WxH (16..16384), got ' 640x480'"},
+        {"live --size 640x480x3", "--size must be WxH (16..16384), got '640x480x3'"},
+        {"monitor --count ' 5' pedal", "--count must be a whole number > 0, got ' 5'"},
+        {"monitor --count 0x5 pedal", "--count must be a whole number > 0, got '0x5'"},
+        {"plugins check x.so --cycles ' 5'", "--cycles must be in 1..1000, got ' 5'"},
+        {"plugins check x.so --cycles 4294967297", "--cycles must be in 1..1000, got '4294967297'"},
+        {"export x.fptake --format pc2 --max-targets ' 5'", "--max-targets must be a whole number from 1 to 2147483647, got ' 5'"},
+        {"export x.fptake --format pc2 --max-targets 4294967297", "--max-targets must be a whole number from 1 to 2147483647, got '4294967297'"},
+        {"export x.fptake --format png-seq --size '640x 480'", "--size WxH, 16..8192 each, got '640x 480'"},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        assert_int_equal(fp(bad[i][0]), 64);
+        if (!strstr(out, bad[i][1])) print_message("%s: %s", bad[i][0], out);
+        assert_non_null(strstr(out, bad[i][1]));
+    }
+    char args[8400];
+    snprintf(args, sizeof args, "monitor --count +2 replay:%s/hands/leap-motion/grab_joints_mm.csv,fast=1",
+             data);
+    assert_int_equal(fp(args), 0);
+}
+
 static void test_corrupt_obj(void **state)
 {
     (void)state;
@@ -504,6 +535,7 @@ int main(void)
     if (!mkdtemp(tmp)) return 1;
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_help_and_usage), cmocka_unit_test(test_decimal_options),
+        cmocka_unit_test(test_integer_options),
         cmocka_unit_test(test_corrupt_obj),
         cmocka_unit_test(test_bad_csv),        cmocka_unit_test(test_decimal_data),
         cmocka_unit_test(test_plugins),

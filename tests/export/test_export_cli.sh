@@ -141,6 +141,11 @@ expect 64 "$fp" export "$take" --format fbx
 expect 64 "$fp" export "$take"
 expect 64 "$fp" export "$take" --format png-seq --size 10x10
 expect 64 "$fp" export "$take" --format pc2 --range 5
+# a frame index is digits (a '+' as in every number): strtoull skipped a blank
+expect 64 "$fp" export "$take" --format pc2 --range " 5-10"
+grep -q "range ' 5-10': ' 5' is neither a frame index nor a timecode" "$tmp/x.out" || { cat "$tmp/x.out"; fail "--range ' 5-10'"; }
+expect 64 "$fp" export "$take" --format pc2 --range "5- 10"
+expect 0 "$fp" export "$take" --format pc2 --range +5-+6 --out "$tmp/plus.pc2" -q
 expect 66 "$fp" export "$tmp/none.fptake" --format pc2
 expect 73 "$fp" export "$take" --format pc2 --out /proc/nope/x.pc2
 expect 64 "$fp" run "${pd[@]}" --mesh "$data/faces/ict-facekit/generic_neutral_mesh.obj" --input "replay:x.csv" --export x.fbx

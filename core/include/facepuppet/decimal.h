@@ -1,7 +1,8 @@
 /*
  * facepuppet/decimal.h: the one syntax of a number, wherever facepuppet reads one from text:
  * command-line options, plugin keys (plugin_util.h's fp_parse_decimal builds on it), and the
- * data files (Leap CSVs, event logs, CyberGlove calibrations, OBJ/PLY/OFF/STL meshes).
+ * data files (Leap CSVs, event logs, CyberGlove calibrations, OBJ/PLY/OFF/STL meshes); and
+ * the whole numbers of integer options (fp_parse_whole).
  * Header-only (C and C++), no allocation, reentrant, [any-thread]; it needs no other facepuppet
  * header, so a library that reads files includes it without the plugin ABI.
  *
@@ -10,6 +11,7 @@
 #ifndef FACEPUPPET_DECIMAL_H
 #define FACEPUPPET_DECIMAL_H
 
+#include <stdbool.h>
 #include <stddef.h>
 
 /** A decimal: an optional sign, digits with at most one '.' (at least one digit: "5",
@@ -35,6 +37,27 @@ static inline size_t fp_decimal_span(const char *v)
         }
     }
     return i;
+}
+
+/** A whole number, as an integer option reads one (a count, a size, a frame index): an
+ *  optional '+' (as fp_decimal_span takes one) then decimal digits, the whole of v: no blanks
+ *  (strtol skipped them), no '-' (strtoull wrapped it round), no '.', exponent or hexadecimal.
+ *  true with *out where its value is at most max; false otherwise, the caller naming the
+ *  option ("--frames must be a whole number > 0, got ' 5'"). [any-thread], no allocation. */
+static inline bool fp_parse_whole(const char *v, unsigned long long max, unsigned long long *out)
+{
+    if (!v) return false;
+    size_t i = v[0] == '+';
+    if (!(v[i] >= '0' && v[i] <= '9')) return false;
+    unsigned long long x = 0;
+    for (; v[i] >= '0' && v[i] <= '9'; i++) {
+        const unsigned d = (unsigned)(v[i] - '0');
+        if (d > max || x > (max - d) / 10) return false; /* beyond max, never wrapped */
+        x = x * 10 + d;
+    }
+    if (v[i]) return false;
+    *out = x;
+    return true;
 }
 
 #endif
