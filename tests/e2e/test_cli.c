@@ -149,6 +149,63 @@ static void test_integer_options(void **state)
     assert_int_equal(fp(args), 0);
 }
 
+/* Run a shell command in tmp (stdin empty); capture stderr+stdout into out; exit status. */
+static int sh(const char *command)
+{
+    char cmd[40000];
+    snprintf(cmd, sizeof cmd, "cd %s && timeout 60 %s </dev/null 2>&1", tmp, command);
+    FILE *p = popen(cmd, "r");
+    size_t n = fread(out, 1, sizeof out - 1, p);
+    out[n] = '\0';
+    int st = pclose(p);
+    return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+
+/* The tools read their numeric arguments as facepuppet's options do (fp_parse_decimal,
+ * fp_parse_whole): atof/atoi/strtof took hexadecimal, inf, nan and blanks, and atof("x") was
+ * 0, the default. Each bad one is 64 naming the argument. */
+static void test_tool_arguments(void **state)
+{
+    (void)state;
+    char csv[4200], cmd[16384];
+    snprintf(csv, sizeof csv, "%s/hands/leap-motion/grab_joints_mm.csv", data);
+    static const char *const bad[][3] = {
+        {"bin/fp-glove-emu", "--rate 0x10", "fp-glove-emu: --rate '0x10': expected a number of Hz"},
+        {"bin/fp-glove-emu", "--rate inf", "fp-glove-emu: --rate 'inf': expected a number of Hz"},
+        {"bin/fp-glove-emu", "--rate x", "fp-glove-emu: --rate 'x': expected a number of Hz"},
+        {"bin/fp-glove-emu", "--sensors ' 22'", "fp-glove-emu: --sensors ' 22': expected 18 or 22"},
+        {"bin/fp-glove-emu", "--sensors x", "fp-glove-emu: --sensors 'x': expected 18 or 22"},
+        {"bin/fp-osc-send", "--speed 0x2 CSV", "fp-osc-send: --speed '0x2': expected a number > 0"},
+        {"bin/fp-osc-send", "--speed nan CSV", "fp-osc-send: --speed 'nan': expected a number > 0"},
+        {"bin/fp-osc-send", "--frames ' 2' CSV", "fp-osc-send: --frames ' 2': expected a whole number"},
+        {"bin/fp-handcheck", "--tip-pad 0x1p-1", "fp-handcheck: --tip-pad: expected a number in [0, 1], got '0x1p-1'"},
+        {"bin/fp-handcheck", "--tip-pad ' .5'", "fp-handcheck: --tip-pad: expected a number in [0, 1], got ' .5'"},
+        {"bin/fp-selfx", "--away ' 1' a.obj b.obj", "fp-selfx: --away takes a ring count 0..8, got ' 1'"},
+        {"tests/fp-export-check", "a.fptake b.pc2 --max-error 0x1p-4", "fp-export-check: --max-error '0x1p-4': expected a number of mm > 0"},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        char args[4400];
+        const char *at = strstr(bad[i][1], "CSV");
+        snprintf(args, sizeof args, "%.*s%s", at ? (int)(at - bad[i][1]) : (int)strlen(bad[i][1]),
+                 bad[i][1], at ? csv : "");
+        snprintf(cmd, sizeof cmd, "%s/%s", build, bad[i][0]);
+        if (access(cmd, X_OK)) continue; /* fp-osc-send needs liblo, fp-selfx CGAL */
+        snprintf(cmd, sizeof cmd, "%s/%s %s", build, bad[i][0], args);
+        int rc = sh(cmd);
+        if (rc != 64 || !strstr(out, bad[i][2])) print_message("%s: %d %s", cmd, rc, out);
+        assert_int_equal(rc, 64);
+        assert_non_null(strstr(out, bad[i][2]));
+    }
+    /* decimal forms still read */
+    snprintf(cmd, sizeof cmd, "%s/bin/fp-osc-send", build);
+    if (!access(cmd, X_OK)) {
+        snprintf(cmd, sizeof cmd, "%s/bin/fp-osc-send --port 9 --speed +1E1 --frames +1 -q %s", build, csv);
+        assert_int_equal(sh(cmd), 0);
+    }
+    snprintf(cmd, sizeof cmd, "%s/bin/fp-handcheck --tip-pad .25 grab", build);
+    assert_int_equal(sh(cmd), 0);
+}
+
 static void test_corrupt_obj(void **state)
 {
     (void)state;
@@ -536,6 +593,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_help_and_usage), cmocka_unit_test(test_decimal_options),
         cmocka_unit_test(test_integer_options),
+        cmocka_unit_test(test_tool_arguments),
         cmocka_unit_test(test_corrupt_obj),
         cmocka_unit_test(test_bad_csv),        cmocka_unit_test(test_decimal_data),
         cmocka_unit_test(test_plugins),
