@@ -249,6 +249,8 @@ static void test_bad_csv(void **state)
 /* Numbers in data files are decimals, as in options: strtod's hexadecimal ("0x1p3" read as
  * 8) is refused with 65 and FILE:LINE:COLUMN and the column or field, in a Leap CSV (info
  * and run), an event log and a CyberGlove calibration; the shared recordings still load. */
+static int sh(const char *command);
+
 static void test_decimal_data(void **state)
 {
     (void)state;
@@ -281,6 +283,18 @@ static void test_decimal_data(void **state)
     write_file("hex.cal", "0 0.01 0\n3 0x1p-7 0\n");
     assert_int_equal(fp("monitor --count 1 cyberglove:/dev/null,cal=hex.cal"), 65);
     assert_non_null(strstr(out, "hex.cal:2: expected finite GAIN and OFFSET after sensor 3"));
+    /* fp-glove-emu's own angles CSV reader: the same, 65 */
+    static const char angles_header[] =
+        "frame,timestamp_us,hand_id,hand_type,thumb_rotation,thumb_mcp,thumb_ip,thumb_abduction,"
+        "index_mcp,index_pip,index_dip,middle_mcp,middle_pip,middle_dip,middle_index_abduction,"
+        "ring_mcp,ring_pip,ring_dip,ring_middle_abduction,pinky_mcp,pinky_pip,pinky_dip,"
+        "pinky_ring_abduction,palm_arch,wrist_pitch,wrist_yaw\n";
+    snprintf(text, sizeof text, "%s0,5,1,right,,0x1p3,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,,,\n",
+             angles_header);
+    write_file("hex_angles.csv", text);
+    snprintf(args, sizeof args, "%s/bin/fp-glove-emu --csv hex_angles.csv", build);
+    assert_int_equal(sh(args), 65);
+    assert_non_null(strstr(out, "hex_angles.csv:2: column 6 is not a number"));
     /* the shared recordings read as before */
     static const char *const recs[] = {"HandSplay-110fps", "Waiting-110fps", "grab", "three-claps"};
     for (int r = 0; r < 4; r++)

@@ -7,6 +7,8 @@
  * Prints the slave path (e.g. /dev/pts/5) on the first line of stdout, then serves until
  * SIGINT/SIGTERM or `quit`. Faults are typed on stdin, one a line:
  *   unplug | plug | pull | replug | garbage N | slow FACTOR | silent | answer | line | stats
+ * Exit 0; 64 a bad option; 65 a bad --csv recording or --cal calibration; 66 a file or the
+ * pty not opened.
  */
 #define _GNU_SOURCE
 #include <errno.h>
@@ -83,9 +85,9 @@ int main(int argc, char **argv)
     char err[512];
     fp_gloveemu *e = NULL;
     int rc = fp_gloveemu_create(&o, &e, err, sizeof err);
-    if (rc < 0) {
+    if (rc < 0) { /* 64 a bad option, 65 a bad --csv or --cal, 66 a file or pty not opened */
         fprintf(stderr, "fp-glove-emu: %s\n", err);
-        return 66;
+        return rc == -EINVAL ? 64 : rc == -EBADMSG || rc == -ERANGE ? 65 : 66;
     }
     char slave[64];
     fp_gloveemu_slave_path(e, slave, sizeof slave);
