@@ -429,7 +429,7 @@ static int export_main(int argc, char **argv)
                    (unsigned long long)k.frames, width, height, out, (double)k.bytes / 1e6);
         goto done;
     }
-    status = fp_app_export_close("facepuppet export", &k.x, fmt, out, max_error, quiet, stdout);
+    status = fp_app_export_close("facepuppet export", NULL, &k.x, fmt, out, max_error, quiet, stdout);
     if (!quiet && status == FP_EXIT_OK && (fmt == FP_EXPORT_GLTF || fmt == FP_EXPORT_GLB))
         printf("facepuppet export: %.6g mm per mesh unit; frame rate %u/%u%s\n", mm_per_unit,
                h->rate.num, h->rate.den, fps > 0 ? " (resampled)" : "");
