@@ -8,6 +8,8 @@
 #include "fp_error.h"
 #include "fp_file.h"
 
+#include <facepuppet/decimal.h> /* fp_decimal_span: the one syntax of a number */
+
 #include <errno.h>
 #include <fcntl.h>
 #include <inttypes.h>
@@ -503,6 +505,9 @@ static int parse_float(cursor *c, float *out, const char *what)
     if (!isfinite(v))
         return reader_fail(c->r, -EBADMSG, col_of(c, tok),
                            "%s is \"%s\", not a finite number", what, tok);
+    if (fp_decimal_span(tok) != (size_t)(end - tok)) /* hexadecimal ("0x1p3"): decimals only */
+        return reader_fail(c->r, -EBADMSG, col_of(c, tok), "bad number \"%s\" for %s",
+                           tok, what);
     *out = v;
     return 0;
 }

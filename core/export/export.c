@@ -155,10 +155,11 @@ int fp_export_begin(const fp_mesh *base, const fp_export_options *opt, fp_export
         !isfinite(opt->mm_per_unit))
         return fp_errorf(err, errlen, -EINVAL, "export: max error and mm per unit must be >= 0");
     if (strlen(opt->path) >= 4000)
-        return fp_errorf(err, errlen, -EINVAL, "export: output path too long");
+        return fp_errorf(err, errlen, -EINVAL, "output path too long (%zu bytes, at most 3999)",
+                         strlen(opt->path));
     fp_exporter *x = calloc(1, sizeof *x);
     if (!x)
-        return fp_errorf(err, errlen, -ENOMEM, "export: out of memory");
+        return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", opt->path);
     x->opt = *opt;
     if (x->opt.max_error_mm == 0)
         x->opt.max_error_mm = 0.1;
@@ -170,7 +171,7 @@ int fp_export_begin(const fp_mesh *base, const fp_export_options *opt, fp_export
     x->scratch = malloc(x->n * 3 * sizeof(float));
     if (!x->scratch) {
         free(x);
-        return fp_errorf(err, errlen, -ENOMEM, "export: out of memory");
+        return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", opt->path);
     }
     int rc = 0;
     switch (opt->format) {
@@ -272,13 +273,13 @@ int fp_export_add(fp_exporter *x, const float *positions, double time_s, char *e
             be32(x->scratch + i, positions + i);
         rc = put(x, x->scratch, 12 * n, err, errlen);
         if (!rc && keep_time(x, time_s - x->first_time))
-            rc = fp_errorf(err, errlen, -ENOMEM, "export: out of memory");
+            rc = fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", x->path);
         break;
     case FP_EXPORT_GLTF:
     case FP_EXPORT_GLB: {
         if (keep_time(x, time_s - x->first_time) ||
             grow((void **)&x->frame_start, &x->fs_cap, x->frames + 2, sizeof(size_t))) {
-            rc = fp_errorf(err, errlen, -ENOMEM, "export: out of memory");
+            rc = fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", x->path);
             break;
         }
         if (x->frames == 0)
@@ -291,12 +292,12 @@ int fp_export_add(fp_exporter *x, const float *positions, double time_s, char *e
             if (x->used + 1 > x->cap) {
                 size_t cap = x->cap;
                 if (grow((void **)&x->idx, &cap, x->used + 1, sizeof(uint32_t))) {
-                    rc = fp_errorf(err, errlen, -ENOMEM, "export: out of memory");
+                    rc = fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", x->path);
                     break;
                 }
                 float *d = realloc(x->disp, cap * 3 * sizeof(float));
                 if (!d) {
-                    rc = fp_errorf(err, errlen, -ENOMEM, "export: out of memory");
+                    rc = fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", x->path);
                     break;
                 }
                 x->disp = d;
@@ -368,14 +369,14 @@ static double recon_error(const float *D, size_t F, size_t m, const float *T, co
 }
 
 /* The F x m float matrix version (what the exporter holds). */
-static int compress_f(const float *D, size_t F, size_t m, double tol, size_t kmax, size_t *k_out,
-                      float **targets, float **weights, double *max_err, char *err,
-                      size_t errlen)
+static int compress_f(const char *who, const float *D, size_t F, size_t m, double tol,
+                      size_t kmax, size_t *k_out, float **targets, float **weights,
+                      double *max_err, char *err, size_t errlen)
 {
     *targets = NULL;
     *weights = NULL;
     if (F == 0 || m == 0 || F > 46340)
-        return fp_errorf(err, errlen, -EINVAL, "export: %zu frames of %zu values", F, m);
+        return fp_errorf(err, errlen, -EINVAL, "%s: %zu frames of %zu values", who, F, m);
     if (kmax == 0 || kmax > F)
         kmax = F;
     double *G = calloc(F * F, sizeof(double)), *ev = calloc(F, sizeof(double));
@@ -384,8 +385,8 @@ static int compress_f(const float *D, size_t F, size_t m, double tol, size_t kma
     double *v = malloc(m * sizeof(double));
     int rc = 0;
     if (!G || !ev || !R || !T || !W || !v) {
-        rc = fp_errorf(err, errlen, -ENOMEM, "export: out of memory (%zu frames x %zu values)",
-                       F, m);
+        rc = fp_errorf(err, errlen, -ENOMEM, "%s: out of memory (%zu frames x %zu values)",
+                       who, F, m);
         goto out;
     }
     /* Gram matrix G = D D^T (symmetric; both triangles filled) */
@@ -404,14 +405,14 @@ static int compress_f(const float *D, size_t F, size_t m, double tol, size_t kma
         lwork = info == 0 ? (int)q : 3 * n;
         double *work = malloc((size_t)lwork * sizeof(double));
         if (!work) {
-            rc = fp_errorf(err, errlen, -ENOMEM, "export: out of memory");
+            rc = fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", who);
             goto out;
         }
         dsyev_("V", "U", &n, G, &n, ev, work, &lwork, &info);
         free(work);
         if (info != 0) {
-            rc = fp_errorf(err, errlen, FP_ENUMERIC, "export: LAPACK dsyev failed (info %d)",
-                           info);
+            rc = fp_errorf(err, errlen, FP_ENUMERIC, "%s: LAPACK dsyev failed (info %d)",
+                           who, info);
             goto out;
         }
     }
@@ -485,7 +486,7 @@ static int compress_f(const float *D, size_t F, size_t m, double tol, size_t kma
     if (!Wk || !Tk) {
         free(Wk);
         free(Tk);
-        rc = fp_errorf(err, errlen, -ENOMEM, "export: out of memory");
+        rc = fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", who);
         goto out;
     }
     for (size_t f = 0; f < F; f++)
@@ -517,7 +518,7 @@ int fp_export_compress(const double *D, size_t F, size_t m, double tol, size_t k
         return fp_errorf(err, errlen, -ENOMEM, "export: out of memory");
     for (size_t i = 0; i < F * m; i++)
         Df[i] = (float)D[i];
-    int rc = compress_f(Df, F, m, tol, kmax, k_out, targets, weights, max_err, err, errlen);
+    int rc = compress_f("export", Df, F, m, tol, kmax, k_out, targets, weights, max_err, err, errlen);
     free(Df);
     if (rc == 0) {   /* the error against D as given (double), not its float32 copy */
         const size_t K = *k_out;
@@ -552,7 +553,7 @@ static int finish_gltf(fp_exporter *x, fp_export_result *res, char *err, size_t 
     /* the vertices any frame moved, and the dense F x 3M displacement matrix over them */
     uint32_t *col = malloc(n * sizeof(uint32_t));
     if (!col)
-        return fp_errorf(err, errlen, -ENOMEM, "export: out of memory");
+        return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", x->path);
     for (size_t v = 0; v < n; v++)
         col[v] = UINT32_MAX;
     size_t M = 0;
@@ -562,7 +563,7 @@ static int finish_gltf(fp_exporter *x, fp_export_result *res, char *err, size_t 
     uint32_t *moved = malloc((n ? n : 1) * sizeof(uint32_t));
     if (!moved) {
         free(col);
-        return fp_errorf(err, errlen, -ENOMEM, "export: out of memory");
+        return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", x->path);
     }
     for (size_t v = 0; v < n; v++)
         if (col[v] != UINT32_MAX) {
@@ -575,8 +576,8 @@ static int finish_gltf(fp_exporter *x, fp_export_result *res, char *err, size_t 
     float *T = NULL, *W = NULL, *targets = NULL;
     char **tnames = NULL;
     if (!D) {
-        rc = fp_errorf(err, errlen, -ENOMEM, "export: out of memory (%zu frames x %zu moved "
-                       "vertices)", F, M);
+        rc = fp_errorf(err, errlen, -ENOMEM, "%s: out of memory (%zu frames x %zu moved "
+                       "vertices)", x->path, F, M);
         goto out;
     }
     for (size_t f = 0; f < F; f++)
@@ -586,7 +587,7 @@ static int finish_gltf(fp_exporter *x, fp_export_result *res, char *err, size_t 
     const double tol = x->opt.max_error_mm / x->opt.mm_per_unit;
     size_t K = 0;
     double max_err = 0;
-    rc = compress_f(D, F, m, tol, x->opt.max_targets > 0 ? (size_t)x->opt.max_targets : 0, &K,
+    rc = compress_f(x->path, D, F, m, tol, x->opt.max_targets > 0 ? (size_t)x->opt.max_targets : 0, &K,
                     &T, &W, &max_err, err, errlen);
     if (rc)
         goto out;
@@ -595,7 +596,7 @@ static int finish_gltf(fp_exporter *x, fp_export_result *res, char *err, size_t 
     float *times = malloc(F * sizeof(float));
     if (!targets || !tnames || !times) {
         free(times);
-        rc = fp_errorf(err, errlen, -ENOMEM, "export: out of memory");
+        rc = fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", x->path);
         goto out;
     }
     for (size_t k = 0; k < K; k++)

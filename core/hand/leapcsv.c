@@ -7,6 +7,8 @@
 
 #include "fp_error.h"
 
+#include <facepuppet/decimal.h> /* fp_decimal_span: the one syntax of a number */
+
 #include <errno.h>
 #include <float.h>
 #include <locale.h>
@@ -191,6 +193,9 @@ static int parse_row(reader *r, fp_leapcsv_format fmt, long line, char *text, fp
         if (!isfinite(v) || fabs(v) > FLT_MAX)
             return fail(r, -EBADMSG, line, f.col[i], "\"%s\" in column %s is not a finite number",
                         s, fp_leapcsv_column_name(fmt, i));
+        if (fp_decimal_span(s) != (size_t)(end - s)) /* hexadecimal ("0x1p3"): decimals only */
+            return fail(r, -EBADMSG, line, f.col[i], "bad number \"%s\" in column %s", s,
+                        fp_leapcsv_column_name(fmt, i));
         row->value[k] = v;
         row->valuef[k] = strtof_l(s, NULL, r->c_locale);
         if (!isfinite(row->valuef[k])) /* a value just above FLT_MAX that rounds up */

@@ -2,6 +2,8 @@
 #include "mesh_internal.h"
 #include "fp_error.h"
 
+#include <facepuppet/decimal.h> /* fp_decimal_span: the one syntax of a number */
+
 #include <ctype.h>
 #include <errno.h>
 #include <float.h>
@@ -290,13 +292,18 @@ static int next_token(obj_line *l, const char **tok, size_t *toklen)
     return 1;
 }
 
+/* One number token: a decimal (fp_decimal_span, the one syntax of a number: C++ streams,
+ * OpenMesh's, read no more), or strtod's "inf"/"nan" words, which read as non-finite for the
+ * caller to name. Hexadecimal floats are malformed. */
 static int parse_number(const char *tok, size_t len, double *out)
 {
     char *e = NULL;
     errno = 0;
     double d = strtod(tok, &e);
-    if (e != tok + len || memchr(tok, 'x', len) || memchr(tok, 'X', len))
-        return 0; /* hexadecimal floats: C++ streams (OpenMesh) do not read them */
+    const char *w = tok + (*tok == '+' || *tok == '-');
+    const int word = *w == 'i' || *w == 'I' || *w == 'n' || *w == 'N';
+    if (e != tok + len || (!word && fp_decimal_span(tok) != len))
+        return 0;
     /* a value beyond float range reads as infinite (the mesh stores floats) */
     *out = isfinite(d) && fabs(d) > FLT_MAX ? (d > 0 ? INFINITY : -INFINITY) : d;
     return 1;
@@ -791,15 +798,6 @@ static int ply_type(const char *tok, size_t len)
     return -1;
 }
 
-/* A decimal number as C++ streams read it (no hex, no inf/nan words). */
-static int is_decimal(const char *tok, size_t len)
-{
-    for (size_t i = 0; i < len; i++)
-        if (!strchr("0123456789+-.eE", tok[i]))
-            return 0;
-    return 1;
-}
-
 /* Check one ASCII value of type `t`; *ival gets integers. 0 when fine, else an error code
  * with the message written. */
 static int ply_ascii_value(const char *path, size_t line, const char *tok, size_t len, int t,
@@ -833,7 +831,7 @@ static int ply_ascii_value(const char *path, size_t line, const char *tok, size_
     if (!isfinite(d) || fabs(d) > FLT_MAX)
         return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
                               "line %zu: non-finite value " TOK_FMT, line, TOK_ARG(tok, len));
-    if (!is_decimal(tok, len))
+    if (fp_decimal_span(buf) != len) /* a decimal, as C++ streams read it: no hexadecimal */
         return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
                               "line %zu: malformed number " TOK_FMT, line, TOK_ARG(tok, len));
     *ival = 0;
@@ -1241,7 +1239,7 @@ int fp__stl_ascii_scan(const char *path, const char *text, size_t len, char *err
         while (next_token(&l, &tok, &toklen)) {
             double d;
             const int parsed = parse_number(tok, toklen, &d);
-            if (!numbers || !parsed || !is_decimal(tok, toklen) || !isfinite(d) ||
+            if (!numbers || !parsed || !isfinite(d) ||
                 fabs(d) > FLT_MAX)
                 return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
                                       "line %zu: %s " TOK_FMT, t.line_no,

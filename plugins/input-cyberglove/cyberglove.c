@@ -831,14 +831,14 @@ static const char USAGE[] =
     "  bits     8 (default) or 16 (CyberGlove III USB: 1eu, 1S)\n"
     "  timeout  ms without a record before reconnecting (default 3 periods, at least 250)\n";
 
+/* A whole number in lo..hi (lo >= 0), as every integer option reads one (fp_parse_whole: an
+ * optional '+' and digits; strtol took a leading blank). */
 static int parse_int(const char *s, long lo, long hi, long *out)
 {
-    char *end;
-    errno = 0;
-    long v = strtol(s, &end, 10);
-    if (!*s || *end || errno || v < lo || v > hi)
+    unsigned long long v;
+    if (!fp_parse_whole(s, (unsigned long long)hi, &v) || v < (unsigned long long)lo)
         return -1;
-    *out = v;
+    *out = (long)v;
     return 0;
 }
 

@@ -8,6 +8,8 @@
 #include "fp_error.h"
 #include "fp_file.h"
 
+#include <facepuppet/decimal.h> /* fp_decimal_span: the one syntax of a number */
+
 #include <errno.h>
 #include <math.h>
 #include <stdbool.h>
@@ -52,13 +54,17 @@ static char *trim_line(char *s)
     return *s ? s : NULL;
 }
 
-/* Parse one double from *p, skipping leading blanks; accepts only finite values. */
+/* Parse one double from *p, skipping leading white space (as strtod did); accepts only a
+ * finite decimal (fp_decimal_span: no hexadecimal, inf or nan). */
 static int parse_num(char **p, double *out)
 {
-    char *end;
+    char *s = *p, *end;
+    while (*s == ' ' || *s == '\t' || *s == '\n' || *s == '\v' || *s == '\f' || *s == '\r')
+        s++;
+    const size_t n = fp_decimal_span(s);
     errno = 0;
-    double v = strtod(*p, &end);
-    if (end == *p || errno == ERANGE || !isfinite(v))
+    double v = n ? strtod(s, &end) : 0;
+    if (!n || end != s + n || errno == ERANGE || !isfinite(v)) /* ("0x10": strtod reads on) */
         return -1;
     *p = end;
     *out = v;

@@ -20,6 +20,8 @@
  *    raw step, OFFSET radians), `#` comments and blank lines allowed, each sensor at most
  *    once; sensors not listed keep the default map.
  *  - none (default map): raw 1..254 -> 0..90 degrees of flexion, linear.
+ * Numbers in both formats are finite decimals (facepuppet/decimal.h: no hexadecimal, inf or
+ * nan), as every number facepuppet reads.
  */
 #ifndef FP_GLOVE_CAL_H
 #define FP_GLOVE_CAL_H

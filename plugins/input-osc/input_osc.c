@@ -914,13 +914,12 @@ static int osc_create(const fp_host *host, const char *arg, const fp_param *para
     }
     long port = DEFAULT_PORT;
     if (arg && *arg) {
-        char *end = NULL;
-        errno = 0;
-        port = strtol(arg, &end, 10);
-        if (errno || !end || *end || port < 0 || port > 65535) {
+        unsigned long long p; /* digits, as every integer option (fp_parse_whole: no blank) */
+        if (!fp_parse_whole(arg, 65535, &p)) {
             snprintf(err, errlen, "osc:%s: PORT must be a number in 0..65535", arg);
             return -EINVAL;
         }
+        port = (long)p;
     }
     int format = FMT_AUTO, hands = HANDS_BOTH;
     double timeout = 1.0, width = 400, aspect = 0.75, height = 200, depth = 0;

@@ -784,6 +784,10 @@ static void test_bad_spec_and_cal(void **state)
     expect_create_error("/dev/null", "hand=both", "hand=both");
     expect_create_error("/dev/null", "rate=0", "rate=0");
     expect_create_error("/dev/null", "timeout=abc", "timeout=abc");
+    /* whole numbers as in every integer option: strtol took a leading blank */
+    expect_create_error("/dev/null", "baud= 115200", "baud= 115200");
+    expect_create_error("/dev/null", "timeout= 500", "timeout= 500");
+    expect_create_error("/dev/null", "timeout=5e2", "timeout=5e2");
     expect_create_error("/dev/null", "cal=/nonexistent/glove.cal", "/nonexistent/glove.cal");
     char p[256], kv[300], want[300];
     snprintf(p, sizeof p, "%s/bad.cal", tmpdir);

@@ -297,6 +297,52 @@ static void test_cal_beyond_float(void **state)
     rmdir(dir);
 }
 
+/* Numbers in a calibration are decimals, as in every option and data file: strtod's
+ * hexadecimal ("0x1p-7" read as 0.0078125), inf and nan are refused, in both formats; every
+ * decimal form, and a blank after the ':' (strtod skipped it), still reads. */
+static void test_cal_decimals(void **state)
+{
+    (void)state;
+    char dir[] = "/tmp/fp_glove_decode_XXXXXX", path[256], want[320], err[512];
+    assert_non_null(mkdtemp(dir));
+    snprintf(path, sizeof path, "%s/g.cal", dir);
+    fpg_cal cal;
+    static const char *const gain_offset[] = {"3 0x1p-7 0\n", "3 0.01 0X10\n", "3 inf 0\n",
+                                              "3 0.01 nan\n", "3 -infinity 0\n"};
+    for (size_t i = 0; i < sizeof gain_offset / sizeof gain_offset[0]; i++) {
+        char text[64];
+        snprintf(text, sizeof text, "0 0.01 0\n%s", gain_offset[i]);
+        fp_test_write_file(path, text);
+        assert_int_equal(fpg_cal_load(path, &cal, err, sizeof err), -EBADMSG);
+        snprintf(want, sizeof want, "%s:2: expected finite GAIN and OFFSET after sensor 3", path);
+        assert_string_equal(err, want);
+    }
+    static const char *const asr[] = {"0x1p-2:46 -0.5:164", "0.3:0x2e -0.5:164",
+                                      "0.3:46 nan:164", "0.3:46 -0.5:INF"};
+    for (size_t i = 0; i < sizeof asr / sizeof asr[0]; i++) {
+        char text[128];
+        snprintf(text, sizeof text, "0.3:46 -0.5:164\n%s\n", asr[i]);
+        fp_test_write_file(path, text);
+        assert_int_equal(fpg_cal_load(path, &cal, err, sizeof err), -EBADMSG);
+        snprintf(want, sizeof want, "%s:2: expected `rad1:raw1 rad2:raw2` (asr format), got \"%s\"",
+                 path, asr[i]);
+        assert_string_equal(err, want);
+    }
+    fp_test_write_file(path, "3 +.5E-1 -0\n4 1e-05 5.\n5\t-.25e1\t\t2E+0\n");
+    assert_int_equal(fpg_cal_load(path, &cal, err, sizeof err), 0);
+    assert_true(cal.gain[3] == 0.05f && cal.offset[3] == 0.0f && signbit(cal.offset[3]));
+    assert_true(cal.gain[4] == 1e-05f && cal.offset[4] == 5.0f);
+    assert_true(cal.gain[5] == -2.5f && cal.offset[5] == 2.0f);
+    char text[2048] = "";
+    for (int i = 0; i < FPG_SENSORS; i++) /* a blank after ':', as strtod allowed */
+        snprintf(text + strlen(text), sizeof text - strlen(text), "+0.5: 10 -.5:2E2\n");
+    fp_test_write_file(path, text);
+    assert_int_equal(fpg_cal_load(path, &cal, err, sizeof err), 0);
+    assert_float_equal(cal.gain[FPG_ASR_LINE_SENSOR[0]], -1.0 / 190, 1e-9);
+    unlink(path);
+    rmdir(dir);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -309,6 +355,7 @@ int main(void)
         cmocka_unit_test(test_split_reads),
         cmocka_unit_test(test_angles_finite),
         cmocka_unit_test(test_cal_beyond_float),
+        cmocka_unit_test(test_cal_decimals),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

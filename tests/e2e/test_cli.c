@@ -118,6 +118,94 @@ static void test_decimal_options(void **state)
     assert_int_equal(fp(args), 0);
 }
 
+/* Integer options are digits, with a '+' as fp_parse_decimal takes one: strtol/strtoull
+ * skipped a leading blank (and wrapped " -5" round to a huge count), (int) casts turned
+ * 4294967297 into 1, sscanf read "640x480x3" as 640x480. Each is 64 naming the option. */
+static void test_integer_options(void **state)
+{
+    (void)state;
+    static const char *const bad[][2] = {
+        {"live --frames ' 5'", "--frames must be a whole number > 0, got ' 5'"},
+        {"live --frames ' -5'", "--frames must be a whole number > 0, got ' -5'"},
+        {"live --frames 5e0", "--frames must be a whole number > 0, got '5e0'"},
+        {"live --size ' 640x480'", "--size must be WxH (16..16384), got ' 640x480'"},
+        {"live --size 640x480x3", "--size must be WxH (16..16384), got '640x480x3'"},
+        {"monitor --count ' 5' pedal", "--count must be a whole number > 0, got ' 5'"},
+        {"monitor --count 0x5 pedal", "--count must be a whole number > 0, got '0x5'"},
+        {"plugins check x.so --cycles ' 5'", "--cycles must be in 1..1000, got ' 5'"},
+        {"plugins check x.so --cycles 4294967297", "--cycles must be in 1..1000, got '4294967297'"},
+        {"export x.fptake --format pc2 --max-targets ' 5'", "--max-targets must be a whole number from 1 to 2147483647, got ' 5'"},
+        {"export x.fptake --format pc2 --max-targets 4294967297", "--max-targets must be a whole number from 1 to 2147483647, got '4294967297'"},
+        {"export x.fptake --format png-seq --size '640x 480'", "--size WxH, 16..8192 each, got '640x 480'"},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        assert_int_equal(fp(bad[i][0]), 64);
+        if (!strstr(out, bad[i][1])) print_message("%s: %s", bad[i][0], out);
+        assert_non_null(strstr(out, bad[i][1]));
+    }
+    char args[8400];
+    snprintf(args, sizeof args, "monitor --count +2 replay:%s/hands/leap-motion/grab_joints_mm.csv,fast=1",
+             data);
+    assert_int_equal(fp(args), 0);
+}
+
+/* Run a shell command in tmp (stdin empty); capture stderr+stdout into out; exit status. */
+static int sh(const char *command)
+{
+    char cmd[40000];
+    snprintf(cmd, sizeof cmd, "cd %s && timeout 60 %s </dev/null 2>&1", tmp, command);
+    FILE *p = popen(cmd, "r");
+    size_t n = fread(out, 1, sizeof out - 1, p);
+    out[n] = '\0';
+    int st = pclose(p);
+    return WIFEXITED(st) ? WEXITSTATUS(st) : -1;
+}
+
+/* The tools read their numeric arguments as facepuppet's options do (fp_parse_decimal,
+ * fp_parse_whole): atof/atoi/strtof took hexadecimal, inf, nan and blanks, and atof("x") was
+ * 0, the default. Each bad one is 64 naming the argument. */
+static void test_tool_arguments(void **state)
+{
+    (void)state;
+    char csv[4200], cmd[16384];
+    snprintf(csv, sizeof csv, "%s/hands/leap-motion/grab_joints_mm.csv", data);
+    static const char *const bad[][3] = {
+        {"bin/fp-glove-emu", "--rate 0x10", "fp-glove-emu: --rate '0x10': expected a number of Hz"},
+        {"bin/fp-glove-emu", "--rate inf", "fp-glove-emu: --rate 'inf': expected a number of Hz"},
+        {"bin/fp-glove-emu", "--rate x", "fp-glove-emu: --rate 'x': expected a number of Hz"},
+        {"bin/fp-glove-emu", "--sensors ' 22'", "fp-glove-emu: --sensors ' 22': expected 18 or 22"},
+        {"bin/fp-glove-emu", "--sensors x", "fp-glove-emu: --sensors 'x': expected 18 or 22"},
+        {"bin/fp-osc-send", "--speed 0x2 CSV", "fp-osc-send: --speed '0x2': expected a number > 0"},
+        {"bin/fp-osc-send", "--speed nan CSV", "fp-osc-send: --speed 'nan': expected a number > 0"},
+        {"bin/fp-osc-send", "--frames ' 2' CSV", "fp-osc-send: --frames ' 2': expected a whole number"},
+        {"bin/fp-handcheck", "--tip-pad 0x1p-1", "fp-handcheck: --tip-pad: expected a number in [0, 1], got '0x1p-1'"},
+        {"bin/fp-handcheck", "--tip-pad ' .5'", "fp-handcheck: --tip-pad: expected a number in [0, 1], got ' .5'"},
+        {"bin/fp-selfx", "--away ' 1' a.obj b.obj", "fp-selfx: --away takes a ring count 0..8, got ' 1'"},
+        {"tests/fp-export-check", "a.fptake b.pc2 --max-error 0x1p-4", "fp-export-check: --max-error '0x1p-4': expected a number of mm > 0"},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        char args[4400];
+        const char *at = strstr(bad[i][1], "CSV");
+        snprintf(args, sizeof args, "%.*s%s", at ? (int)(at - bad[i][1]) : (int)strlen(bad[i][1]),
+                 bad[i][1], at ? csv : "");
+        snprintf(cmd, sizeof cmd, "%s/%s", build, bad[i][0]);
+        if (access(cmd, X_OK)) continue; /* fp-osc-send needs liblo, fp-selfx CGAL */
+        snprintf(cmd, sizeof cmd, "%s/%s %s", build, bad[i][0], args);
+        int rc = sh(cmd);
+        if (rc != 64 || !strstr(out, bad[i][2])) print_message("%s: %d %s", cmd, rc, out);
+        assert_int_equal(rc, 64);
+        assert_non_null(strstr(out, bad[i][2]));
+    }
+    /* decimal forms still read */
+    snprintf(cmd, sizeof cmd, "%s/bin/fp-osc-send", build);
+    if (!access(cmd, X_OK)) {
+        snprintf(cmd, sizeof cmd, "%s/bin/fp-osc-send --port 9 --speed +1E1 --frames +1 -q %s", build, csv);
+        assert_int_equal(sh(cmd), 0);
+    }
+    snprintf(cmd, sizeof cmd, "%s/bin/fp-handcheck --tip-pad .25 grab", build);
+    assert_int_equal(sh(cmd), 0);
+}
+
 static void test_corrupt_obj(void **state)
 {
     (void)state;
@@ -156,6 +244,65 @@ static void test_bad_csv(void **state)
     char written[512];
     snprintf(written, sizeof written, "%s/t.obj", tmp);
     assert_int_equal(access(written, F_OK), 0); /* nothing lost: the result was saved */
+}
+
+/* Numbers in data files are decimals, as in options: strtod's hexadecimal ("0x1p3" read as
+ * 8) is refused with 65 and FILE:LINE:COLUMN and the column or field, in a Leap CSV (info
+ * and run), an event log and a CyberGlove calibration; the shared recordings still load. */
+static int sh(const char *command);
+
+static void test_decimal_data(void **state)
+{
+    (void)state;
+    char src[4200], line1[4096], line2[4096], text[16384], args[16384];
+    snprintf(src, sizeof src, "%s/hands/leap-motion/grab_joints_mm.csv", data);
+    FILE *in = fopen(src, "r");
+    assert_non_null(in);
+    assert_non_null(fgets(line1, sizeof line1, in));
+    assert_non_null(fgets(line2, sizeof line2, in));
+    fclose(in);
+    char *palm_x = line2; /* field 5 */
+    for (int k = 0; k < 4; k++) palm_x = strchr(palm_x, ',') + 1;
+    snprintf(text, sizeof text, "%s%.*s0x1p3%s", line1, (int)(palm_x - line2), line2,
+             strchr(palm_x, ','));
+    write_file("hex.csv", text);
+    char want[256];
+    snprintf(want, sizeof want, "hex.csv:2:%d: bad number \"0x1p3\" in column palm_x",
+             (int)(palm_x - line2) + 1);
+    assert_int_equal(fp("info hex.csv"), 65);
+    if (!strstr(out, want)) print_message("%s", out);
+    assert_non_null(strstr(out, want));
+    snprintf(args, sizeof args, "run -q --mesh %s --input replay:hex.csv,fast=1 --out d.obj", face());
+    assert_int_equal(fp(args), 65);
+    assert_non_null(strstr(out, want));
+    write_file("hex.fplog", "# facepuppet-eventlog 1\n100 wrist left 1 2 0x1p3 1 0 0 0\n");
+    assert_int_equal(fp("info hex.fplog"), 65);
+    if (!strstr(out, "hex.fplog:2:20: bad number \"0x1p3\" for a wrist coordinate in mm"))
+        print_message("%s", out);
+    assert_non_null(strstr(out, "hex.fplog:2:20: bad number \"0x1p3\" for a wrist coordinate in mm"));
+    write_file("hex.cal", "0 0.01 0\n3 0x1p-7 0\n");
+    assert_int_equal(fp("monitor --count 1 cyberglove:/dev/null,cal=hex.cal"), 65);
+    assert_non_null(strstr(out, "hex.cal:2: expected finite GAIN and OFFSET after sensor 3"));
+    /* fp-glove-emu's own angles CSV reader: the same, 65 */
+    static const char angles_header[] =
+        "frame,timestamp_us,hand_id,hand_type,thumb_rotation,thumb_mcp,thumb_ip,thumb_abduction,"
+        "index_mcp,index_pip,index_dip,middle_mcp,middle_pip,middle_dip,middle_index_abduction,"
+        "ring_mcp,ring_pip,ring_dip,ring_middle_abduction,pinky_mcp,pinky_pip,pinky_dip,"
+        "pinky_ring_abduction,palm_arch,wrist_pitch,wrist_yaw\n";
+    snprintf(text, sizeof text, "%s0,5,1,right,,0x1p3,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,,,\n",
+             angles_header);
+    write_file("hex_angles.csv", text);
+    snprintf(args, sizeof args, "%s/bin/fp-glove-emu --csv hex_angles.csv", build);
+    assert_int_equal(sh(args), 65);
+    assert_non_null(strstr(out, "hex_angles.csv:2: column 6 is not a number"));
+    /* the shared recordings read as before */
+    static const char *const recs[] = {"HandSplay-110fps", "Waiting-110fps", "grab", "three-claps"};
+    for (int r = 0; r < 4; r++)
+        for (int k = 0; k < 2; k++) {
+            snprintf(args, sizeof args, "info %s/hands/leap-motion/%s_%s.csv", data, recs[r],
+                     k ? "cyberglove_like_angles_deg" : "joints_mm");
+            assert_int_equal(fp(args), 0);
+        }
 }
 
 static void test_plugins(void **state)
@@ -459,8 +606,11 @@ int main(void)
     if (!mkdtemp(tmp)) return 1;
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_help_and_usage), cmocka_unit_test(test_decimal_options),
+        cmocka_unit_test(test_integer_options),
+        cmocka_unit_test(test_tool_arguments),
         cmocka_unit_test(test_corrupt_obj),
-        cmocka_unit_test(test_bad_csv),        cmocka_unit_test(test_plugins),
+        cmocka_unit_test(test_bad_csv),        cmocka_unit_test(test_decimal_data),
+        cmocka_unit_test(test_plugins),
         cmocka_unit_test(test_info),           cmocka_unit_test(test_missing_mesh),
         cmocka_unit_test(test_frames_out_and_monitor),
         cmocka_unit_test(test_deterministic),  cmocka_unit_test(test_refused_up_front),

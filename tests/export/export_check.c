@@ -6,11 +6,13 @@
  *                evaluated at each frame's time (its own sampler interpolation), positions
  *                base + sum w_k target_k in float32, each glTF vertex against its mesh vertex,
  *                within MM millimetres (mm per unit from fp_take_player_mm_per_unit).
- * Prints one line of figures; exit 0 when everything holds, 1 otherwise, 2 on usage. */
+ * Prints one line of figures; exit 0 when everything holds, 1 otherwise, 64 on usage (a bad
+ * or unknown option named). */
 #define _GNU_SOURCE
 #include "fp_take_player.h"
 #include "fp_mesh.h"
 #include "gltf_anim.h"
+#include <facepuppet/plugin_util.h> /* fp_parse_decimal: numbers as in every option */
 
 #include <math.h>
 #include <stdio.h>
@@ -41,12 +43,21 @@ int main(int argc, char **argv)
 {
     if (argc < 3) {
         fprintf(stderr, "usage: fp-export-check TAKE FILE [--max-error MM]\n");
-        return 2;
+        return 64;
     }
     const char *take = argv[1], *file = argv[2];
     double max_mm = 0.1;
-    for (int i = 3; i + 1 < argc; i += 2)
-        if (!strcmp(argv[i], "--max-error")) max_mm = atof(argv[i + 1]);
+    for (int i = 3; i < argc; i += 2) {
+        if (strcmp(argv[i], "--max-error") || i + 1 == argc) {
+            fprintf(stderr, "fp-export-check: unknown or incomplete option '%s'\n", argv[i]);
+            return 64;
+        }
+        if (!fp_parse_decimal(argv[i + 1], &max_mm) || !(max_mm > 0)) {
+            fprintf(stderr, "fp-export-check: --max-error '%s': expected a number of mm > 0\n",
+                    argv[i + 1]);
+            return 64;
+        }
+    }
     char err[2048];
     fp_plugin_path path;
     const char *dir = getenv("FP_BUILD_DIR");

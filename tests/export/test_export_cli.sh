@@ -141,7 +141,31 @@ expect 64 "$fp" export "$take" --format fbx
 expect 64 "$fp" export "$take"
 expect 64 "$fp" export "$take" --format png-seq --size 10x10
 expect 64 "$fp" export "$take" --format pc2 --range 5
+# a frame index is digits (a '+' as in every number): strtoull skipped a blank
+expect 64 "$fp" export "$take" --format pc2 --range " 5-10"
+grep -q "range ' 5-10': ' 5' is neither a frame index nor a timecode" "$tmp/x.out" || { cat "$tmp/x.out"; fail "--range ' 5-10'"; }
+expect 64 "$fp" export "$take" --format pc2 --range "5- 10"
+expect 0 "$fp" export "$take" --format pc2 --range +5-+6 --out "$tmp/plus.pc2" -q
 expect 66 "$fp" export "$tmp/none.fptake" --format pc2
+# A write that fails (over the file size limit, write() gets EFBIG) names the file once, after
+# the command's one prefix, in every format: glb and gltf said "facepuppet export: export:
+# FILE: write failed: ...". play --export names its option, as on opening.
+small=$(ls "$tmp"/mediapipe-canonical/takes/*.fptake)
+for fmt in glb gltf pc2 mdd; do
+    ( ulimit -f 1; trap '' XFSZ; exec "$fp" export "$small" --format $fmt --out "$tmp/big.$fmt" -q ) \
+        >"$tmp/x.out" 2>&1
+    rc=$?
+    [ $rc -eq 73 ] || { cat "$tmp/x.out"; fail "$fmt over the file size limit: exit $rc, want 73"; }
+    grep -qx "facepuppet export: $tmp/big.$fmt: write failed: File too large.*" "$tmp/x.out" ||
+        { cat "$tmp/x.out"; fail "$fmt: not 'facepuppet export: FILE: write failed: ...'"; }
+    [ ! -e "$tmp/big.$fmt" ] || fail "$fmt: a file was left over the file size limit"
+done
+( ulimit -f 1; trap '' XFSZ; exec "$fp" play "${pd[@]}" "$small" --export "$tmp/big.glb" -q ) >"$tmp/x.out" 2>&1
+rc=$?
+[ $rc -eq 73 ] || { cat "$tmp/x.out"; fail "play --export over the file size limit: exit $rc, want 73"; }
+grep -qx "facepuppet play: --export: $tmp/big.glb: write failed: File too large.*" "$tmp/x.out" ||
+    { cat "$tmp/x.out"; fail "play --export: not 'facepuppet play: --export: FILE: write failed: ...'"; }
+echo "a failed write: one prefix and the file, in glb, gltf, pc2, mdd and play --export"
 expect 73 "$fp" export "$take" --format pc2 --out /proc/nope/x.pc2
 expect 64 "$fp" run "${pd[@]}" --mesh "$data/faces/ict-facekit/generic_neutral_mesh.obj" --input "replay:x.csv" --export x.fbx
 [ ! -e /proc/nope/x.pc2 ] || true

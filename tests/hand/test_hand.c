@@ -392,6 +392,35 @@ static void test_csv_errors(void **state)
     fp_test_write_file(path, text);
     assert_int_equal(fp_leapcsv_read_angles(path, &rows, &n, err, sizeof err), -EBADMSG);
     assert_non_null(strstr(err, "a.csv:2:14: \"1e39\" in column thumb_mcp is not a finite number"));
+    /* numbers are decimals, as in every option: strtod's hexadecimal was read ("0x1p3" as 8)
+     * and a leading blank skipped, now each is a bad number; inf and nan are not finite */
+    static const struct { const char *value, *says; } nondecimal[] = {
+        {"0x1p3", "a.csv:2:14: bad number \"0x1p3\" in column thumb_mcp"},
+        {"0X10", "a.csv:2:14: bad number \"0X10\" in column thumb_mcp"},
+        {"-0x1.8p1", "a.csv:2:14: bad number \"-0x1.8p1\" in column thumb_mcp"},
+        {" 1", "a.csv:2:14: bad number \" 1\" in column thumb_mcp"},
+        {"inf", "a.csv:2:14: \"inf\" in column thumb_mcp is not a finite number"},
+        {"-Infinity", "a.csv:2:14: \"-Infinity\" in column thumb_mcp is not a finite number"},
+        {"nan", "a.csv:2:14: \"nan\" in column thumb_mcp is not a finite number"},
+    };
+    for (size_t i = 0; i < sizeof nondecimal / sizeof nondecimal[0]; i++) {
+        snprintf(text, sizeof text, "%s0,5,1,right,,%s,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,,,\n",
+                 hdr, nondecimal[i].value);
+        fp_test_write_file(path, text);
+        assert_int_equal(fp_leapcsv_read_angles(path, &rows, &n, err, sizeof err), -EBADMSG);
+        if (!strstr(err, nondecimal[i].says)) fail_msg("%s: \"%s\"", nondecimal[i].value, err);
+    }
+    /* every decimal form reads */
+    snprintf(text, sizeof text, "%s0,5,1,right,,+1.5,.5,5.,-0,1e-05,2E+2,-.25e1,8,9,10,11,12,13,14,15,16,17,18,,,\n",
+             hdr);
+    fp_test_write_file(path, text);
+    assert_int_equal(fp_leapcsv_read_angles(path, &rows, &n, err, sizeof err), 0);
+    assert_int_equal(n, 1);
+    const float want_deg[] = {1.5f, 0.5f, 5.0f, -0.0f, 1e-05f, 200.0f, -2.5f};
+    for (int k = 0; k < 7; k++) assert_true(rows[0].degrees[1 + k] == want_deg[k]);
+    assert_true(signbit(rows[0].degrees[4]));
+    free(rows);
+    rows = NULL;
     snprintf(text, sizeof text, "%s%s%s", hdr, good, "1,4,1,right,,1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,,,\n");
     fp_test_write_file(path, text);
     assert_int_equal(fp_leapcsv_read_angles(path, &rows, &n, err, sizeof err), -EBADMSG);

@@ -6,6 +6,7 @@
 #include <facepuppet/mapping_util.h>
 
 #include <errno.h>
+#include <limits.h>
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -347,6 +348,23 @@ static void test_decimal_keys(void **state)
     for (size_t i = 0; i < sizeof badlist / sizeof badlist[0]; i++)
         assert_int_equal(fp_parse_decimal_list(badlist[i], ',', v, 3), 0);
     assert_int_equal(fp_parse_decimal_list("1 2 3 4", ' ', v, 3), 0);
+    /* whole numbers (decimal.h's fp_parse_whole, the integer options'): an optional '+' and
+     * digits, at most the bound, never wrapped round */
+    unsigned long long w = 0;
+    assert_true(fp_parse_whole("0", 10, &w) && w == 0);
+    assert_true(fp_parse_whole("+7", 10, &w) && w == 7);
+    assert_true(fp_parse_whole("010", 10, &w) && w == 10);
+    assert_true(fp_parse_whole("18446744073709551615", ULLONG_MAX, &w) && w == ULLONG_MAX);
+    assert_true(fp_parse_whole("2147483647", INT_MAX, &w) && w == INT_MAX);
+    static const struct { const char *text; unsigned long long max; } notwhole[] = {
+        {"11", 10}, {"7", 5}, {"18446744073709551616", ULLONG_MAX}, {"2147483648", INT_MAX},
+        {"4294967297", INT_MAX}, {"", 10}, {" 5", 10}, {"5 ", 10}, {"\t5", 10}, {"-5", 10},
+        {"-0", 10}, {"5.0", 10}, {"5e0", 10}, {"0x5", 10}, {"+", 10}, {"++5", 10}, {"+-5", 10}};
+    for (size_t i = 0; i < sizeof notwhole / sizeof notwhole[0]; i++) {
+        w = 42;
+        assert_false(fp_parse_whole(notwhole[i].text, notwhole[i].max, &w));
+        assert_true(w == 42);
+    }
 
     /* the mappings' number keys */
     rig r;

@@ -707,6 +707,51 @@ static void test_error_inf_coordinate(void **state)
                       FP_MESH_ERR_FORMAT, "line 2");
 }
 
+/* Coordinates are decimals (facepuppet/decimal.h, as every number facepuppet reads): strtod's
+ * hexadecimal floats are malformed in each text format, inf and nan non-finite (above); every
+ * decimal form in the wild loads ("1e-05", "-0", "+.5E+1", "1.", ".5"). */
+static void test_decimal_coordinates(void **state)
+{
+    (void)state;
+    static const char ply_head[] = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                                   "property float y\nproperty float z\nelement face 1\n"
+                                   "property list uchar int vertex_indices\nend_header\n";
+    char text[1024];
+    expect_load_error(write_tmp("hex.obj", "v 0 0 0\nv 1 0x1p3 0\nv 0 1 0\nf 1 2 3\n"),
+                      FP_MESH_ERR_FORMAT, "line 2: malformed number '0x1p3' in 'v' statement");
+    expect_load_error(write_tmp("hex.off", "OFF\n3 1 0\n0 0 0\n1 -0X10 0\n0 1 0\n3 0 1 2\n"),
+                      FP_MESH_ERR_FORMAT, "line 4: malformed number '-0X10' in vertex 1");
+    snprintf(text, sizeof text, "%s0 0 0\n1 0x1p3 0\n0 1 0\n3 0 1 2\n", ply_head);
+    expect_load_error(write_tmp("hex.ply", text), FP_MESH_ERR_FORMAT,
+                      "line 11: malformed number '0x1p3'");
+    expect_load_error(write_tmp("hex.stl", "solid t\nfacet normal 0 0 1\nouter loop\n"
+                                           "vertex 0 0 0\nvertex 1 0x1p3 0\nvertex 0 1 0\n"
+                                           "endloop\nendfacet\nendsolid t\n"),
+                      FP_MESH_ERR_FORMAT, "line 5: malformed value '0x1p3'");
+    static const float want[9] = {1e-05f, -0.0f, 5.0f, 1.0f, 0.5f, -2.0f, 0.0f, 1.0f, 0.0f};
+    const char *obj = write_tmp("forms.obj", "v 1e-05 -0 +.5E+1\nv 1. .5 -2e0\nv 0 1 0\nf 1 2 3\n");
+    const char *off = write_tmp("forms.off", "OFF\n3 1 0\n1e-05 -0 +.5E+1\n1. .5 -2e0\n0 1 0\n3 0 1 2\n");
+    snprintf(text, sizeof text, "%s1e-05 -0 +.5E+1\n1. .5 -2e0\n0 1 0\n3 0 1 2\n", ply_head);
+    const char *ply = write_tmp("forms.ply", text);
+    const char *paths[] = {obj, off, ply};
+    for (int k = 0; k < 3; k++) {
+        fp_mesh *m = NULL;
+        int rc = fp_mesh_load(paths[k], &m, err, sizeof err);
+        if (rc) fail_msg("%s: %s", paths[k], err);
+        assert_int_equal(m->vertex_count, 3);
+        for (int i = 0; i < 9; i++) assert_true(m->positions[i] == want[i]);
+        assert_true(signbit(m->positions[1]));
+        fp_mesh_free(&m);
+    }
+    fp_mesh *m = NULL;
+    const char *stl = write_tmp("forms.stl", "solid t\nfacet normal 0 0 +1E0\nouter loop\n"
+                                             "vertex 1e-05 -0 +.5E+1\nvertex 1. .5 -2e0\n"
+                                             "vertex 0 1 0\nendloop\nendfacet\nendsolid t\n");
+    if (fp_mesh_load(stl, &m, err, sizeof err)) fail_msg("%s: %s", stl, err);
+    assert_int_equal(m->triangle_count, 1);
+    fp_mesh_free(&m);
+}
+
 static const char tri_gltf_fmt[] =
     "{\"asset\":{\"version\":\"2.0\"},\"scene\":0,\"scenes\":[{\"nodes\":[0]}],"
     "\"nodes\":[{\"mesh\":0}],\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0}}]}],"
@@ -1621,6 +1666,7 @@ int main(void)
         cmocka_unit_test(test_error_index_out_of_range),
         cmocka_unit_test(test_error_nan_coordinate),
         cmocka_unit_test(test_error_inf_coordinate),
+        cmocka_unit_test(test_decimal_coordinates),
         cmocka_unit_test(test_error_gltf_missing_buffer),
         cmocka_unit_test(test_error_gltf_bad_accessor),
         cmocka_unit_test(test_error_unknown_extension),

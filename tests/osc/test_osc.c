@@ -269,6 +269,14 @@ static void factory_describes_itself(void **state)
     assert_int_equal(factory->create(&h->host, port, NULL, 0, &in2, err, sizeof err), -EBUSY); /* (EADDRINUSE as an input that cannot be opened: 66) */
     assert_non_null(strstr(err, "127.0.0.1"));
     assert_int_equal(factory->create(&h->host, "70000", NULL, 0, &in2, err, sizeof err), -EINVAL);
+    /* PORT is digits, as every integer option: strtol took a leading blank */
+    static const char *const badport[] = {" 9000", "0x2328", "9000.0", "-1"};
+    for (size_t i = 0; i < sizeof badport / sizeof badport[0]; i++) {
+        assert_int_equal(factory->create(&h->host, badport[i], NULL, 0, &in2, err, sizeof err), -EINVAL);
+        assert_non_null(strstr(err, "PORT must be a number in 0..65535"));
+    }
+    assert_int_equal(factory->create(&h->host, "+0", NULL, 0, &in2, err, sizeof err), 0);
+    in2->destroy(in2);
     in->destroy(in); /* never started */
     fake_free(h);
 }

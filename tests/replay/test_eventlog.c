@@ -371,6 +371,38 @@ static void reader_errors_name_line_and_column(void **state)
     expect_read_error("e15", "99999999999999999999 button - 1 1 1\n", 2, 1, "time 99999999999999999999 out of range");
 }
 
+/* Floats are decimals, as every number facepuppet reads: strtof's hexadecimal floats were
+ * read ("0x1p3" as 8), now a bad number naming line and column; inf and nan stay "not a
+ * finite number"; every decimal form still reads, bit for bit as strtof gives it. */
+static void reader_floats_are_decimals(void **state)
+{
+    (void)state;
+    expect_read_error("h1", "100 wrist left 1 2 0x1p3 1 0 0 0\n", 2, 20,
+                      "bad number \"0x1p3\" for a wrist coordinate in mm");
+    expect_read_error("h2", "100 wrist left 1 2 3 -0X1.8P0 0 0 0\n", 2, 22,
+                      "bad number \"-0X1.8P0\" for a quaternion component");
+    expect_read_error("h3", "100 wrist left 0x10 2 3 1 0 0 0\n", 2, 16,
+                      "bad number \"0x10\" for a wrist coordinate in mm");
+    expect_read_error("h4", "100 wrist left 1 2 3 1 0 0 nan\n", 2, 28,
+                      "a quaternion component is \"nan\", not a finite number");
+    expect_read_error("h5", "100 wrist left 1 infinity 3 1 0 0 0\n", 2, 18,
+                      "a wrist coordinate in mm is \"infinity\", not a finite number");
+    char path[512], err[256];
+    tmp_path(path, sizeof path, "decimals.fplog");
+    write_text(path, "# facepuppet-eventlog 1\n"
+                     "100 wrist left +1.5 .5 5. -0 1e-05 2E+2 -.25e1\n");
+    fp_eventlog_reader *r = fp_eventlog_reader_open(path, err, sizeof err);
+    assert_non_null(r);
+    fp_event got;
+    assert_int_equal(fp_eventlog_reader_next(r, &got), 1);
+    const float *p = got.wrist.position_mm, *q = got.wrist.rotation;
+    assert_true(p[0] == 1.5f && p[1] == 0.5f && p[2] == 5.0f);
+    assert_true(q[0] == 0.0f && signbit(q[0]));
+    assert_true(q[1] == strtof("1e-05", NULL) && q[2] == 200.0f && q[3] == -2.5f);
+    assert_int_equal(fp_eventlog_reader_next(r, &got), 0);
+    fp_eventlog_reader_close(&r);
+}
+
 /* Times near the int64 limits: before, INT64_MIN and INT64_MAX read back, and the replay's
  * "time minus the first time" overflowed (signed overflow, then times running backwards).
  * Now the reader refuses |TIME| > FP_EVENTLOG_TIME_MAX with FILE:LINE:COLUMN, the writer
@@ -488,6 +520,7 @@ int main(void)
         cmocka_unit_test(crash_safety),
         cmocka_unit_test(comments_blank_lines_crlf_tabs),
         cmocka_unit_test(reader_errors_name_line_and_column),
+        cmocka_unit_test(reader_floats_are_decimals),
         cmocka_unit_test(times_near_int64_limits_refused),
         cmocka_unit_test(writer_exclusive_create),
         cmocka_unit_test(reader_rejects_other_files),

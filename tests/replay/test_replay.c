@@ -587,6 +587,13 @@ static void malformed_rows_fail_create(void **state)
     snprintf(mod, sizeof mod, "%.*s1x0%s", (int)(col - 1), line, strchr(line + col - 1, ','));
     write_with_line(good, bad, 3, mod);
     expect_create_error(bad, NULL, 3, col, "bad number \"1x0\" in column palm_y");
+    /* numbers are decimals: strtod's hexadecimal float was read as 8 */
+    snprintf(mod, sizeof mod, "%.*s0x1p3%s", (int)(col - 1), line, strchr(line + col - 1, ','));
+    write_with_line(good, bad, 3, mod);
+    expect_create_error(bad, NULL, 3, col, "bad number \"0x1p3\" in column palm_y");
+    snprintf(mod, sizeof mod, "%.*sinfinity%s", (int)(col - 1), line, strchr(line + col - 1, ','));
+    write_with_line(good, bad, 3, mod);
+    expect_create_error(bad, NULL, 3, col, "\"infinity\" in column palm_y is not a finite number");
 
     /* a row cut to 40 fields in line 4 */
     get_line(good, 4, line, sizeof line);
@@ -637,6 +644,15 @@ static void malformed_rows_fail_create(void **state)
     fclose(f);
     expect_create_error(angles, NULL, 2, field_col(line, 4 + FP_SENSOR_INDEX_MPJ),
                         "bad number \"4..5\" in column index_mcp");
+    /* the same with a hexadecimal angle ("0x10", read as 16 before) */
+    f = fopen(angles, "w");
+    assert_non_null(f);
+    fputs(read_header(LEAP "grab_cyberglove_like_angles_deg.csv"), f);
+    char *dots = strstr(line, "4..5");
+    fprintf(f, "%.*s0x10%s\n", (int)(dots - line), line, dots + 4);
+    fclose(f);
+    expect_create_error(angles, NULL, 2, field_col(line, 4 + FP_SENSOR_INDEX_MPJ),
+                        "bad number \"0x10\" in column index_mcp");
 
     /* a joints header with one column too many (74 of 73): the error names the extra
      * column (this once read past a 73-field array and printed a stack address) */

@@ -22,6 +22,7 @@
 
 #include "fp_error.h"
 #include "glove_cal.h"
+#include <facepuppet/decimal.h> /* fp_decimal_span: the one syntax of a number */
 
 #define OUT_CAP 65536
 #define FAST_LOW_WATER 2048
@@ -97,7 +98,7 @@ static int load_csv(fp_gloveemu *e, const char *path, char *err, size_t errlen)
         lineno++;
         if (lineno == 1) {
             if (strncmp(line, "frame,timestamp_us,hand_id,hand_type,", 37) != 0) {
-                rc = fp_errorf(err, errlen, -EINVAL, "%s:1: not a joint-angle CSV (header)", path);
+                rc = fp_errorf(err, errlen, -EBADMSG, "%s:1: not a joint-angle CSV (header)", path);
                 goto out;
             }
             continue;
@@ -129,9 +130,9 @@ static int load_csv(fp_gloveemu *e, const char *path, char *err, size_t errlen)
                     rows[n][col - 4] = NAN;
                 } else {
                     char *end;
-                    double v = strtod(p, &end);
-                    if (end != p + len || !isfinite(v)) {
-                        rc = fp_errorf(err, errlen, -EINVAL, "%s:%d: column %d is not a number",
+                    double v = strtod(p, &end); /* a decimal, as every number (no hex) */
+                    if (end != p + len || !isfinite(v) || fp_decimal_span(p) != len) {
+                        rc = fp_errorf(err, errlen, -EBADMSG, "%s:%d: column %d is not a number",
                                   path, lineno, col + 1);
                         goto out;
                     }
@@ -144,7 +145,7 @@ static int load_csv(fp_gloveemu *e, const char *path, char *err, size_t errlen)
             p = comma + 1;
         }
         if (col != 26) {
-            rc = fp_errorf(err, errlen, -EINVAL, "%s:%d: %d columns, expected 26", path, lineno, col);
+            rc = fp_errorf(err, errlen, -EBADMSG, "%s:%d: %d columns, expected 26", path, lineno, col);
             goto out;
         }
         right[n] = is_right;
@@ -152,7 +153,7 @@ static int load_csv(fp_gloveemu *e, const char *path, char *err, size_t errlen)
         n++;
     }
     if (n == 0) {
-        rc = fp_errorf(err, errlen, -EINVAL, "%s: no frames", path);
+        rc = fp_errorf(err, errlen, -EBADMSG, "%s: no frames", path);
         goto out;
     }
     /* keep the frames of this glove's hand when the recording has any */

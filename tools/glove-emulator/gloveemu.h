@@ -94,7 +94,9 @@ typedef struct fp_gloveemu_line {
 } fp_gloveemu_line;
 
 /** Make an emulator and start serving. Returns 0 and *out, or a negative errno code after
- *  writing a message (naming the file and line for a bad recording) to err. */
+ *  writing a message to err: -EINVAL a bad option, -EBADMSG a bad recording (naming the
+ *  file, line and column; its numbers decimals, facepuppet/decimal.h) or calibration, the
+ *  file's own code where one cannot be opened. */
 int fp_gloveemu_create(const fp_gloveemu_options *opts, fp_gloveemu **out, char *err,
                        size_t errlen);
 /** Stop the thread, close the pty, remove link_path. Sets *emu to NULL. */

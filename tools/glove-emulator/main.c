@@ -7,6 +7,8 @@
  * Prints the slave path (e.g. /dev/pts/5) on the first line of stdout, then serves until
  * SIGINT/SIGTERM or `quit`. Faults are typed on stdin, one a line:
  *   unplug | plug | pull | replug | garbage N | slow FACTOR | silent | answer | line | stats
+ * Exit 0; 64 a bad option; 65 a bad --csv recording or --cal calibration; 66 a file or the
+ * pty not opened.
  */
 #define _GNU_SOURCE
 #include <errno.h>
@@ -18,6 +20,7 @@
 #include <unistd.h>
 
 #include "gloveemu.h"
+#include <facepuppet/plugin_util.h> /* fp_parse_decimal, fp_parse_whole: numbers as in every option */
 
 static volatile sig_atomic_t quit;
 static void on_signal(int s) { (void)s; quit = 1; }
@@ -41,7 +44,15 @@ int main(int argc, char **argv)
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         const char *v = i + 1 < argc ? argv[i + 1] : NULL;
-        if (!strcmp(a, "--sensors") && v) { o.sensors = atoi(v); i++; }
+        if (!strcmp(a, "--sensors") && v) {
+            unsigned long long n;
+            if (!fp_parse_whole(v, 22, &n) || (n != 18 && n != 22)) {
+                fprintf(stderr, "fp-glove-emu: --sensors '%s': expected 18 or 22\n", v);
+                return 64;
+            }
+            o.sensors = (int)n;
+            i++;
+        }
         else if (!strcmp(a, "--hand") && v) {
             if (strcmp(v, "left") && strcmp(v, "right")) {
                 fprintf(stderr, "fp-glove-emu: --hand %s: expected left or right\n", v);
@@ -52,7 +63,14 @@ int main(int argc, char **argv)
         }
         else if (!strcmp(a, "--csv") && v) { o.recording = v; i++; }
         else if (!strcmp(a, "--cal") && v) { o.calibration = v; i++; }
-        else if (!strcmp(a, "--rate") && v) { o.rate_hz = atof(v); i++; }
+        else if (!strcmp(a, "--rate") && v) {
+            if (!fp_parse_decimal(v, &o.rate_hz) || !(o.rate_hz > 0 && o.rate_hz <= 100000)) {
+                fprintf(stderr, "fp-glove-emu: --rate '%s': expected a number of Hz, > 0 and at most "
+                        "100000\n", v);
+                return 64;
+            }
+            i++;
+        }
         else if (!strcmp(a, "--link") && v) { o.link_path = v; i++; }
         else if (!strcmp(a, "--fast")) o.fast = true;
         else if (!strcmp(a, "--timestamps")) o.timestamps = true;
@@ -67,9 +85,9 @@ int main(int argc, char **argv)
     char err[512];
     fp_gloveemu *e = NULL;
     int rc = fp_gloveemu_create(&o, &e, err, sizeof err);
-    if (rc < 0) {
+    if (rc < 0) { /* 64 a bad option, 65 a bad --csv or --cal, 66 a file or pty not opened */
         fprintf(stderr, "fp-glove-emu: %s\n", err);
-        return 66;
+        return rc == -EINVAL ? 64 : rc == -EBADMSG || rc == -ERANGE ? 65 : 66;
     }
     char slave[64];
     fp_gloveemu_slave_path(e, slave, sizeof slave);
@@ -107,9 +125,14 @@ int main(int argc, char **argv)
         char *nl;
         while ((nl = strchr(line, '\n'))) {
             *nl = '\0';
-            char cmd[32] = "";
+            char cmd[32] = "", text[200] = "";
             double arg = 0;
-            int k = sscanf(line, "%31s %lf", cmd, &arg);
+            int k = sscanf(line, "%31s %199s", cmd, text); /* an argument: a decimal */
+            if (k == 2 && (!strcmp(cmd, "garbage") || !strcmp(cmd, "slow")) &&
+                !fp_parse_decimal(text, &arg)) {
+                fprintf(stderr, "fp-glove-emu: %s '%s': expected a number\n", cmd, text);
+                k = 0;
+            }
             if (k >= 1) {
                 if (!strcmp(cmd, "unplug")) fp_gloveemu_set_plugged(e, false);
                 else if (!strcmp(cmd, "plug")) fp_gloveemu_set_plugged(e, true);
@@ -121,10 +144,8 @@ int main(int argc, char **argv)
                     }
                 }
                 else if (!strcmp(cmd, "garbage")) {
-                    size_t count = k == 2 && arg > 0 ? (size_t)arg : 16;
                     uint8_t g[4096];
-                    if (count > sizeof g)
-                        count = sizeof g;
+                    size_t count = k == 2 && arg > 0 ? (arg < sizeof g ? (size_t)arg : sizeof g) : 16;
                     for (size_t j = 0; j < count; j++)
                         g[j] = (uint8_t)(rand() & 0xff);
                     fp_gloveemu_inject_garbage(e, g, count);

@@ -7,6 +7,7 @@
  * RECORDING is a name such as "grab" (files DIR/hands/leap-motion/NAME_joints_mm.csv and
  * NAME_cyberglove_like_angles_deg.csv); default: the four shared recordings. DIR defaults to
  * $FP_SHARED_DATA, else ../shared/data if it exists, else the path configured at build time.
+ * Exit 0, 1 when a recording could not be read, 64 a bad option (named).
  */
 #define _POSIX_C_SOURCE 200809L
 #include <stdio.h>
@@ -15,6 +16,7 @@
 #include <unistd.h>
 
 #include "handcheck.h"
+#include <facepuppet/plugin_util.h> /* fp_parse_decimal: numbers as in every option */
 
 static const char *const default_recordings[] = {"HandSplay-110fps", "Waiting-110fps", "grab",
                                                  "three-claps"};
@@ -49,21 +51,21 @@ int main(int argc, char **argv)
                 opt.fit = FP_HANDCHECK_FIT_NONE;
             else {
                 fprintf(stderr, "fp-handcheck: --fit: unknown value '%s' (geometry, size, none)\n", v);
-                return 2;
+                return 64;
             }
         } else if (!strcmp(argv[i], "--tip-pad") && i + 1 < argc) {
-            char *end;
-            opt.tip_pad = strtof(argv[++i], &end);
-            if (*end || end == argv[i] || !(opt.tip_pad >= 0 && opt.tip_pad <= 1)) {
+            double pad;
+            if (!fp_parse_decimal(argv[++i], &pad) || !(pad >= 0 && pad <= 1)) {
                 fprintf(stderr, "fp-handcheck: --tip-pad: expected a number in [0, 1], got '%s'\n", argv[i]);
-                return 2;
+                return 64;
             }
+            opt.tip_pad = (float)pad;
         } else if (!strcmp(argv[i], "--data") && i + 1 < argc) {
             data = argv[++i];
         } else if (argv[i][0] == '-') {
             fprintf(stderr, "fp-handcheck: unknown option '%s'\n", argv[i]);
             usage(stderr);
-            return 2;
+            return 64;
         } else {
             first = i;
             break;

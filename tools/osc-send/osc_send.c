@@ -11,10 +11,12 @@
 #define _GNU_SOURCE
 #include "fp_hand.h"
 #include "leapcsv.h"
+#include <facepuppet/plugin_util.h> /* fp_parse_decimal, fp_parse_whole: numbers as in every option */
 
 #include <lo/lo.h>
 
 #include <getopt.h>
+#include <limits.h>
 #include <math.h>
 #include <stdbool.h>
 #include <stdio.h>
@@ -187,14 +189,21 @@ int main(int argc, char **argv)
             break;
         case 'F': fast = true; break;
         case 'x':
-            speed = atof(optarg);
-            if (!(speed > 0) || speed > 1e6) {
-                fprintf(stderr, "fp-osc-send: --speed %s: expected a number > 0\n", optarg);
+            if (!fp_parse_decimal(optarg, &speed) || !(speed > 0) || speed > 1e6) {
+                fprintf(stderr, "fp-osc-send: --speed '%s': expected a number > 0 and at most 1e6\n", optarg);
                 return 64;
             }
             break;
         case 'B': bundles = false; break;
-        case 'n': max_frames = atol(optarg); break;
+        case 'n': {
+            unsigned long long n;
+            if (!fp_parse_whole(optarg, LONG_MAX, &n)) {
+                fprintf(stderr, "fp-osc-send: --frames '%s': expected a whole number\n", optarg);
+                return 64;
+            }
+            max_frames = (long)n;
+            break;
+        }
         case 'q': quiet = true; break;
         case '?' + 256: usage(stdout); return 0;
         default: usage(stderr); return 64;

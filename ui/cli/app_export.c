@@ -23,14 +23,15 @@ int fp_app_export_open(const char *cmd, const char *file, const struct fp_mesh *
     return FP_EXIT_OK;
 }
 
-int fp_app_export_close(const char *cmd, fp_exporter **x, fp_export_format format,
-                        const char *file, double limit_mm, bool quiet, FILE *f)
+int fp_app_export_close(const char *cmd, const char *option, fp_exporter **x,
+                        fp_export_format format, const char *file, double limit_mm, bool quiet,
+                        FILE *f)
 {
     fp_export_result res;
     char err[1024];
     int rc = fp_export_finish(x, &res, err, sizeof err);
     if (rc) {
-        fprintf(stderr, "%s: export: %s\n", cmd, err);
+        fprintf(stderr, "%s: %s%s%s\n", cmd, option ? option : "", option ? ": " : "", err);
         return fp_app_exit_code(rc, FP_APP_OUTPUT);
     }
     if (!quiet) {

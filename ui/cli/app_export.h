@@ -16,9 +16,13 @@ int fp_app_export_open(const char *cmd, const char *file, const struct fp_mesh *
 
 /** Finish *x and print the summary ("CMD: exported N frames to FILE (FORMAT): K targets,
  *  SIZE, largest error E mm (limit L mm)"; what the format dropped as a note) to f unless
- *  quiet. Returns the exit status (0, or 73/65/70 by fp_app_exit_code). */
-int fp_app_export_close(const char *cmd, fp_exporter **x, fp_export_format format,
-                        const char *file, double limit_mm, bool quiet, FILE *f);
+ *  quiet. An error prints "CMD: OPTION: MESSAGE" ("facepuppet run: --export: FILE: write
+ *  failed: ..."), or "CMD: MESSAGE" with option NULL (the export command, whose output is
+ *  the command's own: "facepuppet export: FILE: write failed: ..."); core/export's messages
+ *  begin with FILE. Returns the exit status (0, or 73/65/70 by fp_app_exit_code). */
+int fp_app_export_close(const char *cmd, const char *option, fp_exporter **x,
+                        fp_export_format format, const char *file, double limit_mm, bool quiet,
+                        FILE *f);
 
 /** "CMD: note: FILE cannot hold the input's polygons, UV seams, ..." on stderr where a mesh
  *  written to another format lost something (fp_mesh_save_ex's dropped bits); nothing when

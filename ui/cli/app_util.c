@@ -214,6 +214,22 @@ int fp_app_check_output(const char *cmd, const char *option, const char *path)
     return 0;
 }
 
+bool fp_app_parse_size(const char *v, int lo, int hi, int *w, int *h)
+{
+    const char *x = v ? strchr(v, 'x') : NULL;
+    char first[32];
+    unsigned long long a, b;
+    if (!x || (size_t)(x - v) >= sizeof first || lo < 0 || hi < lo) return false;
+    snprintf(first, sizeof first, "%.*s", (int)(x - v), v);
+    if (!fp_parse_whole(first, (unsigned long long)hi, &a) ||
+        !fp_parse_whole(x + 1, (unsigned long long)hi, &b) || a < (unsigned long long)lo ||
+        b < (unsigned long long)lo)
+        return false;
+    *w = (int)a;
+    *h = (int)b;
+    return true;
+}
+
 int fp_app_check_mesh_name(const char *cmd, const char *option, const char *path)
 {
     static const char *exts[] = {".obj", ".ply", ".off", ".stl", ".gltf", ".glb"};

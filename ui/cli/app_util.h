@@ -79,6 +79,11 @@ struct fp_take_reader;
 int fp_app_take_intact(const char *cmd, const char *verb, const char *path,
                        const struct fp_take_reader *r);
 
+/** --size's WxH: two whole numbers (fp_parse_whole: an optional '+', digits; no blanks, no
+ *  '-') joined by 'x', each in lo..hi, nothing before or after. false where v is not one (the
+ *  caller names the option). */
+bool fp_app_parse_size(const char *v, int lo, int hi, int *w, int *h);
+
 /** An output mesh's name: an extension the mesh writer knows (.obj .ply .off .stl .gltf .glb,
  *  any case). Returns 0, or 64 (usage) with "CMD: OPTION PATH: unknown mesh format ..."
  *  printed. */

@@ -13,6 +13,7 @@
 
 #include <errno.h>
 #include <getopt.h>
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -120,10 +121,8 @@ static int parse_end(const char *s, fp_take_rate rate, range_end *e, char *err, 
         e->timecode = true;
         return fp_timecode_to_frames(&tc, rate, &e->value) ? -EINVAL : 0;
     }
-    char *end;
-    errno = 0;
-    unsigned long long v = strtoull(s, &end, 10);
-    if (*end || errno || s[0] == '-') {
+    unsigned long long v;
+    if (!fp_parse_whole(s, UINT64_MAX, &v)) { /* (digits: no blank, no '-' wrapped round) */
         snprintf(err, n, "'%s' is neither a frame index nor a timecode HH:MM:SS:FF", s);
         return -EINVAL;
     }
@@ -180,7 +179,7 @@ static int export_main(int argc, char **argv)
     double fps = 0, max_error = 0.1;
     int max_targets = 0, step = 0;
     bool quiet = false;
-    char *end;
+    unsigned long long whole; /* an integer option (fp_parse_whole) */
     optind = 1;
     for (int c; (c = getopt_long(argc, argv, "f:o:m:qh", opts, NULL)) != -1;) {
         switch (c) {
@@ -200,17 +199,16 @@ static int export_main(int argc, char **argv)
             }
             break;
         case OPT_MAX_TARGETS:
-            max_targets = (int)strtol(optarg, &end, 10);
-            if (*end || max_targets < 1) {
-                fprintf(stderr, "facepuppet export: --max-targets must be >= 1, got '%s'\n", optarg);
+            if (!fp_parse_whole(optarg, INT_MAX, &whole) || whole < 1) {
+                fprintf(stderr, "facepuppet export: --max-targets must be a whole number from 1 to 2147483647, got '%s'\n", optarg);
                 return FP_EXIT_USAGE;
             }
+            max_targets = (int)whole;
             break;
         case OPT_STEP: step = 1; break;
         case OPT_SIZE:
-            int used = 0; /* (and nothing after: "1280x720x3" was read as 1280x720) */
-            if (sscanf(optarg, "%dx%d%n", &width, &height, &used) != 2 || optarg[used] ||
-                width < 16 || height < 16 || width > 8192 || height > 8192) {
+            /* (and nothing after: "1280x720x3" was read as 1280x720) */
+            if (!fp_app_parse_size(optarg, 16, 8192, &width, &height)) {
                 fprintf(stderr, "facepuppet export: --size WxH, 16..8192 each, got '%s'\n", optarg);
                 return FP_EXIT_USAGE;
             }
@@ -431,7 +429,7 @@ static int export_main(int argc, char **argv)
                    (unsigned long long)k.frames, width, height, out, (double)k.bytes / 1e6);
         goto done;
     }
-    status = fp_app_export_close("facepuppet export", &k.x, fmt, out, max_error, quiet, stdout);
+    status = fp_app_export_close("facepuppet export", NULL, &k.x, fmt, out, max_error, quiet, stdout);
     if (!quiet && status == FP_EXIT_OK && (fmt == FP_EXPORT_GLTF || fmt == FP_EXPORT_GLB))
         printf("facepuppet export: %.6g mm per mesh unit; frame rate %u/%u%s\n", mm_per_unit,
                h->rate.num, h->rate.den, fps > 0 ? " (resampled)" : "");

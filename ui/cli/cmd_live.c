@@ -103,7 +103,6 @@ static int live_main(int argc, char **argv)
     fp_session_opts sopt;
     fp_session_opts_init(&sopt, so);
     const char *script_arg = NULL;
-    char *end;
     optind = 1;
     for (int c; (c = getopt_long(argc, argv, FP_SESSION_OPTS_SHORT "o:h", opts, NULL)) != -1;) {
         int shared = fp_session_opts_parse(&sopt, c, optarg, "live");
@@ -112,15 +111,14 @@ static int live_main(int argc, char **argv)
         switch (c) {
         case 'o': vo.out = optarg; break;
         case OPT_SIZE:
-            if (sscanf(optarg, "%dx%d", &vo.width, &vo.height) != 2 || vo.width < 16 ||
-                vo.height < 16 || vo.width > 16384 || vo.height > 16384) {
+            if (!fp_app_parse_size(optarg, 16, 16384, &vo.width, &vo.height)) {
                 fprintf(stderr, "facepuppet live: --size must be WxH (16..16384), got '%s'\n", optarg);
                 return FP_EXIT_USAGE;
             }
             break;
         case OPT_FRAMES: {
-            unsigned long long n = strtoull(optarg, &end, 10);
-            if (*end || !n || optarg[0] == '-') {
+            unsigned long long n;
+            if (!fp_parse_whole(optarg, UINT64_MAX, &n) || !n) {
                 fprintf(stderr, "facepuppet live: --frames must be a whole number > 0, got '%s'\n", optarg);
                 return FP_EXIT_USAGE;
             }

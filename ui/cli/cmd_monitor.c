@@ -6,6 +6,7 @@
 #include <errno.h>
 #include <getopt.h>
 #include <inttypes.h>
+#include <limits.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -111,14 +112,13 @@ static int monitor_main(int argc, char **argv)
     for (int c; (c = getopt_long(argc, argv, "n:d:h", opts, NULL)) != -1;) {
         switch (c) {
         case 'n': {
-            char *end;
-            errno = 0;
-            count = strtoll(optarg, &end, 10);
-            if (end == optarg || *end || errno || count < 1) {
+            unsigned long long n;
+            if (!fp_parse_whole(optarg, LLONG_MAX, &n) || n < 1) {
                 fprintf(stderr, "facepuppet monitor: --count must be a whole number > 0, got '%s'\n",
                         optarg);
                 return FP_EXIT_USAGE;
             }
+            count = (long long)n;
             break;
         }
         case 'd': {

@@ -120,7 +120,7 @@ static int play_main(int argc, char **argv)
             first_ns = f.time_ns;
         if (ex && (rc = fp_export_add(ex, fp_session_positions(s),
                                       (double)(f.time_ns - first_ns) * 1e-9, err, sizeof err))) {
-            fprintf(stderr, "facepuppet play: export: %s\n", err);
+            fprintf(stderr, "facepuppet play: --export: %s\n", err);
             status = fp_app_exit_code(rc, FP_APP_OUTPUT);
             goto done;
         }
@@ -151,7 +151,7 @@ static int play_main(int argc, char **argv)
     }
     if (out)
         fp_app_print_dropped("facepuppet play", out, dropped, quiet);
-    if (ex && (status = fp_app_export_close("facepuppet play", &ex, export_fmt, export_file, 0.1,
+    if (ex && (status = fp_app_export_close("facepuppet play", "--export", &ex, export_fmt, export_file, 0.1,
                                             quiet, stdout)))
         goto done;
     if (!quiet) {

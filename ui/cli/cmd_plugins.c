@@ -196,7 +196,7 @@ static int check_main(int argc, char **argv)
     char *keybuf[FP_SPEC_MAX_PARAMS];
     size_t nkeys = 0;
     bool json = false;
-    char *end;
+    unsigned long long whole; /* an integer option (fp_parse_whole) */
     optind = 1;
     int status = FP_EXIT_OK;
     for (int c; (c = getopt_long(argc, argv, "h", opts, NULL)) != -1;) {
@@ -225,12 +225,12 @@ static int check_main(int argc, char **argv)
             }
             break;
         case 'c':
-            o.cycles = (int)strtol(optarg, &end, 10);
-            if (*end || o.cycles < 1 || o.cycles > 1000) {
+            if (!fp_parse_whole(optarg, 1000, &whole) || whole < 1) {
                 fprintf(stderr, "facepuppet plugins check: --cycles must be in 1..1000, got '%s'\n", optarg);
                 status = FP_EXIT_USAGE;
                 goto out;
             }
+            o.cycles = (int)whole;
             break;
         case 'h': usage(stdout); goto out;
         default: usage(stderr); status = FP_EXIT_USAGE; goto out;

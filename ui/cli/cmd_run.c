@@ -283,7 +283,7 @@ static int run_main(int argc, char **argv)
         }
         if (ex && (rc = fp_export_add(ex, fp_session_positions(s), (double)(now - t0) * 1e-9, err,
                                       sizeof err))) {
-            fprintf(stderr, "facepuppet run: export: %s\n", err);
+            fprintf(stderr, "facepuppet run: --export: %s\n", err);
             status = fp_app_exit_code(rc, FP_APP_OUTPUT);
             break;
         }
@@ -351,7 +351,7 @@ static int run_main(int argc, char **argv)
     }
     fp_app_print_dropped("facepuppet run", out, dropped, quiet);
     if (ex && status == FP_EXIT_OK)
-        status = fp_app_export_close("facepuppet run", &ex, export_fmt, export_file, 0.1, quiet,
+        status = fp_app_export_close("facepuppet run", "--export", &ex, export_fmt, export_file, 0.1, quiet,
                                      stderr);
     fp_export_abort(&ex);
     double med = fp_median(update_ms, nupdates);

@@ -8,6 +8,10 @@
 #define FACEPUPPET_PLUGIN_UTIL_H
 
 #include <facepuppet/plugin.h>
+/* fp_decimal_span: the one syntax of a number in a key, an option or a data file: a
+ * decimal, optional sign, digits with at most one '.', optional exponent; no blanks,
+ * hexadecimal ("0x10", "0x1p3"), "inf", "infinity" or "nan" */
+#include <facepuppet/decimal.h>
 #include <math.h>
 #include <stdbool.h>
 #include <stdlib.h>
@@ -38,30 +42,6 @@ static inline int fp_parse_bool(const char *v)
     if (!strcmp(v, "1") || !strcmp(v, "true") || !strcmp(v, "yes") || !strcmp(v, "on")) return 1;
     if (!strcmp(v, "0") || !strcmp(v, "false") || !strcmp(v, "no") || !strcmp(v, "off")) return 0;
     return -1;
-}
-
-/** The one syntax of a number in a key's value or a command-line option: a decimal, an
- *  optional sign, digits with at most one '.' (at least one digit: "5", "-0.5", ".5", "5."),
- *  then an optional exponent, 'e' or 'E', an optional sign and digits ("1e-3", "2E+2").
- *  Returns the length of the longest such number at the start of v (0: none), so that a list
- *  ("1/2/3") can be read number by number. Not what strtod also takes: blanks,
- *  hexadecimal ("0x10", "0x1p3"), "inf", "infinity", "nan". [any-thread], no allocation. */
-static inline size_t fp_decimal_span(const char *v)
-{
-    if (!v) return 0;
-    size_t i = (v[0] == '+' || v[0] == '-') ? 1 : 0, digits = 0;
-    for (; v[i] >= '0' && v[i] <= '9'; i++) digits++;
-    if (v[i] == '.')
-        for (i++; v[i] >= '0' && v[i] <= '9'; i++) digits++;
-    if (!digits) return 0;
-    if (v[i] == 'e' || v[i] == 'E') {
-        size_t j = i + 1 + (v[i + 1] == '+' || v[i + 1] == '-');
-        if (v[j] >= '0' && v[j] <= '9') {
-            while (v[j] >= '0' && v[j] <= '9') j++;
-            i = j;
-        }
-    }
-    return i;
 }
 
 /** Parse v, the whole of it a number as fp_decimal_span reads it, into a finite double (the

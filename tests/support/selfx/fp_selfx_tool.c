@@ -3,9 +3,10 @@
  * written by `facepuppet run --out`); with --away, only the pairs away from BEFORE's own
  * crossings (the trust issue's measure, fp_selfx_count_new_away). Prints the counts and the
  * first new pairs; exit 0 when there is no new crossing, 1 when there are, 2 on an error
- * (unreadable file, different topology). */
+ * (unreadable file, different topology), 64 on usage (a bad --away named). */
 #include "fp_mesh.h"
 #include "selfx.h"
+#include <facepuppet/decimal.h> /* fp_parse_whole: a count as in every option */
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -15,25 +16,26 @@ int main(int argc, char **argv)
 {
     int rings = -1; /* -1: every new pair */
     if (argc == 5 && !strcmp(argv[1], "--away")) {
-        char *end;
-        long r = strtol(argv[2], &end, 10);
-        if (*end || r < 0 || r > 8) {
+        unsigned long long r;
+        if (!fp_parse_whole(argv[2], 8, &r)) {
             fprintf(stderr, "fp-selfx: --away takes a ring count 0..8, got '%s'\n", argv[2]);
-            return 2;
+            return 64;
         }
         rings = (int)r;
         argv += 2;
         argc -= 2;
     }
-    if (argc != 3 || !strcmp(argv[1], "--help")) {
-        fprintf(argc == 2 ? stdout : stderr,
+    const int help = argc == 2 && !strcmp(argv[1], "--help");
+    if (argc != 3 || help) {
+        fprintf(help ? stdout : stderr,
                 "usage: fp-selfx [--away RINGS] BEFORE AFTER\n"
                 "Counts the triangle pairs that cross (exactly, CGAL) in AFTER but not in\n"
                 "BEFORE; adjacent triangles (a shared vertex or edge, vertices welded by\n"
                 "position) are not crossings. --away RINGS leaves out pairs within RINGS vertex\n"
                 "rings of a triangle that crosses in BEFORE (the input's own crossings move\n"
-                "under any deformation). Exit 0: none new, 1: new crossings, 2: error.\n");
-        return argc == 2 ? 0 : 2;
+                "under any deformation). Exit 0: none new, 1: new crossings, 2: error,\n"
+                "64: usage.\n");
+        return help ? 0 : 64;
     }
     char err[512];
     fp_mesh *a = NULL, *b = NULL;
