@@ -108,6 +108,7 @@ typedef struct osc_input {
     bool loopback;
     /* socket and thread */
     int sock;
+    int sock6; /* [::1]:port beside 127.0.0.1:port (a sender's "localhost" may be ::1), -1 none */
     int stop_pipe[2];
     pthread_t thread;
     bool running;
@@ -703,18 +704,19 @@ static void timers(osc_input *o, int64_t now)
 static void *osc_thread(void *arg)
 {
     osc_input *o = arg;
-    struct pollfd fds[2] = {{o->sock, POLLIN, 0}, {o->stop_pipe[0], POLLIN, 0}};
+    struct pollfd fds[3] = {{o->stop_pipe[0], POLLIN, 0}, {o->sock, POLLIN, 0}, {o->sock6, POLLIN, 0}};
     for (;;) {
-        int rc = poll(fds, 2, TICK_MS);
+        int rc = poll(fds, 3, TICK_MS); /* (a negative sock6 is left out by poll) */
         if (rc < 0 && errno != EINTR) {
             push_status(o, FP_STATUS_ERROR, -1, "osc: poll: %s", strerror(errno));
             return NULL;
         }
-        if (fds[1].revents) return NULL;
-        for (int i = 0; i < BURST && rc > 0 && (fds[0].revents & POLLIN); i++) {
+        if (fds[0].revents) return NULL;
+        for (int s = 1; s < 3; s++)
+        for (int i = 0; i < BURST && rc > 0 && (fds[s].revents & POLLIN); i++) {
             struct sockaddr_storage from;
             socklen_t fromlen = sizeof from;
-            ssize_t n = recvfrom(o->sock, o->buf, sizeof o->buf, MSG_DONTWAIT | MSG_TRUNC,
+            ssize_t n = recvfrom(fds[s].fd, o->buf, sizeof o->buf, MSG_DONTWAIT | MSG_TRUNC,
                                  (struct sockaddr *)&from, &fromlen);
             if (n < 0) break; /* EAGAIN: drained */
             int64_t recv_ns = now_ns(o);
@@ -730,8 +732,13 @@ static void *osc_thread(void *arg)
                     const struct sockaddr_in *a = (const struct sockaddr_in *)&from;
                     inet_ntop(AF_INET, &a->sin_addr, addr, sizeof addr);
                     port = ntohs(a->sin_port);
+                } else if (from.ss_family == AF_INET6) {
+                    const struct sockaddr_in6 *a = (const struct sockaddr_in6 *)&from;
+                    inet_ntop(AF_INET6, &a->sin6_addr, addr, sizeof addr);
+                    port = ntohs(a->sin6_port);
                 }
-                snprintf(o->sender, sizeof o->sender, "%s:%u", addr, port);
+                snprintf(o->sender, sizeof o->sender, from.ss_family == AF_INET6 ? "[%s]:%u" : "%s:%u",
+                         addr, port);
             }
             o->packet_pushed = false;
             handle_packet(o, o->buf, (size_t)n, recv_ns, recv_ns, 0);
@@ -765,8 +772,8 @@ static int osc_start(fp_input *self, char *err, size_t errlen)
         return -rc;
     }
     o->running = true;
-    logf_(o, FP_LOG_INFO, "listening on %s:%u (format %s)", o->bind_text, (unsigned)o->port,
-          format_names[o->format]);
+    logf_(o, FP_LOG_INFO, "listening on %s:%u%s (format %s)", o->bind_text, (unsigned)o->port,
+          o->sock6 >= 0 ? " and [::1]" : "", format_names[o->format]);
     return 0;
 }
 
@@ -832,6 +839,7 @@ static void osc_destroy(fp_input *self)
     osc_input *o = self->plugin_data;
     osc_stop(self);
     if (o->sock >= 0) close(o->sock);
+    if (o->sock6 >= 0) close(o->sock6);
     pthread_mutex_destroy(&o->lock);
     free(o->lat_us);
     free(o);
@@ -1029,6 +1037,20 @@ static int osc_create(const fp_host *host, const char *arg, const fp_param *para
     o->port = ntohs(sa.sin_port);
     snprintf(o->bind_text, sizeof o->bind_text, "%s", bind_addr);
     o->loopback = (ntohl(sa.sin_addr.s_addr) >> 24) == 127;
+    /* On 127.0.0.1 also [::1] at the same port, best effort (no IPv6, the port taken there:
+     * IPv4 only): a sender told "localhost" may resolve it to ::1 first (getaddrinfo's
+     * order where /etc/hosts lists both), and would otherwise send into nothing. */
+    o->sock6 = -1;
+    if (sa.sin_addr.s_addr == htonl(INADDR_LOOPBACK)) {
+        struct sockaddr_in6 sa6 = {.sin6_family = AF_INET6, .sin6_port = sa.sin_port,
+                                   .sin6_addr = IN6ADDR_LOOPBACK_INIT};
+        int s6 = socket(AF_INET6, SOCK_DGRAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0), one = 1;
+        if (s6 >= 0 && setsockopt(s6, IPPROTO_IPV6, IPV6_V6ONLY, &one, sizeof one) == 0 &&
+            bind(s6, (struct sockaddr *)&sa6, sizeof sa6) == 0)
+            o->sock6 = s6;
+        else if (s6 >= 0)
+            close(s6);
+    }
     o->host = host;
     o->format = format;
     o->hands = hands;
