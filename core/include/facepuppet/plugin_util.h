@@ -44,6 +44,22 @@ static inline int fp_parse_bool(const char *v)
     return -1;
 }
 
+/** The number at the start of v as fp_decimal_span reads it, into a finite double (the
+ *  nearest, as strtod gives it; '.' is the decimal point: facepuppet never changes the C
+ *  locale's LC_NUMERIC). Returns its length, *out set; 0 where v starts with no such number or
+ *  its value overflows ("1e999"), *out untouched. The one reading behind fp_parse_decimal and
+ *  fp_parse_decimal_list. [any-thread], no allocation. */
+static inline size_t fp_decimal_read(const char *v, double *out)
+{
+    const size_t n = fp_decimal_span(v);
+    if (!n) return 0;
+    char *end;
+    const double x = strtod(v, &end);
+    if (end != v + n || !isfinite(x)) return 0; /* ("0x10": strtod reads on past "0") */
+    *out = x;
+    return n;
+}
+
 /** Parse v, the whole of it a number as fp_decimal_span reads it, into a finite double (the
  *  nearest, as strtod gives it; '.' is the decimal point: facepuppet never changes the C
  *  locale's LC_NUMERIC). false where v is no such number or its value overflows ("1e999");
@@ -51,11 +67,9 @@ static inline int fp_parse_bool(const char *v)
  *  no allocation. */
 static inline bool fp_parse_decimal(const char *v, double *out)
 {
-    const size_t n = fp_decimal_span(v);
-    if (!n || v[n]) return false;
-    char *end;
-    const double x = strtod(v, &end);
-    if (end != v + n || !isfinite(x)) return false;
+    double x;
+    const size_t n = fp_decimal_read(v, &x);
+    if (!n || v[n]) return false; /* *out untouched (a caller's default stays) */
     *out = x;
     return true;
 }
@@ -70,12 +84,9 @@ static inline size_t fp_parse_decimal_list(const char *v, char sep, double *out,
     const char *p = v;
     while (p && sep == ' ' && (*p == ' ' || *p == '\t')) p++;
     while (p && k < max) {
-        const size_t n = fp_decimal_span(p);
-        char *end;
+        const size_t n = fp_decimal_read(p, &out[k]);
         if (!n) return 0;
-        const double x = strtod(p, &end);
-        if (end != p + n || !isfinite(x)) return 0; /* ("0x10": strtod reads on past "0") */
-        out[k++] = x;
+        k++;
         p += n;
         const char *q = p;
         while (sep == ' ' && (*q == ' ' || *q == '\t')) q++;
