@@ -519,12 +519,19 @@ static void mp_emit(osc_input *o, int hand, int64_t t, int64_t recv_ns)
     push_joints(o, hand, t, recv_ns, (const float(*)[3])mm);
 }
 
+/* Whether path is a MediaPipe hand's: "/lx", "/ly", "/lz", "/rx", ... with or without a
+ * trailing '/'. */
+static bool mp_address(const char *path)
+{
+    size_t n = strlen(path);
+    return n >= 3 && n <= 4 && path[0] == '/' && (path[1] == 'l' || path[1] == 'r') &&
+           (path[2] == 'x' || path[2] == 'y' || path[2] == 'z') && (n == 3 || path[3] == '/');
+}
+
 static void fmt_mediapipe(osc_input *o, const char *path, const char *types, lo_arg **argv,
                           int64_t t, int64_t recv_ns)
 {
-    size_t n = strlen(path);
-    if (n < 3 || n > 4 || path[0] != '/' || (path[1] != 'l' && path[1] != 'r') ||
-        (path[2] != 'x' && path[2] != 'y' && path[2] != 'z') || (n == 4 && path[3] != '/')) {
+    if (!mp_address(path)) {
         count(o, FP_OSC_UNKNOWN_ADDRESS);
         return;
     }
@@ -614,9 +621,7 @@ static void handle_message(osc_input *o, unsigned char *data, size_t size, int64
         int slot, finger;
         if (strncmp(path, "/facepuppet/", 12) == 0) fmt = FMT_FACEPUPPET;
         else if (leap_address(path, &slot, &finger)) fmt = FMT_LEAP;
-        else if ((path[1] == 'l' || path[1] == 'r') && (path[2] == 'x' || path[2] == 'y' || path[2] == 'z') &&
-                 (path[3] == 0 || (path[3] == '/' && path[4] == 0)))
-            fmt = FMT_MEDIAPIPE;
+        else if (mp_address(path)) fmt = FMT_MEDIAPIPE;
         else
             count(o, FP_OSC_UNKNOWN_ADDRESS);
     }
