@@ -243,6 +243,15 @@ static void cancel_and_wait(pedal *p)
                  CANCEL_WAIT_MS);
 }
 
+/* Let go of an opened pedal: the interface released when claimed, the kernel driver given
+ * back when we detached it, the handle closed (each fails harmlessly when the device is gone). */
+static void give_back(libusb_device_handle *h, int iface, bool claimed, bool detached)
+{
+    if (claimed) libusb_release_interface(h, iface);
+    if (detached) libusb_attach_kernel_driver(h, iface);
+    libusb_close(h);
+}
+
 /* Close the open pedal. `report`: release held buttons and push DISCONNECTED. */
 static void close_pedal(pedal *p, bool report)
 {
@@ -253,10 +262,8 @@ static void close_pedal(pedal *p, bool report)
         libusb_free_transfer(p->transfer);
     } /* else: leak it rather than free memory libusb may still write (logged above) */
     p->transfer = NULL;
-    libusb_release_interface(p->handle, p->iface); /* fails harmlessly when gone */
-    if (p->detached) libusb_attach_kernel_driver(p->handle, p->iface); /* the same */
+    give_back(p->handle, p->iface, true, p->detached);
     p->detached = false;
-    libusb_close(p->handle);
     p->handle = NULL;
     if (report) {
         fp_pedal_change ch[3];
@@ -327,15 +334,12 @@ static int open_pedal(pedal *p, libusb_device *dev, uint16_t vid, uint16_t pid,
                  "cannot claim interface %d of %04x:%04x: %s%s", iface, vid, pid,
                  libusb_strerror(r),
                  r == LIBUSB_ERROR_BUSY ? " (is another program reading the pedal?)" : "");
-        if (detached) libusb_attach_kernel_driver(h, iface);
-        libusb_close(h);
+        give_back(h, iface, false, detached);
         return r;
     }
     struct libusb_transfer *t = libusb_alloc_transfer(0);
     if (!t) {
-        libusb_release_interface(h, iface);
-        if (detached) libusb_attach_kernel_driver(h, iface);
-        libusb_close(h);
+        give_back(h, iface, true, detached);
         return LIBUSB_ERROR_NO_MEM;
     }
     int len = maxpacket > 0 && maxpacket <= REPORT_MAX ? maxpacket : REPORT_MAX;
@@ -372,9 +376,7 @@ static int open_pedal(pedal *p, libusb_device *dev, uint16_t vid, uint16_t pid,
         host_log(p, FP_LOG_WARNING, "cannot read %04x:%04x: %s", vid, pid, libusb_strerror(r));
         libusb_free_transfer(t);
         p->transfer = NULL;
-        libusb_release_interface(h, iface);
-        if (detached) libusb_attach_kernel_driver(h, iface);
-        libusb_close(h);
+        give_back(h, iface, true, detached);
         p->handle = NULL;
         return r;
     }
