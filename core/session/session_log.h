@@ -30,7 +30,8 @@ typedef void (*fp_session_log_fn)(void *user, int level, const char *source, con
 
 /** Whether a line is one of those notes: below FP_LOG_ERROR and from FP_SLOG_ENGINE or
  *  FP_SLOG_CONTACT. What a quiet program (-q) leaves out; the inputs', recordings', the
- *  mapping's and the rig's lines, and every error, are none. */
+ *  mapping's and the rig's lines, and every error, are none. level: fp_log_level; source:
+ *  the line's source name (NULL: none, never a note). Pure: [any-thread], no allocation. */
 bool fp_slog_is_note(int level, const char *source);
 
 /** A log target: the callback (may be NULL: messages are dropped) and its user pointer. */

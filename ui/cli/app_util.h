@@ -65,7 +65,8 @@ void fp_app_log_line(void *user, int level, const char *source, const char *mess
 
 /** fp_app_log_line for a command given -q: the engine's and the contact guard's notes on
  *  each gesture (fp_slog_is_note) are left out; the inputs', recordings', the mapping's and
- *  the rig's lines and every error print as with fp_app_log_line. */
+ *  the rig's lines and every error print as with fp_app_log_line. user unused. Any thread, as
+ *  fp_app_log_line (one fprintf a line: lines from two threads never interleave). */
 void fp_app_log_line_quiet(void *user, int level, const char *source, const char *message);
 
 /** The longest --duration a command takes, seconds (116 days: its nanoseconds fit an
@@ -80,8 +81,9 @@ int fp_app_take_intact(const char *cmd, const char *verb, const char *path,
                        const struct fp_take_reader *r);
 
 /** --size's WxH: two whole numbers (fp_parse_whole: an optional '+', digits; no blanks, no
- *  '-') joined by 'x', each in lo..hi, nothing before or after. false where v is not one (the
- *  caller names the option). */
+ *  '-') joined by 'x', each in lo..hi (pixels), nothing before or after. true with *w, *h set;
+ *  false where v (NULL too) is not one, *w and *h then untouched (the caller names the
+ *  option). [any-thread], no allocation. */
 bool fp_app_parse_size(const char *v, int lo, int hi, int *w, int *h);
 
 /** An output mesh's name: an extension the mesh writer knows (.obj .ply .off .stl .gltf .glb,
