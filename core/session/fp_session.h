@@ -173,6 +173,7 @@ enum fp_frame_stage {
 };
 
 /** Statistics of one fp_session_step. */
+#define FP_FRAME_REACH_MAX 64 /* the session's control-set capacity */
 typedef struct fp_frame_stats {
     uint64_t frame;
     size_t events;            /* events drained this frame */
@@ -192,6 +193,12 @@ typedef struct fp_frame_stats {
     int guard_substeps;       /* maps composed (1: one; unanchored steps may compose) */
     double guard_reached;     /* smallest fraction of a control vector the map reached (1: all;
                                  below 1 the guard stopped short of an end point) */
+    /* reach (skin_reach.h): how far the skin followed the fingertips this frame */
+    size_t reach_vectors;     /* control vectors starting on the skin (within 0.5 R) that ask
+                                 to move (at least 1e-4 R) */
+    float reach[FP_FRAME_REACH_MAX]; /* each one's reach: how far the skin vertex nearest its
+                                 start point moved over how far its end point asked (1: all) */
+    double reach_asked_max;   /* the longest of them, mesh units */
     double min_det_j;         /* min det dT/dx over the moved vertices (and composed maps) with
                                  fp_session_options.measure_jacobian, else NAN (and when not
                                  active) */

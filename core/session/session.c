@@ -5,6 +5,7 @@
 
 #include "changed.h"
 #include "contact.h"
+#include "skin_reach.h"
 #include "csrbf.h"
 #include "fp_plugin_crash.h"
 #include "fp_mesh.h"
@@ -69,6 +70,7 @@ struct fp_session {
     fp_mapping_step mapping_step; /* step 3 */
     fp_rig_step rig;              /* step 4 */
     fp_engine_step engine;        /* step 5 */
+    fp_skin_reach_gesture gesture_reach; /* the gesture's reach so far (skin_reach.h) */
     fp_history history;           /* step 6 */
     fp_record_step record;        /* step 7 */
 
@@ -801,6 +803,7 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame
             size_t ntouched = fp_engine_step_touched(&s->engine, &touched);
             s->shown = fp_rig_step_finish(&s->rig, s->deformed, touched, ntouched);
             contact_guard(s, ref, (cs->intents & FP_INTENT_COMMIT) != 0, st);
+            fp_skin_reach_frame(s->engine.points, ref, s->shown, cs, st, &s->gesture_reach);
             /* the output differs from the last only in the engine's ranges (blocks in a
              * support now or at its last run), unless the guard's shape is or was shown */
             s->shown_kind = s->contact && s->shown == fp_contact_shape(s->contact) ? SHOWN_OTHER : SHOWN_ENGINE;
@@ -902,6 +905,7 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame
             fp_changed_add(&s->shown_changed, ranges, fp_engine_step_touched(&s->engine, &ranges));
         fp_history_end_gesture(&s->history);
         fp_engine_step_end_gesture(&s->engine, &s->log);
+        fp_skin_reach_gesture_end(&s->gesture_reach, s->head.mm_per_unit, &s->log);
         contact_end_gesture(s);
         shown_ref(s);
     }
@@ -1200,6 +1204,7 @@ static int swap_mapping(fp_session *s, const fp_plugin_path *path, const char *s
     s->engaged = false;
     fp_history_end_gesture(&s->history);
     fp_engine_step_end_gesture(&s->engine, &s->log);
+    fp_skin_reach_gesture_end(&s->gesture_reach, s->head.mm_per_unit, &s->log);
     contact_end_gesture(s);
     fp_engine_step_invalidate(&s->engine);
     fp_mapping_step_init(&s->mapping_step, &s->cs, s->mapping_budget_ms);
@@ -1305,6 +1310,7 @@ void fp_session_destroy(fp_session **sp)
     fp_session_stop(s, msg, sizeof msg);
     fp_mapping_step_flush(&s->mapping_step, &s->log);
     fp_engine_step_flush(&s->engine, &s->log);
+    fp_skin_reach_gesture_end(&s->gesture_reach, s->head.mm_per_unit, &s->log);
     contact_end_gesture(s);
     for (size_t i = 0; i < s->input_count; i++) fp_input_instance_close(&s->inputs[i]);
     destroy_mapping(s, s->mapping, s->mapping_name);

@@ -232,8 +232,8 @@ static int run_main(int argc, char **argv)
     signal(SIGINT, on_signal);
     signal(SIGTERM, on_signal);
 
-    size_t cap = 1024, nupdates = 0;
-    double *update_ms = malloc(cap * sizeof *update_ms);
+    size_t cap = 1024, nupdates = 0, reach_cap = 0, nreach = 0;
+    double *update_ms = malloc(cap * sizeof *update_ms), *reach = NULL, reach_asked_max = 0;
     uint64_t frames = 0, commits = 0, engages = 0, active_frames = 0, guarded = 0, limited = 0;
     double min_det_j = INFINITY, collide_t = 1.0;
     uint64_t collided = 0;
@@ -274,6 +274,17 @@ static int run_main(int argc, char **argv)
             collided++;
             if (st.collide_t < collide_t) collide_t = st.collide_t;
         }
+        for (size_t i = 0; i < st.reach_vectors; i++) { /* how far the skin followed */
+            if (nreach == reach_cap) {
+                size_t nc = reach_cap ? 2 * reach_cap : 1024;
+                double *grown = realloc(reach, nc * sizeof *reach);
+                if (!grown) break;
+                reach = grown;
+                reach_cap = nc;
+            }
+            reach[nreach++] = st.reach[i];
+        }
+        if (st.reach_asked_max > reach_asked_max) reach_asked_max = st.reach_asked_max;
         if (st.active) {
             if (nupdates == cap) {
                 double *grown = realloc(update_ms, 2 * cap * sizeof *update_ms);
@@ -354,13 +365,22 @@ static int run_main(int argc, char **argv)
         status = fp_app_export_close("facepuppet run", "--export", &ex, export_fmt, export_file, 0.1, quiet,
                                      stderr);
     fp_export_abort(&ex);
-    double med = fp_median(update_ms, nupdates);
+    double med = fp_median(update_ms, nupdates), mmu = fp_session_head(s)->mm_per_unit;
+    char reach_text[200] = "";
+    if (nreach)
+        snprintf(reach_text, sizeof reach_text,
+                 "; the skin followed the fingertips %.0f%% (median over %zu touching vectors, 10th "
+                 "percentile %.0f%%, longest drag %.1f mm)", 100.0 * fp_median(reach, nreach), nreach,
+                 100.0 * fp_percentile(reach, nreach, 0.10), reach_asked_max * mmu);
+    free(reach);
     printf("frames %llu, deforming %llu, engaged %llu, committed %llu; vertices moved %zu of %zu; "
-           "displacement mean %.6g max %.6g (mesh units); update median %.3f ms over %zu updates; "
+           "displacement mean %.3g mm max %.3g mm (%.6g, %.6g mesh units of %.4g mm)%s; update median "
+           "%.3f ms over %zu updates; "
            "fold-over guard acted on %llu frames (stopped short on %llu), min det J %.3g; "
            "contact guard scaled back %llu frames (least kept %.0f%%); events dropped %lu%s%s\n",
            (unsigned long long)frames, (unsigned long long)active_frames, (unsigned long long)engages,
-           (unsigned long long)commits, moved, n, n ? sum / n : 0.0, max, med, nupdates,
+           (unsigned long long)commits, moved, n, n ? sum / n * mmu : 0.0, max * mmu, n ? sum / n : 0.0,
+           max, mmu, reach_text, med, nupdates,
            (unsigned long long)guarded, (unsigned long long)limited,
            active_frames ? min_det_j : 1.0, (unsigned long long)collided, 100.0 * collide_t,
            fp_session_dropped(s), status == FP_EXIT_OK ? "; wrote " : "",
