@@ -101,7 +101,7 @@ static void one_run(const char *face, const char *rec, samples *all, int *runs_c
     size_t n = fp_session_vertex_count(s);
     double R = fp_session_radius(s), mm = fp_session_head(s)->mm_per_unit;
     samples run = {0};
-    unsigned long frames = 0, active = 0, limited = 0, by_contact = 0, composed = 0;
+    unsigned long frames = 0, active = 0, limited = 0, by_contact = 0, by_flip = 0, composed = 0;
     int substeps = 1;
     double max_asked = 0;
     for (uint64_t k = 0;; k++) {
@@ -114,6 +114,7 @@ static void one_run(const char *face, const char *rec, samples *all, int *runs_c
             active++;
             limited += st.guard_reached < 1.0;
             by_contact += st.collide_t < 1.0;
+            by_flip += st.collide_t < 1.0 && st.collide_pairs == 0;
             composed += st.guard_substeps > 1;
             if (st.guard_substeps > substeps) substeps = st.guard_substeps;
             const fp_control_set *cs = fp_session_control_set(s);
@@ -140,8 +141,8 @@ static void one_run(const char *face, const char *rec, samples *all, int *runs_c
     }
     double med = run.n ? fp_median(run.v, run.n) : NAN, p10 = run.n ? fp_percentile(run.v, run.n, 0.10) : NAN;
     printf("%-14.14s %-16s frames %4lu active %4lu composed %3lu (up to %2d maps) limited %3lu "
-           "contact-scaled %3lu vectors %4zu reach median %5.1f%% p10 %5.1f%%, largest ask %.1f mm "
-           "(R %.1f mm)\n", face, rec, frames, active, composed, substeps, limited, by_contact, run.n,
+           "contact-scaled %3lu (%3lu for flips alone) vectors %4zu reach median %5.1f%% p10 %5.1f%%, largest ask %.1f mm "
+           "(R %.1f mm)\n", face, rec, frames, active, composed, substeps, limited, by_contact, by_flip, run.n,
            100 * med, 100 * p10, max_asked * mm, R * mm);
     fflush(stdout);
     if (run.n) {

@@ -232,8 +232,9 @@ static int run_main(int argc, char **argv)
     signal(SIGINT, on_signal);
     signal(SIGTERM, on_signal);
 
-    size_t cap = 1024, nupdates = 0, reach_cap = 0, nreach = 0;
-    double *update_ms = malloc(cap * sizeof *update_ms), *reach = NULL, reach_asked_max = 0;
+    size_t cap = 1024, nupdates = 0;
+    double *update_ms = malloc(cap * sizeof *update_ms);
+    fp_app_reach reach = {0};
     uint64_t frames = 0, commits = 0, engages = 0, active_frames = 0, guarded = 0, limited = 0;
     double min_det_j = INFINITY, collide_t = 1.0;
     uint64_t collided = 0;
@@ -274,17 +275,7 @@ static int run_main(int argc, char **argv)
             collided++;
             if (st.collide_t < collide_t) collide_t = st.collide_t;
         }
-        for (size_t i = 0; i < st.reach_vectors; i++) { /* how far the skin followed */
-            if (nreach == reach_cap) {
-                size_t nc = reach_cap ? 2 * reach_cap : 1024;
-                double *grown = realloc(reach, nc * sizeof *reach);
-                if (!grown) break;
-                reach = grown;
-                reach_cap = nc;
-            }
-            reach[nreach++] = st.reach[i];
-        }
-        if (st.reach_asked_max > reach_asked_max) reach_asked_max = st.reach_asked_max;
+        fp_app_reach_add(&reach, &st); /* how far the skin followed */
         if (st.active) {
             if (nupdates == cap) {
                 double *grown = realloc(update_ms, 2 * cap * sizeof *update_ms);
@@ -366,13 +357,9 @@ static int run_main(int argc, char **argv)
                                      stderr);
     fp_export_abort(&ex);
     double med = fp_median(update_ms, nupdates), mmu = fp_session_head(s)->mm_per_unit;
-    char reach_text[200] = "";
-    if (nreach)
-        snprintf(reach_text, sizeof reach_text,
-                 "; the skin followed the fingertips %.0f%% (median over %zu touching vectors, 10th "
-                 "percentile %.0f%%, longest drag %.1f mm)", 100.0 * fp_median(reach, nreach), nreach,
-                 100.0 * fp_percentile(reach, nreach, 0.10), reach_asked_max * mmu);
-    free(reach);
+    char reach_text[200];
+    fp_app_reach_text(&reach, mmu, reach_text, sizeof reach_text);
+    fp_app_reach_free(&reach);
     printf("frames %llu, deforming %llu, engaged %llu, committed %llu; vertices moved %zu of %zu; "
            "displacement mean %.3g mm max %.3g mm (%.6g, %.6g mesh units of %.4g mm)%s; update median "
            "%.3f ms over %zu updates; "
