@@ -4,7 +4,7 @@
 #include "fp_session.h"
 
 #include "changed.h"
-#include "contact.h"
+#include "fp_contact.h"
 #include "csrbf.h"
 #include "fp_plugin_crash.h"
 #include "fp_mesh.h"
