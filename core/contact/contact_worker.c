@@ -4,9 +4,9 @@
 #define _POSIX_C_SOURCE 200809L /* sched_yield */
 #include "contact_internal.h"
 #include "fp_clock.h"
+#include "fp_worker.h"
 
 #include <errno.h>
-#include <pthread.h>
 #include <sched.h>
 #include <stdatomic.h>
 #include <stdlib.h>
@@ -35,17 +35,14 @@ typedef struct wtask {            /* a task: the marking's mark_range(x, y, z), 
 } wtask;
 
 typedef struct pool {
-    pthread_t th;
-    pthread_mutex_t mu;
-    pthread_cond_t cv;
-    bool quit;                    /* under mu */
-    uint32_t gen;                 /* under mu: the newest job's number */
-    atomic_uint agen;             /* gen, for the worker's polling */
+    fp_worker *w;                 /* the thread (fp_worker.h); a job's number is its wake's */
+    uint32_t gen;                 /* the newest job's number (written under the worker's lock,
+                                     publish_job) */
+    uint32_t seen;                /* the worker's: the last job it ran */
     _Atomic uint64_t next;        /* gen << 32 | the next task */
     atomic_uint ntask;            /* the job's tasks so far */
     atomic_bool filling;          /* the caller is still adding tasks to the job */
     atomic_int busy;              /* the worker may hold a task */
-    atomic_bool stop;             /* quit, for the worker's polling */
     fp_contact *c;                /* the job (written before its number is published) */
     int kind;
     bool record;                  /* the walk's: new pairs' vertices into the lanes' rec */
@@ -93,15 +90,6 @@ static void run_task(pool *p, lane *ln, const wtask *t)
     }
 }
 
-static inline void cpu_pause(void)
-{
-#if defined(__x86_64__) || defined(__i386__)
-    __builtin_ia32_pause();
-#elif defined(__aarch64__)
-    __asm__ __volatile__("yield");
-#endif
-}
-
 /* claim and run job gen's tasks until none is left and none is coming */
 static void run_tasks(pool *p, lane *ln, uint32_t gen)
 {
@@ -114,56 +102,38 @@ static void run_tasks(pool *p, lane *ln, uint32_t gen)
                 continue;
             }
             if (++spins > 1024) sched_yield(); /* the caller is making the next task */
-            else cpu_pause();
+            else fp_cpu_pause();
             continue;
         }
         if (atomic_compare_exchange_weak(&p->next, &cur, cur + 1)) run_task(p, ln, &p->task[(uint32_t)cur]);
     }
 }
 
-/* The worker: asleep until a job comes (a step's first is its marking), then it polls for jobs,
- * yielding its core between polls, until none has come for FP_POOL_IDLE_NS: through a
- * deformation at 60 frames a second it does not sleep between frames. Waking it from a sleep
- * took over a millisecond on a 2-core virtual machine, and now and then a whole step: with a
- * 3 ms poll it took no task in about 7% of the 1.7M frames (contact p99 6.6 ms), with 20 ms
- * in none (p99 4.7 ms). */
-static void *pool_main(void *arg)
+/* The worker (fp_worker.h): parked until a job comes (a step's first is its marking), then
+ * it polls for jobs, yielding its core between polls, until none has come for
+ * FP_POOL_IDLE_NS: through a deformation at 60 frames a second it does not sleep between
+ * frames. Waking it from a sleep took over a millisecond on a 2-core virtual machine, and
+ * now and then a whole step: with a 3 ms poll it took no task in about 7% of the 1.7M
+ * frames (contact p99 6.6 ms), with 20 ms in none (p99 4.7 ms). One poll: the newest job,
+ * when it has not run it yet (its number is the wake's, so the jobs it ran are the wakes it
+ * served). */
+static bool pool_poll(void *user, fp_worker *w)
 {
-    pool *p = arg;
-    uint32_t seen = 0;
-    for (;;) {
-        pthread_mutex_lock(&p->mu);
-        while (!p->quit && p->gen == seen) pthread_cond_wait(&p->cv, &p->mu);
-        bool quit = p->quit;
-        pthread_mutex_unlock(&p->mu);
-        if (quit) return NULL;
-        for (int64_t idle = fp_now_ns();;) {
-            uint32_t g = atomic_load(&p->agen);
-            if (g != seen) {
-                seen = g;
-                atomic_store(&p->busy, 1);
-                run_tasks(p, &p->c->tk->lane[1], g);
-                atomic_store(&p->busy, 0);
-                idle = fp_now_ns();
-                continue;
-            }
-            if (fp_now_ns() - idle > FP_POOL_IDLE_NS || atomic_load(&p->stop)) break;
-            sched_yield();
-        }
-    }
+    pool *p = user;
+    uint32_t g = fp_worker_wakes(w);
+    if (g == p->seen) return false;
+    p->seen = g;
+    fp_worker_served(w, g);
+    atomic_store(&p->busy, 1);
+    run_tasks(p, &p->c->tk->lane[1], g);
+    atomic_store(&p->busy, 0);
+    return true;
 }
 
 void fpc_pool_free(pool *p)
 {
     if (!p) return;
-    atomic_store(&p->stop, true);
-    pthread_mutex_lock(&p->mu);
-    p->quit = true;
-    pthread_cond_signal(&p->cv);
-    pthread_mutex_unlock(&p->mu);
-    pthread_join(p->th, NULL);
-    pthread_mutex_destroy(&p->mu);
-    pthread_cond_destroy(&p->cv);
+    fp_worker_destroy(&p->w);
     free(p->task);
     free(p);
 }
@@ -180,27 +150,27 @@ pool *fpc_pool_get(fp_contact *c)
     atomic_init(&p->next, 0);
     atomic_init(&p->ntask, 0);
     atomic_init(&p->busy, 0);
-    atomic_init(&p->agen, 0);
-    atomic_init(&p->stop, false);
     p->c = c;
-    if (pthread_mutex_init(&p->mu, NULL)) {
+    /* polls with a yield between polls, no pause: a job's tasks come as the caller makes them */
+    const fp_worker_spec spec = {.poll = pool_poll, .user = p, .idle_ns = FP_POOL_IDLE_NS,
+                                 .yield_ns = 0, .pauses = 0};
+    int rc = fp_worker_create(&spec, &p->w);
+    if (rc) {
         free(p);
-        return NULL;
-    }
-    if (pthread_cond_init(&p->cv, NULL)) {
-        pthread_mutex_destroy(&p->mu);
-        free(p);
-        return NULL;
-    }
-    if (pthread_create(&p->th, NULL, pool_main, p)) {
-        pthread_cond_destroy(&p->cv);
-        pthread_mutex_destroy(&p->mu);
-        free(p);
-        c->threads = 1; /* not again every frame */
+        if (rc != -ENOMEM) c->threads = 1; /* no thread could be made: not again every frame */
         return NULL;
     }
     k->pool = p;
     return p;
+}
+
+/* fp_worker_wake's publish: the job's number (the wake's) and its first task, before the
+ * number reaches the worker's polls */
+static void publish_job(void *arg, uint32_t wake)
+{
+    pool *p = arg;
+    p->gen = wake;
+    atomic_store(&p->next, (uint64_t)wake << 32);
 }
 
 /* Open a job of this kind on shape s (and ref): the worker may start on its tasks as the
@@ -219,12 +189,7 @@ int fpc_job_open(fp_contact *c, pool *p, int kind, const float *s, const float *
     p->ref = ref;
     atomic_store(&p->ntask, 0);
     atomic_store(&p->filling, true);
-    pthread_mutex_lock(&p->mu);
-    uint32_t gen = ++p->gen;
-    atomic_store(&p->next, (uint64_t)gen << 32);
-    atomic_store(&p->agen, gen);
-    pthread_cond_signal(&p->cv);
-    pthread_mutex_unlock(&p->mu);
+    fp_worker_wake(p->w, publish_job, p);
     return 0;
 }
 
