@@ -5,8 +5,9 @@
  *   2 hand poses and calibration (core/pose/fp_pose.h): FK, workspace calibration
  *   3 the mapping call (step_mapping.h): the control set, checked
  *   4 the rig (step_rig.h): channels pose the base (the jaw), fingers blended by mobility
- *   5 the engine (step_engine.h): factor or reuse, solve, guard, evaluate; tip distances
- *   6 history (history.h): commit into the base, undo ring, reset
+ *   5 the engine (step_engine.h): factor or reuse, solve, guard, evaluate; tip distances;
+ *     the contact guard (step_contact.h, core/contact): no new self-crossings shown
+ *   6 history (history.h): commit into the base (step_commit.h), undo ring, reset
  *   7 the recorder (step_record.h): the frame's record to the sink of the options
  *
  * Errors: functions return 0 or a negative code of core/common/fp_error.h: negative errno
