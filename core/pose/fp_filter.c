@@ -76,7 +76,8 @@ int fp_filter_parse(const char *name, const char *filter, const char *mincutoff,
 int fp_filter_describe(const fp_filter_config *c, char *buf, size_t len)
 {
     if (c->kind != FP_FILTER_ONEEURO) return snprintf(buf, len, "filter off");
-    return snprintf(buf, len, "filter oneeuro mincutoff=%g beta=%g dcutoff=%g: a steady motion lags "
+    return snprintf(buf, len, "hands filtered in the session (oneeuro mincutoff=%g beta=%g dcutoff=%g): "
+                    "a steady motion lags "
                     "%.0f ms at 200 mm/s, %.0f ms at 50 mm/s (samples at %.0f Hz; at most %.0f and "
                     "%.0f ms at any rate)", c->mincutoff, c->beta, c->dcutoff,
                     1e3 * fp_oneeuro_lag(c, 200, FP_FILTER_DESCRIBE_HZ),

@@ -89,10 +89,10 @@ int fp_filter_parse(const char *name, const char *filter, const char *mincutoff,
                     const char *beta, const char *dcutoff, fp_filter_config *out, char *err,
                     size_t errlen);
 
-/** One line for a person: "filter oneeuro mincutoff=0.5 beta=0.025 dcutoff=8: a steady motion
- *  lags 16 ms at 200 mm/s, 36 ms at 50 mm/s (samples at 60 Hz; at most 29 and 91 ms at any
- *  rate)" (fp_oneeuro_lag at FP_FILTER_DESCRIBE_HZ, and its bound), or "filter off". Returns
- *  the length snprintf would write. */
+/** One line for a person: "hands filtered in the session (oneeuro mincutoff=0.5 beta=0.025
+ *  dcutoff=8): a steady motion lags 16 ms at 200 mm/s, 36 ms at 50 mm/s (samples at 60 Hz; at
+ *  most 29 and 91 ms at any rate)" (fp_oneeuro_lag at FP_FILTER_DESCRIBE_HZ, and its bound),
+ *  or "filter off". Returns the length snprintf would write. */
 #define FP_FILTER_DESCRIBE_HZ 60.0
 int fp_filter_describe(const fp_filter_config *c, char *buf, size_t len);
 
