@@ -130,9 +130,13 @@ void fp_pose_default_wrist(int hand, float pos[3], float rot[4])
     rot[1] = rot[2] = rot[3] = 0.f;
 }
 
-/* How far the frame at now is past the latest sample t1, in periods t1 - t0, within [-1, 1]
- * (fp_pose_build_at); 0 without an earlier sample (t0 INT64_MIN: none since a disconnect),
- * or when the period is not in (0, FP_POSE_MAX_PERIOD_NS]. */
+/* How far the frame at now is past the latest sample t1, in periods t1 - t0, within (-1, 1)
+ * (fp_pose_build_at): u = (now - t1) / (t1 - t0) down to -1 (interpolation), and ahead up to
+ * FP_POSE_KNEE as it is, then bent smoothly toward 1 (FP_POSE_KNEE + (1 - FP_POSE_KNEE)
+ * (1 - e^-(u - FP_POSE_KNEE) / (1 - FP_POSE_KNEE)): same value and slope at the knee), so
+ * that the prediction never reaches a whole period ahead and yet two frames in a gap of the
+ * tracker (a dropped sample) still differ; 0 without an earlier sample (t0 INT64_MIN: none
+ * since a disconnect), or when the period is not in (0, FP_POSE_MAX_PERIOD_NS]. */
 static double frame_fraction(bool have_prev, int64_t t0, int64_t t1, int64_t now)
 {
     if (!have_prev || t0 == INT64_MIN || t1 <= t0) return 0;
@@ -141,7 +145,10 @@ static double frame_fraction(bool have_prev, int64_t t0, int64_t t1, int64_t now
     int64_t d;
     if (__builtin_sub_overflow(now, t1, &d)) return now > t1 ? 1 : -1;
     double u = (double)d / (double)period;
-    return u < -1 ? -1 : u > 1 ? 1 : u;
+    if (u < -1) return -1;
+    if (u <= FP_POSE_KNEE) return u;
+    const double k = 1 - FP_POSE_KNEE;
+    return FP_POSE_KNEE + k * -expm1(-(u - FP_POSE_KNEE) / k);
 }
 
 /* x1 + u (x1 - x0), in double, rounded to float. */

@@ -10,10 +10,11 @@
  * (fp_filter.h; fp_pose_take_event_filtered, the event's source choosing the filter's state),
  * and fp_pose_build_at gives each hand at the frame's time, not as its last sample held: from
  * the last two samples of each kind (joint positions, joint angles, wrist pose) the frame
- * sees x1 + u (x1 - x0), u = (now - t1) / (t1 - t0) clamped to [-1, 1]: interpolated
- * between them for a frame before the latest sample, predicted at most one sampling period
- * ahead after it, held there when the samples stop (no runaway). A 57 Hz tracker read at 60
- * frames a second thus gives a new pose every frame instead of repeating one every 20th.
+ * sees x1 + u (x1 - x0), u = (now - t1) / (t1 - t0), at least -1: interpolated between
+ * them for a frame before the latest sample, predicted after it, less than one sampling
+ * period ahead (u bent smoothly toward 1 past FP_POSE_KNEE), held there when the samples stop
+ * (no runaway). A 57 Hz tracker read at 60 frames a second thus gives a new pose every frame
+ * instead of repeating one every 20th, and so does a frame in a gap of a dropped sample.
  *
  * Units: hand events in millimetres in the device frame (+x right, +y up, +z toward the
  * performer, taken as the mesh's +x, +y, +z); poses out in mesh units.
@@ -78,6 +79,10 @@ typedef struct fp_pose_hand {
 /** Samples farther apart than this are not extrapolated between (a hand found again after a
  *  pause): the frame holds the latest. */
 #define FP_POSE_MAX_PERIOD_NS 100000000LL
+/** The prediction follows the last two samples' line up to this fraction of a sampling
+ *  period past the latest sample, then bends smoothly toward one whole period, which it
+ *  never reaches (fp_pose_build_at). */
+#define FP_POSE_KNEE 0.9
 
 /** One input's One Euro filters for one hand: a joint each (positions, mm), a glove sensor
  *  each (radians), the wrist's position (mm) and rotation (the quaternion as a 4-vector). */
@@ -128,10 +133,11 @@ void fp_pose_build(fp_pose_state *p);
 /** fp_pose_build at the frame's time now_ns (host clock, as the events' times): each kind of
  *  sample (joint positions; joint angles, per sensor valid in both; the wrist pose, its
  *  rotation by normalised linear extrapolation) is taken as x1 + u (x1 - x0) from its last
- *  two samples (x0 at t0, x1 at t1), u = (now_ns - t1) / (t1 - t0) clamped to [-1, 1] (a
- *  frame between them interpolates, one after t1 is predicted at most one sampling period
- *  ahead and held there), u = 0 where there is no earlier sample since the hand appeared, or
- *  t1 - t0 is not in (0, FP_POSE_MAX_PERIOD_NS]. Deterministic: the same events and frame
+ *  two samples (x0 at t0, x1 at t1), u = (now_ns - t1) / (t1 - t0) at least -1 (a frame
+ *  between them interpolates) and, past FP_POSE_KNEE, FP_POSE_KNEE + (1 - FP_POSE_KNEE)
+ *  (1 - e^-(u - FP_POSE_KNEE) / (1 - FP_POSE_KNEE)) (a frame after t1 is predicted less than
+ *  one sampling period ahead, and held there as the samples stop); u = 0 where there is no
+ *  earlier sample since the hand appeared, or t1 - t0 is not in (0, FP_POSE_MAX_PERIOD_NS]. Deterministic: the same events and frame
  *  times give the same poses bit for bit. poses[h].time_ns stays the latest hand event's
  *  time (a viewer's latency is measured from it). Call once a frame after the events are
  *  taken. [session-thread]. */

@@ -268,18 +268,30 @@ static void test_frame_time(void **state)
     fp_pose_build_at(p, 105 * MS);
     assert_true(p->poses[R].joints[0][0] == 10.f); /* one sample: as it is */
     fp_pose_take_event(p, &b);
-    struct { int64_t t; float x; } want[] = {
-        {110 * MS, 20.f}, {115 * MS, 25.f}, {120 * MS, 30.f}, {140 * MS, 30.f},  /* ahead, capped */
-        {105 * MS, 15.f}, {100 * MS, 10.f}, {50 * MS, 10.f},                     /* between, capped */
+    /* u past the knee: FP_POSE_KNEE + (1 - FP_POSE_KNEE)(1 - e^-(u - FP_POSE_KNEE)/(1 - FP_POSE_KNEE)) */
+    const double k = 1 - FP_POSE_KNEE;
+    double at1 = FP_POSE_KNEE + k * (1 - exp(-(1 - FP_POSE_KNEE) / k));
+    double at3 = FP_POSE_KNEE + k * (1 - exp(-(3 - FP_POSE_KNEE) / k));
+    struct { int64_t t; double x; } want[] = {
+        {110 * MS, 20}, {115 * MS, 25}, {119 * MS, 29},                 /* ahead, on the line */
+        {120 * MS, 20 + 10 * at1}, {140 * MS, 20 + 10 * at3},           /* bent below a period */
+        {105 * MS, 15}, {100 * MS, 10}, {50 * MS, 10},                  /* between, capped */
     };
+    float last = 0;
     for (size_t i = 0; i < sizeof want / sizeof want[0]; i++) {
         fp_pose_build_at(p, want[i].t);
-        assert_true(p->poses[R].joints[0][0] == want[i].x);
-        assert_true(p->poses[R].joints[3][0] == want[i].x + 3);
-        assert_true(p->poses[R].joints[0][1] == 2 * want[i].x);
+        float x = p->poses[R].joints[0][0];
+        if (fabs(x - want[i].x) > 1e-5) fail_msg("at %lld ms: %.7f, want %.7f", (long long)(want[i].t / MS), x, want[i].x);
+        assert_true(x <= 30.f);                              /* never beyond one period ahead */
+        if (i >= 1 && i <= 4) assert_true(x > last);         /* still moving in a gap */
+        last = x;
+        assert_true(fabsf(p->poses[R].joints[3][0] - (x + 3)) < 1e-5f);
+        assert_true(fabsf(p->poses[R].joints[0][1] - 2 * x) < 1e-5f);
         assert_true(p->poses[R].joints[0][2] == -5.f);
         assert_int_equal(p->poses[R].time_ns, 110 * MS); /* the latest event's time */
     }
+    fp_pose_build_at(p, 10000 * MS);                     /* stopped long ago: held */
+    assert_true(fabsf(p->poses[R].joints[0][0] - 30.f) < 1e-5f);
     fp_pose_build(p); /* the latest sample as it is */
     assert_true(p->poses[R].joints[0][0] == 20.f);
     /* a pause longer than FP_POSE_MAX_PERIOD_NS: held */

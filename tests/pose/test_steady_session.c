@@ -10,12 +10,17 @@
  *    joints and of the face's vertices is at least 5x smaller filtered than unfiltered;
  *  - lag: the filtered hand's joints, and the face's vertices (every 16th), against the clean
  *    ones shifted by s frames (s from -4 to 4 by 0.05, the clean frames interpolated): the s
- *    of least squared difference (the cross-correlation's peak) is at most one frame;
+ *    of least squared difference, each coordinate's mean difference taken out (the
+ *    cross-correlation's peak), is at most one frame;
  *  - stutter: the clean recording (108 Hz, its three real gaps of 27 ms included) and a 57 Hz
  *    copy resampled from it give no two consecutive frames with the same hand joints while
  *    the hand moves (after the hand's first two frames: a single sample shows no motion).
  *
- * The noisy and resampled copies are written by the test into a temporary folder. */
+ * The noisy and resampled copies are written by the test into a temporary folder. For
+ * trying other settings or recordings (figures printed; the thresholds still apply):
+ * FP_TEST_FILTER_KEYS=",beta=0.05" (appended to the filtered input's SPEC),
+ * FP_TEST_STEADY_CLIP=grab (a *_joints_mm.csv of ../shared/data/hands/leap-motion),
+ * FP_TEST_STEADY_HZ=57 (the jitter test's recording resampled first, as the 57 Hz copy). */
 #define _GNU_SOURCE
 #include "fp_plugin_host.h"
 #include "fp_session.h"
@@ -216,7 +221,9 @@ static char *copy_path(const char *name)
 static const char *clip_path(void)
 {
     static char p[4300];
-    snprintf(p, sizeof p, "%s/hands/leap-motion/HandSplay-110fps_joints_mm.csv", fp_test_data_dir());
+    const char *clip = getenv("FP_TEST_STEADY_CLIP");
+    snprintf(p, sizeof p, "%s/hands/leap-motion/%s_joints_mm.csv", fp_test_data_dir(),
+             clip && *clip ? clip : "HandSplay-110fps");
     return p;
 }
 
@@ -224,15 +231,19 @@ static const char *clip_path(void)
 
 /* The shift s (frames, -4 to 4 by 0.05) that brings the clean trajectory nearest to the other:
  * the least mean squared difference between other[k] and clean at k - s (interpolated
- * between frames), over the frames where both saw the hand: the cross-correlation's peak.
- * Positive: the other lags. clean and other: frames x npts points x 3. */
+ * between frames), each coordinate's mean difference taken out (a constant offset, such as
+ * a mapping's zero taken from a noisy first pose, is no lag), over the frames where both saw
+ * the hand: the cross-correlation's peak. Positive: the other lags. clean and other:
+ * frames x npts points x 3. */
 static double best_shift(const float *clean, const float *other, size_t npts, const bool *seen_clean,
                          const bool *seen_other, size_t frames)
 {
     double best = INFINITY, best_s = 0;
+    double *sum = calloc(npts * 3, sizeof *sum);
     for (int si = -80; si <= 80; si++) {
         double s = si * 0.05, e = 0;
         size_t m = 0;
+        memset(sum, 0, npts * 3 * sizeof *sum);
         for (size_t k = 5; k + 5 < frames; k++) {
             double at = (double)k - s;
             size_t a = (size_t)floor(at);
@@ -240,29 +251,42 @@ static double best_shift(const float *clean, const float *other, size_t npts, co
             if (a + 1 >= frames || !seen_clean[a] || !seen_clean[a + 1] || !seen_other[k]) continue;
             for (size_t c = 0; c < npts * 3; c++) {
                 double ref = (1 - w) * clean[a * npts * 3 + c] + w * clean[(a + 1) * npts * 3 + c];
-                e += pow(other[k * npts * 3 + c] - ref, 2);
+                double d = other[k * npts * 3 + c] - ref;
+                e += d * d;
+                sum[c] += d;
             }
             m++;
         }
-        if (m && e / (double)m < best) {
+        if (!m) continue;
+        for (size_t c = 0; c < npts * 3; c++) e -= sum[c] * sum[c] / (double)m;
+        if (e / (double)m < best) {
             best = e / (double)m;
             best_s = s;
         }
     }
+    free(sum);
     return best_s;
 }
 
 static void test_jitter_and_lag(void **state)
 {
     (void)state;
-    static rows clean, noisy;
+    static rows clean, noisy, recorded;
     read_rows(clip_path(), &clean);
+    const char *clean_csv = clip_path();
+    double hz = getenv("FP_TEST_STEADY_HZ") ? atof(getenv("FP_TEST_STEADY_HZ")) : 0;
+    if (hz > 0) {
+        recorded = clean;
+        resample(&recorded, hz, &clean);
+        clean_csv = copy_path("clean_joints_mm.csv");
+        write_rows(clean_csv, &clean);
+    }
     noisy = clean;
     add_noise(&noisy, 1.0, 51);
     const char *noisy_csv = copy_path("noisy_joints_mm.csv");
     write_rows(noisy_csv, &noisy);
     char spec[3][4400];
-    snprintf(spec[0], sizeof spec[0], "replay:%s,fast=1", clip_path());
+    snprintf(spec[0], sizeof spec[0], "replay:%s,fast=1", clean_csv);
     snprintf(spec[1], sizeof spec[1], "replay:%s,fast=1", noisy_csv);
     snprintf(spec[2], sizeof spec[2], "replay:%s,fast=1,filter=oneeuro%s", noisy_csv,
              getenv("FP_TEST_FILTER_KEYS") ? getenv("FP_TEST_FILTER_KEYS") : "");
@@ -319,7 +343,10 @@ static void test_jitter_and_lag(void **state)
         hand_lag[i] = best_shift(&r[0].hand[0][0][0], &r[i].hand[0][0][0], NJ, r[0].present, r[i].present, frames);
         face_lag[i] = best_shift(r[0].face, r[i].face, m, r[0].present, r[i].present, frames);
     }
-    printf("steady: %zu frames at %d fps, %zu still-hold frames (clean hand slower than %.0f mm/s), "
+    printf("steady: %s%s, %s: ", strrchr(clip_path(), '/') + 1, hz > 0 ? " resampled" : "",
+           spec[2] + strlen(noisy_csv) + strlen("replay:,fast=1,"));
+    if (hz > 0) printf("(%.0f Hz) ", hz);
+    printf("%zu frames at %d fps, %zu still-hold frames (clean hand slower than %.0f mm/s), "
            "%zu moving\n  hand jitter in holds (RMS frame-to-frame beyond the clean motion): "
            "unfiltered %.3f mm, filtered %.3f mm: %.1fx less\n  face jitter in holds: unfiltered "
            "%.3g mm, filtered %.3g mm: %.1fx less\n  lag behind the clean motion (cross-correlation "
@@ -331,7 +358,11 @@ static void test_jitter_and_lag(void **state)
     assert_true(hand_rms[1] >= 5 * hand_rms[2]);
     assert_true(face_rms[2] > 0 || face_rms[1] == 0);
     assert_true(face_rms[1] >= 5 * face_rms[2]);
-    assert_true(fabs(hand_lag[1]) <= 0.5 && fabs(face_lag[1]) <= 0.5);
+    /* the unfiltered hand has no lag (a check of the measure); the unfiltered face's peak is
+     * printed only: the noise through the mapping's clamps (the jaw closes no further than
+     * shut) moves it (-0.35 frames here; on Waiting, whose face hardly moves but by the
+     * noise, 1.7 frames, and the measure means nothing there) */
+    assert_true(fabs(hand_lag[1]) <= 0.5);
     assert_true(hand_lag[2] <= 1.0);
     assert_true(face_lag[2] <= 1.0);
     for (int i = 0; i < 3; i++) close_run(&r[i]);
@@ -399,6 +430,8 @@ static int teardown(void **state)
     snprintf(p, sizeof p, "%s/noisy_joints_mm.csv", g_dir);
     unlink(p);
     snprintf(p, sizeof p, "%s/57hz_joints_mm.csv", g_dir);
+    unlink(p);
+    snprintf(p, sizeof p, "%s/clean_joints_mm.csv", g_dir);
     unlink(p);
     rmdir(g_dir);
     return 0;
