@@ -130,12 +130,13 @@ void fp_pose_default_wrist(int hand, float pos[3], float rot[4])
     rot[1] = rot[2] = rot[3] = 0.f;
 }
 
-/* How far the frame at now is past the latest sample t1, in periods t1 - t0, within (-1, 1)
+/* How far the frame at now is past the latest sample t1, in periods t1 - t0, within [-1, 1]
  * (fp_pose_build_at): u = (now - t1) / (t1 - t0) down to -1 (interpolation), and ahead up to
  * FP_POSE_KNEE as it is, then bent smoothly toward 1 (FP_POSE_KNEE + (1 - FP_POSE_KNEE)
  * (1 - e^-(u - FP_POSE_KNEE) / (1 - FP_POSE_KNEE)): same value and slope at the knee), so
  * that the prediction never reaches a whole period ahead and yet two frames in a gap of the
- * tracker (a dropped sample) still differ; 0 without an earlier sample (t0 INT64_MIN: none
+ * tracker (a dropped sample) still differ (1 itself only in the limit: long after, or a
+ * now - t1 beyond int64); 0 without an earlier sample (t0 INT64_MIN: none
  * since a disconnect), or when the period is not in (0, FP_POSE_MAX_PERIOD_NS]. */
 static double frame_fraction(bool have_prev, int64_t t0, int64_t t1, int64_t now)
 {
