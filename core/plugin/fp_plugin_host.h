@@ -11,6 +11,7 @@
 
 #include "fp_clock.h" /* fp_now_ns, the host clock of the ABI */
 #include "fp_error.h"
+#include "fp_filter.h"
 #include "log_relay.h"
 
 #include <facepuppet/plugin.h>
@@ -186,12 +187,18 @@ typedef struct fp_input_instance {
                                             drained on the owner's (log_relay.h) */
     fp_host_log_fn log_fn;               /* where they are drained to (fp_input_instance_set_log) */
     void *log_user;
+    fp_filter_config filter;             /* the filter of its hand events (fp_filter.h): the
+                                            SPEC's filter keys, else the default of its NAME */
 } fp_input_instance;
 
 /** Load the plugin for `spec` and create the instance (not yet started). The host strips
- *  the key `record=FILE` (record this input's events in the event-log format) before the
- *  plugin sees the keys. Returns 0, an FP_EPLUGIN_* code (fp_error.h), or the plugin's own negative errno;
- *  err names the SPEC and reason. */
+ *  its own keys before the plugin sees the keys: `record=FILE` (record this input's events in
+ *  the event-log format; `force=1` beside it) and the filter keys `filter=oneeuro|off`,
+ *  `mincutoff=HZ`, `beta=B`, `dcutoff=HZ` (fp_filter_parse: into inst->filter, starting from
+ *  fp_filter_default of the SPEC's NAME; a bad value is -EINVAL naming the SPEC and key). A
+ *  filter that is on is described (fp_filter_describe, with its lag) in an info line of the
+ *  input's log. Returns 0, -EINVAL, an FP_EPLUGIN_* code (fp_error.h), or the plugin's own
+ *  negative errno; err names the SPEC and reason. */
 int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
                            const char *spec_text, uint32_t source, char *err, size_t errlen);
 /** Call the plugin's start(): its threads or device run from here. Returns 0 or the plugin's

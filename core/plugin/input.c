@@ -159,6 +159,15 @@ int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
         rc = -EINVAL;
         goto out;
     }
+    /* The filter of its hand events (fp_filter.h), the session's: the plugin never sees
+     * these keys, so every input takes them, a third party's too. */
+    const char *filter = fp_spec_take(&spec, "filter"), *mincutoff = fp_spec_take(&spec, "mincutoff");
+    const char *beta = fp_spec_take(&spec, "beta"), *dcutoff = fp_spec_take(&spec, "dcutoff");
+    char ferr[256];
+    if ((rc = fp_filter_parse(spec.name, filter, mincutoff, beta, dcutoff, &inst->filter, ferr, sizeof ferr))) {
+        snprintf(err, errlen, "input '%s': %s", spec_text, ferr);
+        goto out;
+    }
     rc = fp_plugin_load(path, FP_PLUGIN_INPUT, spec.name, &inst->plugin, err, errlen);
     if (rc) goto out;
     rc = fp_event_queue_init(&inst->queue, FP_INPUT_QUEUE_CAPACITY);
@@ -193,6 +202,11 @@ int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
                      "overwrites)", record, used);
             inst->host.log(&inst->host, FP_LOG_WARNING, msg);
         }
+    }
+    if (inst->filter.kind != FP_FILTER_OFF) {
+        char line[512];
+        fp_filter_describe(&inst->filter, line, sizeof line);
+        inst->host.log(&inst->host, FP_LOG_INFO, line);
     }
 out:
     fp_spec_clear(&spec);

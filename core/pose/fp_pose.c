@@ -1,4 +1,5 @@
-/* Step 2 of the frame: hand poses from events, forward kinematics, workspace calibration. */
+/* Step 2 of the frame: hand poses from events (filtered, at the frame's time), forward
+ * kinematics, workspace calibration. */
 #include "fp_pose.h"
 
 #include <math.h>
@@ -12,35 +13,113 @@ void fp_pose_init(fp_pose_state *p, double hand_size, const fp_calibration *c)
     if (c) p->calib = *c;
 }
 
-void fp_pose_take_event(fp_pose_state *p, const fp_event *ev)
+/* The filter state of the event's input for hand h, or NULL where none applies. */
+static fp_pose_filter *filter_state(fp_pose_state *p, const fp_event *ev, int h, const fp_filter_config *c)
+{
+    if (!c || c->kind != FP_FILTER_ONEEURO || ev->header.source >= FP_POSE_MAX_INPUTS) return NULL;
+    return &p->filters[ev->header.source][h];
+}
+
+static void take_positions(fp_pose_hand *hs, fp_pose_filter *fs, const fp_filter_config *c,
+                           const fp_event_joint_positions *e)
+{
+    hs->prev_positions = hs->have_positions;
+    memcpy(hs->prev_joints_mm, hs->joints_mm, sizeof hs->joints_mm);
+    hs->prev_joints_t_ns = hs->joints_t_ns;
+    for (int j = 0; j < FP_HAND_JOINTS; j++) {
+        double x[3] = {e->mm[j][0], e->mm[j][1], e->mm[j][2]};
+        if (fs) fp_oneeuro_filter(&fs->joints[j], c, 3, 1.0, x, e->header.time_ns, x);
+        for (int k = 0; k < 3; k++) hs->joints_mm[j][k] = (float)x[k];
+    }
+    hs->joints_t_ns = e->header.time_ns;
+}
+
+static void take_angles(fp_pose_hand *hs, fp_pose_filter *fs, const fp_filter_config *c,
+                        const fp_event_joint_angles *e)
+{
+    hs->prev_angles = hs->have_angles;
+    memcpy(hs->prev_radians, hs->angles.radians, sizeof hs->prev_radians);
+    hs->prev_valid = hs->angles.valid;
+    hs->prev_angles_t_ns = hs->angles_t_ns;
+    hs->angles = *e;
+    for (int i = 0; i < FP_GLOVE_SENSORS && fs; i++) {
+        if (!(e->valid & (1u << i))) {
+            fp_oneeuro_reset(&fs->angles[i]); /* a sensor coming back starts afresh */
+            continue;
+        }
+        double x = e->radians[i];
+        fp_oneeuro_filter(&fs->angles[i], c, 1, FP_FILTER_ARM_MM, &x, e->header.time_ns, &x);
+        hs->angles.radians[i] = (float)x;
+    }
+    hs->angles_t_ns = e->header.time_ns;
+}
+
+static void take_wrist(fp_pose_hand *hs, fp_pose_filter *fs, const fp_filter_config *c,
+                       const fp_event_wrist_pose *e)
+{
+    hs->prev_wrist = hs->have_wrist;
+    memcpy(hs->prev_wrist_pos, hs->wrist_pos, sizeof hs->wrist_pos);
+    memcpy(hs->prev_wrist_rot, hs->wrist_rot, sizeof hs->wrist_rot);
+    hs->prev_wrist_t_ns = hs->wrist_t_ns;
+    double pos[3] = {e->position_mm[0], e->position_mm[1], e->position_mm[2]};
+    double q[4] = {e->rotation[0], e->rotation[1], e->rotation[2], e->rotation[3]};
+    if (fs) {
+        /* q and -q are one rotation: the one nearer the filter's, so that it averages the
+         * rotation, not the sign */
+        if (fs->wrist_rot.started &&
+            q[0] * fs->wrist_rot.x[0] + q[1] * fs->wrist_rot.x[1] + q[2] * fs->wrist_rot.x[2] + q[3] * fs->wrist_rot.x[3] < 0)
+            for (int k = 0; k < 4; k++) q[k] = -q[k];
+        fp_oneeuro_filter(&fs->wrist_pos, c, 3, 1.0, pos, e->header.time_ns, pos);
+        /* |dq/dt| is half the angular speed */
+        fp_oneeuro_filter(&fs->wrist_rot, c, 4, 2 * FP_FILTER_ARM_MM, q, e->header.time_ns, q);
+        double n = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+        if (n > 1e-12 && isfinite(n))
+            for (int k = 0; k < 4; k++) q[k] /= n;
+    }
+    for (int k = 0; k < 3; k++) hs->wrist_pos[k] = (float)pos[k];
+    for (int k = 0; k < 4; k++) hs->wrist_rot[k] = (float)q[k];
+    hs->wrist_t_ns = e->header.time_ns;
+}
+
+void fp_pose_take_event_filtered(fp_pose_state *p, const fp_event *ev, const fp_filter_config *filter)
 {
     int h = ev->header.hand;
     if (h != FP_HAND_LEFT && h != FP_HAND_RIGHT) return;
     fp_pose_hand *hs = &p->hands[h];
+    fp_pose_filter *fs = filter_state(p, ev, h, filter);
     switch (ev->header.type) {
     case FP_EVENT_JOINT_POSITIONS:
-        memcpy(hs->joints_mm, ev->positions.mm, sizeof ev->positions.mm);
+        take_positions(hs, fs, filter, &ev->positions);
         hs->have_positions = hs->present = true;
         hs->time_ns = ev->header.time_ns;
         break;
     case FP_EVENT_JOINT_ANGLES:
-        hs->angles = ev->angles;
+        take_angles(hs, fs, filter, &ev->angles);
         hs->have_angles = hs->present = true;
         hs->have_positions = false;
         hs->time_ns = ev->header.time_ns;
         break;
     case FP_EVENT_WRIST_POSE:
-        memcpy(hs->wrist_pos, ev->wrist.position_mm, sizeof hs->wrist_pos);
-        memcpy(hs->wrist_rot, ev->wrist.rotation, sizeof hs->wrist_rot);
+        take_wrist(hs, fs, filter, &ev->wrist);
         hs->have_wrist = true;
         break;
     case FP_EVENT_STATUS:
-        if (ev->status.code == FP_STATUS_DISCONNECTED) hs->present = false;
+        if (ev->status.code == FP_STATUS_DISCONNECTED) {
+            hs->present = false;
+            /* no motion is guessed across the gap (the next sample has no earlier one:
+             * frame_fraction); the filter starts afresh */
+            hs->prev_positions = hs->prev_angles = hs->prev_wrist = false;
+            hs->joints_t_ns = hs->angles_t_ns = hs->wrist_t_ns = INT64_MIN;
+            if (ev->header.source < FP_POSE_MAX_INPUTS)
+                memset(&p->filters[ev->header.source][h], 0, sizeof p->filters[0][0]);
+        }
         break;
     default:
         break;
     }
 }
+
+void fp_pose_take_event(fp_pose_state *p, const fp_event *ev) { fp_pose_take_event_filtered(p, ev, NULL); }
 
 void fp_pose_default_wrist(int hand, float pos[3], float rot[4])
 {
@@ -51,7 +130,35 @@ void fp_pose_default_wrist(int hand, float pos[3], float rot[4])
     rot[1] = rot[2] = rot[3] = 0.f;
 }
 
-void fp_pose_build(fp_pose_state *p)
+/* How far the frame at now is past the latest sample t1, in periods t1 - t0, within [-1, 1]
+ * (fp_pose_build_at): u = (now - t1) / (t1 - t0) down to -1 (interpolation), and ahead up to
+ * FP_POSE_KNEE as it is, then bent smoothly toward 1 (FP_POSE_KNEE + (1 - FP_POSE_KNEE)
+ * (1 - e^-(u - FP_POSE_KNEE) / (1 - FP_POSE_KNEE)): same value and slope at the knee), so
+ * that the prediction never reaches a whole period ahead and yet two frames in a gap of the
+ * tracker (a dropped sample) still differ (1 itself only in the limit: long after, or a
+ * now - t1 beyond int64); 0 without an earlier sample (t0 INT64_MIN: none
+ * since a disconnect), or when the period is not in (0, FP_POSE_MAX_PERIOD_NS]. */
+static double frame_fraction(bool have_prev, int64_t t0, int64_t t1, int64_t now)
+{
+    if (!have_prev || t0 == INT64_MIN || t1 <= t0) return 0;
+    uint64_t period = (uint64_t)t1 - (uint64_t)t0; /* (no overflow, whatever the stamps) */
+    if (period > (uint64_t)FP_POSE_MAX_PERIOD_NS) return 0;
+    int64_t d;
+    if (__builtin_sub_overflow(now, t1, &d)) return now > t1 ? 1 : -1;
+    double u = (double)d / (double)period;
+    if (u < -1) return -1;
+    if (u <= FP_POSE_KNEE) return u;
+    const double k = 1 - FP_POSE_KNEE;
+    return FP_POSE_KNEE + k * -expm1(-(u - FP_POSE_KNEE) / k);
+}
+
+/* x1 + u (x1 - x0), in double, rounded to float. */
+static float ahead(float x0, float x1, double u)
+{
+    return (float)((double)x1 + u * ((double)x1 - (double)x0));
+}
+
+static void build(fp_pose_state *p, bool at, int64_t now_ns)
 {
     for (int h = 0; h < FP_HANDS; h++) {
         fp_pose_hand *hs = &p->hands[h];
@@ -59,11 +166,35 @@ void fp_pose_build(fp_pose_state *p)
         out->present = hs->present;
         if (!hs->present) continue;
         out->time_ns = hs->time_ns;
-        if (!hs->have_positions && hs->have_angles) {
-            float pos[3], rot[4];
+        if (hs->have_positions) {
+            double u = at ? frame_fraction(hs->prev_positions, hs->prev_joints_t_ns, hs->joints_t_ns, now_ns) : 0;
+            for (int j = 0; j < FP_HAND_JOINTS; j++)
+                for (int k = 0; k < 3; k++)
+                    hs->built_mm[j][k] = u == 0 ? hs->joints_mm[j][k] : ahead(hs->prev_joints_mm[j][k], hs->joints_mm[j][k], u);
+        } else if (hs->have_angles) {
+            float pos[3], rot[4], rad[FP_GLOVE_SENSORS];
+            memcpy(rad, hs->angles.radians, sizeof rad);
+            double u = at ? frame_fraction(hs->prev_angles, hs->prev_angles_t_ns, hs->angles_t_ns, now_ns) : 0;
+            if (u != 0)
+                for (int i = 0; i < FP_GLOVE_SENSORS; i++)
+                    if (hs->angles.valid & hs->prev_valid & (1u << i)) rad[i] = ahead(hs->prev_radians[i], rad[i], u);
             if (hs->have_wrist) {
                 memcpy(pos, hs->wrist_pos, sizeof pos);
                 memcpy(rot, hs->wrist_rot, sizeof rot);
+                double w = at ? frame_fraction(hs->prev_wrist, hs->prev_wrist_t_ns, hs->wrist_t_ns, now_ns) : 0;
+                if (w != 0) {
+                    float q0[4];
+                    double d = 0, n = 0;
+                    memcpy(q0, hs->prev_wrist_rot, sizeof q0);
+                    for (int k = 0; k < 4; k++) d += (double)q0[k] * rot[k];
+                    for (int k = 0; k < 4 && d < 0; k++) q0[k] = -q0[k];
+                    for (int k = 0; k < 3; k++) pos[k] = ahead(hs->prev_wrist_pos[k], pos[k], w);
+                    double q[4];
+                    for (int k = 0; k < 4; k++) q[k] = (double)rot[k] + w * ((double)rot[k] - q0[k]), n += q[k] * q[k];
+                    n = sqrt(n);
+                    if (n > 1e-12 && isfinite(n))
+                        for (int k = 0; k < 4; k++) rot[k] = (float)(q[k] / n);
+                }
             } else if (p->glove_placed) {
                 memcpy(pos, p->glove_pos[h], sizeof pos);
                 memcpy(rot, p->glove_rot[h], sizeof rot);
@@ -72,12 +203,15 @@ void fp_pose_build(fp_pose_state *p)
             }
             /* A failure (non-finite angle or pose) leaves the joints it could not compute
              * as they were: the last good pose stays. */
-            fp_hand_fk(&p->model, (fp_hand_side)h, hs->angles.radians, hs->angles.valid, pos, rot,
-                       hs->joints_mm);
+            fp_hand_fk(&p->model, (fp_hand_side)h, rad, hs->angles.valid, pos, rot, hs->built_mm);
         }
-        for (int j = 0; j < FP_HAND_JOINTS; j++) fp_pose_to_mesh(&p->calib, h, hs->joints_mm[j], out->joints[j]);
+        for (int j = 0; j < FP_HAND_JOINTS; j++) fp_pose_to_mesh(&p->calib, h, hs->built_mm[j], out->joints[j]);
     }
 }
+
+void fp_pose_build(fp_pose_state *p) { build(p, false, 0); }
+
+void fp_pose_build_at(fp_pose_state *p, int64_t now_ns) { build(p, true, now_ns); }
 
 void fp_pose_default_workspace(float ws_min[3], float ws_max[3])
 {

@@ -6,6 +6,16 @@
  * joint angles and the wrist pose (a default wrist placement for a glove that reports none),
  * then p_mesh = scale * p_mm + offset (the workspace calibration).
  *
+ * Steady hands (issue 51): each hand event may first go through its input's One Euro filter
+ * (fp_filter.h; fp_pose_take_event_filtered, the event's source choosing the filter's state),
+ * and fp_pose_build_at gives each hand at the frame's time, not as its last sample held: from
+ * the last two samples of each kind (joint positions, joint angles, wrist pose) the frame
+ * sees x1 + u (x1 - x0), u = (now - t1) / (t1 - t0), at least -1: interpolated between
+ * them for a frame before the latest sample, predicted after it, less than one sampling
+ * period ahead (u bent smoothly toward 1 past FP_POSE_KNEE), held there when the samples stop
+ * (no runaway). A 57 Hz tracker read at 60 frames a second thus gives a new pose every frame
+ * instead of repeating one every 20th, and so does a frame in a gap of a dropped sample.
+ *
  * Units: hand events in millimetres in the device frame (+x right, +y up, +z toward the
  * performer, taken as the mesh's +x, +y, +z); poses out in mesh units.
  * Errors: nothing here fails; bad input (a hand index outside left/right) is ignored.
@@ -15,6 +25,7 @@
 #ifndef FP_POSE_H
 #define FP_POSE_H
 
+#include "fp_filter.h"
 #include "fp_hand.h"
 #include "fp_head.h"
 
@@ -39,7 +50,8 @@ typedef struct fp_calibration {
     double hand_offset[FP_HANDS][3];/* mesh units, added per hand (left, right) */
 } fp_calibration;
 
-/** What is known of one hand from its events (millimetres, device frame). */
+/** What is known of one hand from its events (millimetres, device frame), as filtered: the
+ *  latest sample of each kind and the one before it (prev_*), each with its event time. */
 typedef struct fp_pose_hand {
     bool present;                 /* seen, and not disconnected since */
     bool have_positions;          /* the latest hand event gave joint positions */
@@ -49,12 +61,42 @@ typedef struct fp_pose_hand {
     float wrist_pos[3], wrist_rot[4];     /* mm; unit quaternion w, x, y, z */
     float joints_mm[FP_HAND_JOINTS][3];   /* fp_hand_joint layout */
     int64_t time_ns;                      /* the latest hand event's host time */
+    /* the samples before the latest (valid where prev_* is set; cleared on a disconnect) */
+    bool prev_positions, prev_angles, prev_wrist;
+    float prev_joints_mm[FP_HAND_JOINTS][3];
+    float prev_radians[FP_GLOVE_SENSORS];
+    uint32_t prev_valid;
+    float prev_wrist_pos[3], prev_wrist_rot[4];
+    int64_t joints_t_ns, prev_joints_t_ns;   /* the event times of joints_mm, prev_joints_mm */
+    int64_t angles_t_ns, prev_angles_t_ns;
+    int64_t wrist_t_ns, prev_wrist_t_ns;
+    float built_mm[FP_HAND_JOINTS][3];    /* the joints of the latest build (device mm) */
 } fp_pose_hand;
 
-/** The pose step's state: both hands, the hand model, the calibration, and the poses of the
- *  latest fp_pose_build. */
+/** The inputs whose filter state is kept (an event's header.source below it; = the
+ *  session's FP_SESSION_MAX_INPUTS). Events of other sources are not filtered. */
+#define FP_POSE_MAX_INPUTS 8
+/** Samples farther apart than this are not extrapolated between (a hand found again after a
+ *  pause): the frame holds the latest. */
+#define FP_POSE_MAX_PERIOD_NS 100000000LL
+/** The prediction follows the last two samples' line up to this fraction of a sampling
+ *  period past the latest sample, then bends smoothly toward one whole period, which it
+ *  never reaches (fp_pose_build_at). */
+#define FP_POSE_KNEE 0.9
+
+/** One input's One Euro filters for one hand: a joint each (positions, mm), a glove sensor
+ *  each (radians), the wrist's position (mm) and rotation (the quaternion as a 4-vector). */
+typedef struct fp_pose_filter {
+    fp_oneeuro joints[FP_HAND_JOINTS];
+    fp_oneeuro angles[FP_GLOVE_SENSORS];
+    fp_oneeuro wrist_pos, wrist_rot;
+} fp_pose_filter;
+
+/** The pose step's state: both hands, the hand model, the calibration, the filters, and the
+ *  poses of the latest fp_pose_build. */
 typedef struct fp_pose_state {
     fp_pose_hand hands[FP_HANDS];
+    fp_pose_filter filters[FP_POSE_MAX_INPUTS][FP_HANDS];  /* by event source, then hand */
     fp_hand_model model;
     fp_calibration calib;
     bool glove_placed;                          /* fp_pose_place_gloves ran */
@@ -68,14 +110,38 @@ void fp_pose_init(fp_pose_state *p, double hand_size, const fp_calibration *c);
 
 /** Take one input event: joint positions (replace the joints; positions win over angles
  *  until angles come again), joint angles, a wrist pose, or a DISCONNECTED status (the hand
- *  is absent until its next event). Other events and events without a hand are ignored. */
+ *  is absent until its next event; its earlier samples are forgotten). Other events and
+ *  events without a hand are ignored. The event is taken as it is (no filter):
+ *  fp_pose_take_event_filtered with NULL. */
 void fp_pose_take_event(fp_pose_state *p, const fp_event *ev);
 
-/** Build p->poses from the hands' state: forward kinematics where only angles came (with the
- *  given wrist pose, else the glove placement of fp_pose_place_gloves, else
- *  fp_pose_default_wrist), then the calibration. Call once a frame
- *  after the events are taken. */
+/** fp_pose_take_event through the One Euro filter `filter` (fp_filter.h; NULL or kind
+ *  FP_FILTER_OFF: none) of the event's input: the state of p->filters[ev->header.source]
+ *  [hand] (a source at or beyond FP_POSE_MAX_INPUTS: none), the event's time_ns driving the
+ *  filter's rate. Joint positions per joint (mm), joint angles per valid sensor (radians,
+ *  speed counted at FP_FILTER_ARM_MM), a wrist pose's position and rotation (the quaternion
+ *  sign-aligned with the last one, renormalised). A DISCONNECTED status resets that input's
+ *  filters of the hand. [session-thread]; no allocation. */
+void fp_pose_take_event_filtered(fp_pose_state *p, const fp_event *ev, const fp_filter_config *filter);
+
+/** Build p->poses from the hands' latest samples as they are (no resampling): forward
+ *  kinematics where only angles came (with the given wrist pose, else the glove placement of
+ *  fp_pose_place_gloves, else fp_pose_default_wrist), then the calibration. For a frame,
+ *  prefer fp_pose_build_at. poses[h].time_ns is the latest hand event's time. */
 void fp_pose_build(fp_pose_state *p);
+
+/** fp_pose_build at the frame's time now_ns (host clock, as the events' times): each kind of
+ *  sample (joint positions; joint angles, per sensor valid in both; the wrist pose, its
+ *  rotation by normalised linear extrapolation) is taken as x1 + u (x1 - x0) from its last
+ *  two samples (x0 at t0, x1 at t1), u = (now_ns - t1) / (t1 - t0) at least -1 (a frame
+ *  between them interpolates) and, past FP_POSE_KNEE, FP_POSE_KNEE + (1 - FP_POSE_KNEE)
+ *  (1 - e^-(u - FP_POSE_KNEE) / (1 - FP_POSE_KNEE)) (a frame after t1 is predicted less than
+ *  one sampling period ahead, and held there as the samples stop); u = 0 where there is no
+ *  earlier sample since the hand appeared, or t1 - t0 is not in (0, FP_POSE_MAX_PERIOD_NS]. Deterministic: the same events and frame
+ *  times give the same poses bit for bit. poses[h].time_ns stays the latest hand event's
+ *  time (a viewer's latency is measured from it). Call once a frame after the events are
+ *  taken. [session-thread]. */
+void fp_pose_build_at(fp_pose_state *p, int64_t now_ns);
 
 /** Default wrist placement for a glove that reports no wrist pose: the two hands side by
  *  side 80 mm from the middle (left at -x), 200 mm above the device and 60 mm toward the

@@ -354,7 +354,8 @@ const fp_calibration *fp_session_calibration(const fp_session *s);
  *  session uses (given, from the calibration's scale, or detected), head->how says where it
  *  came from ("detected from the head: ...", "from --mm-per-unit", "from the calibration"). */
 const fp_head *fp_session_head(const fp_session *s);
-/** The latest pose of a hand in mesh units (NULL if never seen, or its device is
+/** A hand's pose at the last frame's time in mesh units (fp_pose_build_at: its input's
+ *  filter, interpolated or predicted from its samples; NULL if never seen, or its device is
  *  disconnected). Owned by the session; valid until the next fp_session_step. */
 const fp_hand_pose *fp_session_hand(const fp_session *s, int hand);
 /** The last control set (start/end points) the mapping made and the engine used; the

@@ -111,12 +111,12 @@ int fp_session_realtime_memory(fp_session *s, size_t reserve_bytes, char *err, s
 
 /* ---- one frame ------------------------------------------------------------------------- */
 
-/* Every drained event: to the pose step and to the frame's record. */
+/* Every drained event: to the pose step (through its input's filter) and, raw, to the
+ * frame's record. */
 static void on_event(void *user, size_t input, const fp_event *ev)
 {
-    (void)input;
     fp_session *s = user;
-    fp_pose_take_event(&s->pose, ev);
+    fp_pose_take_event_filtered(&s->pose, ev, input < s->input_count ? &s->inputs[input].filter : NULL);
     fp_record_step_event(&s->record, ev);
 }
 
@@ -241,8 +241,8 @@ static void step_frame(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     for (size_t i = 0; i < s->input_count; i++) /* (one load each when none logged) */
         fp_input_instance_drain_log(&s->inputs[i]);
     FP_STAGE_END(FP_STAGE_EVENTS);
-    /* 2: hand poses in mesh units. */
-    fp_pose_build(&s->pose);
+    /* 2: hand poses in mesh units, at the frame's time. */
+    fp_pose_build_at(&s->pose, now_ns);
     FP_STAGE_END(FP_STAGE_HANDS);
 
     /* 3: the mapping. */

@@ -24,7 +24,14 @@ static const struct {
     {"input", required_argument, 'i', "SPEC",
      "NAME[:ARG][,key=value...] (repeatable), e.g.\n"
      "replay:../shared/data/hands/leap-motion/grab_joints_mm.csv\n"
-     "any input also takes record=FILE (an event log of it)"},
+     "any input also takes record=FILE (an event log of it) and\n"
+     "the hand filter (One Euro, per joint): filter=oneeuro|off,\n"
+     "mincutoff=HZ (steadier when still: lower), beta=B (less\n"
+     "lag when moving: higher), dcutoff=HZ; on by default for\n"
+     "osc (mincutoff=0.5,beta=0.025,dcutoff=8), light for\n"
+     "cyberglove (mincutoff=3), off for replay and take; each\n"
+     "hand is shown at the frame's time (interpolated, or\n"
+     "predicted up to one sample ahead)"},
     {"mapping", required_argument, 'M', "SPEC", "anchored (default), unanchored, onehand or a plugin's NAME [,key=value...]"},
     {"radius", required_argument, 'r', "R",
      "support radius in mesh units (default 6% of the mesh's\nbounding-box diagonal, at least 25 mm)"},

@@ -324,10 +324,12 @@ typedef struct fp_input_factory {
 /* ------------------------------------------------------------------------------------- */
 /* Mapping plugins                                                                       */
 
-/** The latest pose of one hand, in mesh units after the workspace calibration. */
+/** The pose of one hand at the frame's time, in mesh units after the workspace calibration:
+ *  the host filters each input's samples (One Euro, per the input's SPEC) and interpolates
+ *  between them, or predicts at most one sample ahead, to the frame's time. */
 typedef struct fp_hand_pose {
     bool present;              /* false: never seen, or the input reported it gone */
-    int64_t time_ns;           /* when it was measured */
+    int64_t time_ns;           /* when the newest sample it is made from was measured */
     float joints[FP_HAND_JOINTS][3];
 } fp_hand_pose;
 
@@ -350,7 +352,7 @@ typedef struct fp_frame_input {
     uint32_t size;
     int64_t time_ns;               /* the frame's time */
     uint64_t frame;                /* frame number since the session began */
-    fp_hand_pose hands[FP_HANDS];  /* latest poses, left and right */
+    fp_hand_pose hands[FP_HANDS];  /* the hands at time_ns, left and right */
     const fp_event *events;        /* button and status events since the last frame */
     size_t event_count;
     const fp_mesh_view *mesh;

@@ -1,0 +1,141 @@
+/* The One Euro filter (Casiez, Roussel, Vogel, CHI 2012) and an input's filter keys. */
+#include "fp_filter.h"
+
+#include <facepuppet/plugin_util.h>
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#define TWO_PI 6.283185307179586476925
+
+void fp_filter_default(const char *name, fp_filter_config *out)
+{
+    memset(out, 0, sizeof *out);
+    out->mincutoff = FP_FILTER_MINCUTOFF;
+    out->beta = FP_FILTER_BETA;
+    out->dcutoff = FP_FILTER_DCUTOFF;
+    if (!name) return;
+    if (!strcmp(name, "osc")) {
+        out->kind = FP_FILTER_ONEEURO;
+    } else if (!strcmp(name, "cyberglove")) {
+        out->kind = FP_FILTER_ONEEURO;
+        out->mincutoff = FP_FILTER_GLOVE_MINCUTOFF;
+    }
+}
+
+/* v a decimal in (lo, hi] (lo_open) or [lo, hi]. */
+static bool in_range(const char *v, double lo, bool lo_open, double hi, double *out)
+{
+    double x;
+    if (!fp_parse_decimal(v, &x)) return false;
+    if (lo_open ? !(x > lo) : !(x >= lo)) return false;
+    if (!(x <= hi)) return false;
+    *out = x;
+    return true;
+}
+
+int fp_filter_parse(const char *name, const char *filter, const char *mincutoff,
+                    const char *beta, const char *dcutoff, fp_filter_config *out, char *err,
+                    size_t errlen)
+{
+    fp_filter_config c;
+    fp_filter_default(name, &c);
+    if (filter) {
+        if (!strcmp(filter, "oneeuro")) c.kind = FP_FILTER_ONEEURO;
+        else if (!strcmp(filter, "off")) c.kind = FP_FILTER_OFF;
+        else {
+            if (err && errlen) snprintf(err, errlen, "filter=%s: expected oneeuro or off", filter);
+            return -EINVAL;
+        }
+    }
+    const char *key = mincutoff ? "mincutoff" : beta ? "beta" : dcutoff ? "dcutoff" : NULL;
+    if (key && c.kind != FP_FILTER_ONEEURO) {
+        if (err && errlen)
+            snprintf(err, errlen, "%s= tunes the One Euro filter, which is off for this input%s: "
+                     "add filter=oneeuro", key, filter ? " (filter=off)" : "");
+        return -EINVAL;
+    }
+    if (mincutoff && !in_range(mincutoff, 0, true, 1000, &c.mincutoff)) {
+        if (err && errlen) snprintf(err, errlen, "mincutoff=%s: expected a number of Hz above 0, at most 1000", mincutoff);
+        return -EINVAL;
+    }
+    if (beta && !in_range(beta, 0, false, 100, &c.beta)) {
+        if (err && errlen) snprintf(err, errlen, "beta=%s: expected a number from 0 to 100 (Hz per mm/s)", beta);
+        return -EINVAL;
+    }
+    if (dcutoff && !in_range(dcutoff, 0, true, 1000, &c.dcutoff)) {
+        if (err && errlen) snprintf(err, errlen, "dcutoff=%s: expected a number of Hz above 0, at most 1000", dcutoff);
+        return -EINVAL;
+    }
+    *out = c;
+    return 0;
+}
+
+int fp_filter_describe(const fp_filter_config *c, char *buf, size_t len)
+{
+    if (c->kind != FP_FILTER_ONEEURO) return snprintf(buf, len, "filter off");
+    return snprintf(buf, len, "hands filtered in the session (oneeuro mincutoff=%g beta=%g dcutoff=%g): "
+                    "a steady motion lags "
+                    "%.0f ms at 200 mm/s, %.0f ms at 50 mm/s (samples at %.0f Hz; at most %.0f and "
+                    "%.0f ms at any rate)", c->mincutoff, c->beta, c->dcutoff,
+                    1e3 * fp_oneeuro_lag(c, 200, FP_FILTER_DESCRIBE_HZ),
+                    1e3 * fp_oneeuro_lag(c, 50, FP_FILTER_DESCRIBE_HZ), FP_FILTER_DESCRIBE_HZ,
+                    1e3 * fp_oneeuro_lag(c, 200, 0), 1e3 * fp_oneeuro_lag(c, 50, 0));
+}
+
+void fp_oneeuro_reset(fp_oneeuro *f) { memset(f, 0, sizeof *f); }
+
+double fp_oneeuro_alpha(double cutoff_hz, double te_s)
+{
+    double tau = 1.0 / (TWO_PI * cutoff_hz);
+    return 1.0 / (1.0 + tau / te_s);
+}
+
+void fp_oneeuro_filter(fp_oneeuro *f, const fp_filter_config *c, int dim, double mm_per_unit,
+                       const double *x, int64_t t_ns, double *out)
+{
+    if (dim < 1) return;
+    if (dim > FP_ONEEURO_MAX_DIM) dim = FP_ONEEURO_MAX_DIM;
+    bool finite = true;
+    for (int k = 0; k < dim; k++) finite = finite && isfinite(x[k]);
+    if (!finite || !f->started) {
+        fp_oneeuro_reset(f);
+        if (finite) {
+            for (int k = 0; k < dim; k++) f->x[k] = x[k];
+            f->te = 1.0 / 120.0;
+            f->t_ns = t_ns;
+            f->started = true;
+        }
+        if (out != x) memmove(out, x, (size_t)dim * sizeof *out);
+        return;
+    }
+    if (t_ns > f->t_ns) f->te = (double)(t_ns - f->t_ns) * 1e-9;
+    f->t_ns = t_ns > f->t_ns ? t_ns : f->t_ns;
+    const double te = f->te, ad = fp_oneeuro_alpha(c->dcutoff, te);
+    double speed2 = 0;
+    for (int k = 0; k < dim; k++) {
+        double d = (x[k] - f->x[k]) / te;            /* dX_i = (X_i - Xhat_{i-1}) / T_e */
+        f->dx[k] = ad * d + (1 - ad) * f->dx[k];     /* dXhat_i */
+        speed2 += f->dx[k] * f->dx[k];
+    }
+    double cutoff = c->mincutoff + c->beta * sqrt(speed2) * mm_per_unit;
+    double a = fp_oneeuro_alpha(cutoff, te);
+    for (int k = 0; k < dim; k++) {
+        f->x[k] = a * x[k] + (1 - a) * f->x[k];      /* Xhat_i */
+        out[k] = f->x[k];
+    }
+}
+
+double fp_oneeuro_lag(const fp_filter_config *c, double speed_mm_s, double rate_hz)
+{
+    double v = fabs(speed_mm_s);
+    double b = TWO_PI * (c->mincutoff + c->beta * v);
+    if (!(rate_hz > 0) || !isfinite(rate_hz) || !(v > 0) || !(c->beta > 0)) return 1.0 / b;
+    /* lambda 2 pi (mincutoff + beta v + beta v lambda rate) = 1:
+     * a lambda^2 + b lambda - 1 = 0, a = 2 pi beta v rate; the positive root, written so that
+     * it does not cancel: 2 / (b + sqrt(b^2 + 4 a)). */
+    double a = TWO_PI * c->beta * v * rate_hz;
+    return 2.0 / (b + sqrt(b * b + 4 * a));
+}
