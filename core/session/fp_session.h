@@ -131,7 +131,7 @@ typedef struct fp_session_options {
     bool no_contact_guard;                          /* true: no contact guard (benchmarks);
                                                        default (false): every shown shape is
                                                        checked for new self-crossings
-                                                       (contact.h) and its motion scaled back */
+                                                       (fp_contact.h) and its motion scaled back */
     bool whole_rig_commit;                          /* true: a commit with a rig unposes,
                                                        commits, poses and re-indexes the whole
                                                        mesh, and one of the contact guard's
@@ -203,12 +203,12 @@ typedef struct fp_frame_stats {
     double min_det_j;         /* min det dT/dx over the moved vertices (and composed maps) with
                                  fp_session_options.measure_jacobian, else NAN (and when not
                                  active) */
-    /* the contact guard (contact.h): the shown shape adds no self-crossing to the last one */
+    /* the contact guard (fp_contact.h): the shown shape adds no self-crossing to the last one */
     double collide_t;         /* fraction of this frame's motion kept (1: all; 0: none) */
     long collide_pairs;       /* new crossing pairs the full motion would have added */
     double collide_ms;        /* the guard's checks, milliseconds */
     double collide_wait_ms;   /* of those, the guard's waits for its worker thread to finish a
-                                 task (contact.h, fp_contact_result.worker_wait_ms), ms */
+                                 task (fp_contact.h, fp_contact_result.worker_wait_ms), ms */
     size_t collide_held;      /* vertices the guard's hold kept in place (fp_contact_hold:
                                  they moved less than its eps since the last frame) */
     int collide_checks;       /* shapes the guard checked (fp_contact_result.checks: 1 when the

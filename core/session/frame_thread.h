@@ -13,7 +13,7 @@
  * (`bench --case frame`, 27 runs alternated with the build before it): the ICT frame's
  * median 0.088 ms (median of the runs; lower in 20 of the 27) against 0.126, its p99
  * unchanged (0.295 against 0.293). Its cost: one core polled through a performance, as the
- * contact guard's worker (contact.h) does after each step; with both polling, the caller's
+ * contact guard's worker (fp_contact.h) does after each step; with both polling, the caller's
  * loop waits longer to be woken (the bench's "waiting for a CPU", p99 0.04-0.41 ms against
  * 0.01-0.08 in one batch), a delay before the frame, not in it. A sleeping frame thread
  * costs nothing.

@@ -12,12 +12,13 @@
  * check first catches P up with what happened since the last one (a gesture ended: the
  * reference was shown; a pose, undo, reset or a rig's commit: the reference changed, on
  * ranges kept in `ref`). Its transitions (asserted in debug builds):
- *   any -> FP_CG_SYNCED        the frame's check (fp_cg_run), fp_cg_open
- *   FP_CG_SYNCED -> SHOWN_REF  the reference is shown again (fp_cg_shown_ref; the others stay)
- *   SYNCED -> SHOWN_REF        a commit without a rig: P is the shape committed, the new
- *                              reference (fp_cg_committed; the frame's check ran)
- *   any -> FP_CG_REF_CHANGED   the reference changed (fp_cg_reference_changed)
- * and while the guard exists, `ref` records nothing unless the state is FP_CG_REF_CHANGED.
+ *   any -> SYNCED          the frame's check (fp_cg_run), a new guard (fp_cg_open)
+ *   SYNCED -> SHOWN_REF    the reference is shown again (fp_cg_shown_ref; from SHOWN_REF or
+ *                          REF_CHANGED nothing changes)
+ *   SYNCED -> SHOWN_REF    a commit without a rig: P, the shape shown and checked this
+ *                          frame, is the new reference (fp_cg_committed)
+ *   any -> REF_CHANGED     the reference changed (fp_cg_reference_changed)
+ * and while the guard exists, `ref` records nothing unless the state is REF_CHANGED.
  *
  * Threads: the session thread (the frame thread, when the frames run there). Errors: out of
  * memory in a frame makes the guard unusable: the reference is shown, and the guard is made

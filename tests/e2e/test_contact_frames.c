@@ -1,4 +1,4 @@
-/* The contact guard in the session, every frame (issue 18: the incremental guard, contact.h):
+/* The contact guard in the session, every frame (issue 18: the incremental guard, fp_contact.h):
  * the three faces (with their rigs) x the four Leap joints recordings x both mappings,
  * replayed on the inputs' own clock (every sample at its time, as `facepuppet run`). At every
  * deforming frame the shape shown is checked against the frame's reference (the posed base,

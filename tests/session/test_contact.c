@@ -1,4 +1,4 @@
-/* The contact guard (core/session/contact.h) against CGAL's exact counter (fp_selfx):
+/* The contact guard (core/contact/fp_contact.h) against CGAL's exact counter (fp_selfx):
  * constructed cases (crossing, touching, coplanar, shared vertex, a welded seam), random
  * triangle soups moved at random, and a real deformed ICT frame (an unguarded CSRBF pull that
  * folds the lips through each other): the counts of new pairs agree; then the bisection.
