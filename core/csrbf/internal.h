@@ -1,5 +1,6 @@
 /* csrbf internals shared by the solver (csrbf_solver.c), the vertex index (csrbf_points.c)
- * and the evaluation (csrbf_eval.c). Not part of the public API. */
+ * and the evaluation (csrbf_eval.c and the files eval_internal.h names). Not part of the
+ * public API. */
 #ifndef CSRBF_INTERNAL_H
 #define CSRBF_INTERNAL_H
 
@@ -161,14 +162,14 @@ struct csrbf_solver {
     int sel_refined;         /* the kept selection has been refined (csrbf_eval.c) */
     uint32_t *sel_blk;       /* sel_cap each: blocks, increasing */
     uint64_t *sel_msk;       /* their centre masks (bit j: centre j) */
-    size_t *sel_cum;         /* sel_cap + 1: prefix costs of the blocks (csrbf_eval.c) */
+    size_t *sel_cum;         /* sel_cap + 1: prefix costs of the blocks (csrbf_select.c) */
     size_t sel_k, sel_evals, sel_cap; /* blocks listed, sum of their mask bits */
 
     /* evaluation scratch: one user at a time; concurrent callers allocate their own */
     atomic_flag scratch_busy;
     void *scratch;
     size_t scratch_cap;
-    /* the kept selection's weight cache (csrbf_eval.c), filled once it is refined, for frames
+    /* the kept selection's weight cache (csrbf_sched.c), filled once it is refined, for frames
      * small enough to stay in cache: valid while sel_w_id == sel_id. One aligned block of sel_wbytes:
      * the pairs' weights (16 floats each), their support masks (uint16), the items' first
      * pairs (uint32, sel_k + 1) and prefix costs (size_t, sel_k + 1); and the selection's
@@ -224,7 +225,7 @@ struct csrbf_near {
  * centre sets, so that a cached block selection is never taken for another one. */
 uint64_t csrbf_new_stamp(void);
 
-/* csrbf_guarded_step_touched's access to a touch (csrbf_eval.c). csrbf_touch_prev: the
+/* csrbf_guarded_step_touched's access to a touch (csrbf_touch.c). csrbf_touch_prev: the
  * blocks the last call computed from the kernel (increasing; *k of them) and, in *full (may
  * be NULL), whether the next call writes every block. csrbf_touch_set: the state a composed
  * step leaves: the blocks computed := blk[0 .. k) (increasing: where the output may differ
