@@ -116,7 +116,7 @@ void csrbf_sched_drive(const eval_plan *p, drive_fn drive, const uint32_t *ib,
      * same core's cache, and then steals from the far end of the others' (a core that the
      * host slows, or a thread that starts late, no longer holds the frame back: on a shared
      * machine one core may run the same part markedly slower than the other for minutes at
-     * a time) */
+     * a time, docs/performance.md) */
     const size_t parts = nt;
     size_t *const isplit = p->isplit, *const bsplit = p->bsplit, *const psplit = p->psplit;
     steal_part *const spans = p->spans;

@@ -125,8 +125,8 @@ typedef struct block_select {
 #define WCACHE_PAIR_BYTES (B * sizeof(float) + sizeof(uint16_t))
 
 /* Cost (ITEM_COST units, half a vector evaluation) above which an evaluation forks its
- * threads: below it (about 8 us of work on one core) a fork/join costs more than it saves,
- * and a frame loop's sleeping workers wake slowly. */
+ * threads: below it (about 8 us of work on one core of the machine it was tuned on) a
+ * fork/join costs more than it saves, and a frame loop's sleeping workers wake slowly. */
 #define PARALLEL_COST 6000
 
 /* Chunks a thread's part of a parallel drive is cut into (csrbf_sched_drive), for stealing. */

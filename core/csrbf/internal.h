@@ -35,8 +35,8 @@ typedef struct csrbf_grid {
 
 /* A grid of at most this many points has no table (tsize 0): its neighbour searches
  * (csrbf_grid_near; the general path's centres of a block) test every point instead of
- * probing 27 or 125 hashed cells per point: 10 centres, 7 us a set_start_points call by the
- * table, 1.7 by the scan. The pairs a caller keeps by distance are the same (its cells are at
+ * probing 27 or 125 hashed cells per point, which costs more than the scan for so few
+ * (docs/performance.md). The pairs a caller keeps by distance are the same (its cells are at
  * least as wide as its reach). */
 #define CSRBF_SCAN_ALL_MAX 32
 
@@ -96,7 +96,7 @@ struct csrbf_solver {
     unsigned warnings;
     /* the fold-over guard's last scale-back (csrbf_solver_limit_end_points), its sentence not
      * yet in msg: written by csrbf_msg_flush when the message is read or extended (formatting
-     * its three doubles costs 12-19 us, more than the rest of a frame's solve) */
+     * its three doubles costs more than the rest of a frame's solve: docs/performance.md) */
     struct {
         int pending;
         size_t limited, clusters;
