@@ -235,8 +235,8 @@ int csrbf_points_update_ranges(csrbf_points *points, const float *xyz, const uin
  *  index (csrbf_points_index_nearest), if any, takes the new positions later: at csrbf_points_sync_nearest, or first thing in the next
  *  update or csrbf_points_index_nearest. Until then csrbf_points_nearest answers from the
  *  points' own blocks (the same answers, slower on a scrambled vertex order). For a commit in
- *  a real-time frame: the index's scattered writes (1.2 of 1.7 ms of a commit's update on a 1.7M
- *  face) move to the next frame's sync. The ranges are copied (out of memory for them: the
+ *  a real-time frame: the index's scattered writes (most of a commit's update on a large face:
+ *  docs/performance.md) move to the next frame's sync. The ranges are copied (out of memory for them: the
  *  index is updated now). Same errors as csrbf_points_update_ranges; same thread rules. */
 int csrbf_points_update_ranges_later(csrbf_points *points, const float *xyz,
                                      const uint32_t *ranges, size_t nranges);
@@ -272,11 +272,8 @@ int csrbf_points_copy(csrbf_points *dst, const csrbf_points *src);
  *  csrbf_points_update_ranges keep the index current at little cost (the vertices whose
  *  position changed, found in their own pass over the blocks, go to their places, and only
  *  those blocks and the nodes above them are refit: a rig's pose that moves the jaw does not
- *  refill the whole index; measured on a 1.69M-vertex grid with 1% of its vertices moved,
- *  csrbf_points_update 7.5 ms against 6.4-6.6 without an index, csrbf_points_update_ranges
- *  on those 1% 0.17 against 0.065 ms; a commit on the 1.7M face, 500 ranges of 47,000-52,000
- *  vertices, 0.96-1.40 against 0.56-0.84 ms, of which the refit of 1,900 blocks 0.07-0.12:
- *  the rest is the moved vertices' stores at their places, none in the cache),
+ *  refill the whole index; its cost, in docs/performance.md, is mostly the moved vertices'
+ *  stores at their places, none in the cache, the refit little),
  *  csrbf_points_copy by refilling it (O(n)). Results are the same
  *  with or without it, bit for bit; only the work differs. Memory: about 22 bytes a vertex.
  *  O(n log n) (a sort); a second call does nothing. csrbf_points_clone makes none.
@@ -346,7 +343,7 @@ typedef struct csrbf_eval_stats {
  *  one core, counted from the blocks visited, stays on the calling thread.
  *  stats may be NULL; with stats the pair count, moved count and maximum
  *  displacement are filled in, counted per block inside the vectorised kernel (the fast path
- *  stays: about 10% more), and with flags & CSRBF_EVAL_JACOBIAN the minimum Jacobian
+ *  stays, at a small cost: docs/performance.md), and with flags & CSRBF_EVAL_JACOBIAN the minimum Jacobian
  *  determinant too (a slower general path, as are the polynomial and more than
  *  CSRBF_FAST_MAX_CENTRES centres). Errors: CSRBF_ERR_INVALID (NULL, unknown flag),
  *  CSRBF_ERR_STATE (no start points), CSRBF_ERR_NOMEM. Thread-safe on a const solver and const

@@ -305,7 +305,7 @@ int csrbf_points_copy(csrbf_points *dst, const csrbf_points *src)
     return CSRBF_OK;
 }
 
-/* SIMD clones of the box pass (AVX-512, AVX2, baseline), as csrbf_eval.c's kernels. No
+/* SIMD clones of the box pass (AVX-512, AVX2, baseline), as csrbf_general.c's kernels. No
  * multiply-add contraction in this file (-ffp-contract=off): distances equal a plain loop's. */
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__ELF__)
 #define PTS_CLONES __attribute__((target_clones("arch=x86-64-v4", "arch=x86-64-v3", "default")))

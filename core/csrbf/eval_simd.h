@@ -1,12 +1,12 @@
 /* The fast path's kernels for one instruction set, written once over 16-lane vector
- * operations: csrbf_eval.c includes this file once per instruction set, with CSRBF_ISA set
+ * operations: csrbf_fast.c includes this file once per instruction set, with CSRBF_ISA set
  *   CSRBF_ISA_AVX512  one __m512 per block of 16 vertices, the V_* names are the AVX-512
  *                     intrinsics themselves (the code compiles as if written with them);
  *   CSRBF_ISA_AVX2    two __m256 halves (AVX2 + FMA), simd16_avx2.h: the same operations,
  *                     lane by lane (a mask is a vector of all-ones lanes, a masked add a
  *                     blend, the 14-bit reciprocal square root estimate the 12-bit one).
  * Each inclusion defines the per-block kernels, the fused drivers, the weight cache fills, the
- * selection refinement and the table SFX(isa) (csrbf_eval.c's eval_isa) of its functions.
+ * selection refinement and the table SFX(isa) (eval_internal.h's eval_isa) of its functions.
  * Needs, before it: B (= 16), csrbf_points, block_select, ITEM_COST, block_stats,
  * weight_cache, copy_base, DRIVE_*, eval_isa. */
 

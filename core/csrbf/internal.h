@@ -1,5 +1,6 @@
 /* csrbf internals shared by the solver (csrbf_solver.c), the vertex index (csrbf_points.c)
- * and the evaluation (csrbf_eval.c). Not part of the public API. */
+ * and the evaluation (csrbf_eval.c and the files eval_internal.h names). Not part of the
+ * public API. */
 #ifndef CSRBF_INTERNAL_H
 #define CSRBF_INTERNAL_H
 
@@ -34,8 +35,8 @@ typedef struct csrbf_grid {
 
 /* A grid of at most this many points has no table (tsize 0): its neighbour searches
  * (csrbf_grid_near; the general path's centres of a block) test every point instead of
- * probing 27 or 125 hashed cells per point: 10 centres, 7 us a set_start_points call by the
- * table, 1.7 by the scan. The pairs a caller keeps by distance are the same (its cells are at
+ * probing 27 or 125 hashed cells per point, which costs more than the scan for so few
+ * (docs/performance.md). The pairs a caller keeps by distance are the same (its cells are at
  * least as wide as its reach). */
 #define CSRBF_SCAN_ALL_MAX 32
 
@@ -95,7 +96,7 @@ struct csrbf_solver {
     unsigned warnings;
     /* the fold-over guard's last scale-back (csrbf_solver_limit_end_points), its sentence not
      * yet in msg: written by csrbf_msg_flush when the message is read or extended (formatting
-     * its three doubles costs 12-19 us, more than the rest of a frame's solve) */
+     * its three doubles costs more than the rest of a frame's solve: docs/performance.md) */
     struct {
         int pending;
         size_t limited, clusters;
@@ -161,14 +162,14 @@ struct csrbf_solver {
     int sel_refined;         /* the kept selection has been refined (csrbf_eval.c) */
     uint32_t *sel_blk;       /* sel_cap each: blocks, increasing */
     uint64_t *sel_msk;       /* their centre masks (bit j: centre j) */
-    size_t *sel_cum;         /* sel_cap + 1: prefix costs of the blocks (csrbf_eval.c) */
+    size_t *sel_cum;         /* sel_cap + 1: prefix costs of the blocks (csrbf_select.c) */
     size_t sel_k, sel_evals, sel_cap; /* blocks listed, sum of their mask bits */
 
     /* evaluation scratch: one user at a time; concurrent callers allocate their own */
     atomic_flag scratch_busy;
     void *scratch;
     size_t scratch_cap;
-    /* the kept selection's weight cache (csrbf_eval.c), filled once it is refined, for frames
+    /* the kept selection's weight cache (csrbf_sched.c), filled once it is refined, for frames
      * small enough to stay in cache: valid while sel_w_id == sel_id. One aligned block of sel_wbytes:
      * the pairs' weights (16 floats each), their support masks (uint16), the items' first
      * pairs (uint32, sel_k + 1) and prefix costs (size_t, sel_k + 1); and the selection's
@@ -224,7 +225,7 @@ struct csrbf_near {
  * centre sets, so that a cached block selection is never taken for another one. */
 uint64_t csrbf_new_stamp(void);
 
-/* csrbf_guarded_step_touched's access to a touch (csrbf_eval.c). csrbf_touch_prev: the
+/* csrbf_guarded_step_touched's access to a touch (csrbf_touch.c). csrbf_touch_prev: the
  * blocks the last call computed from the kernel (increasing; *k of them) and, in *full (may
  * be NULL), whether the next call writes every block. csrbf_touch_set: the state a composed
  * step leaves: the blocks computed := blk[0 .. k) (increasing: where the output may differ

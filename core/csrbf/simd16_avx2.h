@@ -1,6 +1,6 @@
 /* 16 float lanes as two AVX2 vectors: the operations eval_simd.h uses, lane by lane the same
  * as their AVX-512 namesakes except where noted. A mask (v16f) is a vector whose lanes are all
- * ones (in) or zero; bit l of its 16-bit form is lane l. Internal to csrbf_eval.c. */
+ * ones (in) or zero; bit l of its 16-bit form is lane l. Internal to csrbf_fast.c. */
 #ifndef CSRBF_SIMD16_AVX2_H
 #define CSRBF_SIMD16_AVX2_H
 
