@@ -855,7 +855,8 @@ static const char *problem_name(int kind)
     return kind >= 0 && kind < FP_OSC_PROBLEMS ? problem_names[kind] : "?";
 }
 
-static const fp_osc_ext osc_ext = {sizeof(fp_osc_ext), get_stats, problem_name};
+static const fp_osc_ext osc_ext = {.size = sizeof(fp_osc_ext), .get_stats = get_stats,
+                                   .problem_name = problem_name};
 
 static bool osc_workspace(const fp_input *self, float min_mm[3], float max_mm[3])
 {
@@ -866,7 +867,7 @@ static bool osc_workspace(const fp_input *self, float min_mm[3], float max_mm[3]
     return true;
 }
 
-static const fp_input_workspace workspace_ext = {osc_workspace};
+static const fp_input_workspace workspace_ext = {.get = osc_workspace};
 
 static const void *osc_get_extension(const fp_input *self, const char *id)
 {
@@ -1080,21 +1081,41 @@ static int osc_create(const fp_host *host, const char *arg, const fp_param *para
     return 0;
 }
 
+/* The keys, typed (ABI 1.1), for `facepuppet plugins` and `plugins check`; osc_create parses
+ * them itself (the same ranges). A default of "": none (box: the host's desktop-tracker box). */
+static const fp_param_info osc_keys[] = {
+    {.name = "format", .type = FP_PARAM_ENUM, .default_value = "auto",
+     .choices = "auto|facepuppet|leap|mediapipe",
+     .description = "address space: auto takes each message by its address"},
+    {.name = "bind", .type = FP_PARAM_STRING, .default_value = "127.0.0.1",
+     .description = "IPv4 address to listen on (beyond loopback: a warning)"},
+    {.name = "hand", .type = FP_PARAM_ENUM, .default_value = "both", .choices = "left|right|both",
+     .description = "which hands to take (leap: left/right takes slot 0 as that hand)"},
+    {.name = "timeout", .type = FP_PARAM_FLOAT, .min = 0.01, .max = 3600, .default_value = "1",
+     .unit = "s", .description = "silence before the sender is reported disconnected"},
+    {.name = "box", .type = FP_PARAM_STRING, .default_value = "", .unit = "mm",
+     .description = "X0/Y0/Z0/X1/Y1/Z1: the volume the hands move in, device frame"},
+    {.name = "width", .type = FP_PARAM_FLOAT, .min = 1, .max = 10000, .default_value = "400",
+     .unit = "mm", .description = "mediapipe: the width the image spans at the hand"},
+    {.name = "aspect", .type = FP_PARAM_FLOAT, .min = 0.01, .max = 100, .default_value = "0.75",
+     .description = "mediapipe: image height / width"},
+    {.name = "height", .type = FP_PARAM_FLOAT, .min = -10000, .max = 10000, .default_value = "200",
+     .unit = "mm", .description = "mediapipe: device y of the image centre"},
+    {.name = "depth", .type = FP_PARAM_FLOAT, .min = -10000, .max = 10000, .default_value = "0",
+     .unit = "mm", .description = "mediapipe: device z of the landmarks' z = 0"},
+    {.name = "mirror", .type = FP_PARAM_BOOL, .min = 0, .max = 1, .default_value = "0",
+     .description = "mediapipe: flip x (a selfie camera)"},
+    {.name = NULL},
+};
+
 static const fp_input_factory osc_factory = {
     .size = sizeof(fp_input_factory),
     .name = "osc",
     .description = "hand tracking over OSC/UDP (facepuppet, Leap Motion bridges, MediaPipe hands)",
     .usage = usage_text,
     .create = osc_create,
+    .params = osc_keys,
 };
-
-static bool osc_init(const char *plugin_path)
-{
-    (void)plugin_path;
-    return true;
-}
-
-static void osc_deinit(void) {}
 
 static const void *osc_get_factory(const char *factory_id)
 {
@@ -1103,10 +1124,8 @@ static const void *osc_get_factory(const char *factory_id)
 }
 
 FP_PLUGIN_DECLARE_ENTRY = {
-    .abi = {FP_PLUGIN_ABI_MAJOR, FP_PLUGIN_ABI_MINOR},
+    .abi = {.major = FP_PLUGIN_ABI_MAJOR, .minor = FP_PLUGIN_ABI_MINOR},
     .id = "org.facepuppet.input-osc",
     .version = "1.0.0",
-    .init = osc_init,
-    .deinit = osc_deinit,
     .get_factory = osc_get_factory,
 };

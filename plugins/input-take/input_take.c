@@ -163,7 +163,7 @@ static bool take_recording_info(const fp_input *self, fp_recording_info *info)
     return true;
 }
 
-static const fp_input_recording recording_ext = {take_recording_info};
+static const fp_input_recording recording_ext = {.get = take_recording_info};
 
 static const void *take_get_extension(const fp_input *self, const char *id)
 {
@@ -339,21 +339,24 @@ static int take_create(const fp_host *host, const char *arg, const fp_param *par
     return 0;
 }
 
+/* The keys, typed (ABI 1.1), for `facepuppet plugins` and `plugins check`; take_create
+ * parses them itself (the same ranges). */
+static const fp_param_info take_keys[] = {
+    {.name = "speed", .type = FP_PARAM_FLOAT, .min = 1e-3, .max = 1e6, .default_value = "1",
+     .unit = "x", .description = "play this many times as fast (0.001 to 1e6)"},
+    {.name = "fast", .type = FP_PARAM_BOOL, .min = 0, .max = 1, .default_value = "0",
+     .description = "as fast as possible, retrying when the queue is full"},
+    {.name = NULL},
+};
+
 static const fp_input_factory take_factory = {
     .size = sizeof(fp_input_factory),
     .name = "take",
     .description = "performs a take again: its raw input events and key requests",
     .usage = usage_text,
     .create = take_create,
+    .params = take_keys,
 };
-
-static bool take_init(const char *plugin_path)
-{
-    (void)plugin_path;
-    return true;
-}
-
-static void take_deinit(void) {}
 
 static const void *take_get_factory(const char *factory_id)
 {
@@ -362,10 +365,8 @@ static const void *take_get_factory(const char *factory_id)
 }
 
 FP_PLUGIN_DECLARE_ENTRY = {
-    .abi = {FP_PLUGIN_ABI_MAJOR, FP_PLUGIN_ABI_MINOR},
+    .abi = {.major = FP_PLUGIN_ABI_MAJOR, .minor = FP_PLUGIN_ABI_MINOR},
     .id = "org.facepuppet.input-take",
     .version = "1.0.0",
-    .init = take_init,
-    .deinit = take_deinit,
     .get_factory = take_get_factory,
 };
