@@ -17,11 +17,8 @@
 #include "fp_pacer.h"
 
 #include <errno.h>
-#include <locale.h>
 #include <math.h>
-#include <pthread.h>
 #include <stdarg.h>
-#include <stdatomic.h>
 #include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -37,9 +34,7 @@ typedef struct replay {
     double speed;
     bool loop, fast;
 
-    pthread_t thread;
-    bool running;
-    fp_pacer pacer;          /* waits stop() interrupts, lossless pushes (fp_pacer.h) */
+    fp_pacer pacer;          /* the thread, waits stop() interrupts, lossless pushes (fp_pacer.h) */
 } replay;
 
 static const char usage_text[] =
@@ -131,35 +126,19 @@ static void *replay_thread(void *arg)
 static int replay_start(fp_input *self, char *err, size_t errlen)
 {
     replay *r = self->plugin_data;
-    if (r->running) {
-        snprintf(err, errlen, "replay: already started");
-        return -EBUSY;
-    }
-    fp_pacer_rearm(&r->pacer);
-    int rc = pthread_create(&r->thread, NULL, replay_thread, r);
-    if (rc) {
-        snprintf(err, errlen, "replay: cannot start its thread: %s", strerror(rc));
-        return -rc;
-    }
-    r->running = true;
-    return 0;
+    return fp_pacer_start(&r->pacer, replay_thread, r, "replay", err, errlen);
 }
 
 static void replay_stop(fp_input *self)
 {
-    replay *r = self->plugin_data;
-    if (!r->running) return;
-    fp_pacer_stop(&r->pacer);
-    pthread_join(r->thread, NULL);
-    r->running = false;
+    fp_pacer_stop(&((replay *)self->plugin_data)->pacer);
 }
 
 static void replay_destroy(fp_input *self)
 {
     if (!self) return;
     replay *r = self->plugin_data;
-    replay_stop(self);
-    fp_pacer_destroy(&r->pacer);
+    fp_pacer_destroy(&r->pacer); /* (stops the thread first) */
     replay_recording_free(&r->rec);
     free(r->path);
     free(r);
@@ -268,17 +247,10 @@ static int replay_create(const fp_host *host, const char *arg, const fp_param *p
         const char *v = p->value ? p->value : "";
         fp_param q = {.key = p->key ? p->key : "", .value = v};
         if (strcmp(q.key, "speed") == 0) {
-            locale_t c = newlocale(LC_ALL_MASK, "C", (locale_t)0);
-            char *end = NULL;
-            double s = c != (locale_t)0 ? strtod_l(v, &end, c) : NAN;
-            if (c != (locale_t)0) freelocale(c);
-            const size_t n = fp_decimal_span(v); /* a decimal: no hex, inf or nan */
-            if (!n || !end || end != v + n || *end || !isfinite(s) || !(s >= 1e-3) || s > 1e6) {
-                /* (1e-9 stretched a 3 s recording over a century; 1e-300 overflowed) */
+            if (!fp_pacer_parse_speed(v, &speed)) {
                 snprintf(err, errlen, "replay: speed=%s: expected a number from 0.001 to 1e6", v);
                 return -EINVAL;
             }
-            speed = s;
         } else if (strcmp(q.key, "loop") == 0) {
             if (parse_bool(&q, &loop, err, errlen)) return -EINVAL;
         } else if (strcmp(q.key, "fast") == 0) {

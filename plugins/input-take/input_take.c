@@ -35,11 +35,8 @@
 #include "fp_pacer.h"
 
 #include <errno.h>
-#include <locale.h>
 #include <math.h>
-#include <pthread.h>
 #include <stdarg.h>
-#include <stdatomic.h>
 #include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -66,9 +63,7 @@ typedef struct take_input {
     bool fast;
     char warning[512];
 
-    pthread_t thread;
-    bool running;
-    fp_pacer pacer;          /* waits stop() interrupts, lossless pushes (fp_pacer.h) */
+    fp_pacer pacer;          /* the thread, waits stop() interrupts, lossless pushes (fp_pacer.h) */
 } take_input;
 
 static const char usage_text[] =
@@ -115,35 +110,19 @@ static void *take_thread(void *arg)
 static int take_start(fp_input *self, char *err, size_t errlen)
 {
     take_input *r = self->plugin_data;
-    if (r->running) {
-        snprintf(err, errlen, "take: already started");
-        return -EBUSY;
-    }
-    fp_pacer_rearm(&r->pacer);
-    int rc = pthread_create(&r->thread, NULL, take_thread, r);
-    if (rc) {
-        snprintf(err, errlen, "take: cannot start its thread: %s", strerror(rc));
-        return -rc;
-    }
-    r->running = true;
-    return 0;
+    return fp_pacer_start(&r->pacer, take_thread, r, "take", err, errlen);
 }
 
 static void take_stop(fp_input *self)
 {
-    take_input *r = self->plugin_data;
-    if (!r->running) return;
-    fp_pacer_stop(&r->pacer);
-    pthread_join(r->thread, NULL);
-    r->running = false;
+    fp_pacer_stop(&((take_input *)self->plugin_data)->pacer);
 }
 
 static void take_destroy(fp_input *self)
 {
     if (!self) return;
     take_input *r = self->plugin_data;
-    take_stop(self);
-    fp_pacer_destroy(&r->pacer);
+    fp_pacer_destroy(&r->pacer); /* (stops the thread first) */
     free(r->items);
     free(r->path);
     free(r);
@@ -291,16 +270,10 @@ static int take_create(const fp_host *host, const char *arg, const fp_param *par
     for (size_t i = 0; i < nparams; i++) {
         const char *k = params[i].key ? params[i].key : "", *v = params[i].value ? params[i].value : "";
         if (!strcmp(k, "speed")) {
-            locale_t c = newlocale(LC_ALL_MASK, "C", (locale_t)0);
-            char *end = NULL;
-            double s = c != (locale_t)0 ? strtod_l(v, &end, c) : NAN;
-            if (c != (locale_t)0) freelocale(c);
-            const size_t n = fp_decimal_span(v); /* a decimal: no hex, inf or nan */
-            if (!n || !end || end != v + n || *end || !isfinite(s) || !(s >= 1e-3) || s > 1e6) {
+            if (!fp_pacer_parse_speed(v, &speed)) {
                 snprintf(err, errlen, "take: speed=%s: expected a number from 0.001 to 1e6", v);
                 return -EINVAL;
             }
-            speed = s;
         } else if (!strcmp(k, "fast")) {
             if (parse_bool(k, v, &fast, err, errlen)) return -EINVAL;
         } else {
