@@ -5,6 +5,7 @@
 #include "fp_error.h"
 #include "fp_text.h"
 #include "fp_file.h"
+#include "fp_vec.h"
 
 #include <cjson/cJSON.h>
 #include <dirent.h>
@@ -250,18 +251,6 @@ static void normalize(double v[3])
     if (l > 0) v[0] /= l, v[1] /= l, v[2] /= l;
 }
 
-static double dot3(const double a[3], const double b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static void cross3(const double a[3], const double b[3], double o[3])
-{
-    o[0] = a[1] * b[2] - a[2] * b[1];
-    o[1] = a[2] * b[0] - a[0] * b[2];
-    o[2] = a[0] * b[1] - a[1] * b[0];
-}
-
 /* ---------------------------------------------------------------------------------- */
 
 static int parse_mesh(const ctx *c, fp_rig *r, const cJSON *root)
@@ -301,16 +290,16 @@ static int parse_axes(const ctx *c, fp_rig *r, const cJSON *root)
     double *ax[3] = {r->up, r->fwd, r->left};
     const char *nm[3] = {"axes.up", "axes.forward", "axes.left"};
     for (int i = 0; i < 3; i++) {
-        double l = sqrt(dot3(ax[i], ax[i]));
+        double l = sqrt(fp_dot3(ax[i], ax[i]));
         if (fabs(l - 1) > 1e-3) return bad(c, nm[i], "not a unit vector (length %g)", l);
         normalize(ax[i]);
     }
-    if (fabs(dot3(r->up, r->fwd)) > 1e-3 || fabs(dot3(r->up, r->left)) > 1e-3 ||
-        fabs(dot3(r->fwd, r->left)) > 1e-3)
+    if (fabs(fp_dot3(r->up, r->fwd)) > 1e-3 || fabs(fp_dot3(r->up, r->left)) > 1e-3 ||
+        fabs(fp_dot3(r->fwd, r->left)) > 1e-3)
         return bad(c, "axes", "up, forward and left are not orthogonal");
     double x[3];
-    cross3(r->up, r->fwd, x);
-    if (dot3(x, r->left) < 0.999) return bad(c, "axes.left", "must equal up x forward (a right-handed frame)");
+    fp_cross3(r->up, r->fwd, x);
+    if (fp_dot3(x, r->left) < 0.999) return bad(c, "axes.left", "must equal up x forward (a right-handed frame)");
     return 0;
 }
 
@@ -553,12 +542,12 @@ static int parse_jaw(const ctx *c, fp_rig *r, const cJSON *root)
         (rc = get_vec3(c, h, "jaw.hinge", "left", r->hinge_l)))
         return rc;
     double ax[3] = {r->hinge_l[0] - r->hinge_r[0], r->hinge_l[1] - r->hinge_r[1], r->hinge_l[2] - r->hinge_r[2]};
-    double len = sqrt(dot3(ax, ax));
+    double len = sqrt(fp_dot3(ax, ax));
     if (!(len > 0)) return bad(c, "jaw.hinge", "the two joints coincide");
     normalize(ax);
-    if (dot3(ax, r->left) < cos(30 * M_PI / 180))
+    if (fp_dot3(ax, r->left) < cos(30 * M_PI / 180))
         return bad(c, "jaw.hinge", "the axis from right to left joint is %.0f degrees off the face's left axis (at most 30)",
-                   acos(fmax(-1, fmin(1, dot3(ax, r->left)))) * 180 / M_PI);
+                   acos(fmax(-1, fmin(1, fp_dot3(ax, r->left)))) * 180 / M_PI);
     memcpy(r->axis, ax, sizeof ax);
     if ((rc = get_number(c, jaw, "jaw", "open_degrees", true, 1, 60, &r->open_deg))) return rc;
     const cJSON *g;
@@ -599,7 +588,7 @@ static int parse_jaw(const ctx *c, fp_rig *r, const cJSON *root)
         if (k > 0) {
             double d[3] = {r->mouth[k][0] - r->mouth[k - 1][0], r->mouth[k][1] - r->mouth[k - 1][1],
                            r->mouth[k][2] - r->mouth[k - 1][2]};
-            if (dot3(d, r->left) <= 0) return bad(c, q, "the mouth line must run from the right corner to the left (along axes.left)");
+            if (fp_dot3(d, r->left) <= 0) return bad(c, q, "the mouth line must run from the right corner to the left (along axes.left)");
         }
     }
     r->mouth_count = (size_t)k;
@@ -754,9 +743,9 @@ static void face_coords(const fp_rig *r, const double p[3], double *x, double *y
 {
     double d[3];
     for (int i = 0; i < 3; i++) d[i] = p[i] - 0.5 * (r->hinge_r[i] + r->hinge_l[i]);
-    *x = dot3(d, r->left);
-    *y = dot3(d, r->up);
-    *z = dot3(d, r->fwd);
+    *x = fp_dot3(d, r->left);
+    *y = fp_dot3(d, r->up);
+    *z = fp_dot3(d, r->fwd);
 }
 
 /* Signed distance of (z, y) from the line a -> b in the sagittal plane, positive on the side
