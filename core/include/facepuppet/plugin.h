@@ -71,7 +71,6 @@ extern "C" {
 #define FP_HAS_FIELD(ptr, type, field) \
     ((size_t)(ptr)->size >= offsetof(type, field) + sizeof(((type *)0)->field))
 
-
 /** How far fp_frame_input.tip_distance is exact, in support radii: beyond it the host reports
  *  +INFINITY. A fingertip farther than the support radius from every vertex moves none
  *  (the Wendland function is 0 there), and the host's search stops there, so its cost follows
@@ -113,12 +112,12 @@ static inline bool fp_version_is_compatible(fp_version host, fp_version plugin)
 /* ------------------------------------------------------------------------------------- */
 /* Hands                                                                                 */
 
-/** Sensors of a 22-sensor CyberGlove, in the order the glove sends them in a record (the
- *  order of CyberGlove Systems' drivers and of the open readers, asr_cyberglove_lib and
- *  Shadow Robot's cyberglove driver): thumb rotation, thumb MPJ, IJ and abduction; index
- *  MPJ, PIJ, DIJ; middle MPJ, PIJ, DIJ and middle-index abduction; ring likewise with
- *  ring-middle abduction; pinkie likewise with pinkie-ring abduction; palm arch; wrist pitch
- *  and yaw. The 18-sensor glove is the same list without the four DIJ sensors. */
+/** Sensors of a 22-sensor CyberGlove, in the order the glove sends them in a record (as the
+ *  open readers name them: asr_cyberglove_lib, Shadow Robot's and TAMS' drivers): thumb
+ *  rotation, thumb MPJ, IJ and abduction; index MPJ, PIJ, DIJ; middle MPJ, PIJ, DIJ and
+ *  middle-index abduction; ring likewise with ring-middle abduction; pinkie likewise with
+ *  pinkie-ring abduction; palm arch; wrist pitch and yaw. The 18-sensor glove is the same
+ *  list without the four DIJ sensors. */
 enum fp_glove_sensor {
     FP_SENSOR_THUMB_ROTATE = 0, FP_SENSOR_THUMB_MPJ, FP_SENSOR_THUMB_IJ, FP_SENSOR_THUMB_AB,
     FP_SENSOR_INDEX_MPJ, FP_SENSOR_INDEX_PIJ, FP_SENSOR_INDEX_DIJ,
@@ -462,7 +461,8 @@ typedef struct fp_host_rig {
  *  is within reach), its position, its distance and its unit normal. out: count entries of
  *  the caller's, written during the call. Returns 0, -EINVAL (points or out NULL with count >
  *  0), -ENODATA (the session has no surface index yet: no triangles), or the engine's negative
- *  code (a negative errno, or FP_ENUMERIC). [session-thread]: no allocation, no lock; cost follows the queries, not the mesh. */
+ *  code (a negative errno, or FP_ENUMERIC). [session-thread]: no allocation, no lock; cost
+ *  follows the queries, not the mesh. */
 #define FP_HOST_EXT_SURFACE "facepuppet.surface/1"
 typedef struct fp_surface_hit {
     uint32_t vertex;
