@@ -9,6 +9,7 @@
 #ifndef FP_PLUGIN_HOST_H
 #define FP_PLUGIN_HOST_H
 
+#include "fp_clock.h" /* fp_now_ns, the host clock of the ABI */
 #include "fp_error.h"
 #include "log_relay.h"
 
@@ -219,9 +220,6 @@ int fp_input_instance_record_error(fp_input_instance *inst, char *err, size_t er
  *  return 0 or its first error (fp_record.h's codes; message into err). No-op without a
  *  recording. fp_input_instance_close does this too but drops the error. */
 int fp_input_instance_close_record(fp_input_instance *inst, char *err, size_t errlen);
-
-/** CLOCK_MONOTONIC in nanoseconds: the host clock of the ABI. */
-int64_t fp_now_ns(void);
 
 /** Make the standard host services for a mapping instance (no queue); its log lines go to
  *  stderr as "facepuppet: NAME: LEVEL: MESSAGE". `name` must outlive the host. Prefer

@@ -13,7 +13,6 @@
 #include <sys/stat.h>
 #include <limits.h>
 #include <stdint.h>
-#include <time.h>
 #include <unistd.h>
 
 static const char *kind_prefix(fp_plugin_kind kind)
@@ -228,11 +227,4 @@ void fp_plugin_unload(fp_plugin *p)
     fp_plugin_kind kind = p->kind;
     memset(p, 0, sizeof *p);
     p->kind = kind;
-}
-
-int64_t fp_now_ns(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (int64_t)ts.tv_sec * 1000000000LL + ts.tv_nsec;
 }

@@ -5,8 +5,9 @@
  *   2 hand poses and calibration (core/pose/fp_pose.h): FK, workspace calibration
  *   3 the mapping call (step_mapping.h): the control set, checked
  *   4 the rig (step_rig.h): channels pose the base (the jaw), fingers blended by mobility
- *   5 the engine (step_engine.h): factor or reuse, solve, guard, evaluate; tip distances
- *   6 history (history.h): commit into the base, undo ring, reset
+ *   5 the engine (step_engine.h): factor or reuse, solve, guard, evaluate; tip distances;
+ *     the contact guard (step_contact.h, core/contact): no new self-crossings shown
+ *   6 history (history.h): commit into the base (step_commit.h), undo ring, reset
  *   7 the recorder (step_record.h): the frame's record to the sink of the options
  *
  * Errors: functions return 0 or a negative code of core/common/fp_error.h: negative errno
@@ -173,6 +174,7 @@ enum fp_frame_stage {
 };
 
 /** Statistics of one fp_session_step. */
+#define FP_FRAME_REACH_MAX 64 /* the session's control-set capacity */
 typedef struct fp_frame_stats {
     uint64_t frame;
     size_t events;            /* events drained this frame */
@@ -192,6 +194,12 @@ typedef struct fp_frame_stats {
     int guard_substeps;       /* maps composed (1: one; unanchored steps may compose) */
     double guard_reached;     /* smallest fraction of a control vector the map reached (1: all;
                                  below 1 the guard stopped short of an end point) */
+    /* reach (skin_reach.h): how far the skin followed the fingertips this frame */
+    size_t reach_vectors;     /* control vectors starting on the skin (within 0.5 R) that ask
+                                 to move (at least 1e-4 R) */
+    float reach[FP_FRAME_REACH_MAX]; /* each one's reach: how far the skin vertex nearest its
+                                 start point moved over how far its end point asked (1: all) */
+    double reach_asked_max;   /* the longest of them, mesh units */
     double min_det_j;         /* min det dT/dx over the moved vertices (and composed maps) with
                                  fp_session_options.measure_jacobian, else NAN (and when not
                                  active) */

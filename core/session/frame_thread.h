@@ -18,8 +18,9 @@
  * 0.01-0.08 in one batch), a delay before the frame, not in it. A sleeping frame thread
  * costs nothing.
  *
- * How. fp_frame_thread_run posts the call and waits for it (yielding); the thread claims it
- * within about a microsecond when it polls. When it sleeps (no frame for
+ * How. The thread is an fp_worker (core/common/fp_worker.h, as the contact guard's worker):
+ * it spins, then parks. fp_frame_thread_run posts the call and waits for it (yielding); the
+ * thread claims it within about a microsecond when it polls. When it sleeps (no frame for
  * FP_FRAME_THREAD_IDLE_NS), or has not claimed the call within the grace (the system holds it
  * off its core), the caller claims the call and runs it itself, then wakes the thread for
  * the next ones. A call is run once, by one thread, and its effects are visible to the

@@ -1,11 +1,36 @@
 /* Step 6 of the frame: commit into the base, the undo ring of changed pieces, reset. */
 #include "history.h"
 
+#include <assert.h>
 #include <errno.h>
 #include <stdlib.h>
 #include <string.h>
 
 #define P FP_HISTORY_PIECE
+
+/* The ring's invariants (history.h), checked after every change in a debug build (O(levels
+ * + pieces): nothing in a release build): the counts within the ring; each level's pieces
+ * within its room and the mesh; the marks (saved) exactly the open level's pieces, each
+ * once, while a gesture is open on a level, and none otherwise. */
+static void check_ring(const fp_history *h)
+{
+#ifndef NDEBUG
+    assert(h->count <= FP_HISTORY_LEVELS && h->next < FP_HISTORY_LEVELS);
+    for (size_t i = 0; i < FP_HISTORY_LEVELS; i++) {
+        const fp_history_level *l = &h->level[i];
+        assert(l->count <= l->capacity && (!l->capacity || (l->pieces && l->values)));
+    }
+    if (!h->saved) return;
+    const fp_history_level *open = &h->level[(h->next + FP_HISTORY_LEVELS - 1) % FP_HISTORY_LEVELS];
+    size_t want = h->gesture_open && h->count ? open->count : 0, marked = 0;
+    for (size_t k = 0; k < h->npieces; k++) marked += h->saved[k];
+    for (size_t i = 0; i < want; i++)
+        assert(open->pieces[i] < h->npieces && h->saved[open->pieces[i]] == 1);
+    assert(marked == want); /* (so each piece is listed once) */
+#else
+    (void)h;
+#endif
+}
 
 int fp_history_init(fp_history *h, size_t n, float *base)
 {
@@ -14,6 +39,7 @@ int fp_history_init(fp_history *h, size_t n, float *base)
     h->npieces = (n + P - 1) / P;
     h->base = base;
     h->saved = calloc(h->npieces ? h->npieces : 1, 1);
+    check_ring(h);
     return h->saved ? 0 : -ENOMEM;
 }
 
@@ -112,6 +138,7 @@ void fp_history_commit(fp_history *h, const float *deformed)
         h->gestures++;
     }
     commit_span(h, deformed, 0, h->n);
+    check_ring(h);
 }
 
 void fp_history_commit_ranges(fp_history *h, const float *deformed, const uint32_t *ranges,
@@ -126,14 +153,20 @@ void fp_history_commit_ranges(fp_history *h, const float *deformed, const uint32
         if (v0 >= h->n) continue;
         commit_span(h, deformed, v0, c < h->n - v0 ? v0 + c : h->n);
     }
+    check_ring(h);
 }
 
-void fp_history_end_gesture(fp_history *h) { close_gesture(h); }
+void fp_history_end_gesture(fp_history *h)
+{
+    close_gesture(h);
+    check_ring(h);
+}
 
 void fp_history_set_base(fp_history *h, const float *src)
 {
     memcpy(h->base, src, h->n * 3 * sizeof(float));
     close_gesture(h);
+    check_ring(h);
 }
 
 bool fp_history_undo(fp_history *h)
@@ -148,6 +181,7 @@ bool fp_history_undo(fp_history *h)
         memcpy(h->base + 3 * v0, l->values + i * P * 3, nv * 3 * sizeof(float));
     }
     h->gestures = l->gestures;
+    check_ring(h);
     return true;
 }
 
@@ -160,4 +194,5 @@ void fp_history_reset(fp_history *h, const float *loaded)
         close_gesture(h);
     }
     h->gestures = 0;
+    check_ring(h);
 }

@@ -132,6 +132,53 @@ static void take_guard(fp_engine_result *res, const csrbf_guard_stats *gs)
     res->reached = gs->reached;
 }
 
+/* The composed step (csrbf_guarded_step_touched) of cs from the base into deformed; *gs
+ * its statistics. On return the solver holds the last sub-step's start points, so the next
+ * frame factors anew (e->factored false). */
+static int composed(fp_engine_step *e, const fp_control_set *cs, float *deformed, fp_engine_result *res,
+                    csrbf_guard_stats *gs)
+{
+    int rc;
+    csrbf_guard g = {FP_ENGINE_GUARD_MARGIN, CSRBF_GUARD_MAX_SUBSTEPS, 0u};
+    if (e->jacobian) {
+        csrbf_guard gj = g;
+        gj.eval_flags = CSRBF_EVAL_JACOBIAN;
+        csrbf_guard_stats js;
+        if (!e->scratch && !(e->scratch = malloc(csrbf_points_count(e->points) * 3 * sizeof(float))))
+            return CSRBF_ERR_NOMEM;
+        int64_t j0 = fp_now_ns();
+        rc = csrbf_guarded_step(e->solver, e->points, cs->count, &cs->start[0][0], &cs->end[0][0], &gj,
+                                e->scratch, &js);
+        res->jacobian_ms += (double)(fp_now_ns() - j0) / 1e6;
+        if (rc < 0) {
+            e->factored = false;
+            return rc;
+        }
+        res->min_det_j = js.eval.min_jacobian_det;
+    }
+    /* each map rewrites only the blocks in its supports; the touch then lists every block
+     * any of them computed. inter: made at the first composed step, copied after the base
+     * changed whole (both O(n), once) */
+    int64_t ev0 = fp_now_ns();
+    if (!e->inter) {
+        if ((rc = csrbf_points_clone(e->points, &e->inter)) < 0 ||
+            (rc = csrbf_touch_create(e->inter, &e->inter_touch)) < 0) {
+            csrbf_points_destroy(&e->inter);
+            return rc;
+        }
+        e->inter_stale = false;
+    } else if (e->inter_stale) {
+        if ((rc = csrbf_points_copy(e->inter, e->points)) < 0) return rc;
+        e->inter_stale = false;
+    }
+    rc = csrbf_guarded_step_touched(e->solver, e->points, e->touch, e->inter, e->inter_touch, cs->count,
+                                    &cs->start[0][0], &cs->end[0][0], &g, deformed, gs);
+    res->eval_ms = (double)(fp_now_ns() - ev0) / 1e6; /* sub-steps' solves included */
+    e->factored = false; /* the solver holds the last sub-step's start points */
+    e->touched_valid = rc >= 0; /* (on error the touch was reset) */
+    return rc;
+}
+
 static int run(fp_engine_step *e, const fp_control_set *cs, float *deformed, fp_engine_result *res)
 {
     int rc;
@@ -151,73 +198,30 @@ static int run(fp_engine_step *e, const fp_control_set *cs, float *deformed, fp_
     csrbf_eval_stats es = {0};
     res->min_det_j = NAN;
     bool fresh = !same_start(e, cs);
-    if (fresh && (cs->intents & FP_INTENT_COMMIT)) {
-        /* a one-shot step (unanchored): one map when it is injective already, else
-         * composed injective sub-steps */
-        res->refactored = true;
-        if ((rc = csrbf_solver_set_start_points(e->solver, cs->count, &cs->start[0][0])) < 0 ||
-            (rc = csrbf_solver_set_end_points(e->solver, &cs->end[0][0])) < 0 ||
-            (rc = csrbf_solver_limit_end_points(e->solver, FP_ENGINE_GUARD_MARGIN, &gs)) < 0) {
+    /* one map from the start points (a gesture keeps its factor from frame to frame; a
+     * one-shot step factors once), limited per cluster to the margin */
+    if (fresh) {
+        if ((rc = csrbf_solver_set_start_points(e->solver, cs->count, &cs->start[0][0])) < 0) {
             e->factored = false;
             return rc;
         }
         keep_start(e, cs);
-        if (gs.clusters_limited) {
-            csrbf_guard g = {FP_ENGINE_GUARD_MARGIN, CSRBF_GUARD_MAX_SUBSTEPS, 0u};
-            if (e->jacobian) {
-                csrbf_guard gj = g;
-                gj.eval_flags = CSRBF_EVAL_JACOBIAN;
-                csrbf_guard_stats js;
-                if (!e->scratch && !(e->scratch = malloc(csrbf_points_count(e->points) * 3 * sizeof(float))))
-                    return CSRBF_ERR_NOMEM;
-                int64_t j0 = fp_now_ns();
-                rc = csrbf_guarded_step(e->solver, e->points, cs->count, &cs->start[0][0],
-                                        &cs->end[0][0], &gj, e->scratch, &js);
-                res->jacobian_ms += (double)(fp_now_ns() - j0) / 1e6;
-                if (rc < 0) {
-                    e->factored = false;
-                    return rc;
-                }
-                res->min_det_j = js.eval.min_jacobian_det;
-            }
-            /* each map rewrites only the blocks in its supports; the touch then lists every
-             * block any of them computed. inter: made at the first composed step, copied
-             * after the base changed whole (both O(n), once) */
-            int64_t ev0 = fp_now_ns();
-            if (!e->inter) {
-                if ((rc = csrbf_points_clone(e->points, &e->inter)) < 0 ||
-                    (rc = csrbf_touch_create(e->inter, &e->inter_touch)) < 0) {
-                    csrbf_points_destroy(&e->inter);
-                    return rc;
-                }
-                e->inter_stale = false;
-            } else if (e->inter_stale) {
-                if ((rc = csrbf_points_copy(e->inter, e->points)) < 0) return rc;
-                e->inter_stale = false;
-            }
-            rc = csrbf_guarded_step_touched(e->solver, e->points, e->touch, e->inter, e->inter_touch,
-                                            cs->count, &cs->start[0][0], &cs->end[0][0], &g, deformed,
-                                            &gs);
-            res->eval_ms = (double)(fp_now_ns() - ev0) / 1e6; /* sub-steps' solves included */
-            /* the solver holds the last sub-step's start points */
-            e->factored = false;
-            e->touched_valid = rc >= 0; /* (on error the touch was reset) */
-            if (rc < 0) return rc;
-            es = gs.eval;
-            goto done;
-        }
-    } else {
-        /* a gesture (anchored): factor at its start points once, limit every frame */
-        if (fresh) {
-            if ((rc = csrbf_solver_set_start_points(e->solver, cs->count, &cs->start[0][0])) < 0) {
-                e->factored = false;
-                return rc;
-            }
-            keep_start(e, cs);
-            res->refactored = true;
-        }
-        if ((rc = csrbf_solver_set_end_points(e->solver, &cs->end[0][0])) < 0) return rc;
-        if ((rc = csrbf_solver_limit_end_points(e->solver, FP_ENGINE_GUARD_MARGIN, &gs)) < 0) return rc;
+        res->refactored = true;
+    }
+    if ((rc = csrbf_solver_set_end_points(e->solver, &cs->end[0][0])) < 0 ||
+        (rc = csrbf_solver_limit_end_points(e->solver, FP_ENGINE_GUARD_MARGIN, &gs)) < 0) {
+        e->factored = false;
+        return rc;
+    }
+    if (gs.clusters_limited) {
+        /* one map would stop short: composed injective sub-steps from the start points to
+         * the end points along their straight paths, for an anchored gesture (re-made from
+         * its base every frame, so the shape depends on this frame's control set alone) as
+         * for an unanchored step */
+        rc = composed(e, cs, deformed, res, &gs);
+        if (rc < 0) return rc;
+        es = gs.eval;
+        goto done;
     }
     /* one map: only the blocks in a support now or at the last evaluation are written */
     int64_t ev0 = fp_now_ns();

@@ -15,18 +15,21 @@
  * every map the session applies has the engine's injectivity bound L <= FP_ENGINE_GUARD_MARGIN
  * (L < 1 means T injective with det dT/dx > 0 everywhere, so the surface cannot cross
  * itself), decided from the solved coefficients, per cluster of overlapping supports:
- *  - a gesture (start points kept from the last factorisation: anchored, or the first frame
- *    of one) is limited (csrbf_solver_limit_end_points): a cluster over the margin has its
- *    control vectors shortened in proportion, the factor is kept, other clusters untouched;
- *  - a one-shot step (start points new this frame and committed at once: unanchored) is
- *    composed (csrbf_guarded_step): up to CSRBF_GUARD_MAX_SUBSTEPS injective maps, each
- *    start point travelling its cluster's share, until every end point is reached; beyond
- *    that the rest of the step is dropped (a composition of injective maps is injective).
- * So the face follows the fingers as far as an injective map allows: an unanchored step
- * reaches its end points (in sub-steps), an anchored gesture stops where the map would
- * start to fold. What the guard did is in fp_engine_result (per frame) and, once per
- * gesture (not per frame), a log line: "fold-over guard limited the deformation to 63%
- * this gesture ...".
+ *  - the map from the start points to the end points is solved and limited per cluster
+ *    (csrbf_solver_limit_end_points); where nothing is limited it is applied as one map
+ *    (an anchored gesture reuses its factor from frame to frame);
+ *  - where a cluster would be limited, the step is composed instead (csrbf_guarded_step):
+ *    up to CSRBF_GUARD_MAX_SUBSTEPS injective maps, each start point travelling its
+ *    cluster's share of the straight path to its end point, until every end point is
+ *    reached; beyond that the rest is dropped (a composition of injective maps is
+ *    injective). An unanchored step is composed on the shape so far; an anchored gesture's
+ *    map is composed anew from its base every frame (so the shape depends on this frame's
+ *    control set alone, and a take plays back bit for bit).
+ * So the face follows the fingers: a drag reaches its end points in sub-steps, and only
+ * points that converge (where no injective map of CSRBF_GUARD_MAX_SUBSTEPS steps can bring
+ * them together) stop short. What the guard did is in fp_engine_result (per frame) and,
+ * once per gesture (not per frame), a log line: "fold-over guard composed ..." or
+ * "fold-over guard limited the deformation to 63% this gesture ...".
  *
  * Errors: the engine's codes (csrbf.h: CSRBF_ERR_*) are returned unchanged and reported
  * through the log once with a count (source "engine", csrbf_strerror and the solver's
@@ -54,9 +57,8 @@ extern "C" {
 /** The guard's margin: a map is applied when its bound L <= 0.9. L bounds the Lipschitz
  *  constant of T - id, so every singular value of dT/dx lies in [1 - L, 1 + L]: 0.9 keeps a
  *  surface from being compressed more than tenfold by one map while losing only 10% of the
- *  reach that injectivity allows (a single centre folds at |alpha| = R / max|psi'|; the
- *  mappings' own 0.45 R clamp of a control vector sits just below that, 0.474 R for psi31,
- *  and stays as a first line). Smaller margins cost reach and, unanchored, more sub-steps. */
+ *  reach that injectivity allows per map (a single centre folds at |alpha| = R / max|psi'|,
+ *  0.474 R for psi31). Smaller margins cost more sub-steps. */
 #define FP_ENGINE_GUARD_MARGIN 0.9
 
 typedef struct fp_engine_step {

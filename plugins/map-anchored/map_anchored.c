@@ -1,31 +1,41 @@
 /*
  * map-anchored: the anchored mapping of Sato, Savchenko, Ohbuchi (Cyberworlds 2004,
- * sec. 2.3.1). At engage the start points s_i are the fingertips of the engaged hands and
- * stay fixed; the end points d_i follow the fingers every frame, so the host reuses one
- * factorization for the whole gesture; commit folds the deformed shape into the base,
- * cancel drops it.
+ * sec. 2.3.1), grabbing the skin. At engage each point of contact of the engaged hands that
+ * touches the face (within engage x R of the surface) grabs the skin under it: its start
+ * point s_i is the nearest point of the base surface (the host's surface service,
+ * FP_HOST_EXT_SURFACE), and from then on its end point is that skin point plus how far the
+ * fingertip moved since engage, d_i = s_i + (p_i(now) - p_i(engage)). So the grabbed skin
+ * moves exactly as the fingertip moves (T(s_i) = d_i), whatever the gap between finger and
+ * skin at engage; points that do not touch pull nothing (they are not in the control set).
+ * The start points stay fixed for the gesture, so the host reuses one factorization; commit
+ * folds the deformed shape into the base, cancel drops it. (The paper's start points are the
+ * fingertips themselves, which engage up to R/2 off the skin, where the Wendland function is
+ * psi(0.5) = 0.19: the skin then got a fifth of the finger's motion at most.)
+ *
+ * How far one gesture goes is the host's business: a drag longer than one injective map is
+ * composed of certified sub-steps from the grabbed points to the end points (step_engine.h),
+ * so the default has no clamp.
  *
  * Engage and commit come from the performer's requests (FP_INTENT_ENGAGE / _COMMIT /
  * _CANCEL: pedal, keys) and, unless auto=0, from the paper's rule: engage when a hand's
  * fingertip comes within engage x R of the surface; commit when every engaged hand's
- * fingertips are farther than release x R from the base (the hand has let go). The start
- * points are the fingertips at engage: engaging at the support's edge (engage=1) would hold
- * the surface where the Wendland function is ~0 and move nothing, so the default engages at
- * half the radius (psi_{3,1}(0.5) = 0.19 there) and releases at R (hysteresis). The host's
- * fp_frame_input.tip_distance is exact up to FP_TIP_DISTANCE_REACH x R; an engage or release
- * factor beyond it asks the host's surface service (FP_HOST_EXT_SURFACE) for that reach.
+ * fingertips are farther than release x R from the base (the hand has let go). A requested
+ * engage grabs what touches too; with nothing within engage x R it grabs each point's
+ * nearest skin within release x R (a pedal pressed with the hand hovering). A 1.0 host
+ * without the surface service gets the paper's start points (the points themselves).
  *
  * Keys: hands=left|right|both (both), auto=0|1 (1), engage=F (0.5, in R), release=F (1.0, in R;
  *       at least engage, else a hand would let go as it engages: refused at create),
- *       clamp=F (0.45, longest control vector in R; 0 = no limit; keeps the warp
- *       injective, shared/docs/csrbf.md pitfall 4), points=tips|tips+palm|all (tips: the
- *       paper's fingertips; tips+palm adds the palm centre and the knuckles, all every
- *       joint: 5, 11 or 21 points per hand, mapping_util.h fp_points).
+ *       clamp=F (0: none; else the longest control vector in R, a performer's limit),
+ *       points=tips|tips+palm|all (tips: the paper's fingertips; tips+palm adds the palm
+ *       centre and the knuckles, all every joint: 5, 11 or 21 points per hand,
+ *       mapping_util.h fp_points).
  */
 #include <facepuppet/mapping_util.h>
 #include <facepuppet/plugin.h>
 
 #include <errno.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -38,9 +48,12 @@ typedef struct anchored {
     int points;                  /* fp_points mode */
     size_t per_hand;             /* points per hand (FP_POINTS_*_COUNT) */
     bool engaged;
-    unsigned engaged_hands;      /* hands whose tips are the start points */
-    size_t count;
-    float start[FP_CONTROL_CAPACITY][3];
+    unsigned engaged_hands;      /* hands whose points grabbed the skin */
+    size_t count;                /* grabbed points (control vectors) */
+    float start[FP_CONTROL_CAPACITY][3];    /* the grabbed skin points, mesh units */
+    float offset[FP_CONTROL_CAPACITY][3];   /* start - the point at engage */
+    uint8_t hand_of[FP_CONTROL_CAPACITY];   /* which hand ... */
+    uint8_t point_of[FP_CONTROL_CAPACITY];  /* ... and which of its points grabbed */
     float last_end[FP_CONTROL_CAPACITY][3];
     const fp_host *host;
     const fp_host_surface *surface; /* FP_HOST_EXT_SURFACE, or NULL (a 1.0 host) */
@@ -63,7 +76,45 @@ static bool hand_near(const anchored *a, const fp_frame_input *in, int h, double
     return false;
 }
 
-static int engage(anchored *a, const fp_frame_input *in, bool requested)
+/* Grab: the points of hand h within `reach` of the surface, appended to the control set
+ * (start on the skin, offset kept). Returns how many grabbed, or -1 where the host has no
+ * surface service (the caller then takes the points themselves). */
+static int grab(anchored *a, const fp_frame_input *in, int h, double reach, size_t room)
+{
+    if (!a->surface || !a->surface->nearest) return -1;
+    float pts[FP_POINTS_MAX][3];
+    fp_surface_hit hit[FP_POINTS_MAX];
+    size_t n = fp_hand_points(in, h, a->points, pts);
+    if (a->surface->nearest(a->host, (const float (*)[3])pts, n, (float)(reach * in->radius), hit))
+        return -1;
+    int got = 0;
+    for (size_t p = 0; p < n && (size_t)got < room; p++) {
+        if (hit[p].vertex == UINT32_MAX || !(hit[p].distance <= reach * in->radius)) continue;
+        size_t k = a->count++;
+        memcpy(a->start[k], hit[p].position, sizeof a->start[k]);
+        for (int c = 0; c < 3; c++) a->offset[k][c] = hit[p].position[c] - pts[p][c];
+        a->hand_of[k] = (uint8_t)h;
+        a->point_of[k] = (uint8_t)p;
+        got++;
+    }
+    return got;
+}
+
+/* The paper's start points (a host without the surface service): the points themselves. */
+static void take_points(anchored *a, const fp_frame_input *in, int h, size_t room)
+{
+    float pts[FP_POINTS_MAX][3];
+    size_t n = fp_hand_points(in, h, a->points, pts);
+    for (size_t p = 0; p < n && p < room; p++) {
+        size_t k = a->count++;
+        memcpy(a->start[k], pts[p], sizeof a->start[k]);
+        memset(a->offset[k], 0, sizeof a->offset[k]);
+        a->hand_of[k] = (uint8_t)h;
+        a->point_of[k] = (uint8_t)p;
+    }
+}
+
+static int engage(anchored *a, const fp_frame_input *in, bool requested, size_t capacity)
 {
     unsigned which = 0;
     for (int h = 0; h < FP_HANDS; h++) {
@@ -71,13 +122,22 @@ static int engage(anchored *a, const fp_frame_input *in, bool requested)
         if (requested || hand_near(a, in, h, a->engage)) which |= 1u << h;
     }
     if (!which) return 0;
-    a->engaged = true;
-    a->engaged_hands = which;
     a->count = 0;
+    unsigned grabbed = 0;
+    size_t cap = capacity < FP_CONTROL_CAPACITY ? capacity : FP_CONTROL_CAPACITY;
     for (int h = 0; h < FP_HANDS; h++) {
         if (!(which & (1u << h))) continue;
-        a->count += fp_hand_points(in, h, a->points, &a->start[a->count]);
+        int got = grab(a, in, h, a->engage, cap - a->count);
+        if (got == 0 && requested) got = grab(a, in, h, a->release, cap - a->count);
+        if (got < 0) {
+            take_points(a, in, h, cap - a->count);
+            got = 1;
+        }
+        if (got > 0) grabbed |= 1u << h;
     }
+    if (!a->count) return 0;
+    a->engaged = true;
+    a->engaged_hands = grabbed;
     memcpy(a->last_end, a->start, a->count * sizeof a->start[0]);
     return 1;
 }
@@ -98,22 +158,23 @@ static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *o
     if (!a->engaged) {
         bool requested = in->requested & FP_INTENT_ENGAGE;
         if (!requested && !a->automatic) return 0;
-        if (!engage(a, in, requested)) return 0;
+        if (!engage(a, in, requested, out->capacity)) return 0;
         out->intents |= FP_INTENT_ENGAGE;
     }
     if (out->capacity < a->count) return -ENOSPC;
-    /* End points: the engaged hands' fingertips now (a hand that vanished keeps its last). */
-    size_t k = 0;
+    /* End points: each grabbed skin point plus how far its point of contact moved since
+     * engage (a hand that vanished keeps its last). */
     bool still_near = false;
+    float pts[FP_HANDS][FP_POINTS_MAX][3];
     for (int h = 0; h < FP_HANDS; h++) {
-        if (!(a->engaged_hands & (1u << h))) continue;
-        if (in->hands[h].present) {
-            fp_hand_points(in, h, a->points, &a->last_end[k]);
-            if (hand_near(a, in, h, a->release)) still_near = true;
-        }
-        k += a->per_hand;
+        if (!(a->engaged_hands & (1u << h)) || !in->hands[h].present) continue;
+        fp_hand_points(in, h, a->points, pts[h]);
+        if (hand_near(a, in, h, a->release)) still_near = true;
     }
     for (size_t i = 0; i < a->count; i++) {
+        int h = a->hand_of[i];
+        if (in->hands[h].present)
+            for (int c = 0; c < 3; c++) a->last_end[i][c] = pts[h][a->point_of[i]][c] + a->offset[i][c];
         memcpy(out->start[i], a->start[i], sizeof a->start[i]);
         memcpy(out->end[i], a->last_end[i], sizeof a->last_end[i]);
         fp_clamp_vector(out->start[i], out->end[i], a->clamp * in->radius);
@@ -152,8 +213,9 @@ static const fp_param_info keys[KEY_COUNT + 1] = {
     {.name = "release", .type = FP_PARAM_FLOAT, .min = 0.1, .max = 100, .default_value = "1.0",
      .unit = "R",
      .description = "auto commit once every engaged fingertip is farther than release x R (at least engage)"},
-    {.name = "clamp", .type = FP_PARAM_FLOAT, .min = 0, .max = 100, .default_value = "0.45",
-     .unit = "R", .description = "longest control vector (0: no limit)"},
+    {.name = "clamp", .type = FP_PARAM_FLOAT, .min = 0, .max = 100, .default_value = "0",
+     .unit = "R",
+     .description = "longest control vector (0: no limit; the host composes long drags injectively)"},
     {.name = "engage", .type = FP_PARAM_FLOAT, .min = 0.01, .max = 100, .default_value = "0.5",
      .unit = "R",
      .description = "auto engage once a fingertip is within engage x R of the surface"},
@@ -199,13 +261,14 @@ static int create(const fp_host *host, const fp_param *params, size_t nparams,
 static const fp_mapping_factory factory = {
     .size = sizeof(fp_mapping_factory),
     .name = "anchored",
-    .description = "the paper's anchored mode: start points fixed at engage, end points follow",
+    .description = "the paper's anchored mode, grabbing the skin: start points on the skin at engage, end points follow the fingers",
     .usage = "anchored[,hands=left|right|both][,auto=0|1][,engage=F][,release=F][,clamp=F]\n"
              "        [,points=tips|tips+palm|all]\n"
              "  auto=1 engages when a fingertip comes within engage*R of the surface (0.5)\n"
              "  and commits when the hand lets go (farther than release*R, 1.0; engage <=\n"
-             "  release); clamp limits each control vector to clamp*R (0.45 keeps the warp free\n"
-             "  of fold-over).\n"
+             "  release). The points touching the face (within engage*R) grab the skin under\n"
+             "  them: the grabbed skin moves as the fingertip moves; the others pull nothing.\n"
+             "  clamp limits each control vector to clamp*R (0: none, the default).\n"
              "  points: the fingertips (5 per hand, the paper's), tips+palm (+ palm centre and\n"
              "  knuckles: 11) or all (every joint: 21 per hand, 42 for two).",
     .create = create,

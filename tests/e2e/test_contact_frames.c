@@ -8,7 +8,7 @@
  * loaded face (fp_selfx_count_new_away, the input's own crossings and 1 ring around them
  * left out, as the session's guard). Prints what the guard cost per frame (collide_ms). */
 #define _GNU_SOURCE
-#include "contact.h"
+#include "fp_contact.h"
 #include "fp_mesh.h"
 #include "fp_rig.h"
 #include "fp_session.h"

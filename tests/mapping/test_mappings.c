@@ -108,16 +108,16 @@ static void test_anchored_auto(void **state)
     assert_float_equal(r.end[2][0], 2.2, 1e-6);
     assert_float_equal(r.end[2][1], 0.1, 1e-6);
 
-    place_right(&r, 10, 0, 0.5f, 0.9f * R); /* a huge jump is clamped to 0.45 R; still held
-                                             * (release beyond R) */
+    place_right(&r, 10, 0, 0.5f, 0.9f * R); /* a huge jump is followed in full (no clamp by
+                                             * default: the host composes long drags); still
+                                             * held (release beyond R) */
     step(&r, 0);
     assert_true(r.cs.active);
     assert_int_equal(r.cs.intents, 0);
     for (int i = 0; i < 5; i++) {
         double d = 0;
         for (int k = 0; k < 3; k++) d += pow(r.end[i][k] - r.start[i][k], 2);
-        assert_true(sqrt(d) <= 0.45 * R + 1e-5);
-        assert_true(sqrt(d) >= 0.45 * R - 1e-4);
+        assert_true(sqrt(d) > 0.45 * R);
     }
 
     place_right(&r, 0.2f, 0, 3, 2 * R); /* the hand lets go: commit */
@@ -221,7 +221,8 @@ static void test_anchored_beyond_reach(void **state)
     r.m = NULL;
     fp_plugin_unload(&r.plugin);
 
-    /* the defaults (0.5 and 1.0 R) read the host's distances only */
+    /* the defaults (0.5 and 1.0 R) read the host's distances only; the service is asked once,
+     * at engage, for the skin the points grab */
     fp_mapping_host_init(&mh, "anchored", NULL, NULL);
     mh.services = &services;
     assert_int_equal(fp_plugin_load(fp_test_plugin_path(), FP_PLUGIN_MAPPING, "anchored", &r.plugin, err, 1024), 0);
@@ -234,7 +235,7 @@ static void test_anchored_beyond_reach(void **state)
     place_right(&r, 0, 0, 1.4f, INFINITY);
     step(&r, 0);
     assert_true(r.cs.intents & FP_INTENT_COMMIT);
-    assert_int_equal(plane_calls, 0);
+    assert_int_equal(plane_calls, 1);
     close_mapping(&r);
 }
 

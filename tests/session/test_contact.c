@@ -7,7 +7,7 @@
  * recordings: at every frame it accepts exactly when the full check (fp_contact_count_new
  * against the reference) finds nothing, the shape it keeps has no new pair by the full check
  * (and CGAL's), and the push is stopped. */
-#include "contact.h"
+#include "fp_contact.h"
 #include "fp_plugin_host.h"
 #include "csrbf.h"
 #include "fp_mesh.h"

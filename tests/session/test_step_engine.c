@@ -533,7 +533,7 @@ static void test_touched_equals_full(void **state)
         assert_true(csrbf_solver_solve(rs, 2, &start[0][0], &end[0][0]) >= 0);
         csrbf_guard_stats gs;
         assert_true(csrbf_solver_limit_end_points(rs, FP_ENGINE_GUARD_MARGIN, &gs) >= 0);
-        if (gs.clusters_limited && (cs.intents & FP_INTENT_COMMIT) && unanchored) {
+        if (gs.clusters_limited) { /* composed, anchored (from the base) and unanchored alike */
             csrbf_guard g = {FP_ENGINE_GUARD_MARGIN, CSRBF_GUARD_MAX_SUBSTEPS, 0};
             assert_true(csrbf_guarded_step(rs, rp, 2, &start[0][0], &end[0][0], &g, ref, NULL) >= 0);
         } else {
@@ -555,7 +555,7 @@ static void test_touched_equals_full(void **state)
     }
     printf("touched = full on 40 frames (%u limited, %u composed)\n", limited, composed);
     assert_true(composed > 0);
-    assert_true(limited > composed);
+    assert_true(limited >= composed); /* every map a cluster would limit is composed */
     csrbf_points_destroy(&rp);
     csrbf_solver_destroy(&rs);
     fp_engine_step_free(&e);

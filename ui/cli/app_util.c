@@ -2,6 +2,7 @@
 
 #include "command.h"
 #include "fp_error.h"
+#include "fp_stats.h"
 #include "fp_file.h"
 #include "fp_mesh.h"
 #include "fp_session_take.h"
@@ -256,4 +257,36 @@ int fp_app_take_intact(const char *cmd, const char *verb, const char *path,
         fprintf(stderr, "%s: warning: %s; %sing the %zu intact frames\n", cmd, cut, verb,
                 fp_take_reader_frames(r));
     return FP_EXIT_OK;
+}
+
+void fp_app_reach_add(fp_app_reach *r, const fp_frame_stats *st)
+{
+    for (size_t i = 0; i < st->reach_vectors; i++) {
+        if (r->n == r->cap) {
+            size_t nc = r->cap ? 2 * r->cap : 1024;
+            double *g = realloc(r->v, nc * sizeof *g);
+            if (!g) return;
+            r->v = g;
+            r->cap = nc;
+        }
+        r->v[r->n++] = st->reach[i];
+    }
+    if (st->reach_asked_max > r->asked_max) r->asked_max = st->reach_asked_max;
+}
+
+void fp_app_reach_text(fp_app_reach *r, double mm_per_unit, char *text, size_t len)
+{
+    if (!len) return;
+    text[0] = 0;
+    if (!r->n) return;
+    snprintf(text, len,
+             "; the skin followed the fingertips %.0f%% (median over %zu touching vectors, 10th "
+             "percentile %.0f%%, longest drag %.1f mm)", 100.0 * fp_median(r->v, r->n), r->n,
+             100.0 * fp_percentile(r->v, r->n, 0.10), r->asked_max * mm_per_unit);
+}
+
+void fp_app_reach_free(fp_app_reach *r)
+{
+    free(r->v);
+    memset(r, 0, sizeof *r);
 }

@@ -149,4 +149,20 @@ fp_take_rate fp_app_take_rate(double fps);
  *  IN - OUT" (and its error, if it stopped on one). */
 void fp_app_print_take(FILE *f, const char *prefix, const fp_session_take_result *r);
 
+/** How far the skin followed the fingertips over a run (skin_reach.h): every frame's
+ *  touching vectors' reaches (fp_frame_stats.reach), gathered by fp_app_reach_add. Zero-
+ *  initialise; fp_app_reach_free frees it. */
+typedef struct fp_app_reach {
+    double *v;
+    size_t n, cap;
+    double asked_max;     /* the longest drag, mesh units */
+} fp_app_reach;
+/** Gather st's reaches (a failed allocation drops them: the figure is a report). */
+void fp_app_reach_add(fp_app_reach *r, const fp_frame_stats *st);
+/** "; the skin followed the fingertips 91% (median over 574 touching vectors, 10th percentile
+ *  35%, longest drag 79.4 mm)" into text (empty when no vector was gathered); mm from
+ *  mm_per_unit. Reorders r->v. */
+void fp_app_reach_text(fp_app_reach *r, double mm_per_unit, char *text, size_t len);
+void fp_app_reach_free(fp_app_reach *r);
+
 #endif

@@ -94,6 +94,7 @@ static int play_main(int argc, char **argv)
     fp_take_player *player = NULL;
     fp_exporter *ex = NULL;
     int status = FP_EXIT_OK;
+    fp_app_reach reach = {0}; /* how far the skin followed, over the take */
     int rc = fp_take_player_open_logged(take_path, mesh, &path,
                                         quiet ? fp_app_log_line_quiet : fp_app_log_line, NULL,
                                         &player, err, sizeof err);
@@ -127,6 +128,7 @@ static int play_main(int argc, char **argv)
         frames++;
         commits += st.committed;
         active += st.active;
+        fp_app_reach_add(&reach, &st);
         if (frames_out) {
             char file[4400];
             snprintf(file, sizeof file, "%s/frame_%06llu_t%.3fs.obj", frames_out,
@@ -158,12 +160,15 @@ static int play_main(int argc, char **argv)
         char in[32], tcout[32];
         fp_timecode_format(&h->timecode_in, in, sizeof in);
         fp_timecode_format(&fp_take_reader_summary(r)->timecode_out, tcout, sizeof tcout);
-        printf("played %s (%s take %u, %s - %s): frames %llu, deforming %llu, committed %llu%s%s\n",
+        char reach_text[200];
+        fp_app_reach_text(&reach, fp_take_player_mm_per_unit(player), reach_text, sizeof reach_text);
+        printf("played %s (%s take %u, %s - %s): frames %llu, deforming %llu, committed %llu%s%s%s\n",
                take_path, h->slate, h->take, in, tcout, (unsigned long long)frames,
-               (unsigned long long)active, (unsigned long long)commits, out ? "; wrote " : "",
-               out ? out : "");
+               (unsigned long long)active, (unsigned long long)commits, reach_text,
+               out ? "; wrote " : "", out ? out : "");
     }
 done:
+    fp_app_reach_free(&reach);
     fp_export_abort(&ex);
     fp_take_player_close(&player);
     fp_plugin_path_clear(&path);

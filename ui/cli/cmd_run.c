@@ -208,6 +208,7 @@ typedef struct run_totals {
     double collide_t;              /* the least it kept */
     double *update_ms;             /* each deforming frame's update time */
     size_t nupdates, cap;
+    fp_app_reach reach;            /* how far the skin followed (app_util.h) */
 } run_totals;
 
 static void totals_init(run_totals *t)
@@ -235,6 +236,7 @@ static void totals_add(run_totals *t, const fp_frame_stats *st)
         t->collided++;
         if (st->collide_t < t->collide_t) t->collide_t = st->collide_t;
     }
+    fp_app_reach_add(&t->reach, st); /* how far the skin followed */
     if (st->active) {
         if (t->nupdates == t->cap && t->cap) {
             double *grown = realloc(t->update_ms, 2 * t->cap * sizeof *t->update_ms);
@@ -355,18 +357,22 @@ static int save_out(fp_session *s, const char *out, size_t n, bool quiet, unsign
     return FP_EXIT_OK;
 }
 
-/* The summary line on stdout. */
-static void print_summary(const fp_session *s, const run_totals *t, const run_displacement *d,
+/* The summary line on stdout (the mesh's unit in mm: fp_session_head). */
+static void print_summary(const fp_session *s, run_totals *t, const run_displacement *d,
                           int status, const char *out)
 {
-    double med = fp_median(t->update_ms, t->nupdates);
+    double med = fp_median(t->update_ms, t->nupdates), mmu = fp_session_head(s)->mm_per_unit;
+    char reach_text[200];
+    fp_app_reach_text(&t->reach, mmu, reach_text, sizeof reach_text);
     printf("frames %llu, deforming %llu, engaged %llu, committed %llu; vertices moved %zu of %zu; "
-           "displacement mean %.6g max %.6g (mesh units); update median %.3f ms over %zu updates; "
+           "displacement mean %.3g mm max %.3g mm (%.6g, %.6g mesh units of %.4g mm)%s; update median "
+           "%.3f ms over %zu updates; "
            "fold-over guard acted on %llu frames (stopped short on %llu), min det J %.3g; "
            "contact guard scaled back %llu frames (least kept %.0f%%); events dropped %lu%s%s\n",
            (unsigned long long)t->frames, (unsigned long long)t->active_frames,
            (unsigned long long)t->engages, (unsigned long long)t->commits, d->moved, d->n,
-           d->n ? d->sum / d->n : 0.0, d->max, med, t->nupdates, (unsigned long long)t->guarded,
+           d->n ? d->sum / d->n * mmu : 0.0, d->max * mmu, d->n ? d->sum / d->n : 0.0, d->max, mmu,
+           reach_text, med, t->nupdates, (unsigned long long)t->guarded,
            (unsigned long long)t->limited, t->active_frames ? t->min_det_j : 1.0,
            (unsigned long long)t->collided, 100.0 * t->collide_t, fp_session_dropped(s),
            status == FP_EXIT_OK ? "; wrote " : "", status == FP_EXIT_OK ? out : "");
@@ -506,6 +512,7 @@ static int run_main(int argc, char **argv)
     print_summary(s, &t, &d, status, a->out);
     status = final_status(s, status, take_rc, take_err, record_failed, record_err, d.finite);
     free(t.update_ms);
+    fp_app_reach_free(&t.reach);
     fp_session_destroy(&s);
     fp_plugin_path_clear(&path);
     free(a);

@@ -770,20 +770,30 @@ static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
     for (int i = 0; i < v->recent_n; i++) recent += v->recent_frame_ms[i];
     recent = v->recent_n ? recent / v->recent_n : 0;
     const fp_head *head = fp_session_head(v->s);
+    /* the last deforming frame's reach (skin_reach.h): the least share of a touching
+     * fingertip's motion that the skin under it followed, and the longest drag, in mm */
+    char reach[160] = "";
+    const fp_frame_stats *la = &v->last_active;
+    if (la->reach_vectors) {
+        float least = la->reach[0];
+        for (size_t i = 1; i < la->reach_vectors; i++) least = la->reach[i] < least ? la->reach[i] : least;
+        snprintf(reach, sizeof reach, "\nskin follows the fingertips %.0f%%  (drag %.1f mm)",
+                 100.0 * least, la->reach_asked_max * head->mm_per_unit);
+    }
     char text[1024];
     snprintf(text, sizeof text,
              "%s  %zu vertices  mapping %s\n"
              "%.3g mm per mesh unit, %.*s\n"
              "%s   commits %lu   radius %.4g\n"
              "%.1f fps (%.2f ms)   engine %.3f ms   input %.0f ev/s%s\n"
-             "fold-over guard: bound %.2f  reach %.0f%%  sub-steps %d%s",
+             "fold-over guard: bound %.2f  reach %.0f%%  sub-steps %d%s%s",
              v->mesh_path ? (strrchr(v->mesh_path, '/') ? strrchr(v->mesh_path, '/') + 1 : v->mesh_path) : "", v->n, v->mapping,
              head->mm_per_unit, (int)strcspn(head->how, ":"), head->how, hud_state(v), fp_session_commits(v->s),
              fp_session_radius(v->s), recent > 0 ? 1000.0 / recent : 0.0, recent,
              st->active ? st->update_ms : v->last_update_ms, v->input_rate,
              v->opt->gpu_warp ? "   gpu-warp" : "", v->last_active.guard_bound,
              100.0 * v->last_active.guard_reached, v->last_active.guard_substeps,
-             v->last_active.guard_reached < 1.0 ? "  LIMITED" : "");
+             v->last_active.guard_reached < 1.0 ? "  LIMITED" : "", reach);
     const float white[4] = {0.95f, 0.95f, 0.92f, 1.f}, dim[4] = {0.8f, 0.85f, 0.9f, 1.f};
     float scale = h >= 600 ? 2.f : 1.f;
     float y = 8;

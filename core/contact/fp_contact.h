@@ -1,5 +1,5 @@
 /*
- * contact.h: the contact guard (issue 10): a discrete check that a candidate shape adds no
+ * fp_contact.h: the contact guard (issue 10): a discrete check that a candidate shape adds no
  * self-crossings of the surface to a reference shape, and a bisection that scales the
  * motion back until it adds none. Two forms over one test:
  *  - the full check (fp_contact_count_new, fp_contact_guard): stateless, O(n + t) per call;
@@ -32,6 +32,8 @@
  *
  * Errors: negative errno (-EINVAL for NULL or a triangle index >= n, -ENOMEM). Threads: one
  * fp_contact per thread (it keeps scratch buffers and the incremental guard's state).
+ * Link: the static library fp_contact (core/contact; its files by concern are listed in
+ * contact_internal.h), which needs only fp_common (the clock), pthreads and libm.
  */
 #ifndef FP_CONTACT_H
 #define FP_CONTACT_H

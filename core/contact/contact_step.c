@@ -1,0 +1,435 @@
+/* The contact guard's step (fp_contact_step): the moved vertices' first check, the local
+ * scale-back (its k-d tree over the blocking vertices), the bisection; and the hold
+ * (fp_contact_hold). */
+#include "contact_internal.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* P at the moved vertices := P + t (candidate - P), as fp_contact_guard's lerp; ramp (not
+ * NULL): vertex i's share is t + (1 - t) ramp[i] (a local scale-back) */
+static void track_lerp(struct track *k, double t, const double *ramp)
+{
+    for (size_t i = 0; i < k->nmv; i++) {
+        float *p = k->p + 3 * (size_t)k->mv[i];
+        const float *a = k->pv + 3 * i, *b = k->cv + 3 * i;
+        double w = ramp ? t + (1 - t) * ramp[i] : t;
+        for (int j = 0; j < 3; j++)
+            p[j] = w >= 1 ? b[j] : w <= 0 || a[j] == b[j] ? a[j] : (float)((double)a[j] + w * ((double)b[j] - a[j]));
+    }
+}
+
+/* local_ramp's k-d tree over the blocking vertices: a node's points' box, and its points
+ * (leaf: at most FP_KD_LEAF) or its children */
+#define FP_KD_LEAF 8
+typedef struct kdnode {
+    double lo[3], hi[3];
+    uint32_t first, count, left, right; /* left == 0: a leaf (node 0 is the root) */
+} kdnode;
+
+/* the node over the vertices ix[first .. first + n) (positions in pos) and those below it
+ * into kd[*len ..); its index */
+static uint32_t kd_build(kdnode *kd, size_t *len, uint32_t *ix, const float *pos, uint32_t first,
+                         uint32_t n)
+{
+    uint32_t x = (uint32_t)(*len)++;
+    kdnode *d = &kd[x];
+    for (int a = 0; a < 3; a++) d->lo[a] = INFINITY, d->hi[a] = -INFINITY;
+    for (uint32_t i = first; i < first + n; i++)
+        for (int a = 0; a < 3; a++) {
+            d->lo[a] = dmin(d->lo[a], pos[3 * (size_t)ix[i] + a]);
+            d->hi[a] = dmax(d->hi[a], pos[3 * (size_t)ix[i] + a]);
+        }
+    d->first = first;
+    d->count = n;
+    d->left = d->right = 0;
+    if (n <= FP_KD_LEAF) return x;
+    int ax = 0; /* split at the median of the longest side */
+    for (int a = 1; a < 3; a++)
+        if (d->hi[a] - d->lo[a] > d->hi[ax] - d->lo[ax]) ax = a;
+    fpc_select_mid(ix, first, first + n, first + n / 2, ax, pos);
+    uint32_t l = kd_build(kd, len, ix, pos, first, n / 2);
+    uint32_t r = kd_build(kd, len, ix, pos, first + n / 2, n - n / 2);
+    kd[x].left = l;
+    kd[x].right = r;
+    return x;
+}
+
+static inline double kd_lb2(const kdnode *d, const double *p)
+{
+    double s = 0;
+    for (int a = 0; a < 3; a++) {
+        double e = dmax(dmax(d->lo[a] - p[a], p[a] - d->hi[a]), 0.0);
+        s += e * e;
+    }
+    return s;
+}
+
+/* a new clock (tick), and the moved vertices whose share of the motion is below 1 (ramp
+ * NULL: all) stamped with it: the hierarchy's next checks look at their triangles only */
+static void stamp_scaled(fp_contact *c, const double *ramp)
+{
+    struct track *k = c->tk;
+    fpc_tick(c);
+    for (size_t i = 0; i < k->nmv; i++)
+        if (!ramp || ramp[i] < 1) k->vstamp[k->mv[i]] = k->tclock;
+}
+
+/* ramp[i] for the moved vertices: 0 within local_r of a vertex in off (positions in P, as
+ * pv holds them), 1 beyond 2 local_r, smooth between. The nearest off vertex within 2r comes
+ * from a k-d tree over them, the search bounded first by the previous moved vertex's nearest
+ * (its neighbour in memory, mostly on the surface): the brute force's distance where it
+ * matters. A blocked frame on the 1.7M face (114,000 moved vertices, 866 triangles turned
+ * over) took 74 ms in the brute force; a grid of 2r cells helped nothing (every moved vertex
+ * lay within 2r: 50 ms for 93,000 against 493 blocking vertices); the tree, 1-9 ms. 0 or
+ * -ENOMEM. */
+static int local_ramp(fp_contact *c)
+{
+    struct track *k = c->tk;
+    double r = c->local_r, r2 = r * r, r4 = 4 * r2;
+    if (!k->noff) {
+        for (size_t i = 0; i < k->nmv; i++) k->ramp[i] = 1;
+        return 0;
+    }
+    if (reserve((void **)&k->kd_ix, &k->cap_kd_ix, k->noff, sizeof *k->kd_ix) ||
+        reserve((void **)&k->kd, &k->cap_kd, 2 * k->noff, sizeof *k->kd))
+        return -ENOMEM;
+    uint32_t *ix = k->kd_ix;
+    memcpy(ix, k->off, k->noff * sizeof *ix);
+    size_t len = 0;
+    kd_build(k->kd, &len, ix, k->p, 0, (uint32_t)k->noff);
+    const kdnode *kd = k->kd;
+    const float *q = k->p;
+    uint32_t stack[64], w = 0; /* w: the last nearest point (a bound for the next search) */
+    for (size_t i = 0; i < k->nmv; i++) {
+        const float *pf = k->pv + 3 * i;
+        double p[3] = {pf[0], pf[1], pf[2]};
+        const float *qw = q + 3 * (size_t)ix[w];
+        double best = r4, dx = p[0] - qw[0], dy = p[1] - qw[1], dz = p[2] - qw[2];
+        double dw = dx * dx + dy * dy + dz * dz;
+        if (dw < best) best = dw;
+        uint32_t top = 0;
+        stack[top++] = 0;
+        while (top && best > r2) {
+            const kdnode *d = &kd[stack[--top]];
+            if (kd_lb2(d, p) >= best) continue;
+            if (!d->left) {
+                for (uint32_t j = d->first; j < d->first + d->count; j++) {
+                    const float *qj = q + 3 * (size_t)ix[j];
+                    dx = p[0] - qj[0], dy = p[1] - qj[1], dz = p[2] - qj[2];
+                    double d2 = dx * dx + dy * dy + dz * dz;
+                    if (d2 < best) best = d2, w = j;
+                }
+                continue;
+            }
+            double ll = kd_lb2(&kd[d->left], p), lr = kd_lb2(&kd[d->right], p);
+            uint32_t nearer = ll <= lr ? d->left : d->right, farther = ll <= lr ? d->right : d->left;
+            if ((ll <= lr ? lr : ll) < best) stack[top++] = farther; /* (one a level: < 64) */
+            if ((ll <= lr ? ll : lr) < best) stack[top++] = nearer;
+        }
+        double u = best <= r2 ? 0 : best >= r4 ? 1 : (sqrt(best) - r) / r;
+        k->ramp[i] = u * u * (3 - 2 * u);
+    }
+    return 0;
+}
+
+/* A shape's check inside a step (s: P at the moved vertices), by the mesh's broad phase: the
+ * new pairs and (*flips) the newly flipped triangles; record: their vertices into off (a local scale-back's blocking
+ * set), every one counted. Without record (the bisection, which asks only whether the shape
+ * adds any) a flip decides it: the pairs are not looked for (0, *flips >= 1). */
+static long check(fp_contact *c, const float *s, const float *ref, size_t *flips, bool record)
+{
+    return c->tk->tree ? fpc_tree_check(c, s, ref, flips, record, NULL) : fpc_track_check(c, s, ref, false, flips, record);
+}
+
+static int step(fp_contact *c, const float *ref, const float *cand, const uint32_t *ranges,
+                size_t nranges, int iters, fp_contact_result *res);
+
+int fp_contact_step(fp_contact *c, const float *ref, const float *cand, const uint32_t *ranges,
+                    size_t nranges, int iters, fp_contact_result *res)
+{
+    memset(res, 0, sizeof *res);
+    res->t = 1;
+    if (!c || !ref || !cand || (nranges != SIZE_MAX && nranges && !ranges)) return -EINVAL;
+    if (!c->tk && fpc_track_build(c)) return -ENOMEM;
+    int64_t w0 = c->tk->waited_ns;
+    fpc_bg_join(c); /* (a wait for it is the step's) */
+    if (c->tk->broken) return -ENOMEM;
+    int rc = step(c, ref, cand, ranges, nranges, iters, res);
+    res->worker_wait_ms = (double)(c->tk->waited_ns - w0) / 1e6;
+    if (rc) c->tk->broken = true;
+    else fpc_bg_post(c);
+    return rc;
+}
+
+/* The hierarchy's first check of the candidate: its walk job also accepts the candidate ahead
+ * (accept_range, *accepted), so that P's copy costs the threads' idle ends, not a serial
+ * tail; pv holds the old P, given back when the candidate fails. The new pairs (*fl: the
+ * newly flipped triangles), or -ENOMEM. */
+static long first_check_tree(fp_contact *c, const float *ref, const float *cand, size_t *fl, bool *accepted,
+                             fp_contact_result *res)
+{
+    struct track *k = c->tk;
+    size_t cap = k->cap_pv;
+    if (reserve((void **)&k->pv, &cap, 3 * k->nmv, sizeof *k->pv) ||
+        reserve((void **)&k->cv, &k->cap_pv, 3 * k->nmv, sizeof *k->cv))
+        return -ENOMEM;
+    long found = fpc_tree_check(c, cand, ref, fl, false, accepted);
+    if (found < 0) return -ENOMEM;
+    res->moved_tris = k->nmt;
+    if (*accepted && (found || *fl)) /* it fails: P back */
+        for (size_t i = 0; i < k->nmv; i++)
+            memcpy(k->p + 3 * (size_t)k->mv[i], k->pv + 3 * i, 3 * sizeof(float));
+    return found;
+}
+
+/* The envelopes' first check of the candidate: envelopes that hold each moved triangle in
+ * the candidate (and, before a bisection, in P too, so in every shape between them: the
+ * scale-back's), renewed where they do not, then the check over their lists. The new pairs
+ * (*fl: the newly flipped triangles), or -ENOMEM. */
+static long first_check_envelopes(fp_contact *c, const float *ref, const float *cand, size_t *fl)
+{
+    struct track *k = c->tk;
+    if (reserve((void **)&k->mbox, &k->cap_mbox, k->nmt, sizeof *k->mbox)) return -ENOMEM;
+    for (size_t i = 0; i < k->nmt; i++) {
+        /* the triangle's vertices, slot and envelope fetched ahead: dependent loads that
+         * would otherwise miss the cache in turn */
+        if (i + 16 < k->nmt) {
+            __builtin_prefetch(c->tris + 3 * (size_t)k->mt[i + 16]);
+            __builtin_prefetch(k->slot + k->mt[i + 16]);
+        }
+        if (i + 8 < k->nmt) {
+            const uint32_t *w = c->tris + 3 * (size_t)k->mt[i + 8];
+            __builtin_prefetch(cand + 3 * (size_t)w[0]);
+            __builtin_prefetch(cand + 3 * (size_t)w[1]);
+            __builtin_prefetch(cand + 3 * (size_t)w[2]);
+            __builtin_prefetch(c->nrm[k->mt[i + 8]]);
+            const uint32_t sl = k->slot[k->mt[i + 8]];
+            if (sl != FP_TRACK_NONE) __builtin_prefetch(k->dyn[sl].env);
+        }
+        uint32_t a = k->mt[i];
+        const uint32_t *va = c->tris + 3 * (size_t)a;
+        tri_box(cand, va, k->mbox[i]);
+        if ((k->slot[a] == FP_TRACK_NONE || !box_holds(k->dyn[k->slot[a]].env, k->mbox[i])) &&
+            fpc_envelope(c, a, k->mbox[i]))
+            return -ENOMEM;
+        if (fpc_flipped(c, cand, va, a) && !fpc_flipped(c, ref, va, a)) (*fl)++;
+    }
+    *fl += (size_t)fpc_own_flips(c, cand, ref, false);
+    if (fpc_renew_lists(c)) return -ENOMEM;
+    return fpc_track_check(c, cand, ref, true, fl, false);
+}
+
+/* Before a scale-back: the envelopes hold P's boxes too (the bisection's shapes lie between
+ * P and the candidate), and pv, cv hold the moved vertices in P and in the candidate. 0 or
+ * -ENOMEM. */
+static int scale_back_prepare(fp_contact *c, const float *cand)
+{
+    struct track *k = c->tk;
+    for (size_t i = 0; !k->tree && i < k->nmt; i++) {
+        uint32_t a = k->mt[i];
+        float hull[6];
+        tri_box(k->p, c->tris + 3 * (size_t)a, hull);
+        for (int j = 0; j < 3; j++) {
+            hull[j] = min_f(hull[j], k->mbox[i][j]);
+            hull[3 + j] = max_f(hull[3 + j], k->mbox[i][3 + j]);
+        }
+        if (!box_holds(k->dyn[k->slot[a]].env, hull) && fpc_envelope(c, a, hull)) return -ENOMEM;
+    }
+    if (!k->tree && fpc_renew_lists(c)) return -ENOMEM;
+    size_t cap = k->cap_pv;
+    if (reserve((void **)&k->pv, &cap, 3 * k->nmv, sizeof *k->pv) ||
+        reserve((void **)&k->cv, &k->cap_pv, 3 * k->nmv, sizeof *k->cv))
+        return -ENOMEM;
+    float *pv = k->pv, *cv = k->cv;
+    for (size_t i = 0; i < k->nmv; i++) {
+        memcpy(pv + 3 * i, k->p + 3 * (size_t)k->mv[i], 3 * sizeof(float));
+        memcpy(cv + 3 * i, cand + 3 * (size_t)k->mv[i], 3 * sizeof(float));
+    }
+    return 0;
+}
+
+/* A local scale-back (fp_contact_set_local): the motion near the blocking triangles is
+ * scaled, the rest kept (ramp); the shape with none of the near motion must pass (else the
+ * triangles it blocks join, FP_CONTACT_LOCAL_ROUNDS times). *ramp: the ramp of the round
+ * that passed, or NULL (the global scale-back then). found: the first check's new pairs; *fl
+ * its flips, then each check's. 0 or -ENOMEM. */
+static int local_scale_back(fp_contact *c, const float *ref, const float *cand, long found, size_t *fl,
+                            fp_contact_result *res, const double **ramp)
+{
+    struct track *k = c->tk;
+    if (reserve((void **)&k->ramp, &k->cap_ramp, k->nmv, sizeof *k->ramp)) return -ENOMEM;
+    for (size_t i = 0; i < k->noff; i++) k->off_mark[k->off[i]] = 0;
+    k->noff = 0;
+    /* the blocking triangles: on the hierarchy, when the first check's walk found
+     * no pair, its update's flips (the lanes' rec) and the own ones; else a check
+     * that records them */
+    long m = k->tree && !found ? (fpc_rec_merge(c) || fpc_own_flips(c, cand, ref, true) < 0 ? -ENOMEM : 0)
+                               : check(c, cand, ref, fl, true);
+    if (m < 0) return -ENOMEM;
+    for (int round = 0; m > 0 || *fl; round++) {
+        if (m < 0) return -ENOMEM;
+        if (round == FP_CONTACT_LOCAL_ROUNDS) break;
+        track_lerp(k, 0, NULL); /* P, where the distances are taken */
+        if (local_ramp(c)) return -ENOMEM;
+        track_lerp(k, 0, k->ramp);
+        if (k->tree) {
+            /* a vertex kept whole (share 1) is where the candidate has it, and a
+             * triangle of such vertices is not a blocking one, so a pair of them, or
+             * with unmoved ones, added nothing in the candidate: the check looks only
+             * at the triangles of the others (a new stamp; the rest hold the
+             * candidate's boxes and normals from its check) */
+            stamp_scaled(c, k->ramp);
+        }
+        m = check(c, k->p, ref, fl, true);
+        res->checks++;
+        if (!m && !*fl) *ramp = k->ramp;
+    }
+    track_lerp(k, 0, NULL);
+    return 0;
+}
+
+/* The candidate added pairs or flips (found, *fl): P := P + t (cand - P) at the moved
+ * vertices, t the largest of `iters` halvings that adds none, after a local scale-back
+ * where one passes (its ramp then shapes each vertex's share). *fl: the last check's flips.
+ * 0 or -ENOMEM. */
+static int scale_back(fp_contact *c, const float *ref, const float *cand, int iters, long found, size_t *fl,
+                      fp_contact_result *res)
+{
+    struct track *k = c->tk;
+    if (scale_back_prepare(c, cand)) return -ENOMEM;
+    const double *ramp = NULL;
+    if (c->local_r > 0 && iters > 0 && local_scale_back(c, ref, cand, found, fl, res, &ramp)) return -ENOMEM;
+    /* with a ramp the stamps stay the last round's: a vertex kept whole (share 1) is in
+     * place for every t, and its triangles as in the candidate; without one (the rounds
+     * failed) every moved vertex depends on t */
+    if (!ramp && k->tree && c->local_r > 0) stamp_scaled(c, NULL);
+    double lo = 0, hi = 1, held = ramp ? 0 : NAN; /* the t whose shape the hierarchy holds
+                                                       (the passed ramp's: 0) */
+    for (int i = 0; i < iters; i++) {
+        double mid = 0.5 * (lo + hi);
+        track_lerp(k, mid, ramp);
+        size_t u0 = k->updates;
+        long m = check(c, k->p, ref, fl, false);
+        res->checks++;
+        if (m < 0) return -ENOMEM;
+        if (k->updates != u0) held = mid; /* (not a probe's) */
+        if (m || *fl) hi = mid;
+        else lo = mid;
+    }
+    track_lerp(k, lo, ramp);
+    res->t = lo;
+    res->local = ramp != NULL;
+    /* the hierarchy: the normals and boxes of the shape kept, unless the last check that
+     * updated them had it */
+    if (k->tree && !(held == lo) && fpc_tree_update(c, k->p, NULL, false) < 0) return -ENOMEM;
+    return 0;
+}
+
+/* D_P: where P may differ from the reference. P changed only at the moved vertices, so
+ * only they may join it; one that went back to the reference stays in it (a superset is
+ * enough for (2); fp_contact_reference empties it), so the step costs its motion, not
+ * the whole gesture's. from_lanes: the walk job's accept_range found them */
+static void dp_update(fp_contact *c, const float *ref, bool from_lanes)
+{
+    struct track *k = c->tk;
+    if (from_lanes) {
+        for (int j = 0; j < FP_CONTACT_MAX_THREADS; j++)
+            for (size_t i = 0; i < k->lane[j].nmv; i++) {
+                k->in_dp[k->lane[j].mv[i]] = 1;
+                k->dp[k->ndp++] = k->lane[j].mv[i];
+            }
+        return;
+    }
+    for (size_t i = 0; i < k->nmv; i++) {
+        uint32_t v = k->mv[i];
+        if (!k->in_dp[v] && vert_differs(k->p, ref, v)) {
+            k->in_dp[v] = 1;
+            k->dp[k->ndp++] = v;
+        }
+    }
+}
+
+static int step(fp_contact *c, const float *ref, const float *cand, const uint32_t *ranges,
+                size_t nranges, int iters, fp_contact_result *res)
+{
+    struct track *k = c->tk;
+    fpc_tick(c);
+    k->nmv = k->nmt = k->nmo = k->nmq = k->nprobe = 0;
+    size_t renewed0 = k->renewed;
+    for (int i = 0; i < FP_CONTACT_MAX_THREADS; i++) k->lane[i].certified = k->lane[i].tested = 0;
+    k->shared = 0;
+
+    /* the moved vertices: where cand differs from P */
+    if (k->tree ? fpc_collect_mark(c, cand, ranges, nranges) : fpc_collect_moved(c, cand, ranges, nranges))
+        return -ENOMEM;
+    res->moved_verts = k->nmv;
+    if (!k->nmv) return 0; /* nothing moved: P is the candidate */
+    for (size_t i = 0; !k->tree && i < k->nmv; i++) {
+        /* the vertex's triangle range, its triangles and their stamps fetched ahead: three
+         * dependent loads that would otherwise miss the cache in turn (the marking of the
+         * ICT replay's 480 moved vertices: 15-21 us against 19-28) */
+        if (i + 16 < k->nmv) __builtin_prefetch(k->vt_start + k->mv[i + 16]);
+        if (i + 8 < k->nmv) __builtin_prefetch(k->vt + k->vt_start[k->mv[i + 8]]);
+        if (i + 4 < k->nmv)
+            for (uint32_t j = k->vt_start[k->mv[i + 4]]; j < k->vt_start[k->mv[i + 4] + 1]; j++)
+                __builtin_prefetch(k->tstamp + k->vt[j], 1);
+        if (fpc_mark_tris(c, k->mv[i])) return -ENOMEM;
+    }
+    res->moved_tris = k->nmt; /* (the hierarchy counts them in its check's refit) */
+
+    size_t fl = 0; /* newly flipped triangles of the candidate */
+    bool accepted = false; /* the walk job made P the candidate ahead (tree_check) */
+    long found = k->tree ? first_check_tree(c, ref, cand, &fl, &accepted, res)
+                         : first_check_envelopes(c, ref, cand, &fl);
+    if (found < 0) return -ENOMEM;
+    res->checks = 1;
+    res->pairs = found;
+    res->flipped = fl;
+    if (found || fl) {
+        if (scale_back(c, ref, cand, iters, found, &fl, res)) return -ENOMEM;
+    } else if (!accepted) {
+        for (size_t i = 0; i < k->nmv; i++)
+            memcpy(k->p + 3 * (size_t)k->mv[i], cand + 3 * (size_t)k->mv[i], 3 * sizeof(float));
+    }
+    res->renewed = k->renewed - renewed0;
+    res->shared = k->shared;
+    res->certified = 0;
+    for (int i = 0; i < FP_CONTACT_MAX_THREADS; i++) res->certified += k->lane[i].certified;
+    dp_update(c, ref, accepted && !found && !fl);
+    return 0;
+}
+
+/* the vertices v in [f, e) where cand moved from P by less than eps in every coordinate,
+ * and differs from ref: P's vertex back into cand (fp_contact_hold); returns their number */
+static size_t hold_in(const float *p, const float *ref, float *cand, size_t f, size_t e, float eps)
+{
+    size_t held = 0;
+    for (size_t v = f; v < e; v++) {
+        float *q = cand + 3 * v;
+        const float *a = p + 3 * v, *r = ref + 3 * v;
+        bool near = fabsf(q[0] - a[0]) < eps && fabsf(q[1] - a[1]) < eps &&
+                    fabsf(q[2] - a[2]) < eps; /* (false with a NaN) */
+        if (!near || !memcmp(q, a, 3 * sizeof(float)) || !memcmp(q, r, 3 * sizeof(float))) continue;
+        memcpy(q, a, 3 * sizeof(float));
+        held++;
+    }
+    return held;
+}
+
+size_t fp_contact_hold(fp_contact *c, const float *ref, float *cand, const uint32_t *ranges,
+                       size_t nranges, float eps)
+{
+    if (!c || !c->tk || !ref || !cand || !(eps > 0) || (!ranges && nranges != SIZE_MAX)) return 0;
+    const float *p = c->tk->p;
+    if (nranges == SIZE_MAX) return hold_in(p, ref, cand, 0, c->n, eps);
+    size_t held = 0;
+    for (size_t r = 0; r < nranges; r++) {
+        size_t f = ranges[2 * r], e = f + ranges[2 * r + 1];
+        if (f < c->n) held += hold_in(p, ref, cand, f, e < c->n ? e : c->n, eps);
+    }
+    return held;
+}
+

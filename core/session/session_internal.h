@@ -1,0 +1,102 @@
+/*
+ * session_internal.h: the session's insides, shared by its files and by nothing else (the
+ * API is fp_session.h): struct fp_session, and what one file gives another.
+ *   session.c           the frame (fp_session_step: the seven steps), real-time memory,
+ *                       the queries and edits, destruction
+ *   session_open.c      fp_session_create, fp_session_start
+ *   session_mapping.c   the mapping's load, swap and reload (fp_session_set_mapping, ...)
+ *   step_commit.c       the commit (step 6 with the rig and the contact guard; step_commit.h)
+ *   step_contact.c      the contact guard's step (step_contact.h)
+ */
+#ifndef FP_SESSION_INTERNAL_H
+#define FP_SESSION_INTERNAL_H
+
+#include "fp_session.h"
+
+#include "changed.h"
+#include "fp_mesh.h"
+#include "fp_pose.h"
+#include "fp_rig.h"
+#include "frame_thread.h"
+#include "history.h"
+#include "intents.h"
+#include "skin_reach.h"
+#include "step_contact.h"
+#include "step_engine.h"
+#include "step_mapping.h"
+#include "step_record.h"
+#include "step_rig.h"
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+struct fp_session {
+    fp_mesh *mesh;
+    size_t n;
+    float *loaded, *base, *deformed;
+    const float *shown;
+    fp_slog log;
+
+    fp_input_instance inputs[FP_SESSION_MAX_INPUTS];
+    size_t input_count;
+    bool stopped;                 /* fp_session_stop ran */
+
+    fp_plugin mapping_plugin;
+    fp_mapping *mapping;
+    fp_mapping_host mapping_host;
+    fp_log_relay mapping_relay; /* the mapping's log lines until the session thread hands them over */
+    fp_mapping_services services;     /* the host extensions the mapping may ask for */
+    char mapping_name[64];
+    char mapping_spec[1024];      /* the SPEC it was made from (keys kept for a reload) */
+    char mapping_file[4096];      /* the file it was found at (a reload loads a copy) */
+    double mapping_budget_ms;
+    fp_mesh_view view;
+    char rig_how[1200];           /* how the rig was chosen (fp_session_rig_how) */
+
+    double radius;
+    fp_head head;                 /* the head and the mesh's unit (life-size calibration) */
+    bool engaged;                 /* the mapping's deformation is active */
+    uint64_t frame;
+    uint32_t actions;             /* FP_SESSION_ACTION_* since the last frame (recorded) */
+
+    fp_intents intents;           /* step 1 */
+    fp_pose_state pose;           /* step 2 */
+    fp_mapping_step mapping_step; /* step 3 */
+    fp_rig_step rig;              /* step 4 */
+    fp_engine_step engine;        /* step 5 */
+    fp_skin_reach_gesture gesture_reach; /* the gesture's reach so far (skin_reach.h) */
+    fp_history history;           /* step 6 */
+    fp_record_step record;        /* step 7 */
+
+    fp_control_set cs;            /* its arrays are the mapping step's (with canaries) */
+
+    fp_cg_step cg;                /* step 5, after the engine: the contact guard (step_contact.h);
+                                     cg.contact NULL with no_contact_guard */
+
+    /* what changed since the viewer last asked (fp_session_touched, changed.h) */
+    fp_changed shown_changed, base_changed;
+    int shown_kind;               /* what s->shown held at the end of the last frame: */
+    bool whole_rig_commit;        /* fp_session_options.whole_rig_commit */
+    int frame_thread_opt;         /* fp_session_options.frame_thread */
+    fp_frame_thread *ft;          /* the frame thread (frame_thread.h; fp_session_start),
+                                     or NULL: frames run on the caller's */
+};
+
+enum {
+    SHOWN_POSED,    /* the posed base */
+    SHOWN_ENGINE,   /* the engine's output (through the rig's blend): differs from the posed
+                       base only inside the engine's touched ranges */
+    SHOWN_OTHER     /* the contact guard's shape */
+};
+
+/* session_mapping.c: the mapping of SPEC `mapping` loaded and created (from `file` where not
+ * NULL: a copy being hot-reloaded); its reset and destruction (plugin calls, named for a
+ * crash); the host's services it may ask for (FP_HOST_EXT_SURFACE) */
+int fp__session_load_mapping(fp_session *s, const char *mapping, const fp_plugin_path *path,
+                             const char *file, char *err, size_t errlen);
+void fp__session_reset_mapping(fp_session *s);
+void fp__session_destroy_mapping(fp_session *s, fp_mapping *m, const char *name);
+void fp__session_mapping_services(fp_session *s);
+
+#endif

@@ -1,0 +1,347 @@
+/* Opening a session: fp_session_create (the mesh, the rig, the head and the radius, the
+ * steps' state, the contact guard, the mapping and the inputs, the calibration) and
+ * fp_session_start (fp_session.h). */
+#define _GNU_SOURCE
+#include "session_internal.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+#include <sys/stat.h> /* stat: the mesh file's size for progress */
+
+/* Workspace calibration (step 2's state): the mesh's unit (given, else detected from the
+ * head), then the calibration (given, else the inputs' workspaces, or the default one,
+ * fitted life-size in front of the face), then the glove placement. */
+static int calibrate(fp_session *s, const fp_session_options *opt, char *err, size_t errlen)
+{
+    fp_calibration c;
+    if (opt->calibration) {
+        c = *opt->calibration;
+        if (!(c.scale > 0) || !isfinite(c.scale)) {
+            snprintf(err, errlen, "calibration: scale must be > 0, got %g", c.scale);
+            return -EINVAL;
+        }
+        s->head.mm_per_unit = 1.0 / c.scale;
+        s->head.method = FP_HEAD_GIVEN;
+        snprintf(s->head.how, sizeof s->head.how, "from the calibration");
+    } else {
+        fp_input *ins[FP_SESSION_MAX_INPUTS];
+        for (size_t i = 0; i < s->input_count; i++) ins[i] = s->inputs[i].input;
+        float wmin[3], wmax[3];
+        if (!fp_pose_inputs_workspace(ins, s->input_count, wmin, wmax)) fp_pose_default_workspace(wmin, wmax);
+        fp_pose_fit_workspace(&c, s->head.mm_per_unit, wmin, wmax, s->head.min, s->head.max);
+    }
+    s->pose.calib = c;
+    fp_pose_place_gloves(&s->pose, s->loaded, s->n, &s->head);
+    return 0;
+}
+
+/* The rig: given, "none", or the one of this mesh in the rig folder (fp_rig_find). */
+static int attach_rig(fp_session *s, const fp_session_options *opt, char *err, size_t errlen)
+{
+    fp_rig *rig = NULL;
+    int rc;
+    if (opt->rig_path && !strcmp(opt->rig_path, "none")) {
+        snprintf(s->rig_how, sizeof s->rig_how, "none (--rig none)");
+    } else if (opt->rig_path) {
+        if ((rc = fp_rig_load_for_mesh(opt->rig_path, s->n, s->loaded, &rig, err, errlen))) return rc;
+        snprintf(s->rig_how, sizeof s->rig_how, "%s (given; mesh checksum %s)", opt->rig_path,
+                 fp_rig_checksum_matches(rig, s->n, s->loaded) ? "matches" : "differs, same vertex count");
+    } else {
+        char dir[1024], path[1024], msg[1200] = "";
+        const char *d = opt->rig_dir ? opt->rig_dir : fp_rig_default_dir(NULL, dir, sizeof dir);
+        rc = fp_rig_find(d, s->n, s->loaded, path, sizeof path, msg, sizeof msg);
+        if (rc) {
+            snprintf(s->rig_how, sizeof s->rig_how, "none (%s)", msg);
+        } else {
+            if ((rc = fp_rig_load_for_mesh(path, s->n, s->loaded, &rig, err, errlen))) return rc;
+            if (fp_rig_checksum_matches(rig, s->n, s->loaded))
+                snprintf(s->rig_how, sizeof s->rig_how, "%s (found by the mesh's checksum %08x)", path,
+                         fp_rig_mesh_crc32(rig));
+            else
+                snprintf(s->rig_how, sizeof s->rig_how, "%s (found by the vertex count %zu)", path, s->n);
+        }
+    }
+    if ((rc = fp_rig_step_init(&s->rig, rig, s->n, s->base))) {
+        snprintf(err, errlen, "session: out of memory for the rig");
+        return rc;
+    }
+    return 0;
+}
+
+/* fp_session_options.progress: one line, printf-style */
+static void progress(const fp_session_options *opt, const char *fmt, ...)
+{
+    if (!opt->progress) return;
+    char line[512];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(line, sizeof line, fmt, ap);
+    va_end(ap);
+    opt->progress(opt->progress_user, line);
+}
+
+/* The last component of a path. */
+static const char *file_name(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    return slash && slash[1] ? slash + 1 : path;
+}
+
+/* The options checked before anything is made: 0 or -EINVAL (the message in err). */
+static int check_options(const fp_session_options *opt, char *err, size_t errlen)
+{
+    if (!opt || (!opt->mesh_path && !opt->mesh) || !opt->plugin_path) {
+        snprintf(err, errlen, "session: a mesh and a plugin path are required");
+        return -EINVAL;
+    }
+    if (opt->input_count > FP_SESSION_MAX_INPUTS) {
+        snprintf(err, errlen, "session: at most %d inputs", FP_SESSION_MAX_INPUTS);
+        return -EINVAL;
+    }
+    if (opt->mm_per_unit < 0 || isnan(opt->mm_per_unit)) {
+        snprintf(err, errlen, "--mm-per-unit must be > 0, got %g", opt->mm_per_unit);
+        return -EINVAL;
+    }
+    if (opt->radius < 0 || isnan(opt->radius)) {
+        snprintf(err, errlen, "--radius must be > 0 (mesh units), got %g", opt->radius);
+        return -EINVAL;
+    }
+    return 0;
+}
+
+/* The mesh (given or loaded) and the session's shapes: loaded, base and deformed its copies,
+ * the view's bounds; *diag the square of the bounding box's diagonal. 0 or the code. */
+static int open_mesh(fp_session *s, const fp_session_options *opt, double *diag, char *err, size_t errlen)
+{
+    int rc = 0;
+    if (opt->mesh) {
+        if (!(s->mesh = fp_mesh_copy(opt->mesh))) {
+            rc = -ENOMEM;
+            snprintf(err, errlen, "session: out of memory for the mesh");
+            return rc;
+        }
+    } else {
+        struct stat fst;
+        if (opt->progress && !stat(opt->mesh_path, &fst))
+            progress(opt, "loading %s (%.0f MiB)", file_name(opt->mesh_path),
+                     ceil((double)fst.st_size / 1048576.0));
+        if ((rc = fp_mesh_load(opt->mesh_path, &s->mesh, err, errlen))) return rc; /* its code */
+    }
+    s->n = s->mesh->vertex_count;
+    size_t bytes = s->n * 3 * sizeof(float);
+    s->loaded = malloc(bytes);
+    s->base = malloc(bytes);
+    s->deformed = malloc(bytes);
+    if (!s->loaded || !s->base || !s->deformed) {
+        rc = -ENOMEM;
+        snprintf(err, errlen, "session: out of memory for %zu vertices", s->n);
+        return rc;
+    }
+    memcpy(s->loaded, s->mesh->positions, bytes);
+    memcpy(s->base, s->loaded, bytes);
+    memcpy(s->deformed, s->loaded, bytes);
+    s->shown = s->base;
+    fp_mesh_bounds(s->mesh, s->view.bounds_min, s->view.bounds_max);
+    s->view.vertex_count = s->n;
+    s->view.base = s->base;
+    *diag = 0;
+    for (int i = 0; i < 3; i++) {
+        double d = s->view.bounds_max[i] - s->view.bounds_min[i];
+        *diag += d * d;
+    }
+    return 0;
+}
+
+/* The head, the rig (the shape shown: the posed base), the mesh's unit and the radius. 0 or
+ * the code. */
+static int open_scale(fp_session *s, const fp_session_options *opt, double diag, char *err, size_t errlen)
+{
+    int rc = 0;
+    if (fp_head_detect(s->loaded, s->n, &s->head)) {
+        snprintf(err, errlen, "%s: cannot find a head in %zu vertices (flat or non-finite mesh)",
+                 opt->mesh_path, s->n);
+        rc = -EBADMSG; /* the mesh's fault: bad input data (65), as calibrate says */
+        return rc;
+    }
+    if ((rc = attach_rig(s, opt, err, errlen))) return rc;
+    s->shown = s->view.base = fp_rig_step_posed(&s->rig, s->base);
+    if (opt->mm_per_unit > 0) {
+        s->head.mm_per_unit = opt->mm_per_unit;
+        s->head.method = FP_HEAD_GIVEN;
+        snprintf(s->head.how, sizeof s->head.how, "from %s",
+                 opt->mm_per_unit_source ? opt->mm_per_unit_source : "the options");
+    } else if (opt->calibration && opt->calibration->scale > 0) {
+        s->head.mm_per_unit = 1.0 / opt->calibration->scale;
+    } else if (s->rig.rig) { /* a rig wins over detection, the option over a rig */
+        s->head.mm_per_unit = fp_rig_mm_per_unit(s->rig.rig);
+        s->head.method = FP_HEAD_GIVEN;
+        snprintf(s->head.how, sizeof s->head.how, "from the rig %s", fp_rig_source(s->rig.rig));
+    }
+    if (opt->radius > 0 && opt->radius < 1e-6 * sqrt(diag)) {
+        rc = -EINVAL;
+        snprintf(err, errlen, "--radius %g is below a millionth of the mesh's bounding-box "
+                 "diagonal (%.4g mesh units): no vertex would move; give a radius in mesh units",
+                 opt->radius, sqrt(diag));
+        return rc;
+    }
+    {   /* a given scale that makes the face under a millimetre or over a kilometre across is
+         * a slip (mm per unit for units per mm, a unit's power of ten): no hand would reach it */
+        double across_mm;
+        if ((opt->mm_per_unit > 0 || (opt->calibration && opt->calibration->scale > 0)) &&
+            !fp_head_scale_plausible(sqrt(diag), s->head.mm_per_unit, &across_mm)) {
+            rc = opt->mm_per_unit > 0 ? -EINVAL : -ERANGE; /* an option's, or a file's (65) */
+            snprintf(err, errlen, "%s: %g mm per mesh unit makes the face %.3g mm across "
+                     "(its diagonal %.4g mesh units); give millimetres per mesh unit",
+                     opt->mm_per_unit > 0 ? "--mm-per-unit" : "the calibration's scale",
+                     s->head.mm_per_unit, across_mm, sqrt(diag));
+            return rc;
+        }
+    }
+    if (opt->radius > 10 * sqrt(diag)) {
+        rc = -EINVAL;
+        snprintf(err, errlen, "--radius %g is beyond 10x the mesh's bounding-box diagonal (%.4g "
+                 "mesh units): every vertex would move as one; give a radius in mesh units",
+                 opt->radius, sqrt(diag));
+        return rc;
+    }
+    /* Default radius: 6% of the bounding-box diagonal, at least a fingertip's reach
+     * (FP_SESSION_MIN_RADIUS_MM): on a sparse mask (MediaPipe's 468 vertices) a smaller one
+     * holds hardly a vertex. */
+    s->radius = opt->radius > 0 ? opt->radius
+                                : fmax(0.06 * sqrt(diag), FP_SESSION_MIN_RADIUS_MM / s->head.mm_per_unit);
+    return 0;
+}
+
+/* The steps' state: intents, poses, history, recorder, the engine on the posed base, the
+ * contact guard. 0 or the code. */
+static int open_steps(fp_session *s, const fp_session_options *opt, double diag, char *err, size_t errlen)
+{
+    int rc = 0;
+    /* One engine thread by default, at any size: a frame's evaluation writes only the blocks
+     * in a support (a 1% frame on 1.7M vertices is about 0.1 ms on one core), and a second
+     * OpenMP thread that the input and display threads (or the machine's other work) keep
+     * off its core can cost a whole scheduler time slice, its spin-wait after a region the
+     * main thread's core: measured on 2 cores with `bench --case frame --no-contact-guard`,
+     * ICT subdivided to 1.7M vertices, deforming frames 4.06 ms median with all cores
+     * against 0.33 ms on one (the ICT face: 13.7 ms against 0.11 ms with the other core
+     * busy). Whole-mesh writes (a base change) are slower on one thread; -1 asks for all. */
+    int threads = opt->engine_threads ? opt->engine_threads : 1;
+    fp_intents_init(&s->intents);
+    fp_pose_init(&s->pose, opt->hand_size, NULL);
+    if ((rc = fp_history_init(&s->history, s->n, s->base))) {
+        snprintf(err, errlen, "session: out of memory for the undo history");
+        return rc;
+    }
+    fp_record_step_init(&s->record, opt->record, opt->record_user);
+    progress(opt, "indexing %zu vertices", s->n);
+    if ((rc = fp_engine_step_init(&s->engine, s->n, s->shown, threads))) {
+        snprintf(err, errlen, "session: cannot index %zu vertices", s->n);
+        return rc;
+    }
+    /* the output buffer starts as the surface the engine indexes (the posed base), so the
+     * first run writes only the blocks in a support, not the whole mesh */
+    memcpy(s->deformed, s->shown, s->n * 3 * sizeof(float));
+    fp_engine_step_output_is_base(&s->engine);
+    s->mapping_budget_ms = opt->mapping_budget_ms;
+    s->whole_rig_commit = opt->whole_rig_commit;
+    s->frame_thread_opt = opt->frame_thread;
+    /* the hold's eps from the loaded face's diagonal (diag: its square, above) */
+    s->cg.hold = opt->exact_frames || !isfinite(diag) ? 0.0f : (float)(FP_CONTACT_HOLD * sqrt(diag));
+    s->engine.jacobian = opt->measure_jacobian;
+    if ((rc = fp_engine_step_set_topology(&s->engine, s->mesh->triangles, s->mesh->triangle_count))) {
+        snprintf(err, errlen, "session: out of memory for %zu triangles", s->mesh->triangle_count);
+        return rc;
+    }
+    if (!opt->no_contact_guard) {
+        progress(opt, "building the contact guard over %zu triangles", s->mesh->triangle_count);
+        if ((rc = fp_cg_open(&s->cg, s->mesh->triangles, s->mesh->triangle_count, s->n, s->loaded, &s->rig,
+                             s->base, s->shown))) {
+            rc = rc ? rc : -ENOMEM;
+            snprintf(err, errlen, "session: out of memory for the contact guard");
+            return rc;
+        }
+    }
+    return 0;
+}
+
+/* The mapping and the inputs, the calibration, the inputs' clock, the mapping step. 0 or the
+ * code. */
+static int open_inputs(fp_session *s, const fp_session_options *opt, char *err, size_t errlen)
+{
+    int rc = 0;
+    fp__session_mapping_services(s);
+    progress(opt, "loading the mapping and %zu input%s", opt->input_count, opt->input_count == 1 ? "" : "s");
+    if ((rc = fp__session_load_mapping(s, opt->mapping, opt->plugin_path, NULL, err, errlen))) return rc;
+    for (size_t i = 0; i < opt->input_count; i++) {
+        rc = fp_input_instance_open(&s->inputs[i], opt->plugin_path, opt->inputs[i], (uint32_t)i,
+                                    err, errlen);
+        if (rc) return rc;
+        s->input_count = i + 1;
+        /* its log lines (relayed from any thread) straight to the session's callback, on the
+         * thread that drains them: the session's (as the mapping host's) */
+        fp_input_instance_set_log(&s->inputs[i], s->log.fn, s->log.user);
+        fp_input_instance_drain_log(&s->inputs[i]); /* what its create said */
+    }
+    if ((rc = calibrate(s, opt, err, errlen))) return rc;
+    s->intents.clocked = opt->input_clock;
+    for (size_t i = 0; i < s->input_count && opt->input_clock; i++) {
+        const fp_input *in = s->inputs[i].input;
+        const fp_input_recording *ri = in && in->get_extension
+                                           ? in->get_extension(in, FP_EXT_RECORDING_INFO) : NULL;
+        fp_recording_info info;
+        s->intents.waited[i] = ri && ri->get && ri->get(in, &info);
+    }
+    fp_mapping_step_init(&s->mapping_step, &s->cs, s->mapping_budget_ms);
+    return 0;
+}
+
+int fp_session_create(const fp_session_options *opt, fp_session **out, char *err, size_t errlen)
+{
+    *out = NULL;
+    int rc = check_options(opt, err, errlen);
+    if (rc) return rc;
+    fp_session *s = calloc(1, sizeof *s);
+    if (!s) return -ENOMEM;
+    s->log = (fp_slog){opt->log, opt->log_user};
+    if (fp_log_relay_init(&s->mapping_relay)) {
+        free(s);
+        return -ENOMEM;
+    }
+    double diag = 0;
+    if ((rc = open_mesh(s, opt, &diag, err, errlen)) || (rc = open_scale(s, opt, diag, err, errlen)) ||
+        (rc = open_steps(s, opt, diag, err, errlen)) || (rc = open_inputs(s, opt, err, errlen)))
+        goto fail;
+    if (opt->progress) opt->progress(opt->progress_user, NULL);
+    *out = s;
+    return 0;
+fail:
+    if (opt->progress) opt->progress(opt->progress_user, NULL);
+    fp_session_destroy(&s);
+    return rc ? rc : -EINVAL;
+}
+
+int fp_session_start(fp_session *s, char *err, size_t errlen)
+{
+    for (size_t i = 0; i < s->input_count; i++) {
+        int rc = fp_input_instance_start(&s->inputs[i], err, errlen);
+        fp_input_instance_drain_log(&s->inputs[i]); /* what its start said */
+        if (rc) return rc;
+    }
+    /* the frame thread (fp_session_options.frame_thread): a frame whose data fit in a core's
+     * caches runs on a core that stayed awake. Larger meshes do not fit; their contact guard
+     * shares its check between the caller and its own worker, which a third busy thread
+     * would slow down (the 1.7M face's frame, one trial run: 4.9 ms median with one, 2.6
+     * without). None
+     * could be made: the frames run on the caller's. */
+    bool want = s->frame_thread_opt > 0 ||
+                (s->frame_thread_opt == 0 && sysconf(_SC_NPROCESSORS_ONLN) >= 2 &&
+                 s->mesh->triangle_count <= FP_CONTACT_PREWARM);
+    if (want && !s->ft && fp_frame_thread_create(&s->ft))
+        fp_slog_printf(&s->log, FP_LOG_DEBUG, "session", "no frame thread: frames run on the caller's");
+    return 0;
+}

@@ -1,0 +1,59 @@
+/* How far the skin follows the fingertips: skin_reach.h. */
+#include "skin_reach.h"
+
+#include "step_engine.h"
+
+#include <math.h>
+#include <stdbool.h>
+#include <string.h>
+
+void fp_skin_reach_frame(const csrbf_points *points, const float *ref, const float *shown,
+                         const fp_control_set *cs, fp_frame_stats *st, fp_skin_reach_gesture *g)
+{
+    st->reach_vectors = 0;
+    st->reach_asked_max = 0;
+    size_t n = cs->count < FP_ENGINE_MAX_CONTROL ? cs->count : FP_ENGINE_MAX_CONTROL;
+    if (!n || !(cs->radius > 0)) return;
+    float dist[FP_ENGINE_MAX_CONTROL];
+    uint32_t idx[FP_ENGINE_MAX_CONTROL];
+    if (csrbf_points_nearest(points, &cs->start[0][0], n, (float)(FP_REACH_TOUCH * cs->radius), dist, idx) < 0)
+        return;
+    size_t nv = csrbf_points_count(points);
+    for (size_t i = 0; i < n; i++) {
+        if (idx[i] == UINT32_MAX || idx[i] >= nv) continue;
+        double asked = 0, moved = 0;
+        for (int a = 0; a < 3; a++) {
+            double q = (double)cs->end[i][a] - cs->start[i][a];
+            double m = (double)shown[3 * (size_t)idx[i] + a] - ref[3 * (size_t)idx[i] + a];
+            asked += q * q;
+            moved += m * m;
+        }
+        asked = sqrt(asked);
+        if (!(asked >= FP_REACH_MIN_ASK * cs->radius)) continue;
+        double r = sqrt(moved) / asked;
+        st->reach[st->reach_vectors++] = (float)r;
+        if (asked > st->reach_asked_max) st->reach_asked_max = asked;
+        if (g) {
+            if (!g->vectors || r < g->least) g->least = r;
+            g->vectors++;
+            g->below_90 += r < 0.9;
+            g->sum_reach += r;
+            if (asked > g->asked_max) g->asked_max = asked;
+        }
+    }
+}
+
+void fp_skin_reach_gesture_reset(fp_skin_reach_gesture *g) { memset(g, 0, sizeof *g); }
+
+void fp_skin_reach_gesture_end(fp_skin_reach_gesture *g, double mm_per_unit, const fp_slog *log)
+{
+    if (g->vectors) {
+        bool mm = mm_per_unit > 0 && isfinite(mm_per_unit);
+        fp_slog_printf(log, FP_LOG_INFO, FP_SLOG_ENGINE,
+                       "the skin followed the fingertips %.0f%% this gesture (mean of %zu; least "
+                       "%.0f%%, under 90%% in %zu; longest drag %.1f %s)",
+                       100.0 * g->sum_reach / (double)g->vectors, g->vectors, 100.0 * g->least,
+                       g->below_90, g->asked_max * (mm ? mm_per_unit : 1.0), mm ? "mm" : "mesh units");
+    }
+    fp_skin_reach_gesture_reset(g);
+}

@@ -1,0 +1,64 @@
+/*
+ * skin_reach.h: how far the skin follows the fingertips (issue 51), in the performer's
+ * terms. For each control vector whose start point lies on the skin (within
+ * FP_REACH_TOUCH x R of a vertex of the surface the fingers touch: the anchored mapping's
+ * grabbed points lie on it exactly), the vertex nearest the start point is the grabbed skin;
+ * its reach is how far it moved in the shape shown (against the surface of the frame) over
+ * how far the control vector asked, |d_i - s_i|. 1 is the whole way; the guards (fold-over,
+ * contact) are what can make it less. Vectors asking under FP_REACH_MIN_ASK x R are left
+ * out (a resting fingertip asks nothing).
+ *
+ * Per frame into fp_frame_stats (reach, reach_vectors, reach_asked_max); per gesture a
+ * summary (fp_skin_reach_gesture) the session logs at the gesture's end.
+ * Threads: the session thread. No allocation, no I/O.
+ */
+#ifndef FP_SKIN_REACH_H
+#define FP_SKIN_REACH_H
+
+#include "csrbf.h"
+#include "fp_session.h"
+#include "session_log.h"
+
+#include <facepuppet/plugin.h>
+
+#include <stddef.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define FP_REACH_TOUCH 0.5     /* a start point within this x R of the skin is on it */
+#define FP_REACH_MIN_ASK 1e-4  /* x R: shorter control vectors are not counted */
+
+/** One gesture's reach so far (zero-initialise; fp_skin_reach_gesture_reset). */
+typedef struct fp_skin_reach_gesture {
+    size_t vectors;           /* counted (vector, frame) pairs */
+    size_t below_90;          /* of those, reaching under 90% */
+    double sum_reach;         /* sum of the reaches (their mean = sum_reach / vectors) */
+    double least;             /* the smallest reach */
+    double asked_max;         /* the longest control vector counted, mesh units */
+} fp_skin_reach_gesture;
+
+/** The frame's reach: for each of cs's control vectors (cs->count <= FP_ENGINE_MAX_CONTROL)
+ *  whose start point is within FP_REACH_TOUCH x cs->radius of a vertex of `points` (the
+ *  surface the fingers touched, indexed: csrbf_points_nearest), reach = |shown[v] - ref[v]|
+ *  / |end - start| at that vertex v. ref, shown: the points' vertex count x 3 floats, mesh
+ *  units (the surface before the frame's deformation, the shape shown). Writes
+ *  st->reach_vectors, st->reach[0 .. reach_vectors) and st->reach_asked_max, and adds them
+ *  to g (may be NULL). Nothing is written where the index fails (st->reach_vectors 0). */
+void fp_skin_reach_frame(const csrbf_points *points, const float *ref, const float *shown,
+                         const fp_control_set *cs, fp_frame_stats *st, fp_skin_reach_gesture *g);
+
+/** Forget the gesture (its end). */
+void fp_skin_reach_gesture_reset(fp_skin_reach_gesture *g);
+
+/** At a gesture's end: where it counted any vector, log (source FP_SLOG_ENGINE, a note that
+ *  -q leaves out) "the skin followed the fingertips 97% this gesture (mean of N; least 81%,
+ *  under 90% in M; longest drag 23.5 mm)", mm from mm_per_unit (mesh units where it is not
+ *  positive); then reset g. */
+void fp_skin_reach_gesture_end(fp_skin_reach_gesture *g, double mm_per_unit, const fp_slog *log);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

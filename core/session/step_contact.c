@@ -1,0 +1,234 @@
+/* The contact guard's step of the frame: the session's side of core/contact (step_contact.h). */
+#define _GNU_SOURCE /* sysconf's _SC_NPROCESSORS_ONLN */
+#include "step_contact.h"
+
+#include "fp_clock.h"
+
+#include <assert.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+/* The sync state's invariants (step_contact.h), at the end of each transition */
+static void cg_check(const fp_cg_step *g)
+{
+    assert(g->sync >= FP_CG_SYNCED && g->sync <= FP_CG_REF_CHANGED);
+    assert(!g->lost || !g->contact); /* a lost guard is gone until it is made anew */
+    /* while the guard exists, ref records only what FP_CG_REF_CHANGED will compare */
+    assert(!g->contact || g->sync == FP_CG_REF_CHANGED || (!g->ref.all && !g->ref.n));
+    assert(g->limited <= g->frames);
+    (void)g;
+}
+
+/* The guard on the loaded mesh (its own crossings widened by FP_CONTACT_OWN_RINGS), started
+ * on the shape shown. Returns 0 or -ENOMEM (g->contact NULL). */
+static int cg_make(fp_cg_step *g, const fp_rig_step *rig, const float *base, const float *shown)
+{
+    int rc = fp_contact_create(g->tris, g->t, g->n, g->loaded, &g->contact);
+    if (!rc) rc = fp_contact_dilate_own(g->contact, FP_CONTACT_OWN_RINGS);
+    /* a large mesh's checks on two threads where there are two cores (fp_contact.h: the
+     * caller never waits for a worker that has not started; small meshes stay on one) */
+    if (!rc) fp_contact_set_threads(g->contact, sysconf(_SC_NPROCESSORS_ONLN) >= 2 ? 2 : 1, 0);
+    /* flips judged from where the rig's pose put each triangle (O(t): here, once, not at the
+     * first commit of a performance) */
+    if (!rc && rig->rig) {
+        rc = fp_contact_set_pose(g->contact, base, shown);
+        memcpy(g->pose, rig->posed_values, sizeof g->pose);
+        g->posed = !rc;
+    }
+    if (!rc) rc = fp_contact_reference(g->contact, shown, NULL, SIZE_MAX);
+    if (rc) fp_contact_destroy(&g->contact);
+    const uint32_t *r;
+    fp_changed_take(&g->ref, &r); /* from here: where the reference changes */
+    g->sync = FP_CG_SYNCED;
+    return rc;
+}
+
+int fp_cg_open(fp_cg_step *g, const uint32_t *tris, size_t t, size_t n, const float *loaded,
+               const fp_rig_step *rig, const float *base, const float *shown)
+{
+    g->tris = tris;
+    g->t = t;
+    g->n = n;
+    g->loaded = loaded;
+    int rc = cg_make(g, rig, base, shown);
+    cg_check(g);
+    return rc;
+}
+
+/* The reference's changes caught up with (step_contact.h), the rest normals posed as the
+ * reference (fp_contact_set_pose, O(t): when the channels changed, not at every commit: the
+ * open jaw turns the ICT mouth corners 89 degrees from the neutral face). 0 or -ENOMEM. */
+static int cg_sync(fp_cg_step *g, const fp_cg_frame *f)
+{
+    int rc = 0;
+    if (g->sync == FP_CG_REF_CHANGED && f->rig->rig &&
+        (!g->posed || memcmp(g->pose, f->rig->posed_values, sizeof g->pose))) {
+        rc = fp_contact_set_pose(g->contact, f->base, f->ref);
+        memcpy(g->pose, f->rig->posed_values, sizeof g->pose);
+        g->posed = true;
+    }
+    if (!rc && g->sync != FP_CG_SYNCED) {
+        /* P differs from the old reference at D_P only, the new one from the old where
+         * ref says (a rig's commit: its ranges, so not all n vertices compared: 0.08-0.12
+         * ms on the ICT face, in the next gesture's first frame) */
+        const uint32_t *rr = NULL;
+        size_t nr = g->sync == FP_CG_REF_CHANGED ? fp_changed_take(&g->ref, &rr) : 0;
+        rc = fp_contact_reference(g->contact, f->ref, rr, nr);
+    }
+    g->sync = FP_CG_SYNCED;
+    return rc;
+}
+
+/* The guard looks only where the shape may have changed: the engine's touched ranges (the
+ * rig's blend moves no vertex the fingers did not). */
+const float *fp_cg_run(fp_cg_step *g, const fp_cg_frame *f, fp_slog *log, fp_frame_stats *st)
+{
+    const float *ref = f->ref, *shown = f->shown;
+    if (g->lost && shown != ref) { /* the guard is made anew on the shape shown: ref */
+        if (cg_make(g, f->rig, f->base, ref)) return ref; /* still no memory: the base stays */
+        g->lost = false; /* P is ref, shown last frame; the rig's pose set by cg_make */
+    }
+    cg_check(g);
+    if (!g->contact || shown == ref) return shown;
+    int64_t t0 = fp_now_ns();
+    fp_contact_set_local(g->contact, f->radius); /* a blocked finger stops alone */
+    int rc = cg_sync(g, f);
+    fp_contact_result r;
+    /* the hold (fp_contact_hold): vertices that moved less than hold keep their place;
+     * never in a commit's frame, so the base gets the engine's shape. The candidate is the
+     * engine's output or the rig's blend of it, each rewritten next frame wherever it
+     * differs from the posed base now (the engine's touched ranges then hold this frame's
+     * supports), so a held vertex is never left behind */
+    float *cand = shown == f->deformed ? f->deformed
+                  : f->rig->rig && shown == f->rig->shown ? f->rig->shown : NULL;
+    if (!rc && !f->commit && g->hold > 0 && cand)
+        st->collide_held = fp_contact_hold(g->contact, ref, cand, f->touched, f->ntouched, g->hold);
+    if (!rc)
+        rc = fp_contact_step(g->contact, ref, shown, f->touched, f->ntouched, FP_CONTACT_BISECTIONS, &r);
+    st->collide_ms += (double)(fp_now_ns() - t0) / 1e6;
+    if (rc) { /* out of memory: the guard is unusable; show the reference, a new guard next frame */
+        fp_contact_destroy(&g->contact);
+        g->lost = true;
+        fp_slog_printf(log, FP_LOG_ERROR, FP_SLOG_CONTACT, "contact guard: out of memory; showing the base");
+        cg_check(g);
+        return ref;
+    }
+    st->collide_pairs += r.pairs;
+    st->collide_wait_ms += r.worker_wait_ms;
+    st->collide_checks += r.checks;
+    st->collide_moved += r.moved_verts;
+    if (!g->frames) g->t_least = 1.0;
+    g->frames++;
+    if (r.t < 1) {
+        shown = fp_contact_shape(g->contact);
+        g->limited++;
+        if (r.t < g->t_least) g->t_least = r.t;
+        if (r.t < st->collide_t) st->collide_t = r.t;
+    }
+    assert(g->sync == FP_CG_SYNCED); /* P is the shape shown now */
+    cg_check(g);
+    return shown;
+}
+
+bool fp_cg_shows(const fp_cg_step *g, const float *shown)
+{
+    return g->contact && shown == fp_contact_shape(g->contact);
+}
+
+#define FP_GC_SHIFT 4 /* fp_cg_ranges: blocks of 16 vertices */
+
+static int cmp_u32(const void *a, const void *b)
+{
+    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+size_t fp_cg_ranges(fp_cg_step *g, const uint32_t *tr, size_t nt, const uint32_t **out)
+{
+    size_t nb = (g->n >> FP_GC_SHIFT) + 1;
+    if (nt == SIZE_MAX) return SIZE_MAX;
+    if (!g->gc_mark) {
+        g->gc_mark = calloc(nb, 1);
+        g->gc_blk = malloc((nb + 1) * sizeof *g->gc_blk); /* (+1: the store before the test) */
+        g->gc_ranges = malloc(2 * nb * sizeof *g->gc_ranges);
+        if (!g->gc_mark || !g->gc_blk || !g->gc_ranges) {
+            free(g->gc_mark), free(g->gc_blk), free(g->gc_ranges);
+            g->gc_mark = NULL, g->gc_blk = g->gc_ranges = NULL;
+            return SIZE_MAX;
+        }
+    }
+    const uint32_t *dp;
+    size_t ndp = fp_contact_differs(g->contact, &dp), k = 0;
+    for (size_t i = 0; i < ndp; i++) {
+        uint32_t b = dp[i] >> FP_GC_SHIFT;
+        g->gc_blk[k] = b;
+        k += !g->gc_mark[b];
+        g->gc_mark[b] = 1;
+    }
+    for (size_t r = 0; r < nt; r++) {
+        if (!tr[2 * r + 1]) continue;
+        size_t b0 = tr[2 * r] >> FP_GC_SHIFT, b1 = (tr[2 * r] + tr[2 * r + 1] - 1) >> FP_GC_SHIFT;
+        for (size_t b = b0; b <= b1; b++) {
+            g->gc_blk[k] = (uint32_t)b;
+            k += !g->gc_mark[b];
+            g->gc_mark[b] = 1;
+        }
+    }
+    qsort(g->gc_blk, k, sizeof *g->gc_blk, cmp_u32);
+    size_t nr = 0;
+    for (size_t i = 0; i < k;) {
+        size_t b0 = g->gc_blk[i], b1 = b0 + 1;
+        g->gc_mark[b0] = 0;
+        for (i++; i < k && g->gc_blk[i] == b1; i++) g->gc_mark[b1++] = 0;
+        size_t v0 = b0 << FP_GC_SHIFT, v1 = b1 << FP_GC_SHIFT;
+        g->gc_ranges[2 * nr] = (uint32_t)v0;
+        g->gc_ranges[2 * nr + 1] = (uint32_t)((v1 < g->n ? v1 : g->n) - v0);
+        nr++;
+    }
+    *out = g->gc_ranges;
+    return nr;
+}
+
+void fp_cg_reference_changed(fp_cg_step *g, const uint32_t *ranges, size_t count)
+{
+    fp_changed_add(&g->ref, ranges, count);
+    g->sync = FP_CG_REF_CHANGED;
+    cg_check(g);
+}
+
+void fp_cg_shown_ref(fp_cg_step *g)
+{
+    if (g->sync == FP_CG_SYNCED) g->sync = FP_CG_SHOWN_REF;
+    cg_check(g);
+}
+
+void fp_cg_committed(fp_cg_step *g)
+{
+    /* the frame's check ran (every frame that deforms without a rig shows a shape other
+     * than the reference), so P is the shape shown, which the commit made the base */
+    assert(!g->contact || g->sync == FP_CG_SYNCED);
+    g->sync = FP_CG_SHOWN_REF;
+    cg_check(g);
+}
+
+void fp_cg_end_gesture(fp_cg_step *g, fp_slog *log)
+{
+    if (g->limited)
+        fp_slog_printf(log, FP_LOG_WARNING, FP_SLOG_CONTACT,
+                       "contact guard stopped the surface from passing through itself: %lu of "
+                       "%lu frames scaled back (least share of a frame's motion kept %.0f%%)",
+                       g->limited, g->frames, 100.0 * g->t_least);
+    g->frames = g->limited = 0;
+    cg_check(g);
+}
+
+void fp_cg_free(fp_cg_step *g)
+{
+    fp_contact_destroy(&g->contact);
+    fp_changed_free(&g->ref);
+    free(g->gc_mark);
+    free(g->gc_blk);
+    free(g->gc_ranges);
+    memset(g, 0, sizeof *g);
+}

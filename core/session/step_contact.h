@@ -1,0 +1,138 @@
+/*
+ * step_contact.h: the contact guard's step of the frame (step 5, after the engine and the
+ * rig's blend; docs/architecture.md): the session's side of core/contact (fp_contact.h,
+ * its incremental form). Each frame that shows a deformation, the frame's shape is checked
+ * against the shape shown last (the guard's P), on the reference (the posed base): when it
+ * adds self-crossings or flipped triangles against the reference, this frame's motion is
+ * scaled back (fp_contact_step) and the guard's shape is shown instead. Without a rig, by
+ * induction over commits, the shown surface never crosses itself where the loaded face did
+ * not; a rig's own pose (its channels) is not checked.
+ *
+ * The guard's P and the reference are kept in step by a sync state (FP_CG_*): the frame's
+ * check first catches P up with what happened since the last one (a gesture ended: the
+ * reference was shown; a pose, undo, reset or a rig's commit: the reference changed, on
+ * ranges kept in `ref`). Its transitions (asserted in debug builds):
+ *   any -> FP_CG_SYNCED        the frame's check (fp_cg_run), fp_cg_open
+ *   FP_CG_SYNCED -> SHOWN_REF  the reference is shown again (fp_cg_shown_ref; the others stay)
+ *   SYNCED -> SHOWN_REF        a commit without a rig: P is the shape committed, the new
+ *                              reference (fp_cg_committed; the frame's check ran)
+ *   any -> FP_CG_REF_CHANGED   the reference changed (fp_cg_reference_changed)
+ * and while the guard exists, `ref` records nothing unless the state is FP_CG_REF_CHANGED.
+ *
+ * Threads: the session thread (the frame thread, when the frames run there). Errors: out of
+ * memory in a frame makes the guard unusable: the reference is shown, and the guard is made
+ * anew in the next frame that deforms (fp_cg_run).
+ */
+#ifndef FP_STEP_CONTACT_H
+#define FP_STEP_CONTACT_H
+
+#include "changed.h"
+#include "fp_contact.h"
+#include "fp_session.h"
+#include "session_log.h"
+#include "step_rig.h"
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define FP_CONTACT_BISECTIONS 6
+/* pairs within this many vertex rings of the input's own crossings are not the guard's
+ * business (fp_contact_dilate_own): the eyes' intersection curves move under any motion */
+#define FP_CONTACT_OWN_RINGS 1
+/* fp_contact_hold's eps, a fraction of the loaded face's bounding-box diagonal: a vertex
+ * that moved less than this since the last frame keeps its place until it moves more or a
+ * commit (4.75 um on the ICT face, 47.5 cm across: about 1/25 of a pixel where the face
+ * fills a 4K screen) */
+#define FP_CONTACT_HOLD 1e-5
+
+/* The guard's P (the shape it last accepted) and the frame's reference, the posed base: */
+enum {
+    FP_CG_SYNCED = 0,   /* P is the shape shown, on the current reference */
+    FP_CG_SHOWN_REF,    /* the reference was shown since (a gesture ended): P := ref at D_P */
+    FP_CG_REF_CHANGED   /* the reference changed (a pose, undo, reset: anywhere; a commit with a
+                           rig: on its ranges): compare there (ref) and at D_P */
+};
+
+typedef struct fp_cg_step {
+    fp_contact *contact;          /* the guard (fp_contact.h); NULL: none (no_contact_guard,
+                                     or lost) */
+    const uint32_t *tris;         /* the mesh (fp_cg_open's, kept to make the guard anew) */
+    size_t t, n;
+    const float *loaded;          /* the loaded shape: the guard's weld shape */
+    int sync;                     /* FP_CG_*: what the guard's P must catch up with */
+    float pose[FP_RIG_MAX_CHANNELS]; /* the channel values its rest normals were posed by */
+    bool posed;                   /* pose is set (fp_contact_set_pose was called) */
+    bool lost;                    /* the guard ran out of memory: made anew, the base shown
+                                     until then */
+    unsigned long frames, limited; /* this gesture: frames checked, scaled back */
+    double t_least;               /* this gesture: smallest fraction kept */
+    float hold;                   /* fp_contact_hold's eps (mesh units): FP_CONTACT_HOLD of the
+                                     loaded face's diagonal; 0: none (options.exact_frames) */
+    fp_changed ref;               /* where the reference changed since the guard last took it
+                                     (FP_CG_REF_CHANGED: fp_contact_reference compares there) */
+    uint8_t *gc_mark;             /* fp_cg_ranges: a byte per block of 16 vertices (zero */
+    uint32_t *gc_blk, *gc_ranges; /*   between calls), the blocks listed, their ranges */
+} fp_cg_step;
+
+/** The guard on the mesh (tris, t triangles over n vertices, loaded its loaded shape: kept by
+ *  pointer), its own crossings widened by FP_CONTACT_OWN_RINGS, on two threads where there
+ *  are two cores, flips judged from the rig's pose (rig->rig: base its unposed base), started
+ *  on the shape shown (the posed base). Returns 0 or -ENOMEM (g->contact NULL). */
+int fp_cg_open(fp_cg_step *g, const uint32_t *tris, size_t t, size_t n, const float *loaded,
+               const fp_rig_step *rig, const float *base, const float *shown);
+
+/** What the frame's check looks at. */
+typedef struct fp_cg_frame {
+    const float *ref;             /* the reference: the posed base */
+    const float *shown;           /* the frame's shape: the engine's output (deformed) or the
+                                     rig's blend of it (rig->shown); the reference: nothing */
+    bool commit;                  /* the frame commits: no hold (the base gets the engine's) */
+    fp_rig_step *rig;             /* its pose; its blend may be held (fp_contact_hold) */
+    const float *base;            /* the unposed base (fp_contact_set_pose) */
+    float *deformed;              /* the engine's output, which may be held */
+    const uint32_t *touched;      /* the engine's touched ranges (first, count), where the */
+    size_t ntouched;              /*   frame's shape may differ from the reference */
+    double radius;                /* the support radius: a local scale-back's */
+} fp_cg_frame;
+
+/** The frame's check: returns the shape to show (f->shown, or the guard's shape when the
+ *  motion was scaled back, or f->ref when the guard ran out of memory); its times and counts
+ *  into st (collide_*). */
+const float *fp_cg_run(fp_cg_step *g, const fp_cg_frame *f, fp_slog *log, fp_frame_stats *st);
+
+/** True when shown is the guard's shape (its scaled-back P). */
+bool fp_cg_shows(const fp_cg_step *g, const float *shown);
+
+/** Where the guard's shape (P) and the engine's output may differ from the base: the blocks
+ *  of 16 vertices holding the guard's D_P (fp_contact_differs) or a touched range (tr, nt),
+ *  as increasing, disjoint vertex ranges in *out (g's); returns their number, SIZE_MAX when
+ *  unknown (nt == SIZE_MAX) or out of memory. O(D_P + touched), no pass over n. */
+size_t fp_cg_ranges(fp_cg_step *g, const uint32_t *tr, size_t nt, const uint32_t **out);
+
+/** The reference (the posed base) changed on ranges (count SIZE_MAX: anywhere): the next
+ *  check compares P there and at D_P (fp_contact_reference). */
+void fp_cg_reference_changed(fp_cg_step *g, const uint32_t *ranges, size_t count);
+
+/** The shape shown is the reference again (a frame without a deformation, an engine error):
+ *  P catches up before the next check. */
+void fp_cg_shown_ref(fp_cg_step *g);
+
+/** A commit without a rig made the shape shown (the guard's P, checked this frame) the
+ *  reference: only D_P to compare at the next check. */
+void fp_cg_committed(fp_cg_step *g);
+
+/** The gesture ended: one line when the guard scaled it back (FP_SLOG_CONTACT). */
+void fp_cg_end_gesture(fp_cg_step *g, fp_slog *log);
+
+/** Free the guard and the buffers; *g zeroed. */
+void fp_cg_free(fp_cg_step *g);
+
+#ifdef __cplusplus
+}
+#endif
+#endif
