@@ -787,8 +787,9 @@ static double runqueue_ms(int fd)
 /* One replay of three-claps at its own pace through the session API, 60 frames a second:
  * per-stage times (fp_frame_stats.stage_ms), the whole frame, the frames a slow one made the
  * loop skip, the committing frames. For reference, the brute-force fingertip distances on
- * every 8th frame's hands, computed after the replay (on the last base: during it, 40 ms at
- * 1.7M vertices would make the paced loop skip frames), beside the indexed ones on the same
+ * every 8th frame's hands, computed after the replay (on the last base: during it, their
+ * cost at 1.7M vertices, several frame periods (docs/performance.md), would make the paced
+ * loop skip frames), beside the indexed ones on the same
  * base, which must equal them within the session's reach and say "far" beyond it. The
  * session is opened with real-time memory, as live opens it (fp_session_realtime_memory: its
  * malloc settings hold for the rest of the process, which is why frame is the last case). */
@@ -848,7 +849,7 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
     size_t nheld = 0, nwwait = 0, nthere = 0; /* nthere: frames run on the frame thread */
     size_t nhold = 0; /* vertices the contact guard's hold kept in place, all frames */
     double w0 = runqueue_ms(sched_fd); /* read after each frame only: a read just before one
-                                          made the ICT frame about 7% slower */
+                                          slowed the ICT frame (docs/performance.md) */
     int64_t period = 1000000000LL / 60, start = fp_now_ns(), next = start;
     size_t n = fp_session_vertex_count(s);
     while (!fp_session_finished(s) && nf < CAP) {
@@ -1102,12 +1103,11 @@ static double chase_ns(size_t bytes, long loads)
 
 /* Chases on each CPU the bench may run on (at most 8), into line (the calling thread's CPUs
  * are restored): over 3/4 of a core's L2, and over 8 MiB (past L2: the shared cache, or
- * memory). On a shared virtual machine other guests take these caches minute by minute:
- * 6.3 against 11.5 ns a load over 768 KiB on the two CPUs in one minute, 22-64 against
- * 117-127 ns over 8 MiB in another (memory's latency: the shared cache held nothing of
- * ours), compute loops equal. A snapshot at the run's start: the state changes within
- * seconds, so it tells a run's conditions roughly (5 frame runs: ICT medians 0.078-0.146
- * ms against 8 MiB chases of 22-75 ns on the frames' CPU, no clear order). */
+ * memory). On a shared virtual machine other guests take these caches minute by minute,
+ * the two CPUs unlike and the shared cache at times holding nothing of ours, while compute
+ * loops stay equal (docs/performance.md has one VM's figures). A snapshot at the run's
+ * start: the state changes within seconds, so it tells a run's conditions roughly, and frame
+ * medians do not follow it in order. */
 static void probe_cpus(long l2, char *line, size_t cap)
 {
     cpu_set_t old;
@@ -1164,8 +1164,8 @@ static void print_machine(void)
     if (l2 > 0) snprintf(l2s, sizeof l2s, "%ld KiB", l2 / 1024);
     /* the kernel's memory settings that move a frame's tail on a virtual machine: the
      * transparent huge pages mode (the bracketed word) and DAMON's monitors running
-     * (kdamond: its scans of physical memory held a 1.7M-vertex frame up for 4-29 ms now
-     * and then, none over 6 ms with it off; docs/architecture.md, bench) */
+     * (kdamond: its scans of physical memory hold a 1.7M-vertex frame up now and then;
+     * docs/performance.md, and docs/architecture.md, bench) */
     char thp[16] = "unknown", line[64];
     f = fopen("/sys/kernel/mm/transparent_hugepage/enabled", "r");
     if (f) {

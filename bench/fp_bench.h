@@ -47,7 +47,7 @@ int fp_bench_run(const fp_bench_options *o);
  *  (median, p99 and max of fp_take_recorder_push per frame, 10 control vectors and 4
  *  events, while the recorder thread writes to a folder under /tmp) and a take's size per
  *  minute at 60 fps. One line of text, or one JSON object with json != 0, to `out`.
- *  quick: 4000 frames instead of 20000 (about 1 s against 5 s). Returns 0, or 1 when the
+ *  quick: 4000 frames instead of 20000 (docs/performance.md: how long). Returns 0, or 1 when the
  *  take could not be written (the reason on stderr). */
 int fp_bench_take(FILE *out, int quick, int json);
 

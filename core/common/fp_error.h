@@ -23,6 +23,8 @@
 #ifndef FP_ERROR_H
 #define FP_ERROR_H
 
+#include <facepuppet/errors.h>
+
 #include <stdarg.h>
 #include <stddef.h>
 
@@ -30,17 +32,9 @@
 extern "C" {
 #endif
 
-/** The project's own codes, for failures errno has no word for. */
-enum {
-    FP_EPLUGIN_NOT_FOUND = -1001,  /* no <kind>-<name>.so in any plugin folder */
-    FP_EPLUGIN_DLOPEN = -1002,     /* dlopen failed (missing library, bad ELF) */
-    FP_EPLUGIN_NO_ENTRY = -1003,   /* no facepuppet_plugin_entry symbol */
-    FP_EPLUGIN_ABI = -1004,        /* built against an incompatible ABI */
-    FP_EPLUGIN_INIT = -1005,       /* the entry's init returned false */
-    FP_EPLUGIN_NO_FACTORY = -1006, /* no factory of the asked kind, or a bad one */
-    FP_EPLUGIN_FAULT = -1007,      /* a plugin misbehaved at run time (overrun, NaN, crash) */
-    FP_ENUMERIC = -1101            /* the engine could not solve (singular or indefinite) */
-};
+/* The project's own codes, for failures errno has no word for (FP_EPLUGIN_NOT_FOUND ...
+ * FP_EPLUGIN_FAULT, FP_ENUMERIC), are part of the plugin ABI: defined once in the installed
+ * facepuppet/errors.h, which plugins see too. */
 
 /** A static, never-NULL description of `code` (0, a negative errno or an FP_E* code). */
 const char *fp_strerror(int code);

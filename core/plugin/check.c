@@ -500,7 +500,7 @@ static void check_mapping(checker *c, creator *cr)
     int rc = create_with(cr, NULL, 0, &inst, msg, sizeof msg);
     if (rc) return; /* reported by check_keys */
     fp_mapping *m = inst;
-    if (m->size < offsetof(fp_mapping, get_extension) || !m->process) {
+    if (!FP_HAS_FIELD(m, fp_mapping, destroy) || !m->process) {
         report(c, FP_CHECK_FAIL, "instance", "the fp_mapping has size %u or no process()", m->size);
         destroy_inst(cr, m);
         return;
@@ -709,7 +709,7 @@ static void check_input(checker *c, creator *cr)
             break;
         }
         fp_input *in = inst;
-        if (in->size < offsetof(fp_input, get_extension) || !in->start || !in->destroy) {
+        if (!FP_HAS_FIELD(in, fp_input, destroy) || !in->start || !in->destroy) {
             report(c, FP_CHECK_FAIL, "instance", "the fp_input has size %u, or no start or destroy", in->size);
             destroy_inst(cr, in);
             failed = true;
@@ -742,7 +742,7 @@ static void check_input(checker *c, creator *cr)
         /* a device's events are measured by now (1 s of leeway); a recording's are on its own
          * clock (host time at start + the sample's time: plugin.h, FP_EXT_RECORDING_INFO), ahead
          * of the host's with fast=1 or a high speed, by as much as the recording lasts */
-        const bool recording = in->size >= offsetof(fp_input, get_extension) + sizeof in->get_extension &&
+        const bool recording = FP_HAS_FIELD(in, fp_input, get_extension) &&
                                in->get_extension && in->get_extension(in, FP_EXT_RECORDING_INFO);
         int64_t latest = recording ? INT64_MAX : now_ns() + 1000000000LL;
         fp_event ev;

@@ -200,10 +200,10 @@ int fp_plugin_load(const fp_plugin_path *path, fp_plugin_kind kind, const char *
     if (ok && kind == FP_PLUGIN_INPUT) {
         /* An ABI 1.0 factory ends before `params`; fields past f->size are never read. */
         const fp_input_factory *f = out->factory;
-        ok = f->size >= offsetof(fp_input_factory, params) && f->create && f->name;
+        ok = FP_HAS_FIELD(f, fp_input_factory, create) && f->create && f->name;
     } else if (ok) {
         const fp_mapping_factory *f = out->factory;
-        ok = f->size >= offsetof(fp_mapping_factory, params) && f->create && f->name;
+        ok = FP_HAS_FIELD(f, fp_mapping_factory, create) && f->create && f->name;
     }
     if (!ok) {
         snprintf(err, errlen, "%s: offers no %s factory ('%s')", file, what, fid);

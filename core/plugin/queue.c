@@ -3,6 +3,7 @@
  * by storing seq = pos + 1. Lock-free, no allocation after init. */
 #include "fp_plugin_host.h"
 
+#include <assert.h>
 #include <errno.h>
 #include <stdlib.h>
 #include <string.h>
@@ -39,6 +40,7 @@ bool fp_event_queue_push(fp_event_queue *q, const fp_event_header *ev)
         atomic_fetch_add_explicit(&q->dropped, 1, memory_order_relaxed);
         return false;
     }
+    assert(q->cells && (q->mask & (q->mask + 1)) == 0); /* initialised; capacity a power of 2 */
     size_t pos = atomic_load_explicit(&q->head, memory_order_relaxed);
     for (;;) {
         struct fp_event_cell *c = &q->cells[pos & q->mask];
@@ -67,6 +69,11 @@ bool fp_event_queue_pop(fp_event_queue *q, fp_event *out)
     struct fp_event_cell *c = &q->cells[pos & q->mask];
     size_t seq = atomic_load_explicit(&c->seq, memory_order_acquire);
     if ((intptr_t)seq - (intptr_t)(pos + 1) < 0) return false; /* empty */
+    /* The cell was published (seq == pos + 1, after the producer's CAS on head): head is past
+     * pos by at most the capacity, and the event is one push took (a size it accepted). */
+    assert(seq == pos + 1);
+    assert(atomic_load_explicit(&q->head, memory_order_relaxed) - pos - 1 <= q->mask);
+    assert(c->event.header.size >= sizeof(fp_event_header) && c->event.header.size <= sizeof(fp_event));
     memcpy(out, &c->event, c->event.header.size);
     atomic_store_explicit(&c->seq, pos + q->mask + 1, memory_order_release);
     atomic_store_explicit(&q->tail, pos + 1, memory_order_relaxed);

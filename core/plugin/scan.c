@@ -16,15 +16,15 @@ void fp_plugin_describe(const fp_plugin *p, fp_plugin_about *out)
     if (p->kind == FP_PLUGIN_INPUT) {
         const fp_input_factory *f = p->factory;
         out->name = f->name;
-        out->description = f->size >= offsetof(fp_input_factory, usage) ? f->description : NULL;
-        out->usage = f->size >= offsetof(fp_input_factory, create) ? f->usage : NULL;
-        out->params = f->size >= offsetof(fp_input_factory, params) + sizeof f->params ? f->params : NULL;
+        out->description = FP_HAS_FIELD(f, fp_input_factory, description) ? f->description : NULL;
+        out->usage = FP_HAS_FIELD(f, fp_input_factory, usage) ? f->usage : NULL;
+        out->params = FP_HAS_FIELD(f, fp_input_factory, params) ? f->params : NULL;
     } else {
         const fp_mapping_factory *f = p->factory;
         out->name = f->name;
-        out->description = f->size >= offsetof(fp_mapping_factory, usage) ? f->description : NULL;
-        out->usage = f->size >= offsetof(fp_mapping_factory, create) ? f->usage : NULL;
-        out->params = f->size >= offsetof(fp_mapping_factory, params) + sizeof f->params ? f->params : NULL;
+        out->description = FP_HAS_FIELD(f, fp_mapping_factory, description) ? f->description : NULL;
+        out->usage = FP_HAS_FIELD(f, fp_mapping_factory, usage) ? f->usage : NULL;
+        out->params = FP_HAS_FIELD(f, fp_mapping_factory, params) ? f->params : NULL;
     }
 }
 

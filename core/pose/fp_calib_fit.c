@@ -2,6 +2,7 @@
 #include "fp_calib_fit.h"
 
 #include "fp_error.h"
+#include "fp_vec.h"
 
 #include <errno.h>
 #include <math.h>
@@ -218,15 +219,6 @@ static void top_eigenvector(double a[4][4], double v[4])
     for (int k = 0; k < 4; k++) v[k] = e[k][best];
 }
 
-static void qrot(const double q[4], const double v[3], double out[3])
-{
-    double w = q[0], x = q[1], y = q[2], z = q[3];
-    double tx = 2 * (y * v[2] - z * v[1]), ty = 2 * (z * v[0] - x * v[2]), tz = 2 * (x * v[1] - y * v[0]);
-    out[0] = v[0] + w * tx + (y * tz - z * ty);
-    out[1] = v[1] + w * ty + (z * tx - x * tz);
-    out[2] = v[2] + w * tz + (x * ty - y * tx);
-}
-
 /* Whether the points span a plane: the largest triangle with the first point, against the
  * spread. */
 static bool spans_plane(const double (*p)[3], size_t n)
@@ -275,13 +267,13 @@ int fp_calib_similarity(const double (*a)[3], const double (*b)[3], size_t n, do
     for (size_t i = 0; i < n; i++) {
         double pa[3], r[3];
         for (int k = 0; k < 3; k++) pa[k] = a[i][k] - ma[k];
-        qrot(q, pa, r);
+        fp_qrot(q, pa, r);
         for (int k = 0; k < 3; k++) num += r[k] * (b[i][k] - mb[k]);
     }
     *s = num / va;
     if (!(*s > 0) || !isfinite(*s)) return -EDOM;
     double rm[3];
-    qrot(q, ma, rm);
+    fp_qrot(q, ma, rm);
     for (int k = 0; k < 3; k++) t[k] = mb[k] - *s * rm[k];
     return 0;
 }
@@ -312,7 +304,7 @@ int fp_calib_fit_touch(const fp_calib_sample *samples, size_t n,
     double e = 0;
     for (int i = 0; i < FP_CALIB_LANDMARKS; i++) {
         double r[3];
-        qrot(q, a[i], r);
+        fp_qrot(q, a[i], r);
         for (int k = 0; k < 3; k++) e += pow(s * r[k] + t[k] - b[i][k], 2);
     }
     e = sqrt(e / FP_CALIB_LANDMARKS);

@@ -2,6 +2,8 @@
  * kinematics, workspace calibration. */
 #include "fp_pose.h"
 
+#include "fp_vec.h"
+
 #include <math.h>
 #include <string.h>
 
@@ -256,16 +258,6 @@ static void calib_rotation(const fp_calibration *c, double q[4])
     for (int i = 0; i < 4; i++) q[i] = c->rotation[i] / n;
 }
 
-/* v' = q v q* (q unit, w x y z). */
-static void qrot(const double q[4], const double v[3], double out[3])
-{
-    double w = q[0], x = q[1], y = q[2], z = q[3];
-    double tx = 2 * (y * v[2] - z * v[1]), ty = 2 * (z * v[0] - x * v[2]), tz = 2 * (x * v[1] - y * v[0]);
-    out[0] = v[0] + w * tx + (y * tz - z * ty);
-    out[1] = v[1] + w * ty + (z * tx - x * tz);
-    out[2] = v[2] + w * tz + (x * ty - y * tx);
-}
-
 static void qmul(const double a[4], const double b[4], double out[4])
 {
     out[0] = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3];
@@ -292,7 +284,7 @@ void fp_pose_to_mesh(const fp_calibration *c, int hand, const float mm[3], float
     double q[4], v[3] = {mm[0], mm[1], mm[2]}, r[3];
     calib_rotation(c, q);
     if (q[0] == 1) memcpy(r, v, sizeof r);
-    else qrot(q, v, r);
+    else fp_qrot(q, v, r);
     bool h = hand == FP_HAND_LEFT || hand == FP_HAND_RIGHT;
     for (int i = 0; i < 3; i++)
         out[i] = (float)(c->scale * r[i] + c->offset[i] + (h ? c->hand_offset[hand][i] : 0.0));
@@ -331,7 +323,7 @@ void fp_pose_place_gloves(fp_pose_state *p, const float *pos, size_t n, const fp
         /* Back to the device frame: mm = R^-1 (mesh - offset - hand offset) / scale. */
         double m[3] = {wx, wy, wz}, d[3], qd[4];
         for (int i = 0; i < 3; i++) m[i] = (m[i] - c->offset[i] - c->hand_offset[h][i]) / s;
-        qrot(qinv, m, d);
+        fp_qrot(qinv, m, d);
         qmul(qinv, qm, qd);
         for (int i = 0; i < 3; i++) p->glove_pos[h][i] = (float)d[i];
         for (int i = 0; i < 4; i++) p->glove_rot[h][i] = (float)qd[i];

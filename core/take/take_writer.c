@@ -4,6 +4,7 @@
 
 #include "fp_error.h"
 
+#include <assert.h>
 #include <cjson/cJSON.h>
 #include <dirent.h>
 #include <errno.h>
@@ -77,8 +78,9 @@ struct fp_take_writer {
     int64_t origin_ns;
     fp_take_writer_options opt;
     uint8_t *buf;           /* [16 chunk header][payload][4 crc] */
-    size_t cap, used;       /* used: payload bytes */
-    uint32_t pending;       /* frames in the payload */
+    size_t cap, used;       /* used: payload bytes; TAKE_CHUNK_OVERHEAD + used <= cap */
+    uint32_t pending;       /* frames in the payload: 0 exactly when used is 0 (between
+                               chunks; a JSON chunk is written from an empty payload) */
     uint64_t offset;        /* bytes on disk = end of the last whole chunk */
     uint64_t frames;        /* frames on disk */
     int64_t last_time_ns;
@@ -123,11 +125,24 @@ static int reserve(fp_take_writer *w, size_t payload)
     return 0;
 }
 
+/* The chunk state between calls: the payload fits the buffer and the format's chunk limit,
+ * and frames are pending exactly when the payload holds bytes. */
+static void assert_chunk_state(const fp_take_writer *w)
+{
+    assert(w->used == 0 || (w->buf && TAKE_CHUNK_OVERHEAD + w->used <= w->cap));
+    assert(w->used <= TAKE_CHUNK_MAX_PAYLOAD);
+    assert((w->pending == 0) == (w->used == 0));
+    assert(w->offset >= TAKE_SIG_SIZE || w->offset == 0);
+    (void)w;
+}
+
 /* Write one chunk from w->buf (payload already at buf + 16). */
 static int write_chunk(fp_take_writer *w, const char type[4], uint32_t count, char *err,
                        size_t errlen)
 {
     if (w->error) return w->error;
+    assert(w->buf && TAKE_CHUNK_OVERHEAD + w->used <= w->cap && w->used <= TAKE_CHUNK_MAX_PAYLOAD);
+    assert(count == w->pending); /* FRMS: every pending frame; HEAD and TAIL: none pending */
     take_chunk_head(w->buf, type, (uint32_t)w->used, count);
     uint32_t crc = (uint32_t)crc32(0L, w->buf, (uInt)(TAKE_CHUNK_HEAD_SIZE + w->used));
     le_put32(w->buf + TAKE_CHUNK_HEAD_SIZE + w->used, crc);
@@ -153,6 +168,7 @@ static int write_json_chunk(fp_take_writer *w, const char type[4], char *text, c
 {
     if (!text) return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", w->path);
     size_t n = strlen(text);
+    assert(w->used == 0 && w->pending == 0); /* (no frame waits: the payload is free) */
     int rc = reserve(w, n);
     if (!rc) {
         memcpy(w->buf + TAKE_CHUNK_HEAD_SIZE, text, n);
@@ -254,6 +270,7 @@ int fp_take_writer_flush(fp_take_writer *w, char *err, size_t errlen)
         w->frames += n;
         w->pending = 0;
     }
+    assert_chunk_state(w);
     return rc;
 }
 
@@ -264,6 +281,7 @@ static int make_room(fp_take_writer *w, size_t size, char *err, size_t errlen)
     if (w->error)
         return fp_errorf(err, errlen, w->error, "%s: the take stopped after an error: %s", w->path,
                          w->errmsg);
+    assert_chunk_state(w);
     if (w->pending && w->used + size > w->opt.chunk_bytes) {
         int rc = fp_take_writer_flush(w, err, errlen);
         if (rc) return rc;
@@ -276,6 +294,8 @@ static int make_room(fp_take_writer *w, size_t size, char *err, size_t errlen)
 static int commit_record(fp_take_writer *w, size_t size, char *err, size_t errlen)
 {
     const uint8_t *r = w->buf + TAKE_CHUNK_HEAD_SIZE + w->used;
+    assert(TAKE_CHUNK_OVERHEAD + w->used + size <= w->cap); /* make_room reserved it */
+    assert(size >= TAKE_FRAME_FIXED && le_get32(r) == size);  /* a whole record, its own size */
     w->last_time_ns = (int64_t)le_get64(r + 16);
     w->any_frame = true;
     w->used += size;
@@ -305,7 +325,10 @@ int fp_take_writer_add(fp_take_writer *w, const fp_take_frame *frame, char *err,
                          "arrays or counts too large)", w->path, frame ? frame->frame : 0);
     int rc = make_room(w, n, err, errlen);
     if (rc) return rc;
-    fp_take_frame_encode(frame, w->buf + TAKE_CHUNK_HEAD_SIZE + w->used, n);
+    const size_t put = fp_take_frame_encode(frame, w->buf + TAKE_CHUNK_HEAD_SIZE + w->used,
+                                            w->cap - TAKE_CHUNK_OVERHEAD - w->used);
+    assert(put == n); /* the room make_room reserved, and the size fp_take_frame_size gave */
+    (void)put;
     return commit_record(w, n, err, errlen);
 }
 

@@ -748,7 +748,7 @@ static void get_stats(const fp_input *in, fp_cyberglove_stats *out)
     memcpy(out, &s, size);
 }
 
-static const fp_cyberglove_ext EXT = {sizeof(fp_cyberglove_ext), get_stats};
+static const fp_cyberglove_ext EXT = {.size = sizeof(fp_cyberglove_ext), .get_stats = get_stats};
 
 static const void *input_get_extension(const fp_input *self, const char *id)
 {
@@ -980,27 +980,40 @@ fail:
 /* The keys, typed (ABI 1.1), for `facepuppet plugins` and `plugins check`; create parses
  * them itself. A default of "" means: none, decided at run time. */
 static const fp_param_info KEYS[] = {
-    {"baud", FP_PARAM_INT, 1200, 921600, "115200", NULL, "baud", "line speed, 8N1 (standard rates)"},
-    {"cal", FP_PARAM_PATH, 0, 0, "", NULL, NULL, "calibration file (asr two-point or SENSOR GAIN OFFSET)"},
-    {"hand", FP_PARAM_ENUM, 0, 0, "", "left|right", NULL, "which hand (default: the glove's answer to ?R)"},
-    {"rate", FP_PARAM_FLOAT, 1, 10000, "100", NULL, "Hz", "records per second"},
-    {"mode", FP_PARAM_ENUM, 0, 0, "stream", "stream|poll", NULL, "stream (S) or poll (G per record)"},
-    {"bits", FP_PARAM_ENUM, 0, 0, "8", "8|16", NULL, "record format (16: CyberGlove III USB)"},
-    {"timeout", FP_PARAM_INT, 10, 600000, "", NULL, "ms", "silence before reconnecting (default 3 periods, >= 250)"},
-    {NULL, 0, 0, 0, NULL, NULL, NULL, NULL},
+    {.name = "baud", .type = FP_PARAM_INT, .min = 1200, .max = 921600, .default_value = "115200",
+     .unit = "baud", .description = "line speed, 8N1 (standard rates)"},
+    {.name = "cal", .type = FP_PARAM_PATH, .default_value = "",
+     .description = "calibration file (asr two-point or SENSOR GAIN OFFSET)"},
+    {.name = "hand", .type = FP_PARAM_ENUM, .default_value = "", .choices = "left|right",
+     .description = "which hand (default: the glove's answer to ?R)"},
+    {.name = "rate", .type = FP_PARAM_FLOAT, .min = 1, .max = 10000, .default_value = "100",
+     .unit = "Hz", .description = "records per second"},
+    {.name = "mode", .type = FP_PARAM_ENUM, .default_value = "stream", .choices = "stream|poll",
+     .description = "stream (S) or poll (G per record)"},
+    {.name = "bits", .type = FP_PARAM_ENUM, .default_value = "8", .choices = "8|16",
+     .description = "record format (16: CyberGlove III USB)"},
+    {.name = "timeout", .type = FP_PARAM_INT, .min = 10, .max = 600000, .default_value = "",
+     .unit = "ms", .description = "silence before reconnecting (default 3 periods, >= 250)"},
+    {.name = NULL},
 };
 
 static const fp_input_factory FACTORY = {
-    sizeof(fp_input_factory), "cyberglove",
-    "CyberGlove I/II/III data glove on a serial port (8-bit or 16-bit records)", USAGE, create,
-    KEYS};
+    .size = sizeof(fp_input_factory),
+    .name = "cyberglove",
+    .description = "CyberGlove I/II/III data glove on a serial port (8-bit or 16-bit records)",
+    .usage = USAGE,
+    .create = create,
+    .params = KEYS,
+};
 
-static bool entry_init(const char *path) { return true; }
-static void entry_deinit(void) {}
 static const void *entry_get_factory(const char *id)
 {
     return strcmp(id, FP_INPUT_FACTORY_ID) == 0 ? &FACTORY : NULL;
 }
 
-FP_PLUGIN_DECLARE_ENTRY = {{FP_PLUGIN_ABI_MAJOR, FP_PLUGIN_ABI_MINOR}, "org.facepuppet.input-cyberglove",
-                           "0.1.0", entry_init, entry_deinit, entry_get_factory};
+FP_PLUGIN_DECLARE_ENTRY = {
+    .abi = {.major = FP_PLUGIN_ABI_MAJOR, .minor = FP_PLUGIN_ABI_MINOR},
+    .id = "org.facepuppet.input-cyberglove",
+    .version = "0.1.0",
+    .get_factory = entry_get_factory,
+};

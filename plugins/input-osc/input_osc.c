@@ -855,7 +855,8 @@ static const char *problem_name(int kind)
     return kind >= 0 && kind < FP_OSC_PROBLEMS ? problem_names[kind] : "?";
 }
 
-static const fp_osc_ext osc_ext = {sizeof(fp_osc_ext), get_stats, problem_name};
+static const fp_osc_ext osc_ext = {.size = sizeof(fp_osc_ext), .get_stats = get_stats,
+                                   .problem_name = problem_name};
 
 static bool osc_workspace(const fp_input *self, float min_mm[3], float max_mm[3])
 {
@@ -866,7 +867,7 @@ static bool osc_workspace(const fp_input *self, float min_mm[3], float max_mm[3]
     return true;
 }
 
-static const fp_input_workspace workspace_ext = {osc_workspace};
+static const fp_input_workspace workspace_ext = {.get = osc_workspace};
 
 static const void *osc_get_extension(const fp_input *self, const char *id)
 {
@@ -917,122 +918,150 @@ static int parse_number(const char *key, const char *v, double lo, double hi, do
     return 0;
 }
 
-static int osc_create(const fp_host *host, const char *arg, const fp_param *params,
-                      size_t nparams, fp_input **out, char *err, size_t errlen)
+/* What the SPEC asked for (parse_spec). */
+typedef struct osc_settings {
+    long port;
+    int format, hands;
+    double timeout, width, aspect, height, depth;
+    bool mirror, have_box;
+    float box[6];
+    const char *bind_addr;
+} osc_settings;
+
+/* format=V into *format (FMT_*). Returns 0, -ENOTSUP (vmc) or -EINVAL, with a message. */
+static int parse_format(const char *v, int *format, char *err, size_t errlen)
 {
-    *out = NULL;
-    if (!host || !host->push_event || !host->now_ns) {
-        snprintf(err, errlen, "osc: the host lacks push_event or now_ns");
+    *format = -1;
+    for (int f = 0; f <= FMT_AUTO; f++)
+        if (strcmp(v, format_names[f]) == 0) *format = f;
+    if (*format == FMT_VMC) {
+        snprintf(err, errlen, "osc: format=vmc: the VMC protocol is not supported yet "
+                 "(see docs/osc.md); use auto, facepuppet, leap or mediapipe");
+        return -ENOTSUP;
+    }
+    if (*format < 0) {
+        snprintf(err, errlen, "osc: format=%s: expected auto, facepuppet, leap or mediapipe", v);
         return -EINVAL;
     }
-    long port = DEFAULT_PORT;
+    return 0;
+}
+
+/* hand=V into *hands (HANDS_*). Returns 0 or -EINVAL with a message. */
+static int parse_hand(const char *v, int *hands, char *err, size_t errlen)
+{
+    if (strcmp(v, "left") == 0)
+        *hands = HANDS_LEFT;
+    else if (strcmp(v, "right") == 0)
+        *hands = HANDS_RIGHT;
+    else if (strcmp(v, "both") == 0)
+        *hands = HANDS_BOTH;
+    else {
+        snprintf(err, errlen, "osc: hand=%s: expected left, right or both", v);
+        return -EINVAL;
+    }
+    return 0;
+}
+
+/* box=x0/y0/z0/x1/y1/z1 in mm: the volume the hands move in (workspace extension). Returns 0
+ * or -EINVAL with a message. */
+static int parse_box(const char *v, float box[6], char *err, size_t errlen)
+{
+    locale_t c = newlocale(LC_ALL_MASK, "C", (locale_t)0);
+    const char *p = v;
+    int got = 0;
+    for (; got < 6 && c != (locale_t)0; got++) {
+        char *end = NULL;
+        double x = strtod_l(p, &end, c);
+        if (end == p || end != p + fp_decimal_span(p) || !isfinite(x) || fabs(x) > HUGE_MM) break;
+        box[got] = (float)x;
+        p = end;
+        if (got < 5 && *p++ != '/') {
+            got++;
+            break;
+        }
+    }
+    if (c != (locale_t)0) freelocale(c);
+    if (got != 6 || *p || !(box[0] < box[3] && box[1] < box[4] && box[2] < box[5])) {
+        snprintf(err, errlen, "osc: box=%s: expected x0/y0/z0/x1/y1/z1 in mm with x0 < x1, "
+                 "y0 < y1, z0 < z1", v);
+        return -EINVAL;
+    }
+    return 0;
+}
+
+/* One key of the SPEC into *o. Returns 0 or a negative code with a message. */
+static int parse_key(const char *k, const char *v, osc_settings *o, char *err, size_t errlen)
+{
+    if (strcmp(k, "format") == 0) return parse_format(v, &o->format, err, errlen);
+    if (strcmp(k, "bind") == 0) {
+        o->bind_addr = v;
+        return 0;
+    }
+    if (strcmp(k, "hand") == 0) return parse_hand(v, &o->hands, err, errlen);
+    if (strcmp(k, "timeout") == 0) return parse_number(k, v, 0.01, 3600, &o->timeout, err, errlen);
+    if (strcmp(k, "width") == 0) return parse_number(k, v, 1, 10000, &o->width, err, errlen);
+    if (strcmp(k, "aspect") == 0) return parse_number(k, v, 0.01, 100, &o->aspect, err, errlen);
+    if (strcmp(k, "height") == 0) return parse_number(k, v, -10000, 10000, &o->height, err, errlen);
+    if (strcmp(k, "depth") == 0) return parse_number(k, v, -10000, 10000, &o->depth, err, errlen);
+    if (strcmp(k, "box") == 0) {
+        int rc = parse_box(v, o->box, err, errlen);
+        o->have_box = rc == 0;
+        return rc;
+    }
+    if (strcmp(k, "mirror") == 0) {
+        if (strcmp(v, "1") && strcmp(v, "0")) {
+            snprintf(err, errlen, "osc: mirror=%s: expected 0 or 1", v);
+            return -EINVAL;
+        }
+        o->mirror = v[0] == '1';
+        return 0;
+    }
+    snprintf(err, errlen, "osc: unknown key \"%s\" (known: format, bind, hand, timeout, "
+             "width, aspect, height, depth, mirror, box)", k);
+    return -EINVAL;
+}
+
+/* The SPEC: [:PORT] and its keys, into *o (defaults first). Returns 0 or a negative code
+ * with a message naming the key. */
+static int parse_spec(const char *arg, const fp_param *params, size_t nparams, osc_settings *o,
+                      char *err, size_t errlen)
+{
+    *o = (osc_settings){.port = DEFAULT_PORT, .format = FMT_AUTO, .hands = HANDS_BOTH,
+                        .timeout = 1.0, .width = 400, .aspect = 0.75, .height = 200, .depth = 0,
+                        .bind_addr = "127.0.0.1"};
     if (arg && *arg) {
         unsigned long long p; /* digits, as every integer option (fp_parse_whole: no blank) */
         if (!fp_parse_whole(arg, 65535, &p)) {
             snprintf(err, errlen, "osc:%s: PORT must be a number in 0..65535", arg);
             return -EINVAL;
         }
-        port = (long)p;
+        o->port = (long)p;
     }
-    int format = FMT_AUTO, hands = HANDS_BOTH;
-    double timeout = 1.0, width = 400, aspect = 0.75, height = 200, depth = 0;
-    bool mirror = false, have_box = false;
-    float box[6] = {0};
-    const char *bind_addr = "127.0.0.1";
     for (size_t i = 0; i < nparams; i++) {
         const char *k = params[i].key ? params[i].key : "", *v = params[i].value ? params[i].value : "";
-        int rc = 0;
-        if (strcmp(k, "format") == 0) {
-            format = -1;
-            for (int f = 0; f <= FMT_AUTO; f++)
-                if (strcmp(v, format_names[f]) == 0) format = f;
-            if (format == FMT_VMC) {
-                snprintf(err, errlen, "osc: format=vmc: the VMC protocol is not supported yet "
-                         "(see docs/osc.md); use auto, facepuppet, leap or mediapipe");
-                return -ENOTSUP;
-            }
-            if (format < 0) {
-                snprintf(err, errlen, "osc: format=%s: expected auto, facepuppet, leap or mediapipe", v);
-                return -EINVAL;
-            }
-        } else if (strcmp(k, "bind") == 0) {
-            bind_addr = v;
-        } else if (strcmp(k, "hand") == 0) {
-            if (strcmp(v, "left") == 0)
-                hands = HANDS_LEFT;
-            else if (strcmp(v, "right") == 0)
-                hands = HANDS_RIGHT;
-            else if (strcmp(v, "both") == 0)
-                hands = HANDS_BOTH;
-            else {
-                snprintf(err, errlen, "osc: hand=%s: expected left, right or both", v);
-                return -EINVAL;
-            }
-        } else if (strcmp(k, "timeout") == 0) {
-            rc = parse_number(k, v, 0.01, 3600, &timeout, err, errlen);
-        } else if (strcmp(k, "width") == 0) {
-            rc = parse_number(k, v, 1, 10000, &width, err, errlen);
-        } else if (strcmp(k, "aspect") == 0) {
-            rc = parse_number(k, v, 0.01, 100, &aspect, err, errlen);
-        } else if (strcmp(k, "height") == 0) {
-            rc = parse_number(k, v, -10000, 10000, &height, err, errlen);
-        } else if (strcmp(k, "depth") == 0) {
-            rc = parse_number(k, v, -10000, 10000, &depth, err, errlen);
-        } else if (strcmp(k, "box") == 0) {
-            /* x0/y0/z0/x1/y1/z1 in mm: the volume the hands move in (workspace extension) */
-            locale_t c = newlocale(LC_ALL_MASK, "C", (locale_t)0);
-            const char *p = v;
-            int got = 0;
-            for (; got < 6 && c != (locale_t)0; got++) {
-                char *end = NULL;
-                double x = strtod_l(p, &end, c);
-                if (end == p || end != p + fp_decimal_span(p) || !isfinite(x) || fabs(x) > HUGE_MM) break;
-                box[got] = (float)x;
-                p = end;
-                if (got < 5 && *p++ != '/') {
-                    got++;
-                    break;
-                }
-            }
-            if (c != (locale_t)0) freelocale(c);
-            if (got != 6 || *p || !(box[0] < box[3] && box[1] < box[4] && box[2] < box[5])) {
-                snprintf(err, errlen, "osc: box=%s: expected x0/y0/z0/x1/y1/z1 in mm with x0 < x1, "
-                         "y0 < y1, z0 < z1", v);
-                return -EINVAL;
-            }
-            have_box = true;
-        } else if (strcmp(k, "mirror") == 0) {
-            if (strcmp(v, "1") && strcmp(v, "0")) {
-                snprintf(err, errlen, "osc: mirror=%s: expected 0 or 1", v);
-                return -EINVAL;
-            }
-            mirror = v[0] == '1';
-        } else {
-            snprintf(err, errlen, "osc: unknown key \"%s\" (known: format, bind, hand, timeout, "
-                     "width, aspect, height, depth, mirror, box)", k);
-            return -EINVAL;
-        }
+        int rc = parse_key(k, v, o, err, errlen);
         if (rc) return rc;
     }
-    struct sockaddr_in sa = {.sin_family = AF_INET, .sin_port = htons((uint16_t)port)};
-    if (inet_pton(AF_INET, bind_addr, &sa.sin_addr) != 1) {
-        snprintf(err, errlen, "osc: bind=%s: expected an IPv4 address (127.0.0.1, 0.0.0.0, ...)",
-                 bind_addr);
-        return -EINVAL;
-    }
-    osc_input *o = calloc(1, sizeof *o);
-    if (!o || !(o->lat_us = calloc(LATENCY_RING, sizeof *o->lat_us))) {
-        free(o);
-        snprintf(err, errlen, "osc: out of memory");
-        return -ENOMEM;
-    }
+    return 0;
+}
+
+/* Bind the UDP socket (o->sock) to sa (set->bind_addr:set->port), and on 127.0.0.1 also [::1]
+ * at the same port (o->sock6), best effort (no IPv6, the port taken there: IPv4 only): a sender
+ * told "localhost" may resolve it to ::1 first (getaddrinfo's order where /etc/hosts lists
+ * both), and would otherwise send into nothing. Sets o->port (the one bound: PORT 0 picks
+ * one), bind_text and loopback. Returns 0 or a negative code with a message; o->sock is
+ * closed on failure. */
+static int open_sockets(osc_input *o, struct sockaddr_in sa, const osc_settings *set, char *err,
+                        size_t errlen)
+{
+    o->sock6 = -1;
     o->sock = socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
     if (o->sock < 0 || bind(o->sock, (struct sockaddr *)&sa, sizeof sa) != 0) {
         int e = errno;
-        snprintf(err, errlen, "osc: cannot listen on %s:%ld (UDP): %s", bind_addr, port, strerror(e));
+        snprintf(err, errlen, "osc: cannot listen on %s:%ld (UDP): %s", set->bind_addr, set->port,
+                 strerror(e));
         if (o->sock >= 0) close(o->sock);
-        free(o->lat_us);
-        free(o);
+        o->sock = -1;
         /* the port taken, an address not this machine's: an input that cannot be opened
          * (-EBUSY, -ENODEV: exit 66), not a failure of the run */
         return e == EADDRINUSE ? -EBUSY : e == EADDRNOTAVAIL ? -ENODEV : -e;
@@ -1040,12 +1069,8 @@ static int osc_create(const fp_host *host, const char *arg, const fp_param *para
     socklen_t len = sizeof sa;
     getsockname(o->sock, (struct sockaddr *)&sa, &len);
     o->port = ntohs(sa.sin_port);
-    snprintf(o->bind_text, sizeof o->bind_text, "%s", bind_addr);
+    snprintf(o->bind_text, sizeof o->bind_text, "%s", set->bind_addr);
     o->loopback = (ntohl(sa.sin_addr.s_addr) >> 24) == 127;
-    /* On 127.0.0.1 also [::1] at the same port, best effort (no IPv6, the port taken there:
-     * IPv4 only): a sender told "localhost" may resolve it to ::1 first (getaddrinfo's
-     * order where /etc/hosts lists both), and would otherwise send into nothing. */
-    o->sock6 = -1;
     if (sa.sin_addr.s_addr == htonl(INADDR_LOOPBACK)) {
         struct sockaddr_in6 sa6 = {.sin6_family = AF_INET6, .sin6_port = sa.sin_port,
                                    .sin6_addr = IN6ADDR_LOOPBACK_INIT};
@@ -1056,17 +1081,48 @@ static int osc_create(const fp_host *host, const char *arg, const fp_param *para
         else if (s6 >= 0)
             close(s6);
     }
+    return 0;
+}
+
+static int osc_create(const fp_host *host, const char *arg, const fp_param *params,
+                      size_t nparams, fp_input **out, char *err, size_t errlen)
+{
+    *out = NULL;
+    if (!host || !host->push_event || !host->now_ns) {
+        snprintf(err, errlen, "osc: the host lacks push_event or now_ns");
+        return -EINVAL;
+    }
+    osc_settings set;
+    int rc = parse_spec(arg, params, nparams, &set, err, errlen);
+    if (rc) return rc;
+    struct sockaddr_in sa = {.sin_family = AF_INET, .sin_port = htons((uint16_t)set.port)};
+    if (inet_pton(AF_INET, set.bind_addr, &sa.sin_addr) != 1) {
+        snprintf(err, errlen, "osc: bind=%s: expected an IPv4 address (127.0.0.1, 0.0.0.0, ...)",
+                 set.bind_addr);
+        return -EINVAL;
+    }
+    osc_input *o = calloc(1, sizeof *o);
+    if (!o || !(o->lat_us = calloc(LATENCY_RING, sizeof *o->lat_us))) {
+        free(o);
+        snprintf(err, errlen, "osc: out of memory");
+        return -ENOMEM;
+    }
+    if ((rc = open_sockets(o, sa, &set, err, errlen))) {
+        free(o->lat_us);
+        free(o);
+        return rc;
+    }
     o->host = host;
-    o->format = format;
-    o->hands = hands;
-    o->timeout_s = timeout;
-    o->mp_width = (float)width;
-    o->mp_aspect = (float)aspect;
-    o->mp_height = (float)height;
-    o->mp_depth = (float)depth;
-    o->mp_mirror = mirror;
-    o->have_box = have_box;
-    memcpy(o->box, box, sizeof box);
+    o->format = set.format;
+    o->hands = set.hands;
+    o->timeout_s = set.timeout;
+    o->mp_width = (float)set.width;
+    o->mp_aspect = (float)set.aspect;
+    o->mp_height = (float)set.height;
+    o->mp_depth = (float)set.depth;
+    o->mp_mirror = set.mirror;
+    o->have_box = set.have_box;
+    memcpy(o->box, set.box, sizeof set.box);
     pthread_mutex_init(&o->lock, NULL);
     o->st.size = sizeof o->st;
     o->st.port = o->port;
@@ -1075,10 +1131,37 @@ static int osc_create(const fp_host *host, const char *arg, const fp_param *para
                           .get_extension = osc_get_extension};
     if (!o->loopback)
         logf_(o, FP_LOG_WARNING, "listening on %s:%u beyond loopback: any host that can reach "
-              "this port can drive the hands", bind_addr, (unsigned)o->port);
+              "this port can drive the hands", set.bind_addr, (unsigned)o->port);
     *out = &o->input;
     return 0;
 }
+
+/* The keys, typed (ABI 1.1), for `facepuppet plugins` and `plugins check`; osc_create parses
+ * them itself (the same ranges). A default of "": none (box: the host's desktop-tracker box). */
+static const fp_param_info osc_keys[] = {
+    {.name = "format", .type = FP_PARAM_ENUM, .default_value = "auto",
+     .choices = "auto|facepuppet|leap|mediapipe",
+     .description = "address space: auto takes each message by its address"},
+    {.name = "bind", .type = FP_PARAM_STRING, .default_value = "127.0.0.1",
+     .description = "IPv4 address to listen on (beyond loopback: a warning)"},
+    {.name = "hand", .type = FP_PARAM_ENUM, .default_value = "both", .choices = "left|right|both",
+     .description = "which hands to take (leap: left/right takes slot 0 as that hand)"},
+    {.name = "timeout", .type = FP_PARAM_FLOAT, .min = 0.01, .max = 3600, .default_value = "1",
+     .unit = "s", .description = "silence before the sender is reported disconnected"},
+    {.name = "box", .type = FP_PARAM_STRING, .default_value = "", .unit = "mm",
+     .description = "X0/Y0/Z0/X1/Y1/Z1: the volume the hands move in, device frame"},
+    {.name = "width", .type = FP_PARAM_FLOAT, .min = 1, .max = 10000, .default_value = "400",
+     .unit = "mm", .description = "mediapipe: the width the image spans at the hand"},
+    {.name = "aspect", .type = FP_PARAM_FLOAT, .min = 0.01, .max = 100, .default_value = "0.75",
+     .description = "mediapipe: image height / width"},
+    {.name = "height", .type = FP_PARAM_FLOAT, .min = -10000, .max = 10000, .default_value = "200",
+     .unit = "mm", .description = "mediapipe: device y of the image centre"},
+    {.name = "depth", .type = FP_PARAM_FLOAT, .min = -10000, .max = 10000, .default_value = "0",
+     .unit = "mm", .description = "mediapipe: device z of the landmarks' z = 0"},
+    {.name = "mirror", .type = FP_PARAM_BOOL, .min = 0, .max = 1, .default_value = "0",
+     .description = "mediapipe: flip x (a selfie camera)"},
+    {.name = NULL},
+};
 
 static const fp_input_factory osc_factory = {
     .size = sizeof(fp_input_factory),
@@ -1086,15 +1169,8 @@ static const fp_input_factory osc_factory = {
     .description = "hand tracking over OSC/UDP (facepuppet, Leap Motion bridges, MediaPipe hands)",
     .usage = usage_text,
     .create = osc_create,
+    .params = osc_keys,
 };
-
-static bool osc_init(const char *plugin_path)
-{
-    (void)plugin_path;
-    return true;
-}
-
-static void osc_deinit(void) {}
 
 static const void *osc_get_factory(const char *factory_id)
 {
@@ -1103,10 +1179,8 @@ static const void *osc_get_factory(const char *factory_id)
 }
 
 FP_PLUGIN_DECLARE_ENTRY = {
-    .abi = {FP_PLUGIN_ABI_MAJOR, FP_PLUGIN_ABI_MINOR},
+    .abi = {.major = FP_PLUGIN_ABI_MAJOR, .minor = FP_PLUGIN_ABI_MINOR},
     .id = "org.facepuppet.input-osc",
     .version = "1.0.0",
-    .init = osc_init,
-    .deinit = osc_deinit,
     .get_factory = osc_get_factory,
 };

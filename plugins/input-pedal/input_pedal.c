@@ -615,11 +615,15 @@ static int pedal_create(const fp_host *host, const char *arg, const fp_param *pa
 /* The keys, typed (ABI 1.1), for `facepuppet plugins` and `plugins check`; create parses
  * them itself (fp_pedal_config_parse). A default of "" means: none, from the device. */
 static const fp_param_info pedal_keys[] = {
-    {"layout", FP_PARAM_ENUM, 0, 0, "", "vec|keyboard", NULL, "report layout (default: from the known pedal)"},
-    {"keys", FP_PARAM_STRING, 0, 0, "a/b/c", NULL, NULL, "keyboard layout: keys for left/middle/right, '-' unbound"},
-    {"pedals", FP_PARAM_ENUM, 0, 0, "", "1|3", NULL, "1: a single-pedal unit (its key b is the left button)"},
-    {"strict", FP_PARAM_BOOL, 0, 1, "0", NULL, NULL, "fail at start when no pedal is there"},
-    {NULL, 0, 0, 0, NULL, NULL, NULL, NULL},
+    {.name = "layout", .type = FP_PARAM_ENUM, .default_value = "", .choices = "vec|keyboard",
+     .description = "report layout (default: from the known pedal)"},
+    {.name = "keys", .type = FP_PARAM_STRING, .default_value = "a/b/c",
+     .description = "keyboard layout: keys for left/middle/right, '-' unbound"},
+    {.name = "pedals", .type = FP_PARAM_ENUM, .default_value = "", .choices = "1|3",
+     .description = "1: a single-pedal unit (its key b is the left button)"},
+    {.name = "strict", .type = FP_PARAM_BOOL, .min = 0, .max = 1, .default_value = "0",
+     .description = "fail at start when no pedal is there"},
+    {.name = NULL},
 };
 
 static const fp_input_factory pedal_factory = {
@@ -638,14 +642,6 @@ static const fp_input_factory pedal_factory = {
     .params = pedal_keys,
 };
 
-static bool entry_init(const char *path)
-{
-    (void)path;
-    return true;
-}
-
-static void entry_deinit(void) {}
-
 static const void *entry_get_factory(const char *id)
 {
     if (id && !strcmp(id, FP_INPUT_FACTORY_ID))
@@ -654,10 +650,8 @@ static const void *entry_get_factory(const char *id)
 }
 
 FP_PLUGIN_DECLARE_ENTRY = {
-    .abi = {FP_PLUGIN_ABI_MAJOR, FP_PLUGIN_ABI_MINOR},
+    .abi = {.major = FP_PLUGIN_ABI_MAJOR, .minor = FP_PLUGIN_ABI_MINOR},
     .id = "org.facepuppet.input-pedal",
     .version = "0.1.0",
-    .init = entry_init,
-    .deinit = entry_deinit,
     .get_factory = entry_get_factory,
 };

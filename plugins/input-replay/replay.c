@@ -17,11 +17,8 @@
 #include "fp_pacer.h"
 
 #include <errno.h>
-#include <locale.h>
 #include <math.h>
-#include <pthread.h>
 #include <stdarg.h>
-#include <stdatomic.h>
 #include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -37,9 +34,7 @@ typedef struct replay {
     double speed;
     bool loop, fast;
 
-    pthread_t thread;
-    bool running;
-    fp_pacer pacer;          /* waits stop() interrupts, lossless pushes (fp_pacer.h) */
+    fp_pacer pacer;          /* the thread, waits stop() interrupts, lossless pushes (fp_pacer.h) */
 } replay;
 
 static const char usage_text[] =
@@ -131,35 +126,19 @@ static void *replay_thread(void *arg)
 static int replay_start(fp_input *self, char *err, size_t errlen)
 {
     replay *r = self->plugin_data;
-    if (r->running) {
-        snprintf(err, errlen, "replay: already started");
-        return -EBUSY;
-    }
-    fp_pacer_rearm(&r->pacer);
-    int rc = pthread_create(&r->thread, NULL, replay_thread, r);
-    if (rc) {
-        snprintf(err, errlen, "replay: cannot start its thread: %s", strerror(rc));
-        return -rc;
-    }
-    r->running = true;
-    return 0;
+    return fp_pacer_start(&r->pacer, replay_thread, r, "replay", err, errlen);
 }
 
 static void replay_stop(fp_input *self)
 {
-    replay *r = self->plugin_data;
-    if (!r->running) return;
-    fp_pacer_stop(&r->pacer);
-    pthread_join(r->thread, NULL);
-    r->running = false;
+    fp_pacer_stop(&((replay *)self->plugin_data)->pacer);
 }
 
 static void replay_destroy(fp_input *self)
 {
     if (!self) return;
     replay *r = self->plugin_data;
-    replay_stop(self);
-    fp_pacer_destroy(&r->pacer);
+    fp_pacer_destroy(&r->pacer); /* (stops the thread first) */
     replay_recording_free(&r->rec);
     free(r->path);
     free(r);
@@ -236,8 +215,8 @@ static bool replay_recording_info(const fp_input *self, fp_recording_info *info)
     return true;
 }
 
-static const fp_input_workspace workspace_ext = {replay_workspace};
-static const fp_input_recording recording_ext = {replay_recording_info};
+static const fp_input_workspace workspace_ext = {.get = replay_workspace};
+static const fp_input_recording recording_ext = {.get = replay_recording_info};
 
 static const void *replay_get_extension(const fp_input *self, const char *id)
 {
@@ -266,19 +245,12 @@ static int replay_create(const fp_host *host, const char *arg, const fp_param *p
     for (size_t i = 0; i < nparams; i++) {
         const fp_param *p = &params[i];
         const char *v = p->value ? p->value : "";
-        fp_param q = {p->key ? p->key : "", v};
+        fp_param q = {.key = p->key ? p->key : "", .value = v};
         if (strcmp(q.key, "speed") == 0) {
-            locale_t c = newlocale(LC_ALL_MASK, "C", (locale_t)0);
-            char *end = NULL;
-            double s = c != (locale_t)0 ? strtod_l(v, &end, c) : NAN;
-            if (c != (locale_t)0) freelocale(c);
-            const size_t n = fp_decimal_span(v); /* a decimal: no hex, inf or nan */
-            if (!n || !end || end != v + n || *end || !isfinite(s) || !(s >= 1e-3) || s > 1e6) {
-                /* (1e-9 stretched a 3 s recording over a century; 1e-300 overflowed) */
+            if (!fp_pacer_parse_speed(v, &speed)) {
                 snprintf(err, errlen, "replay: speed=%s: expected a number from 0.001 to 1e6", v);
                 return -EINVAL;
             }
-            speed = s;
         } else if (strcmp(q.key, "loop") == 0) {
             if (parse_bool(&q, &loop, err, errlen)) return -EINVAL;
         } else if (strcmp(q.key, "fast") == 0) {
@@ -335,11 +307,15 @@ static int replay_create(const fp_host *host, const char *arg, const fp_param *p
 /* The keys, typed (ABI 1.1), for `facepuppet plugins` and `plugins check`; create parses
  * them itself. */
 static const fp_param_info replay_keys[] = {
-    {"speed", FP_PARAM_FLOAT, 1e-3, 1e6, "1", NULL, "x", "play this many times as fast (0.001 to 1e6)"},
-    {"loop", FP_PARAM_BOOL, 0, 1, "0", NULL, NULL, "start over at the end"},
-    {"fast", FP_PARAM_BOOL, 0, 1, "0", NULL, NULL, "as fast as possible, retrying when the queue is full"},
-    {"hands", FP_PARAM_ENUM, 0, 0, "both", "left|right|both", NULL, "which hands to replay"},
-    {NULL, 0, 0, 0, NULL, NULL, NULL, NULL},
+    {.name = "speed", .type = FP_PARAM_FLOAT, .min = 1e-3, .max = 1e6, .default_value = "1",
+     .unit = "x", .description = "play this many times as fast (0.001 to 1e6)"},
+    {.name = "loop", .type = FP_PARAM_BOOL, .min = 0, .max = 1, .default_value = "0",
+     .description = "start over at the end"},
+    {.name = "fast", .type = FP_PARAM_BOOL, .min = 0, .max = 1, .default_value = "0",
+     .description = "as fast as possible, retrying when the queue is full"},
+    {.name = "hands", .type = FP_PARAM_ENUM, .default_value = "both", .choices = "left|right|both",
+     .description = "which hands to replay"},
+    {.name = NULL},
 };
 
 static const fp_input_factory replay_factory = {
@@ -351,14 +327,6 @@ static const fp_input_factory replay_factory = {
     .params = replay_keys,
 };
 
-static bool replay_init(const char *plugin_path)
-{
-    (void)plugin_path;
-    return true;
-}
-
-static void replay_deinit(void) {}
-
 static const void *replay_get_factory(const char *factory_id)
 {
     if (factory_id && strcmp(factory_id, FP_INPUT_FACTORY_ID) == 0) return &replay_factory;
@@ -366,10 +334,8 @@ static const void *replay_get_factory(const char *factory_id)
 }
 
 FP_PLUGIN_DECLARE_ENTRY = {
-    .abi = {FP_PLUGIN_ABI_MAJOR, FP_PLUGIN_ABI_MINOR},
+    .abi = {.major = FP_PLUGIN_ABI_MAJOR, .minor = FP_PLUGIN_ABI_MINOR},
     .id = "org.facepuppet.input-replay",
     .version = "1.0.0",
-    .init = replay_init,
-    .deinit = replay_deinit,
     .get_factory = replay_get_factory,
 };

@@ -35,11 +35,8 @@
 #include "fp_pacer.h"
 
 #include <errno.h>
-#include <locale.h>
 #include <math.h>
-#include <pthread.h>
 #include <stdarg.h>
-#include <stdatomic.h>
 #include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -66,9 +63,7 @@ typedef struct take_input {
     bool fast;
     char warning[512];
 
-    pthread_t thread;
-    bool running;
-    fp_pacer pacer;          /* waits stop() interrupts, lossless pushes (fp_pacer.h) */
+    fp_pacer pacer;          /* the thread, waits stop() interrupts, lossless pushes (fp_pacer.h) */
 } take_input;
 
 static const char usage_text[] =
@@ -115,35 +110,19 @@ static void *take_thread(void *arg)
 static int take_start(fp_input *self, char *err, size_t errlen)
 {
     take_input *r = self->plugin_data;
-    if (r->running) {
-        snprintf(err, errlen, "take: already started");
-        return -EBUSY;
-    }
-    fp_pacer_rearm(&r->pacer);
-    int rc = pthread_create(&r->thread, NULL, take_thread, r);
-    if (rc) {
-        snprintf(err, errlen, "take: cannot start its thread: %s", strerror(rc));
-        return -rc;
-    }
-    r->running = true;
-    return 0;
+    return fp_pacer_start(&r->pacer, take_thread, r, "take", err, errlen);
 }
 
 static void take_stop(fp_input *self)
 {
-    take_input *r = self->plugin_data;
-    if (!r->running) return;
-    fp_pacer_stop(&r->pacer);
-    pthread_join(r->thread, NULL);
-    r->running = false;
+    fp_pacer_stop(&((take_input *)self->plugin_data)->pacer);
 }
 
 static void take_destroy(fp_input *self)
 {
     if (!self) return;
     take_input *r = self->plugin_data;
-    take_stop(self);
-    fp_pacer_destroy(&r->pacer);
+    fp_pacer_destroy(&r->pacer); /* (stops the thread first) */
     free(r->items);
     free(r->path);
     free(r);
@@ -163,7 +142,7 @@ static bool take_recording_info(const fp_input *self, fp_recording_info *info)
     return true;
 }
 
-static const fp_input_recording recording_ext = {take_recording_info};
+static const fp_input_recording recording_ext = {.get = take_recording_info};
 
 static const void *take_get_extension(const fp_input *self, const char *id)
 {
@@ -291,16 +270,10 @@ static int take_create(const fp_host *host, const char *arg, const fp_param *par
     for (size_t i = 0; i < nparams; i++) {
         const char *k = params[i].key ? params[i].key : "", *v = params[i].value ? params[i].value : "";
         if (!strcmp(k, "speed")) {
-            locale_t c = newlocale(LC_ALL_MASK, "C", (locale_t)0);
-            char *end = NULL;
-            double s = c != (locale_t)0 ? strtod_l(v, &end, c) : NAN;
-            if (c != (locale_t)0) freelocale(c);
-            const size_t n = fp_decimal_span(v); /* a decimal: no hex, inf or nan */
-            if (!n || !end || end != v + n || *end || !isfinite(s) || !(s >= 1e-3) || s > 1e6) {
+            if (!fp_pacer_parse_speed(v, &speed)) {
                 snprintf(err, errlen, "take: speed=%s: expected a number from 0.001 to 1e6", v);
                 return -EINVAL;
             }
-            speed = s;
         } else if (!strcmp(k, "fast")) {
             if (parse_bool(k, v, &fast, err, errlen)) return -EINVAL;
         } else {
@@ -339,21 +312,24 @@ static int take_create(const fp_host *host, const char *arg, const fp_param *par
     return 0;
 }
 
+/* The keys, typed (ABI 1.1), for `facepuppet plugins` and `plugins check`; take_create
+ * parses them itself (the same ranges). */
+static const fp_param_info take_keys[] = {
+    {.name = "speed", .type = FP_PARAM_FLOAT, .min = 1e-3, .max = 1e6, .default_value = "1",
+     .unit = "x", .description = "play this many times as fast (0.001 to 1e6)"},
+    {.name = "fast", .type = FP_PARAM_BOOL, .min = 0, .max = 1, .default_value = "0",
+     .description = "as fast as possible, retrying when the queue is full"},
+    {.name = NULL},
+};
+
 static const fp_input_factory take_factory = {
     .size = sizeof(fp_input_factory),
     .name = "take",
     .description = "performs a take again: its raw input events and key requests",
     .usage = usage_text,
     .create = take_create,
+    .params = take_keys,
 };
-
-static bool take_init(const char *plugin_path)
-{
-    (void)plugin_path;
-    return true;
-}
-
-static void take_deinit(void) {}
 
 static const void *take_get_factory(const char *factory_id)
 {
@@ -362,10 +338,8 @@ static const void *take_get_factory(const char *factory_id)
 }
 
 FP_PLUGIN_DECLARE_ENTRY = {
-    .abi = {FP_PLUGIN_ABI_MAJOR, FP_PLUGIN_ABI_MINOR},
+    .abi = {.major = FP_PLUGIN_ABI_MAJOR, .minor = FP_PLUGIN_ABI_MINOR},
     .id = "org.facepuppet.input-take",
     .version = "1.0.0",
-    .init = take_init,
-    .deinit = take_deinit,
     .get_factory = take_get_factory,
 };

@@ -206,18 +206,22 @@ static void destroy(fp_mapping *self)
  * them. The order is that of the values create reads. */
 enum { KEY_HANDS, KEY_AUTO, KEY_RELEASE, KEY_CLAMP, KEY_ENGAGE, KEY_POINTS, KEY_COUNT };
 static const fp_param_info keys[KEY_COUNT + 1] = {
-    {"hands", FP_PARAM_ENUM, 0, 0, "both", "left|right|both", NULL, "which hands deform"},
-    {"auto", FP_PARAM_BOOL, 0, 1, "1", NULL, NULL,
-     "engage when a fingertip comes within engage x R of the surface, commit when the hand lets go"},
-    {"release", FP_PARAM_FLOAT, 0.1, 100, "1.0", NULL, "R",
-     "auto commit once every engaged fingertip is farther than release x R (at least engage)"},
-    {"clamp", FP_PARAM_FLOAT, 0, 100, "0", NULL, "R",
-     "longest control vector (0: no limit; the host composes long drags injectively)"},
-    {"engage", FP_PARAM_FLOAT, 0.01, 100, "0.5", NULL, "R",
-     "auto engage once a fingertip is within engage x R of the surface"},
-    {"points", FP_PARAM_ENUM, 0, 0, "tips", FP_POINTS_CHOICES, NULL,
-     "points of contact per hand: the 5 tips, + palm centre and knuckles (11), every joint (21)"},
-    {NULL, 0, 0, 0, NULL, NULL, NULL, NULL},
+    {.name = "hands", .type = FP_PARAM_ENUM, .default_value = "both", .choices = "left|right|both",
+     .description = "which hands deform"},
+    {.name = "auto", .type = FP_PARAM_BOOL, .min = 0, .max = 1, .default_value = "1",
+     .description = "engage when a fingertip comes within engage x R of the surface, commit when the hand lets go"},
+    {.name = "release", .type = FP_PARAM_FLOAT, .min = 0.1, .max = 100, .default_value = "1.0",
+     .unit = "R",
+     .description = "auto commit once every engaged fingertip is farther than release x R (at least engage)"},
+    {.name = "clamp", .type = FP_PARAM_FLOAT, .min = 0, .max = 100, .default_value = "0",
+     .unit = "R",
+     .description = "longest control vector (0: no limit; the host composes long drags injectively)"},
+    {.name = "engage", .type = FP_PARAM_FLOAT, .min = 0.01, .max = 100, .default_value = "0.5",
+     .unit = "R",
+     .description = "auto engage once a fingertip is within engage x R of the surface"},
+    {.name = "points", .type = FP_PARAM_ENUM, .default_value = "tips", .choices = FP_POINTS_CHOICES,
+     .description = "points of contact per hand: the 5 tips, + palm centre and knuckles (11), every joint (21)"},
+    {.name = NULL},
 };
 static const unsigned hand_masks[] = {FP_HANDMASK_LEFT, FP_HANDMASK_RIGHT, FP_HANDMASK_BOTH};
 
@@ -277,7 +281,7 @@ static const void *get_factory(const char *id)
 }
 
 FP_PLUGIN_DECLARE_ENTRY = {
-    .abi = {FP_PLUGIN_ABI_MAJOR, FP_PLUGIN_ABI_MINOR},
+    .abi = {.major = FP_PLUGIN_ABI_MAJOR, .minor = FP_PLUGIN_ABI_MINOR},
     .id = "org.facepuppet.map-anchored",
     .version = "1.0",
     .get_factory = get_factory,

@@ -161,12 +161,10 @@ static double jaw_measure(const onehand *o, const fp_hand_pose *h, double scale)
 
 /* ---- the rig ----------------------------------------------------------------------------- */
 
-static bool frame_has(const fp_frame_input *in, size_t end) { return in->size >= end; }
-
 /* This frame's rig: fp_frame_input.rig (ABI 1.1), else the host extension. */
 static const fp_rig_view *frame_rig(const onehand *o, const fp_frame_input *in)
 {
-    if (frame_has(in, offsetof(fp_frame_input, rig) + sizeof in->rig) && in->rig) return in->rig;
+    if (FP_HAS_FIELD(in, fp_frame_input, rig) && in->rig) return in->rig;
     return o->rig_ext && o->rig_ext->get ? o->rig_ext->get(o->host) : NULL;
 }
 
@@ -290,7 +288,7 @@ static int emit(const onehand *o, const fp_rig_view *rig, const fp_frame_input *
 /* jaw.open for this frame: neutral + (max - neutral) x (held + last), clamped. */
 static void emit_jaw(const onehand *o, const fp_rig_view *rig, fp_control_set *out, bool shown)
 {
-    if (out->size < offsetof(fp_control_set, channels) + sizeof out->channels || !out->channels ||
+    if (!FP_HAS_FIELD(out, fp_control_set, channels) || !out->channels ||
         out->channel_capacity < 1)
         return;
     const fp_rig_channel_info *ch = find_channel(rig, "jaw.open");
@@ -317,8 +315,7 @@ static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *o
     const fp_rig_view *rig = frame_rig(o, in);
     if (!rig) return 0;                    /* "onehand needs a rig (--rig)", logged at create */
     double mm_per_unit = rig->mm_per_unit;
-    if (frame_has(in, offsetof(fp_frame_input, mm_per_unit) + sizeof in->mm_per_unit) &&
-        in->mm_per_unit > 0)
+    if (FP_HAS_FIELD(in, fp_frame_input, mm_per_unit) && in->mm_per_unit > 0)
         mm_per_unit = in->mm_per_unit;
     if (!(mm_per_unit > 0) || !isfinite(mm_per_unit)) return -ERANGE;
     const fp_hand_pose *h = &in->hands[o->hand];
@@ -366,30 +363,38 @@ enum {
     KEY_FINGER_MM, KEY_AUTO, KEY_STILL, KEY_STILL_MM, KEY_HOLD, KEY_CLAMP, KEY_COUNT
 };
 static const fp_param_info keys[KEY_COUNT + 1] = {
-    {"hand", FP_PARAM_ENUM, 0, 0, "right", "left|right", NULL, "the hand that drives the face"},
-    {"jaw", FP_PARAM_ENUM, 0, 0, "flexion", "flexion|opening", NULL,
-     "jaw.open from the thumb's flexion, or from the thumb-to-index opening"},
-    {"flex_range", FP_PARAM_FLOAT, 5, 180, "45", NULL, "deg",
-     "thumb flexion beyond neutral that opens the jaw fully (jaw=flexion)"},
-    {"open_range", FP_PARAM_FLOAT, 5, 300, "40", NULL, "mm",
-     "thumb-to-index opening beyond neutral that opens the jaw fully (jaw=opening)"},
-    {"map", FP_PARAM_ENUM, 0, 0, "mouth", "mouth|brows", NULL,
-     "landmark table: mouth (index, ring: mouth corners; middle: upper lip; little: brows) "
-     "or brows (the four brow points)"},
-    {"targets", FP_PARAM_STRING, 0, 0, "", NULL, NULL,
-     "landmarks for index/middle/ring/little, '+' between two, '-' for none; overrides map"},
-    {"gain", FP_PARAM_FLOAT, 0, 20, "1", NULL, "mm/mm",
-     "mm a landmark moves per mm its fingertip moves (1: the hand's motion, 1:1)"},
-    {"finger_mm", FP_PARAM_FLOAT, 30, 150, "70.9", NULL, "mm",
-     "the performer's middle finger, proximal + middle phalanx: the hand's scale"},
-    {"auto", FP_PARAM_BOOL, 0, 1, "1", NULL, NULL, "engage when the hand is held still"},
-    {"still", FP_PARAM_FLOAT, 0, 60, "0.5", NULL, "s", "how long a still hand waits to engage"},
-    {"still_mm", FP_PARAM_FLOAT, 0, 200, "10", NULL, "mm",
-     "a hand is still while its tips and palm stay this close"},
-    {"hold", FP_PARAM_BOOL, 0, 1, "0", NULL, NULL,
-     "keep the face posed while the hand rests (gone, or re-zeroed by an engage request)"},
-    {"clamp", FP_PARAM_FLOAT, 0, 100, "0.45", NULL, "R", "longest control vector (0: no limit)"},
-    {NULL, 0, 0, 0, NULL, NULL, NULL, NULL},
+    {.name = "hand", .type = FP_PARAM_ENUM, .default_value = "right", .choices = "left|right",
+     .description = "the hand that drives the face"},
+    {.name = "jaw", .type = FP_PARAM_ENUM, .default_value = "flexion", .choices = "flexion|opening",
+     .description = "jaw.open from the thumb's flexion, or from the thumb-to-index opening"},
+    {.name = "flex_range", .type = FP_PARAM_FLOAT, .min = 5, .max = 180, .default_value = "45",
+     .unit = "deg",
+     .description = "thumb flexion beyond neutral that opens the jaw fully (jaw=flexion)"},
+    {.name = "open_range", .type = FP_PARAM_FLOAT, .min = 5, .max = 300, .default_value = "40",
+     .unit = "mm",
+     .description = "thumb-to-index opening beyond neutral that opens the jaw fully (jaw=opening)"},
+    {.name = "map", .type = FP_PARAM_ENUM, .default_value = "mouth", .choices = "mouth|brows",
+     .description = "landmark table: mouth (index, ring: mouth corners; middle: upper lip; little: brows) "
+                    "or brows (the four brow points)"},
+    {.name = "targets", .type = FP_PARAM_STRING, .default_value = "",
+     .description = "landmarks for index/middle/ring/little, '+' between two, '-' for none; overrides map"},
+    {.name = "gain", .type = FP_PARAM_FLOAT, .min = 0, .max = 20, .default_value = "1",
+     .unit = "mm/mm",
+     .description = "mm a landmark moves per mm its fingertip moves (1: the hand's motion, 1:1)"},
+    {.name = "finger_mm", .type = FP_PARAM_FLOAT, .min = 30, .max = 150, .default_value = "70.9",
+     .unit = "mm",
+     .description = "the performer's middle finger, proximal + middle phalanx: the hand's scale"},
+    {.name = "auto", .type = FP_PARAM_BOOL, .min = 0, .max = 1, .default_value = "1",
+     .description = "engage when the hand is held still"},
+    {.name = "still", .type = FP_PARAM_FLOAT, .min = 0, .max = 60, .default_value = "0.5",
+     .unit = "s", .description = "how long a still hand waits to engage"},
+    {.name = "still_mm", .type = FP_PARAM_FLOAT, .min = 0, .max = 200, .default_value = "10",
+     .unit = "mm", .description = "a hand is still while its tips and palm stay this close"},
+    {.name = "hold", .type = FP_PARAM_BOOL, .min = 0, .max = 1, .default_value = "0",
+     .description = "keep the face posed while the hand rests (gone, or re-zeroed by an engage request)"},
+    {.name = "clamp", .type = FP_PARAM_FLOAT, .min = 0, .max = 100, .default_value = "0.45",
+     .unit = "R", .description = "longest control vector (0: no limit)"},
+    {.name = NULL},
 };
 
 /* Landmark tables for the right hand: index, middle, ring, little; '+' joins two. */
@@ -558,7 +563,7 @@ static const void *get_factory(const char *id)
 }
 
 FP_PLUGIN_DECLARE_ENTRY = {
-    .abi = {FP_PLUGIN_ABI_MAJOR, FP_PLUGIN_ABI_MINOR},
+    .abi = {.major = FP_PLUGIN_ABI_MAJOR, .minor = FP_PLUGIN_ABI_MINOR},
     .id = "org.facepuppet.map-onehand",
     .version = "1.0",
     .get_factory = get_factory,

@@ -87,13 +87,15 @@ static void destroy(fp_mapping *self)
 /* The keys, typed (ABI 1.1). */
 enum { KEY_HANDS, KEY_AUTO, KEY_CLAMP, KEY_POINTS, KEY_COUNT };
 static const fp_param_info keys[KEY_COUNT + 1] = {
-    {"hands", FP_PARAM_ENUM, 0, 0, "both", "left|right|both", NULL, "which hands deform"},
-    {"auto", FP_PARAM_BOOL, 0, 1, "1", NULL, NULL,
-     "a hand acts while a fingertip is within R of the surface"},
-    {"clamp", FP_PARAM_FLOAT, 0, 100, "0.45", NULL, "R", "longest step (0: no limit)"},
-    {"points", FP_PARAM_ENUM, 0, 0, "tips", FP_POINTS_CHOICES, NULL,
-     "points of contact per hand: the 5 tips, + palm centre and knuckles (11), every joint (21)"},
-    {NULL, 0, 0, 0, NULL, NULL, NULL, NULL},
+    {.name = "hands", .type = FP_PARAM_ENUM, .default_value = "both", .choices = "left|right|both",
+     .description = "which hands deform"},
+    {.name = "auto", .type = FP_PARAM_BOOL, .min = 0, .max = 1, .default_value = "1",
+     .description = "a hand acts while a fingertip is within R of the surface"},
+    {.name = "clamp", .type = FP_PARAM_FLOAT, .min = 0, .max = 100, .default_value = "0.45",
+     .unit = "R", .description = "longest step (0: no limit)"},
+    {.name = "points", .type = FP_PARAM_ENUM, .default_value = "tips", .choices = FP_POINTS_CHOICES,
+     .description = "points of contact per hand: the 5 tips, + palm centre and knuckles (11), every joint (21)"},
+    {.name = NULL},
 };
 static const unsigned hand_masks[] = {FP_HANDMASK_LEFT, FP_HANDMASK_RIGHT, FP_HANDMASK_BOTH};
 
@@ -137,7 +139,7 @@ static const void *get_factory(const char *id)
 }
 
 FP_PLUGIN_DECLARE_ENTRY = {
-    .abi = {FP_PLUGIN_ABI_MAJOR, FP_PLUGIN_ABI_MINOR},
+    .abi = {.major = FP_PLUGIN_ABI_MAJOR, .minor = FP_PLUGIN_ABI_MINOR},
     .id = "org.facepuppet.map-unanchored",
     .version = "1.0",
     .get_factory = get_factory,

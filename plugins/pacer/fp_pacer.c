@@ -1,8 +1,13 @@
 /* Pacing and lossless pushing for replaying input plugins (fp_pacer.h). */
-#define _POSIX_C_SOURCE 200809L
+#define _GNU_SOURCE /* strtod_l */
 #include "fp_pacer.h"
 
+#include <facepuppet/decimal.h>
+
 #include <errno.h>
+#include <locale.h>
+#include <math.h>
+#include <stdlib.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
@@ -24,26 +29,59 @@ int fp_pacer_init(fp_pacer *p, const fp_host *host)
         return -rc;
     }
     atomic_init(&p->stop, false);
+    p->running = false;
     return 0;
 }
 
 void fp_pacer_destroy(fp_pacer *p)
 {
+    fp_pacer_stop(p);
     pthread_cond_destroy(&p->cond);
     pthread_mutex_destroy(&p->mutex);
 }
 
-void fp_pacer_rearm(fp_pacer *p) { atomic_store(&p->stop, false); }
+int fp_pacer_start(fp_pacer *p, void *(*run)(void *), void *arg, const char *who, char *err,
+                   size_t errlen)
+{
+    if (p->running) {
+        snprintf(err, errlen, "%s: already started", who);
+        return -EBUSY;
+    }
+    atomic_store(&p->stop, false); /* a previous stop's request is done with */
+    int rc = pthread_create(&p->thread, NULL, run, arg);
+    if (rc) {
+        snprintf(err, errlen, "%s: cannot start its thread: %s", who, strerror(rc));
+        return -rc;
+    }
+    p->running = true;
+    return 0;
+}
 
 void fp_pacer_stop(fp_pacer *p)
 {
+    if (!p->running) return;
     pthread_mutex_lock(&p->mutex);
     atomic_store(&p->stop, true);
     pthread_cond_broadcast(&p->cond);
     pthread_mutex_unlock(&p->mutex);
+    pthread_join(p->thread, NULL);
+    p->running = false;
 }
 
 bool fp_pacer_stopped(fp_pacer *p) { return atomic_load(&p->stop); }
+
+bool fp_pacer_parse_speed(const char *v, double *out)
+{
+    locale_t c = newlocale(LC_ALL_MASK, "C", (locale_t)0);
+    if (c == (locale_t)0) return false;
+    char *end = NULL;
+    const double s = strtod_l(v, &end, c);
+    freelocale(c);
+    const size_t n = fp_decimal_span(v);
+    if (!n || end != v + n || *end || !isfinite(s) || !(s >= 1e-3) || s > 1e6) return false;
+    *out = s;
+    return true;
+}
 
 int64_t fp_pacer_now_ns(void)
 {

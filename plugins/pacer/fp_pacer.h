@@ -5,9 +5,13 @@
  * millisecond until the event goes in or stop is asked: a recording holds every sample, and
  * a headless run that steps on the recording's clock must see each one).
  *
- * Threads: fp_pacer_init/destroy [main-thread]; fp_pacer_stop [main-thread], wakes a waiting
- * thread; fp_pacer_rearm before starting the thread; the waits and pushes on the plugin's one
- * [input-thread]. Static library `fp_pacer` (PIC, hidden symbols), linked into plugins.
+ * It also owns that plugin's one thread: fp_pacer_start and fp_pacer_stop are a replaying
+ * input's fp_input.start and stop (the plugin passes its thread function), and
+ * fp_pacer_destroy stops the thread before releasing the pacer.
+ *
+ * Threads: fp_pacer_init, _start, _stop and _destroy [main-thread]; the waits and pushes on
+ * the plugin's one [input-thread] (the function given to fp_pacer_start). Static library
+ * `fp_pacer` (PIC, hidden symbols), linked into plugins.
  */
 #ifndef FP_PACER_H
 #define FP_PACER_H
@@ -17,24 +21,37 @@
 #include <pthread.h>
 #include <stdatomic.h>
 #include <stdbool.h>
+#include <stddef.h>
 #include <stdint.h>
 
 typedef struct fp_pacer {
     const fp_host *host;     /* where events are pushed; not owned */
     pthread_mutex_t mutex;
     pthread_cond_t cond;     /* on CLOCK_MONOTONIC; broadcast by fp_pacer_stop */
-    atomic_bool stop;
+    atomic_bool stop;        /* asked by fp_pacer_stop; cleared by fp_pacer_start */
+    pthread_t thread;
+    bool running;            /* [main-thread] started and not yet joined */
 } fp_pacer;
 
 /** Set up *p for host (kept by pointer). Returns 0 or a negative errno. */
 int fp_pacer_init(fp_pacer *p, const fp_host *host);
+/** Stop the thread (fp_pacer_stop), then release *p. */
 void fp_pacer_destroy(fp_pacer *p);
-/** Clear a previous stop, before the thread starts again. */
-void fp_pacer_rearm(fp_pacer *p);
-/** Ask the thread to stop and wake it from any wait. */
+/** Start run(arg) on the pacer's thread. Returns 0; -EBUSY when it already runs, or a
+ *  negative errno when the thread cannot be made, each with a message in err that begins
+ *  with `who` ("replay: already started"). The input's fp_input.start. */
+int fp_pacer_start(fp_pacer *p, void *(*run)(void *), void *arg, const char *who, char *err,
+                   size_t errlen);
+/** Ask the thread to stop, wake it from any wait and join it; nothing when it does not run.
+ *  No push after it returns. The input's fp_input.stop. */
 void fp_pacer_stop(fp_pacer *p);
-/** True once fp_pacer_stop was called (and not rearmed). */
+/** [input-thread] True once fp_pacer_stop was asked (since the last start). */
 bool fp_pacer_stopped(fp_pacer *p);
+/** The `speed=X` key of a replaying input: a decimal (fp_decimal_span: no hexadecimal, inf or
+ *  nan), read in the C locale, from 0.001 to 1e6 (1e-9 stretched a 3 s recording over a
+ *  century; 1e-300 overflowed). true and *out set; false with *out untouched (the caller
+ *  reports "NAME: speed=V: expected a number from 0.001 to 1e6"). [any-thread] */
+bool fp_pacer_parse_speed(const char *v, double *out);
 /** CLOCK_MONOTONIC in nanoseconds. */
 int64_t fp_pacer_now_ns(void);
 /** Wait until CLOCK_MONOTONIC reaches deadline_ns (ns). Returns false when stop was asked. */

@@ -39,6 +39,14 @@ expect 0 'SKIP  start +needs a device: .*cannot open /nonexistent/glove' \
 expect 0 '"passed":[[:space:]]+true' "$fp" plugins check "$builtin/map-anchored.so" --json
 # A replay without its recording fails cleanly, naming what is missing.
 expect 1 'FAIL  create .*replay' "$fp" plugins check "$builtin/input-replay.so"
+# osc and take declare their keys (ABI 1.1 params): each key's range is checked against what
+# create refuses (osc on a free port; take on a take recorded here).
+expect 0 'passed: 14 checks' "$fp" plugins check "$builtin/input-osc.so" --arg 0  # 8 range checks
+"$fp" run -q --mesh "$data/faces/mediapipe-canonical/canonical_face_model.obj" \
+    --input "replay:$rec,fast=1" --duration 0.5 --out "$tmp/t.obj" --take-dir "$tmp/takes" \
+    --slate chk >/dev/null 2>&1 || fail "recording a take for the take input's check"
+expect 0 'passed: 8 checks' "$fp" plugins check "$builtin/input-take.so" \
+    --arg "$tmp/takes/chk_T001.fptake"
 
 # Each broken fixture fails with a message naming the cause.
 expect 0 'passed' "$fp" plugins check "$fx/map-fixture.so"

@@ -1,6 +1,9 @@
 #!/bin/sh
-# Out-of-tree plugin builds against an installed facepuppet, both ways. Args: BUILD_DIR DATA
+# Out-of-tree plugin builds against an installed facepuppet, both ways, with warnings as
+# errors (-Wall -Wextra -Werror): the installed headers alone must be enough, and the
+# templates define none of the host's constants themselves. Args: BUILD_DIR DATA
 set -eu
+warn="-Wall -Wextra -Werror"
 build=$(cd "$1" && pwd) data=$2 src=$(pwd)
 tmp=$(mktemp -d /tmp/fp-sdk-XXXXXX)
 trap 'rm -rf "$tmp"' EXIT
@@ -10,25 +13,36 @@ test -f "$prefix/lib/pkgconfig/facepuppet.pc"
 test -f "$prefix/lib/cmake/facepuppet/facepuppetConfig.cmake"
 test -f "$prefix/share/doc/facepuppet/plugin-guide.md"
 test -f "$prefix/share/facepuppet/templates/mapping/map_grab.c"
+test -f "$prefix/include/facepuppet/errors.h"
+# No local definitions of what plugin.h defines (FP_* macros or enumerators, e.g. a copy of
+# FP_EPLUGIN_FAULT or FP_CONTROL_CAPACITY): a template takes them from the headers.
+if grep -nE '^[[:space:]]*#[[:space:]]*define[[:space:]]+FP_|[^.[:alnum:]_]FP_[A-Z0-9_]+[[:space:]]*=[^=]' \
+     "$prefix"/share/facepuppet/templates/*/*.c; then
+  echo "a template defines a host constant itself (above)" >&2
+  exit 1
+fi
 gen=""; command -v ninja >/dev/null && gen="-G Ninja"
 
 # 1. CMake: the installed templates, copied as an author would copy them.
 for t in mapping input; do
   cp -r "$prefix/share/facepuppet/templates/$t" "$tmp/$t"
   cmake -S "$tmp/$t" -B "$tmp/$t/build" $gen -DCMAKE_PREFIX_PATH="$prefix" \
-        -DFP_DATA="$data" -DCMAKE_BUILD_TYPE=Release --no-warn-unused-cli >/dev/null
+        -DFP_DATA="$data" -DCMAKE_BUILD_TYPE=Release -DCMAKE_C_FLAGS="$warn" \
+        --no-warn-unused-cli >/dev/null
   cmake --build "$tmp/$t/build" >/dev/null
   ctest --test-dir "$tmp/$t/build" --output-on-failure
 done
 test -f "$tmp/mapping/build/map-grab.so"
 test -f "$tmp/input/build/input-sine.so"
 
-# 2. pkg-config: one compiler line.
+# 2. pkg-config: one compiler line each.
 PKG_CONFIG_PATH="$prefix/lib/pkgconfig" pkg-config --exists facepuppet
 mkdir "$tmp/pc"
-cc -std=c11 -O2 -shared -fPIC $(PKG_CONFIG_PATH="$prefix/lib/pkgconfig" pkg-config --cflags facepuppet) \
-   -o "$tmp/pc/map-grab.so" "$tmp/mapping/map_grab.c" \
-   $(PKG_CONFIG_PATH="$prefix/lib/pkgconfig" pkg-config --libs facepuppet)
+cflags=$(PKG_CONFIG_PATH="$prefix/lib/pkgconfig" pkg-config --cflags facepuppet)
+libs=$(PKG_CONFIG_PATH="$prefix/lib/pkgconfig" pkg-config --libs facepuppet)
+cc -std=c11 -O2 $warn -shared -fPIC $cflags -o "$tmp/pc/map-grab.so" "$tmp/mapping/map_grab.c" $libs
+cc -std=c11 -O2 $warn -shared -fPIC -pthread $cflags -o "$tmp/pc/input-sine.so" \
+   "$tmp/input/input_sine.c" $libs
 cd "$tmp"
 out=$("$prefix/bin/facepuppet" run --plugin-dir "$tmp/pc" --mapping grab \
       --mesh "$data/faces/mediapipe-canonical/canonical_face_model.obj" \
@@ -39,4 +53,4 @@ test -n "$moved" && test "$moved" -gt 0
 # Only the entry symbol is exported.
 syms=$(nm -D --defined-only "$tmp/pc/map-grab.so" | awk '{print $3}' | grep -v '^_' || true)
 test "$syms" = "facepuppet_plugin_entry"
-echo "SDK: templates built with CMake and pkg-config against $prefix; map-grab moved $moved vertices"
+echo "SDK: templates built with CMake and pkg-config ($warn) against $prefix; map-grab moved $moved vertices"

@@ -100,7 +100,8 @@ const void *fp_test_plugin_open(const char *file, const char *factory_id, void *
     }
     const fp_plugin_entry *entry = dlsym(*handle, FP_PLUGIN_ENTRY_SYMBOL);
     fp_version host = {FP_PLUGIN_ABI_MAJOR, FP_PLUGIN_ABI_MINOR};
-    if (!entry || !fp_version_is_compatible(host, entry->abi) || !entry->init(path)) {
+    /* init and deinit may be NULL (plugin.h), as the host's loader takes them */
+    if (!entry || !fp_version_is_compatible(host, entry->abi) || (entry->init && !entry->init(path))) {
         fprintf(stderr, "%s: no compatible entry, or its init failed\n", path);
         return NULL;
     }
@@ -113,7 +114,7 @@ void fp_test_plugin_close(void **handle)
 {
     if (!handle || !*handle) return;
     const fp_plugin_entry *entry = dlsym(*handle, FP_PLUGIN_ENTRY_SYMBOL);
-    if (entry) entry->deinit();
+    if (entry && entry->deinit) entry->deinit();
     dlclose(*handle);
     *handle = NULL;
 }

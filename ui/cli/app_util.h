@@ -16,8 +16,9 @@
 /** A session's opening shown on a terminal (fp_session_options.progress): while
  *  fp_session_create works, one status line on stderr, "CMD: opening: STAGE ...", rewritten
  *  as each step begins; when it returns the line is cleared, or replaced by "CMD: opened in
- *  N.N s" when that took a second or more (a large face: loading and the contact guard take
- *  tens of seconds). Where stderr is not a terminal (a pipe, a log), or quiet: nothing. */
+ *  N.N s" when that took a second or more (a large face: loading it and building the contact
+ *  guard take long; docs/performance.md). Where stderr is not a terminal (a pipe, a log), or
+ *  quiet: nothing. */
 typedef struct fp_app_open_progress {
     const char *cmd;  /* "facepuppet run" */
     bool on;          /* stderr is a terminal and not quiet */

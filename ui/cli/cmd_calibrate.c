@@ -127,7 +127,19 @@ static void landmarks(const fp_mesh *m, const fp_head *head, fp_rig *given, cons
     if (rig != given) fp_rig_free(&rig);
 }
 
-static int calibrate_main(int argc, char **argv)
+/* What the command line asked for (calibrate_parse). */
+typedef struct calibrate_args {
+    const char *mesh_path, *input, *out, *rig_path;
+    bool touch;                    /* --mode touch (else hold) */
+    bool no_rig;                   /* --rig none: the head's estimated landmarks, no rig looked for */
+    const char *dirs[8];
+    size_t ndirs;
+    double mm_per_unit, duration;
+    char demo[4096];               /* the demo mesh's path, when --mesh is not given */
+} calibrate_args;
+
+/* Parse the command line into *a. Returns -1 to go on, or the exit status (0 after --help). */
+static int calibrate_parse(int argc, char **argv, calibrate_args *a)
 {
     static const struct option opts[] = {
         {"mesh", required_argument, 0, 'm'},     {"input", required_argument, 0, 'i'},
@@ -135,153 +147,182 @@ static int calibrate_main(int argc, char **argv)
         {"mm-per-unit", required_argument, 0, 'u'}, {"duration", required_argument, 0, 'd'},
         {"rig", required_argument, 0, 'r'},      {"plugin-dir", required_argument, 0, 'P'},
         {"help", no_argument, 0, 'h'},           {0, 0, 0, 0}};
-    const char *mesh_path = NULL, *input = NULL, *out = NULL, *mode = "hold", *rig_path = NULL;
-    bool no_rig = false; /* --rig none: the head's estimated landmarks, no rig looked for */
-    const char *dirs[8];
-    size_t ndirs = 0;
-    double mm_per_unit = 0, duration = 0;
+    const char *mode = "hold";
     optind = 1;
     for (int c; (c = getopt_long(argc, argv, "m:i:o:d:P:h", opts, NULL)) != -1;) {
         switch (c) {
-        case 'm': mesh_path = optarg; break;
+        case 'm': a->mesh_path = optarg; break;
         case 'i':
-            if (input) {
-                fprintf(stderr, "facepuppet calibrate: one --input (given '%s' and '%s')\n", input, optarg);
+            if (a->input) {
+                fprintf(stderr, "facepuppet calibrate: one --input (given '%s' and '%s')\n", a->input, optarg);
                 return FP_EXIT_USAGE;
             }
-            input = optarg;
+            a->input = optarg;
             break;
-        case 'o': out = optarg; break;
+        case 'o': a->out = optarg; break;
         case 'M': mode = optarg; break;
-        case 'r': rig_path = strcmp(optarg, "none") ? optarg : NULL, no_rig = !rig_path; break;
+        case 'r': a->rig_path = strcmp(optarg, "none") ? optarg : NULL, a->no_rig = !a->rig_path; break;
         case 'u':
-            if (!fp_parse_decimal(optarg, &mm_per_unit) || !(mm_per_unit > 0)) {
+            if (!fp_parse_decimal(optarg, &a->mm_per_unit) || !(a->mm_per_unit > 0)) {
                 fprintf(stderr, "facepuppet calibrate: --mm-per-unit must be > 0, got '%s'\n", optarg);
                 return FP_EXIT_USAGE;
             }
             break;
         case 'd':
-            if (!fp_parse_decimal(optarg, &duration) || !(duration > 0 && duration < FP_APP_MAX_DURATION_S)) {
+            if (!fp_parse_decimal(optarg, &a->duration) ||
+                !(a->duration > 0 && a->duration < FP_APP_MAX_DURATION_S)) {
                 fprintf(stderr, "facepuppet calibrate: --duration must be > 0 s and under 1e7, got "
                         "'%s'\n", optarg);
                 return FP_EXIT_USAGE;
             }
             break;
-        case 'P': if (ndirs < 8) dirs[ndirs++] = optarg; break;
+        case 'P': if (a->ndirs < 8) a->dirs[a->ndirs++] = optarg; break;
         case 'h': usage(stdout); return FP_EXIT_OK;
         default: usage(stderr); return FP_EXIT_USAGE;
         }
     }
-    bool touch = !strcmp(mode, "touch");
-    if (!touch && strcmp(mode, "hold")) {
+    a->touch = !strcmp(mode, "touch");
+    if (!a->touch && strcmp(mode, "hold")) {
         fprintf(stderr, "facepuppet calibrate: --mode must be hold or touch, got '%s'\n", mode);
         return FP_EXIT_USAGE;
     }
-    if (!input || !out || optind != argc) {
-        fprintf(stderr, "facepuppet calibrate: %s\n\n", !input ? "--input SPEC is required"
-                        : !out ? "--out FILE is required" : "unexpected argument (see below)");
+    if (!a->input || !a->out || optind != argc) {
+        fprintf(stderr, "facepuppet calibrate: %s\n\n", !a->input ? "--input SPEC is required"
+                        : !a->out ? "--out FILE is required" : "unexpected argument (see below)");
         usage(stderr);
         return FP_EXIT_USAGE;
     }
-    int oc = fp_app_check_output("facepuppet calibrate", "--out", out);
+    int oc = fp_app_check_output("facepuppet calibrate", "--out", a->out);
     if (oc) return oc;
-    char demo[4096];
-    if (!mesh_path) mesh_path = fp_app_data_path("faces/ict-facekit/generic_neutral_mesh.obj", demo, sizeof demo);
+    if (!a->mesh_path)
+        a->mesh_path = fp_app_data_path("faces/ict-facekit/generic_neutral_mesh.obj", a->demo, sizeof a->demo);
+    return -1;
+}
+
+/* The face and its head: loaded, detected, and --mm-per-unit checked as run checks it (a face
+ * under 1 mm or over 1 km is a slip). Returns 0 or the exit status (said); *m to free. */
+static int load_face(const calibrate_args *a, fp_mesh **m, fp_head *head)
+{
     char err[2048];
-    fp_mesh *m = NULL;
-    int rc = fp_app_load_mesh("facepuppet calibrate", false, mesh_path, &m, err, sizeof err);
+    int rc = fp_app_load_mesh("facepuppet calibrate", false, a->mesh_path, m, err, sizeof err);
     if (rc != FP_MESH_OK) {
         fprintf(stderr, "facepuppet calibrate: %s\n", err);
         return fp_app_exit_code(rc, FP_APP_INPUT);
     }
-    fp_head head;
-    if (fp_head_detect(m->positions, m->vertex_count, &head)) {
-        fprintf(stderr, "facepuppet calibrate: %s: cannot find a head (flat or non-finite mesh)\n", mesh_path);
-        fp_mesh_free(&m);
+    if (fp_head_detect((*m)->positions, (*m)->vertex_count, head)) {
+        fprintf(stderr, "facepuppet calibrate: %s: cannot find a head (flat or non-finite mesh)\n", a->mesh_path);
         return FP_EXIT_DATAERR;
     }
-    if (mm_per_unit > 0) { /* as run checks it: a face under 1 mm or over 1 km is a slip */
+    if (a->mm_per_unit > 0) {
         float lo[3], hi[3];
-        fp_mesh_bounds(m, lo, hi);
+        fp_mesh_bounds(*m, lo, hi);
         const double diag = sqrt((double)(hi[0] - lo[0]) * (hi[0] - lo[0]) +
                                  (double)(hi[1] - lo[1]) * (hi[1] - lo[1]) +
                                  (double)(hi[2] - lo[2]) * (hi[2] - lo[2]));
         double across;
-        if (!fp_head_scale_plausible(diag, mm_per_unit, &across)) {
+        if (!fp_head_scale_plausible(diag, a->mm_per_unit, &across)) {
             fprintf(stderr, "facepuppet calibrate: --mm-per-unit %g makes the face %.3g mm across "
                             "(its diagonal %.4g mesh units); give millimetres per mesh unit\n",
-                    mm_per_unit, across, diag);
-            fp_mesh_free(&m);
+                    a->mm_per_unit, across, diag);
             return FP_EXIT_USAGE;
         }
-        head.mm_per_unit = mm_per_unit;
-        snprintf(head.how, sizeof head.how, "from --mm-per-unit");
+        head->mm_per_unit = a->mm_per_unit;
+        snprintf(head->how, sizeof head->how, "from --mm-per-unit");
     }
-    /* a rig given is loaded (and bound to this mesh) before the recording is read: one that
-     * does not fit the mesh is an error, not a silent fall back to estimated landmarks */
-    fp_rig *given_rig = NULL;
-    if (rig_path && (rc = fp_rig_load_for_mesh(rig_path, m->vertex_count, m->positions, &given_rig,
-                                               err, sizeof err))) {
-        fprintf(stderr, "facepuppet calibrate: --rig %s\n", err);
-        fp_mesh_free(&m);
-        return fp_app_exit_code(rc, FP_APP_INPUT);
-    }
+    return 0;
+}
+
+/* Open the input, read its joint positions (read_samples), close it. Returns 0 or a
+ * negative code (message in err, or none: strerror). */
+static int record_samples(const calibrate_args *a, fp_calib_sample **smp, size_t *n,
+                          size_t *angles, char *err, size_t errlen)
+{
     fp_plugin_path path;
-    fp_app_plugin_path(&path, dirs, ndirs);
+    fp_app_plugin_path(&path, a->dirs, a->ndirs);
     fp_input_instance inst;
     memset(&inst, 0, sizeof inst);
-    rc = fp_input_instance_open(&inst, &path, input, 0, err, sizeof err);
+    int rc = fp_input_instance_open(&inst, &path, a->input, 0, err, errlen);
     if (!rc) fp_input_instance_set_log(&inst, fp_app_log_line, NULL); /* its log lines */
-    if (!rc) rc = fp_input_instance_start(&inst, err, sizeof err);
-    fp_calib_sample *smp = NULL;
-    size_t n = 0, angles = 0;
-    if (!rc) rc = read_samples(&inst, duration, &smp, &n, &angles);
+    if (!rc) rc = fp_input_instance_start(&inst, err, errlen);
+    if (!rc) rc = read_samples(&inst, a->duration, smp, n, angles);
     fp_input_instance_close(&inst);
     fp_plugin_path_clear(&path);
-    int status = FP_EXIT_OK;
-    if (rc) {
-        fprintf(stderr, "facepuppet calibrate: %s\n", err[0] ? err : strerror(-rc));
-        status = fp_app_exit_code(rc, FP_APP_INPUT);
-        goto done;
-    }
-    if (!n) {
-        fprintf(stderr, "facepuppet calibrate: %s: no joint positions%s: calibrate needs a tracker's "
-                "positions (a glove alone is placed by default, docs/calibration.md)\n", input,
-                angles ? " (only joint angles)" : "");
-        status = FP_EXIT_DATAERR;
-        goto done;
-    }
+    return rc;
+}
+
+/* Fit the calibration to the samples (hold or touch), write it atomically, say so. Returns
+ * the exit status. */
+static int fit_and_save(const calibrate_args *a, const fp_mesh *m, const fp_head *head,
+                        fp_rig *given_rig, const fp_calib_sample *smp, size_t n)
+{
+    char err[2048];
+    int rc;
     fp_calibration c;
     double touched[FP_CALIB_LANDMARKS][3], rms = 0;
-    if (touch) {
+    if (a->touch) {
         float lm[FP_CALIB_LANDMARKS][3];
-        landmarks(m, &head, given_rig, rig_path, no_rig, lm);
+        landmarks(m, head, given_rig, a->rig_path, a->no_rig, lm);
         rc = fp_calib_fit_touch(smp, n, (const float(*)[3])lm, &c, touched, &rms, err, sizeof err);
     } else {
-        rc = fp_calib_fit_hold(smp, n, m->positions, m->vertex_count, &head, &c, err, sizeof err);
+        rc = fp_calib_fit_hold(smp, n, m->positions, m->vertex_count, head, &c, err, sizeof err);
     }
     if (rc) {
-        fprintf(stderr, "facepuppet calibrate: %s: %s\n", input, strncmp(err, "calibrate: ", 11) ? err : err + 11);
-        status = rc == -ENOMEM ? 1 : FP_EXIT_DATAERR;
-        goto done;
+        fprintf(stderr, "facepuppet calibrate: %s: %s\n", a->input, strncmp(err, "calibrate: ", 11) ? err : err + 11);
+        return rc == -ENOMEM ? 1 : FP_EXIT_DATAERR;
     }
     char comment[512];
-    if (touch)
+    if (a->touch)
         snprintf(comment, sizeof comment, "facepuppet calibrate --mode touch: %zu samples; touches "
                  "(mm) chin %.0f %.0f %.0f, nose tip %.0f %.0f %.0f, forehead %.0f %.0f %.0f; "
                  "residual %.3g mm", n, touched[0][0], touched[0][1], touched[0][2], touched[1][0],
                  touched[1][1], touched[1][2], touched[2][0], touched[2][1], touched[2][2], rms / c.scale);
     else
         snprintf(comment, sizeof comment, "facepuppet calibrate --mode hold: %zu samples; "
-                 "%.4g mm per mesh unit, %s", n, head.mm_per_unit, head.how);
-    rc = fp_calibration_save(out, &c, comment, err, sizeof err);
+                 "%.4g mm per mesh unit, %s", n, head->mm_per_unit, head->how);
+    rc = fp_calibration_save(a->out, &c, comment, err, sizeof err);
     if (rc) {
         fprintf(stderr, "facepuppet calibrate: %s\n", err);
-        status = fp_app_exit_code(rc, FP_APP_OUTPUT);
+        return fp_app_exit_code(rc, FP_APP_OUTPUT);
+    }
+    printf("wrote %s: %.4g mm per mesh unit%s; %s\n", a->out, 1.0 / c.scale,
+           a->touch ? " (fitted)" : "", comment);
+    return FP_EXIT_OK;
+}
+
+static int calibrate_main(int argc, char **argv)
+{
+    calibrate_args a = {0};
+    int status = calibrate_parse(argc, argv, &a);
+    if (status >= 0) return status;
+    fp_mesh *m = NULL;
+    fp_head head;
+    fp_rig *given_rig = NULL;
+    fp_calib_sample *smp = NULL;
+    char err[2048] = "";
+    if ((status = load_face(&a, &m, &head))) goto done;
+    /* a rig given is loaded (and bound to this mesh) before the recording is read: one that
+     * does not fit the mesh is an error, not a silent fall back to estimated landmarks */
+    int rc;
+    if (a.rig_path && (rc = fp_rig_load_for_mesh(a.rig_path, m->vertex_count, m->positions, &given_rig,
+                                                 err, sizeof err))) {
+        fprintf(stderr, "facepuppet calibrate: --rig %s\n", err);
+        status = fp_app_exit_code(rc, FP_APP_INPUT);
         goto done;
     }
-    printf("wrote %s: %.4g mm per mesh unit%s; %s\n", out, 1.0 / c.scale,
-           touch ? " (fitted)" : "", comment);
+    size_t n = 0, angles = 0;
+    if ((rc = record_samples(&a, &smp, &n, &angles, err, sizeof err))) {
+        fprintf(stderr, "facepuppet calibrate: %s\n", err[0] ? err : strerror(-rc));
+        status = fp_app_exit_code(rc, FP_APP_INPUT);
+        goto done;
+    }
+    if (!n) {
+        fprintf(stderr, "facepuppet calibrate: %s: no joint positions%s: calibrate needs a tracker's "
+                "positions (a glove alone is placed by default, docs/calibration.md)\n", a.input,
+                angles ? " (only joint angles)" : "");
+        status = FP_EXIT_DATAERR;
+        goto done;
+    }
+    status = fit_and_save(&a, m, &head, given_rig, smp, n);
 done:
     free(smp);
     fp_rig_free(&given_rig);

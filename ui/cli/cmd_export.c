@@ -158,7 +158,21 @@ static void progress(bool on, size_t done, size_t total, uint64_t written)
     fflush(stderr);
 }
 
-static int export_main(int argc, char **argv)
+/* What the command line asked for (export_parse). */
+typedef struct export_args {
+    const char *format, *out, *range, *mesh, *take_path, *dirs[8];
+    size_t ndirs;
+    double fps, max_error;
+    int max_targets, step;
+    bool quiet;
+    int width, height;             /* png-seq */
+    double yaw, pitch, zoom;       /* png-seq */
+    bool png;                      /* --format png-seq (no exporter: fmt unused) */
+    fp_export_format fmt;
+} export_args;
+
+/* Parse the command line into *a. Returns -1 to go on, or the exit status (0 after --help). */
+static int export_parse(int argc, char **argv, export_args *a)
 {
     enum { OPT_RANGE = 0x200, OPT_FPS, OPT_MAX_ERROR, OPT_MAX_TARGETS, OPT_STEP, OPT_PLUGIN_DIR,
            OPT_SIZE, OPT_CAMERA };
@@ -172,28 +186,23 @@ static int export_main(int argc, char **argv)
         {"quiet", no_argument, 0, 'q'},          {"help", no_argument, 0, 'h'},
         {"size", required_argument, 0, OPT_SIZE}, {"camera", required_argument, 0, OPT_CAMERA},
         {0, 0, 0, 0}};
-    int width = 1280, height = 720;
-    double yaw = 0, pitch = 0, zoom = 1;
-    const char *format = NULL, *out = NULL, *range = NULL, *mesh = NULL, *dirs[8];
-    size_t ndirs = 0;
-    double fps = 0, max_error = 0.1;
-    int max_targets = 0, step = 0;
-    bool quiet = false;
+    *a = (export_args){.width = 1280, .height = 720, .zoom = 1, .max_error = 0.1,
+                       .fmt = FP_EXPORT_OBJ_SEQ};
     unsigned long long whole; /* an integer option (fp_parse_whole) */
     optind = 1;
     for (int c; (c = getopt_long(argc, argv, "f:o:m:qh", opts, NULL)) != -1;) {
         switch (c) {
-        case 'f': format = optarg; break;
-        case 'o': out = optarg; break;
-        case OPT_RANGE: range = optarg; break;
+        case 'f': a->format = optarg; break;
+        case 'o': a->out = optarg; break;
+        case OPT_RANGE: a->range = optarg; break;
         case OPT_FPS:
-            if (!fp_parse_decimal(optarg, &fps) || !(fps > 0 && fps <= 10000)) {
+            if (!fp_parse_decimal(optarg, &a->fps) || !(a->fps > 0 && a->fps <= 10000)) {
                 fprintf(stderr, "facepuppet export: --fps must be in (0, 10000], got '%s'\n", optarg);
                 return FP_EXIT_USAGE;
             }
             break;
         case OPT_MAX_ERROR:
-            if (!fp_parse_decimal(optarg, &max_error) || !(max_error > 0)) {
+            if (!fp_parse_decimal(optarg, &a->max_error) || !(a->max_error > 0)) {
                 fprintf(stderr, "facepuppet export: --max-error must be > 0 mm, got '%s'\n", optarg);
                 return FP_EXIT_USAGE;
             }
@@ -203,12 +212,12 @@ static int export_main(int argc, char **argv)
                 fprintf(stderr, "facepuppet export: --max-targets must be a whole number from 1 to 2147483647, got '%s'\n", optarg);
                 return FP_EXIT_USAGE;
             }
-            max_targets = (int)whole;
+            a->max_targets = (int)whole;
             break;
-        case OPT_STEP: step = 1; break;
+        case OPT_STEP: a->step = 1; break;
         case OPT_SIZE:
             /* (and nothing after: "1280x720x3" was read as 1280x720) */
-            if (!fp_app_parse_size(optarg, 16, 8192, &width, &height)) {
+            if (!fp_app_parse_size(optarg, 16, 8192, &a->width, &a->height)) {
                 fprintf(stderr, "facepuppet export: --size WxH, 16..8192 each, got '%s'\n", optarg);
                 return FP_EXIT_USAGE;
             }
@@ -216,19 +225,19 @@ static int export_main(int argc, char **argv)
         case OPT_CAMERA: {
             double v[3] = {0, 0, 1};
             const size_t k = fp_parse_decimal_list(optarg, ',', v, 3);
-            yaw = v[0], pitch = v[1], zoom = v[2];
-            if (k < 2 || !(zoom > 0 && zoom < 1000)) {
+            a->yaw = v[0], a->pitch = v[1], a->zoom = v[2];
+            if (k < 2 || !(a->zoom > 0 && a->zoom < 1000)) {
                 fprintf(stderr, "facepuppet export: --camera YAW,PITCH[,ZOOM] in degrees (zoom > 0), "
                         "got '%s'\n", optarg);
                 return FP_EXIT_USAGE;
             }
             break;
         }
-        case 'm': mesh = optarg; break;
+        case 'm': a->mesh = optarg; break;
         case OPT_PLUGIN_DIR:
-            if (ndirs < 8) dirs[ndirs++] = optarg;
+            if (a->ndirs < 8) a->dirs[a->ndirs++] = optarg;
             break;
-        case 'q': quiet = true; break;
+        case 'q': a->quiet = true; break;
         case 'h': usage(stdout); return FP_EXIT_OK;
         default: usage(stderr); return FP_EXIT_USAGE;
         }
@@ -237,203 +246,262 @@ static int export_main(int argc, char **argv)
         fprintf(stderr, "facepuppet export: give one TAKE file (see --help)\n");
         return FP_EXIT_USAGE;
     }
-    if (!format) {
+    a->take_path = argv[optind];
+    if (!a->format) {
         fprintf(stderr, "facepuppet export: give --format gltf|glb|pc2|mdd|obj-seq|png-seq\n");
         return FP_EXIT_USAGE;
     }
-    const bool png = strcmp(format, "png-seq") == 0;
+    a->png = strcmp(a->format, "png-seq") == 0;
 #ifndef FP_HAVE_UI
-    if (png) {
+    if (a->png) {
         fprintf(stderr, "facepuppet export: png-seq needs the viewer, and this build has none "
                 "(FP_BUILD_UI off)\n");
         return FP_EXIT_UNAVAILABLE;
     }
 #endif
-    fp_export_format fmt = FP_EXPORT_OBJ_SEQ;
-    if (!png && fp_export_format_parse(format, &fmt)) {
+    if (!a->png && fp_export_format_parse(a->format, &a->fmt)) {
         fprintf(stderr, "facepuppet export: unknown --format '%s' (gltf, glb, pc2, mdd, obj-seq, "
-                "png-seq)\n", format);
+                "png-seq)\n", a->format);
         return FP_EXIT_USAGE;
     }
-    const char *take_path = argv[optind];
+    return -1;
+}
+
+/* --range IN-OUT into its two ends (either may be open). Returns 0 or FP_EXIT_USAGE (said). */
+static int parse_range(const char *range, fp_take_rate rate, range_end *in, range_end *out)
+{
+    const char *dash = strchr(range, '-');
+    char a[64], b[64], err[2048];
+    if (!dash || (size_t)(dash - range) >= sizeof a || strlen(dash + 1) >= sizeof b) {
+        fprintf(stderr, "facepuppet export: --range '%s': give IN-OUT (frames or "
+                "timecodes, either side may be left out)\n", range);
+        return FP_EXIT_USAGE;
+    }
+    snprintf(a, sizeof a, "%.*s", (int)(dash - range), range);
+    snprintf(b, sizeof b, "%s", dash + 1);
+    if (parse_end(a, rate, in, err, sizeof err) || parse_end(b, rate, out, err, sizeof err)) {
+        fprintf(stderr, "facepuppet export: --range '%s': %s\n", range, err);
+        return FP_EXIT_USAGE;
+    }
+    return 0;
+}
+
+/* The output when --out is not given: beside the take, TAKE_png/, TAKE_frames/ (obj-seq) or
+ * TAKE.EXT. */
+static void default_out(const export_args *a, char *buf, size_t len)
+{
+    const char *take_path = a->take_path;
+    const char *dot = strrchr(take_path, '.'), *slash = strrchr(take_path, '/');
+    int stem = dot && (!slash || dot > slash) ? (int)(dot - take_path) : (int)strlen(take_path);
+    if (a->png)
+        snprintf(buf, len, "%.*s_png", stem, take_path);
+    else if (a->fmt == FP_EXPORT_OBJ_SEQ)
+        snprintf(buf, len, "%.*s_frames", stem, take_path);
+    else
+        snprintf(buf, len, "%.*s.%s", stem, take_path, fp_export_format_extension(a->fmt));
+}
+
+/* glTF and GLB: the mesh writer goes by the name, so --out must end in the format's
+ * extension. Returns 0 or FP_EXIT_USAGE (said). */
+static int check_gltf_name(const char *out, fp_export_format fmt)
+{
+    if (fmt != FP_EXPORT_GLTF && fmt != FP_EXPORT_GLB) return 0;
+    const char *dot = strrchr(out, '.'), *slash = strrchr(out, '/');
+    if (!dot || (slash && dot < slash) || strcasecmp(dot + 1, fp_export_format_extension(fmt))) {
+        fprintf(stderr, "facepuppet export: --out %s: give a name ending .%s for --format %s\n",
+                out, fp_export_format_extension(fmt), fp_export_format_extension(fmt));
+        return FP_EXIT_USAGE;
+    }
+    return 0;
+}
+
+/* Where the frames go: the exporter (core/export), or for png-seq the folder `out` (made if
+ * missing) and a headless renderer. Returns 0 or the exit status (said). */
+static int open_sink(sink *k, const export_args *a, const fp_session *s, const char *out,
+                     const char *name, double mm_per_unit)
+{
+    char err[2048];
+    int rc;
+    fp_export_options eo = {.format = a->fmt, .path = out, .max_error_mm = a->max_error,
+                            .mm_per_unit = mm_per_unit, .max_targets = a->max_targets,
+                            .step = a->step, .name = name, .stem = name};
+    if (!a->png && (rc = fp_export_begin(fp_session_mesh(s), &eo, &k->x, err, sizeof err))) {
+        fprintf(stderr, "facepuppet export: %s\n", err);
+        return fp_app_exit_code(rc, FP_APP_OUTPUT);
+    }
+#ifdef FP_HAVE_UI
+    if (a->png) {
+        k->dir = out;
+        k->stem = name;
+        if (mkdir(out, 0777) != 0 && errno != EEXIST) {
+            fprintf(stderr, "facepuppet export: %s: %s\n", out, strerror(errno));
+            return fp_app_exit_code(-errno, FP_APP_OUTPUT);
+        }
+        fp_frame_render_options ro = {.width = a->width, .height = a->height, .yaw_deg = a->yaw,
+                                      .pitch_deg = a->pitch, .zoom = a->zoom};
+        if ((rc = fp_frame_renderer_open(fp_session_mesh(s), &ro, &k->png, err, sizeof err))) {
+            fprintf(stderr, "facepuppet export: %s\n", err);
+            return fp_app_exit_code(rc, FP_APP_INPUT);
+        }
+    }
+#endif
+    return 0;
+}
+
+/* The frames' walk: every frame of the take is played; those in the range go to the sink, at
+ * their own times or resampled at --fps (each sample shows the latest frame at its time). */
+typedef struct export_walk {
+    const export_args *a;
+    fp_take_player *p;
+    const fp_session *s;
+    const fp_take_header *h;
+    range_end in, out;             /* --range */
+    uint64_t tc_in;                /* the take's timecode in, in frames */
+    sink *k;
+    float *held;                   /* --fps: the last frame in the range, n x 3 */
+    size_t n, total;               /* vertices; the take's frames */
+    bool bar;                      /* a progress bar on stderr */
+    bool started, have_held;
+    int64_t first_ns, held_ns;     /* the first frame in the range; the held one */
+    uint64_t sample;               /* --fps: the next sample */
+} export_walk;
+
+/* One frame in the range (positions pos, time t_ns) into the sink. Returns 0 or the sink's
+ * negative code (message in err). */
+static int walk_frame(export_walk *w, const float *pos, int64_t t_ns, char *err, size_t errlen)
+{
+    if (!w->started) {
+        w->started = true;
+        w->first_ns = t_ns;
+    }
+    if (w->a->fps <= 0) return sink_add(w->k, pos, (double)(t_ns - w->first_ns) * 1e-9, err, errlen);
+    /* samples before this frame's time show the frame held before it */
+    int rc = 0;
+    for (double t; w->have_held && !rc &&
+                   (t = (double)w->sample / w->a->fps) < (double)(t_ns - w->first_ns) * 1e-9;
+         w->sample++)
+        rc = sink_add(w->k, w->held, t, err, errlen);
+    memcpy(w->held, pos, w->n * 3 * sizeof(float));
+    w->held_ns = t_ns;
+    w->have_held = true;
+    return rc;
+}
+
+/* Play the whole take through walk_frame, then (--fps) the held frame's own sample times, up
+ * to its time. Returns FP_EXIT_OK or the exit status (said). */
+static int walk_take(export_walk *w)
+{
+    char err[2048];
+    int rc;
+    size_t index = 0;
+    fp_take_frame f;
+    double last_bar = -1;
+    while ((rc = fp_take_player_next(w->p, &f, NULL, err, sizeof err)) == 1) {
+        const size_t i = index++;
+        const bool after_in = !w->in.set || position(&w->in, i, f.time_ns, w->h, w->tc_in) >= w->in.value;
+        const bool before_out = !w->out.set || position(&w->out, i, f.time_ns, w->h, w->tc_in) <= w->out.value;
+        if (after_in && before_out) {
+            if ((rc = walk_frame(w, fp_session_positions(w->s), f.time_ns, err, sizeof err))) {
+                fprintf(stderr, "%sfacepuppet export: %s\n", w->bar ? "\n" : "", err);
+                return fp_app_exit_code(rc, FP_APP_OUTPUT);
+            }
+        } else if (w->started && w->out.set) {
+            break;   /* past OUT */
+        }
+        if (w->bar && (i + 1 == w->total || (double)i - last_bar >= (double)w->total / 100)) {
+            progress(true, i + 1, w->total, sink_frames(w->k));
+            last_bar = (double)i;
+        }
+    }
+    if (rc < 0) {
+        fprintf(stderr, "%sfacepuppet export: %s\n", w->bar ? "\n" : "", err);
+        return fp_app_exit_code(rc, FP_APP_INPUT);
+    }
+    if (w->bar && index < w->total)
+        progress(true, w->total, w->total, sink_frames(w->k));
+    if (w->a->fps > 0 && w->have_held) {   /* the held frame's own sample times, up to its time */
+        for (double t; (t = (double)w->sample / w->a->fps) <= (double)(w->held_ns - w->first_ns) * 1e-9 + 1e-12;
+             w->sample++)
+            if ((rc = sink_add(w->k, w->held, t, err, sizeof err))) {
+                fprintf(stderr, "facepuppet export: %s\n", err);
+                return fp_app_exit_code(rc, FP_APP_OUTPUT);
+            }
+    }
+    return FP_EXIT_OK;
+}
+
+/* Export the opened take p as *a asks. Returns the exit status. */
+static int export_take(const export_args *a, fp_take_player *p, sink *k, float **held)
+{
+    int status;
+    const fp_take_header *h = fp_take_player_header(p);
+    fp_take_reader *r = fp_take_player_reader(p);
+    if ((status = fp_app_take_intact("facepuppet export", "export", a->take_path, r))) return status;
+    export_walk w = {.a = a, .p = p, .h = h, .k = k};
+    if (a->range && (status = parse_range(a->range, h->rate, &w.in, &w.out))) return status;
+    fp_timecode_to_frames(&h->timecode_in, h->rate, &w.tc_in);
+    char def_out[4200];
+    const char *out = a->out;
+    if (!out) { /* the output: given, or beside the take */
+        default_out(a, def_out, sizeof def_out);
+        out = def_out;
+    }
+    if ((status = check_gltf_name(out, a->fmt))) return status;
+    const double mm_per_unit = fp_take_player_mm_per_unit(p);
+    fp_session *s = fp_take_player_session(p);
+    char name[96];
+    snprintf(name, sizeof name, "%s_T%03u", h->slate, h->take);
+    if ((status = open_sink(k, a, s, out, name, mm_per_unit))) return status;
+    w.s = s;
+    w.n = fp_session_vertex_count(s);
+    w.total = fp_take_reader_frames(r);
+    w.bar = !a->quiet && isatty(STDERR_FILENO);
+    w.held = *held = malloc(w.n * 3 * sizeof(float));
+    if (!w.held) {
+        fprintf(stderr, "facepuppet export: out of memory\n");
+        return FP_EXIT_SOFTWARE;
+    }
+    if ((status = walk_take(&w))) return status;
+    if (!w.started) {
+        fprintf(stderr, "facepuppet export: %s%s%sholds none of the take's %zu frames\n",
+                a->range ? "--range " : "the take ", a->range ? a->range : "", a->range ? " " : "",
+                w.total);
+        return FP_EXIT_USAGE;
+    }
+    if (a->png) {
+        if (!a->quiet)
+            printf("facepuppet export: wrote %llu PNG frames (%dx%d) to %s: %.2f MB\n",
+                   (unsigned long long)k->frames, a->width, a->height, out, (double)k->bytes / 1e6);
+        return FP_EXIT_OK;
+    }
+    status = fp_app_export_close("facepuppet export", NULL, &k->x, a->fmt, out, a->max_error,
+                                 a->quiet, stdout);
+    if (!a->quiet && status == FP_EXIT_OK && (a->fmt == FP_EXPORT_GLTF || a->fmt == FP_EXPORT_GLB))
+        printf("facepuppet export: %.6g mm per mesh unit; frame rate %u/%u%s\n", mm_per_unit,
+               h->rate.num, h->rate.den, a->fps > 0 ? " (resampled)" : "");
+    return status;
+}
+
+static int export_main(int argc, char **argv)
+{
+    export_args a;
+    int status = export_parse(argc, argv, &a);
+    if (status >= 0) return status;
     char err[2048];
     fp_plugin_path path;
-    fp_app_plugin_path(&path, dirs, ndirs);
+    fp_app_plugin_path(&path, a.dirs, a.ndirs);
     fp_take_player *p = NULL;
-    int rc = fp_take_player_open_logged(take_path, mesh, &path,
-                                        quiet ? fp_app_log_line_quiet : fp_app_log_line, NULL, &p,
+    int rc = fp_take_player_open_logged(a.take_path, a.mesh, &path,
+                                        a.quiet ? fp_app_log_line_quiet : fp_app_log_line, NULL, &p,
                                         err, sizeof err);
     if (rc) {
         fprintf(stderr, "facepuppet export: %s\n", err);
         fp_plugin_path_clear(&path);
         return fp_app_exit_code(rc, FP_APP_INPUT);
     }
-    int status = FP_EXIT_OK;
     sink k = {0};
     float *held = NULL;
-    const fp_take_header *h = fp_take_player_header(p);
-    fp_take_reader *r = fp_take_player_reader(p);
-    if ((status = fp_app_take_intact("facepuppet export", "export", take_path, r))) goto done;
-    range_end in = {0}, outr = {0};
-    if (range) {
-        const char *dash = strchr(range, '-');
-        char a[64], b[64];
-        if (!dash || (size_t)(dash - range) >= sizeof a || strlen(dash + 1) >= sizeof b) {
-            fprintf(stderr, "facepuppet export: --range '%s': give IN-OUT (frames or "
-                    "timecodes, either side may be left out)\n", range);
-            status = FP_EXIT_USAGE;
-            goto done;
-        }
-        snprintf(a, sizeof a, "%.*s", (int)(dash - range), range);
-        snprintf(b, sizeof b, "%s", dash + 1);
-        if (parse_end(a, h->rate, &in, err, sizeof err) ||
-            parse_end(b, h->rate, &outr, err, sizeof err)) {
-            fprintf(stderr, "facepuppet export: --range '%s': %s\n", range, err);
-            status = FP_EXIT_USAGE;
-            goto done;
-        }
-    }
-    uint64_t tc_in = 0;
-    fp_timecode_to_frames(&h->timecode_in, h->rate, &tc_in);
-    /* the output: given, or beside the take */
-    char def_out[4200];
-    if (!out) {
-        const char *dot = strrchr(take_path, '.'), *slash = strrchr(take_path, '/');
-        int stem = dot && (!slash || dot > slash) ? (int)(dot - take_path) : (int)strlen(take_path);
-        if (png)
-            snprintf(def_out, sizeof def_out, "%.*s_png", stem, take_path);
-        else if (fmt == FP_EXPORT_OBJ_SEQ)
-            snprintf(def_out, sizeof def_out, "%.*s_frames", stem, take_path);
-        else
-            snprintf(def_out, sizeof def_out, "%.*s.%s", stem, take_path,
-                     fp_export_format_extension(fmt));
-        out = def_out;
-    }
-    if (fmt == FP_EXPORT_GLTF || fmt == FP_EXPORT_GLB) { /* the mesh writer goes by the name */
-        const char *dot = strrchr(out, '.'), *slash = strrchr(out, '/');
-        if (!dot || (slash && dot < slash) || strcasecmp(dot + 1, fp_export_format_extension(fmt))) {
-            fprintf(stderr, "facepuppet export: --out %s: give a name ending .%s for --format %s\n",
-                    out, fp_export_format_extension(fmt), fp_export_format_extension(fmt));
-            status = FP_EXIT_USAGE;
-            goto done;
-        }
-    }
-    const double mm_per_unit = fp_take_player_mm_per_unit(p);
-    fp_session *s = fp_take_player_session(p);
-    char name[96];
-    snprintf(name, sizeof name, "%s_T%03u", h->slate, h->take);
-    fp_export_options eo = {.format = fmt, .path = out, .max_error_mm = max_error,
-                            .mm_per_unit = mm_per_unit, .max_targets = max_targets,
-                            .step = step, .name = name, .stem = name};
-    if (!png && (rc = fp_export_begin(fp_session_mesh(s), &eo, &k.x, err, sizeof err))) {
-        fprintf(stderr, "facepuppet export: %s\n", err);
-        status = fp_app_exit_code(rc, FP_APP_OUTPUT);
-        goto done;
-    }
-#ifdef FP_HAVE_UI
-    if (png) {
-        k.dir = out;
-        k.stem = name;
-        if (mkdir(out, 0777) != 0 && errno != EEXIST) {
-            fprintf(stderr, "facepuppet export: %s: %s\n", out, strerror(errno));
-            status = fp_app_exit_code(-errno, FP_APP_OUTPUT);
-            goto done;
-        }
-        fp_frame_render_options ro = {.width = width, .height = height, .yaw_deg = yaw,
-                                      .pitch_deg = pitch, .zoom = zoom};
-        if ((rc = fp_frame_renderer_open(fp_session_mesh(s), &ro, &k.png, err, sizeof err))) {
-            fprintf(stderr, "facepuppet export: %s\n", err);
-            status = fp_app_exit_code(rc, FP_APP_INPUT);
-            goto done;
-        }
-    }
-#else
-    (void)width; (void)height; (void)yaw; (void)pitch; (void)zoom;
-#endif
-    const size_t n = fp_session_vertex_count(s), total = fp_take_reader_frames(r);
-    const bool bar = !quiet && isatty(STDERR_FILENO);
-    held = malloc(n * 3 * sizeof(float));
-    if (!held) {
-        fprintf(stderr, "facepuppet export: out of memory\n");
-        status = FP_EXIT_SOFTWARE;
-        goto done;
-    }
-    /* play every frame; export those in the range, at their own times or resampled */
-    int64_t first_ns = 0, held_ns = 0;
-    bool started = false, have_held = false;
-    uint64_t sample = 0;
-    size_t index = 0;
-    fp_take_frame f;
-    double last_bar = -1;
-    while ((rc = fp_take_player_next(p, &f, NULL, err, sizeof err)) == 1) {
-        const size_t i = index++;
-        const bool after_in = !in.set || position(&in, i, f.time_ns, h, tc_in) >= in.value;
-        const bool before_out = !outr.set || position(&outr, i, f.time_ns, h, tc_in) <= outr.value;
-        if (after_in && before_out) {
-            const float *pos = fp_session_positions(s);
-            if (!started) {
-                started = true;
-                first_ns = f.time_ns;
-            }
-            if (fps <= 0) {
-                rc = sink_add(&k, pos, (double)(f.time_ns - first_ns) * 1e-9, err, sizeof err);
-            } else {
-                /* samples before this frame's time show the frame held before it */
-                rc = 0;
-                for (double t; have_held && !rc &&
-                               (t = (double)sample / fps) < (double)(f.time_ns - first_ns) * 1e-9;
-                     sample++)
-                    rc = sink_add(&k, held, t, err, sizeof err);
-                memcpy(held, pos, n * 3 * sizeof(float));
-                held_ns = f.time_ns;
-                have_held = true;
-            }
-            if (rc) {
-                fprintf(stderr, "%sfacepuppet export: %s\n", bar ? "\n" : "", err);
-                status = fp_app_exit_code(rc, FP_APP_OUTPUT);
-                goto done;
-            }
-        } else if (started && outr.set) {
-            break;   /* past OUT */
-        }
-        if (bar && (i + 1 == total || (double)i - last_bar >= (double)total / 100)) {
-            progress(true, i + 1, total, sink_frames(&k));
-            last_bar = (double)i;
-        }
-    }
-    if (rc < 0) {
-        fprintf(stderr, "%sfacepuppet export: %s\n", bar ? "\n" : "", err);
-        status = fp_app_exit_code(rc, FP_APP_INPUT);
-        goto done;
-    }
-    if (bar && index < total)
-        progress(true, total, total, sink_frames(&k));
-    if (fps > 0 && have_held) {   /* the held frame's own sample times, up to its time */
-        for (double t; (t = (double)sample / fps) <= (double)(held_ns - first_ns) * 1e-9 + 1e-12;
-             sample++)
-            if ((rc = sink_add(&k, held, t, err, sizeof err))) {
-                fprintf(stderr, "facepuppet export: %s\n", err);
-                status = fp_app_exit_code(rc, FP_APP_OUTPUT);
-                goto done;
-            }
-    }
-    if (!started) {
-        fprintf(stderr, "facepuppet export: %s%s%sholds none of the take's %zu frames\n",
-                range ? "--range " : "the take ", range ? range : "", range ? " " : "", total);
-        status = FP_EXIT_USAGE;
-        goto done;
-    }
-    if (png) {
-        if (!quiet)
-            printf("facepuppet export: wrote %llu PNG frames (%dx%d) to %s: %.2f MB\n",
-                   (unsigned long long)k.frames, width, height, out, (double)k.bytes / 1e6);
-        goto done;
-    }
-    status = fp_app_export_close("facepuppet export", NULL, &k.x, fmt, out, max_error, quiet, stdout);
-    if (!quiet && status == FP_EXIT_OK && (fmt == FP_EXPORT_GLTF || fmt == FP_EXPORT_GLB))
-        printf("facepuppet export: %.6g mm per mesh unit; frame rate %u/%u%s\n", mm_per_unit,
-               h->rate.num, h->rate.den, fps > 0 ? " (resampled)" : "");
-done:
+    status = export_take(&a, p, &k, &held);
     fp_export_abort(&k.x);
 #ifdef FP_HAVE_UI
     fp_frame_renderer_close(&k.png);

@@ -75,7 +75,21 @@ static int check_out(const char *out)
     return fp_app_check_output("facepuppet run", "--out", out);
 }
 
-static int run_main(int argc, char **argv)
+/* What the command line asked for (run_parse), with the defaults settled (run_settle). */
+typedef struct run_args {
+    fp_session_options so;
+    fp_session_opts sopt;          /* the shared options; points at so */
+    fp_app_inputs inputs_buf;      /* the demo's and the defaults' strings, which so points into */
+    const char *out, *frames_out;
+    const char *take_dir, *slate, *take_desc, *export_file;
+    fp_export_format export_fmt;   /* of export_file */
+    double fps;
+    bool demo;
+} run_args;
+
+/* Parse the command line into *a (zeroed by the caller). Returns -1 to go on, or the exit
+ * status (0 after --help). */
+static int run_parse(int argc, char **argv, run_args *a)
 {
     enum { OPT_FRAMES_OUT = FP_SESSION_OPTS_FIRST_FREE, OPT_FPS, OPT_BUDGET, OPT_TAKE_DIR,
            OPT_SLATE, OPT_TAKE_DESC, OPT_EXPORT };
@@ -89,41 +103,36 @@ static int run_main(int argc, char **argv)
         {0, 0, 0, 0}};
     struct option opts[FP_SESSION_OPTS_COUNT + sizeof own / sizeof own[0]];
     memcpy(opts + fp_session_opts_longopts(opts), own, sizeof own);
-    fp_session_options so = {0};
-    int rc;
-    fp_session_opts sopt;
-    fp_session_opts_init(&sopt, &so);
-    const char *out = NULL, *frames_out = NULL;
-    const char *take_dir = NULL, *slate = NULL, *take_desc = NULL, *export_file = NULL;
-    double fps = 60;
+    fp_session_opts_init(&a->sopt, &a->so);
+    a->fps = 60;
     optind = 1;
     for (int c; (c = getopt_long(argc, argv, FP_SESSION_OPTS_SHORT "o:h", opts, NULL)) != -1;) {
-        int shared = fp_session_opts_parse(&sopt, c, optarg, "run");
+        int shared = fp_session_opts_parse(&a->sopt, c, optarg, "run");
         if (shared < 0) return fp_app_exit_code(shared, FP_APP_INPUT);
         if (shared) continue;
         switch (c) {
-        case 'o': out = optarg; break;
-        case OPT_FRAMES_OUT: frames_out = optarg; break;
+        case 'o': a->out = optarg; break;
+        case OPT_FRAMES_OUT: a->frames_out = optarg; break;
         case OPT_FPS:
-            if (!fp_parse_decimal(optarg, &fps) || !(fps >= 1 && fps <= 10000)) {
+            if (!fp_parse_decimal(optarg, &a->fps) || !(a->fps >= 1 && a->fps <= 10000)) {
                 fprintf(stderr, "facepuppet run: --fps must be in 1..10000, got '%s'\n", optarg);
                 return FP_EXIT_USAGE;
             }
             break;
-        case OPT_TAKE_DIR: take_dir = optarg; break;
-        case OPT_SLATE: slate = optarg; break;
+        case OPT_TAKE_DIR: a->take_dir = optarg; break;
+        case OPT_SLATE: a->slate = optarg; break;
         case OPT_TAKE_DESC:
             if (!fp_text_ok(optarg, true)) {
                 fprintf(stderr, "facepuppet run: --take-description must be UTF-8 text without "
                                 "control characters (tabs and line breaks allowed)\n");
                 return FP_EXIT_USAGE;
             }
-            take_desc = optarg;
+            a->take_desc = optarg;
             break;
-        case OPT_EXPORT: export_file = optarg; break;
+        case OPT_EXPORT: a->export_file = optarg; break;
         case OPT_BUDGET:
-            if (!fp_parse_decimal(optarg, &so.mapping_budget_ms) ||
-                !(so.mapping_budget_ms > 0 && so.mapping_budget_ms <= 1000)) {
+            if (!fp_parse_decimal(optarg, &a->so.mapping_budget_ms) ||
+                !(a->so.mapping_budget_ms > 0 && a->so.mapping_budget_ms <= 1000)) {
                 fprintf(stderr, "facepuppet run: --budget must be in (0, 1000] ms, got '%s'\n", optarg);
                 return FP_EXIT_USAGE;
             }
@@ -136,124 +145,151 @@ static int run_main(int argc, char **argv)
         fprintf(stderr, "facepuppet run: unexpected argument '%s'\n", argv[optind]);
         return FP_EXIT_USAGE;
     }
-    double speed = sopt.speed, duration = sopt.duration_s;
-    bool quiet = sopt.quiet;
-    /* The demo: no mesh and no input given. */
-    bool mesh_given = so.mesh_path != NULL;
-    fp_app_inputs inputs_buf;
-    bool demo = fp_app_session_defaults(&so, speed, &inputs_buf);
-    if (mesh_given && !so.input_count) {
+    return -1;
+}
+
+/* --frames-out: made if missing, and a folder we can write in. Returns 0 or the exit status. */
+static int check_frames_out(const char *frames_out)
+{
+    struct stat st;
+    if (mkdir(frames_out, 0777) && errno != EEXIST) {
+        fprintf(stderr, "facepuppet run: --frames-out %s: %s\n", frames_out, strerror(errno));
+        return fp_app_exit_code(-errno, FP_APP_OUTPUT);
+    }
+    if (stat(frames_out, &st) || !S_ISDIR(st.st_mode)) {
+        fprintf(stderr, "facepuppet run: --frames-out %s: not a folder\n", frames_out);
+        return FP_EXIT_CANTCREAT;
+    }
+    if (access(frames_out, W_OK | X_OK)) {
+        fprintf(stderr, "facepuppet run: --frames-out %s: %s\n", frames_out, strerror(errno));
+        return FP_EXIT_CANTCREAT;
+    }
+    return 0;
+}
+
+/* The defaults (the demo when neither mesh nor input is given; --out's name), then every
+ * output and the take's options checked before any work. Returns 0 or the exit status. */
+static int run_settle(run_args *a)
+{
+    int rc;
+    bool mesh_given = a->so.mesh_path != NULL;
+    a->demo = fp_app_session_defaults(&a->so, a->sopt.speed, &a->inputs_buf);
+    if (mesh_given && !a->so.input_count) {
         fprintf(stderr, "facepuppet run: give at least one --input SPEC (see --help)\n");
         return FP_EXIT_USAGE;
     }
-    if (!out) out = demo ? "facepuppet-demo.obj" : "facepuppet-out.obj";
+    if (!a->out) a->out = a->demo ? "facepuppet-demo.obj" : "facepuppet-out.obj";
     /* Outputs are checked before any work: a folder we can write into, a format we write. */
-    if ((rc = check_out(out))) return rc;
-    if (frames_out) {
-        struct stat st;
-        if (mkdir(frames_out, 0777) && errno != EEXIST) {
-            fprintf(stderr, "facepuppet run: --frames-out %s: %s\n", frames_out, strerror(errno));
-            return fp_app_exit_code(-errno, FP_APP_OUTPUT);
-        }
-        if (stat(frames_out, &st) || !S_ISDIR(st.st_mode)) {
-            fprintf(stderr, "facepuppet run: --frames-out %s: not a folder\n", frames_out);
-            return FP_EXIT_CANTCREAT;
-        }
-        if (access(frames_out, W_OK | X_OK)) {
-            fprintf(stderr, "facepuppet run: --frames-out %s: %s\n", frames_out, strerror(errno));
-            return FP_EXIT_CANTCREAT;
-        }
-    }
-
-    fp_export_format export_fmt;
-    if (export_file && fp_export_format_from_path(export_file, &export_fmt)) {
+    if ((rc = check_out(a->out))) return rc;
+    if (a->frames_out && (rc = check_frames_out(a->frames_out))) return rc;
+    if (a->export_file && fp_export_format_from_path(a->export_file, &a->export_fmt)) {
         fprintf(stderr, "facepuppet run: --export %s: give a file ending in .gltf, .glb, .pc2 "
-                "or .mdd\n", export_file);
+                "or .mdd\n", a->export_file);
         return FP_EXIT_USAGE;
     }
-    if ((slate || take_desc) && !take_dir) {
+    if ((a->slate || a->take_desc) && !a->take_dir) {
         fprintf(stderr, "facepuppet run: --slate and --take-description need --take-dir\n");
         return FP_EXIT_USAGE;
     }
-    if (slate && !fp_take_slate_valid(slate)) {
+    if (a->slate && !fp_take_slate_valid(a->slate)) {
         fprintf(stderr, "facepuppet run: --slate '%s': use 1-63 of A-Z a-z 0-9 . _ - (not "
-                "starting with '.')\n", slate);
+                "starting with '.')\n", a->slate);
         return FP_EXIT_USAGE;
     }
-    /* --take-dir: the session's record sink feeds the take recorder (fp_session_take.h). */
-    fp_session_take take;
-    fp_session_take_options take_opt = {.dir = take_dir, .slate = slate,
-                                        .description = take_desc, .rate = fp_app_take_rate(fps)};
-    fp_session_take_init(&take, &take_opt, &so);
-    if (take_dir) {
-        so.record = fp_session_take_sink;
-        so.record_user = &take;
-    }
+    return 0;
+}
 
-    fp_plugin_path path;
-    fp_app_plugin_path(&path, sopt.plugin_dirs, sopt.nplugin_dirs);
-    so.plugin_path = &path;
-    /* (input status, mapping and engine errors, recordings; -q: without the engine's notes) */
-    so.log = quiet ? fp_app_log_line_quiet : fp_app_log_line;
-    so.input_clock = true;
-    so.measure_jacobian = true; /* min det J in the summary (the same shape, a slower path) */
-    fp_app_open_progress opening; /* a large face takes a while: its steps on a terminal */
-    fp_app_open_progress_init(&opening, "facepuppet run", quiet);
-    so.progress = fp_app_open_progress_fn;
-    so.progress_user = &opening;
+/* What the frames did, for the summary line. */
+typedef struct run_totals {
+    uint64_t frames, commits, engages, active_frames;
+    uint64_t guarded, limited;     /* frames the fold-over guard acted on / stopped short */
+    double min_det_j;
+    uint64_t collided;             /* frames the contact guard scaled back */
+    double collide_t;              /* the least it kept */
+    double *update_ms;             /* each deforming frame's update time */
+    size_t nupdates, cap;
+    fp_app_reach reach;            /* how far the skin followed (app_util.h) */
+} run_totals;
+
+static void totals_init(run_totals *t)
+{
+    memset(t, 0, sizeof *t);
+    t->min_det_j = INFINITY;
+    t->collide_t = 1.0;
+    t->cap = 1024;
+    t->update_ms = malloc(t->cap * sizeof *t->update_ms);
+    if (!t->update_ms) t->cap = 0; /* (no update times: the median is that of none) */
+}
+
+static void totals_add(run_totals *t, const fp_frame_stats *st)
+{
+    t->frames++;
+    t->commits += st->committed;
+    t->engages += st->engaged;
+    t->active_frames += st->active;
+    if (st->active) {
+        t->guarded += st->guard_limited > 0 || st->guard_substeps > 1;
+        t->limited += st->guard_reached < 1.0;
+        if (st->min_det_j < t->min_det_j) t->min_det_j = st->min_det_j;
+    }
+    if (st->collide_t < 1.0) {
+        t->collided++;
+        if (st->collide_t < t->collide_t) t->collide_t = st->collide_t;
+    }
+    fp_app_reach_add(&t->reach, st); /* how far the skin followed */
+    if (st->active) {
+        if (t->nupdates == t->cap && t->cap) {
+            double *grown = realloc(t->update_ms, 2 * t->cap * sizeof *t->update_ms);
+            if (grown) { t->update_ms = grown; t->cap *= 2; }
+        }
+        if (t->nupdates < t->cap) t->update_ms[t->nupdates++] = st->update_ms;
+    }
+}
+
+/* One frame's outputs besides the final mesh: --export's frame, --frames-out's mesh.
+ * Returns 0 or the exit status of a failed write (said on stderr). */
+static int write_frame(fp_session *s, const run_args *a, fp_exporter *ex, uint64_t k, double t_s)
+{
     char err[2048];
-    fp_session *s = NULL;
-    rc = fp_session_create(&so, &s, err, sizeof err);
-    if (rc) {
-        fprintf(stderr, "facepuppet run: %s\n", err);
-        fp_plugin_path_clear(&path);
-        return fp_app_exit_code(rc, FP_APP_INPUT);
+    int rc;
+    if (ex && (rc = fp_export_add(ex, fp_session_positions(s), t_s, err, sizeof err))) {
+        fprintf(stderr, "facepuppet run: --export: %s\n", err);
+        return fp_app_exit_code(rc, FP_APP_OUTPUT);
     }
-    if (!quiet) {
-        fprintf(stderr, "facepuppet run: %s, %zu vertices, rig %s, mapping %s, radius %.4g, %zu input(s); "
-                "scale: %.4g mm per mesh unit (%s)\n", so.mesh_path, fp_session_vertex_count(s),
-                fp_session_rig_how(s), so.mapping, fp_session_radius(s), so.input_count, fp_session_head(s)->mm_per_unit, fp_session_head(s)->how);
+    if (a->frames_out) {
+        char file[4400];
+        snprintf(file, sizeof file, "%s/frame_%06llu_t%.3fs.obj", a->frames_out, (unsigned long long)k,
+                 t_s);
+        if ((rc = fp_session_save(s, file, err, sizeof err))) {
+            fprintf(stderr, "facepuppet run: %s\n", err);
+            return fp_app_exit_code(rc, FP_APP_OUTPUT);
+        }
     }
-    /* --export: every frame into one animation file (core/export), finished after the run */
-    fp_exporter *ex = NULL;
-    if (export_file && (rc = fp_app_export_open("facepuppet run", export_file, fp_session_mesh(s),
-                                                fp_session_head(s)->mm_per_unit, "run", &ex))) {
-        fp_session_destroy(&s);
-        fp_plugin_path_clear(&path);
-        return rc;
-    }
-    if ((rc = fp_session_start(s, err, sizeof err))) {
-        fprintf(stderr, "facepuppet run: %s\n", err);
-        fp_export_abort(&ex);
-        fp_session_destroy(&s);
-        fp_plugin_path_clear(&path);
-        return fp_app_exit_code(rc, FP_APP_INPUT);
-    }
-    signal(SIGINT, on_signal);
-    signal(SIGTERM, on_signal);
+    return 0;
+}
 
-    size_t cap = 1024, nupdates = 0;
-    double *update_ms = malloc(cap * sizeof *update_ms);
-    fp_app_reach reach = {0};
-    uint64_t frames = 0, commits = 0, engages = 0, active_frames = 0, guarded = 0, limited = 0;
-    double min_det_j = INFINITY, collide_t = 1.0;
-    uint64_t collided = 0;
-    int status = FP_EXIT_OK;
-    /* The clock: the recordings' own (frame k at t0 + k/fps, each step only once every
-     * recording has delivered past it), else the wall clock (live devices only). */
+/* The session's frames, until the inputs end, --duration, an interrupt or a failed write.
+ * The clock: the recordings' own (frame k at t0 + k/fps, each step only once every
+ * recording has delivered past it), else the wall clock (live devices only). The take (if
+ * any) starts at the first frame's time. Returns FP_EXIT_OK or the exit status of a failure. */
+static int run_frames(fp_session *s, const run_args *a, fp_session_take *take, fp_exporter *ex,
+                      run_totals *t)
+{
+    char err[2048];
+    int rc, status = FP_EXIT_OK;
     int64_t t0 = 0, wall0 = fp_now_ns(), last_report = wall0;
     int clock;
     while ((clock = fp_session_input_start(s, &t0)) == 0 && !interrupted) sleep_until(fp_now_ns() + 200000);
     bool input_clock = clock == 1;
     if (!input_clock) t0 = wall0;
     /* The take's time origin (timecode in) is the first frame's time. */
-    if (take_dir && !interrupted && (rc = fp_session_take_start(&take, s, t0, err, sizeof err))) {
+    if (a->take_dir && !interrupted && (rc = fp_session_take_start(take, s, t0, err, sizeof err))) {
         fprintf(stderr, "facepuppet run: take: %s\n", err);
         status = fp_app_exit_code(rc, FP_APP_OUTPUT);
         interrupted = 1;
     }
     for (uint64_t k = 0; !interrupted; k++) {
-        int64_t now = t0 + (int64_t)llround((double)k * 1e9 / fps);
+        int64_t now = t0 + (int64_t)llround((double)k * 1e9 / a->fps);
         if (input_clock) {
             while (!fp_session_inputs_ready(s, now) && !interrupted) sleep_until(fp_now_ns() + 200000);
             if (interrupted) break;
@@ -262,116 +298,93 @@ static int run_main(int argc, char **argv)
         }
         fp_frame_stats st;
         fp_session_step(s, now, &st);
-        frames++;
-        commits += st.committed;
-        engages += st.engaged;
-        active_frames += st.active;
-        if (st.active) {
-            guarded += st.guard_limited > 0 || st.guard_substeps > 1;
-            limited += st.guard_reached < 1.0;
-            if (st.min_det_j < min_det_j) min_det_j = st.min_det_j;
-        }
-        if (st.collide_t < 1.0) {
-            collided++;
-            if (st.collide_t < collide_t) collide_t = st.collide_t;
-        }
-        fp_app_reach_add(&reach, &st); /* how far the skin followed */
-        if (st.active) {
-            if (nupdates == cap) {
-                double *grown = realloc(update_ms, 2 * cap * sizeof *update_ms);
-                if (grown) { update_ms = grown; cap *= 2; }
-            }
-            if (nupdates < cap) update_ms[nupdates++] = st.update_ms;
-        }
-        if (ex && (rc = fp_export_add(ex, fp_session_positions(s), (double)(now - t0) * 1e-9, err,
-                                      sizeof err))) {
-            fprintf(stderr, "facepuppet run: --export: %s\n", err);
-            status = fp_app_exit_code(rc, FP_APP_OUTPUT);
-            break;
-        }
-        if (frames_out) {
-            char file[4400];
-            snprintf(file, sizeof file, "%s/frame_%06llu_t%.3fs.obj", frames_out, (unsigned long long)k,
-                     (double)(now - t0) * 1e-9);
-            if ((rc = fp_session_save(s, file, err, sizeof err))) {
-                fprintf(stderr, "facepuppet run: %s\n", err);
-                status = fp_app_exit_code(rc, FP_APP_OUTPUT);
-                break;
-            }
-        }
+        totals_add(t, &st);
+        if ((status = write_frame(s, a, ex, k, (double)(now - t0) * 1e-9))) break;
         int64_t wall = fp_now_ns();
-        if (!quiet && wall - last_report >= 1000000000LL) {
+        if (!a->sopt.quiet && wall - last_report >= 1000000000LL) {
             fprintf(stderr, "  %6.1f s  frame %-6llu %s  %zu control vectors  update %.3f ms\n",
-                    (now - t0) / 1e9, (unsigned long long)frames, st.active ? "deforming" : "idle     ",
+                    (now - t0) / 1e9, (unsigned long long)t->frames, st.active ? "deforming" : "idle     ",
                     st.control_vectors, st.update_ms);
             last_report = wall;
         }
         if (fp_session_finished(s)) break;
-        if (duration > 0 && now - t0 >= (int64_t)(duration * 1e9)) break;
+        if (a->sopt.duration_s > 0 && now - t0 >= (int64_t)(a->sopt.duration_s * 1e9)) break;
     }
-    if (interrupted && !quiet) fprintf(stderr, "facepuppet run: interrupted; saving what was done\n");
-    /* Close the take: a failed write (ENOSPC) fails the run with 73. */
-    int take_rc = 0;
-    char take_err[1024] = "";
-    if (fp_session_take_recording(&take)) {
-        fp_session_take_result tr;
-        take_rc = fp_session_take_stop(&take, &tr, take_err, sizeof take_err);
-        fp_app_print_take(stderr, "facepuppet run", &tr);
-    }
-    /* Close the record=FILE recordings: a failed write must fail the run. */
-    char record_err[1024] = "";
-    bool record_failed = fp_session_stop(s, record_err, sizeof record_err) != 0;
-    /* The summary: displacement of the final shape from the loaded one. */
+    return status;
+}
+
+/* How far the final shape moved from the loaded one. */
+typedef struct run_displacement {
+    size_t n, moved;
+    double sum, max;
+    bool finite;
+} run_displacement;
+
+static run_displacement measure_displacement(const fp_session *s)
+{
     const float *a = fp_session_loaded(s), *b = fp_session_positions(s);
-    size_t n = fp_session_vertex_count(s), moved = 0;
-    double sum = 0, max = 0;
-    bool finite = true;
-    for (size_t v = 0; v < n; v++) {
+    run_displacement d = {.n = fp_session_vertex_count(s), .finite = true};
+    for (size_t v = 0; v < d.n; v++) {
         double dx = b[3 * v] - a[3 * v], dy = b[3 * v + 1] - a[3 * v + 1], dz = b[3 * v + 2] - a[3 * v + 2];
-        double d = sqrt(dx * dx + dy * dy + dz * dz);
-        if (!isfinite(d)) finite = false;
-        sum += d;
-        if (d > max) max = d;
-        if (d > 0) moved++;
+        double len = sqrt(dx * dx + dy * dy + dz * dz);
+        if (!isfinite(len)) d.finite = false;
+        d.sum += len;
+        if (len > d.max) d.max = len;
+        if (len > 0) d.moved++;
     }
-    unsigned dropped = 0;
-    if (status == FP_EXIT_OK) {
-        /* a large face takes seconds to write: a status line on a terminal (as its opening) */
-        fp_app_open_progress writing;
-        fp_app_open_progress_init(&writing, "facepuppet run", quiet);
-        writing.phase = "writing";
-        snprintf(writing.done, sizeof writing.done, "wrote %s", out);
-        char what[600];
-        snprintf(what, sizeof what, "%s (%zu vertices)", out, n);
-        fp_app_open_progress_fn(&writing, what);
-        rc = fp_session_save_ex(s, out, &dropped, err, sizeof err);
-        fp_app_open_progress_fn(&writing, NULL);
-        if (rc) {
-            fprintf(stderr, "facepuppet run: %s\n", err);
-            status = fp_app_exit_code(rc, FP_APP_OUTPUT);
-        }
+    return d;
+}
+
+/* --out, with a status line on a terminal (a large face takes seconds to write, as its
+ * opening). Returns FP_EXIT_OK or the exit status of a failed write; *dropped as
+ * fp_session_save_ex. */
+static int save_out(fp_session *s, const char *out, size_t n, bool quiet, unsigned *dropped)
+{
+    char err[2048];
+    fp_app_open_progress writing;
+    fp_app_open_progress_init(&writing, "facepuppet run", quiet);
+    writing.phase = "writing";
+    snprintf(writing.done, sizeof writing.done, "wrote %s", out);
+    char what[600];
+    snprintf(what, sizeof what, "%s (%zu vertices)", out, n);
+    fp_app_open_progress_fn(&writing, what);
+    int rc = fp_session_save_ex(s, out, dropped, err, sizeof err);
+    fp_app_open_progress_fn(&writing, NULL);
+    if (rc) {
+        fprintf(stderr, "facepuppet run: %s\n", err);
+        return fp_app_exit_code(rc, FP_APP_OUTPUT);
     }
-    fp_app_print_dropped("facepuppet run", out, dropped, quiet);
-    if (ex && status == FP_EXIT_OK)
-        status = fp_app_export_close("facepuppet run", "--export", &ex, export_fmt, export_file, 0.1, quiet,
-                                     stderr);
-    fp_export_abort(&ex);
-    double med = fp_median(update_ms, nupdates), mmu = fp_session_head(s)->mm_per_unit;
+    return FP_EXIT_OK;
+}
+
+/* The summary line on stdout (the mesh's unit in mm: fp_session_head). */
+static void print_summary(const fp_session *s, run_totals *t, const run_displacement *d,
+                          int status, const char *out)
+{
+    double med = fp_median(t->update_ms, t->nupdates), mmu = fp_session_head(s)->mm_per_unit;
     char reach_text[200];
-    fp_app_reach_text(&reach, mmu, reach_text, sizeof reach_text);
-    fp_app_reach_free(&reach);
+    fp_app_reach_text(&t->reach, mmu, reach_text, sizeof reach_text);
     printf("frames %llu, deforming %llu, engaged %llu, committed %llu; vertices moved %zu of %zu; "
            "displacement mean %.3g mm max %.3g mm (%.6g, %.6g mesh units of %.4g mm)%s; update median "
            "%.3f ms over %zu updates; "
            "fold-over guard acted on %llu frames (stopped short on %llu), min det J %.3g; "
            "contact guard scaled back %llu frames (least kept %.0f%%); events dropped %lu%s%s\n",
-           (unsigned long long)frames, (unsigned long long)active_frames, (unsigned long long)engages,
-           (unsigned long long)commits, moved, n, n ? sum / n * mmu : 0.0, max * mmu, n ? sum / n : 0.0,
-           max, mmu, reach_text, med, nupdates,
-           (unsigned long long)guarded, (unsigned long long)limited,
-           active_frames ? min_det_j : 1.0, (unsigned long long)collided, 100.0 * collide_t,
-           fp_session_dropped(s), status == FP_EXIT_OK ? "; wrote " : "",
-           status == FP_EXIT_OK ? out : "");
+           (unsigned long long)t->frames, (unsigned long long)t->active_frames,
+           (unsigned long long)t->engages, (unsigned long long)t->commits, d->moved, d->n,
+           d->n ? d->sum / d->n * mmu : 0.0, d->max * mmu, d->n ? d->sum / d->n : 0.0, d->max, mmu,
+           reach_text, med, t->nupdates, (unsigned long long)t->guarded,
+           (unsigned long long)t->limited, t->active_frames ? t->min_det_j : 1.0,
+           (unsigned long long)t->collided, 100.0 * t->collide_t, fp_session_dropped(s),
+           status == FP_EXIT_OK ? "; wrote " : "", status == FP_EXIT_OK ? out : "");
+}
+
+/* What the run's end found, in the order it is said: an input's error (65), a take not
+ * written whole, a record=FILE that failed (73), a mapping stopped for a fault (78), a
+ * non-finite vertex (70). Returns the status the run exits with. */
+static int final_status(fp_session *s, int status, int take_rc, const char *take_err,
+                        bool record_failed, const char *record_err, bool finite)
+{
+    char err[2048];
     const char *input_error;
     if (fp_session_input_errors(s, &input_error) && status == FP_EXIT_OK) {
         fprintf(stderr, "facepuppet run: an input reported an error: %s\n", input_error);
@@ -393,9 +406,116 @@ static int run_main(int argc, char **argv)
         fprintf(stderr, "facepuppet run: non-finite vertex in the result\n");
         status = FP_EXIT_SOFTWARE;
     }
-    free(update_ms);
+    return status;
+}
+
+/* Open the session (plugins, mesh, rig) with the run's settings; says what it opened unless
+ * -q. Returns 0 or the exit status (the message on stderr). */
+static int open_session(run_args *a, fp_plugin_path *path, fp_session_take *take, fp_session **s)
+{
+    fp_session_options *so = &a->so;
+    bool quiet = a->sopt.quiet;
+    if (a->take_dir) { /* the session's record sink feeds the take recorder (fp_session_take.h) */
+        so->record = fp_session_take_sink;
+        so->record_user = take;
+    }
+    fp_app_plugin_path(path, a->sopt.plugin_dirs, a->sopt.nplugin_dirs);
+    so->plugin_path = path;
+    /* (input status, mapping and engine errors, recordings; -q: without the engine's notes) */
+    so->log = quiet ? fp_app_log_line_quiet : fp_app_log_line;
+    so->input_clock = true;
+    so->measure_jacobian = true; /* min det J in the summary (the same shape, a slower path) */
+    fp_app_open_progress opening; /* a large face takes a while: its steps on a terminal */
+    fp_app_open_progress_init(&opening, "facepuppet run", quiet);
+    so->progress = fp_app_open_progress_fn;
+    so->progress_user = &opening;
+    char err[2048];
+    int rc = fp_session_create(so, s, err, sizeof err);
+    so->progress = NULL; /* (opening lives in this frame only) */
+    so->progress_user = NULL;
+    if (rc) {
+        fprintf(stderr, "facepuppet run: %s\n", err);
+        return fp_app_exit_code(rc, FP_APP_INPUT);
+    }
+    if (!quiet) {
+        fprintf(stderr, "facepuppet run: %s, %zu vertices, rig %s, mapping %s, radius %.4g, %zu input(s); "
+                "scale: %.4g mm per mesh unit (%s)\n", so->mesh_path, fp_session_vertex_count(*s),
+                fp_session_rig_how(*s), so->mapping, fp_session_radius(*s), so->input_count,
+                fp_session_head(*s)->mm_per_unit, fp_session_head(*s)->how);
+    }
+    return 0;
+}
+
+static int run_main(int argc, char **argv)
+{
+    run_args *a = calloc(1, sizeof *a); /* (the defaults' strings: some 40 kB) */
+    if (!a) {
+        fprintf(stderr, "facepuppet run: out of memory\n");
+        return FP_EXIT_SOFTWARE;
+    }
+    int rc = run_parse(argc, argv, a); /* (-1: go on; 0 after --help) */
+    if (rc >= 0 || (rc = run_settle(a))) {
+        free(a);
+        return rc;
+    }
+    const bool quiet = a->sopt.quiet;
+    fp_session_take take;
+    fp_session_take_options take_opt = {.dir = a->take_dir, .slate = a->slate,
+                                        .description = a->take_desc, .rate = fp_app_take_rate(a->fps)};
+    fp_session_take_init(&take, &take_opt, &a->so);
+    fp_plugin_path path;
+    fp_session *s = NULL;
+    fp_exporter *ex = NULL; /* --export: every frame into one animation file (core/export) */
+    char err[2048];
+    if ((rc = open_session(a, &path, &take, &s)) ||
+        (a->export_file && (rc = fp_app_export_open("facepuppet run", a->export_file, fp_session_mesh(s),
+                                                    fp_session_head(s)->mm_per_unit, "run", &ex)))) {
+        fp_session_destroy(&s);
+        fp_plugin_path_clear(&path);
+        free(a);
+        return rc;
+    }
+    if ((rc = fp_session_start(s, err, sizeof err))) {
+        fprintf(stderr, "facepuppet run: %s\n", err);
+        fp_export_abort(&ex);
+        fp_session_destroy(&s);
+        fp_plugin_path_clear(&path);
+        free(a);
+        return fp_app_exit_code(rc, FP_APP_INPUT);
+    }
+    signal(SIGINT, on_signal);
+    signal(SIGTERM, on_signal);
+    run_totals t;
+    totals_init(&t);
+    int status = run_frames(s, a, &take, ex, &t);
+    if (interrupted && !quiet) fprintf(stderr, "facepuppet run: interrupted; saving what was done\n");
+    /* Close the take: a failed write (ENOSPC) fails the run with 73. */
+    int take_rc = 0;
+    char take_err[1024] = "";
+    if (fp_session_take_recording(&take)) {
+        fp_session_take_result tr;
+        take_rc = fp_session_take_stop(&take, &tr, take_err, sizeof take_err);
+        fp_app_print_take(stderr, "facepuppet run", &tr);
+    }
+    /* Close the record=FILE recordings: a failed write must fail the run. */
+    char record_err[1024] = "";
+    bool record_failed = fp_session_stop(s, record_err, sizeof record_err) != 0;
+    /* The summary: displacement of the final shape from the loaded one. */
+    const run_displacement d = measure_displacement(s);
+    unsigned dropped = 0;
+    if (status == FP_EXIT_OK) status = save_out(s, a->out, d.n, quiet, &dropped);
+    fp_app_print_dropped("facepuppet run", a->out, dropped, quiet);
+    if (ex && status == FP_EXIT_OK)
+        status = fp_app_export_close("facepuppet run", "--export", &ex, a->export_fmt, a->export_file,
+                                     0.1, quiet, stderr);
+    fp_export_abort(&ex);
+    print_summary(s, &t, &d, status, a->out);
+    status = final_status(s, status, take_rc, take_err, record_failed, record_err, d.finite);
+    free(t.update_ms);
+    fp_app_reach_free(&t.reach);
     fp_session_destroy(&s);
     fp_plugin_path_clear(&path);
+    free(a);
     return status;
 }
 

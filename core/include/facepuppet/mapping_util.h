@@ -85,8 +85,9 @@ static inline size_t fp_hand_points(const fp_frame_input *in, int hand, int mode
 }
 
 /** Shorten the control vector start -> end to at most max_len (mesh units); max_len <= 0
- *  leaves it. Keeps the warp injective when max_len < 0.47 R for psi_{3,1}
- *  (shared/docs/csrbf.md, pitfall 4). */
+ *  leaves it. Keeps the warp of a single control vector injective when max_len < 0.47 R
+ *  (the fold-over bound R / max|psi'| of the Wendland psi_{3,1}; with several close vectors
+ *  the host's own fold-over guard still acts). */
 static inline void fp_clamp_vector(const float start[3], float end[3], double max_len)
 {
     if (max_len <= 0) return;

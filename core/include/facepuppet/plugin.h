@@ -12,7 +12,10 @@
  * Versioning: the host loads a plugin whose abi.major equals FP_PLUGIN_ABI_MAJOR and whose
  * abi.minor is at most the host's FP_PLUGIN_ABI_MINOR; anything else is refused with an error
  * naming both versions. Structs that may grow start with a `size` field set by whoever fills
- * them (sizeof of the struct as that side compiled it); the reader reads no field past it.
+ * them (sizeof of the struct as that side compiled it); the reader reads no field past it:
+ * FP_HAS_FIELD(ptr, type, field) is that test. Fill these structs with designated
+ * initialisers (`.size = sizeof(fp_input), .start = my_start, ...`), as the templates do, so
+ * that fields an ABI minor adds stay zero.
  *
  * Threads, as CLAP writes them:
  *   [main-thread]    the thread that loaded the plugin (the host's control thread);
@@ -27,9 +30,26 @@
  * Units: hands in millimetres in the device frame before calibration; the mapping sees them
  * in mesh units (after the host's workspace calibration). Angles in radians. Times in
  * nanoseconds of CLOCK_MONOTONIC (fp_host.now_ns).
+ *
+ * The device frame, in which every input delivers positions and wrist poses: right-handed,
+ * millimetres, the performer facing the device (and the face):
+ *   +x to the performer's right, +y up, +z toward the performer (out of the device),
+ * the frame of a Leap Motion controller. An input whose device measures in other axes or
+ * units turns its data into this frame before pushing it. The host's workspace calibration
+ * then places it at the face (identity rotation: device +x, +y, +z onto the mesh's +x, +y,
+ * +z, a mesh whose face looks along +z).
+ *
+ * Errors: functions return 0 or a negative code: a negative errno (-EINVAL a bad key or
+ * value, -ENOENT/-ENODEV a file or device not there, -EBADMSG malformed data, -EIO, -ENOMEM,
+ * ...; docs/plugin-guide.md, installed with the SDK, gives the exit status each one leads
+ * to) or one of facepuppet's own codes (FP_EPLUGIN_*, FP_ENUMERIC, all below -1000;
+ * facepuppet/errors.h, included here), which a plugin may meet in what the host reports and
+ * never needs to return.
  */
 #ifndef FACEPUPPET_PLUGIN_H
 #define FACEPUPPET_PLUGIN_H
+
+#include <facepuppet/errors.h> /* FP_EPLUGIN_*, FP_ENUMERIC: facepuppet's own error codes */
 
 #include <stdbool.h>
 #include <stddef.h>
@@ -42,6 +62,14 @@ extern "C" {
 #define FP_PLUGIN_ABI_MAJOR 1
 #define FP_PLUGIN_ABI_MINOR 1   /* 1.1: capacities, face frame, rig and surface services,
                                    typed parameters; 1.0 plugins still load */
+
+/** True when the struct at `ptr` (of ABI type `type`, starting with `uint32_t size`) is large
+ *  enough to hold `field`: its size covers the field's last byte. A reader tests it before
+ *  reading a field that a later ABI minor added, e.g.
+ *  `if (FP_HAS_FIELD(in, fp_frame_input, mm_per_unit) && in->mm_per_unit > 0) ...`
+ *  (a 1.0 host's fp_frame_input ends before mm_per_unit). `ptr` is evaluated once. */
+#define FP_HAS_FIELD(ptr, type, field) \
+    ((size_t)(ptr)->size >= offsetof(type, field) + sizeof(((type *)0)->field))
 
 /** How far fp_frame_input.tip_distance is exact, in support radii: beyond it the host reports
  *  +INFINITY. A fingertip farther than the support radius from every vertex moves none
@@ -84,8 +112,12 @@ static inline bool fp_version_is_compatible(fp_version host, fp_version plugin)
 /* ------------------------------------------------------------------------------------- */
 /* Hands                                                                                 */
 
-/** Sensors of a 22-sensor CyberGlove, in the glove's own order (shared/docs/devices.md).
- *  The 18-sensor glove is the same list without the four DIJ sensors. */
+/** Sensors of a 22-sensor CyberGlove, in the order the glove sends them in a record (as the
+ *  open readers name them: asr_cyberglove_lib, Shadow Robot's and TAMS' drivers): thumb
+ *  rotation, thumb MPJ, IJ and abduction; index MPJ, PIJ, DIJ; middle MPJ, PIJ, DIJ and
+ *  middle-index abduction; ring likewise with ring-middle abduction; pinkie likewise with
+ *  pinkie-ring abduction; palm arch; wrist pitch and yaw. The 18-sensor glove is the same
+ *  list without the four DIJ sensors. */
 enum fp_glove_sensor {
     FP_SENSOR_THUMB_ROTATE = 0, FP_SENSOR_THUMB_MPJ, FP_SENSOR_THUMB_IJ, FP_SENSOR_THUMB_AB,
     FP_SENSOR_INDEX_MPJ, FP_SENSOR_INDEX_PIJ, FP_SENSOR_INDEX_DIJ,
@@ -98,7 +130,7 @@ enum fp_glove_sensor {
 
 /** Joints of one hand as positions: the palm centre, then for each finger (thumb, index,
  *  middle, ring, pinky) four points from the hand outward: MCP, PIP, DIP, tip (for the
- *  thumb CMC, MCP, IP, tip). The layout of the Leap Motion recordings in shared/data. */
+ *  thumb CMC, MCP, IP, tip): Leap Motion's skeleton, finger by finger, bone ends in order. */
 enum fp_hand_joint {
     FP_JOINT_PALM = 0,
     FP_JOINT_FINGER0 = 1,       /* first joint of the thumb; finger f, segment k: 1 + 4f + k */
@@ -138,7 +170,8 @@ typedef struct fp_event_joint_angles {
     float radians[FP_GLOVE_SENSORS];
 } fp_event_joint_angles;
 
-/** Joint positions in millimetres in the device frame, fp_hand_joint layout. */
+/** Joint positions in millimetres in the device frame (+x the performer's right, +y up, +z
+ *  toward the performer; above), fp_hand_joint layout. */
 typedef struct fp_event_joint_positions {
     fp_event_header header;
     float mm[FP_HAND_JOINTS][3];
@@ -430,7 +463,8 @@ typedef struct fp_host_rig {
  *  is within reach), its position, its distance and its unit normal. out: count entries of
  *  the caller's, written during the call. Returns 0, -EINVAL (points or out NULL with count >
  *  0), -ENODATA (the session has no surface index yet: no triangles), or the engine's negative
- *  code. [session-thread]: no allocation, no lock; cost follows the queries, not the mesh. */
+ *  code (a negative errno, or FP_ENUMERIC). [session-thread]: no allocation, no lock; cost
+ *  follows the queries, not the mesh. */
 #define FP_HOST_EXT_SURFACE "facepuppet.surface/1"
 typedef struct fp_surface_hit {
     uint32_t vertex;
@@ -522,16 +556,24 @@ typedef struct fp_plugin_entry {
 
     /** [main-thread] Called once after loading, with the shared object's path (the host's
      *  string, valid during the call: copy it to keep it). false refuses the load: the host
-     *  unloads the plugin and reports FP_EPLUGIN_INIT (exit 78), naming it. */
+     *  unloads the plugin and reports FP_EPLUGIN_INIT (exit 78), naming it. May be NULL (the
+     *  host then loads the plugin as if init returned true): leave it out where there is
+     *  nothing to set up. */
     bool (*init)(const char *plugin_path);
-    /** [main-thread] Called once before unloading. */
+    /** [main-thread] Called once before unloading. May be NULL (nothing to release). */
     void (*deinit)(void);
     /** [main-thread] A factory by id (FP_INPUT_FACTORY_ID, FP_MAPPING_FACTORY_ID), or NULL.
-     *  The factory must stay valid until deinit (a static const struct, as the templates). */
+     *  The factory must stay valid until deinit or unloading (a static const struct, as the
+     *  templates). Required. */
     const void *(*get_factory)(const char *factory_id);
 } fp_plugin_entry;
 
-/** Declare the entry in a plugin: FP_PLUGIN_DECLARE_ENTRY = { ... }; */
+/** Declare the entry in a plugin, with designated initialisers (init and deinit may be left
+ *  out):
+ *    FP_PLUGIN_DECLARE_ENTRY = {
+ *        .abi = {.major = FP_PLUGIN_ABI_MAJOR, .minor = FP_PLUGIN_ABI_MINOR},
+ *        .id = "org.example.map-grab", .version = "1.0", .get_factory = get_factory,
+ *    }; */
 #define FP_PLUGIN_DECLARE_ENTRY FP_PLUGIN_EXPORT const fp_plugin_entry facepuppet_plugin_entry
 
 #ifdef __cplusplus

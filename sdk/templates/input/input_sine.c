@@ -103,11 +103,15 @@ static void destroy(fp_input *self) { free(self->plugin_data); }
 
 enum { KEY_HAND, KEY_RATE, KEY_PERIOD, KEY_DURATION, KEY_COUNT };
 static const fp_param_info keys[KEY_COUNT + 1] = {
-    {"hand", FP_PARAM_ENUM, 0, 0, "right", "left|right", NULL, "which hand the glove is"},
-    {"rate", FP_PARAM_FLOAT, 1, 1000, "60", NULL, "Hz", "samples per second"},
-    {"period", FP_PARAM_FLOAT, 0.05, 60, "2", NULL, "s", "one curl and release"},
-    {"duration", FP_PARAM_FLOAT, 0, 86400, "4", NULL, "s", "then end of stream (0: never)"},
-    {NULL, 0, 0, 0, NULL, NULL, NULL, NULL},
+    {.name = "hand", .type = FP_PARAM_ENUM, .default_value = "right", .choices = "left|right",
+     .description = "which hand the glove is"},
+    {.name = "rate", .type = FP_PARAM_FLOAT, .min = 1, .max = 1000, .default_value = "60",
+     .unit = "Hz", .description = "samples per second"},
+    {.name = "period", .type = FP_PARAM_FLOAT, .min = 0.05, .max = 60, .default_value = "2",
+     .unit = "s", .description = "one curl and release"},
+    {.name = "duration", .type = FP_PARAM_FLOAT, .min = 0, .max = 86400, .default_value = "4",
+     .unit = "s", .description = "then end of stream (0: never)"},
+    {.name = NULL},
 };
 
 /* [main-thread] */
@@ -152,7 +156,7 @@ static const void *get_factory(const char *id)
 }
 
 FP_PLUGIN_DECLARE_ENTRY = {
-    .abi = {FP_PLUGIN_ABI_MAJOR, FP_PLUGIN_ABI_MINOR},
+    .abi = {.major = FP_PLUGIN_ABI_MAJOR, .minor = FP_PLUGIN_ABI_MINOR},
     .id = "org.example.input-sine",
     .version = "1.0",
     .get_factory = get_factory,

@@ -90,10 +90,13 @@ static void destroy(fp_mapping *self) { free(self->plugin_data); }
 /* The keys, typed: `facepuppet plugins` prints them and fpmu_params_parse checks them. */
 enum { KEY_HANDS, KEY_GAIN, KEY_AUTO, KEY_COUNT };
 static const fp_param_info keys[KEY_COUNT + 1] = {
-    {"hands", FP_PARAM_ENUM, 0, 0, "both", "left|right|both", NULL, "which hands grab"},
-    {"gain", FP_PARAM_FLOAT, 0, 10, "1.0", NULL, NULL, "how far the face follows the fingers"},
-    {"auto", FP_PARAM_BOOL, 0, 1, "1", NULL, NULL, "engage when a fingertip touches the face"},
-    {NULL, 0, 0, 0, NULL, NULL, NULL, NULL},
+    {.name = "hands", .type = FP_PARAM_ENUM, .default_value = "both", .choices = "left|right|both",
+     .description = "which hands grab"},
+    {.name = "gain", .type = FP_PARAM_FLOAT, .min = 0, .max = 10, .default_value = "1.0",
+     .description = "how far the face follows the fingers"},
+    {.name = "auto", .type = FP_PARAM_BOOL, .min = 0, .max = 1, .default_value = "1",
+     .description = "engage when a fingertip touches the face"},
+    {.name = NULL},
 };
 
 /* [main-thread] */
@@ -135,7 +138,7 @@ static const void *get_factory(const char *id)
 
 /* The one exported symbol. */
 FP_PLUGIN_DECLARE_ENTRY = {
-    .abi = {FP_PLUGIN_ABI_MAJOR, FP_PLUGIN_ABI_MINOR},
+    .abi = {.major = FP_PLUGIN_ABI_MAJOR, .minor = FP_PLUGIN_ABI_MINOR},
     .id = "org.example.map-grab",
     .version = "1.0",
     .get_factory = get_factory,

@@ -1,0 +1,70 @@
+/*
+ * fp_rig_internal.h: the layout of a rig, shared by fp_rig.c (files, validation, binding to a
+ * mesh, lookups) and fp_rig_pose.c (the jaw pose, the mobility blend, the finger limit).
+ * Private to core/rig: everyone else goes through fp_rig.h.
+ */
+#ifndef FP_RIG_INTERNAL_H
+#define FP_RIG_INTERNAL_H
+
+#include "fp_rig.h"
+
+#include <stddef.h>
+#include <stdint.h>
+
+#define MAX_MOUTH_POINTS 16
+
+typedef struct region {
+    char name[FP_RIG_NAME_MAX + 1];
+    int kind;
+    size_t count;
+} region;
+
+typedef struct landmark {
+    char name[FP_RIG_NAME_MAX + 1];
+    uint32_t vertex;
+} landmark;
+
+typedef struct channel {
+    char name[FP_RIG_NAME_MAX + 1];
+    float min, max, neutral;
+} channel;
+
+struct fp_rig {
+    char name[128];
+    char source[1024];
+    char mesh_name[256];
+    size_t n;
+    uint32_t crc;
+    double mm_per_unit;
+    double up[3], fwd[3], left[3];
+    size_t region_count;
+    region regions[FP_RIG_MAX_REGIONS];
+    uint8_t *kind;              /* n */
+    size_t landmark_count;
+    landmark landmarks[FP_RIG_MAX_LANDMARKS];
+    size_t channel_count;
+    channel channels[FP_RIG_MAX_CHANNELS];
+    long jaw_open;              /* index of jaw.open */
+    /* jaw */
+    double hinge_r[3], hinge_l[3];
+    double open_deg;
+    double glide[2];            /* forward, down; mesh units at jaw.open = 1 */
+    size_t mouth_count;
+    double mouth[MAX_MOUTH_POINTS][3];
+    double lip_band, cheek_band, cheek_distance, corner_inset, inner_depth;
+    double menton[3], gonion[3];
+    double neck_band, back_band;
+    size_t weight_count;        /* jaw.weights: soft vertices whose weight the file gives */
+    uint32_t *weight_v;         /* their indices, ascending */
+    float *weight_w;            /* their weights in [0, 1] */
+    double ramp;                /* mobility ramp, mesh units */
+    /* bound */
+    float *w;                   /* n jaw weights */
+    float *m;                   /* n mobility */
+    float *g;                   /* n |grad m| (per mesh unit), 0 where m is flat */
+    uint32_t *slope_v;          /* the vertices with g > 0, ascending */
+    size_t slope_count;
+    double axis[3];             /* unit hinge axis, right -> left */
+};
+
+#endif

@@ -1,0 +1,285 @@
+/* fp_rig_pose: the jaw pose and its inverse, the mobility blend and the finger limit (with
+ * its index by blocks of slope vertices) of a bound rig (fp_rig.h). */
+#define _GNU_SOURCE
+#include "fp_rig_internal.h"
+
+#include <errno.h>
+#include <float.h>
+#include <math.h>
+#include <stdbool.h>
+#include <stdlib.h>
+#include <string.h>
+
+static double jaw_open_value(const fp_rig *r, const float *values)
+{
+    const channel *jc = &r->channels[r->jaw_open];
+    double open = values ? values[r->jaw_open] : jc->neutral;
+    if (isnan(open)) open = jc->neutral;
+    return fmin(jc->max, fmax(jc->min, open));
+}
+
+/* Rodrigues: rotation matrix by angle a (radians) about unit axis k. */
+static void rotation(const double k[3], double a, double R[9])
+{
+    double c = cos(a), s = sin(a), t = 1 - c;
+    R[0] = t * k[0] * k[0] + c, R[1] = t * k[0] * k[1] - s * k[2], R[2] = t * k[0] * k[2] + s * k[1];
+    R[3] = t * k[0] * k[1] + s * k[2], R[4] = t * k[1] * k[1] + c, R[5] = t * k[1] * k[2] - s * k[0];
+    R[6] = t * k[0] * k[2] - s * k[1], R[7] = t * k[1] * k[2] + s * k[0], R[8] = t * k[2] * k[2] + c;
+}
+
+int fp_rig_pose(const fp_rig *r, const float *base, const float *values, float *out)
+{
+    return fp_rig_pose_range(r, base, values, out, 0, r ? r->n : 0);
+}
+
+int fp_rig_pose_range(const fp_rig *r, const float *base, const float *values, float *out,
+                      size_t v0, size_t count)
+{
+    if (!r || !base || !out || !r->w || v0 > r->n || count > r->n - v0) return -EINVAL;
+    double open = jaw_open_value(r, values);
+    double theta = open * r->open_deg * M_PI / 180;
+    double R1[9];
+    rotation(r->axis, theta, R1);
+    for (size_t v = v0; v < v0 + count; v++) {
+        double w = r->w[v];
+        if (w == 0 || theta == 0) {
+            if (out != base) memcpy(&out[3 * v], &base[3 * v], 3 * sizeof(float));
+            continue;
+        }
+        double Rw[9];
+        const double *R = R1;
+        if (w != 1) {
+            rotation(r->axis, w * theta, Rw);
+            R = Rw;
+        }
+        double d[3] = {base[3 * v] - r->hinge_r[0], base[3 * v + 1] - r->hinge_r[1], base[3 * v + 2] - r->hinge_r[2]};
+        double g = w * open;
+        for (int i = 0; i < 3; i++)
+            out[3 * v + i] = (float)(r->hinge_r[i] + R[3 * i] * d[0] + R[3 * i + 1] * d[1] + R[3 * i + 2] * d[2] +
+                                     g * (r->glide[0] * r->fwd[i] - r->glide[1] * r->up[i]));
+    }
+    return 0;
+}
+
+int fp_rig_unpose(const fp_rig *r, const float *base, const float *values, const float *shown, float *out)
+{
+    return fp_rig_unpose_range(r, base, NULL, values, shown, out, 0, r ? r->n : 0);
+}
+
+int fp_rig_unpose_range(const fp_rig *r, const float *base, const float *posed, const float *values,
+                        const float *shown, float *out, size_t v0, size_t count)
+{
+    if (!r || !base || !shown || !out || !r->w || !r->m || v0 > r->n || count > r->n - v0) return -EINVAL;
+    double open = jaw_open_value(r, values);
+    double theta = open * r->open_deg * M_PI / 180;
+    for (size_t v = v0; v < v0 + count; v++) {
+        double w = r->w[v];
+        const float *p = &shown[3 * v];
+        if (r->m[v] == 0 || (posed && p[0] == posed[3 * v] && p[1] == posed[3 * v + 1] && p[2] == posed[3 * v + 2])) {
+            memcpy(&out[3 * v], &base[3 * v], 3 * sizeof(float));
+            continue;
+        }
+        if (w == 0 || theta == 0) {
+            memcpy(&out[3 * v], p, 3 * sizeof(float));
+            continue;
+        }
+        double R[9], d[3];
+        rotation(r->axis, w * theta, R);
+        double g = w * open;
+        for (int i = 0; i < 3; i++)
+            d[i] = p[i] - r->hinge_r[i] - g * (r->glide[0] * r->fwd[i] - r->glide[1] * r->up[i]);
+        for (int i = 0; i < 3; i++) /* R^T d */
+            out[3 * v + i] = (float)(r->hinge_r[i] + R[i] * d[0] + R[3 + i] * d[1] + R[6 + i] * d[2]);
+    }
+    return 0;
+}
+
+int fp_rig_apply_mobility(const fp_rig *r, const float *posed, const float *warped, float *out)
+{
+    return fp_rig_apply_mobility_range(r, posed, warped, out, 0, r ? r->n : 0);
+}
+
+int fp_rig_apply_mobility_range(const fp_rig *r, const float *posed, const float *warped, float *out,
+                                size_t v0, size_t count)
+{
+    if (!r || !posed || !warped || !out || !r->m || v0 > r->n || count > r->n - v0) return -EINVAL;
+    for (size_t v = v0; v < v0 + count; v++) {
+        float m = r->m[v];
+        for (int i = 0; i < 3; i++) {
+            size_t k = 3 * v + i;
+            out[k] = m == 0 ? posed[k] : posed[k] + m * (warped[k] - posed[k]);
+        }
+    }
+    return 0;
+}
+
+double fp_rig_max_finger_displacement(const fp_rig *r)
+{
+    return r ? r->ramp / 3 : 0;
+}
+
+const float *fp_rig_mobility_slope(const fp_rig *r) { return r ? r->g : NULL; }
+
+double fp_rig_finger_limit(const fp_rig *r, const float *posed, const float start[3], double radius)
+{
+    if (!r || !posed || !start || !r->g || !(radius > 0)) return r && r->g ? r->ramp / 3 : 0;
+    double gmax = 0, r2 = radius * radius;
+    for (size_t k = 0; k < r->slope_count; k++) {
+        uint32_t v = r->slope_v[k];
+        if (r->g[v] <= gmax) continue;
+        double d0 = posed[3 * v] - start[0], d1 = posed[3 * v + 1] - start[1], d2 = posed[3 * v + 2] - start[2];
+        if (d0 * d0 + d1 * d1 + d2 * d2 < r2) gmax = r->g[v];
+    }
+    return gmax > 0 ? FP_RIG_FINGER_MARGIN / gmax : INFINITY;
+}
+
+/* ---- the finger limit by blocks of slope vertices ------------------------------------- */
+
+/* Slope vertices per block: consecutive entries of slope_v (ascending vertex index; a mesh's
+ * vertex order keeps neighbours close, as the engine's blocks assume). */
+#define SLOPE_BLOCK 32
+
+typedef struct {
+    float lo[3], hi[3];  /* box of the block's vertices in the posed base */
+    float gmax;          /* the block's largest slope (the rig's, fixed) */
+    uint32_t count;      /* slope vertices in it (SLOPE_BLOCK but for one) */
+} slope_block;
+
+struct fp_rig_slope_index {
+    const fp_rig *rig;
+    size_t nb;           /* blocks */
+    slope_block *block;  /* nb, steepest first */
+    float *p;            /* nb x SLOPE_BLOCK x 4: each block's vertices (x, y, z of the posed
+                            base, slope), block after block in that order */
+    uint32_t *slot;      /* slope_count: where entry k of slope_v sits in p (block = slot /
+                            SLOPE_BLOCK) */
+};
+
+typedef struct {
+    float g;
+    uint32_t b;
+} block_key;
+
+static int by_gmax_desc(const void *a, const void *b)
+{
+    const block_key *x = a, *y = b;
+    return x->g > y->g ? -1 : x->g < y->g ? 1 : (x->b > y->b) - (x->b < y->b);
+}
+
+int fp_rig_slope_index_create(const fp_rig *r, fp_rig_slope_index **out)
+{
+    if (!out) return -EINVAL;
+    *out = NULL;
+    if (!r || !r->g) return -EINVAL;
+    fp_rig_slope_index *ix = calloc(1, sizeof *ix);
+    if (!ix) return -ENOMEM;
+    ix->rig = r;
+    ix->nb = (r->slope_count + SLOPE_BLOCK - 1) / SLOPE_BLOCK;
+    size_t nb = ix->nb ? ix->nb : 1;
+    ix->block = calloc(nb, sizeof *ix->block);
+    ix->p = calloc(nb * SLOPE_BLOCK * 4, sizeof *ix->p);
+    ix->slot = malloc((r->slope_count ? r->slope_count : 1) * sizeof *ix->slot);
+    block_key *keys = malloc(nb * sizeof *keys);
+    if (!ix->block || !ix->p || !ix->slot || !keys) {
+        free(keys);
+        fp_rig_slope_index_destroy(&ix);
+        return -ENOMEM;
+    }
+    for (size_t b = 0; b < ix->nb; b++) {
+        size_t k1 = (b + 1) * SLOPE_BLOCK < r->slope_count ? (b + 1) * SLOPE_BLOCK : r->slope_count;
+        float g = 0;
+        for (size_t k = b * SLOPE_BLOCK; k < k1; k++) g = r->g[r->slope_v[k]] > g ? r->g[r->slope_v[k]] : g;
+        keys[b] = (block_key){g, (uint32_t)b};
+    }
+    qsort(keys, ix->nb, sizeof *keys, by_gmax_desc);
+    for (size_t o = 0; o < ix->nb; o++) {
+        size_t b = keys[o].b, k0 = b * SLOPE_BLOCK;
+        size_t k1 = k0 + SLOPE_BLOCK < r->slope_count ? k0 + SLOPE_BLOCK : r->slope_count;
+        slope_block *bl = &ix->block[o];
+        bl->gmax = keys[o].g;
+        bl->count = (uint32_t)(k1 - k0);
+        for (int i = 0; i < 3; i++) bl->lo[i] = INFINITY, bl->hi[i] = -INFINITY; /* until _set */
+        for (size_t k = k0; k < k1; k++) {
+            ix->slot[k] = (uint32_t)(o * SLOPE_BLOCK + (k - k0));
+            ix->p[4 * (size_t)ix->slot[k] + 3] = r->g[r->slope_v[k]];
+        }
+    }
+    free(keys);
+    *out = ix;
+    return 0;
+}
+
+void fp_rig_slope_index_destroy(fp_rig_slope_index **ix)
+{
+    if (!ix || !*ix) return;
+    free((*ix)->block);
+    free((*ix)->p);
+    free((*ix)->slot);
+    free(*ix);
+    *ix = NULL;
+}
+
+/* Slope entry k takes vertex v's position in posed; its block's box grows to hold it. */
+static void slope_put(fp_rig_slope_index *ix, size_t k, const float *posed)
+{
+    uint32_t sl = ix->slot[k];
+    const float *q = &posed[3 * (size_t)ix->rig->slope_v[k]];
+    float *p = &ix->p[4 * (size_t)sl];
+    slope_block *bl = &ix->block[sl / SLOPE_BLOCK];
+    for (int i = 0; i < 3; i++) {
+        p[i] = q[i];
+        bl->lo[i] = q[i] < bl->lo[i] ? q[i] : bl->lo[i];
+        bl->hi[i] = q[i] > bl->hi[i] ? q[i] : bl->hi[i];
+    }
+}
+
+void fp_rig_slope_index_set(fp_rig_slope_index *ix, const float *posed)
+{
+    if (!ix || !posed) return;
+    for (size_t b = 0; b < ix->nb; b++)
+        for (int i = 0; i < 3; i++) ix->block[b].lo[i] = INFINITY, ix->block[b].hi[i] = -INFINITY;
+    for (size_t k = 0; k < ix->rig->slope_count; k++) slope_put(ix, k, posed);
+}
+
+void fp_rig_slope_index_update_ranges(fp_rig_slope_index *ix, const float *posed, const uint32_t *ranges,
+                                      size_t nranges)
+{
+    if (!ix || !posed || (nranges && !ranges)) return;
+    const fp_rig *r = ix->rig;
+    for (size_t j = 0; j < nranges; j++) {
+        uint64_t a = ranges[2 * j], e = a + ranges[2 * j + 1];
+        size_t lo = 0, hi = r->slope_count; /* the first slope vertex >= a */
+        while (lo < hi) {
+            size_t mid = lo + (hi - lo) / 2;
+            if (r->slope_v[mid] < a) lo = mid + 1;
+            else hi = mid;
+        }
+        for (size_t k = lo; k < r->slope_count && r->slope_v[k] < e; k++) slope_put(ix, k, posed);
+    }
+}
+
+double fp_rig_finger_limit_indexed(const fp_rig_slope_index *ix, const float start[3], double radius)
+{
+    const fp_rig *r = ix ? ix->rig : NULL;
+    if (!r || !start || !r->g || !(radius > 0)) return r && r->g ? r->ramp / 3 : 0;
+    double gmax = 0, r2 = radius * radius;
+    for (size_t b = 0; b < ix->nb; b++) {
+        const slope_block *bl = &ix->block[b];
+        if (bl->gmax <= gmax) break; /* this block and every later one: nothing steeper */
+        /* a lower bound of every vertex's squared distance below, in the same arithmetic
+         * (float differences, double squares): rounding is monotone */
+        double q = 0;
+        for (int i = 0; i < 3; i++) {
+            float d = start[i] < bl->lo[i] ? bl->lo[i] - start[i] : start[i] > bl->hi[i] ? start[i] - bl->hi[i] : 0.f;
+            q += (double)d * d;
+        }
+        if (!(q < r2)) continue;
+        const float *p = &ix->p[4 * b * SLOPE_BLOCK];
+        for (uint32_t k = 0; k < bl->count; k++, p += 4) {
+            if (p[3] <= gmax) continue;
+            double d0 = p[0] - start[0], d1 = p[1] - start[1], d2 = p[2] - start[2];
+            if (d0 * d0 + d1 * d1 + d2 * d2 < r2) gmax = p[3];
+        }
+    }
+    return gmax > 0 ? FP_RIG_FINGER_MARGIN / gmax : INFINITY;
+}
