@@ -59,11 +59,10 @@ void fp_reach_step_check(fp_reach_step *r, int64_t now_ns, const fp_hand_pose ha
                          const float tip[FP_HANDS][FP_FINGERS], bool engaged, double radius,
                          double mm_per_unit, const fp_engine_step *e, const fp_slog *log)
 {
+    /* the time since the last frame counts when hands were there at both ends */
     double dt = r->have_last ? (double)(now_ns - r->last_ns) * 1e-9 : 0.0;
-    if (!(dt > 0)) dt = 0; /* (time going backwards, NaN) */
+    if (!(dt > 0)) dt = 0; /* (time going backwards) */
     if (dt > FP_REACH_MAX_STEP_S) dt = FP_REACH_MAX_STEP_S;
-    r->last_ns = now_ns;
-    r->have_last = true;
     bool present = false;
     double nearest = INFINITY;
     for (int h = 0; h < FP_HANDS; h++) {
@@ -72,6 +71,8 @@ void fp_reach_step_check(fp_reach_step *r, int64_t now_ns, const fp_hand_pose ha
         for (int f = 0; f < FP_FINGERS; f++)
             if (tip[h][f] < nearest) nearest = tip[h][f];
     }
+    r->last_ns = now_ns;
+    r->have_last = present;
     if (engaged || nearest <= FP_REACH_NEAR * radius) { /* near: a new stretch begins */
         r->away_s = 0;
         r->nearest = INFINITY;
@@ -88,7 +89,7 @@ void fp_reach_step_check(fp_reach_step *r, int64_t now_ns, const fp_hand_pose ha
     }
     if (nearest < r->nearest) r->nearest = nearest;
     r->away_s += dt;
-    if (r->away_s < FP_REACH_HINT_S) return;
+    if (r->away_s < FP_REACH_HINT_S - 1e-6) return; /* (a sum of frame steps: 180 x 1/60) */
     r->warned = true;
     r->hints++;
     double mm = mm_per_unit > 0 ? mm_per_unit : 1.0;

@@ -8,7 +8,8 @@
  *    the calibration is refitted from it before the poses are built: from the hands' first
  *    frame, then refined, never while a gesture is engaged. One info line (source
  *    "session") says when the hands were first placed.
- *  - The hint: when hands have been present for FP_REACH_HINT_S seconds (frame time) and no
+ *  - The hint: when hands have been present for FP_REACH_HINT_S seconds (frame time: the
+ *    steps between consecutive frames that both had a hand, each at most 0.25 s) and no
  *    fingertip came within FP_REACH_NEAR x the support radius of the face (the anchored
  *    mapping's default engage distance; fingertip-to-surface distances as the mapping gets
  *    them) and the mapping engaged nothing, one warning (source "session") says how near the
@@ -53,7 +54,7 @@ typedef struct fp_reach_step {
     double away_s;                 /* seconds with hands present and none near, since near */
     double nearest;                /* mesh units: the nearest fingertip over those seconds */
     int64_t last_ns;               /* the last frame's time */
-    bool have_last;
+    bool have_last;                /* ... and it had a hand */
     bool warned;                   /* the hint was said for this stretch */
     unsigned long hints;           /* hints said so far */
 } fp_reach_step;
@@ -76,7 +77,7 @@ void fp_reach_step_place(fp_reach_step *r, fp_pose_state *p, bool engaged, const
                          const fp_slog *log);
 
 /** After the mapping ran: the hint's bookkeeping for the frame at now_ns (the frame clock;
- *  a step between frames counts at most 0.25 s). hands: the frame's poses (mesh units);
+ *  the step from the last frame counts when both had a hand, at most 0.25 s). hands: the frame's poses (mesh units);
  *  tip: the fingertip distances the mapping got (mesh units, +INFINITY beyond its reach);
  *  engaged: the mapping's control set is active; radius: the support radius (mesh units);
  *  mm_per_unit: the mesh's unit; e: the engine, asked the nearest surface without a bound
