@@ -7,6 +7,7 @@
 #include <string.h>
 
 #define FP_REACH_MAX_STEP_S 0.25 /* a gap between frames counts at most this much */
+#define FP_REACH_FAR_EVERY_NS 100000000 /* the unbounded nearest query: at most 10 a second */
 
 int fp_reach_step_init(fp_reach_step *r, fp_reach_placement how)
 {
@@ -80,7 +81,13 @@ void fp_reach_step_check(fp_reach_step *r, int64_t now_ns, const fp_hand_pose ha
         return;
     }
     if (!present || r->warned) return;
-    if (!isfinite(nearest) && e) { /* beyond the tip distances' reach: how far, unbounded */
+    r->away_s += dt;
+    bool due = r->away_s >= FP_REACH_HINT_S - 1e-6; /* (a sum of frame steps: 180 x 1/60) */
+    /* beyond the tip distances' reach: how far, unbounded (a tree search; throttled, and
+     * always on the hint's frame) */
+    if (!isfinite(nearest) && e && (due || !r->far_asked || now_ns - r->far_ns >= FP_REACH_FAR_EVERY_NS)) {
+        r->far_asked = true;
+        r->far_ns = now_ns;
         float d[FP_HANDS][FP_FINGERS];
         fp_engine_step_tip_distances(e, hands, INFINITY, d);
         for (int h = 0; h < FP_HANDS; h++)
@@ -88,8 +95,7 @@ void fp_reach_step_check(fp_reach_step *r, int64_t now_ns, const fp_hand_pose ha
                 if (d[h][f] < nearest) nearest = d[h][f];
     }
     if (nearest < r->nearest) r->nearest = nearest;
-    r->away_s += dt;
-    if (r->away_s < FP_REACH_HINT_S - 1e-6) return; /* (a sum of frame steps: 180 x 1/60) */
+    if (!due) return;
     r->warned = true;
     r->hints++;
     double mm = mm_per_unit > 0 ? mm_per_unit : 1.0;

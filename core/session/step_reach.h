@@ -56,6 +56,8 @@ typedef struct fp_reach_step {
     int64_t last_ns;               /* the last frame's time */
     bool have_last;                /* ... and it had a hand */
     bool warned;                   /* the hint was said for this stretch */
+    bool far_asked;                /* the unbounded nearest query ran ... */
+    int64_t far_ns;                /* ... last at this frame time */
     unsigned long hints;           /* hints said so far */
 } fp_reach_step;
 
@@ -81,8 +83,9 @@ void fp_reach_step_place(fp_reach_step *r, fp_pose_state *p, bool engaged, const
  *  tip: the fingertip distances the mapping got (mesh units, +INFINITY beyond its reach);
  *  engaged: the mapping's control set is active; radius: the support radius (mesh units);
  *  mm_per_unit: the mesh's unit; e: the engine, asked the nearest surface without a bound
- *  while every fingertip is beyond the tip distances' reach (fp_engine_step_tip_distances),
- *  so that the hint says how far. The hint goes to log (FP_LOG_WARNING, "session"). */
+ *  while every fingertip is beyond the tip distances' reach (fp_engine_step_tip_distances;
+ *  at most every 0.1 s of frame time, and on the hint's frame), so that the hint says how
+ *  far. The hint goes to log (FP_LOG_WARNING, "session"). */
 void fp_reach_step_check(fp_reach_step *r, int64_t now_ns, const fp_hand_pose hands[FP_HANDS],
                          const float tip[FP_HANDS][FP_FINGERS], bool engaged, double radius,
                          double mm_per_unit, const fp_engine_step *e, const fp_slog *log);
