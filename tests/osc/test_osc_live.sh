@@ -4,13 +4,11 @@
 # on 127.0.0.1 at the recorded pace.
 #
 #  1. The grab recording deforms the ICT face (anchored) as `run --input replay:` does: the
-#     median over 3 runs of the vertices moved within 20% of the replay's. The max
-#     displacement is printed and held within 50%; within 20% only with FP_OSC_STRICT_MAX=1:
-#     the anchored mapping's largest displacement swings with millimetres of placement and
-#     with the frames' phase against the hand's samples (the replay itself gives 0.218-0.239
-#     mesh units at 50-120 frames a second; placed as it arrives, on the recording's clock,
-#     0.264 at 60; over OSC under load 0.17-0.34), while the vertices moved stay within 6%.
-#     Make it strict when the anchored mapping grabs the skin (start points on the surface).
+#     medians over 3 runs of the vertices moved and of the max displacement within 20% of
+#     the replay's (the median: a single run's frames fall at another phase against the
+#     hand's samples, and the sender's pace and the machine's load move them; measured at
+#     load 10 on 2 cores, 8 single runs: 1183-1301 vertices moved and 5.66-7.35 mm against
+#     the replay's 1287 and 6.17 mm).
 #  2. A hand held still (grab's first row, 6 s) hovers in front of the face, never reaching
 #     it: the run says so (the hint, source "session") within 5 s of the sender starting.
 #
@@ -30,8 +28,8 @@ cleanup() { [ -n "$runpid" ] && kill "$runpid" 2>/dev/null; rm -rf "$tmp"; }
 trap cleanup EXIT
 fail() { echo "FAIL: $*"; exit 1; }
 
-# "moved max" from a run's summary line
-summary() { sed -n 's/.*vertices moved \([0-9]*\) of [0-9]*; displacement mean [^ ]* max \([^ ]*\) .*/\1 \2/p' "$1"; }
+# "moved max" from a run's summary line (max displacement in mm)
+summary() { sed -n 's/.*vertices moved \([0-9]*\) of [0-9]*; displacement mean [^;]* max \([0-9.e+-]*\) mm.*/\1 \2/p' "$1"; }
 
 # osc_run NAME CSV DURATION: `run --input osc:PORT` for DURATION s in the background, the
 # sender started once the run listens; sets runpid, t_send (ns) and fills $tmp/NAME.{out,err}
@@ -75,14 +73,14 @@ osc_wait() {
     >"$tmp/replay.out" 2>"$tmp/replay.err" || { cat "$tmp/replay.err"; fail "the replay run failed"; }
 read -r r_moved r_max < <(summary "$tmp/replay.out")
 [ -n "${r_moved:-}" ] && [ "$r_moved" -gt 0 ] || fail "the replay moved nothing"
-echo "replay: $r_moved vertices moved, max $r_max mesh units"
+echo "replay: $r_moved vertices moved, max $r_max mm"
 moved=() maxes=()
 for k in 1 2 3; do
     osc_run "grab$k" "$grab" 5
     osc_wait "grab$k"
     read -r m x < <(summary "$tmp/grab$k.out")
     [ -n "${m:-}" ] || { cat "$tmp/grab$k.out"; fail "no summary"; }
-    echo "osc run $k: $m vertices moved, max $x mesh units"
+    echo "osc run $k: $m vertices moved, max $x mm"
     grep -q "session: hands placed life-size" "$tmp/grab$k.err" || { cat "$tmp/grab$k.err"; fail "no placement line"; }
     ! grep -q "no fingertip came within" "$tmp/grab$k.err" || { cat "$tmp/grab$k.err"; fail "a hint for a hand that reaches"; }
     [ "$m" -gt 0 ] || { cat "$tmp/grab$k.err"; fail "osc run $k: the face did not deform"; }
@@ -94,10 +92,8 @@ med_max=$(printf '%s\n' "${maxes[@]}" | sort -g | sed -n 2p)
 echo "osc median: $med_moved vertices moved, max $med_max (replay: $r_moved, $r_max)"
 awk -v a="$med_moved" -v b="$r_moved" 'BEGIN { exit !(a >= 0.8 * b && a <= 1.2 * b) }' ||
     fail "vertices moved over OSC ($med_moved) not within 20% of the replay's ($r_moved)"
-tol=0.5
-[ "${FP_OSC_STRICT_MAX:-0}" = 1 ] && tol=0.2
-awk -v a="$med_max" -v b="$r_max" -v t="$tol" 'BEGIN { exit !(a >= (1 - t) * b && a <= (1 + t) * b) }' ||
-    fail "max displacement over OSC ($med_max) not within $tol of the replay's ($r_max)"
+awk -v a="$med_max" -v b="$r_max" 'BEGIN { exit !(a >= 0.8 * b && a <= 1.2 * b) }' ||
+    fail "max displacement over OSC ($med_max mm) not within 20% of the replay's ($r_max mm)"
 
 # ---- 2. a hand that never reaches: the hint within 5 s --------------------------------------
 awk -F, -v OFS=, 'NR == 1 { print; next }
