@@ -76,7 +76,7 @@ typedef struct fp_session_options {
                                                        at scale 1 / mm_per_unit; where no
                                                        input states one, estimated from the
                                                        joints as the hands arrive and refined
-                                                       as they run: step_reach.h) */
+                                                       as they run: step_arrive.h) */
     double mm_per_unit;                             /* the mesh's unit in mm; 0: detect it
                                                        from the head (core/pose/fp_head.h).
                                                        The --mm-per-unit option sets it, and

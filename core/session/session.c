@@ -117,7 +117,7 @@ static void on_event(void *user, size_t input, const fp_event *ev)
 {
     fp_session *s = user;
     fp_pose_take_event_filtered(&s->pose, ev, input < s->input_count ? &s->inputs[input].filter : NULL);
-    fp_reach_step_event(&s->reach, ev); /* (raw: the placement's estimate is robust anyway) */
+    fp_arrive_step_event(&s->arrive, ev); /* (raw: the placement's estimate is robust anyway) */
     fp_record_step_event(&s->record, ev);
 }
 
@@ -244,7 +244,7 @@ static void step_frame(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     FP_STAGE_END(FP_STAGE_EVENTS);
     /* 2: hand poses in mesh units, at the frame's time (a live input's placement refined
      * first). */
-    fp_reach_step_place(&s->reach, &s->pose, s->engaged, &s->head, &s->log);
+    fp_arrive_step_place(&s->arrive, &s->pose, s->engaged, &s->head, &s->log);
     fp_pose_build_at(&s->pose, now_ns);
     FP_STAGE_END(FP_STAGE_HANDS);
 
@@ -279,7 +279,7 @@ static void step_frame(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     FP_STAGE_END(FP_STAGE_DISTANCES);
     fp_mapping_step_run(&s->mapping_step, s->mapping, s->mapping_name, &in, &s->cs, &s->log);
     fp_mapping_host_drain_log(&s->mapping_host); /* (one load when it logged nothing) */
-    fp_reach_step_check(&s->reach, now_ns, in.hands, in.tip_distance, s->cs.active, s->radius,
+    fp_arrive_step_check(&s->arrive, now_ns, in.hands, in.tip_distance, s->cs.active, s->radius,
                         s->head.mm_per_unit, &s->engine, &s->log);
     st->engaged = s->cs.intents & FP_INTENT_ENGAGE;
     if (s->cs.intents & FP_INTENT_CANCEL) {
@@ -514,7 +514,7 @@ void fp_session_destroy(fp_session **sp)
     fp_history_free(&s->history);
     fp_intents_free(&s->intents);
     fp_record_step_free(&s->record);
-    fp_reach_step_free(&s->reach);
+    fp_arrive_step_free(&s->arrive);
     free(s->loaded);
     free(s->base);
     free(s->deformed);

@@ -1,5 +1,5 @@
 /*
- * step_reach.h: hands that arrive, the session's side (issue 51). Two jobs around step 2 of
+ * step_arrive.h: hands that arrive, the session's side (issue 51). Two jobs around step 2 of
  * the frame (docs/architecture.md):
  *
  *  - Placement as it runs: where no calibration is given and no input states its workspace
@@ -8,19 +8,19 @@
  *    the calibration is refitted from it before the poses are built: from the hands' first
  *    frame, then refined, never while a gesture is engaged. One info line (source
  *    "session") says when the hands were first placed.
- *  - The hint: when hands have been present for FP_REACH_HINT_S seconds (frame time: the
+ *  - The hint: when hands have been present for FP_ARRIVE_HINT_S seconds (frame time: the
  *    steps between consecutive frames that both had a hand, each at most 0.25 s) and no
- *    fingertip came within FP_REACH_NEAR x the support radius of the face (the anchored
+ *    fingertip came within FP_ARRIVE_NEAR x the support radius of the face (the anchored
  *    mapping's default engage distance; fingertip-to-surface distances as the mapping gets
  *    them) and the mapping engaged nothing, one warning (source "session") says how near the
  *    nearest fingertip came, in mm, how the hands are placed, and to calibrate. It is said
  *    again only after a fingertip came near (or the mapping engaged) and the hands stayed away
  *    as long once more.
  *
- * Threads: the session thread. Allocation only in fp_reach_step_init.
+ * Threads: the session thread. Allocation only in fp_arrive_step_init.
  */
-#ifndef FP_STEP_REACH_H
-#define FP_STEP_REACH_H
+#ifndef FP_STEP_ARRIVE_H
+#define FP_STEP_ARRIVE_H
 
 #include "fp_head.h"
 #include "fp_pose.h"
@@ -37,19 +37,19 @@
 extern "C" {
 #endif
 
-#define FP_REACH_HINT_S 3.0   /* seconds of hands present and away before the hint */
-#define FP_REACH_NEAR 0.5     /* "near": a fingertip within this x radius of the face */
+#define FP_ARRIVE_HINT_S 3.0   /* seconds of hands present and away before the hint */
+#define FP_ARRIVE_NEAR 0.5     /* "near": a fingertip within this x radius of the face */
 
 /** How the hands are placed (what the hint says). */
-typedef enum fp_reach_placement {
-    FP_REACH_PLACED_AUTO = 0,      /* estimated as they run (fp_pose_auto) */
-    FP_REACH_PLACED_WORKSPACE,     /* from the workspace an input states (a recording, box=) */
-    FP_REACH_PLACED_CALIBRATION    /* a calibration given (--calibration, a take's) */
-} fp_reach_placement;
+typedef enum fp_arrive_placement {
+    FP_ARRIVE_PLACED_AUTO = 0,      /* estimated as they run (fp_pose_auto) */
+    FP_ARRIVE_PLACED_WORKSPACE,     /* from the workspace an input states (a recording, box=) */
+    FP_ARRIVE_PLACED_CALIBRATION    /* a calibration given (--calibration, a take's) */
+} fp_arrive_placement;
 
-typedef struct fp_reach_step {
-    fp_reach_placement how;
-    fp_pose_auto *place;           /* FP_REACH_PLACED_AUTO: the estimator; else NULL */
+typedef struct fp_arrive_step {
+    fp_arrive_placement how;
+    fp_pose_auto *place;           /* FP_ARRIVE_PLACED_AUTO: the estimator; else NULL */
     bool placed_said;              /* the first placement's info line was sent */
     double away_s;                 /* seconds with hands present and none near, since near */
     double nearest;                /* mesh units: the nearest fingertip over those seconds */
@@ -59,23 +59,23 @@ typedef struct fp_reach_step {
     bool far_asked;                /* the unbounded nearest query ran ... */
     int64_t far_ns;                /* ... last at this frame time */
     unsigned long hints;           /* hints said so far */
-} fp_reach_step;
+} fp_arrive_step;
 
-/** Start: how the hands are placed; FP_REACH_PLACED_AUTO makes the estimator. Returns 0 or
- *  -ENOMEM (r then holds nothing to free, and fp_reach_step_free is still safe). */
-int fp_reach_step_init(fp_reach_step *r, fp_reach_placement how);
+/** Start: how the hands are placed; FP_ARRIVE_PLACED_AUTO makes the estimator. Returns 0 or
+ *  -ENOMEM (r then holds nothing to free, and fp_arrive_step_free is still safe). */
+int fp_arrive_step_init(fp_arrive_step *r, fp_arrive_placement how);
 
 /** Free the estimator; r may be zeroed or initialised. */
-void fp_reach_step_free(fp_reach_step *r);
+void fp_arrive_step_free(fp_arrive_step *r);
 
 /** A drained event (the session's event callback): joint positions feed the estimator when
  *  there is one; nothing otherwise. */
-void fp_reach_step_event(fp_reach_step *r, const fp_event *ev);
+void fp_arrive_step_event(fp_arrive_step *r, const fp_event *ev);
 
 /** Before fp_pose_build: with the estimator, refit p->calib when due (fp_pose_auto_refit;
  *  engaged: the last frame's gesture is engaged, nothing moves), at head's mm_per_unit and
  *  head box. The first placement is said once on log (FP_LOG_INFO, "session"). */
-void fp_reach_step_place(fp_reach_step *r, fp_pose_state *p, bool engaged, const fp_head *head,
+void fp_arrive_step_place(fp_arrive_step *r, fp_pose_state *p, bool engaged, const fp_head *head,
                          const fp_slog *log);
 
 /** After the mapping ran: the hint's bookkeeping for the frame at now_ns (the frame clock;
@@ -86,7 +86,7 @@ void fp_reach_step_place(fp_reach_step *r, fp_pose_state *p, bool engaged, const
  *  while every fingertip is beyond the tip distances' reach (fp_engine_step_tip_distances;
  *  at most every 0.1 s of frame time, and on the hint's frame), so that the hint says how
  *  far. The hint goes to log (FP_LOG_WARNING, "session"). */
-void fp_reach_step_check(fp_reach_step *r, int64_t now_ns, const fp_hand_pose hands[FP_HANDS],
+void fp_arrive_step_check(fp_arrive_step *r, int64_t now_ns, const fp_hand_pose hands[FP_HANDS],
                          const float tip[FP_HANDS][FP_FINGERS], bool engaged, double radius,
                          double mm_per_unit, const fp_engine_step *e, const fp_slog *log);
 

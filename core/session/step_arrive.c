@@ -1,31 +1,31 @@
 /* Hands that arrive: placement as the hands run, and the hint when they never reach the face
- * (step_reach.h). */
-#include "step_reach.h"
+ * (step_arrive.h). */
+#include "step_arrive.h"
 
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
 
-#define FP_REACH_MAX_STEP_S 0.25 /* a gap between frames counts at most this much */
-#define FP_REACH_FAR_EVERY_NS 100000000 /* the unbounded nearest query: at most 10 a second */
+#define FP_ARRIVE_MAX_STEP_S 0.25 /* a gap between frames counts at most this much */
+#define FP_ARRIVE_FAR_EVERY_NS 100000000 /* the unbounded nearest query: at most 10 a second */
 
-int fp_reach_step_init(fp_reach_step *r, fp_reach_placement how)
+int fp_arrive_step_init(fp_arrive_step *r, fp_arrive_placement how)
 {
     memset(r, 0, sizeof *r);
     r->how = how;
     r->nearest = INFINITY;
-    if (how == FP_REACH_PLACED_AUTO) return fp_pose_auto_create(&r->place);
+    if (how == FP_ARRIVE_PLACED_AUTO) return fp_pose_auto_create(&r->place);
     return 0;
 }
 
-void fp_reach_step_free(fp_reach_step *r) { fp_pose_auto_destroy(&r->place); }
+void fp_arrive_step_free(fp_arrive_step *r) { fp_pose_auto_destroy(&r->place); }
 
-void fp_reach_step_event(fp_reach_step *r, const fp_event *ev)
+void fp_arrive_step_event(fp_arrive_step *r, const fp_event *ev)
 {
     if (r->place) fp_pose_auto_take(r->place, ev);
 }
 
-void fp_reach_step_place(fp_reach_step *r, fp_pose_state *p, bool engaged, const fp_head *head,
+void fp_arrive_step_place(fp_arrive_step *r, fp_pose_state *p, bool engaged, const fp_head *head,
                          const fp_slog *log)
 {
     if (!r->place || !fp_pose_auto_refit(r->place, p, engaged, head->mm_per_unit, head->min, head->max))
@@ -42,13 +42,13 @@ void fp_reach_step_place(fp_reach_step *r, fp_pose_state *p, bool engaged, const
 }
 
 /* What the hint says of the placement. */
-static const char *placed_words(fp_reach_placement how)
+static const char *placed_words(fp_arrive_placement how)
 {
     switch (how) {
-    case FP_REACH_PLACED_WORKSPACE:
+    case FP_ARRIVE_PLACED_WORKSPACE:
         return "The workspace the input states places them (a recording's range, osc's box=): "
                "state the volume your hands use";
-    case FP_REACH_PLACED_CALIBRATION:
+    case FP_ARRIVE_PLACED_CALIBRATION:
         return "The calibration places them: make it again where you stand";
     default:
         return "They are placed from their own range (the front of where they went at the nose "
@@ -56,14 +56,14 @@ static const char *placed_words(fp_reach_placement how)
     }
 }
 
-void fp_reach_step_check(fp_reach_step *r, int64_t now_ns, const fp_hand_pose hands[FP_HANDS],
+void fp_arrive_step_check(fp_arrive_step *r, int64_t now_ns, const fp_hand_pose hands[FP_HANDS],
                          const float tip[FP_HANDS][FP_FINGERS], bool engaged, double radius,
                          double mm_per_unit, const fp_engine_step *e, const fp_slog *log)
 {
     /* the time since the last frame counts when hands were there at both ends */
     double dt = r->have_last ? (double)(now_ns - r->last_ns) * 1e-9 : 0.0;
     if (!(dt > 0)) dt = 0; /* (time going backwards) */
-    if (dt > FP_REACH_MAX_STEP_S) dt = FP_REACH_MAX_STEP_S;
+    if (dt > FP_ARRIVE_MAX_STEP_S) dt = FP_ARRIVE_MAX_STEP_S;
     bool present = false;
     double nearest = INFINITY;
     for (int h = 0; h < FP_HANDS; h++) {
@@ -74,7 +74,7 @@ void fp_reach_step_check(fp_reach_step *r, int64_t now_ns, const fp_hand_pose ha
     }
     r->last_ns = now_ns;
     r->have_last = present;
-    if (engaged || nearest <= FP_REACH_NEAR * radius) { /* near: a new stretch begins */
+    if (engaged || nearest <= FP_ARRIVE_NEAR * radius) { /* near: a new stretch begins */
         r->away_s = 0;
         r->nearest = INFINITY;
         r->warned = false;
@@ -82,10 +82,10 @@ void fp_reach_step_check(fp_reach_step *r, int64_t now_ns, const fp_hand_pose ha
     }
     if (!present || r->warned) return;
     r->away_s += dt;
-    bool due = r->away_s >= FP_REACH_HINT_S - 1e-6; /* (a sum of frame steps: 180 x 1/60) */
+    bool due = r->away_s >= FP_ARRIVE_HINT_S - 1e-6; /* (a sum of frame steps: 180 x 1/60) */
     /* beyond the tip distances' reach: how far, unbounded (a tree search; throttled, and
      * always on the hint's frame) */
-    if (!isfinite(nearest) && e && (due || !r->far_asked || now_ns - r->far_ns >= FP_REACH_FAR_EVERY_NS)) {
+    if (!isfinite(nearest) && e && (due || !r->far_asked || now_ns - r->far_ns >= FP_ARRIVE_FAR_EVERY_NS)) {
         r->far_asked = true;
         r->far_ns = now_ns;
         float d[FP_HANDS][FP_FINGERS];
@@ -107,5 +107,5 @@ void fp_reach_step_check(fp_reach_step *r, int64_t now_ns, const fp_hand_pose ha
                    "(half the support radius: where the anchored mapping grabs); the nearest "
                    "stayed %s away. %s, or calibrate: `facepuppet calibrate --mesh FACE --input "
                    "SPEC --out cal.json`, then --calibration cal.json (docs/calibration.md)",
-                   r->away_s, FP_REACH_NEAR * radius * mm, far, placed_words(r->how));
+                   r->away_s, FP_ARRIVE_NEAR * radius * mm, far, placed_words(r->how));
 }
