@@ -73,7 +73,10 @@ typedef struct fp_session_options {
     double hand_size;                               /* 0 or 1: mean adult hand */
     const fp_calibration *calibration;              /* NULL: the life-size calibration (the
                                                        inputs' workspace in front of the face
-                                                       at scale 1 / mm_per_unit) */
+                                                       at scale 1 / mm_per_unit; where no
+                                                       input states one, estimated from the
+                                                       joints as the hands arrive and refined
+                                                       as they run: step_arrive.h) */
     double mm_per_unit;                             /* the mesh's unit in mm; 0: detect it
                                                        from the head (core/pose/fp_head.h).
                                                        The --mm-per-unit option sets it, and

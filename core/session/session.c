@@ -117,6 +117,7 @@ static void on_event(void *user, size_t input, const fp_event *ev)
 {
     fp_session *s = user;
     fp_pose_take_event_filtered(&s->pose, ev, input < s->input_count ? &s->inputs[input].filter : NULL);
+    fp_arrive_step_event(&s->arrive, ev); /* (raw: the placement's estimate is robust anyway) */
     fp_record_step_event(&s->record, ev);
 }
 
@@ -241,7 +242,9 @@ static void step_frame(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     for (size_t i = 0; i < s->input_count; i++) /* (one load each when none logged) */
         fp_input_instance_drain_log(&s->inputs[i]);
     FP_STAGE_END(FP_STAGE_EVENTS);
-    /* 2: hand poses in mesh units, at the frame's time. */
+    /* 2: hand poses in mesh units, at the frame's time (a live input's placement refined
+     * first). */
+    fp_arrive_step_place(&s->arrive, &s->pose, s->engaged, &s->head, &s->log);
     fp_pose_build_at(&s->pose, now_ns);
     FP_STAGE_END(FP_STAGE_HANDS);
 
@@ -276,6 +279,8 @@ static void step_frame(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     FP_STAGE_END(FP_STAGE_DISTANCES);
     fp_mapping_step_run(&s->mapping_step, s->mapping, s->mapping_name, &in, &s->cs, &s->log);
     fp_mapping_host_drain_log(&s->mapping_host); /* (one load when it logged nothing) */
+    fp_arrive_step_check(&s->arrive, now_ns, in.hands, in.tip_distance, s->cs.active, s->radius,
+                        s->head.mm_per_unit, &s->engine, &s->log);
     st->engaged = s->cs.intents & FP_INTENT_ENGAGE;
     if (s->cs.intents & FP_INTENT_CANCEL) {
         st->cancelled = true;
@@ -509,6 +514,7 @@ void fp_session_destroy(fp_session **sp)
     fp_history_free(&s->history);
     fp_intents_free(&s->intents);
     fp_record_step_free(&s->record);
+    fp_arrive_step_free(&s->arrive);
     free(s->loaded);
     free(s->base);
     free(s->deformed);

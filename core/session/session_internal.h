@@ -24,6 +24,7 @@
 #include "step_contact.h"
 #include "step_engine.h"
 #include "step_mapping.h"
+#include "step_arrive.h"
 #include "step_record.h"
 #include "step_rig.h"
 
@@ -68,6 +69,7 @@ struct fp_session {
     fp_skin_reach_gesture gesture_reach; /* the gesture's reach so far (skin_reach.h) */
     fp_history history;           /* step 6 */
     fp_record_step record;        /* step 7 */
+    fp_arrive_step arrive;         /* placement as the hands run, and the hint (step_arrive.h) */
 
     fp_control_set cs;            /* its arrays are the mapping step's (with canaries) */
 

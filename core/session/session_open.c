@@ -28,12 +28,18 @@ static int calibrate(fp_session *s, const fp_session_options *opt, char *err, si
         s->head.mm_per_unit = 1.0 / c.scale;
         s->head.method = FP_HEAD_GIVEN;
         snprintf(s->head.how, sizeof s->head.how, "from the calibration");
+        fp_arrive_step_init(&s->arrive, FP_ARRIVE_PLACED_CALIBRATION); /* (allocates nothing) */
     } else {
         fp_input *ins[FP_SESSION_MAX_INPUTS];
         for (size_t i = 0; i < s->input_count; i++) ins[i] = s->inputs[i].input;
         float wmin[3], wmax[3];
-        if (!fp_pose_inputs_workspace(ins, s->input_count, wmin, wmax)) fp_pose_default_workspace(wmin, wmax);
+        bool stated = fp_pose_inputs_workspace(ins, s->input_count, wmin, wmax);
+        if (!stated) fp_pose_default_workspace(wmin, wmax); /* until the hands arrive */
         fp_pose_fit_workspace(&c, s->head.mm_per_unit, wmin, wmax, s->head.min, s->head.max);
+        if (fp_arrive_step_init(&s->arrive, stated ? FP_ARRIVE_PLACED_WORKSPACE : FP_ARRIVE_PLACED_AUTO)) {
+            snprintf(err, errlen, "session: out of memory for the hands' placement");
+            return -ENOMEM;
+        }
     }
     s->pose.calib = c;
     fp_pose_place_gloves(&s->pose, s->loaded, s->n, &s->head);

@@ -33,12 +33,13 @@ typedef struct replay {
     replay_recording rec;
     double speed;
     bool loop, fast;
+    bool workspace;          /* state the recording's range (FP_EXT_WORKSPACE); workspace=0: not */
 
     fp_pacer pacer;          /* the thread, waits stop() interrupts, lossless pushes (fp_pacer.h) */
 } replay;
 
 static const char usage_text[] =
-    "replay:FILE[,speed=X][,loop=1][,fast=1][,hands=left|right|both]\n"
+    "replay:FILE[,speed=X][,loop=1][,fast=1][,hands=left|right|both][,workspace=0]\n"
     "  Replays a recording as live input, at the recorded pace (timestamp_us or time_ns).\n"
     "  FILE is detected by its header line:\n"
     "    Leap joint-positions CSV (*_joints_mm.csv): per hand and row, joint positions in the\n"
@@ -51,6 +52,9 @@ static const char usage_text[] =
     "  loop=1   start over at the end; event times keep increasing (default 0)\n"
     "  fast=1   as fast as possible (a full queue is always retried, never dropped)\n"
     "  hands=H  left, right or both (default both)\n"
+    "  workspace=0  keep the recording's range to itself: the hands are placed as they\n"
+    "           arrive, as a live tracker's (docs/calibration.md; default 1: placed from the\n"
+    "           whole recording's range in advance)\n"
     "  Event times are the recording's own clock (the host clock at start + the sample's\n"
     "  time), whatever the speed; speed and fast only change the pacing. Without loop, the replay ends\n"
     "  with an end-of-stream status. A malformed row fails at creation (FILE:LINE:COLUMN); a\n"
@@ -220,8 +224,7 @@ static const fp_input_recording recording_ext = {.get = replay_recording_info};
 
 static const void *replay_get_extension(const fp_input *self, const char *id)
 {
-    (void)self;
-    if (!strcmp(id, FP_EXT_WORKSPACE)) return &workspace_ext;
+    if (!strcmp(id, FP_EXT_WORKSPACE)) return ((const replay *)self->plugin_data)->workspace ? &workspace_ext : NULL;
     if (!strcmp(id, FP_EXT_RECORDING_INFO)) return &recording_ext;
     return NULL;
 }
@@ -240,7 +243,7 @@ static int replay_create(const fp_host *host, const char *arg, const fp_param *p
         return -EINVAL;
     }
     double speed = 1.0;
-    bool loop = false, fast = false;
+    bool loop = false, fast = false, workspace = true;
     int hands = REPLAY_HAND_BOTH;
     for (size_t i = 0; i < nparams; i++) {
         const fp_param *p = &params[i];
@@ -255,6 +258,8 @@ static int replay_create(const fp_host *host, const char *arg, const fp_param *p
             if (parse_bool(&q, &loop, err, errlen)) return -EINVAL;
         } else if (strcmp(q.key, "fast") == 0) {
             if (parse_bool(&q, &fast, err, errlen)) return -EINVAL;
+        } else if (strcmp(q.key, "workspace") == 0) {
+            if (parse_bool(&q, &workspace, err, errlen)) return -EINVAL;
         } else if (strcmp(q.key, "hands") == 0) {
             hands = (int)fp_parse_hands(v);
             if (!hands) {
@@ -262,7 +267,7 @@ static int replay_create(const fp_host *host, const char *arg, const fp_param *p
                 return -EINVAL;
             }
         } else {
-            snprintf(err, errlen, "replay: unknown key \"%s\" (known: speed, loop, fast, hands)",
+            snprintf(err, errlen, "replay: unknown key \"%s\" (known: speed, loop, fast, hands, workspace)",
                      q.key);
             return -EINVAL;
         }
@@ -291,6 +296,7 @@ static int replay_create(const fp_host *host, const char *arg, const fp_param *p
     r->speed = speed;
     r->loop = loop;
     r->fast = fast;
+    r->workspace = workspace;
     r->input = (fp_input){.size = sizeof(fp_input), .plugin_data = r, .start = replay_start,
                           .stop = replay_stop, .destroy = replay_destroy,
                           .get_extension = replay_get_extension};
@@ -315,6 +321,9 @@ static const fp_param_info replay_keys[] = {
      .description = "as fast as possible, retrying when the queue is full"},
     {.name = "hands", .type = FP_PARAM_ENUM, .default_value = "both", .choices = "left|right|both",
      .description = "which hands to replay"},
+    {.name = "workspace", .type = FP_PARAM_BOOL, .min = 0, .max = 1, .default_value = "1",
+     .description = "state the recording's range, so the hands are placed from it in advance (0: "
+                    "placed as they arrive, as a live tracker's)"},
     {.name = NULL},
 };
 

@@ -32,9 +32,15 @@
  *    over finger_mm (70.9 mm, the mean adult of Buryanov & Kotiuk 2010), so a performer with
  *    a larger hand sets finger_mm to theirs.
  *  - Engage (the pose becomes the neutral): the engage intent (pedal, key E), or with auto=1
- *    the hand held still (every fingertip and the palm within still_mm of where they were)
- *    for still seconds (0: at first sight). Commit (pedal, key C) folds the shape into the
- *    base and ends the gesture; cancel (key X) drops it. Both set jaw.open back to neutral.
+ *    (the default) the hand's first frame (still=0, the default: as a hand puppet, the
+ *    puppet follows the hand from the moment it arrives, its pose then the zero), or, with
+ *    still=S > 0, the hand held still (every fingertip and the palm within still_mm of where
+ *    they were) for S seconds. Real hands are seldom that still: the four Leap recordings'
+ *    hands never stay within 10 mm for 0.5 s, so that rule (the default until issue 51)
+ *    never engaged on them. Commit (pedal, key C) folds the shape into the base and ends
+ *    the gesture; cancel (key X) drops it. Both set jaw.open back to neutral; with auto=1
+ *    and still=0 the next frame engages again with the hand's pose then as the zero (a
+ *    cancel re-zeroes the hand, a commit keeps the shape and continues from it).
  *  - Rest: when the hand disappears (the input reports it gone), hold=0 drops the shape
  *    (a cancel); hold=1 keeps the last control set and jaw.open, and the next engage (still
  *    hand or request) continues from the held shape with the hand's new pose as the zero. An
@@ -385,9 +391,10 @@ static const fp_param_info keys[KEY_COUNT + 1] = {
      .unit = "mm",
      .description = "the performer's middle finger, proximal + middle phalanx: the hand's scale"},
     {.name = "auto", .type = FP_PARAM_BOOL, .min = 0, .max = 1, .default_value = "1",
-     .description = "engage when the hand is held still"},
-    {.name = "still", .type = FP_PARAM_FLOAT, .min = 0, .max = 60, .default_value = "0.5",
-     .unit = "s", .description = "how long a still hand waits to engage"},
+     .description = "engage by itself: at the hand's first frame (still=0), or once it is held still"},
+    {.name = "still", .type = FP_PARAM_FLOAT, .min = 0, .max = 60, .default_value = "0",
+     .unit = "s",
+     .description = "how long the hand must be held still to engage (0: at first sight, that pose the zero)"},
     {.name = "still_mm", .type = FP_PARAM_FLOAT, .min = 0, .max = 200, .default_value = "10",
      .unit = "mm", .description = "a hand is still while its tips and palm stay this close"},
     {.name = "hold", .type = FP_PARAM_BOOL, .min = 0, .max = 1, .default_value = "0",
@@ -548,11 +555,13 @@ static const fp_mapping_factory factory = {
         "    brow_outer_right, middle -> brow_inner_right, ring -> brow_inner_left, little ->\n"
         "    brow_outer_left (hand=left swaps _left and _right); targets=I/M/R/L names any\n"
         "    landmarks ('+' joins two, '-' none).\n"
-        "  Engage (the neutral hand): pedal or key E, or auto=1 a hand still (within still_mm)\n"
-        "  for still seconds (0: at once). Commit: pedal or key C; cancel: key X. hold=1 keeps\n"
-        "  the face posed while the hand is gone and continues from it at the next engage (an\n"
-        "  engage request while engaged re-zeroes the hand); hold=0 drops it when the hand\n"
-        "  goes. Control vectors are clamped to clamp x R.",
+        "  Engage (the neutral hand): auto=1 (default) at the hand's first frame, its pose the\n"
+        "  zero (still=0, default), or once the hand is held still (within still_mm) for\n"
+        "  still=S seconds; pedal or key E (auto=0: only these). Commit: pedal or key C;\n"
+        "  cancel: key X; on the defaults the next frame engages again (X re-zeroes the hand).\n"
+        "  hold=1 keeps the face posed while the hand is gone and continues from it at the\n"
+        "  next engage (an engage request while engaged re-zeroes the hand); hold=0 drops it\n"
+        "  when the hand goes. Control vectors are clamped to clamp x R.",
     .create = create,
     .params = keys,
 };

@@ -266,15 +266,11 @@ static void thumb_curl(bool angles_only)
     assert_int_equal(open_onehand(&x, NULL, 0, true, err), 0);
     hand h = rest_hand(FP_HAND_RIGHT);
     put(&x, FP_HAND_RIGHT, &h, angles_only);
-    step(&x, 0);
-    assert_int_equal(x.rc, 0);
-    assert_false(x.cs.active);                 /* not engaged yet (auto waits 0.5 s) */
-    assert_float_equal(jaw(&x), 0.0, 0);       /* neutral is sent while idle */
-    step(&x, FP_INTENT_ENGAGE);
+    step(&x, 0);                               /* the defaults: engaged at first sight */
     assert_int_equal(x.rc, 0);
     assert_true(x.cs.active);
     assert_true(x.cs.intents & FP_INTENT_ENGAGE);
-    assert_float_equal(jaw(&x), 0.0, 0);
+    assert_float_equal(jaw(&x), 0.0, 0);       /* that pose is the zero */
     double last = 0;
     float mpj0 = h.a[FP_SENSOR_THUMB_MPJ], ij0 = h.a[FP_SENSOR_THUMB_IJ];
     for (int k = 1; k <= 30; k++) {
@@ -346,14 +342,11 @@ static void test_still_hand(void **state)
     h.a[FP_SENSOR_THUMB_IJ] = (float)(15 * DEG);
     for (int f = 0; f < 200; f++) {
         put(&x, FP_HAND_RIGHT, &h, false);
-        step(&x, f == 3 ? FP_INTENT_ENGAGE : 0);
+        step(&x, f == 3 ? FP_INTENT_ENGAGE : 0); /* (a request while engaged: nothing new) */
         assert_int_equal(x.rc, 0);
         assert_float_equal(jaw(&x), 0.0, 0);
-        if (f < 3) {
-            assert_false(x.cs.active);
-            continue;
-        }
-        assert_true(x.cs.active);
+        assert_true(x.cs.active);              /* engaged at first sight (the defaults) */
+        assert_int_equal(!!(x.cs.intents & FP_INTENT_ENGAGE), f == 0);
         assert_int_equal(x.cs.count, 5);
         assert_memory_equal(x.start, x.end, x.cs.count * sizeof x.start[0]);
     }
@@ -517,7 +510,8 @@ static void test_auto_still(void **state)
     (void)state;
     fx x;
     char err[1024];
-    assert_int_equal(open_onehand(&x, NULL, 0, true, err), 0);  /* still=0.5 s, still_mm=10 */
+    fp_param half[] = {{"still", "0.5"}};     /* still_mm=10 (the default) */
+    assert_int_equal(open_onehand(&x, half, 1, true, err), 0);
     hand h = rest_hand(FP_HAND_RIGHT);
     for (int f = 0; f < 100; f++) {          /* moving 11 mm a frame: never still */
         h.pos[0] += f % 20 < 10 ? 11.0f : -11.0f;
@@ -541,6 +535,13 @@ static void test_auto_still(void **state)
     step(&x, 0);
     assert_true(x.cs.active);
     close_onehand(&x);
+    assert_int_equal(open_onehand(&x, NULL, 0, true, err), 0); /* the default: the same */
+    h.pos[0] += 11.0f;                        /* (moving: no stillness asked) */
+    put(&x, FP_HAND_RIGHT, &h, false);
+    step(&x, 0);
+    assert_true(x.cs.active);
+    assert_true(x.cs.intents & FP_INTENT_ENGAGE);
+    close_onehand(&x);
     fp_param q[] = {{"auto", "0"}};           /* auto=0: only by request */
     assert_int_equal(open_onehand(&x, q, 1, true, err), 0);
     for (int f = 0; f < 100; f++) {
@@ -551,40 +552,56 @@ static void test_auto_still(void **state)
     close_onehand(&x);
 }
 
-/* Commit and cancel end the gesture and put jaw.open back to neutral. */
+/* Commit and cancel end the gesture and put jaw.open back to neutral. With auto=0 the next
+ * gesture waits for a request; on the defaults (engaged at first sight) the next frame
+ * engages again with the hand's pose then as the zero: the committed shape stays in the
+ * base, and a cancel (X) re-zeroes the hand. */
 static void test_commit_cancel(void **state)
 {
     (void)state;
-    fx x;
-    char err[1024];
-    assert_int_equal(open_onehand(&x, NULL, 0, true, err), 0);
-    hand h = rest_hand(FP_HAND_RIGHT);
-    put(&x, FP_HAND_RIGHT, &h, false);
-    step(&x, FP_INTENT_ENGAGE);
-    h.a[FP_SENSOR_THUMB_MPJ] += (float)(20 * DEG);
-    h.a[FP_SENSOR_INDEX_MPJ] += (float)(20 * DEG);
-    put(&x, FP_HAND_RIGHT, &h, false);
-    step(&x, 0);
-    assert_true(jaw(&x) > 0.4);
-    step(&x, FP_INTENT_COMMIT);               /* this frame's shape goes into the base */
-    assert_true(x.cs.active);
-    assert_true(x.cs.intents & FP_INTENT_COMMIT);
-    assert_true(jaw(&x) > 0.4);
-    step(&x, 0);
-    assert_false(x.cs.active);
-    assert_float_equal(jaw(&x), 0.0, 0);
-    step(&x, FP_INTENT_ENGAGE);               /* a new gesture from this pose */
-    assert_true(x.cs.active);
-    assert_memory_equal(x.start, x.end, x.cs.count * sizeof x.start[0]);
-    h.a[FP_SENSOR_THUMB_MPJ] += (float)(10 * DEG);
-    put(&x, FP_HAND_RIGHT, &h, false);
-    step(&x, 0);
-    assert_true(jaw(&x) > 0.2);
-    step(&x, FP_INTENT_CANCEL);
-    assert_false(x.cs.active);
-    assert_true(x.cs.intents & FP_INTENT_CANCEL);
-    assert_float_equal(jaw(&x), 0.0, 0);
-    close_onehand(&x);
+    for (int automatic = 0; automatic <= 1; automatic++) {
+        fx x;
+        char err[1024];
+        fp_param p[] = {{"auto", "0"}};
+        assert_int_equal(open_onehand(&x, p, automatic ? 0 : 1, true, err), 0);
+        hand h = rest_hand(FP_HAND_RIGHT);
+        put(&x, FP_HAND_RIGHT, &h, false);
+        step(&x, FP_INTENT_ENGAGE);
+        assert_true(x.cs.active);
+        h.a[FP_SENSOR_THUMB_MPJ] += (float)(20 * DEG);
+        h.a[FP_SENSOR_INDEX_MPJ] += (float)(20 * DEG);
+        put(&x, FP_HAND_RIGHT, &h, false);
+        step(&x, 0);
+        assert_true(jaw(&x) > 0.4);
+        step(&x, FP_INTENT_COMMIT);               /* this frame's shape goes into the base */
+        assert_true(x.cs.active);
+        assert_true(x.cs.intents & FP_INTENT_COMMIT);
+        assert_true(jaw(&x) > 0.4);
+        step(&x, 0);
+        assert_float_equal(jaw(&x), 0.0, 0);
+        if (automatic) {                          /* engaged again: this pose is the zero */
+            assert_true(x.cs.active);
+            assert_true(x.cs.intents & FP_INTENT_ENGAGE);
+        } else {
+            assert_false(x.cs.active);
+            step(&x, FP_INTENT_ENGAGE);           /* a new gesture from this pose */
+            assert_true(x.cs.active);
+        }
+        assert_memory_equal(x.start, x.end, x.cs.count * sizeof x.start[0]);
+        h.a[FP_SENSOR_THUMB_MPJ] += (float)(10 * DEG);
+        put(&x, FP_HAND_RIGHT, &h, false);
+        step(&x, 0);
+        assert_true(jaw(&x) > 0.2);
+        step(&x, FP_INTENT_CANCEL);
+        assert_false(x.cs.active);
+        assert_true(x.cs.intents & FP_INTENT_CANCEL);
+        assert_float_equal(jaw(&x), 0.0, 0);
+        step(&x, 0);
+        assert_int_equal(x.cs.active, automatic); /* the defaults: re-zeroed at once */
+        assert_float_equal(jaw(&x), 0.0, 0);
+        if (automatic) assert_memory_equal(x.start, x.end, x.cs.count * sizeof x.start[0]);
+        close_onehand(&x);
+    }
 }
 
 /* hold=1: the face stays posed while the hand is gone, and the next engage continues from

@@ -38,7 +38,9 @@ static const struct {
     {"mm-per-unit", required_argument, OPT_MM_PER_UNIT, "X",
      "the mesh's unit in millimetres (default: detected from\nthe head, about 23 cm chin to crown)"},
     {"calibration", required_argument, OPT_CALIBRATION, "FILE",
-     "hand calibration JSON (docs/calibration.md; made by\n`facepuppet calibrate`)"},
+     "hand calibration JSON (docs/calibration.md; made by\n`facepuppet calibrate`). Default: life-size, in front\n"
+     "of the face: a recording fitted from its whole range,\na live tracker's hands as they arrive (refined as\n"
+     "they move); a hint after 3 s of hands that never reach"},
     {"speed", required_argument, 's', "X", "replay speed factor for replay inputs (default 1)"},
     {"duration", required_argument, OPT_DURATION, "S", "stop after S seconds (default: when the inputs end)"},
     {"hand-size", required_argument, OPT_HAND_SIZE, "F", "performer's hand size, 1 = mean adult"},
@@ -47,7 +49,8 @@ static const struct {
      "rig file (rigs/README.md); default: the mesh's rig found\nby checksum, else vertex count; 'none': no rig"},
     {"quiet", no_argument, 'q', NULL,
      "no progress or status lines, nor the engine's and\ncontact guard's notes on each gesture; the summary\n"
-     "(stdout), errors and the lines of the inputs,\nrecordings, mapping and rig still print"},
+     "(stdout), errors and the lines of the inputs,\nrecordings, mapping, rig and session (the hands'\n"
+     "placement, the hint) still print"},
 };
 
 void fp_session_opts_init(fp_session_opts *o, fp_session_options *session)

@@ -317,7 +317,9 @@ typedef struct fp_input {
 
 /** Optional input extension FP_EXT_WORKSPACE: the box the hands move in, millimetres,
  *  device frame. A recording knows it in advance; a live device may give its tracking
- *  volume. The host's default workspace calibration fits this box to the face.
+ *  volume. The host's default workspace calibration fits this box to the face; where no
+ *  input gives one, the host estimates it from the joint positions as the hands arrive and
+ *  refines it as they move (docs/calibration.md, "Live inputs").
  *  [main-thread], after create. Returns false where unknown. */
 #define FP_EXT_WORKSPACE "facepuppet.workspace/1"
 typedef struct fp_input_workspace {

@@ -1,0 +1,160 @@
+/* Hands that arrive: a live input's workspace estimated as it runs (fp_pose_auto.h). */
+#include "fp_pose_auto.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define NBINS ((int)(2.0 * FP_POSE_AUTO_SPAN_MM / FP_POSE_AUTO_BIN_MM))
+/* the ring: a window of both hands at the highest sample rate */
+#define CAPACITY ((size_t)(FP_POSE_AUTO_WINDOW_S * FP_POSE_AUTO_RATE_HZ) * FP_HANDS)
+#define PERIOD_NS ((int64_t)(1e9 / FP_POSE_AUTO_RATE_HZ))
+
+_Static_assert(NBINS <= 65536, "bins fit in uint16_t");
+
+typedef struct sample {
+    int64_t t_ns;
+    uint16_t bin[FP_HAND_JOINTS][3];
+} sample;
+
+struct fp_pose_auto {
+    sample *ring;                  /* CAPACITY samples, oldest at head */
+    size_t head, count;
+    uint32_t *hist;                /* 3 x NBINS counts of joint coordinates */
+    int64_t last_kept[FP_HANDS];   /* each hand's last sample time */
+    bool have_kept[FP_HANDS];
+    bool dirty;                    /* samples came (or went) since the last refit */
+    bool fitted;
+    int64_t fit_t;                 /* the newest sample's time at the last refit */
+    unsigned long refits;
+};
+
+int fp_pose_auto_create(fp_pose_auto **out)
+{
+    *out = NULL;
+    fp_pose_auto *a = calloc(1, sizeof *a);
+    if (!a) return -ENOMEM;
+    a->ring = malloc(CAPACITY * sizeof *a->ring);
+    a->hist = calloc(3 * (size_t)NBINS, sizeof *a->hist);
+    if (!a->ring || !a->hist) {
+        fp_pose_auto_destroy(&a);
+        return -ENOMEM;
+    }
+    *out = a;
+    return 0;
+}
+
+void fp_pose_auto_destroy(fp_pose_auto **a)
+{
+    if (!a || !*a) return;
+    free((*a)->ring);
+    free((*a)->hist);
+    free(*a);
+    *a = NULL;
+}
+
+static uint16_t bin_of(float mm)
+{
+    double b = floor(((double)mm + FP_POSE_AUTO_SPAN_MM) / FP_POSE_AUTO_BIN_MM);
+    return (uint16_t)(b < 0 ? 0 : b > NBINS - 1 ? NBINS - 1 : b);
+}
+
+static void count_sample(fp_pose_auto *a, const sample *s, uint32_t sign)
+{
+    for (int j = 0; j < FP_HAND_JOINTS; j++)
+        for (int k = 0; k < 3; k++) a->hist[(size_t)k * NBINS + s->bin[j][k]] += sign; /* -1u: wraps back */
+}
+
+static void drop_oldest(fp_pose_auto *a)
+{
+    count_sample(a, &a->ring[a->head], (uint32_t)-1);
+    a->head = (a->head + 1) % CAPACITY;
+    a->count--;
+    a->dirty = true;
+}
+
+void fp_pose_auto_take(fp_pose_auto *a, const fp_event *ev)
+{
+    int h = ev->header.hand;
+    if (ev->header.type != FP_EVENT_JOINT_POSITIONS || (h != FP_HAND_LEFT && h != FP_HAND_RIGHT)) return;
+    int64_t t = ev->header.time_ns;
+    if (a->have_kept[h] && t >= a->last_kept[h] && t - a->last_kept[h] < PERIOD_NS) return;
+    sample s;
+    s.t_ns = t;
+    for (int j = 0; j < FP_HAND_JOINTS; j++)
+        for (int k = 0; k < 3; k++) {
+            float v = ev->positions.mm[j][k];
+            if (!isfinite(v)) return;
+            s.bin[j][k] = bin_of(v);
+        }
+    a->last_kept[h] = t;
+    a->have_kept[h] = true;
+    /* the window, by the newest sample's time (a clock gone backwards drops nothing: the
+     * ring's capacity still bounds it) */
+    while (a->count && a->ring[a->head].t_ns < t - (int64_t)(FP_POSE_AUTO_WINDOW_S * 1e9)) drop_oldest(a);
+    if (a->count == CAPACITY) drop_oldest(a);
+    a->ring[(a->head + a->count) % CAPACITY] = s;
+    a->count++;
+    count_sample(a, &s, 1);
+    a->dirty = true;
+}
+
+size_t fp_pose_auto_samples(const fp_pose_auto *a) { return a->count; }
+unsigned long fp_pose_auto_refits(const fp_pose_auto *a) { return a->refits; }
+
+/* The coordinate of 0-based rank r in axis k's histogram: the middle of its bin. */
+static float rank_value(const fp_pose_auto *a, int k, size_t r)
+{
+    const uint32_t *hk = a->hist + (size_t)k * NBINS;
+    size_t cum = 0;
+    int b = 0;
+    for (; b < NBINS - 1; b++) {
+        cum += hk[b];
+        if (cum > r) break;
+    }
+    return (float)(-FP_POSE_AUTO_SPAN_MM + (b + 0.5) * FP_POSE_AUTO_BIN_MM);
+}
+
+bool fp_pose_auto_box(const fp_pose_auto *a, float ws_min[3], float ws_max[3])
+{
+    if (!a->count) return false;
+    size_t m = a->count * FP_HAND_JOINTS;
+    /* the replay's ranks (input-replay's workspace: v[(size_t)(0.02 (m - 1) + 0.5)]) */
+    size_t lo = (size_t)(0.02 * (double)(m - 1) + 0.5), hi = (size_t)(0.98 * (double)(m - 1) + 0.5);
+    for (int k = 0; k < 3; k++) {
+        ws_min[k] = rank_value(a, k, lo);
+        ws_max[k] = rank_value(a, k, hi);
+    }
+    return true;
+}
+
+bool fp_pose_auto_refit(fp_pose_auto *a, fp_pose_state *p, bool engaged, double mm_per_unit,
+                        const float head_min[3], const float head_max[3])
+{
+    if (!a->count || !a->dirty || engaged) return false;
+    int64_t newest = a->ring[(a->head + a->count - 1) % CAPACITY].t_ns;
+    int64_t oldest = a->ring[a->head].t_ns;
+    bool settling = newest - oldest < (int64_t)(FP_POSE_AUTO_SETTLE_S * 1e9);
+    if (a->fitted && !settling && newest >= a->fit_t &&
+        newest - a->fit_t < (int64_t)(FP_POSE_AUTO_REFIT_S * 1e9))
+        return false;
+    float wmin[3], wmax[3];
+    fp_pose_auto_box(a, wmin, wmax);
+    fp_calibration old = p->calib, c;
+    fp_pose_fit_workspace(&c, mm_per_unit, wmin, wmax, head_min, head_max);
+    p->calib = c;
+    /* gloves without a wrist pose keep their place on the face: mesh = s g + o, both fits
+     * without rotation, so g' = (s_old g + o_old - o_new) / s_new */
+    if (p->glove_placed && old.scale > 0 && c.scale > 0)
+        for (int h = 0; h < FP_HANDS; h++)
+            for (int i = 0; i < 3; i++) {
+                double m = old.scale * p->glove_pos[h][i] + old.offset[i] + old.hand_offset[h][i];
+                p->glove_pos[h][i] = (float)((m - c.offset[i] - c.hand_offset[h][i]) / c.scale);
+            }
+    a->fitted = true;
+    a->dirty = false;
+    a->fit_t = newest;
+    a->refits++;
+    return true;
+}

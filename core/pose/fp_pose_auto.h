@@ -1,0 +1,94 @@
+/*
+ * fp_pose_auto.h: hands that arrive. Placement of a live input's hands (OSC, a glove with a
+ * position tracker, any tracker that states no workspace) from the joints it has sent so
+ * far: the same rule a replay gets in advance from its whole recording (fp_pose.h,
+ * fp_pose_fit_workspace on the 2nd-98th percentiles of every joint position, per axis), here
+ * on a running estimate of those percentiles over the recent joints.
+ *
+ * The estimate: every joint position event (FP_EVENT_JOINT_POSITIONS, left or right hand)
+ * is kept, at most FP_POSE_AUTO_RATE_HZ samples a second per hand (by the events' own
+ * times), for FP_POSE_AUTO_WINDOW_S seconds of the newest sample's time; each sample's 21
+ * joints go into a per-axis histogram of FP_POSE_AUTO_BIN_MM bins over +-FP_POSE_AUTO_SPAN_MM
+ * (values beyond fall into the end bins: a glitch 3 m away moves a 2nd percentile no more than
+ * it does in the replay's sort). The percentiles are read off the histograms: within half a
+ * bin of the replay's sorted-index rule on the same samples.
+ *
+ * When it refits (fp_pose_auto_refit, once a frame before the poses are built): from the
+ * first sample on (one hand frame's 21 joints already span the hand: on the four Leap
+ * recordings the first 50 ms give the whole recording's centre within 2-6 mm and its front
+ * within 3-5 mm), at every frame while the samples kept span less than
+ * FP_POSE_AUTO_SETTLE_S, then at most every FP_POSE_AUTO_REFIT_S of the samples' clock; never
+ * while the caller says a gesture is engaged (the hands never jump under a grab or a drag).
+ * Everything is decided on the events' times and the frames' order: the same events and
+ * engagements give the same calibrations, bit for bit.
+ *
+ * Units: millimetres in the device frame in, the calibration in mesh units (fp_calibration).
+ * Errors: fp_pose_auto_create returns -ENOMEM; nothing else fails.
+ * Threads: an fp_pose_auto belongs to one thread (the session thread). No allocation after
+ * create, no I/O.
+ */
+#ifndef FP_POSE_AUTO_H
+#define FP_POSE_AUTO_H
+
+#include "fp_pose.h"
+
+#include <facepuppet/plugin.h>
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define FP_POSE_AUTO_WINDOW_S 20.0   /* seconds of recent samples the estimate keeps */
+#define FP_POSE_AUTO_RATE_HZ 64.0    /* samples kept per hand per second, at most */
+#define FP_POSE_AUTO_SETTLE_S 1.0    /* while the samples span less: a refit every frame */
+#define FP_POSE_AUTO_REFIT_S 0.25    /* afterwards: at most one refit per this much time */
+#define FP_POSE_AUTO_BIN_MM 1.0      /* histogram bin width */
+#define FP_POSE_AUTO_SPAN_MM 4096.0  /* histogram range: -span .. +span on every axis */
+
+typedef struct fp_pose_auto fp_pose_auto;
+
+/** A new estimator with no sample (about 0.5 MiB: the samples' ring and the histograms).
+ *  Returns 0 and *out (owned by the caller: fp_pose_auto_destroy), or -ENOMEM (*out NULL). */
+int fp_pose_auto_create(fp_pose_auto **out);
+
+/** Free it and set *a to NULL; NULL or *a NULL: nothing. */
+void fp_pose_auto_destroy(fp_pose_auto **a);
+
+/** Take one input event: a joint positions event of the left or right hand whose joints are
+ *  all finite becomes a sample (unless its hand's last sample is less than
+ *  1 / FP_POSE_AUTO_RATE_HZ older, by the events' times; a time going backwards starts that
+ *  hand's spacing anew); samples older than FP_POSE_AUTO_WINDOW_S before it are dropped,
+ *  and the oldest when the ring is full. Every other event is ignored. ev: not NULL. */
+void fp_pose_auto_take(fp_pose_auto *a, const fp_event *ev);
+
+/** Number of samples kept now (each one hand's 21 joints). */
+size_t fp_pose_auto_samples(const fp_pose_auto *a);
+
+/** The estimated workspace: per axis the 2nd and 98th percentiles of every joint of the
+ *  samples kept (mm, device frame; the rank rule of the replay's workspace, read to the
+ *  middle of a FP_POSE_AUTO_BIN_MM bin). Returns false (boxes untouched) with no sample. */
+bool fp_pose_auto_box(const fp_pose_auto *a, float ws_min[3], float ws_max[3]);
+
+/** Once a frame, after the frame's events were taken and before fp_pose_build: when a refit
+ *  is due (see the header: any new sample since the last, not engaged, the schedule), the
+ *  calibration p->calib becomes fp_pose_fit_workspace(mm_per_unit, the estimated box,
+ *  head_min, head_max), and gloves placed by fp_pose_place_gloves keep their place on the
+ *  face (their device-frame wrists move by the offset's change; every fit is life-size at
+ *  the same mm_per_unit without rotation, so only the offset changes). engaged: a gesture is
+ *  engaged now (the session's last frame), and nothing changes. Returns true when
+ *  p->calib was refitted (the first time: the first placement), false otherwise.
+ *  mm_per_unit as fp_pose_fit_workspace's; head_min/head_max: the head box (fp_head). */
+bool fp_pose_auto_refit(fp_pose_auto *a, fp_pose_state *p, bool engaged, double mm_per_unit,
+                        const float head_min[3], const float head_max[3]);
+
+/** Refits done so far (the first one is the first placement). */
+unsigned long fp_pose_auto_refits(const fp_pose_auto *a);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

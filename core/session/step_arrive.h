@@ -1,0 +1,96 @@
+/*
+ * step_arrive.h: hands that arrive, the session's side (issue 51). Two jobs around step 2 of
+ * the frame (docs/architecture.md):
+ *
+ *  - Placement as it runs: where no calibration is given and no input states its workspace
+ *    (a live tracker: OSC without box=, any input without FP_EXT_WORKSPACE), the joint
+ *    positions drained go to a running estimate of their range (core/pose fp_pose_auto.h) and
+ *    the calibration is refitted from it before the poses are built: from the hands' first
+ *    frame, then refined, never while a gesture is engaged. One info line (source
+ *    "session") says when the hands were first placed.
+ *  - The hint: when hands have been present for FP_ARRIVE_HINT_S seconds (frame time: the
+ *    steps between consecutive frames that both had a hand, each at most 0.25 s) and no
+ *    fingertip came within FP_ARRIVE_NEAR x the support radius of the face (the anchored
+ *    mapping's default engage distance; fingertip-to-surface distances as the mapping gets
+ *    them) and the mapping engaged nothing, one warning (source "session") says how near the
+ *    nearest fingertip came, in mm, how the hands are placed, and to calibrate. It is said
+ *    again only after a fingertip came near (or the mapping engaged) and the hands stayed away
+ *    as long once more.
+ *
+ * Threads: the session thread. Allocation only in fp_arrive_step_init.
+ */
+#ifndef FP_STEP_ARRIVE_H
+#define FP_STEP_ARRIVE_H
+
+#include "fp_head.h"
+#include "fp_pose.h"
+#include "fp_pose_auto.h"
+#include "session_log.h"
+#include "step_engine.h"
+
+#include <facepuppet/plugin.h>
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define FP_ARRIVE_HINT_S 3.0   /* seconds of hands present and away before the hint */
+#define FP_ARRIVE_NEAR 0.5     /* "near": a fingertip within this x radius of the face */
+
+/** How the hands are placed (what the hint says). */
+typedef enum fp_arrive_placement {
+    FP_ARRIVE_PLACED_AUTO = 0,      /* estimated as they run (fp_pose_auto) */
+    FP_ARRIVE_PLACED_WORKSPACE,     /* from the workspace an input states (a recording, box=) */
+    FP_ARRIVE_PLACED_CALIBRATION    /* a calibration given (--calibration, a take's) */
+} fp_arrive_placement;
+
+typedef struct fp_arrive_step {
+    fp_arrive_placement how;
+    fp_pose_auto *place;           /* FP_ARRIVE_PLACED_AUTO: the estimator; else NULL */
+    bool placed_said;              /* the first placement's info line was sent */
+    double away_s;                 /* seconds with hands present and none near, since near */
+    double nearest;                /* mesh units: the nearest fingertip over those seconds */
+    int64_t last_ns;               /* the last frame's time */
+    bool have_last;                /* ... and it had a hand */
+    bool warned;                   /* the hint was said for this stretch */
+    bool far_asked;                /* the unbounded nearest query ran ... */
+    int64_t far_ns;                /* ... last at this frame time */
+    unsigned long hints;           /* hints said so far */
+} fp_arrive_step;
+
+/** Start: how the hands are placed; FP_ARRIVE_PLACED_AUTO makes the estimator. Returns 0 or
+ *  -ENOMEM (r then holds nothing to free, and fp_arrive_step_free is still safe). */
+int fp_arrive_step_init(fp_arrive_step *r, fp_arrive_placement how);
+
+/** Free the estimator; r may be zeroed or initialised. */
+void fp_arrive_step_free(fp_arrive_step *r);
+
+/** A drained event (the session's event callback): joint positions feed the estimator when
+ *  there is one; nothing otherwise. */
+void fp_arrive_step_event(fp_arrive_step *r, const fp_event *ev);
+
+/** Before fp_pose_build: with the estimator, refit p->calib when due (fp_pose_auto_refit;
+ *  engaged: the last frame's gesture is engaged, nothing moves), at head's mm_per_unit and
+ *  head box. The first placement is said once on log (FP_LOG_INFO, "session"). */
+void fp_arrive_step_place(fp_arrive_step *r, fp_pose_state *p, bool engaged, const fp_head *head,
+                         const fp_slog *log);
+
+/** After the mapping ran: the hint's bookkeeping for the frame at now_ns (the frame clock;
+ *  the step from the last frame counts when both had a hand, at most 0.25 s). hands: the frame's poses (mesh units);
+ *  tip: the fingertip distances the mapping got (mesh units, +INFINITY beyond its reach);
+ *  engaged: the mapping's control set is active; radius: the support radius (mesh units);
+ *  mm_per_unit: the mesh's unit; e: the engine, asked the nearest surface without a bound
+ *  while every fingertip is beyond the tip distances' reach (fp_engine_step_tip_distances;
+ *  at most every 0.1 s of frame time, and on the hint's frame), so that the hint says how
+ *  far. The hint goes to log (FP_LOG_WARNING, "session"). */
+void fp_arrive_step_check(fp_arrive_step *r, int64_t now_ns, const fp_hand_pose hands[FP_HANDS],
+                         const float tip[FP_HANDS][FP_FINGERS], bool engaged, double radius,
+                         double mm_per_unit, const fp_engine_step *e, const fp_slog *log);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,283 @@
+/* Hands that arrive (issue 51), through the session on the recordings' own clock (replay
+ * fast=1, frame k at t0 + k/60 s once every recording delivered past it: as `facepuppet run`
+ * steps), deterministic:
+ *
+ *  - onehand on its defaults moves the face on each of the four Leap recordings on each of
+ *    the three faces (their rigs found in rigs/);
+ *  - a recording placed as it arrives (replay workspace=0, as a live tracker: no range in
+ *    advance) grabs the ICT face through the anchored mapping, and by its end the placement
+ *    equals the one the replay gets from its whole range, within 2 mm;
+ *  - a hand held still, placed as it arrives, hovers in front of the face: the hint
+ *    (source "session", a warning) comes once, 3 s after the hand arrived, with how far the
+ *    nearest fingertip stayed; a calibration that puts the reaching hand 10 cm back gives it
+ *    too, naming the calibration; the recording that reaches gives none.
+ *
+ * FP_TEST_VERBOSE=1 prints the session's log. */
+#define _GNU_SOURCE
+#include "fp_session.h"
+#include "fp_test_support.h"
+
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+#include <cmocka.h>
+
+#define FPS 60
+
+static const char *faces[] = {"ict-facekit/generic_neutral_mesh.obj", "lee-perry-smith/LeePerrySmith.obj",
+                              "mediapipe-canonical/canonical_face_model.obj"};
+
+typedef struct logbook {
+    int64_t now, t0, first_hand;   /* the frame being stepped, the clock's start, the first
+                                      frame with a hand (-1: none yet) */
+    unsigned hints, placed;
+    int64_t hint_at;               /* frame time of the first hint, after the first hand */
+    char hint[600];
+} logbook;
+
+static void on_log(void *user, int level, const char *source, const char *message)
+{
+    logbook *lb = user;
+    if (getenv("FP_TEST_VERBOSE")) fprintf(stderr, "  [%d %s] %s\n", level, source, message);
+    if (strcmp(source, "session")) return;
+    if (strstr(message, "hands placed")) lb->placed++;
+    if (level == FP_LOG_WARNING && strstr(message, "no fingertip came within")) {
+        if (!lb->hints++) {
+            lb->hint_at = lb->now - lb->first_hand;
+            snprintf(lb->hint, sizeof lb->hint, "%s", message);
+        }
+    }
+}
+
+typedef struct outcome {
+    unsigned long frames, active, engaged;
+    size_t moved;
+    double max;                    /* mesh units */
+    fp_calibration calib;          /* at the end */
+} outcome;
+
+/* One run of mesh (under faces/) with input and mapping, stepped as `facepuppet run`. */
+static void run(const char *mesh, const char *input, const char *mapping, const fp_calibration *cal,
+                double radius, logbook *lb, outcome *o)
+{
+    char path[4300], err[2048];
+    snprintf(path, sizeof path, "%s/faces/%s", fp_test_data_dir(), mesh);
+    memset(lb, 0, sizeof *lb);
+    memset(o, 0, sizeof *o);
+    lb->first_hand = -1;
+    fp_session_options so;
+    memset(&so, 0, sizeof so);
+    so.mesh_path = path;
+    so.inputs[0] = input;
+    so.input_count = 1;
+    so.mapping = mapping;
+    so.plugin_path = fp_test_plugin_path();
+    so.calibration = cal;
+    so.radius = radius;
+    so.input_clock = true;
+    so.log = on_log;
+    so.log_user = lb;
+    fp_session *s = NULL;
+    int rc = fp_session_create(&so, &s, err, sizeof err);
+    if (rc) fail_msg("%s %s: %s", mesh, input, err);
+    if ((rc = fp_session_start(s, err, sizeof err))) fail_msg("%s: %s", input, err);
+    int64_t t0 = 0, limit = fp_now_ns() + 120LL * 1000000000LL;
+    int clock;
+    while ((clock = fp_session_input_start(s, &t0)) == 0 && fp_now_ns() < limit) fp_test_nap_ms(1);
+    assert_int_equal(clock, 1);
+    lb->t0 = t0;
+    for (uint64_t k = 0; fp_now_ns() < limit; k++) {
+        int64_t now = t0 + (int64_t)llround((double)k * 1e9 / FPS);
+        while (!fp_session_inputs_ready(s, now) && fp_now_ns() < limit) fp_test_nap_ms(1);
+        lb->now = now;
+        fp_frame_stats st;
+        fp_session_step(s, now, &st);
+        if (lb->first_hand < 0 && (fp_session_hand(s, FP_HAND_LEFT) || fp_session_hand(s, FP_HAND_RIGHT)))
+            lb->first_hand = now;
+        o->frames++;
+        o->active += st.active;
+        o->engaged += st.engaged;
+        if (fp_session_finished(s)) break;
+    }
+    assert_true(fp_session_finished(s));
+    const float *a = fp_session_loaded(s), *b = fp_session_positions(s);
+    for (size_t v = 0; v < fp_session_vertex_count(s); v++) {
+        double d2 = 0;
+        for (int k = 0; k < 3; k++) d2 += pow((double)b[3 * v + k] - a[3 * v + k], 2);
+        o->moved += d2 > 0;
+        o->max = fmax(o->max, sqrt(d2));
+    }
+    o->calib = *fp_session_calibration(s);
+    fp_session_destroy(&s);
+}
+
+static void input_of(char *buf, size_t len, const char *rec, const char *keys)
+{
+    snprintf(buf, len, "replay:%s/hands/leap-motion/%s_joints_mm.csv,fast=1%s", fp_test_data_dir(), rec, keys);
+}
+
+#ifndef FP_TEST_RADIUS_ONLY
+static const char *recs[] = {"HandSplay-110fps", "Waiting-110fps", "grab", "three-claps"};
+
+/* onehand on its defaults (no keys): the face moves on every face x recording. */
+static void test_onehand_defaults(void **state)
+{
+    (void)state;
+    for (size_t f = 0; f < 3; f++)
+        for (size_t r = 0; r < 4; r++) {
+            char input[4400];
+            input_of(input, sizeof input, recs[r], "");
+            logbook lb;
+            outcome o;
+            run(faces[f], input, "onehand", NULL, 0, &lb, &o);
+            printf("onehand %-44s %-17s %4lu frames, %4lu deforming, engaged %lu; %5zu vertices "
+                   "moved, max %.4f mesh units\n", faces[f], recs[r], o.frames, o.active, o.engaged,
+                   o.moved, o.max);
+            if (!(o.moved > 0 && o.max > 0 && o.engaged >= 1))
+                fail_msg("onehand on its defaults moved nothing: %s, %s", faces[f], recs[r]);
+            assert_int_equal(lb.hints, 0); /* engaged: nothing to hint */
+        }
+}
+
+/* grab placed as it arrives: placed from the first frame, grabs the face, and ends where the
+ * replay's whole-range placement is (within 2 mm); no hint (the hand reaches). */
+static void test_live_placement_grabs(void **state)
+{
+    (void)state;
+    char whole[4400], live[4400];
+    input_of(whole, sizeof whole, "grab", "");
+    input_of(live, sizeof live, "grab", ",workspace=0");
+    logbook lw, ll;
+    outcome ow, ol;
+    run(faces[0], whole, "anchored", NULL, 0, &lw, &ow);
+    run(faces[0], live, "anchored", NULL, 0, &ll, &ol);
+    printf("grab, ICT, anchored: whole range in advance: %lu engaged, %zu moved, max %.4f; placed "
+           "as it arrives: %lu engaged, %zu moved, max %.4f (mesh units)\n", ow.engaged, ow.moved,
+           ow.max, ol.engaged, ol.moved, ol.max);
+    assert_int_equal(lw.placed, 0);         /* the replay states its range: nothing to place */
+    assert_int_equal(ll.placed, 1);         /* said once */
+    assert_true(ol.engaged >= 1 && ol.moved > 0);
+    assert_int_equal(ll.hints, 0);
+    assert_int_equal(lw.hints, 0);
+    double mm = 1.0 / ow.calib.scale;
+    assert_float_equal(ol.calib.scale, ow.calib.scale, 0);
+    for (int k = 0; k < 3; k++) {
+        double d = (ol.calib.offset[k] - ow.calib.offset[k]) * mm;
+        printf("  placement at the end, axis %d: %+.2f mm from the replay's\n", k, d);
+        assert_true(fabs(d) <= 2.0);
+    }
+}
+
+/* The first row of a recording repeated for 5 s at 110 Hz: a hand held still. */
+static void still_csv(const char *rec, const char *out)
+{
+    char in[4300], line[8192], head[8192];
+    snprintf(in, sizeof in, "%s/hands/leap-motion/%s_joints_mm.csv", fp_test_data_dir(), rec);
+    FILE *f = fopen(in, "r"), *g = fopen(out, "w");
+    assert_non_null(f);
+    assert_non_null(g);
+    assert_non_null(fgets(head, sizeof head, f));
+    assert_non_null(fgets(line, sizeof line, f));
+    fclose(f);
+    fputs(head, g);
+    const char *rest = strchr(strchr(line, ',') + 1, ','); /* after frame, timestamp_us */
+    for (int i = 0; i < 550; i++) fprintf(g, "%d,%d%s", i, 1000000 + i * 9091, rest);
+    assert_int_equal(fclose(g), 0);
+}
+
+static void test_hint(void **state)
+{
+    (void)state;
+    char dir[] = "/tmp/fp-arrive-XXXXXX", csv[64], input[200];
+    assert_non_null(mkdtemp(dir));
+    snprintf(csv, sizeof csv, "%s/still_joints_mm.csv", dir);
+    still_csv("grab", csv);
+    snprintf(input, sizeof input, "replay:%s,fast=1,workspace=0", csv);
+    logbook lb;
+    outcome o;
+    run(faces[0], input, "anchored", NULL, 0, &lb, &o);
+    printf("a still hand placed as it arrives: %u hint(s) %.3f s after it arrived: %s\n", lb.hints,
+           lb.hint_at / 1e9, lb.hint);
+    assert_int_equal(lb.hints, 1);
+    assert_true(lb.hint_at >= 3000000000LL && lb.hint_at <= 3000000000LL + 1000000000LL / FPS);
+    assert_non_null(strstr(lb.hint, "mm away"));
+    assert_non_null(strstr(lb.hint, "facepuppet calibrate"));
+    assert_non_null(strstr(lb.hint, "placed from their own range"));
+    assert_int_equal(o.moved, 0);
+
+    /* a calibration that puts the reaching hand 10 cm back: the hint names it */
+    char whole[4400];
+    input_of(whole, sizeof whole, "grab", "");
+    logbook lw;
+    outcome ow;
+    run(faces[0], whole, "anchored", NULL, 0, &lw, &ow); /* the replay's own placement */
+    fp_calibration back = ow.calib;
+    back.offset[2] += 100.0 * back.scale;
+    run(faces[0], whole, "anchored", &back, 0, &lb, &o);
+    printf("grab 10 cm back by --calibration: %u hint(s) at %.3f s: %s\n", lb.hints, lb.hint_at / 1e9,
+           lb.hint);
+    assert_int_equal(lb.hints, 1);
+    assert_true(lb.hint_at <= 3000000000LL + 1000000000LL / FPS);
+    assert_non_null(strstr(lb.hint, "The calibration places them"));
+    assert_int_equal(o.engaged, 0);
+    unlink(csv);
+    rmdir(dir);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_onehand_defaults),
+        cmocka_unit_test(test_live_placement_grabs),
+        cmocka_unit_test(test_hint),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
+
+#else
+/* A larger radius never moves the skin less for the same hand motion: --radius 1.5x the
+ * default on grab, ICT, anchored, moves at least as many vertices at least as far (max
+ * displacement of the final shape). Its own executable (test_radius_reach), registered
+ * WILL_FAIL in tests/e2e/CMakeLists.txt: it fails on main with the anchored mapping's grab
+ * of the skin (9d9d4b7, start points on the surface) and steady hands (191b825): default
+ * radius 2.851, 1290 vertices moved, max 0.5139 mesh units (5.14 mm); 4.277: 4936 moved, max
+ * 0.3450 (3.45 mm). The skin follows the fingertips 100% at both, but the wider radius
+ * engages at 0.5 R and lets go at R, farther from the face (119 deforming frames against 40
+ * before steady hands). Before the grab: 987 moved, max 0.2185 against 4201, 0.1794. When the
+ * anchored mapping makes it pass, drop WILL_FAIL. */
+static void test_radius_moves_no_less(void **state)
+{
+    (void)state;
+    char whole[4400];
+    input_of(whole, sizeof whole, "grab", "");
+    logbook lb;
+    outcome o1, o2;
+    run(faces[0], whole, "anchored", NULL, 0, &lb, &o1);
+    char path[4300], err[2048];
+    snprintf(path, sizeof path, "%s/faces/%s", fp_test_data_dir(), faces[0]);
+    fp_session_options so;
+    memset(&so, 0, sizeof so);
+    so.mesh_path = path;
+    so.plugin_path = fp_test_plugin_path();
+    fp_session *s = NULL;
+    assert_int_equal(fp_session_create(&so, &s, err, sizeof err), 0);
+    double r = fp_session_radius(s);
+    fp_session_destroy(&s);
+    run(faces[0], whole, "anchored", NULL, 1.5 * r, &lb, &o2);
+    printf("grab, ICT, anchored: radius %.4g: %zu moved, max %.4f; radius %.4g: %zu moved, max "
+           "%.4f (mesh units)\n", r, o1.moved, o1.max, 1.5 * r, o2.moved, o2.max);
+    assert_true(o2.moved >= o1.moved);
+    assert_true(o2.max >= o1.max);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {cmocka_unit_test(test_radius_moves_no_less)};
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
+#endif
