@@ -4,7 +4,7 @@
  * reads and writes directly; the deformation engine works on `positions` in place and calls
  * fp_mesh_compute_normals() after each frame. Files are read and written through OpenMesh
  * (OBJ, PLY, OFF, STL) and tinygltf (glTF 2.0 .gltf and .glb) behind this C API; the C++ stays
- * inside core/mesh/mesh_io.cpp.
+ * inside core/mesh (mesh_io.cpp and its neighbours, mesh_io_internal.hpp).
  *
  * Units: positions are in the file's units (facepuppet calls them "mesh units"); nothing is
  * rescaled. Normals are unit vectors. UVs are as in the file (OBJ/PLY convention, v up; glTF

@@ -1,4 +1,5 @@
-/* Internal to core/mesh: helpers shared by the C part (mesh.c) and the C++ I/O shim. */
+/* Internal to core/mesh: what its C files (mesh.c, the scans mesh_scan_*.c) and its C++
+ * (mesh_io_internal.hpp) share. */
 #ifndef FP_MESH_INTERNAL_H
 #define FP_MESH_INTERNAL_H
 
@@ -59,7 +60,7 @@ int fp__ply_scan(const char *path, const char *text, size_t len, size_t *nv, siz
 int fp__stl_ascii_scan(const char *path, const char *text, size_t len, char *err,
                        size_t errlen);
 
-/** Reference counting of fp_mesh_source (mesh_io.cpp): ref returns src. */
+/** Reference counting of fp_mesh_source (mesh_source.cpp): ref returns src. */
 struct fp_mesh_source *fp__mesh_source_ref(struct fp_mesh_source *src);
 void fp__mesh_source_unref(struct fp_mesh_source *src);
 
