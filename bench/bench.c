@@ -768,61 +768,6 @@ static const char *fp_bench_data_dir(void)
     return root && *root ? root : "../shared/data";
 }
 
-static int edge_cmp(const void *a, const void *b)
-{
-    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
-    return x < y ? -1 : x > y;
-}
-
-fp_mesh *fp_bench_subdivide(const fp_mesh *m)
-{
-    size_t nv = m->vertex_count, nt = m->triangle_count;
-    uint64_t *e = malloc(3 * nt * sizeof *e); /* key << 24 | ... : sort key, then look up */
-    uint64_t *keys = malloc(3 * nt * sizeof *keys);
-    if (!e || !keys) {
-        free(e);
-        free(keys);
-        return NULL;
-    }
-    for (size_t t = 0; t < nt; t++)
-        for (int k = 0; k < 3; k++) {
-            uint64_t a = m->triangles[3 * t + k], b = m->triangles[3 * t + (k + 1) % 3];
-            keys[3 * t + k] = a < b ? a << 32 | b : b << 32 | a;
-        }
-    memcpy(e, keys, 3 * nt * sizeof *e);
-    qsort(e, 3 * nt, sizeof *e, edge_cmp);
-    size_t ne = 0;
-    for (size_t i = 0; i < 3 * nt; i++)
-        if (!ne || e[ne - 1] != e[i]) e[ne++] = e[i];
-    fp_mesh *o = fp_mesh_create(nv + ne, 4 * nt, 0);
-    if (!o) {
-        free(e);
-        free(keys);
-        return NULL;
-    }
-    memcpy(o->positions, m->positions, nv * 3 * sizeof(float));
-    for (size_t i = 0; i < ne; i++) {
-        uint32_t a = (uint32_t)(e[i] >> 32), b = (uint32_t)e[i];
-        for (int k = 0; k < 3; k++)
-            o->positions[3 * (nv + i) + k] = 0.5f * (m->positions[3 * a + k] + m->positions[3 * b + k]);
-    }
-    for (size_t t = 0; t < nt; t++) {
-        uint32_t v[3], mid[3];
-        for (int k = 0; k < 3; k++) {
-            v[k] = m->triangles[3 * t + k];
-            uint64_t *f = bsearch(&keys[3 * t + k], e, ne, sizeof *e, edge_cmp);
-            mid[k] = (uint32_t)(nv + (size_t)(f - e)); /* mid[k]: edge v[k] -> v[k+1] */
-        }
-        uint32_t tri[4][3] = {{v[0], mid[0], mid[2]}, {v[1], mid[1], mid[0]},
-                              {v[2], mid[2], mid[1]}, {mid[0], mid[1], mid[2]}};
-        memcpy(o->triangles + 12 * t, tri, sizeof tri);
-    }
-    free(e);
-    free(keys);
-    fp_mesh_compute_normals(o);
-    return o;
-}
-
 static double pct(double *v, size_t n, double p) { return n ? fp_percentile(v, n, p / 100.0) : 0.0; }
 
 /* The time this thread has waited on a run queue, ms (Linux's /proc/thread-self/schedstat,
@@ -1109,7 +1054,7 @@ static int case_frame(const bench_opts *o)
     int rc = frame_run(o, frame_bo, "ict", m);
     fp_mesh *sub = m;
     for (int l = 0; l < 3 && !rc; l++) {
-        fp_mesh *next = fp_bench_subdivide(sub);
+        fp_mesh *next = fp_mesh_subdivide(sub);
         if (sub != m) fp_mesh_free(&sub);
         if (!next) rc = -ENOMEM;
         sub = next;

@@ -43,13 +43,6 @@ extern const char *const fp_bench_cases[];
  *  FP_ENUMERIC (an engine call failed; its message is on stderr). Not thread-safe. */
 int fp_bench_run(const fp_bench_options *o);
 
-struct fp_mesh;
-/** Midpoint subdivision: every triangle into four, edge midpoints shared (3 levels make the
- *  ICT face about 1.7M vertices: the frame case's large face, the viewer's measurements).
- *  New vertices follow the old ones, in the order of their edges' (smaller, larger) vertex
- *  pairs; normals computed. Returns a new mesh (fp_mesh_free), or NULL out of memory. */
-struct fp_mesh *fp_bench_subdivide(const struct fp_mesh *m);
-
 /** `--case take` (bench/bench_take.c): the take recorder's cost on the session thread
  *  (median, p99 and max of fp_take_recorder_push per frame, 10 control vectors and 4
  *  events, while the recorder thread writes to a folder under /tmp) and a take's size per

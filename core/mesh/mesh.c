@@ -1,4 +1,4 @@
-/* fp_mesh: the C part: allocation, copies, normals, bounds, error text. The
+/* fp_mesh: the C part: allocation, copies, normals, bounds, subdivision, error text. The
  * strict scans of the text formats are mesh_scan_obj.c, mesh_scan_offstl.c and
  * mesh_scan_ply.c; the files themselves go through the C++ of mesh_io.cpp and its
  * neighbours. */
@@ -259,3 +259,64 @@ void fp_mesh_bounds(const fp_mesh *mesh, float min[3], float max[3])
     }
 }
 
+/* ---- subdivision --------------------------------------------------------------------- */
+
+static int edge_cmp(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+fp_mesh *fp_mesh_subdivide(const fp_mesh *m)
+{
+    if (!m || (m->vertex_count && !m->positions) || (m->triangle_count && !m->triangles) ||
+        m->triangle_count > SIZE_MAX / (3 * sizeof(uint64_t)) / 4)
+        return NULL;
+    size_t nv = m->vertex_count, nt = m->triangle_count;
+    /* each triangle's three edges as keys (smaller vertex << 32 | larger), then the distinct
+     * ones sorted: edge i's midpoint is vertex nv + i */
+    uint64_t *e = malloc(3 * nt * sizeof *e + 1);
+    uint64_t *keys = malloc(3 * nt * sizeof *keys + 1);
+    if (!e || !keys) {
+        free(e);
+        free(keys);
+        return NULL;
+    }
+    for (size_t t = 0; t < nt; t++)
+        for (int k = 0; k < 3; k++) {
+            uint64_t a = m->triangles[3 * t + k], b = m->triangles[3 * t + (k + 1) % 3];
+            keys[3 * t + k] = a < b ? a << 32 | b : b << 32 | a;
+        }
+    memcpy(e, keys, 3 * nt * sizeof *e);
+    qsort(e, 3 * nt, sizeof *e, edge_cmp);
+    size_t ne = 0;
+    for (size_t i = 0; i < 3 * nt; i++)
+        if (!ne || e[ne - 1] != e[i]) e[ne++] = e[i];
+    fp_mesh *o = nv + ne <= UINT32_MAX ? fp_mesh_create(nv + ne, 4 * nt, 0) : NULL;
+    if (!o) {
+        free(e);
+        free(keys);
+        return NULL;
+    }
+    memcpy(o->positions, m->positions, nv * 3 * sizeof(float));
+    for (size_t i = 0; i < ne; i++) {
+        uint32_t a = (uint32_t)(e[i] >> 32), b = (uint32_t)e[i];
+        for (int k = 0; k < 3; k++)
+            o->positions[3 * (nv + i) + k] = 0.5f * (m->positions[3 * a + k] + m->positions[3 * b + k]);
+    }
+    for (size_t t = 0; t < nt; t++) {
+        uint32_t v[3], mid[3];
+        for (int k = 0; k < 3; k++) {
+            v[k] = m->triangles[3 * t + k];
+            uint64_t *f = bsearch(&keys[3 * t + k], e, ne, sizeof *e, edge_cmp);
+            mid[k] = (uint32_t)(nv + (size_t)(f - e)); /* mid[k]: edge v[k] -> v[k+1] */
+        }
+        uint32_t tri[4][3] = {{v[0], mid[0], mid[2]}, {v[1], mid[1], mid[0]},
+                              {v[2], mid[2], mid[1]}, {mid[0], mid[1], mid[2]}};
+        memcpy(o->triangles + 12 * t, tri, sizeof tri);
+    }
+    free(e);
+    free(keys);
+    fp_mesh_compute_normals(o);
+    return o;
+}

@@ -499,6 +499,53 @@ static void test_normals_bad_index(void **state)
     assert_int_equal(fp_mesh_compute_normals(NULL), FP_MESH_ERR_INVALID);
 }
 
+/* fp_mesh_subdivide: two triangles sharing an edge give 4 + 5 vertices (the shared edge's
+ * midpoint once), 8 triangles of the documented corners and orientation; the icosahedron's
+ * 30 edges give 42 vertices and 80 outward triangles; NULL gives NULL. */
+static void test_subdivide(void **state)
+{
+    (void)state;
+    fp_mesh *q = fp_mesh_create(4, 2, 0);
+    assert_non_null(q);
+    const float pos[12] = {0, 0, 0, 2, 0, 0, 2, 2, 0, 0, 2, 0};
+    const uint32_t tri[6] = {0, 1, 2, 0, 2, 3};
+    memcpy(q->positions, pos, sizeof pos);
+    memcpy(q->triangles, tri, sizeof tri);
+    fp_mesh *s = fp_mesh_subdivide(q);
+    assert_non_null(s);
+    assert_int_equal(s->vertex_count, 4 + 5);
+    assert_int_equal(s->triangle_count, 8);
+    assert_null(s->uvs);
+    assert_memory_equal(s->positions, pos, sizeof pos);
+    /* edges in (smaller, larger) order: 01 02 03 12 23, their midpoints vertices 4..8 */
+    const float mid[15] = {1, 0, 0, 1, 1, 0, 0, 1, 0, 2, 1, 0, 1, 2, 0};
+    assert_memory_equal(s->positions + 12, mid, sizeof mid);
+    /* triangle 0 (0 1 2): m01 = 4, m12 = 7, m20 = 5 */
+    const uint32_t t0[12] = {0, 4, 5, 1, 7, 4, 2, 5, 7, 4, 7, 5};
+    assert_memory_equal(s->triangles, t0, sizeof t0);
+    for (size_t v = 0; v < s->vertex_count; v++) /* flat, counter-clockwise: +z */
+        assert_true(fabsf(s->normals[3 * v + 2] - 1.0f) < 1e-6f);
+    fp_mesh_free(&s);
+    fp_mesh_free(&q);
+
+    fp_mesh *m = icosahedron();
+    s = fp_mesh_subdivide(m);
+    assert_non_null(s);
+    assert_int_equal(s->vertex_count, 12 + 30);
+    assert_int_equal(s->triangle_count, 80);
+    for (size_t v = 0; v < s->vertex_count; v++) {
+        const float *p = s->positions + 3 * v, *n = s->normals + 3 * v;
+        assert_true(p[0] * n[0] + p[1] * n[1] + p[2] * n[2] > 0.0f);
+    }
+    fp_mesh *again = fp_mesh_subdivide(m); /* deterministic */
+    assert_memory_equal(again->positions, s->positions, 3 * s->vertex_count * sizeof(float));
+    assert_memory_equal(again->triangles, s->triangles, 3 * s->triangle_count * sizeof(uint32_t));
+    fp_mesh_free(&again);
+    fp_mesh_free(&s);
+    fp_mesh_free(&m);
+    assert_null(fp_mesh_subdivide(NULL));
+}
+
 static void test_bounds(void **state)
 {
     (void)state;
@@ -1659,6 +1706,7 @@ int main(void)
         cmocka_unit_test(test_normals_follow_moved_vertices),
         cmocka_unit_test(test_normals_bad_index),
         cmocka_unit_test(test_bounds),
+        cmocka_unit_test(test_subdivide),
         cmocka_unit_test(test_gltf_node_transform_applied),
         cmocka_unit_test(test_error_missing_file),
         cmocka_unit_test(test_error_empty_file),

@@ -7,7 +7,6 @@
  * and a zero-area triangle. No display needed. */
 #define _GNU_SOURCE
 #include "csrbf.h"
-#include "fp_bench.h"
 #include "fp_mesh.h"
 #include "vnormals.h"
 
@@ -139,7 +138,7 @@ static void test_ict_subdivided(void **state)
 {
     (void)state;
     fp_mesh *m = load_face();
-    fp_mesh *sub = fp_bench_subdivide(m);
+    fp_mesh *sub = fp_mesh_subdivide(m);
     assert_non_null(sub);
     run_frames(sub, 6);
     fp_mesh_free(&sub);
