@@ -23,7 +23,13 @@ static int plan_make(eval_plan *p, const csrbf_solver *cs, const csrbf_points *P
 {
     if (!cs || !P || !out || (flags & ~(unsigned)CSRBF_EVAL_JACOBIAN)) return CSRBF_ERR_INVALID;
     if (!cs->have_start) return CSRBF_ERR_STATE;
-    memset(p, 0, sizeof *p);
+    /* every other field is set below, in plan_sizes, plan_scratch or plan_select, before it
+     * is read; these a path may leave alone (no memset of the whole plan, 512 bytes: the
+     * smallest calls are short) */
+    p->fused = p->own = 0;
+    p->mem = NULL;
+    p->pairs = p->moved = 0;
+    p->maxd = 0.0;
     /* The scratch buffer is the only state evaluate touches; a concurrent caller that finds it
      * busy allocates its own. The solver itself is read-only here (but for the kept
      * selection, which only the scratch's holder uses). */
