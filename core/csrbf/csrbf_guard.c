@@ -320,6 +320,30 @@ static void follow_union(follow *f)
     f->ku = k;
 }
 
+/* A composed step's moved count and max displacement against the input shape, where the
+ * output may differ from it (every vertex, or the follow's U blocks). */
+static void composed_moved(const csrbf_points *shape, const follow *fw, const float *deformed,
+                           csrbf_eval_stats *ev)
+{
+    const float *b = shape->xyz;
+    const size_t nv = csrbf_points_count(shape);
+    size_t moved = 0, nb = fw ? fw->ku : 1;
+    double md = 0.0;
+    for (size_t k = 0; k < nb; k++) {
+        size_t v0 = fw ? (size_t)fw->U[k] * CSRBF_BLOCK : 0,
+               v1 = fw ? (v0 + CSRBF_BLOCK < nv ? v0 + CSRBF_BLOCK : nv) : nv;
+        for (size_t v = v0; v < v1; v++) {
+            double d0 = (double)deformed[3 * v] - b[3 * v], d1 = (double)deformed[3 * v + 1] - b[3 * v + 1],
+                   d2 = (double)deformed[3 * v + 2] - b[3 * v + 2];
+            double d = d0 * d0 + d1 * d1 + d2 * d2;
+            moved += d > 0.0;
+            if (d > md) md = d;
+        }
+    }
+    ev->moved = moved;
+    ev->max_displacement = sqrt(md);
+}
+
 static int guarded(csrbf_solver *s, const csrbf_points *shape, follow *fw, size_t n,
                    const float *start, const float *end, const csrbf_guard *guard, float *deformed,
                    csrbf_guard_stats *st)
@@ -440,26 +464,7 @@ static int guarded(csrbf_solver *s, const csrbf_points *shape, follow *fw, size_
     }
     out.reached = reached;
     if (st) {
-        if (out.substeps > 1) { /* moved and max displacement against the input shape: where
-                                   the output may differ from it (every vertex, or U) */
-            const float *b = shape->xyz;
-            size_t moved = 0, nb = fw ? fw->ku : 1;
-            double md = 0.0;
-            for (size_t k = 0; k < nb; k++) {
-                size_t v0 = fw ? (size_t)fw->U[k] * CSRBF_BLOCK : 0,
-                       v1 = fw ? (v0 + CSRBF_BLOCK < nv ? v0 + CSRBF_BLOCK : nv) : nv;
-                for (size_t v = v0; v < v1; v++) {
-                    double d0 = (double)deformed[3 * v] - b[3 * v],
-                           d1 = (double)deformed[3 * v + 1] - b[3 * v + 1],
-                           d2 = (double)deformed[3 * v + 2] - b[3 * v + 2];
-                    double d = d0 * d0 + d1 * d1 + d2 * d2;
-                    moved += d > 0.0;
-                    if (d > md) md = d;
-                }
-            }
-            out.eval.moved = moved;
-            out.eval.max_displacement = sqrt(md);
-        }
+        if (out.substeps > 1) composed_moved(shape, fw, deformed, &out.eval);
         *st = out;
     }
     if (reached < 1.0) {
