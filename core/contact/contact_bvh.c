@@ -174,10 +174,10 @@ static int certified(const struct track *k, lane *ln, const float *s, const bnod
     if (!cert_axis(x, ad)) return 0;
     /* a basis (u, w) of the plane across the axis */
     double h[3] = {fabs(ad[0]) < 0.6 ? 1 : 0, fabs(ad[0]) < 0.6 ? 0 : 1, 0}, u[3], w[3];
-    cross3(ad, h, u);
+    fp_cross3(ad, h, u);
     double lu = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
     for (int j = 0; j < 3; j++) u[j] /= lu;
-    cross3(ad, u, w);
+    fp_cross3(ad, u, w);
     const cert *ct = &k->cert[x->cert];
     int r = contour_tangled(ln, s, k->cyc + ct->start, ct->len, u, w);
     return r < 0 ? r : !r;

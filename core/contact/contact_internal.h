@@ -21,6 +21,7 @@
 #ifndef FP_CONTACT_INTERNAL_H
 #define FP_CONTACT_INTERNAL_H
 
+#include "fp_vec.h"
 #include "fp_contact.h"
 
 #include <errno.h>
@@ -484,12 +485,6 @@ static inline void tri_normal_f(const float *pos, const uint32_t *v, float out[3
 static inline double dmin(double a, double b) { return b < a ? b : a; }
 static inline double dmax(double a, double b) { return b > a ? b : a; }
 
-static inline void cross3(const double a[3], const double b[3], double o[3])
-{
-    o[0] = a[1] * b[2] - a[2] * b[1];
-    o[1] = a[2] * b[0] - a[0] * b[2];
-    o[2] = a[0] * b[1] - a[1] * b[0];
-}
 
 
 /* ---- what one file gives another (each defined, with its comment, in the file named) ---- */

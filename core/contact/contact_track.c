@@ -428,9 +428,9 @@ int fp_contact_set_pose(fp_contact *c, const float *base, const float *posed)
                 for (int k = 0; k < 3; k++) a[k] /= la, b[k] /= lb;
                 double cs = a[0] * b[0] + a[1] * b[1] + a[2] * b[2], ax[3], t1[3], t2[3];
                 if (cs > -0.999999) { /* w rotated by the least rotation taking a to b */
-                    cross3(a, b, ax);
-                    cross3(ax, w, t1);
-                    cross3(ax, t1, t2);
+                    fp_cross3(a, b, ax);
+                    fp_cross3(ax, w, t1);
+                    fp_cross3(ax, t1, t2);
                     for (int k = 0; k < 3; k++) w[k] += t1[k] + t2[k] / (1 + cs);
                 } else { /* turned over by the pose: the posed normal's side */
                     double s = 0;

@@ -5,6 +5,7 @@
  * Internals work in double on the mean adult right hand in its own frame (fp_hand.h), then
  * scale, mirror and place. Rotations are 3x3 row-major matrices.
  */
+#include "fp_vec.h"
 #include "fp_hand.h"
 
 #include "fp_error.h"
@@ -78,20 +79,9 @@ static void mat_tvec(const mat3 a, const double v[3], double out[3])
     memcpy(out, t, sizeof t);
 }
 
-static double dot3(const double a[3], const double b[3])
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static void cross3(const double a[3], const double b[3], double out[3])
-{
-    double t[3] = {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-    memcpy(out, t, sizeof t);
-}
-
 static double normalize3(double v[3])
 {
-    double n = sqrt(dot3(v, v));
+    double n = sqrt(fp_dot3(v, v));
     if (n > 0) {
         v[0] /= n;
         v[1] /= n;
@@ -402,12 +392,12 @@ int fp_hand_frame_from_palm(const fp_hand_model *model, fp_hand_side side,
     double d[3] = {direction[0], direction[1], direction[2]};
     if (normalize3(y) < 1e-9 || normalize3(d) < 1e-9)
         return -EDOM;
-    double dy = dot3(d, y);
+    double dy = fp_dot3(d, y);
     double z[3] = {-(d[0] - dy * y[0]), -(d[1] - dy * y[1]), -(d[2] - dy * y[2])};
     if (normalize3(z) < 1e-3)
         return -EDOM;
     double x[3];
-    cross3(y, z, x);
+    fp_cross3(y, z, x);
     mat3 r;
     set_columns(x, y, z, r);
     double pl[3] = {model->palm_mm[0] * model->size, model->palm_mm[1] * model->size,
@@ -454,10 +444,10 @@ static bool palm_triad(const double palm[3], const double idx[3], const double l
     }
     if (normalize3(e0) < 1e-6)
         return false;
-    cross3(e0, v, e2);
+    fp_cross3(e0, v, e2);
     if (normalize3(e2) < 1e-6)
         return false;
-    cross3(e2, e0, e1);
+    fp_cross3(e2, e0, e1);
     set_columns(e0, e1, e2, r);
     return true;
 }
@@ -659,7 +649,7 @@ int fp_hand_fit_size(const fp_hand_model *model, const float (*joints_mm)[FP_HAN
                 for (int k = 0; k < 3; k++)
                     d[k] = (double)joints_mm[i][FP_JOINT(f, sg + 1)][k] - joints_mm[i][FP_JOINT(f, sg)][k];
                 double mlen = model_segment(model, f, sg);
-                num += sqrt(dot3(d, d)) * mlen;
+                num += sqrt(fp_dot3(d, d)) * mlen;
                 den += mlen * mlen;
             }
     }
