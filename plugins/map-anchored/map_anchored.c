@@ -21,7 +21,8 @@
  * fingertip comes within engage x R of the surface; commit when every engaged hand's
  * fingertips are farther than release x R from the base (the hand has let go). A requested
  * engage grabs what touches too; with nothing within engage x R it grabs each point's
- * nearest skin within release x R (a pedal pressed with the hand hovering). A 1.0 host
+ * nearest skin within release x R (a pedal pressed with the hand hovering), and with
+ * nothing there either, the skin nearest the one point of contact nearest the face. A 1.0 host
  * without the surface service gets the paper's start points (the points themselves).
  *
  * Keys: hands=left|right|both (both), auto=0|1 (1), engage=F (0.5, in R), release=F (1.0, in R;
@@ -35,6 +36,7 @@
 #include <facepuppet/plugin.h>
 
 #include <errno.h>
+#include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -100,6 +102,28 @@ static int grab(anchored *a, const fp_frame_input *in, int h, double reach, size
     return got;
 }
 
+/* A requested engage with nothing within release x R (a pedal pressed with the hand away
+ * from the face): the one point of contact nearest the skin grabs the skin nearest it, so
+ * the request always takes hold. Returns 1, 0 (no point, or no room), or -1 as grab. */
+static int grab_nearest(anchored *a, const fp_frame_input *in, int h, size_t room)
+{
+    if (!a->surface || !a->surface->nearest) return -1;
+    if (!room) return 0;
+    float pts[FP_POINTS_MAX][3];
+    fp_surface_hit hit[FP_POINTS_MAX];
+    size_t n = fp_hand_points(in, h, a->points, pts), best = n;
+    if (a->surface->nearest(a->host, (const float (*)[3])pts, n, INFINITY, hit)) return -1;
+    for (size_t p = 0; p < n; p++)
+        if (hit[p].vertex != UINT32_MAX && (best == n || hit[p].distance < hit[best].distance)) best = p;
+    if (best == n) return 0;
+    size_t k = a->count++;
+    memcpy(a->start[k], hit[best].position, sizeof a->start[k]);
+    for (int c = 0; c < 3; c++) a->offset[k][c] = hit[best].position[c] - pts[best][c];
+    a->hand_of[k] = (uint8_t)h;
+    a->point_of[k] = (uint8_t)best;
+    return 1;
+}
+
 /* The paper's start points (a host without the surface service): the points themselves. */
 static void take_points(anchored *a, const fp_frame_input *in, int h, size_t room)
 {
@@ -129,6 +153,7 @@ static int engage(anchored *a, const fp_frame_input *in, bool requested, size_t 
         if (!(which & (1u << h))) continue;
         int got = grab(a, in, h, a->engage, cap - a->count);
         if (got == 0 && requested) got = grab(a, in, h, a->release, cap - a->count);
+        if (got == 0 && requested) got = grab_nearest(a, in, h, cap - a->count);
         if (got < 0) {
             take_points(a, in, h, cap - a->count);
             got = 1;
