@@ -1,6 +1,7 @@
 /* Hands that arrive: a live input's workspace estimated as it runs (fp_pose_auto.h). */
 #include "fp_pose_auto.h"
 
+#include <assert.h>
 #include <errno.h>
 #include <math.h>
 #include <stdlib.h>
@@ -11,7 +12,8 @@
 #define CAPACITY ((size_t)(FP_POSE_AUTO_WINDOW_S * FP_POSE_AUTO_RATE_HZ) * FP_HANDS)
 #define PERIOD_NS ((int64_t)(1e9 / FP_POSE_AUTO_RATE_HZ))
 
-_Static_assert(NBINS <= 65536, "bins fit in uint16_t");
+/* (NBINS <= 65536: a bin index fits in uint16_t; asserted at create, as clang does not
+ * take a floating-point expression in _Static_assert) */
 
 typedef struct sample {
     int64_t t_ns;
@@ -33,6 +35,7 @@ struct fp_pose_auto {
 int fp_pose_auto_create(fp_pose_auto **out)
 {
     *out = NULL;
+    assert(NBINS <= 65536); /* bins fit in uint16_t */
     fp_pose_auto *a = calloc(1, sizeof *a);
     if (!a) return -ENOMEM;
     a->ring = malloc(CAPACITY * sizeof *a->ring);
