@@ -78,6 +78,17 @@ static bool hand_near(const anchored *a, const fp_frame_input *in, int h, double
     return false;
 }
 
+/* Append control vector k: hand h's point p grabs `skin` (its start point), the point now
+ * at `point`; the offset skin - point is kept for the gesture. */
+static void add_point(anchored *a, int h, size_t p, const float skin[3], const float point[3])
+{
+    size_t k = a->count++;
+    memcpy(a->start[k], skin, sizeof a->start[k]);
+    for (int c = 0; c < 3; c++) a->offset[k][c] = skin[c] - point[c];
+    a->hand_of[k] = (uint8_t)h;
+    a->point_of[k] = (uint8_t)p;
+}
+
 /* Grab: the points of hand h within `reach` of the surface, appended to the control set
  * (start on the skin, offset kept). Returns how many grabbed, or -1 where the host has no
  * surface service (the caller then takes the points themselves). */
@@ -92,11 +103,7 @@ static int grab(anchored *a, const fp_frame_input *in, int h, double reach, size
     int got = 0;
     for (size_t p = 0; p < n && (size_t)got < room; p++) {
         if (hit[p].vertex == UINT32_MAX || !(hit[p].distance <= reach * in->radius)) continue;
-        size_t k = a->count++;
-        memcpy(a->start[k], hit[p].position, sizeof a->start[k]);
-        for (int c = 0; c < 3; c++) a->offset[k][c] = hit[p].position[c] - pts[p][c];
-        a->hand_of[k] = (uint8_t)h;
-        a->point_of[k] = (uint8_t)p;
+        add_point(a, h, p, hit[p].position, pts[p]);
         got++;
     }
     return got;
@@ -116,11 +123,7 @@ static int grab_nearest(anchored *a, const fp_frame_input *in, int h, size_t roo
     for (size_t p = 0; p < n; p++)
         if (hit[p].vertex != UINT32_MAX && (best == n || hit[p].distance < hit[best].distance)) best = p;
     if (best == n) return 0;
-    size_t k = a->count++;
-    memcpy(a->start[k], hit[best].position, sizeof a->start[k]);
-    for (int c = 0; c < 3; c++) a->offset[k][c] = hit[best].position[c] - pts[best][c];
-    a->hand_of[k] = (uint8_t)h;
-    a->point_of[k] = (uint8_t)best;
+    add_point(a, h, best, hit[best].position, pts[best]);
     return 1;
 }
 
@@ -129,13 +132,7 @@ static void take_points(anchored *a, const fp_frame_input *in, int h, size_t roo
 {
     float pts[FP_POINTS_MAX][3];
     size_t n = fp_hand_points(in, h, a->points, pts);
-    for (size_t p = 0; p < n && p < room; p++) {
-        size_t k = a->count++;
-        memcpy(a->start[k], pts[p], sizeof a->start[k]);
-        memset(a->offset[k], 0, sizeof a->offset[k]);
-        a->hand_of[k] = (uint8_t)h;
-        a->point_of[k] = (uint8_t)p;
-    }
+    for (size_t p = 0; p < n && p < room; p++) add_point(a, h, p, pts[p], pts[p]);
 }
 
 static int engage(anchored *a, const fp_frame_input *in, bool requested, size_t capacity)
