@@ -46,7 +46,7 @@ typedef struct anchored {
     fp_mapping mapping;
     unsigned hands;              /* FP_HANDMASK_* listened to */
     bool automatic;
-    double engage, release, clamp;
+    double engage, release, clamp, widen;
     int points;                  /* fp_points mode */
     size_t per_hand;             /* points per hand (FP_POINTS_*_COUNT) */
     bool engaged;
@@ -59,6 +59,9 @@ typedef struct anchored {
     float last_end[FP_CONTROL_CAPACITY][3];
     const fp_host *host;
     const fp_host_surface *surface; /* FP_HOST_EXT_SURFACE, or NULL (a 1.0 host) */
+    float rest_of[FP_CONTROL_CAPACITY][3];  /* where that skin was at rest (widen) */
+    float *rest;                 /* the first base seen (the loaded face), rest_n x 3 */
+    size_t rest_n;
 } anchored;
 
 /* The paper's rule with `factor` x R: the host's tip distances where they reach that far,
@@ -78,11 +81,17 @@ static bool hand_near(const anchored *a, const fp_frame_input *in, int h, double
     return false;
 }
 
-/* Append control vector k: hand h's point p grabs `skin` (its start point), the point now
- * at `point`; the offset skin - point is kept for the gesture. */
-static void add_point(anchored *a, int h, size_t p, const float skin[3], const float point[3])
+/* Append control vector k: hand h's point p grabs `skin` (its start point, base vertex
+ * `vertex` or UINT32_MAX), the point now at `point`; the offset skin - point is kept for the
+ * gesture, and where that skin was at rest. */
+static void add_point(anchored *a, int h, size_t p, const float skin[3], const float point[3],
+                      uint32_t vertex)
 {
     size_t k = a->count++;
+    if (a->rest && vertex < a->rest_n)
+        memcpy(a->rest_of[k], a->rest + 3 * (size_t)vertex, sizeof a->rest_of[k]);
+    else
+        memcpy(a->rest_of[k], skin, sizeof a->rest_of[k]);
     memcpy(a->start[k], skin, sizeof a->start[k]);
     for (int c = 0; c < 3; c++) a->offset[k][c] = skin[c] - point[c];
     a->hand_of[k] = (uint8_t)h;
@@ -103,7 +112,7 @@ static int grab(anchored *a, const fp_frame_input *in, int h, double reach, size
     int got = 0;
     for (size_t p = 0; p < n && (size_t)got < room; p++) {
         if (hit[p].vertex == UINT32_MAX || !(hit[p].distance <= reach * in->radius)) continue;
-        add_point(a, h, p, hit[p].position, pts[p]);
+        add_point(a, h, p, hit[p].position, pts[p], hit[p].vertex);
         got++;
     }
     return got;
@@ -123,7 +132,7 @@ static int grab_nearest(anchored *a, const fp_frame_input *in, int h, size_t roo
     for (size_t p = 0; p < n; p++)
         if (hit[p].vertex != UINT32_MAX && (best == n || hit[p].distance < hit[best].distance)) best = p;
     if (best == n) return 0;
-    add_point(a, h, best, hit[best].position, pts[best]);
+    add_point(a, h, best, hit[best].position, pts[best], hit[best].vertex);
     return 1;
 }
 
@@ -132,7 +141,7 @@ static void take_points(anchored *a, const fp_frame_input *in, int h, size_t roo
 {
     float pts[FP_POINTS_MAX][3];
     size_t n = fp_hand_points(in, h, a->points, pts);
-    for (size_t p = 0; p < n && p < room; p++) add_point(a, h, p, pts[p], pts[p]);
+    for (size_t p = 0; p < n && p < room; p++) add_point(a, h, p, pts[p], pts[p], UINT32_MAX);
 }
 
 static int engage(anchored *a, const fp_frame_input *in, bool requested, size_t capacity)
@@ -164,6 +173,19 @@ static int engage(anchored *a, const fp_frame_input *in, bool requested, size_t 
     return 1;
 }
 
+/* The rest shape for widen: the first base this instance sees (the loaded face, or the
+ * rig's posed base at the first frame), copied once; again if the vertex count changes. */
+static int keep_rest(anchored *a, const fp_frame_input *in)
+{
+    if (!in->mesh || !in->mesh->base || (a->rest && a->rest_n == in->mesh->vertex_count)) return 0;
+    free(a->rest);
+    a->rest_n = 0;
+    if (!(a->rest = malloc(in->mesh->vertex_count * 3 * sizeof *a->rest))) return -ENOMEM;
+    memcpy(a->rest, in->mesh->base, in->mesh->vertex_count * 3 * sizeof *a->rest);
+    a->rest_n = in->mesh->vertex_count;
+    return 0;
+}
+
 static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *out)
 {
     anchored *a = self->plugin_data;
@@ -172,6 +194,7 @@ static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *o
     out->count = 0;
     out->channel_count = 0;
     out->radius = in->radius;
+    if (a->widen > 0 && keep_rest(a, in) < 0) return -ENOMEM;
     if (a->engaged && (in->requested & FP_INTENT_CANCEL)) {
         a->engaged = false;
         out->intents = FP_INTENT_CANCEL;
@@ -203,6 +226,9 @@ static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *o
     }
     out->count = a->count;
     out->active = true;
+    /* a drag that carries the skin far widens the support (fp_drag_radius) */
+    out->radius = fp_drag_radius(in->radius, a->widen, (const float (*)[3])a->rest_of,
+                                 (const float (*)[3])out->end, a->count);
     bool commit = (in->requested & FP_INTENT_COMMIT) ||
                   (a->automatic && !(out->intents & FP_INTENT_ENGAGE) && !still_near);
     if (commit) {
@@ -221,12 +247,14 @@ static void reset(fp_mapping *self)
 
 static void destroy(fp_mapping *self)
 {
-    free(self->plugin_data);
+    anchored *a = self->plugin_data;
+    free(a->rest);
+    free(a);
 }
 
 /* The keys, typed (ABI 1.1): `facepuppet plugins` prints them, fpmu_params_parse checks
  * them. The order is that of the values create reads. */
-enum { KEY_HANDS, KEY_AUTO, KEY_RELEASE, KEY_CLAMP, KEY_ENGAGE, KEY_POINTS, KEY_COUNT };
+enum { KEY_HANDS, KEY_AUTO, KEY_RELEASE, KEY_CLAMP, KEY_ENGAGE, KEY_POINTS, KEY_WIDEN, KEY_COUNT };
 static const fp_param_info keys[KEY_COUNT + 1] = {
     {.name = "hands", .type = FP_PARAM_ENUM, .default_value = "both", .choices = "left|right|both",
      .description = "which hands deform"},
@@ -243,6 +271,9 @@ static const fp_param_info keys[KEY_COUNT + 1] = {
      .description = "auto engage once a fingertip is within engage x R of the surface"},
     {.name = "points", .type = FP_PARAM_ENUM, .default_value = "tips", .choices = FP_POINTS_CHOICES,
      .description = "points of contact per hand: the 5 tips, + palm centre and knuckles (11), every joint (21)"},
+    {.name = "widen", .type = FP_PARAM_FLOAT, .min = 0, .max = 100, .default_value = "0.5",
+     .unit = "R",
+     .description = "skin dragged farther than widen x R from rest widens the support to that distance / widen, so the skin around follows (0: the radius stays)"},
     {.name = NULL},
 };
 static const unsigned hand_masks[] = {FP_HANDMASK_LEFT, FP_HANDMASK_RIGHT, FP_HANDMASK_BOTH};
@@ -267,6 +298,7 @@ static int create(const fp_host *host, const fp_param *params, size_t nparams,
     a->release = v[KEY_RELEASE].number;
     a->clamp = v[KEY_CLAMP].number;
     a->points = (int)v[KEY_POINTS].number;
+    a->widen = v[KEY_WIDEN].number;
     int joints[FP_POINTS_MAX];
     a->per_hand = fp_points_joints(a->points, joints);
     a->host = host;
@@ -285,14 +317,16 @@ static const fp_mapping_factory factory = {
     .name = "anchored",
     .description = "the paper's anchored mode, grabbing the skin: start points on the skin at engage, end points follow the fingers",
     .usage = "anchored[,hands=left|right|both][,auto=0|1][,engage=F][,release=F][,clamp=F]\n"
-             "        [,points=tips|tips+palm|all]\n"
+             "        [,points=tips|tips+palm|all][,widen=F]\n"
              "  auto=1 engages when a fingertip comes within engage*R of the surface (0.5)\n"
              "  and commits when the hand lets go (farther than release*R, 1.0; engage <=\n"
              "  release). The points touching the face (within engage*R) grab the skin under\n"
              "  them: the grabbed skin moves as the fingertip moves; the others pull nothing.\n"
              "  clamp limits each control vector to clamp*R (0: none, the default).\n"
              "  points: the fingertips (5 per hand, the paper's), tips+palm (+ palm centre and\n"
-             "  knuckles: 11) or all (every joint: 21 per hand, 42 for two).",
+             "  knuckles: 11) or all (every joint: 21 per hand, 42 for two).\n"
+             "  widen: skin dragged farther than widen*R from where it was at rest widens the\n"
+             "  support to that distance / widen (0.5), so the skin around follows; 0: never.",
     .create = create,
     .params = keys,
 };

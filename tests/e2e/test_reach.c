@@ -6,8 +6,9 @@
  * gesture's base (a touching fingertip), the base vertex nearest that start point is the
  * grabbed skin; its reach is how far it moved (frame - base) over how far the fingertip asked
  * (|end - start|). Vectors that ask for less than 1e-4 R are left out (a resting finger
- * asks nothing). Asserted: the median over every run's vectors is at least 0.85 (issue 51's
- * first figure is 0.90; measured 0.88). Printed: the table, each run's 10th percentile (FP_TEST_VERBOSE adds the
+ * asks nothing). Asserted: the median over every run's vectors is at least 0.90 (issue 51's
+ * first figure; measured 1.00) and every run's 10th percentile at least 0.35 (the issue's
+ * 0.60 holds on 9 of 12 runs; the worst measured 0.42). Printed: the table, each run's 10th percentile (FP_TEST_VERBOSE adds the
  * log). Experiments: FP_REACH_NO_CONTACT=1 (no contact guard), FP_REACH_RADIUS=R (mesh
  * units), FP_REACH_SAVE=FILE.obj (the frame of the largest ask).
  *
@@ -103,7 +104,7 @@ static void one_run(const char *face, const char *rec, samples *all, int *runs_c
     samples run = {0};
     unsigned long frames = 0, active = 0, limited = 0, by_contact = 0, by_flip = 0, composed = 0;
     int substeps = 1;
-    double max_asked = 0;
+    double max_asked = 0, max_moved = 0;
     for (uint64_t k = 0;; k++) {
         int64_t now = t0 + (int64_t)llround((double)k * 1e9 / 30.0);
         while (!fp_session_inputs_ready(s, now)) fp_test_nap_ms(1);
@@ -135,15 +136,16 @@ static void one_run(const char *face, const char *rec, samples *all, int *runs_c
                     if (getenv("FP_REACH_SAVE")) fp_session_save(s, getenv("FP_REACH_SAVE"), err, sizeof err);
                 }
                 push(&run, sqrt(moved) / asked);
+                if (sqrt(moved) > max_moved) max_moved = sqrt(moved);
             }
         }
         if (fp_session_finished(s)) break;
     }
     double med = run.n ? fp_median(run.v, run.n) : NAN, p10 = run.n ? fp_percentile(run.v, run.n, 0.10) : NAN;
     printf("%-14.14s %-16s frames %4lu active %4lu composed %3lu (up to %2d maps) limited %3lu "
-           "contact-scaled %3lu (%3lu for flips alone) vectors %4zu reach median %5.1f%% p10 %5.1f%%, largest ask %.1f mm "
-           "(R %.1f mm)\n", face, rec, frames, active, composed, substeps, limited, by_contact, by_flip, run.n,
-           100 * med, 100 * p10, max_asked * mm, R * mm);
+           "contact-scaled %3lu (%3lu for flips alone) vectors %4zu reach median %5.1f%% p10 %5.1f%%, largest ask %.1f mm, "
+           "largest drag %.1f mm (R %.1f mm)\n", face, rec, frames, active, composed, substeps, limited, by_contact,
+           by_flip, run.n, 100 * med, 100 * p10, max_asked * mm, max_moved * mm, R * mm);
     fflush(stdout);
     if (run.n) {
         if (p10 < *worst_p10) *worst_p10 = p10;
@@ -173,13 +175,15 @@ static void test_reach_anchored(void **state)
            "p10 %.1f%%, worst run's p10 %.1f%%\n", all.n, runs, 100 * med,
            all.n ? 100 * fp_percentile(all.v, all.n, 0.10) : NAN, 100 * worst_p10);
     assert_true(all.n > 0);
-    /* The issue's target is 0.90; measured 0.88-0.91 (the hands at the frame's time move
-     * the figure by a few per cent): asserted with a little room, so that a change that
-     * loses reach fails here. */
-    assert_true(med >= 0.85);
-    /* The issue's second figure, every run's 10th percentile >= 60%, does not hold yet: the
-     * contact guard holds back frames where the dragged skin's triangles turn past 90
-     * degrees or cross (ICT grab: 100 mm drags). Printed above, not asserted. */
+    /* The issue's target is 0.90; measured 1.00 since the anchored mapping widens the
+     * support of a long drag (widen=0.5; 0.88 before). */
+    assert_true(med >= 0.90);
+    /* The issue's second figure, every run's 10th percentile >= 60%, holds on 9 of 12 runs:
+     * measured 41.7% (MediaPipe grab: the face pushed 98 mm in), 55.7% (ICT Waiting), 59.6%
+     * (Lee Perry-Smith grab: 109 mm); the contact guard holds back frames where the dragged
+     * skin would cross or turn past 90 degrees. Asserted with room, so that a change that
+     * loses reach fails here; the 60% target is printed above, not asserted. */
+    assert_true(worst_p10 >= 0.35);
     free(all.v);
 }
 

@@ -98,6 +98,27 @@ static inline void fp_clamp_vector(const float start[3], float end[3], double ma
     for (int i = 0; i < 3; i++) end[i] = (float)(start[i] + d[i] * k);
 }
 
+/** The support radius for a drag that carries the skin far: max(radius, d / widen), d the
+ *  largest distance from a control vector's end point to where its skin was at rest
+ *  (rest[i], n x 3 mesh units: the grabbed vertex's position in the loaded face; a vector
+ *  with no known rest point gives its start point). A single Wendland map folds beyond a
+ *  drag of 0.47 R, and a composition of injective maps still turns the skin around a drag
+ *  of a few R over on itself (the grabbed point runs ahead of a support that stays R wide);
+ *  a support that grows with the drag makes the skin around follow, as clay does, with the
+ *  same slope at any length. widen <= 0 keeps radius. Mesh units in and out; pure. */
+static inline double fp_drag_radius(double radius, double widen, const float (*rest)[3],
+                                    const float (*end)[3], size_t n)
+{
+    if (!(widen > 0)) return radius;
+    double r = radius;
+    for (size_t i = 0; i < n; i++) {
+        double d[3] = {end[i][0] - rest[i][0], end[i][1] - rest[i][1], end[i][2] - rest[i][2]};
+        double w = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) / widen;
+        if (w > r) r = w;
+    }
+    return r;
+}
+
 /** Parse a finite decimal number in [lo, hi] (plugin_util.h's fp_parse_decimal: no hex, inf
  *  or nan); false where the text is not one. */
 static inline bool fp_parse_double(const char *v, double lo, double hi, double *out)
