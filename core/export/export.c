@@ -152,8 +152,9 @@ int fp_export_begin(const fp_mesh *base, const fp_export_options *opt, fp_export
     if ((unsigned)opt->format > FP_EXPORT_OBJ_SEQ)
         return fp_errorf(err, errlen, -EINVAL, "export: unknown format %d", (int)opt->format);
     if (opt->max_error_mm < 0 || !isfinite(opt->max_error_mm) || opt->mm_per_unit < 0 ||
-        !isfinite(opt->mm_per_unit))
-        return fp_errorf(err, errlen, -EINVAL, "export: max error and mm per unit must be >= 0");
+        !isfinite(opt->mm_per_unit) || opt->frame_rate < 0 || !isfinite(opt->frame_rate))
+        return fp_errorf(err, errlen, -EINVAL,
+                         "export: max error, mm per unit and frame rate must be >= 0");
     if (strlen(opt->path) >= 4000)
         return fp_errorf(err, errlen, -EINVAL, "output path too long (%zu bytes, at most 3999)",
                          strlen(opt->path));
@@ -547,6 +548,17 @@ static uint64_t file_size(const char *path)
     return stat(path, &st) == 0 ? (uint64_t)st.st_size : 0;
 }
 
+/* The frames' rate: the options', else (frames - 1) over the span of their times; 0 for one
+ * frame with none given. */
+static double frame_rate(const fp_exporter *x)
+{
+    if (x->opt.frame_rate > 0)
+        return x->opt.frame_rate;
+    if (x->frames < 2 || !(x->last_time > x->first_time))
+        return 0;
+    return (double)(x->frames - 1) / (x->last_time - x->first_time);
+}
+
 static int finish_gltf(fp_exporter *x, fp_export_result *res, char *err, size_t errlen)
 {
     const size_t F = (size_t)x->frames, n = x->n;
@@ -621,7 +633,9 @@ static int finish_gltf(fp_exporter *x, fp_export_result *res, char *err, size_t 
     fp_mesh_morph_animation anim = {.target_count = K, .targets = targets,
                                     .target_names = (const char *const *)tnames,
                                     .frame_count = F, .times = times, .weights = W,
-                                    .step = x->opt.step, .name = x->opt.name};
+                                    .step = x->opt.step, .name = x->opt.name,
+                                    .unit_scale = x->opt.mm_per_unit / 1000,
+                                    .frame_rate = frame_rate(x)};
     unsigned dropped = 0;
     rc = fp_mesh_save_animation(x->base, &anim, x->path, &dropped, err, errlen);
     free(times);
@@ -723,6 +737,8 @@ int fp_export_finish(fp_exporter **xp, fp_export_result *res, char *err, size_t 
     }
     if (res && !rc) {
         res->frames = x->frames;
+        res->frame_rate = frame_rate(x);
+        res->unit_scale = x->opt.mm_per_unit / 1000;
         if (x->opt.format == FP_EXPORT_OBJ_SEQ) {
             res->bytes = x->seq_bytes;
             res->dropped = x->dropped;

@@ -9,11 +9,15 @@
  *     of the frames x frames Gram matrix D D^T of the (frames x 3n) displacement matrix D,
  *     LAPACK dsyev; K the smallest whose largest per-vertex error, measured with the float32
  *     targets and weights written, is within max_error_mm). Written by
- *     fp_mesh_save_animation (core/mesh).
+ *     fp_mesh_save_animation (core/mesh). In metres, as glTF wants: the vertices stay in
+ *     mesh units under a root node scaled by mm_per_unit / 1000 ("NAME_metres"); the frame
+ *     rate is named in asset.extras.frameRate and the animation's extras.frameRate.
  *   - pc2: Point Cache 2 (little-endian; header "POINTCACHE2\0", version 1, points, start
- *     frame, sampling 1, samples; then samples x points x 3 float32).
+ *     frame 0, sampling 1, samples; then samples x points x 3 float32). PC2 has no place for
+ *     a rate: start and sampling count frames of the reader's scene (one sample a frame),
+ *     so the scene must run at the take's rate (docs/export.md, the Blender recipe).
  *   - mdd: LightWave MDD (big-endian; frames, points, frames float32 times in seconds, then
- *     frames x points x 3 float32).
+ *     frames x points x 3 float32): the times carry the rate.
  *   - obj-seq: one mesh file per frame in a folder (PATH/STEM_NNNNNN.obj), each written back
  *     as the input came in (fp_mesh_save_ex).
  * Point caches hold every frame's positions exactly (the float32 given), in the mesh's vertex
@@ -65,6 +69,9 @@ typedef struct fp_export_options {
     const char *stem;        /* obj-seq file names' stem; NULL: "frame" */
     const char *seq_ext;     /* obj-seq mesh format by extension; NULL: the base mesh's own,
                                 else "obj" */
+    double frame_rate;       /* the frames' rate, frames per second (a take's nominal rate,
+                                or the resampling rate), named in the glTF and in the result;
+                                0: measured from the frames' times at finish */
 } fp_export_options;
 
 typedef struct fp_export_result {
@@ -76,6 +83,12 @@ typedef struct fp_export_result {
                                 0 for point caches (exact) */
     double max_error_units;  /* the same in mesh units */
     unsigned dropped;        /* FP_MESH_DROPPED_* bits: what the format could not keep */
+    double frame_rate;       /* frames per second: the options' rate, else (frames - 1) over
+                                the span from the first frame's time to the last's; 0 for a
+                                single frame with no rate given */
+    double unit_scale;       /* metres per mesh unit (mm_per_unit / 1000): glTF writes it as
+                                its root node's scale; the other formats hold mesh units,
+                                and a reader scales the mesh by it (Blender's importer) */
 } fp_export_result;
 
 typedef struct fp_exporter fp_exporter;

@@ -204,6 +204,16 @@ typedef struct fp_mesh_morph_animation {
     const float *weights;          /* F x K: weights of the targets at each key */
     int step;                      /* 0: LINEAR sampler, 1: STEP */
     const char *name;              /* the animation's name, or NULL */
+    double unit_scale;             /* > 0: metres per mesh unit, written as the uniform scale
+                                      of a root node (named "NAME_metres", "take_metres")
+                                      whose one child is the mesh's node, so that readers
+                                      place the mesh in metres (glTF 2.0 3.4: units are
+                                      metres); the vertices stay in mesh units. 0: no root
+                                      node (the mesh's node is the scene's) */
+    double frame_rate;             /* > 0: the frames' rate, frames per second, named in
+                                      asset.extras.frameRate and the animation's
+                                      extras.frameRate (glTF has no field of its own for it;
+                                      the keys' times are in seconds). 0: not named */
 } fp_mesh_morph_animation;
 
 /** Write `mesh` as glTF 2.0 (.gltf, buffer embedded as base64, or .glb) with morph targets
@@ -213,7 +223,9 @@ typedef struct fp_mesh_morph_animation {
  *  in mesh.extras.targetNames, mesh.extras.sourceVertex); each
  *  primitive gets K POSITION targets (accessors with min/max) sharing the vertex set. From a
  *  glTF input the document's nodes and materials are not kept (*dropped says so).
- *  Buffer views carry their target (34962/34963) except the animation's. Atomic as
+ *  Buffer views carry their target (34962/34963) except the animation's. anim->unit_scale
+ *  adds the root node of that scale (the animation's channel stays on node 0, the mesh's);
+ *  anim->frame_rate names the rate in extras. Atomic as
  *  fp_mesh_save(). Returns FP_MESH_OK, INVALID (bad arguments, non-finite values, times not
  *  increasing), UNSUPPORTED (extension other than gltf/glb), and the save's codes. */
 int fp_mesh_save_animation(const fp_mesh *mesh, const fp_mesh_morph_animation *anim,

@@ -356,6 +356,11 @@ void add_animation(GltfOut &g, const fp_mesh_morph_animation *anim)
     tinygltf::Animation an;
     an.name = anim->name ? anim->name : "take";
     an.samplers.push_back(sm);
+    if (anim->frame_rate > 0) {
+        tinygltf::Value::Object ex;
+        ex["frameRate"] = tinygltf::Value(anim->frame_rate);
+        an.extras = tinygltf::Value(ex);
+    }
     tinygltf::AnimationChannel ch;
     ch.sampler = 0;
     ch.target_node = 0;
@@ -418,8 +423,24 @@ void build_gltf(const fp_mesh *m, const fp_mesh_morph_animation *anim, GltfOut &
     g.model.nodes.push_back(node);
     tinygltf::Scene scene;
     scene.nodes.push_back(0);
+    if (anim && anim->unit_scale > 0) { // mesh units to metres above the mesh's node
+        tinygltf::Node root;
+        root.name = std::string(anim->name ? anim->name : "take") + "_metres";
+        root.scale.assign(3, anim->unit_scale);
+        root.children.push_back(0);
+        g.model.nodes.push_back(root);
+        scene.nodes[0] = int(g.model.nodes.size() - 1);
+    }
     g.model.scenes.push_back(scene);
     g.model.defaultScene = 0;
+    if (anim && (anim->frame_rate > 0 || anim->unit_scale > 0)) {
+        tinygltf::Value::Object ex;
+        if (anim->frame_rate > 0)
+            ex["frameRate"] = tinygltf::Value(anim->frame_rate);
+        if (anim->unit_scale > 0)
+            ex["metresPerUnit"] = tinygltf::Value(anim->unit_scale);
+        g.model.asset.extras = tinygltf::Value(ex);
+    }
     if (anim)
         add_animation(g, anim);
     g.model.buffers.push_back(std::move(g.buffer));

@@ -315,6 +315,10 @@ extern "C" int fp_mesh_save_animation(const fp_mesh *mesh, const fp_mesh_morph_a
         int rc = check_mesh(mesh, path, err, errlen);
         if (rc != FP_MESH_OK)
             return rc;
+        if (!(anim->unit_scale >= 0 && std::isfinite(anim->unit_scale)) ||
+            !(anim->frame_rate >= 0 && std::isfinite(anim->frame_rate)))
+            return fp__mesh_error(err, errlen, FP_MESH_ERR_INVALID, path,
+                                  "unit scale and frame rate must be finite and >= 0");
         const size_t K = anim->target_count, F = anim->frame_count;
         for (size_t i = 0; i < K * 3 * mesh->vertex_count; i++)
             if (!std::isfinite(anim->targets[i]))

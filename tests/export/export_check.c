@@ -5,7 +5,9 @@
  *   .gltf / .glb read back with tinygltf (gltf_anim.cpp, not core/mesh); the animation
  *                evaluated at each frame's time (its own sampler interpolation), positions
  *                base + sum w_k target_k in float32, each glTF vertex against its mesh vertex,
- *                within MM millimetres (mm per unit from fp_take_player_mm_per_unit).
+ *                within MM millimetres (mm per unit from fp_take_player_mm_per_unit); the
+ *                mesh's node placed in metres (the scale above it mm per unit / 1000) and
+ *                asset.extras.frameRate the take's rate.
  * Prints one line of figures; exit 0 when everything holds, 1 otherwise, 64 on usage (a bad
  * or unknown option named). */
 #define _GNU_SOURCE
@@ -15,6 +17,7 @@
 #include <facepuppet/plugin_util.h> /* fp_parse_decimal: numbers as in every option */
 
 #include <math.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -155,12 +158,18 @@ int main(int argc, char **argv)
             }
             k++;
         }
+        /* in metres (the mesh's node under a scale of mm per unit / 1000), the take's rate named */
+        const fp_take_rate rate = fp_take_player_header(p)->rate;
+        const double want_rate = rate.den ? (double)rate.num / rate.den : 0;
+        const bool metres = fabs(a.unit_scale - mmu / 1000) <= 1e-9 * (mmu / 1000);
+        const bool rate_ok = fabs(a.frame_rate - want_rate) <= 1e-9 * want_rate;
         printf("%s: %zu frames, %zu glTF vertices (mesh %zu), %zu triangles, "
                "%zu primitives, materials [%s], K = %zu, largest error %.6g mm at frame %zu "
-               "(limit %.6g mm, %.6g mm per unit)\n", file, k, a.vertices, n,
+               "(limit %.6g mm, %.6g mm per unit); scene scale %.6g (want %.6g: metres), "
+               "asset.extras.frameRate %.6g (the take's %.6g)\n", file, k, a.vertices, n,
                a.triangles, a.primitives, a.material_names, a.targets, worst * mmu, worst_frame,
-               max_mm, mmu);
-        bad += worst * mmu > max_mm || k != frames;
+               max_mm, mmu, a.unit_scale, mmu / 1000, a.frame_rate, want_rate);
+        bad += worst * mmu > max_mm || k != frames || !metres || !rate_ok;
         free(w);
         fp_test_gltf_anim_free(&a);
     }

@@ -98,6 +98,25 @@ extern "C" int fp_test_gltf_anim_load(const char *path, size_t mesh_vertices,
     a->times = (float *)std::malloc(times.size() * 4);
     a->weights = (float *)std::malloc(weights.size() * 4 + 4);
     a->source_vertex = (uint32_t *)std::malloc(a->vertices * 4);
+    a->frame_rate = m.asset.extras.Has("frameRate") && m.asset.extras.Get("frameRate").IsNumber()
+                        ? m.asset.extras.Get("frameRate").GetNumberAsDouble() : 0;
+    // the path from the mesh's node up to a scene root: each uniform scale multiplied in
+    a->unit_scale = 1;
+    for (int ni = an.channels[0].target_node, hops = 0; ni >= 0 && hops <= int(m.nodes.size()); hops++) {
+        const tinygltf::Node &nd = m.nodes[size_t(ni)];
+        if (!nd.matrix.empty() || !nd.rotation.empty() || !nd.translation.empty() ||
+            (!nd.scale.empty() && (nd.scale.size() != 3 || nd.scale[0] != nd.scale[1] ||
+                                   nd.scale[1] != nd.scale[2]))) {
+            a->unit_scale = -1;
+            break;
+        }
+        if (!nd.scale.empty()) a->unit_scale *= nd.scale[0];
+        int parent = -1;
+        for (size_t q = 0; q < m.nodes.size() && parent < 0; q++)
+            for (int c : m.nodes[q].children)
+                if (c == ni) parent = int(q);
+        ni = parent;
+    }
     if (!a->base || !a->target || !a->times || !a->weights || !a->source_vertex) return fail("out of memory");
     std::memcpy(a->base, base.data(), base.size() * 4);
     std::memcpy(a->target, tg.data(), tg.size() * 4);

@@ -21,6 +21,11 @@ typedef struct fp_test_gltf_anim {
     int step;                /* STEP sampler */
     uint32_t *source_vertex; /* N: the mesh vertex of each glTF vertex (seamCopyOf) */
     size_t primitives, materials, nodes, target_names, triangles;
+    double unit_scale;       /* the scale from the mesh's node to the scene (the product of
+                                the uniform scales of it and its ancestors; 1: none), or -1
+                                when a node on that path has a non-uniform scale, a
+                                rotation, a translation or a matrix */
+    double frame_rate;       /* asset.extras.frameRate; 0 where it is not there */
     char material_names[1024]; /* "a,b,c" */
 } fp_test_gltf_anim;
 

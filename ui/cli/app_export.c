@@ -38,10 +38,17 @@ int fp_app_export_close(const char *cmd, const char *option, fp_exporter **x,
         fprintf(f, "%s: exported %llu frames to %s (%s): ", cmd, (unsigned long long)res.frames,
                 file, fp_export_format_name(format));
         if (format == FP_EXPORT_GLTF || format == FP_EXPORT_GLB)
-            fprintf(f, "K = %zu morph targets, %.2f MB, largest error %.4g mm (limit %.4g mm)\n",
-                    res.targets, (double)res.bytes / 1e6, res.max_error_mm, limit_mm);
+            fprintf(f, "K = %zu morph targets, %.2f MB, largest error %.4g mm (limit %.4g mm); "
+                    "in metres: root node scale %.6g (%.6g mm per mesh unit)",
+                    res.targets, (double)res.bytes / 1e6, res.max_error_mm, limit_mm,
+                    res.unit_scale, res.unit_scale * 1000);
         else
-            fprintf(f, "%.2f MB, every frame exact\n", (double)res.bytes / 1e6);
+            fprintf(f, "%.2f MB, every frame exact; mesh units of %.6g mm (scale %.6g for "
+                    "metres)", (double)res.bytes / 1e6, res.unit_scale * 1000, res.unit_scale);
+        if (res.frame_rate > 0)
+            fprintf(f, "; %.6g fps\n", res.frame_rate);
+        else
+            fprintf(f, "; one frame, no rate\n");
         if (res.dropped) {
             char what[256];
             fprintf(f, "%s: note: %s cannot hold the input's %s\n", cmd,

@@ -14,9 +14,12 @@
 int fp_app_export_open(const char *cmd, const char *file, const struct fp_mesh *mesh,
                        double mm_per_unit, const char *name, fp_exporter **x);
 
-/** Finish *x and print the summary ("CMD: exported N frames to FILE (FORMAT): K targets,
- *  SIZE, largest error E mm (limit L mm)"; what the format dropped as a note) to f unless
- *  quiet. An error prints "CMD: OPTION: MESSAGE" ("facepuppet run: --export: FILE: write
+/** Finish *x and print the summary to f unless quiet: "CMD: exported N frames to FILE
+ *  (FORMAT): " then for glTF "K = K morph targets, SIZE MB, largest error E mm (limit L mm);
+ *  in metres: root node scale S (M mm per mesh unit)", for the others "SIZE MB, every frame
+ *  exact; mesh units of M mm (scale S for metres)", and always "; R fps" (the rate the
+ *  exporter was given, else measured from the frames' times); what the format dropped as a
+ *  note. An error prints "CMD: OPTION: MESSAGE" ("facepuppet run: --export: FILE: write
  *  failed: ..."), or "CMD: MESSAGE" with option NULL (the export command, whose output is
  *  the command's own: "facepuppet export: FILE: write failed: ..."); core/export's messages
  *  begin with FILE. Returns the exit status (0, or 73/65/70 by fp_app_exit_code). */

@@ -70,12 +70,18 @@ static void usage(FILE *f)
         "              animation whose weights channel has a key at every frame (Blender,\n"
         "              Unreal, Unity). K is the fewest principal components of the frames'\n"
         "              displacements that keep every vertex of every frame within --max-error.\n"
-        "  pc2, mdd    point caches: every frame's positions exactly (float32), in the mesh's\n"
-        "              vertex order (Blender's Mesh Cache modifier, Maya, 3ds Max)\n"
+        "              In metres: a root node scales the mesh by mm per unit / 1000; the rate\n"
+        "              is named in asset.extras.frameRate.\n"
+        "  pc2, mdd    point caches: every frame's positions exactly (float32, mesh units), in\n"
+        "              the mesh's vertex order (Blender's Mesh Cache modifier, Maya, 3ds Max).\n"
+        "              MDD stores each frame's time; PC2 no rate: play it in a scene at the\n"
+        "              take's (the README's Blender recipe)\n"
         "  obj-seq     one mesh per frame in a folder, written back as the input came in\n"
         "              (quads, UV seams, groups, materials kept)\n"
         "  png-seq     one PNG per frame, drawn as the live viewer draws the face, headless\n"
-        "              (needs a display: xvfb-run on a server)\n\n"
+        "              (needs a display: xvfb-run on a server)\n"
+        "The summary line names the frame rate (the take's, or --fps) and the mesh's unit\n"
+        "(the glTF's root scale, the caches' scale to metres).\n\n"
         "  -f, --format F        the format (required)\n"
         "  -o, --out PATH        the file (a folder for obj-seq); default: the take's path with\n"
         "                        the format's extension (obj-seq: TAKE_frames/)\n"
@@ -318,13 +324,14 @@ static int check_gltf_name(const char *out, fp_export_format fmt)
 /* Where the frames go: the exporter (core/export), or for png-seq the folder `out` (made if
  * missing) and a headless renderer. Returns 0 or the exit status (said). */
 static int open_sink(sink *k, const export_args *a, const fp_session *s, const char *out,
-                     const char *name, double mm_per_unit)
+                     const char *name, double mm_per_unit, double frame_rate)
 {
     char err[2048];
     int rc;
     fp_export_options eo = {.format = a->fmt, .path = out, .max_error_mm = a->max_error,
                             .mm_per_unit = mm_per_unit, .max_targets = a->max_targets,
-                            .step = a->step, .name = name, .stem = name};
+                            .step = a->step, .name = name, .stem = name,
+                            .frame_rate = frame_rate};
     if (!a->png && (rc = fp_export_begin(fp_session_mesh(s), &eo, &k->x, err, sizeof err))) {
         fprintf(stderr, "facepuppet export: %s\n", err);
         return fp_app_exit_code(rc, FP_APP_OUTPUT);
@@ -451,7 +458,10 @@ static int export_take(const export_args *a, fp_take_player *p, sink *k, float *
     fp_session *s = fp_take_player_session(p);
     char name[96];
     snprintf(name, sizeof name, "%s_T%03u", h->slate, h->take);
-    if ((status = open_sink(k, a, s, out, name, mm_per_unit))) return status;
+    /* the output's rate: --fps, else the take's (named in the file and the summary) */
+    const double rate = a->fps > 0 ? a->fps
+                        : h->rate.den ? (double)h->rate.num / (double)h->rate.den : 0;
+    if ((status = open_sink(k, a, s, out, name, mm_per_unit, rate))) return status;
     w.s = s;
     w.n = fp_session_vertex_count(s);
     w.total = fp_take_reader_frames(r);
@@ -474,12 +484,8 @@ static int export_take(const export_args *a, fp_take_player *p, sink *k, float *
                    (unsigned long long)k->frames, a->width, a->height, out, (double)k->bytes / 1e6);
         return FP_EXIT_OK;
     }
-    status = fp_app_export_close("facepuppet export", NULL, &k->x, a->fmt, out, a->max_error,
-                                 a->quiet, stdout);
-    if (!a->quiet && status == FP_EXIT_OK && (a->fmt == FP_EXPORT_GLTF || a->fmt == FP_EXPORT_GLB))
-        printf("facepuppet export: %.6g mm per mesh unit; frame rate %u/%u%s\n", mm_per_unit,
-               h->rate.num, h->rate.den, a->fps > 0 ? " (resampled)" : "");
-    return status;
+    return fp_app_export_close("facepuppet export", NULL, &k->x, a->fmt, out, a->max_error,
+                               a->quiet, stdout);
 }
 
 static int export_main(int argc, char **argv)
