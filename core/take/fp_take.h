@@ -340,6 +340,32 @@ int fp_take_reader_next(fp_take_reader *r, fp_take_frame *frame, char *err, size
 void fp_take_reader_close(fp_take_reader **r);
 
 /* ------------------------------------------------------------------------------------- */
+/* Editing a take's rating and description                                                 */
+
+/** What fp_take_edit_header changes. */
+typedef struct fp_take_edit {
+    bool set_rating;           /* set the rating to `rating` (0 none .. 5) */
+    int rating;
+    const char *description;   /* the new description ("" clears it); NULL keeps it */
+    bool open_ok;              /* rewrite a take with no end chunk too (see below) */
+} fp_take_edit;
+
+/** Rewrite the header of the take at `path` with e's rating and description (`facepuppet
+ *  takes rate` and `describe`). Only the header chunk's "rating" and "description" members
+ *  change (a member missing is added); every other byte of the file (the signature, the
+ *  header's other members as written, every frame chunk, the end chunk) is copied as it was.
+ *  Atomic: a temporary file beside the take (fp_file_open_output: a symbolic link written
+ *  through, the file's mode kept), fsync, renamed over it, the folder synced: a crash leaves
+ *  the old take or the new one. The take is read whole first (fp_take_reader_open); one with
+ *  no end chunk and no damage may still be recording (its recorder would write on into the
+ *  replaced file) and is refused with -EBUSY unless e->open_ok. Returns 0, or -EINVAL (NULL,
+ *  a rating outside 0..5, a description that is not UTF-8 text: fp_text_ok with lines),
+ *  the reader's codes (-ENOENT, -EBADMSG a damaged header, -ENOTSUP, ...), -EBUSY, or the
+ *  write's (-EACCES, -ENOSPC, -EIO; the take then as it was), with err naming the file.
+ *  Nothing printed. Any thread; not against another writer of the same file. */
+int fp_take_edit_header(const char *path, const fp_take_edit *e, char *err, size_t errlen);
+
+/* ------------------------------------------------------------------------------------- */
 /* Listing a folder                                                                        */
 
 typedef struct fp_take_info {
@@ -354,6 +380,7 @@ typedef struct fp_take_info {
     char mapping[64];
     int rating;
     char date[32];
+    char description[512];     /* the header's description (truncated), "" when none */
     bool complete;             /* closed normally */
     int error;                 /* 0, or the code why this file could not be read */
     char message[256];         /* the error or the cut warning, "" when none */

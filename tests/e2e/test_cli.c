@@ -79,13 +79,13 @@ static void test_decimal_options(void **state)
         {"--mapping", "onehand,gain=nan", "onehand: key 'gain': 'nan' is not a number in [0, 20] mm/mm"},
     };
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
-        snprintf(args, sizeof args, "run -q --mesh %s --input %s --out d.obj %s %s", face(), rec,
+        snprintf(args, sizeof args, "run -q --mesh %s --input %s --out d.obj --force %s %s", face(), rec,
                  bad[i].option, bad[i].value);
         assert_int_equal(fp(args), 64);
         if (!strstr(out, bad[i].says)) print_message("%s %s: %s", bad[i].option, bad[i].value, out);
         assert_non_null(strstr(out, bad[i].says));
     }
-    snprintf(args, sizeof args, "run -q --mesh %s --input %s,speed=0x10 --out d.obj", face(), rec);
+    snprintf(args, sizeof args, "run -q --mesh %s --input %s,speed=0x10 --out d.obj --force", face(), rec);
     assert_int_equal(fp(args), 64);
     assert_non_null(strstr(out, "replay: speed=0x10: expected a number from 0.001 to 1e6"));
     static const char *const others[][2] = {
@@ -106,15 +106,15 @@ static void test_decimal_options(void **state)
         assert_non_null(strstr(out, others[i][1]));
     }
     snprintf(args, sizeof args, "pose --mesh %s/faces/ict-facekit/generic_neutral_mesh.obj "
-             "--set jaw.open=0x1p-1 --out p.obj", data);
+             "--set jaw.open=0x1p-1 --out p.obj --force", data);
     assert_int_equal(fp(args), 64);
     assert_non_null(strstr(out, "--set jaw.open=0x1p-1: expected NAME=NUMBER"));
     /* every decimal form still reads */
     snprintf(args, sizeof args, "run -q --mesh %s --input %s,speed=2. --mapping anchored,clamp=.3 "
-             "--radius +5E-1 --fps 3e1 --duration 0.5 --out d.obj", face(), rec);
+             "--radius +5E-1 --fps 3e1 --duration 0.5 --out d.obj --force", face(), rec);
     assert_int_equal(fp(args), 0);
     snprintf(args, sizeof args, "pose --mesh %s/faces/ict-facekit/generic_neutral_mesh.obj "
-             "--set jaw.open=.5 --out p.obj", data);
+             "--set jaw.open=.5 --out p.obj --force", data);
     assert_int_equal(fp(args), 0);
 }
 
@@ -238,7 +238,7 @@ static void test_bad_csv(void **state)
     snprintf(text, sizeof text, "%s0,1000,1,right,,1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,,,\n"
                                 "1,10000,1,right,,1,2,3,4,5", header);
     write_file("truncated.csv", text);
-    snprintf(args, sizeof args, "run --mesh %s --input replay:truncated.csv --out t.obj", face());
+    snprintf(args, sizeof args, "run --mesh %s --input replay:truncated.csv --out t.obj --force", face());
     assert_int_equal(fp(args), 65);
     assert_non_null(strstr(out, "truncated.csv"));
     char written[512];
@@ -272,7 +272,7 @@ static void test_decimal_data(void **state)
     assert_int_equal(fp("info hex.csv"), 65);
     if (!strstr(out, want)) print_message("%s", out);
     assert_non_null(strstr(out, want));
-    snprintf(args, sizeof args, "run -q --mesh %s --input replay:hex.csv,fast=1 --out d.obj", face());
+    snprintf(args, sizeof args, "run -q --mesh %s --input replay:hex.csv,fast=1 --out d.obj --force", face());
     assert_int_equal(fp(args), 65);
     assert_non_null(strstr(out, want));
     write_file("hex.fplog", "# facepuppet-eventlog 1\n100 wrist left 1 2 0x1p3 1 0 0 0\n");
@@ -361,7 +361,7 @@ static void test_frames_out_and_monitor(void **state)
     (void)state;
     char args[16384];
     snprintf(args, sizeof args, "run -q --mesh %s --input replay:%s/hands/leap-motion/grab_joints_mm.csv,speed=8 "
-             "--fps 20 --frames-out frames --out final.ply", face(), data);
+             "--fps 20 --frames-out frames --out final.ply --force", face(), data);
     assert_int_equal(fp(args), 0);
     char cmd[8400];
     snprintf(cmd, sizeof cmd, "ls %s/frames | grep -c '^frame_[0-9]*_t[0-9]*\\.[0-9]*s\\.obj$'", tmp);
@@ -412,7 +412,7 @@ static void test_deterministic(void **state)
     char args[16384], cmd[9000];
     for (int m = 0; m < 3; m++) {
         snprintf(args, sizeof args, "run -q --mesh %s --input replay:%s/hands/leap-motion/"
-                 "grab_joints_mm.csv,%s --out det%d.obj --frames-out det%d", face(), data, modes[m], m, m);
+                 "grab_joints_mm.csv,%s --out det%d.obj --force --frames-out det%d", face(), data, modes[m], m, m);
         assert_int_equal(fp(args), 0);
         assert_non_null(strstr(out, "events dropped 0"));
         assert_null(strstr(out, "vertices moved 0 "));
@@ -435,11 +435,11 @@ static void test_refused_up_front(void **state)
     (void)state;
     char args[16384], rec[4400];
     snprintf(rec, sizeof rec, "--input replay:%s/hands/leap-motion/grab_joints_mm.csv,fast=1", data);
-    snprintf(args, sizeof args, "run --mesh %s %s --out result.xyz", face(), rec);
+    snprintf(args, sizeof args, "run --mesh %s %s --out result.xyz --force", face(), rec);
     assert_int_equal(fp(args), 64);
     assert_non_null(strstr(out, "result.xyz"));
     assert_null(strstr(out, "vertices")); /* no session made */
-    snprintf(args, sizeof args, "run --mesh %s %s --out /nonexistent-dir/out.obj", face(), rec);
+    snprintf(args, sizeof args, "run --mesh %s %s --out /nonexistent-dir/out.obj --force", face(), rec);
     assert_int_equal(fp(args), 73);
     assert_non_null(strstr(out, "/nonexistent-dir/out.obj"));
     assert_null(strstr(out, "vertices"));
@@ -451,7 +451,7 @@ static void test_refused_up_front(void **state)
     assert_int_equal(fp(args), 73);
     assert_non_null(strstr(out, "plain-file"));
     /* A radius beyond 10x the diagonal: a usage error, said once. */
-    snprintf(args, sizeof args, "run --mesh %s %s --radius 1e20 --out r.obj", face(), rec);
+    snprintf(args, sizeof args, "run --mesh %s %s --radius 1e20 --out r.obj --force", face(), rec);
     assert_int_equal(fp(args), 64);
     assert_non_null(strstr(out, "--radius"));
     int lines = 0;
@@ -471,10 +471,10 @@ static void test_refused_up_front(void **state)
     assert_int_equal(fp(args), 66);
     assert_non_null(strstr(out, "folder"));
     write_file("flat.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
-    snprintf(args, sizeof args, "run --mesh flat.obj %s --out f.obj", rec);
+    snprintf(args, sizeof args, "run --mesh flat.obj %s --out f.obj --force", rec);
     assert_int_equal(fp(args), 65);
     assert_non_null(strstr(out, "cannot find a head"));
-    snprintf(args, sizeof args, "pose --mesh %s --set jaw.open=0.2 --out noext", face());
+    snprintf(args, sizeof args, "pose --mesh %s --set jaw.open=0.2 --out noext --force", face());
     assert_int_equal(fp(args), 64);
     assert_non_null(strstr(out, "noext"));
     /* Numbers that would wrap or make nothing move: usage errors naming the option (a
@@ -482,7 +482,7 @@ static void test_refused_up_front(void **state)
     static const char *const silly[] = {"--duration 9.3e9", "--radius 1e-300", "--mm-per-unit 1e300",
                                         "--mm-per-unit 1e-300"};
     for (size_t i = 0; i < sizeof silly / sizeof silly[0]; i++) {
-        snprintf(args, sizeof args, "run --mesh %s %s %s --out s.obj", face(), rec, silly[i]);
+        snprintf(args, sizeof args, "run --mesh %s %s %s --out s.obj --force", face(), rec, silly[i]);
         assert_int_equal(fp(args), 64);
         char opt[32];
         snprintf(opt, sizeof opt, "%.*s", (int)strcspn(silly[i], " "), silly[i]);
@@ -490,10 +490,10 @@ static void test_refused_up_front(void **state)
     }
     /* A good one and --mm-per-unit: the scale line says where the scale came from. */
     write_file("cal.json", "{\"mm_per_unit\": 10, \"offset\": [0, 0, 5]}\n");
-    snprintf(args, sizeof args, "run --mesh %s %s --calibration cal.json --out c.obj", face(), rec);
+    snprintf(args, sizeof args, "run --mesh %s %s --calibration cal.json --out c.obj --force", face(), rec);
     assert_int_equal(fp(args), 0);
     assert_non_null(strstr(out, "scale: 10 mm per mesh unit (from the calibration)"));
-    snprintf(args, sizeof args, "run --mesh %s %s --mm-per-unit 12.5 --out c.obj", face(), rec);
+    snprintf(args, sizeof args, "run --mesh %s %s --mm-per-unit 12.5 --out c.obj --force", face(), rec);
     assert_int_equal(fp(args), 0);
     assert_non_null(strstr(out, "scale: 12.5 mm per mesh unit (from --mm-per-unit)"));
 }
@@ -509,32 +509,32 @@ static void test_calibrate(void **state)
     char args[16384], rec[4300], ict[4300];
     snprintf(rec, sizeof rec, "replay:%s/hands/leap-motion/three-claps_joints_mm.csv,fast=1", data);
     snprintf(ict, sizeof ict, "%s/faces/ict-facekit/generic_neutral_mesh.obj", data);
-    snprintf(args, sizeof args, "calibrate --mesh %s --input %s --out cal-hold.json", ict, rec);
+    snprintf(args, sizeof args, "calibrate --mesh %s --input %s --out cal-hold.json --force", ict, rec);
     assert_int_equal(fp(args), 0);
     assert_non_null(strstr(out, "wrote cal-hold.json: 10.24 mm per mesh unit"));
-    snprintf(args, sizeof args, "run --mesh %s --input %s --calibration cal-hold.json --out h.obj", ict, rec);
+    snprintf(args, sizeof args, "run --mesh %s --input %s --calibration cal-hold.json --out h.obj --force", ict, rec);
     assert_int_equal(fp(args), 0);
     assert_non_null(strstr(out, "scale: 10.24 mm per mesh unit (from the calibration)"));
     /* touch: three-claps has no three touches */
-    snprintf(args, sizeof args, "calibrate --mode touch --mesh %s --input %s --out t.json", ict, rec);
+    snprintf(args, sizeof args, "calibrate --mode touch --mesh %s --input %s --out t.json --force", ict, rec);
     assert_int_equal(fp(args), 65);
     assert_non_null(strstr(out, "chin, nose tip and forehead"));
     snprintf(args, sizeof args, "calibrate --mesh %s --input replay:%s/hands/leap-motion/"
-             "grab_cyberglove_like_angles_deg.csv,fast=1 --out g.json", ict, data);
+             "grab_cyberglove_like_angles_deg.csv,fast=1 --out g.json --force", ict, data);
     assert_int_equal(fp(args), 65);
     assert_non_null(strstr(out, "no joint positions (only joint angles)"));
-    snprintf(args, sizeof args, "calibrate --mesh %s --input %s --out /nonexistent-dir/c.json", ict, rec);
+    snprintf(args, sizeof args, "calibrate --mesh %s --input %s --out /nonexistent-dir/c.json --force", ict, rec);
     assert_int_equal(fp(args), 73);
-    assert_int_equal(fp("calibrate --mode poke --input x --out y.json"), 64);
+    assert_int_equal(fp("calibrate --mode poke --input x --out y.json --force"), 64);
     assert_int_equal(fp("calibrate --input x"), 64);
     /* a --rig that does not fit the mesh: refused before the recording is read (it fell back
      * to estimated landmarks in silence) */
     snprintf(args, sizeof args, "calibrate --mesh %s --rig %s/rigs/ict-facekit.json --mode touch "
-             "--input %s --out r.json", face(), repo, rec);
+             "--input %s --out r.json --force", face(), repo, rec);
     assert_int_equal(fp(args), 65);
     assert_non_null(strstr(out, "--rig"));
     assert_non_null(strstr(out, "26719"));
-    snprintf(args, sizeof args, "pose --mesh %s --rig none --set jaw.open=0.3 --out p.obj", ict);
+    snprintf(args, sizeof args, "pose --mesh %s --rig none --set jaw.open=0.3 --out p.obj --force", ict);
     assert_int_equal(fp(args), 64);
     assert_non_null(strstr(out, "needs a rig"));
 }
@@ -559,7 +559,7 @@ static void test_robust_workspace(void **state)
     assert_int_equal(sscanf(glitch, "workspace x %f..%f y %f..%f z %f..%f", b, b + 1, b + 2, b + 3, b + 4, b + 5), 6);
     for (int k = 0; k < 6; k++) assert_true(fabsf(a[k] - b[k]) < 3.f); /* min/max: 3000 mm */
     /* and the run's hands are the same size: the scale line is the face's. */
-    snprintf(args, sizeof args, "run -q --mesh %s --input replay:glitch_joints_mm.csv,fast=1 --out g.obj", face());
+    snprintf(args, sizeof args, "run -q --mesh %s --input replay:glitch_joints_mm.csv,fast=1 --out g.obj --force", face());
     assert_int_equal(fp(args), 0);
 }
 
@@ -578,7 +578,7 @@ static void test_glove_deforms(void **state)
         for (int r = 0; r < 4; r++)
             for (int m = 0; m < 2; m++) {
                 snprintf(args, sizeof args, "run -q --mesh %s/faces/%s --input replay:%s/hands/leap-motion/"
-                         "%s_cyberglove_like_angles_deg.csv,fast=1 --mapping %s --fps 30 --duration 3 --out g.obj",
+                         "%s_cyberglove_like_angles_deg.csv,fast=1 --mapping %s --fps 30 --duration 3 --out g.obj --force",
                          data, faces[f], data, recs[r], maps[m]);
                 assert_int_equal(fp(args), 0);
                 const char *v = strstr(out, "vertices moved ");

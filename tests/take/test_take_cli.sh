@@ -172,10 +172,10 @@ head -c 40 "$take" >"$tmp/odd/clap_T002.fptake"
 : >"$tmp/odd/empty.fptake"
 "$fp" takes "$tmp/odd" >"$tmp/odd.txt" 2>&1 || fail "takes of odd files exited $?: $(cat "$tmp/odd.txt")"
 cat "$tmp/odd.txt"
-grep -Eq "^clap +1 +[0-9:]{11} +[0-9:]{11} +[0-9.]+s +[0-9]+ .* ok$" "$tmp/odd.txt" || fail "takes: the good take's row"
-grep -Eq "^clap +2 +- +- +- +- +- +- +- +unreadable$" "$tmp/odd.txt" || fail "takes: the cut header's row"
+grep -Eq "^clap +1 +[0-9:]{11} +[0-9:]{11} +[0-9.]+s +[0-9]+ .*  ok +three claps, test$" "$tmp/odd.txt" || fail "takes: the good take's row"
+grep -Eq "^clap +2 +- +- +- +- +- +- +- +unreadable +-$" "$tmp/odd.txt" || fail "takes: the cut header's row"
 for f in junk empty; do
-    grep -Eq "^$f +- +- +- +- +- +- +- +- +unreadable$" "$tmp/odd.txt" || fail "takes: $f's row"
+    grep -Eq "^$f +- +- +- +- +- +- +- +- +unreadable +-$" "$tmp/odd.txt" || fail "takes: $f's row"
     grep -q "^  $tmp/odd/$f.fptake: byte 0: not a facepuppet take (bad signature)$" "$tmp/odd.txt" ||
         fail "takes: $f's reason"
 done
@@ -212,7 +212,7 @@ qt="$tmp/q-takes/take_T001.fptake"
 for cmd in "play $qt -o $tmp/qp.obj" "export $qt -f pc2 -o $tmp/qp.pc2"; do
     "$fp" $cmd >/dev/null 2>"$tmp/qp.err" || fail "$cmd exited $?"
     grep -q "^facepuppet: engine: " "$tmp/qp.err" || fail "$cmd: no engine notes without -q"
-    "$fp" $cmd -q >"$tmp/qp.out" 2>"$tmp/qp.err" || fail "$cmd -q exited $?"
+    "$fp" $cmd -q --force >"$tmp/qp.out" 2>"$tmp/qp.err" || fail "$cmd -q exited $?"
     [ ! -s "$tmp/qp.err" ] && [ ! -s "$tmp/qp.out" ] || fail "$cmd -q printed: $(cat "$tmp/qp.out" "$tmp/qp.err")"
 done
 for c in run play export; do

@@ -1,3 +1,4 @@
+#define _GNU_SOURCE
 #include "app_util.h"
 
 #include "command.h"
@@ -14,6 +15,7 @@
 #include <string.h>
 #include <strings.h>
 #include <unistd.h>
+#include <dirent.h>
 #include <sys/stat.h>
 
 #ifndef FP_PLUGIN_RELDIR
@@ -213,6 +215,129 @@ int fp_app_check_output(const char *cmd, const char *option, const char *path)
         return FP_EXIT_CANTCREAT;
     }
     return 0;
+}
+
+int fp_app_check_new_output(const char *cmd, const char *option, const char *path, bool force)
+{
+    int rc = fp_app_check_output(cmd, option, path);
+    if (rc || force) return rc;
+    struct stat st;
+    if (!stat(path, &st)) { /* (a link's end: what the save would replace) */
+        fprintf(stderr, "%s: %s %s: exists (--force to overwrite)\n", cmd, option, path);
+        return FP_EXIT_CANTCREAT;
+    }
+    return 0;
+}
+
+bool fp_app_free_name(const char *path, char *buf, size_t len)
+{
+    struct stat st;
+    const char *slash = strrchr(path, '/');
+    const char *base = slash ? slash + 1 : path, *dot = strrchr(base, '.');
+    if (dot == base) dot = NULL; /* ".hidden": no extension */
+    int stem = dot ? (int)(dot - path) : (int)strlen(path);
+    for (unsigned n = 0; n <= 999; n++) {
+        int k = n ? snprintf(buf, len, "%.*s-%u%s", stem, path, n, dot ? dot : "")
+                  : snprintf(buf, len, "%s", path);
+        if (k < 0 || (size_t)k >= len) break;
+        if (lstat(buf, &st) && errno == ENOENT) return true;
+    }
+    snprintf(buf, len, "%s", path);
+    return false;
+}
+
+/* The files of dir named PREFIX...SUFFIX: how many, and the first by name into first. */
+static size_t count_named(const char *dir, const char *prefix, const char *suffix, char *first,
+                          size_t len)
+{
+    DIR *d = opendir(dir);
+    size_t n = 0, pl = strlen(prefix), sl = strlen(suffix);
+    first[0] = '\0';
+    for (struct dirent *e; d && (e = readdir(d));) {
+        size_t el = strlen(e->d_name);
+        if (e->d_name[0] == '.' || el < pl + sl || strncmp(e->d_name, prefix, pl) ||
+            strcmp(e->d_name + el - sl, suffix))
+            continue;
+        if (!n++ || strcmp(e->d_name, first) < 0) snprintf(first, len, "%s", e->d_name);
+    }
+    if (d) closedir(d);
+    return n;
+}
+
+int fp_app_check_output_dir(const char *cmd, const char *option, const char *dir, const char *prefix,
+                            const char *suffix, bool make, bool force)
+{
+    struct stat st;
+    if (make && mkdir(dir, 0777) && errno != EEXIST) {
+        fprintf(stderr, "%s: %s %s: %s\n", cmd, option, dir, strerror(errno));
+        return FP_EXIT_CANTCREAT;
+    }
+    if (stat(dir, &st)) {
+        if (!make && errno == ENOENT) return 0;
+        fprintf(stderr, "%s: %s %s: %s\n", cmd, option, dir, strerror(errno));
+        return FP_EXIT_CANTCREAT;
+    }
+    if (!S_ISDIR(st.st_mode)) {
+        fprintf(stderr, "%s: %s %s: not a folder\n", cmd, option, dir);
+        return FP_EXIT_CANTCREAT;
+    }
+    if (access(dir, W_OK | X_OK)) {
+        fprintf(stderr, "%s: %s %s: %s\n", cmd, option, dir, strerror(errno));
+        return FP_EXIT_CANTCREAT;
+    }
+    char first[512];
+    size_t n = force ? 0 : count_named(dir, prefix ? prefix : "", suffix ? suffix : "", first,
+                                       sizeof first);
+    if (n) {
+        fprintf(stderr, "%s: %s %s: holds %zu file%s of an earlier run (%s%s) (--force to "
+                "overwrite)\n", cmd, option, dir, n, n == 1 ? "" : "s", first, n > 1 ? " ..." : "");
+        return FP_EXIT_CANTCREAT;
+    }
+    return 0;
+}
+
+/* "123 MB", "1.3 GB" (decimal, as the exports' summaries). */
+static void size_text(double bytes, char *buf, size_t len)
+{
+    if (bytes >= 1e9) snprintf(buf, len, "%.1f GB", bytes / 1e9);
+    else if (bytes >= 1e6) snprintf(buf, len, "%.0f MB", bytes / 1e6);
+    else snprintf(buf, len, "%.0f kB", ceil(bytes / 1e3));
+}
+
+void fp_app_frames_estimate(const char *cmd, const char *option, const char *dir, double frames,
+                            double fps, size_t vertices, bool quiet)
+{
+    const double frame = FP_APP_OBJ_BYTES_PER_VERTEX * (double)vertices;
+    char a[32], b[32];
+    const char *c = "1 GiB"; /* (FP_APP_FRAMES_WARN_BYTES) */
+    size_text(frame, b, sizeof b);
+    if (frames > 0) {
+        const double total = frames * frame;
+        size_text(total, a, sizeof a);
+        if (total > FP_APP_FRAMES_WARN_BYTES)
+            fprintf(stderr, "%s: warning: %s %s: about %s (%.0f frames x %zu vertices, ~%s a "
+                    "frame), over %s\n", cmd, option, dir, a, frames, vertices, b, c);
+        else if (!quiet)
+            fprintf(stderr, "%s: %s %s: about %s (%.0f frames x %zu vertices, ~%s a frame)\n",
+                    cmd, option, dir, a, frames, vertices, b);
+        return;
+    }
+    if (quiet || !(fps > 0)) return;
+    size_text(frame * fps, a, sizeof a);
+    fprintf(stderr, "%s: %s %s: about %s a second (%g frames a second x %zu vertices, ~%s a "
+            "frame): %s after %.0f s (--duration bounds it)\n", cmd, option, dir, a, fps, vertices,
+            b, c, ceil(FP_APP_FRAMES_WARN_BYTES / (frame * fps)));
+}
+
+bool fp_app_spec_looks_like_file(const char *cmd, const char *option, const char *spec)
+{
+    const size_t name = strcspn(spec, ":,");
+    if (!memchr(spec, '/', name) && !memchr(spec, '.', name)) return false;
+    const size_t el = strlen(FP_TAKE_EXTENSION);
+    const bool take = name > el && !strncasecmp(spec + name - el, FP_TAKE_EXTENSION, el);
+    fprintf(stderr, "%s: %s %s: not a SPEC (NAME[:ARG][,key=value...]); it looks like a file: did "
+            "you mean %s %s:%s?\n", cmd, option, spec, option, take ? "take" : "replay", spec);
+    return true;
 }
 
 bool fp_app_parse_size(const char *v, int lo, int hi, int *w, int *h)

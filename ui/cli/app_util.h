@@ -97,6 +97,48 @@ int fp_app_check_mesh_name(const char *cmd, const char *option, const char *path
  *  status (73) with "CMD: OPTION PATH: REASON" printed. */
 int fp_app_check_output(const char *cmd, const char *option, const char *path);
 
+/** No silent overwrite (issue 53): fp_app_check_output, then, unless force, an output that
+ *  exists (a symbolic link's end included) is refused before any work: "CMD: OPTION PATH:
+ *  exists (--force to overwrite)". Returns 0, or 73 (FP_EXIT_CANTCREAT, the code of every
+ *  output refused) with the line printed. */
+int fp_app_check_new_output(const char *cmd, const char *option, const char *path, bool force);
+
+/** A default output name (one the user did not give) that exists: the next free name, as
+ *  record= takes one: PATH itself when free, else STEM-1.EXT, STEM-2.EXT ... (up to 999).
+ *  Into buf (len bytes). Returns true with buf set, false when none is free or it does not
+ *  fit (buf then PATH). Looks only (lstat): a name may be taken between this and the write. */
+bool fp_app_free_name(const char *path, char *buf, size_t len);
+
+/** A folder of numbered outputs (--frames-out, export's obj-seq and png-seq), before any work:
+ *  made when missing (mkdir 0777, when make), a folder we can write in, and, unless force, one
+ *  that already holds a file the command writes (a name starting with prefix and ending with
+ *  suffix, either "" for any) is refused: "CMD: OPTION DIR: holds N files of an earlier run
+ *  (FILE ...) (--force to overwrite)". A missing folder with make false passes. Returns 0,
+ *  or 73 with the line printed. */
+int fp_app_check_output_dir(const char *cmd, const char *option, const char *dir, const char *prefix,
+                            const char *suffix, bool make, bool force);
+
+/** Bytes a frame of --frames-out takes a vertex, about (an OBJ written back as the input came
+ *  in: its v, vn, vt and face lines; 1.34 MB a frame for the ICT face's 26719 vertices). */
+#define FP_APP_OBJ_BYTES_PER_VERTEX 50.0
+/** Above this a --frames-out's estimate is a warning (1 GiB). */
+#define FP_APP_FRAMES_WARN_BYTES (1024.0 * 1024.0 * 1024.0)
+
+/** Say a --frames-out folder's size before any work, on stderr: "CMD: OPTION DIR: about SIZE
+ *  (N frames x V vertices, ~B a frame)" unless quiet, and "CMD: warning: ..." above
+ *  FP_APP_FRAMES_WARN_BYTES whatever quiet. frames 0: not known before the run (live
+ *  inputs, a recording read to its end): the rate at fps frames a second and when it passes
+ *  1 GiB are said instead. */
+void fp_app_frames_estimate(const char *cmd, const char *option, const char *dir, double frames,
+                            double fps, size_t vertices, bool quiet);
+
+/** A --input SPEC that looks like a file (its NAME, before ':' and ',', holds '/' or '.',
+ *  which no plugin name does: "foo.csv", "../rec/clap.fplog"): "CMD: OPTION SPEC: not a SPEC
+ *  (NAME[:ARG][,key=value...]); it looks like a file: did you mean OPTION take:SPEC?" (a
+ *  .fptake) or "replay:SPEC" (any other) on stderr and true; false (nothing said) for a SPEC
+ *  whose name a plugin could have. Before any work, in every command taking --input. */
+bool fp_app_spec_looks_like_file(const char *cmd, const char *option, const char *spec);
+
 /** The one map from an error code (fp_error.h: 0, a negative errno or an FP_E* code) to the
  *  command's exit status (enum fp_exit, sysexits.h); every subcommand uses it, never the
  *  message text. The table (docs/architecture.md, "Errors"; `facepuppet --help`):

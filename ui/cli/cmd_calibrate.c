@@ -22,7 +22,7 @@ static void usage(FILE *f)
     fprintf(f,
         "usage: facepuppet calibrate --mesh FILE --input SPEC --out FILE.json\n"
         "                            [--mode hold|touch] [--mm-per-unit X] [--duration S]\n"
-        "                            [--rig FILE] [--plugin-dir DIR]\n\n"
+        "                            [--rig FILE] [--plugin-dir DIR] [--force]\n\n"
         "Make a calibration file for `run --calibration` / `live --calibration` from a short\n"
         "recording of the performer's hands (a tracker's joint positions):\n"
         "  hold   (default) hold both hands where the face is, palms to the face, for a few\n"
@@ -33,10 +33,12 @@ static void usage(FILE *f)
         "         matched to those landmarks (from the mesh's rig when one is found, else\n"
         "         estimated from the head) and scale, rotation and offset are fitted\n"
         "The input is read to its end (a recording; add fast=1 to read it at once) or for\n"
-        "--duration seconds. The file is written atomically.\n"
+        "--duration seconds. The file is written atomically; an existing one is refused\n"
+        "before any work unless --force.\n"
         "  -m, --mesh FILE        the face (default: the ICT face of the demo)\n"
         "  -i, --input SPEC       the recording or device (required)\n"
         "  -o, --out FILE         the calibration file to write (required)\n"
+        "      --force            overwrite --out when it exists\n"
         "      --mode hold|touch  see above (default hold)\n"
         "      --mm-per-unit X    the mesh's unit, mm (hold; default: detected from the head)\n"
         "      --rig FILE         the rig whose landmarks touch uses (default: found by mesh)\n"
@@ -44,7 +46,8 @@ static void usage(FILE *f)
         "  -P, --plugin-dir DIR   more plugin folders\n"
         "  -h, --help             this text\n\n"
         "Exit status: 0 written, 64 usage, 65 the recording does not allow a calibration\n"
-        "(no joint positions, touches not found), 66 input missing, 73 output not writable,\n"
+        "(no joint positions, touches not found), 66 input missing, 73 output not writable\n"
+        "or existing without --force,\n"
         "78 plugin missing.\n");
 }
 
@@ -132,6 +135,7 @@ typedef struct calibrate_args {
     const char *mesh_path, *input, *out, *rig_path;
     bool touch;                    /* --mode touch (else hold) */
     bool no_rig;                   /* --rig none: the head's estimated landmarks, no rig looked for */
+    bool force;                    /* --force: an existing --out is overwritten */
     const char *dirs[8];
     size_t ndirs;
     double mm_per_unit, duration;
@@ -146,7 +150,8 @@ static int calibrate_parse(int argc, char **argv, calibrate_args *a)
         {"out", required_argument, 0, 'o'},      {"mode", required_argument, 0, 'M'},
         {"mm-per-unit", required_argument, 0, 'u'}, {"duration", required_argument, 0, 'd'},
         {"rig", required_argument, 0, 'r'},      {"plugin-dir", required_argument, 0, 'P'},
-        {"help", no_argument, 0, 'h'},           {0, 0, 0, 0}};
+        {"help", no_argument, 0, 'h'},           {"force", no_argument, 0, 'F'},
+        {0, 0, 0, 0}};
     const char *mode = "hold";
     optind = 1;
     for (int c; (c = getopt_long(argc, argv, "m:i:o:d:P:h", opts, NULL)) != -1;) {
@@ -157,9 +162,12 @@ static int calibrate_parse(int argc, char **argv, calibrate_args *a)
                 fprintf(stderr, "facepuppet calibrate: one --input (given '%s' and '%s')\n", a->input, optarg);
                 return FP_EXIT_USAGE;
             }
+            if (fp_app_spec_looks_like_file("facepuppet calibrate", "--input", optarg))
+                return FP_EXIT_USAGE;
             a->input = optarg;
             break;
         case 'o': a->out = optarg; break;
+        case 'F': a->force = true; break;
         case 'M': mode = optarg; break;
         case 'r': a->rig_path = strcmp(optarg, "none") ? optarg : NULL, a->no_rig = !a->rig_path; break;
         case 'u':
@@ -192,7 +200,7 @@ static int calibrate_parse(int argc, char **argv, calibrate_args *a)
         usage(stderr);
         return FP_EXIT_USAGE;
     }
-    int oc = fp_app_check_output("facepuppet calibrate", "--out", a->out);
+    int oc = fp_app_check_new_output("facepuppet calibrate", "--out", a->out, a->force);
     if (oc) return oc;
     if (!a->mesh_path)
         a->mesh_path = fp_app_data_path("faces/ict-facekit/generic_neutral_mesh.obj", a->demo, sizeof a->demo);

@@ -63,7 +63,7 @@ static void usage(FILE *f)
     fprintf(f,
         "usage: facepuppet export TAKE --format gltf|glb|pc2|mdd|obj-seq|png-seq [--out PATH]\n"
         "                         [--range IN-OUT] [--fps F] [--max-error MM] [--mesh FILE]\n"
-        "                         [--size WxH] [--camera YAW,PITCH[,ZOOM]]\n\n"
+        "                         [--size WxH] [--camera YAW,PITCH[,ZOOM]] [--force]\n\n"
         "Play a take's frames from the control sets it stored (as `play`: bit-identical to the\n"
         "recording) and write them for an animator's tools:\n"
         "  gltf, glb   glTF 2.0: the mesh with its UVs and materials, K morph targets and one\n"
@@ -87,7 +87,11 @@ static void usage(FILE *f)
         "                        the format's extension (obj-seq: TAKE_frames/)\n"
         "      --range IN-OUT    only these frames: 0-based frame indices of the take or\n"
         "                        timecodes HH:MM:SS:FF (either side may be left out: 120-, -300);\n"
-        "                        frames before IN are still played (commits carry over)\n"
+        "                        frames before IN are still played (commits carry over). Checked\n"
+        "                        before any frame is played: IN past the take's last frame, OUT\n"
+        "                        before its first or IN after OUT is refused (64, naming the\n"
+        "                        take's frames and timecodes); an end past the take is clipped\n"
+        "                        to it with a warning\n"
         "      --fps F           resample to F frames per second (each sample shows the latest\n"
         "                        frame at its time); default: every frame at its own time\n"
         "      --max-error MM    glTF: the largest error allowed, millimetres (default 0.1);\n"
@@ -98,6 +102,9 @@ static void usage(FILE *f)
         "      --size WxH        png-seq: the picture's size in pixels (default 1280x720)\n"
         "      --camera Y,P[,Z]  png-seq: turn the framed view by yaw Y and pitch P degrees,\n"
         "                        zoom Z (default 0,0,1: the face from the front)\n"
+        "      --force           overwrite an output that exists (the file; obj-seq and\n"
+        "                        png-seq: the frames in the folder); without it the export is\n"
+        "                        refused before any work (73)\n"
         "  -m, --mesh FILE       the take's mesh from another path (its crc32 must match)\n"
         "      --plugin-dir DIR  look for plugins in DIR first\n"
         "  -q, --quiet           no progress and no summary, nor the engine's and contact\n"
@@ -105,7 +112,8 @@ static void usage(FILE *f)
         "                        warning still print\n"
         "  -h, --help            this text\n\n"
         "Exit status: 0 done, 64 usage, 65 a damaged take or another mesh, 66 missing,\n"
-        "66 no display for png-seq, 69 png-seq in a build without the viewer, 73 an output not written (facepuppet --help has the whole table).\n");
+        "66 no display for png-seq, 69 png-seq in a build without the viewer, 73 an output not written\n"
+        "or existing without --force (facepuppet --help has the whole table).\n");
 }
 
 /* One end of --range: "" (open), a frame index, or a timecode. */
@@ -171,6 +179,7 @@ typedef struct export_args {
     double fps, max_error;
     int max_targets, step;
     bool quiet;
+    bool force;                    /* --force: an output that exists is overwritten */
     int width, height;             /* png-seq */
     double yaw, pitch, zoom;       /* png-seq */
     bool png;                      /* --format png-seq (no exporter: fmt unused) */
@@ -181,7 +190,7 @@ typedef struct export_args {
 static int export_parse(int argc, char **argv, export_args *a)
 {
     enum { OPT_RANGE = 0x200, OPT_FPS, OPT_MAX_ERROR, OPT_MAX_TARGETS, OPT_STEP, OPT_PLUGIN_DIR,
-           OPT_SIZE, OPT_CAMERA };
+           OPT_SIZE, OPT_CAMERA, OPT_FORCE };
     static const struct option opts[] = {
         {"format", required_argument, 0, 'f'},   {"out", required_argument, 0, 'o'},
         {"range", required_argument, 0, OPT_RANGE}, {"fps", required_argument, 0, OPT_FPS},
@@ -191,6 +200,7 @@ static int export_parse(int argc, char **argv, export_args *a)
         {"plugin-dir", required_argument, 0, OPT_PLUGIN_DIR},
         {"quiet", no_argument, 0, 'q'},          {"help", no_argument, 0, 'h'},
         {"size", required_argument, 0, OPT_SIZE}, {"camera", required_argument, 0, OPT_CAMERA},
+        {"force", no_argument, 0, OPT_FORCE},
         {0, 0, 0, 0}};
     *a = (export_args){.width = 1280, .height = 720, .zoom = 1, .max_error = 0.1,
                        .fmt = FP_EXPORT_OBJ_SEQ};
@@ -244,6 +254,7 @@ static int export_parse(int argc, char **argv, export_args *a)
             if (a->ndirs < 8) a->dirs[a->ndirs++] = optarg;
             break;
         case 'q': a->quiet = true; break;
+        case OPT_FORCE: a->force = true; break;
         case 'h': usage(stdout); return FP_EXIT_OK;
         default: usage(stderr); return FP_EXIT_USAGE;
         }
@@ -290,6 +301,92 @@ static int parse_range(const char *range, fp_take_rate rate, range_end *in, rang
         return FP_EXIT_USAGE;
     }
     return 0;
+}
+
+/* The take's first and last frame on an end's scale: indices 0 .. frames-1, or the timecodes'
+ * frame counts of the first and last frame. */
+static void take_span(const range_end *e, const fp_take_header *h, const fp_take_summary *sum,
+                      size_t frames, uint64_t tc_in, uint64_t *first, uint64_t *last)
+{
+    *first = e->timecode ? tc_in + fp_take_frames_in(sum->first_time_ns - h->time_origin_ns, h->rate) : 0;
+    *last = e->timecode ? tc_in + fp_take_frames_in(sum->last_time_ns - h->time_origin_ns, h->rate)
+                        : frames - 1;
+}
+
+/* One end in words: "frame 120" or "timecode 00:00:02:00". */
+static void end_text(const range_end *e, uint64_t v, fp_take_rate rate, bool drop, char *buf, size_t n)
+{
+    fp_timecode tc;
+    if (e->timecode && !fp_timecode_from_frames(v, rate, drop, &tc)) {
+        char t[32];
+        fp_timecode_format(&tc, t, sizeof t);
+        snprintf(buf, n, "timecode %s", t);
+    } else {
+        snprintf(buf, n, "frame %llu", (unsigned long long)v);
+    }
+}
+
+/* --range against the take, before any frame is played (issue 53): IN past the last frame, OUT
+ * before the first, or IN after OUT (both of one kind) is refused (64); an end past the take is
+ * clipped to it with a warning naming what is exported. Returns 0 or FP_EXIT_USAGE (said). */
+static int check_range(const export_args *a, range_end *in, range_end *out, const fp_take_header *h,
+                       const fp_take_summary *sum, size_t frames, uint64_t tc_in)
+{
+    uint64_t f_in = 0, l_in = 0, f_out = 0, l_out = 0;
+    take_span(in, h, sum, frames, tc_in, &f_in, &l_in);
+    take_span(out, h, sum, frames, tc_in, &f_out, &l_out);
+    char tc0[32], tc1[32], x[48], y[48], have[160];
+    fp_timecode_format(&h->timecode_in, tc0, sizeof tc0);
+    fp_timecode_format(&sum->timecode_out, tc1, sizeof tc1);
+    snprintf(have, sizeof have, "the take has frames 0-%zu, timecodes %s - %s", frames - 1, tc0, tc1);
+    const bool drop = h->timecode_in.drop;
+    const char *why = NULL;
+    if (in->set && in->value > l_in) why = "IN is past the take's last frame";
+    else if (out->set && out->value < f_out) why = "OUT is before the take's first frame";
+    else if (in->set && out->set && in->timecode == out->timecode && in->value > out->value)
+        why = "IN is after OUT";
+    if (why) {
+        fprintf(stderr, "facepuppet export: --range %s: %s (%s)\n", a->range, why, have);
+        return FP_EXIT_USAGE;
+    }
+    bool clipped = false;
+    if (in->set && in->value < f_in) {
+        end_text(in, in->value, h->rate, drop, x, sizeof x);
+        end_text(in, f_in, h->rate, drop, y, sizeof y);
+        fprintf(stderr, "facepuppet export: warning: --range %s: IN (%s) is before the take's first "
+                "frame (%s): clipped to it\n", a->range, x, y);
+        in->value = f_in;
+        clipped = true;
+    }
+    if (out->set && out->value > l_out) {
+        end_text(out, out->value, h->rate, drop, x, sizeof x);
+        end_text(out, l_out, h->rate, drop, y, sizeof y);
+        fprintf(stderr, "facepuppet export: warning: --range %s: OUT (%s) is past the take's last "
+                "frame (%s): clipped to it\n", a->range, x, y);
+        out->value = l_out;
+        clipped = true;
+    }
+    if (clipped && !in->timecode && !out->timecode)
+        fprintf(stderr, "facepuppet export: warning: exporting frames %llu-%llu (%llu of the take's "
+                "%zu)\n", (unsigned long long)(in->set ? in->value : 0),
+                (unsigned long long)(out->set ? out->value : frames - 1),
+                (unsigned long long)((out->set ? out->value : frames - 1) - (in->set ? in->value : 0) + 1),
+                frames);
+    return 0;
+}
+
+/* The output, before any frame is played: a file that exists, or a folder (obj-seq, png-seq)
+ * holding frames of this take's name, is refused without --force. Returns 0 or 73 (said). */
+static int check_out(const export_args *a, const char *out, const char *name)
+{
+    const char *opt = a->out ? "--out" : "output";
+    if (a->png || a->fmt == FP_EXPORT_OBJ_SEQ) {
+        char prefix[128];
+        snprintf(prefix, sizeof prefix, "%s_", name);
+        return fp_app_check_output_dir("facepuppet export", opt, out, prefix, a->png ? ".png" : "",
+                                       false, a->force);
+    }
+    return fp_app_check_new_output("facepuppet export", opt, out, a->force);
 }
 
 /* The output when --out is not given: beside the take, TAKE_png/, TAKE_frames/ (obj-seq) or
@@ -447,6 +544,9 @@ static int export_take(const export_args *a, fp_take_player *p, sink *k, float *
     export_walk w = {.a = a, .p = p, .h = h, .k = k};
     if (a->range && (status = parse_range(a->range, h->rate, &w.in, &w.out))) return status;
     fp_timecode_to_frames(&h->timecode_in, h->rate, &w.tc_in);
+    if (a->range && (status = check_range(a, &w.in, &w.out, h, fp_take_reader_summary(r),
+                                          fp_take_reader_frames(r), w.tc_in)))
+        return status;
     char def_out[4200];
     const char *out = a->out;
     if (!out) { /* the output: given, or beside the take */
@@ -461,6 +561,7 @@ static int export_take(const export_args *a, fp_take_player *p, sink *k, float *
     /* the output's rate: --fps, else the take's (named in the file and the summary) */
     const double rate = a->fps > 0 ? a->fps
                         : h->rate.den ? (double)h->rate.num / (double)h->rate.den : 0;
+    if ((status = check_out(a, out, name))) return status;
     if ((status = open_sink(k, a, s, out, name, mm_per_unit, rate))) return status;
     w.s = s;
     w.n = fp_session_vertex_count(s);

@@ -8,6 +8,7 @@
 #include "fp_take_player.h"
 #include "app_export.h"
 #include "fp_mesh.h"
+#include "fp_text.h"
 
 #include <errno.h>
 #include <getopt.h>
@@ -20,16 +21,20 @@
 static void usage(FILE *f)
 {
     fprintf(f,
-        "usage: facepuppet play TAKE [--frames-out DIR] [--out FILE] [--export FILE] [--mesh FILE]\n\n"
+        "usage: facepuppet play TAKE [--frames-out DIR] [--out FILE] [--export FILE] [--mesh FILE]\n"
+        "                            [--force]\n\n"
         "Reproduce a take's frames from the control sets it stored (no input devices, no\n"
         "mapping): the take's mesh (checked against the crc32 in the take), each frame's\n"
         "control set through the same engine step (fold-over guard included), commits,\n"
         "undo and reset as recorded. The meshes are bit-identical to the recording run's.\n\n"
         "  -o, --out FILE         the last frame's mesh (default: none); format by extension\n"
         "      --frames-out DIR   one mesh per frame, DIR/frame_NNNNNN_tS.SSSs.obj (session\n"
-        "                         frame number, time since the take's timecode in)\n"
+        "                         frame number, time since the take's timecode in); its size\n"
+        "                         is said before any frame (a warning over 1 GiB)\n"
         "      --export FILE      every frame into FILE: .gltf/.glb (morph-target animation,\n"
         "                         0.1 mm), .pc2/.mdd (point caches); see facepuppet export\n"
+        "      --force            overwrite outputs that exist (--out, --export, frames in\n"
+        "                         --frames-out); without it they are refused before any work\n"
         "  -m, --mesh FILE        the take's mesh from another path (its crc32 must match)\n"
         "      --plugin-dir DIR   look for plugins in DIR first\n"
         "  -q, --quiet            no summary line, nor the engine's and contact guard's\n"
@@ -37,21 +42,22 @@ static void usage(FILE *f)
         "                         warning still print\n"
         "  -h, --help             this text\n\n"
         "Exit status: 0 done, 64 usage, 65 a damaged take or another mesh, 66 missing,\n"
-        "73 an output not written (facepuppet --help has the whole table).\n");
+        "73 an output not written or existing without --force (facepuppet --help has the\n"
+        "whole table).\n");
 }
 
 static int play_main(int argc, char **argv)
 {
-    enum { OPT_FRAMES_OUT = 0x200, OPT_PLUGIN_DIR, OPT_EXPORT };
+    enum { OPT_FRAMES_OUT = 0x200, OPT_PLUGIN_DIR, OPT_EXPORT, OPT_FORCE };
     static const struct option opts[] = {
         {"out", required_argument, 0, 'o'},      {"frames-out", required_argument, 0, OPT_FRAMES_OUT},
         {"mesh", required_argument, 0, 'm'},     {"plugin-dir", required_argument, 0, OPT_PLUGIN_DIR},
-        {"export", required_argument, 0, OPT_EXPORT},
+        {"export", required_argument, 0, OPT_EXPORT}, {"force", no_argument, 0, OPT_FORCE},
         {"quiet", no_argument, 0, 'q'},          {"help", no_argument, 0, 'h'},
         {0, 0, 0, 0}};
     const char *out = NULL, *frames_out = NULL, *mesh = NULL, *export_file = NULL, *dirs[8];
     size_t ndirs = 0;
-    bool quiet = false;
+    bool quiet = false, force = false;
     optind = 1;
     for (int c; (c = getopt_long(argc, argv, "o:m:qh", opts, NULL)) != -1;) {
         switch (c) {
@@ -63,6 +69,7 @@ static int play_main(int argc, char **argv)
             if (ndirs < 8) dirs[ndirs++] = optarg;
             break;
         case 'q': quiet = true; break;
+        case OPT_FORCE: force = true; break;
         case 'h': usage(stdout); return FP_EXIT_OK;
         default: usage(stderr); return FP_EXIT_USAGE;
         }
@@ -75,7 +82,7 @@ static int play_main(int argc, char **argv)
     char err[2048];
     if (out) { /* the name and the place, before any work (as run and pose) */
         int oc = fp_app_check_mesh_name("facepuppet play", "--out", out);
-        if (!oc) oc = fp_app_check_output("facepuppet play", "--out", out);
+        if (!oc) oc = fp_app_check_new_output("facepuppet play", "--out", out, force);
         if (oc) return oc;
     }
     fp_export_format export_fmt;
@@ -84,10 +91,11 @@ static int play_main(int argc, char **argv)
                 "or .mdd\n", export_file);
         return FP_EXIT_USAGE;
     }
-    if (frames_out && mkdir(frames_out, 0777) && errno != EEXIST) {
-        fprintf(stderr, "facepuppet play: --frames-out %s: %s\n", frames_out, strerror(errno));
-        return fp_app_exit_code(-errno, FP_APP_OUTPUT);
-    }
+    int oc = export_file ? fp_app_check_new_output("facepuppet play", "--export", export_file, force) : 0;
+    if (!oc && frames_out)
+        oc = fp_app_check_output_dir("facepuppet play", "--frames-out", frames_out, "frame_", ".obj",
+                                     true, force);
+    if (oc) return oc;
     /* The take's session and frame loop (fp_take_player, shared with export). */
     fp_plugin_path path;
     fp_app_plugin_path(&path, dirs, ndirs);
@@ -107,6 +115,9 @@ static int play_main(int argc, char **argv)
     fp_session *s = fp_take_player_session(player);
     const fp_take_header *h = fp_take_reader_header(r);
     if ((status = fp_app_take_intact("facepuppet play", "play", take_path, r))) goto done;
+    if (frames_out) /* its size, before any frame */
+        fp_app_frames_estimate("facepuppet play", "--frames-out", frames_out,
+                               (double)fp_take_reader_frames(r), 0, fp_session_vertex_count(s), quiet);
     if (export_file && (status = fp_app_export_open("facepuppet play", export_file,
                                                     fp_session_mesh(s),
                                                     fp_take_player_mm_per_unit(player),
@@ -162,8 +173,14 @@ static int play_main(int argc, char **argv)
         fp_timecode_format(&fp_take_reader_summary(r)->timecode_out, tcout, sizeof tcout);
         char reach_text[200];
         fp_app_reach_text(&reach, fp_take_player_mm_per_unit(player), reach_text, sizeof reach_text);
-        printf("played %s (%s take %u, %s - %s): frames %llu, deforming %llu, committed %llu%s%s%s\n",
-               take_path, h->slate, h->take, in, tcout, (unsigned long long)frames,
+        char rated[16] = "", desc[600] = ""; /* the take's rating and description, when set */
+        if (h->rating) snprintf(rated, sizeof rated, ", rated %d/5", h->rating);
+        if (h->description && h->description[0]) {
+            char clean[512];
+            snprintf(desc, sizeof desc, ", \"%s\"", fp_text_clean(h->description, clean, sizeof clean));
+        }
+        printf("played %s (%s take %u%s%s, %s - %s): frames %llu, deforming %llu, committed %llu%s%s%s\n",
+               take_path, h->slate, h->take, rated, desc, in, tcout, (unsigned long long)frames,
                (unsigned long long)active, (unsigned long long)commits, reach_text,
                out ? "; wrote " : "", out ? out : "");
     }

@@ -14,13 +14,23 @@
 
 static void pose_usage(FILE *f)
 {
-    fprintf(f, "usage: facepuppet pose --mesh MESH [--rig RIG.json] --set NAME=VALUE [--set ...] --out FILE\n\n"
+    fprintf(f, "usage: facepuppet pose --mesh MESH [--rig RIG.json] --set NAME=VALUE [--set ...] --out FILE\n"
+               "                      [--force]\n\n"
                "Writes the mesh posed by its rig (the jaw about its hinge, the soft tissue by the\n"
                "rig's falloff), without hands. Without --rig the rig is found among the rig files\n"
                "(by the mesh's checksum, else its vertex count): $FACEPUPPET_RIGS, else\n"
                "<bin>/../share/facepuppet/rigs when installed, else the source tree's rigs/.\n"
                "Values outside a channel's range are refused. The output format follows FILE's\n"
-               "extension (OBJ, PLY, OFF, STL, glTF, GLB).\n");
+               "extension (OBJ, PLY, OFF, STL, glTF, GLB); it is written atomically, and an\n"
+               "existing FILE is refused before any work unless --force.\n"
+               "  -m, --mesh MESH        the face\n"
+               "  -r, --rig RIG.json     its rig (default: found by the mesh)\n"
+               "  -s, --set NAME=VALUE   a channel's value (jaw.open=0.5)\n"
+               "  -o, --out FILE         the posed mesh\n"
+               "      --force            overwrite FILE when it exists\n"
+               "  -h, --help             this text\n\n"
+               "Exit status: 0 written, 64 usage (a value out of range), 65 bad mesh or rig,\n"
+               "66 missing, 73 FILE not writable or existing without --force.\n");
 }
 
 static int pose_main(int argc, char **argv)
@@ -30,8 +40,10 @@ static int pose_main(int argc, char **argv)
                                          {"set", required_argument, NULL, 's'},
                                          {"out", required_argument, NULL, 'o'},
                                          {"help", no_argument, NULL, 'h'},
+                                         {"force", no_argument, NULL, 'F'},
                                          {NULL, 0, NULL, 0}};
     const char *mesh_path = NULL, *rig_path = NULL, *out_path = NULL;
+    bool force = false;
     const char *sets[FP_RIG_MAX_CHANNELS];
     size_t nsets = 0;
     optind = 1;
@@ -40,6 +52,7 @@ static int pose_main(int argc, char **argv)
         case 'm': mesh_path = optarg; break;
         case 'r': rig_path = optarg; break;
         case 'o': out_path = optarg; break;
+        case 'F': force = true; break;
         case 's':
             if (nsets == FP_RIG_MAX_CHANNELS) {
                 fprintf(stderr, "facepuppet pose: more than %d --set\n", FP_RIG_MAX_CHANNELS);
@@ -63,7 +76,7 @@ static int pose_main(int argc, char **argv)
         return FP_EXIT_USAGE;
     }
     int oc = fp_app_check_mesh_name("facepuppet pose", "--out", out_path);
-    if (!oc) oc = fp_app_check_output("facepuppet pose", "--out", out_path);
+    if (!oc) oc = fp_app_check_new_output("facepuppet pose", "--out", out_path, force);
     if (oc) return oc;
     char err[2048];
     fp_mesh *m = NULL;

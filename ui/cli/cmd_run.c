@@ -28,7 +28,7 @@ static void usage(FILE *f)
 {
     fprintf(f,
         "usage: facepuppet run [--mesh FILE] --input SPEC [--input SPEC] --mapping NAME\n"
-        "                      [--radius R] [--out FILE] [--frames-out DIR] [--speed X]\n\n"
+        "                      [--radius R] [--out FILE] [--frames-out DIR] [--speed X] [--force]\n\n"
         "Run a headless puppeteering session: the inputs drive the mapping, the mapping\n"
         "drives the CSRBF engine, the face deforms; writes the final mesh.\n"
         "With no options it runs the demo: the ICT face, the three-claps recording, the\n"
@@ -38,9 +38,13 @@ static void usage(FILE *f)
     fprintf(f,
         "Options of run:\n"
         "  -o, --out FILE         final mesh (default facepuppet-out.obj; demo:\n"
-        "                         facepuppet-demo.obj); format by extension\n"
+        "                         facepuppet-demo.obj; when the default exists, the next free\n"
+        "                         name, facepuppet-out-1.obj ..., and said); format by extension\n"
         "      --frames-out DIR   also write one mesh per frame, every frame at --fps\n"
-        "                         (DIR/frame_000123_t2.050s.obj: number, time on the input clock)\n"
+        "                         (DIR/frame_000123_t2.050s.obj: number, time on the input clock);\n"
+        "                         its size is estimated before the run (a warning over 1 GiB)\n"
+        "      --force            overwrite outputs that exist (--out, --export, frames in\n"
+        "                         --frames-out); without it they are refused before any work\n"
         "      --fps N            frames per second of the session loop (default 60)\n"
         "      --export FILE      every frame into FILE: .gltf/.glb (morph-target animation,\n"
         "                         0.1 mm), .pc2/.mdd (point caches); see facepuppet export\n"
@@ -55,7 +59,7 @@ static void usage(FILE *f)
         "speed=, fast=1 or the machine's load (--speed only changes how long it takes).\n"
         "  -h, --help             this text\n\n"
         "Exit status: 0 done, 64 usage, 65 bad input data, 66 input missing, 73 output\n"
-        "not writable, 78 plugin missing or incompatible, or the mapping stopped for a\n"
+        "not writable or existing without --force, 78 plugin missing or incompatible, or the mapping stopped for a\n"
         "fault (it wrote past the host's arrays), 1 other failure\n"
         "(facepuppet --help has the whole table).\n");
 }
@@ -64,15 +68,6 @@ static void sleep_until(int64_t t_ns)
 {
     struct timespec ts = {(time_t)(t_ns / 1000000000LL), (long)(t_ns % 1000000000LL)};
     clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL);
-}
-
-/* --out, before any work: a format we write (by extension) and a folder we can write in.
- * Returns 0 or the exit status (64 unknown extension, 73 folder missing or not writable). */
-static int check_out(const char *out)
-{
-    int rc = fp_app_check_mesh_name("facepuppet run", "--out", out);
-    if (rc) return rc;
-    return fp_app_check_output("facepuppet run", "--out", out);
 }
 
 /* What the command line asked for (run_parse), with the defaults settled (run_settle). */
@@ -85,14 +80,40 @@ typedef struct run_args {
     fp_export_format export_fmt;   /* of export_file */
     double fps;
     bool demo;
+    bool force;                    /* --force: outputs that exist are overwritten */
+    char free_out[4200];           /* the default --out's next free name, when it exists */
 } run_args;
+
+/* --out, before any work: a format we write (by extension), a folder we can write in, and no
+ * file there unless --force. The default name (not given) takes the next free name instead,
+ * said. Returns 0 or the exit status (64 unknown extension, 73 folder missing or not
+ * writable, or the file exists). */
+static int check_out(run_args *a, bool given)
+{
+    int rc = fp_app_check_mesh_name("facepuppet run", "--out", a->out);
+    if (rc) return rc;
+    if (!given && !a->force) {
+        if ((rc = fp_app_check_output("facepuppet run", "--out", a->out))) return rc;
+        if (!fp_app_free_name(a->out, a->free_out, sizeof a->free_out)) {
+            fprintf(stderr, "facepuppet run: %s and %s-1 .. -999 exist (--out names another, "
+                    "--force overwrites)\n", a->out, a->out);
+            return FP_EXIT_CANTCREAT;
+        }
+        if (strcmp(a->free_out, a->out))
+            fprintf(stderr, "facepuppet run: %s exists: writing %s instead (--out names the "
+                    "file, --force overwrites)\n", a->out, a->free_out);
+        a->out = a->free_out;
+        return 0;
+    }
+    return fp_app_check_new_output("facepuppet run", "--out", a->out, a->force);
+}
 
 /* Parse the command line into *a (zeroed by the caller). Returns -1 to go on, or the exit
  * status (0 after --help). */
 static int run_parse(int argc, char **argv, run_args *a)
 {
     enum { OPT_FRAMES_OUT = FP_SESSION_OPTS_FIRST_FREE, OPT_FPS, OPT_BUDGET, OPT_TAKE_DIR,
-           OPT_SLATE, OPT_TAKE_DESC, OPT_EXPORT };
+           OPT_SLATE, OPT_TAKE_DESC, OPT_EXPORT, OPT_FORCE };
     static const struct option own[] = {
         {"out", required_argument, 0, 'o'},        {"frames-out", required_argument, 0, OPT_FRAMES_OUT},
         {"fps", required_argument, 0, OPT_FPS},    {"help", no_argument, 0, 'h'},
@@ -100,6 +121,7 @@ static int run_parse(int argc, char **argv, run_args *a)
         {"take-dir", required_argument, 0, OPT_TAKE_DIR}, {"slate", required_argument, 0, OPT_SLATE},
         {"take-description", required_argument, 0, OPT_TAKE_DESC},
         {"export", required_argument, 0, OPT_EXPORT},
+        {"force", no_argument, 0, OPT_FORCE},
         {0, 0, 0, 0}};
     struct option opts[FP_SESSION_OPTS_COUNT + sizeof own / sizeof own[0]];
     memcpy(opts + fp_session_opts_longopts(opts), own, sizeof own);
@@ -130,6 +152,7 @@ static int run_parse(int argc, char **argv, run_args *a)
             a->take_desc = optarg;
             break;
         case OPT_EXPORT: a->export_file = optarg; break;
+        case OPT_FORCE: a->force = true; break;
         case OPT_BUDGET:
             if (!fp_parse_decimal(optarg, &a->so.mapping_budget_ms) ||
                 !(a->so.mapping_budget_ms > 0 && a->so.mapping_budget_ms <= 1000)) {
@@ -148,25 +171,6 @@ static int run_parse(int argc, char **argv, run_args *a)
     return -1;
 }
 
-/* --frames-out: made if missing, and a folder we can write in. Returns 0 or the exit status. */
-static int check_frames_out(const char *frames_out)
-{
-    struct stat st;
-    if (mkdir(frames_out, 0777) && errno != EEXIST) {
-        fprintf(stderr, "facepuppet run: --frames-out %s: %s\n", frames_out, strerror(errno));
-        return fp_app_exit_code(-errno, FP_APP_OUTPUT);
-    }
-    if (stat(frames_out, &st) || !S_ISDIR(st.st_mode)) {
-        fprintf(stderr, "facepuppet run: --frames-out %s: not a folder\n", frames_out);
-        return FP_EXIT_CANTCREAT;
-    }
-    if (access(frames_out, W_OK | X_OK)) {
-        fprintf(stderr, "facepuppet run: --frames-out %s: %s\n", frames_out, strerror(errno));
-        return FP_EXIT_CANTCREAT;
-    }
-    return 0;
-}
-
 /* The defaults (the demo when neither mesh nor input is given; --out's name), then every
  * output and the take's options checked before any work. Returns 0 or the exit status. */
 static int run_settle(run_args *a)
@@ -178,15 +182,22 @@ static int run_settle(run_args *a)
         fprintf(stderr, "facepuppet run: give at least one --input SPEC (see --help)\n");
         return FP_EXIT_USAGE;
     }
+    const bool out_given = a->out != NULL;
     if (!a->out) a->out = a->demo ? "facepuppet-demo.obj" : "facepuppet-out.obj";
-    /* Outputs are checked before any work: a folder we can write into, a format we write. */
-    if ((rc = check_out(a->out))) return rc;
-    if (a->frames_out && (rc = check_frames_out(a->frames_out))) return rc;
+    /* Outputs are checked before any work: a folder we can write into, a format we write, and
+     * nothing there overwritten without --force. */
+    if ((rc = check_out(a, out_given))) return rc;
     if (a->export_file && fp_export_format_from_path(a->export_file, &a->export_fmt)) {
         fprintf(stderr, "facepuppet run: --export %s: give a file ending in .gltf, .glb, .pc2 "
                 "or .mdd\n", a->export_file);
         return FP_EXIT_USAGE;
     }
+    if (a->export_file && (rc = fp_app_check_new_output("facepuppet run", "--export", a->export_file,
+                                                        a->force)))
+        return rc;
+    if (a->frames_out && (rc = fp_app_check_output_dir("facepuppet run", "--frames-out", a->frames_out,
+                                                       "frame_", ".obj", true, a->force)))
+        return rc;
     if ((a->slate || a->take_desc) && !a->take_dir) {
         fprintf(stderr, "facepuppet run: --slate and --take-description need --take-dir\n");
         return FP_EXIT_USAGE;
@@ -475,6 +486,10 @@ static int run_main(int argc, char **argv)
         free(a);
         return rc;
     }
+    if (a->frames_out) /* its size, before any frame (the duration, when given) */
+        fp_app_frames_estimate("facepuppet run", "--frames-out", a->frames_out,
+                               a->sopt.duration_s > 0 ? ceil(a->sopt.duration_s * a->fps) + 1 : 0,
+                               a->fps, fp_session_vertex_count(s), quiet);
     if ((rc = fp_session_start(s, err, sizeof err))) {
         fprintf(stderr, "facepuppet run: %s\n", err);
         fp_export_abort(&ex);

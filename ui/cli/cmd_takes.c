@@ -1,4 +1,5 @@
-/* facepuppet takes: the takes of a folder as a table or JSON (fp_take_list); and
+/* facepuppet takes: the takes of a folder as a table or JSON (fp_take_list), a take's rating
+ * and description rewritten (takes rate, takes describe: fp_take_edit_header); and
  * fp_app_take_info for `facepuppet info TAKE`. */
 #define _GNU_SOURCE
 #include "app_util.h"
@@ -12,20 +13,32 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 static void usage(FILE *f)
 {
-    fprintf(f, "usage: facepuppet takes [DIR] [--json]\n\n"
+    fprintf(f, "usage: facepuppet takes [DIR] [--json]\n"
+               "       facepuppet takes rate TAKE N          (N: 1..5 stars, 0 none)\n"
+               "       facepuppet takes describe TAKE TEXT   (TEXT: one argument; \"\" clears)\n\n"
                "The takes (SLATE_TNNN.fptake) in DIR (default: the current folder), by slate and\n"
-               "take number: timecode in and out, duration, frames, mesh, mapping, rating; STATE\n"
+               "take number: timecode in and out, duration, frames, mesh, mapping, rating, STATE\n"
+               "and the description (the table shows its first line, cut at 60 characters);\n"
+               "STATE\n"
                "says ok, \"cut\" (damaged or cut short, e.g. the recording process died: the\n"
                "frames before the damage play) or \"open\" (no end chunk yet). A *.fptake file\n"
                "that is no take, or whose signature or header is damaged, is \"unreadable\": its\n"
                "slate and take number are what its name gives, it has no timecode, duration or\n"
                "frames (\"-\"; null in JSON), and the reason is under the table (\"message\").\n"
                "  --json   one JSON array instead of the table\n\n"
+               "rate and describe rewrite the take's header (its \"rating\" and \"description\";\n"
+               "`info`, `takes` and `play` show them) atomically: a temporary file beside the\n"
+               "take renamed over it, every other byte as it was. TAKE is the file (the\n"
+               ".fptake may be left out). A take with no end chunk may still be recording and\n"
+               "is refused unless --force.\n"
+               "  --force  rewrite a take that has no end chunk\n\n"
                "Exit status: 0 once the folder is listed, whatever the files' states (see STATE),\n"
-               "64 usage, 66 the folder cannot be read.\n");
+               "or the take rewritten; 64 usage, 65 a damaged take, 66 the folder or take cannot\n"
+               "be read, 73 the take cannot be rewritten (or has no end chunk, without --force).\n");
 }
 
 static const char *state_of(const fp_take_info *t)
@@ -33,10 +46,27 @@ static const char *state_of(const fp_take_info *t)
     return t->error ? "unreadable" : t->message[0] ? "cut" : t->complete ? "ok" : "open";
 }
 
+/* A description for the table: its first line, made UTF-8 text (fp_text_clean: tabs too
+ * become U+FFFD, so they are made spaces first), cut at 60 characters with "...". */
+static void description_line(const char *d, char *out, size_t n)
+{
+    char line[512];
+    size_t len = strcspn(d, "\n");
+    snprintf(line, sizeof line, "%.*s", (int)len, d);
+    for (char *p = line; *p; p++)
+        if (*p == '\t' || *p == '\r') *p = ' ';
+    fp_text_clean(line, out, n);
+    size_t chars = 0, cut = 0;
+    for (size_t i = 0; out[i]; i++) /* (a character: a byte that is no UTF-8 continuation byte) */
+        if (((unsigned char)out[i] & 0xC0) != 0x80 && chars++ == 57) cut = i;
+    if (chars > 60 && cut + 4 <= n) memcpy(out + cut, "...", 4);
+}
+
 static void print_table(const fp_take_info *v, size_t n)
 {
-    printf("%-16s %4s  %-11s  %-11s  %9s  %7s  %-6s  %-10s  %-28s  %s\n", "SLATE", "TAKE",
-           "TC IN", "TC OUT", "DURATION", "FRAMES", "RATING", "MAPPING", "MESH", "STATE");
+    printf("%-16s %4s  %-11s  %-11s  %9s  %7s  %-6s  %-10s  %-28s  %-10s  %s\n", "SLATE", "TAKE",
+           "TC IN", "TC OUT", "DURATION", "FRAMES", "RATING", "MAPPING", "MESH", "STATE",
+           "DESCRIPTION");
     for (size_t i = 0; i < n; i++) {
         const fp_take_info *t = &v[i];
         char in[32] = "-", out[32] = "-", rate[8] = "-", take[16] = "-", dur[32] = "-", fr[32] = "-";
@@ -53,9 +83,11 @@ static void print_table(const fp_take_info *v, size_t n)
         fp_text_clean(mesh, cm, sizeof cm);
         fp_text_clean(t->mapping, cp, sizeof cp);
         char cs[4 * FP_TAKE_SLATE_MAX];
-        printf("%-16s %4s  %-11s  %-11s  %9s  %7s  %-6s  %-10s  %-28.28s  %s\n",
+        char cd[4 * 64];
+        description_line(t->description, cd, sizeof cd);
+        printf("%-16s %4s  %-11s  %-11s  %9s  %7s  %-6s  %-10s  %-28.28s  %-10s  %s\n",
                fp_text_clean(t->slate, cs, sizeof cs), take, in, out, dur, fr, rate, cp[0] ? cp : "-",
-               cm[0] ? cm : "-", state_of(t));
+               cm[0] ? cm : "-", state_of(t), cd[0] ? cd : "-");
     }
     for (size_t i = 0; i < n; i++)
         if (v[i].message[0]) {
@@ -98,6 +130,9 @@ static int print_json(const fp_take_info *v, size_t n)
         cJSON_AddStringToObject(o, "mesh", fp_text_clean(t->mesh, c, sizeof c));
         cJSON_AddStringToObject(o, "mapping", fp_text_clean(t->mapping, c, sizeof c));
         cJSON_AddNumberToObject(o, "rating", t->rating);
+        /* (line breaks and tabs kept, JSON escapes them; anything else not text cleaned) */
+        cJSON_AddStringToObject(o, "description", fp_text_ok(t->description, true) ? t->description
+                                : fp_text_clean(t->description, c, sizeof c));
         cJSON_AddStringToObject(o, "date", fp_text_clean(t->date, c, sizeof c));
         cJSON_AddStringToObject(o, "state", state_of(t));
         cJSON_AddStringToObject(o, "message", fp_text_clean(t->message, c, sizeof c));
@@ -114,8 +149,72 @@ static int print_json(const fp_take_info *v, size_t n)
     return FP_EXIT_OK;
 }
 
+/* TAKE of rate/describe: the file, or TAKE.fptake when TAKE is not there and that is. */
+static const char *take_file(const char *take, char *buf, size_t len)
+{
+    struct stat st;
+    if (stat(take, &st) && errno == ENOENT) {
+        snprintf(buf, len, "%s%s", take, FP_TAKE_EXTENSION);
+        if (!stat(buf, &st)) return buf;
+    }
+    return take;
+}
+
+/* `takes rate TAKE N` and `takes describe TAKE TEXT` (argv[0] the verb). */
+static int takes_edit(int argc, char **argv)
+{
+    static const struct option opts[] = {{"force", no_argument, 0, 'f'},
+                                         {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
+    const bool rate = !strcmp(argv[0], "rate");
+    fp_take_edit e = {0};
+    optind = 1;
+    for (int c; (c = getopt_long(argc, argv, "+h", opts, NULL)) != -1;) {
+        if (c == 'f') e.open_ok = true;
+        else if (c == 'h') { usage(stdout); return FP_EXIT_OK; }
+        else { usage(stderr); return FP_EXIT_USAGE; }
+    }
+    if (argc - optind != 2) {
+        fprintf(stderr, "facepuppet takes %s: give %s (see --help)\n", argv[0],
+                rate ? "TAKE N" : "TAKE TEXT (quote the text: one argument)");
+        return FP_EXIT_USAGE;
+    }
+    char buf[4200];
+    const char *path = take_file(argv[optind], buf, sizeof buf), *arg = argv[optind + 1];
+    unsigned long long n = 0;
+    if (rate && !fp_parse_whole(arg, 5, &n)) {
+        fprintf(stderr, "facepuppet takes rate: N must be a whole number 0..5 (0: none), got '%s'\n",
+                arg);
+        return FP_EXIT_USAGE;
+    }
+    if (!rate && !fp_text_ok(arg, true)) {
+        fprintf(stderr, "facepuppet takes describe: TEXT must be UTF-8 text without control "
+                "characters (tabs and line breaks allowed)\n");
+        return FP_EXIT_USAGE;
+    }
+    e.set_rating = rate;
+    e.rating = (int)n;
+    e.description = rate ? NULL : arg;
+    struct stat st;
+    if (stat(path, &st)) { /* (a take missing is an input: 66, not an output's 73) */
+        fprintf(stderr, "facepuppet takes %s: %s: %s\n", argv[0], path, strerror(errno));
+        return fp_app_exit_code(-errno, FP_APP_INPUT);
+    }
+    char err[1024];
+    int rc = fp_take_edit_header(path, &e, err, sizeof err);
+    if (rc) {
+        fprintf(stderr, "facepuppet takes %s: %s%s\n", argv[0], err,
+                rc == -EBUSY ? " (--force rewrites it anyway)" : "");
+        return fp_app_exit_code(rc, FP_APP_OUTPUT);
+    }
+    if (rate) printf("%s: rating %llu/5\n", path, n);
+    else printf("%s: description %s\n", path, arg[0] ? arg : "cleared");
+    return FP_EXIT_OK;
+}
+
 static int takes_main(int argc, char **argv)
 {
+    if (argc >= 2 && (!strcmp(argv[1], "rate") || !strcmp(argv[1], "describe")))
+        return takes_edit(argc - 1, argv + 1);
     static const struct option opts[] = {{"json", no_argument, 0, 'j'},
                                          {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     bool json = false;

@@ -95,6 +95,9 @@ int fp_session_opts_parse(fp_session_opts *o, int c, const char *arg, const char
             fprintf(stderr, "facepuppet %s: at most %d --input\n", cmd, FP_SESSION_MAX_INPUTS);
             return -EINVAL;
         }
+        char who[64]; /* ("facepuppet run") */
+        snprintf(who, sizeof who, "facepuppet %s", cmd);
+        if (fp_app_spec_looks_like_file(who, "--input", arg)) return -EINVAL;
         so->inputs[so->input_count++] = arg;
         return 1;
     case 'M': so->mapping = arg; return 1;
