@@ -16,6 +16,7 @@
 #include "fp_session.h"
 #include "fp_stats.h"
 #include "fp_test_support.h"
+#include "facepuppet/mapping_util.h"
 #include "selfx.h"
 
 #include <math.h>
@@ -224,7 +225,7 @@ static void test_fold_fixture_unanchored(void **state)
  * tips lie) and pull together 1.5 R out of the face over ten frames of one anchored gesture:
  * every frame is delivered in full (each grabbed vertex where its end point is: the map is
  * composed of injective sub-steps, not limited), no new crossing, no flipped triangle. */
-static void five_finger_pull(double extent, bool contact_guard)
+static void five_finger_pull(double extent, bool contact_guard, double widen)
 {
     logbook lb = {0};
     char err[2048];
@@ -297,6 +298,8 @@ static void five_finger_pull(double extent, bool contact_guard)
         cs.intents = f == 1 ? FP_INTENT_ENGAGE : 0;
         for (int i = 0; i < 5; i++)
             for (int a = 0; a < 3; a++) cs.end[i][a] = cs.start[i][a] + (float)(dir[a] * pull * f / 10);
+        /* the anchored mapping's support for this drag (its key widen; 0: R) */
+        cs.radius = fp_drag_radius(R, widen, (const float (*)[3])cs.start, (const float (*)[3])cs.end, 5);
         fp_frame_stats st;
         fp_session_apply_controls(s, fp_now_ns(), &cs, 0, &st);
         assert_true(st.active);
@@ -313,24 +316,28 @@ static void five_finger_pull(double extent, bool contact_guard)
             k_flip += flipped(s, p);
         }
     }
-    printf("five-finger pull of %.2f R (%.1f mm), contact guard %s: composed on %d of 10 frames, "
-           "every end point reached; %ld new crossings, %zu triangles turned past 90 degrees\n",
-           extent, pull * 10.0 /* ICT: cm */, contact_guard ? "on" : "off", composed, k_cross, k_flip);
+    printf("five-finger pull of %.2f R (%.1f mm), contact guard %s, widen %g: composed on %d of 10 "
+           "frames, every end point reached; %ld new crossings, %zu triangles turned past 90 degrees\n",
+           extent, pull * 10.0 /* ICT: cm */, contact_guard ? "on" : "off", widen, composed, k_cross, k_flip);
     assert_true(composed > 0);
     assert_int_equal(k_cross, 0);
     if (contact_guard) assert_int_equal(k_flip, 0);
     fp_session_destroy(&s);
 }
 
-/* The fold-over guard alone delivers a 1.5 R pull in full (composed, never limited), with
- * no new crossing; the contact guard on, the whole pull up to 0.9 R (beyond it, on this
- * cheek, a few triangles of the stretched skin turn past 90 degrees from the rest normal,
- * which the contact guard and test_guard's strictness count as flips). */
+/* Issue 51: a coherent five-finger pull of 1.5 R on the ICT cheek is delivered in full with
+ * the contact guard on (composed, not limited, not scaled back, no crossing, no triangle
+ * turned past 90 degrees), with the anchored mapping's support for the drag (widen 0.5: the
+ * support grows to twice the drag); 2 R too. At the fixed radius R the fold-over guard alone
+ * delivers 1.5 R with no new crossing, but 9 triangles of the stretched skin turn past 90
+ * degrees, so with the contact guard a fixed R delivers the whole pull up to 0.9 R. */
 static void test_five_finger_pull(void **state)
 {
     (void)state;
-    five_finger_pull(1.5, false);
-    five_finger_pull(0.9, true);
+    five_finger_pull(1.5, false, 0);
+    five_finger_pull(0.9, true, 0);
+    five_finger_pull(1.5, true, 0.5);
+    five_finger_pull(2.0, true, 0.5);
 }
 
 /* ---- the host's surface service (FP_HOST_EXT_SURFACE) ------------------------------------ */
