@@ -4,15 +4,13 @@
 # on 127.0.0.1 at the recorded pace.
 #
 #  1. The grab recording deforms the ICT face (anchored) as `run --input replay:` does: the
-#     median over 3 runs of the vertices moved within 20% of the replay's; the median of the
-#     max displacement within 35% (20% with FP_OSC_STRICT_MAX=1). A single run's frames fall
-#     at another phase against the hand's samples (the sender's pace and the machine's load
-#     move them), and the largest displacement of the anchored grab swings with that even
-#     where the placement is the replay's own. Measured at load 8-10 on 2 cores: the replay
-#     1290 vertices moved, max 5.14 mm (at 50-120 frames a second: 4.69-5.75 mm); 5 OSC runs
-#     with the replay's own box (box=, no estimate): 1202-1314 moved, max 5.35-6.54 mm; 6
-#     OSC runs placed as they arrive: 1209-1314 moved, max 5.62-6.61 mm; on the recording's
-#     clock placed as it arrives (replay workspace=0): 1289, 6.00 mm.
+#     median over 3 runs of the vertices moved and of the max displacement each within 20%
+#     of the replay's (issue 51). A single run's frames fall at another phase against the
+#     hand's samples (the sender's pace and the machine's load move them), hence the median.
+#     Measured at load 6-8 on 2 cores, with the anchored mapping widening long drags: the
+#     replay 12594 vertices moved, max 5.08 mm; 3 OSC runs placed as they arrive: 12825-12840
+#     moved, max 4.88-5.02 mm. (Before the widening the max swung 4.69-6.61 mm with the phase:
+#     a narrow support left the final shape to the last frames' timing; 35% was needed then.)
 #  2. A hand held still (grab's first row, 6 s) hovers in front of the face, never reaching
 #     it: the run says so (the hint, source "session") within 5 s of the sender starting.
 #
@@ -96,8 +94,7 @@ med_max=$(printf '%s\n' "${maxes[@]}" | sort -g | sed -n 2p)
 echo "osc median: $med_moved vertices moved, max $med_max (replay: $r_moved, $r_max)"
 awk -v a="$med_moved" -v b="$r_moved" 'BEGIN { exit !(a >= 0.8 * b && a <= 1.2 * b) }' ||
     fail "vertices moved over OSC ($med_moved) not within 20% of the replay's ($r_moved)"
-tol=0.35
-[ "${FP_OSC_STRICT_MAX:-0}" = 1 ] && tol=0.2
+tol=0.2
 awk -v a="$med_max" -v b="$r_max" -v t="$tol" 'BEGIN { exit !(a >= (1 - t) * b && a <= (1 + t) * b) }' ||
     fail "max displacement over OSC ($med_max mm) not within $tol of the replay's ($r_max mm)"
 
