@@ -4,6 +4,7 @@
 #include "fp_error.h"
 #include "fp_vec.h"
 
+#include <assert.h>
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -57,6 +58,29 @@ void fp_calib_hold_target(const float *pos, size_t n, const fp_head *head, int h
     out[0] = cx + (hand == FP_HAND_LEFT ? -0.25f : 0.25f) * w;
     out[1] = nose[1];
     if (!fp_head_surface_z(pos, n, out[0], out[1], r, head->neck_y, INFINITY, &out[2])) out[2] = head->max[2];
+}
+
+void fp_calib_hold_travel(const fp_calib_sample *samples, size_t n, double travel[FP_HANDS])
+{
+    for (int h = 0; h < FP_HANDS; h++) {
+        travel[h] = 0;
+        size_t m = 0;
+        for (size_t i = 0; samples && i < n; i++) m += samples[i].hand == h;
+        if (m < 3) continue;
+        double *v = malloc(m * sizeof *v), q = 0;
+        if (!v) continue;
+        for (int k = 0; k < 3; k++) {
+            size_t c = 0;
+            for (size_t i = 0; i < n; i++)
+                if (samples[i].hand == h) v[c++] = samples[i].joints[FP_JOINT_PALM][k];
+            assert(c == m);
+            qsort(v, c, sizeof *v, cmp_double);
+            double lo = v[(size_t)floor(0.02 * (double)(c - 1))], hi = v[(size_t)ceil(0.98 * (double)(c - 1))];
+            q += (hi - lo) * (hi - lo);
+        }
+        travel[h] = sqrt(q);
+        free(v);
+    }
 }
 
 int fp_calib_fit_hold(const fp_calib_sample *samples, size_t n, const float *pos, size_t nv,

@@ -55,6 +55,18 @@ enum { FP_CALIB_CHIN = 0, FP_CALIB_NOSE_TIP, FP_CALIB_FOREHEAD, FP_CALIB_LANDMAR
  *  y the nose tip's height, z the frontmost surface there (fp_head_surface_z within 15 mm). */
 void fp_calib_hold_target(const float *pos, size_t n, const fp_head *head, int hand, float out[3]);
 
+/** A hold whose palm travels farther than this (mm, fp_calib_hold_travel) was not held:
+ *  calibrate warns (the median palm of a moving hand is not where the face was held). */
+#define FP_CALIB_HOLD_TRAVEL_MM 40.0
+
+/** How far each hand's palm travelled during a hold, mm (the samples' unit): the diagonal of
+ *  the box of its positions between the 2nd and 98th percentile per axis, so one glitch does
+ *  not count (a palm held still by a person: under 30 mm on the shipped recordings, HandSplay
+ *  28, Waiting 30; grab 57, three-claps 72-76); travel[h] = 0 where hand h has fewer than 3
+ *  samples. Allocates scratch; on
+ *  allocation failure the hand reads 0. Pure otherwise; any thread. */
+void fp_calib_hold_travel(const fp_calib_sample *samples, size_t n, double travel[FP_HANDS]);
+
 /** Hold mode: the median palm (per axis) of each hand in samples (n of them) is put on
  *  fp_calib_hold_target: scale 1 / head->mm_per_unit, rotation identity; with two hands the
  *  common offset is their mean and each hand's remainder goes to hand_offset. */

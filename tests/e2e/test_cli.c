@@ -511,10 +511,24 @@ static void test_calibrate(void **state)
     snprintf(ict, sizeof ict, "%s/faces/ict-facekit/generic_neutral_mesh.obj", data);
     snprintf(args, sizeof args, "calibrate --mesh %s --input %s --out cal-hold.json --force", ict, rec);
     assert_int_equal(fp(args), 0);
-    assert_non_null(strstr(out, "wrote cal-hold.json: 10.24 mm per mesh unit"));
+    /* the scale run uses without a calibration (the rig found by the mesh: 10 mm), not the
+     * head's estimate (10.24): adding the calibration keeps the scale (issue 53) */
+    assert_non_null(strstr(out, "wrote cal-hold.json: 10 mm per mesh unit"));
+    assert_non_null(strstr(out, "from the rig"));
+    /* three-claps is no hold: each palm travels over 70 mm; said, the file still written */
+    assert_non_null(strstr(out, "the left hand's palm travelled"));
+    assert_non_null(strstr(out, "not held still"));
     snprintf(args, sizeof args, "run --mesh %s --input %s --calibration cal-hold.json --out h.obj --force", ict, rec);
     assert_int_equal(fp(args), 0);
-    assert_non_null(strstr(out, "scale: 10.24 mm per mesh unit (from the calibration)"));
+    assert_non_null(strstr(out, "scale: 10 mm per mesh unit (from the calibration)"));
+    snprintf(args, sizeof args, "run --mesh %s --input %s --out h.obj --force", ict, rec);
+    assert_int_equal(fp(args), 0);
+    assert_non_null(strstr(out, "scale: 10 mm per mesh unit"));
+    /* a palm held still (HandSplay: 28 mm of travel, the fingers splaying) is not warned of */
+    snprintf(args, sizeof args, "calibrate --mesh %s --input replay:%s/hands/leap-motion/"
+             "HandSplay-110fps_joints_mm.csv,fast=1 --out cal-still.json --force", ict, data);
+    assert_int_equal(fp(args), 0);
+    assert_null(strstr(out, "travelled"));
     /* touch: three-claps has no three touches */
     snprintf(args, sizeof args, "calibrate --mode touch --mesh %s --input %s --out t.json --force", ict, rec);
     assert_int_equal(fp(args), 65);

@@ -258,6 +258,30 @@ static int record_samples(const calibrate_args *a, fp_calib_sample **smp, size_t
     return rc;
 }
 
+/* The rig `run` finds for mesh m (fp_rig_find in the default folder, by checksum or vertex
+ * count), loaded into *rig, its path in path; false (nothing said) where none fits. */
+static bool find_rig(const fp_mesh *m, char *path, size_t len, fp_rig **rig)
+{
+    char dir[4096], err[1024];
+    fp_rig_default_dir(fp_app_exe_dir(), dir, sizeof dir);
+    if (fp_rig_find(dir, m->vertex_count, m->positions, path, len, err, sizeof err)) return false;
+    return fp_rig_load_for_mesh(path, m->vertex_count, m->positions, rig, err, sizeof err) == 0;
+}
+
+/* Hold mode: say when a hand moved through what should have been a hold. */
+static void warn_unheld(const calibrate_args *a, const fp_calib_sample *smp, size_t n)
+{
+    double travel[FP_HANDS];
+    fp_calib_hold_travel(smp, n, travel);
+    for (int h = 0; h < FP_HANDS; h++)
+        if (travel[h] > FP_CALIB_HOLD_TRAVEL_MM)
+            fprintf(stderr, "facepuppet calibrate: warning: %s: the %s hand's palm travelled %.0f mm "
+                    "during the hold (over %.0f mm: not held still); its median place is used, but "
+                    "hold both hands still in front of the face, or use --mode touch "
+                    "(docs/calibration.md)\n", a->input, h ? "right" : "left", travel[h],
+                    FP_CALIB_HOLD_TRAVEL_MM);
+}
+
 /* Fit the calibration to the samples (hold or touch), write it atomically, say so. Returns
  * the exit status. */
 static int fit_and_save(const calibrate_args *a, const fp_mesh *m, const fp_head *head,
@@ -272,6 +296,7 @@ static int fit_and_save(const calibrate_args *a, const fp_mesh *m, const fp_head
         landmarks(m, head, given_rig, a->rig_path, a->no_rig, lm);
         rc = fp_calib_fit_touch(smp, n, (const float(*)[3])lm, &c, touched, &rms, err, sizeof err);
     } else {
+        warn_unheld(a, smp, n);
         rc = fp_calib_fit_hold(smp, n, m->positions, m->vertex_count, head, &c, err, sizeof err);
     }
     if (rc) {
@@ -317,6 +342,15 @@ static int calibrate_main(int argc, char **argv)
         status = fp_app_exit_code(rc, FP_APP_INPUT);
         goto done;
     }
+    /* no --rig: the rig run would find for this mesh (its landmarks for touch, its scale) */
+    char found[4096] = "";
+    const char *rig_path = a.rig_path;
+    if (!given_rig && !a.no_rig && find_rig(m, found, sizeof found, &given_rig)) rig_path = found;
+    if (given_rig && !(a.mm_per_unit > 0)) { /* the scale run uses: --mm-per-unit, the rig, the head */
+        head.mm_per_unit = fp_rig_mm_per_unit(given_rig);
+        snprintf(head.how, sizeof head.how, "from the rig %s", rig_path);
+    }
+    a.rig_path = rig_path;
     size_t n = 0, angles = 0;
     if ((rc = record_samples(&a, &smp, &n, &angles, err, sizeof err))) {
         fprintf(stderr, "facepuppet calibrate: %s\n", err[0] ? err : strerror(-rc));
