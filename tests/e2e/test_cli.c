@@ -95,7 +95,7 @@ static void test_decimal_options(void **state)
         {"calibrate --mm-per-unit 0x10", "--mm-per-unit must be > 0, got '0x10'"},
         {"calibrate --duration inf", "--duration must be > 0 s and under 1e7, got 'inf'"},
         {"plugins check x.so --budget 0x2", "--budget must be a time in ms > 0, got '0x2'"},
-        {"export x.fptake --format pc2 --fps 0x18", "--fps must be in (0, 10000], got '0x18'"},
+        {"export x.fptake --format pc2 --fps 0x18", "--resample must be in (0, 10000] frames per second, got '0x18'"},
         {"export x.fptake --format pc2 --max-error 0x1p-4", "--max-error must be > 0 mm, got '0x1p-4'"},
         {"export x.fptake --format png-seq --camera 0x10,5", "--camera YAW,PITCH[,ZOOM] in degrees"},
         {"export x.fptake --format png-seq --camera 10,5,inf", "--camera YAW,PITCH[,ZOOM] in degrees"},

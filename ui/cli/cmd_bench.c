@@ -24,7 +24,7 @@ static void usage(FILE *f)
 {
     fprintf(f,
             "usage: facepuppet bench [--quick] [--json] [--case NAME] [--no-contact-guard]\n"
-            "                        [--exact-frames] [--mapping NAME] [--trace FILE.csv]\n"
+            "                        [--exact-frames] [--mapping SPEC] [--trace FILE.csv]\n"
             "                        [--plot FILE.png] [--help]\n\n"
             "Times the CSRBF engine (medians over repeated updates; the lowest median of 3\n"
             "rounds, 2 with --quick, as the machine may be shared) beside references measured\n"
@@ -76,7 +76,7 @@ static void usage(FILE *f)
             "           shown frame the engine's shape bit for bit; by default a vertex that\n"
             "           moved under 1e-5 of the face's diagonal since the last frame keeps its\n"
             "           place, and its triangles go unchecked)\n"
-            "  --mapping NAME  case frame: the sessions' mapping (default anchored; e.g.\n"
+            "  --mapping SPEC  case frame: the sessions' mapping (default anchored; e.g.\n"
             "           unanchored: a one-shot step committed every frame, composed by the\n"
             "           fold-over guard where one map would fold)\n"
             "  --trace FILE.csv  case frame: one row per frame of each mesh (stage times,\n"

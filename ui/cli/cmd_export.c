@@ -62,7 +62,7 @@ static void usage(FILE *f)
 {
     fprintf(f,
         "usage: facepuppet export TAKE --format gltf|glb|pc2|mdd|obj-seq|png-seq [--out PATH]\n"
-        "                         [--range IN-OUT] [--fps F] [--max-error MM] [--mesh FILE]\n"
+        "                         [--range IN-OUT] [--resample F] [--max-error MM] [--mesh FILE]\n"
         "                         [--size WxH] [--camera YAW,PITCH[,ZOOM]] [--force]\n\n"
         "Play a take's frames from the control sets it stored (as `play`: bit-identical to the\n"
         "recording) and write them for an animator's tools:\n"
@@ -80,7 +80,7 @@ static void usage(FILE *f)
         "              (quads, UV seams, groups, materials kept)\n"
         "  png-seq     one PNG per frame, drawn as the live viewer draws the face, headless\n"
         "              (needs a display: xvfb-run on a server)\n"
-        "The summary line names the frame rate (the take's, or --fps) and the mesh's unit\n"
+        "The summary line names the frame rate (the take's, or --resample) and the mesh's unit\n"
         "(the glTF's root scale, the caches' scale to metres).\n\n"
         "  -f, --format F        the format (required)\n"
         "  -o, --out PATH        the file (a folder for obj-seq); default: the take's path with\n"
@@ -92,8 +92,9 @@ static void usage(FILE *f)
         "                        before its first or IN after OUT is refused (64, naming the\n"
         "                        take's frames and timecodes); an end past the take is clipped\n"
         "                        to it with a warning\n"
-        "      --fps F           resample to F frames per second (each sample shows the latest\n"
+        "      --resample F      resample to F frames per second (each sample shows the latest\n"
         "                        frame at its time); default: every frame at its own time\n"
+        "                        (--fps F: the same, its older name; run's --fps is the session rate)\n"
         "      --max-error MM    glTF: the largest error allowed, millimetres (default 0.1);\n"
         "                        mm per mesh unit from the take's calibration, else the rig's\n"
         "                        or the head's\n"
@@ -106,7 +107,7 @@ static void usage(FILE *f)
         "                        png-seq: the frames in the folder); without it the export is\n"
         "                        refused before any work (73)\n"
         "  -m, --mesh FILE       the take's mesh from another path (its crc32 must match)\n"
-        "      --plugin-dir DIR  look for plugins in DIR first\n"
+        "  -P, --plugin-dir DIR  look for plugins in DIR first\n"
         "  -q, --quiet           no progress and no summary, nor the engine's and contact\n"
         "                        guard's notes on each gesture; errors and a damaged take's\n"
         "                        warning still print\n"
@@ -193,11 +194,11 @@ static int export_parse(int argc, char **argv, export_args *a)
            OPT_SIZE, OPT_CAMERA, OPT_FORCE };
     static const struct option opts[] = {
         {"format", required_argument, 0, 'f'},   {"out", required_argument, 0, 'o'},
-        {"range", required_argument, 0, OPT_RANGE}, {"fps", required_argument, 0, OPT_FPS},
+        {"range", required_argument, 0, OPT_RANGE}, {"resample", required_argument, 0, OPT_FPS}, {"fps", required_argument, 0, OPT_FPS},
         {"max-error", required_argument, 0, OPT_MAX_ERROR},
         {"max-targets", required_argument, 0, OPT_MAX_TARGETS},
         {"step", no_argument, 0, OPT_STEP},      {"mesh", required_argument, 0, 'm'},
-        {"plugin-dir", required_argument, 0, OPT_PLUGIN_DIR},
+        {"plugin-dir", required_argument, 0, 'P'},
         {"quiet", no_argument, 0, 'q'},          {"help", no_argument, 0, 'h'},
         {"size", required_argument, 0, OPT_SIZE}, {"camera", required_argument, 0, OPT_CAMERA},
         {"force", no_argument, 0, OPT_FORCE},
@@ -206,14 +207,14 @@ static int export_parse(int argc, char **argv, export_args *a)
                        .fmt = FP_EXPORT_OBJ_SEQ};
     unsigned long long whole; /* an integer option (fp_parse_whole) */
     optind = 1;
-    for (int c; (c = getopt_long(argc, argv, "f:o:m:qh", opts, NULL)) != -1;) {
+    for (int c; (c = getopt_long(argc, argv, "f:o:m:P:qh", opts, NULL)) != -1;) {
         switch (c) {
         case 'f': a->format = optarg; break;
         case 'o': a->out = optarg; break;
         case OPT_RANGE: a->range = optarg; break;
         case OPT_FPS:
             if (!fp_parse_decimal(optarg, &a->fps) || !(a->fps > 0 && a->fps <= 10000)) {
-                fprintf(stderr, "facepuppet export: --fps must be in (0, 10000], got '%s'\n", optarg);
+                fprintf(stderr, "facepuppet export: --resample must be in (0, 10000] frames per second, got '%s'\n", optarg);
                 return FP_EXIT_USAGE;
             }
             break;
@@ -250,7 +251,7 @@ static int export_parse(int argc, char **argv, export_args *a)
             break;
         }
         case 'm': a->mesh = optarg; break;
-        case OPT_PLUGIN_DIR:
+        case 'P':
             if (a->ndirs < 8) a->dirs[a->ndirs++] = optarg;
             break;
         case 'q': a->quiet = true; break;

@@ -23,7 +23,7 @@
 static void usage(FILE *f)
 {
     fprintf(f,
-        "usage: facepuppet live [--mesh FILE] [--input SPEC]... [--mapping NAME] [--radius R]\n"
+        "usage: facepuppet live [--mesh FILE] [--input SPEC]... [--mapping SPEC] [--radius R]\n"
         "                       [--speed X] [--size WxH] [--frames N] [--screenshot FILE.png]\n"
         "                       [--script TEXT|@FILE] [--gpu-warp] [--vsync] [--out FILE]\n\n"
         "Perform with the face in a window: the inputs drive the mapping, the mapping drives\n"

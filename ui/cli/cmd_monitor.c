@@ -90,6 +90,9 @@ static void usage(FILE *f)
     fprintf(f, "usage: facepuppet monitor [--count N] [--duration S] [--plugin-dir DIR] SPEC\n\n"
                "Print every event of one input as a JSON line, to check a device or a recording.\n"
                "Stops at the end of a recording, after N events or S seconds, or on Ctrl-C.\n"
+               "  -n, --count N          stop after N events\n"
+               "  -d, --duration S       stop after S seconds\n"
+               "  -P, --plugin-dir DIR   look for plugins in DIR first (repeatable)\n"
                "  e.g. facepuppet monitor replay:../shared/data/hands/leap-motion/grab_joints_mm.csv,fast=1\n"
                "       facepuppet monitor pedal\n"
                "       facepuppet monitor cyberglove:/dev/ttyUSB0\n\n"
@@ -109,7 +112,7 @@ static int monitor_main(int argc, char **argv)
     const char *dirs[8];
     size_t ndirs = 0;
     optind = 1;
-    for (int c; (c = getopt_long(argc, argv, "n:d:h", opts, NULL)) != -1;) {
+    for (int c; (c = getopt_long(argc, argv, "n:d:P:h", opts, NULL)) != -1;) {
         switch (c) {
         case 'n': {
             unsigned long long n;

@@ -36,7 +36,7 @@ static void usage(FILE *f)
         "      --force            overwrite outputs that exist (--out, --export, frames in\n"
         "                         --frames-out); without it they are refused before any work\n"
         "  -m, --mesh FILE        the take's mesh from another path (its crc32 must match)\n"
-        "      --plugin-dir DIR   look for plugins in DIR first\n"
+        "  -P, --plugin-dir DIR   look for plugins in DIR first\n"
         "  -q, --quiet            no summary line, nor the engine's and contact guard's\n"
         "                         notes on each gesture; errors and a damaged take's\n"
         "                         warning still print\n"
@@ -51,7 +51,7 @@ static int play_main(int argc, char **argv)
     enum { OPT_FRAMES_OUT = 0x200, OPT_PLUGIN_DIR, OPT_EXPORT, OPT_FORCE };
     static const struct option opts[] = {
         {"out", required_argument, 0, 'o'},      {"frames-out", required_argument, 0, OPT_FRAMES_OUT},
-        {"mesh", required_argument, 0, 'm'},     {"plugin-dir", required_argument, 0, OPT_PLUGIN_DIR},
+        {"mesh", required_argument, 0, 'm'},     {"plugin-dir", required_argument, 0, 'P'},
         {"export", required_argument, 0, OPT_EXPORT}, {"force", no_argument, 0, OPT_FORCE},
         {"quiet", no_argument, 0, 'q'},          {"help", no_argument, 0, 'h'},
         {0, 0, 0, 0}};
@@ -59,13 +59,13 @@ static int play_main(int argc, char **argv)
     size_t ndirs = 0;
     bool quiet = false, force = false;
     optind = 1;
-    for (int c; (c = getopt_long(argc, argv, "o:m:qh", opts, NULL)) != -1;) {
+    for (int c; (c = getopt_long(argc, argv, "o:m:P:qh", opts, NULL)) != -1;) {
         switch (c) {
         case 'o': out = optarg; break;
         case OPT_FRAMES_OUT: frames_out = optarg; break;
         case OPT_EXPORT: export_file = optarg; break;
         case 'm': mesh = optarg; break;
-        case OPT_PLUGIN_DIR:
+        case 'P':
             if (ndirs < 8) dirs[ndirs++] = optarg;
             break;
         case 'q': quiet = true; break;

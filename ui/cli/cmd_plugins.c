@@ -149,7 +149,9 @@ static void usage(FILE *f)
         "folder, --plugin-dir folders, FACEPUPPET_PLUGIN_PATH), loaded and described: kind,\n"
         "id, version, ABI, description, usage and typed keys; a broken one with the reason\n"
         "(dlopen error, no entry, ABI, init failed, no factory, unsafe file). Also the\n"
-        "folders searched and those skipped for safety.\n\n"
+        "folders searched and those skipped for safety.\n"
+        "  -P, --plugin-dir DIR  look for plugins in DIR first (repeatable)\n"
+        "      --json            one JSON document\n\n"
         "plugins check: validate one plugin file (docs/plugin-guide.md, \"Checking a\n"
         "plugin\"): create with defaults and with bad keys; a mapping gets synthetic frames\n"
         "(capacity canaries, NaN, radius, time per call, determinism, destroy); an input is\n"
@@ -288,17 +290,17 @@ static int plugins_main(int argc, char **argv)
 {
     if (argc >= 2 && !strcmp(argv[1], "check")) return check_main(argc - 1, argv + 1);
     static const struct option opts[] = {{"json", no_argument, 0, 'j'},
-                                         {"plugin-dir", required_argument, 0, 'd'},
+                                         {"plugin-dir", required_argument, 0, 'P'},
                                          {"help", no_argument, 0, 'h'},
                                          {0, 0, 0, 0}};
     const char *dirs[FP_PLUGIN_MAX_DIRS];
     size_t ndirs = 0;
     bool json = false;
     optind = 1;
-    for (int c; (c = getopt_long(argc, argv, "h", opts, NULL)) != -1;) {
+    for (int c; (c = getopt_long(argc, argv, "P:h", opts, NULL)) != -1;) {
         switch (c) {
         case 'j': json = true; break;
-        case 'd':
+        case 'P':
             if (ndirs < FP_PLUGIN_MAX_DIRS) dirs[ndirs++] = optarg;
             break;
         case 'h': usage(stdout); return FP_EXIT_OK;

@@ -27,7 +27,7 @@ static void on_signal(int sig) { (void)sig; interrupted = 1; }
 static void usage(FILE *f)
 {
     fprintf(f,
-        "usage: facepuppet run [--mesh FILE] --input SPEC [--input SPEC] --mapping NAME\n"
+        "usage: facepuppet run [--mesh FILE] --input SPEC [--input SPEC] --mapping SPEC\n"
         "                      [--radius R] [--out FILE] [--frames-out DIR] [--speed X] [--force]\n\n"
         "Run a headless puppeteering session: the inputs drive the mapping, the mapping\n"
         "drives the CSRBF engine, the face deforms; writes the final mesh.\n"

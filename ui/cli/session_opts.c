@@ -44,7 +44,7 @@ static const struct {
     {"speed", required_argument, 's', "X", "replay speed factor for replay inputs (default 1)"},
     {"duration", required_argument, OPT_DURATION, "S", "stop after S seconds (default: when the inputs end)"},
     {"hand-size", required_argument, OPT_HAND_SIZE, "F", "performer's hand size, 1 = mean adult"},
-    {"plugin-dir", required_argument, OPT_PLUGIN_DIR, "DIR", "look for plugins in DIR first (repeatable)"},
+    {"plugin-dir", required_argument, 'P', "DIR", "look for plugins in DIR first (repeatable)"},
     {"rig", required_argument, OPT_RIG, "R",
      "rig file (rigs/README.md); default: the mesh's rig found\nby checksum, else vertex count; 'none': no rig"},
     {"quiet", no_argument, 'q', NULL,
@@ -113,7 +113,7 @@ int fp_session_opts_parse(fp_session_opts *o, int c, const char *arg, const char
     case OPT_HAND_SIZE:
         return number(arg, 0.2999999, 3.0000001, &so->hand_size) ? 1
                : bad(cmd, "--hand-size must be in 0.3..3", arg);
-    case OPT_PLUGIN_DIR:
+    case 'P':
         if (o->nplugin_dirs == FP_SESSION_OPTS_MAX_PLUGIN_DIRS) {
             fprintf(stderr, "facepuppet %s: at most %d --plugin-dir\n", cmd,
                     FP_SESSION_OPTS_MAX_PLUGIN_DIRS);

@@ -10,7 +10,7 @@
 #include <stdio.h>
 
 /** The short letters of the shared options, for getopt_long's optstring. */
-#define FP_SESSION_OPTS_SHORT "m:i:M:r:s:q"
+#define FP_SESSION_OPTS_SHORT "m:i:M:r:s:qP:"
 /** How many entries fp_session_opts_longopts writes. */
 #define FP_SESSION_OPTS_COUNT 12
 /** A command's own long-only options take values from here up (the shared ones use 0x100..). */

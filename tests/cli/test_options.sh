@@ -1,0 +1,43 @@
+#!/usr/bin/env bash
+# One set of names across commands (issue 53, item 5): -P is --plugin-dir wherever a command
+# takes plugin folders (run, live, play, export, calibrate, monitor, plugins); usage lines
+# say SPEC for --mapping; export resamples with --resample (--fps kept as its older name),
+# while run's --fps is the session's rate. Each -P is checked by effect: a plugin folder
+# given only with -P is searched (a missing folder is named, or its plugins are listed).
+# SPDX-License-Identifier: GPL-3.0-or-later
+set -u
+build=${FP_BUILD_DIR:-build}
+fp="$(cd "$build" && pwd)/bin/facepuppet"
+plugdir="$(cd "$build" && pwd)/lib/facepuppet"
+data=$(cd "${FP_SHARED_DATA:-../shared/data}" && pwd)
+tmp=$(mktemp -d "${TMPDIR:-/tmp}/fp-options-XXXXXX")
+trap 'rm -rf "$tmp"' EXIT
+fail() { echo "FAIL: $*"; exit 1; }
+cd "$tmp" || exit 1
+
+# -P reaches the plugin search: `plugins -P DIR --json` lists DIR's plugins under DIR
+"$fp" plugins -P "$plugdir" --json >p.json 2>p.err || { cat p.err; fail "plugins -P exited $?"; }
+grep -q "$plugdir" p.json || fail "plugins -P $plugdir: the folder is not in the listing"
+# every command that takes plugin folders accepts -P (getopt would say 'invalid option')
+for c in run live play export calibrate monitor plugins; do
+    "$fp" $c -P /nonexistent-plugin-dir --help >h.out 2>&1
+    grep -qi "invalid option\|unrecognized option" h.out && { cat h.out; fail "$c: -P refused"; }
+    "$fp" $c --help 2>&1 | grep -q -- "-P, --plugin-dir" || fail "$c --help does not show -P, --plugin-dir"
+done
+# usage lines say SPEC for a mapping
+for c in run live bench; do
+    "$fp" $c --help 2>&1 | grep -q -- "--mapping NAME" && fail "$c --help says --mapping NAME (a SPEC)"
+done
+# export: --resample is the rate of the exported samples; --fps is the same (older name)
+"$fp" run --mesh "$data/faces/ict-facekit/generic_neutral_mesh.obj" \
+    --input "replay:$data/hands/leap-motion/three-claps_joints_mm.csv,fast=1" --duration 0.5 \
+    --take-dir takes --slate opt -q -o run.obj >/dev/null 2>&1 || fail "run exited $?"
+take=takes/opt_T001.fptake
+"$fp" export "$take" --format pc2 --resample 24 --out a.pc2 >a.out 2>&1 || { cat a.out; fail "export --resample exited $?"; }
+grep -q "24 fps" a.out || { cat a.out; fail "export --resample 24: the line does not say 24 fps"; }
+"$fp" export "$take" --format pc2 --fps 24 --out b.pc2 >b.out 2>&1 || { cat b.out; fail "export --fps exited $?"; }
+cmp -s a.pc2 b.pc2 || fail "export --fps 24 and --resample 24 differ"
+"$fp" export "$take" --format pc2 --resample 0 --out c.pc2 >c.out 2>&1
+[ $? -eq 64 ] || fail "export --resample 0: want exit 64"
+grep -q -- "--resample" c.out || fail "export --resample 0: the message does not name --resample"
+echo ok
