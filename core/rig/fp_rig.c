@@ -479,7 +479,7 @@ static int parse_jaw(const ctx *c, fp_rig *r, const cJSON *root)
     const cJSON *jaw, *h, *fo;
     int rc = get_object(c, root, "", "jaw", true, &jaw, p, sizeof p);
     if (rc) return rc;
-    static const char *const fj[] = {"hinge", "open_degrees", "glide", "falloff", "weights", NULL};
+    static const char *const fj[] = {"hinge", "open_degrees", "glide", "glide_start", "falloff", "weights", NULL};
     if ((rc = check_fields(c, jaw, "jaw", fj))) return rc;
     if ((rc = get_object(c, jaw, "jaw", "hinge", true, &h, p, sizeof p))) return rc;
     static const char *const fh[] = {"right", "left", NULL};
@@ -516,6 +516,12 @@ static int parse_jaw(const ctx *c, fp_rig *r, const cJSON *root)
             r->glide[k] = e->valuedouble;
         }
     }
+    /* where the condyle starts to slide (rigs/README.md "Jaw and falloff"); absent: 0 (the
+     * glide linear in jaw.open from the start) */
+    const cJSON *gs;
+    if ((rc = get_member(c, jaw, "jaw", "glide_start", false, &gs, p, sizeof p))) return rc;
+    r->glide_start = 0;
+    if (gs && (rc = get_number(c, jaw, "jaw", "glide_start", true, 0, 0.95, &r->glide_start))) return rc;
     if ((rc = get_object(c, jaw, "jaw", "falloff", true, &fo, p, sizeof p))) return rc;
     static const char *const ff[] = {"mouth_line", "lip_band", "cheek_band", "cheek_distance",
                                      "corner_inset", "inner_depth",
@@ -1089,6 +1095,9 @@ size_t fp_rig_describe(const fp_rig *r, size_t n, const float *pos, char *buf, s
     OUT("  hinge      right (%g, %g, %g)  left (%g, %g, %g), opens %g degrees at jaw.open = 1, glide %g forward %g down\n",
         r->hinge_r[0], r->hinge_r[1], r->hinge_r[2], r->hinge_l[0], r->hinge_l[1], r->hinge_l[2], r->open_deg,
         r->glide[0], r->glide[1]);
+    if (r->glide_start > 0)
+        OUT("  glide      starts at jaw.open = %g (a pure rotation before), then linear to jaw.open = 1\n",
+            r->glide_start);
     OUT("  falloff    lip band %g, cheek band %g from %g inside the corners to %g beyond, inner depth %g, neck band %g,"
         " back band %g; mobility ramp %g\n", r->lip_band, r->cheek_band, r->corner_inset, r->cheek_distance,
         r->inner_depth, r->neck_band, r->back_band, r->ramp);

@@ -189,6 +189,17 @@ int fp_rig_channel_values(const fp_rig *rig, const char *const *names, const flo
 void fp_rig_hinge(const fp_rig *rig, float right[3], float left[3], double *open_degrees,
                   double glide[2]);
 
+/** The fraction of the glide (jaw.glide, the condyle's slide along the articular eminence)
+ *  the jaw has made at a jaw.open value: with the file's jaw.glide_start a (in [0, 0.95],
+ *  default 0) it is 0 up to a (the opening is a pure rotation about the condyles) and
+ *  (open - a) / (1 - a) after, reaching 1 at jaw.open = 1 (0 for open <= 0 or NaN, 1 for
+ *  open >= 1); a = 0 is the version-1 glide, linear from the start. Source: Posselt's
+ *  envelope of motion (the posterior border path: rotation for the first 20-25 mm of incisal
+ *  opening, then the condyles translate, a corner in the incisal point's path), rigs/README.md
+ *  "ICT: how the hinge, the angle and the weights were chosen". 0 for a NULL rig.
+ *  [any-thread], no allocation. */
+double fp_rig_glide_fraction(const fp_rig *rig, double open);
+
 /** Per-vertex weights after fp_rig_bind (NULL before): the jaw weight w (fraction of the
  *  jaw's motion a vertex takes: 1 on the jaw, 0 on the skull, in soft tissue the file's
  *  jaw.weights where it lists the vertex, else the falloff; rigs/README.md)
@@ -197,7 +208,7 @@ const float *fp_rig_jaw_weights(const fp_rig *rig);
 const float *fp_rig_mobility(const fp_rig *rig);
 
 /** Pose the base by the channels: out[v] = H + R(w_v * theta) (base[v] - H)
- *  + w_v * jaw.open * (glide[0] * forward - glide[1] * up), where H is the right hinge point,
+ *  + w_v * s(jaw.open) * (glide[0] * forward - glide[1] * up) (s = fp_rig_glide_fraction), where H is the right hinge point,
  *  R(a) the rotation by a about the hinge axis (right to left TMJ; positive opens the mouth:
  *  the chin goes down and back), theta = jaw.open * open_degrees, w_v the vertex's jaw weight
  *  and forward, up the rig's axes. Skull vertices, every vertex with w_v == 0 and every
@@ -218,7 +229,7 @@ int fp_rig_pose_range(const fp_rig *rig, const float *base, const float *values,
 
 /** The inverse of fp_rig_pose for a committed shape: each vertex v of `shown` (the posed
  *  base plus the fingers' work) is taken back by the inverse of its own pose,
- *  out[v] = J_r + R(w_v theta)^T (shown[v] - J_r - w_v jaw.open glide), so that posing `out`
+ *  out[v] = J_r + R(w_v theta)^T (shown[v] - J_r - w_v s(jaw.open) glide), so that posing `out`
  *  with the same values gives `shown` again (to float rounding) and a commit keeps only the
  *  fingers' part (the jaw does not turn twice). Vertices with mobility 0 (skull, jaw: the
  *  fingers cannot move them) are copied from `base` bit for bit. Arrays n x 3 floats; out

@@ -49,6 +49,7 @@ struct fp_rig {
     double hinge_r[3], hinge_l[3];
     double open_deg;
     double glide[2];            /* forward, down; mesh units at jaw.open = 1 */
+    double glide_start;         /* jaw.open where the glide begins (default 0) */
     size_t mouth_count;
     double mouth[MAX_MOUTH_POINTS][3];
     double lip_band, cheek_band, cheek_distance, corner_inset, inner_depth;

@@ -18,6 +18,14 @@ static double jaw_open_value(const fp_rig *r, const float *values)
     return fmin(jc->max, fmax(jc->min, open));
 }
 
+double fp_rig_glide_fraction(const fp_rig *r, double open)
+{
+    if (!r || !(open > 0)) return 0;
+    if (open >= 1) return 1;
+    double t = (open - r->glide_start) / (1 - r->glide_start);
+    return t > 0 ? t : 0;
+}
+
 /* Rodrigues: rotation matrix by angle a (radians) about unit axis k. */
 static void rotation(const double k[3], double a, double R[9])
 {
@@ -37,7 +45,7 @@ int fp_rig_pose_range(const fp_rig *r, const float *base, const float *values, f
 {
     if (!r || !base || !out || !r->w || v0 > r->n || count > r->n - v0) return -EINVAL;
     double open = jaw_open_value(r, values);
-    double theta = open * r->open_deg * M_PI / 180;
+    double theta = open * r->open_deg * M_PI / 180, slide = fp_rig_glide_fraction(r, open);
     double R1[9];
     rotation(r->axis, theta, R1);
     for (size_t v = v0; v < v0 + count; v++) {
@@ -53,7 +61,7 @@ int fp_rig_pose_range(const fp_rig *r, const float *base, const float *values, f
             R = Rw;
         }
         double d[3] = {base[3 * v] - r->hinge_r[0], base[3 * v + 1] - r->hinge_r[1], base[3 * v + 2] - r->hinge_r[2]};
-        double g = w * open;
+        double g = w * slide;
         for (int i = 0; i < 3; i++)
             out[3 * v + i] = (float)(r->hinge_r[i] + R[3 * i] * d[0] + R[3 * i + 1] * d[1] + R[3 * i + 2] * d[2] +
                                      g * (r->glide[0] * r->fwd[i] - r->glide[1] * r->up[i]));
@@ -71,7 +79,7 @@ int fp_rig_unpose_range(const fp_rig *r, const float *base, const float *posed, 
 {
     if (!r || !base || !shown || !out || !r->w || !r->m || v0 > r->n || count > r->n - v0) return -EINVAL;
     double open = jaw_open_value(r, values);
-    double theta = open * r->open_deg * M_PI / 180;
+    double theta = open * r->open_deg * M_PI / 180, slide = fp_rig_glide_fraction(r, open);
     for (size_t v = v0; v < v0 + count; v++) {
         double w = r->w[v];
         const float *p = &shown[3 * v];
@@ -85,7 +93,7 @@ int fp_rig_unpose_range(const fp_rig *r, const float *base, const float *posed, 
         }
         double R[9], d[3];
         rotation(r->axis, w * theta, R);
-        double g = w * open;
+        double g = w * slide;
         for (int i = 0; i < 3; i++)
             d[i] = p[i] - r->hinge_r[i] - g * (r->glide[0] * r->fwd[i] - r->glide[1] * r->up[i]);
         for (int i = 0; i < 3; i++) /* R^T d */

@@ -7,9 +7,11 @@
  * author outside the project would.
  *
  * What the hand does:
- *  - The thumb is the jaw: its flexion (jaw=flexion: the bend at its MCP plus its IP joint,
- *    from the joint positions) or the thumb-to-index opening (jaw=opening: the distance of
- *    the two tips, as in a hand puppet) drives the rig channel jaw.open. Calibrated against
+ *  - The thumb is the jaw: the gap between the thumb and the fingers (jaw=opening, the
+ *    default: the distance of the thumb's tip from the index tip, as a hand puppet's mouth
+ *    opens between the thumb and the fingers) or the thumb's flexion (jaw=flexion: the bend
+ *    at its MCP plus its IP joint, from the joint positions; the curl) drives the rig channel
+ *    jaw.open (issue 53). Calibrated against
  *    the neutral pose: the neutral value (0) at the neutral hand, the channel's maximum (1)
  *    at flex_range degrees more flexion (or open_range mm more opening), linear between and
  *    clamped to the channel's range, so monotonic in the thumb's motion.
@@ -371,8 +373,9 @@ enum {
 static const fp_param_info keys[KEY_COUNT + 1] = {
     {.name = "hand", .type = FP_PARAM_ENUM, .default_value = "right", .choices = "left|right",
      .description = "the hand that drives the face"},
-    {.name = "jaw", .type = FP_PARAM_ENUM, .default_value = "flexion", .choices = "flexion|opening",
-     .description = "jaw.open from the thumb's flexion, or from the thumb-to-index opening"},
+    {.name = "jaw", .type = FP_PARAM_ENUM, .default_value = "opening", .choices = "flexion|opening",
+     .description = "jaw.open from the thumb-to-index opening (a hand puppet's mouth), or from the thumb's "
+                    "flexion (its curl)"},
     {.name = "flex_range", .type = FP_PARAM_FLOAT, .min = 5, .max = 180, .default_value = "45",
      .unit = "deg",
      .description = "thumb flexion beyond neutral that opens the jaw fully (jaw=flexion)"},
@@ -541,12 +544,13 @@ static const fp_mapping_factory factory = {
     .description = "one hand drives the face through its rig: the thumb the jaw, the fingers "
                    "landmarks",
     .usage =
-        "onehand[,hand=left|right][,jaw=flexion|opening][,flex_range=DEG][,open_range=MM]\n"
+        "onehand[,hand=left|right][,jaw=opening|flexion][,flex_range=DEG][,open_range=MM]\n"
         "       [,map=mouth|brows][,targets=I/M/R/L][,gain=F][,finger_mm=MM][,auto=0|1]\n"
         "       [,still=S][,still_mm=MM][,hold=0|1][,clamp=F]\n"
         "  Needs a rig (--rig). The thumb drives jaw.open: 0 at the neutral hand, 1 at\n"
-        "  flex_range (45) degrees more flexion (jaw=flexion: bend at the thumb's MCP + IP) or\n"
-        "  open_range (40) mm more thumb-to-index opening (jaw=opening). The fingertips move\n"
+        "  open_range (40) mm more gap between the thumb's and the index tip (jaw=opening, the\n"
+        "  default: a hand puppet's mouth) or flex_range (45) degrees more thumb flexion\n"
+        "  (jaw=flexion: the curl, bend at the thumb's MCP + IP). The fingertips move\n"
         "  landmarks: end = landmark + gain x (tip now - tip at neutral), the hand's right, up\n"
         "  and toward-you as the face's left, up and forward; gain in mm per mm (1: 1:1), the\n"
         "  hand's mm from its middle finger (finger_mm, 70.9 mm), the face's from the rig.\n"

@@ -61,7 +61,9 @@ def r3(p):
     return [round(float(x), 4) for x in p]
 
 
-def rig(name, desc, mesh_name, V, mm, regions, landmarks, hinge, open_deg, glide, falloff, ramp):
+def rig(name, desc, mesh_name, V, mm, regions, landmarks, hinge, kin, falloff, ramp):
+    """kin: (open_degrees, [forward, down] glide, glide_start) of the jaw."""
+    open_deg, glide, glide_start = kin
     n = len(V)
     used = set()
     regs = []
@@ -81,7 +83,7 @@ def rig(name, desc, mesh_name, V, mm, regions, landmarks, hinge, open_deg, glide
         "regions": regs,
         "landmarks": {k: int(v) for k, v in landmarks.items()},
         "jaw": {"hinge": {"right": r3(hinge[0]), "left": r3(hinge[1])}, "open_degrees": open_deg,
-                "glide": glide, "falloff": falloff},
+                "glide": glide, "glide_start": glide_start, "falloff": falloff},
         "mobility": {"ramp": ramp},
         "channels": [{"name": "jaw.open", "min": 0, "max": 1, "neutral": 0}],
     }
@@ -130,10 +132,20 @@ ICT_CHEEK_BAND = 2.5      # half-width of the cheek blend about the mouth line's
 ICT_CHEEK_DISTANCE = 1.0
 ICT_CORNER_INSET = 1.0
 ICT_INNER_DEPTH = 0.8
-ICT_NECK_BAND = 7.0
-ICT_BACK_BAND = 4.0
-ICT_OPEN_DEGREES = 26.0
-ICT_GLIDE = [0.8, 0.3]    # condyle forward and down at jaw.open = 1, cm
+# Under the chin and behind the ramus the weight falls over 1.5 theta r (the injectivity bound,
+# README "Falloff"; theta the angle at jaw.open = 1): r the distance from the hinge axis there.
+ICT_NECK_R = 11.0         # cm, the skin under the chin
+ICT_BACK_R = 5.5          # cm, the skin behind the ramus
+# The jaw's arc (rigs/README.md "ICT: how the hinge, the angle and the weights were chosen"):
+# Posselt's envelope of motion: the opening is a pure rotation about the condyles for the
+# first 20-25 mm of incisal opening, then the condyles also slide forward and down the
+# articular eminence until the maximal opening, the slide growing linearly with the angle.
+# jaw.open = 1 is a wide opening every healthy adult reaches (JAW_OPEN_MM), on that path.
+JAW_ROTATION_ONLY_MM = 22.5   # incisal opening of the pure rotation (20-25 mm)
+JAW_MAX_OPENING_MM = 50.0     # adult maximal interincisal opening (40-60 mm; about 50)
+JAW_OPEN_MM = 40.0            # jaw.open = 1 (below 40 mm a maximal opening counts as restricted)
+JAW_CONDYLE_SLIDE_MM = 15.0   # condylar translation at maximal opening (10-20 mm)
+JAW_EMINENCE_DEG = 35.0       # the condyle's path below the Frankfort horizontal (30-40 deg)
 # Mobility ramp: fingers act fully this far from bone; the finger clamp is ramp / 3 (fp_rig.h).
 ICT_RAMP = 1.0
 # Jaw weights of the lips and the mouth's inside (rigs/README.md "ICT: the jaw weights").
@@ -145,6 +157,49 @@ ICT_TEETH_T = (0.3, 0.6)  # t = d_upper / (d_upper + d_lower) teeth: weight 0 be
 ICT_TEETH_NEAR = 0.5      # cm: lining and gums this near a tooth take smoothstep(t)
 ICT_LOOP_CLEAR = 1.0      # cm: ... but not the lining this near its opening (the lips decide there)
 ICT_KNN = 6               # nearest neighbours joining the mouth's separate surfaces
+
+
+def jaw_kinematics(V, hinge, upper_teeth, lower_teeth, mm):
+    """The jaw's angle at jaw.open = 1, its glide and where the glide starts, from the
+    anatomy constants JAW_* and the mesh's incisors (rigs/README.md): the lower incisal edge
+    (the highest lower tooth vertex within 4 mm of the midline) turns about the hinge axis
+    (+x, the rig's left) and slides with the condyle; the incisal opening is the upper incisal
+    edge's height (the lowest upper tooth vertex near the midline) minus the lower edge's.
+    theta_r: the pure rotation that opens JAW_ROTATION_ONLY_MM; theta_max: the rotation that,
+    with the whole slide JAW_CONDYLE_SLIDE_MM, opens JAW_MAX_OPENING_MM; between them the
+    slide grows linearly with the angle; theta_1: the angle on that path that opens
+    JAW_OPEN_MM (jaw.open = 1). Returns (open_degrees = theta_1, [forward, down] glide at
+    theta_1 in mesh units, glide_start = theta_r / theta_1, report dict)."""
+    H = 0.5 * (np.array(hinge[0], float) + np.array(hinge[1], float))
+    L, U = V[lower_teeth].astype(float), V[upper_teeth].astype(float)
+    L = L[np.abs(L[:, 0]) < 4.0 / mm]
+    U = U[np.abs(U[:, 0]) < 4.0 / mm]
+    le, ue = L[np.argmax(L[:, 1])] - H, U[np.argmin(U[:, 1])] - H
+    a = np.radians(JAW_EMINENCE_DEG)
+    slide = JAW_CONDYLE_SLIDE_MM / mm
+
+    def opening(theta_deg, down):  # mesh units
+        t = np.radians(theta_deg)
+        y = le[1] * np.cos(t) - le[2] * np.sin(t) - down
+        return ue[1] - y
+
+    def solve(f, target):  # f increasing in the angle
+        lo, hi = 0.0, 60.0
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if f(mid) < target else (lo, mid)
+        return 0.5 * (lo + hi)
+    theta_r = solve(lambda t: opening(t, 0.0), JAW_ROTATION_ONLY_MM / mm)
+    theta_max = solve(lambda t: opening(t, slide * np.sin(a)), JAW_MAX_OPENING_MM / mm)
+    frac = lambda t: min(1.0, max(0.0, (t - theta_r) / (theta_max - theta_r)))
+    theta_1 = solve(lambda t: opening(t, frac(t) * slide * np.sin(a)), JAW_OPEN_MM / mm)
+    open_deg = round(theta_1, 1)
+    g = frac(open_deg) * slide
+    rep = {"theta_r": theta_r, "theta_max": theta_max, "theta_1": theta_1, "slide_1_mm": g * mm,
+           "overbite_mm": -opening(0, 0) * mm, "incisor_radius": float(np.hypot(le[1], le[2])),
+           "lower_edge": le + H, "upper_edge": ue + H}
+    return (open_deg, [round(float(g * np.cos(a)), 3), round(float(g * np.sin(a)), 3)],
+            round(theta_r / open_deg, 3), rep)
 
 
 def smoothstep(a, b, x):
@@ -336,16 +391,19 @@ def build_ict(data):
     # Hinge: the condyles, 1.3 cm in front of the ear canal at its height, 1.9 cm under the
     # skin (intercondylar distance about 10 cm).
     hinge = ([-5.0, 0.5, 2.3], [5.0, 0.5, 2.3])
+    kin = jaw_kinematics(V, hinge, upper_teeth, lower_teeth, 10.0)[:3]
+    theta = np.radians(kin[0])
+    neck_band, back_band = (round(float(1.5 * theta * r), 1) for r in (ICT_NECK_R, ICT_BACK_R))
     mouth = [V[lm["mouth_corner_right"]],
              0.5 * (V[5711] + V[5966]), 0.5 * (V[lm["upper_lip_inner"]] + V[lm["lower_lip_inner"]]),
              0.5 * (V[6216] + V[6470]), V[lm["mouth_corner_left"]]]
     falloff = {"mouth_line": [r3(p) for p in mouth], "lip_band": 0.05, "cheek_band": ICT_CHEEK_BAND,
                "cheek_distance": ICT_CHEEK_DISTANCE, "corner_inset": ICT_CORNER_INSET,
                "inner_depth": ICT_INNER_DEPTH, "menton": [0.0, -8.0, 9.2], "gonion": [5.3, -5.0, 1.6],
-               "neck_band": ICT_NECK_BAND, "back_band": ICT_BACK_BAND}
+               "neck_band": neck_band, "back_band": back_band}
     bone = [("cranium", "skull", cranium), ("ears", "skull", ears), ("upper_teeth", "skull", upper_teeth),
             ("eyeballs", "skull", eyeballs), ("lower_teeth", "jaw", lower_teeth)]
-    first = rig("ict-facekit", "", mesh, V, 10.0, bone, lm, hinge, ICT_OPEN_DEGREES, ICT_GLIDE, falloff, ICT_RAMP)
+    first = rig("ict-facekit", "", mesh, V, 10.0, bone, lm, hinge, kin, falloff, ICT_RAMP)
     w, exact = ict_jaw_weights(V, F, first, lm)
     # gums and lining that the teeth fix at 0 or 1 are rigid with the skull or the jaw
     rigid = lambda part, v: part[exact[part] & (w[part] == v)]
@@ -359,7 +417,7 @@ def build_ict(data):
     ]
     r = rig("ict-facekit", "ICT FaceKit generic neutral head (cm): skull, jaw, falloff from anatomy, "
             "jaw weights of the lips and the mouth's inside", mesh, V, 10.0, regions, lm, hinge,
-            ICT_OPEN_DEGREES, ICT_GLIDE, falloff, ICT_RAMP)
+            kin, falloff, ICT_RAMP)
     # the weights that differ from the falloff, soft vertices only, 4 decimals
     w_fall = falloff_weights(r, V)
     kind = np.zeros(len(V), int)
@@ -370,7 +428,13 @@ def build_ict(data):
     return r, V, F
 
 
-def build_mediapipe(data):
+def ict_kin(ict_rig, scale=1.0):
+    """The ICT jaw's (open_degrees, glide, glide_start), the glide scaled to another mesh."""
+    j = ict_rig["jaw"]
+    return j["open_degrees"], [round(g * scale, 4) for g in j["glide"]], j["glide_start"]
+
+
+def build_mediapipe(data, ict_rig):
     mesh = 'faces/mediapipe-canonical/canonical_face_model.obj'
     V, F = load_obj(data / mesh)
     # MediaPipe face mesh indices (x < 0 is the face's right)
@@ -391,7 +455,7 @@ def build_mediapipe(data):
                "cheek_distance": 2.0, "menton": [0.0, -9.2, 4.0], "gonion": [5.9, -6.0, -0.8],
                "neck_band": 2.5, "back_band": 1.2}
     return rig("mediapipe-canonical", "MediaPipe canonical face mask (cm); hinge behind the mask",
-               mesh, V, 10.0, regions, lm, hinge, ICT_OPEN_DEGREES, ICT_GLIDE, falloff, ICT_RAMP), V, F
+               mesh, V, 10.0, regions, lm, hinge, ict_kin(ict_rig), falloff, ICT_RAMP), V, F
 
 
 def build_lps(data, ict_rig, Vi):
@@ -424,8 +488,7 @@ def build_lps(data, ict_rig, Vi):
     for k in ("lip_band", "cheek_band", "cheek_distance", "corner_inset", "inner_depth", "neck_band", "back_band"):
         fo[k] = round(fo[k] * s, 4)
     return rig("lee-perry-smith", "Lee Perry-Smith head scan; landmarks and hinge carried over from ICT by a similarity",
-               mesh, V, round(mm, 4), regions, lm, (T(h["right"]), T(h["left"])), ICT_OPEN_DEGREES,
-               [round(g * s, 4) for g in ict_rig["jaw"]["glide"]], fo,
+               mesh, V, round(mm, 4), regions, lm, (T(h["right"]), T(h["left"])), ict_kin(ict_rig, s), fo,
                round(ICT_RAMP * s, 4)), V, F
 
 
@@ -434,7 +497,7 @@ def main():
     out = Path(__file__).resolve().parents[1]
     ict, Vi, _ = build_ict(data)
     write(out / 'ict-facekit.json', ict)
-    write(out / 'mediapipe-canonical.json', build_mediapipe(data)[0])
+    write(out / 'mediapipe-canonical.json', build_mediapipe(data, ict)[0])
     write(out / 'lee-perry-smith.json', build_lps(data, ict, Vi)[0])
 
 

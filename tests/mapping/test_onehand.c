@@ -263,7 +263,8 @@ static void thumb_curl(bool angles_only)
 {
     fx x;
     char err[1024];
-    assert_int_equal(open_onehand(&x, NULL, 0, true, err), 0);
+    fp_param p[] = {{"jaw", "flexion"}}; /* the curl: an option (the default is the opening) */
+    assert_int_equal(open_onehand(&x, p, 1, true, err), 0);
     hand h = rest_hand(FP_HAND_RIGHT);
     put(&x, FP_HAND_RIGHT, &h, angles_only);
     step(&x, 0);                               /* the defaults: engaged at first sight */
@@ -298,15 +299,15 @@ static void test_angles_only_thumb(void **state)
     thumb_curl(true);
 }
 
-/* jaw=opening: the thumb moving away from the index opens the jaw by (opening - neutral
- * opening) / 40 mm, the opening measured on the FK's joints in mm. */
-static void test_jaw_opening(void **state)
+/* jaw=opening, the default (issue 53: a hand puppet's mouth): the thumb moving away from the
+ * index opens the jaw by (opening - neutral opening) / 40 mm, the opening measured on the
+ * FK's joints in mm; the same with no jaw= at all. */
+static void jaw_opening(bool by_default)
 {
-    (void)state;
     fx x;
     char err[1024];
     fp_param p[] = {{"jaw", "opening"}};
-    assert_int_equal(open_onehand(&x, p, 1, true, err), 0);
+    assert_int_equal(open_onehand(&x, p, by_default ? 0 : 1, true, err), 0);
     hand h = rest_hand(FP_HAND_RIGHT);
     float j[FP_HAND_JOINTS][3];
     joints_mm(&x, FP_HAND_RIGHT, &h, j);
@@ -327,6 +328,12 @@ static void test_jaw_opening(void **state)
     }
     assert_true(last > 0.3);
     close_onehand(&x);
+}
+static void test_jaw_opening(void **state)
+{
+    (void)state;
+    jaw_opening(false);
+    jaw_opening(true);
 }
 
 /* A still hand moves nothing: every end point is its start point and jaw.open is neutral,
@@ -472,8 +479,8 @@ static void test_left_ignores_right(void **state)
     (void)state;
     fx x;
     char err[1024];
-    fp_param p[] = {{"hand", "left"}, {"still", "0.2"}};
-    assert_int_equal(open_onehand(&x, p, 2, true, err), 0);
+    fp_param p[] = {{"hand", "left"}, {"still", "0.2"}, {"jaw", "flexion"}}; /* the thumb curls */
+    assert_int_equal(open_onehand(&x, p, 3, true, err), 0);
     hand r = rest_hand(FP_HAND_RIGHT), l = rest_hand(FP_HAND_LEFT);
     for (int f = 0; f < 60; f++) {           /* a still right hand, a request: nothing */
         put(&x, FP_HAND_RIGHT, &r, false);
@@ -562,8 +569,8 @@ static void test_commit_cancel(void **state)
     for (int automatic = 0; automatic <= 1; automatic++) {
         fx x;
         char err[1024];
-        fp_param p[] = {{"auto", "0"}};
-        assert_int_equal(open_onehand(&x, p, automatic ? 0 : 1, true, err), 0);
+        fp_param p[] = {{"jaw", "flexion"}, {"auto", "0"}}; /* the thumb curls */
+        assert_int_equal(open_onehand(&x, p, automatic ? 1 : 2, true, err), 0);
         hand h = rest_hand(FP_HAND_RIGHT);
         put(&x, FP_HAND_RIGHT, &h, false);
         step(&x, FP_INTENT_ENGAGE);
@@ -612,8 +619,8 @@ static void test_hold(void **state)
     for (int hold = 0; hold <= 1; hold++) {
         fx x;
         char err[1024];
-        fp_param p[] = {{"hold", hold ? "1" : "0"}};
-        assert_int_equal(open_onehand(&x, p, 1, true, err), 0);
+        fp_param p[] = {{"hold", hold ? "1" : "0"}, {"jaw", "flexion"}}; /* the thumb curls */
+        assert_int_equal(open_onehand(&x, p, 2, true, err), 0);
         hand h = rest_hand(FP_HAND_RIGHT);
         put(&x, FP_HAND_RIGHT, &h, false);
         step(&x, FP_INTENT_ENGAGE);

@@ -178,7 +178,9 @@ static void check_clip(const char *clip)
     }
     assert_true(r.active > 0);
     assert_true(r.jaw_max >= 0.2);                     /* the thumb opened the jaw */
-    assert_true(r.jaw_min_after_max <= r.jaw_max - 0.1); /* and closed it again */
+    /* and closed it again, unless it opened to the clip's last frame (HandSplay: the hand
+     * splays open, so with jaw=opening, the default, the gap only widens) */
+    assert_true(isinf(r.jaw_min_after_max) || r.jaw_min_after_max <= r.jaw_max - 0.1);
     assert_true(r.chin_max >= 0.2 * r.chin_full);
     assert_true(r.corner_max > 0.05);                  /* the fingers moved the corners */
     assert_true(r.checked > 0);

@@ -494,7 +494,7 @@ static void test_broken_files(void **state)
         {"\"nose_tip\": ", "\"nose tip\": ", "landmarks.nose tip"},
         {"\"right\": [", "\"right\": [\"a\", ", "jaw.hinge.right"},
         {"\"right\": [", "\"right\": [0, 0, 0], \"x\": [", "jaw.hinge.x"},
-        {"\"open_degrees\": 26.0", "\"open_degrees\": 90", "jaw.open_degrees"},
+        {"\"open_degrees\": 29.9", "\"open_degrees\": 90", "jaw.open_degrees"},
         {"\"lip_band\": ", "\"lip_band\": -", "jaw.falloff.lip_band"},
         {"\"ramp\": ", "\"ramp\": null, \"r\": ", "mobility.r"},
         {"\"name\": \"jaw.open\"", "\"name\": \"jaw.shut\"", "channels"},
@@ -503,8 +503,12 @@ static void test_broken_files(void **state)
         {"{", "[", ""},
         /* a glide of more than half the joints' distance (1e308 made the posed jaw infinite) */
         {"\"name\": \"ict-facekit\"", "\"name\": \"ict\\u001b[31m\"", "name"}, /* an ESC: no text */
-        {"\"glide\": [0.8, 0.3]", "\"glide\": [1e308, 0.3]", "jaw.glide[0]"},
-        {"\"glide\": [0.8, 0.3]", "\"glide\": [0.8, -100]", "jaw.glide[1]"},
+        {"\"glide\": [0.735, 0.515]", "\"glide\": [1e308, 0.515]", "jaw.glide[0]"},
+        {"\"glide\": [0.735, 0.515]", "\"glide\": [0.735, -100]", "jaw.glide[1]"},
+        /* where the condyles start to slide: a fraction of the opening below 0.95 */
+        {"\"glide_start\": 0.602", "\"glide_start\": 1", "jaw.glide_start"},
+        {"\"glide_start\": 0.602", "\"glide_start\": -0.1", "jaw.glide_start"},
+        {"\"glide_start\": 0.602", "\"glide_start\": \"0.6\"", "jaw.glide_start"},
         /* jaw.weights */
         {"\"weights\": {", "\"weights\": {\"x\": 1, ", "jaw.weights.x"},
         {"\"glide\": [", "\"weights\": 3, \"glide\": [", "jaw.weights"},

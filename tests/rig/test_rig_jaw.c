@@ -71,7 +71,9 @@ static void test_ict_jaw_pose(void **state)
     for (size_t v = LOWER_TEETH_FIRST; v <= LOWER_TEETH_LAST; v++) teeth[v] = 1;
     const uint8_t *kind = fp_rig_vertex_kinds(r);
     float *out = malloc(n * 3 * sizeof *out), vals[FP_RIG_MAX_CHANNELS];
-    static const float opens[] = {0, 0.25f, 0.5f, 0.75f, 1};
+    /* 0.6 and 0.65: either side of the ICT rig's glide_start (0.602), where the condyles
+     * begin to slide */
+    static const float opens[] = {0, 0.25f, 0.5f, 0.6f, 0.65f, 0.75f, 1};
     for (size_t k = 0; k < sizeof opens / sizeof opens[0]; k++) {
         fp_rig_channel_values(r, NULL, NULL, 0, vals);
         vals[fp_rig_channel_index(r, "jaw.open")] = opens[k];
@@ -101,6 +103,30 @@ static void test_ict_jaw_pose(void **state)
         } else {
             assert_memory_equal(out, m->positions, n * 3 * sizeof *out);
         }
+    }
+    /* the arc (rigs/README.md, Posselt's envelope): the incisal opening (the upper central
+     * incisors' lowest point minus the lower ones' highest, within 4 mm of the midline, cm) is
+     * 22.5 mm at the last opening of pure rotation and 40 mm at jaw.open = 1 */
+    long le = -1, ue = -1;
+    for (size_t v = 17039; v <= LOWER_TEETH_LAST; v++) {
+        const float *p = &m->positions[3 * v];
+        if (fabsf(p[0]) >= 0.4f) continue;
+        if (v >= LOWER_TEETH_FIRST) { if (le < 0 || p[1] > m->positions[3 * le + 1]) le = (long)v; }
+        else if (ue < 0 || p[1] < m->positions[3 * ue + 1]) ue = (long)v;
+    }
+    assert_true(le >= 0 && ue >= 0);
+    double start = 0;
+    for (int i = 1; i <= 100; i++)
+        if (fp_rig_glide_fraction(r, i / 100.0) == 0) start = i / 100.0;
+    assert_true(start > 0.3 && start < 0.9 && fp_rig_glide_fraction(r, 1) == 1);
+    static const double want_mm[2] = {22.5, 40.0};
+    for (int k = 0; k < 2; k++) {
+        fp_rig_channel_values(r, NULL, NULL, 0, vals);
+        vals[fp_rig_channel_index(r, "jaw.open")] = k ? 1.0f : (float)start;
+        assert_int_equal(fp_rig_pose(r, m->positions, vals, out), 0);
+        double mm = 10 * (m->positions[3 * ue + 1] - out[3 * le + 1]);
+        printf("incisal opening at jaw.open %.2f: %.1f mm (anatomy: %.1f)\n", k ? 1.0 : start, mm, want_mm[k]);
+        assert_true(fabs(mm - want_mm[k]) < (k ? 0.5 : 1.0));
     }
     free(out), free(teeth);
     fp_rig_free(&r);
