@@ -381,6 +381,24 @@ const struct csrbf_solver *fp_session_solver(const fp_session *s)
                ? fp_engine_step_solver(&s->engine) : NULL;
 }
 
+int fp_session_warp_parts(const fp_session *s, const float **surface, const struct csrbf_solver **solver)
+{
+    *surface = fp_rig_step_posed(&s->rig, s->base);
+    *solver = NULL;
+    if (s->shown == *surface) return 0;
+    if (s->shown_kind != SHOWN_ENGINE) return -EAGAIN;
+    *solver = fp_engine_step_solver(&s->engine);
+    return *solver ? 0 : -EAGAIN;
+}
+
+int fp_session_surface_nearest(const fp_session *s, const float (*points)[3], size_t count,
+                               float max_distance, fp_surface_hit *out)
+{
+    if (!s) return -EINVAL;
+    return fp_engine_step_surface(&s->engine, fp_rig_step_posed(&s->rig, s->base), points, count,
+                                  max_distance, out);
+}
+
 const struct fp_rig *fp_session_rig(const fp_session *s) { return s->rig.rig; }
 const char *fp_session_rig_how(const fp_session *s) { return s->rig_how; }
 

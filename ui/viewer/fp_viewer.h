@@ -86,7 +86,10 @@ typedef struct fp_viewer_report {
     double engine_ms_median;                   /* fp_frame_stats.update_ms of active frames */
     size_t warp_checks;                        /* GPU-warp read-backs compared */
     double warp_max_error;                     /* max |GPU - CPU| over vertices, mesh units */
-    double warp_max_displacement;              /* max |CPU - base| in those frames */
+    double warp_max_displacement;              /* max |CPU - surface| in those frames (the
+                                                  surface: the base posed by the rig) */
+    size_t warp_cpu_frames;                    /* --gpu-warp frames drawn from the CPU (the
+                                                  reason said once on stderr) */
     unsigned long dropped;                     /* input events dropped (queues full) */
     size_t uploads;                            /* frames that uploaded a shape (changed) */
     double upload_ms_median, upload_ms_p99;    /* their normals + GL upload, CPU side */
