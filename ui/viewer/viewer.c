@@ -95,6 +95,7 @@ typedef struct viewer {
     fp_warp_coeffs warp;      /* the engine's coefficients this frame (identity: none) */
     const float *warp_surface;/* the surface they apply to (fp_session_warp_parts) */
     bool warp_solved;         /* a deformation is drawn (not the identity) */
+    uint64_t warp_frames;     /* frames the shader drew a deformation (checked: 1 in 30) */
     unsigned gpu_said;        /* fallback reasons already said (one line each, bits) */
     samples upload_ms, upload_all_ms; /* upload() of frames that uploaded something, of all */
     unsigned long upload_checked, upload_mismatches;
@@ -608,12 +609,13 @@ static void run_script(viewer *v)
         }
         case FP_SCRIPT_PRINT_HUD:
             printf("hud frame %llu state %s commits %lu scale %.4g mm per mesh unit (%s) badge %s "
-                   "touching %zu of %zu nearest %.2f mm messages %zu\n",
+                   "touching %zu of %zu nearest %.2f mm messages %zu drawn %s\n",
                    (unsigned long long)v->frames, hud_state(v), fp_session_commits(v->s),
                    fp_session_head(v->s)->mm_per_unit, fp_session_head(v->s)->how,
                    fp_hud_badge_name(hud_badge(v)), v->cues.touch_count, v->cues.count,
                    v->cues.nearest * fp_session_head(v->s)->mm_per_unit,
-                   fp_hud_live(&v->msgs, fp_now_ns(), (const fp_hud_msg *[FP_HUD_MSGS]){0}, NULL));
+                   fp_hud_live(&v->msgs, fp_now_ns(), (const fp_hud_msg *[FP_HUD_MSGS]){0}, NULL),
+                   v->gpu_now ? (v->warp_solved ? "gpu-warp" : "gpu-surface") : "cpu");
             fflush(stdout);
             break;
         case FP_SCRIPT_PRINT_MESSAGES: {
@@ -883,7 +885,8 @@ static void draw(viewer *v, const fp_frame_stats *st, int w, int h)
         /* the engine step's own coefficients (no second solve) on the surface they apply
          * to, blended by the rig's mobility in the shader (fp_render_set_mobility) */
         fp_render_mesh(&v->r, pv, view, false, &v->warp, skin, v->wireframe);
-        if (v->warp_solved && (v->frames % 30 == 0 || v->frames + 1 == v->opt->frames)) check_warp(v);
+        if (v->warp_solved && (v->warp_frames++ % 30 == 0 || v->shot_path || v->frames + 1 == v->opt->frames))
+            check_warp(v); /* (and every frame shot: the tests compare those) */
     } else {
         fp_render_mesh(&v->r, pv, view, false, NULL, skin, v->wireframe);
     }
