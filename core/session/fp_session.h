@@ -270,7 +270,8 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *stats);
 
 /** The engine step's solver (core/csrbf) whose coefficients made fp_session_positions, for
  *  a GPU warp (csrbf_solver_get_coefficients): non-NULL only while a deformation is shown
- *  (fp_session_positions != fp_session_base) and the session has no rig (with a rig the shape
+ *  (fp_session_positions != fp_session_base), made by one map (not composed by the fold-over
+ *  guard), and the session has no rig (with a rig the shape
  *  is the posed base warped and blended by mobility, which the coefficients alone do not
  *  give). Valid until the next step, radius change or
  *  destroy; read it on the session thread between steps. */
@@ -283,8 +284,9 @@ const struct csrbf_solver *fp_session_solver(const fp_session *s);
  *  reset or commit), and *solver, the engine solver whose coefficients are T, or NULL when
  *  the shape shown is the surface itself (nothing engaged). With a rig the shape shown is
  *  fp_rig_apply_mobility(rig, surface, T(surface)) (fp_rig_mobility's weights), without one
- *  T(surface). Returns 0, or -EAGAIN when the shape shown this frame is neither (the contact
- *  guard's shape, an engine error): draw fp_session_positions then. Session thread, between
+ *  T(surface). Returns 0, -EAGAIN when the shape shown this frame is neither (the contact
+ *  guard's shape, an engine error), or -ERANGE when the fold-over guard composed several maps
+ *  for it (the solver holds the last one only): draw fp_session_positions then. Session thread, between
  *  steps. */
 int fp_session_warp_parts(const fp_session *s, const float **surface,
                           const struct csrbf_solver **solver);

@@ -796,13 +796,15 @@ static void gpu_plan(viewer *v)
         "the contact guard scaled a frame back (its shape is not the warp's)",
         "more centres than the shader takes",
         "the engine's warp has a polynomial part, which the shader lacks",
-        "the engine's coefficients could not be read"};
+        "the engine's coefficients could not be read",
+        "the fold-over guard composed several maps (the shader draws one)"};
     v->gpu_now = false;
     if (!v->opt->gpu_warp || !v->gw || fp_vtakes_reviewing(&v->takes)) return;
     const struct csrbf_solver *solver;
     int reason = -1;
-    if (fp_session_warp_parts(v->s, &v->warp_surface, &solver)) {
-        reason = 0;
+    int parts = fp_session_warp_parts(v->s, &v->warp_surface, &solver);
+    if (parts) {
+        reason = parts == -ERANGE ? 4 : 0;
     } else {
         int rc = fp_warp_from_solver(solver, solver ? fp_session_control_set(v->s)->radius : 1.0, &v->warp);
         if (rc) reason = rc == -E2BIG ? 1 : rc == -ENOTSUP ? 2 : 3;
