@@ -169,7 +169,7 @@ void fp_overlay_rig(fp_render *r, const fp_session *s, const float *pos, size_t 
     const fp_rig *rig = fp_session_rig(s);
     if (!rig || !pos) return;
     vbuf pts = {0}, axis = {0};
-    for (size_t i = 0, n = fp_rig_landmark_count(rig); i < n; i++) {
+    for (size_t i = 0, nl = fp_rig_landmark_count(rig); i < nl; i++) {
         const char *name;
         uint32_t vi;
         if (!fp_rig_landmark_get(rig, i, &name, &vi) && vi < n) vb_add(&pts, pos + 3 * (size_t)vi, rig_landmark);
