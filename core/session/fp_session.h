@@ -270,11 +270,36 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *stats);
 
 /** The engine step's solver (core/csrbf) whose coefficients made fp_session_positions, for
  *  a GPU warp (csrbf_solver_get_coefficients): non-NULL only while a deformation is shown
- *  (fp_session_positions != fp_session_base) and the session has no rig (with a rig the shape
+ *  (fp_session_positions != fp_session_base), made by one map (not composed by the fold-over
+ *  guard), and the session has no rig (with a rig the shape
  *  is the posed base warped and blended by mobility, which the coefficients alone do not
  *  give). Valid until the next step, radius change or
  *  destroy; read it on the session thread between steps. */
 const struct csrbf_solver *fp_session_solver(const fp_session *s);
+
+/** What the shape shown this frame is made of, for a GPU warp that draws it from a surface
+ *  and the engine's coefficients (the viewer's --gpu-warp, also with a rig): *surface, the
+ *  surface the engine's map T runs on (the base posed by the rig's channels; the base itself
+ *  without a rig; n x 3 floats, mesh units, the session's, valid until the next step, undo,
+ *  reset or commit), and *solver, the engine solver whose coefficients are T, or NULL when
+ *  the shape shown is the surface itself (nothing engaged). With a rig the shape shown is
+ *  fp_rig_apply_mobility(rig, surface, T(surface)) (fp_rig_mobility's weights), without one
+ *  T(surface). Returns 0, -EAGAIN when the shape shown this frame is neither (the contact
+ *  guard's shape, an engine error), or -ERANGE when the fold-over guard composed several maps
+ *  for it (the solver holds the last one only): draw fp_session_positions then. Session thread, between
+ *  steps. */
+int fp_session_warp_parts(const fp_session *s, const float **surface,
+                          const struct csrbf_solver **solver);
+
+/** The nearest vertex of the surface the fingers touch (fp_session_warp_parts' surface: the
+ *  base posed by the rig) to each of `count` points (mesh units), within max_distance (mesh
+ *  units; INFINITY: no bound): out[i] as plugin.h's fp_surface_hit (vertex UINT32_MAX and
+ *  distance INFINITY where none is within reach; the vertex's position and unit normal).
+ *  For the viewer's fingertip cues. Returns 0, -EINVAL (NULL, a non-finite point, a NaN or
+ *  negative max_distance), -ENODATA (no triangles). Session thread, between steps; no
+ *  allocation. */
+int fp_session_surface_nearest(const fp_session *s, const float (*points)[3], size_t count,
+                               float max_distance, fp_surface_hit *out);
 
 /** Close the inputs' record=FILE recordings: each recorded input is stopped, what it had
  *  queued is written, its writer thread joined (inputs without a recording keep running). Returns 0, or the first recording's error (a failed write,

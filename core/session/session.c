@@ -166,6 +166,7 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame
         st->guard_limited = er.clusters_limited;
         st->guard_substeps = er.substeps;
         st->guard_reached = er.reached;
+        s->shown_substeps = er.substeps;
         st->min_det_j = er.min_det_j;
         if (rc) s->rig.shown_valid = false; /* the output buffer may have changed unseen */
         if (!rc) {
@@ -377,8 +378,27 @@ const fp_control_set *fp_session_control_set(const fp_session *s) { return &s->c
 const struct csrbf_solver *fp_session_solver(const fp_session *s)
 {
     /* not when the contact guard scaled the shape back: the solver's map is not what is shown */
-    return s->shown != s->base && !fp_cg_shows(&s->cg, s->shown) && !s->rig.rig
+    return s->shown != s->base && !fp_cg_shows(&s->cg, s->shown) && !s->rig.rig && s->shown_substeps <= 1
                ? fp_engine_step_solver(&s->engine) : NULL;
+}
+
+int fp_session_warp_parts(const fp_session *s, const float **surface, const struct csrbf_solver **solver)
+{
+    *surface = fp_rig_step_posed(&s->rig, s->base);
+    *solver = NULL;
+    if (s->shown == *surface) return 0;
+    if (s->shown_kind != SHOWN_ENGINE) return -EAGAIN;
+    if (s->shown_substeps > 1) return -ERANGE; /* one map's coefficients do not make it */
+    *solver = fp_engine_step_solver(&s->engine);
+    return *solver ? 0 : -EAGAIN;
+}
+
+int fp_session_surface_nearest(const fp_session *s, const float (*points)[3], size_t count,
+                               float max_distance, fp_surface_hit *out)
+{
+    if (!s) return -EINVAL;
+    return fp_engine_step_surface(&s->engine, fp_rig_step_posed(&s->rig, s->base), points, count,
+                                  max_distance, out);
 }
 
 const struct fp_rig *fp_session_rig(const fp_session *s) { return s->rig.rig; }

@@ -78,6 +78,8 @@ struct fp_session {
 
     /* what changed since the viewer last asked (fp_session_touched, changed.h) */
     fp_changed shown_changed, base_changed;
+    int shown_substeps;           /* maps the engine composed for the shape shown (1: one,
+                                     whose coefficients the solver holds; fp_session_warp_parts) */
     int shown_kind;               /* what s->shown held at the end of the last frame: */
     bool whole_rig_commit;        /* fp_session_options.whole_rig_commit */
     int frame_thread_opt;         /* fp_session_options.frame_thread */

@@ -40,9 +40,13 @@ static void usage(FILE *f)
         "                         write, exit)\n"
         "      --script TEXT      scripted actions, or @FILE to read them from FILE:\n"
         "                         'wait hands|end|frames N; key K; shot FILE; radius R;\n"
-        "                         drop FILE; close' (docs/architecture.md, the viewer)\n"
-        "      --gpu-warp         evaluate the warp in the vertex shader; checked against the\n"
-        "                         CPU engine by transform feedback (reported at exit)\n"
+        "                         drop FILE; print hud|messages; close' (docs/architecture.md,\n"
+        "                         the viewer)\n"
+        "      --gpu-warp         evaluate the warp in the vertex shader (with a rig: its pose\n"
+        "                         and blend weights from the CPU, the warp on the GPU); checked\n"
+        "                         against the CPU engine by transform feedback (reported at\n"
+        "                         exit); frames it cannot draw (the contact guard's) come from\n"
+        "                         the CPU, the reason said once\n"
         "      --vsync            wait for the display (default: never, swap interval 0)\n"
         "      --take-dir DIR     T (or the pedal's middle button) records takes in DIR\n"
         "      --slate NAME       the takes' slate (default \"take\"); numbers go up per slate\n"
@@ -51,7 +55,11 @@ static void usage(FILE *f)
         "Keys: space pause, E engage, C commit, X cancel, Z undo, R reset, 1 anchored,\n"
         "2 unanchored, [ ] radius, W wireframe, S screenshot, F frame, H hands, Tab HUD,\n"
         "J / K open / close the jaw (a rig's jaw.open), G the rig (regions, landmarks, hinge),\n"
-        "? keys, Esc quit, T take start/stop, P play/pause the last take, , . a frame back/on.\n"
+        "? keys, Esc quit (in a review: back to live), T take start/stop, V review the last\n"
+        "take (again: back to live; so does the next engage), P play/pause it, , . a frame\n"
+        "back/on. The HUD's badge: idle grey, committed teal, ENGAGED green, LIMITED amber,\n"
+        "PAUSED white, REC red, PLAYING blue, REVIEW purple; fingertip spheres turn green\n"
+        "where they reach the skin, a line joins each to its nearest skin point.\n"
         "Mouse: left orbit (on the take strip: scrub), right pan, wheel zoom. Drop a mesh.\n"
         "Script: also 'scrub F' (the take strip at fraction F), 'camera YAW PITCH [ZOOM]'\n"
         "(degrees; the framed view turned, as export's --camera), keys J K G.\n"
@@ -206,9 +214,10 @@ static int live_main(int argc, char **argv)
         printf("\n");
         if (vo.gpu_warp)
             printf("gpu-warp: %zu checks against the CPU engine; max |GPU - CPU| %.3g mesh units, "
-                   "%.3g of the max displacement %.4g\n", rep.warp_checks, rep.warp_max_error,
+                   "%.3g of the max displacement %.4g; %zu frames drawn from the CPU\n", rep.warp_checks,
+                   rep.warp_max_error,
                    rep.warp_max_displacement > 0 ? rep.warp_max_error / rep.warp_max_displacement : 0.0,
-                   rep.warp_max_displacement);
+                   rep.warp_max_displacement, rep.warp_cpu_frames);
     }
     free(script_text);
     fp_plugin_path_clear(&path);

@@ -23,8 +23,12 @@
  * J / K open / close the jaw by 0.1 (a rig's jaw.open), G the rig on/off (regions coloured:
  * skull blue, jaw red, soft tissue green blending to red by its jaw weight; landmarks as
  * white points, the hinge axis as a cyan line through the two joints; a legend in the HUD),
- * T take start/stop, P play/pause the last take, , . a frame back/on,
- * ? (or /) the key list, Esc quit. Mouse: left drag orbit, right or middle drag pan, wheel
+ * T take start/stop (the live face and hands stay shown), V review the last take (again:
+ * back to live; so do Esc and the next engage), P play/pause it, , . a frame back/on,
+ * ? (or /) the key list (on a backdrop), Esc quit (in a review: back to live). The HUD
+ * (hud.h): a state badge by colour, a message stack that wraps and fades; fingertip cues
+ * (overlay.h). --gpu-warp with a rig: the rig's pose and mobility from the CPU, the warp and
+ * the blend in the shader; frames it cannot draw come from the CPU (said once). Mouse: left drag orbit, right or middle drag pan, wheel
  * zoom. A mesh file dropped on the window is loaded (the session is created anew on it).
  *
  * Script (deterministic runs and tests): commands separated by ';' or new lines, run in
@@ -40,7 +44,9 @@
  *   drop FILE    as a file dropped on the window
  *   print mapping | print hud   one stdout line: the mapping (name, id, version, active,
  *                control vectors, reloads) / the HUD (state ENGAGED|committed|idle|PAUSED,
- *                commits in the base, mm per mesh unit and how it was found)
+ *                commits in the base, mm per mesh unit and how it was found, the badge,
+ *                fingertips touching and the nearest's mm, messages, drawn cpu|gpu-warp)
+ *   print messages   the HUD's message stack, a line each (kind, kept|fading, alpha, text)
  *   close        as the window's close button (glfwSetWindowShouldClose)
  *
  * Thread rules: call from the process's main thread (GLFW's rule); one viewer at a time.
@@ -86,7 +92,10 @@ typedef struct fp_viewer_report {
     double engine_ms_median;                   /* fp_frame_stats.update_ms of active frames */
     size_t warp_checks;                        /* GPU-warp read-backs compared */
     double warp_max_error;                     /* max |GPU - CPU| over vertices, mesh units */
-    double warp_max_displacement;              /* max |CPU - base| in those frames */
+    double warp_max_displacement;              /* max |CPU - surface| in those frames (the
+                                                  surface: the base posed by the rig) */
+    size_t warp_cpu_frames;                    /* --gpu-warp frames drawn from the CPU (the
+                                                  reason said once on stderr) */
     unsigned long dropped;                     /* input events dropped (queues full) */
     size_t uploads;                            /* frames that uploaded a shape (changed) */
     double upload_ms_median, upload_ms_p99;    /* their normals + GL upload, CPU side */

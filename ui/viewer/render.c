@@ -19,9 +19,11 @@ static const char mesh_vs[] =
     "layout(location = 0) in vec3 a_pos;\n"
     "layout(location = 1) in vec3 a_nrm;\n"
     "layout(location = 2) in vec3 a_col;\n"
+    "layout(location = 3) in float a_mob;\n"
     "uniform mat4 u_mvp;\n"
     "uniform mat4 u_view;\n"
     "uniform int u_warp_on;\n"
+    "uniform int u_mob_on;\n"
     "out vec3 v_nrm;\n"
     "out vec3 v_posv;\n"
     "out vec3 v_col;\n"
@@ -31,6 +33,10 @@ static const char mesh_vs[] =
     "    if (u_warp_on != 0) {\n"
     "        mat3 j;\n"
     "        p = fp_warp(a_pos, j);\n"
+    "        if (u_mob_on != 0) {\n" /* a rig's blend: posed + m (T(posed) - posed) */
+    "            p = a_pos + a_mob * (p - a_pos);\n"
+    "            j = mat3(1.0) + a_mob * (j - mat3(1.0));\n"
+    "        }\n"
     "        n = transpose(inverse(j)) * a_nrm;\n"
     "    }\n"
     "    gl_Position = u_mvp * vec4(p, 1.0);\n"
@@ -207,7 +213,7 @@ void fp_render_free(fp_render *r)
     glDeleteProgram(r->prog_text);
     GLuint bufs[] = {r->vbo_shape_pos, r->vbo_shape_nrm, r->vbo_base_pos, r->vbo_base_nrm,
                      r->ebo_tris, r->vbo_sphere, r->ebo_sphere, r->vbo_lines, r->vbo_text,
-                     r->ebo_text, r->vbo_shape_col};
+                     r->ebo_text, r->vbo_shape_col, r->vbo_shape_mob};
     glDeleteBuffers(sizeof bufs / sizeof bufs[0], bufs);
     GLuint vaos[] = {r->vao_shape, r->vao_base, r->vao_sphere, r->vao_lines, r->vao_text};
     glDeleteVertexArrays(sizeof vaos / sizeof vaos[0], vaos);
@@ -245,6 +251,7 @@ int fp_render_set_topology(fp_render *r, size_t n, const uint32_t *tris, size_t 
     r->vertex_count = n;
     r->index_count = t * 3;
     r->shape_colors = false; /* colours were for the old vertices */
+    r->shape_mobility = false;
     return glGetError() == GL_OUT_OF_MEMORY ? -ENOMEM : 0;
 }
 
@@ -270,6 +277,22 @@ int fp_render_set_colors(fp_render *r, const float *rgb)
     glBindVertexArray(0);
     if (glGetError() == GL_OUT_OF_MEMORY) return -ENOMEM;
     r->shape_colors = true;
+    return 0;
+}
+
+int fp_render_set_mobility(fp_render *r, const float *m)
+{
+    r->shape_mobility = false;
+    if (!m || !r->vao_shape) return 0;
+    if (!r->vbo_shape_mob) glGenBuffers(1, &r->vbo_shape_mob);
+    glBindVertexArray(r->vao_shape);
+    glBindBuffer(GL_ARRAY_BUFFER, r->vbo_shape_mob);
+    glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(r->vertex_count * sizeof(float)), m, GL_STATIC_DRAW);
+    glEnableVertexAttribArray(3);
+    glVertexAttribPointer(3, 1, GL_FLOAT, GL_FALSE, 0, NULL);
+    glBindVertexArray(0);
+    if (glGetError() == GL_OUT_OF_MEMORY) return -ENOMEM;
+    r->shape_mobility = true;
     return 0;
 }
 
@@ -312,6 +335,7 @@ void fp_render_mesh(fp_render *r, const float mvp[16], const float view[16], boo
     glUniformMatrix4fv(glGetUniformLocation(r->prog_mesh, "u_mvp"), 1, GL_FALSE, mvp);
     glUniformMatrix4fv(glGetUniformLocation(r->prog_mesh, "u_view"), 1, GL_FALSE, view);
     glUniform1i(glGetUniformLocation(r->prog_mesh, "u_warp_on"), warp != NULL);
+    glUniform1i(glGetUniformLocation(r->prog_mesh, "u_mob_on"), warp && !base && r->shape_mobility);
     if (warp) fp_warp_set_uniforms(r->prog_mesh, warp);
     glUniform4fv(glGetUniformLocation(r->prog_mesh, "u_color"), 1, color);
     glUniform1i(glGetUniformLocation(r->prog_mesh, "u_flat"), 0);
@@ -444,6 +468,16 @@ float fp_render_text(fp_render *r, int fbw, int fbh, float x, float y, float sca
     glEnable(GL_DEPTH_TEST);
     glBindVertexArray(0);
     free(buf);
+    return (float)stb_easy_font_height((char *)text) * scale;
+}
+
+float fp_render_text_width(const char *text, float scale)
+{
+    return (float)stb_easy_font_width((char *)text) * scale;
+}
+
+float fp_render_text_height(const char *text, float scale)
+{
     return (float)stb_easy_font_height((char *)text) * scale;
 }
 

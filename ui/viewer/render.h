@@ -21,6 +21,9 @@ typedef struct fp_render {
     /* per-vertex colours of the shown shape (the rig's regions), attribute 2 of vao_shape */
     GLuint vbo_shape_col;
     bool shape_colors;
+    /* per-vertex mobility of a rig (attribute 3 of vao_shape) for a warp drawn on it */
+    GLuint vbo_shape_mob;
+    bool shape_mobility;
     /* a unit sphere */
     GLuint vao_sphere, vbo_sphere, ebo_sphere;
     GLsizei sphere_indices;
@@ -50,9 +53,17 @@ void fp_render_upload_ranges(fp_render *r, bool base, const float *pos, const fl
  *  the topology changes. Shaded as the face. Returns 0 or -ENOMEM. */
 int fp_render_set_colors(fp_render *r, const float *rgb);
 
+/** A rig's mobility per vertex for a warp drawn from the shown buffers: m, vertex_count
+ *  floats in [0, 1] (fp_rig_mobility); then fp_render_mesh(base = false, warp) draws
+ *  x + m (T(x) - x), the session's blend (fp_rig_apply_mobility), with the normals by the
+ *  blend's Jacobian I + m (J_T - I) (the term of grad m left out: shading only). NULL: the
+ *  warp alone. Kept until called again or the topology changes. Returns 0 or -ENOMEM. */
+int fp_render_set_mobility(fp_render *r, const float *m);
+
 /** Draw the face from the shown (base = false) or base buffers. warp: NULL, or coefficients
- *  applied in the vertex shader (then base must be true). color: RGBA (A < 1: translucent,
- *  no depth writes). mvp and view: column-major 4x4. */
+ *  applied in the vertex shader to the buffer's positions (blended by the mobility of
+ *  fp_render_set_mobility when drawn from the shown buffers). color: RGBA (A < 1:
+ *  translucent, no depth writes). mvp and view: column-major 4x4. */
 void fp_render_mesh(fp_render *r, const float mvp[16], const float view[16], bool base,
                     const fp_warp_coeffs *warp, const float color[4], bool wireframe);
 
@@ -69,6 +80,11 @@ void fp_render_lines(fp_render *r, const float mvp[16], const float *verts, size
  *  scaled by `scale`, in color. Returns the height drawn in pixels. */
 float fp_render_text(fp_render *r, int fbw, int fbh, float x, float y, float scale,
                      const char *text, const float color[4]);
+
+/** The width and the height in pixels that fp_render_text draws text at scale (the widest
+ *  line; every line). No GL: any thread. */
+float fp_render_text_width(const char *text, float scale);
+float fp_render_text_height(const char *text, float scale);
 
 /** A filled rectangle at pixel (x, y) from the top left, w x h pixels, in color (A < 1
  *  blends): the HUD's boxes (the take timeline). */

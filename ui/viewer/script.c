@@ -23,7 +23,7 @@ int fp_script_key(const char *name)
         if (!strcasecmp(name, named[i].name)) return named[i].key;
     if (strlen(name) == 1) {
         int c = toupper((unsigned char)name[0]);
-        if (strchr("ECXZRWSFHTPJKG", c)) return GLFW_KEY_A + (c - 'A');
+        if (strchr("ECXZRWSFHTPJKGV", c)) return GLFW_KEY_A + (c - 'A');
         if (c == ',') return GLFW_KEY_COMMA;
         if (c == '.') return GLFW_KEY_PERIOD;
         if (c == '1' || c == '2') return GLFW_KEY_0 + (c - '0');
@@ -99,6 +99,8 @@ int fp_script_parse(const char *text, fp_script *s, char *err, size_t errlen)
             c.op = FP_SCRIPT_PRINT_MAPPING;
         } else if (!strcmp(word, "print") && !strcmp(arg, "hud")) {
             c.op = FP_SCRIPT_PRINT_HUD;
+        } else if (!strcmp(word, "print") && !strcmp(arg, "messages")) {
+            c.op = FP_SCRIPT_PRINT_MESSAGES;
         } else if (!strcmp(word, "close")) {
             c.op = FP_SCRIPT_CLOSE;
             if (arg[0]) rc = -EINVAL;
@@ -107,7 +109,7 @@ int fp_script_parse(const char *text, fp_script *s, char *err, size_t errlen)
         }
         if (rc == -EINVAL)
             snprintf(err, errlen, "--script: command %d '%s %s' is not one of: wait hands|end|reload|frames N, "
-                     "key NAME, shot FILE, radius R, drop FILE, scrub F, camera YAW PITCH [ZOOM], print mapping|hud, close", index, word, arg);
+                     "key NAME, shot FILE, radius R, drop FILE, scrub F, camera YAW PITCH [ZOOM], print mapping|hud|messages, close", index, word, arg);
         if (!rc) rc = add(s, c);
         else free(c.text);
     }

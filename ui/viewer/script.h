@@ -12,7 +12,8 @@ typedef enum fp_script_op {
     FP_SCRIPT_PRINT_MAPPING, /* print mapping: one stdout line, the mapping's name, id, version */
     FP_SCRIPT_SCRUB,         /* scrub F: the take review's playhead to fraction F (the mouse) */
     FP_SCRIPT_PRINT_HUD,     /* print hud: one stdout line, the HUD's state, commits and scale */
-    FP_SCRIPT_CAMERA         /* camera YAW PITCH [ZOOM]: the framed view turned (degrees), zoomed */
+    FP_SCRIPT_CAMERA,        /* camera YAW PITCH [ZOOM]: the framed view turned (degrees), zoomed */
+    FP_SCRIPT_PRINT_MESSAGES /* print messages: the HUD's message stack, a stdout line each */
 } fp_script_op;
 
 typedef struct fp_script_cmd {

@@ -61,6 +61,31 @@ static int review_open(fp_vtakes *t, const fp_session_take_result *res, char *ms
     return 0;
 }
 
+/* The last take's review session, opened at the first request. */
+static bool review_ready(fp_vtakes *t)
+{
+    if (t->rs) return true;
+    char err[1100];
+    if (!t->have_last || review_open(t, &t->last, err, sizeof err)) {
+        t->have_last = false; /* (a take that cannot be read is not tried every frame) */
+        return false;
+    }
+    return true;
+}
+
+int fp_vtakes_review(fp_vtakes *t)
+{
+    if (fp_vtakes_reviewing(t)) {
+        fp_vtakes_leave(t);
+        return 0;
+    }
+    if (!review_ready(t)) return -ENOENT;
+    fp_vtakes_scrub(t, 0);
+    return 0;
+}
+
+bool fp_vtakes_reviewing(const fp_vtakes *t) { return fp_vtakes_shown(t) != NULL; }
+
 static int start(fp_vtakes *t, fp_session *s, int64_t now, char *msg, size_t n)
 {
     char err[1024];
@@ -87,8 +112,9 @@ int fp_vtakes_stop(fp_vtakes *t, fp_session *s, char *msg, size_t n)
         snprintf(msg, n, "take %u not written whole: %s", res.take, err);
         return rc;
     }
-    snprintf(msg, n, "take %u: %llu frames, %llu dropped, %s - %s", res.take,
-             (unsigned long long)res.frames, (unsigned long long)res.dropped, in, out);
+    snprintf(msg, n, "take %u: %llu frames, %llu dropped, %s - %s%s", res.take,
+             (unsigned long long)res.frames, (unsigned long long)res.dropped, in, out,
+             res.frames ? "   V: review" : "");
     if (t->nblocks == FP_VTAKES_BLOCKS) {
         memmove(t->blocks, t->blocks + 1, sizeof t->blocks - sizeof t->blocks[0]);
         t->nblocks--;
@@ -96,7 +122,11 @@ int fp_vtakes_stop(fp_vtakes *t, fp_session *s, char *msg, size_t n)
     t->blocks[t->nblocks].take = res.take;
     t->blocks[t->nblocks].frames = res.frames;
     t->nblocks++;
-    if (res.frames && !review_open(t, &res, err, sizeof err)) fp_vtakes_scrub(t, 0);
+    /* the review opens when asked (fp_vtakes_review): the live face and hands stay */
+    review_close(t);
+    t->last = res;
+    t->have_last = res.frames > 0;
+    t->review_take = res.take; /* (the strip lights it) */
     return 0;
 }
 
@@ -171,7 +201,7 @@ const float *fp_vtakes_shown(const fp_vtakes *t)
 
 void fp_vtakes_play_pause(fp_vtakes *t, int64_t now)
 {
-    if (!t->rs || !t->frames) return;
+    if (!review_ready(t) || !t->frames) return;
     if (t->playing) {
         t->playing = false;
         return;
@@ -187,14 +217,14 @@ void fp_vtakes_play_pause(fp_vtakes *t, int64_t now)
 
 void fp_vtakes_step(fp_vtakes *t, long delta)
 {
-    if (!t->rs) return;
+    if (!review_ready(t)) return;
     t->playing = false;
     show(t, (t->playhead < 0 ? 0 : t->playhead) + delta);
 }
 
 void fp_vtakes_scrub(fp_vtakes *t, double fraction)
 {
-    if (!t->rs || !t->frames) return;
+    if (!review_ready(t) || !t->frames) return;
     t->playing = false;
     fraction = fmin(1.0, fmax(0.0, fraction));
     show(t, lround(fraction * (double)(t->frames - 1)));
@@ -268,8 +298,11 @@ void fp_vtakes_draw(fp_vtakes *t, fp_render *r, int w, int h, int64_t now)
         bx += bw + 3;
     }
     if (t->frames) {
-        snprintf(text, sizeof text, "review take %u: frame %ld / %zu %s   P play/pause  , . step  mouse: scrub",
+        snprintf(text, sizeof text, "review take %u: frame %ld / %zu %s   P play/pause  , . step  Esc or V: live",
                  t->review_take, t->playhead + 1, t->frames, t->playing ? "playing" : t->playhead >= 0 ? "paused" : "live");
+        fp_render_text(r, w, h, x, y - 14 * scale, scale, text, dim);
+    } else if (t->have_last) {
+        snprintf(text, sizeof text, "take %u: V review   P play   mouse on the strip: scrub", t->last.take);
         fp_render_text(r, w, h, x, y - 14 * scale, scale, text, dim);
     }
 }

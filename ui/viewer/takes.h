@@ -2,7 +2,9 @@
  * button) starts and stops recording (optional countdown), the HUD's red REC with the running
  * timecode and take number, and the review of the last take on a timeline strip at the
  * bottom of the window (takes of this session as blocks, a playhead; P play/pause, the mouse
- * on the strip scrubs, , and . step a frame). The review plays the take's stored control
+ * on the strip scrubs, , and . step a frame). Stopping a take leaves the live face and hands
+ * shown: the review opens only when asked (V, or P, , . and the strip, which open it too)
+ * and is left with V again, Esc or the next engage (fp_vtakes_leave). The review plays the take's stored control
  * sets through a second session on the same mesh (fp_session_play_frame, as `facepuppet
  * play`), so the live session goes on untouched.
  *
@@ -34,6 +36,8 @@ typedef struct fp_vtakes {
     struct { uint32_t take; uint64_t frames; } blocks[FP_VTAKES_BLOCKS];
     size_t nblocks;
     uint32_t review_take;
+    fp_session_take_result last;  /* the last take written, reviewed when asked */
+    bool have_last;               /* last holds a take with frames (not found unreadable) */
     char slate[FP_TAKE_SLATE_MAX];
 } fp_vtakes;
 
@@ -54,10 +58,16 @@ int fp_vtakes_stop(fp_vtakes *t, fp_session *s, char *msg, size_t n);
 
 /** The review's shape to show, or NULL (show the live session). */
 const float *fp_vtakes_shown(const fp_vtakes *t);
-/** Review: P (play/pause), frame step by delta (, and .), scrub to a fraction of the take. */
+/** Review: P (play/pause), frame step by delta (, and .), scrub to a fraction of the take;
+ *  each opens the last take's review first if it is not open. */
 void fp_vtakes_play_pause(fp_vtakes *t, int64_t now);
 void fp_vtakes_step(fp_vtakes *t, long delta);
 void fp_vtakes_scrub(fp_vtakes *t, double fraction);
+/** V: open the last take's review paused on its first frame, or leave it when it is shown.
+ *  Returns 0, or -ENOENT (no take to review, or it cannot be read). */
+int fp_vtakes_review(fp_vtakes *t);
+/** Whether a take's frame is shown (fp_vtakes_shown non-NULL). */
+bool fp_vtakes_reviewing(const fp_vtakes *t);
 /** Leave the review (show the live session again). */
 void fp_vtakes_leave(fp_vtakes *t);
 

@@ -7,6 +7,8 @@
 #include "fp_rig.h"
 #include "fp_error.h"
 #include "fp_stats.h"
+#include "hud.h"
+#include "overlay.h"
 #include "png_file.h"
 #include "render.h"
 #include "script.h"
@@ -86,7 +88,15 @@ typedef struct viewer {
      * =check: partial, then compared with the whole every frame */
     fp_vnormals vn;
     enum { UPLOAD_PARTIAL, UPLOAD_FULL, UPLOAD_CHECK } upload_mode;
-    bool showed_review;       /* the last upload showed a take's frame */
+    enum { SRC_SESSION, SRC_REVIEW, SRC_SURFACE } shown_src; /* what the shown buffers hold:
+                                 the session's shape, a take's frame, the GPU warp's surface */
+    /* --gpu-warp: this frame's plan (gpu_plan): drawn by the shader from the surface? */
+    bool gpu_now;
+    fp_warp_coeffs warp;      /* the engine's coefficients this frame (identity: none) */
+    const float *warp_surface;/* the surface they apply to (fp_session_warp_parts) */
+    bool warp_solved;         /* a deformation is drawn (not the identity) */
+    uint64_t warp_frames;     /* frames the shader drew a deformation (checked: 1 in 30) */
+    unsigned gpu_said;        /* fallback reasons already said (one line each, bits) */
     samples upload_ms, upload_all_ms; /* upload() of frames that uploaded something, of all */
     unsigned long upload_checked, upload_mismatches;
 
@@ -99,8 +109,8 @@ typedef struct viewer {
     char *drop_path;          /* mesh dropped, loaded at the next frame */
     double mx, my;
     int drag;                 /* 0 none, 1 orbit, 2 pan */
-    char status[256];         /* last message for the HUD */
-    int64_t status_until;
+    fp_hud_msgs msgs;         /* the HUD's message stack (hud.h) */
+    fp_tip_cues cues;         /* the fingertips' nearest skin points this frame (overlay.h) */
 
     /* measurements */
     uint64_t frames;
@@ -133,16 +143,22 @@ typedef struct viewer {
     } hot;
 } viewer;
 
-static void say(viewer *v, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
-static void say(viewer *v, const char *fmt, ...)
+/* A message of `kind` (hud.h: FP_HUD_TAKE and FP_HUD_SETTING stay until their kind
+ * replaces them, FP_HUD_INFO fades) to the HUD's stack, and to stderr unless quiet (or
+ * always, with always_print: errors). */
+static void say_kind(viewer *v, int kind, bool always_print, const char *fmt, ...)
+    __attribute__((format(printf, 4, 5)));
+static void say_kind(viewer *v, int kind, bool always_print, const char *fmt, ...)
 {
+    char text[FP_HUD_MSG_LEN];
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(v->status, sizeof v->status, fmt, ap);
+    vsnprintf(text, sizeof text, fmt, ap);
     va_end(ap);
-    v->status_until = fp_now_ns() + 3000000000LL;
-    if (!v->opt->quiet) fprintf(stderr, "facepuppet live: %s\n", v->status);
+    fp_hud_say(&v->msgs, kind, fp_now_ns(), text);
+    if (!v->opt->quiet || always_print) fprintf(stderr, "facepuppet live: %s\n", text);
 }
+#define say(v, ...) say_kind(v, FP_HUD_INFO, false, __VA_ARGS__)
 
 /* The session's log lines (input status, mapping and engine errors, recordings): the
  * latest in the HUD's status line, every one to stderr (debug lines only with
@@ -152,8 +168,9 @@ static void on_session_log(void *user, int level, const char *source, const char
 {
     viewer *v = user;
     if (level > FP_LOG_INFO && !getenv("FACEPUPPET_DEBUG")) return;
-    snprintf(v->status, sizeof v->status, "%s: %s", source, message);
-    v->status_until = fp_now_ns() + 5000000000LL;
+    char text[FP_HUD_MSG_LEN];
+    snprintf(text, sizeof text, "%s: %s", source, message);
+    fp_hud_say(&v->msgs, FP_HUD_NOTE, fp_now_ns(), text);
     if (!(v->opt->quiet && fp_slog_is_note(level, source)))
         fprintf(stderr, "facepuppet live: %s: %s\n", source, message);
 }
@@ -262,6 +279,12 @@ static int open_session(viewer *v, char *err, size_t errlen)
         snprintf(err, errlen, "viewer: out of memory for %zu vertices", v->n);
         return rc;
     }
+    const fp_rig *rig = fp_session_rig(v->s); /* the GPU warp's blend weights */
+    if (v->gw && fp_render_set_mobility(&v->r, rig ? fp_rig_mobility(rig) : NULL)) {
+        snprintf(err, errlen, "viewer: out of GPU memory for %zu vertices", v->n);
+        return -ENOMEM;
+    }
+    v->shown_src = SRC_SESSION;
     frame_mesh(v);
     return 0;
 }
@@ -276,8 +299,7 @@ static void load_dropped(viewer *v)
     int rc = open_session(v, err, sizeof err);
     if (rc) {
         v->so.mesh_path = old;
-        say(v, "cannot load %s: %s", path, err);
-        if (v->opt->quiet) fprintf(stderr, "facepuppet live: %s\n", v->status);
+        say_kind(v, FP_HUD_INFO, true, "cannot load %s: %s", path, err);
         free(path);
         if (!v->n) v->error = rc;
         return;
@@ -285,7 +307,7 @@ static void load_dropped(viewer *v)
     free(v->mesh_path);
     v->mesh_path = path;
     v->committed_shown = false;
-    say(v, "loaded %s (%zu vertices)", path, v->n);
+    say_kind(v, FP_HUD_SETTING, false, "loaded %s (%zu vertices)", path, v->n);
 }
 
 /* The HUD's state word: the session's, so that undo, reset and a new mesh show at once. */
@@ -295,18 +317,29 @@ static const char *hud_state(const viewer *v)
     return v->paused ? "PAUSED" : cs->active ? "ENGAGED" : v->committed_shown ? "committed" : "idle";
 }
 
+/* The HUD's badge (hud.h): recording first, then the review, pause, the gesture (LIMITED
+ * while the fold-over guard holds its last frame back), a commit shown, idle. */
+static fp_hud_badge hud_badge(const viewer *v)
+{
+    if (fp_session_take_recording(&v->takes.take)) return FP_HUD_REC;
+    if (fp_vtakes_reviewing(&v->takes)) return v->takes.playing ? FP_HUD_PLAYING : FP_HUD_REVIEW;
+    if (v->paused) return FP_HUD_PAUSED;
+    if (fp_session_control_set(v->s)->active)
+        return v->last_active.guard_reached < 1.0 ? FP_HUD_LIMITED : FP_HUD_ENGAGED;
+    return v->committed_shown ? FP_HUD_COMMITTED : FP_HUD_IDLE;
+}
+
 /* ---- keys ------------------------------------------------------------------------------- */
 
 static void set_mapping(viewer *v, const char *spec)
 {
     char err[1024];
     if (fp_session_set_mapping(v->s, v->so.plugin_path, spec, err, sizeof err)) {
-        say(v, "%s", err);
-        if (v->opt->quiet) fprintf(stderr, "facepuppet live: %s\n", v->status);
+        say_kind(v, FP_HUD_INFO, true, "%s", err);
         return;
     }
     mapping_name(v, spec);
-    say(v, "mapping %s", spec);
+    say_kind(v, FP_HUD_SETTING, false, "mapping %s", spec);
 }
 
 /* T or the pedal's middle button: start or stop a take. */
@@ -314,14 +347,17 @@ static void take_toggle(viewer *v)
 {
     char msg[1200];
     fp_vtakes_toggle(&v->takes, v->s, fp_now_ns(), msg, sizeof msg);
-    if (msg[0]) say(v, "%s", msg);
+    if (msg[0]) say_kind(v, FP_HUD_TAKE, false, "%s", msg);
 }
 
 static void act(viewer *v, int key)
 {
     switch (key) {
     case GLFW_KEY_SPACE: v->paused = !v->paused; break;
-    case GLFW_KEY_E: fp_session_request(v->s, FP_INTENT_ENGAGE); break;
+    case GLFW_KEY_E: /* the next engage leaves a take's review: the live face again */
+        fp_vtakes_leave(&v->takes);
+        fp_session_request(v->s, FP_INTENT_ENGAGE);
+        break;
     case GLFW_KEY_C: fp_session_request(v->s, FP_INTENT_COMMIT); break;
     case GLFW_KEY_X: fp_session_request(v->s, FP_INTENT_CANCEL); break;
     case GLFW_KEY_Z:
@@ -338,7 +374,7 @@ static void act(viewer *v, int key)
         if (isnan(j) || fp_session_set_channel(v->s, "jaw.open", j + (key == GLFW_KEY_J ? 0.1 : -0.1)))
             say(v, "no rig with a jaw.open channel");
         else
-            say(v, "jaw.open %.1f", fmin(1, fmax(0, j + (key == GLFW_KEY_J ? 0.1 : -0.1))));
+            say_kind(v, FP_HUD_SETTING, false, "jaw.open %.1f", fmin(1, fmax(0, j + (key == GLFW_KEY_J ? 0.1 : -0.1))));
         break;
     }
     case GLFW_KEY_G:
@@ -358,7 +394,13 @@ static void act(viewer *v, int key)
     case GLFW_KEY_H: v->hands_on = !v->hands_on; break;
     case GLFW_KEY_TAB: v->hud_on = !v->hud_on; break;
     case GLFW_KEY_SLASH: v->help_on = !v->help_on; break;
-    case GLFW_KEY_ESCAPE: glfwSetWindowShouldClose(v->win, GLFW_TRUE); break;
+    case GLFW_KEY_ESCAPE: /* out of a take's review first; else quit */
+        if (fp_vtakes_reviewing(&v->takes)) fp_vtakes_leave(&v->takes);
+        else glfwSetWindowShouldClose(v->win, GLFW_TRUE);
+        break;
+    case GLFW_KEY_V:
+        if (fp_vtakes_review(&v->takes)) say(v, "no take to review%s", v->takes.enabled ? "" : " (--take-dir DIR records takes)");
+        break;
     case GLFW_KEY_T: take_toggle(v); break;
     case GLFW_KEY_P: fp_vtakes_play_pause(&v->takes, fp_now_ns()); break;
     case GLFW_KEY_COMMA: fp_vtakes_step(&v->takes, -1); break;
@@ -511,7 +553,7 @@ static void watch_mapping(viewer *v)
     }
     v->hot.reloads++;
     const fp_plugin *p = fp_session_mapping_plugin(v->s);
-    say(v, "mapping '%s' reloaded from %s (%s %s)", name, file, p->entry && p->entry->id ? p->entry->id : "?",
+    say_kind(v, FP_HUD_SETTING, false, "mapping '%s' reloaded from %s (%s %s)", name, file, p->entry && p->entry->id ? p->entry->id : "?",
         p->entry && p->entry->version ? p->entry->version : "?");
 }
 
@@ -566,11 +608,29 @@ static void run_script(viewer *v)
             break;
         }
         case FP_SCRIPT_PRINT_HUD:
-            printf("hud frame %llu state %s commits %lu scale %.4g mm per mesh unit (%s)\n",
+            printf("hud frame %llu state %s commits %lu scale %.4g mm per mesh unit (%s) badge %s "
+                   "touching %zu of %zu nearest %.2f mm messages %zu drawn %s\n",
                    (unsigned long long)v->frames, hud_state(v), fp_session_commits(v->s),
-                   fp_session_head(v->s)->mm_per_unit, fp_session_head(v->s)->how);
+                   fp_session_head(v->s)->mm_per_unit, fp_session_head(v->s)->how,
+                   fp_hud_badge_name(hud_badge(v)), v->cues.touch_count, v->cues.count,
+                   v->cues.nearest * fp_session_head(v->s)->mm_per_unit,
+                   fp_hud_live(&v->msgs, fp_now_ns(), (const fp_hud_msg *[FP_HUD_MSGS]){0}, NULL),
+                   v->gpu_now ? (v->warp_solved ? "gpu-warp" : "gpu-surface") : "cpu");
             fflush(stdout);
             break;
+        case FP_SCRIPT_PRINT_MESSAGES: {
+            static const char *const kinds[FP_HUD_KINDS] = {"take", "setting", "note", "info"};
+            const fp_hud_msg *live[FP_HUD_MSGS];
+            float alpha[FP_HUD_MSGS];
+            size_t n = fp_hud_live(&v->msgs, fp_now_ns(), live, alpha);
+            for (size_t i = 0; i < n; i++)
+                printf("message frame %llu %s %s alpha %.2f: %s\n", (unsigned long long)v->frames,
+                       kinds[live[i]->kind], live[i]->until == INT64_MAX ? "kept" : "fading", alpha[i],
+                       live[i]->text);
+            printf("messages frame %llu: %zu\n", (unsigned long long)v->frames, n);
+            fflush(stdout);
+            break;
+        }
         case FP_SCRIPT_DROP:
             free(v->drop_path);
             v->drop_path = strdup(c->text);
@@ -586,165 +646,6 @@ static void run_script(viewer *v)
 
 /* ---- drawing ---------------------------------------------------------------------------- */
 
-typedef struct vbuf {
-    float *v;
-    size_t n, cap;
-} vbuf;
-
-static void vb_add(vbuf *b, const float p[3], const float c[4])
-{
-    if (b->n == b->cap) {
-        size_t cap = b->cap ? 2 * b->cap : 256;
-        float *g = realloc(b->v, cap * 7 * sizeof *g);
-        if (!g) return;
-        b->v = g;
-        b->cap = cap;
-    }
-    float *o = b->v + 7 * b->n++;
-    memcpy(o, p, 3 * sizeof *o);
-    memcpy(o + 3, c, 4 * sizeof *o);
-}
-
-static void draw_hands(viewer *v, const float pv[16], const float view[16])
-{
-    static const float colors[FP_HANDS][4] = {{0.35f, 0.65f, 1.f, 1.f}, {1.f, 0.6f, 0.25f, 1.f}};
-    vbuf bones = {0}, joints = {0}, arrows = {0};
-    float tips[FP_HANDS * FP_FINGERS][3];
-    size_t ntips = 0;
-    for (int h = 0; h < FP_HANDS; h++) {
-        const fp_hand_pose *p = fp_session_hand(v->s, h);
-        if (!p) continue;
-        for (int f = 0; f < FP_FINGERS; f++) {
-            vb_add(&bones, p->joints[FP_JOINT_PALM], colors[h]);
-            vb_add(&bones, p->joints[FP_JOINT(f, 0)], colors[h]);
-            for (int k = 0; k < 3; k++) {
-                vb_add(&bones, p->joints[FP_JOINT(f, k)], colors[h]);
-                vb_add(&bones, p->joints[FP_JOINT(f, k + 1)], colors[h]);
-            }
-            memcpy(tips[ntips++], p->joints[FP_JOINT_TIP(f)], sizeof tips[0]);
-        }
-        for (int j = 0; j < FP_HAND_JOINTS; j++) vb_add(&joints, p->joints[j], colors[h]);
-    }
-    /* Control vectors: a line from start to end and a two-stroke head in the plane that
-     * faces the camera. */
-    const fp_control_set *cs = fp_session_control_set(v->s);
-    if (cs->active) {
-        static const float yellow[4] = {1.f, 0.92f, 0.2f, 1.f};
-        float eye_dir[3] = {view[2], view[6], view[10]}; /* camera +z in world */
-        for (size_t i = 0; i < cs->count; i++) {
-            const float *a = cs->start[i], *b = cs->end[i];
-            float d[3];
-            v3_sub(b, a, d);
-            float len = v3_len(d);
-            vb_add(&arrows, a, yellow);
-            vb_add(&arrows, b, yellow);
-            if (len <= 0) continue;
-            float side[3];
-            v3_cross(d, eye_dir, side);
-            v3_norm(side);
-            float hl = fminf(0.3f * len, 0.15f * (float)cs->radius);
-            for (int s = -1; s <= 1; s += 2) {
-                float q[3];
-                for (int k = 0; k < 3; k++) q[k] = b[k] - d[k] / len * hl + side[k] * hl * 0.5f * (float)s;
-                vb_add(&arrows, b, yellow);
-                vb_add(&arrows, q, yellow);
-            }
-        }
-    }
-    float sphere_color[4] = {0.55f, 0.8f, 1.f, 0.13f};
-    fp_render_spheres(&v->r, pv, view, &tips[0][0], ntips, (float)fp_session_radius(v->s), sphere_color);
-    fp_render_lines(&v->r, pv, bones.v, bones.n, GL_LINES, 1.f, true);
-    fp_render_lines(&v->r, pv, joints.v, joints.n, GL_POINTS, 5.f, true);
-    fp_render_lines(&v->r, pv, arrows.v, arrows.n, GL_LINES, 1.f, false);
-    free(bones.v);
-    free(joints.v);
-    free(arrows.v);
-}
-
-/* The rig overlay's colours (G): skull, jaw, soft tissue at jaw weight 0 (it blends towards
- * the jaw's colour as the weight rises to 1), landmarks, the hinge axis. */
-static const float rig_skull[3] = {0.3f, 0.45f, 1.f}, rig_jaw[3] = {1.f, 0.3f, 0.15f},
-                   rig_soft[3] = {0.3f, 0.8f, 0.3f}, rig_landmark[4] = {1.f, 1.f, 1.f, 1.f},
-                   rig_hinge[4] = {0.f, 0.9f, 1.f, 1.f};
-
-/* Upload the per-vertex region colours of the session's rig (kinds, jaw weights). */
-static void rig_colors(viewer *v)
-{
-    const fp_rig *rig = fp_session_rig(v->s);
-    const uint8_t *kind = rig ? fp_rig_vertex_kinds(rig) : NULL;
-    const float *w = rig ? fp_rig_jaw_weights(rig) : NULL;
-    float *rgb = kind && w && fp_rig_vertex_count(rig) == v->n ? malloc(v->n * 3 * sizeof *rgb) : NULL;
-    if (!rgb) return;
-    for (size_t i = 0; i < v->n; i++) {
-        float t = fminf(1.f, fmaxf(0.f, w[i]));
-        for (int k = 0; k < 3; k++)
-            rgb[3 * i + k] = kind[i] == FP_RIG_SKULL ? rig_skull[k]
-                           : kind[i] == FP_RIG_JAW   ? rig_jaw[k]
-                                                     : rig_soft[k] + t * (rig_jaw[k] - rig_soft[k]);
-    }
-    fp_render_set_colors(&v->r, rgb);
-    free(rgb);
-}
-
-/* The landmarks on the shape shown (points) and the hinge axis (the line through the two
- * temporomandibular joints, drawn a quarter of its length beyond each, and the joints as
- * points), over the face (no depth test: the joints are inside the head). */
-static void draw_rig(viewer *v, const float pv[16], int w, int h)
-{
-    const fp_rig *rig = fp_session_rig(v->s);
-    if (!rig || !v->have_pos) return;
-    vbuf pts = {0}, axis = {0};
-    for (size_t i = 0, n = fp_rig_landmark_count(rig); i < n; i++) {
-        const char *name;
-        uint32_t vi;
-        if (!fp_rig_landmark_get(rig, i, &name, &vi) && vi < v->n) vb_add(&pts, v->pos + 3 * (size_t)vi, rig_landmark);
-    }
-    float jr[3], jl[3], d[3], a[3], b[3];
-    fp_rig_hinge(rig, jr, jl, NULL, NULL);
-    v3_sub(jl, jr, d);
-    for (int k = 0; k < 3; k++) {
-        a[k] = jr[k] - 0.25f * d[k];
-        b[k] = jl[k] + 0.25f * d[k];
-    }
-    vb_add(&axis, a, rig_hinge);
-    vb_add(&axis, b, rig_hinge);
-    /* 2 pixels wide (core profiles draw 1-pixel lines): again shifted a pixel right, up */
-    for (int pass = 0; pass < 3; pass++) {
-        float m[16];
-        memcpy(m, pv, sizeof m);
-        int row = pass - 1; /* clip x (pass 1) or y (pass 2) += one pixel's NDC times w */
-        for (int c = 0; pass && c < 4; c++) m[4 * c + row] += 2.f / (float)(row ? h : w) * m[4 * c + 3];
-        fp_render_lines(&v->r, m, axis.v, axis.n, GL_LINES, 1.f, false);
-    }
-    axis.n = 0;
-    vb_add(&axis, jr, rig_hinge);
-    vb_add(&axis, jl, rig_hinge);
-    fp_render_lines(&v->r, pv, axis.v, axis.n, GL_POINTS, 9.f, false);
-    fp_render_lines(&v->r, pv, pts.v, pts.n, GL_POINTS, 5.f, false);
-    free(pts.v);
-    free(axis.v);
-}
-
-/* The overlay's legend, each name in its colour; returns the height drawn. */
-static float draw_rig_legend(viewer *v, int w, int h, float y, float scale)
-{
-    char jaw[64];
-    double j = fp_session_channel(v->s, "jaw.open");
-    snprintf(jaw, sizeof jaw, "jaw (jaw.open %.1f)", isnan(j) ? 0.0 : j);
-    const struct { const char *text; const float *c; } rows[] = {
-        {"rig (G):", NULL}, {"skull", rig_skull}, {jaw, rig_jaw},
-        {"soft: jaw weight 0 .. 1", rig_soft}, {"landmarks", rig_landmark}, {"hinge axis", rig_hinge}};
-    const float dim[4] = {0.8f, 0.85f, 0.9f, 1.f};
-    float y0 = y;
-    for (size_t i = 0; i < sizeof rows / sizeof rows[0]; i++) {
-        float c[4] = {1, 1, 1, 1};
-        if (rows[i].c) memcpy(c, rows[i].c, 3 * sizeof *c);
-        y += fp_render_text(&v->r, w, h, 8 + (rows[i].c ? 10 * scale : 0), y, scale, rows[i].text,
-                            rows[i].c ? c : dim) + 2 * scale;
-    }
-    return y - y0;
-}
-
 static const char help_text[] =
     "keys\n"
     " space  pause / run\n"
@@ -758,11 +659,14 @@ static const char help_text[] =
     " W wireframe  S screenshot  F frame\n"
     " H hands  Tab HUD  ? this list\n"
     " T      record a take (start / stop)\n"
+    " V      review the last take / back to live\n"
     " P      play / pause the last take\n"
     " , / .  a frame back / on; mouse on the strip scrubs\n"
-    " Esc    quit\n"
+    " Esc    leave the review; else quit\n"
     "mouse: left orbit, right pan, wheel zoom\n"
-    "drop a mesh file on the window to load it";
+    "drop a mesh file on the window to load it\n"
+    "spheres: green where a fingertip's support reaches the skin;\n"
+    "lines: each fingertip to its nearest skin point";
 
 static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
 {
@@ -772,7 +676,7 @@ static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
     const fp_head *head = fp_session_head(v->s);
     /* the last deforming frame's reach (skin_reach.h): the least share of a touching
      * fingertip's motion that the skin under it followed, and the longest drag, in mm */
-    char reach[160] = "";
+    char reach[160] = "", tips[160] = "";
     const fp_frame_stats *la = &v->last_active;
     if (la->reach_vectors) {
         float least = la->reach[0];
@@ -780,30 +684,41 @@ static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
         snprintf(reach, sizeof reach, "\nskin follows the fingertips %.0f%%  (drag %.1f mm)",
                  100.0 * least, la->reach_asked_max * head->mm_per_unit);
     }
-    char text[1024];
+    if (v->cues.count && isfinite(v->cues.nearest))
+        snprintf(tips, sizeof tips, "\nfingertips: %zu of %zu touching, nearest %.1f mm from the skin",
+                 v->cues.touch_count, v->cues.count, v->cues.nearest * head->mm_per_unit);
+    char text[1024], wrapped[2048];
     snprintf(text, sizeof text,
              "%s  %zu vertices  mapping %s\n"
              "%.3g mm per mesh unit, %.*s\n"
-             "%s   commits %lu   radius %.4g\n"
+             "commits %lu   radius %.4g (%.1f mm)\n"
              "%.1f fps (%.2f ms)   engine %.3f ms   input %.0f ev/s%s\n"
              "fold-over guard: bound %.2f  reach %.0f%%  sub-steps %d%s%s",
              v->mesh_path ? (strrchr(v->mesh_path, '/') ? strrchr(v->mesh_path, '/') + 1 : v->mesh_path) : "", v->n, v->mapping,
-             head->mm_per_unit, (int)strcspn(head->how, ":"), head->how, hud_state(v), fp_session_commits(v->s),
-             fp_session_radius(v->s), recent > 0 ? 1000.0 / recent : 0.0, recent,
+             head->mm_per_unit, (int)strcspn(head->how, ":"), head->how, fp_session_commits(v->s),
+             fp_session_radius(v->s), fp_session_radius(v->s) * head->mm_per_unit,
+             recent > 0 ? 1000.0 / recent : 0.0, recent,
              st->active ? st->update_ms : v->last_update_ms, v->input_rate,
-             v->opt->gpu_warp ? "   gpu-warp" : "", v->last_active.guard_bound,
-             100.0 * v->last_active.guard_reached, v->last_active.guard_substeps,
-             v->last_active.guard_reached < 1.0 ? "  LIMITED" : "", reach);
+             v->opt->gpu_warp ? (v->gpu_now ? "   gpu-warp" : "   gpu-warp (CPU now)") : "",
+             v->last_active.guard_bound, 100.0 * v->last_active.guard_reached, v->last_active.guard_substeps,
+             reach, tips);
     const float white[4] = {0.95f, 0.95f, 0.92f, 1.f}, dim[4] = {0.8f, 0.85f, 0.9f, 1.f};
-    float scale = h >= 600 ? 2.f : 1.f;
-    float y = 8;
-    y += fp_render_text(&v->r, w, h, 8, y, scale, text, white) + 6 * scale;
-    if (v->status[0] && fp_now_ns() < v->status_until)
-        y += fp_render_text(&v->r, w, h, 8, y, scale, v->status, dim) + 6 * scale;
-    if (v->rig_on && fp_session_rig(v->s)) y += draw_rig_legend(v, w, h, y, scale) + 6 * scale;
+    float scale = h >= 600 ? 2.f : 1.f, margin = 8, max_px = (float)w - 2 * margin;
+    char tc[40] = "";
+    fp_hud_badge b = hud_badge(v);
+    if (b == FP_HUD_REC) {
+        fp_timecode t;
+        if (!fp_session_take_timecode(&v->takes.take, fp_now_ns(), &t)) fp_timecode_format(&t, tc, sizeof tc);
+    }
+    float y = margin;
+    y += fp_hud_draw_badge(&v->r, w, h, margin, y, scale, b, tc) + 4 * scale;
+    fp_hud_wrap(text, max_px, scale, wrapped, sizeof wrapped);
+    y += fp_render_text(&v->r, w, h, margin, y, scale, wrapped, white) + 6 * scale;
+    y += fp_hud_draw_msgs(&v->msgs, &v->r, w, h, margin, y, max_px, scale, dim, fp_now_ns()) + 4 * scale;
+    if (v->rig_on && fp_session_rig(v->s)) y += fp_overlay_rig_legend(&v->r, v->s, w, h, y, scale) + 6 * scale;
     fp_vtakes_draw(&v->takes, &v->r, w, h, fp_now_ns());
-    if (v->help_on) fp_render_text(&v->r, w, h, 8, y, scale, help_text, dim);
-    else fp_render_text(&v->r, w, h, 8, (float)h - 14 * scale, scale, "? keys", dim);
+    if (v->help_on) fp_hud_draw_help(&v->r, w, h, scale, help_text, white);
+    else fp_render_text(&v->r, w, h, margin, (float)h - 14 * scale, scale, "? keys", dim);
 }
 
 /* Bring one of the face's GPU copies (base: the ghost and the GPU warp's input; else the
@@ -844,8 +759,10 @@ static bool upload_shape(viewer *v, bool base, const float *src, const uint32_t 
 }
 
 /* Upload the base and the shape to show where they changed (fp_session_base_touched,
- * fp_session_touched; a take's frame under review is compared whole). */
-static void upload(viewer *v, bool warp_on_gpu)
+ * fp_session_touched). The shown buffers hold the session's shape, a take's frame under
+ * review, or (the GPU warp drawing this frame) the surface the warp applies to; the last two,
+ * and the first after either, are compared whole. */
+static void upload(viewer *v)
 {
     int64_t t0 = fp_now_ns();
     const uint32_t *ranges;
@@ -853,33 +770,72 @@ static void upload(viewer *v, bool warp_on_gpu)
     bool did = upload_shape(v, true, fp_session_base(v->s), ranges, nr);
     nr = fp_session_touched(v->s, &ranges); /* taken every frame, so the record stays short */
     const float *review = fp_vtakes_shown(&v->takes);
-    if (warp_on_gpu) {
-        v->have_pos = false; /* the shown buffers are not kept */
-    } else if (review || v->showed_review) {
-        const float *src = review ? review : fp_session_positions(v->s);
-        if (!v->have_pos || memcmp(src, v->pos, v->n * 3 * sizeof(float))) {
+    int src = review ? SRC_REVIEW : v->gpu_now ? SRC_SURFACE : SRC_SESSION;
+    if (src != SRC_SESSION || v->shown_src != SRC_SESSION) {
+        const float *p = src == SRC_REVIEW ? review : src == SRC_SURFACE ? v->warp_surface : fp_session_positions(v->s);
+        if (!v->have_pos || memcmp(p, v->pos, v->n * 3 * sizeof(float))) {
             v->have_pos = false;
-            did |= upload_shape(v, false, src, NULL, SIZE_MAX);
+            did |= upload_shape(v, false, p, NULL, SIZE_MAX);
         }
     } else {
         did |= upload_shape(v, false, fp_session_positions(v->s), ranges, nr);
     }
-    v->showed_review = review != NULL;
+    v->shown_src = src;
     double ms = (double)(fp_now_ns() - t0) / 1e6;
     samples_add(&v->upload_all_ms, ms);
     if (did) samples_add(&v->upload_ms, ms);
 }
 
-/* Compare the GPU warp (transform feedback) with the CPU engine's shape this frame. */
-static void check_warp(viewer *v, const fp_warp_coeffs *c)
+/* --gpu-warp, each frame before the upload: whether the shader draws the shape this frame
+ * (the rig's pose and blend weights on the CPU side, the warp on the GPU), with which
+ * coefficients on which surface; where it cannot, the CPU's shape is drawn and the reason is
+ * said once (a line on stderr, a HUD note). */
+static void gpu_plan(viewer *v)
 {
-    if (!v->gw || fp_gpuwarp_eval(v->gw, c, v->n, v->base, v->check)) return;
-    const float *cpu = fp_session_positions(v->s);
+    static const char *const why[] = {
+        "the contact guard scaled a frame back (its shape is not the warp's)",
+        "more centres than the shader takes",
+        "the engine's warp has a polynomial part, which the shader lacks",
+        "the engine's coefficients could not be read",
+        "the fold-over guard composed several maps (the shader draws one)"};
+    v->gpu_now = false;
+    if (!v->opt->gpu_warp || !v->gw || fp_vtakes_reviewing(&v->takes)) return;
+    const struct csrbf_solver *solver;
+    int reason = -1;
+    int parts = fp_session_warp_parts(v->s, &v->warp_surface, &solver);
+    if (parts) {
+        reason = parts == -ERANGE ? 4 : 0;
+    } else {
+        int rc = fp_warp_from_solver(solver, solver ? fp_session_control_set(v->s)->radius : 1.0, &v->warp);
+        if (rc) reason = rc == -E2BIG ? 1 : rc == -ENOTSUP ? 2 : 3;
+    }
+    if (reason >= 0) {
+        v->rep.warp_cpu_frames++;
+        if (!(v->gpu_said & (1u << reason))) {
+            v->gpu_said |= 1u << reason;
+            say_kind(v, FP_HUD_NOTE, true, "gpu-warp: %s; drawing those frames from the CPU", why[reason]);
+        }
+        return;
+    }
+    v->warp_solved = solver != NULL;
+    v->gpu_now = true;
+}
+
+/* Compare the GPU warp (transform feedback, then the rig's blend as the session does it)
+ * with the CPU engine's shape this frame. */
+static void check_warp(viewer *v)
+{
+    if (!v->gw || fp_gpuwarp_eval(v->gw, &v->warp, v->n, v->warp_surface, v->check)) return;
+    const float *cpu = fp_session_positions(v->s), *x = v->warp_surface;
+    const fp_rig *rig = fp_session_rig(v->s);
+    const float *m = rig ? fp_rig_mobility(rig) : NULL;
     double err = 0, disp = 0;
     for (size_t i = 0; i < 3 * v->n; i += 3) {
         double e = 0, d = 0;
+        float mob = m ? m[i / 3] : 1.f;
         for (int k = 0; k < 3; k++) {
-            double a = (double)v->check[i + k] - cpu[i + k], b = (double)cpu[i + k] - v->base[i + k];
+            float g = !m ? v->check[i + k] : mob == 0 ? x[i + k] : x[i + k] + mob * (v->check[i + k] - x[i + k]);
+            double a = (double)g - cpu[i + k], b = (double)cpu[i + k] - x[i + k];
             e += a * a;
             d += b * b;
         }
@@ -918,7 +874,7 @@ static void draw(viewer *v, const fp_frame_stats *st, int w, int h)
     m4_mul(proj, view, pv);
     bool rig_on = v->rig_on && fp_session_rig(v->s);
     if (rig_on != v->r.shape_colors) {
-        if (rig_on) rig_colors(v);
+        if (rig_on) fp_overlay_rig_colors(&v->r, v->s, v->n);
         else fp_render_set_colors(&v->r, NULL);
     }
     static const float skin[4] = {0.86f, 0.7f, 0.6f, 1.f}, ghost[4] = {0.6f, 0.8f, 1.f, 0.22f};
@@ -927,21 +883,18 @@ static void draw(viewer *v, const fp_frame_stats *st, int w, int h)
     /* with a rig the shape is the posed base blended by mobility: drawn from the CPU */
     if (reviewing) {
         fp_render_mesh(&v->r, pv, view, false, NULL, skin, v->wireframe);
-    } else if (v->opt->gpu_warp && !fp_session_rig(v->s)) {
-        /* The engine step's own coefficients (no second solve); the identity when nothing
-         * is deformed or they cannot be drawn. */
-        fp_warp_coeffs c;
-        const fp_control_set *cs = fp_session_control_set(v->s);
-        if (fp_warp_from_solver(deformed ? fp_session_solver(v->s) : NULL, cs->radius, &c))
-            fp_warp_from_solver(NULL, 1.0, &c);
-        fp_render_mesh(&v->r, pv, view, true, &c, skin, v->wireframe);
-        if (deformed && (v->frames % 30 == 0 || v->frames + 1 == v->opt->frames)) check_warp(v, &c);
+    } else if (v->gpu_now) {
+        /* the engine step's own coefficients (no second solve) on the surface they apply
+         * to, blended by the rig's mobility in the shader (fp_render_set_mobility) */
+        fp_render_mesh(&v->r, pv, view, false, &v->warp, skin, v->wireframe);
+        if (v->warp_solved && (v->warp_frames++ % 30 == 0 || v->shot_path || v->frames + 1 == v->opt->frames))
+            check_warp(v); /* (and every frame shot: the tests compare those) */
     } else {
         fp_render_mesh(&v->r, pv, view, false, NULL, skin, v->wireframe);
     }
     if (deformed && (st->active || !fp_session_rig(v->s))) fp_render_mesh(&v->r, pv, view, true, NULL, ghost, false);
-    if (rig_on) draw_rig(v, pv, w, h);
-    if (v->hands_on && !reviewing) draw_hands(v, pv, view);
+    if (rig_on) fp_overlay_rig(&v->r, v->s, v->have_pos ? v->pos : NULL, v->n, pv, w, h);
+    if (v->hands_on && !reviewing) fp_overlay_hands(&v->r, v->s, &v->cues, pv, view);
     if (v->hud_on) draw_hud(v, w, h, st);
 }
 
@@ -965,12 +918,13 @@ static void frame(viewer *v)
     int64_t now = fp_now_ns();
     char take_msg[1200];
     fp_vtakes_tick(&v->takes, v->s, now, take_msg, sizeof take_msg);
-    if (take_msg[0]) say(v, "%s", take_msg);
+    if (take_msg[0]) say_kind(v, FP_HUD_TAKE, false, "%s", take_msg);
     if (!v->paused) {
         fp_session_step(v->s, now, &st);
         for (unsigned k = fp_session_record_toggles(v->s); k > 0; k--) take_toggle(v);
         if (st.committed) v->committed_shown = true;
         if (st.engaged || st.cancelled) v->committed_shown = false;
+        if (st.engaged) fp_vtakes_leave(&v->takes); /* (an engage by a pedal or a gesture) */
         if (st.active) {
             samples_add(&v->engine_ms, st.update_ms);
             v->last_update_ms = st.update_ms;
@@ -990,7 +944,9 @@ static void frame(viewer *v)
         v->events_window = 0;
         v->window_start = now;
     }
-    upload(v, v->opt->gpu_warp && !fp_session_rig(v->s));
+    fp_overlay_tip_cues(v->s, &v->cues);
+    gpu_plan(v);
+    upload(v);
     int w, h;
     glfwGetFramebufferSize(v->win, &w, &h);
     draw(v, &st, w, h);
@@ -1086,7 +1042,10 @@ int fp_viewer_run(const fp_viewer_options *opt, fp_viewer_report *report, char *
     glfwSetDropCallback(v->win, on_drop);
     if ((rc = fp_render_init(&v->r, err, errlen))) goto out;
     v->r_ready = true;
-    if (opt->gpu_warp && (rc = fp_gpuwarp_create(&v->gw, err, errlen))) goto out;
+    if (opt->gpu_warp && fp_gpuwarp_create(&v->gw, err, errlen)) { /* said once; the CPU draws */
+        fprintf(stderr, "facepuppet live: gpu-warp: %s; drawing from the CPU\n", err);
+        err[0] = '\0';
+    }
     if ((rc = open_session(v, err, errlen))) goto out;
     if (!opt->quiet) {
         const char *renderer = (const char *)glGetString(GL_RENDERER);

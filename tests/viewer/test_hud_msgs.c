@@ -1,0 +1,99 @@
+/* The HUD's word wrap and message stack (ui/viewer/hud.c), without a display: every wrapped
+ * line fits the width at the viewer's two scales and window widths, nothing is lost; a take's
+ * confirmation stays through notes until the next take's replaces it; notes fade and go. */
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include "hud.h"
+
+#include <stdio.h>
+#include <string.h>
+
+static void test_wrap_fits(void **state)
+{
+    (void)state;
+    const char *text = "mapping 'anchored': reload of /a/rather/long/path/to/libmap-anchored.so failed: "
+                       "undefined symbol fp_mapping_entry_with_a_name_longer_than_any_line_could_hold_at_all_"
+                       "even_at_the_smallest_scale_of_the_hud_and_then_some_more_characters_to_pass_the_width_of_a_line_of_six_hundred_"
+                       "and_twenty_four_pixels_at_the_scale_of_one; keeping the old one";
+    const float widths[2] = {640 - 16, 1280 - 16}, scales[2] = {1, 2};
+    for (int k = 0; k < 2; k++) {
+        char out[2048];
+        size_t lines = fp_hud_wrap(text, widths[k], scales[k], out, sizeof out);
+        size_t counted = 1, kept = 0;
+        for (char *l = out, *e; l; l = e ? e + 1 : NULL) {
+            e = strchr(l, '\n');
+            char one[2048];
+            snprintf(one, sizeof one, "%.*s", e ? (int)(e - l) : (int)strlen(l), l);
+            float w = fp_render_text_width(one, scales[k]);
+            print_message("%4.0f px: [%s] %.0f px\n", widths[k], one, w);
+            assert_true(w <= widths[k]);
+            counted += e != NULL;
+        }
+        for (const char *p = out; *p; p++) kept += *p != '\n';
+        size_t want = 0;
+        for (const char *p = text; *p; p++) want += *p != ' ';
+        size_t spaces_left = 0;
+        for (const char *p = out; *p; p++) spaces_left += *p == ' ';
+        assert_int_equal(lines, counted);
+        assert_true(lines >= 2);
+        assert_int_equal(kept - spaces_left, want); /* every non-space character kept */
+    }
+    char small[16];
+    fp_hud_wrap("a text longer than the buffer", 1000, 1, small, sizeof small);
+    assert_true(strlen(small) < sizeof small);
+}
+
+static void test_confirmations_kept_notes_fade(void **state)
+{
+    (void)state;
+    fp_hud_msgs s = {0};
+    const int64_t sec = 1000000000LL;
+    const fp_hud_msg *live[FP_HUD_MSGS];
+    float alpha[FP_HUD_MSGS];
+    fp_hud_say(&s, FP_HUD_TAKE, 0, "take 2: 40 frames");
+    for (int i = 0; i < 10; i++) { /* more notes than the stack holds */
+        char t[64];
+        snprintf(t, sizeof t, "contact: note %d", i);
+        fp_hud_say(&s, FP_HUD_NOTE, i * sec / 10, t);
+    }
+    size_t n = fp_hud_live(&s, sec, live, alpha);
+    assert_int_equal(n, FP_HUD_MSGS);
+    assert_string_equal(live[0]->text, "take 2: 40 frames"); /* oldest, still there */
+    assert_string_equal(live[n - 1]->text, "contact: note 9");
+    /* the same note again renews it rather than adding a line */
+    fp_hud_say(&s, FP_HUD_NOTE, sec, "contact: note 9");
+    assert_int_equal(fp_hud_live(&s, sec, live, alpha), FP_HUD_MSGS);
+    /* fading: whole until the last second, half way through it, gone after */
+    n = fp_hud_live(&s, (int64_t)((1.0 + FP_HUD_NOTE_S - 1.1) * sec), live, alpha);
+    float a = -1;
+    for (size_t i = 0; i < n; i++)
+        if (!strcmp(live[i]->text, "contact: note 9")) a = alpha[i];
+    assert_true(a > 0.95f);
+    n = fp_hud_live(&s, (int64_t)((1.0 + FP_HUD_NOTE_S - 0.5) * sec), live, alpha);
+    assert_true(n >= 2);
+    assert_float_equal(alpha[n - 1], 0.5f, 0.02f);
+    n = fp_hud_live(&s, 60 * sec, live, alpha);
+    assert_int_equal(n, 1);
+    assert_string_equal(live[0]->text, "take 2: 40 frames");
+    assert_float_equal(alpha[0], 1.f, 0);
+    /* replaced by its own kind only */
+    fp_hud_say(&s, FP_HUD_SETTING, 61 * sec, "mapping unanchored");
+    fp_hud_say(&s, FP_HUD_TAKE, 62 * sec, "take 3: 12 frames");
+    n = fp_hud_live(&s, 3600 * sec, live, alpha);
+    assert_int_equal(n, 2);
+    assert_string_equal(live[0]->text, "mapping unanchored");
+    assert_string_equal(live[1]->text, "take 3: 12 frames");
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_wrap_fits),
+        cmocka_unit_test(test_confirmations_kept_notes_fade),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,186 @@
+/* The live viewer's HUD parts: badge, message stack, key list backdrop, word wrap (hud.h). */
+#define _GNU_SOURCE
+#include "hud.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* ---- the badge -------------------------------------------------------------------------- */
+
+static const char *const badge_names[FP_HUD_BADGES] = {
+    "idle", "committed", "ENGAGED", "LIMITED", "PAUSED", "REC", "PLAYING", "REVIEW"};
+
+/* Far apart in hue (the tests tell them apart by colour), none of the skin's, the hands'
+ * (blue, orange) or the background's. */
+static const float badge_colors[FP_HUD_BADGES][4] = {
+    {0.45f, 0.47f, 0.5f, 1.f},   /* idle: grey */
+    {0.1f, 0.6f, 0.62f, 1.f},    /* committed: teal */
+    {0.2f, 0.78f, 0.25f, 1.f},   /* ENGAGED: green */
+    {1.f, 0.7f, 0.f, 1.f},       /* LIMITED: amber */
+    {0.92f, 0.92f, 0.92f, 1.f},  /* PAUSED: white */
+    {0.9f, 0.08f, 0.08f, 1.f},   /* REC: red */
+    {0.15f, 0.35f, 0.95f, 1.f},  /* PLAYING: blue */
+    {0.65f, 0.25f, 0.85f, 1.f},  /* REVIEW: purple */
+};
+
+const char *fp_hud_badge_name(fp_hud_badge b)
+{
+    return (unsigned)b < FP_HUD_BADGES ? badge_names[b] : "?";
+}
+
+const float *fp_hud_badge_color(fp_hud_badge b)
+{
+    return badge_colors[(unsigned)b < FP_HUD_BADGES ? b : FP_HUD_IDLE];
+}
+
+float fp_hud_draw_badge(fp_render *r, int w, int h, float x, float y, float scale,
+                        fp_hud_badge b, const char *detail)
+{
+    static const float ink[4] = {0.04f, 0.04f, 0.06f, 1.f};
+    char text[128];
+    snprintf(text, sizeof text, "%s%s%s", fp_hud_badge_name(b), detail && *detail ? "  " : "",
+             detail ? detail : "");
+    float bw = fmaxf(64 * scale, fp_render_text_width(text, scale) + 12 * scale), bh = 15 * scale;
+    fp_render_rect(r, w, h, x, y, bw, bh, fp_hud_badge_color(b));
+    fp_render_text(r, w, h, x + 6 * scale, y + 4 * scale, scale, text, ink);
+    return bh;
+}
+
+/* ---- word wrap -------------------------------------------------------------------------- */
+
+size_t fp_hud_wrap(const char *text, float max_px, float scale, char *out, size_t n)
+{
+    if (!n) return 0;
+    size_t o = 0, start = 0, space = SIZE_MAX, lines = 1;
+    out[0] = '\0';
+    for (const char *p = text; *p && o + 2 < n; p++) {
+        if (*p == '\n') {
+            out[o++] = '\n';
+            start = o;
+            space = SIZE_MAX;
+            lines++;
+            continue;
+        }
+        out[o++] = *p;
+        out[o] = '\0';
+        if (*p == ' ') {
+            space = o - 1;
+            continue;
+        }
+        while (o - start > 1 && fp_render_text_width(out + start, scale) > max_px) {
+            if (space != SIZE_MAX && space > start) { /* at the last space */
+                out[space] = '\n';
+                start = space + 1;
+            } else { /* a word longer than the line: its last character to a new line */
+                if (o + 2 >= n) {
+                    out[--o] = '\0';
+                    return lines;
+                }
+                out[o] = out[o - 1];
+                out[o - 1] = '\n';
+                start = o++;
+                out[o] = '\0';
+            }
+            space = SIZE_MAX;
+            lines++;
+        }
+    }
+    out[o] = '\0';
+    return lines;
+}
+
+/* ---- the message stack ------------------------------------------------------------------ */
+
+static bool kept_kind(int kind) { return kind == FP_HUD_TAKE || kind == FP_HUD_SETTING; }
+
+static void drop_expired(fp_hud_msgs *s, int64_t now)
+{
+    for (size_t i = 0; i < s->count;) {
+        if (s->m[i].until <= now) s->m[i] = s->m[--s->count];
+        else i++;
+    }
+}
+
+void fp_hud_say(fp_hud_msgs *s, int kind, int64_t now, const char *text)
+{
+    if (kind < 0 || kind >= FP_HUD_KINDS) kind = FP_HUD_INFO;
+    drop_expired(s, now);
+    fp_hud_msg *slot = NULL;
+    for (size_t i = 0; i < s->count && !slot; i++)
+        if (s->m[i].kind == kind && (kept_kind(kind) || !strncmp(s->m[i].text, text, FP_HUD_MSG_LEN - 1)))
+            slot = &s->m[i];
+    if (!slot && s->count < FP_HUD_MSGS) slot = &s->m[s->count++];
+    if (!slot) { /* full: the oldest fading message makes room, else the oldest */
+        fp_hud_msg *oldest = NULL, *oldest_fading = NULL;
+        for (size_t i = 0; i < s->count; i++) {
+            fp_hud_msg *m = &s->m[i];
+            if (!oldest || m->seq < oldest->seq) oldest = m;
+            if (!kept_kind(m->kind) && (!oldest_fading || m->seq < oldest_fading->seq)) oldest_fading = m;
+        }
+        slot = oldest_fading ? oldest_fading : oldest;
+    }
+    slot->kind = kind;
+    slot->seq = s->next_seq++;
+    slot->until = kept_kind(kind) ? INT64_MAX
+                                  : now + (int64_t)((kind == FP_HUD_NOTE ? FP_HUD_NOTE_S : FP_HUD_INFO_S) * 1e9);
+    snprintf(slot->text, sizeof slot->text, "%s", text);
+}
+
+static int by_seq(const void *a, const void *b)
+{
+    const fp_hud_msg *x = *(const fp_hud_msg *const *)a, *y = *(const fp_hud_msg *const *)b;
+    return x->seq < y->seq ? -1 : x->seq > y->seq;
+}
+
+size_t fp_hud_live(fp_hud_msgs *s, int64_t now, const fp_hud_msg *out[FP_HUD_MSGS],
+                   float alpha[FP_HUD_MSGS])
+{
+    drop_expired(s, now);
+    for (size_t i = 0; i < s->count; i++) out[i] = &s->m[i];
+    qsort(out, s->count, sizeof *out, by_seq);
+    for (size_t i = 0; alpha && i < s->count; i++) {
+        double left = out[i]->until == INT64_MAX ? 1.0 : (double)(out[i]->until - now) * 1e-9;
+        alpha[i] = (float)fmin(1.0, fmax(0.0, left));
+    }
+    return s->count;
+}
+
+float fp_hud_draw_msgs(fp_hud_msgs *s, fp_render *r, int w, int h, float x, float y,
+                       float max_px, float scale, const float color[4], int64_t now)
+{
+    const fp_hud_msg *live[FP_HUD_MSGS];
+    float alpha[FP_HUD_MSGS];
+    size_t n = fp_hud_live(s, now, live, alpha);
+    float y0 = y;
+    char wrapped[2 * FP_HUD_MSG_LEN];
+    for (size_t i = 0; i < n; i++) {
+        float c[4] = {color[0], color[1], color[2], color[3] * alpha[i]};
+        fp_hud_wrap(live[i]->text, max_px, scale, wrapped, sizeof wrapped);
+        y += fp_render_text(r, w, h, x, y, scale, wrapped, c) + 2 * scale;
+    }
+    return y - y0;
+}
+
+/* ---- the key list ----------------------------------------------------------------------- */
+
+static const float backdrop[4] = {0.03f, 0.035f, 0.05f, 0.93f};
+
+const float *fp_hud_backdrop_color(void) { return backdrop; }
+
+void fp_hud_draw_help(fp_render *r, int w, int h, float scale, const char *text,
+                      const float color[4])
+{
+    size_t n = strlen(text) * 2 + 64;
+    char *wrapped = malloc(n);
+    if (!wrapped) return;
+    float pad = 10 * scale;
+    fp_hud_wrap(text, (float)w - 4 * pad, scale, wrapped, n);
+    float tw = fp_render_text_width(wrapped, scale), th = fp_render_text_height(wrapped, scale);
+    float bw = tw + 2 * pad, bh = th + 2 * pad;
+    float x = floorf(((float)w - bw) / 2), y = floorf(fmaxf(4, ((float)h - bh) / 2));
+    fp_render_rect(r, w, h, x, y, bw, bh, backdrop);
+    fp_render_text(r, w, h, x + pad, y + pad, scale, wrapped, color);
+    free(wrapped);
+}

@@ -1,0 +1,98 @@
+/* hud.h: the live viewer's HUD parts (internal to ui/viewer): the state badge, the message
+ * stack and the key list's backdrop, and the word wrap they share (issue 53 item 1).
+ *
+ * The badge: a filled box at the top left in the state's colour (fp_hud_badge_color) with
+ * the state's word (REC also its timecode) in near-black, so that the state reads at a
+ * glance: idle grey, committed teal, ENGAGED green, LIMITED amber (the fold-over guard held
+ * the gesture back), PAUSED white, REC red, PLAYING blue, REVIEW purple.
+ *
+ * The message stack (fp_hud_msgs): a few lines under the HUD's figures, oldest first, each
+ * wrapped to the window's width. Confirmations (kinds FP_HUD_TAKE, FP_HUD_SETTING: a take
+ * written, a mapping set) stay until a message of their own kind replaces them; notes
+ * (FP_HUD_NOTE: the session's log lines) and answers (FP_HUD_INFO: a key's reply, an error)
+ * stay FP_HUD_NOTE_S / FP_HUD_INFO_S seconds, fading out over the last one. A note never
+ * pushes out a confirmation: when the stack is full the oldest fading message goes.
+ *
+ * Everything here but the drawing functions is plain C (no GL): the wrap and the stack are
+ * tested without a display (tests/viewer/test_hud_msgs.c). Drawing needs the renderer's
+ * context current. Threads: the viewer's.
+ */
+#ifndef FP_UI_HUD_H
+#define FP_UI_HUD_H
+
+#include "render.h"
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+/** The badge's states, in the order the viewer picks them (the first that holds). */
+typedef enum fp_hud_badge {
+    FP_HUD_IDLE, FP_HUD_COMMITTED, FP_HUD_ENGAGED, FP_HUD_LIMITED, FP_HUD_PAUSED,
+    FP_HUD_REC, FP_HUD_PLAYING, FP_HUD_REVIEW, FP_HUD_BADGES
+} fp_hud_badge;
+
+/** The state's word ("idle", "committed", "ENGAGED", "LIMITED", "PAUSED", "REC",
+ *  "PLAYING", "REVIEW"); "?" out of range. Static storage. */
+const char *fp_hud_badge_name(fp_hud_badge b);
+/** The badge's fill colour, RGBA in [0, 1] (alpha 1: drawn exactly, for pixel checks);
+ *  idle's for a value out of range. Static storage. */
+const float *fp_hud_badge_color(fp_hud_badge b);
+
+/** Draw the badge at pixel (x, y) from the top left of a w x h framebuffer: the state's
+ *  word, then `detail` (the REC timecode; NULL or "" for none), on the state's colour, text
+ *  scaled by `scale` (1 or 2). Returns the box's height in pixels. */
+float fp_hud_draw_badge(fp_render *r, int w, int h, float x, float y, float scale,
+                        fp_hud_badge b, const char *detail);
+
+/** Word wrap for stb_easy_font text at `scale`: copy text to out (n bytes, always
+ *  terminated), breaking lines (at spaces, or inside a word longer than a line) so that no
+ *  line is wider than max_px pixels (fp_render_text_width); the text's own newlines are
+ *  kept. A line never holds less than one character. Returns the number of lines written. */
+size_t fp_hud_wrap(const char *text, float max_px, float scale, char *out, size_t n);
+
+enum { FP_HUD_TAKE, FP_HUD_SETTING, FP_HUD_NOTE, FP_HUD_INFO, FP_HUD_KINDS };
+#define FP_HUD_MSGS 6          /* lines of the stack at most */
+#define FP_HUD_MSG_LEN 512     /* bytes a message keeps (longer ones are cut) */
+#define FP_HUD_NOTE_S 6.0      /* seconds a note stays (the last one fading) */
+#define FP_HUD_INFO_S 4.0      /* seconds an answer stays */
+
+typedef struct fp_hud_msg {
+    int kind;                  /* FP_HUD_TAKE ... FP_HUD_INFO */
+    int64_t until;             /* host time (ns) it is gone; INT64_MAX: kept (confirmations) */
+    uint64_t seq;              /* arrival order */
+    char text[FP_HUD_MSG_LEN];
+} fp_hud_msg;
+
+typedef struct fp_hud_msgs {
+    fp_hud_msg m[FP_HUD_MSGS];
+    size_t count;              /* entries in use (in no particular order; seq orders them) */
+    uint64_t next_seq;
+} fp_hud_msgs;
+
+/** Add a message of `kind` at host time now (ns): a confirmation replaces the one of its
+ *  kind; the same text as a live message of its kind renews that one; otherwise it is
+ *  appended, the oldest fading message (else the oldest) making room when the stack is full.
+ *  Expired messages go first. A kind out of range counts as FP_HUD_INFO. */
+void fp_hud_say(fp_hud_msgs *s, int kind, int64_t now, const char *text);
+
+/** The live messages at now, oldest first: up to FP_HUD_MSGS pointers into s written to out;
+ *  alpha (may be NULL) gets each one's opacity in [0, 1] (1 until its last second). Expired
+ *  messages are dropped. Returns how many. */
+size_t fp_hud_live(fp_hud_msgs *s, int64_t now, const fp_hud_msg *out[FP_HUD_MSGS],
+                   float alpha[FP_HUD_MSGS]);
+
+/** Draw the live messages at (x, y), each wrapped to max_px, in `color` faded by its alpha;
+ *  returns the height drawn. */
+float fp_hud_draw_msgs(fp_hud_msgs *s, fp_render *r, int w, int h, float x, float y,
+                       float max_px, float scale, const float color[4], int64_t now);
+
+/** The key list centred in the window on a near-opaque dark backdrop (so that it reads over
+ *  the face), text wrapped to the window. */
+void fp_hud_draw_help(fp_render *r, int w, int h, float scale, const char *text,
+                      const float color[4]);
+
+/** The backdrop's colour (RGBA): the test's reference. Static storage. */
+const float *fp_hud_backdrop_color(void);
+
+#endif
