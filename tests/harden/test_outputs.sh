@@ -41,7 +41,7 @@ landed=0 finished=0
 for attempt in $(seq 1 12); do
     old=$(md5sum <"$out")
     "$fp" run --quiet --mesh "$mesh" --input "replay:$rec,fast=1" --duration "0.$attempt" \
-        --out "$out" >/dev/null 2>&1 &
+        --out "$out" --force >/dev/null 2>&1 &
     pid=$!
     hit=0
     while kill -0 $pid 2>/dev/null; do
@@ -90,14 +90,14 @@ echo precious >"$tmp/rec/take.log"
 for n in 1 2; do
     "$fp" run --quiet --mesh "$data/faces/mediapipe-canonical/canonical_face_model.obj" \
         --input "replay:$rec,fast=1,record=$tmp/rec/take.log" --duration 0.2 \
-        --out "$tmp/rec/out.obj" >/dev/null 2>"$tmp/rec.err" || fail "record run $n failed: $(cat "$tmp/rec.err")"
+        --out "$tmp/rec/out.obj" --force >/dev/null 2>"$tmp/rec.err" || fail "record run $n failed: $(cat "$tmp/rec.err")"
     grep -q "recording to $tmp/rec/take-$n.log" "$tmp/rec.err" || fail "record run $n did not say it records to take-$n.log: $(cat "$tmp/rec.err")"
     head -1 "$tmp/rec/take-$n.log" 2>/dev/null | grep -q "^# facepuppet-eventlog 1" || fail "take-$n.log is not an event log"
 done
 [[ $(cat "$tmp/rec/take.log") == precious ]] || fail "record= overwrote an existing file"
 "$fp" run --quiet --mesh "$data/faces/mediapipe-canonical/canonical_face_model.obj" \
     --input "replay:$rec,fast=1,record=$tmp/rec/take.log,force=1" --duration 0.2 \
-    --out "$tmp/rec/out.obj" >/dev/null 2>"$tmp/rec.err" || fail "force=1 run failed: $(cat "$tmp/rec.err")"
+    --out "$tmp/rec/out.obj" --force >/dev/null 2>"$tmp/rec.err" || fail "force=1 run failed: $(cat "$tmp/rec.err")"
 head -1 "$tmp/rec/take.log" | grep -q "^# facepuppet-eventlog 1" || fail "force=1 did not overwrite take.log"
 [[ ! -e $tmp/rec/take-3.log ]] || fail "force=1 took a new name"
 echo "3. record= never overwrites: take.log kept, take-1.log and take-2.log taken and named; force=1 overwrote"
@@ -147,7 +147,7 @@ echo old >"$sp/real.obj"
 ln -s real.obj "$sp/link.obj"
 ln -s new.obj "$sp/dangling.obj"
 for l in link dangling; do
-    "$fp" run --quiet --mesh "$ict" --input "replay:$rec,fast=1" --duration 0.2 --out "$sp/$l.obj" \
+    "$fp" run --quiet --mesh "$ict" --input "replay:$rec,fast=1" --duration 0.2 --out "$sp/$l.obj" --force \
         >/dev/null 2>"$tmp/sp.err" || fail "--out $l.obj: $(cat "$tmp/sp.err")"
     [[ -L $sp/$l.obj ]] || fail "--out $l.obj replaced the symbolic link"
 done
