@@ -15,7 +15,7 @@ void fp_session_take_init(fp_session_take *t, const fp_session_take_options *opt
 {
     memset(t, 0, sizeof *t);
     if (opt) t->opt = *opt;
-    if (!t->opt.slate) t->opt.slate = "take";
+    if (!t->opt.slate) t->opt.slate = FP_TAKE_DEFAULT_SLATE;
     if (!t->opt.rate.num || !t->opt.rate.den) t->opt.rate = (fp_take_rate){60, 1};
     t->so = so;
 }

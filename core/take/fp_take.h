@@ -52,6 +52,7 @@ extern "C" {
 #define FP_TAKE_VERSION_MINOR 1   /* 1.1: a frame's channels are every rig channel as posed */
 #define FP_TAKE_EXTENSION ".fptake"
 #define FP_TAKE_SLATE_MAX 64      /* bytes of a slate name, NUL included */
+#define FP_TAKE_DEFAULT_SLATE "scene1" /* a slate none was given: "scene1 take 2", scene1_T002.fptake */
 
 /* ------------------------------------------------------------------------------------- */
 /* Frame rate and SMPTE timecode                                                           */

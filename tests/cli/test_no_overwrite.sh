@@ -39,7 +39,7 @@ echo "stale" >old.obj
 refused old.obj "${run[@]}" -q -o old.obj
 # (refused before any work: no take, no frames)
 expect 73 "${run[@]}" -q -o old.obj --take-dir takes
-[ ! -e takes/take_T001.fptake ] || fail "a refused run recorded a take"
+[ ! -e takes/scene1_T001.fptake ] || fail "a refused run recorded a take"
 expect 0 "${run[@]}" -q -o old.obj --force
 [ "$(head -c 5 old.obj)" != "stale" ] || fail "--force did not overwrite old.obj"
 echo "stale" >old.pc2

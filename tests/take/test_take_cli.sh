@@ -131,7 +131,7 @@ grep -q "the take was not written whole" "$tmp/full.err" || fail "no message for
 # first frame chunk: play and export exit 65 naming it, before any output
 "$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv,fast=1" --take-dir "$tmp/nan-takes" \
     -o "$tmp/nan-run.obj" -q >/dev/null 2>&1 || fail "the NaN test's run exited $?"
-patch=(python3 - "$tmp/nan-takes/take_T001.fptake" "$tmp/nan.fptake" "$tmp/cut.fptake")
+patch=(python3 - "$tmp/nan-takes/scene1_T001.fptake" "$tmp/nan.fptake" "$tmp/cut.fptake")
 "${patch[@]}" <<'PY' || fail "could not patch the take"
 import struct, sys, zlib
 b = bytearray(open(sys.argv[1], 'rb').read())
@@ -206,9 +206,9 @@ echo kept >"$tmp/q.log"
 cat "$tmp/quiet.err"
 ! grep -Eq "^facepuppet: (engine|contact): " "$tmp/quiet.err" || fail "run -q printed the engine's notes"
 grep -q "recording to $tmp/q-1.log instead" "$tmp/quiet.err" || fail "run -q left out an input's warning"
-grep -q "take $tmp/q-takes/take_T002.fptake: " "$tmp/quiet.err" || fail "run -q left out the take's line"
+grep -q "take $tmp/q-takes/scene1_T002.fptake: " "$tmp/quiet.err" || fail "run -q left out the take's line"
 grep -q "^frames [0-9]*, deforming" "$tmp/quiet.out" || fail "run -q left out the summary (stdout)"
-qt="$tmp/q-takes/take_T001.fptake"
+qt="$tmp/q-takes/scene1_T001.fptake"
 for cmd in "play $qt -o $tmp/qp.obj" "export $qt -f pc2 -o $tmp/qp.pc2"; do
     "$fp" $cmd >/dev/null 2>"$tmp/qp.err" || fail "$cmd exited $?"
     grep -q "^facepuppet: engine: " "$tmp/qp.err" || fail "$cmd: no engine notes without -q"

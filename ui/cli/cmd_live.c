@@ -49,7 +49,7 @@ static void usage(FILE *f)
         "                         the CPU, the reason said once\n"
         "      --vsync            wait for the display (default: never, swap interval 0)\n"
         "      --take-dir DIR     T (or the pedal's middle button) records takes in DIR\n"
-        "      --slate NAME       the takes' slate (default \"take\"); numbers go up per slate\n"
+        "      --slate NAME       the takes' slate (default \"scene1\"); numbers go up per slate\n"
         "      --countdown S      count S seconds down before a take starts\n"
         "  -h, --help             this text\n\n"
         "Keys: space pause, E engage, C commit, X cancel, Z undo, R reset, 1 anchored,\n"

@@ -51,7 +51,7 @@ static void usage(FILE *f)
         "      --take-dir DIR     record the run as a take in DIR (SLATE_TNNN.fptake; see\n"
         "                         facepuppet takes, play, --input take:FILE); its path,\n"
         "                         frames and timecode are said at the end, -q or not\n"
-        "      --slate NAME       the take's slate (default \"take\"); numbers go up per slate\n"
+        "      --slate NAME       the take's slate (default \"scene1\"); numbers go up per slate\n"
         "      --take-description TEXT  a line stored in the take's header\n"
         "      --budget MS        report a mapping process() slower than MS (default 2)\n\n"
         "The run steps on the recordings' own clock (frame k at t0 + k/fps), not the wall\n"

@@ -112,8 +112,8 @@ int fp_vtakes_stop(fp_vtakes *t, fp_session *s, char *msg, size_t n)
         snprintf(msg, n, "take %u not written whole: %s", res.take, err);
         return rc;
     }
-    snprintf(msg, n, "take %u: %llu frames, %llu dropped, %s - %s%s", res.take,
-             (unsigned long long)res.frames, (unsigned long long)res.dropped, in, out,
+    snprintf(msg, n, "take %u: %llu frames, %llu dropped, %s - %s, %s%s", res.take,
+             (unsigned long long)res.frames, (unsigned long long)res.dropped, in, out, res.path,
              res.frames ? "   V: review" : "");
     if (t->nblocks == FP_VTAKES_BLOCKS) {
         memmove(t->blocks, t->blocks + 1, sizeof t->blocks - sizeof t->blocks[0]);
