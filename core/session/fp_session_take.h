@@ -59,6 +59,10 @@ typedef struct fp_session_take_result {
     int error;                     /* 0, or the code that stopped the recording */
 } fp_session_take_result;
 
+/** The take's reach histogram: steps of 1/200 from 0 to 2 (200%), the last bin holding more. */
+#define FP_SESSION_TAKE_REACH_STEPS 200
+#define FP_SESSION_TAKE_REACH_BINS (2 * FP_SESSION_TAKE_REACH_STEPS + 1)
+
 typedef struct fp_session_take {
     fp_session_take_options opt;   /* copied at init */
     const fp_session_options *so;  /* the session's options (mapping, inputs) */
@@ -69,6 +73,13 @@ typedef struct fp_session_take {
     bool have_first;
     uint64_t frames;               /* frames offered to the recorder */
     char rig_buf[1024];            /* the session's rig path, for the header */
+    /* the take's reach (fp_take_reach, into its end chunk): a histogram of the touching
+     * vectors' reach in steps of 1/FP_SESSION_TAKE_REACH_STEPS (the last bin: that and
+     * more), filled on the session thread without allocation */
+    uint32_t reach_bins[FP_SESSION_TAKE_REACH_BINS];
+    uint64_t reach_vectors;
+    double reach_asked_max;        /* mesh units */
+    double mm_per_unit;            /* the session's, at start (0: unknown) */
 } fp_session_take;
 
 /** Keep the options (copied; their strings are the caller's) and the session options the

@@ -302,7 +302,7 @@ static void step_frame(fp_session *s, int64_t now_ns, fp_frame_stats *st)
 
 #undef FP_STAGE_END
     /* 7: the recorder. */
-    fp_record_step_end(&s->record, s->frame, now_ns, in.requested | s->actions, cs, s->inputs,
+    fp_record_step_end(&s->record, s->frame, now_ns, in.requested | s->actions, cs, st, s->inputs,
                        s->input_count, &s->log);
     s->actions = 0;
     s->frame++;
@@ -327,7 +327,7 @@ void fp_session_apply_controls(fp_session *s, int64_t now_ns, const fp_control_s
         fp_cg_reference_changed(&s->cg, NULL, SIZE_MAX);
     }
     engine_and_history(s, cs, st);
-    fp_record_step_end(&s->record, s->frame, now_ns, requested | s->actions, cs, s->inputs,
+    fp_record_step_end(&s->record, s->frame, now_ns, requested | s->actions, cs, st, s->inputs,
                        s->input_count, &s->log);
     s->actions = 0;
     s->frame++;

@@ -6,6 +6,7 @@
 #include "fp_mesh.h"
 
 #include <errno.h>
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 #include <time.h>
@@ -32,6 +33,23 @@ void fp_session_take_sink(void *user, const fp_frame_record *r)
                        r->controls};
     fp_take_recorder_push(t->rec, &f);
     t->frames++;
+    for (size_t i = 0; i < r->reach_count && i < FP_FRAME_REACH_MAX; i++) {
+        double b = floor((double)r->reach[i] * FP_SESSION_TAKE_REACH_STEPS + 0.5);
+        size_t k = !(b > 0) ? 0 : b >= FP_SESSION_TAKE_REACH_BINS - 1 ? FP_SESSION_TAKE_REACH_BINS - 1 : (size_t)b;
+        t->reach_bins[k]++;
+        t->reach_vectors++;
+    }
+    if (r->reach_count && r->reach_asked_max > t->reach_asked_max) t->reach_asked_max = r->reach_asked_max;
+}
+
+/* The q-quantile of the reach histogram (the bin's value, 1/FP_SESSION_TAKE_REACH_STEPS apart):
+ * the smallest bin whose running count reaches q of the whole, as fp_percentile's rank. */
+static double reach_quantile(const fp_session_take *t, double q)
+{
+    uint64_t want = (uint64_t)floor(q * (double)(t->reach_vectors - 1)) + 1, run = 0;
+    for (size_t k = 0; k < FP_SESSION_TAKE_REACH_BINS; k++)
+        if ((run += t->reach_bins[k]) >= want) return (double)k / FP_SESSION_TAKE_REACH_STEPS;
+    return (double)(FP_SESSION_TAKE_REACH_BINS - 1) / FP_SESSION_TAKE_REACH_STEPS;
 }
 
 bool fp_session_take_recording(const fp_session_take *t) { return t->rec != NULL; }
@@ -95,6 +113,10 @@ int fp_session_take_start(fp_session_take *t, const fp_session *s, int64_t origi
     h->description = t->opt.description;
     t->have_first = false;
     t->frames = 0;
+    memset(t->reach_bins, 0, sizeof t->reach_bins);
+    t->reach_vectors = 0;
+    t->reach_asked_max = 0;
+    t->mm_per_unit = fp_session_head(s)->mm_per_unit;
     t->origin_ns = origin_ns;
     rc = fp_take_recorder_start(t->opt.dir, h, &t->opt.recorder, &t->rec, err, errlen);
     fp_spec_clear(&spec);
@@ -123,6 +145,11 @@ int fp_session_take_stop(fp_session_take *t, fp_session_take_result *res, char *
     if (res) {
         snprintf(res->path, sizeof res->path, "%s", fp_take_recorder_path(t->rec));
         res->take = fp_take_recorder_take(t->rec);
+    }
+    if (t->reach_vectors) {
+        fp_take_reach reach = {t->reach_vectors, reach_quantile(t, 0.5), reach_quantile(t, 0.1),
+                               t->mm_per_unit > 0 ? t->reach_asked_max * t->mm_per_unit : 0};
+        fp_take_recorder_set_reach(t->rec, &reach);
     }
     fp_take_recorder_status st;
     int rc = fp_take_recorder_close(&t->rec, &st, err, errlen);

@@ -1,6 +1,8 @@
 /* Step 7 of the frame: the frame's record to the sink; watching record=FILE writers. */
 #include "step_record.h"
 
+#include "fp_session.h"
+
 #include <stdlib.h>
 #include <string.h>
 
@@ -41,11 +43,13 @@ void fp_record_step_event(fp_record_step *r, const fp_event *ev)
 }
 
 void fp_record_step_end(fp_record_step *r, uint64_t frame, int64_t time_ns, uint32_t requested,
-                        const fp_control_set *controls, fp_input_instance *inputs, size_t n,
-                        const fp_slog *log)
+                        const fp_control_set *controls, const struct fp_frame_stats *st,
+                        fp_input_instance *inputs, size_t n, const fp_slog *log)
 {
     if (r->sink) {
-        fp_frame_record rec = {frame, time_ns, r->events, r->count, r->lost, requested, controls};
+        fp_frame_record rec = {frame, time_ns, r->events, r->count, r->lost, requested, controls,
+                               st ? st->reach : NULL, st ? st->reach_vectors : 0,
+                               st ? st->reach_asked_max : 0};
         r->sink(r->user, &rec);
     }
     for (size_t i = 0; i < n && i < sizeof r->reported / sizeof r->reported[0]; i++) {

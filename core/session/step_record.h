@@ -18,6 +18,8 @@
 #include "fp_plugin_host.h"
 #include "session_log.h"
 
+struct fp_frame_stats; /* fp_session.h */
+
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -35,6 +37,9 @@ typedef struct fp_frame_record {
     size_t events_lost;              /* events drained but not kept (out of memory) */
     uint32_t requested;              /* fp_intent bits requested (keys, pedal) this frame */
     const fp_control_set *controls;  /* the control set the engine was given (after the rig) */
+    const float *reach;              /* the frame's reach per touching vector (skin_reach.h) */
+    size_t reach_count;
+    double reach_asked_max;          /* their longest ask, mesh units */
 } fp_frame_record;
 
 /** The sink: called once per frame on the session thread after the frame; must not block,
@@ -59,11 +64,12 @@ void fp_record_step_begin(fp_record_step *r);
 /** Keep one drained event for this frame's record (nothing without a sink). */
 void fp_record_step_event(fp_record_step *r, const fp_event *ev);
 
-/** End of the frame: hand the record to the sink (if any), and log the first error of each
- *  input's record=FILE recording (n inputs). */
+/** End of the frame: hand the record to the sink (if any; with the frame's reach from st,
+ *  none where st is NULL),
+ *  and log the first error of each input's record=FILE recording (n inputs). */
 void fp_record_step_end(fp_record_step *r, uint64_t frame, int64_t time_ns, uint32_t requested,
-                        const fp_control_set *controls, fp_input_instance *inputs, size_t n,
-                        const fp_slog *log);
+                        const fp_control_set *controls, const struct fp_frame_stats *st,
+                        fp_input_instance *inputs, size_t n, const fp_slog *log);
 
 #ifdef __cplusplus
 }

@@ -218,6 +218,22 @@ int fp_take_writer_add(fp_take_writer *w, const fp_take_frame *frame, char *err,
  *  fp_take_writer_add. */
 int fp_take_writer_add_encoded(fp_take_writer *w, const void *record, size_t size, char *err,
                                size_t errlen);
+/** How far the skin followed the fingertips over a take (issue 51; core/session/skin_reach.h):
+ *  the control vectors of its frames that started on the skin and asked to move, each one's
+ *  reach (how far the skin vertex nearest its start moved over how far it was asked to), as
+ *  their median and 10th percentile (fractions, 1 = all the way), and the longest ask in mm
+ *  (0 where the scale is unknown). vectors = 0: none (a take without touching fingertips, or
+ *  one written before the reach was stored). Stored in the TAIL chunk as
+ *  "reach":{"vectors":N,"median":M,"p10":P,"longest_drag_mm":L}. */
+typedef struct fp_take_reach {
+    uint64_t vectors;
+    double median, p10;
+    double longest_drag_mm;
+} fp_take_reach;
+
+/** The reach the end chunk will store (copied; vectors = 0 stores none). Before close. */
+void fp_take_writer_set_reach(fp_take_writer *w, const fp_take_reach *reach);
+
 /** Write the frames buffered so far as one chunk (nothing if none). Returns 0 or the write
  *  error (-ENOSPC, -EIO, ...), after which the writer only closes. */
 int fp_take_writer_flush(fp_take_writer *w, char *err, size_t errlen);
@@ -279,6 +295,10 @@ const char *fp_take_recorder_error(const fp_take_recorder *rec);
 const char *fp_take_recorder_path(const fp_take_recorder *rec);
 uint32_t fp_take_recorder_take(const fp_take_recorder *rec);
 
+/** [main-thread] The reach the take's end chunk will store (fp_take_writer_set_reach), set
+ *  before fp_take_recorder_close; the recorder thread does not read it. */
+void fp_take_recorder_set_reach(fp_take_recorder *rec, const fp_take_reach *reach);
+
 /** [main-thread] Stop: the thread writes every frame queued before the call, the end chunk
  *  (with the dropped count), closes the file and is joined; *st gets the final counters
  *  (may be NULL). Returns 0, or the error that stopped the recording (-ENOSPC, -EIO...)
@@ -305,6 +325,7 @@ typedef struct fp_take_summary {
     uint64_t cut_offset;       /* byte offset of the first damaged or missing byte */
     uint64_t file_size;
     unsigned version_major, version_minor;   /* the file's format version (signature) */
+    fp_take_reach reach;       /* from the end chunk (vectors = 0: none stored) */
 } fp_take_summary;
 
 /** Open a take: check the signature and header chunk, then scan every chunk (magic, type,

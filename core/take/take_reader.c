@@ -230,6 +230,17 @@ static int read_tail(fp_take_reader *r, chunk_view *cv, uint64_t off)
         r->sum.dropped = (uint64_t)v->valuedouble;
     if (cJSON_IsNumber(v = cJSON_GetObjectItemCaseSensitive(o, "status")))
         r->sum.end_status = (int)v->valuedouble;
+    const cJSON *re = cJSON_GetObjectItemCaseSensitive(o, "reach"), *n, *md, *p, *l;
+    if (cJSON_IsObject(re) && cJSON_IsNumber(n = cJSON_GetObjectItemCaseSensitive(re, "vectors")) &&
+        cJSON_IsNumber(md = cJSON_GetObjectItemCaseSensitive(re, "median")) &&
+        cJSON_IsNumber(p = cJSON_GetObjectItemCaseSensitive(re, "p10")) && n->valuedouble >= 1 &&
+        n->valuedouble < 1e18 && isfinite(md->valuedouble) && isfinite(p->valuedouble)) {
+        r->sum.reach.vectors = (uint64_t)n->valuedouble;
+        r->sum.reach.median = md->valuedouble;
+        r->sum.reach.p10 = p->valuedouble;
+        l = cJSON_GetObjectItemCaseSensitive(re, "longest_drag_mm");
+        r->sum.reach.longest_drag_mm = cJSON_IsNumber(l) && isfinite(l->valuedouble) ? l->valuedouble : 0;
+    }
     cJSON_Delete(o);
     return 0;
 }

@@ -47,7 +47,13 @@ struct fp_take_recorder {
     pthread_t thread;
     bool joined;
     char errmsg[512];
+    fp_take_reach reach;   /* main thread: for the end chunk (fp_take_recorder_set_reach) */
 };
+
+void fp_take_recorder_set_reach(fp_take_recorder *rec, const fp_take_reach *reach)
+{
+    if (rec && reach) rec->reach = *reach;
+}
 
 static size_t pad8(size_t n) { return (n + 7) & ~(size_t)7; }
 
@@ -226,6 +232,7 @@ int fp_take_recorder_close(fp_take_recorder **rp, fp_take_recorder_status *st, c
     uint64_t on_disk = take_writer_frames(rec->w);
     uint64_t will_be = on_disk + (error ? 0 : fp_take_writer_pending(rec->w));
     char msg[512] = "";
+    fp_take_writer_set_reach(rec->w, &rec->reach); /* (the thread is joined: the writer is ours) */
     int rc = fp_take_writer_close(&rec->w, refused + pushed - will_be, error, msg, sizeof msg);
     if (!error && rc) {
         error = rc;

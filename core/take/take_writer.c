@@ -87,7 +87,13 @@ struct fp_take_writer {
     bool any_frame;
     int error;
     char errmsg[512];       /* the write error's message */
+    fp_take_reach reach;    /* for the TAIL (vectors = 0: none) */
 };
+
+void fp_take_writer_set_reach(fp_take_writer *w, const fp_take_reach *reach)
+{
+    if (w && reach) w->reach = *reach;
+}
 
 const char *fp_take_writer_path(const fp_take_writer *w) { return w->path; }
 uint32_t fp_take_writer_take(const fp_take_writer *w) { return w->take; }
@@ -357,6 +363,13 @@ int fp_take_writer_close(fp_take_writer **wp, uint64_t dropped, int status, char
         cJSON_AddStringToObject(o, "timecode_out", buf);
         snprintf(buf, sizeof buf, "%" PRId64, w->last_time_ns);
         cJSON_AddStringToObject(o, "last_time_ns", buf);
+        if (w->reach.vectors) {
+            cJSON *r = cJSON_AddObjectToObject(o, "reach");
+            cJSON_AddNumberToObject(r, "vectors", (double)w->reach.vectors);
+            cJSON_AddNumberToObject(r, "median", w->reach.median);
+            cJSON_AddNumberToObject(r, "p10", w->reach.p10);
+            cJSON_AddNumberToObject(r, "longest_drag_mm", w->reach.longest_drag_mm);
+        }
         char *text = cJSON_PrintUnformatted(o);
         cJSON_Delete(o);
         rc = write_json_chunk(w, TAKE_TYPE_TAIL, text, msg, sizeof msg);

@@ -3,6 +3,7 @@
 #define _GNU_SOURCE
 #include "fp_record.h"
 #include "log_capture.h"
+#include "fp_session.h"
 #include "step_record.h"
 
 #include <errno.h>
@@ -54,7 +55,14 @@ static void test_sink(void **state)
             fp_event ev = button(k);
             fp_record_step_event(&r, &ev);
         }
-        fp_record_step_end(&r, (uint64_t)f, 5000 + f, FP_INTENT_ENGAGE, &cs, NULL, 0, NULL);
+        fp_frame_stats st = {0};
+        st.reach_vectors = (size_t)f;
+        st.reach[0] = 0.5f;
+        st.reach_asked_max = 2.0 * f;
+        fp_record_step_end(&r, (uint64_t)f, 5000 + f, FP_INTENT_ENGAGE, &cs, &st, NULL, 0, NULL);
+        assert_int_equal(got.reach_count, f); /* the frame's reach, for the take */
+        assert_true(got.reach_asked_max == 2.0 * f);
+        if (f) assert_true(got.reach[0] == 0.5f);
         assert_int_equal(sink_calls, f + 1);
         assert_int_equal(got.frame, f);
         assert_int_equal(got.time_ns, 5000 + f);
@@ -69,7 +77,8 @@ static void test_sink(void **state)
         fp_event ev = button(1);
         fp_record_step_event(&r, &ev);
     }
-    fp_record_step_end(&r, 9, 0, 0, &cs, NULL, 0, NULL);
+    fp_record_step_end(&r, 9, 0, 0, &cs, NULL, NULL, 0, NULL);
+    assert_int_equal(got.reach_count, 0);
     assert_int_equal(got.event_count, 1000);
     assert_int_equal(got.events_lost, 0);
     fp_record_step_free(&r);
@@ -138,10 +147,10 @@ static void test_recorder_write_error(void **state)
     log_capture cap = {0};
     fp_slog log = {capture_log, &cap};
     for (int tries = 0; tries < 2000 && !cap.count; tries++) {
-        fp_record_step_end(&r, 0, 0, 0, NULL, &in, 1, &log);
+        fp_record_step_end(&r, 0, 0, 0, NULL, NULL, &in, 1, &log);
         usleep(1000);
     }
-    fp_record_step_end(&r, 1, 0, 0, NULL, &in, 1, &log);
+    fp_record_step_end(&r, 1, 0, 0, NULL, NULL, &in, 1, &log);
     assert_int_equal(cap.count, 1);
     assert_int_equal(cap.level, FP_LOG_ERROR);
     assert_string_equal(cap.source, "glove");

@@ -29,6 +29,20 @@ same_frames() {
     echo "$n frames byte-identical"
 }
 
+# ---- 0. the take stores how far the skin followed the fingertips (issue 51) ----------------
+# HandSplay grabs the forehead (no rig): info prints the take's reach, run's own figures
+"$fp" run "${pd[@]}" --rig none --mesh "$mesh" --input "replay:$(dirname "$csv")/HandSplay-110fps_joints_mm.csv" \
+    --take-dir "$tmp/reach-takes" -o "$tmp/reach.obj" -q >"$tmp/reach.out" 2>"$tmp/reach.err" ||
+    { cat "$tmp/reach.err"; fail "run (reach) exited $?"; }
+"$fp" info "$tmp/reach-takes/scene1_T001.fptake" >"$tmp/info.out" || fail "info exited $?"
+reach_of() { sed -n 's/.*the skin followed the fingertips \([0-9]*\)% (median over \([0-9]*\) touching vectors, 10th percentile \([0-9]*\)%.*/\1 \2 \3/p' "$1" | head -1; }
+r_run=$(reach_of "$tmp/reach.out") r_take=$(reach_of "$tmp/info.out")
+[ -n "$r_run" ] || { cat "$tmp/reach.out"; fail "run printed no reach"; }
+[ -n "$r_take" ] || { cat "$tmp/info.out"; fail "info shows no reach for the take"; }
+python3 -c "import sys; a=list(map(int,sys.argv[1].split())); b=list(map(int,sys.argv[2].split())); sys.exit(not (a[1]==b[1] and abs(a[0]-b[0])<=1 and abs(a[2]-b[2])<=1))" "$r_run" "$r_take" ||
+    fail "the take's reach ($r_take: median %, vectors, p10 %) is not run's ($r_run)"
+echo "0. reach: run $r_run, the take $r_take (median %, touching vectors, p10 %)"
+
 # ---- 1. record, play ----------------------------------------------------------------------
 "$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv" --speed 3 --duration 0.8 --take-dir "$tmp/takes" \
     --slate clap --take-description "three claps, test" --frames-out "$tmp/run" \
