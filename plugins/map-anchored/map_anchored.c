@@ -228,7 +228,7 @@ static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *o
     out->active = true;
     /* a drag that carries the skin far widens the support (fp_drag_radius) */
     out->radius = fp_drag_radius(in->radius, a->widen, (const float (*)[3])a->rest_of,
-                                 (const float (*)[3])out->end, a->count);
+                                 (const float (*)[3])out->start, (const float (*)[3])out->end, a->count);
     bool commit = (in->requested & FP_INTENT_COMMIT) ||
                   (a->automatic && !(out->intents & FP_INTENT_ENGAGE) && !still_near);
     if (commit) {

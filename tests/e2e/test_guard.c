@@ -299,7 +299,8 @@ static void five_finger_pull(double extent, bool contact_guard, double widen)
         for (int i = 0; i < 5; i++)
             for (int a = 0; a < 3; a++) cs.end[i][a] = cs.start[i][a] + (float)(dir[a] * pull * f / 10);
         /* the anchored mapping's support for this drag (its key widen; 0: R) */
-        cs.radius = fp_drag_radius(R, widen, (const float (*)[3])cs.start, (const float (*)[3])cs.end, 5);
+        cs.radius = fp_drag_radius(R, widen, (const float (*)[3])cs.start, (const float (*)[3])cs.start,
+                                   (const float (*)[3])cs.end, 5);
         fp_frame_stats st;
         fp_session_apply_controls(s, fp_now_ns(), &cs, 0, &st);
         assert_true(st.active);

@@ -101,19 +101,23 @@ static inline void fp_clamp_vector(const float start[3], float end[3], double ma
 /** The support radius for a drag that carries the skin far: max(radius, d / widen), d the
  *  largest distance from a control vector's end point to where its skin was at rest
  *  (rest[i], n x 3 mesh units: the grabbed vertex's position in the loaded face; a vector
- *  with no known rest point gives its start point). A single Wendland map folds beyond a
+ *  with no known rest point gives its start point) or to its start point (start[i]: a drag
+ *  that pushes skin back toward its rest is still a drag from where it is). A single Wendland map folds beyond a
  *  drag of 0.47 R, and a composition of injective maps still turns the skin around a drag
  *  of a few R over on itself (the grabbed point runs ahead of a support that stays R wide);
  *  a support that grows with the drag makes the skin around follow, as clay does, with the
  *  same slope at any length. widen <= 0 keeps radius. Mesh units in and out; pure. */
 static inline double fp_drag_radius(double radius, double widen, const float (*rest)[3],
-                                    const float (*end)[3], size_t n)
+                                    const float (*start)[3], const float (*end)[3], size_t n)
 {
     if (!(widen > 0)) return radius;
     double r = radius;
     for (size_t i = 0; i < n; i++) {
         double d[3] = {end[i][0] - rest[i][0], end[i][1] - rest[i][1], end[i][2] - rest[i][2]};
-        double w = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) / widen;
+        double e[3] = {end[i][0] - start[i][0], end[i][1] - start[i][1], end[i][2] - start[i][2]};
+        double dd = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        double de = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+        double w = (dd > de ? dd : de) / widen;
         if (w > r) r = w;
     }
     return r;
