@@ -8,6 +8,7 @@
 
 #include <errno.h>
 #include <math.h>
+#include <alsa/asoundlib.h>
 #include <portaudio.h>
 #include <sndfile.h>
 #include <stdio.h>
@@ -62,6 +63,19 @@ void fp_soundtrack_free(fp_soundtrack *st)
 }
 
 /* ---- outputs ------------------------------------------------------------------------------ */
+
+/* ALSA's own error lines (a machine without a card logs dozens while PortAudio probes):
+ * kept off stderr, the project's libraries print nothing. */
+static void alsa_quiet(const char *file, int line, const char *fn, int err, const char *fmt, ...)
+{
+    (void)file, (void)line, (void)fn, (void)err, (void)fmt;
+}
+
+int fp_audio_pa_init(void)
+{
+    snd_lib_error_set_handler(alsa_quiet);
+    return Pa_Initialize() == paNoError ? 0 : -ENODEV;
+}
 
 typedef enum { OUT_NULL, OUT_FILE, OUT_DEVICE } out_kind;
 
@@ -120,7 +134,7 @@ int fp_audio_out_check(const char *spec, bool force, char *err, size_t errlen)
     if (!spec || !*spec) return fp_errorf(err, errlen, -EINVAL, "empty audio output (null, file:OUT.wav or a device)");
     if (!strcmp(spec, "null")) return 0;
     if (!strncmp(spec, "file:", 5)) return check_file(spec + 5, force, err, errlen);
-    if (Pa_Initialize() != paNoError)
+    if (fp_audio_pa_init())
         return fp_errorf(err, errlen, -ENODEV, "audio device '%s': no sound system (PortAudio)", spec);
     PaDeviceIndex d = find_device(spec, false);
     Pa_Terminate();
@@ -132,7 +146,7 @@ int fp_audio_out_check(const char *spec, bool force, char *err, size_t errlen)
 
 static int open_device(fp_audio_out *o, const char *spec, char *err, size_t errlen)
 {
-    if (Pa_Initialize() != paNoError)
+    if (fp_audio_pa_init())
         return fp_errorf(err, errlen, -ENODEV, "audio device '%s': no sound system (PortAudio)", spec);
     o->pa_up = true;
     PaDeviceIndex d = find_device(spec, false);

@@ -74,6 +74,10 @@ typedef struct fp_audio_out fp_audio_out;
  *  (no folder), -EACCES, -ENODEV (no such device, or no sound system). */
 int fp_audio_out_check(const char *spec, bool force, char *err, size_t errlen);
 
+/** Initialise PortAudio (Pa_Initialize) with ALSA's error lines kept off stderr. Returns 0
+ *  or -ENODEV; pair with Pa_Terminate. [main-thread] */
+int fp_audio_pa_init(void);
+
 /** Open the output for `channels` channels at `rate` Hz (fp_audio_out_check's rules; a file
  *  is written as a WAV of 32-bit floats, through a temporary name renamed at close). Returns
  *  0 and *out, or a negative code with err. */

@@ -132,7 +132,7 @@ int fp_ltc_read_file(const char *path, fp_ltc_info *info, char *err, size_t errl
 int fp_ltc_listen(const char *device, double seconds, fp_ltc_info *info, char *err, size_t errlen)
 {
     memset(info, 0, sizeof *info);
-    if (Pa_Initialize() != paNoError)
+    if (fp_audio_pa_init())
         return fp_errorf(err, errlen, -ENODEV, "LTC device '%s': no sound system (PortAudio)", device);
     PaDeviceIndex dev = paNoDevice;
     if (!strcmp(device, "default")) {
