@@ -82,8 +82,8 @@ static const char usage_text[] =
     "audio:FILE[,key=value...]  or  audio:mic[,device=NAME][,key=value...]\n"
     "  The loudness of a sound file (WAV, FLAC, OGG) or of a microphone drives a rig channel\n"
     "  (jaw.open): the jaw flap. A file is paced as a recording (speed=X, fast=1) and ends\n"
-    "  with it; the mic runs live. Keys: channel=NAME (jaw.open), attack=S (0.01),\n"
-    "  release=S (0.06), gate=DBFS (-40: quieter is silence), gain=G (2), ref=DBFS (the\n"
+    "  with it; the mic runs live. Keys: channel=NAME (jaw.open), attack=S (0.005),\n"
+    "  release=S (0.06), gate=DBFS (-40: quieter is silence), gain=G (4), ref=DBFS (the\n"
     "  file's loudest window; the mic: -12), window=S (0.01), min=V (0), max=V (1),\n"
     "  device=NAME (mic: 'default', an index or part of a name).\n";
 
@@ -430,7 +430,7 @@ static int audio_create(const fp_host *host, const char *arg, const fp_param *pa
         return -ENOMEM;
     }
     a->host = host;
-    a->p = (env_params){.attack_s = 0.01, .release_s = 0.06, .gate_db = -40, .gain = 2, .ref_db = -12,
+    a->p = (env_params){.attack_s = 0.005, .release_s = 0.06, .gate_db = -40, .gain = 4, .ref_db = -12,
                         .window_s = 0.01, .min = 0, .max = 1};
     snprintf(a->p.channel, sizeof a->p.channel, "jaw.open");
     snprintf(a->device, sizeof a->device, "default");
@@ -457,13 +457,13 @@ static int audio_create(const fp_host *host, const char *arg, const fp_param *pa
 static const fp_param_info audio_keys[] = {
     {.name = "channel", .type = FP_PARAM_STRING, .default_value = "jaw.open",
      .description = "the rig channel the loudness drives"},
-    {.name = "attack", .type = FP_PARAM_FLOAT, .min = 0, .max = 10, .default_value = "0.01", .unit = "s",
+    {.name = "attack", .type = FP_PARAM_FLOAT, .min = 0, .max = 10, .default_value = "0.005", .unit = "s",
      .description = "time constant of the rise"},
     {.name = "release", .type = FP_PARAM_FLOAT, .min = 0, .max = 10, .default_value = "0.06", .unit = "s",
      .description = "time constant of the fall"},
     {.name = "gate", .type = FP_PARAM_FLOAT, .min = -200, .max = 0, .default_value = "-40", .unit = "dBFS",
      .description = "quieter than this is silence"},
-    {.name = "gain", .type = FP_PARAM_FLOAT, .min = 0, .max = 1000, .default_value = "2",
+    {.name = "gain", .type = FP_PARAM_FLOAT, .min = 0, .max = 1000, .default_value = "4",
      .description = "the envelope's gain over the reference level"},
     {.name = "ref", .type = FP_PARAM_FLOAT, .min = -200, .max = 0, .default_value = "-12", .unit = "dBFS",
      .description = "reference level (a file: its loudest window unless given)"},
