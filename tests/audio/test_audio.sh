@@ -14,7 +14,8 @@
 #     equal the encoded ones (as libltc counted them).
 #  5. input-audio: run --input audio:speech.wav: jaw.open above 0.3 within two frames of each
 #     syllable's onset, below 0.1 in the silences (0.25 s after each syllable's end on); the
-#     check must fail for onsets moved 0.1 s early.
+#     check must fail for onsets moved 0.1 s early; `plugins check` passes input-audio (its
+#     channel events well-formed).
 # Usage: test_audio.sh PATH/TO/fp_audio_testtool (from the source root; FP_BUILD_DIR: build).
 # SPDX-License-Identifier: GPL-3.0-or-later
 set -u
@@ -110,4 +111,7 @@ cat "$tmp/jaw.err"
 "$tool" jaw "$tmp/jaw/take_T001.fptake" "$onsets" "$ends" || fail "the jaw does not follow the syllables"
 early=$(echo "$onsets" | awk -F, '{ printf "%.4f,%.4f,%.4f", $1 - 0.1, $2 - 0.1, $3 - 0.1 }')
 "$tool" jaw "$tmp/jaw/take_T001.fptake" "$early" "$ends" >/dev/null && fail "the jaw check passed onsets 0.1 s early"
+"$fp" plugins check "$build/lib/facepuppet/input-audio.so" --arg "$tmp/speech.wav" >"$tmp/check.out" 2>&1 ||
+    { cat "$tmp/check.out"; fail "plugins check of input-audio"; }
+grep -E "events|passed" "$tmp/check.out"
 echo "PASS"
