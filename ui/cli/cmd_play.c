@@ -73,6 +73,28 @@ static int play_audio_prepare(fp_app_audio *a, const fp_take_header *h, bool for
     return 0;
 }
 
+/* The summary line: the take, its timecodes, rating and description, what was played. */
+static void print_played(const char *take_path, const fp_take_reader *r, fp_app_reach *reach,
+                         double mm_per_unit, const uint64_t counts[3], const char *out)
+{
+    const fp_take_header *h = fp_take_reader_header(r);
+    char in[32], tcout[32];
+    fp_timecode_format(&h->timecode_in, in, sizeof in);
+    fp_timecode_format(&fp_take_reader_summary(r)->timecode_out, tcout, sizeof tcout);
+    char reach_text[200];
+    fp_app_reach_text(reach, mm_per_unit, reach_text, sizeof reach_text);
+    char rated[16] = "", desc[600] = ""; /* the take's rating and description, when set */
+    if (h->rating) snprintf(rated, sizeof rated, ", rated %d/5", h->rating);
+    if (h->description && h->description[0]) {
+        char clean[512];
+        snprintf(desc, sizeof desc, ", \"%s\"", fp_text_clean(h->description, clean, sizeof clean));
+    }
+    printf("played %s (%s take %u%s%s, %s - %s): frames %llu, deforming %llu, committed %llu%s%s%s\n",
+           take_path, h->slate, h->take, rated, desc, in, tcout, (unsigned long long)counts[0],
+           (unsigned long long)counts[1], (unsigned long long)counts[2], reach_text,
+           out ? "; wrote " : "", out ? out : "");
+}
+
 static int play_main(int argc, char **argv)
 {
     enum { OPT_FRAMES_OUT = 0x200, OPT_PLUGIN_DIR, OPT_EXPORT, OPT_FORCE };
@@ -207,21 +229,8 @@ static int play_main(int argc, char **argv)
                                             quiet, stdout)))
         goto done;
     if (!quiet) {
-        char in[32], tcout[32];
-        fp_timecode_format(&h->timecode_in, in, sizeof in);
-        fp_timecode_format(&fp_take_reader_summary(r)->timecode_out, tcout, sizeof tcout);
-        char reach_text[200];
-        fp_app_reach_text(&reach, fp_take_player_mm_per_unit(player), reach_text, sizeof reach_text);
-        char rated[16] = "", desc[600] = ""; /* the take's rating and description, when set */
-        if (h->rating) snprintf(rated, sizeof rated, ", rated %d/5", h->rating);
-        if (h->description && h->description[0]) {
-            char clean[512];
-            snprintf(desc, sizeof desc, ", \"%s\"", fp_text_clean(h->description, clean, sizeof clean));
-        }
-        printf("played %s (%s take %u%s%s, %s - %s): frames %llu, deforming %llu, committed %llu%s%s%s\n",
-               take_path, h->slate, h->take, rated, desc, in, tcout, (unsigned long long)frames,
-               (unsigned long long)active, (unsigned long long)commits, reach_text,
-               out ? "; wrote " : "", out ? out : "");
+        const uint64_t counts[3] = {frames, active, commits};
+        print_played(take_path, r, &reach, fp_take_player_mm_per_unit(player), counts, out);
     }
 done:
     if (status) fp_audio_out_abort(&audio.out);

@@ -62,10 +62,11 @@ static void usage(FILE *f)
         "clock: the same inputs and options give bit-identical meshes whatever --speed,\n"
         "speed=, fast=1 or the machine's load (--speed only changes how long it takes).\n"
         "  -h, --help             this text\n\n"
-        "Exit status: 0 done, 64 usage, 65 bad input data, 66 input missing, 73 output\n"
-        "not writable or existing without --force (66 also a soundtrack or LTC file missing\n"
-        "or unreadable, 64 an unknown audio device), 78 plugin missing or incompatible, or the mapping stopped for a\n"
-        "fault (it wrote past the host's arrays), 1 other failure\n"
+        "Exit status: 0 done, 64 usage (an unknown audio device too), 65 bad input data (an\n"
+        "LTC file without LTC too), 66 input missing (a soundtrack or LTC file missing or\n"
+        "unreadable too), 73 output not writable or existing without --force, 78 plugin\n"
+        "missing or incompatible, or the mapping stopped for a fault (it wrote past the host's\n"
+        "arrays), 1 other failure\n"
         "(facepuppet --help has the whole table).\n");
 }
 
