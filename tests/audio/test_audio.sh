@@ -90,6 +90,8 @@ refuse 66 "not a sound file" --audio "$tmp/garbage.wav" --audio-out null
 refuse 64 "no audio output device 'no-such-device-54'" --audio "$tmp/speech.wav" --audio-out no-such-device-54
 refuse 66 "No such file" --timecode "ltc:$tmp/missing-ltc.wav"
 refuse 65 "no LTC" --timecode "ltc:$tmp/speech.wav"
+refuse 65 "no LTC" --timecode "ltc:$tmp/speech.wav" --audio "$tmp/speech.wav" --audio-out "file:$tmp/refused.wav"
+[ ! -e "$tmp/refused.wav" ] || fail "a refused run left its --audio-out file"
 
 # ---- 4. LTC ---------------------------------------------------------------------------------
 ltc_case() { # NUM DEN START FPS NAME

@@ -65,10 +65,11 @@ void fp_app_audio_help(FILE *f, bool with_timecode)
         "                         device before the run); the take's rate is the LTC's\n");
 }
 
-/* Exit status for a sound or LTC file's load error. */
+/* Exit status for a soundtrack's load error: missing or unreadable (not a sound file) is an
+ * input that cannot be opened (66), as the issue asks. */
 static int file_status(int rc)
 {
-    return rc == -EBADMSG ? FP_EXIT_NOINPUT : rc == -ENOMEM ? FP_EXIT_SOFTWARE : FP_EXIT_NOINPUT;
+    return rc == -ENOMEM ? FP_EXIT_SOFTWARE : FP_EXIT_NOINPUT;
 }
 
 static int out_status(int rc)
@@ -129,8 +130,8 @@ int fp_app_audio_prepare(fp_app_audio *a, const char *cmd, const char *fallback,
         a->playing = true;
     }
     if ((rc = prepare_timecode(a, cmd))) {
+        fp_audio_out_abort(&a->out); /* (a file output's temporary removed: nothing written) */
         fp_app_audio_finish(a, cmd, true);
-        fp_audio_out_abort(&a->out);
         return rc;
     }
     return 0;
