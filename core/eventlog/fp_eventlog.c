@@ -25,13 +25,13 @@
 #define LINE_MAX_BYTES 4096 /* the longest line the writer makes is about 1.1 kB */
 #define TEXT_BYTES ((int)sizeof(((fp_event_status *)0)->text))
 
-static const char *const type_names[] = {NULL, "angles", "positions", "wrist", "button", "status"};
+static const char *const type_names[] = {NULL, "angles", "positions", "wrist", "button", "status", "channel"};
 static const char *const status_names[] = {NULL, "connected", "disconnected", "reconnecting",
                                            "warning", "error", "end-of-stream"};
 
 const char *fp_eventlog_type_name(int type)
 {
-    return type >= 1 && type <= 5 ? type_names[type] : NULL;
+    return type >= 1 && type <= FP_EVENT_CHANNEL ? type_names[type] : NULL;
 }
 
 const char *fp_eventlog_status_name(uint32_t code)
@@ -47,6 +47,7 @@ static size_t type_size(int type)
     case FP_EVENT_WRIST_POSE: return sizeof(fp_event_wrist_pose);
     case FP_EVENT_BUTTON: return sizeof(fp_event_button);
     case FP_EVENT_STATUS: return sizeof(fp_event_status);
+    case FP_EVENT_CHANNEL: return sizeof(fp_event_channel);
     default: return 0;
     }
 }
@@ -229,6 +230,17 @@ static int format_event(fp_eventlog_writer *w, const fp_event *e, line_buf *b)
         lb_printf(b, " %" PRIu32 " %" PRIu32 " %" PRIu32, e->button.button, e->button.down,
                   e->button.mask);
         break;
+    case FP_EVENT_CHANNEL: { /* NAME VALUE (a name of printable non-space ASCII) */
+        size_t len = strnlen(e->channel.name, sizeof e->channel.name);
+        if (!len || len >= sizeof e->channel.name)
+            return writer_fail(w, -EINVAL, "channel name empty or not NUL-terminated");
+        for (size_t i = 0; i < len; i++)
+            if (e->channel.name[i] <= ' ' || e->channel.name[i] > '~')
+                return writer_fail(w, -EINVAL, "channel name with a space or a non-ASCII byte");
+        lb_printf(b, " %s", e->channel.name);
+        bad = lb_floats(b, &e->channel.value, 1);
+        break;
+    }
     case FP_EVENT_STATUS: {
         const char *code = fp_eventlog_status_name(e->status.code);
         if (code)
@@ -619,12 +631,12 @@ static int parse_event(fp_eventlog_reader *r, char *line, fp_event *out)
 
     if ((rc = need_token(&c, &tok, "the event type"))) return rc;
     int type = 0;
-    for (int i = 1; i <= 5; i++)
+    for (int i = 1; i <= FP_EVENT_CHANNEL; i++)
         if (strcmp(tok, type_names[i]) == 0) type = i;
     if (!type)
         return reader_fail(r, -EBADMSG, col_of(&c, tok),
                            "unknown event type \"%s\" (angles, positions, wrist, button, "
-                           "status)", tok);
+                           "status, channel)", tok);
     h->type = (uint16_t)type;
     h->size = (uint32_t)type_size(type);
 
@@ -674,6 +686,14 @@ static int parse_event(fp_eventlog_reader *r, char *line, fp_event *out)
             if ((rc = parse_u32(&c, tok, 10, &out->status.code, "status code"))) return rc;
         }
         rc = parse_text(&c, out->status.text);
+        break;
+    case FP_EVENT_CHANNEL:
+        if ((rc = need_token(&c, &tok, "the channel name"))) return rc;
+        if (strlen(tok) >= sizeof out->channel.name)
+            return reader_fail(r, -EBADMSG, col_of(&c, tok), "channel name longer than %zu bytes",
+                               sizeof out->channel.name - 1);
+        snprintf(out->channel.name, sizeof out->channel.name, "%s", tok);
+        rc = parse_floats(&c, &out->channel.value, 1, "the channel's value");
         break;
     }
     if (rc) return rc;

@@ -648,9 +648,9 @@ static const char *event_problem(const fp_event *ev, int64_t latest)
 {
     static const uint32_t sizes[] = {0, sizeof(fp_event_joint_angles), sizeof(fp_event_joint_positions),
                                      sizeof(fp_event_wrist_pose), sizeof(fp_event_button),
-                                     sizeof(fp_event_status)};
+                                     sizeof(fp_event_status), sizeof(fp_event_channel)};
     const fp_event_header *h = &ev->header;
-    if (h->type < 1 || h->type > 5) return "unknown type";
+    if (h->type < 1 || h->type > FP_EVENT_CHANNEL) return "unknown type";
     if (h->size != sizes[h->type]) return "size is not that of its type";
     if (h->hand < -1 || h->hand > 1) return "hand is not -1, 0 or 1";
     if (h->type <= FP_EVENT_WRIST_POSE && h->hand < 0) return "a pose event without a hand";
@@ -679,6 +679,11 @@ static const char *event_problem(const fp_event *ev, int64_t latest)
         if (ev->status.code < FP_STATUS_CONNECTED || ev->status.code > FP_STATUS_END_OF_STREAM)
             return "unknown status code";
         if (!memchr(ev->status.text, 0, sizeof ev->status.text)) return "status text not NUL-terminated";
+        break;
+    case FP_EVENT_CHANNEL:
+        if (!memchr(ev->channel.name, 0, sizeof ev->channel.name) || !ev->channel.name[0])
+            return "channel name empty or not NUL-terminated";
+        if (!isfinite(ev->channel.value)) return "channel value not finite";
         break;
     }
     return NULL;

@@ -47,6 +47,14 @@ typedef struct fp_session_take_options {
                                       (fp_session_rig_how) */
     fp_take_rate rate;             /* nominal frame rate; {0,0}: 60/1 */
     fp_take_recorder_options recorder;  /* zero: the recorder's defaults */
+    /* Stage timecode and soundtrack (take format 1.2; zero: none) */
+    bool have_timecode;            /* timecode_in below instead of the time of day */
+    fp_timecode timecode_in;       /* the timecode at the take's origin (e.g. decoded LTC);
+                                      drop-frame as its `drop` says (rate must allow it) */
+    const char *timecode_source;   /* recorded as the header's timecode_source ("ltc:FILE") */
+    const char *soundtrack_path;   /* the soundtrack performed to; NULL: none */
+    uint32_t soundtrack_crc32;     /* zlib crc32 of its bytes */
+    double soundtrack_offset_s;    /* the soundtrack's time at the take's origin */
 } fp_session_take_options;
 
 /** What a finished take holds (fp_session_take_stop). */

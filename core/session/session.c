@@ -119,6 +119,17 @@ static void on_event(void *user, size_t input, const fp_event *ev)
     fp_pose_take_event_filtered(&s->pose, ev, input < s->input_count ? &s->inputs[input].filter : NULL);
     fp_arrive_step_event(&s->arrive, ev); /* (raw: the placement's estimate is robust anyway) */
     fp_record_step_event(&s->record, ev);
+    if (ev->header.type == FP_EVENT_CHANNEL) { /* an input drives a rig channel (ABI 1.2) */
+        char name[sizeof ev->channel.name];
+        snprintf(name, sizeof name, "%.*s", (int)sizeof name - 1, ev->channel.name);
+        if (fp_rig_step_set_channel(&s->rig, name, ev->channel.value) && !s->channel_event_warned) {
+            s->channel_event_warned = true;
+            const char *src = input < s->input_count ? s->inputs[input].name : NULL;
+            fp_slog_printf(&s->log, FP_LOG_WARNING, src ? src : "input",
+                           "channel '%s' is not a channel of the session's rig (or there is no "
+                           "rig): its events are ignored", name);
+        }
+    }
 }
 
 /* Step 5's shape: the engine's output through the rig's blend, checked by the contact guard

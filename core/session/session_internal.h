@@ -64,7 +64,8 @@ struct fp_session {
     fp_intents intents;           /* step 1 */
     fp_pose_state pose;           /* step 2 */
     fp_mapping_step mapping_step; /* step 3 */
-    fp_rig_step rig;              /* step 4 */
+    fp_rig_step rig;
+    bool channel_event_warned;   /* an input's channel event named no channel of the rig */              /* step 4 */
     fp_engine_step engine;        /* step 5 */
     fp_skin_reach_gesture gesture_reach; /* the gesture's reach so far (skin_reach.h) */
     fp_history history;           /* step 6 */

@@ -83,7 +83,19 @@ int fp_session_take_start(fp_session_take *t, const fp_session *s, int64_t origi
     h->rate = t->opt.rate;
     struct timespec rt;
     clock_gettime(CLOCK_REALTIME, &rt);
-    fp_timecode_time_of_day(rt.tv_sec, rt.tv_nsec, h->rate, false, &h->timecode_in);
+    if (t->opt.have_timecode) { /* the stage's timecode (LTC) */
+        uint64_t check;
+        if (fp_timecode_to_frames(&t->opt.timecode_in, h->rate, &check))
+            return fp_errorf(err, errlen, -EINVAL, "the timecode in is not valid at %u/%u fps",
+                             h->rate.num, h->rate.den);
+        h->timecode_in = t->opt.timecode_in;
+    } else {
+        fp_timecode_time_of_day(rt.tv_sec, rt.tv_nsec, h->rate, false, &h->timecode_in);
+    }
+    h->timecode_source = t->opt.timecode_source;
+    h->soundtrack_path = t->opt.soundtrack_path;
+    h->soundtrack_crc32 = t->opt.soundtrack_crc32;
+    h->soundtrack_offset_s = t->opt.soundtrack_offset_s;
     h->time_origin_ns = origin_ns;
     h->mesh_path = so->mesh_path;
     h->mesh_vertices = fp_session_vertex_count(s);
@@ -134,7 +146,7 @@ int fp_session_take_timecode(const fp_session_take *t, int64_t now_ns, fp_timeco
     int rc = fp_timecode_to_frames(&t->header.timecode_in, t->header.rate, &in);
     if (rc) return rc;
     return fp_timecode_from_frames(in + fp_take_frames_in(now_ns - t->origin_ns, t->header.rate),
-                                   t->header.rate, false, tc);
+                                   t->header.rate, t->header.timecode_in.drop, tc);
 }
 
 int fp_session_take_stop(fp_session_take *t, fp_session_take_result *res, char *err,

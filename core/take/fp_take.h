@@ -49,7 +49,9 @@ extern "C" {
 /** Format version written (docs/take-format.md). A reader accepts files of the same major
  *  and any minor (unknown chunk types, event types and trailing fields are skipped). */
 #define FP_TAKE_VERSION_MAJOR 1
-#define FP_TAKE_VERSION_MINOR 1   /* 1.1: a frame's channels are every rig channel as posed */
+#define FP_TAKE_VERSION_MINOR 2   /* 1.1: a frame's channels are every rig channel as posed;
+                                     1.2: header keys soundtrack and timecode_source, channel
+                                     events (type 6) */
 #define FP_TAKE_EXTENSION ".fptake"
 #define FP_TAKE_SLATE_MAX 64      /* bytes of a slate name, NUL included */
 #define FP_TAKE_DEFAULT_SLATE "scene1" /* a slate none was given: "scene1 take 2", scene1_T002.fptake */
@@ -142,6 +144,12 @@ typedef struct fp_take_header {
     double radius;                  /* support radius at the start, mesh units */
     const char *description;
     int rating;                     /* 0 (none) .. 5 */
+    /* 1.2 (absent from earlier takes: NULL / 0) */
+    const char *soundtrack_path;    /* the soundtrack performed to (--audio); NULL: none */
+    uint32_t soundtrack_crc32;      /* zlib crc32 of the soundtrack file's bytes */
+    double soundtrack_offset_s;     /* the soundtrack's time, seconds, at time_origin_ns */
+    const char *timecode_source;    /* where timecode_in came from: "system" (NULL) or
+                                       "ltc:FILE" (decoded LTC) */
 } fp_take_header;
 
 /** zlib crc32 of vertex positions (n x 3 floats) as little-endian bytes. */

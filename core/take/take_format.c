@@ -24,6 +24,7 @@ static size_t event_body_size(uint32_t type)
     case FP_EVENT_WRIST_POSE: return 4 * 7;
     case FP_EVENT_BUTTON: return 12;
     case FP_EVENT_STATUS: return 4 + sizeof(((fp_event_status *)0)->text);
+    case FP_EVENT_CHANNEL: return sizeof(((fp_event_channel *)0)->name) + 4;   /* 1.2 */
     default: return 0;
     }
 }
@@ -70,6 +71,14 @@ static size_t event_encode(const fp_event *e, uint8_t *p)
         memset(b + 4 + len, 0, cap - len);
         break;
     }
+    case FP_EVENT_CHANNEL: {
+        size_t cap = sizeof e->channel.name;
+        size_t len = strnlen(e->channel.name, cap - 1);
+        memcpy(b, e->channel.name, len);
+        memset(b + len, 0, cap - len);
+        le_putf(b + cap, e->channel.value);
+        break;
+    }
     default: break;
     }
     return n;
@@ -112,6 +121,12 @@ static void event_decode(const uint8_t *p, fp_event *e)
         e->status.code = le_get32(b);
         memcpy(e->status.text, b + 4, sizeof e->status.text);
         e->status.text[sizeof e->status.text - 1] = '\0';
+        break;
+    case FP_EVENT_CHANNEL:
+        e->header.size = sizeof(fp_event_channel);
+        memcpy(e->channel.name, b, sizeof e->channel.name);
+        e->channel.name[sizeof e->channel.name - 1] = '\0';
+        e->channel.value = le_getf(b + sizeof e->channel.name);
         break;
     default: break;
     }
@@ -480,6 +495,14 @@ char *take_header_to_json(const fp_take_header *h)
     add_number(o, "radius", h->radius);
     add_str(o, "description", h->description ? h->description : "");
     cJSON_AddNumberToObject(o, "rating", h->rating);
+    if (h->soundtrack_path) { /* 1.2: written only where there is one (takes without stay as 1.1 wrote them) */
+        cJSON *st = cJSON_AddObjectToObject(o, "soundtrack");
+        add_str(st, "path", h->soundtrack_path);
+        snprintf(crc, sizeof crc, "%08" PRIx32, h->soundtrack_crc32);
+        cJSON_AddStringToObject(st, "crc32", crc);
+        add_number(st, "offset_s", h->soundtrack_offset_s);
+    }
+    if (h->timecode_source) add_str(o, "timecode_source", h->timecode_source);
     char *text = cJSON_PrintUnformatted(o);
     cJSON_Delete(o);
     return text;
@@ -632,6 +655,18 @@ static int fill_header(const cJSON *o, fp_take_header *h, strstore *st, char *ms
         if (d < 0 || d > 5) return fp_errorf(msg, msglen, -EBADMSG, "header: \"rating\" not in 0..5");
         h->rating = (int)d;
     }
+    const cJSON *snd = cJSON_GetObjectItemCaseSensitive(o, "soundtrack"); /* 1.2 */
+    if (snd && !cJSON_IsNull(snd)) {
+        const char *path = jstr(snd, "path"), *crc = jstr(snd, "crc32");
+        char *end = NULL;
+        unsigned long v = crc ? strtoul(crc, &end, 16) : 0;
+        if (!cJSON_IsObject(snd) || !path || !crc || !*crc || *end || v > 0xffffffffUL ||
+            !jnum(snd, "offset_s", &h->soundtrack_offset_s) || !isfinite(h->soundtrack_offset_s))
+            return fp_errorf(msg, msglen, -EBADMSG, "header: invalid \"soundtrack\"");
+        h->soundtrack_path = keep(st, path);
+        h->soundtrack_crc32 = (uint32_t)v;
+    }
+    h->timecode_source = keep(st, jstr(o, "timecode_source"));
     return 0;
 }
 

@@ -187,7 +187,7 @@ static unsigned char *slurp(const char *path, size_t *n)
     return b;
 }
 
-/* The file says 1.1; the same take marked 1.0 (a take of the first version: same layout) is
+/* The file says 1.1 or later; the same take marked 1.0 (a take of the first version: same layout) is
  * still read, every frame. */
 static void test_version(void **state)
 {
@@ -201,7 +201,7 @@ static void test_version(void **state)
     assert_int_equal(fp_take_reader_open_memory(b, n, "new", &r, err, sizeof err), 0);
     assert_int_equal(fp_take_reader_summary(r)->version_major, 1);
     assert_int_equal(fp_take_reader_summary(r)->version_minor, FP_TAKE_VERSION_MINOR);
-    assert_int_equal(FP_TAKE_VERSION_MINOR, 1);
+    assert_true(FP_TAKE_VERSION_MINOR >= 1); /* (1.2 added keys and an event type only) */
     fp_take_reader_close(&r);
     b[10] = 0, b[11] = 0; /* minor 0, the signature's crc32 again */
     uint32_t crc = (uint32_t)crc32(0L, b, 12);

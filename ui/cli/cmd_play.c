@@ -7,6 +7,7 @@
 #include "fp_session_take.h"
 #include "fp_take_player.h"
 #include "app_export.h"
+#include "app_audio.h"
 #include "fp_mesh.h"
 #include "fp_text.h"
 
@@ -22,7 +23,7 @@ static void usage(FILE *f)
 {
     fprintf(f,
         "usage: facepuppet play TAKE [--frames-out DIR] [--out FILE] [--export FILE] [--mesh FILE]\n"
-        "                            [--force]\n\n"
+        "                            [--force] [--audio FILE] [--audio-out SPEC] [--audio-offset S]\n\n"
         "Reproduce a take's frames from the control sets it stored (no input devices, no\n"
         "mapping): the take's mesh (checked against the crc32 in the take), each frame's\n"
         "control set through the same engine step (fold-over guard included), commits,\n"
@@ -35,15 +36,63 @@ static void usage(FILE *f)
         "                         0.1 mm), .pc2/.mdd (point caches); see facepuppet export\n"
         "      --force            overwrite outputs that exist (--out, --export, frames in\n"
         "                         --frames-out); without it they are refused before any work\n"
-        "  -m, --mesh FILE        the take's mesh from another path (its crc32 must match)\n"
+        "  -m, --mesh FILE        the take's mesh from another path (its crc32 must match)\n");
+    fp_app_audio_help(f, false);
+    fprintf(f,
+        "                         A take made with --audio plays its recorded soundtrack when\n"
+        "                         --audio-out is given (--audio FILE: another copy of it;\n"
+        "                         a different crc32 is said); its samples follow the frames\n"
         "  -P, --plugin-dir DIR   look for plugins in DIR first\n"
         "  -q, --quiet            no summary line, nor the engine's and contact guard's\n"
         "                         notes on each gesture; errors and a damaged take's\n"
         "                         warning still print\n"
         "  -h, --help             this text\n\n"
-        "Exit status: 0 done, 64 usage, 65 a damaged take or another mesh, 66 missing,\n"
+        "Exit status: 0 done, 64 usage or an unknown audio device, 65 a damaged take or another\n"
+        "mesh, 66 missing (the take, or its soundtrack),\n"
         "73 an output not written or existing without --force (facepuppet --help has the\n"
         "whole table).\n");
+}
+
+/* The soundtrack: --audio FILE, else the take's own when --audio-out is given; the take's
+ * offset unless --audio-offset. A file whose crc32 is not the take's is said. Returns 0 or
+ * the exit status (fp_app_audio_prepare's). */
+static int play_audio_prepare(fp_app_audio *a, const fp_take_header *h, bool force, bool quiet)
+{
+    const char *fallback = a->out_spec && h->soundtrack_path ? h->soundtrack_path : NULL;
+    if (!a->offset_given && h->soundtrack_path) a->offset_s = h->soundtrack_offset_s;
+    if (a->out_spec && !a->path && !fallback) {
+        fprintf(stderr, "facepuppet play: the take has no soundtrack: give --audio FILE\n");
+        return FP_EXIT_USAGE;
+    }
+    int rc = fp_app_audio_prepare(a, "play", fallback, force);
+    if (rc) return rc;
+    if (a->playing && h->soundtrack_path && a->track.crc32 != h->soundtrack_crc32 && !quiet)
+        fprintf(stderr, "facepuppet play: --audio %s has crc32 %08x, the take's soundtrack %s had "
+                "%08x: another file?\n", a->path, (unsigned)a->track.crc32, h->soundtrack_path,
+                (unsigned)h->soundtrack_crc32);
+    return 0;
+}
+
+/* The summary line: the take, its timecodes, rating and description, what was played. */
+static void print_played(const char *take_path, const fp_take_reader *r, fp_app_reach *reach,
+                         double mm_per_unit, const uint64_t counts[3], const char *out)
+{
+    const fp_take_header *h = fp_take_reader_header(r);
+    char in[32], tcout[32];
+    fp_timecode_format(&h->timecode_in, in, sizeof in);
+    fp_timecode_format(&fp_take_reader_summary(r)->timecode_out, tcout, sizeof tcout);
+    char reach_text[200];
+    fp_app_reach_text(reach, mm_per_unit, reach_text, sizeof reach_text);
+    char rated[16] = "", desc[600] = ""; /* the take's rating and description, when set */
+    if (h->rating) snprintf(rated, sizeof rated, ", rated %d/5", h->rating);
+    if (h->description && h->description[0]) {
+        char clean[512];
+        snprintf(desc, sizeof desc, ", \"%s\"", fp_text_clean(h->description, clean, sizeof clean));
+    }
+    printf("played %s (%s take %u%s%s, %s - %s): frames %llu, deforming %llu, committed %llu%s%s%s\n",
+           take_path, h->slate, h->take, rated, desc, in, tcout, (unsigned long long)counts[0],
+           (unsigned long long)counts[1], (unsigned long long)counts[2], reach_text,
+           out ? "; wrote " : "", out ? out : "");
 }
 
 static int play_main(int argc, char **argv)
@@ -55,11 +104,18 @@ static int play_main(int argc, char **argv)
         {"export", required_argument, 0, OPT_EXPORT}, {"force", no_argument, 0, OPT_FORCE},
         {"quiet", no_argument, 0, 'q'},          {"help", no_argument, 0, 'h'},
         {0, 0, 0, 0}};
+    struct option all[sizeof opts / sizeof opts[0] + FP_APP_AUDIO_OPTS_COUNT];
+    size_t nall = fp_app_audio_longopts(all, false);
+    memcpy(all + nall, opts, sizeof opts);
+    fp_app_audio audio = {0};
     const char *out = NULL, *frames_out = NULL, *mesh = NULL, *export_file = NULL, *dirs[8];
     size_t ndirs = 0;
     bool quiet = false, force = false;
     optind = 1;
-    for (int c; (c = getopt_long(argc, argv, "o:m:P:qh", opts, NULL)) != -1;) {
+    for (int c; (c = getopt_long(argc, argv, "o:m:P:qh", all, NULL)) != -1;) {
+        int ac = fp_app_audio_parse(&audio, c, optarg, "play");
+        if (ac > 1) return ac;
+        if (ac) continue;
         switch (c) {
         case 'o': out = optarg; break;
         case OPT_FRAMES_OUT: frames_out = optarg; break;
@@ -115,6 +171,7 @@ static int play_main(int argc, char **argv)
     fp_session *s = fp_take_player_session(player);
     const fp_take_header *h = fp_take_reader_header(r);
     if ((status = fp_app_take_intact("facepuppet play", "play", take_path, r))) goto done;
+    if ((status = play_audio_prepare(&audio, h, force, quiet))) goto done;
     if (frames_out) /* its size, before any frame */
         fp_app_frames_estimate("facepuppet play", "--frames-out", frames_out,
                                (double)fp_take_reader_frames(r), 0, fp_session_vertex_count(s), quiet);
@@ -136,6 +193,10 @@ static int play_main(int argc, char **argv)
             status = fp_app_exit_code(rc, FP_APP_OUTPUT);
             goto done;
         }
+        /* the soundtrack up to the end of this frame (one period of the take's rate) */
+        if ((status = fp_app_audio_advance(&audio, (double)(f.time_ns - h->time_origin_ns) * 1e-9 +
+                                                       (double)h->rate.den / h->rate.num, "play")))
+            goto done;
         frames++;
         commits += st.committed;
         active += st.active;
@@ -168,23 +229,13 @@ static int play_main(int argc, char **argv)
                                             quiet, stdout)))
         goto done;
     if (!quiet) {
-        char in[32], tcout[32];
-        fp_timecode_format(&h->timecode_in, in, sizeof in);
-        fp_timecode_format(&fp_take_reader_summary(r)->timecode_out, tcout, sizeof tcout);
-        char reach_text[200];
-        fp_app_reach_text(&reach, fp_take_player_mm_per_unit(player), reach_text, sizeof reach_text);
-        char rated[16] = "", desc[600] = ""; /* the take's rating and description, when set */
-        if (h->rating) snprintf(rated, sizeof rated, ", rated %d/5", h->rating);
-        if (h->description && h->description[0]) {
-            char clean[512];
-            snprintf(desc, sizeof desc, ", \"%s\"", fp_text_clean(h->description, clean, sizeof clean));
-        }
-        printf("played %s (%s take %u%s%s, %s - %s): frames %llu, deforming %llu, committed %llu%s%s%s\n",
-               take_path, h->slate, h->take, rated, desc, in, tcout, (unsigned long long)frames,
-               (unsigned long long)active, (unsigned long long)commits, reach_text,
-               out ? "; wrote " : "", out ? out : "");
+        const uint64_t counts[3] = {frames, active, commits};
+        print_played(take_path, r, &reach, fp_take_player_mm_per_unit(player), counts, out);
     }
 done:
+    if (status) fp_audio_out_abort(&audio.out);
+    else status = fp_app_audio_finish(&audio, "play", quiet);
+    fp_app_audio_finish(&audio, "play", true);
     fp_app_reach_free(&reach);
     fp_export_abort(&ex);
     fp_take_player_close(&player);

@@ -6,6 +6,7 @@
 #include "fp_session.h"
 #include "fp_session_take.h"
 #include "app_export.h"
+#include "app_audio.h"
 #include "session_opts.h"
 #include "fp_stats.h"
 
@@ -28,7 +29,8 @@ static void usage(FILE *f)
 {
     fprintf(f,
         "usage: facepuppet run [--mesh FILE] --input SPEC [--input SPEC] --mapping SPEC\n"
-        "                      [--radius R] [--out FILE] [--frames-out DIR] [--speed X] [--force]\n\n"
+        "                      [--radius R] [--out FILE] [--frames-out DIR] [--speed X] [--force]\n"
+        "                      [--audio FILE [--audio-out SPEC] [--audio-offset S]] [--timecode SRC]\n\n"
         "Run a headless puppeteering session: the inputs drive the mapping, the mapping\n"
         "drives the CSRBF engine, the face deforms; writes the final mesh.\n"
         "With no options it runs the demo: the ICT face, the three-claps recording, the\n"
@@ -53,14 +55,18 @@ static void usage(FILE *f)
         "                         frames and timecode are said at the end, -q or not\n"
         "      --slate NAME       the take's slate (default \"scene1\"); numbers go up per slate\n"
         "      --take-description TEXT  a line stored in the take's header\n"
-        "      --budget MS        report a mapping process() slower than MS (default 2)\n\n"
+        "      --budget MS        report a mapping process() slower than MS (default 2)\n");
+    fp_app_audio_help(f, true);
+    fprintf(f, "\n"
         "The run steps on the recordings' own clock (frame k at t0 + k/fps), not the wall\n"
         "clock: the same inputs and options give bit-identical meshes whatever --speed,\n"
         "speed=, fast=1 or the machine's load (--speed only changes how long it takes).\n"
         "  -h, --help             this text\n\n"
-        "Exit status: 0 done, 64 usage, 65 bad input data, 66 input missing, 73 output\n"
-        "not writable or existing without --force, 78 plugin missing or incompatible, or the mapping stopped for a\n"
-        "fault (it wrote past the host's arrays), 1 other failure\n"
+        "Exit status: 0 done, 64 usage (an unknown audio device too), 65 bad input data (an\n"
+        "LTC file without LTC too), 66 input missing (a soundtrack or LTC file missing or\n"
+        "unreadable too), 73 output not writable or existing without --force, 78 plugin\n"
+        "missing or incompatible, or the mapping stopped for a fault (it wrote past the host's\n"
+        "arrays), 1 other failure\n"
         "(facepuppet --help has the whole table).\n");
 }
 
@@ -82,6 +88,7 @@ typedef struct run_args {
     bool demo;
     bool force;                    /* --force: outputs that exist are overwritten */
     char free_out[4200];           /* the default --out's next free name, when it exists */
+    fp_app_audio audio;            /* --audio, --audio-out, --audio-offset, --timecode */
 } run_args;
 
 /* --out, before any work: a format we write (by extension), a folder we can write in, and no
@@ -123,8 +130,10 @@ static int run_parse(int argc, char **argv, run_args *a)
         {"export", required_argument, 0, OPT_EXPORT},
         {"force", no_argument, 0, OPT_FORCE},
         {0, 0, 0, 0}};
-    struct option opts[FP_SESSION_OPTS_COUNT + sizeof own / sizeof own[0]];
-    memcpy(opts + fp_session_opts_longopts(opts), own, sizeof own);
+    struct option opts[FP_SESSION_OPTS_COUNT + FP_APP_AUDIO_OPTS_COUNT + sizeof own / sizeof own[0]];
+    size_t nshared = fp_session_opts_longopts(opts);
+    nshared += fp_app_audio_longopts(opts + nshared, true);
+    memcpy(opts + nshared, own, sizeof own);
     fp_session_opts_init(&a->sopt, &a->so);
     a->fps = 60;
     optind = 1;
@@ -132,6 +141,9 @@ static int run_parse(int argc, char **argv, run_args *a)
         int shared = fp_session_opts_parse(&a->sopt, c, optarg, "run");
         if (shared < 0) return fp_app_exit_code(shared, FP_APP_INPUT);
         if (shared) continue;
+        int audio = fp_app_audio_parse(&a->audio, c, optarg, "run");
+        if (audio > 1) return audio;
+        if (audio) continue;
         switch (c) {
         case 'o': a->out = optarg; break;
         case OPT_FRAMES_OUT: a->frames_out = optarg; break;
@@ -283,7 +295,7 @@ static int write_frame(fp_session *s, const run_args *a, fp_exporter *ex, uint64
  * The clock: the recordings' own (frame k at t0 + k/fps, each step only once every
  * recording has delivered past it), else the wall clock (live devices only). The take (if
  * any) starts at the first frame's time. Returns FP_EXIT_OK or the exit status of a failure. */
-static int run_frames(fp_session *s, const run_args *a, fp_session_take *take, fp_exporter *ex,
+static int run_frames(fp_session *s, run_args *a, fp_session_take *take, fp_exporter *ex,
                       run_totals *t)
 {
     char err[2048];
@@ -293,7 +305,9 @@ static int run_frames(fp_session *s, const run_args *a, fp_session_take *take, f
     while ((clock = fp_session_input_start(s, &t0)) == 0 && !interrupted) sleep_until(fp_now_ns() + 200000);
     bool input_clock = clock == 1;
     if (!input_clock) t0 = wall0;
-    /* The take's time origin (timecode in) is the first frame's time. */
+    /* The take's time origin (timecode in) is the first frame's time; its soundtrack and stage
+     * timecode (--audio, --timecode) are those at that time. */
+    fp_app_audio_take_options(&a->audio, t0, &take->opt);
     if (a->take_dir && !interrupted && (rc = fp_session_take_start(take, s, t0, err, sizeof err))) {
         fprintf(stderr, "facepuppet run: take: %s\n", err);
         status = fp_app_exit_code(rc, FP_APP_OUTPUT);
@@ -311,6 +325,9 @@ static int run_frames(fp_session *s, const run_args *a, fp_session_take *take, f
         fp_session_step(s, now, &st);
         totals_add(t, &st);
         if ((status = write_frame(s, a, ex, k, (double)(now - t0) * 1e-9))) break;
+        /* the soundtrack up to the end of this frame (its samples follow the frames) */
+        if ((status = fp_app_audio_advance(&a->audio, (double)(now - t0) * 1e-9 + 1.0 / a->fps, "run")))
+            break;
         int64_t wall = fp_now_ns();
         if (!a->sopt.quiet && wall - last_report >= 1000000000LL) {
             fprintf(stderr, "  %6.1f s  frame %-6llu %s  %zu control vectors  update %.3f ms\n",
@@ -465,7 +482,8 @@ static int run_main(int argc, char **argv)
         return FP_EXIT_SOFTWARE;
     }
     int rc = run_parse(argc, argv, a); /* (-1: go on; 0 after --help) */
-    if (rc >= 0 || (rc = run_settle(a))) {
+    if (rc >= 0 || (rc = run_settle(a)) ||
+        (rc = fp_app_audio_prepare(&a->audio, "run", NULL, a->force))) { /* before any work */
         free(a);
         return rc;
     }
@@ -483,6 +501,8 @@ static int run_main(int argc, char **argv)
                                                     fp_session_head(s)->mm_per_unit, "run", &ex)))) {
         fp_session_destroy(&s);
         fp_plugin_path_clear(&path);
+        fp_audio_out_abort(&a->audio.out);
+        fp_app_audio_finish(&a->audio, "run", true);
         free(a);
         return rc;
     }
@@ -495,6 +515,8 @@ static int run_main(int argc, char **argv)
         fp_export_abort(&ex);
         fp_session_destroy(&s);
         fp_plugin_path_clear(&path);
+        fp_audio_out_abort(&a->audio.out);
+        fp_app_audio_finish(&a->audio, "run", true);
         free(a);
         return fp_app_exit_code(rc, FP_APP_INPUT);
     }
@@ -512,6 +534,8 @@ static int run_main(int argc, char **argv)
         take_rc = fp_session_take_stop(&take, &tr, take_err, sizeof take_err);
         fp_app_print_take(stderr, "facepuppet run", &tr);
     }
+    int audio_status = fp_app_audio_finish(&a->audio, "run", quiet); /* (a file renamed into place) */
+    if (status == FP_EXIT_OK) status = audio_status;
     /* Close the record=FILE recordings: a failed write must fail the run. */
     char record_err[1024] = "";
     bool record_failed = fp_session_stop(s, record_err, sizeof record_err) != 0;

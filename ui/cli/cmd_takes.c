@@ -291,6 +291,11 @@ int fp_app_take_info(const char *path)
     if (h->description && h->description[0])
         printf("  description  %s\n", fp_text_clean(h->description, a, sizeof a));
     printf("  rating       %d/5\n", h->rating);
+    if (h->soundtrack_path) /* (format 1.2) */
+        printf("  soundtrack   %s (crc32 %08x), offset %.6g s\n", fp_text_clean(h->soundtrack_path, a, sizeof a),
+               (unsigned)h->soundtrack_crc32, h->soundtrack_offset_s);
+    if (h->timecode_source)
+        printf("  timecode by  %s\n", fp_text_clean(h->timecode_source, a, sizeof a));
     printf("  end          %s", s->complete ? "closed normally" : "no end chunk (not closed)");
     if (s->complete) printf(", %llu dropped, status %d%s%s", (unsigned long long)s->dropped,
                             s->end_status, s->end_status ? " " : "",

@@ -60,8 +60,9 @@ extern "C" {
 #endif
 
 #define FP_PLUGIN_ABI_MAJOR 1
-#define FP_PLUGIN_ABI_MINOR 1   /* 1.1: capacities, face frame, rig and surface services,
-                                   typed parameters; 1.0 plugins still load */
+#define FP_PLUGIN_ABI_MINOR 2   /* 1.1: capacities, face frame, rig and surface services,
+                                   typed parameters; 1.2: channel events (FP_EVENT_CHANNEL);
+                                   1.0 and 1.1 plugins still load */
 
 /** True when the struct at `ptr` (of ABI type `type`, starting with `uint32_t size`) is large
  *  enough to hold `field`: its size covers the field's last byte. A reader tests it before
@@ -150,7 +151,8 @@ typedef enum fp_event_type {
     FP_EVENT_JOINT_POSITIONS = 2, /* fp_event_joint_positions */
     FP_EVENT_WRIST_POSE = 3,      /* fp_event_wrist_pose */
     FP_EVENT_BUTTON = 4,          /* fp_event_button */
-    FP_EVENT_STATUS = 5           /* fp_event_status */
+    FP_EVENT_STATUS = 5,          /* fp_event_status */
+    FP_EVENT_CHANNEL = 6          /* fp_event_channel (ABI 1.2) */
 } fp_event_type;
 
 typedef struct fp_event_header {
@@ -220,6 +222,17 @@ typedef struct fp_event_status {
     char text[116];     /* NUL-terminated, human readable */
 } fp_event_status;
 
+/** A rig channel's value from an input (ABI 1.2), e.g. input-audio's loudness on
+ *  "jaw.open": the host sets the channel (clamped to its range, as the viewer's keys) when it
+ *  drains the event, before the frame's mapping runs; a channel the mapping also returns
+ *  that frame takes the mapping's value. A name the rig lacks (or a session without a rig)
+ *  is reported once and otherwise ignored. hand: -1. Not passed to the mapping. */
+typedef struct fp_event_channel {
+    fp_event_header header;
+    char name[32];      /* NUL-terminated, at most 31 bytes */
+    float value;        /* finite */
+} fp_event_channel;
+
 /** Any event; the host's queues hold these. */
 typedef union fp_event {
     fp_event_header header;
@@ -228,6 +241,7 @@ typedef union fp_event {
     fp_event_wrist_pose wrist;
     fp_event_button button;
     fp_event_status status;
+    fp_event_channel channel;   /* ABI 1.2 */
 } fp_event;
 
 /* ------------------------------------------------------------------------------------- */

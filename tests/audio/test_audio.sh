@@ -1,0 +1,119 @@
+#!/bin/bash
+# Audio, stage timecode and the audio input (issue 54, items 4-6), end to end:
+#  1. speech: three spoken syllables ("ma", "pa", "la", espeak-ng; sox tone bursts where
+#     espeak-ng is missing) placed by sox at known onsets between silences.
+#  2. sync: run --audio speech.wav --audio-out file:out.wav --audio-offset 0.25 over a real
+#     recording (anchored) writes the soundtrack's samples from 0.25 s on, found within one
+#     60 fps frame (fp_audio_testtool sync); the take records the file, crc32 and offset;
+#     play --audio-out file:play.wav of the take is in sync the same way. The measurement
+#     itself must fail against a wrong offset (0.25 s off).
+#  3. refusals before the performance: a missing or unreadable sound file exits 66, an
+#     unknown device 64, each with its reason and no take or output written.
+#  4. LTC at 25 and 29.97 drop-frame, made with libltc's encoder (crossing a dropped minute):
+#     run --timecode ltc:FILE.wav gives a take whose timecode_in and every frame's timecode
+#     equal the encoded ones (as libltc counted them).
+#  5. input-audio: run --input audio:speech.wav: jaw.open above 0.3 within two frames of each
+#     syllable's onset, below 0.1 in the silences (0.25 s after each syllable's end on); the
+#     check must fail for onsets moved 0.1 s early; `plugins check` passes input-audio (its
+#     channel events well-formed).
+# Usage: test_audio.sh PATH/TO/fp_audio_testtool (from the source root; FP_BUILD_DIR: build).
+# SPDX-License-Identifier: GPL-3.0-or-later
+set -u
+build=${FP_BUILD_DIR:-build}
+fp="$build/bin/facepuppet"
+tool=${1:-$build/tests/fp_audio_testtool}
+pd=(--plugin-dir "$build/lib/facepuppet")
+csv=../shared/data/hands/leap-motion/three-claps_joints_mm.csv
+mesh=../shared/data/faces/ict-facekit/generic_neutral_mesh.obj
+tmp=$(mktemp -d "${TMPDIR:-/tmp}/fp-audio-XXXXXX")
+trap 'rm -rf "$tmp"' EXIT
+fail() { echo "FAIL: $*"; exit 1; }
+command -v sox >/dev/null || fail "sox is missing (Debian: sox; tools/debian-packages.txt)"
+[ -f "$csv" ] && [ -f "$mesh" ] || fail "shared data missing: $csv, $mesh"
+
+# ---- 1. speech ---------------------------------------------------------------------------
+i=0
+for w in ma pa la; do
+    if command -v espeak-ng >/dev/null; then
+        espeak-ng -s 120 -w "$tmp/raw$i.wav" "$w" || fail "espeak-ng"
+        # trimmed to the voice (1% of full scale) at both ends: the onset is the file's start
+        sox "$tmp/raw$i.wav" -r 48000 -c 1 "$tmp/syl$i.wav" silence 1 0.005 1% reverse silence 1 0.005 1% reverse ||
+            fail "sox trim"
+    else
+        sox -n -r 48000 -c 1 "$tmp/syl$i.wav" synth 0.4 sawtooth $((120 + 30 * i)) fade 0.005 0.4 0.05 || fail "sox synth"
+    fi
+    i=$((i + 1))
+done
+sox -n -r 48000 -c 1 "$tmp/sil6.wav" trim 0 0.6 && sox -n -r 48000 -c 1 "$tmp/sil7.wav" trim 0 0.7 || fail "sox silence"
+sox "$tmp/sil6.wav" "$tmp/syl0.wav" "$tmp/sil7.wav" "$tmp/syl1.wav" "$tmp/sil7.wav" "$tmp/syl2.wav" "$tmp/sil6.wav" \
+    "$tmp/speech.wav" || fail "sox concatenation"
+read -r L0 L1 L2 < <(for i in 0 1 2; do soxi -D "$tmp/syl$i.wav"; done | xargs)
+onsets=$(awk -v a="$L0" -v b="$L1" 'BEGIN { printf "%.4f,%.4f,%.4f", 0.6, 1.3 + a, 2.0 + a + b }')
+ends=$(awk -v a="$L0" -v b="$L1" -v c="$L2" 'BEGIN { printf "%.4f,%.4f,%.4f", 0.6 + a, 1.3 + a + b, 2.0 + a + b + c }')
+echo "speech: $(soxi -D "$tmp/speech.wav") s, syllables at $onsets s, ending at $ends s"
+
+# ---- 2. sync ------------------------------------------------------------------------------
+"$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv" --speed 3 --duration 2 --take-dir "$tmp/takes" \
+    --slate speech --audio "$tmp/speech.wav" --audio-out "file:$tmp/out.wav" --audio-offset 0.25 \
+    -o "$tmp/run.obj" -q >"$tmp/run.out" 2>"$tmp/run.err" || { cat "$tmp/run.err"; fail "run --audio exited $?"; }
+cat "$tmp/run.err"
+take="$tmp/takes/speech_T001.fptake"
+[ -f "$take" ] || fail "no take"
+"$tool" sync "$tmp/speech.wav" "$tmp/out.wav" 0.25 || fail "run's soundtrack is out of sync"
+"$tool" sync "$tmp/speech.wav" "$tmp/out.wav" 0.5 >/dev/null && fail "the sync check passed a wrong offset"
+"$fp" info "$take" >"$tmp/info.out" || fail "info exited $?"
+crc=$(python3 -c "import zlib,sys; print('%08x' % (zlib.crc32(open(sys.argv[1],'rb').read()) & 0xffffffff))" "$tmp/speech.wav")
+grep -q "soundtrack   $tmp/speech.wav (crc32 $crc), offset 0.25 s" "$tmp/info.out" ||
+    { cat "$tmp/info.out"; fail "the take does not record the soundtrack, crc32 $crc and offset"; }
+grep -q "format       facepuppet take 1.2" "$tmp/info.out" || fail "the take is not format 1.2"
+"$fp" play "$take" "${pd[@]}" --audio-out "file:$tmp/play.wav" -q || fail "play --audio-out exited $?"
+"$tool" sync "$tmp/speech.wav" "$tmp/play.wav" 0.25 || fail "play's soundtrack is out of sync"
+"$fp" play "$take" "${pd[@]}" --audio-out "file:$tmp/play.wav" -q 2>"$tmp/exists.err"
+[ $? -eq 73 ] || fail "play over an existing --audio-out without --force did not exit 73"
+
+# ---- 3. refusals ---------------------------------------------------------------------------
+refuse() { # WANT_STATUS WANT_TEXT ARGS...
+    local want=$1 text=$2
+    shift 2
+    rm -rf "$tmp/refused"
+    "$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv" --duration 1 --take-dir "$tmp/refused" \
+        -o "$tmp/refused.obj" -q "$@" >/dev/null 2>"$tmp/refuse.err"
+    local rc=$?
+    [ $rc -eq "$want" ] || { cat "$tmp/refuse.err"; fail "run $* exited $rc, want $want"; }
+    grep -q "$text" "$tmp/refuse.err" || { cat "$tmp/refuse.err"; fail "run $*: no reason '$text'"; }
+    [ ! -e "$tmp/refused" ] && [ ! -e "$tmp/refused.obj" ] || fail "run $*: wrote before refusing"
+    echo "refused ($rc): $(grep 'facepuppet run' "$tmp/refuse.err")"
+}
+echo "not a sound file" >"$tmp/garbage.wav"
+refuse 66 "No such file" --audio "$tmp/missing.wav" --audio-out null
+refuse 66 "not a sound file" --audio "$tmp/garbage.wav" --audio-out null
+refuse 64 "no audio output device 'no-such-device-54'" --audio "$tmp/speech.wav" --audio-out no-such-device-54
+refuse 66 "No such file" --timecode "ltc:$tmp/missing-ltc.wav"
+refuse 65 "no LTC" --timecode "ltc:$tmp/speech.wav"
+refuse 65 "no LTC" --timecode "ltc:$tmp/speech.wav" --audio "$tmp/speech.wav" --audio-out "file:$tmp/refused.wav"
+[ ! -e "$tmp/refused.wav" ] || fail "a refused run left its --audio-out file"
+
+# ---- 4. LTC ---------------------------------------------------------------------------------
+ltc_case() { # NUM DEN START FPS NAME
+    "$tool" ltc "$tmp/$5.wav" "$1" "$2" "$3" 4 || fail "ltc encoding"
+    "$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv" --speed 3 --duration 3 --fps "$4" \
+        --timecode "ltc:$tmp/$5.wav" --take-dir "$tmp/$5" -o "$tmp/$5.obj" -q >/dev/null 2>"$tmp/$5.err" ||
+        { cat "$tmp/$5.err"; fail "run --timecode ltc:$5.wav exited $?"; }
+    cat "$tmp/$5.err"
+    "$tool" timecodes "$tmp/$5/take_T001.fptake" "$1" "$2" "$tmp/$5.wav.txt" ||
+        fail "$5: the take's timecodes are not the LTC's"
+}
+ltc_case 25 1 10:00:00:00 25 ltc25
+ltc_case 30000 1001 "00:00:59;20" 29.97 ltc2997df
+
+# ---- 5. input-audio -------------------------------------------------------------------------
+"$fp" run "${pd[@]}" --mesh "$mesh" --input "audio:$tmp/speech.wav,fast=1" --take-dir "$tmp/jaw" \
+    -o "$tmp/jaw.obj" -q >/dev/null 2>"$tmp/jaw.err" || { cat "$tmp/jaw.err"; fail "run --input audio exited $?"; }
+cat "$tmp/jaw.err"
+"$tool" jaw "$tmp/jaw/take_T001.fptake" "$onsets" "$ends" || fail "the jaw does not follow the syllables"
+early=$(echo "$onsets" | awk -F, '{ printf "%.4f,%.4f,%.4f", $1 - 0.1, $2 - 0.1, $3 - 0.1 }')
+"$tool" jaw "$tmp/jaw/take_T001.fptake" "$early" "$ends" >/dev/null && fail "the jaw check passed onsets 0.1 s early"
+"$fp" plugins check "$build/lib/facepuppet/input-audio.so" --arg "$tmp/speech.wav" >"$tmp/check.out" 2>&1 ||
+    { cat "$tmp/check.out"; fail "plugins check of input-audio"; }
+grep -E "events|passed" "$tmp/check.out"
+echo "PASS"

@@ -1,0 +1,186 @@
+/* The soundtrack and timecode options of run and play (app_audio.h). */
+#define _GNU_SOURCE
+#include "app_audio.h"
+#include "app_util.h"
+
+#include "command.h"
+#include "fp_text.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+size_t fp_app_audio_longopts(struct option *out, bool with_timecode)
+{
+    out[0] = (struct option){"audio", required_argument, NULL, FP_APP_AUDIO_OPT};
+    out[1] = (struct option){"audio-out", required_argument, NULL, FP_APP_AUDIO_OPT_OUT};
+    out[2] = (struct option){"audio-offset", required_argument, NULL, FP_APP_AUDIO_OPT_OFFSET};
+    if (!with_timecode) return 3;
+    out[3] = (struct option){"timecode", required_argument, NULL, FP_APP_AUDIO_OPT_TIMECODE};
+    return 4;
+}
+
+int fp_app_audio_parse(fp_app_audio *a, int c, const char *arg, const char *cmd)
+{
+    switch (c) {
+    case FP_APP_AUDIO_OPT: a->path = arg; return 1;
+    case FP_APP_AUDIO_OPT_OUT: a->out_spec = arg; return 1;
+    case FP_APP_AUDIO_OPT_OFFSET:
+        if (!fp_parse_decimal(arg, &a->offset_s) || fabs(a->offset_s) > FP_SOUNDTRACK_MAX_SECONDS) {
+            fprintf(stderr, "facepuppet %s: --audio-offset must be seconds within +-%.0f, got '%s'\n",
+                    cmd, FP_SOUNDTRACK_MAX_SECONDS, arg);
+            return FP_EXIT_USAGE;
+        }
+        a->offset_given = true;
+        return 1;
+    case FP_APP_AUDIO_OPT_TIMECODE:
+        if (strcmp(arg, "system") && (strncmp(arg, "ltc:", 4) || !arg[4])) {
+            fprintf(stderr, "facepuppet %s: --timecode: give system, ltc:FILE.wav or ltc:DEVICE, "
+                    "got '%s'\n", cmd, arg);
+            return FP_EXIT_USAGE;
+        }
+        a->timecode = arg;
+        return 1;
+    default: return 0;
+    }
+}
+
+void fp_app_audio_help(FILE *f, bool with_timecode)
+{
+    fprintf(f,
+        "      --audio FILE       a soundtrack (WAV, FLAC, OGG) played in step with the frames;\n"
+        "                         a take records its path, crc32 and offset\n"
+        "      --audio-out SPEC   where it plays: default (the system's output, PortAudio), a\n"
+        "                         device's index or part of its name, null (nowhere), or\n"
+        "                         file:OUT.wav (exactly the samples played, 32-bit float)\n"
+        "      --audio-offset S   the soundtrack's time at the first frame (default %s)\n",
+        with_timecode ? "0" : "the take's, or 0");
+    if (with_timecode)
+        fprintf(f,
+        "      --timecode SRC     the take's timecode: system (the time of day, default),\n"
+        "                         ltc:FILE.wav (LTC decoded from a recording whose first sample\n"
+        "                         is the first frame) or ltc:DEVICE (LTC heard on an input\n"
+        "                         device before the run); the take's rate is the LTC's\n");
+}
+
+/* Exit status for a soundtrack's load error: missing or unreadable (not a sound file) is an
+ * input that cannot be opened (66), as the issue asks. */
+static int file_status(int rc)
+{
+    return rc == -ENOMEM ? FP_EXIT_SOFTWARE : FP_EXIT_NOINPUT;
+}
+
+static int out_status(int rc)
+{
+    switch (rc) {
+    case -ENODEV: case -EINVAL: return FP_EXIT_USAGE;
+    case -ENOMEM: return FP_EXIT_SOFTWARE;
+    default: return FP_EXIT_CANTCREAT;
+    }
+}
+
+static int prepare_timecode(fp_app_audio *a, const char *cmd)
+{
+    if (!a->timecode || !strcmp(a->timecode, "system")) return 0;
+    const char *src = a->timecode + 4;
+    char err[1024];
+    struct stat st;
+    bool file = stat(src, &st) == 0 || strchr(src, '/') || strchr(src, '.');
+    int rc = file ? fp_ltc_read_file(src, &a->ltc, err, sizeof err)
+                  : fp_ltc_listen(src, 5.0, &a->ltc, err, sizeof err);
+    if (rc) {
+        fprintf(stderr, "facepuppet %s: --timecode: %s\n", cmd, err);
+        if (!file) return rc == -ENODEV ? FP_EXIT_USAGE : FP_EXIT_NOINPUT;
+        return rc == -EBADMSG && stat(src, &st) == 0 ? FP_EXIT_DATAERR : FP_EXIT_NOINPUT;
+    }
+    a->have_ltc = true;
+    snprintf(a->ltc_source, sizeof a->ltc_source, "%s", a->timecode);
+    return 0;
+}
+
+int fp_app_audio_prepare(fp_app_audio *a, const char *cmd, const char *fallback, bool force)
+{
+    char err[2048];
+    const char *path = a->path ? a->path : fallback;
+    int rc;
+    if (a->out_spec && !path) {
+        fprintf(stderr, "facepuppet %s: --audio-out needs a soundtrack (--audio FILE)\n", cmd);
+        return FP_EXIT_USAGE;
+    }
+    if (path) {
+        /* the output first: an unknown device is a usage error whatever the file */
+        const char *spec = a->out_spec ? a->out_spec : "default";
+        if ((rc = fp_audio_out_check(spec, force, err, sizeof err))) {
+            fprintf(stderr, "facepuppet %s: --audio-out: %s\n", cmd, err);
+            return out_status(rc);
+        }
+        if ((rc = fp_soundtrack_load(path, &a->track, err, sizeof err))) {
+            fprintf(stderr, "facepuppet %s: --audio: %s\n", cmd, err);
+            return file_status(rc);
+        }
+        a->path = path;
+        if ((rc = fp_audio_out_open(spec, a->track.rate, a->track.channels, force, &a->out, err, sizeof err))) {
+            fprintf(stderr, "facepuppet %s: --audio-out: %s\n", cmd, err);
+            fp_soundtrack_free(&a->track);
+            return out_status(rc);
+        }
+        fp_audio_player_init(&a->player, &a->track, a->out, a->offset_s);
+        a->playing = true;
+    }
+    if ((rc = prepare_timecode(a, cmd))) {
+        fp_audio_out_abort(&a->out); /* (a file output's temporary removed: nothing written) */
+        fp_app_audio_finish(a, cmd, true);
+        return rc;
+    }
+    return 0;
+}
+
+void fp_app_audio_take_options(const fp_app_audio *a, int64_t t0_ns, fp_session_take_options *o)
+{
+    if (a->playing) {
+        o->soundtrack_path = a->path;
+        o->soundtrack_crc32 = a->track.crc32;
+        o->soundtrack_offset_s = a->offset_s;
+    }
+    if (a->have_ltc) {
+        o->rate = a->ltc.rate;
+        o->have_timecode = true;
+        o->timecode_source = a->ltc_source;
+        if (a->ltc.at_ns) fp_ltc_timecode_at(&a->ltc, t0_ns, &o->timecode_in);
+        else o->timecode_in = a->ltc.first;
+    }
+}
+
+int fp_app_audio_advance(fp_app_audio *a, double t_s, const char *cmd)
+{
+    if (!a->playing) return 0;
+    char err[1024];
+    if (fp_audio_player_advance(&a->player, t_s, err, sizeof err)) {
+        fprintf(stderr, "facepuppet %s: --audio-out: %s\n", cmd, err);
+        return FP_EXIT_CANTCREAT;
+    }
+    return 0;
+}
+
+int fp_app_audio_finish(fp_app_audio *a, const char *cmd, bool quiet)
+{
+    int status = 0;
+    if (a->out) {
+        char err[1024];
+        uint64_t n = fp_audio_out_frames(a->out);
+        if (fp_audio_out_close(&a->out, err, sizeof err)) {
+            fprintf(stderr, "facepuppet %s: --audio-out: %s\n", cmd, err);
+            status = FP_EXIT_CANTCREAT;
+        } else if (!quiet && a->track.rate) {
+            fprintf(stderr, "facepuppet %s: soundtrack %s: %.3f s played from %.3f s to %s\n", cmd,
+                    a->path, (double)n / a->track.rate, a->offset_s,
+                    a->out_spec ? a->out_spec : "default");
+        }
+    }
+    fp_audio_player_free(&a->player);
+    fp_soundtrack_free(&a->track);
+    a->playing = false;
+    return status;
+}

@@ -1,0 +1,67 @@
+/* app_audio.h: the soundtrack and timecode options of `run` and `play` (--audio,
+ * --audio-out, --audio-offset, --timecode): parsed, checked before any work (a missing or
+ * unreadable sound file: 66; an unknown device: 64; an output file that exists: 73), then
+ * the soundtrack delivered in step with the frames (fp_audio_player) and the stage's
+ * timecode handed to the take. */
+#ifndef FP_CLI_APP_AUDIO_H
+#define FP_CLI_APP_AUDIO_H
+
+#include "fp_audio.h"
+#include "fp_session_take.h"
+
+#include <getopt.h>
+#include <stdbool.h>
+#include <stdio.h>
+
+/** The options' getopt values (long-only; above the commands' own). */
+enum { FP_APP_AUDIO_OPT = 0x300, FP_APP_AUDIO_OPT_OUT, FP_APP_AUDIO_OPT_OFFSET, FP_APP_AUDIO_OPT_TIMECODE };
+#define FP_APP_AUDIO_OPTS_COUNT 4
+
+typedef struct fp_app_audio {
+    const char *path;          /* --audio FILE (argv's) */
+    const char *out_spec;      /* --audio-out SPEC; NULL: "default" where a soundtrack plays */
+    double offset_s;           /* --audio-offset S: the soundtrack's time at the first frame */
+    bool offset_given;
+    const char *timecode;      /* --timecode system|ltc:FILE.wav|ltc:DEVICE; NULL: system */
+    fp_soundtrack track;       /* loaded by fp_app_audio_prepare */
+    fp_audio_out *out;
+    fp_audio_player player;
+    bool playing;              /* a soundtrack and its output are open */
+    bool have_ltc;
+    fp_ltc_info ltc;           /* --timecode ltc: what was decoded */
+    char ltc_source[4200];     /* "ltc:FILE" for the take's header */
+} fp_app_audio;
+
+/** Write the options' getopt_long entries to out (FP_APP_AUDIO_OPTS_COUNT of them; with_timecode
+ *  false: the first three only). Returns how many were written. */
+size_t fp_app_audio_longopts(struct option *out, bool with_timecode);
+
+/** Parse one option (c as getopt_long returned it). Returns 1 when taken, 0 when c is not
+ *  one of these, or FP_EXIT_USAGE (said on stderr, `cmd` naming the command). */
+int fp_app_audio_parse(fp_app_audio *a, int c, const char *arg, const char *cmd);
+
+/** The options' --help lines. */
+void fp_app_audio_help(FILE *f, bool with_timecode);
+
+/** Before the performance: load the soundtrack (--audio, or `fallback` when NULL: a take's
+ *  recorded one), check and open its output (--audio-out; a soundtrack needs one, default
+ *  "default"), decode --timecode ltc. Errors said on stderr with `cmd`. Returns 0 or the exit
+ *  status: 66 a sound or LTC file missing or unreadable, 65 no LTC in it, 64 an unknown
+ *  device or a bad spec, 73 an output that exists without force or cannot be made. */
+int fp_app_audio_prepare(fp_app_audio *a, const char *cmd, const char *fallback, bool force);
+
+/** Fill a take's options from what prepare found: the soundtrack's path, crc32 and offset,
+ *  and the LTC's timecode at the take's origin t0_ns (a file's first sample is the
+ *  performance's start; a device's timecode runs on from when it was heard) and its rate.
+ *  Call before fp_session_take_start (on the take's own copy, fp_session_take.opt). */
+void fp_app_audio_take_options(const fp_app_audio *a, int64_t t0_ns, fp_session_take_options *o);
+
+/** The performance reached t_s seconds (the end of the frame shown): deliver the soundtrack
+ *  up to there. Returns 0 or the exit status of a failed write (said on stderr). */
+int fp_app_audio_advance(fp_app_audio *a, double t_s, const char *cmd);
+
+/** Close the output (a file renamed into place) and free everything; says what was written
+ *  unless quiet. Returns 0 or the exit status of a failed close. */
+int fp_app_audio_finish(fp_app_audio *a, const char *cmd, bool quiet);
+
+#endif
