@@ -100,7 +100,7 @@ ltc_case() { # NUM DEN START FPS NAME
         --timecode "ltc:$tmp/$5.wav" --take-dir "$tmp/$5" -o "$tmp/$5.obj" -q >/dev/null 2>"$tmp/$5.err" ||
         { cat "$tmp/$5.err"; fail "run --timecode ltc:$5.wav exited $?"; }
     cat "$tmp/$5.err"
-    "$tool" timecodes "$tmp/$5/take_T001.fptake" "$1" "$2" "$tmp/$5.wav.txt" ||
+    "$tool" timecodes "$tmp/$5/scene1_T001.fptake" "$1" "$2" "$tmp/$5.wav.txt" ||
         fail "$5: the take's timecodes are not the LTC's"
 }
 ltc_case 25 1 10:00:00:00 25 ltc25
@@ -110,9 +110,9 @@ ltc_case 30000 1001 "00:00:59;20" 29.97 ltc2997df
 "$fp" run "${pd[@]}" --mesh "$mesh" --input "audio:$tmp/speech.wav,fast=1" --take-dir "$tmp/jaw" \
     -o "$tmp/jaw.obj" -q >/dev/null 2>"$tmp/jaw.err" || { cat "$tmp/jaw.err"; fail "run --input audio exited $?"; }
 cat "$tmp/jaw.err"
-"$tool" jaw "$tmp/jaw/take_T001.fptake" "$onsets" "$ends" || fail "the jaw does not follow the syllables"
+"$tool" jaw "$tmp/jaw/scene1_T001.fptake" "$onsets" "$ends" || fail "the jaw does not follow the syllables"
 early=$(echo "$onsets" | awk -F, '{ printf "%.4f,%.4f,%.4f", $1 - 0.1, $2 - 0.1, $3 - 0.1 }')
-"$tool" jaw "$tmp/jaw/take_T001.fptake" "$early" "$ends" >/dev/null && fail "the jaw check passed onsets 0.1 s early"
+"$tool" jaw "$tmp/jaw/scene1_T001.fptake" "$early" "$ends" >/dev/null && fail "the jaw check passed onsets 0.1 s early"
 "$fp" plugins check "$build/lib/facepuppet/input-audio.so" --arg "$tmp/speech.wav" >"$tmp/check.out" 2>&1 ||
     { cat "$tmp/check.out"; fail "plugins check of input-audio"; }
 grep -E "events|passed" "$tmp/check.out"

@@ -506,7 +506,8 @@ static void type_and_status_names(void **state)
 {
     assert_string_equal(fp_eventlog_type_name(FP_EVENT_WRIST_POSE), "wrist");
     assert_null(fp_eventlog_type_name(0));
-    assert_null(fp_eventlog_type_name(6));
+    assert_string_equal(fp_eventlog_type_name(FP_EVENT_CHANNEL), "channel");
+    assert_null(fp_eventlog_type_name(FP_EVENT_CHANNEL + 1));
     assert_string_equal(fp_eventlog_status_name(FP_STATUS_END_OF_STREAM), "end-of-stream");
     assert_null(fp_eventlog_status_name(7));
 }
