@@ -77,10 +77,10 @@ void fp_arrive_step_check(fp_arrive_step *r, int64_t now_ns, const fp_hand_pose 
     if (engaged || nearest <= FP_ARRIVE_NEAR * radius) { /* near: a new stretch begins */
         r->away_s = 0;
         r->nearest = INFINITY;
-        r->warned = false;
+        r->reached = true;
         return;
     }
-    if (!present || r->warned) return;
+    if (!present || r->warned || r->reached) return;
     r->away_s += dt;
     bool due = r->away_s >= FP_ARRIVE_HINT_S - 1e-6; /* (a sum of frame steps: 180 x 1/60) */
     /* beyond the tip distances' reach: how far, unbounded (a tree search; throttled, and

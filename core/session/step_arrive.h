@@ -13,9 +13,9 @@
  *    fingertip came within FP_ARRIVE_NEAR x the support radius of the face (the anchored
  *    mapping's default engage distance; fingertip-to-surface distances as the mapping gets
  *    them) and the mapping engaged nothing, one warning (source "session") says how near the
- *    nearest fingertip came, in mm, how the hands are placed, and to calibrate. It is said
- *    again only after a fingertip came near (or the mapping engaged) and the hands stayed away
- *    as long once more.
+ *    nearest fingertip came, in mm, how the hands are placed, and to calibrate. Once, and
+ *    never after a fingertip came near (or the mapping engaged): hands that have reached the
+ *    face are placed well, and a performer resting them away from it is told nothing.
  *
  * Threads: the session thread. Allocation only in fp_arrive_step_init.
  */
@@ -56,6 +56,7 @@ typedef struct fp_arrive_step {
     int64_t last_ns;               /* the last frame's time */
     bool have_last;                /* ... and it had a hand */
     bool warned;                   /* the hint was said for this stretch */
+    bool reached;               /* a fingertip came near (or the mapping engaged): no hint since */
     bool far_asked;                /* the unbounded nearest query ran ... */
     int64_t far_ns;                /* ... last at this frame time */
     unsigned long hints;           /* hints said so far */

@@ -15,11 +15,18 @@ for attempt in 1 2 3 4 5; do
     "$build/bin/facepuppet" run --plugin-dir "$build/lib/facepuppet" \
         --input "osc:$port,box=$box" --duration 4 --out "$tmp/out.obj" >"$tmp/run.out" 2>"$tmp/run.err" &
     run=$!
-    sleep 0.3
+    # the sender starts once the run listens (opening the face takes a while, longer under
+    # the sanitizers: a fixed wait sent the whole recording to a port not yet bound)
+    for i in $(seq 600); do
+        grep -q "listening on" "$tmp/run.err" && break
+        kill -0 $run 2>/dev/null || break
+        sleep 0.1
+    done
     if ! kill -0 $run 2>/dev/null && grep -q "cannot listen" "$tmp/run.err"; then
         wait $run
         continue
     fi
+    grep -q "listening on" "$tmp/run.err" || { cat "$tmp/run.err"; kill $run 2>/dev/null; echo "run did not listen"; exit 1; }
     "$build/bin/fp-osc-send" --port "$port" "$csv" || { echo "fp-osc-send failed"; kill $run; exit 1; }
     wait $run
     rc=$?
