@@ -562,6 +562,8 @@ int fp_stack_layer_spec(const char *spec, fp_stack_region *region, fp_stack_mode
             snprintf(region->names[region->name_count++], FP_STACK_NAME_MAX, "%s", p->names[i]);
         if (!falloff_given) region->core_mm = p->core_mm, region->falloff_mm = p->falloff_mm;
     }
+    if (!rc && !falloff_given && (region->kind == FP_STACK_REGION_RIG || region->kind == FP_STACK_REGION_VERTICES))
+        region->falloff_mm = 10;  /* a smooth edge by default: the blend's bound needs one */
     if (!rc && region->kind == FP_STACK_REGION_LANDMARKS && region->core_mm + region->falloff_mm <= 0)
         rc = fp_errorf(err, errlen, -EINVAL, "--layer %s: landmarks need a core or falloff > 0 mm", spec);
     if (rc) fp_stack_region_clear(region);

@@ -506,7 +506,7 @@ static int walk_take(export_walk *w)
         const bool after_in = !w->in.set || position(&w->in, i, f.time_ns, w->h, w->tc_in) >= w->in.value;
         const bool before_out = !w->out.set || position(&w->out, i, f.time_ns, w->h, w->tc_in) <= w->out.value;
         if (after_in && before_out) {
-            if ((rc = walk_frame(w, fp_session_positions(w->s), f.time_ns, err, sizeof err))) {
+            if ((rc = walk_frame(w, fp_take_player_positions(w->p), f.time_ns, err, sizeof err))) {
                 fprintf(stderr, "%sfacepuppet export: %s\n", w->bar ? "\n" : "", err);
                 return fp_app_exit_code(rc, FP_APP_OUTPUT);
             }

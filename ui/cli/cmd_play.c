@@ -130,7 +130,7 @@ static int play_main(int argc, char **argv)
     while ((rc = fp_take_player_next(player, &f, &st, err, sizeof err)) == 1) {
         if (frames == 0)
             first_ns = f.time_ns;
-        if (ex && (rc = fp_export_add(ex, fp_session_positions(s),
+        if (ex && (rc = fp_export_add(ex, fp_take_player_positions(player),
                                       (double)(f.time_ns - first_ns) * 1e-9, err, sizeof err))) {
             fprintf(stderr, "facepuppet play: --export: %s\n", err);
             status = fp_app_exit_code(rc, FP_APP_OUTPUT);
@@ -144,7 +144,7 @@ static int play_main(int argc, char **argv)
             char file[4400];
             snprintf(file, sizeof file, "%s/frame_%06llu_t%.3fs.obj", frames_out,
                      (unsigned long long)f.frame, (double)(f.time_ns - h->time_origin_ns) * 1e-9);
-            if ((rc = fp_session_save(s, file, err, sizeof err))) {
+            if ((rc = fp_take_player_save(player, file, NULL, err, sizeof err))) {
                 fprintf(stderr, "facepuppet play: %s\n", err);
                 status = fp_app_exit_code(rc, FP_APP_OUTPUT);
                 goto done;
@@ -157,7 +157,7 @@ static int play_main(int argc, char **argv)
         goto done;
     }
     unsigned dropped = 0;
-    if (out && (rc = fp_session_save_ex(s, out, &dropped, err, sizeof err))) {
+    if (out && (rc = fp_take_player_save(player, out, &dropped, err, sizeof err))) {
         fprintf(stderr, "facepuppet play: %s\n", err);
         status = fp_app_exit_code(rc, FP_APP_OUTPUT);
         goto done;
