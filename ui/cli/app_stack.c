@@ -14,6 +14,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <dirent.h>
 
 /* path as stored in a stack in dir: its name alone when it lies in dir, else absolute. */
 static int stack_relative(const char *dir, const char *path, char *buf, size_t n)
@@ -147,4 +148,82 @@ void fp_app_over_free(fp_app_over *o)
 {
     fp_stack_free(&o->stack);
     fp_stack_region_clear(&o->new_layer.region);
+}
+
+/* "0-inf" / "1-2" seconds */
+static const char *range_text(const fp_stack_layer *l, char *buf, size_t n)
+{
+    if (isfinite(l->out_s)) snprintf(buf, n, "%g-%g s", l->in_s, l->out_s);
+    else snprintf(buf, n, "%g s-end", l->in_s);
+    return buf;
+}
+
+int fp_app_stack_info(const char *path)
+{
+    char err[2048];
+    fp_stack *s = NULL;
+    int rc = fp_stack_load(path, &s, err, sizeof err);
+    if (rc) {
+        fprintf(stderr, "facepuppet info: %s\n", err);
+        return fp_app_exit_code(rc, FP_APP_INPUT);
+    }
+    printf("%s\n  format       facepuppet stack %d\n  layers       %zu\n", path, FP_STACK_FORMAT_VERSION,
+           s->layer_count);
+    for (size_t i = 0; i < s->layer_count; i++) {
+        const fp_stack_layer *l = &s->layers[i];
+        char tp[FP_STACK_PATH_MAX + 512], region[512], range[64], what[256];
+        fp_take_reader *r = NULL;
+        fp_stack_take_path(s, i, tp, sizeof tp);
+        if (fp_take_reader_open(tp, &r, err, sizeof err)) snprintf(what, sizeof what, "unreadable: %.200s", err);
+        else {
+            const fp_take_summary *sum = fp_take_reader_summary(r);
+            snprintf(what, sizeof what, "%llu frames, %.3f s%s", (unsigned long long)sum->frames,
+                     sum->duration_s, sum->cut ? ", cut" : "");
+        }
+        fp_take_reader_close(&r);
+        printf("  %2zu  %s  %s, %s, %s, fade %g s, offset %g s, gain %g%s%s  (%s)\n", i, l->take,
+               i ? fp_stack_region_text(&l->region, region, sizeof region) : "base",
+               l->mode == FP_STACK_ADD ? "add" : "replace", range_text(l, range, sizeof range),
+               l->fade_s, l->offset_s, l->gain, l->mute ? ", muted" : "", l->solo ? ", solo" : "", what);
+    }
+    fp_stack_free(&s);
+    return FP_EXIT_OK;
+}
+
+static int by_name(const void *a, const void *b)
+{
+    return strcmp(*(char *const *)a, *(char *const *)b);
+}
+
+void fp_app_stack_list(const char *dir)
+{
+    DIR *d = opendir(dir);
+    char *names[256];
+    size_t n = 0;
+    for (struct dirent *e; d && (e = readdir(d)) && n < 256;)
+        if (fp_stack_is_stack_path(e->d_name) && e->d_name[0] != '.') names[n++] = strdup(e->d_name);
+    if (d) closedir(d);
+    qsort(names, n, sizeof *names, by_name);
+    for (size_t i = 0; i < n; i++) {
+        char path[8192], err[2048], region[512], range[64];
+        snprintf(path, sizeof path, "%s/%s", dir, names[i] ? names[i] : "");
+        fp_stack *s = NULL;
+        if (!i) printf("\n%-24s %s\n", "STACK", "LAYERS");
+        if (!names[i] || fp_stack_load(path, &s, err, sizeof err)) {
+            printf("%-24s unreadable: %s\n", names[i] ? names[i] : "?", names[i] ? err : "out of memory");
+            free(names[i]);
+            continue;
+        }
+        printf("%-24s %zu layers: ", names[i], s->layer_count);
+        for (size_t k = 0; k < s->layer_count; k++) {
+            const fp_stack_layer *l = &s->layers[k];
+            if (!k) printf("%s (base)", l->take);
+            else printf("; %s %s %s %s%s%s", l->take, fp_stack_region_text(&l->region, region, sizeof region),
+                        l->mode == FP_STACK_ADD ? "add" : "replace", range_text(l, range, sizeof range),
+                        l->mute ? " muted" : "", l->solo ? " solo" : "");
+        }
+        printf("\n");
+        fp_stack_free(&s);
+        free(names[i]);
+    }
 }

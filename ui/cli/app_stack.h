@@ -38,6 +38,16 @@ int fp_app_over_check_mesh(const fp_app_over *o, const char *cmd, const struct f
 int fp_app_over_finish(fp_app_over *o, const char *cmd, const char *take_dir,
                        const char *take_path, const char *slate);
 
+/** `facepuppet info STACK`: the stack's layers, one a line (take, region, mode, range,
+ *  fade, offset, gain, mute/solo, the take's frames and duration or why it cannot be read).
+ *  Returns the exit status (65 a malformed stack, 66 missing). */
+int fp_app_stack_info(const char *path);
+
+/** `facepuppet takes DIR`: the stacks (*.fpstack) of dir after the takes' table, by name, each
+ *  with its layers in one line ("NAME  N layers: TAKE (base); TAKE REGION MODE [IN-OUT]").
+ *  Prints nothing when there are none. */
+void fp_app_stack_list(const char *dir);
+
 /** Free what o holds (the stack, the layer's vertices). */
 void fp_app_over_free(fp_app_over *o);
 
