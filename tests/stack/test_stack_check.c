@@ -12,6 +12,11 @@
  *       the layer shows; its weight in time rises from 0 inside [IN, IN + fade] and falls
  *       to 0 inside [OUT - fade, OUT] (the cross-fades lie inside the range; elsewhere it is
  *       below 1 only in a frame where the fold bound scaled it).
+ *   test_stack_check channels TAKE DIR   a channel layer: writes DIR/jaw_T001.fptake, TAKE's
+ *       frames with jaw.open set to 0.8, and DIR/jaw_S001.fpstack, TAKE under a jaw layer
+ *       (channels jaw.open, replace, no fade); the stack's frames equal the jaw take's played
+ *       alone bit for bit but for the first and last (the ends of the layer's range,
+ *       where its weight is 0), and differ from TAKE's.
  * Prints the figures; exit 0 when every check holds, 1 otherwise. */
 #define _GNU_SOURCE
 #include "fp_mesh.h"
@@ -46,11 +51,92 @@ static long crossings(const fp_session *s, const float *pos)
                                    m->triangles, m->triangle_count, 0, NULL, 0, NULL, NULL);
 }
 
+/* The channels mode (see the top). */
+static int channels_check(const char *take, const char *dir, const fp_plugin_path *pp)
+{
+    char err[4096], jaw_path[4200], stack_path[4200];
+    fp_take_reader *r = NULL;
+    fp_take_writer *w = NULL;
+    if (fp_take_reader_open(take, &r, err, sizeof err)) { printf("FAIL: %s\n", err); return 1; }
+    fp_take_header h = *fp_take_reader_header(r);
+    snprintf(h.slate, sizeof h.slate, "jaw");
+    fp_take_writer_options wo = {.no_sync = true};
+    if (fp_take_writer_create(dir, &h, &wo, &w, err, sizeof err)) { printf("FAIL: %s\n", err); return 1; }
+    snprintf(jaw_path, sizeof jaw_path, "%s", fp_take_writer_path(w));
+    fp_take_frame f;
+    size_t set = 0;
+    while (fp_take_reader_next(r, &f, err, sizeof err) == 1) {
+        fp_control_set cs;
+        fp_channel ch[64];
+        if (f.control) {
+            cs = *f.control;
+            memcpy(ch, cs.channels, cs.channel_count * sizeof *ch);
+            for (size_t k = 0; k < cs.channel_count; k++)
+                if (!strcmp(ch[k].name, "jaw.open")) ch[k].value = 0.8f, set++;
+            cs.channels = ch;
+            f.control = &cs;
+        }
+        if (fp_take_writer_add(w, &f, err, sizeof err)) { printf("FAIL: %s\n", err); return 1; }
+    }
+    fp_take_writer_close(&w, 0, 0, err, sizeof err);
+    CHECK(set > 0, "the take has no jaw.open channel (a take with a rig, format 1.1)");
+    fp_stack *s = fp_stack_create();
+    fp_stack_layer l;
+    fp_stack_layer_init(&l, take[0] == '/' ? take : realpath(take, NULL));
+    fp_stack_append(s, &l, err, sizeof err);
+    fp_stack_layer_init(&l, strrchr(jaw_path, '/') + 1);
+    fp_stack_layer_spec("jaw", &l.region, &l.mode, err, sizeof err);
+    l.fade_s = 0;
+    fp_stack_append(s, &l, err, sizeof err);
+    fp_stack_region_clear(&l.region);
+    snprintf(stack_path, sizeof stack_path, "%s/jaw_S001.fpstack", dir);
+    if (fp_stack_save(s, stack_path, err, sizeof err)) { printf("FAIL: %s\n", err); return 1; }
+    fp_stack_free(&s);
+    fp_take_reader_close(&r);
+    fp_take_player *ps = NULL, *pj = NULL, *pb = NULL;
+    if (fp_take_player_open(stack_path, NULL, pp, &ps, err, sizeof err) ||
+        fp_take_player_open(jaw_path, NULL, pp, &pj, err, sizeof err) ||
+        fp_take_player_open(take, NULL, pp, &pb, err, sizeof err)) {
+        printf("FAIL: %s\n", err);
+        return 1;
+    }
+    const size_t n = fp_session_vertex_count(fp_take_player_session(pb));
+    size_t frames = 0, same_jaw = 0, differ_base = 0, total = fp_take_reader_frames(fp_take_player_reader(pb));
+    fp_take_frame g;
+    while (fp_take_player_next(ps, &f, NULL, err, sizeof err) == 1 &&
+           fp_take_player_next(pj, &g, NULL, err, sizeof err) == 1 &&
+           fp_take_player_next(pb, &g, NULL, err, sizeof err) == 1) {
+        const float *c = fp_take_player_positions(ps);
+        if (frames++ == 0 || frames == total) continue; /* the range's ends: weight 0 */
+        const bool eq = !memcmp(c, fp_take_player_positions(pj), n * 3 * sizeof *c);
+        if (!eq) printf("frame %zu differs from the jaw take's\n", frames - 1);
+        same_jaw += eq;
+        differ_base += memcmp(c, fp_take_player_positions(pb), n * 3 * sizeof *c) != 0;
+    }
+    printf("%s: channel layer jaw.open 0.8 over %zu frames: %zu equal the jaw take's, %zu differ "
+           "from the base's\n", stack_path, frames, same_jaw, differ_base);
+    CHECK(frames > 2 && same_jaw == frames - 2, "the channel layer's composite is not the jaw take");
+    CHECK(differ_base == frames - 2, "the channel layer did not move the jaw");
+    fp_take_player_close(&ps);
+    fp_take_player_close(&pj);
+    fp_take_player_close(&pb);
+    printf("%s\n", fails ? "FAILED" : "ok");
+    return fails ? 1 : 0;
+}
+
 int main(int argc, char **argv)
 {
+    if (argc == 4 && !strcmp(argv[1], "channels")) {
+        fp_plugin_path pp;
+        const char *dirs[] = {fp_test_plugin_dir()};
+        fp_plugin_path_init(&pp, dirs, 1, NULL);
+        int rc = channels_check(argv[2], argv[3], &pp);
+        fp_plugin_path_clear(&pp);
+        return rc;
+    }
     if (argc < 3 || (strcmp(argv[1], "mouth") && strcmp(argv[1], "punch")) ||
         (!strcmp(argv[1], "punch") && argc != 5)) {
-        fprintf(stderr, "usage: test_stack_check mouth STACK | punch STACK IN OUT\n");
+        fprintf(stderr, "usage: test_stack_check mouth STACK | punch STACK IN OUT | channels TAKE DIR\n");
         return 2;
     }
     const bool punch = !strcmp(argv[1], "punch");

@@ -8,6 +8,7 @@
 #     last frame's OBJ); export --format glb passes the glTF-Validator with 0 errors;
 #  3. punch-in: a pass punched in at 1.0 s and out at 2.0 s of the 4 s take changes nothing
 #     before 1.0 s and after 2.0 s (bit for bit), the cross-fades inside the range;
+#     a channel layer (jaw.open) makes the base play as the take whose channel it carries;
 #  4. a pass over the stack (the old stack kept); info and takes show stacks and their layers;
 #     refusals before any work (exit 64 usage, 66 missing).
 # SPDX-License-Identifier: GPL-3.0-or-later
@@ -74,6 +75,10 @@ fi
 cat "$tmp/punch.err"
 grep -q "punched 1 s to 2 s" "$tmp/punch.err" || fail "run did not say the punch"
 "$check" punch "$takes/face_S002.fpstack" 1.0 2.0 || fail "the punched stack"
+
+# a channel layer: jaw.open from another take, composed per rig channel
+mkdir -p "$tmp/jaw"
+"$check" channels "$base" "$tmp/jaw" || fail "the channel layer"
 
 # ---- 4. a pass over the stack; info, takes; refusals ----------------------------------------
 "$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$claps,fast=1" --duration 2 --take-dir "$takes" \

@@ -61,11 +61,12 @@ static uint64_t sink_frames(const sink *k)
 static void usage(FILE *f)
 {
     fprintf(f,
-        "usage: facepuppet export TAKE --format gltf|glb|pc2|mdd|obj-seq|png-seq [--out PATH]\n"
+        "usage: facepuppet export TAKE|STACK --format gltf|glb|pc2|mdd|obj-seq|png-seq [--out PATH]\n"
         "                         [--range IN-OUT] [--resample F] [--max-error MM] [--mesh FILE]\n"
         "                         [--size WxH] [--camera YAW,PITCH[,ZOOM]] [--force]\n\n"
         "Play a take's frames from the control sets it stored (as `play`: bit-identical to the\n"
-        "recording) and write them for an animator's tools:\n"
+        "recording; a STACK, .fpstack: its layers composed as `play` does) and write them\n"
+        "for an animator's tools:\n"
         "  gltf, glb   glTF 2.0: the mesh with its UVs and materials, K morph targets and one\n"
         "              animation whose weights channel has a key at every frame (Blender,\n"
         "              Unreal, Unity). K is the fewest principal components of the frames'\n"
@@ -261,7 +262,7 @@ static int export_parse(int argc, char **argv, export_args *a)
         }
     }
     if (argc - optind != 1) {
-        fprintf(stderr, "facepuppet export: give one TAKE file (see --help)\n");
+        fprintf(stderr, "facepuppet export: give one TAKE or STACK file (see --help)\n");
         return FP_EXIT_USAGE;
     }
     a->take_path = argv[optind];

@@ -21,12 +21,14 @@
 static void usage(FILE *f)
 {
     fprintf(f,
-        "usage: facepuppet play TAKE [--frames-out DIR] [--out FILE] [--export FILE] [--mesh FILE]\n"
-        "                            [--force]\n\n"
+        "usage: facepuppet play TAKE|STACK [--frames-out DIR] [--out FILE] [--export FILE]\n"
+        "                            [--mesh FILE] [--force]\n\n"
         "Reproduce a take's frames from the control sets it stored (no input devices, no\n"
         "mapping): the take's mesh (checked against the crc32 in the take), each frame's\n"
         "control set through the same engine step (fold-over guard included), commits,\n"
-        "undo and reset as recorded. The meshes are bit-identical to the recording run's.\n\n"
+        "undo and reset as recorded. The meshes are bit-identical to the recording run's.\n"
+        "A STACK (.fpstack, docs/stack.md) plays every layer's take and composes them per\n"
+        "vertex by region, mode, range, gain, mute and solo (the base's frames are its clock).\n\n"
         "  -o, --out FILE         the last frame's mesh (default: none); format by extension\n"
         "      --frames-out DIR   one mesh per frame, DIR/frame_NNNNNN_tS.SSSs.obj (session\n"
         "                         frame number, time since the take's timecode in); its size\n"
@@ -75,7 +77,7 @@ static int play_main(int argc, char **argv)
         }
     }
     if (argc - optind != 1) {
-        fprintf(stderr, "facepuppet play: give one TAKE file (see --help)\n");
+        fprintf(stderr, "facepuppet play: give one TAKE or STACK file (see --help)\n");
         return FP_EXIT_USAGE;
     }
     const char *take_path = argv[optind];
