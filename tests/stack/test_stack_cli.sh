@@ -51,10 +51,15 @@ grep -q "stack $stack: 2 layers, top: face_T002.fptake, mouth" "$tmp/pass.err" |
 cmp "$tmp/play1.pc2" "$tmp/play2.pc2" && cmp "$tmp/play1.obj" "$tmp/play2.obj" || fail "two plays of the stack differ"
 echo "play twice: $(stat -c %s "$tmp/play1.pc2") bytes of PC2 and the last frame's OBJ identical"
 "$fp" play "$base" --export "$tmp/base.pc2" -q || fail "play base exited $?"
+# the PC2 holds the composite bit for bit (fp-export-check plays the stack again)
+xcheck="$build/tests/fp-export-check"   # (built where TinyGLTF is)
+[ -x "$xcheck" ] || { echo "SKIP (read back only): no $xcheck"; xcheck=true; }
+"$xcheck" "$stack" "$tmp/play1.pc2" || fail "the stack's PC2 is not its composite"
 cmp -s "$tmp/base.pc2" "$tmp/play1.pc2" && fail "the stack plays as its base alone"
 "$fp" export "$stack" --format glb --out "$tmp/stack.glb" >"$tmp/export.out" 2>&1 ||
     { cat "$tmp/export.out"; fail "export glb exited $?"; }
 head -1 "$tmp/export.out"
+"$xcheck" "$stack" "$tmp/stack.glb" --max-error 0.1 || fail "the stack's glb is not its composite"
 if command -v node >/dev/null; then
     if [ ! -d tools/gltf-validate/node_modules/gltf-validator ]; then
         (cd tools/gltf-validate && npm ci --no-audit --no-fund >/dev/null 2>&1 ||
