@@ -87,6 +87,32 @@ double fp_stack_player_layer_weight(const fp_stack_player *p, size_t i);
 /** Frames x layers whose weight the fold bound scaled down so far. */
 unsigned long fp_stack_player_limited(const fp_stack_player *p);
 
+/** A region's weights on a session's loaded shape (the base's): w (n floats in [0, 1]), the
+ *  vertices where w > 0 (sup, nsup of them) and |w'(d)| there (slope, per mesh unit; 0 where
+ *  the weight is flat). Owned: fp_stack_weights_free. */
+typedef struct fp_stack_weights {
+    float *w;
+    uint32_t *sup;
+    float *slope;
+    size_t nsup;
+} fp_stack_weights;
+
+/** The weights of region (not a channel region) on base's loaded shape, core and falloff
+ *  through mm_per_unit (> 0); landmarks and rig regions from base's rig. Returns 0 and *out,
+ *  or -EINVAL (a name the rig lacks, no rig, a vertex past the mesh: said in err), -ENOMEM.
+ *  Cost: O(vertices x region vertices) within the region's reach, once. */
+int fp_stack_region_weights(const fp_stack_region *region, const fp_session *base,
+                            double mm_per_unit, fp_stack_weights *out, char *err, size_t errlen);
+void fp_stack_weights_free(fp_stack_weights *w);
+
+/** One layer's blend into the composite `out` (n x 3, in place): the layer's frame `layer`,
+ *  the neutral shape `neutral`, the region's weights, the weight in time x gain f, the mode
+ *  (the formulas above), with the fold bound: returns the weight used (f, or f scaled down
+ *  by the bound; *limited, may be NULL, says which). Vertices outside the support, and all
+ *  when f <= 0, are not touched. [any-thread] on distinct arrays. */
+double fp_stack_blend(float *out, const float *layer, const float *neutral,
+                      const fp_stack_weights *w, double f, fp_stack_mode mode, bool *limited);
+
 /** Close every layer's player, free the player, set *p to NULL. NULL-safe. */
 void fp_stack_player_close(fp_stack_player **p);
 

@@ -19,10 +19,7 @@ typedef struct layer {
     bool played;               /* a frame of it has played */
     bool on;                   /* not muted, solo rules */
     bool channels;             /* a channel layer */
-    float *w;                  /* n region weights (vertex layers) */
-    uint32_t *sup;             /* the vertices with w > 0 */
-    float *slope;              /* |w'(d)| there, per mesh unit (0 where flat) */
-    size_t nsup;
+    fp_stack_weights wt;       /* vertex layers: the region's weights */
     float chan[FP_STACK_MAX_NAMES]; /* channel layers: the last values of their channels */
     bool chan_set[FP_STACK_MAX_NAMES];
     double f;                  /* weight in time at the last frame */
@@ -39,10 +36,9 @@ struct fp_stack_player {
 static double smooth(double u) { return u <= 0 ? 0 : u >= 1 ? 1 : u * u * (3 - 2 * u); }
 
 /* The seeds of a region: vertices at distance 0. *seeds malloc'ed. */
-static int region_seeds(const fp_stack_layer *l, size_t li, const fp_session *base, size_t n,
+static int region_seeds(const fp_stack_region *r, const fp_session *base, size_t n,
                         uint32_t **seeds, size_t *count, char *err, size_t errlen)
 {
-    const fp_stack_region *r = &l->region;
     const struct fp_rig *rig = fp_session_rig(base);
     size_t cap = r->kind == FP_STACK_REGION_VERTICES ? r->vertex_count
                  : r->kind == FP_STACK_REGION_RIG ? n : r->name_count;
@@ -51,13 +47,13 @@ static int region_seeds(const fp_stack_layer *l, size_t li, const fp_session *ba
     size_t k = 0;
     int rc = 0;
     if (r->kind != FP_STACK_REGION_VERTICES && !rig)
-        rc = fp_errorf(err, errlen, -EINVAL, "layers[%zu]: its region names the rig's %s, and the "
-                       "base take has no rig", li, r->kind == FP_STACK_REGION_RIG ? "regions" : "landmarks");
+        rc = fp_errorf(err, errlen, -EINVAL, "the region names the rig's %s, and the "
+                       "base take has no rig", r->kind == FP_STACK_REGION_RIG ? "regions" : "landmarks");
     else if (r->kind == FP_STACK_REGION_VERTICES) {
         for (size_t i = 0; i < r->vertex_count && !rc; i++)
             if (r->vertices[i] >= n)
-                rc = fp_errorf(err, errlen, -EINVAL, "layers[%zu]: vertex %u past the mesh's %zu",
-                               li, r->vertices[i], n);
+                rc = fp_errorf(err, errlen, -EINVAL, "vertex %u past the mesh's %zu",
+                               r->vertices[i], n);
             else s[k++] = r->vertices[i];
     } else if (r->kind == FP_STACK_REGION_RIG) {
         size_t want = 0;
@@ -66,16 +62,16 @@ static int region_seeds(const fp_stack_layer *l, size_t li, const fp_session *ba
             if (!fp_rig_region_get(rig, i, &d) && !strcmp(d.name, r->names[0])) want = i + 1;
         }
         const uint8_t *owner = fp_rig_vertex_regions(rig);
-        if (!want) rc = fp_errorf(err, errlen, -EINVAL, "layers[%zu]: the rig %s has no region \"%s\"",
-                                  li, fp_rig_name(rig), r->names[0]);
+        if (!want) rc = fp_errorf(err, errlen, -EINVAL, "the rig %s has no region \"%s\"",
+                                  fp_rig_name(rig), r->names[0]);
         for (size_t v = 0; v < n && !rc; v++)
             if (owner[v] == want) s[k++] = (uint32_t)v;
     } else {
         for (size_t i = 0; i < r->name_count && !rc; i++) {
             long v = fp_rig_landmark_index(rig, r->names[i]);
             if (v < 0 || (size_t)v >= n)
-                rc = fp_errorf(err, errlen, -EINVAL, "layers[%zu]: the rig %s has no landmark \"%s\"",
-                               li, fp_rig_name(rig), r->names[i]);
+                rc = fp_errorf(err, errlen, -EINVAL, "the rig %s has no landmark \"%s\"",
+                               fp_rig_name(rig), r->names[i]);
             else s[k++] = (uint32_t)v;
         }
     }
@@ -85,26 +81,34 @@ static int region_seeds(const fp_stack_layer *l, size_t li, const fp_session *ba
     return 0;
 }
 
-/* A vertex layer's weights on the base's loaded shape (fp_stack.h's falloff). */
-static int region_weights(layer *L, const fp_stack_layer *l, size_t li, const fp_session *base,
-                          double mm_per_unit, char *err, size_t errlen)
+int fp_stack_region_weights(const fp_stack_region *region, const fp_session *base,
+                            double mm_per_unit, fp_stack_weights *L, char *err, size_t errlen)
 {
+    memset(L, 0, sizeof *L);
+    if (!region || !base || region->kind == FP_STACK_REGION_CHANNELS || !(mm_per_unit > 0))
+        return fp_errorf(err, errlen, -EINVAL, "fp_stack_region_weights: bad argument");
     size_t n = fp_session_vertex_count(base);
     const float *x = fp_session_loaded(base);
     L->w = calloc(n, sizeof *L->w);
     L->sup = malloc(n * sizeof *L->sup);
     L->slope = calloc(n, sizeof *L->slope);
-    if (!L->w || !L->sup || !L->slope) return fp_errorf(err, errlen, -ENOMEM, "stack: out of memory");
-    if (l->region.kind == FP_STACK_REGION_ALL) {
+    if (!L->w || !L->sup || !L->slope) {
+        fp_stack_weights_free(L);
+        return fp_errorf(err, errlen, -ENOMEM, "stack: out of memory");
+    }
+    if (region->kind == FP_STACK_REGION_ALL) {
         for (size_t v = 0; v < n; v++) L->w[v] = 1, L->sup[v] = (uint32_t)v;
         L->nsup = n;
         return 0;
     }
     uint32_t *seeds = NULL;
     size_t ns = 0;
-    int rc = region_seeds(l, li, base, n, &seeds, &ns, err, errlen);
-    if (rc) return rc;
-    double core = l->region.core_mm / mm_per_unit, fall = l->region.falloff_mm / mm_per_unit;
+    int rc = region_seeds(region, base, n, &seeds, &ns, err, errlen);
+    if (rc) {
+        fp_stack_weights_free(L);
+        return rc;
+    }
+    double core = region->core_mm / mm_per_unit, fall = region->falloff_mm / mm_per_unit;
     double reach = core + fall, lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (size_t i = 0; i < ns; i++) {
         L->w[seeds[i]] = 2; /* marks a seed; 1 below */
@@ -140,6 +144,15 @@ static int region_weights(layer *L, const fp_stack_layer *l, size_t li, const fp
     }
     free(seeds);
     return 0;
+}
+
+void fp_stack_weights_free(fp_stack_weights *w)
+{
+    if (!w) return;
+    free(w->w);
+    free(w->sup);
+    free(w->slope);
+    memset(w, 0, sizeof *w);
 }
 
 /* Open layer i's take and, for vertex layers, its weights. */
@@ -183,9 +196,9 @@ static int open_layer(fp_stack_player *p, size_t i, const char *mesh_path,
                                  "channel \"%s\"", p->stack->path, i, l->region.names[c]);
         return 0;
     }
-    rc = region_weights(L, l, i, fp_take_player_session(base), fp_take_player_mm_per_unit(base),
-                        why, sizeof why);
-    return rc ? fp_errorf(err, errlen, rc, "%s: %s", p->stack->path, why) : 0;
+    rc = fp_stack_region_weights(&l->region, fp_take_player_session(base),
+                                 fp_take_player_mm_per_unit(base), &L->wt, why, sizeof why);
+    return rc ? fp_errorf(err, errlen, rc, "%s: layers[%zu]: %s", p->stack->path, i, why) : 0;
 }
 
 int fp_stack_player_open(const char *stack_path, const char *mesh_path,
@@ -297,14 +310,10 @@ static const fp_control_set *compose_channels(fp_stack_player *p, const fp_contr
     return copy;
 }
 
-/* Layer i composed into p->out with its weight in time f. */
-static void compose_layer(fp_stack_player *p, size_t i)
+double fp_stack_blend(float *o, const float *y, const float *x0, const fp_stack_weights *L,
+                      double f, fp_stack_mode mode, bool *limited)
 {
-    layer *L = &p->layers[i];
-    const bool add = p->stack->layers[i].mode == FP_STACK_ADD;
-    const float *y = fp_session_positions(fp_take_player_session(L->tp));
-    const float *x0 = fp_session_loaded(fp_take_player_session(p->layers[0].tp));
-    float *o = p->out;
+    const bool add = mode == FP_STACK_ADD;
     double g = 0; /* the blend's gradient term, |L - P| |w'| f, over the falloff band */
     for (size_t k = 0; k < L->nsup; k++) {
         uint32_t v = L->sup[k];
@@ -312,16 +321,12 @@ static void compose_layer(fp_stack_player *p, size_t i)
         const float *ref = add ? x0 + 3 * v : o + 3 * v;
         double dx = (double)y[3 * v] - ref[0], dy = (double)y[3 * v + 1] - ref[1],
                dz = (double)y[3 * v + 2] - ref[2];
-        double t = sqrt(dx * dx + dy * dy + dz * dz) * L->slope[v] * L->f;
+        double t = sqrt(dx * dx + dy * dy + dz * dz) * L->slope[v] * f;
         if (t > g) g = t;
     }
-    double f = L->f;
-    if (g > FP_STACK_BLEND_MARGIN) {
-        f *= FP_STACK_BLEND_MARGIN / g;
-        p->limited++;
-    }
-    L->f = f;
-    for (size_t k = 0; k < L->nsup; k++) {
+    if (limited) *limited = g > FP_STACK_BLEND_MARGIN;
+    if (g > FP_STACK_BLEND_MARGIN) f *= FP_STACK_BLEND_MARGIN / g;
+    for (size_t k = 0; k < L->nsup && f > 0; k++) {
         uint32_t v = L->sup[k];
         double w = L->w[v] * f;
         for (int a = 0; a < 3; a++) {
@@ -330,6 +335,18 @@ static void compose_layer(fp_stack_player *p, size_t i)
             else o[j] = w >= 1 ? y[j] : (float)(o[j] + w * ((double)y[j] - o[j]));
         }
     }
+    return f;
+}
+
+/* Layer i composed into p->out with its weight in time f. */
+static void compose_layer(fp_stack_player *p, size_t i)
+{
+    layer *L = &p->layers[i];
+    bool limited = false;
+    L->f = fp_stack_blend(p->out, fp_session_positions(fp_take_player_session(L->tp)),
+                          fp_session_loaded(fp_take_player_session(p->layers[0].tp)), &L->wt, L->f,
+                          p->stack->layers[i].mode, &limited);
+    p->limited += limited;
 }
 
 int fp_stack_player_next(fp_stack_player *p, fp_take_frame *frame, fp_frame_stats *st,
@@ -368,7 +385,7 @@ unsigned long fp_stack_player_limited(const fp_stack_player *p) { return p->limi
 
 const float *fp_stack_player_region_weights(const fp_stack_player *p, size_t i)
 {
-    return p && i < p->stack->layer_count ? p->layers[i].w : NULL;
+    return p && i < p->stack->layer_count ? p->layers[i].wt.w : NULL;
 }
 
 const float *fp_stack_player_layer_positions(fp_stack_player *p, size_t i)
@@ -388,9 +405,7 @@ void fp_stack_player_close(fp_stack_player **pp)
     fp_stack_player *p = *pp;
     for (size_t i = 0; i < FP_STACK_MAX_LAYERS; i++) {
         fp_take_player_close(&p->layers[i].tp);
-        free(p->layers[i].w);
-        free(p->layers[i].sup);
-        free(p->layers[i].slope);
+        fp_stack_weights_free(&p->layers[i].wt);
     }
     fp_stack_free(&p->stack);
     free(p->out);

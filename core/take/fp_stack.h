@@ -142,6 +142,26 @@ void fp_stack_region_clear(fp_stack_region *region);
  *  "all"... into buf. Returns buf. */
 const char *fp_stack_region_text(const fp_stack_region *region, char *buf, size_t n);
 
+/* ---- overdub: a new pass on top of a stack or a take (run/live --over) ----------------- */
+
+/** The stack a pass goes over: `over` a .fpstack (loaded) or a take (checked that it opens;
+ *  a stack of it alone, its path as given). Returns 0 and *out, or the loader's or reader's
+ *  code with err. */
+int fp_stack_over_open(const char *over, fp_stack **out, char *err, size_t errlen);
+
+/** Layer i's take path of the stack opened from `over` (the path to open: as
+ *  fp_stack_take_path for a stack, `over` itself for a take). Returns 0 or -ENAMETOOLONG. */
+int fp_stack_over_take_path(const char *over, const fp_stack *s, size_t i, char *buf, size_t n);
+
+/** Write the overdub's new stack: the layers of `old` (opened from `over`) with their takes'
+ *  paths rewritten for dir (a take in dir by its name, others absolute), then `pass` with
+ *  take_path, as dir/SLATE_SNNN.fpstack (the next free number; never over a file). path_out
+ *  (n bytes) gets its path. Returns 0 or a negative errno with err (-ENOSPC too many layers,
+ *  -ENOENT a take gone, the save's). */
+int fp_stack_over_save(const char *over, const fp_stack *old, const fp_stack_layer *pass,
+                       const char *dir, const char *take_path, const char *slate,
+                       char *path_out, size_t n, char *err, size_t errlen);
+
 /** Free the stack (its layers' vertices too) and set *s to NULL. NULL-safe. */
 void fp_stack_free(fp_stack **s);
 

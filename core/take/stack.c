@@ -1,4 +1,5 @@
 /* fp_stack: the stack file (fp_stack.h, docs/stack.md): parse, check, write, --layer specs. */
+#define _XOPEN_SOURCE 700 /* realpath */
 #include "fp_stack.h"
 #include "fp_take.h"
 #include "fp_error.h"
@@ -583,4 +584,74 @@ const char *fp_stack_region_text(const fp_stack_region *r, char *buf, size_t n)
         k += snprintf(buf + k, n - (size_t)k, ", core %g mm, falloff %g mm", r->core_mm, r->falloff_mm);
     if (r->name[0] && k > 0 && (size_t)k < n) snprintf(buf + k, n - (size_t)k, ")");
     return buf;
+}
+
+/* ---- overdub --------------------------------------------------------------------------- */
+
+int fp_stack_over_open(const char *over, fp_stack **out, char *err, size_t errlen)
+{
+    if (out) *out = NULL;
+    if (!over || !out) return fp_errorf(err, errlen, -EINVAL, "--over: no stack or take");
+    if (fp_stack_is_stack_path(over)) return fp_stack_load(over, out, err, errlen);
+    fp_take_reader *r = NULL;
+    int rc = fp_take_reader_open(over, &r, err, errlen);
+    fp_take_reader_close(&r);
+    if (rc) return rc;
+    fp_stack *s = fp_stack_create();
+    if (!s) return fp_errorf(err, errlen, -ENOMEM, "out of memory");
+    fp_stack_layer base;
+    fp_stack_layer_init(&base, over);
+    if ((rc = fp_stack_append(s, &base, err, errlen))) fp_stack_free(&s);
+    *out = s;
+    return rc;
+}
+
+int fp_stack_over_take_path(const char *over, const fp_stack *s, size_t i, char *buf, size_t n)
+{
+    if (fp_stack_is_stack_path(over)) return fp_stack_take_path(s, i, buf, n);
+    return snprintf(buf, n, "%s", over) < (int)n ? 0 : -ENAMETOOLONG;
+}
+
+/* path as stored in a stack in dir: its name alone when it lies in dir, else absolute. */
+static int stack_relative(const char *dir, const char *path, char *buf, size_t n)
+{
+    char *rd = realpath(dir, NULL), *rp = realpath(path, NULL);
+    int rc = rd && rp ? 0 : -errno;
+    if (!rc) {
+        const char *slash = strrchr(rp, '/');
+        size_t k = strlen(rd);
+        const char *name = slash && (size_t)(slash - rp) == k && !strncmp(rp, rd, k) ? slash + 1 : rp;
+        rc = snprintf(buf, n, "%s", name) < (int)n ? 0 : -ENAMETOOLONG;
+    }
+    free(rd);
+    free(rp);
+    return rc;
+}
+
+int fp_stack_over_save(const char *over, const fp_stack *old, const fp_stack_layer *pass,
+                       const char *dir, const char *take_path, const char *slate,
+                       char *path_out, size_t n, char *err, size_t errlen)
+{
+    if (!over || !old || !pass || !dir || !take_path || !path_out)
+        return fp_errorf(err, errlen, -EINVAL, "fp_stack_over_save: NULL argument");
+    fp_stack *s = fp_stack_create();
+    if (!s) return fp_errorf(err, errlen, -ENOMEM, "out of memory");
+    char p[FP_STACK_PATH_MAX];
+    int rc = 0;
+    for (size_t i = 0; !rc && i < old->layer_count; i++) {
+        fp_stack_layer l = old->layers[i];
+        if ((rc = fp_stack_over_take_path(over, old, i, p, sizeof p)) ||
+            (rc = stack_relative(dir, p, l.take, sizeof l.take)))
+            fp_errorf(err, errlen, rc, "%s: %s", p, strerror(-rc));
+        else rc = fp_stack_append(s, &l, err, errlen);
+    }
+    fp_stack_layer top = *pass;
+    if (!rc && (rc = stack_relative(dir, take_path, top.take, sizeof top.take)))
+        fp_errorf(err, errlen, rc, "%s: %s", take_path, strerror(-rc));
+    if (!rc) rc = fp_stack_append(s, &top, err, errlen);
+    if (!rc && (rc = fp_stack_next_path(dir, slate ? slate : "take", path_out, n)))
+        fp_errorf(err, errlen, rc, "%s: no stack name for slate %s", dir, slate ? slate : "take");
+    if (!rc) rc = fp_stack_save(s, path_out, err, errlen);
+    fp_stack_free(&s);
+    return rc;
 }
