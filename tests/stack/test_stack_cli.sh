@@ -10,7 +10,9 @@
 #     before 1.0 s and after 2.0 s (bit for bit), the cross-fades inside the range;
 #     a channel layer (jaw.open) makes the base play as the take whose channel it carries;
 #  4. a pass over the stack (the old stack kept); info and takes show stacks and their layers;
-#     refusals before any work (exit 64 usage, 66 missing).
+#     refusals before any work (exit 64 usage, 66 missing);
+#  5. live --over under Xvfb: a take over the base punched in and out with I writes a stack
+#     whose pass covers the punched range only (checked as 3).
 # SPDX-License-Identifier: GPL-3.0-or-later
 set -u
 build=${FP_BUILD_DIR:-build}
@@ -105,4 +107,24 @@ expect 66 "$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$claps" --take-dir
 expect 64 "$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$claps" --take-dir "$takes" --over "$base" --punch 2:1
 echo '{"format":"facepuppet-stack","version":1,"layers":[{"take":"face_T001.fptake","mode":"add"}]}' >"$takes/bad.fpstack"
 expect 65 "$fp" play "$takes/bad.fpstack" -o "$tmp/bad.obj"
+
+# ---- 5. live --over: pre-roll, I punches in and out, T ends the take: a new stack ------------
+if command -v xvfb-run >/dev/null && "$fp" live --help >/dev/null 2>&1; then
+    live_dir="$tmp/live"
+    mkdir -p "$live_dir"
+    cp "$base" "$live_dir/"
+    LIBGL_ALWAYS_SOFTWARE=1 xvfb-run -a -s "-screen 0 640x360x24" "$fp" live "${pd[@]}" -q --mesh "$mesh" \
+        --input "replay:$grab,loop=1" --take-dir "$live_dir" --slate face --over "$live_dir/face_T001.fptake" \
+        --layer mouth --script "wait frames 3; key T; wait frames 20; key I; wait frames 30; key I; wait frames 10; \
+        shot $tmp/live.png; key T; wait frames 2; close" >"$tmp/live.out" 2>&1 || { cat "$tmp/live.out"; fail "live --over exited $?"; }
+    grep -E "punch|stack" "$tmp/live.out"
+    lstack="$live_dir/face_S001.fpstack"
+    [ -f "$lstack" ] || fail "live --over wrote no stack"
+    range=$(python3 -c "import json,sys; l=json.load(open(sys.argv[1]))['layers'][1]; assert l['region']['name']=='mouth' and 0<l['in']<l['out'], l; print(l['in'], l['out'])" "$lstack") ||
+        fail "the live stack's pass has no punched range"
+    echo "live: the pass punched in and out at $range s"
+    "$check" punch "$lstack" $range || fail "the live stack's punch"
+else
+    echo "SKIP (live only): no xvfb-run or live is not built"
+fi
 echo "test_stack_cli: ok"

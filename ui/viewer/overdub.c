@@ -204,7 +204,7 @@ void fp_voverdub_draw(const fp_voverdub *o, fp_render *r, int w, int h)
     const size_t lanes = o->stack->layer_count + 1;
     const float lh = 12 * scale, top = y - 8 * scale - lh * (float)lanes;
     double span = o->stack_s > 0 ? fmax(o->stack_s, o->t) : fmax(1, o->t);
-    char text[160], region[200];
+    char text[320], region[80];
     bool solo = false;
     for (size_t i = 1; i < o->stack->layer_count; i++) solo |= o->stack->layers[i].solo;
     for (size_t i = 0; i < o->stack->layer_count; i++) {
@@ -214,7 +214,7 @@ void fp_voverdub_draw(const fp_voverdub *o, fp_render *r, int w, int h)
                  i ? short_region(&l->region, region, sizeof region) : "base",
                  i == 0 ? "" : l->mode == FP_STACK_ADD ? "add" : "replace", l->mute ? " M" : "",
                  l->solo ? " S" : "");
-        text[40] = '\0';
+        text[48] = '\0';
         bool plays = i == 0 || (!l->mute && (!solo || l->solo));
         lane(r, w, h, x, top + lh * (float)i, sw, lh, scale, text, l->in_s, l->out_s, span,
              i == 0 ? base : plays ? on : off);
@@ -222,7 +222,7 @@ void fp_voverdub_draw(const fp_voverdub *o, fp_render *r, int w, int h)
     double a = o->punch ? o->pass.in_s : 0, b = o->punch == 2 ? o->pass.out_s : o->recording ? o->t : 0;
     snprintf(text, sizeof text, "pass %s %s%s", short_region(&o->pass.region, region, sizeof region),
              o->pass.mode == FP_STACK_ADD ? "add" : "replace", o->punch == 0 ? " (pre-roll)" : "");
-    text[40] = '\0';
+    text[48] = '\0';
     lane(r, w, h, x, top + lh * (float)(lanes - 1), sw, lh, scale, text, o->punch || o->recording ? a : 0,
          o->punch ? b : 0, span, pass);
     if (o->recording) {
