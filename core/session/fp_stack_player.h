@@ -103,6 +103,7 @@ typedef struct fp_stack_weights {
  *  Cost: O(vertices x region vertices) within the region's reach, once. */
 int fp_stack_region_weights(const fp_stack_region *region, const fp_session *base,
                             double mm_per_unit, fp_stack_weights *out, char *err, size_t errlen);
+/** Free w's arrays and zero *w. NULL-safe. */
 void fp_stack_weights_free(fp_stack_weights *w);
 
 /** One layer's blend into the composite `out` (n x 3, in place): the layer's frame `layer`,

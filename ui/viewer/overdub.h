@@ -44,6 +44,7 @@ typedef struct fp_voverdub {
  *  loader's / --layer's code with err. */
 int fp_voverdub_init(fp_voverdub *o, const char *over, const char *layer, char *err,
                      size_t errlen);
+/** Close the playback and free the stack and the pass's region. */
 void fp_voverdub_free(fp_voverdub *o);
 
 /** Each frame after the session's step (and once after the last take stopped): a take that
