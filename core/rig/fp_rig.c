@@ -258,11 +258,9 @@ static int parse_regions(const ctx *c, fp_rig *r, const cJSON *root)
     int nr = cJSON_GetArraySize(rs);
     if (nr > FP_RIG_MAX_REGIONS) return bad(c, "regions", "more than %d regions", FP_RIG_MAX_REGIONS);
     r->kind = calloc(r->n, 1);
-    uint8_t *owner = calloc(r->n, 1); /* region index + 1 that claimed the vertex */
-    if (!r->kind || !owner) {
-        free(owner);
+    uint8_t *owner = r->owner = calloc(r->n, 1); /* region index + 1 that claimed the vertex */
+    if (!r->kind || !owner)
         return fp_errorf(c->err, c->errlen, -ENOMEM, "%s: out of memory", c->file);
-    }
     int i = 0;
     rc = 0;
     for (const cJSON *g = rs->child; g && !rc; g = g->next, i++) {
@@ -308,7 +306,6 @@ static int parse_regions(const ctx *c, fp_rig *r, const cJSON *root)
             }
         }
     }
-    free(owner);
     if (rc) return rc;
     r->region_count = (size_t)nr;
     size_t skull = 0, jaw = 0;
@@ -879,6 +876,7 @@ void fp_rig_free(fp_rig **rig)
 {
     if (!rig || !*rig) return;
     free((*rig)->kind);
+    free((*rig)->owner);
     free((*rig)->w);
     free((*rig)->m);
     free((*rig)->g);
@@ -984,6 +982,7 @@ void fp_rig_axes(const fp_rig *r, float up[3], float forward[3], float left[3])
 }
 
 const uint8_t *fp_rig_vertex_kinds(const fp_rig *r) { return r ? r->kind : NULL; }
+const uint8_t *fp_rig_vertex_regions(const fp_rig *r) { return r ? r->owner : NULL; }
 size_t fp_rig_region_count(const fp_rig *r) { return r ? r->region_count : 0; }
 
 int fp_rig_region_get(const fp_rig *r, size_t i, fp_rig_region_desc *out)

@@ -152,6 +152,9 @@ void fp_rig_axes(const fp_rig *rig, float up[3], float forward[3], float left[3]
 
 /** Region kind of every vertex: n bytes of FP_RIG_* values, owned by the rig. */
 const uint8_t *fp_rig_vertex_kinds(const fp_rig *rig);
+/** Region of every vertex: n bytes, the region's index (fp_rig_region_get) + 1, or 0 for a
+ *  vertex in no region; owned by the rig, valid while it lives. [any-thread] */
+const uint8_t *fp_rig_vertex_regions(const fp_rig *rig);
 
 /** Number of regions and the i-th (0 <= i < count). Returns 0 or -EINVAL (i out of range). */
 size_t fp_rig_region_count(const fp_rig *rig);

@@ -40,6 +40,7 @@ struct fp_rig {
     size_t region_count;
     region regions[FP_RIG_MAX_REGIONS];
     uint8_t *kind;              /* n */
+    uint8_t *owner;             /* n: region index + 1 of each vertex, 0 in none */
     size_t landmark_count;
     landmark landmarks[FP_RIG_MAX_LANDMARKS];
     size_t channel_count;

@@ -1,5 +1,7 @@
 /*
- * fp_take_player.h: a take's frames reproduced one by one, the loop `play` and `export`
+ * fp_take_player.h: a take's (or a stack's: a path ending in .fpstack opens an
+ * fp_stack_player, fp_stack_player.h, whose base layer gives the session, reader and header,
+ * and whose composite is fp_take_player_positions) frames reproduced one by one, the loop `play` and `export`
  * share: open the take (core/take), make a session on its mesh (checked against the take's
  * crc32, its rig, no inputs; the mapping is never called), and apply each stored frame with
  * fp_session_play_frame (engine, guard, history as recorded), so every frame's positions are
@@ -53,6 +55,18 @@ const fp_take_header *fp_take_player_header(const fp_take_player *p);
 /** The mesh path the session was made from (the take's or the one given); the player's,
  *  valid until fp_take_player_close. */
 const char *fp_take_player_mesh_path(const fp_take_player *p);
+
+/** The frame's positions: the session's (a take), or the stack's composite (a .fpstack):
+ *  n x 3 floats, the player's, valid until the next fp_take_player_next. */
+const float *fp_take_player_positions(const fp_take_player *p);
+
+/** Save the frame's positions (fp_take_player_positions) on the session's mesh to path, as
+ *  fp_session_save_ex (format by extension; *dropped may be NULL). Returns 0 or its code. */
+int fp_take_player_save(const fp_take_player *p, const char *path, unsigned *dropped, char *err,
+                        size_t errlen);
+
+/** The stack being played (fp_stack_player.h), NULL for a take. The player's. */
+struct fp_stack_player *fp_take_player_stack(fp_take_player *p);
 
 /** Millimetres per mesh unit of the take: 1 / the scale of its recorded calibration (the
  *  first hand that has one), else the session's (the rig's, or detected from the head). */

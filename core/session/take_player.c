@@ -1,5 +1,6 @@
 /* fp_take_player: the frame loop of play and export (fp_take_player.h). */
 #include "fp_take_player.h"
+#include "fp_stack_player.h"
 #include "fp_session_take.h"
 #include "fp_error.h"
 #include "fp_mesh.h"
@@ -8,6 +9,7 @@
 #include <stdlib.h>
 
 struct fp_take_player {
+    fp_stack_player *stack;    /* a stack: its base layer's player does the rest */
     fp_take_reader *reader;
     fp_session *session;
     const char *mesh;
@@ -32,6 +34,16 @@ int fp_take_player_open_logged(const char *take_path, const char *mesh_path,
     fp_take_player *p = calloc(1, sizeof *p);
     if (!p)
         return fp_errorf(err, errlen, -ENOMEM, "play: out of memory");
+    if (fp_stack_is_stack_path(take_path)) {
+        int rc = fp_stack_player_open(take_path, mesh_path, plugin_path, log, log_user, &p->stack,
+                                      err, errlen);
+        if (rc) {
+            free(p);
+            return rc;
+        }
+        *out = p;
+        return 0;
+    }
     int rc = fp_take_reader_open(take_path, &p->reader, err, errlen);
     if (rc) {
         free(p);
@@ -75,6 +87,8 @@ fail:
 int fp_take_player_next(fp_take_player *p, fp_take_frame *frame, fp_frame_stats *st,
                         char *err, size_t errlen)
 {
+    if (p->stack)
+        return fp_stack_player_next(p->stack, frame, st, err, errlen);
     int rc = fp_take_reader_next(p->reader, frame, err, errlen);
     if (rc != 1)
         return rc;
@@ -83,16 +97,46 @@ int fp_take_player_next(fp_take_player *p, fp_take_frame *frame, fp_frame_stats 
     return 1;
 }
 
-fp_session *fp_take_player_session(fp_take_player *p) { return p->session; }
-fp_take_reader *fp_take_player_reader(fp_take_player *p) { return p->reader; }
+/* The player that holds the session and reader: a stack's base layer's, or p. */
+static const fp_take_player *own(const fp_take_player *p)
+{
+    return p->stack ? fp_stack_player_base(p->stack) : p;
+}
+
+fp_session *fp_take_player_session(fp_take_player *p) { return own(p)->session; }
+fp_take_reader *fp_take_player_reader(fp_take_player *p) { return own(p)->reader; }
 const fp_take_header *fp_take_player_header(const fp_take_player *p)
 {
-    return fp_take_reader_header(p->reader);
+    return fp_take_reader_header(own(p)->reader);
 }
-const char *fp_take_player_mesh_path(const fp_take_player *p) { return p->mesh; }
+const char *fp_take_player_mesh_path(const fp_take_player *p) { return own(p)->mesh; }
+fp_stack_player *fp_take_player_stack(fp_take_player *p) { return p->stack; }
+
+const float *fp_take_player_positions(const fp_take_player *p)
+{
+    return p->stack ? fp_stack_player_positions(p->stack) : fp_session_positions(p->session);
+}
+
+int fp_take_player_save(const fp_take_player *p, const char *path, unsigned *dropped, char *err,
+                        size_t errlen)
+{
+    const fp_session *s = own(p)->session;
+    if (!p->stack)
+        return fp_session_save_ex(s, path, dropped, err, errlen);
+    fp_mesh out = *fp_session_mesh(s);
+    out.positions = (float *)fp_stack_player_positions(p->stack);
+    out.normals = malloc(out.vertex_count * 3 * sizeof(float));
+    if (!out.normals)
+        return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", path);
+    fp_mesh_compute_normals(&out);
+    int rc = fp_mesh_save_ex(&out, path, dropped, err, errlen);
+    free(out.normals);
+    return rc;
+}
 
 double fp_take_player_mm_per_unit(const fp_take_player *p)
 {
+    p = own(p);
     const fp_take_header *h = fp_take_reader_header(p->reader);
     for (int k = 0; k < FP_HANDS; k++)
         if (h->calibration[k].present && h->calibration[k].scale > 0)
@@ -106,6 +150,7 @@ void fp_take_player_close(fp_take_player **pp)
     if (!pp || !*pp)
         return;
     fp_take_player *p = *pp;
+    fp_stack_player_close(&p->stack);
     fp_session_destroy(&p->session);
     fp_take_reader_close(&p->reader);
     free(p);

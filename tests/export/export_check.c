@@ -1,5 +1,6 @@
-/* fp-export-check TAKE FILE [--max-error MM] [--fps F]: checks an export against its take,
- * frame by frame. The take is played again (fp_take_player: bit-identical frames), and:
+/* fp-export-check TAKE|STACK FILE [--max-error MM] [--fps F]: checks an export against its take
+ * (a stack: its composite, fp_take_player_positions), frame by frame. The take is played
+ * again (fp_take_player: bit-identical frames), and:
  *   .pc2 / .mdd  read back with their own header parsing here: points, frames (and MDD's
  *                times) as the take says, every float32 bit-identical to the played frame;
  *   .gltf / .glb read back with tinygltf (gltf_anim.cpp, not core/mesh); the animation
@@ -108,7 +109,7 @@ int main(int argc, char **argv)
         size_t k = 0, diff = 0;
         while (fp_take_player_next(p, &f, NULL, err, sizeof err) == 1) {
             if (k == 0) t0 = f.time_ns;
-            const float *pos = fp_session_positions(s);
+            const float *pos = fp_take_player_positions(p);
             const unsigned char *q = b + hdr + k * n * 12;
             for (size_t i = 0; i < 3 * n; i++) {
                 uint32_t want;
@@ -143,7 +144,7 @@ int main(int argc, char **argv)
         size_t worst_frame = 0, k = 0;
         while (fp_take_player_next(p, &f, NULL, err, sizeof err) == 1) {
             if (k == 0) t0 = f.time_ns;
-            const float *pos = fp_session_positions(s);
+            const float *pos = fp_take_player_positions(p);
             fp_test_gltf_anim_weights(&a, (double)(f.time_ns - t0) * 1e-9, w);
             for (size_t j = 0; j < a.vertices; j++) {
                 const float *want = pos + 3 * (size_t)a.source_vertex[j];

@@ -61,11 +61,12 @@ static uint64_t sink_frames(const sink *k)
 static void usage(FILE *f)
 {
     fprintf(f,
-        "usage: facepuppet export TAKE --format gltf|glb|pc2|mdd|obj-seq|png-seq [--out PATH]\n"
+        "usage: facepuppet export TAKE|STACK --format gltf|glb|pc2|mdd|obj-seq|png-seq [--out PATH]\n"
         "                         [--range IN-OUT] [--resample F] [--max-error MM] [--mesh FILE]\n"
         "                         [--size WxH] [--camera YAW,PITCH[,ZOOM]] [--force]\n\n"
         "Play a take's frames from the control sets it stored (as `play`: bit-identical to the\n"
-        "recording) and write them for an animator's tools:\n"
+        "recording; a STACK, .fpstack: its layers composed as `play` does) and write them\n"
+        "for an animator's tools:\n"
         "  gltf, glb   glTF 2.0: the mesh with its UVs and materials, K morph targets and one\n"
         "              animation whose weights channel has a key at every frame (Blender,\n"
         "              Unreal, Unity). K is the fewest principal components of the frames'\n"
@@ -261,7 +262,7 @@ static int export_parse(int argc, char **argv, export_args *a)
         }
     }
     if (argc - optind != 1) {
-        fprintf(stderr, "facepuppet export: give one TAKE file (see --help)\n");
+        fprintf(stderr, "facepuppet export: give one TAKE or STACK file (see --help)\n");
         return FP_EXIT_USAGE;
     }
     a->take_path = argv[optind];
@@ -506,7 +507,7 @@ static int walk_take(export_walk *w)
         const bool after_in = !w->in.set || position(&w->in, i, f.time_ns, w->h, w->tc_in) >= w->in.value;
         const bool before_out = !w->out.set || position(&w->out, i, f.time_ns, w->h, w->tc_in) <= w->out.value;
         if (after_in && before_out) {
-            if ((rc = walk_frame(w, fp_session_positions(w->s), f.time_ns, err, sizeof err))) {
+            if ((rc = walk_frame(w, fp_take_player_positions(w->p), f.time_ns, err, sizeof err))) {
                 fprintf(stderr, "%sfacepuppet export: %s\n", w->bar ? "\n" : "", err);
                 return fp_app_exit_code(rc, FP_APP_OUTPUT);
             }

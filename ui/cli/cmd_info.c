@@ -4,6 +4,7 @@
 #include "command.h"
 #include "fp_file.h"
 #include "fp_mesh.h"
+#include "app_stack.h"
 
 #include <getopt.h>
 #include <math.h>
@@ -111,7 +112,8 @@ static int info_main(int argc, char **argv)
                    "A mesh (OBJ, PLY, OFF, STL, glTF): vertices, triangles, bounds, units.\n"
                    "A recording (joints CSV, angles CSV, event log): frames, rate, hands, duration.\n"
                    "A rig (RIG.json): regions, landmarks, hinge, channels; checked against its mesh.\n"
-                   "A take (.fptake): its header, frames, timecode, and where it was cut if it was.\n");
+                   "A take (.fptake): its header, frames, timecode, and where it was cut if it was.\n"
+                   "A stack (.fpstack): its layers (take, region, mode, range, gain, mute, solo).\n");
         return argc == 2 ? FP_EXIT_OK : FP_EXIT_USAGE;
     }
     if (argv[1][0] == '-' && argv[1][1]) { /* an option it does not have (a file: ./-name) */
@@ -121,6 +123,7 @@ static int info_main(int argc, char **argv)
     }
     const char *dot = strrchr(argv[1], '.');
     if (dot && !strcasecmp(dot, ".json")) return fp_app_rig_info(argv[1]);
+    if (fp_stack_is_stack_path(argv[1])) return fp_app_stack_info(argv[1]);
     if (is_take(argv[1])) return fp_app_take_info(argv[1]);
     return is_mesh(argv[1]) ? mesh_info(argv[1]) : recording_info(argv[1]);
 }

@@ -8,6 +8,7 @@
 
 #ifdef FP_HAVE_UI
 #include "app_util.h"
+#include "app_stack.h"
 #include "fp_error.h"
 #include "fp_session.h"
 #include "fp_viewer.h"
@@ -51,6 +52,12 @@ static void usage(FILE *f)
         "      --take-dir DIR     T (or the pedal's middle button) records takes in DIR\n"
         "      --slate NAME       the takes' slate (default \"scene1\"); numbers go up per slate\n"
         "      --countdown S      count S seconds down before a take starts\n"
+        "      --over STACK_OR_TAKE  overdub: each take is a pass over it (needs --take-dir):\n"
+        "                         T plays it from its start under you (pre-roll), I or the\n"
+        "                         pedal punches in, then out, T (or the pedal) stops; a new\n"
+        "                         stack SLATE_SNNN.fpstack holds the pass on top (docs/stack.md)\n"
+        "      --layer REGION[:MODE]  the passes' region and mode (default mouth:replace; see\n"
+        "                         facepuppet run --help)\n"
         "  -h, --help             this text\n\n"
         "Keys: space pause, E engage, C commit, X cancel, Z undo, R reset, 1 anchored,\n"
         "2 unanchored, [ ] radius, W wireframe, S screenshot, F frame, H hands, Tab HUD,\n"
@@ -60,6 +67,7 @@ static void usage(FILE *f)
         "back/on. The HUD's badge: idle grey, committed teal, ENGAGED green, LIMITED amber,\n"
         "PAUSED white, REC red, PLAYING blue, REVIEW purple; fingertip spheres turn green\n"
         "where they reach the skin, a line joins each to its nearest skin point.\n"
+        "I punches in, then out, in a take over a stack (--over); so does the pedal.\n"
         "Mouse: left orbit (on the take strip: scrub), right pan, wheel zoom. Drop a mesh.\n"
         "Script: also 'scrub F' (the take strip at fraction F), 'camera YAW PITCH [ZOOM]'\n"
         "(degrees; the framed view turned, as export's --camera), keys J K G.\n"
@@ -95,7 +103,7 @@ static char *read_file(const char *path)
 static int live_main(int argc, char **argv)
 {
     enum { OPT_SIZE = FP_SESSION_OPTS_FIRST_FREE, OPT_FRAMES, OPT_SHOT, OPT_SCRIPT, OPT_GPU,
-           OPT_VSYNC, OPT_TAKE_DIR, OPT_SLATE, OPT_COUNTDOWN };
+           OPT_VSYNC, OPT_TAKE_DIR, OPT_SLATE, OPT_COUNTDOWN, OPT_OVER, OPT_LAYER };
     static const struct option own[] = {
         {"out", required_argument, 0, 'o'},
         {"size", required_argument, 0, OPT_SIZE},  {"frames", required_argument, 0, OPT_FRAMES},
@@ -103,6 +111,7 @@ static int live_main(int argc, char **argv)
         {"gpu-warp", no_argument, 0, OPT_GPU},     {"vsync", no_argument, 0, OPT_VSYNC},
         {"take-dir", required_argument, 0, OPT_TAKE_DIR}, {"slate", required_argument, 0, OPT_SLATE},
         {"countdown", required_argument, 0, OPT_COUNTDOWN},
+        {"over", required_argument, 0, OPT_OVER}, {"layer", required_argument, 0, OPT_LAYER},
         {"help", no_argument, 0, 'h'},             {0, 0, 0, 0}};
     struct option opts[FP_SESSION_OPTS_COUNT + sizeof own / sizeof own[0]];
     memcpy(opts + fp_session_opts_longopts(opts), own, sizeof own);
@@ -152,6 +161,8 @@ static int live_main(int argc, char **argv)
             }
             break;
         }
+        case OPT_OVER: vo.over = optarg; break;
+        case OPT_LAYER: vo.layer = optarg; break;
         case 'h': usage(stdout); return FP_EXIT_OK;
         default: usage(stderr); return FP_EXIT_USAGE;
         }
@@ -160,6 +171,10 @@ static int live_main(int argc, char **argv)
         fprintf(stderr, "facepuppet live: unexpected argument '%s'\n", argv[optind]);
         return FP_EXIT_USAGE;
     }
+    fp_app_over over = {.over = vo.over, .layer = vo.layer}; /* checked before the window */
+    int orc = fp_app_over_check(&over, "facepuppet live", vo.take_dir);
+    fp_app_over_free(&over);
+    if (orc) return orc;
     vo.duration_s = sopt.duration_s;
     vo.quiet = sopt.quiet;
     if (vo.screenshot && !vo.frames && !script_arg) {

@@ -22,12 +22,15 @@
 static void usage(FILE *f)
 {
     fprintf(f,
-        "usage: facepuppet play TAKE [--frames-out DIR] [--out FILE] [--export FILE] [--mesh FILE]\n"
-        "                            [--force] [--audio FILE] [--audio-out SPEC] [--audio-offset S]\n\n"
+        "usage: facepuppet play TAKE|STACK [--frames-out DIR] [--out FILE] [--export FILE]\n"
+        "                            [--mesh FILE] [--force] [--audio FILE] [--audio-out SPEC]\n"
+        "                            [--audio-offset S]\n\n"
         "Reproduce a take's frames from the control sets it stored (no input devices, no\n"
         "mapping): the take's mesh (checked against the crc32 in the take), each frame's\n"
         "control set through the same engine step (fold-over guard included), commits,\n"
-        "undo and reset as recorded. The meshes are bit-identical to the recording run's.\n\n"
+        "undo and reset as recorded. The meshes are bit-identical to the recording run's.\n"
+        "A STACK (.fpstack, docs/stack.md) plays every layer's take and composes them per\n"
+        "vertex by region, mode, range, gain, mute and solo (the base's frames are its clock).\n\n"
         "  -o, --out FILE         the last frame's mesh (default: none); format by extension\n"
         "      --frames-out DIR   one mesh per frame, DIR/frame_NNNNNN_tS.SSSs.obj (session\n"
         "                         frame number, time since the take's timecode in); its size\n"
@@ -131,7 +134,7 @@ static int play_main(int argc, char **argv)
         }
     }
     if (argc - optind != 1) {
-        fprintf(stderr, "facepuppet play: give one TAKE file (see --help)\n");
+        fprintf(stderr, "facepuppet play: give one TAKE or STACK file (see --help)\n");
         return FP_EXIT_USAGE;
     }
     const char *take_path = argv[optind];
@@ -187,7 +190,7 @@ static int play_main(int argc, char **argv)
     while ((rc = fp_take_player_next(player, &f, &st, err, sizeof err)) == 1) {
         if (frames == 0)
             first_ns = f.time_ns;
-        if (ex && (rc = fp_export_add(ex, fp_session_positions(s),
+        if (ex && (rc = fp_export_add(ex, fp_take_player_positions(player),
                                       (double)(f.time_ns - first_ns) * 1e-9, err, sizeof err))) {
             fprintf(stderr, "facepuppet play: --export: %s\n", err);
             status = fp_app_exit_code(rc, FP_APP_OUTPUT);
@@ -205,7 +208,7 @@ static int play_main(int argc, char **argv)
             char file[4400];
             snprintf(file, sizeof file, "%s/frame_%06llu_t%.3fs.obj", frames_out,
                      (unsigned long long)f.frame, (double)(f.time_ns - h->time_origin_ns) * 1e-9);
-            if ((rc = fp_session_save(s, file, err, sizeof err))) {
+            if ((rc = fp_take_player_save(player, file, NULL, err, sizeof err))) {
                 fprintf(stderr, "facepuppet play: %s\n", err);
                 status = fp_app_exit_code(rc, FP_APP_OUTPUT);
                 goto done;
@@ -218,7 +221,7 @@ static int play_main(int argc, char **argv)
         goto done;
     }
     unsigned dropped = 0;
-    if (out && (rc = fp_session_save_ex(s, out, &dropped, err, sizeof err))) {
+    if (out && (rc = fp_take_player_save(player, out, &dropped, err, sizeof err))) {
         fprintf(stderr, "facepuppet play: %s\n", err);
         status = fp_app_exit_code(rc, FP_APP_OUTPUT);
         goto done;

@@ -5,6 +5,7 @@
 #include "command.h"
 #include "fp_session.h"
 #include "fp_session_take.h"
+#include "app_stack.h"
 #include "app_export.h"
 #include "app_audio.h"
 #include "session_opts.h"
@@ -55,6 +56,15 @@ static void usage(FILE *f)
         "                         frames and timecode are said at the end, -q or not\n"
         "      --slate NAME       the take's slate (default \"scene1\"); numbers go up per slate\n"
         "      --take-description TEXT  a line stored in the take's header\n"
+        "      --over STACK_OR_TAKE  overdub: the run is a new pass over a stack (.fpstack) or\n"
+        "                         a take; after it a new stack SLATE_SNNN.fpstack in --take-dir\n"
+        "                         holds the old layers and the pass on top (the old one kept)\n"
+        "      --layer REGION[:MODE]  the pass's region and mode (default mouth:replace):\n"
+        "                         mouth, brows, jaw, all, rig:NAME, landmark:NAME[,NAME],\n"
+        "                         channels:NAME[,NAME], vertices:A-B[,C], [@FALLOFF_MM]; MODE\n"
+        "                         replace or add (docs/stack.md)\n"
+        "      --punch IN:OUT     the pass counts only from IN to OUT seconds of the stack,\n"
+        "                         cross-faded inside the range\n"
         "      --budget MS        report a mapping process() slower than MS (default 2)\n");
     fp_app_audio_help(f, true);
     fprintf(f, "\n"
@@ -89,6 +99,7 @@ typedef struct run_args {
     bool force;                    /* --force: outputs that exist are overwritten */
     char free_out[4200];           /* the default --out's next free name, when it exists */
     fp_app_audio audio;            /* --audio, --audio-out, --audio-offset, --timecode */
+    fp_app_over over;              /* --over, --layer, --punch (app_stack.h) */
 } run_args;
 
 /* --out, before any work: a format we write (by extension), a folder we can write in, and no
@@ -120,7 +131,7 @@ static int check_out(run_args *a, bool given)
 static int run_parse(int argc, char **argv, run_args *a)
 {
     enum { OPT_FRAMES_OUT = FP_SESSION_OPTS_FIRST_FREE, OPT_FPS, OPT_BUDGET, OPT_TAKE_DIR,
-           OPT_SLATE, OPT_TAKE_DESC, OPT_EXPORT, OPT_FORCE };
+           OPT_SLATE, OPT_TAKE_DESC, OPT_EXPORT, OPT_FORCE, OPT_OVER, OPT_LAYER, OPT_PUNCH };
     static const struct option own[] = {
         {"out", required_argument, 0, 'o'},        {"frames-out", required_argument, 0, OPT_FRAMES_OUT},
         {"fps", required_argument, 0, OPT_FPS},    {"help", no_argument, 0, 'h'},
@@ -129,6 +140,8 @@ static int run_parse(int argc, char **argv, run_args *a)
         {"take-description", required_argument, 0, OPT_TAKE_DESC},
         {"export", required_argument, 0, OPT_EXPORT},
         {"force", no_argument, 0, OPT_FORCE},
+        {"over", required_argument, 0, OPT_OVER}, {"layer", required_argument, 0, OPT_LAYER},
+        {"punch", required_argument, 0, OPT_PUNCH},
         {0, 0, 0, 0}};
     struct option opts[FP_SESSION_OPTS_COUNT + FP_APP_AUDIO_OPTS_COUNT + sizeof own / sizeof own[0]];
     size_t nshared = fp_session_opts_longopts(opts);
@@ -165,6 +178,9 @@ static int run_parse(int argc, char **argv, run_args *a)
             break;
         case OPT_EXPORT: a->export_file = optarg; break;
         case OPT_FORCE: a->force = true; break;
+        case OPT_OVER: a->over.over = optarg; break;
+        case OPT_LAYER: a->over.layer = optarg; break;
+        case OPT_PUNCH: a->over.punch = optarg; break;
         case OPT_BUDGET:
             if (!fp_parse_decimal(optarg, &a->so.mapping_budget_ms) ||
                 !(a->so.mapping_budget_ms > 0 && a->so.mapping_budget_ms <= 1000)) {
@@ -219,7 +235,7 @@ static int run_settle(run_args *a)
                 "starting with '.')\n", a->slate);
         return FP_EXIT_USAGE;
     }
-    return 0;
+    return fp_app_over_check(&a->over, "facepuppet run", a->take_dir);
 }
 
 /* What the frames did, for the summary line. */
@@ -497,12 +513,14 @@ static int run_main(int argc, char **argv)
     fp_exporter *ex = NULL; /* --export: every frame into one animation file (core/export) */
     char err[2048];
     if ((rc = open_session(a, &path, &take, &s)) ||
+        (rc = fp_app_over_check_mesh(&a->over, "facepuppet run", s)) ||
         (a->export_file && (rc = fp_app_export_open("facepuppet run", a->export_file, fp_session_mesh(s),
                                                     fp_session_head(s)->mm_per_unit, "run", &ex)))) {
         fp_session_destroy(&s);
         fp_plugin_path_clear(&path);
         fp_audio_out_abort(&a->audio.out);
         fp_app_audio_finish(&a->audio, "run", true);
+        fp_app_over_free(&a->over);
         free(a);
         return rc;
     }
@@ -517,6 +535,7 @@ static int run_main(int argc, char **argv)
         fp_plugin_path_clear(&path);
         fp_audio_out_abort(&a->audio.out);
         fp_app_audio_finish(&a->audio, "run", true);
+        fp_app_over_free(&a->over);
         free(a);
         return fp_app_exit_code(rc, FP_APP_INPUT);
     }
@@ -533,9 +552,15 @@ static int run_main(int argc, char **argv)
         fp_session_take_result tr;
         take_rc = fp_session_take_stop(&take, &tr, take_err, sizeof take_err);
         fp_app_print_take(stderr, "facepuppet run", &tr);
+        if (a->over.over && !take_rc && tr.frames) { /* the pass on top of a new stack */
+            int st = fp_app_over_finish(&a->over, "facepuppet run", a->take_dir, tr.path,
+                                        a->slate ? a->slate : FP_TAKE_DEFAULT_SLATE);
+            if (status == FP_EXIT_OK) status = st;
+        }
     }
     int audio_status = fp_app_audio_finish(&a->audio, "run", quiet); /* (a file renamed into place) */
     if (status == FP_EXIT_OK) status = audio_status;
+    fp_app_over_free(&a->over);
     /* Close the record=FILE recordings: a failed write must fail the run. */
     char record_err[1024] = "";
     bool record_failed = fp_session_stop(s, record_err, sizeof record_err) != 0;

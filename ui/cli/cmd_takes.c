@@ -5,6 +5,7 @@
 #include "app_util.h"
 #include "command.h"
 #include "fp_take.h"
+#include "app_stack.h"
 
 #include <cjson/cJSON.h>
 #include "fp_text.h"
@@ -29,6 +30,8 @@ static void usage(FILE *f)
                "that is no take, or whose signature or header is damaged, is \"unreadable\": its\n"
                "slate and take number are what its name gives, it has no timecode, duration or\n"
                "frames (\"-\"; null in JSON), and the reason is under the table (\"message\").\n"
+               "Then the stacks (*.fpstack, layers of takes: docs/stack.md), each with its layers\n"
+               "(take, region, mode, range); --json lists the takes only.\n"
                "  --json   one JSON array instead of the table\n\n"
                "rate and describe rewrite the take's header (its \"rating\" and \"description\";\n"
                "`info`, `takes` and `play` show them) atomically: a temporary file beside the\n"
@@ -241,6 +244,7 @@ static int takes_main(int argc, char **argv)
     if (json) status = print_json(v, n);
     else if (!n) printf("no takes in %s\n", dir);
     else print_table(v, n);
+    if (!json) fp_app_stack_list(dir);  /* the stacks (issue 54), after the takes */
     free(v);
     return status;
 }

@@ -81,6 +81,8 @@ typedef struct fp_viewer_options {
     const char *take_dir;        /* T records takes here (ui/viewer/takes.h); NULL: no takes */
     const char *slate;           /* the takes' slate; NULL: "take" */
     double countdown_s;          /* seconds counted down before a take starts; 0: none */
+    const char *over;            /* --over STACK_OR_TAKE: takes are passes over it (overdub.h) */
+    const char *layer;           /* --layer REGION[:MODE] of those passes; NULL: mouth */
 } fp_viewer_options;
 
 /** What a run measured. Times in milliseconds. */

@@ -13,6 +13,7 @@
 #include "render.h"
 #include "script.h"
 #include "takes.h"
+#include "overdub.h"
 #include "vmath.h"
 #include "vnormals.h"
 
@@ -128,6 +129,7 @@ typedef struct viewer {
     bool committed_shown;     /* last frame committed (HUD) */
     fp_viewer_report rep;
     fp_vtakes takes;          /* T: takes, REC, the review strip (takes.h) */
+    fp_voverdub over;         /* --over: a pass over a stack (overdub.h) */
     int error;                /* a failure that ends the run (screenshot not written) */
     char *err;
     size_t errlen;
@@ -350,6 +352,16 @@ static void take_toggle(viewer *v)
     if (msg[0]) say_kind(v, FP_HUD_TAKE, false, "%s", msg);
 }
 
+/* I, or the pedal's middle button during an overdub's take: punch in or out (overdub.h);
+ * the pedal otherwise starts and stops takes. */
+static void punch(viewer *v, bool pedal)
+{
+    char msg[300];
+    if (fp_voverdub_punch(&v->over, fp_now_ns(), msg, sizeof msg)) say_kind(v, FP_HUD_TAKE, false, "%s", msg);
+    else if (pedal) take_toggle(v);
+    else say(v, "I punches in and out while a take records over a stack (--over)");
+}
+
 static void act(viewer *v, int key)
 {
     switch (key) {
@@ -402,6 +414,7 @@ static void act(viewer *v, int key)
         if (fp_vtakes_review(&v->takes)) say(v, "no take to review%s", v->takes.enabled ? "" : " (--take-dir DIR records takes)");
         break;
     case GLFW_KEY_T: take_toggle(v); break;
+    case GLFW_KEY_I: punch(v, false); break;
     case GLFW_KEY_P: fp_vtakes_play_pause(&v->takes, fp_now_ns()); break;
     case GLFW_KEY_COMMA: fp_vtakes_step(&v->takes, -1); break;
     case GLFW_KEY_PERIOD: fp_vtakes_step(&v->takes, 1); break;
@@ -717,6 +730,7 @@ static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
     y += fp_hud_draw_msgs(&v->msgs, &v->r, w, h, margin, y, max_px, scale, dim, fp_now_ns()) + 4 * scale;
     if (v->rig_on && fp_session_rig(v->s)) y += fp_overlay_rig_legend(&v->r, v->s, w, h, y, scale) + 6 * scale;
     fp_vtakes_draw(&v->takes, &v->r, w, h, fp_now_ns());
+    fp_voverdub_draw(&v->over, &v->r, w, h);
     if (v->help_on) fp_hud_draw_help(&v->r, w, h, scale, help_text, white);
     else fp_render_text(&v->r, w, h, margin, (float)h - 14 * scale, scale, "? keys", dim);
 }
@@ -769,7 +783,7 @@ static void upload(viewer *v)
     size_t nr = fp_session_base_touched(v->s, &ranges);
     bool did = upload_shape(v, true, fp_session_base(v->s), ranges, nr);
     nr = fp_session_touched(v->s, &ranges); /* taken every frame, so the record stays short */
-    const float *review = fp_vtakes_shown(&v->takes);
+    const float *review = fp_voverdub_shown(&v->over) ? fp_voverdub_shown(&v->over) : fp_vtakes_shown(&v->takes);
     int src = review ? SRC_REVIEW : v->gpu_now ? SRC_SURFACE : SRC_SESSION;
     if (src != SRC_SESSION || v->shown_src != SRC_SESSION) {
         const float *p = src == SRC_REVIEW ? review : src == SRC_SURFACE ? v->warp_surface : fp_session_positions(v->s);
@@ -799,7 +813,7 @@ static void gpu_plan(viewer *v)
         "the engine's coefficients could not be read",
         "the fold-over guard composed several maps (the shader draws one)"};
     v->gpu_now = false;
-    if (!v->opt->gpu_warp || !v->gw || fp_vtakes_reviewing(&v->takes)) return;
+    if (!v->opt->gpu_warp || !v->gw || fp_vtakes_reviewing(&v->takes) || fp_voverdub_shown(&v->over)) return;
     const struct csrbf_solver *solver;
     int reason = -1;
     int parts = fp_session_warp_parts(v->s, &v->warp_surface, &solver);
@@ -878,7 +892,7 @@ static void draw(viewer *v, const fp_frame_stats *st, int w, int h)
         else fp_render_set_colors(&v->r, NULL);
     }
     static const float skin[4] = {0.86f, 0.7f, 0.6f, 1.f}, ghost[4] = {0.6f, 0.8f, 1.f, 0.22f};
-    bool reviewing = fp_vtakes_shown(&v->takes) != NULL;
+    bool reviewing = fp_vtakes_shown(&v->takes) || fp_voverdub_shown(&v->over);
     bool deformed = !reviewing && fp_session_positions(v->s) != fp_session_base(v->s);
     /* with a rig the shape is the posed base blended by mobility: drawn from the CPU */
     if (reviewing) {
@@ -921,7 +935,7 @@ static void frame(viewer *v)
     if (take_msg[0]) say_kind(v, FP_HUD_TAKE, false, "%s", take_msg);
     if (!v->paused) {
         fp_session_step(v->s, now, &st);
-        for (unsigned k = fp_session_record_toggles(v->s); k > 0; k--) take_toggle(v);
+        for (unsigned k = fp_session_record_toggles(v->s); k > 0; k--) punch(v, true);
         if (st.committed) v->committed_shown = true;
         if (st.engaged || st.cancelled) v->committed_shown = false;
         if (st.engaged) fp_vtakes_leave(&v->takes); /* (an engage by a pedal or a gesture) */
@@ -944,6 +958,8 @@ static void frame(viewer *v)
         v->events_window = 0;
         v->window_start = now;
     }
+    fp_voverdub_frame(&v->over, &v->takes, v->s, v->so.plugin_path, now, take_msg, sizeof take_msg);
+    if (take_msg[0]) say_kind(v, FP_HUD_TAKE, false, "%s", take_msg);
     fp_overlay_tip_cues(v->s, &v->cues);
     gpu_plan(v);
     upload(v);
@@ -995,6 +1011,11 @@ int fp_viewer_run(const fp_viewer_options *opt, fp_viewer_report *report, char *
     v->so.progress = opening_progress; /* the window shows the opening; the caller's still runs */
     v->so.progress_user = v;
     fp_vtakes_init(&v->takes, opt->take_dir, opt->slate, opt->countdown_s, &v->so);
+    if (fp_voverdub_init(&v->over, opt->over, opt->layer, err, errlen)) {
+        fp_vtakes_free(&v->takes);
+        free(v);
+        return -EINVAL;
+    }
     v->err = err;
     v->errlen = errlen;
     v->hands_on = v->hud_on = true;
@@ -1064,6 +1085,8 @@ int fp_viewer_run(const fp_viewer_options *opt, fp_viewer_report *report, char *
         char msg[1200];
         int trc = fp_vtakes_stop(&v->takes, v->s, msg, sizeof msg);
         if (msg[0] && (trc || !opt->quiet)) fprintf(stderr, "facepuppet live: %s\n", msg);
+        fp_voverdub_frame(&v->over, &v->takes, v->s, v->so.plugin_path, fp_now_ns(), msg, sizeof msg);
+        if (msg[0]) fprintf(stderr, "facepuppet live: %s\n", msg);
         if (trc && !v->error) {
             v->error = trc;
             snprintf(err, errlen, "%s", msg);
@@ -1096,6 +1119,7 @@ out:
     v->rep.upload_mismatches = v->upload_mismatches;
     if (report) *report = v->rep;
     fp_vtakes_free(&v->takes);
+    fp_voverdub_free(&v->over);
     fp_session_destroy(&v->s);
     if (v->win) {
         fp_gpuwarp_destroy(&v->gw);

@@ -1,0 +1,68 @@
+/* overdub.h: a new pass over a stack in the live viewer (internal to ui/viewer; issue 54
+ * item 2; docs/stack.md). With `live --over STACK_OR_TAKE --layer REGION[:MODE]`, a take
+ * started with T plays the stack from its start under the performer (pre-roll): the window
+ * shows the stack's composite with the live session composed on top as the new layer
+ * (fp_stack_blend: the region's weights, the mode, the fold bound). I (or the pedal's middle
+ * switch while the take records) punches in, again punches out, cross-faded over the
+ * layer's fade; T (or the pedal once punched out) stops the take, and a new stack
+ * SLATE_SNNN.fpstack is written beside it (fp_stack_over_save; the old one kept) with the
+ * pass on top over [in, out] (the whole take when it was never punched in). Lanes above the
+ * take strip show each layer (its take, region, range, mute/solo), the pass with its punch
+ * points, and the playhead. A channel pass (--layer jaw) shows the live session as it is.
+ *
+ * Threads: the viewer's. Errors: 0 or a negative errno with a message. */
+#ifndef FP_UI_OVERDUB_H
+#define FP_UI_OVERDUB_H
+
+#include "fp_stack_player.h"
+#include "fp_take_player.h"
+#include "render.h"
+#include "takes.h"
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+typedef struct fp_voverdub {
+    bool enabled;
+    const char *over;              /* --over (the caller's string) */
+    fp_stack *stack;               /* the stack under (a take: a stack of it alone) */
+    fp_stack_layer pass;           /* the pass's region and mode; in/out from the punches */
+    fp_take_player *player;        /* while recording: the stack playing under */
+    fp_stack_weights wt;           /* the pass's region on the live session's loaded shape */
+    float *under, *shown;          /* the stack's frame at the playhead; the composite */
+    size_t n;
+    bool recording, pending, ended, have_under;
+    fp_take_frame next;            /* the player's next frame (pending), not yet due */
+    int64_t t0, first_ns;          /* host time the pass began; the stack's first frame time */
+    int punch;                     /* 0 pre-roll, 1 punched in, 2 punched out */
+    double t, stack_s;             /* playhead and the stack's length, seconds */
+    char written[4200];            /* the last stack written ("" none) */
+} fp_voverdub;
+
+/** Set up from --over and --layer (NULL over: disabled, returns 0). Returns 0, or the stack
+ *  loader's / --layer's code with err. */
+int fp_voverdub_init(fp_voverdub *o, const char *over, const char *layer, char *err,
+                     size_t errlen);
+/** Close the playback and free the stack and the pass's region. */
+void fp_voverdub_free(fp_voverdub *o);
+
+/** Each frame after the session's step (and once after the last take stopped): a take that
+ *  began starts the playback under it; one that ended writes the new stack; while one
+ *  records, the stack advances to the playhead and the composite is made. msg gets a line
+ *  for the HUD ("" none). */
+void fp_voverdub_frame(fp_voverdub *o, fp_vtakes *takes, fp_session *s,
+                       const fp_plugin_path *plugins, int64_t now, char *msg, size_t n);
+
+/** I, or the pedal's middle switch while a pass records and is not yet punched out: punch
+ *  in, then out. Returns true when it acted (msg says what), false when the pedal should
+ *  start or stop the take instead. */
+bool fp_voverdub_punch(fp_voverdub *o, int64_t now, char *msg, size_t n);
+
+/** The composite to show while a pass records, else NULL. */
+const float *fp_voverdub_shown(const fp_voverdub *o);
+
+/** The lanes above the take strip (nothing when disabled). */
+void fp_voverdub_draw(const fp_voverdub *o, fp_render *r, int w, int h);
+
+#endif
