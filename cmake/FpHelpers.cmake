@@ -42,7 +42,8 @@ if(FP_SANITIZE)
   set(FP_SANITIZER_ENV
       "ASAN_OPTIONS=verify_asan_link_order=0:detect_leaks=1"
       "LSAN_OPTIONS=suppressions=${CMAKE_SOURCE_DIR}/tests/lsan.supp:print_suppressions=0"
-      "UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1")
+      "UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1"
+      "FP_TEST_TIME_SCALE=${FP_TEST_TIMEOUT_SCALE}") # a test's own wall-clock limits (test_onehand_session)
 endif()
 
 # fp_test_env(NAME [TIMEOUT seconds] [ENV VAR=value...]): the one place a test's timeout

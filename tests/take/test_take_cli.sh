@@ -78,10 +78,17 @@ grep -q "closed normally, 0 dropped" "$tmp/info.txt" || fail "info: not closed n
 "$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv" --take-dir "$tmp/takes" --slate clap \
     --frames-out "$tmp/killed" -o "$tmp/killed.obj" -q >/dev/null 2>&1 &
 pid=$!
-sleep 2.5
+killed="$tmp/takes/clap_T002.fptake"
+# killed once frames are on disk: the take exists and a second of frames went out (opening the
+# face takes longer under the sanitizers than a fixed wait allowed)
+for i in $(seq 600); do
+    [ -f "$killed" ] && [ "$(ls "$tmp/killed" 2>/dev/null | wc -l)" -gt 30 ] && break
+    kill -0 $pid 2>/dev/null || break
+    sleep 0.1
+done
+sleep 0.5
 kill -KILL $pid
 wait $pid 2>/dev/null
-killed="$tmp/takes/clap_T002.fptake"
 [ -f "$killed" ] || fail "no take after SIGKILL"
 "$fp" info "$killed" >"$tmp/kinfo.txt" || fail "info on the killed take exited $?"
 cat "$tmp/kinfo.txt"
