@@ -29,7 +29,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#define FP_APP_STOP_GRACE_NS 500000000LL      /* a plugin call this long after the signal */
+#define FP_APP_STOP_GRACE_NS 250000000LL      /* a plugin call this long after the signal */
 #define FP_APP_STOP_STEP_LIMIT_NS 3000000000LL /* any frame this long after the signal */
 #define FP_APP_STOP_TAKEOVER_S 3              /* the take-over's own limit */
 

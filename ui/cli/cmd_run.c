@@ -61,7 +61,7 @@ static void usage(FILE *f)
         "speed=, fast=1 or the machine's load (--speed only changes how long it takes).\n"
         "  -h, --help             this text\n\n"
         "SIGINT (Ctrl-C) or SIGTERM: the run ends after the frame in progress, the take closed and\n"
-        "the outputs written (exit 0). When that frame does not end within 0.5 s because a\n"
+        "the outputs written (exit 0). When that frame does not end within 0.25 s because a\n"
         "plugin's call never returns (a mapping's process() that spins), the run ends without\n"
         "it: one line names the plugin, the call and the frame; the take is closed with every\n"
         "frame before it, --export and --out are written up to the frame before, and the exit\n"

@@ -1,0 +1,55 @@
+#!/bin/sh
+# SIGTERM and SIGINT end `facepuppet run` within a second even with a mapping plugin stuck in
+# process() (issue 56, item 3): `timeout -s TERM 5` (and -s INT) with map-fixture-spin, which
+# spins forever on its 30th call, ends within 6 s with exit 143 (130), the plugin named, the
+# take closed normally with every frame before the stuck one (29: session frames 0..28), and
+# --out and --export written. Before the watchdog the process ignored SIGTERM: timeout's KILL
+# 10 s later ended it with 137, which fails here. A mapping that is not stuck still ends
+# after its frame with exit 0, as before.
+# Usage: test_signal_stuck.sh FACEPUPPET FIXTURE_DIR   (from the source root)
+set -u
+fp=$1 fx=$2
+data=${FP_SHARED_DATA:-../shared/data}
+rec=$data/hands/leap-motion/three-claps_joints_mm.csv
+mesh=$data/faces/ict-facekit/generic_neutral_mesh.obj
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+fails=0
+fail() { echo "FAIL: $*"; fails=$((fails + 1)); }
+ms() { echo $(($(date +%s%N) / 1000000)); }
+
+# stuck SIG WANT: the spinning mapping, timeout -s SIG 5; exit WANT within 6 s, the take whole
+stuck() {
+    sig=$1 want=$2 d=$tmp/$1
+    mkdir -p "$d"
+    t0=$(ms)
+    timeout --preserve-status -k 10 -s "$sig" 5 "$fp" run --plugin-dir "$fx" --mesh "$mesh" \
+        --input "replay:$rec" --mapping fixture-spin --take-dir "$d" -o "$d/out.obj" \
+        --export "$d/out.pc2" >"$d/log" 2>&1
+    rc=$? t=$(($(ms) - t0))
+    echo "$sig: exit $rc after $t ms"
+    [ "$rc" = "$want" ] || fail "$sig: exit $rc, wanted $want (137: killed, the signal ignored)"
+    [ "$t" -lt 6000 ] || fail "$sig: ended after $t ms, wanted < 6000"
+    grep -Eq "$sig: plugin 'fixture-spin' has not returned from process \(frame 29\) for [0-9.]+ s" \
+        "$d/log" || fail "$sig: the stuck plugin is not named"
+    grep -q "take $d/scene1_T001.fptake: 29 frames, 0 dropped" "$d/log" || fail "$sig: no take line"
+    "$fp" info "$d/scene1_T001.fptake" >"$d/info" 2>&1 || fail "$sig: info cannot read the take"
+    grep -q "frames       29 (session frames 0..28)" "$d/info" || fail "$sig: the take lacks frames"
+    grep -q "end          closed normally, 0 dropped" "$d/info" || fail "$sig: the take not closed"
+    [ -s "$d/out.obj" ] || fail "$sig: --out not written"
+    [ -s "$d/out.pc2" ] || fail "$sig: --export not written"
+    if [ "$fails" != 0 ]; then sed 's/^/    /' "$d/log" "$d/info"; fi
+}
+stuck TERM 143
+stuck INT 130
+
+# A mapping that returns: the run ends after the frame in progress, exit 0, the take whole.
+d=$tmp/fine
+mkdir -p "$d"
+timeout --preserve-status -k 10 -s TERM 2 "$fp" run --plugin-dir "$fx" --mesh "$mesh" \
+    --input "replay:$rec" --mapping fixture --take-dir "$d" -o "$d/out.obj" >"$d/log" 2>&1
+rc=$?
+[ "$rc" = 0 ] || { fail "fine mapping: exit $rc, wanted 0"; sed 's/^/    /' "$d/log"; }
+"$fp" info "$d/scene1_T001.fptake" 2>&1 | grep -q "closed normally" || fail "fine mapping: take"
+
+[ "$fails" = 0 ] && echo "all passed" || { echo "$fails failed"; exit 1; }
