@@ -13,6 +13,7 @@
 #include <stdatomic.h>
 #include <stdio.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 enum { ST_OFF, ST_IDLE, ST_STEP, ST_TAKEN, ST_DONE };
@@ -38,13 +39,29 @@ static void say(const char *a, const char *b, const char *c)
     }
 }
 
+static _Atomic int64_t got_ns; /* when the first came (CLOCK_MONOTONIC) */
+
+static int64_t now_ns(void) /* (async-signal-safe: clock_gettime) */
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (int64_t)ts.tv_sec * 1000000000LL + ts.tv_nsec;
+}
+
 static void on_signal(int sig)
 {
     int saved = errno, none = 0;
-    if (!atomic_compare_exchange_strong(&got, &none, sig)) { /* the second: at once */
+    if (!atomic_compare_exchange_strong(&got, &none, sig)) {
+        /* the second: at once, unless it is the first's echo (timeout(1) signals the command,
+         * then its process group: the command gets the signal twice) */
+        if (now_ns() - atomic_load(&got_ns) < FP_APP_STOP_REPEAT_NS) {
+            errno = saved;
+            return;
+        }
         say(cmd_name, ": second ", sig == SIGINT ? "SIGINT: ending at once\n" : "SIGTERM: ending at once\n");
         _exit(128 + sig);
     }
+    atomic_store(&got_ns, now_ns());
     char b = 's';
     ssize_t w = write(wake[1], &b, 1);
     (void)w;

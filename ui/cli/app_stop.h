@@ -16,8 +16,9 @@
  * now, the session thread being inside the step) and ends the process with _exit(128 +
  * the signal) without joining the stuck thread: 130 for SIGINT, 143 for SIGTERM. An alarm
  * (FP_APP_STOP_TAKEOVER_S) ends the process with the same status should the take-over
- * itself hang. A second SIGINT or SIGTERM ends the process at once with 128 + that signal,
- * writing nothing more.
+ * itself hang. A second SIGINT or SIGTERM, a second or more after the first, ends the
+ * process at once with 128 + that signal, writing nothing more (one sooner is taken for the
+ * first's echo: timeout(1) signals the command, then its process group, which holds it).
  *
  * Threads: install, the step brackets, loop_end and uninstall from the command's main
  * thread (its frame loop); requested from any thread; the take-over function runs on the
@@ -29,9 +30,10 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#define FP_APP_STOP_GRACE_NS 250000000LL      /* a plugin call this long after the signal */
+#define FP_APP_STOP_GRACE_NS 100000000LL      /* a plugin call this long after the signal */
 #define FP_APP_STOP_STEP_LIMIT_NS 3000000000LL /* any frame this long after the signal */
 #define FP_APP_STOP_TAKEOVER_S 3              /* the take-over's own limit */
+#define FP_APP_STOP_REPEAT_NS 1000000000LL    /* a second signal sooner is the first's echo */
 
 /** The take-over (on the watchdog thread): close the take and write what outputs it can
  *  from state the frame loop owns; in_plugin: the frame is stuck in a plugin call (the
