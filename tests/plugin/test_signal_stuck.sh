@@ -6,9 +6,13 @@
 # --out and --export written. Before the watchdog the process ignored SIGTERM: timeout's KILL
 # 10 s later ended it with 137, which fails here. A mapping that is not stuck still ends
 # after its frame with exit 0, as before.
+# Under the sanitizers (FP_TEST_TIMEOUT_SCALE > 1) the session opens and ends slower: the
+# signal comes at 5 s x the scale, the bound is that plus 1 s x the scale.
 # Usage: test_signal_stuck.sh FACEPUPPET FIXTURE_DIR   (from the source root)
 set -u
 fp=$1 fx=$2
+scale=${FP_TEST_TIMEOUT_SCALE:-1}
+after=$((5 * scale)) bound=$((5000 * scale + 1000 * scale))
 data=${FP_SHARED_DATA:-../shared/data}
 rec=$data/hands/leap-motion/three-claps_joints_mm.csv
 mesh=$data/faces/ict-facekit/generic_neutral_mesh.obj
@@ -23,13 +27,13 @@ stuck() {
     sig=$1 want=$2 d=$tmp/$1
     mkdir -p "$d"
     t0=$(ms)
-    timeout --preserve-status -k 10 -s "$sig" 5 "$fp" run --plugin-dir "$fx" --mesh "$mesh" \
+    timeout --preserve-status -k 10 -s "$sig" "$after" "$fp" run --plugin-dir "$fx" --mesh "$mesh" \
         --input "replay:$rec" --mapping fixture-spin --take-dir "$d" -o "$d/out.obj" \
         --export "$d/out.pc2" >"$d/log" 2>&1
     rc=$? t=$(($(ms) - t0))
     echo "$sig: exit $rc after $t ms"
     [ "$rc" = "$want" ] || fail "$sig: exit $rc, wanted $want (137: killed, the signal ignored)"
-    [ "$t" -lt 6000 ] || fail "$sig: ended after $t ms, wanted < 6000"
+    [ "$t" -lt "$bound" ] || fail "$sig: ended after $t ms, wanted < $bound"
     grep -Eq "$sig: plugin 'fixture-spin' has not returned from process \(frame 29\) for [0-9.]+ s" \
         "$d/log" || fail "$sig: the stuck plugin is not named"
     grep -q "take $d/scene1_T001.fptake: 29 frames, 0 dropped" "$d/log" || fail "$sig: no take line"
@@ -46,7 +50,7 @@ stuck INT 130
 # A mapping that returns: the run ends after the frame in progress, exit 0, the take whole.
 d=$tmp/fine
 mkdir -p "$d"
-timeout --preserve-status -k 10 -s TERM 2 "$fp" run --plugin-dir "$fx" --mesh "$mesh" \
+timeout --preserve-status -k 10 -s TERM $((2 * scale)) "$fp" run --plugin-dir "$fx" --mesh "$mesh" \
     --input "replay:$rec" --mapping fixture --take-dir "$d" -o "$d/out.obj" >"$d/log" 2>&1
 rc=$?
 [ "$rc" = 0 ] || { fail "fine mapping: exit $rc, wanted 0"; sed 's/^/    /' "$d/log"; }

@@ -570,8 +570,8 @@ static int run_main(int argc, char **argv)
     }
     /* SIGINT, SIGTERM: the loop ends after the frame; a frame stuck in a plugin is abandoned */
     run_stuck stuck = {s, a, &take, &ex};
-    if (fp_app_stop_install("facepuppet run", run_take_over, &stuck))
-        fprintf(stderr, "facepuppet run: warning: no watchdog for a stuck plugin (out of threads)\n");
+    if ((rc = fp_app_stop_install("facepuppet run", run_take_over, &stuck)))
+        fprintf(stderr, "facepuppet run: warning: no watchdog for a stuck plugin: %s\n", strerror(-rc));
     run_totals t;
     totals_init(&t);
     int status = run_frames(s, a, &take, ex, &t);
