@@ -66,7 +66,8 @@ static void usage(FILE *f)
         "(degrees; the framed view turned, as export's --camera), keys J K G.\n"
         "At exit it prints the frame time and the input-event-to-frame latency (median, p99).\n\n"
         "SIGINT (Ctrl-C) or SIGTERM ends the session as closing the window does (a take\n"
-        "recording closed, --out written; exit 0); a frame stuck 0.1 s in a plugin call that\n"
+        "recording closed, --out written; exit 0; while the session opens, at once); a frame\n"
+        "stuck 0.1 s in a plugin call that\n"
         "never returns is abandoned (the take closed with the frames before it, --out of the\n"
         "last whole frame, exit 128 + the signal: 130, 143), as in facepuppet run.\n\n"
         "Exit status: 0 done, 64 usage, 65 bad input data, 66 input or display missing,\n"
@@ -82,14 +83,23 @@ typedef struct live_stuck {
     fp_session_take *take;
     const char *out;
     bool quiet;
+    bool installed;    /* app_stop's handlers, from the session's first opening on */
 } live_stuck;
 
-/* fp_viewer_options.opened [the viewer's thread, between frames] */
+static void live_take_over(void *user, int sig, bool in_plugin);
+
+/* fp_viewer_options.opened: the session and take for the take-over; the first time, the
+ * handlers (a signal while the window and the session open still ends the process at once,
+ * as before). [the viewer's thread, between frames] */
 static void live_opened(void *user, fp_session *s, struct fp_session_take *take)
 {
     live_stuck *c = user;
     c->s = s;
     c->take = take;
+    if (c->installed) return;
+    c->installed = true;
+    int rc = fp_app_stop_install("facepuppet live", live_take_over, c);
+    if (rc) fprintf(stderr, "facepuppet live: warning: no watchdog for a stuck plugin: %s\n", strerror(-rc));
 }
 
 /* fp_app_stop_fn: the take closed (sealed first), --out written when the frame is stuck in
@@ -240,18 +250,16 @@ static int live_main(int argc, char **argv)
     so->progress_user = &opening;
     char err[2048] = "";
     fp_viewer_report rep = {0};
-    /* SIGINT, SIGTERM: the loop ends before the next frame; a frame stuck in a plugin is
-     * abandoned (app_stop.h) */
+    /* SIGINT, SIGTERM, once the session is open: the loop ends before the next frame; a frame
+     * stuck in a plugin is abandoned (app_stop.h) */
     live_stuck stuck = {.out = vo.out, .quiet = sopt.quiet};
     vo.stop_requested = fp_app_stop_requested;
     vo.step_begin = fp_app_stop_step_begin;
     vo.step_end = fp_app_stop_step_end;
     vo.opened = live_opened;
     vo.user = &stuck;
-    int rc = fp_app_stop_install("facepuppet live", live_take_over, &stuck);
-    if (rc) fprintf(stderr, "facepuppet live: warning: no watchdog for a stuck plugin: %s\n", strerror(-rc));
-    rc = fp_viewer_run(&vo, &rep, err, sizeof err);
-    fp_app_stop_uninstall();
+    int rc = fp_viewer_run(&vo, &rep, err, sizeof err);
+    fp_app_stop_uninstall(); /* (nothing when never installed) */
     int status = FP_EXIT_OK;
     if (rc) {
         fprintf(stderr, "facepuppet live: %s\n", err);
