@@ -12,6 +12,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <ucontext.h>
 #include <unistd.h>
 
@@ -30,19 +31,91 @@ static _Thread_local struct {
     const char *who, *call;
     uint64_t frame;
     int depth;
+    int slot;      /* its slot in `calls` + 1 while a call is in progress (0: none) */
 } current;
+
+/* The calls in progress, for other threads (fp_plugin_call_oldest): a slot is owned by one
+ * thread from its outermost enter to its leave; its fields are written under a sequence
+ * count (odd while being written), which a reader checks before and after. */
+#define MAX_CALLS 64
+typedef struct call_slot {
+    atomic_bool owned;
+    atomic_uint seq;
+    _Atomic(const char *) who, call;
+    _Atomic uint64_t frame;
+    _Atomic int64_t since_ns;
+} call_slot;
+
+static call_slot calls[MAX_CALLS];
+
+static int64_t mono_ns(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (int64_t)ts.tv_sec * 1000000000LL + ts.tv_nsec;
+}
+
+static void slot_write(call_slot *c, const char *who, const char *call, uint64_t frame,
+                       int64_t since_ns)
+{
+    unsigned q = atomic_load_explicit(&c->seq, memory_order_relaxed);
+    atomic_store_explicit(&c->seq, q + 1, memory_order_relaxed);
+    atomic_thread_fence(memory_order_release);
+    atomic_store_explicit(&c->who, who, memory_order_relaxed);
+    atomic_store_explicit(&c->call, call, memory_order_relaxed);
+    atomic_store_explicit(&c->frame, frame, memory_order_relaxed);
+    atomic_store_explicit(&c->since_ns, since_ns, memory_order_relaxed);
+    atomic_store_explicit(&c->seq, q + 2, memory_order_release);
+}
 
 void fp_plugin_call_enter(const char *who, const char *call, uint64_t frame)
 {
     current.who = who;
     current.call = call;
     current.frame = frame;
-    current.depth++;
+    if (current.depth++ == 0) { /* the outermost call: a slot, if one is free */
+        for (int i = 0; i < MAX_CALLS && !current.slot; i++)
+            if (!atomic_load_explicit(&calls[i].owned, memory_order_relaxed) &&
+                !atomic_exchange_explicit(&calls[i].owned, true, memory_order_acquire))
+                current.slot = i + 1;
+        if (current.slot) slot_write(&calls[current.slot - 1], who, call, frame, mono_ns());
+    } else if (current.slot) { /* nested: the innermost is named, since the outermost began */
+        call_slot *c = &calls[current.slot - 1];
+        slot_write(c, who, call, frame, atomic_load_explicit(&c->since_ns, memory_order_relaxed));
+    }
 }
 
 void fp_plugin_call_leave(void)
 {
-    if (current.depth > 0 && --current.depth == 0) current.who = current.call = NULL;
+    if (current.depth > 0 && --current.depth == 0) {
+        current.who = current.call = NULL;
+        if (current.slot) {
+            call_slot *c = &calls[current.slot - 1];
+            slot_write(c, NULL, NULL, 0, 0);
+            atomic_store_explicit(&c->owned, false, memory_order_release);
+            current.slot = 0;
+        }
+    }
+}
+
+bool fp_plugin_call_oldest(fp_plugin_call_info *out)
+{
+    bool found = false;
+    for (int i = 0; i < MAX_CALLS; i++) {
+        call_slot *c = &calls[i];
+        if (!atomic_load_explicit(&c->owned, memory_order_acquire)) continue;
+        unsigned q = atomic_load_explicit(&c->seq, memory_order_acquire);
+        if (q & 1) continue;
+        fp_plugin_call_info got = {atomic_load_explicit(&c->who, memory_order_relaxed),
+                                   atomic_load_explicit(&c->call, memory_order_relaxed),
+                                   atomic_load_explicit(&c->frame, memory_order_relaxed),
+                                   atomic_load_explicit(&c->since_ns, memory_order_relaxed)};
+        atomic_thread_fence(memory_order_acquire);
+        if (atomic_load_explicit(&c->seq, memory_order_relaxed) != q || !got.who) continue;
+        if (!found || got.since_ns < out->since_ns) *out = got;
+        found = true;
+    }
+    return found;
 }
 
 /* ---- address ranges of loaded plugins ---- */

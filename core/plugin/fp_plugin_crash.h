@@ -13,11 +13,14 @@
  * keep what their writer threads had flushed (core/take: all but the last chunk).
  *
  * Thread rules: install once from the main thread; enter/leave on any thread (each thread
- * has its own record); register/unregister [main-thread] (the loader calls them).
+ * has its own record, and its outermost call in progress is published for the others:
+ * fp_plugin_call_oldest, which says what a stuck call is stuck in); register/unregister
+ * [main-thread] (the loader calls them).
  */
 #ifndef FP_PLUGIN_CRASH_H
 #define FP_PLUGIN_CRASH_H
 
+#include <stdbool.h>
 #include <stdint.h>
 
 #ifdef __cplusplus
@@ -33,6 +36,22 @@ int fp_plugin_crash_install(void);
  *  The strings must outlive the call. Nests: only the innermost is reported. */
 void fp_plugin_call_enter(const char *who, const char *call, uint64_t frame);
 void fp_plugin_call_leave(void);
+
+/** A plugin call in progress, seen from another thread (fp_plugin_call_oldest). */
+typedef struct fp_plugin_call_info {
+    const char *who;     /* as given to fp_plugin_call_enter (the innermost call's) */
+    const char *call;
+    uint64_t frame;
+    int64_t since_ns;    /* when the outermost call began, CLOCK_MONOTONIC ns */
+} fp_plugin_call_info;
+
+/** The plugin call in progress that began first, on any thread (each thread's outermost
+ *  call is published in one of 64 slots, claimed at enter and freed at leave; a thread that
+ *  finds none free is not seen). For a watchdog: what a stuck thread is stuck in. Returns
+ *  false when no call is in progress. The strings are the caller's of enter: they must live
+ *  as long as whoever calls this may read them (the session's names live as long as it).
+ *  [any thread; not async-signal-safe in principle, but takes no lock] */
+bool fp_plugin_call_oldest(fp_plugin_call_info *out);
 
 /** The loader records each loaded shared object's address range under its path, so a crash
  *  on a plugin's own thread can be attributed; unregister before dlclose. */

@@ -23,7 +23,9 @@
  * -EBADMSG (a take's mesh checksum differs: the message names both). Nothing is printed.
  *
  * Threads: one session thread; start and stop on it too (they may block on the disk:
- * header, join), the sink on it between them.
+ * header, join), the sink on it between them. One exception: another thread may end the
+ * take while the session thread is stuck (a plugin that never returns): it seals the take
+ * first (fp_session_take_seal), then stops it; the sink records nothing from then on.
  */
 #ifndef FP_SESSION_TAKE_H
 #define FP_SESSION_TAKE_H
@@ -31,6 +33,7 @@
 #include "fp_session.h"
 #include "fp_take.h"
 
+#include <stdatomic.h>
 #include <stdbool.h>
 #include <stdint.h>
 
@@ -88,6 +91,7 @@ typedef struct fp_session_take {
     uint64_t reach_vectors;
     double reach_asked_max;        /* mesh units */
     double mm_per_unit;            /* the session's, at start (0: unknown) */
+    _Atomic int gate;              /* 0 open, 1 a sink call in progress, 2 sealed */
 } fp_session_take;
 
 /** Keep the options (copied; their strings are the caller's) and the session options the
@@ -118,6 +122,14 @@ int fp_session_take_timecode(const fp_session_take *t, int64_t now_ns, fp_timeco
  *  the recording (-ENOSPC, -EIO...) with err; 0 when nothing was recording. */
 int fp_session_take_stop(fp_session_take *t, fp_session_take_result *res, char *err,
                          size_t errlen);
+
+/** Seal the take from a thread other than the session's: from now on the sink records
+ *  nothing (a call in progress is waited for: it does no I/O and calls no plugin, so this
+ *  takes microseconds), so that this thread may then stop the take (fp_session_take_stop)
+ *  while the session thread is stuck elsewhere (in a plugin's process, say). For ending a
+ *  process: the session thread must not start or stop the take after this (a start opens
+ *  the gate again). [any thread] */
+void fp_session_take_seal(fp_session_take *t);
 
 /** Compare session s's loaded positions with the take's mesh checksum (crc of "positions").
  *  Returns 0, or -EBADMSG with a message naming both meshes and both checksums. */

@@ -13,6 +13,7 @@
 #include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 struct fp_frame_thread {
     fp_worker *w;                 /* the thread: spins, then parks (fp_worker.h) */
@@ -166,9 +167,24 @@ int fp_frame_thread_run(fp_frame_thread *ft, void (*fn)(void *), void *arg, int6
             if (atomic_load(&ft->cpu) == sched_getcpu()) sched_yield();
             else fp_cpu_pause();
         }
-        while (atomic_load(&ft->done) != seq)
-            if (atomic_load(&ft->cpu) == sched_getcpu()) sched_yield();
-            else fp_cpu_pause();
+        /* a long call (a large face's frame, a plugin that never returns): past
+         * FP_FRAME_THREAD_NAP_AFTER_NS the caller naps between looks, its core given back
+         * (to the watchdog that ends a run with a plugin stuck: ui/cli/app_stop.h) */
+        bool napping = false;
+        for (unsigned n = 1; atomic_load(&ft->done) != seq; n++) {
+            if (napping) {
+                /* a hundredth of the wait so far, at most FP_FRAME_THREAD_NAP_MAX_NS */
+                int64_t ns = (fp_now_ns() - t0) / 100;
+                struct timespec nap = {0, ns < FP_FRAME_THREAD_NAP_MAX_NS ? (long)ns : FP_FRAME_THREAD_NAP_MAX_NS};
+                nanosleep(&nap, NULL);
+            } else if (!(n & 1023) && fp_now_ns() - t0 > FP_FRAME_THREAD_NAP_AFTER_NS) {
+                napping = true;
+            } else if (atomic_load(&ft->cpu) == sched_getcpu()) {
+                sched_yield();
+            } else {
+                fp_cpu_pause();
+            }
+        }
         ft->there++;
         return 1;
     }

@@ -19,7 +19,9 @@
  * costs nothing.
  *
  * How. The thread is an fp_worker (core/common/fp_worker.h, as the contact guard's worker):
- * it spins, then parks. fp_frame_thread_run posts the call and waits for it (yielding); the
+ * it spins, then parks. fp_frame_thread_run posts the call and waits for it (yielding, then
+ * napping past FP_FRAME_THREAD_NAP_AFTER_NS: a call that never returns, a plugin's that
+ * spins, must not hold the caller's core too, which the watchdog of `run` needs); the
  * thread claims it within about a microsecond when it polls. When it sleeps (no frame for
  * FP_FRAME_THREAD_IDLE_NS), or has not claimed the call within the grace (the system holds it
  * off its core), the caller claims the call and runs it itself, then wakes the thread for
@@ -44,6 +46,11 @@ extern "C" {
 
 #define FP_FRAME_THREAD_IDLE_NS 20000000 /* polls this long after a frame, then sleeps */
 #define FP_FRAME_THREAD_GRACE_NS 20000   /* the caller runs a call not claimed within this */
+/* the caller waits for a call's end spinning, then, past this, naps between looks: a
+ * hundredth of the wait so far, at most FP_FRAME_THREAD_NAP_MAX_NS (a long frame ends at
+ * most 1% later to the caller; a stuck one costs no core) */
+#define FP_FRAME_THREAD_NAP_AFTER_NS 20000000
+#define FP_FRAME_THREAD_NAP_MAX_NS 1000000
 
 typedef struct fp_frame_thread fp_frame_thread;
 

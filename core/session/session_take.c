@@ -7,6 +7,7 @@
 
 #include <errno.h>
 #include <math.h>
+#include <sched.h>
 #include <stdio.h>
 #include <string.h>
 #include <time.h>
@@ -21,10 +22,34 @@ void fp_session_take_init(fp_session_take *t, const fp_session_take_options *opt
     t->so = so;
 }
 
+static void sink_push(fp_session_take *t, const fp_frame_record *r);
+
 void fp_session_take_sink(void *user, const fp_frame_record *r)
 {
     fp_session_take *t = user;
-    if (!t->rec) return;
+    int open = 0; /* (fp_session_take_seal: nothing once sealed) */
+    if (!atomic_compare_exchange_strong_explicit(&t->gate, &open, 1, memory_order_acquire,
+                                                 memory_order_relaxed))
+        return;
+    if (t->rec) sink_push(t, r);
+    atomic_store_explicit(&t->gate, 0, memory_order_release);
+}
+
+void fp_session_take_seal(fp_session_take *t)
+{
+    for (;;) {
+        int open = 0;
+        if (atomic_compare_exchange_weak_explicit(&t->gate, &open, 2, memory_order_acquire,
+                                                  memory_order_relaxed))
+            return;
+        if (open == 2) return; /* sealed already */
+        sched_yield();         /* a sink call in progress: microseconds */
+    }
+}
+
+/* The sink's work, inside its gate. */
+static void sink_push(fp_session_take *t, const fp_frame_record *r)
+{
     if (!t->have_first) {
         t->first_frame = r->frame;
         t->have_first = true;
@@ -128,6 +153,7 @@ int fp_session_take_start(fp_session_take *t, const fp_session *s, int64_t origi
     memset(t->reach_bins, 0, sizeof t->reach_bins);
     t->reach_vectors = 0;
     t->reach_asked_max = 0;
+    atomic_store(&t->gate, 0);
     t->mm_per_unit = fp_session_head(s)->mm_per_unit;
     t->origin_ns = origin_ns;
     rc = fp_take_recorder_start(t->opt.dir, h, &t->opt.recorder, &t->rec, err, errlen);

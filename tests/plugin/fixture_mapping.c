@@ -8,6 +8,7 @@
  *   FIXTURE_SLOW           process busy-waits 5 ms
  *   FIXTURE_NO_INSTANCE    create returns 0 without an instance
  *   FIXTURE_SEGV           process dereferences a null pointer from frame 3 on
+ *   FIXTURE_SPIN           process spins forever on its 30th call (SIGTERM's watchdog)
  *   FIXTURE_ENGINE_FAIL    A with a support radius of 1e20 (finite and positive: the host's
  *                             checks pass), which the engine refuses every frame (coincident
  *                             start points would not do: the engine merges them)
@@ -33,6 +34,7 @@
 typedef struct fixture {
     fp_mapping mapping;
     double gain;
+    unsigned long calls;   /* process calls so far */
 } fixture;
 
 static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *out)
@@ -43,6 +45,12 @@ static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *o
     clock_gettime(CLOCK_MONOTONIC, &t0);
     do clock_gettime(CLOCK_MONOTONIC, &t);
     while ((t.tv_sec - t0.tv_sec) * 1e9 + (t.tv_nsec - t0.tv_nsec) < 5e6);
+#endif
+#ifdef FIXTURE_SPIN
+    if (++fx->calls == 30)
+        for (volatile unsigned long spin = 0;; spin++) {} /* never returns */
+#else
+    fx->calls++;
 #endif
 #ifdef FIXTURE_SEGV
     if (in->frame >= 3) {

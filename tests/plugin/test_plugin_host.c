@@ -358,6 +358,70 @@ static void *producer(void *arg)
     return NULL;
 }
 
+/* A thread inside a plugin call, until released: what fp_plugin_call_oldest shows of it. */
+typedef struct stuck_call {
+    pthread_mutex_t mu;
+    pthread_cond_t cv;
+    int phase;   /* 1 entered, 2 released */
+} stuck_call;
+
+static void *call_and_wait(void *u)
+{
+    stuck_call *c = u;
+    fp_plugin_call_enter("spinner", "process", 29);
+    fp_plugin_call_enter("spinner", "reset", 29); /* nested: the innermost is named */
+    pthread_mutex_lock(&c->mu);
+    c->phase = 1;
+    pthread_cond_broadcast(&c->cv);
+    while (c->phase != 2) pthread_cond_wait(&c->cv, &c->mu);
+    pthread_mutex_unlock(&c->mu);
+    fp_plugin_call_leave();
+    fp_plugin_call_leave();
+    return NULL;
+}
+
+/* Another thread sees a call in progress (the watchdog of `run`: app_stop.h): its plugin,
+ * call, frame and start; none once it left; a call on this thread is seen too. */
+static void test_call_oldest(void **state)
+{
+    (void)state;
+    fp_plugin_call_info info;
+    assert_false(fp_plugin_call_oldest(&info));
+    stuck_call c = {PTHREAD_MUTEX_INITIALIZER, PTHREAD_COND_INITIALIZER, 0};
+    pthread_t th;
+    assert_int_equal(pthread_create(&th, NULL, call_and_wait, &c), 0);
+    pthread_mutex_lock(&c.mu);
+    while (c.phase != 1) pthread_cond_wait(&c.cv, &c.mu);
+    pthread_mutex_unlock(&c.mu);
+    assert_true(fp_plugin_call_oldest(&info));
+    assert_string_equal(info.who, "spinner");
+    assert_string_equal(info.call, "reset");
+    assert_int_equal(info.frame, 29);
+    assert_true(info.since_ns > 0);
+    int64_t first = info.since_ns;
+    fp_plugin_call_enter("later", "create", 0); /* this thread's, begun after: not the oldest */
+    assert_true(fp_plugin_call_oldest(&info));
+    assert_string_equal(info.who, "spinner");
+    assert_int_equal(info.since_ns, first);
+    pthread_mutex_lock(&c.mu);
+    c.phase = 2;
+    pthread_cond_broadcast(&c.cv);
+    pthread_mutex_unlock(&c.mu);
+    pthread_join(th, NULL);
+    assert_true(fp_plugin_call_oldest(&info));
+    assert_string_equal(info.who, "later");
+    fp_plugin_call_leave();
+    assert_false(fp_plugin_call_oldest(&info));
+    for (int i = 0; i < 200; i++) { /* slots are given back: more calls than slots */
+        fp_plugin_call_enter("again", "process", (uint64_t)i);
+        fp_plugin_call_leave();
+    }
+    fp_plugin_call_enter("again", "process", 7);
+    assert_true(fp_plugin_call_oldest(&info));
+    assert_int_equal(info.frame, 7);
+    fp_plugin_call_leave();
+}
+
 static void test_queue_mpsc(void **state)
 {
     (void)state;
@@ -408,6 +472,7 @@ int main(void)
         cmocka_unit_test(test_log_relayed), cmocka_unit_test(test_queue_mpsc),
         cmocka_unit_test(test_queue_full),        cmocka_unit_test(test_unsafe_folders_skipped),
         cmocka_unit_test(test_builtin_first),     cmocka_unit_test(test_crash_names_plugin),
+        cmocka_unit_test(test_call_oldest),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

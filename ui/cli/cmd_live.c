@@ -7,6 +7,7 @@
 #include <stdio.h>
 
 #ifdef FP_HAVE_UI
+#include "app_stop.h"
 #include "app_util.h"
 #include "app_stack.h"
 #include "fp_error.h"
@@ -72,9 +73,67 @@ static void usage(FILE *f)
         "Script: also 'scrub F' (the take strip at fraction F), 'camera YAW PITCH [ZOOM]'\n"
         "(degrees; the framed view turned, as export's --camera), keys J K G.\n"
         "At exit it prints the frame time and the input-event-to-frame latency (median, p99).\n\n"
+        "SIGINT (Ctrl-C) or SIGTERM ends the session as closing the window does (a take\n"
+        "recording closed, --out written; exit 0; while the session opens, at once); a frame\n"
+        "stuck 0.1 s in a plugin call that never returns is abandoned (the take closed with\n"
+        "the frames before it, --out of the last whole frame, exit 128 + the signal: 130,\n"
+        "143), as in facepuppet run.\n\n"
         "Exit status: 0 done, 64 usage, 65 bad input data, 66 input or display missing,\n"
-        "73 output not writable, 78 plugin missing or incompatible, 1 other failure\n"
+        "73 output not writable, 78 plugin missing or incompatible, 130/143 ended by\n"
+        "SIGINT/SIGTERM with a plugin stuck, 1 other failure\n"
         "(facepuppet --help has the whole table).\n");
+}
+
+/* What the watchdog's take-over (app_stop.h) ends when a signal finds a frame stuck: the
+ * session and the take the viewer gave (fp_viewer_options.opened), --out. */
+typedef struct live_stuck {
+    fp_session *s;
+    fp_session_take *take;
+    const char *out;
+    bool quiet;
+    bool installed;    /* app_stop's handlers, from the session's first opening on */
+} live_stuck;
+
+static void live_take_over(void *user, int sig, bool in_plugin);
+
+/* fp_viewer_options.opened: the session and take for the take-over; the first time, the
+ * handlers (a signal while the window and the session open still ends the process at once,
+ * as before). [the viewer's thread, between frames] */
+static void live_opened(void *user, fp_session *s, struct fp_session_take *take)
+{
+    live_stuck *c = user;
+    c->s = s;
+    c->take = take;
+    if (c->installed) return;
+    c->installed = true;
+    int rc = fp_app_stop_install("facepuppet live", live_take_over, c);
+    if (rc) fprintf(stderr, "facepuppet live: warning: no watchdog for a stuck plugin: %s\n", strerror(-rc));
+}
+
+/* fp_app_stop_fn: the take closed (sealed first), --out written when the frame is stuck in
+ * a plugin (the shown mesh is the last whole frame's). [the watchdog thread] */
+static void live_take_over(void *user, int sig, bool in_plugin)
+{
+    live_stuck *c = user;
+    (void)sig;
+    if (c->take) {
+        fp_session_take_seal(c->take);
+        if (fp_session_take_recording(c->take)) {
+            fp_session_take_result tr;
+            char err[1024] = "";
+            if (fp_session_take_stop(c->take, &tr, err, sizeof err))
+                fprintf(stderr, "facepuppet live: the take was not written whole: %s\n", err);
+            fp_app_print_take(stderr, "facepuppet live", &tr);
+        }
+    }
+    if (!c->out || !c->s) return;
+    char err[2048];
+    if (!in_plugin)
+        fprintf(stderr, "facepuppet live: %s not written (the frame was not in a plugin)\n", c->out);
+    else if (fp_session_save(c->s, c->out, err, sizeof err))
+        fprintf(stderr, "facepuppet live: %s\n", err);
+    else if (!c->quiet)
+        fprintf(stderr, "facepuppet live: wrote %s (the last whole frame)\n", c->out);
 }
 
 static char *read_file(const char *path)
@@ -206,7 +265,16 @@ static int live_main(int argc, char **argv)
     so->progress_user = &opening;
     char err[2048] = "";
     fp_viewer_report rep = {0};
+    /* SIGINT, SIGTERM, once the session is open: the loop ends before the next frame; a frame
+     * stuck in a plugin is abandoned (app_stop.h) */
+    live_stuck stuck = {.out = vo.out, .quiet = sopt.quiet};
+    vo.stop_requested = fp_app_stop_requested;
+    vo.step_begin = fp_app_stop_step_begin;
+    vo.step_end = fp_app_stop_step_end;
+    vo.opened = live_opened;
+    vo.user = &stuck;
     int rc = fp_viewer_run(&vo, &rep, err, sizeof err);
+    fp_app_stop_uninstall(); /* (nothing when never installed) */
     int status = FP_EXIT_OK;
     if (rc) {
         fprintf(stderr, "facepuppet live: %s\n", err);

@@ -8,6 +8,7 @@
 #include "app_stack.h"
 #include "app_export.h"
 #include "app_audio.h"
+#include "app_stop.h"
 #include "session_opts.h"
 #include "fp_stats.h"
 
@@ -22,9 +23,6 @@
 #include <strings.h>
 #include <time.h>
 #include <unistd.h>
-
-static volatile sig_atomic_t interrupted;
-static void on_signal(int sig) { (void)sig; interrupted = 1; }
 
 static void usage(FILE *f)
 {
@@ -72,11 +70,18 @@ static void usage(FILE *f)
         "clock: the same inputs and options give bit-identical meshes whatever --speed,\n"
         "speed=, fast=1 or the machine's load (--speed only changes how long it takes).\n"
         "  -h, --help             this text\n\n"
+        "SIGINT (Ctrl-C) or SIGTERM: the run ends after the frame in progress, the take closed and\n"
+        "the outputs written (exit 0). When that frame does not end within 0.1 s because a\n"
+        "plugin's call never returns (a mapping's process() that spins), the run ends without\n"
+        "it: one line names the plugin, the call and the frame; the take is closed with every\n"
+        "frame before it, --export and --out are written up to the frame before, and the exit\n"
+        "status is 128 + the signal (130 SIGINT, 143 SIGTERM; the frames of --frames-out are\n"
+        "written as they go). A second signal a second later ends the run at once, 128 + it.\n\n"
         "Exit status: 0 done, 64 usage (an unknown audio device too), 65 bad input data (an\n"
         "LTC file without LTC too), 66 input missing (a soundtrack or LTC file missing or\n"
         "unreadable too), 73 output not writable or existing without --force, 78 plugin\n"
         "missing or incompatible, or the mapping stopped for a fault (it wrote past the host's\n"
-        "arrays), 1 other failure\n"
+        "arrays), 130/143 ended by SIGINT/SIGTERM with a plugin stuck (above), 1 other failure\n"
         "(facepuppet --help has the whole table).\n");
 }
 
@@ -318,27 +323,31 @@ static int run_frames(fp_session *s, run_args *a, fp_session_take *take, fp_expo
     int rc, status = FP_EXIT_OK;
     int64_t t0 = 0, wall0 = fp_now_ns(), last_report = wall0;
     int clock;
-    while ((clock = fp_session_input_start(s, &t0)) == 0 && !interrupted) sleep_until(fp_now_ns() + 200000);
+    while ((clock = fp_session_input_start(s, &t0)) == 0 && !fp_app_stop_requested())
+        sleep_until(fp_now_ns() + 200000);
     bool input_clock = clock == 1;
     if (!input_clock) t0 = wall0;
     /* The take's time origin (timecode in) is the first frame's time; its soundtrack and stage
      * timecode (--audio, --timecode) are those at that time. */
     fp_app_audio_take_options(&a->audio, t0, &take->opt);
-    if (a->take_dir && !interrupted && (rc = fp_session_take_start(take, s, t0, err, sizeof err))) {
+    if (a->take_dir && !fp_app_stop_requested() &&
+        (rc = fp_session_take_start(take, s, t0, err, sizeof err))) {
         fprintf(stderr, "facepuppet run: take: %s\n", err);
-        status = fp_app_exit_code(rc, FP_APP_OUTPUT);
-        interrupted = 1;
+        return fp_app_exit_code(rc, FP_APP_OUTPUT);
     }
-    for (uint64_t k = 0; !interrupted; k++) {
+    for (uint64_t k = 0; !fp_app_stop_requested(); k++) {
         int64_t now = t0 + (int64_t)llround((double)k * 1e9 / a->fps);
         if (input_clock) {
-            while (!fp_session_inputs_ready(s, now) && !interrupted) sleep_until(fp_now_ns() + 200000);
-            if (interrupted) break;
+            while (!fp_session_inputs_ready(s, now) && !fp_app_stop_requested())
+                sleep_until(fp_now_ns() + 200000);
+            if (fp_app_stop_requested()) break;
         } else {
             sleep_until(now);
         }
         fp_frame_stats st;
+        fp_app_stop_step_begin(); /* (a frame stuck in a plugin is abandoned on a signal) */
         fp_session_step(s, now, &st);
+        fp_app_stop_step_end();
         totals_add(t, &st);
         if ((status = write_frame(s, a, ex, k, (double)(now - t0) * 1e-9))) break;
         /* the soundtrack up to the end of this frame (its samples follow the frames) */
@@ -490,6 +499,45 @@ static int open_session(run_args *a, fp_plugin_path *path, fp_session_take *take
     return 0;
 }
 
+/* What the watchdog's take-over (app_stop.h) ends when a signal finds the frame loop stuck
+ * in a frame: all of it the loop's, which waits inside fp_session_step meanwhile. */
+typedef struct run_stuck {
+    fp_session *s;
+    run_args *a;
+    fp_session_take *take;
+    fp_exporter **ex;
+} run_stuck;
+
+/* fp_app_stop_fn: the take closed (sealed first: the stuck frame, should it end, records
+ * nothing), the soundtrack and --export finished, --out written when the frame is stuck in
+ * a plugin (the shown mesh is then the last whole frame's; elsewhere the frame may be
+ * writing it). [the watchdog thread] */
+static void run_take_over(void *user, int sig, bool in_plugin)
+{
+    run_stuck *c = user;
+    const bool quiet = c->a->sopt.quiet;
+    (void)sig;
+    if (fp_session_take_recording(c->take)) {
+        fp_session_take_seal(c->take);
+        fp_session_take_result tr;
+        char err[1024] = "";
+        if (fp_session_take_stop(c->take, &tr, err, sizeof err))
+            fprintf(stderr, "facepuppet run: the take was not written whole: %s\n", err);
+        fp_app_print_take(stderr, "facepuppet run", &tr);
+    }
+    fp_app_audio_finish(&c->a->audio, "run", quiet);
+    if (*c->ex)
+        fp_app_export_close("facepuppet run", "--export", c->ex, c->a->export_fmt, c->a->export_file,
+                            0.1, quiet, stderr);
+    if (!in_plugin) {
+        fprintf(stderr, "facepuppet run: %s not written (the frame was not in a plugin)\n", c->a->out);
+        return;
+    }
+    unsigned dropped = 0;
+    if (save_out(c->s, c->a->out, fp_session_vertex_count(c->s), quiet, &dropped) == FP_EXIT_OK && !quiet)
+        fprintf(stderr, "facepuppet run: wrote %s (the last whole frame)\n", c->a->out);
+}
+
 static int run_main(int argc, char **argv)
 {
     run_args *a = calloc(1, sizeof *a); /* (the defaults' strings: some 40 kB) */
@@ -539,12 +587,15 @@ static int run_main(int argc, char **argv)
         free(a);
         return fp_app_exit_code(rc, FP_APP_INPUT);
     }
-    signal(SIGINT, on_signal);
-    signal(SIGTERM, on_signal);
+    /* SIGINT, SIGTERM: the loop ends after the frame; a frame stuck in a plugin is abandoned */
+    run_stuck stuck = {s, a, &take, &ex};
+    if ((rc = fp_app_stop_install("facepuppet run", run_take_over, &stuck)))
+        fprintf(stderr, "facepuppet run: warning: no watchdog for a stuck plugin: %s\n", strerror(-rc));
     run_totals t;
     totals_init(&t);
     int status = run_frames(s, a, &take, ex, &t);
-    if (interrupted && !quiet) fprintf(stderr, "facepuppet run: interrupted; saving what was done\n");
+    fp_app_stop_loop_end();
+    if (fp_app_stop_requested() && !quiet) fprintf(stderr, "facepuppet run: interrupted; saving what was done\n");
     /* Close the take: a failed write (ENOSPC) fails the run with 73. */
     int take_rc = 0;
     char take_err[1024] = "";
@@ -577,6 +628,7 @@ static int run_main(int argc, char **argv)
     status = final_status(s, status, take_rc, take_err, record_failed, record_err, d.finite);
     free(t.update_ms);
     fp_app_reach_free(&t.reach);
+    fp_app_stop_uninstall();
     fp_session_destroy(&s);
     fp_plugin_path_clear(&path);
     free(a);

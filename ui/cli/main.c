@@ -71,7 +71,9 @@ static void usage(FILE *f)
                "A plugin's create() error goes through the same table by its code (EINVAL 64,\n"
                "EBADMSG 65, ENOENT/ENODEV 66...). A crash inside a plugin prints\n"
                "\"fatal signal SIG... in plugin 'NAME' during CALL (frame N)\" and ends with\n"
-               "128 + the signal.\n\n"
+               "128 + the signal. SIGINT or SIGTERM ends a run after its frame (0); a frame\n"
+               "stuck in a plugin call (one that never returns) is abandoned 0.1 s after it,\n"
+               "the take closed, and the run ends with 128 + the signal (130, 143).\n\n"
                "Environment: FACEPUPPET_PLUGIN_PATH  more plugin folders (colon-separated,\n"
                "absolute); FACEPUPPET_DEBUG=1  show plugins' and the session's debug lines.\n");
 }

@@ -64,6 +64,8 @@
 extern "C" {
 #endif
 
+struct fp_session_take; /* (fp_session_take.h) */
+
 typedef struct fp_viewer_options {
     fp_session_options session;  /* as for fp_session_create (mesh, inputs, mapping, ...) */
     int width, height;           /* window size in screen coordinates; 0: 1280 x 720 */
@@ -83,6 +85,17 @@ typedef struct fp_viewer_options {
     double countdown_s;          /* seconds counted down before a take starts; 0: none */
     const char *over;            /* --over STACK_OR_TAKE: takes are passes over it (overdub.h) */
     const char *layer;           /* --layer REGION[:MODE] of those passes; NULL: mouth */
+    /* An end asked from outside (SIGINT, SIGTERM: ui/cli/app_stop.h), NULL each for none:
+     * stop_requested, read before each frame, ends the loop as the window's closing does
+     * (the take closed, --out written); step_begin and step_end bracket the session's step;
+     * opened(user, s, take) gives the caller the session (again after a dropped mesh) and
+     * the take recorder, for a take-over from another thread while a frame is stuck in a
+     * plugin (valid until fp_viewer_run returns; called on this thread between frames). */
+    bool (*stop_requested)(void);
+    void (*step_begin)(void);
+    void (*step_end)(void);
+    void (*opened)(void *user, fp_session *s, struct fp_session_take *take);
+    void *user;
 } fp_viewer_options;
 
 /** What a run measured. Times in milliseconds. */

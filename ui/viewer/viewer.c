@@ -288,6 +288,7 @@ static int open_session(viewer *v, char *err, size_t errlen)
     }
     v->shown_src = SRC_SESSION;
     frame_mesh(v);
+    if (v->opt->opened) v->opt->opened(v->opt->user, v->s, &v->takes.take);
     return 0;
 }
 
@@ -934,7 +935,9 @@ static void frame(viewer *v)
     fp_vtakes_tick(&v->takes, v->s, now, take_msg, sizeof take_msg);
     if (take_msg[0]) say_kind(v, FP_HUD_TAKE, false, "%s", take_msg);
     if (!v->paused) {
+        if (v->opt->step_begin) v->opt->step_begin(); /* (a stuck frame: app_stop.h) */
         fp_session_step(v->s, now, &st);
+        if (v->opt->step_end) v->opt->step_end();
         for (unsigned k = fp_session_record_toggles(v->s); k > 0; k--) punch(v, true);
         if (st.committed) v->committed_shown = true;
         if (st.engaged || st.cancelled) v->committed_shown = false;
@@ -1075,7 +1078,8 @@ int fp_viewer_run(const fp_viewer_options *opt, fp_viewer_report *report, char *
                 (const char *)glGetString(GL_VERSION), renderer ? renderer : "?");
     }
     int64_t t0 = v->window_start = fp_now_ns();
-    while (!glfwWindowShouldClose(v->win) && !v->error) {
+    while (!glfwWindowShouldClose(v->win) && !v->error &&
+           !(opt->stop_requested && opt->stop_requested())) {
         frame(v);
         if (opt->frames && v->frames >= opt->frames) break;
         if (opt->duration_s > 0 && fp_now_ns() - t0 >= (int64_t)(opt->duration_s * 1e9)) break;
