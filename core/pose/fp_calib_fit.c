@@ -17,6 +17,18 @@ static int cmp_double(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
+/* Axis k of joint `joint` over the samples [from, to) of `hand` (-1: any), sorted into v
+ * (room for every sample of the hand). Returns how many. */
+static size_t joint_axis_sorted(const fp_calib_sample *s, size_t from, size_t to, int hand, int joint,
+                                int k, double *v)
+{
+    size_t c = 0;
+    for (size_t i = from; i < to; i++)
+        if (hand < 0 || s[i].hand == hand) v[c++] = s[i].joints[joint][k];
+    qsort(v, c, sizeof *v, cmp_double);
+    return c;
+}
+
 /* Per-axis median of joint `joint` over the samples [from, to) of `hand` (-1: any). Returns
  * the number of samples used. */
 static size_t median_joint(const fp_calib_sample *s, size_t from, size_t to, int hand, int joint,
@@ -28,10 +40,7 @@ static size_t median_joint(const fp_calib_sample *s, size_t from, size_t to, int
     double *v = malloc(m * sizeof *v);
     if (!v) return 0;
     for (int k = 0; k < 3; k++) {
-        size_t c = 0;
-        for (size_t i = from; i < to; i++)
-            if (hand < 0 || s[i].hand == hand) v[c++] = s[i].joints[joint][k];
-        qsort(v, c, sizeof *v, cmp_double);
+        size_t c = joint_axis_sorted(s, from, to, hand, joint, k, v);
         out[k] = c % 2 ? v[c / 2] : 0.5 * (v[c / 2 - 1] + v[c / 2]);
     }
     free(v);
@@ -70,11 +79,8 @@ void fp_calib_hold_travel(const fp_calib_sample *samples, size_t n, double trave
         double *v = malloc(m * sizeof *v), q = 0;
         if (!v) continue;
         for (int k = 0; k < 3; k++) {
-            size_t c = 0;
-            for (size_t i = 0; i < n; i++)
-                if (samples[i].hand == h) v[c++] = samples[i].joints[FP_JOINT_PALM][k];
+            size_t c = joint_axis_sorted(samples, 0, n, h, FP_JOINT_PALM, k, v);
             assert(c == m);
-            qsort(v, c, sizeof *v, cmp_double);
             double lo = v[(size_t)floor(0.02 * (double)(c - 1))], hi = v[(size_t)ceil(0.98 * (double)(c - 1))];
             q += (hi - lo) * (hi - lo);
         }

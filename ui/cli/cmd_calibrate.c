@@ -94,25 +94,16 @@ static int read_samples(fp_input_instance *inst, double duration, fp_calib_sampl
 }
 
 /* Landmarks for touch: the rig's chin and nose_tip (and forehead when it has one) where a rig
- * is given (`given`, loaded up front) or found, the head's estimate for the rest. Prints
- * where they came from. */
-static void landmarks(const fp_mesh *m, const fp_head *head, fp_rig *given, const char *given_path,
-                      bool none, float lm[FP_CALIB_LANDMARKS][3])
+ * was given or found (`rig`, at `rig_path`; calibrate_main loads it up front), the head's
+ * estimate for the rest; `why`: why a rig found did not load ("" for none). Prints where
+ * they came from. */
+static void landmarks(const fp_mesh *m, const fp_head *head, const fp_rig *rig, const char *rig_path,
+                      const char *why, float lm[FP_CALIB_LANDMARKS][3])
 {
     fp_calib_head_landmarks(m->positions, m->vertex_count, head, lm);
-    char found[4096], err[1024];
-    const char *rig_path = given ? given_path : NULL;
-    if (!rig_path && !none) { /* (--rig none: no rig looked for) */
-        char dir[4096];
-        fp_rig_default_dir(fp_app_exe_dir(), dir, sizeof dir);
-        if (!fp_rig_find(dir, m->vertex_count, m->positions, found, sizeof found, err, sizeof err))
-            rig_path = found;
-    }
-    fp_rig *rig = given;
-    if (!rig_path || (!rig && fp_rig_load_for_mesh(rig_path, m->vertex_count, m->positions, &rig, err,
-                                                   sizeof err))) {
-        printf("landmarks: estimated from the head%s%s\n", rig_path ? " (rig: " : "", rig_path ? err : "");
-        if (rig_path) printf(")\n");
+    if (!rig) {
+        printf("landmarks: estimated from the head%s%s\n", why[0] ? " (rig: " : "", why);
+        if (why[0]) printf(")\n");
         return;
     }
     static const char *names[FP_CALIB_LANDMARKS] = {"chin", "nose_tip", "forehead"};
@@ -127,7 +118,6 @@ static void landmarks(const fp_mesh *m, const fp_head *head, fp_rig *given, cons
         }
     }
     printf("\n");
-    if (rig != given) fp_rig_free(&rig);
 }
 
 /* What the command line asked for (calibrate_parse). */
@@ -135,6 +125,7 @@ typedef struct calibrate_args {
     const char *mesh_path, *input, *out, *rig_path;
     bool touch;                    /* --mode touch (else hold) */
     bool no_rig;                   /* --rig none: the head's estimated landmarks, no rig looked for */
+    char rig_why[1024];            /* why the rig found by the mesh did not load ("": none) */
     bool force;                    /* --force: an existing --out is overwritten */
     const char *dirs[8];
     size_t ndirs;
@@ -259,13 +250,14 @@ static int record_samples(const calibrate_args *a, fp_calib_sample **smp, size_t
 }
 
 /* The rig `run` finds for mesh m (fp_rig_find in the default folder, by checksum or vertex
- * count), loaded into *rig, its path in path; false (nothing said) where none fits. */
-static bool find_rig(const fp_mesh *m, char *path, size_t len, fp_rig **rig)
+ * count), loaded into *rig, its path in path; false where none fits (why stays "") or the one
+ * found does not load (why says so). */
+static bool find_rig(const fp_mesh *m, char *path, size_t len, fp_rig **rig, char *why, size_t whylen)
 {
     char dir[4096], err[1024];
     fp_rig_default_dir(fp_app_exe_dir(), dir, sizeof dir);
     if (fp_rig_find(dir, m->vertex_count, m->positions, path, len, err, sizeof err)) return false;
-    return fp_rig_load_for_mesh(path, m->vertex_count, m->positions, rig, err, sizeof err) == 0;
+    return fp_rig_load_for_mesh(path, m->vertex_count, m->positions, rig, why, whylen) == 0;
 }
 
 /* Hold mode: say when a hand moved through what should have been a hold. */
@@ -293,7 +285,7 @@ static int fit_and_save(const calibrate_args *a, const fp_mesh *m, const fp_head
     double touched[FP_CALIB_LANDMARKS][3], rms = 0;
     if (a->touch) {
         float lm[FP_CALIB_LANDMARKS][3];
-        landmarks(m, head, given_rig, a->rig_path, a->no_rig, lm);
+        landmarks(m, head, given_rig, a->rig_path, a->rig_why, lm);
         rc = fp_calib_fit_touch(smp, n, (const float(*)[3])lm, &c, touched, &rms, err, sizeof err);
     } else {
         warn_unheld(a, smp, n);
@@ -345,7 +337,8 @@ static int calibrate_main(int argc, char **argv)
     /* no --rig: the rig run would find for this mesh (its landmarks for touch, its scale) */
     char found[4096] = "";
     const char *rig_path = a.rig_path;
-    if (!given_rig && !a.no_rig && find_rig(m, found, sizeof found, &given_rig)) rig_path = found;
+    if (!given_rig && !a.no_rig && find_rig(m, found, sizeof found, &given_rig, a.rig_why, sizeof a.rig_why))
+        rig_path = found;
     if (given_rig && !(a.mm_per_unit > 0)) { /* the scale run uses: --mm-per-unit, the rig, the head */
         head.mm_per_unit = fp_rig_mm_per_unit(given_rig);
         snprintf(head.how, sizeof head.how, "from the rig %s", rig_path);
