@@ -239,7 +239,8 @@ typedef struct fp_take_reach {
     double longest_drag_mm;
 } fp_take_reach;
 
-/** The reach the end chunk will store (copied; vectors = 0 stores none). Before close. */
+/** The reach the end chunk will store (copied; vectors = 0 stores none; NULL w or reach:
+ *  nothing). Call before fp_take_writer_close, on the thread that owns the writer. */
 void fp_take_writer_set_reach(fp_take_writer *w, const fp_take_reach *reach);
 
 /** Write the frames buffered so far as one chunk (nothing if none). Returns 0 or the write
@@ -304,7 +305,8 @@ const char *fp_take_recorder_path(const fp_take_recorder *rec);
 uint32_t fp_take_recorder_take(const fp_take_recorder *rec);
 
 /** [main-thread] The reach the take's end chunk will store (fp_take_writer_set_reach), set
- *  before fp_take_recorder_close; the recorder thread does not read it. */
+ *  before fp_take_recorder_close; the recorder thread does not read it. Copied; NULL rec or
+ *  reach: nothing. */
 void fp_take_recorder_set_reach(fp_take_recorder *rec, const fp_take_reach *reach);
 
 /** [main-thread] Stop: the thread writes every frame queued before the call, the end chunk

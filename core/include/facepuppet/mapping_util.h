@@ -106,7 +106,8 @@ static inline void fp_clamp_vector(const float start[3], float end[3], double ma
  *  drag of 0.47 R, and a composition of injective maps still turns the skin around a drag
  *  of a few R over on itself (the grabbed point runs ahead of a support that stays R wide);
  *  a support that grows with the drag makes the skin around follow, as clay does, with the
- *  same slope at any length. widen <= 0 keeps radius. Mesh units in and out; pure. */
+ *  same slope at any length. widen <= 0 keeps radius. rest, start, end: n x 3 each. Mesh units
+ *  in and out; no errors; pure (any thread). */
 static inline double fp_drag_radius(double radius, double widen, const float (*rest)[3],
                                     const float (*start)[3], const float (*end)[3], size_t n)
 {
