@@ -67,7 +67,8 @@ struct fp_contact {
                                      this share of the skin of its envelope's side gets a new
                                      one around that box (recentre, on the worker) */
 
-#define FP_CONTACT_LOCAL_ROUNDS 3 /* a local scale-back: times its blocking set may grow */
+#define FP_CONTACT_LOCAL_ROUNDS 5 /* a local scale-back: times its blocking set may grow */
+#define FP_CONTACT_LOCAL_NARROW 4.0 /* its first ramp: local_r / this, doubled each round */
 #define FP_TRACK_INLINE 6          /* list entries kept in the dyn itself (one cache line) */
 
 #define FP_CONTACT_MAX_THREADS 2  /* the caller and one worker (fp_contact_set_threads) */

@@ -85,10 +85,10 @@ static void stamp_scaled(fp_contact *c, const double *ramp)
  * over) took 74 ms in the brute force; a grid of 2r cells helped nothing (every moved vertex
  * lay within 2r: 50 ms for 93,000 against 493 blocking vertices); the tree, 1-9 ms. 0 or
  * -ENOMEM. */
-static int local_ramp(fp_contact *c)
+static int local_ramp(fp_contact *c, double r)
 {
     struct track *k = c->tk;
-    double r = c->local_r, r2 = r * r, r4 = 4 * r2;
+    double r2 = r * r, r4 = 4 * r2;
     if (!k->noff) {
         for (size_t i = 0; i < k->nmv; i++) k->ramp[i] = 1;
         return 0;
@@ -253,8 +253,11 @@ static int scale_back_prepare(fp_contact *c, const float *cand)
 
 /* A local scale-back (fp_contact_set_local): the motion near the blocking triangles is
  * scaled, the rest kept (ramp); the shape with none of the near motion must pass (else the
- * triangles it blocks join, FP_CONTACT_LOCAL_ROUNDS times). *ramp: the ramp of the round
- * that passed, or NULL (the global scale-back then). found: the first check's new pairs; *fl
+ * triangles it blocks join, FP_CONTACT_LOCAL_ROUNDS times). The ramp starts narrow
+ * (local_r / FP_CONTACT_LOCAL_NARROW) and doubles each round up to local_r, so a blocked
+ * pair holds back as little of the skin around it as passes the check: the skin a finger
+ * drags past a crease keeps following it. *ramp: the ramp of the round that passed, or
+ * NULL (the global scale-back then). found: the first check's new pairs; *fl
  * its flips, then each check's. 0 or -ENOMEM. */
 static int local_scale_back(fp_contact *c, const float *ref, const float *cand, long found, size_t *fl,
                             fp_contact_result *res, const double **ramp)
@@ -269,11 +272,12 @@ static int local_scale_back(fp_contact *c, const float *ref, const float *cand, 
     long m = k->tree && !found ? (fpc_rec_merge(c) || fpc_own_flips(c, cand, ref, true) < 0 ? -ENOMEM : 0)
                                : check(c, cand, ref, fl, true);
     if (m < 0) return -ENOMEM;
-    for (int round = 0; m > 0 || *fl; round++) {
+    double r = c->local_r / FP_CONTACT_LOCAL_NARROW;
+    for (int round = 0; m > 0 || *fl; round++, r = fmin(2 * r, c->local_r)) {
         if (m < 0) return -ENOMEM;
         if (round == FP_CONTACT_LOCAL_ROUNDS) break;
         track_lerp(k, 0, NULL); /* P, where the distances are taken */
-        if (local_ramp(c)) return -ENOMEM;
+        if (local_ramp(c, r)) return -ENOMEM;
         track_lerp(k, 0, k->ramp);
         if (k->tree) {
             /* a vertex kept whole (share 1) is where the candidate has it, and a
@@ -285,7 +289,10 @@ static int local_scale_back(fp_contact *c, const float *ref, const float *cand, 
         }
         m = check(c, k->p, ref, fl, true);
         res->checks++;
-        if (!m && !*fl) *ramp = k->ramp;
+        if (!m && !*fl) {
+            *ramp = k->ramp;
+            res->local_r = r;
+        }
     }
     track_lerp(k, 0, NULL);
     return 0;

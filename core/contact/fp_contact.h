@@ -102,6 +102,8 @@ typedef struct fp_contact_result {
     size_t certified;    /* fp_contact_step, the hierarchy: patches certified (their pairs
                             not tested) */
     int local;           /* fp_contact_step: 1 when the scale-back was local */
+    double local_r;      /* fp_contact_step, local: the ramp's r (fp_contact_set_local's r / 4,
+                            / 2 or r: the first that passed) */
     size_t shared;       /* fp_contact_step, the hierarchy: checks whose refit and walk
                             two threads shared (fp_contact_set_threads) */
     double worker_wait_ms; /* fp_contact_step: how long the caller waited, at the ends of
@@ -205,7 +207,11 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
  * a blocking triangle (a triangle of a new pair or a newly flipped one, positions in P),
  * smoothstep up to 1 at 2r, so a finger stopped at the lips does not freeze a brow. The
  * shape with t = 0 must pass the check; when it does not, the triangles it blocks join the
- * blocking set (up to FP_CONTACT_LOCAL_ROUNDS = 3 times), then the global t as above. The
+ * blocking set and r doubles (rounds at r/4, r/2, then r: up to FP_CONTACT_LOCAL_ROUNDS = 5
+ * rounds), then the global t as above. Starting narrow holds back as little skin as passes:
+ * a pair blocked by the eye no longer stops the cheek a finger drags beside it (reach,
+ * tests/e2e/test_reach: Lee Perry-Smith's grab, 10th percentile 23% with r from the start,
+ * 62% so). The
  * bisection is then over t with w. Every vertex still lies on its segment P -> C (w in
  * [0, 1]), so (3) holds unchanged; every shape kept passed the same check, so the
  * invariant holds, and a fold at the border between scaled and kept motion is a flip or a

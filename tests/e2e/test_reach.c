@@ -7,8 +7,9 @@
  * grabbed skin; its reach is how far it moved (frame - base) over how far the fingertip asked
  * (|end - start|). Vectors that ask for less than 1e-4 R are left out (a resting finger
  * asks nothing). Asserted: the median over every run's vectors is at least 0.90 (issue 51's
- * first figure; measured 1.00) and every run's 10th percentile at least 0.15 (the issue's
- * 0.60 holds on 10 of 12 runs; the worst measured 0.23). Printed: the table, each run's 10th percentile (FP_TEST_VERBOSE adds the
+ * first figure; measured 1.00) and every run's 10th percentile at least 0.60 (the issue's
+ * second; the worst measured 0.62, Lee Perry-Smith's grab, where the contact guard holds
+ * two sheets of skin under a millimetre apart by the eye). Printed: the table, each run's 10th percentile (FP_TEST_VERBOSE adds the
  * log). Experiments: FP_REACH_NO_CONTACT=1 (no contact guard), FP_REACH_RADIUS=R (mesh
  * units), FP_REACH_SAVE=FILE.obj (the frame of the largest ask), FP_REACH_RIG=1 (each face's
  * own rig instead of none: on the ICT face its finger limit near bone holds every drag to
@@ -186,7 +187,7 @@ static void test_reach_anchored(void **state)
      * the contact guard holds back frames where the dragged skin would cross or turn past 90
      * degrees. Asserted with room, so that a change that loses reach fails here; the 60%
      * target is printed above, not asserted. */
-    assert_true(worst_p10 >= 0.15);
+    assert_true(worst_p10 >= 0.60);
     free(all.v);
 }
 

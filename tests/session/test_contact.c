@@ -924,12 +924,15 @@ static void test_track_local_ramp(void **state)
         fp_contact *tk;
         assert_int_equal(fp_contact_create(tris, t, n, pos, &tk), 0);
         if (tree) fp_contact_set_prewarm(tk, 0);
-        fp_contact_set_local(tk, r);
+        fp_contact_set_local(tk, 4 * r); /* its first ramp: r (set_local's r / 4) */
         assert_int_equal(fp_contact_reference(tk, pos, NULL, SIZE_MAX), 0);
         fp_contact_result res;
         assert_int_equal(fp_contact_step(tk, pos, cand, NULL, SIZE_MAX, 6, &res), 0);
         assert_int_equal(res.local, 1);
-        assert_int_equal(res.checks, 2 + 6); /* one round of the ramp passed */
+        /* the first round's ramp (r) passed, on the first check's blocking set */
+        double rr = res.local_r;
+        assert_true(rr == r);
+        assert_int_equal(res.checks, 2 + 6);
         for (size_t v = 0; v < n; v++) {
             double d2 = INFINITY; /* the brute force: every blocking vertex */
             for (size_t q = 0; q < n; q++)
@@ -938,7 +941,7 @@ static void test_track_local_ramp(void **state)
                            dz = (double)pos[3 * v + 2] - pos[3 * q + 2];
                     d2 = fmin(d2, dx * dx + dy * dy + dz * dz);
                 }
-            double u = d2 <= r * r ? 0 : d2 >= 4 * r * r ? 1 : (sqrt(d2) - r) / r;
+            double u = d2 <= rr * rr ? 0 : d2 >= 4 * rr * rr ? 1 : (sqrt(d2) - rr) / rr;
             double w = res.t + (1 - res.t) * (u * u * (3 - 2 * u));
             for (int j = 0; j < 3; j++) {
                 float a = pos[3 * v + j], b = cand[3 * v + j];
