@@ -16,6 +16,10 @@
 #     syllable's onset, below 0.1 in the silences (0.25 s after each syllable's end on); the
 #     check must fail for onsets moved 0.1 s early; `plugins check` passes input-audio (its
 #     channel events well-formed).
+#  6. --audio-in file:ramp.wav (an emulated microphone heard in real time, every sample saying
+#     where it is): the take's SLATE_TNNN.mic.wav spans its frames (last frame's end, within
+#     1/60 s), is one run of the ramp without a gap or a repeat, and the header names it; an
+#     unknown device exits 64, a missing file 66, no --take-dir 64, before any work.
 # Usage: test_audio.sh PATH/TO/fp_audio_testtool (from the source root; FP_BUILD_DIR: build).
 # SPDX-License-Identifier: GPL-3.0-or-later
 set -u
@@ -116,4 +120,21 @@ early=$(echo "$onsets" | awk -F, '{ printf "%.4f,%.4f,%.4f", $1 - 0.1, $2 - 0.1,
 "$fp" plugins check "$build/lib/facepuppet/input-audio.so" --arg "$tmp/speech.wav" >"$tmp/check.out" 2>&1 ||
     { cat "$tmp/check.out"; fail "plugins check of input-audio"; }
 grep -E "events|passed" "$tmp/check.out"
+
+# ---- 6. --audio-in ---------------------------------------------------------------------------
+"$tool" ramp "$tmp/ramp.wav" 30 || fail "ramp"
+"$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv" --duration 2 --take-dir "$tmp/mic" \
+    --audio-in "file:$tmp/ramp.wav" -o "$tmp/mic.obj" -q >/dev/null 2>"$tmp/mic.err" ||
+    { cat "$tmp/mic.err"; fail "run --audio-in exited $?"; }
+cat "$tmp/mic.err"
+[ -f "$tmp/mic/scene1_T001.mic.wav" ] || fail "no scene1_T001.mic.wav beside the take"
+"$tool" span "$tmp/mic/scene1_T001.fptake" "$tmp/mic/scene1_T001.mic.wav" || fail "the microphone's WAV does not span the take"
+"$tool" ramp-check "$tmp/mic/scene1_T001.mic.wav" || fail "the microphone's WAV is not one run of its samples"
+"$fp" info "$tmp/mic/scene1_T001.fptake" | grep -q "microphone   scene1_T001.mic.wav (from file:$tmp/ramp.wav)" ||
+    fail "the take's header does not name its microphone"
+refuse 64 "no audio input device 'no-such-mic-54'" --audio-in no-such-mic-54
+refuse 66 "No such file" --audio-in "file:$tmp/missing-mic.wav"
+"$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv" --audio-in "file:$tmp/ramp.wav" -o "$tmp/refused.obj" -q \
+    >/dev/null 2>"$tmp/refuse.err"
+[ $? -eq 64 ] && grep -q "give --take-dir" "$tmp/refuse.err" || fail "--audio-in without --take-dir was not refused (64)"
 echo "PASS"

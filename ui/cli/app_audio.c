@@ -19,7 +19,8 @@ size_t fp_app_audio_longopts(struct option *out, bool with_timecode)
     out[2] = (struct option){"audio-offset", required_argument, NULL, FP_APP_AUDIO_OPT_OFFSET};
     if (!with_timecode) return 3;
     out[3] = (struct option){"timecode", required_argument, NULL, FP_APP_AUDIO_OPT_TIMECODE};
-    return 4;
+    out[4] = (struct option){"audio-in", required_argument, NULL, FP_APP_AUDIO_OPT_IN};
+    return 5;
 }
 
 int fp_app_audio_parse(fp_app_audio *a, int c, const char *arg, const char *cmd)
@@ -43,6 +44,13 @@ int fp_app_audio_parse(fp_app_audio *a, int c, const char *arg, const char *cmd)
         }
         a->timecode = arg;
         return 1;
+    case FP_APP_AUDIO_OPT_IN:
+        if (!*arg || !strcmp(arg, "file:")) {
+            fprintf(stderr, "facepuppet %s: --audio-in: give a device or file:IN.wav, got '%s'\n", cmd, arg);
+            return FP_EXIT_USAGE;
+        }
+        a->in_spec = arg;
+        return 1;
     default: return 0;
     }
 }
@@ -62,7 +70,12 @@ void fp_app_audio_help(FILE *f, bool with_timecode)
         "      --timecode SRC     the take's timecode: system (the time of day, default),\n"
         "                         ltc:FILE.wav (LTC decoded from a recording whose first sample\n"
         "                         is the first frame) or ltc:DEVICE (LTC heard on an input\n"
-        "                         device before the run); the take's rate is the LTC's\n");
+        "                         device before the run); the take's rate is the LTC's\n"
+        "      --audio-in DEV     record a microphone beside each take (SLATE_TNNN.mic.wav, its\n"
+        "                         sample 0 at the take's first frame; the take's header names\n"
+        "                         it): default, a device's index or part of its name, or\n"
+        "                         file:IN.wav (a sound file heard in real time: an emulated\n"
+        "                         microphone); it runs on the wall clock\n");
 }
 
 /* Exit status for a soundtrack's load error: missing or unreadable (not a sound file) is an
@@ -104,7 +117,7 @@ int fp_app_audio_prepare(fp_app_audio *a, const char *cmd, const char *fallback,
 {
     char err[2048];
     const char *path = a->path ? a->path : fallback;
-    int rc;
+    int rc = 0;
     if (a->out_spec && !path) {
         fprintf(stderr, "facepuppet %s: --audio-out needs a soundtrack (--audio FILE)\n", cmd);
         return FP_EXIT_USAGE;
@@ -129,7 +142,12 @@ int fp_app_audio_prepare(fp_app_audio *a, const char *cmd, const char *fallback,
         fp_audio_player_init(&a->player, &a->track, a->out, a->offset_s);
         a->playing = true;
     }
-    if ((rc = prepare_timecode(a, cmd))) {
+    rc = prepare_timecode(a, cmd);
+    if (!rc && a->in_spec && (rc = fp_audio_in_open(a->in_spec, &a->in, err, sizeof err))) {
+        fprintf(stderr, "facepuppet %s: --audio-in: %s\n", cmd, err);
+        rc = rc == -ENODEV || rc == -EINVAL ? FP_EXIT_USAGE : file_status(rc);
+    }
+    if (rc) {
         fp_audio_out_abort(&a->out); /* (a file output's temporary removed: nothing written) */
         fp_app_audio_finish(a, cmd, true);
         return rc;
@@ -144,6 +162,7 @@ void fp_app_audio_take_options(const fp_app_audio *a, int64_t t0_ns, fp_session_
         o->soundtrack_crc32 = a->track.crc32;
         o->soundtrack_offset_s = a->offset_s;
     }
+    if (a->in) o->audio_in_device = a->in_spec;
     if (a->have_ltc) {
         o->rate = a->ltc.rate;
         o->have_timecode = true;
@@ -151,6 +170,44 @@ void fp_app_audio_take_options(const fp_app_audio *a, int64_t t0_ns, fp_session_
         if (a->ltc.at_ns) fp_ltc_timecode_at(&a->ltc, t0_ns, &o->timecode_in);
         else o->timecode_in = a->ltc.first;
     }
+}
+
+void fp_app_audio_restart(fp_app_audio *a)
+{
+    if (!a->playing) return;
+    fp_audio_player_free(&a->player);
+    fp_audio_player_init(&a->player, &a->track, a->out, a->offset_s);
+}
+
+int fp_app_audio_take_started(fp_app_audio *a, const fp_session_take *take, int64_t origin_ns,
+                              const char *cmd)
+{
+    a->in_path[0] = '\0';
+    if (!a->in || !take->header.audio_in_device) return 0;
+    const char *tp = fp_take_recorder_path(take->rec), *slash = strrchr(tp, '/');
+    char name[FP_TAKE_SLATE_MAX + 32], err[2048];
+    if (fp_take_audio_in_name(take->header.slate, take->header.take, name, sizeof name)) return 0;
+    snprintf(a->in_path, sizeof a->in_path, "%.*s%s", slash ? (int)(slash - tp + 1) : 0, tp, name);
+    if (fp_audio_in_record(a->in, a->in_path, origin_ns, err, sizeof err)) {
+        fprintf(stderr, "facepuppet %s: --audio-in: %s\n", cmd, err);
+        a->in_path[0] = '\0';
+        return FP_EXIT_CANTCREAT;
+    }
+    return 0;
+}
+
+int fp_app_audio_take_stopped(fp_app_audio *a, int64_t end_ns, const char *cmd, bool quiet)
+{
+    if (!a->in || !a->in_path[0]) return 0;
+    char err[2048];
+    uint64_t n = 0;
+    int rc = fp_audio_in_record_stop(a->in, end_ns, &n, err, sizeof err);
+    if (rc) fprintf(stderr, "facepuppet %s: --audio-in: %s\n", cmd, err);
+    else if (!quiet)
+        fprintf(stderr, "facepuppet %s: microphone %s: %.3f s from %s\n", cmd, a->in_path,
+                (double)n / fp_audio_in_rate(a->in), a->in_spec);
+    a->in_path[0] = '\0';
+    return rc ? FP_EXIT_CANTCREAT : 0;
 }
 
 int fp_app_audio_advance(fp_app_audio *a, double t_s, const char *cmd)
@@ -181,6 +238,7 @@ int fp_app_audio_finish(fp_app_audio *a, const char *cmd, bool quiet)
     }
     fp_audio_player_free(&a->player);
     fp_soundtrack_free(&a->track);
+    fp_audio_in_close(&a->in); /* (a recording not stopped is dropped) */
     a->playing = false;
     return status;
 }

@@ -300,6 +300,9 @@ int fp_app_take_info(const char *path)
                (unsigned)h->soundtrack_crc32, h->soundtrack_offset_s);
     if (h->timecode_source)
         printf("  timecode by  %s\n", fp_text_clean(h->timecode_source, a, sizeof a));
+    if (h->audio_in_path) /* (format 1.2, --audio-in) */
+        printf("  microphone   %s (from %s), beside the take\n", fp_text_clean(h->audio_in_path, a, sizeof a),
+               fp_text_clean(h->audio_in_device ? h->audio_in_device : "", b, sizeof b));
     printf("  end          %s", s->complete ? "closed normally" : "no end chunk (not closed)");
     if (s->complete) printf(", %llu dropped, status %d%s%s", (unsigned long long)s->dropped,
                             s->end_status, s->end_status ? " " : "",

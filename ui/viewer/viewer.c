@@ -938,6 +938,7 @@ static void frame(viewer *v)
         if (v->opt->step_begin) v->opt->step_begin(); /* (a stuck frame: app_stop.h) */
         fp_session_step(v->s, now, &st);
         if (v->opt->step_end) v->opt->step_end();
+        if (v->opt->sound.frame_done) v->opt->sound.frame_done(v->opt->sound.user, now);
         for (unsigned k = fp_session_record_toggles(v->s); k > 0; k--) punch(v, true);
         if (st.committed) v->committed_shown = true;
         if (st.engaged || st.cancelled) v->committed_shown = false;
@@ -1014,6 +1015,7 @@ int fp_viewer_run(const fp_viewer_options *opt, fp_viewer_report *report, char *
     v->so.progress = opening_progress; /* the window shows the opening; the caller's still runs */
     v->so.progress_user = v;
     fp_vtakes_init(&v->takes, opt->take_dir, opt->slate, opt->countdown_s, &v->so);
+    v->takes.sound = &opt->sound;
     if (fp_voverdub_init(&v->over, opt->over, opt->layer, err, errlen)) {
         fp_vtakes_free(&v->takes);
         free(v);
