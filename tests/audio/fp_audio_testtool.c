@@ -31,6 +31,11 @@
  *   range REF.wav OUT.wav START_S FRAMES
  *       OUT is FRAMES sample frames, each channel equal bit for bit to REF's from round(START_S
  *       x rate) on (0 outside REF). Exit 1 at the first difference (printed).
+ *   take-range TAKE SOUNDTRACK FIRST LAST|last
+ *       Prints "START_S FRAMES": where frames FIRST..LAST (indices) of TAKE lie in its
+ *       soundtrack (offset_s + the first's time since the origin) and how many of the
+ *       soundtrack's samples they span (the last's time - the first's + one period of the
+ *       take's rate), for `range`.
  * timecodes also takes a 6th argument `any`: the take's timecode_in may be any of the LTC's
  *       (a live take starts later than the LTC's first sample); from there frames follow.
  * SPDX-License-Identifier: GPL-3.0-or-later */
@@ -334,8 +339,32 @@ static int cmd_range(char **argv)
     return 0;
 }
 
+static int cmd_take_range(char **argv)
+{
+    fp_take_reader *r = NULL;
+    char err[1024];
+    if (fp_take_reader_open(argv[2], &r, err, sizeof err)) return fprintf(stderr, "%s\n", err), 1;
+    const fp_take_header *h = fp_take_reader_header(r);
+    SF_INFO si;
+    memset(&si, 0, sizeof si);
+    SNDFILE *sf = sf_open(argv[3], SFM_READ, &si);
+    if (!sf) return fprintf(stderr, "%s: %s\n", argv[3], sf_strerror(NULL)), 1;
+    sf_close(sf);
+    fp_take_frame f;
+    size_t a = (size_t)atol(argv[4]), b = strcmp(argv[5], "last") ? (size_t)atol(argv[5]) : fp_take_reader_frames(r) - 1;
+    if (fp_take_reader_read(r, a, &f, err, sizeof err)) return fprintf(stderr, "%s\n", err), 1;
+    int64_t ta = f.time_ns;
+    if (fp_take_reader_read(r, b, &f, err, sizeof err)) return fprintf(stderr, "%s\n", err), 1;
+    double start = h->soundtrack_offset_s + (double)(ta - h->time_origin_ns) * 1e-9;
+    double dur = (double)(f.time_ns - ta) * 1e-9 + (double)h->rate.den / h->rate.num;
+    printf("%.17g %lld\n", start, (long long)llround(dur * si.samplerate));
+    fp_take_reader_close(&r);
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
+    if (argc >= 6 && !strcmp(argv[1], "take-range")) return cmd_take_range(argv);
     if (argc >= 4 && !strcmp(argv[1], "span")) return cmd_span(argv);
     if (argc >= 4 && !strcmp(argv[1], "ramp")) return cmd_ramp(argv);
     if (argc >= 3 && !strcmp(argv[1], "ramp-check")) return cmd_ramp_check(argv);

@@ -20,6 +20,10 @@
 #     where it is): the take's SLATE_TNNN.mic.wav spans its frames (last frame's end, within
 #     1/60 s), is one run of the ramp without a gap or a repeat, and the header names it; an
 #     unknown device exits 64, a missing file 66, no --take-dir 64, before any work.
+#  7. export of the take of 2 (and of a stack over it) writes NAME.wav beside the animation:
+#     bit for bit the soundtrack's samples under the exported frames (from the first's
+#     soundtrack time, for the frames' span + one period), also for --range 30-90; an
+#     existing NAME.wav without --force is refused (73) before any frame.
 # Usage: test_audio.sh PATH/TO/fp_audio_testtool (from the source root; FP_BUILD_DIR: build).
 # SPDX-License-Identifier: GPL-3.0-or-later
 set -u
@@ -137,4 +141,24 @@ refuse 66 "No such file" --audio-in "file:$tmp/missing-mic.wav"
 "$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv" --audio-in "file:$tmp/ramp.wav" -o "$tmp/refused.obj" -q \
     >/dev/null 2>"$tmp/refuse.err"
 [ $? -eq 64 ] && grep -q "give --take-dir" "$tmp/refuse.err" || fail "--audio-in without --take-dir was not refused (64)"
+
+# ---- 7. export's soundtrack -------------------------------------------------------------------
+"$fp" export "$take" "${pd[@]}" --format pc2 --out "$tmp/exp.pc2" -q || fail "export exited $?"
+read -r s0 n0 < <("$tool" take-range "$take" "$tmp/speech.wav" 0 last)
+"$tool" range "$tmp/speech.wav" "$tmp/exp.wav" "$s0" "$n0" || fail "export's WAV is not the take's range of the soundtrack"
+"$tool" range "$tmp/speech.wav" "$tmp/exp.wav" "$(awk -v s="$s0" 'BEGIN { print s + 0.01 }')" "$n0" >/dev/null &&
+    fail "the range check passed a soundtrack 10 ms off"
+"$fp" export "$take" "${pd[@]}" --format glb --range 30-90 --out "$tmp/exp30.glb" -q || fail "export --range exited $?"
+read -r s1 n1 < <("$tool" take-range "$take" "$tmp/speech.wav" 30 90)
+"$tool" range "$tmp/speech.wav" "$tmp/exp30.wav" "$s1" "$n1" || fail "export --range's WAV is not the range's soundtrack"
+rm -f "$tmp/exp.pc2"
+"$fp" export "$take" "${pd[@]}" --format pc2 --out "$tmp/exp.pc2" -q 2>"$tmp/exp.err"
+[ $? -eq 73 ] && grep -q "exp.wav exists" "$tmp/exp.err" && [ ! -e "$tmp/exp.pc2" ] ||
+    { cat "$tmp/exp.err"; fail "an existing NAME.wav was not refused (73) before the export"; }
+"$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv" --speed 3 --duration 1 --take-dir "$tmp/takes" \
+    --slate speech --over "$take" --layer brows@20:add -o "$tmp/over.obj" -q >/dev/null 2>"$tmp/over.err" ||
+    { cat "$tmp/over.err"; fail "run --over exited $?"; }
+"$fp" export "$tmp/takes/speech_S001.fpstack" "${pd[@]}" --format pc2 --out "$tmp/stack.pc2" -q ||
+    fail "export of the stack exited $?"
+"$tool" range "$tmp/speech.wav" "$tmp/stack.wav" "$s0" "$n0" || fail "the stack's WAV is not its base take's range of the soundtrack"
 echo "PASS"

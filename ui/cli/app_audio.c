@@ -242,3 +242,63 @@ int fp_app_audio_finish(fp_app_audio *a, const char *cmd, bool quiet)
     a->playing = false;
     return status;
 }
+
+int fp_app_audio_export_check(const fp_take_header *h, const char *anim_out, bool force, char *wav,
+                              size_t n, const char *cmd)
+{
+    wav[0] = '\0';
+    if (!h->soundtrack_path) return 0;
+    const char *dot = strrchr(anim_out, '.'), *slash = strrchr(anim_out, '/');
+    struct stat st;
+    bool folder = stat(anim_out, &st) == 0 ? S_ISDIR(st.st_mode) : !dot || (slash && dot < slash);
+    size_t len = strlen(anim_out);
+    while (folder && len > 1 && anim_out[len - 1] == '/') len--;
+    int stem = folder ? (int)len : (int)(dot - anim_out);
+    snprintf(wav, n, "%.*s.wav", stem, anim_out);
+    char err[2048], spec[4300];
+    int rc;
+    snprintf(spec, sizeof spec, "file:%s", wav);
+    if ((rc = fp_audio_out_check(spec, force, err, sizeof err))) {
+        fprintf(stderr, "facepuppet %s: the soundtrack's WAV: %s\n", cmd, err);
+        wav[0] = '\0';
+        return rc == -ENOMEM ? FP_EXIT_SOFTWARE : FP_EXIT_CANTCREAT;
+    }
+    return 0;
+}
+
+int fp_app_audio_export_write(const fp_take_header *h, const char *wav, int64_t first_ns,
+                              double duration_s, bool force, bool quiet, FILE *say,
+                              const char *cmd)
+{
+    if (!wav[0] || !h->soundtrack_path) return 0;
+    char err[2048], spec[4300];
+    fp_soundtrack track;
+    if (fp_soundtrack_load(h->soundtrack_path, &track, err, sizeof err)) {
+        fprintf(stderr, "facepuppet %s: warning: the take's soundtrack: %s: %s not written\n", cmd, err, wav);
+        return 0;
+    }
+    if (!quiet && track.crc32 != h->soundtrack_crc32)
+        fprintf(stderr, "facepuppet %s: warning: %s has crc32 %08x, the take's soundtrack had %08x: "
+                "another file?\n", cmd, h->soundtrack_path, (unsigned)track.crc32, (unsigned)h->soundtrack_crc32);
+    /* the soundtrack's time at the first exported frame */
+    const double start_s = h->soundtrack_offset_s + (double)(first_ns - h->time_origin_ns) * 1e-9;
+    snprintf(spec, sizeof spec, "file:%s", wav);
+    fp_audio_out *out = NULL;
+    fp_audio_player p;
+    int rc = fp_audio_out_open(spec, track.rate, track.channels, force, &out, err, sizeof err);
+    if (!rc) {
+        fp_audio_player_init(&p, &track, out, start_s);
+        rc = fp_audio_player_advance(&p, duration_s, err, sizeof err);
+        fp_audio_player_free(&p);
+    }
+    uint64_t frames = fp_audio_out_frames(out);
+    if (!rc) rc = fp_audio_out_close(&out, err, sizeof err);
+    fp_audio_out_abort(&out);
+    if (rc) fprintf(stderr, "facepuppet %s: the soundtrack's WAV: %s\n", cmd, err);
+    else if (!quiet)
+        fprintf(say, "facepuppet %s: wrote %s: the soundtrack %s from %.6f s for %.6f s (%llu samples at "
+                "%d Hz), its sample 0 at the animation's first frame\n", cmd, wav, h->soundtrack_path,
+                start_s, (double)frames / track.rate, (unsigned long long)frames, track.rate);
+    fp_soundtrack_free(&track);
+    return rc ? FP_EXIT_CANTCREAT : 0;
+}

@@ -83,4 +83,21 @@ int fp_app_audio_advance(fp_app_audio *a, double t_s, const char *cmd);
  *  unless quiet. Returns 0 or the exit status of a failed close. */
 int fp_app_audio_finish(fp_app_audio *a, const char *cmd, bool quiet);
 
+/** export, before any frame is played: where the soundtrack of the take (header h: a take's
+ *  or a stack's base layer's) goes, `anim_out` with its extension replaced by .wav (a folder
+ *  output: beside it, FOLDER.wav), into wav (n bytes; "" when the take has none). A file there
+ *  without force is refused. Returns 0 or 73 (said with cmd). */
+int fp_app_audio_export_check(const fp_take_header *h, const char *anim_out, bool force, char *wav,
+                              size_t n, const char *cmd);
+
+/** export, after the frames: the soundtrack's samples under the exported frames, from the
+ *  first one's time first_ns for duration_s seconds (the animation's length: its last
+ *  frame's time + one frame period), into wav (32-bit float, the soundtrack's rate and
+ *  channels): the animation's time 0 is the WAV's sample 0. A soundtrack that cannot be
+ *  read is a warning (no WAV). Says what it wrote on `say` unless quiet. Returns 0 or 73 (a
+ *  write failed; said). */
+int fp_app_audio_export_write(const fp_take_header *h, const char *wav, int64_t first_ns,
+                              double duration_s, bool force, bool quiet, FILE *say,
+                              const char *cmd);
+
 #endif
