@@ -23,7 +23,8 @@
  * J / K open / close the jaw by 0.1 (a rig's jaw.open), G the rig on/off (regions coloured:
  * skull blue, jaw red, soft tissue green blending to red by its jaw weight; landmarks as
  * white points, the hinge axis as a cyan line through the two joints; a legend in the HUD),
- * T take start/stop (the live face and hands stay shown), V review the last take (again:
+ * I punch in/out and L, M, O select, mute, solo a layer of the stack under an overdub
+ * (--over; overdub.h), T take start/stop (the live face and hands stay shown), V review the last take (again:
  * back to live; so do Esc and the next engage), P play/pause it, , . a frame back/on,
  * ? (or /) the key list (on a backdrop), Esc quit (in a review: back to live). The HUD
  * (hud.h): a state badge by colour, a message stack that wraps and fades; fingertip cues
@@ -36,7 +37,7 @@
  * frame's commands (the shot shows this frame):
  *   wait hands | wait end | wait frames N    a hand is present / every input ended / N frames
  *                                            passed since the wait began
- *   key NAME     as the key: E C X Z R 1 2 [ ] W S F H J K G T P , . Tab ? space Esc
+ *   key NAME     as the key: E C X Z R 1 2 [ ] W S F H J K G T P V I L M O , . Tab ? space Esc
  *   shot FILE    write this frame as PNG
  *   radius R     set the support radius (mesh units)
  *   camera YAW PITCH [ZOOM]   the framed view (F) turned by yaw (degrees, about +y, positive
