@@ -82,6 +82,7 @@ fi
 cat "$tmp/punch.err"
 grep -q "punched 1 s to 2 s" "$tmp/punch.err" || fail "run did not say the punch"
 "$check" punch "$takes/face_S002.fpstack" 1.0 2.0 || fail "the punched stack"
+"$check" mute "$stack" || fail "muting a layer while the stack plays"
 
 # a channel layer: jaw.open from another take, composed per rig channel
 mkdir -p "$tmp/jaw"
