@@ -293,6 +293,13 @@ int fp_audio_player_advance(fp_audio_player *p, double t_s, char *err, size_t er
     return 0;
 }
 
+void fp_audio_player_skip(fp_audio_player *p, double t_s)
+{
+    if (!p->track || !isfinite(t_s)) return;
+    const int64_t want = (int64_t)llround(t_s * p->track->rate);
+    if (want > (int64_t)p->delivered) p->delivered = (uint64_t)want;
+}
+
 void fp_audio_player_free(fp_audio_player *p)
 {
     free(p->chunk);

@@ -124,6 +124,11 @@ void fp_audio_player_init(fp_audio_player *p, const fp_soundtrack *track, fp_aud
  *  nothing. Returns 0 or the output's error with err. */
 int fp_audio_player_advance(fp_audio_player *p, double t_s, char *err, size_t errlen);
 
+/** Skip to performance time t_s without writing (a live performance that stalled or paused:
+ *  a device's blocking write would otherwise queue the whole gap and lag by it): the next
+ *  advance writes from there. An earlier t_s does nothing. */
+void fp_audio_player_skip(fp_audio_player *p, double t_s);
+
 /** Free the scratch (not the track or the output). */
 void fp_audio_player_free(fp_audio_player *p);
 

@@ -221,6 +221,16 @@ int fp_app_audio_advance(fp_app_audio *a, double t_s, const char *cmd)
     return 0;
 }
 
+int fp_app_audio_advance_live(fp_app_audio *a, double t_s, const char *cmd)
+{
+    if (!a->playing) return 0;
+    const char *spec = a->out_spec ? a->out_spec : "default";
+    const double due = t_s - (double)a->player.delivered / a->track.rate;
+    if (strcmp(spec, "null") && strncmp(spec, "file:", 5) && due > 0.25)
+        fp_audio_player_skip(&a->player, t_s - 0.05);
+    return fp_app_audio_advance(a, t_s, cmd);
+}
+
 int fp_app_audio_finish(fp_app_audio *a, const char *cmd, bool quiet)
 {
     int status = 0;

@@ -79,6 +79,12 @@ int fp_app_audio_take_stopped(fp_app_audio *a, int64_t end_ns, const char *cmd, 
  *  up to there. Returns 0 or the exit status of a failed write (said on stderr). */
 int fp_app_audio_advance(fp_app_audio *a, double t_s, const char *cmd);
 
+/** As fp_app_audio_advance for a live performance: where the output is a device and more
+ *  than 0.25 s is due at once (the frames stalled, or were paused), the gap is skipped (its
+ *  sound lost, the soundtrack still at its place) rather than queued behind the device's
+ *  blocking write. A file or null output gets every sample. */
+int fp_app_audio_advance_live(fp_app_audio *a, double t_s, const char *cmd);
+
 /** Close the output (a file renamed into place) and free everything; says what was written
  *  unless quiet. Returns 0 or the exit status of a failed close. */
 int fp_app_audio_finish(fp_app_audio *a, const char *cmd, bool quiet);

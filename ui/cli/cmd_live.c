@@ -194,7 +194,7 @@ static void sound_stopped(void *user)
     l->recording = false;
     sound_fail(l, fp_app_audio_take_stopped(&l->audio, l->end_ns, "live", l->quiet));
     if (!l->takes || !l->running) return;
-    sound_fail(l, fp_app_audio_advance(&l->audio, (double)(l->end_ns - l->origin) * 1e-9, "live"));
+    sound_fail(l, fp_app_audio_advance_live(&l->audio, (double)(l->end_ns - l->origin) * 1e-9, "live"));
     l->running = false; /* (silence until the next take) */
 }
 
@@ -207,7 +207,7 @@ static void sound_frame(void *user, int64_t now_ns)
     }
     if (l->recording) l->end_ns = now_ns + LIVE_PERIOD_NS;
     if (l->running && !l->status)
-        sound_fail(l, fp_app_audio_advance(&l->audio, (double)(now_ns + LIVE_PERIOD_NS - l->origin) * 1e-9, "live"));
+        sound_fail(l, fp_app_audio_advance_live(&l->audio, (double)(now_ns + LIVE_PERIOD_NS - l->origin) * 1e-9, "live"));
 }
 
 /* The soundtrack, the timecode and the microphone, before the window, and the viewer's hooks.
