@@ -7,6 +7,8 @@
 #     last frame's end, within 1/60 s); the take records the file, crc32 and offset, and play
 #     of it with --audio-out is in sync the same way; the microphone's WAV beside the take
 #     spans it and is one run of its samples.
+#  1b. live --over that take --audio speech.wav (no --audio-offset): the pass hears the line
+#     where the base take did (0.25 s), in sync; its take records offset 0.25.
 #  2. live --timecode ltc:ltc25.wav (25 fps LTC from 10:00:00:00 made with libltc; its first
 #     sample is the first take's start): two takes, both at 25 fps with timecode_in one of the
 #     LTC's and every frame's timecode the LTC's from there; the second's timecode_in is later
@@ -51,6 +53,12 @@ grep -q "microphone   scene1_T001.mic.wav" "$tmp/info.out" || fail "the live tak
 "$tool" sync "$tmp/speech.wav" "$tmp/play.wav" 0.25 || fail "play's soundtrack of the live take is out of sync"
 "$tool" span "$take" "$tmp/takes/scene1_T001.mic.wav" || fail "live's microphone does not span the take"
 "$tool" ramp-check "$tmp/takes/scene1_T001.mic.wav" || fail "live's microphone is not one run of its samples"
+
+"${live[@]}" --take-dir "$tmp/takes" --over "$take" --layer brows@20:add --audio "$tmp/speech.wav" \
+    --audio-out "file:$tmp/over.wav" --script "$script" >/dev/null 2>"$tmp/over.err" ||
+    { cat "$tmp/over.err"; fail "live --over --audio exited $?"; }
+"$tool" sync "$tmp/speech.wav" "$tmp/over.wav" 0.25 || fail "the pass does not hear the line where the base did"
+"$fp" info "$tmp/takes/scene1_T002.fptake" | grep -q "offset 0.25 s" || fail "the pass's take does not record offset 0.25"
 
 # ---- 2. LTC -----------------------------------------------------------------------------------
 "$tool" ltc "$tmp/ltc25.wav" 25 1 10:00:00:00 20 || fail "ltc encoding"

@@ -64,7 +64,7 @@ void fp_app_audio_help(FILE *f, bool with_timecode)
         "                         device's index or part of its name, null (nowhere), or\n"
         "                         file:OUT.wav (exactly the samples played, 32-bit float)\n"
         "      --audio-offset S   the soundtrack's time at the first frame (default %s)\n",
-        with_timecode ? "0" : "the take's, or 0");
+        with_timecode ? "0; with --over, the base take's" : "the take's, or 0");
     if (with_timecode)
         fprintf(f,
         "      --timecode SRC     the take's timecode: system (the time of day, default),\n"

@@ -63,6 +63,20 @@ int fp_app_over_check(fp_app_over *o, const char *cmd, const char *take_dir)
     return 0;
 }
 
+bool fp_app_over_soundtrack_offset(const fp_app_over *o, double *offset_s)
+{
+    if (!o->over || !o->stack) return false;
+    char path[FP_STACK_PATH_MAX + 512], err[2048];
+    fp_stack_over_take_path(o->over, o->stack, 0, path, sizeof path);
+    fp_take_reader *r = NULL;
+    if (fp_take_reader_open(path, &r, err, sizeof err)) return false;
+    const fp_take_header *h = fp_take_reader_header(r);
+    const bool has = h->soundtrack_path != NULL;
+    if (has) *offset_s = h->soundtrack_offset_s;
+    fp_take_reader_close(&r);
+    return has;
+}
+
 int fp_app_over_check_mesh(const fp_app_over *o, const char *cmd, const fp_session *s)
 {
     if (!o->over) return 0;

@@ -56,6 +56,12 @@ void fp_app_stack_list(const char *dir);
  *  "solo"}]} (the first layer's region "base"). NULL when out of memory; the caller's. */
 cJSON *fp_app_stack_list_json(const char *dir);
 
+/** The soundtrack's offset the base take of --over recorded (where it was made with
+ *  --audio): the pass hears the line where the base did. true and *offset_s, else false
+ *  (no --over, no soundtrack, a base take that cannot be read). Call after
+ *  fp_app_over_check. */
+bool fp_app_over_soundtrack_offset(const fp_app_over *o, double *offset_s);
+
 /** Free what o holds (the stack, the layer's vertices). */
 void fp_app_over_free(fp_app_over *o);
 

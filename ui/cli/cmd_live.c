@@ -354,6 +354,8 @@ static int live_main(int argc, char **argv)
     }
     fp_app_over over = {.over = vo.over, .layer = vo.layer}; /* checked before the window */
     int orc = fp_app_over_check(&over, "facepuppet live", vo.take_dir);
+    if (!orc && snd.audio.path && !snd.audio.offset_given) /* the line where the base heard it */
+        fp_app_over_soundtrack_offset(&over, &snd.audio.offset_s);
     fp_app_over_free(&over);
     if (orc) return orc;
     vo.duration_s = sopt.duration_s;

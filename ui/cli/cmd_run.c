@@ -246,7 +246,10 @@ static int run_settle(run_args *a)
                 "starting with '.')\n", a->slate);
         return FP_EXIT_USAGE;
     }
-    return fp_app_over_check(&a->over, "facepuppet run", a->take_dir);
+    if ((rc = fp_app_over_check(&a->over, "facepuppet run", a->take_dir))) return rc;
+    if (a->audio.path && !a->audio.offset_given) /* the line where the base take heard it */
+        fp_app_over_soundtrack_offset(&a->over, &a->audio.offset_s);
+    return 0;
 }
 
 /* What the frames did, for the summary line. */
