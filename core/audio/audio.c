@@ -2,6 +2,7 @@
  * the player that delivers a soundtrack in step with a performance (fp_audio.h). */
 #define _GNU_SOURCE
 #include "fp_audio.h"
+#include "audio_internal.h"
 
 #include "fp_error.h"
 #include "fp_file.h"
@@ -95,9 +96,7 @@ static bool ends_with(const char *s, const char *tail)
     return a >= b && !strcasecmp(s + a - b, tail);
 }
 
-/* A PortAudio device by "default", index or part of its name, with output (or input)
- * channels. PortAudio must be initialised. Returns the index or paNoDevice. */
-static PaDeviceIndex find_device(const char *spec, bool input)
+int fp_audio_find_device(const char *spec, bool input)
 {
     if (!strcmp(spec, "default")) return input ? Pa_GetDefaultInputDevice() : Pa_GetDefaultOutputDevice();
     int count = Pa_GetDeviceCount();
@@ -136,7 +135,7 @@ int fp_audio_out_check(const char *spec, bool force, char *err, size_t errlen)
     if (!strncmp(spec, "file:", 5)) return check_file(spec + 5, force, err, errlen);
     if (fp_audio_pa_init())
         return fp_errorf(err, errlen, -ENODEV, "audio device '%s': no sound system (PortAudio)", spec);
-    PaDeviceIndex d = find_device(spec, false);
+    PaDeviceIndex d = fp_audio_find_device(spec, false);
     Pa_Terminate();
     if (d == paNoDevice)
         return fp_errorf(err, errlen, -ENODEV, "no audio output device '%s' (null and file:OUT.wav "
@@ -149,7 +148,7 @@ static int open_device(fp_audio_out *o, const char *spec, char *err, size_t errl
     if (fp_audio_pa_init())
         return fp_errorf(err, errlen, -ENODEV, "audio device '%s': no sound system (PortAudio)", spec);
     o->pa_up = true;
-    PaDeviceIndex d = find_device(spec, false);
+    PaDeviceIndex d = fp_audio_find_device(spec, false);
     if (d == paNoDevice) return fp_errorf(err, errlen, -ENODEV, "no audio output device '%s'", spec);
     PaStreamParameters p = {.device = d, .channelCount = o->channels, .sampleFormat = paFloat32,
                             .suggestedLatency = Pa_GetDeviceInfo(d)->defaultLowOutputLatency};
@@ -292,6 +291,13 @@ int fp_audio_player_advance(fp_audio_player *p, double t_s, char *err, size_t er
         p->delivered += n;
     }
     return 0;
+}
+
+void fp_audio_player_skip(fp_audio_player *p, double t_s)
+{
+    if (!p->track || !isfinite(t_s)) return;
+    const int64_t want = (int64_t)llround(t_s * p->track->rate);
+    if (want > (int64_t)p->delivered) p->delivered = (uint64_t)want;
 }
 
 void fp_audio_player_free(fp_audio_player *p)

@@ -16,6 +16,10 @@
  *     soundtrack's sample round(offset * rate) + k, whatever the session's speed or load:
  *     a file output is in sync to the sample; a device output follows the frames the session
  *     delivers (paced by the device's blocking write when the session runs ahead).
+ *   - fp_audio_in: a microphone (a PortAudio input device, or "file:X.wav": a sound file
+ *     heard in real time, an emulated microphone) captured on its own thread, each sample at
+ *     a host time; a recording writes the samples from a start time to an end time (host
+ *     clock, CLOCK_MONOTONIC: the performance's) into a WAV beside a take.
  *   - fp_ltc: SMPTE LTC decoded with libltc from a WAV (or a PortAudio input device): the
  *     frame rate (24, 25, 29.97 drop-frame or not, 30), the timecode at the file's first
  *     sample, and the count of frames decoded and of discontinuities.
@@ -120,8 +124,55 @@ void fp_audio_player_init(fp_audio_player *p, const fp_soundtrack *track, fp_aud
  *  nothing. Returns 0 or the output's error with err. */
 int fp_audio_player_advance(fp_audio_player *p, double t_s, char *err, size_t errlen);
 
+/** Skip to performance time t_s without writing (a live performance that stalled or paused:
+ *  a device's blocking write would otherwise queue the whole gap and lag by it): the next
+ *  advance writes from there. An earlier t_s does nothing. */
+void fp_audio_player_skip(fp_audio_player *p, double t_s);
+
 /** Free the scratch (not the track or the output). */
 void fp_audio_player_free(fp_audio_player *p);
+
+/* ---- inputs (a microphone) -------------------------------------------------------------------- */
+
+typedef struct fp_audio_in fp_audio_in;
+
+/** Check an input spec before any work: "file:PATH" (an emulated microphone: PATH must be a
+ *  sound file libsndfile reads: fp_soundtrack_load's codes, -ENOENT, -EACCES, -EBADMSG) or a
+ *  PortAudio input device ("default", an index or a case-insensitive part of its name:
+ *  -ENODEV when there is none, or no sound system). -EINVAL: an empty spec. */
+int fp_audio_in_check(const char *spec, char *err, size_t errlen);
+
+/** Open the input and start capturing on its own thread: a device at its default rate, one
+ *  channel; a file at its rate and channels, its sample k heard at the open's host time +
+ *  k / rate (silence after its end). The last 10 s are kept, for a recording that starts
+ *  in the past. Device samples are placed on the host clock at the first block (the input
+ *  latency PortAudio reports subtracted); the device's own clock is not followed after that.
+ *  Returns 0 and *out, or fp_audio_in_check's codes, -EIO (the device would not start),
+ *  -ENOMEM, -EAGAIN (no thread), with err. [main-thread] */
+int fp_audio_in_open(const char *spec, fp_audio_in **out, char *err, size_t errlen);
+
+/** The input's sample rate (Hz) and channels; 0 for NULL. */
+int fp_audio_in_rate(const fp_audio_in *in);
+int fp_audio_in_channels(const fp_audio_in *in);
+
+/** Record into a new WAV at `path` (32-bit float, the input's rate and channels; written
+ *  through a temporary beside it, renamed by fp_audio_in_record_stop): its sample 0 is the
+ *  input's sample at host time t0_ns (silence for any time before the capture began). Returns
+ *  0, -EBUSY (recording already), or the file's code (fp_file_open_output's, -EIO) with err.
+ *  Thread-safe against the capture thread; one caller at a time. */
+int fp_audio_in_record(fp_audio_in *in, const char *path, int64_t t0_ns, char *err, size_t errlen);
+
+/** End the recording at host time end_ns: waits until the input has captured up to there (2 s
+ *  at most; a device that stopped: silence), writes the samples before end_ns, closes and
+ *  renames the WAV into place. *frames (may be NULL): the sample frames in the file, 0 on an
+ *  error. Returns 0 (also when nothing records) or the first write's error (-EIO; the
+ *  temporary removed) with err. */
+int fp_audio_in_record_stop(fp_audio_in *in, int64_t end_ns, uint64_t *frames, char *err,
+                            size_t errlen);
+
+/** Stop the capture thread, drop a recording in progress (its temporary removed) and free
+ *  *in (set to NULL). NULL: nothing. */
+void fp_audio_in_close(fp_audio_in **in);
 
 /* ---- LTC ---------------------------------------------------------------------------------- */
 

@@ -58,6 +58,8 @@ typedef struct fp_session_take_options {
     const char *soundtrack_path;   /* the soundtrack performed to; NULL: none */
     uint32_t soundtrack_crc32;     /* zlib crc32 of its bytes */
     double soundtrack_offset_s;    /* the soundtrack's time at the take's origin */
+    const char *audio_in_device;   /* a microphone recorded beside the take (its WAV's name in
+                                      the header: fp_take_audio_in_name); NULL: none */
 } fp_session_take_options;
 
 /** What a finished take holds (fp_session_take_stop). */

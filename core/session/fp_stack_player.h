@@ -72,6 +72,13 @@ const float *fp_stack_player_positions(const fp_stack_player *p);
 const fp_stack *fp_stack_player_stack(const fp_stack_player *p);
 struct fp_take_player *fp_stack_player_base(fp_stack_player *p);
 
+/** Mute or solo layer i (1 .. layer_count - 1; the base always plays) from the next frame on,
+ *  as the stack's file would: the layers that play follow (a solo anywhere plays the soloed
+ *  layers only, muted ones never). The stack's copy (fp_stack_player_stack) changes too.
+ *  Layers go on playing their frames either way, so a layer turned on again is in step.
+ *  Returns 0 or -EINVAL (i out of range). For live's overdub keys. */
+int fp_stack_player_set_layer(fp_stack_player *p, size_t i, bool mute, bool solo);
+
 /** Layer i's region weight per vertex (n floats in [0, 1]; NULL for channel layers and
  *  i out of range), for tests and the viewer. */
 const float *fp_stack_player_region_weights(const fp_stack_player *p, size_t i);

@@ -121,6 +121,7 @@ int fp_session_take_start(fp_session_take *t, const fp_session *s, int64_t origi
     h->soundtrack_path = t->opt.soundtrack_path;
     h->soundtrack_crc32 = t->opt.soundtrack_crc32;
     h->soundtrack_offset_s = t->opt.soundtrack_offset_s;
+    h->audio_in_device = t->opt.audio_in_device;
     h->time_origin_ns = origin_ns;
     h->mesh_path = so->mesh_path;
     h->mesh_vertices = fp_session_vertex_count(s);

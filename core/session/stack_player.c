@@ -383,6 +383,26 @@ const fp_stack *fp_stack_player_stack(const fp_stack_player *p) { return p->stac
 fp_take_player *fp_stack_player_base(fp_stack_player *p) { return p->layers[0].tp; }
 unsigned long fp_stack_player_limited(const fp_stack_player *p) { return p->limited; }
 
+/* Which layers play: the base; a layer not muted when no layer is soloed, else a soloed one. */
+static void set_on(fp_stack_player *p)
+{
+    bool solo = false;
+    for (size_t i = 1; i < p->stack->layer_count; i++) solo |= p->stack->layers[i].solo;
+    for (size_t i = 0; i < p->stack->layer_count; i++) {
+        const fp_stack_layer *l = &p->stack->layers[i];
+        p->layers[i].on = i == 0 || (!l->mute && (!solo || l->solo));
+    }
+}
+
+int fp_stack_player_set_layer(fp_stack_player *p, size_t i, bool mute, bool solo)
+{
+    if (!p || i == 0 || i >= p->stack->layer_count) return -EINVAL;
+    p->stack->layers[i].mute = mute;
+    p->stack->layers[i].solo = solo;
+    set_on(p);
+    return 0;
+}
+
 const float *fp_stack_player_region_weights(const fp_stack_player *p, size_t i)
 {
     return p && i < p->stack->layer_count ? p->layers[i].wt.w : NULL;

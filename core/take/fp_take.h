@@ -150,6 +150,11 @@ typedef struct fp_take_header {
     double soundtrack_offset_s;     /* the soundtrack's time, seconds, at time_origin_ns */
     const char *timecode_source;    /* where timecode_in came from: "system" (NULL) or
                                        "ltc:FILE" (decoded LTC) */
+    const char *audio_in_device;    /* the microphone recorded beside the take (--audio-in
+                                       DEVICE); NULL: none. Writing: the writer names the
+                                       file (fp_take_audio_in_name) */
+    const char *audio_in_path;      /* its WAV's name, in the take's folder; its sample 0 is
+                                       at time_origin_ns (ignored when writing) */
 } fp_take_header;
 
 /** zlib crc32 of vertex positions (n x 3 floats) as little-endian bytes. */
@@ -187,6 +192,10 @@ bool fp_take_slate_valid(const char *slate);
 
 /** "SLATE_T003.fptake" (three digits at least) into buf. Returns 0 or -EINVAL. */
 int fp_take_filename(const char *slate, uint32_t take, char *buf, size_t n);
+
+/** The name of the microphone's WAV beside take `take` of `slate` (--audio-in):
+ *  "SLATE_TNNN.mic.wav". Returns 0, or -EINVAL (a bad slate, take 0, buf too small). */
+int fp_take_audio_in_name(const char *slate, uint32_t take, char *buf, size_t n);
 
 /** The next free take number for `slate` in folder `dir`: one more than the largest NNN of
  *  the files SLATE_TNNN.fptake there, or 1. Numbers increase per slate and start at 1 for a

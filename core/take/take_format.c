@@ -503,6 +503,11 @@ char *take_header_to_json(const fp_take_header *h)
         add_number(st, "offset_s", h->soundtrack_offset_s);
     }
     if (h->timecode_source) add_str(o, "timecode_source", h->timecode_source);
+    if (h->audio_in_path) { /* 1.2, optional: the microphone's WAV beside the take */
+        cJSON *ai = cJSON_AddObjectToObject(o, "audio_in");
+        add_str(ai, "path", h->audio_in_path);
+        add_str(ai, "device", h->audio_in_device ? h->audio_in_device : "");
+    }
     char *text = cJSON_PrintUnformatted(o);
     cJSON_Delete(o);
     return text;
@@ -667,6 +672,14 @@ static int fill_header(const cJSON *o, fp_take_header *h, strstore *st, char *ms
         h->soundtrack_crc32 = (uint32_t)v;
     }
     h->timecode_source = keep(st, jstr(o, "timecode_source"));
+    const cJSON *ai = cJSON_GetObjectItemCaseSensitive(o, "audio_in"); /* 1.2, optional */
+    if (ai && !cJSON_IsNull(ai)) {
+        const char *path = jstr(ai, "path"), *dev = jstr(ai, "device");
+        if (!cJSON_IsObject(ai) || !path || !*path || strchr(path, '/'))
+            return fp_errorf(msg, msglen, -EBADMSG, "header: invalid \"audio_in\" (a file name in the take's folder)");
+        h->audio_in_path = keep(st, path);
+        h->audio_in_device = keep(st, dev ? dev : "");
+    }
     return 0;
 }
 

@@ -26,6 +26,13 @@ int fp_take_filename(const char *slate, uint32_t take, char *buf, size_t n)
     return (k < 0 || (size_t)k >= n) ? -EINVAL : 0;
 }
 
+int fp_take_audio_in_name(const char *slate, uint32_t take, char *buf, size_t n)
+{
+    if (!fp_take_slate_valid(slate) || !take) return -EINVAL;
+    int k = snprintf(buf, n, "%s_T%03" PRIu32 ".mic.wav", slate, take);
+    return (k < 0 || (size_t)k >= n) ? -EINVAL : 0;
+}
+
 /* The take number of `name` if it is SLATE_TNNN.fptake of this slate, else 0. */
 static uint32_t name_take(const char *name, const char *slate)
 {
@@ -241,6 +248,9 @@ int fp_take_writer_create(const char *dir, const fp_take_header *header,
 
     fp_take_header h = *header;
     h.take = take;
+    char mic[FP_TAKE_SLATE_MAX + 32];
+    h.audio_in_path = NULL;
+    if (h.audio_in_device && !fp_take_audio_in_name(h.slate, take, mic, sizeof mic)) h.audio_in_path = mic;
     if (!h.date[0]) {
         time_t now = time(NULL);
         struct tm tm;

@@ -19,6 +19,25 @@
  *       and < 0.1 in the silences (before the first onset, and from each end + RELEASE_S,
  *       default 0.25, to the next onset or the take's end). Prints the figures; exit 1 on
  *       a miss.
+ *   span TAKE WAV
+ *       WAV's length against the take's span: its last frame's time - time_origin_ns + one
+ *       period of 60 fps (a frame's end). Exit 1 when they differ by more than 1/60 s.
+ *   ramp OUT.wav SECONDS
+ *       A 48 kHz mono 32-bit float WAV whose sample k is ((k mod 32768) + 1) / 65536: every
+ *       sample says where it is (an emulated microphone for --audio-in file:).
+ *   ramp-check WAV
+ *       WAV's samples are one run of a ramp's without a gap or a repeat; prints where it
+ *       starts. Exit 1 at a break.
+ *   range REF.wav OUT.wav START_S FRAMES
+ *       OUT is FRAMES sample frames, each channel equal bit for bit to REF's from round(START_S
+ *       x rate) on (0 outside REF). Exit 1 at the first difference (printed).
+ *   take-range TAKE SOUNDTRACK FIRST LAST|last
+ *       Prints "START_S FRAMES": where frames FIRST..LAST (indices) of TAKE lie in its
+ *       soundtrack (offset_s + the first's time since the origin) and how many of the
+ *       soundtrack's samples they span (the last's time - the first's + one period of the
+ *       take's rate), for `range`.
+ * timecodes also takes a 6th argument `any`: the take's timecode_in may be any of the LTC's
+ *       (a live take starts later than the LTC's first sample); from there frames follow.
  * SPDX-License-Identifier: GPL-3.0-or-later */
 #include "fp_take.h"
 
@@ -140,15 +159,22 @@ static int cmd_timecodes(char **argv)
     uint64_t in_n = 0;
     fp_timecode_to_frames(&h->timecode_in, h->rate, &in_n);
     fp_take_frame f;
-    size_t n = fp_take_reader_frames(r), checked = 0;
+    size_t n = fp_take_reader_frames(r), checked = 0, base = 0;
     int64_t t_first = 0;
+    const bool any = argv[6] && !strcmp(argv[6], "any");
+    if (any) { /* timecode_in is one of the LTC's */
+        for (base = 0; base < nl && strcmp(lines[base], in); base++) {
+        }
+        if (base == nl) printf("timecodes: timecode_in %s is none of the LTC's\n", in), bad = 1;
+        else printf("timecodes: timecode_in %s is the LTC's frame %zu\n", in, base);
+    }
     for (size_t i = 0; i < n && !bad; i++) {
         if (fp_take_reader_read(r, i, &f, err, sizeof err)) return fprintf(stderr, "%s\n", err), 1;
         if (!i) t_first = f.time_ns;
         fp_timecode got;
         fp_timecode_from_frames(in_n + fp_take_frames_in(f.time_ns - h->time_origin_ns, h->rate), h->rate,
                                 h->timecode_in.drop, &got);
-        uint64_t k = fp_take_frames_in(f.time_ns - t_first, want);
+        uint64_t k = base + fp_take_frames_in(f.time_ns - (any ? h->time_origin_ns : t_first), want);
         if (k >= nl) break; /* (past the LTC encoded) */
         snprintf(ws, sizeof ws, "%s", lines[k]);
         char gs[32];
@@ -224,12 +250,129 @@ static int cmd_jaw(int argc, char **argv)
     return bad;
 }
 
+static int cmd_span(char **argv)
+{
+    fp_take_reader *r = NULL;
+    char err[1024];
+    if (fp_take_reader_open(argv[2], &r, err, sizeof err)) return fprintf(stderr, "%s\n", err), 1;
+    const fp_take_header *h = fp_take_reader_header(r);
+    size_t n = fp_take_reader_frames(r);
+    fp_take_frame f;
+    if (!n || fp_take_reader_read(r, n - 1, &f, err, sizeof err)) return fprintf(stderr, "%s: no frames\n", argv[2]), 1;
+    double span = (double)(f.time_ns - h->time_origin_ns) * 1e-9 + 1.0 / 60;
+    fp_take_reader_close(&r);
+    SF_INFO si;
+    float *w = read_wav(argv[3], &si);
+    if (!w) return 1;
+    free(w);
+    double len = (double)si.frames / si.samplerate;
+    printf("span: %s: %.4f s; %s: %.4f s (%ld frames at %d Hz); difference %.2f ms (tolerance %.2f)\n", argv[2],
+           span, argv[3], len, (long)si.frames, si.samplerate, 1e3 * (len - span), 1e3 / 60);
+    return fabs(len - span) <= 1.0 / 60 ? 0 : 1;
+}
+
+static float ramp_value(long k) { return (float)((k % 32768) + 1) / 65536.0f; }
+
+static int cmd_ramp(char **argv)
+{
+    long n = lround(atof(argv[3]) * 48000);
+    SF_INFO si = {.samplerate = 48000, .channels = 1, .format = SF_FORMAT_WAV | SF_FORMAT_FLOAT};
+    SNDFILE *sf = sf_open(argv[2], SFM_WRITE, &si);
+    float *buf = malloc((size_t)n * sizeof *buf);
+    if (!sf || !buf) return fprintf(stderr, "%s: %s\n", argv[2], sf_strerror(NULL)), 1;
+    for (long k = 0; k < n; k++) buf[k] = ramp_value(k);
+    sf_writef_float(sf, buf, n);
+    sf_close(sf);
+    free(buf);
+    return 0;
+}
+
+static int cmd_ramp_check(char **argv)
+{
+    SF_INFO si;
+    float *w = read_wav(argv[2], &si);
+    if (!w || si.frames < 2) return fprintf(stderr, "ramp-check: %s: no samples\n", argv[2]), 1;
+    long start = lround(w[0] * 65536.0) - 1;
+    for (long k = 1; k < (long)si.frames; k++)
+        if (w[k] != ramp_value(start + k)) {
+            printf("ramp-check: %s: sample %ld is %.8g, the ramp's %.8g (a gap or a repeat)\n", argv[2], k,
+                   w[k], ramp_value(start + k));
+            return 1;
+        }
+    if (w[0] <= 0) return printf("ramp-check: %s: starts with silence\n", argv[2]), 1;
+    printf("ramp-check: %s: %ld samples, one run of the ramp from its sample %ld (mod 32768)\n", argv[2],
+           (long)si.frames, start);
+    free(w);
+    return 0;
+}
+
+static int cmd_range(char **argv)
+{
+    SF_INFO a, b;
+    memset(&a, 0, sizeof a);
+    memset(&b, 0, sizeof b);
+    SNDFILE *fa = sf_open(argv[2], SFM_READ, &a), *fb = sf_open(argv[3], SFM_READ, &b);
+    if (!fa || !fb) return fprintf(stderr, "range: %s\n", sf_strerror(NULL)), 1;
+    if (a.samplerate != b.samplerate || a.channels != b.channels)
+        return printf("range: rate or channels differ (%d/%d, %d/%d)\n", a.samplerate, a.channels,
+                      b.samplerate, b.channels), 1;
+    size_t ch = (size_t)a.channels;
+    float *ra = malloc((size_t)a.frames * ch * sizeof(float) + 4), *rb = malloc((size_t)b.frames * ch * sizeof(float) + 4);
+    sf_readf_float(fa, ra, a.frames);
+    sf_readf_float(fb, rb, b.frames);
+    sf_close(fa);
+    sf_close(fb);
+    long start = lround(atof(argv[4]) * a.samplerate), want = atol(argv[5]);
+    if (b.frames != want) return printf("range: %s has %ld frames, want %ld\n", argv[3], (long)b.frames, want), 1;
+    long nonzero = 0;
+    for (long k = 0; k < want; k++)
+        for (size_t c = 0; c < ch; c++) {
+            long i = start + k;
+            float r = i >= 0 && i < a.frames ? ra[(size_t)i * ch + c] : 0.0f, o = rb[(size_t)k * ch + c];
+            if (memcmp(&r, &o, sizeof r)) return printf("range: frame %ld channel %zu: %.9g, the soundtrack's %.9g\n", k, c, o, r), 1;
+            nonzero += o != 0;
+        }
+    printf("range: %s: %ld frames equal %s's from frame %ld bit for bit (%ld samples not zero)\n", argv[3], want,
+           argv[2], start, nonzero);
+    free(ra);
+    free(rb);
+    return 0;
+}
+
+static int cmd_take_range(char **argv)
+{
+    fp_take_reader *r = NULL;
+    char err[1024];
+    if (fp_take_reader_open(argv[2], &r, err, sizeof err)) return fprintf(stderr, "%s\n", err), 1;
+    const fp_take_header *h = fp_take_reader_header(r);
+    SF_INFO si;
+    memset(&si, 0, sizeof si);
+    SNDFILE *sf = sf_open(argv[3], SFM_READ, &si);
+    if (!sf) return fprintf(stderr, "%s: %s\n", argv[3], sf_strerror(NULL)), 1;
+    sf_close(sf);
+    fp_take_frame f;
+    size_t a = (size_t)atol(argv[4]), b = strcmp(argv[5], "last") ? (size_t)atol(argv[5]) : fp_take_reader_frames(r) - 1;
+    if (fp_take_reader_read(r, a, &f, err, sizeof err)) return fprintf(stderr, "%s\n", err), 1;
+    int64_t ta = f.time_ns;
+    if (fp_take_reader_read(r, b, &f, err, sizeof err)) return fprintf(stderr, "%s\n", err), 1;
+    double start = h->soundtrack_offset_s + (double)(ta - h->time_origin_ns) * 1e-9;
+    double dur = (double)(f.time_ns - ta) * 1e-9 + (double)h->rate.den / h->rate.num;
+    printf("%.17g %lld\n", start, (long long)llround(dur * si.samplerate));
+    fp_take_reader_close(&r);
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
+    if (argc >= 6 && !strcmp(argv[1], "take-range")) return cmd_take_range(argv);
+    if (argc >= 4 && !strcmp(argv[1], "span")) return cmd_span(argv);
+    if (argc >= 4 && !strcmp(argv[1], "ramp")) return cmd_ramp(argv);
+    if (argc >= 3 && !strcmp(argv[1], "ramp-check")) return cmd_ramp_check(argv);
+    if (argc >= 6 && !strcmp(argv[1], "range")) return cmd_range(argv);
     if (argc >= 7 && !strcmp(argv[1], "ltc")) return cmd_ltc(argv);
     if (argc >= 5 && !strcmp(argv[1], "sync")) return cmd_sync(argv);
     if (argc >= 6 && !strcmp(argv[1], "timecodes")) return cmd_timecodes(argv);
     if (argc >= 5 && !strcmp(argv[1], "jaw")) return cmd_jaw(argc, argv);
-    fprintf(stderr, "usage: fp_audio_testtool ltc|sync|timecodes|jaw ... (see the source)\n");
+    fprintf(stderr, "usage: fp_audio_testtool ltc|sync|timecodes|jaw|span|ramp|ramp-check|range ... (see the source)\n");
     return 2;
 }

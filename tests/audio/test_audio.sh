@@ -16,6 +16,14 @@
 #     syllable's onset, below 0.1 in the silences (0.25 s after each syllable's end on); the
 #     check must fail for onsets moved 0.1 s early; `plugins check` passes input-audio (its
 #     channel events well-formed).
+#  6. --audio-in file:ramp.wav (an emulated microphone heard in real time, every sample saying
+#     where it is): the take's SLATE_TNNN.mic.wav spans its frames (last frame's end, within
+#     1/60 s), is one run of the ramp without a gap or a repeat, and the header names it; an
+#     unknown device exits 64, a missing file 66, no --take-dir 64, before any work.
+#  7. export of the take of 2 (and of a stack over it) writes NAME.wav beside the animation:
+#     bit for bit the soundtrack's samples under the exported frames (from the first's
+#     soundtrack time, for the frames' span + one period), also for --range 30-90; an
+#     existing NAME.wav without --force is refused (73) before any frame.
 # Usage: test_audio.sh PATH/TO/fp_audio_testtool (from the source root; FP_BUILD_DIR: build).
 # SPDX-License-Identifier: GPL-3.0-or-later
 set -u
@@ -116,4 +124,41 @@ early=$(echo "$onsets" | awk -F, '{ printf "%.4f,%.4f,%.4f", $1 - 0.1, $2 - 0.1,
 "$fp" plugins check "$build/lib/facepuppet/input-audio.so" --arg "$tmp/speech.wav" >"$tmp/check.out" 2>&1 ||
     { cat "$tmp/check.out"; fail "plugins check of input-audio"; }
 grep -E "events|passed" "$tmp/check.out"
+
+# ---- 6. --audio-in ---------------------------------------------------------------------------
+"$tool" ramp "$tmp/ramp.wav" 30 || fail "ramp"
+"$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv" --duration 2 --take-dir "$tmp/mic" \
+    --audio-in "file:$tmp/ramp.wav" -o "$tmp/mic.obj" -q >/dev/null 2>"$tmp/mic.err" ||
+    { cat "$tmp/mic.err"; fail "run --audio-in exited $?"; }
+cat "$tmp/mic.err"
+[ -f "$tmp/mic/scene1_T001.mic.wav" ] || fail "no scene1_T001.mic.wav beside the take"
+"$tool" span "$tmp/mic/scene1_T001.fptake" "$tmp/mic/scene1_T001.mic.wav" || fail "the microphone's WAV does not span the take"
+"$tool" ramp-check "$tmp/mic/scene1_T001.mic.wav" || fail "the microphone's WAV is not one run of its samples"
+"$fp" info "$tmp/mic/scene1_T001.fptake" | grep -q "microphone   scene1_T001.mic.wav (from file:$tmp/ramp.wav)" ||
+    fail "the take's header does not name its microphone"
+refuse 64 "no audio input device 'no-such-mic-54'" --audio-in no-such-mic-54
+refuse 66 "No such file" --audio-in "file:$tmp/missing-mic.wav"
+"$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv" --audio-in "file:$tmp/ramp.wav" -o "$tmp/refused.obj" -q \
+    >/dev/null 2>"$tmp/refuse.err"
+[ $? -eq 64 ] && grep -q "give --take-dir" "$tmp/refuse.err" || fail "--audio-in without --take-dir was not refused (64)"
+
+# ---- 7. export's soundtrack -------------------------------------------------------------------
+"$fp" export "$take" "${pd[@]}" --format pc2 --out "$tmp/exp.pc2" -q || fail "export exited $?"
+read -r s0 n0 < <("$tool" take-range "$take" "$tmp/speech.wav" 0 last)
+"$tool" range "$tmp/speech.wav" "$tmp/exp.wav" "$s0" "$n0" || fail "export's WAV is not the take's range of the soundtrack"
+"$tool" range "$tmp/speech.wav" "$tmp/exp.wav" "$(awk -v s="$s0" 'BEGIN { print s + 0.01 }')" "$n0" >/dev/null &&
+    fail "the range check passed a soundtrack 10 ms off"
+"$fp" export "$take" "${pd[@]}" --format glb --range 30-90 --out "$tmp/exp30.glb" -q || fail "export --range exited $?"
+read -r s1 n1 < <("$tool" take-range "$take" "$tmp/speech.wav" 30 90)
+"$tool" range "$tmp/speech.wav" "$tmp/exp30.wav" "$s1" "$n1" || fail "export --range's WAV is not the range's soundtrack"
+rm -f "$tmp/exp.pc2"
+"$fp" export "$take" "${pd[@]}" --format pc2 --out "$tmp/exp.pc2" -q 2>"$tmp/exp.err"
+[ $? -eq 73 ] && grep -q "exp.wav exists" "$tmp/exp.err" && [ ! -e "$tmp/exp.pc2" ] ||
+    { cat "$tmp/exp.err"; fail "an existing NAME.wav was not refused (73) before the export"; }
+"$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv" --speed 3 --duration 1 --take-dir "$tmp/takes" \
+    --slate speech --over "$take" --layer brows@20:add -o "$tmp/over.obj" -q >/dev/null 2>"$tmp/over.err" ||
+    { cat "$tmp/over.err"; fail "run --over exited $?"; }
+"$fp" export "$tmp/takes/speech_S001.fpstack" "${pd[@]}" --format pc2 --out "$tmp/stack.pc2" -q ||
+    fail "export of the stack exited $?"
+"$tool" range "$tmp/speech.wav" "$tmp/stack.wav" "$s0" "$n0" || fail "the stack's WAV is not its base take's range of the soundtrack"
 echo "PASS"

@@ -17,6 +17,11 @@
  *       (channels jaw.open, replace, no fade); the stack's frames equal the jaw take's played
  *       alone bit for bit but for the first and last (the ends of the layer's range,
  *       where its weight is 0), and differ from TAKE's.
+ *   test_stack_check mute STACK   fp_stack_player_set_layer (live's M and O keys): layer 1
+ *       muted for the middle third of the frames: there every frame equals the base take's
+ *       bit for bit; before and after (unmuted again) every frame equals the stack's played
+ *       without a change, bit for bit (the layer went on playing: in step); soloing layer 1
+ *       changes nothing in a two-layer stack; the base cannot be muted (-EINVAL).
  * Prints the figures; exit 0 when every check holds, 1 otherwise. */
 #define _GNU_SOURCE
 #include "fp_mesh.h"
@@ -26,6 +31,7 @@
 #include "fp_take_player.h"
 #include "selfx.h"
 
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -124,8 +130,70 @@ static int channels_check(const char *take, const char *dir, const fp_plugin_pat
     return fails ? 1 : 0;
 }
 
+static int mute_check(const char *path, const fp_plugin_path *pp)
+{
+    char err[4096], base_path[8192];
+    fp_take_player *a = NULL, *b = NULL, *base = NULL;
+    if (fp_take_player_open(path, NULL, pp, &a, err, sizeof err) ||
+        fp_take_player_open(path, NULL, pp, &b, err, sizeof err)) {
+        printf("FAIL: %s\n", err);
+        return 1;
+    }
+    fp_stack_player *sp = fp_take_player_stack(a);
+    fp_stack_take_path(fp_stack_player_stack(sp), 0, base_path, sizeof base_path);
+    if (fp_take_player_open(base_path, NULL, pp, &base, err, sizeof err)) {
+        printf("FAIL: %s\n", err);
+        return 1;
+    }
+    CHECK(fp_stack_player_set_layer(sp, 0, true, false) == -EINVAL, "the base was muted");
+    CHECK(fp_stack_player_set_layer(sp, 2, true, false) == -EINVAL, "a layer past the top was muted");
+    const size_t n = fp_session_vertex_count(fp_take_player_session(base));
+    const size_t total = fp_take_reader_frames(fp_take_player_reader(base));
+    fp_take_frame f;
+    size_t k = 0, muted = 0, muted_diff = 0, on = 0, on_diff = 0, shows = 0;
+    while (fp_take_player_next(a, &f, NULL, err, sizeof err) == 1) {
+        if (fp_take_player_next(b, &f, NULL, err, sizeof err) != 1 ||
+            fp_take_player_next(base, &f, NULL, err, sizeof err) != 1) {
+            CHECK(0, "the players ended apart");
+            break;
+        }
+        const float *ca = fp_take_player_positions(a), *cb = fp_take_player_positions(b),
+                    *cbase = fp_take_player_positions(base);
+        const bool mid = k >= total / 3 && k < 2 * total / 3;
+        if (mid) {
+            muted++;
+            muted_diff += memcmp(ca, cbase, n * 3 * sizeof *ca) != 0;
+        } else {
+            on++;
+            on_diff += memcmp(ca, cb, n * 3 * sizeof *ca) != 0;
+            shows += memcmp(cb, cbase, n * 3 * sizeof *cb) != 0;
+        }
+        k++; /* the next frame: muted in the middle third, soloed (a no-op here) after */
+        if (k == total / 3) CHECK(!fp_stack_player_set_layer(sp, 1, true, false), "mute");
+        if (k == 2 * total / 3) CHECK(!fp_stack_player_set_layer(sp, 1, false, true), "solo");
+    }
+    printf("mute: %zu frames muted, %zu differ from the base; %zu frames playing, %zu differ from "
+           "the stack unchanged (the layer shows in %zu of them)\n", muted, muted_diff, on, on_diff, shows);
+    CHECK(muted > 0 && muted_diff == 0, "muted frames differ from the base");
+    CHECK(on > 0 && on_diff == 0, "frames with the layer on differ from the stack played unchanged");
+    CHECK(shows > 0, "the layer never shows: the check proves nothing");
+    fp_take_player_close(&a);
+    fp_take_player_close(&b);
+    fp_take_player_close(&base);
+    printf("%s\n", fails ? "FAILED" : "ok");
+    return fails ? 1 : 0;
+}
+
 int main(int argc, char **argv)
 {
+    if (argc == 3 && !strcmp(argv[1], "mute")) {
+        fp_plugin_path pp;
+        const char *dirs[] = {fp_test_plugin_dir()};
+        fp_plugin_path_init(&pp, dirs, 1, NULL);
+        int rc = mute_check(argv[2], &pp);
+        fp_plugin_path_clear(&pp);
+        return rc;
+    }
     if (argc == 4 && !strcmp(argv[1], "channels")) {
         fp_plugin_path pp;
         const char *dirs[] = {fp_test_plugin_dir()};

@@ -82,6 +82,7 @@ fi
 cat "$tmp/punch.err"
 grep -q "punched 1 s to 2 s" "$tmp/punch.err" || fail "run did not say the punch"
 "$check" punch "$takes/face_S002.fpstack" 1.0 2.0 || fail "the punched stack"
+"$check" mute "$stack" || fail "muting a layer while the stack plays"
 
 # a channel layer: jaw.open from another take, composed per rig channel
 mkdir -p "$tmp/jaw"
@@ -100,6 +101,26 @@ grep -q "layers       2" "$tmp/info.txt" && grep -q "1  face_T002.fptake .*mouth
     fail "info of the stack"
 "$fp" takes "$takes" | tee "$tmp/takes.txt"
 grep -Eq "^face_S001.fpstack +2 layers" "$tmp/takes.txt" || fail "takes does not list the stack"
+grep -Eq "^face_S002.fpstack +2 layers: face_T001.fptake \(base\); face_T00[0-9].fptake .* 1-2 s" "$tmp/takes.txt" ||
+    fail "takes does not show the punched layer's range"
+"$fp" takes --json "$takes" >"$tmp/takes.json" || fail "takes --json exited $?"
+python3 - "$tmp/takes.json" <<'PY' || fail "takes --json does not list the stacks and their layers"
+import json, sys
+v = json.load(open(sys.argv[1]))
+takes = [e for e in v if e["kind"] == "take"]
+stacks = {e["path"].rsplit("/", 1)[1]: e for e in v if e["kind"] == "stack"}
+assert takes and all(t["slate"] == "face" for t in takes), takes
+assert set(stacks) >= {"face_S001.fpstack", "face_S002.fpstack", "face_S003.fpstack"}, stacks.keys()
+s1, s2, s3 = (stacks["face_S00%d.fpstack" % i] for i in (1, 2, 3))
+assert all(s["state"] == "ok" for s in (s1, s2, s3))
+assert [l["region"] for l in s1["layers"]][0] == "base" and s1["layers"][1]["region"].startswith("mouth"), s1
+assert s1["layers"][1]["mode"] == "replace" and s1["layers"][1]["out_s"] is None, s1
+assert s2["layers"][1]["in_s"] == 1.0 and s2["layers"][1]["out_s"] == 2.0, s2
+assert len(s3["layers"]) == 3 and s3["layers"][2]["mode"] == "add" and s3["layers"][2]["region"].startswith("brows"), s3
+assert all(l["mute"] is False and l["solo"] is False for l in s3["layers"]), s3
+print("takes --json: %d takes, %d stacks (%s)" % (len(takes), len(stacks), ", ".join(
+    "%s %d layers" % (k, len(e["layers"])) for k, e in sorted(stacks.items()))))
+PY
 expect 64 "$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$claps" --take-dir "$takes" --over "$base" --layer nose
 expect 64 "$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$claps" --layer mouth
 expect 64 "$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$claps" --over "$base"

@@ -19,7 +19,8 @@ size_t fp_app_audio_longopts(struct option *out, bool with_timecode)
     out[2] = (struct option){"audio-offset", required_argument, NULL, FP_APP_AUDIO_OPT_OFFSET};
     if (!with_timecode) return 3;
     out[3] = (struct option){"timecode", required_argument, NULL, FP_APP_AUDIO_OPT_TIMECODE};
-    return 4;
+    out[4] = (struct option){"audio-in", required_argument, NULL, FP_APP_AUDIO_OPT_IN};
+    return 5;
 }
 
 int fp_app_audio_parse(fp_app_audio *a, int c, const char *arg, const char *cmd)
@@ -43,6 +44,13 @@ int fp_app_audio_parse(fp_app_audio *a, int c, const char *arg, const char *cmd)
         }
         a->timecode = arg;
         return 1;
+    case FP_APP_AUDIO_OPT_IN:
+        if (!*arg || !strcmp(arg, "file:")) {
+            fprintf(stderr, "facepuppet %s: --audio-in: give a device or file:IN.wav, got '%s'\n", cmd, arg);
+            return FP_EXIT_USAGE;
+        }
+        a->in_spec = arg;
+        return 1;
     default: return 0;
     }
 }
@@ -56,13 +64,18 @@ void fp_app_audio_help(FILE *f, bool with_timecode)
         "                         device's index or part of its name, null (nowhere), or\n"
         "                         file:OUT.wav (exactly the samples played, 32-bit float)\n"
         "      --audio-offset S   the soundtrack's time at the first frame (default %s)\n",
-        with_timecode ? "0" : "the take's, or 0");
+        with_timecode ? "0; with --over, the base take's" : "the take's, or 0");
     if (with_timecode)
         fprintf(f,
         "      --timecode SRC     the take's timecode: system (the time of day, default),\n"
         "                         ltc:FILE.wav (LTC decoded from a recording whose first sample\n"
         "                         is the first frame) or ltc:DEVICE (LTC heard on an input\n"
-        "                         device before the run); the take's rate is the LTC's\n");
+        "                         device before the run); the take's rate is the LTC's\n"
+        "      --audio-in DEV     record a microphone beside each take (SLATE_TNNN.mic.wav, its\n"
+        "                         sample 0 at the take's first frame; the take's header names\n"
+        "                         it): default, a device's index or part of its name, or\n"
+        "                         file:IN.wav (a sound file heard in real time: an emulated\n"
+        "                         microphone); it runs on the wall clock\n");
 }
 
 /* Exit status for a soundtrack's load error: missing or unreadable (not a sound file) is an
@@ -104,7 +117,7 @@ int fp_app_audio_prepare(fp_app_audio *a, const char *cmd, const char *fallback,
 {
     char err[2048];
     const char *path = a->path ? a->path : fallback;
-    int rc;
+    int rc = 0;
     if (a->out_spec && !path) {
         fprintf(stderr, "facepuppet %s: --audio-out needs a soundtrack (--audio FILE)\n", cmd);
         return FP_EXIT_USAGE;
@@ -129,7 +142,12 @@ int fp_app_audio_prepare(fp_app_audio *a, const char *cmd, const char *fallback,
         fp_audio_player_init(&a->player, &a->track, a->out, a->offset_s);
         a->playing = true;
     }
-    if ((rc = prepare_timecode(a, cmd))) {
+    rc = prepare_timecode(a, cmd);
+    if (!rc && a->in_spec && (rc = fp_audio_in_open(a->in_spec, &a->in, err, sizeof err))) {
+        fprintf(stderr, "facepuppet %s: --audio-in: %s\n", cmd, err);
+        rc = rc == -ENODEV || rc == -EINVAL ? FP_EXIT_USAGE : file_status(rc);
+    }
+    if (rc) {
         fp_audio_out_abort(&a->out); /* (a file output's temporary removed: nothing written) */
         fp_app_audio_finish(a, cmd, true);
         return rc;
@@ -144,6 +162,7 @@ void fp_app_audio_take_options(const fp_app_audio *a, int64_t t0_ns, fp_session_
         o->soundtrack_crc32 = a->track.crc32;
         o->soundtrack_offset_s = a->offset_s;
     }
+    if (a->in) o->audio_in_device = a->in_spec;
     if (a->have_ltc) {
         o->rate = a->ltc.rate;
         o->have_timecode = true;
@@ -151,6 +170,44 @@ void fp_app_audio_take_options(const fp_app_audio *a, int64_t t0_ns, fp_session_
         if (a->ltc.at_ns) fp_ltc_timecode_at(&a->ltc, t0_ns, &o->timecode_in);
         else o->timecode_in = a->ltc.first;
     }
+}
+
+void fp_app_audio_restart(fp_app_audio *a)
+{
+    if (!a->playing) return;
+    fp_audio_player_free(&a->player);
+    fp_audio_player_init(&a->player, &a->track, a->out, a->offset_s);
+}
+
+int fp_app_audio_take_started(fp_app_audio *a, const fp_session_take *take, int64_t origin_ns,
+                              const char *cmd)
+{
+    a->in_path[0] = '\0';
+    if (!a->in || !take->header.audio_in_device) return 0;
+    const char *tp = fp_take_recorder_path(take->rec), *slash = strrchr(tp, '/');
+    char name[FP_TAKE_SLATE_MAX + 32], err[2048];
+    if (fp_take_audio_in_name(take->header.slate, take->header.take, name, sizeof name)) return 0;
+    snprintf(a->in_path, sizeof a->in_path, "%.*s%s", slash ? (int)(slash - tp + 1) : 0, tp, name);
+    if (fp_audio_in_record(a->in, a->in_path, origin_ns, err, sizeof err)) {
+        fprintf(stderr, "facepuppet %s: --audio-in: %s\n", cmd, err);
+        a->in_path[0] = '\0';
+        return FP_EXIT_CANTCREAT;
+    }
+    return 0;
+}
+
+int fp_app_audio_take_stopped(fp_app_audio *a, int64_t end_ns, const char *cmd, bool quiet)
+{
+    if (!a->in || !a->in_path[0]) return 0;
+    char err[2048];
+    uint64_t n = 0;
+    int rc = fp_audio_in_record_stop(a->in, end_ns, &n, err, sizeof err);
+    if (rc) fprintf(stderr, "facepuppet %s: --audio-in: %s\n", cmd, err);
+    else if (!quiet)
+        fprintf(stderr, "facepuppet %s: microphone %s: %.3f s from %s\n", cmd, a->in_path,
+                (double)n / fp_audio_in_rate(a->in), a->in_spec);
+    a->in_path[0] = '\0';
+    return rc ? FP_EXIT_CANTCREAT : 0;
 }
 
 int fp_app_audio_advance(fp_app_audio *a, double t_s, const char *cmd)
@@ -162,6 +219,16 @@ int fp_app_audio_advance(fp_app_audio *a, double t_s, const char *cmd)
         return FP_EXIT_CANTCREAT;
     }
     return 0;
+}
+
+int fp_app_audio_advance_live(fp_app_audio *a, double t_s, const char *cmd)
+{
+    if (!a->playing) return 0;
+    const char *spec = a->out_spec ? a->out_spec : "default";
+    const double due = t_s - (double)a->player.delivered / a->track.rate;
+    if (strcmp(spec, "null") && strncmp(spec, "file:", 5) && due > 0.25)
+        fp_audio_player_skip(&a->player, t_s - 0.05);
+    return fp_app_audio_advance(a, t_s, cmd);
 }
 
 int fp_app_audio_finish(fp_app_audio *a, const char *cmd, bool quiet)
@@ -181,6 +248,67 @@ int fp_app_audio_finish(fp_app_audio *a, const char *cmd, bool quiet)
     }
     fp_audio_player_free(&a->player);
     fp_soundtrack_free(&a->track);
+    fp_audio_in_close(&a->in); /* (a recording not stopped is dropped) */
     a->playing = false;
     return status;
+}
+
+int fp_app_audio_export_check(const fp_take_header *h, const char *anim_out, bool force, char *wav,
+                              size_t n, const char *cmd)
+{
+    wav[0] = '\0';
+    if (!h->soundtrack_path) return 0;
+    const char *dot = strrchr(anim_out, '.'), *slash = strrchr(anim_out, '/');
+    struct stat st;
+    bool folder = stat(anim_out, &st) == 0 ? S_ISDIR(st.st_mode) : !dot || (slash && dot < slash);
+    size_t len = strlen(anim_out);
+    while (folder && len > 1 && anim_out[len - 1] == '/') len--;
+    int stem = folder ? (int)len : (int)(dot - anim_out);
+    snprintf(wav, n, "%.*s.wav", stem, anim_out);
+    char err[2048], spec[4300];
+    int rc;
+    snprintf(spec, sizeof spec, "file:%s", wav);
+    if ((rc = fp_audio_out_check(spec, force, err, sizeof err))) {
+        fprintf(stderr, "facepuppet %s: the soundtrack's WAV: %s\n", cmd, err);
+        wav[0] = '\0';
+        return rc == -ENOMEM ? FP_EXIT_SOFTWARE : FP_EXIT_CANTCREAT;
+    }
+    return 0;
+}
+
+int fp_app_audio_export_write(const fp_take_header *h, const char *wav, int64_t first_ns,
+                              double duration_s, bool force, bool quiet, FILE *say,
+                              const char *cmd)
+{
+    if (!wav[0] || !h->soundtrack_path) return 0;
+    char err[2048], spec[4300];
+    fp_soundtrack track;
+    if (fp_soundtrack_load(h->soundtrack_path, &track, err, sizeof err)) {
+        fprintf(stderr, "facepuppet %s: warning: the take's soundtrack: %s: %s not written\n", cmd, err, wav);
+        return 0;
+    }
+    if (!quiet && track.crc32 != h->soundtrack_crc32)
+        fprintf(stderr, "facepuppet %s: warning: %s has crc32 %08x, the take's soundtrack had %08x: "
+                "another file?\n", cmd, h->soundtrack_path, (unsigned)track.crc32, (unsigned)h->soundtrack_crc32);
+    /* the soundtrack's time at the first exported frame */
+    const double start_s = h->soundtrack_offset_s + (double)(first_ns - h->time_origin_ns) * 1e-9;
+    snprintf(spec, sizeof spec, "file:%s", wav);
+    fp_audio_out *out = NULL;
+    fp_audio_player p;
+    int rc = fp_audio_out_open(spec, track.rate, track.channels, force, &out, err, sizeof err);
+    if (!rc) {
+        fp_audio_player_init(&p, &track, out, start_s);
+        rc = fp_audio_player_advance(&p, duration_s, err, sizeof err);
+        fp_audio_player_free(&p);
+    }
+    uint64_t frames = fp_audio_out_frames(out);
+    if (!rc) rc = fp_audio_out_close(&out, err, sizeof err);
+    fp_audio_out_abort(&out);
+    if (rc) fprintf(stderr, "facepuppet %s: the soundtrack's WAV: %s\n", cmd, err);
+    else if (!quiet)
+        fprintf(say, "facepuppet %s: wrote %s: the soundtrack %s from %.6f s for %.6f s (%llu samples at "
+                "%d Hz), its sample 0 at the animation's first frame\n", cmd, wav, h->soundtrack_path,
+                start_s, (double)frames / track.rate, (unsigned long long)frames, track.rate);
+    fp_soundtrack_free(&track);
+    return rc ? FP_EXIT_CANTCREAT : 0;
 }

@@ -14,8 +14,9 @@
 #include <stdio.h>
 
 /** The options' getopt values (long-only; above the commands' own). */
-enum { FP_APP_AUDIO_OPT = 0x300, FP_APP_AUDIO_OPT_OUT, FP_APP_AUDIO_OPT_OFFSET, FP_APP_AUDIO_OPT_TIMECODE };
-#define FP_APP_AUDIO_OPTS_COUNT 4
+enum { FP_APP_AUDIO_OPT = 0x300, FP_APP_AUDIO_OPT_OUT, FP_APP_AUDIO_OPT_OFFSET, FP_APP_AUDIO_OPT_TIMECODE,
+       FP_APP_AUDIO_OPT_IN };
+#define FP_APP_AUDIO_OPTS_COUNT 5
 
 typedef struct fp_app_audio {
     const char *path;          /* --audio FILE (argv's) */
@@ -30,10 +31,14 @@ typedef struct fp_app_audio {
     bool have_ltc;
     fp_ltc_info ltc;           /* --timecode ltc: what was decoded */
     char ltc_source[4200];     /* "ltc:FILE" for the take's header */
+    const char *in_spec;       /* --audio-in DEVICE|file:X.wav (argv's) */
+    fp_audio_in *in;           /* opened by fp_app_audio_prepare */
+    char in_path[4400];        /* the WAV a take records ("" none) */
 } fp_app_audio;
 
 /** Write the options' getopt_long entries to out (FP_APP_AUDIO_OPTS_COUNT of them; with_timecode
- *  false: the first three only). Returns how many were written. */
+ *  false, for play: the first three only, without --timecode and --audio-in). Returns how
+ *  many were written. */
 size_t fp_app_audio_longopts(struct option *out, bool with_timecode);
 
 /** Parse one option (c as getopt_long returned it). Returns 1 when taken, 0 when c is not
@@ -45,9 +50,10 @@ void fp_app_audio_help(FILE *f, bool with_timecode);
 
 /** Before the performance: load the soundtrack (--audio, or `fallback` when NULL: a take's
  *  recorded one), check and open its output (--audio-out; a soundtrack needs one, default
- *  "default"), decode --timecode ltc. Errors said on stderr with `cmd`. Returns 0 or the exit
- *  status: 66 a sound or LTC file missing or unreadable, 65 no LTC in it, 64 an unknown
- *  device or a bad spec, 73 an output that exists without force or cannot be made. */
+ *  "default"), decode --timecode ltc, open --audio-in (capturing from here on). Errors said
+ *  on stderr with `cmd`. Returns 0 or the exit status: 66 a sound or LTC file missing or
+ *  unreadable (file:X.wav of --audio-in too), 65 no LTC in it, 64 an unknown device (output
+ *  or input) or a bad spec, 73 an output that exists without force or cannot be made. */
 int fp_app_audio_prepare(fp_app_audio *a, const char *cmd, const char *fallback, bool force);
 
 /** Fill a take's options from what prepare found: the soundtrack's path, crc32 and offset,
@@ -56,12 +62,48 @@ int fp_app_audio_prepare(fp_app_audio *a, const char *cmd, const char *fallback,
  *  Call before fp_session_take_start (on the take's own copy, fp_session_take.opt). */
 void fp_app_audio_take_options(const fp_app_audio *a, int64_t t0_ns, fp_session_take_options *o);
 
+/** Play the soundtrack from its start (--audio-offset) again: live, at each take's start. */
+void fp_app_audio_restart(fp_app_audio *a);
+
+/** A take started at host time origin_ns (after fp_session_take_start): --audio-in records
+ *  the microphone into SLATE_TNNN.mic.wav beside it from origin_ns on (the name the take's
+ *  header gives). Returns 0 or the exit status (73: the WAV cannot be made; said). */
+int fp_app_audio_take_started(fp_app_audio *a, const fp_session_take *take, int64_t origin_ns,
+                              const char *cmd);
+
+/** The take ended at host time end_ns (its last frame's end): the microphone's WAV closed
+ *  there; says its length unless quiet. Returns 0 or the exit status of a failed write. */
+int fp_app_audio_take_stopped(fp_app_audio *a, int64_t end_ns, const char *cmd, bool quiet);
+
 /** The performance reached t_s seconds (the end of the frame shown): deliver the soundtrack
  *  up to there. Returns 0 or the exit status of a failed write (said on stderr). */
 int fp_app_audio_advance(fp_app_audio *a, double t_s, const char *cmd);
 
+/** As fp_app_audio_advance for a live performance: where the output is a device and more
+ *  than 0.25 s is due at once (the frames stalled, or were paused), the gap is skipped (its
+ *  sound lost, the soundtrack still at its place) rather than queued behind the device's
+ *  blocking write. A file or null output gets every sample. */
+int fp_app_audio_advance_live(fp_app_audio *a, double t_s, const char *cmd);
+
 /** Close the output (a file renamed into place) and free everything; says what was written
  *  unless quiet. Returns 0 or the exit status of a failed close. */
 int fp_app_audio_finish(fp_app_audio *a, const char *cmd, bool quiet);
+
+/** export, before any frame is played: where the soundtrack of the take (header h: a take's
+ *  or a stack's base layer's) goes, `anim_out` with its extension replaced by .wav (a folder
+ *  output: beside it, FOLDER.wav), into wav (n bytes; "" when the take has none). A file there
+ *  without force is refused. Returns 0 or 73 (said with cmd). */
+int fp_app_audio_export_check(const fp_take_header *h, const char *anim_out, bool force, char *wav,
+                              size_t n, const char *cmd);
+
+/** export, after the frames: the soundtrack's samples under the exported frames, from the
+ *  first one's time first_ns for duration_s seconds (the animation's length: its last
+ *  frame's time + one frame period), into wav (32-bit float, the soundtrack's rate and
+ *  channels): the animation's time 0 is the WAV's sample 0. A soundtrack that cannot be
+ *  read is a warning (no WAV). Says what it wrote on `say` unless quiet. Returns 0 or 73 (a
+ *  write failed; said). */
+int fp_app_audio_export_write(const fp_take_header *h, const char *wav, int64_t first_ns,
+                              double duration_s, bool force, bool quiet, FILE *say,
+                              const char *cmd);
 
 #endif

@@ -7,6 +7,7 @@
 #include "fp_session_take.h"
 #include "fp_take.h"
 #include "fp_error.h"
+#include "fp_text.h"
 
 #include <errno.h>
 #include <limits.h>
@@ -60,6 +61,20 @@ int fp_app_over_check(fp_app_over *o, const char *cmd, const char *take_dir)
         return fp_app_exit_code(rc, FP_APP_INPUT);
     }
     return 0;
+}
+
+bool fp_app_over_soundtrack_offset(const fp_app_over *o, double *offset_s)
+{
+    if (!o->over || !o->stack) return false;
+    char path[FP_STACK_PATH_MAX + 512], err[2048];
+    fp_stack_over_take_path(o->over, o->stack, 0, path, sizeof path);
+    fp_take_reader *r = NULL;
+    if (fp_take_reader_open(path, &r, err, sizeof err)) return false;
+    const fp_take_header *h = fp_take_reader_header(r);
+    const bool has = h->soundtrack_path != NULL;
+    if (has) *offset_s = h->soundtrack_offset_s;
+    fp_take_reader_close(&r);
+    return has;
 }
 
 int fp_app_over_check_mesh(const fp_app_over *o, const char *cmd, const fp_session *s)
@@ -155,15 +170,62 @@ static int by_name(const void *a, const void *b)
     return strcmp(*(char *const *)a, *(char *const *)b);
 }
 
-void fp_app_stack_list(const char *dir)
+/* The *.fpstack names of dir, sorted, into names (strdup'ed; NULL where out of memory).
+ * Returns how many (256 at most). */
+static size_t stack_names(const char *dir, char *names[256])
 {
     DIR *d = opendir(dir);
-    char *names[256];
     size_t n = 0;
     for (struct dirent *e; d && (e = readdir(d)) && n < 256;)
         if (fp_stack_is_stack_path(e->d_name) && e->d_name[0] != '.') names[n++] = strdup(e->d_name);
     if (d) closedir(d);
     qsort(names, n, sizeof *names, by_name);
+    return n;
+}
+
+cJSON *fp_app_stack_list_json(const char *dir)
+{
+    char *names[256];
+    size_t n = stack_names(dir, names);
+    cJSON *arr = cJSON_CreateArray();
+    for (size_t i = 0; arr && i < n; i++) {
+        char path[8192], err[2048] = "out of memory", region[512], c[4 * 2048];
+        snprintf(path, sizeof path, "%s/%s", dir, names[i] ? names[i] : "");
+        fp_stack *s = NULL;
+        cJSON *o = cJSON_CreateObject(), *layers = cJSON_CreateArray();
+        const bool ok = names[i] && !fp_stack_load(path, &s, err, sizeof err);
+        cJSON_AddStringToObject(o, "kind", "stack");
+        cJSON_AddStringToObject(o, "path", fp_text_clean(path, c, sizeof c));
+        cJSON_AddStringToObject(o, "state", ok ? "ok" : "unreadable");
+        cJSON_AddStringToObject(o, "message", ok ? "" : fp_text_clean(err, c, sizeof c));
+        for (size_t k = 0; ok && k < s->layer_count; k++) {
+            const fp_stack_layer *l = &s->layers[k];
+            cJSON *e = cJSON_CreateObject();
+            cJSON_AddStringToObject(e, "take", fp_text_clean(l->take, c, sizeof c));
+            cJSON_AddStringToObject(e, "region", k ? fp_stack_region_text(&l->region, region, sizeof region) : "base");
+            cJSON_AddStringToObject(e, "mode", l->mode == FP_STACK_ADD ? "add" : "replace");
+            cJSON_AddNumberToObject(e, "in_s", l->in_s);
+            if (isfinite(l->out_s)) cJSON_AddNumberToObject(e, "out_s", l->out_s);
+            else cJSON_AddNullToObject(e, "out_s"); /* (to the take's end) */
+            cJSON_AddNumberToObject(e, "fade_s", l->fade_s);
+            cJSON_AddNumberToObject(e, "offset_s", l->offset_s);
+            cJSON_AddNumberToObject(e, "gain", l->gain);
+            cJSON_AddBoolToObject(e, "mute", l->mute);
+            cJSON_AddBoolToObject(e, "solo", l->solo);
+            cJSON_AddItemToArray(layers, e);
+        }
+        cJSON_AddItemToObject(o, "layers", layers);
+        cJSON_AddItemToArray(arr, o);
+        fp_stack_free(&s);
+        free(names[i]);
+    }
+    return arr;
+}
+
+void fp_app_stack_list(const char *dir)
+{
+    char *names[256];
+    size_t n = stack_names(dir, names);
     for (size_t i = 0; i < n; i++) {
         char path[8192], err[2048], region[512], range[64];
         snprintf(path, sizeof path, "%s/%s", dir, names[i] ? names[i] : "");

@@ -7,6 +7,8 @@
 
 #include "fp_stack.h"
 
+#include <cjson/cJSON.h>
+
 #include <stdbool.h>
 #include <stddef.h>
 
@@ -47,6 +49,18 @@ int fp_app_stack_info(const char *path);
  *  with its layers in one line ("NAME  N layers: TAKE (base); TAKE REGION MODE [IN-OUT]").
  *  Prints nothing when there are none. */
 void fp_app_stack_list(const char *dir);
+
+/** `facepuppet takes DIR --json`: the stacks of dir by name, a JSON array of {"kind":
+ *  "stack", "path", "state": "ok"|"unreadable", "message", "layers": [{"take", "region",
+ *  "mode", "in_s", "out_s" (null: to the end), "fade_s", "offset_s", "gain", "mute",
+ *  "solo"}]} (the first layer's region "base"). NULL when out of memory; the caller's. */
+cJSON *fp_app_stack_list_json(const char *dir);
+
+/** The soundtrack's offset the base take of --over recorded (where it was made with
+ *  --audio): the pass hears the line where the base did. true and *offset_s, else false
+ *  (no --over, no soundtrack, a base take that cannot be read). Call after
+ *  fp_app_over_check. */
+bool fp_app_over_soundtrack_offset(const fp_app_over *o, double *offset_s);
 
 /** Free what o holds (the stack, the layer's vertices). */
 void fp_app_over_free(fp_app_over *o);

@@ -3,6 +3,7 @@
  * mesh file per frame (core/export, docs/export.md). */
 #define _GNU_SOURCE
 #include "app_export.h"
+#include "app_audio.h"
 #include "app_util.h"
 #include "command.h"
 #include "fp_take_player.h"
@@ -30,10 +31,12 @@ typedef struct sink {
 #endif
     const char *dir, *stem;
     uint64_t frames, bytes;
+    double last_t;       /* the last frame's time, seconds from the first */
 } sink;
 
 static int sink_add(sink *k, const float *pos, double t, char *err, size_t errlen)
 {
+    k->last_t = t;
     if (k->x)
         return fp_export_add(k->x, pos, t, err, errlen);
 #ifdef FP_HAVE_UI
@@ -564,6 +567,8 @@ static int export_take(const export_args *a, fp_take_player *p, sink *k, float *
     const double rate = a->fps > 0 ? a->fps
                         : h->rate.den ? (double)h->rate.num / (double)h->rate.den : 0;
     if ((status = check_out(a, out, name))) return status;
+    char wav[4400]; /* the soundtrack under the frames, beside them (NAME.wav) */
+    if ((status = fp_app_audio_export_check(h, out, a->force, wav, sizeof wav, "export"))) return status;
     if ((status = open_sink(k, a, s, out, name, mm_per_unit, rate))) return status;
     w.s = s;
     w.n = fp_session_vertex_count(s);
@@ -585,10 +590,12 @@ static int export_take(const export_args *a, fp_take_player *p, sink *k, float *
         if (!a->quiet)
             printf("facepuppet export: wrote %llu PNG frames (%dx%d) to %s: %.2f MB\n",
                    (unsigned long long)k->frames, a->width, a->height, out, (double)k->bytes / 1e6);
-        return FP_EXIT_OK;
+    } else if ((status = fp_app_export_close("facepuppet export", NULL, &k->x, a->fmt, out, a->max_error,
+                                             a->quiet, stdout))) {
+        return status;
     }
-    return fp_app_export_close("facepuppet export", NULL, &k->x, a->fmt, out, a->max_error,
-                               a->quiet, stdout);
+    return fp_app_audio_export_write(h, wav, w.first_ns, k->last_t + (rate > 0 ? 1.0 / rate : 0), a->force,
+                                     a->quiet, stdout, "export");
 }
 
 static int export_main(int argc, char **argv)

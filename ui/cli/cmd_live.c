@@ -7,6 +7,7 @@
 #include <stdio.h>
 
 #ifdef FP_HAVE_UI
+#include "app_audio.h"
 #include "app_stop.h"
 #include "app_util.h"
 #include "app_stack.h"
@@ -27,7 +28,9 @@ static void usage(FILE *f)
     fprintf(f,
         "usage: facepuppet live [--mesh FILE] [--input SPEC]... [--mapping SPEC] [--radius R]\n"
         "                       [--speed X] [--size WxH] [--frames N] [--screenshot FILE.png]\n"
-        "                       [--script TEXT|@FILE] [--gpu-warp] [--vsync] [--out FILE]\n\n"
+        "                       [--script TEXT|@FILE] [--gpu-warp] [--vsync] [--out FILE]\n"
+        "                       [--audio FILE [--audio-out SPEC] [--audio-offset S]] [--timecode SRC]\n"
+        "                       [--audio-in DEVICE]\n\n"
         "Perform with the face in a window: the inputs drive the mapping, the mapping drives\n"
         "the CSRBF engine, the face deforms as you watch. With no mesh and no input it plays\n"
         "the demo: the ICT face and the three-claps recording.\n\n"
@@ -58,7 +61,12 @@ static void usage(FILE *f)
         "                         pedal punches in, then out, T (or the pedal) stops; a new\n"
         "                         stack SLATE_SNNN.fpstack holds the pass on top (docs/stack.md)\n"
         "      --layer REGION[:MODE]  the passes' region and mode (default mouth:replace; see\n"
-        "                         facepuppet run --help)\n"
+        "                         facepuppet run --help)\n");
+    fp_app_audio_help(f, true);
+    fprintf(f,
+        "  With --take-dir the soundtrack plays from --audio-offset at each take's start (as the\n"
+        "  stack of --over does) until it stops; without, from the first frame on. An LTC file's\n"
+        "  first sample is the first take's start.\n"
         "  -h, --help             this text\n\n"
         "Keys: space pause, E engage, C commit, X cancel, Z undo, R reset, 1 anchored,\n"
         "2 unanchored, [ ] radius, W wireframe, S screenshot, F frame, H hands, Tab HUD,\n"
@@ -68,7 +76,10 @@ static void usage(FILE *f)
         "back/on. The HUD's badge: idle grey, committed teal, ENGAGED green, LIMITED amber,\n"
         "PAUSED white, REC red, PLAYING blue, REVIEW purple; fingertip spheres turn green\n"
         "where they reach the skin, a line joins each to its nearest skin point.\n"
-        "I punches in, then out, in a take over a stack (--over); so does the pedal.\n"
+        "I punches in, then out, in a take over a stack (--over); so does the pedal. L selects\n"
+        "a layer of that stack, M mutes it, O solos it (the stack under you plays so, and the\n"
+        "new stack records it). Lanes above the strip: a layer each, the pass with its punch\n"
+        "points, and the soundtrack's waveform (--audio).\n"
         "Mouse: left orbit (on the take strip: scrub), right pan, wheel zoom. Drop a mesh.\n"
         "Script: also 'scrub F' (the take strip at fraction F), 'camera YAW PITCH [ZOOM]'\n"
         "(degrees; the framed view turned, as export's --camera), keys J K G.\n"
@@ -78,7 +89,8 @@ static void usage(FILE *f)
         "stuck 0.1 s in a plugin call that never returns is abandoned (the take closed with\n"
         "the frames before it, --out of the last whole frame, exit 128 + the signal: 130,\n"
         "143), as in facepuppet run.\n\n"
-        "Exit status: 0 done, 64 usage, 65 bad input data, 66 input or display missing,\n"
+        "Exit status: 0 done, 64 usage (an unknown audio device too), 65 bad input data, 66 input\n"
+        "or display missing (a soundtrack, LTC or --audio-in file too),\n"
         "73 output not writable, 78 plugin missing or incompatible, 130/143 ended by\n"
         "SIGINT/SIGTERM with a plugin stuck, 1 other failure\n"
         "(facepuppet --help has the whole table).\n");
@@ -136,6 +148,85 @@ static void live_take_over(void *user, int sig, bool in_plugin)
         fprintf(stderr, "facepuppet live: wrote %s (the last whole frame)\n", c->out);
 }
 
+/* The soundtrack, the microphone and the stage timecode (--audio, --audio-in, --timecode)
+ * through the viewer's hooks (fp_viewer_sound). [the viewer's thread] */
+typedef struct live_sound {
+    fp_app_audio audio;
+    bool takes;          /* --take-dir: the soundtrack plays with each take */
+    bool quiet;
+    bool running;        /* the soundtrack advancing from origin */
+    bool recording;      /* a take records */
+    int64_t origin;      /* host time of the soundtrack's --audio-offset */
+    int64_t end_ns;      /* the end of the take's last frame */
+    int status;          /* the first failure's exit status */
+} live_sound;
+
+#define LIVE_PERIOD_NS 16666667 /* a frame's end: one 60 fps period after its time */
+
+static void sound_fail(live_sound *l, int status)
+{
+    if (status && !l->status) l->status = status;
+}
+
+static void sound_starting(void *user, int64_t origin_ns, fp_session_take_options *o)
+{
+    live_sound *l = user;
+    if (l->audio.have_ltc && !l->audio.ltc.at_ns) l->audio.ltc.at_ns = origin_ns; /* (a file's) */
+    fp_app_audio_take_options(&l->audio, origin_ns, o);
+    if (!l->takes) return;
+    fp_app_audio_restart(&l->audio);
+    l->origin = origin_ns;
+    l->running = true;
+}
+
+static void sound_started(void *user, const fp_session_take *take, int64_t origin_ns)
+{
+    live_sound *l = user;
+    l->recording = true;
+    l->end_ns = origin_ns;
+    sound_fail(l, fp_app_audio_take_started(&l->audio, take, origin_ns, "live"));
+}
+
+static void sound_stopped(void *user)
+{
+    live_sound *l = user;
+    if (!l->recording) return;
+    l->recording = false;
+    sound_fail(l, fp_app_audio_take_stopped(&l->audio, l->end_ns, "live", l->quiet));
+    if (!l->takes || !l->running) return;
+    sound_fail(l, fp_app_audio_advance_live(&l->audio, (double)(l->end_ns - l->origin) * 1e-9, "live"));
+    l->running = false; /* (silence until the next take) */
+}
+
+static void sound_frame(void *user, int64_t now_ns)
+{
+    live_sound *l = user;
+    if (!l->takes && !l->running) {
+        l->origin = now_ns;
+        l->running = true;
+    }
+    if (l->recording) l->end_ns = now_ns + LIVE_PERIOD_NS;
+    if (l->running && !l->status)
+        sound_fail(l, fp_app_audio_advance_live(&l->audio, (double)(now_ns + LIVE_PERIOD_NS - l->origin) * 1e-9, "live"));
+}
+
+/* The soundtrack, the timecode and the microphone, before the window, and the viewer's hooks.
+ * Returns 0 or the exit status (66, 65, 64, 73; --audio-in without --take-dir: 64). */
+static int sound_prepare(live_sound *l, fp_viewer_options *vo, bool quiet)
+{
+    if (l->audio.in_spec && !vo->take_dir) {
+        fprintf(stderr, "facepuppet live: --audio-in records beside a take: give --take-dir\n");
+        return FP_EXIT_USAGE;
+    }
+    int rc = fp_app_audio_prepare(&l->audio, "live", NULL, false);
+    if (rc) return rc;
+    l->takes = vo->take_dir != NULL;
+    l->quiet = quiet;
+    vo->sound = (fp_viewer_sound){sound_starting, sound_started, sound_stopped, sound_frame, l,
+                                  l->audio.playing ? &l->audio.track : NULL, l->audio.offset_s};
+    return 0;
+}
+
 static char *read_file(const char *path)
 {
     FILE *f = fopen(path, "rb");
@@ -159,6 +250,30 @@ static char *read_file(const char *path)
     return buf;
 }
 
+/* The measurements at exit, on stdout. */
+static void print_report(const fp_viewer_report *r, bool gpu_warp)
+{
+    if (!r->frames) return;
+    printf("frames %llu; frame time median %.2f ms, p99 %.2f ms; event-to-frame latency median "
+           "%.2f ms, p99 %.2f ms over %zu events; engine update median %.3f ms; events dropped %lu\n",
+           (unsigned long long)r->frames, r->frame_ms_median, r->frame_ms_p99,
+           r->latency_ms_median, r->latency_ms_p99, r->latency_samples, r->engine_ms_median,
+           r->dropped);
+    printf("upload (normals + GL) median %.3f ms, p99 %.3f ms over %zu frames that changed "
+           "(all frames: median %.3f ms, p99 %.3f ms)", r->upload_ms_median, r->upload_ms_p99,
+           r->uploads, r->upload_all_ms_median, r->upload_all_ms_p99);
+    if (r->upload_checked)
+        printf("; %lu partial uploads checked, %lu differ from the whole", r->upload_checked,
+               r->upload_mismatches);
+    printf("\n");
+    if (gpu_warp)
+        printf("gpu-warp: %zu checks against the CPU engine; max |GPU - CPU| %.3g mesh units, "
+               "%.3g of the max displacement %.4g; %zu frames drawn from the CPU\n", r->warp_checks,
+               r->warp_max_error,
+               r->warp_max_displacement > 0 ? r->warp_max_error / r->warp_max_displacement : 0.0,
+               r->warp_max_displacement, r->warp_cpu_frames);
+}
+
 static int live_main(int argc, char **argv)
 {
     enum { OPT_SIZE = FP_SESSION_OPTS_FIRST_FREE, OPT_FRAMES, OPT_SHOT, OPT_SCRIPT, OPT_GPU,
@@ -172,8 +287,12 @@ static int live_main(int argc, char **argv)
         {"countdown", required_argument, 0, OPT_COUNTDOWN},
         {"over", required_argument, 0, OPT_OVER}, {"layer", required_argument, 0, OPT_LAYER},
         {"help", no_argument, 0, 'h'},             {0, 0, 0, 0}};
-    struct option opts[FP_SESSION_OPTS_COUNT + sizeof own / sizeof own[0]];
-    memcpy(opts + fp_session_opts_longopts(opts), own, sizeof own);
+    struct option opts[FP_SESSION_OPTS_COUNT + FP_APP_AUDIO_OPTS_COUNT + sizeof own / sizeof own[0]];
+    size_t nshared = fp_session_opts_longopts(opts);
+    nshared += fp_app_audio_longopts(opts + nshared, true);
+    memcpy(opts + nshared, own, sizeof own);
+    static live_sound snd; /* (static: its strings are some 9 kB) */
+    memset(&snd, 0, sizeof snd);
     fp_viewer_options vo = {0};
     fp_session_options *so = &vo.session;
     fp_session_opts sopt;
@@ -184,6 +303,9 @@ static int live_main(int argc, char **argv)
         int shared = fp_session_opts_parse(&sopt, c, optarg, "live");
         if (shared < 0) return fp_app_exit_code(shared, FP_APP_INPUT);
         if (shared) continue;
+        int audio = fp_app_audio_parse(&snd.audio, c, optarg, "live");
+        if (audio > 1) return audio;
+        if (audio) continue;
         switch (c) {
         case 'o': vo.out = optarg; break;
         case OPT_SIZE:
@@ -232,6 +354,8 @@ static int live_main(int argc, char **argv)
     }
     fp_app_over over = {.over = vo.over, .layer = vo.layer}; /* checked before the window */
     int orc = fp_app_over_check(&over, "facepuppet live", vo.take_dir);
+    if (!orc && snd.audio.path && !snd.audio.offset_given) /* the line where the base heard it */
+        fp_app_over_soundtrack_offset(&over, &snd.audio.offset_s);
     fp_app_over_free(&over);
     if (orc) return orc;
     vo.duration_s = sopt.duration_s;
@@ -254,6 +378,11 @@ static int live_main(int argc, char **argv)
         vo.script = script_text;
     } else {
         vo.script = script_arg;
+    }
+    int arc = sound_prepare(&snd, &vo, sopt.quiet); /* before the window */
+    if (arc) {
+        free(script_text);
+        return arc;
     }
 
     fp_plugin_path path;
@@ -282,26 +411,10 @@ static int live_main(int argc, char **argv)
          * script, -EIO a screenshot or --out not written: all in the one table. */
         status = fp_app_exit_code(rc, FP_APP_INPUT);
     }
-    if (rep.frames) {
-        printf("frames %llu; frame time median %.2f ms, p99 %.2f ms; event-to-frame latency median "
-               "%.2f ms, p99 %.2f ms over %zu events; engine update median %.3f ms; events dropped %lu\n",
-               (unsigned long long)rep.frames, rep.frame_ms_median, rep.frame_ms_p99,
-               rep.latency_ms_median, rep.latency_ms_p99, rep.latency_samples, rep.engine_ms_median,
-               rep.dropped);
-        printf("upload (normals + GL) median %.3f ms, p99 %.3f ms over %zu frames that changed "
-               "(all frames: median %.3f ms, p99 %.3f ms)", rep.upload_ms_median, rep.upload_ms_p99,
-               rep.uploads, rep.upload_all_ms_median, rep.upload_all_ms_p99);
-        if (rep.upload_checked)
-            printf("; %lu partial uploads checked, %lu differ from the whole", rep.upload_checked,
-                   rep.upload_mismatches);
-        printf("\n");
-        if (vo.gpu_warp)
-            printf("gpu-warp: %zu checks against the CPU engine; max |GPU - CPU| %.3g mesh units, "
-                   "%.3g of the max displacement %.4g; %zu frames drawn from the CPU\n", rep.warp_checks,
-                   rep.warp_max_error,
-                   rep.warp_max_displacement > 0 ? rep.warp_max_error / rep.warp_max_displacement : 0.0,
-                   rep.warp_max_displacement, rep.warp_cpu_frames);
-    }
+    sound_stopped(&snd); /* (a take the watchdog closed) */
+    int astatus = fp_app_audio_finish(&snd.audio, "live", sopt.quiet);
+    if (status == FP_EXIT_OK) status = snd.status ? snd.status : astatus;
+    print_report(&rep, vo.gpu_warp);
     free(script_text);
     fp_plugin_path_clear(&path);
     return status;

@@ -29,7 +29,8 @@ static void usage(FILE *f)
     fprintf(f,
         "usage: facepuppet run [--mesh FILE] --input SPEC [--input SPEC] --mapping SPEC\n"
         "                      [--radius R] [--out FILE] [--frames-out DIR] [--speed X] [--force]\n"
-        "                      [--audio FILE [--audio-out SPEC] [--audio-offset S]] [--timecode SRC]\n\n"
+        "                      [--audio FILE [--audio-out SPEC] [--audio-offset S]] [--timecode SRC]\n"
+        "                      [--audio-in DEVICE]\n\n"
         "Run a headless puppeteering session: the inputs drive the mapping, the mapping\n"
         "drives the CSRBF engine, the face deforms; writes the final mesh.\n"
         "With no options it runs the demo: the ICT face, the three-claps recording, the\n"
@@ -105,6 +106,7 @@ typedef struct run_args {
     char free_out[4200];           /* the default --out's next free name, when it exists */
     fp_app_audio audio;            /* --audio, --audio-out, --audio-offset, --timecode */
     fp_app_over over;              /* --over, --layer, --punch (app_stack.h) */
+    int64_t take_end_ns;           /* the end of the take's last frame (its mic WAV's end) */
 } run_args;
 
 /* --out, before any work: a format we write (by extension), a folder we can write in, and no
@@ -235,12 +237,19 @@ static int run_settle(run_args *a)
         fprintf(stderr, "facepuppet run: --slate and --take-description need --take-dir\n");
         return FP_EXIT_USAGE;
     }
+    if (a->audio.in_spec && !a->take_dir) {
+        fprintf(stderr, "facepuppet run: --audio-in records beside a take: give --take-dir\n");
+        return FP_EXIT_USAGE;
+    }
     if (a->slate && !fp_take_slate_valid(a->slate)) {
         fprintf(stderr, "facepuppet run: --slate '%s': use 1-63 of A-Z a-z 0-9 . _ - (not "
                 "starting with '.')\n", a->slate);
         return FP_EXIT_USAGE;
     }
-    return fp_app_over_check(&a->over, "facepuppet run", a->take_dir);
+    if ((rc = fp_app_over_check(&a->over, "facepuppet run", a->take_dir))) return rc;
+    if (a->audio.path && !a->audio.offset_given) /* the line where the base take heard it */
+        fp_app_over_soundtrack_offset(&a->over, &a->audio.offset_s);
+    return 0;
 }
 
 /* What the frames did, for the summary line. */
@@ -335,6 +344,9 @@ static int run_frames(fp_session *s, run_args *a, fp_session_take *take, fp_expo
         fprintf(stderr, "facepuppet run: take: %s\n", err);
         return fp_app_exit_code(rc, FP_APP_OUTPUT);
     }
+    a->take_end_ns = t0;
+    if (fp_session_take_recording(take) && (status = fp_app_audio_take_started(&a->audio, take, t0, "run")))
+        return status;
     for (uint64_t k = 0; !fp_app_stop_requested(); k++) {
         int64_t now = t0 + (int64_t)llround((double)k * 1e9 / a->fps);
         if (input_clock) {
@@ -349,6 +361,7 @@ static int run_frames(fp_session *s, run_args *a, fp_session_take *take, fp_expo
         fp_session_step(s, now, &st);
         fp_app_stop_step_end();
         totals_add(t, &st);
+        a->take_end_ns = now + (int64_t)llround(1e9 / a->fps);
         if ((status = write_frame(s, a, ex, k, (double)(now - t0) * 1e-9))) break;
         /* the soundtrack up to the end of this frame (its samples follow the frames) */
         if ((status = fp_app_audio_advance(&a->audio, (double)(now - t0) * 1e-9 + 1.0 / a->fps, "run")))
@@ -525,6 +538,7 @@ static void run_take_over(void *user, int sig, bool in_plugin)
             fprintf(stderr, "facepuppet run: the take was not written whole: %s\n", err);
         fp_app_print_take(stderr, "facepuppet run", &tr);
     }
+    fp_app_audio_take_stopped(&c->a->audio, c->a->take_end_ns, "run", quiet);
     fp_app_audio_finish(&c->a->audio, "run", quiet);
     if (*c->ex)
         fp_app_export_close("facepuppet run", "--export", c->ex, c->a->export_fmt, c->a->export_file,
@@ -603,6 +617,8 @@ static int run_main(int argc, char **argv)
         fp_session_take_result tr;
         take_rc = fp_session_take_stop(&take, &tr, take_err, sizeof take_err);
         fp_app_print_take(stderr, "facepuppet run", &tr);
+        int in_status = fp_app_audio_take_stopped(&a->audio, a->take_end_ns, "run", quiet);
+        if (status == FP_EXIT_OK) status = in_status;
         if (a->over.over && !take_rc && tr.frames) { /* the pass on top of a new stack */
             int st = fp_app_over_finish(&a->over, "facepuppet run", a->take_dir, tr.path,
                                         a->slate ? a->slate : FP_TAKE_DEFAULT_SLATE);

@@ -31,8 +31,11 @@ static void usage(FILE *f)
                "slate and take number are what its name gives, it has no timecode, duration or\n"
                "frames (\"-\"; null in JSON), and the reason is under the table (\"message\").\n"
                "Then the stacks (*.fpstack, layers of takes: docs/stack.md), each with its layers\n"
-               "(take, region, mode, range); --json lists the takes only.\n"
-               "  --json   one JSON array instead of the table\n\n"
+               "(take, region, mode, range, mute, solo).\n"
+               "  --json   one JSON array instead of the table: the takes (\"kind\": \"take\"), then\n"
+               "           the stacks (\"kind\": \"stack\", \"path\", \"state\", \"message\", \"layers\":\n"
+               "           take, region, mode, in_s, out_s (null: to the end), fade_s, offset_s,\n"
+               "           gain, mute, solo)\n\n"
                "rate and describe rewrite the take's header (its \"rating\" and \"description\";\n"
                "`info`, `takes` and `play` show them) atomically: a temporary file beside the\n"
                "take renamed over it, every other byte as it was. TAKE is the file (the\n"
@@ -103,13 +106,14 @@ static void print_table(const fp_take_info *v, size_t n)
         }
 }
 
-static int print_json(const fp_take_info *v, size_t n)
+static int print_json(const fp_take_info *v, size_t n, const char *dir)
 {
     cJSON *arr = cJSON_CreateArray();
     for (size_t i = 0; arr && i < n; i++) {
         const fp_take_info *t = &v[i];
         cJSON *o = cJSON_CreateObject();
         char in[32] = "", out[32] = "", c[4 * 4096]; /* c: a string made UTF-8 text (fp_text.h) */
+        cJSON_AddStringToObject(o, "kind", "take");
         if (!t->error) {
             fp_timecode_format(&t->timecode_in, in, sizeof in);
             fp_timecode_format(&t->timecode_out, out, sizeof out);
@@ -141,6 +145,9 @@ static int print_json(const fp_take_info *v, size_t n)
         cJSON_AddStringToObject(o, "message", fp_text_clean(t->message, c, sizeof c));
         cJSON_AddItemToArray(arr, o);
     }
+    cJSON *stacks = fp_app_stack_list_json(dir); /* then the stacks, each with its layers */
+    for (cJSON *e; arr && stacks && (e = cJSON_DetachItemFromArray(stacks, 0));) cJSON_AddItemToArray(arr, e);
+    cJSON_Delete(stacks);
     char *text = arr ? cJSON_Print(arr) : NULL;
     cJSON_Delete(arr);
     if (!text) {
@@ -241,7 +248,7 @@ static int takes_main(int argc, char **argv)
         return fp_app_exit_code(rc, FP_APP_INPUT);
     }
     int status = FP_EXIT_OK;
-    if (json) status = print_json(v, n);
+    if (json) status = print_json(v, n, dir);
     else if (!n) printf("no takes in %s\n", dir);
     else print_table(v, n);
     if (!json) fp_app_stack_list(dir);  /* the stacks (issue 54), after the takes */
@@ -300,6 +307,9 @@ int fp_app_take_info(const char *path)
                (unsigned)h->soundtrack_crc32, h->soundtrack_offset_s);
     if (h->timecode_source)
         printf("  timecode by  %s\n", fp_text_clean(h->timecode_source, a, sizeof a));
+    if (h->audio_in_path) /* (format 1.2, --audio-in) */
+        printf("  microphone   %s (from %s), beside the take\n", fp_text_clean(h->audio_in_path, a, sizeof a),
+               fp_text_clean(h->audio_in_device ? h->audio_in_device : "", b, sizeof b));
     printf("  end          %s", s->complete ? "closed normally" : "no end chunk (not closed)");
     if (s->complete) printf(", %llu dropped, status %d%s%s", (unsigned long long)s->dropped,
                             s->end_status, s->end_status ? " " : "",

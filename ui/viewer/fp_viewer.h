@@ -23,7 +23,8 @@
  * J / K open / close the jaw by 0.1 (a rig's jaw.open), G the rig on/off (regions coloured:
  * skull blue, jaw red, soft tissue green blending to red by its jaw weight; landmarks as
  * white points, the hinge axis as a cyan line through the two joints; a legend in the HUD),
- * T take start/stop (the live face and hands stay shown), V review the last take (again:
+ * I punch in/out and L, M, O select, mute, solo a layer of the stack under an overdub
+ * (--over; overdub.h), T take start/stop (the live face and hands stay shown), V review the last take (again:
  * back to live; so do Esc and the next engage), P play/pause it, , . a frame back/on,
  * ? (or /) the key list (on a backdrop), Esc quit (in a review: back to live). The HUD
  * (hud.h): a state badge by colour, a message stack that wraps and fades; fingertip cues
@@ -36,7 +37,7 @@
  * frame's commands (the shot shows this frame):
  *   wait hands | wait end | wait frames N    a hand is present / every input ended / N frames
  *                                            passed since the wait began
- *   key NAME     as the key: E C X Z R 1 2 [ ] W S F H J K G T P , . Tab ? space Esc
+ *   key NAME     as the key: E C X Z R 1 2 [ ] W S F H J K G T P V I L M O , . Tab ? space Esc
  *   shot FILE    write this frame as PNG
  *   radius R     set the support radius (mesh units)
  *   camera YAW PITCH [ZOOM]   the framed view (F) turned by yaw (degrees, about +y, positive
@@ -65,6 +66,27 @@ extern "C" {
 #endif
 
 struct fp_session_take; /* (fp_session_take.h) */
+struct fp_session_take_options;
+struct fp_soundtrack;   /* (fp_audio.h) */
+
+/* The performance's sound and timecode (ui/cli: live's --audio, --audio-in, --timecode), each
+ * NULL for none; called on the viewer's thread with `user`:
+ *   take_starting(user, origin_ns, o)  a take is about to start at host time origin_ns: fill
+ *                                      o's soundtrack and timecode fields (o: the take's own)
+ *   take_started(user, take, origin_ns) it started (its path, header: take->rec, header)
+ *   take_stopped(user)                 it stopped (after its last frame)
+ *   frame_done(user, now_ns)           a frame was stepped at now_ns (not while paused)
+ * soundtrack: drawn as a waveform on the take strip, from soundtrack_offset_s at a take's
+ * start (the caller's; outlives fp_viewer_run). */
+typedef struct fp_viewer_sound {
+    void (*take_starting)(void *user, int64_t origin_ns, struct fp_session_take_options *o);
+    void (*take_started)(void *user, const struct fp_session_take *take, int64_t origin_ns);
+    void (*take_stopped)(void *user);
+    void (*frame_done)(void *user, int64_t now_ns);
+    void *user;
+    const struct fp_soundtrack *soundtrack;
+    double soundtrack_offset_s;
+} fp_viewer_sound;
 
 typedef struct fp_viewer_options {
     fp_session_options session;  /* as for fp_session_create (mesh, inputs, mapping, ...) */
@@ -96,6 +118,7 @@ typedef struct fp_viewer_options {
     void (*step_end)(void);
     void (*opened)(void *user, fp_session *s, struct fp_session_take *take);
     void *user;
+    fp_viewer_sound sound;       /* soundtrack, microphone, timecode hooks (above) */
 } fp_viewer_options;
 
 /** What a run measured. Times in milliseconds. */

@@ -3,6 +3,7 @@
 #include "fp_error.h"
 
 #include <errno.h>
+#include <stddef.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -68,6 +69,9 @@ static void start(fp_voverdub *o, fp_session *s, const fp_plugin_path *plugins, 
         fp_take_player_close(&o->player);
         return;
     }
+    fp_stack_player *sp = fp_take_player_stack(o->player); /* the layers as L, M, O left them */
+    for (size_t i = 1; sp && i < o->stack->layer_count; i++)
+        fp_stack_player_set_layer(sp, i, o->stack->layers[i].mute, o->stack->layers[i].solo);
     const fp_take_summary *sum = fp_take_reader_summary(fp_take_player_reader(o->player));
     o->first_ns = sum->first_time_ns;
     o->stack_s = (double)(sum->last_time_ns - sum->first_time_ns) * 1e-9;
@@ -164,6 +168,27 @@ bool fp_voverdub_punch(fp_voverdub *o, int64_t now, char *msg, size_t n)
     return true;
 }
 
+bool fp_voverdub_layer_key(fp_voverdub *o, char key, char *msg, size_t n)
+{
+    msg[0] = '\0';
+    if (!o->enabled || !o->stack) return false;
+    const size_t top = o->stack->layer_count;
+    if (top < 2) {
+        snprintf(msg, n, "the stack has only its base: no layer to mute or solo");
+        return true;
+    }
+    if (key == 'L' || !o->selected) o->selected = o->selected + 1 < top && key == 'L' ? o->selected + 1 : 1;
+    fp_stack_layer *l = &o->stack->layers[o->selected];
+    if (key == 'M') l->mute = !l->mute;
+    if (key == 'O') l->solo = !l->solo;
+    fp_stack_player *sp = o->player ? fp_take_player_stack(o->player) : NULL;
+    if (sp) fp_stack_player_set_layer(sp, o->selected, l->mute, l->solo);
+    const char *name = strrchr(l->take, '/') ? strrchr(l->take, '/') + 1 : l->take;
+    snprintf(msg, n, "layer %zu (%.60s)%s%s%s", o->selected, name, l->mute ? " muted" : "",
+             l->solo ? " solo" : "", l->mute || l->solo ? "" : " plays");
+    return true;
+}
+
 const float *fp_voverdub_shown(const fp_voverdub *o)
 {
     return o->enabled && o->recording && o->have_under && o->pass.region.kind != FP_STACK_REGION_CHANNELS
@@ -180,53 +205,67 @@ static const char *short_region(const fp_stack_region *r, char *buf, size_t n)
     return buf;
 }
 
-/* One lane: its label, its range [a, b] of span seconds lit, tags. */
+/* One lane: its label, its range [a, b] of span seconds lit, its in and out points (ticks:
+ * an in after 0, an out before the end), outlined when selected. */
 static void lane(fp_render *r, int w, int h, float x, float y, float lw, float lh, float scale,
-                 const char *label, double a, double b, double span, const float *col)
+                 const char *label, double a, double b, double span, const float *col, bool ticks,
+                 bool selected)
 {
     static const float bg[4] = {0.05f, 0.05f, 0.07f, 0.7f}, white[4] = {0.95f, 0.95f, 0.92f, 1.f};
-    float lx = x + 150 * scale, bw = lw - 150 * scale;
+    float lx = x + FP_VWAVE_LABEL_PX * scale, bw = lw - FP_VWAVE_LABEL_PX * scale;
     fp_render_rect(r, w, h, x, y, lw, lh - 2, bg);
+    if (selected) { /* an outline: top and bottom lines */
+        fp_render_rect(r, w, h, x, y, lw, scale, white);
+        fp_render_rect(r, w, h, x, y + lh - 2 - scale, lw, scale, white);
+    }
     fp_render_text(r, w, h, x + 3, y + 2, scale * 0.8f, label, white);
     if (span <= 0) return;
     double ca = fmax(0, fmin(a, span)), cb = fmax(ca, fmin(b, span));
     fp_render_rect(r, w, h, lx + bw * (float)(ca / span), y + 2, bw * (float)((cb - ca) / span), lh - 6, col);
+    if (ticks && a > 0 && a <= span)
+        fp_render_rect(r, w, h, lx + bw * (float)(a / span) - scale, y, 2 * scale, lh - 2, white);
+    if (ticks && isfinite(b) && b <= span)
+        fp_render_rect(r, w, h, lx + bw * (float)(b / span) - scale, y, 2 * scale, lh - 2, white);
 }
 
-void fp_voverdub_draw(const fp_voverdub *o, fp_render *r, int w, int h)
+bool fp_voverdub_draw(const fp_voverdub *o, fp_render *r, int w, int h, const fp_vwave *wave)
 {
-    if (!o->enabled || !o->stack) return;
+    if (!o->enabled || !o->stack) return false;
     float scale = h >= 600 ? 2.f : 1.f, x, y, sw, sh;
     fp_vtakes_strip_rect(w, h, &x, &y, &sw, &sh);
     static const float base[4] = {0.35f, 0.45f, 0.6f, 1.f}, on[4] = {0.45f, 0.75f, 0.5f, 1.f},
                        off[4] = {0.3f, 0.3f, 0.3f, 1.f}, pass[4] = {0.95f, 0.3f, 0.25f, 1.f},
                        head[4] = {1.f, 0.85f, 0.2f, 1.f};
-    const size_t lanes = o->stack->layer_count + 1;
-    const float lh = 12 * scale, top = y - 8 * scale - lh * (float)lanes;
-    double span = o->stack_s > 0 ? fmax(o->stack_s, o->t) : fmax(1, o->t);
+    const size_t lanes = o->stack->layer_count + 1, below = fp_vwave_on(wave) ? 1 : 0;
+    const float lh = 12 * scale, top = y - 8 * scale - lh * (float)(lanes + below);
+    double span = o->stack_s > 0 ? fmax(o->stack_s, o->t) : fmax(fp_vwave_on(wave) ? wave->length_s : 1, o->t);
     char text[320], region[80];
     bool solo = false;
     for (size_t i = 1; i < o->stack->layer_count; i++) solo |= o->stack->layers[i].solo;
     for (size_t i = 0; i < o->stack->layer_count; i++) {
         const fp_stack_layer *l = &o->stack->layers[i];
         const char *name = strrchr(l->take, '/') ? strrchr(l->take, '/') + 1 : l->take;
-        snprintf(text, sizeof text, "%zu %.20s %s %s%s%s", i, name,
-                 i ? short_region(&l->region, region, sizeof region) : "base",
-                 i == 0 ? "" : l->mode == FP_STACK_ADD ? "add" : "replace", l->mute ? " M" : "",
-                 l->solo ? " S" : "");
+        /* the tags first (the label column is 150 px: a long label runs under the range) */
+        int stem = (int)(strrchr(name, '.') ? strrchr(name, '.') - name : (ptrdiff_t)strlen(name));
+        snprintf(text, sizeof text, "%zu%s%s %.*s %s %s", i, l->mute ? " M" : "", l->solo ? " S" : "",
+                 stem < 20 ? stem : 20, name, i ? short_region(&l->region, region, sizeof region) : "base",
+                 i == 0 ? "" : l->mode == FP_STACK_ADD ? "add" : "replace");
         text[48] = '\0';
         bool plays = i == 0 || (!l->mute && (!solo || l->solo));
         lane(r, w, h, x, top + lh * (float)i, sw, lh, scale, text, l->in_s, l->out_s, span,
-             i == 0 ? base : plays ? on : off);
+             i == 0 ? base : plays ? on : off, i > 0, i > 0 && i == o->selected);
     }
     double a = o->punch ? o->pass.in_s : 0, b = o->punch == 2 ? o->pass.out_s : o->recording ? o->t : 0;
     snprintf(text, sizeof text, "pass %s %s%s", short_region(&o->pass.region, region, sizeof region),
              o->pass.mode == FP_STACK_ADD ? "add" : "replace", o->punch == 0 ? " (pre-roll)" : "");
     text[48] = '\0';
     lane(r, w, h, x, top + lh * (float)(lanes - 1), sw, lh, scale, text, o->punch || o->recording ? a : 0,
-         o->punch ? b : 0, span, pass);
+         o->punch ? b : 0, span, pass, o->punch > 0, false);
+    if (below) /* the soundtrack under the lanes, on their time axis */
+        fp_vwave_draw(wave, r, w, h, x, top + lh * (float)lanes, sw, lh, scale, span, NAN);
     if (o->recording) {
-        float bw = sw - 150 * scale, px = x + 150 * scale + bw * (float)fmin(1, o->t / span);
-        fp_render_rect(r, w, h, px - scale, top - 2 * scale, 2 * scale, lh * (float)lanes + 2 * scale, head);
+        float bw = sw - FP_VWAVE_LABEL_PX * scale, px = x + FP_VWAVE_LABEL_PX * scale + bw * (float)fmin(1, o->t / span);
+        fp_render_rect(r, w, h, px - scale, top - 2 * scale, 2 * scale, lh * (float)(lanes + below) + 2 * scale, head);
     }
+    return true;
 }

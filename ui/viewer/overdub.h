@@ -18,6 +18,7 @@
 #include "fp_take_player.h"
 #include "render.h"
 #include "takes.h"
+#include "wave.h"
 
 #include <stdbool.h>
 #include <stddef.h>
@@ -38,6 +39,7 @@ typedef struct fp_voverdub {
     int punch;                     /* 0 pre-roll, 1 punched in, 2 punched out */
     double t, stack_s;             /* playhead and the stack's length, seconds */
     char written[4200];            /* the last stack written ("" none) */
+    size_t selected;               /* the layer L selected for M and O (0: none yet) */
 } fp_voverdub;
 
 /** Set up from --over and --layer (NULL over: disabled, returns 0). Returns 0, or the stack
@@ -59,10 +61,19 @@ void fp_voverdub_frame(fp_voverdub *o, fp_vtakes *takes, fp_session *s,
  *  start or stop the take instead. */
 bool fp_voverdub_punch(fp_voverdub *o, int64_t now, char *msg, size_t n);
 
+/** L selects the next layer of the stack (1 .. its top, again from 1), M mutes or unmutes
+ *  it, O solos or unsolos it: the stack under the pass plays so from the next frame (while
+ *  a take records) and the new stack is written with those states. Returns true when it
+ *  acted (msg says what), false without an overdub. */
+bool fp_voverdub_layer_key(fp_voverdub *o, char key, char *msg, size_t n);
+
 /** The composite to show while a pass records, else NULL. */
 const float *fp_voverdub_shown(const fp_voverdub *o);
 
-/** The lanes above the take strip (nothing when disabled). */
-void fp_voverdub_draw(const fp_voverdub *o, fp_render *r, int w, int h);
+/** The lanes above the take strip, one a layer (its range lit, dimmed when muted or off for
+ *  another's solo, tagged M / S, its in and out points as white ticks, the selected one
+ *  outlined), the pass's with its punch points, and under them the soundtrack's waveform
+ *  (wave, when on) on the same time axis. Returns false (nothing drawn) when disabled. */
+bool fp_voverdub_draw(const fp_voverdub *o, fp_render *r, int w, int h, const fp_vwave *wave);
 
 #endif

@@ -502,3 +502,37 @@ void fp_render_rect(fp_render *r, int fbw, int fbh, float x, float y, float w, f
     glEnable(GL_DEPTH_TEST);
     glBindVertexArray(0);
 }
+
+int fp_render_rects(fp_render *r, int fbw, int fbh, const float *xywh, size_t n,
+                    const float color[4])
+{
+    if (!n) return 0;
+    /* two triangles a rectangle, the text program's layout (x y z + 4 colour bytes) */
+    float *v = malloc(n * 6 * 4 * sizeof *v);
+    if (!v) return -ENOMEM;
+    for (size_t i = 0; i < n; i++) {
+        const float x = xywh[4 * i], y = xywh[4 * i + 1], w = xywh[4 * i + 2], h = xywh[4 * i + 3];
+        const float c[6][2] = {{x, y}, {x + w, y}, {x + w, y + h}, {x, y}, {x + w, y + h}, {x, y + h}};
+        for (int k = 0; k < 6; k++) {
+            float *o = v + (i * 6 + (size_t)k) * 4;
+            o[0] = c[k][0], o[1] = c[k][1], o[2] = 0, o[3] = 0;
+        }
+    }
+    glBindVertexArray(r->vao_text);
+    glBindBuffer(GL_ARRAY_BUFFER, r->vbo_text);
+    glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(n * 6 * 4 * sizeof *v), v, GL_STREAM_DRAW);
+    free(v);
+    float proj[16];
+    m4_ortho(proj, 0, (float)fbw, (float)fbh, 0);
+    glUseProgram(r->prog_text);
+    glUniformMatrix4fv(glGetUniformLocation(r->prog_text, "u_proj"), 1, GL_FALSE, proj);
+    glUniform4fv(glGetUniformLocation(r->prog_text, "u_color"), 1, color);
+    glDisable(GL_DEPTH_TEST);
+    glEnable(GL_BLEND);
+    glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+    glDrawArrays(GL_TRIANGLES, 0, (GLsizei)(n * 6));
+    glDisable(GL_BLEND);
+    glEnable(GL_DEPTH_TEST);
+    glBindVertexArray(0);
+    return 0;
+}

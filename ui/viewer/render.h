@@ -91,4 +91,9 @@ float fp_render_text_height(const char *text, float scale);
 void fp_render_rect(fp_render *r, int fbw, int fbh, float x, float y, float w, float h,
                     const float color[4]);
 
+/** n filled rectangles (xywh: n x 4 floats, pixels from the top left) in one colour, one
+ *  draw call (a waveform's columns). Returns 0 or -ENOMEM (nothing drawn). */
+int fp_render_rects(fp_render *r, int fbw, int fbh, const float *xywh, size_t n,
+                    const float color[4]);
+
 #endif

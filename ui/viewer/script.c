@@ -23,7 +23,7 @@ int fp_script_key(const char *name)
         if (!strcasecmp(name, named[i].name)) return named[i].key;
     if (strlen(name) == 1) {
         int c = toupper((unsigned char)name[0]);
-        if (strchr("ECXZRWSFHTPJKGVI", c)) return GLFW_KEY_A + (c - 'A');
+        if (strchr("ECXZRWSFHTPJKGVILMO", c)) return GLFW_KEY_A + (c - 'A');
         if (c == ',') return GLFW_KEY_COMMA;
         if (c == '.') return GLFW_KEY_PERIOD;
         if (c == '1' || c == '2') return GLFW_KEY_0 + (c - '0');

@@ -90,10 +90,17 @@ static int start(fp_vtakes *t, fp_session *s, int64_t now, char *msg, size_t n)
 {
     char err[1024];
     fp_vtakes_leave(t);
+    const fp_viewer_sound *h = t->sound;
+    if (h && h->take_starting) h->take_starting(h->user, now, &t->take.opt);
     int rc = fp_session_take_start(&t->take, s, now, err, sizeof err);
-    if (rc) snprintf(msg, n, "take: %s", err);
-    else snprintf(msg, n, "recording %s take %u", t->slate, t->take.header.take);
-    return rc;
+    if (rc) {
+        snprintf(msg, n, "take: %s", err);
+        return rc;
+    }
+    t->origin_ns = now;
+    if (h && h->take_started) h->take_started(h->user, &t->take, now);
+    snprintf(msg, n, "recording %s take %u", t->slate, t->take.header.take);
+    return 0;
 }
 
 int fp_vtakes_stop(fp_vtakes *t, fp_session *s, char *msg, size_t n)
@@ -105,6 +112,7 @@ int fp_vtakes_stop(fp_vtakes *t, fp_session *s, char *msg, size_t n)
     fp_session_take_result res;
     char err[1024] = "";
     int rc = fp_session_take_stop(&t->take, &res, err, sizeof err);
+    if (t->sound && t->sound->take_stopped) t->sound->take_stopped(t->sound->user);
     char in[32], out[32];
     fp_timecode_format(&res.timecode_in, in, sizeof in);
     fp_timecode_format(&res.timecode_out, out, sizeof out);

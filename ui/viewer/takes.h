@@ -13,6 +13,7 @@
 #define FP_UI_TAKES_H
 
 #include "fp_session_take.h"
+#include "fp_viewer.h"
 #include "render.h"
 
 #include <stdbool.h>
@@ -39,6 +40,8 @@ typedef struct fp_vtakes {
     fp_session_take_result last;  /* the last take written, reviewed when asked */
     bool have_last;               /* last holds a take with frames (not found unreadable) */
     char slate[FP_TAKE_SLATE_MAX];
+    const fp_viewer_sound *sound; /* the take hooks (fp_viewer.h), or NULL */
+    int64_t origin_ns;            /* the take recording's (or the last one's) start */
 } fp_vtakes;
 
 /** Set up: the options' take folder, slate, countdown; puts the record sink into *so (the

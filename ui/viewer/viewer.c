@@ -14,6 +14,7 @@
 #include "script.h"
 #include "takes.h"
 #include "overdub.h"
+#include "wave.h"
 #include "vmath.h"
 #include "vnormals.h"
 
@@ -129,6 +130,7 @@ typedef struct viewer {
     bool committed_shown;     /* last frame committed (HUD) */
     fp_viewer_report rep;
     fp_vtakes takes;          /* T: takes, REC, the review strip (takes.h) */
+    fp_vwave wave;            /* the soundtrack's waveform on the timeline (wave.h) */
     fp_voverdub over;         /* --over: a pass over a stack (overdub.h) */
     int error;                /* a failure that ends the run (screenshot not written) */
     char *err;
@@ -363,6 +365,14 @@ static void punch(viewer *v, bool pedal)
     else say(v, "I punches in and out while a take records over a stack (--over)");
 }
 
+/* L, M, O: select, mute, solo a layer of the stack under an overdub (overdub.h). */
+static void layer_key(viewer *v, int key)
+{
+    char msg[300];
+    if (fp_voverdub_layer_key(&v->over, (char)('A' + (key - GLFW_KEY_A)), msg, sizeof msg)) say_kind(v, FP_HUD_TAKE, false, "%s", msg);
+    else say(v, "L, M, O select, mute and solo a layer of the stack under an overdub (--over)");
+}
+
 static void act(viewer *v, int key)
 {
     switch (key) {
@@ -416,6 +426,7 @@ static void act(viewer *v, int key)
         break;
     case GLFW_KEY_T: take_toggle(v); break;
     case GLFW_KEY_I: punch(v, false); break;
+    case GLFW_KEY_L: case GLFW_KEY_M: case GLFW_KEY_O: layer_key(v, key); break;
     case GLFW_KEY_P: fp_vtakes_play_pause(&v->takes, fp_now_ns()); break;
     case GLFW_KEY_COMMA: fp_vtakes_step(&v->takes, -1); break;
     case GLFW_KEY_PERIOD: fp_vtakes_step(&v->takes, 1); break;
@@ -677,6 +688,7 @@ static const char help_text[] =
     " P      play / pause the last take\n"
     " , / .  a frame back / on; mouse on the strip scrubs\n"
     " Esc    leave the review; else quit\n"
+    " I punch in/out; L layer, M mute, O solo (--over)\n"
     "mouse: left orbit, right pan, wheel zoom\n"
     "drop a mesh file on the window to load it\n"
     "spheres: green where a fingertip's support reaches the skin;\n"
@@ -731,7 +743,9 @@ static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
     y += fp_hud_draw_msgs(&v->msgs, &v->r, w, h, margin, y, max_px, scale, dim, fp_now_ns()) + 4 * scale;
     if (v->rig_on && fp_session_rig(v->s)) y += fp_overlay_rig_legend(&v->r, v->s, w, h, y, scale) + 6 * scale;
     fp_vtakes_draw(&v->takes, &v->r, w, h, fp_now_ns());
-    fp_voverdub_draw(&v->over, &v->r, w, h);
+    if (!fp_voverdub_draw(&v->over, &v->r, w, h, &v->wave)) /* else the waveform alone */
+        fp_vwave_draw_lane(&v->wave, &v->r, w, h, fp_session_take_recording(&v->takes.take)
+                                                      ? (double)(fp_now_ns() - v->takes.origin_ns) * 1e-9 : NAN);
     if (v->help_on) fp_hud_draw_help(&v->r, w, h, scale, help_text, white);
     else fp_render_text(&v->r, w, h, margin, (float)h - 14 * scale, scale, "? keys", dim);
 }
@@ -938,6 +952,7 @@ static void frame(viewer *v)
         if (v->opt->step_begin) v->opt->step_begin(); /* (a stuck frame: app_stop.h) */
         fp_session_step(v->s, now, &st);
         if (v->opt->step_end) v->opt->step_end();
+        if (v->opt->sound.frame_done) v->opt->sound.frame_done(v->opt->sound.user, now);
         for (unsigned k = fp_session_record_toggles(v->s); k > 0; k--) punch(v, true);
         if (st.committed) v->committed_shown = true;
         if (st.engaged || st.cancelled) v->committed_shown = false;
@@ -1014,8 +1029,11 @@ int fp_viewer_run(const fp_viewer_options *opt, fp_viewer_report *report, char *
     v->so.progress = opening_progress; /* the window shows the opening; the caller's still runs */
     v->so.progress_user = v;
     fp_vtakes_init(&v->takes, opt->take_dir, opt->slate, opt->countdown_s, &v->so);
+    v->takes.sound = &opt->sound;
+    (void)fp_vwave_init(&v->wave, opt->sound.soundtrack, opt->sound.soundtrack_offset_s); /* (-ENOMEM: none drawn) */
     if (fp_voverdub_init(&v->over, opt->over, opt->layer, err, errlen)) {
         fp_vtakes_free(&v->takes);
+        fp_vwave_free(&v->wave);
         free(v);
         return -EINVAL;
     }
@@ -1124,6 +1142,7 @@ out:
     if (report) *report = v->rep;
     fp_vtakes_free(&v->takes);
     fp_voverdub_free(&v->over);
+    fp_vwave_free(&v->wave);
     fp_session_destroy(&v->s);
     if (v->win) {
         fp_gpuwarp_destroy(&v->gw);
