@@ -81,6 +81,13 @@ size_t fp_test_reversed(const float *a, const float *b, const uint32_t *tris, si
     return k;
 }
 
+int fp_test_time_scale(void)
+{
+    const char *e = getenv("FP_TEST_TIME_SCALE");
+    int s = e ? atoi(e) : 1;
+    return s > 1 ? s : 1;
+}
+
 void fp_test_nap_ms(int ms)
 {
     struct timespec ts = {ms / 1000, (long)(ms % 1000) * 1000000L};

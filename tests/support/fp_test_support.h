@@ -40,6 +40,9 @@ size_t fp_test_reversed(const float *a, const float *b, const uint32_t *tris, si
 int64_t fp_test_mono_ns(void);
 /** Sleep ms milliseconds. */
 void fp_test_nap_ms(int ms);
+/** FP_TEST_TIME_SCALE (cmake/FpHelpers.cmake: 3 in sanitizer builds, where the code runs
+ *  several times slower), at least 1; 1 when unset or not a number. */
+int fp_test_time_scale(void);
 
 /* ---- one plugin, loaded by dlopen ----------------------------------------------------- */
 
