@@ -146,7 +146,8 @@ void fp_app_link_before(fp_app_link *l, int64_t now_ns, uint64_t frame)
     if (l && l->ctl) fp_control_session_apply(&l->cs, now_ns, frame);
 }
 
-void fp_app_link_after(fp_app_link *l, int64_t now_ns, uint64_t frame)
+void fp_app_link_after_frame(fp_app_link *l, int64_t now_ns, uint64_t frame, const float *pos,
+                             const char *timecode)
 {
     if (!l) return;
     if (l->ctl) fp_control_session_tick(&l->cs, now_ns, frame);
@@ -154,12 +155,30 @@ void fp_app_link_after(fp_app_link *l, int64_t now_ns, uint64_t frame)
         char tc[32] = "";
         fp_session_take *t = l->o.take;
         fp_timecode c;
-        if (t && fp_session_take_recording(t) && !fp_session_take_timecode(t, now_ns, &c))
+        if (timecode) snprintf(tc, sizeof tc, "%s", timecode);
+        else if (t && fp_session_take_recording(t) && !fp_session_take_timecode(t, now_ns, &c))
             fp_timecode_format(&c, tc, sizeof tc);
-        for (size_t c = 0; c < l->nchannels; c++)
-            l->values[c] = (float)fp_session_channel(l->o.s, l->channels[c]);
-        fp_stream_frame(l->stream, fp_session_positions(l->o.s), l->values, now_ns, tc);
+        for (size_t k = 0; k < l->nchannels; k++)
+            l->values[k] = (float)fp_session_channel(l->o.s, l->channels[k]);
+        fp_stream_frame(l->stream, pos ? pos : fp_session_positions(l->o.s), l->values, now_ns, tc);
     }
+}
+
+void fp_app_link_after(fp_app_link *l, int64_t now_ns, uint64_t frame)
+{
+    fp_app_link_after_frame(l, now_ns, frame, NULL, NULL);
+}
+
+void fp_app_link_idle(fp_app_link *l, int64_t now_ns, uint64_t frame)
+{
+    if (l && l->ctl) fp_control_session_tick(&l->cs, now_ns, frame);
+}
+
+void fp_app_link_set_session(fp_app_link *l, fp_session *s)
+{
+    if (!l) return;
+    l->o.s = s;
+    l->cs.s = s;
 }
 
 bool fp_app_link_quit(const fp_app_link *l) { return l && l->cs.quit; }
@@ -213,6 +232,13 @@ int fp_app_link_open(const fp_app_link_options *o, fp_app_link **out)
 void fp_app_link_origin(fp_app_link *l, int64_t t0_ns) { (void)l; (void)t0_ns; }
 void fp_app_link_before(fp_app_link *l, int64_t now_ns, uint64_t frame) { (void)l; (void)now_ns; (void)frame; }
 void fp_app_link_after(fp_app_link *l, int64_t now_ns, uint64_t frame) { (void)l; (void)now_ns; (void)frame; }
+void fp_app_link_after_frame(fp_app_link *l, int64_t now_ns, uint64_t frame, const float *pos,
+                             const char *timecode)
+{
+    (void)l; (void)now_ns; (void)frame; (void)pos; (void)timecode;
+}
+void fp_app_link_set_session(fp_app_link *l, fp_session *s) { (void)l; (void)s; }
+void fp_app_link_idle(fp_app_link *l, int64_t now_ns, uint64_t frame) { (void)l; (void)now_ns; (void)frame; }
 bool fp_app_link_quit(const fp_app_link *l) { (void)l; return false; }
 void fp_app_link_set_transport(fp_app_link *l, fp_app_link_transport_fn fn, fp_app_link_state_fn st,
                                void *user)

@@ -41,6 +41,15 @@ void fp_app_link_origin(fp_app_link *l, int64_t t0_ns);
 void fp_app_link_before(fp_app_link *l, int64_t now_ns, uint64_t frame);
 /** After the frame: push the status to subscribers, stream the frame. */
 void fp_app_link_after(fp_app_link *l, int64_t now_ns, uint64_t frame);
+/** The same with the frame's positions (n x 3 floats, mesh units; play: the stack's composite)
+ *  and timecode (NULL: the take recording's, else none) given. */
+void fp_app_link_after_frame(fp_app_link *l, int64_t now_ns, uint64_t frame, const float *pos,
+                             const char *timecode);
+/** While no frame is made (play stopped): the status pushed to subscribers when due. */
+void fp_app_link_idle(fp_app_link *l, int64_t now_ns, uint64_t frame);
+/** The session the commands and the stream read from now on (play's seek reopens it); the
+ *  same vertex count. */
+void fp_app_link_set_session(fp_app_link *l, fp_session *s);
 /** True once /fp/quit was received. */
 bool fp_app_link_quit(const fp_app_link *l);
 
