@@ -64,6 +64,13 @@ void fp_stream_origin(fp_stream *st, int64_t t0_ns);
 int fp_stream_frame(fp_stream *st, const float *pos, const float *channels, int64_t now_ns,
                     const char *timecode);
 
+/** fp_stream_frame where only the vertex ranges given can differ from the last frame's pos:
+ *  ranges[2k] first vertex, ranges[2k+1] count, increasing and disjoint (fp_session_touched's;
+ *  nranges SIZE_MAX or ranges NULL: any may, as fp_stream_frame). Outside them the positions
+ *  must be bit for bit those of the last call. */
+int fp_stream_frame_ranges(fp_stream *st, const float *pos, const uint32_t *ranges, size_t nranges,
+                           const float *channels, int64_t now_ns, const char *timecode);
+
 /** Make the next frame a keyframe. */
 void fp_stream_request_key(fp_stream *st);
 

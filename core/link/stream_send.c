@@ -19,8 +19,10 @@
 #include <unistd.h>
 
 #define TIMES 4096               /* per-frame send times kept for the percentiles */
-#define RECORD_BYTES 8           /* u16 index gap, 3 x i16 offset */
+#define RECORD_BYTES 8           /* u16 index gap, 3 x i16 offset (after a u32 count) */
 #define MAX_GAP 65535u
+#define BLOCK 64                 /* vertices compared with the last frame's at once (memcmp) */
+#define SLOT_SLACK 256           /* a packet's slot: mtu plus this */
 
 struct fp_stream {
     fp_stream_options o;
@@ -31,6 +33,11 @@ struct fp_stream {
     size_t max_records;          /* records per packet */
     int sock;
     int16_t *sent;               /* n x 3: the quantised offsets last sent */
+    float *last;                 /* n x 3: the positions last quantised */
+    unsigned char *slots;        /* the frame's packets, serialised, nslots x slot_size */
+    size_t nslots, slot_size;
+    struct mmsghdr *msgs;        /* one sendmmsg for them */
+    struct iovec *iov;
     uint32_t *idx;               /* the frame's records: vertex indices */
     size_t *starts;              /* the record each packet of the frame starts at */
     int16_t *q;                  /* ... and their offsets (3 each) */
@@ -152,12 +159,15 @@ int fp_stream_open(const fp_stream_options *o, fp_stream **out, char *err, size_
     s->sent = calloc(3 * o->n, sizeof *s->sent);
     s->idx = malloc(o->n * sizeof *s->idx);
     s->q = malloc(3 * o->n * sizeof *s->q);
-    s->blob = malloc(s->max_records * RECORD_BYTES);
+    s->blob = malloc(4 + s->max_records * RECORD_BYTES);
     s->starts = malloc((o->n + 1) * sizeof *s->starts);
-    if (!s->sent || !s->idx || !s->q || !s->blob || !s->starts) {
+    s->last = malloc(3 * o->n * sizeof *s->last);
+    s->slot_size = s->mtu + SLOT_SLACK;
+    if (!s->sent || !s->idx || !s->q || !s->blob || !s->starts || !s->last) {
         rc = fp_errorf(err, errlen, -ENOMEM, "%s: out of memory for %zu vertices", o->spec, o->n);
         goto fail;
     }
+    memcpy(s->last, o->neutral, 3 * o->n * sizeof *s->last); /* (sent: all 0, the neutral's) */
     s->key_requested = true; /* the first frame is a keyframe */
     drop_knob(s);
     *out = s;
@@ -177,13 +187,28 @@ static bool drop_now(fp_stream *s)
     return (double)(s->rng >> 11) * 0x1p-53 < s->drop_p;
 }
 
-/* Serialise m at path and send it (or drop it: the knob). */
-static void send_message(fp_stream *s, lo_message m, const char *path)
+/* Room for k packets in the slots (grown, rarely: a frame larger than any before). */
+static int slots_reserve(fp_stream *s, size_t k)
 {
-    unsigned char buf[65536];
+    if (k <= s->nslots) return 0;
+    unsigned char *slots = realloc(s->slots, k * s->slot_size);
+    if (slots) s->slots = slots;
+    struct mmsghdr *msgs = realloc(s->msgs, k * sizeof *msgs);
+    if (msgs) s->msgs = msgs;
+    struct iovec *iov = realloc(s->iov, k * sizeof *iov);
+    if (iov) s->iov = iov;
+    if (!slots || !msgs || !iov) return -ENOMEM;
+    s->nslots = k;
+    return 0;
+}
+
+/* Serialise m at path into the frame's next slot (*used of them), or drop it (the knob). */
+static void queue_message(fp_stream *s, lo_message m, const char *path, size_t *used)
+{
     size_t size = lo_message_length(m, path);
     s->st.packets++;
-    if (size > sizeof buf || !lo_message_serialise(m, path, buf, &size)) {
+    unsigned char *slot = s->slots + *used * s->slot_size;
+    if (*used >= s->nslots || size > s->slot_size || !lo_message_serialise(m, path, slot, &size)) {
         s->st.send_errors++;
         return;
     }
@@ -192,8 +217,40 @@ static void send_message(fp_stream *s, lo_message m, const char *path)
         s->st.dropped++;
         return;
     }
-    if (send(s->sock, buf, size, 0) < 0) s->st.send_errors++;
+    s->iov[*used] = (struct iovec){slot, size};
+    s->msgs[*used] = (struct mmsghdr){.msg_hdr = {.msg_iov = &s->iov[*used], .msg_iovlen = 1}};
+    s->st.bytes += size;
+    (*used)++;
+}
+
+/* Send the frame's queued packets: one sendmmsg (more when the kernel takes fewer). */
+static void flush(fp_stream *s, size_t used)
+{
+    for (size_t at = 0; at < used;) {
+        int k = sendmmsg(s->sock, s->msgs + at, (unsigned)(used - at), 0);
+        if (k <= 0) { /* the rest is lost (counted) */
+            s->st.send_errors += used - at;
+            return;
+        }
+        at += (size_t)k;
+    }
+}
+
+/* The info message: serialised and sent alone (its path may be long). */
+static void send_message(fp_stream *s, lo_message m, const char *path)
+{
+    size_t size = lo_message_length(m, path);
+    s->st.packets++;
+    void *buf = lo_message_serialise(m, path, NULL, &size);
+    if (!buf) {
+        s->st.send_errors++;
+        return;
+    }
+    s->seq++;
+    if (drop_now(s)) s->st.dropped++;
+    else if (send(s->sock, buf, size, 0) < 0) s->st.send_errors++;
     else s->st.bytes += size;
+    free(buf);
 }
 
 /* /fp/stream/info before a keyframe. */
@@ -218,16 +275,17 @@ static void put16(unsigned char *p, uint16_t v) { p[0] = (unsigned char)(v >> 8)
 
 /* One packet: the records [a, b) of the frame covering vertices [lo, hi). */
 static void send_packet(fp_stream *s, size_t a, size_t b, uint32_t lo, uint32_t hi, int part, int parts,
-                        bool key, double t, const char *tc, const float *channels)
+                        bool key, double t, const char *tc, const float *channels, size_t *used)
 {
-    uint32_t prev = lo;
+    uint32_t prev = lo, count = (uint32_t)(b - a);
+    for (int k = 0; k < 4; k++) s->blob[k] = (unsigned char)(count >> (24 - 8 * k)); /* (never empty) */
     for (size_t r = a; r < b; r++) {
-        unsigned char *p = s->blob + (r - a) * RECORD_BYTES;
+        unsigned char *p = s->blob + 4 + (r - a) * RECORD_BYTES;
         put16(p, (uint16_t)(s->idx[r] - prev));
         prev = s->idx[r];
         for (int k = 0; k < 3; k++) put16(p + 2 + 2 * k, (uint16_t)s->q[3 * r + k]);
     }
-    lo_blob blob = lo_blob_new((int32_t)((b - a) * RECORD_BYTES), s->blob);
+    lo_blob blob = lo_blob_new((int32_t)(4 + (b - a) * RECORD_BYTES), s->blob);
     lo_message m = lo_message_new();
     if (!m || !blob) {
         s->st.send_errors++;
@@ -246,34 +304,53 @@ static void send_packet(fp_stream *s, size_t a, size_t b, uint32_t lo, uint32_t 
     lo_message_add_int32(m, (int32_t)hi);
     lo_message_add_blob(m, blob);
     for (size_t c = 0; c < s->o.nchannels; c++) lo_message_add_float(m, channels ? channels[c] : 0.0f);
-    send_message(s, m, "/fp/stream/frame");
+    queue_message(s, m, "/fp/stream/frame", used);
     lo_message_free(m);
     lo_blob_free(blob);
     s->st.records += b - a;
 }
 
 /* The frame's records: every non-zero offset (key) or every changed one, into idx and q. */
-static size_t collect(fp_stream *s, const float *pos, bool key)
+static size_t collect(fp_stream *s, const float *pos, bool key, const uint32_t *ranges, size_t nranges)
 {
     const float *nu = s->o.neutral;
     const double scale = s->o.mm_per_unit / s->step_mm;
-    size_t m = 0;
-    for (size_t v = 0; v < s->o.n; v++) {
-        int16_t q[3];
-        for (int k = 0; k < 3; k++) {
-            double d = (double)(pos[3 * v + k] - nu[3 * v + k]) * scale;
-            long r = isfinite(d) ? lrint(d) : 0;
-            if (r > 32767 || r < -32767) { r = r > 0 ? 32767 : -32767; s->st.clipped++; }
-            q[k] = (int16_t)r;
+    const size_t n = s->o.n;
+    size_t m = 0, r = 0;
+    const bool all = nranges == SIZE_MAX || (!ranges && nranges); /* (0 ranges: none moved) */
+    for (size_t b0 = 0; b0 < n; b0 += BLOCK) {
+        const size_t b1 = b0 + BLOCK < n ? b0 + BLOCK : n, bytes = 3 * (b1 - b0) * sizeof(float);
+        bool in = all; /* the block meets a touched range */
+        while (!in && r < nranges && (size_t)ranges[2 * r] + ranges[2 * r + 1] <= b0) r++;
+        if (!in && r < nranges && ranges[2 * r] < b1) in = true;
+        if (!in && !key) {
+            if (r >= nranges) break; /* (nothing further moved) */
+            b0 = (size_t)ranges[2 * r] / BLOCK * BLOCK - BLOCK; /* (the next touched block) */
+            continue;
         }
-        int16_t *old = s->sent + 3 * v;
-        bool changed = q[0] != old[0] || q[1] != old[1] || q[2] != old[2];
-        if (key ? (q[0] | q[1] | q[2]) != 0 : changed) {
-            s->idx[m] = (uint32_t)v;
-            memcpy(s->q + 3 * m, q, sizeof q);
-            m++;
+        const bool moved = in && memcmp(pos + 3 * b0, s->last + 3 * b0, bytes) != 0; /* (most do not) */
+        if (!moved && !key) continue;
+        if (moved) memcpy(s->last + 3 * b0, pos + 3 * b0, bytes);
+        for (size_t v = b0; v < b1; v++) {
+            int16_t *old = s->sent + 3 * v;
+            bool changed = false;
+            if (moved) {
+                int16_t q[3];
+                for (int k = 0; k < 3; k++) {
+                    double d = (double)(pos[3 * v + k] - nu[3 * v + k]) * scale;
+                    long r = isfinite(d) ? lrint(d) : 0;
+                    if (r > 32767 || r < -32767) { r = r > 0 ? 32767 : -32767; s->st.clipped++; }
+                    q[k] = (int16_t)r;
+                }
+                changed = q[0] != old[0] || q[1] != old[1] || q[2] != old[2];
+                if (changed) memcpy(old, q, sizeof q);
+            }
+            if (key ? (old[0] | old[1] | old[2]) != 0 : changed) {
+                s->idx[m] = (uint32_t)v;
+                memcpy(s->q + 3 * m, old, 3 * sizeof *old);
+                m++;
+            }
         }
-        if (changed) memcpy(old, q, sizeof q);
     }
     return m;
 }
@@ -281,13 +358,19 @@ static size_t collect(fp_stream *s, const float *pos, bool key)
 int fp_stream_frame(fp_stream *s, const float *pos, const float *channels, int64_t now_ns,
                     const char *timecode)
 {
+    return fp_stream_frame_ranges(s, pos, NULL, SIZE_MAX, channels, now_ns, timecode);
+}
+
+int fp_stream_frame_ranges(fp_stream *s, const float *pos, const uint32_t *ranges, size_t nranges,
+                           const float *channels, int64_t now_ns, const char *timecode)
+{
     int64_t t_start = fp_now_ns();
     bool key = s->key_requested || s->frame % s->key_period == 0;
     s->key_requested = false;
     char tc[16];
     snprintf(tc, sizeof tc, "%s", timecode ? timecode : "");
     const double t = (double)(now_ns - s->t0_ns) * 1e-9;
-    size_t m = collect(s, pos, key);
+    size_t m = collect(s, pos, key, ranges, nranges);
     /* the packets: at most max_records each; an index gap above MAX_GAP starts a new one */
     size_t nparts = 1;
     s->starts[0] = 0;
@@ -304,12 +387,15 @@ int fp_stream_frame(fp_stream *s, const float *pos, const float *channels, int64
         send_info(s);
         s->st.keyframes++;
     }
+    size_t used = 0;
+    if (slots_reserve(s, nparts)) nparts = 0; /* (out of memory: the frame is lost, counted) */
     for (size_t k = 0; k < nparts; k++) {
         size_t a = s->starts[k], b = k + 1 < nparts ? s->starts[k + 1] : m;
         uint32_t lo = k == 0 ? 0 : s->idx[a];
         uint32_t hi = k + 1 < nparts ? s->idx[b] : (uint32_t)s->o.n;
-        send_packet(s, a, b, lo, hi, (int)k, (int)nparts, key, t, tc, channels);
+        send_packet(s, a, b, lo, hi, (int)k, (int)nparts, key, t, tc, channels, &used);
     }
+    flush(s, used);
     s->st.frames++;
     s->frame++;
     s->times[(s->st.frames - 1) % TIMES] = (double)(fp_now_ns() - t_start) * 1e-3;
@@ -358,6 +444,10 @@ void fp_stream_close(fp_stream **sp)
     free(s->q);
     free(s->blob);
     free(s->starts);
+    free(s->last);
+    free(s->slots);
+    free(s->msgs);
+    free(s->iov);
     free(s);
     *sp = NULL;
 }

@@ -160,7 +160,11 @@ void fp_app_link_after_frame(fp_app_link *l, int64_t now_ns, uint64_t frame, con
             fp_timecode_format(&c, tc, sizeof tc);
         for (size_t k = 0; k < l->nchannels; k++)
             l->values[k] = (float)fp_session_channel(l->o.s, l->channels[k]);
-        fp_stream_frame(l->stream, pos ? pos : fp_session_positions(l->o.s), l->values, now_ns, tc);
+        const uint32_t *ranges = NULL;
+        size_t nranges = SIZE_MAX;
+        if (!pos && l->o.touched) nranges = fp_session_touched(l->o.s, &ranges);
+        fp_stream_frame_ranges(l->stream, pos ? pos : fp_session_positions(l->o.s), ranges, nranges,
+                               l->values, now_ns, tc);
     }
 }
 
@@ -207,7 +211,7 @@ void fp_app_link_close(fp_app_link **lp)
     if (l->stream) {
         char line[512];
         fp_stream_summary(l->stream, line, sizeof line);
-        if (!l->o.quiet) fprintf(stderr, "facepuppet %s: --stream: %s\n", l->o.cmd, line);
+        fprintf(stderr, "facepuppet %s: --stream: %s\n", l->o.cmd, line); /* (-q or not) */
         fp_stream_close(&l->stream);
     }
     free(l);

@@ -25,6 +25,8 @@ typedef struct fp_app_link_options {
     fp_session_take *take;             /* NULL: no takes (record start answered with an error) */
     const fp_plugin_path *plugin_path; /* /fp/mapping's */
     double fps;                        /* the frame rate (the stream's keyframe period) */
+    bool touched;                      /* the stream may read fp_session_touched (no other
+                                          caller: run, play; not live, whose viewer does) */
     bool quiet;
 } fp_app_link_options;
 

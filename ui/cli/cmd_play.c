@@ -121,6 +121,13 @@ static void frame_timecode(const fp_take_header *h, int64_t time_ns, char *buf, 
     fp_timecode_format(&tc, buf, n);
 }
 
+/* What the stream sends: a stack's composite, or NULL for a take's session (its touched
+ * ranges: app_link.h). */
+static const float *play_positions(fp_take_player *p)
+{
+    return fp_take_player_stack(p) ? fp_take_player_positions(p) : NULL;
+}
+
 static void sleep_until_ns(int64_t t_ns)
 {
     struct timespec ts = {(time_t)(t_ns / 1000000000LL), (long)(t_ns % 1000000000LL)};
@@ -218,7 +225,7 @@ static int play_controlled(play_ctl *c, const fp_take_header *h)
         c->pos_s = (double)(f.time_ns - c->first_ns) * 1e-9;
         sleep_until_ns(c->wall_base + (int64_t)llround(c->pos_s * 1e9));
         frame_timecode(h, f.time_ns, tc, sizeof tc);
-        fp_app_link_after_frame(c->link, f.time_ns, c->frames++, fp_take_player_positions(c->player), tc);
+        fp_app_link_after_frame(c->link, f.time_ns, c->frames++, play_positions(c->player), tc);
     }
     return FP_EXIT_OK;
 }
@@ -322,7 +329,8 @@ static int play_main(int argc, char **argv)
         goto done;
     fp_app_link_options lo = {.cmd = "play", .control = control, .stream = stream, .s = s,
                               .mesh_path = fp_take_player_mesh_path(player),
-                              .fps = (double)h->rate.num / h->rate.den, .quiet = quiet};
+                              .fps = (double)h->rate.num / h->rate.den, .quiet = quiet,
+                              .touched = true};
     if ((status = fp_app_link_open(&lo, &link))) goto done;
     if (control) {
         play_ctl c = {.take_path = take_path, .mesh = mesh, .path = &path, .quiet = quiet,
@@ -344,7 +352,7 @@ static int play_main(int argc, char **argv)
             char tc[32];
             sleep_until_ns(wall0 + (f.time_ns - first_ns));
             frame_timecode(h, f.time_ns, tc, sizeof tc);
-            fp_app_link_after_frame(link, f.time_ns, frames, fp_take_player_positions(player), tc);
+            fp_app_link_after_frame(link, f.time_ns, frames, play_positions(player), tc);
         }
         if (ex && (rc = fp_export_add(ex, fp_take_player_positions(player),
                                       (double)(f.time_ns - first_ns) * 1e-9, err, sizeof err))) {

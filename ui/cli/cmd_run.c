@@ -597,7 +597,7 @@ static int run_main(int argc, char **argv)
     }
     fp_app_link_options lo = {.cmd = "run", .control = a->sopt.control, .stream = a->sopt.stream,
                               .s = s, .mesh_path = a->so.mesh_path, .take = a->take_dir ? &take : NULL,
-                              .plugin_path = &path, .fps = a->fps, .quiet = quiet};
+                              .plugin_path = &path, .fps = a->fps, .quiet = quiet, .touched = true};
     if ((rc = fp_app_link_open(&lo, &a->link))) {
         fp_export_abort(&ex);
         fp_session_destroy(&s);
