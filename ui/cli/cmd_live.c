@@ -172,6 +172,20 @@ static void live_take_over(void *user, int sig, bool in_plugin)
         fprintf(stderr, "facepuppet live: wrote %s (the last whole frame)\n", c->out);
 }
 
+/* --control, --stream: opened with the session (live_opened), the frames bracketed, /fp/quit
+ * ending the loop (vo->stop_requested). */
+static void live_link_setup(live_stuck *c, fp_viewer_options *vo, const fp_session_opts *sopt,
+                            const fp_plugin_path *path)
+{
+    c->link_opt = (fp_app_link_options){.cmd = "live", .control = sopt->control, .stream = sopt->stream,
+                                        .mesh_path = sopt->session->mesh_path, .plugin_path = path,
+                                        .fps = 60, .quiet = sopt->quiet};
+    live_current = c;
+    vo->stop_requested = live_stop_requested;
+    vo->frame_begin = live_frame_begin;
+    vo->frame_end = live_frame_end;
+}
+
 static char *read_file(const char *path)
 {
     FILE *f = fopen(path, "rb");
@@ -304,14 +318,8 @@ static int live_main(int argc, char **argv)
     fp_viewer_report rep = {0};
     /* SIGINT, SIGTERM, once the session is open: the loop ends before the next frame; a frame
      * stuck in a plugin is abandoned (app_stop.h) */
-    live_stuck stuck = {.out = vo.out, .quiet = sopt.quiet,
-                        .link_opt = {.cmd = "live", .control = sopt.control, .stream = sopt.stream,
-                                     .mesh_path = so->mesh_path, .plugin_path = &path, .fps = 60,
-                                     .quiet = sopt.quiet}};
-    live_current = &stuck;
-    vo.stop_requested = live_stop_requested;
-    vo.frame_begin = live_frame_begin;
-    vo.frame_end = live_frame_end;
+    live_stuck stuck = {.out = vo.out, .quiet = sopt.quiet};
+    live_link_setup(&stuck, &vo, &sopt, &path);
     vo.step_begin = fp_app_stop_step_begin;
     vo.step_end = fp_app_stop_step_end;
     vo.opened = live_opened;

@@ -230,6 +230,70 @@ static int play_controlled(play_ctl *c, const fp_take_header *h)
     return FP_EXIT_OK;
 }
 
+/* --control and --stream opened (*link; NULL when neither), and with --control the
+ * transport run to its end. Returns 0 or the exit status. */
+static int play_link_open(play_ctl *c, const char *control, const char *stream, const fp_take_header *h,
+                          fp_app_link **link)
+{
+    fp_app_link_options lo = {.cmd = "play", .control = control, .stream = stream,
+                              .s = fp_take_player_session(c->player),
+                              .mesh_path = fp_take_player_mesh_path(c->player),
+                              .fps = (double)h->rate.num / h->rate.den, .quiet = c->quiet,
+                              .touched = true};
+    int status = fp_app_link_open(&lo, link);
+    if (status) return status;
+    c->link = *link;
+    if (control) return play_controlled(c, h);
+    fp_app_link_origin(*link, h->time_origin_ns);
+    return 0;
+}
+
+/* --stream without --control: frame f at wall time `at` (the take's pace), its time and
+ * timecode. */
+static void play_stream_frame(fp_app_link *link, const fp_take_header *h, fp_take_player *player,
+                              const fp_take_frame *f, int64_t at, uint64_t frame)
+{
+    char tc[32];
+    sleep_until_ns(at);
+    frame_timecode(h, f->time_ns, tc, sizeof tc);
+    fp_app_link_after_frame(link, f->time_ns, frame, play_positions(player), tc);
+}
+
+/* What play writes and sends, checked before any work. */
+typedef struct play_outputs {
+    const char *out, *export_file, *frames_out, *control, *stream, *audio_out;
+    bool force;
+} play_outputs;
+
+/* --control and --stream's SPECs; --out, --export (its format into *fmt), --frames-out: a
+ * name we write, nothing there unless --force; none of them with --control. Returns 0 or
+ * the exit status (said). */
+static int play_check_outputs(const play_outputs *o, fp_export_format *fmt)
+{
+    int oc = fp_app_link_check("play", o->control, o->stream);
+    if (oc) return oc;
+    if (o->control && (o->out || o->export_file || o->frames_out || o->audio_out)) {
+        fprintf(stderr, "facepuppet play: --control is a transport (play, stop, seek): give --out, "
+                "--export, --frames-out or --audio-out without it\n");
+        return FP_EXIT_USAGE;
+    }
+    if (o->out) { /* the name and the place, before any work (as run and pose) */
+        oc = fp_app_check_mesh_name("facepuppet play", "--out", o->out);
+        if (!oc) oc = fp_app_check_new_output("facepuppet play", "--out", o->out, o->force);
+        if (oc) return oc;
+    }
+    if (o->export_file && fp_export_format_from_path(o->export_file, fmt)) {
+        fprintf(stderr, "facepuppet play: --export %s: give a file ending in .gltf, .glb, .pc2 "
+                "or .mdd\n", o->export_file);
+        return FP_EXIT_USAGE;
+    }
+    oc = o->export_file ? fp_app_check_new_output("facepuppet play", "--export", o->export_file, o->force) : 0;
+    if (!oc && o->frames_out)
+        oc = fp_app_check_output_dir("facepuppet play", "--frames-out", o->frames_out, "frame_", ".obj",
+                                     true, o->force);
+    return oc;
+}
+
 static int play_main(int argc, char **argv)
 {
     enum { OPT_FRAMES_OUT = 0x200, OPT_PLUGIN_DIR, OPT_EXPORT, OPT_FORCE, OPT_CONTROL, OPT_STREAM };
@@ -275,28 +339,9 @@ static int play_main(int argc, char **argv)
     }
     const char *take_path = argv[optind];
     char err[2048];
-    int lc = fp_app_link_check("play", control, stream);
-    if (lc) return lc;
-    if (control && (out || export_file || frames_out || audio.out_spec)) {
-        fprintf(stderr, "facepuppet play: --control is a transport (play, stop, seek): give --out, "
-                "--export, --frames-out or --audio-out without it\n");
-        return FP_EXIT_USAGE;
-    }
-    if (out) { /* the name and the place, before any work (as run and pose) */
-        int oc = fp_app_check_mesh_name("facepuppet play", "--out", out);
-        if (!oc) oc = fp_app_check_new_output("facepuppet play", "--out", out, force);
-        if (oc) return oc;
-    }
     fp_export_format export_fmt;
-    if (export_file && fp_export_format_from_path(export_file, &export_fmt)) {
-        fprintf(stderr, "facepuppet play: --export %s: give a file ending in .gltf, .glb, .pc2 "
-                "or .mdd\n", export_file);
-        return FP_EXIT_USAGE;
-    }
-    int oc = export_file ? fp_app_check_new_output("facepuppet play", "--export", export_file, force) : 0;
-    if (!oc && frames_out)
-        oc = fp_app_check_output_dir("facepuppet play", "--frames-out", frames_out, "frame_", ".obj",
-                                     true, force);
+    const play_outputs po = {out, export_file, frames_out, control, stream, audio.out_spec, force};
+    int oc = play_check_outputs(&po, &export_fmt);
     if (oc) return oc;
     /* The take's session and frame loop (fp_take_player, shared with export). */
     fp_plugin_path path;
@@ -327,19 +372,11 @@ static int play_main(int argc, char **argv)
                                                     fp_take_player_mm_per_unit(player),
                                                     h->slate, &ex)))
         goto done;
-    fp_app_link_options lo = {.cmd = "play", .control = control, .stream = stream, .s = s,
-                              .mesh_path = fp_take_player_mesh_path(player),
-                              .fps = (double)h->rate.num / h->rate.den, .quiet = quiet,
-                              .touched = true};
-    if ((status = fp_app_link_open(&lo, &link))) goto done;
-    if (control) {
-        play_ctl c = {.take_path = take_path, .mesh = mesh, .path = &path, .quiet = quiet,
-                      .player = player, .link = link};
-        status = play_controlled(&c, h);
+    play_ctl c = {.take_path = take_path, .mesh = mesh, .path = &path, .quiet = quiet, .player = player};
+    if ((status = play_link_open(&c, control, stream, h, &link)) || control) {
         player = c.player; /* (a seek reopens it) */
         goto done;
     }
-    fp_app_link_origin(link, h->time_origin_ns);
     int64_t wall0 = fp_now_ns();
     uint64_t frames = 0, commits = 0, active = 0;
     fp_frame_stats st;
@@ -348,12 +385,7 @@ static int play_main(int argc, char **argv)
     while ((rc = fp_take_player_next(player, &f, &st, err, sizeof err)) == 1) {
         if (frames == 0)
             first_ns = f.time_ns;
-        if (link) { /* --stream: at the take's pace, its time and timecode */
-            char tc[32];
-            sleep_until_ns(wall0 + (f.time_ns - first_ns));
-            frame_timecode(h, f.time_ns, tc, sizeof tc);
-            fp_app_link_after_frame(link, f.time_ns, frames, play_positions(player), tc);
-        }
+        if (link) play_stream_frame(link, h, player, &f, wall0 + (f.time_ns - first_ns), frames);
         if (ex && (rc = fp_export_add(ex, fp_take_player_positions(player),
                                       (double)(f.time_ns - first_ns) * 1e-9, err, sizeof err))) {
             fprintf(stderr, "facepuppet play: --export: %s\n", err);
