@@ -77,13 +77,11 @@ static void *control_thread(void *arg)
     }
 }
 
-bool fp_control_spec_ok(const char *spec) { return spec && strncmp(spec, "osc:", 4) == 0; }
-
 /* "osc:PORT[,bind=ADDR]" into *port and bind (a copy in buf). */
 static int parse_spec(const char *spec, long *port, char *bind_addr, size_t n, char *err,
                       size_t errlen)
 {
-    if (!fp_control_spec_ok(spec))
+    if (!spec || strncmp(spec, "osc:", 4))
         return fp_errorf(err, errlen, -EINVAL, "--control %s: expected osc:PORT[,bind=ADDR]",
                          spec ? spec : "(null)");
     const char *p = spec + 4, *comma = strchr(p, ',');
@@ -104,6 +102,18 @@ static int parse_spec(const char *spec, long *port, char *bind_addr, size_t n, c
         snprintf(bind_addr, n, "%s", comma + 6);
     }
     return 0;
+}
+
+int fp_control_spec_check(const char *spec, char *err, size_t errlen)
+{
+    long port;
+    char bind_addr[64];
+    struct in_addr a;
+    int rc = parse_spec(spec, &port, bind_addr, sizeof bind_addr, err, errlen);
+    if (!rc && inet_pton(AF_INET, bind_addr, &a) != 1)
+        rc = fp_errorf(err, errlen, -EINVAL, "--control %s: bind=%s: expected an IPv4 address", spec,
+                       bind_addr);
+    return rc;
 }
 
 int fp_control_open(const char *spec, fp_control **out, char *warning, size_t wlen, char *err,

@@ -133,8 +133,9 @@ size_t fp_control_subscribers(const fp_control *c);
 /** The counts so far. [any thread] */
 void fp_control_stats_get(fp_control *c, fp_control_stats *st);
 
-/** "osc:9000" etc.: true when spec names the control surface's scheme (for option checks). */
-bool fp_control_spec_ok(const char *spec);
+/** Check SPEC's syntax without binding (a command's options, before any work). Returns 0
+ *  or -EINVAL with err naming it. */
+int fp_control_spec_check(const char *spec, char *err, size_t errlen);
 
 /** Stop the thread, close the socket, free. *c becomes NULL; NULL is fine. */
 void fp_control_close(fp_control **c);

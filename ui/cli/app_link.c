@@ -28,11 +28,11 @@ struct fp_app_link {
 
 int fp_app_link_check(const char *cmd, const char *control, const char *stream)
 {
-    if (control && !fp_control_spec_ok(control)) {
-        fprintf(stderr, "facepuppet %s: --control %s: expected osc:PORT[,bind=ADDR]\n", cmd, control);
+    char err[512];
+    if (control && fp_control_spec_check(control, err, sizeof err)) {
+        fprintf(stderr, "facepuppet %s: %s\n", cmd, err);
         return FP_EXIT_USAGE;
     }
-    char err[512];
     if (stream && fp_stream_spec_check(stream, err, sizeof err)) {
         fprintf(stderr, "facepuppet %s: --stream %s\n", cmd, err);
         return FP_EXIT_USAGE;
