@@ -790,8 +790,10 @@ static double runqueue_ms(int fd)
     return sscanf(buf, "%llu %llu", &run, &wait) == 2 ? (double)wait / 1e6 : NAN;
 }
 
-/* --stream's sender measured in the frame case: to a socket on loopback that this thread
- * drains after each frame (not timed), so that none is dropped for a full buffer. */
+/* --stream measured in the frame case: its part on the frame thread (fp_stream_frame_ranges:
+ * the offsets quantised where the mesh moved, the records handed to its sender thread), the
+ * sender sending to a socket on loopback that this thread drains after each frame (not
+ * timed), so that none is dropped for a full buffer. */
 typedef struct bench_stream {
     int sink;
 #ifdef FP_BENCH_HAVE_LINK
@@ -1069,8 +1071,9 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
             printf("  %-22s %10.4f %10.4f\n", names[k], pct(st_ms[k], nf, 50), pct(st_ms[k], nf, 99));
         printf("  %-22s %10.4f %10.4f\n", "contact", pct(contact_ms, nf, 50), pct(contact_ms, nf, 99));
         if (bs.st && stream_us)
-            printf("  %-22s %10.4f %10.4f (after the frame: --stream's sender to a loopback socket; "
-                   "%.0f packets, %.0f bytes a frame)\n", "stream (send)", pct(stream_us, nf, 50) / 1e3,
+            printf("  %-22s %10.4f %10.4f (after the frame: --stream's part on the frame thread, "
+                   "quantising and handing over; its sender thread sent %.0f packets, %.0f bytes a "
+                   "frame to a loopback socket)\n", "stream", pct(stream_us, nf, 50) / 1e3,
                    pct(stream_us, nf, 99) / 1e3, (double)bs.packets / (nf ? nf : 1), (double)bs.bytes / (nf ? nf : 1));
         printf("  %-22s %10.4f %10.4f\n", "whole frame", pct(total, nf, 50), pct(total, nf, 99));
         if (sched_fd >= 0)

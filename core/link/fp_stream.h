@@ -18,7 +18,9 @@
  *
  * Errors: 0 or a negative errno code with err: -EINVAL a bad SPEC, -ENOENT a host that does
  * not resolve, the socket's codes, -ENOMEM. A failed send is counted, never fatal.
- * Threads: one thread (the frame loop's) for a stream; no locks.
+ * Threads: one caller thread (the frame loop's) for a stream, and the stream's own sender
+ * thread (started by open, joined by finish or close); the hand-over is a lock-free ring of
+ * frames (64), the sender woken by a condition variable.
  */
 #ifndef FP_STREAM_H
 #define FP_STREAM_H
@@ -43,6 +45,9 @@ typedef struct fp_stream_options {
     const char *const *channels;    /* names (caller's, kept), up to FP_STREAM_MAX_CHANNELS */
     size_t nchannels;
     double fps;                     /* the frame rate, for info (0: unknown) */
+    bool wait;                      /* when the sender is behind, the frame waits for room
+                                       (run, play: no frame lost) instead of being skipped
+                                       (live: the performance keeps its pace) */
 } fp_stream_options;
 
 typedef struct fp_stream fp_stream;
@@ -59,8 +64,12 @@ void fp_stream_origin(fp_stream *st, int64_t t0_ns);
 
 /** Send one frame: pos (n x 3 floats, mesh units), the channels' values (nchannels floats;
  *  NULL: zeros) at host time now_ns, with timecode (may be "" or NULL). A keyframe when due
- *  or requested. Returns the packets sent (dropped ones included), or a negative code when
- *  every send failed. No allocation besides liblo's message. */
+ *  or requested. On the calling thread the offsets are quantised where the mesh moved and the
+ *  frame's records handed to the stream's sender thread, which makes and sends the packets
+ *  (liblo, sendmmsg). Returns 0; -EAGAIN when the sender is 64 frames behind (STREAM_JOBS)
+ *  and o.wait is not set: the frame is not sent (a receiver sees it lost) and the next is a
+ *  keyframe (with o.wait the call waits for room); -ENOMEM the
+ *  same when its records found no room (the only allocation: a frame larger than any before). */
 int fp_stream_frame(fp_stream *st, const float *pos, const float *channels, int64_t now_ns,
                     const char *timecode);
 
@@ -74,17 +83,25 @@ int fp_stream_frame_ranges(fp_stream *st, const float *pos, const uint32_t *rang
 /** Make the next frame a keyframe. */
 void fp_stream_request_key(fp_stream *st);
 
-/** Totals so far. */
+/** Totals so far (the sender thread's counts may trail while it runs: fp_stream_finish). */
 typedef struct fp_stream_stats {
     uint64_t frames, keyframes, packets, bytes, records, dropped, send_errors, clipped;
-    double send_us_median, send_us_p99, send_us_max;   /* per frame, the last 4096 frames */
+    uint64_t busy;                                     /* frames not handed over: sender behind */
+    double send_us_median, send_us_p99, send_us_max;   /* the frame thread's part a frame (the
+                                                          quantising and the hand-over), the
+                                                          last 4096 frames */
+    double tx_us_median, tx_us_p99;                    /* the sender thread's a frame */
 } fp_stream_stats;
 void fp_stream_stats_get(const fp_stream *st, fp_stream_stats *out);
 
+/** Send what was handed over and stop the sender thread (summary and close do it). */
+void fp_stream_finish(fp_stream *st);
+
 /** "to 127.0.0.1:9100, step 0.05 mm, keyframe every 30 frames, packets of at most 1400 bytes" */
 void fp_stream_describe(const fp_stream *st, char *buf, size_t n);
-/** "N frames (K keyframes), P packets, B bytes; send median U us, p99 V us; dropped D" */
-void fp_stream_summary(const fp_stream *st, char *buf, size_t n);
+/** fp_stream_finish, then "N frames (K keyframes), P packets, B bytes, ...; the frame thread's
+ *  part median U us, ...; dropped D, ..." */
+void fp_stream_summary(fp_stream *st, char *buf, size_t n);
 
 void fp_stream_close(fp_stream **st);
 

@@ -1,6 +1,8 @@
-/* The live output stream's sender (fp_stream.h; the format: docs/osc.md, "Stream"). */
+/* The live output stream, the frame thread's side (fp_stream.h; the format: docs/osc.md,
+ * "Stream"): the options, the offsets quantised where the mesh moved, the frame's records
+ * handed to the sender thread (stream_tx.c), which makes and sends the packets. */
 #define _GNU_SOURCE
-#include "fp_stream.h"
+#include "stream_internal.h"
 
 #include "fp_clock.h"
 #include "fp_error.h"
@@ -9,49 +11,15 @@
 #include "facepuppet/plugin_util.h"
 
 #include <errno.h>
-#include <lo/lo.h>
 #include <math.h>
 #include <netdb.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/socket.h>
 #include <unistd.h>
 
-#define TIMES 4096               /* per-frame send times kept for the percentiles */
-#define RECORD_BYTES 8           /* u16 index gap, 3 x i16 offset (after a u32 count) */
-#define MAX_GAP 65535u
+#define RECORD_BYTES 8           /* (stream_tx.c's) */
 #define BLOCK 64                 /* vertices compared with the last frame's at once (memcmp) */
-#define SLOT_SLACK 256           /* a packet's slot: mtu plus this */
-
-struct fp_stream {
-    fp_stream_options o;
-    char host[256], port[8];
-    double step_mm;              /* quantisation step */
-    unsigned key_period;         /* frames between keyframes */
-    unsigned mtu;                /* bytes of a datagram at most */
-    size_t max_records;          /* records per packet */
-    int sock;
-    int16_t *sent;               /* n x 3: the quantised offsets last sent */
-    float *last;                 /* n x 3: the positions last quantised */
-    unsigned char *slots;        /* the frame's packets, serialised, nslots x slot_size */
-    size_t nslots, slot_size;
-    struct mmsghdr *msgs;        /* one sendmmsg for them */
-    struct iovec *iov;
-    uint32_t *idx;               /* the frame's records: vertex indices */
-    size_t *starts;              /* the record each packet of the frame starts at */
-    int16_t *q;                  /* ... and their offsets (3 each) */
-    unsigned char *blob;         /* one packet's records */
-    uint32_t seq;                /* packets sent */
-    uint64_t frame;              /* frames sent */
-    bool key_requested;
-    int64_t t0_ns;
-    double drop_p;               /* the test knob */
-    uint64_t drop_frames;        /* 0: every frame */
-    uint64_t rng;
-    fp_stream_stats st;
-    double times[TIMES];
-};
 
 /* "osc:HOST:PORT[,step=MM][,key=N][,mtu=B]" into *s (host, port, step, key, mtu). */
 static int parse(const char *spec, fp_stream *s, char *err, size_t errlen)
@@ -104,8 +72,11 @@ static int parse(const char *spec, fp_stream *s, char *err, size_t errlen)
 
 int fp_stream_spec_check(const char *spec, char *err, size_t errlen)
 {
-    fp_stream s;
-    return parse(spec, &s, err, errlen);
+    fp_stream *s = calloc(1, sizeof *s); /* (some 100 kB: not on the stack) */
+    if (!s) return fp_errorf(err, errlen, -ENOMEM, "out of memory");
+    int rc = parse(spec, s, err, errlen);
+    free(s);
+    return rc;
 }
 
 /* The test knob FP_STREAM_DROP=P[:FRAMES], FP_STREAM_SEED. */
@@ -126,6 +97,21 @@ static void drop_knob(fp_stream *s)
     }
 }
 
+/* The socket to HOST:PORT (connected: send() needs no address). */
+static int open_socket(fp_stream *s, char *err, size_t errlen)
+{
+    struct addrinfo hints = {.ai_family = AF_INET, .ai_socktype = SOCK_DGRAM}, *ai = NULL;
+    int g = getaddrinfo(s->host, s->port, &hints, &ai);
+    if (g) return fp_errorf(err, errlen, -ENOENT, "%s: host %s: %s", s->o.spec, s->host, gai_strerror(g));
+    s->sock = socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+    int big = 4 << 20, rc = 0;
+    if (s->sock >= 0) setsockopt(s->sock, SOL_SOCKET, SO_SNDBUF, &big, sizeof big);
+    if (s->sock < 0 || connect(s->sock, ai->ai_addr, ai->ai_addrlen) != 0)
+        rc = fp_errorf(err, errlen, -errno, "%s: %s", s->o.spec, strerror(errno));
+    freeaddrinfo(ai);
+    return rc;
+}
+
 int fp_stream_open(const fp_stream_options *o, fp_stream **out, char *err, size_t errlen)
 {
     *out = NULL;
@@ -139,37 +125,27 @@ int fp_stream_open(const fp_stream_options *o, fp_stream **out, char *err, size_
     if (rc) { free(s); return rc; }
     s->o = *o;
     s->sock = -1;
-    size_t head = 128 + 5 * o->nchannels;
-    s->max_records = (s->mtu - head) / RECORD_BYTES;
-    struct addrinfo hints = {.ai_family = AF_INET, .ai_socktype = SOCK_DGRAM}, *ai = NULL;
-    int g = getaddrinfo(s->host, s->port, &hints, &ai);
-    if (g) {
-        rc = fp_errorf(err, errlen, -ENOENT, "%s: host %s: %s", o->spec, s->host, gai_strerror(g));
-        goto fail;
-    }
-    s->sock = socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
-    int big = 4 << 20;
-    if (s->sock >= 0) setsockopt(s->sock, SOL_SOCKET, SO_SNDBUF, &big, sizeof big);
-    if (s->sock < 0 || connect(s->sock, ai->ai_addr, ai->ai_addrlen) != 0) {
-        rc = fp_errorf(err, errlen, -errno, "%s: %s", o->spec, strerror(errno));
-        freeaddrinfo(ai);
-        goto fail;
-    }
-    freeaddrinfo(ai);
+    s->max_records = (s->mtu - 128 - 5 * o->nchannels) / RECORD_BYTES;
+    pthread_mutex_init(&s->mu, NULL);
+    pthread_cond_init(&s->cond, NULL);
+    pthread_cond_init(&s->space, NULL);
+    if ((rc = open_socket(s, err, errlen))) goto fail;
     s->sent = calloc(3 * o->n, sizeof *s->sent);
     s->idx = malloc(o->n * sizeof *s->idx);
     s->q = malloc(3 * o->n * sizeof *s->q);
-    s->blob = malloc(4 + s->max_records * RECORD_BYTES);
-    s->starts = malloc((o->n + 1) * sizeof *s->starts);
     s->last = malloc(3 * o->n * sizeof *s->last);
-    s->slot_size = s->mtu + SLOT_SLACK;
-    if (!s->sent || !s->idx || !s->q || !s->blob || !s->starts || !s->last) {
+    if (!s->sent || !s->idx || !s->q || !s->last || fp__stream_tx_init(s)) {
         rc = fp_errorf(err, errlen, -ENOMEM, "%s: out of memory for %zu vertices", o->spec, o->n);
         goto fail;
     }
     memcpy(s->last, o->neutral, 3 * o->n * sizeof *s->last); /* (sent: all 0, the neutral's) */
     s->key_requested = true; /* the first frame is a keyframe */
     drop_knob(s);
+    if ((rc = -pthread_create(&s->thread, NULL, fp__stream_tx, s))) {
+        fp_errorf(err, errlen, rc, "%s: cannot start the sender thread: %s", o->spec, strerror(-rc));
+        goto fail;
+    }
+    s->thread_ok = true;
     *out = s;
     return 0;
 fail:
@@ -180,168 +156,53 @@ fail:
 void fp_stream_origin(fp_stream *st, int64_t t0_ns) { st->t0_ns = t0_ns; }
 void fp_stream_request_key(fp_stream *st) { st->key_requested = true; }
 
-static bool drop_now(fp_stream *s)
+/* The block [b0, b1) meets a touched range (ranges from *r on, which is advanced). */
+static bool block_touched(const uint32_t *ranges, size_t nranges, size_t *r, size_t b0, size_t b1)
 {
-    if (!(s->drop_p > 0) || (s->drop_frames && s->frame >= s->drop_frames)) return false;
-    s->rng ^= s->rng << 13; s->rng ^= s->rng >> 7; s->rng ^= s->rng << 17;
-    return (double)(s->rng >> 11) * 0x1p-53 < s->drop_p;
+    while (*r < nranges && (size_t)ranges[2 * *r] + ranges[2 * *r + 1] <= b0) (*r)++;
+    return *r < nranges && ranges[2 * *r] < b1;
 }
 
-/* Room for k packets in the slots (grown, rarely: a frame larger than any before). */
-static int slots_reserve(fp_stream *s, size_t k)
+/* An offset in steps (d: mesh units x scale), rounded half away from zero, in float (the
+ * decoder's tolerance holds: within half a step, plus float rounding); beyond +-32767
+ * clipped (counted), not finite 0. */
+static inline int16_t quantise(float d, uint64_t *clipped)
 {
-    if (k <= s->nslots) return 0;
-    unsigned char *slots = realloc(s->slots, k * s->slot_size);
-    if (slots) s->slots = slots;
-    struct mmsghdr *msgs = realloc(s->msgs, k * sizeof *msgs);
-    if (msgs) s->msgs = msgs;
-    struct iovec *iov = realloc(s->iov, k * sizeof *iov);
-    if (iov) s->iov = iov;
-    if (!slots || !msgs || !iov) return -ENOMEM;
-    s->nslots = k;
-    return 0;
-}
-
-/* Serialise m at path into the frame's next slot (*used of them), or drop it (the knob). */
-static void queue_message(fp_stream *s, lo_message m, const char *path, size_t *used)
-{
-    size_t size = lo_message_length(m, path);
-    s->st.packets++;
-    unsigned char *slot = s->slots + *used * s->slot_size;
-    if (*used >= s->nslots || size > s->slot_size || !lo_message_serialise(m, path, slot, &size)) {
-        s->st.send_errors++;
-        return;
+    if (!(d > -32767.5f && d < 32767.5f)) {
+        if (d == d) (*clipped)++;
+        return d > 0 ? 32767 : d < 0 ? -32767 : 0;
     }
-    s->seq++;
-    if (drop_now(s)) {
-        s->st.dropped++;
-        return;
-    }
-    s->iov[*used] = (struct iovec){slot, size};
-    s->msgs[*used] = (struct mmsghdr){.msg_hdr = {.msg_iov = &s->iov[*used], .msg_iovlen = 1}};
-    s->st.bytes += size;
-    (*used)++;
+    return (int16_t)(d + (d >= 0 ? 0.5f : -0.5f));
 }
 
-/* Send the frame's queued packets: one sendmmsg (more when the kernel takes fewer). */
-static void flush(fp_stream *s, size_t used)
-{
-    for (size_t at = 0; at < used;) {
-        int k = sendmmsg(s->sock, s->msgs + at, (unsigned)(used - at), 0);
-        if (k <= 0) { /* the rest is lost (counted) */
-            s->st.send_errors += used - at;
-            return;
-        }
-        at += (size_t)k;
-    }
-}
-
-/* The info message: serialised and sent alone (its path may be long). */
-static void send_message(fp_stream *s, lo_message m, const char *path)
-{
-    size_t size = lo_message_length(m, path);
-    s->st.packets++;
-    void *buf = lo_message_serialise(m, path, NULL, &size);
-    if (!buf) {
-        s->st.send_errors++;
-        return;
-    }
-    s->seq++;
-    if (drop_now(s)) s->st.dropped++;
-    else if (send(s->sock, buf, size, 0) < 0) s->st.send_errors++;
-    else s->st.bytes += size;
-    free(buf);
-}
-
-/* /fp/stream/info before a keyframe. */
-static void send_info(fp_stream *s)
-{
-    lo_message m = lo_message_new();
-    if (!m) { s->st.send_errors++; return; }
-    lo_message_add_int32(m, (int32_t)s->seq);
-    lo_message_add_int32(m, (int32_t)s->o.n);
-    lo_message_add_double(m, s->o.mm_per_unit);
-    lo_message_add_double(m, s->step_mm);
-    lo_message_add_int32(m, (int32_t)s->key_period);
-    lo_message_add_double(m, s->o.fps);
-    lo_message_add_int32(m, (int32_t)s->o.mesh_crc32);
-    lo_message_add_string(m, s->o.mesh_path ? s->o.mesh_path : "");
-    for (size_t c = 0; c < s->o.nchannels; c++) lo_message_add_string(m, s->o.channels[c]);
-    send_message(s, m, "/fp/stream/info");
-    lo_message_free(m);
-}
-
-static void put16(unsigned char *p, uint16_t v) { p[0] = (unsigned char)(v >> 8); p[1] = (unsigned char)v; }
-
-/* One packet: the records [a, b) of the frame covering vertices [lo, hi). */
-static void send_packet(fp_stream *s, size_t a, size_t b, uint32_t lo, uint32_t hi, int part, int parts,
-                        bool key, double t, const char *tc, const float *channels, size_t *used)
-{
-    uint32_t prev = lo, count = (uint32_t)(b - a);
-    for (int k = 0; k < 4; k++) s->blob[k] = (unsigned char)(count >> (24 - 8 * k)); /* (never empty) */
-    for (size_t r = a; r < b; r++) {
-        unsigned char *p = s->blob + 4 + (r - a) * RECORD_BYTES;
-        put16(p, (uint16_t)(s->idx[r] - prev));
-        prev = s->idx[r];
-        for (int k = 0; k < 3; k++) put16(p + 2 + 2 * k, (uint16_t)s->q[3 * r + k]);
-    }
-    lo_blob blob = lo_blob_new((int32_t)(4 + (b - a) * RECORD_BYTES), s->blob);
-    lo_message m = lo_message_new();
-    if (!m || !blob) {
-        s->st.send_errors++;
-        if (m) lo_message_free(m);
-        if (blob) lo_blob_free(blob);
-        return;
-    }
-    lo_message_add_int32(m, (int32_t)s->seq);
-    lo_message_add_int32(m, (int32_t)s->frame);
-    lo_message_add_int32(m, key ? 1 : 0);
-    lo_message_add_double(m, t);
-    lo_message_add_string(m, tc);
-    lo_message_add_int32(m, part);
-    lo_message_add_int32(m, parts);
-    lo_message_add_int32(m, (int32_t)lo);
-    lo_message_add_int32(m, (int32_t)hi);
-    lo_message_add_blob(m, blob);
-    for (size_t c = 0; c < s->o.nchannels; c++) lo_message_add_float(m, channels ? channels[c] : 0.0f);
-    queue_message(s, m, "/fp/stream/frame", used);
-    lo_message_free(m);
-    lo_blob_free(blob);
-    s->st.records += b - a;
-}
-
-/* The frame's records: every non-zero offset (key) or every changed one, into idx and q. */
+/* The frame's records into idx and q: every non-zero offset (key) or every changed one; the
+ * blocks compared are those in the touched ranges (all: ranges NULL with nranges > 0, or
+ * SIZE_MAX, or a full scan owed after a frame not handed over). */
 static size_t collect(fp_stream *s, const float *pos, bool key, const uint32_t *ranges, size_t nranges)
 {
     const float *nu = s->o.neutral;
-    const double scale = s->o.mm_per_unit / s->step_mm;
+    const float scale = (float)(s->o.mm_per_unit / s->step_mm);
     const size_t n = s->o.n;
     size_t m = 0, r = 0;
-    const bool all = nranges == SIZE_MAX || (!ranges && nranges); /* (0 ranges: none moved) */
+    const bool all = nranges == SIZE_MAX || (!ranges && nranges) || s->full_scan;
+    s->full_scan = false;
     for (size_t b0 = 0; b0 < n; b0 += BLOCK) {
         const size_t b1 = b0 + BLOCK < n ? b0 + BLOCK : n, bytes = 3 * (b1 - b0) * sizeof(float);
-        bool in = all; /* the block meets a touched range */
-        while (!in && r < nranges && (size_t)ranges[2 * r] + ranges[2 * r + 1] <= b0) r++;
-        if (!in && r < nranges && ranges[2 * r] < b1) in = true;
+        const bool in = all || block_touched(ranges, nranges, &r, b0, b1);
         if (!in && !key) {
             if (r >= nranges) break; /* (nothing further moved) */
-            b0 = (size_t)ranges[2 * r] / BLOCK * BLOCK - BLOCK; /* (the next touched block) */
+            b0 = (size_t)ranges[2 * r] / BLOCK * BLOCK - BLOCK; /* (on to the next touched block) */
             continue;
         }
         const bool moved = in && memcmp(pos + 3 * b0, s->last + 3 * b0, bytes) != 0; /* (most do not) */
-        if (!moved && !key) continue;
-        if (moved) memcpy(s->last + 3 * b0, pos + 3 * b0, bytes);
-        for (size_t v = b0; v < b1; v++) {
+        for (size_t v = b0; v < b1 && (moved || key); v++) {
             int16_t *old = s->sent + 3 * v;
+            const float *p = pos + 3 * v, *l = s->last + 3 * v;
             bool changed = false;
-            if (moved) {
+            if (moved && (p[0] != l[0] || p[1] != l[1] || p[2] != l[2])) { /* (NaN: always) */
                 int16_t q[3];
-                for (int k = 0; k < 3; k++) {
-                    double d = (double)(pos[3 * v + k] - nu[3 * v + k]) * scale;
-                    long r = isfinite(d) ? lrint(d) : 0;
-                    if (r > 32767 || r < -32767) { r = r > 0 ? 32767 : -32767; s->st.clipped++; }
-                    q[k] = (int16_t)r;
-                }
+                for (int k = 0; k < 3; k++) q[k] = quantise((p[k] - nu[3 * v + k]) * scale, &s->clipped);
+                memcpy(s->last + 3 * v, p, 3 * sizeof *p);
                 changed = q[0] != old[0] || q[1] != old[1] || q[2] != old[2];
                 if (changed) memcpy(old, q, sizeof q);
             }
@@ -355,6 +216,20 @@ static size_t collect(fp_stream *s, const float *pos, bool key, const uint32_t *
     return m;
 }
 
+/* The job's arrays for m records (grown, rarely). */
+static int job_reserve(stream_job *j, size_t m)
+{
+    if (m <= j->cap) return 0;
+    size_t cap = m + m / 2 + 64;
+    uint32_t *idx = realloc(j->idx, cap * sizeof *idx);
+    if (idx) j->idx = idx;
+    int16_t *q = realloc(j->q, 3 * cap * sizeof *q);
+    if (q) j->q = q;
+    if (!idx || !q) return -ENOMEM;
+    j->cap = cap;
+    return 0;
+}
+
 int fp_stream_frame(fp_stream *s, const float *pos, const float *channels, int64_t now_ns,
                     const char *timecode)
 {
@@ -365,54 +240,82 @@ int fp_stream_frame_ranges(fp_stream *s, const float *pos, const uint32_t *range
                            const float *channels, int64_t now_ns, const char *timecode)
 {
     int64_t t_start = fp_now_ns();
-    bool key = s->key_requested || s->frame % s->key_period == 0;
-    s->key_requested = false;
-    char tc[16];
-    snprintf(tc, sizeof tc, "%s", timecode ? timecode : "");
-    const double t = (double)(now_ns - s->t0_ns) * 1e-9;
-    size_t m = collect(s, pos, key, ranges, nranges);
-    /* the packets: at most max_records each; an index gap above MAX_GAP starts a new one */
-    size_t nparts = 1;
-    s->starts[0] = 0;
-    for (size_t r = 0, lo = 0; r < m; r++) {
-        size_t count = r - s->starts[nparts - 1];
-        size_t gap = s->idx[r] - (count ? s->idx[r - 1] : lo);
-        if (count >= s->max_records || gap > MAX_GAP) {
-            s->starts[nparts++] = r;
-            lo = s->idx[r];
+    const uint64_t frame = s->frame++;
+    size_t head = atomic_load_explicit(&s->head, memory_order_relaxed);
+    int rc = 0;
+    if (s->o.wait && head - atomic_load_explicit(&s->tail, memory_order_acquire) >= STREAM_JOBS) {
+        pthread_mutex_lock(&s->mu); /* (run, play: no frame lost; the sender frees a job soon) */
+        while (head - atomic_load_explicit(&s->tail, memory_order_acquire) >= STREAM_JOBS)
+            pthread_cond_wait(&s->space, &s->mu);
+        pthread_mutex_unlock(&s->mu);
+    }
+    if (head - atomic_load_explicit(&s->tail, memory_order_acquire) >= STREAM_JOBS) {
+        /* the sender is behind: the frame is not sent (a receiver sees it lost), the next
+         * one is a keyframe over every block */
+        s->busy++;
+        s->key_requested = s->full_scan = true;
+        rc = -EAGAIN;
+    } else {
+        const bool key = s->key_requested || frame % s->key_period == 0;
+        s->key_requested = false;
+        size_t m = collect(s, pos, key, ranges, nranges);
+        stream_job *j = &s->jobs[head % STREAM_JOBS];
+        if (job_reserve(j, m)) {
+            s->key_requested = s->full_scan = true; /* (as a frame not handed over) */
+            rc = -ENOMEM;
+        } else {
+            j->frame = frame;
+            j->key = key;
+            j->t = (double)(now_ns - s->t0_ns) * 1e-9;
+            snprintf(j->tc, sizeof j->tc, "%s", timecode ? timecode : "");
+            for (size_t c = 0; c < s->o.nchannels; c++) j->channels[c] = channels ? channels[c] : 0.0f;
+            j->m = m;
+            memcpy(j->idx, s->idx, m * sizeof *j->idx);
+            memcpy(j->q, s->q, 3 * m * sizeof *j->q);
+            atomic_store_explicit(&s->head, head + 1, memory_order_release);
+            pthread_mutex_lock(&s->mu);
+            pthread_cond_signal(&s->cond);
+            pthread_mutex_unlock(&s->mu);
+            s->keyframes += key;
         }
     }
-    uint64_t p0 = s->st.packets;
-    if (key) {
-        send_info(s);
-        s->st.keyframes++;
-    }
-    size_t used = 0;
-    if (slots_reserve(s, nparts)) nparts = 0; /* (out of memory: the frame is lost, counted) */
-    for (size_t k = 0; k < nparts; k++) {
-        size_t a = s->starts[k], b = k + 1 < nparts ? s->starts[k + 1] : m;
-        uint32_t lo = k == 0 ? 0 : s->idx[a];
-        uint32_t hi = k + 1 < nparts ? s->idx[b] : (uint32_t)s->o.n;
-        send_packet(s, a, b, lo, hi, (int)k, (int)nparts, key, t, tc, channels, &used);
-    }
-    flush(s, used);
-    s->st.frames++;
-    s->frame++;
-    s->times[(s->st.frames - 1) % TIMES] = (double)(fp_now_ns() - t_start) * 1e-3;
-    return (int)(s->st.packets - p0);
+    s->times[s->frames % STREAM_TIMES] = (double)(fp_now_ns() - t_start) * 1e-3;
+    s->frames++;
+    return rc;
+}
+
+/* Median, p99 and max of the last n (at most STREAM_TIMES) of v. */
+static void percentiles(const double *v, uint64_t count, double out[3])
+{
+    size_t n = count < STREAM_TIMES ? (size_t)count : STREAM_TIMES;
+    double *copy = n ? malloc(n * sizeof *copy) : NULL;
+    out[0] = out[1] = out[2] = 0;
+    if (!copy) return;
+    memcpy(copy, v, n * sizeof *copy);
+    out[0] = fp_median(copy, n);
+    out[1] = fp_percentile(copy, n, 0.99);
+    out[2] = fp_percentile(copy, n, 1.0);
+    free(copy);
 }
 
 void fp_stream_stats_get(const fp_stream *s, fp_stream_stats *out)
 {
-    *out = s->st;
-    size_t n = s->st.frames < TIMES ? (size_t)s->st.frames : TIMES;
-    double *copy = n ? malloc(n * sizeof *copy) : NULL;
-    if (!copy) return;
-    memcpy(copy, s->times, n * sizeof *copy);
-    out->send_us_median = fp_median(copy, n);
-    out->send_us_p99 = fp_percentile(copy, n, 0.99);
-    out->send_us_max = fp_percentile(copy, n, 1.0);
-    free(copy);
+    memset(out, 0, sizeof *out);
+    out->frames = s->frames;
+    out->keyframes = s->keyframes;
+    out->clipped = s->clipped;
+    out->busy = s->busy;
+    out->packets = atomic_load_explicit(&s->packets, memory_order_relaxed);
+    out->bytes = atomic_load_explicit(&s->bytes, memory_order_relaxed);
+    out->records = atomic_load_explicit(&s->records, memory_order_relaxed);
+    out->dropped = atomic_load_explicit(&s->dropped, memory_order_relaxed);
+    out->send_errors = atomic_load_explicit(&s->send_errors, memory_order_relaxed);
+    double p[3];
+    percentiles(s->times, s->frames, p);
+    out->send_us_median = p[0], out->send_us_p99 = p[1], out->send_us_max = p[2];
+    uint64_t sent = atomic_load_explicit(&s->sent_frames, memory_order_acquire);
+    percentiles(s->tx_times, sent, p);
+    out->tx_us_median = p[0], out->tx_us_p99 = p[1];
 }
 
 void fp_stream_describe(const fp_stream *s, char *buf, size_t n)
@@ -422,32 +325,50 @@ void fp_stream_describe(const fp_stream *s, char *buf, size_t n)
              s->step_mm * sqrt(3.0) / 2, s->key_period, s->mtu, s->max_records);
 }
 
-void fp_stream_summary(const fp_stream *s, char *buf, size_t n)
+void fp_stream_summary(fp_stream *s, char *buf, size_t n)
 {
+    fp_stream_finish(s);
     fp_stream_stats st;
     fp_stream_stats_get(s, &st);
-    snprintf(buf, n, "%llu frames (%llu keyframes), %llu packets, %llu bytes, %llu offsets; send "
-             "median %.1f us, p99 %.1f us a frame; dropped by FP_STREAM_DROP %llu, send errors %llu, "
-             "clipped %llu", (unsigned long long)st.frames, (unsigned long long)st.keyframes,
+    snprintf(buf, n, "%llu frames (%llu keyframes), %llu packets, %llu bytes, %llu offsets; the frame "
+             "thread's part median %.1f us, p99 %.1f us a frame, the sender thread's median %.1f us, "
+             "p99 %.1f us; frames not sent (sender behind) %llu, dropped by FP_STREAM_DROP %llu, send "
+             "errors %llu, clipped %llu", (unsigned long long)st.frames, (unsigned long long)st.keyframes,
              (unsigned long long)st.packets, (unsigned long long)st.bytes, (unsigned long long)st.records,
-             st.send_us_median, st.send_us_p99, (unsigned long long)st.dropped,
+             st.send_us_median, st.send_us_p99, st.tx_us_median, st.tx_us_p99,
+             (unsigned long long)st.busy, (unsigned long long)st.dropped,
              (unsigned long long)st.send_errors, (unsigned long long)st.clipped);
+}
+
+void fp_stream_finish(fp_stream *s)
+{
+    if (!s || !s->thread_ok) return;
+    pthread_mutex_lock(&s->mu);
+    s->stop = true;
+    pthread_cond_signal(&s->cond);
+    pthread_mutex_unlock(&s->mu);
+    pthread_join(s->thread, NULL);
+    s->thread_ok = false;
 }
 
 void fp_stream_close(fp_stream **sp)
 {
     fp_stream *s = sp ? *sp : NULL;
     if (!s) return;
+    fp_stream_finish(s);
     if (s->sock >= 0) close(s->sock);
+    for (int k = 0; k < STREAM_JOBS; k++) {
+        free(s->jobs[k].idx);
+        free(s->jobs[k].q);
+    }
+    fp__stream_tx_free(s);
     free(s->sent);
     free(s->idx);
     free(s->q);
-    free(s->blob);
-    free(s->starts);
     free(s->last);
-    free(s->slots);
-    free(s->msgs);
-    free(s->iov);
+    pthread_mutex_destroy(&s->mu);
+    pthread_cond_destroy(&s->cond);
+    pthread_cond_destroy(&s->space);
     free(s);
     *sp = NULL;
 }

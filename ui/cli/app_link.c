@@ -108,7 +108,8 @@ int fp_app_link_open(const fp_app_link_options *o, fp_app_link **out)
                                 .mm_per_unit = fp_session_head(o->s)->mm_per_unit,
                                 .mesh_path = o->mesh_path,
                                 .mesh_crc32 = fp_take_crc32_positions(neutral, n),
-                                .channels = l->channels, .nchannels = l->nchannels, .fps = o->fps};
+                                .channels = l->channels, .nchannels = l->nchannels, .fps = o->fps,
+                                .wait = strcmp(o->cmd, "live") != 0};
         if ((rc = fp_stream_open(&so, &l->stream, err, sizeof err))) {
             fprintf(stderr, "facepuppet %s: --stream %s\n", o->cmd, err);
             fp_control_close(&l->ctl);
