@@ -4,6 +4,12 @@
  * or a fresh factorisation). */
 #define _GNU_SOURCE /* getloadavg, sched_setaffinity */
 #include "fp_bench.h"
+#ifdef FP_BENCH_HAVE_LINK
+#include "fp_stream.h"
+#endif
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
 
 #include "csrbf.h"
 #include "fp_error.h"
@@ -784,6 +790,75 @@ static double runqueue_ms(int fd)
     return sscanf(buf, "%llu %llu", &run, &wait) == 2 ? (double)wait / 1e6 : NAN;
 }
 
+/* --stream measured in the frame case: its part on the frame thread (fp_stream_frame_ranges:
+ * the offsets quantised where the mesh moved, the records handed to its sender thread), the
+ * sender sending to a socket on loopback that this thread drains after each frame (not
+ * timed), so that none is dropped for a full buffer. */
+typedef struct bench_stream {
+    int sink;
+#ifdef FP_BENCH_HAVE_LINK
+    fp_stream *st;
+#else
+    void *st;
+#endif
+    uint64_t packets, bytes;
+} bench_stream;
+
+static void bench_stream_open(bench_stream *b, fp_session *s)
+{
+    memset(b, 0, sizeof *b);
+    b->sink = -1;
+#ifdef FP_BENCH_HAVE_LINK
+    struct sockaddr_in sa = {.sin_family = AF_INET, .sin_addr.s_addr = htonl(INADDR_LOOPBACK)};
+    socklen_t len = sizeof sa;
+    int big = 8 << 20;
+    b->sink = socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
+    if (b->sink < 0 || bind(b->sink, (struct sockaddr *)&sa, sizeof sa) ||
+        getsockname(b->sink, (struct sockaddr *)&sa, &len))
+        return;
+    setsockopt(b->sink, SOL_SOCKET, SO_RCVBUF, &big, sizeof big);
+    char spec[64], err[512];
+    snprintf(spec, sizeof spec, "osc:127.0.0.1:%u", (unsigned)ntohs(sa.sin_port));
+    const float *neutral = fp_session_loaded(s);
+    fp_stream_options o = {.spec = spec, .neutral = neutral, .n = fp_session_vertex_count(s),
+                           .mm_per_unit = fp_session_head(s)->mm_per_unit, .fps = 60};
+    if (fp_stream_open(&o, &b->st, err, sizeof err))
+        fprintf(stderr, "bench: frame: no stream: %s\n", err);
+#else
+    (void)s;
+#endif
+}
+
+/* One frame streamed: microseconds of the sender; the sink drained. */
+static double bench_stream_frame(bench_stream *b, fp_session *s, int64_t now)
+{
+#ifdef FP_BENCH_HAVE_LINK
+    if (!b->st) return 0;
+    int64_t a = fp_now_ns();
+    const uint32_t *ranges;
+    size_t nranges = fp_session_touched(s, &ranges); /* (as run and play stream) */
+    fp_stream_frame_ranges(b->st, fp_session_positions(s), ranges, nranges, NULL, now, "");
+    double us = (double)(fp_now_ns() - a) / 1e3;
+    static unsigned char buf[65536];
+    for (ssize_t k; (k = recv(b->sink, buf, sizeof buf, 0)) > 0;) {
+        b->packets++;
+        b->bytes += (uint64_t)k;
+    }
+    return us;
+#else
+    (void)b, (void)s, (void)now;
+    return 0;
+#endif
+}
+
+static void bench_stream_close(bench_stream *b)
+{
+#ifdef FP_BENCH_HAVE_LINK
+    fp_stream_close(&b->st);
+#endif
+    if (b->sink >= 0) close(b->sink);
+}
+
 /* One replay of three-claps at its own pace through the session API, 60 frames a second:
  * per-stage times (fp_frame_stats.stage_ms), the whole frame, the frames a slow one made the
  * loop skip, the committing frames. For reference, the brute-force fingertip distances on
@@ -845,6 +920,9 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
         fprintf(stderr, "bench: frame: out of memory\n");
         return -ENOMEM;
     }
+    bench_stream bs;
+    bench_stream_open(&bs, s);
+    double *stream_us = malloc(CAP * sizeof *stream_us); /* --stream's sender (fp_stream.h) */
     int sched_fd = open("/proc/thread-self/schedstat", O_RDONLY | O_CLOEXEC);
     size_t nheld = 0, nwwait = 0, nthere = 0; /* nthere: frames run on the frame thread */
     size_t nhold = 0; /* vertices the contact guard's hold kept in place, all frames */
@@ -857,6 +935,7 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
         int64_t a = fp_now_ns();
         fp_session_step(s, a, &st);
         int64_t b = fp_now_ns();
+        if (stream_us) stream_us[nf] = bench_stream_frame(&bs, s, a);
         cpu[nf] = sched_getcpu();
         double w1 = runqueue_ms(sched_fd), h = w1 - w0;
         w0 = w1;
@@ -961,6 +1040,9 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
                    names[k], pct(st_ms[k], nf, 99));
         printf(",\"contact_median\":%.6g,\"contact_p99\":%.6g", pct(contact_ms, nf, 50),
                pct(contact_ms, nf, 99));
+        if (bs.st && stream_us)
+            printf(",\"stream_send_median\":%.6g,\"stream_send_p99\":%.6g", pct(stream_us, nf, 50) / 1e3,
+                   pct(stream_us, nf, 99) / 1e3);
         if (sched_fd >= 0)
             printf(",\"cpu_wait_median\":%.6g,\"cpu_wait_p99\":%.6g,\"frames_cpu_wait_1ms\":%zu",
                    pct(held, nf, 50), pct(held, nf, 99), nheld);
@@ -988,6 +1070,11 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
         for (int k = 0; k < FP_STAGE_COUNT; k++)
             printf("  %-22s %10.4f %10.4f\n", names[k], pct(st_ms[k], nf, 50), pct(st_ms[k], nf, 99));
         printf("  %-22s %10.4f %10.4f\n", "contact", pct(contact_ms, nf, 50), pct(contact_ms, nf, 99));
+        if (bs.st && stream_us)
+            printf("  %-22s %10.4f %10.4f (after the frame: --stream's part on the frame thread, "
+                   "quantising and handing over; its sender thread sent %.0f packets, %.0f bytes a "
+                   "frame to a loopback socket)\n", "stream", pct(stream_us, nf, 50) / 1e3,
+                   pct(stream_us, nf, 99) / 1e3, (double)bs.packets / (nf ? nf : 1), (double)bs.bytes / (nf ? nf : 1));
         printf("  %-22s %10.4f %10.4f\n", "whole frame", pct(total, nf, 50), pct(total, nf, 99));
         if (sched_fd >= 0)
             printf("  %-22s %10.4f %10.4f (%zu frames 1 ms or more: the system ran something else "
@@ -1012,6 +1099,8 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
     for (int k = 0; k < FP_STAGE_COUNT; k++) free(st_ms[k]);
     free(fst);
     free(skipped);
+    free(stream_us);
+    bench_stream_close(&bs);
     free(contact_ms);
     free(held);
     free(wwait);

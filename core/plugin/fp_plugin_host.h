@@ -166,6 +166,7 @@ bool fp_event_queue_pop(fp_event_queue *q, fp_event *out);
 /* ---- input instances ------------------------------------------------------------------ */
 
 struct fp_event_recorder;
+struct fp_event_forwarder;
 
 /** A log callback with the signature of the session's (fp_session_log_fn): level is an
  *  fp_log_level, source names who speaks. */
@@ -181,6 +182,8 @@ typedef struct fp_input_instance {
     uint32_t source;                     /* index in the session; stamped into events */
     struct fp_event_recorder *record;    /* record=FILE: every polled event is queued for
                                             its writer thread (fp_record.h) */
+    struct fp_event_forwarder *forward;  /* forward=osc:HOST:PORT: every event the queue
+                                            takes is sent again over OSC (fp_forward.h) */
     bool started;
     bool stopped;                        /* stop() was called (it is called once) */
     fp_log_relay log;                    /* the plugin's log lines, from any thread, until
@@ -193,7 +196,8 @@ typedef struct fp_input_instance {
 
 /** Load the plugin for `spec` and create the instance (not yet started). The host strips
  *  its own keys before the plugin sees the keys: `record=FILE` (record this input's events in
- *  the event-log format; `force=1` beside it) and the filter keys `filter=oneeuro|off`,
+ *  the event-log format; `force=1` beside it), `forward=osc:HOST:PORT` (send them again in
+ *  the OSC input's format, fp_forward.h; -ENOTSUP without liblo) and the filter keys `filter=oneeuro|off`,
  *  `mincutoff=HZ`, `beta=B`, `dcutoff=HZ` (fp_filter_parse: into inst->filter, starting from
  *  fp_filter_default of the SPEC's NAME; a bad value is -EINVAL naming the SPEC and key). A
  *  filter that is on is described (fp_filter_describe, with its lag) in an info line of the

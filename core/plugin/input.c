@@ -4,6 +4,7 @@
 #include "fp_plugin_host.h"
 
 #include "fp_plugin_crash.h"
+#include "fp_forward.h"
 #include "fp_record.h"
 
 #include <errno.h>
@@ -20,7 +21,9 @@ static bool host_push(const fp_host *host, const fp_event_header *ev)
     fp_event copy;
     memcpy(&copy, ev, ev->size);
     copy.header.source = inst->source;
-    return fp_event_queue_push(&inst->queue, &copy.header);
+    if (!fp_event_queue_push(&inst->queue, &copy.header)) return false;
+    if (inst->forward) fp_event_forwarder_push(inst->forward, &copy); /* (the input's thread) */
+    return true;
 }
 
 static int64_t host_now(const fp_host *host)
@@ -151,6 +154,7 @@ int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
     snprintf(inst->name, sizeof inst->name, "%s", spec.name);
     inst->source = source;
     const char *record = fp_spec_take(&spec, "record");
+    const char *forward = fp_spec_take(&spec, "forward");
     /* force=1 (only beside record=): overwrite the recording's file instead of taking the
      * next free name. */
     const char *force = record ? fp_spec_take(&spec, "force") : NULL;
@@ -202,6 +206,16 @@ int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
                      "overwrites)", record, used);
             inst->host.log(&inst->host, FP_LOG_WARNING, msg);
         }
+    }
+    if (forward) {
+        if ((rc = fp_event_forwarder_create(forward, &inst->forward, perr, sizeof perr))) {
+            snprintf(err, errlen, "input '%s': %s", spec_text, perr);
+            goto out;
+        }
+        char line[400];
+        snprintf(line, sizeof line, "forwarding its events to %s over OSC (docs/osc.md, Forward)",
+                 fp_event_forwarder_target(inst->forward));
+        inst->host.log(&inst->host, FP_LOG_INFO, line);
     }
     if (inst->filter.kind != FP_FILTER_OFF) {
         char line[512];
@@ -274,6 +288,17 @@ void fp_input_instance_close(fp_input_instance *inst)
             fp_plugin_call_leave();
         }
         inst->input = NULL;
+    }
+    if (inst->forward) { /* (the input's threads are gone) */
+        fp_forward_stats fs;
+        fp_event_forwarder_stats(inst->forward, &fs);
+        char line[400];
+        snprintf(line, sizeof line, "forwarded %llu events to %s (%llu not forwarded: statuses, "
+                 "channels, key requests; %llu failed sends)", (unsigned long long)fs.sent,
+                 fp_event_forwarder_target(inst->forward), (unsigned long long)fs.skipped,
+                 (unsigned long long)fs.errors);
+        fp_log_relay_push(&inst->log, FP_LOG_INFO, line);
+        fp_event_forwarder_destroy(&inst->forward);
     }
     fp_event_queue_destroy(&inst->queue);
     fp_plugin_unload(&inst->plugin);

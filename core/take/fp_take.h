@@ -212,13 +212,16 @@ typedef struct fp_take_writer_options {
     uint32_t chunk_frames;     /* frames per chunk at most; 0: 30 */
     size_t chunk_bytes;        /* flush a chunk once its payload reaches this; 0: 1 MiB */
     bool no_sync;              /* skip fdatasync after each chunk (tests); default: sync */
+    uint32_t take;             /* 0: the next free number; else exactly this one (a stage's
+                                  control surface names it: --control), -EEXIST if taken */
 } fp_take_writer_options;
 
 /** Create the next take of header->slate in `dir` (created if missing): choose the number
- *  (fp_take_next_number, retried on EEXIST), open with O_CREAT|O_EXCL, write the file
- *  signature and the header chunk. header->take is ignored; header->date empty means now.
- *  Returns 0 and *out, or a negative errno with err (-EINVAL bad header, -EACCES, -ENOSPC,
- *  -EIO). On failure no file is left behind. */
+ *  (fp_take_next_number, retried on EEXIST; or opt->take exactly), open with
+ *  O_CREAT|O_EXCL, write the file signature and the header chunk. header->take is ignored;
+ *  header->date empty means now. Returns 0 and *out, or a negative errno with err (-EINVAL
+ *  bad header, -EEXIST opt->take's file exists: never overwritten, -EACCES, -ENOSPC, -EIO).
+ *  On failure no file is left behind. */
 int fp_take_writer_create(const char *dir, const fp_take_header *header,
                           const fp_take_writer_options *opt, fp_take_writer **out,
                           char *err, size_t errlen);

@@ -224,9 +224,8 @@ int fp_take_writer_create(const char *dir, const fp_take_header *header,
     w->tc_in = header->timecode_in;
     w->origin_ns = header->time_origin_ns;
 
-    uint32_t take;
-    rc = fp_take_next_number(dir, header->slate, &take, err, errlen);
-    if (rc) goto fail;
+    uint32_t take = w->opt.take;
+    if (!take && (rc = fp_take_next_number(dir, header->slate, &take, err, errlen))) goto fail;
     size_t plen = strlen(dir) + FP_TAKE_SLATE_MAX + 32;
     w->path = malloc(plen);
     if (!w->path) {
@@ -239,8 +238,10 @@ int fp_take_writer_create(const char *dir, const fp_take_header *header,
         snprintf(w->path, plen, "%s/%s", dir, name);
         w->fd = open(w->path, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
         if (w->fd >= 0) break;
-        if (errno != EEXIST || tries > 1000) {
-            rc = fp_errorf(err, errlen, -errno, "%s: %s", w->path, strerror(errno));
+        if (errno != EEXIST || tries > 1000 || w->opt.take) {
+            int e = errno;
+            rc = fp_errorf(err, errlen, -e, "%s: %s%s", w->path, strerror(e),
+                           e == EEXIST ? " (a take is never overwritten)" : "");
             goto fail;
         }
     }

@@ -9,6 +9,8 @@
 #ifdef FP_HAVE_UI
 #include "app_audio.h"
 #include "app_stop.h"
+#include "app_link.h"
+#include "fp_clock.h"
 #include "app_util.h"
 #include "app_stack.h"
 #include "fp_error.h"
@@ -104,7 +106,31 @@ typedef struct live_stuck {
     const char *out;
     bool quiet;
     bool installed;    /* app_stop's handlers, from the session's first opening on */
+    fp_app_link_options link_opt;  /* --control, --stream: opened with the session */
+    fp_app_link *link;
+    int link_status;   /* the link's open failure: the exit status */
+    uint64_t frame;
 } live_stuck;
+
+static live_stuck *live_current; /* (stop_requested takes no user: /fp/quit ends the loop) */
+
+static bool live_stop_requested(void)
+{
+    return fp_app_stop_requested() || (live_current && (fp_app_link_quit(live_current->link) ||
+                                                        live_current->link_status));
+}
+
+static void live_frame_begin(void *user, int64_t now_ns)
+{
+    live_stuck *c = user;
+    fp_app_link_before(c->link, now_ns, c->frame);
+}
+
+static void live_frame_end(void *user, int64_t now_ns)
+{
+    live_stuck *c = user;
+    fp_app_link_after(c->link, now_ns, c->frame++);
+}
 
 static void live_take_over(void *user, int sig, bool in_plugin);
 
@@ -116,6 +142,16 @@ static void live_opened(void *user, fp_session *s, struct fp_session_take *take)
     live_stuck *c = user;
     c->s = s;
     c->take = take;
+    if ((c->link_opt.control || c->link_opt.stream) && !c->link_status) {
+        if (c->link) { /* a dropped mesh: the link follows the new session */
+            fp_app_link_close(&c->link);
+            fprintf(stderr, "facepuppet live: --control/--stream opened again on the new mesh\n");
+        }
+        c->link_opt.s = s;
+        c->link_opt.take = take && take->opt.dir ? take : NULL;
+        if ((c->link_status = fp_app_link_open(&c->link_opt, &c->link)) == 0)
+            fp_app_link_origin(c->link, fp_now_ns());
+    }
     if (c->installed) return;
     c->installed = true;
     int rc = fp_app_stop_install("facepuppet live", live_take_over, c);
@@ -225,6 +261,20 @@ static int sound_prepare(live_sound *l, fp_viewer_options *vo, bool quiet)
     vo->sound = (fp_viewer_sound){sound_starting, sound_started, sound_stopped, sound_frame, l,
                                   l->audio.playing ? &l->audio.track : NULL, l->audio.offset_s};
     return 0;
+}
+
+/* --control, --stream: opened with the session (live_opened), the frames bracketed, /fp/quit
+ * ending the loop (vo->stop_requested). */
+static void live_link_setup(live_stuck *c, fp_viewer_options *vo, const fp_session_opts *sopt,
+                            const fp_plugin_path *path)
+{
+    c->link_opt = (fp_app_link_options){.cmd = "live", .control = sopt->control, .stream = sopt->stream,
+                                        .mesh_path = sopt->session->mesh_path, .plugin_path = path,
+                                        .fps = 60, .quiet = sopt->quiet};
+    live_current = c;
+    vo->stop_requested = live_stop_requested;
+    vo->frame_begin = live_frame_begin;
+    vo->frame_end = live_frame_end;
 }
 
 static char *read_file(const char *path)
@@ -356,6 +406,7 @@ static int live_main(int argc, char **argv)
     int orc = fp_app_over_check(&over, "facepuppet live", vo.take_dir);
     if (!orc && snd.audio.path && !snd.audio.offset_given) /* the line where the base heard it */
         fp_app_over_soundtrack_offset(&over, &snd.audio.offset_s);
+    if (!orc) orc = fp_app_link_check("live", sopt.control, sopt.stream);
     fp_app_over_free(&over);
     if (orc) return orc;
     vo.duration_s = sopt.duration_s;
@@ -397,14 +448,16 @@ static int live_main(int argc, char **argv)
     /* SIGINT, SIGTERM, once the session is open: the loop ends before the next frame; a frame
      * stuck in a plugin is abandoned (app_stop.h) */
     live_stuck stuck = {.out = vo.out, .quiet = sopt.quiet};
-    vo.stop_requested = fp_app_stop_requested;
+    live_link_setup(&stuck, &vo, &sopt, &path);
     vo.step_begin = fp_app_stop_step_begin;
     vo.step_end = fp_app_stop_step_end;
     vo.opened = live_opened;
     vo.user = &stuck;
     int rc = fp_viewer_run(&vo, &rep, err, sizeof err);
     fp_app_stop_uninstall(); /* (nothing when never installed) */
-    int status = FP_EXIT_OK;
+    fp_app_link_close(&stuck.link);
+    live_current = NULL;
+    int status = stuck.link_status;
     if (rc) {
         fprintf(stderr, "facepuppet live: %s\n", err);
         /* fp_viewer_run's codes: the session's (inputs), -ENODEV no display, -EINVAL a bad

@@ -8,6 +8,8 @@
 #include "fp_take_player.h"
 #include "app_export.h"
 #include "app_audio.h"
+#include "app_link.h"
+#include "fp_clock.h"
 #include "fp_mesh.h"
 #include "fp_text.h"
 
@@ -17,6 +19,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 
 static void usage(FILE *f)
@@ -39,7 +42,14 @@ static void usage(FILE *f)
         "                         0.1 mm), .pc2/.mdd (point caches); see facepuppet export\n"
         "      --force            overwrite outputs that exist (--out, --export, frames in\n"
         "                         --frames-out); without it they are refused before any work\n"
-        "  -m, --mesh FILE        the take's mesh from another path (its crc32 must match)\n");
+        "  -m, --mesh FILE        the take's mesh from another path (its crc32 must match)\n"
+        "      --stream SPEC      osc:HOST:PORT[,step=MM][,key=N][,mtu=B]: every frame sent\n"
+        "                         over OSC at the take's pace, with its time and timecode\n"
+        "                         (docs/osc.md, Stream; the Blender add-on receives it)\n"
+        "      --control SPEC     osc:PORT[,bind=ADDR]: a transport over OSC (docs/osc.md):\n"
+        "                         cued at the first frame, /fp/play, /fp/stop, /fp/seek S,\n"
+        "                         /fp/status, /fp/quit; the take is paced in real time; not\n"
+        "                         with --out, --export, --frames-out or --audio-out\n");
     fp_app_audio_help(f, false);
     fprintf(f,
         "                         A take made with --audio plays its recorded soundtrack when\n"
@@ -98,20 +108,208 @@ static void print_played(const char *take_path, const fp_take_reader *r, fp_app_
            out ? "; wrote " : "", out ? out : "");
 }
 
+/* The frame's timecode: the take's timecode in plus the frames of its rate since its origin. */
+static void frame_timecode(const fp_take_header *h, int64_t time_ns, char *buf, size_t n)
+{
+    uint64_t f0;
+    fp_timecode tc;
+    buf[0] = '\0';
+    double k = (double)(time_ns - h->time_origin_ns) * 1e-9 * h->rate.num / h->rate.den;
+    if (k < 0 || fp_timecode_to_frames(&h->timecode_in, h->rate, &f0) ||
+        fp_timecode_from_frames(f0 + (uint64_t)llround(k), h->rate, h->timecode_in.drop, &tc))
+        return;
+    fp_timecode_format(&tc, buf, n);
+}
+
+/* What the stream sends: a stack's composite, or NULL for a take's session (its touched
+ * ranges: app_link.h). */
+static const float *play_positions(fp_take_player *p)
+{
+    return fp_take_player_stack(p) ? fp_take_player_positions(p) : NULL;
+}
+
+static void sleep_until_ns(int64_t t_ns)
+{
+    struct timespec ts = {(time_t)(t_ns / 1000000000LL), (long)(t_ns % 1000000000LL)};
+    clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, NULL);
+}
+
+/* play --control: the transport (app_link.h). */
+typedef struct play_ctl {
+    const char *take_path, *mesh;
+    const fp_plugin_path *path;
+    bool quiet;
+    fp_take_player *player;
+    fp_app_link *link;
+    bool playing, ended;
+    double pos_s;          /* the shown frame's time since the first frame */
+    int64_t first_ns;      /* the first frame's time (the take's clock) */
+    int64_t wall_base;     /* wall time of pos 0 while playing */
+    uint64_t frames;       /* frames shown */
+    int error;             /* a reader's code that ended the transport */
+} play_ctl;
+
+/* Reopen the take and apply its frames up to the first at or after t (seconds). */
+static int play_seek(play_ctl *c, double t, char *msg, size_t n)
+{
+    fp_take_player *p = NULL;
+    char err[2048];
+    int rc = fp_take_player_open_logged(c->take_path, c->mesh, c->path,
+                                        c->quiet ? fp_app_log_line_quiet : fp_app_log_line, NULL, &p,
+                                        err, sizeof err);
+    if (rc) return snprintf(msg, n, "%.900s", err), rc;
+    fp_take_player_close(&c->player);
+    c->player = p;
+    fp_app_link_set_session(c->link, fp_take_player_session(p));
+    fp_take_frame f;
+    c->pos_s = 0;
+    c->ended = false;
+    while ((rc = fp_take_player_next(p, &f, NULL, err, sizeof err)) == 1) {
+        c->pos_s = (double)(f.time_ns - c->first_ns) * 1e-9;
+        if (c->pos_s >= t - 1e-9) break;
+    }
+    if (rc < 0) return snprintf(msg, n, "%.900s", err), rc;
+    if (rc == 0) c->ended = true;
+    c->wall_base = fp_now_ns() - (int64_t)llround(c->pos_s * 1e9);
+    return 0;
+}
+
+static int play_transport(void *user, int kind, double seek_s, char *msg, size_t n)
+{
+    play_ctl *c = user;
+    if (kind == FP_APP_LINK_STOP) {
+        c->playing = false;
+        return 0;
+    }
+    if (kind == FP_APP_LINK_SEEK || c->ended) {
+        int rc = play_seek(c, kind == FP_APP_LINK_SEEK ? seek_s : 0, msg, n);
+        if (rc) return rc;
+    }
+    if (kind == FP_APP_LINK_PLAY) {
+        c->playing = true;
+        c->wall_base = fp_now_ns() - (int64_t)llround(c->pos_s * 1e9);
+    }
+    return 0;
+}
+
+static const char *play_state(void *user, double *time_s)
+{
+    play_ctl *c = user;
+    *time_s = c->pos_s;
+    return c->playing ? "playing" : c->ended ? "ended" : "stopped";
+}
+
+/* The transport's loop until /fp/quit: frames at the take's pace while playing, streamed. */
+static int play_controlled(play_ctl *c, const fp_take_header *h)
+{
+    char err[2048], tc[32];
+    fp_app_link_set_transport(c->link, play_transport, play_state, c);
+    c->first_ns = h->time_origin_ns;
+    fp_app_link_origin(c->link, h->time_origin_ns);
+    while (!fp_app_link_quit(c->link)) {
+        fp_app_link_before(c->link, c->first_ns + (int64_t)llround(c->pos_s * 1e9), c->frames);
+        if (fp_app_link_quit(c->link)) break;
+        if (!c->playing) {
+            fp_app_link_idle(c->link, c->first_ns + (int64_t)llround(c->pos_s * 1e9), c->frames);
+            sleep_until_ns(fp_now_ns() + 5000000);
+            continue;
+        }
+        fp_take_frame f;
+        int rc = fp_take_player_next(c->player, &f, NULL, err, sizeof err);
+        if (rc <= 0) {
+            if (rc < 0) fprintf(stderr, "facepuppet play: %s\n", err);
+            c->playing = false;
+            c->ended = true;
+            continue;
+        }
+        c->pos_s = (double)(f.time_ns - c->first_ns) * 1e-9;
+        sleep_until_ns(c->wall_base + (int64_t)llround(c->pos_s * 1e9));
+        frame_timecode(h, f.time_ns, tc, sizeof tc);
+        fp_app_link_after_frame(c->link, f.time_ns, c->frames++, play_positions(c->player), tc);
+    }
+    return FP_EXIT_OK;
+}
+
+/* --control and --stream opened (*link; NULL when neither), and with --control the
+ * transport run to its end. Returns 0 or the exit status. */
+static int play_link_open(play_ctl *c, const char *control, const char *stream, const fp_take_header *h,
+                          fp_app_link **link)
+{
+    fp_app_link_options lo = {.cmd = "play", .control = control, .stream = stream,
+                              .s = fp_take_player_session(c->player),
+                              .mesh_path = fp_take_player_mesh_path(c->player),
+                              .fps = (double)h->rate.num / h->rate.den, .quiet = c->quiet,
+                              .touched = true};
+    int status = fp_app_link_open(&lo, link);
+    if (status) return status;
+    c->link = *link;
+    if (control) return play_controlled(c, h);
+    fp_app_link_origin(*link, h->time_origin_ns);
+    return 0;
+}
+
+/* --stream without --control: frame f at wall time `at` (the take's pace), its time and
+ * timecode. */
+static void play_stream_frame(fp_app_link *link, const fp_take_header *h, fp_take_player *player,
+                              const fp_take_frame *f, int64_t at, uint64_t frame)
+{
+    char tc[32];
+    sleep_until_ns(at);
+    frame_timecode(h, f->time_ns, tc, sizeof tc);
+    fp_app_link_after_frame(link, f->time_ns, frame, play_positions(player), tc);
+}
+
+/* What play writes and sends, checked before any work. */
+typedef struct play_outputs {
+    const char *out, *export_file, *frames_out, *control, *stream, *audio_out;
+    bool force;
+} play_outputs;
+
+/* --control and --stream's SPECs; --out, --export (its format into *fmt), --frames-out: a
+ * name we write, nothing there unless --force; none of them with --control. Returns 0 or
+ * the exit status (said). */
+static int play_check_outputs(const play_outputs *o, fp_export_format *fmt)
+{
+    int oc = fp_app_link_check("play", o->control, o->stream);
+    if (oc) return oc;
+    if (o->control && (o->out || o->export_file || o->frames_out || o->audio_out)) {
+        fprintf(stderr, "facepuppet play: --control is a transport (play, stop, seek): give --out, "
+                "--export, --frames-out or --audio-out without it\n");
+        return FP_EXIT_USAGE;
+    }
+    if (o->out) { /* the name and the place, before any work (as run and pose) */
+        oc = fp_app_check_mesh_name("facepuppet play", "--out", o->out);
+        if (!oc) oc = fp_app_check_new_output("facepuppet play", "--out", o->out, o->force);
+        if (oc) return oc;
+    }
+    if (o->export_file && fp_export_format_from_path(o->export_file, fmt)) {
+        fprintf(stderr, "facepuppet play: --export %s: give a file ending in .gltf, .glb, .pc2 "
+                "or .mdd\n", o->export_file);
+        return FP_EXIT_USAGE;
+    }
+    oc = o->export_file ? fp_app_check_new_output("facepuppet play", "--export", o->export_file, o->force) : 0;
+    if (!oc && o->frames_out)
+        oc = fp_app_check_output_dir("facepuppet play", "--frames-out", o->frames_out, "frame_", ".obj",
+                                     true, o->force);
+    return oc;
+}
+
 static int play_main(int argc, char **argv)
 {
-    enum { OPT_FRAMES_OUT = 0x200, OPT_PLUGIN_DIR, OPT_EXPORT, OPT_FORCE };
+    enum { OPT_FRAMES_OUT = 0x200, OPT_PLUGIN_DIR, OPT_EXPORT, OPT_FORCE, OPT_CONTROL, OPT_STREAM };
     static const struct option opts[] = {
         {"out", required_argument, 0, 'o'},      {"frames-out", required_argument, 0, OPT_FRAMES_OUT},
         {"mesh", required_argument, 0, 'm'},     {"plugin-dir", required_argument, 0, 'P'},
         {"export", required_argument, 0, OPT_EXPORT}, {"force", no_argument, 0, OPT_FORCE},
         {"quiet", no_argument, 0, 'q'},          {"help", no_argument, 0, 'h'},
+        {"control", required_argument, 0, OPT_CONTROL}, {"stream", required_argument, 0, OPT_STREAM},
         {0, 0, 0, 0}};
     struct option all[sizeof opts / sizeof opts[0] + FP_APP_AUDIO_OPTS_COUNT];
     size_t nall = fp_app_audio_longopts(all, false);
     memcpy(all + nall, opts, sizeof opts);
     fp_app_audio audio = {0};
     const char *out = NULL, *frames_out = NULL, *mesh = NULL, *export_file = NULL, *dirs[8];
+    const char *control = NULL, *stream = NULL;
     size_t ndirs = 0;
     bool quiet = false, force = false;
     optind = 1;
@@ -129,6 +327,8 @@ static int play_main(int argc, char **argv)
             break;
         case 'q': quiet = true; break;
         case OPT_FORCE: force = true; break;
+        case OPT_CONTROL: control = optarg; break;
+        case OPT_STREAM: stream = optarg; break;
         case 'h': usage(stdout); return FP_EXIT_OK;
         default: usage(stderr); return FP_EXIT_USAGE;
         }
@@ -139,27 +339,16 @@ static int play_main(int argc, char **argv)
     }
     const char *take_path = argv[optind];
     char err[2048];
-    if (out) { /* the name and the place, before any work (as run and pose) */
-        int oc = fp_app_check_mesh_name("facepuppet play", "--out", out);
-        if (!oc) oc = fp_app_check_new_output("facepuppet play", "--out", out, force);
-        if (oc) return oc;
-    }
     fp_export_format export_fmt;
-    if (export_file && fp_export_format_from_path(export_file, &export_fmt)) {
-        fprintf(stderr, "facepuppet play: --export %s: give a file ending in .gltf, .glb, .pc2 "
-                "or .mdd\n", export_file);
-        return FP_EXIT_USAGE;
-    }
-    int oc = export_file ? fp_app_check_new_output("facepuppet play", "--export", export_file, force) : 0;
-    if (!oc && frames_out)
-        oc = fp_app_check_output_dir("facepuppet play", "--frames-out", frames_out, "frame_", ".obj",
-                                     true, force);
+    const play_outputs po = {out, export_file, frames_out, control, stream, audio.out_spec, force};
+    int oc = play_check_outputs(&po, &export_fmt);
     if (oc) return oc;
     /* The take's session and frame loop (fp_take_player, shared with export). */
     fp_plugin_path path;
     fp_app_plugin_path(&path, dirs, ndirs);
     fp_take_player *player = NULL;
     fp_exporter *ex = NULL;
+    fp_app_link *link = NULL; /* --control, --stream */
     int status = FP_EXIT_OK;
     fp_app_reach reach = {0}; /* how far the skin followed, over the take */
     int rc = fp_take_player_open_logged(take_path, mesh, &path,
@@ -183,6 +372,12 @@ static int play_main(int argc, char **argv)
                                                     fp_take_player_mm_per_unit(player),
                                                     h->slate, &ex)))
         goto done;
+    play_ctl c = {.take_path = take_path, .mesh = mesh, .path = &path, .quiet = quiet, .player = player};
+    if ((status = play_link_open(&c, control, stream, h, &link)) || control) {
+        player = c.player; /* (a seek reopens it) */
+        goto done;
+    }
+    int64_t wall0 = fp_now_ns();
     uint64_t frames = 0, commits = 0, active = 0;
     fp_frame_stats st;
     fp_take_frame f;
@@ -190,6 +385,7 @@ static int play_main(int argc, char **argv)
     while ((rc = fp_take_player_next(player, &f, &st, err, sizeof err)) == 1) {
         if (frames == 0)
             first_ns = f.time_ns;
+        if (link) play_stream_frame(link, h, player, &f, wall0 + (f.time_ns - first_ns), frames);
         if (ex && (rc = fp_export_add(ex, fp_take_player_positions(player),
                                       (double)(f.time_ns - first_ns) * 1e-9, err, sizeof err))) {
             fprintf(stderr, "facepuppet play: --export: %s\n", err);
@@ -236,6 +432,7 @@ static int play_main(int argc, char **argv)
         print_played(take_path, r, &reach, fp_take_player_mm_per_unit(player), counts, out);
     }
 done:
+    fp_app_link_close(&link);
     if (status) fp_audio_out_abort(&audio.out);
     else status = fp_app_audio_finish(&audio, "play", quiet);
     fp_app_audio_finish(&audio, "play", true);

@@ -9,6 +9,7 @@
 #include "app_export.h"
 #include "app_audio.h"
 #include "app_stop.h"
+#include "app_link.h"
 #include "session_opts.h"
 #include "fp_stats.h"
 
@@ -107,6 +108,7 @@ typedef struct run_args {
     fp_app_audio audio;            /* --audio, --audio-out, --audio-offset, --timecode */
     fp_app_over over;              /* --over, --layer, --punch (app_stack.h) */
     int64_t take_end_ns;           /* the end of the take's last frame (its mic WAV's end) */
+    fp_app_link *link;             /* --control, --stream (app_link.h) */
 } run_args;
 
 /* --out, before any work: a format we write (by extension), a folder we can write in, and no
@@ -246,6 +248,7 @@ static int run_settle(run_args *a)
                 "starting with '.')\n", a->slate);
         return FP_EXIT_USAGE;
     }
+    if ((rc = fp_app_link_check("run", a->sopt.control, a->sopt.stream))) return rc;
     if ((rc = fp_app_over_check(&a->over, "facepuppet run", a->take_dir))) return rc;
     if (a->audio.path && !a->audio.offset_given) /* the line where the base take heard it */
         fp_app_over_soundtrack_offset(&a->over, &a->audio.offset_s);
@@ -339,7 +342,9 @@ static int run_frames(fp_session *s, run_args *a, fp_session_take *take, fp_expo
     /* The take's time origin (timecode in) is the first frame's time; its soundtrack and stage
      * timecode (--audio, --timecode) are those at that time. */
     fp_app_audio_take_options(&a->audio, t0, &take->opt);
-    if (a->take_dir && !fp_app_stop_requested() &&
+    fp_app_link_origin(a->link, t0);
+    /* with --control the take starts when the control surface says (/fp/record/start) */
+    if (a->take_dir && !a->sopt.control && !fp_app_stop_requested() &&
         (rc = fp_session_take_start(take, s, t0, err, sizeof err))) {
         fprintf(stderr, "facepuppet run: take: %s\n", err);
         return fp_app_exit_code(rc, FP_APP_OUTPUT);
@@ -356,10 +361,13 @@ static int run_frames(fp_session *s, run_args *a, fp_session_take *take, fp_expo
         } else {
             sleep_until(now);
         }
+        fp_app_link_before(a->link, now, k); /* the control surface's commands, answered */
+        if (fp_app_link_quit(a->link)) break;
         fp_frame_stats st;
         fp_app_stop_step_begin(); /* (a frame stuck in a plugin is abandoned on a signal) */
         fp_session_step(s, now, &st);
         fp_app_stop_step_end();
+        fp_app_link_after(a->link, now, k); /* status pushed, the frame streamed */
         totals_add(t, &st);
         a->take_end_ns = now + (int64_t)llround(1e9 / a->fps);
         if ((status = write_frame(s, a, ex, k, (double)(now - t0) * 1e-9))) break;
@@ -601,6 +609,19 @@ static int run_main(int argc, char **argv)
         free(a);
         return fp_app_exit_code(rc, FP_APP_INPUT);
     }
+    fp_app_link_options lo = {.cmd = "run", .control = a->sopt.control, .stream = a->sopt.stream,
+                              .s = s, .mesh_path = a->so.mesh_path, .take = a->take_dir ? &take : NULL,
+                              .plugin_path = &path, .fps = a->fps, .quiet = quiet, .touched = true};
+    if ((rc = fp_app_link_open(&lo, &a->link))) {
+        fp_export_abort(&ex);
+        fp_session_destroy(&s);
+        fp_plugin_path_clear(&path);
+        fp_audio_out_abort(&a->audio.out);
+        fp_app_audio_finish(&a->audio, "run", true);
+        fp_app_over_free(&a->over);
+        free(a);
+        return rc;
+    }
     /* SIGINT, SIGTERM: the loop ends after the frame; a frame stuck in a plugin is abandoned */
     run_stuck stuck = {s, a, &take, &ex};
     if ((rc = fp_app_stop_install("facepuppet run", run_take_over, &stuck)))
@@ -642,6 +663,7 @@ static int run_main(int argc, char **argv)
     fp_export_abort(&ex);
     print_summary(s, &t, &d, status, a->out);
     status = final_status(s, status, take_rc, take_err, record_failed, record_err, d.finite);
+    fp_app_link_close(&a->link);
     free(t.update_ms);
     fp_app_reach_free(&t.reach);
     fp_app_stop_uninstall();

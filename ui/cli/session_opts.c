@@ -13,7 +13,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-enum { OPT_DURATION = 0x100, OPT_HAND_SIZE, OPT_PLUGIN_DIR, OPT_MM_PER_UNIT, OPT_CALIBRATION, OPT_RIG };
+enum { OPT_DURATION = 0x100, OPT_HAND_SIZE, OPT_PLUGIN_DIR, OPT_MM_PER_UNIT, OPT_CALIBRATION, OPT_RIG,
+       OPT_CONTROL, OPT_STREAM };
 
 static const struct {
     const char *name;
@@ -47,6 +48,13 @@ static const struct {
     {"plugin-dir", required_argument, 'P', "DIR", "look for plugins in DIR first (repeatable)"},
     {"rig", required_argument, OPT_RIG, "R",
      "rig file (rigs/README.md); default: the mesh's rig found\nby checksum, else vertex count; 'none': no rig"},
+    {"control", required_argument, OPT_CONTROL, "SPEC",
+     "osc:PORT[,bind=ADDR]: take commands over OSC (record\nstart/stop with slate and take, engage, commit, undo,\n"
+     "radius, mapping, channels...), each answered with the\nstatus; also Live Link Face's /RecordStart (docs/osc.md);\n"
+     "with --take-dir, run records only when told"},
+    {"stream", required_argument, OPT_STREAM, "SPEC",
+     "osc:HOST:PORT[,step=MM][,key=N][,mtu=B]: send every frame\n(vertex offsets from the neutral, 0.05 mm steps; rig\n"
+     "channels) over OSC, a keyframe every 30 frames; the\nBlender add-on receives it (docs/osc.md, Stream)"},
     {"quiet", no_argument, 'q', NULL,
      "no progress or status lines, nor the engine's and\ncontact guard's notes on each gesture; the summary\n"
      "(stdout), errors and the lines of the inputs,\nrecordings, mapping, rig and session (the hands'\n"
@@ -136,6 +144,8 @@ int fp_session_opts_parse(fp_session_opts *o, int c, const char *arg, const char
         return 1;
     }
     case 'q': o->quiet = true; return 1;
+    case OPT_CONTROL: o->control = arg; return 1;
+    case OPT_STREAM: o->stream = arg; return 1;
     default: return 0;
     }
 }

@@ -117,6 +117,11 @@ typedef struct fp_viewer_options {
     void (*step_begin)(void);
     void (*step_end)(void);
     void (*opened)(void *user, fp_session *s, struct fp_session_take *take);
+    /* frame_begin and frame_end (NULL: none) bracket each frame's session step (not while
+     * paused), on this thread: the control surface's commands applied before it, the frame
+     * streamed after it (ui/cli/app_link.h); now_ns is the frame's time. */
+    void (*frame_begin)(void *user, int64_t now_ns);
+    void (*frame_end)(void *user, int64_t now_ns);
     void *user;
     fp_viewer_sound sound;       /* soundtrack, microphone, timecode hooks (above) */
 } fp_viewer_options;

@@ -949,10 +949,12 @@ static void frame(viewer *v)
     fp_vtakes_tick(&v->takes, v->s, now, take_msg, sizeof take_msg);
     if (take_msg[0]) say_kind(v, FP_HUD_TAKE, false, "%s", take_msg);
     if (!v->paused) {
+        if (v->opt->frame_begin) v->opt->frame_begin(v->opt->user, now); /* (--control) */
         if (v->opt->step_begin) v->opt->step_begin(); /* (a stuck frame: app_stop.h) */
         fp_session_step(v->s, now, &st);
         if (v->opt->step_end) v->opt->step_end();
         if (v->opt->sound.frame_done) v->opt->sound.frame_done(v->opt->sound.user, now);
+        if (v->opt->frame_end) v->opt->frame_end(v->opt->user, now); /* (--stream) */
         for (unsigned k = fp_session_record_toggles(v->s); k > 0; k--) punch(v, true);
         if (st.committed) v->committed_shown = true;
         if (st.engaged || st.cancelled) v->committed_shown = false;

@@ -1,0 +1,262 @@
+/* The OSC control surface's socket, network thread and queue (fp_control.h). The messages'
+ * checks are in control_parse.c. */
+#define _GNU_SOURCE
+#include "fp_control.h"
+#include "control_internal.h"
+
+#include "fp_error.h"
+#include "facepuppet/decimal.h"
+
+#include <arpa/inet.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <lo/lo.h>
+#include <netinet/in.h>
+#include <poll.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#define TICK_MS 50
+#define BURST 64               /* datagrams read per wake-up before the stop pipe is looked at */
+
+static void problem(fp_control *c, fp_control_problem p)
+{
+    atomic_fetch_add_explicit(&c->problems[p], 1, memory_order_relaxed);
+}
+
+void fp__control_problem(fp_control *c, fp_control_problem p) { problem(c, p); }
+
+/* Queue cmd (the network thread: the ring's only producer). */
+void fp__control_queue(fp_control *c, const fp_control_cmd *cmd)
+{
+    size_t head = atomic_load_explicit(&c->head, memory_order_relaxed);
+    size_t tail = atomic_load_explicit(&c->tail, memory_order_acquire);
+    if (head - tail >= FP_CONTROL_RING) {
+        problem(c, FP_CTL_QUEUE_FULL);
+        return;
+    }
+    c->ring[head % FP_CONTROL_RING] = *cmd;
+    atomic_store_explicit(&c->head, head + 1, memory_order_release);
+    atomic_fetch_add_explicit(&c->queued, 1, memory_order_relaxed);
+}
+
+bool fp_control_next(fp_control *c, fp_control_cmd *cmd)
+{
+    if (!c) return false;
+    size_t tail = atomic_load_explicit(&c->tail, memory_order_relaxed);
+    size_t head = atomic_load_explicit(&c->head, memory_order_acquire);
+    if (tail == head) return false;
+    *cmd = c->ring[tail % FP_CONTROL_RING];
+    atomic_store_explicit(&c->tail, tail + 1, memory_order_release);
+    return true;
+}
+
+static void *control_thread(void *arg)
+{
+    fp_control *c = arg;
+    struct pollfd fds[2] = {{c->stop_pipe[0], POLLIN, 0}, {c->sock, POLLIN, 0}};
+    for (;;) {
+        int rc = poll(fds, 2, TICK_MS);
+        if (rc < 0 && errno != EINTR) return NULL;
+        if (fds[0].revents) return NULL;
+        for (int i = 0; i < BURST && rc > 0 && (fds[1].revents & POLLIN); i++) {
+            fp_control_cmd from = {0};
+            from.fromlen = sizeof from.from;
+            ssize_t n = recvfrom(c->sock, c->buf, sizeof c->buf, MSG_DONTWAIT | MSG_TRUNC,
+                                 (struct sockaddr *)&from.from, &from.fromlen);
+            if (n < 0) break; /* EAGAIN: drained */
+            atomic_fetch_add_explicit(&c->packets, 1, memory_order_relaxed);
+            if ((size_t)n > sizeof c->buf) {
+                problem(c, FP_CTL_MALFORMED);
+                continue;
+            }
+            fp__control_packet(c, c->buf, (size_t)n, &from, 0);
+        }
+    }
+}
+
+/* "osc:PORT[,bind=ADDR]" into *port and bind (a copy in buf). */
+static int parse_spec(const char *spec, long *port, char *bind_addr, size_t n, char *err,
+                      size_t errlen)
+{
+    if (!spec || strncmp(spec, "osc:", 4))
+        return fp_errorf(err, errlen, -EINVAL, "--control %s: expected osc:PORT[,bind=ADDR]",
+                         spec ? spec : "(null)");
+    const char *p = spec + 4, *comma = strchr(p, ',');
+    char digits[16];
+    size_t len = comma ? (size_t)(comma - p) : strlen(p);
+    if (len == 0 || len >= sizeof digits)
+        return fp_errorf(err, errlen, -EINVAL, "--control %s: PORT must be 0..65535", spec);
+    memcpy(digits, p, len);
+    digits[len] = '\0';
+    unsigned long long v;
+    if (!fp_parse_whole(digits, 65535, &v))
+        return fp_errorf(err, errlen, -EINVAL, "--control %s: PORT must be 0..65535", spec);
+    *port = (long)v;
+    snprintf(bind_addr, n, "127.0.0.1");
+    if (comma) {
+        if (strncmp(comma + 1, "bind=", 5) != 0 || strchr(comma + 1, ','))
+            return fp_errorf(err, errlen, -EINVAL, "--control %s: the only key is bind=ADDR", spec);
+        snprintf(bind_addr, n, "%s", comma + 6);
+    }
+    return 0;
+}
+
+int fp_control_spec_check(const char *spec, char *err, size_t errlen)
+{
+    long port;
+    char bind_addr[64];
+    struct in_addr a;
+    int rc = parse_spec(spec, &port, bind_addr, sizeof bind_addr, err, errlen);
+    if (!rc && inet_pton(AF_INET, bind_addr, &a) != 1)
+        rc = fp_errorf(err, errlen, -EINVAL, "--control %s: bind=%s: expected an IPv4 address", spec,
+                       bind_addr);
+    return rc;
+}
+
+int fp_control_open(const char *spec, fp_control **out, char *warning, size_t wlen, char *err,
+                    size_t errlen)
+{
+    *out = NULL;
+    if (warning && wlen) warning[0] = '\0';
+    long port = 0;
+    char bind_addr[64];
+    int rc = parse_spec(spec, &port, bind_addr, sizeof bind_addr, err, errlen);
+    if (rc) return rc;
+    struct sockaddr_in sa = {.sin_family = AF_INET, .sin_port = htons((uint16_t)port)};
+    if (inet_pton(AF_INET, bind_addr, &sa.sin_addr) != 1)
+        return fp_errorf(err, errlen, -EINVAL, "--control %s: bind=%s: expected an IPv4 address",
+                         spec, bind_addr);
+    fp_control *c = calloc(1, sizeof *c);
+    if (!c) return fp_errorf(err, errlen, -ENOMEM, "--control: out of memory");
+    c->sock = socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
+    if (c->sock < 0 || bind(c->sock, (struct sockaddr *)&sa, sizeof sa) != 0) {
+        int e = errno;
+        if (c->sock >= 0) close(c->sock);
+        free(c);
+        return fp_errorf(err, errlen, e == EADDRINUSE ? -EBUSY : -e,
+                         "--control %s: cannot listen on %s:%ld (UDP): %s", spec, bind_addr, port,
+                         strerror(e));
+    }
+    socklen_t len = sizeof sa;
+    getsockname(c->sock, (struct sockaddr *)&sa, &len);
+    c->port = ntohs(sa.sin_port);
+    if ((ntohl(sa.sin_addr.s_addr) >> 24) != 127 && warning && wlen)
+        snprintf(warning, wlen, "--control listens on %s:%u beyond loopback: any host that can "
+                 "reach it can start takes and drive the session (OSC has no authentication)",
+                 bind_addr, c->port);
+    if (pipe2(c->stop_pipe, O_CLOEXEC) != 0 ||
+        pthread_create(&c->thread, NULL, control_thread, c) != 0) {
+        int e = errno ? errno : EAGAIN;
+        close(c->sock);
+        if (c->stop_pipe[0] > 0) { close(c->stop_pipe[0]); close(c->stop_pipe[1]); }
+        free(c);
+        return fp_errorf(err, errlen, -e, "--control: cannot start its thread: %s", strerror(e));
+    }
+    *out = c;
+    return 0;
+}
+
+unsigned fp_control_port(const fp_control *c) { return c ? c->port : 0; }
+
+void fp_control_stats_get(fp_control *c, fp_control_stats *st)
+{
+    memset(st, 0, sizeof *st);
+    if (!c) return;
+    st->packets = atomic_load_explicit(&c->packets, memory_order_relaxed);
+    st->messages = atomic_load_explicit(&c->messages, memory_order_relaxed);
+    st->queued = atomic_load_explicit(&c->queued, memory_order_relaxed);
+    for (int k = 0; k < FP_CTL_PROBLEMS; k++) {
+        st->problems[k] = atomic_load_explicit(&c->problems[k], memory_order_relaxed);
+        st->refused += st->problems[k];
+    }
+    st->replies = c->replies;
+    st->pushes = c->pushes;
+    st->send_errors = c->send_errors;
+}
+
+/* One /fp/status message to `to`. */
+static int send_status(fp_control *c, const struct sockaddr *to, socklen_t tolen, const char *address,
+                       const char *result, const fp_control_status *st)
+{
+    lo_message m = lo_message_new();
+    if (!m) return -ENOMEM;
+    fp_control_stats cs;
+    fp_control_stats_get(c, &cs);
+    lo_message_add_string(m, address);
+    lo_message_add_string(m, result);
+    lo_message_add_string(m, st->state ? st->state : "idle");
+    lo_message_add_string(m, st->timecode ? st->timecode : "");
+    lo_message_add_string(m, st->slate ? st->slate : "");
+    lo_message_add_int32(m, (int32_t)st->take);
+    lo_message_add_int32(m, st->recording ? 1 : 0);
+    lo_message_add_float(m, (float)st->time_s);
+    lo_message_add_int32(m, (int32_t)(st->frame & 0x7fffffff));
+    lo_message_add_int32(m, (int32_t)(cs.refused & 0x7fffffff));
+    unsigned char buf[2048];
+    size_t size = lo_message_length(m, "/fp/status");
+    int rc = 0;
+    if (size > sizeof buf || !lo_message_serialise(m, "/fp/status", buf, &size)) rc = -EMSGSIZE;
+    else if (sendto(c->sock, buf, size, MSG_DONTWAIT, to, tolen) < 0) rc = -errno;
+    lo_message_free(m);
+    if (rc) c->send_errors++;
+    return rc;
+}
+
+int fp_control_reply(fp_control *c, const fp_control_cmd *cmd, const char *result,
+                     const fp_control_status *st)
+{
+    int rc = send_status(c, (const struct sockaddr *)&cmd->from, cmd->fromlen, cmd->address, result, st);
+    if (!rc) c->replies++;
+    return rc;
+}
+
+int fp_control_push(fp_control *c, const fp_control_status *st)
+{
+    int n = 0;
+    if (!c) return 0;
+    for (size_t i = 0; i < c->nsubs; i++)
+        if (!send_status(c, (const struct sockaddr *)&c->subs[i], c->sublen[i], "push", "ok", st)) n++;
+    c->pushes += (uint64_t)n;
+    return n;
+}
+
+int fp_control_subscribe(fp_control *c, const fp_control_cmd *cmd, bool on)
+{
+    struct sockaddr_storage a = cmd->from;
+    if (cmd->port > 0) {
+        if (a.ss_family == AF_INET) ((struct sockaddr_in *)&a)->sin_port = htons((uint16_t)cmd->port);
+        else if (a.ss_family == AF_INET6) ((struct sockaddr_in6 *)&a)->sin6_port = htons((uint16_t)cmd->port);
+    }
+    for (size_t i = 0; i < c->nsubs; i++) {
+        if (c->sublen[i] != cmd->fromlen || memcmp(&c->subs[i], &a, cmd->fromlen)) continue;
+        if (on) return 0; /* (subscribed already) */
+        c->subs[i] = c->subs[c->nsubs - 1];
+        c->sublen[i] = c->sublen[c->nsubs - 1];
+        c->nsubs--;
+        return 0;
+    }
+    if (!on) return -ENOENT;
+    if (c->nsubs == FP_CONTROL_MAX_SUBSCRIBERS) return -ENOSPC;
+    c->subs[c->nsubs] = a;
+    c->sublen[c->nsubs++] = cmd->fromlen;
+    return 0;
+}
+
+size_t fp_control_subscribers(const fp_control *c) { return c ? c->nsubs : 0; }
+
+void fp_control_close(fp_control **cp)
+{
+    fp_control *c = cp ? *cp : NULL;
+    if (!c) return;
+    ssize_t w = write(c->stop_pipe[1], "x", 1);
+    (void)w;
+    pthread_join(c->thread, NULL);
+    close(c->stop_pipe[0]);
+    close(c->stop_pipe[1]);
+    close(c->sock);
+    free(c);
+    *cp = NULL;
+}

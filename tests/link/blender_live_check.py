@@ -1,0 +1,103 @@
+# Run by tests/link/test_blender.sh inside a headless Blender (blender -b --python ... -- ARGS):
+# the add-on tools/blender/facepuppet_live.py receives a take's --stream onto the ICT face
+# imported from the same OBJ, records it as shape-key animation, and every recorded frame,
+# evaluated by Blender at its scene frame, is compared with the take's PC2 (the frames
+# `facepuppet play` makes) within --tol-mm. Prints "blender-live: ..." lines, the last one
+# "blender-live: PASS" on success.
+# ARGS: --addon PY --obj MESH.obj --pc2 TAKE.pc2 --port P [--tol-mm 0.1] [--timeout S]
+import argparse
+import importlib.util
+import math
+import struct
+import sys
+import time
+
+import bpy
+import numpy as np
+
+
+def say(text):
+    print("blender-live: " + text, flush=True)
+
+
+def fail(text):
+    say("FAIL: " + text)
+    sys.exit(1)
+
+
+argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+ap = argparse.ArgumentParser()
+ap.add_argument("--addon", required=True)
+ap.add_argument("--obj", required=True)
+ap.add_argument("--pc2", required=True)
+ap.add_argument("--port", type=int, required=True)
+ap.add_argument("--tol-mm", type=float, default=0.1)
+ap.add_argument("--timeout", type=float, default=120)
+a = ap.parse_args(argv)
+
+spec = importlib.util.spec_from_file_location("facepuppet_live", a.addon)
+addon = importlib.util.module_from_spec(spec)
+spec.loader.exec_module(addon)
+addon.register()
+
+bpy.ops.wm.obj_import(filepath=a.obj)
+obj = bpy.context.selected_objects[0]
+bpy.context.view_layer.objects.active = obj
+bpy.context.scene.frame_start = 1
+link = addon.FaceLink(obj, a.port, "TIMECODE")
+link.start()  # (recording from the first frame on, as the Record button does)
+say("listening on %d" % a.port)
+t_end = time.time() + a.timeout
+started = False
+while time.time() < t_end:
+    got = link.poll()
+    if got and not started:
+        started = True
+    if started and not got:
+        quiet_since = time.time()
+        while time.time() - quiet_since < 3 and not link.poll():
+            time.sleep(0.002)
+        if time.time() - quiet_since >= 3:
+            break
+    time.sleep(0.001)
+if not started:
+    fail("nothing received")
+rx = link.rx
+recorded = link.stop()
+say("received %d frames (%d packets, %d lost by sequence, %d incomplete, %d malformed); recorded %d "
+    "shape keys; %s" % (rx.frames, rx.packets, rx.lost, rx.incomplete, rx.bad, recorded,
+                        "timecode in %s" % bpy.context.scene.get("facepuppet_timecode_in", "-")))
+if link.error:
+    fail(link.error)
+
+with open(a.pc2, "rb") as f:
+    data = f.read()
+sig, ver, n, start, rate, nframes = struct.unpack_from("<12siiffi", data, 0)
+if recorded != nframes:
+    fail("recorded %d frames, the take has %d" % (recorded, nframes))
+mmu = rx.info["mm_per_unit"]
+scene = bpy.context.scene
+frames = [fr for fr, _ in link.recorded]
+if frames != list(range(frames[0], frames[0] + len(frames))):
+    fail("the recorded frames are not one a scene frame: %s..." % frames[:8])
+say("keyed on scene frames %d..%d at %d fps (the stream's timecodes)" % (frames[0], frames[-1], scene.render.fps))
+worst, worst_at = 0.0, None
+co = np.zeros(3 * n, np.float32)
+pc2 = np.frombuffer(data, "<f4", nframes * n * 3, 32).reshape(nframes, n, 3).astype(np.float64)
+for k, fr in enumerate(frames):
+    scene.frame_set(fr)
+    dg = bpy.context.evaluated_depsgraph_get()
+    me = obj.evaluated_get(dg).to_mesh()
+    me.vertices.foreach_get("co", co)
+    obj.evaluated_get(dg).to_mesh_clear()
+    frame_worst = float(np.sqrt(((co.reshape(n, 3) - pc2[k]) ** 2).sum(1)).max()) * mmu
+    if frame_worst > worst:
+        worst, worst_at = frame_worst, k
+moved = float(np.sqrt(((pc2[-1] - pc2[0]) ** 2).sum(1)).max()) * mmu  # (the last frame against the first)
+say("largest difference from the take's frames: %.4f mm (frame %s; allowed %.3g mm); the face moved "
+    "up to %.2f mm from the first frame to the last" % (worst, worst_at, a.tol_mm, moved))
+if worst > a.tol_mm:
+    fail("frame %d differs by %.4f mm" % (worst_at, worst))
+if moved < 0.5:
+    fail("the take hardly moves (%.3f mm): no test of the animation" % moved)
+say("PASS")

@@ -1,0 +1,73 @@
+"""Minimal OSC 1.0 encoding and decoding with the standard library (socket, struct), for the
+tests of the control surface and the stream (docs/osc.md). Types: i f d s b (and T F N)."""
+import struct
+
+
+def _pad(b):
+    return b + b"\0" * (4 - len(b) % 4)
+
+
+def _blob(b):
+    return struct.pack(">i", len(b)) + b + b"\0" * ((4 - len(b) % 4) % 4)
+
+
+def encode(address, *args):
+    """One OSC message. ints -> i, floats -> f, str -> s, bytes -> b; (tag, value) forces a tag."""
+    tags, data = ",", b""
+    for a in args:
+        tag, v = a if isinstance(a, tuple) else (
+            "i" if isinstance(a, int) else "f" if isinstance(a, float) else
+            "s" if isinstance(a, str) else "b", a)
+        tags += tag
+        if tag == "i":
+            data += struct.pack(">i", v)
+        elif tag == "f":
+            data += struct.pack(">f", v)
+        elif tag == "d":
+            data += struct.pack(">d", v)
+        elif tag == "s":
+            data += _pad(v.encode())
+        elif tag == "b":
+            data += _blob(v)
+    return _pad(address.encode()) + _pad(tags.encode()) + data
+
+
+def bundle(*messages, timetag=1):
+    out = b"#bundle\0" + struct.pack(">Q", timetag)
+    for m in messages:
+        out += struct.pack(">i", len(m)) + m
+    return out
+
+
+def _string(p, at):
+    end = p.index(b"\0", at)
+    return p[at:end].decode("utf-8", "replace"), (end + 4) & ~3
+
+
+def decode(p):
+    """(address, [args]) of one OSC message (not a bundle); raises ValueError when malformed."""
+    try:
+        address, at = _string(p, 0)
+        tags, at = _string(p, at)
+        if not tags.startswith(","):
+            raise ValueError("no type tags")
+        args = []
+        for t in tags[1:]:
+            if t == "i":
+                args.append(struct.unpack_from(">i", p, at)[0]); at += 4
+            elif t == "f":
+                args.append(struct.unpack_from(">f", p, at)[0]); at += 4
+            elif t == "d":
+                args.append(struct.unpack_from(">d", p, at)[0]); at += 8
+            elif t == "s":
+                s, at = _string(p, at); args.append(s)
+            elif t == "b":
+                n = struct.unpack_from(">i", p, at)[0]; at += 4
+                args.append(bytes(p[at:at + n])); at += (n + 3) & ~3
+            elif t in "TFN":
+                args.append({"T": True, "F": False, "N": None}[t])
+            else:
+                raise ValueError("type tag %r" % t)
+        return address, args
+    except (struct.error, IndexError) as e:
+        raise ValueError(str(e))

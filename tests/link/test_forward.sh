@@ -1,0 +1,78 @@
+#!/bin/bash
+# A second performer (issue 55, item 4): performer B's input forwarded to performer A's session
+# (forward=osc:HOST:PORT, fp_forward.h), on loopback:
+#  - one process with both inputs: the three-claps recording's left hand (replay, hands=left)
+#    and its right hand (hands=right, workspace=0: placed as it arrives, as a live tracker's);
+#  - two processes: A runs the left hand and `--input osc:PORT,filter=off`; B
+#    (`facepuppet monitor`) replays the right hand with forward=osc:127.0.0.1:PORT. A's face
+#    must end as the one process's: the same vertices moved (within 1%), the same largest
+#    displacement (within 5%), every vertex within 0.5 mm (the rest is network timing);
+#  - the latency through loopback: B forwards to tests/link/forward_latency.py, which prints
+#    each event's arrival minus its time (the host clock both share).
+# SPDX-License-Identifier: GPL-3.0-or-later
+set -uo pipefail
+build=${FP_BUILD_DIR:-build}
+data=${FP_SHARED_DATA:-../shared/data}
+fp="$build/bin/facepuppet"
+pd=(--plugin-dir "$build/lib/facepuppet")
+rec="$data/hands/leap-motion/three-claps_joints_mm.csv"
+fail() { echo "FAIL: $*"; exit 1; }
+tmp=$(mktemp -d "${TMPDIR:-/tmp}/fp-forward-XXXXXX")
+trap 'kill $(jobs -p) 2>/dev/null; rm -rf "$tmp"' EXIT
+summary() { sed -n 's/.*vertices moved \([0-9]*\) of [0-9]*; displacement mean [^;]* max \([0-9.e+-]*\) mm.*/\1 \2/p' "$1"; }
+
+"$fp" run "${pd[@]}" --input "replay:$rec,hands=left" --input "replay:$rec,hands=right,workspace=0" \
+    -o "$tmp/one.obj" -q >"$tmp/one.out" 2>&1 || { cat "$tmp/one.out"; fail "the one process"; }
+read -r o_moved o_max < <(summary "$tmp/one.out")
+[ -n "${o_moved:-}" ] && [ "$o_moved" -gt 0 ] || fail "the one process moved nothing"
+echo "one process, both inputs: $o_moved vertices moved, max $o_max mm"
+
+ok=0
+for attempt in 1 2 3 4 5; do
+    port=$((20000 + RANDOM % 40000))
+    "$fp" run "${pd[@]}" --input "replay:$rec,hands=left" --input "osc:$port,filter=off" --duration 5 \
+        -o "$tmp/a.obj" -q >"$tmp/a.out" 2>"$tmp/a.err" &
+    a=$!
+    for i in $(seq 600); do grep -q "listening on" "$tmp/a.err" && break; kill -0 $a 2>/dev/null || break; sleep 0.1; done
+    if ! grep -q "listening on" "$tmp/a.err"; then
+        wait $a
+        grep -q "cannot listen" "$tmp/a.err" && continue
+        cat "$tmp/a.err"; fail "A did not listen"
+    fi
+    "$fp" monitor "${pd[@]}" "replay:$rec,hands=right,workspace=0,forward=osc:127.0.0.1:$port" \
+        >"$tmp/b.out" 2>"$tmp/b.err" || { cat "$tmp/b.err"; fail "B (monitor) exited $?"; }
+    wait $a || { cat "$tmp/a.err"; fail "A exited $?"; }
+    ok=1
+    break
+done
+[ $ok = 1 ] || fail "no free port in 5 tries"
+grep "forwarded" "$tmp/b.err"
+grep "problems" "$tmp/a.err"
+read -r a_moved a_max < <(summary "$tmp/a.out")
+echo "two processes (B forwarding to A): ${a_moved:-?} vertices moved, max ${a_max:-?} mm"
+python3 - "$tmp/one.obj" "$tmp/a.obj" "$o_moved" "${a_moved:-0}" "$o_max" "${a_max:-0}" <<'PY' || fail "A's face is not the one process's"
+import math, sys
+def verts(p): return [tuple(map(float, l.split()[1:4])) for l in open(p) if l.startswith("v ")]
+one, two = verts(sys.argv[1]), verts(sys.argv[2])
+om, am, ox, ax = int(sys.argv[3]), int(sys.argv[4]), float(sys.argv[5]), float(sys.argv[6])
+d = max(math.dist(p, q) for p, q in zip(one, two)) * 10   # (the ICT face: 10 mm a unit)
+print("largest vertex difference between the two faces: %.4f mm" % d)
+if len(one) != len(two): sys.exit("vertex counts differ")
+if not (abs(am - om) <= 0.01 * om and abs(ax - ox) <= 0.05 * ox): sys.exit("moved/max differ")
+if d > 0.5: sys.exit("a vertex differs by %.3f mm" % d)
+PY
+
+# the latency through loopback
+for attempt in 1 2 3 4 5; do
+    port=$((20000 + RANDOM % 40000))
+    python3 tests/link/forward_latency.py $port >"$tmp/lat.out" 2>&1 &
+    l=$!
+    for i in $(seq 100); do grep -q "listening" "$tmp/lat.out" && break; kill -0 $l 2>/dev/null || break; sleep 0.1; done
+    grep -q "listening" "$tmp/lat.out" || { wait $l; continue; }
+    "$fp" monitor "${pd[@]}" "replay:$rec,forward=osc:127.0.0.1:$port" >/dev/null 2>&1 || fail "monitor"
+    wait $l || { cat "$tmp/lat.out"; fail "the latency receiver"; }
+    grep "^events" "$tmp/lat.out"
+    echo "PASS"
+    exit 0
+done
+fail "no free port for the latency receiver"
