@@ -26,6 +26,9 @@ static int cg_make(fp_cg_step *g, const fp_rig_step *rig, const float *base, con
 {
     int rc = fp_contact_create(g->tris, g->t, g->n, g->loaded, &g->contact);
     if (!rc) rc = fp_contact_dilate_own(g->contact, FP_CONTACT_OWN_RINGS);
+    /* the hierarchy on every mesh (FP_CG_PREWARM): its work follows the moved triangles'
+     * count, not how far they moved, where an envelope's list grows with a fast drag */
+    if (!rc) fp_contact_set_prewarm(g->contact, FP_CG_PREWARM);
     /* a large mesh's checks on two threads where there are two cores (fp_contact.h: the
      * caller never waits for a worker that has not started; small meshes stay on one) */
     if (!rc) fp_contact_set_threads(g->contact, sysconf(_SC_NPROCESSORS_ONLN) >= 2 ? 2 : 1, 0);

@@ -42,6 +42,16 @@ extern "C" {
 #endif
 
 #define FP_CONTACT_BISECTIONS 6
+/* The guard's broad phase (fp_contact_set_prewarm): envelopes up to this many triangles, the
+ * hierarchy above; 0: the hierarchy on every mesh. Envelopes were the faster on face-sized
+ * meshes while a frame moved the skin less than a triangle's size; with drags that carry the
+ * skin tens of millimetres (issue 51) their boxes and lists grow with the motion: the
+ * contact-limited frames of the ICT face's grab at 1.5 R took 0.2-0.6 s each with envelopes.
+ * Same decisions either way (tests/session/test_contact.c); figures in docs/performance.md
+ * (a build with -DFP_CG_PREWARM=262144 in CMAKE_C_FLAGS gives the envelopes to compare). */
+#ifndef FP_CG_PREWARM
+#define FP_CG_PREWARM 0
+#endif
 /* pairs within this many vertex rings of the input's own crossings are not the guard's
  * business (fp_contact_dilate_own): the eyes' intersection curves move under any motion */
 #define FP_CONTACT_OWN_RINGS 1
