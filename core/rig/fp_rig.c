@@ -777,9 +777,10 @@ int fp_rig_bind(fp_rig *r, size_t n, const float *pos, char *err, size_t errlen)
     }
     float *w = malloc(n * sizeof *w), *m = malloc(n * sizeof *m), *g = calloc(n, sizeof *g);
     uint32_t *slope_v = malloc(n * sizeof *slope_v);
+    float *slope_dir = malloc(3 * n * sizeof *slope_dir);
     size_t slope_count = 0;
-    if (!w || !m || !g || !slope_v) {
-        free(w), free(m), free(g), free(slope_v);
+    if (!w || !m || !g || !slope_v || !slope_dir) {
+        free(w), free(m), free(g), free(slope_v), free(slope_dir);
         return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", r->source);
     }
     /* sagittal-plane points of the jaw outline and the mouth line in face coordinates */
@@ -814,7 +815,7 @@ int fp_rig_bind(fp_rig *r, size_t n, const float *pos, char *err, size_t errlen)
     size_t ncell = (size_t)(dims[0] * dims[1] * dims[2]);
     size_t *start = calloc(ncell + 1, sizeof *start), *items = malloc(n * sizeof *items);
     if (!start || !items) {
-        free(w), free(m), free(g), free(slope_v), free(start), free(items);
+        free(w), free(m), free(g), free(slope_v), free(slope_dir), free(start), free(items);
         return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", r->source);
     }
 #define CELL(v, i) ((long)fmin((double)(dims[i] - 1), floor((pos[3 * (v) + (i)] - lo[i]) / csz[i])))
@@ -823,7 +824,7 @@ int fp_rig_bind(fp_rig *r, size_t n, const float *pos, char *err, size_t errlen)
     for (size_t i = 0; i < ncell; i++) start[i + 1] += start[i];
     size_t *fill = calloc(ncell, sizeof *fill);
     if (!fill) {
-        free(w), free(m), free(g), free(slope_v), free(start), free(items);
+        free(w), free(m), free(g), free(slope_v), free(slope_dir), free(start), free(items);
         return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", r->source);
     }
     for (size_t v = 0; v < n; v++)
@@ -838,6 +839,7 @@ int fp_rig_bind(fp_rig *r, size_t n, const float *pos, char *err, size_t errlen)
         }
         long cc[3] = {CELL(v, 0), CELL(v, 1), CELL(v, 2)};
         double best = INFINITY;
+        size_t bu = v;
         for (long a = cc[0] - 1; a <= cc[0] + 1; a++)
             for (long b = cc[1] - 1; b <= cc[1] + 1; b++)
                 for (long d = cc[2] - 1; d <= cc[2] + 1; d++) {
@@ -847,19 +849,23 @@ int fp_rig_bind(fp_rig *r, size_t n, const float *pos, char *err, size_t errlen)
                         size_t u = items[k];
                         double d0 = pos[3 * u] - pos[3 * v], d1 = pos[3 * u + 1] - pos[3 * v + 1],
                                d2 = pos[3 * u + 2] - pos[3 * v + 2];
-                        best = fmin(best, d0 * d0 + d1 * d1 + d2 * d2);
+                        if (d0 * d0 + d1 * d1 + d2 * d2 < best) best = d0 * d0 + d1 * d1 + d2 * d2, bu = u;
                     }
                 }
         m[v] = (float)smoothstep(0, r->ramp, sqrt(best));
         /* |grad m| = smoothstep'(d) |grad d| = 6 t (1 - t) / ramp (t = d / ramp; |grad d| = 1) */
         double t = sqrt(best) / r->ramp;
         g[v] = t > 0 && t < 1 ? (float)(6 * t * (1 - t) / r->ramp) : 0.0f;
-        if (g[v] > 0) slope_v[slope_count++] = (uint32_t)v;
+        if (g[v] > 0) { /* grad m points away from the nearest rigid vertex */
+            double e = sqrt(best);
+            for (int i = 0; i < 3; i++) slope_dir[3 * slope_count + i] = (float)((pos[3 * v + i] - pos[3 * bu + i]) / e);
+            slope_v[slope_count++] = (uint32_t)v;
+        }
     }
 #undef CELL
     free(start), free(items), free(fill);
-    free(r->w), free(r->m), free(r->g), free(r->slope_v);
-    r->w = w, r->m = m, r->g = g, r->slope_v = slope_v, r->slope_count = slope_count;
+    free(r->w), free(r->m), free(r->g), free(r->slope_v), free(r->slope_dir);
+    r->w = w, r->m = m, r->g = g, r->slope_v = slope_v, r->slope_dir = slope_dir, r->slope_count = slope_count;
     return 0;
 }
 
@@ -880,6 +886,7 @@ void fp_rig_free(fp_rig **rig)
     free((*rig)->w);
     free((*rig)->m);
     free((*rig)->g);
+    free((*rig)->slope_dir);
     free((*rig)->slope_v);
     free((*rig)->weight_v);
     free((*rig)->weight_w);

@@ -37,6 +37,17 @@
  *    (fp_rig_finger_limit; no limit where m is flat, i.e. soft tissue farther than the ramp
  *    from bone, where only the engine's own 0.45 R guard applies). The worst case anywhere
  *    is ramp / 3 (smoothstep's steepest slope 1.5 / ramp): fp_rig_max_finger_displacement().
+ *    Sharper, by direction (fp_rig_finger_limit_toward, what the session clamps by): the
+ *    extra term is rank one, so I + (T - x) grad(m)^T has the eigenvalues 1, 1 and
+ *    1 + grad(m) . (T - x): only a motion toward the bone (against grad m) squeezes the ramp,
+ *    and a pull away from it or along it stretches or shears the skin without folding it. The
+ *    clamp then bounds |control vector| * psi(rho / R) * |grad m| * max(0, -cos) <= 1/2 over
+ *    the vertices of the ramp within R of the vector's whole segment (the capsule the
+ *    engine's composed sub-steps sweep; rho a vertex's distance to it, psi Wendland's
+ *    psi_{3,1}: T - x at rho from a centre that moves by the vector, one finger alone), with
+ *    no limit for a pull away from every bone it reaches. A fold the
+ *    bound misses (fingers' fields adding up) is a flipped triangle the session's contact
+ *    guard sees and holds back.
  * The rig's pose itself (the jaw about its hinge, rotated by a smooth fraction of the angle)
  * is applied before the fingers, so a finger's start point is taken on the posed base.
  *
@@ -313,6 +324,24 @@ void fp_rig_slope_index_set(fp_rig_slope_index *ix, const float *posed);
 void fp_rig_slope_index_update_ranges(fp_rig_slope_index *ix, const float *posed,
                                       const uint32_t *ranges, size_t nranges);
 double fp_rig_finger_limit_indexed(const fp_rig_slope_index *ix, const float start[3], double radius);
+
+/** The directional finger clamp (the bound at the top of this file, by direction): the
+ *  largest length (mesh units) of a control vector from `start` toward `end` (3 floats each,
+ *  mesh units, on the posed base `posed`, n x 3) that keeps |vector| * c_v <=
+ *  FP_RIG_FINGER_MARGIN for every slope vertex v within `radius` of the segment start -> end,
+ *  c_v = psi(rho_v / radius) |grad m|_v max(0, -dir_v . u), rho_v v's distance to the
+ *  segment, psi Wendland's psi_{3,1}, dir_v grad m's unit direction at v (in the bound
+ *  shape; the pose turns the jaw's by a few degrees at most), u the vector's unit direction;
+ *  INFINITY when no such vertex is pushed toward its bone. Returns ramp / 3 for NULL
+ *  arguments or radius <= 0, 0 for an unbound rig. O(slope vertices). [any-thread]. */
+double fp_rig_finger_limit_toward(const fp_rig *rig, const float *posed, const float start[3], const float end[3],
+                                  double radius);
+/** fp_rig_finger_limit_toward through the index (blocks steepest first, skipped when their
+ *  box is at least `radius` from the segment's box, stopped at the first block no steeper
+ *  than the push found): the same value as the brute force, for the posed base given last.
+ *  [any-thread] on an index not being updated; no allocation. */
+double fp_rig_finger_limit_toward_indexed(const fp_rig_slope_index *ix, const float start[3], const float end[3],
+                                          double radius);
 
 /** The folder of the rig files: $FACEPUPPET_RIGS when set; else <exe_dir>/../share/
  *  facepuppet/rigs when it exists (installed); else the source tree's rigs/ (compiled in as

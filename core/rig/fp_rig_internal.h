@@ -65,6 +65,8 @@ struct fp_rig {
     float *m;                   /* n mobility */
     float *g;                   /* n |grad m| (per mesh unit), 0 where m is flat */
     uint32_t *slope_v;          /* the vertices with g > 0, ascending */
+    float *slope_dir;           /* slope_count x 3: grad m's unit direction at each (away
+                                   from its nearest rigid vertex, in the bound shape) */
     size_t slope_count;
     double axis[3];             /* unit hinge axis, right -> left */
 };

@@ -141,6 +141,59 @@ double fp_rig_finger_limit(const fp_rig *r, const float *posed, const float star
     return gmax > 0 ? FP_RIG_FINGER_MARGIN / gmax : INFINITY;
 }
 
+/* The squared distance from p to the segment a -> a + d (dd = |d|^2). */
+static double seg_dist2(const float p[3], const float a[3], const double d[3], double dd)
+{
+    double w[3] = {(double)p[0] - a[0], (double)p[1] - a[1], (double)p[2] - a[2]};
+    double t = dd > 0 ? (w[0] * d[0] + w[1] * d[1] + w[2] * d[2]) / dd : 0;
+    t = t < 0 ? 0 : t > 1 ? 1 : t;
+    double q = 0;
+    for (int i = 0; i < 3; i++) q += (w[i] - t * d[i]) * (w[i] - t * d[i]);
+    return q;
+}
+
+/* Wendland's psi_{3,1} (csrbf.md): the share of a centre's displacement at distance r R. */
+static double wendland(double r)
+{
+    double a = 1 - r;
+    return r < 1 ? a * a * a * a * (4 * r + 1) : 0;
+}
+
+/* One slope vertex's push: its slope times the share of the unit direction u against its
+ * grad m (toward the rigid vertex), 0 when u pulls away or runs along. */
+static double push_of(float g, const float *dir, const double u[3])
+{
+    double c = -(dir[0] * u[0] + dir[1] * u[1] + dir[2] * u[2]);
+    return c > 0 ? g * c : 0;
+}
+
+static void capsule_of(const float start[3], const float end[3], double d[3], double u[3], double *dd)
+{
+    *dd = 0;
+    for (int i = 0; i < 3; i++) {
+        d[i] = (double)end[i] - start[i];
+        *dd += d[i] * d[i];
+    }
+    double len = sqrt(*dd);
+    for (int i = 0; i < 3; i++) u[i] = len > 0 ? d[i] / len : 0;
+}
+
+double fp_rig_finger_limit_toward(const fp_rig *r, const float *posed, const float start[3], const float end[3],
+                                  double radius)
+{
+    if (!r || !posed || !start || !end || !r->g || !(radius > 0)) return r && r->g ? r->ramp / 3 : 0;
+    double d[3], u[3], dd, cmax = 0, r2 = radius * radius;
+    capsule_of(start, end, d, u, &dd);
+    for (size_t k = 0; k < r->slope_count; k++) {
+        uint32_t v = r->slope_v[k];
+        double c = push_of(r->g[v], &r->slope_dir[3 * k], u);
+        if (c <= cmax) continue;
+        double q = seg_dist2(&posed[3 * v], start, d, dd);
+        if (q < r2) cmax = fmax(cmax, c * wendland(sqrt(q) / radius));
+    }
+    return cmax > 0 ? FP_RIG_FINGER_MARGIN / cmax : INFINITY;
+}
+
 /* ---- the finger limit by blocks of slope vertices ------------------------------------- */
 
 /* Slope vertices per block: consecutive entries of slope_v (ascending vertex index; a mesh's
@@ -159,6 +212,7 @@ struct fp_rig_slope_index {
     slope_block *block;  /* nb, steepest first */
     float *p;            /* nb x SLOPE_BLOCK x 4: each block's vertices (x, y, z of the posed
                             base, slope), block after block in that order */
+    float *dir;          /* nb x SLOPE_BLOCK x 3: their grad m directions (slope_dir) */
     uint32_t *slot;      /* slope_count: where entry k of slope_v sits in p (block = slot /
                             SLOPE_BLOCK) */
 };
@@ -186,9 +240,10 @@ int fp_rig_slope_index_create(const fp_rig *r, fp_rig_slope_index **out)
     size_t nb = ix->nb ? ix->nb : 1;
     ix->block = calloc(nb, sizeof *ix->block);
     ix->p = calloc(nb * SLOPE_BLOCK * 4, sizeof *ix->p);
+    ix->dir = calloc(nb * SLOPE_BLOCK * 3, sizeof *ix->dir);
     ix->slot = malloc((r->slope_count ? r->slope_count : 1) * sizeof *ix->slot);
     block_key *keys = malloc(nb * sizeof *keys);
-    if (!ix->block || !ix->p || !ix->slot || !keys) {
+    if (!ix->block || !ix->p || !ix->dir || !ix->slot || !keys) {
         free(keys);
         fp_rig_slope_index_destroy(&ix);
         return -ENOMEM;
@@ -210,6 +265,7 @@ int fp_rig_slope_index_create(const fp_rig *r, fp_rig_slope_index **out)
         for (size_t k = k0; k < k1; k++) {
             ix->slot[k] = (uint32_t)(o * SLOPE_BLOCK + (k - k0));
             ix->p[4 * (size_t)ix->slot[k] + 3] = r->g[r->slope_v[k]];
+            memcpy(&ix->dir[3 * (size_t)ix->slot[k]], &r->slope_dir[3 * k], 3 * sizeof *ix->dir);
         }
     }
     free(keys);
@@ -222,6 +278,7 @@ void fp_rig_slope_index_destroy(fp_rig_slope_index **ix)
     if (!ix || !*ix) return;
     free((*ix)->block);
     free((*ix)->p);
+    free((*ix)->dir);
     free((*ix)->slot);
     free(*ix);
     *ix = NULL;
@@ -290,4 +347,38 @@ double fp_rig_finger_limit_indexed(const fp_rig_slope_index *ix, const float sta
         }
     }
     return gmax > 0 ? FP_RIG_FINGER_MARGIN / gmax : INFINITY;
+}
+
+double fp_rig_finger_limit_toward_indexed(const fp_rig_slope_index *ix, const float start[3], const float end[3],
+                                          double radius)
+{
+    const fp_rig *r = ix ? ix->rig : NULL;
+    if (!r || !start || !end || !r->g || !(radius > 0)) return r && r->g ? r->ramp / 3 : 0;
+    double d[3], u[3], dd, cmax = 0, r2 = radius * radius;
+    capsule_of(start, end, d, u, &dd);
+    float slo[3], shi[3]; /* the segment's box */
+    for (int i = 0; i < 3; i++) {
+        slo[i] = start[i] < end[i] ? start[i] : end[i];
+        shi[i] = start[i] < end[i] ? end[i] : start[i];
+    }
+    for (size_t b = 0; b < ix->nb; b++) {
+        const slope_block *bl = &ix->block[b];
+        if (bl->gmax <= cmax) break; /* a push is at most the slope: nothing larger after */
+        /* a lower bound of every vertex's squared distance to the segment: the boxes' gap
+         * (float differences in double are exact) */
+        double q = 0;
+        for (int i = 0; i < 3; i++) {
+            double g = shi[i] < bl->lo[i] ? (double)bl->lo[i] - shi[i] : slo[i] > bl->hi[i] ? (double)slo[i] - bl->hi[i] : 0;
+            q += g * g;
+        }
+        if (!(q < r2)) continue;
+        const float *p = &ix->p[4 * b * SLOPE_BLOCK], *dir = &ix->dir[3 * b * SLOPE_BLOCK];
+        for (uint32_t k = 0; k < bl->count; k++, p += 4, dir += 3) {
+            double c = push_of(p[3], dir, u);
+            if (c <= cmax) continue;
+            double q = seg_dist2(p, start, d, dd);
+            if (q < r2) cmax = fmax(cmax, c * wendland(sqrt(q) / radius));
+        }
+    }
+    return cmax > 0 ? FP_RIG_FINGER_MARGIN / cmax : INFINITY;
 }

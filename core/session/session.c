@@ -157,7 +157,10 @@ static void show_deformed(fp_session *s, bool commit, int was, fp_frame_stats *s
 /* Steps 5 and 6 on the control set the engine is given (after the rig's clamp), on the
  * posed base: evaluate, the rig's mobility blend, show, commit. Shared by fp_session_step
  * and fp_session_apply_controls (takes played back). */
-static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame_stats *st)
+/* cs: what the engine gets (the rig's clamped copy); asked: what the mapping asked for, the
+ * reach's measure (the same start points) */
+static void engine_and_history(fp_session *s, const fp_control_set *cs, const fp_control_set *asked,
+                               fp_frame_stats *st)
 {
     int was = s->shown_kind;
     const uint32_t *ranges;
@@ -185,7 +188,7 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, fp_frame
             const float *posed = s->shown;
             show_deformed(s, (cs->intents & FP_INTENT_COMMIT) != 0, was, st);
             /* how far the skin followed the fingertips (skin_reach.h) */
-            fp_skin_reach_frame(s->engine.points, posed, s->shown, cs, st, &s->gesture_reach);
+            fp_skin_reach_frame(s->engine.points, posed, s->shown, asked, st, &s->gesture_reach);
             if (cs->intents & FP_INTENT_COMMIT) fp_commit_step_run(s, st);
         } else {
             fp_changed_all(&s->shown_changed); /* the posed base again, after an error */
@@ -308,8 +311,9 @@ static void step_frame(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     const fp_control_set *cs = fp_rig_step_run(&s->rig, &s->cs);
     FP_STAGE_END(FP_STAGE_MAPPING);
 
-    /* 5: the engine. 6: history. */
-    engine_and_history(s, cs, st);
+    /* 5: the engine. 6: history. The reach is measured against the mapping's own set: a rig's
+     * clamp is part of what holds the skin back. */
+    engine_and_history(s, cs, &s->cs, st);
 
 #undef FP_STAGE_END
     /* 7: the recorder. */
@@ -337,7 +341,7 @@ void fp_session_apply_controls(fp_session *s, int64_t now_ns, const fp_control_s
         fp_changed_all(&s->shown_changed);
         fp_cg_reference_changed(&s->cg, NULL, SIZE_MAX);
     }
-    engine_and_history(s, cs, st);
+    engine_and_history(s, cs, cs, st);
     fp_record_step_end(&s->record, s->frame, now_ns, requested | s->actions, cs, st, s->inputs,
                        s->input_count, &s->log);
     s->actions = 0;

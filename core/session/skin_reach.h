@@ -4,8 +4,9 @@
  * FP_REACH_TOUCH x R of a vertex of the surface the fingers touch: the anchored mapping's
  * grabbed points lie on it exactly), the vertex nearest the start point is the grabbed skin;
  * its reach is how far it moved in the shape shown (against the surface of the frame) over
- * how far the control vector asked, |d_i - s_i|. 1 is the whole way; the guards (fold-over,
- * contact) are what can make it less. Vectors asking under FP_REACH_MIN_ASK x R are left
+ * how far the control vector asked, |d_i - s_i|, the mapping's vector before a rig's clamp
+ * (a take stores the clamped one, so playing it measures against that). 1 is the whole way;
+ * the guards (a rig's clamp, the fold-over and contact guards) are what can make it less. Vectors asking under FP_REACH_MIN_ASK x R are left
  * out (a resting fingertip asks nothing).
  *
  * Per frame into fp_frame_stats (reach, reach_vectors, reach_asked_max); per gesture a

@@ -134,7 +134,6 @@ bool fp_rig_step_update(fp_rig_step *st, const fp_control_set *cs, const float *
     size_t nc = fp_rig_channel_count(st->rig);
     if (!st->dirty && !memcmp(st->values, st->posed_values, nc * sizeof(float))) return false;
     fp_rig_pose(st->rig, base, st->values, st->posed);
-    st->limit_count = 0; /* the finger limits and the blend depend on the posed base */
     fp_rig_slope_index_set(st->slopes, st->posed); /* O(slope vertices), under the pose's O(n) */
     st->slope_npend = 0;                           /* (the whole posed base taken) */
     st->shown_valid = false;
@@ -163,17 +162,11 @@ const fp_control_set *fp_rig_step_run(fp_rig_step *st, const fp_control_set *cs)
     for (size_t i = 0; i < o->channel_count; i++) st->applied[i].value = st->posed_values[i];
     o->count = cs->count < FP_RIG_STEP_MAX_CONTROL ? cs->count : FP_RIG_STEP_MAX_CONTROL;
     o->capacity = FP_RIG_STEP_MAX_CONTROL;
-    if (cs->radius != st->limit_radius) st->limit_count = 0;
-    st->limit_radius = cs->radius;
     slopes_take(st);
     for (size_t i = 0; i < o->count; i++) {
-        /* the engine's 0.45 R, and the rig's local bound where the support reaches a ramp
-         * (computed again only where the start point moved) */
-        if (i >= st->limit_count || memcmp(st->limit_start[i], cs->start[i], sizeof st->limit_start[i])) {
-            st->limit[i] = fp_rig_finger_limit_indexed(st->slopes, cs->start[i], cs->radius);
-            memcpy(st->limit_start[i], cs->start[i], sizeof st->limit_start[i]);
-        }
-        double limit = fmin(0.45 * cs->radius, st->limit[i]);
+        /* the rig's bound by direction (fp_rig.h): only a push toward a bone the segment's
+         * supports reach is clamped; the engine composes injective maps for the rest */
+        double limit = fp_rig_finger_limit_toward_indexed(st->slopes, cs->start[i], cs->end[i], cs->radius);
         double d[3], len = 0;
         for (int k = 0; k < 3; k++) {
             d[k] = (double)cs->end[i][k] - cs->start[i][k];
@@ -186,7 +179,6 @@ const fp_control_set *fp_rig_step_run(fp_rig_step *st, const fp_control_set *cs)
             end[i][k] = f == 1 ? cs->end[i][k] : (float)(cs->start[i][k] + f * d[k]);
         }
     }
-    st->limit_count = o->count;
     return o;
 }
 
@@ -253,7 +245,6 @@ void fp_rig_step_rebase_ranges(fp_rig_step *st, const float *base, float *deform
     } else { /* out of memory for them: now */
         fp_rig_slope_index_update_ranges(st->slopes, st->posed, ranges, nranges);
     }
-    st->limit_count = 0;
     refresh_view(st);
 }
 

@@ -8,8 +8,9 @@
  *   - the posed base: fp_rig_pose(base, values) (the jaw about its hinge, the soft tissue by
  *     the rig's falloff), recomputed only when the base or a value changed; the engine's
  *     points follow it (the session re-indexes them), so fingers start on the posed surface;
- *   - the fingers' control vectors are clamped to min(0.45 R, fp_rig_max_finger_displacement)
- *     (the mobility blend stays injective, fp_rig.h), in a copy of the control set; the copy's
+ *   - the fingers' control vectors are clamped by fp_rig_finger_limit_toward (a push toward
+ *     a bone held to what keeps the mobility blend from folding, by its bound; a pull away or
+ *     along it not at all: fp_rig.h), in a copy of the control set; the copy's
  *     channels are every channel of the rig with the value posed this frame (whoever set it:
  *     the viewer's keys, the host's API, the mapping), so that the frame's record (step 7, a
  *     take) holds the pose and playing it (fp_session_apply_controls) poses the same;
@@ -61,12 +62,6 @@ typedef struct fp_rig_step {
     float *commit;                                /* n x 3: the shape a commit folds in */
     double max_displacement;                      /* worst-case finger clamp (ramp / 3), for reports */
     fp_control_set cs;                            /* the clamped copy the engine takes */
-    /* fp_rig_finger_limit per control point, kept while the posed base, the radius and that
-     * start point (bitwise) stay: an anchored gesture computes it once, not every frame */
-    double limit[FP_RIG_STEP_MAX_CONTROL];
-    float limit_start[FP_RIG_STEP_MAX_CONTROL][3];
-    double limit_radius;
-    size_t limit_count;                           /* entries valid; 0 after posing anew */
     fp_rig_slope_index *slopes;                   /* the limits' blocks on the posed base
                                                    * (fp_rig.h), set with each pose */
     uint32_t *slope_pend;                         /* ranges (first, count) of the posed base
@@ -143,7 +138,7 @@ bool fp_rig_step_posed_current(const fp_rig_step *st);
  *  it): the posed base is posed again there (fp_rig_pose_range; elsewhere it already equals
  *  the pose of the base), `deformed` (the engine's output buffer, n x 3) is set to it there
  *  (the engine's output equals its base after a commit: fp_engine_step_commit), the blend
- *  buffer there too, the kept finger limits are forgotten and the landmarks refreshed; the
+ *  buffer there too, and the landmarks refreshed; the
  *  limits' boxes grow there at the next fp_rig_step_run (the ranges kept until then, out of
  *  the commit's frame). No-op without a rig. O(vertices in the ranges + landmarks). */
 void fp_rig_step_rebase_ranges(fp_rig_step *st, const float *base, float *deformed,

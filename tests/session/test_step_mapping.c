@@ -125,16 +125,16 @@ static void test_rig_pass_through(void **state)
 }
 
 /* The rig's finger clamp on the ICT face: every frame's clamped control set equals one made
- * with fp_rig_finger_limit computed afresh on the current posed base, while the step keeps
- * the limits of unmoved start points (an anchored gesture), after a start point moves, the
- * radius changes, the jaw is posed anew (the posed base changed), and after commits that
- * move the base on ranges (fp_rig_step_rebase_ranges, whose slope index update waits for the
- * next limits). */
+ * with the brute force fp_rig_finger_limit_toward computed afresh on the current posed base
+ * (the step's index: fp_rig_finger_limit_toward_indexed), through an anchored gesture, after
+ * a start point moves, the radius changes, the jaw is posed anew (the posed base changed),
+ * and after commits that move the base on ranges (fp_rig_step_rebase_ranges, whose slope
+ * index update waits for the next limits); vectors pushed toward bone and pulled away. */
 static void expect_clamped(const fp_rig_step *r, const fp_control_set *in, const fp_control_set *out)
 {
     assert_int_equal(out->count, in->count);
     for (size_t i = 0; i < in->count; i++) {
-        double limit = fmin(0.45 * in->radius, fp_rig_finger_limit(r->rig, r->posed, in->start[i], in->radius));
+        double limit = fp_rig_finger_limit_toward(r->rig, r->posed, in->start[i], in->end[i], in->radius);
         double d[3], len = 0;
         for (int k = 0; k < 3; k++) {
             d[k] = (double)in->end[i][k] - in->start[i][k];
@@ -175,7 +175,7 @@ static void test_rig_clamp_kept(void **state)
     float *moved = malloc(n * 3 * sizeof *moved), *scratch = malloc(n * 3 * sizeof *scratch);
     assert_non_null(moved);
     assert_non_null(scratch);
-    unsigned limited = 0;
+    unsigned limited = 0, looser = 0;
     for (int frame = 0; frame < 40; frame++) {
         if (frame == 0 || frame == 25) /* a new gesture: new start points */
             for (int i = 0; i < 4; i++)
@@ -193,14 +193,23 @@ static void test_rig_clamp_kept(void **state)
             uint32_t rg[2] = {frame == 30 ? (uint32_t)(n / 3) : 0, frame == 30 ? (uint32_t)(n / 3) : (uint32_t)n};
             fp_rig_step_rebase_ranges(&r, moved, scratch, rg, 1);
         }
+        /* out of the face and back in, sideways both ways: toward and away from bones */
+        float sgn = frame % 2 ? -1.f : 1.f;
         for (int i = 0; i < 4; i++)
-            for (int k = 0; k < 3; k++) en[i][k] = st[i][k] + (k == 2 ? 1.5f : 0.3f) * (float)(frame % 5 + 1);
+            for (int k = 0; k < 3; k++) en[i][k] = st[i][k] + sgn * (k == 2 ? 1.5f : 0.3f) * (float)(frame % 5 + 1);
         const fp_control_set *out = fp_rig_step_run(&r, &cs);
         expect_clamped(&r, &cs, out);
-        for (size_t i = 0; i < 4; i++)
-            limited += fp_rig_finger_limit(r.rig, r.posed, st[i], cs.radius) < 0.45 * cs.radius;
+        for (size_t i = 0; i < 4; i++) {
+            double l = fp_rig_finger_limit_toward(r.rig, r.posed, st[i], en[i], cs.radius);
+            limited += l < 1.5;
+            looser += l > 2 * fp_rig_finger_limit(r.rig, r.posed, st[i], cs.radius); /* the bound
+                                                                   blind to direction */
+        }
     }
-    assert_true(limited > 0); /* the rig's own limit acted somewhere, not only the 0.45 R */
+    printf("rig clamp: %u vectors held under 1.5, %u let over twice as far as by |grad m| alone, of 160\n",
+           limited, looser);
+    assert_true(limited > 0); /* pushes toward bone were held */
+    assert_true(looser > 0);  /* and the others went farther */
     fp_rig_step_free(&r);
     fp_mesh_free(&m);
     free(moved);
