@@ -7,6 +7,7 @@
 
 #include <lo/lo.h>
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -57,9 +58,24 @@ static bool types_match(const char *pattern, const char *types)
     }
 }
 
+/* liblo's argv points into the message at 4-byte alignment, while lo_arg (a union with
+ * 64-bit members) asks for 8: the value is read through memcpy, never through the union
+ * (tests/fuzz/fuzz_control found the misaligned access, as fuzz_osc did in input-osc). */
 static double number(char type, const lo_arg *a)
 {
-    return type == 'f' ? (double)a->f : type == 'd' ? a->d : (double)a->i;
+    if (type == 'f') {
+        float f;
+        memcpy(&f, a, sizeof f);
+        return f;
+    }
+    if (type == 'd') {
+        double d;
+        memcpy(&d, a, sizeof d);
+        return d;
+    }
+    int32_t i;
+    memcpy(&i, a, sizeof i);
+    return i;
 }
 
 /* A mapping SPEC: NAME[,key=value...] of letters, digits and . _ - , = + (no '/' or ':': a
