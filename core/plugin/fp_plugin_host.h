@@ -102,6 +102,17 @@ typedef struct fp_plugin {
 int fp_plugin_load(const fp_plugin_path *path, fp_plugin_kind kind, const char *name,
                    fp_plugin *out, char *err, size_t errlen);
 
+/** Where fp_plugin_load would find `name` (as it searches: a name with a '/' is the file
+ *  itself), into file (filelen bytes), without loading it; *builtin (may be NULL) true when
+ *  it is in the path's built-in folder. Unsafe candidates skipped are described in warning
+ *  (may be NULL). Returns whether a file was found. */
+bool fp_plugin_find(const fp_plugin_path *path, fp_plugin_kind kind, const char *name, char *file,
+                    size_t filelen, bool *builtin, char *warning, size_t warnlen);
+/** fp_plugin_load's message for a plugin not found (the folders searched and the plugins
+ *  there, and `warning` where not empty) into err. */
+void fp_plugin_not_found(const fp_plugin_path *path, fp_plugin_kind kind, const char *name,
+                         const char *warning, char *err, size_t errlen);
+
 /** deinit and dlclose. Safe on a zeroed fp_plugin. */
 void fp_plugin_unload(fp_plugin *plugin);
 

@@ -162,6 +162,18 @@ typedef struct fp_session_options {
                                                        machine a 20 us grace may pass every
                                                        frame); -1: never. fp_session_step,
                                                        frame_thread.h */
+    int isolate;                                    /* which mapping runs in a helper
+                                                       process (fp_isolate.h's
+                                                       fp_isolate_mode): 0 (FP_ISOLATE_NONE,
+                                                       the default of the library) every one
+                                                       in process; 1 those not found in the
+                                                       path's built-in folder (the default of
+                                                       `run` and `live`); 2 every one */
+    double isolate_deadline_ms;                     /* an isolated process() that has not
+                                                       answered by then is abandoned and its
+                                                       helper restarted; 0: 50 ms */
+    const char *isolate_helper;                     /* the executable run in helper mode;
+                                                       NULL: /proc/self/exe (facepuppet) */
 } fp_session_options;
 
 /** The frame's stages, for fp_frame_stats.stage_ms (`bench --case frame`). */

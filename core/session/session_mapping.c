@@ -22,7 +22,21 @@ int fp__session_load_mapping(fp_session *s, const char *mapping, const fp_plugin
         fp_spec_clear(&spec);
         return -EINVAL;
     }
-    rc = fp_plugin_load(path, FP_PLUGIN_MAPPING, file ? file : spec.name, &s->mapping_plugin, err, errlen);
+    /* isolated (fp_isolate.h): found here, loaded and created in a helper process */
+    char found[4096];
+    bool builtin = false;
+    bool isolated = s->isolate != FP_ISOLATE_NONE &&
+                    fp_plugin_find(path, FP_PLUGIN_MAPPING, file ? file : spec.name, found, sizeof found,
+                                   &builtin, NULL, 0) &&
+                    fp_isolate_wanted((fp_isolate_mode)s->isolate, builtin);
+    if (isolated) {
+        memset(&s->mapping_plugin, 0, sizeof s->mapping_plugin);
+        s->mapping_plugin.kind = FP_PLUGIN_MAPPING;
+        rc = (s->mapping_plugin.path = strdup(found)) ? 0 : -ENOMEM;
+        if (rc) snprintf(err, errlen, "mapping '%s': out of memory", mapping);
+    } else {
+        rc = fp_plugin_load(path, FP_PLUGIN_MAPPING, file ? file : spec.name, &s->mapping_plugin, err, errlen);
+    }
     if (!rc) {
         snprintf(s->mapping_name, sizeof s->mapping_name, "%s", spec.name);
         fp_mapping_host_init(&s->mapping_host, spec.name, s->log.fn, s->log.user);
@@ -30,9 +44,13 @@ int fp__session_load_mapping(fp_session *s, const char *mapping, const fp_plugin
         s->mapping_host.services = &s->services; /* FP_HOST_EXT_SURFACE */
         s->mapping_host.relay = &s->mapping_relay;
         const fp_mapping_factory *f = s->mapping_plugin.factory;
-        char perr[512] = "";
+        char perr[1024] = "";
         fp_plugin_call_enter(s->mapping_name, "create", s->frame);
-        rc = f->create(&s->mapping_host.host, spec.params, spec.nparams, &s->mapping, perr, sizeof perr);
+        if (isolated)
+            rc = fp_isolate_mapping_create(&s->isolate_opt, found, s->mapping_name, &s->mapping_host.host,
+                                           spec.params, spec.nparams, &s->mapping, perr, sizeof perr);
+        else
+            rc = f->create(&s->mapping_host.host, spec.params, spec.nparams, &s->mapping, perr, sizeof perr);
         fp_plugin_call_leave();
         fp_mapping_host_drain_log(&s->mapping_host); /* what its create said */
         if (rc || !s->mapping) {

@@ -7,13 +7,15 @@
 #include "fp_rig.h"
 
 #include "fp_calib_file.h"
+#include "fp_isolate.h"
 
 #include <errno.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-enum { OPT_DURATION = 0x100, OPT_HAND_SIZE, OPT_PLUGIN_DIR, OPT_MM_PER_UNIT, OPT_CALIBRATION, OPT_RIG };
+enum { OPT_DURATION = 0x100, OPT_HAND_SIZE, OPT_PLUGIN_DIR, OPT_MM_PER_UNIT, OPT_CALIBRATION, OPT_RIG,
+       OPT_ISOLATE, OPT_ISOLATE_DEADLINE };
 
 static const struct {
     const char *name;
@@ -47,6 +49,11 @@ static const struct {
     {"plugin-dir", required_argument, 'P', "DIR", "look for plugins in DIR first (repeatable)"},
     {"rig", required_argument, OPT_RIG, "R",
      "rig file (rigs/README.md); default: the mesh's rig found\nby checksum, else vertex count; 'none': no rig"},
+    {"isolate", required_argument, OPT_ISOLATE, "WHICH",
+     "third-party (default): a mapping plugin not shipped with\nfacepuppet runs in a helper process; a crash or hang\n"
+     "there holds the last control set and restarts it;\nall: every mapping so; none: every one in process"},
+    {"isolate-deadline", required_argument, OPT_ISOLATE_DEADLINE, "MS",
+     "an isolated mapping's process() that has not answered\nwithin MS ms (default 50) is abandoned, its helper\nrestarted"},
     {"quiet", no_argument, 'q', NULL,
      "no progress or status lines, nor the engine's and\ncontact guard's notes on each gesture; the summary\n"
      "(stdout), errors and the lines of the inputs,\nrecordings, mapping, rig and session (the hands'\n"
@@ -60,6 +67,7 @@ void fp_session_opts_init(fp_session_opts *o, fp_session_options *session)
     static char rig_dir[1024]; /* the rig folder next to the program (fp_rig_default_dir) */
     session->rig_dir = fp_rig_default_dir(fp_app_exe_dir(), rig_dir, sizeof rig_dir);
     o->speed = 1;
+    session->isolate = FP_ISOLATE_THIRD_PARTY;
 }
 
 size_t fp_session_opts_longopts(struct option *out)
@@ -135,6 +143,15 @@ int fp_session_opts_parse(fp_session_opts *o, int c, const char *arg, const char
         so->calibration = &o->calibration;
         return 1;
     }
+    case OPT_ISOLATE: {
+        fp_isolate_mode mode;
+        if (fp_isolate_mode_parse(arg, &mode)) return bad(cmd, "--isolate must be all, none or third-party", arg);
+        so->isolate = (int)mode;
+        return 1;
+    }
+    case OPT_ISOLATE_DEADLINE:
+        return number(arg, 0.999, 60001, &so->isolate_deadline_ms) ? 1
+               : bad(cmd, "--isolate-deadline must be 1 to 60000 ms", arg);
     case 'q': o->quiet = true; return 1;
     default: return 0;
     }
