@@ -95,6 +95,10 @@ typedef struct fp_isolate_stats {
 } fp_isolate_stats;
 bool fp_isolate_mapping_stats(const fp_mapping *m, fp_isolate_stats *out);
 
+/** The plugin's entry id and version (fp_plugin_entry) as its helper loaded it: strings of
+ *  the proxy, valid while it lives. False where `m` is not an isolated mapping. */
+bool fp_isolate_mapping_about(const fp_mapping *m, const char **id, const char **version);
+
 /** The helper's main: argv as the executable got it (argv[1] is FP_ISOLATE_HELPER_ARG).
  *  Returns the exit status (0 when the host asked it to quit or went away). Prints nothing:
  *  everything goes to the host. */

@@ -269,7 +269,17 @@ typedef struct fp_mapping_host {
                                         Kept by pointer: it must outlive the host */
     fp_log_relay *relay;             /* NULL: none; else the owner's, set after init, which
                                         must outlive the instance */
+    void (*fault)(void *user, const char *text); /* FP_HOST_EXT_FAULT_NOTICE; NULL: not offered */
+    void *fault_user;
 } fp_mapping_host;
+
+/** Host extension of the host's own (not in plugin.h, not for plugins): an isolated mapping's
+ *  proxy (fp_isolate.h) tells the host of each fault (a helper dead or past its deadline) with
+ *  one line of text, e.g. for the take. [session-thread], during process(). */
+#define FP_HOST_EXT_FAULT_NOTICE "facepuppet.host.fault-notice/1"
+typedef struct fp_host_fault_notice {
+    void (*notice)(const fp_host *host, const char *text);
+} fp_host_fault_notice;
 void fp_mapping_host_init(fp_mapping_host *mh, const char *name, fp_host_log_fn log, void *log_user);
 /** Hand the lines kept in mh->relay to mh->log with mh's source, oldest first (a line counts
  *  any dropped). Returns their number; 0 without a relay. [owner's thread]. */

@@ -110,11 +110,20 @@ static const fp_rig_view *mapping_rig(const fp_host *host)
 
 static const fp_host_rig mapping_rig_ext = {mapping_rig};
 
+static void mapping_fault(const fp_host *host, const char *text)
+{
+    const fp_mapping_host *mh = host ? host->host_data : NULL;
+    if (mh && mh->fault) mh->fault(mh->fault_user, text);
+}
+
+static const fp_host_fault_notice mapping_fault_ext = {mapping_fault};
+
 static const void *mapping_extension(const fp_host *host, const char *id)
 {
     const fp_mapping_host *mh = host ? host->host_data : NULL;
     if (!id) return NULL;
     if (!strcmp(id, FP_HOST_EXT_RIG)) return &mapping_rig_ext;
+    if (!strcmp(id, FP_HOST_EXT_FAULT_NOTICE) && mh && mh->fault) return &mapping_fault_ext;
     if (!strcmp(id, FP_HOST_EXT_SURFACE) && mh && mh->services && mh->services->surface.nearest)
         return &mh->services->surface;
     return NULL;

@@ -20,6 +20,7 @@ typedef struct proxy {
     const fp_host *host;                 /* the session's, for log and its extensions */
     const fp_host_surface *surface;
     const fp_host_rig *rig;
+    const fp_host_fault_notice *notice;  /* the host's record of faults (the take), or NULL */
     char exe[4096], file[4096], name[64];
     fp_spec keys;                        /* the SPEC's keys, for each restart */
     double deadline_ms;
@@ -35,6 +36,7 @@ typedef struct proxy {
     float last_start[FP_CONTROL_CAPACITY][3], last_end[FP_CONTROL_CAPACITY][3];
     fp_channel last_channels[FP_CHANNEL_CAPACITY];
     const fp_rig_view *rig_at_create;
+    char id[400], version[400];          /* the plugin entry's, as its helper said */
 } proxy;
 
 int fp_isolate_mode_parse(const char *text, fp_isolate_mode *out)
@@ -270,6 +272,13 @@ static int spawn(proxy *x)
 /* A fault: the helper is gone or killed; say why once, and when it comes back. */
 static void fault(proxy *x, const char *call, uint64_t frame, const char *cause)
 {
+    if (x->notice) { /* the take's status event: 116 bytes, so the short form */
+        char text[116];
+        snprintf(text, sizeof text, "mapping '%.40s' fault: %s during %s (frame %llu)", x->name,
+                 strstr(cause, "deadline") ? "deadline missed" : strstr(cause, "SIG") ? strstr(cause, "SIG") : "helper gone",
+                 call, (unsigned long long)frame);
+        x->notice->notice(x->host, text);
+    }
     x->stats.faults++;
     x->streak++;
     x->calls_ok = 0;
@@ -410,6 +419,15 @@ bool fp_isolate_mapping_stats(const fp_mapping *m, fp_isolate_stats *out)
     return true;
 }
 
+bool fp_isolate_mapping_about(const fp_mapping *m, const char **id, const char **version)
+{
+    if (!m || m->process != proxy_process) return false;
+    const proxy *x = m->plugin_data;
+    *id = x->id;
+    *version = x->version;
+    return true;
+}
+
 /* A copy of the keys in an fp_spec of our own (they must outlive the caller's). */
 static int copy_keys(fp_spec *spec, const fp_param *params, size_t nparams)
 {
@@ -454,6 +472,7 @@ int fp_isolate_mapping_create(const fp_isolate_options *opt, const char *file, c
     if (host && host->get_extension) {
         x->surface = host->get_extension(host, FP_HOST_EXT_SURFACE);
         x->rig = host->get_extension(host, FP_HOST_EXT_RIG);
+        x->notice = host->get_extension(host, FP_HOST_EXT_FAULT_NOTICE);
     }
     int rc = spawn(x);
     if (rc) {
@@ -481,6 +500,10 @@ int fp_isolate_mapping_create(const fp_isolate_options *opt, const char *file, c
         proxy_destroy(&x->m);
         return rc;
     }
+    char *nl = strchr(x->proc.ready_text, '\n');
+    if (nl) *nl = '\0';
+    snprintf(x->id, sizeof x->id, "%.399s", x->proc.ready_text);
+    snprintf(x->version, sizeof x->version, "%.399s", nl ? nl + 1 : "?");
     x->state = UP;
     x->m.size = sizeof x->m;
     x->m.plugin_data = x;

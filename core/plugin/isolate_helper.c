@@ -272,6 +272,9 @@ int fp_isolate_helper_main(int argc, char **argv)
             m = NULL;
         }
     }
+    if (!rc) /* what the host shows of it: the entry's id and version */
+        snprintf(err, sizeof err, "%.400s\n%.400s", plugin.entry->id ? plugin.entry->id : "?",
+                 plugin.entry->version ? plugin.entry->version : "?");
     send_msg(FP_ISO_MSG_READY, rc, rc && !err[0] ? "create failed" : err);
     if (rc) return 0;
     for (;;) {

@@ -56,6 +56,10 @@ struct fp_session {
     int isolate;                  /* fp_isolate_mode of the options */
     fp_isolate_options isolate_opt;
     char isolate_helper[4096];
+    fp_plugin_entry isolated_entry; /* an isolated mapping's id and version, for
+                                       mapping_plugin.entry (no functions: the plugin is
+                                       loaded in its helper) */
+    char isolated_id[128], isolated_version[64];
     fp_mesh_view view;
     char rig_how[1200];           /* how the rig was chosen (fp_session_rig_how) */
 

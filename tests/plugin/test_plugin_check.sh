@@ -74,7 +74,7 @@ assert k['replay']['keys'][0]['name']=='speed'; assert k['fixture-initfails']['s
 chmod 777 "$tmp" && expect 0 "skipped" "$fp" plugins --plugin-dir "$tmp"; chmod 700 "$tmp"
 
 # run: the host names the mapping at fault.
-run() { "$fp" run --plugin-dir "$fx" --mesh "$mesh" --input "replay:$rec" --duration 1 --quiet -o "$tmp/out.obj" --force "$@"; }
+run() { "$fp" run --isolate none --plugin-dir "$fx" --mesh "$mesh" --input "replay:$rec" --duration 1 --quiet -o "$tmp/out.obj" --force "$@"; }
 expect 78 "mapping 'fixture-overrun': wrote past the capacity of the host's start array \(64 entries\) on frame [0-9]+; the mapping is stopped" run --mapping fixture-overrun
 expect 139 "fatal signal SIGSEGV in plugin 'fixture-segv' during process \(frame 3\)" run --mapping fixture-segv
 expect 0 "mapping 'fixture-slow': process took [0-9]+\.[0-9]+ ms on frame [0-9]+, over the budget of 2 ms" run --mapping fixture-slow
