@@ -247,6 +247,7 @@ void fp_host_init_for_mapping(fp_host *host, const char *name);
 /** Services a session offers its mapping through get_extension (plugin.h, ABI 1.1). */
 typedef struct fp_mapping_services {
     fp_host_surface surface;   /* FP_HOST_EXT_SURFACE; not offered while nearest is NULL */
+    uint64_t (*base_version)(void *user); /* FP_HOST_EXT_BASE_VERSION; NULL: not offered */
     void *user;                /* the provider's data, for the service's implementation */
 } fp_mapping_services;
 
@@ -276,6 +277,15 @@ typedef struct fp_mapping_host {
 /** Host extension of the host's own (not in plugin.h, not for plugins): an isolated mapping's
  *  proxy (fp_isolate.h) tells the host of each fault (a helper dead or past its deadline) with
  *  one line of text, e.g. for the take. [session-thread], during process(). */
+/** Host extension of the host's own (not for plugins): a number that changes whenever the
+ *  content of fp_frame_input.mesh->base may have changed since the last frame (a commit, an
+ *  undo, a rig pose), so that an isolated mapping's proxy copies the base to its helper only
+ *  then. [session-thread] */
+#define FP_HOST_EXT_BASE_VERSION "facepuppet.host.base-version/1"
+typedef struct fp_host_base_version {
+    uint64_t (*get)(const fp_host *host);
+} fp_host_base_version;
+
 #define FP_HOST_EXT_FAULT_NOTICE "facepuppet.host.fault-notice/1"
 typedef struct fp_host_fault_notice {
     void (*notice)(const fp_host *host, const char *text);

@@ -21,6 +21,12 @@ typedef struct proxy {
     const fp_host_surface *surface;
     const fp_host_rig *rig;
     const fp_host_fault_notice *notice;  /* the host's record of faults (the take), or NULL */
+    const fp_host_base_version *base_ext; /* when the base changed, or NULL: copied every frame */
+    uint64_t base_version;               /* the version of the base in the shared memory */
+    const float *base_ptr;               /* and where it came from */
+    size_t base_n;
+    bool base_valid;                     /* false: copy it at the next frame (a new helper) */
+    uint64_t base_off;
     char exe[4096], file[4096], name[64];
     fp_spec keys;                        /* the SPEC's keys, for each restart */
     double deadline_ms;
@@ -171,7 +177,18 @@ static int put_frame(proxy *x, const fp_frame_input *in, const fp_control_set *o
     s->has_mesh = in->mesh != NULL;
     if (in->mesh) {
         s->mesh = *in->mesh;
-        if (n) memcpy((char *)s + s->off_base, in->mesh->base, n * 3 * sizeof(float));
+        /* the base only when it may have changed (the host's version, its address, its
+         * size, a new helper): the one copy that grows with the mesh */
+        uint64_t v = x->base_ext ? x->base_ext->get(x->host) : 0;
+        if (n && (!x->base_ext || !x->base_valid || v != x->base_version || in->mesh->base != x->base_ptr ||
+                  n != x->base_n || s->off_base != x->base_off)) {
+            memcpy((char *)s + s->off_base, in->mesh->base, n * 3 * sizeof(float));
+            x->base_version = v;
+            x->base_ptr = in->mesh->base;
+            x->base_n = n;
+            x->base_off = s->off_base;
+            x->base_valid = true;
+        }
     }
     put_rig(s, r);
     s->cs = *out;
@@ -263,6 +280,7 @@ static uint32_t offers(const proxy *x) { return (x->surface ? 1u : 0u) | (x->rig
 
 static int spawn(proxy *x)
 {
+    x->base_valid = false;
     x->rig_at_create = x->rig ? x->rig->get(x->host) : NULL;
     size_t bytes = layout(x->rig_at_create ? x->rig_at_create->vertex_count : 0, x->rig_at_create, NULL);
     return fp_iso_proc_spawn(&x->proc, x->exe, x->file, x->name, x->keys.params, x->keys.nparams, bytes,
@@ -473,6 +491,7 @@ int fp_isolate_mapping_create(const fp_isolate_options *opt, const char *file, c
         x->surface = host->get_extension(host, FP_HOST_EXT_SURFACE);
         x->rig = host->get_extension(host, FP_HOST_EXT_RIG);
         x->notice = host->get_extension(host, FP_HOST_EXT_FAULT_NOTICE);
+        x->base_ext = host->get_extension(host, FP_HOST_EXT_BASE_VERSION);
     }
     int rc = spawn(x);
     if (rc) {

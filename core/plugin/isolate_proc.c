@@ -200,6 +200,7 @@ int fp_iso_proc_call(fp_iso_proc *p, uint32_t op, double deadline_ms,
     uint64_t one = 1;
     if (write(p->go, &one, sizeof one) != sizeof one) return FP_ISO_DIED;
     int64_t end = fp_now_ns() + (int64_t)(deadline_ms * 1e6);
+
     for (;;) {
         /* a short spin first: the answer of a quick process() comes within microseconds,
          * sooner than a sleep and a wake-up */

@@ -107,9 +107,18 @@ static int surface_nearest(const fp_host *host, const float (*points)[3], size_t
                                   max_distance, out);
 }
 
+/* FP_HOST_EXT_BASE_VERSION: the engine counts every change of the base it indexes (the
+ * posed base the mapping sees: commits, undo, reset, the rig's poses). */
+static uint64_t base_version(void *user)
+{
+    const fp_session *s = user;
+    return s->engine.base_version;
+}
+
 void fp__session_mapping_services(fp_session *s)
 {
     s->services.surface.nearest = surface_nearest;
+    s->services.base_version = base_version;
     s->services.user = s;
 }
 

@@ -9,7 +9,9 @@
  *   2 hang    spins forever
  *   3 chaos   from frame `at` on, each call crashes with probability 1/`mean` and hangs with
  *             the same probability (a xorshift seeded from `seed` and the frame number)
- * Its state is the call count only, so after a restart it deforms as it did before. */
+ * With commit=1 each step is committed and its start read from the frame's mesh->base (the
+ * test that an isolated mapping's copy of the base follows the commits).
+ * It keeps no state, so after a restart it deforms as it did before. */
 #include <facepuppet/mapping_util.h>
 #include <facepuppet/plugin.h>
 
@@ -26,6 +28,7 @@ typedef struct fault {
     const fp_host *host;
     const fp_host_surface *surface;
     double gain, at, mean, seed;
+    bool commit;
 } fault;
 
 static void crash(void)
@@ -71,13 +74,17 @@ static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *o
     if (rc) return rc;
     for (size_t i = 0; i < n && out->count < out->capacity; i++) {
         if (hits[i].vertex == UINT32_MAX) continue;
+        /* commit=1 reads the start from the frame's base (its copy, isolated) */
+        const float *p = f->commit && in->mesh && in->mesh->base ? &in->mesh->base[3 * (size_t)hits[i].vertex]
+                                                                  : hits[i].position;
         for (int k = 0; k < 3; k++) {
-            out->start[out->count][k] = hits[i].position[k];
-            out->end[out->count][k] = hits[i].position[k] + (float)f->gain * (tips[i][k] - hits[i].position[k]);
+            out->start[out->count][k] = p[k];
+            out->end[out->count][k] = p[k] + (float)f->gain * (tips[i][k] - p[k]);
         }
         out->count++;
     }
     out->active = out->count > 0;
+    if (f->commit && out->active) out->intents = FP_INTENT_COMMIT; /* each step into the base */
     return 0;
 }
 
@@ -88,13 +95,14 @@ static const fp_param_info keys[] = {
     {"at", FP_PARAM_INT, 0, 1e9, "29", NULL, "frame", "the session frame of the (first) fault"},
     {"mean", FP_PARAM_INT, 1, 1e9, "100", NULL, "frames", "chaos: one crash and one hang in this many calls"},
     {"seed", FP_PARAM_INT, 0, 1e9, "1", NULL, NULL, "chaos: the random sequence"},
+    {"commit", FP_PARAM_BOOL, 0, 1, "0", NULL, NULL, "commit each step, its start read from the frame's base"},
     {NULL, 0, 0, 0, NULL, NULL, NULL, NULL},
 };
 
 static int create(const fp_host *host, const fp_param *params, size_t nparams, fp_mapping **out,
                   char *err, size_t errlen)
 {
-    fpmu_value v[4];
+    fpmu_value v[5];
     int rc = fpmu_params_parse("fault", keys, params, nparams, v, err, errlen);
     if (rc) return rc;
     fault *f = calloc(1, sizeof *f);
@@ -105,6 +113,7 @@ static int create(const fp_host *host, const fp_param *params, size_t nparams, f
     f->at = v[1].number;
     f->mean = v[2].number;
     f->seed = v[3].number;
+    f->commit = v[4].number != 0;
     f->mapping = (fp_mapping){.size = sizeof(fp_mapping), .plugin_data = f, .process = process,
                               .destroy = destroy};
     *out = &f->mapping;
@@ -115,7 +124,7 @@ static const fp_mapping_factory factory = {
     .size = sizeof(fp_mapping_factory),
     .name = "fault",
     .description = "pulls the skin to the fingertips; faults on a chosen frame (isolation tests)",
-    .usage = "gain=G, at=FRAME, mean=N, seed=S",
+    .usage = "gain=G, at=FRAME, mean=N, seed=S, commit=0|1",
     .create = create,
     .params = keys,
 };

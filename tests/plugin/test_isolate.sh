@@ -13,7 +13,8 @@
 #  - --isolate all with the built-in mappings gives bit-identical meshes to in-process runs
 #    (every frame: --export .pc2, and the last: -o .obj) on the three faces and the four
 #    recordings, the mappings taken in turn (a generous deadline: on a loaded machine a
-#    helper may miss 50 ms, and a missed deadline is by design not the same run).
+#    helper may miss 50 ms, and a missed deadline is by design not the same run); and the same
+#    for map-steady,commit=1, which reads the frame's base after each commit.
 # Under the sanitizers the helper's crash ends as ASan reports it (an exit status, not the
 # signal), which the crash's pattern accepts. Args: BUILD_DIR DATA (from the source root)
 set -u
@@ -128,4 +129,20 @@ for face in ict-facekit/generic_neutral_mesh.obj lee-perry-smith/LeePerrySmith.o
     done
 done
 echo "identical: $same of $i runs (3 faces x 4 recordings; anchored, unanchored, onehand in turn)"
+# The base's copy follows the commits: map-steady,commit=1 reads its start points from the
+# frame's mesh->base and commits every step.
+for face in ict-facekit/generic_neutral_mesh.obj lee-perry-smith/LeePerrySmith.obj \
+            mediapipe-canonical/canonical_face_model.obj; do
+    for iso in none all; do
+        "$fp" run -q --isolate $iso --isolate-deadline 60000 --plugin-dir "$tmp/pc" --mapping steady,commit=1 \
+            --mesh "$data/faces/$face" --input "replay:$data/hands/leap-motion/HandSplay-110fps_joints_mm.csv" \
+            --duration 2 -o "$tmp/cb-$iso.obj" --export "$tmp/cb-$iso.pc2" --force >"$tmp/cb-$iso.log" 2>&1 ||
+            fail "$face steady,commit=1 --isolate $iso: exit $?"
+    done
+    committed=$(sed -n 's/^frames [0-9]*, deforming [0-9]*, engaged [0-9]*, committed \([0-9]*\).*/\1/p' "$tmp/cb-all.log")
+    [ "${committed:-0}" -gt 0 ] || fail "$face steady,commit=1: nothing committed"
+    cmp -s "$tmp/cb-none.pc2" "$tmp/cb-all.pc2" && cmp -s "$tmp/cb-none.obj" "$tmp/cb-all.obj" ||
+        fail "$face steady,commit=1: --isolate all differs from in process (the base's copy)"
+    echo "base copy: $face, $committed frames committed, isolated identical to in process"
+done
 [ "$fails" = 0 ] && echo "all passed" || { echo "$fails failed"; exit 1; }
