@@ -53,7 +53,7 @@ typedef enum fp_isolate_mode {
 #define FP_ISOLATE_BACKOFF_MS 100.0     /* the first restart's wait */
 #define FP_ISOLATE_BACKOFF_MAX_MS 2000.0
 #define FP_ISOLATE_MAX_FAULTS 5         /* faults in a row before giving up */
-#define FP_ISOLATE_HEALTHY_CALLS 120    /* calls answered that end a row of faults */
+#define FP_ISOLATE_HEALTHY_CALLS 60     /* calls answered that end a row of faults (1 s at 60 Hz) */
 
 /** The first argument of the helper mode: `facepuppet __plugin-helper ...`. */
 #define FP_ISOLATE_HELPER_ARG "__plugin-helper"

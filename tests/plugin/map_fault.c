@@ -7,8 +7,9 @@
  *   0 steady  never faults (the reference the others are compared with)
  *   1 crash   writes through a null pointer (SIGSEGV)
  *   2 hang    spins forever
- *   3 chaos   from frame `at` on, each call crashes with probability 1/`mean` and hangs with
- *             the same probability (a xorshift seeded from `seed` and the frame number)
+ *   3 chaos   from frame `at` on, in each window of `mean` frames, at a random frame of its
+ *             first half: a crash (40%), a hang (40%) or nothing (a xorshift of `seed` and
+ *             the window's number)
  * With commit=1 each step is committed and its start read from the frame's mesh->base (the
  * test that an isolated mapping's copy of the base follows the commits).
  * It keeps no state, so after a restart it deforms as it did before. */
@@ -48,11 +49,16 @@ static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *o
     if (FAULT_MODE == 1 && in->frame == (uint64_t)f->at) crash();
     if (FAULT_MODE == 2 && in->frame == (uint64_t)f->at) hang();
     if (FAULT_MODE == 3 && in->frame >= (uint64_t)f->at) {
-        uint64_t x = (uint64_t)f->seed * 0x9E3779B97F4A7C15ull + in->frame * 0xBF58476D1CE4E5B9ull + 1;
+        /* one fault at most in each window of `mean` frames, at a random frame of its first
+         * half: a crash (40%), a hang (40%) or none */
+        uint64_t n = (uint64_t)(f->mean >= 2 ? f->mean : 2), w = (in->frame - (uint64_t)f->at) / n;
+        uint64_t x = (uint64_t)f->seed * 0x9E3779B97F4A7C15ull + w * 0xBF58476D1CE4E5B9ull + 1;
         x ^= x << 13, x ^= x >> 7, x ^= x << 17;
-        uint64_t n = (uint64_t)(f->mean > 1 ? f->mean : 1);
-        if (x % n == 0) crash();
-        if ((x >> 20) % n == 0) hang();
+        if ((in->frame - (uint64_t)f->at) % n == x % (n / 2)) {
+            unsigned kind = (unsigned)((x >> 32) % 10);
+            if (kind < 4) crash();
+            if (kind < 8) hang();
+        }
     }
     out->active = false;
     out->intents = 0;
@@ -93,7 +99,7 @@ static void destroy(fp_mapping *self) { free(self->plugin_data); }
 static const fp_param_info keys[] = {
     {"gain", FP_PARAM_FLOAT, 0, 1, "0.5", NULL, NULL, "how far the skin follows the fingertip"},
     {"at", FP_PARAM_INT, 0, 1e9, "29", NULL, "frame", "the session frame of the (first) fault"},
-    {"mean", FP_PARAM_INT, 1, 1e9, "100", NULL, "frames", "chaos: one crash and one hang in this many calls"},
+    {"mean", FP_PARAM_INT, 2, 1e9, "240", NULL, "frames", "chaos: at most one fault in this many frames"},
     {"seed", FP_PARAM_INT, 0, 1e9, "1", NULL, NULL, "chaos: the random sequence"},
     {"commit", FP_PARAM_BOOL, 0, 1, "0", NULL, NULL, "commit each step, its start read from the frame's base"},
     {NULL, 0, 0, 0, NULL, NULL, NULL, NULL},
