@@ -27,6 +27,10 @@ typedef struct proxy {
     size_t base_n;
     bool base_valid;                     /* false: copy it at the next frame (a new helper) */
     uint64_t base_off;
+    const uint8_t *region_ptr;           /* the rig's regions in the shared memory: from */
+    size_t region_n;
+    uint64_t region_off;
+    bool region_valid;                   /* false: copy them at the next frame (a new helper) */
     char exe[4096], file[4096], name[64];
     fp_spec keys;                        /* the SPEC's keys, for each restart */
     double deadline_ms;
@@ -126,8 +130,9 @@ static uint32_t put_string(char *strings, size_t *used, const char *s)
     return (uint32_t)at;
 }
 
-/* The rig into the shared memory (its layout already set). */
-static void put_rig(fp_iso_shm *s, const fp_rig_view *r)
+/* The rig into the shared memory (its layout already set); its regions only with
+ * `regions` (they change with the rig alone). */
+static void put_rig(fp_iso_shm *s, const fp_rig_view *r, bool regions)
 {
     s->has_rig = r != NULL;
     if (!r) return;
@@ -135,7 +140,7 @@ static void put_rig(fp_iso_shm *s, const fp_rig_view *r)
     char *base = (char *)s, *strings = base + s->off_strings;
     size_t used = 0;
     s->rig_name = put_string(strings, &used, r->name);
-    if (r->vertex_count && r->region) memcpy(base + s->off_region, r->region, r->vertex_count);
+    if (regions && r->vertex_count && r->region) memcpy(base + s->off_region, r->region, r->vertex_count);
     fp_iso_landmark *l = (fp_iso_landmark *)(base + s->off_landmarks);
     for (size_t i = 0; i < r->landmark_count; i++) {
         l[i].name = put_string(strings, &used, r->landmarks[i].name);
@@ -154,7 +159,7 @@ static void fill_create(void *user, fp_iso_shm *s)
     proxy *x = user;
     const fp_rig_view *r = x->rig_at_create;
     layout(r ? r->vertex_count : 0, r, s);
-    put_rig(s, r);
+    put_rig(s, r, true);
 }
 
 /* This frame's input and the host's control set into the shared memory. */
@@ -190,7 +195,15 @@ static int put_frame(proxy *x, const fp_frame_input *in, const fp_control_set *o
             x->base_valid = true;
         }
     }
-    put_rig(s, r);
+    bool regions = r && (!x->region_valid || r->region != x->region_ptr || r->vertex_count != x->region_n ||
+                         s->off_region != x->region_off);
+    put_rig(s, r, regions);
+    if (regions) {
+        x->region_ptr = r->region;
+        x->region_n = r->vertex_count;
+        x->region_off = s->off_region;
+        x->region_valid = true;
+    }
     s->cs = *out;
     if (s->cs.capacity > FP_CONTROL_CAPACITY) s->cs.capacity = FP_CONTROL_CAPACITY;
     if (s->cs.channel_capacity > FP_CHANNEL_CAPACITY) s->cs.channel_capacity = FP_CHANNEL_CAPACITY;
@@ -281,6 +294,7 @@ static uint32_t offers(const proxy *x) { return (x->surface ? 1u : 0u) | (x->rig
 static int spawn(proxy *x)
 {
     x->base_valid = false;
+    x->region_valid = false;
     x->rig_at_create = x->rig ? x->rig->get(x->host) : NULL;
     size_t bytes = layout(x->rig_at_create ? x->rig_at_create->vertex_count : 0, x->rig_at_create, NULL);
     return fp_iso_proc_spawn(&x->proc, x->exe, x->file, x->name, x->keys.params, x->keys.nparams, bytes,
