@@ -8,6 +8,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <poll.h>
+#include <pthread.h>
 #include <sys/prctl.h>
 #include <time.h>
 #include <signal.h>
@@ -266,6 +267,19 @@ static int do_process(fp_mapping *m)
     return rc;
 }
 
+/* The helper outlives no host: this thread waits for the socket's hang-up (the host exited,
+ * even by SIGKILL) and ends the process, also while the plugin spins in a call. */
+static void *host_watch(void *arg)
+{
+    (void)arg;
+    for (;;) {
+        struct pollfd p = {H.sock, 0, 0}; /* POLLHUP and POLLERR are always reported */
+        if (poll(&p, 1, -1) < 0 && errno != EINTR) _exit(0);
+        if (p.revents & (POLLHUP | POLLERR | POLLNVAL)) _exit(0);
+    }
+    return NULL;
+}
+
 static int arg_fd(const char *s)
 {
     char *end;
@@ -293,6 +307,9 @@ int fp_isolate_helper_main(int argc, char **argv)
     if (H.shm == MAP_FAILED || H.shm->magic != FP_ISO_MAGIC || H.shm->version != FP_ISO_VERSION) return 66;
     if (remap()) return 70;
     if (rebuild_rig()) return 70;
+    pthread_t watch;
+    if (pthread_create(&watch, NULL, host_watch, NULL)) return 70;
+    pthread_detach(watch);
 
     memset(&H.host, 0, sizeof H.host);
     H.host.size = sizeof H.host;

@@ -105,7 +105,13 @@ int fp_iso_proc_spawn(fp_iso_proc *p, const char *exe, const char *file, const c
     char kv[FP_SPEC_MAX_PARAMS][512];
     char *argv[8 + FP_SPEC_MAX_PARAMS + 1];
     size_t a = 0;
-    argv[a++] = (char *)exe;
+    /* run as `exe` (/proc/self/exe: this very program, even if its file was replaced since),
+     * named in ps as the file it came from */
+    char name0[4096];
+    ssize_t nl = readlink(exe, name0, sizeof name0 - 1);
+    if (nl > 0) name0[nl] = '\0';
+    else snprintf(name0, sizeof name0, "%s", exe);
+    argv[a++] = name0;
     argv[a++] = (char *)FP_ISOLATE_HELPER_ARG;
     for (int i = 0; i < 4; i++) argv[a++] = fds[i];
     argv[a++] = (char *)file;
