@@ -8,6 +8,8 @@
 #include "fp_clock.h"
 
 #include <errno.h>
+#include <fcntl.h>
+#include <unistd.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -32,6 +34,9 @@ typedef struct proxy {
     uint64_t region_off;
     bool region_valid;                   /* false: copy them at the next frame (a new helper) */
     char exe[4096], file[4096], name[64];
+    int file_fd;                         /* the plugin file, open: a restart loads it from here
+                                            (/proc/self/fd/N), even if the file was removed
+                                            (live's hot reload loads a copy it removes) */
     fp_spec keys;                        /* the SPEC's keys, for each restart */
     double deadline_ms;
     bool quiet_restarts;
@@ -297,8 +302,11 @@ static int spawn(proxy *x)
     x->region_valid = false;
     x->rig_at_create = x->rig ? x->rig->get(x->host) : NULL;
     size_t bytes = layout(x->rig_at_create ? x->rig_at_create->vertex_count : 0, x->rig_at_create, NULL);
-    return fp_iso_proc_spawn(&x->proc, x->exe, x->file, x->name, x->keys.params, x->keys.nparams, bytes,
-                             offers(x), fill_create, x);
+    char via_fd[64];
+    bool restart = x->stats.faults > 0 && x->file_fd >= 0;
+    if (restart) snprintf(via_fd, sizeof via_fd, "/proc/self/fd/%d", x->file_fd);
+    return fp_iso_proc_spawn(&x->proc, x->exe, restart ? via_fd : x->file, restart ? x->file_fd : -1, x->name,
+                             x->keys.params, x->keys.nparams, bytes, offers(x), fill_create, x);
 }
 
 /* A fault: the helper is gone or killed; say why once, and when it comes back. */
@@ -438,6 +446,7 @@ static void proxy_destroy(fp_mapping *self)
 {
     proxy *x = self->plugin_data;
     if (x->proc.pid > 0) fp_iso_proc_end(&x->proc, 1000, relay_log, x);
+    if (x->file_fd >= 0) close(x->file_fd);
     fp_spec_clear(&x->keys);
     free(x);
 }
@@ -495,6 +504,7 @@ int fp_isolate_mapping_create(const fp_isolate_options *opt, const char *file, c
     }
     fp_iso_proc_init(&x->proc);
     x->m.plugin_data = x;
+    x->file_fd = open(file, O_RDONLY | O_CLOEXEC);
     x->host = host;
     x->deadline_ms = opt && opt->deadline_ms > 0 ? opt->deadline_ms : FP_ISOLATE_DEADLINE_MS;
     x->quiet_restarts = opt && opt->quiet_restarts;

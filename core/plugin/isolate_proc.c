@@ -60,7 +60,7 @@ static void release(fp_iso_proc *p)
     p->pid = 0;
 }
 
-int fp_iso_proc_spawn(fp_iso_proc *p, const char *exe, const char *file, const char *name,
+int fp_iso_proc_spawn(fp_iso_proc *p, const char *exe, const char *file, int file_fd, const char *name,
                       const fp_param *params, size_t nparams, size_t bytes, uint32_t offers,
                       void (*fill)(void *user, fp_iso_shm *shm), void *fill_user)
 {
@@ -131,6 +131,7 @@ int fp_iso_proc_spawn(fp_iso_proc *p, const char *exe, const char *file, const c
     posix_spawn_file_actions_adddup2(&fa, p->go, p->go);
     posix_spawn_file_actions_adddup2(&fa, p->done, p->done);
     posix_spawn_file_actions_adddup2(&fa, sv[1], sv[1]);
+    if (file_fd >= 0) posix_spawn_file_actions_adddup2(&fa, file_fd, file_fd);
     sigset_t none, all;
     sigemptyset(&none);
     sigfillset(&all);

@@ -41,9 +41,10 @@ void fp_iso_proc_init(fp_iso_proc *p);
 
 /** Make the shared memory (at least `bytes`, with `offers`; `fill` writes into it before the
  *  helper starts, e.g. the rig for the plugin's create), the eventfds and the socket, and
- *  spawn `exe` in helper mode for the plugin `file` named `name` with `params`. Returns 0 or
+ *  spawn `exe` in helper mode for the plugin `file` named `name` with `params`; file_fd
+ *  (-1: none) is a descriptor the helper inherits (`file` may then be /proc/self/fd/N). Returns 0 or
  *  a negative errno (nothing is left open). Does not wait for the helper. */
-int fp_iso_proc_spawn(fp_iso_proc *p, const char *exe, const char *file, const char *name,
+int fp_iso_proc_spawn(fp_iso_proc *p, const char *exe, const char *file, int file_fd, const char *name,
                       const fp_param *params, size_t nparams, size_t bytes, uint32_t offers,
                       void (*fill)(void *user, fp_iso_shm *shm), void *fill_user);
 
