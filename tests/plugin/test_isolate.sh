@@ -31,7 +31,7 @@ fp=$prefix/bin/facepuppet
 export PKG_CONFIG_PATH="$prefix/lib/pkgconfig"
 cflags=$(pkg-config --cflags facepuppet) libs=$(pkg-config --libs facepuppet)
 mkdir -m 755 "$tmp/pc"
-for m in steady:0 crash:1 hang:2; do
+for m in steady:0 crash:1 hang:2 chaos:3; do
     cc -std=c11 -O2 -Wall -Wextra -Werror -shared -fPIC -fvisibility=hidden $cflags \
        -DFAULT_MODE=${m#*:} -o "$tmp/pc/map-${m%:*}.so" "$src/tests/plugin/map_fault.c" $libs ||
         { echo "FAIL: building map-${m%:*} out of tree"; exit 1; }
@@ -106,6 +106,37 @@ fault() {
 }
 fault crash "the helper process (died of SIGSEGV|exited with status [0-9]+)"
 fault hang "no answer within the deadline of $deadline ms \(the helper was killed\)"
+
+# Repeated faults: chaos,mean=2 faults in every call from frame 29 on. The restarts back off
+# (0.1, 0.2, 0.4, 0.8 s), the fifth fault in a row gives up with one line naming the plugin,
+# and the run still ends with exit 0 and every frame, the face as it was (the frames after
+# the give-up all equal).
+mkdir -p "$tmp/giveup"
+"$fp" run --plugin-dir "$tmp/pc" --mesh "$mesh" --input "replay:$rec,loop=1" --duration 20 \
+    --mapping chaos,mean=2 --isolate-deadline "$deadline" --frames-out "$tmp/giveup" >"$tmp/giveup.log" 2>&1
+rc=$?
+[ "$rc" = 0 ] || fail "give-up: exit $rc, wanted 0"
+waits=$(grep -o "restarts in [0-9.]* s (fault [0-9] in a row)" "$tmp/giveup.log" | sed 's/restarts in \([0-9.]*\) s.*/\1/' | tr '\n' ' ')
+[ "$waits" = "0.1 0.2 0.4 0.8 " ] || fail "give-up: the restarts waited '$waits', wanted 0.1 0.2 0.4 0.8"
+gave=$(grep -c "mapping 'chaos': isolated: .* 5 faults in a row: given up, the face stays as it was" "$tmp/giveup.log")
+[ "$gave" = 1 ] || fail "give-up: said $gave times, wanted once"
+ng=$(sed -n 's/^frames \([0-9]*\),.*/\1/p' "$tmp/giveup.log")
+[ "$(ls "$tmp/giveup"/frame_*.obj | wc -l)" = "${ng:-x}" ] || fail "give-up: not every frame written"
+last=$(frame "$tmp/giveup" $((ng - 1)))
+k=$((ng - 60))
+while [ "$k" -lt "$ng" ]; do
+    cmp -s "$(frame "$tmp/giveup" "$k")" "$last" || { fail "give-up: frame $k moved after the give-up"; break; }
+    k=$((k + 1))
+done
+echo "give-up: restarts waited $waits s, given up once, $ng frames, the last 60 still"
+if [ "$fails" != 0 ]; then grep -v "^     *[0-9.]* s  frame" "$tmp/giveup.log" | sed 's/^/    /'; fi
+
+# A bad key is refused by the isolated plugin's create as in process: exit 64, named.
+"$fp" run --plugin-dir "$tmp/pc" --mesh "$mesh" --input "replay:$rec" --mapping steady,gain=7 \
+    -o "$tmp/bad.obj" >"$tmp/bad.log" 2>&1
+rc=$?
+[ "$rc" = 64 ] || fail "bad key: exit $rc, wanted 64"
+grep -q "gain" "$tmp/bad.log" || fail "bad key: the message does not name it"
 
 # Bit-identical: --isolate all and none, the built-in mappings in turn.
 i=0 same=0
