@@ -415,7 +415,10 @@ int fp_session_set_mapping(fp_session *s, const fp_plugin_path *path, const char
  *  code). Session thread only, between frames. */
 int fp_session_reload_mapping(fp_session *s, const char *file, char *err, size_t errlen);
 /** The file the mapping was found at by name (not a reload's copy), the loaded plugin (its
- *  entry's id and version), and the mapping's name. Valid until the mapping changes. */
+ *  entry's id and version), and the mapping's name. Valid until the mapping changes. An
+ *  isolated mapping (fp_session_options.isolate) is loaded in its helper process: its
+ *  fp_plugin has the path and an entry with the id and version its helper reported, and no
+ *  handle, factory or entry functions. */
 const char *fp_session_mapping_file(const fp_session *s);
 const fp_plugin *fp_session_mapping_plugin(const fp_session *s);
 const char *fp_session_mapping_name(const fp_session *s);
