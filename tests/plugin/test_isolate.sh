@@ -138,6 +138,16 @@ rc=$?
 [ "$rc" = 64 ] || fail "bad key: exit $rc, wanted 64"
 grep -q "gain" "$tmp/bad.log" || fail "bad key: the message does not name it"
 
+# Usage: a mode that is none of the three, a deadline out of range (exit 64, named).
+"$fp" run --isolate some --mesh "$mesh" --input "replay:$rec" >"$tmp/u1.log" 2>&1
+rc=$?
+[ "$rc" = 64 ] && grep -q -- "--isolate must be all, none or third-party, got 'some'" "$tmp/u1.log" ||
+    fail "--isolate some: exit $rc: $(cat "$tmp/u1.log")"
+"$fp" run --isolate-deadline 0 --mesh "$mesh" --input "replay:$rec" >"$tmp/u2.log" 2>&1
+rc=$?
+[ "$rc" = 64 ] && grep -q -- "--isolate-deadline must be 1 to 60000 ms, got '0'" "$tmp/u2.log" ||
+    fail "--isolate-deadline 0: exit $rc: $(cat "$tmp/u2.log")"
+
 # Bit-identical: --isolate all and none, the built-in mappings in turn.
 i=0 same=0
 for face in ict-facekit/generic_neutral_mesh.obj lee-perry-smith/LeePerrySmith.obj \
