@@ -120,12 +120,19 @@ static bool wait_go(bool paced)
     if (!paced) { /* the host's answer to a surface query: microseconds away */
         got = spin_until(fp_now_ns() + 100000);
     } else if (period > 0 && period < FP_ISO_SPIN_MAX_PERIOD_NS) {
-        int64_t wake = due - FP_ISO_SPIN_LEAD_NS, now = fp_now_ns();
-        if (wake > now && !fresh()) {
+        int64_t wake = due - FP_ISO_SPIN_LEAD_NS;
+        for (int64_t now; !fresh() && (now = fp_now_ns()) < wake;) { /* sleep until then */
             struct timespec ts = {(time_t)((wake - now) / 1000000000), (long)((wake - now) % 1000000000)};
             struct pollfd p[2] = {{H.go, POLLIN, 0}, {H.sock, POLLIN, 0}};
             int k = ppoll(p, 2, &ts, NULL);
+            if (k < 0 && errno != EINTR) return false;
             if (k > 0 && (p[1].revents & (POLLHUP | POLLERR))) return false;
+            if (k > 0 && (p[1].revents & POLLIN)) {
+                char b[16];
+                if (recv(H.sock, b, sizeof b, MSG_DONTWAIT) == 0) return false;
+            }
+            uint64_t n; /* a count left by a request seen spinning wakes it early: drain it */
+            if (k > 0 && (p[0].revents & POLLIN)) (void)!read(H.go, &n, sizeof n);
         }
         got = spin_until(due + FP_ISO_SPIN_LAG_NS);
     }
