@@ -1142,6 +1142,8 @@ static int case_frame(const bench_opts *o)
             frame_bo->mapping ? frame_bo->mapping : "anchored");
     if (frame_bo->trace) fputs(FP_BENCH_TRACE_HEADER, frame_bo->trace);
     int rc = frame_run(o, frame_bo, "ict", m);
+    if (!rc) rc = fp_bench_isolate(stdout, frame_bo, m, "ict", fp_bench_data_dir(), o->json); /* issue 56 */
+    if (!rc) rc = fp_bench_isolate_small(stdout, frame_bo, fp_bench_data_dir(), o->json);
     fp_mesh *sub = m;
     for (int l = 0; l < 3 && !rc; l++) {
         fp_mesh *next = fp_mesh_subdivide(sub);

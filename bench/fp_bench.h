@@ -51,4 +51,15 @@ int fp_bench_run(const fp_bench_options *o);
  *  take could not be written (the reason on stderr). */
 int fp_bench_take(FILE *out, int quick, int json);
 
+struct fp_mesh;
+/** The frame case's isolated mapping (bench_isolate.c, issue 56): the same paced replay of
+ *  three-claps (data_dir's) on `mesh` with the mapping in process, then in a helper process;
+ *  prints the mapping stage's medians, their difference (the overhead a frame, us) and ratio,
+ *  the whole frame's medians and the helper's resident memory (a table, or one JSON line
+ *  labelled `label`). Returns 0 or the session's code (its message on stderr). */
+int fp_bench_isolate(FILE *out, const fp_bench_options *bo, const struct fp_mesh *mesh, const char *label,
+                     const char *data_dir, bool json);
+/** The same on the MediaPipe face (468 vertices): the overhead without the large base's copy. */
+int fp_bench_isolate_small(FILE *out, const fp_bench_options *bo, const char *data_dir, bool json);
+
 #endif

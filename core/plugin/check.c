@@ -2,6 +2,7 @@
  * would, and harder. */
 #define _GNU_SOURCE
 #include "fp_plugin_check.h"
+#include "fp_isolate.h"
 #include "fp_plugin_crash.h"
 
 #include <errno.h>
@@ -493,6 +494,74 @@ static void run_sequence(checker *c, fp_mapping *m, scene *s, snapshot *snaps, d
     }
 }
 
+/* The first frame whose control sets differ between two passes, or FRAMES. */
+static size_t first_difference(const snapshot *a, const snapshot *b)
+{
+    size_t f = 0;
+    for (; f < FRAMES; f++) {
+        const snapshot *x = &a[f], *y = &b[f];
+        if (x->active != y->active || x->intents != y->intents || x->radius != y->radius ||
+            x->count != y->count || x->channel_count != y->channel_count ||
+            memcmp(x->start, y->start, x->count * sizeof x->start[0]) ||
+            memcmp(x->end, y->end, x->count * sizeof x->end[0]))
+            break;
+        bool same = true;
+        for (size_t i = 0; i < x->channel_count; i++)
+            same &= !strncmp(x->channels[i].name, y->channels[i].name, sizeof x->channels[i].name) &&
+                    x->channels[i].value == y->channels[i].value;
+        if (!same) break;
+    }
+    return f;
+}
+
+/* The same sequence with the mapping in a helper process (fp_isolate.h): the control sets
+ * must be those of the first pass in process (`a`), frame for frame. */
+static void check_isolated(checker *c, creator *cr, const snapshot *a)
+{
+    const fp_check_options *o = c->opt;
+    fp_isolate_options io = {.helper = o->helper, .deadline_ms = 10000, .quiet_restarts = true};
+    fp_mapping *m = NULL;
+    char msg[1024] = "";
+    int rc = fp_isolate_mapping_create(&io, c->who, c->sum->name, &cr->host, o->params, o->nparams, &m, msg,
+                                       sizeof msg);
+    if (rc) {
+        report(c, FP_CHECK_FAIL, "isolated", "in a helper process: %s", msg);
+        return;
+    }
+    scene *s = calloc(1, sizeof *s);
+    snapshot *b = calloc(FRAMES, sizeof *b);
+    double *t = calloc(FRAMES, sizeof *t);
+    fault faults[6] = {{.what = "process"}, {.what = "capacity"}, {.what = "overrun"},
+                       {.what = "finite points"}, {.what = "radius"}, {.what = "channels"}};
+    bool dead = false;
+    if (s && b && t) {
+        scene_init(s);
+        run_sequence(c, m, s, b, t, faults, &dead);
+        fp_isolate_stats st;
+        fp_isolate_mapping_stats(m, &st);
+        size_t f = first_difference(a, b);
+        qsort(t, FRAMES, sizeof *t, cmp_double);
+        if (st.faults || dead)
+            report(c, FP_CHECK_FAIL, "isolated", "in a helper process: %lu fault(s) (a crash or a hang "
+                   "there that in process did not happen)", st.faults);
+        else if (f < FRAMES)
+            report(c, FP_CHECK_FAIL, "isolated", "in a helper process frame %zu gave another control set "
+                   "(active %d/%d, count %zu/%zu): it depends on something the copy does not carry "
+                   "(shared globals? a pointer kept from an earlier frame?)", f, a[f].active, b[f].active,
+                   a[f].count, b[f].count);
+        else
+            report(c, FP_CHECK_PASS, "isolated", "in a helper process the same %d frames gave identical "
+                   "control sets (a call's median %.1f us there, copies and wake-ups included)", FRAMES,
+                   t[FRAMES / 2]);
+    } else {
+        report(c, FP_CHECK_FAIL, "memory", "out of memory");
+    }
+    m->destroy(m);
+    free(s);
+    free(b);
+    free(t);
+}
+
 static void check_mapping(checker *c, creator *cr)
 {
     void *inst;
@@ -568,20 +637,7 @@ static void check_mapping(checker *c, creator *cr)
     }
     free(t);
     if (ran_twice && !any) {
-        size_t f = 0;
-        for (; f < FRAMES; f++) {
-            const snapshot *x = &a[f], *y = &b[f];
-            if (x->active != y->active || x->intents != y->intents || x->radius != y->radius ||
-                x->count != y->count || x->channel_count != y->channel_count ||
-                memcmp(x->start, y->start, x->count * sizeof x->start[0]) ||
-                memcmp(x->end, y->end, x->count * sizeof x->end[0]))
-                break;
-            bool same = true;
-            for (size_t i = 0; i < x->channel_count; i++)
-                same &= !strncmp(x->channels[i].name, y->channels[i].name, sizeof x->channels[i].name) &&
-                        x->channels[i].value == y->channels[i].value;
-            if (!same) break;
-        }
+        size_t f = first_difference(a, b);
         if (f < FRAMES)
             report(c, FP_CHECK_FAIL, "determinism",
                    "after reset the same frames gave a different control set on frame %zu "
@@ -590,6 +646,7 @@ static void check_mapping(checker *c, creator *cr)
         else
             report(c, FP_CHECK_PASS, "determinism", "after reset the same %d frames gave identical control sets",
                    FRAMES);
+        if (f == FRAMES && c->opt->isolate) check_isolated(c, cr, a);
     } else if (!m->reset && !dead) {
         report(c, FP_CHECK_INFO, "determinism", "the mapping has no reset()");
     }

@@ -47,6 +47,10 @@ typedef struct fp_check_options {
     size_t nparams;
     double budget_ms;         /* a mapping's process() budget; 0: 2 ms */
     int cycles;               /* an input's create/start/stop/destroy cycles; 0: 5 */
+    bool isolate;             /* a mapping whose sequence passed: the first pass again with it
+                                 in a helper process (fp_isolate.h), its control sets compared
+                                 frame for frame ("isolated") */
+    const char *helper;       /* the helper's executable; NULL: /proc/self/exe */
 } fp_check_options;
 
 /** What the check found, besides the lines it reported. */

@@ -102,6 +102,17 @@ typedef struct fp_plugin {
 int fp_plugin_load(const fp_plugin_path *path, fp_plugin_kind kind, const char *name,
                    fp_plugin *out, char *err, size_t errlen);
 
+/** Where fp_plugin_load would find `name` (as it searches: a name with a '/' is the file
+ *  itself), into file (filelen bytes), without loading it; *builtin (may be NULL) true when
+ *  it is in the path's built-in folder. Unsafe candidates skipped are described in warning
+ *  (may be NULL). Returns whether a file was found. */
+bool fp_plugin_find(const fp_plugin_path *path, fp_plugin_kind kind, const char *name, char *file,
+                    size_t filelen, bool *builtin, char *warning, size_t warnlen);
+/** fp_plugin_load's message for a plugin not found (the folders searched and the plugins
+ *  there, and `warning` where not empty) into err. */
+void fp_plugin_not_found(const fp_plugin_path *path, fp_plugin_kind kind, const char *name,
+                         const char *warning, char *err, size_t errlen);
+
 /** deinit and dlclose. Safe on a zeroed fp_plugin. */
 void fp_plugin_unload(fp_plugin *plugin);
 
@@ -240,6 +251,7 @@ void fp_host_init_for_mapping(fp_host *host, const char *name);
 /** Services a session offers its mapping through get_extension (plugin.h, ABI 1.1). */
 typedef struct fp_mapping_services {
     fp_host_surface surface;   /* FP_HOST_EXT_SURFACE; not offered while nearest is NULL */
+    uint64_t (*base_version)(void *user); /* FP_HOST_EXT_BASE_VERSION; NULL: not offered */
     void *user;                /* the provider's data, for the service's implementation */
 } fp_mapping_services;
 
@@ -262,7 +274,26 @@ typedef struct fp_mapping_host {
                                         Kept by pointer: it must outlive the host */
     fp_log_relay *relay;             /* NULL: none; else the owner's, set after init, which
                                         must outlive the instance */
+    void (*fault)(void *user, const char *text); /* FP_HOST_EXT_FAULT_NOTICE; NULL: not offered */
+    void *fault_user;
 } fp_mapping_host;
+
+/** Host extension of the host's own (not in plugin.h, not for plugins): an isolated mapping's
+ *  proxy (fp_isolate.h) tells the host of each fault (a helper dead or past its deadline) with
+ *  one line of text, e.g. for the take. [session-thread], during process(). */
+/** Host extension of the host's own (not for plugins): a number that changes whenever the
+ *  content of fp_frame_input.mesh->base may have changed since the last frame (a commit, an
+ *  undo, a rig pose), so that an isolated mapping's proxy copies the base to its helper only
+ *  then. [session-thread] */
+#define FP_HOST_EXT_BASE_VERSION "facepuppet.host.base-version/1"
+typedef struct fp_host_base_version {
+    uint64_t (*get)(const fp_host *host);
+} fp_host_base_version;
+
+#define FP_HOST_EXT_FAULT_NOTICE "facepuppet.host.fault-notice/1"
+typedef struct fp_host_fault_notice {
+    void (*notice)(const fp_host *host, const char *text);
+} fp_host_fault_notice;
 void fp_mapping_host_init(fp_mapping_host *mh, const char *name, fp_host_log_fn log, void *log_user);
 /** Hand the lines kept in mh->relay to mh->log with mh's source, oldest first (a line counts
  *  any dropped). Returns their number; 0 without a relay. [owner's thread]. */

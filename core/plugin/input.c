@@ -113,11 +113,30 @@ static const fp_rig_view *mapping_rig(const fp_host *host)
 
 static const fp_host_rig mapping_rig_ext = {mapping_rig};
 
+static void mapping_fault(const fp_host *host, const char *text)
+{
+    const fp_mapping_host *mh = host ? host->host_data : NULL;
+    if (mh && mh->fault) mh->fault(mh->fault_user, text);
+}
+
+static const fp_host_fault_notice mapping_fault_ext = {mapping_fault};
+
+static uint64_t mapping_base_version(const fp_host *host)
+{
+    const fp_mapping_host *mh = host ? host->host_data : NULL;
+    return mh && mh->services && mh->services->base_version ? mh->services->base_version(mh->services->user) : 0;
+}
+
+static const fp_host_base_version mapping_base_version_ext = {mapping_base_version};
+
 static const void *mapping_extension(const fp_host *host, const char *id)
 {
     const fp_mapping_host *mh = host ? host->host_data : NULL;
     if (!id) return NULL;
     if (!strcmp(id, FP_HOST_EXT_RIG)) return &mapping_rig_ext;
+    if (!strcmp(id, FP_HOST_EXT_FAULT_NOTICE) && mh && mh->fault) return &mapping_fault_ext;
+    if (!strcmp(id, FP_HOST_EXT_BASE_VERSION) && mh && mh->services && mh->services->base_version)
+        return &mapping_base_version_ext;
     if (!strcmp(id, FP_HOST_EXT_SURFACE) && mh && mh->services && mh->services->surface.nearest)
         return &mh->services->surface;
     return NULL;

@@ -120,6 +120,51 @@ static int fail(fp_plugin *p, int code)
     return code;
 }
 
+void fp_plugin_not_found(const fp_plugin_path *path, fp_plugin_kind kind, const char *name,
+                         const char *warning, char *err, size_t errlen)
+{
+    const char *what = kind == FP_PLUGIN_INPUT ? "input" : "mapping";
+    char dirs[1024] = "", avail[1024];
+    size_t used = 0;
+    for (size_t i = 0; i < path->count; i++) {
+        int w = snprintf(dirs + used, used < sizeof dirs ? sizeof dirs - used : 0, "%s%s",
+                         i ? ", " : "", path->dirs[i]);
+        if (w > 0) used += (size_t)w;
+    }
+    fp_plugin_list(path, kind, avail, sizeof avail);
+    if (strchr(name, '/'))
+        snprintf(err, errlen, "%s plugin file '%s' not found", what, name);
+    else
+        snprintf(err, errlen, "no %s plugin named '%s' (looked for %s%s.so in: %s; available: %s)%s%s",
+                 what, name, kind_prefix(kind), name, path->count ? dirs : "no folders",
+                 avail[0] ? avail : "none", warning && warning[0] ? "; " : "", warning ? warning : "");
+}
+
+bool fp_plugin_find(const fp_plugin_path *path, fp_plugin_kind kind, const char *name, char *file,
+                    size_t filelen, bool *builtin, char *warning, size_t warnlen)
+{
+    struct stat st;
+    bool found = false;
+    if (builtin) *builtin = false;
+    if (strchr(name, '/')) {
+        snprintf(file, filelen, "%s", name);
+        return stat(file, &st) == 0;
+    }
+    for (size_t i = 0; i < path->count && !found; i++) {
+        snprintf(file, filelen, "%s/%s%s.so", path->dirs[i], kind_prefix(kind), name);
+        found = stat(file, &st) == 0;
+        char why[128];
+        if (found && i != path->builtin && fp_plugin_path_unsafe(file, why, sizeof why)) {
+            size_t used = warning ? strlen(warning) : 0;
+            if (warning && used < warnlen)
+                snprintf(warning + used, warnlen - used, "%s%.300s skipped: %.120s", used ? "; " : "", file, why);
+            found = false;
+        }
+        if (found && builtin) *builtin = i == path->builtin;
+    }
+    return found;
+}
+
 int fp_plugin_load(const fp_plugin_path *path, fp_plugin_kind kind, const char *name,
                    fp_plugin *out, char *err, size_t errlen)
 {
@@ -127,40 +172,9 @@ int fp_plugin_load(const fp_plugin_path *path, fp_plugin_kind kind, const char *
     memset(out, 0, sizeof *out);
     out->kind = kind;
     char file[4096];
-    struct stat st;
-    bool found = false;
-    if (strchr(name, '/')) {
-        snprintf(file, sizeof file, "%s", name);
-        found = stat(file, &st) == 0;
-    } else {
-        for (size_t i = 0; i < path->count && !found; i++) {
-            snprintf(file, sizeof file, "%s/%s%s.so", path->dirs[i], kind_prefix(kind), name);
-            found = stat(file, &st) == 0;
-            char why[128];
-            if (found && i != path->builtin && fp_plugin_path_unsafe(file, why, sizeof why)) {
-                size_t used = strlen(out->warning);
-                if (used < sizeof out->warning)
-                    snprintf(out->warning + used, sizeof out->warning - used, "%s%.300s skipped: %.120s",
-                             used ? "; " : "", file, why);
-                found = false;
-            }
-        }
-    }
+    bool found = fp_plugin_find(path, kind, name, file, sizeof file, NULL, out->warning, sizeof out->warning);
     if (!found) {
-        char dirs[1024] = "", avail[1024];
-        size_t used = 0;
-        for (size_t i = 0; i < path->count; i++) {
-            int w = snprintf(dirs + used, used < sizeof dirs ? sizeof dirs - used : 0, "%s%s",
-                             i ? ", " : "", path->dirs[i]);
-            if (w > 0) used += (size_t)w;
-        }
-        fp_plugin_list(path, kind, avail, sizeof avail);
-        if (strchr(name, '/'))
-            snprintf(err, errlen, "%s plugin file '%s' not found", what, name);
-        else
-            snprintf(err, errlen, "no %s plugin named '%s' (looked for %s%s.so in: %s; available: %s)%s%s",
-                     what, name, kind_prefix(kind), name, path->count ? dirs : "no folders",
-                     avail[0] ? avail : "none", out->warning[0] ? "; " : "", out->warning);
+        fp_plugin_not_found(path, kind, name, out->warning, err, errlen);
         return FP_EPLUGIN_NOT_FOUND;
     }
     out->path = strdup(file);

@@ -162,6 +162,18 @@ typedef struct fp_session_options {
                                                        machine a 20 us grace may pass every
                                                        frame); -1: never. fp_session_step,
                                                        frame_thread.h */
+    int isolate;                                    /* which mapping runs in a helper
+                                                       process (fp_isolate.h's
+                                                       fp_isolate_mode): 0 (FP_ISOLATE_NONE,
+                                                       the default of the library) every one
+                                                       in process; 1 those not found in the
+                                                       path's built-in folder (the default of
+                                                       `run` and `live`); 2 every one */
+    double isolate_deadline_ms;                     /* an isolated process() that has not
+                                                       answered by then is abandoned and its
+                                                       helper restarted; 0: 50 ms */
+    const char *isolate_helper;                     /* the executable run in helper mode;
+                                                       NULL: /proc/self/exe (facepuppet) */
 } fp_session_options;
 
 /** The frame's stages, for fp_frame_stats.stage_ms (`bench --case frame`). */
@@ -403,7 +415,10 @@ int fp_session_set_mapping(fp_session *s, const fp_plugin_path *path, const char
  *  code). Session thread only, between frames. */
 int fp_session_reload_mapping(fp_session *s, const char *file, char *err, size_t errlen);
 /** The file the mapping was found at by name (not a reload's copy), the loaded plugin (its
- *  entry's id and version), and the mapping's name. Valid until the mapping changes. */
+ *  entry's id and version), and the mapping's name. Valid until the mapping changes. An
+ *  isolated mapping (fp_session_options.isolate) is loaded in its helper process: its
+ *  fp_plugin has the path and an entry with the id and version its helper reported, and no
+ *  handle, factory or entry functions. */
 const char *fp_session_mapping_file(const fp_session *s);
 const fp_plugin *fp_session_mapping_plugin(const fp_session *s);
 const char *fp_session_mapping_name(const fp_session *s);

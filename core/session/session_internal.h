@@ -14,6 +14,7 @@
 #include "fp_session.h"
 
 #include "changed.h"
+#include "fp_isolate.h"
 #include "fp_mesh.h"
 #include "fp_pose.h"
 #include "fp_rig.h"
@@ -52,6 +53,13 @@ struct fp_session {
     char mapping_spec[1024];      /* the SPEC it was made from (keys kept for a reload) */
     char mapping_file[4096];      /* the file it was found at (a reload loads a copy) */
     double mapping_budget_ms;
+    int isolate;                  /* fp_isolate_mode of the options */
+    fp_isolate_options isolate_opt;
+    char isolate_helper[4096];
+    fp_plugin_entry isolated_entry; /* an isolated mapping's id and version, for
+                                       mapping_plugin.entry (no functions: the plugin is
+                                       loaded in its helper) */
+    char isolated_id[128], isolated_version[64];
     fp_mesh_view view;
     char rig_how[1200];           /* how the rig was chosen (fp_session_rig_how) */
 

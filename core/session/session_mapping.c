@@ -9,6 +9,25 @@
 #include <stdio.h>
 #include <string.h>
 
+/* FP_HOST_EXT_FAULT_NOTICE: an isolated mapping's fault goes into the frame's record (the
+ * take) as a status event of the first input (docs/take-format.md: events carry an input's
+ * index), code FP_STATUS_WARNING, hand -1. */
+static void fault_notice(void *user, const char *text)
+{
+    fp_session *s = user;
+    if (!s->input_count) return;
+    fp_event ev;
+    memset(&ev, 0, sizeof ev);
+    ev.status.header.size = sizeof ev.status;
+    ev.status.header.type = FP_EVENT_STATUS;
+    ev.status.header.time_ns = fp_now_ns();
+    ev.status.header.source = 0;
+    ev.status.header.hand = -1;
+    ev.status.code = FP_STATUS_WARNING;
+    snprintf(ev.status.text, sizeof ev.status.text, "%s", text);
+    fp_record_step_event(&s->record, &ev);
+}
+
 /* Load the mapping of SPEC `mapping` (from `file` where not NULL: a copy being hot-reloaded)
  * and create it with the SPEC's keys. */
 int fp__session_load_mapping(fp_session *s, const char *mapping, const fp_plugin_path *path,
@@ -22,17 +41,37 @@ int fp__session_load_mapping(fp_session *s, const char *mapping, const fp_plugin
         fp_spec_clear(&spec);
         return -EINVAL;
     }
-    rc = fp_plugin_load(path, FP_PLUGIN_MAPPING, file ? file : spec.name, &s->mapping_plugin, err, errlen);
+    /* isolated (fp_isolate.h): found here, loaded and created in a helper process */
+    char found[4096];
+    bool builtin = false;
+    bool isolated = s->isolate != FP_ISOLATE_NONE &&
+                    fp_plugin_find(path, FP_PLUGIN_MAPPING, file ? file : spec.name, found, sizeof found,
+                                   &builtin, NULL, 0) &&
+                    fp_isolate_wanted((fp_isolate_mode)s->isolate, builtin);
+    if (isolated) {
+        memset(&s->mapping_plugin, 0, sizeof s->mapping_plugin);
+        s->mapping_plugin.kind = FP_PLUGIN_MAPPING;
+        rc = (s->mapping_plugin.path = strdup(found)) ? 0 : -ENOMEM;
+        if (rc) snprintf(err, errlen, "mapping '%s': out of memory", mapping);
+    } else {
+        rc = fp_plugin_load(path, FP_PLUGIN_MAPPING, file ? file : spec.name, &s->mapping_plugin, err, errlen);
+    }
     if (!rc) {
         snprintf(s->mapping_name, sizeof s->mapping_name, "%s", spec.name);
         fp_mapping_host_init(&s->mapping_host, spec.name, s->log.fn, s->log.user);
         s->mapping_host.rig = fp_rig_step_view(&s->rig); /* FP_HOST_EXT_RIG */
         s->mapping_host.services = &s->services; /* FP_HOST_EXT_SURFACE */
         s->mapping_host.relay = &s->mapping_relay;
+        s->mapping_host.fault = fault_notice;
+        s->mapping_host.fault_user = s;
         const fp_mapping_factory *f = s->mapping_plugin.factory;
-        char perr[512] = "";
+        char perr[1024] = "";
         fp_plugin_call_enter(s->mapping_name, "create", s->frame);
-        rc = f->create(&s->mapping_host.host, spec.params, spec.nparams, &s->mapping, perr, sizeof perr);
+        if (isolated)
+            rc = fp_isolate_mapping_create(&s->isolate_opt, found, s->mapping_name, &s->mapping_host.host,
+                                           spec.params, spec.nparams, &s->mapping, perr, sizeof perr);
+        else
+            rc = f->create(&s->mapping_host.host, spec.params, spec.nparams, &s->mapping, perr, sizeof perr);
         fp_plugin_call_leave();
         fp_mapping_host_drain_log(&s->mapping_host); /* what its create said */
         if (rc || !s->mapping) {
@@ -41,6 +80,15 @@ int fp__session_load_mapping(fp_session *s, const char *mapping, const fp_plugin
             s->mapping = NULL;
             rc = rc ? rc : FP_EPLUGIN_FAULT;
         } else {
+            const char *id, *version;
+            if (isolated && fp_isolate_mapping_about(s->mapping, &id, &version)) {
+                snprintf(s->isolated_id, sizeof s->isolated_id, "%s", id);
+                snprintf(s->isolated_version, sizeof s->isolated_version, "%s", version);
+                memset(&s->isolated_entry, 0, sizeof s->isolated_entry);
+                s->isolated_entry.id = s->isolated_id;
+                s->isolated_entry.version = s->isolated_version;
+                s->mapping_plugin.entry = &s->isolated_entry;
+            }
             snprintf(s->mapping_spec, sizeof s->mapping_spec, "%s", mapping);
             if (!file) snprintf(s->mapping_file, sizeof s->mapping_file, "%s", s->mapping_plugin.path);
         }
@@ -59,9 +107,18 @@ static int surface_nearest(const fp_host *host, const float (*points)[3], size_t
                                   max_distance, out);
 }
 
+/* FP_HOST_EXT_BASE_VERSION: the engine counts every change of the base it indexes (the
+ * posed base the mapping sees: commits, undo, reset, the rig's poses). */
+static uint64_t base_version(void *user)
+{
+    const fp_session *s = user;
+    return s->engine.base_version;
+}
+
 void fp__session_mapping_services(fp_session *s)
 {
     s->services.surface.nearest = surface_nearest;
+    s->services.base_version = base_version;
     s->services.user = s;
 }
 

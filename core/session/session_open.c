@@ -254,6 +254,10 @@ static int open_steps(fp_session *s, const fp_session_options *opt, double diag,
     memcpy(s->deformed, s->shown, s->n * 3 * sizeof(float));
     fp_engine_step_output_is_base(&s->engine);
     s->mapping_budget_ms = opt->mapping_budget_ms;
+    s->isolate = opt->isolate;
+    snprintf(s->isolate_helper, sizeof s->isolate_helper, "%s", opt->isolate_helper ? opt->isolate_helper : "");
+    s->isolate_opt.helper = opt->isolate_helper ? s->isolate_helper : NULL;
+    s->isolate_opt.deadline_ms = opt->isolate_deadline_ms;
     s->whole_rig_commit = opt->whole_rig_commit;
     s->frame_thread_opt = opt->frame_thread;
     /* the hold's eps from the loaded face's diagonal (diag: its square, above) */

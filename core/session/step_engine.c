@@ -61,6 +61,7 @@ void fp_engine_step_free(fp_engine_step *e)
 
 void fp_engine_step_set_base(fp_engine_step *e, const float *base)
 {
+    e->base_version++;
     csrbf_points_update(e->points, base);
     e->inter_stale = true; /* (a rig's channel changes the base every frame it moves) */
     csrbf_touch_reset(e->touch); /* the output buffer no longer matches the base */
@@ -70,6 +71,7 @@ void fp_engine_step_set_base(fp_engine_step *e, const float *base)
 
 void fp_engine_step_commit_ranges(fp_engine_step *e, const float *base, const uint32_t *ranges, size_t nr)
 {
+    e->base_version++;
     /* the nearest index takes the commit at the next frame's distances (fp_engine_step_sync) */
     csrbf_points_update_ranges_later(e->points, base, ranges, nr);
     if (e->inter && !e->inter_stale) csrbf_points_update_ranges(e->inter, base, ranges, nr);
@@ -80,6 +82,7 @@ void fp_engine_step_commit_ranges(fp_engine_step *e, const float *base, const ui
 
 void fp_engine_step_commit(fp_engine_step *e, const float *base)
 {
+    e->base_version++;
     const uint32_t *ranges;
     size_t nr = csrbf_touch_ranges(e->touch, &ranges);
     if (e->touched_valid) { /* only the blocks the last evaluation wrote differ */

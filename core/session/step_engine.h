@@ -63,6 +63,9 @@ extern "C" {
 
 typedef struct fp_engine_step {
     csrbf_solver *solver;         /* NULL until the first run */
+    uint64_t base_version;        /* counts the base's changes (set_base, commit, commit_ranges):
+                                     an isolated mapping's copy of the base is renewed when it
+                                     moves (FP_HOST_EXT_BASE_VERSION) */
     double solver_radius;         /* the radius the solver was made for */
     csrbf_points *points;         /* the base vertices, blocked for evaluation */
     csrbf_touch *touch;           /* which blocks of the (persistent) output differ from the base */

@@ -50,6 +50,12 @@ expect 0 'passed: 8 checks' "$fp" plugins check "$builtin/input-take.so" \
 
 # Each broken fixture fails with a message naming the cause.
 expect 0 'passed' "$fp" plugins check "$fx/map-fixture.so"
+# Not one of facepuppet's own: its frames again in a helper process (issue 56), identical;
+# --isolate none leaves that pass out, --isolate all adds it for a built-in mapping.
+expect 0 'PASS  isolated +in a helper process the same 240 frames gave identical control sets' \
+    "$fp" plugins check "$fx/map-fixture.so"
+expect 0 'passed: 9 checks' "$fp" plugins check "$fx/map-fixture.so" --isolate none  # 10 with the isolated pass
+expect 0 'PASS  isolated' "$fp" plugins check "$builtin/map-onehand.so" --isolate all
 expect 1 "FAIL  overrun +wrote past the capacity of the host's start array" "$fp" plugins check "$fx/map-fixture-overrun.so"
 expect 1 'FAIL  finite points +control vector 0: end point .*nan.* is not finite' "$fp" plugins check "$fx/map-fixture-nan.so"
 expect 1 'FAIL  time +process took [0-9]+\.[0-9]+ ms .*over the budget of 2 ms' "$fp" plugins check "$fx/map-fixture-slow.so"
@@ -74,7 +80,7 @@ assert k['replay']['keys'][0]['name']=='speed'; assert k['fixture-initfails']['s
 chmod 777 "$tmp" && expect 0 "skipped" "$fp" plugins --plugin-dir "$tmp"; chmod 700 "$tmp"
 
 # run: the host names the mapping at fault.
-run() { "$fp" run --plugin-dir "$fx" --mesh "$mesh" --input "replay:$rec" --duration 1 --quiet -o "$tmp/out.obj" --force "$@"; }
+run() { "$fp" run --isolate none --plugin-dir "$fx" --mesh "$mesh" --input "replay:$rec" --duration 1 --quiet -o "$tmp/out.obj" --force "$@"; }
 expect 78 "mapping 'fixture-overrun': wrote past the capacity of the host's start array \(64 entries\) on frame [0-9]+; the mapping is stopped" run --mapping fixture-overrun
 expect 139 "fatal signal SIGSEGV in plugin 'fixture-segv' during process \(frame 3\)" run --mapping fixture-segv
 expect 0 "mapping 'fixture-slow': process took [0-9]+\.[0-9]+ ms on frame [0-9]+, over the budget of 2 ms" run --mapping fixture-slow

@@ -1,5 +1,6 @@
 /* facepuppet plugins: list every plugin on the search path; plugins check FILE.so: validate one. */
 #define _GNU_SOURCE
+#include "fp_isolate.h"
 #include "app_util.h"
 #include "command.h"
 #include "fp_plugin_check.h"
@@ -9,6 +10,7 @@
 #include <cjson/cJSON.h>
 #include <errno.h>
 #include <getopt.h>
+#include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -160,6 +162,10 @@ static void usage(FILE *f)
         "  --key K=V       a key added to every create (repeatable), e.g. --key fast=1\n"
         "  --budget MS     a mapping's process() budget (default 2 ms)\n"
         "  --cycles N      an input's start/stop cycles (default 5)\n"
+        "  --isolate WHICH third-party (default): a mapping not in facepuppet's own plugin\n"
+        "                  folder whose frames pass runs them again in a helper process\n"
+        "                  (as run and live would run it), control sets compared frame by\n"
+        "                  frame (\"isolated\"); all: any mapping; none: no such pass\n"
         "  --json          machine-readable output\n\n"
         "Exit status: 0 passed (skips allowed, e.g. \"needs a device\"), 1 a check failed,\n"
         "64 usage, 78 the plugin cannot be loaded (missing, ABI, no entry, init, factory).\n");
@@ -187,13 +193,26 @@ static void on_check(void *user, fp_check_level level, const char *check, const 
     }
 }
 
+/* Whether `file` is in facepuppet's own plugin folder (its real directory is that one). */
+static bool in_builtin_dir(const char *file)
+{
+    char dir[4200], real_dir[PATH_MAX], real_file[PATH_MAX];
+    fp_app_builtin_plugin_dir(dir, sizeof dir);
+    if (!realpath(dir, real_dir) || !realpath(file, real_file)) return false;
+    char *slash = strrchr(real_file, '/');
+    if (!slash) return false;
+    *slash = '\0';
+    return !strcmp(real_dir, real_file);
+}
+
 static int check_main(int argc, char **argv)
 {
     static const struct option opts[] = {{"json", no_argument, 0, 'j'},      {"arg", required_argument, 0, 'a'},
                                          {"key", required_argument, 0, 'k'}, {"budget", required_argument, 0, 'b'},
                                          {"cycles", required_argument, 0, 'c'}, {"help", no_argument, 0, 'h'},
-                                         {0, 0, 0, 0}};
+                                         {"isolate", required_argument, 0, 'I'}, {0, 0, 0, 0}};
     fp_check_options o = {0};
+    fp_isolate_mode isolate = FP_ISOLATE_THIRD_PARTY;
     fp_param keys[FP_SPEC_MAX_PARAMS];
     char *keybuf[FP_SPEC_MAX_PARAMS];
     size_t nkeys = 0;
@@ -234,6 +253,14 @@ static int check_main(int argc, char **argv)
             }
             o.cycles = (int)whole;
             break;
+        case 'I':
+            if (fp_isolate_mode_parse(optarg, &isolate)) {
+                fprintf(stderr, "facepuppet plugins check: --isolate must be all, none or third-party, got '%s'\n",
+                        optarg);
+                status = FP_EXIT_USAGE;
+                goto out;
+            }
+            break;
         case 'h': usage(stdout); goto out;
         default: usage(stderr); status = FP_EXIT_USAGE; goto out;
         }
@@ -247,6 +274,7 @@ static int check_main(int argc, char **argv)
     o.nparams = nkeys;
     char file[4200];
     snprintf(file, sizeof file, "%s%s", strchr(argv[optind], '/') ? "" : "./", argv[optind]);
+    o.isolate = fp_isolate_wanted(isolate, in_builtin_dir(file));
     fp_plugin_crash_install();
     check_printer cp = {json, json ? cJSON_CreateArray() : NULL};
     fp_check_summary sum;

@@ -7,6 +7,7 @@
 #include "fp_rig.h"
 
 #include "fp_calib_file.h"
+#include "fp_isolate.h"
 
 #include <errno.h>
 #include <math.h>
@@ -14,7 +15,7 @@
 #include <string.h>
 
 enum { OPT_DURATION = 0x100, OPT_HAND_SIZE, OPT_PLUGIN_DIR, OPT_MM_PER_UNIT, OPT_CALIBRATION, OPT_RIG,
-       OPT_CONTROL, OPT_STREAM };
+       OPT_CONTROL, OPT_STREAM, OPT_ISOLATE, OPT_ISOLATE_DEADLINE };
 
 static const struct {
     const char *name;
@@ -55,6 +56,11 @@ static const struct {
     {"stream", required_argument, OPT_STREAM, "SPEC",
      "osc:HOST:PORT[,step=MM][,key=N][,mtu=B]: send every frame\n(vertex offsets from the neutral, 0.05 mm steps; rig\n"
      "channels) over OSC, a keyframe every 30 frames; the\nBlender add-on receives it (docs/osc.md, Stream)"},
+    {"isolate", required_argument, OPT_ISOLATE, "WHICH",
+     "third-party (default): a mapping plugin not shipped with\nfacepuppet runs in a helper process; a crash or hang\n"
+     "there holds the last control set and restarts it;\nall: every mapping so; none: every one in process"},
+    {"isolate-deadline", required_argument, OPT_ISOLATE_DEADLINE, "MS",
+     "an isolated mapping's process() that has not answered\nwithin MS ms (default 50) is abandoned, its helper\nrestarted"},
     {"quiet", no_argument, 'q', NULL,
      "no progress or status lines, nor the engine's and\ncontact guard's notes on each gesture; the summary\n"
      "(stdout), errors and the lines of the inputs,\nrecordings, mapping, rig and session (the hands'\n"
@@ -68,6 +74,7 @@ void fp_session_opts_init(fp_session_opts *o, fp_session_options *session)
     static char rig_dir[1024]; /* the rig folder next to the program (fp_rig_default_dir) */
     session->rig_dir = fp_rig_default_dir(fp_app_exe_dir(), rig_dir, sizeof rig_dir);
     o->speed = 1;
+    session->isolate = FP_ISOLATE_THIRD_PARTY;
 }
 
 size_t fp_session_opts_longopts(struct option *out)
@@ -143,6 +150,15 @@ int fp_session_opts_parse(fp_session_opts *o, int c, const char *arg, const char
         so->calibration = &o->calibration;
         return 1;
     }
+    case OPT_ISOLATE: {
+        fp_isolate_mode mode;
+        if (fp_isolate_mode_parse(arg, &mode)) return bad(cmd, "--isolate must be all, none or third-party", arg);
+        so->isolate = (int)mode;
+        return 1;
+    }
+    case OPT_ISOLATE_DEADLINE:
+        return number(arg, 0.999, 60001, &so->isolate_deadline_ms) ? 1
+               : bad(cmd, "--isolate-deadline must be 1 to 60000 ms", arg);
     case 'q': o->quiet = true; return 1;
     case OPT_CONTROL: o->control = arg; return 1;
     case OPT_STREAM: o->stream = arg; return 1;

@@ -1,0 +1,110 @@
+/*
+ * fp_isolate.h: a mapping plugin in a helper process (issue 56). The host gets an fp_mapping
+ * whose process(), reset() and destroy() forward to the plugin running in `facepuppet
+ * __plugin-helper` (the same executable: nothing else is installed); the caller (the
+ * session) calls it as any mapping. Each frame the frame input (hands, events, the mesh's
+ * base, the rig) and the control set are copied through shared memory (memfd + mmap) with an
+ * eventfd wake-up each way; the host's surface service (FP_HOST_EXT_SURFACE) is answered
+ * during the call, the rig (FP_HOST_EXT_RIG) is copied, and the plugin's log lines come back
+ * through the host's fp_host.log. Same calls in the same order, same control sets: a built-in
+ * mapping gives bit-identical meshes isolated or not (tests/plugin/test_isolate.sh).
+ *
+ * The watchdog: a call that has not answered within the deadline, or a helper that died (any
+ * signal, any exit), is a fault. The call returns at once with the last good control set
+ * held (without its intents; an inactive set where it committed), the fault is reported once
+ * through fp_host.log naming the plugin, the call, the frame and the cause, the helper is
+ * killed (SIGKILL) and reaped, and a new one is started in the background after a back-off
+ * (FP_ISOLATE_BACKOFF_MS, doubling per fault in a row, at most FP_ISOLATE_BACKOFF_MAX_MS),
+ * created anew with the same keys; the frames meanwhile hold the set. After
+ * FP_ISOLATE_MAX_FAULTS faults in a row (a helper that answered FP_ISOLATE_HEALTHY_CALLS
+ * calls ends a row) it gives up: one error line, and every later call returns an inactive
+ * set with code 0 (the face stays as it was, the session runs on).
+ *
+ * Errors: as the in-process loader and factory (fp_plugin_load's FP_EPLUGIN_* codes, the
+ * factory's own code with its message), plus the host's: -ENOMEM, -EIO (no helper could be
+ * started), FP_EPLUGIN_FAULT (the helper died or hung during create).
+ *
+ * Threads: create and destroy [main-thread]; process and reset on the session's thread, one
+ * call at a time (plugin.h's [session-thread]); they never block longer than the deadline.
+ */
+#ifndef FP_ISOLATE_H
+#define FP_ISOLATE_H
+
+#include "fp_plugin_host.h"
+
+#include <facepuppet/plugin.h>
+#include <stdbool.h>
+#include <stddef.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Which mappings run in a helper: none (all in process), those not found in facepuppet's
+ *  own plugin folder (the default of `run`, `live` and `plugins check`), or all. */
+typedef enum fp_isolate_mode {
+    FP_ISOLATE_NONE = 0,
+    FP_ISOLATE_THIRD_PARTY = 1,
+    FP_ISOLATE_ALL = 2
+} fp_isolate_mode;
+
+#define FP_ISOLATE_DEADLINE_MS 50.0     /* default deadline of one call (3 frames at 60 Hz) */
+#define FP_ISOLATE_CREATE_MS 10000.0    /* the helper's load and create */
+#define FP_ISOLATE_BACKOFF_MS 100.0     /* the first restart's wait */
+#define FP_ISOLATE_BACKOFF_MAX_MS 2000.0
+#define FP_ISOLATE_MAX_FAULTS 5         /* faults in a row before giving up */
+#define FP_ISOLATE_HEALTHY_CALLS 60     /* calls answered that end a row of faults (1 s at 60 Hz) */
+
+/** The first argument of the helper mode: `facepuppet __plugin-helper ...`. */
+#define FP_ISOLATE_HELPER_ARG "__plugin-helper"
+
+/** "none", "third-party" or "all" into *out; -EINVAL for anything else. */
+int fp_isolate_mode_parse(const char *text, fp_isolate_mode *out);
+/** The mode's name as parsed. */
+const char *fp_isolate_mode_name(fp_isolate_mode mode);
+
+/** Whether the plugin at `file` (found on `path`, fp_plugin_find) runs in a helper under
+ *  `mode`: never for NONE, always for ALL; for THIRD_PARTY, unless `builtin` (the file was
+ *  found in the path's built-in folder). */
+bool fp_isolate_wanted(fp_isolate_mode mode, bool builtin);
+
+typedef struct fp_isolate_options {
+    const char *helper;        /* the executable run as the helper; NULL: /proc/self/exe */
+    double deadline_ms;        /* 0: FP_ISOLATE_DEADLINE_MS */
+    bool quiet_restarts;       /* true: no info line when a helper is back */
+} fp_isolate_options;
+
+/** Start a helper that loads the mapping plugin `file` (an absolute or relative path; the
+ *  caller resolved it), calls its init, and creates an instance with `params` (the SPEC's
+ *  keys); `name` (the SPEC's NAME) names it in messages. `host` is the fp_host the plugin
+ *  would have had in process (its log, FP_HOST_EXT_SURFACE and FP_HOST_EXT_RIG are used);
+ *  it must outlive the instance. On success *out is the proxy (free it with its destroy,
+ *  which ends the helper). On failure, the plugin's message or the loader's in err, and
+ *  the code (above). [main-thread] */
+int fp_isolate_mapping_create(const fp_isolate_options *opt, const char *file, const char *name,
+                              const fp_host *host, const fp_param *params, size_t nparams,
+                              fp_mapping **out, char *err, size_t errlen);
+
+/** What a proxy has been through, for reports and tests: faults (deadlines missed, helpers
+ *  dead), restarts done, frames held, whether it gave up, and the helper's pid (0: none).
+ *  False where `m` is not an isolated mapping. [the session's thread] */
+typedef struct fp_isolate_stats {
+    unsigned long faults, restarts, held;
+    bool gave_up;
+    int pid;
+} fp_isolate_stats;
+bool fp_isolate_mapping_stats(const fp_mapping *m, fp_isolate_stats *out);
+
+/** The plugin's entry id and version (fp_plugin_entry) as its helper loaded it: strings of
+ *  the proxy, valid while it lives. False where `m` is not an isolated mapping. */
+bool fp_isolate_mapping_about(const fp_mapping *m, const char **id, const char **version);
+
+/** The helper's main: argv as the executable got it (argv[1] is FP_ISOLATE_HELPER_ARG).
+ *  Returns the exit status (0 when the host asked it to quit or went away). Prints nothing:
+ *  everything goes to the host. */
+int fp_isolate_helper_main(int argc, char **argv);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,77 @@
+/*
+ * isolate_proc.h: one helper process of an isolated mapping, host side (internal to
+ * core/plugin; fp_isolate.h is the interface). Spawns `EXE __plugin-helper ...` with the
+ * shared memory (isolate_shm.h), its eventfds and its socket, waits for its create result,
+ * makes one round trip with a deadline, and ends or kills it. No policy here: the restarts,
+ * the held control set and the reports are isolate.c's.
+ *
+ * Threads: one thread at a time per fp_iso_proc.
+ */
+#ifndef FP_ISOLATE_PROC_H
+#define FP_ISOLATE_PROC_H
+
+#include "fp_isolate.h"
+#include "isolate_shm.h"
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <sys/types.h>
+
+/* Outcomes of a wait besides 0 (answered) and a negative errno. */
+#define FP_ISO_HUNG 1     /* the deadline passed */
+#define FP_ISO_DIED 2     /* the helper hung up (it exited or was killed) */
+#define FP_ISO_PENDING 3  /* no answer yet (a wait of 0 ms) */
+
+typedef void (*fp_iso_log_fn)(void *user, int level, const char *message);
+
+typedef struct fp_iso_proc {
+    pid_t pid;               /* 0: none */
+    int memfd, go, done, sock;
+    fp_iso_shm *shm;
+    size_t mapped;
+    int64_t started_ns;
+    bool ready;              /* its READY came */
+    int ready_rc;            /* create's code */
+    char ready_text[1000];   /* create's message */
+} fp_iso_proc;
+
+/** A zeroed process with every descriptor -1. */
+void fp_iso_proc_init(fp_iso_proc *p);
+
+/** Make the shared memory (at least `bytes`, with `offers`; `fill` writes into it before the
+ *  helper starts, e.g. the rig for the plugin's create), the eventfds and the socket, and
+ *  spawn `exe` in helper mode for the plugin `file` named `name` with `params`; file_fd
+ *  (-1: none) is a descriptor the helper inherits (`file` may then be /proc/self/fd/N). Returns 0 or
+ *  a negative errno (nothing is left open). Does not wait for the helper. */
+int fp_iso_proc_spawn(fp_iso_proc *p, const char *exe, const char *file, int file_fd, const char *name,
+                      const fp_param *params, size_t nparams, size_t bytes, uint32_t offers,
+                      void (*fill)(void *user, fp_iso_shm *shm), void *fill_user);
+
+/** Grow the shared memory to `bytes` (rounded to pages); the helper maps the new size at its
+ *  next request. 0 or a negative errno. */
+int fp_iso_proc_reserve(fp_iso_proc *p, size_t bytes);
+
+/** Wait up to timeout_ms for the helper's create result (p->ready_rc, p->ready_text); log
+ *  lines that come meanwhile go to log_fn. Returns 0 (it came), FP_ISO_HUNG, FP_ISO_DIED. */
+int fp_iso_proc_wait_ready(fp_iso_proc *p, double timeout_ms, fp_iso_log_fn log_fn, void *user);
+/** The same without waiting: 0, FP_ISO_PENDING or FP_ISO_DIED. */
+int fp_iso_proc_poll_ready(fp_iso_proc *p, fp_iso_log_fn log_fn, void *user);
+
+/** One request `op` (the shared memory already written) and its answer within deadline_ms;
+ *  a surface query of the helper's meanwhile is answered by surface(user, shm), which fills
+ *  surf_hits and returns the code. Returns 0 (answered), FP_ISO_HUNG or FP_ISO_DIED. */
+int fp_iso_proc_call(fp_iso_proc *p, uint32_t op, double deadline_ms,
+                     int (*surface)(void *user, fp_iso_shm *shm), fp_iso_log_fn log_fn, void *user);
+
+/** Hand the log lines waiting on the socket to log_fn. */
+void fp_iso_proc_drain_log(fp_iso_proc *p, fp_iso_log_fn log_fn, void *user);
+
+/** SIGKILL the helper unless it has exited, reap it, close everything. `why` (may be NULL)
+ *  gets how it ended: "died of SIGSEGV", "exited with status 3". */
+void fp_iso_proc_kill(fp_iso_proc *p, char *why, size_t whylen);
+
+/** Ask the helper to quit (destroy, deinit), wait up to wait_ms for it, then kill. */
+void fp_iso_proc_end(fp_iso_proc *p, double wait_ms, fp_iso_log_fn log_fn, void *user);
+
+#endif

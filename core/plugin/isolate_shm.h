@@ -1,0 +1,89 @@
+/*
+ * isolate_shm.h: what the host and an isolated mapping's helper process share (internal to
+ * core/plugin: isolate.c is the host side, isolate_helper.c the helper's).
+ *
+ * One memfd, mapped by both: this header, then a variable part (the mesh's base, the rig's
+ * regions, landmarks, channels and their names) whose size follows the mesh; the host grows
+ * the memfd (ftruncate) and sets `size`, and the helper maps it again when `size` grew.
+ * Everything is copied by value; pointers never cross (each side rebuilds its own).
+ *
+ * Wake-ups: two eventfds. The host writes a request (op, req_seq + 1) and writes `go`; the
+ * helper answers (reply, reply_seq = req_seq) and writes `done`. During process() the helper
+ * may ask for the host's surface service: it writes the points, reply FP_ISO_REPLY_SURFACE
+ * and `done`, then waits on `go` for the host's FP_ISO_OP_SURFACE answer. A SOCK_SEQPACKET
+ * socket carries the helper's log lines and its create result (fp_iso_msg), and its hang-up
+ * tells either side that the other is gone.
+ *
+ * Thread rules: the host side is one thread at a time (the session's); the helper is one
+ * thread.
+ */
+#ifndef FP_ISOLATE_SHM_H
+#define FP_ISOLATE_SHM_H
+
+#include <facepuppet/plugin.h>
+
+#include <stdatomic.h>
+#include <stdint.h>
+
+#define FP_ISO_MAGIC 0x4f534946u        /* "FISO" */
+#define FP_ISO_VERSION 1u
+#define FP_ISO_SURFACE_MAX 256          /* surface queries per round trip (more: several) */
+#define FP_ISO_GUARD 8                  /* canary entries after each control-set array */
+#define FP_ISO_CANARY 0xA5
+
+enum { FP_ISO_OP_PROCESS = 1, FP_ISO_OP_RESET = 2, FP_ISO_OP_SURFACE = 3, FP_ISO_OP_QUIT = 4 };
+enum { FP_ISO_REPLY_DONE = 1, FP_ISO_REPLY_SURFACE = 2 };
+enum { FP_ISO_MSG_READY = 1, FP_ISO_MSG_LOG = 2 };
+
+/** A message on the socket: the create result (READY: rc, text the error) or a log line. */
+typedef struct fp_iso_msg {
+    uint32_t type;
+    int32_t rc;       /* READY: create's code; LOG: the fp_log_level */
+    char text[1000];
+} fp_iso_msg;
+
+/** A landmark or channel in the shared part: names as offsets into the string area. */
+typedef struct fp_iso_landmark {
+    uint32_t name;
+    uint32_t vertex;
+    float position[3];
+} fp_iso_landmark;
+typedef struct fp_iso_channel {
+    uint32_t name;
+    float min, max, neutral, value;
+} fp_iso_channel;
+
+typedef struct fp_iso_shm {
+    uint32_t magic, version;
+    _Atomic uint64_t size;            /* bytes of the memfd (header + variable part) */
+    _Atomic uint64_t req_seq;         /* the host's request number */
+    _Atomic uint64_t reply_seq;       /* the request the helper answered */
+    uint32_t op;                      /* FP_ISO_OP_* of req_seq */
+    uint32_t reply;                   /* FP_ISO_REPLY_* of reply_seq */
+    int32_t rc;                       /* process()'s code */
+    uint32_t offers;                  /* bit 0: surface, bit 1: rig (the host's extensions) */
+
+    /* the frame: in's pointers are rebuilt by the helper */
+    fp_frame_input in;
+    fp_event events[FP_FRAME_EVENT_CAPACITY];
+    uint32_t has_mesh, has_rig;
+    fp_mesh_view mesh;                /* base: at off_base */
+    fp_rig_view rig;                  /* region, landmarks, channels, name: at their offsets */
+    uint64_t off_base, off_region, off_landmarks, off_channels, off_strings;
+    uint32_t rig_name;                /* offset of the rig's name in the strings */
+
+    /* the control set, both ways, with canaries after each array */
+    fp_control_set cs;                /* scalars; pointers rebuilt */
+    float start[FP_CONTROL_CAPACITY + FP_ISO_GUARD][3];
+    float end[FP_CONTROL_CAPACITY + FP_ISO_GUARD][3];
+    fp_channel channels[FP_CHANNEL_CAPACITY + FP_ISO_GUARD];
+
+    /* the surface service, one round trip */
+    uint32_t surf_count;
+    float surf_max;
+    int32_t surf_rc;
+    float surf_points[FP_ISO_SURFACE_MAX][3];
+    fp_surface_hit surf_hits[FP_ISO_SURFACE_MAX];
+} fp_iso_shm;
+
+#endif
