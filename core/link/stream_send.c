@@ -270,8 +270,10 @@ int fp_stream_frame_ranges(fp_stream *s, const float *pos, const uint32_t *range
             snprintf(j->tc, sizeof j->tc, "%s", timecode ? timecode : "");
             for (size_t c = 0; c < s->o.nchannels; c++) j->channels[c] = channels ? channels[c] : 0.0f;
             j->m = m;
-            memcpy(j->idx, s->idx, m * sizeof *j->idx);
-            memcpy(j->q, s->q, 3 * m * sizeof *j->q);
+            if (m) { /* (none moved: the buffers may not exist yet) */
+                memcpy(j->idx, s->idx, m * sizeof *j->idx);
+                memcpy(j->q, s->q, 3 * m * sizeof *j->q);
+            }
             atomic_store_explicit(&s->head, head + 1, memory_order_release);
             pthread_mutex_lock(&s->mu);
             pthread_cond_signal(&s->cond);

@@ -48,7 +48,9 @@ sock.bind(("127.0.0.1", 0))
 
 def command(address, *args, expect="ok"):
     sock.sendto(fposc.encode(address, *args), ("127.0.0.1", port))
-    if not select.select([sock], [], [], 10)[0]:
+    # 10 s, times FP_TEST_TIME_SCALE (the sanitizers: play opens the take and the face after
+    # it starts listening, several times slower there)
+    if not select.select([sock], [], [], 10 * max(1, int(os.environ.get("FP_TEST_TIME_SCALE", "1"))))[0]:
         fail("%s: no reply" % address)
     a, r = fposc.decode(sock.recv(65536))
     st = dict(zip(["command", "result", "state", "timecode", "slate", "take", "recording", "time",
