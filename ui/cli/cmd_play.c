@@ -199,7 +199,9 @@ static const char *play_state(void *user, double *time_s)
     return c->playing ? "playing" : c->ended ? "ended" : "stopped";
 }
 
-/* The transport's loop until /fp/quit: frames at the take's pace while playing, streamed. */
+/* The transport's loop until /fp/quit: frames at the take's pace while playing, streamed.
+ * h: the first player's header, for the origin only: a seek reopens the take (a new player,
+ * the old one's header freed), so the frames' timecodes take the current player's. */
 static int play_controlled(play_ctl *c, const fp_take_header *h)
 {
     char err[2048], tc[32];
@@ -224,7 +226,7 @@ static int play_controlled(play_ctl *c, const fp_take_header *h)
         }
         c->pos_s = (double)(f.time_ns - c->first_ns) * 1e-9;
         sleep_until_ns(c->wall_base + (int64_t)llround(c->pos_s * 1e9));
-        frame_timecode(h, f.time_ns, tc, sizeof tc);
+        frame_timecode(fp_take_player_header(c->player), f.time_ns, tc, sizeof tc);
         fp_app_link_after_frame(c->link, f.time_ns, c->frames++, play_positions(c->player), tc);
     }
     return FP_EXIT_OK;
