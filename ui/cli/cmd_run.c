@@ -560,6 +560,20 @@ static void run_take_over(void *user, int sig, bool in_plugin)
         fprintf(stderr, "facepuppet run: wrote %s (the last whole frame)\n", c->a->out);
 }
 
+/* An end before the frames: what run_main opened so far released (each takes NULL), the
+ * soundtrack's output discarded, a freed; returns status. */
+static int run_abandon(run_args *a, fp_exporter **ex, fp_session **s, fp_plugin_path *path, int status)
+{
+    fp_export_abort(ex);
+    fp_session_destroy(s);
+    fp_plugin_path_clear(path);
+    fp_audio_out_abort(&a->audio.out);
+    fp_app_audio_finish(&a->audio, "run", true);
+    fp_app_over_free(&a->over);
+    free(a);
+    return status;
+}
+
 static int run_main(int argc, char **argv)
 {
     run_args *a = calloc(1, sizeof *a); /* (the defaults' strings: some 40 kB) */
@@ -586,13 +600,7 @@ static int run_main(int argc, char **argv)
         (rc = fp_app_over_check_mesh(&a->over, "facepuppet run", s)) ||
         (a->export_file && (rc = fp_app_export_open("facepuppet run", a->export_file, fp_session_mesh(s),
                                                     fp_session_head(s)->mm_per_unit, "run", &ex)))) {
-        fp_session_destroy(&s);
-        fp_plugin_path_clear(&path);
-        fp_audio_out_abort(&a->audio.out);
-        fp_app_audio_finish(&a->audio, "run", true);
-        fp_app_over_free(&a->over);
-        free(a);
-        return rc;
+        return run_abandon(a, &ex, &s, &path, rc);
     }
     if (a->frames_out) /* its size, before any frame (the duration, when given) */
         fp_app_frames_estimate("facepuppet run", "--frames-out", a->frames_out,
@@ -600,28 +608,12 @@ static int run_main(int argc, char **argv)
                                a->fps, fp_session_vertex_count(s), quiet);
     if ((rc = fp_session_start(s, err, sizeof err))) {
         fprintf(stderr, "facepuppet run: %s\n", err);
-        fp_export_abort(&ex);
-        fp_session_destroy(&s);
-        fp_plugin_path_clear(&path);
-        fp_audio_out_abort(&a->audio.out);
-        fp_app_audio_finish(&a->audio, "run", true);
-        fp_app_over_free(&a->over);
-        free(a);
-        return fp_app_exit_code(rc, FP_APP_INPUT);
+        return run_abandon(a, &ex, &s, &path, fp_app_exit_code(rc, FP_APP_INPUT));
     }
     fp_app_link_options lo = {.cmd = "run", .control = a->sopt.control, .stream = a->sopt.stream,
                               .s = s, .mesh_path = a->so.mesh_path, .take = a->take_dir ? &take : NULL,
                               .plugin_path = &path, .fps = a->fps, .quiet = quiet, .touched = true};
-    if ((rc = fp_app_link_open(&lo, &a->link))) {
-        fp_export_abort(&ex);
-        fp_session_destroy(&s);
-        fp_plugin_path_clear(&path);
-        fp_audio_out_abort(&a->audio.out);
-        fp_app_audio_finish(&a->audio, "run", true);
-        fp_app_over_free(&a->over);
-        free(a);
-        return rc;
-    }
+    if ((rc = fp_app_link_open(&lo, &a->link))) return run_abandon(a, &ex, &s, &path, rc);
     /* SIGINT, SIGTERM: the loop ends after the frame; a frame stuck in a plugin is abandoned */
     run_stuck stuck = {s, a, &take, &ex};
     if ((rc = fp_app_stop_install("facepuppet run", run_take_over, &stuck)))
