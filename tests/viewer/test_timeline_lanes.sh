@@ -38,7 +38,7 @@ span=$("$fp" info "$P/face_T001.fptake" | sed -n 's/^  duration *\([0-9.]*\) s$/
 LIBGL_ALWAYS_SOFTWARE=1 "$fp" live "${pd[@]}" -q --size 1280x720 --mesh "$mesh" \
     --input "replay:$H/HandSplay-110fps_joints_mm.csv,loop=1" --take-dir "$P" --slate face \
     --over "$P/face_S001.fpstack" --layer brows@20:add "${snd[@]}" \
-    --script "wait frames 3; key T; wait frames 8; key I; wait frames 8; key L; key M; print messages; key I; wait frames 4;
+    --script "wait frames 3; key T; wait frames 8; key I; wait frames 40; key L; key M; print messages; key I; wait frames 4;
 shot $tmp/lanes.png; key T; wait frames 2; close" >"$tmp/live.out" 2>"$tmp/live.err" ||
     { cat "$tmp/live.err"; fail "live exited $?"; }
 grep -q "layer 1 (face_T002.fptake) muted" "$tmp/live.out" || { cat "$tmp/live.out"; fail "M did not mute layer 1"; }
