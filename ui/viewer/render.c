@@ -420,6 +420,28 @@ void fp_render_lines(fp_render *r, const float mvp[16], const float *verts, size
     glEnable(GL_DEPTH_TEST);
     glBindVertexArray(0);
 }
+/* The text program's state for a 2D overlay in pixels (origin top left) of a fbw x fbh
+ * framebuffer, drawn in color over the scene with alpha blending; overlay_end restores the
+ * scene's (depth test on, no blending, no vertex array bound). [the GL thread] */
+static void overlay_begin(fp_render *r, int fbw, int fbh, const float color[4])
+{
+    float proj[16];
+    m4_ortho(proj, 0, (float)fbw, (float)fbh, 0);
+    glUseProgram(r->prog_text);
+    glUniformMatrix4fv(glGetUniformLocation(r->prog_text, "u_proj"), 1, GL_FALSE, proj);
+    glUniform4fv(glGetUniformLocation(r->prog_text, "u_color"), 1, color);
+    glDisable(GL_DEPTH_TEST);
+    glEnable(GL_BLEND);
+    glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+}
+
+static void overlay_end(void)
+{
+    glDisable(GL_BLEND);
+    glEnable(GL_DEPTH_TEST);
+    glBindVertexArray(0);
+}
+
 
 float fp_render_text(fp_render *r, int fbw, int fbh, float x, float y, float scale,
                      const char *text, const float color[4])
@@ -454,19 +476,10 @@ float fp_render_text(fp_render *r, int fbw, int fbh, float x, float y, float sca
     } else {
         glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, r->ebo_text);
     }
-    float proj[16];
-    m4_ortho(proj, 0, (float)fbw, (float)fbh, 0);
-    glUseProgram(r->prog_text);
-    glUniformMatrix4fv(glGetUniformLocation(r->prog_text, "u_proj"), 1, GL_FALSE, proj);
-    glUniform4fv(glGetUniformLocation(r->prog_text, "u_color"), 1, color);
-    glDisable(GL_DEPTH_TEST);
-    glEnable(GL_BLEND);
-    glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+    overlay_begin(r, fbw, fbh, color);
     if ((size_t)quads <= r->text_quads_cap)
         glDrawElements(GL_TRIANGLES, quads * 6, GL_UNSIGNED_INT, NULL);
-    glDisable(GL_BLEND);
-    glEnable(GL_DEPTH_TEST);
-    glBindVertexArray(0);
+    overlay_end();
     free(buf);
     return (float)stb_easy_font_height((char *)text) * scale;
 }
@@ -489,18 +502,9 @@ void fp_render_rect(fp_render *r, int fbw, int fbh, float x, float y, float w, f
     glBindVertexArray(r->vao_text);
     glBindBuffer(GL_ARRAY_BUFFER, r->vbo_text);
     glBufferData(GL_ARRAY_BUFFER, sizeof v, v, GL_STREAM_DRAW);
-    float proj[16];
-    m4_ortho(proj, 0, (float)fbw, (float)fbh, 0);
-    glUseProgram(r->prog_text);
-    glUniformMatrix4fv(glGetUniformLocation(r->prog_text, "u_proj"), 1, GL_FALSE, proj);
-    glUniform4fv(glGetUniformLocation(r->prog_text, "u_color"), 1, color);
-    glDisable(GL_DEPTH_TEST);
-    glEnable(GL_BLEND);
-    glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+    overlay_begin(r, fbw, fbh, color);
     glDrawArrays(GL_TRIANGLE_FAN, 0, 4);
-    glDisable(GL_BLEND);
-    glEnable(GL_DEPTH_TEST);
-    glBindVertexArray(0);
+    overlay_end();
 }
 
 int fp_render_rects(fp_render *r, int fbw, int fbh, const float *xywh, size_t n,
@@ -522,17 +526,8 @@ int fp_render_rects(fp_render *r, int fbw, int fbh, const float *xywh, size_t n,
     glBindBuffer(GL_ARRAY_BUFFER, r->vbo_text);
     glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(n * 6 * 4 * sizeof *v), v, GL_STREAM_DRAW);
     free(v);
-    float proj[16];
-    m4_ortho(proj, 0, (float)fbw, (float)fbh, 0);
-    glUseProgram(r->prog_text);
-    glUniformMatrix4fv(glGetUniformLocation(r->prog_text, "u_proj"), 1, GL_FALSE, proj);
-    glUniform4fv(glGetUniformLocation(r->prog_text, "u_color"), 1, color);
-    glDisable(GL_DEPTH_TEST);
-    glEnable(GL_BLEND);
-    glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+    overlay_begin(r, fbw, fbh, color);
     glDrawArrays(GL_TRIANGLES, 0, (GLsizei)(n * 6));
-    glDisable(GL_BLEND);
-    glEnable(GL_DEPTH_TEST);
-    glBindVertexArray(0);
+    overlay_end();
     return 0;
 }
