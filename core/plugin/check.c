@@ -804,8 +804,9 @@ static void check_input(checker *c, creator *cr)
         /* a device's events are measured by now (1 s of leeway); a recording's are on its own
          * clock (host time at start + the sample's time: plugin.h, FP_EXT_RECORDING_INFO), ahead
          * of the host's with fast=1 or a high speed, by as much as the recording lasts */
-        const bool recording = FP_HAS_FIELD(in, fp_input, get_extension) &&
-                               in->get_extension && in->get_extension(in, FP_EXT_RECORDING_INFO);
+        const bool recording = FP_HAS_FIELD(in, fp_input, get_extension) && in->get_extension &&
+                               (in->get_extension(in, FP_EXT_RECORDING_INFO) ||
+                                in->get_extension(in, FP_EXT_INPUT_CLOCK));
         int64_t latest = recording ? INT64_MAX : now_ns() + 1000000000LL;
         fp_event ev;
         while (fp_event_queue_pop(&ih->queue, &ev)) {

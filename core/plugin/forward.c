@@ -22,6 +22,7 @@ struct fp_event_forwarder {
     int sock;
     char target[300];
     _Atomic uint64_t sent, skipped, errors;
+    _Atomic int64_t origin_ns; /* the first event's time: the input's time zero; INT64_MIN unset */
 };
 
 int fp_event_forwarder_create(const char *spec, fp_event_forwarder **out, char *err, size_t errlen)
@@ -53,6 +54,7 @@ int fp_event_forwarder_create(const char *spec, fp_event_forwarder **out, char *
     }
     freeaddrinfo(ai);
     snprintf(f->target, sizeof f->target, "%s:%s", host, port);
+    atomic_init(&f->origin_ns, INT64_MIN);
     *out = f;
     return 0;
 }
@@ -91,33 +93,57 @@ static lo_message message(const fp_event *ev, char *path, size_t n)
         lo_message_add_int32(m, ev->button.down ? 1 : 0);
         return m;
     }
+    case FP_EVENT_STATUS:
+        if (ev->status.code != FP_STATUS_END_OF_STREAM || !(m = lo_message_new())) return NULL;
+        snprintf(path, n, "/facepuppet/end");
+        return m;
     default: return NULL;
     }
 }
 
+/* A time as an OSC timetag (1 s added: never the "immediate" 0). */
+static lo_timetag timetag_of(int64_t t)
+{
+    if (t < 0) t = 0;
+    return (lo_timetag){(uint32_t)(t / 1000000000 + 1), (uint32_t)(((uint64_t)(t % 1000000000) << 32) / 1000000000u)};
+}
+
+/* Append one bundle element (int32 size, then the message) at buf + *at. */
+static bool append(unsigned char *buf, size_t cap, size_t *at, lo_message m, const char *path)
+{
+    size_t size = lo_message_length(m, path);
+    if (*at + 4 + size > cap || !lo_message_serialise(m, path, buf + *at + 4, &size)) return false;
+    for (int k = 0; k < 4; k++) buf[*at + (size_t)k] = (unsigned char)((uint32_t)size >> (24 - 8 * k));
+    *at += 4 + size;
+    return true;
+}
+
 void fp_event_forwarder_push(fp_event_forwarder *f, const fp_event *ev)
 {
+    int64_t unset = INT64_MIN; /* the input's first event, whatever it is, sets its time zero */
+    atomic_compare_exchange_strong(&f->origin_ns, &unset, ev->header.time_ns);
     char path[64];
     lo_message m = message(ev, path, sizeof path);
     if (!m) {
         atomic_fetch_add_explicit(&f->skipped, 1, memory_order_relaxed);
         return;
     }
-    /* the event's time as the bundle's timetag (1 s added: never the "immediate" 0) */
-    const int64_t t = ev->header.time_ns > 0 ? ev->header.time_ns : 0;
-    lo_timetag tt = {(uint32_t)(t / 1000000000 + 1), (uint32_t)(((uint64_t)(t % 1000000000) << 32) / 1000000000u)};
-    /* the bundle by hand around liblo's message: "#bundle", the timetag, the size, it */
+    /* the bundle by hand: "#bundle", the event's time as its timetag, then the sender's time
+     * zero (/facepuppet/origin t: a receiver on clock=recording counts from it) and the event */
+    lo_message origin = lo_message_new();
+    bool ok = origin != NULL;
+    if (ok) lo_message_add_timetag(origin, timetag_of(atomic_load(&f->origin_ns)));
     unsigned char buf[1024];
-    size_t size = lo_message_length(m, path);
-    bool ok = size + 20 <= sizeof buf && lo_message_serialise(m, path, buf + 20, &size);
-    if (ok) {
-        memcpy(buf, "#bundle", 8);
-        const uint32_t words[3] = {tt.sec, tt.frac, (uint32_t)size};
-        for (int w = 0; w < 3; w++)
-            for (int k = 0; k < 4; k++) buf[8 + 4 * w + k] = (unsigned char)(words[w] >> (24 - 8 * k));
-        ok = send(f->sock, buf, size + 20, 0) == (ssize_t)(size + 20);
-    }
+    const lo_timetag tt = timetag_of(ev->header.time_ns);
+    memcpy(buf, "#bundle", 8);
+    const uint32_t words[2] = {tt.sec, tt.frac};
+    for (int w = 0; w < 2; w++)
+        for (int k = 0; k < 4; k++) buf[8 + 4 * w + k] = (unsigned char)(words[w] >> (24 - 8 * k));
+    size_t at = 16;
+    ok = ok && append(buf, sizeof buf, &at, origin, "/facepuppet/origin") && append(buf, sizeof buf, &at, m, path);
+    ok = ok && send(f->sock, buf, at, 0) == (ssize_t)at;
     atomic_fetch_add_explicit(ok ? &f->sent : &f->errors, 1, memory_order_relaxed);
+    if (origin) lo_message_free(origin);
     lo_message_free(m);
 }
 

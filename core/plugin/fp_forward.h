@@ -4,12 +4,15 @@
  * again over OSC/UDP in the OSC input's own format (format=facepuppet), so that another
  * facepuppet session receives this input as `--input osc:PORT`. Each event goes in a bundle
  * whose timetag is its time (the host clock), which the OSC input maps to its own clock: the
- * sender's spacing is kept exactly.
+ * sender's spacing is kept exactly. The bundle's first element is the input's time zero (the
+ * time of the first event it pushed: a replay's start), /facepuppet/origin t, so that a
+ * receiver on `clock=recording` places each event at its time on the recording's clock.
  *   joint positions -> /facepuppet/hand/{left,right}/joints 63 x f
  *   joint angles    -> /facepuppet/hand/{left,right}/angles i (valid mask) + 22 x f
  *   wrist pose      -> /facepuppet/hand/{left,right}/wrist 7 x f
  *   button          -> /facepuppet/button i (0 left, 1 middle, 2 right) i (down)
- * Status and channel events, key requests and events without a hand are not forwarded
+ *   end of stream   -> /facepuppet/end (no arguments: the recording ended)
+ * Other status and channel events, key requests and events without a hand are not forwarded
  * (counted). A failed send is counted, never fatal.
  *
  * Errors: 0 or a negative code with err: -EINVAL a bad SPEC, -ENOENT a host that does not

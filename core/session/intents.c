@@ -104,6 +104,7 @@ static void fetch(fp_intents *it, fp_input_instance *in, size_t i, int64_t t)
         }
         fp_event *slot = &a->ev[(a->head + a->len) % a->cap];
         if (!fp_input_instance_poll(in, slot)) return;
+        if (it->started) slot->header.time_ns += it->shift[i];
         a->len++;
         if (slot->header.type == FP_EVENT_STATUS && slot->status.code == FP_STATUS_END_OF_STREAM)
             a->eos = true;
@@ -154,6 +155,10 @@ bool fp_intents_ready(fp_intents *it, fp_input_instance *inputs, size_t n, int64
 
 int fp_intents_first_time(fp_intents *it, fp_input_instance *inputs, size_t n, int64_t *t0)
 {
+    if (it->started) {
+        *t0 = it->t0;
+        return 1;
+    }
     bool any = false;
     int64_t first = 0;
     for (size_t i = 0; i < n && i < FP_INTENTS_MAX_INPUTS; i++) {
@@ -168,8 +173,16 @@ int fp_intents_first_time(fp_intents *it, fp_input_instance *inputs, size_t n, i
         if (!any || t < first) first = t;
         any = true;
     }
-    if (any) *t0 = first;
-    return any ? 1 : -1;
+    if (!any) return -1;
+    for (size_t i = 0; i < n && i < FP_INTENTS_MAX_INPUTS; i++) { /* each time zero to the earliest */
+        fp_intents_ahead *a = &it->ahead[i];
+        if (!it->waited[i] || !a->len) continue;
+        it->shift[i] = first - ahead_at(a, 0)->header.time_ns;
+        for (size_t k = 0; k < a->len; k++) a->ev[(a->head + k) % a->cap].header.time_ns += it->shift[i];
+    }
+    it->started = true;
+    *t0 = it->t0 = first;
+    return 1;
 }
 
 void fp_intents_free(fp_intents *it)

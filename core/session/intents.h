@@ -38,6 +38,9 @@ typedef struct fp_intents {
     bool clocked;                           /* consume by time: fp_intents_drain_until */
     bool waited[FP_INTENTS_MAX_INPUTS];     /* inputs on the input clock (recordings) */
     fp_intents_ahead ahead[FP_INTENTS_MAX_INPUTS];
+    bool started;                           /* fp_intents_first_time has fixed t0 and the shifts */
+    int64_t t0;                             /* the recordings' common time zero */
+    int64_t shift[FP_INTENTS_MAX_INPUTS];   /* added to a waited input's times (time zeros aligned) */
     uint32_t requested;                     /* fp_intent bits for the next mapping call */
     bool ended[FP_INTENTS_MAX_INPUTS];      /* input i reported FP_STATUS_END_OF_STREAM */
     unsigned input_errors;                  /* FP_STATUS_ERROR events seen */
@@ -89,8 +92,13 @@ size_t fp_intents_drain_until(fp_intents *it, fp_input_instance *inputs, size_t 
  *  events into the lookahead (consumes none). */
 bool fp_intents_ready(fp_intents *it, fp_input_instance *inputs, size_t n, int64_t t);
 
-/** The earliest first event time of the waited inputs, once each has delivered one or ended:
- *  1 and *t0; 0 while one has not yet; -1 when none is waited for (or all ended empty). */
+/** The recordings' common time zero: once each waited input has delivered its first event
+ *  (or ended), the earliest of those first events' times, 1 and *t0; 0 while one has not yet;
+ *  -1 when none is waited for (or all ended empty). A recording's first event marks its time
+ *  zero (plugin.h, FP_EXT_INPUT_CLOCK: a replay's start status): from then on each waited
+ *  input's event times are shifted so that its time zero is *t0, so several recordings (and
+ *  one forwarded from another session) start together whatever the order and latency their
+ *  threads started with (a run is then the same whichever input started first). */
 int fp_intents_first_time(fp_intents *it, fp_input_instance *inputs, size_t n, int64_t *t0);
 
 /** Free the lookahead buffers. */

@@ -303,8 +303,10 @@ static int open_inputs(fp_session *s, const fp_session_options *opt, char *err, 
         const fp_input *in = s->inputs[i].input;
         const fp_input_recording *ri = in && in->get_extension
                                            ? in->get_extension(in, FP_EXT_RECORDING_INFO) : NULL;
+        const fp_input_clock *ck = in && in->get_extension ? in->get_extension(in, FP_EXT_INPUT_CLOCK) : NULL;
         fp_recording_info info;
-        s->intents.waited[i] = ri && ri->get && ri->get(in, &info);
+        s->intents.waited[i] = (ri && ri->get && ri->get(in, &info)) ||
+                               (ck && ck->on_recording_clock && ck->on_recording_clock(in));
     }
     fp_mapping_step_init(&s->mapping_step, &s->cs, s->mapping_budget_ms);
     return 0;

@@ -16,6 +16,7 @@
  */
 #define _GNU_SOURCE
 #include "osc.h"
+#include "osc_spec.h"
 
 #include <facepuppet/plugin.h>
 #include <facepuppet/plugin_util.h>
@@ -41,31 +42,27 @@
 #include <time.h>
 #include <unistd.h>
 
-#define DEFAULT_PORT 9000
 #define PACKET_MAX 65536           /* a UDP datagram never exceeds it */
 #define BURST 256                  /* datagrams read per wake before timers are looked at */
 #define TICK_MS 50                 /* poll timeout: timers are checked at least this often */
 #define MAX_DEPTH 8                /* nested bundles */
-#define HUGE_MM 10000.f            /* 10 m: beyond it a position is hostile or broken */
 #define MAX_RADIANS 6.2831853f     /* 2 pi */
 #define LATENCY_RING 65536
 #define REPORT_DELAY_NS 1000000000LL /* a problem kind is reported 1 s after it first occurs */
 #define REANCHOR_NS 1000000000LL   /* timetag mapping re-anchored beyond 1 s from arrival */
 #define STATUS_RETRY_NS 100000000LL /* a status event is retried for up to 100 ms */
 
-enum osc_format { FMT_FACEPUPPET, FMT_LEAP, FMT_MEDIAPIPE, FMT_VMC, FMT_AUTO };
-static const char *const format_names[] = {"facepuppet", "leap", "mediapipe", "vmc", "auto"};
-enum { HANDS_LEFT = 1, HANDS_RIGHT = 2, HANDS_BOTH = 3 };
 
 static const char *const problem_names[FP_OSC_PROBLEMS] = {
     "malformed", "bad-types", "bad-count", "non-finite", "out-of-range", "unknown-address",
-    "incomplete", "queue-full"};
+    "incomplete", "queue-full", "untimed"};
 static const char *const problem_text[FP_OSC_PROBLEMS] = {
     "malformed packets (not OSC, or a bad bundle)", "messages with wrong type tags",
     "messages with a wrong argument count", "messages with NaN or infinite values",
     "messages with values out of range (beyond 10 m, 2 pi, a bad quaternion or button)",
     "messages to addresses outside the format", "incomplete frames superseded",
-    "events dropped (host queue full)"};
+    "events dropped (host queue full)",
+    "messages without a time on the sender's recording clock (clock=recording)"};
 
 /* Straight-finger estimate of the joints a Leap bridge does not send: for each finger the
  * lengths (mm) from the palm centre to MCP (CMC for the thumb), MCP-PIP, PIP-DIP, DIP-tip
@@ -97,7 +94,7 @@ typedef struct osc_input {
     fp_input input;
     const fp_host *host;
     /* configuration */
-    int format, hands;
+    int format, hands, clock;
     double timeout_s;
     float mp_width, mp_aspect, mp_height, mp_depth;
     bool mp_mirror;
@@ -120,6 +117,11 @@ typedef struct osc_input {
     char sender[64];
     bool have_offset;
     int64_t offset_ns;
+    /* clock=recording: event time = origin_ns + (timetag - the sender's origin timetag) */
+    int64_t origin_ns;             /* host time at start(): the recording's time zero here */
+    bool have_sender_origin, ended;
+    int64_t sender_origin_tt;      /* the sender's /facepuppet/origin, ns on the timetag scale */
+    int64_t clock_t;               /* the last message's time (statuses are pushed at it) */
     uint32_t buttons;
     leap_slot leap[2];
     mp_hand mp[FP_HANDS];
@@ -185,8 +187,10 @@ static void push_status(osc_input *o, uint32_t code, int hand, const char *fmt, 
 {
     fp_event ev;
     memset(&ev, 0, sizeof ev);
+    /* on the recording's clock, at the last message's time: never ahead of the samples */
+    const int64_t t = o->clock == CLOCK_RECORDING ? o->clock_t : now_ns(o);
     ev.status.header = (fp_event_header){.size = sizeof ev.status, .type = FP_EVENT_STATUS,
-                                         .time_ns = now_ns(o), .hand = hand};
+                                         .time_ns = t, .hand = hand};
     ev.status.code = code;
     va_list ap;
     va_start(ap, fmt);
@@ -257,7 +261,7 @@ static void note_valid(osc_input *o, int64_t recv_ns, int hand)
         bump(o, &o->st.connects);
         o->hands_seen = 0;
         push_status(o, FP_STATUS_CONNECTED, -1, "osc %s: sender %s on port %u",
-                    format_names[o->format], o->sender, (unsigned)o->port);
+                    fp__osc_format_names[o->format], o->sender, (unsigned)o->port);
     }
     o->last_valid_ns = recv_ns;
     if (hand >= 0) o->hands_seen |= 1u << hand;
@@ -585,13 +589,28 @@ static uint32_t be32(const unsigned char *p)
     return (uint32_t)p[0] << 24 | (uint32_t)p[1] << 16 | (uint32_t)p[2] << 8 | p[3];
 }
 
+#define UNTIMED INT64_MIN /* clock=recording: a message with no time on the recording's clock */
+
+static int64_t timetag_ns(uint32_t sec, uint32_t frac)
+{
+    return (int64_t)sec * 1000000000 + (int64_t)(((uint64_t)frac * 1000000000u) >> 32);
+}
+
+/* clock=recording: the host time of a bundle's timetag, the sender's recording time after its
+ * origin counted from this input's start; UNTIMED for "immediate" or before the origin. */
+static int64_t recording_time(const osc_input *o, uint32_t sec, uint32_t frac)
+{
+    if ((sec == 0 && frac <= 1) || !o->have_sender_origin) return UNTIMED;
+    return o->origin_ns + (timetag_ns(sec, frac) - o->sender_origin_tt);
+}
+
 /* Host time of an OSC timetag: sender time plus the offset fixed by the first timed bundle
  * (arrival - timetag), re-anchored when the result strays more than 1 s from the arrival
  * (the sender restarted or its clock stepped). Immediate (0, 1) means the arrival. */
 static int64_t map_timetag(osc_input *o, uint32_t sec, uint32_t frac, int64_t recv_ns)
 {
     if (sec == 0 && frac <= 1) return recv_ns;
-    int64_t tt = (int64_t)sec * 1000000000 + (int64_t)(((uint64_t)frac * 1000000000u) >> 32);
+    int64_t tt = timetag_ns(sec, frac);
     if (!o->have_offset || llabs(tt + o->offset_ns - recv_ns) > REANCHOR_NS) {
         o->have_offset = true;
         o->offset_ns = recv_ns - tt;
@@ -600,6 +619,37 @@ static int64_t map_timetag(osc_input *o, uint32_t sec, uint32_t frac, int64_t re
         pthread_mutex_unlock(&o->lock);
     }
     return tt + o->offset_ns;
+}
+
+/* The addresses of forward= (fp_forward.h) that carry no hand, in any format:
+ * /facepuppet/origin t (the sender's time zero) and /facepuppet/end (its recording ended). With
+ * clock=recording a message without a time on that clock is dropped here (counted). Returns
+ * true when the message was taken (or dropped) here. */
+static bool transport_message(osc_input *o, const char *path, const char *types, lo_arg **argv,
+                              int64_t t)
+{
+    if (strcmp(path, "/facepuppet/origin") == 0) {
+        if (check_types(o, types, "t")) {
+            o->sender_origin_tt = timetag_ns(argv[0]->t.sec, argv[0]->t.frac);
+            o->have_sender_origin = true;
+        }
+        return true;
+    }
+    if (o->clock == CLOCK_RECORDING) {
+        if (t == UNTIMED) {
+            count(o, FP_OSC_UNTIMED);
+            return true;
+        }
+        if (t > o->clock_t) o->clock_t = t;
+    }
+    if (strcmp(path, "/facepuppet/end") == 0) {
+        if (check_types(o, types, "") && o->clock == CLOCK_RECORDING && !o->ended) {
+            o->ended = true;
+            push_status(o, FP_STATUS_END_OF_STREAM, -1, "osc: %s's recording ended", o->sender);
+        }
+        return true;
+    }
+    return false;
 }
 
 static void handle_message(osc_input *o, unsigned char *data, size_t size, int64_t t,
@@ -616,6 +666,10 @@ static void handle_message(osc_input *o, unsigned char *data, size_t size, int64
     const char *types = lo_message_get_types(m);
     lo_arg **argv = lo_message_get_argv(m);
     if (!types) types = "";
+    if (transport_message(o, path, types, argv, t)) {
+        lo_message_free(m);
+        return;
+    }
     int fmt = o->format;
     if (fmt == FMT_AUTO) { /* each message by its address space (they do not overlap) */
         int slot, finger;
@@ -644,7 +698,9 @@ static void handle_packet(osc_input *o, unsigned char *data, size_t size, int64_
             return;
         }
         bump(o, &o->st.bundles);
-        int64_t bt = map_timetag(o, be32(data + 8), be32(data + 12), recv_ns);
+        const uint32_t sec = be32(data + 8), frac = be32(data + 12);
+        const bool rec = o->clock == CLOCK_RECORDING;
+        const int64_t bt = rec ? UNTIMED : map_timetag(o, sec, frac, recv_ns);
         size_t at = 16;
         while (at < size) {
             if (size - at < 4) {
@@ -657,7 +713,8 @@ static void handle_packet(osc_input *o, unsigned char *data, size_t size, int64_
                 count(o, FP_OSC_MALFORMED);
                 return;
             }
-            handle_packet(o, data + at, n, bt, recv_ns, depth + 1);
+            /* (recording: after each element, which may be the sender's origin) */
+            handle_packet(o, data + at, n, rec ? recording_time(o, sec, frac) : bt, recv_ns, depth + 1);
             at += n;
         }
         return;
@@ -666,7 +723,7 @@ static void handle_packet(osc_input *o, unsigned char *data, size_t size, int64_
         count(o, FP_OSC_MALFORMED);
         return;
     }
-    handle_message(o, data, size, t, recv_ns);
+    handle_message(o, data, size, o->clock == CLOCK_RECORDING && depth == 0 ? UNTIMED : t, recv_ns);
 }
 
 static void record_latency(osc_input *o, int64_t recv_ns)
@@ -692,6 +749,11 @@ static void timers(osc_input *o, int64_t now)
                         o->timeout_s);
         memset(o->leap, 0, sizeof o->leap);
         for (int h = 0; h < FP_HANDS; h++) o->mp[h].have = 0;
+        if (o->clock == CLOCK_RECORDING && !o->ended) { /* a stopped clock: never wait on it */
+            o->ended = true;
+            push_status(o, FP_STATUS_END_OF_STREAM, -1, "osc: %s's recording stopped without its "
+                        "end (no data for %.3g s): taken as ended", o->sender, o->timeout_s);
+        }
     }
     for (int k = 0; k < FP_OSC_PROBLEMS; k++) {
         if (o->report_at[k] <= 0 || now < o->report_at[k]) continue;
@@ -769,6 +831,11 @@ static int osc_start(fp_input *self, char *err, size_t errlen)
         return -e;
     }
     o->connected = false;
+    o->origin_ns = o->clock_t = now_ns(o);
+    o->have_sender_origin = o->ended = false;
+    if (o->clock == CLOCK_RECORDING) /* the recording's time zero here: its first event */
+        push_status(o, FP_STATUS_CONNECTED, -1, "osc: port %u, on the sender's recording clock "
+                    "(clock=recording): waiting for a forwarded recording", (unsigned)o->port);
     int rc = pthread_create(&o->thread, NULL, osc_thread, o);
     if (rc) {
         close(o->stop_pipe[0]);
@@ -778,7 +845,7 @@ static int osc_start(fp_input *self, char *err, size_t errlen)
     }
     o->running = true;
     logf_(o, FP_LOG_INFO, "listening on %s:%u%s (format %s)", o->bind_text, (unsigned)o->port,
-          o->sock6 >= 0 ? " and [::1]" : "", format_names[o->format]);
+          o->sock6 >= 0 ? " and [::1]" : "", fp__osc_format_names[o->format]);
     return 0;
 }
 
@@ -869,9 +936,17 @@ static bool osc_workspace(const fp_input *self, float min_mm[3], float max_mm[3]
 
 static const fp_input_workspace workspace_ext = {.get = osc_workspace};
 
+static bool osc_on_recording_clock(const fp_input *self)
+{
+    return ((const osc_input *)self->plugin_data)->clock == CLOCK_RECORDING;
+}
+
+static const fp_input_clock clock_ext = {.on_recording_clock = osc_on_recording_clock};
+
 static const void *osc_get_extension(const fp_input *self, const char *id)
 {
     const osc_input *o = self->plugin_data;
+    if (id && strcmp(id, FP_EXT_INPUT_CLOCK) == 0 && o->clock == CLOCK_RECORDING) return &clock_ext;
     if (id && strcmp(id, FP_OSC_EXT_ID) == 0) return &osc_ext;
     if (id && strcmp(id, FP_EXT_WORKSPACE) == 0 && o->have_box) return &workspace_ext;
     return NULL;
@@ -879,171 +954,6 @@ static const void *osc_get_extension(const fp_input *self, const char *id)
 
 /* ------------------------------------------------------------------------------------- */
 /* Factory                                                                                */
-
-static const char usage_text[] =
-    "osc[:PORT][,format=auto|facepuppet|leap|mediapipe][,bind=ADDR][,hand=left|right|both]\n"
-    "   [,timeout=SECONDS][,box=X0/Y0/Z0/X1/Y1/Z1][,width=MM][,aspect=H/W][,height=MM]\n"
-    "   [,depth=MM][,mirror=1]\n"
-    "  Hand tracking over OSC (UDP), decoded with liblo; address spaces in docs/osc.md.\n"
-    "  PORT     UDP port (default 9000; 0 picks a free one, logged at start)\n"
-    "  format   auto (default): each message by its address, any of the three below\n"
-    "           facepuppet: /facepuppet/hand/{left,right}/{joints,angles,wrist}, /facepuppet/button\n"
-    "           leap: /hand<s> i i f f f (palm), /finger<s>-<n> i i f f f (tips; the other\n"
-    "             joints are estimated on the straight line from palm to tip)\n"
-    "           mediapipe: /lx/ /ly/ [/lz/] /rx/ /ry/ [/rz/], 21 normalised floats each\n"
-    "           (vmc is not supported yet)\n"
-    "  bind     address to listen on (default 127.0.0.1; anything else is logged as a warning)\n"
-    "  hand     which hands to take (default both; for leap, left/right takes slot 0 as that hand)\n"
-    "  timeout  seconds of silence before the sender is reported disconnected (default 1)\n"
-    "  box      the volume the hands move in, mm, device frame: fitted to the face by the host\n"
-    "           (default: the host's desktop-tracker box)\n"
-    "  mediapipe: width = mm across the image (default 400), aspect = image height / width\n"
-    "    (default 0.75), height = device y of the image centre (default 200 mm), depth = device\n"
-    "    z of the landmarks' z = 0 (default 0), mirror=1 flips x.\n"
-    "  Bundles' timetags become event times (offset fixed by the first timed bundle).\n";
-
-static int parse_number(const char *key, const char *v, double lo, double hi, double *out,
-                        char *err, size_t errlen)
-{
-    locale_t c = newlocale(LC_ALL_MASK, "C", (locale_t)0);
-    char *end = NULL;
-    double x = c != (locale_t)0 ? strtod_l(v, &end, c) : NAN;
-    if (c != (locale_t)0) freelocale(c);
-    const size_t n = fp_decimal_span(v); /* a decimal: no hex, inf or nan */
-    if (!n || !end || end != v + n || *end || !isfinite(x) || x < lo || x > hi) {
-        snprintf(err, errlen, "osc: %s=%s: expected a number in [%g, %g]", key, v, lo, hi);
-        return -EINVAL;
-    }
-    *out = x;
-    return 0;
-}
-
-/* What the SPEC asked for (parse_spec). */
-typedef struct osc_settings {
-    long port;
-    int format, hands;
-    double timeout, width, aspect, height, depth;
-    bool mirror, have_box;
-    float box[6];
-    const char *bind_addr;
-} osc_settings;
-
-/* format=V into *format (FMT_*). Returns 0, -ENOTSUP (vmc) or -EINVAL, with a message. */
-static int parse_format(const char *v, int *format, char *err, size_t errlen)
-{
-    *format = -1;
-    for (int f = 0; f <= FMT_AUTO; f++)
-        if (strcmp(v, format_names[f]) == 0) *format = f;
-    if (*format == FMT_VMC) {
-        snprintf(err, errlen, "osc: format=vmc: the VMC protocol is not supported yet "
-                 "(see docs/osc.md); use auto, facepuppet, leap or mediapipe");
-        return -ENOTSUP;
-    }
-    if (*format < 0) {
-        snprintf(err, errlen, "osc: format=%s: expected auto, facepuppet, leap or mediapipe", v);
-        return -EINVAL;
-    }
-    return 0;
-}
-
-/* hand=V into *hands (HANDS_*). Returns 0 or -EINVAL with a message. */
-static int parse_hand(const char *v, int *hands, char *err, size_t errlen)
-{
-    if (strcmp(v, "left") == 0)
-        *hands = HANDS_LEFT;
-    else if (strcmp(v, "right") == 0)
-        *hands = HANDS_RIGHT;
-    else if (strcmp(v, "both") == 0)
-        *hands = HANDS_BOTH;
-    else {
-        snprintf(err, errlen, "osc: hand=%s: expected left, right or both", v);
-        return -EINVAL;
-    }
-    return 0;
-}
-
-/* box=x0/y0/z0/x1/y1/z1 in mm: the volume the hands move in (workspace extension). Returns 0
- * or -EINVAL with a message. */
-static int parse_box(const char *v, float box[6], char *err, size_t errlen)
-{
-    locale_t c = newlocale(LC_ALL_MASK, "C", (locale_t)0);
-    const char *p = v;
-    int got = 0;
-    for (; got < 6 && c != (locale_t)0; got++) {
-        char *end = NULL;
-        double x = strtod_l(p, &end, c);
-        if (end == p || end != p + fp_decimal_span(p) || !isfinite(x) || fabs(x) > HUGE_MM) break;
-        box[got] = (float)x;
-        p = end;
-        if (got < 5 && *p++ != '/') {
-            got++;
-            break;
-        }
-    }
-    if (c != (locale_t)0) freelocale(c);
-    if (got != 6 || *p || !(box[0] < box[3] && box[1] < box[4] && box[2] < box[5])) {
-        snprintf(err, errlen, "osc: box=%s: expected x0/y0/z0/x1/y1/z1 in mm with x0 < x1, "
-                 "y0 < y1, z0 < z1", v);
-        return -EINVAL;
-    }
-    return 0;
-}
-
-/* One key of the SPEC into *o. Returns 0 or a negative code with a message. */
-static int parse_key(const char *k, const char *v, osc_settings *o, char *err, size_t errlen)
-{
-    if (strcmp(k, "format") == 0) return parse_format(v, &o->format, err, errlen);
-    if (strcmp(k, "bind") == 0) {
-        o->bind_addr = v;
-        return 0;
-    }
-    if (strcmp(k, "hand") == 0) return parse_hand(v, &o->hands, err, errlen);
-    if (strcmp(k, "timeout") == 0) return parse_number(k, v, 0.01, 3600, &o->timeout, err, errlen);
-    if (strcmp(k, "width") == 0) return parse_number(k, v, 1, 10000, &o->width, err, errlen);
-    if (strcmp(k, "aspect") == 0) return parse_number(k, v, 0.01, 100, &o->aspect, err, errlen);
-    if (strcmp(k, "height") == 0) return parse_number(k, v, -10000, 10000, &o->height, err, errlen);
-    if (strcmp(k, "depth") == 0) return parse_number(k, v, -10000, 10000, &o->depth, err, errlen);
-    if (strcmp(k, "box") == 0) {
-        int rc = parse_box(v, o->box, err, errlen);
-        o->have_box = rc == 0;
-        return rc;
-    }
-    if (strcmp(k, "mirror") == 0) {
-        if (strcmp(v, "1") && strcmp(v, "0")) {
-            snprintf(err, errlen, "osc: mirror=%s: expected 0 or 1", v);
-            return -EINVAL;
-        }
-        o->mirror = v[0] == '1';
-        return 0;
-    }
-    snprintf(err, errlen, "osc: unknown key \"%s\" (known: format, bind, hand, timeout, "
-             "width, aspect, height, depth, mirror, box)", k);
-    return -EINVAL;
-}
-
-/* The SPEC: [:PORT] and its keys, into *o (defaults first). Returns 0 or a negative code
- * with a message naming the key. */
-static int parse_spec(const char *arg, const fp_param *params, size_t nparams, osc_settings *o,
-                      char *err, size_t errlen)
-{
-    *o = (osc_settings){.port = DEFAULT_PORT, .format = FMT_AUTO, .hands = HANDS_BOTH,
-                        .timeout = 1.0, .width = 400, .aspect = 0.75, .height = 200, .depth = 0,
-                        .bind_addr = "127.0.0.1"};
-    if (arg && *arg) {
-        unsigned long long p; /* digits, as every integer option (fp_parse_whole: no blank) */
-        if (!fp_parse_whole(arg, 65535, &p)) {
-            snprintf(err, errlen, "osc:%s: PORT must be a number in 0..65535", arg);
-            return -EINVAL;
-        }
-        o->port = (long)p;
-    }
-    for (size_t i = 0; i < nparams; i++) {
-        const char *k = params[i].key ? params[i].key : "", *v = params[i].value ? params[i].value : "";
-        int rc = parse_key(k, v, o, err, errlen);
-        if (rc) return rc;
-    }
-    return 0;
-}
 
 /* Bind the UDP socket (o->sock) to sa (set->bind_addr:set->port), and on 127.0.0.1 also [::1]
  * at the same port (o->sock6), best effort (no IPv6, the port taken there: IPv4 only): a sender
@@ -1093,7 +1003,7 @@ static int osc_create(const fp_host *host, const char *arg, const fp_param *para
         return -EINVAL;
     }
     osc_settings set;
-    int rc = parse_spec(arg, params, nparams, &set, err, errlen);
+    int rc = fp__osc_parse_spec(arg, params, nparams, &set, err, errlen);
     if (rc) return rc;
     struct sockaddr_in sa = {.sin_family = AF_INET, .sin_port = htons((uint16_t)set.port)};
     if (inet_pton(AF_INET, set.bind_addr, &sa.sin_addr) != 1) {
@@ -1115,6 +1025,7 @@ static int osc_create(const fp_host *host, const char *arg, const fp_param *para
     o->host = host;
     o->format = set.format;
     o->hands = set.hands;
+    o->clock = set.clock;
     o->timeout_s = set.timeout;
     o->mp_width = (float)set.width;
     o->mp_aspect = (float)set.aspect;
@@ -1136,40 +1047,13 @@ static int osc_create(const fp_host *host, const char *arg, const fp_param *para
     return 0;
 }
 
-/* The keys, typed (ABI 1.1), for `facepuppet plugins` and `plugins check`; osc_create parses
- * them itself (the same ranges). A default of "": none (box: the host's desktop-tracker box). */
-static const fp_param_info osc_keys[] = {
-    {.name = "format", .type = FP_PARAM_ENUM, .default_value = "auto",
-     .choices = "auto|facepuppet|leap|mediapipe",
-     .description = "address space: auto takes each message by its address"},
-    {.name = "bind", .type = FP_PARAM_STRING, .default_value = "127.0.0.1",
-     .description = "IPv4 address to listen on (beyond loopback: a warning)"},
-    {.name = "hand", .type = FP_PARAM_ENUM, .default_value = "both", .choices = "left|right|both",
-     .description = "which hands to take (leap: left/right takes slot 0 as that hand)"},
-    {.name = "timeout", .type = FP_PARAM_FLOAT, .min = 0.01, .max = 3600, .default_value = "1",
-     .unit = "s", .description = "silence before the sender is reported disconnected"},
-    {.name = "box", .type = FP_PARAM_STRING, .default_value = "", .unit = "mm",
-     .description = "X0/Y0/Z0/X1/Y1/Z1: the volume the hands move in, device frame"},
-    {.name = "width", .type = FP_PARAM_FLOAT, .min = 1, .max = 10000, .default_value = "400",
-     .unit = "mm", .description = "mediapipe: the width the image spans at the hand"},
-    {.name = "aspect", .type = FP_PARAM_FLOAT, .min = 0.01, .max = 100, .default_value = "0.75",
-     .description = "mediapipe: image height / width"},
-    {.name = "height", .type = FP_PARAM_FLOAT, .min = -10000, .max = 10000, .default_value = "200",
-     .unit = "mm", .description = "mediapipe: device y of the image centre"},
-    {.name = "depth", .type = FP_PARAM_FLOAT, .min = -10000, .max = 10000, .default_value = "0",
-     .unit = "mm", .description = "mediapipe: device z of the landmarks' z = 0"},
-    {.name = "mirror", .type = FP_PARAM_BOOL, .min = 0, .max = 1, .default_value = "0",
-     .description = "mediapipe: flip x (a selfie camera)"},
-    {.name = NULL},
-};
-
 static const fp_input_factory osc_factory = {
     .size = sizeof(fp_input_factory),
     .name = "osc",
     .description = "hand tracking over OSC/UDP (facepuppet, Leap Motion bridges, MediaPipe hands)",
-    .usage = usage_text,
+    .usage = fp__osc_usage,
     .create = osc_create,
-    .params = osc_keys,
+    .params = fp__osc_keys,
 };
 
 static const void *osc_get_factory(const char *factory_id)

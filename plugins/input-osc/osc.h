@@ -16,7 +16,7 @@
 
 #include "facepuppet/plugin.h"
 
-#define FP_OSC_EXT_ID "org.facepuppet.osc-stats/1"
+#define FP_OSC_EXT_ID "org.facepuppet.osc-stats/2" /* /2: FP_OSC_UNTIMED */
 
 /** What went wrong with a packet or message; each kind is counted, and reported once (host
  *  log + a warning status) about a second after its first occurrence, with the count by
@@ -32,6 +32,8 @@ typedef enum fp_osc_problem {
     FP_OSC_INCOMPLETE,      /* a frame assembled from several messages (leap, mediapipe) that
                                was superseded before it was complete */
     FP_OSC_QUEUE_FULL,      /* an event the host refused (its bounded queue was full) */
+    FP_OSC_UNTIMED,         /* clock=recording: a message outside a timed bundle, or before the
+                               sender's /facepuppet/origin (no time on the recording's clock) */
     FP_OSC_PROBLEMS
 } fp_osc_problem;
 
@@ -46,7 +48,8 @@ typedef struct fp_osc_stats {
     uint64_t problems[FP_OSC_PROBLEMS]; /* per fp_osc_problem; [FP_OSC_QUEUE_FULL] = drops */
     uint64_t connects;          /* silence -> traffic transitions (CONNECTED pushed) */
     uint64_t disconnects;       /* traffic -> silence for `timeout` (DISCONNECTED pushed) */
-    int64_t timetag_offset_ns;  /* host clock - sender clock, from the first timed bundle */
+    int64_t timetag_offset_ns;  /* host clock - sender clock, from the first timed bundle
+                                   (clock=arrival) */
     uint64_t latency_samples;   /* packets behind the two figures below (last <= 65536) */
     double latency_median_us;   /* packet received (recvfrom returned) -> its last event pushed */
     double latency_p99_us;

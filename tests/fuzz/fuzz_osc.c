@@ -2,12 +2,13 @@
  * input_osc.c: bundles, timetags, liblo's message parser, the facepuppet, leap and mediapipe
  * address formats), the bytes any host on the network may send. The plugin's source is
  * included so that its packet handler is reachable without a socket round trip. Input: byte 0
- * picks the format, hand and mirror of an instance made for this input (create() on port 0,
+ * picks the format, hand, clock (0x40: recording) and mirror of an instance made for this input (create() on port 0,
  * a fake host), the rest is split at each 0xFF 0xFE 0xFD 0xFC into datagrams handed to the
  * handler as recvfrom would, 1 ms apart. Every event pushed must be valid
  * (fuzz_event_check.h: finite floats, known type). Seeds: tests/fuzz/corpus/fuzz_osc
  * (packets sent by tools/osc-send, one per format). */
 #include "../../plugins/input-osc/input_osc.c"
+#include "../../plugins/input-osc/osc_spec.c"
 
 #include "fuzz_event_check.h"
 
@@ -43,11 +44,12 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (size < 1) return 0;
     static const char *formats[4] = {"facepuppet", "leap", "mediapipe", "auto"};
     static const char *hands[3] = {"both", "left", "right"};
-    fp_param params[3] = {{"format", formats[data[0] % 4]}, {"hand", hands[data[0] / 4 % 3]},
-                          {"mirror", data[0] & 0x80 ? "1" : "0"}};
+    fp_param params[4] = {{"format", formats[data[0] % 4]}, {"hand", hands[data[0] / 4 % 3]},
+                          {"mirror", data[0] & 0x80 ? "1" : "0"},
+                          {"clock", data[0] & 0x40 ? "recording" : "arrival"}};
     fp_input *in = NULL;
     char err[256];
-    if (osc_create(&host, "0", params, 3, &in, err, sizeof err)) abort();
+    if (osc_create(&host, "0", params, 4, &in, err, sizeof err)) abort();
     osc_input *o = in->plugin_data;
     data++;
     size--;

@@ -24,9 +24,15 @@ while select.select([sock], [], [], 3.0 if lat else 60.0)[0]:
     now = time.monotonic_ns()
     if data[:8] != b"#bundle\0":
         sys.exit("FAIL: not a bundle")
-    sec, frac, size = struct.unpack_from(">IIi", data, 8)
-    address, args = fposc.decode(data[20:20 + size])
-    addresses[address] = addresses.get(address, 0) + 1
+    sec, frac = struct.unpack_from(">II", data, 8)
+    at, elements = 16, []
+    while at < len(data):  # the sender's origin (/facepuppet/origin), then the event
+        (size,) = struct.unpack_from(">i", data, at)
+        elements.append(fposc.decode(data[at + 4:at + 4 + size])[0])
+        at += 4 + size
+    if elements[:1] != ["/facepuppet/origin"] or len(elements) != 2:
+        sys.exit("FAIL: a bundle of %s (expected /facepuppet/origin and one event)" % elements)
+    addresses[elements[1]] = addresses.get(elements[1], 0) + 1
     lat.append((now - ((sec - 1) * 1000000000 + (frac * 1000000000 >> 32))) / 1000.0)
 lat.sort()
 if not lat:

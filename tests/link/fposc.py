@@ -59,6 +59,8 @@ def decode(p):
                 args.append(struct.unpack_from(">f", p, at)[0]); at += 4
             elif t == "d":
                 args.append(struct.unpack_from(">d", p, at)[0]); at += 8
+            elif t == "t":  # a timetag: (seconds, fraction)
+                args.append(struct.unpack_from(">II", p, at)); at += 8
             elif t == "s":
                 s, at = _string(p, at); args.append(s)
             elif t == "b":

@@ -3,10 +3,12 @@
 # (forward=osc:HOST:PORT, fp_forward.h), on loopback:
 #  - one process with both inputs: the three-claps recording's left hand (replay, hands=left)
 #    and its right hand (hands=right, workspace=0: placed as it arrives, as a live tracker's);
-#  - two processes: A runs the left hand and `--input osc:PORT,filter=off`; B
-#    (`facepuppet monitor`) replays the right hand with forward=osc:127.0.0.1:PORT. A's face
-#    must end as the one process's: the same vertices moved (within 1%), the same largest
-#    displacement (within 5%), every vertex within 0.5 mm (the rest is network timing);
+#  - two processes on the recordings' clock: A runs the left hand and
+#    `--input osc:PORT,filter=off,clock=recording`; B (`facepuppet monitor`) replays the right
+#    hand with forward=osc:127.0.0.1:PORT. A steps each frame once B's events up to its time
+#    have arrived, the two recordings' time zeros aligned (the forwarded /facepuppet/origin),
+#    and ends at B's /facepuppet/end: A's face must be the one process's, vertex for vertex
+#    (written the same, to the last digit), whenever B starts and however the packets are paced;
 #  - the latency through loopback: B forwards to tests/link/forward_latency.py, which prints
 #    each event's arrival minus its time (the host clock both share).
 # SPDX-License-Identifier: GPL-3.0-or-later
@@ -30,7 +32,8 @@ echo "one process, both inputs: $o_moved vertices moved, max $o_max mm"
 ok=0
 for attempt in 1 2 3 4 5; do
     port=$((20000 + RANDOM % 40000))
-    "$fp" run "${pd[@]}" --input "replay:$rec,hands=left" --input "osc:$port,filter=off" --duration 5 \
+    # (B starts a second or more after A: A waits for it; 120 s at most)
+    timeout 120 "$fp" run "${pd[@]}" --input "replay:$rec,hands=left" --input "osc:$port,filter=off,clock=recording" \
         -o "$tmp/a.obj" -q >"$tmp/a.out" 2>"$tmp/a.err" &
     a=$!
     for i in $(seq 600); do grep -q "listening on" "$tmp/a.err" && break; kill -0 $a 2>/dev/null || break; sleep 0.1; done
@@ -39,6 +42,7 @@ for attempt in 1 2 3 4 5; do
         grep -q "cannot listen" "$tmp/a.err" && continue
         cat "$tmp/a.err"; fail "A did not listen"
     fi
+    sleep 1 # (A waits on the clock meanwhile)
     "$fp" monitor "${pd[@]}" "replay:$rec,hands=right,workspace=0,forward=osc:127.0.0.1:$port" \
         >"$tmp/b.out" 2>"$tmp/b.err" || { cat "$tmp/b.err"; fail "B (monitor) exited $?"; }
     wait $a || { cat "$tmp/a.err"; fail "A exited $?"; }
@@ -58,15 +62,9 @@ om, am, ox, ax = int(sys.argv[3]), int(sys.argv[4]), float(sys.argv[5]), float(s
 d = max(math.dist(p, q) for p, q in zip(one, two)) * 10   # (the ICT face: 10 mm a unit)
 print("largest vertex difference between the two faces: %.4f mm" % d)
 if len(one) != len(two): sys.exit("vertex counts differ")
-# up to network timing: an event that arrives a frame later changes when a gesture engages
-# and commits, and since the rig's clamp acts by direction (a drag pulling away from bone
-# goes the whole way) the final shapes differ by millimetres: 14.1 against 10.5 mm max, a
-# vertex 9.4 mm apart, in one run (with the rig's clamp blind to direction they were within
-# 0.13 mm). Issue 55 asks the same deformation up to network timing; asserted here: as many
-# vertices moved (within 5%) and the largest displacement within 50%; the largest vertex
-# difference is printed, not asserted, until both processes can run on the recordings' clock.
-if not (abs(am - om) <= 0.05 * om and abs(ax - ox) <= 0.5 * ox): sys.exit("moved/max differ")
+if (am, ax) != (om, ox) or d > 1e-4: sys.exit("the faces differ")
 PY
+cmp -s "$tmp/one.obj" "$tmp/a.obj" || fail "the two meshes are not written the same"
 
 # the latency through loopback
 for attempt in 1 2 3 4 5; do

@@ -628,6 +628,79 @@ static void bundles_keep_timetags(void **state)
     close_fixture(&f);
 }
 
+/* clock=recording (a recording forwarded by another session): the input's first event is its
+ * time zero (a connected status at start); a bundle's events are placed at that zero plus the
+ * timetag's distance from the sender's /facepuppet/origin; a message with no such time (a
+ * plain message, a bundle before any origin) is dropped and counted as untimed;
+ * /facepuppet/end ends the stream; the input asks to be stepped on (FP_EXT_INPUT_CLOCK). */
+static void recording_clock_places_events(void **state)
+{
+    (void)state;
+    osc_fixture f;
+    open_fixture(&f, "clock=recording", 256);
+    const fp_input_clock *ck = f.in->get_extension(f.in, FP_EXT_INPUT_CLOCK);
+    assert_non_null(ck);
+    assert_true(ck->on_recording_clock(f.in));
+    assert_true(wait_type(f.h, FP_EVENT_STATUS, FP_STATUS_CONNECTED, 1));
+    const int64_t zero = f.h->events[0].header.time_ns;
+    /* untimed: a plain message, then a bundle without the sender's origin */
+    lo_message m = joints_message(&rows[1]);
+    assert_true(lo_send_message(f.to, "/facepuppet/hand/right/joints", m) > 0);
+    lo_message_free(m);
+    lo_timetag origin = {3900000000u, 0x40000000u}; /* the sender's time zero, its clock */
+    lo_bundle b = lo_bundle_new(origin);
+    lo_bundle_add_message(b, "/facepuppet/hand/right/joints", joints_message(&rows[1]));
+    assert_true(lo_send_bundle(f.to, b) > 0);
+    lo_bundle_free_recursive(b);
+    wait_packets(&f, 2);
+    assert_int_equal(stats(&f).problems[FP_OSC_UNTIMED], 2);
+    const int64_t step_ns[] = {0, 9000000, 2500000000LL};
+    for (int i = 0; i < 3; i++) {
+        uint64_t frac = (uint64_t)origin.frac + (uint64_t)(((double)step_ns[i] / 1e9) * 4294967296.0);
+        lo_timetag tt = {origin.sec + (uint32_t)(frac >> 32), (uint32_t)frac};
+        b = lo_bundle_new(tt);
+        lo_message o = lo_message_new();
+        lo_message_add_timetag(o, origin);
+        lo_bundle_add_message(b, "/facepuppet/origin", o);
+        lo_bundle_add_message(b, "/facepuppet/hand/right/joints", joints_message(&rows[1]));
+        assert_true(lo_send_bundle(f.to, b) > 0);
+        lo_bundle_free_recursive(b);
+        wait_packets(&f, (uint64_t)i + 3);
+    }
+    assert_true(wait_type(f.h, FP_EVENT_JOINT_POSITIONS, -1, 3));
+    for (int i = 0; i < 3; i++) /* (timetag fractions: within 2 ns) */
+        assert_true(llabs(nth_positions(f.h, (size_t)i)->header.time_ns - (zero + step_ns[i])) <= 2);
+    b = lo_bundle_new(origin);
+    lo_message o = lo_message_new();
+    lo_message_add_timetag(o, origin);
+    lo_bundle_add_message(b, "/facepuppet/origin", o);
+    lo_bundle_add_message(b, "/facepuppet/end", lo_message_new());
+    assert_true(lo_send_bundle(f.to, b) > 0);
+    lo_bundle_free_recursive(b);
+    assert_true(wait_type(f.h, FP_EVENT_STATUS, FP_STATUS_END_OF_STREAM, 1));
+    /* statuses never run ahead of the samples: the end at the latest sample's time */
+    const fp_event *last = &f.h->events[f.h->count - 1];
+    assert_int_equal(last->status.code, FP_STATUS_END_OF_STREAM);
+    assert_true(llabs(last->header.time_ns - (zero + step_ns[2])) <= 2);
+    assert_int_equal(stats(&f).problems[FP_OSC_UNTIMED], 2);
+    close_fixture(&f);
+    /* the default clock (arrival) takes the origin and the end silently and never ends */
+    open_fixture(&f, NULL, 256);
+    assert_null(f.in->get_extension(f.in, FP_EXT_INPUT_CLOCK));
+    b = lo_bundle_new(origin);
+    o = lo_message_new();
+    lo_message_add_timetag(o, origin);
+    lo_bundle_add_message(b, "/facepuppet/origin", o);
+    lo_bundle_add_message(b, "/facepuppet/end", lo_message_new());
+    assert_true(lo_send_bundle(f.to, b) > 0);
+    lo_bundle_free_recursive(b);
+    wait_packets(&f, 1);
+    fp_osc_stats st = stats(&f);
+    for (int k = 0; k < FP_OSC_PROBLEMS; k++) assert_int_equal(st.problems[k], 0);
+    assert_int_equal(count_type(f.h, FP_EVENT_STATUS, FP_STATUS_END_OF_STREAM), 0);
+    close_fixture(&f);
+}
+
 /* A sender that stops is reported disconnected (per hand it drove) after the timeout, and
  * connected again when it returns. */
 static void stopped_sender_reported(void **state)
@@ -868,6 +941,7 @@ int main(void)
         cmocka_unit_test(auto_format_takes_each_address_space),
         cmocka_unit_test(ipv6_loopback_heard),
         cmocka_unit_test(bundles_keep_timetags),
+        cmocka_unit_test(recording_clock_places_events),
         cmocka_unit_test(stopped_sender_reported),
         cmocka_unit_test(hostile_packets_counted),
         cmocka_unit_test(flood_keeps_memory_bounded),

@@ -41,7 +41,7 @@ expect 0 '"passed":[[:space:]]+true' "$fp" plugins check "$builtin/map-anchored.
 expect 1 'FAIL  create .*replay' "$fp" plugins check "$builtin/input-replay.so"
 # osc and take declare their keys (ABI 1.1 params): each key's range is checked against what
 # create refuses (osc on a free port; take on a take recorded here).
-expect 0 'passed: 14 checks' "$fp" plugins check "$builtin/input-osc.so" --arg 0  # 8 range checks
+expect 0 'passed: 15 checks' "$fp" plugins check "$builtin/input-osc.so" --arg 0  # 9 range checks
 "$fp" run -q --mesh "$data/faces/mediapipe-canonical/canonical_face_model.obj" \
     --input "replay:$rec,fast=1" --duration 0.5 --out "$tmp/t.obj" --take-dir "$tmp/takes" \
     --slate chk >/dev/null 2>&1 || fail "recording a take for the take input's check"

@@ -340,6 +340,18 @@ typedef struct fp_input_workspace {
     bool (*get)(const fp_input *self, float min_mm[3], float max_mm[3]);
 } fp_input_workspace;
 
+/** Optional input extension FP_EXT_INPUT_CLOCK: an input without a recording of its own whose
+ *  event times nevertheless follow a recording's clock (the OSC input with clock=recording,
+ *  fed by another session's forward=): a host that steps on the recordings' clock (`run`)
+ *  waits for it as for a recording: a frame at time t is made once the input has delivered an
+ *  event later than t or ended (FP_STATUS_END_OF_STREAM). Such an input must keep its event
+ *  times, statuses included, non-decreasing, and end its stream when its source stops.
+ *  [main-thread], after create. Returns false where the times are measured as they come. */
+#define FP_EXT_INPUT_CLOCK "facepuppet.input-clock/1"
+typedef struct fp_input_clock {
+    bool (*on_recording_clock)(const fp_input *self);
+} fp_input_clock;
+
 /** Optional input extension FP_EXT_RECORDING_INFO: what a recording holds, for
  *  `facepuppet info`. [main-thread], after create. Returns false where not a recording. */
 #define FP_EXT_RECORDING_INFO "facepuppet.recording-info/1"
