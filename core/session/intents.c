@@ -1,6 +1,8 @@
 /* Step 1 of the frame: drain the inputs, bind pedals and keys to intents, count statuses. */
 #include "intents.h"
 
+#include "fp_clock.h"
+
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -118,7 +120,7 @@ size_t fp_intents_drain_until(fp_intents *it, fp_input_instance *inputs, size_t 
     it->frame_event_count = 0;
     for (size_t i = 0; i < n; i++) {
         fp_event ev;
-        if (i >= FP_INTENTS_MAX_INPUTS || !it->waited[i]) {
+        if (i >= FP_INTENTS_MAX_INPUTS) {
             while (fp_input_instance_poll(&inputs[i], &ev)) {
                 fp_intents_take(it, i, inputs[i].name, &ev, engaged, log);
                 if (each) each(user, i, &ev);
@@ -126,10 +128,16 @@ size_t fp_intents_drain_until(fp_intents *it, fp_input_instance *inputs, size_t 
             }
             continue;
         }
+        /* a live input's event stamped after t waits for the frame of its time (a frame that
+         * runs late sees each hand as at its own time), unless it is stamped beyond the wall
+         * clock (another clock than the host's: taken at once) */
+        const int64_t beyond = it->waited[i] ? INT64_MAX : fp_now_ns() + FP_INTENTS_HOLD_MAX_NS;
         fp_intents_ahead *a = &it->ahead[i];
         for (;;) {
             if (!a->len) fetch(it, &inputs[i], i, t);
-            if (!a->len || ahead_at(a, 0)->header.time_ns > t) break;
+            if (!a->len) break;
+            const int64_t et = ahead_at(a, 0)->header.time_ns;
+            if (et > t && et <= beyond) break;
             ev = *ahead_at(a, 0);
             a->head = (a->head + 1) % a->cap;
             a->len--;

@@ -25,7 +25,8 @@ extern "C" {
 #endif
 
 #define FP_INTENTS_MAX_INPUTS 8         /* = FP_SESSION_MAX_INPUTS */
-#define FP_INTENTS_MAX_FRAME_EVENTS 64  /* button/status events kept per frame for the mapping */
+#define FP_INTENTS_MAX_FRAME_EVENTS 64
+#define FP_INTENTS_HOLD_MAX_NS 50000000 /* 50 ms: a live event stamped later than that is taken */  /* button/status events kept per frame for the mapping */
 
 /** Events taken from an input's queue but not yet consumed (the input clock's lookahead). */
 typedef struct fp_intents_ahead {
@@ -79,9 +80,11 @@ void fp_intents_take(fp_intents *it, size_t input, const char *name, const fp_ev
 size_t fp_intents_drain(fp_intents *it, fp_input_instance *inputs, size_t n, bool engaged,
                         const fp_slog *log, fp_intents_event_fn each, void *user);
 
-/** The input clock (a headless run): like fp_intents_drain, but from each `waited` input only
- *  the events stamped at or before t (time_ns) are consumed, in order; the first later one
- *  stays in the lookahead for a later frame. Inputs not waited for are drained whole.
+/** The input clock (a headless run): like fp_intents_drain, but from each input only the
+ *  events stamped at or before t (time_ns) are consumed, in order; the first later one stays
+ *  in the lookahead for a later frame. For an input not waited for (live), an event stamped
+ *  more than FP_INTENTS_HOLD_MAX_NS beyond the host clock now is taken at once (its clock is
+ *  not the host's), and what it has not queued yet is not waited for.
  *  Returns the number of events consumed. Allocation: the lookahead grows as needed (an
  *  event that finds no memory stays in its queue). */
 size_t fp_intents_drain_until(fp_intents *it, fp_input_instance *inputs, size_t n, int64_t t,

@@ -94,12 +94,13 @@ med_max=$(printf '%s\n' "${maxes[@]}" | sort -g | sed -n 2p)
 echo "osc median: $med_moved vertices moved, max $med_max (replay: $r_moved, $r_max)"
 [ "${FP_TEST_TIME_SCALE:-1}" -gt 1 ] || awk -v a="$med_moved" -v b="$r_moved" 'BEGIN { exit !(a >= 0.8 * b && a <= 1.2 * b) }' ||
     fail "vertices moved over OSC ($med_moved) not within 20% of the replay's ($r_moved)"
-# The max displacement: issue 51 asks 20%, not met since the rig's clamp acts by direction
-# (fp_rig.h): drags near bone are no longer all held to 3.3 mm, so the final shape's largest
-# displacement follows each drag's path, and the live placement (a running estimate) differs
-# from the replay's whole-range fit: medians of 3 runs 6.0, 7.6 and 10.4 mm against the
-# replay's 8.15 (with --rig none 57-105 mm against 77.5). Checked within 50% until the live
-# placement matches the replay's; the vertices moved (2-3% apart) within 20% above.
+# The max displacement: issue 51 asks 20%, not met with the OSC input's default One Euro
+# filter: its lag changes each drag's path, and with the rig the guards make the final shape
+# follow the path (the skin followed 16-67% per gesture). Measured at load 2-5 (2 cores): the
+# medians of 3 runs 6.4-6.9 mm against the replay's 8.15; with filter=off 7.2-8.5 (within
+# 20%), as the replay with the live placement (workspace=0) gives 7.5-8.2 at 57-63 fps and
+# the replay with the OSC's filter 6.2-7.6. Checked within 50%; the vertices moved (2-3%
+# apart) within 20% above.
 tol=0.5
 # under the sanitizers (FP_TEST_TIME_SCALE > 1) each live frame takes several periods, so
 # the frames the OSC events land in differ from the replay's: there the check is that it

@@ -1,5 +1,6 @@
 /* core/session/intents: pedal binding, key requests, status counts and log lines, draining. */
 #include "intents.h"
+#include "fp_clock.h"
 #include "log_capture.h"
 
 #include <setjmp.h>
@@ -127,12 +128,79 @@ static void test_drain(void **state)
     for (int i = 0; i < 2; i++) fp_event_queue_destroy(&in[i].queue);
 }
 
+static fp_event stamped(int type_code, int64_t t)
+{
+    fp_event ev = type_code ? status(type_code, "s") : button(FP_BUTTON_MIDDLE, true);
+    ev.header.time_ns = t;
+    return ev;
+}
+
+static int64_t seen_t[16];
+static size_t seen_n;
+static void note_time(void *user, size_t input, const fp_event *ev)
+{
+    (void)user;
+    if (seen_n < 16) seen_t[seen_n++] = (int64_t)input * 1000000000000LL + ev->header.time_ns;
+}
+
+/* The input clock: two recordings whose threads started 500 ns apart start together (each
+ * one's first event is its time zero); a live input's event stamped after the frame waits
+ * for the frame of its time, one stamped beyond the wall clock (another clock) is taken at
+ * once. */
+static void test_clock_aligns_and_holds(void **state)
+{
+    (void)state;
+    fp_input_instance in[3];
+    memset(in, 0, sizeof in);
+    for (int i = 0; i < 3; i++) assert_int_equal(fp_event_queue_init(&in[i].queue, 64), 0);
+    const int64_t zero[2] = {1000, 1500};
+    for (int i = 0; i < 2; i++) {
+        fp_event e = stamped(FP_STATUS_CONNECTED, zero[i]);
+        assert_true(fp_event_queue_push(&in[i].queue, &e.header));
+        for (int k = 1; k <= 2; k++) {
+            e = stamped(0, zero[i] + 10 * k);
+            assert_true(fp_event_queue_push(&in[i].queue, &e.header));
+        }
+    }
+    fp_intents it;
+    fp_intents_init(&it);
+    it.clocked = it.waited[0] = it.waited[1] = true;
+    int64_t t0 = 0;
+    assert_int_equal(fp_intents_first_time(&it, in, 3, &t0), 1);
+    assert_int_equal(t0, 1000);
+    seen_n = 0;
+    assert_true(fp_intents_ready(&it, in, 3, 1010));
+    assert_int_equal(fp_intents_drain_until(&it, in, 2, 1010, false, NULL, note_time, NULL), 4);
+    const int64_t want[4] = {1000, 1010, 1000000000000LL + 1000, 1000000000000LL + 1010};
+    for (int k = 0; k < 4; k++) assert_int_equal(seen_t[k], want[k]);
+    assert_false(fp_intents_ready(&it, in, 3, 1020)); /* nothing past 1020 yet: wait */
+    /* the live input (2): stamped by the host clock */
+    const int64_t now = fp_now_ns();
+    const int64_t times[3] = {now - 1000, now + 10000000000LL, now + 1000000}; /* (in order) */
+    for (int k = 0; k < 3; k++) {
+        fp_event e = stamped(0, times[k]);
+        assert_true(fp_event_queue_push(&in[2].queue, &e.header));
+    }
+    seen_n = 0;
+    fp_intents_drain_until(&it, in, 3, now, false, NULL, note_time, NULL);
+    assert_int_equal(seen_n, 4); /* 1020 and 1520 (shifted to 1020), then 2 live ones */
+    assert_int_equal(seen_t[2], 2000000000000LL + times[0]);
+    assert_int_equal(seen_t[3], 2000000000000LL + times[1]);
+    seen_n = 0;
+    fp_intents_drain_until(&it, in, 3, now + 1000000, false, NULL, note_time, NULL);
+    assert_int_equal(seen_n, 1);
+    assert_int_equal(seen_t[0], 2000000000000LL + times[2]);
+    fp_intents_free(&it);
+    for (int i = 0; i < 3; i++) fp_event_queue_destroy(&in[i].queue);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_pedal_binding),
         cmocka_unit_test(test_status_counts_and_log),
         cmocka_unit_test(test_drain),
+        cmocka_unit_test(test_clock_aligns_and_holds),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
