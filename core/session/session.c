@@ -274,6 +274,7 @@ static void step_frame(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     in.event_count = s->intents.frame_event_count;
     in.mesh = &s->view;
     in.radius = s->radius;
+    in.touch_radius = s->touch_radius;
     in.requested = fp_intents_take_requested(&s->intents);
     in.mm_per_unit = s->head.mm_per_unit;
     if (s->rig.rig) {
@@ -289,7 +290,8 @@ static void step_frame(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     /* on its base (the posed surface), within the fingers' reach only (plugin.h); the index
      * first takes a commit of the last frame */
     fp_engine_step_sync(&s->engine);
-    fp_engine_step_tip_distances(&s->engine, s->pose.poses, (float)(FP_TIP_DISTANCE_REACH * s->radius),
+    fp_engine_step_tip_distances(&s->engine, s->pose.poses,
+                                 (float)(FP_TIP_DISTANCE_REACH * fmax(s->radius, s->touch_radius)),
                                  in.tip_distance);
     FP_STAGE_END(FP_STAGE_DISTANCES);
     fp_mapping_step_run(&s->mapping_step, s->mapping, s->mapping_name, &in, &s->cs, &s->log);

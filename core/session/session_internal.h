@@ -64,6 +64,7 @@ struct fp_session {
     char rig_how[1200];           /* how the rig was chosen (fp_session_rig_how) */
 
     double radius;
+    double touch_radius;          /* the default radius: touch is measured in it (plugin.h) */
     fp_head head;                 /* the head and the mesh's unit (life-size calibration) */
     bool engaged;                 /* the mapping's deformation is active */
     uint64_t frame;

@@ -218,8 +218,8 @@ static int open_scale(fp_session *s, const fp_session_options *opt, double diag,
     /* Default radius: 6% of the bounding-box diagonal, at least a fingertip's reach
      * (FP_SESSION_MIN_RADIUS_MM): on a sparse mask (MediaPipe's 468 vertices) a smaller one
      * holds hardly a vertex. */
-    s->radius = opt->radius > 0 ? opt->radius
-                                : fmax(0.06 * sqrt(diag), FP_SESSION_MIN_RADIUS_MM / s->head.mm_per_unit);
+    s->touch_radius = fmax(0.06 * sqrt(diag), FP_SESSION_MIN_RADIUS_MM / s->head.mm_per_unit);
+    s->radius = opt->radius > 0 ? opt->radius : s->touch_radius;
     return 0;
 }
 

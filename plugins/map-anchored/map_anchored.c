@@ -24,6 +24,9 @@
  * nearest skin within release x R (a pedal pressed with the hand hovering), and with
  * nothing there either, the skin nearest the one point of contact nearest the face. A 1.0 host
  * without the surface service gets the paper's start points (the points themselves).
+ * Touch is measured in the face's default R (fp_touch_radius), not the support's: a wider
+ * --radius moves more skin around the same grab, it never engages farther off the skin nor
+ * lets go later (which made a wider brush move the skin less).
  *
  * Keys: hands=left|right|both (both), auto=0|1 (1), engage=F (0.5, in R), release=F (1.0, in R;
  *       at least engage, else a hand would let go as it engages: refused at create),
@@ -74,10 +77,11 @@ static bool hand_near(const anchored *a, const fp_frame_input *in, int h, double
     float tips[FP_FINGERS][3];
     fp_surface_hit hit[FP_FINGERS];
     fp_hand_tips(in, h, tips);
-    if (a->surface->nearest(a->host, (const float (*)[3])tips, FP_FINGERS, (float)(factor * in->radius), hit))
+    const double touch = fp_touch_radius(in);
+    if (a->surface->nearest(a->host, (const float (*)[3])tips, FP_FINGERS, (float)(factor * touch), hit))
         return fp_hand_is_near(in, h, factor);
     for (int f = 0; f < FP_FINGERS; f++)
-        if (hit[f].distance < factor * in->radius) return true;
+        if (hit[f].distance < factor * touch) return true;
     return false;
 }
 
@@ -107,11 +111,12 @@ static int grab(anchored *a, const fp_frame_input *in, int h, double reach, size
     float pts[FP_POINTS_MAX][3];
     fp_surface_hit hit[FP_POINTS_MAX];
     size_t n = fp_hand_points(in, h, a->points, pts);
-    if (a->surface->nearest(a->host, (const float (*)[3])pts, n, (float)(reach * in->radius), hit))
+    const double touch = fp_touch_radius(in);
+    if (a->surface->nearest(a->host, (const float (*)[3])pts, n, (float)(reach * touch), hit))
         return -1;
     int got = 0;
     for (size_t p = 0; p < n && (size_t)got < room; p++) {
-        if (hit[p].vertex == UINT32_MAX || !(hit[p].distance <= reach * in->radius)) continue;
+        if (hit[p].vertex == UINT32_MAX || !(hit[p].distance <= reach * touch)) continue;
         add_point(a, h, p, hit[p].position, pts[p], hit[p].vertex);
         got++;
     }
@@ -320,7 +325,8 @@ static const fp_mapping_factory factory = {
              "        [,points=tips|tips+palm|all][,widen=F]\n"
              "  auto=1 engages when a fingertip comes within engage*R of the surface (0.5)\n"
              "  and commits when the hand lets go (farther than release*R, 1.0; engage <=\n"
-             "  release). The points touching the face (within engage*R) grab the skin under\n"
+             "  release; R here: the face's default radius, whatever --radius makes the\n"
+             "  support). The points touching the face (within engage*R) grab the skin under\n"
              "  them: the grabbed skin moves as the fingertip moves; the others pull nothing.\n"
              "  clamp limits each control vector to clamp*R (0: none, the default).\n"
              "  points: the fingertips (5 per hand, the paper's), tips+palm (+ palm centre and\n"

@@ -242,14 +242,13 @@ int main(void)
 #else
 /* A larger radius never moves the skin less for the same hand motion: --radius 1.5x the
  * default on grab, ICT, anchored, moves at least as many vertices at least as far (max
- * displacement of the final shape). Its own executable (test_radius_reach), registered
- * WILL_FAIL in tests/e2e/CMakeLists.txt: it fails on main with the anchored mapping's grab
- * of the skin (9d9d4b7, start points on the surface) and steady hands (191b825): default
- * radius 2.851, 1290 vertices moved, max 0.5139 mesh units (5.14 mm); 4.277: 4936 moved, max
- * 0.3450 (3.45 mm). The skin follows the fingertips 100% at both, but the wider radius
- * engages at 0.5 R and lets go at R, farther from the face (119 deforming frames against 40
- * before steady hands). Before the grab: 987 moved, max 0.2185 against 4201, 0.1794. When the
- * anchored mapping makes it pass, drop WILL_FAIL. */
+ * displacement of the final shape). Its own executable (test_radius_reach). It failed while
+ * the anchored mapping measured touch in the support radius: the wider brush engaged at 0.5 R
+ * and let go at R, farther from the face, so the gestures themselves changed (2.851: 12597
+ * moved, max 0.8147 mesh units; 4.277: 12805, 0.756). Touch is now measured in the face's
+ * default radius (fp_frame_input.touch_radius), so the same hand grabs the same skin at the
+ * same frames, and the drags' widened supports (fp_drag_radius) carry the final shape: both
+ * 12597 moved, max 0.8147. */
 static void test_radius_moves_no_less(void **state)
 {
     (void)state;

@@ -129,6 +129,29 @@ static void test_anchored_auto(void **state)
     close_mapping(&r);
 }
 
+/* Touch is measured in the face's default radius (fp_frame_input.touch_radius): a support of
+ * 1.5 R engages at 0.5 R from the skin as R does, not at 0.75 R; a host that does not give it
+ * (touch_radius 0) has touch measured in the support radius, as before. */
+static void test_anchored_touch_radius(void **state)
+{
+    (void)state;
+    for (int given = 0; given < 2; given++) {
+        rig r;
+        char err[1024];
+        assert_int_equal(open_mapping(&r, "anchored", NULL, 0, err), 0);
+        r.in.radius = 1.5 * R;
+        r.in.touch_radius = given ? R : 0;
+        place_right(&r, 0, 0, 0.6f, 0.6f * R); /* within 0.5 x 1.5 R, beyond 0.5 R */
+        step(&r, 0);
+        assert_int_equal(r.cs.active, !given);
+        place_right(&r, 0, 0, 0.45f, 0.45f * R);
+        step(&r, 0);
+        assert_true(r.cs.active);
+        assert_true(fabs(r.cs.radius - 1.5 * R) < 1e-9); /* the support stays the wider one */
+        close_mapping(&r);
+    }
+}
+
 static void test_anchored_requests(void **state)
 {
     (void)state;
@@ -478,7 +501,8 @@ static void test_points(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_anchored_auto), cmocka_unit_test(test_anchored_requests),
+        cmocka_unit_test(test_anchored_auto),
+        cmocka_unit_test(test_anchored_touch_radius), cmocka_unit_test(test_anchored_requests),
         cmocka_unit_test(test_unanchored), cmocka_unit_test(test_bad_keys),
         cmocka_unit_test(test_points), cmocka_unit_test(test_anchored_beyond_reach),
         cmocka_unit_test(test_decimal_keys),

@@ -18,15 +18,26 @@
 
 /* Which hands a mapping listens to: FP_HANDMASK_* and fp_parse_hands, in plugin_util.h. */
 
+/** The radius touch distances are measured in (fp_frame_input.touch_radius: the face's
+ *  default support radius, whatever --radius makes the support), or the support radius
+ *  where the host does not give it. Mesh units; pure. */
+static inline double fp_touch_radius(const fp_frame_input *in)
+{
+    return FP_HAS_FIELD(in, fp_frame_input, touch_radius) && in->touch_radius > 0 ? in->touch_radius
+                                                                                   : in->radius;
+}
+
 /** The paper's activation rule (Sato et al. 2004, sec. 2.3): a hand is active while one of
- *  its fingertips is within `factor` x the support radius of the surface. Exact for factor
- *  <= FP_TIP_DISTANCE_REACH (the host's tip distances are +INFINITY beyond it); farther out,
- *  ask FP_HOST_EXT_SURFACE with that reach (map-anchored does). */
+ *  its fingertips is within `factor` x the touch radius (fp_touch_radius: the support radius
+ *  at the face's default) of the surface. Exact for factor <= FP_TIP_DISTANCE_REACH (the
+ *  host's tip distances are +INFINITY beyond it); farther out, ask FP_HOST_EXT_SURFACE with
+ *  that reach (map-anchored does). */
 static inline bool fp_hand_is_near(const fp_frame_input *in, int hand, double factor)
 {
     if (!in->hands[hand].present) return false;
+    const double touch = fp_touch_radius(in);
     for (int f = 0; f < FP_FINGERS; f++)
-        if (in->tip_distance[hand][f] < factor * in->radius) return true;
+        if (in->tip_distance[hand][f] < factor * touch) return true;
     return false;
 }
 

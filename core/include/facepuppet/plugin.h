@@ -420,7 +420,8 @@ typedef struct fp_frame_input {
     double radius;                 /* the session's support radius, mesh units */
     uint32_t requested;            /* fp_intent bits asked for by the performer (keys, pedal) */
     /** Distance from each fingertip (FP_JOINT_TIP) of each present hand to the nearest
-     *  vertex of the base, mesh units, exact up to FP_TIP_DISTANCE_REACH x radius; +INFINITY
+     *  vertex of the base, mesh units, exact up to FP_TIP_DISTANCE_REACH x the larger of
+     *  radius and touch_radius; +INFINITY
      *  beyond it ("far") and for an absent hand. The paper's rule "a hand is active while its
      *  fingertips are within the support radius of the surface" reads it. A mapping that
      *  needs distances farther out asks FP_HOST_EXT_SURFACE with its own max_distance. */
@@ -436,6 +437,14 @@ typedef struct fp_frame_input {
     /** The rig of this mesh (fp_rig_view below), or NULL where the session has none. Valid
      *  during this call. */
     const struct fp_rig_view *rig;
+
+    /* ---- read only where size covers it (FP_HAS_FIELD; earlier hosts do not fill it) ---- */
+    /** The radius touch is measured in, mesh units: the face's default support radius, which
+     *  --radius and the live keys ([ ]) leave as it is, so that a fingertip touches the skin
+     *  at the same distance whatever the brush's size (a wider brush then never engages
+     *  farther off the skin nor lets go later). fp_touch_radius (mapping_util.h) reads it,
+     *  or radius where a host does not fill it. */
+    double touch_radius;
 } fp_frame_input;
 
 /* ------------------------------------------------------------------------------------- */
