@@ -144,7 +144,14 @@ if command -v xvfb-run >/dev/null && "$fp" live --help >/dev/null 2>&1; then
     range=$(python3 -c "import json,sys; l=json.load(open(sys.argv[1]))['layers'][1]; assert l['region']['name']=='mouth' and 0<l['in']<l['out'], l; print(l['in'], l['out'])" "$lstack") ||
         fail "the live stack's pass has no punched range"
     echo "live: the pass punched in and out at $range s"
-    "$check" punch "$lstack" $range || fail "the live stack's punch"
+    # (under the sanitizers the first frames after T take about 0.4 s each, so the 20 frames
+    # before I pass the 4.5 s stack's end: there the stack and its range are checked above,
+    # the punch's frames only in the release build)
+    if [ "${FP_TEST_TIME_SCALE:-1}" -gt 1 ] && ! awk -v o="${range#* }" 'BEGIN { exit !(o < 4.5) }'; then
+        echo "live: the punch ends past the stack under the sanitizers' slow frames: its frames not checked"
+    else
+        "$check" punch "$lstack" $range || fail "the live stack's punch"
+    fi
 else
     echo "SKIP (live only): no xvfb-run or live is not built"
 fi
