@@ -183,6 +183,10 @@ struct fp_event_forwarder;
  *  fp_log_level, source names who speaks. */
 typedef void (*fp_host_log_fn)(void *user, int level, const char *source, const char *message);
 
+/** The longest performer name (`performer=NAME`, FP_PERFORMER_CAPACITY performers at most in
+ *  a session): letters, digits, '-' and '_'. */
+#define FP_PERFORMER_NAME_MAX 31
+
 /** One running input: its plugin, the fp_host given to it, its queue. */
 typedef struct fp_input_instance {
     fp_plugin plugin;
@@ -203,6 +207,9 @@ typedef struct fp_input_instance {
     void *log_user;
     fp_filter_config filter;             /* the filter of its hand events (fp_filter.h): the
                                             SPEC's filter keys, else the default of its NAME */
+    char performer[FP_PERFORMER_NAME_MAX + 1]; /* performer=NAME: whose hands its events
+                                            are (the session keys hands by performer and
+                                            side); "" without the key: the first performer */
 } fp_input_instance;
 
 /** Load the plugin for `spec` and create the instance (not yet started). The host strips
@@ -210,7 +217,9 @@ typedef struct fp_input_instance {
  *  the event-log format; `force=1` beside it), `forward=osc:HOST:PORT` (send them again in
  *  the OSC input's format, fp_forward.h; -ENOTSUP without liblo) and the filter keys `filter=oneeuro|off`,
  *  `mincutoff=HZ`, `beta=B`, `dcutoff=HZ` (fp_filter_parse: into inst->filter, starting from
- *  fp_filter_default of the SPEC's NAME; a bad value is -EINVAL naming the SPEC and key). A
+ *  fp_filter_default of the SPEC's NAME; a bad value is -EINVAL naming the SPEC and key), and
+ *  `performer=NAME` (into inst->performer: 1 to FP_PERFORMER_NAME_MAX letters, digits, '-'
+ *  or '_', else -EINVAL naming the SPEC; the session gives each performer its own hands). A
  *  filter that is on is described (fp_filter_describe, with its lag) in an info line of the
  *  input's log. Returns 0, -EINVAL, an FP_EPLUGIN_* code (fp_error.h), or the plugin's own
  *  negative errno; err names the SPEC and reason. */

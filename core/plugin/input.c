@@ -159,6 +159,25 @@ size_t fp_mapping_host_drain_log(fp_mapping_host *mh)
     return mh->relay ? fp_log_relay_drain(mh->relay, mh->source, mh->log, mh->log_user) : 0;
 }
 
+/* performer=NAME, the host's key (whose hands the input's are): into inst->performer. */
+static int take_performer(fp_input_instance *inst, fp_spec *spec, const char *spec_text, char *err,
+                          size_t errlen)
+{
+    const char *name = fp_spec_take(spec, "performer");
+    if (!name) return 0;
+    size_t n = strlen(name);
+    bool ok = n >= 1 && n <= FP_PERFORMER_NAME_MAX;
+    for (size_t i = 0; ok && i < n; i++) {
+        char c = name[i];
+        ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '-' || c == '_';
+    }
+    if (!ok)
+        return fp_errorf(err, errlen, -EINVAL, "input '%s': performer=%s: expected a name of 1 to %d "
+                         "letters, digits, '-' or '_'", spec_text, name, FP_PERFORMER_NAME_MAX);
+    memcpy(inst->performer, name, n + 1);
+    return 0;
+}
+
 int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
                            const char *spec_text, uint32_t source, char *err, size_t errlen)
 {
@@ -191,6 +210,7 @@ int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
         snprintf(err, errlen, "input '%s': %s", spec_text, ferr);
         goto out;
     }
+    if ((rc = take_performer(inst, &spec, spec_text, err, errlen))) goto out;
     rc = fp_plugin_load(path, FP_PLUGIN_INPUT, spec.name, &inst->plugin, err, errlen);
     if (rc) goto out;
     rc = fp_event_queue_init(&inst->queue, FP_INPUT_QUEUE_CAPACITY);

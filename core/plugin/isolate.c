@@ -167,6 +167,21 @@ static void fill_create(void *user, fp_iso_shm *s)
     put_rig(s, r, true);
 }
 
+/* The further performers' hands and tip distances (ABI 1.3) by value; the helper points
+ * its frame's extra_hands and extra_tip_distance at them. */
+static void put_extra_hands(fp_iso_shm *s, const fp_frame_input *in)
+{
+    uint32_t extra = 0;
+    if (FP_HAS_FIELD(in, fp_frame_input, extra_tip_distance) && in->extra_hands && in->extra_tip_distance)
+        extra = in->extra_performers < FP_PERFORMER_CAPACITY - 1 ? in->extra_performers : FP_PERFORMER_CAPACITY - 1;
+    s->in.extra_performers = extra;
+    s->in.extra_hands = NULL;
+    s->in.extra_tip_distance = NULL;
+    if (!extra) return;
+    memcpy(s->extra_hands, in->extra_hands, FP_HANDS * extra * sizeof s->extra_hands[0]);
+    memcpy(s->extra_tips, in->extra_tip_distance, FP_HANDS * extra * sizeof s->extra_tips[0]);
+}
+
 /* This frame's input and the host's control set into the shared memory. */
 static int put_frame(proxy *x, const fp_frame_input *in, const fp_control_set *out)
 {
@@ -184,6 +199,7 @@ static int put_frame(proxy *x, const fp_frame_input *in, const fp_control_set *o
     if (ne > FP_FRAME_EVENT_CAPACITY) ne = FP_FRAME_EVENT_CAPACITY;
     if (ne) memcpy(s->events, in->events, ne * sizeof s->events[0]);
     s->in.event_count = ne;
+    put_extra_hands(s, in);
     s->has_mesh = in->mesh != NULL;
     if (in->mesh) {
         s->mesh = *in->mesh;

@@ -251,6 +251,11 @@ static int do_process(fp_mapping *m)
     fp_iso_shm *s = H.shm;
     fp_frame_input in = s->in;
     in.events = s->events;
+    bool extra = FP_HAS_FIELD(&s->in, fp_frame_input, extra_tip_distance) && s->in.extra_performers > 0 &&
+                 s->in.extra_performers < FP_PERFORMER_CAPACITY;
+    in.extra_performers = extra ? s->in.extra_performers : 0;
+    in.extra_hands = extra ? s->extra_hands : NULL; /* (the host's copies, ABI 1.3) */
+    in.extra_tip_distance = extra ? (const float (*)[FP_FINGERS])s->extra_tips : NULL;
     in.mesh = NULL;
     if (s->has_mesh) {
         H.mesh = s->mesh;

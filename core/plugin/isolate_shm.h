@@ -26,7 +26,7 @@
 #include <stdint.h>
 
 #define FP_ISO_MAGIC 0x4f534946u        /* "FISO" */
-#define FP_ISO_VERSION 1u
+#define FP_ISO_VERSION 2u              /* 2: the further performers' hands */
 #define FP_ISO_SURFACE_MAX 256          /* surface queries per round trip (more: several) */
 #define FP_ISO_GUARD 8                  /* canary entries after each control-set array */
 #define FP_ISO_CANARY 0xA5
@@ -66,6 +66,9 @@ typedef struct fp_iso_shm {
     /* the frame: in's pointers are rebuilt by the helper */
     fp_frame_input in;
     fp_event events[FP_FRAME_EVENT_CAPACITY];
+    /* in.extra_hands and in.extra_tip_distance (ABI 1.3), in.extra_performers x FP_HANDS rows */
+    fp_hand_pose extra_hands[(FP_PERFORMER_CAPACITY - 1) * FP_HANDS];
+    float extra_tips[(FP_PERFORMER_CAPACITY - 1) * FP_HANDS][FP_FINGERS];
     uint32_t has_mesh, has_rig;
     fp_mesh_view mesh;                /* base: at off_base */
     fp_rig_view rig;                  /* region, landmarks, channels, name: at their offsets */

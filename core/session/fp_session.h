@@ -398,6 +398,16 @@ const fp_head *fp_session_head(const fp_session *s);
  *  filter, interpolated or predicted from its samples; NULL if never seen, or its device is
  *  disconnected). Owned by the session; valid until the next fp_session_step. */
 const fp_hand_pose *fp_session_hand(const fp_session *s, int hand);
+/** Performers (the inputs' host key `performer=NAME`; core/session/performers.h): how many
+ *  share the session (1 to FP_PERFORMER_CAPACITY; 1 where no input names one), performer i's
+ *  name ("" for a first performer whose inputs name none; NULL beyond the count; the
+ *  session's string) and its hand of fp_hand_side `hand` as fp_session_hand (performer 0's
+ *  hands are fp_session_hand's; NULL beyond the count). Each performer's hands are placed by
+ *  its own calibration; fp_session_calibration is the first performer's. [session-thread]
+ *  or between frames. */
+size_t fp_session_performer_count(const fp_session *s);
+const char *fp_session_performer_name(const fp_session *s, size_t performer);
+const fp_hand_pose *fp_session_performer_hand(const fp_session *s, size_t performer, int hand);
 /** The last control set (start/end points) the mapping made and the engine used; the
  *  session's, rewritten by every step (copy what is kept). */
 const fp_control_set *fp_session_control_set(const fp_session *s);

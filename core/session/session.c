@@ -116,8 +116,9 @@ int fp_session_realtime_memory(fp_session *s, size_t reserve_bytes, char *err, s
 static void on_event(void *user, size_t input, const fp_event *ev)
 {
     fp_session *s = user;
-    fp_pose_take_event_filtered(&s->pose, ev, input < s->input_count ? &s->inputs[input].filter : NULL);
-    fp_arrive_step_event(&s->arrive, ev); /* (raw: the placement's estimate is robust anyway) */
+    size_t p = input < s->input_count ? s->performers.of_input[input] : 0; /* whose hands */
+    fp_pose_take_event_filtered(&s->pose[p], ev, input < s->input_count ? &s->inputs[input].filter : NULL);
+    fp_arrive_step_event(&s->arrive[p], ev); /* (raw: the placement's estimate is robust anyway) */
     fp_record_step_event(&s->record, ev);
     if (ev->header.type == FP_EVENT_CHANNEL) { /* an input drives a rig channel (ABI 1.2) */
         char name[sizeof ev->channel.name];
@@ -259,8 +260,7 @@ static void step_frame(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     FP_STAGE_END(FP_STAGE_EVENTS);
     /* 2: hand poses in mesh units, at the frame's time (a live input's placement refined
      * first). */
-    fp_arrive_step_place(&s->arrive, &s->pose, s->engaged, &s->head, &s->log);
-    fp_pose_build_at(&s->pose, now_ns);
+    fp__session_performers_build(s, now_ns); /* (each performer's) */
     FP_STAGE_END(FP_STAGE_HANDS);
 
     /* 3: the mapping. */
@@ -269,7 +269,6 @@ static void step_frame(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     in.size = sizeof in;
     in.time_ns = now_ns;
     in.frame = s->frame;
-    memcpy(in.hands, s->pose.poses, sizeof in.hands);
     in.events = s->intents.frame_events;
     in.event_count = s->intents.frame_event_count;
     in.mesh = &s->view;
@@ -290,14 +289,12 @@ static void step_frame(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     /* on its base (the posed surface), within the fingers' reach only (plugin.h); the index
      * first takes a commit of the last frame */
     fp_engine_step_sync(&s->engine);
-    fp_engine_step_tip_distances(&s->engine, s->pose.poses,
-                                 (float)(FP_TIP_DISTANCE_REACH * fmax(s->radius, s->touch_radius)),
-                                 in.tip_distance);
+    /* the hands and their distances: the first performer's, then the others' (extra_*) */
+    fp__session_performers_frame(s, &in, (float)(FP_TIP_DISTANCE_REACH * fmax(s->radius, s->touch_radius)));
     FP_STAGE_END(FP_STAGE_DISTANCES);
     fp_mapping_step_run(&s->mapping_step, s->mapping, s->mapping_name, &in, &s->cs, &s->log);
     fp_mapping_host_drain_log(&s->mapping_host); /* (one load when it logged nothing) */
-    fp_arrive_step_check(&s->arrive, now_ns, in.hands, in.tip_distance, s->cs.active, s->radius,
-                        s->head.mm_per_unit, &s->engine, &s->log);
+    fp__session_performers_check(s, now_ns, &in);
     st->engaged = s->cs.intents & FP_INTENT_ENGAGE;
     if (s->cs.intents & FP_INTENT_CANCEL) {
         st->cancelled = true;
@@ -388,7 +385,7 @@ const float *fp_session_loaded(const fp_session *s) { return s->loaded; }
 size_t fp_session_vertex_count(const fp_session *s) { return s->n; }
 const struct fp_mesh *fp_session_mesh(const fp_session *s) { return s->mesh; }
 double fp_session_radius(const fp_session *s) { return s->radius; }
-const fp_calibration *fp_session_calibration(const fp_session *s) { return &s->pose.calib; }
+const fp_calibration *fp_session_calibration(const fp_session *s) { return &s->pose[0].calib; }
 const fp_head *fp_session_head(const fp_session *s) { return &s->head; }
 const fp_control_set *fp_session_control_set(const fp_session *s) { return &s->cs; }
 
@@ -438,7 +435,21 @@ void fp_session_set_radius(fp_session *s, double radius)
 
 const fp_hand_pose *fp_session_hand(const fp_session *s, int hand)
 {
-    return hand >= 0 && hand < FP_HANDS && s->pose.poses[hand].present ? &s->pose.poses[hand] : NULL;
+    return fp_session_performer_hand(s, 0, hand);
+}
+
+size_t fp_session_performer_count(const fp_session *s) { return s->performers.count; }
+
+const char *fp_session_performer_name(const fp_session *s, size_t performer)
+{
+    return performer < s->performers.count ? s->performers.names[performer] : NULL;
+}
+
+const fp_hand_pose *fp_session_performer_hand(const fp_session *s, size_t performer, int hand)
+{
+    if (performer >= s->performers.count || hand < 0 || hand >= FP_HANDS) return NULL;
+    const fp_hand_pose *p = &s->pose[performer].poses[hand];
+    return p->present ? p : NULL;
 }
 
 /* After undo or reset: the mapping forgets its gesture, and so does the control set that
@@ -551,7 +562,7 @@ void fp_session_destroy(fp_session **sp)
     fp_history_free(&s->history);
     fp_intents_free(&s->intents);
     fp_record_step_free(&s->record);
-    fp_arrive_step_free(&s->arrive);
+    for (size_t p = 0; p < FP_PERFORMER_CAPACITY; p++) fp_arrive_step_free(&s->arrive[p]);
     free(s->loaded);
     free(s->base);
     free(s->deformed);

@@ -5,6 +5,7 @@
  *                       the queries and edits, destruction
  *   session_open.c      fp_session_create, fp_session_start
  *   session_mapping.c   the mapping's load, swap and reload (fp_session_set_mapping, ...)
+ *   session_performers.c  each performer's hands: the calibration, the frame's poses
  *   step_commit.c       the commit (step 6 with the rig and the contact guard; step_commit.h)
  *   step_contact.c      the contact guard's step (step_contact.h)
  */
@@ -21,6 +22,7 @@
 #include "frame_thread.h"
 #include "history.h"
 #include "intents.h"
+#include "performers.h"
 #include "skin_reach.h"
 #include "step_contact.h"
 #include "step_engine.h"
@@ -71,7 +73,12 @@ struct fp_session {
     uint32_t actions;             /* FP_SESSION_ACTION_* since the last frame (recorded) */
 
     fp_intents intents;           /* step 1 */
-    fp_pose_state pose;           /* step 2 */
+    fp_pose_state pose[FP_PERFORMER_CAPACITY]; /* step 2: each performer's (performers.h);
+                                     [0] the first's, the only one without performer= */
+    fp_performers performers;     /* whose inputs are whose */
+    fp_hand_pose extra_hands[(FP_PERFORMER_CAPACITY - 1) * FP_HANDS]; /* the frame's further
+                                     performers' hands and their tip distances (plugin.h) */
+    float extra_tips[(FP_PERFORMER_CAPACITY - 1) * FP_HANDS][FP_FINGERS];
     fp_mapping_step mapping_step; /* step 3 */
     fp_rig_step rig;
     bool channel_event_warned;   /* an input's channel event named no channel of the rig */              /* step 4 */
@@ -79,7 +86,8 @@ struct fp_session {
     fp_skin_reach_gesture gesture_reach; /* the gesture's reach so far (skin_reach.h) */
     fp_history history;           /* step 6 */
     fp_record_step record;        /* step 7 */
-    fp_arrive_step arrive;         /* placement as the hands run, and the hint (step_arrive.h) */
+    fp_arrive_step arrive[FP_PERFORMER_CAPACITY]; /* each performer's placement as the hands
+                                     run, and the hint (step_arrive.h) */
 
     fp_control_set cs;            /* its arrays are the mapping step's (with canaries) */
 
@@ -112,5 +120,15 @@ int fp__session_load_mapping(fp_session *s, const char *mapping, const fp_plugin
 void fp__session_reset_mapping(fp_session *s);
 void fp__session_destroy_mapping(fp_session *s, fp_mapping *m, const char *name);
 void fp__session_mapping_services(fp_session *s);
+
+/* session_performers.c: the inputs' performers (performers.h) and each performer's pose state
+ * and calibration (given, else its own inputs' workspaces, else placed as the hands arrive;
+ * the glove placement), after the inputs opened; then, each frame, every performer's hands
+ * placed and built at now_ns, the further performers' into in->extra_* with their fingertip
+ * distances, and the hint per performer after the mapping. */
+int fp__session_performers_open(fp_session *s, const fp_session_options *opt, char *err, size_t errlen);
+void fp__session_performers_build(fp_session *s, int64_t now_ns);
+void fp__session_performers_frame(fp_session *s, fp_frame_input *in, float reach);
+void fp__session_performers_check(fp_session *s, int64_t now_ns, const fp_frame_input *in);
 
 #endif

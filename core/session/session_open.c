@@ -13,39 +13,6 @@
 #include <unistd.h>
 #include <sys/stat.h> /* stat: the mesh file's size for progress */
 
-/* Workspace calibration (step 2's state): the mesh's unit (given, else detected from the
- * head), then the calibration (given, else the inputs' workspaces, or the default one,
- * fitted life-size in front of the face), then the glove placement. */
-static int calibrate(fp_session *s, const fp_session_options *opt, char *err, size_t errlen)
-{
-    fp_calibration c;
-    if (opt->calibration) {
-        c = *opt->calibration;
-        if (!(c.scale > 0) || !isfinite(c.scale)) {
-            snprintf(err, errlen, "calibration: scale must be > 0, got %g", c.scale);
-            return -EINVAL;
-        }
-        s->head.mm_per_unit = 1.0 / c.scale;
-        s->head.method = FP_HEAD_GIVEN;
-        snprintf(s->head.how, sizeof s->head.how, "from the calibration");
-        fp_arrive_step_init(&s->arrive, FP_ARRIVE_PLACED_CALIBRATION); /* (allocates nothing) */
-    } else {
-        fp_input *ins[FP_SESSION_MAX_INPUTS];
-        for (size_t i = 0; i < s->input_count; i++) ins[i] = s->inputs[i].input;
-        float wmin[3], wmax[3];
-        bool stated = fp_pose_inputs_workspace(ins, s->input_count, wmin, wmax);
-        if (!stated) fp_pose_default_workspace(wmin, wmax); /* until the hands arrive */
-        fp_pose_fit_workspace(&c, s->head.mm_per_unit, wmin, wmax, s->head.min, s->head.max);
-        if (fp_arrive_step_init(&s->arrive, stated ? FP_ARRIVE_PLACED_WORKSPACE : FP_ARRIVE_PLACED_AUTO)) {
-            snprintf(err, errlen, "session: out of memory for the hands' placement");
-            return -ENOMEM;
-        }
-    }
-    s->pose.calib = c;
-    fp_pose_place_gloves(&s->pose, s->loaded, s->n, &s->head);
-    return 0;
-}
-
 /* The rig: given, "none", or the one of this mesh in the rig folder (fp_rig_find). */
 static int attach_rig(fp_session *s, const fp_session_options *opt, char *err, size_t errlen)
 {
@@ -238,7 +205,8 @@ static int open_steps(fp_session *s, const fp_session_options *opt, double diag,
      * busy). Whole-mesh writes (a base change) are slower on one thread; -1 asks for all. */
     int threads = opt->engine_threads ? opt->engine_threads : 1;
     fp_intents_init(&s->intents);
-    fp_pose_init(&s->pose, opt->hand_size, NULL);
+    fp_pose_init(&s->pose[0], opt->hand_size, NULL); /* (the first performer's; the others' at
+                                                        fp__session_performers_open) */
     if ((rc = fp_history_init(&s->history, s->n, s->base))) {
         snprintf(err, errlen, "session: out of memory for the undo history");
         return rc;
@@ -297,7 +265,7 @@ static int open_inputs(fp_session *s, const fp_session_options *opt, char *err, 
         fp_input_instance_set_log(&s->inputs[i], s->log.fn, s->log.user);
         fp_input_instance_drain_log(&s->inputs[i]); /* what its create said */
     }
-    if ((rc = calibrate(s, opt, err, errlen))) return rc;
+    if ((rc = fp__session_performers_open(s, opt, err, errlen))) return rc; /* and calibrate */
     s->intents.clocked = opt->input_clock;
     for (size_t i = 0; i < s->input_count && opt->input_clock; i++) {
         const fp_input *in = s->inputs[i].input;

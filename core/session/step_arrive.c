@@ -35,10 +35,10 @@ void fp_arrive_step_place(fp_arrive_step *r, fp_pose_state *p, bool engaged, con
     float lo[3], hi[3];
     fp_pose_auto_box(r->place, lo, hi);
     fp_slog_printf(log, FP_LOG_INFO, "session",
-                   "hands placed life-size in front of the face from their first frame (no input "
+                   "%shands placed life-size in front of the face from their first frame (no input "
                    "states a workspace: x %.0f..%.0f, y %.0f..%.0f, z %.0f..%.0f mm so far), "
                    "refined as they move; --calibration FILE fixes the placement",
-                   lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]);
+                   r->who, lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]);
 }
 
 /* What the hint says of the placement. */
@@ -103,9 +103,9 @@ void fp_arrive_step_check(fp_arrive_step *r, int64_t now_ns, const fp_hand_pose 
     if (isfinite(r->nearest)) snprintf(far, sizeof far, "%.0f mm", r->nearest * mm);
     else snprintf(far, sizeof far, "(unknown)");
     fp_slog_printf(log, FP_LOG_WARNING, "session",
-                   "hands present for %.0f s, but no fingertip came within %.0f mm of the face "
+                   "%shands present for %.0f s, but no fingertip came within %.0f mm of the face "
                    "(half the support radius: where the anchored mapping grabs); the nearest "
                    "stayed %s away. %s, or calibrate: `facepuppet calibrate --mesh FACE --input "
                    "SPEC --out cal.json`, then --calibration cal.json (docs/calibration.md)",
-                   r->away_s, FP_ARRIVE_NEAR * radius * mm, far, placed_words(r->how));
+                   r->who, r->away_s, FP_ARRIVE_NEAR * radius * mm, far, placed_words(r->how));
 }

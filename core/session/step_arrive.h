@@ -60,6 +60,8 @@ typedef struct fp_arrive_step {
     bool far_asked;                /* the unbounded nearest query ran ... */
     int64_t far_ns;                /* ... last at this frame time */
     unsigned long hints;           /* hints said so far */
+    char who[80];                  /* whose hands, before its lines ("performer 'B': "; set
+                                      after init by a session of several performers), or "" */
 } fp_arrive_step;
 
 /** Start: how the hands are placed; FP_ARRIVE_PLACED_AUTO makes the estimator. Returns 0 or

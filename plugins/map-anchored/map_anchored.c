@@ -28,6 +28,12 @@
  * --radius moves more skin around the same grab, it never engages farther off the skin nor
  * lets go later (which made a wider brush move the skin less).
  *
+ * Every performer's hands grab (ABI 1.3, fp_frame_input.extra_hands: two right hands from
+ * two performers are two hands, each grabbing its own skin); hands= picks the sides for all
+ * of them. The control set holds FP_CONTROL_CAPACITY points: the first performer's grab
+ * first, a later performer's points beyond it are left out (only with points=all, or
+ * tips+palm and more than five hands).
+ *
  * Keys: hands=left|right|both (both), auto=0|1 (1), engage=F (0.5, in R), release=F (1.0, in R;
  *       at least engage, else a hand would let go as it engages: refused at create),
  *       clamp=F (0: none; else the longest control vector in R, a performer's limit),
@@ -53,7 +59,8 @@ typedef struct anchored {
     int points;                  /* fp_points mode */
     size_t per_hand;             /* points per hand (FP_POINTS_*_COUNT) */
     bool engaged;
-    unsigned engaged_hands;      /* hands whose points grabbed the skin */
+    unsigned engaged_hands;      /* hands whose points grabbed the skin (bit: an index of
+                                    fp_frame_hand_count's list, every performer's) */
     size_t count;                /* grabbed points (control vectors) */
     float start[FP_CONTROL_CAPACITY][3];    /* the grabbed skin points, mesh units */
     float offset[FP_CONTROL_CAPACITY][3];   /* start - the point at engage */
@@ -73,7 +80,7 @@ static bool hand_near(const anchored *a, const fp_frame_input *in, int h, double
 {
     if (factor <= FP_TIP_DISTANCE_REACH || !a->surface || !a->surface->nearest)
         return fp_hand_is_near(in, h, factor);
-    if (!in->hands[h].present) return false;
+    if (!fp_frame_hand(in, h)->present) return false;
     float tips[FP_FINGERS][3];
     fp_surface_hit hit[FP_FINGERS];
     fp_hand_tips(in, h, tips);
@@ -152,15 +159,16 @@ static void take_points(anchored *a, const fp_frame_input *in, int h, size_t roo
 static int engage(anchored *a, const fp_frame_input *in, bool requested, size_t capacity)
 {
     unsigned which = 0;
-    for (int h = 0; h < FP_HANDS; h++) {
-        if (!(a->hands & (1u << h)) || !in->hands[h].present) continue;
+    int nh = fp_frame_hand_count(in);
+    for (int h = 0; h < nh; h++) { /* every performer's hands: side h % FP_HANDS */
+        if (!(a->hands & (1u << (h % FP_HANDS))) || !fp_frame_hand(in, h)->present) continue;
         if (requested || hand_near(a, in, h, a->engage)) which |= 1u << h;
     }
     if (!which) return 0;
     a->count = 0;
     unsigned grabbed = 0;
     size_t cap = capacity < FP_CONTROL_CAPACITY ? capacity : FP_CONTROL_CAPACITY;
-    for (int h = 0; h < FP_HANDS; h++) {
+    for (int h = 0; h < nh; h++) {
         if (!(which & (1u << h))) continue;
         int got = grab(a, in, h, a->engage, cap - a->count);
         if (got == 0 && requested) got = grab(a, in, h, a->release, cap - a->count);
@@ -215,15 +223,16 @@ static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *o
     /* End points: each grabbed skin point plus how far its point of contact moved since
      * engage (a hand that vanished keeps its last). */
     bool still_near = false;
-    float pts[FP_HANDS][FP_POINTS_MAX][3];
-    for (int h = 0; h < FP_HANDS; h++) {
-        if (!(a->engaged_hands & (1u << h)) || !in->hands[h].present) continue;
+    float pts[FP_MAX_FRAME_HANDS][FP_POINTS_MAX][3];
+    int nh = fp_frame_hand_count(in);
+    for (int h = 0; h < nh; h++) {
+        if (!(a->engaged_hands & (1u << h)) || !fp_frame_hand(in, h)->present) continue;
         fp_hand_points(in, h, a->points, pts[h]);
         if (hand_near(a, in, h, a->release)) still_near = true;
     }
     for (size_t i = 0; i < a->count; i++) {
         int h = a->hand_of[i];
-        if (in->hands[h].present)
+        if (h < nh && fp_frame_hand(in, h)->present)
             for (int c = 0; c < 3; c++) a->last_end[i][c] = pts[h][a->point_of[i]][c] + a->offset[i][c];
         memcpy(out->start[i], a->start[i], sizeof a->start[i]);
         memcpy(out->end[i], a->last_end[i], sizeof a->last_end[i]);
@@ -332,7 +341,8 @@ static const fp_mapping_factory factory = {
              "  points: the fingertips (5 per hand, the paper's), tips+palm (+ palm centre and\n"
              "  knuckles: 11) or all (every joint: 21 per hand, 42 for two).\n"
              "  widen: skin dragged farther than widen*R from where it was at rest widens the\n"
-             "  support to that distance / widen (0.5), so the skin around follows; 0: never.",
+             "  support to that distance / widen (0.5), so the skin around follows; 0: never.\n"
+             "  Every performer's hands grab (inputs' performer=NAME): hands= picks the sides.",
     .create = create,
     .params = keys,
 };

@@ -6,6 +6,10 @@
  * Written against the public headers only (plugin.h ABI 1.1 and mapping_util.h), as a plugin
  * author outside the project would.
  *
+ * Whose hand: the first performer's (fp_frame_input.hands, the inputs without performer=, or
+ * the first named); further performers' hands (extra_hands, ABI 1.3) are ignored: one face,
+ * one puppeteer's hand.
+ *
  * What the hand does:
  *  - The thumb is the jaw: the gap between the thumb and the fingers (jaw=opening, the
  *    default: the distance of the thumb's tip from the index tip, as a hand puppet's mouth
@@ -565,7 +569,9 @@ static const fp_mapping_factory factory = {
         "  cancel: key X; on the defaults the next frame engages again (X re-zeroes the hand).\n"
         "  hold=1 keeps the face posed while the hand is gone and continues from it at the\n"
         "  next engage (an engage request while engaged re-zeroes the hand); hold=0 drops it\n"
-        "  when the hand goes. Control vectors are clamped to clamp x R.",
+        "  when the hand goes. Control vectors are clamped to clamp x R.\n"
+        "  With several performers (inputs' performer=NAME) the first performer's hand drives\n"
+        "  the face; the others' hands are ignored.",
     .create = create,
     .params = keys,
 };

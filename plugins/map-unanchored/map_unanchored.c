@@ -9,6 +9,10 @@
  * engaged (FP_INTENT_ENGAGE until FP_INTENT_COMMIT or _CANCEL). Each step is already in the
  * base, so cancel only ends the gesture; it cannot take steps back.
  *
+ * Every performer's hands step (ABI 1.3, fp_frame_input.extra_hands: two right hands from two
+ * performers are two hands); hands= picks the sides for all of them. A later performer's hand
+ * whose points no longer fit the control set (points=all: more than three hands) is left out.
+ *
  * Keys: hands=left|right|both (both), auto=0|1 (1), clamp=F (0.45, longest step in R),
  *       points=tips|tips+palm|all (5, 11 or 21 points per hand, mapping_util.h fp_points).
  */
@@ -27,8 +31,8 @@ typedef struct unanchored {
     double clamp;
     int points;                                /* fp_points mode */
     bool held;                                 /* engaged by request */
-    bool have_last[FP_HANDS];
-    float last[FP_HANDS][FP_POINTS_MAX][3];
+    bool have_last[FP_MAX_FRAME_HANDS];        /* by fp_frame_hand_count's index */
+    float last[FP_MAX_FRAME_HANDS][FP_POINTS_MAX][3];
 } unanchored;
 
 static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *out)
@@ -45,14 +49,19 @@ static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *o
     }
     if (in->requested & (FP_INTENT_COMMIT | FP_INTENT_CANCEL)) u->held = false;
     size_t k = 0;
-    for (int h = 0; h < FP_HANDS; h++) {
-        if (!(u->hands & (1u << h)) || !in->hands[h].present) {
+    int nh = fp_frame_hand_count(in);
+    for (int h = 0; h < nh; h++) { /* every performer's hands: side h % FP_HANDS */
+        if (!(u->hands & (1u << (h % FP_HANDS))) || !fp_frame_hand(in, h)->present) {
             u->have_last[h] = false;
             continue;
         }
         bool acts = u->held || (u->automatic && fp_hand_is_near(in, h, 1.0));
         float pts[FP_POINTS_MAX][3];
         size_t n = fp_hand_points(in, h, u->points, pts);
+        if (acts && u->have_last[h] && out->capacity < k + n && h >= FP_HANDS) {
+            u->have_last[h] = false; /* a later performer's hand past the capacity: left out */
+            continue;
+        }
         if (acts && u->have_last[h]) {
             if (out->capacity < k + n) return -ENOSPC;
             for (size_t f = 0; f < n; f++, k++) {
@@ -76,7 +85,7 @@ static void reset(fp_mapping *self)
 {
     unanchored *u = self->plugin_data;
     u->held = false;
-    u->have_last[0] = u->have_last[1] = false;
+    memset(u->have_last, 0, sizeof u->have_last);
 }
 
 static void destroy(fp_mapping *self)
@@ -128,7 +137,8 @@ static const fp_mapping_factory factory = {
     .usage = "unanchored[,hands=left|right|both][,auto=0|1][,clamp=F][,points=tips|tips+palm|all]\n"
              "  a hand acts while a fingertip is within R of the surface (auto=1) or while\n"
              "  engaged; each step is folded into the base at once. points: the fingertips\n"
-             "  (5 per hand), tips+palm (+ palm centre and knuckles: 11) or all (21 per hand).",
+             "  (5 per hand), tips+palm (+ palm centre and knuckles: 11) or all (21 per hand).\n"
+             "  Every performer's hands act (inputs' performer=NAME): hands= picks the sides.",
     .create = create,
     .params = keys,
 };

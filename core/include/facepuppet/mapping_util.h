@@ -27,25 +27,56 @@ static inline double fp_touch_radius(const fp_frame_input *in)
                                                                                    : in->radius;
 }
 
+/** Every performer's hands as one list (ABI 1.3): hand i is performer i / FP_HANDS's hand of
+ *  side i % FP_HANDS (fp_hand_side), so 0 and 1 are fp_frame_input.hands (the first
+ *  performer's) and from FP_HANDS on fp_frame_input.extra_hands. fp_frame_hand_count gives
+ *  FP_HANDS x the performers (FP_HANDS from a host before 1.3, or with one performer; at
+ *  most FP_HANDS x FP_PERFORMER_CAPACITY). The hand functions below take such an index. */
+#define FP_MAX_FRAME_HANDS (FP_HANDS * FP_PERFORMER_CAPACITY)
+static inline int fp_frame_hand_count(const fp_frame_input *in)
+{
+    if (!FP_HAS_FIELD(in, fp_frame_input, extra_tip_distance) || !in->extra_hands || !in->extra_tip_distance)
+        return FP_HANDS;
+    uint32_t extra = in->extra_performers < FP_PERFORMER_CAPACITY - 1 ? in->extra_performers
+                                                                      : FP_PERFORMER_CAPACITY - 1;
+    return FP_HANDS * (1 + (int)extra);
+}
+
+/** Hand i of fp_frame_hand_count's list (i below the count): its pose, mesh units. */
+static inline const fp_hand_pose *fp_frame_hand(const fp_frame_input *in, int i)
+{
+    return i < FP_HANDS ? &in->hands[i] : &in->extra_hands[i - FP_HANDS];
+}
+
+/** Hand i's fingertip distances (FP_FINGERS of them, as fp_frame_input.tip_distance). */
+static inline const float *fp_frame_tip_distance(const fp_frame_input *in, int i)
+{
+    return i < FP_HANDS ? in->tip_distance[i] : in->extra_tip_distance[i - FP_HANDS];
+}
+
 /** The paper's activation rule (Sato et al. 2004, sec. 2.3): a hand is active while one of
  *  its fingertips is within `factor` x the touch radius (fp_touch_radius: the support radius
  *  at the face's default) of the surface. Exact for factor <= FP_TIP_DISTANCE_REACH (the
  *  host's tip distances are +INFINITY beyond it); farther out, ask FP_HOST_EXT_SURFACE with
- *  that reach (map-anchored does). */
+ *  that reach (map-anchored does). `hand`: an index of fp_frame_hand_count's list (0 left,
+ *  1 right: the first performer's). */
 static inline bool fp_hand_is_near(const fp_frame_input *in, int hand, double factor)
 {
-    if (!in->hands[hand].present) return false;
+    if (!fp_frame_hand(in, hand)->present) return false;
     const double touch = fp_touch_radius(in);
+    const float *d = fp_frame_tip_distance(in, hand);
     for (int f = 0; f < FP_FINGERS; f++)
-        if (in->tip_distance[hand][f] < factor * touch) return true;
+        if (d[f] < factor * touch) return true;
     return false;
 }
 
-/** Copy hand `hand`'s five fingertips (thumb..pinky) into tips[5][3], mesh units. */
+/** Copy hand `hand`'s five fingertips (thumb..pinky) into tips[5][3], mesh units (`hand` as
+ *  fp_hand_is_near's). */
 static inline void fp_hand_tips(const fp_frame_input *in, int hand, float tips[FP_FINGERS][3])
 {
+    const fp_hand_pose *p = fp_frame_hand(in, hand);
     for (int f = 0; f < FP_FINGERS; f++)
-        memcpy(tips[f], in->hands[hand].joints[FP_JOINT_TIP(f)], sizeof tips[f]);
+        memcpy(tips[f], p->joints[FP_JOINT_TIP(f)], sizeof tips[f]);
 }
 
 /** Points of contact of one hand (the `points=` key of the anchored and unanchored
@@ -59,7 +90,8 @@ static inline void fp_hand_tips(const fp_frame_input *in, int hand, float tips[F
 typedef enum fp_points { FP_POINTS_TIPS = 0, FP_POINTS_TIPS_PALM = 1, FP_POINTS_ALL = 2 } fp_points;
 #define FP_POINTS_CHOICES "tips|tips+palm|all"
 /** Points per hand in each mode; FP_POINTS_MAX is the largest (two hands: 2 x it, within
- *  FP_CONTROL_CAPACITY). */
+ *  FP_CONTROL_CAPACITY; the fingertips of FP_MAX_FRAME_HANDS hands fit too, 40, but not
+ *  every joint of more than three hands: a mapping leaves the later performers' out). */
 #define FP_POINTS_TIPS_COUNT FP_FINGERS
 #define FP_POINTS_TIPS_PALM_COUNT (2 * FP_FINGERS + 1)
 #define FP_POINTS_ALL_COUNT FP_HAND_JOINTS
@@ -85,13 +117,14 @@ static inline size_t fp_points_joints(int mode, int joints[FP_POINTS_MAX])
 }
 
 /** Copy hand `hand`'s points of contact of `mode` into pts (at least FP_POINTS_MAX rows),
- *  mesh units; returns how many (as fp_points_joints). */
+ *  mesh units; returns how many (as fp_points_joints). `hand` as fp_hand_is_near's. */
 static inline size_t fp_hand_points(const fp_frame_input *in, int hand, int mode,
                                     float pts[][3])
 {
     int joints[FP_POINTS_MAX];
     size_t n = fp_points_joints(mode, joints);
-    for (size_t i = 0; i < n; i++) memcpy(pts[i], in->hands[hand].joints[joints[i]], sizeof pts[i]);
+    const fp_hand_pose *p = fp_frame_hand(in, hand);
+    for (size_t i = 0; i < n; i++) memcpy(pts[i], p->joints[joints[i]], sizeof pts[i]);
     return n;
 }
 

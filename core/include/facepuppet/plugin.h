@@ -60,9 +60,10 @@ extern "C" {
 #endif
 
 #define FP_PLUGIN_ABI_MAJOR 1
-#define FP_PLUGIN_ABI_MINOR 2   /* 1.1: capacities, face frame, rig and surface services,
+#define FP_PLUGIN_ABI_MINOR 3   /* 1.1: capacities, face frame, rig and surface services,
                                    typed parameters; 1.2: channel events (FP_EVENT_CHANNEL);
-                                   1.0 and 1.1 plugins still load */
+                                   1.3: further performers' hands (fp_frame_input.extra_*);
+                                   1.0 to 1.2 plugins still load */
 
 /** True when the struct at `ptr` (of ABI type `type`, starting with `uint32_t size`) is large
  *  enough to hold `field`: its size covers the field's last byte. A reader tests it before
@@ -85,6 +86,11 @@ extern "C" {
 #define FP_CHANNEL_CAPACITY 16
 /** At most this many events (buttons, status) reach a mapping in one frame. */
 #define FP_FRAME_EVENT_CAPACITY 64
+/** At most this many performers share a session (ABI 1.3): the first one's hands are
+ *  fp_frame_input.hands, the others' fp_frame_input.extra_hands (at most
+ *  FP_PERFORMER_CAPACITY - 1 pairs). An input joins a performer with the host's SPEC key
+ *  `performer=NAME`; inputs without it are the first performer's. */
+#define FP_PERFORMER_CAPACITY 4
 
 /** Name of the one exported symbol, of type `const fp_plugin_entry`. */
 #define FP_PLUGIN_ENTRY_SYMBOL "facepuppet_plugin_entry"
@@ -445,6 +451,22 @@ typedef struct fp_frame_input {
      *  farther off the skin nor lets go later). fp_touch_radius (mapping_util.h) reads it,
      *  or radius where a host does not fill it. */
     double touch_radius;
+
+    /* ---- ABI 1.3 (read only where size covers them; a 1.2 host does not fill them) --- */
+    /** Further performers (inputs with `performer=NAME`, two right hands from two people):
+     *  extra_performers of them, 0 to FP_PERFORMER_CAPACITY - 1, in the order their names
+     *  first appear among the inputs. Their hands are pairs, left then right:
+     *  extra_hands[FP_HANDS * p + side] is performer p + 2's hand of fp_hand_side `side`
+     *  (p from 0), as `hands` (mesh units, at time_ns, each performer placed by its own
+     *  calibration); extra_tip_distance[FP_HANDS * p + side][finger] is its fingertips'
+     *  distances, as `tip_distance`. `hands` and `tip_distance` stay the first performer's.
+     *  Both arrays have FP_HANDS x extra_performers rows; NULL where extra_performers is 0.
+     *  The host's, valid during this call only (copy what is kept); [session-thread]. A
+     *  mapping that ignores them drives the face from the first performer alone;
+     *  mapping_util.h's fp_frame_hand_count and fp_frame_hand read both as one list. */
+    uint32_t extra_performers;
+    const fp_hand_pose *extra_hands;
+    const float (*extra_tip_distance)[FP_FINGERS];
 } fp_frame_input;
 
 /* ------------------------------------------------------------------------------------- */
