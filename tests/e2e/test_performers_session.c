@@ -1,0 +1,290 @@
+/* Whose hands are whose (issue 55, item 4), through whole sessions on the ICT face on the
+ * input clock, with two recordings that both give a right hand: three-claps (hands=right) and
+ * grab, each replayed fast=1.
+ *  - merged (no performer= key, as before): one performer, the second recording's right hand
+ *    overwrites the first's in the session's one pair of hands;
+ *  - grab with performer=B: two performers; the first performer's right hand follows the
+ *    three-claps recording as it does alone, B's right hand follows grab as it does alone
+ *    (each placed by its own calibration), and the anchored mapping gets both hands: more
+ *    control vectors than the first recording alone gives, and a different shape than the
+ *    merge; the same through the isolated mapping (--isolate all's helper);
+ *  - a performer= key on the only input (or on every input of one performer) changes
+ *    nothing: the shape bit for bit as without it.
+ * The two inputs start a moment apart (each stamps its events from its own start), so two
+ * runs with two inputs are compared within a tolerance, and runs of one input exactly. */
+#define _GNU_SOURCE
+#include "fp_session.h"
+#include "fp_test_support.h"
+
+#include <errno.h>
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <cmocka.h>
+
+#define MAX_FRAMES 2000
+
+typedef struct run_out {
+    size_t frames, performers;
+    unsigned long vectors;          /* control vectors summed over the frames */
+    size_t max_vectors;             /* the most in one frame */
+    size_t moved;                   /* vertices of the final shape off the loaded one */
+    unsigned long of[2];            /* control vectors whose end is nearest performer p's right
+                                       fingertips (the grabbed skin's offset: under R) */
+    size_t frames_both;             /* frames with vectors of both performers */
+    bool have[2][MAX_FRAMES];       /* performer p's right hand present at frame k ... */
+    float palm[2][MAX_FRAMES][3];   /* ... and its palm, mesh units */
+    float *shape;                   /* the final shape, n x 3 */
+    size_t n;
+} run_out;
+
+static char specs[4][2048];
+
+/* The recordings as input SPECs: three-claps' right hand; grab with `key` (NULL: none). */
+static const char *claps(const char *key)
+{
+    snprintf(specs[0], sizeof specs[0], "replay:%s/hands/leap-motion/three-claps_joints_mm.csv,hands=right,"
+             "fast=1%s%s", fp_test_data_dir(), key ? "," : "", key ? key : "");
+    return specs[0];
+}
+static const char *grab(const char *key)
+{
+    snprintf(specs[1], sizeof specs[1], "replay:%s/hands/leap-motion/grab_joints_mm.csv,fast=1%s%s",
+             fp_test_data_dir(), key ? "," : "", key ? key : "");
+    return specs[1];
+}
+
+static void sleep_us(long us)
+{
+    struct timespec ts = {0, us * 1000};
+    nanosleep(&ts, NULL);
+}
+
+/* Whose hand each control vector of the frame follows: its end point's nearest fingertip of
+ * the performers' right hands, within 2 R (an anchored vector ends at the fingertip plus the
+ * offset to the skin it grabbed, under R). */
+static void attribute(const fp_session *s, run_out *o)
+{
+    const fp_control_set *cs = fp_session_control_set(s);
+    double reach = 2 * fp_session_radius(s);
+    size_t n[2] = {0, 0};
+    for (size_t i = 0; i < cs->count; i++) {
+        double best = reach;
+        int who = -1;
+        for (size_t p = 0; p < 2 && p < fp_session_performer_count(s); p++) {
+            const fp_hand_pose *h = fp_session_performer_hand(s, p, FP_HAND_RIGHT);
+            for (int f = 0; h && f < FP_FINGERS; f++) {
+                double d = 0;
+                for (int c = 0; c < 3; c++) d += pow((double)cs->end[i][c] - h->joints[FP_JOINT_TIP(f)][c], 2);
+                if (sqrt(d) < best) best = sqrt(d), who = (int)p;
+            }
+        }
+        if (who >= 0) n[who]++;
+    }
+    o->of[0] += n[0];
+    o->of[1] += n[1];
+    o->frames_both += n[0] && n[1];
+}
+
+/* A session of the inputs with the anchored mapping (isolated: in its helper), stepped on the
+ * input clock at 60 frames a second to the recordings' end, as `facepuppet run`. */
+static void run(const char *const *inputs, int n, bool isolated, run_out *o)
+{
+    memset(o, 0, sizeof *o);
+    char err[2048], helper[4096];
+    fp_session_options so;
+    fp_test_face_options(&so, "anchored", NULL);
+    for (int i = 0; i < n; i++) so.inputs[i] = inputs[i];
+    so.input_count = (size_t)n;
+    so.input_clock = true;
+    if (isolated) {
+        snprintf(helper, sizeof helper, "%s/bin/facepuppet", fp_test_build_dir());
+        so.isolate = 2; /* all */
+        so.isolate_helper = helper;
+        so.isolate_deadline_ms = 5000.0 * fp_test_time_scale();
+    }
+    fp_session *s = NULL;
+    int rc = fp_session_create(&so, &s, err, sizeof err);
+    if (rc) fail_msg("%s", err);
+    if ((rc = fp_session_start(s, err, sizeof err))) fail_msg("%s", err);
+    o->performers = fp_session_performer_count(s);
+    int64_t t0 = 0;
+    while (fp_session_input_start(s, &t0) == 0) sleep_us(200);
+    for (size_t k = 0; k < MAX_FRAMES; k++) {
+        int64_t now = t0 + (int64_t)llround((double)k * 1e9 / 60.0);
+        while (!fp_session_inputs_ready(s, now)) sleep_us(200);
+        fp_frame_stats st;
+        fp_session_step(s, now, &st);
+        o->vectors += st.active ? st.control_vectors : 0;
+        if (st.active && st.control_vectors > o->max_vectors) o->max_vectors = st.control_vectors;
+        if (st.active) attribute(s, o);
+        for (size_t p = 0; p < 2 && p < o->performers; p++) {
+            const fp_hand_pose *h = fp_session_performer_hand(s, p, FP_HAND_RIGHT);
+            o->have[p][k] = h != NULL;
+            if (h) memcpy(o->palm[p][k], h->joints[FP_JOINT_PALM], sizeof o->palm[p][k]);
+        }
+        o->frames = k + 1;
+        if (fp_session_finished(s)) break;
+    }
+    o->n = fp_session_vertex_count(s);
+    o->shape = malloc(o->n * 3 * sizeof *o->shape);
+    assert_non_null(o->shape);
+    memcpy(o->shape, fp_session_positions(s), o->n * 3 * sizeof *o->shape);
+    const float *loaded = fp_session_loaded(s);
+    for (size_t v = 0; v < o->n; v++)
+        if (memcmp(&loaded[3 * v], &o->shape[3 * v], 3 * sizeof(float))) o->moved++;
+    fp_session_destroy(&s);
+}
+
+/* How far a's hand of performer pa strays from b's of performer pb: over the frames where
+ * a's is present, the largest distance to the nearest of b's within `window` frames either
+ * side (mesh units; the inputs' start apart shifts a second recording by a fraction of a
+ * frame); *both: how many of a's frames had one of b's to compare. */
+static double hand_gap(const run_out *a, int pa, const run_out *b, int pb, int window, size_t *both)
+{
+    double worst = 0;
+    *both = 0;
+    for (size_t k = 0; k < a->frames; k++) {
+        if (!a->have[pa][k]) continue;
+        double best = INFINITY;
+        for (long j = (long)k - window; j <= (long)k + window; j++) {
+            if (j < 0 || (size_t)j >= b->frames || !b->have[pb][j]) continue;
+            double d = 0;
+            for (int c = 0; c < 3; c++) d += pow((double)a->palm[pa][k][c] - b->palm[pb][j][c], 2);
+            best = fmin(best, sqrt(d));
+        }
+        if (!isfinite(best)) continue;
+        worst = fmax(worst, best);
+        (*both)++;
+    }
+    return worst;
+}
+
+static void say(const char *what, const run_out *o)
+{
+    printf("# %-27s performers %zu, frames %zu, control vectors %lu (most in a frame %zu; "
+           "following the first's right hand %lu, B's %lu; frames with both %zu), vertices moved "
+           "%zu\n", what, o->performers, o->frames, o->vectors, o->max_vectors, o->of[0], o->of[1],
+           o->frames_both, o->moved);
+}
+
+static void test_two_right_hands(void **state)
+{
+    (void)state;
+    run_out alone, grab_alone, merged, two, two_iso;
+    const char *in1[] = {claps(NULL)};
+    run(in1, 1, false, &alone);
+    const char *in1b[] = {grab(NULL)};
+    run(in1b, 1, false, &grab_alone);
+    const char *in2[] = {claps(NULL), grab(NULL)};
+    run(in2, 2, false, &merged);
+    const char *in3[] = {claps(NULL), grab("performer=B")};
+    run(in3, 2, false, &two);
+    run(in3, 2, true, &two_iso);
+    say("three-claps right alone", &alone);
+    say("grab alone", &grab_alone);
+    say("both, no performer= (merge)", &merged);
+    say("grab with performer=B", &two);
+    say("performer=B, --isolate all", &two_iso);
+    assert_int_equal(alone.performers, 1);
+    assert_int_equal(merged.performers, 1);
+    assert_int_equal(two.performers, 2);
+
+    /* the first performer's right hand: as alone with performer=B, overwritten in the merge */
+    size_t both;
+    double gap_two = hand_gap(&two, 0, &alone, 0, 3, &both);
+    printf("# first performer's right palm vs three-claps alone: at most %.4g mesh units apart "
+           "over %zu frames (performer=B)", gap_two, both);
+    assert_true(both > 100);
+    double gap_merged = hand_gap(&merged, 0, &alone, 0, 3, &both);
+    printf(", %.4g over %zu (merge, the nearest within 3 frames)\n", gap_merged, both);
+    assert_true(gap_two < 0.5);    /* 5 mm: the inputs' start apart (0 when the first starts first) */
+    assert_true(gap_merged > 2.0); /* the other recording's hand, centimetres away */
+    /* B's right hand: as grab alone, placed by its own calibration */
+    double gap_b = hand_gap(&two, 1, &grab_alone, 0, 3, &both);
+    printf("# B's right palm vs grab alone: at most %.4g mesh units over %zu frames (the nearest "
+           "within 3 frames)\n", gap_b, both);
+    assert_true(both > 100);
+    assert_true(gap_b < 0.5);
+
+    /* both right hands drive vectors (each grabs while the gesture is open: together in a
+     * frame or two); the merge's one hand, jumping between the recordings, hardly holds a
+     * gesture; another shape */
+    assert_true(two.of[0] > 0);
+    assert_true(two.of[1] > 0);
+    assert_true(two.vectors > 2 * merged.vectors);
+    assert_true(two.moved != merged.moved || memcmp(two.shape, merged.shape, two.n * 3 * sizeof(float)));
+    /* isolated: both performers' hands reach the helper's mapping */
+    assert_int_equal(two_iso.performers, 2);
+    assert_true(two_iso.of[0] > 0);
+    assert_true(two_iso.of[1] > 0);
+    assert_true(two_iso.vectors > 2 * merged.vectors);
+    run_out *all[] = {&alone, &grab_alone, &merged, &two, &two_iso};
+    for (size_t i = 0; i < sizeof all / sizeof all[0]; i++) free(all[i]->shape);
+}
+
+/* A name on the only performer's inputs changes nothing, bit for bit. */
+static void test_one_named_performer(void **state)
+{
+    (void)state;
+    run_out plain, named;
+    const char *in1[] = {claps(NULL)};
+    run(in1, 1, false, &plain);
+    const char *in2[] = {claps("performer=A")};
+    run(in2, 1, false, &named);
+    say("three-claps", &plain);
+    say("three-claps, performer=A", &named);
+    assert_int_equal(named.performers, 1);
+    assert_true(plain.moved > 0);
+    assert_int_equal(plain.vectors, named.vectors);
+    assert_int_equal(plain.n, named.n);
+    assert_memory_equal(plain.shape, named.shape, plain.n * 3 * sizeof(float));
+    free(plain.shape);
+    free(named.shape);
+}
+
+/* At most FP_PERFORMER_CAPACITY performers: the input that would open a fifth is named. */
+static void test_too_many(void **state)
+{
+    (void)state;
+    char in[5][2048];
+    const char *inputs[5];
+    for (int i = 0; i < 5; i++) {
+        snprintf(in[i], sizeof in[i], "replay:%s/hands/leap-motion/grab_joints_mm.csv,performer=P%d",
+                 fp_test_data_dir(), i);
+        inputs[i] = in[i];
+    }
+    fp_session_options so;
+    fp_test_face_options(&so, "anchored", NULL);
+    for (int i = 0; i < 5; i++) so.inputs[i] = inputs[i];
+    so.input_count = 5;
+    fp_session *s = NULL;
+    char err[2048] = "";
+    assert_int_equal(fp_session_create(&so, &s, err, sizeof err), -EINVAL);
+    assert_null(s);
+    printf("# %s\n", err);
+    assert_non_null(strstr(err, "performer=P4"));
+    assert_non_null(strstr(err, in[4]));
+    assert_non_null(strstr(err, "at most 4 performers"));
+    /* a name that is no name */
+    snprintf(in[0], sizeof in[0], "replay:%s/hands/leap-motion/grab_joints_mm.csv,performer=a b",
+             fp_test_data_dir());
+    so.input_count = 1;
+    assert_int_equal(fp_session_create(&so, &s, err, sizeof err), -EINVAL);
+    assert_non_null(strstr(err, "performer=a b"));
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_two_right_hands),
+        cmocka_unit_test(test_one_named_performer),
+        cmocka_unit_test(test_too_many),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
