@@ -40,8 +40,9 @@ static void print_json_string(const char *s)
     putchar('"');
 }
 
-/** One event as one JSON object on one line. */
-static void print_event(const fp_event *ev)
+/** One event as one JSON object on one line; `performer` (the SPEC's performer=, or "")
+ *  named after the hand where given. */
+static void print_event(const fp_event *ev, const char *performer)
 {
     static const char *types[] = {"", "joint_angles", "joint_positions", "wrist_pose", "button", "status"};
     static const char *codes[] = {"", "connected", "disconnected", "reconnecting", "warning", "error",
@@ -51,6 +52,7 @@ static void print_event(const fp_event *ev)
            t >= 1 && t <= 5 ? types[t] : "unknown");
     const char *hand = hand_name(ev->header.hand);
     if (hand) printf(",\"hand\":\"%s\"", hand);
+    if (performer[0]) printf(",\"performer\":\"%s\"", performer); /* ([A-Za-z0-9_-]) */
     switch (t) {
     case FP_EVENT_JOINT_ANGLES:
         printf(",\"valid\":%" PRIu32 ",\"radians\":", ev->angles.valid);
@@ -164,7 +166,7 @@ static int monitor_main(int argc, char **argv)
         fp_event ev;
         bool any = false;
         while ((count < 0 || printed < count) && fp_input_instance_poll(&inst, &ev)) {
-            print_event(&ev);
+            print_event(&ev, inst.performer);
             printed++;
             any = true;
             if (ev.header.type == FP_EVENT_STATUS && ev.status.code == FP_STATUS_END_OF_STREAM) ended = true;

@@ -33,7 +33,10 @@ static const struct {
      "osc (mincutoff=0.5,beta=0.025,dcutoff=8), light for\n"
      "cyberglove (mincutoff=3), off for replay and take; each\n"
      "hand is shown at the frame's time (interpolated, or\n"
-     "predicted up to one sample ahead)"},
+     "predicted up to one sample ahead); performer=NAME: whose\n"
+     "hands (each performer has a left and a right hand and a\n"
+     "placement of their own, at most 4; without it: the\n"
+     "first input's performer), e.g. osc:9000,performer=B"},
     {"mapping", required_argument, 'M', "SPEC", "anchored (default), unanchored, onehand or a plugin's NAME [,key=value...]"},
     {"radius", required_argument, 'r', "R",
      "support radius in mesh units (default 6% of the mesh's\nbounding-box diagonal, at least 25 mm)"},

@@ -37,12 +37,13 @@ void fp_overlay_tip_cues(const fp_session *s, fp_tip_cues *out)
     memset(out, 0, sizeof *out);
     out->nearest = INFINITY;
     double radius = fp_session_radius(s);
-    float q[FP_HANDS * FP_FINGERS][3];
-    for (int h = 0; h < FP_HANDS; h++) {
-        const fp_hand_pose *p = fp_session_hand(s, h);
-        for (int f = 0; p && f < FP_FINGERS; f++) memcpy(q[out->count++], p->joints[FP_JOINT_TIP(f)], sizeof q[0]);
-    }
-    fp_surface_hit hit[FP_HANDS * FP_FINGERS];
+    float q[FP_TIP_CUES_MAX][3];
+    for (size_t who = 0; who < fp_session_performer_count(s) && who < FP_PERFORMER_CAPACITY; who++)
+        for (int h = 0; h < FP_HANDS; h++) {
+            const fp_hand_pose *p = fp_session_performer_hand(s, who, h);
+            for (int f = 0; p && f < FP_FINGERS; f++) memcpy(q[out->count++], p->joints[FP_JOINT_TIP(f)], sizeof q[0]);
+        }
+    fp_surface_hit hit[FP_TIP_CUES_MAX];
     if (!out->count || fp_session_surface_nearest(s, (const float (*)[3])q, out->count,
                                                   (float)(FP_TIP_CUE_REACH * radius), hit)) {
         for (size_t i = 0; i < out->count; i++) out->dist[i] = INFINITY;
@@ -66,7 +67,7 @@ void fp_overlay_tip_cues(const fp_session *s, fp_tip_cues *out)
 static void draw_tips(fp_render *r, const fp_tip_cues *c, float radius, const float pv[16],
                       const float view[16])
 {
-    float far_tips[FP_HANDS * FP_FINGERS][3], near_tips[FP_HANDS * FP_FINGERS][3];
+    float far_tips[FP_TIP_CUES_MAX][3], near_tips[FP_TIP_CUES_MAX][3];
     size_t nfar = 0, nnear = 0;
     vbuf ticks = {0}, spots = {0};
     for (size_t i = 0; i < c->count; i++) {
@@ -89,20 +90,26 @@ static void draw_tips(fp_render *r, const fp_tip_cues *c, float radius, const fl
 void fp_overlay_hands(fp_render *r, const fp_session *s, const fp_tip_cues *cues,
                       const float pv[16], const float view[16])
 {
-    static const float colors[FP_HANDS][4] = {{0.35f, 0.65f, 1.f, 1.f}, {1.f, 0.6f, 0.25f, 1.f}};
+    static const float side_colors[FP_HANDS][4] = {{0.35f, 0.65f, 1.f, 1.f}, {1.f, 0.6f, 0.25f, 1.f}};
     vbuf bones = {0}, joints = {0}, arrows = {0};
-    for (int h = 0; h < FP_HANDS; h++) {
-        const fp_hand_pose *p = fp_session_hand(s, h);
+    size_t performers = fp_session_performer_count(s);
+    for (size_t hh = 0; hh < performers * FP_HANDS; hh++) {
+        size_t who = hh / FP_HANDS;
+        int h = (int)(hh % FP_HANDS);
+        const fp_hand_pose *p = fp_session_performer_hand(s, who, h);
         if (!p) continue;
+        float col[4]; /* a later performer's paler: toward white by a third each */
+        for (int c = 0; c < 4; c++)
+            col[c] = c == 3 ? 1.f : side_colors[h][c] + (1.f - side_colors[h][c]) * (float)who / 3.f;
         for (int f = 0; f < FP_FINGERS; f++) {
-            vb_add(&bones, p->joints[FP_JOINT_PALM], colors[h]);
-            vb_add(&bones, p->joints[FP_JOINT(f, 0)], colors[h]);
+            vb_add(&bones, p->joints[FP_JOINT_PALM], col);
+            vb_add(&bones, p->joints[FP_JOINT(f, 0)], col);
             for (int k = 0; k < 3; k++) {
-                vb_add(&bones, p->joints[FP_JOINT(f, k)], colors[h]);
-                vb_add(&bones, p->joints[FP_JOINT(f, k + 1)], colors[h]);
+                vb_add(&bones, p->joints[FP_JOINT(f, k)], col);
+                vb_add(&bones, p->joints[FP_JOINT(f, k + 1)], col);
             }
         }
-        for (int j = 0; j < FP_HAND_JOINTS; j++) vb_add(&joints, p->joints[j], colors[h]);
+        for (int j = 0; j < FP_HAND_JOINTS; j++) vb_add(&joints, p->joints[j], col);
     }
     /* Control vectors: a line from start to end and a two-stroke head in the plane that
      * faces the camera. */

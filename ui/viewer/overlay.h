@@ -29,13 +29,15 @@
 extern const float fp_tip_far_sphere[4], fp_tip_touch_sphere[4], fp_tip_far_color[4],
     fp_tip_touch_color[4];
 
-/** Each present hand's fingertips this frame and their nearest skin points. */
+/** Each present hand's fingertips this frame and their nearest skin points: every
+ *  performer's hands (fp_session_performer_hand), the first performer's first. */
+#define FP_TIP_CUES_MAX (FP_PERFORMER_CAPACITY * FP_HANDS * FP_FINGERS)
 typedef struct fp_tip_cues {
     size_t count;                              /* fingertips (5 per present hand) */
-    float tip[FP_HANDS * FP_FINGERS][3];       /* mesh units */
-    float skin[FP_HANDS * FP_FINGERS][3];      /* the nearest skin vertex (where dist finite) */
-    float dist[FP_HANDS * FP_FINGERS];         /* mesh units; INFINITY beyond the cue's reach */
-    bool touching[FP_HANDS * FP_FINGERS];      /* dist <= R */
+    float tip[FP_TIP_CUES_MAX][3];             /* mesh units */
+    float skin[FP_TIP_CUES_MAX][3];            /* the nearest skin vertex (where dist finite) */
+    float dist[FP_TIP_CUES_MAX];               /* mesh units; INFINITY beyond the cue's reach */
+    bool touching[FP_TIP_CUES_MAX];            /* dist <= R */
     size_t touch_count;
     float nearest;                             /* the least dist; INFINITY: none in reach */
 } fp_tip_cues;
@@ -44,7 +46,8 @@ typedef struct fp_tip_cues {
  *  Session thread, between steps; no allocation. */
 void fp_overlay_tip_cues(const fp_session *s, fp_tip_cues *out);
 
-/** Draw the hands (bones, joints), the fingertips' spheres and cues (cues from
+/** Draw the hands (bones, joints; every performer's, the left blue and the right orange, a
+ *  later performer's paler), the fingertips' spheres and cues (cues from
  *  fp_overlay_tip_cues this frame) and, while engaged, the control vectors as arrows.
  *  pv, view: column-major 4x4. */
 void fp_overlay_hands(fp_render *r, const fp_session *s, const fp_tip_cues *cues,

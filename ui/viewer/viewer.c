@@ -584,9 +584,12 @@ static void watch_mapping(viewer *v)
 
 /* ---- script ----------------------------------------------------------------------------- */
 
-static bool any_hand(const viewer *v)
+static bool any_hand(const viewer *v) /* (any performer's) */
 {
-    return fp_session_hand(v->s, FP_HAND_LEFT) || fp_session_hand(v->s, FP_HAND_RIGHT);
+    for (size_t p = 0; p < fp_session_performer_count(v->s); p++)
+        if (fp_session_performer_hand(v->s, p, FP_HAND_LEFT) || fp_session_performer_hand(v->s, p, FP_HAND_RIGHT))
+            return true;
+    return false;
 }
 
 static void run_script(viewer *v)
@@ -694,6 +697,23 @@ static const char help_text[] =
     "spheres: green where a fingertip's support reaches the skin;\n"
     "lines: each fingertip to its nearest skin point";
 
+/* Whose hands are there, with several performers (inputs' performer=NAME): "\nhands: first
+ * left right, B right"; "" with one performer. */
+static void hud_hands(const viewer *v, char *buf, size_t len)
+{
+    size_t np = fp_session_performer_count(v->s), used;
+    buf[0] = 0;
+    if (np < 2) return;
+    snprintf(buf, len, "\nhands:");
+    for (size_t p = 0; p < np; p++) {
+        const char *name = fp_session_performer_name(v->s, p);
+        bool l = fp_session_performer_hand(v->s, p, FP_HAND_LEFT), r = fp_session_performer_hand(v->s, p, FP_HAND_RIGHT);
+        used = strlen(buf);
+        snprintf(buf + used, len - used, "%s %s %s", p ? "," : "", name && name[0] ? name : "first",
+                 l && r ? "left right" : l ? "left" : r ? "right" : "none");
+    }
+}
+
 static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
 {
     double recent = 0;
@@ -713,13 +733,15 @@ static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
     if (v->cues.count && isfinite(v->cues.nearest))
         snprintf(tips, sizeof tips, "\nfingertips: %zu of %zu touching, nearest %.1f mm from the skin",
                  v->cues.touch_count, v->cues.count, v->cues.nearest * head->mm_per_unit);
+    char hands[200];
+    hud_hands(v, hands, sizeof hands);
     char text[1024], wrapped[2048];
     snprintf(text, sizeof text,
              "%s  %zu vertices  mapping %s\n"
              "%.3g mm per mesh unit, %.*s\n"
              "commits %lu   radius %.4g (%.1f mm)\n"
              "%.1f fps (%.2f ms)   engine %.3f ms   input %.0f ev/s%s\n"
-             "fold-over guard: bound %.2f  reach %.0f%%  sub-steps %d%s%s",
+             "fold-over guard: bound %.2f  reach %.0f%%  sub-steps %d%s%s%s",
              v->mesh_path ? (strrchr(v->mesh_path, '/') ? strrchr(v->mesh_path, '/') + 1 : v->mesh_path) : "", v->n, v->mapping,
              head->mm_per_unit, (int)strcspn(head->how, ":"), head->how, fp_session_commits(v->s),
              fp_session_radius(v->s), fp_session_radius(v->s) * head->mm_per_unit,
@@ -727,7 +749,7 @@ static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
              st->active ? st->update_ms : v->last_update_ms, v->input_rate,
              v->opt->gpu_warp ? (v->gpu_now ? "   gpu-warp" : "   gpu-warp (CPU now)") : "",
              v->last_active.guard_bound, 100.0 * v->last_active.guard_reached, v->last_active.guard_substeps,
-             reach, tips);
+             reach, tips, hands);
     const float white[4] = {0.95f, 0.95f, 0.92f, 1.f}, dim[4] = {0.8f, 0.85f, 0.9f, 1.f};
     float scale = h >= 600 ? 2.f : 1.f, margin = 8, max_px = (float)w - 2 * margin;
     char tc[40] = "";
