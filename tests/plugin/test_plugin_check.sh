@@ -60,7 +60,7 @@ expect 1 "FAIL  overrun +wrote past the capacity of the host's start array" "$fp
 expect 1 'FAIL  finite points +control vector 0: end point .*nan.* is not finite' "$fp" plugins check "$fx/map-fixture-nan.so"
 expect 1 'FAIL  time +process took [0-9]+\.[0-9]+ ms .*over the budget of 2 ms' "$fp" plugins check "$fx/map-fixture-slow.so"
 expect 1 'FAIL  create +create returned 0 without an instance' "$fp" plugins check "$fx/map-fixture-noinstance.so"
-expect 78 'FAIL  load .*built for plugin ABI 2\.0, this facepuppet has ABI 1\.2' "$fp" plugins check "$fx/map-fixture-abi2.so"
+expect 78 'FAIL  load .*built for plugin ABI 2\.0, this facepuppet has ABI 1\.3' "$fp" plugins check "$fx/map-fixture-abi2.so"
 expect 78 'built for plugin ABI 2\.0' "$fp" plugins check "$fx/input-fixture-abi2.so"
 expect 64 'give one FILE' "$fp" plugins check
 
@@ -74,7 +74,7 @@ expect 0 'fixture-abi2 +BROKEN \(abi\)' "$fp" plugins --plugin-dir "$tmp/list"
 expect 0 '"status":[[:space:]]+"no-entry"' "$fp" plugins --json --plugin-dir "$tmp/list"
 "$fp" plugins --json --plugin-dir "$tmp/list" >"$tmp/list.json" 2>&1
 python3 -c "import json,sys; d=json.load(open(sys.argv[1])); k={p['name']:p for p in d['plugins']}; \
-assert k['anchored']['keys'][2]['name']=='release' and k['anchored']['abi']=='1.2'; \
+assert k['anchored']['keys'][2]['name']=='release' and k['anchored']['abi']=='1.3'; \
 assert k['replay']['keys'][0]['name']=='speed'; assert k['fixture-initfails']['status']=='init-failed'" \
     "$tmp/list.json" && echo "ok: plugins --json parses" || fail "plugins --json content"
 chmod 777 "$tmp" && expect 0 "skipped" "$fp" plugins --plugin-dir "$tmp"; chmod 700 "$tmp"
