@@ -394,9 +394,10 @@ const fp_calibration *fp_session_calibration(const fp_session *s);
  *  session uses (given, from the calibration's scale, or detected), head->how says where it
  *  came from ("detected from the head: ...", "from --mm-per-unit", "from the calibration"). */
 const fp_head *fp_session_head(const fp_session *s);
-/** A hand's pose at the last frame's time in mesh units (fp_pose_build_at: its input's
- *  filter, interpolated or predicted from its samples; NULL if never seen, or its device is
- *  disconnected). Owned by the session; valid until the next fp_session_step. */
+/** A hand of the first performer (below) at the last frame's time in mesh units
+ *  (fp_pose_build_at: its input's filter, interpolated or predicted from its samples; NULL if
+ *  never seen, or its device is disconnected). Owned by the session; valid until the next
+ *  fp_session_step. */
 const fp_hand_pose *fp_session_hand(const fp_session *s, int hand);
 /** Performers (the inputs' host key `performer=NAME`; core/session/performers.h): how many
  *  share the session (1 to FP_PERFORMER_CAPACITY; 1 where no input names one), performer i's
