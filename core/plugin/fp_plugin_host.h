@@ -210,6 +210,8 @@ typedef struct fp_input_instance {
     char performer[FP_PERFORMER_NAME_MAX + 1]; /* performer=NAME: whose hands its events
                                             are (the session keys hands by performer and
                                             side); "" without the key: the first performer */
+    char calibration[1024];              /* calibration=FILE: its performer's calibration
+                                            (docs/calibration.md; read by the session); "" */
 } fp_input_instance;
 
 /** Load the plugin for `spec` and create the instance (not yet started). The host strips
@@ -219,7 +221,9 @@ typedef struct fp_input_instance {
  *  `mincutoff=HZ`, `beta=B`, `dcutoff=HZ` (fp_filter_parse: into inst->filter, starting from
  *  fp_filter_default of the SPEC's NAME; a bad value is -EINVAL naming the SPEC and key), and
  *  `performer=NAME` (into inst->performer: 1 to FP_PERFORMER_NAME_MAX letters, digits, '-'
- *  or '_', else -EINVAL naming the SPEC; the session gives each performer its own hands). A
+ *  or '_', else -EINVAL naming the SPEC; the session gives each performer its own hands) and
+ *  `calibration=FILE` (into inst->calibration, not read here: the session places that
+ *  input's performer by it; an empty or too long path is -EINVAL). A
  *  filter that is on is described (fp_filter_describe, with its lag) in an info line of the
  *  input's log. Returns 0, -EINVAL, an FP_EPLUGIN_* code (fp_error.h), or the plugin's own
  *  negative errno; err names the SPEC and reason. */

@@ -178,6 +178,20 @@ static int take_performer(fp_input_instance *inst, fp_spec *spec, const char *sp
     return 0;
 }
 
+/* calibration=FILE, the host's key (its performer's placement): the path, kept for the
+ * session, which reads it. */
+static int take_calibration(fp_input_instance *inst, fp_spec *spec, const char *spec_text, char *err,
+                            size_t errlen)
+{
+    const char *path = fp_spec_take(spec, "calibration");
+    if (!path) return 0;
+    if (!path[0] || strlen(path) >= sizeof inst->calibration)
+        return fp_errorf(err, errlen, -EINVAL, "input '%s': calibration=: expected a file (docs/calibration.md) "
+                         "of under %zu bytes", spec_text, sizeof inst->calibration);
+    snprintf(inst->calibration, sizeof inst->calibration, "%s", path);
+    return 0;
+}
+
 int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
                            const char *spec_text, uint32_t source, char *err, size_t errlen)
 {
@@ -210,7 +224,9 @@ int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
         snprintf(err, errlen, "input '%s': %s", spec_text, ferr);
         goto out;
     }
-    if ((rc = take_performer(inst, &spec, spec_text, err, errlen))) goto out;
+    if ((rc = take_performer(inst, &spec, spec_text, err, errlen)) ||
+        (rc = take_calibration(inst, &spec, spec_text, err, errlen)))
+        goto out;
     rc = fp_plugin_load(path, FP_PLUGIN_INPUT, spec.name, &inst->plugin, err, errlen);
     if (rc) goto out;
     rc = fp_event_queue_init(&inst->queue, FP_INPUT_QUEUE_CAPACITY);

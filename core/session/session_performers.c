@@ -3,6 +3,8 @@
  * further performers' given to the mapping as fp_frame_input.extra_* (plugin.h, ABI 1.3). */
 #include "session_internal.h"
 
+#include "fp_calib_file.h"
+
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -11,14 +13,41 @@
 _Static_assert(FP_SESSION_MAX_INPUTS <= sizeof(((fp_performers *)0)->of_input), "every input has a performer");
 _Static_assert(FP_SESSION_MAX_INPUTS <= FP_POSE_MAX_INPUTS, "every input has its filter state");
 
+/* The calibration=FILE its inputs give performer p, read into *c: 1; 0 where none gives one;
+ * or the code: the file's (fp_calib_file.h), -EINVAL where two of its inputs name two files
+ * (err names the SPEC). */
+static int own_calibration(const fp_session *s, const fp_session_options *opt, size_t p, fp_calibration *c,
+                           char *err, size_t errlen)
+{
+    size_t first = s->input_count;
+    for (size_t i = 0; i < s->input_count; i++) {
+        if (s->performers.of_input[i] != p || !s->inputs[i].calibration[0]) continue;
+        if (first == s->input_count) first = i;
+        else if (strcmp(s->inputs[i].calibration, s->inputs[first].calibration))
+            return fp_errorf(err, errlen, -EINVAL, "input '%s': calibration=%s: its performer is placed by "
+                             "calibration=%s already (input %zu); one calibration a performer", opt->inputs[i],
+                             s->inputs[i].calibration, s->inputs[first].calibration, first + 1);
+    }
+    if (first == s->input_count) return 0;
+    char ferr[1024];
+    int rc = fp_calibration_load(s->inputs[first].calibration, c, ferr, sizeof ferr);
+    if (rc) return fp_errorf(err, errlen, rc, "input '%s': calibration=%s", opt->inputs[first], ferr);
+    return 1;
+}
+
 /* Workspace calibration of performer p (its pose state): the mesh's unit (given, else detected
- * from the head), then the calibration (given: every performer's; else the workspaces its own
- * inputs state, or the default one, fitted life-size in front of the face; placed as its hands
- * arrive where none is stated), then the glove placement. With one performer: all inputs. */
+ * from the head), then the calibration (its inputs' calibration=FILE; else given: every
+ * performer's; else the workspaces its own inputs state, or the default one, fitted life-size
+ * in front of the face; placed as its hands arrive where none is stated), then the glove
+ * placement. With one performer: all inputs. */
 static int calibrate(fp_session *s, const fp_session_options *opt, size_t p, char *err, size_t errlen)
 {
     fp_calibration c;
-    if (opt->calibration) {
+    int own = own_calibration(s, opt, p, &c, err, errlen);
+    if (own < 0) return own;
+    if (own) {
+        fp_arrive_step_init(&s->arrive[p], FP_ARRIVE_PLACED_CALIBRATION); /* (allocates nothing) */
+    } else if (opt->calibration) {
         c = *opt->calibration;
         if (!(c.scale > 0) || !isfinite(c.scale)) {
             snprintf(err, errlen, "calibration: scale must be > 0, got %g", c.scale);

@@ -15,6 +15,7 @@
  * compared frame for frame; B's, whose first sample falls elsewhere on the grid than when
  * grab runs alone, within a tolerance. */
 #define _GNU_SOURCE
+#include "fp_calib_file.h"
 #include "fp_session.h"
 #include "fp_test_support.h"
 
@@ -27,6 +28,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <unistd.h>
 #include <cmocka.h>
 
 #define MAX_FRAMES 2000
@@ -257,6 +259,72 @@ static void test_one_named_performer(void **state)
     free(named.shape);
 }
 
+/* calibration=FILE on B's input places B's hands by it alone: moving its offset by 2 mesh
+ * units along x moves B's right palm by that in every frame and leaves the first performer's
+ * hands and the frames' count as they were; a missing file, or two files for one performer,
+ * is refused naming the input's SPEC. */
+static void test_own_calibration(void **state)
+{
+    (void)state;
+    char dir[] = "/tmp/fp-perf-calib-XXXXXX", f1[64], f2[64], spec[2][1200], err[2048];
+    assert_non_null(mkdtemp(dir));
+    snprintf(f1, sizeof f1, "%s/b1.json", dir);
+    snprintf(f2, sizeof f2, "%s/b2.json", dir);
+    fp_calibration c = {.scale = 0.1, .offset = {-1, -20, -2}, .rotation = {1, 0, 0, 0}};
+    assert_int_equal(fp_calibration_save(f1, &c, NULL, err, sizeof err), 0);
+    c.offset[0] += 2;
+    assert_int_equal(fp_calibration_save(f2, &c, NULL, err, sizeof err), 0);
+    run_out a, b;
+    snprintf(spec[0], sizeof spec[0], "performer=B,calibration=%s", f1);
+    const char *in1[] = {claps(NULL), grab(spec[0])};
+    run(in1, 2, false, &a);
+    snprintf(spec[1], sizeof spec[1], "performer=B,calibration=%s", f2);
+    const char *in2[] = {claps(NULL), grab(spec[1])};
+    run(in2, 2, false, &b);
+    assert_int_equal(a.frames, b.frames);
+    size_t both = 0;
+    double dx_min = INFINITY, dx_max = -INFINITY, other = 0;
+    for (size_t k = 0; k < a.frames; k++) {
+        assert_int_equal(a.have[0][k], b.have[0][k]);
+        if (a.have[0][k]) assert_memory_equal(a.palm[0][k], b.palm[0][k], sizeof a.palm[0][k]);
+        if (!a.have[1][k] || !b.have[1][k]) continue;
+        both++;
+        double dx = (double)b.palm[1][k][0] - a.palm[1][k][0];
+        dx_min = fmin(dx_min, dx), dx_max = fmax(dx_max, dx);
+        other = fmax(other, fmax(fabs((double)b.palm[1][k][1] - a.palm[1][k][1]),
+                                 fabs((double)b.palm[1][k][2] - a.palm[1][k][2])));
+    }
+    printf("# B's calibration offset +2 along x: B's right palm moved %.6f..%.6f along x, %.2g "
+           "across, over %zu frames; the first performer's hands bit for bit\n", dx_min, dx_max, other, both);
+    assert_true(both > 100);
+    assert_true(fabs(dx_min - 2) < 1e-4 && fabs(dx_max - 2) < 1e-4 && other < 1e-4);
+    free(a.shape);
+    free(b.shape);
+    /* refusals */
+    fp_session_options so;
+    fp_test_face_options(&so, "anchored", NULL);
+    char missing[3000], other_file[3000];
+    snprintf(missing, sizeof missing, "%s,performer=B,calibration=%s/none.json", grab(NULL), dir);
+    so.inputs[0] = claps(NULL);
+    so.inputs[1] = missing;
+    so.input_count = 2;
+    fp_session *s = NULL;
+    assert_int_equal(fp_session_create(&so, &s, err, sizeof err), -ENOENT);
+    printf("# %s\n", err);
+    assert_non_null(strstr(err, missing));
+    snprintf(other_file, sizeof other_file, "%s,performer=B,calibration=%s", grab(NULL), f2);
+    snprintf(missing, sizeof missing, "%s,performer=B,calibration=%s", claps(NULL), f1);
+    so.inputs[0] = missing;
+    so.inputs[1] = other_file;
+    assert_int_equal(fp_session_create(&so, &s, err, sizeof err), -EINVAL);
+    printf("# %s\n", err);
+    assert_non_null(strstr(err, "one calibration a performer"));
+    assert_non_null(strstr(err, other_file));
+    unlink(f1);
+    unlink(f2);
+    rmdir(dir);
+}
+
 /* At most FP_PERFORMER_CAPACITY performers: the input that would open a fifth is named. */
 static void test_too_many(void **state)
 {
@@ -293,6 +361,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_two_right_hands),
         cmocka_unit_test(test_one_named_performer),
+        cmocka_unit_test(test_own_calibration),
         cmocka_unit_test(test_too_many),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

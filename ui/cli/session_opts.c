@@ -38,7 +38,8 @@ static const struct {
      "ahead); performer=NAME: whose\n"
      "hands (each performer has a left and a right hand and a\n"
      "placement of their own, at most 4; without it: the\n"
-     "first input's performer), e.g. osc:9000,performer=B"},
+     "first input's performer), e.g. osc:9000,performer=B;\n"
+     "calibration=FILE: that performer's own calibration"},
     {"mapping", required_argument, 'M', "SPEC", "anchored (default), unanchored, onehand or a plugin's NAME [,key=value...]"},
     {"radius", required_argument, 'r', "R",
      "support radius in mesh units (default 6% of the mesh's\nbounding-box diagonal, at least 25 mm)"},
