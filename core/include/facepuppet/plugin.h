@@ -62,7 +62,8 @@ extern "C" {
 #define FP_PLUGIN_ABI_MAJOR 1
 #define FP_PLUGIN_ABI_MINOR 3   /* 1.1: capacities, face frame, rig and surface services,
                                    typed parameters; 1.2: channel events (FP_EVENT_CHANNEL);
-                                   1.3: further performers' hands (fp_frame_input.extra_*);
+                                   1.3: further performers' hands (fp_frame_input.extra_*),
+                                   the touch radius (fp_frame_input.touch_radius);
                                    1.0 to 1.2 plugins still load */
 
 /** True when the struct at `ptr` (of ABI type `type`, starting with `uint32_t size`) is large
@@ -444,15 +445,13 @@ typedef struct fp_frame_input {
      *  during this call. */
     const struct fp_rig_view *rig;
 
-    /* ---- read only where size covers it (FP_HAS_FIELD; earlier hosts do not fill it) ---- */
+    /* ---- ABI 1.3 (read only where size covers them; a 1.2 host does not fill them) --- */
     /** The radius touch is measured in, mesh units: the face's default support radius, which
      *  --radius and the live keys ([ ]) leave as it is, so that a fingertip touches the skin
      *  at the same distance whatever the brush's size (a wider brush then never engages
      *  farther off the skin nor lets go later). fp_touch_radius (mapping_util.h) reads it,
      *  or radius where a host does not fill it. */
     double touch_radius;
-
-    /* ---- ABI 1.3 (read only where size covers them; a 1.2 host does not fill them) --- */
     /** Further performers (inputs with `performer=NAME`, two right hands from two people):
      *  extra_performers of them, 0 to FP_PERFORMER_CAPACITY - 1, in the order their names
      *  first appear among the inputs. Their hands are pairs, left then right:
