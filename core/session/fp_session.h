@@ -331,6 +331,12 @@ int fp_session_input_start(fp_session *s, int64_t *t0);
  *  before each step; it consumes nothing). True without the input clock. */
 bool fp_session_inputs_ready(fp_session *s, int64_t t);
 
+/** Input clock: how many recordings have not yet delivered past t (after
+ *  fp_session_inputs_ready said false), their names ('replay', 'osc', ...) in names (n bytes,
+ *  cut short where it does not fit); the inputs' log lines waiting meanwhile go to the log
+ *  (a wait for a forwarded recording says why). Session thread, between frames. */
+size_t fp_session_inputs_waiting(fp_session *s, int64_t t, char *names, size_t n);
+
 /** True once every input has reported FP_STATUS_END_OF_STREAM (recordings ended). */
 bool fp_session_finished(const fp_session *s);
 

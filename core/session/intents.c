@@ -149,6 +149,13 @@ size_t fp_intents_drain_until(fp_intents *it, fp_input_instance *inputs, size_t 
     return count;
 }
 
+bool fp_intents_input_ready(const fp_intents *it, size_t i, int64_t t)
+{
+    if (i >= FP_INTENTS_MAX_INPUTS || !it->waited[i] || it->ended[i]) return true;
+    const fp_intents_ahead *a = &it->ahead[i];
+    return a->eos || (a->len && ahead_at(a, a->len - 1)->header.time_ns > t);
+}
+
 bool fp_intents_ready(fp_intents *it, fp_input_instance *inputs, size_t n, int64_t t)
 {
     for (size_t i = 0; i < n && i < FP_INTENTS_MAX_INPUTS; i++) {

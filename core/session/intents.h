@@ -95,6 +95,10 @@ size_t fp_intents_drain_until(fp_intents *it, fp_input_instance *inputs, size_t 
  *  events into the lookahead (consumes none). */
 bool fp_intents_ready(fp_intents *it, fp_input_instance *inputs, size_t n, int64_t t);
 
+/** Whether waited input i has ended or delivered past t, as fp_intents_ready last found
+ *  (it fetches; this does not). True for an input not waited for. */
+bool fp_intents_input_ready(const fp_intents *it, size_t i, int64_t t);
+
 /** The recordings' common time zero: once each waited input has delivered its first event
  *  (or ended), the earliest of those first events' times, 1 and *t0; 0 while one has not yet;
  *  -1 when none is waited for (or all ended empty). A recording's first event marks its time

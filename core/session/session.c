@@ -359,6 +359,19 @@ bool fp_session_inputs_ready(fp_session *s, int64_t t)
     return !s->intents.clocked || fp_intents_ready(&s->intents, s->inputs, s->input_count, t);
 }
 
+size_t fp_session_inputs_waiting(fp_session *s, int64_t t, char *names, size_t n)
+{
+    size_t count = 0, len = 0;
+    if (n) names[0] = '\0';
+    for (size_t i = 0; i < s->input_count; i++) {
+        fp_input_instance_drain_log(&s->inputs[i]); /* (what it says while nothing steps) */
+        if (!s->intents.clocked || fp_intents_input_ready(&s->intents, i, t)) continue;
+        if (len < n) len += (size_t)snprintf(names + len, n - len, "%s'%s'", count ? ", " : "", s->inputs[i].name);
+        count++;
+    }
+    return count;
+}
+
 bool fp_session_finished(const fp_session *s) { return fp_intents_all_ended(&s->intents, s->input_count); }
 
 void fp_session_request(fp_session *s, uint32_t intents) { fp_intents_request(&s->intents, intents); }

@@ -66,6 +66,19 @@ if (am, ax) != (om, ox) or d > 1e-4: sys.exit("the faces differ")
 PY
 cmp -s "$tmp/one.obj" "$tmp/a.obj" || fail "the two meshes are not written the same"
 
+# a sender that is not a forwarding session (fp-osc-send: no origin) under clock=recording:
+# its messages are counted untimed, and run says what it waits for instead of hanging mute
+port=$((20000 + RANDOM % 40000))
+timeout 8 "$fp" run "${pd[@]}" --input "replay:$rec,hands=left" --input "osc:$port,clock=recording" \
+    -o "$tmp/w.obj" -q >"$tmp/w.out" 2>"$tmp/w.err" &
+w=$!
+for i in $(seq 600); do grep -q "listening on" "$tmp/w.err" && break; kill -0 $w 2>/dev/null || break; sleep 0.1; done
+"$build/bin/fp-osc-send" --quiet --port "$port" "$rec" >/dev/null 2>&1
+wait $w
+grep -q "waiting 3 s for 'osc' to deliver past" "$tmp/w.err" || { cat "$tmp/w.err"; fail "no word of the wait"; }
+grep -q "without a time on the sender's recording clock" "$tmp/w.err" || { cat "$tmp/w.err"; fail "untimed not reported"; }
+grep "waiting 3 s" "$tmp/w.err"
+
 # the latency through loopback
 for attempt in 1 2 3 4 5; do
     port=$((20000 + RANDOM % 40000))

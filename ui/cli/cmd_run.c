@@ -355,8 +355,17 @@ static int run_frames(fp_session *s, run_args *a, fp_session_take *take, fp_expo
     for (uint64_t k = 0; !fp_app_stop_requested(); k++) {
         int64_t now = t0 + (int64_t)llround((double)k * 1e9 / a->fps);
         if (input_clock) {
-            while (!fp_session_inputs_ready(s, now) && !fp_app_stop_requested())
+            for (int64_t w0 = fp_now_ns(), said = 0; !fp_session_inputs_ready(s, now) && !fp_app_stop_requested();) {
                 sleep_until(fp_now_ns() + 200000);
+                if (fp_now_ns() - w0 > (said + 1) * 3000000000LL) { /* every 3 s: who, and why */
+                    char names[256];
+                    said++;
+                    if (fp_session_inputs_waiting(s, now, names, sizeof names))
+                        fprintf(stderr, "facepuppet run: waiting %lld s for %s to deliver past %.3f s "
+                                "(a forwarded recording: is its sender running?)\n", (long long)said * 3,
+                                names, (double)(now - t0) * 1e-9);
+                }
+            }
             if (fp_app_stop_requested()) break;
         } else {
             sleep_until(now);
