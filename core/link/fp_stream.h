@@ -10,7 +10,9 @@
  * rig channels: a receiver that misses a packet knows which range is stale (the gap between
  * the ranges it got, or the whole frame), and a keyframe packet makes its range exact again
  * (unlisted vertices there are at the neutral). Before each keyframe /fp/stream/info says
- * the vertex count, the unit, the step and the channels' names.
+ * the vertex count, the unit, the step and the channels' names. The frame thread hands the
+ * sender thread only the changed offsets; the sender keeps every offset handed so far and
+ * makes a keyframe from them, so a keyframe costs the frame thread no more than any frame.
  *
  * Test knob: FP_STREAM_DROP=P[:FRAMES] drops each packet with probability P (in the first
  * FRAMES frames only, when given), seeded by FP_STREAM_SEED (default 1); the drops are

@@ -17,7 +17,8 @@
 /* One frame for the sender thread: its records (vertex index, offset in steps) and header. */
 typedef struct stream_job {
     uint64_t frame;
-    bool key;
+    bool key;                    /* sent as a keyframe: the sender's whole state (stream_tx.c) */
+    bool full;                   /* the records are every non-zero offset (after a lost hand-over) */
     double t;
     char tc[16];
     float channels[FP_STREAM_MAX_CHANNELS];
@@ -41,6 +42,7 @@ struct fp_stream {
     int16_t *q;
     uint64_t frame;              /* frames made */
     bool key_requested, full_scan;
+    bool resync;                 /* a frame's records were lost: the next job carries them all */
     int64_t t0_ns;
     uint64_t frames, keyframes, clipped, busy;
     double times[STREAM_TIMES];  /* the frame thread's microseconds a frame */
@@ -53,6 +55,8 @@ struct fp_stream {
     pthread_cond_t space;        /* a job sent (a frame thread that waits for room: o.wait) */
     bool thread_ok, stop;        /* (stop: under mu) */
     /* the sender thread's */
+    int16_t *tx_state;           /* n x 3: the offsets handed over so far (a keyframe sends them) */
+    stream_job tx_key;           /* a keyframe's records, from tx_state */
     unsigned char *slots;        /* the frame's packets, serialised, nslots x slot_size */
     size_t nslots, slot_size;
     struct mmsghdr *msgs;

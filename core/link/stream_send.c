@@ -175,9 +175,11 @@ static inline int16_t quantise(float d, uint64_t *clipped)
     return (int16_t)(d + (d >= 0 ? 0.5f : -0.5f));
 }
 
-/* The frame's records into idx and q: every non-zero offset (key) or every changed one; the
- * blocks compared are those in the touched ranges (all: ranges NULL with nranges > 0, or
- * SIZE_MAX, or a full scan owed after a frame not handed over). */
+/* The frame's records into idx and q: every changed offset, or every non-zero one (key: after
+ * a frame's records were lost; a keyframe is made by the sender thread from what it was
+ * handed, so the frame thread never scans the whole mesh for one); the blocks compared are
+ * those in the touched ranges (all: ranges NULL with nranges > 0, or SIZE_MAX, or a full
+ * scan owed after a frame not handed over). */
 static size_t collect(fp_stream *s, const float *pos, bool key, const uint32_t *ranges, size_t nranges)
 {
     const float *nu = s->o.neutral;
@@ -256,16 +258,19 @@ int fp_stream_frame_ranges(fp_stream *s, const float *pos, const uint32_t *range
         s->key_requested = s->full_scan = true;
         rc = -EAGAIN;
     } else {
-        const bool key = s->key_requested || frame % s->key_period == 0;
+        const bool key = s->key_requested || frame % s->key_period == 0, full = s->resync;
         s->key_requested = false;
-        size_t m = collect(s, pos, key, ranges, nranges);
+        size_t m = collect(s, pos, full, ranges, nranges);
         stream_job *j = &s->jobs[head % STREAM_JOBS];
         if (job_reserve(j, m)) {
-            s->key_requested = s->full_scan = true; /* (as a frame not handed over) */
+            /* (its changes are lost: the next job carries every offset) */
+            s->key_requested = s->full_scan = s->resync = true;
             rc = -ENOMEM;
         } else {
+            s->resync = false;
             j->frame = frame;
             j->key = key;
+            j->full = full;
             j->t = (double)(now_ns - s->t0_ns) * 1e-9;
             snprintf(j->tc, sizeof j->tc, "%s", timecode ? timecode : "");
             for (size_t c = 0; c < s->o.nchannels; c++) j->channels[c] = channels ? channels[c] : 0.0f;

@@ -23,7 +23,8 @@ int fp__stream_tx_init(fp_stream *s)
 {
     s->slot_size = s->mtu + SLOT_SLACK;
     s->blob = malloc(4 + s->max_records * RECORD_BYTES);
-    return s->blob ? 0 : -ENOMEM;
+    s->tx_state = calloc(3 * s->o.n, sizeof *s->tx_state);
+    return s->blob && s->tx_state ? 0 : -ENOMEM;
 }
 
 void fp__stream_tx_free(fp_stream *s)
@@ -33,6 +34,40 @@ void fp__stream_tx_free(fp_stream *s)
     free(s->msgs);
     free(s->iov);
     free(s->starts);
+    free(s->tx_state);
+    free(s->tx_key.idx);
+    free(s->tx_key.q);
+}
+
+/* The job's records into the sender's state (a full job replaces it); for a keyframe, the job
+ * to send: every non-zero offset of the state, with j's header (NULL: no memory, counted). */
+static const stream_job *track(fp_stream *s, const stream_job *j)
+{
+    if (j->full) memset(s->tx_state, 0, 3 * s->o.n * sizeof *s->tx_state);
+    for (size_t r = 0; r < j->m; r++) memcpy(s->tx_state + 3 * (size_t)j->idx[r], j->q + 3 * r, 3 * sizeof *j->q);
+    if (!j->key || j->full) return j;
+    stream_job *k = &s->tx_key;
+    size_t m = 0;
+    for (size_t v = 0; v < s->o.n; v++) {
+        const int16_t *q = s->tx_state + 3 * v;
+        if (!(q[0] | q[1] | q[2])) continue;
+        if (m == k->cap) {
+            size_t cap = 2 * k->cap + 1024;
+            uint32_t *idx = realloc(k->idx, cap * sizeof *idx);
+            if (idx) k->idx = idx;
+            int16_t *qq = idx ? realloc(k->q, 3 * cap * sizeof *qq) : NULL;
+            if (qq) k->q = qq;
+            if (!idx || !qq) return NULL;
+            k->cap = cap;
+        }
+        k->idx[m] = (uint32_t)v;
+        memcpy(k->q + 3 * m, q, 3 * sizeof *q);
+        m++;
+    }
+    k->frame = j->frame, k->key = true, k->full = true, k->t = j->t, k->m = m;
+    memcpy(k->tc, j->tc, sizeof k->tc);
+    memcpy(k->channels, j->channels, sizeof k->channels);
+    return k;
 }
 
 static bool drop_now(fp_stream *s, uint64_t frame)
@@ -160,9 +195,11 @@ static void packet(fp_stream *s, const stream_job *j, size_t a, size_t b, uint32
 
 /* One frame out: split (at most max_records a packet; an index gap above MAX_GAP starts a
  * new one), serialised, sent. */
-static void send_job(fp_stream *s, const stream_job *j)
+static void send_job(fp_stream *s, const stream_job *handed)
 {
     int64_t t_start = fp_now_ns();
+    const stream_job *j = track(s, handed);
+    if (!j) { bump(&s->send_errors, 1); return; }
     if (j->m + 1 > s->nstarts) {
         size_t *grown = realloc(s->starts, (j->m + 1) * sizeof *grown);
         if (!grown) { bump(&s->send_errors, 1); return; }
