@@ -62,8 +62,7 @@ static const char *const problem_text[FP_OSC_PROBLEMS] = {
     "messages with values out of range (beyond 10 m, 2 pi, a bad quaternion or button)",
     "messages to addresses outside the format", "incomplete frames superseded",
     "events dropped (host queue full)",
-    "messages without a time on the sender's recording clock (clock=recording takes another "
-    "session's forward=; other senders need clock=arrival)"};
+    "messages without a time on the sender's recording clock (needs a session's forward=)"};
 
 /* Straight-finger estimate of the joints a Leap bridge does not send: for each finger the
  * lengths (mm) from the palm centre to MCP (CMC for the thumb), MCP-PIP, PIP-DIP, DIP-tip
