@@ -19,7 +19,7 @@
 #include <cmocka.h>
 
 typedef struct outcome {
-    unsigned long frames, active, commits, checked_outside;
+    unsigned long frames, active, commits, checked_outside, guarded;
     double max_disp;
 } outcome;
 
@@ -46,7 +46,13 @@ static void run_session(const char *mapping, outcome *o)
         if (st.active) {
             o->active++;
             o->commits += st.committed;
-            /* Outside every support the shape is the base before this frame, bit for bit. */
+        }
+        /* Outside every support the shape is the base before this frame, bit for bit; not on
+         * a frame the contact guard scaled back: its shape lies between the last frame's and
+         * this one's, so skin the last frame's (wider) support moved stays partly moved (seen
+         * under ASan and on a loaded machine, where frames are few and far apart) */
+        if (st.active && st.collide_t < 1) o->guarded++;
+        if (st.active && !(st.collide_t < 1)) {
             const fp_control_set *cs = fp_session_control_set(s);
             for (size_t v = 0; v < n; v++) {
                 bool inside = false;
@@ -80,9 +86,9 @@ static void run_session(const char *mapping, outcome *o)
         for (int k = 0; k < 3; k++) d2 += pow(fin[3 * v + k] - loaded[3 * v + k], 2);
         if (sqrt(d2) > o->max_disp) o->max_disp = sqrt(d2);
     }
-    printf("%s: %lu frames, %lu deforming, %lu commits, max displacement %.4g (R %.4g), "
-           "%lu vertex checks outside the supports\n", mapping, o->frames, o->active, o->commits,
-           o->max_disp, R, o->checked_outside);
+    printf("%s: %lu frames, %lu deforming (%lu scaled back by the contact guard), %lu commits, max "
+           "displacement %.4g (R %.4g), %lu vertex checks outside the supports\n", mapping, o->frames,
+           o->active, o->guarded, o->commits, o->max_disp, R, o->checked_outside);
     free(before);
     fp_session_destroy(&s);
 }
