@@ -21,6 +21,7 @@ rec="$data/hands/leap-motion/three-claps_joints_mm.csv"
 fail() { echo "FAIL: $*"; exit 1; }
 tmp=$(mktemp -d "${TMPDIR:-/tmp}/fp-forward-XXXXXX")
 trap 'kill $(jobs -p) 2>/dev/null; rm -rf "$tmp"' EXIT
+. "$(dirname "$0")/listen.sh"
 summary() { sed -n 's/.*vertices moved \([0-9]*\) of [0-9]*; displacement mean [^;]* max \([0-9.e+-]*\) mm.*/\1 \2/p' "$1"; }
 
 "$fp" run "${pd[@]}" --input "replay:$rec,hands=left" --input "replay:$rec,hands=right,workspace=0" \
@@ -29,27 +30,12 @@ read -r o_moved o_max < <(summary "$tmp/one.out")
 [ -n "${o_moved:-}" ] && [ "$o_moved" -gt 0 ] || fail "the one process moved nothing"
 echo "one process, both inputs: $o_moved vertices moved, max $o_max mm"
 
-ok=0
-for attempt in 1 2 3 4 5; do
-    port=$((20000 + RANDOM % 40000))
-    # (B starts a second or more after A: A waits for it; 120 s at most)
-    timeout 120 "$fp" run "${pd[@]}" --input "replay:$rec,hands=left" --input "osc:$port,filter=off,clock=recording" \
-        -o "$tmp/a.obj" -q >"$tmp/a.out" 2>"$tmp/a.err" &
-    a=$!
-    for i in $(seq 600); do grep -q "listening on" "$tmp/a.err" && break; kill -0 $a 2>/dev/null || break; sleep 0.1; done
-    if ! grep -q "listening on" "$tmp/a.err"; then
-        wait $a
-        grep -q "cannot listen" "$tmp/a.err" && continue
-        cat "$tmp/a.err"; fail "A did not listen"
-    fi
-    sleep 1 # (A waits on the clock meanwhile)
-    "$fp" monitor "${pd[@]}" "replay:$rec,hands=right,workspace=0,forward=osc:127.0.0.1:$port" \
-        >"$tmp/b.out" 2>"$tmp/b.err" || { cat "$tmp/b.err"; fail "B (monitor) exited $?"; }
-    wait $a || { cat "$tmp/a.err"; fail "A exited $?"; }
-    ok=1
-    break
-done
-[ $ok = 1 ] || fail "no free port in 5 tries"
+# (B starts a second or more after A: A waits for it; 120 s at most)
+listen_run a 120 --input "replay:$rec,hands=left" --input "osc:@PORT@,filter=off,clock=recording"
+sleep 1 # (A waits on the clock meanwhile)
+"$fp" monitor "${pd[@]}" "replay:$rec,hands=right,workspace=0,forward=osc:127.0.0.1:$port" \
+    >"$tmp/b.out" 2>"$tmp/b.err" || { cat "$tmp/b.err"; fail "B (monitor) exited $?"; }
+wait $run_pid || { cat "$tmp/a.err"; fail "A exited $?"; }
 grep "forwarded" "$tmp/b.err"
 grep "problems" "$tmp/a.err"
 read -r a_moved a_max < <(summary "$tmp/a.out")
@@ -68,13 +54,9 @@ cmp -s "$tmp/one.obj" "$tmp/a.obj" || fail "the two meshes are not written the s
 
 # a sender that is not a forwarding session (fp-osc-send: no origin) under clock=recording:
 # its messages are counted untimed, and run says what it waits for instead of hanging mute
-port=$((20000 + RANDOM % 40000))
-timeout 8 "$fp" run "${pd[@]}" --input "replay:$rec,hands=left" --input "osc:$port,clock=recording" \
-    -o "$tmp/w.obj" -q >"$tmp/w.out" 2>"$tmp/w.err" &
-w=$!
-for i in $(seq 600); do grep -q "listening on" "$tmp/w.err" && break; kill -0 $w 2>/dev/null || break; sleep 0.1; done
+listen_run w 8 --input "replay:$rec,hands=left" --input "osc:@PORT@,clock=recording"
 "$build/bin/fp-osc-send" --quiet --port "$port" "$rec" >/dev/null 2>&1
-wait $w
+wait $run_pid
 grep -q "waiting 3 s for 'osc' to deliver past" "$tmp/w.err" || { cat "$tmp/w.err"; fail "no word of the wait"; }
 grep -q "without a time on the sender's recording clock" "$tmp/w.err" || { cat "$tmp/w.err"; fail "untimed not reported"; }
 grep "waiting 3 s" "$tmp/w.err"

@@ -19,6 +19,7 @@ grab="replay:$data/hands/leap-motion/grab_joints_mm.csv,workspace=0"
 fail() { echo "FAIL: $*"; exit 1; }
 tmp=$(mktemp -d "${TMPDIR:-/tmp}/fp-forward-perf-XXXXXX")
 trap 'kill $(jobs -p) 2>/dev/null; rm -rf "$tmp"' EXIT
+. "$(dirname "$0")/listen.sh"
 moved() { grep -o 'vertices moved [0-9]* of [0-9]*' "$1"; }
 
 "$fp" run "${pd[@]}" --input "$claps" --input "$grab,performer=B" -o "$tmp/one.obj" -q \
@@ -29,24 +30,11 @@ echo "one process, performer=B: $(moved "$tmp/one.out")"
 # two_processes NAME KEYS: A with osc:PORT,filter=off,clock=recording,KEYS; B forwards grab
 two_processes() {
     local name=$1 keys=$2
-    for attempt in 1 2 3 4 5; do
-        local port=$((20000 + RANDOM % 40000))
-        timeout 120 "$fp" run "${pd[@]}" --input "$claps" --input "osc:$port,filter=off,clock=recording$keys" \
-            -o "$tmp/$name.obj" -q >"$tmp/$name.out" 2>"$tmp/$name.err" &
-        local a=$!
-        for i in $(seq 600); do grep -q "listening on" "$tmp/$name.err" && break; kill -0 $a 2>/dev/null || break; sleep 0.1; done
-        if ! grep -q "listening on" "$tmp/$name.err"; then
-            wait $a
-            grep -q "cannot listen" "$tmp/$name.err" && continue
-            cat "$tmp/$name.err"; fail "A ($name) did not listen"
-        fi
-        "$fp" monitor "${pd[@]}" "$grab,forward=osc:127.0.0.1:$port" >/dev/null 2>"$tmp/$name.b.err" ||
-            { cat "$tmp/$name.b.err"; fail "B (monitor) exited $?"; }
-        wait $a || { cat "$tmp/$name.err"; fail "A ($name) exited $?"; }
-        echo "two processes, $name: $(moved "$tmp/$name.out")"
-        return 0
-    done
-    fail "no free port in 5 tries"
+    listen_run "$name" 120 --input "$claps" --input "osc:@PORT@,filter=off,clock=recording$keys"
+    "$fp" monitor "${pd[@]}" "$grab,forward=osc:127.0.0.1:$port" >/dev/null 2>"$tmp/$name.b.err" ||
+        { cat "$tmp/$name.b.err"; fail "B (monitor) exited $?"; }
+    wait $run_pid || { cat "$tmp/$name.err"; fail "A ($name) exited $?"; }
+    echo "two processes, $name: $(moved "$tmp/$name.out")"
 }
 two_processes two ",performer=B"
 grep -q "performer 'B': osc (input 2)" "$tmp/two.err" || { cat "$tmp/two.err"; fail "A does not say B's input is B's"; }
