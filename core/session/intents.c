@@ -161,9 +161,7 @@ bool fp_intents_ready(fp_intents *it, fp_input_instance *inputs, size_t n, int64
     for (size_t i = 0; i < n && i < FP_INTENTS_MAX_INPUTS; i++) {
         if (!it->waited[i] || it->ended[i]) continue;
         fetch(it, &inputs[i], i, t);
-        const fp_intents_ahead *a = &it->ahead[i];
-        if (a->eos) continue;
-        if (!a->len || ahead_at(a, a->len - 1)->header.time_ns <= t) return false;
+        if (!fp_intents_input_ready(it, i, t)) return false;
     }
     return true;
 }
