@@ -3,6 +3,7 @@
  * into the worker's tasks (contact_worker.c). Building it: contact_cluster.c. */
 #include "contact_internal.h"
 
+#include <assert.h>
 #include <errno.h>
 #include <math.h>
 #include <stdlib.h>
@@ -374,7 +375,8 @@ int fpc_mark_range(fp_contact *c, lane *ln, const float *a, uint32_t x, uint32_t
 }
 
 /* the pair (a, b), not adjacent, not both unmoved: 1 when it is new in s (crosses in s, not in
- * ref; neither degenerate; their vertices into ln->rec when record), 0, -ENOMEM */
+ * ref; neither degenerate; a and b into ln->rec when record or the track's rec_pairs), 0,
+ * -ENOMEM */
 static int test_pair(fp_contact *c, lane *ln, const float *s, const float *ref, uint32_t a, uint32_t b, bool record)
 {
     const uint32_t *va = c->tris + 3 * (size_t)a, *vb = c->tris + 3 * (size_t)b;
@@ -386,7 +388,7 @@ static int test_pair(fp_contact *c, lane *ln, const float *s, const float *ref, 
     tri_of(ref, va, ta);
     tri_of(ref, vb, tb);
     if (tris_meet(ta, tb)) return 0;
-    if (record &&
+    if ((record || c->tk->rec_pairs) &&
         (push_u32(&ln->rec, &ln->nrec, &ln->cap_rec, a) || push_u32(&ln->rec, &ln->nrec, &ln->cap_rec, b)))
         return -ENOMEM;
     return 1;
@@ -434,6 +436,10 @@ static long leaf_pairs(fp_contact *c, lane *ln, const float *s, const float *ref
             if (welded_adjacent(k->ow[i], k->ow[j])) continue;
             int r = test_pair(c, ln, s, ref, k->order[i], k->order[j], record);
             if (r < 0) return r;
+            if (r && ln->npairs < FP_PAIR_PROBE) { /* (for the bisection's probe) */
+                ln->pairs[2 * ln->npairs] = k->order[i];
+                ln->pairs[2 * ln->npairs++ + 1] = k->order[j];
+            }
             found += r;
         }
     }
@@ -560,6 +566,7 @@ long fpc_tree_update(fp_contact *c, const float *s, const float *ref, bool recor
         k->lane[i].flips = k->lane[i].found = 0;
         k->lane[i].moved = 0;
         k->lane[i].nrec = 0;
+        k->lane[i].npairs = 0;
     }
     k->nmq = 0;
     pool *p = 2 * k->nmv < c->share_min ? NULL : fpc_pool_get(c);
@@ -588,6 +595,19 @@ long fpc_tree_update(fp_contact *c, const float *s, const float *ref, bool recor
     return g < 0 ? g : flips + g;
 }
 
+/* A walk that found new pairs (found > 0): the lanes' first ones become the probe */
+static void keep_pairs(struct track *k, long found)
+{
+    if (found <= 0) return;
+    k->npair_probe = 0;
+    for (int i = 0; i < FP_CONTACT_MAX_THREADS; i++)
+        for (size_t j = 0; j < k->lane[i].npairs; j++, k->npair_probe++) {
+            k->pair_probe[2 * k->npair_probe] = k->lane[i].pairs[2 * j];
+            k->pair_probe[2 * k->npair_probe + 1] = k->lane[i].pairs[2 * j + 1];
+        }
+    assert(k->npair_probe > 0 && k->npair_probe <= FP_PAIR_PROBE * FP_CONTACT_MAX_THREADS);
+}
+
 /* New pairs and newly flipped triangles (*flips) of shape s (P but for the moved vertices)
  * against ref, among the pairs with a moved triangle: update, then the hierarchy from its
  * root. accepted not NULL (a step's first check, s its candidate): when the walk is shared,
@@ -599,7 +619,8 @@ long fpc_tree_check(fp_contact *c, const float *s, const float *ref, size_t *fli
                        bool *accepted)
 {
     struct track *k = c->tk;
-    if (!record && !accepted) /* a bisection's: one of the last flips still there decides it */
+    if (!record && !accepted) { /* a bisection's: one of the last flips or new pairs still
+                                   there decides it, before the refit and the walk */
         for (size_t i = 0; i < k->nprobe; i++) {
             const uint32_t *v = c->tris + 3 * (size_t)k->probe[i];
             if (fpc_flipped(c, s, v, k->probe[i]) && !fpc_flipped(c, ref, v, k->probe[i])) {
@@ -607,6 +628,16 @@ long fpc_tree_check(fp_contact *c, const float *s, const float *ref, size_t *fli
                 return 0;
             }
         }
+        /* a pair the walk found new (neither own nor adjacent) that crosses in s and not in
+         * ref is one of the full check's new pairs of s, whatever moved: s fails */
+        for (size_t i = 0; i < k->npair_probe; i++) {
+            int r = test_pair(c, &k->lane[0], s, ref, k->pair_probe[2 * i], k->pair_probe[2 * i + 1], false);
+            if (r) {
+                *flips = 0;
+                return r;
+            }
+        }
+    }
     long f = fpc_tree_update(c, s, ref, record);
     if (f < 0) return f;
     *flips = (size_t)f;
@@ -614,6 +645,7 @@ long fpc_tree_check(fp_contact *c, const float *s, const float *ref, size_t *fli
     pool *p = k->nmq < c->share_min ? NULL : fpc_pool_get(c);
     if (!p) {
         long r = fpc_node_self(c, &k->lane[0], s, ref, 0, record);
+        keep_pairs(k, r);
         return r >= 0 && record && fpc_rec_merge(c) ? -ENOMEM : r;
     }
     if (fpc_job_open(c, p, FP_JOB_WALK, s, ref, record)) return -ENOMEM;
@@ -627,6 +659,7 @@ long fpc_tree_check(fp_contact *c, const float *s, const float *ref, size_t *fli
     fpc_job_finish(c, p);
     k->shared++;
     long r = fpc_lanes_sum(k, false);
+    keep_pairs(k, r);
     return r >= 0 && record && fpc_rec_merge(c) ? -ENOMEM : r;
 }
 

@@ -131,6 +131,9 @@ typedef struct cellvec {          /* a cell of the dynamic grid */
     bool used;
 } cellvec;
 
+/* new pairs a check keeps for the step's next bisection checks to try first, per thread */
+#define FP_PAIR_PROBE 8
+
 typedef struct lane {             /* one thread's part of a hierarchy check: scratch and counts */
     double *xy;                   /* a contour's projection (2 per vertex) */
     size_t cap_xy;
@@ -153,6 +156,8 @@ typedef struct lane {             /* one thread's part of a hierarchy check: scr
                                      of a check's update, and with record those of its new
                                      pairs (their vertices into off: rec_merge) */
     size_t nrec, cap_rec;
+    uint32_t pairs[2 * FP_PAIR_PROBE]; /* the first new pairs its walk tasks found (a, b) */
+    size_t npairs;
 } lane;
 
 struct track {
@@ -236,6 +241,14 @@ struct track {
     uint32_t *probe;              /* the hierarchy: triangles newly flipped in the step's last
                                      check that had any (a bisection's check tries them first) */
     size_t nprobe, cap_probe;
+    uint32_t pair_probe[2 * FP_PAIR_PROBE * FP_CONTACT_MAX_THREADS]; /* the hierarchy: new
+                                     pairs (a, b) of the step's last check that found any (a
+                                     bisection's check tries them first) */
+    size_t npair_probe;
+    bool rec_pairs;               /* the hierarchy: the walk records its new pairs' triangles
+                                     (lanes' rec) without record: a step's first check, so
+                                     that a local scale-back has its blocking set without a
+                                     second check of the candidate */
     uint32_t *kd_ix;              /* local_ramp: off's vertices, in its k-d tree's order */
     size_t cap_kd_ix;
     struct kdnode *kd;            /* local_ramp's k-d tree over them (node 0 the root) */

@@ -176,7 +176,9 @@ static long first_check_tree(fp_contact *c, const float *ref, const float *cand,
     if (reserve((void **)&k->pv, &cap, 3 * k->nmv, sizeof *k->pv) ||
         reserve((void **)&k->cv, &k->cap_pv, 3 * k->nmv, sizeof *k->cv))
         return -ENOMEM;
+    k->rec_pairs = true; /* (local_scale_back's blocking set) */
     long found = fpc_tree_check(c, cand, ref, fl, false, accepted);
+    k->rec_pairs = false;
     if (found < 0) return -ENOMEM;
     res->moved_tris = k->nmt;
     if (*accepted && (found || *fl)) /* it fails: P back */
@@ -266,11 +268,11 @@ static int local_scale_back(fp_contact *c, const float *ref, const float *cand, 
     if (reserve((void **)&k->ramp, &k->cap_ramp, k->nmv, sizeof *k->ramp)) return -ENOMEM;
     for (size_t i = 0; i < k->noff; i++) k->off_mark[k->off[i]] = 0;
     k->noff = 0;
-    /* the blocking triangles: on the hierarchy, when the first check's walk found
-     * no pair, its update's flips (the lanes' rec) and the own ones; else a check
-     * that records them */
-    long m = k->tree && !found ? (fpc_rec_merge(c) || fpc_own_flips(c, cand, ref, true) < 0 ? -ENOMEM : 0)
-                               : check(c, cand, ref, fl, true);
+    /* the blocking triangles: on the hierarchy, the first check's (the lanes' rec: its
+     * update's flips and its walk's new pairs, rec_pairs) and the own flipped ones; on the
+     * envelopes a check that records them */
+    long m = k->tree ? (fpc_rec_merge(c) || fpc_own_flips(c, cand, ref, true) < 0 ? -ENOMEM : found)
+                     : check(c, cand, ref, fl, true);
     if (m < 0) return -ENOMEM;
     double r = c->local_r / FP_CONTACT_LOCAL_NARROW;
     for (int round = 0; m > 0 || *fl; round++, r = fmin(2 * r, c->local_r)) {
@@ -364,7 +366,7 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
 {
     struct track *k = c->tk;
     fpc_tick(c);
-    k->nmv = k->nmt = k->nmo = k->nmq = k->nprobe = 0;
+    k->nmv = k->nmt = k->nmo = k->nmq = k->nprobe = k->npair_probe = 0;
     size_t renewed0 = k->renewed;
     for (int i = 0; i < FP_CONTACT_MAX_THREADS; i++) k->lane[i].certified = k->lane[i].tested = 0;
     k->shared = 0;

@@ -217,10 +217,13 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
  * invariant holds, and a fold at the border between scaled and kept motion is a flip or a
  * crossing that check sees. s(v) takes the nearest blocking vertex from a k-d tree over
  * them (exact: the brute force's distance wherever it is under 2r).
- * On the hierarchy, when the candidate's check found no new pair, its newly flipped
- * triangles are the blocking set (no second check of the candidate), and a bisection's
- * check first tests the triangles the last failing check found flipped: one still flipped
- * decides it (as the full check would: P has none) before the refit. A vertex with
+ * On the hierarchy the candidate's check keeps its new pairs' triangles and its newly
+ * flipped ones: they are the blocking set (no second check of the candidate: on the 1.68M
+ * face that second walk had cost 115-230 ms of a contact-limited frame), and a bisection's
+ * check first tests the triangles the last failing check found flipped and up to 8 new
+ * pairs per thread it found: one still flipped, or a pair still crossing in the shape and
+ * not in ref (neither own nor adjacent: one of the full check's new pairs, whatever moved),
+ * decides it before the refit and the walk. A vertex with
  * s(v) = 1 is where C has it, in every shape of the scale-back, and a triangle of such
  * vertices is not a blocking one: a pair of them (or with unmoved ones) is as in C, where it
  * added nothing. So on the hierarchy the check of each ramp and, once one passed, the
