@@ -19,6 +19,7 @@ typedef struct checker {
     fp_check_summary *sum;
     const fp_check_options *opt;
     const char *who;          /* the plugin's file, for the crash bracket */
+    bool extra;               /* the plugin knows ABI 1.3: frames with further performers */
 } checker;
 
 static void report(checker *c, fp_check_level level, const char *check, const char *fmt, ...)
@@ -201,8 +202,11 @@ static bool check_keys(creator *cr, const fp_param_info *info, bool *device)
 #define GRID 9
 #define NV (GRID * GRID)
 #define GUARD 8
-#define SEQ 120                     /* frames per half; the second half has a rig */
-#define FRAMES (2 * SEQ)
+#define SEQ 120                     /* frames per half before 1.3; the second half has a rig */
+#define XSEQ 40                     /* and after them, from 1.3: frames with further performers */
+#define MAX_FRAMES (2 * (SEQ + XSEQ))
+#define XROWS ((FP_PERFORMER_CAPACITY - 1) * FP_HANDS) /* extra_hands' rows at most */
+#define NFAULT 7
 static const unsigned char canary_byte = 0xA5;
 
 typedef struct snapshot {
@@ -226,11 +230,26 @@ typedef struct scene {
     fp_channel ch[FP_CHANNEL_CAPACITY + GUARD];
     fp_control_set cs;
     fp_event events[2];
+    /* ABI 1.3: the further performers' hands and tip distances, the rows past a frame's
+     * FP_HANDS x extra_performers (and GUARD more) holding trap hands (present, NaN joints,
+     * touching); copies of both to find a write into them */
+    size_t half, frames;      /* frames per half (SEQ, + XSEQ with `extra`), in all */
+    fp_hand_pose xhands[XROWS + GUARD], xhands_copy[XROWS + GUARD];
+    float xtips[XROWS + GUARD][FP_FINGERS], xtips_copy[XROWS + GUARD][FP_FINGERS];
+    char xname[2][4][64];     /* the scenarios' names, "3 further performers, touching" */
 } scene;
 
-static void scene_init(scene *s)
+/* extra: the sequence has the frames with further performers (a plugin of ABI 1.3 on). */
+static void scene_init(scene *s, bool extra)
 {
     memset(s, 0, sizeof *s);
+    s->half = SEQ + (extra ? XSEQ : 0);
+    s->frames = 2 * s->half;
+    static const char *what[4] = {"hands far", "touching", "edge poses", "their hands gone"};
+    for (int b = 0; b < 2; b++)
+        for (int k = 0; k < 4; k++)
+            snprintf(s->xname[b][k], sizeof s->xname[b][k], "%d further performer%s, %s",
+                     b ? FP_PERFORMER_CAPACITY - 1 : 1, b ? "s" : "", what[k]);
     for (int j = 0; j < GRID; j++)
         for (int i = 0; i < GRID; i++) {
             float *v = s->grid[j * GRID + i];
@@ -314,10 +333,91 @@ static void make_hand(fp_hand_pose *h, float x, float y, float z, bool collapse)
         }
 }
 
-/* Frame f (0..FRAMES-1) of the sequence: hands, requests, events, the rig in the second half. */
+/* Edge pose k (0..4) of a pair of hands, without NaN: joints all at a vertex, at the bounds'
+ * corners, a hand 1e4 units away, both collapsed at one point, an engage and commit at once.
+ * Returns the fp_intent bits the pose asks for. */
+static uint32_t edge_pose(const scene *s, fp_hand_pose *L, fp_hand_pose *R, int k)
+{
+    switch (k % 5) {
+    case 0: make_hand(R, s->grid[NV / 2][0], s->grid[NV / 2][1], s->grid[NV / 2][2], true); break;
+    case 1: make_hand(L, -1, -1, 0, false); make_hand(R, 1, 1, 0.1f, false); break;
+    case 2: make_hand(R, 1e4f, -1e4f, 1e4f, false); break;
+    case 3: make_hand(L, 0, 0, 0, true); make_hand(R, 0, 0, 0, true); break;
+    default: make_hand(R, 0, 0, 0.0f, false); return FP_INTENT_ENGAGE | FP_INTENT_COMMIT;
+    }
+    return 0;
+}
+
+/* The fingertip distances of n hands as the session gives them (plugin.h): to the nearest
+ * vertex, exact within FP_TIP_DISTANCE_REACH x radius, +INFINITY beyond it and for an absent
+ * hand. */
+static void tip_distances(const scene *s, const fp_hand_pose *hands, size_t n, double radius,
+                          float (*out)[FP_FINGERS])
+{
+    for (size_t h = 0; h < n; h++)
+        for (int t = 0; t < FP_FINGERS; t++) {
+            out[h][t] = INFINITY;
+            if (!hands[h].present) continue;
+            const float *tip = hands[h].joints[FP_JOINT_TIP(t)];
+            double best = INFINITY;
+            for (int v = 0; v < NV; v++) {
+                double dx = tip[0] - s->grid[v][0], dy = tip[1] - s->grid[v][1], dz = tip[2] - s->grid[v][2];
+                double d = dx * dx + dy * dy + dz * dz;
+                if (d < best) best = d;
+            }
+            if (sqrt(best) <= FP_TIP_DISTANCE_REACH * radius) out[h][t] = (float)sqrt(best);
+        }
+}
+
+/* Frame x (0..XSEQ-1) of a half's frames with further performers (ABI 1.3): 1 then
+ * FP_PERFORMER_CAPACITY - 1 of them, their hands far, touching (engage, then commit or
+ * cancel; the first performer's right hand with them from the fourth frame on), at the edge
+ * poses (each performer another), then gone (extra_performers unchanged, their hands absent,
+ * the first performer's touching). The rows past the frame's become trap hands; both arrays
+ * are copied for the check that process() left them alone. */
+static void make_extra(scene *s, size_t x, fp_frame_input *in, const char **what)
+{
+    const int b = x >= XSEQ / 2, k = (int)(x % (XSEQ / 2));
+    const uint32_t n = b ? FP_PERFORMER_CAPACITY - 1 : 1;
+    const float ph = (float)x / 5.0f;
+    memset(s->xhands, 0, sizeof s->xhands);
+    for (uint32_t p = 0; p < n; p++) {
+        fp_hand_pose *L = &s->xhands[FP_HANDS * p + FP_HAND_LEFT], *R = &s->xhands[FP_HANDS * p + FP_HAND_RIGHT];
+        const float px = -0.6f + 0.5f * (float)p, py = 0.3f * sinf(ph + (float)p);
+        if (k < 5) {
+            make_hand(L, px - 0.2f, py, 2.0f + 0.1f * (float)p, false);
+            make_hand(R, px + 0.2f, py, 2.5f, false);
+        } else if (k < 12) {
+            make_hand(R, px, py, k < 7 ? 0.5f - (k - 5) * 0.24f : 0.02f, false);
+            if (p % 2) make_hand(L, px - 0.1f, -py, 0.03f, false);
+        } else if (k < 17) {
+            in->requested |= edge_pose(s, L, R, k - 12 + (int)p);
+        }
+    }
+    if (k >= 8 && k < 12) make_hand(&in->hands[FP_HAND_RIGHT], 0.2f * cosf(ph), -0.4f, 0.02f, false);
+    if (k >= 17) make_hand(&in->hands[FP_HAND_RIGHT], 0.1f, 0.1f, 0.02f, false);
+    if (k == 6) in->requested |= FP_INTENT_ENGAGE;
+    if (k == 11) in->requested |= b ? FP_INTENT_CANCEL : FP_INTENT_COMMIT;
+    *what = s->xname[b][k < 5 ? 0 : k < 12 ? 1 : k < 17 ? 2 : 3];
+    tip_distances(s, s->xhands, FP_HANDS * n, in->radius, s->xtips);
+    for (size_t r = FP_HANDS * n; r < XROWS + GUARD; r++) {
+        s->xhands[r].present = true;
+        for (int j = 0; j < FP_HAND_JOINTS; j++)
+            for (int c = 0; c < 3; c++) s->xhands[r].joints[j][c] = NAN;
+        for (int t = 0; t < FP_FINGERS; t++) s->xtips[r][t] = 0;
+    }
+    memcpy(s->xhands_copy, s->xhands, sizeof s->xhands);
+    memcpy(s->xtips_copy, s->xtips, sizeof s->xtips);
+    in->extra_performers = n;
+    in->extra_hands = s->xhands;
+    in->extra_tip_distance = (const float (*)[FP_FINGERS])s->xtips;
+}
+
+/* Frame f (0..s->frames-1) of the sequence: hands, requests, events, the rig in the second
+ * half; each half's last XSEQ frames with further performers where the plugin knows them. */
 static void make_frame(scene *s, size_t f, fp_frame_input *in, const char **what)
 {
-    size_t g = f % SEQ;
+    size_t g = f % s->half;
     memset(in, 0, sizeof *in);
     in->size = sizeof *in;
     in->frame = f;
@@ -328,7 +428,7 @@ static void make_frame(scene *s, size_t f, fp_frame_input *in, const char **what
     in->face_up[1] = 1;
     in->face_forward[2] = 1;
     in->face_left[0] = 1;
-    in->rig = f >= SEQ ? &s->rig : NULL;
+    in->rig = f >= s->half ? &s->rig : NULL;
     float ph = (float)g / 10.0f;
     fp_hand_pose *L = &in->hands[FP_HAND_LEFT], *R = &in->hands[FP_HAND_RIGHT];
     if (g < 10) {
@@ -354,35 +454,14 @@ static void make_frame(scene *s, size_t f, fp_frame_input *in, const char **what
         make_hand(R, 0.5f, 0, 2, false);
     } else if (g < 110) {
         *what = "edge poses";
-        switch (g % 5) {
-        case 0: make_hand(R, s->grid[NV / 2][0], s->grid[NV / 2][1], s->grid[NV / 2][2], true); break;
-        case 1: make_hand(L, -1, -1, 0, false); make_hand(R, 1, 1, 0.1f, false); break;
-        case 2: make_hand(R, 1e4f, -1e4f, 1e4f, false); break;
-        case 3: make_hand(L, 0, 0, 0, true); make_hand(R, 0, 0, 0, true); break;
-        default: make_hand(R, 0, 0, 0.0f, false); in->requested = FP_INTENT_ENGAGE | FP_INTENT_COMMIT; break;
-        }
-    } else {
+        in->requested = edge_pose(s, L, R, (int)(g % 5));
+    } else if (g < SEQ) {
         *what = "no hands, requests";
         in->requested = g % 2 ? FP_INTENT_COMMIT : FP_INTENT_CANCEL;
+    } else {
+        make_extra(s, g - SEQ, in, what);
     }
-    for (int h = 0; h < FP_HANDS; h++)
-        for (int t = 0; t < FP_FINGERS; t++) {
-            const fp_hand_pose *p = &in->hands[h];
-            if (!p->present) {
-                in->tip_distance[h][t] = INFINITY;
-                continue;
-            }
-            const float *tip = p->joints[FP_JOINT_TIP(t)];
-            double best = INFINITY;
-            for (int v = 0; v < NV; v++) {
-                double dx = tip[0] - s->grid[v][0], dy = tip[1] - s->grid[v][1], dz = tip[2] - s->grid[v][2];
-                double d = dx * dx + dy * dy + dz * dz;
-                if (d < best) best = d;
-            }
-            /* as the session gives it: exact within its reach, "far" beyond (plugin.h) */
-            in->tip_distance[h][t] = sqrt(best) <= FP_TIP_DISTANCE_REACH * in->radius ? (float)sqrt(best) : INFINITY;
-            p = NULL;
-        }
+    tip_distances(s, in->hands, FP_HANDS, in->radius, in->tip_distance);
     /* Pedal presses now and then: the left button down and up. */
     if (g == 40 || g == 41) {
         fp_event_button *b = &s->events[0].button;
@@ -392,6 +471,16 @@ static void make_frame(scene *s, size_t f, fp_frame_input *in, const char **what
         in->events = s->events;
         in->event_count = 1;
     }
+}
+
+/* Frame f's scenario, "one hand touching, rig", in buf. */
+static const char *frame_what(scene *s, size_t f, char *buf, size_t len)
+{
+    fp_frame_input in;
+    const char *what = "";
+    make_frame(s, f, &in, &what);
+    snprintf(buf, len, "%s%s", what, f >= s->half ? ", rig" : "");
+    return buf;
 }
 
 typedef struct fault {
@@ -412,8 +501,7 @@ static void fault_add(fault *f, size_t frame, const char *scen, const char *fmt,
         va_start(ap, fmt);
         vsnprintf(d, sizeof d, fmt, ap);
         va_end(ap);
-        snprintf(f->detail, sizeof f->detail, "%s (first on frame %zu, %s%s)", d, frame, scen,
-                 frame >= SEQ ? ", rig" : "");
+        snprintf(f->detail, sizeof f->detail, "%s (first on frame %zu, %s)", d, frame, scen);
     }
 }
 
@@ -423,21 +511,49 @@ static int cmp_double(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
+static void faults_init(fault *f)
+{
+    static const char *what[NFAULT] = {"process", "capacity", "overrun", "finite points", "radius",
+                                       "channels", "performers"};
+    for (int k = 0; k < NFAULT; k++) f[k] = (fault){.what = what[k]};
+}
+
+/* After a frame with further performers: whether process() left the host's extra_hands and
+ * extra_tip_distance as they were (its rows and the trap rows after them); where not, a
+ * fault naming the first row written, and both arrays restored. */
+static void check_extra_untouched(scene *s, const fp_frame_input *in, fault *fx, size_t f, const char *where)
+{
+    const size_t rows = FP_HANDS * (size_t)in->extra_performers;
+    for (size_t r = 0; r < XROWS + GUARD; r++) {
+        bool hand = memcmp(&s->xhands[r], &s->xhands_copy[r], sizeof s->xhands[r]) != 0;
+        if (!hand && !memcmp(s->xtips[r], s->xtips_copy[r], sizeof s->xtips[r])) continue;
+        fault_add(fx, f, where, "wrote into the host's %s[%zu]%s (const: the further performers' "
+                  "hands are the host's, plugin.h)", hand ? "extra_hands" : "extra_tip_distance", r,
+                  r < rows ? "" : ", past its FP_HANDS x extra_performers rows");
+        memcpy(s->xhands, s->xhands_copy, sizeof s->xhands);
+        memcpy(s->xtips, s->xtips_copy, sizeof s->xtips);
+        return;
+    }
+}
+
 /* One pass over the sequence: checks each frame, records times and control sets. */
 static void run_sequence(checker *c, fp_mapping *m, scene *s, snapshot *snaps, double *times_us,
                          fault *faults, bool *dead)
 {
-    enum { F_RC, F_COUNT, F_CANARY, F_NONFINITE, F_RADIUS, F_CHANNEL };
-    for (size_t f = 0; f < FRAMES && !*dead; f++) {
+    enum { F_RC, F_COUNT, F_CANARY, F_NONFINITE, F_RADIUS, F_CHANNEL, F_EXTRA };
+    for (size_t f = 0; f < s->frames && !*dead; f++) {
         fp_frame_input in;
-        const char *scen = "";
-        make_frame(s, f, &in, &scen);
-        fp_plugin_call_enter(c->who, "process", f);
+        const char *what = "";
+        char scen[96];
+        make_frame(s, f, &in, &what);
+        snprintf(scen, sizeof scen, "%s%s", what, f >= s->half ? ", rig" : "");
+        fp_plugin_call_enter(c->who, in.extra_performers ? "process with further performers" : "process", f);
         int64_t t0 = now_ns();
         int rc = m->process(m, &in, &s->cs);
         int64_t t1 = now_ns();
         fp_plugin_call_leave();
         times_us[f] = (t1 - t0) / 1e3;
+        if (in.extra_performers) check_extra_untouched(s, &in, &faults[F_EXTRA], f, scen);
         const char *which = NULL;
         fp_control_set *cs = &s->cs;
         if (!canaries_intact(s, &which)) {
@@ -465,11 +581,13 @@ static void run_sequence(checker *c, fp_mapping *m, scene *s, snapshot *snaps, d
             for (int k = 0; k < 3; k++)
                 if (!isfinite(cs->start[i][k]) || !isfinite(cs->end[i][k])) {
                     fault_add(&faults[F_NONFINITE], f, scen,
-                              "control vector %zu: %s point (%g, %g, %g) is not finite", i,
+                              "control vector %zu: %s point (%g, %g, %g) is not finite%s", i,
                               isfinite(cs->start[i][k]) ? "end" : "start",
                               isfinite(cs->start[i][k]) ? cs->end[i][0] : cs->start[i][0],
                               isfinite(cs->start[i][k]) ? cs->end[i][1] : cs->start[i][1],
-                              isfinite(cs->start[i][k]) ? cs->end[i][2] : cs->start[i][2]);
+                              isfinite(cs->start[i][k]) ? cs->end[i][2] : cs->start[i][2],
+                              in.extra_performers ? " (the frame's hands are finite; only extra_hands' rows "
+                              "past FP_HANDS x extra_performers hold NaN: read past them?)" : "");
                     i = cs->count;
                     break;
                 }
@@ -494,11 +612,11 @@ static void run_sequence(checker *c, fp_mapping *m, scene *s, snapshot *snaps, d
     }
 }
 
-/* The first frame whose control sets differ between two passes, or FRAMES. */
-static size_t first_difference(const snapshot *a, const snapshot *b)
+/* The first of n frames whose control sets differ between two passes, or n. */
+static size_t first_difference(const snapshot *a, const snapshot *b, size_t n)
 {
     size_t f = 0;
-    for (; f < FRAMES; f++) {
+    for (; f < n; f++) {
         const snapshot *x = &a[f], *y = &b[f];
         if (x->active != y->active || x->intents != y->intents || x->radius != y->radius ||
             x->count != y->count || x->channel_count != y->channel_count ||
@@ -529,30 +647,32 @@ static void check_isolated(checker *c, creator *cr, const snapshot *a)
         return;
     }
     scene *s = calloc(1, sizeof *s);
-    snapshot *b = calloc(FRAMES, sizeof *b);
-    double *t = calloc(FRAMES, sizeof *t);
-    fault faults[6] = {{.what = "process"}, {.what = "capacity"}, {.what = "overrun"},
-                       {.what = "finite points"}, {.what = "radius"}, {.what = "channels"}};
+    snapshot *b = calloc(MAX_FRAMES, sizeof *b);
+    double *t = calloc(MAX_FRAMES, sizeof *t);
+    fault faults[NFAULT];
+    faults_init(faults);
     bool dead = false;
     if (s && b && t) {
-        scene_init(s);
+        scene_init(s, c->extra); /* (the helper carries the further performers' hands: isolate_shm.h) */
+        const size_t n = s->frames;
+        char what[96];
         run_sequence(c, m, s, b, t, faults, &dead);
         fp_isolate_stats st;
         fp_isolate_mapping_stats(m, &st);
-        size_t f = first_difference(a, b);
-        qsort(t, FRAMES, sizeof *t, cmp_double);
+        size_t f = first_difference(a, b, n);
+        qsort(t, n, sizeof *t, cmp_double);
         if (st.faults || dead)
             report(c, FP_CHECK_FAIL, "isolated", "in a helper process: %lu fault(s) (a crash or a hang "
                    "there that in process did not happen)", st.faults);
-        else if (f < FRAMES)
-            report(c, FP_CHECK_FAIL, "isolated", "in a helper process frame %zu gave another control set "
-                   "(active %d/%d, count %zu/%zu): it depends on something the copy does not carry "
-                   "(shared globals? a pointer kept from an earlier frame?)", f, a[f].active, b[f].active,
-                   a[f].count, b[f].count);
+        else if (f < n)
+            report(c, FP_CHECK_FAIL, "isolated", "in a helper process frame %zu (%s) gave another control "
+                   "set (active %d/%d, count %zu/%zu): it depends on something the copy does not carry "
+                   "(shared globals? a pointer kept from an earlier frame?)", f,
+                   frame_what(s, f, what, sizeof what), a[f].active, b[f].active, a[f].count, b[f].count);
         else
-            report(c, FP_CHECK_PASS, "isolated", "in a helper process the same %d frames gave identical "
-                   "control sets (a call's median %.1f us there, copies and wake-ups included)", FRAMES,
-                   t[FRAMES / 2]);
+            report(c, FP_CHECK_PASS, "isolated", "in a helper process the same %zu frames gave identical "
+                   "control sets (a call's median %.1f us there, copies and wake-ups included)", n,
+                   t[n / 2]);
     } else {
         report(c, FP_CHECK_FAIL, "memory", "out of memory");
     }
@@ -574,47 +694,59 @@ static void check_mapping(checker *c, creator *cr)
         destroy_inst(cr, m);
         return;
     }
+    /* Frames with further performers only for a plugin that knows them: a host must not
+     * rely on fields past those of the plugin's ABI (plugin.h) */
+    const fp_version abi = cr->plugin->entry->abi;
+    c->extra = abi.minor >= 3;
+    if (!c->extra)
+        report(c, FP_CHECK_INFO, "performers", "the plugin declares ABI %u.%u, before 1.3: no frames with "
+               "further performers' hands (fp_frame_input.extra_hands)", abi.major, abi.minor);
     scene *s = calloc(1, sizeof *s);
-    snapshot *a = calloc(FRAMES, sizeof *a), *b = calloc(FRAMES, sizeof *b);
-    double *ta = calloc(FRAMES, sizeof *ta), *tb = calloc(FRAMES, sizeof *tb);
-    fault faults[6] = {{.what = "process"}, {.what = "capacity"}, {.what = "overrun"},
-                       {.what = "finite points"}, {.what = "radius"}, {.what = "channels"}};
+    snapshot *a = calloc(MAX_FRAMES, sizeof *a), *b = calloc(MAX_FRAMES, sizeof *b);
+    double *ta = calloc(MAX_FRAMES, sizeof *ta), *tb = calloc(MAX_FRAMES, sizeof *tb);
+    fault faults[NFAULT];
+    faults_init(faults);
     bool dead = false; /* read after `out` too */
     if (!s || !a || !b || !ta || !tb) {
         report(c, FP_CHECK_FAIL, "memory", "out of memory");
         goto out;
     }
-    scene_init(s);
+    scene_init(s, c->extra);
+    const size_t n = s->frames;
     run_sequence(c, m, s, a, ta, faults, &dead);
     bool ran_twice = false;
     if (!dead) {
         if (m->reset) {
-            fp_plugin_call_enter(c->who, "reset", FRAMES);
+            fp_plugin_call_enter(c->who, "reset", n);
             m->reset(m);
             fp_plugin_call_leave();
         }
-        fault again[6];
-        memcpy(again, faults, sizeof again);
-        for (int k = 0; k < 6; k++) again[k].count = 0;
+        fault again[NFAULT];
+        faults_init(again);
         run_sequence(c, m, s, b, tb, again, &dead);
-        for (int k = 0; k < 6; k++)
+        for (int k = 0; k < NFAULT; k++)
             if (!faults[k].count && again[k].count) faults[k] = again[k];
         ran_twice = true;
     }
     bool any = false;
-    for (int k = 0; k < 6; k++)
+    for (int k = 0; k < NFAULT; k++)
         if (faults[k].count) {
             any = true;
             report(c, FP_CHECK_FAIL, faults[k].what, "%s; %zu frame(s)", faults[k].detail, faults[k].count);
         }
     if (!any)
         report(c, FP_CHECK_PASS, "control sets",
-               "%d frames (no hands, one hand, both, touching and far, edge poses; without and "
-               "with a rig): count <= capacity, canaries intact, finite points, radius > 0",
-               FRAMES);
+               "%zu frames (no hands, one hand, both, touching and far, edge poses%s; without and "
+               "with a rig): count <= capacity, canaries intact, finite points, radius > 0", n,
+               c->extra ? ", with further performers" : "");
+    if (!any && c->extra)
+        report(c, FP_CHECK_PASS, "performers", "%d frames with 1 and %d further performers (hands far, "
+               "touching, edge poses, gone): extra_hands and extra_tip_distance left as given", 2 * XSEQ,
+               FP_PERFORMER_CAPACITY - 1);
     /* Timing: per frame the lower of the two runs. */
-    size_t nt = dead ? 0 : FRAMES;
-    double *t = calloc(FRAMES, sizeof *t);
+    size_t nt = dead ? 0 : n;
+    double *t = calloc(MAX_FRAMES, sizeof *t);
+    char what[96];
     if (t && nt) {
         size_t worst = 0;
         for (size_t f = 0; f < nt; f++) {
@@ -630,23 +762,24 @@ static void check_mapping(checker *c, creator *cr)
         if (max > budget_us)
             report(c, FP_CHECK_FAIL, "time",
                    "process took %.3f ms on frame %zu (in both runs), over the budget of %g ms "
-                   "(median %.3f ms)", max / 1e3, worst, c->opt->budget_ms, c->sum->median_us / 1e3);
+                   "(median %.3f ms; %s)", max / 1e3, worst, c->opt->budget_ms, c->sum->median_us / 1e3,
+                   frame_what(s, worst, what, sizeof what));
         else
             report(c, FP_CHECK_PASS, "time", "process median %.1f us, max %.1f us (budget %g ms)",
                    c->sum->median_us, max, c->opt->budget_ms);
     }
     free(t);
     if (ran_twice && !any) {
-        size_t f = first_difference(a, b);
-        if (f < FRAMES)
+        size_t f = first_difference(a, b, n);
+        if (f < n)
             report(c, FP_CHECK_FAIL, "determinism",
-                   "after reset the same frames gave a different control set on frame %zu "
-                   "(active %d/%d, count %zu/%zu, intents %u/%u)",
-                   f, a[f].active, b[f].active, a[f].count, b[f].count, a[f].intents, b[f].intents);
+                   "after reset the same frames gave a different control set on frame %zu, %s "
+                   "(active %d/%d, count %zu/%zu, intents %u/%u)", f, frame_what(s, f, what, sizeof what),
+                   a[f].active, b[f].active, a[f].count, b[f].count, a[f].intents, b[f].intents);
         else
-            report(c, FP_CHECK_PASS, "determinism", "after reset the same %d frames gave identical control sets",
-                   FRAMES);
-        if (f == FRAMES && c->opt->isolate) check_isolated(c, cr, a);
+            report(c, FP_CHECK_PASS, "determinism", "after reset the same %zu frames gave identical control sets",
+                   n);
+        if (f == n && c->opt->isolate) check_isolated(c, cr, a);
     } else if (!m->reset && !dead) {
         report(c, FP_CHECK_INFO, "determinism", "the mapping has no reset()");
     }
@@ -849,7 +982,7 @@ int fp_plugin_check(const char *file, const fp_check_options *opt_in, fp_check_f
     fp_check_summary local;
     if (!sum) sum = &local;
     memset(sum, 0, sizeof *sum);
-    checker c = {fn, user, sum, &opt, file};
+    checker c = {fn, user, sum, &opt, file, false};
     const char *base = strrchr(file, '/');
     base = base ? base + 1 : file;
     fp_plugin_path none;

@@ -11,10 +11,16 @@
  *    with no hands, one hand far and touching, both hands touching, engage/commit/cancel
  *    requests and pedal events, edge poses without NaN (joints all at one point, a tip on a
  *    vertex, a hand 1e4 units away, at the bounds' corner), once without and once with a rig
- *    view; after each process(): the return code, count <= capacity, channel_count <=
+ *    view; for a plugin of ABI 1.3 on, each half then has 40 frames with 1 and
+ *    FP_PERFORMER_CAPACITY - 1 further performers (extra_hands far, touching, at the edge
+ *    poses, gone; their tip distances as the session gives them; the rows past the frame's
+ *    FP_HANDS x extra_performers are present hands with NaN joints, so that a read past them
+ *    shows as a non-finite point), a plugin before 1.3 an INFO line instead (it cannot read
+ *    them); after each process(): the return code, count <= capacity, channel_count <=
  *    channel_capacity, canaries after the host's start, end and channel arrays untouched,
- *    finite start and end points, radius > 0 and finite when active, the call's time
- *    against the budget (the lower of two runs per frame, so a preemption does not fail it);
+ *    finite start and end points, radius > 0 and finite when active, extra_hands and
+ *    extra_tip_distance unchanged (the host's, const), the call's time against the budget
+ *    (the lower of two runs per frame, so a preemption does not fail it);
  *    then reset and the same sequence again: identical control sets (determinism); destroy;
  *  an input: `cycles` times create, start, 100 ms of events, stop, destroy; every event
  *    well-formed (size for its type, type, hand, finite values, unit quaternion, button
@@ -49,7 +55,8 @@ typedef struct fp_check_options {
     int cycles;               /* an input's create/start/stop/destroy cycles; 0: 5 */
     bool isolate;             /* a mapping whose sequence passed: the first pass again with it
                                  in a helper process (fp_isolate.h), its control sets compared
-                                 frame for frame ("isolated") */
+                                 frame for frame ("isolated"; the further performers' frames
+                                 too) */
     const char *helper;       /* the helper's executable; NULL: /proc/self/exe */
 } fp_check_options;
 

@@ -12,7 +12,11 @@
  *   FIXTURE_ENGINE_FAIL    A with a support radius of 1e20 (finite and positive: the host's
  *                             checks pass), which the engine refuses every frame (coincident
  *                             start points would not do: the engine merges them)
- *   FIXTURE_ABI_MAJOR=2    built for ABI 2.0 */
+ *   FIXTURE_EXTRA_WRITE    A, and writes into the host's const extra_hands (ABI 1.3)
+ *   FIXTURE_EXTRA_READ     A, and a control vector from every further hand the ABI allows
+ *                             (FP_PERFORMER_CAPACITY - 1 performers), not the extra_performers
+ *                             given (ABI 1.3)
+ *   FIXTURE_ABI_MAJOR=2    built for ABI 2.0; FIXTURE_ABI_MINOR=3: 1.3 (else 1.0) */
 #define _POSIX_C_SOURCE 200809L
 #include <facepuppet/mapping_util.h>
 #include <facepuppet/plugin.h>
@@ -24,6 +28,9 @@
 
 #ifndef FIXTURE_ABI_MAJOR
 #define FIXTURE_ABI_MAJOR FP_PLUGIN_ABI_MAJOR
+#endif
+#ifndef FIXTURE_ABI_MINOR
+#define FIXTURE_ABI_MINOR 0
 #endif
 #ifdef FIXTURE_B
 #define FIXTURE_VERSION "B"
@@ -83,6 +90,20 @@ static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *o
 #endif
 #ifdef FIXTURE_NAN
     if (out->active) out->end[0][1] = NAN;
+#endif
+#ifdef FIXTURE_EXTRA_WRITE
+    if (FP_HAS_FIELD(in, fp_frame_input, extra_tip_distance) && in->extra_performers && in->extra_hands)
+        ((fp_hand_pose *)in->extra_hands)[0].joints[0][0] += 1; /* (the host's, const) */
+#endif
+#ifdef FIXTURE_EXTRA_READ
+    if (FP_HAS_FIELD(in, fp_frame_input, extra_tip_distance) && in->extra_hands)
+        for (int h = 0; h < FP_HANDS * (FP_PERFORMER_CAPACITY - 1) && out->count < out->capacity; h++) {
+            if (!in->extra_hands[h].present) continue; /* past extra_performers x FP_HANDS too */
+            memcpy(out->start[out->count], in->extra_hands[h].joints[FP_JOINT_TIP(1)], sizeof out->start[0]);
+            memcpy(out->end[out->count], out->start[out->count], sizeof out->end[0]);
+            out->end[out->count++][2] += (float)(0.01 * in->radius);
+            out->active = true;
+        }
 #endif
 #ifdef FIXTURE_OVERRUN
     for (size_t i = 0; i < out->capacity + 2; i++) {
@@ -145,5 +166,5 @@ static const void *get_factory(const char *id)
 }
 
 FP_PLUGIN_DECLARE_ENTRY = {
-    {FIXTURE_ABI_MAJOR, 0}, "org.facepuppet.test.map-fixture", FIXTURE_VERSION, NULL, NULL, get_factory,
+    {FIXTURE_ABI_MAJOR, FIXTURE_ABI_MINOR}, "org.facepuppet.test.map-fixture", FIXTURE_VERSION, NULL, NULL, get_factory,
 };

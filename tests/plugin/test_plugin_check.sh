@@ -26,8 +26,12 @@ expect() {
 }
 
 # Built-in plugins pass (the glove has no device here: a documented skip, exit 0).
-expect 0 'passed: 15 checks' "$fp" plugins check "$builtin/map-anchored.so"  # 15: a check per key (engage, points, widen)
-expect 0 'PASS  determinism' "$fp" plugins check "$builtin/map-unanchored.so"
+expect 0 'passed: 16 checks' "$fp" plugins check "$builtin/map-anchored.so"  # 16: a check per key (engage, points, widen)
+expect 0 'PASS  determinism +after reset the same 320 frames' "$fp" plugins check "$builtin/map-unanchored.so"
+# ABI 1.3 mappings also get 80 frames with 1 and 3 further performers' hands (extra_hands)
+for m in anchored unanchored onehand; do
+    expect 0 'PASS  performers +80 frames with 1 and 3 further performers' "$fp" plugins check "$builtin/map-$m.so"
+done
 expect 0 'PASS  events +[0-9]+ events well-formed' "$fp" plugins check "$builtin/input-replay.so" --arg "$rec"
 # fast=1 (the help's own example): a recording's events run ahead of the host clock, on its own
 expect 0 'PASS  events +[0-9]+ events well-formed' "$fp" plugins check "$builtin/input-replay.so" --arg "$rec" --key fast=1
@@ -55,9 +59,21 @@ expect 0 'passed' "$fp" plugins check "$fx/map-fixture.so"
 expect 0 'PASS  isolated +in a helper process the same 240 frames gave identical control sets' \
     "$fp" plugins check "$fx/map-fixture.so"
 expect 0 'passed: 9 checks' "$fp" plugins check "$fx/map-fixture.so" --isolate none  # 10 with the isolated pass
+# map-fixture declares ABI 1.0: no frames with further performers, said so
+expect 0 'INFO  performers +the plugin declares ABI 1\.0, before 1\.3: no frames with further performers' \
+    "$fp" plugins check "$fx/map-fixture.so" --isolate none
+# the isolated pass carries the further performers' hands (isolate_shm.h): the same 320 frames
+expect 0 'PASS  isolated +in a helper process the same 320 frames gave identical control sets' \
+    "$fp" plugins check "$builtin/map-unanchored.so" --isolate all
 expect 0 'PASS  isolated' "$fp" plugins check "$builtin/map-onehand.so" --isolate all
 expect 1 "FAIL  overrun +wrote past the capacity of the host's start array" "$fp" plugins check "$fx/map-fixture-overrun.so"
 expect 1 'FAIL  finite points +control vector 0: end point .*nan.* is not finite' "$fp" plugins check "$fx/map-fixture-nan.so"
+# ABI 1.3: a mapping that writes into the host's const extra_hands, or reads further hands past
+# the extra_performers given (the host's rows after them hold NaN), fails on such a frame
+expect 1 "FAIL  performers +wrote into the host's extra_hands\[0\] .*\(first on frame [0-9]+, 1 further performer, hands far\)" \
+    "$fp" plugins check "$fx/map-fixture-extrawrite.so"
+expect 1 'FAIL  finite points +control vector [0-9]+: start point .*read past them\?\) \(first on frame [0-9]+, 1 further performer' \
+    "$fp" plugins check "$fx/map-fixture-extraread.so"
 expect 1 'FAIL  time +process took [0-9]+\.[0-9]+ ms .*over the budget of 2 ms' "$fp" plugins check "$fx/map-fixture-slow.so"
 expect 1 'FAIL  create +create returned 0 without an instance' "$fp" plugins check "$fx/map-fixture-noinstance.so"
 expect 78 'FAIL  load .*built for plugin ABI 2\.0, this facepuppet has ABI 1\.3' "$fp" plugins check "$fx/map-fixture-abi2.so"
