@@ -4,6 +4,14 @@
  * performer's key requests, paced by the events' times, so that a new session runs them
  * through any mapping, rig or radius (and records a new take).
  *
+ * source=N (1-based, as the session's messages number inputs): only the events the take's
+ * input N pushed (recorded with header.source N-1), so that a take of several performers is
+ * performed again by one instance for each of its inputs, each with its performer= (the CLI
+ * splits a `take:FILE` of two or more performers so: ui/cli/app_util.c). The key requests
+ * are pushed by the instance without source= or with source=1 only, so that several
+ * instances do not request twice. N beyond the take's inputs: create() fails (-EINVAL)
+ * naming the file and its input count.
+ *
  * SPDX-License-Identifier: GPL-3.0-or-later
  *
  * Flow: create() opens the take (core/take's reader; a take cut short plays its intact
@@ -11,10 +19,11 @@
  * waits for each item's moment (a timed wait over CLOCK_MONOTONIC, so stop() wakes it) and
  * pushes it; stop() sets a flag, signals and joins.
  *
- * Times: an item's time is its offset from the take's first event, on the host clock from
- * the start (host_t0 + offset), whatever the speed: as input-replay does, so that a run
- * stepping on the inputs' clock sees the same events in the same frames. speed=X and fast=1
- * only change the pacing. A full queue is retried, never dropped.
+ * Times: an item's time is its offset from the take's first event (of any source, so that
+ * the instances of several source= keep in step), on the host clock from the start
+ * (host_t0 + offset), whatever the speed: as input-replay does, so that a run stepping on
+ * the inputs' clock sees the same events in the same frames. speed=X and fast=1 only change
+ * the pacing. A full queue is retried, never dropped.
  *
  * Key requests: the intents the performer asked for by key (the frame's requested bits that
  * no pedal button of that frame explains) are pushed as an FP_BUTTON_REQUEST button event
@@ -61,18 +70,23 @@ typedef struct take_input {
     double rate_hz;
     double speed;
     bool fast;
+    uint32_t source;         /* source=N: only the take's input N's events; 0: every input's */
     char warning[512];
 
     fp_pacer pacer;          /* the thread, waits stop() interrupts, lossless pushes (fp_pacer.h) */
 } take_input;
 
 static const char usage_text[] =
-    "take:FILE[,speed=X][,fast=1]\n"
+    "take:FILE[,speed=X][,fast=1][,source=N]\n"
     "  Performs a take (FILE.fptake, docs/take-format.md) again: its raw input events and the\n"
     "  performer's key requests, at the recorded pace, through this session's mapping, rig\n"
     "  and radius. Pedal buttons come back as buttons; key requests as FP_BUTTON_REQUEST.\n"
     "  speed=X  play X times as fast (0.001 to 1e6, default 1)\n"
     "  fast=1   as fast as possible\n"
+    "  source=N only the events of the take's input N (1 to its input count), and the key\n"
+    "           requests only with 1; default: every input's. `run` and `live` perform a\n"
+    "           take of two or more performers as one take input for each of its inputs\n"
+    "           (source=N, the recorded performer= and calibration=): each keeps their hands\n"
     "  Event times are the take's own clock (the host clock at start + the event's offset in\n"
     "  the take), whatever the speed. A take cut short plays its intact frames (a warning\n"
     "  status first). Ends with an end-of-stream status.\n";
@@ -191,6 +205,12 @@ static int load(take_input *r, const char *path, char *err, size_t errlen)
     if (rc) return rc;
     snprintf(r->warning, sizeof r->warning, "%s", fp_take_reader_warning(rd));
     const fp_take_header *h = fp_take_reader_header(rd);
+    if (r->source > h->input_count) {
+        snprintf(err, errlen, "take: %s: source=%u: the take has %zu input%s (source=1 to %zu)", path,
+                 r->source, h->input_count, h->input_count == 1 ? "" : "s", h->input_count);
+        fp_take_reader_close(&rd);
+        return -EINVAL;
+    }
     r->rate_hz = h->rate.den ? (double)h->rate.num / h->rate.den : 0;
     size_t cap = 0;
     bool have_t0 = false;
@@ -210,6 +230,7 @@ static int load(take_input *r, const char *path, char *err, size_t errlen)
             const fp_event *e = &f.events[i];
             if (e->header.type == FP_EVENT_STATUS && e->status.code == FP_STATUS_END_OF_STREAM)
                 continue;
+            if (r->source && e->header.source != r->source - 1) continue; /* another input's */
             if (e->header.hand == FP_HAND_LEFT || e->header.hand == FP_HAND_RIGHT)
                 r->hands |= 1u << e->header.hand;
             int64_t t = e->header.time_ns - t0;
@@ -217,7 +238,7 @@ static int load(take_input *r, const char *path, char *err, size_t errlen)
             prev = t;
             mem = add_item(r, &cap, t, e);
         }
-        uint32_t keys = key_requests(&f);
+        uint32_t keys = r->source <= 1 ? key_requests(&f) : 0;
         if (keys && !mem) {
             fp_event ev;
             memset(&ev, 0, sizeof ev);
@@ -262,11 +283,12 @@ static int take_create(const fp_host *host, const char *arg, const fp_param *par
         return -EINVAL;
     }
     if (!arg || !*arg) {
-        snprintf(err, errlen, "take: no FILE given (take:FILE.fptake[,speed=X][,fast=1])");
+        snprintf(err, errlen, "take: no FILE given (take:FILE.fptake[,speed=X][,fast=1][,source=N])");
         return -EINVAL;
     }
     double speed = 1.0;
     bool fast = false;
+    unsigned long long source = 0;
     for (size_t i = 0; i < nparams; i++) {
         const char *k = params[i].key ? params[i].key : "", *v = params[i].value ? params[i].value : "";
         if (!strcmp(k, "speed")) {
@@ -276,8 +298,14 @@ static int take_create(const fp_host *host, const char *arg, const fp_param *par
             }
         } else if (!strcmp(k, "fast")) {
             if (parse_bool(k, v, &fast, err, errlen)) return -EINVAL;
+        } else if (!strcmp(k, "source")) {
+            if (!fp_parse_whole(v, FP_TAKE_MAX_INPUTS, &source) || !source) {
+                snprintf(err, errlen, "take: source=%s: expected an input of the take, 1 to %d", v,
+                         FP_TAKE_MAX_INPUTS);
+                return -EINVAL;
+            }
         } else {
-            snprintf(err, errlen, "take: unknown key \"%s\" (known: speed, fast)", k);
+            snprintf(err, errlen, "take: unknown key \"%s\" (known: speed, fast, source)", k);
             return -EINVAL;
         }
     }
@@ -287,6 +315,7 @@ static int take_create(const fp_host *host, const char *arg, const fp_param *par
         snprintf(err, errlen, "take: out of memory");
         return -ENOMEM;
     }
+    r->source = (uint32_t)source;
     int rc = load(r, arg, err, errlen);
     if (rc) {
         free(r->items);
@@ -319,6 +348,8 @@ static const fp_param_info take_keys[] = {
      .unit = "x", .description = "play this many times as fast (0.001 to 1e6)"},
     {.name = "fast", .type = FP_PARAM_BOOL, .min = 0, .max = 1, .default_value = "0",
      .description = "as fast as possible, retrying when the queue is full"},
+    {.name = "source", .type = FP_PARAM_INT, .min = 1, .max = FP_TAKE_MAX_INPUTS, .default_value = "",
+     .description = "only the take's input N's events (key requests: with 1 only); default every input's"},
     {.name = NULL},
 };
 

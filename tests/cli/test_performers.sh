@@ -7,7 +7,11 @@
 #     --isolate all (the mapping in its helper, the further hands in its shared memory);
 #     both inputs naming one performer give the merge's bytes;
 #  2. monitor prints the input's "performer" in every line (none without the key);
-#  3. a fifth performer, or a NAME that is no name, is refused with exit 64 naming the SPEC.
+#  3. a fifth performer, or a NAME that is no name, is refused with exit 64 naming the SPEC;
+#  4. a take of two performers performed again (`--input take:FILE`) keeps its performers: one
+#     take input each (source=N, performer= and calibration= as recorded), byte-identical to
+#     the run (see there for what a take does not hold); source=3 of a take of two inputs, or
+#     more inputs than a session takes, is refused with exit 64 naming the take.
 # SPDX-License-Identifier: GPL-3.0-or-later
 set -u
 build=${FP_BUILD_DIR:-build}
@@ -57,4 +61,57 @@ rc=$?
 [ $rc -eq 64 ] || { cat "$tmp/bad.out"; fail "performer=B/x: exit $rc, want 64"; }
 grep -qF "performer=B/x: expected a name of 1 to 31 letters, digits, '-' or '_'" "$tmp/bad.out" ||
     { cat "$tmp/bad.out"; fail "performer=B/x: no reason given"; }
+
+# 4. (run steps on the recordings' clock: the same events give the same frames, every frame's
+#    vertices compared in an --export .pc2)
+two_again() { grep -q "session: 2 performers, each with a left and a right hand of their own: the first performer: take (input 1); performer 'B': take (input 2)" "$tmp/$1.err" ||
+                  { cat "$tmp/$1.err"; fail "$1: the take's two performers are not two"; }; }
+echo '{"scale": 0.1, "offset": [-4.1, -15.1, 22.9]}' >"$tmp/cal-a.json"
+echo '{"scale": 0.1, "offset": [-5.6, -16.7, 21.1]}' >"$tmp/cal-b.json"
+mesh=(--mesh "$data/faces/ict-facekit/generic_neutral_mesh.obj")
+# each performer placed by a calibration=FILE: the take performed again is the run, bit for bit
+run rec "${mesh[@]}" --input "$claps,calibration=$tmp/cal-a.json" --input "$grab,performer=B,calibration=$tmp/cal-b.json" \
+    --take-dir "$tmp/takes" --slate s --export "$tmp/rec.pc2"
+run again "${mesh[@]}" --input "take:$tmp/takes/s_T001.fptake,fast=1" --export "$tmp/again.pc2"
+two_again again
+cmp -s "$tmp/again.obj" "$tmp/rec.obj" || fail "a take of two performers performed again differs from its run"
+cmp -s "$tmp/again.pc2" "$tmp/rec.pc2" || fail "a take of two performers performed again: its frames (--export .pc2) differ from the run's"
+rm -f "$tmp/again.pc2" "$tmp/rec.pc2" # (72 MB each)
+cmp -s "$tmp/again.obj" "$tmp/merged.obj" && fail "a take of two performers performed again gives the merge"
+# one take input for all (performer= given: no split): every hand the one performer's, not the run
+run one "${mesh[@]}" --input "take:$tmp/takes/s_T001.fptake,fast=1,performer=X"
+grep -q "2 performers" "$tmp/one.err" && fail "performer= on the take input still splits it"
+cmp -s "$tmp/one.obj" "$tmp/rec.obj" && fail "one take input for both performers gives the two performers' face"
+# placed by default: not exact. The take holds the first performer's calibration only (the
+# header's "calibration"), which a take performed again gives every performer, where the run
+# fitted performer B to B's own recording; so it is the run of the recordings with that
+# calibration for both (read from the take's header), bit for bit.
+run rec2 "${mesh[@]}" --input "$claps" --input "$grab,performer=B" --take-dir "$tmp/takes" --slate d
+run again2 "${mesh[@]}" --input "take:$tmp/takes/d_T001.fptake,fast=1"
+two_again again2
+cmp -s "$tmp/again2.obj" "$tmp/merged.obj" && fail "a take of two performers (placed by default) performed again gives the merge"
+python3 - "$tmp/takes/d_T001.fptake" "$tmp/rec2-cal.json" <<'PY' || fail "could not read the take's calibration"
+import json, struct, sys
+b, off = open(sys.argv[1], 'rb').read(), 16
+while b[off + 4:off + 8] != b'HEAD':
+    off += 20 + struct.unpack_from('<I', b, off + 8)[0]
+c = json.loads(b[off + 16:off + 16 + struct.unpack_from('<I', b, off + 8)[0]])['calibration'][1]
+json.dump({'scale': c['scale'], 'offset': c['offset']}, open(sys.argv[2], 'w'))
+PY
+run rec2cal "${mesh[@]}" --calibration "$tmp/rec2-cal.json" --input "$claps" --input "$grab,performer=B"
+cmp -s "$tmp/again2.obj" "$tmp/rec2cal.obj" || fail "performed again (placed by default): not the run placed by the take's calibration"
+# source=N beyond the take's inputs; more inputs than a session takes
+"$fp" run -q "${pd[@]}" --input "take:$tmp/takes/s_T001.fptake,fast=1,source=3" --out "$tmp/src3.obj" >"$tmp/src3.out" 2>&1
+rc=$?
+[ $rc -eq 64 ] || { cat "$tmp/src3.out"; fail "source=3 of a take of 2 inputs: exit $rc, want 64"; }
+grep -qF "take: $tmp/takes/s_T001.fptake: source=3: the take has 2 inputs (source=1 to 2)" "$tmp/src3.out" ||
+    { cat "$tmp/src3.out"; fail "source=3: the refusal does not name the take"; }
+seven=()
+for i in 1 2 3 4 5 6 7; do seven+=(--input "$grab"); done
+"$fp" run -q "${pd[@]}" "${seven[@]}" --input "take:$tmp/takes/s_T001.fptake" --out "$tmp/nine.obj" >"$tmp/nine.out" 2>&1
+rc=$?
+[ $rc -eq 64 ] || { cat "$tmp/nine.out"; fail "a take of 2 inputs beside 7 others: exit $rc, want 64"; }
+grep -qF -- "--input take:$tmp/takes/s_T001.fptake: the take's 2 performers have 2 inputs, one take input each (source=N): 9 --input in all, at most 8" "$tmp/nine.out" ||
+    { cat "$tmp/nine.out"; fail "nine inputs: the refusal does not name the take"; }
+[ -e "$tmp/src3.obj" ] || [ -e "$tmp/nine.obj" ] && fail "a refused take input wrote a mesh"
 echo "ok"

@@ -49,7 +49,7 @@ expect 0 'passed: 15 checks' "$fp" plugins check "$builtin/input-osc.so" --arg 0
 "$fp" run -q --mesh "$data/faces/mediapipe-canonical/canonical_face_model.obj" \
     --input "replay:$rec,fast=1" --duration 0.5 --out "$tmp/t.obj" --take-dir "$tmp/takes" \
     --slate chk >/dev/null 2>&1 || fail "recording a take for the take input's check"
-expect 0 'passed: 8 checks' "$fp" plugins check "$builtin/input-take.so" \
+expect 0 'passed: 9 checks' "$fp" plugins check "$builtin/input-take.so" \
     --arg "$tmp/takes/chk_T001.fptake"
 
 # Each broken fixture fails with a message naming the cause.

@@ -78,9 +78,109 @@ int fp_app_exit_code(int code, fp_app_io io)
     }
 }
 
-bool fp_app_session_defaults(fp_session_options *so, double speed, fp_app_inputs *buf)
+/* The take a `take:FILE` SPEC performs, opened, and the SPEC parsed into *spec (fp_spec_clear
+ * it in any case); NULL for another input, a SPEC that does not parse or a take that does not
+ * open (the plugin says why when the session opens it). */
+static fp_take_reader *open_take(const char *text, fp_spec *spec)
+{
+    char err[512];
+    fp_take_reader *r = NULL;
+    memset(spec, 0, sizeof *spec);
+    if (strncmp(text, "take:", 5) || fp_spec_parse(text, spec, err, sizeof err) || !spec->arg ||
+        fp_take_reader_open(spec->arg, &r, err, sizeof err))
+        return NULL;
+    return r;
+}
+
+static bool spec_has(const fp_spec *spec, const char *key)
+{
+    for (size_t i = 0; i < spec->nparams; i++)
+        if (spec->params[i].key && !strcmp(spec->params[i].key, key)) return true;
+    return false;
+}
+
+/* A recorded SPEC's performer= (into name) and calibration= (into cal, when not NULL): "" where
+ * it has none or does not parse. */
+static void recorded_keys(const char *text, char *name, size_t nlen, char *cal, size_t clen)
+{
+    fp_spec spec;
+    char err[256];
+    name[0] = '\0';
+    if (cal) cal[0] = '\0';
+    if (!text || fp_spec_parse(text, &spec, err, sizeof err)) return;
+    const char *p = fp_spec_take(&spec, "performer"), *c = fp_spec_take(&spec, "calibration");
+    if (p) snprintf(name, nlen, "%s", p);
+    if (c && cal) snprintf(cal, clen, "%s", c);
+    fp_spec_clear(&spec);
+}
+
+/* How many performers a take's inputs were: the first input's is the first, inputs without
+ * performer= join it, and each name met for the first time opens the next (as
+ * fp_performers_assign gives them). */
+static size_t take_performers(const fp_take_header *h)
+{
+    char names[FP_TAKE_MAX_INPUTS][FP_PERFORMER_NAME_MAX + 2];
+    size_t count = 0;
+    for (size_t i = 0; i < h->input_count && i < FP_TAKE_MAX_INPUTS; i++) {
+        char name[sizeof names[0]];
+        recorded_keys(h->inputs[i], name, sizeof name, NULL, 0);
+        if (i && !name[0]) continue; /* the first performer's */
+        size_t k = 0;
+        while (k < count && strcmp(names[k], name)) k++;
+        if (k == count) memcpy(names[count++], name, sizeof name);
+    }
+    return count;
+}
+
+/* The recorded calibration of a take (the first performer's, per hand; the right hand's where
+ * both), as so->calibration. */
+static void take_calibration(const fp_take_header *h, fp_session_options *so, fp_app_inputs *buf)
+{
+    for (int hand = FP_HANDS - 1; hand >= 0 && !so->calibration; hand--) {
+        const fp_take_calibration *c = &h->calibration[hand];
+        if (!c->present || !(c->scale > 0)) continue;
+        buf->take_calibration.scale = c->scale;
+        memcpy(buf->take_calibration.offset, c->offset, sizeof c->offset);
+        so->calibration = &buf->take_calibration;
+    }
+}
+
+/* The take inputs of take h's inputs, one each, into ins (at *n, *made of buf->takes used):
+ * the user's SPEC text, ",source=K", and the recorded SPEC's performer= and calibration= (a
+ * calibration file that cannot be read is left out: that performer is then placed as the
+ * others). Returns 0, or 64 with the line printed: more than FP_SESSION_MAX_INPUTS (rest: the
+ * --input after this one), or a SPEC too long. */
+static int split_take(const char *cmd, const char *text, const fp_take_header *h, size_t rest,
+                      const char **ins, size_t *n, fp_app_inputs *buf, size_t *made)
+{
+    if (*n + h->input_count + rest > FP_SESSION_MAX_INPUTS) {
+        fprintf(stderr, "%s: --input %s: the take's %zu performers have %zu inputs, one take input "
+                "each (source=N): %zu --input in all, at most %d\n", cmd, text, take_performers(h),
+                h->input_count, *n + h->input_count + rest, FP_SESSION_MAX_INPUTS);
+        return FP_EXIT_USAGE;
+    }
+    for (size_t k = 0; k < h->input_count; k++) {
+        char name[FP_PERFORMER_NAME_MAX + 2], cal[1100];
+        recorded_keys(h->inputs[k], name, sizeof name, cal, sizeof cal);
+        if (cal[0] && access(cal, R_OK)) cal[0] = '\0';
+        char *out = buf->takes[(*made)++];
+        int len = snprintf(out, sizeof buf->takes[0], "%s,source=%zu%s%s%s%s", text, k + 1,
+                           name[0] ? ",performer=" : "", name, cal[0] ? ",calibration=" : "", cal);
+        if (len < 0 || (size_t)len >= sizeof buf->takes[0]) {
+            fprintf(stderr, "%s: --input %s: too long to perform the take's input %zu\n", cmd, text,
+                    k + 1);
+            return FP_EXIT_USAGE;
+        }
+        ins[(*n)++] = out;
+    }
+    return 0;
+}
+
+int fp_app_session_defaults(const char *cmd, fp_session_options *so, double speed, fp_app_inputs *buf,
+                            bool *demo_out)
 {
     bool demo = !so->mesh_path && !so->input_count;
+    if (demo_out) *demo_out = demo;
     if (!so->mesh_path)
         so->mesh_path = fp_app_data_path("faces/ict-facekit/generic_neutral_mesh.obj",
                                          buf->demo_mesh, sizeof buf->demo_mesh);
@@ -100,27 +200,29 @@ bool fp_app_session_defaults(fp_session_options *so, double speed, fp_app_inputs
             so->inputs[i] = buf->specs[i];
         }
     }
-    /* A take performed again: its hands where the take had them (the recorded calibration). */
-    for (size_t i = 0; i < so->input_count && !so->calibration; i++) {
+    /* A take performed again: its hands where the take had them (the recorded calibration);
+     * a take of two or more performers (issue 55), unless the SPEC picks a source= or a
+     * performer=: one take input for each of its inputs, each with its performer as recorded,
+     * so that their hands stay theirs. */
+    const char *ins[FP_SESSION_MAX_INPUTS];
+    size_t n = 0, made = 0;
+    int rc = 0;
+    for (size_t i = 0; i < so->input_count && !rc; i++) {
         fp_spec spec;
-        char err[512];
-        if (strncmp(so->inputs[i], "take:", 5) || fp_spec_parse(so->inputs[i], &spec, err, sizeof err))
-            continue;
-        fp_take_reader *r = NULL;
-        if (spec.arg && !fp_take_reader_open(spec.arg, &r, err, sizeof err)) {
-            const fp_take_header *h = fp_take_reader_header(r);
-            for (int hand = FP_HANDS - 1; hand >= 0 && !so->calibration; hand--) {
-                const fp_take_calibration *c = &h->calibration[hand];
-                if (!c->present || !(c->scale > 0)) continue;
-                buf->take_calibration.scale = c->scale;
-                memcpy(buf->take_calibration.offset, c->offset, sizeof c->offset);
-                so->calibration = &buf->take_calibration;
-            }
-            fp_take_reader_close(&r);
-        }
+        fp_take_reader *r = open_take(so->inputs[i], &spec);
+        const fp_take_header *h = r ? fp_take_reader_header(r) : NULL;
+        if (h && !so->calibration) take_calibration(h, so, buf);
+        if (h && !spec_has(&spec, "source") && !spec_has(&spec, "performer") && take_performers(h) > 1)
+            rc = split_take(cmd, so->inputs[i], h, so->input_count - i - 1, ins, &n, buf, &made);
+        else
+            ins[n++] = so->inputs[i];
+        fp_take_reader_close(&r);
         fp_spec_clear(&spec);
     }
-    return demo;
+    if (rc) return rc;
+    memcpy(so->inputs, ins, n * sizeof ins[0]);
+    so->input_count = n;
+    return 0;
 }
 
 fp_take_rate fp_app_take_rate(double fps)

@@ -163,16 +163,25 @@ typedef struct fp_app_inputs {
     char demo_mesh[4096];
     char demo_input[4200];
     char specs[FP_SESSION_MAX_INPUTS][4300];
+    char takes[FP_SESSION_MAX_INPUTS][5600]; /* a take's inputs, one take input each (source=N) */
     fp_calibration take_calibration;   /* a take input's recorded calibration */
 } fp_app_inputs;
 
-/** Defaults shared by `run` and `live`. With neither a mesh nor an input the session is the
- *  demo: the ICT face and the three-claps recording (returns true). Without a mesh: the ICT
- *  face. Without a mapping: "anchored". A speed other than 1 is appended as `,speed=X` to
- *  every replay or take input that sets none. With no calibration and a `take:FILE` input,
- *  the calibration the take recorded (so that a take performed again sees its hands where
- *  they were). Strings point into *buf. */
-bool fp_app_session_defaults(fp_session_options *so, double speed, fp_app_inputs *buf);
+/** Defaults shared by `run` and `live` (cmd: "facepuppet run", for the messages). With
+ *  neither a mesh nor an input the session is the demo: the ICT face and the three-claps
+ *  recording (*demo true; demo may be NULL). Without a mesh: the ICT face. Without a mapping:
+ *  "anchored". A speed other than 1 is appended as `,speed=X` to every replay or take input
+ *  that sets none. With no calibration and a `take:FILE` input, the calibration the take
+ *  recorded (so that a take performed again sees its hands where they were). A `take:FILE`
+ *  input without source= or performer= whose take's inputs were two or more performers
+ *  (their SPECs' performer=; unnamed inputs the first input's, as the session counts them)
+ *  becomes one take input for each of the take's inputs: SPEC,source=N and the recorded
+ *  performer= and calibration= (where that file can be read), so that each performer's hands
+ *  stay theirs; a take that cannot be read is left as given (its plugin says why). Strings
+ *  point into *buf. Returns 0, or 64 with "CMD: --input SPEC: ..." printed where the take's
+ *  inputs and the others make more than FP_SESSION_MAX_INPUTS. */
+int fp_app_session_defaults(const char *cmd, fp_session_options *so, double speed, fp_app_inputs *buf,
+                            bool *demo);
 
 /** `facepuppet info RIG.json` (cmd_pose.c): describe the rig and check it against its mesh
  *  (the mesh the rig names under the shared data folder, when it is there). Returns an exit

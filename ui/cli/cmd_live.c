@@ -415,9 +415,11 @@ static int live_main(int argc, char **argv)
         fprintf(stderr, "facepuppet live: --screenshot needs --frames N (or a --script that closes)\n");
         return FP_EXIT_USAGE;
     }
-    /* The demo when no mesh and no input are given; --speed for replay inputs. */
+    /* The demo when no mesh and no input are given; --speed for replay inputs; a take of
+     * several performers: one take input for each of its inputs. */
     fp_app_inputs inputs_buf;
-    fp_app_session_defaults(so, sopt.speed, &inputs_buf);
+    if ((orc = fp_app_session_defaults("facepuppet live", so, sopt.speed, &inputs_buf, NULL)))
+        return orc;
     char *script_text = NULL;
     if (script_arg && script_arg[0] == '@') {
         errno = 0;

@@ -214,7 +214,9 @@ static int run_settle(run_args *a)
 {
     int rc;
     bool mesh_given = a->so.mesh_path != NULL;
-    a->demo = fp_app_session_defaults(&a->so, a->sopt.speed, &a->inputs_buf);
+    if ((rc = fp_app_session_defaults("facepuppet run", &a->so, a->sopt.speed, &a->inputs_buf,
+                                      &a->demo)))
+        return rc;
     if (mesh_given && !a->so.input_count) {
         fprintf(stderr, "facepuppet run: give at least one --input SPEC (see --help)\n");
         return FP_EXIT_USAGE;
