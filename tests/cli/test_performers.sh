@@ -10,8 +10,9 @@
 #  3. a fifth performer, or a NAME that is no name, is refused with exit 64 naming the SPEC;
 #  4. a take of two performers performed again (`--input take:FILE`) keeps its performers: one
 #     take input each (source=N, performer= and calibration= as recorded), byte-identical to
-#     the run (see there for what a take does not hold); source=3 of a take of two inputs, or
-#     more inputs than a session takes, is refused with exit 64 naming the take.
+#     the run (see there for what a take does not hold); a take of one performer's two inputs
+#     too; source=3 of a take of two inputs, or more inputs than a session takes, is refused
+#     with exit 64 naming the take.
 # SPDX-License-Identifier: GPL-3.0-or-later
 set -u
 build=${FP_BUILD_DIR:-build}
@@ -100,6 +101,12 @@ json.dump({'scale': c['scale'], 'offset': c['offset']}, open(sys.argv[2], 'w'))
 PY
 run rec2cal "${mesh[@]}" --calibration "$tmp/rec2-cal.json" --input "$claps" --input "$grab,performer=B"
 cmp -s "$tmp/again2.obj" "$tmp/rec2cal.obj" || fail "performed again (placed by default): not the run placed by the take's calibration"
+# one performer, two inputs: split too (each input's filter and clock its own again), so the
+# take performed again is its run bit for bit; one take input for both is not
+run rec3 "${mesh[@]}" --input "$claps" --input "$grab" --take-dir "$tmp/takes" --slate m
+run again3 "${mesh[@]}" --input "take:$tmp/takes/m_T001.fptake,fast=1"
+grep -q "2 performers" "$tmp/again3.err" && fail "a take of one performer's two inputs came back as two performers"
+cmp -s "$tmp/again3.obj" "$tmp/rec3.obj" || fail "a take of one performer's two inputs performed again differs from its run"
 # source=N beyond the take's inputs; more inputs than a session takes
 "$fp" run -q "${pd[@]}" --input "take:$tmp/takes/s_T001.fptake,fast=1,source=3" --out "$tmp/src3.obj" >"$tmp/src3.out" 2>&1
 rc=$?
@@ -111,7 +118,7 @@ for i in 1 2 3 4 5 6 7; do seven+=(--input "$grab"); done
 "$fp" run -q "${pd[@]}" "${seven[@]}" --input "take:$tmp/takes/s_T001.fptake" --out "$tmp/nine.obj" >"$tmp/nine.out" 2>&1
 rc=$?
 [ $rc -eq 64 ] || { cat "$tmp/nine.out"; fail "a take of 2 inputs beside 7 others: exit $rc, want 64"; }
-grep -qF -- "--input take:$tmp/takes/s_T001.fptake: the take's 2 performers have 2 inputs, one take input each (source=N): 9 --input in all, at most 8" "$tmp/nine.out" ||
+grep -qF -- "--input take:$tmp/takes/s_T001.fptake: the take has 2 inputs (2 performers), one take input each (source=N): 9 --input in all, at most 8" "$tmp/nine.out" ||
     { cat "$tmp/nine.out"; fail "nine inputs: the refusal does not name the take"; }
 [ -e "$tmp/src3.obj" ] || [ -e "$tmp/nine.obj" ] && fail "a refused take input wrote a mesh"
 echo "ok"

@@ -154,9 +154,10 @@ static int split_take(const char *cmd, const char *text, const fp_take_header *h
                       const char **ins, size_t *n, fp_app_inputs *buf, size_t *made)
 {
     if (*n + h->input_count + rest > FP_SESSION_MAX_INPUTS) {
-        fprintf(stderr, "%s: --input %s: the take's %zu performers have %zu inputs, one take input "
-                "each (source=N): %zu --input in all, at most %d\n", cmd, text, take_performers(h),
-                h->input_count, *n + h->input_count + rest, FP_SESSION_MAX_INPUTS);
+        fprintf(stderr, "%s: --input %s: the take has %zu inputs (%zu performer%s), one take input "
+                "each (source=N): %zu --input in all, at most %d\n", cmd, text, h->input_count,
+                take_performers(h), take_performers(h) == 1 ? "" : "s", *n + h->input_count + rest,
+                FP_SESSION_MAX_INPUTS);
         return FP_EXIT_USAGE;
     }
     for (size_t k = 0; k < h->input_count; k++) {
@@ -201,9 +202,11 @@ int fp_app_session_defaults(const char *cmd, fp_session_options *so, double spee
         }
     }
     /* A take performed again: its hands where the take had them (the recorded calibration);
-     * a take of two or more performers (issue 55), unless the SPEC picks a source= or a
-     * performer=: one take input for each of its inputs, each with its performer as recorded,
-     * so that their hands stay theirs. */
+     * a take of two or more inputs, unless the SPEC picks a source= or a performer=: one take
+     * input for each of its inputs, each with its performer as recorded, so that their hands
+     * stay theirs (issue 55) and each input's state (its filter, its clock) is its own again,
+     * as in the run that recorded it (one input for all of them did not give that run's
+     * shapes, even with one performer). */
     const char *ins[FP_SESSION_MAX_INPUTS];
     size_t n = 0, made = 0;
     int rc = 0;
@@ -212,7 +215,7 @@ int fp_app_session_defaults(const char *cmd, fp_session_options *so, double spee
         fp_take_reader *r = open_take(so->inputs[i], &spec);
         const fp_take_header *h = r ? fp_take_reader_header(r) : NULL;
         if (h && !so->calibration) take_calibration(h, so, buf);
-        if (h && !spec_has(&spec, "source") && !spec_has(&spec, "performer") && take_performers(h) > 1)
+        if (h && !spec_has(&spec, "source") && !spec_has(&spec, "performer") && h->input_count > 1)
             rc = split_take(cmd, so->inputs[i], h, so->input_count - i - 1, ins, &n, buf, &made);
         else
             ins[n++] = so->inputs[i];
