@@ -9,6 +9,8 @@
 
 #include <errno.h>
 #include <lo/lo.h>
+#include <pthread.h>
+#include <sched.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -234,6 +236,11 @@ static void send_job(fp_stream *s, const stream_job *handed)
 void *fp__stream_tx(void *arg)
 {
     fp_stream *s = arg;
+    /* SCHED_BATCH: woken by a frame's hand-over it does not preempt the frame thread on its
+     * CPU (wakeup preemption), it runs when a CPU is free (the frame thread sleeps most of a
+     * period); best effort, the default policy where refused */
+    const struct sched_param batch = {0};
+    (void)pthread_setschedparam(pthread_self(), SCHED_BATCH, &batch);
     for (;;) {
         pthread_mutex_lock(&s->mu);
         while (atomic_load_explicit(&s->tail, memory_order_relaxed) ==
