@@ -5,9 +5,10 @@
  * through any mapping, rig or radius (and records a new take).
  *
  * source=N (1-based, as the session's messages number inputs): only the events the take's
- * input N pushed (recorded with header.source N-1), so that a take of several performers is
- * performed again by one instance for each of its inputs, each with its performer= (the CLI
- * splits a `take:FILE` of two or more performers so: ui/cli/app_util.c). The key requests
+ * input N pushed (recorded with header.source N-1), so that a take of several inputs is
+ * performed again by one instance for each of them, each with its performer= and its own
+ * filter and clock (the CLI splits a `take:FILE` of two or more inputs so:
+ * ui/cli/app_util.c). The key requests
  * are pushed by the instance without source= or with source=1 only, so that several
  * instances do not request twice. N beyond the take's inputs: create() fails (-EINVAL)
  * naming the file and its input count.
@@ -85,8 +86,8 @@ static const char usage_text[] =
     "  fast=1   as fast as possible\n"
     "  source=N only the events of the take's input N (1 to its input count), and the key\n"
     "           requests only with 1; default: every input's. `run` and `live` perform a\n"
-    "           take of two or more performers as one take input for each of its inputs\n"
-    "           (source=N, the recorded performer= and calibration=): each keeps their hands\n"
+    "           take of two or more inputs as one take input for each of them (source=N,\n"
+    "           the recorded performer= and calibration=): each keeps its hands and state\n"
     "  Event times are the take's own clock (the host clock at start + the event's offset in\n"
     "  the take), whatever the speed. A take cut short plays its intact frames (a warning\n"
     "  status first). Ends with an end-of-stream status.\n";
