@@ -59,6 +59,13 @@ extern "C" {
  *  line can be cleared. */
 typedef void (*fp_session_progress_fn)(void *user, const char *stage);
 
+/** A performer's calibration by name (fp_session_options.performer_calibrations): name ""
+ *  is a first performer whose inputs name none. */
+typedef struct fp_session_performer_placement {
+    const char *name;
+    fp_calibration calibration;
+} fp_session_performer_placement;
+
 typedef struct fp_session_options {
     const char *mesh_path;                          /* required (unless mesh is given) */
     const struct fp_mesh *mesh;                     /* a mesh in memory instead of mesh_path
@@ -71,6 +78,12 @@ typedef struct fp_session_options {
                                                        the mesh's bounding-box diagonal, at
                                                        least FP_SESSION_MIN_RADIUS_MM */
     double hand_size;                               /* 0 or 1: mean adult hand */
+    const fp_session_performer_placement *performer_calibrations; /* a performer's own
+                                                       calibration by name (a take performed
+                                                       again: its header's performers), after
+                                                       its inputs' calibration=FILE, before
+                                                       `calibration`; may be NULL */
+    size_t performer_calibration_count;
     const fp_calibration *calibration;              /* NULL: the life-size calibration (the
                                                        inputs' workspace in front of the face
                                                        at scale 1 / mm_per_unit; where no
@@ -414,6 +427,9 @@ const fp_hand_pose *fp_session_hand(const fp_session *s, int hand);
  *  or between frames. */
 size_t fp_session_performer_count(const fp_session *s);
 const char *fp_session_performer_name(const fp_session *s, size_t performer);
+/** Performer i's calibration now (NULL beyond the count; the session's; performer 0's is
+ *  fp_session_calibration's). */
+const fp_calibration *fp_session_performer_calibration(const fp_session *s, size_t performer);
 const fp_hand_pose *fp_session_performer_hand(const fp_session *s, size_t performer, int hand);
 /** The last control set (start/end points) the mapping made and the engine used; the
  *  session's, rewritten by every step (copy what is kept). */

@@ -399,6 +399,10 @@ size_t fp_session_vertex_count(const fp_session *s) { return s->n; }
 const struct fp_mesh *fp_session_mesh(const fp_session *s) { return s->mesh; }
 double fp_session_radius(const fp_session *s) { return s->radius; }
 const fp_calibration *fp_session_calibration(const fp_session *s) { return &s->pose[0].calib; }
+const fp_calibration *fp_session_performer_calibration(const fp_session *s, size_t performer)
+{
+    return performer < s->performers.count ? &s->pose[performer].calib : NULL;
+}
 const fp_head *fp_session_head(const fp_session *s) { return &s->head; }
 const fp_control_set *fp_session_control_set(const fp_session *s) { return &s->cs; }
 

@@ -36,15 +36,22 @@ static int own_calibration(const fp_session *s, const fp_session_options *opt, s
 }
 
 /* Workspace calibration of performer p (its pose state): the mesh's unit (given, else detected
- * from the head), then the calibration (its inputs' calibration=FILE; else given: every
- * performer's; else the workspaces its own inputs state, or the default one, fitted life-size
- * in front of the face; placed as its hands arrive where none is stated), then the glove
- * placement. With one performer: all inputs. */
+ * from the head), then the calibration (its inputs' calibration=FILE; else, past the first,
+ * its own by name in opt->performer_calibrations; else given: every performer's; else the
+ * workspaces its own inputs state, or the default one, fitted life-size in front of the face;
+ * placed as its hands arrive where none is stated), then the glove placement. With one
+ * performer: all inputs. */
 static int calibrate(fp_session *s, const fp_session_options *opt, size_t p, char *err, size_t errlen)
 {
     fp_calibration c;
     int own = own_calibration(s, opt, p, &c, err, errlen);
     if (own < 0) return own;
+    for (size_t k = 0; !own && p && k < opt->performer_calibration_count; k++) /* (by name) */
+        if (opt->performer_calibrations[k].name &&
+            !strcmp(opt->performer_calibrations[k].name, s->performers.names[p])) {
+            c = opt->performer_calibrations[k].calibration;
+            own = 1;
+        }
     if (own) {
         fp_arrive_step_init(&s->arrive[p], FP_ARRIVE_PLACED_CALIBRATION); /* (allocates nothing) */
     } else if (opt->calibration) {

@@ -147,6 +147,17 @@ int fp_session_take_start(fp_session_take *t, const fp_session *s, int64_t origi
         tc->rotation[0] = 1;
         memcpy(tc->offset, c->offset, sizeof tc->offset);
     }
+    /* 1.3: every performer's placement, whole (the array above keeps scale and offset) */
+    h->performer_count = fp_session_performer_count(s);
+    for (size_t p = 0; p < h->performer_count; p++) {
+        const fp_calibration *pc = fp_session_performer_calibration(s, p);
+        fp_take_performer *tp = &h->performers[p];
+        tp->name = fp_session_performer_name(s, p);
+        tp->scale = pc->scale;
+        memcpy(tp->rotation, pc->rotation, sizeof tp->rotation);
+        memcpy(tp->offset, pc->offset, sizeof tp->offset);
+        memcpy(tp->hand_offset, pc->hand_offset, sizeof tp->hand_offset);
+    }
     h->radius = fp_session_radius(s);
     h->description = t->opt.description;
     t->have_first = false;

@@ -49,9 +49,9 @@ extern "C" {
 /** Format version written (docs/take-format.md). A reader accepts files of the same major
  *  and any minor (unknown chunk types, event types and trailing fields are skipped). */
 #define FP_TAKE_VERSION_MAJOR 1
-#define FP_TAKE_VERSION_MINOR 2   /* 1.1: a frame's channels are every rig channel as posed;
+#define FP_TAKE_VERSION_MINOR 3   /* 1.1: a frame's channels are every rig channel as posed;
                                      1.2: header keys soundtrack and timecode_source, channel
-                                     events (type 6) */
+                                     events (type 6); 1.3: header key performers */
 #define FP_TAKE_EXTENSION ".fptake"
 #define FP_TAKE_SLATE_MAX 64      /* bytes of a slate name, NUL included */
 #define FP_TAKE_DEFAULT_SLATE "scene1" /* a slate none was given: "scene1 take 2", scene1_T002.fptake */
@@ -121,6 +121,18 @@ typedef struct fp_take_calibration {
 #define FP_TAKE_MAX_INPUTS 16
 #define FP_TAKE_MAX_KEYS 32
 
+/** 1.3: one performer's placement at the take's start (p_mesh = scale * R(rotation) p_mm +
+ *  offset + hand_offset[hand]), as the session placed their hands (fp_pose.h's
+ *  fp_calibration, whole: `calibration` above keeps scale and offset only). */
+typedef struct fp_take_performer {
+    const char *name;               /* performer=NAME; "" for a first performer whose inputs
+                                       name none (writing: the caller's; reading: the reader's) */
+    double scale;                   /* mesh units per millimetre, > 0 */
+    double rotation[4];             /* unit quaternion w, x, y, z */
+    double offset[3];               /* mesh units */
+    double hand_offset[FP_HANDS][3];/* mesh units, left, right */
+} fp_take_performer;
+
 /** What a take is of. Strings are caller-owned when writing (NULL = absent) and
  *  reader-owned (valid until fp_take_reader_close) when read. */
 typedef struct fp_take_header {
@@ -155,6 +167,11 @@ typedef struct fp_take_header {
                                        file (fp_take_audio_in_name) */
     const char *audio_in_path;      /* its WAV's name, in the take's folder; its sample 0 is
                                        at time_origin_ns (ignored when writing) */
+    /* 1.3 (absent from earlier takes: 0) */
+    fp_take_performer performers[FP_PERFORMER_CAPACITY]; /* each performer's placement, in the
+                                       session's order (the first first); written where count
+                                       > 0 */
+    size_t performer_count;
 } fp_take_header;
 
 /** zlib crc32 of vertex positions (n x 3 floats) as little-endian bytes. */

@@ -407,6 +407,17 @@ int take_header_check(const fp_take_header *h, char *err, size_t errlen)
         if (c->present && (!isfinite(c->scale) || !finite3(c->rotation, 4) || !finite3(c->offset, 3)))
             return fp_errorf(err, errlen, -EINVAL, "take header: calibration of hand %d not finite", k);
     }
+    if (h->performer_count > FP_PERFORMER_CAPACITY)
+        return fp_errorf(err, errlen, -EINVAL, "take header: %zu performers (at most %d)", h->performer_count,
+                         FP_PERFORMER_CAPACITY);
+    for (size_t k = 0; k < h->performer_count; k++) {
+        const fp_take_performer *p = &h->performers[k];
+        if (!p->name || !fp_text_ok(p->name, false) || !(p->scale > 0) || !isfinite(p->scale) ||
+            !finite3(p->rotation, 4) || !finite3(p->offset, 3) || !finite3(p->hand_offset[0], 3) ||
+            !finite3(p->hand_offset[1], 3))
+            return fp_errorf(err, errlen, -EINVAL, "take header: performer %zu: a name and a finite "
+                             "placement (scale > 0) expected", k + 1);
+    }
     if (h->mesh_crc_of && strcmp(h->mesh_crc_of, "positions") && strcmp(h->mesh_crc_of, "file"))
         return fp_errorf(err, errlen, -EINVAL, "take header: mesh_crc_of must be positions or file");
     return 0;
@@ -491,6 +502,20 @@ char *take_header_to_json(const fp_take_header *h)
         cJSON_AddItemToObject(e, "rotation", darray(c->rotation, 4));
         cJSON_AddItemToObject(e, "offset", darray(c->offset, 3));
         cJSON_AddItemToArray(cal, e);
+    }
+    if (h->performer_count) { /* 1.3 */
+        cJSON *ps = cJSON_AddArrayToObject(o, "performers");
+        for (size_t k = 0; k < h->performer_count; k++) {
+            const fp_take_performer *p = &h->performers[k];
+            cJSON *e = cJSON_CreateObject();
+            cJSON_AddStringToObject(e, "name", p->name);
+            add_number(e, "scale", p->scale);
+            cJSON_AddItemToObject(e, "rotation", darray(p->rotation, 4));
+            cJSON_AddItemToObject(e, "offset", darray(p->offset, 3));
+            cJSON *ho = cJSON_AddArrayToObject(e, "hand_offset");
+            for (int hand = 0; hand < FP_HANDS; hand++) cJSON_AddItemToArray(ho, darray(p->hand_offset[hand], 3));
+            cJSON_AddItemToArray(ps, e);
+        }
     }
     add_number(o, "radius", h->radius);
     add_str(o, "description", h->description ? h->description : "");
@@ -652,6 +677,30 @@ static int fill_header(const cJSON *o, fp_take_header *h, strstore *st, char *ms
             !jdarray(c, "offset", hc->offset, 3))
             return fp_errorf(msg, msglen, -EBADMSG, "header: invalid \"calibration\" of hand %d", i);
         hc->present = true;
+    }
+    const cJSON *ps = cJSON_GetObjectItemCaseSensitive(o, "performers"); /* 1.3 */
+    if (ps && !(cJSON_IsArray(ps) && cJSON_GetArraySize(ps) <= FP_PERFORMER_CAPACITY))
+        return fp_errorf(msg, msglen, -EBADMSG, "header: \"performers\" is not an array of at most %d",
+                         FP_PERFORMER_CAPACITY);
+    for (int i = 0; ps && i < cJSON_GetArraySize(ps); i++) {
+        const cJSON *c = cJSON_GetArrayItem(ps, i), *ho = cJSON_GetObjectItemCaseSensitive(c, "hand_offset");
+        fp_take_performer *p = &h->performers[h->performer_count];
+        const char *name = jstr(c, "name");
+        if (!name || !fp_text_ok(name, false) || !jnum(c, "scale", &p->scale) || !(p->scale > 0) ||
+            !jdarray(c, "rotation", p->rotation, 4) || !jdarray(c, "offset", p->offset, 3) ||
+            !(cJSON_IsArray(ho) && cJSON_GetArraySize(ho) == FP_HANDS))
+            return fp_errorf(msg, msglen, -EBADMSG, "header: invalid \"performers\"[%d]", i);
+        for (int hand = 0; hand < FP_HANDS; hand++) {
+            const cJSON *v = cJSON_GetArrayItem(ho, hand);
+            for (int a = 0; a < 3; a++) {
+                const cJSON *x = cJSON_IsArray(v) && cJSON_GetArraySize(v) == 3 ? cJSON_GetArrayItem(v, a) : NULL;
+                if (!cJSON_IsNumber(x) || !isfinite(x->valuedouble))
+                    return fp_errorf(msg, msglen, -EBADMSG, "header: invalid \"performers\"[%d] hand_offset", i);
+                p->hand_offset[hand][a] = x->valuedouble;
+            }
+        }
+        p->name = keep(st, name);
+        h->performer_count++;
     }
     if (!jnum(o, "radius", &h->radius) || h->radius < 0)
         return fp_errorf(msg, msglen, -EBADMSG, "header: missing or invalid \"radius\"");

@@ -73,7 +73,7 @@ take="$tmp/takes/speech_T001.fptake"
 crc=$(python3 -c "import zlib,sys; print('%08x' % (zlib.crc32(open(sys.argv[1],'rb').read()) & 0xffffffff))" "$tmp/speech.wav")
 grep -q "soundtrack   $tmp/speech.wav (crc32 $crc), offset 0.25 s" "$tmp/info.out" ||
     { cat "$tmp/info.out"; fail "the take does not record the soundtrack, crc32 $crc and offset"; }
-grep -q "format       facepuppet take 1.2" "$tmp/info.out" || fail "the take is not format 1.2"
+grep -qE "format       facepuppet take 1\.([2-9]|[1-9][0-9])$" "$tmp/info.out" || fail "the take is not format 1.2 or later"
 "$fp" play "$take" "${pd[@]}" --audio-out "file:$tmp/play.wav" -q || fail "play --audio-out exited $?"
 "$tool" sync "$tmp/speech.wav" "$tmp/play.wav" 0.25 || fail "play's soundtrack is out of sync"
 "$fp" play "$take" "${pd[@]}" --audio-out "file:$tmp/play.wav" -q 2>"$tmp/exists.err"

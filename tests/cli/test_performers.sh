@@ -9,8 +9,8 @@
 #  2. monitor prints the input's "performer" in every line (none without the key);
 #  3. a fifth performer, or a NAME that is no name, is refused with exit 64 naming the SPEC;
 #  4. a take of two performers performed again (`--input take:FILE`) keeps its performers: one
-#     take input each (source=N, performer= and calibration= as recorded), byte-identical to
-#     the run (see there for what a take does not hold); a take of one performer's two inputs
+#     take input each (source=N, performer= and calibration= as recorded, each performer's
+#     placement from the take), byte-identical to the run; a take of one performer's two inputs
 #     too; source=3 of a take of two inputs, or more inputs than a session takes, is refused
 #     with exit 64 naming the take.
 # SPDX-License-Identifier: GPL-3.0-or-later
@@ -83,24 +83,17 @@ cmp -s "$tmp/again.obj" "$tmp/merged.obj" && fail "a take of two performers perf
 run one "${mesh[@]}" --input "take:$tmp/takes/s_T001.fptake,fast=1,performer=X"
 grep -q "2 performers" "$tmp/one.err" && fail "performer= on the take input still splits it"
 cmp -s "$tmp/one.obj" "$tmp/rec.obj" && fail "one take input for both performers gives the two performers' face"
-# placed by default: not exact. The take holds the first performer's calibration only (the
-# header's "calibration"), which a take performed again gives every performer, where the run
-# fitted performer B to B's own recording; so it is the run of the recordings with that
-# calibration for both (read from the take's header), bit for bit.
+# placed by default (each by their own recording's workspace): the take holds every
+# performer's placement (take format 1.3, "performers"), so performed again it is the run,
+# bit for bit (before 1.3 every performer came back placed by the first one's)
 run rec2 "${mesh[@]}" --input "$claps" --input "$grab,performer=B" --take-dir "$tmp/takes" --slate d
 run again2 "${mesh[@]}" --input "take:$tmp/takes/d_T001.fptake,fast=1"
 two_again again2
+cmp -s "$tmp/again2.obj" "$tmp/rec2.obj" || fail "a take of two performers placed by default performed again differs from its run"
 cmp -s "$tmp/again2.obj" "$tmp/merged.obj" && fail "a take of two performers (placed by default) performed again gives the merge"
-python3 - "$tmp/takes/d_T001.fptake" "$tmp/rec2-cal.json" <<'PY' || fail "could not read the take's calibration"
-import json, struct, sys
-b, off = open(sys.argv[1], 'rb').read(), 16
-while b[off + 4:off + 8] != b'HEAD':
-    off += 20 + struct.unpack_from('<I', b, off + 8)[0]
-c = json.loads(b[off + 16:off + 16 + struct.unpack_from('<I', b, off + 8)[0]])['calibration'][1]
-json.dump({'scale': c['scale'], 'offset': c['offset']}, open(sys.argv[2], 'w'))
-PY
-run rec2cal "${mesh[@]}" --calibration "$tmp/rec2-cal.json" --input "$claps" --input "$grab,performer=B"
-cmp -s "$tmp/again2.obj" "$tmp/rec2cal.obj" || fail "performed again (placed by default): not the run placed by the take's calibration"
+"$fp" info "$tmp/takes/d_T001.fptake" >"$tmp/info2.txt" 2>&1 || { cat "$tmp/info2.txt"; fail "info of the take failed"; }
+grep -q "^  performer    (the first): scale " "$tmp/info2.txt" && grep -q "^  performer    B: scale " "$tmp/info2.txt" ||
+    { cat "$tmp/info2.txt"; fail "info does not show each performer's placement"; }
 # one performer, two inputs: split too (each input's filter and clock its own again), so the
 # take performed again is its run bit for bit; one take input for both is not
 run rec3 "${mesh[@]}" --input "$claps" --input "$grab" --take-dir "$tmp/takes" --slate m

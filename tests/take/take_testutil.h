@@ -172,6 +172,13 @@ static inline void tt_header(fp_take_header *h, const char *slate)
     h->calibration[1].offset[0] = 1.0 / 3.0;
     h->calibration[1].offset[1] = 1.5;
     h->calibration[1].offset[2] = -12e-17;
+    h->performer_count = 2; /* (format 1.3) */
+    h->performers[0] = (fp_take_performer){.name = "", .scale = 0.1, .rotation = {1, 0, 0, 0},
+                                           .offset = {0.1, 1.0 / 7.0, 12.5}};
+    h->performers[1] = (fp_take_performer){.name = "B", .scale = 0.2 / 3.0,
+                                           .rotation = {0.7071067811865476, 0, -0.7071067811865475, 0},
+                                           .offset = {-4.1, 1e-300, 21.1},
+                                           .hand_offset = {{0.5, 0, 0}, {-0.5, 0, 1.0 / 3.0}}};
     h->radius = 2.4000000000000004;
     h->description = "claps, \"second\" try\n";
     h->rating = 4;

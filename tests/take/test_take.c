@@ -273,6 +273,15 @@ static void test_roundtrip_writer(void **state)
     assert_memory_equal(h->calibration[1].rotation, w.calibration[1].rotation, 4 * sizeof(double));
     assert_memory_equal(h->calibration[1].offset, w.calibration[1].offset, 3 * sizeof(double));
     assert_memory_equal(&h->radius, &w.radius, sizeof(double));
+    assert_int_equal(h->performer_count, 2); /* 1.3: every performer's placement, bit for bit */
+    for (size_t k = 0; k < 2; k++) {
+        const fp_take_performer *a = &h->performers[k], *b = &w.performers[k];
+        assert_string_equal(a->name, b->name);
+        assert_memory_equal(&a->scale, &b->scale, sizeof(double));
+        assert_memory_equal(a->rotation, b->rotation, sizeof a->rotation);
+        assert_memory_equal(a->offset, b->offset, sizeof a->offset);
+        assert_memory_equal(a->hand_offset, b->hand_offset, sizeof a->hand_offset);
+    }
     assert_string_equal(h->description, w.description);
     assert_int_equal(h->rating, 4);
 
@@ -668,6 +677,12 @@ static void test_bad_header(void **state)
         {"\"keys\":{", "\"keys\":[\"a\"],\"k\":{", 0, "header: \"mapping.keys\" is not an object"},
         {"\"keys\":{", "\"keys\":{\"a\":1,", 0, "header: \"mapping.keys\" key 0 is not a string"},
         {"\"mapping\":{", "\"mapping\":7,\"m\":{", 0, "header: \"mapping\" is not an object"},
+        /* 1.3: each performer's placement */
+        {"\"performers\":[", "\"performers\":{\"a\":1},\"p\":[", 0, "header: \"performers\" is not an array of at most 4"},
+        {"\"performers\":[", "\"performers\":[1,2,3,4,", 0, "header: \"performers\" is not an array of at most 4"},
+        {"\"name\":\"B\"", "\"name\":7", 0, "header: invalid \"performers\"[1]"},
+        {"\"scale\":0.1,\"rotation\":[1,", "\"scale\":0,\"rotation\":[1,", 0, "header: invalid \"performers\"[0]"},
+        {"\"hand_offset\":[[", "\"hand_offset\":[[\"x\",", 0, "header: invalid \"performers\"[0] hand_offset"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         const size_t tl = cases[i].tl ? cases[i].tl : strlen(cases[i].to); /* (tl: with a NUL) */

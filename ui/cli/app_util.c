@@ -136,7 +136,26 @@ static size_t take_performers(const fp_take_header *h)
  * both), as so->calibration. */
 static void take_calibration(const fp_take_header *h, fp_session_options *so, fp_app_inputs *buf)
 {
-    for (int hand = FP_HANDS - 1; hand >= 0 && !so->calibration; hand--) {
+    /* 1.3: each performer's placement whole, the first's for every performer as before, the
+     * others' by name (a take of several performers comes back split: each keeps theirs) */
+    for (size_t k = 0; k < h->performer_count && k < FP_PERFORMER_CAPACITY; k++) {
+        const fp_take_performer *p = &h->performers[k];
+        fp_calibration c = {.scale = p->scale};
+        memcpy(c.rotation, p->rotation, sizeof c.rotation);
+        memcpy(c.offset, p->offset, sizeof c.offset);
+        memcpy(c.hand_offset, p->hand_offset, sizeof c.hand_offset);
+        if (!k) {
+            buf->take_calibration = c;
+            so->calibration = &buf->take_calibration;
+            continue;
+        }
+        fp_session_performer_placement *pp = &buf->performers[so->performer_calibration_count++];
+        snprintf(buf->performer_names[k], sizeof buf->performer_names[k], "%s", p->name);
+        pp->name = buf->performer_names[k];
+        pp->calibration = c;
+        so->performer_calibrations = buf->performers;
+    }
+    for (int hand = FP_HANDS - 1; hand >= 0 && !so->calibration; hand--) { /* (before 1.3) */
         const fp_take_calibration *c = &h->calibration[hand];
         if (!c->present || !(c->scale > 0)) continue;
         buf->take_calibration.scale = c->scale;

@@ -165,6 +165,9 @@ typedef struct fp_app_inputs {
     char specs[FP_SESSION_MAX_INPUTS][4300];
     char takes[FP_SESSION_MAX_INPUTS][5600]; /* a take's inputs, one take input each (source=N) */
     fp_calibration take_calibration;   /* a take input's recorded calibration */
+    fp_session_performer_placement performers[FP_PERFORMER_CAPACITY]; /* a take's further
+                                          performers' (take format 1.3) */
+    char performer_names[FP_PERFORMER_CAPACITY][FP_PERFORMER_NAME_MAX + 1];
 } fp_app_inputs;
 
 /** Defaults shared by `run` and `live` (cmd: "facepuppet run", for the messages). With

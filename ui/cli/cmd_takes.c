@@ -299,6 +299,12 @@ int fp_app_take_info(const char *path)
             printf("  calibration  %s: scale %.6g mesh units/mm, offset %.6g %.6g %.6g\n",
                    hand ? "right" : "left", c->scale, c->offset[0], c->offset[1], c->offset[2]);
     }
+    for (size_t k = 0; h->performer_count > 1 && k < h->performer_count; k++) { /* (format 1.3) */
+        const fp_take_performer *p = &h->performers[k];
+        printf("  performer    %s: scale %.6g mesh units/mm, offset %.6g %.6g %.6g\n",
+               p->name[0] ? fp_text_clean(p->name, a, sizeof a) : "(the first)", p->scale, p->offset[0],
+               p->offset[1], p->offset[2]);
+    }
     if (h->description && h->description[0])
         printf("  description  %s\n", fp_text_clean(h->description, a, sizeof a));
     printf("  rating       %d/5\n", h->rating);
