@@ -40,6 +40,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     for (size_t i = 0; i < h->mapping_key_count; i++)
         sink += strlen(h->mapping_keys[i].key) + strlen(h->mapping_keys[i].value);
     for (size_t i = 0; i < h->input_count; i++) sink += strlen(h->inputs[i]);
+    for (size_t i = 0; i < h->performer_count; i++) /* (1.3) */
+        sink += strlen(h->performers[i].name) + (uint64_t)(h->performers[i].scale > 0) +
+                (uint64_t)(h->performers[i].hand_offset[1][2] != 0);
     sink += strlen(fp_take_reader_warning(r)) + fp_take_reader_summary(r)->frames;
     fp_take_frame f;
     while (fp_take_reader_next(r, &f, err, sizeof err) == 1) touch(&f);
