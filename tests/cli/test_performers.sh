@@ -67,7 +67,7 @@ grep -qF "performer=B/x: expected a name of 1 to 31 letters, digits, '-' or '_'"
 #    vertices compared in an --export .pc2)
 two_again() { grep -q "session: 2 performers, each with a left and a right hand of their own: the first performer: take (input 1); performer 'B': take (input 2)" "$tmp/$1.err" ||
                   { cat "$tmp/$1.err"; fail "$1: the take's two performers are not two"; }; }
-echo '{"scale": 0.1, "offset": [-4.1, -15.1, 22.9]}' >"$tmp/cal-a.json"
+echo '{"scale": 0.1, "rotation": [0.9998, 0, 0.02, 0], "offset": [-4.1, -15.1, 22.9], "left": {"offset": [0.2, 0, 0]}, "right": {"offset": [-0.3, 0.1, 0]}}' >"$tmp/cal-a.json"
 echo '{"scale": 0.1, "offset": [-5.6, -16.7, 21.1]}' >"$tmp/cal-b.json"
 mesh=(--mesh "$data/faces/ict-facekit/generic_neutral_mesh.obj")
 # each performer placed by a calibration=FILE: the take performed again is the run, bit for bit
@@ -78,6 +78,22 @@ two_again again
 cmp -s "$tmp/again.obj" "$tmp/rec.obj" || fail "a take of two performers performed again differs from its run"
 cmp -s "$tmp/again.pc2" "$tmp/rec.pc2" || fail "a take of two performers performed again: its frames (--export .pc2) differ from the run's"
 rm -f "$tmp/again.pc2" "$tmp/rec.pc2" # (72 MB each)
+# the header's per-hand calibration is the first performer's placement of that hand (its
+# offset plus the hand's), the rotation as placed
+"$fp" info "$tmp/takes/s_T001.fptake" >"$tmp/info1.txt" 2>&1 || { cat "$tmp/info1.txt"; fail "info of the take failed"; }
+grep -q "^  calibration  right: scale 0.1 mesh units/mm, offset -4.4 -15 22.9$" "$tmp/info1.txt" &&
+    grep -q "^  calibration  left: scale 0.1 mesh units/mm, offset -3.9 -15.1 22.9$" "$tmp/info1.txt" ||
+    { cat "$tmp/info1.txt"; fail "the take's calibration is not the first performer's placement of each hand"; }
+python3 - "$tmp/takes/s_T001.fptake" <<'PY' || fail "the take's calibration lost the rotation"
+import json, math, struct, sys
+b, off = open(sys.argv[1], 'rb').read(), 16
+while b[off + 4:off + 8] != b'HEAD':
+    off += 20 + struct.unpack_from('<I', b, off + 8)[0]
+h = json.loads(b[off + 16:off + 16 + struct.unpack_from('<I', b, off + 8)[0]])
+n = math.hypot(0.9998, 0.02)
+for c in h['calibration'] + [h['performers'][0]]:
+    assert all(abs(a - e) < 1e-12 for a, e in zip(c['rotation'], [0.9998 / n, 0, 0.02 / n, 0])), c
+PY
 cmp -s "$tmp/again.obj" "$tmp/merged.obj" && fail "a take of two performers performed again gives the merge"
 # one take input for all (performer= given: no split): every hand the one performer's, not the run
 run one "${mesh[@]}" --input "take:$tmp/takes/s_T001.fptake,fast=1,performer=X"
