@@ -424,6 +424,7 @@ static void make_frame(scene *s, size_t f, fp_frame_input *in, const char **what
     in->time_ns = (int64_t)f * 16666667;
     in->mesh = &s->view;
     in->radius = 0.3;
+    in->touch_radius = in->radius; /* (ABI 1.3: as a session at its default radius fills it) */
     in->mm_per_unit = 100;
     in->face_up[1] = 1;
     in->face_forward[2] = 1;
