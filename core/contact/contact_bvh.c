@@ -613,12 +613,15 @@ static void keep_pairs(struct track *k, long found)
  * root. accepted not NULL (a step's first check, s its candidate): when the walk is shared,
  * its job also makes P := s at the moved vertices ahead of the verdict (accept_range: the
  * old P into pv, the vertices that join D_P into the lanes' mv), and *accepted = true.
- * Neither accepted nor record (a bisection's check): a flip decides, no walk (check).
+ * Neither accepted nor record (a bisection's check): a flip decides, no walk (check). With
+ * accepted the walk also keeps its new pairs' triangles in the lanes' rec (rec_pairs), the
+ * blocking set of a local scale-back.
  * Returns the new pairs or -ENOMEM. */
 long fpc_tree_check(fp_contact *c, const float *s, const float *ref, size_t *flips, bool record,
                        bool *accepted)
 {
     struct track *k = c->tk;
+    k->rec_pairs = accepted != NULL; /* a step's first check: its blocking set kept */
     if (!record && !accepted) { /* a bisection's: one of the last flips or new pairs still
                                    there decides it, before the refit and the walk */
         for (size_t i = 0; i < k->nprobe; i++) {

@@ -246,9 +246,9 @@ struct track {
                                      bisection's check tries them first) */
     size_t npair_probe;
     bool rec_pairs;               /* the hierarchy: the walk records its new pairs' triangles
-                                     (lanes' rec) without record: a step's first check, so
-                                     that a local scale-back has its blocking set without a
-                                     second check of the candidate */
+                                     (lanes' rec) without record: set by fpc_tree_check for a
+                                     step's first check (accepted), so that a local scale-back
+                                     has its blocking set without a second check */
     uint32_t *kd_ix;              /* local_ramp: off's vertices, in its k-d tree's order */
     size_t cap_kd_ix;
     struct kdnode *kd;            /* local_ramp's k-d tree over them (node 0 the root) */

@@ -176,9 +176,7 @@ static long first_check_tree(fp_contact *c, const float *ref, const float *cand,
     if (reserve((void **)&k->pv, &cap, 3 * k->nmv, sizeof *k->pv) ||
         reserve((void **)&k->cv, &k->cap_pv, 3 * k->nmv, sizeof *k->cv))
         return -ENOMEM;
-    k->rec_pairs = true; /* (local_scale_back's blocking set) */
     long found = fpc_tree_check(c, cand, ref, fl, false, accepted);
-    k->rec_pairs = false;
     if (found < 0) return -ENOMEM;
     res->moved_tris = k->nmt;
     if (*accepted && (found || *fl)) /* it fails: P back */

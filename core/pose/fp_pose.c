@@ -246,8 +246,7 @@ bool fp_pose_inputs_workspace(fp_input *const *inputs, size_t n, float ws_min[3]
     return known;
 }
 
-/* The calibration's rotation, normalised; all zeros (or degenerate): the identity. */
-static void calib_rotation(const fp_calibration *c, double q[4])
+void fp_calibration_rotation(const fp_calibration *c, double q[4])
 {
     double n = sqrt(c->rotation[0] * c->rotation[0] + c->rotation[1] * c->rotation[1] +
                     c->rotation[2] * c->rotation[2] + c->rotation[3] * c->rotation[3]);
@@ -282,7 +281,7 @@ void fp_pose_fit_workspace(fp_calibration *c, double mm_per_unit, const float ws
 void fp_pose_to_mesh(const fp_calibration *c, int hand, const float mm[3], float out[3])
 {
     double q[4], v[3] = {mm[0], mm[1], mm[2]}, r[3];
-    calib_rotation(c, q);
+    fp_calibration_rotation(c, q);
     if (q[0] == 1) memcpy(r, v, sizeof r);
     else fp_qrot(q, v, r);
     bool h = hand == FP_HAND_LEFT || hand == FP_HAND_RIGHT;
@@ -302,7 +301,7 @@ void fp_pose_place_gloves(fp_pose_state *p, const float *pos, size_t n, const fp
     float w = head->max[0] - head->min[0];
     float r = (float)(15.0 * s), gap = (float)(FP_POSE_GLOVE_GAP_MM * s);
     double q[4], qinv[4];
-    calib_rotation(c, q);
+    fp_calibration_rotation(c, q);
     qinv[0] = q[0], qinv[1] = -q[1], qinv[2] = -q[2], qinv[3] = -q[3];
     for (int h = 0; h < FP_HANDS; h++) {
         float j[FP_HAND_JOINTS][3];

@@ -171,6 +171,10 @@ bool fp_pose_inputs_workspace(fp_input *const *inputs, size_t n, float ws_min[3]
 void fp_pose_fit_workspace(fp_calibration *c, double mm_per_unit, const float ws_min[3],
                            const float ws_max[3], const float head_min[3], const float head_max[3]);
 
+/** The rotation c applies, as a unit quaternion w, x, y, z into q: c->rotation normalised;
+ *  all zeros, degenerate or not finite: the identity (an unset rotation). Pure; any thread. */
+void fp_calibration_rotation(const fp_calibration *c, double q[4]);
+
 /** Place gloves that report no wrist pose (p->calib set first): each hand's wrist in front
  *  of its half of the face (the head box of `head`), palm toward the face (-z), fingers up
  *  (+y), the open hand's middle fingertip at the head box's centre height and a quarter of

@@ -139,17 +139,14 @@ int fp_session_take_start(fp_session_take *t, const fp_session *s, int64_t origi
     if (rc) return rc;
     for (size_t i = 0; i < so->input_count && i < FP_TAKE_MAX_INPUTS; i++)
         h->inputs[h->input_count++] = so->inputs[i];
-    /* the first performer's placement per hand: its rotation (normalised; all zeros is the
-     * identity, as fp_pose reads it) and offset + that hand's offset */
+    /* the first performer's placement per hand: its rotation as fp_pose applies it and
+     * offset + that hand's offset */
     const fp_calibration *c = fp_session_calibration(s);
-    double qn = sqrt(c->rotation[0] * c->rotation[0] + c->rotation[1] * c->rotation[1] +
-                     c->rotation[2] * c->rotation[2] + c->rotation[3] * c->rotation[3]);
     for (int hand = 0; hand < FP_HANDS; hand++) {
         fp_take_calibration *tc = &h->calibration[hand];
         tc->present = true;
         tc->scale = c->scale;
-        for (int i = 0; i < 4; i++)
-            tc->rotation[i] = qn > 1e-12 && isfinite(qn) ? c->rotation[i] / qn : (double)(i == 0);
+        fp_calibration_rotation(c, tc->rotation);
         for (int i = 0; i < 3; i++) tc->offset[i] = c->offset[i] + c->hand_offset[hand][i];
     }
     /* 1.3: every performer's placement, whole (the array above keeps scale and offset) */

@@ -572,9 +572,9 @@ static bool jnum(const cJSON *o, const char *key, double *out)
     return true;
 }
 
-static bool jdarray(const cJSON *o, const char *key, double *out, int n)
+/* Array a of n finite numbers into out. */
+static bool jdvec(const cJSON *a, double *out, int n)
 {
-    const cJSON *a = cJSON_GetObjectItemCaseSensitive(o, key);
     if (!cJSON_IsArray(a) || cJSON_GetArraySize(a) != n) return false;
     for (int i = 0; i < n; i++) {
         const cJSON *v = cJSON_GetArrayItem(a, i);
@@ -582,6 +582,11 @@ static bool jdarray(const cJSON *o, const char *key, double *out, int n)
         out[i] = v->valuedouble;
     }
     return true;
+}
+
+static bool jdarray(const cJSON *o, const char *key, double *out, int n)
+{
+    return jdvec(cJSON_GetObjectItemCaseSensitive(o, key), out, n);
 }
 
 static int fill_header(const cJSON *o, fp_take_header *h, strstore *st, char *msg, size_t msglen)
@@ -690,15 +695,9 @@ static int fill_header(const cJSON *o, fp_take_header *h, strstore *st, char *ms
             !jdarray(c, "rotation", p->rotation, 4) || !jdarray(c, "offset", p->offset, 3) ||
             !(cJSON_IsArray(ho) && cJSON_GetArraySize(ho) == FP_HANDS))
             return fp_errorf(msg, msglen, -EBADMSG, "header: invalid \"performers\"[%d]", i);
-        for (int hand = 0; hand < FP_HANDS; hand++) {
-            const cJSON *v = cJSON_GetArrayItem(ho, hand);
-            for (int a = 0; a < 3; a++) {
-                const cJSON *x = cJSON_IsArray(v) && cJSON_GetArraySize(v) == 3 ? cJSON_GetArrayItem(v, a) : NULL;
-                if (!cJSON_IsNumber(x) || !isfinite(x->valuedouble))
-                    return fp_errorf(msg, msglen, -EBADMSG, "header: invalid \"performers\"[%d] hand_offset", i);
-                p->hand_offset[hand][a] = x->valuedouble;
-            }
-        }
+        for (int hand = 0; hand < FP_HANDS; hand++)
+            if (!jdvec(cJSON_GetArrayItem(ho, hand), p->hand_offset[hand], 3))
+                return fp_errorf(msg, msglen, -EBADMSG, "header: invalid \"performers\"[%d] hand_offset", i);
         p->name = keep(st, name);
         h->performer_count++;
     }

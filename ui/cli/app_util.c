@@ -132,8 +132,9 @@ static size_t take_performers(const fp_take_header *h)
     return count;
 }
 
-/* The recorded calibration of a take (the first performer's, per hand; the right hand's where
- * both), as so->calibration. */
+/* The recorded placement of a take: from format 1.3 each performer's (the first's as
+ * so->calibration, the others' by name as so->performer_calibrations), before it the first
+ * performer's scale and offset (the right hand's where both). */
 static void take_calibration(const fp_take_header *h, fp_session_options *so, fp_app_inputs *buf)
 {
     /* 1.3: each performer's placement whole, the first's for every performer as before, the
@@ -173,10 +174,10 @@ static int split_take(const char *cmd, const char *text, const fp_take_header *h
                       const char **ins, size_t *n, fp_app_inputs *buf, size_t *made)
 {
     if (*n + h->input_count + rest > FP_SESSION_MAX_INPUTS) {
+        const size_t np = take_performers(h);
         fprintf(stderr, "%s: --input %s: the take has %zu inputs (%zu performer%s), one take input "
-                "each (source=N): %zu --input in all, at most %d\n", cmd, text, h->input_count,
-                take_performers(h), take_performers(h) == 1 ? "" : "s", *n + h->input_count + rest,
-                FP_SESSION_MAX_INPUTS);
+                "each (source=N): %zu --input in all, at most %d\n", cmd, text, h->input_count, np,
+                np == 1 ? "" : "s", *n + h->input_count + rest, FP_SESSION_MAX_INPUTS);
         return FP_EXIT_USAGE;
     }
     for (size_t k = 0; k < h->input_count; k++) {

@@ -175,12 +175,14 @@ typedef struct fp_app_inputs {
  *  recording (*demo true; demo may be NULL). Without a mesh: the ICT face. Without a mapping:
  *  "anchored". A speed other than 1 is appended as `,speed=X` to every replay or take input
  *  that sets none. With no calibration and a `take:FILE` input, the calibration the take
- *  recorded (so that a take performed again sees its hands where they were). A `take:FILE`
- *  input without source= or performer= whose take's inputs were two or more performers
- *  (their SPECs' performer=; unnamed inputs the first input's, as the session counts them)
- *  becomes one take input for each of the take's inputs: SPEC,source=N and the recorded
- *  performer= and calibration= (where that file can be read), so that each performer's hands
- *  stay theirs; a take that cannot be read is left as given (its plugin says why). Strings
+ *  recorded (so that a take performed again sees its hands where they were): from format 1.3
+ *  each performer's placement (the first's as `calibration`, the others' by name as
+ *  `performer_calibrations`), before it the first performer's scale and offset. A
+ *  `take:FILE` input without source= or performer= whose take has two or more inputs
+ *  becomes one take input for each of them: SPEC,source=N and the recorded performer= and
+ *  calibration= (where that file can be read), so that each performer's hands and each
+ *  input's filter and clock are their own again; a take that cannot be read is left as
+ *  given (its plugin says why). Strings
  *  point into *buf. Returns 0, or 64 with "CMD: --input SPEC: ..." printed where the take's
  *  inputs and the others make more than FP_SESSION_MAX_INPUTS. */
 int fp_app_session_defaults(const char *cmd, fp_session_options *so, double speed, fp_app_inputs *buf,

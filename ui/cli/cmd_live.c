@@ -416,7 +416,7 @@ static int live_main(int argc, char **argv)
         return FP_EXIT_USAGE;
     }
     /* The demo when no mesh and no input are given; --speed for replay inputs; a take of
-     * several performers: one take input for each of its inputs. */
+     * several inputs: one take input for each of them. */
     fp_app_inputs inputs_buf;
     if ((orc = fp_app_session_defaults("facepuppet live", so, sopt.speed, &inputs_buf, NULL)))
         return orc;
