@@ -427,8 +427,11 @@ const fp_hand_pose *fp_session_hand(const fp_session *s, int hand);
  *  or between frames. */
 size_t fp_session_performer_count(const fp_session *s);
 const char *fp_session_performer_name(const fp_session *s, size_t performer);
-/** Performer i's calibration now (NULL beyond the count; the session's; performer 0's is
- *  fp_session_calibration's). */
+/** Performer i's calibration now (fp_pose.h: scale in mesh units per mm, offsets in mesh
+ *  units, rotation device -> mesh): the one its hands are placed by, refined as they arrive
+ *  where none was given. NULL beyond the count; owned by the session, valid until the next
+ *  fp_session_step; performer 0's is fp_session_calibration's. No errors. [session-thread]
+ *  or between frames. */
 const fp_calibration *fp_session_performer_calibration(const fp_session *s, size_t performer);
 const fp_hand_pose *fp_session_performer_hand(const fp_session *s, size_t performer, int hand);
 /** The last control set (start/end points) the mapping made and the engine used; the
