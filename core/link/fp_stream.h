@@ -57,8 +57,11 @@ typedef struct fp_stream fp_stream;
 /** Check SPEC's syntax (no socket). Returns 0 or -EINVAL with err. */
 int fp_stream_spec_check(const char *spec, char *err, size_t errlen);
 
-/** Resolve the host, open a UDP socket to it, allocate the state (3 x int16 and 4 bytes a
- *  vertex). Returns 0 and *out, or a negative code with err. */
+/** Resolve the host, open a UDP socket to it, allocate the state (3 x int16 a vertex) and the
+ *  snapshots (2 to 8 copies of the positions, 64 MB in all where the mesh allows; touched
+ *  here, so that no frame faults them in), start the sender thread and, on a mesh of 131,072
+ *  vertices or more, a helper that shares large copies. Returns 0 and *out, or a negative
+ *  code with err. */
 int fp_stream_open(const fp_stream_options *o, fp_stream **out, char *err, size_t errlen);
 
 /** The time origin of the frames' times (seconds since it). */
@@ -66,12 +69,12 @@ void fp_stream_origin(fp_stream *st, int64_t t0_ns);
 
 /** Send one frame: pos (n x 3 floats, mesh units), the channels' values (nchannels floats;
  *  NULL: zeros) at host time now_ns, with timecode (may be "" or NULL). A keyframe when due
- *  or requested. On the calling thread the offsets are quantised where the mesh moved and the
- *  frame's records handed to the stream's sender thread, which makes and sends the packets
- *  (liblo, sendmmsg). Returns 0; -EAGAIN when the sender is 64 frames behind (STREAM_JOBS)
- *  and o.wait is not set: the frame is not sent (a receiver sees it lost) and the next is a
- *  keyframe (with o.wait the call waits for room); -ENOMEM the
- *  same when its records found no room (the only allocation: a frame larger than any before). */
+ *  or requested. On the calling thread only a copy: the positions of the blocks that may have
+ *  moved go into a free snapshot, handed to the stream's sender thread, which quantises them,
+ *  makes and sends the packets (liblo, sendmmsg). Returns 0; -EAGAIN when the sender holds
+ *  every snapshot or is 64 frames behind (STREAM_JOBS) and o.wait is not set: the frame is not
+ *  sent (a receiver sees it lost) and the next is a keyframe (with o.wait the call waits for
+ *  room); -ENOMEM the same when the frame's list of blocks could not grow. */
 int fp_stream_frame(fp_stream *st, const float *pos, const float *channels, int64_t now_ns,
                     const char *timecode);
 

@@ -1,6 +1,7 @@
 /* The live output stream, the frame thread's side (fp_stream.h; the format: docs/osc.md,
- * "Stream"): the options, the offsets quantised where the mesh moved, the frame's records
- * handed to the sender thread (stream_tx.c), which makes and sends the packets. */
+ * "Stream"): the options, the frame's touched blocks copied into a snapshot (stream_snap.c)
+ * and handed to the sender thread, which quantises them (stream_collect.c), makes and sends
+ * the packets (stream_tx.c); the statistics. */
 #define _GNU_SOURCE
 #include "stream_internal.h"
 
@@ -19,7 +20,6 @@
 #include <unistd.h>
 
 #define RECORD_BYTES 8           /* (stream_tx.c's) */
-#define BLOCK 64                 /* vertices compared with the last frame's at once (memcmp) */
 
 /* "osc:HOST:PORT[,step=MM][,key=N][,mtu=B]" into *s (host, port, step, key, mtu). */
 static int parse(const char *spec, fp_stream *s, char *err, size_t errlen)
@@ -130,15 +130,10 @@ int fp_stream_open(const fp_stream_options *o, fp_stream **out, char *err, size_
     pthread_cond_init(&s->cond, NULL);
     pthread_cond_init(&s->space, NULL);
     if ((rc = open_socket(s, err, errlen))) goto fail;
-    s->sent = calloc(3 * o->n, sizeof *s->sent);
-    s->idx = malloc(o->n * sizeof *s->idx);
-    s->q = malloc(3 * o->n * sizeof *s->q);
-    s->last = malloc(3 * o->n * sizeof *s->last);
-    if (!s->sent || !s->idx || !s->q || !s->last || fp__stream_tx_init(s)) {
+    if (fp__stream_tx_init(s) || fp__stream_snap_open(s)) {
         rc = fp_errorf(err, errlen, -ENOMEM, "%s: out of memory for %zu vertices", o->spec, o->n);
         goto fail;
     }
-    memcpy(s->last, o->neutral, 3 * o->n * sizeof *s->last); /* (sent: all 0, the neutral's) */
     s->key_requested = true; /* the first frame is a keyframe */
     drop_knob(s);
     if ((rc = -pthread_create(&s->thread, NULL, fp__stream_tx, s))) {
@@ -156,86 +151,26 @@ fail:
 void fp_stream_origin(fp_stream *st, int64_t t0_ns) { st->t0_ns = t0_ns; }
 void fp_stream_request_key(fp_stream *st) { st->key_requested = true; }
 
-/* The block [b0, b1) meets a touched range (ranges from *r on, which is advanced). */
-static bool block_touched(const uint32_t *ranges, size_t nranges, size_t *r, size_t b0, size_t b1)
-{
-    while (*r < nranges && (size_t)ranges[2 * *r] + ranges[2 * *r + 1] <= b0) (*r)++;
-    return *r < nranges && ranges[2 * *r] < b1;
-}
-
-/* An offset in steps (d: mesh units x scale), rounded half away from zero, in float (the
- * decoder's tolerance holds: within half a step, plus float rounding); beyond +-32767
- * clipped (counted), not finite 0. */
-static inline int16_t quantise(float d, uint64_t *clipped)
-{
-    if (!(d > -32767.5f && d < 32767.5f)) {
-        if (d == d) (*clipped)++;
-        return d > 0 ? 32767 : d < 0 ? -32767 : 0;
-    }
-    return (int16_t)(d + (d >= 0 ? 0.5f : -0.5f));
-}
-
-/* The frame's records into idx and q: every changed offset, or every non-zero one (key: after
- * a frame's records were lost; a keyframe is made by the sender thread from what it was
- * handed, so the frame thread never scans the whole mesh for one); the blocks compared are
- * those in the touched ranges (all: ranges NULL with nranges > 0, or SIZE_MAX, or a full
- * scan owed after a frame not handed over). */
-static size_t collect(fp_stream *s, const float *pos, bool key, const uint32_t *ranges, size_t nranges)
-{
-    const float *nu = s->o.neutral;
-    const float scale = (float)(s->o.mm_per_unit / s->step_mm);
-    const size_t n = s->o.n;
-    size_t m = 0, r = 0;
-    const bool all = nranges == SIZE_MAX || (!ranges && nranges) || s->full_scan;
-    s->full_scan = false;
-    for (size_t b0 = 0; b0 < n; b0 += BLOCK) {
-        const size_t b1 = b0 + BLOCK < n ? b0 + BLOCK : n, bytes = 3 * (b1 - b0) * sizeof(float);
-        const bool in = all || block_touched(ranges, nranges, &r, b0, b1);
-        if (!in && !key) {
-            if (r >= nranges) break; /* (nothing further moved) */
-            b0 = (size_t)ranges[2 * r] / BLOCK * BLOCK - BLOCK; /* (on to the next touched block) */
-            continue;
-        }
-        const bool moved = in && memcmp(pos + 3 * b0, s->last + 3 * b0, bytes) != 0; /* (most do not) */
-        for (size_t v = b0; v < b1 && (moved || key); v++) {
-            int16_t *old = s->sent + 3 * v;
-            const float *p = pos + 3 * v, *l = s->last + 3 * v;
-            bool changed = false;
-            if (moved && (p[0] != l[0] || p[1] != l[1] || p[2] != l[2])) { /* (NaN: always) */
-                int16_t q[3];
-                for (int k = 0; k < 3; k++) q[k] = quantise((p[k] - nu[3 * v + k]) * scale, &s->clipped);
-                memcpy(s->last + 3 * v, p, 3 * sizeof *p);
-                changed = q[0] != old[0] || q[1] != old[1] || q[2] != old[2];
-                if (changed) memcpy(old, q, sizeof q);
-            }
-            if (key ? (old[0] | old[1] | old[2]) != 0 : changed) {
-                s->idx[m] = (uint32_t)v;
-                memcpy(s->q + 3 * m, old, 3 * sizeof *old);
-                m++;
-            }
-        }
-    }
-    return m;
-}
-
-/* The job's arrays for m records (grown, rarely). */
-static int job_reserve(stream_job *j, size_t m)
-{
-    if (m <= j->cap) return 0;
-    size_t cap = m + m / 2 + 64;
-    uint32_t *idx = realloc(j->idx, cap * sizeof *idx);
-    if (idx) j->idx = idx;
-    int16_t *q = realloc(j->q, 3 * cap * sizeof *q);
-    if (q) j->q = q;
-    if (!idx || !q) return -ENOMEM;
-    j->cap = cap;
-    return 0;
-}
-
 int fp_stream_frame(fp_stream *s, const float *pos, const float *channels, int64_t now_ns,
                     const char *timecode)
 {
     return fp_stream_frame_ranges(s, pos, NULL, SIZE_MAX, channels, now_ns, timecode);
+}
+
+/* Room for the frame at head: a free place in the ring and a free snapshot (*snap); with
+ * o.wait (run, play: no frame lost) it waits for the sender to free them. */
+static bool room(fp_stream *s, size_t head, int *snap)
+{
+    *snap = -1;
+    if (!s->o.wait)
+        return head - atomic_load_explicit(&s->tail, memory_order_acquire) < STREAM_JOBS &&
+               (*snap = fp__stream_snap_take(s)) >= 0;
+    pthread_mutex_lock(&s->mu);
+    while (head - atomic_load_explicit(&s->tail, memory_order_acquire) >= STREAM_JOBS ||
+           (*snap = fp__stream_snap_take(s)) < 0)
+        pthread_cond_wait(&s->space, &s->mu);
+    pthread_mutex_unlock(&s->mu);
+    return true;
 }
 
 int fp_stream_frame_ranges(fp_stream *s, const float *pos, const uint32_t *ranges, size_t nranges,
@@ -244,47 +179,35 @@ int fp_stream_frame_ranges(fp_stream *s, const float *pos, const uint32_t *range
     int64_t t_start = fp_now_ns();
     const uint64_t frame = s->frame++;
     size_t head = atomic_load_explicit(&s->head, memory_order_relaxed);
-    int rc = 0;
-    if (s->o.wait && head - atomic_load_explicit(&s->tail, memory_order_acquire) >= STREAM_JOBS) {
-        pthread_mutex_lock(&s->mu); /* (run, play: no frame lost; the sender frees a job soon) */
-        while (head - atomic_load_explicit(&s->tail, memory_order_acquire) >= STREAM_JOBS)
-            pthread_cond_wait(&s->space, &s->mu);
-        pthread_mutex_unlock(&s->mu);
-    }
-    if (head - atomic_load_explicit(&s->tail, memory_order_acquire) >= STREAM_JOBS) {
+    stream_hand *h = &s->jobs[head % STREAM_JOBS];
+    const bool all = nranges == SIZE_MAX || (!ranges && nranges) || s->full_scan;
+    int rc = 0, snap;
+    if (!room(s, head, &snap)) {
         /* the sender is behind: the frame is not sent (a receiver sees it lost), the next
          * one is a keyframe over every block */
         s->busy++;
         s->key_requested = s->full_scan = true;
         rc = -EAGAIN;
+    } else if (fp__stream_snap_ranges(h, ranges, nranges, all, s->o.n)) {
+        atomic_store_explicit(&s->snap_busy[snap], false, memory_order_release);
+        s->key_requested = s->full_scan = true; /* (the same: not sent) */
+        rc = -ENOMEM;
     } else {
-        const bool key = s->key_requested || frame % s->key_period == 0, full = s->resync;
-        s->key_requested = false;
-        size_t m = collect(s, pos, full, ranges, nranges);
-        stream_job *j = &s->jobs[head % STREAM_JOBS];
-        if (job_reserve(j, m)) {
-            /* (its changes are lost: the next job carries every offset) */
-            s->key_requested = s->full_scan = s->resync = true;
-            rc = -ENOMEM;
-        } else {
-            s->resync = false;
-            j->frame = frame;
-            j->key = key;
-            j->full = full;
-            j->t = (double)(now_ns - s->t0_ns) * 1e-9;
-            snprintf(j->tc, sizeof j->tc, "%s", timecode ? timecode : "");
-            for (size_t c = 0; c < s->o.nchannels; c++) j->channels[c] = channels ? channels[c] : 0.0f;
-            j->m = m;
-            if (m) { /* (none moved: the buffers may not exist yet) */
-                memcpy(j->idx, s->idx, m * sizeof *j->idx);
-                memcpy(j->q, s->q, 3 * m * sizeof *j->q);
-            }
-            atomic_store_explicit(&s->head, head + 1, memory_order_release);
-            pthread_mutex_lock(&s->mu);
-            pthread_cond_signal(&s->cond);
-            pthread_mutex_unlock(&s->mu);
-            s->keyframes += key;
-        }
+        const bool key = s->key_requested || frame % s->key_period == 0;
+        s->key_requested = s->full_scan = false;
+        h->snap = snap;
+        fp__stream_snap_copy(s, h, pos);
+        stream_job *j = &h->head;
+        j->frame = frame;
+        j->key = key;
+        j->t = (double)(now_ns - s->t0_ns) * 1e-9;
+        snprintf(j->tc, sizeof j->tc, "%s", timecode ? timecode : "");
+        for (size_t c = 0; c < s->o.nchannels; c++) j->channels[c] = channels ? channels[c] : 0.0f;
+        atomic_store_explicit(&s->head, head + 1, memory_order_release);
+        pthread_mutex_lock(&s->mu);
+        pthread_cond_signal(&s->cond);
+        pthread_mutex_unlock(&s->mu);
+        s->keyframes += key;
     }
     s->times[s->frames % STREAM_TIMES] = (double)(fp_now_ns() - t_start) * 1e-3;
     s->frames++;
@@ -310,7 +233,7 @@ void fp_stream_stats_get(const fp_stream *s, fp_stream_stats *out)
     memset(out, 0, sizeof *out);
     out->frames = s->frames;
     out->keyframes = s->keyframes;
-    out->clipped = s->clipped;
+    out->clipped = atomic_load_explicit(&s->clipped, memory_order_relaxed);
     out->busy = s->busy;
     out->packets = atomic_load_explicit(&s->packets, memory_order_relaxed);
     out->bytes = atomic_load_explicit(&s->bytes, memory_order_relaxed);
@@ -364,15 +287,8 @@ void fp_stream_close(fp_stream **sp)
     if (!s) return;
     fp_stream_finish(s);
     if (s->sock >= 0) close(s->sock);
-    for (int k = 0; k < STREAM_JOBS; k++) {
-        free(s->jobs[k].idx);
-        free(s->jobs[k].q);
-    }
+    fp__stream_snap_free(s);
     fp__stream_tx_free(s);
-    free(s->sent);
-    free(s->idx);
-    free(s->q);
-    free(s->last);
     pthread_mutex_destroy(&s->mu);
     pthread_cond_destroy(&s->cond);
     pthread_cond_destroy(&s->space);

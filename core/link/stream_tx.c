@@ -1,5 +1,5 @@
 /* The stream's sender thread (stream_internal.h): each frame handed over by the frame thread
- * is split into packets of at most mtu bytes over consecutive vertex ranges, serialised by
+ * is quantised from its snapshot (stream_collect.c), its records split into packets of at most mtu bytes over consecutive vertex ranges, serialised by
  * liblo (docs/osc.md, "Stream") and sent with one sendmmsg; /fp/stream/info before each
  * keyframe; the test knob FP_STREAM_DROP drops packets here. */
 #define _GNU_SOURCE
@@ -39,29 +39,21 @@ void fp__stream_tx_free(fp_stream *s)
     free(s->tx_state);
     free(s->tx_key.idx);
     free(s->tx_key.q);
+    free(s->tx_rec.idx);
+    free(s->tx_rec.q);
 }
 
-/* The job's records into the sender's state (a full job replaces it); for a keyframe, the job
- * to send: every non-zero offset of the state, with j's header (NULL: no memory, counted). */
-static const stream_job *track(fp_stream *s, const stream_job *j)
+/* The job to send: j, or for a keyframe every non-zero offset of the state, with j's header
+ * (NULL: no memory, counted). */
+static const stream_job *keyframe(fp_stream *s, const stream_job *j)
 {
-    if (j->full) memset(s->tx_state, 0, 3 * s->o.n * sizeof *s->tx_state);
-    for (size_t r = 0; r < j->m; r++) memcpy(s->tx_state + 3 * (size_t)j->idx[r], j->q + 3 * r, 3 * sizeof *j->q);
-    if (!j->key || j->full) return j;
+    if (!j->key) return j;
     stream_job *k = &s->tx_key;
     size_t m = 0;
     for (size_t v = 0; v < s->o.n; v++) {
         const int16_t *q = s->tx_state + 3 * v;
         if (!(q[0] | q[1] | q[2])) continue;
-        if (m == k->cap) {
-            size_t cap = 2 * k->cap + 1024;
-            uint32_t *idx = realloc(k->idx, cap * sizeof *idx);
-            if (idx) k->idx = idx;
-            int16_t *qq = idx ? realloc(k->q, 3 * cap * sizeof *qq) : NULL;
-            if (qq) k->q = qq;
-            if (!idx || !qq) return NULL;
-            k->cap = cap;
-        }
+        if (m == k->cap && fp__stream_reserve(k, 2 * k->cap + 1024)) return NULL;
         k->idx[m] = (uint32_t)v;
         memcpy(k->q + 3 * m, q, 3 * sizeof *q);
         m++;
@@ -197,11 +189,8 @@ static void packet(fp_stream *s, const stream_job *j, size_t a, size_t b, uint32
 
 /* One frame out: split (at most max_records a packet; an index gap above MAX_GAP starts a
  * new one), serialised, sent. */
-static void send_job(fp_stream *s, const stream_job *handed)
+static void send_records(fp_stream *s, const stream_job *j)
 {
-    int64_t t_start = fp_now_ns();
-    const stream_job *j = track(s, handed);
-    if (!j) { bump(&s->send_errors, 1); return; }
     if (j->m + 1 > s->nstarts) {
         size_t *grown = realloc(s->starts, (j->m + 1) * sizeof *grown);
         if (!grown) { bump(&s->send_errors, 1); return; }
@@ -228,6 +217,30 @@ static void send_job(fp_stream *s, const stream_job *handed)
         packet(s, j, a, b, lo, hi, (int)k, (int)nparts, &used);
     }
     flush(s, used);
+}
+
+/* One frame handed over: its snapshot quantised into records (the snapshot then freed), a
+ * keyframe when due or owed (records lost for want of memory), sent. */
+static void send_hand(fp_stream *s, const stream_hand *h)
+{
+    int64_t t_start = fp_now_ns();
+    const int rc = fp__stream_collect(s, h);
+    atomic_store_explicit(&s->snap_busy[h->snap], false, memory_order_release);
+    if (s->o.wait) { /* (a frame thread may wait for a snapshot) */
+        pthread_mutex_lock(&s->mu);
+        pthread_cond_signal(&s->space);
+        pthread_mutex_unlock(&s->mu);
+    }
+    stream_job *rec = &s->tx_rec;
+    rec->frame = h->head.frame;
+    rec->key = h->head.key || rc || s->tx_key_owed;
+    rec->t = h->head.t;
+    memcpy(rec->tc, h->head.tc, sizeof rec->tc);
+    memcpy(rec->channels, h->head.channels, sizeof rec->channels);
+    const stream_job *j = keyframe(s, rec);
+    s->tx_key_owed = !j;
+    if (j) send_records(s, j);
+    else bump(&s->send_errors, 1);
     uint64_t done = atomic_load_explicit(&s->sent_frames, memory_order_relaxed);
     s->tx_times[done % STREAM_TIMES] = (double)(fp_now_ns() - t_start) * 1e-3;
     atomic_store_explicit(&s->sent_frames, done + 1, memory_order_release);
@@ -251,7 +264,7 @@ void *fp__stream_tx(void *arg)
         size_t tail = atomic_load_explicit(&s->tail, memory_order_relaxed);
         size_t head = atomic_load_explicit(&s->head, memory_order_acquire);
         for (; tail != head; tail++) {
-            send_job(s, &s->jobs[tail % STREAM_JOBS]);
+            send_hand(s, &s->jobs[tail % STREAM_JOBS]);
             atomic_store_explicit(&s->tail, tail + 1, memory_order_release);
             if (s->o.wait) { /* (a frame thread may wait for room) */
                 pthread_mutex_lock(&s->mu);
