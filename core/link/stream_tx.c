@@ -1,7 +1,8 @@
 /* The stream's sender thread (stream_internal.h): each frame handed over by the frame thread
- * is quantised from its snapshot (stream_collect.c), its records split into packets of at most mtu bytes over consecutive vertex ranges, serialised by
- * liblo (docs/osc.md, "Stream") and sent with one sendmmsg; /fp/stream/info before each
- * keyframe; the test knob FP_STREAM_DROP drops packets here. */
+ * is quantised from its snapshot (stream_collect.c), its records split into packets of at
+ * most mtu bytes over consecutive vertex ranges, serialised by liblo (docs/osc.md, "Stream")
+ * and sent with one sendmmsg; /fp/stream/info before each keyframe; the test knob
+ * FP_STREAM_DROP drops packets here. */
 #define _GNU_SOURCE
 #include "stream_internal.h"
 
