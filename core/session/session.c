@@ -133,6 +133,29 @@ static void on_event(void *user, size_t input, const fp_event *ev)
     }
 }
 
+/* What changed where the contact guard's shape is shown now or was last frame (was). Each
+ * shape shown differs from the reference (the posed base; its own changes are recorded where
+ * they happen) only where it may: the guard's shape at its D_P (fp_cg_ranges), the engine's
+ * output (or the rig's blend of it, or the reference) in the engine's ranges, which hold last
+ * frame's too. So the change lies in the engine's ranges, the D_P now when the guard's shape
+ * is shown and the one kept at its last showing (guard_dp). */
+static void changed_guard(fp_session *s, int was, const uint32_t *touched, size_t ntouched)
+{
+    if (was == SHOWN_OTHER) fp_changed_add(&s->shown_changed, s->guard_dp, s->guard_dp_n);
+    fp_changed_add(&s->shown_changed, touched, ntouched);
+    if (s->shown_kind != SHOWN_OTHER) return;
+    const uint32_t *gr = NULL;
+    size_t ng = s->shown_changed.tracking ? fp_cg_ranges(&s->cg, NULL, 0, &gr) : SIZE_MAX;
+    if (ng != SIZE_MAX && ng > s->guard_dp_cap) {
+        uint32_t *grown = realloc(s->guard_dp, 2 * ng * sizeof *grown);
+        if (grown) s->guard_dp = grown, s->guard_dp_cap = ng;
+        else ng = SIZE_MAX; /* (anything: always correct) */
+    }
+    if (ng != SIZE_MAX && ng) memcpy(s->guard_dp, gr, 2 * ng * sizeof *gr);
+    s->guard_dp_n = ng;
+    fp_changed_add(&s->shown_changed, s->guard_dp, ng);
+}
+
 /* Step 5's shape: the engine's output through the rig's blend, checked by the contact guard
  * (step_contact.h), shown; what changed since the last frame (was: what it showed) */
 static void show_deformed(fp_session *s, bool commit, int was, fp_frame_stats *st)
@@ -150,7 +173,7 @@ static void show_deformed(fp_session *s, bool commit, int was, fp_frame_stats *s
      * or at its last run), unless the guard's shape is or was shown */
     s->shown_kind = fp_cg_shows(&s->cg, s->shown) ? SHOWN_OTHER : SHOWN_ENGINE;
     if (s->shown_kind == SHOWN_OTHER || was == SHOWN_OTHER)
-        fp_changed_all(&s->shown_changed);
+        changed_guard(s, was, touched, ntouched);
     else
         fp_changed_add(&s->shown_changed, ranges, fp_engine_step_touched(&s->engine, &ranges));
 }
@@ -196,9 +219,10 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, const fp
             fp_cg_shown_ref(&s->cg); /* the engine failed: the posed base is shown */
         }
     } else {
-        /* the posed base: where the engine's last output differed from it, if shown */
+        /* the posed base: where the engine's last output or the guard's shape differed
+         * from it, if shown */
         if (was == SHOWN_OTHER)
-            fp_changed_all(&s->shown_changed);
+            fp_changed_add(&s->shown_changed, s->guard_dp, s->guard_dp_n);
         else if (was == SHOWN_ENGINE)
             fp_changed_add(&s->shown_changed, ranges, fp_engine_step_touched(&s->engine, &ranges));
         fp_history_end_gesture(&s->history);
@@ -574,6 +598,7 @@ void fp_session_destroy(fp_session **sp)
     fp_engine_step_free(&s->engine);
     fp_cg_free(&s->cg);
     fp_changed_free(&s->shown_changed);
+    free(s->guard_dp);
     fp_changed_free(&s->base_changed);
     fp_rig_step_free(&s->rig);
     fp_history_free(&s->history);

@@ -96,6 +96,10 @@ struct fp_session {
 
     /* what changed since the viewer last asked (fp_session_touched, changed.h) */
     fp_changed shown_changed, base_changed;
+    uint32_t *guard_dp;           /* the guard's D_P when its shape was last shown (fp_cg_ranges'
+                                     copy, guard_dp_n pairs; SIZE_MAX: not kept, anything): where
+                                     that shape may differ from the reference (session.c) */
+    size_t guard_dp_n, guard_dp_cap;
     int shown_substeps;           /* maps the engine composed for the shape shown (1: one,
                                      whose coefficients the solver holds; fp_session_warp_parts) */
     int shown_kind;               /* what s->shown held at the end of the last frame: */

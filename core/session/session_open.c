@@ -287,6 +287,7 @@ int fp_session_create(const fp_session_options *opt, fp_session **out, char *err
     if (rc) return rc;
     fp_session *s = calloc(1, sizeof *s);
     if (!s) return -ENOMEM;
+    s->guard_dp_n = SIZE_MAX; /* (nothing kept: anything) */
     s->log = (fp_slog){opt->log, opt->log_user};
     if (fp_log_relay_init(&s->mapping_relay)) {
         free(s);

@@ -141,50 +141,39 @@ bool fp_cg_shows(const fp_cg_step *g, const float *shown)
 
 #define FP_GC_SHIFT 4 /* fp_cg_ranges: blocks of 16 vertices */
 
-static int cmp_u32(const void *a, const void *b)
-{
-    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
-    return x < y ? -1 : x > y;
-}
-
 size_t fp_cg_ranges(fp_cg_step *g, const uint32_t *tr, size_t nt, const uint32_t **out)
 {
-    size_t nb = (g->n >> FP_GC_SHIFT) + 1;
+    const size_t nb = (g->n >> FP_GC_SHIFT) + 1;
     if (nt == SIZE_MAX) return SIZE_MAX;
     if (!g->gc_mark) {
         g->gc_mark = calloc(nb, 1);
-        g->gc_blk = malloc((nb + 1) * sizeof *g->gc_blk); /* (+1: the store before the test) */
         g->gc_ranges = malloc(2 * nb * sizeof *g->gc_ranges);
-        if (!g->gc_mark || !g->gc_blk || !g->gc_ranges) {
-            free(g->gc_mark), free(g->gc_blk), free(g->gc_ranges);
-            g->gc_mark = NULL, g->gc_blk = g->gc_ranges = NULL;
+        if (!g->gc_mark || !g->gc_ranges) {
+            free(g->gc_mark), free(g->gc_ranges);
+            g->gc_mark = NULL, g->gc_ranges = NULL;
             return SIZE_MAX;
         }
     }
     const uint32_t *dp;
-    size_t ndp = fp_contact_differs(g->contact, &dp), k = 0;
-    for (size_t i = 0; i < ndp; i++) {
-        uint32_t b = dp[i] >> FP_GC_SHIFT;
-        g->gc_blk[k] = b;
-        k += !g->gc_mark[b];
-        g->gc_mark[b] = 1;
-    }
+    const size_t ndp = fp_contact_differs(g->contact, &dp);
+    for (size_t i = 0; i < ndp; i++) g->gc_mark[dp[i] >> FP_GC_SHIFT] = 1;
     for (size_t r = 0; r < nt; r++) {
         if (!tr[2 * r + 1]) continue;
         size_t b0 = tr[2 * r] >> FP_GC_SHIFT, b1 = (tr[2 * r] + tr[2 * r + 1] - 1) >> FP_GC_SHIFT;
-        for (size_t b = b0; b <= b1; b++) {
-            g->gc_blk[k] = (uint32_t)b;
-            k += !g->gc_mark[b];
-            g->gc_mark[b] = 1;
-        }
+        memset(g->gc_mark + b0, 1, b1 - b0 + 1);
     }
-    qsort(g->gc_blk, k, sizeof *g->gc_blk, cmp_u32);
+    /* the marked blocks in order, a scan of n / 16 bytes (a sort of the 1.7M face's 100,000
+     * blocks took milliseconds), the marks cleared on the way */
     size_t nr = 0;
-    for (size_t i = 0; i < k;) {
-        size_t b0 = g->gc_blk[i], b1 = b0 + 1;
-        g->gc_mark[b0] = 0;
-        for (i++; i < k && g->gc_blk[i] == b1; i++) g->gc_mark[b1++] = 0;
-        size_t v0 = b0 << FP_GC_SHIFT, v1 = b1 << FP_GC_SHIFT;
+    for (size_t b = 0; b < nb;) {
+        if (!g->gc_mark[b]) {
+            b++;
+            continue;
+        }
+        const size_t b0 = b;
+        while (b < nb && g->gc_mark[b]) g->gc_mark[b++] = 0;
+        const size_t v0 = b0 << FP_GC_SHIFT, v1 = b << FP_GC_SHIFT;
+        if (v0 >= g->n) break;
         g->gc_ranges[2 * nr] = (uint32_t)v0;
         g->gc_ranges[2 * nr + 1] = (uint32_t)((v1 < g->n ? v1 : g->n) - v0);
         nr++;
@@ -231,7 +220,6 @@ void fp_cg_free(fp_cg_step *g)
     fp_contact_destroy(&g->contact);
     fp_changed_free(&g->ref);
     free(g->gc_mark);
-    free(g->gc_blk);
     free(g->gc_ranges);
     memset(g, 0, sizeof *g);
 }

@@ -86,8 +86,9 @@ typedef struct fp_cg_step {
                                      loaded face's diagonal; 0: none (options.exact_frames) */
     fp_changed ref;               /* where the reference changed since the guard last took it
                                      (FP_CG_REF_CHANGED: fp_contact_reference compares there) */
-    uint8_t *gc_mark;             /* fp_cg_ranges: a byte per block of 16 vertices (zero */
-    uint32_t *gc_blk, *gc_ranges; /*   between calls), the blocks listed, their ranges */
+    uint8_t *gc_mark;             /* fp_cg_ranges: a byte per block of 16 vertices (zero
+                                     between calls) */
+    uint32_t *gc_ranges;          /* its ranges */
 } fp_cg_step;
 
 /** The guard on the mesh (tris, t triangles over n vertices, loaded its loaded shape: kept by
@@ -122,7 +123,9 @@ bool fp_cg_shows(const fp_cg_step *g, const float *shown);
 /** Where the guard's shape (P) and the engine's output may differ from the base: the blocks
  *  of 16 vertices holding the guard's D_P (fp_contact_differs) or a touched range (tr, nt),
  *  as increasing, disjoint vertex ranges in *out (g's); returns their number, SIZE_MAX when
- *  unknown (nt == SIZE_MAX) or out of memory. O(D_P + touched), no pass over n. */
+ *  unknown (nt == SIZE_MAX) or out of memory. O(D_P + touched + n / 16): the marked
+ *  blocks are read in order from a byte per block. Used by the commit of the guard's shape
+ *  (step_commit.c) and by the shape shown's changed ranges (session.c). */
 size_t fp_cg_ranges(fp_cg_step *g, const uint32_t *tr, size_t nt, const uint32_t **out);
 
 /** The reference (the posed base) changed on ranges (count SIZE_MAX: anywhere): the next

@@ -510,11 +510,95 @@ static void test_guard_commit_ranged_equals_whole(void **state)
     free(f.cover);
 }
 
+/* One anchored frame of the fixture's three control vectors, each end point its start moved
+ * by amp x R along dir; its statistics into *st; the ranges taken and checked (take). */
+static size_t pressed(fixture *f, const float dir[3][3], double amp, uint32_t intents, double *frac,
+                      fp_frame_stats *st)
+{
+    size_t bk;
+    f->cs.active = true;
+    f->cs.intents = intents;
+    f->cs.count = 3;
+    for (int i = 0; i < 3; i++)
+        for (int k = 0; k < 3; k++) f->end[i][k] = f->start[i][k] + (float)(amp * f->radius * dir[i][k]);
+    fp_session_apply_controls(f->s, f->t += 16666667, &f->cs, intents, st);
+    return take(f, frac, &bk);
+}
+
+/* Without a rig: the contact guard's shape shown through gestures that are not committed (the
+ * lips pressed through each other, further each frame, then back), frames to and from it and
+ * the posed base after it: the reported ranges cover every change (take), and where the
+ * guard's shape is shown now or was last frame they are its D_P and the engine's ranges, a
+ * part of the face, not everything. */
+static void test_guard_shown_ranges(void **state)
+{
+    (void)state;
+    fixture f = {0};
+    f.s = rig_session_of(false, "none");
+    fixture_ready(&f);
+    double frac;
+    size_t bk, guarded = 0, partial = 0, after = 0;
+    take(&f, &frac, &bk);
+    static const uint32_t spots[][3] = {{6213, 5708, 3742}, {1507, 5517, 1528}};
+    static const float dir[3][3] = {{0, -1, 0}, {0, 1, 0}, {0, 0, -1}};
+    for (size_t t = 0; t < sizeof spots / sizeof spots[0]; t++) {
+        place(&f, spots[t][0], spots[t][1], spots[t][2]);
+        bool was_guarded = false;
+        for (int i = 0; i < 16; i++) {
+            const double amp = 0.06 * (i < 10 ? i + 1 : 20 - i); /* to 0.6 R and back to 0.24 R */
+            fp_frame_stats st;
+            size_t k = pressed(&f, dir, amp, i == 0 ? FP_INTENT_ENGAGE : 0, &frac, &st);
+            const bool g = st.collide_t < 1;
+            if (i > 1 && (g || was_guarded)) { /* (the engine's first run writes its whole output) */
+                guarded += g;
+                after += !g;
+                if (k != SIZE_MAX && frac < 0.8) partial++;
+                else fail_msg("spot %zu frame %d (guard %d, last frame %d): %zu ranges, %.3f of the vertices",
+                              t, i, g, was_guarded, k, frac);
+            }
+            was_guarded = g;
+        }
+        f.cs.active = false; /* the gesture ends: the posed base again */
+        f.cs.count = 0;
+        fp_session_apply_controls(f.s, f.t += 16666667, &f.cs, 0, NULL);
+        size_t k = take(&f, &frac, &bk);
+        if (was_guarded && !(k != SIZE_MAX && frac < 0.5))
+            fail_msg("spot %zu: the base after the guard's shape: %zu ranges, %.3f", t, k, frac);
+        assert_memory_equal(fp_session_positions(f.s), fp_session_base(f.s), f.n * 3 * sizeof(float));
+    }
+    /* the press slides along the mouth (its start points 0.05 R further each frame), so the
+     * guard's shape differs from the base where the engine no longer writes; then the hands
+     * go to the forehead: the engine's output is shown again, the change lies where the
+     * guard's shape was (its D_P kept) */
+    size_t slid = 0;
+    for (int i = 0; i < 20; i++) {
+        place(&f, spots[0][0], spots[0][1], spots[0][2]);
+        for (int c = 0; c < 3; c++) f.start[c][0] += (float)(0.05 * i * f.radius);
+        fp_frame_stats st;
+        pressed(&f, dir, 0.5, i == 0 ? FP_INTENT_ENGAGE : 0, &frac, &st);
+        slid += st.collide_t < 1;
+        if (getenv("DBG")) printf("slide %d g %d frac %.3f\n", i, st.collide_t < 1, frac);
+        if (i >= 6 && st.collide_t < 1) break; /* (the guard's shape shown last) */
+    }
+    place(&f, 12000, 12001, 12002);
+    fp_frame_stats st;
+    size_t k = pressed(&f, dir, 0.01, 0, &frac, &st); /* (take: covered) */
+    assert_true(k != SIZE_MAX && st.collide_t >= 1);
+    printf("the contact guard's shape shown in %zu frames, %zu more right after it: %zu of them "
+           "reported in part; a sliding press shown in %zu frames\n", guarded, after, partial, slid);
+    assert_true(guarded >= 4 && slid >= 3);
+    fp_session_destroy(&f.s);
+    free(f.shown);
+    free(f.base);
+    free(f.cover);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_changed_union),
         cmocka_unit_test(test_guard_commit_ranged_equals_whole),
+        cmocka_unit_test(test_guard_shown_ranges),
         cmocka_unit_test(test_session_contract_no_rig),
         cmocka_unit_test(test_session_contract_rig),
         cmocka_unit_test(test_rig_commit_ranged_equals_whole),
