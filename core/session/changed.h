@@ -1,10 +1,10 @@
 /*
  * changed.h: what changed in a shape since its consumer last asked (fp_session_touched,
  * fp_session_base_touched): vertex ranges, or "anything". The session adds each frame's
- * ranges (the engine's, fp_engine_step_touched) or marks everything (undo, reset, a rig pose,
- * the contact guard); the viewer takes the union at its upload and re-normals and uploads
- * only those ranges. Nothing is recorded before the first take, so a session nobody asks
- * pays nothing.
+ * ranges (the engine's, fp_engine_step_touched, and the contact guard's D_P where its shape
+ * is shown) or marks everything (undo, reset, a rig pose); the viewer takes the union at its
+ * upload and re-normals and uploads only those ranges (--stream copies only those). Nothing
+ * is recorded before the first take, so a session nobody asks pays nothing.
  *
  * Ranges are (first, count) pairs of uint32, increasing, disjoint and not adjacent.
  * Errors: none; an allocation that fails turns the record into "anything" (the consumer

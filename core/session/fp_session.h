@@ -386,10 +386,11 @@ const float *fp_session_base(const fp_session *s);
  *  Returns their number, 0 when nothing changed, or SIZE_MAX (*ranges NULL) when anything
  *  may have: the first call (which starts the record: a session nobody asks records
  *  nothing), undo, reset, a commit with a rig or the contact guard, a rig pose (channels),
- *  the contact guard's shape, an engine error, a mapping swap. Otherwise the ranges are the
- *  union of the engine's per frame (fp_engine_step_touched: blocks of 16 vertices in a
- *  support now or at its last run). *ranges is the session's, valid until the next call.
- *  Session thread. */
+ *  an engine error, a mapping swap. Otherwise the ranges are the union of the engine's per
+ *  frame (fp_engine_step_touched: blocks of 16 vertices in a support now or at its last
+ *  run), and where the contact guard's shape is shown, now or the frame before, of its D_P
+ *  (the blocks where that shape may differ from the posed base: fp_cg_ranges). *ranges is
+ *  the session's, valid until the next call. Session thread. */
 size_t fp_session_touched(fp_session *s, const uint32_t **ranges);
 /** The same for fp_session_base: a commit's ranges (the engine's), SIZE_MAX after undo,
  *  reset, a commit with a rig or through the contact guard. */
