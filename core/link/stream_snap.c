@@ -12,7 +12,6 @@
 #include "facepuppet/decimal.h"
 
 #include <errno.h>
-#include <pthread.h>
 #include <sched.h>
 #include <stdlib.h>
 #include <string.h>
@@ -48,14 +47,11 @@ static bool helper_poll(void *user, fp_worker *w)
     return true;
 }
 
-/* SCHED_BATCH, as the sender thread (stream_tx.c): woken, it does not preempt the frame
- * thread on its CPU (a wake took up to 3.6 ms so on the 1.7M face); it runs on the other
- * (best effort: the default policy where refused). */
+/* SCHED_BATCH, as the sender thread (fp__stream_batch). */
 static void helper_enter(void *user)
 {
     (void)user;
-    const struct sched_param batch = {0};
-    (void)pthread_setschedparam(pthread_self(), SCHED_BATCH, &batch);
+    fp__stream_batch();
 }
 
 int fp__stream_snap_open(fp_stream *s)

@@ -247,14 +247,16 @@ static void send_hand(fp_stream *s, const stream_hand *h)
     atomic_store_explicit(&s->sent_frames, done + 1, memory_order_release);
 }
 
+void fp__stream_batch(void)
+{
+    const struct sched_param batch = {0};
+    (void)pthread_setschedparam(pthread_self(), SCHED_BATCH, &batch);
+}
+
 void *fp__stream_tx(void *arg)
 {
     fp_stream *s = arg;
-    /* SCHED_BATCH: woken by a frame's hand-over it does not preempt the frame thread on its
-     * CPU (wakeup preemption), it runs when a CPU is free (the frame thread sleeps most of a
-     * period); best effort, the default policy where refused */
-    const struct sched_param batch = {0};
-    (void)pthread_setschedparam(pthread_self(), SCHED_BATCH, &batch);
+    fp__stream_batch();
     for (;;) {
         pthread_mutex_lock(&s->mu);
         while (atomic_load_explicit(&s->tail, memory_order_relaxed) ==

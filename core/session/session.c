@@ -137,12 +137,11 @@ static void on_event(void *user, size_t input, const fp_event *ev)
  * shape shown differs from the reference (the posed base; its own changes are recorded where
  * they happen) only where it may: the guard's shape at its D_P (fp_cg_ranges), the engine's
  * output (or the rig's blend of it, or the reference) in the engine's ranges, which hold last
- * frame's too. So the change lies in the engine's ranges, the D_P now when the guard's shape
- * is shown and the one kept at its last showing (guard_dp). */
-static void changed_guard(fp_session *s, int was, const uint32_t *touched, size_t ntouched)
+ * frame's too. So the change lies in the engine's ranges (added by the caller), the D_P now
+ * when the guard's shape is shown and the one kept at its last showing (guard_dp). */
+static void changed_guard(fp_session *s, int was)
 {
     if (was == SHOWN_OTHER) fp_changed_add(&s->shown_changed, s->guard_dp, s->guard_dp_n);
-    fp_changed_add(&s->shown_changed, touched, ntouched);
     if (s->shown_kind != SHOWN_OTHER) return;
     const uint32_t *gr = NULL;
     size_t ng = s->shown_changed.tracking ? fp_cg_ranges(&s->cg, NULL, 0, &gr) : SIZE_MAX;
@@ -160,7 +159,6 @@ static void changed_guard(fp_session *s, int was, const uint32_t *touched, size_
  * (step_contact.h), shown; what changed since the last frame (was: what it showed) */
 static void show_deformed(fp_session *s, bool commit, int was, fp_frame_stats *st)
 {
-    const uint32_t *ranges;
     const float *ref = s->shown; /* the posed base */
     const uint32_t *touched;
     size_t ntouched = fp_engine_step_touched(&s->engine, &touched);
@@ -170,12 +168,10 @@ static void show_deformed(fp_session *s, bool commit, int was, fp_frame_stats *s
                            .radius = s->radius};
     s->shown = fp_cg_run(&s->cg, &f, &s->log, st);
     /* the output differs from the last only in the engine's ranges (blocks in a support now
-     * or at its last run), unless the guard's shape is or was shown */
+     * or at its last run), and the guard's D_P where its shape is or was shown */
     s->shown_kind = fp_cg_shows(&s->cg, s->shown) ? SHOWN_OTHER : SHOWN_ENGINE;
-    if (s->shown_kind == SHOWN_OTHER || was == SHOWN_OTHER)
-        changed_guard(s, was, touched, ntouched);
-    else
-        fp_changed_add(&s->shown_changed, ranges, fp_engine_step_touched(&s->engine, &ranges));
+    fp_changed_add(&s->shown_changed, touched, ntouched);
+    if (s->shown_kind == SHOWN_OTHER || was == SHOWN_OTHER) changed_guard(s, was);
 }
 
 /* Steps 5 and 6 on the control set the engine is given (after the rig's clamp), on the
