@@ -299,10 +299,11 @@ double fp_rig_finger_limit(const fp_rig *rig, const float *posed, const float st
                            double radius);
 
 /** The finger limit by blocks (the same result as fp_rig_finger_limit, bit for bit, for a
- *  fraction of its cost): the slope vertices in blocks of 32 consecutive ones (ascending
- *  vertex index), each with its largest slope (fixed by the rig) and its box in the posed
- *  base, stored steepest block first with a copy of its vertices' posed positions and
- *  slopes. A query visits the blocks steepest first, skips those whose box is at least
+ *  fraction of its cost): the slope vertices in blocks of 32 (consecutive in the Morton
+ *  order of their positions in the first posed base given, the order then kept; before
+ *  that in vertex order), each with its largest slope and its directions' box (fixed by the
+ *  rig) and its box in the posed base, stored steepest block first with a copy of its
+ *  vertices' posed positions and slopes. A query visits the blocks steepest first, skips those whose box is at least
  *  `radius` away (a lower bound in the same float arithmetic as the full scan, so nothing
  *  within reach is skipped) and stops at the first block no steeper than the slope found.
  *  The index refers to the rig (which must outlive it):
@@ -337,8 +338,12 @@ double fp_rig_finger_limit_indexed(const fp_rig_slope_index *ix, const float sta
 double fp_rig_finger_limit_toward(const fp_rig *rig, const float *posed, const float start[3], const float end[3],
                                   double radius);
 /** fp_rig_finger_limit_toward through the index (blocks steepest first, skipped when their
- *  box is at least `radius` from the segment's box, stopped at the first block no steeper
- *  than the push found): the same value as the brute force, for the posed base given last.
+ *  box is at least `radius` from the segment's box or when their slope times the most of u
+ *  their directions' box can push against times psi at that box gap is no more than the
+ *  push found, stopped at the first block no steeper than the push found): the same value
+ *  as the brute force, for the posed base given last. On the ICT face's anchored frames
+ *  (one finger, widened supports) the rig's clamp took 30-80 us a frame with blocks in
+ *  vertex order, about a third of that so (docs/performance.md).
  *  [any-thread] on an index not being updated; no allocation. */
 double fp_rig_finger_limit_toward_indexed(const fp_rig_slope_index *ix, const float start[3], const float end[3],
                                           double radius);

@@ -196,8 +196,11 @@ double fp_rig_finger_limit_toward(const fp_rig *r, const float *posed, const flo
 
 /* ---- the finger limit by blocks of slope vertices ------------------------------------- */
 
-/* Slope vertices per block: consecutive entries of slope_v (ascending vertex index; a mesh's
- * vertex order keeps neighbours close, as the engine's blocks assume). */
+/* Slope vertices per block: until the first posed base is given, consecutive entries of
+ * slope_v (ascending vertex index); from then on consecutive in the Morton order of that
+ * base's positions, so that each block's box and directions' box are tight (a mesh's vertex
+ * order need not keep neighbours close: on the ICT face a block's box spanned the jaw, and
+ * the directional query scanned 100-170 of 255 blocks). */
 #define SLOPE_BLOCK 32
 
 typedef struct {
@@ -206,6 +209,16 @@ typedef struct {
     float gmax;          /* the block's largest slope (the rig's, fixed) */
     uint32_t count;      /* slope vertices in it (SLOPE_BLOCK but for one) */
 } slope_block;
+
+typedef struct {
+    float g;
+    uint32_t b;
+} block_key;
+
+typedef struct {
+    uint32_t code; /* Morton code of the entry's position */
+    uint32_t k;    /* the entry */
+} spatial_key;
 
 struct fp_rig_slope_index {
     const fp_rig *rig;
@@ -216,12 +229,12 @@ struct fp_rig_slope_index {
     float *dir;          /* nb x SLOPE_BLOCK x 3: their grad m directions (slope_dir) */
     uint32_t *slot;      /* slope_count: where entry k of slope_v sits in p (block = slot /
                             SLOPE_BLOCK) */
+    block_key *keys;     /* nb: layout's scratch */
+    spatial_key *order;  /* slope_count: the entries by position (layout_spatial's scratch) */
+    uint32_t *ord;       /* slope_count: the entries in the order laid out */
+    bool spatial;        /* the blocks hold entries close in the first posed base given
+                            (fp_rig_slope_index_set), not in vertex order */
 };
-
-typedef struct {
-    float g;
-    uint32_t b;
-} block_key;
 
 static int by_gmax_desc(const void *a, const void *b)
 {
@@ -229,30 +242,16 @@ static int by_gmax_desc(const void *a, const void *b)
     return x->g > y->g ? -1 : x->g < y->g ? 1 : (x->b > y->b) - (x->b < y->b);
 }
 
-int fp_rig_slope_index_create(const fp_rig *r, fp_rig_slope_index **out)
+/* Blocks of SLOPE_BLOCK entries in the order ord (slope_count entry indices), sorted
+ * steepest first: their slopes, directions and directions' boxes (the positions' boxes are
+ * _set's). keys: room for nb. */
+static void layout(fp_rig_slope_index *ix, const uint32_t *ord, block_key *keys)
 {
-    if (!out) return -EINVAL;
-    *out = NULL;
-    if (!r || !r->g) return -EINVAL;
-    fp_rig_slope_index *ix = calloc(1, sizeof *ix);
-    if (!ix) return -ENOMEM;
-    ix->rig = r;
-    ix->nb = (r->slope_count + SLOPE_BLOCK - 1) / SLOPE_BLOCK;
-    size_t nb = ix->nb ? ix->nb : 1;
-    ix->block = calloc(nb, sizeof *ix->block);
-    ix->p = calloc(nb * SLOPE_BLOCK * 4, sizeof *ix->p);
-    ix->dir = calloc(nb * SLOPE_BLOCK * 3, sizeof *ix->dir);
-    ix->slot = malloc((r->slope_count ? r->slope_count : 1) * sizeof *ix->slot);
-    block_key *keys = malloc(nb * sizeof *keys);
-    if (!ix->block || !ix->p || !ix->dir || !ix->slot || !keys) {
-        free(keys);
-        fp_rig_slope_index_destroy(&ix);
-        return -ENOMEM;
-    }
+    const fp_rig *r = ix->rig;
     for (size_t b = 0; b < ix->nb; b++) {
         size_t k1 = (b + 1) * SLOPE_BLOCK < r->slope_count ? (b + 1) * SLOPE_BLOCK : r->slope_count;
         float g = 0;
-        for (size_t k = b * SLOPE_BLOCK; k < k1; k++) g = r->g[r->slope_v[k]] > g ? r->g[r->slope_v[k]] : g;
+        for (size_t j = b * SLOPE_BLOCK; j < k1; j++) g = fmaxf(g, r->g[r->slope_v[ord[j]]]);
         keys[b] = (block_key){g, (uint32_t)b};
     }
     qsort(keys, ix->nb, sizeof *keys, by_gmax_desc);
@@ -266,8 +265,9 @@ int fp_rig_slope_index_create(const fp_rig *r, fp_rig_slope_index **out)
             bl->lo[i] = bl->dlo[i] = INFINITY; /* the positions' until _set */
             bl->hi[i] = bl->dhi[i] = -INFINITY;
         }
-        for (size_t k = k0; k < k1; k++) {
-            ix->slot[k] = (uint32_t)(o * SLOPE_BLOCK + (k - k0));
+        for (size_t j = k0; j < k1; j++) {
+            const size_t k = ord[j];
+            ix->slot[k] = (uint32_t)(o * SLOPE_BLOCK + (j - k0));
             ix->p[4 * (size_t)ix->slot[k] + 3] = r->g[r->slope_v[k]];
             memcpy(&ix->dir[3 * (size_t)ix->slot[k]], &r->slope_dir[3 * k], 3 * sizeof *ix->dir);
             for (int i = 0; i < 3; i++) {
@@ -276,7 +276,31 @@ int fp_rig_slope_index_create(const fp_rig *r, fp_rig_slope_index **out)
             }
         }
     }
-    free(keys);
+}
+
+int fp_rig_slope_index_create(const fp_rig *r, fp_rig_slope_index **out)
+{
+    if (!out) return -EINVAL;
+    *out = NULL;
+    if (!r || !r->g) return -EINVAL;
+    fp_rig_slope_index *ix = calloc(1, sizeof *ix);
+    if (!ix) return -ENOMEM;
+    ix->rig = r;
+    ix->nb = (r->slope_count + SLOPE_BLOCK - 1) / SLOPE_BLOCK;
+    size_t nb = ix->nb ? ix->nb : 1, ns = r->slope_count ? r->slope_count : 1;
+    ix->block = calloc(nb, sizeof *ix->block);
+    ix->p = calloc(nb * SLOPE_BLOCK * 4, sizeof *ix->p);
+    ix->dir = calloc(nb * SLOPE_BLOCK * 3, sizeof *ix->dir);
+    ix->slot = malloc(ns * sizeof *ix->slot);
+    ix->keys = malloc(nb * sizeof *ix->keys);
+    ix->order = malloc(ns * sizeof *ix->order);
+    ix->ord = malloc(ns * sizeof *ix->ord);
+    if (!ix->block || !ix->p || !ix->dir || !ix->slot || !ix->keys || !ix->order || !ix->ord) {
+        fp_rig_slope_index_destroy(&ix);
+        return -ENOMEM;
+    }
+    for (size_t k = 0; k < r->slope_count; k++) ix->ord[k] = (uint32_t)k;
+    layout(ix, ix->ord, ix->keys);
     *out = ix;
     return 0;
 }
@@ -288,6 +312,9 @@ void fp_rig_slope_index_destroy(fp_rig_slope_index **ix)
     free((*ix)->p);
     free((*ix)->dir);
     free((*ix)->slot);
+    free((*ix)->keys);
+    free((*ix)->order);
+    free((*ix)->ord);
     free(*ix);
     *ix = NULL;
 }
@@ -306,9 +333,52 @@ static void slope_put(fp_rig_slope_index *ix, size_t k, const float *posed)
     }
 }
 
+static uint32_t spread10(uint32_t x) /* 10 bits to every third of 30 */
+{
+    x &= 0x3ffu;
+    x = (x | x << 16) & 0x030000ffu;
+    x = (x | x << 8) & 0x0300f00fu;
+    x = (x | x << 4) & 0x030c30c3u;
+    x = (x | x << 2) & 0x09249249u;
+    return x;
+}
+
+static int by_code(const void *a, const void *b)
+{
+    const spatial_key *x = a, *y = b;
+    return x->code != y->code ? (x->code > y->code) - (x->code < y->code) : (x->k > y->k) - (x->k < y->k);
+}
+
+/* The entries in the Morton order of their positions in posed (ties by entry), laid out
+ * anew: blocks of neighbours. Which block holds a vertex changes no query's result. */
+static void layout_spatial(fp_rig_slope_index *ix, const float *posed)
+{
+    const fp_rig *r = ix->rig;
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t k = 0; k < r->slope_count; k++)
+        for (int i = 0; i < 3; i++) {
+            lo[i] = fminf(lo[i], posed[3 * (size_t)r->slope_v[k] + i]);
+            hi[i] = fmaxf(hi[i], posed[3 * (size_t)r->slope_v[k] + i]);
+        }
+    for (size_t k = 0; k < r->slope_count; k++) {
+        uint32_t code = 0;
+        for (int i = 0; i < 3; i++) {
+            double x = hi[i] > lo[i] ? (posed[3 * (size_t)r->slope_v[k] + i] - lo[i]) / ((double)hi[i] - lo[i]) : 0;
+            x = x * 1023.0; /* NaN (an unusable position) to cell 0 */
+            code |= spread10(x > 0 ? (x < 1023 ? (uint32_t)x : 1023u) : 0u) << i;
+        }
+        ix->order[k] = (spatial_key){code, (uint32_t)k};
+    }
+    qsort(ix->order, r->slope_count, sizeof *ix->order, by_code);
+    for (size_t j = 0; j < r->slope_count; j++) ix->ord[j] = ix->order[j].k;
+    layout(ix, ix->ord, ix->keys);
+    ix->spatial = true;
+}
+
 void fp_rig_slope_index_set(fp_rig_slope_index *ix, const float *posed)
 {
     if (!ix || !posed) return;
+    if (!ix->spatial) layout_spatial(ix, posed);
     for (size_t b = 0; b < ix->nb; b++)
         for (int i = 0; i < 3; i++) ix->block[b].lo[i] = INFINITY, ix->block[b].hi[i] = -INFINITY;
     for (size_t k = 0; k < ix->rig->slope_count; k++) slope_put(ix, k, posed);
