@@ -692,6 +692,11 @@ static int parse_event(fp_eventlog_reader *r, char *line, fp_event *out)
         if (strlen(tok) >= sizeof out->channel.name)
             return reader_fail(r, -EBADMSG, col_of(&c, tok), "channel name longer than %zu bytes",
                                sizeof out->channel.name - 1);
+        for (const char *q = tok; *q; q++) /* what the writer writes: printable ASCII, no space */
+            if (*q <= ' ' || *q > '~')
+                return reader_fail(r, -EBADMSG, col_of(&c, q),
+                                   "channel name with byte 0x%02x (printable ASCII only)",
+                                   (unsigned)(unsigned char)*q);
         snprintf(out->channel.name, sizeof out->channel.name, "%s", tok);
         rc = parse_floats(&c, &out->channel.value, 1, "the channel's value");
         break;

@@ -394,8 +394,10 @@ static int parse_keys(audio_input *a, const fp_param *params, size_t n, bool *re
             }
             a->fast = b == 1;
         } else if (!strcmp(k, "channel")) {
-            if (!*v || strlen(v) >= sizeof a->p.channel) {
-                snprintf(err, errlen, "audio: channel=%s: give a name of 1 to 31 bytes", v);
+            bool printable = true; /* as event logs write it (record=): no space, ASCII */
+            for (const char *q = v; *q; q++) printable &= *q > ' ' && *q <= '~';
+            if (!*v || strlen(v) >= sizeof a->p.channel || !printable) {
+                snprintf(err, errlen, "audio: channel=%s: give a name of 1 to 31 printable ASCII characters, no spaces", v);
                 rc = -EINVAL;
             }
             snprintf(a->p.channel, sizeof a->p.channel, "%s", v);

@@ -15,7 +15,7 @@
 #  5. input-audio: run --input audio:speech.wav: jaw.open above 0.3 within two frames of each
 #     syllable's onset, below 0.1 in the silences (0.25 s after each syllable's end on); the
 #     check must fail for onsets moved 0.1 s early; `plugins check` passes input-audio (its
-#     channel events well-formed).
+#     channel events well-formed); a channel name with a space is refused before any work.
 #  6. --audio-in file:ramp.wav (an emulated microphone heard in real time, every sample saying
 #     where it is): the take's SLATE_TNNN.mic.wav spans its frames (last frame's end, within
 #     1/60 s), is one run of the ramp without a gap or a repeat, and the header names it; an
@@ -124,6 +124,11 @@ early=$(echo "$onsets" | awk -F, '{ printf "%.4f,%.4f,%.4f", $1 - 0.1, $2 - 0.1,
 "$fp" plugins check "$build/lib/facepuppet/input-audio.so" --arg "$tmp/speech.wav" >"$tmp/check.out" 2>&1 ||
     { cat "$tmp/check.out"; fail "plugins check of input-audio"; }
 grep -E "events|passed" "$tmp/check.out"
+# a channel name an event log could not record (record=) is refused before the performance
+"$fp" run "${pd[@]}" --mesh "$mesh" --input "audio:$tmp/speech.wav,fast=1,channel=jaw open" \
+    -o "$tmp/bad.obj" -q >/dev/null 2>"$tmp/bad.err" && fail "channel=\"jaw open\" was taken"
+grep -q "printable ASCII" "$tmp/bad.err" || { cat "$tmp/bad.err"; fail "channel=\"jaw open\": no reason given"; }
+[ ! -e "$tmp/bad.obj" ] || fail "channel=\"jaw open\": an output was written"
 
 # ---- 6. --audio-in ---------------------------------------------------------------------------
 "$tool" ramp "$tmp/ramp.wav" 30 || fail "ramp"

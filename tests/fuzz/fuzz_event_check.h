@@ -1,6 +1,7 @@
 /* fuzz_event_check.h: what every decoded fp_event must satisfy, whatever the input: a known
  * type with its struct's size, hand -1, 0 or 1, every float finite, angles' valid mask within
- * the 22 sensors, status text NUL-terminated. Aborts otherwise. Test code only. */
+ * the 22 sensors, status text NUL-terminated, a channel's name printable ASCII. Aborts
+ * otherwise. Test code only. */
 #ifndef FP_FUZZ_EVENT_CHECK_H
 #define FP_FUZZ_EVENT_CHECK_H
 
@@ -41,6 +42,15 @@ static void fuzz_check_event(const fp_event *e)
         if (h->size < sizeof e->status || !memchr(e->status.text, 0, sizeof e->status.text))
             abort();
         break;
+    case FP_EVENT_CHANNEL: { /* a name of printable ASCII without spaces, a finite value */
+        if (h->size < sizeof e->channel) abort();
+        const char *z = memchr(e->channel.name, 0, sizeof e->channel.name);
+        if (!z || z == e->channel.name) abort();
+        for (const char *q = e->channel.name; q < z; q++)
+            if (*q <= ' ' || *q > '~') abort();
+        fuzz_check_floats(&e->channel.value, 1);
+        break;
+    }
     default:
         abort();
     }

@@ -369,6 +369,9 @@ static void reader_errors_name_line_and_column(void **state)
     expect_read_error("e13", "100 angles left 0x400000 0\n", 2, 17, "valid mask 0x400000 has bits beyond");
     expect_read_error("e14", "100 button - 1 1 1 source=1 source=2\n", 2, 29, "unexpected \"source=2\"");
     expect_read_error("e15", "99999999999999999999 button - 1 1 1\n", 2, 1, "time 99999999999999999999 out of range");
+    /* a name the writer would refuse (fuzz_eventlog found one read and not written back) */
+    expect_read_error("e16", "100 channel - jaw\x01open 0.5\n", 2, 18, "channel name with byte 0x01");
+    expect_read_error("e17", "100 channel - jaw\xc3\xa9 0.5\n", 2, 18, "channel name with byte 0xc3");
 }
 
 /* Floats are decimals, as every number facepuppet reads: strtof's hexadecimal floats were
