@@ -453,13 +453,16 @@ double fp_rig_finger_limit_toward_indexed(const fp_rig_slope_index *ix, const fl
         /* the most any vertex here can push: its largest share of u against grad m (the
          * directions' box: a linear function's maximum over it is at a corner), over by
          * 1e-6 for the vertices' own rounding (about 1e-16 here), times the Wendland weight
-         * at the box gap (psi decreasing, over by 1e-9 for the rounding of the distances).
-         * A block that cannot beat the push found is skipped: the result stays the brute
-         * force's, bit for bit (a push equal to cmax changes nothing there either) */
+         * at the box gap (psi decreasing), over by a part in 1e9 and 1e-20 for the rounding
+         * of the distances (about 1e-15 of r: relative to psi, 4e-15 / (1 - r), under 1e-9
+         * where psi is over 1e-20). A block that cannot beat the push found is skipped: the
+         * result stays the brute force's, bit for bit (a push equal to cmax changes nothing
+         * there either) */
         double share = 1e-6;
         for (int i = 0; i < 3; i++) share += fmax(-(double)bl->dlo[i] * u[i], -(double)bl->dhi[i] * u[i]);
         if (share <= 0) continue; /* every vertex pulls away or runs along: push 0 */
-        if (bl->gmax * fmin(share, 1.0 + 1e-6) * wendland(sqrt(q) / radius) * (1 + 1e-9) <= cmax) continue;
+        double w = wendland(sqrt(q) / radius) * (1 + 1e-9) + 1e-20;
+        if (bl->gmax * fmin(share, 1.0 + 1e-6) * w <= cmax) continue;
         const float *p = &ix->p[4 * b * SLOPE_BLOCK], *dir = &ix->dir[3 * b * SLOPE_BLOCK];
         for (uint32_t k = 0; k < bl->count; k++, p += 4, dir += 3) {
             double c = push_of(p[3], dir, u);
