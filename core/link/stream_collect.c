@@ -70,6 +70,5 @@ int fp__stream_collect(fp_stream *s, const stream_hand *h)
     }
     atomic_fetch_add_explicit(&s->clipped, clipped, memory_order_relaxed);
     rec->m = lost ? 0 : m;
-    rec->full = false;
     return lost ? -ENOMEM : 0;
 }

@@ -20,7 +20,6 @@
 typedef struct stream_job {
     uint64_t frame;
     bool key;                    /* sent as a keyframe: the sender's whole state */
-    bool full;                   /* the records are every non-zero offset (a keyframe's) */
     double t;
     char tc[16];
     float channels[FP_STREAM_MAX_CHANNELS];

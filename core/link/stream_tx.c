@@ -59,7 +59,7 @@ static const stream_job *keyframe(fp_stream *s, const stream_job *j)
         memcpy(k->q + 3 * m, q, 3 * sizeof *q);
         m++;
     }
-    k->frame = j->frame, k->key = true, k->full = true, k->t = j->t, k->m = m;
+    k->frame = j->frame, k->key = true, k->t = j->t, k->m = m;
     memcpy(k->tc, j->tc, sizeof k->tc);
     memcpy(k->channels, j->channels, sizeof k->channels);
     return k;

@@ -230,8 +230,8 @@ struct fp_rig_slope_index {
     uint32_t *slot;      /* slope_count: where entry k of slope_v sits in p (block = slot /
                             SLOPE_BLOCK) */
     block_key *keys;     /* nb: layout's scratch */
-    spatial_key *order;  /* slope_count: the entries by position (layout_spatial's scratch) */
-    uint32_t *ord;       /* slope_count: the entries in the order laid out */
+    spatial_key *order;  /* slope_count: the entries in the order laid out (by position
+                            once layout_spatial ran; code 0 and entry order before) */
     bool spatial;        /* the blocks hold entries close in the first posed base given
                             (fp_rig_slope_index_set), not in vertex order */
 };
@@ -242,16 +242,17 @@ static int by_gmax_desc(const void *a, const void *b)
     return x->g > y->g ? -1 : x->g < y->g ? 1 : (x->b > y->b) - (x->b < y->b);
 }
 
-/* Blocks of SLOPE_BLOCK entries in the order ord (slope_count entry indices), sorted
- * steepest first: their slopes, directions and directions' boxes (the positions' boxes are
- * _set's). keys: room for nb. */
-static void layout(fp_rig_slope_index *ix, const uint32_t *ord, block_key *keys)
+/* Blocks of SLOPE_BLOCK entries in the order of ix->order, sorted steepest first: their
+ * slopes, directions and directions' boxes (the positions' boxes are _set's). */
+static void layout(fp_rig_slope_index *ix)
 {
     const fp_rig *r = ix->rig;
+    const spatial_key *ord = ix->order;
+    block_key *keys = ix->keys;
     for (size_t b = 0; b < ix->nb; b++) {
         size_t k1 = (b + 1) * SLOPE_BLOCK < r->slope_count ? (b + 1) * SLOPE_BLOCK : r->slope_count;
         float g = 0;
-        for (size_t j = b * SLOPE_BLOCK; j < k1; j++) g = fmaxf(g, r->g[r->slope_v[ord[j]]]);
+        for (size_t j = b * SLOPE_BLOCK; j < k1; j++) g = fmaxf(g, r->g[r->slope_v[ord[j].k]]);
         keys[b] = (block_key){g, (uint32_t)b};
     }
     qsort(keys, ix->nb, sizeof *keys, by_gmax_desc);
@@ -266,7 +267,7 @@ static void layout(fp_rig_slope_index *ix, const uint32_t *ord, block_key *keys)
             bl->hi[i] = bl->dhi[i] = -INFINITY;
         }
         for (size_t j = k0; j < k1; j++) {
-            const size_t k = ord[j];
+            const size_t k = ord[j].k;
             ix->slot[k] = (uint32_t)(o * SLOPE_BLOCK + (j - k0));
             ix->p[4 * (size_t)ix->slot[k] + 3] = r->g[r->slope_v[k]];
             memcpy(&ix->dir[3 * (size_t)ix->slot[k]], &r->slope_dir[3 * k], 3 * sizeof *ix->dir);
@@ -294,13 +295,12 @@ int fp_rig_slope_index_create(const fp_rig *r, fp_rig_slope_index **out)
     ix->slot = malloc(ns * sizeof *ix->slot);
     ix->keys = malloc(nb * sizeof *ix->keys);
     ix->order = malloc(ns * sizeof *ix->order);
-    ix->ord = malloc(ns * sizeof *ix->ord);
-    if (!ix->block || !ix->p || !ix->dir || !ix->slot || !ix->keys || !ix->order || !ix->ord) {
+    if (!ix->block || !ix->p || !ix->dir || !ix->slot || !ix->keys || !ix->order) {
         fp_rig_slope_index_destroy(&ix);
         return -ENOMEM;
     }
-    for (size_t k = 0; k < r->slope_count; k++) ix->ord[k] = (uint32_t)k;
-    layout(ix, ix->ord, ix->keys);
+    for (size_t k = 0; k < r->slope_count; k++) ix->order[k] = (spatial_key){0, (uint32_t)k};
+    layout(ix);
     *out = ix;
     return 0;
 }
@@ -314,7 +314,6 @@ void fp_rig_slope_index_destroy(fp_rig_slope_index **ix)
     free((*ix)->slot);
     free((*ix)->keys);
     free((*ix)->order);
-    free((*ix)->ord);
     free(*ix);
     *ix = NULL;
 }
@@ -370,8 +369,7 @@ static void layout_spatial(fp_rig_slope_index *ix, const float *posed)
         ix->order[k] = (spatial_key){code, (uint32_t)k};
     }
     qsort(ix->order, r->slope_count, sizeof *ix->order, by_code);
-    for (size_t j = 0; j < r->slope_count; j++) ix->ord[j] = ix->order[j].k;
-    layout(ix, ix->ord, ix->keys);
+    layout(ix);
     ix->spatial = true;
 }
 
