@@ -468,6 +468,10 @@ typedef struct csrbf_guard {
     int max_substeps;    /* maps composed at most; 0: CSRBF_GUARD_MAX_SUBSTEPS; 1: limit only
                             (the anchored mode: the start points stay, the factor is reused) */
     unsigned eval_flags; /* flags for csrbf_evaluate (CSRBF_EVAL_JACOBIAN) */
+    uint64_t max_pairs;  /* 0: none; else a map past the CSRBF_GUARD_MAX_SUBSTEPS-th is composed
+                            only while the (vertex, centre) pairs the maps so far evaluated
+                            are under it: the default's maps always, more where they are
+                            cheap (a small support, a small mesh) */
 } csrbf_guard;
 
 /** One guarded step: deformed = T_k o ... o T_1 (shape), each T_j injective (bound <= margin),
@@ -478,7 +482,8 @@ typedef struct csrbf_guard {
  *  j = 1), solves for the end points, limits per cluster (csrbf_solver_limit_end_points:
  *  t_C), evaluates on the shape so far, and moves p_i <- p_i + t_C (end_i - p_i); it stops
  *  when every t_C = 1 (T(start_i) = end_i, the composition of injective maps is injective)
- *  or after max_substeps maps (the rest of the motion is dropped; CSRBF_WARN_LIMITED).
+ *  or after max_substeps maps, or past the CSRBF_GUARD_MAX_SUBSTEPS-th once the maps so far
+ *  evaluated max_pairs pairs (the rest of the motion is dropped; CSRBF_WARN_LIMITED).
  *  When start equals the solver's current start points bit for bit, the factor is reused.
  *  Cost: a step that is injective already costs one update plus the bound (O(m^2) for m
  *  fingertips: a few per cent of the evaluation); otherwise each sub-step costs a

@@ -351,6 +351,7 @@ static int guarded(csrbf_solver *s, const csrbf_points *shape, follow *fw, size_
     double margin = guard && guard->margin != 0.0 ? guard->margin : CSRBF_GUARD_MARGIN;
     int maxk = guard && guard->max_substeps != 0 ? guard->max_substeps : CSRBF_GUARD_MAX_SUBSTEPS;
     unsigned flags = guard ? guard->eval_flags : 0u;
+    uint64_t max_pairs = guard ? guard->max_pairs : 0u, pairs = 0;
     if (!(margin > 0.0 && margin < 1.0) || maxk < 1) {
         s->lim_note.pending = 0;
         snprintf(s->msg, sizeof s->msg,
@@ -398,18 +399,19 @@ static int guarded(csrbf_solver *s, const csrbf_points *shape, follow *fw, size_
         if (ls.bound_after > out.bound_after) out.bound_after = ls.bound_after;
         csrbf_eval_stats es;
         if (!fw) {
-            rc = csrbf_evaluate(s, cur, deformed, flags, st ? &es : NULL);
+            rc = csrbf_evaluate(s, cur, deformed, flags, st || max_pairs ? &es : NULL);
         } else if (j == 0) { /* the shape's own touch: its blocks of the last call restored */
             const uint32_t *w = csrbf_touch_prev(fw->touch, &fw->kw, &fw->wall);
             memcpy(fw->W, w, fw->kw * sizeof *w);
-            rc = csrbf_evaluate_touched(s, shape, fw->touch, deformed, flags, st ? &es : NULL);
+            rc = csrbf_evaluate_touched(s, shape, fw->touch, deformed, flags, st || max_pairs ? &es : NULL);
             const uint32_t *c = csrbf_touch_prev(fw->touch, &fw->kc, NULL);
             memcpy(fw->C, c, fw->kc * sizeof *c);
             memcpy(fw->U, c, fw->kc * sizeof *c);
             fw->ku = fw->kc;
         } else { /* on inter, the shape so far: only the blocks in this map's supports */
             csrbf_touch_commit(fw->itouch);
-            rc = csrbf_evaluate_touched(s, fw->inter, fw->itouch, deformed, flags, st ? &es : NULL);
+            rc = csrbf_evaluate_touched(s, fw->inter, fw->itouch, deformed, flags,
+                                        st || max_pairs ? &es : NULL);
             const uint32_t *c = csrbf_touch_prev(fw->itouch, &fw->kc, NULL);
             memcpy(fw->C, c, fw->kc * sizeof *c);
             follow_union(fw);
@@ -432,7 +434,9 @@ static int guarded(csrbf_solver *s, const csrbf_points *shape, follow *fw, size_
                 P[3 * i + a] = t < 1.0 ? (float)(P[3 * i + a] + t * (E[3 * i + a] - P[3 * i + a]))
                                        : E[3 * i + a];
         }
+        if (max_pairs) pairs += es.pairs;
         if (ls.clusters_limited == 0 || j + 1 >= maxk) break;
+        if (max_pairs && j + 1 >= CSRBF_GUARD_MAX_SUBSTEPS && pairs >= max_pairs) break;
         /* the next map acts on the shape so far */
         if (fw) { /* which differs from inter only where this map computed */
             fw->inter_set = 1;

@@ -142,7 +142,7 @@ static int composed(fp_engine_step *e, const fp_control_set *cs, float *deformed
                     csrbf_guard_stats *gs)
 {
     int rc;
-    csrbf_guard g = {FP_ENGINE_GUARD_MARGIN, CSRBF_GUARD_MAX_SUBSTEPS, 0u};
+    csrbf_guard g = {FP_ENGINE_GUARD_MARGIN, FP_ENGINE_MAX_SUBSTEPS, 0u, FP_ENGINE_MAX_PAIRS};
     if (e->jacobian) {
         csrbf_guard gj = g;
         gj.eval_flags = CSRBF_EVAL_JACOBIAN;

@@ -19,14 +19,14 @@
  *    (csrbf_solver_limit_end_points); where nothing is limited it is applied as one map
  *    (an anchored gesture reuses its factor from frame to frame);
  *  - where a cluster would be limited, the step is composed instead (csrbf_guarded_step):
- *    up to CSRBF_GUARD_MAX_SUBSTEPS injective maps, each start point travelling its
+ *    up to FP_ENGINE_MAX_SUBSTEPS injective maps, each start point travelling its
  *    cluster's share of the straight path to its end point, until every end point is
  *    reached; beyond that the rest is dropped (a composition of injective maps is
  *    injective). An unanchored step is composed on the shape so far; an anchored gesture's
  *    map is composed anew from its base every frame (so the shape depends on this frame's
  *    control set alone, and a take plays back bit for bit).
  * So the face follows the fingers: a drag reaches its end points in sub-steps, and only
- * points that converge (where no injective map of CSRBF_GUARD_MAX_SUBSTEPS steps can bring
+ * points that converge (where no injective map of FP_ENGINE_MAX_SUBSTEPS steps can bring
  * them together) stop short. What the guard did is in fp_engine_result (per frame) and,
  * once per gesture (not per frame), a log line: "fold-over guard composed ..." or
  * "fold-over guard limited the deformation to 63% this gesture ...".
@@ -60,6 +60,16 @@ extern "C" {
  *  reach that injectivity allows per map (a single centre folds at |alpha| = R / max|psi'|,
  *  0.474 R for psi31). Smaller margins cost more sub-steps. */
 #define FP_ENGINE_GUARD_MARGIN 0.9
+
+/** The composed step's limits (csrbf_guard max_substeps, max_pairs): up to 64 maps, those
+ *  past the engine's default 16 only while the maps so far evaluated under 4M (vertex,
+ *  centre) pairs (about 9 ms on the project's 2-core VM). Fingertips that grab skin a few
+ *  millimetres apart and pull it apart need dozens of maps, as each map may stretch the gap
+ *  between them by only so much (a reversed three-claps on the ICT face: 60 maps, 5.4M
+ *  pairs); on a large mesh, whose maps each evaluate millions of pairs, the 16 stay the
+ *  limit. Deterministic: the count depends on the control set and the mesh, not on time. */
+#define FP_ENGINE_MAX_SUBSTEPS 64
+#define FP_ENGINE_MAX_PAIRS 4000000u
 
 typedef struct fp_engine_step {
     csrbf_solver *solver;         /* NULL until the first run */

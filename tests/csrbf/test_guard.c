@@ -409,6 +409,60 @@ static void test_guarded_step_gentle(void **state)
     free(o2);
 }
 
+/* Skin grabbed by two fingertips close together and pulled far apart (0.01 R to 1.2 R): each
+ * map may stretch the gap only so much (the bound grows as 1 / gap^2), so the default 16 maps
+ * stop short; 64 maps reach it, with or without a pairs budget that allows them, and a budget
+ * already spent keeps the default's 16. Every map applied is injective (no tetrahedron of the
+ * lattice turns over, det > 0 at every vertex). */
+static void test_guarded_step_pairs_budget(void **state)
+{
+    (void)state;
+    const double lo[3] = {-1.6, -1.2, -1.2}, hi[3] = {1.6, 1.2, 1.2};
+    size_t nv;
+    float *grid = lattice(20, lo, hi, &nv);
+    float *out = malloc(nv * 3 * sizeof *out);
+    csrbf_points *pts;
+    assert_int_equal(csrbf_points_create(nv, grid, &pts), CSRBF_OK);
+    const float st[6] = {-0.005f, 0, 0, 0.005f, 0, 0}, en[6] = {-0.6f, 0, 0, 0.6f, 0, 0};
+    csrbf_solver *s = make_solver(1.0, CSRBF_PSI31, CSRBF_POLY_NONE);
+    csrbf_guard_stats gs;
+    csrbf_guard g = {0};
+    g.eval_flags = CSRBF_EVAL_JACOBIAN;
+    assert_int_equal(csrbf_guarded_step(s, pts, 2, st, en, &g, out, &gs), CSRBF_WARN_LIMITED);
+    assert_int_equal(gs.substeps, CSRBF_GUARD_MAX_SUBSTEPS);
+    double reached16 = gs.reached;
+    assert_true(reached16 < 1.0);
+    uint64_t pairs16 = gs.eval.pairs;
+    g.max_substeps = 64;
+    assert_int_equal(csrbf_guarded_step(s, pts, 2, st, en, &g, out, &gs), CSRBF_WARN_SUBSTEPS);
+    int needed = gs.substeps;
+    assert_true(needed > CSRBF_GUARD_MAX_SUBSTEPS && needed <= 64);
+    assert_true(gs.reached == 1.0);
+    assert_true(gs.eval.min_jacobian_det > 0.0);
+    assert_double_le(gs.bound_after, 0.9 + 1e-12);
+    assert_int_equal(flipped_tets(grid, out, 20), 0);
+    /* a budget the maps stay under: the same composition */
+    g.max_pairs = (uint64_t)gs.eval.pairs + 1;
+    assert_int_equal(csrbf_guarded_step(s, pts, 2, st, en, &g, out, &gs), CSRBF_WARN_SUBSTEPS);
+    assert_int_equal(gs.substeps, needed);
+    /* a budget the default's maps already spent: those 16, no more */
+    g.max_pairs = pairs16 / 2;
+    assert_int_equal(csrbf_guarded_step(s, pts, 2, st, en, &g, out, &gs), CSRBF_WARN_LIMITED);
+    assert_int_equal(gs.substeps, CSRBF_GUARD_MAX_SUBSTEPS);
+    assert_true(gs.reached == reached16);
+    /* one spent part way: stops at the first map past the 16th that reaches it */
+    g.max_pairs = pairs16 + 1;
+    assert_int_equal(csrbf_guarded_step(s, pts, 2, st, en, &g, out, &gs), CSRBF_WARN_LIMITED);
+    assert_int_equal(gs.substeps, CSRBF_GUARD_MAX_SUBSTEPS + 1);
+    assert_true(gs.reached > reached16 && gs.reached < 1.0);
+    printf("  pulled apart from 0.01 R to 1.2 R: 16 maps reach %.0f%%, %d maps all of it\n",
+           100 * reached16, needed);
+    csrbf_solver_destroy(&s);
+    csrbf_points_destroy(&pts);
+    free(grid);
+    free(out);
+}
+
 /* csrbf_guarded_step_touched against csrbf_guarded_step, frame after frame on one persistent
  * output, as an unanchored session runs it: folding and gentle steps at random places, some
  * committed (the shape := the output on the touched ranges, inter kept with it). Each frame's
@@ -547,7 +601,7 @@ int main(void)
         cmocka_unit_test(test_error_codes),          cmocka_unit_test(test_pair_pulled_apart),
         cmocka_unit_test(test_single_centre_beyond_bound), cmocka_unit_test(test_bound_random),
         cmocka_unit_test(test_limit_per_cluster),    cmocka_unit_test(test_guarded_step_gentle),
-        cmocka_unit_test(test_guarded_step_touched),
+        cmocka_unit_test(test_guarded_step_touched), cmocka_unit_test(test_guarded_step_pairs_budget),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

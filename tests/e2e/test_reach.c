@@ -15,7 +15,13 @@
  * own rig instead of none: on the ICT face its finger limit near bone holds every drag to
  * about 3 mm, reach median 8-31%).
  *
- * Set FP_REACH_ONLY=FACE/RECORDING substrings to run one pair (e.g. "ict/grab"). */
+ * Set FP_REACH_ONLY=FACE/RECORDING substrings to run one pair (e.g. "ict/grab"), and
+ * FP_REACH_HANDS=DIR to read the four recordings' *_joints_mm.csv from DIR instead (copies
+ * transformed to try other hands: mirrored, reversed, faster). Forensics: FP_TEST_VERBOSE
+ * lists the frames the contact guard scaled back, FP_REACH_SAVE_FRAME=K saves frame K (to
+ * FP_REACH_SAVE) instead of the largest ask's, FP_REACH_PAIRS=1 prints the start and end
+ * distances of the vectors within 2 R of each other in each frame the fold-over guard
+ * limited (fingertips converging, or pulling apart skin they grabbed close together). */
 #define _GNU_SOURCE
 #include "fp_session.h"
 #include "fp_stats.h"
@@ -79,8 +85,12 @@ static void one_run(const char *face, const char *rec, samples *all, int *runs_c
 {
     char mesh[4300], input[4400], err[2048];
     snprintf(mesh, sizeof mesh, "%s/faces/%s", fp_test_data_dir(), face);
-    snprintf(input, sizeof input, "replay:%s/hands/leap-motion/%s_joints_mm.csv,fast=1",
-             fp_test_data_dir(), rec);
+    char hands[4200];
+    if (getenv("FP_REACH_HANDS")) /* (experiments: transformed copies of the recordings) */
+        snprintf(hands, sizeof hands, "%s", getenv("FP_REACH_HANDS"));
+    else
+        snprintf(hands, sizeof hands, "%s/hands/leap-motion", fp_test_data_dir());
+    snprintf(input, sizeof input, "replay:%s/%s_joints_mm.csv,fast=1", hands, rec);
     fp_session_options so = {0};
     so.mesh_path = mesh;
     so.inputs[0] = input;
@@ -107,7 +117,8 @@ static void one_run(const char *face, const char *rec, samples *all, int *runs_c
     samples run = {0};
     unsigned long frames = 0, active = 0, limited = 0, by_contact = 0, by_flip = 0, composed = 0;
     int substeps = 1;
-    double max_asked = 0, max_moved = 0;
+    double max_asked = 0, max_moved = 0, max_update_ms = 0;
+    uint64_t max_pairs = 0;
     for (uint64_t k = 0;; k++) {
         int64_t now = t0 + (int64_t)llround((double)k * 1e9 / 30.0);
         while (!fp_session_inputs_ready(s, now)) fp_test_nap_ms(1);
@@ -119,9 +130,30 @@ static void one_run(const char *face, const char *rec, samples *all, int *runs_c
             limited += st.guard_reached < 1.0;
             by_contact += st.collide_t < 1.0;
             by_flip += st.collide_t < 1.0 && st.collide_pairs == 0;
+            if (getenv("FP_TEST_VERBOSE") && st.collide_t < 1.0)
+                fprintf(stderr, "  frame %llu: contact kept %.3f (%s)\n", (unsigned long long)k, st.collide_t,
+                        st.collide_pairs ? "crossings" : "flips alone");
+            if (getenv("FP_REACH_SAVE_FRAME") && (uint64_t)atoll(getenv("FP_REACH_SAVE_FRAME")) == k)
+                fp_session_save(s, getenv("FP_REACH_SAVE"), err, sizeof err);
             composed += st.guard_substeps > 1;
             if (st.guard_substeps > substeps) substeps = st.guard_substeps;
+            if (st.update_ms > max_update_ms) max_update_ms = st.update_ms;
+            if (st.pairs > max_pairs) max_pairs = st.pairs;
             const fp_control_set *cs = fp_session_control_set(s);
+            if (getenv("FP_REACH_PAIRS") && st.guard_reached < 1.0) {
+                fprintf(stderr, "  frame %llu limited %.3f bound %.1f, %zu vectors:", (unsigned long long)k,
+                        st.guard_reached, st.guard_bound, cs->count);
+                for (size_t i = 0; i < cs->count; i++)
+                    for (size_t j = i + 1; j < cs->count; j++) {
+                        double ds = 0, de = 0;
+                        for (int a = 0; a < 3; a++) {
+                            ds += pow((double)cs->start[i][a] - cs->start[j][a], 2);
+                            de += pow((double)cs->end[i][a] - cs->end[j][a], 2);
+                        }
+                        if (sqrt(ds) < 2 * R) fprintf(stderr, " [%zu,%zu s %.1f e %.1f]", i, j, sqrt(ds) * mm, sqrt(de) * mm);
+                    }
+                fprintf(stderr, "\n");
+            }
             const float *base = fp_session_base(s), *pos = fp_session_positions(s);
             for (size_t i = 0; i < cs->count; i++) {
                 double d;
@@ -136,7 +168,7 @@ static void one_run(const char *face, const char *rec, samples *all, int *runs_c
                 if (asked < 1e-4 * R) continue;
                 if (asked > max_asked) {
                     max_asked = asked;
-                    if (getenv("FP_REACH_SAVE")) fp_session_save(s, getenv("FP_REACH_SAVE"), err, sizeof err);
+                    if (getenv("FP_REACH_SAVE") && !getenv("FP_REACH_SAVE_FRAME")) fp_session_save(s, getenv("FP_REACH_SAVE"), err, sizeof err);
                 }
                 push(&run, sqrt(moved) / asked);
                 if (sqrt(moved) > max_moved) max_moved = sqrt(moved);
@@ -147,8 +179,9 @@ static void one_run(const char *face, const char *rec, samples *all, int *runs_c
     double med = run.n ? fp_median(run.v, run.n) : NAN, p10 = run.n ? fp_percentile(run.v, run.n, 0.10) : NAN;
     printf("%-14.14s %-16s frames %4lu active %4lu composed %3lu (up to %2d maps) limited %3lu "
            "contact-scaled %3lu (%3lu for flips alone) vectors %4zu reach median %5.1f%% p10 %5.1f%%, largest ask %.1f mm, "
-           "largest drag %.1f mm (R %.1f mm)\n", face, rec, frames, active, composed, substeps, limited, by_contact,
-           by_flip, run.n, 100 * med, 100 * p10, max_asked * mm, max_moved * mm, R * mm);
+           "largest drag %.1f mm (R %.1f mm); slowest engine update %.1f ms, most pairs %llu\n", face, rec, frames,
+           active, composed, substeps, limited, by_contact, by_flip, run.n, 100 * med, 100 * p10, max_asked * mm,
+           max_moved * mm, R * mm, max_update_ms, (unsigned long long)max_pairs);
     fflush(stdout);
     if (run.n) {
         if (p10 < *worst_p10) *worst_p10 = p10;
