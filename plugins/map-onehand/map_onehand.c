@@ -8,7 +8,11 @@
  *
  * Whose hand: the first performer's (fp_frame_input.hands, the inputs without performer=, or
  * the first named); further performers' hands (extra_hands, ABI 1.3) are ignored: one face,
- * one puppeteer's hand.
+ * one puppeteer's hand. Which of their hands: hand=auto (the default) takes the one that is
+ * there, the right where both are, and keeps it while it stays: a left-handed performer, or
+ * a tracker that sees only a left hand, drives the face without a key. When the driving hand
+ * leaves and the other is there, that frame ends the gesture as the hand's leaving does
+ * (hold=) and the next engages the other. hand=left|right takes only that one.
  *
  * What the hand does:
  *  - The thumb is the jaw: the gap between the thumb and the fingers (jaw=opening, the
@@ -55,7 +59,7 @@
  *  - Every control vector is clamped to clamp x R (0.45 R keeps one centre's warp
  *    injective, shared/docs/csrbf.md pitfall 4; the host's fold-over guard does the rest).
  *
- * Landmark tables (hand=right; for hand=left the names' _left and _right are swapped, so
+ * Landmark tables (the right hand; for the left the names' _left and _right are swapped, so
  * that the finger nearer a corner on screen drives it):
  *   map=mouth (default): index -> mouth_corner_right, middle -> upper_lip,
  *                        ring -> mouth_corner_left, little -> brow_left + brow_right
@@ -96,7 +100,8 @@ typedef struct onehand {
     const fp_host_rig *rig_ext;            /* FP_HOST_EXT_RIG, or NULL */
 
     /* keys */
-    int hand;                              /* FP_HAND_LEFT / FP_HAND_RIGHT */
+    bool hand_auto;                        /* hand=auto: the hand that is there */
+    int hand;                              /* FP_HAND_LEFT / FP_HAND_RIGHT: the driving hand */
     jaw_mode jaw;
     double flex_range;                     /* radians of flexion for the full jaw */
     double open_range;                     /* mm of thumb-index opening for the full jaw */
@@ -109,7 +114,8 @@ typedef struct onehand {
     /* the landmark table */
     size_t count;                          /* control vectors */
     int finger[OH_SLOTS];                  /* 1..4 (FP_JOINT_TIP finger) */
-    char landmark[OH_SLOTS][OH_NAME];
+    char landmark[OH_SLOTS][OH_NAME];      /* for the right hand */
+    char landmark_left[OH_SLOTS][OH_NAME]; /* for the left: mirrored (map=), or as given */
 
     /* the gesture */
     bool engaged;                          /* the hand drives the face now */
@@ -194,11 +200,21 @@ static const fp_rig_channel_info *find_channel(const fp_rig_view *rig, const cha
     return NULL;
 }
 
-/* The first landmark of the table that the rig lacks, or NULL. */
+/* Landmark i of the driving hand's table. */
+static const char *landmark(const onehand *o, size_t i)
+{
+    return o->hand == FP_HAND_LEFT ? o->landmark_left[i] : o->landmark[i];
+}
+
+/* The first landmark of the tables that the rig lacks (the hands the keys allow), or NULL. */
 static const char *missing_landmark(const onehand *o, const fp_rig_view *rig)
 {
-    for (size_t i = 0; i < o->count; i++)
-        if (!find_landmark(rig, o->landmark[i])) return o->landmark[i];
+    for (size_t i = 0; i < o->count; i++) {
+        if ((o->hand_auto || o->hand == FP_HAND_RIGHT) && !find_landmark(rig, o->landmark[i]))
+            return o->landmark[i];
+        if ((o->hand_auto || o->hand == FP_HAND_LEFT) && !find_landmark(rig, o->landmark_left[i]))
+            return o->landmark_left[i];
+    }
     return NULL;
 }
 
@@ -285,7 +301,7 @@ static int emit(const onehand *o, const fp_rig_view *rig, const fp_frame_input *
     if (o->count > out->capacity) return -ENOSPC;
     size_t n = 0;
     for (size_t i = 0; i < o->count; i++) {
-        const fp_rig_landmark *lm = find_landmark(rig, o->landmark[i]);
+        const fp_rig_landmark *lm = find_landmark(rig, landmark(o, i));
         if (!lm) continue;
         memcpy(out->start[n], lm->position, sizeof out->start[n]);
         for (int k = 0; k < 3; k++) out->end[n][k] = lm->position[k] + (o->held[i][k] + o->last[i][k]);
@@ -330,6 +346,15 @@ static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *o
     if (FP_HAS_FIELD(in, fp_frame_input, mm_per_unit) && in->mm_per_unit > 0)
         mm_per_unit = in->mm_per_unit;
     if (!(mm_per_unit > 0) || !isfinite(mm_per_unit)) return -ERANGE;
+    /* hand=auto: the other hand takes over where the driving one is gone; a gesture of the
+     * one gone ends first (this frame, as its leaving does), the other engages next frame */
+    int other = o->hand == FP_HAND_LEFT ? FP_HAND_RIGHT : FP_HAND_LEFT;
+    bool take_other = o->hand_auto && !in->hands[o->hand].present && in->hands[other].present;
+    if (take_other && !o->engaged && !o->posed) {
+        o->hand = other;
+        o->have_anchor = false;
+        take_other = false;
+    }
     const fp_hand_pose *h = &in->hands[o->hand];
     uint32_t req = in->requested;
 
@@ -362,6 +387,10 @@ static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *o
         out->intents |= FP_INTENT_COMMIT;  /* this frame's shape becomes the base */
         end_gesture(o);
     }
+    if (take_other) { /* (a held shape, hold=1, stays: the other hand continues from it) */
+        o->hand = other;
+        o->have_anchor = false;
+    }
     return 0;
 }
 
@@ -375,8 +404,8 @@ enum {
     KEY_FINGER_MM, KEY_AUTO, KEY_STILL, KEY_STILL_MM, KEY_HOLD, KEY_CLAMP, KEY_COUNT
 };
 static const fp_param_info keys[KEY_COUNT + 1] = {
-    {.name = "hand", .type = FP_PARAM_ENUM, .default_value = "right", .choices = "left|right",
-     .description = "the hand that drives the face"},
+    {.name = "hand", .type = FP_PARAM_ENUM, .default_value = "auto", .choices = "auto|left|right",
+     .description = "the hand that drives the face: auto, the one there (the right where both are)"},
     {.name = "jaw", .type = FP_PARAM_ENUM, .default_value = "opening", .choices = "flexion|opening",
      .description = "jaw.open from the thumb-to-index opening (a hand puppet's mouth), or from the thumb's "
                     "flexion (its curl)"},
@@ -429,7 +458,8 @@ static void mirror_name(const char *in, char *out, size_t len)
         snprintf(out, len, "%s", in);
 }
 
-/* Parse "I/M/R/L" (each "-", "name" or "name+name") into the table. */
+/* Parse "I/M/R/L" (each "-", "name" or "name+name") into the tables: the right hand's as
+ * written, the left's mirrored when `mirror` (map=), else the same (targets=). */
 static int parse_targets(onehand *o, const char *text, bool mirror, char *err, size_t errlen)
 {
     o->count = 0;
@@ -458,8 +488,9 @@ static int parse_targets(onehand *o, const char *text, bool mirror, char *err, s
                 char name[OH_NAME];
                 snprintf(name, sizeof name, "%.*s", (int)l, q);
                 o->finger[o->count] = f + 1;
-                if (mirror) mirror_name(name, o->landmark[o->count], OH_NAME);
-                else snprintf(o->landmark[o->count], OH_NAME, "%s", name);
+                snprintf(o->landmark[o->count], OH_NAME, "%s", name);
+                if (mirror) mirror_name(name, o->landmark_left[o->count], OH_NAME);
+                else snprintf(o->landmark_left[o->count], OH_NAME, "%s", name);
                 o->count++;
                 n++;
             }
@@ -490,7 +521,8 @@ static int create(const fp_host *host, const fp_param *params, size_t nparams, f
     onehand *o = calloc(1, sizeof *o);
     if (!o) return -ENOMEM;
     o->host = host;
-    o->hand = v[KEY_HAND].number == 0 ? FP_HAND_LEFT : FP_HAND_RIGHT;
+    o->hand_auto = v[KEY_HAND].number == 0;
+    o->hand = v[KEY_HAND].number == 1 ? FP_HAND_LEFT : FP_HAND_RIGHT; /* (auto: the right first) */
     o->jaw = v[KEY_JAW].number == 0 ? JAW_FLEXION : JAW_OPENING;
     o->flex_range = v[KEY_FLEX_RANGE].number * (3.14159265358979323846 / 180.0);
     o->open_range = v[KEY_OPEN_RANGE].number;
@@ -508,7 +540,7 @@ static int create(const fp_host *host, const fp_param *params, size_t nparams, f
         const char *const *t = tables[(int)v[KEY_MAP].number];
         char text[4 * 2 * OH_NAME];
         snprintf(text, sizeof text, "%s/%s/%s/%s", t[0], t[1], t[2], t[3]);
-        rc = parse_targets(o, text, o->hand == FP_HAND_LEFT, err, errlen);
+        rc = parse_targets(o, text, true, err, errlen);
     }
     if (rc) {
         free(o);
@@ -548,20 +580,22 @@ static const fp_mapping_factory factory = {
     .description = "one hand drives the face through its rig: the thumb the jaw, the fingers "
                    "landmarks",
     .usage =
-        "onehand[,hand=left|right][,jaw=opening|flexion][,flex_range=DEG][,open_range=MM]\n"
+        "onehand[,hand=auto|left|right][,jaw=opening|flexion][,flex_range=DEG][,open_range=MM]\n"
         "       [,map=mouth|brows][,targets=I/M/R/L][,gain=F][,finger_mm=MM][,auto=0|1]\n"
         "       [,still=S][,still_mm=MM][,hold=0|1][,clamp=F]\n"
-        "  Needs a rig (--rig). The thumb drives jaw.open: 0 at the neutral hand, 1 at\n"
-        "  open_range (40) mm more gap between the thumb's and the index tip (jaw=opening, the\n"
-        "  default: a hand puppet's mouth) or flex_range (45) degrees more thumb flexion\n"
-        "  (jaw=flexion: the curl, bend at the thumb's MCP + IP). The fingertips move\n"
-        "  landmarks: end = landmark + gain x (tip now - tip at neutral), the hand's right, up\n"
-        "  and toward-you as the face's left, up and forward; gain in mm per mm (1: 1:1), the\n"
-        "  hand's mm from its middle finger (finger_mm, 70.9 mm), the face's from the rig.\n"
+        "  Needs a rig (--rig). hand=auto (default): the hand that is there (the right where\n"
+        "  both are) drives, and keeps driving while it stays. The thumb drives jaw.open: 0 at\n"
+        "  the neutral hand, 1 at open_range (40) mm more gap between the thumb's and the\n"
+        "  index tip (jaw=opening, the default: a hand puppet's mouth) or flex_range (45)\n"
+        "  degrees more thumb flexion (jaw=flexion: the curl, bend at the thumb's MCP + IP).\n"
+        "  The fingertips move landmarks: end = landmark + gain x (tip now - tip at neutral),\n"
+        "  the hand's right, up and toward-you as the face's left, up and forward; gain in mm\n"
+        "  per mm (1: 1:1), the hand's mm from its middle finger (finger_mm, 70.9 mm), the\n"
+        "  face's from the rig.\n"
         "  map=mouth: index -> mouth_corner_right, middle -> upper_lip, ring ->\n"
         "    mouth_corner_left, little -> brow_left + brow_right; map=brows: index ->\n"
         "    brow_outer_right, middle -> brow_inner_right, ring -> brow_inner_left, little ->\n"
-        "    brow_outer_left (hand=left swaps _left and _right); targets=I/M/R/L names any\n"
+        "    brow_outer_left (a left hand swaps _left and _right); targets=I/M/R/L names any\n"
         "    landmarks ('+' joins two, '-' none).\n"
         "  Engage (the neutral hand): auto=1 (default) at the hand's first frame, its pose the\n"
         "  zero (still=0, default), or once the hand is held still (within still_mm) for\n"

@@ -511,6 +511,79 @@ static void test_left_ignores_right(void **state)
     close_onehand(&x);
 }
 
+/* hand=auto (the default): a lone left hand drives the face at its first frame, its index
+ * the face's left mouth corner; where both are there, the right; when the driving hand goes
+ * and the other stays, that frame ends the gesture (hold=0: cancelled) and the next engages
+ * the other hand, which alone then drives. */
+static void test_auto_hand(void **state)
+{
+    (void)state;
+    fx x;
+    char err[1024];
+    assert_int_equal(open_onehand(&x, NULL, 0, true, err), 0);
+    hand l = rest_hand(FP_HAND_LEFT), r = rest_hand(FP_HAND_RIGHT);
+    put(&x, FP_HAND_LEFT, &l, false);
+    step(&x, 0);                             /* the left hand's first frame: engaged */
+    assert_int_equal(x.rc, 0);
+    assert_true(x.cs.active);
+    assert_true(x.cs.intents & FP_INTENT_ENGAGE);
+    size_t li = slot_of(&x, "mouth_corner_left");
+    for (int f = 0; f < 20; f++) {           /* the left index curls: the left corner moves */
+        l.a[FP_SENSOR_INDEX_MPJ] += (float)(1.5 * DEG);
+        put(&x, FP_HAND_LEFT, &l, false);
+        step(&x, 0);
+    }
+    float dl = fabsf(x.end[li][0] - x.start[li][0]) + fabsf(x.end[li][1] - x.start[li][1]) +
+               fabsf(x.end[li][2] - x.start[li][2]);
+    assert_true(dl > 0.05f);                 /* (mesh units: half a millimetre) */
+    size_t ri = slot_of(&x, "mouth_corner_right");
+    assert_memory_equal(x.start[ri], x.end[ri], sizeof x.start[ri]); /* the left ring: still */
+    /* the right hand arrives too: the left keeps driving */
+    put(&x, FP_HAND_RIGHT, &r, false);
+    put(&x, FP_HAND_LEFT, &l, false);
+    step(&x, 0);
+    assert_true(x.cs.active);
+    assert_int_equal(x.cs.intents & FP_INTENT_CANCEL, 0);
+    /* the left goes, the right stays: this frame ends the left's gesture */
+    gone(&x, FP_HAND_LEFT);
+    put(&x, FP_HAND_RIGHT, &r, false);
+    step(&x, 0);
+    assert_true(x.cs.intents & FP_INTENT_CANCEL);
+    assert_false(x.cs.active);
+    put(&x, FP_HAND_RIGHT, &r, false);
+    step(&x, 0);                             /* and the right engages, its pose the zero */
+    assert_true(x.cs.active);
+    assert_true(x.cs.intents & FP_INTENT_ENGAGE);
+    for (int f = 0; f < 20; f++) {           /* the right index curls: the right corner moves */
+        r.a[FP_SENSOR_INDEX_MPJ] += (float)(1.5 * DEG);
+        put(&x, FP_HAND_RIGHT, &r, false);
+        step(&x, 0);
+    }
+    ri = slot_of(&x, "mouth_corner_right");
+    li = slot_of(&x, "mouth_corner_left");
+    float dr = fabsf(x.end[ri][0] - x.start[ri][0]) + fabsf(x.end[ri][1] - x.start[ri][1]) +
+               fabsf(x.end[ri][2] - x.start[ri][2]);
+    assert_true(dr > 0.05f);
+    assert_memory_equal(x.start[li], x.end[li], sizeof x.start[li]);
+    close_onehand(&x);
+    /* both there from the start: the right */
+    assert_int_equal(open_onehand(&x, NULL, 0, true, err), 0);
+    l = rest_hand(FP_HAND_LEFT);
+    r = rest_hand(FP_HAND_RIGHT);
+    put(&x, FP_HAND_LEFT, &l, false);
+    put(&x, FP_HAND_RIGHT, &r, false);
+    step(&x, 0);
+    assert_true(x.cs.active);
+    for (int f = 0; f < 20; f++) {           /* only the left moves: nothing */
+        l.a[FP_SENSOR_INDEX_MPJ] += (float)(1.5 * DEG);
+        put(&x, FP_HAND_LEFT, &l, false);
+        put(&x, FP_HAND_RIGHT, &r, false);
+        step(&x, 0);
+        assert_memory_equal(x.start, x.end, x.cs.count * sizeof x.start[0]);
+    }
+    close_onehand(&x);
+}
+
 /* auto=1: a hand held still for `still` seconds engages; a moving one does not. */
 static void test_auto_still(void **state)
 {
@@ -708,7 +781,7 @@ static void test_keys(void **state)
     char err[1024];
     fp_param a[] = {{"hand", "both"}};
     assert_int_equal(open_onehand(&x, a, 1, true, err), -EINVAL);
-    assert_non_null(strstr(err, "onehand: key 'hand': 'both' is not one of left|right"));
+    assert_non_null(strstr(err, "onehand: key 'hand': 'both' is not one of auto|left|right"));
     close_onehand(&x);
     fp_param b[] = {{"targets", "nose_tip/chin"}};
     assert_int_equal(open_onehand(&x, b, 1, true, err), -EINVAL);
@@ -768,6 +841,7 @@ int main(void)
         cmocka_unit_test(test_start_points_are_landmarks),
         cmocka_unit_test(test_relative_motion_tracker), cmocka_unit_test(test_angles_only_motion),
         cmocka_unit_test(test_left_ignores_right),   cmocka_unit_test(test_auto_still),
+        cmocka_unit_test(test_auto_hand),
         cmocka_unit_test(test_commit_cancel),        cmocka_unit_test(test_hold),
         cmocka_unit_test(test_no_rig),               cmocka_unit_test(test_keys),
     };
