@@ -437,7 +437,7 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
                      fp_contact_result *res)
 {
     memset(res, 0, sizeof *res);
-    res->t = 1;
+    res->t = res->kept = 1;
     fp_contact_count info;
     long k = fp_contact_count_new(c, ref, cand, NULL, 0, &info);
     res->moved_tris = info.moved_tris;
@@ -445,7 +445,7 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
     res->checks = 1;
     if (k < 0) {
         lerp(c, ref, cand, 0, out);
-        res->t = 0;
+        res->t = res->kept = 0;
         return (int)k;
     }
     res->pairs = k;
@@ -469,6 +469,6 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
         else lo = mid;
     }
     lerp(c, ref, cand, lo, out);
-    res->t = lo;
+    res->t = res->kept = lo;
     return 0;
 }

@@ -151,7 +151,7 @@ int fp_contact_step(fp_contact *c, const float *ref, const float *cand, const ui
                     size_t nranges, int iters, fp_contact_result *res)
 {
     memset(res, 0, sizeof *res);
-    res->t = 1;
+    res->t = res->kept = 1;
     if (!c || !ref || !cand || (nranges != SIZE_MAX && nranges && !ranges)) return -EINVAL;
     if (!c->tk && fpc_track_build(c)) return -ENOMEM;
     int64_t w0 = c->tk->waited_ns;
@@ -329,6 +329,21 @@ static int scale_back(fp_contact *c, const float *ref, const float *cand, int it
     track_lerp(k, lo, ramp);
     res->t = lo;
     res->local = ramp != NULL;
+    /* the share of the motion kept: how far the moved vertices went, over how far the
+     * candidate took them (pv: P's positions, cv: the candidate's; k->p: the shape kept) */
+    double asked = 0, went = 0;
+    for (size_t i = 0; i < k->nmv; i++) {
+        const float *q = k->p + 3 * (size_t)k->mv[i], *a = k->pv + 3 * i, *b = k->cv + 3 * i;
+        double da = 0, dw = 0;
+        for (int j = 0; j < 3; j++) {
+            da += ((double)b[j] - a[j]) * ((double)b[j] - a[j]);
+            dw += ((double)q[j] - a[j]) * ((double)q[j] - a[j]);
+        }
+        asked += sqrt(da);
+        went += sqrt(dw);
+    }
+    res->kept = asked > 0 ? fmin(1.0, went / asked) : lo; /* (t itself where t is uniform,
+                                                             but for the floats' rounding) */
     /* the hierarchy: the normals and boxes of the shape kept, unless the last check that
      * updated them had it */
     if (k->tree && !(held == lo) && fpc_tree_update(c, k->p, NULL, false) < 0) return -ENOMEM;

@@ -93,6 +93,10 @@ typedef struct fp_contact_result {
     double t;            /* the fraction of the motion kept (1: all, 0: the reference); with
                             local: near the blocking triangles (the rest more, see
                             fp_contact_set_local) */
+    double kept;         /* the share of the candidate's motion kept, as the eye sees it: the
+                            sum over the moved vertices of how far each moved over how far the
+                            candidate had it move (1: all; t, unless the scale-back was local,
+                            where the skin away from the blocking triangles moved whole) */
     long pairs;          /* new pairs of the full candidate */
     size_t flipped;      /* newly flipped triangles of the full candidate (these block too) */
     int checks;          /* checks of a shape (fp_contact_count_new calls) */

@@ -232,7 +232,11 @@ typedef struct fp_frame_stats {
                                  fp_session_options.measure_jacobian, else NAN (and when not
                                  active) */
     /* the contact guard (fp_contact.h): the shown shape adds no self-crossing to the last one */
-    double collide_t;         /* fraction of this frame's motion kept (1: all; 0: none) */
+    double collide_t;         /* fraction of this frame's motion kept near where the skin would
+                                 cross (fp_contact_result.t: 1 all; 0 none there) */
+    double collide_kept;      /* share of the frame's motion kept over the moved skin
+                                 (fp_contact_result.kept: 1 all; with a local scale-back the
+                                 skin away from the crossing moved whole) */
     long collide_pairs;       /* new crossing pairs the full motion would have added */
     double collide_ms;        /* the guard's checks, milliseconds */
     double collide_wait_ms;   /* of those, the guard's waits for its worker thread to finish a

@@ -263,7 +263,7 @@ static void step_frame(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     st->frame = s->frame;
     st->guard_reached = 1.0;
     st->min_det_j = NAN;
-    st->collide_t = 1.0;
+    st->collide_t = st->collide_kept = 1.0;
 
     int64_t tick = fp_now_ns(), tock;
 #define FP_STAGE_END(stage)                                                                   \
@@ -349,7 +349,7 @@ void fp_session_apply_controls(fp_session *s, int64_t now_ns, const fp_control_s
     if (!st) st = &local;
     memset(st, 0, sizeof *st);
     st->frame = s->frame;
-    st->collide_t = 1.0;
+    st->collide_t = st->collide_kept = 1.0;
     fp_record_step_begin(&s->record);
     st->engaged = cs->intents & FP_INTENT_ENGAGE;
     st->cancelled = cs->intents & FP_INTENT_CANCEL;

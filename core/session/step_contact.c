@@ -126,8 +126,9 @@ const float *fp_cg_run(fp_cg_step *g, const fp_cg_frame *f, fp_slog *log, fp_fra
     if (r.t < 1) {
         shown = fp_contact_shape(g->contact);
         g->limited++;
-        if (r.t < g->t_least) g->t_least = r.t;
+        if (r.kept < g->t_least) g->t_least = r.kept;
         if (r.t < st->collide_t) st->collide_t = r.t;
+        if (r.kept < st->collide_kept) st->collide_kept = r.kept;
     }
     assert(g->sync == FP_CG_SYNCED); /* P is the shape shown now */
     cg_check(g);

@@ -81,7 +81,8 @@ typedef struct fp_cg_step {
     bool lost;                    /* the guard ran out of memory: made anew, the base shown
                                      until then */
     unsigned long frames, limited; /* this gesture: frames checked, scaled back */
-    double t_least;               /* this gesture: smallest fraction kept */
+    double t_least;               /* this gesture: smallest share of a frame's motion kept
+                                     (fp_contact_result.kept) */
     float hold;                   /* fp_contact_hold's eps (mesh units): FP_CONTACT_HOLD of the
                                      loaded face's diagonal; 0: none (options.exact_frames) */
     fp_changed ref;               /* where the reference changed since the guard last took it

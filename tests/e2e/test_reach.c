@@ -131,7 +131,8 @@ static void one_run(const char *face, const char *rec, samples *all, int *runs_c
             by_contact += st.collide_t < 1.0;
             by_flip += st.collide_t < 1.0 && st.collide_pairs == 0;
             if (getenv("FP_TEST_VERBOSE") && st.collide_t < 1.0)
-                fprintf(stderr, "  frame %llu: contact kept %.3f (%s)\n", (unsigned long long)k, st.collide_t,
+                fprintf(stderr, "  frame %llu: contact kept %.3f of the motion (%.3f near the blocking "
+                        "triangles; %s)\n", (unsigned long long)k, st.collide_kept, st.collide_t,
                         st.collide_pairs ? "crossings" : "flips alone");
             if (getenv("FP_REACH_SAVE_FRAME") && (uint64_t)atoll(getenv("FP_REACH_SAVE_FRAME")) == k)
                 fp_session_save(s, getenv("FP_REACH_SAVE"), err, sizeof err);

@@ -846,8 +846,28 @@ static void two_fingers(int frames, double local, float *far_kept, float *near_t
         track_frame(tk, full, pos, cand, n, tris, t, ranges, true, 0, &ts);
     }
     /* the last frame once more on its own, for the result */
+    float *before = malloc(n * 3 * sizeof(float));
+    memcpy(before, fp_contact_shape(tk), n * 3 * sizeof(float));
     assert_int_equal(fp_contact_step(tk, pos, cand, NULL, SIZE_MAX, 6, &r), 0);
     const float *kept = fp_contact_shape(tk);
+    /* the share of the motion kept (fp_contact_result.kept), recomputed: how far each vertex
+     * went over how far the candidate asked, from the shape before the step */
+    double asked = 0, went = 0;
+    for (size_t v = 0; v < n; v++) {
+        double da = 0, dw = 0;
+        for (int k = 0; k < 3; k++) {
+            da += pow((double)cand[3 * v + k] - before[3 * v + k], 2);
+            dw += pow((double)kept[3 * v + k] - before[3 * v + k], 2);
+        }
+        asked += sqrt(da);
+        went += sqrt(dw);
+    }
+    double share = asked > 0 ? went / asked : 1.0;
+    assert_true(r.kept >= 0 && r.kept <= 1);
+    assert_true(fabs(r.kept - fmin(share, 1.0)) <= 1e-6);
+    if (r.t < 1 && r.local) assert_true(r.kept >= r.t - 1e-6); /* each share t or more */
+    if (r.t < 1 && !r.local) assert_true(fabs(r.kept - r.t) <= 1e-4); /* one t for every vertex */
+    free(before);
     *far_kept = 1, *near_top = 0;
     double far_max = 0, far_got = 0;
     for (size_t v = 0; v < n / 2; v++) {
@@ -964,6 +984,17 @@ static void test_track_local_ramp(void **state)
                tree ? "hierarchy" : "envelopes", np, res.t, kept_whole, kept_none);
         assert_true(kept_whole > 0 && res.t < 1);
         assert_int_equal(fp_contact_count_new(full, pos, kept, NULL, 0, NULL), 0);
+        /* the share of the motion kept, as the eye sees it: the far dip whole, the bump's
+         * skin t and more (the formula's shares, weighted by how far each vertex was asked) */
+        double asked = 0, went = 0;
+        for (size_t v = 0; v < n; v++) {
+            double da = fabs((double)cand[3 * v + 2] - pos[3 * v + 2]);
+            asked += da;
+            went += fabs((double)want[3 * v + 2] - pos[3 * v + 2]);
+        }
+        printf("  the share of the motion kept: %.4f (t %.4f)\n", res.kept, res.t);
+        assert_true(fabs(res.kept - went / asked) <= 1e-6);
+        assert_true(res.kept > res.t + 0.05);
         fp_contact_destroy(&tk);
     }
     fp_contact_destroy(&full);

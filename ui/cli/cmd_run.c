@@ -263,7 +263,7 @@ typedef struct run_totals {
     uint64_t guarded, limited;     /* frames the fold-over guard acted on / stopped short */
     double min_det_j;
     uint64_t collided;             /* frames the contact guard scaled back */
-    double collide_t;              /* the least it kept */
+    double collide_t;              /* the least share of a frame's motion it kept */
     double *update_ms;             /* each deforming frame's update time */
     size_t nupdates, cap;
     fp_app_reach reach;            /* how far the skin followed (app_util.h) */
@@ -292,7 +292,7 @@ static void totals_add(run_totals *t, const fp_frame_stats *st)
     }
     if (st->collide_t < 1.0) {
         t->collided++;
-        if (st->collide_t < t->collide_t) t->collide_t = st->collide_t;
+        if (st->collide_kept < t->collide_t) t->collide_t = st->collide_kept;
     }
     fp_app_reach_add(&t->reach, st); /* how far the skin followed */
     if (st->active) {
