@@ -405,7 +405,8 @@ static const char *faces[] = {"ict-facekit/generic_neutral_mesh.obj",
 static const char *takes[] = {"HandSplay-110fps", "Waiting-110fps", "grab", "three-claps"};
 
 /* Both mappings, strictly: no new crossing away from the input's own, at the end and at the
- * snapshots. The fold-over guard alone (injective maps) does not give that: unanchored drags
+ * snapshots (FP_GUARD_HANDS=DIR reads the four *_joints_mm.csv from DIR instead: copies
+ * transformed, as test_reach's FP_REACH_HANDS). The fold-over guard alone (injective maps) does not give that: unanchored drags
  * compose hundreds of injective steps that squeeze near-touching surfaces (lips, eyelids)
  * together, the flat triangles between moved vertices are not the smooth mapped surface,
  * and a rig's mobility blend is no CSRBF map. The contact guard (core/session/contact.h)
@@ -420,9 +421,12 @@ static void recordings(const char *mapping)
         char mesh[4300];
         snprintf(mesh, sizeof mesh, "%s/faces/%s", fp_test_data_dir(), faces[fi]);
         for (size_t ti = 0; ti < sizeof takes / sizeof takes[0]; ti++) {
-            char input[4400];
-            snprintf(input, sizeof input, "replay:%s/hands/leap-motion/%s_joints_mm.csv,speed=4",
-                     fp_test_data_dir(), takes[ti]);
+            char input[4400], hands[4200];
+            if (getenv("FP_GUARD_HANDS")) /* (experiments: transformed copies of the recordings) */
+                snprintf(hands, sizeof hands, "%s", getenv("FP_GUARD_HANDS"));
+            else
+                snprintf(hands, sizeof hands, "%s/hands/leap-motion", fp_test_data_dir());
+            snprintf(input, sizeof input, "replay:%s/%s_joints_mm.csv,speed=4", hands, takes[ti]);
             logbook lb = {0};
             fp_session *s = open_session(mesh, mapping, input, &lb);
             unsigned long frames = 0, active = 0, limited = 0, composed = 0, collided = 0;
