@@ -65,9 +65,10 @@ extern "C" {
  *  past the engine's default 16 only while the maps so far evaluated under 4M (vertex,
  *  centre) pairs (about 9 ms on the project's 2-core VM). Fingertips that grab skin a few
  *  millimetres apart and pull it apart need dozens of maps, as each map may stretch the gap
- *  between them by only so much (a reversed three-claps on the ICT face: 60 maps, 5.4M
- *  pairs); on a large mesh, whose maps each evaluate millions of pairs, the 16 stay the
- *  limit. Deterministic: the count depends on the control set and the mesh, not on time. */
+ *  between them by only so much (a three-claps played backwards on the ICT face would take
+ *  60 maps, 5.4M pairs: the budget stops it at 47); on a large mesh, whose maps each
+ *  evaluate millions of pairs, the 16 stay the limit. Deterministic: the count depends on
+ *  the control set and the mesh, not on time (docs/performance.md has the figures). */
 #define FP_ENGINE_MAX_SUBSTEPS 64
 #define FP_ENGINE_MAX_PAIRS 4000000u
 
