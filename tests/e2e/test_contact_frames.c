@@ -95,7 +95,7 @@ static void run(const char *face, const char *take, const char *mapping)
         if (!st.committed) reference(s, ref);
         active++;
         scaled += st.collide_t < 1;
-        least = fmin(least, st.collide_t);
+        least = fmin(least, st.collide_kept);
         if (ncms < cap) cms[ncms++] = st.collide_ms;
         fp_contact_count info;
         long kk = fp_contact_count_new(full, ref, fp_session_positions(s), NULL, 0, &info);

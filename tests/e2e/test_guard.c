@@ -448,7 +448,7 @@ static void recordings(const char *mapping)
                     composed += st.guard_substeps > 1;
                     min_det = fmin(min_det, st.min_det_j);
                     collided += st.collide_t < 1;
-                    collide_t = fmin(collide_t, st.collide_t);
+                    collide_t = fmin(collide_t, st.collide_kept); /* (the share of the motion) */
                     collide_ms = fmax(collide_ms, st.collide_ms);
                     if (st.collide_ms > 0 && ncms < 4096) cms[ncms++] = st.collide_ms;
                     if (active % 40 == 0 && nsnap < 2) {
