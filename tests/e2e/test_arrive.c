@@ -3,8 +3,7 @@
  * steps), deterministic:
  *
  *  - onehand on its defaults moves the face on each of the four Leap recordings on each of
- *    the three faces (their rigs found in rigs/), and under a left hand alone (grab
- *    mirrored, a copy the test writes to /tmp: a left-handed performer);
+ *    the three faces (their rigs found in rigs/) (a left hand alone: test_left_handed.sh);
  *  - a recording placed as it arrives (replay workspace=0, as a live tracker: no range in
  *    advance) grabs the ICT face through the anchored mapping, and by its end the placement
  *    equals the one the replay gets from its whole range, within 2 mm;
@@ -19,7 +18,6 @@
 #include "fp_test_support.h"
 
 #include <math.h>
-#include <stdbool.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -126,68 +124,25 @@ static void input_of(char *buf, size_t len, const char *rec, const char *keys)
 #ifndef FP_TEST_RADIUS_ONLY
 static const char *recs[] = {"HandSplay-110fps", "Waiting-110fps", "grab", "three-claps"};
 
-/* A left hand: rec's joints mirrored (x negated, directions and normals too) and its hands'
- * sides swapped, written to a temporary file (path into buf). */
-static void mirrored_copy(const char *rec, char *buf, size_t len)
-{
-    char src[4300];
-    snprintf(src, sizeof src, "%s/hands/leap-motion/%s_joints_mm.csv", fp_test_data_dir(), rec);
-    snprintf(buf, len, "/tmp/fp_arrive_%d_%s_joints_mm.csv", (int)getpid(), rec);
-    FILE *in = fopen(src, "r"), *out = fopen(buf, "w");
-    assert_non_null(in);
-    assert_non_null(out);
-    static char line[1 << 16];
-    bool neg[512] = {false};
-    int side_col = -1;
-    for (int row = 0; fgets(line, sizeof line, in); row++) {
-        char *save = NULL, *tok = strtok_r(line, ",\n", &save);
-        for (int c = 0; tok; c++, tok = strtok_r(NULL, ",\n", &save)) {
-            if (c) fputc(',', out);
-            size_t n = strlen(tok);
-            if (row == 0) {
-                if (c < 512) neg[c] = (n > 2 && !strcmp(tok + n - 2, "_x")) || !strcmp(tok, "palm_nx");
-                if (!strcmp(tok, "hand_type")) side_col = c;
-                fputs(tok, out);
-            } else if (c == side_col) {
-                fputs(!strcmp(tok, "right") ? "left" : !strcmp(tok, "left") ? "right" : tok, out);
-            } else if (c < 512 && neg[c]) {
-                fprintf(out, "%.9g", -strtod(tok, NULL));
-            } else {
-                fputs(tok, out);
-            }
-        }
-        fputc('\n', out);
-    }
-    assert_true(side_col >= 0);
-    fclose(in);
-    assert_int_equal(fclose(out), 0);
-}
-
-/* onehand on its defaults (no keys): the face moves on every face x recording, and under a
- * left hand alone (grab mirrored: a left-handed performer). */
+/* onehand on its defaults (no keys): the face moves on every face x recording (a left hand
+ * alone: tests/e2e/test_left_handed.sh). */
 static void test_onehand_defaults(void **state)
 {
     (void)state;
-    char left[4400], left_input[4500];
-    mirrored_copy("grab", left, sizeof left);
-    snprintf(left_input, sizeof left_input, "replay:%s,fast=1", left);
     for (size_t f = 0; f < 3; f++)
-        for (size_t r = 0; r < 5; r++) {
-            char input[4600];
-            if (r < 4) input_of(input, sizeof input, recs[r], "");
-            else snprintf(input, sizeof input, "%s", left_input);
+        for (size_t r = 0; r < 4; r++) {
+            char input[4400];
+            input_of(input, sizeof input, recs[r], "");
             logbook lb;
             outcome o;
             run(faces[f], input, "onehand", NULL, 0, &lb, &o);
-            const char *name = r < 4 ? recs[r] : "grab, left hand";
             printf("onehand %-44s %-17s %4lu frames, %4lu deforming, engaged %lu; %5zu vertices "
-                   "moved, max %.4f mesh units\n", faces[f], name, o.frames, o.active, o.engaged,
+                   "moved, max %.4f mesh units\n", faces[f], recs[r], o.frames, o.active, o.engaged,
                    o.moved, o.max);
             if (!(o.moved > 0 && o.max > 0 && o.engaged >= 1))
-                fail_msg("onehand on its defaults moved nothing: %s, %s", faces[f], name);
+                fail_msg("onehand on its defaults moved nothing: %s, %s", faces[f], recs[r]);
             assert_int_equal(lb.hints, 0); /* engaged: nothing to hint */
         }
-    unlink(left);
 }
 
 /* grab placed as it arrives: placed from the first frame, grabs the face, and ends where the

@@ -4,7 +4,10 @@
 #  1. test_guard's recordings, anchored: no new crossing away from the input's own and no
 #     flipped triangle on the three faces (the same strictness as the recordings themselves);
 #  2. test_reach on the ICT face: the skin follows the fingertips (median at least 90%, each
-#     run's 10th percentile at least 60%; measured 100% and 63-100%).
+#     run's 10th percentile at least 60%; measured 100% and 63-100%);
+#  3. onehand on its defaults, the mirrored grab on each face (its rig): it engages, moves
+#     the face (vertices moved and max displacement above 0; measured 10155, 2930 and 214
+#     vertices) and gives no hint (a hand that reaches).
 # Lee Perry-Smith's and MediaPipe's reach under mirrored hands are not asserted: MediaPipe's
 # three-claps turns a patch of skin past a right angle, which the contact guard counts as
 # turned over (README, "What stops a drag short"; the stop notes of issue 51).
@@ -28,4 +31,21 @@ else
 fi
 FP_SHARED_DATA=$data FP_REACH_HANDS=$tmp/mirror FP_REACH_ONLY=ict-facekit \
     "$build/tests/test_reach" || { echo "FAIL: test_reach on mirrored hands"; exit 1; }
+
+for face in ict-facekit/generic_neutral_mesh.obj lee-perry-smith/LeePerrySmith.obj \
+            mediapipe-canonical/canonical_face_model.obj; do
+    "$build/bin/facepuppet" run --plugin-dir "$build/lib/facepuppet" --mesh "$data/faces/$face" \
+        --mapping onehand --input "replay:$tmp/mirror/grab_joints_mm.csv,fast=1" \
+        --out "$tmp/onehand.obj" --force >"$tmp/onehand.out" 2>"$tmp/onehand.err" ||
+        { cat "$tmp/onehand.err"; echo "FAIL: onehand run on $face"; exit 1; }
+    line=$(grep '^frames' "$tmp/onehand.out")
+    echo "onehand, left hand, $face: $line"
+    engaged=$(sed -n 's/.* engaged \([0-9]*\),.*/\1/p' <<<"$line")
+    moved=$(sed -n 's/.*vertices moved \([0-9]*\) of.*/\1/p' <<<"$line")
+    max=$(sed -n 's/.*displacement mean [^;]* max \([0-9.e+-]*\) mm.*/\1/p' <<<"$line")
+    [ "${engaged:-0}" -ge 1 ] && [ "${moved:-0}" -gt 0 ] && awk -v m="${max:-0}" 'BEGIN { exit !(m > 0) }' ||
+        { echo "FAIL: onehand on its defaults moved nothing under a left hand: $face"; exit 1; }
+    ! grep -q "no fingertip came within" "$tmp/onehand.err" ||
+        { cat "$tmp/onehand.err"; echo "FAIL: a hint for a left hand that reaches: $face"; exit 1; }
+done
 echo ok
