@@ -169,6 +169,15 @@ static int lb_floats(line_buf *b, const float *v, int n)
     return 0;
 }
 
+/* A channel name's bytes, as the writer writes them and the reader takes them: printable
+ * ASCII, no space. The first byte of name[0, len) that is not one, or NULL. */
+static const char *channel_bad_byte(const char *name, size_t len)
+{
+    for (size_t i = 0; i < len; i++)
+        if (name[i] <= ' ' || name[i] > '~') return name + i;
+    return NULL;
+}
+
 static int writer_fail(fp_eventlog_writer *w, int code, const char *fmt, ...)
 {
     va_list ap;
@@ -234,9 +243,8 @@ static int format_event(fp_eventlog_writer *w, const fp_event *e, line_buf *b)
         size_t len = strnlen(e->channel.name, sizeof e->channel.name);
         if (!len || len >= sizeof e->channel.name)
             return writer_fail(w, -EINVAL, "channel name empty or not NUL-terminated");
-        for (size_t i = 0; i < len; i++)
-            if (e->channel.name[i] <= ' ' || e->channel.name[i] > '~')
-                return writer_fail(w, -EINVAL, "channel name with a space or a non-ASCII byte");
+        if (channel_bad_byte(e->channel.name, len))
+            return writer_fail(w, -EINVAL, "channel name with a space or a non-ASCII byte");
         lb_printf(b, " %s", e->channel.name);
         bad = lb_floats(b, &e->channel.value, 1);
         break;
@@ -692,11 +700,11 @@ static int parse_event(fp_eventlog_reader *r, char *line, fp_event *out)
         if (strlen(tok) >= sizeof out->channel.name)
             return reader_fail(r, -EBADMSG, col_of(&c, tok), "channel name longer than %zu bytes",
                                sizeof out->channel.name - 1);
-        for (const char *q = tok; *q; q++) /* what the writer writes: printable ASCII, no space */
-            if (*q <= ' ' || *q > '~')
-                return reader_fail(r, -EBADMSG, col_of(&c, q),
-                                   "channel name with byte 0x%02x (printable ASCII only)",
-                                   (unsigned)(unsigned char)*q);
+        const char *bad = channel_bad_byte(tok, strlen(tok)); /* what the writer writes */
+        if (bad)
+            return reader_fail(r, -EBADMSG, col_of(&c, bad),
+                               "channel name with byte 0x%02x (printable ASCII only)",
+                               (unsigned)(unsigned char)*bad);
         snprintf(out->channel.name, sizeof out->channel.name, "%s", tok);
         rc = parse_floats(&c, &out->channel.value, 1, "the channel's value");
         break;
