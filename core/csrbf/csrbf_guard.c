@@ -6,6 +6,7 @@
 #include "internal.h"
 
 #include <math.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -351,7 +352,8 @@ static int guarded(csrbf_solver *s, const csrbf_points *shape, follow *fw, size_
     double margin = guard && guard->margin != 0.0 ? guard->margin : CSRBF_GUARD_MARGIN;
     int maxk = guard && guard->max_substeps != 0 ? guard->max_substeps : CSRBF_GUARD_MAX_SUBSTEPS;
     unsigned flags = guard ? guard->eval_flags : 0u;
-    uint64_t max_pairs = guard ? guard->max_pairs : 0u, pairs = 0;
+    const uint64_t max_pairs = guard ? guard->max_pairs : 0u;
+    const bool counted = st || max_pairs; /* the evaluations' statistics are needed */
     if (!(margin > 0.0 && margin < 1.0) || maxk < 1) {
         s->lim_note.pending = 0;
         snprintf(s->msg, sizeof s->msg,
@@ -399,27 +401,26 @@ static int guarded(csrbf_solver *s, const csrbf_points *shape, follow *fw, size_
         if (ls.bound_after > out.bound_after) out.bound_after = ls.bound_after;
         csrbf_eval_stats es;
         if (!fw) {
-            rc = csrbf_evaluate(s, cur, deformed, flags, st || max_pairs ? &es : NULL);
+            rc = csrbf_evaluate(s, cur, deformed, flags, counted ? &es : NULL);
         } else if (j == 0) { /* the shape's own touch: its blocks of the last call restored */
             const uint32_t *w = csrbf_touch_prev(fw->touch, &fw->kw, &fw->wall);
             memcpy(fw->W, w, fw->kw * sizeof *w);
-            rc = csrbf_evaluate_touched(s, shape, fw->touch, deformed, flags, st || max_pairs ? &es : NULL);
+            rc = csrbf_evaluate_touched(s, shape, fw->touch, deformed, flags, counted ? &es : NULL);
             const uint32_t *c = csrbf_touch_prev(fw->touch, &fw->kc, NULL);
             memcpy(fw->C, c, fw->kc * sizeof *c);
             memcpy(fw->U, c, fw->kc * sizeof *c);
             fw->ku = fw->kc;
         } else { /* on inter, the shape so far: only the blocks in this map's supports */
             csrbf_touch_commit(fw->itouch);
-            rc = csrbf_evaluate_touched(s, fw->inter, fw->itouch, deformed, flags,
-                                        st || max_pairs ? &es : NULL);
+            rc = csrbf_evaluate_touched(s, fw->inter, fw->itouch, deformed, flags, counted ? &es : NULL);
             const uint32_t *c = csrbf_touch_prev(fw->itouch, &fw->kc, NULL);
             memcpy(fw->C, c, fw->kc * sizeof *c);
             follow_union(fw);
         }
         if (rc < 0) return rc;
         out.substeps = j + 1;
-        if (st) {
-            out.eval.pairs += es.pairs;
+        if (counted) {
+            out.eval.pairs += es.pairs; /* (also the budget's count) */
             if (es.min_jacobian_det < out.eval.min_jacobian_det)
                 out.eval.min_jacobian_det = es.min_jacobian_det;
             if (j == 0) {
@@ -434,9 +435,8 @@ static int guarded(csrbf_solver *s, const csrbf_points *shape, follow *fw, size_
                 P[3 * i + a] = t < 1.0 ? (float)(P[3 * i + a] + t * (E[3 * i + a] - P[3 * i + a]))
                                        : E[3 * i + a];
         }
-        if (max_pairs) pairs += es.pairs;
         if (ls.clusters_limited == 0 || j + 1 >= maxk) break;
-        if (max_pairs && j + 1 >= CSRBF_GUARD_MAX_SUBSTEPS && pairs >= max_pairs) break;
+        if (max_pairs && j + 1 >= CSRBF_GUARD_MAX_SUBSTEPS && out.eval.pairs >= max_pairs) break;
         /* the next map acts on the shape so far */
         if (fw) { /* which differs from inter only where this map computed */
             fw->inter_set = 1;
