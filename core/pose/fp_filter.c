@@ -3,6 +3,7 @@
 
 #include <facepuppet/plugin_util.h>
 
+#include <assert.h>
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -22,6 +23,8 @@ void fp_filter_default(const char *name, fp_filter_config *out)
     } else if (!strcmp(name, "cyberglove")) {
         out->kind = FP_FILTER_ONEEURO;
         out->mincutoff = FP_FILTER_GLOVE_MINCUTOFF;
+        out->beta = FP_FILTER_GLOVE_BETA;
+        out->dcutoff = FP_FILTER_GLOVE_DCUTOFF;
     }
 }
 
@@ -93,10 +96,13 @@ double fp_oneeuro_alpha(double cutoff_hz, double te_s)
     return 1.0 / (1.0 + tau / te_s);
 }
 
-void fp_oneeuro_filter(fp_oneeuro *f, const fp_filter_config *c, int dim, double mm_per_unit,
-                       const double *x, int64_t t_ns, double *out)
+/* The first half of a sample: T_e, dX_i and dXhat_i; returns |dXhat_i| x mm_per_unit, or -1
+ * where the sample is passed through (the filter's first, or not finite: it then starts
+ * afresh) and its smoothing skipped. */
+static double oneeuro_speed(fp_oneeuro *f, const fp_filter_config *c, int dim, double mm_per_unit,
+                        const double *x, int64_t t_ns)
 {
-    if (dim < 1) return;
+    if (dim < 1) return -1;
     if (dim > FP_ONEEURO_MAX_DIM) dim = FP_ONEEURO_MAX_DIM;
     bool finite = true;
     for (int k = 0; k < dim; k++) finite = finite && isfinite(x[k]);
@@ -108,8 +114,7 @@ void fp_oneeuro_filter(fp_oneeuro *f, const fp_filter_config *c, int dim, double
             f->t_ns = t_ns;
             f->started = true;
         }
-        if (out != x) memmove(out, x, (size_t)dim * sizeof *out);
-        return;
+        return -1;
     }
     if (t_ns > f->t_ns) f->te = (double)(t_ns - f->t_ns) * 1e-9;
     f->t_ns = t_ns > f->t_ns ? t_ns : f->t_ns;
@@ -120,12 +125,44 @@ void fp_oneeuro_filter(fp_oneeuro *f, const fp_filter_config *c, int dim, double
         f->dx[k] = ad * d + (1 - ad) * f->dx[k];     /* dXhat_i */
         speed2 += f->dx[k] * f->dx[k];
     }
-    double cutoff = c->mincutoff + c->beta * sqrt(speed2) * mm_per_unit;
-    double a = fp_oneeuro_alpha(cutoff, te);
+    return sqrt(speed2) * mm_per_unit;
+}
+
+/* The second half: Xhat_i at cutoff_hz. */
+static void oneeuro_smooth(fp_oneeuro *f, double cutoff_hz, int dim, const double *x, double *out)
+{
+    double a = fp_oneeuro_alpha(cutoff_hz, f->te);
     for (int k = 0; k < dim; k++) {
         f->x[k] = a * x[k] + (1 - a) * f->x[k];      /* Xhat_i */
         out[k] = f->x[k];
     }
+}
+
+void fp_oneeuro_filter(fp_oneeuro *f, const fp_filter_config *c, int dim, double mm_per_unit,
+                       const double *x, int64_t t_ns, double *out)
+{
+    if (dim < 1) return;
+    if (dim > FP_ONEEURO_MAX_DIM) dim = FP_ONEEURO_MAX_DIM;
+    double speed = oneeuro_speed(f, c, dim, mm_per_unit, x, t_ns);
+    if (speed < 0) {
+        if (out != x) memmove(out, x, (size_t)dim * sizeof *out);
+        return;
+    }
+    oneeuro_smooth(f, c->mincutoff + c->beta * speed, dim, x, out);
+}
+
+void fp_oneeuro_filter_joints(fp_oneeuro *f, size_t count, const fp_filter_config *c,
+                              double (*x)[3], int64_t t_ns)
+{
+    assert(count <= FP_ONEEURO_MAX_JOINTS);
+    double speed[FP_ONEEURO_MAX_JOINTS], fastest = 0;
+    for (size_t j = 0; j < count && j < FP_ONEEURO_MAX_JOINTS; j++) {
+        speed[j] = oneeuro_speed(&f[j], c, 3, 1.0, x[j], t_ns);
+        if (speed[j] > fastest) fastest = speed[j];
+    }
+    const double cutoff = c->mincutoff + c->beta * fastest;
+    for (size_t j = 0; j < count && j < FP_ONEEURO_MAX_JOINTS; j++)
+        if (speed[j] >= 0) oneeuro_smooth(&f[j], cutoff, 3, x[j], x[j]);
 }
 
 double fp_oneeuro_lag(const fp_filter_config *c, double speed_mm_s, double rate_hz)

@@ -2,7 +2,8 @@
  * fp_filter.h: the input filter of step 2 (docs/architecture.md): the One Euro filter of
  * Casiez, Roussel and Vogel, "1 Euro Filter: A Simple Speed-based Low-pass Filter for Noisy
  * Input in Interactive Systems", CHI 2012, pp. 2527-2530 (doi 10.1145/2207676.2208639), run
- * per joint and per input on the hand events (core/pose/fp_pose.h), and the host keys that
+ * per joint and per input on the hand events (a hand's joint positions sharing one cutoff,
+ * fp_oneeuro_filter_joints) (core/pose/fp_pose.h), and the host keys that
  * set it on an input SPEC (`filter=oneeuro,mincutoff=HZ,beta=B,dcutoff=HZ`, stripped by
  * core/plugin before the plugin sees its keys).
  *
@@ -57,24 +58,39 @@ typedef struct fp_filter_config {
 } fp_filter_config;
 
 /** The defaults of filter=oneeuro (a camera tracker: MediaPipe, Leap Motion over OSC), chosen
- *  on the real Leap recordings (HandSplay, grab, Waiting; 108 Hz and resampled to 57 Hz) with
- *  1 mm of Gaussian noise added on every joint, read at 60 frames a second: still holds 5.6x
- *  to 6.7x steadier at 108 Hz (5x to 6x at 57 Hz) and the motion 0.5 to 0.65 frames behind
- *  (0.65 to 0.85 at 57 Hz); tests/pose/test_steady_session.c checks HandSplay. The face
- *  through onehand follows the hand (HandSplay 6.3x, grab 5.6x at 108 Hz) but on Waiting
- *  4.7x against its hand's 5.7x, whatever the settings tried (mincutoff 0.3-0.7, beta
- *  0.015-0.035, dcutoff 4-12). Its jaw alone gives the same 4.7x (targets=-/-/-/-), and
- *  the jaw is shut in about a third of its frames, where the noise does not move it (not
- *  established as the cause); FP_TEST_STEADY_CLIP=Waiting-110fps FP_TEST_FILTER_KEYS=
- *  ",mincutoff=..." build/tests/test_steady_session prints the figures. The
- *  derivative's cutoff is well above the paper's 1 Hz: at 1 Hz the speed estimate takes
- *  160 ms to see a hand start moving, and the motion lags 1.2 frames for the same jitter. */
+ *  on the real Leap recordings with 1 mm of Gaussian noise added on every joint, through
+ *  onehand at 60 frames a second, 108 Hz and resampled to 57 Hz (`FP_TEST_STEADY_CLIP=NAME
+ *  FP_TEST_STEADY_HZ=57 build/tests/test_steady_session` prints each; tests check HandSplay at
+ *  both rates). Jitter in still holds, hand / face, x less than unfiltered; lag in frames:
+ *
+ *    clip, rate        per joint (0.5, 0.025, 8)       a hand's joints sharing (0.5, 0.018, 6)
+ *    HandSplay 108     6.6 / 6.3, lag 0.65 / 0.60      6.3 / 6.2, lag 0.60 / 0.70
+ *    HandSplay 57      5.8 / 4.7, lag 0.85 / 0.75      5.4 / 5.3, lag 0.80 / 0.85
+ *    grab 108          6.5 / 5.6, lag 0.50 / 0.70      6.1 / 5.6, lag 0.50 / 0.70
+ *    grab 57           5.5 / 5.1, lag 0.65 / 1.20      5.4 / 5.2, lag 0.65 / 1.25
+ *    Waiting 108       5.7 / 4.7, lag 0.65 / 0.90      5.6 / 5.6, lag 0.60 / 0.70
+ *    Waiting 57        4.9 / 2.2, lag 0.80 / 1.25      4.9 / 2.5, lag 0.75 / 1.05
+ *    three-claps 108   3.9 / 4.6, lag 0.65 / 0.75      4.0 / 4.4, lag 0.65 / 0.70
+ *
+ *  The shared cutoff (fp_oneeuro_filter_joints) lifts the face where the hand's joints moved
+ *  at different speeds (a joint-to-joint vector lagged by the slower joint's cutoff). Not met
+ *  by either, nor by any setting tried (mincutoff 0.3-1, beta 0.01-0.04, dcutoff 2-12, each
+ *  with both): three-claps' hand (11 hold frames, between claps), grab's face lag at 57 Hz,
+ *  whose hand lags 0.65 (with a 20 Hz cutoff and no beta, hand 0.40, face 0.55: the face's
+ *  peak sits 0.15-0.6 frames behind the hand's), and Waiting's face at 57 Hz: its jaw is
+ *  shut in about a third of its frames, where the noise does not move it (not established
+ *  as the cause). The derivative's cutoff is well above the paper's 1 Hz: at 1 Hz the speed
+ *  estimate takes 160 ms to see a hand start moving, and the motion lags 1.2 frames for the
+ *  same jitter. */
 #define FP_FILTER_MINCUTOFF 0.5
-#define FP_FILTER_BETA 0.025
-#define FP_FILTER_DCUTOFF 8.0
+#define FP_FILTER_BETA 0.018
+#define FP_FILTER_DCUTOFF 6.0
 /** A glove's defaults (cyberglove): light, its bend sensors' noise being small (a step of the
- *  converter): a higher cutoff when still, so less lag. */
+ *  converter): a higher cutoff when still, so less lag; its sensors each filtered alone, at
+ *  the camera trackers' settings before the joints shared a cutoff. */
 #define FP_FILTER_GLOVE_MINCUTOFF 3.0
+#define FP_FILTER_GLOVE_BETA 0.025
+#define FP_FILTER_GLOVE_DCUTOFF 8.0
 /** An angle's rate in rad/s counts as this many mm/s (a point 100 mm from the joint). */
 #define FP_FILTER_ARM_MM 100.0
 
@@ -95,9 +111,9 @@ int fp_filter_parse(const char *name, const char *filter, const char *mincutoff,
                     const char *beta, const char *dcutoff, fp_filter_config *out, char *err,
                     size_t errlen);
 
-/** One line for a person: "hands filtered in the session (oneeuro mincutoff=0.5 beta=0.025
- *  dcutoff=8): a steady motion lags 16 ms at 200 mm/s, 36 ms at 50 mm/s (samples at 60 Hz; at
- *  most 29 and 91 ms at any rate)" (fp_oneeuro_lag at FP_FILTER_DESCRIBE_HZ, and its bound),
+/** One line for a person: "hands filtered in the session (oneeuro mincutoff=0.5 beta=0.018
+ *  dcutoff=6): a steady motion lags 19 ms at 200 mm/s, 43 ms at 50 mm/s (samples at 60 Hz; at
+ *  most 39 and 114 ms at any rate)" (fp_oneeuro_lag at FP_FILTER_DESCRIBE_HZ, and its bound),
  *  or "filter off". Returns the length snprintf would write. */
 #define FP_FILTER_DESCRIBE_HZ 60.0
 int fp_filter_describe(const fp_filter_config *c, char *buf, size_t len);
@@ -127,6 +143,19 @@ double fp_oneeuro_alpha(double cutoff_hz, double te_s);
  *  A non-finite value in x resets the filter and is passed through. */
 void fp_oneeuro_filter(fp_oneeuro *f, const fp_filter_config *c, int dim, double mm_per_unit,
                        const double *x, int64_t t_ns, double *out);
+
+/** A hand's joint positions, filtered as one hand: count filters f[0 .. count) (count <=
+ *  FP_ONEEURO_MAX_JOINTS), one a joint, each over the 3-vector x[j] (mm) taken at t_ns,
+ *  filtered in place. Each joint keeps its own dXhat and Xhat (its own noise averaged by its
+ *  own low pass), but the joints share one cutoff, f_c = mincutoff + beta |dXhat| of the
+ *  fastest joint this sample, as a joint's coordinates share theirs: the hand keeps its shape
+ *  as it moves (joint-to-joint vectors, which a mapping reads, lag as the joints do), and the
+ *  still palm of a hand whose fingers close follows them at once. A joint whose filter had
+ *  not started, or whose sample is not finite, passes through as in fp_oneeuro_filter and
+ *  does not count. Same units and rules as fp_oneeuro_filter; c->kind is not read. */
+#define FP_ONEEURO_MAX_JOINTS 32
+void fp_oneeuro_filter_joints(fp_oneeuro *f, size_t count, const fp_filter_config *c,
+                              double (*x)[3], int64_t t_ns);
 
 /** The One Euro filter's lag on a steady ramp of speed_mm_s sampled at rate_hz, seconds:
  *  lambda = tau(mincutoff + beta (v + v lambda T_e^-1)) solved exactly (a quadratic in

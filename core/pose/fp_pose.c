@@ -28,11 +28,12 @@ static void take_positions(fp_pose_hand *hs, fp_pose_filter *fs, const fp_filter
     hs->prev_positions = hs->have_positions;
     memcpy(hs->prev_joints_mm, hs->joints_mm, sizeof hs->joints_mm);
     hs->prev_joints_t_ns = hs->joints_t_ns;
-    for (int j = 0; j < FP_HAND_JOINTS; j++) {
-        double x[3] = {e->mm[j][0], e->mm[j][1], e->mm[j][2]};
-        if (fs) fp_oneeuro_filter(&fs->joints[j], c, 3, 1.0, x, e->header.time_ns, x);
-        for (int k = 0; k < 3; k++) hs->joints_mm[j][k] = (float)x[k];
-    }
+    double x[FP_HAND_JOINTS][3];
+    for (int j = 0; j < FP_HAND_JOINTS; j++)
+        for (int k = 0; k < 3; k++) x[j][k] = e->mm[j][k];
+    if (fs) fp_oneeuro_filter_joints(fs->joints, FP_HAND_JOINTS, c, x, e->header.time_ns);
+    for (int j = 0; j < FP_HAND_JOINTS; j++)
+        for (int k = 0; k < 3; k++) hs->joints_mm[j][k] = (float)x[j][k];
     hs->joints_t_ns = e->header.time_ns;
 }
 

@@ -145,6 +145,54 @@ static void test_adaptive(void **state)
     assert_true(lag < lag_fixed / 5);
 }
 
+/* A hand's joints share the fastest joint's cutoff: beside a joint moving at 400 mm/s, a
+ * still joint's 1 mm step is followed as the moving joint's cutoff allows, far faster than
+ * its own filter would (alone, at mincutoff); each joint's own filter otherwise: two joints
+ * alike give what fp_oneeuro_filter gives each. */
+static void test_shared_cutoff(void **state)
+{
+    (void)state;
+    const double te = 1 / 108.0; /* the stamps are whole ns: the filter's T_e is near it */
+    fp_oneeuro hand[2], alone;
+    fp_oneeuro_reset(&hand[0]);
+    fp_oneeuro_reset(&hand[1]);
+    fp_oneeuro_reset(&alone);
+    double x[2][3], a[3], prev_speed = 0;
+    int n = 200;
+    for (int i = 0; i <= n; i++) {
+        int64_t t = llround(i * te * 1e9);
+        double step = i == n ? 1.0 : 0.0;
+        x[0][0] = 400.0 * i * te, x[0][1] = x[0][2] = 0;  /* the moving joint */
+        x[1][0] = step, x[1][1] = x[1][2] = 0;               /* still, then a 1 mm step */
+        a[0] = step, a[1] = a[2] = 0;
+        if (i == n) prev_speed = sqrt(hand[0].dx[0] * hand[0].dx[0]);
+        fp_oneeuro_filter_joints(hand, 2, &tracker, x, t);
+        fp_oneeuro_filter(&alone, &tracker, 3, 1.0, a, t, a);
+    }
+    /* the step's share taken: alpha at the fastest joint's cutoff (its dXhat this sample) */
+    double speed = hand[0].dx[0];
+    double want = fp_oneeuro_alpha(tracker.mincutoff + tracker.beta * speed, hand[1].te);
+    printf("a still joint's 1 mm step beside a joint at 400 mm/s: %.3f mm taken at once "
+           "(alone: %.3f mm)\n", x[1][0], a[0]);
+    assert_true(prev_speed > 300 && speed > 300);
+    assert_true(fabs(x[1][0] - want) < 1e-12);
+    assert_true(x[1][0] > 4 * a[0]);
+    /* alike joints: the same as each alone, bit for bit */
+    fp_oneeuro two[2], one;
+    fp_oneeuro_reset(&two[0]);
+    fp_oneeuro_reset(&two[1]);
+    fp_oneeuro_reset(&one);
+    for (int i = 0; i < 300; i++) {
+        double v = 50.0 * sin(i * 0.05) + (i % 7) * 0.3;
+        double y[2][3] = {{v, -v, 2 * v}, {v, -v, 2 * v}}, z[3] = {v, -v, 2 * v};
+        int64_t t = (int64_t)i * 9 * MS;
+        fp_oneeuro_filter_joints(two, 2, &tracker, y, t);
+        fp_oneeuro_filter(&one, &tracker, 3, 1.0, z, t, z);
+        assert_memory_equal(y[0], z, sizeof z);
+        assert_memory_equal(y[1], z, sizeof z);
+    }
+}
+
 /* A repeated stamp uses the last period; a non-finite sample resets the filter. */
 static void test_stamps(void **state)
 {
@@ -435,7 +483,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_alpha),          cmocka_unit_test(test_constant),
         cmocka_unit_test(test_ramp_lag),       cmocka_unit_test(test_noise),
-        cmocka_unit_test(test_adaptive),       cmocka_unit_test(test_stamps),
+        cmocka_unit_test(test_adaptive),       cmocka_unit_test(test_shared_cutoff),
+        cmocka_unit_test(test_stamps),
         cmocka_unit_test(test_keys),           cmocka_unit_test(test_frame_time),
         cmocka_unit_test(test_frame_time_angles), cmocka_unit_test(test_no_repeats),
         cmocka_unit_test(test_filtered_events),

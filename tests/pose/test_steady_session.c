@@ -2,7 +2,8 @@
  * clock at 60 frames a second, the ICT face with its rig and `--mapping onehand,still=0`
  * (the one-hand recording moves the jaw and the landmarks, so the face deforms every frame):
  *
- *  - jitter: a copy of the real HandSplay recording (108 Hz, one right hand) with Gaussian
+ *  - jitter: a copy of the real HandSplay recording (108 Hz, one right hand; and resampled at
+ *    57 Hz, a second test) with Gaussian
  *    noise of sigma 1 mm on every joint coordinate (fixed seed), replayed unfiltered and
  *    through the One Euro filter (`filter=oneeuro`, its defaults), in lockstep with the clean
  *    recording: during still holds (frames where the clean hand's fastest joint moves slower
@@ -20,7 +21,9 @@
  * trying other settings or recordings (figures printed; the thresholds still apply):
  * FP_TEST_FILTER_KEYS=",beta=0.05" (appended to the filtered input's SPEC),
  * FP_TEST_STEADY_CLIP=grab (a *_joints_mm.csv of ../shared/data/hands/leap-motion),
- * FP_TEST_STEADY_HZ=57 (the jitter test's recording resampled first, as the 57 Hz copy). */
+ * FP_TEST_STEADY_HZ=57 (the first jitter test's recording resampled first, as the 57 Hz copy;
+ * the second is resampled at 57 Hz always), FP_TEST_STEADY_MAPPING=anchored (instead of
+ * onehand; the face then moves only while a fingertip touches). */
 #define _GNU_SOURCE
 #include "fp_plugin_host.h"
 #include "fp_session.h"
@@ -158,7 +161,7 @@ static void open_run(run *r, const char *spec)
 {
     memset(r, 0, sizeof *r);
     fp_session_options so;
-    fp_test_face_options(&so, MAPPING, NULL);
+    fp_test_face_options(&so, getenv("FP_TEST_STEADY_MAPPING") ? getenv("FP_TEST_STEADY_MAPPING") : MAPPING, NULL);
     so.inputs[0] = spec;
     so.input_count = 1;
     so.input_clock = true;
@@ -268,13 +271,11 @@ static double best_shift(const float *clean, const float *other, size_t npts, co
     return best_s;
 }
 
-static void test_jitter_and_lag(void **state)
+static void jitter_and_lag(double hz)
 {
-    (void)state;
     static rows clean, noisy, recorded;
     read_rows(clip_path(), &clean);
     const char *clean_csv = clip_path();
-    double hz = getenv("FP_TEST_STEADY_HZ") ? atof(getenv("FP_TEST_STEADY_HZ")) : 0;
     if (hz > 0) {
         recorded = clean;
         resample(&recorded, hz, &clean);
@@ -395,6 +396,20 @@ static size_t stutters(const char *spec, size_t *frames_out, size_t *moving_out)
     return rep;
 }
 
+static void test_jitter_and_lag(void **state)
+{
+    (void)state;
+    jitter_and_lag(getenv("FP_TEST_STEADY_HZ") ? atof(getenv("FP_TEST_STEADY_HZ")) : 0);
+}
+
+/* The same at 57 Hz (the recording resampled), a slower tracker's rate: each sample weighs
+ * more in the filter, and a frame's prediction reaches further. */
+static void test_jitter_and_lag_57hz(void **state)
+{
+    (void)state;
+    jitter_and_lag(57);
+}
+
 static void test_no_stutter(void **state)
 {
     (void)state;
@@ -441,6 +456,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_jitter_and_lag),
+        cmocka_unit_test(test_jitter_and_lag_57hz),
         cmocka_unit_test(test_no_stutter),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
