@@ -19,7 +19,7 @@ void fp_filter_default(const char *name, fp_filter_config *out)
     out->dcutoff = FP_FILTER_DCUTOFF;
     if (!name) return;
     if (!strcmp(name, "osc")) {
-        out->kind = FP_FILTER_ONEEURO;
+        out->kind = FP_FILTER_AUTO;
     } else if (!strcmp(name, "cyberglove")) {
         out->kind = FP_FILTER_ONEEURO;
         out->mincutoff = FP_FILTER_GLOVE_MINCUTOFF;
@@ -47,14 +47,15 @@ int fp_filter_parse(const char *name, const char *filter, const char *mincutoff,
     fp_filter_default(name, &c);
     if (filter) {
         if (!strcmp(filter, "oneeuro")) c.kind = FP_FILTER_ONEEURO;
+        else if (!strcmp(filter, "auto")) c.kind = FP_FILTER_AUTO;
         else if (!strcmp(filter, "off")) c.kind = FP_FILTER_OFF;
         else {
-            if (err && errlen) snprintf(err, errlen, "filter=%s: expected oneeuro or off", filter);
+            if (err && errlen) snprintf(err, errlen, "filter=%s: expected oneeuro, auto or off", filter);
             return -EINVAL;
         }
     }
     const char *key = mincutoff ? "mincutoff" : beta ? "beta" : dcutoff ? "dcutoff" : NULL;
-    if (key && c.kind != FP_FILTER_ONEEURO) {
+    if (key && c.kind == FP_FILTER_OFF) {
         if (err && errlen)
             snprintf(err, errlen, "%s= tunes the One Euro filter, which is off for this input%s: "
                      "add filter=oneeuro", key, filter ? " (filter=off)" : "");
@@ -78,11 +79,14 @@ int fp_filter_parse(const char *name, const char *filter, const char *mincutoff,
 
 int fp_filter_describe(const fp_filter_config *c, char *buf, size_t len)
 {
-    if (c->kind != FP_FILTER_ONEEURO) return snprintf(buf, len, "filter off");
-    return snprintf(buf, len, "hands filtered in the session (oneeuro mincutoff=%g beta=%g dcutoff=%g): "
+    if (c->kind == FP_FILTER_OFF) return snprintf(buf, len, "filter off");
+    return snprintf(buf, len, "hands filtered in the session%s (oneeuro mincutoff=%g beta=%g dcutoff=%g): "
                     "a steady motion lags "
                     "%.0f ms at 200 mm/s, %.0f ms at 50 mm/s (samples at %.0f Hz; at most %.0f and "
-                    "%.0f ms at any rate)", c->mincutoff, c->beta, c->dcutoff,
+                    "%.0f ms at any rate)",
+                    c->kind == FP_FILTER_AUTO ? " where the tracker does not smooth them (MediaPipe's "
+                                                "landmarks; a Leap's joints as sent)" : "",
+                    c->mincutoff, c->beta, c->dcutoff,
                     1e3 * fp_oneeuro_lag(c, 200, FP_FILTER_DESCRIBE_HZ),
                     1e3 * fp_oneeuro_lag(c, 50, FP_FILTER_DESCRIBE_HZ), FP_FILTER_DESCRIBE_HZ,
                     1e3 * fp_oneeuro_lag(c, 200, 0), 1e3 * fp_oneeuro_lag(c, 50, 0));

@@ -46,7 +46,10 @@ extern "C" {
 /** Which filter an input's hand events go through. */
 typedef enum fp_filter_kind {
     FP_FILTER_OFF = 0,      /* the events as the input gave them */
-    FP_FILTER_ONEEURO = 1   /* the One Euro filter, per joint */
+    FP_FILTER_ONEEURO = 1,  /* the One Euro filter, per joint */
+    FP_FILTER_AUTO = 2      /* the One Euro filter on the events the input flags
+                               FP_EVENT_FLAG_UNSMOOTHED (plugin.h: a tracker that does not
+                               smooth its own samples), the others as given */
 } fp_filter_kind;
 
 /** An input's filter settings (the SPEC keys filter=, mincutoff=, beta=, dcutoff=). */
@@ -94,18 +97,20 @@ typedef struct fp_filter_config {
 /** An angle's rate in rad/s counts as this many mm/s (a point 100 mm from the joint). */
 #define FP_FILTER_ARM_MM 100.0
 
-/** The filter an input of this plugin NAME gets when its SPEC says nothing: "osc" the One
- *  Euro filter at the defaults above (camera trackers jitter), "cyberglove" at the glove's
- *  (mincutoff FP_FILTER_GLOVE_MINCUTOFF), every other input ("replay", "take", "pedal", a
+/** The filter an input of this plugin NAME gets when its SPEC says nothing: "osc" auto at
+ *  the defaults above (FP_FILTER_AUTO: the hands of a MediaPipe sender, whose landmarks
+ *  jitter, filtered; a Leap's or another facepuppet's, smooth already, as sent, so that they
+ *  deform the face as their recordings replayed do), "cyberglove" the One Euro filter at the
+ *  glove's settings (FP_FILTER_GLOVE_*), every other input ("replay", "take", "pedal", a
  *  third party's) off: a recording replayed for analysis is seen as recorded. name may be
  *  NULL (off). */
 void fp_filter_default(const char *name, fp_filter_config *out);
 
 /** The filter of an input named `name` from its host keys (each NULL where not given):
- *  filter=oneeuro|off, mincutoff=HZ (decimal in (0, 1000]), beta=B (in [0, 100]),
+ *  filter=oneeuro|auto|off, mincutoff=HZ (decimal in (0, 1000]), beta=B (in [0, 100]),
  *  dcutoff=HZ (in (0, 1000]). Starts from fp_filter_default(name); mincutoff, beta or dcutoff
- *  change the One Euro filter's settings, so they need it on (the input's default or
- *  filter=oneeuro). Returns 0 and *out, or -EINVAL (*out untouched) with a message naming the
+ *  change the One Euro filter's settings, so they need it on or auto (the input's default,
+ *  filter=oneeuro or filter=auto). Returns 0 and *out, or -EINVAL (*out untouched) with a message naming the
  *  key into err (errlen bytes, may be 0). */
 int fp_filter_parse(const char *name, const char *filter, const char *mincutoff,
                     const char *beta, const char *dcutoff, fp_filter_config *out, char *err,
@@ -114,7 +119,8 @@ int fp_filter_parse(const char *name, const char *filter, const char *mincutoff,
 /** One line for a person: "hands filtered in the session (oneeuro mincutoff=0.5 beta=0.018
  *  dcutoff=6): a steady motion lags 19 ms at 200 mm/s, 43 ms at 50 mm/s (samples at 60 Hz; at
  *  most 39 and 114 ms at any rate)" (fp_oneeuro_lag at FP_FILTER_DESCRIBE_HZ, and its bound),
- *  or "filter off". Returns the length snprintf would write. */
+ *  for auto "hands filtered in the session where the tracker does not smooth them
+ *  (MediaPipe's landmarks; a Leap's joints as sent) (oneeuro ...", or "filter off". Returns the length snprintf would write. */
 #define FP_FILTER_DESCRIBE_HZ 60.0
 int fp_filter_describe(const fp_filter_config *c, char *buf, size_t len);
 

@@ -18,7 +18,8 @@ void fp_pose_init(fp_pose_state *p, double hand_size, const fp_calibration *c)
 /* The filter state of the event's input for hand h, or NULL where none applies. */
 static fp_pose_filter *filter_state(fp_pose_state *p, const fp_event *ev, int h, const fp_filter_config *c)
 {
-    if (!c || c->kind != FP_FILTER_ONEEURO || ev->header.source >= FP_POSE_MAX_INPUTS) return NULL;
+    if (!c || c->kind == FP_FILTER_OFF || ev->header.source >= FP_POSE_MAX_INPUTS) return NULL;
+    if (c->kind == FP_FILTER_AUTO && !(ev->header.flags & FP_EVENT_FLAG_UNSMOOTHED)) return NULL;
     return &p->filters[ev->header.source][h];
 }
 

@@ -116,7 +116,8 @@ void fp_pose_init(fp_pose_state *p, double hand_size, const fp_calibration *c);
 void fp_pose_take_event(fp_pose_state *p, const fp_event *ev);
 
 /** fp_pose_take_event through the One Euro filter `filter` (fp_filter.h; NULL or kind
- *  FP_FILTER_OFF: none) of the event's input: the state of p->filters[ev->header.source]
+ *  FP_FILTER_OFF: none; FP_FILTER_AUTO: only for an event flagged FP_EVENT_FLAG_UNSMOOTHED)
+ *  of the event's input: the state of p->filters[ev->header.source]
  *  [hand] (a source at or beyond FP_POSE_MAX_INPUTS: none), the event's time_ns driving the
  *  filter's rate. Joint positions per joint (mm), joint angles per valid sensor (radians,
  *  speed counted at FP_FILTER_ARM_MM), a wrist pose's position and rotation (the quaternion

@@ -274,8 +274,9 @@ static void header_for(fp_event *ev, size_t size, uint16_t type, int64_t t, int 
                                    .hand = hand};
 }
 
+/* flags: the event's header.flags (FP_EVENT_FLAG_UNSMOOTHED for MediaPipe's landmarks) */
 static void push_joints(osc_input *o, int hand, int64_t t, int64_t recv_ns,
-                        const float mm[FP_HAND_JOINTS][3])
+                        const float mm[FP_HAND_JOINTS][3], uint16_t flags)
 {
     if (!finite_all(&mm[0][0], FP_HAND_JOINTS * 3)) {
         count(o, FP_OSC_NONFINITE);
@@ -288,6 +289,7 @@ static void push_joints(osc_input *o, int hand, int64_t t, int64_t recv_ns,
     note_valid(o, recv_ns, hand);
     fp_event ev;
     header_for(&ev, sizeof ev.positions, FP_EVENT_JOINT_POSITIONS, t, hand);
+    ev.header.flags = flags;
     memcpy(ev.positions.mm, mm, sizeof ev.positions.mm);
     push_event(o, &ev);
 }
@@ -343,7 +345,7 @@ static void fmt_facepuppet(osc_input *o, const char *path, const char *types, lo
         }
         float mm[FP_HAND_JOINTS][3];
         floats_of(argv, 0, 63, &mm[0][0]);
-        push_joints(o, hand, t, recv_ns, (const float(*)[3])mm);
+        push_joints(o, hand, t, recv_ns, (const float(*)[3])mm, 0);
     } else if (strcmp(rest, "angles") == 0) {
         /* 22 floats (all valid), or an int mask of the valid sensors and 22 floats */
         char want[32];
@@ -449,7 +451,7 @@ static void leap_emit(osc_input *o, int slot, int64_t t, int64_t recv_ns)
         }
         memcpy(mm[FP_JOINT_TIP(f)], ls->tip[f], sizeof mm[0]);
     }
-    push_joints(o, hand, t, recv_ns, (const float(*)[3])mm);
+    push_joints(o, hand, t, recv_ns, (const float(*)[3])mm, 0);
 }
 
 static void fmt_leap(osc_input *o, const char *path, const char *types, lo_arg **argv,
@@ -520,7 +522,7 @@ static void mp_emit(osc_input *o, int hand, int64_t t, int64_t recv_ns)
     for (int j = 1; j < 21; j++) memcpy(mm[j], lm[j], sizeof mm[j]);
     for (int i = 0; i < 3; i++)
         mm[FP_JOINT_PALM][i] = (lm[0][i] + lm[5][i] + lm[9][i] + lm[13][i] + lm[17][i]) / 5.f;
-    push_joints(o, hand, t, recv_ns, (const float(*)[3])mm);
+    push_joints(o, hand, t, recv_ns, (const float(*)[3])mm, FP_EVENT_FLAG_UNSMOOTHED);
 }
 
 /* Whether path is a MediaPipe hand's: "/lx", "/ly", "/lz", "/rx", ... with or without a

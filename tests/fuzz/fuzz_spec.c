@@ -67,7 +67,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         if (frc) {
             if (frc != -EINVAL || !ferr[0] || memcmp(&fc, &keep, sizeof fc)) abort();
         } else {
-            if (fc.kind != FP_FILTER_OFF && fc.kind != FP_FILTER_ONEEURO) abort();
+            if (fc.kind != FP_FILTER_OFF && fc.kind != FP_FILTER_ONEEURO && fc.kind != FP_FILTER_AUTO) abort();
             if (!(fc.mincutoff > 0 && fc.mincutoff <= 1000) || !(fc.beta >= 0 && fc.beta <= 100) ||
                 !(fc.dcutoff > 0 && fc.dcutoff <= 1000))
                 abort();

@@ -306,6 +306,7 @@ static void facepuppet_joints_equal_csv(void **state)
         const fp_event *e = nth_positions(f.h, i);
         assert_non_null(e);
         assert_int_equal(e->header.hand, rows[i].side);
+        assert_int_equal(e->header.flags, 0);
         assert_memory_equal(e->positions.mm, rows[i].joints_mm, sizeof e->positions.mm);
     }
     fp_osc_stats st = stats(&f);
@@ -486,6 +487,7 @@ static void auto_format_takes_each_address_space(void **state)
     assert_true(wait_type(f.h, FP_EVENT_JOINT_POSITIONS, -1, 1));
     const fp_event *e = nth_positions(f.h, 0);
     assert_memory_equal(e->positions.mm[FP_JOINT_PALM], r->palm_mm, sizeof r->palm_mm);
+    assert_int_equal(e->header.flags, 0); /* a Leap's joints: smoothed by its service */
     for (const char *axis = "xy"; *axis; axis++) { /* a right hand: 21 landmarks a coordinate */
         lo_message m = lo_message_new();
         for (int j = 0; j < 21; j++) lo_message_add_float(m, 0.3f + 0.01f * (float)j);
@@ -499,6 +501,8 @@ static void auto_format_takes_each_address_space(void **state)
     wait_packets(&f, 10);
     assert_true(wait_type(f.h, FP_EVENT_JOINT_POSITIONS, -1, 2));
     assert_true(wait_type(f.h, FP_EVENT_BUTTON, -1, 1));
+    /* MediaPipe's landmarks are flagged unsmoothed: the host's filter=auto smooths them */
+    assert_int_equal(nth_positions(f.h, 1)->header.flags, FP_EVENT_FLAG_UNSMOOTHED);
     fp_osc_stats st = stats(&f);
     assert_int_equal(st.problems[FP_OSC_UNKNOWN_ADDRESS], 1);
     for (int k = 0; k < FP_OSC_PROBLEMS; k++)
@@ -578,6 +582,7 @@ static void mediapipe_landmarks_to_mm(void **state)
             e = nth_positions(f.h, e_i++);
         }
         assert_int_equal(e->header.hand, r->side);
+        assert_int_equal(e->header.flags, FP_EVENT_FLAG_UNSMOOTHED);
         for (int j = 1; j < 21; j++)
             for (int k = 0; k < 3; k++)
                 assert_true(fabsf(e->positions.mm[j][k] - r->joints_mm[j][k]) < 2e-3f * (1 + fabsf(r->joints_mm[j][k])) / 10);

@@ -223,7 +223,7 @@ static void test_keys(void **state)
     fp_filter_config c;
     char err[256];
     fp_filter_default("osc", &c);
-    assert_int_equal(c.kind, FP_FILTER_ONEEURO);
+    assert_int_equal(c.kind, FP_FILTER_AUTO);
     assert_true(c.mincutoff == FP_FILTER_MINCUTOFF && c.beta == FP_FILTER_BETA && c.dcutoff == FP_FILTER_DCUTOFF);
     fp_filter_default("cyberglove", &c);
     assert_int_equal(c.kind, FP_FILTER_ONEEURO);
@@ -241,7 +241,11 @@ static void test_keys(void **state)
     assert_int_equal(fp_filter_parse("replay", "oneeuro", "2", "0.01", ".5", &c, err, sizeof err), 0);
     assert_true(c.mincutoff == 2 && c.beta == 0.01 && c.dcutoff == 0.5);
     assert_int_equal(fp_filter_parse("osc", NULL, NULL, "0.02", NULL, &c, err, sizeof err), 0);
-    assert_true(c.kind == FP_FILTER_ONEEURO && c.beta == 0.02 && c.mincutoff == FP_FILTER_MINCUTOFF);
+    assert_true(c.kind == FP_FILTER_AUTO && c.beta == 0.02 && c.mincutoff == FP_FILTER_MINCUTOFF);
+    assert_int_equal(fp_filter_parse("replay", "auto", "1", NULL, NULL, &c, err, sizeof err), 0);
+    assert_true(c.kind == FP_FILTER_AUTO && c.mincutoff == 1);
+    assert_int_equal(fp_filter_parse("osc", "oneeuro", NULL, NULL, NULL, &c, err, sizeof err), 0);
+    assert_int_equal(c.kind, FP_FILTER_ONEEURO);
     assert_int_equal(fp_filter_parse("osc", "off", NULL, NULL, NULL, &c, err, sizeof err), 0);
     assert_int_equal(c.kind, FP_FILTER_OFF);
     /* refusals leave *out untouched and name the key */
@@ -274,6 +278,9 @@ static void test_keys(void **state)
     fp_filter_config o = {0};
     fp_filter_describe(&o, line, sizeof line);
     assert_string_equal(line, "filter off");
+    fp_filter_default("osc", &o);
+    fp_filter_describe(&o, line, sizeof line);
+    assert_non_null(strstr(line, "where the tracker does not smooth them"));
 }
 
 /* ---- fp_pose at the frame's time ------------------------------------------------------- */
@@ -455,6 +462,19 @@ static void test_filtered_events(void **state)
     fp_event d = positions(FP_HAND_RIGHT, 30, 30 * MS, 2);
     fp_pose_take_event_filtered(p, &d, &off);
     assert_true(p->hands[FP_HAND_RIGHT].joints_mm[0][0] == 30.f);
+    /* auto: only the events flagged unsmoothed go through the filter */
+    fp_filter_config automatic = tracker;
+    automatic.kind = FP_FILTER_AUTO;
+    fp_event e = positions(FP_HAND_LEFT, 0, 0, 3), f = positions(FP_HAND_LEFT, 10, 10 * MS, 3);
+    fp_pose_take_event_filtered(p, &e, &automatic);
+    fp_pose_take_event_filtered(p, &f, &automatic);
+    assert_false(p->filters[3][FP_HAND_LEFT].joints[0].started);
+    assert_true(p->hands[FP_HAND_LEFT].joints_mm[0][0] == 10.f);
+    e.header.flags = f.header.flags = FP_EVENT_FLAG_UNSMOOTHED;
+    fp_pose_take_event_filtered(p, &e, &automatic);
+    fp_pose_take_event_filtered(p, &f, &automatic);
+    assert_true(p->filters[3][FP_HAND_LEFT].joints[0].started);
+    assert_true(p->hands[FP_HAND_LEFT].joints_mm[0][0] > 0 && p->hands[FP_HAND_LEFT].joints_mm[0][0] < 10);
     /* noise on a still hand, 100 Hz, read at 60 fps */
     fp_pose_state *q = identity_pose(&qs);
     identity_pose(&raw);

@@ -165,11 +165,19 @@ typedef enum fp_event_type {
 typedef struct fp_event_header {
     uint32_t size;     /* sizeof the whole event struct */
     uint16_t type;     /* fp_event_type */
-    uint16_t flags;    /* reserved, 0 */
+    uint16_t flags;    /* FP_EVENT_FLAG_* below, 0 where none applies */
     int64_t time_ns;   /* when the device measured it (host clock, fp_host.now_ns) */
     uint32_t source;   /* set by the host: which input instance pushed it */
     int32_t hand;      /* fp_hand_side, or -1 where no hand applies */
 } fp_event_header;
+
+/** header.flags: the tracker gives each sample as it measured it, with no smoothing of its
+ *  own (a camera landmark model such as MediaPipe's, whose joints jitter by millimetres from
+ *  frame to frame). A host's input filter `filter=auto` (the osc input's default) smooths the
+ *  hands of these events and passes the others as sent (a Leap service's joints, which it
+ *  smooths itself: the Leap recordings in shared/data move under 0.05 mm off a straight line
+ *  from sample to sample). Plugins built before the flag send 0; hosts before it ignore it. */
+#define FP_EVENT_FLAG_UNSMOOTHED 0x1u
 
 /** Joint angles in radians, CyberGlove sensor order. Bit i of `valid` is set where sensor i
  *  was measured; the others are 0 and must be ignored (the host uses its default pose). */
