@@ -10,8 +10,8 @@
  * first figure; measured 1.00) and every run's 10th percentile at least 0.60 (the issue's
  * second; the worst measured 0.62, Lee Perry-Smith's grab, where the contact guard holds
  * two sheets of skin under a millimetre apart by the eye). Printed: the table, each run's 10th percentile (FP_TEST_VERBOSE adds the
- * log). Experiments: FP_REACH_NO_CONTACT=1 (no contact guard), FP_REACH_RADIUS=R (mesh
- * units), FP_REACH_SAVE=FILE.obj (the frame of the largest ask), FP_REACH_RIG=1 (each face's
+ * log). Experiments: FP_REACH_NO_CONTACT=1 (no contact guard), FP_REACH_MAPPING=SPEC (e.g.
+ * anchored,widen=0.75), FP_REACH_RADIUS=R (mesh units), FP_REACH_SAVE=FILE.obj (the frame of the largest ask), FP_REACH_RIG=1 (each face's
  * own rig instead of none: on the ICT face its finger limit near bone holds every drag to
  * about 3 mm, reach median 8-31%).
  *
@@ -95,7 +95,7 @@ static void one_run(const char *face, const char *rec, samples *all, int *runs_c
     so.mesh_path = mesh;
     so.inputs[0] = input;
     so.input_count = 1;
-    so.mapping = "anchored";
+    so.mapping = getenv("FP_REACH_MAPPING") ? getenv("FP_REACH_MAPPING") : "anchored"; /* (experiments) */
     so.rig_path = getenv("FP_REACH_RIG") ? NULL : "none"; /* (experiments: the mesh's own rig) */
     so.input_clock = true;
     so.plugin_path = fp_test_plugin_path();
