@@ -104,7 +104,7 @@ double fp_oneeuro_alpha(double cutoff_hz, double te_s)
  * where the sample is passed through (the filter's first, or not finite: it then starts
  * afresh) and its smoothing skipped. */
 static double oneeuro_speed(fp_oneeuro *f, const fp_filter_config *c, int dim, double mm_per_unit,
-                        const double *x, int64_t t_ns)
+                            const double *x, int64_t t_ns)
 {
     if (dim < 1) return -1;
     if (dim > FP_ONEEURO_MAX_DIM) dim = FP_ONEEURO_MAX_DIM;
