@@ -4,13 +4,14 @@
 # on 127.0.0.1 at the recorded pace.
 #
 #  1. The grab recording deforms the ICT face (anchored) as `run --input replay:` does: the
-#     median over 3 runs of the vertices moved and of the max displacement each within 20%
+#     median over 5 runs of the vertices moved and of the max displacement each within 20%
 #     of the replay's (issue 51). A single run's frames fall at another phase against the
 #     hand's samples (the sender's pace and the machine's load move them), hence the median.
 #     The osc input's default filter=auto passes a Leap's (and this sender's facepuppet
 #     format's) joints as sent, as the replay does. Measured on 2 cores: the replay 12597
-#     vertices moved, max 8.15 mm; single OSC runs, idle 12856-12872 moved, max 7.2-7.9 mm;
-#     beside another test's load (ctest -j2) max 6.1-8.0, hence RUN_SERIAL.
+#     vertices moved, max 8.15 mm; single OSC runs, idle 12836-12872 moved, max 7.2-8.1 mm;
+#     beside another test's load (ctest -j2) max 6.1-8.0 (late frames, or an engage frame that
+#     catches one more fingertip), hence RUN_SERIAL and 5 runs.
 #  2. A hand held still (grab's first row, 6 s) hovers in front of the face, never reaching
 #     it: the run says so (the hint, source "session") within 5 s of the sender starting.
 #
@@ -78,7 +79,7 @@ read -r r_moved r_max < <(summary "$tmp/replay.out")
 [ -n "${r_moved:-}" ] && [ "$r_moved" -gt 0 ] || fail "the replay moved nothing"
 echo "replay: $r_moved vertices moved, max $r_max mm"
 moved=() maxes=()
-for k in 1 2 3; do
+for k in 1 2 3 4 5; do
     osc_run "grab$k" "$grab" 5
     osc_wait "grab$k"
     read -r m x < <(summary "$tmp/grab$k.out")
@@ -90,8 +91,8 @@ for k in 1 2 3; do
     moved+=("$m")
     maxes+=("$x")
 done
-med_moved=$(printf '%s\n' "${moved[@]}" | sort -n | sed -n 2p)
-med_max=$(printf '%s\n' "${maxes[@]}" | sort -g | sed -n 2p)
+med_moved=$(printf '%s\n' "${moved[@]}" | sort -n | sed -n 3p)
+med_max=$(printf '%s\n' "${maxes[@]}" | sort -g | sed -n 3p)
 echo "osc median: $med_moved vertices moved, max $med_max (replay: $r_moved, $r_max)"
 [ "${FP_TEST_TIME_SCALE:-1}" -gt 1 ] || awk -v a="$med_moved" -v b="$r_moved" 'BEGIN { exit !(a >= 0.8 * b && a <= 1.2 * b) }' ||
     fail "vertices moved over OSC ($med_moved) not within 20% of the replay's ($r_moved)"
