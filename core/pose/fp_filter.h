@@ -110,8 +110,8 @@ void fp_filter_default(const char *name, fp_filter_config *out);
  *  filter=oneeuro|auto|off, mincutoff=HZ (decimal in (0, 1000]), beta=B (in [0, 100]),
  *  dcutoff=HZ (in (0, 1000]). Starts from fp_filter_default(name); mincutoff, beta or dcutoff
  *  change the One Euro filter's settings, so they need it on or auto (the input's default,
- *  filter=oneeuro or filter=auto). Returns 0 and *out, or -EINVAL (*out untouched) with a message naming the
- *  key into err (errlen bytes, may be 0). */
+ *  filter=oneeuro or filter=auto). Returns 0 and *out, or -EINVAL (*out untouched) with a
+ *  message naming the key into err (errlen bytes, may be 0). */
 int fp_filter_parse(const char *name, const char *filter, const char *mincutoff,
                     const char *beta, const char *dcutoff, fp_filter_config *out, char *err,
                     size_t errlen);
@@ -120,7 +120,8 @@ int fp_filter_parse(const char *name, const char *filter, const char *mincutoff,
  *  dcutoff=6): a steady motion lags 19 ms at 200 mm/s, 43 ms at 50 mm/s (samples at 60 Hz; at
  *  most 39 and 114 ms at any rate)" (fp_oneeuro_lag at FP_FILTER_DESCRIBE_HZ, and its bound),
  *  for auto "hands filtered in the session where the tracker does not smooth them
- *  (MediaPipe's landmarks; a Leap's joints as sent) (oneeuro ...", or "filter off". Returns the length snprintf would write. */
+ *  (MediaPipe's landmarks; a Leap's joints as sent) (oneeuro ...", or "filter off". Returns
+ *  the length snprintf would write. */
 #define FP_FILTER_DESCRIBE_HZ 60.0
 int fp_filter_describe(const fp_filter_config *c, char *buf, size_t len);
 
@@ -158,7 +159,9 @@ void fp_oneeuro_filter(fp_oneeuro *f, const fp_filter_config *c, int dim, double
  *  as it moves (joint-to-joint vectors, which a mapping reads, lag as the joints do), and the
  *  still palm of a hand whose fingers close follows them at once. A joint whose filter had
  *  not started, or whose sample is not finite, passes through as in fp_oneeuro_filter and
- *  does not count. Same units and rules as fp_oneeuro_filter; c->kind is not read. */
+ *  does not count. Same units and rules as fp_oneeuro_filter; c->kind is not read. Nothing
+ *  fails (count is asserted, and only the first FP_ONEEURO_MAX_JOINTS are filtered in a
+ *  release build); no allocation; f belongs to one thread (the session thread). */
 #define FP_ONEEURO_MAX_JOINTS 32
 void fp_oneeuro_filter_joints(fp_oneeuro *f, size_t count, const fp_filter_config *c,
                               double (*x)[3], int64_t t_ns);

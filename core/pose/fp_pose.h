@@ -119,7 +119,8 @@ void fp_pose_take_event(fp_pose_state *p, const fp_event *ev);
  *  FP_FILTER_OFF: none; FP_FILTER_AUTO: only for an event flagged FP_EVENT_FLAG_UNSMOOTHED)
  *  of the event's input: the state of p->filters[ev->header.source]
  *  [hand] (a source at or beyond FP_POSE_MAX_INPUTS: none), the event's time_ns driving the
- *  filter's rate. Joint positions per joint (mm), joint angles per valid sensor (radians,
+ *  filter's rate. Joint positions per joint (mm; a hand's joints sharing one cutoff,
+ *  fp_oneeuro_filter_joints), joint angles per valid sensor (radians,
  *  speed counted at FP_FILTER_ARM_MM), a wrist pose's position and rotation (the quaternion
  *  sign-aligned with the last one, renormalised). A DISCONNECTED status resets that input's
  *  filters of the hand. [session-thread]; no allocation. */
