@@ -217,8 +217,8 @@ typedef struct fp_input_instance {
 /** Load the plugin for `spec` and create the instance (not yet started). The host strips
  *  its own keys before the plugin sees the keys: `record=FILE` (record this input's events in
  *  the event-log format; `force=1` beside it), `forward=osc:HOST:PORT` (send them again in
- *  the OSC input's format, fp_forward.h; -ENOTSUP without liblo) and the filter keys `filter=oneeuro|off`,
- *  `mincutoff=HZ`, `beta=B`, `dcutoff=HZ` (fp_filter_parse: into inst->filter, starting from
+ *  the OSC input's format, fp_forward.h; -ENOTSUP without liblo) and the filter keys `filter=oneeuro|auto|off`,
+ *  `mincutoff=HZ`, `beta=B`, `dcutoff=HZ`, `trend=HZ` (fp_filter_parse: into inst->filter, starting from
  *  fp_filter_default of the SPEC's NAME; a bad value is -EINVAL naming the SPEC and key), and
  *  `performer=NAME` (into inst->performer: 1 to FP_PERFORMER_NAME_MAX letters, digits, '-'
  *  or '_', else -EINVAL naming the SPEC; the session gives each performer its own hands) and

@@ -219,8 +219,10 @@ int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
      * these keys, so every input takes them, a third party's too. */
     const char *filter = fp_spec_take(&spec, "filter"), *mincutoff = fp_spec_take(&spec, "mincutoff");
     const char *beta = fp_spec_take(&spec, "beta"), *dcutoff = fp_spec_take(&spec, "dcutoff");
+    const char *trend = fp_spec_take(&spec, "trend");
     char ferr[256];
-    if ((rc = fp_filter_parse(spec.name, filter, mincutoff, beta, dcutoff, &inst->filter, ferr, sizeof ferr))) {
+    if ((rc = fp_filter_parse(spec.name, filter, mincutoff, beta, dcutoff, trend, &inst->filter, ferr,
+                              sizeof ferr))) {
         snprintf(err, errlen, "input '%s': %s", spec_text, ferr);
         goto out;
     }

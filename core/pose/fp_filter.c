@@ -1,4 +1,5 @@
-/* The One Euro filter (Casiez, Roussel, Vogel, CHI 2012) and an input's filter keys. */
+/* The One Euro filter (Casiez, Roussel, Vogel, CHI 2012) with Holt's trend, and an input's
+ * filter keys. */
 #include "fp_filter.h"
 
 #include <facepuppet/plugin_util.h>
@@ -17,6 +18,7 @@ void fp_filter_default(const char *name, fp_filter_config *out)
     out->mincutoff = FP_FILTER_MINCUTOFF;
     out->beta = FP_FILTER_BETA;
     out->dcutoff = FP_FILTER_DCUTOFF;
+    out->trend = FP_FILTER_TREND;
     if (!name) return;
     if (!strcmp(name, "osc")) {
         out->kind = FP_FILTER_AUTO;
@@ -25,6 +27,7 @@ void fp_filter_default(const char *name, fp_filter_config *out)
         out->mincutoff = FP_FILTER_GLOVE_MINCUTOFF;
         out->beta = FP_FILTER_GLOVE_BETA;
         out->dcutoff = FP_FILTER_GLOVE_DCUTOFF;
+        out->trend = 0.0;
     }
 }
 
@@ -40,8 +43,8 @@ static bool in_range(const char *v, double lo, bool lo_open, double hi, double *
 }
 
 int fp_filter_parse(const char *name, const char *filter, const char *mincutoff,
-                    const char *beta, const char *dcutoff, fp_filter_config *out, char *err,
-                    size_t errlen)
+                    const char *beta, const char *dcutoff, const char *trend, fp_filter_config *out,
+                    char *err, size_t errlen)
 {
     fp_filter_config c;
     fp_filter_default(name, &c);
@@ -54,7 +57,7 @@ int fp_filter_parse(const char *name, const char *filter, const char *mincutoff,
             return -EINVAL;
         }
     }
-    const char *key = mincutoff ? "mincutoff" : beta ? "beta" : dcutoff ? "dcutoff" : NULL;
+    const char *key = mincutoff ? "mincutoff" : beta ? "beta" : dcutoff ? "dcutoff" : trend ? "trend" : NULL;
     if (key && c.kind == FP_FILTER_OFF) {
         if (err && errlen)
             snprintf(err, errlen, "%s= tunes the One Euro filter, which is off for this input%s: "
@@ -73,6 +76,10 @@ int fp_filter_parse(const char *name, const char *filter, const char *mincutoff,
         if (err && errlen) snprintf(err, errlen, "dcutoff=%s: expected a number of Hz above 0, at most 1000", dcutoff);
         return -EINVAL;
     }
+    if (trend && !in_range(trend, 0, false, 1000, &c.trend)) {
+        if (err && errlen) snprintf(err, errlen, "trend=%s: expected a number of Hz from 0 (off) to 1000", trend);
+        return -EINVAL;
+    }
     *out = c;
     return 0;
 }
@@ -80,13 +87,18 @@ int fp_filter_parse(const char *name, const char *filter, const char *mincutoff,
 int fp_filter_describe(const fp_filter_config *c, char *buf, size_t len)
 {
     if (c->kind == FP_FILTER_OFF) return snprintf(buf, len, "filter off");
+    const char *where = c->kind == FP_FILTER_AUTO ? " where the tracker does not smooth them (MediaPipe's "
+                                                    "landmarks; a Leap's joints as sent)" : "";
+    if (c->trend > 0)
+        return snprintf(buf, len, "hands filtered in the session%s (oneeuro mincutoff=%g beta=%g dcutoff=%g "
+                        "trend=%g): a steady motion is followed without lag once its trend has "
+                        "settled (about %.0f ms after it starts or turns)",
+                        where, c->mincutoff, c->beta, c->dcutoff, c->trend, 1e3 / (TWO_PI * c->trend));
     return snprintf(buf, len, "hands filtered in the session%s (oneeuro mincutoff=%g beta=%g dcutoff=%g): "
                     "a steady motion lags "
                     "%.0f ms at 200 mm/s, %.0f ms at 50 mm/s (samples at %.0f Hz; at most %.0f and "
                     "%.0f ms at any rate)",
-                    c->kind == FP_FILTER_AUTO ? " where the tracker does not smooth them (MediaPipe's "
-                                                "landmarks; a Leap's joints as sent)" : "",
-                    c->mincutoff, c->beta, c->dcutoff,
+                    where, c->mincutoff, c->beta, c->dcutoff,
                     1e3 * fp_oneeuro_lag(c, 200, FP_FILTER_DESCRIBE_HZ),
                     1e3 * fp_oneeuro_lag(c, 50, FP_FILTER_DESCRIBE_HZ), FP_FILTER_DESCRIBE_HZ,
                     1e3 * fp_oneeuro_lag(c, 200, 0), 1e3 * fp_oneeuro_lag(c, 50, 0));
@@ -132,12 +144,38 @@ static double oneeuro_speed(fp_oneeuro *f, const fp_filter_config *c, int dim, d
     return sqrt(speed2) * mm_per_unit;
 }
 
-/* The second half: Xhat_i at cutoff_hz. */
-static void oneeuro_smooth(fp_oneeuro *f, double cutoff_hz, int dim, const double *x, double *out)
+/* The second half: Xhat_i at cutoff_hz, from the prediction Xhat_{i-1} + T_e B_{i-1} (Holt)
+ * while the sample is not behind Xhat_{i-1} along B by over FP_FILTER_TREND_SLACK_MM, else
+ * from Xhat_{i-1} with B decaying;
+ * and B_i at trend_hz (0: none, B stays 0: the paper's filter, bit for bit). */
+static void oneeuro_smooth(fp_oneeuro *f, double cutoff_hz, double trend_hz, double mm_per_unit, int dim,
+                           const double *x, double *out)
 {
-    double a = fp_oneeuro_alpha(cutoff_hz, f->te);
+    const double a = fp_oneeuro_alpha(cutoff_hz, f->te);
+    if (!(trend_hz > 0)) {
+        for (int k = 0; k < dim; k++) {
+            f->x[k] = a * x[k] + (1 - a) * f->x[k];  /* Xhat_i */
+            out[k] = f->x[k];
+        }
+        return;
+    }
+    const double b = fp_oneeuro_alpha(trend_hz, f->te);
+    double along = 0, tr2 = 0;
     for (int k = 0; k < dim; k++) {
-        f->x[k] = a * x[k] + (1 - a) * f->x[k];      /* Xhat_i */
+        along += (x[k] - f->x[k]) * f->tr[k];
+        tr2 += f->tr[k] * f->tr[k];
+    }
+    /* the motion stopped or turned: predict nothing */
+    const bool behind = along * mm_per_unit < -FP_FILTER_TREND_SLACK_MM * sqrt(tr2);
+    for (int k = 0; k < dim; k++) {
+        const double last = f->x[k];
+        if (behind) {
+            f->x[k] = a * x[k] + (1 - a) * last;
+            f->tr[k] *= 1 - b;
+        } else {
+            f->x[k] = a * x[k] + (1 - a) * (last + f->te * f->tr[k]);   /* Xhat_i */
+            f->tr[k] = b * (f->x[k] - last) / f->te + (1 - b) * f->tr[k]; /* B_i */
+        }
         out[k] = f->x[k];
     }
 }
@@ -152,7 +190,7 @@ void fp_oneeuro_filter(fp_oneeuro *f, const fp_filter_config *c, int dim, double
         if (out != x) memmove(out, x, (size_t)dim * sizeof *out);
         return;
     }
-    oneeuro_smooth(f, c->mincutoff + c->beta * speed, dim, x, out);
+    oneeuro_smooth(f, c->mincutoff + c->beta * speed, c->trend, mm_per_unit, dim, x, out);
 }
 
 void fp_oneeuro_filter_joints(fp_oneeuro *f, size_t count, const fp_filter_config *c,
@@ -166,11 +204,12 @@ void fp_oneeuro_filter_joints(fp_oneeuro *f, size_t count, const fp_filter_confi
     }
     const double cutoff = c->mincutoff + c->beta * fastest;
     for (size_t j = 0; j < count && j < FP_ONEEURO_MAX_JOINTS; j++)
-        if (speed[j] >= 0) oneeuro_smooth(&f[j], cutoff, 3, x[j], x[j]);
+        if (speed[j] >= 0) oneeuro_smooth(&f[j], cutoff, c->trend, 1.0, 3, x[j], x[j]);
 }
 
 double fp_oneeuro_lag(const fp_filter_config *c, double speed_mm_s, double rate_hz)
 {
+    if (c->trend > 0) return 0.0; /* Holt's trend follows a steady ramp exactly, once settled */
     double v = fabs(speed_mm_s);
     double b = TWO_PI * (c->mincutoff + c->beta * v);
     if (!(rate_hz > 0) || !isfinite(rate_hz) || !(v > 0) || !(c->beta > 0)) return 1.0 / b;

@@ -4,8 +4,8 @@
  * Input in Interactive Systems", CHI 2012, pp. 2527-2530 (doi 10.1145/2207676.2208639), run
  * per joint and per input on the hand events (a hand's joint positions sharing one cutoff,
  * fp_oneeuro_filter_joints) (core/pose/fp_pose.h), and the host keys that
- * set it on an input SPEC (`filter=oneeuro,mincutoff=HZ,beta=B,dcutoff=HZ`, stripped by
- * core/plugin before the plugin sees its keys).
+ * set it on an input SPEC (`filter=oneeuro,mincutoff=HZ,beta=B,dcutoff=HZ,trend=HZ`, stripped
+ * by core/plugin before the plugin sees its keys).
  *
  * The filter, at each sample X_i taken at time t_i (T_e = t_i - t_{i-1}, seconds):
  *
@@ -13,17 +13,31 @@
  *   dX_i        = (X_i - Xhat_{i-1}) / T_e                       (the paper's Algorithm 1)
  *   dXhat_i     = alpha(d_cutoff) dX_i + (1 - alpha(d_cutoff)) dXhat_{i-1}
  *   f_c         = mincutoff + beta |dXhat_i|
- *   Xhat_i      = alpha(f_c) X_i + (1 - alpha(f_c)) Xhat_{i-1}
+ *   Xhat_i      = alpha(f_c) X_i + (1 - alpha(f_c)) (Xhat_{i-1} + T_e B_{i-1})
+ *   B_i         = alpha(trend) (Xhat_i - Xhat_{i-1}) / T_e + (1 - alpha(trend)) B_{i-1}
+ *   (where (X_i - Xhat_{i-1}) . B_{i-1} / |B_{i-1}| < -FP_FILTER_TREND_SLACK_MM instead:
+ *    Xhat_i = alpha(f_c) X_i + (1 - alpha(f_c)) Xhat_{i-1}, B_i = (1 - alpha(trend)) B_{i-1})
  *
- * with Xhat_0 = X_0, dXhat_0 = 0. A joint is filtered as one vector (its 3 coordinates share
- * the cutoff, |dXhat| being the length of the filtered velocity: the shape of a motion is kept,
+ * with Xhat_0 = X_0, dXhat_0 = 0, B_0 = 0. B is Holt's trend (C. C. Holt, "Forecasting
+ * seasonals and trends by exponentially weighted moving averages", 1957; Int. J. Forecasting
+ * 20(1), 2004, pp. 5-10; "double exponential smoothing", which LaViola, EGVE 2003, used for
+ * tracked hands): the low pass smooths about where the motion is heading, not where it was,
+ * so a steady motion is followed without lag once B has settled (a time constant of
+ * 1 / (2 pi trend) after it starts or turns), and the cutoff can stay low for the jitter.
+ * Where the sample falls FP_FILTER_TREND_SLACK_MM behind the smoothed position along B (the
+ * motion stopped or turned) nothing is predicted and B dies away: Holt's trend alone carries
+ * a stopping hand on (at a low cutoff the prediction outweighs the sample): 10.8 mm past a
+ * sudden stop from 300 mm/s at 57 Hz, 4.3 mm with the rule (tests/pose/test_filter.c).
+ * trend = 0 leaves B at 0: the paper's filter, bit for bit.
+ *
+ * A joint is filtered as one vector (its 3 coordinates share the cutoff, |dXhat| being the length of the filtered velocity: the shape of a motion is kept,
  * whatever its direction); a joint angle (a glove's sensor) as a scalar. Speeds are in mm/s so
  * that one `beta` serves every kind of input: an angle's rate counts as the speed of a point
  * FP_FILTER_ARM_MM from the joint (radians x 100 mm: a fingertip about a knuckle), a wrist
  * rotation's likewise (the quaternion's rate is half the angular speed).
  *
- * Its lag: on a steady ramp of speed v (mm/s) sampled every T_e, the output trails the input
- * by exactly lambda = tau(f_c) seconds, where f_c = mincutoff + beta (v + v lambda / T_e)
+ * Its lag without the trend (trend = 0): on a steady ramp of speed v (mm/s) sampled every T_e,
+ * the output trails the input by exactly lambda = tau(f_c) seconds, where f_c = mincutoff + beta (v + v lambda / T_e)
  * (the derivative sees the lag too); fp_oneeuro_lag solves it. lambda <= 1 / (2 pi
  * (mincutoff + beta v)) at any rate, the bound `run` reports.
  *
@@ -52,45 +66,53 @@ typedef enum fp_filter_kind {
                                smooth its own samples), the others as given */
 } fp_filter_kind;
 
-/** An input's filter settings (the SPEC keys filter=, mincutoff=, beta=, dcutoff=). */
+/** An input's filter settings (the SPEC keys filter=, mincutoff=, beta=, dcutoff=, trend=). */
 typedef struct fp_filter_config {
     fp_filter_kind kind;
     double mincutoff;   /* Hz, > 0: the cutoff when the joint is still (the jitter left) */
     double beta;        /* Hz per mm/s, >= 0: how fast the cutoff rises with speed (the lag) */
     double dcutoff;     /* Hz, > 0: the cutoff of the speed estimate (the paper: 1 Hz) */
+    double trend;       /* Hz, >= 0: the cutoff of Holt's trend B (0: none, the paper's) */
 } fp_filter_config;
 
 /** The defaults of filter=oneeuro (a camera tracker: MediaPipe, Leap Motion over OSC), chosen
  *  on the real Leap recordings with 1 mm of Gaussian noise added on every joint, through
  *  onehand at 60 frames a second, 108 Hz and resampled to 57 Hz (`FP_TEST_STEADY_CLIP=NAME
  *  FP_TEST_STEADY_HZ=57 build/tests/test_steady_session` prints each; tests check HandSplay at
- *  both rates). Jitter in still holds, hand / face, x less than unfiltered; lag in frames:
+ *  both rates; FP_TEST_FILTER_KEYS=",trend=0,mincutoff=0.5,beta=0.018" gives the old column).
+ *  Jitter in still holds, hand / face, x less than unfiltered (5x asked); lag in frames (one
+ *  asked; negative: ahead):
  *
- *    clip, rate        per joint (0.5, 0.025, 8)       a hand's joints sharing (0.5, 0.018, 6)
- *    HandSplay 108     6.6 / 6.3, lag 0.65 / 0.60      6.3 / 6.2, lag 0.60 / 0.70
- *    HandSplay 57      5.8 / 4.7, lag 0.85 / 0.75      5.4 / 5.3, lag 0.80 / 0.85
- *    grab 108          6.5 / 5.6, lag 0.50 / 0.70      6.1 / 5.6, lag 0.50 / 0.70
- *    grab 57           5.5 / 5.1, lag 0.65 / 1.20      5.4 / 5.2, lag 0.65 / 1.25
- *    Waiting 108       5.7 / 4.7, lag 0.65 / 0.90      5.6 / 5.6, lag 0.60 / 0.70
- *    Waiting 57        4.9 / 2.2, lag 0.80 / 1.25      4.9 / 2.5, lag 0.75 / 1.05
- *    three-claps 108   3.9 / 4.6, lag 0.65 / 0.75      4.0 / 4.4, lag 0.65 / 0.70
+ *    clip, rate        no trend (0.5, 0.018, 6)        trend 6 Hz (0.3, 0.01, 6): the defaults
+ *    HandSplay 108     6.3 / 6.2, lag 0.60 / 0.70      8.0 / 8.3, lag 0.35 / 0.05
+ *    HandSplay 57      5.4 / 5.3, lag 0.80 / 0.85      6.7 / 7.9, lag 0.60 / 0.20
+ *    grab 108          6.1 / 5.6, lag 0.50 / 0.70      7.1 / 5.4, lag 0.35 / 0.05
+ *    grab 57           5.4 / 5.2, lag 0.65 / 1.25      6.9 / 6.3, lag 0.55 / 0.80
+ *    Waiting 108       5.6 / 5.6, lag 0.60 / 0.70      6.8 / 11.8, lag 0.45 / 0.00
+ *    Waiting 57        4.9 / 2.5, lag 0.75 / 1.05      6.0 / 16.9, lag 0.75 / 0.65
+ *    three-claps 108   4.0 / 4.4, lag 0.65 / 0.70      4.0 / 6.8, lag 0.40 / 0.40
  *
- *  The shared cutoff (fp_oneeuro_filter_joints) lifts the face where the hand's joints moved
- *  at different speeds (a joint-to-joint vector lagged by the slower joint's cutoff). Not met
- *  by either, nor by any setting tried (mincutoff 0.3-1, beta 0.01-0.04, dcutoff 2-12, each
- *  with both): three-claps' hand (11 hold frames, between claps), grab's face lag at 57 Hz,
- *  whose hand lags 0.65 (with a 20 Hz cutoff and no beta, hand 0.40, face 0.55: the face's
- *  peak sits 0.15-0.6 frames behind the hand's), and Waiting's face at 57 Hz: its jaw is
- *  shut in about a third of its frames, where the noise does not move it (not established
- *  as the cause). The derivative's cutoff is well above the paper's 1 Hz: at 1 Hz the speed
- *  estimate takes 160 ms to see a hand start moving, and the motion lags 1.2 frames for the
- *  same jitter. */
-#define FP_FILTER_MINCUTOFF 0.5
-#define FP_FILTER_BETA 0.018
+ *  Without the trend a low pass smooths where the motion was, so the cutoff that leaves 5x
+ *  less jitter lagged the slow motions (grab's jaw, closed by a slow thumb, over a frame at
+ *  57 Hz), and in Waiting at 57 Hz the lag counted as jitter. With it the cutoff could go
+ *  down (0.3 Hz, beta 0.01). Swept (trend 1-8 Hz, mincutoff 0.2-0.3, beta 0.007-0.012, the
+ *  stop rule's slack 0, 2 and 3 mm): a trend of 1 Hz lingered into the holds (jitter 4.4-5.2x);
+ *  with no slack, noise stopped the trend of slow motions (face lag 1.1-1.3 frames at 57 Hz);
+ *  with none of the stop rule, the face ran up to 0.85 frames ahead. Still short of 5x:
+ *  three-claps' hand (11 hold frames, between claps, each right after a fast motion). The
+ *  derivative's cutoff is well above the paper's 1 Hz: at 1 Hz the speed estimate takes
+ *  160 ms to see a hand start moving. */
+#define FP_FILTER_MINCUTOFF 0.3
+#define FP_FILTER_BETA 0.01
 #define FP_FILTER_DCUTOFF 6.0
+#define FP_FILTER_TREND 6.0
+/** How far (mm) a sample may fall behind the smoothed position along the trend before the
+ *  trend counts the motion as stopped: above the trackers' jitter, so that noise does not
+ *  stop a slow motion's trend. */
+#define FP_FILTER_TREND_SLACK_MM 3.0
 /** A glove's defaults (cyberglove): light, its bend sensors' noise being small (a step of the
  *  converter): a higher cutoff when still, so less lag; its sensors each filtered alone, at
- *  the camera trackers' settings before the joints shared a cutoff. */
+ *  the camera trackers' settings before the joints shared a cutoff; no trend (trend=0). */
 #define FP_FILTER_GLOVE_MINCUTOFF 3.0
 #define FP_FILTER_GLOVE_BETA 0.025
 #define FP_FILTER_GLOVE_DCUTOFF 8.0
@@ -108,18 +130,21 @@ void fp_filter_default(const char *name, fp_filter_config *out);
 
 /** The filter of an input named `name` from its host keys (each NULL where not given):
  *  filter=oneeuro|auto|off, mincutoff=HZ (decimal in (0, 1000]), beta=B (in [0, 100]),
- *  dcutoff=HZ (in (0, 1000]). Starts from fp_filter_default(name); mincutoff, beta or dcutoff
- *  change the One Euro filter's settings, so they need it on or auto (the input's default,
- *  filter=oneeuro or filter=auto). Returns 0 and *out, or -EINVAL (*out untouched) with a
- *  message naming the key into err (errlen bytes, may be 0). */
+ *  dcutoff=HZ (in (0, 1000]), trend=HZ (in [0, 1000]; 0 turns the trend off). Starts from
+ *  fp_filter_default(name); mincutoff, beta, dcutoff or trend change the One Euro filter's
+ *  settings, so they need it on or auto (the input's default, filter=oneeuro or filter=auto).
+ *  Returns 0 and *out, or -EINVAL (*out untouched) with a message naming the key into err
+ *  (errlen bytes, may be 0). */
 int fp_filter_parse(const char *name, const char *filter, const char *mincutoff,
-                    const char *beta, const char *dcutoff, fp_filter_config *out, char *err,
-                    size_t errlen);
+                    const char *beta, const char *dcutoff, const char *trend, fp_filter_config *out,
+                    char *err, size_t errlen);
 
-/** One line for a person: "hands filtered in the session (oneeuro mincutoff=0.5 beta=0.018
- *  dcutoff=6): a steady motion lags 19 ms at 200 mm/s, 43 ms at 50 mm/s (samples at 60 Hz; at
- *  most 39 and 114 ms at any rate)" (fp_oneeuro_lag at FP_FILTER_DESCRIBE_HZ, and its bound),
- *  for auto "hands filtered in the session where the tracker does not smooth them
+/** One line for a person: without a trend "hands filtered in the session (oneeuro
+ *  mincutoff=0.5 beta=0.018 dcutoff=6): a steady motion lags 19 ms at 200 mm/s, 43 ms at 50
+ *  mm/s (samples at 60 Hz; at most 39 and 114 ms at any rate)" (fp_oneeuro_lag at
+ *  FP_FILTER_DESCRIBE_HZ, and its bound); with one "(oneeuro mincutoff=0.3 beta=0.01
+ *  dcutoff=6 trend=6): a steady motion is followed without lag once its trend has settled
+ *  (about 27 ms after it starts or turns)" (1 / (2 pi trend)); for auto "hands filtered in the session where the tracker does not smooth them
  *  (MediaPipe's landmarks; a Leap's joints as sent) (oneeuro ...", or "filter off". Returns
  *  the length snprintf would write. */
 #define FP_FILTER_DESCRIBE_HZ 60.0
@@ -130,6 +155,7 @@ int fp_filter_describe(const fp_filter_config *c, char *buf, size_t len);
 typedef struct fp_oneeuro {
     double x[FP_ONEEURO_MAX_DIM];   /* Xhat_{i-1} */
     double dx[FP_ONEEURO_MAX_DIM];  /* dXhat_{i-1}, units per second */
+    double tr[FP_ONEEURO_MAX_DIM];  /* B_{i-1}, Holt's trend, units per second */
     double te;                      /* the last sampling period, seconds */
     int64_t t_ns;                   /* t_{i-1} */
     bool started;                   /* a sample was taken since the reset */
@@ -169,7 +195,8 @@ void fp_oneeuro_filter_joints(fp_oneeuro *f, size_t count, const fp_filter_confi
 /** The One Euro filter's lag on a steady ramp of speed_mm_s sampled at rate_hz, seconds:
  *  lambda = tau(mincutoff + beta (v + v lambda T_e^-1)) solved exactly (a quadratic in
  *  lambda). rate_hz <= 0 or not finite: the bound at any rate, 1 / (2 pi (mincutoff +
- *  beta v)). c->kind is not read. */
+ *  beta v)). With a trend (c->trend > 0) 0: once settled, the ramp is followed exactly.
+ *  c->kind is not read. */
 double fp_oneeuro_lag(const fp_filter_config *c, double speed_mm_s, double rate_hz);
 
 #ifdef __cplusplus

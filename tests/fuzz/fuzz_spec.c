@@ -3,7 +3,7 @@
  * parsed. A parse must give a valid name, at most FP_SPEC_MAX_PARAMS unique valid keys, and
  * the same text when put back together; fp_spec_take gives each value once. A refusal: -EINVAL
  * and a message. The host's filter keys of an input SPEC (core/pose/fp_filter.h:
- * fp_filter_parse on filter=, mincutoff=, beta=, dcutoff=, as fp_input_instance_open takes
+ * fp_filter_parse on filter=, mincutoff=, beta=, dcutoff=, trend=, as fp_input_instance_open takes
  * them) give a filter within the documented ranges, or -EINVAL and a message with the
  * config untouched. Seeds: tests/fuzz/corpus/fuzz_spec. */
 #define _POSIX_C_SOURCE 200809L
@@ -55,24 +55,25 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         }
         if (n != strlen(text) || strcmp(back, text) != 0) abort();
         /* the filter keys, looked up as the host takes them out */
-        const char *fk[4] = {NULL, NULL, NULL, NULL}, *names[4] = {"filter", "mincutoff", "beta", "dcutoff"};
+        const char *fk[5] = {NULL, NULL, NULL, NULL, NULL};
+        const char *names[5] = {"filter", "mincutoff", "beta", "dcutoff", "trend"};
         for (size_t i = 0; i < s.nparams; i++)
-            for (int k = 0; k < 4; k++)
+            for (int k = 0; k < 5; k++)
                 if (!strcmp(s.params[i].key, names[k])) fk[k] = s.params[i].value;
         fp_filter_config fc, keep;
         memset(&fc, 0x5a, sizeof fc);
         keep = fc;
         char ferr[256] = "";
-        int frc = fp_filter_parse(s.name, fk[0], fk[1], fk[2], fk[3], &fc, ferr, sizeof ferr);
+        int frc = fp_filter_parse(s.name, fk[0], fk[1], fk[2], fk[3], fk[4], &fc, ferr, sizeof ferr);
         if (frc) {
             if (frc != -EINVAL || !ferr[0] || memcmp(&fc, &keep, sizeof fc)) abort();
         } else {
             if (fc.kind != FP_FILTER_OFF && fc.kind != FP_FILTER_ONEEURO && fc.kind != FP_FILTER_AUTO) abort();
             if (!(fc.mincutoff > 0 && fc.mincutoff <= 1000) || !(fc.beta >= 0 && fc.beta <= 100) ||
-                !(fc.dcutoff > 0 && fc.dcutoff <= 1000))
+                !(fc.dcutoff > 0 && fc.dcutoff <= 1000) || !(fc.trend >= 0 && fc.trend <= 1000))
                 abort();
-            double lag = fp_oneeuro_lag(&fc, 200, 60);
-            if (!(lag > 0) || !isfinite(lag)) abort();
+            double lag = fp_oneeuro_lag(&fc, 200, 60); /* 0 with a trend: a ramp followed */
+            if (!(fc.trend > 0 ? lag == 0 : lag > 0) || !isfinite(lag)) abort();
             char line[512];
             if (fp_filter_describe(&fc, line, sizeof line) <= 0) abort();
         }

@@ -17,8 +17,9 @@
 
 #define MS 1000000LL
 
+/* the tracker's cutoffs in the paper's filter (no trend): its equations are checked exactly */
 static const fp_filter_config tracker = {FP_FILTER_ONEEURO, FP_FILTER_MINCUTOFF, FP_FILTER_BETA,
-                                         FP_FILTER_DCUTOFF};
+                                         FP_FILTER_DCUTOFF, 0.0};
 
 static uint64_t g_rng = 7;
 static double gauss(void)
@@ -145,6 +146,66 @@ static void test_adaptive(void **state)
     assert_true(lag < lag_fixed / 5);
 }
 
+/* Holt's trend (trend > 0): a steady ramp is followed exactly once the trend has settled
+ * (a lag of 0, where the paper's filter at the same cutoffs trails by fp_oneeuro_lag), and a
+ * still joint's noise is left about as the paper's filter leaves it: the trend adds some
+ * sample-to-sample jitter, the price of the lag (FP_FILTER_TREND's table, fp_filter.h). The
+ * same filter with trend 0 is the paper's bit for bit (test_ramp_lag, test_noise). */
+static void test_trend(void **state)
+{
+    (void)state;
+    fp_filter_config with = tracker, without = tracker;
+    with.trend = FP_FILTER_TREND;
+    const double rate = 57, te = 1 / rate, v = 80; /* a slow thumb, at a slow tracker's rate */
+    fp_oneeuro f, g;
+    fp_oneeuro_reset(&f);
+    fp_oneeuro_reset(&g);
+    double out_with = 0, out_without = 0, x = 0;
+    int n = (int)(5 * rate);
+    for (int i = 0; i <= n; i++) {
+        x = v * i * te;
+        fp_oneeuro_filter(&f, &with, 1, 1.0, &x, llround(i * te * 1e9), &out_with);
+        fp_oneeuro_filter(&g, &without, 1, 1.0, &x, llround(i * te * 1e9), &out_without);
+    }
+    double lag_with = (x - out_with) / v, lag_without = (x - out_without) / v;
+    printf("ramp %.0f mm/s at %.0f Hz: lag %.3f ms with the trend, %.1f ms without (formula %.1f)\n",
+           v, rate, lag_with * 1e3, lag_without * 1e3, fp_oneeuro_lag(&without, v, rate) * 1e3);
+    assert_true(fabs(lag_with) < 1e-6);
+    assert_true(fabs(lag_without - fp_oneeuro_lag(&without, v, rate)) < 1e-6);
+    assert_true(lag_without > 0.015); /* over a frame at 60 fps without it */
+    assert_true(fp_oneeuro_lag(&with, v, rate) == 0);
+    /* a sudden stop from 300 mm/s: the trend of the finished motion dies away once the hand
+     * is FP_FILTER_TREND_SLACK_MM behind, the output goes a little past the hand (Holt's trend
+     * alone: 10.8 mm) and settles on it */
+    fp_oneeuro_reset(&f);
+    double past = 0, y = 0;
+    for (int i = 0; i <= n + (int)(3 * rate); i++) {
+        y = 300 * (i < n ? i : n) * te;
+        fp_oneeuro_filter(&f, &with, 1, 1.0, &y, llround(i * te * 1e9), &out_with);
+        if (i > n && out_with - y > past) past = out_with - y;
+    }
+    printf("a sudden stop from 300 mm/s: %.2f mm past the hand at most, %.4f mm off after 3 s\n", past,
+           out_with - y);
+    assert_true(past < FP_FILTER_TREND_SLACK_MM + 1.5);
+    assert_true(fabs(out_with - y) < 0.05);
+    /* noise on a still joint, 108 Hz: still several times less sample to sample */
+    fp_oneeuro_reset(&f);
+    double step2_in = 0, step2_out = 0, prev_in = 0, prev_out = 0;
+    for (int i = 0; i < 20000; i++) {
+        double y = gauss(), o;
+        fp_oneeuro_filter(&f, &with, 1, 1.0, &y, llround(i * (1e9 / 108)), &o);
+        if (i >= 1000) {
+            step2_in += (y - prev_in) * (y - prev_in);
+            step2_out += (o - prev_out) * (o - prev_out);
+        }
+        prev_in = y;
+        prev_out = o;
+    }
+    printf("still joint, 1 mm noise at 108 Hz, trend %g Hz: sample-to-sample %.1fx less\n", with.trend,
+           sqrt(step2_in / step2_out));
+    assert_true(step2_out * 25 < step2_in);
+}
+
 /* A hand's joints share the fastest joint's cutoff: beside a joint moving at 400 mm/s, a
  * still joint's 1 mm step is followed as the moving joint's cutoff allows, far faster than
  * its own filter would (alone, at mincutoff); each joint's own filter otherwise: two joints
@@ -225,48 +286,56 @@ static void test_keys(void **state)
     fp_filter_default("osc", &c);
     assert_int_equal(c.kind, FP_FILTER_AUTO);
     assert_true(c.mincutoff == FP_FILTER_MINCUTOFF && c.beta == FP_FILTER_BETA && c.dcutoff == FP_FILTER_DCUTOFF);
+    assert_true(c.trend == FP_FILTER_TREND);
     fp_filter_default("cyberglove", &c);
     assert_int_equal(c.kind, FP_FILTER_ONEEURO);
-    assert_true(c.mincutoff == FP_FILTER_GLOVE_MINCUTOFF);
+    assert_true(c.mincutoff == FP_FILTER_GLOVE_MINCUTOFF && c.trend == 0);
     const char *off[] = {"replay", "take", "pedal", "fixture", NULL};
     for (int i = 0; i < 5; i++) {
         fp_filter_default(off[i], &c);
         assert_int_equal(c.kind, FP_FILTER_OFF);
     }
-    assert_int_equal(fp_filter_parse("replay", NULL, NULL, NULL, NULL, &c, err, sizeof err), 0);
+    assert_int_equal(fp_filter_parse("replay", NULL, NULL, NULL, NULL, NULL, &c, err, sizeof err), 0);
     assert_int_equal(c.kind, FP_FILTER_OFF);
-    assert_int_equal(fp_filter_parse("replay", "oneeuro", NULL, NULL, NULL, &c, err, sizeof err), 0);
+    assert_int_equal(fp_filter_parse("replay", "oneeuro", NULL, NULL, NULL, NULL, &c, err, sizeof err), 0);
     assert_int_equal(c.kind, FP_FILTER_ONEEURO);
     assert_true(c.beta == FP_FILTER_BETA);
-    assert_int_equal(fp_filter_parse("replay", "oneeuro", "2", "0.01", ".5", &c, err, sizeof err), 0);
-    assert_true(c.mincutoff == 2 && c.beta == 0.01 && c.dcutoff == 0.5);
-    assert_int_equal(fp_filter_parse("osc", NULL, NULL, "0.02", NULL, &c, err, sizeof err), 0);
+    assert_int_equal(fp_filter_parse("replay", "oneeuro", "2", "0.01", ".5", NULL, &c, err, sizeof err), 0);
+    assert_true(c.mincutoff == 2 && c.beta == 0.01 && c.dcutoff == 0.5 && c.trend == FP_FILTER_TREND);
+    assert_int_equal(fp_filter_parse("replay", "oneeuro", NULL, NULL, NULL, "0", &c, err, sizeof err), 0);
+    assert_true(c.trend == 0);
+    assert_int_equal(fp_filter_parse("osc", NULL, NULL, NULL, NULL, "2.5", &c, err, sizeof err), 0);
+    assert_true(c.kind == FP_FILTER_AUTO && c.trend == 2.5);
+    assert_int_equal(fp_filter_parse("osc", NULL, NULL, "0.02", NULL, NULL, &c, err, sizeof err), 0);
     assert_true(c.kind == FP_FILTER_AUTO && c.beta == 0.02 && c.mincutoff == FP_FILTER_MINCUTOFF);
-    assert_int_equal(fp_filter_parse("replay", "auto", "1", NULL, NULL, &c, err, sizeof err), 0);
+    assert_int_equal(fp_filter_parse("replay", "auto", "1", NULL, NULL, NULL, &c, err, sizeof err), 0);
     assert_true(c.kind == FP_FILTER_AUTO && c.mincutoff == 1);
-    assert_int_equal(fp_filter_parse("osc", "oneeuro", NULL, NULL, NULL, &c, err, sizeof err), 0);
+    assert_int_equal(fp_filter_parse("osc", "oneeuro", NULL, NULL, NULL, NULL, &c, err, sizeof err), 0);
     assert_int_equal(c.kind, FP_FILTER_ONEEURO);
-    assert_int_equal(fp_filter_parse("osc", "off", NULL, NULL, NULL, &c, err, sizeof err), 0);
+    assert_int_equal(fp_filter_parse("osc", "off", NULL, NULL, NULL, NULL, &c, err, sizeof err), 0);
     assert_int_equal(c.kind, FP_FILTER_OFF);
     /* refusals leave *out untouched and name the key */
     fp_filter_config keep = c;
-    struct { const char *f, *m, *b, *d, *needle; } bad[] = {
-        {"kalman", NULL, NULL, NULL, "filter=kalman"},
-        {NULL, "1", NULL, NULL, "filter=oneeuro"},          /* replay: off by default */
-        {"off", NULL, "0.1", NULL, "beta="},
-        {"oneeuro", "0", NULL, NULL, "mincutoff=0"},
-        {"oneeuro", "-1", NULL, NULL, "mincutoff=-1"},
-        {"oneeuro", "nan", NULL, NULL, "mincutoff=nan"},
-        {"oneeuro", "0x10", NULL, NULL, "mincutoff=0x10"},
-        {"oneeuro", "1001", NULL, NULL, "mincutoff=1001"},
-        {"oneeuro", NULL, "-0.1", NULL, "beta=-0.1"},
-        {"oneeuro", NULL, "inf", NULL, "beta=inf"},
-        {"oneeuro", NULL, "", NULL, "beta="},
-        {"oneeuro", NULL, NULL, "0", "dcutoff=0"},
+    struct { const char *f, *m, *b, *d, *t, *needle; } bad[] = {
+        {"kalman", NULL, NULL, NULL, NULL, "filter=kalman"},
+        {NULL, "1", NULL, NULL, NULL, "filter=oneeuro"},          /* replay: off by default */
+        {"off", NULL, "0.1", NULL, NULL, "beta="},
+        {"oneeuro", "0", NULL, NULL, NULL, "mincutoff=0"},
+        {"oneeuro", "-1", NULL, NULL, NULL, "mincutoff=-1"},
+        {"oneeuro", "nan", NULL, NULL, NULL, "mincutoff=nan"},
+        {"oneeuro", "0x10", NULL, NULL, NULL, "mincutoff=0x10"},
+        {"oneeuro", "1001", NULL, NULL, NULL, "mincutoff=1001"},
+        {"oneeuro", NULL, "-0.1", NULL, NULL, "beta=-0.1"},
+        {"oneeuro", NULL, "inf", NULL, NULL, "beta=inf"},
+        {"oneeuro", NULL, "", NULL, NULL, "beta="},
+        {"oneeuro", NULL, NULL, "0", NULL, "dcutoff=0"},
+        {"oneeuro", NULL, NULL, NULL, "-1", "trend=-1"},
+        {"oneeuro", NULL, NULL, NULL, "1e9", "trend=1e9"},
+        {"off", NULL, NULL, NULL, "6", "trend="},
     };
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         err[0] = 0;
-        assert_int_equal(fp_filter_parse("replay", bad[i].f, bad[i].m, bad[i].b, bad[i].d, &c, err, sizeof err), -EINVAL);
+        assert_int_equal(fp_filter_parse("replay", bad[i].f, bad[i].m, bad[i].b, bad[i].d, bad[i].t, &c, err, sizeof err), -EINVAL);
         assert_memory_equal(&c, &keep, sizeof c);
         if (!strstr(err, bad[i].needle)) fail_msg("%zu: '%s' lacks '%s'", i, err, bad[i].needle);
     }
@@ -281,6 +350,9 @@ static void test_keys(void **state)
     fp_filter_default("osc", &o);
     fp_filter_describe(&o, line, sizeof line);
     assert_non_null(strstr(line, "where the tracker does not smooth them"));
+    assert_non_null(strstr(line, "trend=6"));
+    assert_non_null(strstr(line, "without lag once its trend has settled (about 27 ms"));
+    printf("%s\n", line);
 }
 
 /* ---- fp_pose at the frame's time ------------------------------------------------------- */
@@ -503,7 +575,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_alpha),          cmocka_unit_test(test_constant),
         cmocka_unit_test(test_ramp_lag),       cmocka_unit_test(test_noise),
-        cmocka_unit_test(test_adaptive),       cmocka_unit_test(test_shared_cutoff),
+        cmocka_unit_test(test_adaptive),
+        cmocka_unit_test(test_trend),       cmocka_unit_test(test_shared_cutoff),
         cmocka_unit_test(test_stamps),
         cmocka_unit_test(test_keys),           cmocka_unit_test(test_frame_time),
         cmocka_unit_test(test_frame_time_angles), cmocka_unit_test(test_no_repeats),
