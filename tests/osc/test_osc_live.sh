@@ -16,6 +16,8 @@
 #     it: the run says so (the hint, source "session") within 5 s of the sender starting.
 #
 # FP_OSC_LIVE_KEYS=",filter=oneeuro" (appended to the osc SPEC) tries the input's keys.
+# FP_OSC_LIVE_CSV=FILE sends another Leap joints recording instead of grab (e.g. a copy from
+# tools/hands-variants).
 # Free ports: a random high one, another if it is taken (tests run in parallel); every wait
 # is bounded. SPDX-License-Identifier: GPL-3.0-or-later
 set -u
@@ -25,7 +27,7 @@ send="$build/bin/fp-osc-send"
 pd=(--plugin-dir "$build/lib/facepuppet")
 data=${FP_SHARED_DATA:-../shared/data}
 mesh=$data/faces/ict-facekit/generic_neutral_mesh.obj
-grab=$data/hands/leap-motion/grab_joints_mm.csv
+grab=${FP_OSC_LIVE_CSV:-$data/hands/leap-motion/grab_joints_mm.csv}
 tmp=$(mktemp -d "${TMPDIR:-/tmp}/fp-osc-live-XXXXXX")
 runpid=
 cleanup() { [ -n "$runpid" ] && kill "$runpid" 2>/dev/null; rm -rf "$tmp"; }
