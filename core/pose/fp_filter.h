@@ -99,7 +99,11 @@ typedef struct fp_filter_config {
  *  stop rule's slack 0, 2 and 3 mm): a trend of 1 Hz lingered into the holds (jitter 4.4-5.2x);
  *  with no slack, noise stopped the trend of slow motions (face lag 1.1-1.3 frames at 57 Hz);
  *  with none of the stop rule, the face ran up to 0.85 frames ahead. Still short of 5x:
- *  three-claps' hand (11 hold frames, between claps, each right after a fast motion). The
+ *  three-claps' hand (11 hold frames, between claps, each right after a fast motion). At
+ *  30 Hz (FP_TEST_STEADY_HZ=30; a webcam's MediaPipe) neither filter reaches 5x: showing a
+ *  30 Hz hand at 60 fps interpolates every other frame, which halves the unfiltered jitter
+ *  (1.1 mm instead of 2.3). HandSplay 3.4 / 2.3x, lag 0.80 / 0.50 (no trend: 3.8 / 2.6x,
+ *  0.75 / 1.30); grab 3.7 / 3.8x, lag 0.60 / -1.30 (3.8 / 3.6x, 0.60 / 1.25). The
  *  derivative's cutoff is well above the paper's 1 Hz: at 1 Hz the speed estimate takes
  *  160 ms to see a hand start moving. */
 #define FP_FILTER_MINCUTOFF 0.3
