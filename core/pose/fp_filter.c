@@ -146,7 +146,7 @@ static double oneeuro_speed(fp_oneeuro *f, const fp_filter_config *c, int dim, d
 
 /* The second half: Xhat_i at cutoff_hz, from the prediction Xhat_{i-1} + T_e B_{i-1} (Holt)
  * while the sample is not behind Xhat_{i-1} along B by over FP_FILTER_TREND_SLACK_MM, else
- * from Xhat_{i-1} with B decaying;
+ * from Xhat_{i-1} with B decaying; after a gap over FP_FILTER_TREND_GAP_S, B starts at 0;
  * and B_i at trend_hz (0: none, B stays 0: the paper's filter, bit for bit). */
 static void oneeuro_smooth(fp_oneeuro *f, double cutoff_hz, double trend_hz, double mm_per_unit, int dim,
                            const double *x, double *out)
@@ -167,6 +167,8 @@ static void oneeuro_smooth(fp_oneeuro *f, double cutoff_hz, double trend_hz, dou
     }
     /* the motion stopped or turned: predict nothing */
     const bool behind = along * mm_per_unit < -FP_FILTER_TREND_SLACK_MM * sqrt(tr2);
+    if (f->te > FP_FILTER_TREND_GAP_S) /* the hand was away: no motion is guessed across it */
+        for (int k = 0; k < dim; k++) f->tr[k] = 0;
     for (int k = 0; k < dim; k++) {
         const double last = f->x[k];
         if (behind) {

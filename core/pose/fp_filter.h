@@ -17,6 +17,7 @@
  *   B_i         = alpha(trend) (Xhat_i - Xhat_{i-1}) / T_e + (1 - alpha(trend)) B_{i-1}
  *   (where (X_i - Xhat_{i-1}) . B_{i-1} / |B_{i-1}| < -FP_FILTER_TREND_SLACK_MM instead:
  *    Xhat_i = alpha(f_c) X_i + (1 - alpha(f_c)) Xhat_{i-1}, B_i = (1 - alpha(trend)) B_{i-1})
+ *   (B_{i-1} taken as 0 where T_e > FP_FILTER_TREND_GAP_S)
  *
  * with Xhat_0 = X_0, dXhat_0 = 0, B_0 = 0. B is Holt's trend (C. C. Holt, "Forecasting
  * seasonals and trends by exponentially weighted moving averages", 1957; Int. J. Forecasting
@@ -114,6 +115,9 @@ typedef struct fp_filter_config {
  *  trend counts the motion as stopped: above the trackers' jitter, so that noise does not
  *  stop a slow motion's trend. */
 #define FP_FILTER_TREND_SLACK_MM 3.0
+/** A sample more than this many seconds after the last (a tracker that lost the hand, or
+ *  paused) starts the trend afresh (B = 0): no motion is guessed across a gap. */
+#define FP_FILTER_TREND_GAP_S 0.1
 /** A glove's defaults (cyberglove): light, its bend sensors' noise being small (a step of the
  *  converter): a higher cutoff when still, so less lag; its sensors each filtered alone, at
  *  the camera trackers' settings before the joints shared a cutoff; no trend (trend=0). */

@@ -188,7 +188,19 @@ static void test_trend(void **state)
            out_with - y);
     assert_true(past < FP_FILTER_TREND_SLACK_MM + 1.5);
     assert_true(fabs(out_with - y) < 0.05);
-    /* noise on a still joint, 108 Hz: still several times less sample to sample */
+    /* a gap: the hand away for a second after moving at 300 mm/s comes back where it left; no
+     * motion is guessed across the gap (the output stays between the input and the last) */
+    fp_oneeuro_reset(&f);
+    int i = 0;
+    for (; i <= n; i++) {
+        y = 300 * i * te;
+        fp_oneeuro_filter(&f, &with, 1, 1.0, &y, llround(i * te * 1e9), &out_with);
+    }
+    double before = out_with;
+    fp_oneeuro_filter(&f, &with, 1, 1.0, &y, llround(((i - 1) * te + 1.0) * 1e9), &out_with);
+    printf("back after a 1 s gap at the same place: %.3f mm off (was %.3f)\n", out_with - y, before - y);
+    assert_true(fabs(out_with - y) <= fabs(before - y) + 1e-9);
+
     fp_oneeuro_reset(&f);
     double step2_in = 0, step2_out = 0, prev_in = 0, prev_out = 0;
     for (int i = 0; i < 20000; i++) {
