@@ -79,8 +79,9 @@ typedef struct fp_filter_config {
 /** The defaults of filter=oneeuro (a camera tracker: MediaPipe, Leap Motion over OSC), chosen
  *  on the real Leap recordings with 1 mm of Gaussian noise added on every joint, through
  *  onehand at 60 frames a second, 108 Hz and resampled to 57 Hz (`FP_TEST_STEADY_CLIP=NAME
- *  FP_TEST_STEADY_HZ=57 build/tests/test_steady_session` prints each; tests check HandSplay at
- *  both rates; FP_TEST_FILTER_KEYS=",trend=0,mincutoff=0.5,beta=0.018" gives the old column).
+ *  FP_TEST_STEADY_HZ=57 build/tests/test_steady_session` prints each; its tests check every
+ *  row below, the hand's jitter on HandSplay only; FP_TEST_FILTER_KEYS=",trend=0,mincutoff=0.5,
+ *  beta=0.018" gives the old column).
  *  Jitter in still holds, hand / face, x less than unfiltered (5x asked); lag in frames (one
  *  asked; negative: ahead):
  *

@@ -12,7 +12,8 @@
  *  - lag: the filtered hand's joints, and the face's vertices (every 16th), against the clean
  *    ones shifted by s frames (s from -4 to 4 by 0.05, the clean frames interpolated): the s
  *    of least squared difference, each coordinate's mean difference taken out (the
- *    cross-correlation's peak), is at most one frame;
+ *    cross-correlation's peak), is at most one frame; the face's criteria and the hand's lag
+ *    also on grab and Waiting (at their rate and at 57 Hz) and three-claps (its rate);
  *  - stutter: the clean recording (108 Hz, its three real gaps of 27 ms included) and a 57 Hz
  *    copy resampled from it give no two consecutive frames with the same hand joints while
  *    the hand moves (after the hand's first two frames: a single sample shows no motion).
@@ -221,10 +222,13 @@ static char *copy_path(const char *name)
     return s;
 }
 
+static const char *g_clip;      /* test_jitter_and_lag_other_recordings' clip, else NULL */
+static bool g_hand_jitter = true; /* the hand's jitter asserted too (else printed only) */
+
 static const char *clip_path(void)
 {
     static char p[4300];
-    const char *clip = getenv("FP_TEST_STEADY_CLIP");
+    const char *clip = g_clip ? g_clip : getenv("FP_TEST_STEADY_CLIP");
     snprintf(p, sizeof p, "%s/hands/leap-motion/%s_joints_mm.csv", fp_test_data_dir(),
              clip && *clip ? clip : "HandSplay-110fps");
     return p;
@@ -356,7 +360,7 @@ static void jitter_and_lag(double hz)
            frames, FPS, holds, HOLD_MM_S, moving, hand_rms[1], hand_rms[2], hand_rms[1] / hand_rms[2],
            face_rms[1], face_rms[2], face_rms[1] / face_rms[2], hand_lag[1], hand_lag[2],
            hand_lag[2] * 1e3 / FPS, face_lag[1], face_lag[2], face_lag[2] * 1e3 / FPS);
-    assert_true(hand_rms[1] >= 5 * hand_rms[2]);
+    if (g_hand_jitter) assert_true(hand_rms[1] >= 5 * hand_rms[2]);
     assert_true(face_rms[2] > 0 || face_rms[1] == 0);
     assert_true(face_rms[1] >= 5 * face_rms[2]);
     /* the unfiltered hand has no lag (a check of the measure); the unfiltered face's peak is
@@ -410,6 +414,26 @@ static void test_jitter_and_lag_57hz(void **state)
     jitter_and_lag(57);
 }
 
+/* The face's criteria (5x less jitter, at most a frame of lag) on the other recordings, at
+ * their rate and resampled at 57 Hz (three-claps, two hands, at its rate only: the resampling
+ * here follows one hand). The hand's jitter is printed, not asserted: between three-claps'
+ * claps (11 hold frames, each right after a fast motion) it is 4.0x (core/pose/fp_filter.h);
+ * the issue asks it of the face. */
+static void test_jitter_and_lag_other_recordings(void **state)
+{
+    (void)state;
+    if (getenv("FP_TEST_STEADY_CLIP")) skip(); /* a run for one clip: the tests above */
+    static const struct { const char *clip; double hz; } runs[] = {
+        {"grab", 0}, {"grab", 57}, {"Waiting-110fps", 0}, {"Waiting-110fps", 57}, {"three-claps", 0}};
+    g_hand_jitter = false;
+    for (size_t i = 0; i < sizeof runs / sizeof runs[0]; i++) {
+        g_clip = runs[i].clip;
+        jitter_and_lag(runs[i].hz);
+    }
+    g_clip = NULL;
+    g_hand_jitter = true;
+}
+
 static void test_no_stutter(void **state)
 {
     (void)state;
@@ -457,6 +481,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_jitter_and_lag),
         cmocka_unit_test(test_jitter_and_lag_57hz),
+        cmocka_unit_test(test_jitter_and_lag_other_recordings),
         cmocka_unit_test(test_no_stutter),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
