@@ -31,16 +31,17 @@
  * sudden stop from 300 mm/s at 57 Hz, 4.3 mm with the rule (tests/pose/test_filter.c).
  * trend = 0 leaves B at 0: the paper's filter, bit for bit.
  *
- * A joint is filtered as one vector (its 3 coordinates share the cutoff, |dXhat| being the length of the filtered velocity: the shape of a motion is kept,
- * whatever its direction); a joint angle (a glove's sensor) as a scalar. Speeds are in mm/s so
+ * A joint is filtered as one vector (its 3 coordinates share the cutoff, |dXhat| being the
+ * length of the filtered velocity: the shape of a motion is kept, whatever its direction); a
+ * joint angle (a glove's sensor) as a scalar. Speeds are in mm/s so
  * that one `beta` serves every kind of input: an angle's rate counts as the speed of a point
  * FP_FILTER_ARM_MM from the joint (radians x 100 mm: a fingertip about a knuckle), a wrist
  * rotation's likewise (the quaternion's rate is half the angular speed).
  *
  * Its lag without the trend (trend = 0): on a steady ramp of speed v (mm/s) sampled every T_e,
- * the output trails the input by exactly lambda = tau(f_c) seconds, where f_c = mincutoff + beta (v + v lambda / T_e)
- * (the derivative sees the lag too); fp_oneeuro_lag solves it. lambda <= 1 / (2 pi
- * (mincutoff + beta v)) at any rate, the bound `run` reports.
+ * the output trails the input by exactly lambda = tau(f_c) seconds, where f_c = mincutoff +
+ * beta (v + v lambda / T_e) (the derivative sees the lag too); fp_oneeuro_lag solves it.
+ * lambda <= 1 / (2 pi (mincutoff + beta v)) at any rate, the bound `run` reports.
  *
  * Units: times in nanoseconds of the event clock (plugin.h), cutoffs in Hz, beta in Hz per
  * mm/s. Errors: fp_filter_parse returns -EINVAL with a message; nothing else fails.
@@ -153,9 +154,9 @@ int fp_filter_parse(const char *name, const char *filter, const char *mincutoff,
  *  mm/s (samples at 60 Hz; at most 39 and 114 ms at any rate)" (fp_oneeuro_lag at
  *  FP_FILTER_DESCRIBE_HZ, and its bound); with one "(oneeuro mincutoff=0.3 beta=0.01
  *  dcutoff=6 trend=6): a steady motion is followed without lag once its trend has settled
- *  (about 27 ms after it starts or turns)" (1 / (2 pi trend)); for auto "hands filtered in the session where the tracker does not smooth them
- *  (MediaPipe's landmarks; a Leap's joints as sent) (oneeuro ...", or "filter off". Returns
- *  the length snprintf would write. */
+ *  (about 27 ms after it starts or turns)" (1 / (2 pi trend)); for auto "hands filtered in
+ *  the session where the tracker does not smooth them (MediaPipe's landmarks; a Leap's
+ *  joints as sent) (oneeuro ...", or "filter off". Returns the length snprintf would write. */
 #define FP_FILTER_DESCRIBE_HZ 60.0
 int fp_filter_describe(const fp_filter_config *c, char *buf, size_t len);
 
