@@ -222,13 +222,11 @@ static char *copy_path(const char *name)
     return s;
 }
 
-static const char *g_clip;      /* test_jitter_and_lag_other_recordings' clip, else NULL */
-static bool g_hand_jitter = true; /* the hand's jitter asserted too (else printed only) */
-
-static const char *clip_path(void)
+/* The recording clip (NULL: FP_TEST_STEADY_CLIP, else HandSplay) in the shared data. */
+static const char *clip_path(const char *clip)
 {
     static char p[4300];
-    const char *clip = g_clip ? g_clip : getenv("FP_TEST_STEADY_CLIP");
+    if (!clip) clip = getenv("FP_TEST_STEADY_CLIP");
     snprintf(p, sizeof p, "%s/hands/leap-motion/%s_joints_mm.csv", fp_test_data_dir(),
              clip && *clip ? clip : "HandSplay-110fps");
     return p;
@@ -275,11 +273,13 @@ static double best_shift(const float *clean, const float *other, size_t npts, co
     return best_s;
 }
 
-static void jitter_and_lag(double hz)
+/* clip as clip_path takes it; hz > 0: resampled at hz first; hand_jitter: the hand's jitter
+ * asserted too (else printed only) */
+static void jitter_and_lag(const char *clip, double hz, bool hand_jitter)
 {
     static rows clean, noisy, recorded;
-    read_rows(clip_path(), &clean);
-    const char *clean_csv = clip_path();
+    read_rows(clip_path(clip), &clean);
+    const char *clean_csv = clip_path(clip);
     if (hz > 0) {
         recorded = clean;
         resample(&recorded, hz, &clean);
@@ -348,7 +348,7 @@ static void jitter_and_lag(double hz)
         hand_lag[i] = best_shift(&r[0].hand[0][0][0], &r[i].hand[0][0][0], NJ, r[0].present, r[i].present, frames);
         face_lag[i] = best_shift(r[0].face, r[i].face, m, r[0].present, r[i].present, frames);
     }
-    printf("steady: %s%s, %s: ", strrchr(clip_path(), '/') + 1, hz > 0 ? " resampled" : "",
+    printf("steady: %s%s, %s: ", strrchr(clip_path(clip), '/') + 1, hz > 0 ? " resampled" : "",
            spec[2] + strlen(noisy_csv) + strlen("replay:,fast=1,"));
     if (hz > 0) printf("(%.0f Hz) ", hz);
     printf("%zu frames at %d fps, %zu still-hold frames (clean hand slower than %.0f mm/s), "
@@ -360,7 +360,7 @@ static void jitter_and_lag(double hz)
            frames, FPS, holds, HOLD_MM_S, moving, hand_rms[1], hand_rms[2], hand_rms[1] / hand_rms[2],
            face_rms[1], face_rms[2], face_rms[1] / face_rms[2], hand_lag[1], hand_lag[2],
            hand_lag[2] * 1e3 / FPS, face_lag[1], face_lag[2], face_lag[2] * 1e3 / FPS);
-    if (g_hand_jitter) assert_true(hand_rms[1] >= 5 * hand_rms[2]);
+    if (hand_jitter) assert_true(hand_rms[1] >= 5 * hand_rms[2]);
     assert_true(face_rms[2] > 0 || face_rms[1] == 0);
     assert_true(face_rms[1] >= 5 * face_rms[2]);
     /* the unfiltered hand has no lag (a check of the measure); the unfiltered face's peak is
@@ -403,7 +403,7 @@ static size_t stutters(const char *spec, size_t *frames_out, size_t *moving_out)
 static void test_jitter_and_lag(void **state)
 {
     (void)state;
-    jitter_and_lag(getenv("FP_TEST_STEADY_HZ") ? atof(getenv("FP_TEST_STEADY_HZ")) : 0);
+    jitter_and_lag(NULL, getenv("FP_TEST_STEADY_HZ") ? atof(getenv("FP_TEST_STEADY_HZ")) : 0, true);
 }
 
 /* The same at 57 Hz (the recording resampled), a slower tracker's rate: each sample weighs
@@ -411,7 +411,7 @@ static void test_jitter_and_lag(void **state)
 static void test_jitter_and_lag_57hz(void **state)
 {
     (void)state;
-    jitter_and_lag(57);
+    jitter_and_lag(NULL, 57, true);
 }
 
 /* The face's criteria (5x less jitter, at most a frame of lag) on the other recordings, at
@@ -425,25 +425,19 @@ static void test_jitter_and_lag_other_recordings(void **state)
     if (getenv("FP_TEST_STEADY_CLIP")) skip(); /* a run for one clip: the tests above */
     static const struct { const char *clip; double hz; } runs[] = {
         {"grab", 0}, {"grab", 57}, {"Waiting-110fps", 0}, {"Waiting-110fps", 57}, {"three-claps", 0}};
-    g_hand_jitter = false;
-    for (size_t i = 0; i < sizeof runs / sizeof runs[0]; i++) {
-        g_clip = runs[i].clip;
-        jitter_and_lag(runs[i].hz);
-    }
-    g_clip = NULL;
-    g_hand_jitter = true;
+    for (size_t i = 0; i < sizeof runs / sizeof runs[0]; i++) jitter_and_lag(runs[i].clip, runs[i].hz, false);
 }
 
 static void test_no_stutter(void **state)
 {
     (void)state;
     static rows clean, slow;
-    read_rows(clip_path(), &clean);
+    read_rows(clip_path(NULL), &clean);
     resample(&clean, 57.0, &slow);
     const char *slow_csv = copy_path("57hz_joints_mm.csv");
     write_rows(slow_csv, &slow);
     char spec[2][4400];
-    snprintf(spec[0], sizeof spec[0], "replay:%s,fast=1", clip_path());
+    snprintf(spec[0], sizeof spec[0], "replay:%s,fast=1", clip_path(NULL));
     snprintf(spec[1], sizeof spec[1], "replay:%s,fast=1", slow_csv);
     size_t frames[2], moving[2], rep[2];
     for (int i = 0; i < 2; i++) rep[i] = stutters(spec[i], &frames[i], &moving[i]);
