@@ -238,6 +238,9 @@ typedef struct fp_frame_stats {
                                  (fp_contact_result.kept: 1 all; with a local scale-back the
                                  skin away from the crossing moved whole) */
     long collide_pairs;       /* new crossing pairs the full motion would have added */
+    double flip_widen;        /* the support radius this frame, over the mapping's: 1, or more
+                                 in a gesture the guard held back for flipped triangles alone
+                                 (FP_FLIP_WIDEN, step_contact.h) */
     double collide_ms;        /* the guard's checks, milliseconds */
     double collide_wait_ms;   /* of those, the guard's waits for its worker thread to finish a
                                  task (fp_contact.h, fp_contact_result.worker_wait_ms), ms */

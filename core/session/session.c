@@ -162,6 +162,7 @@ static void show_deformed(fp_session *s, bool commit, int was, fp_frame_stats *s
     const float *ref = s->shown; /* the posed base */
     const uint32_t *touched;
     size_t ntouched = fp_engine_step_touched(&s->engine, &touched);
+    fp_sheet_bind_apply(&s->bind, ref, s->deformed, touched, ntouched);
     s->shown = fp_rig_step_finish(&s->rig, s->deformed, touched, ntouched);
     const fp_cg_frame f = {.ref = ref, .shown = s->shown, .commit = commit, .rig = &s->rig, .base = s->base,
                            .deformed = s->deformed, .touched = touched, .ntouched = ntouched,
@@ -225,6 +226,10 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, const fp
         fp_engine_step_end_gesture(&s->engine, &s->log);
         fp_skin_reach_gesture_end(&s->gesture_reach, s->head.mm_per_unit, &s->log);
         fp_cg_end_gesture(&s->cg, &s->log);
+        if (s->flip_widen > 1.0)
+            fp_slog_printf(&s->log, FP_LOG_INFO, FP_SLOG_CONTACT,
+                           "contact guard widened the support %.2gx this gesture, so a long drag "
+                           "turned the skin around less", s->flip_widen);
         fp_cg_shown_ref(&s->cg);
     }
     s->engaged = cs->active && !(cs->intents & (FP_INTENT_COMMIT | FP_INTENT_CANCEL));
@@ -312,6 +317,7 @@ static void step_frame(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     /* the hands and their distances: the first performer's, then the others' (extra_*) */
     fp__session_performers_frame(s, &in, (float)(FP_TIP_DISTANCE_REACH * fmax(s->radius, s->touch_radius)));
     FP_STAGE_END(FP_STAGE_DISTANCES);
+    if (s->cs_asked_radius > 0) s->cs.radius = s->cs_asked_radius, s->cs_asked_radius = 0; /* (widened) */
     fp_mapping_step_run(&s->mapping_step, s->mapping, s->mapping_name, &in, &s->cs, &s->log);
     fp_mapping_host_drain_log(&s->mapping_host); /* (one load when it logged nothing) */
     fp__session_performers_check(s, now_ns, &in);
@@ -327,12 +333,21 @@ static void step_frame(fp_session *s, int64_t now_ns, fp_frame_stats *st)
         fp_changed_all(&s->shown_changed);
         fp_cg_reference_changed(&s->cg, NULL, SIZE_MAX);
     }
+    /* a gesture the guard held back for flips alone runs widened (step_contact.h); not on a
+     * rig, whose clamp bounds each push toward a bone within the mapping's support */
+    double asked_radius = s->cs.radius;
+    if (s->cs.active && s->flip_widen > 1.0 && !s->rig.rig) {
+        s->cs.radius = asked_radius * s->flip_widen;
+        s->cs_asked_radius = asked_radius; /* (given back to the mapping before its next call) */
+    }
     const fp_control_set *cs = fp_rig_step_run(&s->rig, &s->cs);
     FP_STAGE_END(FP_STAGE_MAPPING);
 
     /* 5: the engine. 6: history. The reach is measured against the mapping's own set: a rig's
      * clamp is part of what holds the skin back. */
     engine_and_history(s, cs, &s->cs, st);
+    st->flip_widen = s->cs.radius / asked_radius;
+    s->flip_widen = s->engaged ? fp_cg_next_widen(s->flip_widen, st) : 1.0;
 
 #undef FP_STAGE_END
     /* 7: the recorder. */
@@ -350,6 +365,7 @@ void fp_session_apply_controls(fp_session *s, int64_t now_ns, const fp_control_s
     memset(st, 0, sizeof *st);
     st->frame = s->frame;
     st->collide_t = st->collide_kept = 1.0;
+    st->flip_widen = 1.0; /* (the stored radius is the engine's) */
     fp_record_step_begin(&s->record);
     st->engaged = cs->intents & FP_INTENT_ENGAGE;
     st->cancelled = cs->intents & FP_INTENT_CANCEL;
@@ -499,6 +515,7 @@ static void after_set_base(fp_session *s)
     s->cs.count = 0;
     s->cs.intents = 0;
     s->engaged = false;
+    s->flip_widen = 1.0;
 }
 
 unsigned long fp_session_commits(const fp_session *s) { return s->history.gestures; }
@@ -593,6 +610,7 @@ void fp_session_destroy(fp_session **sp)
     fp_plugin_unload(&s->mapping_plugin);
     fp_engine_step_free(&s->engine);
     fp_cg_free(&s->cg);
+    fp_sheet_bind_free(&s->bind);
     fp_changed_free(&s->shown_changed);
     free(s->guard_dp);
     fp_changed_free(&s->base_changed);

@@ -25,6 +25,7 @@
 #include "performers.h"
 #include "skin_reach.h"
 #include "step_contact.h"
+#include "sheet_bind.h"
 #include "step_engine.h"
 #include "step_mapping.h"
 #include "step_arrive.h"
@@ -91,6 +92,9 @@ struct fp_session {
 
     fp_control_set cs;            /* its arrays are the mapping step's (with canaries) */
 
+    fp_sheet_bind bind;           /* close sheets carried together (sheet_bind.h) */
+    double flip_widen;            /* this gesture's support widening (fp_cg_next_widen; 1: none) */
+    double cs_asked_radius;       /* the mapping's radius where cs.radius was widened; 0: not */
     fp_cg_step cg;                /* step 5, after the engine: the contact guard (step_contact.h);
                                      cg.contact NULL with no_contact_guard */
 

@@ -235,6 +235,12 @@ static int open_steps(fp_session *s, const fp_session_options *opt, double diag,
         snprintf(err, errlen, "session: out of memory for %zu triangles", s->mesh->triangle_count);
         return rc;
     }
+    /* the loaded face's close sheets, carried together (sheet_bind.h) */
+    if ((rc = fp_sheet_bind_build(s->loaded, s->n, s->mesh->triangles, s->mesh->triangle_count, &s->bind))) {
+        snprintf(err, errlen, "session: out of memory finding the close sheets of %zu triangles",
+                 s->mesh->triangle_count);
+        return rc;
+    }
     if (!opt->no_contact_guard) {
         progress(opt, "building the contact guard over %zu triangles", s->mesh->triangle_count);
         if ((rc = fp_cg_open(&s->cg, s->mesh->triangles, s->mesh->triangle_count, s->n, s->loaded, &s->rig,

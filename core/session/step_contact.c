@@ -5,6 +5,7 @@
 #include "fp_clock.h"
 
 #include <assert.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -214,6 +215,14 @@ void fp_cg_end_gesture(fp_cg_step *g, fp_slog *log)
                        g->limited, g->frames, 100.0 * g->t_least);
     g->frames = g->limited = 0;
     cg_check(g);
+}
+
+double fp_cg_next_widen(double widen, const fp_frame_stats *st)
+{
+    if (!(widen >= 1.0)) widen = 1.0;
+    if (st->active && st->collide_t < 1.0 && st->collide_pairs == 0)
+        widen = fmin(widen * FP_FLIP_WIDEN, FP_FLIP_WIDEN_MAX);
+    return widen;
 }
 
 void fp_cg_free(fp_cg_step *g)

@@ -61,6 +61,17 @@ extern "C" {
  * fills a 4K screen) */
 #define FP_CONTACT_HOLD 1e-5
 
+/* A gesture the guard held back for flipped triangles alone (a long drag turning skin over
+ * without crossing anything: under a nostril, a lip) is widened: from the next frame its
+ * support radius is FP_FLIP_WIDEN times the mapping's, again at each such hold, up to
+ * FP_FLIP_WIDEN_MAX, until the gesture ends. The control vectors are the same, so the
+ * fingertips' skin goes as far; the map is smoother, so the skin around turns less and the
+ * guard need not stop it. Crossings do not widen: a wider support carries more of the face
+ * (an eye's, an ear's close sheets) into the drag. Measured on the recordings and transformed
+ * copies of them (tools/hands-variants; figures in docs/performance.md). */
+#define FP_FLIP_WIDEN 1.5
+#define FP_FLIP_WIDEN_MAX 2.25
+
 /* The guard's P (the shape it last accepted) and the frame's reference, the posed base: */
 enum {
     FP_CG_SYNCED = 0,   /* P is the shape shown, on the current reference */
@@ -143,6 +154,12 @@ void fp_cg_committed(fp_cg_step *g);
 
 /** The gesture ended: one line when the guard scaled it back (FP_SLOG_CONTACT). */
 void fp_cg_end_gesture(fp_cg_step *g, fp_slog *log);
+
+/** The support widening for a gesture's next frame (FP_FLIP_WIDEN), from this frame's
+ *  (widen; below 1: none) and its stats: a frame held back for flips alone (st->active,
+ *  st->collide_t < 1, st->collide_pairs 0) widens once more, up to FP_FLIP_WIDEN_MAX;
+ *  otherwise the widening stays. The caller resets it to 1 when the gesture ends. Pure. */
+double fp_cg_next_widen(double widen, const fp_frame_stats *st);
 
 /** Free the guard and the buffers; *g zeroed. */
 void fp_cg_free(fp_cg_step *g);
