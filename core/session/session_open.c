@@ -7,6 +7,7 @@
 #include <errno.h>
 #include <math.h>
 #include <stdarg.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -85,6 +86,20 @@ static int check_options(const fp_session_options *opt, char *err, size_t errlen
         return -EINVAL;
     }
     return 0;
+}
+
+/* fp_sheet_bind_build on the session's loaded face, for a thread */
+typedef struct bind_job {
+    fp_session *s;
+    int rc;
+} bind_job;
+
+static void *bind_run(void *u)
+{
+    bind_job *j = u;
+    j->rc = fp_sheet_bind_build(j->s->loaded, j->s->n, j->s->mesh->triangles, j->s->mesh->triangle_count,
+                                &j->s->bind);
+    return NULL;
 }
 
 /* The mesh (given or loaded) and the session's shapes: loaded, base and deformed its copies,
@@ -235,20 +250,26 @@ static int open_steps(fp_session *s, const fp_session_options *opt, double diag,
         snprintf(err, errlen, "session: out of memory for %zu triangles", s->mesh->triangle_count);
         return rc;
     }
-    /* the loaded face's close sheets, carried together (sheet_bind.h) */
-    if ((rc = fp_sheet_bind_build(s->loaded, s->n, s->mesh->triangles, s->mesh->triangle_count, &s->bind))) {
-        snprintf(err, errlen, "session: out of memory finding the close sheets of %zu triangles",
-                 s->mesh->triangle_count);
-        return rc;
-    }
+    /* the loaded face's close sheets (sheet_bind.h), found on a second thread while the
+     * contact guard builds its hierarchy: both read the loaded shape only */
+    bind_job job = {.s = s};
+    pthread_t th;
+    bool threaded = pthread_create(&th, NULL, bind_run, &job) == 0;
+    if (!threaded) bind_run(&job);
     if (!opt->no_contact_guard) {
         progress(opt, "building the contact guard over %zu triangles", s->mesh->triangle_count);
-        if ((rc = fp_cg_open(&s->cg, s->mesh->triangles, s->mesh->triangle_count, s->n, s->loaded, &s->rig,
-                             s->base, s->shown))) {
-            rc = rc ? rc : -ENOMEM;
-            snprintf(err, errlen, "session: out of memory for the contact guard");
-            return rc;
-        }
+        rc = fp_cg_open(&s->cg, s->mesh->triangles, s->mesh->triangle_count, s->n, s->loaded, &s->rig,
+                        s->base, s->shown);
+    }
+    if (threaded) pthread_join(th, NULL);
+    if (rc) {
+        snprintf(err, errlen, "session: out of memory for the contact guard");
+        return rc;
+    }
+    if (job.rc) {
+        snprintf(err, errlen, "session: out of memory finding the close sheets of %zu triangles",
+                 s->mesh->triangle_count);
+        return job.rc;
     }
     return 0;
 }

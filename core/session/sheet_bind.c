@@ -96,30 +96,60 @@ static int by_dist(const void *a, const void *b)
     return p->v != q->v ? (p->v < q->v ? -1 : 1) : (p->t > q->t) - (p->t < q->t);
 }
 
+/* a cell's key: its coordinates' bits interleaved (Morton order), so that cells near in space
+ * are mostly near in the grid's sorted entries */
+static uint64_t spread(uint64_t x)
+{
+    x &= 0x1fffff;
+    x = (x | x << 32) & 0x1f00000000ffffu;
+    x = (x | x << 16) & 0x1f0000ff0000ffu;
+    x = (x | x << 8) & 0x100f00f00f00f00fu;
+    x = (x | x << 4) & 0x10c30c30c30c30c3u;
+    x = (x | x << 2) & 0x1249249249249249u;
+    return x;
+}
+
+static uint64_t cell_key(long i, long j, long k)
+{
+    return spread((uint64_t)i) | spread((uint64_t)j) << 1 | spread((uint64_t)k) << 2;
+}
+
 typedef struct cell_tri {
     uint64_t cell;
     uint32_t t;
 } cell_tri;
 
-static int by_cell(const void *a, const void *b)
+/* sorts by cell (stable: by triangle within a cell, as they were made), 11 bits a pass up to
+ * the highest bit of max_key. Returns 0 or -ENOMEM. */
+static int radix_sort(cell_tri *a, size_t count, uint64_t max_key)
 {
-    const cell_tri *p = a, *q = b;
-    if (p->cell != q->cell) return p->cell < q->cell ? -1 : 1;
-    return (p->t > q->t) - (p->t < q->t);
+    cell_tri *tmp = malloc((count + 1) * sizeof *tmp);
+    size_t *hist = malloc(2049 * sizeof *hist);
+    if (!tmp || !hist) {
+        free(tmp), free(hist);
+        return -ENOMEM;
+    }
+    for (int shift = 0; shift < 64 && (max_key >> shift); shift += 11) {
+        memset(hist, 0, 2049 * sizeof *hist);
+        for (size_t i = 0; i < count; i++) hist[((a[i].cell >> shift) & 2047) + 1]++;
+        for (int d = 0; d < 2048; d++) hist[d + 1] += hist[d];
+        for (size_t i = 0; i < count; i++) tmp[hist[(a[i].cell >> shift) & 2047]++] = a[i];
+        memcpy(a, tmp, count * sizeof *a);
+    }
+    free(tmp), free(hist);
+    return 0;
 }
 
-static uint64_t cell_key(long i, long j, long k)
-{
-    return ((uint64_t)(i & 0x1fffff) << 42) | ((uint64_t)(j & 0x1fffff) << 21) | (uint64_t)(k & 0x1fffff);
-}
-
+/* every triangle under each cell its box meets, sorted by cell */
 typedef struct grid {
     cell_tri *ct;
+    float (*box)[6];  /* each triangle's box: low corner, high corner */
     size_t count;
     double lo[3], cell;
 } grid;
 
-/* every triangle under each cell its box meets */
+static long cell_of(const grid *g, double x, int k) { return (long)floor((x - g->lo[k]) / g->cell); }
+
 static int grid_build(grid *g, const float *pos, const uint32_t *tris, size_t t, double cell)
 {
     memset(g, 0, sizeof *g);
@@ -128,17 +158,20 @@ static int grid_build(grid *g, const float *pos, const uint32_t *tris, size_t t,
     for (size_t i = 0; i < 3 * t; i++)
         for (int k = 0; k < 3; k++) g->lo[k] = fmin(g->lo[k], pos[3 * (size_t)tris[i] + k]);
     size_t cap = 2 * t + 16;
+    uint64_t max_key = 0;
     g->ct = malloc(cap * sizeof *g->ct);
-    if (!g->ct) return -ENOMEM;
+    g->box = malloc((t + 1) * sizeof *g->box);
+    if (!g->ct || !g->box) return -ENOMEM;
     for (size_t f = 0; f < t; f++) {
         long lo[3], hi[3];
         for (int k = 0; k < 3; k++) {
-            double a = INFINITY, b = -INFINITY;
-            for (int c = 0; c < 3; c++) {
+            double a = pos[3 * (size_t)tris[3 * f] + k], b = a;
+            for (int c = 1; c < 3; c++) {
                 double x = pos[3 * (size_t)tris[3 * f + c] + k];
-                a = fmin(a, x), b = fmax(b, x);
+                a = x < a ? x : a, b = x > b ? x : b;
             }
-            lo[k] = (long)floor((a - g->lo[k]) / cell), hi[k] = (long)floor((b - g->lo[k]) / cell);
+            lo[k] = cell_of(g, a, k), hi[k] = cell_of(g, b, k);
+            g->box[f][k] = (float)a, g->box[f][3 + k] = (float)b;
         }
         for (long i = lo[0]; i <= hi[0]; i++)
             for (long j = lo[1]; j <= hi[1]; j++)
@@ -149,10 +182,10 @@ static int grid_build(grid *g, const float *pos, const uint32_t *tris, size_t t,
                         g->ct = grown, cap *= 2;
                     }
                     g->ct[g->count++] = (cell_tri){cell_key(i, j, k), (uint32_t)f};
+                    max_key |= g->ct[g->count - 1].cell;
                 }
     }
-    qsort(g->ct, g->count, sizeof *g->ct, by_cell);
-    return 0;
+    return radix_sort(g->ct, g->count, max_key);
 }
 
 /* the first entry of a cell, or count */
@@ -165,6 +198,21 @@ static size_t grid_find(const grid *g, uint64_t key)
         else hi = mid;
     }
     return lo;
+}
+
+static void grid_free(grid *g) { free(g->ct), free(g->box); }
+
+/* the vertices in the order of their cells (queries near in space run one after another) */
+typedef struct vkey {
+    uint64_t cell;
+    uint32_t v;
+} vkey;
+
+static int by_vkey(const void *a, const void *b)
+{
+    const vkey *p = a, *q = b;
+    if (p->cell != q->cell) return p->cell < q->cell ? -1 : 1;
+    return (p->v > q->v) - (p->v < q->v);
 }
 
 /* ---- vertex rings ------------------------------------------------------------------------ */
@@ -232,6 +280,7 @@ int fp_sheet_bind_build(const float *pos, size_t n, const uint32_t *tris, size_t
     grid g = {0};
     rings r = {0};
     cand *cs = NULL;
+    vkey *order = NULL;
     size_t nc = 0, cap = 0;
     double *edge = calloc(n, sizeof *edge);
     uint32_t *deg = calloc(n, sizeof *deg), *weld = weld_by_position(pos, n);
@@ -250,9 +299,15 @@ int fp_sheet_bind_build(const float *pos, size_t n, const uint32_t *tris, size_t
         }
     double mean = sum / (3.0 * (double)t);
     if (!(mean > 0)) { rc = 0; goto out; }
-    if ((rc = grid_build(&g, pos, tris, t, 2 * mean)) || (rc = rings_build(&r, weld, n, tris, t))) goto out;
+    if ((rc = grid_build(&g, pos, tris, t, mean)) || (rc = rings_build(&r, weld, n, tris, t))) goto out;
     rc = -ENOMEM;
-    for (size_t v = 0; v < n; v++) {
+    if (!(order = malloc(n * sizeof *order))) goto out;
+    for (size_t v = 0; v < n; v++)
+        order[v] = (vkey){cell_key(cell_of(&g, pos[3 * v], 0), cell_of(&g, pos[3 * v + 1], 1),
+                                   cell_of(&g, pos[3 * v + 2], 2)), (uint32_t)v};
+    qsort(order, n, sizeof *order, by_vkey);
+    for (size_t o = 0; o < n; o++) {
+        size_t v = order[o].v;
         uint32_t w = weld[v];
         if (!deg[w]) continue;
         double reach = FP_SHEET_BIND_GAP * edge[w] / deg[w];
@@ -270,7 +325,12 @@ int fp_sheet_bind_build(const float *pos, size_t n, const uint32_t *tris, size_t
                 for (long k = lo[2]; k <= hi[2]; k++) {
                     uint64_t key = cell_key(i, j, k);
                     for (size_t e = grid_find(&g, key); e < g.count && g.ct[e].cell == key; e++) {
+                        const float *bx = g.box[g.ct[e].t];
+                        if (p[0] + best < bx[0] || p[1] + best < bx[1] || p[2] + best < bx[2] ||
+                            p[0] - best > bx[3] || p[1] - best > bx[4] || p[2] - best > bx[5])
+                            continue; /* (its box is out of reach) */
                         const uint32_t *f = tris + 3 * (size_t)g.ct[e].t;
+                        if (weld[f[0]] == w || weld[f[1]] == w || weld[f[2]] == w) continue; /* its own */
                         double a[3], bb[3], cc[3], q[3] = {p[0], p[1], p[2]}, by[3], d = 0;
                         for (int m = 0; m < 3; m++)
                             a[m] = pos[3 * (size_t)f[0] + m], bb[m] = pos[3 * (size_t)f[1] + m],
@@ -323,7 +383,7 @@ int fp_sheet_bind_build(const float *pos, size_t n, const uint32_t *tris, size_t
     rc = 0;
 out:
     if (rc) fp_sheet_bind_free(b);
-    free(g.ct), rings_free(&r), free(cs), free(edge), free(deg), free(weld), free(role);
+    grid_free(&g), free(order), rings_free(&r), free(cs), free(edge), free(deg), free(weld), free(role);
     return rc;
 }
 
