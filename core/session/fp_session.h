@@ -442,8 +442,10 @@ const char *fp_session_performer_name(const fp_session *s, size_t performer);
  *  or between frames. */
 const fp_calibration *fp_session_performer_calibration(const fp_session *s, size_t performer);
 const fp_hand_pose *fp_session_performer_hand(const fp_session *s, size_t performer, int hand);
-/** The last control set (start/end points) the mapping made and the engine used; the
- *  session's, rewritten by every step (copy what is kept). */
+/** The last control set (start/end points) the mapping made and the engine used, its radius
+ *  the engine's (the mapping's, widened in a gesture the contact guard held back for flipped
+ *  triangles alone: fp_frame_stats.flip_widen); the session's, rewritten by every step (copy
+ *  what is kept). */
 const fp_control_set *fp_session_control_set(const fp_session *s);
 /** Replace the mapping by a new one from spec (NAME[,key=value...], as the mapping option),
  *  loaded from path: keeps the mesh, the base, the undo history, the inputs and the radius;
