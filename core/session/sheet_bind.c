@@ -355,7 +355,7 @@ int fp_sheet_bind_build(const float *pos, size_t n, const uint32_t *tris, size_t
         }
         cs[nc++] = c;
     }
-    qsort(cs, nc, sizeof *cs, by_dist);
+    if (nc) qsort(cs, nc, sizeof *cs, by_dist);
     b->follower = malloc((nc + 1) * sizeof *b->follower);
     b->leader = malloc((nc + 1) * sizeof *b->leader);
     b->bary = malloc((nc + 1) * sizeof *b->bary);
@@ -371,7 +371,7 @@ int fp_sheet_bind_build(const float *pos, size_t n, const uint32_t *tris, size_t
         for (int c = 0; c < 3; c++) role[weld[f[c]]] = 2;
         cs[kept++] = cs[i];
     }
-    qsort(cs, kept, sizeof *cs, by_follower); /* (fp_sheet_bind_apply walks them by range) */
+    if (kept) qsort(cs, kept, sizeof *cs, by_follower); /* (fp_sheet_bind_apply walks them by range) */
     for (size_t i = 0; i < kept; i++) {
         uint32_t w = weld[cs[i].v];
         b->follower[i] = cs[i].v;
