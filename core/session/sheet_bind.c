@@ -51,31 +51,36 @@ static void nearest_on_triangle(const double p[3], const double a[3], const doub
 
 /* ---- welding by position ----------------------------------------------------------------- */
 
-static const float *g_pos; /* (qsort's comparator) */
+typedef struct at_pos {
+    float p[3];
+    uint32_t v;
+} at_pos;
 
 static int by_position(const void *a, const void *b)
 {
-    const float *p = g_pos + 3 * (size_t)*(const uint32_t *)a, *q = g_pos + 3 * (size_t)*(const uint32_t *)b;
+    const at_pos *x = a, *y = b;
     for (int k = 0; k < 3; k++)
-        if (p[k] != q[k]) return p[k] < q[k] ? -1 : 1;
-    return (*(const uint32_t *)a > *(const uint32_t *)b) - (*(const uint32_t *)a < *(const uint32_t *)b);
+        if (x->p[k] != y->p[k]) return x->p[k] < y->p[k] ? -1 : 1;
+    return (x->v > y->v) - (x->v < y->v);
 }
 
 /* weld[v]: the least index at v's position */
 static uint32_t *weld_by_position(const float *pos, size_t n)
 {
-    uint32_t *order = malloc(n * sizeof *order), *weld = malloc(n * sizeof *weld);
+    at_pos *order = malloc(n * sizeof *order);
+    uint32_t *weld = malloc(n * sizeof *weld);
     if (!order || !weld) {
         free(order), free(weld);
         return NULL;
     }
-    for (size_t v = 0; v < n; v++) order[v] = (uint32_t)v;
-    g_pos = pos;
+    for (size_t v = 0; v < n; v++) {
+        memcpy(order[v].p, pos + 3 * v, sizeof order[v].p);
+        order[v].v = (uint32_t)v;
+    }
     qsort(order, n, sizeof *order, by_position);
     for (size_t i = 0; i < n; i++) {
-        const float *p = pos + 3 * (size_t)order[i];
-        bool same = i > 0 && !memcmp(p, pos + 3 * (size_t)order[i - 1], 3 * sizeof *p);
-        weld[order[i]] = same ? weld[order[i - 1]] : order[i];
+        bool same = i > 0 && !memcmp(order[i].p, order[i - 1].p, sizeof order[i].p);
+        weld[order[i].v] = same ? weld[order[i - 1].v] : order[i].v;
     }
     free(order);
     return weld;
