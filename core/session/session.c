@@ -226,10 +226,11 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, const fp
         fp_engine_step_end_gesture(&s->engine, &s->log);
         fp_skin_reach_gesture_end(&s->gesture_reach, s->head.mm_per_unit, &s->log);
         fp_cg_end_gesture(&s->cg, &s->log);
-        if (s->flip_widen > 1.0)
+        if (s->flip_widened > 1.0)
             fp_slog_printf(&s->log, FP_LOG_INFO, FP_SLOG_CONTACT,
-                           "contact guard widened the support %.2gx this gesture, so a long drag "
-                           "turned the skin around less", s->flip_widen);
+                           "contact guard widened the support %.3gx this gesture, so a long drag "
+                           "turned the skin around less", s->flip_widened);
+        s->flip_widened = 1.0;
         fp_cg_shown_ref(&s->cg);
     }
     s->engaged = cs->active && !(cs->intents & (FP_INTENT_COMMIT | FP_INTENT_CANCEL));
@@ -346,8 +347,9 @@ static void step_frame(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     /* 5: the engine. 6: history. The reach is measured against the mapping's own set: a rig's
      * clamp is part of what holds the skin back. */
     engine_and_history(s, cs, &s->cs, st);
-    st->flip_widen = s->cs.radius / asked_radius;
-    s->flip_widen = s->engaged ? fp_cg_next_widen(s->flip_widen, st) : 1.0;
+    st->flip_widen = asked_radius > 0 ? s->cs.radius / asked_radius : 1.0;
+    if (st->flip_widen > s->flip_widened) s->flip_widened = st->flip_widen;
+    s->flip_widen = s->engaged && !s->rig.rig ? fp_cg_next_widen(s->flip_widen, st) : 1.0;
 
 #undef FP_STAGE_END
     /* 7: the recorder. */

@@ -95,6 +95,7 @@ struct fp_session {
     fp_sheet_bind bind;           /* close sheets carried together (sheet_bind.h) */
     double flip_widen;            /* this gesture's support widening (fp_cg_next_widen; 1: none) */
     double cs_asked_radius;       /* the mapping's radius where cs.radius was widened; 0: not */
+    double flip_widened;          /* the most this gesture's support was widened (its log line) */
     fp_cg_step cg;                /* step 5, after the engine: the contact guard (step_contact.h);
                                      cg.contact NULL with no_contact_guard */
 

@@ -5,7 +5,8 @@
 #     flipped triangle on the three faces (the same strictness as the recordings themselves);
 #  2. test_reach on the three faces: the skin follows the fingertips (median at least 90%,
 #     each run's 10th percentile at least 60%; measured 100% and 72.0-100%);
-#  3. onehand on its defaults, the mirrored grab on each face (its rig): it engages, moves
+#  3. a gesture the contact guard held back for flips alone goes on widened and says so;
+#  4. onehand on its defaults, the mirrored grab on each face (its rig): it engages, moves
 #     the face (vertices moved and max displacement above 0; measured 10155, 2930 and 214
 #     vertices) and gives no hint (a hand that reaches).
 # (Before a flip-held gesture was widened, step_contact.h, MediaPipe's mirrored three-claps
@@ -31,6 +32,15 @@ else
 fi
 FP_SHARED_DATA=$data FP_REACH_HANDS=$tmp/mirror \
     "$build/tests/test_reach" || { echo "FAIL: test_reach on mirrored hands"; exit 1; }
+
+# A gesture held back for flips alone goes on widened, and says so: the mirrored grab on the
+# MediaPipe face, without a rig (measured: "widened the support 2.25x", twice).
+"$build/bin/facepuppet" run --plugin-dir "$build/lib/facepuppet" \
+    --mesh "$data/faces/mediapipe-canonical/canonical_face_model.obj" --rig none \
+    --input "replay:$tmp/mirror/grab_joints_mm.csv,fast=1" --out "$tmp/widen.obj" --force \
+    >"$tmp/widen.out" 2>"$tmp/widen.err" || { cat "$tmp/widen.err"; echo "FAIL: the widening run"; exit 1; }
+grep -q "contact guard widened the support 2.25x this gesture" "$tmp/widen.err" ||
+    { cat "$tmp/widen.err"; echo "FAIL: no widened gesture said on the mirrored grab (MediaPipe)"; exit 1; }
 
 for face in ict-facekit/generic_neutral_mesh.obj lee-perry-smith/LeePerrySmith.obj \
             mediapipe-canonical/canonical_face_model.obj; do
