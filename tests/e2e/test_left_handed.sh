@@ -15,23 +15,9 @@
 # Usage: test_left_handed.sh BUILD_DIR. Exit 77 (skipped) without python3 or the data.
 # SPDX-License-Identifier: GPL-3.0-or-later
 set -u
-build=${1:?usage: test_left_handed.sh BUILD_DIR}
-data=${FP_SHARED_DATA:-../shared/data}
-[ -d "$data/hands/leap-motion" ] || { echo "no $data/hands/leap-motion: skipped"; exit 77; }
-command -v python3 >/dev/null || { echo "no python3: skipped"; exit 77; }
-tmp=$(mktemp -d "${TMPDIR:-/tmp}/fp-left-XXXXXX")
-trap 'rm -rf "$tmp"' EXIT
-python3 tools/hands-variants "$tmp" --data "$data" || { echo "FAIL: hands-variants"; exit 1; }
-[ -s "$tmp/mirror/grab_joints_mm.csv" ] || { echo "FAIL: no mirrored grab"; exit 1; }
-
-if [ -x "$build/tests/test_guard" ]; then
-    FP_SHARED_DATA=$data FP_GUARD_HANDS=$tmp/mirror FP_TEST_FILTER=test_recordings_anchored \
-        "$build/tests/test_guard" || { echo "FAIL: test_guard on mirrored hands"; exit 1; }
-else
-    echo "no test_guard (built where CGAL is): its part skipped"
-fi
-FP_SHARED_DATA=$data FP_REACH_HANDS=$tmp/mirror \
-    "$build/tests/test_reach" || { echo "FAIL: test_reach on mirrored hands"; exit 1; }
+. "$(dirname "$0")/hands_variants.sh"
+variants_setup "${1:?usage: test_left_handed.sh BUILD_DIR}" left
+variant_guard_and_reach mirror "mirrored hands"
 
 # A gesture held back for flips alone goes on widened, and says so: the mirrored grab on the
 # MediaPipe face, without a rig (measured: "widened the support 2.25x", twice).
