@@ -411,6 +411,7 @@ static bool carry(const fp_sheet_bind *b, size_t i, const float *ref, float *x)
     uint32_t v = b->follower[i];
     const uint32_t *f = b->leader[i];
     const float *l = b->bary[i];
+    assert(v != f[0] && v != f[1] && v != f[2]); /* a follower is never its leader's corner */
     double p0[3], p1[3], o[3], d = 0;
     for (int k = 0; k < 3; k++) {
         p0[k] = l[0] * ref[3 * (size_t)f[0] + k] + l[1] * ref[3 * (size_t)f[1] + k] + l[2] * ref[3 * (size_t)f[2] + k];
