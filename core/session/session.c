@@ -601,6 +601,7 @@ void fp_session_destroy(fp_session **sp)
     fp_frame_thread_destroy(&s->ft); /* (between frames: no call in progress) */
     char msg[8];
     fp_session_stop(s, msg, sizeof msg);
+    for (size_t p = 0; p < s->performers.count; p++) fp_arrive_step_finish(&s->arrive[p], &s->log);
     fp_mapping_step_flush(&s->mapping_step, &s->log);
     fp_engine_step_flush(&s->engine, &s->log);
     fp_skin_reach_gesture_end(&s->gesture_reach, s->head.mm_per_unit, &s->log);

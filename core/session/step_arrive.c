@@ -56,6 +56,23 @@ static const char *placed_words(fp_arrive_placement how)
     }
 }
 
+/* The hint, once a stretch (r->warned): how long, how near, how the hands are placed. */
+static void say(fp_arrive_step *r, const fp_slog *log)
+{
+    r->warned = true;
+    r->hints++;
+    char far[64];
+    if (isfinite(r->nearest)) snprintf(far, sizeof far, "%.0f mm", r->nearest * r->mm);
+    else snprintf(far, sizeof far, "(unknown)");
+    fp_slog_printf(log, FP_LOG_WARNING, "session",
+                   "%shands present for %.*f s, but no fingertip came within %.0f mm of the face "
+                   "(half the support radius: where the anchored mapping grabs); the nearest "
+                   "stayed %s away. %s, or calibrate: `facepuppet calibrate --mesh FACE --input "
+                   "SPEC --out cal.json`, then --calibration cal.json (docs/calibration.md)",
+                   r->who, r->away_s < FP_ARRIVE_HINT_S - 1e-6 ? 1 : 0, r->away_s, r->near_mm, far,
+                   placed_words(r->how));
+}
+
 void fp_arrive_step_check(fp_arrive_step *r, int64_t now_ns, const fp_hand_pose hands[FP_HANDS],
                          const float tip[FP_HANDS][FP_FINGERS], bool engaged, double radius,
                          double mm_per_unit, const fp_engine_step *e, const fp_slog *log)
@@ -95,17 +112,12 @@ void fp_arrive_step_check(fp_arrive_step *r, int64_t now_ns, const fp_hand_pose 
                 if (d[h][f] < nearest) nearest = d[h][f];
     }
     if (nearest < r->nearest) r->nearest = nearest;
-    if (!due) return;
-    r->warned = true;
-    r->hints++;
-    double mm = mm_per_unit > 0 ? mm_per_unit : 1.0;
-    char far[64];
-    if (isfinite(r->nearest)) snprintf(far, sizeof far, "%.0f mm", r->nearest * mm);
-    else snprintf(far, sizeof far, "(unknown)");
-    fp_slog_printf(log, FP_LOG_WARNING, "session",
-                   "%shands present for %.0f s, but no fingertip came within %.0f mm of the face "
-                   "(half the support radius: where the anchored mapping grabs); the nearest "
-                   "stayed %s away. %s, or calibrate: `facepuppet calibrate --mesh FACE --input "
-                   "SPEC --out cal.json`, then --calibration cal.json (docs/calibration.md)",
-                   r->who, r->away_s, FP_ARRIVE_NEAR * radius * mm, far, placed_words(r->how));
+    r->mm = mm_per_unit > 0 ? mm_per_unit : 1.0;
+    r->near_mm = FP_ARRIVE_NEAR * radius * r->mm;
+    if (due) say(r, log);
+}
+
+void fp_arrive_step_finish(fp_arrive_step *r, const fp_slog *log)
+{
+    if (!r->warned && !r->reached && r->away_s >= FP_ARRIVE_END_S - 1e-6) say(r, log);
 }

@@ -15,7 +15,8 @@
  *    them) and the mapping engaged nothing, one warning (source "session") says how near the
  *    nearest fingertip came, in mm, how the hands are placed, and to calibrate. Once, and
  *    never after a fingertip came near (or the mapping engaged): hands that have reached the
- *    face are placed well, and a performer resting them away from it is told nothing.
+ *    face are placed well, and a performer resting them away from it is told nothing. A
+ *    session that ends sooner (a short replay) says it at its end (fp_arrive_step_finish).
  *
  * Threads: the session thread. Allocation only in fp_arrive_step_init.
  */
@@ -39,6 +40,7 @@ extern "C" {
 
 #define FP_ARRIVE_HINT_S 3.0   /* seconds of hands present and away before the hint */
 #define FP_ARRIVE_NEAR 0.5     /* "near": a fingertip within this x radius of the face */
+#define FP_ARRIVE_END_S 1.0    /* at the end, hands present and away this long get the hint */
 
 /** How the hands are placed (what the hint says). */
 typedef enum fp_arrive_placement {
@@ -60,6 +62,8 @@ typedef struct fp_arrive_step {
     bool far_asked;                /* the unbounded nearest query ran ... */
     int64_t far_ns;                /* ... last at this frame time */
     unsigned long hints;           /* hints said so far */
+    double near_mm;                /* the last check's "near" (FP_ARRIVE_NEAR x radius), mm */
+    double mm;                     /* the last check's mm_per_unit */
     char who[80];                  /* whose hands, before its lines ("performer 'B': "; set
                                       after init by a session of several performers), or "" */
 } fp_arrive_step;
@@ -92,6 +96,12 @@ void fp_arrive_step_place(fp_arrive_step *r, fp_pose_state *p, bool engaged, con
 void fp_arrive_step_check(fp_arrive_step *r, int64_t now_ns, const fp_hand_pose hands[FP_HANDS],
                          const float tip[FP_HANDS][FP_FINGERS], bool engaged, double radius,
                          double mm_per_unit, const fp_engine_step *e, const fp_slog *log);
+
+/** At the session's end (a replay shorter than FP_ARRIVE_HINT_S, or hands that left before
+ *  it): when hands were present and away for FP_ARRIVE_END_S seconds or more, none came
+ *  near and the hint was not said for that stretch, it is said now, with the seconds they
+ *  were there (a run that moved nothing says why). Nothing otherwise. */
+void fp_arrive_step_finish(fp_arrive_step *r, const fp_slog *log);
 
 #ifdef __cplusplus
 }

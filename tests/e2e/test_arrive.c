@@ -10,7 +10,9 @@
  *  - a hand held still, placed as it arrives, hovers in front of the face: the hint
  *    (source "session", a warning) comes once, 3 s after the hand arrived, with how far the
  *    nearest fingertip stayed; a calibration that puts the reaching hand 10 cm back gives it
- *    too, naming the calibration; the recording that reaches gives none.
+ *    too, naming the calibration; the recording that reaches gives none; a replay that ends
+ *    sooner (the still hand for 2 s) gives it at its end, with the seconds the hand was
+ *    there, and half a second of it gives none.
  *
  * FP_TEST_VERBOSE=1 prints the session's log. */
 #define _GNU_SOURCE
@@ -28,6 +30,7 @@
 #include <cmocka.h>
 
 #define FPS 60
+#define FP_ARRIVE_TEST_HINT_S 3.0 /* step_arrive.h's FP_ARRIVE_HINT_S: a hint due while running */
 
 static const char *faces[] = {"ict-facekit/generic_neutral_mesh.obj", "lee-perry-smith/LeePerrySmith.obj",
                               "mediapipe-canonical/canonical_face_model.obj"};
@@ -175,7 +178,7 @@ static void test_live_placement_grabs(void **state)
 }
 
 /* The first row of a recording repeated for 5 s at 110 Hz: a hand held still. */
-static void still_csv(const char *rec, const char *out)
+static void still_csv(const char *rec, const char *out, int samples)
 {
     char in[4300], line[8192], head[8192];
     snprintf(in, sizeof in, "%s/hands/leap-motion/%s_joints_mm.csv", fp_test_data_dir(), rec);
@@ -187,7 +190,7 @@ static void still_csv(const char *rec, const char *out)
     fclose(f);
     fputs(head, g);
     const char *rest = strchr(strchr(line, ',') + 1, ','); /* after frame, timestamp_us */
-    for (int i = 0; i < 550; i++) fprintf(g, "%d,%d%s", i, 1000000 + i * 9091, rest);
+    for (int i = 0; i < samples; i++) fprintf(g, "%d,%d%s", i, 1000000 + i * 9091, rest);
     assert_int_equal(fclose(g), 0);
 }
 
@@ -197,7 +200,7 @@ static void test_hint(void **state)
     char dir[] = "/tmp/fp-arrive-XXXXXX", csv[64], input[200];
     assert_non_null(mkdtemp(dir));
     snprintf(csv, sizeof csv, "%s/still_joints_mm.csv", dir);
-    still_csv("grab", csv);
+    still_csv("grab", csv, 550); /* 5 s at 110 Hz */
     snprintf(input, sizeof input, "replay:%s,fast=1,workspace=0", csv);
     logbook lb;
     outcome o;
@@ -226,6 +229,24 @@ static void test_hint(void **state)
     assert_true(lb.hint_at <= 3000000000LL + 1000000000LL / FPS);
     assert_non_null(strstr(lb.hint, "The calibration places them"));
     assert_int_equal(o.engaged, 0);
+
+    /* a replay that ends before the hint is due (2 s of the still hand): the hint at its
+     * end, with the time the hand was there; half a second says nothing */
+    still_csv("grab", csv, 220);
+    run(faces[0], input, "anchored", NULL, 0, &lb, &o);
+    printf("a still hand for 2 s: %u hint(s) at %.3f s: %s\n", lb.hints, lb.hint_at / 1e9, lb.hint);
+    assert_int_equal(lb.hints, 1);
+    double said = 0;
+    const char *at = strstr(lb.hint, "hands present for ");
+    assert_non_null(at);
+    assert_int_equal(sscanf(at, "hands present for %lf s", &said), 1);
+    assert_true(said > 1.5 && said < FP_ARRIVE_TEST_HINT_S);
+    assert_true(lb.hint_at > 1500000000LL);
+    assert_non_null(strstr(lb.hint, "mm away"));
+    assert_int_equal(o.moved, 0);
+    still_csv("grab", csv, 55);
+    run(faces[0], input, "anchored", NULL, 0, &lb, &o);
+    assert_int_equal(lb.hints, 0);
     unlink(csv);
     rmdir(dir);
 }

@@ -487,8 +487,9 @@ static void recordings(const char *mapping)
             assert_int_equal(k, 0);
             assert_int_equal(fl, 0);
             /* the face still deforms (MediaPipe's mask is not reached by three-claps, with
-             * or without the guards) */
-            if (fi < 2) assert_true(moved > 0);
+             * or without the guards); transformed copies (FP_GUARD_HANDS) may never touch a
+             * face, and are checked for tears alone */
+            if (fi < 2 && !getenv("FP_GUARD_HANDS")) assert_true(moved > 0);
             fp_session_destroy(&s);
         }
     }
