@@ -56,6 +56,7 @@ struct fp_contact {
     int threads;          /* fp_contact_set_threads: 1 or 2 */
     size_t share_min;     /* fp_contact_set_threads: moved triangles from which a check is shared */
     double local_r;       /* fp_contact_set_local: 0, a scale-back is global */
+    bool carry;           /* fp_contact_set_carry (default true) */
 };
 
 /* ---- the incremental guard (fp_contact.h "The incremental guard") ------------------------- */
@@ -69,6 +70,11 @@ struct fp_contact {
 
 #define FP_CONTACT_LOCAL_ROUNDS 5 /* a local scale-back: times its blocking set may grow */
 #define FP_CONTACT_LOCAL_NARROW 4.0 /* its first ramp: local_r / this, doubled each round */
+#define FP_CONTACT_CARRY_ROUNDS 3 /* its rounds that try the held skin carried first (r / 4,
+                                     r / 2, r: later ones never passed on the recordings) */
+#define FP_CONTACT_CARRY_MAX_TRIS 200000 /* a step with more moved triangles tries none (a
+                                     carried check that fails costs a check: 0.1-1 s on the
+                                     1.7M face) */
 #define FP_TRACK_INLINE 6          /* list entries kept in the dyn itself (one cache line) */
 
 #define FP_CONTACT_MAX_THREADS 2  /* the caller and one worker (fp_contact_set_threads) */
@@ -237,6 +243,10 @@ struct track {
     uint8_t *off_mark;            /* n: in off */
     double *ramp;                 /* per moved vertex: the share of its motion always kept */
     size_t cap_ramp;
+    float *carry;                 /* per moved vertex (x3): a carried round's translation of
+                                     P, or NULL use (local_scale_back, carry_on) */
+    size_t cap_carry;
+    bool carry_on;                /* the passed ramp carries (track_lerp adds carry) */
     size_t updates;               /* the hierarchy: tree_update calls so far */
     uint32_t *probe;              /* the hierarchy: triangles newly flipped in the step's last
                                      check that had any (a bisection's check tries them first) */
@@ -252,7 +262,7 @@ struct track {
     uint32_t *kd_ix;              /* local_ramp: off's vertices, in its k-d tree's order */
     size_t cap_kd_ix;
     struct kdnode *kd;            /* local_ramp's k-d tree over them (node 0 the root) */
-    size_t cap_kd;
+    size_t cap_kd, nkd;           /* (nkd: its nodes now) */
     bool bg;                      /* a recentre job is posted to the worker (bg_join) */
     bool broken;                  /* a call ran out of memory half way: unusable */
 };

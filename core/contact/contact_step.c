@@ -12,10 +12,20 @@
  * NULL): vertex i's share is t + (1 - t) ramp[i] (a local scale-back) */
 static void track_lerp(struct track *k, double t, const double *ramp)
 {
+    const bool carry = ramp && k->carry_on;
     for (size_t i = 0; i < k->nmv; i++) {
         float *p = k->p + 3 * (size_t)k->mv[i];
         const float *a = k->pv + 3 * i, *b = k->cv + 3 * i;
         double w = ramp ? t + (1 - t) * ramp[i] : t;
+        if (carry && w < 1) {
+            /* a carried round: from P moved by the carry toward the candidate */
+            const float *d = k->carry + 3 * i;
+            for (int j = 0; j < 3; j++) {
+                double a2 = (double)a[j] + d[j];
+                p[j] = (float)(a2 + w * ((double)b[j] - a2));
+            }
+            continue;
+        }
         for (int j = 0; j < 3; j++)
             p[j] = w >= 1 ? b[j] : w <= 0 || a[j] == b[j] ? a[j] : (float)((double)a[j] + w * ((double)b[j] - a[j]));
     }
@@ -27,6 +37,7 @@ static void track_lerp(struct track *k, double t, const double *ramp)
 typedef struct kdnode {
     double lo[3], hi[3];
     uint32_t first, count, left, right; /* left == 0: a leaf (node 0 is the root) */
+    double sp[3], sd[3];                /* carry_build: sums of its points' P and motion */
 } kdnode;
 
 /* the node over the vertices ix[first .. first + n) (positions in pos) and those below it
@@ -100,6 +111,7 @@ static int local_ramp(fp_contact *c, double r)
     memcpy(ix, k->off, k->noff * sizeof *ix);
     size_t len = 0;
     kd_build(k->kd, &len, ix, k->p, 0, (uint32_t)k->noff);
+    k->nkd = len;
     const kdnode *kd = k->kd;
     const float *q = k->p;
     uint32_t stack[64], w = 0; /* w: the last nearest point (a bound for the next search) */
@@ -131,6 +143,81 @@ static int local_ramp(fp_contact *c, double r)
         }
         double u = best <= r2 ? 0 : best >= r4 ? 1 : (sqrt(best) - r) / r;
         k->ramp[i] = u * u * (3 - 2 * u);
+    }
+    return 0;
+}
+
+/* A carried round's translation (carry, per moved vertex): each vertex held back (ramp < 1)
+ * is carried by the mean motion (candidate - P) of the blocking vertices within 2r of it,
+ * weighted by (1 - d^2 / 4r^2)^2, so the held skin moves on with the drag as one piece (its
+ * triangles keep their shapes and relative places) instead of staying behind; the ramp
+ * then blends it into the candidate. A k-d node under r / 4 across counts as its points'
+ * mean (their sums, made bottom-up here: the tree's children follow their parent), so a
+ * vertex costs about the nodes near it, not every blocking vertex (the 1.7M face's blocked
+ * frames hold some 2,600). Called after local_ramp(c, r), with P in k->p. 0 or -ENOMEM. */
+static int carry_build(fp_contact *c, double r, const float *cand)
+{
+    struct track *k = c->tk;
+    if (reserve((void **)&k->carry, &k->cap_carry, 3 * k->nmv, sizeof *k->carry)) return -ENOMEM;
+    memset(k->carry, 0, 3 * k->nmv * sizeof *k->carry);
+    if (!k->noff) return 0;
+    kdnode *kd = k->kd;
+    const uint32_t *ix = k->kd_ix;
+    const float *q = k->p;
+    for (size_t x = k->nkd; x-- > 0;) {
+        kdnode *d = &kd[x];
+        for (int a = 0; a < 3; a++) d->sp[a] = d->sd[a] = 0;
+        if (d->left) {
+            for (int a = 0; a < 3; a++)
+                d->sp[a] = kd[d->left].sp[a] + kd[d->right].sp[a], d->sd[a] = kd[d->left].sd[a] + kd[d->right].sd[a];
+            continue;
+        }
+        for (uint32_t j = d->first; j < d->first + d->count; j++)
+            for (int a = 0; a < 3; a++) {
+                double pa = q[3 * (size_t)ix[j] + a];
+                d->sp[a] += pa;
+                d->sd[a] += (double)cand[3 * (size_t)ix[j] + a] - pa;
+            }
+    }
+    const double R2 = 4 * r * r, small2 = r * r / 16;
+    uint32_t stack[64];
+    for (size_t i = 0; i < k->nmv; i++) {
+        if (k->ramp[i] >= 1) continue;
+        const float *pf = k->pv + 3 * i;
+        double p[3] = {pf[0], pf[1], pf[2]}, sw = 0, sd[3] = {0, 0, 0};
+        uint32_t top = 0;
+        stack[top++] = 0;
+        while (top) {
+            const kdnode *d = &kd[stack[--top]];
+            if (kd_lb2(d, p) >= R2) continue;
+            double diag2 = 0;
+            for (int a = 0; a < 3; a++) diag2 += (d->hi[a] - d->lo[a]) * (d->hi[a] - d->lo[a]);
+            if (diag2 <= small2 || !d->left) {
+                if (diag2 <= small2) { /* its points' mean */
+                    double e2 = 0;
+                    for (int a = 0; a < 3; a++) e2 += (p[a] - d->sp[a] / d->count) * (p[a] - d->sp[a] / d->count);
+                    if (e2 >= R2) continue;
+                    double u = 1 - e2 / R2, w = u * u;
+                    sw += w * d->count;
+                    for (int a = 0; a < 3; a++) sd[a] += w * d->sd[a];
+                    continue;
+                }
+                for (uint32_t j = d->first; j < d->first + d->count; j++) {
+                    const float *qj = q + 3 * (size_t)ix[j], *cj = cand + 3 * (size_t)ix[j];
+                    double e2 = 0;
+                    for (int a = 0; a < 3; a++) e2 += (p[a] - qj[a]) * (p[a] - qj[a]);
+                    if (e2 >= R2) continue;
+                    double u = 1 - e2 / R2, w = u * u;
+                    sw += w;
+                    for (int a = 0; a < 3; a++) sd[a] += w * ((double)cj[a] - qj[a]);
+                }
+                continue;
+            }
+            stack[top++] = d->left; /* (a level each: < 64) */
+            stack[top++] = d->right;
+        }
+        if (sw > 0)
+            for (int a = 0; a < 3; a++) k->carry[3 * i + a] = (float)(sd[a] / sw);
     }
     return 0;
 }
@@ -273,11 +360,34 @@ static int local_scale_back(fp_contact *c, const float *ref, const float *cand, 
                      : check(c, cand, ref, fl, true);
     if (m < 0) return -ENOMEM;
     double r = c->local_r / FP_CONTACT_LOCAL_NARROW;
+    /* carried rounds: on the hierarchy only (the envelopes hold the segment P -> C, which a
+     * carried vertex leaves), and where a check is cheap enough to try one more */
+    const bool carry = c->carry && k->tree && k->nmt <= FP_CONTACT_CARRY_MAX_TRIS;
     for (int round = 0; m > 0 || *fl; round++, r = fmin(2 * r, c->local_r)) {
         if (m < 0) return -ENOMEM;
         if (round == FP_CONTACT_LOCAL_ROUNDS) break;
+        k->carry_on = false;
         track_lerp(k, 0, NULL); /* P, where the distances are taken */
         if (local_ramp(c, r)) return -ENOMEM;
+        if (carry && round < FP_CONTACT_CARRY_ROUNDS) {
+            /* carried first: the held skin moved on as one piece */
+            if (carry_build(c, r, cand)) return -ENOMEM;
+            k->carry_on = true;
+            track_lerp(k, 0, k->ramp);
+            stamp_scaled(c, k->ramp);
+            size_t cfl = 0;
+            long cm = check(c, k->p, ref, &cfl, false);
+            res->checks++;
+            if (cm < 0) return -ENOMEM;
+            if (!cm && !cfl) {
+                *fl = 0;
+                *ramp = k->ramp;
+                res->local_r = r;
+                res->carried = true;
+                break;
+            }
+            k->carry_on = false;
+        }
         track_lerp(k, 0, k->ramp);
         if (k->tree) {
             /* a vertex kept whole (share 1) is where the candidate has it, and a
@@ -294,7 +404,10 @@ static int local_scale_back(fp_contact *c, const float *ref, const float *cand, 
             res->local_r = r;
         }
     }
+    bool carried = *ramp && k->carry_on;
+    k->carry_on = false;
     track_lerp(k, 0, NULL);
+    k->carry_on = carried; /* (the bisection's shapes carry too) */
     return 0;
 }
 
@@ -308,6 +421,7 @@ static int scale_back(fp_contact *c, const float *ref, const float *cand, int it
     struct track *k = c->tk;
     if (scale_back_prepare(c, cand)) return -ENOMEM;
     const double *ramp = NULL;
+    k->carry_on = false;
     if (c->local_r > 0 && iters > 0 && local_scale_back(c, ref, cand, found, fl, res, &ramp)) return -ENOMEM;
     /* with a ramp the stamps stay the last round's: a vertex kept whole (share 1) is in
      * place for every t, and its triangles as in the candidate; without one (the rounds

@@ -72,6 +72,7 @@ void fpc_track_free(struct track *k)
     free(k->off);
     free(k->off_mark);
     free(k->ramp);
+    free(k->carry);
     free(k->probe);
     free(k->kd_ix);
     free(k->kd);
@@ -443,6 +444,11 @@ int fp_contact_set_pose(fp_contact *c, const float *base, const float *posed)
         for (int k = 0; k < 3; k++) c->nrm[i][k] = (float)w[k];
     }
     return 0;
+}
+
+void fp_contact_set_carry(fp_contact *c, bool on)
+{
+    if (c) c->carry = on;
 }
 
 void fp_contact_set_local(fp_contact *c, double radius)

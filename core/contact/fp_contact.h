@@ -108,6 +108,8 @@ typedef struct fp_contact_result {
     int local;           /* fp_contact_step: 1 when the scale-back was local */
     double local_r;      /* fp_contact_step, local: the ramp's r (fp_contact_set_local's r / 4,
                             / 2 or r: the first that passed) */
+    bool carried;        /* fp_contact_step, local: the ramp that passed carried the held
+                            skin (fp_contact_set_carry) */
     size_t shared;       /* fp_contact_step, the hierarchy: checks whose refit and walk
                             two threads shared (fp_contact_set_threads) */
     double worker_wait_ms; /* fp_contact_step: how long the caller waited, at the ends of
@@ -221,6 +223,24 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
  * invariant holds, and a fold at the border between scaled and kept motion is a flip or a
  * crossing that check sees. s(v) takes the nearest blocking vertex from a k-d tree over
  * them (exact: the brute force's distance wherever it is under 2r).
+ * Carried rounds (fp_contact_set_carry, on by default; the hierarchy only): each of the
+ * first FP_CONTACT_CARRY_ROUNDS rounds first tries the held skin carried: vertex v at
+ * P(v) + T(v) + w(v) (C(v) - P(v) - T(v)), T(v) the mean motion C - P of the blocking
+ * vertices within 2r of v, weighted by (1 - d^2 / 4r^2)^2 (0 with none near). Near one
+ * blocked spot T is nearly constant, so the skin there moves on with the drag as one piece,
+ * its triangles keeping their shapes and places among themselves, instead of staying
+ * behind: a finger that drags a nostril's crease or an eyelid along keeps it under the
+ * finger. When that shape passes, it is the round's, and the bisection goes over t from it
+ * (P + T + w (C - P - T)); when it does not, the round goes on held as above. A carried
+ * vertex leaves the segment P -> C, which the envelopes' argument (3a) needs, so carried
+ * rounds run on the hierarchy alone (3b: its check refits the shape it is given, wherever
+ * the moved vertices are); a vertex with s(v) = 1 is still where C has it, so the check
+ * looks only at the others, as below. Every shape kept still passed the full check. Reach
+ * (tests/e2e/test_reach, 10th percentiles): ICT grab 92% -> 100%; transformed copies
+ * (tools/hands-variants): ICT mirrored grab 72% -> 100%, MediaPipe 1.6x faster grab 76% ->
+ * 97.5%, Lee Perry-Smith pinched grab 58.7% -> 96% (docs/performance.md). A step that
+ * moves more than FP_CONTACT_CARRY_MAX_TRIS triangles tries none: a carried check that
+ * fails is one check more, and on the 1.7M face one costs 0.1-1 s.
  * On the hierarchy the candidate's check keeps its new pairs' triangles and its newly
  * flipped ones: they are the blocking set (no second check of the candidate: on the 1.68M
  * face that second walk had cost 115-230 ms of a contact-limited frame), and a bisection's
@@ -416,6 +436,11 @@ int fp_contact_set_pose(fp_contact *c, const float *base, const float *posed);
  *  vertices inside the blocking vertices' box grown by 2r x the blocking vertices (test_guard,
  *  unanchored ICT three-claps: check p99 3.1 ms against 2.7 ms global; noisy, 2 cores). */
 void fp_contact_set_local(fp_contact *c, double radius);
+
+/** A local scale-back's carried rounds (the argument above), on (the default) or off (the
+ *  held rounds alone, as before issue 51's carry: tests and comparisons). Threads: as
+ *  every call on c. */
+void fp_contact_set_carry(fp_contact *c, bool on);
 
 /** P, the shape fp_contact_step last accepted (n x 3, owned by c, valid until its next
  *  call), or NULL before the first fp_contact_reference. */

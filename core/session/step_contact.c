@@ -6,6 +6,7 @@
 
 #include <assert.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -127,6 +128,7 @@ const float *fp_cg_run(fp_cg_step *g, const fp_cg_frame *f, fp_slog *log, fp_fra
     if (r.t < 1) {
         shown = fp_contact_shape(g->contact);
         g->limited++;
+        g->carried += r.carried;
         if (r.kept < g->t_least) g->t_least = r.kept;
         if (r.t < st->collide_t) st->collide_t = r.t;
         if (r.kept < st->collide_kept) st->collide_kept = r.kept;
@@ -208,12 +210,16 @@ void fp_cg_committed(fp_cg_step *g)
 
 void fp_cg_end_gesture(fp_cg_step *g, fp_slog *log)
 {
+    char carried[96] = "";
+    if (g->carried)
+        snprintf(carried, sizeof carried, "; in %lu the skin held back was carried along with the drag",
+                 g->carried);
     if (g->limited)
         fp_slog_printf(log, FP_LOG_WARNING, FP_SLOG_CONTACT,
                        "contact guard stopped the surface from passing through itself: %lu of "
-                       "%lu frames scaled back (least share of a frame's motion kept %.0f%%)",
-                       g->limited, g->frames, 100.0 * g->t_least);
-    g->frames = g->limited = 0;
+                       "%lu frames scaled back (least share of a frame's motion kept %.0f%%)%s",
+                       g->limited, g->frames, 100.0 * g->t_least, carried);
+    g->frames = g->limited = g->carried = 0;
     cg_check(g);
 }
 

@@ -92,6 +92,8 @@ typedef struct fp_cg_step {
     bool lost;                    /* the guard ran out of memory: made anew, the base shown
                                      until then */
     unsigned long frames, limited; /* this gesture: frames checked, scaled back */
+    unsigned long carried;        /* ... of those, the frames whose held skin was carried along
+                                     (fp_contact_result.carried) */
     double t_least;               /* this gesture: smallest share of a frame's motion kept
                                      (fp_contact_result.kept) */
     float hold;                   /* fp_contact_hold's eps (mesh units): FP_CONTACT_HOLD of the

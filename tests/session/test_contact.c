@@ -662,6 +662,9 @@ static void ways_open(fp_contact *tk[WAYS], const uint32_t *tris, size_t t, size
         assert_int_equal(fp_contact_create(tris, t, n, weld, &tk[w]), 0);
         if (rings) assert_int_equal(fp_contact_dilate_own(tk[w], rings), 0);
         fp_contact_set_local(tk[w], radius);
+        fp_contact_set_carry(tk[w], false); /* (the held rounds: the same on both broad phases;
+                                               carried ones, hierarchy only: test_contact_carry
+                                               and test_track_local_random) */
         if (w == 1 || w == 2) fp_contact_set_prewarm(tk[w], 0);
         if (w >= 2) fp_contact_set_threads(tk[w], 2, 1);
         assert_int_equal(fp_contact_reference(tk[w], ref, NULL, SIZE_MAX), 0);
@@ -734,12 +737,31 @@ static void test_track_local_paths(void **state)
     replay_close(&rp);
 }
 
+/* One step of the carried trackers (the hierarchy on 1 and 2 threads): the same t and shape,
+ * bit for bit; the shape adds no pair and no flip by the full check; *carried counts the
+ * steps whose ramp carried. */
+static void carried_step(fp_contact *cr[2], fp_contact *full, const float *ref, const float *cand,
+                         const uint32_t *ranges, size_t nr, size_t n, int *carried)
+{
+    fp_contact_result res[2];
+    for (int w = 0; w < 2; w++) assert_int_equal(fp_contact_step(cr[w], ref, cand, ranges, nr, 6, &res[w]), 0);
+    assert_true(res[1].t == res[0].t);
+    assert_int_equal(res[1].carried, res[0].carried);
+    assert_memory_equal(fp_contact_shape(cr[1]), fp_contact_shape(cr[0]), n * 3 * sizeof(float));
+    fp_contact_count info;
+    assert_int_equal(fp_contact_count_new(full, ref, fp_contact_shape(cr[0]), NULL, 0, &info), 0);
+    assert_int_equal(info.flipped, 0);
+    *carried += res[0].carried;
+}
+
 /* The local scale-back on synthetic pushes, four ways as above: bumps of random height,
  * sideways push and width on both sheets (a push folds a sheet over: flips, also at some
  * shares only), a random local radius, three frames each, then the upper sheet alone down
  * onto the shape kept (the lower sheet's triangles judged by what the trackers hold of it);
  * every frame the four trackers keep the same shape, bit for bit, and it adds no new pair
- * and no flip by the full check. On the hierarchy the ramps' and bisection's checks look
+ * and no flip by the full check. Two more trackers with carried rounds (fp_contact_set_carry,
+ * the hierarchy, 1 and 2 threads) go their own way: the same shape as each other, every one
+ * passing the full check. On the hierarchy the ramps' and bisection's checks look
  * only at the vertices with a share below 1 (a tracker that looked at none fails here). */
 static void test_track_local_random(void **state)
 {
@@ -754,7 +776,7 @@ static void test_track_local_random(void **state)
     assert_int_equal(fp_contact_create(tris, t, n, pos, &full), 0);
     unsigned seed = 12345;
 #define RND() ((seed = seed * 1103515245u + 12345u) >> 8 & 0xffff) / 65535.0
-    int steps = 0, local = 0, partial = 0, flips = 0, down = 0;
+    int steps = 0, local = 0, partial = 0, flips = 0, down = 0, carried = 0;
     for (int trial = 0; trial < 24; trial++) {
         for (size_t v = 0; v < 3 * n; v++) field[v] = 0;
         for (int b = 0; b < 4; b++) {
@@ -768,8 +790,15 @@ static void test_track_local_random(void **state)
             }
         }
         double r = 0.03 + 0.12 * RND();
-        fp_contact *tk[WAYS];
+        fp_contact *tk[WAYS], *cr[2]; /* cr: carried rounds on, the hierarchy on 1 and 2 threads */
         ways_open(tk, tris, t, n, pos, 0, r, pos);
+        for (int w = 0; w < 2; w++) {
+            assert_int_equal(fp_contact_create(tris, t, n, pos, &cr[w]), 0);
+            fp_contact_set_local(cr[w], r);
+            fp_contact_set_prewarm(cr[w], 0);
+            if (w) fp_contact_set_threads(cr[w], 2, 1);
+            assert_int_equal(fp_contact_reference(cr[w], pos, NULL, SIZE_MAX), 0);
+        }
         for (int f = 1; f <= 3; f++) {
             memcpy(cand, pos, n * 3 * sizeof(float));
             for (size_t v = 0; v < 3 * n; v++) cand[v] += field[v] * (float)f / 3;
@@ -779,6 +808,7 @@ static void test_track_local_random(void **state)
             fp_contact_count info;
             assert_int_equal(fp_contact_count_new(full, pos, fp_contact_shape(tk[0]), NULL, 0, &info), 0);
             assert_int_equal(info.flipped, 0);
+            carried_step(cr, full, pos, cand, ranges, nr, n, &carried);
             steps++;
             flips += res[0].flipped > 0;
             local += res[0].local;
@@ -799,13 +829,24 @@ static void test_track_local_random(void **state)
         assert_int_equal(fp_contact_count_new(full, pos, fp_contact_shape(tk[0]), NULL, 0, &info), 0);
         assert_int_equal(info.flipped, 0);
         down += res[0].pairs > 0;
+        /* the carried trackers' own shapes went their own way: the upper sheet down onto it */
+        memcpy(cand, fp_contact_shape(cr[0]), n * 3 * sizeof(float));
+        for (size_t v = n / 2; v < n; v++) {
+            double d = hypot(pos[3 * v] - 0.5, pos[3 * v + 1] - 0.5) / 0.6;
+            if (d < 1) cand[3 * v + 2] -= (float)(0.06 * (1 - d * d) * (1 - d * d));
+        }
+        nr = diff_ranges(cand, pos, n, ranges);
+        carried_step(cr, full, pos, cand, ranges, nr, n, &carried);
         for (int w = 0; w < WAYS; w++) fp_contact_destroy(&tk[w]);
+        for (int w = 0; w < 2; w++) fp_contact_destroy(&cr[w]);
     }
 #undef RND
     printf("random pushes: %d steps, %d with flips, %d scaled back locally (%d with 0 < t < 1), then "
            "the upper sheet alone down onto the kept shape (%d of %d meet it); the four ways kept the "
-           "same shapes, none adds a pair or a flip\n", steps, flips, local, partial, down, 24);
-    assert_true(partial > 4 && flips > 4 && down > 4);
+           "same shapes, none adds a pair or a flip; with carried rounds %d steps carried, the same "
+           "shapes on one thread and two, none adds a pair or a flip\n", steps, flips, local, partial,
+           down, 24, carried);
+    assert_true(partial > 4 && flips > 4 && down > 4 && carried > 0);
     fp_contact_destroy(&full);
     free(ranges);
     free(field);
@@ -945,6 +986,7 @@ static void test_track_local_ramp(void **state)
         assert_int_equal(fp_contact_create(tris, t, n, pos, &tk), 0);
         if (tree) fp_contact_set_prewarm(tk, 0);
         fp_contact_set_local(tk, 4 * r); /* its first ramp: r (set_local's r / 4) */
+        fp_contact_set_carry(tk, false); /* (the held ramp's formula) */
         assert_int_equal(fp_contact_reference(tk, pos, NULL, SIZE_MAX), 0);
         fp_contact_result res;
         assert_int_equal(fp_contact_step(tk, pos, cand, NULL, SIZE_MAX, 6, &res), 0);
