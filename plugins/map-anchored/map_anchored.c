@@ -39,7 +39,11 @@
  *       clamp=F (0: none; else the longest control vector in R, a performer's limit),
  *       points=tips|tips+palm|all (tips: the paper's fingertips; tips+palm adds the palm
  *       centre and the knuckles, all every joint: 5, 11 or 21 points per hand,
- *       mapping_util.h fp_points).
+ *       mapping_util.h fp_points), widen=F (0.5, in R: fp_drag_radius), apart=F (0.2, in R:
+ *       points whose grabbed skin lies within apart x R grab it once, the point nearest its
+ *       skin holding it: a fingertip is about 15 mm across, so only fingertips pinched
+ *       together, or hovering over one bit of skin such as the nose's tip, share; 0: each
+ *       grabs its own).
  */
 #include <facepuppet/mapping_util.h>
 #include <facepuppet/plugin.h>
@@ -55,7 +59,7 @@ typedef struct anchored {
     fp_mapping mapping;
     unsigned hands;              /* FP_HANDMASK_* listened to */
     bool automatic;
-    double engage, release, clamp, widen;
+    double engage, release, clamp, widen, apart;
     int points;                  /* fp_points mode */
     size_t per_hand;             /* points per hand (FP_POINTS_*_COUNT) */
     bool engaged;
@@ -70,6 +74,7 @@ typedef struct anchored {
     const fp_host *host;
     const fp_host_surface *surface; /* FP_HOST_EXT_SURFACE, or NULL (a 1.0 host) */
     float rest_of[FP_CONTROL_CAPACITY][3];  /* where that skin was at rest (widen) */
+    float gap[FP_CONTROL_CAPACITY];         /* the point's distance to the skin it grabbed */
     float *rest;                 /* the first base seen (the loaded face), rest_n x 3 */
     size_t rest_n;
 } anchored;
@@ -99,6 +104,9 @@ static void add_point(anchored *a, int h, size_t p, const float skin[3], const f
                       uint32_t vertex)
 {
     size_t k = a->count++;
+    double g2 = 0;
+    for (int c = 0; c < 3; c++) g2 += ((double)skin[c] - point[c]) * ((double)skin[c] - point[c]);
+    a->gap[k] = (float)sqrt(g2);
     if (a->rest && vertex < a->rest_n)
         memcpy(a->rest_of[k], a->rest + 3 * (size_t)vertex, sizeof a->rest_of[k]);
     else
@@ -156,6 +164,53 @@ static void take_points(anchored *a, const fp_frame_input *in, int h, size_t roo
     for (size_t p = 0; p < n && p < room; p++) add_point(a, h, p, pts[p], pts[p], UINT32_MAX);
 }
 
+/* One grab per bit of skin: the points taken nearest their skin first (ties: the earlier),
+ * each kept unless a point kept already grabbed skin within `apart` (mesh units) of its
+ * own; the others let go. So two fingertips pinched together grab the skin once, and
+ * opening them does not ask one bit of skin to go two ways (start points a fingertip's
+ * width apart lie a triangle or two apart: no map of the mesh can pull them far apart
+ * without folding it, and the fold-over guard then held the gesture to a few percent).
+ * The kept points stay in their order. */
+static void one_grab_per_skin(anchored *a, double apart)
+{
+    if (!(apart > 0) || a->count < 2) return;
+    size_t order[FP_CONTROL_CAPACITY];
+    for (size_t i = 0; i < a->count; i++) order[i] = i;
+    for (size_t i = 1; i < a->count; i++) /* insertion sort by (gap, index): a few dozen */
+        for (size_t j = i; j > 0 && a->gap[order[j]] < a->gap[order[j - 1]]; j--) {
+            size_t t = order[j];
+            order[j] = order[j - 1];
+            order[j - 1] = t;
+        }
+    bool keep[FP_CONTROL_CAPACITY] = {false};
+    for (size_t o = 0; o < a->count; o++) {
+        size_t i = order[o];
+        keep[i] = true;
+        for (size_t q = 0; q < o && keep[i]; q++) {
+            size_t j = order[q];
+            if (!keep[j]) continue;
+            double d2 = 0;
+            for (int c = 0; c < 3; c++)
+                d2 += ((double)a->start[i][c] - a->start[j][c]) * ((double)a->start[i][c] - a->start[j][c]);
+            if (d2 < apart * apart) keep[i] = false;
+        }
+    }
+    size_t kept = 0;
+    for (size_t i = 0; i < a->count; i++) {
+        if (!keep[i]) continue;
+        if (kept != i) {
+            memcpy(a->start[kept], a->start[i], sizeof a->start[i]);
+            memcpy(a->offset[kept], a->offset[i], sizeof a->offset[i]);
+            memcpy(a->rest_of[kept], a->rest_of[i], sizeof a->rest_of[i]);
+            a->hand_of[kept] = a->hand_of[i];
+            a->point_of[kept] = a->point_of[i];
+            a->gap[kept] = a->gap[i];
+        }
+        kept++;
+    }
+    a->count = kept;
+}
+
 static int engage(anchored *a, const fp_frame_input *in, bool requested, size_t capacity)
 {
     unsigned which = 0;
@@ -180,6 +235,7 @@ static int engage(anchored *a, const fp_frame_input *in, bool requested, size_t 
         if (got > 0) grabbed |= 1u << h;
     }
     if (!a->count) return 0;
+    one_grab_per_skin(a, a->apart * fp_touch_radius(in));
     a->engaged = true;
     a->engaged_hands = grabbed;
     memcpy(a->last_end, a->start, a->count * sizeof a->start[0]);
@@ -268,7 +324,7 @@ static void destroy(fp_mapping *self)
 
 /* The keys, typed (ABI 1.1): `facepuppet plugins` prints them, fpmu_params_parse checks
  * them. The order is that of the values create reads. */
-enum { KEY_HANDS, KEY_AUTO, KEY_RELEASE, KEY_CLAMP, KEY_ENGAGE, KEY_POINTS, KEY_WIDEN, KEY_COUNT };
+enum { KEY_HANDS, KEY_AUTO, KEY_RELEASE, KEY_CLAMP, KEY_ENGAGE, KEY_POINTS, KEY_WIDEN, KEY_APART, KEY_COUNT };
 static const fp_param_info keys[KEY_COUNT + 1] = {
     {.name = "hands", .type = FP_PARAM_ENUM, .default_value = "both", .choices = "left|right|both",
      .description = "which hands deform"},
@@ -288,6 +344,9 @@ static const fp_param_info keys[KEY_COUNT + 1] = {
     {.name = "widen", .type = FP_PARAM_FLOAT, .min = 0, .max = 100, .default_value = "0.5",
      .unit = "R",
      .description = "skin dragged farther than widen x R from rest widens the support to that distance / widen, so the skin around follows (0: the radius stays)"},
+    {.name = "apart", .type = FP_PARAM_FLOAT, .min = 0, .max = 100, .default_value = "0.2",
+     .unit = "R",
+     .description = "points whose grabbed skin lies within apart x R grab it once: the one nearest the skin holds it (0: every point grabs)"},
     {.name = NULL},
 };
 static const unsigned hand_masks[] = {FP_HANDMASK_LEFT, FP_HANDMASK_RIGHT, FP_HANDMASK_BOTH};
@@ -313,6 +372,7 @@ static int create(const fp_host *host, const fp_param *params, size_t nparams,
     a->clamp = v[KEY_CLAMP].number;
     a->points = (int)v[KEY_POINTS].number;
     a->widen = v[KEY_WIDEN].number;
+    a->apart = v[KEY_APART].number;
     int joints[FP_POINTS_MAX];
     a->per_hand = fp_points_joints(a->points, joints);
     a->host = host;
@@ -331,7 +391,7 @@ static const fp_mapping_factory factory = {
     .name = "anchored",
     .description = "the paper's anchored mode, grabbing the skin: start points on the skin at engage, end points follow the fingers",
     .usage = "anchored[,hands=left|right|both][,auto=0|1][,engage=F][,release=F][,clamp=F]\n"
-             "        [,points=tips|tips+palm|all][,widen=F]\n"
+             "        [,points=tips|tips+palm|all][,widen=F][,apart=F]\n"
              "  auto=1 engages when a fingertip comes within engage*R of the surface (0.5)\n"
              "  and commits when the hand lets go (farther than release*R, 1.0; engage <=\n"
              "  release; R here: the face's default radius, whatever --radius makes the\n"
@@ -342,6 +402,10 @@ static const fp_mapping_factory factory = {
              "  knuckles: 11) or all (every joint: 21 per hand, 42 for two).\n"
              "  widen: skin dragged farther than widen*R from where it was at rest widens the\n"
              "  support to that distance / widen (0.5), so the skin around follows; 0: never.\n"
+             "  apart: points whose grabbed skin lies within apart*R of each other (0.2; a\n"
+             "  fingertip's width) grab it once, the one nearest its skin holding it: two\n"
+             "  fingertips pinched together and then opened do not pull one bit of skin two\n"
+             "  ways; 0: each point grabs its own.\n"
              "  Every performer's hands grab (inputs' performer=NAME): hands= picks the sides.",
     .create = create,
     .params = keys,

@@ -262,6 +262,81 @@ static void test_anchored_beyond_reach(void **state)
     close_mapping(&r);
 }
 
+/* The plane z = 0 with each hit at the foot of its point (the skin right under it). */
+static int plane_foot(const fp_host *host, const float (*points)[3], size_t count, float max_distance,
+                      fp_surface_hit *out)
+{
+    int rc = plane_nearest(host, points, count, max_distance, out);
+    for (size_t i = 0; i < count; i++) {
+        out[i].position[0] = points[i][0];
+        out[i].position[1] = points[i][1];
+        out[i].position[2] = 0;
+    }
+    return rc;
+}
+
+/* One grab per bit of skin (key apart, 0.2 R by default): thumb and index pinched together
+ * (their tips 0.05 R apart, the thumb 0.1 R off the skin, the index 0.3 R) grab the skin
+ * once, the thumb's (nearer its skin) holding it, and opening the pinch moves that skin with
+ * the thumb alone; fingertips R apart each grab their own. want: the grabs. */
+static void pinch_case(const char *apart, float third_at, size_t want)
+{
+    rig r;
+    char err[1024];
+    fp_param p[] = {{"apart", apart}};
+    memset(&r, 0, sizeof r);
+    assert_int_equal(fp_plugin_load(fp_test_plugin_path(), FP_PLUGIN_MAPPING, "anchored", &r.plugin, err, 1024), 0);
+    static fp_mapping_services services;
+    services.surface.nearest = plane_foot;
+    static fp_mapping_host mh;
+    fp_mapping_host_init(&mh, "anchored", NULL, NULL);
+    mh.services = &services;
+    const fp_mapping_factory *f = r.plugin.factory;
+    assert_int_equal(f->create(&mh.host, apart ? p : NULL, apart ? 1 : 0, &r.m, err, 1024), 0);
+    r.cs.size = sizeof r.cs;
+    r.cs.capacity = 64;
+    r.cs.start = r.start;
+    r.cs.end = r.end;
+    r.cs.channels = r.ch;
+    r.cs.channel_capacity = 4;
+    r.in.size = sizeof r.in;
+    r.in.radius = R;
+    fp_hand_pose *h = &r.in.hands[FP_HAND_RIGHT];
+    h->present = true;
+    const float tip[FP_FINGERS][3] = {{0, 0, 0.1f}, {0.05f, 0, 0.3f}, {third_at, 0, 0.2f}, {3, 0, 0.2f}, {4, 0, 0.2f}};
+    for (int f = 0; f < FP_FINGERS; f++) {
+        memcpy(h->joints[FP_JOINT_TIP(f)], tip[f], sizeof tip[f]);
+        r.in.tip_distance[FP_HAND_RIGHT][f] = tip[f][2];
+    }
+    step(&r, 0);
+    assert_true(r.cs.active);
+    printf("apart=%s, the middle fingertip %.2f R from the thumb: %zu grabs\n", apart ? apart : "(0.2)",
+           third_at, r.cs.count);
+    assert_int_equal(r.cs.count, want);
+    /* open the pinch: the thumb 0.5 R to -x, the index 0.5 R to +x */
+    h->joints[FP_JOINT_TIP(0)][0] -= 0.5f;
+    h->joints[FP_JOINT_TIP(1)][0] += 0.5f;
+    step(&r, 0);
+    assert_true(r.cs.active);
+    assert_int_equal(r.cs.count, want);
+    assert_true(fabsf(r.cs.start[0][0]) < 1e-6f);            /* the thumb's skin, first */
+    assert_true(fabsf(r.cs.end[0][0] + 0.5f) < 1e-6f);       /* ... goes with the thumb */
+    if (want == 5) /* every point grabs: the index's own skin goes +x */
+        assert_true(fabsf(r.cs.end[1][0] - 0.55f) < 1e-6f);
+    for (size_t i = 1; i < r.cs.count && want < 5; i++)
+        assert_true(fabsf(r.cs.start[i][0] - 0.05f) > 1e-6f); /* the index let go */
+    close_mapping(&r);
+}
+
+static void test_anchored_apart(void **state)
+{
+    (void)state;
+    pinch_case(NULL, 2.0f, 4);   /* the index lets go: thumb, middle, ring, little */
+    pinch_case("0", 2.0f, 5);    /* every fingertip grabs its own */
+    pinch_case(NULL, 0.25f, 4);  /* the middle 0.25 R from the thumb's skin keeps its own */
+    pinch_case("0.3", 0.25f, 3); /* within 0.3 R of the thumb's skin: the thumb's */
+}
+
 static void test_unanchored(void **state)
 {
     (void)state;
@@ -506,6 +581,7 @@ int main(void)
         cmocka_unit_test(test_unanchored), cmocka_unit_test(test_bad_keys),
         cmocka_unit_test(test_points), cmocka_unit_test(test_anchored_beyond_reach),
         cmocka_unit_test(test_decimal_keys),
+        cmocka_unit_test(test_anchored_apart),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -26,7 +26,7 @@ expect() {
 }
 
 # Built-in plugins pass (the glove has no device here: a documented skip, exit 0).
-expect 0 'passed: 16 checks' "$fp" plugins check "$builtin/map-anchored.so"  # 16: a check per key (engage, points, widen)
+expect 0 'passed: 17 checks' "$fp" plugins check "$builtin/map-anchored.so"  # 17: a check per key (engage, points, widen, apart)
 expect 0 'PASS  determinism +after reset the same 320 frames' "$fp" plugins check "$builtin/map-unanchored.so"
 # ABI 1.3 mappings also get 80 frames with 1 and 3 further performers' hands (extra_hands)
 for m in anchored unanchored onehand; do
