@@ -28,14 +28,9 @@ typedef struct rig {
     fp_frame_input in;
 } rig;
 
-static int open_mapping(rig *r, const char *name, const fp_param *params, size_t n, char *err)
+/* r's control set and frame input, empty, for the host's radius R */
+static void rig_buffers(rig *r)
 {
-    memset(r, 0, sizeof *r);
-    int rc = fp_plugin_load(fp_test_plugin_path(), FP_PLUGIN_MAPPING, name, &r->plugin, err, 1024);
-    if (rc) return rc;
-    fp_host_init_for_mapping(&r->host, name);
-    const fp_mapping_factory *f = r->plugin.factory;
-    rc = f->create(&r->host, params, n, &r->m, err, 1024);
     r->cs.size = sizeof r->cs;
     r->cs.capacity = 64;
     r->cs.start = r->start;
@@ -46,7 +41,36 @@ static int open_mapping(rig *r, const char *name, const fp_param *params, size_t
     r->in.radius = R;
     for (int h = 0; h < FP_HANDS; h++)
         for (int f = 0; f < FP_FINGERS; f++) r->in.tip_distance[h][f] = INFINITY;
+}
+
+static int open_mapping(rig *r, const char *name, const fp_param *params, size_t n, char *err)
+{
+    memset(r, 0, sizeof *r);
+    int rc = fp_plugin_load(fp_test_plugin_path(), FP_PLUGIN_MAPPING, name, &r->plugin, err, 1024);
+    if (rc) return rc;
+    fp_host_init_for_mapping(&r->host, name);
+    const fp_mapping_factory *f = r->plugin.factory;
+    rc = f->create(&r->host, params, n, &r->m, err, 1024);
+    rig_buffers(r);
     return rc;
+}
+
+/* The anchored mapping on a mapping host whose surface service is `nearest` (mh: kept by the
+ * caller for the mapping's life); the keys must be accepted. */
+static void open_anchored_on(rig *r, fp_mapping_host *mh, fp_mapping_services *services,
+                             int (*nearest)(const fp_host *, const float (*)[3], size_t, float, fp_surface_hit *),
+                             const fp_param *params, size_t n)
+{
+    char err[1024];
+    memset(r, 0, sizeof *r);
+    assert_int_equal(fp_plugin_load(fp_test_plugin_path(), FP_PLUGIN_MAPPING, "anchored", &r->plugin, err, 1024), 0);
+    memset(services, 0, sizeof *services);
+    services->surface.nearest = nearest;
+    fp_mapping_host_init(mh, "anchored", NULL, NULL);
+    mh->services = services;
+    const fp_mapping_factory *f = r->plugin.factory;
+    assert_int_equal(f->create(&mh->host, params, n, &r->m, err, 1024), 0);
+    rig_buffers(r);
 }
 
 static void close_mapping(rig *r)
@@ -205,25 +229,10 @@ static void test_anchored_beyond_reach(void **state)
     (void)state;
     assert_true(FP_TIP_DISTANCE_REACH < 1.5);
     rig r;
-    char err[1024];
     fp_param p[] = {{"engage", "1.5"}, {"release", "3"}};
-    memset(&r, 0, sizeof r);
-    assert_int_equal(fp_plugin_load(fp_test_plugin_path(), FP_PLUGIN_MAPPING, "anchored", &r.plugin, err, 1024), 0);
     static fp_mapping_services services;
-    services.surface.nearest = plane_nearest;
     static fp_mapping_host mh;
-    fp_mapping_host_init(&mh, "anchored", NULL, NULL);
-    mh.services = &services;
-    const fp_mapping_factory *f = r.plugin.factory;
-    assert_int_equal(f->create(&mh.host, p, 2, &r.m, err, 1024), 0);
-    r.cs.size = sizeof r.cs;
-    r.cs.capacity = 64;
-    r.cs.start = r.start;
-    r.cs.end = r.end;
-    r.cs.channels = r.ch;
-    r.cs.channel_capacity = 4;
-    r.in.size = sizeof r.in;
-    r.in.radius = R;
+    open_anchored_on(&r, &mh, &services, plane_nearest, p, 2);
     plane_calls = 0;
     place_right(&r, 0, 0, 1.6f, INFINITY); /* beyond 1.5 R: nothing */
     step(&r, 0);
@@ -240,17 +249,11 @@ static void test_anchored_beyond_reach(void **state)
     place_right(&r, 0, 0, 3.5f, INFINITY); /* let go */
     step(&r, 0);
     assert_true(r.cs.intents & FP_INTENT_COMMIT);
-    r.m->destroy(r.m);
-    r.m = NULL;
-    fp_plugin_unload(&r.plugin);
+    close_mapping(&r);
 
     /* the defaults (0.5 and 1.0 R) read the host's distances only; the service is asked once,
      * at engage, for the skin the points grab */
-    fp_mapping_host_init(&mh, "anchored", NULL, NULL);
-    mh.services = &services;
-    assert_int_equal(fp_plugin_load(fp_test_plugin_path(), FP_PLUGIN_MAPPING, "anchored", &r.plugin, err, 1024), 0);
-    f = r.plugin.factory;
-    assert_int_equal(f->create(&mh.host, NULL, 0, &r.m, err, 1024), 0);
+    open_anchored_on(&r, &mh, &services, plane_nearest, NULL, 0);
     plane_calls = 0;
     place_right(&r, 0, 0, 0.4f, 0.4f);
     step(&r, 0);
@@ -282,25 +285,10 @@ static int plane_foot(const fp_host *host, const float (*points)[3], size_t coun
 static void pinch_case(const char *apart, float third_at, size_t want)
 {
     rig r;
-    char err[1024];
     fp_param p[] = {{"apart", apart}};
-    memset(&r, 0, sizeof r);
-    assert_int_equal(fp_plugin_load(fp_test_plugin_path(), FP_PLUGIN_MAPPING, "anchored", &r.plugin, err, 1024), 0);
     static fp_mapping_services services;
-    services.surface.nearest = plane_foot;
     static fp_mapping_host mh;
-    fp_mapping_host_init(&mh, "anchored", NULL, NULL);
-    mh.services = &services;
-    const fp_mapping_factory *f = r.plugin.factory;
-    assert_int_equal(f->create(&mh.host, apart ? p : NULL, apart ? 1 : 0, &r.m, err, 1024), 0);
-    r.cs.size = sizeof r.cs;
-    r.cs.capacity = 64;
-    r.cs.start = r.start;
-    r.cs.end = r.end;
-    r.cs.channels = r.ch;
-    r.cs.channel_capacity = 4;
-    r.in.size = sizeof r.in;
-    r.in.radius = R;
+    open_anchored_on(&r, &mh, &services, plane_foot, apart ? p : NULL, apart ? 1 : 0);
     fp_hand_pose *h = &r.in.hands[FP_HAND_RIGHT];
     h->present = true;
     const float tip[FP_FINGERS][3] = {{0, 0, 0.1f}, {0.05f, 0, 0.3f}, {third_at, 0, 0.2f}, {3, 0, 0.2f}, {4, 0, 0.2f}};
