@@ -3,6 +3,7 @@
  * (fp_contact_hold). */
 #include "contact_internal.h"
 
+#include <assert.h>
 #include <errno.h>
 #include <math.h>
 #include <stdlib.h>
@@ -366,7 +367,7 @@ static int local_scale_back(fp_contact *c, const float *ref, const float *cand, 
     for (int round = 0; m > 0 || *fl; round++, r = fmin(2 * r, c->local_r)) {
         if (m < 0) return -ENOMEM;
         if (round == FP_CONTACT_LOCAL_ROUNDS) break;
-        k->carry_on = false;
+        assert(!k->carry_on); /* (set only by a carried round that passed, which ends them) */
         track_lerp(k, 0, NULL); /* P, where the distances are taken */
         if (local_ramp(c, r)) return -ENOMEM;
         if (carry && round < FP_CONTACT_CARRY_ROUNDS) {
@@ -404,10 +405,9 @@ static int local_scale_back(fp_contact *c, const float *ref, const float *cand, 
             res->local_r = r;
         }
     }
-    bool carried = *ramp && k->carry_on;
-    k->carry_on = false;
-    track_lerp(k, 0, NULL);
-    k->carry_on = carried; /* (the bisection's shapes carry too) */
+    /* carry_on stays set when a carried round passed: the bisection's shapes carry too */
+    assert(!k->carry_on || (*ramp && k->tree));
+    track_lerp(k, 0, NULL); /* (no ramp: P itself) */
     return 0;
 }
 

@@ -98,15 +98,14 @@ static bool hand_near(const anchored *a, const fp_frame_input *in, int h, double
 }
 
 /* Append control vector k: hand h's point p grabs `skin` (its start point, base vertex
- * `vertex` or UINT32_MAX), the point now at `point`; the offset skin - point is kept for the
- * gesture, and where that skin was at rest. */
+ * `vertex` or UINT32_MAX), the point now at `point`, `gap` from it (the surface hit's
+ * distance); the offset skin - point is kept for the gesture, and where that skin was at
+ * rest. */
 static void add_point(anchored *a, int h, size_t p, const float skin[3], const float point[3],
-                      uint32_t vertex)
+                      uint32_t vertex, float gap)
 {
     size_t k = a->count++;
-    double g2 = 0;
-    for (int c = 0; c < 3; c++) g2 += ((double)skin[c] - point[c]) * ((double)skin[c] - point[c]);
-    a->gap[k] = (float)sqrt(g2);
+    a->gap[k] = gap;
     if (a->rest && vertex < a->rest_n)
         memcpy(a->rest_of[k], a->rest + 3 * (size_t)vertex, sizeof a->rest_of[k]);
     else
@@ -132,7 +131,7 @@ static int grab(anchored *a, const fp_frame_input *in, int h, double reach, size
     int got = 0;
     for (size_t p = 0; p < n && (size_t)got < room; p++) {
         if (hit[p].vertex == UINT32_MAX || !(hit[p].distance <= reach * touch)) continue;
-        add_point(a, h, p, hit[p].position, pts[p], hit[p].vertex);
+        add_point(a, h, p, hit[p].position, pts[p], hit[p].vertex, hit[p].distance);
         got++;
     }
     return got;
@@ -152,7 +151,7 @@ static int grab_nearest(anchored *a, const fp_frame_input *in, int h, size_t roo
     for (size_t p = 0; p < n; p++)
         if (hit[p].vertex != UINT32_MAX && (best == n || hit[p].distance < hit[best].distance)) best = p;
     if (best == n) return 0;
-    add_point(a, h, best, hit[best].position, pts[best], hit[best].vertex);
+    add_point(a, h, best, hit[best].position, pts[best], hit[best].vertex, hit[best].distance);
     return 1;
 }
 
@@ -161,7 +160,7 @@ static void take_points(anchored *a, const fp_frame_input *in, int h, size_t roo
 {
     float pts[FP_POINTS_MAX][3];
     size_t n = fp_hand_points(in, h, a->points, pts);
-    for (size_t p = 0; p < n && p < room; p++) add_point(a, h, p, pts[p], pts[p], UINT32_MAX);
+    for (size_t p = 0; p < n && p < room; p++) add_point(a, h, p, pts[p], pts[p], UINT32_MAX, 0);
 }
 
 /* One grab per bit of skin: the points taken nearest their skin first (ties: the earlier),
