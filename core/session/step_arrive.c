@@ -2,8 +2,10 @@
  * (step_arrive.h). */
 #include "step_arrive.h"
 
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #define FP_ARRIVE_MAX_STEP_S 0.25 /* a gap between frames counts at most this much */
@@ -39,6 +41,137 @@ void fp_arrive_step_place(fp_arrive_step *r, fp_pose_state *p, bool engaged, con
                    "states a workspace: x %.0f..%.0f, y %.0f..%.0f, z %.0f..%.0f mm so far), "
                    "refined as they move; --calibration FILE fixes the placement",
                    r->who, lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]);
+}
+
+/* ---- hands that never come near ---- */
+
+typedef struct tips_in {
+    float (*mm)[3];   /* FP_FINGERS fingertips a sample, device mm */
+    int *hand;
+    size_t stride;    /* every stride-th sample is kept */
+    size_t seen, kept, cap;
+} tips_in;
+
+static void count_one(void *ctx, int hand, const float (*mm)[3])
+{
+    (void)hand, (void)mm;
+    ((tips_in *)ctx)->seen++;
+}
+
+static void keep_one(void *ctx, int hand, const float (*mm)[3])
+{
+    tips_in *t = ctx;
+    if (t->seen++ % t->stride || t->kept == t->cap || (hand != FP_HAND_LEFT && hand != FP_HAND_RIGHT)) return;
+    for (int f = 0; f < FP_FINGERS; f++) memcpy(t->mm[FP_FINGERS * t->kept + f], mm[FP_JOINT_TIP(f)], sizeof *t->mm);
+    t->hand[t->kept++] = hand;
+}
+
+/* Which fingertips act (acts[hand][finger]): those that move at least half as far as the one
+ * that moves most (the largest side of the box their kept samples span, device mm), so that
+ * a hand held still while two fingers pinch is brought in by the pinching ones; every
+ * fingertip where none moves. */
+static void acting(const tips_in *t, bool acts[FP_HANDS][FP_FINGERS])
+{
+    float lo[FP_HANDS][FP_FINGERS][3], hi[FP_HANDS][FP_FINGERS][3];
+    for (int h = 0; h < FP_HANDS; h++)
+        for (int f = 0; f < FP_FINGERS; f++)
+            for (int k = 0; k < 3; k++) lo[h][f][k] = INFINITY, hi[h][f][k] = -INFINITY;
+    for (size_t i = 0; i < t->kept; i++)
+        for (int f = 0; f < FP_FINGERS; f++)
+            for (int k = 0; k < 3; k++) {
+                float v = t->mm[FP_FINGERS * i + f][k];
+                lo[t->hand[i]][f][k] = fminf(lo[t->hand[i]][f][k], v);
+                hi[t->hand[i]][f][k] = fmaxf(hi[t->hand[i]][f][k], v);
+            }
+    double ext[FP_HANDS][FP_FINGERS], most = 0;
+    for (int h = 0; h < FP_HANDS; h++)
+        for (int f = 0; f < FP_FINGERS; f++) {
+            ext[h][f] = 0;
+            for (int k = 0; k < 3; k++) ext[h][f] = fmax(ext[h][f], (double)hi[h][f][k] - lo[h][f][k]);
+            most = fmax(most, ext[h][f]);
+        }
+    for (int h = 0; h < FP_HANDS; h++)
+        for (int f = 0; f < FP_FINGERS; f++) acts[h][f] = !(ext[h][f] < 0.5 * most);
+}
+
+/* The nearest the fingertips `acts` names come (all: NULL), pushed p toward the face (mesh
+ * units), each query bounded by `bound` (farther: INFINITY); q: room for the kept tips, d:
+ * their distances. */
+static double nearest_at(const tips_in *t, const fp_calibration *c, double p, float bound,
+                         const bool acts[FP_HANDS][FP_FINGERS], const fp_engine_step *e, float (*q)[3], float *d)
+{
+    fp_calibration at = *c;
+    at.offset[2] -= p;
+    size_t nq = 0;
+    for (size_t i = 0; i < t->kept; i++)
+        for (int f = 0; f < FP_FINGERS; f++)
+            if (!acts || acts[t->hand[i]][f]) fp_pose_to_mesh(&at, t->hand[i], t->mm[FP_FINGERS * i + f], q[nq++]);
+    if (!nq || csrbf_points_nearest(e->points, &q[0][0], nq, bound, d, NULL) < 0) return INFINITY;
+    double m = INFINITY;
+    for (size_t i = 0; i < nq; i++) m = fmin(m, d[i]);
+    return m;
+}
+
+double fp_arrive_bring_in(fp_calibration *c, fp_input *const *ins, size_t n, double radius, const fp_head *head,
+                          const fp_engine_step *e, const char *who, const fp_slog *log)
+{
+    const fp_input_recording_joints *jx[16];
+    fp_input *ins_of[16];
+    size_t nj = 0;
+    tips_in t = {.stride = 1};
+    for (size_t i = 0; i < n && nj < sizeof jx / sizeof *jx; i++) {
+        fp_input *in = ins[i];
+        if (!in || !in->get_extension || !in->get_extension(in, FP_EXT_WORKSPACE)) continue;
+        const fp_input_recording_joints *x = in->get_extension(in, FP_EXT_RECORDING_JOINTS);
+        if (!x || !x->each) continue;
+        x->each(in, count_one, &t);
+        jx[nj] = x;
+        ins_of[nj++] = in;
+    }
+    if (!t.seen || !(radius > 0) || !e || !e->points) return 0;
+    t.stride = (t.seen + FP_ARRIVE_BRING_SAMPLES - 1) / FP_ARRIVE_BRING_SAMPLES;
+    t.cap = (t.seen + t.stride - 1) / t.stride;
+    t.mm = malloc(FP_FINGERS * t.cap * sizeof *t.mm);
+    t.hand = malloc(t.cap * sizeof *t.hand);
+    float(*q)[3] = malloc(FP_FINGERS * t.cap * sizeof *q);
+    float *d = malloc(FP_FINGERS * t.cap * sizeof *d);
+    double push = 0;
+    if (!t.mm || !t.hand || !q || !d) {
+        push = -ENOMEM;
+        goto out;
+    }
+    t.seen = 0;
+    for (size_t i = 0; i < nj; i++) jx[i]->each(ins_of[i], keep_one, &t);
+    const double near = FP_ARRIVE_NEAR * radius, to = FP_ARRIVE_BRING_TO * radius;
+    const double deepest = (double)head->max[2] - head->min[2];
+    double d0 = nearest_at(&t, c, 0, INFINITY, NULL, e, q, d), p = 0;
+    if (!(d0 > near) || !isfinite(d0)) goto out; /* near already (or nothing to measure) */
+    /* the march, on the fingertips that act: a push of dp - to moves none of them nearer
+     * than to, so none is passed */
+    bool acts[FP_HANDS][FP_FINGERS];
+    acting(&t, acts);
+    double dp = nearest_at(&t, c, 0, INFINITY, acts, e, q, d);
+    for (int it = 0; it < 64 && dp > to; it++) {
+        p += fmax(dp - to, 1e-3 * radius);
+        if (!(p <= deepest)) goto out; /* none comes near within the head's depth: as it was */
+        dp = nearest_at(&t, c, p, (float)(dp + (dp - to) + radius), acts, e, q, d);
+    }
+    if (!(dp <= near)) goto out;
+    push = p;
+    c->offset[2] -= p;
+    double mm = head->mm_per_unit > 0 ? head->mm_per_unit : 1.0;
+    fp_slog_printf(log, FP_LOG_INFO, "session",
+                   "%sthe recording's fingertips never come within %.0f mm of the face where its "
+                   "range places them (the nearest %.0f mm away): brought %.0f mm closer, so that "
+                   "the fingertips that move come within %.0f mm (docs/calibration.md; "
+                   "--calibration FILE fixes the placement)",
+                   who ? who : "", near * mm, d0 * mm, p * mm, dp * mm);
+out:
+    free(t.mm);
+    free(t.hand);
+    free(q);
+    free(d);
+    return push;
 }
 
 /* What the hint says of the placement. */

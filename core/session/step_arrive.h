@@ -97,6 +97,27 @@ void fp_arrive_step_check(fp_arrive_step *r, int64_t now_ns, const fp_hand_pose 
                          const float tip[FP_HANDS][FP_FINGERS], bool engaged, double radius,
                          double mm_per_unit, const fp_engine_step *e, const fp_slog *log);
 
+/** Hands that never come near (issue 51, "hands that arrive"): a recording placed by its
+ *  range (fp_pose_fit_workspace: its front at the nose tip's depth) whose fingertips would
+ *  never come within FP_ARRIVE_NEAR x radius of the face (a hand held in place, its front
+ *  before the brow or an eye rather than the nose) is brought toward the face, along depth,
+ *  until its nearest approach lies FP_ARRIVE_BRING_TO x radius from the surface. ins: the n
+ *  inputs of one performer; those stating a workspace and giving their joints in advance
+ *  (FP_EXT_RECORDING_JOINTS) are read, every k-th sample where they hold more than
+ *  FP_ARRIVE_BRING_SAMPLES; their fingertips are placed by *c and measured against the
+ *  face's vertices (e's index, as the mapping's fingertip distances are). Where some
+ *  fingertip comes near already (every recording in ../shared/data does), or none is given,
+ *  or no push up to the head's depth (head box, mesh units) brings one near, *c is left as
+ *  it is. The push: a march in depth by the nearest distance less the target, which cannot
+ *  step past a nearer placement (a distance changes no faster than the push). One info line
+ *  (source "session") says how far they were and how far they were moved, in mm. Returns the
+ *  push (mesh units, subtracted from c->offset[2]; 0: none) or -ENOMEM (*c untouched). Main
+ *  thread, at the opening. */
+#define FP_ARRIVE_BRING_TO 0.25
+#define FP_ARRIVE_BRING_SAMPLES 4096
+double fp_arrive_bring_in(fp_calibration *c, fp_input *const *ins, size_t n, double radius, const fp_head *head,
+                          const fp_engine_step *e, const char *who, const fp_slog *log);
+
 /** At the session's end (a replay shorter than FP_ARRIVE_HINT_S, or hands that left before
  *  it): when hands were present and away for FP_ARRIVE_END_S seconds or more, none came
  *  near and the hint was not said for that stretch, it is said now, with the seconds they

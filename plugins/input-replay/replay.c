@@ -54,7 +54,8 @@ static const char usage_text[] =
     "  hands=H  left, right or both (default both)\n"
     "  workspace=0  keep the recording's range to itself: the hands are placed as they\n"
     "           arrive, as a live tracker's (docs/calibration.md; default 1: placed from the\n"
-    "           whole recording's range in advance)\n"
+    "           whole recording's range in advance, and brought closer where its fingertips\n"
+    "           would never come within reach of the face)\n"
     "  Event times are the recording's own clock (the host clock at start + the sample's\n"
     "  time), whatever the speed; speed and fast only change the pacing. Without loop, the replay ends\n"
     "  with an end-of-stream status. A malformed row fails at creation (FILE:LINE:COLUMN); a\n"
@@ -219,13 +220,31 @@ static bool replay_recording_info(const fp_input *self, fp_recording_info *info)
     return true;
 }
 
+/* Every joint-position sample, in order (FP_EXT_RECORDING_JOINTS): the host's placement
+ * looks at how near the fingertips come to the face before the first frame. */
+static size_t replay_joints(const fp_input *self, void (*fn)(void *ctx, int hand, const float (*mm)[3]),
+                            void *ctx)
+{
+    const replay *r = self->plugin_data;
+    size_t n = 0;
+    for (size_t i = 0; i < r->rec.count; i++) {
+        const fp_event *ev = &r->rec.items[i].event;
+        if (ev->header.type != FP_EVENT_JOINT_POSITIONS) continue;
+        fn(ctx, ev->header.hand, (const float(*)[3])ev->positions.mm);
+        n++;
+    }
+    return n;
+}
+
 static const fp_input_workspace workspace_ext = {.get = replay_workspace};
 static const fp_input_recording recording_ext = {.get = replay_recording_info};
+static const fp_input_recording_joints joints_ext = {.each = replay_joints};
 
 static const void *replay_get_extension(const fp_input *self, const char *id)
 {
     if (!strcmp(id, FP_EXT_WORKSPACE)) return ((const replay *)self->plugin_data)->workspace ? &workspace_ext : NULL;
     if (!strcmp(id, FP_EXT_RECORDING_INFO)) return &recording_ext;
+    if (!strcmp(id, FP_EXT_RECORDING_JOINTS)) return ((const replay *)self->plugin_data)->workspace ? &joints_ext : NULL;
     return NULL;
 }
 

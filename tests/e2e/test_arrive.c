@@ -12,7 +12,12 @@
  *    nearest fingertip stayed; a calibration that puts the reaching hand 10 cm back gives it
  *    too, naming the calibration; the recording that reaches gives none; a replay that ends
  *    sooner (the still hand for 2 s) gives it at its end, with the seconds the hand was
- *    there, and half a second of it gives none.
+ *    there, and half a second of it gives none;
+ *  - a hand held still while its thumb and index pinch, replayed with its range (placed in
+ *    advance, its front at the nose tip's depth), never comes near the face there: it is
+ *    brought closer by its pinching fingertips (one info line with the millimetres) and
+ *    moves the face; the real recordings, which come near, are left where their range puts
+ *    them (no such line).
  *
  * FP_TEST_VERBOSE=1 prints the session's log. */
 #define _GNU_SOURCE
@@ -38,7 +43,8 @@ static const char *faces[] = {"ict-facekit/generic_neutral_mesh.obj", "lee-perry
 typedef struct logbook {
     int64_t now, t0, first_hand;   /* the frame being stepped, the clock's start, the first
                                       frame with a hand (-1: none yet) */
-    unsigned hints, placed;
+    unsigned hints, placed, brought;
+    double brought_mm;             /* the bring-in's push, mm */
     int64_t hint_at;               /* frame time of the first hint, after the first hand */
     char hint[600];
 } logbook;
@@ -49,6 +55,11 @@ static void on_log(void *user, int level, const char *source, const char *messag
     if (getenv("FP_TEST_VERBOSE")) fprintf(stderr, "  [%d %s] %s\n", level, source, message);
     if (strcmp(source, "session")) return;
     if (strstr(message, "hands placed")) lb->placed++;
+    const char *b = strstr(message, "brought ");
+    if (b && strstr(message, "mm closer")) {
+        lb->brought++;
+        assert_int_equal(sscanf(b, "brought %lf mm closer", &lb->brought_mm), 1);
+    }
     if (level == FP_LOG_WARNING && strstr(message, "no fingertip came within")) {
         if (!lb->hints++) {
             lb->hint_at = lb->now - lb->first_hand;
@@ -164,6 +175,8 @@ static void test_live_placement_grabs(void **state)
            "as it arrives: %lu engaged, %zu moved, max %.4f (mesh units)\n", ow.engaged, ow.moved,
            ow.max, ol.engaged, ol.moved, ol.max);
     assert_int_equal(lw.placed, 0);         /* the replay states its range: nothing to place */
+    assert_int_equal(lw.brought, 0);        /* it comes near there: left where its range puts it */
+    assert_int_equal(ll.brought, 0);        /* (placed as it arrives: no range in advance) */
     assert_int_equal(ll.placed, 1);         /* said once */
     assert_true(ol.engaged >= 1 && ol.moved > 0);
     assert_int_equal(ll.hints, 0);
@@ -192,6 +205,83 @@ static void still_csv(const char *rec, const char *out, int samples)
     const char *rest = strchr(strchr(line, ',') + 1, ','); /* after frame, timestamp_us */
     for (int i = 0; i < samples; i++) fprintf(g, "%d,%d%s", i, 1000000 + i * 9091, rest);
     assert_int_equal(fclose(g), 0);
+}
+
+/* The first row of a recording for `samples` rows at 110 Hz, its thumb and index tips (and,
+ * half as far, their distal joints) drawn toward their midpoint: to 90% of the way and back
+ * every 1.5 s. A performer who holds the hand in place and pinches. */
+static void pinch_csv(const char *rec, const char *out, int samples)
+{
+    char in[4300], line[8192], head[8192];
+    snprintf(in, sizeof in, "%s/hands/leap-motion/%s_joints_mm.csv", fp_test_data_dir(), rec);
+    FILE *f = fopen(in, "r"), *g = fopen(out, "w");
+    assert_non_null(f);
+    assert_non_null(g);
+    assert_non_null(fgets(head, sizeof head, f));
+    assert_non_null(fgets(line, sizeof line, f));
+    fclose(f);
+    fputs(head, g);
+    /* the columns: thumb_tip_x, index_tip_x, thumb_dip_x, index_dip_x (each x, y, z) */
+    static const char *names[4] = {"thumb_tip_x", "index_tip_x", "thumb_dip_x", "index_dip_x"};
+    int at[4] = {-1, -1, -1, -1}, ncol = 0;
+    double v[256];
+    for (char *save = NULL, *c = strtok_r(head, ",\r\n", &save); c; c = strtok_r(NULL, ",\r\n", &save), ncol++)
+        for (int k = 0; k < 4; k++)
+            if (!strcmp(c, names[k])) at[k] = ncol;
+    for (int k = 0; k < 4; k++) assert_true(at[k] >= 0);
+    char *cell[256];
+    int n = 0;
+    for (char *save = NULL, *c = strtok_r(line, ",\r\n", &save); c && n < 256; c = strtok_r(NULL, ",\r\n", &save))
+        cell[n++] = c;
+    assert_int_equal(n, ncol);
+    for (int i = 0; i < n; i++) v[i] = atof(cell[i]);
+    for (int i = 0; i < samples; i++) {
+        double c = 0.45 * (1 - cos(2 * M_PI * i / (1.5 * 110))), mid[3], w[256];
+        memcpy(w, v, sizeof w);
+        for (int a = 0; a < 3; a++) mid[a] = 0.5 * (v[at[0] + a] + v[at[1] + a]);
+        for (int k = 0; k < 4; k++)
+            for (int a = 0; a < 3; a++) w[at[k] + a] += (k < 2 ? c : 0.5 * c) * (mid[a] - v[at[k] + a]);
+        fprintf(g, "%d,%d,%s,%s", i, 1000000 + i * 9091, cell[2], cell[3]); /* frame, time, id, side */
+        for (int j = 4; j < n; j++) fprintf(g, ",%.4f", w[j]);
+        fputc('\n', g);
+    }
+    assert_int_equal(fclose(g), 0);
+}
+
+/* A still hand pinching, replayed with its range: never near the face where the range puts
+ * it, so brought closer by its pinching fingertips, and the pinch moves the skin; the same
+ * hand placed as it arrives (no range in advance) is not, and gets the hint. */
+static void test_bring_in(void **state)
+{
+    (void)state;
+    char dir[] = "/tmp/fp-arrive-XXXXXX", csv[64], input[200];
+    assert_non_null(mkdtemp(dir));
+    snprintf(csv, sizeof csv, "%s/pinch_joints_mm.csv", dir);
+    pinch_csv("grab", csv, 440); /* 4 s at 110 Hz */
+    for (size_t f = 0; f < 3; f++) {
+        snprintf(input, sizeof input, "replay:%s,fast=1", csv);
+        logbook lb;
+        outcome o;
+        run(faces[f], input, "anchored", NULL, 0, &lb, &o);
+        double mm = 1.0 / o.calib.scale;
+        printf("a still hand pinching, %-44s brought %.0f mm closer (%u line): %lu engaged, %zu "
+               "vertices moved, max %.1f mm; %u hint(s)\n", faces[f], lb.brought_mm, lb.brought,
+               o.engaged, o.moved, o.max * mm, lb.hints);
+        assert_int_equal(lb.brought, 1);
+        assert_true(lb.brought_mm > 0);
+        assert_true(o.engaged >= 1);
+        assert_true(o.moved > 0 && o.max * mm > 5.0); /* the pinch pulls the skin millimetres */
+        assert_int_equal(lb.hints, 0);
+    }
+    snprintf(input, sizeof input, "replay:%s,fast=1,workspace=0", csv);
+    logbook lb;
+    outcome o;
+    run(faces[0], input, "anchored", NULL, 0, &lb, &o);
+    printf("the same, placed as it arrives: brought %u, %lu engaged, %u hint(s)\n", lb.brought, o.engaged,
+           lb.hints);
+    assert_int_equal(lb.brought, 0);
+    unlink(csv);
+    rmdir(dir);
 }
 
 static void test_hint(void **state)
@@ -257,6 +347,7 @@ int main(void)
         cmocka_unit_test(test_onehand_defaults),
         cmocka_unit_test(test_live_placement_grabs),
         cmocka_unit_test(test_hint),
+        cmocka_unit_test(test_bring_in),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

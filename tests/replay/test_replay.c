@@ -314,6 +314,64 @@ static void positions_and_wrist_equal_csv(void **state)
     free(rows);
 }
 
+/* FP_EXT_RECORDING_JOINTS: the joint positions given before start are the joint-position
+ * events the replay then pushes, in order, bit for bit, with their hands; workspace=0 (the
+ * range kept to itself) gives neither the workspace nor the joints; an angles recording has
+ * no positions to give. */
+typedef struct joints_seen {
+    const fp_test_host *h;
+    size_t e, n;
+    int bad;
+} joints_seen;
+
+static void joints_cb(void *ctx, int hand, const float (*mm)[3])
+{
+    joints_seen *j = ctx;
+    while (j->e < j->h->count && j->h->events[j->e].header.type != FP_EVENT_JOINT_POSITIONS) j->e++;
+    if (j->e == j->h->count) {
+        j->bad++;
+        return;
+    }
+    const fp_event *ev = &j->h->events[j->e++];
+    j->bad += ev->header.hand != hand || memcmp(ev->positions.mm, mm, sizeof ev->positions.mm) != 0;
+    j->n++;
+}
+
+static void joints_given_in_advance(void **state)
+{
+    (void)state;
+    const char *path = LEAP "three-claps_joints_mm.csv";
+    size_t nrows;
+    csv_row *rows = read_csv(path, &nrows);
+    fp_test_host *h = replay_all(path, "fast=1", 4 * nrows + 16);
+    fp_test_host *h2 = fp_test_host_new(16);
+    fp_input *in = NULL;
+    char err[512];
+    assert_int_equal(create(h2, path, "fast=1", &in, err, sizeof err), 0);
+    assert_non_null(in->get_extension(in, FP_EXT_WORKSPACE));
+    const fp_input_recording_joints *x = in->get_extension(in, FP_EXT_RECORDING_JOINTS);
+    assert_non_null(x);
+    joints_seen j = {.h = h};
+    assert_int_equal(x->each(in, joints_cb, &j), nrows);
+    assert_int_equal(j.n, nrows);
+    assert_int_equal(j.bad, 0);
+    assert_int_equal(count_type(h, FP_EVENT_JOINT_POSITIONS, -1), nrows);
+    in->destroy(in);
+    assert_int_equal(create(h2, path, "fast=1,workspace=0", &in, err, sizeof err), 0);
+    assert_null(in->get_extension(in, FP_EXT_WORKSPACE));
+    assert_null(in->get_extension(in, FP_EXT_RECORDING_JOINTS));
+    in->destroy(in);
+    assert_int_equal(create(h2, LEAP "grab_cyberglove_like_angles_deg.csv", "fast=1", &in, err, sizeof err), 0);
+    x = in->get_extension(in, FP_EXT_RECORDING_JOINTS);
+    joints_seen none = {.h = h};
+    assert_true(!x || x->each(in, joints_cb, &none) == 0);
+    assert_int_equal(none.n, 0);
+    in->destroy(in);
+    fp_test_host_free(h2);
+    fp_test_host_free(h);
+    free(rows);
+}
+
 static void angles_in_radians_empty_invalid(void **state)
 {
     const char *path = LEAP "three-claps_cyberglove_like_angles_deg.csv";
@@ -826,6 +884,7 @@ int main(void)
         cmocka_unit_test(paced_drops_poses_not_status),
         cmocka_unit_test(loop_repeats_with_increasing_times),
         cmocka_unit_test(stop_is_prompt),
+        cmocka_unit_test(joints_given_in_advance),
         cmocka_unit_test(malformed_rows_fail_create),
         cmocka_unit_test(truncated_file_replays_to_last_full_row),
         cmocka_unit_test(spec_errors),

@@ -381,6 +381,18 @@ typedef struct fp_input_recording {
     bool (*get)(const fp_input *self, fp_recording_info *info);
 } fp_input_recording;
 
+/** Optional input extension FP_EXT_RECORDING_JOINTS: a recording's joint positions in
+ *  advance, for the host's placement (docs/calibration.md, "Hands that never come near"):
+ *  each calls fn once per FP_EVENT_JOINT_POSITIONS event it will push, in order, with the
+ *  event's hand (fp_hand_side) and its FP_HAND_JOINTS positions (mm, device frame; the
+ *  pointer valid during the call). Only an input that also states its workspace
+ *  (FP_EXT_WORKSPACE) is asked. [main-thread], after create, before start. Returns the
+ *  number of samples given (0: none). */
+#define FP_EXT_RECORDING_JOINTS "facepuppet.recording-joints/1"
+typedef struct fp_input_recording_joints {
+    size_t (*each)(const fp_input *self, void (*fn)(void *ctx, int hand, const float (*mm)[3]), void *ctx);
+} fp_input_recording_joints;
+
 typedef struct fp_input_factory {
     uint32_t size;
     const char *name;        /* the SPEC name, e.g. "replay" */
