@@ -62,32 +62,39 @@ static void keep_one(void *ctx, int hand, const float (*mm)[3])
 {
     tips_in *t = ctx;
     if (t->seen++ % t->stride || t->kept == t->cap || (hand != FP_HAND_LEFT && hand != FP_HAND_RIGHT)) return;
+    for (int f = 0; f < FP_FINGERS; f++)
+        for (int k = 0; k < 3; k++)
+            if (!isfinite(mm[FP_JOINT_TIP(f)][k])) return; /* (a sample the replay would not make) */
     for (int f = 0; f < FP_FINGERS; f++) memcpy(t->mm[FP_FINGERS * t->kept + f], mm[FP_JOINT_TIP(f)], sizeof *t->mm);
     t->hand[t->kept++] = hand;
 }
 
-/* Which fingertips act (acts[hand][finger]): those that move at least half as far as the one
- * that moves most (the largest side of the box their kept samples span, device mm), so that
- * a hand held still while two fingers pinch is brought in by the pinching ones; every
- * fingertip where none moves. */
-static void acting(const tips_in *t, bool acts[FP_HANDS][FP_FINGERS])
+static int cmp_float(const void *a, const void *b)
 {
-    float lo[FP_HANDS][FP_FINGERS][3], hi[FP_HANDS][FP_FINGERS][3];
-    for (int h = 0; h < FP_HANDS; h++)
-        for (int f = 0; f < FP_FINGERS; f++)
-            for (int k = 0; k < 3; k++) lo[h][f][k] = INFINITY, hi[h][f][k] = -INFINITY;
-    for (size_t i = 0; i < t->kept; i++)
-        for (int f = 0; f < FP_FINGERS; f++)
-            for (int k = 0; k < 3; k++) {
-                float v = t->mm[FP_FINGERS * i + f][k];
-                lo[t->hand[i]][f][k] = fminf(lo[t->hand[i]][f][k], v);
-                hi[t->hand[i]][f][k] = fmaxf(hi[t->hand[i]][f][k], v);
-            }
+    float x = *(const float *)a, y = *(const float *)b;
+    return (x > y) - (x < y);
+}
+
+/* Which fingertips act (acts[hand][finger]): those that move at least half as far as the one
+ * that moves most (the largest side of the box between the 2nd and 98th percentiles of its
+ * kept samples, per axis, device mm: one glitch sample moves it no more than it does the
+ * workspace), so that a hand held still while two fingers pinch is brought in by the
+ * pinching ones; every fingertip where none moves. buf: room for the kept samples. */
+static void acting(const tips_in *t, float *buf, bool acts[FP_HANDS][FP_FINGERS])
+{
     double ext[FP_HANDS][FP_FINGERS], most = 0;
     for (int h = 0; h < FP_HANDS; h++)
         for (int f = 0; f < FP_FINGERS; f++) {
             ext[h][f] = 0;
-            for (int k = 0; k < 3; k++) ext[h][f] = fmax(ext[h][f], (double)hi[h][f][k] - lo[h][f][k]);
+            for (int k = 0; k < 3; k++) {
+                size_t m = 0;
+                for (size_t i = 0; i < t->kept; i++)
+                    if (t->hand[i] == h) buf[m++] = t->mm[FP_FINGERS * i + f][k];
+                if (!m) continue;
+                qsort(buf, m, sizeof *buf, cmp_float);
+                double lo = buf[(size_t)(0.02 * (double)(m - 1) + 0.5)], hi = buf[(size_t)(0.98 * (double)(m - 1) + 0.5)];
+                ext[h][f] = fmax(ext[h][f], hi - lo);
+            }
             most = fmax(most, ext[h][f]);
         }
     for (int h = 0; h < FP_HANDS; h++)
@@ -149,7 +156,7 @@ double fp_arrive_bring_in(fp_calibration *c, fp_input *const *ins, size_t n, dou
     /* the march, on the fingertips that act: a push of dp - to moves none of them nearer
      * than to, so none is passed */
     bool acts[FP_HANDS][FP_FINGERS];
-    acting(&t, acts);
+    acting(&t, d, acts); /* (d: room for a float a kept fingertip) */
     double dp = nearest_at(&t, c, 0, INFINITY, acts, e, q, d);
     for (int it = 0; it < 64 && dp > to; it++) {
         p += fmax(dp - to, 1e-3 * radius);
