@@ -75,11 +75,8 @@ static int calibrate(fp_session *s, const fp_session_options *opt, size_t p, cha
         fp_pose_fit_workspace(&c, s->head.mm_per_unit, wmin, wmax, s->head.min, s->head.max);
         /* a recording whose fingertips never come near where its range places them is
          * brought toward the face (step_arrive.h) */
-        if (stated && fp_arrive_bring_in(&c, ins, k, s->radius, &s->head, &s->engine, NULL, &s->log) < 0) {
-            snprintf(err, errlen, "session: out of memory for the hands' placement");
-            return -ENOMEM;
-        }
-        if (fp_arrive_step_init(&s->arrive[p], stated ? FP_ARRIVE_PLACED_WORKSPACE : FP_ARRIVE_PLACED_AUTO)) {
+        if ((stated && fp_arrive_bring_in(&c, ins, k, s->radius, &s->head, &s->engine, NULL, &s->log) < 0) ||
+            fp_arrive_step_init(&s->arrive[p], stated ? FP_ARRIVE_PLACED_WORKSPACE : FP_ARRIVE_PLACED_AUTO)) {
             snprintf(err, errlen, "session: out of memory for the hands' placement");
             return -ENOMEM;
         }

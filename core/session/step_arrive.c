@@ -119,22 +119,23 @@ static double nearest_at(const tips_in *t, const fp_calibration *c, double p, fl
     return m;
 }
 
-double fp_arrive_bring_in(fp_calibration *c, fp_input *const *ins, size_t n, double radius, const fp_head *head,
-                          const fp_engine_step *e, const char *who, const fp_slog *log)
+/* Every joint sample of the inputs that state a workspace and give their joints, to fn. */
+static void each_sample(fp_input *const *ins, size_t n, void (*fn)(void *ctx, int hand, const float (*mm)[3]),
+                        tips_in *t)
 {
-    const fp_input_recording_joints *jx[16];
-    fp_input *ins_of[16];
-    size_t nj = 0;
-    tips_in t = {.stride = 1};
-    for (size_t i = 0; i < n && nj < sizeof jx / sizeof *jx; i++) {
+    for (size_t i = 0; i < n; i++) {
         fp_input *in = ins[i];
         if (!in || !in->get_extension || !in->get_extension(in, FP_EXT_WORKSPACE)) continue;
         const fp_input_recording_joints *x = in->get_extension(in, FP_EXT_RECORDING_JOINTS);
-        if (!x || !x->each) continue;
-        x->each(in, count_one, &t);
-        jx[nj] = x;
-        ins_of[nj++] = in;
+        if (x && x->each) x->each(in, fn, t);
     }
+}
+
+double fp_arrive_bring_in(fp_calibration *c, fp_input *const *ins, size_t n, double radius, const fp_head *head,
+                          const fp_engine_step *e, const char *who, const fp_slog *log)
+{
+    tips_in t = {.stride = 1};
+    each_sample(ins, n, count_one, &t);
     if (!t.seen || !(radius > 0) || !e || !e->points) return 0;
     t.stride = (t.seen + FP_ARRIVE_BRING_SAMPLES - 1) / FP_ARRIVE_BRING_SAMPLES;
     t.cap = (t.seen + t.stride - 1) / t.stride;
@@ -148,7 +149,7 @@ double fp_arrive_bring_in(fp_calibration *c, fp_input *const *ins, size_t n, dou
         goto out;
     }
     t.seen = 0;
-    for (size_t i = 0; i < nj; i++) jx[i]->each(ins_of[i], keep_one, &t);
+    each_sample(ins, n, keep_one, &t);
     const double near = FP_ARRIVE_NEAR * radius, to = FP_ARRIVE_BRING_TO * radius;
     const double deepest = (double)head->max[2] - head->min[2];
     double d0 = nearest_at(&t, c, 0, INFINITY, NULL, e, q, d), p = 0;

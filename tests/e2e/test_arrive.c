@@ -190,18 +190,27 @@ static void test_live_placement_grabs(void **state)
     }
 }
 
-/* The first row of a recording repeated for 5 s at 110 Hz: a hand held still. */
-static void still_csv(const char *rec, const char *out, int samples)
+/* A Leap recording's header and first row (each with its newline), and `out` opened for
+ * writing with that header already in it. */
+static FILE *first_row(const char *rec, const char *out, char head[8192], char line[8192])
 {
-    char in[4300], line[8192], head[8192];
+    char in[4300];
     snprintf(in, sizeof in, "%s/hands/leap-motion/%s_joints_mm.csv", fp_test_data_dir(), rec);
     FILE *f = fopen(in, "r"), *g = fopen(out, "w");
     assert_non_null(f);
     assert_non_null(g);
-    assert_non_null(fgets(head, sizeof head, f));
-    assert_non_null(fgets(line, sizeof line, f));
+    assert_non_null(fgets(head, 8192, f));
+    assert_non_null(fgets(line, 8192, f));
     fclose(f);
     fputs(head, g);
+    return g;
+}
+
+/* The first row of a recording repeated for 5 s at 110 Hz: a hand held still. */
+static void still_csv(const char *rec, const char *out, int samples)
+{
+    char line[8192], head[8192];
+    FILE *g = first_row(rec, out, head, line);
     const char *rest = strchr(strchr(line, ',') + 1, ','); /* after frame, timestamp_us */
     for (int i = 0; i < samples; i++) fprintf(g, "%d,%d%s", i, 1000000 + i * 9091, rest);
     assert_int_equal(fclose(g), 0);
@@ -212,15 +221,8 @@ static void still_csv(const char *rec, const char *out, int samples)
  * every 1.5 s. A performer who holds the hand in place and pinches. */
 static void pinch_csv(const char *rec, const char *out, int samples)
 {
-    char in[4300], line[8192], head[8192];
-    snprintf(in, sizeof in, "%s/hands/leap-motion/%s_joints_mm.csv", fp_test_data_dir(), rec);
-    FILE *f = fopen(in, "r"), *g = fopen(out, "w");
-    assert_non_null(f);
-    assert_non_null(g);
-    assert_non_null(fgets(head, sizeof head, f));
-    assert_non_null(fgets(line, sizeof line, f));
-    fclose(f);
-    fputs(head, g);
+    char line[8192], head[8192];
+    FILE *g = first_row(rec, out, head, line);
     /* the columns: thumb_tip_x, index_tip_x, thumb_dip_x, index_dip_x (each x, y, z) */
     static const char *names[4] = {"thumb_tip_x", "index_tip_x", "thumb_dip_x", "index_dip_x"};
     int at[4] = {-1, -1, -1, -1}, ncol = 0;
