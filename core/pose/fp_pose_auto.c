@@ -30,6 +30,11 @@ struct fp_pose_auto {
     bool fitted;
     int64_t fit_t;                 /* the newest sample's time at the last refit */
     unsigned long refits;
+    float first[FP_HANDS][FP_FINGERS][3]; /* each hand's fingertips in its first sample, mm */
+    bool have_first[FP_HANDS];
+    int beyond[FP_HANDS];          /* samples in a row with a fingertip FP_POSE_STILL_MM off */
+    bool moved;                    /* a hand moved (FP_POSE_STILL_MM): not still any more */
+    bool hovered;                  /* the last refit placed them hovering */
 };
 
 int fp_pose_auto_create(fp_pose_auto **out)
@@ -77,6 +82,28 @@ static void drop_oldest(fp_pose_auto *a)
     a->dirty = true;
 }
 
+/* Stillness (FP_POSE_STILL_MM): hand h's fingertips in a kept sample against its first. */
+static void note_motion(fp_pose_auto *a, int h, const float (*mm)[3])
+{
+    if (a->moved) return;
+    if (!a->have_first[h]) {
+        for (int f = 0; f < FP_FINGERS; f++) memcpy(a->first[h][f], mm[FP_JOINT_TIP(f)], sizeof a->first[h][f]);
+        a->have_first[h] = true;
+        return;
+    }
+    bool off = false;
+    for (int f = 0; f < FP_FINGERS && !off; f++)
+        for (int k = 0; k < 3; k++)
+            off |= fabs((double)mm[FP_JOINT_TIP(f)][k] - a->first[h][f][k]) >= FP_POSE_STILL_MM;
+    a->beyond[h] = off ? a->beyond[h] + 1 : 0;
+    if (a->beyond[h] >= 2) {
+        a->moved = true;
+        a->dirty = true; /* (the next refit drops the hover) */
+    }
+}
+
+bool fp_pose_auto_still(const fp_pose_auto *a) { return !a->moved; }
+
 void fp_pose_auto_take(fp_pose_auto *a, const fp_event *ev)
 {
     int h = ev->header.hand;
@@ -93,6 +120,7 @@ void fp_pose_auto_take(fp_pose_auto *a, const fp_event *ev)
         }
     a->last_kept[h] = t;
     a->have_kept[h] = true;
+    note_motion(a, h, ev->positions.mm);
     /* the window, by the newest sample's time (a clock gone backwards drops nothing: the
      * ring's capacity still bounds it) */
     while (a->count && a->ring[a->head].t_ns < t - (int64_t)(FP_POSE_AUTO_WINDOW_S * 1e9)) drop_oldest(a);
@@ -133,19 +161,22 @@ bool fp_pose_auto_box(const fp_pose_auto *a, float ws_min[3], float ws_max[3])
 }
 
 bool fp_pose_auto_refit(fp_pose_auto *a, fp_pose_state *p, bool engaged, double mm_per_unit,
-                        const float head_min[3], const float head_max[3])
+                        const float head_min[3], const float head_max[3], double hover)
 {
+    assert(hover >= 0);
     if (!a->count || !a->dirty || engaged) return false;
     int64_t newest = a->ring[(a->head + a->count - 1) % CAPACITY].t_ns;
     int64_t oldest = a->ring[a->head].t_ns;
     bool settling = newest - oldest < (int64_t)(FP_POSE_AUTO_SETTLE_S * 1e9);
-    if (a->fitted && !settling && newest >= a->fit_t &&
+    if (a->fitted && !settling && !(a->hovered && a->moved) && newest >= a->fit_t &&
         newest - a->fit_t < (int64_t)(FP_POSE_AUTO_REFIT_S * 1e9))
-        return false;
+        return false; /* (hands that hovered and moved are placed at once) */
     float wmin[3], wmax[3];
     fp_pose_auto_box(a, wmin, wmax);
     fp_calibration old = p->calib, c;
     fp_pose_fit_workspace(&c, mm_per_unit, wmin, wmax, head_min, head_max);
+    a->hovered = !a->moved && hover > 0;
+    if (a->hovered) c.offset[2] += hover; /* still hands hover (FP_POSE_STILL_MM) */
     p->calib = c;
     /* gloves without a wrist pose keep their place on the face: mesh = s g + o, both fits
      * without rotation, so g' = (s_old g + o_old - o_new) / s_new */

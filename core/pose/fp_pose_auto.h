@@ -18,7 +18,8 @@
  * recordings the first 50 ms give the whole recording's centre within 2-6 mm and its front
  * within 3-5 mm), at every frame while the samples kept span less than
  * FP_POSE_AUTO_SETTLE_S, then at most every FP_POSE_AUTO_REFIT_S of the samples' clock; never
- * while the caller says a gesture is engaged (the hands never jump under a grab or a drag).
+ * while the caller says a gesture is engaged (the hands never jump under a grab or a drag);
+ * and at once when still hands (FP_POSE_STILL_MM), placed hovering, first move.
  * Everything is decided on the events' times and the frames' order: the same events and
  * engagements give the same calibrations, bit for bit.
  *
@@ -48,6 +49,14 @@ extern "C" {
 #define FP_POSE_AUTO_REFIT_S 0.25    /* afterwards: at most one refit per this much time */
 #define FP_POSE_AUTO_BIN_MM 1.0      /* histogram bin width */
 #define FP_POSE_AUTO_SPAN_MM 4096.0  /* histogram range: -span .. +span on every axis */
+/** Hands that have not moved: until some fingertip of a hand has been FP_POSE_STILL_MM or
+ *  more (on an axis) from where that hand's first sample put it, in two samples kept in a
+ *  row (one glitch sample is not a move), the hands are still, and a refit places them
+ *  `hover` in front of where their range would (fp_pose_auto_refit). Their range is then
+ *  the hand's own size, and its front (a fingertip or a knuckle, whatever the pose) would
+ *  sit at the nose tip's depth, touching the face or not by chance; a hand held still in
+ *  front of the tracker hovers instead, and the hint tells the performer to reach. */
+#define FP_POSE_STILL_MM 10.0
 
 typedef struct fp_pose_auto fp_pose_auto;
 
@@ -76,14 +85,18 @@ bool fp_pose_auto_box(const fp_pose_auto *a, float ws_min[3], float ws_max[3]);
 /** Once a frame, after the frame's events were taken and before fp_pose_build: when a refit
  *  is due (see the header: any new sample since the last, not engaged, the schedule), the
  *  calibration p->calib becomes fp_pose_fit_workspace(mm_per_unit, the estimated box,
- *  head_min, head_max), and gloves placed by fp_pose_place_gloves keep their place on the
+ *  head_min, head_max), moved `hover` (mesh units, >= 0) away from the face in depth while
+ *  the hands are still (FP_POSE_STILL_MM; fp_pose_auto_still), and gloves placed by fp_pose_place_gloves keep their place on the
  *  face (their device-frame wrists move by the offset's change; every fit is life-size at
  *  the same mm_per_unit without rotation, so only the offset changes). engaged: a gesture is
  *  engaged now (the session's last frame), and nothing changes. Returns true when
  *  p->calib was refitted (the first time: the first placement), false otherwise.
  *  mm_per_unit as fp_pose_fit_workspace's; head_min/head_max: the head box (fp_head). */
 bool fp_pose_auto_refit(fp_pose_auto *a, fp_pose_state *p, bool engaged, double mm_per_unit,
-                        const float head_min[3], const float head_max[3]);
+                        const float head_min[3], const float head_max[3], double hover);
+
+/** Whether no hand has moved yet (FP_POSE_STILL_MM): true before any sample. */
+bool fp_pose_auto_still(const fp_pose_auto *a);
 
 /** Refits done so far (the first one is the first placement). */
 unsigned long fp_pose_auto_refits(const fp_pose_auto *a);

@@ -73,13 +73,15 @@ static int calibrate(fp_session *s, const fp_session_options *opt, size_t p, cha
         bool stated = fp_pose_inputs_workspace(ins, k, wmin, wmax);
         if (!stated) fp_pose_default_workspace(wmin, wmax); /* until the hands arrive */
         fp_pose_fit_workspace(&c, s->head.mm_per_unit, wmin, wmax, s->head.min, s->head.max);
-        /* a recording whose fingertips never come near where its range places them is
-         * brought toward the face (step_arrive.h) */
-        if ((stated && fp_arrive_bring_in(&c, ins, k, s->radius, &s->head, &s->engine, NULL, &s->log) < 0) ||
-            fp_arrive_step_init(&s->arrive[p], stated ? FP_ARRIVE_PLACED_WORKSPACE : FP_ARRIVE_PLACED_AUTO)) {
+        /* a recording whose fingertips never move is held out, hovering; one whose
+         * fingertips never come near where its range places them is brought toward the
+         * face (step_arrive.h) */
+        int held = stated ? fp_arrive_bring_in(&c, ins, k, s->radius, &s->head, &s->engine, NULL, &s->log) : 0;
+        if (held < 0 || fp_arrive_step_init(&s->arrive[p], stated ? FP_ARRIVE_PLACED_WORKSPACE : FP_ARRIVE_PLACED_AUTO)) {
             snprintf(err, errlen, "session: out of memory for the hands' placement");
             return -ENOMEM;
         }
+        s->arrive[p].hovered = held == 1; /* (the hint's words) */
     }
     s->pose[p].calib = c;
     fp_pose_place_gloves(&s->pose[p], s->loaded, s->n, &s->head);
@@ -116,7 +118,7 @@ int fp__session_performers_open(fp_session *s, const fp_session_options *opt, ch
 void fp__session_performers_build(fp_session *s, int64_t now_ns)
 {
     for (size_t p = 0; p < s->performers.count; p++) {
-        fp_arrive_step_place(&s->arrive[p], &s->pose[p], s->engaged, &s->head, &s->log);
+        fp_arrive_step_place(&s->arrive[p], &s->pose[p], s->engaged, &s->head, s->radius, &s->log);
         fp_pose_build_at(&s->pose[p], now_ns);
     }
 }

@@ -28,19 +28,35 @@ void fp_arrive_step_event(fp_arrive_step *r, const fp_event *ev)
 }
 
 void fp_arrive_step_place(fp_arrive_step *r, fp_pose_state *p, bool engaged, const fp_head *head,
-                         const fp_slog *log)
+                         double radius, const fp_slog *log)
 {
-    if (!r->place || !fp_pose_auto_refit(r->place, p, engaged, head->mm_per_unit, head->min, head->max))
+    double hover = radius > 0 ? FP_ARRIVE_HOVER * radius : 0;
+    if (!r->place || !fp_pose_auto_refit(r->place, p, engaged, head->mm_per_unit, head->min, head->max, hover))
         return;
-    if (r->placed_said) return;
+    double mm = head->mm_per_unit > 0 ? head->mm_per_unit : 1.0;
+    bool still = fp_pose_auto_still(r->place) && hover > 0;
+    r->hover_mm = still ? hover * mm : 0;
+    if (r->placed_said) {
+        if (r->hovered && !still)
+            fp_slog_printf(log, FP_LOG_INFO, "session",
+                           "%shands moved: placed by their range now, no longer held %.0f mm out",
+                           r->who, hover * mm);
+        r->hovered = still;
+        return;
+    }
     r->placed_said = true;
+    r->hovered = still;
     float lo[3], hi[3];
     fp_pose_auto_box(r->place, lo, hi);
+    char held[160] = "";
+    if (still)
+        snprintf(held, sizeof held, "; until a fingertip moves %.0f mm they are held %.0f mm out, "
+                 "hovering in front of the face", FP_POSE_STILL_MM, hover * mm);
     fp_slog_printf(log, FP_LOG_INFO, "session",
                    "%shands placed life-size in front of the face from their first frame (no input "
                    "states a workspace: x %.0f..%.0f, y %.0f..%.0f, z %.0f..%.0f mm so far), "
-                   "refined as they move; --calibration FILE fixes the placement",
-                   r->who, lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]);
+                   "refined as they move%s; --calibration FILE fixes the placement",
+                   r->who, lo[0], hi[0], lo[1], hi[1], lo[2], hi[2], held);
 }
 
 /* ---- hands that never come near ---- */
@@ -79,8 +95,9 @@ static int cmp_float(const void *a, const void *b)
  * that moves most (the largest side of the box between the 2nd and 98th percentiles of its
  * kept samples, per axis, device mm: one glitch sample moves it no more than it does the
  * workspace), so that a hand held still while two fingers pinch is brought in by the
- * pinching ones; every fingertip where none moves. buf: room for the kept samples. */
-static void acting(const tips_in *t, float *buf, bool acts[FP_HANDS][FP_FINGERS])
+ * pinching ones; every fingertip where none moves. Returns how far the one that moves most
+ * moves (device mm). buf: room for the kept samples. */
+static double acting(const tips_in *t, float *buf, bool acts[FP_HANDS][FP_FINGERS])
 {
     double ext[FP_HANDS][FP_FINGERS], most = 0;
     for (int h = 0; h < FP_HANDS; h++)
@@ -99,6 +116,7 @@ static void acting(const tips_in *t, float *buf, bool acts[FP_HANDS][FP_FINGERS]
         }
     for (int h = 0; h < FP_HANDS; h++)
         for (int f = 0; f < FP_FINGERS; f++) acts[h][f] = !(ext[h][f] < 0.5 * most);
+    return most;
 }
 
 /* The nearest the fingertips `acts` names come (all: NULL), pushed p toward the face (mesh
@@ -131,33 +149,43 @@ static void each_sample(fp_input *const *ins, size_t n, void (*fn)(void *ctx, in
     }
 }
 
-double fp_arrive_bring_in(fp_calibration *c, fp_input *const *ins, size_t n, double radius, const fp_head *head,
-                          const fp_engine_step *e, const char *who, const fp_slog *log)
+int fp_arrive_bring_in(fp_calibration *c, fp_input *const *ins, size_t n, double radius, const fp_head *head,
+                       const fp_engine_step *e, const char *who, const fp_slog *log)
 {
     tips_in t = {.stride = 1};
     each_sample(ins, n, count_one, &t);
     if (!t.seen || !(radius > 0) || !e || !e->points) return 0;
+    double mm = head->mm_per_unit > 0 ? head->mm_per_unit : 1.0;
     t.stride = (t.seen + FP_ARRIVE_BRING_SAMPLES - 1) / FP_ARRIVE_BRING_SAMPLES;
     t.cap = (t.seen + t.stride - 1) / t.stride;
     t.mm = malloc(FP_FINGERS * t.cap * sizeof *t.mm);
     t.hand = malloc(t.cap * sizeof *t.hand);
     float(*q)[3] = malloc(FP_FINGERS * t.cap * sizeof *q);
     float *d = malloc(FP_FINGERS * t.cap * sizeof *d);
-    double push = 0;
+    int rc = 0;
     if (!t.mm || !t.hand || !q || !d) {
-        push = -ENOMEM;
+        rc = -ENOMEM;
         goto out;
     }
     t.seen = 0;
     each_sample(ins, n, keep_one, &t);
     const double near = FP_ARRIVE_NEAR * radius, to = FP_ARRIVE_BRING_TO * radius;
     const double deepest = (double)head->max[2] - head->min[2];
+    bool acts[FP_HANDS][FP_FINGERS];
+    double most = acting(&t, d, acts); /* (d: room for a float a kept fingertip) */
     double d0 = nearest_at(&t, c, 0, INFINITY, NULL, e, q, d), p = 0;
+    if (t.kept && most < FP_POSE_STILL_MM) { /* hands that never move hover, as live ones do */
+        c->offset[2] += FP_ARRIVE_HOVER * radius;
+        fp_slog_printf(log, FP_LOG_INFO, "session",
+                       "%sthe recording's hands never move (every fingertip within %.0f mm): held "
+                       "%.0f mm out, hovering in front of the face (docs/calibration.md)",
+                       who ? who : "", FP_POSE_STILL_MM, FP_ARRIVE_HOVER * radius * mm);
+        rc = 1;
+        goto out;
+    }
     if (!(d0 > near) || !isfinite(d0)) goto out; /* near already (or nothing to measure) */
     /* the march, on the fingertips that act: a push of dp - to moves none of them nearer
      * than to, so none is passed */
-    bool acts[FP_HANDS][FP_FINGERS];
-    acting(&t, d, acts); /* (d: room for a float a kept fingertip) */
     double dp = nearest_at(&t, c, 0, INFINITY, acts, e, q, d);
     for (int it = 0; it < 64 && dp > to; it++) {
         p += fmax(dp - to, 1e-3 * radius);
@@ -165,9 +193,7 @@ double fp_arrive_bring_in(fp_calibration *c, fp_input *const *ins, size_t n, dou
         dp = nearest_at(&t, c, p, (float)(dp + (dp - to) + radius), acts, e, q, d);
     }
     if (!(dp <= near)) goto out;
-    push = p;
     c->offset[2] -= p;
-    double mm = head->mm_per_unit > 0 ? head->mm_per_unit : 1.0;
     fp_slog_printf(log, FP_LOG_INFO, "session",
                    "%sthe recording's fingertips never come within %.0f mm of the face where its "
                    "range places them (the nearest %.0f mm away): brought %.0f mm closer, so that "
@@ -179,7 +205,7 @@ out:
     free(t.hand);
     free(q);
     free(d);
-    return push;
+    return rc;
 }
 
 /* What the hint says of the placement. */
@@ -194,6 +220,9 @@ static const char *placed_words(fp_arrive_placement how)
     default:
         return "They are placed from their own range (the front of where they went at the nose "
                "tip): reach toward the face";
+    case FP_ARRIVE_PLACED_STILL:
+        return "They have not moved, so they are held out, hovering in front of the face: reach "
+               "toward it";
     }
 }
 
@@ -211,7 +240,7 @@ static void say(fp_arrive_step *r, const fp_slog *log)
                    "stayed %s away. %s, or calibrate: `facepuppet calibrate --mesh FACE --input "
                    "SPEC --out cal.json`, then --calibration cal.json (docs/calibration.md)",
                    r->who, r->away_s < FP_ARRIVE_HINT_S - 1e-6 ? 1 : 0, r->away_s, r->near_mm, far,
-                   placed_words(r->how));
+                   placed_words(r->hovered ? FP_ARRIVE_PLACED_STILL : r->how));
 }
 
 void fp_arrive_step_check(fp_arrive_step *r, int64_t now_ns, const fp_hand_pose hands[FP_HANDS],

@@ -46,7 +46,8 @@ extern "C" {
 typedef enum fp_arrive_placement {
     FP_ARRIVE_PLACED_AUTO = 0,      /* estimated as they run (fp_pose_auto) */
     FP_ARRIVE_PLACED_WORKSPACE,     /* from the workspace an input states (a recording, box=) */
-    FP_ARRIVE_PLACED_CALIBRATION    /* a calibration given (--calibration, a take's) */
+    FP_ARRIVE_PLACED_CALIBRATION,   /* a calibration given (--calibration, a take's) */
+    FP_ARRIVE_PLACED_STILL          /* (the hint's words) estimated, the hands still: held out */
 } fp_arrive_placement;
 
 typedef struct fp_arrive_step {
@@ -64,6 +65,8 @@ typedef struct fp_arrive_step {
     unsigned long hints;           /* hints said so far */
     double near_mm;                /* the last check's "near" (FP_ARRIVE_NEAR x radius), mm */
     double mm;                     /* the last check's mm_per_unit */
+    bool hovered;                  /* the hands are still: placed FP_ARRIVE_HOVER x radius out */
+    double hover_mm;               /* ... that far, mm (0: not held out) */
     char who[80];                  /* whose hands, before its lines ("performer 'B': "; set
                                       after init by a session of several performers), or "" */
 } fp_arrive_step;
@@ -81,9 +84,14 @@ void fp_arrive_step_event(fp_arrive_step *r, const fp_event *ev);
 
 /** Before fp_pose_build: with the estimator, refit p->calib when due (fp_pose_auto_refit;
  *  engaged: the last frame's gesture is engaged, nothing moves), at head's mm_per_unit and
- *  head box. The first placement is said once on log (FP_LOG_INFO, "session"). */
+ *  head box; hands that have not moved yet (FP_POSE_STILL_MM) are held FP_ARRIVE_HOVER x
+ *  radius (the support radius, mesh units) out from the face in depth: every fingertip then
+ *  lies that far in front of the nose tip's depth, so no still pose touches the face by
+ *  chance, and the hint says to reach. The first placement is said once on log
+ *  (FP_LOG_INFO, "session"), and the end of the hover when the hands move. */
+#define FP_ARRIVE_HOVER 1.0
 void fp_arrive_step_place(fp_arrive_step *r, fp_pose_state *p, bool engaged, const fp_head *head,
-                         const fp_slog *log);
+                         double radius, const fp_slog *log);
 
 /** After the mapping ran: the hint's bookkeeping for the frame at now_ns (the frame clock;
  *  the step from the last frame counts when both had a hand, at most 0.25 s). hands: the frame's poses (mesh units);
@@ -97,7 +105,11 @@ void fp_arrive_step_check(fp_arrive_step *r, int64_t now_ns, const fp_hand_pose 
                          const float tip[FP_HANDS][FP_FINGERS], bool engaged, double radius,
                          double mm_per_unit, const fp_engine_step *e, const fp_slog *log);
 
-/** Hands that never come near (issue 51, "hands that arrive"): a recording placed by its
+/** Hands that never move or never come near (issue 51, "hands that arrive"). A recording
+ *  whose fingertips never move (each within FP_POSE_STILL_MM: the 2nd-98th percentile box of
+ *  its samples, largest side) is held FP_ARRIVE_HOVER x radius out in depth (c->offset[2]
+ *  increased), as a live input's still hands are (fp_arrive_step_place), and said so on an
+ *  info line. Otherwise a recording placed by its
  *  range (fp_pose_fit_workspace: its front at the nose tip's depth) whose fingertips would
  *  never come within FP_ARRIVE_NEAR x radius of the face (a hand held in place, its front
  *  before the brow or an eye rather than the nose) is brought toward the face, along depth,
@@ -109,14 +121,14 @@ void fp_arrive_step_check(fp_arrive_step *r, int64_t now_ns, const fp_hand_pose 
  *  fingertip comes near already (every recording in ../shared/data does), or none is given,
  *  or no push up to the head's depth (head box, mesh units) brings one near, *c is left as
  *  it is. The push: a march in depth by the nearest distance less the target, which cannot
- *  step past a nearer placement (a distance changes no faster than the push). One info line
- *  (source "session") says how far they were and how far they were moved, in mm. Returns the
- *  push (mesh units, subtracted from c->offset[2]; 0: none) or -ENOMEM (*c untouched). Main
- *  thread, at the opening. */
+ *  step past a nearer placement (a distance changes no faster than the push; it is
+ *  subtracted from c->offset[2]). One info line (source "session") says how far they were
+ *  and how far they were moved, in mm. Returns 1 (held out, still), 0 (as it was, or brought
+ *  in) or -ENOMEM (*c untouched). Main thread, at the opening. */
 #define FP_ARRIVE_BRING_TO 0.25
 #define FP_ARRIVE_BRING_SAMPLES 4096
-double fp_arrive_bring_in(fp_calibration *c, fp_input *const *ins, size_t n, double radius, const fp_head *head,
-                          const fp_engine_step *e, const char *who, const fp_slog *log);
+int fp_arrive_bring_in(fp_calibration *c, fp_input *const *ins, size_t n, double radius, const fp_head *head,
+                       const fp_engine_step *e, const char *who, const fp_slog *log);
 
 /** At the session's end (a replay shorter than FP_ARRIVE_HINT_S, or hands that left before
  *  it): when hands were present and away for FP_ARRIVE_END_S seconds or more, none came

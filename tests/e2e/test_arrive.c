@@ -13,6 +13,9 @@
  *    too, naming the calibration; the recording that reaches gives none; a replay that ends
  *    sooner (the still hand for 2 s) gives it at its end, with the seconds the hand was
  *    there, and half a second of it gives none;
+ *  - the first row of each recording held still, placed as it arrives or by its range, on
+ *    each face: held out, hovering (a still pose's front would sit at the nose tip's depth,
+ *    touching the face by chance), nothing engaged, the hint once;
  *  - a hand held still while its thumb and index pinch, replayed with its range (placed in
  *    advance, its front at the nose tip's depth), never comes near the face there: it is
  *    brought closer by its pinching fingertips (one info line with the millimetres) and
@@ -43,7 +46,7 @@ static const char *faces[] = {"ict-facekit/generic_neutral_mesh.obj", "lee-perry
 typedef struct logbook {
     int64_t now, t0, first_hand;   /* the frame being stepped, the clock's start, the first
                                       frame with a hand (-1: none yet) */
-    unsigned hints, placed, brought;
+    unsigned hints, placed, brought, held;
     double brought_mm;             /* the bring-in's push, mm */
     int64_t hint_at;               /* frame time of the first hint, after the first hand */
     char hint[600];
@@ -55,6 +58,7 @@ static void on_log(void *user, int level, const char *source, const char *messag
     if (getenv("FP_TEST_VERBOSE")) fprintf(stderr, "  [%d %s] %s\n", level, source, message);
     if (strcmp(source, "session")) return;
     if (strstr(message, "hands placed")) lb->placed++;
+    if (strstr(message, "hands never move")) lb->held++;
     const char *b = strstr(message, "brought ");
     if (b && strstr(message, "mm closer")) {
         lb->brought++;
@@ -303,7 +307,7 @@ static void test_hint(void **state)
     assert_true(lb.hint_at >= 3000000000LL && lb.hint_at <= 3000000000LL + 1000000000LL / FPS);
     assert_non_null(strstr(lb.hint, "mm away"));
     assert_non_null(strstr(lb.hint, "facepuppet calibrate"));
-    assert_non_null(strstr(lb.hint, "placed from their own range"));
+    assert_non_null(strstr(lb.hint, "They have not moved, so they are held out"));
     assert_int_equal(o.moved, 0);
 
     /* a calibration that puts the reaching hand 10 cm back: the hint names it */
@@ -343,6 +347,38 @@ static void test_hint(void **state)
     rmdir(dir);
 }
 
+/* Hands held still never touch the face by chance: the first row of each recording held for
+ * 3.5 s (three-claps' touched the ICT face where its range put it: its front, a fingertip,
+ * at the nose tip's depth), placed as it arrives and with its range, on each face: held out
+ * (hovering), nothing engaged, the hint once, saying why; with the range the info line says
+ * so too. */
+static void test_still_hands_hover(void **state)
+{
+    (void)state;
+    char dir[] = "/tmp/fp-arrive-XXXXXX", csv[64], input[200];
+    assert_non_null(mkdtemp(dir));
+    snprintf(csv, sizeof csv, "%s/still_joints_mm.csv", dir);
+    for (size_t r = 0; r < 4; r++) {
+        still_csv(recs[r], csv, 385);
+        for (size_t f = 0; f < 3; f++)
+            for (int live = 0; live < 2; live++) {
+                snprintf(input, sizeof input, "replay:%s,fast=1%s", csv, live ? ",workspace=0" : "");
+                logbook lb;
+                outcome o;
+                run(faces[f], input, "anchored", NULL, 0, &lb, &o);
+                printf("still %-17s %-44s %-13s engaged %lu, moved %zu, %u hint(s)\n", recs[r], faces[f],
+                       live ? "as it arrives" : "by its range", o.engaged, o.moved, lb.hints);
+                assert_int_equal(o.engaged, 0);
+                assert_int_equal(o.moved, 0);
+                assert_int_equal(lb.hints, 1);
+                assert_non_null(strstr(lb.hint, "They have not moved, so they are held out"));
+                assert_int_equal(lb.held, live ? 0 : 1);
+            }
+    }
+    unlink(csv);
+    rmdir(dir);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -350,6 +386,7 @@ int main(void)
         cmocka_unit_test(test_live_placement_grabs),
         cmocka_unit_test(test_hint),
         cmocka_unit_test(test_bring_in),
+        cmocka_unit_test(test_still_hands_hover),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -164,7 +164,7 @@ static void test_refit_schedule(void **state)
     fp_pose_state p;
     fp_calibration c0 = {0.1, {1, 2, 3}, {1, 0, 0, 0}, {{0, 0, 0}, {0, 0, 0}}};
     fp_pose_init(&p, 0, &c0);
-    assert_false(fp_pose_auto_refit(a, &p, false, 10.0, head_min, head_max)); /* no sample */
+    assert_false(fp_pose_auto_refit(a, &p, false, 10.0, head_min, head_max, 0)); /* no sample */
     float mm[FP_HAND_JOINTS][3];
     int64_t t = 0;
     unsigned refits = 0, frames = 0;
@@ -172,7 +172,7 @@ static void test_refit_schedule(void **state)
         spread_hand(mm, (float)f, 100, -50 - (float)f);
         fp_event ev = joints_event(FP_HAND_RIGHT, mm, t);
         fp_pose_auto_take(a, &ev);
-        bool r = fp_pose_auto_refit(a, &p, false, 10.0, head_min, head_max);
+        bool r = fp_pose_auto_refit(a, &p, false, 10.0, head_min, head_max, 0);
         frames++;
         refits += r;
         if (t < (int64_t)(FP_POSE_AUTO_SETTLE_S * 1e9)) assert_true(r); /* settling: each frame */
@@ -188,17 +188,17 @@ static void test_refit_schedule(void **state)
     /* 60 frames of settling (t < 1 s), then one every 0.25 s: 4 */
     assert_int_equal(refits, 60 + 4);
     assert_int_equal(fp_pose_auto_refits(a), refits);
-    assert_false(fp_pose_auto_refit(a, &p, false, 10.0, head_min, head_max)); /* nothing new */
+    assert_false(fp_pose_auto_refit(a, &p, false, 10.0, head_min, head_max, 0)); /* nothing new */
     /* engaged: nothing moves, however long; released: refitted at once */
     fp_calibration held = p.calib;
     for (int f = 0; f < 60; f++, t += 16666667) {
         spread_hand(mm, 200, 100, 100);
         fp_event ev = joints_event(FP_HAND_RIGHT, mm, t);
         fp_pose_auto_take(a, &ev);
-        assert_false(fp_pose_auto_refit(a, &p, true, 10.0, head_min, head_max));
+        assert_false(fp_pose_auto_refit(a, &p, true, 10.0, head_min, head_max, 0));
         assert_memory_equal(&p.calib, &held, sizeof held);
     }
-    assert_true(fp_pose_auto_refit(a, &p, false, 10.0, head_min, head_max));
+    assert_true(fp_pose_auto_refit(a, &p, false, 10.0, head_min, head_max, 0));
     assert_memory_not_equal(&p.calib, &held, sizeof held);
     fp_pose_auto_destroy(&a);
 }
@@ -218,7 +218,7 @@ static void test_deterministic(void **state)
             spread_hand(mm, 30.f * sinf(0.1f * f), 150 + 20.f * cosf(0.07f * f), -60.f * sinf(0.05f * f));
             fp_event ev = joints_event(f % 3 ? FP_HAND_RIGHT : FP_HAND_LEFT, mm, (int64_t)f * 9000000);
             fp_pose_auto_take(a, &ev);
-            fp_pose_auto_refit(a, &p, f % 50 > 40, 10.24, head_min, head_max);
+            fp_pose_auto_refit(a, &p, f % 50 > 40, 10.24, head_min, head_max, 0);
             seen[run][f] = p.calib;
         }
         fp_pose_auto_destroy(&a);
@@ -248,13 +248,55 @@ static void test_gloves_keep_their_place(void **state)
     spread_hand(mm, 300, -200, 400);
     fp_event ev = joints_event(FP_HAND_RIGHT, mm, 5);
     fp_pose_auto_take(a, &ev);
-    assert_true(fp_pose_auto_refit(a, &p, false, 10.0, head_min, head_max));
+    assert_true(fp_pose_auto_refit(a, &p, false, 10.0, head_min, head_max, 0));
     for (int h = 0; h < FP_HANDS; h++) {
         float after[3];
         fp_pose_to_mesh(&p.calib, h, p.glove_pos[h], after);
         for (int k = 0; k < 3; k++) assert_float_equal(after[k], before[h][k], 1e-4);
         assert_true(fabsf(p.glove_pos[h][0] - g[h][0]) > 100); /* the device wrist did move */
     }
+    fp_pose_auto_destroy(&a);
+}
+
+/* Still hands hover (FP_POSE_STILL_MM): while no fingertip has moved 10 mm from its first
+ * sample, a refit places the hands `hover` farther out in depth than the range would; one
+ * glitch sample does not end it, two in a row do, and the refit then comes at once (not on
+ * the schedule), without the hover. */
+static void test_still_hands_hover(void **state)
+{
+    (void)state;
+    fp_pose_auto *a;
+    assert_int_equal(fp_pose_auto_create(&a), 0);
+    fp_pose_state p;
+    fp_pose_init(&p, 0, NULL);
+    assert_true(fp_pose_auto_still(a)); /* no sample yet */
+    const double hover = 2.5;
+    float mm[FP_HAND_JOINTS][3], lo[3], hi[3];
+    fp_calibration want;
+    int64_t t = 0;
+    for (int f = 0; f < 90; f++, t += 16666667) { /* 1.5 s held (jitter 1 mm) */
+        spread_hand(mm, 10.f + (float)(f % 2), 100, -50);
+        if (f == 70) mm[FP_JOINT_TIP(2)][2] += 40.f; /* one glitch sample */
+        fp_event ev = joints_event(FP_HAND_RIGHT, mm, t);
+        fp_pose_auto_take(a, &ev);
+        fp_pose_auto_refit(a, &p, false, 10.0, head_min, head_max, hover);
+        assert_true(fp_pose_auto_still(a));
+        assert_true(fp_pose_auto_box(a, lo, hi));
+        fp_pose_fit_workspace(&want, 10.0, lo, hi, head_min, head_max);
+        if (f < 60) assert_float_equal(p.calib.offset[2], want.offset[2] + hover, 1e-9); /* (settling) */
+    }
+    /* the fingertips move 12 mm: after the second such sample the hover ends at once */
+    for (int f = 0; f < 2; f++, t += 16666667) {
+        spread_hand(mm, 22.f, 100, -50);
+        fp_event ev = joints_event(FP_HAND_RIGHT, mm, t);
+        fp_pose_auto_take(a, &ev);
+        bool r = fp_pose_auto_refit(a, &p, false, 10.0, head_min, head_max, hover);
+        assert_int_equal(fp_pose_auto_still(a), f == 0);
+        if (f == 1) assert_true(r);
+    }
+    assert_true(fp_pose_auto_box(a, lo, hi));
+    fp_pose_fit_workspace(&want, 10.0, lo, hi, head_min, head_max);
+    assert_memory_equal(&p.calib, &want, sizeof want);
     fp_pose_auto_destroy(&a);
 }
 
@@ -266,6 +308,7 @@ int main(void)
         cmocka_unit_test(test_refit_schedule),
         cmocka_unit_test(test_deterministic),
         cmocka_unit_test(test_gloves_keep_their_place),
+        cmocka_unit_test(test_still_hands_hover),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
