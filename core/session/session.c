@@ -210,6 +210,8 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, const fp
             show_deformed(s, (cs->intents & FP_INTENT_COMMIT) != 0, was, st);
             /* how far the skin followed the fingertips (skin_reach.h) */
             fp_skin_reach_frame(s->engine.points, posed, s->shown, asked, st, &s->gesture_reach);
+            if (s->rig.rig)
+                fp_skin_reach_allowed(s->engine.points, posed, s->shown, cs, st, &s->gesture_reach_allowed);
             if (cs->intents & FP_INTENT_COMMIT) fp_commit_step_run(s, st);
         } else {
             fp_changed_all(&s->shown_changed); /* the posed base again, after an error */
@@ -224,7 +226,7 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, const fp
             fp_changed_add(&s->shown_changed, ranges, fp_engine_step_touched(&s->engine, &ranges));
         fp_history_end_gesture(&s->history);
         fp_engine_step_end_gesture(&s->engine, &s->log);
-        fp_skin_reach_gesture_end(&s->gesture_reach, s->head.mm_per_unit, &s->log);
+        fp_skin_reach_gesture_end(&s->gesture_reach, &s->gesture_reach_allowed, s->head.mm_per_unit, &s->log);
         fp_cg_end_gesture(&s->cg, &s->log);
         if (s->flip_widened > 1.0)
             fp_slog_printf(&s->log, FP_LOG_INFO, FP_SLOG_CONTACT,
@@ -604,7 +606,7 @@ void fp_session_destroy(fp_session **sp)
     for (size_t p = 0; p < s->performers.count; p++) fp_arrive_step_finish(&s->arrive[p], &s->log);
     fp_mapping_step_flush(&s->mapping_step, &s->log);
     fp_engine_step_flush(&s->engine, &s->log);
-    fp_skin_reach_gesture_end(&s->gesture_reach, s->head.mm_per_unit, &s->log);
+    fp_skin_reach_gesture_end(&s->gesture_reach, &s->gesture_reach_allowed, s->head.mm_per_unit, &s->log);
     fp_cg_end_gesture(&s->cg, &s->log);
     for (size_t i = 0; i < s->input_count; i++) fp_input_instance_close(&s->inputs[i]);
     fp__session_destroy_mapping(s, s->mapping, s->mapping_name);

@@ -85,6 +85,7 @@ struct fp_session {
     bool channel_event_warned;   /* an input's channel event named no channel of the rig */              /* step 4 */
     fp_engine_step engine;        /* step 5 */
     fp_skin_reach_gesture gesture_reach; /* the gesture's reach so far (skin_reach.h) */
+    fp_skin_reach_gesture gesture_reach_allowed; /* ... against what the rig allowed */
     fp_history history;           /* step 6 */
     fp_record_step record;        /* step 7 */
     fp_arrive_step arrive[FP_PERFORMER_CAPACITY]; /* each performer's placement as the hands

@@ -178,7 +178,7 @@ static int swap_mapping(fp_session *s, const fp_plugin_path *path, const char *s
     s->engaged = false;
     fp_history_end_gesture(&s->history);
     fp_engine_step_end_gesture(&s->engine, &s->log);
-    fp_skin_reach_gesture_end(&s->gesture_reach, s->head.mm_per_unit, &s->log);
+    fp_skin_reach_gesture_end(&s->gesture_reach, &s->gesture_reach_allowed, s->head.mm_per_unit, &s->log);
     fp_cg_end_gesture(&s->cg, &s->log);
     fp_engine_step_invalidate(&s->engine);
     fp_mapping_step_init(&s->mapping_step, &s->cs, s->mapping_budget_ms);

@@ -10,7 +10,10 @@
  * out (a resting fingertip asks nothing).
  *
  * Per frame into fp_frame_stats (reach, reach_vectors, reach_asked_max); per gesture a
- * summary (fp_skin_reach_gesture) the session logs at the gesture's end.
+ * summary (fp_skin_reach_gesture) the session logs at the gesture's end. With a rig, the
+ * same against the vectors its clamp allowed (fp_skin_reach_allowed): how far the skin
+ * followed where the skull and jaw let it, so that a push into the cheekbone, held back on
+ * purpose, reads as such.
  * Threads: the session thread. No allocation, no I/O.
  */
 #ifndef FP_SKIN_REACH_H
@@ -50,14 +53,22 @@ typedef struct fp_skin_reach_gesture {
 void fp_skin_reach_frame(const csrbf_points *points, const float *ref, const float *shown,
                          const fp_control_set *cs, fp_frame_stats *st, fp_skin_reach_gesture *g);
 
+/** The same against what a rig allowed: cs the rig's clamped copy of the mapping's set (the
+ *  vectors the engine got), into st->reach_allowed[0 .. reach_allowed_vectors) and g. */
+void fp_skin_reach_allowed(const csrbf_points *points, const float *ref, const float *shown,
+                           const fp_control_set *cs, fp_frame_stats *st, fp_skin_reach_gesture *g);
+
 /** Forget the gesture (its end). */
 void fp_skin_reach_gesture_reset(fp_skin_reach_gesture *g);
 
 /** At a gesture's end: where it counted any vector, log (source FP_SLOG_ENGINE, a note that
  *  -q leaves out) "the skin followed the fingertips 97% this gesture (mean of N; least 81%,
  *  under 90% in M; longest drag 23.5 mm)", mm from mm_per_unit (mesh units where it is not
- *  positive); then reset g. */
-void fp_skin_reach_gesture_end(fp_skin_reach_gesture *g, double mm_per_unit, const fp_slog *log);
+ *  positive), and where `allowed` (the reach against what a rig allowed, NULL without one)
+ *  differs by half a point or more, "; 100% of what the rig allowed: it holds back a push
+ *  toward the skull or the jaw"; then reset g and allowed. */
+void fp_skin_reach_gesture_end(fp_skin_reach_gesture *g, fp_skin_reach_gesture *allowed, double mm_per_unit,
+                               const fp_slog *log);
 
 #ifdef __cplusplus
 }

@@ -35,7 +35,6 @@ void fp_arrive_step_place(fp_arrive_step *r, fp_pose_state *p, bool engaged, con
         return;
     double mm = head->mm_per_unit > 0 ? head->mm_per_unit : 1.0;
     bool still = fp_pose_auto_still(r->place) && hover > 0;
-    r->hover_mm = still ? hover * mm : 0;
     if (r->placed_said) {
         if (r->hovered && !still)
             fp_slog_printf(log, FP_LOG_INFO, "session",

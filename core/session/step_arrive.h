@@ -66,7 +66,6 @@ typedef struct fp_arrive_step {
     double near_mm;                /* the last check's "near" (FP_ARRIVE_NEAR x radius), mm */
     double mm;                     /* the last check's mm_per_unit */
     bool hovered;                  /* the hands are still: placed FP_ARRIVE_HOVER x radius out */
-    double hover_mm;               /* ... that far, mm (0: not held out) */
     char who[80];                  /* whose hands, before its lines ("performer 'B': "; set
                                       after init by a session of several performers), or "" */
 } fp_arrive_step;

@@ -42,6 +42,17 @@ r_run=$(reach_of "$tmp/reach.out") r_take=$(reach_of "$tmp/info.out")
 python3 -c "import sys; a=list(map(int,sys.argv[1].split())); b=list(map(int,sys.argv[2].split())); sys.exit(not (a[1]==b[1] and abs(a[0]-b[0])<=1 and abs(a[2]-b[2])<=1))" "$r_run" "$r_take" ||
     fail "the take's reach ($r_take: median %, vectors, p10 %) is not run's ($r_run)"
 echo "0. reach: run $r_run, the take $r_take (median %, touching vectors, p10 %)"
+! grep -q "of what the rig allowed" "$tmp/reach.out" || fail "a run without a rig speaks of what the rig allowed"
+# With the face's rig, grab pushes toward the cheekbone and the rig holds that back: run says
+# how far the skin followed what the rig allowed too (the skull's part, not a failure)
+"$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$(dirname "$csv")/grab_joints_mm.csv" -o "$tmp/reach-rig.obj" \
+    -q >"$tmp/reach-rig.out" 2>"$tmp/reach-rig.err" || { cat "$tmp/reach-rig.err"; fail "run (rig) exited $?"; }
+r_rig=$(reach_of "$tmp/reach-rig.out")
+r_allowed=$(sed -n 's/.*; \([0-9]*\)% of what the rig allowed, 10th percentile \([0-9]*\)%: it holds back a push toward the skull or the jaw.*/\1 \2/p' "$tmp/reach-rig.out")
+[ -n "$r_allowed" ] || { cat "$tmp/reach-rig.out"; fail "run with the rig did not say what the rig allowed"; }
+python3 -c "import sys; a=list(map(int,sys.argv[1].split())); b=list(map(int,sys.argv[2].split())); sys.exit(not (b[0]>=90 and b[1]>=60 and a[0]<b[0]))" "$r_rig" "$r_allowed" ||
+    fail "with the rig: followed $r_rig, of what it allowed $r_allowed (want at least 90% and 60%, above the plain figure)"
+echo "0. with the rig: followed $r_rig (median %, vectors, p10 %), of what it allowed $r_allowed (median %, p10 %)"
 
 # ---- 1. record, play ----------------------------------------------------------------------
 "$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv" --speed 3 --duration 0.8 --take-dir "$tmp/takes" \

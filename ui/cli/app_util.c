@@ -509,18 +509,26 @@ int fp_app_take_intact(const char *cmd, const char *verb, const char *path,
     return FP_EXIT_OK;
 }
 
+/* Append x to the array *v of *n (capacity *cap); false where it could not grow. */
+static bool reach_push(double **v, size_t *n, size_t *cap, double x)
+{
+    if (*n == *cap) {
+        size_t nc = *cap ? 2 * *cap : 1024;
+        double *g = realloc(*v, nc * sizeof *g);
+        if (!g) return false;
+        *v = g;
+        *cap = nc;
+    }
+    (*v)[(*n)++] = x;
+    return true;
+}
+
 void fp_app_reach_add(fp_app_reach *r, const fp_frame_stats *st)
 {
-    for (size_t i = 0; i < st->reach_vectors; i++) {
-        if (r->n == r->cap) {
-            size_t nc = r->cap ? 2 * r->cap : 1024;
-            double *g = realloc(r->v, nc * sizeof *g);
-            if (!g) return;
-            r->v = g;
-            r->cap = nc;
-        }
-        r->v[r->n++] = st->reach[i];
-    }
+    for (size_t i = 0; i < st->reach_vectors; i++)
+        if (!reach_push(&r->v, &r->n, &r->cap, st->reach[i])) return;
+    for (size_t i = 0; i < st->reach_allowed_vectors; i++)
+        if (!reach_push(&r->va, &r->na, &r->capa, st->reach_allowed[i])) return;
     if (st->reach_asked_max > r->asked_max) r->asked_max = st->reach_asked_max;
 }
 
@@ -529,14 +537,23 @@ void fp_app_reach_text(fp_app_reach *r, double mm_per_unit, char *text, size_t l
     if (!len) return;
     text[0] = 0;
     if (!r->n) return;
+    double med = fp_median(r->v, r->n), p10 = fp_percentile(r->v, r->n, 0.10);
+    char rig[160] = "";
+    if (r->na) {
+        double ma = fp_median(r->va, r->na), pa = fp_percentile(r->va, r->na, 0.10);
+        if (fabs(ma - med) >= 0.005 || fabs(pa - p10) >= 0.005)
+            snprintf(rig, sizeof rig, "; %.0f%% of what the rig allowed, 10th percentile %.0f%%: it "
+                     "holds back a push toward the skull or the jaw", 100.0 * ma, 100.0 * pa);
+    }
     snprintf(text, len,
              "; the skin followed the fingertips %.0f%% (median over %zu touching vectors, 10th "
-             "percentile %.0f%%, longest drag %.1f mm)", 100.0 * fp_median(r->v, r->n), r->n,
-             100.0 * fp_percentile(r->v, r->n, 0.10), r->asked_max * mm_per_unit);
+             "percentile %.0f%%, longest drag %.1f mm%s)", 100.0 * med, r->n, 100.0 * p10,
+             r->asked_max * mm_per_unit, rig);
 }
 
 void fp_app_reach_free(fp_app_reach *r)
 {
     free(r->v);
+    free(r->va);
     memset(r, 0, sizeof *r);
 }

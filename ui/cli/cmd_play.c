@@ -94,7 +94,7 @@ static void print_played(const char *take_path, const fp_take_reader *r, fp_app_
     char in[32], tcout[32];
     fp_timecode_format(&h->timecode_in, in, sizeof in);
     fp_timecode_format(&fp_take_reader_summary(r)->timecode_out, tcout, sizeof tcout);
-    char reach_text[200];
+    char reach_text[400];
     fp_app_reach_text(reach, mm_per_unit, reach_text, sizeof reach_text);
     char rated[16] = "", desc[600] = ""; /* the take's rating and description, when set */
     if (h->rating) snprintf(rated, sizeof rated, ", rated %d/5", h->rating);

@@ -447,7 +447,7 @@ static void print_summary(const fp_session *s, run_totals *t, const run_displace
                           int status, const char *out)
 {
     double med = fp_median(t->update_ms, t->nupdates), mmu = fp_session_head(s)->mm_per_unit;
-    char reach_text[200];
+    char reach_text[400];
     fp_app_reach_text(&t->reach, mmu, reach_text, sizeof reach_text);
     printf("frames %llu, deforming %llu, engaged %llu, committed %llu; vertices moved %zu of %zu; "
            "displacement mean %.3g mm max %.3g mm (%.6g, %.6g mesh units of %.4g mm)%s; update median "

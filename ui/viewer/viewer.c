@@ -725,10 +725,15 @@ static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
     char reach[160] = "", tips[160] = "";
     const fp_frame_stats *la = &v->last_active;
     if (la->reach_vectors) {
-        float least = la->reach[0];
+        float least = la->reach[0], allowed = la->reach_allowed_vectors ? la->reach_allowed[0] : 0;
         for (size_t i = 1; i < la->reach_vectors; i++) least = la->reach[i] < least ? la->reach[i] : least;
-        snprintf(reach, sizeof reach, "\nskin follows the fingertips %.0f%%  (drag %.1f mm)",
-                 100.0 * least, la->reach_asked_max * head->mm_per_unit);
+        for (size_t i = 1; i < la->reach_allowed_vectors; i++)
+            allowed = la->reach_allowed[i] < allowed ? la->reach_allowed[i] : allowed;
+        char rig[64] = ""; /* a push toward the bone, held back by the rig */
+        if (la->reach_allowed_vectors && fabsf(allowed - least) >= 0.005f)
+            snprintf(rig, sizeof rig, "; %.0f%% of what the rig allows", 100.0 * allowed);
+        snprintf(reach, sizeof reach, "\nskin follows the fingertips %.0f%%  (drag %.1f mm%s)",
+                 100.0 * least, la->reach_asked_max * head->mm_per_unit, rig);
     }
     if (v->cues.count && isfinite(v->cues.nearest))
         snprintf(tips, sizeof tips, "\nfingertips: %zu of %zu touching, nearest %.1f mm from the skin",
