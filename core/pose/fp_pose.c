@@ -38,6 +38,54 @@ static void take_positions(fp_pose_hand *hs, fp_pose_filter *fs, const fp_filter
     hs->joints_t_ns = e->header.time_ns;
 }
 
+/* Whether joints b (at tb) jumped from a (at ta): FP_POSE_JUMP_MM and FP_POSE_JUMP_MM_S. */
+static bool jumped(const float (*a)[3], int64_t ta, const float (*b)[3], int64_t tb)
+{
+    double step = 0;
+    for (int j = 0; j < FP_HAND_JOINTS; j++) {
+        double d2 = 0;
+        for (int k = 0; k < 3; k++) d2 += ((double)b[j][k] - a[j][k]) * ((double)b[j][k] - a[j][k]);
+        if (d2 > step) step = d2;
+    }
+    step = sqrt(step);
+    double dt = tb > ta ? (double)(tb - ta) * 1e-9 : 0.0;
+    return step > FP_POSE_JUMP_MM && step > FP_POSE_JUMP_MM_S * dt;
+}
+
+/* Forget hand h's motion so far (a disconnect, or the hand found elsewhere): no motion is
+ * guessed across the gap (the next sample has no earlier one: frame_fraction), the input's
+ * filter of the hand starts afresh. */
+static void hand_afresh(fp_pose_state *p, fp_pose_hand *hs, int h, uint32_t source)
+{
+    hs->prev_positions = hs->prev_angles = hs->prev_wrist = false;
+    hs->joints_t_ns = hs->angles_t_ns = hs->wrist_t_ns = INT64_MIN;
+    hs->jump_pending = false;
+    if (source < FP_POSE_MAX_INPUTS) memset(&p->filters[source][h], 0, sizeof p->filters[0][0]);
+}
+
+/* Joint positions through the jump rule (FP_POSE_JUMP_MM): true where e is to be taken. */
+static bool positions_pass(fp_pose_state *p, fp_pose_hand *hs, int h, const fp_event_joint_positions *e)
+{
+    const int64_t t = e->header.time_ns, seen = hs->seen_t_ns;
+    hs->seen_t_ns = t;
+    bool known = hs->present && hs->have_positions && hs->joints_t_ns != INT64_MIN;
+    if (!known || !jumped((const float (*)[3])hs->raw_mm, seen > hs->joints_t_ns ? seen : hs->joints_t_ns, e->mm, t)) {
+        hs->glitches += hs->jump_pending;
+        hs->jump_pending = false; /* (a held sample was a glitch) */
+        return true;
+    }
+    if (hs->jump_pending && !jumped((const float (*)[3])hs->jump_mm, hs->jump_t_ns, e->mm, t)) {
+        hand_afresh(p, hs, h, e->header.source); /* found elsewhere */
+        hs->absent_until_ns = t + FP_POSE_JUMP_ABSENT_NS;
+        hs->jumps++;
+        return true;
+    }
+    hs->jump_pending = true; /* held back: the next sample decides */
+    memcpy(hs->jump_mm, e->mm, sizeof hs->jump_mm);
+    hs->jump_t_ns = t;
+    return false;
+}
+
 static void take_angles(fp_pose_hand *hs, fp_pose_filter *fs, const fp_filter_config *c,
                         const fp_event_joint_angles *e)
 {
@@ -93,6 +141,8 @@ void fp_pose_take_event_filtered(fp_pose_state *p, const fp_event *ev, const fp_
     fp_pose_filter *fs = filter_state(p, ev, h, filter);
     switch (ev->header.type) {
     case FP_EVENT_JOINT_POSITIONS:
+        if (!positions_pass(p, hs, h, &ev->positions)) break;
+        memcpy(hs->raw_mm, ev->positions.mm, sizeof hs->raw_mm);
         take_positions(hs, fs, filter, &ev->positions);
         hs->have_positions = hs->present = true;
         hs->time_ns = ev->header.time_ns;
@@ -110,12 +160,7 @@ void fp_pose_take_event_filtered(fp_pose_state *p, const fp_event *ev, const fp_
     case FP_EVENT_STATUS:
         if (ev->status.code == FP_STATUS_DISCONNECTED) {
             hs->present = false;
-            /* no motion is guessed across the gap (the next sample has no earlier one:
-             * frame_fraction); the filter starts afresh */
-            hs->prev_positions = hs->prev_angles = hs->prev_wrist = false;
-            hs->joints_t_ns = hs->angles_t_ns = hs->wrist_t_ns = INT64_MIN;
-            if (ev->header.source < FP_POSE_MAX_INPUTS)
-                memset(&p->filters[ev->header.source][h], 0, sizeof p->filters[0][0]);
+            hand_afresh(p, hs, h, ev->header.source);
         }
         break;
     default:
@@ -167,8 +212,11 @@ static void build(fp_pose_state *p, bool at, int64_t now_ns)
     for (int h = 0; h < FP_HANDS; h++) {
         fp_pose_hand *hs = &p->hands[h];
         fp_hand_pose *out = &p->poses[h];
-        out->present = hs->present;
-        if (!hs->present) continue;
+        /* a hand found elsewhere is absent a moment; one held back too long is absent */
+        out->present = hs->present &&
+                       !(at && (now_ns < hs->absent_until_ns ||
+                                (hs->jump_pending && now_ns - hs->joints_t_ns > FP_POSE_MAX_PERIOD_NS)));
+        if (!out->present) continue;
         out->time_ns = hs->time_ns;
         if (hs->have_positions) {
             double u = at ? frame_fraction(hs->prev_positions, hs->prev_joints_t_ns, hs->joints_t_ns, now_ns) : 0;

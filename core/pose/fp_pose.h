@@ -71,6 +71,15 @@ typedef struct fp_pose_hand {
     int64_t angles_t_ns, prev_angles_t_ns;
     int64_t wrist_t_ns, prev_wrist_t_ns;
     float built_mm[FP_HAND_JOINTS][3];    /* the joints of the latest build (device mm) */
+    /* jumps (FP_POSE_JUMP_MM): the latest joint positions taken, as they came (unfiltered);
+     * a sample held back as a jump; a hand found elsewhere is absent until absent_until_ns */
+    float raw_mm[FP_HAND_JOINTS][3];
+    bool jump_pending;
+    float jump_mm[FP_HAND_JOINTS][3];
+    int64_t jump_t_ns, absent_until_ns;
+    int64_t seen_t_ns;                    /* the latest joint positions' time, taken or not */
+    unsigned long jumps;                  /* hands found elsewhere (confirmed jumps) */
+    unsigned long glitches;               /* single samples dropped as jumps */
 } fp_pose_hand;
 
 /** The inputs whose filter state is kept (an event's header.source below it; = the
@@ -83,6 +92,22 @@ typedef struct fp_pose_hand {
  *  period past the latest sample, then bends smoothly toward one whole period, which it
  *  never reaches (fp_pose_build_at). */
 #define FP_POSE_KNEE 0.9
+
+/** Jumps: a joint positions sample whose joints moved more than FP_POSE_JUMP_MM from the
+ *  hand's latest (some joint, as they came), and faster than FP_POSE_JUMP_MM_S, is not a hand
+ *  moving (the real recordings' fingertips move 28 mm at most between samples, 1.7 m/s at
+ *  most; the speed over the time since the sample before, taken or held back, so that a
+ *  tracker sending nonsense at its rate never passes) but a tracker's glitch: a hand swapped
+ *  for the other, or lost and found elsewhere.
+ *  It is held back, the hand staying where it was. The next sample decides: near where the
+ *  hand was, the glitch is dropped (fp_pose_hand.glitches); near the held one, the hand was
+ *  found elsewhere (.jumps): it starts afresh there (no motion across the jump, its filter
+ *  reset) and is absent for frames before FP_POSE_JUMP_ABSENT_NS past that sample, so a
+ *  gesture it held lets go instead of dragging the skin across the jump; far from both, it is
+ *  held back in turn. A hand held back longer than FP_POSE_MAX_PERIOD_NS is absent. */
+#define FP_POSE_JUMP_MM 60.0
+#define FP_POSE_JUMP_MM_S 5000.0
+#define FP_POSE_JUMP_ABSENT_NS 50000000LL
 
 /** One input's One Euro filters for one hand: a joint each (positions, mm), a glove sensor
  *  each (radians), the wrist's position (mm) and rotation (the quaternion as a 4-vector). */

@@ -117,7 +117,17 @@ static void on_event(void *user, size_t input, const fp_event *ev)
 {
     fp_session *s = user;
     size_t p = input < s->input_count ? s->performers.of_input[input] : 0; /* whose hands */
+    int h = ev->header.hand;
+    unsigned long jumps = h == FP_HAND_LEFT || h == FP_HAND_RIGHT ? s->pose[p].hands[h].jumps : 0;
     fp_pose_take_event_filtered(&s->pose[p], ev, input < s->input_count ? &s->inputs[input].filter : NULL);
+    if ((h == FP_HAND_LEFT || h == FP_HAND_RIGHT) && s->pose[p].hands[h].jumps != jumps) {
+        const char *src = input < s->input_count ? s->inputs[input].name : NULL;
+        fp_slog_repeat_report(&s->jump_report, &s->log, FP_LOG_WARNING, src ? src : "input", -ERANGE,
+                              "the %s hand jumped farther and faster than a hand moves (fp_pose.h "
+                              "FP_POSE_JUMP_MM): taken as the tracker losing it and finding it "
+                              "elsewhere, so a gesture it held let go there",
+                              h == FP_HAND_LEFT ? "left" : "right");
+    }
     fp_arrive_step_event(&s->arrive[p], ev); /* (raw: the placement's estimate is robust anyway) */
     fp_record_step_event(&s->record, ev);
     if (ev->header.type == FP_EVENT_CHANNEL) { /* an input drives a rig channel (ABI 1.2) */
@@ -608,6 +618,7 @@ void fp_session_destroy(fp_session **sp)
     fp_engine_step_flush(&s->engine, &s->log);
     fp_skin_reach_gesture_end(&s->gesture_reach, &s->gesture_reach_allowed, s->head.mm_per_unit, &s->log);
     fp_cg_end_gesture(&s->cg, &s->log);
+    fp_slog_repeat_flush(&s->jump_report, &s->log);
     for (size_t i = 0; i < s->input_count; i++) fp_input_instance_close(&s->inputs[i]);
     fp__session_destroy_mapping(s, s->mapping, s->mapping_name);
     fp_mapping_host_drain_log(&s->mapping_host);

@@ -16,6 +16,8 @@
  *  - the first row of each recording held still, placed as it arrives or by its range, on
  *    each face: held out, hovering (a still pose's front would sit at the nose tip's depth,
  *    touching the face by chance), nothing engaged, the hint once;
+ *  - a tracker that finds the hand 150 mm over mid-grab: said once, the gesture lets go
+ *    (fp_pose.h FP_POSE_JUMP_MM), the face moves no more than under the recording;
  *  - a hand held still while its thumb and index pinch, replayed with its range (placed in
  *    advance, its front at the nose tip's depth), never comes near the face there: it is
  *    brought closer by its pinching fingertips (one info line with the millimetres) and
@@ -46,7 +48,7 @@ static const char *faces[] = {"ict-facekit/generic_neutral_mesh.obj", "lee-perry
 typedef struct logbook {
     int64_t now, t0, first_hand;   /* the frame being stepped, the clock's start, the first
                                       frame with a hand (-1: none yet) */
-    unsigned hints, placed, brought, held;
+    unsigned hints, placed, brought, held, jumps;
     double brought_mm;             /* the bring-in's push, mm */
     int64_t hint_at;               /* frame time of the first hint, after the first hand */
     char hint[600];
@@ -56,6 +58,7 @@ static void on_log(void *user, int level, const char *source, const char *messag
 {
     logbook *lb = user;
     if (getenv("FP_TEST_VERBOSE")) fprintf(stderr, "  [%d %s] %s\n", level, source, message);
+    if (level == FP_LOG_WARNING && strstr(message, "jumped farther and faster than a hand moves")) lb->jumps++;
     if (strcmp(source, "session")) return;
     if (strstr(message, "hands placed")) lb->placed++;
     if (strstr(message, "hands never move")) lb->held++;
@@ -379,9 +382,63 @@ static void test_still_hands_hover(void **state)
     rmdir(dir);
 }
 
+/* A tracker that loses the hand mid-grab and finds it 150 mm over (grab's rows from 130 on,
+ * in the gesture, moved 150 mm in x), placed as it arrives on the ICT face with its rig: the
+ * jump is said once, the gesture lets go there instead of dragging the skin across, and the
+ * face moves no more than under the recording itself (it dragged the skin 23.2 mm against
+ * 7.9 before fp_pose.h's FP_POSE_JUMP_MM). */
+static void test_jump_lets_go(void **state)
+{
+    (void)state;
+    char dir[] = "/tmp/fp-arrive-XXXXXX", csv[64], input[200], in[4300], line[8192];
+    assert_non_null(mkdtemp(dir));
+    snprintf(csv, sizeof csv, "%s/jump_joints_mm.csv", dir);
+    snprintf(in, sizeof in, "%s/hands/leap-motion/grab_joints_mm.csv", fp_test_data_dir());
+    FILE *f = fopen(in, "r"), *g = fopen(csv, "w");
+    assert_non_null(f);
+    assert_non_null(g);
+    int cols_x[64], nx = 0;
+    assert_non_null(fgets(line, sizeof line, f));
+    fputs(line, g);
+    char *save = NULL;
+    int c = 0;
+    for (char *tok = strtok_r(line, ",\n", &save); tok; tok = strtok_r(NULL, ",\n", &save), c++)
+        if (c >= 4 && strlen(tok) > 2 && !strcmp(tok + strlen(tok) - 2, "_x") && nx < 64) cols_x[nx++] = c;
+    assert_true(nx >= 20);
+    for (int row = 0; fgets(line, sizeof line, f); row++) {
+        save = NULL;
+        c = 0;
+        int k = 0;
+        for (char *tok = strtok_r(line, ",\n", &save); tok; tok = strtok_r(NULL, ",\n", &save), c++) {
+            bool x = k < nx && cols_x[k] == c;
+            k += x;
+            if (x && row >= 130) fprintf(g, "%s%.4f", c ? "," : "", strtod(tok, NULL) + 150.0);
+            else fprintf(g, "%s%s", c ? "," : "", tok);
+        }
+        fputc('\n', g);
+    }
+    fclose(f);
+    assert_int_equal(fclose(g), 0);
+    char clean[4400];
+    input_of(clean, sizeof clean, "grab", ",workspace=0");
+    snprintf(input, sizeof input, "replay:%s,fast=1,workspace=0", csv);
+    logbook lc, lj;
+    outcome oc, oj;
+    run(faces[0], clean, "anchored", NULL, 0, &lc, &oc);
+    run(faces[0], input, "anchored", NULL, 0, &lj, &oj);
+    printf("grab on ICT, as it arrives: max %.4f mesh units, %u jump(s) said; found 150 mm over "
+           "mid-grab: max %.4f, %u jump(s) said\n", oc.max, lc.jumps, oj.max, lj.jumps);
+    assert_int_equal(lc.jumps, 0);
+    assert_int_equal(lj.jumps, 1);
+    assert_true(oj.max <= oc.max);
+    unlink(csv);
+    rmdir(dir);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_jump_lets_go),
         cmocka_unit_test(test_onehand_defaults),
         cmocka_unit_test(test_live_placement_grabs),
         cmocka_unit_test(test_hint),
