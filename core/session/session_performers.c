@@ -76,7 +76,7 @@ static int calibrate(fp_session *s, const fp_session_options *opt, size_t p, cha
         /* a recording whose fingertips never move is held out, hovering; one whose
          * fingertips never come near where its range places them is brought toward the
          * face (step_arrive.h) */
-        int held = stated ? fp_arrive_bring_in(&c, ins, k, s->radius, &s->head, &s->engine, NULL, &s->log) : 0;
+        int held = stated ? fp_arrive_bring_in(&c, ins, k, s->touch_radius, &s->head, &s->engine, NULL, &s->log) : 0;
         if (held < 0 || fp_arrive_step_init(&s->arrive[p], stated ? FP_ARRIVE_PLACED_WORKSPACE : FP_ARRIVE_PLACED_AUTO)) {
             snprintf(err, errlen, "session: out of memory for the hands' placement");
             return -ENOMEM;
@@ -118,7 +118,7 @@ int fp__session_performers_open(fp_session *s, const fp_session_options *opt, ch
 void fp__session_performers_build(fp_session *s, int64_t now_ns)
 {
     for (size_t p = 0; p < s->performers.count; p++) {
-        fp_arrive_step_place(&s->arrive[p], &s->pose[p], s->engaged, &s->head, s->radius, &s->log);
+        fp_arrive_step_place(&s->arrive[p], &s->pose[p], s->engaged, &s->head, s->touch_radius, &s->log);
         fp_pose_build_at(&s->pose[p], now_ns);
     }
 }
@@ -143,7 +143,7 @@ void fp__session_performers_check(fp_session *s, int64_t now_ns, const fp_frame_
         const fp_hand_pose *hands = p ? &s->extra_hands[FP_HANDS * (p - 1)] : in->hands;
         const float (*tips)[FP_FINGERS] = p ? (const float (*)[FP_FINGERS])&s->extra_tips[FP_HANDS * (p - 1)]
                                             : (const float (*)[FP_FINGERS])in->tip_distance;
-        fp_arrive_step_check(&s->arrive[p], now_ns, hands, tips, s->cs.active, s->radius,
+        fp_arrive_step_check(&s->arrive[p], now_ns, hands, tips, s->cs.active, s->touch_radius,
                              s->head.mm_per_unit, &s->engine, &s->log);
     }
 }

@@ -10,7 +10,7 @@
  *    "session") says when the hands were first placed.
  *  - The hint: when hands have been present for FP_ARRIVE_HINT_S seconds (frame time: the
  *    steps between consecutive frames that both had a hand, each at most 0.25 s) and no
- *    fingertip came within FP_ARRIVE_NEAR x the support radius of the face (the anchored
+ *    fingertip came within FP_ARRIVE_NEAR x the touch radius of the face (the anchored
  *    mapping's default engage distance; fingertip-to-surface distances as the mapping gets
  *    them) and the mapping engaged nothing, one warning (source "session") says how near the
  *    nearest fingertip came, in mm, how the hands are placed, and to calibrate. Once, and
@@ -84,9 +84,9 @@ void fp_arrive_step_event(fp_arrive_step *r, const fp_event *ev);
 /** Before fp_pose_build: with the estimator, refit p->calib when due (fp_pose_auto_refit;
  *  engaged: the last frame's gesture is engaged, nothing moves), at head's mm_per_unit and
  *  head box; hands that have not moved yet (FP_POSE_STILL_MM) are held FP_ARRIVE_HOVER x
- *  radius (the support radius, mesh units) out from the face in depth: every fingertip then
- *  lies that far in front of the nose tip's depth, so no still pose touches the face by
- *  chance, and the hint says to reach. The first placement is said once on log
+ *  radius (the touch radius, mesh units: the face's default support radius) out from the
+ *  face in depth: every fingertip then lies that far in front of the nose tip's depth, so
+ *  no still pose touches the face by chance, and the hint says to reach. The first placement is said once on log
  *  (FP_LOG_INFO, "session"), and the end of the hover when the hands move. */
 #define FP_ARRIVE_HOVER 1.0
 void fp_arrive_step_place(fp_arrive_step *r, fp_pose_state *p, bool engaged, const fp_head *head,
@@ -95,7 +95,8 @@ void fp_arrive_step_place(fp_arrive_step *r, fp_pose_state *p, bool engaged, con
 /** After the mapping ran: the hint's bookkeeping for the frame at now_ns (the frame clock;
  *  the step from the last frame counts when both had a hand, at most 0.25 s). hands: the frame's poses (mesh units);
  *  tip: the fingertip distances the mapping got (mesh units, +INFINITY beyond its reach);
- *  engaged: the mapping's control set is active; radius: the support radius (mesh units);
+ *  engaged: the mapping's control set is active; radius: the touch radius (mesh units: the
+ *  face's default support radius, which --radius leaves, as the mapping measures touch);
  *  mm_per_unit: the mesh's unit; e: the engine, asked the nearest surface without a bound
  *  while every fingertip is beyond the tip distances' reach (fp_engine_step_tip_distances;
  *  at most every 0.1 s of frame time, and on the hint's frame), so that the hint says how
@@ -117,7 +118,8 @@ void fp_arrive_step_check(fp_arrive_step *r, int64_t now_ns, const fp_hand_pose 
  *  (FP_EXT_RECORDING_JOINTS) are read, every k-th sample where they hold more than
  *  FP_ARRIVE_BRING_SAMPLES; their fingertips are placed by *c and measured against the
  *  face's vertices (e's index, as the mapping's fingertip distances are). Where some
- *  fingertip comes near already (every recording in ../shared/data does), or none is given,
+ *  fingertip comes near already (every recording in ../shared/data does, but three-claps on
+ *  the MediaPipe face at its rig's scale: brought 7 mm), or none is given,
  *  or no push up to the head's depth (head box, mesh units) brings one near, *c is left as
  *  it is. The push: a march in depth by the nearest distance less the target, which cannot
  *  step past a nearer placement (a distance changes no faster than the push; it is
