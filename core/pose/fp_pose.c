@@ -38,11 +38,12 @@ static void take_positions(fp_pose_hand *hs, fp_pose_filter *fs, const fp_filter
     hs->joints_t_ns = e->header.time_ns;
 }
 
-/* Whether joints b (at tb) jumped from a (at ta): FP_POSE_JUMP_MM and FP_POSE_JUMP_MM_S. */
-static bool jumped(const float (*a)[3], int64_t ta, const float (*b)[3], int64_t tb)
+/* Whether points b (at tb) jumped from a (at ta), n of them: FP_POSE_JUMP_MM and
+ * FP_POSE_JUMP_MM_S. */
+static bool jumped_n(const float (*a)[3], int64_t ta, const float (*b)[3], int64_t tb, int n)
 {
     double step = 0;
-    for (int j = 0; j < FP_HAND_JOINTS; j++) {
+    for (int j = 0; j < n; j++) {
         double d2 = 0;
         for (int k = 0; k < 3; k++) d2 += ((double)b[j][k] - a[j][k]) * ((double)b[j][k] - a[j][k]);
         if (d2 > step) step = d2;
@@ -52,6 +53,11 @@ static bool jumped(const float (*a)[3], int64_t ta, const float (*b)[3], int64_t
     return step > FP_POSE_JUMP_MM && step > FP_POSE_JUMP_MM_S * dt;
 }
 
+static bool jumped(const float (*a)[3], int64_t ta, const float (*b)[3], int64_t tb)
+{
+    return jumped_n(a, ta, b, tb, FP_HAND_JOINTS);
+}
+
 /* Forget hand h's motion so far (a disconnect, or the hand found elsewhere): no motion is
  * guessed across the gap (the next sample has no earlier one: frame_fraction), the input's
  * filter of the hand starts afresh. */
@@ -59,7 +65,7 @@ static void hand_afresh(fp_pose_state *p, fp_pose_hand *hs, int h, uint32_t sour
 {
     hs->prev_positions = hs->prev_angles = hs->prev_wrist = false;
     hs->joints_t_ns = hs->angles_t_ns = hs->wrist_t_ns = INT64_MIN;
-    hs->jump_pending = false;
+    hs->jump_pending = hs->wrist_jump_pending = false;
     if (source < FP_POSE_MAX_INPUTS) memset(&p->filters[source][h], 0, sizeof p->filters[0][0]);
 }
 
@@ -83,6 +89,30 @@ static bool positions_pass(fp_pose_state *p, fp_pose_hand *hs, int h, const fp_e
     hs->jump_pending = true; /* held back: the next sample decides */
     memcpy(hs->jump_mm, e->mm, sizeof hs->jump_mm);
     hs->jump_t_ns = t;
+    return false;
+}
+
+/* A wrist pose through the same rule: true where e is to be taken. */
+static bool wrist_pass(fp_pose_state *p, fp_pose_hand *hs, int h, const fp_event_wrist_pose *e)
+{
+    const int64_t t = e->header.time_ns, seen = hs->wrist_seen_t_ns;
+    const float(*b)[3] = (const float(*)[3])e->position_mm;
+    hs->wrist_seen_t_ns = t;
+    bool known = hs->have_wrist && hs->wrist_t_ns != INT64_MIN;
+    if (!known || !jumped_n((const float(*)[3])hs->raw_wrist_mm, seen > hs->wrist_t_ns ? seen : hs->wrist_t_ns, b, t, 1)) {
+        hs->glitches += hs->wrist_jump_pending;
+        hs->wrist_jump_pending = false;
+        return true;
+    }
+    if (hs->wrist_jump_pending && !jumped_n((const float(*)[3])hs->wrist_jump_mm, hs->wrist_jump_t_ns, b, t, 1)) {
+        hand_afresh(p, hs, h, e->header.source);
+        hs->absent_until_ns = t + FP_POSE_JUMP_ABSENT_NS;
+        hs->jumps++;
+        return true;
+    }
+    hs->wrist_jump_pending = true;
+    memcpy(hs->wrist_jump_mm, e->position_mm, sizeof hs->wrist_jump_mm);
+    hs->wrist_jump_t_ns = t;
     return false;
 }
 
@@ -154,6 +184,8 @@ void fp_pose_take_event_filtered(fp_pose_state *p, const fp_event *ev, const fp_
         hs->time_ns = ev->header.time_ns;
         break;
     case FP_EVENT_WRIST_POSE:
+        if (!wrist_pass(p, hs, h, &ev->wrist)) break;
+        memcpy(hs->raw_wrist_mm, ev->wrist.position_mm, sizeof hs->raw_wrist_mm);
         take_wrist(hs, fs, filter, &ev->wrist);
         hs->have_wrist = true;
         break;
@@ -215,7 +247,8 @@ static void build(fp_pose_state *p, bool at, int64_t now_ns)
         /* a hand found elsewhere is absent a moment; one held back too long is absent */
         out->present = hs->present &&
                        !(at && (now_ns < hs->absent_until_ns ||
-                                (hs->jump_pending && now_ns - hs->joints_t_ns > FP_POSE_MAX_PERIOD_NS)));
+                                (hs->jump_pending && now_ns - hs->joints_t_ns > FP_POSE_MAX_PERIOD_NS) ||
+                                (hs->wrist_jump_pending && now_ns - hs->wrist_t_ns > FP_POSE_MAX_PERIOD_NS)));
         if (!out->present) continue;
         out->time_ns = hs->time_ns;
         if (hs->have_positions) {

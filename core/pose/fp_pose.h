@@ -78,6 +78,10 @@ typedef struct fp_pose_hand {
     float jump_mm[FP_HAND_JOINTS][3];
     int64_t jump_t_ns, absent_until_ns;
     int64_t seen_t_ns;                    /* the latest joint positions' time, taken or not */
+    float raw_wrist_mm[3];                /* the same for wrist poses (their position) */
+    bool wrist_jump_pending;
+    float wrist_jump_mm[3];
+    int64_t wrist_jump_t_ns, wrist_seen_t_ns;
     unsigned long jumps;                  /* hands found elsewhere (confirmed jumps) */
     unsigned long glitches;               /* single samples dropped as jumps */
 } fp_pose_hand;
@@ -104,7 +108,8 @@ typedef struct fp_pose_hand {
  *  found elsewhere (.jumps): it starts afresh there (no motion across the jump, its filter
  *  reset) and is absent for frames before FP_POSE_JUMP_ABSENT_NS past that sample, so a
  *  gesture it held lets go instead of dragging the skin across the jump; far from both, it is
- *  held back in turn. A hand held back longer than FP_POSE_MAX_PERIOD_NS is absent. */
+ *  held back in turn. A hand held back longer than FP_POSE_MAX_PERIOD_NS is absent. A wrist
+ *  pose's position (a glove's tracker) goes by the same rule. */
 #define FP_POSE_JUMP_MM 60.0
 #define FP_POSE_JUMP_MM_S 5000.0
 #define FP_POSE_JUMP_ABSENT_NS 50000000LL

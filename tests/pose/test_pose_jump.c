@@ -1,7 +1,7 @@
 /* core/pose: a tracker's jumps (fp_pose.h FP_POSE_JUMP_MM): a single sample far away is
  * dropped, a hand found elsewhere is absent a moment and starts afresh there, a tracker
  * sending nonsense leaves the hand absent, and the real recordings (at their rate, every
- * other row, 1.6x faster) never jump. */
+ * other row, 1.6x faster) never jump; a glove tracker's wrist poses go by the same rule. */
 #define _GNU_SOURCE
 #include "fp_pose.h"
 #include "leapcsv.h"
@@ -157,6 +157,52 @@ static void test_recordings_never_jump(void **state)
     }
 }
 
+/* A glove's tracker (wrist poses beside joint angles): the same rule on the wrist's
+ * position. 1 mm a sample; sample 30 a glitch 200 mm over, dropped; from sample 60 on 150 mm
+ * over: absent a moment, then there. */
+static void test_wrist_jumps(void **state)
+{
+    (void)state;
+    fp_pose_state p;
+    fp_pose_init(&p, 0, &identity);
+    size_t absent = 0;
+    int64_t found = 61 * PERIOD_NS;
+    for (int64_t now = 0, i = 0; now < 100 * PERIOD_NS; now += FRAME_NS) {
+        for (; i < 100 && i * PERIOD_NS <= now; i++) {
+            fp_event a, w;
+            memset(&a, 0, sizeof a);
+            a.header.size = sizeof a.angles;
+            a.header.type = FP_EVENT_JOINT_ANGLES;
+            a.header.hand = FP_HAND_RIGHT;
+            a.header.time_ns = i * PERIOD_NS;
+            fp_pose_take_event(&p, &a);
+            memset(&w, 0, sizeof w);
+            w.header.size = sizeof w.wrist;
+            w.header.type = FP_EVENT_WRIST_POSE;
+            w.header.hand = FP_HAND_RIGHT;
+            w.header.time_ns = i * PERIOD_NS;
+            w.wrist.position_mm[0] = (float)i + (i == 30 ? 200.f : 0.f) + (i >= 60 ? 150.f : 0.f);
+            w.wrist.position_mm[1] = 200.f;
+            w.wrist.rotation[0] = 1.f;
+            fp_pose_take_event(&p, &w);
+        }
+        fp_pose_build_at(&p, now);
+        const fp_hand_pose *hp = &p.poses[FP_HAND_RIGHT];
+        double t = (double)now / PERIOD_NS, want = t + (now >= found ? 150.0 : 0.0);
+        if (now >= found && now < found + FP_POSE_JUMP_ABSENT_NS) {
+            assert_false(hp->present);
+            absent++;
+        } else if (now > PERIOD_NS) {
+            assert_true(hp->present);
+            if (!(fabs(hp->joints[0][0] - want) < 3.0))
+                fail_msg("frame at %.2f samples: wrist x %.2f, want about %.2f", t, hp->joints[0][0], want);
+        }
+    }
+    assert_true(absent >= 2);
+    assert_int_equal(p.hands[FP_HAND_RIGHT].glitches, 1);
+    assert_int_equal(p.hands[FP_HAND_RIGHT].jumps, 1);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -164,6 +210,7 @@ int main(void)
         cmocka_unit_test(test_found_elsewhere),
         cmocka_unit_test(test_nonsense_absent),
         cmocka_unit_test(test_recordings_never_jump),
+        cmocka_unit_test(test_wrist_jumps),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
