@@ -4,6 +4,7 @@
 
 #include "fp_vec.h"
 
+#include <assert.h>
 #include <math.h>
 #include <string.h>
 
@@ -40,7 +41,7 @@ static void take_positions(fp_pose_hand *hs, fp_pose_filter *fs, const fp_filter
 
 /* Whether points b (at tb) jumped from a (at ta), n of them: FP_POSE_JUMP_MM and
  * FP_POSE_JUMP_MM_S. */
-static bool jumped_n(const float (*a)[3], int64_t ta, const float (*b)[3], int64_t tb, int n)
+static bool jumped(const float (*a)[3], int64_t ta, const float (*b)[3], int64_t tb, int n)
 {
     double step = 0;
     for (int j = 0; j < n; j++) {
@@ -53,11 +54,6 @@ static bool jumped_n(const float (*a)[3], int64_t ta, const float (*b)[3], int64
     return step > FP_POSE_JUMP_MM && step > FP_POSE_JUMP_MM_S * dt;
 }
 
-static bool jumped(const float (*a)[3], int64_t ta, const float (*b)[3], int64_t tb)
-{
-    return jumped_n(a, ta, b, tb, FP_HAND_JOINTS);
-}
-
 /* Forget hand h's motion so far (a disconnect, or the hand found elsewhere): no motion is
  * guessed across the gap (the next sample has no earlier one: frame_fraction), the input's
  * filter of the hand starts afresh. */
@@ -65,55 +61,34 @@ static void hand_afresh(fp_pose_state *p, fp_pose_hand *hs, int h, uint32_t sour
 {
     hs->prev_positions = hs->prev_angles = hs->prev_wrist = false;
     hs->joints_t_ns = hs->angles_t_ns = hs->wrist_t_ns = INT64_MIN;
-    hs->jump_pending = hs->wrist_jump_pending = false;
+    hs->joint_jumps.pending = hs->wrist_jumps.pending = false;
     if (source < FP_POSE_MAX_INPUTS) memset(&p->filters[source][h], 0, sizeof p->filters[0][0]);
 }
 
-/* Joint positions through the jump rule (FP_POSE_JUMP_MM): true where e is to be taken. */
-static bool positions_pass(fp_pose_state *p, fp_pose_hand *hs, int h, const fp_event_joint_positions *e)
+/* The jump rule (FP_POSE_JUMP_MM) on sample x (n points, at t, from `source`) of stream j,
+ * whose latest taken sample is at last_t (INT64_MIN: none, nothing to jump from): true where
+ * x is to be taken (and then kept in j->raw). */
+static bool jump_rule(fp_pose_state *p, fp_pose_hand *hs, int h, uint32_t source, fp_pose_jumps *j,
+                      const float (*x)[3], int n, int64_t t, int64_t last_t)
 {
-    const int64_t t = e->header.time_ns, seen = hs->seen_t_ns;
-    hs->seen_t_ns = t;
-    bool known = hs->present && hs->have_positions && hs->joints_t_ns != INT64_MIN;
-    if (!known || !jumped((const float (*)[3])hs->raw_mm, seen > hs->joints_t_ns ? seen : hs->joints_t_ns, e->mm, t)) {
-        hs->glitches += hs->jump_pending;
-        hs->jump_pending = false; /* (a held sample was a glitch) */
-        return true;
-    }
-    if (hs->jump_pending && !jumped((const float (*)[3])hs->jump_mm, hs->jump_t_ns, e->mm, t)) {
-        hand_afresh(p, hs, h, e->header.source); /* found elsewhere */
+    assert(n >= 1 && n <= FP_HAND_JOINTS);
+    const int64_t seen = j->seen_t_ns;
+    j->seen_t_ns = t;
+    if (last_t == INT64_MIN || !jumped((const float (*)[3])j->raw, seen > last_t ? seen : last_t, x, t, n)) {
+        hs->glitches += j->pending; /* (a held sample was a glitch) */
+        j->pending = false;
+    } else if (j->pending && !jumped((const float (*)[3])j->held, j->held_t_ns, x, t, n)) {
+        hand_afresh(p, hs, h, source); /* found elsewhere */
         hs->absent_until_ns = t + FP_POSE_JUMP_ABSENT_NS;
         hs->jumps++;
-        return true;
+    } else { /* held back: the next sample decides */
+        j->pending = true;
+        memcpy(j->held, x, (size_t)n * sizeof x[0]);
+        j->held_t_ns = t;
+        return false;
     }
-    hs->jump_pending = true; /* held back: the next sample decides */
-    memcpy(hs->jump_mm, e->mm, sizeof hs->jump_mm);
-    hs->jump_t_ns = t;
-    return false;
-}
-
-/* A wrist pose through the same rule: true where e is to be taken. */
-static bool wrist_pass(fp_pose_state *p, fp_pose_hand *hs, int h, const fp_event_wrist_pose *e)
-{
-    const int64_t t = e->header.time_ns, seen = hs->wrist_seen_t_ns;
-    const float(*b)[3] = (const float(*)[3])e->position_mm;
-    hs->wrist_seen_t_ns = t;
-    bool known = hs->have_wrist && hs->wrist_t_ns != INT64_MIN;
-    if (!known || !jumped_n((const float(*)[3])hs->raw_wrist_mm, seen > hs->wrist_t_ns ? seen : hs->wrist_t_ns, b, t, 1)) {
-        hs->glitches += hs->wrist_jump_pending;
-        hs->wrist_jump_pending = false;
-        return true;
-    }
-    if (hs->wrist_jump_pending && !jumped_n((const float(*)[3])hs->wrist_jump_mm, hs->wrist_jump_t_ns, b, t, 1)) {
-        hand_afresh(p, hs, h, e->header.source);
-        hs->absent_until_ns = t + FP_POSE_JUMP_ABSENT_NS;
-        hs->jumps++;
-        return true;
-    }
-    hs->wrist_jump_pending = true;
-    memcpy(hs->wrist_jump_mm, e->position_mm, sizeof hs->wrist_jump_mm);
-    hs->wrist_jump_t_ns = t;
-    return false;
+    memcpy(j->raw, x, (size_t)n * sizeof x[0]);
+    return true;
 }
 
 static void take_angles(fp_pose_hand *hs, fp_pose_filter *fs, const fp_filter_config *c,
@@ -171,8 +146,9 @@ void fp_pose_take_event_filtered(fp_pose_state *p, const fp_event *ev, const fp_
     fp_pose_filter *fs = filter_state(p, ev, h, filter);
     switch (ev->header.type) {
     case FP_EVENT_JOINT_POSITIONS:
-        if (!positions_pass(p, hs, h, &ev->positions)) break;
-        memcpy(hs->raw_mm, ev->positions.mm, sizeof hs->raw_mm);
+        if (!jump_rule(p, hs, h, ev->header.source, &hs->joint_jumps, ev->positions.mm, FP_HAND_JOINTS,
+                       ev->header.time_ns, hs->present && hs->have_positions ? hs->joints_t_ns : INT64_MIN))
+            break;
         take_positions(hs, fs, filter, &ev->positions);
         hs->have_positions = hs->present = true;
         hs->time_ns = ev->header.time_ns;
@@ -184,8 +160,9 @@ void fp_pose_take_event_filtered(fp_pose_state *p, const fp_event *ev, const fp_
         hs->time_ns = ev->header.time_ns;
         break;
     case FP_EVENT_WRIST_POSE:
-        if (!wrist_pass(p, hs, h, &ev->wrist)) break;
-        memcpy(hs->raw_wrist_mm, ev->wrist.position_mm, sizeof hs->raw_wrist_mm);
+        if (!jump_rule(p, hs, h, ev->header.source, &hs->wrist_jumps, (const float (*)[3])ev->wrist.position_mm, 1,
+                       ev->header.time_ns, hs->have_wrist ? hs->wrist_t_ns : INT64_MIN))
+            break;
         take_wrist(hs, fs, filter, &ev->wrist);
         hs->have_wrist = true;
         break;
@@ -247,8 +224,8 @@ static void build(fp_pose_state *p, bool at, int64_t now_ns)
         /* a hand found elsewhere is absent a moment; one held back too long is absent */
         out->present = hs->present &&
                        !(at && (now_ns < hs->absent_until_ns ||
-                                (hs->jump_pending && now_ns - hs->joints_t_ns > FP_POSE_MAX_PERIOD_NS) ||
-                                (hs->wrist_jump_pending && now_ns - hs->wrist_t_ns > FP_POSE_MAX_PERIOD_NS)));
+                                (hs->joint_jumps.pending && now_ns - hs->joints_t_ns > FP_POSE_MAX_PERIOD_NS) ||
+                                (hs->wrist_jumps.pending && now_ns - hs->wrist_t_ns > FP_POSE_MAX_PERIOD_NS)));
         if (!out->present) continue;
         out->time_ns = hs->time_ns;
         if (hs->have_positions) {

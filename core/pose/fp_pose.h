@@ -50,6 +50,16 @@ typedef struct fp_calibration {
     double hand_offset[FP_HANDS][3];/* mesh units, added per hand (left, right) */
 } fp_calibration;
 
+/** One stream of a hand's positions under the jump rule (FP_POSE_JUMP_MM): the joints, or
+ *  the wrist's position (its first point). */
+typedef struct fp_pose_jumps {
+    float raw[FP_HAND_JOINTS][3];         /* the latest taken, as they came (unfiltered) */
+    float held[FP_HAND_JOINTS][3];        /* a sample held back as a jump */
+    int64_t held_t_ns;
+    int64_t seen_t_ns;                    /* the latest sample's time, taken or not */
+    bool pending;                         /* held holds a sample */
+} fp_pose_jumps;
+
 /** What is known of one hand from its events (millimetres, device frame), as filtered: the
  *  latest sample of each kind and the one before it (prev_*), each with its event time. */
 typedef struct fp_pose_hand {
@@ -71,17 +81,10 @@ typedef struct fp_pose_hand {
     int64_t angles_t_ns, prev_angles_t_ns;
     int64_t wrist_t_ns, prev_wrist_t_ns;
     float built_mm[FP_HAND_JOINTS][3];    /* the joints of the latest build (device mm) */
-    /* jumps (FP_POSE_JUMP_MM): the latest joint positions taken, as they came (unfiltered);
-     * a sample held back as a jump; a hand found elsewhere is absent until absent_until_ns */
-    float raw_mm[FP_HAND_JOINTS][3];
-    bool jump_pending;
-    float jump_mm[FP_HAND_JOINTS][3];
-    int64_t jump_t_ns, absent_until_ns;
-    int64_t seen_t_ns;                    /* the latest joint positions' time, taken or not */
-    float raw_wrist_mm[3];                /* the same for wrist poses (their position) */
-    bool wrist_jump_pending;
-    float wrist_jump_mm[3];
-    int64_t wrist_jump_t_ns, wrist_seen_t_ns;
+    /* jumps (FP_POSE_JUMP_MM) of the joints and of the wrist's position; a hand found
+     * elsewhere is absent until absent_until_ns */
+    fp_pose_jumps joint_jumps, wrist_jumps;
+    int64_t absent_until_ns;
     unsigned long jumps;                  /* hands found elsewhere (confirmed jumps) */
     unsigned long glitches;               /* single samples dropped as jumps */
 } fp_pose_hand;
