@@ -219,9 +219,8 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, const fp
             const float *posed = s->shown;
             show_deformed(s, (cs->intents & FP_INTENT_COMMIT) != 0, was, st);
             /* how far the skin followed the fingertips (skin_reach.h) */
-            fp_skin_reach_frame(s->engine.points, posed, s->shown, asked, st, &s->gesture_reach);
-            if (s->rig.rig)
-                fp_skin_reach_allowed(s->engine.points, posed, s->shown, cs, st, &s->gesture_reach_allowed);
+            fp_skin_reach_frame(s->engine.points, posed, s->shown, asked, s->rig.rig ? cs : NULL, st,
+                                &s->gesture_reach, &s->gesture_reach_allowed);
             if (cs->intents & FP_INTENT_COMMIT) fp_commit_step_run(s, st);
         } else {
             fp_changed_all(&s->shown_changed); /* the posed base again, after an error */

@@ -9,15 +9,44 @@
 #include <stdbool.h>
 #include <string.h>
 
-/* The reaches of cs's vectors that start on the skin into out[0 .. *count), the longest ask
- * into *asked_max, and into g (may be NULL). */
-static void measure(const csrbf_points *points, const float *ref, const float *shown, const fp_control_set *cs,
-                    float *out, size_t *count, double *asked_max, fp_skin_reach_gesture *g)
+/* One vector's reach r (it asked `asked`, mesh units) into out[*count] and g (may be NULL). */
+static void add(double r, double asked, float *out, size_t *count, fp_skin_reach_gesture *g)
 {
-    *count = 0;
-    *asked_max = 0;
+    assert(*count < FP_FRAME_REACH_MAX);
+    out[(*count)++] = (float)r;
+    if (!g) return;
+    if (!g->vectors || r < g->least) g->least = r;
+    g->vectors++;
+    g->below_90 += r < 0.9;
+    g->sum_reach += r;
+    if (asked > g->asked_max) g->asked_max = asked;
+}
+
+/* How far vector i of cs asked (mesh units), and how far vertex v moved, over it: *r. */
+static double asked_of(const fp_control_set *cs, size_t i, const float *ref, const float *shown, uint32_t v,
+                       double *r)
+{
+    double asked = 0, moved = 0;
+    for (int a = 0; a < 3; a++) {
+        double q = (double)cs->end[i][a] - cs->start[i][a];
+        double m = (double)shown[3 * (size_t)v + a] - ref[3 * (size_t)v + a];
+        asked += q * q;
+        moved += m * m;
+    }
+    asked = sqrt(asked);
+    *r = sqrt(moved) / asked;
+    return asked;
+}
+
+void fp_skin_reach_frame(const csrbf_points *points, const float *ref, const float *shown,
+                         const fp_control_set *cs, const fp_control_set *allowed, fp_frame_stats *st,
+                         fp_skin_reach_gesture *g, fp_skin_reach_gesture *g_allowed)
+{
+    st->reach_vectors = st->reach_allowed_vectors = 0;
+    st->reach_asked_max = 0;
     size_t n = cs->count < FP_ENGINE_MAX_CONTROL ? cs->count : FP_ENGINE_MAX_CONTROL;
     if (!n || !(cs->radius > 0)) return;
+    /* the skin under each start point, once for both sets (a rig's clamp keeps the starts) */
     float dist[FP_ENGINE_MAX_CONTROL];
     uint32_t idx[FP_ENGINE_MAX_CONTROL];
     if (csrbf_points_nearest(points, &cs->start[0][0], n, (float)(FP_REACH_TOUCH * cs->radius), dist, idx) < 0)
@@ -25,40 +54,16 @@ static void measure(const csrbf_points *points, const float *ref, const float *s
     size_t nv = csrbf_points_count(points);
     for (size_t i = 0; i < n; i++) {
         if (idx[i] == UINT32_MAX || idx[i] >= nv) continue;
-        double asked = 0, moved = 0;
-        for (int a = 0; a < 3; a++) {
-            double q = (double)cs->end[i][a] - cs->start[i][a];
-            double m = (double)shown[3 * (size_t)idx[i] + a] - ref[3 * (size_t)idx[i] + a];
-            asked += q * q;
-            moved += m * m;
-        }
-        asked = sqrt(asked);
+        double r, asked = asked_of(cs, i, ref, shown, idx[i], &r);
         if (!(asked >= FP_REACH_MIN_ASK * cs->radius)) continue;
-        double r = sqrt(moved) / asked;
-        assert(*count < FP_FRAME_REACH_MAX);
-        out[(*count)++] = (float)r;
-        if (asked > *asked_max) *asked_max = asked;
-        if (g) {
-            if (!g->vectors || r < g->least) g->least = r;
-            g->vectors++;
-            g->below_90 += r < 0.9;
-            g->sum_reach += r;
-            if (asked > g->asked_max) g->asked_max = asked;
-        }
+        add(r, asked, st->reach, &st->reach_vectors, g);
+        if (asked > st->reach_asked_max) st->reach_asked_max = asked;
+        if (!allowed || i >= allowed->count) continue;
+        assert(!memcmp(allowed->start[i], cs->start[i], sizeof cs->start[i]));
+        double ra, asked_allowed = asked_of(allowed, i, ref, shown, idx[i], &ra);
+        if (asked_allowed >= FP_REACH_MIN_ASK * allowed->radius)
+            add(ra, asked_allowed, st->reach_allowed, &st->reach_allowed_vectors, g_allowed);
     }
-}
-
-void fp_skin_reach_frame(const csrbf_points *points, const float *ref, const float *shown,
-                         const fp_control_set *cs, fp_frame_stats *st, fp_skin_reach_gesture *g)
-{
-    measure(points, ref, shown, cs, st->reach, &st->reach_vectors, &st->reach_asked_max, g);
-}
-
-void fp_skin_reach_allowed(const csrbf_points *points, const float *ref, const float *shown,
-                           const fp_control_set *cs, fp_frame_stats *st, fp_skin_reach_gesture *g)
-{
-    double longest;
-    measure(points, ref, shown, cs, st->reach_allowed, &st->reach_allowed_vectors, &longest, g);
 }
 
 void fp_skin_reach_gesture_reset(fp_skin_reach_gesture *g) { memset(g, 0, sizeof *g); }

@@ -11,7 +11,7 @@
  *
  * Per frame into fp_frame_stats (reach, reach_vectors, reach_asked_max); per gesture a
  * summary (fp_skin_reach_gesture) the session logs at the gesture's end. With a rig, the
- * same against the vectors its clamp allowed (fp_skin_reach_allowed): how far the skin
+ * same against the vectors its clamp allowed (fp_skin_reach_frame's `allowed`): how far the skin
  * followed where the skull and jaw let it, so that a push into the cheekbone, held back on
  * purpose, reads as such.
  * Threads: the session thread. No allocation, no I/O.
@@ -49,14 +49,14 @@ typedef struct fp_skin_reach_gesture {
  *  / |end - start| at that vertex v. ref, shown: the points' vertex count x 3 floats, mesh
  *  units (the surface before the frame's deformation, the shape shown). Writes
  *  st->reach_vectors, st->reach[0 .. reach_vectors) and st->reach_asked_max, and adds them
- *  to g (may be NULL). Nothing is written where the index fails (st->reach_vectors 0). */
+ *  to g (may be NULL). allowed (NULL: none, and st->reach_allowed_vectors 0): a rig's clamped
+ *  copy of cs (its vectors start where cs's do, at most as many), each of the same vectors'
+ *  reach against it into st->reach_allowed and g_allowed (may be NULL; a vector the rig held
+ *  under FP_REACH_MIN_ASK x R is left out). One nearest query for both. Nothing is written
+ *  where the index fails (the counts 0). */
 void fp_skin_reach_frame(const csrbf_points *points, const float *ref, const float *shown,
-                         const fp_control_set *cs, fp_frame_stats *st, fp_skin_reach_gesture *g);
-
-/** The same against what a rig allowed: cs the rig's clamped copy of the mapping's set (the
- *  vectors the engine got), into st->reach_allowed[0 .. reach_allowed_vectors) and g. */
-void fp_skin_reach_allowed(const csrbf_points *points, const float *ref, const float *shown,
-                           const fp_control_set *cs, fp_frame_stats *st, fp_skin_reach_gesture *g);
+                         const fp_control_set *cs, const fp_control_set *allowed, fp_frame_stats *st,
+                         fp_skin_reach_gesture *g, fp_skin_reach_gesture *g_allowed);
 
 /** Forget the gesture (its end). */
 void fp_skin_reach_gesture_reset(fp_skin_reach_gesture *g);

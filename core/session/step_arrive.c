@@ -172,7 +172,6 @@ int fp_arrive_bring_in(fp_calibration *c, fp_input *const *ins, size_t n, double
     const double deepest = (double)head->max[2] - head->min[2];
     bool acts[FP_HANDS][FP_FINGERS];
     double most = acting(&t, d, acts); /* (d: room for a float a kept fingertip) */
-    double d0 = nearest_at(&t, c, 0, INFINITY, NULL, e, q, d), p = 0;
     if (t.kept && most < FP_POSE_STILL_MM) { /* hands that never move hover, as live ones do */
         c->offset[2] += FP_ARRIVE_HOVER * radius;
         fp_slog_printf(log, FP_LOG_INFO, "session",
@@ -182,6 +181,7 @@ int fp_arrive_bring_in(fp_calibration *c, fp_input *const *ins, size_t n, double
         rc = 1;
         goto out;
     }
+    double d0 = nearest_at(&t, c, 0, INFINITY, NULL, e, q, d), p = 0;
     if (!(d0 > near) || !isfinite(d0)) goto out; /* near already (or nothing to measure) */
     /* the march, on the fingertips that act: a push of dp - to moves none of them nearer
      * than to, so none is passed */

@@ -257,6 +257,36 @@ static void pinch_csv(const char *rec, const char *out, int samples)
     assert_int_equal(fclose(g), 0);
 }
 
+/* A recording whose hand is found `dx` mm over in x from data row `from` on (0-based): every
+ * x column after the hand's id and side moved, the other columns as they are. */
+static void shifted_csv(const char *rec, const char *out, int from, double dx)
+{
+    char in[4300], line[8192];
+    snprintf(in, sizeof in, "%s/hands/leap-motion/%s_joints_mm.csv", fp_test_data_dir(), rec);
+    FILE *f = fopen(in, "r"), *g = fopen(out, "w");
+    assert_non_null(f);
+    assert_non_null(g);
+    bool is_x[256] = {false};
+    assert_non_null(fgets(line, sizeof line, f));
+    fputs(line, g);
+    char *save = NULL;
+    int c = 0, nx = 0;
+    for (char *tok = strtok_r(line, ",\n", &save); tok && c < 256; tok = strtok_r(NULL, ",\n", &save), c++)
+        nx += is_x[c] = c >= 4 && strlen(tok) > 2 && !strcmp(tok + strlen(tok) - 2, "_x");
+    assert_true(nx >= 20);
+    for (int row = 0; fgets(line, sizeof line, f); row++) {
+        save = NULL;
+        c = 0;
+        for (char *tok = strtok_r(line, ",\n", &save); tok; tok = strtok_r(NULL, ",\n", &save), c++) {
+            if (c < 256 && is_x[c] && row >= from) fprintf(g, "%s%.4f", c ? "," : "", strtod(tok, NULL) + dx);
+            else fprintf(g, "%s%s", c ? "," : "", tok);
+        }
+        fputc('\n', g);
+    }
+    fclose(f);
+    assert_int_equal(fclose(g), 0);
+}
+
 /* A still hand pinching, replayed with its range: never near the face where the range puts
  * it, so brought closer by its pinching fingertips, and the pinch moves the skin; the same
  * hand placed as it arrives (no range in advance) is not, and gets the hint. */
@@ -390,35 +420,10 @@ static void test_still_hands_hover(void **state)
 static void test_jump_lets_go(void **state)
 {
     (void)state;
-    char dir[] = "/tmp/fp-arrive-XXXXXX", csv[64], input[200], in[4300], line[8192];
+    char dir[] = "/tmp/fp-arrive-XXXXXX", csv[64], input[200];
     assert_non_null(mkdtemp(dir));
     snprintf(csv, sizeof csv, "%s/jump_joints_mm.csv", dir);
-    snprintf(in, sizeof in, "%s/hands/leap-motion/grab_joints_mm.csv", fp_test_data_dir());
-    FILE *f = fopen(in, "r"), *g = fopen(csv, "w");
-    assert_non_null(f);
-    assert_non_null(g);
-    int cols_x[64], nx = 0;
-    assert_non_null(fgets(line, sizeof line, f));
-    fputs(line, g);
-    char *save = NULL;
-    int c = 0;
-    for (char *tok = strtok_r(line, ",\n", &save); tok; tok = strtok_r(NULL, ",\n", &save), c++)
-        if (c >= 4 && strlen(tok) > 2 && !strcmp(tok + strlen(tok) - 2, "_x") && nx < 64) cols_x[nx++] = c;
-    assert_true(nx >= 20);
-    for (int row = 0; fgets(line, sizeof line, f); row++) {
-        save = NULL;
-        c = 0;
-        int k = 0;
-        for (char *tok = strtok_r(line, ",\n", &save); tok; tok = strtok_r(NULL, ",\n", &save), c++) {
-            bool x = k < nx && cols_x[k] == c;
-            k += x;
-            if (x && row >= 130) fprintf(g, "%s%.4f", c ? "," : "", strtod(tok, NULL) + 150.0);
-            else fprintf(g, "%s%s", c ? "," : "", tok);
-        }
-        fputc('\n', g);
-    }
-    fclose(f);
-    assert_int_equal(fclose(g), 0);
+    shifted_csv("grab", csv, 130, 150.0);
     char clean[4400];
     input_of(clean, sizeof clean, "grab", ",workspace=0");
     snprintf(input, sizeof input, "replay:%s,fast=1,workspace=0", csv);

@@ -2,6 +2,7 @@
 #define _GNU_SOURCE
 #include "fp_pose_auto.h"
 #include "leapcsv.h"
+#include "pose_events.h"
 
 #include <errno.h>
 #include <math.h>
@@ -17,18 +18,6 @@ static const char *data_dir(void)
 {
     const char *d = getenv("FP_SHARED_DATA");
     return d && *d ? d : "../shared/data";
-}
-
-static fp_event joints_event(int hand, const float mm[FP_HAND_JOINTS][3], int64_t t)
-{
-    fp_event ev;
-    memset(&ev, 0, sizeof ev);
-    ev.header.size = sizeof ev.positions;
-    ev.header.type = FP_EVENT_JOINT_POSITIONS;
-    ev.header.hand = hand;
-    ev.header.time_ns = t;
-    memcpy(ev.positions.mm, mm, sizeof ev.positions.mm);
-    return ev;
 }
 
 /* A hand whose joints spread over a 100 x 100 x 100 mm box from (x, y, z). */

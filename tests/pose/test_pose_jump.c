@@ -5,6 +5,7 @@
 #define _GNU_SOURCE
 #include "fp_pose.h"
 #include "leapcsv.h"
+#include "pose_events.h"
 
 #include <math.h>
 #include <setjmp.h>
@@ -17,18 +18,6 @@
 
 #define PERIOD_NS 9091000LL /* 110 Hz, a Leap's rate */
 #define FRAME_NS 16666667LL
-
-static fp_event joints_event(int hand, const float mm[FP_HAND_JOINTS][3], int64_t t)
-{
-    fp_event ev;
-    memset(&ev, 0, sizeof ev);
-    ev.header.size = sizeof ev.positions;
-    ev.header.type = FP_EVENT_JOINT_POSITIONS;
-    ev.header.hand = hand;
-    ev.header.time_ns = t;
-    memcpy(ev.positions.mm, mm, sizeof ev.positions.mm);
-    return ev;
-}
 
 /* A hand at (x, 200, 0): joints spread 5 mm apart along y. */
 static void hand_at(float mm[FP_HAND_JOINTS][3], float x)

@@ -714,6 +714,14 @@ static void hud_hands(const viewer *v, char *buf, size_t len)
     }
 }
 
+/* The smallest of n reaches (n > 0; 0 for none). */
+static float least_of(const float *r, size_t n)
+{
+    float least = n ? r[0] : 0.f;
+    for (size_t i = 1; i < n; i++) least = r[i] < least ? r[i] : least;
+    return least;
+}
+
 static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
 {
     double recent = 0;
@@ -725,10 +733,8 @@ static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
     char reach[160] = "", tips[160] = "";
     const fp_frame_stats *la = &v->last_active;
     if (la->reach_vectors) {
-        float least = la->reach[0], allowed = la->reach_allowed_vectors ? la->reach_allowed[0] : 0;
-        for (size_t i = 1; i < la->reach_vectors; i++) least = la->reach[i] < least ? la->reach[i] : least;
-        for (size_t i = 1; i < la->reach_allowed_vectors; i++)
-            allowed = la->reach_allowed[i] < allowed ? la->reach_allowed[i] : allowed;
+        float least = least_of(la->reach, la->reach_vectors);
+        float allowed = least_of(la->reach_allowed, la->reach_allowed_vectors);
         char rig[64] = ""; /* a push toward the bone, held back by the rig */
         if (la->reach_allowed_vectors && fabsf(allowed - least) >= 0.005f)
             snprintf(rig, sizeof rig, "; %.0f%% of what the rig allows", 100.0 * allowed);
