@@ -89,11 +89,29 @@ static void test_confirmations_kept_notes_fade(void **state)
     assert_string_equal(live[1]->text, "take 3: 12 frames");
 }
 
+/* The reach line: the least reach and the drag; with a rig whose clamp held a push back, what
+ * it allowed too; nothing without a touching vector. */
+static void test_reach_line(void **state)
+{
+    (void)state;
+    char out[160];
+    const float r[3] = {1.0f, 0.09f, 0.5f}, a[3] = {1.0f, 1.0f, 1.0f};
+    fp_hud_reach_line(r, 3, NULL, 0, 76.44, out, sizeof out);
+    assert_string_equal(out, "\nskin follows the fingertips 9%  (drag 76.4 mm)");
+    fp_hud_reach_line(r, 3, a, 3, 76.44, out, sizeof out);
+    assert_string_equal(out, "\nskin follows the fingertips 9%  (drag 76.4 mm; 100% of what the rig allows)");
+    fp_hud_reach_line(a, 3, a, 3, 10.0, out, sizeof out); /* the rig held nothing back */
+    assert_string_equal(out, "\nskin follows the fingertips 100%  (drag 10.0 mm)");
+    fp_hud_reach_line(r, 0, a, 3, 10.0, out, sizeof out);
+    assert_string_equal(out, "");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_wrap_fits),
         cmocka_unit_test(test_confirmations_kept_notes_fade),
+        cmocka_unit_test(test_reach_line),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

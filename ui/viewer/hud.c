@@ -184,3 +184,24 @@ void fp_hud_draw_help(fp_render *r, int w, int h, float scale, const char *text,
     fp_render_text(r, w, h, x + pad, y + pad, scale, wrapped, color);
     free(wrapped);
 }
+
+/* The smallest of n reaches (0 for none). */
+static float least_of(const float *r, size_t n)
+{
+    float least = n ? r[0] : 0.f;
+    for (size_t i = 1; i < n; i++) least = r[i] < least ? r[i] : least;
+    return least;
+}
+
+void fp_hud_reach_line(const float *reach, size_t n, const float *allowed, size_t na, double drag_mm,
+                       char *out, size_t len)
+{
+    if (!len) return;
+    out[0] = 0;
+    if (!n) return;
+    float least = least_of(reach, n), least_allowed = least_of(allowed, na);
+    char rig[64] = ""; /* a push toward the bone, held back by the rig */
+    if (na && fabsf(least_allowed - least) >= 0.005f)
+        snprintf(rig, sizeof rig, "; %.0f%% of what the rig allows", 100.0 * least_allowed);
+    snprintf(out, len, "\nskin follows the fingertips %.0f%%  (drag %.1f mm%s)", 100.0 * least, drag_mm, rig);
+}

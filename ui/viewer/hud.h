@@ -51,6 +51,14 @@ float fp_hud_draw_badge(fp_render *r, int w, int h, float x, float y, float scal
  *  kept. A line never holds less than one character. Returns the number of lines written. */
 size_t fp_hud_wrap(const char *text, float max_px, float scale, char *out, size_t n);
 
+/** The HUD's reach line (skin_reach.h), into out (len bytes, always terminated): "\nskin
+ *  follows the fingertips 9%  (drag 76.4 mm)", the least of the n reaches (fractions, 1: the
+ *  whole way) of the last deforming frame and its longest drag in mm; where a rig's reach
+ *  (the na reaches against what its clamp allowed) differs by half a point or more, "...;
+ *  100% of what the rig allows)". Empty with n == 0. Plain C; any thread. */
+void fp_hud_reach_line(const float *reach, size_t n, const float *allowed, size_t na, double drag_mm,
+                       char *out, size_t len);
+
 enum { FP_HUD_TAKE, FP_HUD_SETTING, FP_HUD_NOTE, FP_HUD_INFO, FP_HUD_KINDS };
 #define FP_HUD_MSGS 6          /* lines of the stack at most */
 #define FP_HUD_MSG_LEN 512     /* bytes a message keeps (longer ones are cut) */

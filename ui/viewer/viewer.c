@@ -714,14 +714,6 @@ static void hud_hands(const viewer *v, char *buf, size_t len)
     }
 }
 
-/* The smallest of n reaches (n > 0; 0 for none). */
-static float least_of(const float *r, size_t n)
-{
-    float least = n ? r[0] : 0.f;
-    for (size_t i = 1; i < n; i++) least = r[i] < least ? r[i] : least;
-    return least;
-}
-
 static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
 {
     double recent = 0;
@@ -732,15 +724,8 @@ static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
      * fingertip's motion that the skin under it followed, and the longest drag, in mm */
     char reach[160] = "", tips[160] = "";
     const fp_frame_stats *la = &v->last_active;
-    if (la->reach_vectors) {
-        float least = least_of(la->reach, la->reach_vectors);
-        float allowed = least_of(la->reach_allowed, la->reach_allowed_vectors);
-        char rig[64] = ""; /* a push toward the bone, held back by the rig */
-        if (la->reach_allowed_vectors && fabsf(allowed - least) >= 0.005f)
-            snprintf(rig, sizeof rig, "; %.0f%% of what the rig allows", 100.0 * allowed);
-        snprintf(reach, sizeof reach, "\nskin follows the fingertips %.0f%%  (drag %.1f mm%s)",
-                 100.0 * least, la->reach_asked_max * head->mm_per_unit, rig);
-    }
+    fp_hud_reach_line(la->reach, la->reach_vectors, la->reach_allowed, la->reach_allowed_vectors,
+                      la->reach_asked_max * head->mm_per_unit, reach, sizeof reach);
     if (v->cues.count && isfinite(v->cues.nearest))
         snprintf(tips, sizeof tips, "\nfingertips: %zu of %zu touching, nearest %.1f mm from the skin",
                  v->cues.touch_count, v->cues.count, v->cues.nearest * head->mm_per_unit);
