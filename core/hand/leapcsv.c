@@ -196,6 +196,9 @@ static int parse_row(reader *r, fp_leapcsv_format fmt, long line, char *text, fp
         if (fp_decimal_span(s) != (size_t)(end - s)) /* hexadecimal ("0x1p3"): decimals only */
             return fail(r, -EBADMSG, line, f.col[i], "bad number \"%s\" in column %s", s,
                         fp_leapcsv_column_name(fmt, i));
+        if (fmt == FP_LEAPCSV_JOINTS && fabs(v) > FP_EVENT_MAX_MM)
+            return fail(r, -EBADMSG, line, f.col[i], "%s in column %s is beyond 10 m of the tracker "
+                        "(FP_EVENT_MAX_MM, in mm): not a hand", s, fp_leapcsv_column_name(fmt, i));
         row->value[k] = v;
         row->valuef[k] = strtof_l(s, NULL, r->c_locale);
         if (!isfinite(row->valuef[k])) /* a value just above FLT_MAX that rounds up */

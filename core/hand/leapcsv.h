@@ -9,7 +9,8 @@
  * names); every row the header's number of fields; frame, timestamp_us, hand_id integers;
  * hand_type "left" or "right"; every value a decimal (facepuppet/decimal.h: no blanks,
  * hexadecimal, inf or nan) finite as a float (C locale, whatever the process's locale); empty
- * fields only in the angles format; timestamp_us never smaller
+ * fields only in the angles format; in the joints format every value within FP_EVENT_MAX_MM (10 m)
+ * of the tracker; timestamp_us never smaller
  * than the row before's and within +-FP_LEAPCSV_TIME_MAX_US (so that it converts to ns and
  * differences of times never overflow, as for the event log's times); no NUL
  * byte. Blank lines are skipped; a CR before the newline is dropped. A last line without a

@@ -2,6 +2,7 @@
  * would, and harder. */
 #define _GNU_SOURCE
 #include "fp_plugin_check.h"
+#include "fp_event_check.h"
 #include "fp_isolate.h"
 #include "fp_plugin_crash.h"
 
@@ -827,56 +828,13 @@ static void ih_log(const fp_host *host, fp_log_level level, const char *message)
 }
 static const void *ih_ext(const fp_host *host, const char *id) { (void)host; (void)id; return NULL; }
 
-static bool finite_n(const float *v, size_t n)
-{
-    for (size_t i = 0; i < n; i++)
-        if (!isfinite(v[i])) return false;
-    return true;
-}
-
-/* Why ev is malformed, or NULL. latest: the last time_ns an event may have. */
+/* Why ev is malformed, or NULL: its content (fp_event_check.h), then its time. latest: the
+ * last time_ns an event may have. */
 static const char *event_problem(const fp_event *ev, int64_t latest)
 {
-    static const uint32_t sizes[] = {0, sizeof(fp_event_joint_angles), sizeof(fp_event_joint_positions),
-                                     sizeof(fp_event_wrist_pose), sizeof(fp_event_button),
-                                     sizeof(fp_event_status), sizeof(fp_event_channel)};
-    const fp_event_header *h = &ev->header;
-    if (h->type < 1 || h->type > FP_EVENT_CHANNEL) return "unknown type";
-    if (h->size != sizes[h->type]) return "size is not that of its type";
-    if (h->hand < -1 || h->hand > 1) return "hand is not -1, 0 or 1";
-    if (h->type <= FP_EVENT_WRIST_POSE && h->hand < 0) return "a pose event without a hand";
-    if (h->time_ns < 0 || h->time_ns > latest) return "time_ns in the future or negative";
-    switch (h->type) {
-    case FP_EVENT_JOINT_ANGLES:
-        if (!finite_n(ev->angles.radians, FP_GLOVE_SENSORS)) return "a joint angle is not finite";
-        break;
-    case FP_EVENT_JOINT_POSITIONS:
-        if (!finite_n(&ev->positions.mm[0][0], FP_HAND_JOINTS * 3)) return "a joint position is not finite";
-        break;
-    case FP_EVENT_WRIST_POSE: {
-        const float *q = ev->wrist.rotation;
-        if (!finite_n(ev->wrist.position_mm, 3) || !finite_n(q, 4)) return "the wrist pose is not finite";
-        double n = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3];
-        if (fabs(n - 1) > 1e-2) return "the wrist rotation is not a unit quaternion";
-        break;
-    }
-    case FP_EVENT_BUTTON:
-        if (ev->button.button != FP_BUTTON_LEFT && ev->button.button != FP_BUTTON_MIDDLE &&
-            ev->button.button != FP_BUTTON_RIGHT)
-            return "button is not one fp_button bit";
-        if (ev->button.down > 1 || ev->button.mask > 7) return "button down or mask out of range";
-        break;
-    case FP_EVENT_STATUS:
-        if (ev->status.code < FP_STATUS_CONNECTED || ev->status.code > FP_STATUS_END_OF_STREAM)
-            return "unknown status code";
-        if (!memchr(ev->status.text, 0, sizeof ev->status.text)) return "status text not NUL-terminated";
-        break;
-    case FP_EVENT_CHANNEL:
-        if (!memchr(ev->channel.name, 0, sizeof ev->channel.name) || !ev->channel.name[0])
-            return "channel name empty or not NUL-terminated";
-        if (!isfinite(ev->channel.value)) return "channel value not finite";
-        break;
-    }
+    const char *why;
+    if (fp_event_check(ev, &why)) return why;
+    if (ev->header.time_ns < 0 || ev->header.time_ns > latest) return "time_ns in the future or negative";
     return NULL;
 }
 

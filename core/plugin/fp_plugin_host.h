@@ -212,6 +212,9 @@ typedef struct fp_input_instance {
                                             side); "" without the key: the first performer */
     char calibration[1024];              /* calibration=FILE: its performer's calibration
                                             (docs/calibration.md; read by the session); "" */
+    atomic_uint_least64_t refused;       /* malformed events push_event refused
+                                            (fp_event_check.h), from the plugin's threads */
+    atomic_uint refused_kinds;           /* bit f: a refusal for fp_event_fault f was logged */
 } fp_input_instance;
 
 /** Load the plugin for `spec` and create the instance (not yet started). The host strips

@@ -3,6 +3,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "fp_plugin_host.h"
 
+#include "fp_event_check.h"
 #include "fp_plugin_crash.h"
 #include "fp_forward.h"
 #include "fp_record.h"
@@ -20,6 +21,18 @@ static bool host_push(const fp_host *host, const fp_event_header *ev)
     if (!ev || ev->size < sizeof *ev || ev->size > sizeof(fp_event)) return false;
     fp_event copy;
     memcpy(&copy, ev, ev->size);
+    const char *why;
+    fp_event_fault f = fp_event_check(&copy, &why);
+    if (f) { /* dropped here, so a torn or absurd sample never reaches a hand */
+        atomic_fetch_add(&inst->refused, 1);
+        if (!(atomic_fetch_or(&inst->refused_kinds, 1u << f) & (1u << f))) {
+            char line[200];
+            snprintf(line, sizeof line, "refused a malformed event: %s (type %u, hand %d); such events "
+                     "are dropped, and counted when the input closes", why, ev->type, (int)ev->hand);
+            fp_log_relay_push(&inst->log, FP_LOG_WARNING, line);
+        }
+        return true; /* (not a full queue: the plugin must not send it again) */
+    }
     copy.header.source = inst->source;
     if (!fp_event_queue_push(&inst->queue, &copy.header)) return false;
     if (inst->forward) fp_event_forwarder_push(inst->forward, &copy); /* (the input's thread) */
@@ -356,6 +369,14 @@ void fp_input_instance_close(fp_input_instance *inst)
                  (unsigned long long)fs.errors);
         fp_log_relay_push(&inst->log, FP_LOG_INFO, line);
         fp_event_forwarder_destroy(&inst->forward);
+    }
+    uint64_t refused = atomic_load(&inst->refused);
+    if (refused) {
+        char line[200];
+        snprintf(line, sizeof line, "refused %llu malformed event%s in all (fp_event_check.h: the "
+                 "plugin sent them; every other event was taken)", (unsigned long long)refused,
+                 refused == 1 ? "" : "s");
+        fp_log_relay_push(&inst->log, FP_LOG_WARNING, line);
     }
     fp_event_queue_destroy(&inst->queue);
     fp_plugin_unload(&inst->plugin);

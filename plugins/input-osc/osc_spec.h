@@ -13,7 +13,7 @@
 #include <stddef.h>
 
 #define DEFAULT_PORT 9000
-#define HUGE_MM 10000.f            /* 10 m: beyond it a position is hostile or broken */
+#define HUGE_MM FP_EVENT_MAX_MM     /* 10 m: beyond it a position is hostile or broken */
 
 enum osc_format { FMT_FACEPUPPET, FMT_LEAP, FMT_MEDIAPIPE, FMT_VMC, FMT_AUTO };
 enum { HANDS_LEFT = 1, HANDS_RIGHT = 2, HANDS_BOTH = 3 };

@@ -458,6 +458,30 @@ static void test_csv_errors(void **state)
     snprintf(want, sizeof want, "a.csv:2:%ld: bad number \"q", (long)(c - line2) + 1);
     assert_non_null(strstr(err, want));
     assert_non_null(strstr(err, "in column thumb_dip_y"));
+    /* A joint position beyond 10 m (FP_EVENT_MAX_MM), finite or not, is not a hand: the
+     * replay would place the hands by it (a 98th percentile far away) and move nothing */
+    static const char *far[] = {"1e38", "-10000.5", "25000"};
+    for (size_t i = 0; i < sizeof far / sizeof far[0]; i++) {
+        snprintf(text, sizeof text, "%.*s%s%s", (int)(c - line2), line2, far[i], strchr(c, ','));
+        FILE *o = fopen(path, "w");
+        assert_non_null(o);
+        fputs(line1, o);
+        fputs(text, o);
+        fclose(o);
+        assert_int_equal(fp_leapcsv_read_joints(path, &jr, &n, err, sizeof err), -EBADMSG);
+        snprintf(want, sizeof want, "a.csv:2:%ld: %s in column thumb_dip_y is beyond 10 m", (long)(c - line2) + 1,
+                 far[i]);
+        assert_non_null(strstr(err, want));
+    }
+    snprintf(text, sizeof text, "%.*s%s%s", (int)(c - line2), line2, "9999.5", strchr(c, ','));
+    FILE *o = fopen(path, "w");
+    assert_non_null(o);
+    fputs(line1, o);
+    fputs(text, o);
+    fclose(o);
+    assert_int_equal(fp_leapcsv_read_joints(path, &jr, &n, err, sizeof err), 0); /* within: read */
+    free(jr);
+    jr = NULL;
     unlink(path);
     rmdir(dir);
     assert_int_equal(fp_leapcsv_read_joints(path, &jr, &n, err, sizeof err), -ENOENT);

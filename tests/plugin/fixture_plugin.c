@@ -4,6 +4,12 @@
  *   FIXTURE_INIT_FAILS  init returns false
  *   FIXTURE_CRASH_INIT  init dereferences a null pointer
  *   FIXTURE_CRASH_THREAD start() runs a thread of its own that dereferences a null pointer
+ *   FIXTURE_BAD_EVENTS  start() pushes a right hand's joint positions 600 times, 10 ms apart
+ *                       (a hand held still 40 mm in front of the tracker's origin), with
+ *                       malformed events among them: joint positions with a NaN, one
+ *                       beyond 10 m, an unknown type, a joint positions event of a wrong
+ *                       size, a wrist pose whose rotation is not a unit quaternion, a
+ *                       pose event without a hand; then the end of the stream
  *   FIXTURE_GOOD        a working input that pushes FIXTURE_EVENTS events then ends;
  *                       key open_ms=N: its create takes N ms (a slow device's open: the
  *                       viewer's opening screen is read while it waits); key log=N:
@@ -12,6 +18,7 @@
 #define _POSIX_C_SOURCE 200809L /* nanosleep */
 #include <facepuppet/plugin.h>
 
+#include <math.h>
 #include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -67,6 +74,34 @@ static int start(fp_input *self, char *err, size_t errlen)
     fixture *fx = (fixture *)self;
     const fp_host *host = fx->host;
     if (fx->log_lines > 0) fx->logging = !pthread_create(&fx->logger, NULL, logger, fx);
+#ifdef FIXTURE_BAD_EVENTS
+    int64_t t0 = host->now_ns(host);
+    for (int k = 0; k < 600; k++) {
+        fp_event_joint_positions jp = {{sizeof jp, FP_EVENT_JOINT_POSITIONS, 0, t0 + k * 10000000LL, 0, 1}, {{0}}};
+        for (int j = 0; j < FP_HAND_JOINTS; j++) {
+            jp.mm[j][0] = 10.0f * (float)(j % 5);
+            jp.mm[j][1] = 150.0f + 8.0f * (float)(j / 5);
+            jp.mm[j][2] = 40.0f;
+        }
+        switch (k % 100) {
+        case 10: jp.mm[7][1] = NAN; break;
+        case 20: jp.mm[3][2] = 1e38f; break;
+        case 30: jp.header.type = 99; break;
+        case 40: jp.header.size = sizeof jp - 12; break;
+        case 50: {
+            fp_event_wrist_pose w = {{sizeof w, FP_EVENT_WRIST_POSE, 0, t0 + k * 10000000LL, 0, 1},
+                                     {0, 150, 40}, {2, 0, 0, 0}};
+            host->push_event(host, &w.header);
+            continue;
+        }
+        case 60: jp.header.hand = -1; break;
+        }
+        while (!host->push_event(host, &jp.header)) {
+            struct timespec ts = {0, 1000000};
+            nanosleep(&ts, NULL);
+        }
+    }
+#endif
     for (int i = 0; i < 3; i++) {
         fp_event_button b = {{sizeof b, FP_EVENT_BUTTON, 0, host->now_ns(host), 0, -1},
                              FP_BUTTON_LEFT, (uint32_t)(i % 2 == 0), (uint32_t)(i % 2 == 0)};

@@ -1,8 +1,10 @@
 /* The host side of the plugin ABI: SPEC parsing, the loader's errors, the MPSC queue. */
 #define _GNU_SOURCE
 #include "fp_plugin_host.h"
+#include "fp_event_check.h"
 #include "fp_plugin_crash.h"
 
+#include <math.h>
 #include <pthread.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -182,6 +184,63 @@ static void test_log_relayed(void **state)
     assert_string_equal(seen.lines[3], "line 2");
     assert_int_equal(seen.on_owner, 4);
     assert_int_equal(seen.warnings, 3);
+    fp_plugin_path_clear(&path);
+}
+
+/* ---- malformed events are refused at push_event, said once per kind and counted ---- */
+
+static void test_malformed_events_refused(void **state)
+{
+    (void)state;
+    const char *dirs[] = {fixture_dir};
+    fp_plugin_path path;
+    fp_plugin_path_init(&path, dirs, 1, NULL);
+    fp_input_instance inst;
+    char err[1024];
+    log_seen seen = {.owner = pthread_self()};
+    /* 600 pushes of a still hand, every 100 six of them malformed (fixture_plugin.c
+     * FIXTURE_BAD_EVENTS), then 3 buttons and the end of the stream */
+    assert_int_equal(fp_input_instance_open(&inst, &path, "fixture-badevents", 0, err, sizeof err), 0);
+    fp_input_instance_set_log(&inst, seen_log, &seen);
+    assert_int_equal(fp_input_instance_start(&inst, err, sizeof err), 0);
+    fp_event ev;
+    int joints = 0, other = 0;
+    while (fp_input_instance_poll(&inst, &ev)) {
+        const char *why = NULL;
+        assert_int_equal(fp_event_check(&ev, &why), FP_EVENT_OK); /* none reaches the queue */
+        if (ev.header.type == FP_EVENT_JOINT_POSITIONS) {
+            joints++;
+            for (int j = 0; j < FP_HAND_JOINTS; j++)
+                for (int k = 0; k < 3; k++) assert_true(fabsf(ev.positions.mm[j][k]) <= 200);
+        } else {
+            other++;
+        }
+    }
+    assert_int_equal(joints, 600 - 36); /* 6 wrist poses pushed in 6 joints' place, 30 bad joints */
+    assert_int_equal(other, 4);         /* 3 buttons and the status */
+    assert_int_equal((int)atomic_load(&inst.refused), 36);
+    assert_int_equal(fp_input_instance_drain_log(&inst), 6); /* one warning per kind */
+    const char *kinds[] = {"a joint position is not finite", "a joint position is beyond 10 m",
+                           "unknown type", "size is not that of its type",
+                           "the wrist rotation is not a unit quaternion", "a pose event without a hand"};
+    for (int i = 0; i < 6; i++) {
+        assert_non_null(strstr(seen.lines[i], "refused a malformed event"));
+        assert_non_null(strstr(seen.lines[i], kinds[i]));
+    }
+    fp_input_instance_close(&inst);
+    assert_int_equal(seen.n, 7);
+    assert_non_null(strstr(seen.lines[6], "refused 36 malformed events in all"));
+    assert_int_equal(seen.warnings, 7);
+
+    /* the good fixture: nothing refused, nothing said */
+    seen = (log_seen){.owner = pthread_self()};
+    assert_int_equal(fp_input_instance_open(&inst, &path, "fixture", 0, err, sizeof err), 0);
+    fp_input_instance_set_log(&inst, seen_log, &seen);
+    assert_int_equal(fp_input_instance_start(&inst, err, sizeof err), 0);
+    while (fp_input_instance_poll(&inst, &ev)) {
+    }
+    fp_input_instance_close(&inst);
+    assert_int_equal(seen.n, 0);
     fp_plugin_path_clear(&path);
 }
 
@@ -469,7 +528,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_spec_parse),        cmocka_unit_test(test_loader_errors),
         cmocka_unit_test(test_env_path_and_instance),
-        cmocka_unit_test(test_log_relayed), cmocka_unit_test(test_queue_mpsc),
+        cmocka_unit_test(test_log_relayed), cmocka_unit_test(test_malformed_events_refused),
+        cmocka_unit_test(test_queue_mpsc),
         cmocka_unit_test(test_queue_full),        cmocka_unit_test(test_unsafe_folders_skipped),
         cmocka_unit_test(test_builtin_first),     cmocka_unit_test(test_crash_names_plugin),
         cmocka_unit_test(test_call_oldest),

@@ -153,6 +153,10 @@ typedef enum fp_hand_side { FP_HAND_LEFT = 0, FP_HAND_RIGHT = 1, FP_HANDS = 2 } 
 /* ------------------------------------------------------------------------------------- */
 /* Events: flat, memcpy-able structs behind a common header                              */
 
+/** The farthest a joint or wrist position may be from the device's origin, on any axis, in
+ *  mm (10 m): beyond it a position is broken or hostile, and the host refuses the event. */
+#define FP_EVENT_MAX_MM 10000.0f
+
 typedef enum fp_event_type {
     FP_EVENT_JOINT_ANGLES = 1,    /* fp_event_joint_angles */
     FP_EVENT_JOINT_POSITIONS = 2, /* fp_event_joint_positions */
@@ -275,7 +279,11 @@ typedef struct fp_host {
      *  sets header.source. Returns false when the queue is full: the event is dropped and
      *  counted by the host (the session thread always has the latest pose anyway); false
      *  too, and not counted, when header.size is below sizeof(fp_event_header) or above
-     *  sizeof(fp_event). The event is copied: it may live on the caller's stack. */
+     *  sizeof(fp_event). A malformed event (another type's size, a NaN, a position beyond
+     *  FP_EVENT_MAX_MM, a rotation that is not a unit quaternion, a pose without a hand: the
+     *  rule `facepuppet plugins check` applies) is refused: true is returned, the event is
+     *  dropped, and the host warns once per kind and counts them. The event is copied: it
+     *  may live on the caller's stack. */
     bool (*push_event)(const struct fp_host *host, const fp_event_header *event);
 
     /** [any-thread] The host clock: CLOCK_MONOTONIC in nanoseconds. */
