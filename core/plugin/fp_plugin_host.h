@@ -11,6 +11,7 @@
 
 #include "fp_clock.h" /* fp_now_ns, the host clock of the ABI */
 #include "fp_error.h"
+#include "fp_event_check.h"
 #include "fp_filter.h"
 #include "log_relay.h"
 
@@ -214,7 +215,9 @@ typedef struct fp_input_instance {
                                             (docs/calibration.md; read by the session); "" */
     atomic_uint_least64_t refused;       /* malformed events push_event refused
                                             (fp_event_check.h), from the plugin's threads */
-    atomic_uint refused_kinds;           /* bit f: a refusal for fp_event_fault f was logged */
+    _Atomic(const char *) refused_why[FP_EVENT_FAULTS]; /* per fp_event_fault: the first
+                                            one's reason (a static phrase), set by push_event */
+    unsigned refused_said;               /* owner's: bit f, the warning for fault f was said */
 } fp_input_instance;
 
 /** Load the plugin for `spec` and create the instance (not yet started). The host strips

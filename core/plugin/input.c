@@ -3,7 +3,6 @@
 #define _POSIX_C_SOURCE 200809L
 #include "fp_plugin_host.h"
 
-#include "fp_event_check.h"
 #include "fp_plugin_crash.h"
 #include "fp_forward.h"
 #include "fp_record.h"
@@ -23,14 +22,11 @@ static bool host_push(const fp_host *host, const fp_event_header *ev)
     memcpy(&copy, ev, ev->size);
     const char *why;
     fp_event_fault f = fp_event_check(&copy, &why);
-    if (f) { /* dropped here, so a torn or absurd sample never reaches a hand */
+    if (f) { /* dropped here, so a torn or absurd sample never reaches a hand; the owner's
+              * next drain says so (no lock on the plugin's thread) */
+        const char *none = NULL;
+        atomic_compare_exchange_strong(&inst->refused_why[f], &none, why);
         atomic_fetch_add(&inst->refused, 1);
-        if (!(atomic_fetch_or(&inst->refused_kinds, 1u << f) & (1u << f))) {
-            char line[200];
-            snprintf(line, sizeof line, "refused a malformed event: %s (type %u, hand %d); such events "
-                     "are dropped, and counted when the input closes", why, ev->type, (int)ev->hand);
-            fp_log_relay_push(&inst->log, FP_LOG_WARNING, line);
-        }
         return true; /* (not a full queue: the plugin must not send it again) */
     }
     copy.header.source = inst->source;
@@ -59,8 +55,24 @@ void fp_input_instance_set_log(fp_input_instance *inst, fp_host_log_fn fn, void 
     inst->log_user = user;
 }
 
+/* On the owner's thread: a warning for each kind of malformed event refused since the last
+ * drain and never said before (the first such event's reason). */
+static void say_refused(fp_input_instance *inst)
+{
+    for (int f = 1; f < FP_EVENT_FAULTS; f++) {
+        const char *why = atomic_load(&inst->refused_why[f]);
+        if (!why || (inst->refused_said & (1u << f))) continue;
+        inst->refused_said |= 1u << f;
+        char line[200];
+        snprintf(line, sizeof line, "refused a malformed event: %s; such events are dropped, and "
+                 "counted when the input closes", why);
+        fp_log_relay_push(&inst->log, FP_LOG_WARNING, line);
+    }
+}
+
 size_t fp_input_instance_drain_log(fp_input_instance *inst)
 {
+    say_refused(inst);
     return fp_log_relay_drain(&inst->log, inst->name, inst->log_fn, inst->log_user);
 }
 
@@ -370,6 +382,7 @@ void fp_input_instance_close(fp_input_instance *inst)
         fp_log_relay_push(&inst->log, FP_LOG_INFO, line);
         fp_event_forwarder_destroy(&inst->forward);
     }
+    say_refused(inst);
     uint64_t refused = atomic_load(&inst->refused);
     if (refused) {
         char line[200];
