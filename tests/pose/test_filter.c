@@ -4,6 +4,7 @@
 #define _GNU_SOURCE
 #include "fp_filter.h"
 #include "fp_pose.h"
+#include "pose_events.h"
 
 #include <errno.h>
 #include <math.h>
@@ -371,18 +372,14 @@ static void test_keys(void **state)
 
 static fp_event positions(int hand, double x, int64_t t, uint32_t source)
 {
-    fp_event ev;
-    memset(&ev, 0, sizeof ev);
-    ev.header.size = sizeof ev.positions;
-    ev.header.type = FP_EVENT_JOINT_POSITIONS;
-    ev.header.hand = hand;
-    ev.header.time_ns = t;
-    ev.header.source = source;
+    float mm[FP_HAND_JOINTS][3];
     for (int j = 0; j < FP_HAND_JOINTS; j++) {
-        ev.positions.mm[j][0] = (float)(x + j);
-        ev.positions.mm[j][1] = (float)(2 * x);
-        ev.positions.mm[j][2] = -5.f;
+        mm[j][0] = (float)(x + j);
+        mm[j][1] = (float)(2 * x);
+        mm[j][2] = -5.f;
     }
+    fp_event ev = joints_event(hand, (const float (*)[3])mm, t);
+    ev.header.source = source;
     return ev;
 }
 

@@ -18,17 +18,14 @@
 #include <string.h>
 #include <cmocka.h>
 
+#include "pose_events.h"
+
 static fp_event positions_event(int hand, float base, int64_t t)
 {
-    fp_event ev;
-    memset(&ev, 0, sizeof ev);
-    ev.header.size = sizeof ev.positions;
-    ev.header.type = FP_EVENT_JOINT_POSITIONS;
-    ev.header.hand = hand;
-    ev.header.time_ns = t;
+    float mm[FP_HAND_JOINTS][3];
     for (int j = 0; j < FP_HAND_JOINTS; j++)
-        for (int k = 0; k < 3; k++) ev.positions.mm[j][k] = base + 10.f * j + k;
-    return ev;
+        for (int k = 0; k < 3; k++) mm[j][k] = base + 10.f * j + k;
+    return joints_event(hand, (const float (*)[3])mm, t);
 }
 
 /* Joint positions go through p = scale * mm + offset, exactly (double, rounded once). */
