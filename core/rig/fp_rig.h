@@ -45,7 +45,11 @@
  *    the vertices of the ramp within R of the vector's whole segment (the capsule the
  *    engine's composed sub-steps sweep; rho a vertex's distance to it, psi Wendland's
  *    psi_{3,1}: T - x at rho from a centre that moves by the vector, one finger alone), with
- *    no limit for a pull away from every bone it reaches. A fold the
+ *    no limit for a pull away from every bone it reaches. The session keeps a vector within
+ *    that bound by cutting its push alone (fp_rig_finger_clamp_indexed: the component
+ *    against the worst vertex's grad m, vertex after vertex), not by shortening the whole
+ *    vector, so a drag along the cheek with a little push toward the cheekbone keeps its
+ *    drag (what that changed: docs/performance.md, "The rig cuts the push only"). A fold the
  *    bound misses (fingers' fields adding up) is a flipped triangle the session's contact
  *    guard sees and holds back.
  * The rig's pose itself (the jaw about its hinge, rotated by a smooth fraction of the angle)
@@ -347,6 +351,23 @@ double fp_rig_finger_limit_toward(const fp_rig *rig, const float *posed, const f
  *  [any-thread] on an index not being updated; no allocation. */
 double fp_rig_finger_limit_toward_indexed(const fp_rig_slope_index *ix, const float start[3], const float end[3],
                                           double radius);
+
+/** The directional clamp of one control vector (what the session applies; the bound at the
+ *  top of this file): writes into out_end (3 floats, mesh units) the end point of a vector
+ *  from `start` that keeps every push c_v within FP_RIG_FINGER_MARGIN and lands as near
+ *  `end` as it finds. Only a push toward bone folds the ramp, so the vector loses only that:
+ *  up to 8 rounds each cut the worst vertex's push (its component along -dir_v) to the
+ *  margin, the capsule then searched again (another vertex may be the worst); where the
+ *  rounds do not settle, what they left is scaled to its own limit (within the bound: its
+ *  capsule lies in the one searched). A sideways drag with a little push toward the
+ *  cheekbone so keeps its sideways part instead of shrinking whole, and the result moves
+ *  continuously with `end` but where the worst vertex changes. Returns 0 (out_end = end:
+ *  within the bound, the same test as fp_rig_finger_limit_toward_indexed's), 1 (the push
+ *  cut), 2 (scaled). radius <= 0: scaled to the global
+ *  bound ramp / 3 (as the limit says); NULL ix or an unbound rig: 0. [any-thread] on an
+ *  index not being updated; no allocation; asserts its pointers. */
+int fp_rig_finger_clamp_indexed(const fp_rig_slope_index *ix, const float start[3], const float end[3],
+                                double radius, float out_end[3]);
 
 /** The folder of the rig files: $FACEPUPPET_RIGS when set; else <exe_dir>/../share/
  *  facepuppet/rigs when it exists (installed); else the source tree's rigs/ (compiled in as

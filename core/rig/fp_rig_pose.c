@@ -3,6 +3,7 @@
 #define _GNU_SOURCE
 #include "fp_rig_internal.h"
 
+#include <assert.h>
 #include <errno.h>
 #include <float.h>
 #include <math.h>
@@ -425,11 +426,17 @@ double fp_rig_finger_limit_indexed(const fp_rig_slope_index *ix, const float sta
     return gmax > 0 ? FP_RIG_FINGER_MARGIN / gmax : INFINITY;
 }
 
-double fp_rig_finger_limit_toward_indexed(const fp_rig_slope_index *ix, const float start[3], const float end[3],
-                                          double radius)
+/* The largest push c_v (fp_rig.h) over the slope vertices within radius of the segment
+ * start -> end, through the index; with worst (may be NULL): that vertex's grad m direction
+ * and its slope times its Wendland weight (its push is that times max(0, -dir . u)). */
+typedef struct {
+    float dir[3];
+    double k;
+} slope_worst;
+
+static double push_scan(const fp_rig_slope_index *ix, const float start[3], const float end[3], double radius,
+                        slope_worst *worst)
 {
-    const fp_rig *r = ix ? ix->rig : NULL;
-    if (!r || !start || !end || !r->g || !(radius > 0)) return r && r->g ? r->ramp / 3 : 0;
     double d[3], u[3], dd, cmax = 0, r2 = radius * radius;
     capsule_of(start, end, d, u, &dd);
     float slo[3], shi[3]; /* the segment's box */
@@ -466,8 +473,72 @@ double fp_rig_finger_limit_toward_indexed(const fp_rig_slope_index *ix, const fl
             double c = push_of(p[3], dir, u);
             if (c <= cmax) continue;
             double q = seg_dist2(p, start, d, dd);
-            if (q < r2) cmax = fmax(cmax, c * wendland(sqrt(q) / radius));
+            if (!(q < r2)) continue;
+            double w = wendland(sqrt(q) / radius);
+            if (c * w > cmax) {
+                cmax = c * w;
+                if (worst) *worst = (slope_worst){{dir[0], dir[1], dir[2]}, p[3] * w};
+            }
         }
     }
+    return cmax;
+}
+
+double fp_rig_finger_limit_toward_indexed(const fp_rig_slope_index *ix, const float start[3], const float end[3],
+                                          double radius)
+{
+    const fp_rig *r = ix ? ix->rig : NULL;
+    if (!r || !start || !end || !r->g || !(radius > 0)) return r && r->g ? r->ramp / 3 : 0;
+    double cmax = push_scan(ix, start, end, radius, NULL);
     return cmax > 0 ? FP_RIG_FINGER_MARGIN / cmax : INFINITY;
+}
+
+/* The projection rounds of fp_rig_finger_clamp_indexed before it scales instead. */
+#define CLAMP_ROUNDS 8
+
+static double seg_len(const float a[3], const float b[3])
+{
+    double q = 0;
+    for (int i = 0; i < 3; i++) q += ((double)b[i] - a[i]) * ((double)b[i] - a[i]);
+    return sqrt(q);
+}
+
+int fp_rig_finger_clamp_indexed(const fp_rig_slope_index *ix, const float start[3], const float end[3],
+                                double radius, float out_end[3])
+{
+    const fp_rig *r = ix ? ix->rig : NULL;
+    assert(start && end && out_end);
+    memcpy(out_end, end, 3 * sizeof(float));
+    if (!r || !r->g) return 0;
+    double len = seg_len(start, end);
+    if (!(radius > 0)) { /* no support to search: the global bound */
+        double f = len > r->ramp / 3 ? r->ramp / 3 / len : 1;
+        for (int i = 0; i < 3; i++) out_end[i] = f == 1 ? end[i] : (float)(start[i] + f * ((double)end[i] - start[i]));
+        return f == 1 ? 0 : 2;
+    }
+    /* round 0: the vector asked, by the limit's own test; then each round the worst
+     * vertex's push cut to the margin (a hair under), along its direction only: another
+     * vertex, or the moved capsule, may then be the worst */
+    double v[3];
+    for (int i = 0; i < 3; i++) v[i] = (double)end[i] - start[i];
+    for (int round = 0;; round++) {
+        slope_worst w;
+        float e[3];
+        for (int i = 0; i < 3; i++) e[i] = round ? (float)(start[i] + v[i]) : end[i];
+        double c = push_scan(ix, start, e, radius, &w), l = round ? seg_len(start, e) : len;
+        if (!(l > FP_RIG_FINGER_MARGIN / c)) {
+            memcpy(out_end, e, sizeof e);
+            return round ? 1 : 0;
+        }
+        double push = -(w.dir[0] * v[0] + w.dir[1] * v[1] + w.dir[2] * v[2]);
+        double allowed = FP_RIG_FINGER_MARGIN * (1 - 1e-6) / w.k;
+        if (round == CLAMP_ROUNDS || !(push > allowed) || !(w.k > 0)) {
+            /* the last vector scaled to its limit: within the bound, its capsule lying in
+             * the one just searched (no cut toward a bone left, or rounding at the margin) */
+            double f = FP_RIG_FINGER_MARGIN / c / l;
+            for (int i = 0; i < 3; i++) out_end[i] = (float)(start[i] + f * ((double)e[i] - start[i]));
+            return 2;
+        }
+        for (int i = 0; i < 3; i++) v[i] += (push - allowed) * w.dir[i];
+    }
 }

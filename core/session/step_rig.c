@@ -165,19 +165,9 @@ const fp_control_set *fp_rig_step_run(fp_rig_step *st, const fp_control_set *cs)
     slopes_take(st);
     for (size_t i = 0; i < o->count; i++) {
         /* the rig's bound by direction (fp_rig.h): only a push toward a bone the segment's
-         * supports reach is clamped; the engine composes injective maps for the rest */
-        double limit = fp_rig_finger_limit_toward_indexed(st->slopes, cs->start[i], cs->end[i], cs->radius);
-        double d[3], len = 0;
-        for (int k = 0; k < 3; k++) {
-            d[k] = (double)cs->end[i][k] - cs->start[i][k];
-            len += d[k] * d[k];
-        }
-        len = sqrt(len);
-        double f = len > limit ? limit / len : 1;
-        for (int k = 0; k < 3; k++) {
-            start[i][k] = cs->start[i][k];
-            end[i][k] = f == 1 ? cs->end[i][k] : (float)(cs->start[i][k] + f * d[k]);
-        }
+         * supports reach is cut; the engine composes injective maps for the rest */
+        memcpy(start[i], cs->start[i], sizeof start[i]);
+        fp_rig_finger_clamp_indexed(st->slopes, cs->start[i], cs->end[i], cs->radius, end[i]);
     }
     return o;
 }

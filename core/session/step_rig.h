@@ -8,9 +8,10 @@
  *   - the posed base: fp_rig_pose(base, values) (the jaw about its hinge, the soft tissue by
  *     the rig's falloff), recomputed only when the base or a value changed; the engine's
  *     points follow it (the session re-indexes them), so fingers start on the posed surface;
- *   - the fingers' control vectors are clamped by fp_rig_finger_limit_toward (a push toward
- *     a bone held to what keeps the mobility blend from folding, by its bound; a pull away or
- *     along it not at all: fp_rig.h), in a copy of the control set; the copy's
+ *   - the fingers' control vectors are clamped by fp_rig_finger_clamp_indexed (the push
+ *     toward a bone cut to what keeps the mobility blend from folding, by its bound, the rest
+ *     of the vector kept; a pull away or along it not at all: fp_rig.h), in a copy of the
+ *     control set; the copy's
  *     channels are every channel of the rig with the value posed this frame (whoever set it:
  *     the viewer's keys, the host's API, the mapping), so that the frame's record (step 7, a
  *     take) holds the pose and playing it (fp_session_apply_controls) poses the same;

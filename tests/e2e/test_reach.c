@@ -12,8 +12,8 @@
  * two sheets of skin under a millimetre apart by the eye). Printed: the table, each run's 10th percentile (FP_TEST_VERBOSE adds the
  * log). Experiments: FP_REACH_NO_CONTACT=1 (no contact guard), FP_REACH_MAPPING=SPEC (e.g.
  * anchored,widen=0.75), FP_REACH_RADIUS=R (mesh units), FP_REACH_SAVE=FILE.obj (the frame of the largest ask), FP_REACH_RIG=1 (each face's
- * own rig instead of none: on the ICT face its finger limit near bone holds every drag to
- * about 3 mm, reach median 8-31%).
+ * own rig instead of none: its finger limit near bone cuts a drag's push toward the bone,
+ * run medians 32-100%, docs/performance.md "The rig cuts the push only").
  *
  * Set FP_REACH_ONLY=FACE/RECORDING substrings to run one pair (e.g. "ict/grab"), and
  * FP_REACH_HANDS=DIR to read the four recordings' *_joints_mm.csv from DIR instead (copies

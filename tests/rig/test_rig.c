@@ -336,7 +336,23 @@ static size_t check_limits(const fp_rig *r, const fp_rig_slope_index *ix, const 
             fast = fp_rig_finger_limit_toward_indexed(ix, start, end, radii[k]);
             if (memcmp(&full, &fast, sizeof full))
                 fail_msg("vertex %zu, R %g: toward, indexed %.17g, full scan %.17g", v, radii[k], fast, full);
+            /* the clamp: end kept where within that limit, else a vector within the full
+             * scan's limit for itself, the push cut or (rounds unsettled) scaled */
+            float out[3];
+            int rc = fp_rig_finger_clamp_indexed(ix, start, end, radii[k], out);
+            double asked = 0, got = 0;
+            for (int i = 0; i < 3; i++) {
+                asked += ((double)end[i] - start[i]) * ((double)end[i] - start[i]);
+                got += ((double)out[i] - start[i]) * ((double)out[i] - start[i]);
+            }
+            assert_int_equal(rc == 0, !(sqrt(asked) > full));
+            if (rc == 0) assert_memory_equal(out, end, sizeof out);
+            else assert_true(sqrt(got) <= fp_rig_finger_limit_toward(r, posed, start, out, radii[k]) * (1 + 1e-6) + 1e-7);
         }
+        /* no support (radius 0): the global bound, ramp / 3, as the limit says */
+        float end[3] = {start[0] + 5.f, start[1], start[2]}, out[3];
+        assert_int_equal(fp_rig_finger_clamp_indexed(ix, start, end, 0, out), 2);
+        assert_float_equal(out[0] - start[0], fp_rig_max_finger_displacement(r), 1e-5);
     }
     return finite;
 }

@@ -124,16 +124,21 @@ static void test_rig_pass_through(void **state)
     assert_memory_equal(&copy, &cs, sizeof cs);
 }
 
-/* The rig's finger clamp on the ICT face: every frame's clamped control set equals one made
- * with the brute force fp_rig_finger_limit_toward computed afresh on the current posed base
- * (the step's index: fp_rig_finger_limit_toward_indexed), through an anchored gesture, after
- * a start point moves, the radius changes, the jaw is posed anew (the posed base changed),
- * and after commits that move the base on ranges (fp_rig_step_rebase_ranges, whose slope
- * index update waits for the next limits); vectors pushed toward bone and pulled away. */
-static void expect_clamped(const fp_rig_step *r, const fp_control_set *in, const fp_control_set *out)
+/* The rig's finger clamp on the ICT face, against the brute force fp_rig_finger_limit_toward
+ * computed afresh on the current posed base (the step's clamp goes through the slope index),
+ * through an anchored gesture, after a start point moves, the radius changes, the jaw is
+ * posed anew (the posed base changed), and after commits that move the base on ranges
+ * (fp_rig_step_rebase_ranges, whose slope index update waits for the next limits); vectors
+ * pushed toward bone and pulled away. Every clamped vector is within the brute force's bound
+ * for its own segment; one within the bound as asked is kept bit for bit; one cut keeps
+ * more than the whole vector scaled to its limit (the clamp before) when what it lost was
+ * the push alone (counted in *longer, of *cut). */
+static void expect_clamped(const fp_rig_step *r, const fp_control_set *in, const fp_control_set *out,
+                           unsigned *cut, unsigned *longer)
 {
     assert_int_equal(out->count, in->count);
     for (size_t i = 0; i < in->count; i++) {
+        assert_memory_equal(out->start[i], in->start[i], sizeof in->start[i]);
         double limit = fp_rig_finger_limit_toward(r->rig, r->posed, in->start[i], in->end[i], in->radius);
         double d[3], len = 0;
         for (int k = 0; k < 3; k++) {
@@ -141,12 +146,19 @@ static void expect_clamped(const fp_rig_step *r, const fp_control_set *in, const
             len += d[k] * d[k];
         }
         len = sqrt(len);
-        double f = len > limit ? limit / len : 1;
-        for (int k = 0; k < 3; k++) {
-            float e = f == 1 ? in->end[i][k] : (float)(in->start[i][k] + f * d[k]);
-            assert_memory_equal(&out->start[i][k], &in->start[i][k], sizeof(float));
-            assert_memory_equal(&out->end[i][k], &e, sizeof(float));
+        if (!(len > limit)) {
+            assert_memory_equal(out->end[i], in->end[i], sizeof in->end[i]);
+            continue;
         }
+        double got = 0;
+        for (int k = 0; k < 3; k++) {
+            double o = (double)out->end[i][k] - in->start[i][k];
+            got += o * o;
+        }
+        double own = fp_rig_finger_limit_toward(r->rig, r->posed, out->start[i], out->end[i], in->radius);
+        assert_true(sqrt(got) <= own * (1 + 1e-6) + 1e-7); /* within the bound (float ends) */
+        (*cut)++;
+        *longer += sqrt(got) > limit * (1 + 1e-9);
     }
 }
 
@@ -175,7 +187,7 @@ static void test_rig_clamp_kept(void **state)
     float *moved = malloc(n * 3 * sizeof *moved), *scratch = malloc(n * 3 * sizeof *scratch);
     assert_non_null(moved);
     assert_non_null(scratch);
-    unsigned limited = 0, looser = 0;
+    unsigned limited = 0, looser = 0, cut = 0, longer = 0;
     for (int frame = 0; frame < 40; frame++) {
         if (frame == 0 || frame == 25) /* a new gesture: new start points */
             for (int i = 0; i < 4; i++)
@@ -195,10 +207,12 @@ static void test_rig_clamp_kept(void **state)
         }
         /* out of the face and back in, sideways both ways: toward and away from bones */
         float sgn = frame % 2 ? -1.f : 1.f;
+        /* (vectors 0 and 1 mostly in or out, 2 and 3 mostly sideways with a little in or out) */
         for (int i = 0; i < 4; i++)
-            for (int k = 0; k < 3; k++) en[i][k] = st[i][k] + sgn * (k == 2 ? 1.5f : 0.3f) * (float)(frame % 5 + 1);
+            for (int k = 0; k < 3; k++)
+                en[i][k] = st[i][k] + sgn * (k == (i < 2 ? 2 : 0) ? 1.5f : 0.3f) * (float)(frame % 5 + 1);
         const fp_control_set *out = fp_rig_step_run(&r, &cs);
-        expect_clamped(&r, &cs, out);
+        expect_clamped(&r, &cs, out, &cut, &longer);
         for (size_t i = 0; i < 4; i++) {
             double l = fp_rig_finger_limit_toward(r.rig, r.posed, st[i], en[i], cs.radius);
             limited += l < 1.5;
@@ -206,10 +220,12 @@ static void test_rig_clamp_kept(void **state)
                                                                    blind to direction */
         }
     }
-    printf("rig clamp: %u vectors held under 1.5, %u let over twice as far as by |grad m| alone, of 160\n",
-           limited, looser);
+    printf("rig clamp: %u vectors held under 1.5, %u let over twice as far as by |grad m| alone, of 160; "
+           "%u cut, %u of them longer than the vector scaled whole\n", limited, looser, cut, longer);
     assert_true(limited > 0); /* pushes toward bone were held */
     assert_true(looser > 0);  /* and the others went farther */
+    assert_true(cut > 0);
+    assert_true(longer * 10 >= cut * 9); /* the part that does not push kept */
     fp_rig_step_free(&r);
     fp_mesh_free(&m);
     free(moved);
