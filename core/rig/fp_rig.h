@@ -363,9 +363,9 @@ double fp_rig_finger_limit_toward_indexed(const fp_rig_slope_index *ix, const fl
  *  cheekbone so keeps its sideways part instead of shrinking whole, and the result moves
  *  continuously with `end` but where the worst vertex changes. Returns 0 (out_end = end:
  *  within the bound, the same test as fp_rig_finger_limit_toward_indexed's), 1 (the push
- *  cut), 2 (scaled). radius <= 0: scaled to the global
- *  bound ramp / 3 (as the limit says); NULL ix or an unbound rig: 0. [any-thread] on an
- *  index not being updated; no allocation; asserts its pointers. */
+ *  cut), 2 (scaled). radius <= 0: scaled to the global bound ramp / 3 (as the limit says);
+ *  NULL ix or an unbound rig: 0. [any-thread] on an index not being updated; no
+ *  allocation; asserts its pointers. */
 int fp_rig_finger_clamp_indexed(const fp_rig_slope_index *ix, const float start[3], const float end[3],
                                 double radius, float out_end[3]);
 

@@ -503,6 +503,12 @@ static double seg_len(const float a[3], const float b[3])
     return sqrt(q);
 }
 
+/* out := start + f (end - start), rounded once to float; f == 1 keeps end bit for bit */
+static void scaled_end(const float start[3], const float end[3], double f, float out[3])
+{
+    for (int i = 0; i < 3; i++) out[i] = f == 1 ? end[i] : (float)(start[i] + f * ((double)end[i] - start[i]));
+}
+
 int fp_rig_finger_clamp_indexed(const fp_rig_slope_index *ix, const float start[3], const float end[3],
                                 double radius, float out_end[3])
 {
@@ -513,7 +519,7 @@ int fp_rig_finger_clamp_indexed(const fp_rig_slope_index *ix, const float start[
     double len = seg_len(start, end);
     if (!(radius > 0)) { /* no support to search: the global bound */
         double f = len > r->ramp / 3 ? r->ramp / 3 / len : 1;
-        for (int i = 0; i < 3; i++) out_end[i] = f == 1 ? end[i] : (float)(start[i] + f * ((double)end[i] - start[i]));
+        scaled_end(start, end, f, out_end);
         return f == 1 ? 0 : 2;
     }
     /* round 0: the vector asked, by the limit's own test; then each round the worst
@@ -535,8 +541,7 @@ int fp_rig_finger_clamp_indexed(const fp_rig_slope_index *ix, const float start[
         if (round == CLAMP_ROUNDS || !(push > allowed) || !(w.k > 0)) {
             /* the last vector scaled to its limit: within the bound, its capsule lying in
              * the one just searched (no cut toward a bone left, or rounding at the margin) */
-            double f = FP_RIG_FINGER_MARGIN / c / l;
-            for (int i = 0; i < 3; i++) out_end[i] = (float)(start[i] + f * ((double)e[i] - start[i]));
+            scaled_end(start, e, FP_RIG_FINGER_MARGIN / c / l, out_end);
             return 2;
         }
         for (int i = 0; i < 3; i++) v[i] += (push - allowed) * w.dir[i];
