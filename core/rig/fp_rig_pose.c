@@ -427,18 +427,23 @@ double fp_rig_finger_limit_indexed(const fp_rig_slope_index *ix, const float sta
 }
 
 /* The largest push c_v (fp_rig.h) over the slope vertices within radius of the segment
- * start -> end, through the index; with worst (may be NULL): that vertex's grad m direction
- * and its slope times its Wendland weight (its push is that times max(0, -dir . u)). */
+ * start -> end, through the index, for a vector along `along` (3 doubles, any length; NULL:
+ * along the segment itself); with worst (may be NULL): that vertex's grad m direction and its
+ * slope times its Wendland weight (its push is that times max(0, -dir . u)). */
 typedef struct {
     float dir[3];
     double k;
 } slope_worst;
 
-static double push_scan(const fp_rig_slope_index *ix, const float start[3], const float end[3], double radius,
-                        slope_worst *worst)
+static double push_scan(const fp_rig_slope_index *ix, const float start[3], const float end[3],
+                        const double *along, double radius, slope_worst *worst)
 {
     double d[3], u[3], dd, cmax = 0, r2 = radius * radius;
     capsule_of(start, end, d, u, &dd);
+    if (along) {
+        double q = sqrt(along[0] * along[0] + along[1] * along[1] + along[2] * along[2]);
+        for (int i = 0; i < 3; i++) u[i] = q > 0 ? along[i] / q : 0;
+    }
     float slo[3], shi[3]; /* the segment's box */
     for (int i = 0; i < 3; i++) {
         slo[i] = start[i] < end[i] ? start[i] : end[i];
@@ -489,12 +494,13 @@ double fp_rig_finger_limit_toward_indexed(const fp_rig_slope_index *ix, const fl
 {
     const fp_rig *r = ix ? ix->rig : NULL;
     if (!r || !start || !end || !r->g || !(radius > 0)) return r && r->g ? r->ramp / 3 : 0;
-    double cmax = push_scan(ix, start, end, radius, NULL);
+    double cmax = push_scan(ix, start, end, NULL, radius, NULL);
     return cmax > 0 ? FP_RIG_FINGER_MARGIN / cmax : INFINITY;
 }
 
-/* The projection rounds of fp_rig_finger_clamp_indexed before it scales instead. */
-#define CLAMP_ROUNDS 8
+/* The searches of fp_rig_finger_clamp_indexed (each adds the worst vertex's constraint)
+ * before it scales what is left instead. */
+#define CLAMP_ROUNDS 16
 
 static double seg_len(const float a[3], const float b[3])
 {
@@ -507,6 +513,78 @@ static double seg_len(const float a[3], const float b[3])
 static void scaled_end(const float start[3], const float end[3], double f, float out[3])
 {
     for (int i = 0; i < 3; i++) out[i] = f == 1 ? end[i] : (float)(start[i] + f * ((double)end[i] - start[i]));
+}
+
+static double dot3(const double a[3], const double b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+/* Solves the m x m (m <= 3) symmetric system g x = r by Cramer's rule; false when g is
+ * near singular (constraints whose directions are dependent: another active set serves). */
+static bool solve_small(int m, const double g[3][3], const double r[3], double x[3])
+{
+    if (m == 1) {
+        if (!(g[0][0] > 1e-12)) return false;
+        x[0] = r[0] / g[0][0];
+        return true;
+    }
+    if (m == 2) {
+        double det = g[0][0] * g[1][1] - g[0][1] * g[1][0];
+        if (!(fabs(det) > 1e-9)) return false;
+        x[0] = (r[0] * g[1][1] - g[0][1] * r[1]) / det;
+        x[1] = (g[0][0] * r[1] - r[0] * g[1][0]) / det;
+        return true;
+    }
+    double c0 = g[1][1] * g[2][2] - g[1][2] * g[2][1], c1 = g[1][0] * g[2][2] - g[1][2] * g[2][0],
+           c2 = g[1][0] * g[2][1] - g[1][1] * g[2][0];
+    double det = g[0][0] * c0 - g[0][1] * c1 + g[0][2] * c2;
+    if (!(fabs(det) > 1e-9)) return false;
+    for (int j = 0; j < 3; j++) {
+        double h[3][3];
+        memcpy(h, g, sizeof h);
+        for (int i = 0; i < 3; i++) h[i][j] = r[i];
+        x[j] = (h[0][0] * (h[1][1] * h[2][2] - h[1][2] * h[2][1]) - h[0][1] * (h[1][0] * h[2][2] - h[1][2] * h[2][0]) +
+                h[0][2] * (h[1][0] * h[2][1] - h[1][1] * h[2][0])) / det;
+    }
+    return true;
+}
+
+/* The point of {v : a_j . v <= b_j for j < n} nearest v0 (a_j unit; n <= CLAMP_ROUNDS): the
+ * Euclidean projection onto a convex polytope, unique and 1-Lipschitz in v0 and continuous
+ * in the b_j. In 3-D it lies on at most 3 independent active constraints, so every active
+ * set of up to 3 is tried (696 for n = 16) and the KKT point kept: multipliers
+ * lambda >= 0 (v = v0 - sum lambda_j a_j) and every constraint met. False when rounding
+ * leaves none (v untouched). */
+static bool project_polytope(const double v0[3], const double (*a)[3], const double *b, int n, double v[3])
+{
+    double best = INFINITY;
+    for (int i0 = 0; i0 < n; i0++)
+        for (int i1 = i0; i1 < n; i1++)
+            for (int i2 = i1; i2 < n; i2++) {
+                /* the active sets {i0} as (i0, i0, i0), {i0, i1} as (i0, i1, i1), {i0, i1, i2} */
+                if (i1 == i0 && i2 != i0) continue;
+                int set[3] = {i0, i1, i2}, m = i1 == i0 ? 1 : i2 == i1 ? 2 : 3;
+                double g[3][3], rhs[3], lam[3], w[3];
+                for (int i = 0; i < m; i++) {
+                    for (int j = 0; j < m; j++) g[i][j] = dot3(a[set[i]], a[set[j]]);
+                    rhs[i] = dot3(a[set[i]], v0) - b[set[i]];
+                }
+                if (!solve_small(m, g, rhs, lam)) continue;
+                bool ok = true;
+                for (int i = 0; i < m; i++) ok = ok && lam[i] >= -1e-12;
+                memcpy(w, v0, sizeof w);
+                for (int i = 0; i < m; i++)
+                    for (int c = 0; c < 3; c++) w[c] -= lam[i] * a[set[i]][c];
+                for (int j = 0; j < n && ok; j++) ok = dot3(a[j], w) <= b[j] + 1e-12 * (1 + fabs(b[j]));
+                double q = (w[0] - v0[0]) * (w[0] - v0[0]) + (w[1] - v0[1]) * (w[1] - v0[1]) +
+                           (w[2] - v0[2]) * (w[2] - v0[2]);
+                if (ok && q < best) {
+                    best = q;
+                    memcpy(v, w, sizeof w);
+                }
+            }
+    return best < INFINITY;
 }
 
 int fp_rig_finger_clamp_indexed(const fp_rig_slope_index *ix, const float start[3], const float end[3],
@@ -522,28 +600,50 @@ int fp_rig_finger_clamp_indexed(const fp_rig_slope_index *ix, const float start[
         scaled_end(start, end, f, out_end);
         return f == 1 ? 0 : 2;
     }
-    /* round 0: the vector asked, by the limit's own test; then each round the worst
-     * vertex's push cut to the margin (a hair under), along its direction only: another
-     * vertex, or the moved capsule, may then be the worst */
-    double v[3];
-    for (int i = 0; i < 3; i++) v[i] = (double)end[i] - start[i];
+    /* round 0: the vector asked, by the limit's own test. Then each round adds the worst
+     * vertex's constraint (its push, the vector's component against its grad m, at most the
+     * margin, a hair under) and takes the vector asked projected onto every constraint found:
+     * the nearest vector that meets them, so what is cut is a push toward bone and no more.
+     * The constraints are weighed on the asked vector's capsule (the finger's whole path),
+     * so they follow `end` smoothly, and so does the projection onto them (a convex set
+     * holding 0: the result is no longer than the vector asked). Last, the result's own
+     * capsule, which may reach vertices the asked one does not, is searched once, and the
+     * result scaled to its limit there where it is over: a continuous function of `end` too.
+     * Constraints weighed on each cut vector's own capsule instead made the result depend on
+     * which vertex a search met first: cuts that jumped from 21 to 10 mm between two frames
+     * of a grab (docs/performance.md). */
+    double v0[3], v[3], a[CLAMP_ROUNDS][3], b[CLAMP_ROUNDS];
+    for (int i = 0; i < 3; i++) v[i] = v0[i] = (double)end[i] - start[i];
     for (int round = 0;; round++) {
         slope_worst w;
         float e[3];
         for (int i = 0; i < 3; i++) e[i] = round ? (float)(start[i] + v[i]) : end[i];
-        double c = push_scan(ix, start, e, radius, &w), l = round ? seg_len(start, e) : len;
+        double l = round ? seg_len(start, e) : len;
+        double c = push_scan(ix, start, end, round ? v : NULL, radius, &w);
         if (!(l > FP_RIG_FINGER_MARGIN / c)) {
-            memcpy(out_end, e, sizeof e);
-            return round ? 1 : 0;
-        }
-        double push = -(w.dir[0] * v[0] + w.dir[1] * v[1] + w.dir[2] * v[2]);
-        double allowed = FP_RIG_FINGER_MARGIN * (1 - 1e-6) / w.k;
-        if (round == CLAMP_ROUNDS || !(push > allowed) || !(w.k > 0)) {
-            /* the last vector scaled to its limit: within the bound, its capsule lying in
-             * the one just searched (no cut toward a bone left, or rounding at the margin) */
-            scaled_end(start, e, FP_RIG_FINGER_MARGIN / c / l, out_end);
+            if (!round) return 0; /* out_end = end */
+            double own = push_scan(ix, start, e, NULL, radius, NULL);
+            if (!(l > FP_RIG_FINGER_MARGIN / own)) {
+                memcpy(out_end, e, sizeof e);
+                return 1;
+            }
+            scaled_end(start, e, FP_RIG_FINGER_MARGIN / own / l, out_end);
             return 2;
         }
-        for (int i = 0; i < 3; i++) v[i] += (push - allowed) * w.dir[i];
+        bool projected = false;
+        if (round < CLAMP_ROUNDS && w.k > 0) {
+            for (int i = 0; i < 3; i++) a[round][i] = -(double)w.dir[i];
+            double an = sqrt(dot3(a[round], a[round]));
+            for (int i = 0; i < 3; i++) a[round][i] /= an;
+            b[round] = FP_RIG_FINGER_MARGIN * (1 - 1e-5) / (w.k * an);
+            projected = project_polytope(v0, (const double (*)[3])a, b, round + 1, v);
+        }
+        if (!projected) {
+            /* rounds spent (or rounding at the margin): the last vector scaled to its limit
+             * on both capsules (its own lies in the one just searched) */
+            double own = push_scan(ix, start, e, NULL, radius, NULL);
+            scaled_end(start, e, FP_RIG_FINGER_MARGIN / fmax(c, own) / l, out_end);
+            return 2;
+        }
     }
 }

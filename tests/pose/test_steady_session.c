@@ -24,7 +24,10 @@
  * FP_TEST_STEADY_CLIP=grab (a *_joints_mm.csv of ../shared/data/hands/leap-motion),
  * FP_TEST_STEADY_HZ=57 (the first jitter test's recording resampled first, as the 57 Hz copy;
  * the second is resampled at 57 Hz always), FP_TEST_STEADY_MAPPING=anchored (instead of
- * onehand; the face then moves only while a fingertip touches). */
+ * onehand; the face then moves only while a fingertip touches). Each run also prints its
+ * pops: frames where the clean run's face moved over twice as far as the hand's fastest
+ * joint and 1 mm more (a clamp or a guard letting go at once; not asserted: the contact
+ * guard's held skin catches up in one frame where it lets go, docs/performance.md). */
 #define _GNU_SOURCE
 #include "fp_plugin_host.h"
 #include "fp_session.h"
@@ -302,7 +305,8 @@ static void jitter_and_lag(const char *clip, double hz, bool hand_jitter)
     for (int i = 0; i < 3; i++) memcpy(r[i].prev, fp_session_positions(r[i].s), n * 3 * sizeof(float));
 
     double hand_j[3] = {0}, face_j[3] = {0};   /* sums of squares over the hold frames */
-    size_t holds = 0, moving = 0, frames = 0;
+    size_t holds = 0, moving = 0, frames = 0, pops = 0;
+    double pop_mm = 0;
     for (size_t k = 0;; k++) {
         bool on = true;
         for (int i = 0; i < 3; i++) on = step(&r[i], k) && on;
@@ -315,6 +319,16 @@ static void jitter_and_lag(const char *clip, double hz, bool hand_jitter)
         double fastest = 0;
         for (int j = 0; j < NJ; j++) fastest = fmax(fastest, d3(r[0].hand[k][j], r[0].hand[k - 1][j]) * mm * FPS);
         bool hold = fastest < HOLD_MM_S;
+        /* a pop: the clean run's face moving in one frame over twice as far as the hand's
+         * fastest joint, and 1 mm more (printed, not asserted: see the header) */
+        double face_step = 0, hand_step = 0;
+        const float *q = fp_session_positions(r[0].s);
+        for (size_t v = 0; v < n; v++) face_step = fmax(face_step, d3(&q[3 * v], &r[0].prev[3 * v]) * mm);
+        for (int j = 0; j < NJ; j++) hand_step = fmax(hand_step, d3(r[0].hand[k][j], r[0].hand[k - 1][j]) * mm);
+        if (face_step > 2 * hand_step + 1.0) {
+            pops++;
+            pop_mm = fmax(pop_mm, face_step);
+        }
         holds += hold;
         moving += !hold;
         const float *clean_now = fp_session_positions(r[0].s);
@@ -356,10 +370,11 @@ static void jitter_and_lag(const char *clip, double hz, bool hand_jitter)
            "unfiltered %.3f mm, filtered %.3f mm: %.1fx less\n  face jitter in holds: unfiltered "
            "%.3g mm, filtered %.3g mm: %.1fx less\n  lag behind the clean motion (cross-correlation "
            "peak): hand unfiltered %.2f frames, filtered %.2f frames (%.1f ms); face unfiltered "
-           "%.2f, filtered %.2f frames (%.1f ms)\n",
+           "%.2f, filtered %.2f frames (%.1f ms)\n  pops (the clean run's face moving in a frame over twice "
+           "the hand's fastest joint + 1 mm): %zu, largest %.1f mm\n",
            frames, FPS, holds, HOLD_MM_S, moving, hand_rms[1], hand_rms[2], hand_rms[1] / hand_rms[2],
            face_rms[1], face_rms[2], face_rms[1] / face_rms[2], hand_lag[1], hand_lag[2],
-           hand_lag[2] * 1e3 / FPS, face_lag[1], face_lag[2], face_lag[2] * 1e3 / FPS);
+           hand_lag[2] * 1e3 / FPS, face_lag[1], face_lag[2], face_lag[2] * 1e3 / FPS, pops, pop_mm);
     if (hand_jitter) assert_true(hand_rms[1] >= 5 * hand_rms[2]);
     assert_true(face_rms[2] > 0 || face_rms[1] == 0);
     assert_true(face_rms[1] >= 5 * face_rms[2]);
