@@ -48,10 +48,10 @@
  *    no limit for a pull away from every bone it reaches. The session keeps a vector within
  *    that bound by cutting its push alone (fp_rig_finger_clamp_indexed: the vector
  *    projected onto the pushes' constraints, the nearest one meeting them), not by
- *    shortening the whole vector, so a drag along the cheek with a little push toward the cheekbone keeps its
- *    drag (what that changed: docs/performance.md, "The rig cuts the push only"). A fold the
- *    bound misses (fingers' fields adding up) is a flipped triangle the session's contact
- *    guard sees and holds back.
+ *    shortening the whole vector, so a drag along the cheek with a little push toward the
+ *    cheekbone keeps its drag (what that changed: docs/performance.md, "The rig cuts the
+ *    push only"). A fold the bound misses (fingers' fields adding up) is a flipped triangle
+ *    the session's contact guard sees and holds back.
  * The rig's pose itself (the jaw about its hinge, rotated by a smooth fraction of the angle)
  * is applied before the fingers, so a finger's start point is taken on the posed base.
  *
@@ -366,10 +366,9 @@ double fp_rig_finger_limit_toward_indexed(const fp_rig_slope_index *ix, const fl
  *  the result moves continuously with `end` (the weights follow `end`, and the projection
  *  onto a convex set is continuous; test_rig: a step of `end` moves it at most 10x as far,
  *  where the earlier clamp, weighing each cut on its own capsule, jumped 18.8 mm in a step
- *  of 0.05). Returns 0
- *  (out_end = end: within the bound, the same test as fp_rig_finger_limit_toward_indexed's),
- *  1 (the push cut), 2 (scaled). radius <= 0: scaled to the global bound ramp / 3 (as the
- *  limit says); NULL ix or an unbound rig: 0. Source: the bound above (this project's);
+ *  of 0.05). Returns 0 (out_end = end: within the bound, the same test as
+ *  fp_rig_finger_limit_toward_indexed's), 1 (the push cut), 2 (scaled). radius <= 0: scaled
+ *  to the global bound ramp / 3 (as the limit says); NULL ix or an unbound rig: 0. Source: the bound above (this project's);
  *  the projection onto half-spaces is the KKT point of min |v - v0|^2 subject to
  *  a_j . v <= b_j. [any-thread] on an index not being updated; no allocation; asserts its
  *  pointers. */

@@ -520,6 +520,12 @@ static double dot3(const double a[3], const double b[3])
     return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
 
+static double det3(const double h[3][3])
+{
+    return h[0][0] * (h[1][1] * h[2][2] - h[1][2] * h[2][1]) - h[0][1] * (h[1][0] * h[2][2] - h[1][2] * h[2][0]) +
+           h[0][2] * (h[1][0] * h[2][1] - h[1][1] * h[2][0]);
+}
+
 /* Solves the m x m (m <= 3) symmetric system g x = r by Cramer's rule; false when g is
  * near singular (constraints whose directions are dependent: another active set serves). */
 static bool solve_small(int m, const double g[3][3], const double r[3], double x[3])
@@ -536,16 +542,13 @@ static bool solve_small(int m, const double g[3][3], const double r[3], double x
         x[1] = (g[0][0] * r[1] - r[0] * g[1][0]) / det;
         return true;
     }
-    double c0 = g[1][1] * g[2][2] - g[1][2] * g[2][1], c1 = g[1][0] * g[2][2] - g[1][2] * g[2][0],
-           c2 = g[1][0] * g[2][1] - g[1][1] * g[2][0];
-    double det = g[0][0] * c0 - g[0][1] * c1 + g[0][2] * c2;
+    double det = det3(g);
     if (!(fabs(det) > 1e-9)) return false;
     for (int j = 0; j < 3; j++) {
         double h[3][3];
         memcpy(h, g, sizeof h);
         for (int i = 0; i < 3; i++) h[i][j] = r[i];
-        x[j] = (h[0][0] * (h[1][1] * h[2][2] - h[1][2] * h[2][1]) - h[0][1] * (h[1][0] * h[2][2] - h[1][2] * h[2][0]) +
-                h[0][2] * (h[1][0] * h[2][1] - h[1][1] * h[2][0])) / det;
+        x[j] = det3((const double (*)[3])h) / det;
     }
     return true;
 }

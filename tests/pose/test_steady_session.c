@@ -321,11 +321,10 @@ static void jitter_and_lag(const char *clip, double hz, bool hand_jitter)
         bool hold = fastest < HOLD_MM_S;
         /* a pop: the clean run's face moving in one frame over twice as far as the hand's
          * fastest joint, and 1 mm more (printed, not asserted: see the header) */
-        double face_step = 0, hand_step = 0;
+        double face_step = 0;
         const float *q = fp_session_positions(r[0].s);
         for (size_t v = 0; v < n; v++) face_step = fmax(face_step, d3(&q[3 * v], &r[0].prev[3 * v]) * mm);
-        for (int j = 0; j < NJ; j++) hand_step = fmax(hand_step, d3(r[0].hand[k][j], r[0].hand[k - 1][j]) * mm);
-        if (face_step > 2 * hand_step + 1.0) {
+        if (face_step > 2 * fastest / FPS + 1.0) {
             pops++;
             pop_mm = fmax(pop_mm, face_step);
         }
