@@ -84,16 +84,21 @@ typedef struct fp_filter_config {
  *  row below, the hand's jitter on HandSplay only; FP_TEST_FILTER_KEYS=",trend=0,mincutoff=0.5,
  *  beta=0.018" gives the old column).
  *  Jitter in still holds, hand / face, x less than unfiltered (5x asked); lag in frames (one
- *  asked; negative: ahead):
+ *  asked; negative: ahead). The defaults' column through onehand's eased jaw (ease=0.3,
+ *  plugins/map-onehand); the no-trend column was measured with the jaw straight from neutral
+ *  (before the ease; the defaults then gave Waiting's face 11.8x and 16.9x, whose unfiltered
+ *  face the straight jaw's chatter made 2.5x as unsteady, and a still hand pinching 2.6x):
  *
  *    clip, rate        no trend (0.5, 0.018, 6)        trend 6 Hz (0.3, 0.01, 6): the defaults
- *    HandSplay 108     6.3 / 6.2, lag 0.60 / 0.70      8.0 / 8.3, lag 0.35 / 0.05
- *    HandSplay 57      5.4 / 5.3, lag 0.80 / 0.85      6.7 / 7.9, lag 0.60 / 0.20
- *    grab 108          6.1 / 5.6, lag 0.50 / 0.70      7.1 / 5.4, lag 0.35 / 0.05
- *    grab 57           5.4 / 5.2, lag 0.65 / 1.25      6.9 / 6.3, lag 0.55 / 0.80
- *    Waiting 108       5.6 / 5.6, lag 0.60 / 0.70      6.8 / 11.8, lag 0.45 / 0.00
- *    Waiting 57        4.9 / 2.5, lag 0.75 / 1.05      6.0 / 16.9, lag 0.75 / 0.65
- *    three-claps 108   4.0 / 4.4, lag 0.65 / 0.70      4.0 / 6.8, lag 0.40 / 0.40
+ *    HandSplay 108     6.3 / 6.2, lag 0.60 / 0.70      8.0 / 8.2, lag 0.35 / -0.05
+ *    HandSplay 57      5.4 / 5.3, lag 0.80 / 0.85      6.7 / 7.6, lag 0.60 / -0.05
+ *    grab 108          6.1 / 5.6, lag 0.50 / 0.70      7.1 / 5.3, lag 0.35 / -0.10
+ *    grab 57           5.4 / 5.2, lag 0.65 / 1.25      6.9 / 6.2, lag 0.55 / 0.75
+ *    Waiting 108       5.6 / 5.6, lag 0.60 / 0.70      6.8 / 5.7, lag 0.45 / 0.00
+ *    Waiting 57        4.9 / 2.5, lag 0.75 / 1.05      6.0 / 5.3, lag 0.75 / 0.55
+ *    three-claps 108   4.0 / 4.4, lag 0.65 / 0.70      4.0 / 6.6, lag 0.40 / 0.40
+ *    still pinch 108                                   9.9 / 8.7, lag 0.10 / 0.40
+ *    still pinch 57                                    10.0 / 8.6, lag 0.25 / 0.25
  *
  *  Without the trend a low pass smooths where the motion was, so the cutoff that leaves 5x
  *  less jitter lagged the slow motions (grab's jaw, closed by a slow thumb, over a frame at

@@ -20,9 +20,13 @@
  *    opens between the thumb and the fingers) or the thumb's flexion (jaw=flexion: the bend
  *    at its MCP plus its IP joint, from the joint positions; the curl) drives the rig channel
  *    jaw.open (issue 53). Calibrated against
- *    the neutral pose: the neutral value (0) at the neutral hand, the channel's maximum (1)
- *    at flex_range degrees more flexion (or open_range mm more opening), linear between and
- *    clamped to the channel's range, so monotonic in the thumb's motion.
+ *    the neutral pose: the neutral value (0) at the neutral hand, rising by 1 (the channel's
+ *    whole range) per flex_range degrees more flexion (or open_range mm more opening),
+ *    clamped to the channel's range, monotonic in the thumb's motion; it eases in over the
+ *    first ease x that range (0.3: the first 12 mm of opening; slope 0 at neutral, so a
+ *    resting hand's tremor and a tracker's noise leave the shut jaw still), so it is fully
+ *    open at (1 + ease/2) x the range: 46 mm of opening, 52 degrees of flexion (jaw_curve;
+ *    ease=0: straight from neutral, fully open at the range).
  *  - The other fingertips drive control vectors whose start points are rig landmarks (the
  *    table below, key map= or targets=): each start point is the landmark's position as the
  *    host's rig view gives it this frame (on the base posed by the rig's channels), so start
@@ -105,6 +109,7 @@ typedef struct onehand {
     jaw_mode jaw;
     double flex_range;                     /* radians of flexion for the full jaw */
     double open_range;                     /* mm of thumb-index opening for the full jaw */
+    double ease;                           /* share of the range the jaw eases in over */
     double gain;                           /* mm on the face per mm of hand */
     double finger_mm;                      /* the performer's middle proximal + middle, mm */
     double clamp;                          /* longest control vector, in R */
@@ -271,6 +276,20 @@ static bool held_still(onehand *o, const fp_hand_pose *h, int64_t now_ns)
     return scale > 0 && (double)(now_ns - o->anchor_ns) >= o->still_s * 1e9;
 }
 
+/* jaw.open above neutral (in the channel's range: 1 opens it fully) for u, the thumb's
+ * measure beyond neutral over its range: with ease e > 0 it eases in from the neutral over
+ * |u| < e (u^2 / 2e, a slope of 0 at neutral: a resting hand's tremor and a tracker's noise
+ * about the pose at engage leave the shut jaw still, where a straight line there opened it
+ * by every twitch and the jaw's stop at shut made that twitch one-sided), then rises
+ * straight at the same slope as without it (|u| - e/2: never faster than the thumb asks),
+ * so the jaw is fully open at u = 1 + e/2. Odd in u (a held open jaw closes the same way).
+ * e = 0: u itself. */
+static double jaw_curve(double u, double e)
+{
+    double a = fabs(u);
+    return copysign(a < e ? a * a / (2 * e) : a - e / 2, u);
+}
+
 /* Follow the hand: this gesture's displacement of every landmark and the jaw. A frame with
  * a non-finite joint keeps the last displacement. */
 static void follow(onehand *o, const fp_hand_pose *h, const fp_rig_view *rig, double mm_per_unit)
@@ -288,8 +307,9 @@ static void follow(onehand *o, const fp_hand_pose *h, const fp_rig_view *rig, do
         for (int c = 0; c < 3; c++)
             o->last[i][c] = (float)(k * (d[0] * rig->left[c] + d[1] * rig->up[c] + d[2] * rig->forward[c]));
     }
-    double t = jaw_measure(o, h, o->scale) - o->neutral_jaw;
-    if (isfinite(t)) o->last_jaw = t / (o->jaw == JAW_FLEXION ? o->flex_range : o->open_range);
+    double u = (jaw_measure(o, h, o->scale) - o->neutral_jaw) /
+               (o->jaw == JAW_FLEXION ? o->flex_range : o->open_range);
+    if (isfinite(u)) o->last_jaw = jaw_curve(u, o->ease);
 }
 
 /* Write the control set of the shape shown: start = the landmark where the rig view has it
@@ -400,7 +420,7 @@ static void destroy(fp_mapping *self) { free(self->plugin_data); }
 /* ---- keys ----------------------------------------------------------------------------------- */
 
 enum {
-    KEY_HAND, KEY_JAW, KEY_FLEX_RANGE, KEY_OPEN_RANGE, KEY_MAP, KEY_TARGETS, KEY_GAIN,
+    KEY_HAND, KEY_JAW, KEY_FLEX_RANGE, KEY_OPEN_RANGE, KEY_EASE, KEY_MAP, KEY_TARGETS, KEY_GAIN,
     KEY_FINGER_MM, KEY_AUTO, KEY_STILL, KEY_STILL_MM, KEY_HOLD, KEY_CLAMP, KEY_COUNT
 };
 static const fp_param_info keys[KEY_COUNT + 1] = {
@@ -411,10 +431,16 @@ static const fp_param_info keys[KEY_COUNT + 1] = {
                     "flexion (its curl)"},
     {.name = "flex_range", .type = FP_PARAM_FLOAT, .min = 5, .max = 180, .default_value = "45",
      .unit = "deg",
-     .description = "thumb flexion beyond neutral that opens the jaw fully (jaw=flexion)"},
+     .description = "thumb flexion beyond neutral per full jaw travel (jaw=flexion; fully open "
+                    "at (1 + ease/2) x this)"},
     {.name = "open_range", .type = FP_PARAM_FLOAT, .min = 5, .max = 300, .default_value = "40",
      .unit = "mm",
-     .description = "thumb-to-index opening beyond neutral that opens the jaw fully (jaw=opening)"},
+     .description = "thumb-to-index opening beyond neutral per full jaw travel (jaw=opening; "
+                    "fully open at (1 + ease/2) x this)"},
+    {.name = "ease", .type = FP_PARAM_FLOAT, .min = 0, .max = 1, .default_value = "0.3",
+     .description = "share of flex_range or open_range over which the jaw eases in from shut "
+                    "(a resting hand's tremor leaves it still; fully open at (1 + ease/2) x the "
+                    "range; 0: straight from the start)"},
     {.name = "map", .type = FP_PARAM_ENUM, .default_value = "mouth", .choices = "mouth|brows",
      .description = "landmark table: mouth (index, ring: mouth corners; middle: upper lip; little: brows) "
                     "or brows (the four brow points)"},
@@ -526,6 +552,7 @@ static int create(const fp_host *host, const fp_param *params, size_t nparams, f
     o->jaw = v[KEY_JAW].number == 0 ? JAW_FLEXION : JAW_OPENING;
     o->flex_range = v[KEY_FLEX_RANGE].number * (3.14159265358979323846 / 180.0);
     o->open_range = v[KEY_OPEN_RANGE].number;
+    o->ease = v[KEY_EASE].number;
     o->gain = v[KEY_GAIN].number;
     o->finger_mm = v[KEY_FINGER_MM].number;
     o->automatic = v[KEY_AUTO].number != 0;
@@ -581,13 +608,16 @@ static const fp_mapping_factory factory = {
                    "landmarks",
     .usage =
         "onehand[,hand=auto|left|right][,jaw=opening|flexion][,flex_range=DEG][,open_range=MM]\n"
-        "       [,map=mouth|brows][,targets=I/M/R/L][,gain=F][,finger_mm=MM][,auto=0|1]\n"
+        "       [,ease=F][,map=mouth|brows][,targets=I/M/R/L][,gain=F][,finger_mm=MM][,auto=0|1]\n"
         "       [,still=S][,still_mm=MM][,hold=0|1][,clamp=F]\n"
         "  Needs a rig (--rig). hand=auto (default): the hand that is there (the right where\n"
         "  both are) drives, and keeps driving while it stays. The thumb drives jaw.open: 0 at\n"
-        "  the neutral hand, 1 at open_range (40) mm more gap between the thumb's and the\n"
+        "  the neutral hand, +1 per open_range (40) mm more gap between the thumb's and the\n"
         "  index tip (jaw=opening, the default: a hand puppet's mouth) or flex_range (45)\n"
-        "  degrees more thumb flexion (jaw=flexion: the curl, bend at the thumb's MCP + IP).\n"
+        "  degrees more thumb flexion (jaw=flexion: the curl, bend at the thumb's MCP + IP),\n"
+        "  easing in over the first ease (0.3) of that range: slope 0 at neutral, so a\n"
+        "  resting hand's tremor leaves the shut jaw still; fully open at (1 + ease/2) x the\n"
+        "  range, 46 mm (ease=0: straight from neutral, fully open at the range).\n"
         "  The fingertips move landmarks: end = landmark + gain x (tip now - tip at neutral),\n"
         "  the hand's right, up and toward-you as the face's left, up and forward; gain in mm\n"
         "  per mm (1: 1:1), the hand's mm from its middle finger (finger_mm, 70.9 mm), the\n"

@@ -257,8 +257,17 @@ static size_t slot_of(const fx *x, const char *name)
 
 /* ---- tests ---------------------------------------------------------------------------------- */
 
-/* A curling thumb opens the jaw monotonically: 0 at the neutral hand, then (delta MPJ +
- * delta IJ) / flex_range of the FK's own angles, up to 1. For trackers and for gloves. */
+/* jaw.open for u (the thumb's measure beyond neutral over its range) as the usage states it:
+ * u^2 / 2e below e (ease, 0.3 by default), |u| - e/2 above, clamped to [0, 1]. */
+static double eased(double u, double e)
+{
+    double a = fabs(u), r = a < e ? a * a / (2 * e) : a - e / 2;
+    return fmin(1.0, fmax(0.0, copysign(r, u)));
+}
+
+/* A curling thumb opens the jaw monotonically: 0 at the neutral hand, then u = (delta MPJ +
+ * delta IJ) / flex_range of the FK's own angles eased in (eased), up to 1. For trackers and
+ * for gloves. */
 static void thumb_curl(bool angles_only)
 {
     fx x;
@@ -280,7 +289,7 @@ static void thumb_curl(bool angles_only)
         put(&x, FP_HAND_RIGHT, &h, angles_only);
         step(&x, 0);
         assert_int_equal(x.rc, 0);
-        double v = jaw(&x), want = fmin(1.0, k * 2.5 / 45.0);
+        double v = jaw(&x), want = eased(k * 2.5 / 45.0, 0.3);
         assert_true(v >= last);                /* monotonic */
         assert_float_equal(v, want, 0.01);     /* against the FK's angles */
         last = v;
@@ -300,8 +309,8 @@ static void test_angles_only_thumb(void **state)
 }
 
 /* jaw=opening, the default (issue 53: a hand puppet's mouth): the thumb moving away from the
- * index opens the jaw by (opening - neutral opening) / 40 mm, the opening measured on the
- * FK's joints in mm; the same with no jaw= at all. */
+ * index opens the jaw by u = (opening - neutral opening) / 40 mm eased in (eased), the
+ * opening measured on the FK's joints in mm; the same with no jaw= at all. */
 static void jaw_opening(bool by_default)
 {
     fx x;
@@ -323,7 +332,7 @@ static void jaw_opening(bool by_default)
         step(&x, 0);
         double v = jaw(&x);
         assert_true(v >= last);
-        assert_float_equal(v, fmin(1.0, fmax(0.0, (d - d0) / 40.0)), 0.005);
+        assert_float_equal(v, eased((d - d0) / 40.0, 0.3), 0.005);
         last = v;
     }
     assert_true(last > 0.3);
@@ -334,6 +343,43 @@ static void test_jaw_opening(void **state)
     (void)state;
     jaw_opening(false);
     jaw_opening(true);
+}
+
+/* A trembling thumb (the opening up to 1.5 mm either side of neutral, a tracker's noise or a
+ * resting hand's tremor) leaves the eased jaw all but shut: at most 0.0025 of its travel
+ * (1.5 mm: (1.5/40)^2 / 0.6 = 0.0023), where the straight line (ease=0) opens it by every
+ * outward twitch, over 10x as far. */
+static void test_tremor_leaves_jaw_shut(void **state)
+{
+    (void)state;
+    double most[2] = {0, 0};
+    for (int straight = 0; straight <= 1; straight++) {
+        fx x;
+        char err[1024];
+        fp_param p[] = {{"ease", "0"}};
+        assert_int_equal(open_onehand(&x, p, straight ? 1 : 0, true, err), 0);
+        hand h = rest_hand(FP_HAND_RIGHT);
+        float j[FP_HAND_JOINTS][3];
+        joints_mm(&x, FP_HAND_RIGHT, &h, j);
+        double d0 = sqrt(pow(j[4][0] - j[8][0], 2) + pow(j[4][1] - j[8][1], 2) + pow(j[4][2] - j[8][2], 2));
+        put(&x, FP_HAND_RIGHT, &h, false);
+        step(&x, FP_INTENT_ENGAGE);
+        float ab0 = h.a[FP_SENSOR_THUMB_AB];
+        for (int k = 0; k < 40; k++) {
+            h.a[FP_SENSOR_THUMB_AB] = ab0 + (float)((k % 2 ? 1 : -1) * (0.2 + 0.02 * (k % 7)) * DEG);
+            joints_mm(&x, FP_HAND_RIGHT, &h, j);
+            double d = sqrt(pow(j[4][0] - j[8][0], 2) + pow(j[4][1] - j[8][1], 2) + pow(j[4][2] - j[8][2], 2));
+            assert_true(fabs(d - d0) <= 1.5);
+            put(&x, FP_HAND_RIGHT, &h, false);
+            step(&x, 0);
+            assert_int_equal(x.rc, 0);
+            most[straight] = fmax(most[straight], jaw(&x));
+        }
+        close_onehand(&x);
+    }
+    printf("tremor: jaw at most %.5f eased, %.5f straight\n", most[0], most[1]);
+    assert_true(most[0] <= 0.0025);
+    assert_true(most[1] > 10 * most[0]);
 }
 
 /* A still hand moves nothing: every end point is its start point and jaw.open is neutral,
@@ -507,7 +553,7 @@ static void test_left_ignores_right(void **state)
     l.a[FP_SENSOR_THUMB_MPJ] += (float)(20 * DEG);  /* the left thumb does */
     put(&x, FP_HAND_LEFT, &l, false);
     step(&x, 0);
-    assert_float_equal(jaw(&x), 20.0 / 45.0, 0.01);
+    assert_float_equal(jaw(&x), eased(20.0 / 45.0, 0.3), 0.01);
     close_onehand(&x);
 }
 
@@ -642,8 +688,8 @@ static void test_commit_cancel(void **state)
     for (int automatic = 0; automatic <= 1; automatic++) {
         fx x;
         char err[1024];
-        fp_param p[] = {{"jaw", "flexion"}, {"auto", "0"}}; /* the thumb curls */
-        assert_int_equal(open_onehand(&x, p, automatic ? 1 : 2, true, err), 0);
+        fp_param p[] = {{"jaw", "flexion"}, {"ease", "0"}, {"auto", "0"}}; /* the thumb curls, straight */
+        assert_int_equal(open_onehand(&x, p, automatic ? 2 : 3, true, err), 0);
         hand h = rest_hand(FP_HAND_RIGHT);
         put(&x, FP_HAND_RIGHT, &h, false);
         step(&x, FP_INTENT_ENGAGE);
@@ -692,8 +738,8 @@ static void test_hold(void **state)
     for (int hold = 0; hold <= 1; hold++) {
         fx x;
         char err[1024];
-        fp_param p[] = {{"hold", hold ? "1" : "0"}, {"jaw", "flexion"}}; /* the thumb curls */
-        assert_int_equal(open_onehand(&x, p, 2, true, err), 0);
+        fp_param p[] = {{"hold", hold ? "1" : "0"}, {"jaw", "flexion"}, {"ease", "0"}}; /* straight */
+        assert_int_equal(open_onehand(&x, p, 3, true, err), 0);
         hand h = rest_hand(FP_HAND_RIGHT);
         put(&x, FP_HAND_RIGHT, &h, false);
         step(&x, FP_INTENT_ENGAGE);
@@ -829,7 +875,7 @@ static void test_keys(void **state)
         if (k->type == FP_PARAM_FLOAT) assert_true(k->min < k->max);
         assert_non_null(strstr(f->usage, k->name));   /* documented in the usage text */
     }
-    assert_int_equal(n, 13);
+    assert_int_equal(n, 14);
     close_onehand(&x);
 }
 
@@ -837,7 +883,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_thumb_curl_opens_jaw), cmocka_unit_test(test_angles_only_thumb),
-        cmocka_unit_test(test_jaw_opening),          cmocka_unit_test(test_still_hand),
+        cmocka_unit_test(test_jaw_opening),          cmocka_unit_test(test_tremor_leaves_jaw_shut),          cmocka_unit_test(test_still_hand),
         cmocka_unit_test(test_start_points_are_landmarks),
         cmocka_unit_test(test_relative_motion_tracker), cmocka_unit_test(test_angles_only_motion),
         cmocka_unit_test(test_left_ignores_right),   cmocka_unit_test(test_auto_still),
