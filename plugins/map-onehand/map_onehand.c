@@ -107,8 +107,8 @@ typedef struct onehand {
     bool hand_auto;                        /* hand=auto: the hand that is there */
     int hand;                              /* FP_HAND_LEFT / FP_HAND_RIGHT: the driving hand */
     jaw_mode jaw;
-    double flex_range;                     /* radians of flexion for the full jaw */
-    double open_range;                     /* mm of thumb-index opening for the full jaw */
+    double flex_range;                     /* radians of flexion per full jaw travel */
+    double open_range;                     /* mm of thumb-index opening per full jaw travel */
     double ease;                           /* share of the range the jaw eases in over */
     double gain;                           /* mm on the face per mm of hand */
     double finger_mm;                      /* the performer's middle proximal + middle, mm */
