@@ -308,6 +308,15 @@ static void test_angles_only_thumb(void **state)
     thumb_curl(true);
 }
 
+/* The thumb-to-index opening of hand h as the mapping measures it: the distance between the
+ * thumb's tip (joint 4) and the index tip (joint 8) of the FK's joints, mm. */
+static double opening_mm(fx *x, const hand *h)
+{
+    float j[FP_HAND_JOINTS][3];
+    joints_mm(x, FP_HAND_RIGHT, h, j);
+    return sqrt(pow(j[4][0] - j[8][0], 2) + pow(j[4][1] - j[8][1], 2) + pow(j[4][2] - j[8][2], 2));
+}
+
 /* jaw=opening, the default (issue 53: a hand puppet's mouth): the thumb moving away from the
  * index opens the jaw by u = (opening - neutral opening) / 40 mm eased in (eased), the
  * opening measured on the FK's joints in mm; the same with no jaw= at all. */
@@ -318,16 +327,13 @@ static void jaw_opening(bool by_default)
     fp_param p[] = {{"jaw", "opening"}};
     assert_int_equal(open_onehand(&x, p, by_default ? 0 : 1, true, err), 0);
     hand h = rest_hand(FP_HAND_RIGHT);
-    float j[FP_HAND_JOINTS][3];
-    joints_mm(&x, FP_HAND_RIGHT, &h, j);
-    double d0 = sqrt(pow(j[4][0] - j[8][0], 2) + pow(j[4][1] - j[8][1], 2) + pow(j[4][2] - j[8][2], 2));
+    double d0 = opening_mm(&x, &h);
     put(&x, FP_HAND_RIGHT, &h, false);
     step(&x, FP_INTENT_ENGAGE);
     double last = 0;
     for (int k = 1; k <= 12; k++) {
         h.a[FP_SENSOR_THUMB_AB] += (float)(3 * DEG);
-        joints_mm(&x, FP_HAND_RIGHT, &h, j);
-        double d = sqrt(pow(j[4][0] - j[8][0], 2) + pow(j[4][1] - j[8][1], 2) + pow(j[4][2] - j[8][2], 2));
+        double d = opening_mm(&x, &h);
         put(&x, FP_HAND_RIGHT, &h, false);
         step(&x, 0);
         double v = jaw(&x);
@@ -359,16 +365,13 @@ static void test_tremor_leaves_jaw_shut(void **state)
         fp_param p[] = {{"ease", "0"}};
         assert_int_equal(open_onehand(&x, p, straight ? 1 : 0, true, err), 0);
         hand h = rest_hand(FP_HAND_RIGHT);
-        float j[FP_HAND_JOINTS][3];
-        joints_mm(&x, FP_HAND_RIGHT, &h, j);
-        double d0 = sqrt(pow(j[4][0] - j[8][0], 2) + pow(j[4][1] - j[8][1], 2) + pow(j[4][2] - j[8][2], 2));
+        double d0 = opening_mm(&x, &h);
         put(&x, FP_HAND_RIGHT, &h, false);
         step(&x, FP_INTENT_ENGAGE);
         float ab0 = h.a[FP_SENSOR_THUMB_AB];
         for (int k = 0; k < 40; k++) {
             h.a[FP_SENSOR_THUMB_AB] = ab0 + (float)((k % 2 ? 1 : -1) * (0.2 + 0.02 * (k % 7)) * DEG);
-            joints_mm(&x, FP_HAND_RIGHT, &h, j);
-            double d = sqrt(pow(j[4][0] - j[8][0], 2) + pow(j[4][1] - j[8][1], 2) + pow(j[4][2] - j[8][2], 2));
+            double d = opening_mm(&x, &h);
             assert_true(fabs(d - d0) <= 1.5);
             put(&x, FP_HAND_RIGHT, &h, false);
             step(&x, 0);
