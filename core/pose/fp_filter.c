@@ -144,10 +144,11 @@ static double oneeuro_speed(fp_oneeuro *f, const fp_filter_config *c, int dim, d
     return sqrt(speed2) * mm_per_unit;
 }
 
-/* The second half: Xhat_i at cutoff_hz, from the prediction Xhat_{i-1} + T_e B_{i-1} (Holt)
- * while the sample is not behind Xhat_{i-1} along B by over FP_FILTER_TREND_SLACK_MM, else
- * from Xhat_{i-1} with B decaying; after a gap over FP_FILTER_TREND_GAP_S, B starts at 0;
- * and B_i at trend_hz (0: none, B stays 0: the paper's filter, bit for bit). */
+/* The second half: Xhat_i at cutoff_hz, from the prediction Xhat_{i-1} + g T_e B_{i-1}
+ * (Holt), g fading from 1 to 0 as the sample falls behind Xhat_{i-1} along B from
+ * FP_FILTER_TREND_SLACK_MM to FP_FILTER_TREND_STOP_MM (then from Xhat_{i-1}, B decaying);
+ * after a gap over FP_FILTER_TREND_GAP_S, B starts at 0; and B_i at trend_hz (0: none, B
+ * stays 0: the paper's filter, bit for bit). */
 static void oneeuro_smooth(fp_oneeuro *f, double cutoff_hz, double trend_hz, double mm_per_unit, int dim,
                            const double *x, double *out)
 {
@@ -165,19 +166,19 @@ static void oneeuro_smooth(fp_oneeuro *f, double cutoff_hz, double trend_hz, dou
         along += (x[k] - f->x[k]) * f->tr[k];
         tr2 += f->tr[k] * f->tr[k];
     }
-    /* the motion stopped or turned: predict nothing */
-    const bool behind = along * mm_per_unit < -FP_FILTER_TREND_SLACK_MM * sqrt(tr2);
+    /* the motion stopping or turning: the sample behind Xhat_{i-1} along B by s mm; the
+     * prediction and the trend's update fade from s = FP_FILTER_TREND_SLACK_MM to none at
+     * FP_FILTER_TREND_STOP_MM (a ramp: the output stays continuous in the sample) */
+    const double behind_mm = tr2 > 0 ? -along * mm_per_unit / sqrt(tr2) : 0;
+    const double g = 1 - fmin(1, fmax(0, (behind_mm - FP_FILTER_TREND_SLACK_MM) /
+                                             (FP_FILTER_TREND_STOP_MM - FP_FILTER_TREND_SLACK_MM)));
+    assert(g >= 0 && g <= 1);
     if (f->te > FP_FILTER_TREND_GAP_S) /* the hand was away: no motion is guessed across it */
         for (int k = 0; k < dim; k++) f->tr[k] = 0;
     for (int k = 0; k < dim; k++) {
         const double last = f->x[k];
-        if (behind) {
-            f->x[k] = a * x[k] + (1 - a) * last;
-            f->tr[k] *= 1 - b;
-        } else {
-            f->x[k] = a * x[k] + (1 - a) * (last + f->te * f->tr[k]);   /* Xhat_i */
-            f->tr[k] = b * (f->x[k] - last) / f->te + (1 - b) * f->tr[k]; /* B_i */
-        }
+        f->x[k] = a * x[k] + (1 - a) * (last + g * f->te * f->tr[k]);       /* Xhat_i */
+        f->tr[k] = g * b * (f->x[k] - last) / f->te + (1 - b) * f->tr[k];   /* B_i */
         out[k] = f->x[k];
     }
 }

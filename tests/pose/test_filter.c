@@ -175,9 +175,9 @@ static void test_trend(void **state)
     assert_true(fabs(lag_without - fp_oneeuro_lag(&without, v, rate)) < 1e-6);
     assert_true(lag_without > 0.015); /* over a frame at 60 fps without it */
     assert_true(fp_oneeuro_lag(&with, v, rate) == 0);
-    /* a sudden stop from 300 mm/s: the trend of the finished motion dies away once the hand
-     * is FP_FILTER_TREND_SLACK_MM behind, the output goes a little past the hand (Holt's trend
-     * alone: 10.8 mm) and settles on it */
+    /* a sudden stop from 300 mm/s: the trend of the finished motion fades as the hand falls
+     * FP_FILTER_TREND_SLACK_MM to FP_FILTER_TREND_STOP_MM behind, the output goes a little
+     * past the hand (Holt's trend alone: 10.8 mm) and settles on it */
     fp_oneeuro_reset(&f);
     double past = 0, y = 0;
     for (int i = 0; i <= n + (int)(3 * rate); i++) {
@@ -187,7 +187,7 @@ static void test_trend(void **state)
     }
     printf("a sudden stop from 300 mm/s: %.2f mm past the hand at most, %.4f mm off after 3 s\n", past,
            out_with - y);
-    assert_true(past < FP_FILTER_TREND_SLACK_MM + 1.5);
+    assert_true(past < FP_FILTER_TREND_STOP_MM + 1.5);
     assert_true(fabs(out_with - y) < 0.05);
     /* a gap: the hand away for a second after moving at 300 mm/s comes back where it left; no
      * motion is guessed across the gap (the output stays between the input and the last) */
@@ -217,6 +217,40 @@ static void test_trend(void **state)
     printf("still joint, 1 mm noise at 108 Hz, trend %g Hz: sample-to-sample %.1fx less\n", with.trend,
            sqrt(step2_in / step2_out));
     assert_true(step2_out * 25 < step2_in);
+}
+
+/* The trend's fade is continuous in the sample: from a joint moving at 100 mm/s (57 Hz), the
+ * next sample swept from 2 mm ahead of the smoothed position to 8 mm behind it along the
+ * motion in steps of 1 um moves the output by at most 5 um a step (the slope of the fade,
+ * about 0.6 mm per mm, and the low pass's alpha). A switch at one distance would jump by the
+ * whole prediction, (1 - alpha) T_e |B|: about 1.7 mm here. */
+static void test_trend_fade_continuous(void **state)
+{
+    (void)state;
+    fp_filter_config with = tracker;
+    with.trend = FP_FILTER_TREND;
+    const double rate = 57, te = 1 / rate, v = 100;
+    fp_oneeuro f;
+    fp_oneeuro_reset(&f);
+    double x = 0, out = 0;
+    int n = (int)rate;
+    for (int i = 0; i <= n; i++) {
+        x = v * i * te;
+        fp_oneeuro_filter(&f, &with, 1, 1.0, &x, llround(i * te * 1e9), &out);
+    }
+    double largest = 0, prev = NAN, first = NAN;
+    for (int k = 0; k <= 10000; k++) {
+        fp_oneeuro g = f;                          /* the same state, each sample in turn */
+        double y = out + 2.0 - k * 1e-3, o;
+        fp_oneeuro_filter(&g, &with, 1, 1.0, &y, llround((n + 1) * te * 1e9), &o);
+        if (k) largest = fmax(largest, fabs(o - prev));
+        else first = o;
+        prev = o;
+    }
+    printf("the next sample swept 10 mm across the fade in 1 um steps: the output moved %.2f mm, "
+           "at most %.4f mm a step\n", first - prev, largest);
+    assert_true(largest < 0.005);
+    assert_true(first - prev > 0.5);  /* and it does move with the sample */
 }
 
 /* A hand's joints share the fastest joint's cutoff: beside a joint moving at 400 mm/s, a
@@ -585,7 +619,8 @@ int main(void)
         cmocka_unit_test(test_alpha),          cmocka_unit_test(test_constant),
         cmocka_unit_test(test_ramp_lag),       cmocka_unit_test(test_noise),
         cmocka_unit_test(test_adaptive),
-        cmocka_unit_test(test_trend),       cmocka_unit_test(test_shared_cutoff),
+        cmocka_unit_test(test_trend),       cmocka_unit_test(test_trend_fade_continuous),
+        cmocka_unit_test(test_shared_cutoff),
         cmocka_unit_test(test_stamps),
         cmocka_unit_test(test_keys),           cmocka_unit_test(test_frame_time),
         cmocka_unit_test(test_frame_time_angles), cmocka_unit_test(test_no_repeats),

@@ -14,6 +14,8 @@
  *    of least squared difference, each coordinate's mean difference taken out (the
  *    cross-correlation's peak), is at most one frame; the face's criteria and the hand's lag
  *    also on grab and Waiting (at their rate and at 57 Hz) and three-claps (its rate);
+ *  - the same criteria on a still hand pinching (a copy the test makes of HandSplay's middle
+ *    pose, thumb and index closing and opening every 1.5 s), with two seeds of the noise;
  *  - stutter: the clean recording (108 Hz, its three real gaps of 27 ms included) and a 57 Hz
  *    copy resampled from it give no two consecutive frames with the same hand joints while
  *    the hand moves (after the hand's first two frames: a single sample shows no motion).
@@ -24,7 +26,8 @@
  * FP_TEST_STEADY_CLIP=grab (a *_joints_mm.csv of ../shared/data/hands/leap-motion),
  * FP_TEST_STEADY_HZ=57 (the first jitter test's recording resampled first, as the 57 Hz copy;
  * the second is resampled at 57 Hz always), FP_TEST_STEADY_MAPPING=anchored (instead of
- * onehand; the face then moves only while a fingertip touches). Each run also prints its
+ * onehand; the face then moves only while a fingertip touches), FP_TEST_STEADY_SEED=7 (the
+ * noise's seed instead of 51). Each run also prints its
  * pops: frames where the clean run's face moved over twice as far as the hand's fastest
  * joint and 1 mm more (a clamp or a guard letting go at once; not asserted: the contact
  * guard's held skin catches up in one frame where it lets go, docs/performance.md). */
@@ -50,6 +53,7 @@
 #define MAPPING "onehand,still=0"
 
 static char g_dir[256];
+static uint64_t g_seed = 51;   /* the noise's seed (FP_TEST_STEADY_SEED) */
 
 /* ---- the recordings ------------------------------------------------------------------- */
 
@@ -340,7 +344,7 @@ static void jitter_and_lag(const char *clip, double hz, bool hand_jitter)
         write_rows(clean_csv, &clean);
     }
     noisy = clean;
-    add_noise(&noisy, 1.0, 51);
+    add_noise(&noisy, 1.0, g_seed);
     const char *noisy_csv = copy_path("noisy_joints_mm.csv");
     write_rows(noisy_csv, &noisy);
     char spec[3][4400];
@@ -507,10 +511,19 @@ static void test_jitter_and_lag_still_pinch(void **state)
     static rows real, held;
     read_rows(clip_path(NULL), &real);
     still_pinch(&real, &held);
-    const char *held_csv = copy_path("stillpinch_joints_mm.csv");
+    char held_csv[512]; /* copy_path's buffers are reused by the runs below */
+    snprintf(held_csv, sizeof held_csv, "%s", copy_path("stillpinch_joints_mm.csv"));
     write_rows(held_csv, &held);
-    jitter_and_lag(held_csv, 0, true);
-    jitter_and_lag(held_csv, 57, true);
+    /* two seeds: the turns of the pinch make this copy's holds the most sensitive to the
+     * noise drawn (at 57 Hz, before the trend's fade, fp_filter.h: seed 2 4.4x, seed 51 8.6x;
+     * with it 5.6x and 10.9x) */
+    const uint64_t seed = g_seed;
+    for (int i = 0; i < 2; i++) {
+        g_seed = i ? 2 : seed;
+        jitter_and_lag(held_csv, 0, true);
+        jitter_and_lag(held_csv, 57, true);
+    }
+    g_seed = seed;
 }
 
 static void test_no_stutter(void **state)
@@ -538,6 +551,7 @@ static int setup(void **state)
 {
     (void)state;
     snprintf(g_dir, sizeof g_dir, "/tmp/fp_steady_XXXXXX");
+    if (getenv("FP_TEST_STEADY_SEED")) g_seed = strtoull(getenv("FP_TEST_STEADY_SEED"), NULL, 10);
     return mkdtemp(g_dir) ? 0 : -1;
 }
 
