@@ -116,7 +116,7 @@ typedef struct fp_filter_config {
  *  less jitter lagged the slow motions (grab's jaw, closed by a slow thumb, over a frame at
  *  57 Hz), and in Waiting at 57 Hz the lag counted as jitter. With it the cutoff could go
  *  down (0.3 Hz, beta 0.01). Swept (trend 1-8 Hz, mincutoff 0.2-0.3, beta 0.007-0.012, the
- *  stop rule's slack 0, 2 and 3 mm): a trend of 1 Hz lingered into the holds (jitter 4.4-5.2x);
+ *  stop rule, then a switch, at 0, 2 and 3 mm): a trend of 1 Hz lingered into the holds (jitter 4.4-5.2x);
  *  with no slack, noise stopped the trend of slow motions (face lag 1.1-1.3 frames at 57 Hz);
  *  with none of the stop rule, the face ran up to 0.85 frames ahead. Still short of 5x:
  *  three-claps' hand (11 hold frames, between claps, each right after a fast motion). At
