@@ -31,10 +31,10 @@
  * FP_FILTER_TREND_STOP_MM, and B dies away: Holt's trend alone carries a stopping hand on (at
  * a low cutoff the prediction outweighs the sample): 10.8 mm past a sudden stop from
  * 300 mm/s at 57 Hz, 4.3 mm with the fade (tests/pose/test_filter.c). The fade is a ramp,
- * not a switch, so the output is continuous in the sample: a switch at one distance (3 mm,
- * until issue 51's last stop) let the noise decide at each turn of a slow motion whether the
- * prediction went on or stopped, and the face jumped between frames there (docs/performance.md,
- * "The filter's trend fades"). trend = 0 leaves B at 0: the paper's filter, bit for bit.
+ * not a switch, so the output is continuous in the sample: with a switch at one distance
+ * the noise decided at each turn of a slow motion whether the prediction went on or stopped,
+ * and the face jumped between frames there (docs/performance.md, "The filter's trend
+ * fades"). trend = 0 leaves B at 0: the paper's filter, bit for bit.
  *
  * A joint is filtered as one vector (its 3 coordinates share the cutoff, |dXhat| being the
  * length of the filtered velocity: the shape of a motion is kept, whatever its direction); a
@@ -116,9 +116,10 @@ typedef struct fp_filter_config {
  *  less jitter lagged the slow motions (grab's jaw, closed by a slow thumb, over a frame at
  *  57 Hz), and in Waiting at 57 Hz the lag counted as jitter. With it the cutoff could go
  *  down (0.3 Hz, beta 0.01). Swept (trend 1-8 Hz, mincutoff 0.2-0.3, beta 0.007-0.012, the
- *  stop rule, then a switch, at 0, 2 and 3 mm): a trend of 1 Hz lingered into the holds (jitter 4.4-5.2x);
- *  with no slack, noise stopped the trend of slow motions (face lag 1.1-1.3 frames at 57 Hz);
- *  with none of the stop rule, the face ran up to 0.85 frames ahead. Still short of 5x:
+ *  stop rule, then a switch, at 0, 2 and 3 mm): a trend of 1 Hz lingered into the holds
+ *  (jitter 4.4-5.2x); with no slack, noise stopped the trend of slow motions (face lag
+ *  1.1-1.3 frames at 57 Hz); with none of the stop rule, the face ran up to 0.85 frames
+ *  ahead. Still short of 5x:
  *  three-claps' hand (11 hold frames, between claps, each right after a fast motion). At
  *  30 Hz (FP_TEST_STEADY_HZ=30; a webcam's MediaPipe) neither filter reaches 5x: showing a
  *  30 Hz hand at 60 fps interpolates every other frame, which halves the unfiltered jitter
