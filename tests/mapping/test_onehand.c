@@ -230,6 +230,16 @@ static void put(fx *x, int side, const hand *h, bool angles_only)
     fp_pose_take_event(&x->pose, &ev);
 }
 
+/* The right hand at rest, given as joint positions, then the engage request: the pose most
+ * tests start from (its pose the zero); returns that hand. */
+static hand engaged_rest(fx *x)
+{
+    hand h = rest_hand(FP_HAND_RIGHT);
+    put(x, FP_HAND_RIGHT, &h, false);
+    step(x, FP_INTENT_ENGAGE);
+    return h;
+}
+
 static void gone(fx *x, int side)
 {
     fp_event ev;
@@ -326,10 +336,8 @@ static void jaw_opening(bool by_default)
     char err[1024];
     fp_param p[] = {{"jaw", "opening"}};
     assert_int_equal(open_onehand(&x, p, by_default ? 0 : 1, true, err), 0);
-    hand h = rest_hand(FP_HAND_RIGHT);
+    hand h = engaged_rest(&x);
     double d0 = opening_mm(&x, &h);
-    put(&x, FP_HAND_RIGHT, &h, false);
-    step(&x, FP_INTENT_ENGAGE);
     double last = 0;
     for (int k = 1; k <= 12; k++) {
         h.a[FP_SENSOR_THUMB_AB] += (float)(3 * DEG);
@@ -364,10 +372,8 @@ static void test_tremor_leaves_jaw_shut(void **state)
         char err[1024];
         fp_param p[] = {{"ease", "0"}};
         assert_int_equal(open_onehand(&x, p, straight ? 1 : 0, true, err), 0);
-        hand h = rest_hand(FP_HAND_RIGHT);
+        hand h = engaged_rest(&x);
         double d0 = opening_mm(&x, &h);
-        put(&x, FP_HAND_RIGHT, &h, false);
-        step(&x, FP_INTENT_ENGAGE);
         float ab0 = h.a[FP_SENSOR_THUMB_AB];
         for (int k = 0; k < 40; k++) {
             h.a[FP_SENSOR_THUMB_AB] = ab0 + (float)((k % 2 ? 1 : -1) * (0.2 + 0.02 * (k % 7)) * DEG);
@@ -693,9 +699,7 @@ static void test_commit_cancel(void **state)
         char err[1024];
         fp_param p[] = {{"jaw", "flexion"}, {"ease", "0"}, {"auto", "0"}}; /* the thumb curls, straight */
         assert_int_equal(open_onehand(&x, p, automatic ? 2 : 3, true, err), 0);
-        hand h = rest_hand(FP_HAND_RIGHT);
-        put(&x, FP_HAND_RIGHT, &h, false);
-        step(&x, FP_INTENT_ENGAGE);
+        hand h = engaged_rest(&x);
         assert_true(x.cs.active);
         h.a[FP_SENSOR_THUMB_MPJ] += (float)(20 * DEG);
         h.a[FP_SENSOR_INDEX_MPJ] += (float)(20 * DEG);
@@ -743,9 +747,7 @@ static void test_hold(void **state)
         char err[1024];
         fp_param p[] = {{"hold", hold ? "1" : "0"}, {"jaw", "flexion"}, {"ease", "0"}}; /* straight */
         assert_int_equal(open_onehand(&x, p, 3, true, err), 0);
-        hand h = rest_hand(FP_HAND_RIGHT);
-        put(&x, FP_HAND_RIGHT, &h, false);
-        step(&x, FP_INTENT_ENGAGE);
+        hand h = engaged_rest(&x);
         h.pos[1] += 5;                        /* 5 mm up: every landmark 0.5 units up */
         h.a[FP_SENSOR_THUMB_MPJ] += (float)(9 * DEG);
         put(&x, FP_HAND_RIGHT, &h, false);
@@ -802,9 +804,7 @@ static void test_no_rig(void **state)
     assert_int_equal(open_onehand(&x, NULL, 0, false, err), 0);
     assert_non_null(strstr(x.log, "onehand needs a rig (--rig)"));
     x.in.rig = NULL;
-    hand h = rest_hand(FP_HAND_RIGHT);
-    put(&x, FP_HAND_RIGHT, &h, false);
-    step(&x, FP_INTENT_ENGAGE);
+    hand h = engaged_rest(&x);
     assert_int_equal(x.rc, 0);
     assert_false(x.cs.active);
     assert_int_equal(x.cs.count, 0);
@@ -851,9 +851,7 @@ static void test_keys(void **state)
     /* a custom table: nose_tip and both cheeks, index and ring only */
     fp_param ok[] = {{"targets", "nose_tip/-/cheek_left+cheek_right/-"}, {"map", "brows"}};
     assert_int_equal(open_onehand(&x, ok, 2, true, err), 0);
-    hand h = rest_hand(FP_HAND_RIGHT);
-    put(&x, FP_HAND_RIGHT, &h, false);
-    step(&x, FP_INTENT_ENGAGE);
+    hand h = engaged_rest(&x);
     assert_int_equal(x.cs.count, 3);
     slot_of(&x, "nose_tip");
     slot_of(&x, "cheek_left");
