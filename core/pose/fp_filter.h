@@ -104,6 +104,7 @@ typedef struct fp_filter_config {
  *    Waiting 108       5.6 / 5.6, lag 0.60 / 0.70      7.7 / 5.8, lag 0.45 / 0.05  | 5.6
  *    Waiting 57        4.9 / 2.5, lag 0.75 / 1.05      6.2 / 5.6, lag 0.75 / 0.50  | 5.1
  *    three-claps 108   4.0 / 4.4, lag 0.65 / 0.70      4.7 / 6.5, lag 0.40 / 0.50  | 5.4
+ *    three-claps 57                                    4.4 / 6.1, lag 0.65 / 0.60  | 4.9 (seed 3)
  *    still pinch 108                                   10.6 / 9.6, lag 0.15 / 0.45 | 7.2 (seed 2)
  *    still pinch 57                                    11.0 / 10.9, lag 0.35 / 0.45 | 5.6 (seed 2)
  *
