@@ -7,6 +7,9 @@
 #                                   test_guard's recordings, anchored (where it is built:
 #                                   CGAL), then test_reach on the three faces, on $tmp/VARIANT;
 #                                   exits 1 naming WHAT when either fails
+#   variant_onehand VARIANT WHAT    onehand on its defaults, $tmp/VARIANT's grab on each face
+#                                   (its rig): it engages, moves the face and gives no hint
+#                                   (a hand that reaches); exits 1 naming WHAT otherwise
 # SPDX-License-Identifier: GPL-3.0-or-later
 
 variants_setup() {
@@ -29,4 +32,24 @@ variant_guard_and_reach() {
     fi
     FP_SHARED_DATA=$data FP_REACH_HANDS=$tmp/$1 "$build/tests/test_reach" ||
         { echo "FAIL: test_reach on $2"; exit 1; }
+}
+
+variant_onehand() {
+    local face line engaged moved max
+    for face in ict-facekit/generic_neutral_mesh.obj lee-perry-smith/LeePerrySmith.obj \
+                mediapipe-canonical/canonical_face_model.obj; do
+        "$build/bin/facepuppet" run --plugin-dir "$build/lib/facepuppet" --mesh "$data/faces/$face" \
+            --mapping onehand --input "replay:$tmp/$1/grab_joints_mm.csv,fast=1" \
+            --out "$tmp/onehand.obj" --force >"$tmp/onehand.out" 2>"$tmp/onehand.err" ||
+            { cat "$tmp/onehand.err"; echo "FAIL: onehand run on $face"; exit 1; }
+        line=$(grep '^frames' "$tmp/onehand.out")
+        echo "onehand, $2, $face: $line"
+        engaged=$(sed -n 's/.* engaged \([0-9]*\),.*/\1/p' <<<"$line")
+        moved=$(sed -n 's/.*vertices moved \([0-9]*\) of.*/\1/p' <<<"$line")
+        max=$(sed -n 's/.*displacement mean [^;]* max \([0-9.e+-]*\) mm.*/\1/p' <<<"$line")
+        [ "${engaged:-0}" -ge 1 ] && [ "${moved:-0}" -gt 0 ] && awk -v m="${max:-0}" 'BEGIN { exit !(m > 0) }' ||
+            { echo "FAIL: onehand on its defaults moved nothing under $2: $face"; exit 1; }
+        ! grep -q "no fingertip came within" "$tmp/onehand.err" ||
+            { cat "$tmp/onehand.err"; echo "FAIL: a hint for $2, which reaches: $face"; exit 1; }
+    done
 }

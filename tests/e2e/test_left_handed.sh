@@ -28,20 +28,5 @@ variant_guard_and_reach mirror "mirrored hands"
 grep -q "contact guard widened the support 2.25x this gesture" "$tmp/widen.err" ||
     { cat "$tmp/widen.err"; echo "FAIL: no widened gesture said on the mirrored grab (MediaPipe)"; exit 1; }
 
-for face in ict-facekit/generic_neutral_mesh.obj lee-perry-smith/LeePerrySmith.obj \
-            mediapipe-canonical/canonical_face_model.obj; do
-    "$build/bin/facepuppet" run --plugin-dir "$build/lib/facepuppet" --mesh "$data/faces/$face" \
-        --mapping onehand --input "replay:$tmp/mirror/grab_joints_mm.csv,fast=1" \
-        --out "$tmp/onehand.obj" --force >"$tmp/onehand.out" 2>"$tmp/onehand.err" ||
-        { cat "$tmp/onehand.err"; echo "FAIL: onehand run on $face"; exit 1; }
-    line=$(grep '^frames' "$tmp/onehand.out")
-    echo "onehand, left hand, $face: $line"
-    engaged=$(sed -n 's/.* engaged \([0-9]*\),.*/\1/p' <<<"$line")
-    moved=$(sed -n 's/.*vertices moved \([0-9]*\) of.*/\1/p' <<<"$line")
-    max=$(sed -n 's/.*displacement mean [^;]* max \([0-9.e+-]*\) mm.*/\1/p' <<<"$line")
-    [ "${engaged:-0}" -ge 1 ] && [ "${moved:-0}" -gt 0 ] && awk -v m="${max:-0}" 'BEGIN { exit !(m > 0) }' ||
-        { echo "FAIL: onehand on its defaults moved nothing under a left hand: $face"; exit 1; }
-    ! grep -q "no fingertip came within" "$tmp/onehand.err" ||
-        { cat "$tmp/onehand.err"; echo "FAIL: a hint for a left hand that reaches: $face"; exit 1; }
-done
+variant_onehand mirror "a left hand"
 echo ok
