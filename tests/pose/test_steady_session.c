@@ -130,58 +130,50 @@ static void add_noise(rows *r, double sigma_mm, uint64_t seed)
             if (k < 3 || k >= 9) r->v[i][k] += sigma_mm * gauss();
 }
 
-/* The recording resampled at hz, each hand (hand id and side) on its own: at the times
+/* The recording resampled at hz, each hand (hand id and side) on its own: row k at
  * t_first + k / hz (t_first the recording's first row, so two hands' rows share frame k's
- * number and time) within each stretch of the hand's rows without a gap over 100 ms (the
- * hand away stays away), every value interpolated linearly between the hand's rows around
- * it; rows in time order, the hands in the order they first appear. */
+ * number and time) for each hand within a stretch of its rows without a gap over 100 ms (a
+ * hand away stays away), every value interpolated linearly between the hand's rows around it;
+ * in time order, the hands of a frame in the order they first appear. */
 static void resample(const rows *in, double hz, rows *out)
 {
+    enum { MAX_HANDS = 8 };
+    static size_t idx[MAX_HANDS][1024];      /* each hand's rows */
+    size_t m[MAX_HANDS] = {0}, a[MAX_HANDS] = {0}, b[MAX_HANDS], j[MAX_HANDS] = {0};
+    size_t hands = 0;
+    for (size_t i = 0; i < in->n; i++) {
+        size_t h = 0;
+        while (h < hands && strcmp(in->lead[idx[h][0]], in->lead[i])) h++;
+        assert_true(h < MAX_HANDS);
+        hands += h == hands;
+        idx[h][m[h]++] = i;
+    }
+    for (size_t h = 0; h < hands; h++) /* the first stretch: idx[h][a..b] */
+        for (b[h] = 0; b[h] + 1 < m[h] && in->t_us[idx[h][b[h] + 1]] - in->t_us[idx[h][b[h]]] <= 100000; b[h]++) {}
     memcpy(out->header, in->header, sizeof out->header);
     out->n = 0;
-    const double t0 = (double)in->t_us[0], step = 1e6 / hz;
-    for (size_t first = 0; first < in->n; first++) {
-        bool seen = false; /* this row's hand resampled already */
-        for (size_t i = 0; i < first && !seen; i++) seen = !strcmp(in->lead[i], in->lead[first]);
-        if (seen) continue;
-        size_t idx[1024], m = 0; /* the hand's rows */
-        for (size_t i = first; i < in->n; i++)
-            if (!strcmp(in->lead[i], in->lead[first])) idx[m++] = i;
-        for (size_t a = 0, b; a < m; a = b + 1) { /* a stretch idx[a..b] */
-            for (b = a; b + 1 < m && in->t_us[idx[b + 1]] - in->t_us[idx[b]] <= 100000; b++) {}
-            size_t j = a;
-            for (long k = (long)ceil(((double)in->t_us[idx[a]] - t0) / step);; k++) {
-                double t = t0 + (double)k * step;
-                if (t > (double)in->t_us[idx[b]]) break;
-                while (j + 1 < b && (double)in->t_us[idx[j + 1]] <= t) j++;
-                const size_t r0 = idx[j], r1 = idx[j < b ? j + 1 : j];
-                double w = r1 == r0 ? 0 : (t - (double)in->t_us[r0]) / (double)(in->t_us[r1] - in->t_us[r0]);
-                assert_true(out->n < 1024);
-                out->frame[out->n] = k;
-                out->t_us[out->n] = llround(t);
-                snprintf(out->lead[out->n], sizeof out->lead[0], "%s", in->lead[r0]);
-                for (int c = 0; c < 69; c++) out->v[out->n][c] = (1 - w) * in->v[r0][c] + w * in->v[r1][c];
-                out->n++;
+    const double t0 = (double)in->t_us[0], t_end = (double)in->t_us[in->n - 1];
+    for (long k = 0;; k++) {
+        const double t = t0 + (double)k * 1e6 / hz;
+        if (t > t_end) break;
+        for (size_t h = 0; h < hands; h++) {
+            const size_t *r = idx[h];
+            while (t > (double)in->t_us[r[b[h]]] && b[h] + 1 < m[h]) { /* the next stretch */
+                j[h] = a[h] = b[h] + 1;
+                for (b[h] = a[h]; b[h] + 1 < m[h] && in->t_us[r[b[h] + 1]] - in->t_us[r[b[h]]] <= 100000; b[h]++) {}
             }
+            if (t < (double)in->t_us[r[a[h]]] || t > (double)in->t_us[r[b[h]]]) continue; /* away */
+            while (j[h] + 1 < b[h] && (double)in->t_us[r[j[h] + 1]] <= t) j[h]++;
+            const size_t r0 = r[j[h]], r1 = r[j[h] < b[h] ? j[h] + 1 : j[h]];
+            const double w = r1 == r0 ? 0 : (t - (double)in->t_us[r0]) / (double)(in->t_us[r1] - in->t_us[r0]);
+            assert_true(out->n < 1024);
+            out->frame[out->n] = k;
+            out->t_us[out->n] = llround(t);
+            snprintf(out->lead[out->n], sizeof out->lead[0], "%s", in->lead[r0]);
+            for (int c = 0; c < 69; c++) out->v[out->n][c] = (1 - w) * in->v[r0][c] + w * in->v[r1][c];
+            out->n++;
         }
     }
-    for (size_t i = 1; i < out->n; i++) /* time order, stable: a few hundred rows */
-        for (size_t k = i; k > 0 && out->frame[k] < out->frame[k - 1]; k--) {
-            long f = out->frame[k];
-            long long t = out->t_us[k];
-            char lead[32];
-            double v[69];
-            memcpy(lead, out->lead[k], sizeof lead);
-            memcpy(v, out->v[k], sizeof v);
-            out->frame[k] = out->frame[k - 1];
-            out->t_us[k] = out->t_us[k - 1];
-            memcpy(out->lead[k], out->lead[k - 1], sizeof lead);
-            memcpy(out->v[k], out->v[k - 1], sizeof v);
-            out->frame[k - 1] = f;
-            out->t_us[k - 1] = t;
-            memcpy(out->lead[k - 1], lead, sizeof lead);
-            memcpy(out->v[k - 1], v, sizeof v);
-        }
 }
 
 /* The value column (0..68, after frame, timestamp, hand id and side) named name in r's
