@@ -130,6 +130,14 @@ static void add_noise(rows *r, double sigma_mm, uint64_t seed)
             if (k < 3 || k >= 9) r->v[i][k] += sigma_mm * gauss();
 }
 
+/* The last of a hand's rows r[a..m) before a gap over 100 ms (or its last row). */
+static size_t stretch_end(const rows *in, const size_t *r, size_t m, size_t a)
+{
+    size_t b = a;
+    while (b + 1 < m && in->t_us[r[b + 1]] - in->t_us[r[b]] <= 100000) b++;
+    return b;
+}
+
 /* The recording resampled at hz, each hand (hand id and side) on its own: row k at
  * t_first + k / hz (t_first the recording's first row, so two hands' rows share frame k's
  * number and time) for each hand within a stretch of its rows without a gap over 100 ms (a
@@ -148,8 +156,7 @@ static void resample(const rows *in, double hz, rows *out)
         hands += h == hands;
         idx[h][m[h]++] = i;
     }
-    for (size_t h = 0; h < hands; h++) /* the first stretch: idx[h][a..b] */
-        for (b[h] = 0; b[h] + 1 < m[h] && in->t_us[idx[h][b[h] + 1]] - in->t_us[idx[h][b[h]]] <= 100000; b[h]++) {}
+    for (size_t h = 0; h < hands; h++) b[h] = stretch_end(in, idx[h], m[h], 0); /* idx[h][a..b] */
     memcpy(out->header, in->header, sizeof out->header);
     out->n = 0;
     const double t0 = (double)in->t_us[0], t_end = (double)in->t_us[in->n - 1];
@@ -160,7 +167,7 @@ static void resample(const rows *in, double hz, rows *out)
             const size_t *r = idx[h];
             while (t > (double)in->t_us[r[b[h]]] && b[h] + 1 < m[h]) { /* the next stretch */
                 j[h] = a[h] = b[h] + 1;
-                for (b[h] = a[h]; b[h] + 1 < m[h] && in->t_us[r[b[h] + 1]] - in->t_us[r[b[h]]] <= 100000; b[h]++) {}
+                b[h] = stretch_end(in, r, m[h], a[h]);
             }
             if (t < (double)in->t_us[r[a[h]]] || t > (double)in->t_us[r[b[h]]]) continue; /* away */
             while (j[h] + 1 < b[h] && (double)in->t_us[r[j[h] + 1]] <= t) j[h]++;
