@@ -5,8 +5,10 @@
 #                                   or the data, 1 when hands-variants fails
 #   variant_guard_and_reach VARIANT WHAT
 #                                   test_guard's recordings, anchored (where it is built:
-#                                   CGAL), then test_reach on the three faces, on $tmp/VARIANT;
-#                                   exits 1 naming WHAT when either fails
+#                                   CGAL), then test_reach on the three faces, on $tmp/VARIANT
+#                                   (a folder: every *_joints_mm.csv in it, grab among them;
+#                                   or one *_joints_mm.csv); exits 1 naming WHAT when either
+#                                   fails
 #   variant_onehand VARIANT WHAT    onehand on its defaults, $tmp/VARIANT's grab on each face
 #                                   (its rig): it engages, moves the face and gives no hint
 #                                   (a hand that reaches); exits 1 naming WHAT otherwise
@@ -23,7 +25,7 @@ variants_setup() {
 }
 
 variant_guard_and_reach() {
-    [ -s "$tmp/$1/grab_joints_mm.csv" ] || { echo "FAIL: no grab in $tmp/$1"; exit 1; }
+    [ -s "$tmp/$1" ] || [ -s "$tmp/$1/grab_joints_mm.csv" ] || { echo "FAIL: no grab in $tmp/$1"; exit 1; }
     if [ -x "$build/tests/test_guard" ]; then
         FP_SHARED_DATA=$data FP_GUARD_HANDS=$tmp/$1 FP_TEST_FILTER=test_recordings_anchored \
             "$build/tests/test_guard" || { echo "FAIL: test_guard on $2"; exit 1; }

@@ -402,11 +402,11 @@ static void test_surface_service(void **state)
 static const char *faces[] = {"ict-facekit/generic_neutral_mesh.obj",
                               "lee-perry-smith/LeePerrySmith.obj",
                               "mediapipe-canonical/canonical_face_model.obj"};
-static const char *takes[] = {"HandSplay-110fps", "Waiting-110fps", "grab", "three-claps"};
+static fp_test_recordings takes; /* the four, or FP_GUARD_HANDS's */
 
 /* Both mappings, strictly: no new crossing away from the input's own, at the end and at the
- * snapshots (FP_GUARD_HANDS=DIR reads the four *_joints_mm.csv from DIR instead: copies
- * transformed, as test_reach's FP_REACH_HANDS). The fold-over guard alone (injective maps) does not give that: unanchored drags
+ * snapshots (FP_GUARD_HANDS=DIR, every *_joints_mm.csv in it, or FILE_joints_mm.csv runs
+ * other hands instead of the four, as test_reach's FP_REACH_HANDS). The fold-over guard alone (injective maps) does not give that: unanchored drags
  * compose hundreds of injective steps that squeeze near-touching surfaces (lips, eyelids)
  * together, the flat triangles between moved vertices are not the smooth mapped surface,
  * and a rig's mobility blend is no CSRBF map. The contact guard (core/session/contact.h)
@@ -417,16 +417,13 @@ static void recordings(const char *mapping)
 {
     /* sanitizer builds (several times slower): the ICT face only, the same code as the others */
     size_t nfaces = fp_test_time_scale() > 1 ? 1 : sizeof faces / sizeof faces[0];
+    fp_test_recordings_from("FP_GUARD_HANDS", &takes);
     for (size_t fi = 0; fi < nfaces; fi++) {
         char mesh[4300];
         snprintf(mesh, sizeof mesh, "%s/faces/%s", fp_test_data_dir(), faces[fi]);
-        for (size_t ti = 0; ti < sizeof takes / sizeof takes[0]; ti++) {
-            char input[4400], hands[4200];
-            if (getenv("FP_GUARD_HANDS")) /* (experiments: transformed copies of the recordings) */
-                snprintf(hands, sizeof hands, "%s", getenv("FP_GUARD_HANDS"));
-            else
-                snprintf(hands, sizeof hands, "%s/hands/leap-motion", fp_test_data_dir());
-            snprintf(input, sizeof input, "replay:%s/%s_joints_mm.csv,speed=4", hands, takes[ti]);
+        for (size_t ti = 0; ti < takes.n; ti++) {
+            char input[4400];
+            snprintf(input, sizeof input, "replay:%s,speed=4", takes.path[ti]);
             logbook lb = {0};
             fp_session *s = open_session(mesh, mapping, input, &lb);
             unsigned long frames = 0, active = 0, limited = 0, composed = 0, collided = 0;
@@ -477,7 +474,7 @@ static void recordings(const char *mapping)
                    "check median %.2f ms p99 %.2f ms); moved %5zu of %5zu (%5.2f%%), max displacement "
                    "%.4g (R %.4g); new crossings %ld (+%ld next to the input's own), flipped %zu "
                    "(%zu checks)\n",
-                   faces[fi], takes[ti], mapping, frames, active, limited, composed,
+                   faces[fi], takes.name[ti], mapping, frames, active, limited, composed,
                    active ? min_det : 1.0, collided, 100.0 * collide_t, fp_median(cms, ncms), fp_percentile(cms, ncms, 0.99), moved, n, 100.0 * moved / n, maxd,
                    fp_session_radius(s), k, near, fl, nsnap + 1);
             fflush(stdout);

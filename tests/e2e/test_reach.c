@@ -16,8 +16,9 @@
  * run medians 32-100%, docs/performance.md "The rig cuts the push only").
  *
  * Set FP_REACH_ONLY=FACE/RECORDING substrings to run one pair (e.g. "ict/grab"), and
- * FP_REACH_HANDS=DIR to read the four recordings' *_joints_mm.csv from DIR instead (copies
- * transformed to try other hands: mirrored, reversed, faster). Forensics: FP_TEST_VERBOSE
+ * FP_REACH_HANDS=DIR (every *_joints_mm.csv in it) or FILE_joints_mm.csv to run other hands
+ * instead of the four (fp_test_recordings_from: transformed copies, tools/hands-variants, or
+ * a recording of your own; in the recordings' CSV format, docs/devices.md). Forensics: FP_TEST_VERBOSE
  * lists the frames the contact guard scaled back, FP_REACH_SAVE_FRAME=K saves frame K (to
  * FP_REACH_SAVE) instead of the largest ask's, FP_REACH_PAIRS=1 prints the start and end
  * distances of the vectors within 2 R of each other in each frame the fold-over guard
@@ -78,20 +79,16 @@ static size_t nearest_vertex(const float *b, size_t n, const float p[3], double 
 static const char *faces[] = {"ict-facekit/generic_neutral_mesh.obj",
                               "lee-perry-smith/LeePerrySmith.obj",
                               "mediapipe-canonical/canonical_face_model.obj"};
-static const char *recs[] = {"HandSplay-110fps", "Waiting-110fps", "grab", "three-claps"};
+static fp_test_recordings recs; /* the four, or FP_REACH_HANDS's */
 
-/* One run; its reach samples go to `all` and its own percentiles are checked. */
-static void one_run(const char *face, const char *rec, samples *all, int *runs_checked,
-                    double *worst_p10)
+/* One run of recording `rec` (a *_joints_mm.csv) named `rec_name`; its reach samples go to
+ * `all` and its own percentiles are checked. */
+static void one_run(const char *face, const char *rec, const char *rec_name, samples *all,
+                    int *runs_checked, double *worst_p10)
 {
     char mesh[4300], input[4400], err[2048];
     snprintf(mesh, sizeof mesh, "%s/faces/%s", fp_test_data_dir(), face);
-    char hands[4200];
-    if (getenv("FP_REACH_HANDS")) /* (experiments: transformed copies of the recordings) */
-        snprintf(hands, sizeof hands, "%s", getenv("FP_REACH_HANDS"));
-    else
-        snprintf(hands, sizeof hands, "%s/hands/leap-motion", fp_test_data_dir());
-    snprintf(input, sizeof input, "replay:%s/%s_joints_mm.csv,fast=1", hands, rec);
+    snprintf(input, sizeof input, "replay:%s,fast=1", rec);
     fp_session_options so = {0};
     so.mesh_path = mesh;
     so.inputs[0] = input;
@@ -182,7 +179,7 @@ static void one_run(const char *face, const char *rec, samples *all, int *runs_c
     double med = run.n ? fp_median(run.v, run.n) : NAN, p10 = run.n ? fp_percentile(run.v, run.n, 0.10) : NAN;
     printf("%-14.14s %-16s frames %4lu active %4lu composed %3lu (up to %2d maps) limited %3lu "
            "contact-scaled %3lu (%3lu for flips alone) vectors %4zu reach median %5.1f%% p10 %5.1f%%, largest ask %.1f mm, "
-           "largest drag %.1f mm (R %.1f mm); slowest engine update %.1f ms, most pairs %llu\n", face, rec, frames,
+           "largest drag %.1f mm (R %.1f mm); slowest engine update %.1f ms, most pairs %llu\n", face, rec_name, frames,
            active, composed, substeps, limited, by_contact, by_flip, run.n, 100 * med, 100 * p10, max_asked * mm,
            max_moved * mm, R * mm, max_update_ms, (unsigned long long)max_pairs);
     fflush(stdout);
@@ -202,15 +199,16 @@ static void test_reach_anchored(void **state)
     samples all = {0};
     int runs = 0;
     double worst_p10 = INFINITY;
+    fp_test_recordings_from("FP_REACH_HANDS", &recs);
     for (size_t fi = 0; fi < sizeof faces / sizeof faces[0]; fi++)
-        for (size_t ri = 0; ri < sizeof recs / sizeof recs[0]; ri++) {
-            char name[256];
-            snprintf(name, sizeof name, "%s/%s", faces[fi], recs[ri]);
+        for (size_t ri = 0; ri < recs.n; ri++) {
+            char name[600];
+            snprintf(name, sizeof name, "%s/%s", faces[fi], recs.name[ri]);
             if (only && !strcasestr(name, only)) continue;
             /* sanitizer builds (several times slower): the ICT face's four runs, the same
              * code as the others' */
             if (!only && fp_test_time_scale() > 1 && fi > 0) continue;
-            one_run(faces[fi], recs[ri], &all, &runs, &worst_p10);
+            one_run(faces[fi], recs.path[ri], recs.name[ri], &all, &runs, &worst_p10);
         }
     double med = all.n ? fp_median(all.v, all.n) : NAN;
     printf("all runs: %zu vectors in %d runs with touching fingertips, reach median %.1f%%, "

@@ -6,10 +6,12 @@
 #include <stdarg.h>
 #include <cmocka.h>
 
+#include <dirent.h>
 #include <dlfcn.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
 
 #include "fp_plugin_host.h"
@@ -42,6 +44,84 @@ const char *fp_test_face_path(void)
     snprintf(path, sizeof path, "%s/faces/ict-facekit/generic_neutral_mesh.obj",
              fp_test_data_dir());
     return path;
+}
+
+#define FP_TEST_JOINTS_SUFFIX "_joints_mm.csv"
+
+/* 1 when file name f ends in FP_TEST_JOINTS_SUFFIX with something before it */
+static int is_joints(const char *f)
+{
+    size_t n = strlen(f), k = strlen(FP_TEST_JOINTS_SUFFIX);
+    return n > k && strcmp(f + n - k, FP_TEST_JOINTS_SUFFIX) == 0;
+}
+
+static void add_recording(fp_test_recordings *out, const char *dir, const char *file)
+{
+    assert_true(out->n < FP_TEST_RECORDINGS_MAX);
+    size_t i = out->n++;
+    int w = snprintf(out->path[i], sizeof out->path[i], "%s/%s", dir, file);
+    assert_true(w > 0 && (size_t)w < sizeof out->path[i]);
+    snprintf(out->name[i], sizeof out->name[i], "%.*s",
+             (int)(strlen(file) - strlen(FP_TEST_JOINTS_SUFFIX)), file);
+}
+
+static int by_name(const void *a, const void *b)
+{
+    return strcmp(*(char *const *)a, *(char *const *)b);
+}
+
+void fp_test_recordings_from(const char *env, fp_test_recordings *out)
+{
+    static const char *const four[] = {"HandSplay-110fps", "Waiting-110fps", "grab", "three-claps"};
+    memset(out, 0, sizeof *out);
+    const char *where = env ? getenv(env) : NULL;
+    if (!where || !*where) {
+        char dir[4200], file[256];
+        snprintf(dir, sizeof dir, "%s/hands/leap-motion", fp_test_data_dir());
+        for (size_t i = 0; i < sizeof four / sizeof four[0]; i++) {
+            snprintf(file, sizeof file, "%s%s", four[i], FP_TEST_JOINTS_SUFFIX);
+            add_recording(out, dir, file);
+        }
+        return;
+    }
+    struct stat st;
+    if (stat(where, &st) != 0) {
+        fprintf(stderr, "%s=%s: no such file or folder\n", env, where);
+        fail();
+    }
+    if (!S_ISDIR(st.st_mode)) {
+        /* one recording: its folder and file name */
+        const char *slash = strrchr(where, '/');
+        const char *file = slash ? slash + 1 : where;
+        if (!is_joints(file)) {
+            fprintf(stderr, "%s=%s: not a folder nor a *%s\n", env, where, FP_TEST_JOINTS_SUFFIX);
+            fail();
+        }
+        char dir[4200];
+        snprintf(dir, sizeof dir, "%.*s", slash ? (int)(slash - where) : 1, slash ? where : ".");
+        add_recording(out, dir, file);
+        return;
+    }
+    DIR *d = opendir(where);
+    assert_non_null(d);
+    char *names[FP_TEST_RECORDINGS_MAX];
+    size_t n = 0;
+    for (struct dirent *e; (e = readdir(d));)
+        if (is_joints(e->d_name)) {
+            assert_true(n < FP_TEST_RECORDINGS_MAX);
+            names[n] = strdup(e->d_name);
+            assert_non_null(names[n++]);
+        }
+    closedir(d);
+    if (!n) {
+        fprintf(stderr, "%s=%s: no *%s in that folder\n", env, where, FP_TEST_JOINTS_SUFFIX);
+        fail();
+    }
+    qsort(names, n, sizeof names[0], by_name);
+    for (size_t i = 0; i < n; i++) {
+        add_recording(out, where, names[i]);
+        free(names[i]);
+    }
 }
 
 void fp_test_write_file(const char *path, const char *text)

@@ -28,6 +28,26 @@ const char *fp_test_plugin_dir(void);
 /** "<data>/faces/ict-facekit/generic_neutral_mesh.obj". */
 const char *fp_test_face_path(void);
 
+/* ---- the hand recordings a test runs on ------------------------------------------------ */
+
+#define FP_TEST_RECORDINGS_MAX 32
+
+/** Leap joints recordings (*_joints_mm.csv): their paths and names (the file name less
+ *  "_joints_mm.csv"). */
+typedef struct fp_test_recordings {
+    size_t n;
+    char path[FP_TEST_RECORDINGS_MAX][4200];
+    char name[FP_TEST_RECORDINGS_MAX][256];
+} fp_test_recordings;
+
+/** The recordings a test runs on, chosen by the environment variable `env` (so that the checks
+ *  run on hands they were not tuned on, e.g. FP_REACH_HANDS): unset or empty, the four of
+ *  <data>/hands/leap-motion (HandSplay-110fps, Waiting-110fps, grab, three-claps); a folder,
+ *  every *_joints_mm.csv in it, sorted by name (at most FP_TEST_RECORDINGS_MAX); a
+ *  *_joints_mm.csv file, that one. Fails the test, saying why, when `env` names neither or
+ *  a folder without one. out: the caller's (large: keep it static or on the heap). */
+void fp_test_recordings_from(const char *env, fp_test_recordings *out);
+
 /** Write text to path (created or truncated). Fails the test when it cannot. */
 void fp_test_write_file(const char *path, const char *text);
 
