@@ -274,7 +274,7 @@ static long flat_pass(fp_contact *c, lane *ln, const float *s, const float *ref,
         double nd[3];
         tri_box(s, va, k->tbox[q]);
         tri_normal_f(s, va, k->tn[q], nd);
-        if (ref && flipped_n(c, nd, k->order[q]) && !fpc_flipped(c, ref, va, k->order[q])) {
+        if (ref && fpc_new_flip(c, flips_n(c, nd, k->order[q]), ref, va, k->order[q])) {
             flips++;
             if (push_u32(&ln->rec, &ln->nrec, &ln->cap_rec, k->order[q])) return -ENOMEM;
         }
@@ -626,7 +626,7 @@ long fpc_tree_check(fp_contact *c, const float *s, const float *ref, size_t *fli
                                    there decides it, before the refit and the walk */
         for (size_t i = 0; i < k->nprobe; i++) {
             const uint32_t *v = c->tris + 3 * (size_t)k->probe[i];
-            if (fpc_flipped(c, s, v, k->probe[i]) && !fpc_flipped(c, ref, v, k->probe[i])) {
+            if (fpc_new_flip(c, fpc_flips(c, s, v, k->probe[i]), ref, v, k->probe[i])) {
                 *flips = 1;
                 return 0;
             }

@@ -384,7 +384,7 @@ long fpc_track_check(fp_contact *c, const float *s, const float *ref, bool cand_
     for (size_t i = 0; i < k->nmt; i++) {
         uint32_t a = k->mt[i];
         const uint32_t *va = c->tris + 3 * (size_t)a;
-        if (!cand_boxes && fpc_flipped(c, s, va, a) && !fpc_flipped(c, ref, va, a)) {
+        if (!cand_boxes && fpc_new_flip(c, fpc_flips(c, s, va, a), ref, va, a)) {
             (*flips)++;
             if (!record) return 0; /* a bisection's check: a flip decides (check) */
             if (fpc_add_off(c, va)) return -ENOMEM;

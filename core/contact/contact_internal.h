@@ -348,15 +348,32 @@ static inline bool boxes_meet(const float *a, const float *b)
     return (a[0] <= b[3]) & (b[0] <= a[3]) & (a[1] <= b[4]) & (b[1] <= a[4]) & (a[2] <= b[5]) & (b[2] <= a[5]);
 }
 
-/* n (e1 x e2 in double) turned by more than acos(FP_CONTACT_FLIP_COS) from triangle i's rest
- * normal (a unit vector): d < FP_CONTACT_FLIP_COS |n|, without a square root */
-static inline bool flipped_n(const fp_contact *c, const double n[3], size_t i)
+/* n (e1 x e2 in double) turned by more than acos(FP_CONTACT_FLIP_COS) from the unit normal r:
+ * d < FP_CONTACT_FLIP_COS |n|, without a square root */
+static inline bool turned_from(const double n[3], const float r[3])
 {
-    double d = n[0] * c->nrm[i][0] + n[1] * c->nrm[i][1] + n[2] * c->nrm[i][2];
+    double d = n[0] * r[0] + n[1] * r[1] + n[2] * r[2];
     return d < 0 || d * d < FP_CONTACT_FLIP_COS * FP_CONTACT_FLIP_COS * (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
 }
 
-bool fpc_flipped(const fp_contact *c, const float *pos, const uint32_t *v, size_t i);
+/* The rest normals of triangle i that n is turned over from: bit 0 the pose's (c->nrm, the
+ * weld shape's carried by fp_contact_set_pose), bit 1 the weld shape's own (c->nrm_weld,
+ * kept once a pose was set): a triangle the pose turned 60 degrees may turn 30 more, not 90 */
+static inline unsigned flips_n(const fp_contact *c, const double n[3], size_t i)
+{
+    return (unsigned)turned_from(n, c->nrm[i]) | (unsigned)(c->nrm_weld && turned_from(n, c->nrm_weld[i])) << 1;
+}
+
+/* flips_n of triangle i (vertices v) in pos */
+unsigned fpc_flips(const fp_contact *c, const float *pos, const uint32_t *v, size_t i);
+
+/* Triangle i newly turned over in s: turned from a rest normal (flips_n's bits: cand) that it
+ * is not turned from in ref (so a triangle the pose itself turned past 90 degrees from the
+ * loaded face is excused that, not a fold from where the pose put it) */
+static inline bool fpc_new_flip(const fp_contact *c, unsigned cand, const float *ref, const uint32_t *v, size_t i)
+{
+    return cand && (cand & ~fpc_flips(c, ref, v, i));
+}
 
 /* grow *p (elements of size el) to hold need; 0 or -ENOMEM */
 static inline int reserve(void **p, size_t *cap, size_t need, size_t el)
@@ -514,7 +531,7 @@ static inline double dmax(double a, double b) { return b > a ? b : a; }
 /* ---- what one file gives another (each defined, with its comment, in the file named) ---- */
 
 /* contact_scan.c */
-/* (fpc_flipped: above, with flipped_n) */
+/* (fpc_flips, fpc_new_flip: above, with flips_n) */
 
 /* contact_envelope.c: an envelope for triangle x around box (a renewal request); the
  * requests' lists; the check over the lists; the re-centring job */

@@ -220,7 +220,7 @@ static void sort_cells(cellrec **r, cellrec **tmp, size_t m, int bits)
     }
 }
 
-bool fpc_flipped(const fp_contact *c, const float *pos, const uint32_t *v, size_t i)
+unsigned fpc_flips(const fp_contact *c, const float *pos, const uint32_t *v, size_t i)
 {
     double t[3][3], e1[3], e2[3];
     tri_of(pos, v, t);
@@ -230,7 +230,7 @@ bool fpc_flipped(const fp_contact *c, const float *pos, const uint32_t *v, size_
     }
     double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
                    e1[0] * e2[1] - e1[1] * e2[0]};
-    return flipped_n(c, n, i);
+    return flips_n(c, n, i);
 }
 
 /* One pair of the check (scan): a moved, b near it (both moved: a the lower), their boxes
@@ -302,7 +302,7 @@ static long scan(fp_contact *c, const float *ref, const float *cand, bool all, u
         sum += ext;
         /* a triangle turned over against its rest normal (and not already in ref); own
          * triangles too: a flip is no crossing, the input's own crossings do not excuse it */
-        if (info && ref && fpc_flipped(c, cand, v, i) && !fpc_flipped(c, ref, v, i))
+        if (info && ref && fpc_new_flip(c, fpc_flips(c, cand, v, i), ref, v, i))
             info->flipped++;
     }
     if (info) info->moved_tris = nm;

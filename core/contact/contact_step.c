@@ -303,7 +303,7 @@ static long first_check_envelopes(fp_contact *c, const float *ref, const float *
         if ((k->slot[a] == FP_TRACK_NONE || !box_holds(k->dyn[k->slot[a]].env, k->mbox[i])) &&
             fpc_envelope(c, a, k->mbox[i]))
             return -ENOMEM;
-        if (fpc_flipped(c, cand, va, a) && !fpc_flipped(c, ref, va, a)) (*fl)++;
+        if (fpc_new_flip(c, fpc_flips(c, cand, va, a), ref, va, a)) (*fl)++;
     }
     *fl += (size_t)fpc_own_flips(c, cand, ref, false);
     if (fpc_renew_lists(c)) return -ENOMEM;

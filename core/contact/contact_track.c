@@ -194,7 +194,7 @@ long fpc_own_flips(fp_contact *c, const float *s, const float *ref, bool record)
     long f = 0;
     for (size_t i = 0; i < k->nmo; i++) {
         const uint32_t *v = c->tris + 3 * (size_t)k->mo[i];
-        if (fpc_flipped(c, s, v, k->mo[i]) && !fpc_flipped(c, ref, v, k->mo[i])) {
+        if (fpc_new_flip(c, fpc_flips(c, s, v, k->mo[i]), ref, v, k->mo[i])) {
             f++;
             if (record && fpc_add_off(c, v)) return -ENOMEM;
         }

@@ -40,6 +40,12 @@ static int attach_rig(fp_session *s, const fp_session_options *opt, char *err, s
                 snprintf(s->rig_how, sizeof s->rig_how, "%s (found by the vertex count %zu)", path, s->n);
         }
     }
+    /* jaw weights that turn no triangle over (fp_rig_unfold_jaw) */
+    if (rig && (rc = fp_rig_unfold_jaw(rig, s->loaded, s->mesh->triangles, s->mesh->triangle_count, NULL))) {
+        fp_rig_free(&rig);
+        snprintf(err, errlen, "session: out of memory for the rig's jaw weights");
+        return rc;
+    }
     if ((rc = fp_rig_step_init(&s->rig, rig, s->n, s->base))) {
         snprintf(err, errlen, "session: out of memory for the rig");
         return rc;

@@ -3,7 +3,9 @@
  * them) and folds no part of the surface; the skull stays bit for bit; the lower teeth move
  * rigidly (residual of the best rigid fit, Horn's method) and turn by jaw.open times the rig's
  * angle about an axis along the hinge; the weights follow anatomy at the landmarks (upper lip
- * still, lower lip and chin fully, mouth corners about half). */
+ * still, lower lip and chin fully, mouth corners about half); after fp_rig_unfold_jaw no
+ * triangle is turned over (its normal past 90 degrees), where the weights as the falloff
+ * gives them turned some. */
 #define _GNU_SOURCE
 #include "fp_mesh.h"
 #include "fp_rig.h"
@@ -46,6 +48,21 @@ static void test_ict_jaw_pose(void **state)
     if (rc) fprintf(stderr, "%s\n", err);
     assert_int_equal(rc, 0);
     assert_string_equal(fp_rig_name(r), "ict-facekit");
+    float *out = malloc(n * 3 * sizeof *out), vals[FP_RIG_MAX_CHANNELS];
+    /* the jaw's weights as the falloff gives them turn triangles over (normals past 90
+     * degrees: 4 gum triangles at jaw.open 0.6, 20 at 1); fp_rig_unfold_jaw evens the weights
+     * of those triangles (checked below at every opening: none turned) */
+    long raw_turned = 0;
+    fp_rig_channel_values(r, NULL, NULL, 0, vals);
+    vals[fp_rig_channel_index(r, "jaw.open")] = 1;
+    assert_int_equal(fp_rig_pose(r, m->positions, vals, out), 0);
+    rig_check_folds(m->positions, out, m->triangles, m->triangle_count, &raw_turned);
+    size_t changed = 0;
+    assert_int_equal(fp_rig_unfold_jaw(r, m->positions, m->triangles, m->triangle_count, &changed), 0);
+    printf("jaw.open 1 before fp_rig_unfold_jaw: %ld triangles turned over; %zu soft vertices' "
+           "weights evened\n", raw_turned, changed);
+    assert_true(raw_turned > 0);
+    assert_true(changed > 0 && changed < 200);
     /* the weights at the landmarks */
     const float *w = fp_rig_jaw_weights(r);
     const char *fixed0[] = {"upper_lip", "nose_tip", "upper_lip_inner"}, *fixed1[] = {"lower_lip", "chin", "lower_lip_inner"};
@@ -70,10 +87,9 @@ static void test_ict_jaw_pose(void **state)
     uint8_t *teeth = calloc(n, 1);
     for (size_t v = LOWER_TEETH_FIRST; v <= LOWER_TEETH_LAST; v++) teeth[v] = 1;
     const uint8_t *kind = fp_rig_vertex_kinds(r);
-    float *out = malloc(n * 3 * sizeof *out), vals[FP_RIG_MAX_CHANNELS];
     /* 0.6 and 0.65: either side of the ICT rig's glide_start (0.602), where the condyles
-     * begin to slide */
-    static const float opens[] = {0, 0.25f, 0.5f, 0.6f, 0.65f, 0.75f, 1};
+     * begin to slide; the others between the eighths fp_rig_unfold_jaw samples */
+    static const float opens[] = {0, 0.1f, 0.25f, 0.3f, 0.45f, 0.5f, 0.6f, 0.65f, 0.7f, 0.75f, 0.9f, 1};
     for (size_t k = 0; k < sizeof opens / sizeof opens[0]; k++) {
         fp_rig_channel_values(r, NULL, NULL, 0, vals);
         vals[fp_rig_channel_index(r, "jaw.open")] = opens[k];
@@ -96,6 +112,7 @@ static void test_ict_jaw_pose(void **state)
                acos(fmin(1, along)) * 180 / M_PI, disp > 0 ? 100 * resid / disp : 0.0, disp);
         assert_int_equal(x, 0);
         assert_int_equal(folds, 0);
+        assert_int_equal(turned, 0);
         assert_true(fabs(angle - opens[k] * open_deg) < 0.5);
         if (opens[k] > 0) {
             assert_true(resid < 0.01 * disp);

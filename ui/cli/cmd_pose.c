@@ -99,6 +99,8 @@ static int pose_main(int argc, char **argv)
     }
     fp_rig *rig = NULL;
     rc = fp_rig_load_for_mesh(rig_path, m->vertex_count, m->positions, &rig, err, sizeof err);
+    if (!rc && (rc = fp_rig_unfold_jaw(rig, m->positions, m->triangles, m->triangle_count, NULL)))
+        snprintf(err, sizeof err, "%.1000s: out of memory for the jaw weights", rig_path);
     if (rc) {
         fprintf(stderr, "facepuppet pose: %s\n", err);
         fp_mesh_free(&m);
