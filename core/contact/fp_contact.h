@@ -421,12 +421,13 @@ void fp_contact_set_threads(fp_contact *c, int threads, size_t min_moved);
  *  with a rig's pose (base: the unposed reference, posed: the reference the rig made of it,
  *  both n x 3), the weld shape's normals carried by the pose (each triangle's turned by the
  *  least rotation that takes its normal in base to its normal in posed; a triangle the pose
- *  turned over: posed's normal) and the weld shape's as well: a triangle is turned over
- *  when it is past 90 degrees from either. So the fingers turn no triangle over from where
- *  the pose put it, nor from the loaded face (a triangle the jaw turned 60 degrees may turn
- *  30 more, not 90: before, the one-hand mapping's landmarks and jaw together turned 1-19
- *  triangles over against the loaded face in 7 of tests/e2e/test_guard's 12 runs), while a
- *  triangle the pose itself turned over is excused as every flip of the reference is (the
+ *  turned over: posed's normal) and the weld shape's as well: a triangle is newly turned
+ *  over when it is past 90 degrees from one of the two that it is not past in the reference.
+ *  So the fingers turn no triangle over from where the pose put it, nor from the loaded face
+ *  (a triangle the jaw turned 60 degrees may turn 30 more, not 90: before, the one-hand
+ *  mapping's landmarks and jaw together turned 1-19 triangles over against the loaded face
+ *  in 7 of tests/e2e/test_guard's 12 runs); a triangle the pose itself turned past 90
+ *  degrees from the loaded face is excused that, not a fold from where the pose put it (the
  *  rig keeps its pose from turning any: fp_rig_unfold_jaw). base == posed or both NULL: the
  *  weld shape's normals again. Call it when the reference changes, before
  *  fp_contact_reference (whose P := ref keeps the invariant below: a pair or flip of ref is
