@@ -9,8 +9,9 @@
  * vertices the mean weight of its three (a triangle whose weights are equal turns rigidly,
  * which never turns it over), round after round, until none is turned over at any sampled
  * opening; after the first round only triangles with a vertex the last round changed are
- * looked at again (the others' weights, hence their poses, are as they were). Only the vertices of such triangles change (on ICT 56 of 26,719, the face's
- * vertices by 0.025 mm RMS at jaw.open 1); only triangles whose weights differ are posed. */
+ * looked at again (the others' weights, hence their poses, are as they were). Only the
+ * vertices of such triangles change (on ICT 56 of 26,719, the face's vertices by 0.025 mm
+ * RMS at jaw.open 1); only triangles whose weights differ are posed. */
 #define _GNU_SOURCE
 #include "fp_rig_internal.h"
 
@@ -21,7 +22,7 @@
 #include <string.h>
 
 #define UNFOLD_OPENINGS 8   /* openings sampled: max / 8, 2 max / 8, ... max */
-#define UNFOLD_ROUNDS 200   /* smoothing rounds at most */
+#define UNFOLD_ROUNDS 200   /* evening rounds at most */
 #define UNFOLD_COS 1e-5     /* turned over: normal within acos(this) of 90 degrees or past it
                                (the contact guard's FP_CONTACT_FLIP_COS) */
 
@@ -106,7 +107,7 @@ int fp_rig_unfold_jaw(fp_rig *r, const float *pos, const uint32_t *tris, size_t 
         if (!moved) break; /* what is left turned over has no soft vertex to give */
     }
     if (changed)
-        for (size_t v = 0; v < r->n; v++) *changed += touched[v] && r->kind[v] == FP_RIG_SOFT;
+        for (size_t v = 0; v < r->n; v++) *changed += touched[v]; /* (soft vertices only) */
 out:
     free(n0);
     free(posed);
