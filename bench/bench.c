@@ -1023,7 +1023,7 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
     }
     if (!rc) fp_engine_step_free(&e);
     static const char *names[FP_STAGE_COUNT] = {"events", "hands", "distances", "mapping",
-                                                "solve", "evaluate", "commit"};
+                                                "solve", "evaluate", "shape", "commit"};
     /* the whole frame by the CPU it ended on (the first FRAME_CPUS CPUs; -1: none there):
      * on a shared VM one CPU's caches may be another guest's too (print_machine's chase) */
     enum { FRAME_CPUS = 4 };

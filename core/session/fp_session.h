@@ -197,6 +197,8 @@ enum fp_frame_stage {
     FP_STAGE_MAPPING,         /* the mapping plugin and the rig */
     FP_STAGE_SOLVE,           /* factor or reuse, solve, the fold-over guard */
     FP_STAGE_EVALUATE,        /* T(base) (touched blocks) */
+    FP_STAGE_SHAPE,           /* the shape shown around the contact guard: close sheets
+                                 carried, the rig's mobility blend, the skin's reach */
     FP_STAGE_COMMIT,          /* history and re-index after a commit */
     FP_STAGE_COUNT
 };

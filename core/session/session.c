@@ -171,9 +171,11 @@ static void show_deformed(fp_session *s, bool commit, int was, fp_frame_stats *s
 {
     const float *ref = s->shown; /* the posed base */
     const uint32_t *touched;
+    int64_t t0 = fp_now_ns();
     size_t ntouched = fp_engine_step_touched(&s->engine, &touched);
     fp_sheet_bind_apply(&s->bind, ref, s->deformed, touched, ntouched);
     s->shown = fp_rig_step_finish(&s->rig, s->deformed, touched, ntouched);
+    st->stage_ms[FP_STAGE_SHAPE] += (double)(fp_now_ns() - t0) / 1e6;
     const fp_cg_frame f = {.ref = ref, .shown = s->shown, .commit = commit, .rig = &s->rig, .base = s->base,
                            .deformed = s->deformed, .touched = touched, .ntouched = ntouched,
                            .radius = s->radius};
@@ -219,8 +221,10 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, const fp
             const float *posed = s->shown;
             show_deformed(s, (cs->intents & FP_INTENT_COMMIT) != 0, was, st);
             /* how far the skin followed the fingertips (skin_reach.h) */
+            int64_t t0 = fp_now_ns();
             fp_skin_reach_frame(s->engine.points, posed, s->shown, asked, s->rig.rig ? cs : NULL, st,
                                 &s->gesture_reach, &s->gesture_reach_allowed);
+            st->stage_ms[FP_STAGE_SHAPE] += (double)(fp_now_ns() - t0) / 1e6;
             if (cs->intents & FP_INTENT_COMMIT) fp_commit_step_run(s, st);
         } else {
             fp_changed_all(&s->shown_changed); /* the posed base again, after an error */

@@ -33,7 +33,7 @@ ls -A "$tmp/o" | grep -q '^\.t\.csv\.' && fail "a temporary file was left behind
 "$py" - "$tmp/o/t.csv" "$tmp/out" <<'PY' || fail "the trace does not match the run's table"
 import csv, math, re, sys
 header = ("mesh,frame,frame_ms,events_ms,hands_ms,distances_ms,mapping_ms,solve_ms,evaluate_ms,"
-          "commit_ms,contact_ms,contact_worker_wait_ms,cpu_wait_ms,cpu,active,engaged,committed,"
+          "shape_ms,commit_ms,contact_ms,contact_worker_wait_ms,cpu_wait_ms,cpu,active,engaged,committed,"
           "refactored,control_vectors,pairs,guard_substeps,contact_t,contact_pairs,contact_held,"
           "contact_checks,contact_moved,skipped_after")
 lines = open(sys.argv[1]).read().splitlines()
@@ -46,7 +46,8 @@ for line in open(sys.argv[2]):
     if m:
         table[m.group(1)] = [int(g) for g in m.groups()[1:]]
 assert set(table) == {"ict", "ict-subdiv3"}, f"meshes in the table: {sorted(table)}"
-stages = ["events_ms", "hands_ms", "distances_ms", "mapping_ms", "solve_ms", "evaluate_ms", "commit_ms"]
+stages = ["events_ms", "hands_ms", "distances_ms", "mapping_ms", "solve_ms", "evaluate_ms", "shape_ms",
+          "commit_ms"]
 for mesh, (nv, frames, skipped, deforming, commits) in table.items():
     rs = [r for r in rows if r["mesh"] == mesh]
     assert len(rs) == frames, f"{mesh}: {len(rs)} rows, the table says {frames} frames"
@@ -59,6 +60,9 @@ for mesh, (nv, frames, skipped, deforming, commits) in table.items():
         assert math.isfinite(f) and f > 0, f"{mesh} frame {r['frame']}: frame_ms {f}"
         for s in stages + ["contact_ms"]:  # each stage is a part of the frame
             assert 0 <= float(r[s]) <= f + 1e-3, f"{mesh} frame {r['frame']}: {s} {r[s]} > {f}"
+        # the stages are disjoint parts of the frame: their sum cannot pass it
+        parts = sum(float(r[s]) for s in stages + ["contact_ms"])
+        assert parts <= f + 1e-3, f"{mesh} frame {r['frame']}: the stages add up to {parts} > {f}"
         t = float(r["contact_t"])
         assert 0 <= t <= 1, f"{mesh} frame {r['frame']}: contact_t {t}"
         moved, checks = int(r["contact_moved"]), int(r["contact_checks"])
