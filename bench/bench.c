@@ -1162,14 +1162,17 @@ static int case_frame(const bench_opts *o)
     int rc = frame_run(o, frame_bo, "ict", m);
     if (!rc) rc = fp_bench_isolate(stdout, frame_bo, m, "ict", fp_bench_data_dir(), o->json); /* issue 56 */
     if (!rc) rc = fp_bench_isolate_small(stdout, frame_bo, fp_bench_data_dir(), o->json);
+    unsigned levels = frame_bo->subdivide ? frame_bo->subdivide : 1u << 3;
     fp_mesh *sub = m;
-    for (int l = 0; l < 3 && !rc; l++) {
+    for (int l = 1; l <= FP_BENCH_MAX_LEVEL && levels >> l && !rc; l++) {
         fp_mesh *next = fp_mesh_subdivide(sub);
         if (sub != m) fp_mesh_free(&sub);
         if (!next) rc = -ENOMEM;
         sub = next;
+        char label[32];
+        snprintf(label, sizeof label, "ict-subdiv%d", l);
+        if (!rc && (levels >> l & 1u)) rc = frame_run(o, frame_bo, label, sub);
     }
-    if (!rc) rc = frame_run(o, frame_bo, "ict-subdiv3", sub);
     if (sub != m) fp_mesh_free(&sub);
     fp_mesh_free(&m);
     return rc;

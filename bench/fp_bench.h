@@ -17,6 +17,8 @@ typedef struct fp_bench_options {
     bool exact_frames;     /* case frame: sessions with fp_session_options.exact_frames
                               (`bench --exact-frames`: no contact hold, every shown frame the
                               engine's shape bit for bit) */
+    unsigned subdivide;    /* case frame: bit L set (1 <= L <= FP_BENCH_MAX_LEVEL) runs ICT
+                              subdivided L times (`bench --subdivide L[,L...]`); 0: level 3 */
     const char *mapping;   /* case frame: the sessions' mapping (`bench --mapping NAME`);
                               NULL: anchored */
     const struct fp_plugin_path *plugin_path; /* where the replay and mapping plugins are
@@ -25,6 +27,10 @@ typedef struct fp_bench_options {
                                 (`bench --trace FILE.csv`; FP_BENCH_TRACE_HEADER first), or
                                 NULL; borrowed, left open */
 } fp_bench_options;
+
+/** The most midpoint subdivisions of the ICT face the frame case makes (level 3: about 1.7M
+ *  vertices; each level 4x the triangles). */
+#define FP_BENCH_MAX_LEVEL 3
 
 /** The trace's header line (fp_bench_options.trace): the columns, in order. Times in ms;
  *  cpu_wait_ms empty where /proc/thread-self/schedstat is missing; skipped_after: the

@@ -23,6 +23,14 @@ grep -q "records the frame case" "$tmp/err" || fail "no reason for --case table1
 "$fp" bench --plot "$tmp/o/f.png" --trace "$tmp/o/t.csv" >/dev/null 2>&1
 rc=$?
 [ $rc = 64 ] || fail "--trace with --plot: exit $rc, expected 64"
+"$fp" bench --case frame --subdivide 4 >"$tmp/out" 2>"$tmp/err"
+rc=$?
+[ $rc = 64 ] || fail "--subdivide 4: exit $rc, expected 64"
+grep -q "levels 1 to 3" "$tmp/err" || fail "no reason for --subdivide 4: $(cat "$tmp/err")"
+grep -q "^frame" "$tmp/out" && fail "the frame case ran with --subdivide 4"
+"$fp" bench --case table1 --subdivide 1 >/dev/null 2>"$tmp/err"
+rc=$?
+[ $rc = 64 ] || fail "--subdivide with --case table1: exit $rc, expected 64"
 [ -z "$(ls -A "$tmp/o")" ] || fail "files left behind by the failed calls: $(ls -A "$tmp/o")"
 
 # 2. a real run: one row per frame of each mesh, agreeing with the table it printed
@@ -72,4 +80,12 @@ for mesh, (nv, frames, skipped, deforming, commits) in table.items():
             assert int(r["pairs"]) == 0 and r["committed"] == "0", f"{mesh} frame {r['frame']}: idle frame"
 print("trace:", {m: len([r for r in rows if r["mesh"] == m]) for m in table}, "rows")
 PY
+
+# 3. --subdivide 1: the ICT face and its first subdivision, in the table and the trace
+"$fp" bench --case frame --quick --subdivide 1 --trace "$tmp/o/t1.csv" >"$tmp/out1" 2>"$tmp/err" ||
+    fail "bench --case frame --subdivide 1 exited $?: $(tail -3 "$tmp/err")"
+grep -q "^frame ict-subdiv1 *105569 vertices" "$tmp/out1" || fail "no ict-subdiv1 row of 105569 vertices: $(grep '^frame' "$tmp/out1")"
+grep -q "^frame ict-subdiv3" "$tmp/out1" && fail "--subdivide 1 ran level 3 too"
+cut -d, -f1 "$tmp/o/t1.csv" | sort -u | tr '\n' ' ' | grep -qx "ict ict-subdiv1 mesh " ||
+    fail "the trace's meshes: $(cut -d, -f1 "$tmp/o/t1.csv" | sort -u | tr '\n' ' ')"
 exit 0

@@ -24,8 +24,8 @@ static void usage(FILE *f)
 {
     fprintf(f,
             "usage: facepuppet bench [--quick] [--json] [--case NAME] [--no-contact-guard]\n"
-            "                        [--exact-frames] [--mapping SPEC] [--trace FILE.csv]\n"
-            "                        [--plot FILE.png] [--help]\n\n"
+            "                        [--exact-frames] [--subdivide L[,L...]] [--mapping SPEC]\n"
+            "                        [--trace FILE.csv] [--plot FILE.png] [--help]\n\n"
             "Times the CSRBF engine (medians over repeated updates; the lowest median of 3\n"
             "rounds, 2 with --quick, as the machine may be shared) beside references measured\n"
             "in the same run. Cases:\n"
@@ -43,8 +43,9 @@ static void usage(FILE *f)
             "  take     the take recorder's cost on the session thread per frame (median, p99)\n"
             "           and a take's size per minute at 60 fps\n"
             "  frame    the session's whole frame through the session API: the ICT face and\n"
-            "           ICT subdivided in memory (3 midpoint levels, about 1.7M vertices), the\n"
-            "           three-claps recording at its own pace, 60 frames a second, anchored,\n"
+            "           ICT subdivided in memory (3 midpoint levels, about 1.7M vertices;\n"
+            "           --subdivide), the three-claps recording at its own pace, 60 frames\n"
+            "           a second, anchored,\n"
             "           sessions with real-time memory and started as live opens them (no\n"
             "           page fault in a frame; fp_session_realtime_memory, a process-wide\n"
             "           malloc setting, so this case runs last; the ICT frames on the\n"
@@ -77,6 +78,8 @@ static void usage(FILE *f)
             "           shown frame the engine's shape bit for bit; by default a vertex that\n"
             "           moved under 1e-5 of the face's diagonal since the last frame keeps its\n"
             "           place, and its triangles go unchecked)\n"
+            "  --subdivide L[,L...]  case frame: after the ICT face, ICT subdivided L times\n"
+            "           (1: 105,569 vertices, 2: 419,929, 3: 1,675,289; default 3)\n"
             "  --mapping SPEC  case frame: the sessions' mapping (default anchored; e.g.\n"
             "           unanchored: a one-shot step committed every frame, composed by the\n"
             "           fold-over guard where one map would fold)\n"
@@ -281,6 +284,20 @@ static int bench_main(int argc, char **argv)
             o.no_contact_guard = true;
         } else if (!strcmp(argv[i], "--exact-frames")) {
             o.exact_frames = true;
+        } else if (!strcmp(argv[i], "--subdivide") && i + 1 < argc) {
+            const char *v = argv[++i];
+            char *end;
+            o.subdivide = 0;
+            do {
+                long l = strtol(v, &end, 10);
+                if (end == v || l < 1 || l > FP_BENCH_MAX_LEVEL || (*end && *end != ',')) {
+                    fprintf(stderr, "facepuppet bench: --subdivide '%s': levels 1 to %d, comma-separated\n",
+                            argv[i], FP_BENCH_MAX_LEVEL);
+                    return FP_EXIT_USAGE;
+                }
+                o.subdivide |= 1u << l;
+                v = end + (*end == ',');
+            } while (*end);
         } else if (!strcmp(argv[i], "--mapping") && i + 1 < argc) {
             o.mapping = argv[++i];
         } else if (!strcmp(argv[i], "--case") && i + 1 < argc) {
@@ -318,6 +335,10 @@ static int bench_main(int argc, char **argv)
             return FP_EXIT_USAGE;
         }
         return bench_plot(&o, plot);
+    }
+    if (o.subdivide && o.only && strcmp(o.only, "frame")) {
+        fprintf(stderr, "facepuppet bench: --subdivide chooses the frame case's meshes (--case is '%s')\n", o.only);
+        return FP_EXIT_USAGE;
     }
     if (trace && o.only && strcmp(o.only, "frame")) {
         fprintf(stderr, "facepuppet bench: --trace records the frame case, not '%s'\n", o.only);
