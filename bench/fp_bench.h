@@ -37,9 +37,9 @@ typedef struct fp_bench_options {
  *  60 fps periods that passed while the frame ran (frames the paced loop skipped after it). */
 #define FP_BENCH_TRACE_HEADER                                                                  \
     "mesh,frame,frame_ms,events_ms,hands_ms,distances_ms,mapping_ms,solve_ms,evaluate_ms,"     \
-    "shape_ms,commit_ms,contact_ms,contact_worker_wait_ms,cpu_wait_ms,cpu,active,engaged,committed,"    \
-    "refactored,control_vectors,pairs,guard_substeps,contact_t,contact_pairs,contact_held,"    \
-    "contact_checks,contact_moved,skipped_after\n"
+    "shape_ms,commit_ms,contact_ms,contact_worker_wait_ms,cpu_wait_ms,cpu,active,engaged,"      \
+    "committed,refactored,control_vectors,pairs,guard_substeps,contact_t,contact_pairs,"       \
+    "contact_held,contact_checks,contact_moved,skipped_after\n"
 
 /** The case names, in the order they run; NULL-terminated. */
 extern const char *const fp_bench_cases[];

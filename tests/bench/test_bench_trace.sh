@@ -41,9 +41,9 @@ ls -A "$tmp/o" | grep -q '^\.t\.csv\.' && fail "a temporary file was left behind
 "$py" - "$tmp/o/t.csv" "$tmp/out" <<'PY' || fail "the trace does not match the run's table"
 import csv, math, re, sys
 header = ("mesh,frame,frame_ms,events_ms,hands_ms,distances_ms,mapping_ms,solve_ms,evaluate_ms,"
-          "shape_ms,commit_ms,contact_ms,contact_worker_wait_ms,cpu_wait_ms,cpu,active,engaged,committed,"
-          "refactored,control_vectors,pairs,guard_substeps,contact_t,contact_pairs,contact_held,"
-          "contact_checks,contact_moved,skipped_after")
+          "shape_ms,commit_ms,contact_ms,contact_worker_wait_ms,cpu_wait_ms,cpu,active,engaged,"
+          "committed,refactored,control_vectors,pairs,guard_substeps,contact_t,contact_pairs,"
+          "contact_held,contact_checks,contact_moved,skipped_after")
 lines = open(sys.argv[1]).read().splitlines()
 assert lines[0] == header, f"header: {lines[0]}"
 rows = list(csv.DictReader(lines))
