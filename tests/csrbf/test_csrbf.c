@@ -280,6 +280,61 @@ static size_t check_ranges(const float *out, const float *last, size_t nv, const
     return covered;
 }
 
+/* A commit of scattered ranges (csrbf_points_update_ranges) refits the block tree above every
+ * one of them, whatever order the ranges come in: blocks carried far off the grid are found
+ * there by an evaluation whose support holds only them, as on a fresh index of the same
+ * positions (a node left unrefit would skip them and leave them in place). */
+static void test_update_ranges_tree(void **state)
+{
+    (void)state;
+    size_t nx = 203, ny = 150, nv = nx * ny; /* 1,904 blocks: three levels of the tree */
+    float *v = malloc(nv * 3 * sizeof *v), *a = malloc(nv * 3 * sizeof *a), *b = malloc(nv * 3 * sizeof *b);
+    assert_non_null(v);
+    assert_non_null(a);
+    assert_non_null(b);
+    /* ascending, then the same ranges in another order (the range-by-range path) */
+    const uint32_t up[] = {100, 40, 5000, 3, 5020, 17, 5100, 0, 20000, 300, (uint32_t)nv - 50, 50};
+    const uint32_t mixed[] = {20000, 300, 100, 40, (uint32_t)nv - 50, 50, 5020, 17, 5000, 3};
+    const uint32_t *sets[2] = {up, mixed};
+    const size_t counts[2] = {6, 5};
+    for (int k = 0; k < 2; k++) {
+        for (size_t j = 0; j < ny; j++)
+            for (size_t i = 0; i < nx; i++) {
+                float *q = v + 3 * (j * nx + i);
+                q[0] = (float)i * 0.5f;
+                q[1] = (float)j * 0.5f;
+                q[2] = 0.0f;
+            }
+        csrbf_points *p = NULL, *fresh = NULL;
+        assert_int_equal(csrbf_points_create(nv, v, &p), CSRBF_OK);
+        for (size_t r = 0; r < counts[k]; r++) /* carried 500 units off the grid, in a column */
+            for (uint32_t x = sets[k][2 * r]; x < sets[k][2 * r] + sets[k][2 * r + 1]; x++) {
+                v[3 * x] = 500.0f;
+                v[3 * x + 1] = 500.0f;
+                v[3 * x + 2] = (float)x * 1e-3f;
+            }
+        assert_int_equal(csrbf_points_update_ranges(p, v, sets[k], counts[k]), CSRBF_OK);
+        assert_int_equal(csrbf_points_create(nv, v, &fresh), CSRBF_OK);
+        /* one centre in the column's middle, its support the whole column and nothing else */
+        csrbf_solver *s = make_solver(40.0, CSRBF_PSI31, CSRBF_POLY_NONE, 0);
+        const float st[3] = {500.0f, 500.0f, 15.0f}, en[3] = {501.0f, 500.0f, 15.0f};
+        assert_true(csrbf_solver_solve(s, 1, st, en) >= 0);
+        assert_int_equal(csrbf_evaluate(s, p, a, 0, NULL), CSRBF_OK);
+        assert_int_equal(csrbf_evaluate(s, fresh, b, 0, NULL), CSRBF_OK);
+        assert_memory_equal(a, b, nv * 3 * sizeof *a);
+        for (size_t r = 0; r < counts[k]; r++) /* each carried vertex moved with the centre */
+            for (uint32_t x = sets[k][2 * r]; x < sets[k][2 * r] + sets[k][2 * r + 1]; x++)
+                assert_true(a[3 * x] > v[3 * x] + 0.1f);
+        assert_memory_equal(a + 3 * 1000, v + 3 * 1000, 3 * sizeof *a); /* the grid stays */
+        csrbf_solver_destroy(&s);
+        csrbf_points_destroy(&fresh);
+        csrbf_points_destroy(&p);
+    }
+    free(v);
+    free(a);
+    free(b);
+}
+
 /* The persistent-output evaluation: on a grid, fingertips that move (and jump away) give
  * bit-identical output to csrbf_evaluate every frame; vertices outside the reported ranges are
  * unchanged from the last frame; a commit through csrbf_points_update_ranges and
@@ -1418,7 +1473,7 @@ int main(void)
         cmocka_unit_test(test_points_update),       cmocka_unit_test(test_jacobian_fd),
         cmocka_unit_test(test_foldover),            cmocka_unit_test(test_invalid),
         cmocka_unit_test(test_concurrent_evaluate), cmocka_unit_test(test_stats_fast_path),
-        cmocka_unit_test(test_touched),             cmocka_unit_test(test_many_centres),
+        cmocka_unit_test(test_touched), cmocka_unit_test(test_update_ranges_tree),             cmocka_unit_test(test_many_centres),
         cmocka_unit_test(test_touched_frames),      cmocka_unit_test(test_touched_fused),      cmocka_unit_test(test_selection_cache),
         cmocka_unit_test(test_selection_paths),     cmocka_unit_test(test_weight_cache),
         cmocka_unit_test(test_simd_path),           cmocka_unit_test(test_threads_steal),
