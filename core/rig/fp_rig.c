@@ -204,7 +204,7 @@ static int parse_mesh(const ctx *c, fp_rig *r, const cJSON *root)
     const cJSON *m;
     int rc = get_object(c, root, "", "mesh", true, &m, p, sizeof p);
     if (rc) return rc;
-    static const char *const f[] = {"name", "vertex_count", "positions_crc32", NULL};
+    static const char *const f[] = {"name", "vertex_count", "positions_crc32", "landmark_positions", NULL};
     if ((rc = check_fields(c, m, "mesh", f))) return rc;
     if ((rc = get_string(c, m, "mesh", "name", false, r->mesh_name, sizeof r->mesh_name))) return rc;
     double n = 0;
@@ -346,6 +346,33 @@ static int parse_landmarks(const ctx *c, fp_rig *r, const cJSON *root)
             return bad(c, q, "missing (every rig names it)");
         }
     }
+    return 0;
+}
+
+/* mesh.landmark_positions (optional): every landmark's position on the rig's own mesh, which
+ * places the rig on a moved copy of it (fp_rig_place.c) */
+static int parse_reference(const ctx *c, fp_rig *r, const cJSON *root)
+{
+    char p[512];
+    const cJSON *lp;
+    int rc = get_object(c, cJSON_GetObjectItemCaseSensitive(root, "mesh"), "mesh", "landmark_positions", false,
+                        &lp, p, sizeof p);
+    if (rc || !lp) return rc;
+    size_t given = 0;
+    for (const cJSON *e = lp->child; e; e = e->next) {
+        char q[600];
+        join(q, sizeof q, "mesh.landmark_positions", e->string ? e->string : "?");
+        size_t k = 0;
+        while (e->string && k < r->landmark_count && strcmp(r->landmarks[k].name, e->string)) k++;
+        if (!e->string || k == r->landmark_count) return bad(c, q, "no landmark of that name");
+        if (cJSON_GetObjectItemCaseSensitive(lp, e->string) != e) return bad(c, q, "given twice");
+        if ((rc = vec3_of(c, e, q, r->landmarks[k].ref))) return rc;
+        given++;
+    }
+    if (given != r->landmark_count)
+        return bad(c, "mesh.landmark_positions", "%zu of the %zu landmarks: give every one", given,
+                   r->landmark_count);
+    r->has_ref = true;
     return 0;
 }
 
@@ -615,7 +642,8 @@ int fp_rig_parse(const char *json, size_t len, const char *name, fp_rig **out, c
         (rc = parse_mesh(&c, r, root)) ||
         (rc = get_number(&c, root, "", "mm_per_unit", true, 1e-6, 1e6, &r->mm_per_unit)) ||
         (rc = parse_axes(&c, r, root)) || (rc = parse_regions(&c, r, root)) ||
-        (rc = parse_landmarks(&c, r, root)) || (rc = parse_channels(&c, r, root)) ||
+        (rc = parse_landmarks(&c, r, root)) || (rc = parse_reference(&c, r, root)) ||
+        (rc = parse_channels(&c, r, root)) ||
         (rc = parse_jaw(&c, r, root)))
         goto done;
     char p[64];
@@ -625,6 +653,7 @@ int fp_rig_parse(const char *json, size_t len, const char *name, fp_rig **out, c
     if ((rc = check_fields(&c, mob, "mobility", fm)) ||
         (rc = get_number(&c, mob, "mobility", "ramp", true, 1e-9, 1e9, &r->ramp)))
         goto done;
+    fpr_geom_keep(r); /* (what each bind places anew) */
 done:
     cJSON_Delete(root);
     if (rc) {
@@ -758,6 +787,7 @@ int fp_rig_bind(fp_rig *r, size_t n, const float *pos, char *err, size_t errlen)
             if (!isfinite(q)) return fp_errorf(err, errlen, -EINVAL, "fp_rig_bind: vertex %zu is not finite", v);
             lo[i] = fmin(lo[i], q), hi[i] = fmax(hi[i], q);
         }
+    fpr_place(r, pos); /* a moved copy of the rig's mesh: its coordinates carried there */
     const double *hp[2] = {r->hinge_r, r->hinge_l};
     const char *hn[2] = {"jaw.hinge.right", "jaw.hinge.left"};
     double reach = 60.0 / r->mm_per_unit;

@@ -147,6 +147,37 @@ int fp_rig_bind(fp_rig *rig, size_t n, const float *positions, char *err, size_t
 int fp_rig_unfold_jaw(fp_rig *rig, const float *positions, const uint32_t *tris, size_t t,
                       size_t *changed);
 
+/** Where fp_rig_bind put the rig on the mesh it bound. A rig file may give its landmarks'
+ *  positions on its own mesh (mesh.landmark_positions). Binding a mesh whose landmark
+ *  vertices lie elsewhere (a copy moved, turned or scaled: Blender's Z-up, metres instead of
+ *  centimetres) first carries the rig's coordinates (axes, hinge, mouth line, menton, gonion)
+ *  by the similarity x -> scale R x + shift that fits the landmarks best (least squares:
+ *  Horn, "Closed-form solution of absolute orientation using unit quaternions", JOSA A
+ *  4(4):629-642, 1987, with his symmetric scale, the ratio of the two sets' RMS spreads),
+ *  scales its lengths (bands, glide, mobility.ramp) and divides mm_per_unit by the scale.
+ *  Not placed (the file's coordinates kept, bit for bit) when the fit moves no landmark by
+ *  more than FP_RIG_PLACE_SAME of their spread (the rig's own mesh, or another shape of its
+ *  topology in the same frame), when it leaves more than FP_RIG_PLACE_MISFIT of it as
+ *  residual (no copy of the face: the landmarks' layout differs), or without positions. */
+typedef struct fp_rig_placement {
+    int placed;        /* 1: the rig was carried as below; 0: the file's coordinates */
+    double degrees;    /* rotation angle of R */
+    double scale;      /* mesh units of the bound mesh per unit of the rig's (1 unplaced) */
+    double shift[3];   /* translation, bound mesh units */
+    double rms;        /* the landmarks' residual after the fit, bound mesh units */
+    double spread;     /* their RMS distance from their centroid on the bound mesh */
+} fp_rig_placement;
+#define FP_RIG_PLACE_SAME 0.01
+#define FP_RIG_PLACE_MISFIT 0.25
+
+/** The last fp_rig_bind's placement (zeros before a bind). [any-thread] */
+fp_rig_placement fp_rig_get_placement(const fp_rig *rig);
+
+/** The rotation that turns +x, +y, +z into the face's left, up and forward axes (fp_rig_axes,
+ *  as bound): a unit quaternion w, x, y, z into q; the identity for the shipped rigs on their
+ *  own meshes. What fp_calibration's face frame takes (fp_pose.h). [any-thread] */
+void fp_rig_face_rotation(const fp_rig *rig, double q[4]);
+
 /** fp_rig_load then fp_rig_bind. */
 int fp_rig_load_for_mesh(const char *path, size_t n, const float *positions, fp_rig **out,
                          char *err, size_t errlen);

@@ -8,6 +8,7 @@
 
 #include "fp_rig.h"
 
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -22,7 +23,22 @@ typedef struct region {
 typedef struct landmark {
     char name[FP_RIG_NAME_MAX + 1];
     uint32_t vertex;
+    double ref[3];              /* where it lies on the rig's own mesh (mesh.landmark_positions) */
 } landmark;
+
+/* The rig's coordinates and lengths as the file gives them (fp_rig_place.c carries a copy of
+ * them onto a moved copy of the mesh at each bind) */
+typedef struct rig_geom {
+    double mm_per_unit;
+    double up[3], fwd[3], left[3];
+    double hinge_r[3], hinge_l[3], axis[3];
+    double glide[2];
+    double mouth[MAX_MOUTH_POINTS][3];
+    double lip_band, cheek_band, cheek_distance, corner_inset, inner_depth;
+    double menton[3], gonion[3];
+    double neck_band, back_band;
+    double ramp;
+} rig_geom;
 
 typedef struct channel {
     char name[FP_RIG_NAME_MAX + 1];
@@ -69,6 +85,16 @@ struct fp_rig {
                                    from its nearest rigid vertex, in the bound shape) */
     size_t slope_count;
     double axis[3];             /* unit hinge axis, right -> left */
+    /* placement (fp_rig_place.c) */
+    bool has_ref;               /* every landmark has ref (mesh.landmark_positions given) */
+    rig_geom parsed;            /* the file's geometry, kept at the end of fp_rig_parse */
+    fp_rig_placement placement; /* the last bind's */
 };
+
+/* fp_rig_place.c: r's geometry back to the file's, then, when the landmarks' vertices in pos
+ * (n x 3) lie elsewhere than their ref (a moved, turned or scaled copy of the rig's mesh),
+ * carried there by the similarity that fits them best (r->placement says) */
+void fpr_geom_keep(fp_rig *r);
+void fpr_place(fp_rig *r, const float *pos);
 
 #endif

@@ -77,7 +77,10 @@ def rig(name, desc, mesh_name, V, mm, regions, landmarks, hinge, kin, falloff, r
         regs.append({"name": "soft_tissue", "kind": "soft", "vertices": ranges(rest)})
     return {
         "format": "facepuppet-rig", "version": 1, "name": name, "description": desc,
-        "mesh": {"name": mesh_name, "vertex_count": n, "positions_crc32": crc(V)},
+        "mesh": {"name": mesh_name, "vertex_count": n, "positions_crc32": crc(V),
+                 # where the landmarks lie on this mesh: a moved copy of it gets the rig
+                 # carried there by the similarity that fits them (fp_rig_placement)
+                 "landmark_positions": {k: r3(V[int(v)]) for k, v in landmarks.items()}},
         "mm_per_unit": mm,
         "axes": {"up": [0, 1, 0], "forward": [0, 0, 1], "left": [1, 0, 0]},
         "regions": regs,

@@ -547,6 +547,95 @@ static char *edit(const char *text, const char *from, const char *to)
     return o;
 }
 
+/* A rig on a moved copy of its mesh (fp_rig_placement): the ICT face turned 90 degrees about x
+ * (Blender's Z-up), in metres and moved gets the rig carried there by its landmarks; the jaw
+ * weights and the mobility are the original's, and the jaw opens as the original's carried
+ * there (the pose of the copy is the copy of the pose, within float rounding); mm_per_unit
+ * follows the scale. The original mesh, and a copy moved by less than FP_RIG_PLACE_SAME of the
+ * landmarks' spread, keep the file's coordinates (not placed); a face whose landmarks lie
+ * nowhere like the rig's (the vertices shuffled) is not placed either. */
+static void test_placement(void **state)
+{
+    (void)state;
+    fp_mesh *m = load_face("ict-facekit/generic_neutral_mesh.obj");
+    size_t n = m->vertex_count;
+    fp_rig *a = find_rig(m);
+    fp_rig_placement pa = fp_rig_get_placement(a);
+    assert_int_equal(pa.placed, 0);
+    assert_true(pa.degrees < 0.01 && pa.rms < 1e-3);
+    const double s = 0.01, t[3] = {0.3, -1.2, 0.05}; /* cm to m, then moved */
+    float *q = malloc(n * 3 * sizeof *q), *pa_out = malloc(n * 3 * sizeof *pa_out), *pb_out = malloc(n * 3 * sizeof *pb_out);
+    assert_non_null(q);
+    assert_non_null(pa_out);
+    assert_non_null(pb_out);
+    for (size_t v = 0; v < n; v++) { /* (x, y, z) -> (x, -z, y): up is +z, the face looks along -y */
+        const float *p = m->positions + 3 * v;
+        q[3 * v] = (float)(s * p[0] + t[0]);
+        q[3 * v + 1] = (float)(-s * p[2] + t[1]);
+        q[3 * v + 2] = (float)(s * p[1] + t[2]);
+    }
+    char path[4096], err[512];
+    snprintf(path, sizeof path, "%s/ict-facekit.json", FP_TEST_RIGS_DIR);
+    fp_rig *b = NULL;
+    int rc = fp_rig_load_for_mesh(path, n, q, &b, err, sizeof err);
+    if (rc) fprintf(stderr, "%s\n", err);
+    assert_int_equal(rc, 0);
+    fp_rig_placement pb = fp_rig_get_placement(b);
+    assert_int_equal(pb.placed, 1);
+    assert_true(fabs(pb.degrees - 90) < 0.01);
+    assert_true(fabs(pb.scale / s - 1) < 1e-4);
+    assert_true(pb.rms < 1e-5 * pb.spread * 100);
+    assert_true(fabs(fp_rig_mm_per_unit(b) / (fp_rig_mm_per_unit(a) / s) - 1) < 1e-4);
+    float up[3], fw[3], le[3];
+    fp_rig_axes(b, up, fw, le);
+    assert_true(fabs(up[2] - 1) < 1e-4 && fabs(fw[1] + 1) < 1e-4 && fabs(le[0] - 1) < 1e-4);
+    /* the same weights, the same pose carried */
+    const float *wa = fp_rig_jaw_weights(a), *wb = fp_rig_jaw_weights(b);
+    const float *ma = fp_rig_mobility(a), *mb = fp_rig_mobility(b);
+    double dw = 0, dm = 0;
+    for (size_t v = 0; v < n; v++) {
+        dw = fmax(dw, fabs((double)wa[v] - wb[v]));
+        dm = fmax(dm, fabs((double)ma[v] - mb[v]));
+    }
+    printf("placed: %.4f degrees, scale %.6g, rms %.3g of spread %.3g; jaw weights differ by %.3g, mobility by %.3g\n",
+           pb.degrees, pb.scale, pb.rms, pb.spread, dw, dm);
+    assert_true(dw < 1e-3 && dm < 1e-3);
+    float vals[FP_RIG_MAX_CHANNELS] = {0};
+    vals[fp_rig_channel_index(a, "jaw.open")] = 0.7f;
+    assert_int_equal(fp_rig_pose(a, m->positions, vals, pa_out), 0);
+    assert_int_equal(fp_rig_pose(b, q, vals, pb_out), 0);
+    double worst = 0, jaw_moved = 0;
+    for (size_t v = 0; v < n; v++) {
+        const float *p = pa_out + 3 * v;
+        double c[3] = {s * p[0] + t[0], -s * p[2] + t[1], s * p[1] + t[2]};
+        for (int k = 0; k < 3; k++) {
+            worst = fmax(worst, fabs(c[k] - pb_out[3 * v + k]));
+            jaw_moved = fmax(jaw_moved, fabs((double)pb_out[3 * v + k] - q[3 * v + k]));
+        }
+    }
+    printf("jaw.open 0.7: the copy's pose is the pose carried within %.3g mm (the jaw moved up to %.3g mm)\n",
+           worst * fp_rig_mm_per_unit(b), jaw_moved * fp_rig_mm_per_unit(b));
+    assert_true(jaw_moved * fp_rig_mm_per_unit(b) > 5);    /* the jaw opened */
+    assert_true(worst * fp_rig_mm_per_unit(b) < 0.01);     /* as the original's, carried */
+    fp_rig_free(&b);
+    /* moved by a hair: the file's coordinates */
+    for (size_t v = 0; v < 3 * n; v++) q[v] = m->positions[v] + 1e-4f;
+    assert_int_equal(fp_rig_load_for_mesh(path, n, q, &b, err, sizeof err), 0);
+    assert_int_equal(fp_rig_get_placement(b).placed, 0);
+    fp_rig_free(&b);
+    /* the vertices reversed: the landmarks' layout is no copy of the rig's: not placed (and the
+     * hinge check then judges the file's coordinates as ever) */
+    for (size_t v = 0; v < n; v++) memcpy(q + 3 * v, m->positions + 3 * (n - 1 - v), 3 * sizeof *q);
+    rc = fp_rig_load_for_mesh(path, n, q, &b, err, sizeof err);
+    if (!rc) assert_int_equal(fp_rig_get_placement(b).placed, 0);
+    fp_rig_free(&b);
+    fp_rig_free(&a);
+    free(q);
+    free(pa_out);
+    free(pb_out);
+    fp_mesh_free(&m);
+}
+
 static void test_broken_files(void **state)
 {
     (void)state;
@@ -574,8 +663,8 @@ static void test_broken_files(void **state)
         {"\"vertices\": [", "\"vertices\": [[10, 5], ", "regions[0].vertices[0]"},
         {"\"vertices\": [", "\"vertices\": [-1, ", "regions[0].vertices[0]"},
         {"\"vertices\": [", "\"vertices\": [19300, ", "regions[6].vertices"}, /* a lower tooth: overlaps jaw */
-        {"\"chin\": ", "\"chin\": 26719, \"x\": ", "landmarks.chin"},
-        {"\"nose_tip\": ", "\"nose tip\": ", "landmarks.nose tip"},
+        {"\"chin\": 966", "\"chin\": 26719, \"x\": 966", "landmarks.chin"},
+        {"\"nose_tip\": 4857", "\"nose tip\": 4857", "landmarks.nose tip"},
         {"\"right\": [", "\"right\": [\"a\", ", "jaw.hinge.right"},
         {"\"right\": [", "\"right\": [0, 0, 0], \"x\": [", "jaw.hinge.x"},
         {"\"open_degrees\": 29.9", "\"open_degrees\": 90", "jaw.open_degrees"},
@@ -605,6 +694,12 @@ static void test_broken_files(void **state)
          "jaw.weights.vertices[0]"},
         {"\"weights\": {\n   \"vertices\": [", "\"weights\": {\n   \"vertices\": [[0, 99999], ", "jaw.weights.vertices[0]"},
         {"\"weights\": {\n   \"vertices\": [", "\"weights\": {\n   \"vertices\": [26719, ", "jaw.weights.vertices[0]"},
+        /* mesh.landmark_positions: every landmark, each 3 finite numbers, no other name */
+        {"\"landmark_positions\": {", "\"landmark_positions\": {\"nosetip\": [0, 0, 0], ",
+         "mesh.landmark_positions.nosetip"},
+        {"\"chin\": [0.0, -7.5671, 10.432],", "", "mesh.landmark_positions: 22 of the 23 landmarks"},
+        {"\"chin\": [0.0, -7.5671, 10.432]", "\"chin\": [0.0, \"a\", 10.432]", "mesh.landmark_positions.chin[1]"},
+        {"\"chin\": [0.0, -7.5671, 10.432]", "\"chin\": [0.0, 1e999, 10.432]", "mesh.landmark_positions.chin"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         char *bad = edit(good, cases[i].from, cases[i].to);
@@ -706,7 +801,7 @@ int main(void)
         cmocka_unit_test(test_ict_finger_limit), cmocka_unit_test(test_ict_finger_limit_indexed),
         cmocka_unit_test(test_ict_clamp_continuous),
         cmocka_unit_test(test_lee_perry_smith),  cmocka_unit_test(test_mediapipe),
-        cmocka_unit_test(test_broken_files),
+        cmocka_unit_test(test_broken_files),     cmocka_unit_test(test_placement),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
