@@ -188,9 +188,12 @@ done:
     return rc;
 }
 
-int fp_calibration_save(const char *path, const fp_calibration *c, const char *comment, char *err,
+int fp_calibration_save(const char *path, const fp_calibration *given, const char *comment, char *err,
                         size_t errlen)
 {
+    fp_calibration flat; /* (a face's frame folded into the rotation and the offsets) */
+    fp_calibration_flatten(given, &flat);
+    const fp_calibration *c = &flat;
     if (!(c->scale > 0)) return fp_errorf(err, errlen, -EINVAL, "%s: scale must be > 0", path);
     fp_file_output o;
     int rc = fp_file_open_output(path, "", "w", 0, &o); /* a link's end; no folder or device */

@@ -26,8 +26,8 @@ extern "C" {
 /** Read path into *c (untouched on error). */
 int fp_calibration_load(const char *path, fp_calibration *c, char *err, size_t errlen);
 
-/** Write *c to path atomically (mm_per_unit = 1 / scale, rotation, offsets); `comment` (may be
- *  NULL) goes into a "comment" field. */
+/** Write *c to path atomically (mm_per_unit = 1 / scale, rotation, offsets; a face frame folded
+ *  into them, fp_calibration_flatten); `comment` (may be NULL) goes into a "comment" field. */
 int fp_calibration_save(const char *path, const fp_calibration *c, const char *comment, char *err,
                         size_t errlen);
 

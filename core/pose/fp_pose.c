@@ -338,15 +338,55 @@ void fp_pose_fit_workspace(fp_calibration *c, double mm_per_unit, const float ws
     c->offset[2] = ((double)head_max[2] - FP_POSE_REACH_PRESS_MM * c->scale) - c->scale * ws_min[2];
 }
 
+/* c's face frame as a unit quaternion; false: none (all zeros, the identity or not finite) */
+static bool face_frame(const fp_calibration *c, double f[4])
+{
+    double n = sqrt(c->face[0] * c->face[0] + c->face[1] * c->face[1] + c->face[2] * c->face[2] +
+                    c->face[3] * c->face[3]);
+    if (!(n > 1e-12) || !isfinite(n)) return false;
+    for (int i = 0; i < 4; i++) f[i] = c->face[i] / n;
+    return !(f[0] == 1 && f[1] == 0 && f[2] == 0 && f[3] == 0);
+}
+
 void fp_pose_to_mesh(const fp_calibration *c, int hand, const float mm[3], float out[3])
 {
-    double q[4], v[3] = {mm[0], mm[1], mm[2]}, r[3];
+    double q[4], v[3] = {mm[0], mm[1], mm[2]}, r[3], f[4];
     fp_calibration_rotation(c, q);
     if (q[0] == 1) memcpy(r, v, sizeof r);
     else fp_qrot(q, v, r);
     bool h = hand == FP_HAND_LEFT || hand == FP_HAND_RIGHT;
+    if (face_frame(c, f)) { /* in the face's frame, then turned into the mesh's */
+        double a[3], b[3];
+        for (int i = 0; i < 3; i++) a[i] = c->scale * r[i] + c->offset[i] + (h ? c->hand_offset[hand][i] : 0.0);
+        fp_qrot(f, a, b);
+        for (int i = 0; i < 3; i++) out[i] = (float)b[i];
+        return;
+    }
     for (int i = 0; i < 3; i++)
         out[i] = (float)(c->scale * r[i] + c->offset[i] + (h ? c->hand_offset[hand][i] : 0.0));
+}
+
+void fp_calibration_flatten(const fp_calibration *c, fp_calibration *out)
+{
+    double f[4];
+    if (!face_frame(c, f)) {
+        if (out != c) *out = *c;
+        memset(out->face, 0, sizeof out->face);
+        return;
+    }
+    fp_calibration r = *c;
+    double q[4], fq[4], v[3];
+    fp_calibration_rotation(c, q);
+    qmul(f, q, fq);
+    memcpy(r.rotation, fq, sizeof fq);
+    memcpy(v, c->offset, sizeof v);
+    fp_qrot(f, v, r.offset);
+    for (int h = 0; h < FP_HANDS; h++) {
+        memcpy(v, c->hand_offset[h], sizeof v);
+        fp_qrot(f, v, r.hand_offset[h]);
+    }
+    memset(r.face, 0, sizeof r.face);
+    *out = r;
 }
 
 void fp_pose_place_gloves(fp_pose_state *p, const float *pos, size_t n, const fp_head *head)

@@ -39,16 +39,27 @@
 extern "C" {
 #endif
 
-/** Workspace calibration: p_mesh = scale * R p_mm + offset + hand_offset[hand] (hands: mm,
+/** Workspace calibration: p_mesh = F (scale * R p_mm + offset + hand_offset[hand]) (hands: mm,
  *  device frame; the device's +x right, +y up, +z toward the performer, as the mesh's +x,
- *  +y, +z when R is the identity). A rotation of all zeros counts as the identity, so
- *  {scale, {x, y, z}} initialisers keep their meaning. docs/calibration.md has the file. */
+ *  +y, +z when R and F are the identity). A rotation of all zeros counts as the identity, so
+ *  {scale, {x, y, z}} initialisers keep their meaning. docs/calibration.md has the file.
+ *  F, the face's frame, is the session's: where a rig placed on a turned copy of its mesh
+ *  (fp_rig_placement) says the face looks along another axis than +z or up is not +y, F
+ *  turns the face's frame (its left, up and forward as x, y, z) into the mesh's; the head
+ *  box and every fit of the hands (fp_pose_fit_workspace, the arrival's) then work in the
+ *  face's frame, as for a face that looks along +z. Files and takes hold it folded into R
+ *  and the offsets (fp_calibration_flatten). */
 typedef struct fp_calibration {
     double scale;                   /* mesh units per millimetre (1 / mm_per_unit) */
     double offset[3];               /* mesh units, both hands */
     double rotation[4];             /* device -> mesh, unit quaternion w, x, y, z */
     double hand_offset[FP_HANDS][3];/* mesh units, added per hand (left, right) */
+    double face[4];                 /* F: face's frame -> mesh, unit quaternion; all zeros: none */
 } fp_calibration;
+
+/** c with its face frame folded into the rest (out->face all zeros; the same p_mesh for every
+ *  hand and point): what a take or a file records. out may be c. Pure; any thread. */
+void fp_calibration_flatten(const fp_calibration *c, fp_calibration *out);
 
 /** One stream of a hand's positions under the jump rule (FP_POSE_JUMP_MM): the joints, or
  *  the wrist's position (its first point). */

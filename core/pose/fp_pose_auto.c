@@ -175,6 +175,7 @@ bool fp_pose_auto_refit(fp_pose_auto *a, fp_pose_state *p, bool engaged, double 
     fp_pose_auto_box(a, wmin, wmax);
     fp_calibration old = p->calib, c;
     fp_pose_fit_workspace(&c, mm_per_unit, wmin, wmax, head_min, head_max);
+    memcpy(c.face, old.face, sizeof c.face); /* (the fit is in the face's frame) */
     a->hovered = !a->moved && hover > 0;
     if (a->hovered) c.offset[2] += hover; /* still hands hover (FP_POSE_STILL_MM) */
     p->calib = c;

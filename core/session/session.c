@@ -639,6 +639,7 @@ void fp_session_destroy(fp_session **sp)
     fp_record_step_free(&s->record);
     for (size_t p = 0; p < FP_PERFORMER_CAPACITY; p++) fp_arrive_step_free(&s->arrive[p]);
     free(s->loaded);
+    free(s->canon);
     free(s->base);
     free(s->deformed);
     fp_mesh_free(&s->mesh);

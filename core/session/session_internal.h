@@ -69,6 +69,12 @@ struct fp_session {
     double radius;
     double touch_radius;          /* the default radius: touch is measured in it (plugin.h) */
     fp_head head;                 /* the head and the mesh's unit (life-size calibration) */
+    double face[4];               /* the face's frame (fp_calibration.face): set where the rig
+                                     says the face looks along another axis than +z, or up is
+                                     not +y (a turned copy of its mesh); all zeros: none */
+    float *canon;                 /* n x 3: the loaded shape turned into the face's frame (with
+                                     face; the gloves' placement reads it) */
+    fp_head face_head;            /* the head in the face's frame (with face) */
     bool engaged;                 /* the mapping's deformation is active */
     uint64_t frame;
     uint32_t actions;             /* FP_SESSION_ACTION_* since the last frame (recorded) */

@@ -4,6 +4,8 @@
 #define _GNU_SOURCE
 #include "session_internal.h"
 
+#include "fp_vec.h"
+
 #include <errno.h>
 #include <math.h>
 #include <stdarg.h>
@@ -40,6 +42,14 @@ static int attach_rig(fp_session *s, const fp_session_options *opt, char *err, s
                 snprintf(s->rig_how, sizeof s->rig_how, "%s (found by the vertex count %zu)", path, s->n);
         }
     }
+    if (rig && fp_rig_get_placement(rig).placed) { /* a moved copy of the rig's mesh */
+        fp_rig_placement pl = fp_rig_get_placement(rig);
+        size_t k = strlen(s->rig_how);
+        if (k && s->rig_how[k - 1] == ')') k--;
+        snprintf(s->rig_how + k, sizeof s->rig_how - k,
+                 "; placed on this mesh by its landmarks: turned %.1f degrees, scaled %.4g, moved "
+                 "(%.4g, %.4g, %.4g))", pl.degrees, pl.scale, pl.shift[0], pl.shift[1], pl.shift[2]);
+    }
     /* jaw weights that turn no triangle over (fp_rig_unfold_jaw) */
     if (rig && (rc = fp_rig_unfold_jaw(rig, s->loaded, s->mesh->triangles, s->mesh->triangle_count, NULL))) {
         fp_rig_free(&rig);
@@ -50,6 +60,40 @@ static int attach_rig(fp_session *s, const fp_session_options *opt, char *err, s
         snprintf(err, errlen, "session: out of memory for the rig");
         return rc;
     }
+    return 0;
+}
+
+/* The face's frame (session_internal.h): a rig whose face axes are turned from +x, +y, +z by
+ * more than half a degree (placed on a turned copy of its mesh, fp_rig_placement) gives the
+ * rotation, the loaded shape turned back into it and the head found there, where the hands
+ * are fitted as for a face that looks along +z (fp_calibration.face). 0 or -ENOMEM. */
+static int face_frame(fp_session *s)
+{
+    double q[4];
+    memset(s->face, 0, sizeof s->face);
+    if (!s->rig.rig) return 0;
+    fp_rig_face_rotation(s->rig.rig, q);
+    if (q[0] >= cos(0.25 * M_PI / 180)) return 0; /* (turned under half a degree) */
+    if (!(s->canon = malloc(s->n * 3 * sizeof *s->canon))) return -ENOMEM;
+    const double back[4] = {q[0], -q[1], -q[2], -q[3]};
+    for (size_t v = 0; v < s->n; v++) {
+        double p[3] = {s->loaded[3 * v], s->loaded[3 * v + 1], s->loaded[3 * v + 2]}, c[3];
+        fp_qrot(back, p, c);
+        for (int i = 0; i < 3; i++) s->canon[3 * v + i] = (float)c[i];
+    }
+    if (fp_head_detect(s->canon, s->n, &s->face_head)) { /* (found on the same shape turned) */
+        free(s->canon);
+        s->canon = NULL;
+        return 0;
+    }
+    memcpy(s->face, q, sizeof q);
+    double z[3] = {0, 0, 1}, y[3] = {0, 1, 0}, fwd[3], up[3];
+    fp_qrot(q, z, fwd);
+    fp_qrot(q, y, up);
+    fp_slog_printf(&s->log, FP_LOG_INFO, "session",
+                   "the face looks along (%.2f, %.2f, %.2f) with up (%.2f, %.2f, %.2f) (its rig's axes): "
+                   "the hands are placed in front of it, as for a face that looks along +z",
+                   fwd[0], fwd[1], fwd[2], up[0], up[1], up[2]);
     return 0;
 }
 
@@ -163,6 +207,10 @@ static int open_scale(fp_session *s, const fp_session_options *opt, double diag,
         return rc;
     }
     if ((rc = attach_rig(s, opt, err, errlen))) return rc;
+    if ((rc = face_frame(s))) {
+        snprintf(err, errlen, "session: out of memory for the face's frame");
+        return rc;
+    }
     s->shown = s->view.base = fp_rig_step_posed(&s->rig, s->base);
     if (opt->mm_per_unit > 0) {
         s->head.mm_per_unit = opt->mm_per_unit;
@@ -202,6 +250,11 @@ static int open_scale(fp_session *s, const fp_session_options *opt, double diag,
                  "mesh units): every vertex would move as one; give a radius in mesh units",
                  opt->radius, sqrt(diag));
         return rc;
+    }
+    if (s->canon) { /* the face's frame's head: the same unit */
+        s->face_head.mm_per_unit = s->head.mm_per_unit;
+        s->face_head.method = s->head.method;
+        memcpy(s->face_head.how, s->head.how, sizeof s->face_head.how);
     }
     /* Default radius: 6% of the bounding-box diagonal, at least a fingertip's reach
      * (FP_SESSION_MIN_RADIUS_MM): on a sparse mask (MediaPipe's 468 vertices) a smaller one

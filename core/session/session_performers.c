@@ -72,11 +72,14 @@ static int calibrate(fp_session *s, const fp_session_options *opt, size_t p, cha
         float wmin[3], wmax[3];
         bool stated = fp_pose_inputs_workspace(ins, k, wmin, wmax);
         if (!stated) fp_pose_default_workspace(wmin, wmax); /* until the hands arrive */
-        fp_pose_fit_workspace(&c, s->head.mm_per_unit, wmin, wmax, s->head.min, s->head.max);
+        /* in the face's frame where it is turned (fp_calibration.face) */
+        const fp_head *fh = s->canon ? &s->face_head : &s->head;
+        fp_pose_fit_workspace(&c, fh->mm_per_unit, wmin, wmax, fh->min, fh->max);
+        memcpy(c.face, s->face, sizeof c.face);
         /* a recording whose fingertips never move is held out, hovering; one whose
          * fingertips never come near where its range places them is brought toward the
          * face (step_arrive.h) */
-        int held = stated ? fp_arrive_bring_in(&c, ins, k, s->touch_radius, &s->head, &s->engine, NULL, &s->log) : 0;
+        int held = stated ? fp_arrive_bring_in(&c, ins, k, s->touch_radius, fh, &s->engine, NULL, &s->log) : 0;
         if (held < 0 || fp_arrive_step_init(&s->arrive[p], stated ? FP_ARRIVE_PLACED_WORKSPACE : FP_ARRIVE_PLACED_AUTO)) {
             snprintf(err, errlen, "session: out of memory for the hands' placement");
             return -ENOMEM;
@@ -84,7 +87,8 @@ static int calibrate(fp_session *s, const fp_session_options *opt, size_t p, cha
         s->arrive[p].hovered = held == 1; /* (the hint's words) */
     }
     s->pose[p].calib = c;
-    fp_pose_place_gloves(&s->pose[p], s->loaded, s->n, &s->head);
+    bool turned = s->canon && memcmp(c.face, s->face, sizeof c.face) == 0; /* (fitted here) */
+    fp_pose_place_gloves(&s->pose[p], turned ? s->canon : s->loaded, s->n, turned ? &s->face_head : &s->head);
     return 0;
 }
 
@@ -118,7 +122,10 @@ int fp__session_performers_open(fp_session *s, const fp_session_options *opt, ch
 void fp__session_performers_build(fp_session *s, int64_t now_ns)
 {
     for (size_t p = 0; p < s->performers.count; p++) {
-        fp_arrive_step_place(&s->arrive[p], &s->pose[p], s->engaged, &s->head, s->touch_radius, &s->log);
+        const double *f = s->pose[p].calib.face; /* (fitted in the face's frame) */
+        bool turned = f[0] != 0 || f[1] != 0 || f[2] != 0 || f[3] != 0;
+        fp_arrive_step_place(&s->arrive[p], &s->pose[p], s->engaged, turned ? &s->face_head : &s->head,
+                             s->touch_radius, &s->log);
         fp_pose_build_at(&s->pose[p], now_ns);
     }
 }

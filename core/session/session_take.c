@@ -141,7 +141,9 @@ int fp_session_take_start(fp_session_take *t, const fp_session *s, int64_t origi
         h->inputs[h->input_count++] = so->inputs[i];
     /* the first performer's placement per hand: its rotation as fp_pose applies it and
      * offset + that hand's offset */
-    const fp_calibration *c = fp_session_calibration(s);
+    fp_calibration flat; /* (a face's frame folded in: the take holds device -> mesh) */
+    fp_calibration_flatten(fp_session_calibration(s), &flat);
+    const fp_calibration *c = &flat;
     for (int hand = 0; hand < FP_HANDS; hand++) {
         fp_take_calibration *tc = &h->calibration[hand];
         tc->present = true;
@@ -152,7 +154,9 @@ int fp_session_take_start(fp_session_take *t, const fp_session *s, int64_t origi
     /* 1.3: every performer's placement, whole (the array above keeps scale and offset) */
     h->performer_count = fp_session_performer_count(s);
     for (size_t p = 0; p < h->performer_count; p++) {
-        const fp_calibration *pc = fp_session_performer_calibration(s, p);
+        fp_calibration pflat;
+        fp_calibration_flatten(fp_session_performer_calibration(s, p), &pflat);
+        const fp_calibration *pc = &pflat;
         fp_take_performer *tp = &h->performers[p];
         tp->name = fp_session_performer_name(s, p);
         tp->scale = pc->scale;

@@ -420,7 +420,7 @@ static fp_event positions(int hand, double x, int64_t t, uint32_t source)
 /* p with the identity calibration (mesh units = mm), no hand seen. */
 static fp_pose_state *identity_pose(fp_pose_state *p)
 {
-    fp_calibration c = {1.0, {0, 0, 0}, {0, 0, 0, 0}, {{0, 0, 0}, {0, 0, 0}}};
+    fp_calibration c = {1.0, {0, 0, 0}, {0, 0, 0, 0}, {{0, 0, 0}, {0, 0, 0}}, {0, 0, 0, 0}};
     fp_pose_init(p, 0, &c);
     return p;
 }

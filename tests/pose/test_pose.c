@@ -32,7 +32,7 @@ static fp_event positions_event(int hand, float base, int64_t t)
 static void test_positions_calibrated(void **state)
 {
     (void)state;
-    fp_calibration c = {0.25, {1.0, -2.0, 3.5}, {0, 0, 0, 0}, {{0, 0, 0}, {0, 0, 0}}};
+    fp_calibration c = {0.25, {1.0, -2.0, 3.5}, {0, 0, 0, 0}, {{0, 0, 0}, {0, 0, 0}}, {0, 0, 0, 0}};
     fp_pose_state p;
     fp_pose_init(&p, 0, &c);
     fp_event ev = positions_event(FP_HAND_RIGHT, 100.f, 42);
@@ -69,7 +69,7 @@ static void test_positions_calibrated(void **state)
 static void test_angles_forward_kinematics(void **state)
 {
     (void)state;
-    fp_calibration id = {1.0, {0, 0, 0}, {1, 0, 0, 0}, {{0, 0, 0}, {0, 0, 0}}};
+    fp_calibration id = {1.0, {0, 0, 0}, {1, 0, 0, 0}, {{0, 0, 0}, {0, 0, 0}}, {0, 0, 0, 0}};
     fp_pose_state p;
     fp_pose_init(&p, 1.1, &id);
     assert_true(fabsf(p.model.size - 1.1f) < 1e-6f);
@@ -202,6 +202,47 @@ static void test_head_detect(void **state)
     }
 }
 
+/* The face's frame (fp_calibration.face): a point goes through scale, R and the offsets in the
+ * face's frame, then F turns it into the mesh's; fp_calibration_flatten folds F into R and the
+ * offsets with the same result, and so does a calibration file saved from it; a face of all
+ * zeros or the identity changes nothing, bit for bit. */
+static void test_face_frame(void **state)
+{
+    (void)state;
+    const double h = 0.70710678118654752440; /* F: 90 degrees about x (a Z-up mesh) */
+    fp_calibration c = {0.1, {1, 2, 3}, {0.9238795325, 0, 0.3826834324, 0}, {{0.5, 0, 0}, {0, -0.5, 0.25}},
+                        {h, h, 0, 0}},
+                   flat, none = c, id = c, back;
+    memset(none.face, 0, sizeof none.face);
+    id.face[0] = 1, id.face[1] = id.face[2] = id.face[3] = 0;
+    fp_calibration_flatten(&c, &flat);
+    assert_true(flat.face[0] == 0 && flat.face[1] == 0 && flat.face[2] == 0 && flat.face[3] == 0);
+    char dir[] = "/tmp/fp_face_XXXXXX", path[256], err[512];
+    assert_non_null(mkdtemp(dir));
+    snprintf(path, sizeof path, "%s/c.json", dir);
+    assert_int_equal(fp_calibration_save(path, &c, "test", err, sizeof err), 0);
+    assert_int_equal(fp_calibration_load(path, &back, err, sizeof err), 0);
+    const float pts[3][3] = {{0, 0, 0}, {120, -40, 75}, {-300, 210, -15}};
+    for (int hand = 0; hand < FP_HANDS; hand++)
+        for (int i = 0; i < 3; i++) {
+            float a[3], b[3], f[3], u[3], v[3];
+            fp_pose_to_mesh(&c, hand, pts[i], a);
+            fp_pose_to_mesh(&none, hand, pts[i], u);
+            fp_pose_to_mesh(&id, hand, pts[i], v);
+            assert_memory_equal(u, v, sizeof u); /* (the identity: as no face) */
+            /* F (x, y, z) = (x, -z, y) */
+            assert_true(fabsf(a[0] - u[0]) < 1e-5f && fabsf(a[1] + u[2]) < 1e-5f && fabsf(a[2] - u[1]) < 1e-5f);
+            fp_pose_to_mesh(&flat, hand, pts[i], b);
+            fp_pose_to_mesh(&back, hand, pts[i], f);
+            for (int k = 0; k < 3; k++) {
+                assert_true(fabsf(a[k] - b[k]) < 1e-5f);
+                assert_true(fabsf(a[k] - f[k]) < 1e-4f);
+            }
+        }
+    unlink(path);
+    rmdir(dir);
+}
+
 /* The calibration file: a round trip, and errors naming the file and the field. */
 static void test_calibration_file(void **state)
 {
@@ -209,7 +250,7 @@ static void test_calibration_file(void **state)
     char dir[] = "/tmp/fp_calib_XXXXXX", path[256], err[512];
     assert_non_null(mkdtemp(dir));
     snprintf(path, sizeof path, "%s/c.json", dir);
-    fp_calibration c = {0.1, {1, 2, 3}, {0, 0, 0, 1}, {{0.5, 0, 0}, {0, -0.5, 0}}}, back;
+    fp_calibration c = {0.1, {1, 2, 3}, {0, 0, 0, 1}, {{0.5, 0, 0}, {0, -0.5, 0}}, {0, 0, 0, 0}}, back;
     /* the mode a new file gets (0666 under the umask), not the temporary file's 0600 */
     mode_t um = umask(027);
     assert_int_equal(fp_calibration_save(path, &c, "test", err, sizeof err), 0);
@@ -413,6 +454,7 @@ int main(void)
         cmocka_unit_test(test_fit_workspace),
         cmocka_unit_test(test_head_detect),
         cmocka_unit_test(test_calibration_file),
+        cmocka_unit_test(test_face_frame),
         cmocka_unit_test(test_head_scale_plausible),
         cmocka_unit_test(test_inputs_workspace_unknown),
         cmocka_unit_test(test_calibrate_touch),

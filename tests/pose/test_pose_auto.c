@@ -151,7 +151,7 @@ static void test_refit_schedule(void **state)
     fp_pose_auto *a;
     assert_int_equal(fp_pose_auto_create(&a), 0);
     fp_pose_state p;
-    fp_calibration c0 = {0.1, {1, 2, 3}, {1, 0, 0, 0}, {{0, 0, 0}, {0, 0, 0}}};
+    fp_calibration c0 = {0.1, {1, 2, 3}, {1, 0, 0, 0}, {{0, 0, 0}, {0, 0, 0}}, {0, 0, 0, 0}};
     fp_pose_init(&p, 0, &c0);
     assert_false(fp_pose_auto_refit(a, &p, false, 10.0, head_min, head_max, 0)); /* no sample */
     float mm[FP_HAND_JOINTS][3];

@@ -29,7 +29,7 @@ static void hand_at(float mm[FP_HAND_JOINTS][3], float x)
     }
 }
 
-static const fp_calibration identity = {1.0, {0, 0, 0}, {1, 0, 0, 0}, {{0, 0, 0}, {0, 0, 0}}};
+static const fp_calibration identity = {1.0, {0, 0, 0}, {1, 0, 0, 0}, {{0, 0, 0}, {0, 0, 0}}, {0, 0, 0, 0}};
 
 /* Feed the right hand at x(i) for samples i < n (one every PERIOD_NS), building a frame at
  * every FRAME_NS; out_x[f] the frame's joint 0 x (NAN: absent). Returns the frames. */
