@@ -64,6 +64,7 @@ typedef struct camera {
     float yaw, pitch, dist;
     float fovy;
     float scene_size;   /* bounding-box diagonal of the mesh */
+    face_axes axes;     /* yaw and pitch turn about the face's up and left (its rig's axes) */
 } camera;
 
 typedef struct viewer {
@@ -184,12 +185,15 @@ static void on_session_log(void *user, int level, const char *source, const char
 static void frame_mesh(viewer *v)
 {
     const fp_mesh *m = fp_session_mesh(v->s);
-    float lo[3], hi[3];
-    fp_mesh_bounds(m, lo, hi);
-    float d[3];
+    const fp_rig *rig = fp_session_rig(v->s);
+    float up[3], fwd[3], left[3], lo[3], hi[3], d[3], c[3];
+    if (rig) fp_rig_axes(rig, up, fwd, left); /* a face turned in its mesh: seen from its front */
+    face_axes_set(&v->cam.axes, rig ? up : NULL, rig ? fwd : NULL);
+    face_axes_bounds(&v->cam.axes, m->positions, m->vertex_count, lo, hi);
     v3_sub(hi, lo, d);
     float diag = v3_len(d);
-    for (int i = 0; i < 3; i++) v->cam.target[i] = 0.5f * (lo[i] + hi[i]);
+    for (int i = 0; i < 3; i++) c[i] = 0.5f * (lo[i] + hi[i]);
+    face_axes_to_mesh(&v->cam.axes, c, v->cam.target);
     v->cam.yaw = 0;
     v->cam.pitch = 0;
     v->cam.fovy = 35.f * (float)M_PI / 180.f;
@@ -205,11 +209,12 @@ static void frame_mesh(viewer *v)
 static void camera_matrices(const viewer *v, int w, int h, float view[16], float proj[16])
 {
     const camera *c = &v->cam;
-    float eye[3] = {c->target[0] + c->dist * cosf(c->pitch) * sinf(c->yaw),
-                    c->target[1] + c->dist * sinf(c->pitch),
-                    c->target[2] + c->dist * cosf(c->pitch) * cosf(c->yaw)};
-    float up[3] = {0, 1, 0};
-    m4_look_at(view, eye, c->target, up);
+    const float l[3] = {c->dist * cosf(c->pitch) * sinf(c->yaw), c->dist * sinf(c->pitch),
+                        c->dist * cosf(c->pitch) * cosf(c->yaw)};
+    float eye[3];
+    face_axes_to_mesh(&c->axes, l, eye);
+    for (int i = 0; i < 3; i++) eye[i] += c->target[i];
+    m4_look_at(view, eye, c->target, c->axes.y);
     float zn = fmaxf(c->dist - 2 * c->scene_size, c->dist * 0.02f);
     m4_perspective(proj, c->fovy, h > 0 ? (float)w / (float)h : 1.f, zn, c->dist + 2 * c->scene_size);
 }
@@ -485,7 +490,10 @@ static void on_cursor(GLFWwindow *w, double x, double y)
         glfwGetWindowSize(w, &ww, &wh);
         float k = 2.f * v->cam.dist * tanf(v->cam.fovy / 2) / (float)(wh > 0 ? wh : 1);
         float cy = cosf(v->cam.yaw), sy = sinf(v->cam.yaw), cp = cosf(v->cam.pitch), sp = sinf(v->cam.pitch);
-        float right[3] = {cy, 0, -sy}, up[3] = {-sp * sy, cp, -sp * cy};
+        const float rl[3] = {cy, 0, -sy}, ul[3] = {-sp * sy, cp, -sp * cy}; /* (the face's axes) */
+        float right[3], up[3];
+        face_axes_to_mesh(&v->cam.axes, rl, right);
+        face_axes_to_mesh(&v->cam.axes, ul, up);
         for (int i = 0; i < 3; i++) v->cam.target[i] += (float)(-dx * right[i] + dy * up[i]) * k;
     }
 }

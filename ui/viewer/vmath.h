@@ -4,6 +4,7 @@
 #define FP_UI_VMATH_H
 
 #include <math.h>
+#include <stddef.h>
 #include <string.h>
 
 static inline void v3_sub(const float a[3], const float b[3], float o[3])
@@ -81,6 +82,40 @@ static inline void m4_look_at(float m[16], const float eye[3], const float at[3]
     m[12] = -v3_dot(s, eye);
     m[13] = -v3_dot(u, eye);
     m[14] = v3_dot(f, eye);
+}
+
+/* The face's axes the camera turns about (left, up, forward in mesh coordinates: +x, +y, +z
+ * for a face that looks along +z; a rig's fp_rig_axes for a turned one) */
+typedef struct face_axes {
+    float x[3], y[3], z[3];
+} face_axes;
+
+/* up and forward (unit, orthogonal) or NULL: the identity; left = up x forward */
+static inline void face_axes_set(face_axes *a, const float *up, const float *forward)
+{
+    const float y[3] = {0, 1, 0}, z[3] = {0, 0, 1};
+    memcpy(a->y, up ? up : y, sizeof a->y);
+    memcpy(a->z, forward ? forward : z, sizeof a->z);
+    v3_cross(a->y, a->z, a->x);
+}
+
+/* the face-frame point l as mesh coordinates */
+static inline void face_axes_to_mesh(const face_axes *a, const float l[3], float o[3])
+{
+    for (int i = 0; i < 3; i++) o[i] = l[0] * a->x[i] + l[1] * a->y[i] + l[2] * a->z[i];
+}
+
+/* the n points' box in the face's axes (lo, hi: along x, y, z of the face) */
+static inline void face_axes_bounds(const face_axes *a, const float *pos, size_t n, float lo[3], float hi[3])
+{
+    for (int k = 0; k < 3; k++) lo[k] = INFINITY, hi[k] = -INFINITY;
+    for (size_t i = 0; i < n; i++) {
+        const float *p = pos + 3 * i;
+        const float c[3] = {v3_dot(p, a->x), v3_dot(p, a->y), v3_dot(p, a->z)};
+        for (int k = 0; k < 3; k++) lo[k] = fminf(lo[k], c[k]), hi[k] = fmaxf(hi[k], c[k]);
+    }
+    if (!n)
+        for (int k = 0; k < 3; k++) lo[k] = hi[k] = 0;
 }
 
 #endif
