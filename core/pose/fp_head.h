@@ -58,6 +58,12 @@ typedef struct fp_head {
  *  flat mesh), -ENOMEM. */
 int fp_head_detect(const float *pos, size_t n, fp_head *out);
 
+/** A face that looks elsewhere than +z (fp_calibration.face): its n positions turned back into
+ *  the face's own frame into `turned` (n x 3, the caller's), by the inverse of the unit
+ *  quaternion face (w, x, y, z: the face's frame -> the mesh's), and the head found there
+ *  (fp_head_detect; its box in the face's frame). Returns as fp_head_detect. */
+int fp_head_detect_turned(const float *pos, size_t n, const double face[4], float *turned, fp_head *out);
+
 /** The face's size across, in millimetres, for a given scale: diagonal (the mesh's
  *  bounding-box diagonal, mesh units) x mm_per_unit, into *across_mm (may be NULL). Returns
  *  true when it is a face a hand can reach, 1 mm to 1 km (FP_HEAD_ACROSS_MIN_MM ..

@@ -75,13 +75,7 @@ static int face_frame(fp_session *s)
     fp_rig_face_rotation(s->rig.rig, q);
     if (q[0] >= cos(0.25 * M_PI / 180)) return 0; /* (turned under half a degree) */
     if (!(s->canon = malloc(s->n * 3 * sizeof *s->canon))) return -ENOMEM;
-    const double back[4] = {q[0], -q[1], -q[2], -q[3]};
-    for (size_t v = 0; v < s->n; v++) {
-        double p[3] = {s->loaded[3 * v], s->loaded[3 * v + 1], s->loaded[3 * v + 2]}, c[3];
-        fp_qrot(back, p, c);
-        for (int i = 0; i < 3; i++) s->canon[3 * v + i] = (float)c[i];
-    }
-    if (fp_head_detect(s->canon, s->n, &s->face_head)) { /* (found on the same shape turned) */
+    if (fp_head_detect_turned(s->loaded, s->n, q, s->canon, &s->face_head)) { /* (as on the shape) */
         free(s->canon);
         s->canon = NULL;
         return 0;

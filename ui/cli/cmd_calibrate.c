@@ -289,7 +289,21 @@ static int fit_and_save(const calibrate_args *a, const fp_mesh *m, const fp_head
         rc = fp_calib_fit_touch(smp, n, (const float(*)[3])lm, &c, touched, &rms, err, sizeof err);
     } else {
         warn_unheld(a, smp, n);
-        rc = fp_calib_fit_hold(smp, n, m->positions, m->vertex_count, head, &c, err, sizeof err);
+        /* a face turned in its mesh (its rig placed on a turned copy): held in front of the
+         * face's own axes, the file holding the turn (fp_calibration.face, flattened) */
+        double q[4] = {1, 0, 0, 0};
+        if (given_rig) fp_rig_face_rotation(given_rig, q);
+        float *turned = q[0] < cos(0.25 * M_PI / 180) ? malloc(m->vertex_count * 3 * sizeof *turned) : NULL;
+        fp_head th;
+        if (turned && !fp_head_detect_turned(m->positions, m->vertex_count, q, turned, &th)) {
+            th.mm_per_unit = head->mm_per_unit;
+            memcpy(th.how, head->how, sizeof th.how);
+            rc = fp_calib_fit_hold(smp, n, turned, m->vertex_count, &th, &c, err, sizeof err);
+            memcpy(c.face, q, sizeof c.face);
+        } else {
+            rc = fp_calib_fit_hold(smp, n, m->positions, m->vertex_count, head, &c, err, sizeof err);
+        }
+        free(turned);
     }
     if (rc) {
         fprintf(stderr, "facepuppet calibrate: %s: %s\n", a->input, strncmp(err, "calibrate: ", 11) ? err : err + 11);
