@@ -8,7 +8,10 @@
 #     21.3 mm turned; before, metres refused the rig, exit 65, and Z-up moved 3 vertices);
 #  2. pose opens the copy's jaw as it opens the face's (exit 0; the pose carried within
 #     0.001 mm is test_rig's test_placement);
-#  3. export --format png-seq (under Xvfb, where the viewer is built) shows the Z-up copy from
+#  3. calibrate --mode hold on the Z-up copy (in metres) writes the face's calibration turned
+#     and scaled with it (rotation 90 degrees about x, offset 0.01 (x, -z, y) of the face's,
+#     within 0.01 mm; 1000 mm per unit);
+#  4. export --format png-seq (under Xvfb, where the viewer is built) shows the Z-up copy from
 #     the face's front, as it shows the face itself: the pictures of the same frame of the two
 #     takes differ by under 2 of 255 a pixel on average (before: seen from above the crown).
 # Usage: test_turned_face.sh BUILD_DIR. Exit 77 (skipped) without python3 or the data.
@@ -120,6 +123,24 @@ EOF
 else
     echo "SKIP (png-seq only): no viewer in this build or no xvfb-run"
 fi
+
+for name in face zup; do
+    mesh=$face
+    [ $name = zup ] && mesh=$tmp/zup.obj
+    "$build/bin/facepuppet" calibrate --mesh "$mesh" --input "replay:$data/hands/leap-motion/Waiting-110fps_joints_mm.csv" \
+        --out "$tmp/$name.cal.json" >"$tmp/cal.out" 2>&1 || { cat "$tmp/cal.out"; echo "FAIL: calibrate on $name"; exit 1; }
+done
+python3 - "$tmp/face.cal.json" "$tmp/zup.cal.json" <<'EOF' || { echo "FAIL: the Z-up copy's calibration is not the face's turned"; exit 1; }
+import json, math, sys
+a, b = (json.load(open(p)) for p in sys.argv[1:])
+(ax, ay, az), (bx, by, bz) = a["offset"], b["offset"]
+q, h = b["rotation"], math.sqrt(0.5)
+print("calibrate: offset", [round(v, 3) for v in b["offset"]], "rotation", [round(v, 4) for v in q])
+s = 0.01  # (the copy is in metres)
+assert max(abs(bx - s * ax), abs(by + s * az), abs(bz - s * ay)) < 1e-5, (a, b)
+assert abs(b["mm_per_unit"] / a["mm_per_unit"] / 100 - 1) < 1e-4, (a, b)
+assert abs(q[0] - h) < 1e-4 and abs(q[1] - h) < 1e-4 and abs(q[2]) < 1e-4 and abs(q[3]) < 1e-4, q
+EOF
 
 for name in metres zup; do
     "$build/bin/facepuppet" pose --mesh "$tmp/$name.obj" --set jaw.open=0.6 --out "$tmp/$name.posed.obj" \
