@@ -9,6 +9,8 @@
 #ifndef FP_VEC_H
 #define FP_VEC_H
 
+#include <math.h>
+
 /** a . b */
 static inline double fp_dot3(const double a[3], const double b[3])
 {
@@ -34,6 +36,31 @@ static inline void fp_qrot(const double q[4], const double v[3], double out[3])
     out[0] = v[0] + w * tx + (y * tz - z * ty);
     out[1] = v[1] + w * ty + (z * tx - x * tz);
     out[2] = v[2] + w * tz + (x * ty - y * tx);
+}
+
+/* The unit quaternion (w, x, y, z) of the rotation whose matrix has the columns left, up and
+ * forward (orthonormal, left = up x forward): it turns +x, +y, +z into them. Shepperd's
+ * method (the largest of the four diagonal combinations); w >= 0. */
+static inline void fp_quat_from_axes(const double left[3], const double up[3], const double fwd[3], double q[4])
+{
+    double M[3][3];
+    for (int i = 0; i < 3; i++) M[i][0] = left[i], M[i][1] = up[i], M[i][2] = fwd[i];
+    double tr = M[0][0] + M[1][1] + M[2][2];
+    if (tr >= M[0][0] && tr >= M[1][1] && tr >= M[2][2]) {
+        double w = 2 * sqrt(fmax(0, 1 + tr));
+        q[0] = w / 4, q[1] = (M[2][1] - M[1][2]) / w, q[2] = (M[0][2] - M[2][0]) / w, q[3] = (M[1][0] - M[0][1]) / w;
+    } else if (M[0][0] >= M[1][1] && M[0][0] >= M[2][2]) {
+        double w = 2 * sqrt(fmax(0, 1 + M[0][0] - M[1][1] - M[2][2]));
+        q[0] = (M[2][1] - M[1][2]) / w, q[1] = w / 4, q[2] = (M[0][1] + M[1][0]) / w, q[3] = (M[0][2] + M[2][0]) / w;
+    } else if (M[1][1] >= M[2][2]) {
+        double w = 2 * sqrt(fmax(0, 1 + M[1][1] - M[0][0] - M[2][2]));
+        q[0] = (M[0][2] - M[2][0]) / w, q[1] = (M[0][1] + M[1][0]) / w, q[2] = w / 4, q[3] = (M[1][2] + M[2][1]) / w;
+    } else {
+        double w = 2 * sqrt(fmax(0, 1 + M[2][2] - M[0][0] - M[1][1]));
+        q[0] = (M[1][0] - M[0][1]) / w, q[1] = (M[0][2] + M[2][0]) / w, q[2] = (M[1][2] + M[2][1]) / w, q[3] = w / 4;
+    }
+    double n = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    for (int i = 0; i < 4; i++) q[i] = (q[0] < 0 ? -q[i] : q[i]) / n;
 }
 
 #endif

@@ -4,6 +4,8 @@
 #define _GNU_SOURCE /* M_PI */
 #include "fp_rig_internal.h"
 
+#include "fp_vec.h"
+
 #include <assert.h>
 #include <math.h>
 #include <string.h>
@@ -215,27 +217,5 @@ fp_rig_placement fp_rig_get_placement(const fp_rig *r)
 void fp_rig_face_rotation(const fp_rig *r, double q[4])
 {
     q[0] = 1, q[1] = q[2] = q[3] = 0;
-    if (!r) return;
-    /* M's columns: left, up, forward (a proper rotation: left = up x forward, fp_rig_parse);
-     * its quaternion by the largest of the four diagonal combinations (Shepperd 1978) */
-    double M[3][3];
-    for (int i = 0; i < 3; i++) M[i][0] = r->left[i], M[i][1] = r->up[i], M[i][2] = r->fwd[i];
-    double tr = M[0][0] + M[1][1] + M[2][2];
-    if (tr >= M[0][0] && tr >= M[1][1] && tr >= M[2][2]) {
-        double w = 2 * sqrt(fmax(0, 1 + tr));
-        q[0] = w / 4, q[1] = (M[2][1] - M[1][2]) / w, q[2] = (M[0][2] - M[2][0]) / w, q[3] = (M[1][0] - M[0][1]) / w;
-    } else if (M[0][0] >= M[1][1] && M[0][0] >= M[2][2]) {
-        double w = 2 * sqrt(fmax(0, 1 + M[0][0] - M[1][1] - M[2][2]));
-        q[0] = (M[2][1] - M[1][2]) / w, q[1] = w / 4, q[2] = (M[0][1] + M[1][0]) / w, q[3] = (M[0][2] + M[2][0]) / w;
-    } else if (M[1][1] >= M[2][2]) {
-        double w = 2 * sqrt(fmax(0, 1 + M[1][1] - M[0][0] - M[2][2]));
-        q[0] = (M[0][2] - M[2][0]) / w, q[1] = (M[0][1] + M[1][0]) / w, q[2] = w / 4, q[3] = (M[1][2] + M[2][1]) / w;
-    } else {
-        double w = 2 * sqrt(fmax(0, 1 + M[2][2] - M[0][0] - M[1][1]));
-        q[0] = (M[1][0] - M[0][1]) / w, q[1] = (M[0][2] + M[2][0]) / w, q[2] = (M[1][2] + M[2][1]) / w, q[3] = w / 4;
-    }
-    double n = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    for (int i = 0; i < 4; i++) q[i] /= n;
-    if (q[0] < 0)
-        for (int i = 0; i < 4; i++) q[i] = -q[i];
+    if (r) fp_quat_from_axes(r->left, r->up, r->fwd, q); /* (left = up x forward, fp_rig_parse) */
 }

@@ -99,6 +99,14 @@ typedef struct fp_session_options {
     const char *mm_per_unit_source;                 /* where a given mm_per_unit came from,
                                                        for the scale line ("--mm-per-unit",
                                                        "rig FILE"); NULL: "given" */
+    float face_up[3], face_facing[3];               /* the face's up and the axis it looks
+                                                       along, in the mesh (unit, orthogonal;
+                                                       both or neither): the hands are placed
+                                                       in front of it and the viewer looks at
+                                                       it from there. Zeros: the rig's axes
+                                                       (a rig placed on a turned copy of its
+                                                       mesh), else +y up, looking along +z
+                                                       (fp_calibration.face) */
     const fp_plugin_path *plugin_path;              /* required */
     int engine_threads;                             /* 0: 1 (a frame's work follows the
                                                        supports); -1: all cores; N: N threads */
@@ -480,6 +488,11 @@ const char *fp_session_mapping_name(const fp_session *s);
 int fp_session_mapping_fault(const fp_session *s, char *err, size_t errlen);
 /** The session's rig (core/rig), or NULL without one. */
 const struct fp_rig *fp_session_rig(const fp_session *s);
+
+/** The face's up and the axis it looks along, in mesh coordinates (unit): the options', the
+ *  placed rig's, or +y and +z (fp_session_options.face_up). The viewer's and png-seq's camera
+ *  turns about them. [any-thread] after fp_session_create. */
+void fp_session_face_axes(const fp_session *s, float up[3], float facing[3]);
 /** How the rig was chosen, for a command's first line: "rigs/ict-facekit.json (found by the
  *  mesh's checksum 577903df)", "... (given)", "none (--rig none)", "none (no rig fits ...)". */
 const char *fp_session_rig_how(const fp_session *s);

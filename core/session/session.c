@@ -4,6 +4,8 @@
 #define _GNU_SOURCE
 #include "session_internal.h"
 
+#include "fp_vec.h"
+
 #include "csrbf.h"
 #include "fp_clock.h"
 #include "fp_plugin_crash.h"
@@ -457,6 +459,16 @@ const fp_calibration *fp_session_performer_calibration(const fp_session *s, size
     return performer < s->performers.count ? &s->pose[performer].calib : NULL;
 }
 const fp_head *fp_session_head(const fp_session *s) { return &s->head; }
+
+void fp_session_face_axes(const fp_session *s, float up[3], float facing[3])
+{
+    double y[3] = {0, 1, 0}, z[3] = {0, 0, 1}, a[3] = {0, 1, 0}, b[3] = {0, 0, 1};
+    if (s->canon) { /* (the face's frame is set) */
+        fp_qrot(s->face, y, a);
+        fp_qrot(s->face, z, b);
+    }
+    for (int i = 0; i < 3; i++) up[i] = (float)a[i], facing[i] = (float)b[i];
+}
 const fp_control_set *fp_session_control_set(const fp_session *s) { return &s->cs; }
 
 const struct csrbf_solver *fp_session_solver(const fp_session *s)

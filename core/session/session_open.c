@@ -67,27 +67,48 @@ static int attach_rig(fp_session *s, const fp_session_options *opt, char *err, s
  * more than half a degree (placed on a turned copy of its mesh, fp_rig_placement) gives the
  * rotation, the loaded shape turned back into it and the head found there, where the hands
  * are fitted as for a face that looks along +z (fp_calibration.face). 0 or -ENOMEM. */
-static int face_frame(fp_session *s)
+static int face_frame(fp_session *s, const fp_session_options *opt, char *err, size_t errlen)
 {
     double q[4];
     memset(s->face, 0, sizeof s->face);
-    if (!s->rig.rig) return 0;
-    fp_rig_face_rotation(s->rig.rig, q);
+    const float *u = opt->face_up, *f = opt->face_facing;
+    bool given_u = u[0] != 0 || u[1] != 0 || u[2] != 0, given_f = f[0] != 0 || f[1] != 0 || f[2] != 0;
+    if (given_u || given_f) { /* the options' */
+        double up[3] = {u[0], u[1], u[2]}, fwd[3] = {f[0], f[1], f[2]}, left[3];
+        if (!given_u || !given_f || fabs(fp_dot3(up, up) - 1) > 1e-3 || fabs(fp_dot3(fwd, fwd) - 1) > 1e-3 ||
+            fabs(fp_dot3(up, fwd)) > 1e-3) {
+            snprintf(err, errlen, "the face's axes: give both --up and --facing, two unit axes at a right "
+                     "angle (e.g. --up +z --facing -y)");
+            return -EINVAL;
+        }
+        fp_cross3(up, fwd, left);
+        fp_quat_from_axes(left, up, fwd, q);
+    } else if (s->rig.rig) {
+        fp_rig_face_rotation(s->rig.rig, q);
+    } else {
+        return 0;
+    }
     if (q[0] >= cos(0.25 * M_PI / 180)) return 0; /* (turned under half a degree) */
-    if (!(s->canon = malloc(s->n * 3 * sizeof *s->canon))) return -ENOMEM;
+    if (!(s->canon = malloc(s->n * 3 * sizeof *s->canon))) {
+        snprintf(err, errlen, "session: out of memory for the face's frame");
+        return -ENOMEM;
+    }
     if (fp_head_detect_turned(s->loaded, s->n, q, s->canon, &s->face_head)) { /* (as on the shape) */
         free(s->canon);
         s->canon = NULL;
         return 0;
     }
     memcpy(s->face, q, sizeof q);
+    s->head.mm_per_unit = s->face_head.mm_per_unit; /* the unit detected as for a face that looks */
+    s->head.method = s->face_head.method;           /* along +z (a given one still wins below) */
+    memcpy(s->head.how, s->face_head.how, sizeof s->head.how);
     double z[3] = {0, 0, 1}, y[3] = {0, 1, 0}, fwd[3], up[3];
     fp_qrot(q, z, fwd);
     fp_qrot(q, y, up);
     fp_slog_printf(&s->log, FP_LOG_INFO, "session",
-                   "the face looks along (%.2f, %.2f, %.2f) with up (%.2f, %.2f, %.2f) (its rig's axes): "
+                   "the face looks along (%.2f, %.2f, %.2f) with up (%.2f, %.2f, %.2f) (%s): "
                    "the hands are placed in front of it, as for a face that looks along +z",
-                   fwd[0], fwd[1], fwd[2], up[0], up[1], up[2]);
+                   fwd[0], fwd[1], fwd[2], up[0], up[1], up[2], given_u ? "--up, --facing" : "its rig's axes");
     return 0;
 }
 
@@ -201,10 +222,7 @@ static int open_scale(fp_session *s, const fp_session_options *opt, double diag,
         return rc;
     }
     if ((rc = attach_rig(s, opt, err, errlen))) return rc;
-    if ((rc = face_frame(s))) {
-        snprintf(err, errlen, "session: out of memory for the face's frame");
-        return rc;
-    }
+    if ((rc = face_frame(s, opt, err, errlen))) return rc;
     s->shown = s->view.base = fp_rig_step_posed(&s->rig, s->base);
     if (opt->mm_per_unit > 0) {
         s->head.mm_per_unit = opt->mm_per_unit;

@@ -237,7 +237,8 @@ static void say(fp_arrive_step *r, const fp_slog *log)
                    "%shands present for %.*f s, but no fingertip came within %.0f mm of the face "
                    "(half the face's default support radius: where the anchored mapping grabs); the nearest "
                    "stayed %s away. %s, or calibrate: `facepuppet calibrate --mesh FACE --input "
-                   "SPEC --out cal.json`, then --calibration cal.json (docs/calibration.md)",
+                   "SPEC --out cal.json`, then --calibration cal.json; a face that does not look "
+                   "along +z with +y up: --up and --facing (docs/calibration.md)",
                    r->who, r->away_s < FP_ARRIVE_HINT_S - 1e-6 ? 1 : 0, r->away_s, r->near_mm, far,
                    placed_words(r->hovered ? FP_ARRIVE_PLACED_STILL : r->how));
 }

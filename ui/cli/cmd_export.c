@@ -8,7 +8,6 @@
 #include "command.h"
 #include "fp_take_player.h"
 #include "fp_error.h"
-#include "fp_rig.h"
 #ifdef FP_HAVE_UI
 #include "fp_frame_render.h"
 #endif
@@ -449,8 +448,7 @@ static int open_sink(sink *k, const export_args *a, const fp_session *s, const c
         }
         fp_frame_render_options ro = {.width = a->width, .height = a->height, .yaw_deg = a->yaw,
                                       .pitch_deg = a->pitch, .zoom = a->zoom};
-        float left[3];
-        if (fp_session_rig(s)) fp_rig_axes(fp_session_rig(s), ro.up, ro.forward, left); /* (a turned face) */
+        fp_session_face_axes(s, ro.up, ro.forward); /* (a turned face: seen from its front) */
         if ((rc = fp_frame_renderer_open(fp_session_mesh(s), &ro, &k->png, err, sizeof err))) {
             fprintf(stderr, "facepuppet export: %s\n", err);
             return fp_app_exit_code(rc, FP_APP_INPUT);

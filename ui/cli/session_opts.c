@@ -15,7 +15,7 @@
 #include <string.h>
 
 enum { OPT_DURATION = 0x100, OPT_HAND_SIZE, OPT_PLUGIN_DIR, OPT_MM_PER_UNIT, OPT_CALIBRATION, OPT_RIG,
-       OPT_CONTROL, OPT_STREAM, OPT_ISOLATE, OPT_ISOLATE_DEADLINE };
+       OPT_CONTROL, OPT_STREAM, OPT_ISOLATE, OPT_ISOLATE_DEADLINE, OPT_UP, OPT_FACING };
 
 static const struct {
     const char *name;
@@ -49,6 +49,10 @@ static const struct {
      "support radius in mesh units (default 6% of the mesh's\nbounding-box diagonal, at least 25 mm)"},
     {"mm-per-unit", required_argument, OPT_MM_PER_UNIT, "X",
      "the mesh's unit in millimetres (default: detected from\nthe head, about 23 cm chin to crown)"},
+    {"up", required_argument, OPT_UP, "AXIS",
+     "the face's up in the mesh: +x, -x, +y, -y, +z or -z\n(with --facing; default: the rig's, else +y)"},
+    {"facing", required_argument, OPT_FACING, "AXIS",
+     "the axis the face looks along (with --up; default: the\nrig's, else +z): a Z-up export, --up +z --facing -y"},
     {"calibration", required_argument, OPT_CALIBRATION, "FILE",
      "hand calibration JSON (docs/calibration.md; made by\n`facepuppet calibrate`). Default: life-size, in front\n"
      "of the face: a recording fitted from its whole range,\na live tracker's hands as they arrive (refined as\n"
@@ -101,6 +105,17 @@ static bool number(const char *arg, double lo, double hi, double *out)
     double v;
     if (!fp_parse_decimal(arg, &v) || !(v > lo && v < hi)) return false;
     *out = v;
+    return true;
+}
+
+/* +x, -x, +y, -y, +z, -z (or x, y, z) into a unit axis */
+static bool axis(const char *arg, float out[3])
+{
+    int sign = 1;
+    if (*arg == '+' || *arg == '-') sign = *arg++ == '-' ? -1 : 1;
+    if (!arg[0] || arg[1] || arg[0] < 'x' || arg[0] > 'z') return false;
+    out[0] = out[1] = out[2] = 0;
+    out[arg[0] - 'x'] = (float)sign;
     return true;
 }
 
@@ -169,6 +184,10 @@ int fp_session_opts_parse(fp_session_opts *o, int c, const char *arg, const char
     case OPT_ISOLATE_DEADLINE:
         return number(arg, 0.999, 60001, &so->isolate_deadline_ms) ? 1
                : bad(cmd, "--isolate-deadline must be 1 to 60000 ms", arg);
+    case OPT_UP:
+        return axis(arg, so->face_up) ? 1 : bad(cmd, "--up must be +x, -x, +y, -y, +z or -z", arg);
+    case OPT_FACING:
+        return axis(arg, so->face_facing) ? 1 : bad(cmd, "--facing must be +x, -x, +y, -y, +z or -z", arg);
     case 'q': o->quiet = true; return 1;
     case OPT_CONTROL: o->control = arg; return 1;
     case OPT_STREAM: o->stream = arg; return 1;

@@ -12,7 +12,7 @@
 /** The short letters of the shared options, for getopt_long's optstring. */
 #define FP_SESSION_OPTS_SHORT "m:i:M:r:s:qP:"
 /** How many entries fp_session_opts_longopts writes. */
-#define FP_SESSION_OPTS_COUNT 16
+#define FP_SESSION_OPTS_COUNT 18
 /** A command's own long-only options take values from here up (the shared ones use 0x100..). */
 #define FP_SESSION_OPTS_FIRST_FREE 0x200
 #define FP_SESSION_OPTS_MAX_PLUGIN_DIRS 8

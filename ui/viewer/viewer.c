@@ -185,10 +185,9 @@ static void on_session_log(void *user, int level, const char *source, const char
 static void frame_mesh(viewer *v)
 {
     const fp_mesh *m = fp_session_mesh(v->s);
-    const fp_rig *rig = fp_session_rig(v->s);
-    float up[3], fwd[3], left[3], lo[3], hi[3], d[3], c[3];
-    if (rig) fp_rig_axes(rig, up, fwd, left); /* a face turned in its mesh: seen from its front */
-    face_axes_set(&v->cam.axes, rig ? up : NULL, rig ? fwd : NULL);
+    float up[3], fwd[3], lo[3], hi[3], d[3], c[3];
+    fp_session_face_axes(v->s, up, fwd); /* a face turned in its mesh: seen from its front */
+    face_axes_set(&v->cam.axes, up, fwd);
     face_axes_bounds(&v->cam.axes, m->positions, m->vertex_count, lo, hi);
     v3_sub(hi, lo, d);
     float diag = v3_len(d);
