@@ -164,6 +164,10 @@ int fp_session_take_start(fp_session_take *t, const fp_session *s, int64_t origi
         memcpy(tp->offset, pc->offset, sizeof tp->offset);
         memcpy(tp->hand_offset, pc->hand_offset, sizeof tp->hand_offset);
     }
+    float up[3], facing[3]; /* (1.4: where the face looks elsewhere than +z) */
+    fp_session_face_axes(s, up, facing);
+    if (up[1] < 1 || facing[2] < 1)
+        for (int i = 0; i < 3; i++) h->face_up[i] = up[i], h->face_facing[i] = facing[i];
     h->radius = fp_session_radius(s);
     h->description = t->opt.description;
     t->have_first = false;

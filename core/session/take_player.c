@@ -73,6 +73,8 @@ int fp_take_player_open_logged(const char *take_path, const char *mesh_path,
                              .plugin_path = plugin_path,
                              .rig_path = h->rig_path ? h->rig_path : "none",
                              .log = log, .log_user = log_user};
+    for (int i = 0; i < 3; i++) /* (1.4: the face's axes, for the camera) */
+        so.face_up[i] = (float)h->face_up[i], so.face_facing[i] = (float)h->face_facing[i];
     if ((rc = fp_session_create(&so, &p->session, err, errlen)))
         goto fail;
     if ((rc = fp_session_take_check_mesh(p->session, p->mesh, h, err, errlen)))

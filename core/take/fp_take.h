@@ -49,9 +49,10 @@ extern "C" {
 /** Format version written (docs/take-format.md). A reader accepts files of the same major
  *  and any minor (unknown chunk types, event types and trailing fields are skipped). */
 #define FP_TAKE_VERSION_MAJOR 1
-#define FP_TAKE_VERSION_MINOR 3   /* 1.1: a frame's channels are every rig channel as posed;
+#define FP_TAKE_VERSION_MINOR 4   /* 1.1: a frame's channels are every rig channel as posed;
                                      1.2: header keys soundtrack and timecode_source, channel
-                                     events (type 6); 1.3: header key performers */
+                                     events (type 6); 1.3: header key performers; 1.4: header
+                                     key face */
 #define FP_TAKE_EXTENSION ".fptake"
 #define FP_TAKE_SLATE_MAX 64      /* bytes of a slate name, NUL included */
 #define FP_TAKE_DEFAULT_SLATE "scene1" /* a slate none was given: "scene1 take 2", scene1_T002.fptake */
@@ -172,6 +173,10 @@ typedef struct fp_take_header {
                                        session's order (the first first); written where count
                                        > 0 */
     size_t performer_count;
+    /* 1.4 (absent from earlier takes, and where the face looks along +z with +y up: zeros) */
+    double face_up[3], face_facing[3]; /* the face's axes in the mesh (fp_session_face_axes,
+                                       from a placed rig or --up, --facing): a player's session
+                                       takes them, so its camera sees the face's front */
 } fp_take_header;
 
 /** zlib crc32 of vertex positions (n x 3 floats) as little-endian bytes. */

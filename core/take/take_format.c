@@ -517,6 +517,11 @@ char *take_header_to_json(const fp_take_header *h)
             cJSON_AddItemToArray(ps, e);
         }
     }
+    if (h->face_up[0] || h->face_up[1] || h->face_up[2]) { /* 1.4 */
+        cJSON *f = cJSON_AddObjectToObject(o, "face");
+        cJSON_AddItemToObject(f, "up", darray(h->face_up, 3));
+        cJSON_AddItemToObject(f, "facing", darray(h->face_facing, 3));
+    }
     add_number(o, "radius", h->radius);
     add_str(o, "description", h->description ? h->description : "");
     cJSON_AddNumberToObject(o, "rating", h->rating);
@@ -701,6 +706,10 @@ static int fill_header(const cJSON *o, fp_take_header *h, strstore *st, char *ms
         p->name = keep(st, name);
         h->performer_count++;
     }
+    const cJSON *face = cJSON_GetObjectItemCaseSensitive(o, "face"); /* 1.4 */
+    if (face && !(cJSON_IsObject(face) && jdarray(face, "up", h->face_up, 3) &&
+                  jdarray(face, "facing", h->face_facing, 3)))
+        return fp_errorf(msg, msglen, -EBADMSG, "header: invalid \"face\" (up and facing, 3 numbers each)");
     if (!jnum(o, "radius", &h->radius) || h->radius < 0)
         return fp_errorf(msg, msglen, -EBADMSG, "header: missing or invalid \"radius\"");
     h->description = keep(st, jstr(o, "description"));

@@ -16,7 +16,8 @@
 #     within 0.01 mm; 1000 mm per unit);
 #  4. export --format png-seq (under Xvfb, where the viewer is built) shows the Z-up copy from
 #     the face's front, as it shows the face itself: the pictures of the same frame of the two
-#     takes differ by under 2 of 255 a pixel on average (before: seen from above the crown).
+#     takes differ by under 2 of 255 a pixel on average (before: seen from above the crown);
+#     so does a take with --rig none --up +z --facing -y (the take's header key face, 1.4).
 # Usage: test_turned_face.sh BUILD_DIR. Exit 77 (skipped) without python3 or the data.
 # SPDX-License-Identifier: GPL-3.0-or-later
 set -u
@@ -77,8 +78,11 @@ for name in metres zup turned; do
         "$m" "$m0" "$x" "$x0" || { echo "FAIL: $name moves otherwise than the face"; exit 1; }
 done
 
-png() { # MESH NAME: frame 100 of a take of the grab on MESH, rendered into $tmp/NAME.png.d
-    "$build/bin/facepuppet" run --plugin-dir "$build/lib/facepuppet" --mesh "$1" \
+png() { # MESH NAME [OPTIONS...]: frame 100 of a take of the grab on MESH, rendered into $tmp/NAME.png.d
+    local mesh=$1 name=$2
+    shift 2
+    set -- "$mesh" "$name" "$@"
+    "$build/bin/facepuppet" run --plugin-dir "$build/lib/facepuppet" --mesh "$1" "${@:3}" \
         --input "replay:$grab,fast=1" --take-dir "$tmp/$2.takes" --out "$tmp/$2.t.obj" --force \
         >/dev/null 2>&1 || { echo "FAIL: the take on $2"; exit 1; }
     LIBGL_ALWAYS_SOFTWARE=1 xvfb-run -a -s "-screen 0 1280x720x24" "$build/bin/facepuppet" export \
@@ -88,7 +92,11 @@ png() { # MESH NAME: frame 100 of a take of the grab on MESH, rendered into $tmp
 if "$build/bin/facepuppet" live --help >/dev/null 2>&1 && command -v xvfb-run >/dev/null; then
     png "$face" face
     png "$tmp/zup.obj" zup
-    python3 - "$(ls "$tmp"/face.png.d/*.png)" "$(ls "$tmp"/zup.png.d/*.png)" <<'EOF' ||
+    png "$face" face_norig --rig none
+    png "$tmp/zup.obj" zup_norig --rig none --up +z --facing -y
+    for pair in "face zup" "face_norig zup_norig"; do
+    set -- $pair
+    python3 - "$(ls "$tmp/$1.png.d"/*.png)" "$(ls "$tmp/$2.png.d"/*.png)" <<'EOF' ||
 import struct, sys, zlib
 def pixels(path):  # 8-bit RGB or RGBA, every PNG filter undone
     b = open(path, 'rb').read()
@@ -119,10 +127,11 @@ def pixels(path):  # 8-bit RGB or RGBA, every PNG filter undone
     return b''.join(out)
 a, b = pixels(sys.argv[1]), pixels(sys.argv[2])
 diff = sum(abs(x - y) for x, y in zip(a, b)) / len(a)
-print(f"png-seq: the Z-up copy's frame 100 differs from the face's by {diff:.2f} of 255 a pixel")
+print(f"png-seq: {sys.argv[2].split('/')[-2]}'s frame 100 differs from the face's by {diff:.2f} of 255 a pixel")
 assert len(set(a)) > 20 and diff < 2, diff
 EOF
-        { echo "FAIL: the Z-up copy is not seen as the face is"; exit 1; }
+        { echo "FAIL: the Z-up copy ($2) is not seen as the face is"; exit 1; }
+    done
 else
     echo "SKIP (png-seq only): no viewer in this build or no xvfb-run"
 fi
