@@ -13,7 +13,7 @@
 #     0.001 mm is test_rig's test_placement);
 #  3. calibrate --mode hold on the Z-up copy (in metres) writes the face's calibration turned
 #     and scaled with it (rotation 90 degrees about x, offset 0.01 (x, -z, y) of the face's,
-#     within 0.01 mm; 1000 mm per unit);
+#     within 0.01 mm; 1000 mm per unit), with its rig or with --rig none --up +z --facing -y;
 #  4. export --format png-seq (under Xvfb, where the viewer is built) shows the Z-up copy from
 #     the face's front, as it shows the face itself: the pictures of the same frame of the two
 #     takes differ by under 2 of 255 a pixel on average (before: seen from above the crown);
@@ -157,13 +157,17 @@ for bad in "--up +z" "--up +z --facing +z" "--up w --facing -y"; do
     [ $rc -eq 64 ] || { cat "$tmp/bad.err"; echo "FAIL: '$bad' exited $rc, want 64"; exit 1; }
 done
 
-for name in face zup; do
+for name in face zup face_norig zup_norig; do
     mesh=$face
-    [ $name = zup ] && mesh=$tmp/zup.obj
-    "$build/bin/facepuppet" calibrate --mesh "$mesh" --input "replay:$data/hands/leap-motion/Waiting-110fps_joints_mm.csv" \
+    opts=()
+    case $name in zup*) mesh=$tmp/zup.obj ;; esac
+    case $name in face_norig) opts=(--rig none) ;; zup_norig) opts=(--rig none --up +z --facing -y) ;; esac
+    "$build/bin/facepuppet" calibrate --mesh "$mesh" "${opts[@]}" --input "replay:$data/hands/leap-motion/Waiting-110fps_joints_mm.csv" \
         --out "$tmp/$name.cal.json" >"$tmp/cal.out" 2>&1 || { cat "$tmp/cal.out"; echo "FAIL: calibrate on $name"; exit 1; }
 done
-python3 - "$tmp/face.cal.json" "$tmp/zup.cal.json" <<'EOF' || { echo "FAIL: the Z-up copy's calibration is not the face's turned"; exit 1; }
+for pair in "face zup" "face_norig zup_norig"; do
+set -- $pair
+python3 - "$tmp/$1.cal.json" "$tmp/$2.cal.json" <<'EOF' || { echo "FAIL: the Z-up copy's calibration ($2) is not the face's turned"; exit 1; }
 import json, math, sys
 a, b = (json.load(open(p)) for p in sys.argv[1:])
 (ax, ay, az), (bx, by, bz) = a["offset"], b["offset"]
@@ -174,6 +178,7 @@ assert max(abs(bx - s * ax), abs(by + s * az), abs(bz - s * ay)) < 1e-5, (a, b)
 assert abs(b["mm_per_unit"] / a["mm_per_unit"] / 100 - 1) < 1e-4, (a, b)
 assert abs(q[0] - h) < 1e-4 and abs(q[1] - h) < 1e-4 and abs(q[2]) < 1e-4 and abs(q[3]) < 1e-4, q
 EOF
+done
 
 for name in metres zup; do
     "$build/bin/facepuppet" pose --mesh "$tmp/$name.obj" --set jaw.open=0.6 --out "$tmp/$name.posed.obj" \

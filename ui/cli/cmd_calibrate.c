@@ -1,6 +1,8 @@
 /* facepuppet calibrate: a calibration file from a short recording (docs/calibration.md). */
 #define _GNU_SOURCE
 #include "app_util.h"
+#include "fp_vec.h"
+#include "session_opts.h"
 #include "command.h"
 #include "fp_calib_file.h"
 #include "fp_calib_fit.h"
@@ -22,7 +24,8 @@ static void usage(FILE *f)
     fprintf(f,
         "usage: facepuppet calibrate --mesh FILE --input SPEC --out FILE.json\n"
         "                            [--mode hold|touch] [--mm-per-unit X] [--duration S]\n"
-        "                            [--rig FILE] [--plugin-dir DIR] [--force]\n\n"
+        "                            [--rig FILE] [--up AXIS --facing AXIS] [--plugin-dir DIR]\n"
+        "                            [--force]\n\n"
         "Make a calibration file for `run --calibration` / `live --calibration` from a short\n"
         "recording of the performer's hands (a tracker's joint positions):\n"
         "  hold   (default) hold both hands where the face is, palms to the face, for a few\n"
@@ -42,6 +45,8 @@ static void usage(FILE *f)
         "      --mode hold|touch  see above (default hold)\n"
         "      --mm-per-unit X    the mesh's unit, mm (hold; default: detected from the head)\n"
         "      --rig FILE         the rig whose landmarks touch uses (default: found by mesh)\n"
+        "      --up AXIS, --facing AXIS  hold: the face's up and the axis it looks along\n"
+        "                         (+x, -x, +y, -y, +z, -z; default: the rig's, else +y, +z)\n"
         "  -d, --duration S       stop reading after S seconds\n"
         "  -P, --plugin-dir DIR   more plugin folders\n"
         "  -h, --help             this text\n\n"
@@ -130,6 +135,7 @@ typedef struct calibrate_args {
     const char *dirs[8];
     size_t ndirs;
     double mm_per_unit, duration;
+    float up[3], facing[3];        /* --up, --facing (zeros: not given) */
     char demo[4096];               /* the demo mesh's path, when --mesh is not given */
 } calibrate_args;
 
@@ -142,6 +148,7 @@ static int calibrate_parse(int argc, char **argv, calibrate_args *a)
         {"mm-per-unit", required_argument, 0, 'u'}, {"duration", required_argument, 0, 'd'},
         {"rig", required_argument, 0, 'r'},      {"plugin-dir", required_argument, 0, 'P'},
         {"help", no_argument, 0, 'h'},           {"force", no_argument, 0, 'F'},
+        {"up", required_argument, 0, 'U'},       {"facing", required_argument, 0, 'A'},
         {0, 0, 0, 0}};
     const char *mode = "hold";
     optind = 1;
@@ -176,6 +183,14 @@ static int calibrate_parse(int argc, char **argv, calibrate_args *a)
             }
             break;
         case 'P': if (a->ndirs < 8) a->dirs[a->ndirs++] = optarg; break;
+        case 'U':
+        case 'A':
+            if (!fp_session_opts_axis(optarg, c == 'U' ? a->up : a->facing)) {
+                fprintf(stderr, "facepuppet calibrate: --%s must be +x, -x, +y, -y, +z or -z, got '%s'\n",
+                        c == 'U' ? "up" : "facing", optarg);
+                return FP_EXIT_USAGE;
+            }
+            break;
         case 'h': usage(stdout); return FP_EXIT_OK;
         default: usage(stderr); return FP_EXIT_USAGE;
         }
@@ -189,6 +204,12 @@ static int calibrate_parse(int argc, char **argv, calibrate_args *a)
         fprintf(stderr, "facepuppet calibrate: %s\n\n", !a->input ? "--input SPEC is required"
                         : !a->out ? "--out FILE is required" : "unexpected argument (see below)");
         usage(stderr);
+        return FP_EXIT_USAGE;
+    }
+    bool gu = a->up[0] != 0 || a->up[1] != 0 || a->up[2] != 0, gf = a->facing[0] != 0 || a->facing[1] != 0 || a->facing[2] != 0;
+    if (gu != gf || (gu && a->up[0] * a->facing[0] + a->up[1] * a->facing[1] + a->up[2] * a->facing[2] != 0)) {
+        fprintf(stderr, "facepuppet calibrate: give both --up and --facing, two axes at a right angle "
+                "(e.g. --up +z --facing -y)\n");
         return FP_EXIT_USAGE;
     }
     int oc = fp_app_check_new_output("facepuppet calibrate", "--out", a->out, a->force);
@@ -292,12 +313,21 @@ static int fit_and_save(const calibrate_args *a, const fp_mesh *m, const fp_head
         /* a face turned in its mesh (its rig placed on a turned copy): held in front of the
          * face's own axes, the file holding the turn (fp_calibration.face, flattened) */
         double q[4] = {1, 0, 0, 0};
-        if (given_rig) fp_rig_face_rotation(given_rig, q);
+        if (a->up[0] != 0 || a->up[1] != 0 || a->up[2] != 0) { /* --up, --facing */
+            const double u[3] = {a->up[0], a->up[1], a->up[2]}, f[3] = {a->facing[0], a->facing[1], a->facing[2]};
+            double l[3];
+            fp_cross3(u, f, l);
+            fp_quat_from_axes(l, u, f, q);
+        } else if (given_rig) {
+            fp_rig_face_rotation(given_rig, q);
+        }
         float *turned = q[0] < cos(0.25 * M_PI / 180) ? malloc(m->vertex_count * 3 * sizeof *turned) : NULL;
         fp_head th;
         if (turned && !fp_head_detect_turned(m->positions, m->vertex_count, q, turned, &th)) {
-            th.mm_per_unit = head->mm_per_unit;
-            memcpy(th.how, head->how, sizeof th.how);
+            if (a->mm_per_unit > 0 || given_rig) { /* a given unit; else the face frame's detection */
+                th.mm_per_unit = head->mm_per_unit;
+                memcpy(th.how, head->how, sizeof th.how);
+            }
             rc = fp_calib_fit_hold(smp, n, turned, m->vertex_count, &th, &c, err, sizeof err);
             memcpy(c.face, q, sizeof c.face);
         } else {
@@ -317,7 +347,8 @@ static int fit_and_save(const calibrate_args *a, const fp_mesh *m, const fp_head
                  touched[1][1], touched[1][2], touched[2][0], touched[2][1], touched[2][2], rms / c.scale);
     else
         snprintf(comment, sizeof comment, "facepuppet calibrate --mode hold: %zu samples; "
-                 "%.4g mm per mesh unit, %s", n, head->mm_per_unit, head->how);
+                 "%.4g mm per mesh unit, %s", n, 1.0 / c.scale, c.face[0] || c.face[1] || c.face[2] || c.face[3]
+                 ? "detected in the face's frame" : head->how);
     rc = fp_calibration_save(a->out, &c, comment, err, sizeof err);
     if (rc) {
         fprintf(stderr, "facepuppet calibrate: %s\n", err);

@@ -108,8 +108,7 @@ static bool number(const char *arg, double lo, double hi, double *out)
     return true;
 }
 
-/* +x, -x, +y, -y, +z, -z (or x, y, z) into a unit axis */
-static bool axis(const char *arg, float out[3])
+bool fp_session_opts_axis(const char *arg, float out[3])
 {
     int sign = 1;
     if (*arg == '+' || *arg == '-') sign = *arg++ == '-' ? -1 : 1;
@@ -185,9 +184,9 @@ int fp_session_opts_parse(fp_session_opts *o, int c, const char *arg, const char
         return number(arg, 0.999, 60001, &so->isolate_deadline_ms) ? 1
                : bad(cmd, "--isolate-deadline must be 1 to 60000 ms", arg);
     case OPT_UP:
-        return axis(arg, so->face_up) ? 1 : bad(cmd, "--up must be +x, -x, +y, -y, +z or -z", arg);
+        return fp_session_opts_axis(arg, so->face_up) ? 1 : bad(cmd, "--up must be +x, -x, +y, -y, +z or -z", arg);
     case OPT_FACING:
-        return axis(arg, so->face_facing) ? 1 : bad(cmd, "--facing must be +x, -x, +y, -y, +z or -z", arg);
+        return fp_session_opts_axis(arg, so->face_facing) ? 1 : bad(cmd, "--facing must be +x, -x, +y, -y, +z or -z", arg);
     case 'q': o->quiet = true; return 1;
     case OPT_CONTROL: o->control = arg; return 1;
     case OPT_STREAM: o->stream = arg; return 1;

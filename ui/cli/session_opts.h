@@ -44,6 +44,10 @@ size_t fp_session_opts_longopts(struct option *out);
  *  -ERANGE) for --calibration (the message, prefixed "facepuppet CMD: ", is on stderr). */
 int fp_session_opts_parse(fp_session_opts *o, int c, const char *arg, const char *cmd);
 
+/** --up and --facing's AXIS: +x, -x, +y, -y, +z, -z (or x, y, z) into a unit axis; false for
+ *  anything else (out untouched). */
+bool fp_session_opts_axis(const char *arg, float out[3]);
+
 /** Print the shared options' help lines (one table for both commands). */
 void fp_session_opts_help(FILE *f);
 
