@@ -63,10 +63,12 @@ static int attach_rig(fp_session *s, const fp_session_options *opt, char *err, s
     return 0;
 }
 
-/* The face's frame (session_internal.h): a rig whose face axes are turned from +x, +y, +z by
- * more than half a degree (placed on a turned copy of its mesh, fp_rig_placement) gives the
- * rotation, the loaded shape turned back into it and the head found there, where the hands
- * are fitted as for a face that looks along +z (fp_calibration.face). 0 or -ENOMEM. */
+/* The face's frame (session_internal.h): the options' axes (face_up, face_facing), else a rig
+ * whose face axes are turned (placed on a turned copy of its mesh, fp_rig_placement); turned
+ * from +x, +y, +z by more than half a degree, they give the rotation, the loaded shape turned
+ * back into it and the head found there (its unit too, unless one is given), where the hands
+ * are fitted as for a face that looks along +z (fp_calibration.face). 0, -EINVAL (one axis
+ * given, or two not at a right angle: err says) or -ENOMEM. */
 static int face_frame(fp_session *s, const fp_session_options *opt, char *err, size_t errlen)
 {
     double q[4];
