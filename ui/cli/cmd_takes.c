@@ -286,6 +286,9 @@ int fp_app_take_info(const char *path)
            (unsigned long long)h->mesh_vertices, h->mesh_crc32,
            h->mesh_crc_of ? fp_text_clean(h->mesh_crc_of, b, sizeof b) : "?");
     printf("  rig          %s\n", h->rig_path ? fp_text_clean(h->rig_path, a, sizeof a) : "-");
+    if (h->face_up[0] || h->face_up[1] || h->face_up[2]) /* (1.4: a turned face) */
+        printf("  face         up (%.2f, %.2f, %.2f), looking along (%.2f, %.2f, %.2f)\n", h->face_up[0],
+               h->face_up[1], h->face_up[2], h->face_facing[0], h->face_facing[1], h->face_facing[2]);
     printf("  mapping      %s", h->mapping ? fp_text_clean(h->mapping, a, sizeof a) : "-");
     for (size_t i = 0; i < h->mapping_key_count; i++)
         printf(",%s=%s", fp_text_clean(h->mapping_keys[i].key, a, sizeof a),
