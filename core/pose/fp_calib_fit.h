@@ -87,14 +87,8 @@ int fp_calib_find_touches(const fp_calib_sample *samples, size_t n, int finger,
                           double touched[FP_CALIB_LANDMARKS][3], int64_t t_ns[FP_CALIB_LANDMARKS][2],
                           char *err, size_t errlen);
 
-/** The similarity b ~ s R a + t over n >= 3 point pairs (least squares; Umeyama/Horn, see
- *  the top): *s, q (unit quaternion w x y z), t. Returns 0 or -EDOM (collinear or
- *  coincident points). */
-int fp_calib_similarity(const double (*a)[3], const double (*b)[3], size_t n, double *s,
-                        double q[4], double t[3]);
-
 /** Touch mode: fp_calib_find_touches (index fingertip) matched to landmarks[3] (mesh units,
- *  chin, nose tip, forehead), then fp_calib_similarity: scale s, rotation, offset t. The
+ *  chin, nose tip, forehead), then fp_similarity_fit (fp_similarity.h): scale s, rotation, offset t. The
  *  touch points in mm go to touched (may be NULL); rms the fit's residual, mesh units (may
  *  be NULL). -EDOM also for touches under FP_CALIB_MIN_APART_MM apart or a residual over
  *  FP_CALIB_MAX_RESIDUAL_MM. */

@@ -229,22 +229,22 @@ static int parse_axes(const ctx *c, fp_rig *r, const cJSON *root)
     if (rc) return rc;
     static const char *const f[] = {"up", "forward", "left", NULL};
     if ((rc = check_fields(c, a, "axes", f))) return rc;
-    if ((rc = get_vec3(c, a, "axes", "up", r->up)) || (rc = get_vec3(c, a, "axes", "forward", r->fwd)) ||
-        (rc = get_vec3(c, a, "axes", "left", r->left)))
+    if ((rc = get_vec3(c, a, "axes", "up", r->geom.up)) || (rc = get_vec3(c, a, "axes", "forward", r->geom.fwd)) ||
+        (rc = get_vec3(c, a, "axes", "left", r->geom.left)))
         return rc;
-    double *ax[3] = {r->up, r->fwd, r->left};
+    double *ax[3] = {r->geom.up, r->geom.fwd, r->geom.left};
     const char *nm[3] = {"axes.up", "axes.forward", "axes.left"};
     for (int i = 0; i < 3; i++) {
         double l = sqrt(fp_dot3(ax[i], ax[i]));
         if (fabs(l - 1) > 1e-3) return bad(c, nm[i], "not a unit vector (length %g)", l);
         normalize(ax[i]);
     }
-    if (fabs(fp_dot3(r->up, r->fwd)) > 1e-3 || fabs(fp_dot3(r->up, r->left)) > 1e-3 ||
-        fabs(fp_dot3(r->fwd, r->left)) > 1e-3)
+    if (fabs(fp_dot3(r->geom.up, r->geom.fwd)) > 1e-3 || fabs(fp_dot3(r->geom.up, r->geom.left)) > 1e-3 ||
+        fabs(fp_dot3(r->geom.fwd, r->geom.left)) > 1e-3)
         return bad(c, "axes", "up, forward and left are not orthogonal");
     double x[3];
-    fp_cross3(r->up, r->fwd, x);
-    if (fp_dot3(x, r->left) < 0.999) return bad(c, "axes.left", "must equal up x forward (a right-handed frame)");
+    fp_cross3(r->geom.up, r->geom.fwd, x);
+    if (fp_dot3(x, r->geom.left) < 0.999) return bad(c, "axes.left", "must equal up x forward (a right-handed frame)");
     return 0;
 }
 
@@ -507,17 +507,17 @@ static int parse_jaw(const ctx *c, fp_rig *r, const cJSON *root)
     if ((rc = check_fields(c, jaw, "jaw", fj))) return rc;
     if ((rc = get_object(c, jaw, "jaw", "hinge", true, &h, p, sizeof p))) return rc;
     static const char *const fh[] = {"right", "left", NULL};
-    if ((rc = check_fields(c, h, "jaw.hinge", fh)) || (rc = get_vec3(c, h, "jaw.hinge", "right", r->hinge_r)) ||
-        (rc = get_vec3(c, h, "jaw.hinge", "left", r->hinge_l)))
+    if ((rc = check_fields(c, h, "jaw.hinge", fh)) || (rc = get_vec3(c, h, "jaw.hinge", "right", r->geom.hinge_r)) ||
+        (rc = get_vec3(c, h, "jaw.hinge", "left", r->geom.hinge_l)))
         return rc;
-    double ax[3] = {r->hinge_l[0] - r->hinge_r[0], r->hinge_l[1] - r->hinge_r[1], r->hinge_l[2] - r->hinge_r[2]};
+    double ax[3] = {r->geom.hinge_l[0] - r->geom.hinge_r[0], r->geom.hinge_l[1] - r->geom.hinge_r[1], r->geom.hinge_l[2] - r->geom.hinge_r[2]};
     double len = sqrt(fp_dot3(ax, ax));
     if (!(len > 0)) return bad(c, "jaw.hinge", "the two joints coincide");
     normalize(ax);
-    if (fp_dot3(ax, r->left) < cos(30 * M_PI / 180))
+    if (fp_dot3(ax, r->geom.left) < cos(30 * M_PI / 180))
         return bad(c, "jaw.hinge", "the axis from right to left joint is %.0f degrees off the face's left axis (at most 30)",
-                   acos(fmax(-1, fmin(1, fp_dot3(ax, r->left)))) * 180 / M_PI);
-    memcpy(r->axis, ax, sizeof ax);
+                   acos(fmax(-1, fmin(1, fp_dot3(ax, r->geom.left)))) * 180 / M_PI);
+    memcpy(r->geom.axis, ax, sizeof ax);
     if ((rc = get_number(c, jaw, "jaw", "open_degrees", true, 1, 60, &r->open_deg))) return rc;
     const cJSON *g;
     if ((rc = get_member(c, jaw, "jaw", "glide", false, &g, p, sizeof p))) return rc;
@@ -531,13 +531,13 @@ static int parse_jaw(const ctx *c, fp_rig *r, const cJSON *root)
             if (!cJSON_IsNumber(e) || !isfinite(e->valuedouble)) return bad(c, q, "expected a number, got %s", type_name(e));
             /* a jaw slides a few mm; half the joints' distance apart is already absurd (1e308
              * made every jaw vertex infinite at the first pose) */
-            const double span = sqrt((r->hinge_l[0] - r->hinge_r[0]) * (r->hinge_l[0] - r->hinge_r[0]) +
-                                     (r->hinge_l[1] - r->hinge_r[1]) * (r->hinge_l[1] - r->hinge_r[1]) +
-                                     (r->hinge_l[2] - r->hinge_r[2]) * (r->hinge_l[2] - r->hinge_r[2]));
+            const double span = sqrt((r->geom.hinge_l[0] - r->geom.hinge_r[0]) * (r->geom.hinge_l[0] - r->geom.hinge_r[0]) +
+                                     (r->geom.hinge_l[1] - r->geom.hinge_r[1]) * (r->geom.hinge_l[1] - r->geom.hinge_r[1]) +
+                                     (r->geom.hinge_l[2] - r->geom.hinge_r[2]) * (r->geom.hinge_l[2] - r->geom.hinge_r[2]));
             if (fabs(e->valuedouble) > 0.5 * span)
                 return bad(c, q, "%g mesh units is more than half the joints' distance apart (%g)",
                            e->valuedouble, span);
-            r->glide[k] = e->valuedouble;
+            r->geom.glide[k] = e->valuedouble;
         }
     }
     /* where the condyle starts to slide (rigs/README.md "Jaw and falloff"); absent: 0 (the
@@ -559,27 +559,27 @@ static int parse_jaw(const ctx *c, fp_rig *r, const cJSON *root)
     for (const cJSON *e = ml->child; e; e = e->next, k++) {
         char q[64];
         snprintf(q, sizeof q, "jaw.falloff.mouth_line[%d]", k);
-        if ((rc = vec3_of(c, e, q, r->mouth[k]))) return rc;
+        if ((rc = vec3_of(c, e, q, r->geom.mouth[k]))) return rc;
         if (k > 0) {
-            double d[3] = {r->mouth[k][0] - r->mouth[k - 1][0], r->mouth[k][1] - r->mouth[k - 1][1],
-                           r->mouth[k][2] - r->mouth[k - 1][2]};
-            if (fp_dot3(d, r->left) <= 0) return bad(c, q, "the mouth line must run from the right corner to the left (along axes.left)");
+            double d[3] = {r->geom.mouth[k][0] - r->geom.mouth[k - 1][0], r->geom.mouth[k][1] - r->geom.mouth[k - 1][1],
+                           r->geom.mouth[k][2] - r->geom.mouth[k - 1][2]};
+            if (fp_dot3(d, r->geom.left) <= 0) return bad(c, q, "the mouth line must run from the right corner to the left (along axes.left)");
         }
     }
     r->mouth_count = (size_t)k;
     double big = 1e9;
-    if ((rc = get_number(c, fo, "jaw.falloff", "lip_band", true, 0, big, &r->lip_band)) ||
-        (rc = get_number(c, fo, "jaw.falloff", "cheek_band", true, 0, big, &r->cheek_band)) ||
-        (rc = get_number(c, fo, "jaw.falloff", "cheek_distance", true, 0, big, &r->cheek_distance)) ||
-        (rc = get_number(c, fo, "jaw.falloff", "corner_inset", false, 0, big, &r->corner_inset)) ||
-        (rc = get_number(c, fo, "jaw.falloff", "inner_depth", false, 0, big, &r->inner_depth)) ||
-        (rc = get_number(c, fo, "jaw.falloff", "neck_band", true, 0, big, &r->neck_band)) ||
-        (rc = get_number(c, fo, "jaw.falloff", "back_band", true, 0, big, &r->back_band)) ||
-        (rc = get_vec3(c, fo, "jaw.falloff", "menton", r->menton)) ||
-        (rc = get_vec3(c, fo, "jaw.falloff", "gonion", r->gonion)))
+    if ((rc = get_number(c, fo, "jaw.falloff", "lip_band", true, 0, big, &r->geom.lip_band)) ||
+        (rc = get_number(c, fo, "jaw.falloff", "cheek_band", true, 0, big, &r->geom.cheek_band)) ||
+        (rc = get_number(c, fo, "jaw.falloff", "cheek_distance", true, 0, big, &r->geom.cheek_distance)) ||
+        (rc = get_number(c, fo, "jaw.falloff", "corner_inset", false, 0, big, &r->geom.corner_inset)) ||
+        (rc = get_number(c, fo, "jaw.falloff", "inner_depth", false, 0, big, &r->geom.inner_depth)) ||
+        (rc = get_number(c, fo, "jaw.falloff", "neck_band", true, 0, big, &r->geom.neck_band)) ||
+        (rc = get_number(c, fo, "jaw.falloff", "back_band", true, 0, big, &r->geom.back_band)) ||
+        (rc = get_vec3(c, fo, "jaw.falloff", "menton", r->geom.menton)) ||
+        (rc = get_vec3(c, fo, "jaw.falloff", "gonion", r->geom.gonion)))
         return rc;
-    if (!(r->lip_band > 0) || !(r->cheek_band > 0) || !(r->neck_band > 0) || !(r->back_band > 0) ||
-        !(r->cheek_distance > 0))
+    if (!(r->geom.lip_band > 0) || !(r->geom.cheek_band > 0) || !(r->geom.neck_band > 0) || !(r->geom.back_band > 0) ||
+        !(r->geom.cheek_distance > 0))
         return bad(c, "jaw.falloff", "the bands and cheek_distance must be > 0");
     const cJSON *wj;
     if ((rc = get_object(c, jaw, "jaw", "weights", false, &wj, p, sizeof p))) return rc;
@@ -640,7 +640,7 @@ int fp_rig_parse(const char *json, size_t len, const char *name, fp_rig **out, c
     if ((rc = get_string(&c, root, "", "name", true, r->name, sizeof r->name)) ||
         (rc = get_string(&c, root, "", "description", false, desc, sizeof desc)) ||
         (rc = parse_mesh(&c, r, root)) ||
-        (rc = get_number(&c, root, "", "mm_per_unit", true, 1e-6, 1e6, &r->mm_per_unit)) ||
+        (rc = get_number(&c, root, "", "mm_per_unit", true, 1e-6, 1e6, &r->geom.mm_per_unit)) ||
         (rc = parse_axes(&c, r, root)) || (rc = parse_regions(&c, r, root)) ||
         (rc = parse_landmarks(&c, r, root)) || (rc = parse_reference(&c, r, root)) ||
         (rc = parse_channels(&c, r, root)) ||
@@ -651,9 +651,9 @@ int fp_rig_parse(const char *json, size_t len, const char *name, fp_rig **out, c
     if ((rc = get_object(&c, root, "", "mobility", true, &mob, p, sizeof p))) goto done;
     static const char *const fm[] = {"ramp", NULL};
     if ((rc = check_fields(&c, mob, "mobility", fm)) ||
-        (rc = get_number(&c, mob, "mobility", "ramp", true, 1e-9, 1e9, &r->ramp)))
+        (rc = get_number(&c, mob, "mobility", "ramp", true, 1e-9, 1e9, &r->geom.ramp)))
         goto done;
-    fpr_geom_keep(r); /* (what each bind places anew) */
+    r->parsed = r->geom; /* (what each bind places anew) */
 done:
     cJSON_Delete(root);
     if (rc) {
@@ -719,10 +719,10 @@ static double smoothstep(double a, double b, double x)
 static void face_coords(const fp_rig *r, const double p[3], double *x, double *y, double *z)
 {
     double d[3];
-    for (int i = 0; i < 3; i++) d[i] = p[i] - 0.5 * (r->hinge_r[i] + r->hinge_l[i]);
-    *x = fp_dot3(d, r->left);
-    *y = fp_dot3(d, r->up);
-    *z = fp_dot3(d, r->fwd);
+    for (int i = 0; i < 3; i++) d[i] = p[i] - 0.5 * (r->geom.hinge_r[i] + r->geom.hinge_l[i]);
+    *x = fp_dot3(d, r->geom.left);
+    *y = fp_dot3(d, r->geom.up);
+    *z = fp_dot3(d, r->geom.fwd);
 }
 
 /* Signed distance of (z, y) from the line a -> b in the sagittal plane, positive on the side
@@ -763,15 +763,15 @@ static double falloff(const fp_rig *r, const double p[3], const double mouth[][3
     }
     /* the split between the lips widens toward the corners (from corner_inset inside them to
      * cheek_distance beyond) and with the depth behind the lips (the mouth's lining) */
-    double s = smoothstep(-r->corner_inset, r->cheek_distance, e);
-    if (r->inner_depth > 0) s = fmax(s, smoothstep(r->inner_depth, 2 * r->inner_depth, zm - z));
-    double b = r->lip_band + (r->cheek_band - r->lip_band) * s;
+    double s = smoothstep(-r->geom.corner_inset, r->geom.cheek_distance, e);
+    if (r->geom.inner_depth > 0) s = fmax(s, smoothstep(r->geom.inner_depth, 2 * r->geom.inner_depth, zm - z));
+    double b = r->geom.lip_band + (r->geom.cheek_band - r->geom.lip_band) * s;
     double w_mouth = 1 - smoothstep(-b, b, y - ym);
     if (w_mouth == 0) return 0;
     double d_back = side_distance(C, G, M, z, y);  /* behind the ramus */
     double d_below = side_distance(G, M, C, z, y); /* below the mandible's lower border */
-    double w_back = 1 - smoothstep(0, r->back_band, d_back);
-    double w_neck = 1 - smoothstep(0, r->neck_band, d_below);
+    double w_back = 1 - smoothstep(0, r->geom.back_band, d_back);
+    double w_neck = 1 - smoothstep(0, r->geom.neck_band, d_below);
     return w_mouth * w_back * w_neck;
 }
 
@@ -788,9 +788,9 @@ int fp_rig_bind(fp_rig *r, size_t n, const float *pos, char *err, size_t errlen)
             lo[i] = fmin(lo[i], q), hi[i] = fmax(hi[i], q);
         }
     fpr_place(r, pos); /* a moved copy of the rig's mesh: its coordinates carried there */
-    const double *hp[2] = {r->hinge_r, r->hinge_l};
+    const double *hp[2] = {r->geom.hinge_r, r->geom.hinge_l};
     const char *hn[2] = {"jaw.hinge.right", "jaw.hinge.left"};
-    double reach = 60.0 / r->mm_per_unit;
+    double reach = 60.0 / r->geom.mm_per_unit;
     for (int s = 0; s < 2; s++) {
         for (int i = 0; i < 3; i++)
             if (hp[s][i] < lo[i] || hp[s][i] > hi[i])
@@ -803,7 +803,7 @@ int fp_rig_bind(fp_rig *r, size_t n, const float *pos, char *err, size_t errlen)
         }
         if (sqrt(best) > reach)
             return bad(&c, hn[s], "no vertex within 60 mm (nearest %.4g mm): not near the head",
-                       sqrt(best) * r->mm_per_unit);
+                       sqrt(best) * r->geom.mm_per_unit);
     }
     float *w = malloc(n * sizeof *w), *m = malloc(n * sizeof *m), *g = calloc(n, sizeof *g);
     uint32_t *slope_v = malloc(n * sizeof *slope_v);
@@ -816,12 +816,12 @@ int fp_rig_bind(fp_rig *r, size_t n, const float *pos, char *err, size_t errlen)
     /* sagittal-plane points of the jaw outline and the mouth line in face coordinates */
     double mouth[MAX_MOUTH_POINTS][3], C[2] = {0, 0}, G[2], M[2], x, y, z;
     for (size_t k = 0; k < r->mouth_count; k++) {
-        face_coords(r, r->mouth[k], &x, &y, &z);
+        face_coords(r, r->geom.mouth[k], &x, &y, &z);
         mouth[k][0] = x, mouth[k][1] = y, mouth[k][2] = z;
     }
-    face_coords(r, r->gonion, &x, &y, &z);
+    face_coords(r, r->geom.gonion, &x, &y, &z);
     G[0] = z, G[1] = y;
-    face_coords(r, r->menton, &x, &y, &z);
+    face_coords(r, r->geom.menton, &x, &y, &z);
     M[0] = z, M[1] = y;
     for (size_t v = 0; v < n; v++) {
         if (r->kind[v] == FP_RIG_SKULL) w[v] = 0;
@@ -833,7 +833,7 @@ int fp_rig_bind(fp_rig *r, size_t n, const float *pos, char *err, size_t errlen)
     }
     for (size_t k = 0; k < r->weight_count; k++) w[r->weight_v[k]] = r->weight_w[k]; /* jaw.weights */
     /* mobility: smoothstep of the distance to the nearest rigid vertex, through a grid */
-    double cell = r->ramp;
+    double cell = r->geom.ramp;
     long dims[3];
     for (int i = 0; i < 3; i++) {
         double d = floor((hi[i] - lo[i]) / cell) + 1;
@@ -882,10 +882,10 @@ int fp_rig_bind(fp_rig *r, size_t n, const float *pos, char *err, size_t errlen)
                         if (d0 * d0 + d1 * d1 + d2 * d2 < best) best = d0 * d0 + d1 * d1 + d2 * d2, bu = u;
                     }
                 }
-        m[v] = (float)smoothstep(0, r->ramp, sqrt(best));
+        m[v] = (float)smoothstep(0, r->geom.ramp, sqrt(best));
         /* |grad m| = smoothstep'(d) |grad d| = 6 t (1 - t) / ramp (t = d / ramp; |grad d| = 1) */
-        double t = sqrt(best) / r->ramp;
-        g[v] = t > 0 && t < 1 ? (float)(6 * t * (1 - t) / r->ramp) : 0.0f;
+        double t = sqrt(best) / r->geom.ramp;
+        g[v] = t > 0 && t < 1 ? (float)(6 * t * (1 - t) / r->geom.ramp) : 0.0f;
         if (g[v] > 0) { /* grad m points away from the nearest rigid vertex */
             double e = sqrt(best);
             for (int i = 0; i < 3; i++) slope_dir[3 * slope_count + i] = (float)((pos[3 * v + i] - pos[3 * bu + i]) / e);
@@ -1007,14 +1007,14 @@ const char *fp_rig_source(const fp_rig *r) { return r ? r->source : ""; }
 size_t fp_rig_vertex_count(const fp_rig *r) { return r ? r->n : 0; }
 const char *fp_rig_mesh_name(const fp_rig *r) { return r ? r->mesh_name : ""; }
 uint32_t fp_rig_mesh_crc32(const fp_rig *r) { return r ? r->crc : 0; }
-double fp_rig_mm_per_unit(const fp_rig *r) { return r ? r->mm_per_unit : 0; }
+double fp_rig_mm_per_unit(const fp_rig *r) { return r ? r->geom.mm_per_unit : 0; }
 
 void fp_rig_axes(const fp_rig *r, float up[3], float forward[3], float left[3])
 {
     for (int i = 0; i < 3; i++) {
-        if (up) up[i] = (float)r->up[i];
-        if (forward) forward[i] = (float)r->fwd[i];
-        if (left) left[i] = (float)r->left[i];
+        if (up) up[i] = (float)r->geom.up[i];
+        if (forward) forward[i] = (float)r->geom.fwd[i];
+        if (left) left[i] = (float)r->geom.left[i];
     }
 }
 
@@ -1094,11 +1094,11 @@ int fp_rig_channel_values(const fp_rig *r, const char *const *names, const float
 void fp_rig_hinge(const fp_rig *r, float right[3], float left[3], double *open_degrees, double glide[2])
 {
     for (int i = 0; i < 3; i++) {
-        if (right) right[i] = (float)r->hinge_r[i];
-        if (left) left[i] = (float)r->hinge_l[i];
+        if (right) right[i] = (float)r->geom.hinge_r[i];
+        if (left) left[i] = (float)r->geom.hinge_l[i];
     }
     if (open_degrees) *open_degrees = r->open_deg;
-    if (glide) glide[0] = r->glide[0], glide[1] = r->glide[1];
+    if (glide) glide[0] = r->geom.glide[0], glide[1] = r->geom.glide[1];
 }
 
 const float *fp_rig_jaw_weights(const fp_rig *r) { return r ? r->w : NULL; }
@@ -1117,8 +1117,8 @@ size_t fp_rig_describe(const fp_rig *r, size_t n, const float *pos, char *buf, s
     OUT("%s\n  rig        %s (format version %d)\n  mesh       %s, %zu vertices, positions crc32 %08x\n",
         r->source, r->name, FP_RIG_FORMAT_VERSION, r->mesh_name[0] ? r->mesh_name : "(unnamed)", r->n, r->crc);
     OUT("  unit       %g mm per mesh unit\n  axes       up (%g, %g, %g)  forward (%g, %g, %g)  left (%g, %g, %g)\n",
-        r->mm_per_unit, r->up[0], r->up[1], r->up[2], r->fwd[0], r->fwd[1], r->fwd[2], r->left[0], r->left[1],
-        r->left[2]);
+        r->geom.mm_per_unit, r->geom.up[0], r->geom.up[1], r->geom.up[2], r->geom.fwd[0], r->geom.fwd[1], r->geom.fwd[2], r->geom.left[0], r->geom.left[1],
+        r->geom.left[2]);
     size_t tot[3] = {0, 0, 0};
     for (size_t v = 0; v < r->n; v++) tot[r->kind[v]]++;
     OUT("  regions    %zu (skull %zu, jaw %zu, soft %zu vertices)\n", r->region_count, tot[1], tot[2], tot[0]);
@@ -1129,14 +1129,14 @@ size_t fp_rig_describe(const fp_rig *r, size_t n, const float *pos, char *buf, s
     OUT("  landmarks  %zu\n", r->landmark_count);
     for (size_t i = 0; i < r->landmark_count; i++) OUT("    %-22s %u\n", r->landmarks[i].name, r->landmarks[i].vertex);
     OUT("  hinge      right (%g, %g, %g)  left (%g, %g, %g), opens %g degrees at jaw.open = 1, glide %g forward %g down\n",
-        r->hinge_r[0], r->hinge_r[1], r->hinge_r[2], r->hinge_l[0], r->hinge_l[1], r->hinge_l[2], r->open_deg,
-        r->glide[0], r->glide[1]);
+        r->geom.hinge_r[0], r->geom.hinge_r[1], r->geom.hinge_r[2], r->geom.hinge_l[0], r->geom.hinge_l[1], r->geom.hinge_l[2], r->open_deg,
+        r->geom.glide[0], r->geom.glide[1]);
     if (r->glide_start > 0)
         OUT("  glide      starts at jaw.open = %g (a pure rotation before), then linear to jaw.open = 1\n",
             r->glide_start);
     OUT("  falloff    lip band %g, cheek band %g from %g inside the corners to %g beyond, inner depth %g, neck band %g,"
-        " back band %g; mobility ramp %g\n", r->lip_band, r->cheek_band, r->corner_inset, r->cheek_distance,
-        r->inner_depth, r->neck_band, r->back_band, r->ramp);
+        " back band %g; mobility ramp %g\n", r->geom.lip_band, r->geom.cheek_band, r->geom.corner_inset, r->geom.cheek_distance,
+        r->geom.inner_depth, r->geom.neck_band, r->geom.back_band, r->geom.ramp);
     if (r->weight_count) OUT("  weights    %zu soft vertices take their jaw weight from the file (jaw.weights), the rest the falloff\n",
                              r->weight_count);
     OUT("  channels   %zu\n", r->channel_count);

@@ -152,8 +152,7 @@ int fp_rig_unfold_jaw(fp_rig *rig, const float *positions, const uint32_t *tris,
  *  vertices lie elsewhere (a copy moved, turned or scaled: Blender's Z-up, metres instead of
  *  centimetres) first carries the rig's coordinates (axes, hinge, mouth line, menton, gonion)
  *  by the similarity x -> scale R x + shift that fits the landmarks best (least squares:
- *  Horn, "Closed-form solution of absolute orientation using unit quaternions", JOSA A
- *  4(4):629-642, 1987, with his symmetric scale, the ratio of the two sets' RMS spreads),
+ *  Horn's unit quaternion, Umeyama's scale; fp_similarity_fit, as calibrate's touch fit),
  *  scales its lengths (bands, glide, mobility.ramp) and divides mm_per_unit by the scale.
  *  Not placed (the file's coordinates kept, bit for bit) when the fit moves no landmark by
  *  more than FP_RIG_PLACE_SAME of their spread (the rig's own mesh, or another shape of its

@@ -26,18 +26,19 @@ typedef struct landmark {
     double ref[3];              /* where it lies on the rig's own mesh (mesh.landmark_positions) */
 } landmark;
 
-/* The rig's coordinates and lengths as the file gives them (fp_rig_place.c carries a copy of
- * them onto a moved copy of the mesh at each bind) */
+/* The rig's unit, coordinates and lengths (mesh units): as the file gives them, or carried
+ * onto a moved copy of its mesh at each bind (fp_rig_place.c keeps the file's in parsed) */
 typedef struct rig_geom {
     double mm_per_unit;
     double up[3], fwd[3], left[3];
-    double hinge_r[3], hinge_l[3], axis[3];
-    double glide[2];
+    double hinge_r[3], hinge_l[3];
+    double axis[3];             /* unit hinge axis, right -> left */
+    double glide[2];            /* forward, down; mesh units at jaw.open = 1 */
     double mouth[MAX_MOUTH_POINTS][3];
     double lip_band, cheek_band, cheek_distance, corner_inset, inner_depth;
     double menton[3], gonion[3];
     double neck_band, back_band;
-    double ramp;
+    double ramp;                /* mobility ramp, mesh units */
 } rig_geom;
 
 typedef struct channel {
@@ -51,8 +52,7 @@ struct fp_rig {
     char mesh_name[256];
     size_t n;
     uint32_t crc;
-    double mm_per_unit;
-    double up[3], fwd[3], left[3];
+    rig_geom geom;              /* the unit, the face's axes, the jaw's coordinates, lengths */
     size_t region_count;
     region regions[FP_RIG_MAX_REGIONS];
     uint8_t *kind;              /* n */
@@ -62,20 +62,13 @@ struct fp_rig {
     size_t channel_count;
     channel channels[FP_RIG_MAX_CHANNELS];
     long jaw_open;              /* index of jaw.open */
-    /* jaw */
-    double hinge_r[3], hinge_l[3];
+    /* jaw (its coordinates in geom) */
     double open_deg;
-    double glide[2];            /* forward, down; mesh units at jaw.open = 1 */
     double glide_start;         /* jaw.open where the glide begins (default 0) */
     size_t mouth_count;
-    double mouth[MAX_MOUTH_POINTS][3];
-    double lip_band, cheek_band, cheek_distance, corner_inset, inner_depth;
-    double menton[3], gonion[3];
-    double neck_band, back_band;
     size_t weight_count;        /* jaw.weights: soft vertices whose weight the file gives */
     uint32_t *weight_v;         /* their indices, ascending */
     float *weight_w;            /* their weights in [0, 1] */
-    double ramp;                /* mobility ramp, mesh units */
     /* bound */
     float *w;                   /* n jaw weights */
     float *m;                   /* n mobility */
@@ -84,17 +77,15 @@ struct fp_rig {
     float *slope_dir;           /* slope_count x 3: grad m's unit direction at each (away
                                    from its nearest rigid vertex, in the bound shape) */
     size_t slope_count;
-    double axis[3];             /* unit hinge axis, right -> left */
     /* placement (fp_rig_place.c) */
     bool has_ref;               /* every landmark has ref (mesh.landmark_positions given) */
     rig_geom parsed;            /* the file's geometry, kept at the end of fp_rig_parse */
     fp_rig_placement placement; /* the last bind's */
 };
 
-/* fp_rig_place.c: r's geometry back to the file's, then, when the landmarks' vertices in pos
- * (n x 3) lie elsewhere than their ref (a moved, turned or scaled copy of the rig's mesh),
- * carried there by the similarity that fits them best (r->placement says) */
-void fpr_geom_keep(fp_rig *r);
+/* fp_rig_place.c: r's geometry back to the file's (r->parsed), then, when the landmarks'
+ * vertices in pos (n x 3) lie elsewhere than their ref (a moved, turned or scaled copy of the
+ * rig's mesh), carried there by the similarity that fits them best (r->placement says) */
 void fpr_place(fp_rig *r, const float *pos);
 
 #endif

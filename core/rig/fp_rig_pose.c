@@ -48,7 +48,7 @@ int fp_rig_pose_range(const fp_rig *r, const float *base, const float *values, f
     double open = jaw_open_value(r, values);
     double theta = open * r->open_deg * M_PI / 180, slide = fp_rig_glide_fraction(r, open);
     double R1[9];
-    rotation(r->axis, theta, R1);
+    rotation(r->geom.axis, theta, R1);
     for (size_t v = v0; v < v0 + count; v++) {
         double w = r->w[v];
         if (w == 0 || theta == 0) {
@@ -58,14 +58,14 @@ int fp_rig_pose_range(const fp_rig *r, const float *base, const float *values, f
         double Rw[9];
         const double *R = R1;
         if (w != 1) {
-            rotation(r->axis, w * theta, Rw);
+            rotation(r->geom.axis, w * theta, Rw);
             R = Rw;
         }
-        double d[3] = {base[3 * v] - r->hinge_r[0], base[3 * v + 1] - r->hinge_r[1], base[3 * v + 2] - r->hinge_r[2]};
+        double d[3] = {base[3 * v] - r->geom.hinge_r[0], base[3 * v + 1] - r->geom.hinge_r[1], base[3 * v + 2] - r->geom.hinge_r[2]};
         double g = w * slide;
         for (int i = 0; i < 3; i++)
-            out[3 * v + i] = (float)(r->hinge_r[i] + R[3 * i] * d[0] + R[3 * i + 1] * d[1] + R[3 * i + 2] * d[2] +
-                                     g * (r->glide[0] * r->fwd[i] - r->glide[1] * r->up[i]));
+            out[3 * v + i] = (float)(r->geom.hinge_r[i] + R[3 * i] * d[0] + R[3 * i + 1] * d[1] + R[3 * i + 2] * d[2] +
+                                     g * (r->geom.glide[0] * r->geom.fwd[i] - r->geom.glide[1] * r->geom.up[i]));
     }
     return 0;
 }
@@ -93,12 +93,12 @@ int fp_rig_unpose_range(const fp_rig *r, const float *base, const float *posed, 
             continue;
         }
         double R[9], d[3];
-        rotation(r->axis, w * theta, R);
+        rotation(r->geom.axis, w * theta, R);
         double g = w * slide;
         for (int i = 0; i < 3; i++)
-            d[i] = p[i] - r->hinge_r[i] - g * (r->glide[0] * r->fwd[i] - r->glide[1] * r->up[i]);
+            d[i] = p[i] - r->geom.hinge_r[i] - g * (r->geom.glide[0] * r->geom.fwd[i] - r->geom.glide[1] * r->geom.up[i]);
         for (int i = 0; i < 3; i++) /* R^T d */
-            out[3 * v + i] = (float)(r->hinge_r[i] + R[i] * d[0] + R[3 + i] * d[1] + R[6 + i] * d[2]);
+            out[3 * v + i] = (float)(r->geom.hinge_r[i] + R[i] * d[0] + R[3 + i] * d[1] + R[6 + i] * d[2]);
     }
     return 0;
 }
@@ -124,14 +124,14 @@ int fp_rig_apply_mobility_range(const fp_rig *r, const float *posed, const float
 
 double fp_rig_max_finger_displacement(const fp_rig *r)
 {
-    return r ? r->ramp / 3 : 0;
+    return r ? r->geom.ramp / 3 : 0;
 }
 
 const float *fp_rig_mobility_slope(const fp_rig *r) { return r ? r->g : NULL; }
 
 double fp_rig_finger_limit(const fp_rig *r, const float *posed, const float start[3], double radius)
 {
-    if (!r || !posed || !start || !r->g || !(radius > 0)) return r && r->g ? r->ramp / 3 : 0;
+    if (!r || !posed || !start || !r->g || !(radius > 0)) return r && r->g ? r->geom.ramp / 3 : 0;
     double gmax = 0, r2 = radius * radius;
     for (size_t k = 0; k < r->slope_count; k++) {
         uint32_t v = r->slope_v[k];
@@ -182,7 +182,7 @@ static void capsule_of(const float start[3], const float end[3], double d[3], do
 double fp_rig_finger_limit_toward(const fp_rig *r, const float *posed, const float start[3], const float end[3],
                                   double radius)
 {
-    if (!r || !posed || !start || !end || !r->g || !(radius > 0)) return r && r->g ? r->ramp / 3 : 0;
+    if (!r || !posed || !start || !end || !r->g || !(radius > 0)) return r && r->g ? r->geom.ramp / 3 : 0;
     double d[3], u[3], dd, cmax = 0, r2 = radius * radius;
     capsule_of(start, end, d, u, &dd);
     for (size_t k = 0; k < r->slope_count; k++) {
@@ -403,7 +403,7 @@ void fp_rig_slope_index_update_ranges(fp_rig_slope_index *ix, const float *posed
 double fp_rig_finger_limit_indexed(const fp_rig_slope_index *ix, const float start[3], double radius)
 {
     const fp_rig *r = ix ? ix->rig : NULL;
-    if (!r || !start || !r->g || !(radius > 0)) return r && r->g ? r->ramp / 3 : 0;
+    if (!r || !start || !r->g || !(radius > 0)) return r && r->g ? r->geom.ramp / 3 : 0;
     double gmax = 0, r2 = radius * radius;
     for (size_t b = 0; b < ix->nb; b++) {
         const slope_block *bl = &ix->block[b];
@@ -493,7 +493,7 @@ double fp_rig_finger_limit_toward_indexed(const fp_rig_slope_index *ix, const fl
                                           double radius)
 {
     const fp_rig *r = ix ? ix->rig : NULL;
-    if (!r || !start || !end || !r->g || !(radius > 0)) return r && r->g ? r->ramp / 3 : 0;
+    if (!r || !start || !end || !r->g || !(radius > 0)) return r && r->g ? r->geom.ramp / 3 : 0;
     double cmax = push_scan(ix, start, end, NULL, radius, NULL);
     return cmax > 0 ? FP_RIG_FINGER_MARGIN / cmax : INFINITY;
 }
@@ -599,7 +599,7 @@ int fp_rig_finger_clamp_indexed(const fp_rig_slope_index *ix, const float start[
     if (!r || !r->g) return 0;
     double len = seg_len(start, end);
     if (!(radius > 0)) { /* no support to search: the global bound */
-        double f = len > r->ramp / 3 ? r->ramp / 3 / len : 1;
+        double f = len > r->geom.ramp / 3 ? r->geom.ramp / 3 / len : 1;
         scaled_end(start, end, f, out_end);
         return f == 1 ? 0 : 2;
     }
