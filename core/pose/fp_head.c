@@ -1,6 +1,8 @@
 /* The head in a face mesh and the mesh's unit (fp_head.h says how). */
 #include "fp_head.h"
 
+#include "fp_vec.h"
+
 #include <errno.h>
 #include <math.h>
 #include <stdbool.h>
@@ -123,13 +125,12 @@ bool fp_head_scale_plausible(double diagonal, double mm_per_unit, double *across
 int fp_head_detect_turned(const float *pos, size_t n, const double face[4], float *turned, fp_head *out)
 {
     if (!pos || !face || !turned || !out) return -EINVAL;
-    const double w = face[0], x = -face[1], y = -face[2], z = -face[3]; /* the inverse */
+    const double back[4] = {face[0], -face[1], -face[2], -face[3]}; /* the inverse */
     for (size_t v = 0; v < n; v++) {
         const double p[3] = {pos[3 * v], pos[3 * v + 1], pos[3 * v + 2]};
-        const double tx = 2 * (y * p[2] - z * p[1]), ty = 2 * (z * p[0] - x * p[2]), tz = 2 * (x * p[1] - y * p[0]);
-        turned[3 * v] = (float)(p[0] + w * tx + (y * tz - z * ty));
-        turned[3 * v + 1] = (float)(p[1] + w * ty + (z * tx - x * tz));
-        turned[3 * v + 2] = (float)(p[2] + w * tz + (x * ty - y * tx));
+        double c[3];
+        fp_qrot(back, p, c);
+        for (int i = 0; i < 3; i++) turned[3 * v + i] = (float)c[i];
     }
     return fp_head_detect(turned, n, out);
 }

@@ -5,6 +5,7 @@
 #include "fp_vec.h"
 
 #include <assert.h>
+#include <errno.h>
 #include <math.h>
 #include <string.h>
 
@@ -364,6 +365,21 @@ void fp_pose_to_mesh(const fp_calibration *c, int hand, const float mm[3], float
     }
     for (int i = 0; i < 3; i++)
         out[i] = (float)(c->scale * r[i] + c->offset[i] + (h ? c->hand_offset[hand][i] : 0.0));
+}
+
+bool fp_face_turned(const double q[4])
+{
+    return fabs(q[0]) < cos(0.5 * FP_FACE_TURNED_DEG * 3.14159265358979323846 / 180); /* (w = cos(angle / 2)) */
+}
+
+int fp_face_from_axes(const float up[3], const float facing[3], double q[4])
+{
+    double u[3] = {up[0], up[1], up[2]}, f[3] = {facing[0], facing[1], facing[2]}, l[3];
+    if (fabs(fp_dot3(u, u) - 1) > 1e-3 || fabs(fp_dot3(f, f) - 1) > 1e-3 || fabs(fp_dot3(u, f)) > 1e-3)
+        return -EINVAL;
+    fp_cross3(u, f, l);
+    fp_quat_from_axes(l, u, f, q);
+    return 0;
 }
 
 void fp_calibration_flatten(const fp_calibration *c, fp_calibration *out)

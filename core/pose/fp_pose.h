@@ -57,6 +57,19 @@ typedef struct fp_calibration {
     double face[4];                 /* F: face's frame -> mesh, unit quaternion; all zeros: none */
 } fp_calibration;
 
+/** A face frame turned from +x, +y, +z by more than this (degrees) is one; less is none (the
+ *  face's frame of the session and of calibrate --mode hold). */
+#define FP_FACE_TURNED_DEG 0.5
+
+/** Whether the unit quaternion q turns by more than FP_FACE_TURNED_DEG. Pure; any thread. */
+bool fp_face_turned(const double q[4]);
+
+/** The face frame whose up and facing (the axis the face looks along) in the mesh are given:
+ *  q (unit quaternion w, x, y, z) turns +y into up and +z into facing. Returns 0, or -EINVAL
+ *  where either is not of unit length or they are not at a right angle (within 1e-3; zeros:
+ *  not given). Pure; any thread. */
+int fp_face_from_axes(const float up[3], const float facing[3], double q[4]);
+
 /** c with its face frame folded into the rest (out->face all zeros; the same p_mesh for every
  *  hand and point): what a take or a file records. out may be c. Pure; any thread. */
 void fp_calibration_flatten(const fp_calibration *c, fp_calibration *out);

@@ -65,7 +65,7 @@ static int attach_rig(fp_session *s, const fp_session_options *opt, char *err, s
 
 /* The face's frame (session_internal.h): the options' axes (face_up, face_facing), else a rig
  * whose face axes are turned (placed on a turned copy of its mesh, fp_rig_placement); turned
- * from +x, +y, +z by more than half a degree, they give the rotation, the loaded shape turned
+ * from +x, +y, +z by more than FP_FACE_TURNED_DEG, they give the rotation, the loaded shape turned
  * back into it and the head found there (its unit too, unless one is given), where the hands
  * are fitted as for a face that looks along +z (fp_calibration.face). 0, -EINVAL (one axis
  * given, or two not at a right angle: err says) or -ENOMEM. */
@@ -76,21 +76,17 @@ static int face_frame(fp_session *s, const fp_session_options *opt, char *err, s
     const float *u = opt->face_up, *f = opt->face_facing;
     bool given_u = u[0] != 0 || u[1] != 0 || u[2] != 0, given_f = f[0] != 0 || f[1] != 0 || f[2] != 0;
     if (given_u || given_f) { /* the options' */
-        double up[3] = {u[0], u[1], u[2]}, fwd[3] = {f[0], f[1], f[2]}, left[3];
-        if (!given_u || !given_f || fabs(fp_dot3(up, up) - 1) > 1e-3 || fabs(fp_dot3(fwd, fwd) - 1) > 1e-3 ||
-            fabs(fp_dot3(up, fwd)) > 1e-3) {
+        if (fp_face_from_axes(u, f, q)) {
             snprintf(err, errlen, "the face's axes: give both --up and --facing, two unit axes at a right "
                      "angle (e.g. --up +z --facing -y)");
             return -EINVAL;
         }
-        fp_cross3(up, fwd, left);
-        fp_quat_from_axes(left, up, fwd, q);
     } else if (s->rig.rig) {
         fp_rig_face_rotation(s->rig.rig, q);
     } else {
         return 0;
     }
-    if (q[0] >= cos(0.25 * M_PI / 180)) return 0; /* (turned under half a degree) */
+    if (!fp_face_turned(q)) return 0;
     if (!(s->canon = malloc(s->n * 3 * sizeof *s->canon))) {
         snprintf(err, errlen, "session: out of memory for the face's frame");
         return -ENOMEM;

@@ -241,6 +241,18 @@ static void test_face_frame(void **state)
         }
     unlink(path);
     rmdir(dir);
+    /* a Z-up face's axes give that F; one axis, a long one or parallel ones are refused */
+    const float zu[3] = {0, 0, 1}, ny[3] = {0, -1, 0}, zero[3] = {0, 0, 0}, two[3] = {0, 0, 2};
+    double q[4];
+    assert_int_equal(fp_face_from_axes(zu, ny, q), 0);
+    assert_true(fabs(q[0] - h) < 1e-12 && fabs(q[1] - h) < 1e-12 && fabs(q[2]) < 1e-12 && fabs(q[3]) < 1e-12);
+    assert_true(fp_face_turned(q));
+    assert_int_equal(fp_face_from_axes(zu, zero, q), -EINVAL);
+    assert_int_equal(fp_face_from_axes(two, ny, q), -EINVAL);
+    assert_int_equal(fp_face_from_axes(zu, zu, q), -EINVAL);
+    const double ident[4] = {1, 0, 0, 0}, hair[4] = {cos(0.2 * M_PI / 180), sin(0.2 * M_PI / 180), 0, 0};
+    assert_false(fp_face_turned(ident));
+    assert_false(fp_face_turned(hair)); /* (0.4 degrees) */
 }
 
 /* The calibration file: a round trip, and errors naming the file and the field. */

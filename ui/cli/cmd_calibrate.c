@@ -1,7 +1,6 @@
 /* facepuppet calibrate: a calibration file from a short recording (docs/calibration.md). */
 #define _GNU_SOURCE
 #include "app_util.h"
-#include "fp_vec.h"
 #include "session_opts.h"
 #include "command.h"
 #include "fp_calib_file.h"
@@ -313,15 +312,9 @@ static int fit_and_save(const calibrate_args *a, const fp_mesh *m, const fp_head
         /* a face turned in its mesh (its rig placed on a turned copy): held in front of the
          * face's own axes, the file holding the turn (fp_calibration.face, flattened) */
         double q[4] = {1, 0, 0, 0};
-        if (a->up[0] != 0 || a->up[1] != 0 || a->up[2] != 0) { /* --up, --facing */
-            const double u[3] = {a->up[0], a->up[1], a->up[2]}, f[3] = {a->facing[0], a->facing[1], a->facing[2]};
-            double l[3];
-            fp_cross3(u, f, l);
-            fp_quat_from_axes(l, u, f, q);
-        } else if (given_rig) {
-            fp_rig_face_rotation(given_rig, q);
-        }
-        float *turned = q[0] < cos(0.25 * M_PI / 180) ? malloc(m->vertex_count * 3 * sizeof *turned) : NULL;
+        if (a->up[0] != 0 || a->up[1] != 0 || a->up[2] != 0) fp_face_from_axes(a->up, a->facing, q); /* (checked) */
+        else if (given_rig) fp_rig_face_rotation(given_rig, q);
+        float *turned = fp_face_turned(q) ? malloc(m->vertex_count * 3 * sizeof *turned) : NULL;
         fp_head th;
         if (turned && !fp_head_detect_turned(m->positions, m->vertex_count, q, turned, &th)) {
             if (a->mm_per_unit > 0 || given_rig) { /* a given unit; else the face frame's detection */
