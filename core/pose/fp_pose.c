@@ -367,6 +367,12 @@ void fp_pose_to_mesh(const fp_calibration *c, int hand, const float mm[3], float
         out[i] = (float)(c->scale * r[i] + c->offset[i] + (h ? c->hand_offset[hand][i] : 0.0));
 }
 
+bool fp_calibration_has_face(const fp_calibration *c)
+{
+    double f[4];
+    return face_frame(c, f);
+}
+
 bool fp_face_turned(const double q[4])
 {
     return fabs(q[0]) < cos(0.5 * FP_FACE_TURNED_DEG * 3.14159265358979323846 / 180); /* (w = cos(angle / 2)) */

@@ -70,6 +70,9 @@ bool fp_face_turned(const double q[4]);
  *  not given). Pure; any thread. */
 int fp_face_from_axes(const float up[3], const float facing[3], double q[4]);
 
+/** Whether c has a face frame (face neither all zeros nor the identity). Pure; any thread. */
+bool fp_calibration_has_face(const fp_calibration *c);
+
 /** c with its face frame folded into the rest (out->face all zeros; the same p_mesh for every
  *  hand and point): what a take or a file records. out may be c. Pure; any thread. */
 void fp_calibration_flatten(const fp_calibration *c, fp_calibration *out);

@@ -87,7 +87,7 @@ static int calibrate(fp_session *s, const fp_session_options *opt, size_t p, cha
         s->arrive[p].hovered = held == 1; /* (the hint's words) */
     }
     s->pose[p].calib = c;
-    bool turned = s->canon && memcmp(c.face, s->face, sizeof c.face) == 0; /* (fitted here) */
+    bool turned = fp_calibration_has_face(&c); /* (fitted here in the face's frame) */
     fp_pose_place_gloves(&s->pose[p], turned ? s->canon : s->loaded, s->n, turned ? &s->face_head : &s->head);
     return 0;
 }
@@ -122,8 +122,7 @@ int fp__session_performers_open(fp_session *s, const fp_session_options *opt, ch
 void fp__session_performers_build(fp_session *s, int64_t now_ns)
 {
     for (size_t p = 0; p < s->performers.count; p++) {
-        const double *f = s->pose[p].calib.face; /* (fitted in the face's frame) */
-        bool turned = f[0] != 0 || f[1] != 0 || f[2] != 0 || f[3] != 0;
+        bool turned = fp_calibration_has_face(&s->pose[p].calib); /* (fitted in the face's frame) */
         fp_arrive_step_place(&s->arrive[p], &s->pose[p], s->engaged, turned ? &s->face_head : &s->head,
                              s->touch_radius, &s->log);
         fp_pose_build_at(&s->pose[p], now_ns);

@@ -205,8 +205,10 @@ static int calibrate_parse(int argc, char **argv, calibrate_args *a)
         usage(stderr);
         return FP_EXIT_USAGE;
     }
-    bool gu = a->up[0] != 0 || a->up[1] != 0 || a->up[2] != 0, gf = a->facing[0] != 0 || a->facing[1] != 0 || a->facing[2] != 0;
-    if (gu != gf || (gu && a->up[0] * a->facing[0] + a->up[1] * a->facing[1] + a->up[2] * a->facing[2] != 0)) {
+    double q[4];
+    bool given = a->up[0] != 0 || a->up[1] != 0 || a->up[2] != 0 || a->facing[0] != 0 || a->facing[1] != 0 ||
+                 a->facing[2] != 0;
+    if (given && fp_face_from_axes(a->up, a->facing, q)) {
         fprintf(stderr, "facepuppet calibrate: give both --up and --facing, two axes at a right angle "
                 "(e.g. --up +z --facing -y)\n");
         return FP_EXIT_USAGE;
@@ -303,6 +305,8 @@ static int fit_and_save(const calibrate_args *a, const fp_mesh *m, const fp_head
     int rc;
     fp_calibration c;
     double touched[FP_CALIB_LANDMARKS][3], rms = 0;
+    char how[sizeof head->how]; /* (hold: where the unit came from) */
+    memcpy(how, head->how, sizeof how);
     if (a->touch) {
         float lm[FP_CALIB_LANDMARKS][3];
         landmarks(m, head, given_rig, a->rig_path, a->rig_why, lm);
@@ -323,6 +327,7 @@ static int fit_and_save(const calibrate_args *a, const fp_mesh *m, const fp_head
             }
             rc = fp_calib_fit_hold(smp, n, turned, m->vertex_count, &th, &c, err, sizeof err);
             memcpy(c.face, q, sizeof c.face);
+            snprintf(how, sizeof how, "%s (the face's frame)", th.how);
         } else {
             rc = fp_calib_fit_hold(smp, n, m->positions, m->vertex_count, head, &c, err, sizeof err);
         }
@@ -340,8 +345,7 @@ static int fit_and_save(const calibrate_args *a, const fp_mesh *m, const fp_head
                  touched[1][1], touched[1][2], touched[2][0], touched[2][1], touched[2][2], rms / c.scale);
     else
         snprintf(comment, sizeof comment, "facepuppet calibrate --mode hold: %zu samples; "
-                 "%.4g mm per mesh unit, %s", n, 1.0 / c.scale, c.face[0] || c.face[1] || c.face[2] || c.face[3]
-                 ? "detected in the face's frame" : head->how);
+                 "%.4g mm per mesh unit, %s", n, 1.0 / c.scale, how);
     rc = fp_calibration_save(a->out, &c, comment, err, sizeof err);
     if (rc) {
         fprintf(stderr, "facepuppet calibrate: %s\n", err);
