@@ -26,7 +26,7 @@ typedef struct fp_frame_render_options {
     int width, height;        /* pixels; 0: 1280 x 720 */
     double yaw_deg, pitch_deg;/* about the face's up and left */
     double zoom;              /* 0: 1 */
-    float up[3], forward[3];  /* the face's axes (its rig's, fp_rig_axes), unit and orthogonal;
+    float up[3], forward[3];  /* the face's axes (fp_session_face_axes), unit and orthogonal;
                                  all zeros: +y up, looking along +z */
 } fp_frame_render_options;
 

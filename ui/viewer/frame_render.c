@@ -87,24 +87,19 @@ int fp_frame_renderer_open(const fp_mesh *mesh, const fp_frame_render_options *o
         goto fail;
     }
     /* the camera: the viewer's framing of the loaded shape, turned and zoomed */
-    float lo[3], hi[3], d[3], target[3], c[3];
+    float d[3], target[3];
     face_axes ax;
     bool given = v3_dot(opt->up, opt->up) > 0.5f && v3_dot(opt->forward, opt->forward) > 0.5f;
     face_axes_set(&ax, given ? opt->up : NULL, given ? opt->forward : NULL);
-    face_axes_bounds(&ax, mesh->positions, mesh->vertex_count, lo, hi);
-    v3_sub(hi, lo, d);
-    for (int i = 0; i < 3; i++) c[i] = 0.5f * (lo[i] + hi[i]);
-    face_axes_to_mesh(&ax, c, target);
+    face_axes_frame(&ax, mesh->positions, mesh->vertex_count, target, d);
     const float fovy = 35.f * (float)M_PI / 180.f, aspect = (float)w / (float)h;
     const float half = 0.5f * fmaxf(d[1], d[0] / aspect) * 1.15f;
     const float zoom = opt->zoom > 0 ? (float)opt->zoom : 1.f;
     const float dist = (half / tanf(fovy / 2) + 0.5f * d[2]) / zoom;
     const float size = v3_len(d) > 0 ? v3_len(d) : 1.f;
     const float yaw = (float)(opt->yaw_deg * M_PI / 180), pitch = (float)(opt->pitch_deg * M_PI / 180);
-    const float l[3] = {dist * cosf(pitch) * sinf(yaw), dist * sinf(pitch), dist * cosf(pitch) * cosf(yaw)};
     float eye[3];
-    face_axes_to_mesh(&ax, l, eye);
-    for (int i = 0; i < 3; i++) eye[i] += target[i];
+    face_axes_eye(&ax, target, dist, yaw, pitch, eye);
     m4_look_at(f->view, eye, target, ax.y);
     m4_perspective(f->proj, fovy, aspect, fmaxf(dist - 2 * size, dist * 0.02f), dist + 2 * size);
     *out = f;

@@ -64,7 +64,7 @@ typedef struct camera {
     float yaw, pitch, dist;
     float fovy;
     float scene_size;   /* bounding-box diagonal of the mesh */
-    face_axes axes;     /* yaw and pitch turn about the face's up and left (its rig's axes) */
+    face_axes axes;     /* yaw and pitch turn about the face's up and left (fp_session_face_axes) */
 } camera;
 
 typedef struct viewer {
@@ -185,14 +185,11 @@ static void on_session_log(void *user, int level, const char *source, const char
 static void frame_mesh(viewer *v)
 {
     const fp_mesh *m = fp_session_mesh(v->s);
-    float up[3], fwd[3], lo[3], hi[3], d[3], c[3];
+    float up[3], fwd[3], d[3];
     fp_session_face_axes(v->s, up, fwd); /* a face turned in its mesh: seen from its front */
     face_axes_set(&v->cam.axes, up, fwd);
-    face_axes_bounds(&v->cam.axes, m->positions, m->vertex_count, lo, hi);
-    v3_sub(hi, lo, d);
+    face_axes_frame(&v->cam.axes, m->positions, m->vertex_count, v->cam.target, d);
     float diag = v3_len(d);
-    for (int i = 0; i < 3; i++) c[i] = 0.5f * (lo[i] + hi[i]);
-    face_axes_to_mesh(&v->cam.axes, c, v->cam.target);
     v->cam.yaw = 0;
     v->cam.pitch = 0;
     v->cam.fovy = 35.f * (float)M_PI / 180.f;
@@ -208,11 +205,8 @@ static void frame_mesh(viewer *v)
 static void camera_matrices(const viewer *v, int w, int h, float view[16], float proj[16])
 {
     const camera *c = &v->cam;
-    const float l[3] = {c->dist * cosf(c->pitch) * sinf(c->yaw), c->dist * sinf(c->pitch),
-                        c->dist * cosf(c->pitch) * cosf(c->yaw)};
     float eye[3];
-    face_axes_to_mesh(&c->axes, l, eye);
-    for (int i = 0; i < 3; i++) eye[i] += c->target[i];
+    face_axes_eye(&c->axes, c->target, c->dist, c->yaw, c->pitch, eye);
     m4_look_at(view, eye, c->target, c->axes.y);
     float zn = fmaxf(c->dist - 2 * c->scene_size, c->dist * 0.02f);
     m4_perspective(proj, c->fovy, h > 0 ? (float)w / (float)h : 1.f, zn, c->dist + 2 * c->scene_size);

@@ -85,7 +85,7 @@ static inline void m4_look_at(float m[16], const float eye[3], const float at[3]
 }
 
 /* The face's axes the camera turns about (left, up, forward in mesh coordinates: +x, +y, +z
- * for a face that looks along +z; a rig's fp_rig_axes for a turned one) */
+ * for a face that looks along +z; fp_session_face_axes for a turned one) */
 typedef struct face_axes {
     float x[3], y[3], z[3];
 } face_axes;
@@ -116,6 +116,26 @@ static inline void face_axes_bounds(const face_axes *a, const float *pos, size_t
     }
     if (!n)
         for (int k = 0; k < 3; k++) lo[k] = hi[k] = 0;
+}
+
+/* The n points' box in the face's axes: its centre in mesh coordinates (target) and its
+ * extent along the face's left, up and forward (d): what the camera frames */
+static inline void face_axes_frame(const face_axes *a, const float *pos, size_t n, float target[3], float d[3])
+{
+    float lo[3], hi[3], c[3];
+    face_axes_bounds(a, pos, n, lo, hi);
+    for (int i = 0; i < 3; i++) c[i] = 0.5f * (lo[i] + hi[i]), d[i] = hi[i] - lo[i];
+    face_axes_to_mesh(a, c, target);
+}
+
+/* The camera's eye dist from target, turned by yaw about the face's up and pitch about its
+ * left (radians; 0, 0: in front of the face) */
+static inline void face_axes_eye(const face_axes *a, const float target[3], float dist, float yaw, float pitch,
+                                 float eye[3])
+{
+    const float l[3] = {dist * cosf(pitch) * sinf(yaw), dist * sinf(pitch), dist * cosf(pitch) * cosf(yaw)};
+    face_axes_to_mesh(a, l, eye);
+    for (int i = 0; i < 3; i++) eye[i] += target[i];
 }
 
 #endif
