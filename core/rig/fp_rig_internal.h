@@ -1,6 +1,7 @@
 /*
- * fp_rig_internal.h: the layout of a rig, shared by fp_rig.c (files, validation, binding to a
- * mesh, lookups) and fp_rig_pose.c (the jaw pose, the mobility blend, the finger limit).
+ * fp_rig_internal.h: the layout of a rig, shared by fp_rig_parse.c (files, validation),
+ * fp_rig.c (binding to a mesh, lookups), fp_rig_place.c (a moved copy of its mesh) and
+ * fp_rig_pose.c (the jaw pose, the mobility blend, the finger limit).
  * Private to core/rig: everyone else goes through fp_rig.h.
  */
 #ifndef FP_RIG_INTERNAL_H
@@ -11,6 +12,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <string.h>
 
 #define MAX_MOUTH_POINTS 16
 
@@ -82,6 +84,24 @@ struct fp_rig {
     rig_geom parsed;            /* the file's geometry, kept at the end of fp_rig_parse */
     fp_rig_placement placement; /* the last bind's */
 };
+
+/* An error's context: the file and where its message goes (fp_rig_parse.c, fp_rig.c) */
+typedef struct fpr_ctx {
+    const char *file;
+    char *err;
+    size_t errlen;
+} fpr_ctx;
+
+/* -EBADMSG with "FILE: PATH: message" in c's buffer (PATH: the JSON path, "" the top) */
+int fpr_bad(const fpr_ctx *c, const char *path, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+
+/* the place of landmark `name` in r->landmarks, or r->landmark_count: none */
+static inline size_t fpr_landmark_at(const fp_rig *r, const char *name)
+{
+    size_t k = 0;
+    while (k < r->landmark_count && strcmp(r->landmarks[k].name, name)) k++;
+    return k;
+}
 
 /* fp_rig_place.c: r's geometry back to the file's (r->parsed), then, when the landmarks'
  * vertices in pos (n x 3) lie elsewhere than their ref (a moved, turned or scaled copy of the
