@@ -368,6 +368,12 @@ size_t fp_contact_differs(const fp_contact *c, const uint32_t **verts)
     return c && c->tk ? c->tk->ndp : 0;
 }
 
+size_t fp_contact_moved(const fp_contact *c, const uint32_t **verts)
+{
+    *verts = c && c->tk ? c->tk->mv : NULL;
+    return c && c->tk ? c->tk->nmv : 0;
+}
+
 void fp_contact_set_prewarm(fp_contact *c, size_t max_tris)
 {
     if (c) c->prewarm = max_tris;

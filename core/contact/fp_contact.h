@@ -459,6 +459,15 @@ const float *fp_contact_shape(const fp_contact *c);
  *  copies these vertices only. */
 size_t fp_contact_differs(const fp_contact *c, const uint32_t **verts);
 
+/** The vertices the last fp_contact_step (or fp_contact_reference) found moved: where its
+ *  candidate differed bitwise from P as it was before the call (indices < n, no repeats, in
+ *  no order; the step's P differs from the earlier P at these only). *verts owned by c, valid
+ *  until its next call. Returns their number (0, *verts NULL, before the first
+ *  fp_contact_reference and for c NULL). No errors. Threads: as every call on c. So a
+ *  caller whose buffer held the candidate learns where the shape it shows may differ from
+ *  that buffer (a scale-back's vertices) without comparing the two. */
+size_t fp_contact_moved(const fp_contact *c, const uint32_t **verts);
+
 /** The triangle-triangle test alone (closed triangles, 3 x 3 doubles each): 1 when they
  *  share a point, else 0. Exposed for tests. */
 int fp_contact_tri_tri(const double a[3][3], const double b[3][3]);

@@ -64,6 +64,16 @@ static commit_done commit_plain(fp_session *s)
     return (commit_done){s->base, r, nr, false};
 }
 
+/* No rig, the guard checked the frame's shape (fp_cg_commit_ranges): the output becomes the
+ * base where it may differ from it (gr), and only there is it re-indexed. The shape shown
+ * is the output: the guard accepted it whole. */
+static commit_done commit_plain_ranges(fp_session *s, const uint32_t *gr, size_t ng)
+{
+    fp_history_commit_ranges(&s->history, s->deformed, gr, ng);
+    fp_engine_step_commit_ranges(&s->engine, s->base, gr, ng);
+    return (commit_done){s->base, gr, ng, false};
+}
+
 /* No rig, the guard scaled the motion back: its shape goes into the output buffer and the
  * base where either may differ from the base (gr: D_P and this frame's touched ranges; bit
  * for bit the whole path below), and only those ranges are re-indexed. The guard's P is
@@ -128,7 +138,13 @@ void fp_commit_step_run(fp_session *s, fp_frame_stats *st)
     if (s->rig.rig && !rig_whole && guard_shown)
         rig_whole = (ng = fp_cg_ranges(&s->cg, tr, nt, &gr)) == SIZE_MAX;
     commit_done d;
-    if (rig_whole)
+    /* without a rig, where the guard checked this frame's shape: only where a vertex moved
+     * (fp_cg_commit_ranges), not the whole supports */
+    size_t nm = !s->rig.rig && !s->whole_rig_commit && nt != SIZE_MAX ? fp_cg_commit_ranges(&s->cg, &gr)
+                                                                    : SIZE_MAX;
+    if (nm != SIZE_MAX)
+        d = guard_shown ? commit_guard_ranges(s, gr, nm) : commit_plain_ranges(s, gr, nm);
+    else if (rig_whole)
         d = commit_rig_whole(s);
     else if (!s->rig.rig && guard_shown && !s->whole_rig_commit &&
              (ng = fp_cg_ranges(&s->cg, tr, nt, &gr)) != SIZE_MAX)

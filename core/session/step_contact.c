@@ -90,6 +90,7 @@ static int cg_sync(fp_cg_step *g, const fp_cg_frame *f)
 const float *fp_cg_run(fp_cg_step *g, const fp_cg_frame *f, fp_slog *log, fp_frame_stats *st)
 {
     const float *ref = f->ref, *shown = f->shown;
+    g->stepped = false;
     if (g->lost && shown != ref) { /* the guard is made anew on the shape shown: ref */
         if (cg_make(g, f->rig, f->base, ref)) return ref; /* still no memory: the base stays */
         g->lost = false; /* P is ref, shown last frame; the rig's pose set by cg_make */
@@ -119,6 +120,7 @@ const float *fp_cg_run(fp_cg_step *g, const fp_cg_frame *f, fp_slog *log, fp_fra
         cg_check(g);
         return ref;
     }
+    g->stepped = true;
     st->collide_pairs += r.pairs;
     st->collide_wait_ms += r.worker_wait_ms;
     st->collide_checks += r.checks;
@@ -145,7 +147,10 @@ bool fp_cg_shows(const fp_cg_step *g, const float *shown)
 
 #define FP_GC_SHIFT 4 /* fp_cg_ranges: blocks of 16 vertices */
 
-size_t fp_cg_ranges(fp_cg_step *g, const uint32_t *tr, size_t nt, const uint32_t **out)
+/* fp_cg_ranges and fp_cg_commit_ranges: the blocks of D_P, of the ranges tr and of the
+ * vertices mv */
+static size_t mark_blocks(fp_cg_step *g, const uint32_t *tr, size_t nt, const uint32_t *mv, size_t nmv,
+                        const uint32_t **out)
 {
     const size_t nb = (g->n >> FP_GC_SHIFT) + 1;
     if (nt == SIZE_MAX) return SIZE_MAX;
@@ -161,6 +166,7 @@ size_t fp_cg_ranges(fp_cg_step *g, const uint32_t *tr, size_t nt, const uint32_t
     const uint32_t *dp;
     const size_t ndp = fp_contact_differs(g->contact, &dp);
     for (size_t i = 0; i < ndp; i++) g->gc_mark[dp[i] >> FP_GC_SHIFT] = 1;
+    for (size_t i = 0; i < nmv; i++) g->gc_mark[mv[i] >> FP_GC_SHIFT] = 1;
     for (size_t r = 0; r < nt; r++) {
         if (!tr[2 * r + 1]) continue;
         size_t b0 = tr[2 * r] >> FP_GC_SHIFT, b1 = (tr[2 * r] + tr[2 * r + 1] - 1) >> FP_GC_SHIFT;
@@ -184,6 +190,19 @@ size_t fp_cg_ranges(fp_cg_step *g, const uint32_t *tr, size_t nt, const uint32_t
     }
     *out = g->gc_ranges;
     return nr;
+}
+
+size_t fp_cg_ranges(fp_cg_step *g, const uint32_t *tr, size_t nt, const uint32_t **out)
+{
+    return mark_blocks(g, tr, nt, NULL, 0, out);
+}
+
+size_t fp_cg_commit_ranges(fp_cg_step *g, const uint32_t **out)
+{
+    if (!g->stepped || !g->contact) return SIZE_MAX;
+    const uint32_t *mv;
+    size_t nmv = fp_contact_moved(g->contact, &mv);
+    return mark_blocks(g, NULL, 0, mv, nmv, out);
 }
 
 void fp_cg_reference_changed(fp_cg_step *g, const uint32_t *ranges, size_t count)

@@ -103,6 +103,8 @@ typedef struct fp_cg_step {
     uint8_t *gc_mark;             /* fp_cg_ranges: a byte per block of 16 vertices (zero
                                      between calls) */
     uint32_t *gc_ranges;          /* its ranges */
+    bool stepped;                 /* the last fp_cg_run checked its frame's shape (the guard's
+                                     moved vertices are that check's: fp_cg_commit_ranges) */
 } fp_cg_step;
 
 /** The guard on the mesh (tris, t triangles over n vertices, loaded its loaded shape: kept by
@@ -141,6 +143,20 @@ bool fp_cg_shows(const fp_cg_step *g, const float *shown);
  *  blocks are read in order from a byte per block. Used by the commit of the guard's shape
  *  (step_commit.c) and by the shape shown's changed ranges (session.c). */
 size_t fp_cg_ranges(fp_cg_step *g, const uint32_t *tr, size_t nt, const uint32_t **out);
+
+/** Where a frame's commit must write, without a rig, when this frame's fp_cg_run checked its
+ *  shape (shown: the engine's output, or the guard's shape scaled back): the blocks of 16
+ *  vertices holding the guard's D_P or a vertex that check found moved (fp_contact_moved),
+ *  as fp_cg_ranges gives them. The shape shown differs from the base (the guard's reference,
+ *  P before the check outside D_P) only in D_P; the engine's output differs from the shape
+ *  shown only at the moved vertices a scale-back held back, and elsewhere in its touched
+ *  ranges equals P before the check, so the base. So a commit there leaves output, shape
+ *  shown and base equal everywhere, as one over the touched ranges does, but its work follows
+ *  the vertices that moved, not the supports (unanchored, which commits every frame: most of
+ *  a support's vertices move by less than a float's rounding and keep their bits). SIZE_MAX
+ *  when the last fp_cg_run did not check (no guard, lost, nothing moved from the reference)
+ *  or out of memory. */
+size_t fp_cg_commit_ranges(fp_cg_step *g, const uint32_t **out);
 
 /** The reference (the posed base) changed on ranges (count SIZE_MAX: anywhere): the next
  *  check compares P there and at D_P (fp_contact_reference). */

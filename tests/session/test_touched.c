@@ -6,7 +6,9 @@
  * cancels, undo, reset, a jaw channel and calls that skip frames; and the ranges stay small
  * where the engine's supports are (not "everything" in disguise), commits with a rig
  * included. And a rig commit through the touched ranges against the whole-mesh commit
- * (fp_session_options.whole_rig_commit), two sessions bit for bit. */
+ * (fp_session_options.whole_rig_commit), two sessions bit for bit; without a rig, a commit
+ * where the guard checked the frame writes where the step moved vertices, not the engine's
+ * whole supports (fp_cg_commit_ranges), again bit for bit the whole-mesh commit. */
 #define _GNU_SOURCE
 #include "changed.h"
 #include "fp_mesh.h"
@@ -510,6 +512,67 @@ static void test_guard_commit_ranged_equals_whole(void **state)
     free(f.cover);
 }
 
+/* Without a rig, a committed one-shot step where one of three fingertips moves and two stay
+ * (their control vectors zero, their supports apart from the moving one's): the commit writes
+ * the base where the step moved a vertex (fp_cg_commit_ranges), not in the two still supports
+ * the engine wrote (its touched ranges, which the shown shape's ranges hold); the reported
+ * ranges cover every change (take), and a session that commits the whole mesh
+ * (whole_rig_commit) keeps the same base and shape, bit for bit. */
+static void test_commit_follows_motion(void **state)
+{
+    (void)state;
+    fixture f = {0};
+    fp_session *w = rig_session_of(true, "none");
+    f.s = rig_session_of(false, "none");
+    fixture_ready(&f);
+    double frac;
+    size_t bk;
+    take(&f, &frac, &bk);
+    /* three vertices 3 R apart or more */
+    const float *b = fp_session_base(f.s);
+    uint32_t v[3] = {3000, 0, 0};
+    int got = 1;
+    for (uint32_t c = 0; c < f.n && got < 3; c += 97) {
+        bool far = true;
+        for (int j = 0; j < got; j++) {
+            double d2 = 0;
+            for (int k = 0; k < 3; k++) d2 += (b[3 * c + k] - b[3 * v[j] + k]) * (double)(b[3 * c + k] - b[3 * v[j] + k]);
+            far = far && d2 > 9 * f.radius * f.radius;
+        }
+        if (far) v[got++] = c;
+    }
+    assert_int_equal(got, 3);
+    double shown_frac = 0, base_frac = 0;
+    for (int r = 0; r < 4; r++) {
+        place(&f, v[0], v[1], v[2]);
+        memcpy(f.end, f.start, sizeof f.end);
+        f.end[0][1] += (float)(0.05 * f.radius * (r + 1)); /* one fingertip moves, two stay */
+        f.cs.active = true;
+        f.cs.intents = FP_INTENT_COMMIT;
+        f.cs.count = 3;
+        fp_frame_stats a, c;
+        f.t += 16666667;
+        fp_session_apply_controls(f.s, f.t, &f.cs, FP_INTENT_COMMIT, &a);
+        fp_session_apply_controls(w, f.t, &f.cs, FP_INTENT_COMMIT, &c);
+        assert_true(a.committed && c.committed);
+        assert_memory_equal(fp_session_base(f.s), fp_session_base(w), f.n * 3 * sizeof(float));
+        assert_memory_equal(fp_session_positions(f.s), fp_session_positions(w), f.n * 3 * sizeof(float));
+        double bf;
+        take_one(&f, true, &bf, NULL); /* the base: the commit's ranges */
+        take_one(&f, false, &frac, NULL); /* the shown shape: the engine's touched ranges too */
+        base_frac += bf;
+        shown_frac += frac;
+    }
+    printf("committed one-shot steps, one fingertip of three moving: the base written on %.4f of "
+           "the vertices a step, the shown shape reported on %.4f\n", base_frac / 4, shown_frac / 4);
+    assert_true(base_frac > 0 && base_frac < 0.5 * shown_frac);
+    fp_session_destroy(&w);
+    fp_session_destroy(&f.s);
+    free(f.shown);
+    free(f.base);
+    free(f.cover);
+}
+
 /* One anchored frame of the fixture's three control vectors, each end point its start moved
  * by amp x R along dir; its statistics into *st; the ranges taken and checked (take). */
 static size_t pressed(fixture *f, const float dir[3][3], double amp, uint32_t intents, double *frac,
@@ -598,6 +661,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_changed_union),
         cmocka_unit_test(test_guard_commit_ranged_equals_whole),
+        cmocka_unit_test(test_commit_follows_motion),
         cmocka_unit_test(test_guard_shown_ranges),
         cmocka_unit_test(test_session_contract_no_rig),
         cmocka_unit_test(test_session_contract_rig),
