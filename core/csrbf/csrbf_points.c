@@ -252,7 +252,7 @@ static int update_ranges(csrbf_points *p, const float *xyz, const uint32_t *rang
         fill_tree_range(p, b0, b1);
     }
     if (later) {
-        memcpy(p->pend, ranges, 2 * nranges * sizeof *ranges);
+        if (nranges) memcpy(p->pend, ranges, 2 * nranges * sizeof *ranges); /* (none: pend may be NULL) */
         p->npend = nranges;
     } else if (p->near) {
         near_refit_dirty(p->near, p->n);

@@ -333,7 +333,8 @@ static void test_nearest_scrambled_ties(void **state)
  * own blocks; every answer as the brute force's, before and after the sync, after a second
  * later update (the first is taken first), after an update_ranges, after a whole update that
  * leaves the pending vertices where the later update put them (the index must still learn
- * them), after csrbf_points_index_nearest (it syncs) and after csrbf_points_copy. The blocks
+ * them), after csrbf_points_index_nearest (it syncs) and after csrbf_points_copy; a later
+ * update of no ranges changes nothing. The blocks
  * (evaluation) are current at once: bit for bit as a set made from the new positions. */
 static void test_update_ranges_later(void **state)
 {
@@ -372,6 +373,11 @@ static void test_update_ranges_later(void **state)
     csrbf_points_sync_nearest(ix);
     check_nearest(ix, w, N, q, Q, &hits, &far);
     csrbf_points_sync_nearest(ix); /* nothing pending: nothing */
+    check_nearest(ix, w, N, q, Q, &hits, &far);
+    /* a later update of no ranges (a commit where no vertex moved): nothing pending */
+    assert_int_equal(csrbf_points_update_ranges_later(ix, w, NULL, 0), CSRBF_OK);
+    check_nearest(ix, w, N, q, Q, &hits, &far);
+    csrbf_points_sync_nearest(ix);
     check_nearest(ix, w, N, q, Q, &hits, &far);
     /* two later updates in a row on different ranges (the first taken first), then a later
      * and an immediate one */
