@@ -149,8 +149,9 @@ size_t fp_cg_ranges(fp_cg_step *g, const uint32_t *tr, size_t nt, const uint32_t
  *  vertices holding the guard's D_P or a vertex that check found moved (fp_contact_moved),
  *  as fp_cg_ranges gives them. The shape shown differs from the base (the guard's reference,
  *  P before the check outside D_P) only in D_P; the engine's output differs from the shape
- *  shown only at the moved vertices a scale-back held back, and elsewhere in its touched
- *  ranges equals P before the check, so the base. So a commit there leaves output, shape
+ *  shown only at the moved vertices a scale-back held back; elsewhere in its touched ranges
+ *  it equals P before the check (so the base, outside D_P), and outside them the base (the
+ *  engine rewrites what left a support). So a commit there leaves output, shape
  *  shown and base equal everywhere, as one over the touched ranges does, but its work follows
  *  the vertices that moved, not the supports (unanchored, which commits every frame: most of
  *  a support's vertices move by less than a float's rounding and keep their bits). SIZE_MAX
