@@ -136,6 +136,15 @@ static int get_object(const fpr_ctx *c, const cJSON *obj, const char *path, cons
     return 0;
 }
 
+static int get_array(const fpr_ctx *c, const cJSON *obj, const char *path, const char *key,
+                     const cJSON **out, char *p, size_t plen)
+{
+    int rc = get_member(c, obj, path, key, true, out, p, plen);
+    if (rc) return rc;
+    if (!cJSON_IsArray(*out)) return fpr_bad(c, p, "expected an array, got %s", type_name(*out));
+    return 0;
+}
+
 static bool valid_name(const char *s)
 {
     size_t n = strlen(s);
@@ -242,9 +251,8 @@ static int parse_regions(const fpr_ctx *c, fp_rig *r, const cJSON *root)
 {
     char p[512];
     const cJSON *rs;
-    int rc = get_member(c, root, "", "regions", true, &rs, p, sizeof p);
+    int rc = get_array(c, root, "", "regions", &rs, p, sizeof p);
     if (rc) return rc;
-    if (!cJSON_IsArray(rs)) return fpr_bad(c, "regions", "expected an array, got %s", type_name(rs));
     int nr = cJSON_GetArraySize(rs);
     if (nr > FP_RIG_MAX_REGIONS) return fpr_bad(c, "regions", "more than %d regions", FP_RIG_MAX_REGIONS);
     r->kind = calloc(r->n, 1);
@@ -273,8 +281,7 @@ static int parse_regions(const fpr_ctx *c, fp_rig *r, const cJSON *root)
         else { char q[80]; snprintf(q, sizeof q, "%s.kind", gp); rc = fpr_bad(c, q, "\"%s\" is not soft, skull or jaw", kind); break; }
         const cJSON *vs;
         char vp[96];
-        if ((rc = get_member(c, g, gp, "vertices", true, &vs, vp, sizeof vp))) break;
-        if (!cJSON_IsArray(vs)) { rc = fpr_bad(c, vp, "expected an array, got %s", type_name(vs)); break; }
+        if ((rc = get_array(c, g, gp, "vertices", &vs, vp, sizeof vp))) break;
         int k = 0;
         for (const cJSON *e = vs->child; e && !rc; e = e->next, k++) {
             char ep[128];
@@ -368,9 +375,8 @@ static int parse_channels(const fpr_ctx *c, fp_rig *r, const cJSON *root)
 {
     char p[512];
     const cJSON *cs;
-    int rc = get_member(c, root, "", "channels", true, &cs, p, sizeof p);
+    int rc = get_array(c, root, "", "channels", &cs, p, sizeof p);
     if (rc) return rc;
-    if (!cJSON_IsArray(cs)) return fpr_bad(c, "channels", "expected an array, got %s", type_name(cs));
     int i = 0;
     r->jaw_open = -1;
     for (const cJSON *e = cs->child; e; e = e->next, i++) {

@@ -156,7 +156,9 @@ size_t fp_cg_ranges(fp_cg_step *g, const uint32_t *tr, size_t nt, const uint32_t
  *  the vertices that moved, not the supports (unanchored, which commits every frame: most of
  *  a support's vertices move by less than a float's rounding and keep their bits). SIZE_MAX
  *  when the last fp_cg_run did not check (no guard, lost, nothing moved from the reference)
- *  or out of memory. */
+ *  or out of memory. *out is g's, valid until its next call. Threads: the session's frame
+ *  thread, after fp_cg_run and before the guard's next call (the moved vertices are its
+ *  last step's). */
 size_t fp_cg_commit_ranges(fp_cg_step *g, const uint32_t **out);
 
 /** The reference (the posed base) changed on ranges (count SIZE_MAX: anywhere): the next
