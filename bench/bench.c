@@ -884,12 +884,18 @@ static void bench_stream_close(bench_stream *b)
  * base, which must equal them within the session's reach and say "far" beyond it. The
  * session is opened with real-time memory, as live opens it (fp_session_realtime_memory: its
  * malloc settings hold for the rest of the process, which is why frame is the last case). */
+static void nap_ms(int ms)
+{
+    struct timespec ts = {0, (long)ms * 1000000L};
+    nanosleep(&ts, NULL);
+}
+
 static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char *label,
                      const fp_mesh *mesh)
 {
     char input[4300];
-    snprintf(input, sizeof input, "replay:%s/hands/leap-motion/three-claps_joints_mm.csv",
-             fp_bench_data_dir());
+    snprintf(input, sizeof input, "replay:%s/hands/leap-motion/three-claps_joints_mm.csv%s",
+             fp_bench_data_dir(), bo->every_frame ? ",fast=1" : "");
     fp_session_options so = {0};
     so.mesh = mesh;
     so.inputs[0] = input;
@@ -898,6 +904,7 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
     so.plugin_path = bo->plugin_path;
     so.no_contact_guard = bo->no_contact_guard;
     so.exact_frames = bo->exact_frames;
+    so.input_clock = bo->every_frame; /* (--every-frame: stepped on the recording's clock) */
     char err[1024];
     fp_session *s = NULL;
     int64_t open0 = fp_now_ns(); /* the session's index and contact guard, the input */
@@ -912,7 +919,7 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
         return rc;
     }
     enum { CAP = 4096 };
-    size_t nf = 0, nact = 0, ncommit = 0, nengage = 0, dropped = 0;
+    size_t nf = 0, nact = 0, ncommit = 0, nengage = 0, dropped = 0, late = 0; /* late: --every-frame */
     double *st_ms[FP_STAGE_COUNT], *total = malloc(CAP * sizeof *total),
            *act = malloc(CAP * sizeof *act), *com = malloc(CAP * sizeof *com),
            *eng = malloc(CAP * sizeof *eng);
@@ -944,12 +951,19 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
     size_t nhold = 0; /* vertices the contact guard's hold kept in place, all frames */
     double w0 = runqueue_ms(sched_fd); /* read after each frame only: a read just before one
                                           slowed the ICT frame (docs/performance.md) */
-    int64_t period = 1000000000LL / 60, start = fp_now_ns(), next = start;
+    int64_t period = 1000000000LL / 60, start = fp_now_ns(), next = start, clock0 = 0;
     size_t n = fp_session_vertex_count(s);
+    if (bo->every_frame) { /* the recording's time zero (its first event) */
+        int ic;
+        while ((ic = fp_session_input_start(s, &clock0)) == 0) nap_ms(1);
+        if (ic < 0) clock0 = start;
+    }
     while (!fp_session_finished(s) && nf < CAP) {
         fp_frame_stats st;
+        int64_t when = clock0 + (int64_t)nf * period; /* --every-frame: the frame's time */
+        while (bo->every_frame && !fp_session_inputs_ready(s, when)) nap_ms(1);
         int64_t a = fp_now_ns();
-        fp_session_step(s, a, &st);
+        fp_session_step(s, bo->every_frame ? when : a, &st);
         int64_t b = fp_now_ns();
         if (stream_us) stream_us[nf] = bench_stream_frame(&bs, s, a);
         cpu[nf] = sched_getcpu();
@@ -976,9 +990,12 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
         nf++;
         next += period;
         int64_t now = fp_now_ns();
-        if (next > now) {
+        if (next > now) { /* (paced as live: the contact guard's worker runs between frames) */
             struct timespec ts = {(time_t)((next - now) / 1000000000LL), (long)((next - now) % 1000000000LL)};
             nanosleep(&ts, NULL);
+        } else if (bo->every_frame) { /* late: none skipped, the next frame only delayed */
+            late++;
+            next = now;
         } else { /* late: the frames whose time passed meanwhile are skipped */
             dropped += (size_t)((now - next) / period);
             if (skipped) skipped[nf - 1] = (size_t)((now - next) / period);
@@ -1039,6 +1056,7 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
         if (ncpu[c]) cpus_seen = c + 1;
     if (o->json) {
         printf("{\"case\":\"frame\",\"mesh\":\"%s\",\"vertices\":%zu,\"frames\":%zu,\"frames_dropped\":%zu,"
+               "\"every_frame\":%s,\"frames_late\":%zu,"
                "\"seconds_open\":%.4g,\"seconds\":%.4g,\"deforming\":%zu,\"commits\":%zu,\"ms_median\":%.6g,\"ms_p99\":%.6g,"
                "\"ms_deforming_median\":%.6g,\"ms_deforming_p99\":%.6g,\"ms_commit_median\":%.6g,"
                "\"ms_commit_max\":%.6g,\"ms_engage_median\":%.6g,\"ms_engage_max\":%.6g,"
@@ -1046,7 +1064,7 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
                "\"ms_distances_indexed_median\":%.6g,\"distances_within_reach\":%zu,"
                "\"distances_far\":%zu,\"distances_wrong\":%zu,\"contact_guard\":%s,\"frames_on_frame_thread\":%zu,"
                "\"contact_hold\":%s,\"held_vertices_per_deforming_frame\":%.6g",
-               label, n, nf, dropped, open_s, seconds, nact, ncommit, pct(total, nf, 50), pct(total, nf, 99),
+               label, n, nf, dropped, bo->every_frame ? "true" : "false", late, open_s, seconds, nact, ncommit, pct(total, nf, 50), pct(total, nf, 99),
                pct(act, nact, 50), pct(act, nact, 99), pct(com, ncommit, 50), pct(com, ncommit, 100),
                pct(eng, nengage, 50), pct(eng, nengage, 100), pct(brute, nbrute, 50), pct(indexed, nbrute, 50), within, far, wrong,
                bo->no_contact_guard ? "false" : "true", nthere,
@@ -1073,10 +1091,14 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
         }
         printf("]}\n");
     } else {
-        printf("frame %-14s %8zu vertices, opened in %.2f s, %zu frames in %.2f s (%zu skipped: a late "
-               "frame's periods), %zu deforming, %zu commits, contact guard %s, %zu run on the frame "
-               "thread\n",
-               label, n, open_s, nf, seconds, dropped, nact, ncommit, bo->no_contact_guard ? "off" : "on",
+        char skips[96];
+        if (bo->every_frame)
+            snprintf(skips, sizeof skips, "every one stepped; %zu ended past the next's time", late);
+        else
+            snprintf(skips, sizeof skips, "%zu skipped: a late frame's periods", dropped);
+        printf("frame %-14s %8zu vertices, opened in %.2f s, %zu frames in %.2f s (%s), %zu deforming, "
+               "%zu commits, contact guard %s, %zu run on the frame thread\n",
+               label, n, open_s, nf, seconds, skips, nact, ncommit, bo->no_contact_guard ? "off" : "on",
                nthere);
         if (!bo->no_contact_guard)
             printf("  contact hold %s: %.0f vertices a deforming frame kept in place (moved under "

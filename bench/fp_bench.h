@@ -17,6 +17,10 @@ typedef struct fp_bench_options {
     bool exact_frames;     /* case frame: sessions with fp_session_options.exact_frames
                               (`bench --exact-frames`: no contact hold, every shown frame the
                               engine's shape bit for bit) */
+    bool every_frame;      /* case frame: the replay on its own clock (`bench --every-frame`):
+                              every 60 fps frame stepped, none skipped, each timed; a slow
+                              frame delays the next instead of skipping periods, so its
+                              hands are never merged with later ones' */
     unsigned subdivide;    /* case frame: bit L set (1 <= L <= FP_BENCH_MAX_LEVEL) runs ICT
                               subdivided L times (`bench --subdivide L[,L...]`); 0: level 3 */
     const char *mapping;   /* case frame: the sessions' mapping (`bench --mapping NAME`);

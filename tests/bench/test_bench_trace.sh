@@ -81,9 +81,18 @@ for mesh, (nv, frames, skipped, deforming, commits) in table.items():
 print("trace:", {m: len([r for r in rows if r["mesh"] == m]) for m in table}, "rows")
 PY
 
-# 3. --subdivide 1: the ICT face and its first subdivision, in the table and the trace
-"$fp" bench --case frame --quick --subdivide 1 --trace "$tmp/o/t1.csv" >"$tmp/out1" 2>"$tmp/err" ||
-    fail "bench --case frame --subdivide 1 exited $?: $(tail -3 "$tmp/err")"
+# 3. --subdivide 1 --every-frame: the ICT face and its first subdivision, in the table and the
+# trace; every frame of the recording stepped on its own clock, so the 105k face (whose slow
+# frames the paced loop of 2. would skip periods after) has as many frames as the ICT face, and
+# none skipped
+"$fp" bench --case frame --quick --subdivide 1 --every-frame --trace "$tmp/o/t1.csv" >"$tmp/out1" 2>"$tmp/err" ||
+    fail "bench --case frame --subdivide 1 --every-frame exited $?: $(tail -3 "$tmp/err")"
+n_ict=$(sed -n 's/^frame ict  *26719 vertices, .*, \([0-9]*\) frames in .*(every one stepped; .*/\1/p' "$tmp/out1")
+n_sub=$(sed -n 's/^frame ict-subdiv1 *105569 vertices, .*, \([0-9]*\) frames in .*(every one stepped; .*/\1/p' "$tmp/out1")
+[ -n "$n_ict" ] && [ "$n_ict" -gt 100 ] && [ "$n_ict" = "$n_sub" ] ||
+    fail "--every-frame: frames '$n_ict' (ict) and '$n_sub' (ict-subdiv1), expected the same, every one stepped: $(grep '^frame' "$tmp/out1")"
+awk -F, 'NR > 1 && $NF != 0 { bad = 1 } END { exit bad }' "$tmp/o/t1.csv" ||
+    fail "--every-frame: a frame's skipped_after is not 0"
 grep -q "^frame ict-subdiv1 *105569 vertices" "$tmp/out1" || fail "no ict-subdiv1 row of 105569 vertices: $(grep '^frame' "$tmp/out1")"
 grep -q "^frame ict-subdiv3" "$tmp/out1" && fail "--subdivide 1 ran level 3 too"
 cut -d, -f1 "$tmp/o/t1.csv" | sort -u | tr '\n' ' ' | grep -qx "ict ict-subdiv1 mesh " ||

@@ -24,8 +24,8 @@ static void usage(FILE *f)
 {
     fprintf(f,
             "usage: facepuppet bench [--quick] [--json] [--case NAME] [--no-contact-guard]\n"
-            "                        [--exact-frames] [--subdivide L[,L...]] [--mapping SPEC]\n"
-            "                        [--trace FILE.csv] [--plot FILE.png] [--help]\n\n"
+            "                        [--exact-frames] [--every-frame] [--subdivide L[,L...]]\n"
+            "                        [--mapping SPEC] [--trace FILE.csv] [--plot FILE.png] [--help]\n\n"
             "Times the CSRBF engine (medians over repeated updates; the lowest median of 3\n"
             "rounds, 2 with --quick, as the machine may be shared) beside references measured\n"
             "in the same run. Cases:\n"
@@ -77,6 +77,10 @@ static void usage(FILE *f)
             "           shown frame the engine's shape bit for bit; by default a vertex that\n"
             "           moved under 1e-5 of the face's diagonal since the last frame keeps its\n"
             "           place, and its triangles go unchecked)\n"
+            "  --every-frame  case frame: every frame of the recording stepped and timed, on\n"
+            "           its own clock (as run steps), none skipped: a frame slower than the\n"
+            "           60 fps period delays the next instead of making the loop skip periods\n"
+            "           (whose hands would then come merged into one frame)\n"
             "  --subdivide L[,L...]  case frame: after the ICT face, ICT subdivided L times\n"
             "           (1: 105,569 vertices, 2: 419,929, 3: 1,675,289; default 3)\n"
             "  --mapping SPEC  case frame: the sessions' mapping (default anchored; e.g.\n"
@@ -283,6 +287,8 @@ static int bench_main(int argc, char **argv)
             o.no_contact_guard = true;
         } else if (!strcmp(argv[i], "--exact-frames")) {
             o.exact_frames = true;
+        } else if (!strcmp(argv[i], "--every-frame")) {
+            o.every_frame = true;
         } else if (!strcmp(argv[i], "--subdivide") && i + 1 < argc) {
             const char *v = argv[++i];
             char *end;
