@@ -905,6 +905,7 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
     so.no_contact_guard = bo->no_contact_guard;
     so.exact_frames = bo->exact_frames;
     so.input_clock = bo->every_frame; /* (--every-frame: stepped on the recording's clock) */
+    if (bo->no_rig) so.rig_path = "none";
     char err[1024];
     fp_session *s = NULL;
     int64_t open0 = fp_now_ns(); /* the session's index and contact guard, the input */
@@ -1100,6 +1101,7 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
                "%zu commits, contact guard %s, %zu run on the frame thread\n",
                label, n, open_s, nf, seconds, skips, nact, ncommit, bo->no_contact_guard ? "off" : "on",
                nthere);
+        printf("  rig: %s\n", fp_session_rig_how(s));
         if (!bo->no_contact_guard)
             printf("  contact hold %s: %.0f vertices a deforming frame kept in place (moved under "
                    "1e-5 of the face's diagonal since the last frame)\n",

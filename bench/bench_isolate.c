@@ -53,6 +53,7 @@ static int paced(const fp_bench_options *bo, const fp_mesh *mesh, const char *in
     so.plugin_path = bo->plugin_path;
     so.no_contact_guard = bo->no_contact_guard;
     so.exact_frames = bo->exact_frames;
+    if (bo->no_rig) so.rig_path = "none";
     so.isolate = isolate;
     char err[1024];
     fp_session *s = NULL;

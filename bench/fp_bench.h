@@ -17,6 +17,8 @@ typedef struct fp_bench_options {
     bool exact_frames;     /* case frame: sessions with fp_session_options.exact_frames
                               (`bench --exact-frames`: no contact hold, every shown frame the
                               engine's shape bit for bit) */
+    bool no_rig;           /* case frame: sessions with rig_path "none" (`bench --no-rig`):
+                              the ICT face without its rig, as its subdivisions always are */
     bool every_frame;      /* case frame: the replay on its own clock (`bench --every-frame`):
                               every 60 fps frame stepped, none skipped, each timed; a slow
                               frame delays the next instead of skipping periods, so its

@@ -69,6 +69,9 @@ struct fp_contact {
                                      one around that box (recentre, on the worker) */
 
 #define FP_CONTACT_LOCAL_ROUNDS 5 /* a local scale-back: times its blocking set may grow */
+#define FP_CONTACT_GALLOP 16 /* a scale-back after one that kept at most 1/16 near the
+                                 blocking triangles (skin a blocked finger holds, frame after
+                                 frame) tries its t first, then doubles it, before halving */
 #define FP_CONTACT_LOCAL_NARROW 4.0 /* its first ramp: local_r / this, doubled each round */
 #define FP_CONTACT_CARRY_ROUNDS 3 /* its rounds that try the held skin carried first (r / 4,
                                      r / 2, r: later ones never passed on the recordings) */
@@ -247,6 +250,10 @@ struct track {
                                      P, or NULL use (local_scale_back, carry_on) */
     size_t cap_carry;
     bool carry_on;                /* the passed ramp carries (track_lerp adds carry) */
+    uint32_t t_hint;              /* the last step's scale-back, where its t was small (at most
+                                     1 / FP_CONTACT_GALLOP of the motion): t x 2^iters, plus 1;
+                                     0 when the last step kept more, or passed whole. The next
+                                     scale-back searches up from it (contact_step.c) */
     size_t updates;               /* the hierarchy: tree_update calls so far */
     uint32_t *probe;              /* the hierarchy: triangles newly flipped in the step's last
                                      check that had any (a bisection's check tries them first) */

@@ -204,7 +204,8 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
  *      1e-4 margin holds.)
  * So the candidate is accepted exactly when fp_contact_count_new(ref, C) would find no new
  * pair and no newly flipped triangle, and the bisection (shape P + t (C - P) at the moved
- * vertices, t the largest of `iters` halvings that adds none) keeps the invariant. What
+ * vertices, t on the grid of 2^iters steps: halvings, or after a step that kept little its t
+ * first, doubled while it passes; only a t whose shape passed is kept) keeps the invariant. What
  * changes against fp_contact_guard: t scales this frame's motion (P -> C), not the gesture's
  * (ref -> C); the shape shown after a scaled frame is P's, and the next frame goes on from it.
  *
@@ -341,7 +342,12 @@ int fp_contact_reference(fp_contact *c, const float *ref, const uint32_t *ranges
  *  cand may differ from ref (e.g. fp_engine_step_touched: (first, count) pairs; SIZE_MAX:
  *  anywhere). Accepts cand (res->t = 1, P := cand, bit for bit) when it adds no new pair and
  *  no newly flipped triangle to ref (the argument above), else P := P + t (cand - P) at the
- *  moved vertices with the largest t of the bisection (`iters` halvings, 0: P stays).
+ *  moved vertices with t from the bisection on the grid of 2^iters steps (`iters` halvings,
+ *  0 to 24; 0: P stays). After a step that scaled back to t at most 1/16 (FP_CONTACT_GALLOP),
+ *  the search first tries that t (or 1 step) and doubles it while it passes, then halves the
+ *  bracket: skin held frame after frame then costs about 2 checks instead of iters, and t
+ *  is one whose shape passed, as before (not necessarily the largest such t: neither was
+ *  the halvings'). Deterministic: the same calls give the same shapes.
  *  Nothing moved (cand = P where looked): no work. The shape to show is cand when
  *  res->t == 1, else fp_contact_shape. Work: the vertices in ranges and D_P, the moved
  *  triangles and their lists; envelopes renewed where a box left its own (with a worker,

@@ -1047,6 +1047,70 @@ static void test_track_local_ramp(void **state)
     free(tris);
 }
 
+/* Skin held frame after frame (issue 51's blocked drags): a bump of the lower sheet pushed far
+ * through the upper one keeps 1/64 of its motion; the next frame, pushing less but still
+ * through, goes on from there. Its scale-back tries the last t first (FP_CONTACT_GALLOP), so it takes the first
+ * check and two more (1/64 passes, 2/64 fails) where halvings from [0, 1] take six, and it
+ * keeps a t whose shape adds no new pair while the next step of the grid would (CGAL-free:
+ * fp_contact_count_new, the full check); envelopes and hierarchy alike. */
+static void bump_to(const float *pos, size_t n, double h, float *cand)
+{
+    memcpy(cand, pos, n * 3 * sizeof(float));
+    for (size_t v = 0; v < n / 2; v++) {
+        double d = hypot(pos[3 * v] - 0.5, pos[3 * v + 1] - 0.5) / 0.2;
+        if (d < 1) cand[3 * v + 2] += (float)(h * (1 - d * d) * (1 - d * d));
+    }
+}
+
+static void test_track_hint(void **state)
+{
+    (void)state;
+    float *pos;
+    size_t n, t;
+    uint32_t *tris;
+    sheets(32, 0.05f, &pos, &n, &tris, &t);
+    float *cand = malloc(n * 3 * sizeof(float)), *prev = malloc(n * 3 * sizeof(float)),
+          *step = malloc(n * 3 * sizeof(float));
+    fp_contact *full;
+    assert_int_equal(fp_contact_create(tris, t, n, pos, &full), 0);
+    for (int tree = 0; tree < 2; tree++) {
+        fp_contact *tk;
+        assert_int_equal(fp_contact_create(tris, t, n, pos, &tk), 0);
+        if (tree) fp_contact_set_prewarm(tk, 0);
+        fp_contact_set_local(tk, 0); /* one t for the frame (the global scale-back) */
+        assert_int_equal(fp_contact_reference(tk, pos, NULL, SIZE_MAX), 0);
+        fp_contact_result r1, r2;
+        bump_to(pos, n, 2.4, cand); /* the gap is 0.05: about 1/48 of the push passes */
+        assert_int_equal(fp_contact_step(tk, pos, cand, NULL, SIZE_MAX, 6, &r1), 0);
+        assert_int_equal(r1.checks, 1 + 6); /* no hint yet: the halvings */
+        assert_true(r1.t == 1.0 / 64);
+        memcpy(prev, fp_contact_shape(tk), n * 3 * sizeof(float));
+        bump_to(pos, n, 0.6, cand); /* the next frame still pushes through: from the shape
+                                       kept (0.0375 up), 1/64 of it passes, 2/64 do not */
+        assert_int_equal(fp_contact_step(tk, pos, cand, NULL, SIZE_MAX, 6, &r2), 0);
+        printf("held skin (%s): frame 1 t %.4f in %d checks, frame 2 t %.4f in %d checks\n",
+               tree ? "hierarchy" : "envelopes", r1.t, r1.checks, r2.t, r2.checks);
+        assert_true(r2.checks <= 1 + 2); /* the first check, 1/64 (passes), 2/64 (fails) */
+        assert_true(r2.t == 1.0 / 64);
+        /* the shape kept is prev + t (cand - prev), with no new pair; the grid's next t adds some */
+        for (int g = 0; g < 2; g++) {
+            double w = r2.t + g / 64.0;
+            for (size_t i = 0; i < 3 * n; i++)
+                step[i] = prev[i] == cand[i] ? prev[i] : (float)((double)prev[i] + w * ((double)cand[i] - prev[i]));
+            if (!g) assert_memory_equal(fp_contact_shape(tk), step, n * 3 * sizeof(float));
+            long np = fp_contact_count_new(full, pos, step, NULL, 0, NULL);
+            assert_true(g ? np > 0 : np == 0);
+        }
+        fp_contact_destroy(&tk);
+    }
+    fp_contact_destroy(&full);
+    free(step);
+    free(prev);
+    free(cand);
+    free(pos);
+    free(tris);
+}
+
 /* fp_contact_set_pose: a triangle is turned over when past 90 degrees from where the pose put
  * it or from the loaded (weld) shape: one the pose turned 89 degrees (the ICT mouth corners'
  * before fp_rig_unfold_jaw) may turn back, not 2 degrees further (91 from the loaded face:
@@ -1596,6 +1660,7 @@ int main(void)
         cmocka_unit_test(test_track_big),
         cmocka_unit_test(test_track_local),
         cmocka_unit_test(test_track_local_ramp),
+        cmocka_unit_test(test_track_hint),
         cmocka_unit_test(test_track_local_paths),
         cmocka_unit_test(test_track_local_random),
         cmocka_unit_test(test_set_pose),

@@ -24,7 +24,7 @@ static void usage(FILE *f)
 {
     fprintf(f,
             "usage: facepuppet bench [--quick] [--json] [--case NAME] [--no-contact-guard]\n"
-            "                        [--exact-frames] [--every-frame] [--subdivide L[,L...]]\n"
+            "                        [--exact-frames] [--every-frame] [--no-rig] [--subdivide L[,L...]]\n"
             "                        [--mapping SPEC] [--trace FILE.csv] [--plot FILE.png] [--help]\n\n"
             "Times the CSRBF engine (medians over repeated updates; the lowest median of 3\n"
             "rounds, 2 with --quick, as the machine may be shared) beside references measured\n"
@@ -81,6 +81,9 @@ static void usage(FILE *f)
             "           its own clock (as run steps), none skipped: a frame slower than the\n"
             "           60 fps period delays the next instead of making the loop skip periods\n"
             "           (whose hands would then come merged into one frame)\n"
+            "  --no-rig  case frame: sessions without a rig (the ICT face's, found by its\n"
+            "           checksum, holds the skull and the teeth still under the fingers; the\n"
+            "           subdivided faces have none either way: no rig fits their vertex count)\n"
             "  --subdivide L[,L...]  case frame: after the ICT face, ICT subdivided L times\n"
             "           (1: 105,569 vertices, 2: 419,929, 3: 1,675,289; default 3)\n"
             "  --mapping SPEC  case frame: the sessions' mapping (default anchored; e.g.\n"
@@ -287,6 +290,8 @@ static int bench_main(int argc, char **argv)
             o.no_contact_guard = true;
         } else if (!strcmp(argv[i], "--exact-frames")) {
             o.exact_frames = true;
+        } else if (!strcmp(argv[i], "--no-rig")) {
+            o.no_rig = true;
         } else if (!strcmp(argv[i], "--every-frame")) {
             o.every_frame = true;
         } else if (!strcmp(argv[i], "--subdivide") && i + 1 < argc) {
