@@ -5,6 +5,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -115,6 +116,52 @@ FILE *fp_file_fopen_regular(const char *path, int *code)
         if (fd >= 0) close(fd);
     }
     return f;
+}
+
+int fp_file_read_all(const char *path, size_t max, char **buf, size_t *len)
+{
+    if (buf) *buf = NULL;
+    if (len) *len = 0;
+    if (!path || !buf || !len) return -EINVAL;
+    int code = 0;
+    FILE *f = fp_file_fopen_regular(path, &code);
+    if (!f) return code;
+    char *b = NULL;
+    size_t n = 0, cap = 0, lim = max < SIZE_MAX - 2 ? max + 1 : SIZE_MAX - 2;
+    int rc = 0;
+    for (;;) {
+        if (n == cap) { /* grown by doubling, to max + 1 at most: one byte past max tells */
+            size_t want = cap ? 2 * cap : 8192;
+            if (want > lim || want < cap) want = lim;
+            char *t = want > cap ? realloc(b, want + 1) : NULL;
+            if (!t) {
+                rc = want > cap ? -ENOMEM : -EFBIG;
+                break;
+            }
+            b = t;
+            cap = want;
+        }
+        size_t got = fread(b + n, 1, cap - n, f);
+        n += got;
+        if (n > max) {
+            rc = -EFBIG;
+            break;
+        }
+        if (got == 0) {
+            if (ferror(f)) rc = -EIO;
+            break;
+        }
+    }
+    fclose(f);
+    if (rc) {
+        free(b);
+        return rc;
+    }
+    if (!b && !(b = malloc(1))) return -ENOMEM; /* (an empty file) */
+    b[n] = '\0';
+    *buf = b;
+    *len = n;
+    return 0;
 }
 
 int fp_file_output_code(int e)

@@ -6,7 +6,7 @@
  * mode a new file gets (fp_file_new_mode), then fsync and rename. The callers keep their own
  * writes and their error messages and codes (fp_file_output.failed says which step failed).
  * And the one way readers open an input file (fp_file_open_regular: a FIFO or a device never
- * blocks or passes for a file). Link: the static library `fp_common` (PIC).
+ * blocks or passes for a file), and read a small one whole (fp_file_read_all). Link: the static library `fp_common` (PIC).
  */
 #ifndef FP_FILE_H
 #define FP_FILE_H
@@ -38,6 +38,14 @@ int fp_file_open_regular(const char *path);
 /** fp_file_open_regular as a stdio stream ("rb"): the FILE, or NULL with *code (the same
  *  negative errno; -ENOMEM from fdopen). Thread-safe. */
 FILE *fp_file_fopen_regular(const char *path, int *code);
+
+/** Read the regular file `path` whole (opened by fp_file_open_regular) into *buf, NUL-ended
+ *  (*len bytes before the NUL: a file's text may hold NULs, *len says where it ends), at
+ *  most `max` bytes. Returns 0 (*buf the caller's: free it), or a negative errno with *buf
+ *  NULL: fp_file_open_regular's (-ENOENT, -EISDIR, -ENXIO, ...), -EFBIG (more than max
+ *  bytes: nothing parsed of a part), -ENOMEM, -EIO (a read error); -EINVAL (NULL). The
+ *  rig and calibration readers word each code with the file's name. Thread-safe. */
+int fp_file_read_all(const char *path, size_t max, char **buf, size_t *len);
 
 /** The file an atomic save of `path` replaces: `path` itself when it is a regular file or does
  *  not exist, or, for a symbolic link, the file at the end of its chain (the link is written

@@ -38,36 +38,21 @@ static int numbers(const char *path, const cJSON *obj, const char *prefix, const
     return 1;
 }
 
+/* the largest calibration file read (a real one is a few hundred bytes) */
+#define FP_CALIBRATION_MAX_BYTES ((size_t)1 << 20)
+
 int fp_calibration_load(const char *path, fp_calibration *out, char *err, size_t errlen)
 {
-    int code;
-    FILE *f = fp_file_fopen_regular(path, &code); /* (a folder, FIFO or device: refused) */
-    if (!f) return fp_errorf(err, errlen, code, "%s: %s", path, fp_file_error_text(code));
-    char *text = NULL;
-    size_t len = 0, cap = 0;
-    for (;;) {
-        if (len + 4096 > cap) {
-            cap = cap ? 2 * cap : 8192;
-            char *t = realloc(text, cap + 1);
-            if (!t) {
-                free(text);
-                fclose(f);
-                return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", path);
-            }
-            text = t;
-        }
-        size_t got = fread(text + len, 1, cap - len, f);
-        len += got;
-        if (got == 0) break;
-        if (len > (1u << 20)) break;
-    }
-    int rerr = ferror(f);
-    fclose(f);
-    if (rerr) {
-        free(text);
-        return fp_errorf(err, errlen, -EIO, "%s: read error", path);
-    }
-    text[len] = 0;
+    char *text;
+    size_t len;
+    int code = fp_file_read_all(path, FP_CALIBRATION_MAX_BYTES, &text, &len); /* (a folder,
+                                                           FIFO or device: refused) */
+    if (code == -EFBIG) /* (not parsed in part: its end would read as the error) */
+        return fp_errorf(err, errlen, -EBADMSG, "%s: larger than 1 MiB (a calibration is a "
+                         "JSON object of a few hundred bytes)", path);
+    if (code == -ENOMEM) return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", path);
+    if (code == -EIO) return fp_errorf(err, errlen, -EIO, "%s: read error", path);
+    if (code) return fp_errorf(err, errlen, code, "%s: %s", path, fp_file_error_text(code));
     const char *end = NULL;
     cJSON *root = cJSON_ParseWithLengthOpts(text, len, &end, false);
     int rc = 0;

@@ -23,7 +23,12 @@
 extern "C" {
 #endif
 
-/** Read path into *c (untouched on error). */
+/** Read the calibration file `path` (a JSON object, the format above) into *c (untouched on
+ *  error). Returns 0, or with a message naming the file (and line:column or the field):
+ *  -EBADMSG (not valid JSON, an unknown or repeated field, a bad value; a file over 1 MiB,
+ *  which no calibration is), -ERANGE (a value not finite or beyond 1e9), the file's own
+ *  codes (-ENOENT, -EACCES, -EISDIR, -ENXIO: a folder, FIFO or device; fp_file_read_all),
+ *  -ENOMEM, -EIO. Reentrant. */
 int fp_calibration_load(const char *path, fp_calibration *c, char *err, size_t errlen);
 
 /** Write *c to path atomically (mm_per_unit = 1 / scale, rotation, offsets; a face frame folded

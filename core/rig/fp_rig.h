@@ -116,7 +116,9 @@ typedef struct fp_rig_channel_desc {
 int fp_rig_parse(const char *json, size_t len, const char *name, fp_rig **out, char *err,
                  size_t errlen);
 
-/** Read and parse a rig file. Errors as fp_rig_parse, plus -ENOENT / -EACCES / -EIO. */
+/** Read and parse a rig file. Errors as fp_rig_parse (a file over 1 GiB: -EBADMSG), plus
+ *  the file's own codes (-ENOENT, -EACCES, -EISDIR, -ENXIO: a folder, FIFO or device;
+ *  fp_file_read_all), -ENOMEM, -EIO. */
 int fp_rig_load(const char *path, fp_rig **out, char *err, size_t errlen);
 
 /** Bind a parsed rig to its mesh's rest positions (n x 3 floats, mesh units): checks that

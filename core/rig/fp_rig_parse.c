@@ -662,37 +662,14 @@ int fp_rig_load(const char *path, fp_rig **out, char *err, size_t errlen)
 {
     if (out) *out = NULL;
     if (!path || !out) return fp_errorf(err, errlen, -EINVAL, "fp_rig_load: NULL argument");
-    int code;
-    FILE *f = fp_file_fopen_regular(path, &code); /* (a folder, FIFO or device: refused) */
-    if (!f) return fp_errorf(err, errlen, code, "%s: %s", path, fp_file_error_text(code));
-    char *buf = NULL;
-    size_t len = 0, cap = 0;
-    for (;;) {
-        if (len + 65536 > cap) {
-            cap = cap ? cap * 2 : 1 << 20;
-            if (cap > (size_t)1 << 30) {
-                free(buf);
-                fclose(f);
-                return fp_errorf(err, errlen, -EBADMSG, "%s: larger than 1 GiB", path);
-            }
-            char *nb = realloc(buf, cap);
-            if (!nb) {
-                free(buf);
-                fclose(f);
-                return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", path);
-            }
-            buf = nb;
-        }
-        size_t got = fread(buf + len, 1, cap - len, f);
-        len += got;
-        if (got == 0) break;
-    }
-    int ioerr = ferror(f);
-    fclose(f);
-    if (ioerr) {
-        free(buf);
-        return fp_errorf(err, errlen, -EIO, "%s: read error", path);
-    }
+    char *buf;
+    size_t len;
+    int code = fp_file_read_all(path, (size_t)1 << 30, &buf, &len); /* (a folder, FIFO or
+                                                                       device: refused) */
+    if (code == -EFBIG) return fp_errorf(err, errlen, -EBADMSG, "%s: larger than 1 GiB", path);
+    if (code == -ENOMEM) return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", path);
+    if (code == -EIO) return fp_errorf(err, errlen, -EIO, "%s: read error", path);
+    if (code) return fp_errorf(err, errlen, code, "%s: %s", path, fp_file_error_text(code));
     int rc = fp_rig_parse(buf, len, path, out, err, errlen);
     free(buf);
     return rc;

@@ -205,6 +205,49 @@ static void test_open_regular(void **state)
     assert_int_equal(fp_file_open_regular(dir), -EISDIR);
 }
 
+/* fp_file_read_all: a file whole and NUL-ended, up to max bytes exactly; one byte more,
+ * -EFBIG and nothing returned; an empty file ""; what is not a regular file refused as
+ * fp_file_open_regular refuses it */
+static void test_read_all(void **state)
+{
+    (void)state;
+    char p[256];
+    snprintf(p, sizeof p, "%s/all.bin", dir);
+    const size_t size = 20000; /* past the first 8 KiB buffer: it grows */
+    FILE *f = fopen(p, "wb");
+    assert_non_null(f);
+    for (size_t i = 0; i < size; i++) fputc(i % 7 ? 'a' + (int)(i % 26) : 0, f); /* NULs too */
+    fclose(f);
+    char *b = (char *)1;
+    size_t n = 1;
+    assert_int_equal(fp_file_read_all(p, size, &b, &n), 0);
+    assert_int_equal(n, size);
+    for (size_t i = 0; i < size; i++) assert_int_equal(b[i], i % 7 ? 'a' + (int)(i % 26) : 0);
+    assert_int_equal(b[size], 0);
+    free(b);
+    assert_int_equal(fp_file_read_all(p, size - 1, &b, &n), -EFBIG);
+    assert_null(b);
+    assert_int_equal(n, 0);
+    assert_int_equal(fp_file_read_all(p, SIZE_MAX, &b, &n), 0); /* (no limit: max + 1 not wrapped) */
+    assert_int_equal(n, size);
+    free(b);
+    f = fopen(p, "wb");
+    fclose(f);
+    assert_int_equal(fp_file_read_all(p, 0, &b, &n), 0);
+    assert_int_equal(n, 0);
+    assert_string_equal(b, "");
+    free(b);
+    assert_int_equal(unlink(p), 0);
+    assert_int_equal(fp_file_read_all(p, 10, &b, &n), -ENOENT);
+    assert_null(b);
+    assert_int_equal(fp_file_read_all(dir, 10, &b, &n), -EISDIR);
+    snprintf(p, sizeof p, "%s/fifo2", dir);
+    assert_int_equal(mkfifo(p, 0600), 0);
+    assert_int_equal(fp_file_read_all(p, 10, &b, &n), -ENXIO);
+    assert_int_equal(unlink(p), 0);
+    assert_int_equal(fp_file_read_all(NULL, 10, &b, &n), -EINVAL);
+}
+
 /* fp_file_output_code: the errno of a failed output call as the project reports it */
 static void test_output_code(void **state)
 {
@@ -406,6 +449,7 @@ int main(void)
         cmocka_unit_test(test_new_mode),
         cmocka_unit_test(test_target),
         cmocka_unit_test(test_open_regular),
+        cmocka_unit_test(test_read_all),
         cmocka_unit_test(test_output_code),
         cmocka_unit_test(test_output_commit),
         cmocka_unit_test(test_output_abort),

@@ -298,6 +298,21 @@ static void test_calibration_file(void **state)
         assert_non_null(strstr(err, path));
         assert_non_null(strstr(err, bad[i].field));
     }
+    { /* a valid calibration after 1 MiB of spaces: refused as too large, not read in part
+         (a part would fail as "not valid JSON (it ends too soon)", misleading) */
+        FILE *f = fopen(path, "w");
+        for (int i = 0; i < 1100; i++) fprintf(f, "%1024s", "");
+        fputs("{\"scale\": 0.1}", f);
+        fclose(f);
+        assert_int_equal(fp_calibration_load(path, &back, err, sizeof err), -EBADMSG);
+        assert_non_null(strstr(err, path));
+        assert_non_null(strstr(err, "larger than 1 MiB"));
+        f = fopen(path, "w"); /* the same under 1 MiB: read */
+        for (int i = 0; i < 1000; i++) fprintf(f, "%1024s", "");
+        fputs("{\"scale\": 0.1}", f);
+        fclose(f);
+        assert_int_equal(fp_calibration_load(path, &back, err, sizeof err), 0);
+    }
     snprintf(path, sizeof path, "%s/missing.json", dir);
     assert_int_equal(fp_calibration_load(path, &back, err, sizeof err), -ENOENT);
     /* An unwritable place: an error, nothing half-written. */
