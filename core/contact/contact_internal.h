@@ -57,6 +57,7 @@ struct fp_contact {
     size_t share_min;     /* fp_contact_set_threads: moved triangles from which a check is shared */
     double local_r;       /* fp_contact_set_local: 0, a scale-back is global */
     bool carry;           /* fp_contact_set_carry (default true) */
+    size_t gallop_min;    /* fp_contact_set_gallop (default FP_CONTACT_GALLOP_MIN_TRIS) */
 };
 
 /* ---- the incremental guard (fp_contact.h "The incremental guard") ------------------------- */
@@ -71,7 +72,8 @@ struct fp_contact {
 #define FP_CONTACT_LOCAL_ROUNDS 5 /* a local scale-back: times its blocking set may grow */
 #define FP_CONTACT_GALLOP 16 /* a scale-back after one that kept at most 1/16 near the
                                  blocking triangles (skin a blocked finger holds, frame after
-                                 frame) tries its t first, then doubles it, before halving */
+                                 frame) tries its t first, then doubles it, before halving
+                                 (steps of fp_contact_set_gallop's triangles or more) */
 #define FP_CONTACT_LOCAL_NARROW 4.0 /* its first ramp: local_r / this, doubled each round */
 #define FP_CONTACT_CARRY_ROUNDS 3 /* its rounds that try the held skin carried first (r / 4,
                                      r / 2, r: later ones never passed on the recordings) */

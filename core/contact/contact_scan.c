@@ -88,6 +88,7 @@ int fp_contact_create(const uint32_t *tris, size_t t, size_t n, const float *wel
     c->prewarm = FP_CONTACT_PREWARM;
     c->certify = true;
     c->carry = true;
+    c->gallop_min = FP_CONTACT_GALLOP_MIN_TRIS;
     c->threads = 1;
     c->share_min = FP_CONTACT_SHARE_MIN;
     c->weld = malloc((n ? n : 1) * sizeof *c->weld);

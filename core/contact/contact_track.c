@@ -457,6 +457,11 @@ void fp_contact_set_carry(fp_contact *c, bool on)
     if (c) c->carry = on;
 }
 
+void fp_contact_set_gallop(fp_contact *c, size_t min_tris)
+{
+    if (c) c->gallop_min = min_tris;
+}
+
 void fp_contact_set_local(fp_contact *c, double radius)
 {
     if (c) c->local_r = radius > 0 && isfinite(radius) ? radius : 0;

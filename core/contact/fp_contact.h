@@ -344,8 +344,9 @@ int fp_contact_reference(fp_contact *c, const float *ref, const uint32_t *ranges
  *  no newly flipped triangle to ref (the argument above), else P := P + t (cand - P) at the
  *  moved vertices with t from the bisection on the grid of 2^iters steps (`iters` halvings,
  *  0 to 24; 0: P stays). After a step that scaled back to t at most 1/16 (FP_CONTACT_GALLOP),
- *  the search first tries that t (or 1 step) and doubles it while it passes, then halves the
- *  bracket: skin held frame after frame then costs about 2 checks instead of iters, and t
+ *  a step of at least fp_contact_set_gallop's triangles first tries that t (or 1 step) and
+ *  doubles it while it passes, then halves the bracket: skin held frame after frame then
+ *  costs about 2 checks instead of iters, and t
  *  is one whose shape passed, as before (not necessarily the largest such t: neither was
  *  the halvings'). Deterministic: the same calls give the same shapes.
  *  Nothing moved (cand = P where looked): no work. The shape to show is cand when
@@ -452,6 +453,14 @@ void fp_contact_set_local(fp_contact *c, double radius);
  *  held rounds alone, as before issue 51's carry: tests and comparisons). Threads: as
  *  every call on c. */
 void fp_contact_set_carry(fp_contact *c, bool on);
+
+/** The scale-back's search from the last step's t (fp_contact_step: after a step that kept at
+ *  most 1/16, that t tried first and doubled) applies to steps that move at least min_tris
+ *  triangles; smaller ones halve from [0, 1] (their t as before it: where a check costs
+ *  microseconds the halvings may find a larger t, pass and fail not being monotone in t).
+ *  Default FP_CONTACT_GALLOP_MIN_TRIS; 0: every step (tests). Threads: as every call on c. */
+void fp_contact_set_gallop(fp_contact *c, size_t min_tris);
+#define FP_CONTACT_GALLOP_MIN_TRIS 200000
 
 /** P, the shape fp_contact_step last accepted (n x 3, owned by c, valid until its next
  *  call), or NULL before the first fp_contact_reference. */

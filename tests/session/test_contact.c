@@ -1078,6 +1078,7 @@ static void test_track_hint(void **state)
         assert_int_equal(fp_contact_create(tris, t, n, pos, &tk), 0);
         if (tree) fp_contact_set_prewarm(tk, 0);
         fp_contact_set_local(tk, 0); /* one t for the frame (the global scale-back) */
+        fp_contact_set_gallop(tk, 0); /* (every step: a face-sized one has 200,000 triangles) */
         assert_int_equal(fp_contact_reference(tk, pos, NULL, SIZE_MAX), 0);
         fp_contact_result r1, r2;
         bump_to(pos, n, 2.4, cand); /* the gap is 0.05: about 1/48 of the push passes */
@@ -1092,6 +1093,21 @@ static void test_track_hint(void **state)
                tree ? "hierarchy" : "envelopes", r1.t, r1.checks, r2.t, r2.checks);
         assert_true(r2.checks <= 1 + 2); /* the first check, 1/64 (passes), 2/64 (fails) */
         assert_true(r2.t == 1.0 / 64);
+        { /* by default a step this small halves from [0, 1]: the same shapes in 1 + 6 checks */
+            fp_contact *dflt;
+            fp_contact_result d1, d2;
+            assert_int_equal(fp_contact_create(tris, t, n, pos, &dflt), 0);
+            if (tree) fp_contact_set_prewarm(dflt, 0);
+            fp_contact_set_local(dflt, 0);
+            assert_int_equal(fp_contact_reference(dflt, pos, NULL, SIZE_MAX), 0);
+            bump_to(pos, n, 2.4, step);
+            assert_int_equal(fp_contact_step(dflt, pos, step, NULL, SIZE_MAX, 6, &d1), 0);
+            assert_int_equal(fp_contact_step(dflt, pos, cand, NULL, SIZE_MAX, 6, &d2), 0);
+            assert_int_equal(d2.checks, 1 + 6);
+            assert_true(d2.t == r2.t);
+            assert_memory_equal(fp_contact_shape(dflt), fp_contact_shape(tk), n * 3 * sizeof(float));
+            fp_contact_destroy(&dflt);
+        }
         /* the shape kept is prev + t (cand - prev), with no new pair; the grid's next t adds some */
         for (int g = 0; g < 2; g++) {
             double w = r2.t + g / 64.0;
