@@ -875,7 +875,9 @@ static void bench_stream_close(bench_stream *b)
     if (b->sink >= 0) close(b->sink);
 }
 
-/* One replay of three-claps at its own pace through the session API, 60 frames a second:
+/* One replay of three-claps at its own pace through the session API, 60 frames a second
+ * (--every-frame: on the recording's own clock, every frame stepped, a late one delaying the
+ * next instead of skipping periods):
  * per-stage times (fp_frame_stats.stage_ms), the whole frame, the frames a slow one made the
  * loop skip, the committing frames. For reference, the brute-force fingertip distances on
  * every 8th frame's hands, computed after the replay (on the last base: during it, their
@@ -953,13 +955,18 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
     double w0 = runqueue_ms(sched_fd); /* read after each frame only: a read just before one
                                           slowed the ICT frame (docs/performance.md) */
     int64_t period = 1000000000LL / 60, start = fp_now_ns(), next = start, clock0 = 0;
+    bool no_events = false;
     size_t n = fp_session_vertex_count(s);
-    if (bo->every_frame) { /* the recording's time zero (its first event) */
-        int ic;
-        while ((ic = fp_session_input_start(s, &clock0)) == 0) nap_ms(1);
+    if (bo->every_frame) { /* the recording's time zero (its first event), 30 s at most */
+        int ic, waited = 0;
+        while ((ic = fp_session_input_start(s, &clock0)) == 0 && waited++ < 30000) nap_ms(1);
+        if (ic == 0) {
+            fprintf(stderr, "bench: frame: the recording gave no event in 30 s\n");
+            no_events = true; /* (no frame stepped; the case fails) */
+        }
         if (ic < 0) clock0 = start;
     }
-    while (!fp_session_finished(s) && nf < CAP) {
+    while (!no_events && !fp_session_finished(s) && nf < CAP) {
         fp_frame_stats st;
         int64_t when = clock0 + (int64_t)nf * period; /* --every-frame: the frame's time */
         while (bo->every_frame && !fp_session_inputs_ready(s, when)) nap_ms(1);
@@ -1158,6 +1165,7 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
     free(hands);
     fp_session_destroy(&s);
     if (rc) fprintf(stderr, "bench: frame: out of memory for the reference\n");
+    if (!rc && no_events) rc = -EIO;
     if (!rc && wrong) {
         fprintf(stderr, "bench: frame: %zu indexed fingertip distances differ from the brute force\n", wrong);
         rc = -EIO;
