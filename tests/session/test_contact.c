@@ -309,6 +309,17 @@ static double max_move(const float *a, const float *b, size_t n)
     return m;
 }
 
+/* cand := pos with the lower sheet (the first n / 2 vertices of sheets()) bumped up by h at
+ * (0.5, 0.5), a (1 - d^2)^2 bump of radius r */
+static void bump_to(const float *pos, size_t n, double r, double h, float *cand)
+{
+    memcpy(cand, pos, n * 3 * sizeof(float));
+    for (size_t v = 0; v < n / 2; v++) {
+        double d = hypot(pos[3 * v] - 0.5, pos[3 * v + 1] - 0.5) / r;
+        if (d < 1) cand[3 * v + 2] += (float)(h * (1 - d * d) * (1 - d * d));
+    }
+}
+
 /* two sheets 0.05 apart; the lower one's middle pushed up by a bump of height 0.12 (through
  * the upper one) over `frames` frames: the guard lets it rise to the upper sheet and no
  * further */
@@ -328,12 +339,7 @@ static void sheets_push(int frames, int lazy)
     assert_int_equal(fp_contact_reference(tk, pos, NULL, SIZE_MAX), 0);
     track_stats ts = {0, 0, 0, 1.0, 0, 0};
     for (int f = 1; f <= frames; f++) {
-        memcpy(cand, pos, n * 3 * sizeof(float));
-        double h = 0.12 * f / frames;
-        for (size_t v = 0; v < n / 2; v++) {
-            double d = hypot(pos[3 * v] - 0.5, pos[3 * v + 1] - 0.5) / 0.3;
-            if (d < 1) cand[3 * v + 2] += (float)(h * (1 - d * d) * (1 - d * d));
-        }
+        bump_to(pos, n, 0.3, 0.12 * f / frames, cand);
         track_frame(tk, full, pos, cand, n, tris, t, ranges, true, 0, &ts);
     }
     /* the unguarded push crosses; the kept one rose to within a few per cent of the gap */
@@ -1049,19 +1055,10 @@ static void test_track_local_ramp(void **state)
 
 /* Skin held frame after frame (issue 51's blocked drags): a bump of the lower sheet pushed far
  * through the upper one keeps 1/64 of its motion; the next frame, pushing less but still
- * through, goes on from there. Its scale-back tries the last t first (FP_CONTACT_GALLOP), so it takes the first
- * check and two more (1/64 passes, 2/64 fails) where halvings from [0, 1] take six, and it
- * keeps a t whose shape adds no new pair while the next step of the grid would (CGAL-free:
- * fp_contact_count_new, the full check); envelopes and hierarchy alike. */
-static void bump_to(const float *pos, size_t n, double h, float *cand)
-{
-    memcpy(cand, pos, n * 3 * sizeof(float));
-    for (size_t v = 0; v < n / 2; v++) {
-        double d = hypot(pos[3 * v] - 0.5, pos[3 * v + 1] - 0.5) / 0.2;
-        if (d < 1) cand[3 * v + 2] += (float)(h * (1 - d * d) * (1 - d * d));
-    }
-}
-
+ * through, goes on from there. Its scale-back tries the last t first (FP_CONTACT_GALLOP), so
+ * it takes the first check and two more (1/64 passes, 2/64 fails) where halvings from [0, 1]
+ * take six, and it keeps a t whose shape adds no new pair while the next step of the grid
+ * would (CGAL-free: fp_contact_count_new, the full check); envelopes and hierarchy alike. */
 static void test_track_hint(void **state)
 {
     (void)state;
@@ -1081,12 +1078,12 @@ static void test_track_hint(void **state)
         fp_contact_set_gallop(tk, 0); /* (every step: a face-sized one has 200,000 triangles) */
         assert_int_equal(fp_contact_reference(tk, pos, NULL, SIZE_MAX), 0);
         fp_contact_result r1, r2;
-        bump_to(pos, n, 2.4, cand); /* the gap is 0.05: about 1/48 of the push passes */
+        bump_to(pos, n, 0.2, 2.4, cand); /* the gap is 0.05: about 1/48 of the push passes */
         assert_int_equal(fp_contact_step(tk, pos, cand, NULL, SIZE_MAX, 6, &r1), 0);
         assert_int_equal(r1.checks, 1 + 6); /* no hint yet: the halvings */
         assert_true(r1.t == 1.0 / 64);
         memcpy(prev, fp_contact_shape(tk), n * 3 * sizeof(float));
-        bump_to(pos, n, 0.6, cand); /* the next frame still pushes through: from the shape
+        bump_to(pos, n, 0.2, 0.6, cand); /* the next frame still pushes through: from the shape
                                        kept (0.0375 up), 1/64 of it passes, 2/64 do not */
         assert_int_equal(fp_contact_step(tk, pos, cand, NULL, SIZE_MAX, 6, &r2), 0);
         printf("held skin (%s): frame 1 t %.4f in %d checks, frame 2 t %.4f in %d checks\n",
@@ -1100,7 +1097,7 @@ static void test_track_hint(void **state)
             if (tree) fp_contact_set_prewarm(dflt, 0);
             fp_contact_set_local(dflt, 0);
             assert_int_equal(fp_contact_reference(dflt, pos, NULL, SIZE_MAX), 0);
-            bump_to(pos, n, 2.4, step);
+            bump_to(pos, n, 0.2, 2.4, step);
             assert_int_equal(fp_contact_step(dflt, pos, step, NULL, SIZE_MAX, 6, &d1), 0);
             assert_int_equal(fp_contact_step(dflt, pos, cand, NULL, SIZE_MAX, 6, &d2), 0);
             assert_int_equal(d2.checks, 1 + 6);
