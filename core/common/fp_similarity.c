@@ -45,41 +45,6 @@ static void top_eigenvector(double a[4][4], double v[4])
     for (int k = 0; k < 4; k++) v[k] = e[k][best];
 }
 
-/* The rotation of Horn's method from the cross-covariance S (Sxy = sum a_x b_y, about the
- * centroids): the top eigenvector of his symmetric N, a unit quaternion with w >= 0. */
-static void horn_rotation(const double S[3][3], double q[4])
-{
-    double N[4][4] = {
-        {S[0][0] + S[1][1] + S[2][2], S[1][2] - S[2][1], S[2][0] - S[0][2], S[0][1] - S[1][0]},
-        {S[1][2] - S[2][1], S[0][0] - S[1][1] - S[2][2], S[0][1] + S[1][0], S[2][0] + S[0][2]},
-        {S[2][0] - S[0][2], S[0][1] + S[1][0], -S[0][0] + S[1][1] - S[2][2], S[1][2] + S[2][1]},
-        {S[0][1] - S[1][0], S[2][0] + S[0][2], S[1][2] + S[2][1], -S[0][0] - S[1][1] + S[2][2]}};
-    top_eigenvector(N, q);
-    double nq = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    for (int k = 0; k < 4; k++) q[k] /= nq;
-    if (q[0] < 0)
-        for (int k = 0; k < 4; k++) q[k] = -q[k];
-}
-
-void fp_rotation_fit(const double (*a)[3], const double (*b)[3], size_t n, double q[4])
-{
-    double ma[3] = {0, 0, 0}, mb[3] = {0, 0, 0};
-    for (size_t i = 0; i < n; i++)
-        for (int k = 0; k < 3; k++) ma[k] += a[i][k] / (double)n, mb[k] += b[i][k] / (double)n;
-    double S[3][3] = {{0}}, scale = 0;
-    for (size_t i = 0; i < n; i++) {
-        double pa[3], pb[3];
-        for (int k = 0; k < 3; k++) pa[k] = a[i][k] - ma[k], pb[k] = b[i][k] - mb[k];
-        for (int r = 0; r < 3; r++)
-            for (int c = 0; c < 3; c++) S[r][c] += pa[r] * pb[c];
-        scale += sqrt((pa[0] * pa[0] + pa[1] * pa[1] + pa[2] * pa[2]) * (pb[0] * pb[0] + pb[1] * pb[1] + pb[2] * pb[2]));
-    }
-    /* S + beta I adds beta (4 e0 e0^T - I) to N: among rotations that fit equally (a set
-     * that spans no plane leaves the turn about its line free) the one nearest the identity */
-    for (int k = 0; k < 3; k++) S[k][k] += FP_ROTATION_FIT_BIAS * scale;
-    horn_rotation(S, q);
-}
-
 /* Whether the points span a plane: the largest triangle with the first point, against the
  * spread. */
 static bool spans_plane(const double (*p)[3], size_t n)
@@ -112,7 +77,17 @@ int fp_similarity_fit(const double (*a)[3], const double (*b)[3], size_t n, doub
             for (int c = 0; c < 3; c++) S[r][c] += pa[r] * pb[c];
         va += pa[0] * pa[0] + pa[1] * pa[1] + pa[2] * pa[2];
     }
-    horn_rotation(S, q);
+    /* Horn's N matrix (Sxy = sum a_x b_y); its top eigenvector is the rotation a -> b. */
+    double N[4][4] = {
+        {S[0][0] + S[1][1] + S[2][2], S[1][2] - S[2][1], S[2][0] - S[0][2], S[0][1] - S[1][0]},
+        {S[1][2] - S[2][1], S[0][0] - S[1][1] - S[2][2], S[0][1] + S[1][0], S[2][0] + S[0][2]},
+        {S[2][0] - S[0][2], S[0][1] + S[1][0], -S[0][0] + S[1][1] - S[2][2], S[1][2] + S[2][1]},
+        {S[0][1] - S[1][0], S[2][0] + S[0][2], S[1][2] + S[2][1], -S[0][0] - S[1][1] + S[2][2]}};
+    top_eigenvector(N, q);
+    double nq = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    for (int k = 0; k < 4; k++) q[k] /= nq;
+    if (q[0] < 0)
+        for (int k = 0; k < 4; k++) q[k] = -q[k];
     /* Umeyama's scale: sum b' . R a' / sum |a'|^2. */
     double num = 0;
     for (size_t i = 0; i < n; i++) {

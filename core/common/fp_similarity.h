@@ -24,19 +24,6 @@ extern "C" {
 int fp_similarity_fit(const double (*a)[3], const double (*b)[3], size_t n, double *s, double q[4],
                       double t[3]);
 
-/** The tie-break of fp_rotation_fit, as a share of sum |a'_i| |b'_i|. */
-#define FP_ROTATION_FIT_BIAS 1e-3
-
-/** The rotation alone b_i - mb ~ R (a_i - ma) over n >= 1 point pairs (primes about the
- *  centroids), by Horn's unit quaternion as fp_similarity_fit, for any set: where rotations
- *  fit equally (two points, or collinear ones: the turn about their line is free; one point,
- *  or coincident ones: any) the one nearest the identity, by a tie-break that adds
- *  FP_ROTATION_FIT_BIAS sum |a'_i| |b'_i| to the cross-covariance's diagonal (it moves a
- *  spanning set's fit by about that share of its angle). Out: q (unit quaternion w x y z,
- *  w >= 0: the turn is at most 180 degrees); the identity for coincident points. Pure,
- *  [any-thread], no allocation, no error. */
-void fp_rotation_fit(const double (*a)[3], const double (*b)[3], size_t n, double q[4]);
-
 #ifdef __cplusplus
 }
 #endif

@@ -472,17 +472,7 @@ typedef struct csrbf_guard {
                             only while the (vertex, centre) pairs the maps so far evaluated
                             are under it: the default's maps always, more where they are
                             cheap (a small support, a small mesh) */
-    const float *via;    /* NULL (or nvia 0): each start point travels the straight line to its
-                            end point. Else nvia x n x 3 floats, waypoints: start point i
-                            passes via[k][i] for k = 0 .. nvia - 1 in turn, then goes to its
-                            end point, each leg straight and composed as below; a path that
-                            bends where the straight line would bring two points together
-                            (fingertips that twist) keeps them apart */
-    size_t nvia;         /* waypoints a start point passes (at most CSRBF_GUARD_MAX_VIA) */
 } csrbf_guard;
-
-/** At most this many waypoints in csrbf_guard.via. */
-#define CSRBF_GUARD_MAX_VIA 8
 
 /** One guarded step: deformed = T_k o ... o T_1 (shape), each T_j injective (bound <= margin),
  *  moving the n start points toward the end points as far as injective maps allow.
@@ -493,11 +483,7 @@ typedef struct csrbf_guard {
  *  t_C), evaluates on the shape so far, and moves p_i <- p_i + t_C (end_i - p_i); it stops
  *  when every t_C = 1 (T(start_i) = end_i, the composition of injective maps is injective)
  *  or after max_substeps maps, or past the CSRBF_GUARD_MAX_SUBSTEPS-th once the maps so far
- *  evaluated max_pairs pairs (the rest of the motion is dropped; CSRBF_WARN_LIMITED). With
- *  waypoints (guard->via) "end" above is each leg's end in turn: when every t_C = 1 the
- *  points are at the leg's end, and the next map starts the next leg (every point together);
- *  the count of maps and pairs runs over all legs. stats->reached is then the least share
- *  of its path's length (start, the waypoints, end) a point travelled.
+ *  evaluated max_pairs pairs (the rest of the motion is dropped; CSRBF_WARN_LIMITED).
  *  When start equals the solver's current start points bit for bit, the factor is reused.
  *  Cost: a step that is injective already costs one update plus the bound (O(m^2) for m
  *  fingertips: a few per cent of the evaluation); otherwise each sub-step costs a
@@ -505,8 +491,8 @@ typedef struct csrbf_guard {
  *  shape (a scratch csrbf_points owned by the solver, allocated on first need).
  *  Returns CSRBF_OK (one map, nothing limited), CSRBF_WARN_SUBSTEPS (composed, every end
  *  point reached), CSRBF_WARN_LIMITED (stopped short), or the first error of the calls it
- *  makes (CSRBF_ERR_INVALID for NULL arguments, n == 0, a bad margin / max_substeps or
- *  more than CSRBF_GUARD_MAX_VIA waypoints, CSRBF_ERR_NOMEM,
+ *  makes (CSRBF_ERR_INVALID for NULL arguments, n == 0 or a bad margin / max_substeps,
+ *  CSRBF_ERR_NOMEM,
  *  CSRBF_ERR_NUMERIC); after an error deformed is unspecified. On return the solver holds the
  *  last sub-step's start points and (limited) coefficients. stats may be NULL.
  *  Not thread-safe (modifies the solver). Source: csrbf.md pitfall 4 (compose or scale). */

@@ -354,13 +354,10 @@ static int guarded(csrbf_solver *s, const csrbf_points *shape, follow *fw, size_
     unsigned flags = guard ? guard->eval_flags : 0u;
     const uint64_t max_pairs = guard ? guard->max_pairs : 0u;
     const bool counted = st || max_pairs; /* the evaluations' statistics are needed */
-    const float *via = guard && guard->nvia ? guard->via : NULL;
-    const size_t nvia = via ? guard->nvia : 0;
-    if (!(margin > 0.0 && margin < 1.0) || maxk < 1 || nvia > CSRBF_GUARD_MAX_VIA) {
+    if (!(margin > 0.0 && margin < 1.0) || maxk < 1) {
         s->lim_note.pending = 0;
         snprintf(s->msg, sizeof s->msg,
-                 "guarded_step: margin %g must be in (0, 1), max_substeps %d >= 1 and waypoints %zu <= %d",
-                 margin, maxk, nvia, CSRBF_GUARD_MAX_VIA);
+                 "guarded_step: margin %g must be in (0, 1) and max_substeps %d >= 1", margin, maxk);
         return CSRBF_ERR_INVALID;
     }
     if (n > s->g_cap) {
@@ -374,8 +371,7 @@ static int guarded(csrbf_solver *s, const csrbf_points *shape, follow *fw, size_
     }
     float *P = s->g_p, *E = s->g_e;
     memcpy(P, start, n * 3 * sizeof *P);
-    memcpy(E, nvia ? via : end, n * 3 * sizeof *E);
-    size_t leg = 0; /* E: via[leg], or end once leg == nvia */
+    memcpy(E, end, n * 3 * sizeof *E);
     int reuse = s->have_start && s->n == n;
     for (size_t i = 0; i < 3 * n && reuse; i++) reuse = (double)start[i] == s->s_in[i];
 
@@ -439,12 +435,7 @@ static int guarded(csrbf_solver *s, const csrbf_points *shape, follow *fw, size_
                 P[3 * i + a] = t < 1.0 ? (float)(P[3 * i + a] + t * (E[3 * i + a] - P[3 * i + a]))
                                        : E[3 * i + a];
         }
-        if (ls.clusters_limited == 0) { /* at E: the end, or the next leg */
-            if (leg == nvia) break;
-            leg++;
-            memcpy(E, leg < nvia ? via + leg * 3 * n : end, n * 3 * sizeof *E);
-        }
-        if (j + 1 >= maxk) break;
+        if (ls.clusters_limited == 0 || j + 1 >= maxk) break;
         if (max_pairs && j + 1 >= CSRBF_GUARD_MAX_SUBSTEPS && out.eval.pairs >= max_pairs) break;
         /* the next map acts on the shape so far */
         if (fw) { /* which differs from inter only where this map computed */
@@ -460,25 +451,9 @@ static int guarded(csrbf_solver *s, const csrbf_points *shape, follow *fw, size_
         if (rc < 0) return rc;
         cur = s->g_tmp;
     }
-    /* how far each start point got along its control vector (its path with waypoints) */
+    /* how far each start point got along its control vector */
     double reached = 1.0;
-    for (size_t i = 0; i < n && nvia; i++) {
-        double full = 0.0, done = 0.0;
-        for (size_t k = 0; k <= nvia; k++) {
-            const float *a = k ? via + (k - 1) * 3 * n + 3 * i : start + 3 * i;
-            const float *b = k < nvia ? via + k * 3 * n + 3 * i : end + 3 * i;
-            double l = 0.0, r = 0.0;
-            for (int c = 0; c < 3; c++) {
-                l += ((double)b[c] - a[c]) * ((double)b[c] - a[c]);
-                r += ((double)b[c] - P[3 * i + c]) * ((double)b[c] - P[3 * i + c]);
-            }
-            full += sqrt(l);
-            if (k < leg) done += sqrt(l);
-            else if (k == leg) done += fmax(0.0, sqrt(l) - sqrt(r));
-        }
-        if (full > 0.0 && done / full < reached) reached = done / full;
-    }
-    for (size_t i = 0; i < n && !nvia; i++) {
+    for (size_t i = 0; i < n; i++) {
         double full = 0.0, left = 0.0;
         for (int a = 0; a < 3; a++) {
             double f = (double)end[3 * i + a] - start[3 * i + a];

@@ -5,7 +5,6 @@
 
 #include <errno.h>
 #include <math.h>
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -143,12 +142,7 @@ static int composed(fp_engine_step *e, const fp_control_set *cs, float *deformed
                     csrbf_guard_stats *gs)
 {
     int rc;
-    csrbf_guard g = {FP_ENGINE_GUARD_MARGIN, FP_ENGINE_MAX_SUBSTEPS, 0u, FP_ENGINE_MAX_PAIRS, NULL, 0};
-    /* fingertips that turn together: a bent path (twist_path.h), the straight line elsewhere */
-    if ((g.nvia = fp_twist_path(cs->count, (const float(*)[3])cs->start, (const float(*)[3])cs->end, cs->radius,
-                                &e->via[0][0])))
-        g.via = &e->via[0][0];
-    res->via = g.nvia;
+    csrbf_guard g = {FP_ENGINE_GUARD_MARGIN, FP_ENGINE_MAX_SUBSTEPS, 0u, FP_ENGINE_MAX_PAIRS};
     if (e->jacobian) {
         csrbf_guard gj = g;
         gj.eval_flags = CSRBF_EVAL_JACOBIAN;
@@ -279,7 +273,6 @@ int fp_engine_step_run(fp_engine_step *e, const fp_control_set *cs, float *defor
     e->g_frames++;
     e->g_limited += res->reached < 1.0;
     e->g_composed += res->substeps > 1;
-    e->g_turned += res->via > 0;
     if (res->reached < e->g_reached) e->g_reached = res->reached;
     if (res->substeps > e->g_substeps) e->g_substeps = res->substeps;
     if (res->bound > e->g_bound) e->g_bound = res->bound;
@@ -288,21 +281,18 @@ int fp_engine_step_run(fp_engine_step *e, const fp_control_set *cs, float *defor
 
 void fp_engine_step_end_gesture(fp_engine_step *e, const fp_slog *log)
 {
-    char turned[96] = "";
-    if (e->g_turned)
-        snprintf(turned, sizeof turned, "; %lu along the fingertips' turn, not straight", e->g_turned);
     if (e->g_limited)
         fp_slog_printf(log, FP_LOG_WARNING, FP_SLOG_ENGINE,
                        "fold-over guard limited the deformation to %.0f%% this gesture (%lu of %lu "
-                       "frames limited, largest fold-over bound %.2f > %.2f%s)",
+                       "frames limited, largest fold-over bound %.2f > %.2f)",
                        100.0 * e->g_reached, e->g_limited, e->g_frames, e->g_bound,
-                       FP_ENGINE_GUARD_MARGIN, turned);
+                       FP_ENGINE_GUARD_MARGIN);
     else if (e->g_composed)
         fp_slog_printf(log, FP_LOG_INFO, FP_SLOG_ENGINE,
                        "fold-over guard composed %lu of %lu steps from up to %d injective maps this "
-                       "gesture (largest fold-over bound %.2f%s)",
-                       e->g_composed, e->g_frames, e->g_substeps, e->g_bound, turned);
-    e->g_frames = e->g_limited = e->g_composed = e->g_turned = 0;
+                       "gesture (largest fold-over bound %.2f)",
+                       e->g_composed, e->g_frames, e->g_substeps, e->g_bound);
+    e->g_frames = e->g_limited = e->g_composed = 0;
 }
 
 const csrbf_solver *fp_engine_step_solver(const fp_engine_step *e) { return e->solver; }

@@ -22,9 +22,7 @@
  *    up to FP_ENGINE_MAX_SUBSTEPS injective maps, each start point travelling its
  *    cluster's share of the straight path to its end point, until every end point is
  *    reached; beyond that the rest is dropped (a composition of injective maps is
- *    injective). Fingertips that turn together (a pinch twisted), which the straight paths
- *    would bring onto one point on the way, travel the turn instead, through waypoints
- *    (twist_path.h: fp_engine_result.via). An unanchored step is composed on the shape so far; an anchored gesture's
+ *    injective). An unanchored step is composed on the shape so far; an anchored gesture's
  *    map is composed anew from its base every frame (so the shape depends on this frame's
  *    control set alone, and a take plays back bit for bit).
  * So the face follows the fingers: a drag reaches its end points in sub-steps, and only
@@ -43,7 +41,6 @@
 
 #include "csrbf.h"
 #include "session_log.h"
-#include "twist_path.h"
 
 #include <facepuppet/plugin.h>
 
@@ -95,15 +92,13 @@ typedef struct fp_engine_step {
     bool factored;                /* factored_start holds the factored start points */
     size_t factored_count;
     float factored_start[FP_ENGINE_MAX_CONTROL][3];
-    float via[FP_TWIST_MAX_VIA * FP_ENGINE_MAX_CONTROL][3]; /* a bent path's waypoints
-                                     (twist_path.h), a composed step's scratch */
     fp_slog_repeat errors;        /* the engine's repeated error */
     bool jacobian;                /* measure min det dT/dx (fp_engine_result.min_det_j) */
     /* the surface service (FP_HOST_EXT_SURFACE): triangles around each vertex */
     const uint32_t *tris;         /* the mesh's triangles (not owned) */
     uint32_t *vt_start, *vt;      /* vertex v's triangles: vt[vt_start[v] .. vt_start[v+1]) */
     /* the current gesture, for the guard's one line per gesture */
-    unsigned long g_frames, g_limited, g_composed, g_turned;
+    unsigned long g_frames, g_limited, g_composed;
     double g_reached;             /* smallest fraction reached over the gesture */
     int g_substeps;               /* most sub-steps in one frame */
     double g_bound;               /* largest requested bound */
@@ -121,7 +116,6 @@ typedef struct fp_engine_result {
     size_t clusters;              /* clusters of overlapping supports */
     size_t clusters_limited;      /* clusters the guard scaled back (first map) */
     int substeps;                 /* maps composed (1: one map) */
-    size_t via;                   /* waypoints of a bent path (twist_path.h; 0: straight) */
     double reached;               /* smallest fraction of a control vector reached (1: all) */
     double min_det_j;             /* min det dT/dx over the moved vertices and the maps
                                      applied when e->jacobian, else NAN */

@@ -8,9 +8,8 @@
 #  1. test_guard's recordings, anchored (and unanchored on the pinched copies at 57 Hz): no
 #     new crossing away from the input's own and no flipped triangle on the three faces;
 #  2. test_reach on the three faces: median at least 90%, each run's 10th percentile at least
-#     60% (measured: every median 100%; worst 10th percentiles 81.2% pinched, ICT's grab,
-#     83.9% unpinched and 86.8% pinched at 57 Hz, Lee Perry-Smith's three-claps, whose
-#     tips turn about each other: 64.6%, 63.1% and 67.8% on straight paths, twist_path.h);
+#     60% (measured: every median 100%; worst 10th percentiles, all Lee Perry-Smith's
+#     three-claps, 64.6% pinched, 63.1% unpinched, 67.8% pinched at 57 Hz);
 #     The pinched grab at 57 Hz also alone, under a name of its own in a folder with other
 #     files, given to both as the file and (test_reach) as the folder;
 #  3. onehand on its defaults, the pinched grab at 57 Hz on each face (its rig): it engages,

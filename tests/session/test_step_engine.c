@@ -540,7 +540,7 @@ static void test_touched_equals_full(void **state)
         csrbf_guard_stats gs;
         assert_true(csrbf_solver_limit_end_points(rs, FP_ENGINE_GUARD_MARGIN, &gs) >= 0);
         if (gs.clusters_limited) { /* composed, anchored (from the base) and unanchored alike */
-            csrbf_guard g = {FP_ENGINE_GUARD_MARGIN, FP_ENGINE_MAX_SUBSTEPS, 0, FP_ENGINE_MAX_PAIRS, NULL, 0};
+            csrbf_guard g = {FP_ENGINE_GUARD_MARGIN, FP_ENGINE_MAX_SUBSTEPS, 0, FP_ENGINE_MAX_PAIRS};
             assert_true(csrbf_guarded_step(rs, rp, 2, &start[0][0], &end[0][0], &g, ref, NULL) >= 0);
         } else {
             assert_int_equal(csrbf_evaluate(rs, rp, ref, 0, NULL), 0);
