@@ -8,6 +8,9 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 /* ==== the hierarchy (fp_contact.h, "The hierarchy"): a large mesh's broad phase ==== */
 
@@ -396,17 +399,43 @@ static int test_pair(fp_contact *c, lane *ln, const float *s, const float *ref, 
 
 /* the pairs between leaves x and y (x == y: within x) with a moved triangle whose boxes meet
  * in s: new ones counted (test_pair). y's boxes are copied by axis first, so that each of
- * x's triangles meets them all in one loop the compiler vectorises; the pairs to test are
- * then the set bits of a mask (boxes meet, a moved triangle, within x each pair once), not a
- * branch for each of y's triangles. */
+ * x's triangles meets them four at a time (boxes_hit: SSE2, which GCC's -O3 did not make of
+ * the scalar loop); the pairs to test are then the set bits of a mask (boxes meet, a moved
+ * triangle, within x each pair once), not a branch for each of y's triangles. */
 _Static_assert(FP_BVH_LEAF <= 32, "a leaf's triangles are the bits of a uint32_t");
+#define LEAF_PAD ((FP_BVH_LEAF + 3) & ~3) /* y's boxes in groups of four */
+
+/* the bits q < ny of y's boxes (by axis: lo, hi) that box ba meets */
+static inline uint32_t boxes_hit(const float *ba, const float (*lo)[LEAF_PAD], const float (*hi)[LEAF_PAD],
+                                 uint32_t ny)
+{
+    uint32_t m = 0;
+#if defined(__SSE2__)
+    /* four of y's boxes a compare (x86-64's baseline): the scalar loop's tests, lane by lane */
+    const __m128 a0 = _mm_set1_ps(ba[0]), a1 = _mm_set1_ps(ba[1]), a2 = _mm_set1_ps(ba[2]),
+                 a3 = _mm_set1_ps(ba[3]), a4 = _mm_set1_ps(ba[4]), a5 = _mm_set1_ps(ba[5]);
+    for (uint32_t q = 0; q < ny; q += 4) {
+        __m128 h = _mm_and_ps(_mm_cmple_ps(a0, _mm_loadu_ps(hi[0] + q)), _mm_cmple_ps(_mm_loadu_ps(lo[0] + q), a3));
+        h = _mm_and_ps(h, _mm_and_ps(_mm_cmple_ps(a1, _mm_loadu_ps(hi[1] + q)), _mm_cmple_ps(_mm_loadu_ps(lo[1] + q), a4)));
+        h = _mm_and_ps(h, _mm_and_ps(_mm_cmple_ps(a2, _mm_loadu_ps(hi[2] + q)), _mm_cmple_ps(_mm_loadu_ps(lo[2] + q), a5)));
+        m |= (uint32_t)_mm_movemask_ps(h) << q;
+    }
+    return ny < 32 ? m & ((1u << ny) - 1) : m;
+#else
+    for (uint32_t q = 0; q < ny; q++)
+        m |= (uint32_t)((ba[0] <= hi[0][q]) & (lo[0][q] <= ba[3]) & (ba[1] <= hi[1][q]) & (lo[1][q] <= ba[4]) &
+                        (ba[2] <= hi[2][q]) & (lo[2][q] <= ba[5])) << q;
+    return m;
+#endif
+}
+
 static long leaf_pairs(fp_contact *c, lane *ln, const float *s, const float *ref, uint32_t x, uint32_t y,
                        bool record)
 {
     struct track *k = c->tk;
     const uint32_t clk = k->tclock;
     const bnode *bx = &k->node[x], *by = &k->node[y];
-    float lo[3][FP_BVH_LEAF], hi[3][FP_BVH_LEAF];
+    float lo[3][LEAF_PAD], hi[3][LEAF_PAD];
     uint32_t jy[FP_BVH_LEAF], ny = 0, jm = 0; /* jm: y's moved ones, by bit */
     for (uint32_t j = by->first; j < by->first + by->count; j++) {
         const float *b = k->tbox[j];
@@ -418,18 +447,16 @@ static long leaf_pairs(fp_contact *c, lane *ln, const float *s, const float *ref
         jm |= (uint32_t)(k->pstamp[j] == clk) << ny;
         jy[ny++] = j;
     }
+    for (uint32_t q = ny; q < ((ny + 3) & ~3u); q++) /* the last group's unused lanes: meet nothing */
+        for (int a = 0; a < 3; a++) lo[a][q] = INFINITY, hi[a][q] = -INFINITY;
     long found = 0;
     for (uint32_t i = bx->first; ny && i < bx->first + bx->count; i++) {
         const float *ba = k->tbox[i];
         if (x != y && !boxes_meet(ba, by->box)) continue;
         /* within x: only y's triangles after i (y's are x's, in order) */
         uint32_t q0 = x == y ? i - bx->first + 1 : 0;
-        unsigned char hit[FP_BVH_LEAF];
-        for (uint32_t q = q0; q < ny; q++)
-            hit[q] = (ba[0] <= hi[0][q]) & (lo[0][q] <= ba[3]) & (ba[1] <= hi[1][q]) & (lo[1][q] <= ba[4]) &
-                     (ba[2] <= hi[2][q]) & (lo[2][q] <= ba[5]);
-        uint32_t m = 0;
-        for (uint32_t q = q0; q < ny; q++) m |= (uint32_t)hit[q] << q;
+        uint32_t m = boxes_hit(ba, (const float(*)[LEAF_PAD])lo, (const float(*)[LEAF_PAD])hi, ny);
+        m &= q0 < 32 ? ~((1u << q0) - 1) : 0u;
         if (k->pstamp[i] != clk) m &= jm; /* neither moved: nothing new */
         for (; m; m &= m - 1) {
             uint32_t j = jy[__builtin_ctz(m)];
