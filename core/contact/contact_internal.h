@@ -498,11 +498,12 @@ static inline bool vert_differs(const float *a, const float *b, size_t v)
     return ((x[0] ^ y[0]) | (x[1] ^ y[1]) | (x[2] ^ y[2])) != 0;
 }
 
-/* two triangles given by their welded vertices share one */
+/* two triangles given by their welded vertices share one (nine compares, no branch: most
+ * boxes that meet in a leaf are neighbours', so a branch each was mispredicted often) */
 static inline bool welded_adjacent(const uint32_t a[3], const uint32_t b[3])
 {
-    return a[0] == b[0] || a[0] == b[1] || a[0] == b[2] || a[1] == b[0] || a[1] == b[1] || a[1] == b[2] ||
-           a[2] == b[0] || a[2] == b[1] || a[2] == b[2];
+    return ((a[0] == b[0]) | (a[0] == b[1]) | (a[0] == b[2]) | (a[1] == b[0]) | (a[1] == b[1]) | (a[1] == b[2]) |
+            (a[2] == b[0]) | (a[2] == b[1]) | (a[2] == b[2])) != 0;
 }
 
 /* Triangle v's unit normal in pos (e1 x e2 normalised, as flipped; in double, stored as
