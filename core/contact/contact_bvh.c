@@ -437,15 +437,18 @@ static long leaf_pairs(fp_contact *c, lane *ln, const float *s, const float *ref
     const bnode *bx = &k->node[x], *by = &k->node[y];
     float lo[3][LEAF_PAD], hi[3][LEAF_PAD];
     uint32_t jy[FP_BVH_LEAF], ny = 0, jm = 0; /* jm: y's moved ones, by bit */
+    /* y's boxes that meet x's box, compacted without a branch (each written at ny, which
+     * moves on only when it meets: that branch was the loop's most mispredicted) */
     for (uint32_t j = by->first; j < by->first + by->count; j++) {
         const float *b = k->tbox[j];
-        if (x != y && !boxes_meet(b, bx->box)) continue;
+        const uint32_t in = (x == y) | boxes_meet(b, bx->box);
         for (int a = 0; a < 3; a++) {
             lo[a][ny] = b[a];
             hi[a][ny] = b[3 + a];
         }
-        jm |= (uint32_t)(k->pstamp[j] == clk) << ny;
-        jy[ny++] = j;
+        jm |= (in & (uint32_t)(k->pstamp[j] == clk)) << ny;
+        jy[ny] = j;
+        ny += in;
     }
     for (uint32_t q = ny; q < ((ny + 3) & ~3u); q++) /* the last group's unused lanes: meet nothing */
         for (int a = 0; a < 3; a++) lo[a][q] = INFINITY, hi[a][q] = -INFINITY;
