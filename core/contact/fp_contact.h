@@ -346,9 +346,9 @@ int fp_contact_reference(fp_contact *c, const float *ref, const uint32_t *ranges
  *  0 to 24; 0: P stays). After a step that scaled back to t at most 1/16 (FP_CONTACT_GALLOP),
  *  a step of at least fp_contact_set_gallop's triangles first tries that t (or 1 step) and
  *  doubles it while it passes, then halves the bracket: skin held frame after frame then
- *  costs about 2 checks instead of iters, and t
- *  is one whose shape passed, as before (not necessarily the largest such t: neither was
- *  the halvings'). Deterministic: the same calls give the same shapes.
+ *  costs about 2 checks instead of iters, and t is one whose shape passed, as before (not
+ *  necessarily the largest such t: neither was the halvings'). Deterministic: the same
+ *  calls give the same shapes.
  *  Nothing moved (cand = P where looked): no work. The shape to show is cand when
  *  res->t == 1, else fp_contact_shape. Work: the vertices in ranges and D_P, the moved
  *  triangles and their lists; envelopes renewed where a box left its own (with a worker,
