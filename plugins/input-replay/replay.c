@@ -1,6 +1,7 @@
 /*
- * replay.c: the input-replay plugin. Replays a recorded hand (Leap CSV or facepuppet event
- * log) as live input, on its own thread, at the recorded pace or faster.
+ * replay.c: the input-replay plugin. Replays a recorded hand (Leap CSV, Leap playback
+ * original or facepuppet event log) as live input, on its own thread, at the recorded pace or
+ * faster.
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  *
@@ -41,12 +42,14 @@ typedef struct replay {
 static const char usage_text[] =
     "replay:FILE[,speed=X][,loop=1][,fast=1][,hands=left|right|both][,workspace=0]\n"
     "  Replays a recording as live input, at the recorded pace (timestamp_us or time_ns).\n"
-    "  FILE is detected by its header line:\n"
+    "  FILE is detected by its first bytes:\n"
     "    Leap joint-positions CSV (*_joints_mm.csv): per hand and row, joint positions in the\n"
     "      palm, thumb..pinky MCP/PIP/DIP/tip layout and a wrist pose (palm position; rotation\n"
     "      from palm normal and hand direction);\n"
     "    Leap joint-angles CSV (*_cyberglove_like_angles_deg.csv): joint angles, degrees to\n"
     "      radians, empty fields marked not valid;\n"
+    "    Leap playback original (leapjs-playback's *.json.lz, LZ-string base64, or *.json):\n"
+    "      its frames' hands read as the joint-positions CSV's rows;\n"
     "    facepuppet event log (docs/eventlog.md): the events as recorded.\n"
     "  speed=X  play X times as fast (0.001 to 1e6, default 1)\n"
     "  loop=1   start over at the end; event times keep increasing (default 0)\n"
@@ -58,7 +61,8 @@ static const char usage_text[] =
     "           would never come within reach of the face)\n"
     "  Event times are the recording's own clock (the host clock at start + the sample's\n"
     "  time), whatever the speed; speed and fast only change the pacing. Without loop, the replay ends\n"
-    "  with an end-of-stream status. A malformed row fails at creation (FILE:LINE:COLUMN); a\n"
+    "  with an end-of-stream status. A malformed row fails at creation (FILE:LINE:COLUMN; in a\n"
+    "  Leap original FILE: JSON.PATH, e.g. frames[12].hands[0].palmNormal); a\n"
     "  last line cut short (no newline) is dropped and reported with an error status (the\n"
     "  recording is damaged) after the rows before it were replayed.\n";
 
@@ -349,7 +353,8 @@ static const fp_param_info replay_keys[] = {
 static const fp_input_factory replay_factory = {
     .size = sizeof(fp_input_factory),
     .name = "replay",
-    .description = "replays a recorded hand (Leap CSV or facepuppet event log) as live input",
+    .description = "replays a recorded hand (Leap CSV, Leap playback original or facepuppet "
+                   "event log) as live input",
     .usage = usage_text,
     .create = replay_create,
     .params = replay_keys,

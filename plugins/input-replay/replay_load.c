@@ -12,10 +12,12 @@
 #include "fp_eventlog.h"
 #include "fp_hand.h"
 #include "leapcsv.h"
+#include "leapjson.h"
 
 #include <errno.h>
 #include <math.h>
 #include <stdarg.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -117,8 +119,10 @@ static int csv_row(void *user, const fp_leapcsv_row *row, char *err, size_t errl
     } else {
         float q[4];
         if (replay_wrist_rotation(&v[3], &v[6], q))
-            return fail(L, -EBADMSG, row->line, row->col[FP_LEAPCSV_LEAD + 3],
-                        "palm normal and hand direction are zero or parallel");
+            return row->line > 0 ? fail(L, -EBADMSG, row->line, row->col[FP_LEAPCSV_LEAD + 3],
+                                        "palm normal and hand direction are zero or parallel")
+                                 : fail(L, -EBADMSG, 0, 0, "frames[%ld], hand %ld: palm normal and hand "
+                                        "direction are zero or parallel", row->frame, row->hand_id);
         replay_item *it = push_item(L);
         if (!it) return oom(L);
         it->t_ns = t_ns;
@@ -207,6 +211,18 @@ static int read_head(loader *L, char *head, size_t len)
     return 0;
 }
 
+/* A Leap playback original by its first bytes: JSON's '{' (after blanks or a BOM), or LZ-string
+ * base64 (leapjson.h): its alphabet only, 16 characters or more (a word is not a recording), to
+ * the end of the head or of a short file */
+static bool leap_playback(const char *head)
+{
+    const char *p = head + (strncmp(head, "\xEF\xBB\xBF", 3) ? 0 : 3);
+    p += strspn(p, " \t\r\n");
+    if (*p == '{') return true;
+    size_t n = strspn(head, "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/=");
+    return n >= 16 && head[n + strspn(head + n, " \t\r\n")] == '\0';
+}
+
 int replay_load(const char *path, int hands, replay_recording *out, char *err, size_t errlen)
 {
     memset(out, 0, sizeof *out);
@@ -224,10 +240,14 @@ int replay_load(const char *path, int hands, replay_recording *out, char *err, s
         rc = fp_leapcsv_read(path, FP_LEAPCSV_ANY, &fmt, csv_row, &L, &out->truncated_line, err,
                              errlen);
         out->format = fmt == FP_LEAPCSV_JOINTS ? REPLAY_FORMAT_JOINTS_CSV : REPLAY_FORMAT_ANGLES_CSV;
+    } else if (leap_playback(head)) {
+        out->format = REPLAY_FORMAT_LEAP_JSON;
+        rc = fp_leapjson_read(path, csv_row, &L, err, errlen);
     } else {
         rc = fail(&L, -EBADMSG, 1, 1,
-                  "unknown format: expected a facepuppet event log (\"# %s 1\") or a Leap CSV "
-                  "(header \"%s...\")", FP_EVENTLOG_MAGIC, csv_lead);
+                  "unknown format: expected a facepuppet event log (\"# %s 1\"), a Leap CSV "
+                  "(header \"%s...\") or a Leap playback recording (JSON, or LZ-string base64 as "
+                  "*.json.lz)", FP_EVENTLOG_MAGIC, csv_lead);
     }
     if (!rc && out->count == 0)
         rc = L.seen ? fail(&L, -EINVAL, 0, 0, "no events to replay (hands=%s)", /* the option's */

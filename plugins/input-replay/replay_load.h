@@ -1,7 +1,8 @@
 /*
  * replay_load.h: input-replay's loader. Reads a whole recording (Leap joint-positions CSV,
- * Leap joint-angles CSV, both read by core/hand/leapcsv.h, or facepuppet event log) into a
- * list of timed events.
+ * Leap joint-angles CSV, both read by core/hand/leapcsv.h; a Leap playback original, JSON or
+ * LZ-string base64, read by core/hand/leapjson.h into the joints CSV's rows; or a facepuppet
+ * event log) into a list of timed events.
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
@@ -21,7 +22,8 @@ enum { REPLAY_HAND_LEFT = FP_HANDMASK_LEFT, REPLAY_HAND_RIGHT = FP_HANDMASK_RIGH
 typedef enum replay_format {
     REPLAY_FORMAT_JOINTS_CSV = 1,  /* *_joints_mm.csv */
     REPLAY_FORMAT_ANGLES_CSV = 2,  /* *_cyberglove_like_angles_deg.csv */
-    REPLAY_FORMAT_EVENTLOG = 3     /* docs/eventlog.md */
+    REPLAY_FORMAT_EVENTLOG = 3,    /* docs/eventlog.md */
+    REPLAY_FORMAT_LEAP_JSON = 4    /* *.json.lz, *.json: Leap playback originals (leapjson.h) */
 } replay_format;
 
 /** One event and when it happened, in ns after the recording's first kept event. */

@@ -372,6 +372,39 @@ static void joints_given_in_advance(void **state)
     free(rows);
 }
 
+/* A Leap playback original (*.json.lz, core/hand/leapjson.h) replays as its CSV conversion:
+ * the same events in the same order and times, positions within the CSV's 4 decimals */
+static void leap_original_replays_as_its_csv(void **state)
+{
+    (void)state;
+    const char *lz = LEAP "three-claps.json.lz", *csv = LEAP "three-claps_joints_mm.csv";
+    size_t nrows;
+    csv_row *rows = read_csv(csv, &nrows);
+    fp_test_host *a = replay_all(lz, "fast=1", 4 * nrows + 16);
+    fp_test_host *b = replay_all(csv, "fast=1", 4 * nrows + 16);
+    assert_int_equal(a->count, b->count);
+    assert_int_equal(count_type(a, FP_EVENT_JOINT_POSITIONS, -1), nrows);
+    double worst = 0;
+    for (size_t e = 0; e < a->count; e++) {
+        const fp_event *x = &a->events[e], *y = &b->events[e];
+        assert_int_equal(x->header.type, y->header.type);
+        assert_int_equal(x->header.hand, y->header.hand);
+        assert_int_equal(x->header.time_ns - a->events[0].header.time_ns,
+                         y->header.time_ns - b->events[0].header.time_ns);
+        if (x->header.type != FP_EVENT_JOINT_POSITIONS) continue;
+        for (int j = 0; j < FP_HAND_JOINTS; j++)
+            for (int c = 0; c < 3; c++) {
+                double d = fabs((double)x->positions.mm[j][c] - y->positions.mm[j][c]);
+                worst = d > worst ? d : worst;
+            }
+    }
+    printf("three-claps.json.lz: %zu events, as its CSV's; positions within %.2g mm\n", a->count, worst);
+    assert_true(worst <= 6e-5);
+    fp_test_host_free(a);
+    fp_test_host_free(b);
+    free(rows);
+}
+
 static void angles_in_radians_empty_invalid(void **state)
 {
     const char *path = LEAP "three-claps_cyberglove_like_angles_deg.csv";
@@ -877,6 +910,7 @@ int main(void)
         cmocka_unit_test(factory_describes_itself),
         cmocka_unit_test(frame_counts_match_csv_rows),
         cmocka_unit_test(positions_and_wrist_equal_csv),
+        cmocka_unit_test(leap_original_replays_as_its_csv),
         cmocka_unit_test(angles_in_radians_empty_invalid),
         cmocka_unit_test(hands_filter),
         cmocka_unit_test(pacing_follows_speed),
