@@ -321,10 +321,8 @@ static void *collect_next(collect *c)
     ((row)->frame = (in)->frame, (row)->timestamp_us = (in)->timestamp_us, \
      (row)->hand_id = (in)->hand_id, (row)->side = (in)->side)
 
-static int on_joints(void *user, const fp_leapcsv_row *in, char *err, size_t errlen)
+void fp_leap_joints_from_row(const fp_leapcsv_row *in, fp_leap_joints_row *row)
 {
-    fp_leap_joints_row *row = collect_next(user);
-    if (!row) return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", in->path);
     COPY_LEAD(row, in);
     for (int k = 0; k < 3; k++) {
         row->palm_mm[k] = in->valuef[k];
@@ -336,6 +334,13 @@ static int on_joints(void *user, const fp_leapcsv_row *in, char *err, size_t err
         for (int j = 0; j < 4; j++)
             for (int k = 0; k < 3; k++)
                 row->joints_mm[FP_JOINT(f, j)][k] = in->valuef[9 + (f * 4 + j) * 3 + k];
+}
+
+static int on_joints(void *user, const fp_leapcsv_row *in, char *err, size_t errlen)
+{
+    fp_leap_joints_row *row = collect_next(user);
+    if (!row) return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", in->path);
+    fp_leap_joints_from_row(in, row);
     return 0;
 }
 

@@ -98,6 +98,10 @@ typedef struct fp_leap_angles_row {
     uint32_t valid;                      /* bit i: column i was not empty */
 } fp_leap_angles_row;
 
+/** A joints-format row (in->format FP_LEAPCSV_JOINTS) as an fp_leap_joints_row: the lead
+ *  columns, and the values as valuef[] holds them. */
+void fp_leap_joints_from_row(const fp_leapcsv_row *in, fp_leap_joints_row *out);
+
 /** Read a *_joints_mm.csv whole. On success *rows (free() it) holds *n >= 1 rows in file
  *  order; a file without data rows is -EBADMSG. */
 int fp_leapcsv_read_joints(const char *path, fp_leap_joints_row **rows, size_t *n, char *err,

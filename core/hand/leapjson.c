@@ -431,3 +431,49 @@ int fp_leapjson_read(const char *path, fp_leapcsv_row_fn fn, void *user, char *e
     free(text);
     return rc;
 }
+
+bool fp_leapjson_looks_like(const char *head)
+{
+    const char *p = head + (strncmp(head, "\xEF\xBB\xBF", 3) ? 0 : 3);
+    p += strspn(p, " \t\r\n");
+    if (*p == '{') return true;
+    size_t n = strspn(head, "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/=");
+    return n >= 16 && head[n + strspn(head + n, " \t\r\n")] == '\0';
+}
+
+typedef struct joints_rows {
+    fp_leap_joints_row *r;
+    size_t n, cap;
+} joints_rows;
+
+static int on_joints(void *user, const fp_leapcsv_row *in, char *err, size_t errlen)
+{
+    joints_rows *R = user;
+    if (R->n == R->cap) {
+        size_t cap = R->cap ? 2 * R->cap : 1024;
+        fp_leap_joints_row *r = realloc(R->r, cap * sizeof *r);
+        if (!r) return fp_error_at(err, errlen, -ENOMEM, in->path, 0, 0, "out of memory");
+        R->r = r;
+        R->cap = cap;
+    }
+    fp_leap_joints_from_row(in, &R->r[R->n++]);
+    return 0;
+}
+
+int fp_leapjson_read_joints(const char *path, fp_leap_joints_row **rows, size_t *n, char *err,
+                            size_t errlen)
+{
+    if (rows) *rows = NULL;
+    if (n) *n = 0;
+    if (!rows || !n) return fp_errorf(err, errlen, -EINVAL, "fp_leapjson_read_joints: NULL argument");
+    joints_rows R = {0};
+    int rc = fp_leapjson_read(path, on_joints, &R, err, errlen);
+    if (!rc && !R.n) rc = fp_error_at(err, errlen, -EBADMSG, path, 0, 0, "the recording holds no hands");
+    if (rc) {
+        free(R.r);
+        return rc;
+    }
+    *rows = R.r;
+    *n = R.n;
+    return 0;
+}

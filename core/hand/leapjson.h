@@ -37,6 +37,7 @@
 #ifndef FP_LEAPJSON_H
 #define FP_LEAPJSON_H
 
+#include <stdbool.h>
 #include <stddef.h>
 
 #include "leapcsv.h"
@@ -61,5 +62,16 @@ int fp_lzstring_decode_base64(const char *in, size_t len, size_t max_out, char *
  *  LZ-string base64) and call fn for each hand of each frame, in order. Returns 0, fn's
  *  non-zero code, or a negative code (above) with err "path: reason". */
 int fp_leapjson_read(const char *path, fp_leapcsv_row_fn fn, void *user, char *err, size_t errlen);
+
+/** Whether a file's first bytes (head: NUL-ended, up to 63 of them or the whole file) look like
+ *  a Leap playback recording: '{' after blanks or a UTF-8 BOM, or only LZ-string's base64
+ *  alphabet, 16 characters or more (a word is not a recording), to the end of the head or of
+ *  a short file (then blanks). How `replay:` and fp-osc-send tell it from a CSV. */
+bool fp_leapjson_looks_like(const char *head);
+
+/** fp_leapjson_read into rows, as fp_leapcsv_read_joints reads a CSV: *rows (free() it)
+ *  holds *n >= 1 rows; a recording without hands is -EBADMSG. */
+int fp_leapjson_read_joints(const char *path, fp_leap_joints_row **rows, size_t *n, char *err,
+                            size_t errlen);
 
 #endif

@@ -17,7 +17,6 @@
 #include <errno.h>
 #include <math.h>
 #include <stdarg.h>
-#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -211,18 +210,6 @@ static int read_head(loader *L, char *head, size_t len)
     return 0;
 }
 
-/* A Leap playback original by its first bytes: JSON's '{' (after blanks or a BOM), or LZ-string
- * base64 (leapjson.h): its alphabet only, 16 characters or more (a word is not a recording), to
- * the end of the head or of a short file */
-static bool leap_playback(const char *head)
-{
-    const char *p = head + (strncmp(head, "\xEF\xBB\xBF", 3) ? 0 : 3);
-    p += strspn(p, " \t\r\n");
-    if (*p == '{') return true;
-    size_t n = strspn(head, "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/=");
-    return n >= 16 && head[n + strspn(head + n, " \t\r\n")] == '\0';
-}
-
 int replay_load(const char *path, int hands, replay_recording *out, char *err, size_t errlen)
 {
     memset(out, 0, sizeof *out);
@@ -240,7 +227,7 @@ int replay_load(const char *path, int hands, replay_recording *out, char *err, s
         rc = fp_leapcsv_read(path, FP_LEAPCSV_ANY, &fmt, csv_row, &L, &out->truncated_line, err,
                              errlen);
         out->format = fmt == FP_LEAPCSV_JOINTS ? REPLAY_FORMAT_JOINTS_CSV : REPLAY_FORMAT_ANGLES_CSV;
-    } else if (leap_playback(head)) {
+    } else if (fp_leapjson_looks_like(head)) {
         out->format = REPLAY_FORMAT_LEAP_JSON;
         rc = fp_leapjson_read(path, csv_row, &L, err, errlen);
     } else {

@@ -1,11 +1,13 @@
 #!/bin/bash
 # End to end over loopback: `facepuppet run --input osc:PORT` while fp-osc-send replays the
 # three-claps recording to it (bundles, timetags, recorded pace); the ICT face must deform.
+# The sender reads the Leap playback original (three-claps.json.lz, core/hand/leapjson.h);
+# test_osc_live sends a CSV.
 # A random high port is tried, and another if it is taken (tests run in parallel).
 # SPDX-License-Identifier: GPL-3.0-or-later
 set -u
 build=${FP_BUILD_DIR:-build}
-csv=../shared/data/hands/leap-motion/three-claps_joints_mm.csv
+csv=${FP_SHARED_DATA:-../shared/data}/hands/leap-motion/three-claps.json.lz
 tmp=$(mktemp -d "${TMPDIR:-/tmp}/fp-osc-run-XXXXXX")
 trap 'rm -rf "$tmp"' EXIT
 # the recording's volume (mm), as a performer would state their tracker's

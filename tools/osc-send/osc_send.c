@@ -1,6 +1,6 @@
 /*
  * osc_send.c: fp-osc-send, replays a Leap joints CSV (shared/data/hands/leap-motion/
- * *_joints_mm.csv) over OSC/UDP to facepuppet's input-osc, one bundle per frame with the
+ * *_joints_mm.csv) or a Leap playback original (*.json.lz, core/hand/leapjson.h) over OSC/UDP to facepuppet's input-osc, one bundle per frame with the
  * frame's timetag, at the recorded pace or as fast as possible. For tests and demos.
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
@@ -11,6 +11,7 @@
 #define _GNU_SOURCE
 #include "fp_hand.h"
 #include "leapcsv.h"
+#include "leapjson.h"
 #include <facepuppet/plugin_util.h> /* fp_parse_decimal, fp_parse_whole: numbers as in every option */
 
 #include <lo/lo.h>
@@ -32,7 +33,8 @@ static void usage(FILE *f)
             "usage: fp-osc-send [--port P] [--host ADDR] [--format facepuppet|leap|mediapipe]\n"
             "                   [--send joints,wrist] [--hand left|right|both] [--fast | --speed X]\n"
             "                   [--no-bundle] [--frames N] [--quiet] FILE\n\n"
-            "Replays a Leap joints CSV (*_joints_mm.csv) over OSC/UDP to facepuppet's osc input,\n"
+            "Replays a Leap joints CSV (*_joints_mm.csv), or a Leap playback original (*.json.lz,\n"
+            "*.json), over OSC/UDP to facepuppet's osc input,\n"
             "one bundle per frame, timetag = now at start + the frame's recorded time.\n"
             "  --port P       UDP port (default 9000)   --host ADDR  (default 127.0.0.1)\n"
             "  --format F     facepuppet (default): /facepuppet/hand/H/joints (63 f), /wrist (7 f)\n"
@@ -216,7 +218,15 @@ int main(int argc, char **argv)
     fp_leap_joints_row *rows = NULL;
     size_t nrows = 0;
     char err[512];
-    if (fp_leapcsv_read_joints(argv[optind], &rows, &nrows, err, sizeof err) < 0) {
+    char head[64] = "";
+    FILE *hf = fopen(argv[optind], "rb");
+    if (hf) {
+        head[fread(head, 1, sizeof head - 1, hf)] = '\0';
+        fclose(hf);
+    }
+    bool original = strncmp(head, "frame,", 6) && fp_leapjson_looks_like(head);
+    if ((original ? fp_leapjson_read_joints(argv[optind], &rows, &nrows, err, sizeof err)
+                  : fp_leapcsv_read_joints(argv[optind], &rows, &nrows, err, sizeof err)) < 0) {
         fprintf(stderr, "fp-osc-send: %s\n", err);
         return 65;
     }
