@@ -206,13 +206,14 @@ static fp_osc_stats stats(osc_fixture *f)
     return st;
 }
 
-/* Waits until the plugin has read `packets` datagrams, or read none for 100 ms (the kernel
- * may drop datagrams when the socket buffer overflows), or 5 s passed. */
+/* Waits until the plugin has read `packets` datagrams, or read none for 1 s (the kernel may
+ * drop datagrams when the socket buffer overflows; a loaded machine may hold the plugin's
+ * thread off its core for a good part of that, hence not less), or 5 s passed. */
 static void wait_packets(osc_fixture *f, uint64_t packets)
 {
     uint64_t last = 0;
     int64_t end = mono_ns() + 5000000000LL, progress = mono_ns();
-    while (mono_ns() < end && mono_ns() - progress < 100000000) {
+    while (mono_ns() < end && mono_ns() - progress < 1000000000) {
         uint64_t n = stats(f).packets;
         if (n >= packets) return;
         if (n != last) progress = mono_ns(), last = n;
@@ -461,6 +462,9 @@ static void leap_palm_and_tips_equal_csv(void **state)
     lo_send(f.to, "/finger0-1", "iifff", 7, 1, 1.f, 2.f, 3.f);
     lo_send(f.to, "/hand0", "iifff", 7, 0, 1.f, 2.f, 3.f);
     wait_packets(&f, stats(&f).packets + 4);
+    for (int64_t end = mono_ns() + 5000000000LL; /* counted once the 4th is handled */
+         !stats(&f).problems[FP_OSC_INCOMPLETE] && mono_ns() < end;)
+        sleep_ms(2);
     sleep_ms(20);
     assert_int_equal(stats(&f).problems[FP_OSC_INCOMPLETE], 1);
     assert_int_equal(count_type(f.h, FP_EVENT_JOINT_POSITIONS, -1), before);
@@ -622,13 +626,15 @@ static void bundles_keep_timetags(void **state)
     lo_message_free(m);
     assert_true(wait_type(f.h, FP_EVENT_JOINT_POSITIONS, -1, 6));
     int64_t t0 = nth_positions(f.h, 0)->header.time_ns;
-    assert_true(t0 >= before && t0 - before < 100000000);
+    assert_true(t0 >= before && t0 - before < 1000000000); /* its arrival, not the sender's
+                                                               clock (years away); under 1 s
+                                                               however loaded the machine */
     for (int i = 1; i < 5; i++) {
         int64_t d = nth_positions(f.h, (size_t)i)->header.time_ns - t0;
         assert_true(llabs(d - step_ns[i]) <= 2); /* timetag fraction rounding */
     }
     int64_t tp = nth_positions(f.h, 5)->header.time_ns;
-    assert_true(tp >= plain_sent && tp - plain_sent < 100000000);
+    assert_true(tp >= plain_sent && tp - plain_sent < 1000000000);
     assert_int_equal(stats(&f).bundles, 5);
     close_fixture(&f);
 }
@@ -714,17 +720,20 @@ static void stopped_sender_reported(void **state)
     osc_fixture f;
     open_fixture(&f, "timeout=0.2", 256);
     for (int round = 0; round < 2; round++) {
+        int64_t quiet = 0; /* the last send: the sender is quiet from then on */
         for (int i = 0; i < 5; i++) {
             lo_message m = joints_message(&rows[0]);
+            quiet = mono_ns();
             assert_true(lo_send_message(f.to, "/facepuppet/hand/left/joints", m) > 0);
             lo_message_free(m);
             sleep_ms(20);
         }
         assert_true(wait_type(f.h, FP_EVENT_STATUS, FP_STATUS_CONNECTED, (size_t)round + 1));
-        int64_t quiet = mono_ns();
         assert_true(wait_type(f.h, FP_EVENT_STATUS, FP_STATUS_DISCONNECTED, (size_t)round + 1));
+        /* not before the 0.2 s timeout since the last packet (whatever held this thread);
+         * within a bound a loaded machine keeps */
         int64_t waited = mono_ns() - quiet;
-        assert_true(waited > 100000000 && waited < 1000000000);
+        assert_true(waited >= 200000000 && waited < 3000000000LL);
     }
     /* order: connected, poses, disconnected (left hand), connected, ... */
     int last = 0;
@@ -817,7 +826,11 @@ static void hostile_packets_counted(void **state)
         if (i % 100 == 99) wait_packets(&f, (uint64_t)i + 1);
     }
     wait_packets(&f, (uint64_t)N);
-    sleep_ms(1200); /* the once-per-kind reports are due 1 s after the first of each kind */
+    /* the once-per-kind reports are due 1 s after the first of each kind */
+    for (int64_t end = mono_ns() + 5000000000LL;
+         count_type(f.h, FP_EVENT_STATUS, FP_STATUS_WARNING) < 6 && mono_ns() < end;)
+        sleep_ms(10);
+    sleep_ms(200);
     fp_osc_stats st = stats(&f);
     printf("hostile: %llu packets read of %d; malformed %llu, bad-types %llu, bad-count %llu, "
            "non-finite %llu, out-of-range %llu, unknown %llu\n",
