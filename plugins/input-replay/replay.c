@@ -205,7 +205,7 @@ static bool replay_workspace(const fp_input *self, float min_mm[3], float max_mm
 static bool replay_recording_info(const fp_input *self, fp_recording_info *info)
 {
     const replay *r = self->plugin_data;
-    static const char *formats[] = {"", "joints-csv", "angles-csv", "eventlog"};
+    static const char *formats[] = {"", "joints-csv", "angles-csv", "eventlog", "leap-playback"};
     memset(info, 0, sizeof *info);
     uint64_t distinct = 0;
     int64_t last = -1;
@@ -219,8 +219,8 @@ static bool replay_recording_info(const fp_input *self, fp_recording_info *info)
     info->frames = distinct;
     info->duration_s = (double)r->rec.duration_ns / 1e9;
     info->rate_hz = distinct > 1 && r->rec.duration_ns > 0 ? (double)(distinct - 1) / info->duration_s : 0;
-    snprintf(info->format, sizeof info->format, "%s",
-             r->rec.format >= 1 && r->rec.format <= 3 ? formats[r->rec.format] : "unknown");
+    const bool known = r->rec.format >= 1 && r->rec.format < sizeof formats / sizeof *formats;
+    snprintf(info->format, sizeof info->format, "%s", known ? formats[r->rec.format] : "unknown");
     return true;
 }
 

@@ -345,6 +345,11 @@ static void test_info(void **state)
     assert_non_null(strstr(out, "frames    403"));
     assert_non_null(strstr(out, "left, right"));
     assert_non_null(strstr(out, "joints-csv"));
+    snprintf(args, sizeof args, "info %s/hands/leap-motion/three-claps.json.lz", data); /* its original */
+    assert_int_equal(fp(args), 0);
+    assert_non_null(strstr(out, "frames    403"));
+    assert_non_null(strstr(out, "left, right"));
+    assert_non_null(strstr(out, "leap-playback"));
     snprintf(args, sizeof args, "info %s/faces/ict-facekit/generic_neutral_mesh.obj", data);
     assert_int_equal(fp(args), 0);
     assert_non_null(strstr(out, "vertices  26719"));

@@ -110,7 +110,8 @@ static int info_main(int argc, char **argv)
         FILE *f = argc == 2 ? stdout : stderr;
         fprintf(f, "usage: facepuppet info FILE\n\n"
                    "A mesh (OBJ, PLY, OFF, STL, glTF): vertices, triangles, bounds, units.\n"
-                   "A recording (joints CSV, angles CSV, event log): frames, rate, hands, duration.\n"
+                   "A recording (joints CSV, angles CSV, Leap playback original, event log): frames,\n"
+                   "  rate, hands, duration.\n"
                    "A rig (RIG.json): regions, landmarks, hinge, channels; checked against its mesh.\n"
                    "A take (.fptake): its header, frames, timecode, and where it was cut if it was.\n"
                    "A stack (.fpstack): its layers (take, region, mode, range, gain, mute, solo).\n");

@@ -383,7 +383,7 @@ typedef struct fp_recording_info {
     uint32_t hands;           /* bit per fp_hand_side seen */
     double rate_hz;           /* median sample rate */
     double duration_s;        /* first to last sample */
-    char format[32];          /* e.g. "joints-csv", "angles-csv", "eventlog" */
+    char format[32];          /* e.g. "joints-csv", "angles-csv", "eventlog", "leap-playback" */
 } fp_recording_info;
 typedef struct fp_input_recording {
     bool (*get)(const fp_input *self, fp_recording_info *info);
