@@ -87,6 +87,20 @@ static double falloff(const fp_rig *r, const double p[3], const double mouth[][3
     return w_mouth * w_back * w_neck;
 }
 
+/* fpr_nearest_rigid with the grid's keys: each rigid vertex's cell (of ramp-sized cells over
+ * the mesh's box lo, sides csz, dims cells a side) and its index */
+static int fpr_nearest_rigid_keyed(const fp_rig *r, size_t n, const float *pos, const double *lo,
+                                   const double *csz, const long *dims, uint64_t *key, uint32_t *near,
+                                   double *best2)
+{
+#define CELL(v, i) ((long)fmin((double)(dims[i] - 1), floor((pos[3 * (v) + (i)] - lo[i]) / csz[i])))
+    for (size_t v = 0; v < n; v++)
+        key[v] = r->kind[v] == FP_RIG_SOFT ? UINT64_MAX
+                 : (uint64_t)((CELL(v, 0) * dims[1] + CELL(v, 1)) * dims[2] + CELL(v, 2)) << 32 | v;
+#undef CELL
+    return fpr_nearest_rigid(r->kind, n, pos, key, r->geom.ramp * r->geom.ramp, near, best2);
+}
+
 int fp_rig_bind(fp_rig *r, size_t n, const float *pos, char *err, size_t errlen)
 {
     if (!r || !pos) return fp_errorf(err, errlen, -EINVAL, "fp_rig_bind: NULL argument");
@@ -144,7 +158,10 @@ int fp_rig_bind(fp_rig *r, size_t n, const float *pos, char *err, size_t errlen)
         }
     }
     for (size_t k = 0; k < r->weight_count; k++) w[r->weight_v[k]] = r->weight_w[k]; /* jaw.weights */
-    /* mobility: smoothstep of the distance to the nearest rigid vertex, through a grid */
+    /* mobility: smoothstep of the distance to the nearest rigid vertex (within the ramp: beyond
+     * it m is 1). Ties go to the vertex first in the order of the grid of ramp-sized cells this
+     * search once scanned (its cell's index, then its own): the key, so that the result is the
+     * same as that grid's, bit for bit (fp_rig_near.c) */
     double cell = r->geom.ramp;
     long dims[3];
     for (int i = 0; i < 3; i++) {
@@ -154,46 +171,20 @@ int fp_rig_bind(fp_rig *r, size_t n, const float *pos, char *err, size_t errlen)
     double csz[3];
     for (int i = 0; i < 3; i++) csz[i] = fmax((hi[i] - lo[i]) / (double)dims[i], cell);
     for (int i = 0; i < 3; i++) dims[i] = (long)floor((hi[i] - lo[i]) / csz[i]) + 1;
-    size_t ncell = (size_t)(dims[0] * dims[1] * dims[2]);
-    size_t *start = calloc(ncell + 1, sizeof *start), *items = malloc(n * sizeof *items);
-    if (!start || !items) {
-        free(w), free(m), free(g), free(slope_v), free(slope_dir), free(start), free(items);
+    uint64_t *key = malloc(n * sizeof *key);
+    uint32_t *near = malloc(n * sizeof *near);
+    double *best2 = malloc(n * sizeof *best2);
+    if (!key || !near || !best2 || fpr_nearest_rigid_keyed(r, n, pos, lo, csz, dims, key, near, best2)) {
+        free(w), free(m), free(g), free(slope_v), free(slope_dir), free(key), free(near), free(best2);
         return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", r->source);
     }
-#define CELL(v, i) ((long)fmin((double)(dims[i] - 1), floor((pos[3 * (v) + (i)] - lo[i]) / csz[i])))
-    for (size_t v = 0; v < n; v++)
-        if (r->kind[v] != FP_RIG_SOFT) start[(CELL(v, 0) * dims[1] + CELL(v, 1)) * dims[2] + CELL(v, 2) + 1]++;
-    for (size_t i = 0; i < ncell; i++) start[i + 1] += start[i];
-    size_t *fill = calloc(ncell, sizeof *fill);
-    if (!fill) {
-        free(w), free(m), free(g), free(slope_v), free(slope_dir), free(start), free(items);
-        return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", r->source);
-    }
-    for (size_t v = 0; v < n; v++)
-        if (r->kind[v] != FP_RIG_SOFT) {
-            size_t ci = (size_t)((CELL(v, 0) * dims[1] + CELL(v, 1)) * dims[2] + CELL(v, 2));
-            items[start[ci] + fill[ci]++] = v;
-        }
     for (size_t v = 0; v < n; v++) {
         if (r->kind[v] != FP_RIG_SOFT) {
             m[v] = 0;
             continue;
         }
-        long cc[3] = {CELL(v, 0), CELL(v, 1), CELL(v, 2)};
-        double best = INFINITY;
-        size_t bu = v;
-        for (long a = cc[0] - 1; a <= cc[0] + 1; a++)
-            for (long b = cc[1] - 1; b <= cc[1] + 1; b++)
-                for (long d = cc[2] - 1; d <= cc[2] + 1; d++) {
-                    if (a < 0 || b < 0 || d < 0 || a >= dims[0] || b >= dims[1] || d >= dims[2]) continue;
-                    size_t ci = (size_t)((a * dims[1] + b) * dims[2] + d);
-                    for (size_t k = start[ci]; k < start[ci + 1]; k++) {
-                        size_t u = items[k];
-                        double d0 = pos[3 * u] - pos[3 * v], d1 = pos[3 * u + 1] - pos[3 * v + 1],
-                               d2 = pos[3 * u + 2] - pos[3 * v + 2];
-                        if (d0 * d0 + d1 * d1 + d2 * d2 < best) best = d0 * d0 + d1 * d1 + d2 * d2, bu = u;
-                    }
-                }
+        double best = best2[v];
+        size_t bu = near[v];
         m[v] = (float)smoothstep(0, r->geom.ramp, sqrt(best));
         /* |grad m| = smoothstep'(d) |grad d| = 6 t (1 - t) / ramp (t = d / ramp; |grad d| = 1) */
         double t = sqrt(best) / r->geom.ramp;
@@ -204,8 +195,7 @@ int fp_rig_bind(fp_rig *r, size_t n, const float *pos, char *err, size_t errlen)
             slope_v[slope_count++] = (uint32_t)v;
         }
     }
-#undef CELL
-    free(start), free(items), free(fill);
+    free(key), free(near), free(best2);
     free(r->w), free(r->m), free(r->g), free(r->slope_v), free(r->slope_dir);
     r->w = w, r->m = m, r->g = g, r->slope_v = slope_v, r->slope_dir = slope_dir, r->slope_count = slope_count;
     return 0;

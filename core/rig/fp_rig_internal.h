@@ -108,4 +108,12 @@ static inline size_t fpr_landmark_at(const fp_rig *r, const char *name)
  * rig's mesh), carried there by the similarity that fits them best (r->placement says) */
 void fpr_place(fp_rig *r, const float *pos);
 
+/* fp_rig_near.c: for each soft vertex v (kind[v] == FP_RIG_SOFT) of the n (positions pos, n x 3),
+ * the nearest vertex of another kind within reach2 (a squared distance, inclusive), its squared
+ * distance as float differences squared and summed in double: bu[v] and best[v]; ties to the
+ * smallest key[u]; none (and for the other vertices): best[v] = INFINITY, bu[v] = v. 0 or
+ * -ENOMEM. A k-d tree: n log n. */
+int fpr_nearest_rigid(const uint8_t *kind, size_t n, const float *pos, const uint64_t *key, double reach2,
+                      uint32_t *bu, double *best);
+
 #endif

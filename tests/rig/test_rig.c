@@ -9,6 +9,7 @@
 #include "csrbf.h"
 #include "fp_mesh.h"
 #include "fp_rig.h"
+#include "fp_rig_internal.h" /* (test_mobility_brute_force: the ramp) */
 #define RIG_CHECK_NO_FOLDS
 #include "rig_check.h"
 
@@ -507,6 +508,54 @@ static void test_ict_finger_limit_indexed(void **state)
     fp_mesh_free(&m);
 }
 
+/* The mobility m and its slope |grad m| (fp_rig_bind; the nearest rigid vertex found by a k-d
+ * tree, core/rig/fp_rig_near.c) against a brute-force search over every skull and jaw vertex,
+ * the same arithmetic (float differences, squared and summed in double): equal bit for bit on
+ * each face with its rig. (The ramp is read from the rig's insides, fp_rig_internal.h: ramp / 3
+ * times 3 need not give it back to the bit.) */
+static double smooth01(double x) { return x <= 0 ? 0 : x >= 1 ? 1 : x * x * (3 - 2 * x); }
+
+static void mobility_is_brute_force(const char *rel)
+{
+    fp_mesh *m = load_face(rel);
+    fp_rig *r = find_rig(m);
+    size_t n = m->vertex_count, soft = 0, sloped = 0;
+    const uint8_t *kind = fp_rig_vertex_kinds(r);
+    const float *mob = fp_rig_mobility(r), *g = fp_rig_mobility_slope(r), *p = m->positions;
+    double ramp = r->geom.ramp;
+    for (size_t v = 0; v < n; v++) {
+        if (kind[v] != FP_RIG_SOFT) {
+            assert_true(mob[v] == 0);
+            continue;
+        }
+        soft++;
+        double best = INFINITY;
+        for (size_t u = 0; u < n; u++) {
+            if (kind[u] == FP_RIG_SOFT) continue;
+            double d0 = p[3 * u] - p[3 * v], d1 = p[3 * u + 1] - p[3 * v + 1], d2 = p[3 * u + 2] - p[3 * v + 2];
+            double e = d0 * d0 + d1 * d1 + d2 * d2;
+            if (e < best) best = e;
+        }
+        double d = sqrt(best), t = d / ramp;
+        float want_m = (float)smooth01(t), want_g = t > 0 && t < 1 ? (float)(6 * t * (1 - t) / ramp) : 0.0f;
+        if (mob[v] != want_m || g[v] != want_g)
+            fail_msg("%s: vertex %zu: m %.9g g %.9g, brute force %.9g %.9g", rel, v, mob[v], g[v], want_m, want_g);
+        sloped += g[v] > 0;
+    }
+    printf("%s: mobility of %zu soft vertices (%zu on the ramp) equal to the brute force's\n", rel, soft, sloped);
+    assert_true(sloped > 0);
+    fp_rig_free(&r);
+    fp_mesh_free(&m);
+}
+
+static void test_mobility_brute_force(void **state)
+{
+    (void)state;
+    mobility_is_brute_force("ict-facekit/generic_neutral_mesh.obj");
+    mobility_is_brute_force("lee-perry-smith/LeePerrySmith.obj");
+    mobility_is_brute_force("mediapipe-canonical/canonical_face_model.obj");
+}
+
 static void test_lee_perry_smith(void **state)
 {
     (void)state;
@@ -801,6 +850,7 @@ int main(void)
         cmocka_unit_test(test_ict_finger_limit), cmocka_unit_test(test_ict_finger_limit_indexed),
         cmocka_unit_test(test_ict_clamp_continuous),
         cmocka_unit_test(test_lee_perry_smith),  cmocka_unit_test(test_mediapipe),
+        cmocka_unit_test(test_mobility_brute_force),
         cmocka_unit_test(test_broken_files),     cmocka_unit_test(test_placement),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
