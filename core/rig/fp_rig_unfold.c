@@ -11,10 +11,12 @@
  * opening; after the first round only triangles with a vertex the last round changed are
  * looked at again (the others' weights, hence their poses, are as they were). Only the
  * vertices of such triangles change (on ICT 56 of 26,719, the face's vertices by 0.025 mm
- * RMS at jaw.open 1); only triangles whose weights differ are posed. */
+ * RMS at jaw.open 1); only the vertices of triangles whose weights differ are posed, each
+ * once an opening. */
 #define _GNU_SOURCE
 #include "fp_rig_internal.h"
 
+#include <assert.h>
 #include <errno.h>
 #include <math.h>
 #include <stdbool.h>
@@ -47,31 +49,84 @@ static bool turned(const float *posed, const uint32_t *t, const double n0[3])
     return n[0] * n0[0] + n[1] * n0[1] + n[2] * n0[2] <= UNFOLD_COS * l0 * l;
 }
 
-/* Mark the triangles turned over at any sampled opening (mark: t flags); their count. Only
- * triangles whose weights differ can turn (equal weights: one rigid motion), so only their
- * vertices are posed (into posed, at their own places). */
+/* The repair's working state. An opening's candidates (cand, up to t) and the vertices they
+ * need posed (vlist, up to n; vstamp[v] == clock: listed already; tstamp[k] == clock: triangle
+ * k looked at). A round's marked triangles (marked, ascending; mark[k] set) and the vertices
+ * it changed (freshv; fresh[v] set). Each vertex's triangles (adj[adj_start[v] ..
+ * adj_start[v + 1])), so that a round after the first looks only at the triangles of the
+ * vertices the last one changed, not at all t (on the 1.7M-vertex face, ICT subdivided three
+ * times, the rounds ran to their cap of 200, each over 3.4M triangles eight times). */
+typedef struct unfold {
+    uint32_t *cand, *vlist, *vstamp, *tstamp, clock;
+    uint32_t *marked, *freshv, *adj_start, *adj;
+    size_t nmarked, nfresh;
+    uint8_t *mark, *fresh;
+} unfold;
+
+static int cmp_u32(const void *a, const void *b)
+{
+    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* triangle k may turn: not marked yet, and its weights differ (equal weights: one rigid
+ * motion, which never turns it over) */
+static inline bool may_turn(const fp_rig *r, const unfold *u, const uint32_t *f, size_t k)
+{
+    return !u->mark[k] && !(r->w[f[0]] == r->w[f[1]] && r->w[f[1]] == r->w[f[2]]);
+}
+
+/* Mark the triangles turned over at any sampled opening, into u->marked (ascending) and
+ * u->mark; their count. The first round looks at every triangle, a later one at those of
+ * u->freshv. Only the candidates' vertices are posed (into posed, at their own places), each
+ * once an opening. */
 static size_t mark_turned(const fp_rig *r, const float *pos, const uint32_t *tris, size_t t,
-                          const double *n0, const uint8_t *fresh, float *posed, uint8_t *mark)
+                          const double *n0, bool first, float *posed, unfold *u)
 {
     const channel *jc = &r->channels[r->jaw_open];
     float values[FP_RIG_MAX_CHANNELS];
     for (size_t c = 0; c < r->channel_count; c++) values[c] = r->channels[c].neutral;
-    size_t count = 0;
-    memset(mark, 0, t);
+    for (size_t i = 0; i < u->nmarked; i++) u->mark[u->marked[i]] = 0;
+    u->nmarked = 0;
     for (int s = 1; s <= UNFOLD_OPENINGS; s++) {
         values[r->jaw_open] = (float)(jc->max * s / UNFOLD_OPENINGS);
-        for (size_t k = 0; k < t; k++) {
-            const uint32_t *f = tris + 3 * k;
-            if (mark[k] || (r->w[f[0]] == r->w[f[1]] && r->w[f[1]] == r->w[f[2]])) continue;
-            if (fresh && !fresh[f[0]] && !fresh[f[1]] && !fresh[f[2]]) continue;
-            for (int j = 0; j < 3; j++) fp_rig_pose_range(r, pos, values, posed, f[j], 1);
-            if (turned(posed, f, n0 + 3 * k)) {
-                count++;
-                mark[k] = 1;
+        assert(u->clock < UINT32_MAX); /* (8 an opening's round, 200 rounds) */
+        const uint32_t clk = ++u->clock;
+        size_t nc = 0, nv = 0;
+#define CANDIDATE(k)                                                                           \
+    do {                                                                                       \
+        const uint32_t *f = tris + 3 * (size_t)(k);                                            \
+        if (may_turn(r, u, f, (k))) {                                                          \
+            u->cand[nc++] = (uint32_t)(k);                                                     \
+            for (int j = 0; j < 3; j++)                                                        \
+                if (u->vstamp[f[j]] != clk) u->vstamp[f[j]] = clk, u->vlist[nv++] = f[j];      \
+        }                                                                                      \
+    } while (0)
+        if (first) {
+            for (size_t k = 0; k < t; k++) CANDIDATE(k);
+        } else {
+            for (size_t i = 0; i < u->nfresh; i++) {
+                uint32_t v = u->freshv[i];
+                for (uint32_t a = u->adj_start[v]; a < u->adj_start[v + 1]; a++) {
+                    uint32_t k = u->adj[a];
+                    if (u->tstamp[k] == clk) continue;
+                    u->tstamp[k] = clk;
+                    CANDIDATE(k);
+                }
+            }
+        }
+#undef CANDIDATE
+        for (size_t i = 0; i < nv; i++) fp_rig_pose_range(r, pos, values, posed, u->vlist[i], 1);
+        for (size_t i = 0; i < nc; i++) {
+            size_t k = u->cand[i];
+            if (turned(posed, tris + 3 * k, n0 + 3 * k)) {
+                u->mark[k] = 1;
+                u->marked[u->nmarked++] = (uint32_t)k;
             }
         }
     }
-    return count;
+    qsort(u->marked, u->nmarked, sizeof *u->marked, cmp_u32);
+    return u->nmarked;
 }
 
 int fp_rig_unfold_jaw(fp_rig *r, const float *pos, const uint32_t *tris, size_t t, size_t *changed)
@@ -81,38 +136,53 @@ int fp_rig_unfold_jaw(fp_rig *r, const float *pos, const uint32_t *tris, size_t 
     for (size_t i = 0; i < 3 * t; i++)
         if (tris[i] >= r->n) return -EINVAL;
     if (r->jaw_open < 0 || !(r->open_deg > 0) || !t) return 0;
+    if (t > UINT32_MAX / 3) return -EINVAL;
+    size_t n = r->n;
     double *n0 = malloc(3 * t * sizeof *n0);
-    float *posed = malloc(3 * r->n * sizeof *posed);
-    uint8_t *mark = malloc(t), *touched = calloc(r->n, 1), *fresh = calloc(r->n, 1);
+    float *posed = malloc(3 * n * sizeof *posed);
+    uint8_t *touched = calloc(n, 1);
+    unfold u = {.cand = malloc(t * sizeof *u.cand), .vlist = malloc(n * sizeof *u.vlist),
+                .vstamp = calloc(n, sizeof *u.vstamp), .tstamp = calloc(t, sizeof *u.tstamp),
+                .marked = malloc(t * sizeof *u.marked), .freshv = malloc(n * sizeof *u.freshv),
+                .adj_start = calloc(n + 1, sizeof *u.adj_start), .adj = malloc(3 * t * sizeof *u.adj),
+                .mark = calloc(t, 1), .fresh = calloc(n, 1)};
     int rc = -ENOMEM;
-    if (!n0 || !posed || !mark || !touched || !fresh) goto out;
+    if (!n0 || !posed || !touched || !u.cand || !u.vlist || !u.vstamp || !u.tstamp || !u.marked ||
+        !u.freshv || !u.adj_start || !u.adj || !u.mark || !u.fresh)
+        goto out;
     for (size_t k = 0; k < t; k++) normal(pos, tris + 3 * k, n0 + 3 * k);
+    for (size_t i = 0; i < 3 * t; i++) u.adj_start[tris[i] + 1]++;
+    for (size_t v = 0; v < n; v++) u.adj_start[v + 1] += u.adj_start[v];
+    for (size_t k = 0; k < t; k++) /* (vlist as the fill counts, then cleared) */
+        for (int j = 0; j < 3; j++) {
+            uint32_t v = tris[3 * k + j];
+            u.adj[u.adj_start[v] + u.vstamp[v]++] = (uint32_t)k;
+        }
+    memset(u.vstamp, 0, n * sizeof *u.vstamp);
     rc = 0;
     for (int round = 0; round < UNFOLD_ROUNDS; round++) {
-        if (!mark_turned(r, pos, tris, t, n0, round ? fresh : NULL, posed, mark)) break;
-        memset(fresh, 0, r->n);
-        /* each turned triangle's soft vertices take the triangle's mean weight, in turn */
-        bool moved = false;
-        for (size_t k = 0; k < t; k++) {
-            const uint32_t *f = tris + 3 * k;
-            if (!mark[k]) continue;
+        if (!mark_turned(r, pos, tris, t, n0, round == 0, posed, &u)) break;
+        for (size_t i = 0; i < u.nfresh; i++) u.fresh[u.freshv[i]] = 0;
+        u.nfresh = 0;
+        /* each turned triangle's soft vertices take the triangle's mean weight, in turn (in
+         * the triangles' order) */
+        for (size_t i = 0; i < u.nmarked; i++) {
+            const uint32_t *f = tris + 3 * (size_t)u.marked[i];
             double mean = (r->w[f[0]] + r->w[f[1]] + r->w[f[2]]) / 3;
             for (int j = 0; j < 3; j++)
                 if (r->kind[f[j]] == FP_RIG_SOFT && r->w[f[j]] != (float)mean) {
                     r->w[f[j]] = (float)mean;
-                    touched[f[j]] = fresh[f[j]] = 1;
-                    moved = true;
+                    touched[f[j]] = 1;
+                    if (!u.fresh[f[j]]) u.fresh[f[j]] = 1, u.freshv[u.nfresh++] = f[j];
                 }
         }
-        if (!moved) break; /* what is left turned over has no soft vertex to give */
+        if (!u.nfresh) break; /* what is left turned over has no soft vertex to give */
     }
     if (changed)
         for (size_t v = 0; v < r->n; v++) *changed += touched[v]; /* (soft vertices only) */
 out:
-    free(n0);
-    free(posed);
-    free(mark);
-    free(touched);
-    free(fresh);
+    free(n0), free(posed), free(touched);
+    free(u.cand), free(u.vlist), free(u.vstamp), free(u.tstamp), free(u.marked), free(u.freshv);
+    free(u.adj_start), free(u.adj), free(u.mark), free(u.fresh);
     return rc;
 }
