@@ -15,6 +15,7 @@
 #include "fp_error.h"
 #include "fp_stats.h"
 #include "fp_mesh.h"
+#include "fp_rig.h"
 #include "fp_session.h"
 #include "step_engine.h"
 
@@ -893,7 +894,7 @@ static void nap_ms(int ms)
 }
 
 static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char *label,
-                     const fp_mesh *mesh)
+                     const fp_mesh *mesh, const char *rig_path)
 {
     char input[4300];
     snprintf(input, sizeof input, "replay:%s/hands/leap-motion/three-claps_joints_mm.csv%s",
@@ -908,6 +909,7 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
     so.exact_frames = bo->exact_frames;
     so.input_clock = bo->every_frame; /* (--every-frame: stepped on the recording's clock) */
     if (bo->no_rig) so.rig_path = "none";
+    else if (rig_path) so.rig_path = rig_path; /* (a subdivided face's: ICT's, carried) */
     char err[1024];
     fp_session *s = NULL;
     int64_t open0 = fp_now_ns(); /* the session's index and contact guard, the input */
@@ -1108,7 +1110,11 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
                "%zu commits, contact guard %s, %zu run on the frame thread\n",
                label, n, open_s, nf, seconds, skips, nact, ncommit, bo->no_contact_guard ? "off" : "on",
                nthere);
-        printf("  rig: %s\n", fp_session_rig_how(s));
+        if (rig_path && !bo->no_rig)
+            printf("  rig: the ICT face's, carried through each subdivision (bench_rig.c: a midpoint in a "
+                   "region when both ends are)\n");
+        else
+            printf("  rig: %s\n", fp_session_rig_how(s));
         if (!bo->no_contact_guard)
             printf("  contact hold %s: %.0f vertices a deforming frame kept in place (moved under "
                    "1e-5 of the face's diagonal since the last frame)\n",
@@ -1191,20 +1197,38 @@ static int case_frame(const bench_opts *o)
     fprintf(stderr, "bench: frame (the session's whole frame; three-claps at its own pace, 60 fps, %s)\n",
             frame_bo->mapping ? frame_bo->mapping : "anchored");
     if (frame_bo->trace) fputs(FP_BENCH_TRACE_HEADER, frame_bo->trace);
-    int rc = frame_run(o, frame_bo, "ict", m);
+    int rc = frame_run(o, frame_bo, "ict", m, NULL);
     if (!rc) rc = fp_bench_isolate(stdout, frame_bo, m, "ict", fp_bench_data_dir(), o->json); /* issue 56 */
     if (!rc) rc = fp_bench_isolate_small(stdout, frame_bo, fp_bench_data_dir(), o->json);
     unsigned levels = frame_bo->subdivide ? frame_bo->subdivide : 1u << 3;
+    /* the subdivided faces carry the ICT face's rig (bench_rig.c), unless --no-rig */
+    fp_bench_rig *rig = NULL;
+    char rdir[4096], rpath[4300];
+    if (!rc && !frame_bo->no_rig && levels > 1 &&
+        !fp_rig_find(fp_rig_default_dir(NULL, rdir, sizeof rdir), m->vertex_count, m->positions, rpath,
+                     sizeof rpath, err, sizeof err) &&
+        fp_bench_rig_open(rpath, &rig, err, sizeof err))
+        fprintf(stderr, "bench: frame: the subdivided faces without a rig: %s\n", err);
     fp_mesh *sub = m;
     for (int l = 1; l <= FP_BENCH_MAX_LEVEL && levels >> l && !rc; l++) {
         fp_mesh *next = fp_mesh_subdivide(sub);
-        if (sub != m) fp_mesh_free(&sub);
         if (!next) rc = -ENOMEM;
+        if (!rc && rig && fp_bench_rig_subdivide(rig, sub, next, err, sizeof err)) {
+            fprintf(stderr, "bench: frame: the subdivided faces without a rig: %s\n", err);
+            fp_bench_rig_free(&rig);
+        }
+        if (sub != m) fp_mesh_free(&sub);
         sub = next;
-        char label[32];
+        char label[32], tmp[4300] = "";
         snprintf(label, sizeof label, "ict-subdiv%d", l);
-        if (!rc && (levels >> l & 1u)) rc = frame_run(o, frame_bo, label, sub);
+        if (!rc && (levels >> l & 1u) && rig && fp_bench_rig_write(rig, tmp, sizeof tmp, err, sizeof err)) {
+            fprintf(stderr, "bench: frame: %s without a rig: %s\n", label, err);
+            *tmp = '\0';
+        }
+        if (!rc && (levels >> l & 1u)) rc = frame_run(o, frame_bo, label, sub, *tmp ? tmp : NULL);
+        if (*tmp) unlink(tmp);
     }
+    fp_bench_rig_free(&rig);
     if (sub != m) fp_mesh_free(&sub);
     fp_mesh_free(&m);
     return rc;

@@ -74,4 +74,16 @@ int fp_bench_isolate(FILE *out, const fp_bench_options *bo, const struct fp_mesh
 /** The same on the MediaPipe face (468 vertices): the overhead without the large base's copy. */
 int fp_bench_isolate_small(FILE *out, const fp_bench_options *bo, const char *data_dir, bool json);
 
+/** The ICT face's rig carried through the frame case's subdivisions (bench_rig.c; the rule is
+ *  there): open a rig file (a JSON document held whole), carry it from `coarse` to `fine`
+ *  (fp_mesh_subdivide(coarse); the rig must be coarse's), write it to a new temporary file
+ *  (path: its name, n bytes; the caller unlinks it), free it. Each returns 0 or a negative
+ *  code with err set. One thread. */
+typedef struct fp_bench_rig fp_bench_rig;
+int fp_bench_rig_open(const char *path, fp_bench_rig **out, char *err, size_t errlen);
+int fp_bench_rig_subdivide(fp_bench_rig *r, const struct fp_mesh *coarse, const struct fp_mesh *fine,
+                           char *err, size_t errlen);
+int fp_bench_rig_write(const fp_bench_rig *r, char *path, size_t n, char *err, size_t errlen);
+void fp_bench_rig_free(fp_bench_rig **r);
+
 #endif

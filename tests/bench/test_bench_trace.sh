@@ -81,8 +81,8 @@ for mesh, (nv, frames, skipped, deforming, commits) in table.items():
 print("trace:", {m: len([r for r in rows if r["mesh"] == m]) for m in table}, "rows")
 PY
 
-# 3. --subdivide 1 --every-frame: the ICT face and its first subdivision, in the table and the
-# trace; every frame of the recording stepped on its own clock, so the 105k face (whose slow
+# 3. --subdivide 1 --every-frame: the ICT face and its first subdivision (with the ICT face's
+# rig carried onto it), in the table and the trace; every frame of the recording stepped on its own clock, so the 105k face (whose slow
 # frames the paced loop of 2. would skip periods after) has as many frames as the ICT face, and
 # none skipped
 "$fp" bench --case frame --quick --subdivide 1 --every-frame --trace "$tmp/o/t1.csv" >"$tmp/out1" 2>"$tmp/err" ||
@@ -95,6 +95,8 @@ awk -F, 'NR > 1 && $NF != 0 { bad = 1 } END { exit bad }' "$tmp/o/t1.csv" ||
     fail "--every-frame: a frame's skipped_after is not 0"
 grep -q "^frame ict-subdiv1 *105569 vertices" "$tmp/out1" || fail "no ict-subdiv1 row of 105569 vertices: $(grep '^frame' "$tmp/out1")"
 grep -q "^frame ict-subdiv3" "$tmp/out1" && fail "--subdivide 1 ran level 3 too"
+grep -A1 "^frame ict-subdiv1" "$tmp/out1" | grep -q "rig: the ICT face's, carried through each subdivision" ||
+    fail "the 105k face does not carry the ICT face's rig: $(grep -A1 '^frame ict-subdiv1' "$tmp/out1")"
 cut -d, -f1 "$tmp/o/t1.csv" | sort -u | tr '\n' ' ' | grep -qx "ict ict-subdiv1 mesh " ||
     fail "the trace's meshes: $(cut -d, -f1 "$tmp/o/t1.csv" | sort -u | tr '\n' ' ')"
 exit 0
