@@ -23,6 +23,7 @@
 
 #include "fp_vec.h"
 #include "fp_contact.h"
+#include "fp_select.h"
 
 #include <errno.h>
 #include <math.h>
@@ -562,8 +563,7 @@ long fpc_tree_update(fp_contact *c, const float *s, const float *ref, bool recor
 long fpc_tree_check(fp_contact *c, const float *s, const float *ref, size_t *flips, bool record,
                     bool *accepted);
 
-/* contact_cluster.c: the hierarchy's building; the median split (also the k-d tree's) */
-void fpc_select_mid(uint32_t *order, size_t lo, size_t hi, size_t mid, int a, const float *key);
+/* contact_cluster.c: the hierarchy's building (its median split, as the k-d tree's: fp_select.h) */
 int fpc_tree_build(fp_contact *c, struct track *k);
 
 /* contact_track.c: the incremental state */

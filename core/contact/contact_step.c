@@ -61,7 +61,7 @@ static uint32_t kd_build(kdnode *kd, size_t *len, uint32_t *ix, const float *pos
     int ax = 0; /* split at the median of the longest side */
     for (int a = 1; a < 3; a++)
         if (d->hi[a] - d->lo[a] > d->hi[ax] - d->lo[ax]) ax = a;
-    fpc_select_mid(ix, first, first + n, first + n / 2, ax, pos);
+    fp_select_mid(ix, first, first + n, first + n / 2, ax, pos);
     uint32_t l = kd_build(kd, len, ix, pos, first, n / 2);
     uint32_t r = kd_build(kd, len, ix, pos, first + n / 2, n - n / 2);
     kd[x].left = l;

@@ -98,8 +98,10 @@ typedef struct fp_leap_angles_row {
     uint32_t valid;                      /* bit i: column i was not empty */
 } fp_leap_angles_row;
 
-/** A joints-format row (in->format FP_LEAPCSV_JOINTS) as an fp_leap_joints_row: the lead
- *  columns, and the values as valuef[] holds them. */
+/** A joints-format row (in->format FP_LEAPCSV_JOINTS, 69 values) as an fp_leap_joints_row:
+ *  the lead columns, and the values as valuef[] holds them (mm; the palm also as joint
+ *  FP_JOINT_PALM). No errors, no allocation; both pointers the caller's, not NULL.
+ *  Reentrant, [any-thread]. Used by both readers (leapcsv.c, leapjson.c). */
 void fp_leap_joints_from_row(const fp_leapcsv_row *in, fp_leap_joints_row *out);
 
 /** Read a *_joints_mm.csv whole. On success *rows (free() it) holds *n >= 1 rows in file

@@ -6,6 +6,8 @@
  * vertices are 64 times as dense as on the ICT face. */
 #include "fp_rig_internal.h"
 
+#include "fp_select.h"
+
 #include <assert.h>
 #include <errno.h>
 #include <math.h>
@@ -26,30 +28,6 @@ typedef struct tree {
     const float *pos;
 } tree;
 
-/* ix[lo .. hi) partly sorted so that ix[mid] has the mid-th smallest coordinate on axis a */
-static void select_mid(uint32_t *ix, size_t lo, size_t hi, size_t mid, int a, const float *pos)
-{
-    while (hi - lo > 1) {
-        float p = pos[3 * (size_t)ix[lo + (hi - lo) / 2] + a];
-        size_t i = lo, j = hi - 1;
-        while (i <= j) {
-            while (pos[3 * (size_t)ix[i] + a] < p) i++;
-            while (pos[3 * (size_t)ix[j] + a] > p) j--;
-            if (i <= j) {
-                uint32_t t = ix[i];
-                ix[i] = ix[j];
-                ix[j] = t;
-                i++;
-                if (j == 0) break;
-                j--;
-            }
-        }
-        if (mid <= j) hi = j + 1;
-        else if (mid >= i) lo = i;
-        else return;
-    }
-}
-
 static uint32_t build(tree *t, uint32_t first, uint32_t n)
 {
     uint32_t x = (uint32_t)t->len++;
@@ -68,7 +46,7 @@ static uint32_t build(tree *t, uint32_t first, uint32_t n)
     int ax = 0;
     for (int a = 1; a < 3; a++)
         if (d->hi[a] - d->lo[a] > d->hi[ax] - d->lo[ax]) ax = a;
-    select_mid(t->ix, first, first + n, first + n / 2, ax, t->pos);
+    fp_select_mid(t->ix, first, first + n, first + n / 2, ax, t->pos);
     uint32_t l = build(t, first, n / 2), r = build(t, first + n / 2, n - n / 2);
     t->node[x].left = l;
     t->node[x].right = r;
