@@ -113,6 +113,29 @@ static commit_done commit_rig_ranges(fp_session *s, const uint32_t *gr, size_t n
     return (commit_done){fp_rig_step_posed(&s->rig, s->base), gr, ng, true};
 }
 
+/* A rig, where this frame's check of the guard ran (fp_cg_commit_ranges, gr): the base, the
+ * posed base and the engine's index change only on the blocks holding D_P or a vertex that
+ * check found moved, not on the whole supports (tr). Elsewhere in tr the shape shown is the
+ * posed base already (a vertex neither moved nor in D_P is where P and the reference, the
+ * posed base, have it), so the commit shape there is the base (fp_rig_unpose_range keeps
+ * unmoved vertices) and only the engine's output, which may hold a rigid vertex's
+ * displacement the blend ignored, goes back to the posed base. Bit for bit
+ * commit_rig_ranges over tr and D_P, for a fraction of the work where most of a support
+ * keeps its bits (unanchored, which commits every frame). */
+static commit_done commit_rig_moved(fp_session *s, const uint32_t *tr, size_t nt, const uint32_t *gr,
+                                    size_t ng)
+{
+    const float *cshape = fp_rig_step_commit_ranges(&s->rig, s->base, s->shown, gr, ng);
+    fp_history_commit_ranges(&s->history, cshape, gr, ng);
+    fp_rig_step_rebase_ranges(&s->rig, s->base, s->deformed, gr, ng);
+    const float *posed = fp_rig_step_posed(&s->rig, s->base);
+    for (size_t r = 0; r < nt; r++)
+        memcpy(s->deformed + 3 * (size_t)tr[2 * r], posed + 3 * (size_t)tr[2 * r],
+               3 * (size_t)tr[2 * r + 1] * sizeof(float));
+    fp_engine_step_commit_ranges(&s->engine, posed, gr, ng);
+    return (commit_done){posed, gr, ng, true};
+}
+
 /* A rig, the whole mesh: only the fingers' part goes into the base; the whole mesh is
  * unposed, committed, posed and re-indexed (the anchored gesture ended; unanchored
  * restarts anyway) */
@@ -135,14 +158,16 @@ void fp_commit_step_run(fp_session *s, fp_frame_stats *st)
     size_t ng = nt;
     bool rig_whole = s->rig.rig && (nt == SIZE_MAX || s->whole_rig_commit ||
                                     !fp_rig_step_posed_current(&s->rig));
-    if (s->rig.rig && !rig_whole && guard_shown)
-        rig_whole = (ng = fp_cg_ranges(&s->cg, tr, nt, &gr)) == SIZE_MAX;
     commit_done d;
-    /* without a rig, where the guard checked this frame's shape: only where a vertex moved
+    /* where this frame's check of the guard ran: only where a vertex moved
      * (fp_cg_commit_ranges), not the whole supports */
-    size_t nm = !s->rig.rig && !s->whole_rig_commit && nt != SIZE_MAX ? fp_cg_commit_ranges(&s->cg, &gr)
-                                                                    : SIZE_MAX;
-    if (nm != SIZE_MAX)
+    size_t nm = !s->whole_rig_commit && nt != SIZE_MAX && !rig_whole ? fp_cg_commit_ranges(&s->cg, &gr)
+                                                                  : SIZE_MAX;
+    if (nm == SIZE_MAX && s->rig.rig && !rig_whole && guard_shown)
+        rig_whole = (ng = fp_cg_ranges(&s->cg, tr, nt, &gr)) == SIZE_MAX;
+    if (nm != SIZE_MAX && s->rig.rig)
+        d = commit_rig_moved(s, tr, nt, gr, nm);
+    else if (nm != SIZE_MAX)
         d = guard_shown ? commit_guard_ranges(s, gr, nm) : commit_plain_ranges(s, gr, nm);
     else if (rig_whole)
         d = commit_rig_whole(s);

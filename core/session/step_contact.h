@@ -144,8 +144,9 @@ bool fp_cg_shows(const fp_cg_step *g, const float *shown);
  *  (step_commit.c) and by the shape shown's changed ranges (session.c). */
 size_t fp_cg_ranges(fp_cg_step *g, const uint32_t *tr, size_t nt, const uint32_t **out);
 
-/** Where a frame's commit must write, without a rig, when this frame's fp_cg_run checked its
- *  shape (shown: the engine's output, or the guard's shape scaled back): the blocks of 16
+/** Where a frame's commit must write when this frame's fp_cg_run checked its
+ *  shape (with a rig, the base, the posed base and the index; the engine's output goes back
+ *  to the posed base on the whole touched ranges, step_commit.c) (shown: the engine's output, or the guard's shape scaled back): the blocks of 16
  *  vertices holding the guard's D_P or a vertex that check found moved (fp_contact_moved),
  *  as fp_cg_ranges gives them. The shape shown differs from the base (the guard's reference,
  *  P before the check outside D_P) only in D_P; the engine's output differs from the shape
