@@ -102,6 +102,39 @@ static void fill_tree_range(csrbf_points *p, size_t b0, size_t b1)
     }
 }
 
+/* fill_tree_range over the blocks of vertex ranges ((first, count) pairs), level by level,
+ * a node shared by consecutive ranges refit once (ranges in any order give the same boxes:
+ * each node is the union of its children, refit after them). A range's own walk to the top, as fill_tree_range does it,
+ * cost a commit of the 1.7M-vertex face's few thousand ranges of 16 vertices a fifth of a
+ * millisecond. */
+static void fill_tree_ranges(csrbf_points *p, const uint32_t *ranges, size_t nranges)
+{
+    size_t div = 1;
+    for (int l = 1; l < p->tlevels; l++) {
+        div *= CSRBF_FAN;
+        size_t last = SIZE_MAX; /* the last node refit at this level */
+        for (size_t r = 0; r < nranges; r++) {
+            size_t v0 = ranges[2 * r], c = ranges[2 * r + 1];
+            if (!c) continue;
+            size_t i0 = v0 / CSRBF_BLOCK / div, i1 = (v0 + c - 1) / CSRBF_BLOCK / div;
+            for (size_t i = i0; i <= i1; i++) {
+                if (i == last) continue; /* (every level below is refit: the same again) */
+                last = i;
+                for (int a = 0; a < 3; a++) {
+                    const float *clo = p->tlo[l - 1][a], *chi = p->thi[l - 1][a];
+                    float lo = INFINITY, hi = -INFINITY;
+                    for (size_t k = CSRBF_FAN * i; k < CSRBF_FAN * i + CSRBF_FAN; k++) {
+                        lo = clo[k] < lo ? clo[k] : lo;
+                        hi = chi[k] > hi ? chi[k] : hi;
+                    }
+                    p->tlo[l][a][i] = lo;
+                    p->thi[l][a][i] = hi;
+                }
+            }
+        }
+    }
+}
+
 static void fill_blocks(csrbf_points *p)
 {
     for (int a = 0; a < 3; a++) {
@@ -249,8 +282,8 @@ static int update_ranges(csrbf_points *p, const float *xyz, const uint32_t *rang
             for (size_t b = b0; b < b1; b++) fill_block(p, b, NULL);
         else
             fill_block_range(p, b0, b1);
-        fill_tree_range(p, b0, b1);
     }
+    fill_tree_ranges(p, ranges, nranges);
     if (later) {
         if (nranges) memcpy(p->pend, ranges, 2 * nranges * sizeof *ranges); /* (none: pend may be NULL) */
         p->npend = nranges;
