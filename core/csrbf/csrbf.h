@@ -236,8 +236,9 @@ int csrbf_points_update_ranges(csrbf_points *points, const float *xyz, const uin
  *  update or csrbf_points_index_nearest. Until then csrbf_points_nearest answers from the
  *  points' own blocks (the same answers, slower on a scrambled vertex order). For a commit in
  *  a real-time frame: the index's scattered writes (most of a commit's update on a large face:
- *  docs/performance.md) move to the next frame's sync. The ranges are copied (out of memory for them: the
- *  index is updated now). Same errors as csrbf_points_update_ranges; same thread rules. */
+ *  docs/performance.md) move to the next frame's sync, and only the listed vertices whose position changed
+ *  (bitwise) are kept for it, not the whole ranges (out of memory for them: the index is
+ *  updated now). Same errors as csrbf_points_update_ranges; same thread rules. */
 int csrbf_points_update_ranges_later(csrbf_points *points, const float *xyz,
                                      const uint32_t *ranges, size_t nranges);
 

@@ -29,8 +29,11 @@ static int check(size_t n, const float *xyz)
  * which only makes csrbf_evaluate's whole-box test more conservative). x: p's nearest index
  * (or NULL; a constant in each caller's loop, so the inlined copies differ): the block's
  * vertices whose position changed (bitwise: their old positions are still in s) go to their
- * places there, their blocks to refit (near_refit_dirty, by the caller). */
-static inline __attribute__((always_inline)) void fill_block(csrbf_points *p, size_t b, struct csrbf_near *x)
+ * places there, their blocks to refit (near_refit_dirty, by the caller). rec (or NULL, with
+ * x NULL): those vertices appended there instead (room for CSRBF_BLOCK), for the index to
+ * take later; returns how many. */
+static inline __attribute__((always_inline)) size_t fill_block(csrbf_points *p, size_t b, struct csrbf_near *x,
+                                                               uint32_t *rec)
 {
     size_t n = p->n, k0 = b * CSRBF_BLOCK, k1 = k0 + CSRBF_BLOCK < n ? k0 + CSRBF_BLOCK : n;
     uint32_t moved = 0; /* by bit */
@@ -38,7 +41,7 @@ static inline __attribute__((always_inline)) void fill_block(csrbf_points *p, si
         float lo = INFINITY, hi = -INFINITY;
         for (size_t k = k0; k < k1; k++) {
             float v = p->xyz[3 * k + a];
-            if (x) {
+            if (x || rec) {
                 uint32_t u, o;
                 memcpy(&u, &v, sizeof u);
                 memcpy(&o, &p->s[a][k], sizeof o);
@@ -60,15 +63,18 @@ static inline __attribute__((always_inline)) void fill_block(csrbf_points *p, si
         for (int a = 0; a < 3; a++) x->s[a][q] = p->s[a][k];
         x->dirty[0][q / CSRBF_BLOCK] = 1;
     }
+    size_t nrec = 0;
+    for (; rec && moved; moved &= moved - 1) rec[nrec++] = (uint32_t)(k0 + (size_t)__builtin_ctz(moved));
+    return nrec;
 }
 
 /* Recompute blocks b0..b1 (fill_block) */
 static void fill_block_range(csrbf_points *p, size_t b0, size_t b1)
 {
     if (p->near)
-        for (size_t b = b0; b < b1; b++) fill_block(p, b, p->near);
+        for (size_t b = b0; b < b1; b++) fill_block(p, b, p->near, NULL);
     else
-        for (size_t b = b0; b < b1; b++) fill_block(p, b, NULL);
+        for (size_t b = b0; b < b1; b++) fill_block(p, b, NULL, NULL);
 }
 
 /* csrbf_points_index_nearest's index (below) */
@@ -224,16 +230,15 @@ int csrbf_points_create(size_t n, const float *xyz, csrbf_points **out)
     return CSRBF_OK;
 }
 
-/* The pending ranges' positions (p->xyz) into the nearest index, its boxes refit. */
+/* The pending vertices' positions (p->xyz) into the nearest index, its boxes refit. */
 static void near_take_pending(csrbf_points *p)
 {
     struct csrbf_near *x = p->near;
-    for (size_t r = 0; x && r < p->npend; r++)
-        for (size_t k = p->pend[2 * r], e = k + p->pend[2 * r + 1]; k < e; k++) {
-            uint32_t q = x->place[k];
-            for (int a = 0; a < 3; a++) x->s[a][q] = p->xyz[3 * k + a];
-            x->dirty[0][q / CSRBF_BLOCK] = 1;
-        }
+    for (size_t i = 0; x && i < p->npend; i++) {
+        uint32_t k = p->pend[i], q = x->place[k];
+        for (int a = 0; a < 3; a++) x->s[a][q] = p->xyz[3 * (size_t)k + a];
+        x->dirty[0][q / CSRBF_BLOCK] = 1;
+    }
     if (x && p->npend) near_refit_dirty(x, p->n);
     p->npend = 0;
 }
@@ -255,7 +260,7 @@ int csrbf_points_update(csrbf_points *p, const float *xyz)
 }
 
 /* csrbf_points_update_ranges and _later: later, the index's part is left to
- * near_take_pending (the ranges kept in p->pend), else done now. */
+ * near_take_pending (the vertices that moved kept in p->pend), else done now. */
 static int update_ranges(csrbf_points *p, const float *xyz, const uint32_t *ranges, size_t nranges,
                          int later)
 {
@@ -265,31 +270,31 @@ static int update_ranges(csrbf_points *p, const float *xyz, const uint32_t *rang
         if (v0 > p->n || c > p->n - v0 || check(c, xyz + 3 * v0)) return CSRBF_ERR_INVALID;
     }
     near_take_pending(p); /* one update pending at most */
-    if (later && p->near && nranges > p->pend_cap) {
-        uint32_t *q = realloc(p->pend, 2 * nranges * sizeof *q);
+    size_t room = 0; /* the most vertices a later update may leave pending: its blocks' */
+    for (size_t r = 0; later && r < nranges; r++)
+        if (ranges[2 * r + 1])
+            room += ((ranges[2 * r] + (size_t)ranges[2 * r + 1] + CSRBF_BLOCK - 1) / CSRBF_BLOCK -
+                     ranges[2 * r] / CSRBF_BLOCK) * CSRBF_BLOCK;
+    if (later && p->near && room > p->pend_cap) {
+        uint32_t *q = realloc(p->pend, room * sizeof *q);
         if (q) {
             p->pend = q;
-            p->pend_cap = nranges;
+            p->pend_cap = room;
         }
     }
-    later = later && p->near && nranges <= p->pend_cap; /* (out of memory: now) */
+    later = later && p->near && room <= p->pend_cap; /* (out of memory: now) */
     for (size_t r = 0; r < nranges; r++) {
         size_t v0 = ranges[2 * r], c = ranges[2 * r + 1];
         if (!c) continue;
         memcpy(p->xyz + 3 * v0, xyz + 3 * v0, c * 3 * sizeof(float));
         size_t b0 = v0 / CSRBF_BLOCK, b1 = (v0 + c + CSRBF_BLOCK - 1) / CSRBF_BLOCK;
-        if (later)
-            for (size_t b = b0; b < b1; b++) fill_block(p, b, NULL);
+        if (later) /* (a block two ranges share: its vertices moved once, recorded once) */
+            for (size_t b = b0; b < b1; b++) p->npend += fill_block(p, b, NULL, p->pend + p->npend);
         else
             fill_block_range(p, b0, b1);
     }
     fill_tree_ranges(p, ranges, nranges);
-    if (later) {
-        if (nranges) memcpy(p->pend, ranges, 2 * nranges * sizeof *ranges); /* (none: pend may be NULL) */
-        p->npend = nranges;
-    } else if (p->near) {
-        near_refit_dirty(p->near, p->n);
-    }
+    if (!later && p->near) near_refit_dirty(p->near, p->n);
     p->stamp = csrbf_new_stamp();
     return CSRBF_OK;
 }

@@ -198,8 +198,9 @@ struct csrbf_points {
     size_t tcount[CSRBF_TREE_MAX];            /* nodes per level (unpadded) */
     float *tlo[CSRBF_TREE_MAX][3], *thi[CSRBF_TREE_MAX][3];
     struct csrbf_near *near; /* csrbf_points_index_nearest's index, or NULL */
-    uint32_t *pend;          /* ranges (first, count) whose new positions the index has not
-                                taken yet (csrbf_points_update_ranges_later); npend of them */
+    uint32_t *pend;          /* the vertices whose new positions the index has not taken yet
+                                (csrbf_points_update_ranges_later: those of its ranges whose
+                                position changed, bitwise); npend of them, room for pend_cap */
     size_t npend, pend_cap;
 };
 
