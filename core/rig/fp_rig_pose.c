@@ -3,12 +3,8 @@
 #define _GNU_SOURCE
 #include "fp_rig_internal.h"
 
-#include <assert.h>
 #include <errno.h>
-#include <float.h>
 #include <math.h>
-#include <stdbool.h>
-#include <stdlib.h>
 #include <string.h>
 
 static double jaw_open_value(const fp_rig *r, const float *values)
