@@ -84,35 +84,26 @@ static void near_refit_dirty(struct csrbf_near *x, size_t n);
 
 static size_t pad_fan(size_t n) { return (n + CSRBF_FAN - 1) / CSRBF_FAN * CSRBF_FAN; }
 
-/* Recompute the block tree's nodes above blocks b0..b1-1 from their children (exact: a
- * node's box is the union of its children's, padding boxes being empty). */
-static void fill_tree_range(csrbf_points *p, size_t b0, size_t b1)
+/* The block tree's node i at level l >= 1 from its children (exact: a node's box is the
+ * union of its children's, padding boxes being empty) */
+static void fill_tree_node(csrbf_points *p, int l, size_t i)
 {
-    if (b1 <= b0) return;
-    size_t i0 = b0, i1 = b1 - 1; /* inclusive node range at the current level */
-    for (int l = 1; l < p->tlevels; l++) {
-        i0 /= CSRBF_FAN;
-        i1 /= CSRBF_FAN;
-        for (int a = 0; a < 3; a++) {
-            const float *clo = p->tlo[l - 1][a], *chi = p->thi[l - 1][a];
-            for (size_t i = i0; i <= i1; i++) {
-                float lo = INFINITY, hi = -INFINITY;
-                for (size_t c = CSRBF_FAN * i; c < CSRBF_FAN * i + CSRBF_FAN; c++) {
-                    lo = clo[c] < lo ? clo[c] : lo;
-                    hi = chi[c] > hi ? chi[c] : hi;
-                }
-                p->tlo[l][a][i] = lo;
-                p->thi[l][a][i] = hi;
-            }
+    for (int a = 0; a < 3; a++) {
+        const float *clo = p->tlo[l - 1][a], *chi = p->thi[l - 1][a];
+        float lo = INFINITY, hi = -INFINITY;
+        for (size_t k = CSRBF_FAN * i; k < CSRBF_FAN * i + CSRBF_FAN; k++) {
+            lo = clo[k] < lo ? clo[k] : lo;
+            hi = chi[k] > hi ? chi[k] : hi;
         }
+        p->tlo[l][a][i] = lo;
+        p->thi[l][a][i] = hi;
     }
 }
 
-/* fill_tree_range over the blocks of vertex ranges ((first, count) pairs), level by level,
- * a node shared by consecutive ranges refit once (ranges in any order give the same boxes:
- * each node is the union of its children, refit after them). A range's own walk to the top, as fill_tree_range does it,
- * cost a commit of the 1.7M-vertex face's few thousand ranges of 16 vertices a fifth of a
- * millisecond. */
+/* The block tree's nodes above the blocks of vertex ranges ((first, count) pairs), level by
+ * level, a node shared by consecutive ranges refit once (ranges in any order give the same
+ * boxes: each node is refit after its children). A range's own walk to the top cost a commit
+ * of the 1.7M-vertex face's few thousand ranges of 16 vertices a fifth of a millisecond. */
 static void fill_tree_ranges(csrbf_points *p, const uint32_t *ranges, size_t nranges)
 {
     size_t div = 1;
@@ -126,16 +117,7 @@ static void fill_tree_ranges(csrbf_points *p, const uint32_t *ranges, size_t nra
             for (size_t i = i0; i <= i1; i++) {
                 if (i == last) continue; /* (every level below is refit: the same again) */
                 last = i;
-                for (int a = 0; a < 3; a++) {
-                    const float *clo = p->tlo[l - 1][a], *chi = p->thi[l - 1][a];
-                    float lo = INFINITY, hi = -INFINITY;
-                    for (size_t k = CSRBF_FAN * i; k < CSRBF_FAN * i + CSRBF_FAN; k++) {
-                        lo = clo[k] < lo ? clo[k] : lo;
-                        hi = chi[k] > hi ? chi[k] : hi;
-                    }
-                    p->tlo[l][a][i] = lo;
-                    p->thi[l][a][i] = hi;
-                }
+                fill_tree_node(p, l, i);
             }
         }
     }
@@ -148,7 +130,8 @@ static void fill_blocks(csrbf_points *p)
         p->bhi[a] = -INFINITY;
     }
     fill_block_range(p, 0, p->nblocks);
-    fill_tree_range(p, 0, p->nblocks);
+    const uint32_t all[2] = {0, (uint32_t)p->n}; /* (n < UINT32_MAX: csrbf_points_create) */
+    fill_tree_ranges(p, all, 1);
 }
 
 void csrbf_points_destroy(csrbf_points **pp)
