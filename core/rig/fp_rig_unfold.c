@@ -15,6 +15,7 @@
  * once an opening. */
 #define _GNU_SOURCE
 #include "fp_rig_internal.h"
+#include "fp_mesh.h"
 
 #include <assert.h>
 #include <errno.h>
@@ -53,7 +54,7 @@ static bool turned(const float *posed, const uint32_t *t, const double n0[3])
  * need posed (vlist, up to n; vstamp[v] == clock: listed already; tstamp[k] == clock: triangle
  * k looked at). A round's marked triangles (marked, ascending; mark[k] set) and the vertices
  * it changed (freshv; fresh[v] set). Each vertex's triangles (adj[adj_start[v] ..
- * adj_start[v + 1])), so that a round after the first looks only at the triangles of the
+ * adj_start[v + 1]), fp_mesh_vertex_triangles), so that a round after the first looks only at the triangles of the
  * vertices the last one changed, not at all t (on the 1.7M-vertex face, ICT subdivided three
  * times, the rounds ran to their cap of 200, each over 3.4M triangles eight times). */
 typedef struct unfold {
@@ -144,21 +145,13 @@ int fp_rig_unfold_jaw(fp_rig *r, const float *pos, const uint32_t *tris, size_t 
     unfold u = {.cand = malloc(t * sizeof *u.cand), .vlist = malloc(n * sizeof *u.vlist),
                 .vstamp = calloc(n, sizeof *u.vstamp), .tstamp = calloc(t, sizeof *u.tstamp),
                 .marked = malloc(t * sizeof *u.marked), .freshv = malloc(n * sizeof *u.freshv),
-                .adj_start = calloc(n + 1, sizeof *u.adj_start), .adj = malloc(3 * t * sizeof *u.adj),
                 .mark = calloc(t, 1), .fresh = calloc(n, 1)};
     int rc = -ENOMEM;
     if (!n0 || !posed || !touched || !u.cand || !u.vlist || !u.vstamp || !u.tstamp || !u.marked ||
-        !u.freshv || !u.adj_start || !u.adj || !u.mark || !u.fresh)
+        !u.freshv || !u.mark || !u.fresh)
         goto out;
+    if ((rc = fp_mesh_vertex_triangles(tris, t, n, &u.adj_start, &u.adj))) goto out; /* (-ENOMEM, -EINVAL) */
     for (size_t k = 0; k < t; k++) normal(pos, tris + 3 * k, n0 + 3 * k);
-    for (size_t i = 0; i < 3 * t; i++) u.adj_start[tris[i] + 1]++;
-    for (size_t v = 0; v < n; v++) u.adj_start[v + 1] += u.adj_start[v];
-    for (size_t k = 0; k < t; k++) /* (vlist as the fill counts, then cleared) */
-        for (int j = 0; j < 3; j++) {
-            uint32_t v = tris[3 * k + j];
-            u.adj[u.adj_start[v] + u.vstamp[v]++] = (uint32_t)k;
-        }
-    memset(u.vstamp, 0, n * sizeof *u.vstamp);
     rc = 0;
     for (int round = 0; round < UNFOLD_ROUNDS; round++) {
         if (!mark_turned(r, pos, tris, t, n0, round == 0, posed, &u)) break;
