@@ -199,11 +199,17 @@ static void test_script_parse(void **state)
     assert_true(s.cmds[2].number == -30 && s.cmds[2].pitch == 5 && s.cmds[2].zoom == 0.2);
     assert_true(s.cmds[3].op == FP_SCRIPT_WAIT_FRAMES && s.cmds[3].number == 4);
     fp_script_free(&s);
+    /* seconds on the wall clock, fractions kept (frames are whole) */
+    assert_int_equal(fp_script_parse("wait seconds 1.25; wait seconds 0", &s, err, sizeof err), 0);
+    assert_true(s.cmds[0].op == FP_SCRIPT_WAIT_SECONDS && s.cmds[0].number == 1.25);
+    assert_true(s.cmds[1].op == FP_SCRIPT_WAIT_SECONDS && s.cmds[1].number == 0);
+    fp_script_free(&s);
     const char *bad[] = {"jump 3", "key Q", "wait forever", "radius -1", "shot", "close now",
                          "wait frames x", "camera", "camera 10", "camera 10 95", "camera 1 2 0",
                          "camera 1 2 3 4", "camera nan 0", "radius 0x10", "radius inf",
                          "scrub 0x1p-1", "wait frames 0x3", "camera 0x10 5", "camera 10 5 0x1",
-                         "wait frames 3 x"};
+                         "wait frames 3 x", "wait seconds", "wait seconds -1", "wait seconds inf",
+                         "wait seconds 2 3"};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         err[0] = '\0';
         assert_int_equal(fp_script_parse(bad[i], &s, err, sizeof err), -EINVAL);

@@ -68,6 +68,9 @@ int fp_script_parse(const char *text, fp_script *s, char *err, size_t errlen)
             else if (m == 2 && !strcmp(what, "frames") && k >= 0 && k < 1e9) {
                 c.op = FP_SCRIPT_WAIT_FRAMES;
                 c.number = floor(k);
+            } else if (m == 2 && !strcmp(what, "seconds") && k >= 0 && k < 1e6) {
+                c.op = FP_SCRIPT_WAIT_SECONDS; /* for live inputs, which run on the wall clock */
+                c.number = k;
             } else {
                 rc = -EINVAL;
             }
@@ -108,7 +111,7 @@ int fp_script_parse(const char *text, fp_script *s, char *err, size_t errlen)
             rc = -EINVAL;
         }
         if (rc == -EINVAL)
-            snprintf(err, errlen, "--script: command %d '%s %s' is not one of: wait hands|end|reload|frames N, "
+            snprintf(err, errlen, "--script: command %d '%s %s' is not one of: wait hands|end|reload|frames N|seconds S, "
                      "key NAME, shot FILE, radius R, drop FILE, scrub F, camera YAW PITCH [ZOOM], print mapping|hud|messages, close", index, word, arg);
         if (!rc) rc = add(s, c);
         else free(c.text);

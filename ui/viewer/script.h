@@ -13,13 +13,14 @@ typedef enum fp_script_op {
     FP_SCRIPT_SCRUB,         /* scrub F: the take review's playhead to fraction F (the mouse) */
     FP_SCRIPT_PRINT_HUD,     /* print hud: one stdout line, the HUD's state, commits and scale */
     FP_SCRIPT_CAMERA,        /* camera YAW PITCH [ZOOM]: the framed view turned (degrees), zoomed */
-    FP_SCRIPT_PRINT_MESSAGES /* print messages: the HUD's message stack, a stdout line each */
+    FP_SCRIPT_PRINT_MESSAGES, /* print messages: the HUD's message stack, a stdout line each */
+    FP_SCRIPT_WAIT_SECONDS   /* wait seconds S: until S s of the wall clock have passed */
 } fp_script_op;
 
 typedef struct fp_script_cmd {
     fp_script_op op;
     int key;            /* GLFW key code for FP_SCRIPT_KEY */
-    double number;      /* frames, radius; camera: yaw (degrees) */
+    double number;      /* frames, seconds, radius; camera: yaw (degrees) */
     double pitch, zoom; /* camera: pitch (degrees), zoom (> 0) */
     char *text;         /* file for SHOT and DROP (owned) */
 } fp_script_cmd;
@@ -28,6 +29,7 @@ typedef struct fp_script {
     fp_script_cmd *cmds;
     size_t count, next;
     uint64_t wait_start;  /* frame the current wait began at */
+    double wait_start_s;  /* and its wall clock (glfwGetTime, s) */
     int waiting;
     unsigned long reload_mark;  /* reload attempts when the current wait began */
 } fp_script;

@@ -599,15 +599,17 @@ static void run_script(viewer *v)
     while (sc->next < sc->count) {
         fp_script_cmd *c = &sc->cmds[sc->next];
         if (c->op == FP_SCRIPT_WAIT_HANDS || c->op == FP_SCRIPT_WAIT_END ||
-            c->op == FP_SCRIPT_WAIT_FRAMES || c->op == FP_SCRIPT_WAIT_RELOAD) {
+            c->op == FP_SCRIPT_WAIT_FRAMES || c->op == FP_SCRIPT_WAIT_RELOAD || c->op == FP_SCRIPT_WAIT_SECONDS) {
             if (!sc->waiting) {
                 sc->waiting = 1;
                 sc->wait_start = v->frames;
+                sc->wait_start_s = glfwGetTime();
                 sc->reload_mark = v->hot.attempts;
             }
             bool done = c->op == FP_SCRIPT_WAIT_HANDS  ? any_hand(v)
                       : c->op == FP_SCRIPT_WAIT_END    ? fp_session_finished(v->s)
                       : c->op == FP_SCRIPT_WAIT_RELOAD ? v->hot.attempts > sc->reload_mark
+                      : c->op == FP_SCRIPT_WAIT_SECONDS ? glfwGetTime() - sc->wait_start_s >= c->number
                                                        : v->frames - sc->wait_start >= (uint64_t)c->number;
             if (!done) return;
             sc->waiting = 0;
