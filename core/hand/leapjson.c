@@ -321,8 +321,17 @@ static int hand_row(const walk *W, const cJSON *frame, const char *fw, const cJS
         int64_t hid = 0, ft = 0;
         if ((rc = integer(W, p, pw, "handId", 2147483647.0, &hid))) return rc;
         if (hid != id) continue;
-        if ((rc = integer(W, p, pw, "type", 4, &ft))) return rc;
-        if (ft < 0) return bad(W, "%s.type: expected 0 (thumb) to 4 (pinky)", pw);
+        if (cJSON_GetObjectItemCaseSensitive(p, "type")) {
+            if ((rc = integer(W, p, pw, "type", 4, &ft))) return rc;
+            if (ft < 0) return bad(W, "%s.type: expected 0 (thumb) to 4 (pinky)", pw);
+        } else { /* (format 2 packs no type): Leap's finger id is 10 x its hand's id + its type */
+            int64_t fid = 0;
+            if ((rc = integer(W, p, pw, "id", 2147483647.0 * 11, &fid))) return rc;
+            ft = fid - 10 * hid;
+            if (ft < 0 || ft > 4)
+                return bad(W, "%s: no type, and its id %lld is not 10 x its hand's id %lld + 0 (thumb) "
+                              "to 4 (pinky)", pw, (long long)fid, (long long)hid);
+        }
         if (seen >> ft & 1) return bad(W, "%s: a second %s of hand %lld", pw, finger_name[ft], (long long)id);
         seen |= 1u << ft;
         for (int j = 0; j < 4; j++)
@@ -333,6 +342,85 @@ static int hand_row(const walk *W, const cJSON *frame, const char *fw, const cJS
             return bad(W, "%s: hand %lld has no %s (a pointable of type %d)", where, (long long)id,
                        finger_name[f], f);
     for (int i = 0; i < FP_LEAPCSV_JOINT_VALUES; i++) row->valuef[i] = (float)v[i];
+    return 0;
+}
+
+/* leapjs-playback's format 2 (recording.js, unPackArray): a packed value `data` unfolded by
+ * the packing structure `st` (frames[0]) into a new object (its leaves references into data,
+ * so it must be deleted before data): a name takes the value at its place; a nested array
+ * makes a list of each of data's items unfolded by it (hands, pointables); {key: st2} makes
+ * key the value at its place unfolded by st2. NULL with *rc set on an error. */
+static cJSON *unpack(const walk *W, const cJSON *st, const cJSON *data, const char *where, int *rc)
+{
+    if (!cJSON_IsArray(st)) {
+        *rc = bad(W, "frames[0]: expected an array of names (format 2's packing structure)");
+        return NULL;
+    }
+    if (!cJSON_IsArray(data)) {
+        *rc = bad(W, "%s: expected an array (a packed frame, format 2)", where);
+        return NULL;
+    }
+    cJSON *out = cJSON_CreateObject();
+    bool ok = out != NULL;
+    const cJSON *d = data->child;
+    for (const cJSON *s = st->child; ok && s; s = s->next, d = d ? d->next : NULL) {
+        if (cJSON_IsString(s)) { /* (past data's end: absent, as in recording.js) */
+            ok = !d || cJSON_AddItemReferenceToObject(out, s->valuestring, (cJSON *)d);
+        } else if (cJSON_IsArray(s)) { /* a list: every item of data by s */
+            cJSON_Delete(out);
+            ok = (out = cJSON_CreateArray()) != NULL;
+            int k = 0;
+            for (const cJSON *e = data->child; ok && e; e = e->next, k++) {
+                char ew[96];
+                snprintf(ew, sizeof ew, "%.80s[%d]", where, k);
+                cJSON *u = unpack(W, s, e, ew, rc);
+                ok = u && cJSON_AddItemToArray(out, u);
+                if (!ok) cJSON_Delete(u);
+            }
+            break;
+        } else if (cJSON_IsObject(s) && s->child && s->child->string) {
+            if (!d) continue;
+            char kw[96];
+            snprintf(kw, sizeof kw, "%.60s.%.30s", where, s->child->string);
+            cJSON *u = unpack(W, s->child, d, kw, rc);
+            ok = u && cJSON_AddItemToObject(out, s->child->string, u);
+            if (!ok) cJSON_Delete(u);
+        } else {
+            *rc = bad(W, "frames[0]: expected names, arrays and {name: [...]} (format 2's packing structure)");
+            ok = false;
+        }
+    }
+    if (ok) return out;
+    cJSON_Delete(out);
+    if (!*rc) *rc = fp_error_at(W->err, W->errlen, -ENOMEM, W->path, 0, 0, "out of memory");
+    return NULL;
+}
+
+/* frame f (where: its JSON path in the file), the recording's frame i, into a row for each
+ * hand (row: the row so far, its timestamp the frame before's when *have_ts) */
+static int frame_rows(const walk *W, const cJSON *f, const char *where, long i, fp_leapcsv_row *row,
+                      bool *have_ts, fp_leapcsv_row_fn fn, void *user)
+{
+    if (!cJSON_IsObject(f)) return bad(W, "%s: expected an object", where);
+    int64_t ts = 0;
+    int rc = integer(W, f, where, "timestamp", (double)FP_LEAPCSV_TIME_MAX_US, &ts);
+    if (rc) return rc;
+    if (*have_ts && ts < row->timestamp_us)
+        return bad(W, "%s.timestamp: %lld goes backwards (the frame before has %lld)", where,
+                   (long long)ts, (long long)row->timestamp_us);
+    *have_ts = true;
+    row->timestamp_us = ts;
+    row->frame = i;
+    const cJSON *hands = cJSON_GetObjectItemCaseSensitive(f, "hands");
+    if (hands && !cJSON_IsArray(hands)) return bad(W, "%s.hands: expected an array", where);
+    int h = 0;
+    for (const cJSON *hand = hands ? hands->child : NULL; hand; hand = hand->next, h++) {
+        char hw[80];
+        snprintf(hw, sizeof hw, "%.60s.hands[%d]", where, h);
+        if (!cJSON_IsObject(hand)) return bad(W, "%s: expected an object", hw);
+        if ((rc = hand_row(W, f, where, hand, hw, row))) return rc;
+        if ((rc = fn(user, row, W->err, W->errlen))) return rc;
+    }
     return 0;
 }
 
@@ -347,34 +435,26 @@ static int walk_frames(const walk *W, const cJSON *root, fp_leapcsv_row_fn fn, v
     row.format = FP_LEAPCSV_JOINTS;
     row.nvalues = FP_LEAPCSV_JOINT_VALUES;
     row.valid = (1u << FP_GLOVE_SENSORS) - 1u; /* as the joints CSV's rows */
+    /* format 2: frames[0] the packing structure, then a packed frame each */
+    const cJSON *meta = cJSON_GetObjectItemCaseSensitive(root, "metadata");
+    const cJSON *version = cJSON_GetObjectItemCaseSensitive(meta, "formatVersion");
+    const cJSON *st = cJSON_IsNumber(version) && version->valuedouble == 2 ? frames->child : NULL;
+    if (st && !cJSON_IsArray(st))
+        return bad(W, "frames[0]: expected an array of names (format 2's packing structure)");
     bool have_ts = false;
     long i = 0;
-    for (const cJSON *f = frames->child; f; f = f->next, i++) {
+    int rc = 0;
+    for (const cJSON *f = st ? st->next : frames->child; f; f = f->next, i++) {
         char where[64];
-        snprintf(where, sizeof where, "frames[%ld]", i);
-        if (cJSON_IsArray(f))
-            return bad(W, "%s: a packed frame (leapjs-playback's format 2); save the recording in "
-                          "format 1 (unpacked frames)", where);
-        if (!cJSON_IsObject(f)) return bad(W, "%s: expected an object", where);
-        int64_t ts = 0;
-        int rc = integer(W, f, where, "timestamp", (double)FP_LEAPCSV_TIME_MAX_US, &ts);
+        snprintf(where, sizeof where, "frames[%ld]", i + (st != NULL));
+        if (cJSON_IsArray(f) && !st)
+            return bad(W, "%s: a packed frame, but metadata.formatVersion is not 2 (leapjs-playback's "
+                          "packed format)", where);
+        cJSON *unpacked = st ? unpack(W, st, f, where, &rc) : NULL;
         if (rc) return rc;
-        if (have_ts && ts < row.timestamp_us)
-            return bad(W, "%s.timestamp: %lld goes backwards (the frame before has %lld)", where,
-                       (long long)ts, (long long)row.timestamp_us);
-        have_ts = true;
-        row.timestamp_us = ts;
-        row.frame = i;
-        const cJSON *hands = cJSON_GetObjectItemCaseSensitive(f, "hands");
-        if (hands && !cJSON_IsArray(hands)) return bad(W, "%s.hands: expected an array", where);
-        int h = 0;
-        for (const cJSON *hand = hands ? hands->child : NULL; hand; hand = hand->next, h++) {
-            char hw[64];
-            snprintf(hw, sizeof hw, "frames[%ld].hands[%d]", i, h);
-            if (!cJSON_IsObject(hand)) return bad(W, "%s: expected an object", hw);
-            if ((rc = hand_row(W, f, where, hand, hw, &row))) return rc;
-            if ((rc = fn(user, &row, W->err, W->errlen))) return rc;
-        }
+        rc = frame_rows(W, unpacked ? unpacked : f, where, i, &row, &have_ts, fn, user);
+        cJSON_Delete(unpacked);
+        if (rc) return rc;
     }
     return 0;
 }

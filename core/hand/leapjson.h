@@ -1,7 +1,8 @@
 /*
  * leapjson.h: the reader of Leap Motion playback recordings, the originals beside the CSVs in
  * shared/data/hands/leap-motion (*.json.lz): leapjs-playback's JSON frames (formats 0.1 and 1,
- * Leap protocol 6), plain (*.json) or compressed with LZ-string's compressToBase64 (*.json.lz).
+ * and its packed format 2; Leap protocol 6), plain (*.json) or compressed with LZ-string's
+ * compressToBase64 (*.json.lz).
  * Each hand of each frame is handed on as one row of the joints CSV (leapcsv.h), so that
  * `replay:` reads an original as it reads its conversion. Used by the replay input plugin
  * (static library `fp_leapjson`, PIC, hidden symbols).
@@ -12,10 +13,13 @@
  * within +-FP_LEAPCSV_TIME_MAX_US), "hands" (objects with "id", "type" "left" or "right",
  * "palmPosition", "palmNormal" and "direction", three numbers each) and "pointables"
  * (objects with "handId", "type" 0 thumb .. 4 pinky, and "mcpPosition", "pipPosition",
- * "dipPosition", "tipPosition"; tools, "tool": true, are passed over). Each hand has each of
+ * "dipPosition", "tipPosition"; tools, "tool": true, are passed over; without "type", Leap's
+ * rule that a finger's "id" is 10 x its hand's id + its type gives it). Each hand has each of
  * the five fingers once. Every position within FP_EVENT_MAX_MM (10 m) of the tracker. Other
- * fields are ignored. leapjs-playback's packed format 2 (frames as arrays) is refused with a
- * message. The compressed text is LZ-string's base64 alphabet (A-Z a-z 0-9 + / =), white
+ * fields are ignored. Format 2 (metadata.formatVersion 2, as leapjs-playback 0.2 saves): frames[0]
+ * is the packing structure (names, nested lists and {name: [...]}), each later frame an array of
+ * values in its order, unfolded as recording.js's unPackArray does; rows count its frames from
+ * frames[1] as frame 0, messages name the file's own index. The compressed text is LZ-string's base64 alphabet (A-Z a-z 0-9 + / =), white
  * space at its end allowed, at most FP_LEAPJSON_MAX_PACKED bytes, and decompresses to at most
  * FP_LEAPJSON_MAX_TEXT bytes (a stream that grows past it is refused: LZ's output can be
  * quadratic in its input).

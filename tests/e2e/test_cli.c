@@ -350,6 +350,25 @@ static void test_info(void **state)
     assert_non_null(strstr(out, "frames    403"));
     assert_non_null(strstr(out, "left, right"));
     assert_non_null(strstr(out, "leap-playback"));
+    /* a plain .json recording in leapjs-playback's packed format 2 (not a rig) */
+    write_file("packed.json",
+               "{\"metadata\":{\"formatVersion\":2},\"frames\":[[\"id\",\"timestamp\",{\"hands\":[[\"id\","
+               "\"type\",\"direction\",\"palmNormal\",\"palmPosition\"]]},{\"pointables\":[[\"id\",\"handId\","
+               "\"type\",\"tool\",\"mcpPosition\",\"pipPosition\",\"dipPosition\",\"tipPosition\"]]}],[null,"
+               "1000,[[7,\"right\",[0,0,-1],[0,-1,0],[1,200,3]]],[[null,7,1,true,null,null,null,"
+               "null],[null,7,0,null,[0,201,0],[0,202,-10],[0,203,-20],[0,204,-30]],[null,7,1,"
+               "null,[10,201,0],[10,202,-10],[10,203,-20],[10,204,-30]],[null,7,2,null,[20,201,"
+               "0],[20,202,-10],[20,203,-20],[20,204,-30]],[null,7,3,null,[30,201,0],[30,202,"
+               "-10],[30,203,-20],[30,204,-30]],[null,7,4,null,[40,201,0],[40,202,-10],[40,203,"
+               "-20],[40,204,-30]]]],[null,9000,[[7,\"right\",[0,0,-1],[0,-1,0],[1,200,3]]],[[null,"
+               "7,1,true,null,null,null,null],[null,7,0,null,[0,201,0],[0,202,-10],[0,203,-20],"
+               "[0,204,-30]],[null,7,1,null,[10,201,0],[10,202,-10],[10,203,-20],[10,204,-30]],"
+               "[null,7,2,null,[20,201,0],[20,202,-10],[20,203,-20],[20,204,-30]],[null,7,3,null,"
+               "[30,201,0],[30,202,-10],[30,203,-20],[30,204,-30]],[null,7,4,null,[40,201,0],[40,"
+               "202,-10],[40,203,-20],[40,204,-30]]]]]}");
+    assert_int_equal(fp("info packed.json"), 0);
+    assert_non_null(strstr(out, "leap-playback"));
+    assert_non_null(strstr(out, "frames    2"));
     snprintf(args, sizeof args, "info %s/faces/ict-facekit/generic_neutral_mesh.obj", data);
     assert_int_equal(fp(args), 0);
     assert_non_null(strstr(out, "vertices  26719"));

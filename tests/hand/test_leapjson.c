@@ -6,6 +6,8 @@
  *  - The four originals in shared/data give the rows of their CSV conversions (made by others
  *    from the same files): the same frames, times, hands, and every value within the CSV's
  *    rounding to 4 decimals.
+ *  - Format 2: each original packed as leapjs-playback 0.2 saves it (recording.js packArray,
+ *    its packing structure, no finger "type") reads as the original, row for row, bit for bit.
  *  - Hostile recordings get -EBADMSG and a message naming the file and the JSON path.
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
@@ -21,6 +23,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include <cJSON.h>
 #include <cmocka.h>
 
 #include "fp_test_support.h"
@@ -149,6 +152,120 @@ static void originals_equal_their_csv(void **state)
     }
 }
 
+/* recording.js (leapjs-playback 0.2) packArray: data's values in st's order (a name: its
+ * value, null when absent; a nested array: each of data's items packed by it; {key: st2}:
+ * data[key] packed by st2) */
+static cJSON *pack(const cJSON *st, const cJSON *data)
+{
+    cJSON *out = cJSON_CreateArray();
+    for (const cJSON *s = st->child; s; s = s->next) {
+        if (cJSON_IsString(s)) {
+            const cJSON *v = cJSON_GetObjectItemCaseSensitive(data, s->valuestring);
+            cJSON_AddItemToArray(out, v ? cJSON_Duplicate(v, true) : cJSON_CreateNull());
+        } else if (cJSON_IsArray(s)) {
+            for (const cJSON *e = data ? data->child : NULL; e; e = e->next) cJSON_AddItemToArray(out, pack(s, e));
+        } else {
+            cJSON_AddItemToArray(out, pack(s->child, cJSON_GetObjectItemCaseSensitive(data, s->child->string)));
+        }
+    }
+    return out;
+}
+
+/* leapjs-playback 0.2's packing structure (recording.js), as its format 2 files hold it:
+ * the pointables without "type" */
+static const char packing[] =
+    "[\"id\",\"timestamp\",{\"hands\":[[\"id\",\"type\",\"direction\",\"palmNormal\",\"palmPosition\","
+    "\"palmVelocity\",\"stabilizedPalmPosition\",\"pinchStrength\",\"grabStrength\",\"confidence\"]]},"
+    "{\"pointables\":[[\"id\",\"direction\",\"handId\",\"length\",\"stabilizedTipPosition\",\"tipPosition\","
+    "\"tipVelocity\",\"tool\",\"carpPosition\",\"mcpPosition\",\"pipPosition\",\"dipPosition\","
+    "\"btipPosition\",\"bases\"]]},{\"interactionBox\":[\"center\",\"size\"]}]";
+
+static void format2_reads_as_the_original(void **state)
+{
+    (void)state;
+    char dir[] = "/tmp/fp_leapjson2XXXXXX";
+    assert_non_null(mkdtemp(dir));
+    static const char *const recs[] = {"grab", "three-claps"};
+    for (size_t k = 0; k < sizeof recs / sizeof recs[0]; k++) {
+        char jp[4200], pp[256], err[512];
+        snprintf(jp, sizeof jp, "%s/hands/leap-motion/%s.json.lz", fp_test_data_dir(), recs[k]);
+        snprintf(pp, sizeof pp, "%s/%s-packed.json", dir, recs[k]);
+        /* the original's text, packed */
+        char *raw = NULL, *text = NULL, why[160];
+        size_t n = 0, tn = 0;
+        FILE *f = fopen(jp, "rb");
+        assert_non_null(f);
+        raw = malloc(1 << 22);
+        n = fread(raw, 1, 1 << 22, f);
+        fclose(f);
+        assert_int_equal(fp_lzstring_decode_base64(raw, n, FP_LEAPJSON_MAX_TEXT, &text, &tn, why, sizeof why), 0);
+        free(raw);
+        cJSON *orig = cJSON_Parse(text), *st = cJSON_Parse(packing);
+        free(text);
+        assert_non_null(orig);
+        assert_non_null(st);
+        cJSON *out = cJSON_CreateObject(), *frames = cJSON_AddArrayToObject(out, "frames");
+        cJSON_AddItemToObject(out, "metadata", cJSON_Parse("{\"formatVersion\":2,\"generatedBy\":\"LeapJS Playback 0.2.0\"}"));
+        cJSON_AddItemToArray(frames, cJSON_Duplicate(st, true));
+        size_t nf = 0;
+        for (const cJSON *fr = cJSON_GetObjectItemCaseSensitive(orig, "frames")->child; fr; fr = fr->next, nf++)
+            cJSON_AddItemToArray(frames, pack(st, fr));
+        char *packed = cJSON_PrintUnformatted(out);
+        fp_test_write_file(pp, packed);
+        free(packed);
+        cJSON_Delete(out);
+        cJSON_Delete(orig);
+        cJSON_Delete(st);
+        rows J = {0}, P = {0};
+        assert_int_equal(fp_leapjson_read(jp, collect, &J, err, sizeof err), 0);
+        int rc = fp_leapjson_read(pp, collect, &P, err, sizeof err);
+        if (rc) fprintf(stderr, "%s\n", err);
+        assert_int_equal(rc, 0);
+        printf("%-12s %zu frames packed (format 2): %zu rows, the original %zu\n", recs[k], nf, P.n, J.n);
+        assert_int_equal(P.n, J.n);
+        assert_true(J.n > 300);
+        for (size_t i = 0; i < J.n; i++) {
+            assert_int_equal(P.r[i].frame, J.r[i].frame);
+            assert_int_equal(P.r[i].timestamp_us, J.r[i].timestamp_us);
+            assert_int_equal(P.r[i].hand_id, J.r[i].hand_id);
+            assert_int_equal(P.r[i].side, J.r[i].side);
+            assert_memory_equal(P.r[i].value, J.r[i].value, sizeof J.r[i].value);
+        }
+        free(J.r);
+        free(P.r);
+        unlink(pp);
+    }
+    /* hostile packed files: the code and what the message names */
+    struct {
+        const char *text, *want;
+    } cases[] = {
+        {"{\"metadata\":{\"formatVersion\":2},\"frames\":[{\"id\":1}]}", "frames[0]: expected an array of names"},
+        {"{\"metadata\":{\"formatVersion\":2},\"frames\":[[\"timestamp\"],{\"timestamp\":1}]}",
+         "frames[1]: expected an array (a packed frame"},
+        {"{\"metadata\":{\"formatVersion\":2},\"frames\":[[\"timestamp\",7],[1]]}", "frames[0]: expected names"},
+        {"{\"metadata\":{\"formatVersion\":2},\"frames\":[[\"timestamp\",{\"hands\":[[\"id\"]]}],[1,7]]}",
+         "frames[1].hands: expected an array (a packed frame"},
+        {"{\"frames\":[[\"timestamp\"],[1]]}", "frames[0]: a packed frame, but metadata.formatVersion is not 2"},
+        {"{\"frames\":[{\"timestamp\":1,\"hands\":[{\"id\":7,\"type\":\"right\",\"palmPosition\":[1,2,3],"
+         "\"palmNormal\":[0,-1,0],\"direction\":[0,0,-1]}],\"pointables\":[{\"handId\":7,\"id\":99}]}]}",
+         "frames[0].pointables[0]: no type, and its id 99 is not 10 x its hand's id 7 + 0 (thumb) to 4"},
+    };
+    char path[256], err[512];
+    snprintf(path, sizeof path, "%s/bad.json", dir);
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        fp_test_write_file(path, cases[c].text);
+        rows R = {0};
+        int rc = fp_leapjson_read(path, collect, &R, err, sizeof err);
+        printf("packed %zu -> %s\n", c, err);
+        assert_int_equal(rc, -EBADMSG);
+        assert_non_null(strstr(err, path));
+        assert_non_null(strstr(err, cases[c].want));
+        free(R.r);
+    }
+    unlink(path);
+    rmdir(dir);
+}
+
 /* A frame of one right hand (id 7) at time ts: five fingers and a tool */
 static void frame_text(char *b, size_t n, long long ts, const char *hand_extra, int skip_finger)
 {
@@ -201,7 +318,7 @@ static void plain_json_and_hostile_files(void **state)
         {"no ring", "frames[0].hands[0]: hand 7 has no ring"},
         {"far palm", "frames[0].hands[0].palmPosition[1]: 20000 is beyond 10 m"},
         {"bad type", "frames[0].hands[0].type: expected \"left\" or \"right\""},
-        {"packed", "frames[0]: a packed frame"},
+        {"packed", "frames[0]: a packed frame, but metadata.formatVersion is not 2"},
         {"not json", "not valid JSON near line 2"},
         {"fraction", "frames[0].timestamp: expected an integer"},
         {"not base64", "not a Leap playback recording (JSON, or LZ-string base64 as *.json.lz): "
@@ -260,6 +377,7 @@ int main(void)
         cmocka_unit_test(lzstring_vectors),
         cmocka_unit_test(lzstring_refusals),
         cmocka_unit_test(originals_equal_their_csv),
+        cmocka_unit_test(format2_reads_as_the_original),
         cmocka_unit_test(plain_json_and_hostile_files),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -26,6 +26,20 @@ static bool is_take(const char *path)
     return n == sizeof sig && !memcmp(sig, "\x89" "FPTAKE\n", sizeof sig);
 }
 
+/* a .json that is a Leap playback recording, not a rig: no "facepuppet-rig" and a "frames"
+ * key in its first 64 KiB (a rig names its format first; a recording holds its frames) */
+static bool is_json_recording(const char *path)
+{
+    static char head[65537];
+    int code;
+    FILE *f = fp_file_fopen_regular(path, &code);
+    if (!f) return false;
+    size_t n = fread(head, 1, sizeof head - 1, f);
+    fclose(f);
+    head[n] = '\0';
+    return !strstr(head, "\"facepuppet-rig\"") && strstr(head, "\"frames\"");
+}
+
 static bool is_mesh(const char *path)
 {
     static const char *exts[] = {".obj", ".ply", ".off", ".stl", ".gltf", ".glb"};
@@ -123,7 +137,7 @@ static int info_main(int argc, char **argv)
         return FP_EXIT_USAGE;
     }
     const char *dot = strrchr(argv[1], '.');
-    if (dot && !strcasecmp(dot, ".json")) return fp_app_rig_info(argv[1]);
+    if (dot && !strcasecmp(dot, ".json") && !is_json_recording(argv[1])) return fp_app_rig_info(argv[1]);
     if (fp_stack_is_stack_path(argv[1])) return fp_app_stack_info(argv[1]);
     if (is_take(argv[1])) return fp_app_take_info(argv[1]);
     return is_mesh(argv[1]) ? mesh_info(argv[1]) : recording_info(argv[1]);
