@@ -405,7 +405,7 @@ static const char *faces[] = {"ict-facekit/generic_neutral_mesh.obj",
 static fp_test_recordings takes; /* the four, or FP_GUARD_HANDS's */
 
 /* Both mappings, strictly: no new crossing away from the input's own, at the end and at the
- * snapshots (FP_GUARD_HANDS=DIR, every *_joints_mm.csv in it, or FILE_joints_mm.csv runs
+ * snapshots (FP_GUARD_HANDS=DIR, every recording in it, *_joints_mm.csv or a Leap original, or one file, runs
  * other hands instead of the four, as test_reach's FP_REACH_HANDS). The fold-over guard alone (injective maps) does not give that: unanchored drags
  * compose hundreds of injective steps that squeeze near-touching surfaces (lips, eyelids)
  * together, the flat triangles between moved vertices are not the smooth mapped surface,

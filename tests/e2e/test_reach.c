@@ -16,9 +16,10 @@
  * run medians 32-100%, docs/performance.md "The rig cuts the push only").
  *
  * Set FP_REACH_ONLY=FACE/RECORDING substrings to run one pair (e.g. "ict/grab"), and
- * FP_REACH_HANDS=DIR (every *_joints_mm.csv in it) or FILE_joints_mm.csv to run other hands
- * instead of the four (fp_test_recordings_from: transformed copies, tools/hands-variants, or
- * a recording of your own; in the recordings' CSV format, docs/devices.md). Forensics: FP_TEST_VERBOSE
+ * FP_REACH_HANDS=DIR (every *_joints_mm.csv, *.json.lz or *.json in it) or one such file to run
+ * other hands instead of the four (fp_test_recordings_from: transformed copies,
+ * tools/hands-variants, leapjs-playback's other originals, or a recording of your own; in the
+ * recordings' CSV format, docs/devices.md, or a Leap playback original). Forensics: FP_TEST_VERBOSE
  * lists the frames the contact guard scaled back, FP_REACH_SAVE_FRAME=K saves frame K (to
  * FP_REACH_SAVE) instead of the largest ask's, FP_REACH_PAIRS=1 prints the start and end
  * distances of the vectors within 2 R of each other in each frame the fold-over guard

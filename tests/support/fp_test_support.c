@@ -47,12 +47,18 @@ const char *fp_test_face_path(void)
 }
 
 #define FP_TEST_JOINTS_SUFFIX "_joints_mm.csv"
+/* what a recording's file name ends in: the joints CSV, a Leap playback original */
+static const char *const suffixes[] = {FP_TEST_JOINTS_SUFFIX, ".json.lz", ".json"};
 
-/* 1 when file name f ends in FP_TEST_JOINTS_SUFFIX with something before it */
-static int is_joints(const char *f)
+/* the length of the suffix file name f ends in with something before it, or 0 */
+static size_t is_joints(const char *f)
 {
-    size_t n = strlen(f), k = strlen(FP_TEST_JOINTS_SUFFIX);
-    return n > k && strcmp(f + n - k, FP_TEST_JOINTS_SUFFIX) == 0;
+    size_t n = strlen(f);
+    for (size_t i = 0; i < sizeof suffixes / sizeof suffixes[0]; i++) {
+        size_t k = strlen(suffixes[i]);
+        if (n > k && strcmp(f + n - k, suffixes[i]) == 0) return k;
+    }
+    return 0;
 }
 
 static void add_recording(fp_test_recordings *out, const char *dir, const char *file)
@@ -61,8 +67,7 @@ static void add_recording(fp_test_recordings *out, const char *dir, const char *
     size_t i = out->n++;
     int w = snprintf(out->path[i], sizeof out->path[i], "%s/%s", dir, file);
     assert_true(w > 0 && (size_t)w < sizeof out->path[i]);
-    snprintf(out->name[i], sizeof out->name[i], "%.*s",
-             (int)(strlen(file) - strlen(FP_TEST_JOINTS_SUFFIX)), file);
+    snprintf(out->name[i], sizeof out->name[i], "%.*s", (int)(strlen(file) - is_joints(file)), file);
 }
 
 static int by_name(const void *a, const void *b)
@@ -94,7 +99,8 @@ void fp_test_recordings_from(const char *env, fp_test_recordings *out)
         const char *slash = strrchr(where, '/');
         const char *file = slash ? slash + 1 : where;
         if (!is_joints(file)) {
-            fprintf(stderr, "%s=%s: not a folder nor a *%s\n", env, where, FP_TEST_JOINTS_SUFFIX);
+            fprintf(stderr, "%s=%s: not a folder nor a *%s, *.json.lz or *.json\n", env, where,
+                    FP_TEST_JOINTS_SUFFIX);
             fail();
         }
         char dir[4200];
@@ -114,7 +120,8 @@ void fp_test_recordings_from(const char *env, fp_test_recordings *out)
         }
     closedir(d);
     if (!n) {
-        fprintf(stderr, "%s=%s: no *%s in that folder\n", env, where, FP_TEST_JOINTS_SUFFIX);
+        fprintf(stderr, "%s=%s: no *%s, *.json.lz or *.json in that folder\n", env, where,
+                FP_TEST_JOINTS_SUFFIX);
         fail();
     }
     qsort(names, n, sizeof names[0], by_name);

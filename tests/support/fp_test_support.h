@@ -32,8 +32,8 @@ const char *fp_test_face_path(void);
 
 #define FP_TEST_RECORDINGS_MAX 32
 
-/** Leap joints recordings (*_joints_mm.csv): their paths and names (the file name less
- *  "_joints_mm.csv"). */
+/** Leap recordings (*_joints_mm.csv, or the playback originals *.json.lz and *.json): their
+ *  paths and names (the file name less that ending), read through `replay:`. */
 typedef struct fp_test_recordings {
     size_t n;
     char path[FP_TEST_RECORDINGS_MAX][4200];
@@ -43,8 +43,8 @@ typedef struct fp_test_recordings {
 /** The recordings a test runs on, chosen by the environment variable `env` (so that the checks
  *  run on hands they were not tuned on, e.g. FP_REACH_HANDS): unset or empty, the four of
  *  <data>/hands/leap-motion (HandSplay-110fps, Waiting-110fps, grab, three-claps); a folder,
- *  every *_joints_mm.csv in it, sorted by name (at most FP_TEST_RECORDINGS_MAX); a
- *  *_joints_mm.csv file, that one. Fails the test, saying why, when `env` names neither or
+ *  every recording in it (*_joints_mm.csv, *.json.lz, *.json), sorted by name (at most
+ *  FP_TEST_RECORDINGS_MAX); such a file, that one. Fails the test, saying why, when `env` names neither or
  *  a folder without one. out: the caller's (large: keep it static or on the heap). */
 void fp_test_recordings_from(const char *env, fp_test_recordings *out);
 
