@@ -366,8 +366,9 @@ double fp_rig_finger_limit(const fp_rig *rig, const float *posed, const float st
  *      changed unknown where;
  *    - fp_rig_slope_index_update_ranges(ix, posed, ranges, n): the posed base changed only
  *      on these vertex ranges ((first, count) pairs): their slope vertices take their new
- *      positions, their blocks' boxes grow to hold them (O(log + slope vertices in the
- *      ranges)); boxes only grow, which keeps every skip exact;
+ *      positions, their blocks' boxes are made again from their vertices (O(log + the
+ *      touched blocks' vertices)); a box always holds its vertices, which keeps every skip
+ *      exact, and shrinks when skin that moved away comes back;
  *    - fp_rig_finger_limit_indexed(ix, start, radius): fp_rig_finger_limit(rig, posed,
  *      start, radius) for the posed base given last.
  *  create: 0, -EINVAL (NULL, rig not bound), -ENOMEM (16 bytes per slope vertex). Queries

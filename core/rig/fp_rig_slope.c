@@ -131,7 +131,9 @@ struct fp_rig_slope_index {
     int levels;          /* tree levels above the blocks (0: nb <= SLOPE_FAN) */
     size_t tcount[SLOPE_LEVELS + 1];  /* nodes a level; tcount[0] = nb */
     float (*tbox[SLOPE_LEVELS + 1])[6]; /* levels 1..levels: each node's box, lo then hi */
-    uint8_t *tdirty[SLOPE_LEVELS + 1]; /* levels 1..levels: nodes to refit (a box below grew) */
+    uint8_t *tdirty[SLOPE_LEVELS + 1]; /* levels 1..levels: nodes to refit (a box below changed) */
+    uint8_t *bdirty;     /* nb: a block whose box update_ranges recomputes (it is in bdlist) */
+    uint32_t *bdlist;    /* nb: those blocks */
 };
 
 /* Node i of level l's box (level 0: block b = i's, at its place) */
@@ -243,7 +245,10 @@ int fp_rig_slope_index_create(const fp_rig *r, fp_rig_slope_index **out)
     ix->order = malloc(ns * sizeof *ix->order);
     ix->pos = malloc(nb * sizeof *ix->pos);
     ix->seq = malloc(nb * sizeof *ix->seq);
-    bool ok = ix->block && ix->p && ix->dir && ix->slot && ix->keys && ix->order && ix->pos && ix->seq;
+    ix->bdirty = calloc(nb, 1);
+    ix->bdlist = malloc(nb * sizeof *ix->bdlist);
+    bool ok = ix->block && ix->p && ix->dir && ix->slot && ix->keys && ix->order && ix->pos && ix->seq &&
+              ix->bdirty && ix->bdlist;
     ix->tcount[0] = ix->nb;
     while (ok && ix->tcount[ix->levels] > SLOPE_FAN && ix->levels < SLOPE_LEVELS) {
         int l = ++ix->levels;
@@ -274,6 +279,8 @@ void fp_rig_slope_index_destroy(fp_rig_slope_index **ix)
     free((*ix)->order);
     free((*ix)->pos);
     free((*ix)->seq);
+    free((*ix)->bdirty);
+    free((*ix)->bdlist);
     for (int l = 1; l <= SLOPE_LEVELS; l++) {
         free((*ix)->tbox[l]);
         free((*ix)->tdirty[l]);
@@ -282,7 +289,8 @@ void fp_rig_slope_index_destroy(fp_rig_slope_index **ix)
     *ix = NULL;
 }
 
-/* Slope entry k takes vertex v's position in posed; its block's box grows to hold it. */
+/* Slope entry k takes vertex v's position in posed; its block's box grows to hold it (and
+ * its level 1 node is marked for the refit). */
 static void slope_put(fp_rig_slope_index *ix, size_t k, const float *posed)
 {
     uint32_t sl = ix->slot[k];
@@ -353,6 +361,7 @@ void fp_rig_slope_index_update_ranges(fp_rig_slope_index *ix, const float *posed
 {
     if (!ix || !posed || (nranges && !ranges)) return;
     const fp_rig *r = ix->rig;
+    size_t nd = 0; /* blocks touched */
     for (size_t j = 0; j < nranges; j++) {
         uint64_t a = ranges[2 * j], e = a + ranges[2 * j + 1];
         size_t lo = 0, hi = r->slope_count; /* the first slope vertex >= a */
@@ -361,7 +370,25 @@ void fp_rig_slope_index_update_ranges(fp_rig_slope_index *ix, const float *posed
             if (r->slope_v[mid] < a) lo = mid + 1;
             else hi = mid;
         }
-        for (size_t k = lo; k < r->slope_count && r->slope_v[k] < e; k++) slope_put(ix, k, posed);
+        for (size_t k = lo; k < r->slope_count && r->slope_v[k] < e; k++) {
+            slope_put(ix, k, posed);
+            uint32_t b = ix->slot[k] / SLOPE_BLOCK;
+            if (!ix->bdirty[b]) ix->bdirty[b] = 1, ix->bdlist[nd++] = b;
+        }
+    }
+    /* the touched blocks' boxes made again from their vertices: slope_put only grows them,
+     * and skin that went and came back would leave them as wide as its path, the tree's
+     * pruning weaker frame after frame in a long unanchored performance */
+    for (size_t j = 0; j < nd; j++) {
+        slope_block *bl = &ix->block[ix->bdlist[j]];
+        const float *p = &ix->p[4 * (size_t)ix->bdlist[j] * SLOPE_BLOCK];
+        ix->bdirty[ix->bdlist[j]] = 0;
+        for (int i = 0; i < 3; i++) bl->lo[i] = INFINITY, bl->hi[i] = -INFINITY;
+        for (uint32_t v = 0; v < bl->count; v++, p += 4)
+            for (int i = 0; i < 3; i++) {
+                bl->lo[i] = p[i] < bl->lo[i] ? p[i] : bl->lo[i];
+                bl->hi[i] = p[i] > bl->hi[i] ? p[i] : bl->hi[i];
+            }
     }
     tree_refit(ix, false);
 }
