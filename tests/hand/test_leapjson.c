@@ -152,6 +152,21 @@ static void originals_equal_their_csv(void **state)
     }
 }
 
+/* text written to path and read: refused with -EBADMSG, the message naming the file and
+ * holding want (printed after label) */
+static void refused(const char *path, const char *text, const char *label, const char *want)
+{
+    char err[512];
+    fp_test_write_file(path, text);
+    rows R = {0};
+    int rc = fp_leapjson_read(path, collect, &R, err, sizeof err);
+    printf("%-10s -> %s\n", label, err);
+    assert_int_equal(rc, -EBADMSG);
+    assert_non_null(strstr(err, path));
+    assert_non_null(strstr(err, want));
+    free(R.r);
+}
+
 /* recording.js (leapjs-playback 0.2) packArray: data's values in st's order (a name: its
  * value, null when absent; a nested array: each of data's items packed by it; {key: st2}:
  * data[key] packed by st2) */
@@ -250,17 +265,12 @@ static void format2_reads_as_the_original(void **state)
          "\"palmNormal\":[0,-1,0],\"direction\":[0,0,-1]}],\"pointables\":[{\"handId\":7,\"id\":99}]}]}",
          "frames[0].pointables[0]: no type, and its id 99 is not 10 x its hand's id 7 + 0 (thumb) to 4"},
     };
-    char path[256], err[512];
+    char path[256];
     snprintf(path, sizeof path, "%s/bad.json", dir);
     for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
-        fp_test_write_file(path, cases[c].text);
-        rows R = {0};
-        int rc = fp_leapjson_read(path, collect, &R, err, sizeof err);
-        printf("packed %zu -> %s\n", c, err);
-        assert_int_equal(rc, -EBADMSG);
-        assert_non_null(strstr(err, path));
-        assert_non_null(strstr(err, cases[c].want));
-        free(R.r);
+        char label[32];
+        snprintf(label, sizeof label, "packed %zu", c);
+        refused(path, cases[c].text, label, cases[c].want);
     }
     unlink(path);
     rmdir(dir);
@@ -350,16 +360,7 @@ static void plain_json_and_hostile_files(void **state)
         if (!strcmp(w, "not json")) snprintf(text, sizeof text, "{\"frames\":\n[}");
         if (!strcmp(w, "fraction")) snprintf(text, sizeof text, "{\"frames\":[{\"timestamp\":1.5}]}");
         if (!strcmp(w, "not base64")) snprintf(text, sizeof text, "BIUwNmD2A0?EDukBOYAmBCIA");
-        fp_test_write_file(path, text);
-        R.n = 0;
-        int rc = fp_leapjson_read(path, collect, &R, err, sizeof err);
-        printf("%-10s -> %s\n", w, err);
-        assert_int_equal(rc, -EBADMSG);
-        assert_non_null(strstr(err, path));
-        assert_non_null(strstr(err, cases[c].want));
-        free(R.r);
-        R.r = NULL;
-        R.cap = 0;
+        refused(path, text, w, cases[c].want);
     }
     /* a compressed text that is not JSON; and a missing file */
     fp_test_write_file(path, "BIUwNmD2A0AEDukBOYAmBCIA\n");

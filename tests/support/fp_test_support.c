@@ -51,7 +51,7 @@ const char *fp_test_face_path(void)
 static const char *const suffixes[] = {FP_TEST_JOINTS_SUFFIX, ".json.lz", ".json"};
 
 /* the length of the suffix file name f ends in with something before it, or 0 */
-static size_t is_joints(const char *f)
+static size_t recording_suffix(const char *f)
 {
     size_t n = strlen(f);
     for (size_t i = 0; i < sizeof suffixes / sizeof suffixes[0]; i++) {
@@ -67,7 +67,7 @@ static void add_recording(fp_test_recordings *out, const char *dir, const char *
     size_t i = out->n++;
     int w = snprintf(out->path[i], sizeof out->path[i], "%s/%s", dir, file);
     assert_true(w > 0 && (size_t)w < sizeof out->path[i]);
-    snprintf(out->name[i], sizeof out->name[i], "%.*s", (int)(strlen(file) - is_joints(file)), file);
+    snprintf(out->name[i], sizeof out->name[i], "%.*s", (int)(strlen(file) - recording_suffix(file)), file);
 }
 
 static int by_name(const void *a, const void *b)
@@ -98,7 +98,7 @@ void fp_test_recordings_from(const char *env, fp_test_recordings *out)
         /* one recording: its folder and file name */
         const char *slash = strrchr(where, '/');
         const char *file = slash ? slash + 1 : where;
-        if (!is_joints(file)) {
+        if (!recording_suffix(file)) {
             fprintf(stderr, "%s=%s: not a folder nor a *%s, *.json.lz or *.json\n", env, where,
                     FP_TEST_JOINTS_SUFFIX);
             fail();
@@ -113,7 +113,7 @@ void fp_test_recordings_from(const char *env, fp_test_recordings *out)
     char *names[FP_TEST_RECORDINGS_MAX];
     size_t n = 0;
     for (struct dirent *e; (e = readdir(d));)
-        if (is_joints(e->d_name)) {
+        if (recording_suffix(e->d_name)) {
             assert_true(n < FP_TEST_RECORDINGS_MAX);
             names[n] = strdup(e->d_name);
             assert_non_null(names[n++]);

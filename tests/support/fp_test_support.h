@@ -44,8 +44,8 @@ typedef struct fp_test_recordings {
  *  run on hands they were not tuned on, e.g. FP_REACH_HANDS): unset or empty, the four of
  *  <data>/hands/leap-motion (HandSplay-110fps, Waiting-110fps, grab, three-claps); a folder,
  *  every recording in it (*_joints_mm.csv, *.json.lz, *.json), sorted by name (at most
- *  FP_TEST_RECORDINGS_MAX); such a file, that one. Fails the test, saying why, when `env` names neither or
- *  a folder without one. out: the caller's (large: keep it static or on the heap). */
+ *  FP_TEST_RECORDINGS_MAX); such a file, that one. Fails the test, saying why, when `env`
+ *  names neither or a folder without one. out: the caller's (large: keep it static or on the heap). */
 void fp_test_recordings_from(const char *env, fp_test_recordings *out);
 
 /** Write text to path (created or truncated). Fails the test when it cannot. */
