@@ -238,10 +238,14 @@ typedef struct fp_frame_stats {
     float reach[FP_FRAME_REACH_MAX]; /* each one's reach: how far the skin vertex nearest its
                                  start point moved over how far its end point asked (1: all) */
     double reach_asked_max;   /* the longest of them, mesh units */
-    size_t reach_allowed_vectors; /* with a rig: the same vectors' reach against what the rig's
-                                 clamp allowed (the vector the engine got: a push toward a bone
-                                 held back); 0 without a rig */
+    size_t reach_allowed_vectors; /* with a rig: the same vectors' reach against what the rig
+                                 allowed (the vector its clamp left, the engine's, times the
+                                 grabbed vertex's mobility: a push toward a bone held back, the
+                                 blend near it); 0 without a rig */
     float reach_allowed[FP_FRAME_REACH_MAX];
+    size_t reach_held;        /* with a rig: vectors whose grabbed vertex the rig keeps still
+                                 (mobility 0: the skull or the jaw; skin_reach.h), left out of
+                                 reach_allowed */
     double min_det_j;         /* min det dT/dx over the moved vertices (and composed maps) with
                                  fp_session_options.measure_jacobian, else NAN (and when not
                                  active) */

@@ -224,8 +224,10 @@ static void engine_and_history(fp_session *s, const fp_control_set *cs, const fp
             show_deformed(s, (cs->intents & FP_INTENT_COMMIT) != 0, was, st);
             /* how far the skin followed the fingertips (skin_reach.h) */
             int64_t t0 = fp_now_ns();
-            fp_skin_reach_frame(s->engine.points, posed, s->shown, asked, s->rig.rig ? cs : NULL, st,
-                                &s->gesture_reach, &s->gesture_reach_allowed);
+            const float *mobility = s->rig.rig && csrbf_points_count(s->engine.points) == s->rig.n
+                                        ? fp_rig_mobility(s->rig.rig) : NULL;
+            fp_skin_reach_frame(s->engine.points, posed, s->shown, asked, s->rig.rig ? cs : NULL, mobility,
+                                st, &s->gesture_reach, &s->gesture_reach_allowed);
             st->stage_ms[FP_STAGE_SHAPE] += (double)(fp_now_ns() - t0) / 1e6;
             if (cs->intents & FP_INTENT_COMMIT) fp_commit_step_run(s, st);
         } else {

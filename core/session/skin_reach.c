@@ -39,10 +39,10 @@ static double asked_of(const fp_control_set *cs, size_t i, const float *ref, con
 }
 
 void fp_skin_reach_frame(const csrbf_points *points, const float *ref, const float *shown,
-                         const fp_control_set *cs, const fp_control_set *allowed, fp_frame_stats *st,
-                         fp_skin_reach_gesture *g, fp_skin_reach_gesture *g_allowed)
+                         const fp_control_set *cs, const fp_control_set *allowed, const float *mobility,
+                         fp_frame_stats *st, fp_skin_reach_gesture *g, fp_skin_reach_gesture *g_allowed)
 {
-    st->reach_vectors = st->reach_allowed_vectors = 0;
+    st->reach_vectors = st->reach_allowed_vectors = st->reach_held = 0;
     st->reach_asked_max = 0;
     size_t n = cs->count < FP_ENGINE_MAX_CONTROL ? cs->count : FP_ENGINE_MAX_CONTROL;
     if (!n || !(cs->radius > 0)) return;
@@ -61,8 +61,14 @@ void fp_skin_reach_frame(const csrbf_points *points, const float *ref, const flo
         if (!allowed || i >= allowed->count) continue;
         assert(!memcmp(allowed->start[i], cs->start[i], sizeof cs->start[i]));
         double ra, asked_allowed = asked_of(allowed, i, ref, shown, idx[i], &ra);
-        if (asked_allowed >= FP_REACH_MIN_ASK * allowed->radius)
-            add(ra, asked_allowed, st->reach_allowed, &st->reach_allowed_vectors, g_allowed);
+        double m = mobility ? (double)mobility[idx[i]] : 1.0; /* the blend's share there */
+        if (!(asked_allowed >= FP_REACH_MIN_ASK * allowed->radius)) continue; /* all held back */
+        if (!(m * asked_allowed >= FP_REACH_MIN_ASK * allowed->radius)) { /* the bone itself */
+            st->reach_held++;
+            if (g_allowed) g_allowed->held++;
+            continue;
+        }
+        add(ra / m, m * asked_allowed, st->reach_allowed, &st->reach_allowed_vectors, g_allowed);
     }
 }
 
@@ -75,10 +81,20 @@ void fp_skin_reach_gesture_end(fp_skin_reach_gesture *g, fp_skin_reach_gesture *
         bool mm = mm_per_unit > 0 && isfinite(mm_per_unit);
         double mean = g->sum_reach / (double)g->vectors;
         double mean_allowed = allowed && allowed->vectors ? allowed->sum_reach / (double)allowed->vectors : mean;
-        char rig[128] = "";
-        if (fabs(mean_allowed - mean) >= 0.005)
-            snprintf(rig, sizeof rig, "; %.0f%% of what the rig allowed: it holds back a push toward "
-                     "the skull or the jaw", 100.0 * mean_allowed);
+        char rig[256] = "";
+        size_t held = allowed ? allowed->held : 0;
+        int k = 0;
+        if (fabs(mean_allowed - mean) >= 0.005 && (!held || allowed->vectors))
+            k = snprintf(rig, sizeof rig, "; %.0f%% of what the rig allowed: it holds back a push toward "
+                         "the skull or the jaw", 100.0 * mean_allowed);
+        if (held && k >= 0 && (size_t)k < sizeof rig) {
+            if (held < g->vectors)
+                snprintf(rig + k, sizeof rig - (size_t)k, "; %zu of them grabbed the skull or the jaw, "
+                         "which the rig keeps still", held);
+            else
+                snprintf(rig + k, sizeof rig - (size_t)k, "; they grabbed the skull or the jaw, which "
+                         "the rig keeps still");
+        }
         fp_slog_printf(log, FP_LOG_INFO, FP_SLOG_ENGINE,
                        "the skin followed the fingertips %.0f%% this gesture (mean of %zu; least "
                        "%.0f%%, under 90%% in %zu; longest drag %.1f %s%s)",

@@ -11,9 +11,12 @@
  *
  * Per frame into fp_frame_stats (reach, reach_vectors, reach_asked_max); per gesture a
  * summary (fp_skin_reach_gesture) the session logs at the gesture's end. With a rig, the
- * same against the vectors its clamp allowed (fp_skin_reach_frame's `allowed`): how far the skin
- * followed where the skull and jaw let it, so that a push into the cheekbone, held back on
- * purpose, reads as such.
+ * same against what the rig allowed (fp_skin_reach_frame's `allowed` and `mobility`): the
+ * vector its clamp left, times the grabbed vertex's mobility (the blend lets that share of the
+ * fingers' motion through; fp_rig.h): how far the skin followed where the skull and jaw let
+ * it, so that a push into the cheekbone, held back on purpose, reads as such, and a fingertip
+ * that grabbed the skull or the jaw themselves (mobility 0: the rig keeps them still) is
+ * named, not counted as skin that failed to follow.
  * Threads: the session thread. No allocation, no I/O.
  */
 #ifndef FP_SKIN_REACH_H
@@ -41,6 +44,9 @@ typedef struct fp_skin_reach_gesture {
     double sum_reach;         /* sum of the reaches (their mean = sum_reach / vectors) */
     double least;             /* the smallest reach */
     double asked_max;         /* the longest control vector counted, mesh units */
+    size_t held;              /* against what a rig allowed: vectors whose grabbed vertex the
+                                 rig keeps still (allowed under FP_REACH_MIN_ASK x R), left
+                                 out of the others */
 } fp_skin_reach_gesture;
 
 /** The frame's reach: for each of cs's control vectors (cs->count <= FP_ENGINE_MAX_CONTROL)
@@ -52,11 +58,15 @@ typedef struct fp_skin_reach_gesture {
  *  to g (may be NULL). allowed (NULL: none, and st->reach_allowed_vectors 0): a rig's clamped
  *  copy of cs (its vectors start where cs's do, at most as many), each of the same vectors'
  *  reach against it into st->reach_allowed and g_allowed (may be NULL; a vector the rig held
- *  under FP_REACH_MIN_ASK x R is left out). One nearest query for both. Nothing is written
- *  where the index fails (the counts 0). */
+ *  under FP_REACH_MIN_ASK x R is left out). mobility (NULL: 1 everywhere): the rig's per-vertex
+ *  mobility (the points' vertex count floats, fp_rig_mobility), which scales what the rig
+ *  allowed at the grabbed vertex; a vector whose allowed motion so comes under
+ *  FP_REACH_MIN_ASK x R is counted in st->reach_held and g_allowed->held instead (the skull or
+ *  the jaw grabbed). One nearest query for both. Nothing is written where the index fails
+ *  (the counts 0). */
 void fp_skin_reach_frame(const csrbf_points *points, const float *ref, const float *shown,
-                         const fp_control_set *cs, const fp_control_set *allowed, fp_frame_stats *st,
-                         fp_skin_reach_gesture *g, fp_skin_reach_gesture *g_allowed);
+                         const fp_control_set *cs, const fp_control_set *allowed, const float *mobility,
+                         fp_frame_stats *st, fp_skin_reach_gesture *g, fp_skin_reach_gesture *g_allowed);
 
 /** Forget the gesture (its end). */
 void fp_skin_reach_gesture_reset(fp_skin_reach_gesture *g);
@@ -66,7 +76,9 @@ void fp_skin_reach_gesture_reset(fp_skin_reach_gesture *g);
  *  under 90% in M; longest drag 23.5 mm)", mm from mm_per_unit (mesh units where it is not
  *  positive), and where `allowed` (the reach against what a rig allowed, NULL without one)
  *  differs by half a point or more, "; 100% of what the rig allowed: it holds back a push
- *  toward the skull or the jaw"; then reset g and allowed. */
+ *  toward the skull or the jaw", and where it held vectors (allowed->held), "; 12 of them
+ *  grabbed the skull or the jaw, which the rig keeps still" (all of them: "; they grabbed
+ *  ..."); then reset g and allowed. */
 void fp_skin_reach_gesture_end(fp_skin_reach_gesture *g, fp_skin_reach_gesture *allowed, double mm_per_unit,
                                const fp_slog *log);
 

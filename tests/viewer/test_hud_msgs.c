@@ -90,20 +90,29 @@ static void test_confirmations_kept_notes_fade(void **state)
 }
 
 /* The reach line: the least reach and the drag; with a rig whose clamp held a push back, what
- * it allowed too; nothing without a touching vector. */
+ * it allowed too; fingertips on the skull or the jaw named; nothing without a touching
+ * vector. */
 static void test_reach_line(void **state)
 {
     (void)state;
-    char out[160];
-    const float r[3] = {1.0f, 0.09f, 0.5f}, a[3] = {1.0f, 1.0f, 1.0f};
-    fp_hud_reach_line(r, 3, NULL, 0, 76.44, out, sizeof out);
+    char out[200];
+    const float r[3] = {1.0f, 0.09f, 0.5f}, a[3] = {1.0f, 1.0f, 1.0f}, z[3] = {0.f, 0.f, 0.f};
+    fp_hud_reach_line(r, 3, NULL, 0, 0, 76.44, out, sizeof out);
     assert_string_equal(out, "\nskin follows the fingertips 9%  (drag 76.4 mm)");
-    fp_hud_reach_line(r, 3, a, 3, 76.44, out, sizeof out);
+    fp_hud_reach_line(r, 3, a, 3, 0, 76.44, out, sizeof out);
     assert_string_equal(out, "\nskin follows the fingertips 9%  (drag 76.4 mm; 100% of what the rig allows)");
-    fp_hud_reach_line(a, 3, a, 3, 10.0, out, sizeof out); /* the rig held nothing back */
+    fp_hud_reach_line(a, 3, a, 3, 0, 10.0, out, sizeof out); /* the rig held nothing back */
     assert_string_equal(out, "\nskin follows the fingertips 100%  (drag 10.0 mm)");
-    fp_hud_reach_line(r, 0, a, 3, 10.0, out, sizeof out);
+    fp_hud_reach_line(r, 0, a, 3, 0, 10.0, out, sizeof out);
     assert_string_equal(out, "");
+    /* one of three grabbed the skull: the other two followed all the rig allowed */
+    fp_hud_reach_line(r, 3, a, 2, 1, 20.0, out, sizeof out);
+    assert_string_equal(out, "\nskin follows the fingertips 9%  (drag 20.0 mm; 100% of what the rig allows; "
+                             "1 on the skull or the jaw, kept still)");
+    /* all on the skull: the 0% is the rig's, said so */
+    fp_hud_reach_line(z, 3, NULL, 0, 3, 20.0, out, sizeof out);
+    assert_string_equal(out, "\nskin follows the fingertips 0%  (drag 20.0 mm; on the skull or the jaw: the rig "
+                             "keeps them still)");
 }
 
 int main(void)

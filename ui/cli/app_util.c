@@ -529,6 +529,7 @@ void fp_app_reach_add(fp_app_reach *r, const fp_frame_stats *st)
         if (!reach_push(&r->v, &r->n, &r->cap, st->reach[i])) return;
     for (size_t i = 0; i < st->reach_allowed_vectors; i++)
         if (!reach_push(&r->va, &r->na, &r->capa, st->reach_allowed[i])) return;
+    r->held += st->reach_held;
     if (st->reach_asked_max > r->asked_max) r->asked_max = st->reach_asked_max;
 }
 
@@ -538,13 +539,17 @@ void fp_app_reach_text(fp_app_reach *r, double mm_per_unit, char *text, size_t l
     text[0] = 0;
     if (!r->n) return;
     double med = fp_median(r->v, r->n), p10 = fp_percentile(r->v, r->n, 0.10);
-    char rig[160] = "";
+    char rig[256] = "";
+    int k = 0;
     if (r->na) {
         double ma = fp_median(r->va, r->na), pa = fp_percentile(r->va, r->na, 0.10);
         if (fabs(ma - med) >= 0.005 || fabs(pa - p10) >= 0.005)
-            snprintf(rig, sizeof rig, "; %.0f%% of what the rig allowed, 10th percentile %.0f%%: it "
-                     "holds back a push toward the skull or the jaw", 100.0 * ma, 100.0 * pa);
+            k = snprintf(rig, sizeof rig, "; %.0f%% of what the rig allowed, 10th percentile %.0f%%: it "
+                         "holds back a push toward the skull or the jaw", 100.0 * ma, 100.0 * pa);
     }
+    if (r->held && k >= 0 && (size_t)k < sizeof rig)
+        snprintf(rig + k, sizeof rig - (size_t)k, "; %zu of them on the skull or the jaw, which the rig "
+                 "keeps still", r->held);
     snprintf(text, len,
              "; the skin followed the fingertips %.0f%% (median over %zu touching vectors, 10th "
              "percentile %.0f%%, longest drag %.1f mm%s)", 100.0 * med, r->n, 100.0 * p10,

@@ -212,8 +212,9 @@ typedef struct fp_app_reach {
     double *v;
     size_t n, cap;
     double asked_max;     /* the longest drag, mesh units */
-    double *va;           /* with a rig: against what its clamp allowed (reach_allowed) */
+    double *va;           /* with a rig: against what it allowed (reach_allowed) */
     size_t na, capa;
+    size_t held;          /* with a rig: vectors on the skull or the jaw (reach_held) */
 } fp_app_reach;
 /** Gather st's reaches (a failed allocation drops them: the figure is a report). */
 void fp_app_reach_add(fp_app_reach *r, const fp_frame_stats *st);
@@ -221,7 +222,9 @@ void fp_app_reach_add(fp_app_reach *r, const fp_frame_stats *st);
  *  35%, longest drag 79.4 mm)" into text (empty when no vector was gathered); mm from
  *  mm_per_unit; with a rig whose clamp held a push back (the reach against what it allowed
  *  differs by half a point or more), "...; 100% of what the rig allowed, 10th percentile
- *  100%: it holds back a push toward the skull or the jaw)". Reorders r->v and r->va. */
+ *  100%: it holds back a push toward the skull or the jaw)", and where fingertips grabbed
+ *  the skull or the jaw, "...; 26 of them on the skull or the jaw, which the rig keeps
+ *  still)". Reorders r->v and r->va. */
 void fp_app_reach_text(fp_app_reach *r, double mm_per_unit, char *text, size_t len);
 void fp_app_reach_free(fp_app_reach *r);
 

@@ -193,15 +193,22 @@ static float least_of(const float *r, size_t n)
     return least;
 }
 
-void fp_hud_reach_line(const float *reach, size_t n, const float *allowed, size_t na, double drag_mm,
-                       char *out, size_t len)
+void fp_hud_reach_line(const float *reach, size_t n, const float *allowed, size_t na, size_t held,
+                       double drag_mm, char *out, size_t len)
 {
     if (!len) return;
     out[0] = 0;
     if (!n) return;
     float least = least_of(reach, n), least_allowed = least_of(allowed, na);
-    char rig[64] = ""; /* a push toward the bone, held back by the rig */
+    char rig[128] = ""; /* a push toward the bone held back, the bone itself kept still */
+    int k = 0;
     if (na && fabsf(least_allowed - least) >= 0.005f)
-        snprintf(rig, sizeof rig, "; %.0f%% of what the rig allows", 100.0 * least_allowed);
+        k = snprintf(rig, sizeof rig, "; %.0f%% of what the rig allows", 100.0 * least_allowed);
+    if (held && k >= 0 && (size_t)k < sizeof rig) {
+        if (held < n)
+            snprintf(rig + k, sizeof rig - (size_t)k, "; %zu on the skull or the jaw, kept still", held);
+        else
+            snprintf(rig + k, sizeof rig - (size_t)k, "; on the skull or the jaw: the rig keeps them still");
+    }
     snprintf(out, len, "\nskin follows the fingertips %.0f%%  (drag %.1f mm%s)", 100.0 * least, drag_mm, rig);
 }

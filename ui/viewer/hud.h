@@ -54,10 +54,13 @@ size_t fp_hud_wrap(const char *text, float max_px, float scale, char *out, size_
 /** The HUD's reach line (skin_reach.h), into out (len bytes, always terminated): "\nskin
  *  follows the fingertips 9%  (drag 76.4 mm)", the least of the n reaches (fractions, 1: the
  *  whole way) of the last deforming frame and its longest drag in mm; where a rig's reach
- *  (the na reaches against what its clamp allowed) differs by half a point or more, "...;
- *  100% of what the rig allows)". Empty with n == 0. Plain C; any thread. */
-void fp_hud_reach_line(const float *reach, size_t n, const float *allowed, size_t na, double drag_mm,
-                       char *out, size_t len);
+ *  (the na reaches against what it allowed) differs by half a point or more, "...; 100% of
+ *  what the rig allows)"; where `held` of the n grabbed the skull or the jaw (the rig keeps
+ *  them still, fp_frame_stats.reach_held), "...; 2 on the skull or the jaw, kept still)", or
+ *  with all of them held "...; on the skull or the jaw: the rig keeps them still)". Empty
+ *  with n == 0. Plain C; any thread. */
+void fp_hud_reach_line(const float *reach, size_t n, const float *allowed, size_t na, size_t held,
+                       double drag_mm, char *out, size_t len);
 
 enum { FP_HUD_TAKE, FP_HUD_SETTING, FP_HUD_NOTE, FP_HUD_INFO, FP_HUD_KINDS };
 #define FP_HUD_MSGS 6          /* lines of the stack at most */

@@ -728,7 +728,7 @@ static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
     char reach[160] = "", tips[160] = "";
     const fp_frame_stats *la = &v->last_active;
     fp_hud_reach_line(la->reach, la->reach_vectors, la->reach_allowed, la->reach_allowed_vectors,
-                      la->reach_asked_max * head->mm_per_unit, reach, sizeof reach);
+                      la->reach_held, la->reach_asked_max * head->mm_per_unit, reach, sizeof reach);
     if (v->cues.count && isfinite(v->cues.nearest))
         snprintf(tips, sizeof tips, "\nfingertips: %zu of %zu touching, nearest %.1f mm from the skin",
                  v->cues.touch_count, v->cues.count, v->cues.nearest * head->mm_per_unit);
