@@ -451,3 +451,15 @@ void fp_pose_place_gloves(fp_pose_state *p, const float *pos, size_t n, const fp
     }
     p->glove_placed = true;
 }
+
+void fp_pose_recalibrate(fp_pose_state *p, const fp_calibration *c)
+{
+    fp_calibration old = p->calib;
+    p->calib = *c;
+    if (!p->glove_placed || !(old.scale > 0) || !(c->scale > 0)) return;
+    for (int h = 0; h < FP_HANDS; h++)
+        for (int i = 0; i < 3; i++) {
+            double m = old.scale * p->glove_pos[h][i] + old.offset[i] + old.hand_offset[h][i];
+            p->glove_pos[h][i] = (float)((m - c->offset[i] - c->hand_offset[h][i]) / c->scale);
+        }
+}

@@ -248,6 +248,12 @@ void fp_calibration_rotation(const fp_calibration *c, double q[4]);
 #define FP_POSE_GLOVE_GAP_MM 8.0
 void fp_pose_place_gloves(fp_pose_state *p, const float *pos, size_t n, const fp_head *head);
 
+/** A new calibration c for hands placed as they run (fp_pose_auto.h, step_arrive.h): p->calib
+ *  = c, and gloves placed by fp_pose_place_gloves keep their place on the face (their
+ *  device-frame wrists move by the offset's change: g' = (s_old g + o_old - o_new) / s_new;
+ *  both calibrations without rotation, as fp_pose_fit_workspace makes them). */
+void fp_pose_recalibrate(fp_pose_state *p, const fp_calibration *c);
+
 /** p_mesh = c->scale * R p_mm + c->offset + c->hand_offset[hand], in double, rounded to
  *  float (hand outside left/right: no hand offset). */
 void fp_pose_to_mesh(const fp_calibration *c, int hand, const float mm[3], float out[3]);

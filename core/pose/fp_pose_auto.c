@@ -18,6 +18,7 @@
 typedef struct sample {
     int64_t t_ns;
     uint16_t bin[FP_HAND_JOINTS][3];
+    uint8_t hand;                  /* FP_HAND_LEFT or FP_HAND_RIGHT */
 } sample;
 
 struct fp_pose_auto {
@@ -112,6 +113,7 @@ void fp_pose_auto_take(fp_pose_auto *a, const fp_event *ev)
     if (a->have_kept[h] && t >= a->last_kept[h] && t - a->last_kept[h] < PERIOD_NS) return;
     sample s;
     s.t_ns = t;
+    s.hand = (uint8_t)h;
     for (int j = 0; j < FP_HAND_JOINTS; j++)
         for (int k = 0; k < 3; k++) {
             float v = ev->positions.mm[j][k];
@@ -132,6 +134,20 @@ void fp_pose_auto_take(fp_pose_auto *a, const fp_event *ev)
 }
 
 size_t fp_pose_auto_samples(const fp_pose_auto *a) { return a->count; }
+
+/* the middle of bin b, mm */
+static float bin_mm(uint16_t b) { return (float)(-FP_POSE_AUTO_SPAN_MM + (b + 0.5) * FP_POSE_AUTO_BIN_MM); }
+
+void fp_pose_auto_each(const fp_pose_auto *a, void (*fn)(void *ctx, int hand, const float (*mm)[3]), void *ctx)
+{
+    float mm[FP_HAND_JOINTS][3];
+    for (size_t i = 0; i < a->count; i++) {
+        const sample *s = &a->ring[(a->head + i) % CAPACITY];
+        for (int j = 0; j < FP_HAND_JOINTS; j++)
+            for (int k = 0; k < 3; k++) mm[j][k] = bin_mm(s->bin[j][k]);
+        fn(ctx, s->hand, (const float(*)[3])mm);
+    }
+}
 unsigned long fp_pose_auto_refits(const fp_pose_auto *a) { return a->refits; }
 
 /* The coordinate of 0-based rank r in axis k's histogram: the middle of its bin. */
@@ -144,7 +160,7 @@ static float rank_value(const fp_pose_auto *a, int k, size_t r)
         cum += hk[b];
         if (cum > r) break;
     }
-    return (float)(-FP_POSE_AUTO_SPAN_MM + (b + 0.5) * FP_POSE_AUTO_BIN_MM);
+    return bin_mm((uint16_t)b);
 }
 
 bool fp_pose_auto_box(const fp_pose_auto *a, float ws_min[3], float ws_max[3])
@@ -178,15 +194,7 @@ bool fp_pose_auto_refit(fp_pose_auto *a, fp_pose_state *p, bool engaged, double 
     memcpy(c.face, old.face, sizeof c.face); /* (the fit is in the face's frame) */
     a->hovered = !a->moved && hover > 0;
     if (a->hovered) c.offset[2] += hover; /* still hands hover (FP_POSE_STILL_MM) */
-    p->calib = c;
-    /* gloves without a wrist pose keep their place on the face: mesh = s g + o, both fits
-     * without rotation, so g' = (s_old g + o_old - o_new) / s_new */
-    if (p->glove_placed && old.scale > 0 && c.scale > 0)
-        for (int h = 0; h < FP_HANDS; h++)
-            for (int i = 0; i < 3; i++) {
-                double m = old.scale * p->glove_pos[h][i] + old.offset[i] + old.hand_offset[h][i];
-                p->glove_pos[h][i] = (float)((m - c.offset[i] - c.hand_offset[h][i]) / c.scale);
-            }
+    fp_pose_recalibrate(p, &c); /* (gloves without a wrist pose keep their place) */
     a->fitted = true;
     a->dirty = false;
     a->fit_t = newest;

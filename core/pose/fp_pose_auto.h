@@ -77,6 +77,12 @@ void fp_pose_auto_take(fp_pose_auto *a, const fp_event *ev);
 /** Number of samples kept now (each one hand's 21 joints). */
 size_t fp_pose_auto_samples(const fp_pose_auto *a);
 
+/** Every sample kept, oldest first, to fn: its hand (FP_HAND_LEFT or FP_HAND_RIGHT) and its
+ *  FP_HAND_JOINTS joints (mm, device frame) at the middles of their FP_POSE_AUTO_BIN_MM bins
+ *  (a valid pointer during the call only). For a placement that measures the hands against
+ *  the face (step_arrive.h's bring-in). */
+void fp_pose_auto_each(const fp_pose_auto *a, void (*fn)(void *ctx, int hand, const float (*mm)[3]), void *ctx);
+
 /** The estimated workspace: per axis the 2nd and 98th percentiles of every joint of the
  *  samples kept (mm, device frame; the rank rule of the replay's workspace, read to the
  *  middle of a FP_POSE_AUTO_BIN_MM bin). Returns false (boxes untouched) with no sample. */

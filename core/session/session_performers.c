@@ -124,7 +124,7 @@ void fp__session_performers_build(fp_session *s, int64_t now_ns)
     for (size_t p = 0; p < s->performers.count; p++) {
         bool turned = fp_calibration_has_face(&s->pose[p].calib); /* (fitted in the face's frame) */
         fp_arrive_step_place(&s->arrive[p], &s->pose[p], s->engaged, turned ? &s->face_head : &s->head,
-                             s->touch_radius, &s->log);
+                             s->touch_radius, &s->engine, &s->log);
         fp_pose_build_at(&s->pose[p], now_ns);
     }
 }

@@ -11,16 +11,38 @@
 #define FP_ARRIVE_MAX_STEP_S 0.25 /* a gap between frames counts at most this much */
 #define FP_ARRIVE_FAR_EVERY_NS 100000000 /* the unbounded nearest query: at most 10 a second */
 
+static void bring_in_live(fp_arrive_step *r, fp_pose_state *ps, const fp_head *head, double radius,
+                          const fp_engine_step *e, const fp_slog *log);
+
 int fp_arrive_step_init(fp_arrive_step *r, fp_arrive_placement how)
 {
     memset(r, 0, sizeof *r);
     r->how = how;
     r->nearest = INFINITY;
-    if (how == FP_ARRIVE_PLACED_AUTO) return fp_pose_auto_create(&r->place);
+    if (how != FP_ARRIVE_PLACED_AUTO) return 0;
+    r->live_tips = malloc(FP_FINGERS * FP_ARRIVE_LIVE_SAMPLES * sizeof *r->live_tips);
+    r->live_hand = malloc(FP_ARRIVE_LIVE_SAMPLES * sizeof *r->live_hand);
+    r->live_q = malloc(FP_FINGERS * FP_ARRIVE_LIVE_SAMPLES * sizeof *r->live_q);
+    r->live_d = malloc(FP_FINGERS * FP_ARRIVE_LIVE_SAMPLES * sizeof *r->live_d);
+    if (!r->live_tips || !r->live_hand || !r->live_q || !r->live_d || fp_pose_auto_create(&r->place)) {
+        fp_arrive_step_free(r);
+        return -ENOMEM;
+    }
     return 0;
 }
 
-void fp_arrive_step_free(fp_arrive_step *r) { fp_pose_auto_destroy(&r->place); }
+void fp_arrive_step_free(fp_arrive_step *r)
+{
+    fp_pose_auto_destroy(&r->place);
+    free(r->live_tips);
+    free(r->live_hand);
+    free(r->live_q);
+    free(r->live_d);
+    r->live_tips = NULL;
+    r->live_hand = NULL;
+    r->live_q = NULL;
+    r->live_d = NULL;
+}
 
 void fp_arrive_step_event(fp_arrive_step *r, const fp_event *ev)
 {
@@ -28,11 +50,16 @@ void fp_arrive_step_event(fp_arrive_step *r, const fp_event *ev)
 }
 
 void fp_arrive_step_place(fp_arrive_step *r, fp_pose_state *p, bool engaged, const fp_head *head,
-                         double radius, const fp_slog *log)
+                         double radius, const fp_engine_step *e, const fp_slog *log)
 {
     double hover = radius > 0 ? FP_ARRIVE_HOVER * radius : 0;
-    if (!r->place || !fp_pose_auto_refit(r->place, p, engaged, head->mm_per_unit, head->min, head->max, hover))
+    if (!r->place) return;
+    bool now = r->bring_on && !r->brought && !engaged; /* the first bring-in: at once */
+    if (!fp_pose_auto_refit(r->place, p, engaged, head->mm_per_unit, head->min, head->max, hover)) {
+        if (now) bring_in_live(r, p, head, radius, e, log);
         return;
+    }
+    if (r->bring_on && !fp_pose_auto_still(r->place)) bring_in_live(r, p, head, radius, e, log);
     double mm = head->mm_per_unit > 0 ? head->mm_per_unit : 1.0;
     bool still = fp_pose_auto_still(r->place) && hover > 0;
     if (r->placed_said) {
@@ -148,6 +175,39 @@ static void each_sample(fp_input *const *ins, size_t n, void (*fn)(void *ctx, in
     }
 }
 
+/* The bring-in on the kept samples t (step_arrive.h, fp_arrive_bring_in): *d0 the nearest
+ * any fingertip comes at *c, *p the push toward the face (mesh units, along depth) that brings
+ * the fingertips that act to FP_ARRIVE_BRING_TO x radius, *dp their nearest after it. q, d:
+ * room for FP_FINGERS x t->kept points and floats. BRING_STILL: the hands never move
+ * (FP_POSE_STILL_MM); BRING_NONE: near already, or no push within the head's depth brings
+ * them near (*p 0); BRING_PUSH: *p > 0. */
+enum { BRING_NONE, BRING_STILL, BRING_PUSH };
+static int bring_push(const tips_in *t, const fp_calibration *c, double radius, const fp_head *head,
+                      const fp_engine_step *e, float (*q)[3], float *d, double *d0, double *p, double *dp)
+{
+    const double near = FP_ARRIVE_NEAR * radius, to = FP_ARRIVE_BRING_TO * radius;
+    const double deepest = (double)head->max[2] - head->min[2];
+    bool acts[FP_HANDS][FP_FINGERS];
+    *p = 0;
+    *d0 = *dp = INFINITY;
+    double most = acting(t, d, acts); /* (d: room for a float a kept fingertip) */
+    if (t->kept && most < FP_POSE_STILL_MM) return BRING_STILL;
+    *d0 = nearest_at(t, c, 0, INFINITY, NULL, e, q, d);
+    if (!(*d0 > near) || !isfinite(*d0)) return BRING_NONE; /* near already (or nothing to measure) */
+    /* the march, on the fingertips that act: a push of dp - to moves none of them nearer
+     * than to, so none is passed */
+    double x = nearest_at(t, c, 0, INFINITY, acts, e, q, d), push = 0;
+    for (int it = 0; it < 64 && x > to; it++) {
+        push += fmax(x - to, 1e-3 * radius);
+        if (!(push <= deepest)) return BRING_NONE; /* none comes near within the head's depth */
+        x = nearest_at(t, c, push, (float)(x + (x - to) + radius), acts, e, q, d);
+    }
+    if (!(x <= near)) return BRING_NONE;
+    *p = push;
+    *dp = x;
+    return BRING_PUSH;
+}
+
 int fp_arrive_bring_in(fp_calibration *c, fp_input *const *ins, size_t n, double radius, const fp_head *head,
                        const fp_engine_step *e, const char *who, const fp_slog *log)
 {
@@ -168,43 +228,62 @@ int fp_arrive_bring_in(fp_calibration *c, fp_input *const *ins, size_t n, double
     }
     t.seen = 0;
     each_sample(ins, n, keep_one, &t);
-    const double near = FP_ARRIVE_NEAR * radius, to = FP_ARRIVE_BRING_TO * radius;
-    const double deepest = (double)head->max[2] - head->min[2];
-    bool acts[FP_HANDS][FP_FINGERS];
-    double most = acting(&t, d, acts); /* (d: room for a float a kept fingertip) */
-    if (t.kept && most < FP_POSE_STILL_MM) { /* hands that never move hover, as live ones do */
+    double d0, p, dp;
+    switch (bring_push(&t, c, radius, head, e, q, d, &d0, &p, &dp)) {
+    case BRING_STILL: /* hands that never move hover, as live ones do */
         c->offset[2] += FP_ARRIVE_HOVER * radius;
         fp_slog_printf(log, FP_LOG_INFO, "session",
                        "%sthe recording's hands never move (every fingertip within %.0f mm): held "
                        "%.0f mm out, hovering in front of the face (docs/calibration.md)",
                        who ? who : "", FP_POSE_STILL_MM, FP_ARRIVE_HOVER * radius * mm);
         rc = 1;
-        goto out;
+        break;
+    case BRING_PUSH:
+        c->offset[2] -= p;
+        fp_slog_printf(log, FP_LOG_INFO, "session",
+                       "%sthe recording's fingertips never come within %.0f mm of the face where its "
+                       "range places them (the nearest %.0f mm away): brought %.0f mm closer, so that "
+                       "the fingertips that move come within %.0f mm (docs/calibration.md; "
+                       "--calibration FILE fixes the placement)",
+                       who ? who : "", FP_ARRIVE_NEAR * radius * mm, d0 * mm, p * mm, dp * mm);
+        break;
+    default:
+        break;
     }
-    double d0 = nearest_at(&t, c, 0, INFINITY, NULL, e, q, d), p = 0;
-    if (!(d0 > near) || !isfinite(d0)) goto out; /* near already (or nothing to measure) */
-    /* the march, on the fingertips that act: a push of dp - to moves none of them nearer
-     * than to, so none is passed */
-    double dp = nearest_at(&t, c, 0, INFINITY, acts, e, q, d);
-    for (int it = 0; it < 64 && dp > to; it++) {
-        p += fmax(dp - to, 1e-3 * radius);
-        if (!(p <= deepest)) goto out; /* none comes near within the head's depth: as it was */
-        dp = nearest_at(&t, c, p, (float)(dp + (dp - to) + radius), acts, e, q, d);
-    }
-    if (!(dp <= near)) goto out;
-    c->offset[2] -= p;
-    fp_slog_printf(log, FP_LOG_INFO, "session",
-                   "%sthe recording's fingertips never come within %.0f mm of the face where its "
-                   "range places them (the nearest %.0f mm away): brought %.0f mm closer, so that "
-                   "the fingertips that move come within %.0f mm (docs/calibration.md; "
-                   "--calibration FILE fixes the placement)",
-                   who ? who : "", near * mm, d0 * mm, p * mm, dp * mm);
 out:
     free(t.mm);
     free(t.hand);
     free(q);
     free(d);
     return rc;
+}
+
+/* The same for a live input's hands at a refit (step_arrive.h): on the estimator's samples,
+ * every stride-th of at most FP_ARRIVE_LIVE_SAMPLES, into r's buffers; p->calib, the range's
+ * placement just made, moved by the push (r->push). The first push is said on log. */
+static void bring_in_live(fp_arrive_step *r, fp_pose_state *ps, const fp_head *head, double radius,
+                          const fp_engine_step *e, const fp_slog *log)
+{
+    r->push = 0;
+    size_t n = fp_pose_auto_samples(r->place);
+    if (!n || !r->live_tips || !e || !e->points || !(radius > 0)) return;
+    tips_in t = {.mm = r->live_tips, .hand = r->live_hand, .cap = FP_ARRIVE_LIVE_SAMPLES,
+                 .stride = (n + FP_ARRIVE_LIVE_SAMPLES - 1) / FP_ARRIVE_LIVE_SAMPLES};
+    fp_pose_auto_each(r->place, keep_one, &t);
+    double d0, p, dp, mm = head->mm_per_unit > 0 ? head->mm_per_unit : 1.0;
+    if (bring_push(&t, &ps->calib, radius, head, e, r->live_q, r->live_d, &d0, &p, &dp) != BRING_PUSH) return;
+    fp_calibration c = ps->calib;
+    c.offset[2] -= p;
+    fp_pose_recalibrate(ps, &c);
+    r->push = p;
+    if (r->brought) return;
+    r->brought = true;
+    fp_slog_printf(log, FP_LOG_INFO, "session",
+                   "%sthe hands' fingertips would not come within %.0f mm of the face where their "
+                   "range places them (the nearest %.0f mm away so far): brought %.0f mm closer, so "
+                   "that the fingertips that move come within %.0f mm, as a recording's are; "
+                   "refined as they move (docs/calibration.md; --calibration FILE fixes the placement)",
+                   r->who, FP_ARRIVE_NEAR * radius * mm, d0 * mm, p * mm, dp * mm);
 }
 
 /* What the hint says of the placement. */
@@ -262,13 +341,17 @@ void fp_arrive_step_check(fp_arrive_step *r, int64_t now_ns, const fp_hand_pose 
     r->last_ns = now_ns;
     r->have_last = present;
     if (engaged || nearest <= FP_ARRIVE_NEAR * radius) { /* near: a new stretch begins */
-        r->away_s = 0;
+        r->away_s = r->moving_away_s = 0;
         r->nearest = INFINITY;
         r->reached = true;
         return;
     }
     if (!present || r->warned || r->reached) return;
     r->away_s += dt;
+    if (r->place && !r->hovered) { /* moving hands, placed by their range */
+        r->moving_away_s += dt;
+        if (r->moving_away_s >= FP_ARRIVE_BRING_AFTER_S - 1e-6) r->bring_on = true;
+    }
     bool due = r->away_s >= FP_ARRIVE_HINT_S - 1e-6; /* (a sum of frame steps: 180 x 1/60) */
     /* beyond the tip distances' reach: how far, unbounded (a tree search; throttled, and
      * always on the hint's frame) */

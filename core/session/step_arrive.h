@@ -66,6 +66,14 @@ typedef struct fp_arrive_step {
     double near_mm;                /* the last check's "near" (FP_ARRIVE_NEAR x radius), mm */
     double mm;                     /* the last check's mm_per_unit */
     bool hovered;                  /* the hands are still: placed FP_ARRIVE_HOVER x radius out */
+    double moving_away_s;          /* of away_s: seconds the hands moved, placed by their range */
+    bool bring_on;                 /* FP_ARRIVE_BRING_AFTER_S of those came: bring them in */
+    bool brought;                  /* the live bring-in was said */
+    double push;                   /* mesh units: how far the last refit brought them in */
+    float (*live_tips)[3];         /* FP_ARRIVE_PLACED_AUTO: its buffers (FP_ARRIVE_LIVE_SAMPLES */
+    int *live_hand;                /* samples' fingertips, hands, their points in mesh units */
+    float (*live_q)[3];            /* and distances) */
+    float *live_d;
     char who[80];                  /* whose hands, before its lines ("performer 'B': "; set
                                       after init by a session of several performers), or "" */
 } fp_arrive_step;
@@ -87,10 +95,21 @@ void fp_arrive_step_event(fp_arrive_step *r, const fp_event *ev);
  *  radius (the touch radius, mesh units: the face's default support radius) out from the
  *  face in depth: every fingertip then lies that far in front of the nose tip's depth, so
  *  no still pose touches the face by chance, and the hint says to reach. The first placement is said once on log
- *  (FP_LOG_INFO, "session"), and the end of the hover when the hands move. */
+ *  (FP_LOG_INFO, "session"), and the end of the hover when the hands move.
+ *  At each refit of hands that moved, they are then brought in as a recording is
+ *  (fp_arrive_bring_in's rule and march, on the estimator's samples so far, at most
+ *  FP_ARRIVE_LIVE_SAMPLES of them, against e's index): a placement by the range whose
+ *  fingertips would not come within FP_ARRIVE_NEAR x radius of the face is pushed in depth
+ *  until the nearest approach of those that move lies FP_ARRIVE_BRING_TO x radius from it,
+ *  as the same hands replayed from a recording are (so the same motion grabs the same skin
+ *  live and replayed); one info line the first time. Cost: one march over the fingertips of at most 64
+ *  samples, 1.6-2.6 ms (ICT face), at a refit (every FP_POSE_AUTO_REFIT_S at most, never
+ *  engaged). Gloves placed on the face keep their place (fp_pose_recalibrate). */
 #define FP_ARRIVE_HOVER 1.0
+#define FP_ARRIVE_BRING_AFTER_S 1.0
+#define FP_ARRIVE_LIVE_SAMPLES 64
 void fp_arrive_step_place(fp_arrive_step *r, fp_pose_state *p, bool engaged, const fp_head *head,
-                         double radius, const fp_slog *log);
+                         double radius, const fp_engine_step *e, const fp_slog *log);
 
 /** After the mapping ran: the hint's bookkeeping for the frame at now_ns (the frame clock;
  *  the step from the last frame counts when both had a hand, at most 0.25 s). hands: the frame's poses (mesh units);

@@ -289,6 +289,43 @@ static void test_still_hands_hover(void **state)
     fp_pose_auto_destroy(&a);
 }
 
+/* fp_pose_auto_each: every kept sample, oldest first, with its hand and its joints at their
+ * bins' middles (within half a bin of what was sent). */
+typedef struct seen {
+    int n, hands[8];
+    float first[FP_HAND_JOINTS][3];
+} seen;
+
+static void see(void *ctx, int hand, const float (*mm)[3])
+{
+    seen *s = ctx;
+    if (s->n < 8) s->hands[s->n] = hand;
+    if (!s->n) memcpy(s->first, mm, sizeof s->first);
+    s->n++;
+}
+
+static void test_each_sample(void **state)
+{
+    (void)state;
+    fp_pose_auto *a;
+    assert_int_equal(fp_pose_auto_create(&a), 0);
+    float mm[FP_HAND_JOINTS][3];
+    spread_hand(mm, -30.3f, 120.7f, 10.2f);
+    for (int i = 0; i < 3; i++) {
+        fp_event ev = joints_event(i == 1 ? FP_HAND_LEFT : FP_HAND_RIGHT, mm, (int64_t)i * 20000000);
+        fp_pose_auto_take(a, &ev);
+    }
+    seen s = {0};
+    fp_pose_auto_each(a, see, &s);
+    assert_int_equal(s.n, 3);
+    assert_int_equal(s.hands[0], FP_HAND_RIGHT);
+    assert_int_equal(s.hands[1], FP_HAND_LEFT);
+    assert_int_equal(s.hands[2], FP_HAND_RIGHT);
+    for (int j = 0; j < FP_HAND_JOINTS; j++)
+        for (int k = 0; k < 3; k++) assert_true(fabsf(s.first[j][k] - mm[j][k]) <= 0.5f * FP_POSE_AUTO_BIN_MM);
+    fp_pose_auto_destroy(&a);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -298,6 +335,7 @@ int main(void)
         cmocka_unit_test(test_deterministic),
         cmocka_unit_test(test_gloves_keep_their_place),
         cmocka_unit_test(test_still_hands_hover),
+        cmocka_unit_test(test_each_sample),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
