@@ -40,7 +40,9 @@ cp "$data/faces/mediapipe-canonical/canonical_face_model.obj" "$tmp/lone/"
 variant_guard_and_reach lone/my-pinch-57hz_joints_mm.csv "a lone recording of a pinch at 57 Hz"
 out=$(FP_SHARED_DATA=$data FP_REACH_HANDS=$tmp/lone "$build/tests/test_reach" 2>&1) ||
     { echo "$out"; echo "FAIL: test_reach on a folder of one recording"; exit 1; }
-[ "$(grep -c ' my-pinch-57hz ' <<<"$out")" -eq 3 ] ||
-    { echo "$out"; echo "FAIL: test_reach did not run the folder's one recording on the three faces"; exit 1; }
+faces=3 # (sanitizer builds, FP_TEST_TIME_SCALE > 1: test_reach runs the ICT face alone)
+[ "${FP_TEST_TIME_SCALE:-1}" -gt 1 ] && faces=1
+[ "$(grep -c ' my-pinch-57hz ' <<<"$out")" -eq "$faces" ] ||
+    { echo "$out"; echo "FAIL: test_reach did not run the folder's one recording on the $faces face(s)"; exit 1; }
 variant_onehand pinch-variants/57hz "a pinching hand at 57 Hz"
 echo "PASS: pinched hands"
