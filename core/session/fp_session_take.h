@@ -91,6 +91,7 @@ typedef struct fp_session_take {
      * more), filled on the session thread without allocation */
     uint32_t reach_bins[FP_SESSION_TAKE_REACH_BINS];
     uint64_t reach_vectors;
+    uint64_t reach_held;           /* of them, on the skull or the jaw (fp_take_reach.held) */
     double reach_asked_max;        /* mesh units */
     double mm_per_unit;            /* the session's, at start (0: unknown) */
     _Atomic int gate;              /* 0 open, 1 a sink call in progress, 2 sealed */

@@ -65,6 +65,7 @@ static void sink_push(fp_session_take *t, const fp_frame_record *r)
         t->reach_vectors++;
     }
     if (r->reach_count && r->reach_asked_max > t->reach_asked_max) t->reach_asked_max = r->reach_asked_max;
+    t->reach_held += r->reach_held;
 }
 
 /* The q-quantile of the reach histogram (the bin's value, 1/FP_SESSION_TAKE_REACH_STEPS apart):
@@ -174,6 +175,7 @@ int fp_session_take_start(fp_session_take *t, const fp_session *s, int64_t origi
     t->frames = 0;
     memset(t->reach_bins, 0, sizeof t->reach_bins);
     t->reach_vectors = 0;
+    t->reach_held = 0;
     t->reach_asked_max = 0;
     atomic_store(&t->gate, 0);
     t->mm_per_unit = fp_session_head(s)->mm_per_unit;
@@ -208,7 +210,8 @@ int fp_session_take_stop(fp_session_take *t, fp_session_take_result *res, char *
     }
     if (t->reach_vectors) {
         fp_take_reach reach = {t->reach_vectors, reach_quantile(t, 0.5), reach_quantile(t, 0.1),
-                               t->mm_per_unit > 0 ? t->reach_asked_max * t->mm_per_unit : 0};
+                               t->mm_per_unit > 0 ? t->reach_asked_max * t->mm_per_unit : 0,
+                               t->reach_held};
         fp_take_recorder_set_reach(t->rec, &reach);
     }
     fp_take_recorder_status st;

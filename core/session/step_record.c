@@ -49,7 +49,7 @@ void fp_record_step_end(fp_record_step *r, uint64_t frame, int64_t time_ns, uint
     if (r->sink) {
         fp_frame_record rec = {frame, time_ns, r->events, r->count, r->lost, requested, controls,
                                st ? st->reach : NULL, st ? st->reach_vectors : 0,
-                               st ? st->reach_asked_max : 0};
+                               st ? st->reach_asked_max : 0, st ? st->reach_held : 0};
         r->sink(r->user, &rec);
     }
     for (size_t i = 0; i < n && i < sizeof r->reported / sizeof r->reported[0]; i++) {

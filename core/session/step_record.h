@@ -40,6 +40,7 @@ typedef struct fp_frame_record {
     const float *reach;              /* the frame's reach per touching vector (skin_reach.h) */
     size_t reach_count;
     double reach_asked_max;          /* their longest ask, mesh units */
+    size_t reach_held;               /* of them, those a rig keeps still (the skull, the jaw) */
 } fp_frame_record;
 
 /** The sink: called once per frame on the session thread after the frame; must not block,

@@ -264,13 +264,16 @@ int fp_take_writer_add_encoded(fp_take_writer *w, const void *record, size_t siz
  *  the control vectors of its frames that started on the skin and asked to move, each one's
  *  reach (how far the skin vertex nearest its start moved over how far it was asked to), as
  *  their median and 10th percentile (fractions, 1 = all the way), and the longest ask in mm
- *  (0 where the scale is unknown). vectors = 0: none (a take without touching fingertips, or
- *  one written before the reach was stored). Stored in the TAIL chunk as
- *  "reach":{"vectors":N,"median":M,"p10":P,"longest_drag_mm":L}. */
+ *  (0 where the scale is unknown); held: of those vectors, the ones whose grabbed vertex a rig
+ *  keeps still (the skull or the jaw: fp_frame_stats.reach_held). vectors = 0: none (a take
+ *  without touching fingertips, or one written before the reach was stored). Stored in the
+ *  TAIL chunk as "reach":{"vectors":N,"median":M,"p10":P,"longest_drag_mm":L}, with
+ *  "held":H where H > 0 (a reader of a take without it reads 0). */
 typedef struct fp_take_reach {
     uint64_t vectors;
     double median, p10;
     double longest_drag_mm;
+    uint64_t held;
 } fp_take_reach;
 
 /** The reach the end chunk will store (copied; vectors = 0 stores none; NULL w or reach:

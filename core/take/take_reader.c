@@ -240,6 +240,9 @@ static int read_tail(fp_take_reader *r, chunk_view *cv, uint64_t off)
         r->sum.reach.p10 = p->valuedouble;
         l = cJSON_GetObjectItemCaseSensitive(re, "longest_drag_mm");
         r->sum.reach.longest_drag_mm = cJSON_IsNumber(l) && isfinite(l->valuedouble) ? l->valuedouble : 0;
+        l = cJSON_GetObjectItemCaseSensitive(re, "held"); /* (vectors on the skull or the jaw) */
+        if (cJSON_IsNumber(l) && l->valuedouble >= 1 && l->valuedouble <= n->valuedouble)
+            r->sum.reach.held = (uint64_t)l->valuedouble;
     }
     cJSON_Delete(o);
     return 0;

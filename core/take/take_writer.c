@@ -380,6 +380,7 @@ int fp_take_writer_close(fp_take_writer **wp, uint64_t dropped, int status, char
             cJSON_AddNumberToObject(r, "median", w->reach.median);
             cJSON_AddNumberToObject(r, "p10", w->reach.p10);
             cJSON_AddNumberToObject(r, "longest_drag_mm", w->reach.longest_drag_mm);
+            if (w->reach.held) cJSON_AddNumberToObject(r, "held", (double)w->reach.held);
         }
         char *text = cJSON_PrintUnformatted(o);
         cJSON_Delete(o);

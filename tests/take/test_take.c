@@ -314,6 +314,42 @@ static void test_roundtrip_writer(void **state)
     rm_rf(dir);
 }
 
+/* The TAIL's reach round trip: the figures, and the vectors a rig held on the skull or the
+ * jaw ("held", written only when some were); a take without "held" reads 0. */
+static void test_reach_roundtrip(void **state)
+{
+    (void)state;
+    char dir[512], err[512];
+    make_dir(dir, sizeof dir, "reach");
+    for (int with_held = 0; with_held < 2; with_held++) {
+        fp_take_header h;
+        tt_header(&h, with_held ? "H" : "N");
+        fp_take_writer_options o = {.no_sync = true};
+        fp_take_writer *w;
+        if (fp_take_writer_create(dir, &h, &o, &w, err, sizeof err)) fail_msg("%s", err);
+        char path[1024];
+        snprintf(path, sizeof path, "%s", fp_take_writer_path(w));
+        tt_frame t;
+        tt_make(&t, 0, 1);
+        if (fp_take_writer_add(w, &t.f, err, sizeof err)) fail_msg("%s", err);
+        fp_take_reach reach = {51, 0.0, 0.0, 159.4, with_held ? 26 : 0};
+        fp_take_writer_set_reach(w, &reach);
+        if (fp_take_writer_close(&w, 0, 0, err, sizeof err)) fail_msg("%s", err);
+        size_t n;
+        uint8_t *bytes = slurp(path, &n);
+        bool has = memmem(bytes, n, "\"held\"", 6) != NULL;
+        free(bytes);
+        assert_int_equal(has, with_held);
+        fp_take_reader *r;
+        if (fp_take_reader_open(path, &r, err, sizeof err)) fail_msg("%s", err);
+        const fp_take_reach *got = &fp_take_reader_summary(r)->reach;
+        assert_int_equal(got->vectors, 51);
+        assert_true(got->longest_drag_mm == 159.4);
+        assert_int_equal(got->held, with_held ? 26 : 0);
+        fp_take_reader_close(&r);
+    }
+}
+
 static void test_roundtrip_recorder(void **state)
 {
     (void)state;
@@ -1114,6 +1150,7 @@ int main(void)
         cmocka_unit_test(test_timecode_values),
         cmocka_unit_test(test_timecode_roundtrip_and_errors),
         cmocka_unit_test(test_roundtrip_writer),
+        cmocka_unit_test(test_reach_roundtrip),
         cmocka_unit_test(test_roundtrip_recorder),
         cmocka_unit_test(test_recorder_drops),
         cmocka_unit_test(test_sigkill_mid_take),
