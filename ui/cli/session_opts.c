@@ -56,7 +56,8 @@ static const struct {
     {"calibration", required_argument, OPT_CALIBRATION, "FILE",
      "hand calibration JSON (docs/calibration.md; made by\n`facepuppet calibrate`). Default: life-size, in front\n"
      "of the face: a recording fitted from its whole range,\na live tracker's hands as they arrive (refined as\n"
-     "they move); a hint after 3 s of hands that never reach"},
+     "they move); either brought closer where their moving\nfingertips never come near (a live one after 1 s);\n"
+     "a hint after 3 s of hands that never reach"},
     {"speed", required_argument, 's', "X", "replay speed factor for replay inputs (default 1)"},
     {"duration", required_argument, OPT_DURATION, "S", "stop after S seconds (default: when the inputs end)"},
     {"hand-size", required_argument, OPT_HAND_SIZE, "F", "performer's hand size, 1 = mean adult"},
