@@ -451,6 +451,7 @@ typedef struct fp_take_info {
     char date[32];
     char description[512];     /* the header's description (truncated), "" when none */
     bool complete;             /* closed normally */
+    fp_take_reach reach;       /* from the end chunk (vectors = 0: none stored) */
     int error;                 /* 0, or the code why this file could not be read */
     char message[256];         /* the error or the cut warning, "" when none */
 } fp_take_info;

@@ -510,6 +510,7 @@ int fp_take_list(const char *dir, fp_take_info **out, size_t *count, char *err, 
         snprintf(t->date, sizeof t->date, "%s", h->date);
         snprintf(t->description, sizeof t->description, "%s", h->description ? h->description : "");
         t->complete = s->complete;
+        t->reach = s->reach;
         snprintf(t->message, sizeof t->message, "%s", fp_take_reader_warning(r));
         fp_take_reader_close(&r);
     }

@@ -42,6 +42,14 @@ r_run=$(reach_of "$tmp/reach.out") r_take=$(reach_of "$tmp/info.out")
 python3 -c "import sys; a=list(map(int,sys.argv[1].split())); b=list(map(int,sys.argv[2].split())); sys.exit(not (a[1]==b[1] and abs(a[0]-b[0])<=1 and abs(a[2]-b[2])<=1))" "$r_run" "$r_take" ||
     fail "the take's reach ($r_take: median %, vectors, p10 %) is not run's ($r_run)"
 echo "0. reach: run $r_run, the take $r_take (median %, touching vectors, p10 %)"
+# takes --json lists the same reach (its "reach" object; no rig: none held)
+"$fp" takes --json "$tmp/reach-takes" >"$tmp/reach.json" || fail "takes --json exited $?"
+python3 -c "
+import json, sys
+t = [x for x in json.load(open(sys.argv[1])) if x['kind'] == 'take'][0]['reach']
+m, n, p = map(int, sys.argv[2].split())
+sys.exit(not (t['vectors'] == n and round(100 * t['median']) == m and round(100 * t['p10']) == p and t['held'] == 0))
+" "$tmp/reach.json" "$r_take" || { cat "$tmp/reach.json"; fail "takes --json's reach is not info's ($r_take)"; }
 ! grep -q "of what the rig allowed" "$tmp/reach.out" || fail "a run without a rig speaks of what the rig allowed"
 # With the face's rig, grab pushes toward the cheekbone and the rig holds that back: run says
 # how far the skin followed what the rig allowed too (the skull's part, not a failure)

@@ -32,8 +32,10 @@ static void usage(FILE *f)
                "frames (\"-\"; null in JSON), and the reason is under the table (\"message\").\n"
                "Then the stacks (*.fpstack, layers of takes: docs/stack.md), each with its layers\n"
                "(take, region, mode, range, mute, solo).\n"
-               "  --json   one JSON array instead of the table: the takes (\"kind\": \"take\"), then\n"
-               "           the stacks (\"kind\": \"stack\", \"path\", \"state\", \"message\", \"layers\":\n"
+               "  --json   one JSON array instead of the table: the takes (\"kind\": \"take\"; their\n"
+               "           \"reach\", info's reach line: vectors, median, p10, longest_drag_mm,\n"
+               "           held; null where none), then the stacks (\"kind\": \"stack\", \"path\",\n"
+               "           \"state\", \"message\", \"layers\":\n"
                "           take, region, mode, in_s, out_s (null: to the end), fade_s, offset_s,\n"
                "           gain, mute, solo)\n\n"
                "rate and describe rewrite the take's header (its \"rating\" and \"description\";\n"
@@ -142,6 +144,16 @@ static int print_json(const fp_take_info *v, size_t n, const char *dir)
                                 : fp_text_clean(t->description, c, sizeof c));
         cJSON_AddStringToObject(o, "date", fp_text_clean(t->date, c, sizeof c));
         cJSON_AddStringToObject(o, "state", state_of(t));
+        if (t->reach.vectors) { /* how far the skin followed (the take's end chunk) */
+            cJSON *r = cJSON_AddObjectToObject(o, "reach");
+            cJSON_AddNumberToObject(r, "vectors", (double)t->reach.vectors);
+            cJSON_AddNumberToObject(r, "median", t->reach.median);
+            cJSON_AddNumberToObject(r, "p10", t->reach.p10);
+            cJSON_AddNumberToObject(r, "longest_drag_mm", t->reach.longest_drag_mm);
+            cJSON_AddNumberToObject(r, "held", (double)t->reach.held);
+        } else {
+            cJSON_AddNullToObject(o, "reach");
+        }
         cJSON_AddStringToObject(o, "message", fp_text_clean(t->message, c, sizeof c));
         cJSON_AddItemToArray(arr, o);
     }
