@@ -251,7 +251,8 @@ void fp_pose_place_gloves(fp_pose_state *p, const float *pos, size_t n, const fp
 /** A new calibration c for hands placed as they run (fp_pose_auto.h, step_arrive.h): p->calib
  *  = c, and gloves placed by fp_pose_place_gloves keep their place on the face (their
  *  device-frame wrists move by the offset's change: g' = (s_old g + o_old - o_new) / s_new;
- *  both calibrations without rotation, as fp_pose_fit_workspace makes them). */
+ *  both calibrations without rotation, as fp_pose_fit_workspace makes them). Cannot fail;
+ *  no allocation; the thread that owns p (the session thread). */
 void fp_pose_recalibrate(fp_pose_state *p, const fp_calibration *c);
 
 /** p_mesh = c->scale * R p_mm + c->offset + c->hand_offset[hand], in double, rounded to

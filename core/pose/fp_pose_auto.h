@@ -80,7 +80,8 @@ size_t fp_pose_auto_samples(const fp_pose_auto *a);
 /** Every sample kept, oldest first, to fn: its hand (FP_HAND_LEFT or FP_HAND_RIGHT) and its
  *  FP_HAND_JOINTS joints (mm, device frame) at the middles of their FP_POSE_AUTO_BIN_MM bins
  *  (a valid pointer during the call only). For a placement that measures the hands against
- *  the face (step_arrive.h's bring-in). */
+ *  the face (step_arrive.h's bring-in). a, fn: not NULL. Cannot fail; no allocation; a's
+ *  thread (the rule above). */
 void fp_pose_auto_each(const fp_pose_auto *a, void (*fn)(void *ctx, int hand, const float (*mm)[3]), void *ctx);
 
 /** The estimated workspace: per axis the 2nd and 98th percentiles of every joint of the

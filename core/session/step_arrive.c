@@ -54,7 +54,7 @@ void fp_arrive_step_place(fp_arrive_step *r, fp_pose_state *p, bool engaged, con
 {
     double hover = radius > 0 ? FP_ARRIVE_HOVER * radius : 0;
     if (!r->place) return;
-    bool now = r->bring_on && !r->brought && !engaged; /* the first bring-in: at once */
+    bool now = r->bring_on && !r->bring_tried && !engaged; /* the first bring-in: at once */
     if (!fp_pose_auto_refit(r->place, p, engaged, head->mm_per_unit, head->min, head->max, hover)) {
         if (now) bring_in_live(r, p, head, radius, e, log);
         return;
@@ -260,11 +260,11 @@ out:
 
 /* The same for a live input's hands at a refit (step_arrive.h): on the estimator's samples,
  * every stride-th of at most FP_ARRIVE_LIVE_SAMPLES, into r's buffers; p->calib, the range's
- * placement just made, moved by the push (r->push). The first push is said on log. */
+ * placement just made, moved by the push. The first push is said on log. */
 static void bring_in_live(fp_arrive_step *r, fp_pose_state *ps, const fp_head *head, double radius,
                           const fp_engine_step *e, const fp_slog *log)
 {
-    r->push = 0;
+    r->bring_tried = true; /* (later tries come with the refits only) */
     size_t n = fp_pose_auto_samples(r->place);
     if (!n || !r->live_tips || !e || !e->points || !(radius > 0)) return;
     tips_in t = {.mm = r->live_tips, .hand = r->live_hand, .cap = FP_ARRIVE_LIVE_SAMPLES,
@@ -275,7 +275,6 @@ static void bring_in_live(fp_arrive_step *r, fp_pose_state *ps, const fp_head *h
     fp_calibration c = ps->calib;
     c.offset[2] -= p;
     fp_pose_recalibrate(ps, &c);
-    r->push = p;
     if (r->brought) return;
     r->brought = true;
     fp_slog_printf(log, FP_LOG_INFO, "session",

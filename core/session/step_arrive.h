@@ -68,8 +68,8 @@ typedef struct fp_arrive_step {
     bool hovered;                  /* the hands are still: placed FP_ARRIVE_HOVER x radius out */
     double moving_away_s;          /* of away_s: seconds the hands moved, placed by their range */
     bool bring_on;                 /* FP_ARRIVE_BRING_AFTER_S of those came: bring them in */
+    bool bring_tried;              /* the live bring-in ran (outside a refit: once) */
     bool brought;                  /* the live bring-in was said */
-    double push;                   /* mesh units: how far the last refit brought them in */
     float (*live_tips)[3];         /* FP_ARRIVE_PLACED_AUTO: its buffers (FP_ARRIVE_LIVE_SAMPLES */
     int *live_hand;                /* samples' fingertips, hands, their points in mesh units */
     float (*live_q)[3];            /* and distances) */
