@@ -11,6 +11,12 @@
 
 #include <math.h>
 
+/** A triangle is turned over (flipped) when its normal is more than acos(FP_FLIP_COS) from its
+ *  rest normal: 90 degrees less 0.0006 of a degree, a margin over the rest normal's rounding
+ *  to float. One rule for the contact guard (FP_CONTACT_FLIP_COS, fp_contact.h, where the
+ *  margin's reason is) and the rig's jaw weights (fp_rig_unfold_jaw). */
+#define FP_FLIP_COS 1e-5
+
 /** a . b */
 static inline double fp_dot3(const double a[3], const double b[3])
 {

@@ -42,6 +42,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "fp_vec.h"
+
 #ifdef __cplusplus
 extern "C" {
 #endif
@@ -62,11 +64,12 @@ void fp_contact_destroy(fp_contact **c);
 int fp_contact_dilate_own(fp_contact *c, int rings);
 
 /** A triangle is turned over (flipped) when its normal is more than acos(this) from its rest
- *  normal: 90 degrees less 0.0006 of a degree, a margin over the rest normal's rounding to float. The
+ *  normal (FP_FLIP_COS, fp_vec.h: 1e-5): 90 degrees less 0.0006 of a degree, a margin over the
+ *  rest normal's rounding to float. The
  *  bisection drives a turning triangle to that edge; at exactly 90 degrees the rounding
  *  decided the sign, and an independent check in double (tests/e2e/test_guard) saw a flip
  *  the guard had let through (tests/session/test_contact.c test_flip_boundary). */
-#define FP_CONTACT_FLIP_COS 1e-5
+#define FP_CONTACT_FLIP_COS FP_FLIP_COS
 
 /** What fp_contact_count_new saw besides the new pairs. */
 typedef struct fp_contact_count {

@@ -16,6 +16,7 @@
 #define _GNU_SOURCE
 #include "fp_rig_internal.h"
 #include "fp_mesh.h"
+#include "fp_vec.h"
 
 #include <assert.h>
 #include <errno.h>
@@ -26,8 +27,6 @@
 
 #define UNFOLD_OPENINGS 8   /* openings sampled: max / 8, 2 max / 8, ... max */
 #define UNFOLD_ROUNDS 200   /* evening rounds at most */
-#define UNFOLD_COS 1e-5     /* turned over: normal within acos(this) of 90 degrees or past it
-                               (the contact guard's FP_CONTACT_FLIP_COS) */
 
 static void normal(const float *p, const uint32_t *t, double n[3])
 {
@@ -47,7 +46,7 @@ static bool turned(const float *posed, const uint32_t *t, const double n0[3])
     double l0 = sqrt(n0[0] * n0[0] + n0[1] * n0[1] + n0[2] * n0[2]);
     double l = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
     if (!(l0 > 0)) return false; /* degenerate at rest: no normal to turn */
-    return n[0] * n0[0] + n[1] * n0[1] + n[2] * n0[2] <= UNFOLD_COS * l0 * l;
+    return n[0] * n0[0] + n[1] * n0[1] + n[2] * n0[2] <= FP_FLIP_COS * l0 * l;
 }
 
 /* The repair's working state. An opening's candidates (cand, up to t) and the vertices they

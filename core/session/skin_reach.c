@@ -22,20 +22,26 @@ static void add(double r, double asked, float *out, size_t *count, fp_skin_reach
     if (asked > g->asked_max) g->asked_max = asked;
 }
 
-/* How far vector i of cs asked (mesh units), and how far vertex v moved, over it: *r. */
-static double asked_of(const fp_control_set *cs, size_t i, const float *ref, const float *shown, uint32_t v,
-                       double *r)
+/* How far vector i of cs asked (mesh units). */
+static double asked_of(const fp_control_set *cs, size_t i)
 {
-    double asked = 0, moved = 0;
+    double q2 = 0;
     for (int a = 0; a < 3; a++) {
         double q = (double)cs->end[i][a] - cs->start[i][a];
-        double m = (double)shown[3 * (size_t)v + a] - ref[3 * (size_t)v + a];
-        asked += q * q;
-        moved += m * m;
+        q2 += q * q;
     }
-    asked = sqrt(asked);
-    *r = sqrt(moved) / asked;
-    return asked;
+    return sqrt(q2);
+}
+
+/* How far vertex v moved from ref to shown (mesh units). */
+static double moved_of(const float *ref, const float *shown, uint32_t v)
+{
+    double m2 = 0;
+    for (int a = 0; a < 3; a++) {
+        double m = (double)shown[3 * (size_t)v + a] - ref[3 * (size_t)v + a];
+        m2 += m * m;
+    }
+    return sqrt(m2);
 }
 
 void fp_skin_reach_frame(const csrbf_points *points, const float *ref, const float *shown,
@@ -54,13 +60,14 @@ void fp_skin_reach_frame(const csrbf_points *points, const float *ref, const flo
     size_t nv = csrbf_points_count(points);
     for (size_t i = 0; i < n; i++) {
         if (idx[i] == UINT32_MAX || idx[i] >= nv) continue;
-        double r, asked = asked_of(cs, i, ref, shown, idx[i], &r);
+        double asked = asked_of(cs, i);
         if (!(asked >= FP_REACH_MIN_ASK * cs->radius)) continue;
-        add(r, asked, st->reach, &st->reach_vectors, g);
+        double moved = moved_of(ref, shown, idx[i]);
+        add(moved / asked, asked, st->reach, &st->reach_vectors, g);
         if (asked > st->reach_asked_max) st->reach_asked_max = asked;
         if (!allowed || i >= allowed->count) continue;
         assert(!memcmp(allowed->start[i], cs->start[i], sizeof cs->start[i]));
-        double ra, asked_allowed = asked_of(allowed, i, ref, shown, idx[i], &ra);
+        double asked_allowed = asked_of(allowed, i);
         double m = mobility ? (double)mobility[idx[i]] : 1.0; /* the blend's share there */
         if (!(asked_allowed >= FP_REACH_MIN_ASK * allowed->radius)) continue; /* all held back */
         if (!(m * asked_allowed >= FP_REACH_MIN_ASK * allowed->radius)) { /* the bone itself */
@@ -68,7 +75,8 @@ void fp_skin_reach_frame(const csrbf_points *points, const float *ref, const flo
             if (g_allowed) g_allowed->held++;
             continue;
         }
-        add(ra / m, m * asked_allowed, st->reach_allowed, &st->reach_allowed_vectors, g_allowed);
+        add(moved / asked_allowed / m, m * asked_allowed, st->reach_allowed, &st->reach_allowed_vectors,
+            g_allowed);
     }
 }
 

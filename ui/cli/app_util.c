@@ -540,20 +540,28 @@ void fp_app_reach_text(fp_app_reach *r, double mm_per_unit, char *text, size_t l
     if (!r->n) return;
     double med = fp_median(r->v, r->n), p10 = fp_percentile(r->v, r->n, 0.10);
     char rig[256] = "";
-    int k = 0;
     if (r->na) {
         double ma = fp_median(r->va, r->na), pa = fp_percentile(r->va, r->na, 0.10);
         if (fabs(ma - med) >= 0.005 || fabs(pa - p10) >= 0.005)
-            k = snprintf(rig, sizeof rig, "; %.0f%% of what the rig allowed, 10th percentile %.0f%%: it "
-                         "holds back a push toward the skull or the jaw", 100.0 * ma, 100.0 * pa);
+            snprintf(rig, sizeof rig, "; %.0f%% of what the rig allowed, 10th percentile %.0f%%: it "
+                     "holds back a push toward the skull or the jaw", 100.0 * ma, 100.0 * pa);
     }
-    if (r->held && k >= 0 && (size_t)k < sizeof rig)
-        snprintf(rig + k, sizeof rig - (size_t)k, "; %zu of them on the skull or the jaw, which the rig "
-                 "keeps still", r->held);
+    int w = snprintf(text, len, "; ");
+    if (w > 0 && (size_t)w < len)
+        fp_app_reach_sentence(text + w, len - (size_t)w, med, r->n, p10, r->asked_max * mm_per_unit, rig,
+                              r->held);
+}
+
+void fp_app_reach_sentence(char *text, size_t len, double median, size_t vectors, double p10,
+                           double longest_mm, const char *rig, size_t held)
+{
+    if (!len) return;
+    char h[96] = "";
+    if (held) snprintf(h, sizeof h, "; %zu of them on the skull or the jaw, which the rig keeps still", held);
     snprintf(text, len,
-             "; the skin followed the fingertips %.0f%% (median over %zu touching vectors, 10th "
-             "percentile %.0f%%, longest drag %.1f mm%s)", 100.0 * med, r->n, 100.0 * p10,
-             r->asked_max * mm_per_unit, rig);
+             "the skin followed the fingertips %.0f%% (median over %zu touching vectors, 10th "
+             "percentile %.0f%%, longest drag %.1f mm%s%s)", 100.0 * median, vectors, 100.0 * p10,
+             longest_mm, rig ? rig : "", h);
 }
 
 void fp_app_reach_free(fp_app_reach *r)

@@ -227,5 +227,12 @@ void fp_app_reach_add(fp_app_reach *r, const fp_frame_stats *st);
  *  still)". Reorders r->v and r->va. */
 void fp_app_reach_text(fp_app_reach *r, double mm_per_unit, char *text, size_t len);
 void fp_app_reach_free(fp_app_reach *r);
+/** The sentence both `run`'s summary (fp_app_reach_text) and `info` (a take's TAIL) print:
+ *  "the skin followed the fingertips M% (median over N touching vectors, 10th percentile P%,
+ *  longest drag D mm[rig][; H of them on the skull or the jaw, which the rig keeps still])"
+ *  into text (len bytes, truncated), median and p10 as fractions, rig "" or a clause that
+ *  starts "; ", held 0 for none. No errors; any thread. */
+void fp_app_reach_sentence(char *text, size_t len, double median, size_t vectors, double p10,
+                           double longest_mm, const char *rig, size_t held);
 
 #endif

@@ -336,13 +336,10 @@ int fp_app_take_info(const char *path)
                             s->end_status, s->end_status ? " " : "",
                             s->end_status ? fp_strerror(s->end_status) : "");
     if (s->reach.vectors) {
-        char held[96] = "";
-        if (s->reach.held)
-            snprintf(held, sizeof held, "; %llu of them on the skull or the jaw, which the rig keeps still",
-                     (unsigned long long)s->reach.held);
-        printf("\n  reach        the skin followed the fingertips %.0f%% (median over %llu touching vectors, "
-               "10th percentile %.0f%%, longest drag %.1f mm%s)", 100 * s->reach.median,
-               (unsigned long long)s->reach.vectors, 100 * s->reach.p10, s->reach.longest_drag_mm, held);
+        char line[512];
+        fp_app_reach_sentence(line, sizeof line, s->reach.median, (size_t)s->reach.vectors, s->reach.p10,
+                              s->reach.longest_drag_mm, "", (size_t)s->reach.held);
+        printf("\n  reach        %s", line);
     }
     printf("\n  file size    %llu bytes\n", (unsigned long long)s->file_size);
     int status = FP_EXIT_OK;
