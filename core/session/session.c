@@ -177,6 +177,8 @@ static void show_deformed(fp_session *s, bool commit, int was, fp_frame_stats *s
     size_t ntouched = fp_engine_step_touched(&s->engine, &touched);
     fp_sheet_bind_apply(&s->bind, ref, s->deformed, touched, ntouched);
     s->shown = fp_rig_step_finish(&s->rig, s->deformed, touched, ntouched);
+    /* (shown is the rig's buffer or deformed: the session's own, writable) */
+    fp_crack_apply(&s->crack, s->mesh->triangles, ref, (float *)s->shown);
     st->stage_ms[FP_STAGE_SHAPE] += (double)(fp_now_ns() - t0) / 1e6;
     const fp_cg_frame f = {.ref = ref, .shown = s->shown, .commit = commit, .rig = &s->rig, .base = s->base,
                            .deformed = s->deformed, .touched = touched, .ntouched = ntouched,
@@ -644,6 +646,7 @@ void fp_session_destroy(fp_session **sp)
     fp_engine_step_free(&s->engine);
     fp_cg_free(&s->cg);
     fp_sheet_bind_free(&s->bind);
+    fp_crack_free(&s->crack);
     fp_changed_free(&s->shown_changed);
     free(s->guard_dp);
     fp_changed_free(&s->base_changed);

@@ -26,6 +26,7 @@
 #include "skin_reach.h"
 #include "step_contact.h"
 #include "sheet_bind.h"
+#include "crack.h"
 #include "step_engine.h"
 #include "step_mapping.h"
 #include "step_arrive.h"
@@ -101,6 +102,7 @@ struct fp_session {
     fp_control_set cs;            /* its arrays are the mapping step's (with canaries) */
 
     fp_sheet_bind bind;           /* close sheets carried together (sheet_bind.h) */
+    fp_crack crack;               /* cracked seams kept closed (crack.h) */
     double flip_widen;            /* this gesture's support widening (fp_cg_next_widen; 1: none) */
     double cs_asked_radius;       /* the mapping's radius where cs.radius was widened; 0: not */
     double flip_widened;          /* the most this gesture's support was widened (its log line) */

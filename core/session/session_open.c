@@ -151,7 +151,7 @@ static int check_options(const fp_session_options *opt, char *err, size_t errlen
     return 0;
 }
 
-/* fp_sheet_bind_build on the session's loaded face, for a thread */
+/* fp_sheet_bind_build and fp_crack_build on the session's loaded face, for a thread */
 typedef struct bind_job {
     fp_session *s;
     int rc;
@@ -162,6 +162,9 @@ static void *bind_run(void *u)
     bind_job *j = u;
     j->rc = fp_sheet_bind_build(j->s->loaded, j->s->n, j->s->mesh->triangles, j->s->mesh->triangle_count,
                                 &j->s->bind);
+    if (!j->rc)
+        j->rc = fp_crack_build(j->s->loaded, j->s->n, j->s->mesh->triangles, j->s->mesh->triangle_count,
+                               &j->s->crack);
     return NULL;
 }
 
