@@ -142,21 +142,14 @@ static void test_ict_cracks(void **state)
 static void test_ict_three_claps_not_held_for_cracks(void **state)
 {
     (void)state;
-    const char *dirs[] = {fp_test_plugin_dir()};
-    fp_plugin_path path;
-    fp_plugin_path_init(&path, dirs, 1, NULL);
-    char mesh[4300], input[4400], err[2048];
-    snprintf(mesh, sizeof mesh, "%s/faces/ict-facekit/generic_neutral_mesh.obj", fp_test_data_dir());
+    char input[4400], err[2048];
     snprintf(input, sizeof input, "replay:%s/hands/leap-motion/three-claps_joints_mm.csv,fast=1",
              fp_test_data_dir());
-    fp_session_options so = {0};
-    so.mesh_path = mesh;
+    fp_session_options so;
+    fp_test_face_options(&so, "anchored", FP_TEST_RIGS_DIR);
     so.inputs[0] = input;
     so.input_count = 1;
-    so.mapping = "anchored";
-    so.plugin_path = &path;
     so.input_clock = true;
-    so.rig_dir = FP_TEST_RIGS_DIR;
     fp_session *s = NULL;
     int rc = fp_session_create(&so, &s, err, sizeof err);
     if (!rc) rc = fp_session_start(s, err, sizeof err);
@@ -182,7 +175,6 @@ static void test_ict_three_claps_not_held_for_cracks(void **state)
     assert_true(active > 50);
     assert_int_equal(for_pairs, 0);
     fp_session_destroy(&s);
-    fp_plugin_path_clear(&path);
 }
 
 int main(void)
