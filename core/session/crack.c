@@ -1,5 +1,6 @@
 /* crack.c: cracked seams kept closed (crack.h). */
 #include "crack.h"
+#include "weld.h"
 
 #include "fp_contact.h"
 
@@ -11,20 +12,6 @@
 #include <string.h>
 
 /* ---- building ---------------------------------------------------------------------------- */
-
-typedef struct at_pos {
-    float p[3];
-    uint32_t v;
-} at_pos;
-
-/* by position, x then y then z, then index (a weld's first vertex comes first) */
-static int by_position(const void *a, const void *b)
-{
-    const at_pos *u = a, *w = b;
-    for (int k = 0; k < 3; k++)
-        if (u->p[k] != w->p[k]) return (u->p[k] > w->p[k]) - (u->p[k] < w->p[k]);
-    return (u->v > w->v) - (u->v < w->v);
-}
 
 static int by_crack(const void *a, const void *b)
 {
@@ -52,23 +39,15 @@ static int push4(uint32_t **a, size_t *len, size_t *cap, uint32_t w, uint32_t x,
     return 0;
 }
 
-/* the welds (weld[v]: the first vertex at v's position) and the cracks between them:
+/* the welds (weld.h) and the cracks between them:
  * (lower weld, higher weld) pairs into *cr (2 x *ncr). 0 or -ENOMEM */
 static int find_cracks(const float *pos, size_t n, uint32_t *weld, uint32_t **cr, size_t *ncr)
 {
-    at_pos *ix = malloc((n ? n : 1) * sizeof *ix);
-    if (!ix) return -ENOMEM;
+    fp_at_pos *ix = NULL;
+    if (fp_weld_by_position(pos, n, weld, &ix)) return -ENOMEM;
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (size_t v = 0; v < n; v++) {
-        for (int k = 0; k < 3; k++) ix[v].p[k] = pos[3 * v + k] + 0.0f; /* (-0 as +0: runs by value) */
-        ix[v].v = (uint32_t)v;
+    for (size_t v = 0; v < n; v++)
         for (int k = 0; k < 3; k++) lo[k] = fminf(lo[k], pos[3 * v + k]), hi[k] = fmaxf(hi[k], pos[3 * v + k]);
-    }
-    qsort(ix, n, sizeof *ix, by_position);
-    for (size_t i = 0; i < n; i++) {
-        bool same = i && !memcmp(ix[i].p, ix[i - 1].p, sizeof ix[i].p);
-        weld[ix[i].v] = same ? weld[ix[i - 1].v] : ix[i].v;
-    }
     double diag = 0;
     for (int k = 0; k < 3; k++) diag += ((double)hi[k] - lo[k]) * ((double)hi[k] - lo[k]);
     const double tol = FP_CRACK_TOL * sqrt(diag);

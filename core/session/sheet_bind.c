@@ -1,5 +1,6 @@
 /* sheet_bind.c: close sheets carried together (sheet_bind.h). */
 #include "sheet_bind.h"
+#include "weld.h"
 
 #include <assert.h>
 #include <stdbool.h>
@@ -47,43 +48,6 @@ static void nearest_on_triangle(const double p[3], const double a[3], const doub
     }
     double den = 1 / (va + vb + vc);
     bary[1] = vb * den, bary[2] = vc * den, bary[0] = 1 - bary[1] - bary[2];
-}
-
-/* ---- welding by position ----------------------------------------------------------------- */
-
-typedef struct at_pos {
-    float p[3];
-    uint32_t v;
-} at_pos;
-
-static int by_position(const void *a, const void *b)
-{
-    const at_pos *x = a, *y = b;
-    for (int k = 0; k < 3; k++)
-        if (x->p[k] != y->p[k]) return x->p[k] < y->p[k] ? -1 : 1;
-    return (x->v > y->v) - (x->v < y->v);
-}
-
-/* weld[v]: the least index at v's position */
-static uint32_t *weld_by_position(const float *pos, size_t n)
-{
-    at_pos *order = malloc(n * sizeof *order);
-    uint32_t *weld = malloc(n * sizeof *weld);
-    if (!order || !weld) {
-        free(order), free(weld);
-        return NULL;
-    }
-    for (size_t v = 0; v < n; v++) {
-        memcpy(order[v].p, pos + 3 * v, sizeof order[v].p);
-        order[v].v = (uint32_t)v;
-    }
-    qsort(order, n, sizeof *order, by_position);
-    for (size_t i = 0; i < n; i++) {
-        bool same = i > 0 && !memcmp(order[i].p, order[i - 1].p, sizeof order[i].p);
-        weld[order[i].v] = same ? weld[order[i - 1].v] : order[i].v;
-    }
-    free(order);
-    return weld;
 }
 
 /* ---- the candidates ------------------------------------------------------------------------ */
@@ -288,9 +252,9 @@ int fp_sheet_bind_build(const float *pos, size_t n, const uint32_t *tris, size_t
     vkey *order = NULL;
     size_t nc = 0, cap = 0;
     double *edge = calloc(n, sizeof *edge);
-    uint32_t *deg = calloc(n, sizeof *deg), *weld = weld_by_position(pos, n);
+    uint32_t *deg = calloc(n, sizeof *deg), *weld = malloc(n * sizeof *weld);
     uint8_t *role = calloc(n, 1); /* 1 follower, 2 a leader's corner */
-    if (!edge || !deg || !weld || !role) goto out;
+    if (!edge || !deg || !weld || !role || fp_weld_by_position(pos, n, weld, NULL)) goto out;
     /* each welded vertex's mean edge length */
     double sum = 0;
     for (size_t f = 0; f < t; f++)
