@@ -15,7 +15,7 @@
 
 static int by_crack(const void *a, const void *b)
 {
-    const uint32_t *p = a, *q = b; /* (lower weld, higher weld, -, -) */
+    const uint32_t *p = a, *q = b; /* (lower weld, higher weld) */
     if (p[0] != q[0]) return (p[0] > q[0]) - (p[0] < q[0]);
     return (p[1] > q[1]) - (p[1] < q[1]);
 }
@@ -26,16 +26,17 @@ static int by_u32(const void *a, const void *b)
     return (p > q) - (p < q);
 }
 
-static int push4(uint32_t **a, size_t *len, size_t *cap, uint32_t w, uint32_t x, uint32_t y, uint32_t z)
+/* (a, b) onto the growing list *l of *len pairs */
+static int push_pair(uint32_t **l, size_t *len, size_t *cap, uint32_t a, uint32_t b)
 {
     if (*len == *cap) {
         size_t c = 2 * *cap + 64;
-        uint32_t *g = realloc(*a, 4 * c * sizeof *g);
+        uint32_t *g = realloc(*l, 2 * c * sizeof *g);
         if (!g) return -ENOMEM;
-        *a = g, *cap = c;
+        *l = g, *cap = c;
     }
-    uint32_t *e = *a + 4 * (*len)++;
-    e[0] = w, e[1] = x, e[2] = y, e[3] = z;
+    (*l)[2 * *len] = a, (*l)[2 * *len + 1] = b;
+    ++*len;
     return 0;
 }
 
@@ -64,15 +65,15 @@ static int find_cracks(const float *pos, size_t n, uint32_t *weld, uint32_t **cr
                 d2 += e * e;
             }
             if (!(d2 <= tol * tol)) continue;
-            if (push4(&out, &len, &cap, a < b ? a : b, a < b ? b : a, 0, 0)) return free(ix), free(out), -ENOMEM;
+            if (push_pair(&out, &len, &cap, a < b ? a : b, a < b ? b : a)) return free(ix), free(out), -ENOMEM;
         }
     free(ix);
-    /* once each (a weld of several vertices met the other side as often), as pairs of two */
-    if (len) qsort(out, len, 4 * sizeof *out, by_crack);
+    /* once each (a weld of several vertices met the other side as often) */
+    if (len) qsort(out, len, 2 * sizeof *out, by_crack);
     size_t m = 0;
     for (size_t i = 0; i < len; i++)
-        if (!m || out[4 * i] != out[2 * (m - 1)] || out[4 * i + 1] != out[2 * (m - 1) + 1])
-            out[2 * m] = out[4 * i], out[2 * m + 1] = out[4 * i + 1], m++;
+        if (!m || by_crack(out + 2 * i, out + 2 * (m - 1)))
+            out[2 * m] = out[2 * i], out[2 * m + 1] = out[2 * i + 1], m++;
     *cr = out;
     *ncr = m;
     return 0;

@@ -67,6 +67,8 @@ int fp_crack_build(const float *pos, size_t n, const uint32_t *tris, size_t t, f
  *  costs one comparison a side). Returns the number of pairs parted. */
 size_t fp_crack_apply(const fp_crack *k, const uint32_t *tris, const float *ref, float *x);
 
+/** Frees what fp_crack_build made and zeroes k (k zeroed or built; safe twice). No errors.
+ *  Threads: not while fp_crack_apply runs on k. */
 void fp_crack_free(fp_crack *k);
 
 #ifdef __cplusplus
