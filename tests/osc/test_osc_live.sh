@@ -20,7 +20,8 @@
 #
 # FP_OSC_LIVE_KEYS=",filter=oneeuro" (appended to the osc SPEC) tries the input's keys.
 # FP_OSC_LIVE_CSV=FILE sends another Leap joints recording instead of grab (e.g. a copy from
-# tools/hands-variants).
+# tools/hands-variants); FP_OSC_LIVE_MESH=FILE deforms another face instead of ICT's (the
+# bounds stay the grab's on ICT: docs/performance.md "Live against replay on the other faces").
 # Free ports: a random high one, another if it is taken (tests run in parallel); every wait
 # is bounded. SPDX-License-Identifier: GPL-3.0-or-later
 set -u
@@ -29,7 +30,7 @@ fp="$build/bin/facepuppet"
 send="$build/bin/fp-osc-send"
 pd=(--plugin-dir "$build/lib/facepuppet")
 data=${FP_SHARED_DATA:-../shared/data}
-mesh=$data/faces/ict-facekit/generic_neutral_mesh.obj
+mesh=${FP_OSC_LIVE_MESH:-$data/faces/ict-facekit/generic_neutral_mesh.obj}
 grab=${FP_OSC_LIVE_CSV:-$data/hands/leap-motion/grab_joints_mm.csv}
 tmp=$(mktemp -d "${TMPDIR:-/tmp}/fp-osc-live-XXXXXX")
 runpid=
