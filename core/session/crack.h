@@ -57,14 +57,17 @@ typedef struct fp_crack {
     size_t ngroups;
 } fp_crack;
 
-/** Finds the cracks of a mesh: pos n x 3 (mesh units), tris t x 3. Returns 0 (k filled,
- *  k->npairs may be 0) or -ENOMEM (k zeroed). O(n log n + t). */
+/** Finds the cracks of a mesh: pos n x 3 (mesh units), tris t x 3 (indices < n; not kept).
+ *  Returns 0 (k filled, k->npairs may be 0) or -ENOMEM (k zeroed). O(n log n + t). Threads:
+ *  any, k the caller's alone. */
 int fp_crack_build(const float *pos, size_t n, const uint32_t *tris, size_t t, fp_crack *k);
 
-/** Closes the cracks the rounding opened: ref the reference (n x 3: the contact guard's, the
- *  posed base), x the candidate (n x 3, changed in place at crack corners only). Only the pairs
- *  of a crack where x moved a side's vertex from ref are tested (a crack outside every support
- *  costs one comparison a side). Returns the number of pairs parted. */
+/** Closes the cracks the rounding opened: tris the triangles k was built with, ref the
+ *  reference (n x 3, mesh units: the contact guard's, the posed base), x the candidate (n x 3,
+ *  changed in place at crack corners only). Only the pairs of a crack where x moved a side's
+ *  vertex from ref are tested (a crack outside every support costs one comparison a side).
+ *  Returns the number of pairs parted; no errors, no allocation. Threads: the frame thread;
+ *  k read only. */
 size_t fp_crack_apply(const fp_crack *k, const uint32_t *tris, const float *ref, float *x);
 
 /** Frees what fp_crack_build made and zeroes k (k zeroed or built; safe twice). No errors.

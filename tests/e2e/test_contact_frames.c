@@ -52,7 +52,7 @@ static unsigned long total_frames, total_scaled;
 
 static void run(const char *face, const char *take, const char *mapping)
 {
-    char mesh[4300], input[4400], err[2048];
+    char mesh[4300], input[4400];
     snprintf(mesh, sizeof mesh, "%s/faces/%s", fp_test_data_dir(), face);
     snprintf(input, sizeof input, "replay:%s/hands/leap-motion/%s_joints_mm.csv,fast=1",
              fp_test_data_dir(), take);
@@ -66,11 +66,7 @@ static void run(const char *face, const char *take, const char *mapping)
     so.mapping = mapping;
     so.plugin_path = &path;
     so.input_clock = true;
-    fp_session *s = NULL;
-    int rc = fp_session_create(&so, &s, err, sizeof err);
-    if (!rc) rc = fp_session_start(s, err, sizeof err);
-    if (rc) fprintf(stderr, "%s\n", err);
-    assert_int_equal(rc, 0);
+    fp_session *s = fp_test_session_open(&so);
     const fp_mesh *m = fp_session_mesh(s);
     size_t n = fp_session_vertex_count(s), t = m->triangle_count;
     fp_contact *full;

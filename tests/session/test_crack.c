@@ -142,7 +142,7 @@ static void test_ict_cracks(void **state)
 static void test_ict_three_claps_not_held_for_cracks(void **state)
 {
     (void)state;
-    char input[4400], err[2048];
+    char input[4400];
     snprintf(input, sizeof input, "replay:%s/hands/leap-motion/three-claps_joints_mm.csv,fast=1",
              fp_test_data_dir());
     fp_session_options so;
@@ -150,11 +150,7 @@ static void test_ict_three_claps_not_held_for_cracks(void **state)
     so.inputs[0] = input;
     so.input_count = 1;
     so.input_clock = true;
-    fp_session *s = NULL;
-    int rc = fp_session_create(&so, &s, err, sizeof err);
-    if (!rc) rc = fp_session_start(s, err, sizeof err);
-    if (rc) fprintf(stderr, "%s\n", err);
-    assert_int_equal(rc, 0);
+    fp_session *s = fp_test_session_open(&so);
     int64_t t0;
     while (fp_session_input_start(s, &t0) == 0) fp_test_nap_ms(1);
     unsigned long frames = 0, active = 0, scaled = 0, for_pairs = 0;

@@ -437,20 +437,25 @@ void fp_test_face_options(fp_session_options *so, const char *mapping, const cha
     so->rig_dir = rig_dir;
 }
 
-fp_session *fp_test_session_start(const char *mapping, const char *const *inputs, int n)
+fp_session *fp_test_session_open(const fp_session_options *so)
 {
     char err[2048];
-    fp_session_options so;
-    fp_test_face_options(&so, mapping, NULL);
-    assert_true(n >= 0 && n <= (int)(sizeof so.inputs / sizeof so.inputs[0]));
-    for (int i = 0; i < n; i++) so.inputs[i] = inputs[i];
-    so.input_count = n;
     fp_session *s = NULL;
-    int rc = fp_session_create(&so, &s, err, sizeof err);
+    int rc = fp_session_create(so, &s, err, sizeof err);
     if (rc) fprintf(stderr, "%s\n", err);
     assert_int_equal(rc, 0);
     rc = fp_session_start(s, err, sizeof err);
     if (rc) fprintf(stderr, "%s\n", err);
     assert_int_equal(rc, 0);
     return s;
+}
+
+fp_session *fp_test_session_start(const char *mapping, const char *const *inputs, int n)
+{
+    fp_session_options so;
+    fp_test_face_options(&so, mapping, NULL);
+    assert_true(n >= 0 && n <= (int)(sizeof so.inputs / sizeof so.inputs[0]));
+    for (int i = 0; i < n; i++) so.inputs[i] = inputs[i];
+    so.input_count = n;
+    return fp_test_session_open(&so);
 }

@@ -139,8 +139,12 @@ struct fp_session_options;
  *  none given); every other field zero. */
 void fp_test_face_options(struct fp_session_options *so, const char *mapping, const char *rig_dir);
 
+/** Create and start a session with the options so (not kept). Fails the test (printing the
+ *  error) when create or start fails; the session is the caller's (fp_session_destroy). */
+struct fp_session *fp_test_session_open(const struct fp_session_options *so);
+
 /** Create and start a session on the ICT face with n input SPECs and a mapping SPEC, plugins
- *  from the build. Fails the test (printing the error) when create or start fails. */
+ *  from the build (fp_test_session_open). */
 struct fp_session *fp_test_session_start(const char *mapping, const char *const *inputs, int n);
 
 #endif
