@@ -107,14 +107,10 @@ static void run(const char *mesh, const char *input, const char *mapping, const 
     int rc = fp_session_create(&so, &s, err, sizeof err);
     if (rc) fail_msg("%s %s: %s", mesh, input, err);
     if ((rc = fp_session_start(s, err, sizeof err))) fail_msg("%s: %s", input, err);
-    int64_t t0 = 0, limit = fp_now_ns() + 120LL * 1000000000LL;
-    int clock;
-    while ((clock = fp_session_input_start(s, &t0)) == 0 && fp_now_ns() < limit) fp_test_nap_ms(1);
-    assert_int_equal(clock, 1);
+    int64_t t0 = fp_test_session_t0(s), limit = fp_now_ns() + 120LL * 1000000000LL;
     lb->t0 = t0;
     for (uint64_t k = 0; fp_now_ns() < limit; k++) {
-        int64_t now = t0 + (int64_t)llround((double)k * 1e9 / FPS);
-        while (!fp_session_inputs_ready(s, now) && fp_now_ns() < limit) fp_test_nap_ms(1);
+        int64_t now = fp_test_frame_time(s, t0, k, FPS);
         lb->now = now;
         fp_frame_stats st;
         fp_session_step(s, now, &st);

@@ -75,13 +75,11 @@ static void run(const char *face, const char *take, const char *mapping)
     float *ref = malloc(n * 3 * sizeof(float)), *snap[2] = {NULL, NULL};
     size_t cap = 8192, ncms = 0;
     double *cms = malloc(cap * sizeof *cms);
-    int64_t t0;
-    while (fp_session_input_start(s, &t0) == 0) fp_test_nap_ms(1);
+    int64_t t0 = fp_test_session_t0(s);
     unsigned long active = 0, scaled = 0;
     double least = 1;
     for (uint64_t k = 0; !fp_session_finished(s); k++) {
-        int64_t now = t0 + (int64_t)llround((double)k * 1e9 / 60);
-        while (!fp_session_inputs_ready(s, now)) fp_test_nap_ms(1);
+        int64_t now = fp_test_frame_time(s, t0, k, 60);
         reference(s, ref); /* the base as the frame starts (a commit changes it at its end) */
         fp_frame_stats st;
         fp_session_step(s, now, &st);

@@ -63,12 +63,6 @@ static const char *grab(const char *key)
     return specs[1];
 }
 
-static void sleep_us(long us)
-{
-    struct timespec ts = {0, us * 1000};
-    nanosleep(&ts, NULL);
-}
-
 /* Whose hand each control vector of the frame follows: its end point's nearest fingertip of
  * the performers' right hands, within 2 R (an anchored vector ends at the fingertip plus the
  * offset to the skin it grabbed, under R). */
@@ -117,11 +111,9 @@ static void run(const char *const *inputs, int n, bool isolated, run_out *o)
     if (rc) fail_msg("%s", err);
     if ((rc = fp_session_start(s, err, sizeof err))) fail_msg("%s", err);
     o->performers = fp_session_performer_count(s);
-    int64_t t0 = 0;
-    while (fp_session_input_start(s, &t0) == 0) sleep_us(200);
+    int64_t t0 = fp_test_session_t0(s);
     for (size_t k = 0; k < MAX_FRAMES; k++) {
-        int64_t now = t0 + (int64_t)llround((double)k * 1e9 / 60.0);
-        while (!fp_session_inputs_ready(s, now)) sleep_us(200);
+        int64_t now = fp_test_frame_time(s, t0, k, 60.0);
         fp_frame_stats st;
         fp_session_step(s, now, &st);
         o->vectors += st.active ? st.control_vectors : 0;

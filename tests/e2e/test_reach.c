@@ -107,10 +107,7 @@ static void one_run(const char *face, const char *rec, const char *rec_name, sam
     assert_int_equal(rc, 0);
     rc = fp_session_start(s, err, sizeof err);
     assert_int_equal(rc, 0);
-    int64_t t0 = 0;
-    int clock;
-    while ((clock = fp_session_input_start(s, &t0)) == 0) fp_test_nap_ms(1);
-    assert_int_equal(clock, 1);
+    int64_t t0 = fp_test_session_t0(s);
     size_t n = fp_session_vertex_count(s);
     double R = fp_session_radius(s), mm = fp_session_head(s)->mm_per_unit;
     samples run = {0};
@@ -119,8 +116,7 @@ static void one_run(const char *face, const char *rec, const char *rec_name, sam
     double max_asked = 0, max_moved = 0, max_update_ms = 0;
     uint64_t max_pairs = 0;
     for (uint64_t k = 0;; k++) {
-        int64_t now = t0 + (int64_t)llround((double)k * 1e9 / 30.0);
-        while (!fp_session_inputs_ready(s, now)) fp_test_nap_ms(1);
+        int64_t now = fp_test_frame_time(s, t0, k, 30.0);
         fp_frame_stats st;
         fp_session_step(s, now, &st);
         frames++;

@@ -137,8 +137,7 @@ static void undo_all_exact(const char *mapping)
     if (!rc) rc = fp_session_start(s, err, sizeof err);
     if (rc) fprintf(stderr, "%s\n", err);
     assert_int_equal(rc, 0);
-    int64_t t0 = 0;
-    while (fp_session_input_start(s, &t0) == 0) fp_test_nap_ms(1);
+    int64_t t0 = fp_test_session_t0(s);
     size_t n = fp_session_vertex_count(s), bytes = n * 3 * sizeof(float);
     enum { KEEP = FP_SESSION_UNDO_LEVELS };
     float *before = malloc(bytes), *snap[KEEP];
@@ -146,8 +145,7 @@ static void undo_all_exact(const char *mapping)
     unsigned long gestures = 0, commits = 0;
     int64_t deadline = fp_now_ns() + 60LL * 1000000000LL;
     for (uint64_t k = 0; !fp_session_finished(s) && fp_now_ns() < deadline; k++) {
-        int64_t now = t0 + (int64_t)llround((double)k * 1e9 / 60.0);
-        while (!fp_session_inputs_ready(s, now) && fp_now_ns() < deadline) fp_test_nap_ms(1);
+        int64_t now = fp_test_frame_time(s, t0, k, 60.0);
         memcpy(before, fp_session_base(s), bytes);
         fp_frame_stats st;
         fp_session_step(s, now, &st);

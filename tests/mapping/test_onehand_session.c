@@ -100,17 +100,12 @@ static void run_clip(const char *clip, clip_result *r)
     assert_int_equal(fp_rig_pose(rig, loaded, values, posed), 0);
     r->chin_full = vdist(&posed[3 * chin], &loaded[3 * chin]);
 
-    int64_t t0 = 0;
     /* 300 s a clip, times FP_TEST_TIME_SCALE (sanitizer builds: their ctest timeout scale) */
-    const char *ts = getenv("FP_TEST_TIME_SCALE");
-    double scale = ts && atof(ts) >= 1 ? atof(ts) : 1;
-    int64_t limit = fp_now_ns() + (int64_t)(300e9 * scale);
-    while (fp_session_input_start(s, &t0) == 0 && fp_now_ns() < limit) fp_test_nap_ms(1);
+    int64_t t0 = fp_test_session_t0(s), limit = fp_now_ns() + 300000000000LL * fp_test_time_scale();
     bool requested = false;
     r->jaw_min_after_max = INFINITY;
     for (uint64_t k = 0; !fp_session_finished(s) && fp_now_ns() < limit; k++) {
-        int64_t now = t0 + (int64_t)llround((double)k * 1e9 / FPS);
-        while (!fp_session_inputs_ready(s, now) && fp_now_ns() < limit) fp_test_nap_ms(1);
+        int64_t now = fp_test_frame_time(s, t0, k, FPS);
         fp_frame_stats st;
         fp_session_step(s, now, &st);
         r->frames++;

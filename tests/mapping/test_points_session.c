@@ -51,11 +51,9 @@ static void run(const char *mapping, size_t want_min_centres)
     unsigned long frames = 0, active = 0, commits = 0, checks = 0;
     size_t max_centres = 0;
     long new_pairs = 0, near_own = 0, near_total = 0;
-    int64_t t0 = 0, limit = fp_now_ns() + 900LL * 1000000000LL;
-    while (fp_session_input_start(s, &t0) == 0 && fp_now_ns() < limit) fp_test_nap_ms(1);
+    int64_t t0 = fp_test_session_t0(s), limit = fp_now_ns() + 900LL * 1000000000LL;
     for (uint64_t k = 0; !fp_session_finished(s) && fp_now_ns() < limit; k++) {
-        int64_t now = t0 + (int64_t)llround((double)k * 1e9 / FPS);
-        while (!fp_session_inputs_ready(s, now) && fp_now_ns() < limit) fp_test_nap_ms(1);
+        int64_t now = fp_test_frame_time(s, t0, k, FPS);
         memcpy(before, fp_session_base(s), n * 3 * sizeof(float));
         fp_frame_stats st;
         fp_session_step(s, now, &st);

@@ -263,8 +263,7 @@ static void open_run(run *r, const char *spec)
     r->present = calloc(MAX_FRAMES, sizeof *r->present);
     r->prev = calloc(fp_session_vertex_count(r->s) * 3, sizeof(float));
     r->face = calloc((size_t)MAX_FRAMES * (fp_session_vertex_count(r->s) / FACE_STRIDE + 1) * 3, sizeof(float));
-    int64_t limit = fp_now_ns() + 60LL * 1000000000LL;
-    while (fp_session_input_start(r->s, &r->t0) == 0 && fp_now_ns() < limit) fp_test_nap_ms(1);
+    r->t0 = fp_test_session_t0(r->s);
 }
 
 static void close_run(run *r)
@@ -280,10 +279,7 @@ static void close_run(run *r)
 static bool step(run *r, size_t k)
 {
     if (fp_session_finished(r->s) || k >= MAX_FRAMES) return false;
-    int64_t now = r->t0 + (int64_t)llround((double)k * 1e9 / FPS);
-    int64_t limit = fp_now_ns() + 60LL * 1000000000LL;
-    while (!fp_session_inputs_ready(r->s, now) && fp_now_ns() < limit) fp_test_nap_ms(1);
-    fp_session_step(r->s, now, NULL);
+    fp_session_step(r->s, fp_test_frame_time(r->s, r->t0, k, FPS), NULL);
     const fp_hand_pose *h = fp_session_hand(r->s, FP_HAND_RIGHT);
     r->present[k] = h && h->present;
     if (r->present[k]) memcpy(r->hand[k], h->joints, sizeof r->hand[k]);

@@ -573,7 +573,7 @@ static void replay_open(replay *rp, const char *take, const char *mapping)
     rp->ref = malloc(rp->n * 3 * sizeof(float));
     memcpy(rp->ref, fp_session_base(rp->s), rp->n * 3 * sizeof(float));
     rp->k = 0;
-    while (fp_session_input_start(rp->s, &rp->t0) == 0) fp_test_nap_ms(1);
+    rp->t0 = fp_test_session_t0(rp->s);
 }
 
 /* The next frame: -1 the take has ended, 0 no gesture (the base is shown), 1 a deforming
@@ -581,8 +581,7 @@ static void replay_open(replay *rp, const char *take, const char *mapping)
 static int replay_next(replay *rp)
 {
     if (fp_session_finished(rp->s)) return -1;
-    int64_t now = rp->t0 + (int64_t)llround((double)rp->k++ * 1e9 / 60);
-    while (!fp_session_inputs_ready(rp->s, now)) fp_test_nap_ms(1);
+    int64_t now = fp_test_frame_time(rp->s, rp->t0, rp->k++, 60);
     rp->committed = memcmp(rp->ref, fp_session_base(rp->s), rp->n * 3 * sizeof(float)) != 0;
     if (rp->committed) memcpy(rp->ref, fp_session_base(rp->s), rp->n * 3 * sizeof(float));
     fp_frame_stats st;
@@ -1609,19 +1608,15 @@ static void session_hold(const char *rig)
         diag2 += e * e;
     }
     double eps = (float)(1e-5 * sqrt(diag2));
-    int64_t t0[2];
-    for (int i = 0; i < 2; i++)
-        while (fp_session_input_start(s[i], &t0[i]) == 0) fp_test_nap_ms(1);
+    int64_t t0[2] = {fp_test_session_t0(s[0]), fp_test_session_t0(s[1])};
     size_t held = 0, frames = 0, active = 0, commits = 0, differ = 0;
     double worst = 0;
     bool scaled = false;
     for (uint64_t k = 0; !fp_session_finished(s[0]) || !fp_session_finished(s[1]); k++) {
         assert_true(k < 100000);
-        int64_t dt = (int64_t)llround((double)k * 1e9 / 60);
-        while (!fp_session_inputs_ready(s[0], t0[0] + dt) || !fp_session_inputs_ready(s[1], t0[1] + dt))
-            fp_test_nap_ms(1);
+        int64_t now[2] = {fp_test_frame_time(s[0], t0[0], k, 60), fp_test_frame_time(s[1], t0[1], k, 60)};
         fp_frame_stats st[2];
-        for (int i = 0; i < 2; i++) fp_session_step(s[i], t0[i] + dt, &st[i]);
+        for (int i = 0; i < 2; i++) fp_session_step(s[i], now[i], &st[i]);
         assert_int_equal(st[0].active, st[1].active);
         assert_int_equal(st[0].committed, st[1].committed);
         assert_int_equal(st[1].collide_held, 0);

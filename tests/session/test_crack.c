@@ -151,15 +151,12 @@ static void test_ict_three_claps_not_held_for_cracks(void **state)
     so.input_count = 1;
     so.input_clock = true;
     fp_session *s = fp_test_session_open(&so);
-    int64_t t0;
-    while (fp_session_input_start(s, &t0) == 0) fp_test_nap_ms(1);
+    int64_t t0 = fp_test_session_t0(s);
     unsigned long frames = 0, active = 0, scaled = 0, for_pairs = 0;
     for (uint64_t i = 0; !fp_session_finished(s); i++) {
         assert_true(i < 100000);
-        int64_t dt = (int64_t)llround((double)i * 1e9 / 60);
-        while (!fp_session_inputs_ready(s, t0 + dt)) fp_test_nap_ms(1);
         fp_frame_stats st;
-        fp_session_step(s, t0 + dt, &st);
+        fp_session_step(s, fp_test_frame_time(s, t0, i, 60), &st);
         frames++;
         active += st.active;
         scaled += st.collide_t < 1;

@@ -137,18 +137,15 @@ static void test_session_same_frames(void **state)
     fp_session *a = open_session(-1, &path), *b = open_session(2, &path);
     size_t n = fp_session_vertex_count(a);
     assert_int_equal(fp_session_vertex_count(b), n);
-    int64_t t0a, t0b;
-    while (fp_session_input_start(a, &t0a) == 0) fp_test_nap_ms(1);
-    while (fp_session_input_start(b, &t0b) == 0) fp_test_nap_ms(1);
+    int64_t t0a = fp_test_session_t0(a), t0b = fp_test_session_t0(b);
     unsigned long frames = 0, active = 0, committed = 0, scaled = 0, there = 0;
     for (uint64_t k = 0; !fp_session_finished(a) || !fp_session_finished(b); k++) {
         assert_true(k < 100000);
-        int64_t dt = (int64_t)llround((double)k * 1e9 / 60); /* each on its recording's clock */
-        while (!fp_session_inputs_ready(a, t0a + dt) || !fp_session_inputs_ready(b, t0b + dt))
-            fp_test_nap_ms(1);
+        /* each on its recording's clock */
+        int64_t ta = fp_test_frame_time(a, t0a, k, 60), tb = fp_test_frame_time(b, t0b, k, 60);
         fp_frame_stats sa, sb;
-        fp_session_step(a, t0a + dt, &sa);
-        fp_session_step(b, t0b + dt, &sb);
+        fp_session_step(a, ta, &sa);
+        fp_session_step(b, tb, &sb);
         assert_false(sa.frame_thread);
         there += sb.frame_thread;
         assert_int_equal(sa.active, sb.active);

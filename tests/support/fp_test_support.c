@@ -8,6 +8,7 @@
 
 #include <dirent.h>
 #include <dlfcn.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -458,4 +459,26 @@ fp_session *fp_test_session_start(const char *mapping, const char *const *inputs
     for (int i = 0; i < n; i++) so.inputs[i] = inputs[i];
     so.input_count = n;
     return fp_test_session_open(&so);
+}
+
+/* the waits' bound: 120 s, longer in slow builds */
+static int64_t wait_limit(void) { return fp_test_mono_ns() + 120LL * 1000000000LL * fp_test_time_scale(); }
+
+int64_t fp_test_session_t0(fp_session *s)
+{
+    int64_t t0 = 0, limit = wait_limit();
+    int clock;
+    while ((clock = fp_session_input_start(s, &t0)) == 0 && fp_test_mono_ns() < limit) fp_test_nap_ms(1);
+    if (clock != 1) fail_msg("the session's input clock: %s", clock ? "no input is a recording" : "none within the wait");
+    return t0;
+}
+
+int64_t fp_test_frame_time(fp_session *s, int64_t t0, uint64_t k, double fps)
+{
+    int64_t now = t0 + (int64_t)llround((double)k * 1e9 / fps), limit = wait_limit();
+    while (!fp_session_inputs_ready(s, now)) {
+        if (fp_test_mono_ns() >= limit) fail_msg("frame %llu: the inputs not ready within the wait", (unsigned long long)k);
+        fp_test_nap_ms(1);
+    }
+    return now;
 }

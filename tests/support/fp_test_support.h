@@ -147,4 +147,15 @@ struct fp_session *fp_test_session_open(const struct fp_session_options *so);
  *  from the build (fp_test_session_open). */
 struct fp_session *fp_test_session_start(const char *mapping, const char *const *inputs, int n);
 
+/** The input clock's start of s (options.input_clock, fp_session_input_start): waits for it
+ *  (1 ms naps) at most 120 s x fp_test_time_scale(); fails the test when no input is a
+ *  recording or the wait runs out. Returns t0, ns on the recordings' clock. */
+int64_t fp_test_session_t0(struct fp_session *s);
+
+/** Frame k of a replay stepped at fps frames a second on the input clock from t0: its time,
+ *  t0 + round(k x 1e9 / fps) ns, once s's inputs are ready at it (fp_session_inputs_ready:
+ *  every event up to it delivered), waiting with 1 ms naps at most 120 s x
+ *  fp_test_time_scale() (then fails the test). Pass it to fp_session_step. */
+int64_t fp_test_frame_time(struct fp_session *s, int64_t t0, uint64_t k, double fps);
+
 #endif
