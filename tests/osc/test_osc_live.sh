@@ -18,7 +18,9 @@
 #     before still hands were held out) hovers in front of the face, never reaching it: the
 #     run says so (the hint, source "session") within 5 s of the sender starting.
 #
-# FP_OSC_LIVE_KEYS=",filter=oneeuro" (appended to the osc SPEC) tries the input's keys.
+# FP_OSC_LIVE_KEYS=",filter=oneeuro" (appended to the osc SPEC) tries the input's keys;
+# FP_OSC_LIVE_SEND="--format leap --no-bundle" the sender's options (another address space,
+# plain messages timed by their arrival).
 # FP_OSC_LIVE_CSV=FILE sends another Leap joints recording instead of grab (e.g. a copy from
 # tools/hands-variants); FP_OSC_LIVE_MESH=FILE deforms another face instead of ICT's (the
 # bounds stay the grab's on ICT: docs/performance.md "Live against replay on the other faces").
@@ -57,7 +59,7 @@ osc_run() {
         done
         if grep -q "listening on" "$tmp/$name.err"; then
             t_send=$(date +%s%N)
-            "$send" --quiet --port "$port" "$csv" >"$tmp/$name.send" 2>&1 &
+            "$send" --quiet --port "$port" ${FP_OSC_LIVE_SEND:-} "$csv" >"$tmp/$name.send" 2>&1 &
             sendpid=$!
             return 0
         fi
