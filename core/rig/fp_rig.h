@@ -78,6 +78,9 @@ extern "C" {
 #define FP_RIG_MAX_CHANNELS 32
 #define FP_RIG_MAX_REGIONS 64
 #define FP_RIG_MAX_LANDMARKS 256
+/** The regions' spans list at most this many times mesh.vertex_count vertices in all, repeats
+ *  within a region included (a vertex in two regions is refused anyway). */
+#define FP_RIG_LISTED_MAX 4
 /** Longest name (region, landmark, channel), bytes, without the NUL. */
 #define FP_RIG_NAME_MAX 31
 

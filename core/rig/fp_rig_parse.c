@@ -261,6 +261,9 @@ static int parse_regions(const fpr_ctx *c, fp_rig *r, const cJSON *root)
         return fp_errorf(c->err, c->errlen, -ENOMEM, "%s: out of memory", c->file);
     int i = 0;
     rc = 0;
+    /* the vertices the spans list, repeats included: at most FP_RIG_LISTED_MAX x n, so that a
+     * hostile file's thousands of whole-mesh spans are refused as counted, not walked */
+    size_t listed = 0;
     for (const cJSON *g = rs->child; g && !rc; g = g->next, i++) {
         char gp[64];
         snprintf(gp, sizeof gp, "regions[%d]", i);
@@ -288,6 +291,12 @@ static int parse_regions(const fpr_ctx *c, fp_rig *r, const cJSON *root)
             snprintf(ep, sizeof ep, "%s[%d]", vp, k);
             uint32_t a, b;
             if ((rc = vertex_span(c, e, ep, r->n, &a, &b))) break;
+            if ((size_t)(b - a) + 1 > FP_RIG_LISTED_MAX * r->n - listed) {
+                rc = fpr_bad(c, ep, "the regions list more than %d x %zu vertices (the mesh's count), "
+                             "repeats included", FP_RIG_LISTED_MAX, r->n);
+                break;
+            }
+            listed += (size_t)(b - a) + 1;
             for (uint32_t v = a; v <= b; v++) {
                 if (owner[v] == (uint8_t)(i + 1)) continue; /* repeated in the same region */
                 if (owner[v]) {

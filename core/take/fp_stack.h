@@ -37,6 +37,7 @@ extern "C" {
 #define FP_STACK_MAX_NAMES 16      /* landmarks or channels of one region */
 #define FP_STACK_NAME_MAX 32       /* bytes of a name, NUL included */
 #define FP_STACK_PATH_MAX 4096
+#define FP_STACK_MAX_GROUP 16777216u /* vertex indices of one vertex group, at most (each < 2^24) */
 
 /** What a layer's region is made of. */
 typedef enum fp_stack_region_kind {
@@ -94,8 +95,9 @@ fp_stack *fp_stack_create(void);
 
 /** Parse `len` bytes of JSON (docs/stack.md); `name` starts messages and, as a file path,
  *  becomes stack->path. Checks the structure, types, unknown members, ranges (in <= out,
- *  fade, gain 0..2), one kind per region, layer 0 with no region and replace mode, at most
- *  FP_STACK_MAX_LAYERS. Returns 0 and *out (fp_stack_free) or -EBADMSG with
+ *  fade, gain 0..2), one kind per region, a vertex group of at most FP_STACK_MAX_GROUP
+ *  indices (counted by its spans' lengths before any is walked or allocated), layer 0 with no
+ *  region and replace mode, at most FP_STACK_MAX_LAYERS. Returns 0 and *out (fp_stack_free) or -EBADMSG with
  *  "NAME: json.path: reason", -ENOMEM. */
 int fp_stack_parse(const char *json, size_t len, const char *name, fp_stack **out, char *err,
                    size_t errlen);

@@ -124,7 +124,9 @@ static int get_names(const pctx *c, const cJSON *a, const char *where, fp_stack_
     return 0;
 }
 
-/* "vertices": indices and [first, last] spans (as the rig's regions). */
+/* "vertices": indices and [first, last] spans (as the rig's regions), FP_STACK_MAX_GROUP
+ * indices at most in all: the first pass counts the spans by their lengths (a hostile file's
+ * thousands of spans of 2^24 are refused there, not walked or allocated), the second fills. */
 static int get_vertices(const pctx *c, const cJSON *a, const char *where, fp_stack_region *r)
 {
     if (!cJSON_IsArray(a) || !a->child) return bad(c, where, "expected an array of vertex indices");
@@ -140,10 +142,14 @@ static int get_vertices(const pctx *c, const cJSON *a, const char *where, fp_sta
             else return bad(c, where, "expected an index or [first, last]");
             if (!(lo >= 0 && hi >= lo && hi < 16777216.0) || lo != floor(lo) || hi != floor(hi))
                 return bad(c, where, "a vertex span [%g, %g] that is not 0 <= first <= last < 2^24", lo, hi);
-            for (uint32_t v = (uint32_t)lo; v <= (uint32_t)hi; v++, n++)
-                if (pass) r->vertices[n] = v;
+            size_t len = (size_t)(hi - lo) + 1;
+            if (len > FP_STACK_MAX_GROUP - n)
+                return bad(c, where, "more than %u vertex indices in the group", (unsigned)FP_STACK_MAX_GROUP);
+            if (pass)
+                for (uint32_t v = (uint32_t)lo; v <= (uint32_t)hi; v++) r->vertices[n++] = v;
+            else n += len;
         }
-        if (!pass && (n > 16777216u || !(r->vertices = malloc(n * sizeof *r->vertices))))
+        if (!pass && !(r->vertices = malloc(n * sizeof *r->vertices)))
             return fp_errorf(c->err, c->errlen, -ENOMEM, "%s: out of memory", c->name);
     }
     r->vertex_count = n;
@@ -486,8 +492,10 @@ static int split_vertices(const char *list, fp_stack_region *r, char *err, size_
                 if (end == q || b < a) goto bad;
             }
             if (b >= 16777216ul || (*end && *end != ',')) goto bad;
-            for (unsigned long v = a; v <= b; v++, n++)
-                if (pass) r->vertices[n] = (uint32_t)v;
+            if (b - a + 1 > FP_STACK_MAX_GROUP - n) goto bad; /* counted, not walked */
+            if (pass)
+                for (unsigned long v = a; v <= b; v++) r->vertices[n++] = (uint32_t)v;
+            else n += b - a + 1;
             p = end + (*end == ',');
         }
         if (!n) goto bad;
@@ -498,7 +506,7 @@ static int split_vertices(const char *list, fp_stack_region *r, char *err, size_
     return 0;
 bad:
     return fp_errorf(err, errlen, -EINVAL, "--layer: vertices \"%s\": give indices A or spans A-B "
-                     "below 2^24, separated by commas", list);
+                     "below 2^24, separated by commas, at most 2^24 in all", list);
 }
 
 int fp_stack_layer_spec(const char *spec, fp_stack_region *region, fp_stack_mode *mode,

@@ -750,6 +750,9 @@ static void test_broken_files(void **state)
         {"\"vertices\": [", "\"vertices\": [[10, 5], ", "regions[0].vertices[0]"},
         {"\"vertices\": [", "\"vertices\": [-1, ", "regions[0].vertices[0]"},
         {"\"vertices\": [", "\"vertices\": [19300, ", "regions[6].vertices"}, /* a lower tooth: overlaps jaw */
+        /* the whole mesh listed over and over (a hostile file: refused as counted, not walked) */
+        {"\"vertices\": [", "\"vertices\": [[0, 26718], [0, 26718], [0, 26718], [0, 26718], ",
+         "regions[0].vertices[4]: the regions list more than 4 x 26719 vertices"},
         {"\"chin\": 966", "\"chin\": 26719, \"x\": 966", "landmarks.chin"},
         {"\"nose_tip\": 4857", "\"nose tip\": 4857", "landmarks.nose tip"},
         {"\"right\": [", "\"right\": [\"a\", ", "jaw.hinge.right"},

@@ -98,6 +98,11 @@ static void test_refusals(void **state)
         {"{\"take\":\"b\",\"region\":{\"landmarks\":[\"chin\"],\"channels\":[\"jaw.open\"]}}", "exactly one"},
         {"{\"take\":\"b\",\"region\":{\"landmarks\":[\"chin\"],\"falloff_mm\":0}}", "core_mm or falloff_mm"},
         {"{\"take\":\"b\",\"region\":{\"vertices\":[[5,2]]}}", "vertex span"},
+        /* spans past 2^24 indices in all: refused as counted (a hostile file's thousands of
+         * them once walked every index and then reported running out of memory) */
+        {"{\"take\":\"b\",\"region\":{\"vertices\":[[0,16777215],[0,16777215],[0,16777215]]}}",
+         "layers[1].region.vertices: more than 16777216 vertex indices"},
+        {"{\"take\":\"b\",\"region\":{\"vertices\":[[1,16777215],0,7]}}", "more than 16777216"},
         {"{\"take\":\"\"}", "\"take\""},
     };
     for (size_t i = 0; i < sizeof cases / sizeof *cases; i++) {
@@ -128,7 +133,8 @@ static void test_layer_specs(void **state)
     assert_int_equal(fp_stack_layer_spec("channels:jaw.open", &r, &m, err, sizeof err), 0);
     assert_int_equal(r.kind, FP_STACK_REGION_CHANNELS);
     static const char *const bad[] = {"nose", "rig:", "landmark:", "vertices:5-2", "vertices:x",
-                                      "mouth@-1", "mouth@", "landmark:a@0", "mouth:blend"};
+                                      "mouth@-1", "mouth@", "landmark:a@0", "mouth:blend",
+                                      "vertices:0-16777215,0-16777215", "vertices:1-16777215,0,5"};
     for (size_t i = 0; i < sizeof bad / sizeof *bad; i++) {
         err[0] = 0;
         if (fp_stack_layer_spec(bad[i], &r, &m, err, sizeof err) != -EINVAL || !err[0])
