@@ -178,6 +178,15 @@ int fp_plugin_load(const fp_plugin_path *path, fp_plugin_kind kind, const char *
         return FP_EPLUGIN_NOT_FOUND;
     }
     out->path = strdup(file);
+    /* a regular file only: dlopen would wait on a FIFO for a writer (`plugins check FIFO`, or a
+     * FIFO named like a plugin in a plugin folder, hung the command) */
+    struct stat st;
+    bool there = stat(file, &st) == 0;
+    if (!there || !S_ISREG(st.st_mode)) {
+        snprintf(err, errlen, "%s: cannot load: %s", file,
+                 !there ? strerror(errno) : "not a regular file (a FIFO, device or socket)");
+        return fail(out, FP_EPLUGIN_DLOPEN);
+    }
     out->handle = dlopen(file, RTLD_NOW | RTLD_LOCAL);
     if (!out->handle) {
         snprintf(err, errlen, "%s: cannot load: %s", file, dlerror());

@@ -29,6 +29,7 @@
 #define _GNU_SOURCE
 #include <facepuppet/plugin.h>
 #include <facepuppet/plugin_util.h>
+#include "fp_file.h"
 #include "fp_pacer.h"
 
 #include <alsa/asoundlib.h>
@@ -125,14 +126,13 @@ static int load_file(audio_input *a, bool ref_given, char *err, size_t errlen)
 {
     SF_INFO si;
     memset(&si, 0, sizeof si);
-    FILE *f = fopen(a->path, "rb");
-    if (!f) {
-        int e = errno;
-        snprintf(err, errlen, "audio: %s: %s", a->path, strerror(e));
-        return -e;
+    /* a regular file only: a FIFO or a device is refused, never waited on (fp_file.h) */
+    int fd = fp_file_open_regular(a->path);
+    if (fd < 0) {
+        snprintf(err, errlen, "audio: %s: %s", a->path, fp_file_error_text(fd));
+        return fd;
     }
-    fclose(f);
-    SNDFILE *sf = sf_open(a->path, SFM_READ, &si);
+    SNDFILE *sf = sf_open_fd(fd, SFM_READ, &si, 1); /* (closes fd, also on failure) */
     if (!sf) {
         snprintf(err, errlen, "audio: %s: not a sound file libsndfile reads (%s)", a->path, sf_strerror(NULL));
         return -EBADMSG;

@@ -84,7 +84,7 @@ refuse() { # WANT_STATUS WANT_TEXT ARGS...
     local want=$1 text=$2
     shift 2
     rm -rf "$tmp/refused"
-    "$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv" --duration 1 --take-dir "$tmp/refused" \
+    timeout 60 "$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv" --duration 1 --take-dir "$tmp/refused" \
         -o "$tmp/refused.obj" -q "$@" >/dev/null 2>"$tmp/refuse.err"
     local rc=$?
     [ $rc -eq "$want" ] || { cat "$tmp/refuse.err"; fail "run $* exited $rc, want $want"; }
@@ -129,6 +129,13 @@ grep -E "events|passed" "$tmp/check.out"
     -o "$tmp/bad.obj" -q >/dev/null 2>"$tmp/bad.err" && fail "channel=\"jaw open\" was taken"
 grep -q "printable ASCII" "$tmp/bad.err" || { cat "$tmp/bad.err"; fail "channel=\"jaw open\": no reason given"; }
 [ ! -e "$tmp/bad.obj" ] || fail "channel=\"jaw open\": an output was written"
+# a FIFO where a sound file goes: refused (66) by every reader, never waited on (refuse's
+# timeout: 124 where one opened it and waited for a writer, as input-audio did)
+mkfifo "$tmp/fifo.wav"
+refuse 66 "not a regular file" --input "audio:$tmp/fifo.wav"
+refuse 66 "not a regular file" --audio "$tmp/fifo.wav" --audio-out null
+refuse 66 "not a regular file" --timecode "ltc:$tmp/fifo.wav"
+refuse 66 "not a regular file" --audio-in "file:$tmp/fifo.wav"
 
 # ---- 6. --audio-in ---------------------------------------------------------------------------
 "$tool" ramp "$tmp/ramp.wav" 30 || fail "ramp"

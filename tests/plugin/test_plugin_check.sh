@@ -35,6 +35,12 @@ done
 expect 0 'PASS  events +[0-9]+ events well-formed' "$fp" plugins check "$builtin/input-replay.so" --arg "$rec"
 # fast=1 (the help's own example): a recording's events run ahead of the host clock, on its own
 expect 0 'PASS  events +[0-9]+ events well-formed' "$fp" plugins check "$builtin/input-replay.so" --arg "$rec" --key fast=1
+# a FIFO given as the plugin, or named like one in a plugin folder: refused, never waited on
+# (dlopen would wait for a writer; timeout's 124 where it did)
+mkfifo "$tmp/fifo.so"
+expect 78 'fifo.so: cannot load: not a regular file' timeout 30 "$fp" plugins check "$tmp/fifo.so"
+mkdir "$tmp/fifodir" && mkfifo "$tmp/fifodir/input-fifo.so"
+expect 0 'input-fifo.so: cannot load: not a regular file' timeout 30 "$fp" plugins --plugin-dir "$tmp/fifodir"
 # a recording given with --arg that is not there: a failure, not a device to skip
 expect 1 'FAIL  create .*No such file' "$fp" plugins check "$builtin/input-replay.so" --arg /nonexistent/rec.csv
 expect 0 'PASS  cycle +5 x create' "$fp" plugins check "$builtin/input-pedal.so"
