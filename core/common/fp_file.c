@@ -126,6 +126,11 @@ int fp_file_read_all(const char *path, size_t max, char **buf, size_t *len)
     int code = 0;
     FILE *f = fp_file_fopen_regular(path, &code);
     if (!f) return code;
+    struct stat st; /* a file already past max: refused before reading max bytes of it */
+    if (fstat(fileno(f), &st) == 0 && st.st_size > 0 && (uintmax_t)st.st_size > (uintmax_t)max) {
+        fclose(f);
+        return -EFBIG;
+    }
     char *b = NULL;
     size_t n = 0, cap = 0, lim = max < SIZE_MAX - 2 ? max + 1 : SIZE_MAX - 2;
     int rc = 0;

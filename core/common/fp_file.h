@@ -43,7 +43,7 @@ FILE *fp_file_fopen_regular(const char *path, int *code);
  *  (*len bytes before the NUL: a file's text may hold NULs, *len says where it ends), at
  *  most `max` bytes. Returns 0 (*buf the caller's: free it), or a negative errno with *buf
  *  NULL: fp_file_open_regular's (-ENOENT, -EISDIR, -ENXIO, ...), -EFBIG (more than max
- *  bytes: nothing parsed of a part), -ENOMEM, -EIO (a read error); -EINVAL (NULL). The
+ *  bytes: nothing parsed of a part; a file whose size is already past max, before reading), -ENOMEM, -EIO (a read error); -EINVAL (NULL). The
  *  rig and calibration readers word each code with the file's name. Thread-safe. */
 int fp_file_read_all(const char *path, size_t max, char **buf, size_t *len);
 
