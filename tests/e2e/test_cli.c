@@ -5,6 +5,7 @@
 #include <stddef.h>
 #include <math.h>
 #include <stdio.h>
+#include <sys/stat.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/wait.h>
@@ -520,6 +521,16 @@ static void test_refused_up_front(void **state)
         char opt[32];
         snprintf(opt, sizeof opt, "%.*s", (int)strcspn(silly[i], " "), silly[i]);
         if (!strstr(out, opt)) fail_msg("%s: \"%s\"", silly[i], out);
+    }
+    /* A FIFO where a file is read, here live's --script @FILE (read with fopen, it waited for
+     * a writer): refused, 66, before any window (fp()'s timeout ends a wait: 124). 69 where
+     * this build has no viewer. */
+    snprintf(args, sizeof args, "%s/fifo-script", tmp);
+    assert_int_equal(mkfifo(args, 0600), 0);
+    int rc = fp("live --script @fifo-script --frames 1");
+    if (rc != 69) {
+        assert_int_equal(rc, 66);
+        assert_non_null(strstr(out, "fifo-script: is not a regular file"));
     }
     /* A good one and --mm-per-unit: the scale line says where the scale came from. */
     write_file("cal.json", "{\"mm_per_unit\": 10, \"offset\": [0, 0, 5]}\n");

@@ -14,6 +14,7 @@
 #include "app_util.h"
 #include "app_stack.h"
 #include "fp_error.h"
+#include "fp_file.h"
 #include "fp_session.h"
 #include "fp_viewer.h"
 #include "session_opts.h"
@@ -24,6 +25,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+#define LIVE_SCRIPT_MAX ((size_t)1 << 20) /* --script @FILE: bytes at most */
 
 static void usage(FILE *f)
 {
@@ -278,29 +281,6 @@ static void live_link_setup(live_stuck *c, fp_viewer_options *vo, const fp_sessi
     vo->frame_end = live_frame_end;
 }
 
-static char *read_file(const char *path)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f) return NULL;
-    char *buf = NULL;
-    size_t len = 0, cap = 0, got;
-    char chunk[4096];
-    while ((got = fread(chunk, 1, sizeof chunk, f)) > 0) {
-        if (len + got + 1 > cap) {
-            cap = 2 * (len + got + 1);
-            char *grown = realloc(buf, cap);
-            if (!grown) { free(buf); fclose(f); return NULL; }
-            buf = grown;
-        }
-        memcpy(buf + len, chunk, got);
-        len += got;
-    }
-    fclose(f);
-    if (!buf) buf = calloc(1, 1);
-    else buf[len] = '\0';
-    return buf;
-}
-
 /* The measurements at exit, on stdout. */
 static void print_report(const fp_viewer_report *r, bool gpu_warp)
 {
@@ -423,11 +403,12 @@ static int live_main(int argc, char **argv)
         return orc;
     char *script_text = NULL;
     if (script_arg && script_arg[0] == '@') {
-        errno = 0;
-        if (!(script_text = read_file(script_arg + 1))) {
-            int code = errno ? -errno : -ENOENT;
-            fprintf(stderr, "facepuppet live: --script %s: %s\n", script_arg + 1, fp_strerror(code));
-            return fp_app_exit_code(code, FP_APP_INPUT);
+        size_t len; /* a regular file of 1 MiB at most: never a FIFO waited on */
+        int code = fp_file_read_all(script_arg + 1, LIVE_SCRIPT_MAX, &script_text, &len);
+        if (code) {
+            fprintf(stderr, "facepuppet live: --script %s: %s\n", script_arg + 1,
+                    code == -EFBIG ? "larger than 1 MiB" : fp_file_error_text(code));
+            return fp_app_exit_code(code == -EFBIG ? -EBADMSG : code, FP_APP_INPUT);
         }
         vo.script = script_text;
     } else {
