@@ -6,6 +6,7 @@
 #include "leapcsv.h"
 
 #include "fp_error.h"
+#include "fp_file.h"
 
 #include <facepuppet/decimal.h> /* fp_decimal_span: the one syntax of a number */
 
@@ -209,37 +210,14 @@ static int parse_row(reader *r, fp_leapcsv_format fmt, long line, char *text, fp
     return 0;
 }
 
+/* The file whole (fp_file_read_all: a regular file, FP_LEAPCSV_MAX_BYTES at most, refused by
+ * its size before reading when larger). */
 static int read_whole(reader *r, char **data, size_t *len)
 {
-    FILE *f = fopen(r->path, "rb");
-    if (!f) {
-        int e = errno;
-        return fail(r, -e, 0, 0, "cannot open: %s", strerror(e));
-    }
-    size_t cap = 1 << 16, n = 0;
-    char *buf = malloc(cap + 1);
-    while (buf) {
-        n += fread(buf + n, 1, cap - n, f);
-        if (n < cap) break;
-        char *bigger = realloc(buf, cap * 2 + 1);
-        if (!bigger) {
-            free(buf);
-            buf = NULL;
-            break;
-        }
-        buf = bigger;
-        cap *= 2;
-    }
-    int bad = ferror(f);
-    fclose(f);
-    if (!buf) return fail(r, -ENOMEM, 0, 0, "out of memory");
-    if (bad) {
-        free(buf);
-        return fail(r, -EIO, 0, 0, "cannot read");
-    }
-    buf[n] = '\0';
-    *data = buf;
-    *len = n;
+    int rc = fp_file_read_all(r->path, FP_LEAPCSV_MAX_BYTES, data, len);
+    if (rc == -EFBIG) return fail(r, -EBADMSG, 0, 0, "larger than 1 GiB (FP_LEAPCSV_MAX_BYTES)");
+    if (rc == -ENOMEM) return fail(r, -ENOMEM, 0, 0, "out of memory");
+    if (rc) return fail(r, rc, 0, 0, "cannot open: %s", fp_file_error_text(rc));
     return 0;
 }
 

@@ -19,7 +19,9 @@
  * Errors (core/common/fp_error.h): -EBADMSG for malformed content, with the message
  * "FILE:LINE:COLUMN: reason" (COLUMN 1-based, in bytes; the reason names the column, e.g.
  * `bad number "1x0" in column palm_y`); -errno with "FILE: cannot open: ..." when the file
- * cannot be opened; -EIO when a read fails; -ENOMEM. Threads: reentrant, [any-thread].
+ * cannot be opened (a FIFO or a device is not waited on: -ENXIO); -EBADMSG "larger than 1 GiB"
+ * for a file over FP_LEAPCSV_MAX_BYTES (by its size, before reading); -EIO when a read fails; -ENOMEM.
+ * Threads: reentrant, [any-thread].
  */
 #ifndef FP_LEAPCSV_H
 #define FP_LEAPCSV_H
@@ -28,6 +30,9 @@
 #include <stdint.h>
 
 #include "facepuppet/plugin.h"
+
+/** The largest recording read, bytes (1 GiB: an hour of two hands at 115 Hz is about 0.5 GB). */
+#define FP_LEAPCSV_MAX_BYTES ((size_t)1 << 30)
 
 typedef enum fp_leapcsv_format {
     FP_LEAPCSV_ANY = 0,    /* as an argument: take the format the header names */

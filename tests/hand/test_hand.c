@@ -12,6 +12,7 @@
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
+#include <sys/stat.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -482,6 +483,17 @@ static void test_csv_errors(void **state)
     assert_int_equal(fp_leapcsv_read_joints(path, &jr, &n, err, sizeof err), 0); /* within: read */
     free(jr);
     jr = NULL;
+    /* a file past FP_LEAPCSV_MAX_BYTES (the header, then a sparse 2 TiB): refused by its size
+     * before a byte of it is read (read whole first, it ran out of memory: -ENOMEM) */
+    assert_int_equal(truncate(path, (off_t)1 << 41), 0);
+    assert_int_equal(fp_leapcsv_read_joints(path, &jr, &n, err, sizeof err), -EBADMSG);
+    assert_non_null(strstr(err, "a.csv: larger than 1 GiB"));
+    assert_null(jr);
+    /* a FIFO: refused, never waited on for a writer */
+    unlink(path);
+    assert_int_equal(mkfifo(path, 0600), 0);
+    assert_int_equal(fp_leapcsv_read_joints(path, &jr, &n, err, sizeof err), -ENXIO);
+    assert_non_null(strstr(err, "a.csv: cannot open: is not a regular file"));
     unlink(path);
     rmdir(dir);
     assert_int_equal(fp_leapcsv_read_joints(path, &jr, &n, err, sizeof err), -ENOENT);
