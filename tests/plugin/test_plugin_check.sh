@@ -41,6 +41,9 @@ mkfifo "$tmp/fifo.so"
 expect 78 'fifo.so: cannot load: not a regular file' timeout 30 "$fp" plugins check "$tmp/fifo.so"
 mkdir "$tmp/fifodir" && mkfifo "$tmp/fifodir/input-fifo.so"
 expect 0 'input-fifo.so: cannot load: not a regular file' timeout 30 "$fp" plugins --plugin-dir "$tmp/fifodir"
+# ... and one of the same name in a later folder: the FIFO shadows it, looked at without opening
+mkdir "$tmp/fifodir2" && cp "$builtin/input-replay.so" "$tmp/fifodir2/input-fifo.so"
+expect 0 'input-fifo.so: cannot load: not a regular file' timeout 30 "$fp" plugins --plugin-dir "$tmp/fifodir" --plugin-dir "$tmp/fifodir2"
 # a recording given with --arg that is not there: a failure, not a device to skip
 expect 1 'FAIL  create .*No such file' "$fp" plugins check "$builtin/input-replay.so" --arg /nonexistent/rec.csv
 expect 0 'PASS  cycle +5 x create' "$fp" plugins check "$builtin/input-pedal.so"
