@@ -48,6 +48,11 @@ extern "C" {
 #define FP_SESSION_UNDO_LEVELS 32
 /** The default support radius is at least this many millimetres (a fingertip's reach). */
 #define FP_SESSION_MIN_RADIUS_MM 25.0
+/** A mesh fits the engine (csrbf.h) when every |coordinate| is at most CSRBF_MAX_COORD (1e15)
+ *  and its bounding box's diagonal at least this many mesh units (its default support radius,
+ *  6% of that, then stays far above the engine's smallest, 1e-15); fp_session_create refuses
+ *  another (-EBADMSG, naming the file and the figure) before any work. */
+#define FP_SESSION_MIN_DIAGONAL 1e-12
 
 /* fp_calibration (p_mesh = scale * p_mm + offset) is declared in fp_pose.h;
  * fp_session_log_fn in session_log.h; fp_frame_record and fp_frame_record_fn in

@@ -204,9 +204,25 @@ static int open_mesh(fp_session *s, const fp_session_options *opt, double *diag,
     s->view.vertex_count = s->n;
     s->view.base = s->base;
     *diag = 0;
+    double reach = 0; /* the largest |coordinate| */
     for (int i = 0; i < 3; i++) {
         double d = s->view.bounds_max[i] - s->view.bounds_min[i];
         *diag += d * d;
+        reach = fmax(reach, fmax(fabs(s->view.bounds_min[i]), fabs(s->view.bounds_max[i])));
+    }
+    /* the engine's range (FP_SESSION_MIN_DIAGONAL): such a mesh was indexed nowhere ("cannot
+     * index", exit 70) or moved nothing, the engine refusing its radius every frame */
+    const char *name = opt->mesh_path ? opt->mesh_path : "the mesh";
+    if (reach > CSRBF_MAX_COORD) {
+        snprintf(err, errlen, "%s: coordinates reach %.3g mesh units, beyond the engine's range (%g): "
+                 "scale the mesh down (export it in larger units)", name, reach, CSRBF_MAX_COORD);
+        return -EBADMSG;
+    }
+    if (*diag > 0 && sqrt(*diag) < FP_SESSION_MIN_DIAGONAL) {
+        snprintf(err, errlen, "%s: the mesh spans %.3g mesh units (its bounding box's diagonal), under "
+                 "%g, too small for the engine's support radii: scale it up (export it in smaller "
+                 "units)", name, sqrt(*diag), FP_SESSION_MIN_DIAGONAL);
+        return -EBADMSG;
     }
     return 0;
 }

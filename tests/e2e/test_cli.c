@@ -508,6 +508,17 @@ static void test_refused_up_front(void **state)
     snprintf(args, sizeof args, "run --mesh flat.obj %s --out f.obj --force", rec);
     assert_int_equal(fp(args), 65);
     assert_non_null(strstr(out, "cannot find a head"));
+    /* A mesh outside the engine's range (csrbf.h): coordinates past 1e15 were "cannot index"
+     * (70), a diagonal of 1e-20 ran with the engine refusing the radius every frame (0, nothing
+     * moved). Bad input data, 65, naming the file and the figure, before any work. */
+    write_file("huge.obj", "v 0 0 0\nv 1e20 0 0\nv 0 1e20 0\nv 0 0 1e20\nf 1 2 3\nf 1 3 4\nf 1 4 2\nf 2 4 3\n");
+    snprintf(args, sizeof args, "run --mesh huge.obj %s --out h.obj --force", rec);
+    assert_int_equal(fp(args), 65);
+    assert_non_null(strstr(out, "huge.obj: coordinates reach 1e+20 mesh units, beyond the engine's range"));
+    write_file("tiny.obj", "v 0 0 0\nv 1e-20 0 0\nv 0 1e-20 0\nv 0 0 1e-20\nf 1 2 3\nf 1 3 4\nf 1 4 2\nf 2 4 3\n");
+    snprintf(args, sizeof args, "run --mesh tiny.obj %s --out t.obj --force", rec);
+    assert_int_equal(fp(args), 65);
+    assert_non_null(strstr(out, "tiny.obj: the mesh spans 1.73e-20 mesh units"));
     snprintf(args, sizeof args, "pose --mesh %s --set jaw.open=0.2 --out noext --force", face());
     assert_int_equal(fp(args), 64);
     assert_non_null(strstr(out, "noext"));
