@@ -270,6 +270,12 @@ int fp_mesh_compute_normals(fp_mesh *mesh);
  *  A mesh without vertices (or NULL) gives all zeros. */
 void fp_mesh_bounds(const fp_mesh *mesh, float min[3], float max[3]);
 
+/** used[v] := 1 where vertex v is a corner of at least one triangle, else 0 (used:
+ *  vertex_count bytes, the caller's); returns how many are in none (a stray point an exporter
+ *  left: drawn nowhere, no part of the surface). The mesh's indices are < vertex_count (as
+ *  every loader checks). */
+size_t fp_mesh_used_vertices(const fp_mesh *mesh, uint8_t *used);
+
 /** Midpoint subdivision: a new mesh with every triangle of `mesh` cut into four at the
  *  midpoints of its edges, each edge's midpoint one vertex shared by the triangles on it.
  *  Shapes: the result has n + e vertices and 4t triangles (n, t: the input's; e: its

@@ -11,6 +11,7 @@
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <assert.h>
 #include <string.h>
 
 const char *fp_mesh_strerror(int result) { return fp_strerror(result); }
@@ -240,6 +241,19 @@ int fp_mesh_compute_normals(fp_mesh *mesh)
     }
     return fp_mesh_normals(mesh->triangles, mesh->triangle_count, mesh->positions,
                            mesh->vertex_count, mesh->normals);
+}
+
+size_t fp_mesh_used_vertices(const fp_mesh *mesh, uint8_t *used)
+{
+    size_t n = mesh->vertex_count, none = n;
+    memset(used, 0, n);
+    for (size_t i = 0; i < 3 * mesh->triangle_count; i++) {
+        uint32_t v = mesh->triangles[i];
+        assert(v < n);
+        none -= !used[v];
+        used[v] = 1;
+    }
+    return none;
 }
 
 void fp_mesh_bounds(const fp_mesh *mesh, float min[3], float max[3])

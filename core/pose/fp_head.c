@@ -12,24 +12,31 @@
 
 #define SLICES 64
 
-int fp_head_detect(const float *pos, size_t n, fp_head *out)
+int fp_head_detect(const float *pos, size_t n, fp_head *out) { return fp_head_detect_used(pos, n, NULL, out); }
+
+int fp_head_detect_used(const float *pos, size_t n, const uint8_t *used, fp_head *out)
 {
     if (!pos || !out || n < 4) return -EINVAL;
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (size_t v = 0; v < n; v++)
+    size_t m = 0;
+    for (size_t v = 0; v < n; v++) {
+        if (used && !used[v]) continue;
+        m++;
         for (int k = 0; k < 3; k++) {
             float c = pos[3 * v + k];
             if (!isfinite(c)) return -EINVAL;
             lo[k] = fminf(lo[k], c);
             hi[k] = fmaxf(hi[k], c);
         }
+    }
     double height = (double)hi[1] - lo[1];
-    if (!(height > 0) || !(hi[0] > lo[0])) return -EINVAL;
+    if (m < 4 || !(height > 0) || !(hi[0] > lo[0])) return -EINVAL;
     /* Per slice: x and z extents of its vertices. */
     float (*ext)[4] = malloc(SLICES * sizeof *ext);   /* xmin, xmax, zmin, zmax */
     if (!ext) return -ENOMEM;
     for (int s = 0; s < SLICES; s++) ext[s][0] = ext[s][2] = INFINITY, ext[s][1] = ext[s][3] = -INFINITY;
     for (size_t v = 0; v < n; v++) {
+        if (used && !used[v]) continue;
         int s = (int)((pos[3 * v + 1] - lo[1]) / height * SLICES);
         if (s >= SLICES) s = SLICES - 1;
         if (s < 0) s = 0;
@@ -70,7 +77,7 @@ int fp_head_detect(const float *pos, size_t n, fp_head *out)
     for (int pass = 0; pass < 2; pass++) {
         for (int k = 0; k < 3; k++) out->min[k] = INFINITY, out->max[k] = -INFINITY;
         for (size_t v = 0; v < n; v++) {
-            if (pos[3 * v + 1] < y_neck) continue;
+            if ((used && !used[v]) || pos[3 * v + 1] < y_neck) continue;
             for (int k = 0; k < 3; k++) {
                 out->min[k] = fminf(out->min[k], pos[3 * v + k]);
                 out->max[k] = fmaxf(out->max[k], pos[3 * v + k]);
@@ -122,7 +129,8 @@ bool fp_head_scale_plausible(double diagonal, double mm_per_unit, double *across
     return across >= FP_HEAD_ACROSS_MIN_MM && across <= FP_HEAD_ACROSS_MAX_MM;
 }
 
-int fp_head_detect_turned(const float *pos, size_t n, const double face[4], float *turned, fp_head *out)
+int fp_head_detect_turned(const float *pos, size_t n, const uint8_t *used, const double face[4], float *turned,
+                          fp_head *out)
 {
     if (!pos || !face || !turned || !out) return -EINVAL;
     const double back[4] = {face[0], -face[1], -face[2], -face[3]}; /* the inverse */
@@ -132,5 +140,5 @@ int fp_head_detect_turned(const float *pos, size_t n, const double face[4], floa
         fp_qrot(back, p, c);
         for (int i = 0; i < 3; i++) turned[3 * v + i] = (float)c[i];
     }
-    return fp_head_detect(turned, n, out);
+    return fp_head_detect_used(turned, n, used, out);
 }

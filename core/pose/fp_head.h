@@ -30,6 +30,7 @@
 
 #include <stdbool.h>
 #include <stddef.h>
+#include <stdint.h>
 
 #ifdef __cplusplus
 extern "C" {
@@ -58,11 +59,19 @@ typedef struct fp_head {
  *  flat mesh), -ENOMEM. */
 int fp_head_detect(const float *pos, size_t n, fp_head *out);
 
+/** fp_head_detect over the vertices v with used[v] != 0 only (used: n bytes, or NULL for all;
+ *  fp_mesh_used_vertices: the surface's, without points in no triangle, which a stray one far
+ *  off would turn into the head's box and the mesh's unit). -EINVAL also when fewer than 4 are
+ *  used. */
+int fp_head_detect_used(const float *pos, size_t n, const uint8_t *used, fp_head *out);
+
 /** A face that looks elsewhere than +z (fp_calibration.face): its n positions turned back into
  *  the face's own frame into `turned` (n x 3, the caller's), by the inverse of the unit
  *  quaternion face (w, x, y, z: the face's frame -> the mesh's), and the head found there
- *  (fp_head_detect; its box in the face's frame). Returns as fp_head_detect. */
-int fp_head_detect_turned(const float *pos, size_t n, const double face[4], float *turned, fp_head *out);
+ *  (fp_head_detect_used with used, NULL for all; its box in the face's frame). Returns as
+ *  fp_head_detect. */
+int fp_head_detect_turned(const float *pos, size_t n, const uint8_t *used, const double face[4], float *turned,
+                          fp_head *out);
 
 /** The face's size across, in millimetres, for a given scale: diagonal (the mesh's
  *  bounding-box diagonal, mesh units) x mm_per_unit, into *across_mm (may be NULL). Returns

@@ -657,6 +657,7 @@ void fp_session_destroy(fp_session **sp)
     for (size_t p = 0; p < FP_PERFORMER_CAPACITY; p++) fp_arrive_step_free(&s->arrive[p]);
     free(s->loaded);
     free(s->canon);
+    free(s->used);
     free(s->base);
     free(s->deformed);
     fp_mesh_free(&s->mesh);

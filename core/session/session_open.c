@@ -91,7 +91,7 @@ static int face_frame(fp_session *s, const fp_session_options *opt, char *err, s
         snprintf(err, errlen, "session: out of memory for the face's frame");
         return -ENOMEM;
     }
-    if (fp_head_detect_turned(s->loaded, s->n, q, s->canon, &s->face_head)) { /* (as on the shape) */
+    if (fp_head_detect_turned(s->loaded, s->n, s->used, q, s->canon, &s->face_head)) { /* (as on the shape) */
         free(s->canon);
         s->canon = NULL;
         return 0;
@@ -200,7 +200,38 @@ static int open_mesh(fp_session *s, const fp_session_options *opt, double *diag,
     memcpy(s->base, s->loaded, bytes);
     memcpy(s->deformed, s->loaded, bytes);
     s->shown = s->base;
-    fp_mesh_bounds(s->mesh, s->view.bounds_min, s->view.bounds_max);
+    /* the surface's bounds: a vertex in no triangle (a stray point an exporter left, drawn
+     * nowhere) is left out of the mesh's size, hence of the radius, the head and the hands'
+     * placement (one at 1e6 units beside a 25-unit mask made a radius of 6e4 units and moved
+     * only itself); the engine still carries it */
+    const char *name = opt->mesh_path ? opt->mesh_path : "the mesh";
+    size_t unused = 0;
+    if (s->mesh->triangle_count) {
+        if (!(s->used = malloc(s->n))) {
+            snprintf(err, errlen, "session: out of memory for %zu vertices", s->n);
+            return -ENOMEM;
+        }
+        if (!(unused = fp_mesh_used_vertices(s->mesh, s->used))) {
+            free(s->used);
+            s->used = NULL;
+        }
+    }
+    if (unused < s->n) {
+        for (int k = 0; k < 3; k++) s->view.bounds_min[k] = INFINITY, s->view.bounds_max[k] = -INFINITY;
+        for (size_t v = 0; v < s->n; v++) {
+            if (s->used && !s->used[v]) continue;
+            for (int k = 0; k < 3; k++) {
+                s->view.bounds_min[k] = fminf(s->view.bounds_min[k], s->loaded[3 * v + k]);
+                s->view.bounds_max[k] = fmaxf(s->view.bounds_max[k], s->loaded[3 * v + k]);
+            }
+        }
+    } else {
+        fp_mesh_bounds(s->mesh, s->view.bounds_min, s->view.bounds_max);
+    }
+    if (unused)
+        fp_slog_printf(&s->log, FP_LOG_WARNING, "session",
+                       "%s: %zu of %zu vertices are in no triangle: left out of the face's size, "
+                       "its head and the hands' placement", name, unused, s->n);
     s->view.vertex_count = s->n;
     s->view.base = s->base;
     *diag = 0;
@@ -208,11 +239,12 @@ static int open_mesh(fp_session *s, const fp_session_options *opt, double *diag,
     for (int i = 0; i < 3; i++) {
         double d = s->view.bounds_max[i] - s->view.bounds_min[i];
         *diag += d * d;
-        reach = fmax(reach, fmax(fabs(s->view.bounds_min[i]), fabs(s->view.bounds_max[i])));
     }
+    float lo_all[3], hi_all[3];
     /* the engine's range (FP_SESSION_MIN_DIAGONAL): such a mesh was indexed nowhere ("cannot
      * index", exit 70) or moved nothing, the engine refusing its radius every frame */
-    const char *name = opt->mesh_path ? opt->mesh_path : "the mesh";
+    fp_mesh_bounds(s->mesh, lo_all, hi_all); /* (every vertex's, the engine holds them all) */
+    for (int k = 0; k < 3; k++) reach = fmax(reach, fmax(fabs(lo_all[k]), fabs(hi_all[k])));
     if (reach > CSRBF_MAX_COORD) {
         snprintf(err, errlen, "%s: coordinates reach %.3g mesh units, beyond the engine's range (%g): "
                  "scale the mesh down (export it in larger units)", name, reach, CSRBF_MAX_COORD);
@@ -232,7 +264,7 @@ static int open_mesh(fp_session *s, const fp_session_options *opt, double *diag,
 static int open_scale(fp_session *s, const fp_session_options *opt, double diag, char *err, size_t errlen)
 {
     int rc = 0;
-    if (fp_head_detect(s->loaded, s->n, &s->head)) {
+    if (fp_head_detect_used(s->loaded, s->n, s->used, &s->head)) {
         snprintf(err, errlen, "%s: cannot find a head in %zu vertices (flat or non-finite mesh)",
                  opt->mesh_path, s->n);
         rc = -EBADMSG; /* the mesh's fault: bad input data (65), as calibrate says */

@@ -390,6 +390,45 @@ static void test_missing_mesh(void **state)
     assert_non_null(strstr(out, "/nonexistent/face.obj"));
 }
 
+/* "vertices moved A of B; ... max M mm" of a run's summary into moved, of, max */
+static void moved_of(unsigned *moved, unsigned *of, double *max)
+{
+    const char *p = strstr(out, "vertices moved ");
+    assert_non_null(p);
+    assert_int_equal(sscanf(p, "vertices moved %u of %u", moved, of), 2);
+    const char *q = strstr(p, " max ");
+    assert_non_null(q);
+    assert_int_equal(sscanf(q, " max %lf mm", max), 1);
+}
+
+/* A vertex in no triangle (a stray point an exporter left) is no part of the face's size: one
+ * 1e6 units beside the 25-unit MediaPipe mask made a default radius of 6e4 units, placed the
+ * hands by it and moved that point alone. Now the run says so and deforms as without it. */
+static void test_stray_vertex(void **state)
+{
+    (void)state;
+    char args[16384], path[4400];
+    snprintf(args, sizeof args, "run -q --rig none --mesh %s --input replay:%s/hands/leap-motion/grab_joints_mm.csv,fast=1 "
+             "--out plain.obj --force", face(), data);
+    assert_int_equal(fp(args), 0);
+    assert_null(strstr(out, "in no triangle"));
+    unsigned m0, n0, m1, n1;
+    double x0, x1;
+    moved_of(&m0, &n0, &x0);
+    snprintf(path, sizeof path, "%s/stray.obj", tmp);
+    snprintf(args, sizeof args, "cp %s %s && echo 'v 1000000 0 0' >> %s", face(), path, path);
+    assert_int_equal(system(args), 0);
+    snprintf(args, sizeof args, "run -q --rig none --mesh stray.obj --input replay:%s/hands/leap-motion/grab_joints_mm.csv,fast=1 "
+             "--out stray-out.obj --force", data);
+    assert_int_equal(fp(args), 0);
+    assert_non_null(strstr(out, "stray.obj: 1 of 469 vertices are in no triangle"));
+    moved_of(&m1, &n1, &x1);
+    assert_int_equal(n1, n0 + 1);
+    assert_int_equal(m1, m0);    /* the face's, not the point's alone */
+    assert_true(x1 == x0);
+    assert_true(m0 > 400);
+}
+
 static void test_frames_out_and_monitor(void **state)
 {
     (void)state;
@@ -680,7 +719,7 @@ int main(void)
         cmocka_unit_test(test_corrupt_obj),
         cmocka_unit_test(test_bad_csv),        cmocka_unit_test(test_decimal_data),
         cmocka_unit_test(test_plugins),
-        cmocka_unit_test(test_info),           cmocka_unit_test(test_missing_mesh),
+        cmocka_unit_test(test_info),           cmocka_unit_test(test_missing_mesh), cmocka_unit_test(test_stray_vertex),
         cmocka_unit_test(test_frames_out_and_monitor),
         cmocka_unit_test(test_deterministic),  cmocka_unit_test(test_refused_up_front),
         cmocka_unit_test(test_robust_workspace),

@@ -220,6 +220,18 @@ static int calibrate_parse(int argc, char **argv, calibrate_args *a)
     return -1;
 }
 
+/* The vertices in a triangle (fp_mesh_used_vertices), malloc'ed, or NULL when every one is (or
+ * out of memory: then all count): the head is found on the surface, as the session finds it. */
+static uint8_t *surface_vertices(const fp_mesh *m)
+{
+    uint8_t *used = m->triangle_count ? malloc(m->vertex_count) : NULL;
+    if (used && !fp_mesh_used_vertices(m, used)) {
+        free(used);
+        used = NULL;
+    }
+    return used;
+}
+
 /* The face and its head: loaded, detected, and --mm-per-unit checked as run checks it (a face
  * under 1 mm or over 1 km is a slip). Returns 0 or the exit status (said); *m to free. */
 static int load_face(const calibrate_args *a, fp_mesh **m, fp_head *head)
@@ -230,7 +242,10 @@ static int load_face(const calibrate_args *a, fp_mesh **m, fp_head *head)
         fprintf(stderr, "facepuppet calibrate: %s\n", err);
         return fp_app_exit_code(rc, FP_APP_INPUT);
     }
-    if (fp_head_detect((*m)->positions, (*m)->vertex_count, head)) {
+    uint8_t *used = surface_vertices(*m);
+    int hrc = fp_head_detect_used((*m)->positions, (*m)->vertex_count, used, head);
+    free(used);
+    if (hrc) {
         fprintf(stderr, "facepuppet calibrate: %s: cannot find a head (flat or non-finite mesh)\n", a->mesh_path);
         return FP_EXIT_DATAERR;
     }
@@ -320,7 +335,10 @@ static int fit_and_save(const calibrate_args *a, const fp_mesh *m, const fp_head
         else if (given_rig) fp_rig_face_rotation(given_rig, q);
         float *turned = fp_face_turned(q) ? malloc(m->vertex_count * 3 * sizeof *turned) : NULL;
         fp_head th;
-        if (turned && !fp_head_detect_turned(m->positions, m->vertex_count, q, turned, &th)) {
+        uint8_t *used = turned ? surface_vertices(m) : NULL;
+        int hrc = turned ? fp_head_detect_turned(m->positions, m->vertex_count, used, q, turned, &th) : -1;
+        free(used);
+        if (!hrc) {
             if (a->mm_per_unit > 0 || given_rig) { /* a given unit; else the face frame's detection */
                 th.mm_per_unit = head->mm_per_unit;
                 memcpy(th.how, head->how, sizeof th.how);
