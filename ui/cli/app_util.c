@@ -421,24 +421,30 @@ int fp_app_check_output_dir(const char *cmd, const char *option, const char *dir
     return 0;
 }
 
-/* "123 MB", "1.3 GB" (decimal, as the exports' summaries). */
-static void size_text(double bytes, char *buf, size_t len)
+void fp_app_size_text(double bytes, char *buf, size_t len)
 {
     if (bytes >= 1e9) snprintf(buf, len, "%.1f GB", bytes / 1e9);
     else if (bytes >= 1e6) snprintf(buf, len, "%.0f MB", bytes / 1e6);
     else snprintf(buf, len, "%.0f kB", ceil(bytes / 1e3));
 }
 
-void fp_app_frames_estimate(const char *cmd, const char *option, const char *dir, double frames,
-                            double fps, size_t vertices, bool quiet)
+double fp_app_obj_frame_bytes(const fp_mesh *mesh)
 {
-    const double frame = FP_APP_OBJ_BYTES_PER_VERTEX * (double)vertices;
+    const double n = (double)mesh->vertex_count, t = (double)mesh->triangle_count;
+    return mesh->uvs ? 36 * n + 23 * n + 24 * t : 36 * n + 17 * t;
+}
+
+void fp_app_frames_estimate(const char *cmd, const char *option, const char *dir, double frames,
+                            double fps, const fp_mesh *mesh, bool quiet)
+{
+    const size_t vertices = mesh->vertex_count;
+    const double frame = fp_app_obj_frame_bytes(mesh);
     char a[32], b[32];
     const char *c = "1 GiB"; /* (FP_APP_FRAMES_WARN_BYTES) */
-    size_text(frame, b, sizeof b);
+    fp_app_size_text(frame, b, sizeof b);
     if (frames > 0) {
         const double total = frames * frame;
-        size_text(total, a, sizeof a);
+        fp_app_size_text(total, a, sizeof a);
         if (total > FP_APP_FRAMES_WARN_BYTES)
             fprintf(stderr, "%s: warning: %s %s: about %s (%.0f frames x %zu vertices, ~%s a "
                     "frame), over %s\n", cmd, option, dir, a, frames, vertices, b, c);
@@ -448,7 +454,7 @@ void fp_app_frames_estimate(const char *cmd, const char *option, const char *dir
         return;
     }
     if (quiet || !(fps > 0)) return;
-    size_text(frame * fps, a, sizeof a);
+    fp_app_size_text(frame * fps, a, sizeof a);
     fprintf(stderr, "%s: %s %s: about %s a second (%g frames a second x %zu vertices, ~%s a "
             "frame): %s after %.0f s (--duration bounds it)\n", cmd, option, dir, a, fps, vertices,
             b, c, ceil(FP_APP_FRAMES_WARN_BYTES / (frame * fps)));

@@ -120,7 +120,14 @@ int fp_app_check_output_dir(const char *cmd, const char *option, const char *dir
 
 /** Bytes a frame of --frames-out takes a vertex, about (an OBJ written back as the input came
  *  in: its v, vn, vt and face lines; 1.34 MB a frame for the ICT face's 26719 vertices). */
-#define FP_APP_OBJ_BYTES_PER_VERTEX 50.0
+/** An OBJ frame's bytes, about, as the mesh writer writes it (core/mesh): a "v" line of about
+ *  36 bytes a vertex, a "vt" line of 23 where the mesh has texture coordinates, and "f" lines
+ *  of about 17 bytes a triangle (24 with "vt" indices; a quad's line holds two). On the ICT
+ *  face 2.84 MB against the 2.79 MB written (26,719 vertices, 52,768 triangles as 26,384 quads;
+ *  50 bytes a vertex, the estimate before, said 1.3 MB). */
+double fp_app_obj_frame_bytes(const struct fp_mesh *mesh);
+/** bytes as "123 MB", "1.3 GB" or "12 kB" (decimal, as the exports' summaries) into buf. */
+void fp_app_size_text(double bytes, char *buf, size_t len);
 /** Above this a --frames-out's estimate is a warning (1 GiB). */
 #define FP_APP_FRAMES_WARN_BYTES (1024.0 * 1024.0 * 1024.0)
 
@@ -130,7 +137,7 @@ int fp_app_check_output_dir(const char *cmd, const char *option, const char *dir
  *  inputs, a recording read to its end): the rate at fps frames a second and when it passes
  *  1 GiB are said instead. */
 void fp_app_frames_estimate(const char *cmd, const char *option, const char *dir, double frames,
-                            double fps, size_t vertices, bool quiet);
+                            double fps, const struct fp_mesh *mesh, bool quiet);
 
 /** A --input SPEC that looks like a file (its NAME, before ':' and ',', holds '/' or '.',
  *  which no plugin name does: "foo.csv", "../rec/clap.fplog"): "CMD: OPTION SPEC: not a SPEC

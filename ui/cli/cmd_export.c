@@ -19,6 +19,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/statvfs.h>
 #include <strings.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -394,6 +395,69 @@ static int check_out(const export_args *a, const char *out, const char *name)
     return fp_app_check_new_output("facepuppet export", opt, out, a->force);
 }
 
+/* The frames an export writes, about: those of the range (the take's rate), or at --fps over
+ * their span; from the take's summary, before any is played. */
+static double frames_out(const export_args *a, const range_end *in, const range_end *out,
+                         const fp_take_header *h, const fp_take_summary *sum, size_t frames, uint64_t tc_in)
+{
+    uint64_t f0 = 0, l0 = 0, f1 = 0, l1 = 0;
+    take_span(in, h, sum, frames, tc_in, &f0, &l0);
+    take_span(out, h, sum, frames, tc_in, &f1, &l1);
+    const double first = in->set ? (double)in->value - (double)f0 : 0;  /* take frames from the start */
+    const double last = out->set ? (double)out->value - (double)f1 : (double)frames - 1;
+    const double n = last >= first ? last - first + 1 : 0;
+    const double rate = h->rate.den ? (double)h->rate.num / h->rate.den : 0;
+    return a->fps > 0 && rate > 0 ? floor(n / rate * a->fps) + 1 : n;
+}
+
+/* A point cache's or an OBJ sequence's size, about, before any frame (a --fps of 10000 for 100
+ * wrote 10.6 GB of a 3.3 s take unasked): said over FP_APP_FRAMES_WARN_BYTES, and refused (73)
+ * when the output's file system has less room free. glTF (its morph targets reduced) and
+ * PNG sizes are not known ahead. Returns 0 or FP_EXIT_CANTCREAT (said). */
+static int check_size(const export_args *a, const char *out, double frames, const fp_mesh *mesh)
+{
+    const size_t vertices = mesh->vertex_count;
+    double per_frame;
+    if (a->png) return 0;
+    switch (a->fmt) {
+    case FP_EXPORT_PC2: per_frame = 12.0 * (double)vertices; break;
+    case FP_EXPORT_MDD: per_frame = 12.0 * (double)vertices + 4; break;
+    case FP_EXPORT_OBJ_SEQ: per_frame = fp_app_obj_frame_bytes(mesh); break;
+    default: return 0;
+    }
+    const double bytes = frames * per_frame;
+    /* the file system it lands on: the folder (obj-seq) or the file's folder, else the folder
+     * that will hold a folder not made yet */
+    char dir[4200];
+    snprintf(dir, sizeof dir, "%s", out);
+    struct statvfs fs;
+    bool found = a->fmt == FP_EXPORT_OBJ_SEQ && statvfs(dir, &fs) == 0;
+    while (!found) {
+        char *slash = strrchr(dir, '/');
+        if (!slash) {
+            found = statvfs(".", &fs) == 0;
+            break;
+        }
+        slash[slash == dir] = 0; /* (the root keeps its '/') */
+        found = statvfs(dir, &fs) == 0 || slash == dir;
+    }
+    if (!found) return 0;
+    const double room = (double)fs.f_bavail * (double)fs.f_frsize;
+    char need[32], free_text[32];
+    fp_app_size_text(bytes, need, sizeof need);
+    fp_app_size_text(room, free_text, sizeof free_text);
+    if (bytes > room) {
+        fprintf(stderr, "facepuppet export: %s: about %s (%.0f frames x %zu vertices), more than the %s "
+                "free there; nothing written (a smaller --resample or --range)\n",
+                out, need, frames, vertices, free_text);
+        return FP_EXIT_CANTCREAT;
+    }
+    if (bytes > FP_APP_FRAMES_WARN_BYTES)
+        fprintf(stderr, "facepuppet export: warning: %s: about %s (%.0f frames x %zu vertices), over 1 GiB\n",
+                out, need, frames, vertices);
+    return 0;
+}
+
 /* The output when --out is not given: beside the take, TAKE_png/, TAKE_frames/ (obj-seq) or
  * TAKE.EXT. */
 static void default_out(const export_args *a, char *buf, size_t len)
@@ -568,6 +632,10 @@ static int export_take(const export_args *a, fp_take_player *p, sink *k, float *
     const double rate = a->fps > 0 ? a->fps
                         : h->rate.den ? (double)h->rate.num / (double)h->rate.den : 0;
     if ((status = check_out(a, out, name))) return status;
+    if ((status = check_size(a, out, frames_out(a, &w.in, &w.out, h, fp_take_reader_summary(r),
+                                                fp_take_reader_frames(r), w.tc_in),
+                             fp_session_mesh(s))))
+        return status;
     char wav[4400]; /* the soundtrack under the frames, beside them (NAME.wav) */
     if ((status = fp_app_audio_export_check(h, out, a->force, wav, sizeof wav, "export"))) return status;
     if ((status = open_sink(k, a, s, out, name, mm_per_unit, rate))) return status;

@@ -368,7 +368,7 @@ static int play_main(int argc, char **argv)
     if ((status = play_audio_prepare(&audio, h, force, quiet))) goto done;
     if (frames_out) /* its size, before any frame */
         fp_app_frames_estimate("facepuppet play", "--frames-out", frames_out,
-                               (double)fp_take_reader_frames(r), 0, fp_session_vertex_count(s), quiet);
+                               (double)fp_take_reader_frames(r), 0, fp_session_mesh(s), quiet);
     if (export_file && (status = fp_app_export_open("facepuppet play", export_file,
                                                     fp_session_mesh(s),
                                                     fp_take_player_mm_per_unit(player),

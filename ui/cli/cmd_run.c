@@ -616,7 +616,7 @@ static int run_main(int argc, char **argv)
     if (a->frames_out) /* its size, before any frame (the duration, when given) */
         fp_app_frames_estimate("facepuppet run", "--frames-out", a->frames_out,
                                a->sopt.duration_s > 0 ? ceil(a->sopt.duration_s * a->fps) + 1 : 0,
-                               a->fps, fp_session_vertex_count(s), quiet);
+                               a->fps, fp_session_mesh(s), quiet);
     if ((rc = fp_session_start(s, err, sizeof err))) {
         fprintf(stderr, "facepuppet run: %s\n", err);
         return run_abandon(a, &ex, &s, &path, fp_app_exit_code(rc, FP_APP_INPUT));
