@@ -170,9 +170,10 @@ expect 73 "$fp" export "$take" --format pc2 --out /proc/nope/x.pc2
 # An export larger than the room free where it goes: refused before any frame (73), naming the
 # size (a --fps of 10000 for 100 wrote 10.6 GB of a 3.3 s take, unasked). A 1 MiB tmpfs in a
 # user namespace (unshare -r -m); skipped where the system allows none.
-if unshare -r -m true 2>/dev/null; then
+mkdir -p "$tmp/room"
+if unshare -r -m sh -c 'mount -t tmpfs -o size=1m tmpfs "$1"' _ "$tmp/room" 2>/dev/null; then
     for fmt in pc2 mdd obj-seq; do
-        unshare -r -m bash -c 'mkdir -p "$1/room" && mount -t tmpfs -o size=1m tmpfs "$1/room" &&
+        unshare -r -m bash -c 'mount -t tmpfs -o size=1m tmpfs "$1/room" &&
                                exec "$2" export "$3" --format "$4" --out "$1/room/out.$4"' _ "$tmp" "$fp" "$take" $fmt \
             >"$tmp/x.out" 2>&1
         rc=$?
@@ -182,7 +183,7 @@ if unshare -r -m true 2>/dev/null; then
     done
     echo "an export larger than the room free: refused before any frame, in pc2, mdd and obj-seq"
 else
-    echo "SKIP (room check only): no user namespace to mount a small file system in"
+    echo "SKIP (room check only): no user namespace to mount a small file system in here"
 fi
 expect 64 "$fp" run "${pd[@]}" --mesh "$data/faces/ict-facekit/generic_neutral_mesh.obj" --input "replay:x.csv" --export x.fbx
 [ ! -e /proc/nope/x.pc2 ] || true
