@@ -281,6 +281,20 @@ static void live_link_setup(live_stuck *c, fp_viewer_options *vo, const fp_sessi
     vo->frame_end = live_frame_end;
 }
 
+/* --script @FILE: the file's text into *text (the caller frees it); TEXT itself: *text NULL.
+ * A regular file of 1 MiB at most, never a FIFO waited on. Returns 0 or the exit status (said). */
+static int read_script(const char *arg, char **text)
+{
+    *text = NULL;
+    if (!arg || arg[0] != '@') return 0;
+    size_t len;
+    int code = fp_file_read_all(arg + 1, LIVE_SCRIPT_MAX, text, &len);
+    if (!code) return 0;
+    fprintf(stderr, "facepuppet live: --script %s: %s\n", arg + 1,
+            code == -EFBIG ? "larger than 1 MiB" : fp_file_error_text(code));
+    return fp_app_exit_code(code == -EFBIG ? -EBADMSG : code, FP_APP_INPUT);
+}
+
 /* The measurements at exit, on stdout. */
 static void print_report(const fp_viewer_report *r, bool gpu_warp)
 {
@@ -402,18 +416,8 @@ static int live_main(int argc, char **argv)
     if ((orc = fp_app_session_defaults("facepuppet live", so, sopt.speed, &inputs_buf, NULL)))
         return orc;
     char *script_text = NULL;
-    if (script_arg && script_arg[0] == '@') {
-        size_t len; /* a regular file of 1 MiB at most: never a FIFO waited on */
-        int code = fp_file_read_all(script_arg + 1, LIVE_SCRIPT_MAX, &script_text, &len);
-        if (code) {
-            fprintf(stderr, "facepuppet live: --script %s: %s\n", script_arg + 1,
-                    code == -EFBIG ? "larger than 1 MiB" : fp_file_error_text(code));
-            return fp_app_exit_code(code == -EFBIG ? -EBADMSG : code, FP_APP_INPUT);
-        }
-        vo.script = script_text;
-    } else {
-        vo.script = script_arg;
-    }
+    if ((orc = read_script(script_arg, &script_text))) return orc;
+    vo.script = script_text ? script_text : script_arg;
     int arc = sound_prepare(&snd, &vo, sopt.quiet); /* before the window */
     if (arc) {
         free(script_text);
