@@ -23,6 +23,10 @@
 #include <unistd.h>
 
 #define LINE_MAX_BYTES 4096 /* the longest line the writer makes is about 1.1 kB */
+/* The longest line the reader takes: a longer one (a file of NULs a crash left, a hostile
+ * one) is refused as it passes this, never held whole (3 GiB of NULs after the header were
+ * read into 3 GB of memory, then called "no events") */
+#define READ_LINE_MAX 65536
 #define TEXT_BYTES ((int)sizeof(((fp_event_status *)0)->text))
 
 static const char *const type_names[] = {NULL, "angles", "positions", "wrist", "button", "status", "channel"};
@@ -337,7 +341,7 @@ struct fp_eventlog_reader {
     FILE *f;
     char *path;
     locale_t c_locale;
-    char *line;        /* getline buffer */
+    char *line;        /* the line read (READ_LINE_MAX + 1 bytes) */
     size_t line_cap;
     long line_no;      /* lines read so far */
     long event_line;   /* line of the last event returned */
@@ -374,17 +378,30 @@ void fp_eventlog_reader_close(fp_eventlog_reader **pr)
 }
 
 /* Reads one line into r->line without its "\n" (and "\r"). Returns 1 for a complete line, 2 for
- * a last line without newline, 0 at the end, or -EIO. */
+ * a last line without newline, 0 at the end, -E2BIG for a line past READ_LINE_MAX bytes (not
+ * read on), -ENOMEM or -EIO. */
 static int read_line(fp_eventlog_reader *r, size_t *len)
 {
     errno = 0;
-    ssize_t n = getline(&r->line, &r->line_cap, r->f);
-    if (n < 0) {
+    if (!r->line && !(r->line = malloc(READ_LINE_MAX + 1))) return -ENOMEM;
+    r->line_cap = READ_LINE_MAX + 1;
+    size_t n = 0;
+    int c;
+    while ((c = getc_unlocked(r->f)) != EOF) {
+        if (n == READ_LINE_MAX) {
+            r->line_no++;
+            return -E2BIG;
+        }
+        r->line[n++] = (char)c;
+        if (c == '\n') break;
+    }
+    r->line[n] = '\0';
+    if (n == 0) {
         if (ferror(r->f)) return -EIO;
         return 0;
     }
     r->line_no++;
-    int complete = n > 0 && r->line[n - 1] == '\n';
+    int complete = r->line[n - 1] == '\n';
     if (complete) r->line[--n] = '\0';
     if (n > 0 && r->line[n - 1] == '\r') r->line[--n] = '\0';
     *len = (size_t)n;
@@ -440,16 +457,16 @@ fp_eventlog_reader *fp_eventlog_reader_open_code(const char *path, int *code_out
     }
     size_t len = 0;
     int rc = read_line(r, &len);
-    if (rc < 0) {
-        *cd = -EIO;
-        put_msg(err, errlen, "%s: cannot read: %s", path, strerror(errno));
+    if (rc < 0 && rc != -E2BIG) {
+        *cd = rc;
+        put_msg(err, errlen, "%s: cannot read: %s", path, rc == -ENOMEM ? "out of memory" : strerror(errno));
         fp_eventlog_reader_close(&r);
         return NULL;
     }
     *cd = -EBADMSG;
     const char *magic = "# " FP_EVENTLOG_MAGIC " ";
     size_t mlen = strlen(magic);
-    if (rc == 0 || strncmp(r->line, magic, mlen) != 0) {
+    if (rc <= 0 || strncmp(r->line, magic, mlen) != 0) {
         put_msg(err, errlen, "%s:1:1: not a facepuppet event log (the first line must be "
                 "\"# %s %d\")", path, FP_EVENTLOG_MAGIC, FP_EVENTLOG_VERSION);
         fp_eventlog_reader_close(&r);
@@ -742,6 +759,10 @@ int fp_eventlog_reader_next(fp_eventlog_reader *r, fp_event *out)
     for (;;) {
         size_t len = 0;
         int rc = read_line(r, &len);
+        if (rc == -E2BIG)
+            return reader_fail(r, -EBADMSG, READ_LINE_MAX + 1, "a line longer than %d bytes (an event's "
+                               "line is about 1 kB at most)", READ_LINE_MAX);
+        if (rc == -ENOMEM) return reader_fail(r, -ENOMEM, 0, "out of memory");
         if (rc < 0) return reader_fail(r, -EIO, 0, "cannot read: %s", strerror(errno));
         if (rc == 0) return 0;
         if (rc == 2) {

@@ -372,6 +372,26 @@ static void reader_errors_name_line_and_column(void **state)
     /* a name the writer would refuse (fuzz_eventlog found one read and not written back) */
     expect_read_error("e16", "100 channel - jaw\x01open 0.5\n", 2, 18, "channel name with byte 0x01");
     expect_read_error("e17", "100 channel - jaw\xc3\xa9 0.5\n", 2, 18, "channel name with byte 0xc3");
+    /* a line past 64 KiB (a file of NULs a crash left, a hostile one): refused as it passes
+     * the limit, not read whole (3 GiB of NULs after the header took 3 GB of memory, then read
+     * as "no events"); terminated or not, NULs or text */
+    char path[512], err[512];
+    tmp_path(path, sizeof path, "e18");
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    fputs("# facepuppet-eventlog 1\n100 button - 1 1 1\n", f);
+    for (int i = 0; i < 70000; i++) fputc(i % 2 ? 0 : 'x', f);
+    fclose(f);
+    fp_eventlog_reader *r = fp_eventlog_reader_open(path, err, sizeof err);
+    assert_non_null(r);
+    fp_event got;
+    assert_int_equal(fp_eventlog_reader_next(r, &got), 1);
+    assert_int_equal(fp_eventlog_reader_next(r, &got), -EBADMSG);
+    char want[600];
+    snprintf(want, sizeof want, "%s:3:65537: a line longer than 65536 bytes", path);
+    if (strncmp(fp_eventlog_reader_error(r), want, strlen(want)))
+        fail_msg("message \"%s\"", fp_eventlog_reader_error(r));
+    fp_eventlog_reader_close(&r);
 }
 
 /* Floats are decimals, as every number facepuppet reads: strtof's hexadecimal floats were
