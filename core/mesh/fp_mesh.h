@@ -276,6 +276,10 @@ void fp_mesh_bounds(const fp_mesh *mesh, float min[3], float max[3]);
  *  every loader checks). */
 size_t fp_mesh_used_vertices(const fp_mesh *mesh, uint8_t *used);
 
+/** fp_mesh_bounds over the vertices v with used[v] != 0 (used NULL: every vertex; none used:
+ *  all zeros): the surface's bounds, without points in no triangle. */
+void fp_mesh_bounds_used(const fp_mesh *mesh, const uint8_t *used, float min[3], float max[3]);
+
 /** Midpoint subdivision: a new mesh with every triangle of `mesh` cut into four at the
  *  midpoints of its edges, each edge's midpoint one vertex shared by the triangles on it.
  *  Shapes: the result has n + e vertices and 4t triangles (n, t: the input's; e: its

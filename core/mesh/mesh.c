@@ -7,6 +7,7 @@
 
 #include <ctype.h>
 #include <math.h>
+#include <stdbool.h>
 #include <stdint.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -254,6 +255,26 @@ size_t fp_mesh_used_vertices(const fp_mesh *mesh, uint8_t *used)
         used[v] = 1;
     }
     return none;
+}
+
+void fp_mesh_bounds_used(const fp_mesh *mesh, const uint8_t *used, float min[3], float max[3])
+{
+    if (!used) {
+        fp_mesh_bounds(mesh, min, max);
+        return;
+    }
+    bool any = false;
+    for (size_t i = 0; i < mesh->vertex_count; i++) {
+        if (!used[i]) continue;
+        const float *p = mesh->positions + 3 * i;
+        for (int k = 0; k < 3; k++) {
+            if (!any || p[k] < min[k]) min[k] = p[k];
+            if (!any || p[k] > max[k]) max[k] = p[k];
+        }
+        any = true;
+    }
+    if (!any)
+        for (int k = 0; k < 3; k++) min[k] = max[k] = 0.0f;
 }
 
 void fp_mesh_bounds(const fp_mesh *mesh, float min[3], float max[3])

@@ -216,18 +216,7 @@ static int open_mesh(fp_session *s, const fp_session_options *opt, double *diag,
             s->used = NULL;
         }
     }
-    if (unused < s->n) {
-        for (int k = 0; k < 3; k++) s->view.bounds_min[k] = INFINITY, s->view.bounds_max[k] = -INFINITY;
-        for (size_t v = 0; v < s->n; v++) {
-            if (s->used && !s->used[v]) continue;
-            for (int k = 0; k < 3; k++) {
-                s->view.bounds_min[k] = fminf(s->view.bounds_min[k], s->loaded[3 * v + k]);
-                s->view.bounds_max[k] = fmaxf(s->view.bounds_max[k], s->loaded[3 * v + k]);
-            }
-        }
-    } else {
-        fp_mesh_bounds(s->mesh, s->view.bounds_min, s->view.bounds_max);
-    }
+    fp_mesh_bounds_used(s->mesh, s->used, s->view.bounds_min, s->view.bounds_max);
     if (unused)
         fp_slog_printf(&s->log, FP_LOG_WARNING, "session",
                        "%s: %zu of %zu vertices are in no triangle: left out of the face's size, "

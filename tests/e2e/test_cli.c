@@ -427,6 +427,10 @@ static void test_stray_vertex(void **state)
     assert_int_equal(m1, m0);    /* the face's, not the point's alone */
     assert_true(x1 == x0);
     assert_true(m0 > 400);
+    /* info says the same: the surface's bounds, and the point counted */
+    assert_int_equal(fp("info stray.obj"), 0);
+    assert_non_null(strstr(out, "unused    1 vertices in no triangle"));
+    assert_null(strstr(out, "1e+06"));
 }
 
 static void test_frames_out_and_monitor(void **state)

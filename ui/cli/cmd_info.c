@@ -9,6 +9,7 @@
 #include <getopt.h>
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <strings.h>
 
@@ -67,13 +68,20 @@ static int mesh_info(const char *path)
         fprintf(stderr, "facepuppet info: %s\n", err);
         return fp_app_exit_code(rc, FP_APP_INPUT);
     }
+    /* the surface's bounds, as the session sizes the face: points in no triangle left out */
+    uint8_t *used = m->triangle_count ? malloc(m->vertex_count) : NULL;
+    size_t unused = used ? fp_mesh_used_vertices(m, used) : 0;
     float lo[3], hi[3];
-    fp_mesh_bounds(m, lo, hi);
+    fp_mesh_bounds_used(m, unused ? used : NULL, lo, hi);
+    free(used);
     double ext = fmax(hi[0] - lo[0], fmax(hi[1] - lo[1], hi[2] - lo[2]));
     printf("%s\n  vertices  %zu\n  triangles %zu\n  uvs       %s\n"
            "  bounds    [%g, %g, %g] .. [%g, %g, %g]\n  size      %g x %g x %g\n  units     %s\n",
            path, m->vertex_count, m->triangle_count, m->uvs ? "yes" : "no", lo[0], lo[1], lo[2],
            hi[0], hi[1], hi[2], hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], guess_units(ext));
+    if (unused)
+        printf("  unused    %zu vertices in no triangle (left out of the bounds, as run leaves them "
+               "out of the face's size)\n", unused);
     fp_mesh_free(&m);
     return FP_EXIT_OK;
 }
