@@ -244,14 +244,14 @@ static int load_face(const calibrate_args *a, fp_mesh **m, fp_head *head)
     }
     uint8_t *used = surface_vertices(*m);
     int hrc = fp_head_detect_used((*m)->positions, (*m)->vertex_count, used, head);
+    float lo[3], hi[3];
+    fp_mesh_bounds_used(*m, used, lo, hi); /* (the surface's, as the session's) */
     free(used);
     if (hrc) {
         fprintf(stderr, "facepuppet calibrate: %s: cannot find a head (flat or non-finite mesh)\n", a->mesh_path);
         return FP_EXIT_DATAERR;
     }
     if (a->mm_per_unit > 0) {
-        float lo[3], hi[3];
-        fp_mesh_bounds(*m, lo, hi);
         const double diag = sqrt((double)(hi[0] - lo[0]) * (hi[0] - lo[0]) +
                                  (double)(hi[1] - lo[1]) * (hi[1] - lo[1]) +
                                  (double)(hi[2] - lo[2]) * (hi[2] - lo[2]));
