@@ -250,6 +250,15 @@ static void test_close_button_and_esc(void **state)
     assert_true(out_contains("frames 3;"));
     assert_int_equal(live("-i 'replay:%s' --frames 1000 --script 'wait frames 1; key Esc'", rec), 0);
     assert_true(out_contains("frames 2;"));
+    /* the same script from a file (--script @FILE, read as every input file is) */
+    char path[512];
+    snprintf(path, sizeof path, "%s/close.script", tmp);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fputs("wait frames 2; close\n", f);
+    fclose(f);
+    assert_int_equal(live("-i 'replay:%s' --frames 1000 --script @%s", rec, path), 0);
+    assert_true(out_contains("frames 3;"));
 }
 
 static void test_drop_mesh_and_mapping_keys(void **state)
