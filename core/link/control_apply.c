@@ -100,7 +100,14 @@ static int apply_one(fp_control_session *cs, const fp_control_cmd *c, int64_t no
     case FP_CTL_UNDO:
         return fp_session_undo(cs->s) ? 0 : (snprintf(msg, n, "nothing to undo"), -ENOENT);
     case FP_CTL_RESET: fp_session_reset(cs->s); return 0;
-    case FP_CTL_RADIUS: fp_session_set_radius(cs->s, c->value); return 0;
+    case FP_CTL_RADIUS: {
+        double lo, hi;
+        fp_session_radius_range(cs->s, &lo, &hi);
+        int rc = fp_session_set_radius(cs->s, c->value);
+        if (rc) snprintf(msg, n, "radius %g outside [%g, %g] mesh units (a millionth to 10 times the mesh's "
+                         "diagonal): the radius stays", c->value, lo, hi);
+        return rc;
+    }
     case FP_CTL_MAPPING: {
         char err[1024];
         int rc = cs->plugin_path ? fp_session_set_mapping(cs->s, cs->plugin_path, c->text, err, sizeof err)

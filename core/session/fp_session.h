@@ -53,6 +53,11 @@ extern "C" {
  *  6% of that, then stays far above the engine's smallest, 1e-15); fp_session_create refuses
  *  another (-EBADMSG, naming the file and the figure) before any work. */
 #define FP_SESSION_MIN_DIAGONAL 1e-12
+/** A support radius is at least this many and at most this many bounding-box diagonals
+ *  (--radius at open, fp_session_set_radius after): below, no vertex would move; above, every
+ *  vertex would move as one. */
+#define FP_SESSION_RADIUS_MIN_DIAGONALS 1e-6
+#define FP_SESSION_RADIUS_MAX_DIAGONALS 10.0
 
 /* fp_calibration (p_mesh = scale * p_mm + offset) is declared in fp_pose.h;
  * fp_session_log_fn in session_log.h; fp_frame_record and fp_frame_record_fn in
@@ -435,10 +440,16 @@ const struct fp_mesh *fp_session_mesh(const fp_session *s);
 /** The support radius R of the Wendland functions the engine uses (Sato et al., section 3),
  *  mesh units. */
 double fp_session_radius(const fp_session *s);
-/** Set the support radius, mesh units, from the next frame on (the viewer's [ and ] keys): a
- *  value not finite or not > 0 is ignored (the radius stays). [session-thread] or between
- *  frames. */
-void fp_session_set_radius(fp_session *s, double radius);
+/** Set the support radius, mesh units, from the next frame on (the viewer's [ and ] keys,
+ *  the control surface's /fp/radius). The bounds --radius has at open: at least a millionth
+ *  and at most 10 times the mesh's bounding-box diagonal (fp_session_radius_range); outside
+ *  them, or not finite, the radius stays and -ERANGE is returned (a radius of 1e-30 made the
+ *  engine refuse every frame, the face still). Returns 0 or -ERANGE. [session-thread] or
+ *  between frames. */
+int fp_session_set_radius(fp_session *s, double radius);
+/** The radii fp_session_set_radius takes, mesh units: *lo a millionth and *hi 10 times the
+ *  mesh's bounding-box diagonal (of the vertices in a triangle). */
+void fp_session_radius_range(const fp_session *s, double *lo, double *hi);
 const fp_calibration *fp_session_calibration(const fp_session *s);
 /** The head found in the loaded mesh and the mesh's unit: head->mm_per_unit is the one the
  *  session uses (given, from the calibration's scale, or detected), head->how says where it

@@ -514,9 +514,19 @@ double fp_session_channel(const fp_session *s, const char *name)
     return fp_rig_step_channel(&s->rig, name);
 }
 
-void fp_session_set_radius(fp_session *s, double radius)
+void fp_session_radius_range(const fp_session *s, double *lo, double *hi)
 {
-    if (radius > 0 && isfinite(radius)) s->radius = radius;
+    *lo = FP_SESSION_RADIUS_MIN_DIAGONALS * s->diagonal;
+    *hi = FP_SESSION_RADIUS_MAX_DIAGONALS * s->diagonal;
+}
+
+int fp_session_set_radius(fp_session *s, double radius)
+{
+    double lo, hi;
+    fp_session_radius_range(s, &lo, &hi);
+    if (!(radius >= lo && radius <= hi)) return -ERANGE; /* (NaN too) */
+    s->radius = radius;
+    return 0;
 }
 
 const fp_hand_pose *fp_session_hand(const fp_session *s, int hand)

@@ -68,6 +68,7 @@ struct fp_session {
     char rig_how[1200];           /* how the rig was chosen (fp_session_rig_how) */
 
     double radius;
+    double diagonal;              /* the surface's bounding-box diagonal, mesh units */
     double touch_radius;          /* the default radius: touch is measured in it (plugin.h) */
     fp_head head;                 /* the head and the mesh's unit (life-size calibration) */
     double face[4];               /* the face's frame (fp_calibration.face): set where the rig

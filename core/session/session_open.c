@@ -229,6 +229,7 @@ static int open_mesh(fp_session *s, const fp_session_options *opt, double *diag,
         double d = s->view.bounds_max[i] - s->view.bounds_min[i];
         *diag += d * d;
     }
+    s->diagonal = sqrt(*diag);
     float lo_all[3], hi_all[3];
     /* the engine's range (FP_SESSION_MIN_DIAGONAL): such a mesh was indexed nowhere ("cannot
      * index", exit 70) or moved nothing, the engine refusing its radius every frame */
@@ -274,7 +275,7 @@ static int open_scale(fp_session *s, const fp_session_options *opt, double diag,
         s->head.method = FP_HEAD_GIVEN;
         snprintf(s->head.how, sizeof s->head.how, "from the rig %s", fp_rig_source(s->rig.rig));
     }
-    if (opt->radius > 0 && opt->radius < 1e-6 * sqrt(diag)) {
+    if (opt->radius > 0 && opt->radius < FP_SESSION_RADIUS_MIN_DIAGONALS * sqrt(diag)) {
         rc = -EINVAL;
         snprintf(err, errlen, "--radius %g is below a millionth of the mesh's bounding-box "
                  "diagonal (%.4g mesh units): no vertex would move; give a radius in mesh units",
@@ -294,7 +295,7 @@ static int open_scale(fp_session *s, const fp_session_options *opt, double diag,
             return rc;
         }
     }
-    if (opt->radius > 10 * sqrt(diag)) {
+    if (opt->radius > FP_SESSION_RADIUS_MAX_DIAGONALS * sqrt(diag)) {
         rc = -EINVAL;
         snprintf(err, errlen, "--radius %g is beyond 10x the mesh's bounding-box diagonal (%.4g "
                  "mesh units): every vertex would move as one; give a radius in mesh units",

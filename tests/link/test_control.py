@@ -136,6 +136,11 @@ try:
     command("/fp/record/start", "scene7", 12, expect="error")
     command("/fp/play", expect="error: no transport")
     command("/fp/radius", 2.5)
+    # a radius the face cannot use (a millionth to 10 times its diagonal): an error, the radius
+    # stays (1e-30 was taken, and the engine then refused every frame, the face still)
+    command("/fp/radius", 1e-30, expect="error: radius 1e-30 outside [")
+    command("/fp/radius", 1e6 - 1, expect="error: radius 999999 outside [")
+    command("/fp/radius", 2.5)
     command("/fp/channel", "jaw.open", 0.2)
     command("/fp/channel", "no.such.channel", 0.2, expect="error")
     command("/fp/cancel")

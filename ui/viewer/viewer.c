@@ -404,8 +404,8 @@ static void act(viewer *v, int key)
         break;
     case GLFW_KEY_1: set_mapping(v, "anchored"); break;
     case GLFW_KEY_2: set_mapping(v, "unanchored"); break;
-    case GLFW_KEY_LEFT_BRACKET: fp_session_set_radius(v->s, fp_session_radius(v->s) / 1.1); break;
-    case GLFW_KEY_RIGHT_BRACKET: fp_session_set_radius(v->s, fp_session_radius(v->s) * 1.1); break;
+    case GLFW_KEY_LEFT_BRACKET: (void)fp_session_set_radius(v->s, fp_session_radius(v->s) / 1.1); break; /* (at a bound: stays) */
+    case GLFW_KEY_RIGHT_BRACKET: (void)fp_session_set_radius(v->s, fp_session_radius(v->s) * 1.1); break;
     case GLFW_KEY_W: v->wireframe = !v->wireframe; break;
     case GLFW_KEY_S:
         if (!v->shot_path && asprintf(&v->shot_path, "facepuppet-shot-%03d.png", ++v->shot_counter) < 0)
@@ -619,7 +619,7 @@ static void run_script(viewer *v)
         sc->next++;
         switch (c->op) {
         case FP_SCRIPT_KEY: act(v, c->key); break;
-        case FP_SCRIPT_RADIUS: fp_session_set_radius(v->s, c->number); break;
+        case FP_SCRIPT_RADIUS: (void)fp_session_set_radius(v->s, c->number); break;
         case FP_SCRIPT_SCRUB: fp_vtakes_scrub(&v->takes, c->number); break;
         case FP_SCRIPT_CAMERA: /* the framed view (F), turned and zoomed */
             frame_mesh(v);
