@@ -270,11 +270,14 @@ int fp_mesh_compute_normals(fp_mesh *mesh);
  *  A mesh without vertices (or NULL) gives all zeros. */
 void fp_mesh_bounds(const fp_mesh *mesh, float min[3], float max[3]);
 
-/** used[v] := 1 where vertex v is a corner of at least one triangle, else 0 (used:
- *  vertex_count bytes, the caller's); returns how many are in none (a stray point an exporter
- *  left: drawn nowhere, no part of the surface). The mesh's indices are < vertex_count (as
- *  every loader checks). */
-size_t fp_mesh_used_vertices(const fp_mesh *mesh, uint8_t *used);
+/** The surface's vertices: *unused := how many vertices are a corner of no triangle (a
+ *  stray point an exporter left: drawn nowhere, no part of the surface); *used := a mask of
+ *  vertex_count bytes, used[v] = 1 where v is in a triangle, else 0 (malloc'ed, the caller
+ *  frees it), or NULL where every vertex is in one or the mesh has no triangles (then
+ *  *unused = 0), so that NULL means "all" to fp_mesh_bounds_used and fp_head_detect_used.
+ *  The mesh's indices are < vertex_count (as every loader checks). Returns 0, or -ENOMEM
+ *  (*used NULL, *unused 0). */
+int fp_mesh_surface_mask(const fp_mesh *mesh, uint8_t **used, size_t *unused);
 
 /** fp_mesh_bounds over the vertices v with used[v] != 0 (used NULL: every vertex; none used:
  *  all zeros): the surface's bounds, without points in no triangle. */

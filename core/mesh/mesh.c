@@ -6,6 +6,7 @@
 #include "fp_error.h"
 
 #include <ctype.h>
+#include <errno.h>
 #include <math.h>
 #include <stdbool.h>
 #include <stdint.h>
@@ -244,17 +245,27 @@ int fp_mesh_compute_normals(fp_mesh *mesh)
                            mesh->vertex_count, mesh->normals);
 }
 
-size_t fp_mesh_used_vertices(const fp_mesh *mesh, uint8_t *used)
+int fp_mesh_surface_mask(const fp_mesh *mesh, uint8_t **used, size_t *unused)
 {
+    *used = NULL;
+    *unused = 0;
     size_t n = mesh->vertex_count, none = n;
-    memset(used, 0, n);
+    if (!mesh->triangle_count) return 0;
+    uint8_t *u = calloc(n ? n : 1, 1);
+    if (!u) return -ENOMEM;
     for (size_t i = 0; i < 3 * mesh->triangle_count; i++) {
         uint32_t v = mesh->triangles[i];
         assert(v < n);
-        none -= !used[v];
-        used[v] = 1;
+        none -= !u[v];
+        u[v] = 1;
     }
-    return none;
+    if (!none) {
+        free(u);
+        return 0;
+    }
+    *used = u;
+    *unused = none;
+    return 0;
 }
 
 void fp_mesh_bounds_used(const fp_mesh *mesh, const uint8_t *used, float min[3], float max[3])

@@ -448,7 +448,8 @@ double fp_session_radius(const fp_session *s);
  *  between frames. */
 int fp_session_set_radius(fp_session *s, double radius);
 /** The radii fp_session_set_radius takes, mesh units: *lo a millionth and *hi 10 times the
- *  mesh's bounding-box diagonal (of the vertices in a triangle). */
+ *  mesh's bounding-box diagonal (of the vertices in a triangle). No errors. Any thread (it
+ *  reads what fp_session_create fixed). */
 void fp_session_radius_range(const fp_session *s, double *lo, double *hi);
 const fp_calibration *fp_session_calibration(const fp_session *s);
 /** The head found in the loaded mesh and the mesh's unit: head->mm_per_unit is the one the

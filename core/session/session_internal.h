@@ -75,7 +75,7 @@ struct fp_session {
                                      says the face looks along another axis than +z, or up is
                                      not +y (a turned copy of its mesh); all zeros: none */
     uint8_t *used;                /* n: 1 where a vertex is in a triangle; NULL when all are
-                                     (fp_mesh_used_vertices: the surface's size and head) */
+                                     (fp_mesh_surface_mask: the surface's size and head) */
     float *canon;                 /* n x 3: the loaded shape turned into the face's frame (with
                                      face; the gloves' placement reads it) */
     fp_head face_head;            /* the head in the face's frame (with face) */

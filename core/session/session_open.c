@@ -205,16 +205,10 @@ static int open_mesh(fp_session *s, const fp_session_options *opt, double *diag,
      * placement (one at 1e6 units beside a 25-unit mask made a radius of 6e4 units and moved
      * only itself); the engine still carries it */
     const char *name = opt->mesh_path ? opt->mesh_path : "the mesh";
-    size_t unused = 0;
-    if (s->mesh->triangle_count) {
-        if (!(s->used = malloc(s->n))) {
-            snprintf(err, errlen, "session: out of memory for %zu vertices", s->n);
-            return -ENOMEM;
-        }
-        if (!(unused = fp_mesh_used_vertices(s->mesh, s->used))) {
-            free(s->used);
-            s->used = NULL;
-        }
+    size_t unused;
+    if (fp_mesh_surface_mask(s->mesh, &s->used, &unused)) {
+        snprintf(err, errlen, "session: out of memory for %zu vertices", s->n);
+        return -ENOMEM;
     }
     fp_mesh_bounds_used(s->mesh, s->used, s->view.bounds_min, s->view.bounds_max);
     if (unused)

@@ -124,9 +124,10 @@ int fp_app_check_output_dir(const char *cmd, const char *option, const char *dir
  *  36 bytes a vertex, a "vt" line of 23 where the mesh has texture coordinates, and "f" lines
  *  of about 17 bytes a triangle (24 with "vt" indices; a quad's line holds two). On the ICT
  *  face 2.84 MB against the 2.79 MB written (26,719 vertices, 52,768 triangles as 26,384 quads;
- *  50 bytes a vertex, the estimate before, said 1.3 MB). */
+ *  50 bytes a vertex, the estimate before, said 1.3 MB). Pure; any thread. */
 double fp_app_obj_frame_bytes(const struct fp_mesh *mesh);
-/** bytes as "123 MB", "1.3 GB" or "12 kB" (decimal, as the exports' summaries) into buf. */
+/** bytes as "123 MB", "1.3 GB" or "12 kB" (decimal, as the exports' summaries) into buf (len
+ *  bytes, NUL-ended, cut if short). Pure; any thread. */
 void fp_app_size_text(double bytes, char *buf, size_t len);
 /** Above this a --frames-out's estimate is a warning (1 GiB). */
 #define FP_APP_FRAMES_WARN_BYTES (1024.0 * 1024.0 * 1024.0)

@@ -220,16 +220,13 @@ static int calibrate_parse(int argc, char **argv, calibrate_args *a)
     return -1;
 }
 
-/* The vertices in a triangle (fp_mesh_used_vertices), malloc'ed, or NULL when every one is (or
- * out of memory: then all count): the head is found on the surface, as the session finds it. */
+/* The vertices in a triangle (fp_mesh_surface_mask), or NULL when every one is (or out of
+ * memory: then all count): the head is found on the surface, as the session finds it. */
 static uint8_t *surface_vertices(const fp_mesh *m)
 {
-    uint8_t *used = m->triangle_count ? malloc(m->vertex_count) : NULL;
-    if (used && !fp_mesh_used_vertices(m, used)) {
-        free(used);
-        used = NULL;
-    }
-    return used;
+    uint8_t *used;
+    size_t unused;
+    return fp_mesh_surface_mask(m, &used, &unused) ? NULL : used;
 }
 
 /* The face and its head: loaded, detected, and --mm-per-unit checked as run checks it (a face

@@ -69,10 +69,11 @@ static int mesh_info(const char *path)
         return fp_app_exit_code(rc, FP_APP_INPUT);
     }
     /* the surface's bounds, as the session sizes the face: points in no triangle left out */
-    uint8_t *used = m->triangle_count ? malloc(m->vertex_count) : NULL;
-    size_t unused = used ? fp_mesh_used_vertices(m, used) : 0;
+    uint8_t *used;
+    size_t unused;
+    (void)fp_mesh_surface_mask(m, &used, &unused); /* (out of memory: every vertex's bounds) */
     float lo[3], hi[3];
-    fp_mesh_bounds_used(m, unused ? used : NULL, lo, hi);
+    fp_mesh_bounds_used(m, used, lo, hi);
     free(used);
     double ext = fmax(hi[0] - lo[0], fmax(hi[1] - lo[1], hi[2] - lo[2]));
     printf("%s\n  vertices  %zu\n  triangles %zu\n  uvs       %s\n"
