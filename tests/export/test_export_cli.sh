@@ -182,6 +182,37 @@ if unshare -r -m sh -c 'mount -t tmpfs -o size=1m tmpfs "$1"' _ "$tmp/room" 2>/d
             "$tmp/x.out" || { cat "$tmp/x.out"; fail "$fmt larger than the room free: no size said"; }
     done
     echo "an export larger than the room free: refused before any frame, in pc2, mdd and obj-seq"
+    # run and play check theirs too where the frames are known before the first (play: the
+    # take's; run: --duration's): --frames-out and --export refused, and nothing left in the
+    # room (a --frames-out folder the refused command made is taken away)
+    room() { unshare -r -m bash -c 'mount -t tmpfs -o size=1m tmpfs "$1/room" && d=$1 && shift &&
+                                    cd "$d/room" && "$@"; rc=$?; ls -A | sed "s/^/left: /"; exit $rc' \
+                 _ "$tmp" "$@" >"$tmp/x.out" 2>&1; }
+    ict_mesh="$data/faces/ict-facekit/generic_neutral_mesh.obj"
+    grab="replay:$data/hands/leap-motion/grab_joints_mm.csv,fast=1"
+    for c in "play --frames-out fr" "play --export x.pc2" "run --frames-out fr" "run --export x.mdd"; do
+        set -- $c
+        if [ "$1" = play ]; then room "$fp" play "${pd[@]}" "$take" "$2" "$3"
+        else room "$fp" run "${pd[@]}" --mesh "$ict_mesh" --input "$grab" --duration 2 -q "$2" "$3"; fi
+        rc=$?
+        [ $rc -eq 73 ] || { cat "$tmp/x.out"; fail "$c larger than the room free: exit $rc, want 73"; }
+        grep -q "^facepuppet $1: $2 $3: about [0-9]* MB ([0-9]* frames x 26719 vertices), more than the 1 MB free there; nothing written" \
+            "$tmp/x.out" || { cat "$tmp/x.out"; fail "$c larger than the room free: no size said"; }
+        ! grep -q "^left: " "$tmp/x.out" || { cat "$tmp/x.out"; fail "$c refused, but left a file or folder"; }
+    done
+    # an --out the room cannot hold (the ICT face's 2.8 MB) fails the run (73), and the export
+    # beside it, which fits elsewhere, is still finished: each output stands alone
+    rm -f "$tmp/kept.pc2"
+    room "$fp" run "${pd[@]}" --mesh "$ict_mesh" --input "$grab" --duration 0.5 -q --out o.obj --export "$tmp/kept.pc2"
+    rc=$?
+    [ $rc -eq 73 ] || { cat "$tmp/x.out"; fail "--out larger than the room free: exit $rc, want 73"; }
+    grep -q "o.obj: write failed: No space left on device" "$tmp/x.out" || { cat "$tmp/x.out"; fail "--out: no write failure said"; }
+    [ -s "$tmp/kept.pc2" ] || { cat "$tmp/x.out"; fail "--out failed and the --export beside it was lost"; }
+    n=$(od -An -tu4 -j28 -N4 "$tmp/kept.pc2" | tr -d ' ')
+    [ "$(stat -c %s "$tmp/kept.pc2")" -eq $((32 + n * 12 * 26719)) ] && [ "$n" -gt 0 ] ||
+        fail "the --export kept beside a failed --out is not a whole point cache ($n frames)"
+    echo "run and play: --frames-out and --export larger than the room refused before any frame," \
+         "nothing left; a failed --out keeps the export beside it ($n frames)"
 else
     echo "SKIP (room check only): no user namespace to mount a small file system in here"
 fi

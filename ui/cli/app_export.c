@@ -2,9 +2,21 @@
 #include "app_export.h"
 #include "app_util.h"
 #include "command.h"
+#include "fp_mesh.h"
+
+double fp_app_export_frame_bytes(fp_export_format format, const struct fp_mesh *mesh)
+{
+    const double n = (double)mesh->vertex_count;
+    switch (format) {
+    case FP_EXPORT_PC2: return 12 * n;
+    case FP_EXPORT_MDD: return 12 * n + 4;
+    case FP_EXPORT_OBJ_SEQ: return fp_app_obj_frame_bytes(mesh);
+    default: return 0;
+    }
+}
 
 int fp_app_export_open(const char *cmd, const char *file, const struct fp_mesh *mesh,
-                       double mm_per_unit, const char *name, fp_exporter **x)
+                       double mm_per_unit, const char *name, double frames, fp_exporter **x)
 {
     fp_export_format fmt;
     if (fp_export_format_from_path(file, &fmt)) {
@@ -12,6 +24,11 @@ int fp_app_export_open(const char *cmd, const char *file, const struct fp_mesh *
                 cmd, file);
         return FP_EXIT_USAGE;
     }
+    char what[4200];
+    snprintf(what, sizeof what, "--export %s", file);
+    int status = fp_app_output_fits(cmd, what, file, frames * fp_app_export_frame_bytes(fmt, mesh),
+                                    frames, mesh->vertex_count, NULL);
+    if (status) return status;
     fp_export_options eo = {.format = fmt, .path = file, .mm_per_unit = mm_per_unit,
                             .name = name};
     char err[1024];

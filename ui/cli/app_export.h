@@ -8,11 +8,19 @@
 #include <stdbool.h>
 #include <stdio.h>
 
+/** A frame's bytes in `format` for `mesh`, about: a point cache's 12 a vertex (MDD 4 more a
+ *  frame), an OBJ sequence's fp_app_obj_frame_bytes; 0 where it is not known ahead (glTF,
+ *  whose morph targets are reduced). Pure; any thread. */
+double fp_app_export_frame_bytes(fp_export_format format, const struct fp_mesh *mesh);
+
 /** `--export FILE` of run and play: the format from FILE's extension (.gltf .glb .pc2 .mdd),
- *  the exporter begun on `mesh` (the session's loaded mesh). Prints "CMD: ..." on error and
- *  returns the exit status (64 an unknown extension, 73 an output not writable); 0 and *x. */
+ *  the exporter begun on `mesh` (the session's loaded mesh). frames: how many the run will
+ *  write when known before it (play: the take's; run: --duration's), else 0; a point cache
+ *  larger than its file system's free room is then refused before any work
+ *  (fp_app_output_fits). Prints "CMD: ..." on error and returns the exit status (64 an
+ *  unknown extension, 73 an output not writable or too large); 0 and *x. */
 int fp_app_export_open(const char *cmd, const char *file, const struct fp_mesh *mesh,
-                       double mm_per_unit, const char *name, fp_exporter **x);
+                       double mm_per_unit, const char *name, double frames, fp_exporter **x);
 
 /** Finish *x and print the summary to f unless quiet: "CMD: exported N frames to FILE
  *  (FORMAT): " then for glTF "K = K morph targets, SIZE MB, largest error E mm (limit L mm);

@@ -17,6 +17,7 @@
 #include <unistd.h>
 #include <dirent.h>
 #include <sys/stat.h>
+#include <sys/statvfs.h>
 
 #ifndef FP_PLUGIN_RELDIR
 #define FP_PLUGIN_RELDIR "../lib/facepuppet"
@@ -390,10 +391,12 @@ static size_t count_named(const char *dir, const char *prefix, const char *suffi
 }
 
 int fp_app_check_output_dir(const char *cmd, const char *option, const char *dir, const char *prefix,
-                            const char *suffix, bool make, bool force)
+                            const char *suffix, bool make, bool force, bool *made)
 {
     struct stat st;
-    if (make && mkdir(dir, 0777) && errno != EEXIST) {
+    const bool mk = make && mkdir(dir, 0777) == 0;
+    if (made) *made = mk;
+    if (make && !mk && errno != EEXIST) {
         fprintf(stderr, "%s: %s %s: %s\n", cmd, option, dir, strerror(errno));
         return FP_EXIT_CANTCREAT;
     }
@@ -434,16 +437,56 @@ double fp_app_obj_frame_bytes(const fp_mesh *mesh)
     return mesh->uvs ? 36 * n + 23 * n + 24 * t : 36 * n + 17 * t;
 }
 
-void fp_app_frames_estimate(const char *cmd, const char *option, const char *dir, double frames,
-                            double fps, const fp_mesh *mesh, bool quiet)
+int fp_app_free_room(const char *path, double *bytes)
+{
+    char dir[4200];
+    snprintf(dir, sizeof dir, "%s", path && path[0] ? path : ".");
+    struct statvfs fs;
+    for (;;) {
+        if (statvfs(dir, &fs) == 0) break;
+        char *slash = strrchr(dir, '/');
+        if (!slash) {
+            if (statvfs(".", &fs) != 0) return -1;
+            break;
+        }
+        if (slash == dir) { /* the root keeps its '/' */
+            if (!slash[1] || statvfs("/", &fs) != 0) return -1;
+            break;
+        }
+        *slash = 0;
+    }
+    *bytes = (double)fs.f_bavail * (double)fs.f_frsize;
+    return 0;
+}
+
+int fp_app_output_fits(const char *cmd, const char *what, const char *path, double bytes,
+                       double frames, size_t vertices, const char *hint)
+{
+    double room;
+    if (!(bytes > 0) || fp_app_free_room(path, &room)) return FP_EXIT_OK;
+    if (bytes <= room) return FP_EXIT_OK;
+    char need[32], free_text[32];
+    fp_app_size_text(bytes, need, sizeof need);
+    fp_app_size_text(room, free_text, sizeof free_text);
+    fprintf(stderr, "%s: %s: about %s (%.0f frames x %zu vertices), more than the %s free there; "
+            "nothing written%s%s%s\n", cmd, what, need, frames, vertices, free_text,
+            hint ? " (" : "", hint ? hint : "", hint ? ")" : "");
+    return FP_EXIT_CANTCREAT;
+}
+
+int fp_app_frames_estimate(const char *cmd, const char *option, const char *dir, double frames,
+                           double fps, const fp_mesh *mesh, bool quiet, const char *hint)
 {
     const size_t vertices = mesh->vertex_count;
     const double frame = fp_app_obj_frame_bytes(mesh);
-    char a[32], b[32];
+    char a[32], b[32], what[4300];
     const char *c = "1 GiB"; /* (FP_APP_FRAMES_WARN_BYTES) */
     fp_app_size_text(frame, b, sizeof b);
     if (frames > 0) {
         const double total = frames * frame;
+        snprintf(what, sizeof what, "%s %s", option, dir);
+        int rc = fp_app_output_fits(cmd, what, dir, total, frames, vertices, hint);
+        if (rc) return rc;
         fp_app_size_text(total, a, sizeof a);
         if (total > FP_APP_FRAMES_WARN_BYTES)
             fprintf(stderr, "%s: warning: %s %s: about %s (%.0f frames x %zu vertices, ~%s a "
@@ -451,13 +494,14 @@ void fp_app_frames_estimate(const char *cmd, const char *option, const char *dir
         else if (!quiet)
             fprintf(stderr, "%s: %s %s: about %s (%.0f frames x %zu vertices, ~%s a frame)\n",
                     cmd, option, dir, a, frames, vertices, b);
-        return;
+        return FP_EXIT_OK;
     }
-    if (quiet || !(fps > 0)) return;
+    if (quiet || !(fps > 0)) return FP_EXIT_OK;
     fp_app_size_text(frame * fps, a, sizeof a);
     fprintf(stderr, "%s: %s %s: about %s a second (%g frames a second x %zu vertices, ~%s a "
             "frame): %s after %.0f s (--duration bounds it)\n", cmd, option, dir, a, fps, vertices,
             b, c, ceil(FP_APP_FRAMES_WARN_BYTES / (frame * fps)));
+    return FP_EXIT_OK;
 }
 
 bool fp_app_spec_looks_like_file(const char *cmd, const char *option, const char *spec)

@@ -110,13 +110,14 @@ int fp_app_check_new_output(const char *cmd, const char *option, const char *pat
 bool fp_app_free_name(const char *path, char *buf, size_t len);
 
 /** A folder of numbered outputs (--frames-out, export's obj-seq and png-seq), before any work:
- *  made when missing (mkdir 0777, when make), a folder we can write in, and, unless force, one
- *  that already holds a file the command writes (a name starting with prefix and ending with
- *  suffix, either "" for any) is refused: "CMD: OPTION DIR: holds N files of an earlier run
- *  (FILE ...) (--force to overwrite)". A missing folder with make false passes. Returns 0,
- *  or 73 with the line printed. */
+ *  made when missing (mkdir 0777, when make; *made, when not NULL, says whether this call made
+ *  it, so that a command refused before its first frame can take it away again with rmdir), a
+ *  folder we can write in, and, unless force, one that already holds a file the command
+ *  writes (a name starting with prefix and ending with suffix, either "" for any) is refused:
+ *  "CMD: OPTION DIR: holds N files of an earlier run (FILE ...) (--force to overwrite)". A
+ *  missing folder with make false passes. Returns 0, or 73 with the line printed. */
 int fp_app_check_output_dir(const char *cmd, const char *option, const char *dir, const char *prefix,
-                            const char *suffix, bool make, bool force);
+                            const char *suffix, bool make, bool force, bool *made);
 
 /** Bytes a frame of --frames-out takes a vertex, about (an OBJ written back as the input came
  *  in: its v, vn, vt and face lines; 1.34 MB a frame for the ICT face's 26719 vertices). */
@@ -132,13 +133,27 @@ void fp_app_size_text(double bytes, char *buf, size_t len);
 /** Above this a --frames-out's estimate is a warning (1 GiB). */
 #define FP_APP_FRAMES_WARN_BYTES (1024.0 * 1024.0 * 1024.0)
 
+/** The room free, in bytes, for an unprivileged user (statvfs's f_bavail) on the file system
+ *  that `path` lands on: path itself when it exists, else the nearest folder above it that
+ *  does ("." for a bare name). Returns 0 and *bytes, or -1 when none answered. Any thread. */
+int fp_app_free_room(const char *path, double *bytes);
+
+/** An output of about `bytes` (frames x vertices, for the message) that `path` will hold,
+ *  checked before any work: when its file system has less room free (fp_app_free_room),
+ *  "CMD: WHAT: about SIZE (N frames x V vertices), more than the FREE free there; nothing
+ *  written (HINT)" on stderr and FP_EXIT_CANTCREAT (73); else 0 (also when bytes is 0, or the
+ *  room cannot be asked). hint may be NULL. Any thread. */
+int fp_app_output_fits(const char *cmd, const char *what, const char *path, double bytes,
+                       double frames, size_t vertices, const char *hint);
+
 /** Say a --frames-out folder's size before any work, on stderr: "CMD: OPTION DIR: about SIZE
  *  (N frames x V vertices, ~B a frame)" unless quiet, and "CMD: warning: ..." above
- *  FP_APP_FRAMES_WARN_BYTES whatever quiet. frames 0: not known before the run (live
- *  inputs, a recording read to its end): the rate at fps frames a second and when it passes
- *  1 GiB are said instead. */
-void fp_app_frames_estimate(const char *cmd, const char *option, const char *dir, double frames,
-                            double fps, const struct fp_mesh *mesh, bool quiet);
+ *  FP_APP_FRAMES_WARN_BYTES whatever quiet; refused as fp_app_output_fits (73, its hint)
+ *  where the folder's file system has less room free. frames 0: not known before the run
+ *  (live inputs, a recording read to its end): the rate at fps frames a second and when it
+ *  passes 1 GiB are said instead, and nothing is refused. Returns 0 or FP_EXIT_CANTCREAT. */
+int fp_app_frames_estimate(const char *cmd, const char *option, const char *dir, double frames,
+                           double fps, const struct fp_mesh *mesh, bool quiet, const char *hint);
 
 /** A --input SPEC that looks like a file (its NAME, before ':' and ',', holds '/' or '.',
  *  which no plugin name does: "foo.csv", "../rec/clap.fplog"): "CMD: OPTION SPEC: not a SPEC

@@ -19,7 +19,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/statvfs.h>
 #include <strings.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -392,7 +391,7 @@ static int check_out(const export_args *a, const char *out, const char *name)
         char prefix[128];
         snprintf(prefix, sizeof prefix, "%s_", name);
         return fp_app_check_output_dir("facepuppet export", opt, out, prefix, a->png ? ".png" : "",
-                                       false, a->force);
+                                       false, a->force, NULL);
     }
     return fp_app_check_new_output("facepuppet export", opt, out, a->force);
 }
@@ -419,41 +418,14 @@ static double frames_out(const export_args *a, const range_end *in, const range_
 static int check_size(const export_args *a, const char *out, double frames, const fp_mesh *mesh)
 {
     const size_t vertices = mesh->vertex_count;
-    double per_frame;
-    if (a->png) return 0;
-    switch (a->fmt) {
-    case FP_EXPORT_PC2: per_frame = 12.0 * (double)vertices; break;
-    case FP_EXPORT_MDD: per_frame = 12.0 * (double)vertices + 4; break;
-    case FP_EXPORT_OBJ_SEQ: per_frame = fp_app_obj_frame_bytes(mesh); break;
-    default: return 0;
-    }
+    const double per_frame = fp_app_export_frame_bytes(a->fmt, mesh);
+    if (a->png || !(per_frame > 0)) return 0;
     const double bytes = frames * per_frame;
-    /* the file system it lands on: the folder (obj-seq) or the file's folder, else the folder
-     * that will hold a folder not made yet */
-    char dir[4200];
-    snprintf(dir, sizeof dir, "%s", out);
-    struct statvfs fs;
-    bool found = a->fmt == FP_EXPORT_OBJ_SEQ && statvfs(dir, &fs) == 0;
-    while (!found) {
-        char *slash = strrchr(dir, '/');
-        if (!slash) {
-            found = statvfs(".", &fs) == 0;
-            break;
-        }
-        slash[slash == dir] = 0; /* (the root keeps its '/') */
-        found = statvfs(dir, &fs) == 0 || slash == dir;
-    }
-    if (!found) return 0;
-    const double room = (double)fs.f_bavail * (double)fs.f_frsize;
-    char need[32], free_text[32];
+    int rc = fp_app_output_fits("facepuppet export", out, out, bytes, frames, vertices,
+                                "a smaller --resample or --range");
+    if (rc) return rc;
+    char need[32];
     fp_app_size_text(bytes, need, sizeof need);
-    fp_app_size_text(room, free_text, sizeof free_text);
-    if (bytes > room) {
-        fprintf(stderr, "facepuppet export: %s: about %s (%.0f frames x %zu vertices), more than the %s "
-                "free there; nothing written (a smaller --resample or --range)\n",
-                out, need, frames, vertices, free_text);
-        return FP_EXIT_CANTCREAT;
-    }
     if (bytes > FP_APP_FRAMES_WARN_BYTES)
         fprintf(stderr, "facepuppet export: warning: %s: about %s (%.0f frames x %zu vertices), over 1 GiB\n",
                 out, need, frames, vertices);

@@ -40,6 +40,8 @@ static void usage(FILE *f)
         "                         is said before any frame (a warning over 1 GiB)\n"
         "      --export FILE      every frame into FILE: .gltf/.glb (morph-target animation,\n"
         "                         0.1 mm), .pc2/.mdd (point caches); see facepuppet export\n"
+        "                         (--frames-out and a point cache larger than the room free\n"
+        "                         where they go are refused before any frame, 73)\n"
         "      --force            overwrite outputs that exist (--out, --export, frames in\n"
         "                         --frames-out); without it they are refused before any work\n"
         "  -m, --mesh FILE        the take's mesh from another path (its crc32 must match)\n"
@@ -268,9 +270,9 @@ typedef struct play_outputs {
 } play_outputs;
 
 /* --control and --stream's SPECs; --out, --export (its format into *fmt), --frames-out: a
- * name we write, nothing there unless --force; none of them with --control. Returns 0 or
- * the exit status (said). */
-static int play_check_outputs(const play_outputs *o, fp_export_format *fmt)
+ * name we write, nothing there unless --force (*made: the folder was made here); none of them
+ * with --control. Returns 0 or the exit status (said). */
+static int play_check_outputs(const play_outputs *o, fp_export_format *fmt, bool *made)
 {
     int oc = fp_app_link_check("play", o->control, o->stream);
     if (oc) return oc;
@@ -292,7 +294,7 @@ static int play_check_outputs(const play_outputs *o, fp_export_format *fmt)
     oc = o->export_file ? fp_app_check_new_output("facepuppet play", "--export", o->export_file, o->force) : 0;
     if (!oc && o->frames_out)
         oc = fp_app_check_output_dir("facepuppet play", "--frames-out", o->frames_out, "frame_", ".obj",
-                                     true, o->force);
+                                     true, o->force, made);
     return oc;
 }
 
@@ -343,7 +345,8 @@ static int play_main(int argc, char **argv)
     char err[2048];
     fp_export_format export_fmt;
     const play_outputs po = {out, export_file, frames_out, control, stream, audio.out_spec, force};
-    int oc = play_check_outputs(&po, &export_fmt);
+    bool frames_made = false; /* the --frames-out folder made here: taken away if refused before a frame */
+    int oc = play_check_outputs(&po, &export_fmt, &frames_made);
     if (oc) return oc;
     /* The take's session and frame loop (fp_take_player, shared with export). */
     fp_plugin_path path;
@@ -359,6 +362,7 @@ static int play_main(int argc, char **argv)
     if (rc) {
         fprintf(stderr, "facepuppet play: %s\n", err);
         fp_plugin_path_clear(&path);
+        if (frames_made) rmdir(frames_out);
         return fp_app_exit_code(rc, FP_APP_INPUT);
     }
     fp_take_reader *r = fp_take_player_reader(player);
@@ -366,19 +370,21 @@ static int play_main(int argc, char **argv)
     const fp_take_header *h = fp_take_reader_header(r);
     if ((status = fp_app_take_intact("facepuppet play", "play", take_path, r))) goto done;
     if ((status = play_audio_prepare(&audio, h, force, quiet))) goto done;
-    if (frames_out) /* its size, before any frame */
-        fp_app_frames_estimate("facepuppet play", "--frames-out", frames_out,
-                               (double)fp_take_reader_frames(r), 0, fp_session_mesh(s), quiet);
+    const double take_frames = (double)fp_take_reader_frames(r); /* outputs' sizes, before any */
+    if (frames_out && (status = fp_app_frames_estimate("facepuppet play", "--frames-out", frames_out,
+                                                       take_frames, 0, fp_session_mesh(s), quiet, NULL)))
+        goto done;
     if (export_file && (status = fp_app_export_open("facepuppet play", export_file,
                                                     fp_session_mesh(s),
                                                     fp_take_player_mm_per_unit(player),
-                                                    h->slate, &ex)))
+                                                    h->slate, take_frames, &ex)))
         goto done;
     play_ctl c = {.take_path = take_path, .mesh = mesh, .path = &path, .quiet = quiet, .player = player};
     if ((status = play_link_open(&c, control, stream, h, &link)) || control) {
         player = c.player; /* (a seek reopens it) */
         goto done;
     }
+    frames_made = false; /* (frames are written from here on) */
     int64_t wall0 = fp_now_ns();
     uint64_t frames = 0, commits = 0, active = 0;
     fp_frame_stats st;
@@ -422,18 +428,20 @@ static int play_main(int argc, char **argv)
     if (out && (rc = fp_take_player_save(player, out, &dropped, err, sizeof err))) {
         fprintf(stderr, "facepuppet play: %s\n", err);
         status = fp_app_exit_code(rc, FP_APP_OUTPUT);
-        goto done;
-    }
-    if (out)
+    } else if (out) {
         fp_app_print_dropped("facepuppet play", out, dropped, quiet);
-    if (ex && (status = fp_app_export_close("facepuppet play", "--export", &ex, export_fmt, export_file, 0.1,
-                                            quiet, stdout)))
-        goto done;
+    }
+    /* the export is finished even when --out could not be written: each output stands alone */
+    const int ex_status = ex ? fp_app_export_close("facepuppet play", "--export", &ex, export_fmt,
+                                                   export_file, 0.1, quiet, stdout) : FP_EXIT_OK;
+    if (!status) status = ex_status;
+    if (status) goto done;
     if (!quiet) {
         const uint64_t counts[3] = {frames, active, commits};
         print_played(take_path, r, &reach, fp_take_player_mm_per_unit(player), counts, out);
     }
 done:
+    if (frames_made) rmdir(frames_out);
     fp_app_link_close(&link);
     if (status) fp_audio_out_abort(&audio.out);
     else status = fp_app_audio_finish(&audio, "play", quiet);

@@ -45,7 +45,9 @@ static void usage(FILE *f)
         "                         name, facepuppet-out-1.obj ..., and said); format by extension\n"
         "      --frames-out DIR   also write one mesh per frame, every frame at --fps\n"
         "                         (DIR/frame_000123_t2.050s.obj: number, time on the input clock);\n"
-        "                         its size is estimated before the run (a warning over 1 GiB)\n"
+        "                         its size is estimated before the run (a warning over 1 GiB;\n"
+        "                         with --duration, refused (73) where it is more than the room\n"
+        "                         free there, as is --export's point cache)\n"
         "      --force            overwrite outputs that exist (--out, --export, frames in\n"
         "                         --frames-out); without it they are refused before any work\n"
         "      --fps N            frames per second of the session loop (default 60)\n"
@@ -99,6 +101,7 @@ typedef struct run_args {
     fp_session_opts sopt;          /* the shared options; points at so */
     fp_app_inputs inputs_buf;      /* the demo's and the defaults' strings, which so points into */
     const char *out, *frames_out;
+    bool frames_out_made;          /* this run made the --frames-out folder (rmdir if refused) */
     const char *take_dir, *slate, *take_desc, *export_file;
     fp_export_format export_fmt;   /* of export_file */
     double fps;
@@ -235,7 +238,8 @@ static int run_settle(run_args *a)
                                                         a->force)))
         return rc;
     if (a->frames_out && (rc = fp_app_check_output_dir("facepuppet run", "--frames-out", a->frames_out,
-                                                       "frame_", ".obj", true, a->force)))
+                                                       "frame_", ".obj", true, a->force,
+                                                       &a->frames_out_made)))
         return rc;
     if ((a->slate || a->take_desc) && !a->take_dir) {
         fprintf(stderr, "facepuppet run: --slate and --take-description need --take-dir\n");
@@ -573,8 +577,11 @@ static void run_take_over(void *user, int sig, bool in_plugin)
 
 /* An end before the frames: what run_main opened so far released (each takes NULL), the
  * soundtrack's output discarded, a freed; returns status. */
+/* A run refused before its first frame: what it made taken away (an empty --frames-out folder it
+ * made; the export's temporary file), a that was settled freed. */
 static int run_abandon(run_args *a, fp_exporter **ex, fp_session **s, fp_plugin_path *path, int status)
 {
+    if (a->frames_out_made) rmdir(a->frames_out);
     fp_export_abort(ex);
     fp_session_destroy(s);
     fp_plugin_path_clear(path);
@@ -595,6 +602,7 @@ static int run_main(int argc, char **argv)
     int rc = run_parse(argc, argv, a); /* (-1: go on; 0 after --help) */
     if (rc >= 0 || (rc = run_settle(a)) ||
         (rc = fp_app_audio_prepare(&a->audio, "run", NULL, a->force))) { /* before any work */
+        if (a->frames_out_made) rmdir(a->frames_out);
         free(a);
         return rc;
     }
@@ -607,16 +615,18 @@ static int run_main(int argc, char **argv)
     fp_session *s = NULL;
     fp_exporter *ex = NULL; /* --export: every frame into one animation file (core/export) */
     char err[2048];
+    /* the frames written, when known before the run (--duration): the outputs' sizes checked */
+    const double frames = a->sopt.duration_s > 0 ? ceil(a->sopt.duration_s * a->fps) + 1 : 0;
     if ((rc = open_session(a, &path, &take, &s)) ||
         (rc = fp_app_over_check_mesh(&a->over, "facepuppet run", s)) ||
+        (a->frames_out && (rc = fp_app_frames_estimate("facepuppet run", "--frames-out", a->frames_out,
+                                                       frames, a->fps, fp_session_mesh(s), quiet,
+                                                       "a shorter --duration"))) ||
         (a->export_file && (rc = fp_app_export_open("facepuppet run", a->export_file, fp_session_mesh(s),
-                                                    fp_session_head(s)->mm_per_unit, "run", &ex)))) {
+                                                    fp_session_head(s)->mm_per_unit, "run", frames,
+                                                    &ex)))) {
         return run_abandon(a, &ex, &s, &path, rc);
     }
-    if (a->frames_out) /* its size, before any frame (the duration, when given) */
-        fp_app_frames_estimate("facepuppet run", "--frames-out", a->frames_out,
-                               a->sopt.duration_s > 0 ? ceil(a->sopt.duration_s * a->fps) + 1 : 0,
-                               a->fps, fp_session_mesh(s), quiet);
     if ((rc = fp_session_start(s, err, sizeof err))) {
         fprintf(stderr, "facepuppet run: %s\n", err);
         return run_abandon(a, &ex, &s, &path, fp_app_exit_code(rc, FP_APP_INPUT));
@@ -658,11 +668,14 @@ static int run_main(int argc, char **argv)
     /* The summary: displacement of the final shape from the loaded one. */
     const run_displacement d = measure_displacement(s);
     unsigned dropped = 0;
-    if (status == FP_EXIT_OK) status = save_out(s, a->out, d.n, quiet, &dropped);
-    fp_app_print_dropped("facepuppet run", a->out, dropped, quiet);
-    if (ex && status == FP_EXIT_OK)
-        status = fp_app_export_close("facepuppet run", "--export", &ex, a->export_fmt, a->export_file,
-                                     0.1, quiet, stderr);
+    if (status == FP_EXIT_OK) {
+        const int out_status = save_out(s, a->out, d.n, quiet, &dropped);
+        fp_app_print_dropped("facepuppet run", a->out, dropped, quiet);
+        /* the export is finished even when --out could not be written: each output stands alone */
+        const int ex_status = ex ? fp_app_export_close("facepuppet run", "--export", &ex, a->export_fmt,
+                                                       a->export_file, 0.1, quiet, stderr) : FP_EXIT_OK;
+        status = out_status ? out_status : ex_status;
+    }
     fp_export_abort(&ex);
     print_summary(s, &t, &d, status, a->out);
     status = final_status(s, status, take_rc, take_err, record_failed, record_err, d.finite);
