@@ -298,6 +298,37 @@ static int play_check_outputs(const play_outputs *o, fp_export_format *fmt, bool
     return oc;
 }
 
+/* --frames-out: frame f as DIR/frame_NNNNNN_tS.SSSs.obj. Returns 0 or the exit status (said). */
+static int play_write_frame(fp_take_player *player, const char *dir, const fp_take_frame *f,
+                            const fp_take_header *h)
+{
+    char file[4400], err[2048];
+    snprintf(file, sizeof file, "%s/frame_%06llu_t%.3fs.obj", dir, (unsigned long long)f->frame,
+             (double)(f->time_ns - h->time_origin_ns) * 1e-9);
+    int rc = fp_take_player_save(player, file, NULL, err, sizeof err);
+    if (rc) fprintf(stderr, "facepuppet play: %s\n", err);
+    return rc ? fp_app_exit_code(rc, FP_APP_OUTPUT) : FP_EXIT_OK;
+}
+
+/* After the last frame: --out written and *ex finished (when given), the export even when --out
+ * could not be written (each output stands alone). Returns 0 or the first exit status (said). */
+static int play_finish_outputs(fp_take_player *player, const char *out, fp_exporter **ex,
+                               fp_export_format fmt, const char *export_file, bool quiet)
+{
+    int status = FP_EXIT_OK, rc;
+    unsigned dropped = 0;
+    char err[2048];
+    if (out && (rc = fp_take_player_save(player, out, &dropped, err, sizeof err))) {
+        fprintf(stderr, "facepuppet play: %s\n", err);
+        status = fp_app_exit_code(rc, FP_APP_OUTPUT);
+    } else if (out) {
+        fp_app_print_dropped("facepuppet play", out, dropped, quiet);
+    }
+    const int ex_status = *ex ? fp_app_export_close("facepuppet play", "--export", ex, fmt,
+                                                    export_file, 0.1, quiet, stdout) : FP_EXIT_OK;
+    return status ? status : ex_status;
+}
+
 static int play_main(int argc, char **argv)
 {
     enum { OPT_FRAMES_OUT = 0x200, OPT_PLUGIN_DIR, OPT_EXPORT, OPT_FORCE, OPT_CONTROL, OPT_STREAM };
@@ -408,34 +439,14 @@ static int play_main(int argc, char **argv)
         commits += st.committed;
         active += st.active;
         fp_app_reach_add(&reach, &st);
-        if (frames_out) {
-            char file[4400];
-            snprintf(file, sizeof file, "%s/frame_%06llu_t%.3fs.obj", frames_out,
-                     (unsigned long long)f.frame, (double)(f.time_ns - h->time_origin_ns) * 1e-9);
-            if ((rc = fp_take_player_save(player, file, NULL, err, sizeof err))) {
-                fprintf(stderr, "facepuppet play: %s\n", err);
-                status = fp_app_exit_code(rc, FP_APP_OUTPUT);
-                goto done;
-            }
-        }
+        if (frames_out && (status = play_write_frame(player, frames_out, &f, h))) goto done;
     }
     if (rc < 0) {
         fprintf(stderr, "facepuppet play: %s\n", err);
         status = fp_app_exit_code(rc, FP_APP_INPUT);
         goto done;
     }
-    unsigned dropped = 0;
-    if (out && (rc = fp_take_player_save(player, out, &dropped, err, sizeof err))) {
-        fprintf(stderr, "facepuppet play: %s\n", err);
-        status = fp_app_exit_code(rc, FP_APP_OUTPUT);
-    } else if (out) {
-        fp_app_print_dropped("facepuppet play", out, dropped, quiet);
-    }
-    /* the export is finished even when --out could not be written: each output stands alone */
-    const int ex_status = ex ? fp_app_export_close("facepuppet play", "--export", &ex, export_fmt,
-                                                   export_file, 0.1, quiet, stdout) : FP_EXIT_OK;
-    if (!status) status = ex_status;
-    if (status) goto done;
+    if ((status = play_finish_outputs(player, out, &ex, export_fmt, export_file, quiet))) goto done;
     if (!quiet) {
         const uint64_t counts[3] = {frames, active, commits};
         print_played(take_path, r, &reach, fp_take_player_mm_per_unit(player), counts, out);
