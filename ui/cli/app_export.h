@@ -18,7 +18,8 @@ double fp_app_export_frame_bytes(fp_export_format format, const struct fp_mesh *
  *  write when known before it (play: the take's; run: --duration's), else 0; a point cache
  *  larger than its file system's free room is then refused before any work
  *  (fp_app_output_fits). Prints "CMD: ..." on error and returns the exit status (64 an
- *  unknown extension, 73 an output not writable or too large); 0 and *x. */
+ *  unknown extension, 73 an output not writable or too large); 0 and *x (owned by the
+ *  caller: fp_app_export_close or fp_export_abort). The thread that feeds *x. */
 int fp_app_export_open(const char *cmd, const char *file, const struct fp_mesh *mesh,
                        double mm_per_unit, const char *name, double frames, fp_exporter **x);
 

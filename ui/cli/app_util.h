@@ -151,7 +151,8 @@ int fp_app_output_fits(const char *cmd, const char *what, const char *path, doub
  *  FP_APP_FRAMES_WARN_BYTES whatever quiet; refused as fp_app_output_fits (73, its hint)
  *  where the folder's file system has less room free. frames 0: not known before the run
  *  (live inputs, a recording read to its end): the rate at fps frames a second and when it
- *  passes 1 GiB are said instead, and nothing is refused. Returns 0 or FP_EXIT_CANTCREAT. */
+ *  passes 1 GiB are said instead, and nothing is refused. mesh: the session's loaded mesh
+ *  (its vertex and triangle counts, uvs). Returns 0 or FP_EXIT_CANTCREAT. Any thread. */
 int fp_app_frames_estimate(const char *cmd, const char *option, const char *dir, double frames,
                            double fps, const struct fp_mesh *mesh, bool quiet, const char *hint);
 
