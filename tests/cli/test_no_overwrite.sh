@@ -107,6 +107,13 @@ expect 0 "$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:short.csv,fast=1" -
 grep -q "warning: --frames-out big: about [0-9.]* GB (6001 frames x 26719 vertices.*over 1 GiB" "$tmp/x.out" ||
     { cat "$tmp/x.out"; fail "run did not warn of a --frames-out over 1 GiB"; }
 [ "$(ls big | wc -l)" -lt 100 ] || fail "the short recording made $(ls big | wc -l) frames"
+# the same warning for a point cache beside it (fp_app_output_fits: export, run and play
+# alike), with its size a frame: 12 bytes a vertex
+expect 0 "$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:short.csv,fast=1" --duration 100 -q \
+    -o r5.obj --export big.pc2
+grep -q "warning: --export big.pc2: about 1.9 GB (6001 frames x 26719 vertices, ~321 kB a frame), over 1 GiB" "$tmp/x.out" ||
+    { cat "$tmp/x.out"; fail "run did not warn of an --export over 1 GiB"; }
+[ "$(stat -c %s big.pc2)" -lt 100000000 ] || fail "the short recording made a point cache of $(stat -c %s big.pc2) bytes"
 # no --duration: the rate a second and when it passes 1 GiB
 expect 0 "$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:short.csv,fast=1" -o r4.obj --frames-out big2
 grep -q -- "--frames-out big2: about [0-9]* MB a second (60 frames a second x 26719 vertices.*1 GiB after [0-9]* s" "$tmp/x.out" ||

@@ -463,10 +463,17 @@ int fp_app_output_fits(const char *cmd, const char *what, const char *path, doub
                        double frames, size_t vertices, const char *hint)
 {
     double room;
-    if (!(bytes > 0) || fp_app_free_room(path, &room)) return FP_EXIT_OK;
-    if (bytes <= room) return FP_EXIT_OK;
-    char need[32], free_text[32];
+    if (!(bytes > 0)) return FP_EXIT_OK;
+    char need[32], free_text[32], frame[32];
     fp_app_size_text(bytes, need, sizeof need);
+    if (fp_app_free_room(path, &room) || bytes <= room) {
+        if (bytes > FP_APP_FRAMES_WARN_BYTES) {
+            fp_app_size_text(frames > 0 ? bytes / frames : bytes, frame, sizeof frame);
+            fprintf(stderr, "%s: warning: %s: about %s (%.0f frames x %zu vertices, ~%s a frame), "
+                    "over 1 GiB\n", cmd, what, need, frames, vertices, frame);
+        }
+        return FP_EXIT_OK;
+    }
     fp_app_size_text(room, free_text, sizeof free_text);
     fprintf(stderr, "%s: %s: about %s (%.0f frames x %zu vertices), more than the %s free there; "
             "nothing written%s%s%s\n", cmd, what, need, frames, vertices, free_text,
@@ -488,10 +495,7 @@ int fp_app_frames_estimate(const char *cmd, const char *option, const char *dir,
         int rc = fp_app_output_fits(cmd, what, dir, total, frames, vertices, hint);
         if (rc) return rc;
         fp_app_size_text(total, a, sizeof a);
-        if (total > FP_APP_FRAMES_WARN_BYTES)
-            fprintf(stderr, "%s: warning: %s %s: about %s (%.0f frames x %zu vertices, ~%s a "
-                    "frame), over %s\n", cmd, option, dir, a, frames, vertices, b, c);
-        else if (!quiet)
+        if (total <= FP_APP_FRAMES_WARN_BYTES && !quiet) /* (above it: said as a warning) */
             fprintf(stderr, "%s: %s %s: about %s (%.0f frames x %zu vertices, ~%s a frame)\n",
                     cmd, option, dir, a, frames, vertices, b);
         return FP_EXIT_OK;

@@ -130,7 +130,7 @@ double fp_app_obj_frame_bytes(const struct fp_mesh *mesh);
 /** bytes as "123 MB", "1.3 GB" or "12 kB" (decimal, as the exports' summaries) into buf (len
  *  bytes, NUL-ended, cut if short). Pure; any thread. */
 void fp_app_size_text(double bytes, char *buf, size_t len);
-/** Above this a --frames-out's estimate is a warning (1 GiB). */
+/** Above this an output's size said before the work is a warning (1 GiB): fp_app_output_fits. */
 #define FP_APP_FRAMES_WARN_BYTES (1024.0 * 1024.0 * 1024.0)
 
 /** The room free, in bytes, for an unprivileged user (statvfs's f_bavail) on the file system
@@ -142,7 +142,9 @@ int fp_app_free_room(const char *path, double *bytes);
  *  checked before any work: when its file system has less room free (fp_app_free_room),
  *  "CMD: WHAT: about SIZE (N frames x V vertices), more than the FREE free there; nothing
  *  written (HINT)" on stderr and FP_EXIT_CANTCREAT (73); else 0 (also when bytes is 0, or the
- *  room cannot be asked). hint may be NULL. Any thread. */
+ *  room cannot be asked), after "CMD: warning: WHAT: about SIZE (N frames x V vertices, ~B a
+ *  frame), over 1 GiB" on stderr where bytes is above FP_APP_FRAMES_WARN_BYTES. hint may be
+ *  NULL. Any thread. */
 int fp_app_output_fits(const char *cmd, const char *what, const char *path, double bytes,
                        double frames, size_t vertices, const char *hint);
 

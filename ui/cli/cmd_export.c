@@ -421,15 +421,8 @@ static int check_size(const export_args *a, const char *out, double frames, cons
     const double per_frame = fp_app_export_frame_bytes(a->fmt, mesh);
     if (a->png || !(per_frame > 0)) return 0;
     const double bytes = frames * per_frame;
-    int rc = fp_app_output_fits("facepuppet export", out, out, bytes, frames, vertices,
-                                "a smaller --resample or --range");
-    if (rc) return rc;
-    char need[32];
-    fp_app_size_text(bytes, need, sizeof need);
-    if (bytes > FP_APP_FRAMES_WARN_BYTES)
-        fprintf(stderr, "facepuppet export: warning: %s: about %s (%.0f frames x %zu vertices), over 1 GiB\n",
-                out, need, frames, vertices);
-    return 0;
+    return fp_app_output_fits("facepuppet export", out, out, bytes, frames, vertices,
+                              "a smaller --resample or --range");
 }
 
 /* The output when --out is not given: beside the take, TAKE_png/, TAKE_frames/ (obj-seq) or
