@@ -162,7 +162,11 @@ typedef struct fp_event_queue {
     size_t mask;
     _Alignas(64) atomic_size_t head;     /* producers claim here */
     _Alignas(64) atomic_size_t tail;     /* consumer reads here */
-    _Alignas(64) atomic_ulong dropped;   /* events refused because the queue was full */
+    _Alignas(64) atomic_ulong dropped;   /* events refused because the queue was full (each
+                                            once, however often pushed again), less those
+                                            pushed again and taken (refused) */
+    atomic_uint_least64_t refused;       /* the last refused event: a key of its bytes (never
+                                            0); 0: none since the last one was taken */
 } fp_event_queue;
 
 /** capacity is rounded up to a power of two (at least 2). Returns 0 or -ENOMEM. */
@@ -170,8 +174,16 @@ int fp_event_queue_init(fp_event_queue *q, size_t capacity);
 /** Free the cells; no producer may push any more (the input stopped, its threads joined).
  *  Safe on a zeroed queue. */
 void fp_event_queue_destroy(fp_event_queue *q);
-/** Copy ev (ev->size bytes, at most sizeof(fp_event)) in. False when full or too large. */
+/** Copy ev (ev->size bytes, at most sizeof(fp_event)) in. False when full or too large.
+ *  An event refused as full counts once in dropped, however often it is pushed again; when
+ *  it is taken before another is refused, that count is taken back: a producer that waits
+ *  for room loses nothing, and the count says so. */
 bool fp_event_queue_push(fp_event_queue *q, const fp_event_header *ev);
+/** The events dropped so far: dropped, less the last refused event, which its producer may
+ *  still be waiting to push again (a replay stopped while it waited for room lost nothing
+ *  the run had reached; an event not pushed again counts once another is refused). About,
+ *  while producers push. Any thread. */
+unsigned long fp_event_queue_dropped(const fp_event_queue *q);
 /** Copy the oldest event out. False when empty. */
 bool fp_event_queue_pop(fp_event_queue *q, fp_event *out);
 

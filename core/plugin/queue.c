@@ -25,6 +25,7 @@ int fp_event_queue_init(fp_event_queue *q, size_t capacity)
     atomic_init(&q->head, 0);
     atomic_init(&q->tail, 0);
     atomic_init(&q->dropped, 0);
+    atomic_init(&q->refused, 0);
     return 0;
 }
 
@@ -32,6 +33,43 @@ void fp_event_queue_destroy(fp_event_queue *q)
 {
     free(q->cells);
     q->cells = NULL;
+}
+
+/* A refused event's identity: FNV-1a over its bytes, never 0 */
+static uint64_t event_key(const fp_event_header *ev)
+{
+    const unsigned char *b = (const unsigned char *)ev;
+    uint64_t h = 1469598103934665603ull;
+    for (uint32_t i = 0; i < ev->size; i++) h = (h ^ b[i]) * 1099511628211ull;
+    return h | 1u;
+}
+
+/* The queue refused ev: one more dropped event, unless it is the one refused last (pushed
+ * again: counted once). dropped is counted before refused names the event, so that
+ * fp_event_queue_dropped never subtracts what is not counted yet. */
+static void refused(fp_event_queue *q, const fp_event_header *ev)
+{
+    const uint64_t k = event_key(ev);
+    uint64_t old = atomic_load_explicit(&q->refused, memory_order_relaxed);
+    if (old == k) return;
+    atomic_fetch_add_explicit(&q->dropped, 1, memory_order_relaxed);
+    while (!atomic_compare_exchange_weak_explicit(&q->refused, &old, k, memory_order_relaxed,
+                                                  memory_order_relaxed))
+        if (old == k) { /* another producer named the same event meanwhile, and counted it */
+            atomic_fetch_sub_explicit(&q->dropped, 1, memory_order_relaxed);
+            return;
+        }
+}
+
+/* The queue took ev: where it is the event last refused (pushed again, as a producer that
+ * waits for room does), it was not dropped after all */
+static void taken(fp_event_queue *q, const fp_event_header *ev)
+{
+    uint64_t old = atomic_load_explicit(&q->refused, memory_order_relaxed);
+    if (!old || old != event_key(ev)) return;
+    if (atomic_compare_exchange_strong_explicit(&q->refused, &old, 0, memory_order_relaxed,
+                                                memory_order_relaxed))
+        atomic_fetch_sub_explicit(&q->dropped, 1, memory_order_relaxed);
 }
 
 bool fp_event_queue_push(fp_event_queue *q, const fp_event_header *ev)
@@ -52,15 +90,24 @@ bool fp_event_queue_push(fp_event_queue *q, const fp_event_header *ev)
                                                       memory_order_relaxed)) {
                 memcpy(&c->event, ev, ev->size);
                 atomic_store_explicit(&c->seq, pos + 1, memory_order_release);
+                taken(q, ev);
                 return true;
             }
         } else if (dif < 0) {
-            atomic_fetch_add_explicit(&q->dropped, 1, memory_order_relaxed);
+            refused(q, ev);
             return false; /* full */
         } else {
             pos = atomic_load_explicit(&q->head, memory_order_relaxed);
         }
     }
+}
+
+unsigned long fp_event_queue_dropped(const fp_event_queue *q)
+{
+    fp_event_queue *w = (fp_event_queue *)q; /* (atomic loads only) */
+    const unsigned long d = atomic_load_explicit(&w->dropped, memory_order_relaxed);
+    const unsigned long waiting = atomic_load_explicit(&w->refused, memory_order_relaxed) != 0;
+    return d > waiting ? d - waiting : 0;
 }
 
 bool fp_event_queue_pop(fp_event_queue *q, fp_event *out)

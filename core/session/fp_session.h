@@ -534,7 +534,9 @@ unsigned long fp_session_commits(const fp_session *s);
 bool fp_session_undo(fp_session *s);
 /** Back to the loaded shape (undoable when the base differed); rig channels to neutral. */
 void fp_session_reset(fp_session *s);
-/** Events dropped because an input's queue was full, over all inputs. Any thread. */
+/** Events dropped because an input's queue was full, over all inputs: an event the input
+ *  pushed again until it was taken (a replay with fast=1) is not one
+ *  (fp_event_queue_dropped). Any thread. */
 unsigned long fp_session_dropped(const fp_session *s);
 
 /** How many FP_STATUS_ERROR events the inputs reported (a damaged recording, a device that

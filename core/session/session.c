@@ -589,7 +589,7 @@ unsigned long fp_session_dropped(const fp_session *s)
 {
     unsigned long n = 0;
     for (size_t i = 0; i < s->input_count; i++)
-        n += atomic_load(&((fp_session *)s)->inputs[i].queue.dropped);
+        n += fp_event_queue_dropped(&s->inputs[i].queue);
     return n;
 }
 

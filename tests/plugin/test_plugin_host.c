@@ -521,6 +521,52 @@ static void test_queue_full(void **state)
     fp_event_queue_destroy(&q);
 }
 
+/* A producer that waits for room (the replay's fast=1, fp_pacer_push) pushes the refused event
+ * again: once it is taken, its refusals are not drops; an event refused and never pushed
+ * again (another came instead) stays one */
+static void test_queue_retry(void **state)
+{
+    (void)state;
+    assert_int_equal(fp_event_queue_init(&q, 4), 0);
+    fp_event ev;
+    for (uint32_t i = 0; i < 4; i++) {
+        fp_event_button b = {{sizeof b, FP_EVENT_BUTTON, 0, (int64_t)i, 0, -1}, 1, 1, i};
+        assert_true(fp_event_queue_push(&q, &b.header));
+    }
+    fp_event_button e5 = {{sizeof e5, FP_EVENT_BUTTON, 0, 5, 0, -1}, 1, 1, 5};
+    for (int i = 0; i < 3; i++) assert_false(fp_event_queue_push(&q, &e5.header));
+    assert_int_equal(atomic_load(&q.dropped), 1); /* one event, refused three times */
+    assert_true(fp_event_queue_pop(&q, &ev));
+    assert_true(fp_event_queue_push(&q, &e5.header)); /* the same event, taken */
+    assert_int_equal(atomic_load(&q.dropped), 0);
+    fp_event_button e6 = {{sizeof e6, FP_EVENT_BUTTON, 0, 6, 0, -1}, 1, 1, 6};
+    fp_event_button e7 = e6;
+    e7.header.time_ns = 7; /* the same but for its time: another event */
+    assert_false(fp_event_queue_push(&q, &e6.header));
+    assert_false(fp_event_queue_push(&q, &e6.header));
+    assert_false(fp_event_queue_push(&q, &e7.header));
+    assert_false(fp_event_queue_push(&q, &e7.header));
+    assert_int_equal(atomic_load(&q.dropped), 2);
+    assert_int_equal(fp_event_queue_dropped(&q), 1); /* e6; e7 may yet be pushed again */
+    assert_true(fp_event_queue_pop(&q, &ev));
+    assert_true(fp_event_queue_push(&q, &e7.header));
+    assert_int_equal(atomic_load(&q.dropped), 1); /* e6, never pushed again */
+    assert_int_equal(fp_event_queue_dropped(&q), 1);
+    assert_true(fp_event_queue_pop(&q, &ev));
+    assert_true(fp_event_queue_push(&q, &e6.header)); /* too late: counted */
+    assert_int_equal(fp_event_queue_dropped(&q), 1);
+    /* refused and not pushed again yet (a replay stopped while it waited for room): not
+     * counted until another event is refused, then once */
+    fp_event_button e8 = e6, e9 = e6;
+    e8.header.time_ns = 8;
+    e9.header.time_ns = 9;
+    for (int i = 0; i < 5; i++) assert_false(fp_event_queue_push(&q, &e8.header));
+    assert_int_equal(fp_event_queue_dropped(&q), 1);
+    assert_false(fp_event_queue_push(&q, &e9.header));
+    assert_int_equal(fp_event_queue_dropped(&q), 2);
+    fp_event_queue_destroy(&q);
+}
+
 int main(void)
 {
     const char *build = getenv("FP_BUILD_DIR");
@@ -531,7 +577,8 @@ int main(void)
         cmocka_unit_test(test_env_path_and_instance),
         cmocka_unit_test(test_log_relayed), cmocka_unit_test(test_malformed_events_refused),
         cmocka_unit_test(test_queue_mpsc),
-        cmocka_unit_test(test_queue_full),        cmocka_unit_test(test_unsafe_folders_skipped),
+        cmocka_unit_test(test_queue_full),        cmocka_unit_test(test_queue_retry),
+        cmocka_unit_test(test_unsafe_folders_skipped),
         cmocka_unit_test(test_builtin_first),     cmocka_unit_test(test_crash_names_plugin),
         cmocka_unit_test(test_call_oldest),
     };

@@ -277,7 +277,9 @@ typedef struct fp_host {
 
     /** [any-thread, lock-free, wait-free] Copy one event into this instance's queue. The host
      *  sets header.source. Returns false when the queue is full: the event is dropped and
-     *  counted by the host (the session thread always has the latest pose anyway); false
+     *  counted by the host (the session thread always has the latest pose anyway), unless
+     *  the plugin pushes the same event again and it is taken (a recording's replay that
+     *  waits for room): then its refusals are not counted as drops; false
      *  too, and not counted, when header.size is below sizeof(fp_event_header) or above
      *  sizeof(fp_event). A malformed event (another type's size, a NaN, a position beyond
      *  FP_EVENT_MAX_MM, a rotation that is not a unit quaternion, a pose without a hand: the
