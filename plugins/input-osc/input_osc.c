@@ -222,33 +222,62 @@ static bool within(const float *v, size_t n, float limit)
 
 /* Checks a message's type tags against `want` (all of one letter when `want` is a single
  * letter repeated n times). Counts bad-count or bad-types and returns false on mismatch. */
+/* A number as OSC senders send one: 'f' (float32), 'd' (float64), 'i' (int32) or 'h' (int64);
+ * Node's node-osc, for one, types a whole number as an int. An integer: 'i' or 'h'. */
+static bool number_type(char c) { return c == 'f' || c == 'd' || c == 'i' || c == 'h'; }
+static bool integer_type(char c) { return c == 'i' || c == 'h'; }
+
+/* types against want, where an 'f' takes any number_type and an 'i' any integer_type; a
+ * mismatch counted (bad-count or bad-types) */
 static bool check_types(osc_input *o, const char *types, const char *want)
 {
-    if (strcmp(types, want) == 0) return true;
-    count(o, strlen(types) != strlen(want) ? FP_OSC_BAD_COUNT : FP_OSC_BAD_TYPES);
-    return false;
+    const size_t n = strlen(want);
+    if (strlen(types) != n) {
+        count(o, FP_OSC_BAD_COUNT);
+        return false;
+    }
+    for (size_t i = 0; i < n; i++)
+        if (want[i] == 'f' ? !number_type(types[i]) : want[i] == 'i' ? !integer_type(types[i])
+                                                                     : types[i] != want[i]) {
+            count(o, FP_OSC_BAD_TYPES);
+            return false;
+        }
+    return true;
 }
 
 /* liblo's argv points into the message at 4-byte alignment, while lo_arg (a union with
- * 64-bit members) asks for 8: read the 32-bit values through memcpy, never through the union
- * (tests/fuzz/fuzz_osc found the misaligned access). */
-static float arg_f(lo_arg *a)
+ * 64-bit members) asks for 8: read the values through memcpy, never through the union
+ * (tests/fuzz/fuzz_osc found the misaligned access). type: the argument's tag, one that
+ * check_types let through for a number (or an integer, arg_i) */
+static float arg_f(lo_arg *a, char type)
 {
-    float v;
-    memcpy(&v, a, sizeof v);
-    return v;
+    float f;
+    double d;
+    int32_t i;
+    int64_t h;
+    switch (type) {
+    case 'd': memcpy(&d, a, sizeof d); return (float)d; /* (beyond float: inf, refused later) */
+    case 'i': memcpy(&i, a, sizeof i); return (float)i;
+    case 'h': memcpy(&h, a, sizeof h); return (float)h;
+    default: memcpy(&f, a, sizeof f); return f;
+    }
 }
 
-static int32_t arg_i(lo_arg *a)
+static int32_t arg_i(lo_arg *a, char type)
 {
+    if (type == 'h') {
+        int64_t h;
+        memcpy(&h, a, sizeof h);
+        return h < INT32_MIN ? INT32_MIN : h > INT32_MAX ? INT32_MAX : (int32_t)h;
+    }
     int32_t v;
     memcpy(&v, a, sizeof v);
     return v;
 }
 
-static void floats_of(lo_arg **argv, int first, int n, float *out)
+static void floats_of(lo_arg **argv, const char *types, int first, int n, float *out)
 {
-    for (int i = 0; i < n; i++) out[i] = arg_f(argv[first + i]);
+    for (int i = 0; i < n; i++) out[i] = arg_f(argv[first + i], types[first + i]);
 }
 
 static bool hand_wanted(const osc_input *o, int h) { return o->hands & (1 << h); }
@@ -302,7 +331,7 @@ static void fmt_facepuppet(osc_input *o, const char *path, const char *types, lo
 {
     if (strcmp(path, "/facepuppet/button") == 0) {
         if (!check_types(o, types, "ii")) return;
-        int32_t index = arg_i(argv[0]), down = arg_i(argv[1]);
+        int32_t index = arg_i(argv[0], types[0]), down = arg_i(argv[1], types[1]);
         if (index < 0 || index > 2 || (down != 0 && down != 1)) {
             count(o, FP_OSC_OUT_OF_RANGE);
             return;
@@ -344,7 +373,7 @@ static void fmt_facepuppet(osc_input *o, const char *path, const char *types, lo
             return;
         }
         float mm[FP_HAND_JOINTS][3];
-        floats_of(argv, 0, 63, &mm[0][0]);
+        floats_of(argv, types, 0, 63, &mm[0][0]);
         push_joints(o, hand, t, recv_ns, (const float(*)[3])mm, 0);
     } else if (strcmp(rest, "angles") == 0) {
         /* 22 floats (all valid), or an int mask of the valid sensors and 22 floats */
@@ -353,13 +382,10 @@ static void fmt_facepuppet(osc_input *o, const char *path, const char *types, lo
         want[22] = 0;
         int first = 0;
         uint32_t valid = (1u << FP_GLOVE_SENSORS) - 1;
-        if (types[0] == 'i' && strlen(types) == 23) {
-            if (strcmp(types + 1, want) != 0) {
-                count(o, FP_OSC_BAD_TYPES);
-                return;
-            }
+        if (integer_type(types[0]) && strlen(types) == 23) {
+            if (!check_types(o, types + 1, want)) return;
             first = 1;
-            valid = (uint32_t)arg_i(argv[0]) & ((1u << FP_GLOVE_SENSORS) - 1);
+            valid = (uint32_t)arg_i(argv[0], types[0]) & ((1u << FP_GLOVE_SENSORS) - 1);
         } else if (!check_types(o, types, want)) {
             return;
         }
@@ -368,7 +394,7 @@ static void fmt_facepuppet(osc_input *o, const char *path, const char *types, lo
             return;
         }
         float rad[FP_GLOVE_SENSORS];
-        floats_of(argv, first, FP_GLOVE_SENSORS, rad);
+        floats_of(argv, types, first, FP_GLOVE_SENSORS, rad);
         if (!finite_all(rad, FP_GLOVE_SENSORS)) {
             count(o, FP_OSC_NONFINITE);
             return;
@@ -389,7 +415,7 @@ static void fmt_facepuppet(osc_input *o, const char *path, const char *types, lo
             return;
         }
         float v[7];
-        floats_of(argv, 0, 7, v);
+        floats_of(argv, types, 0, 7, v);
         if (!finite_all(v, 7)) {
             count(o, FP_OSC_NONFINITE);
             return;
@@ -468,7 +494,7 @@ static void fmt_leap(osc_input *o, const char *path, const char *types, lo_arg *
         return;
     }
     float v[3];
-    floats_of(argv, 2, 3, v);
+    floats_of(argv, types, 2, 3, v);
     if (!finite_all(v, 3)) {
         count(o, FP_OSC_NONFINITE);
         return;
@@ -481,12 +507,12 @@ static void fmt_leap(osc_input *o, const char *path, const char *types, lo_arg *
     if (kind == 1) {
         if (ls->have_palm && ls->tips) count(o, FP_OSC_INCOMPLETE);
         ls->have_palm = true;
-        ls->hand_id = arg_i(argv[0]);
+        ls->hand_id = arg_i(argv[0], types[0]);
         ls->tips = 0;
         memcpy(ls->palm, v, sizeof v);
         return;
     }
-    if (!ls->have_palm || arg_i(argv[0]) != ls->hand_id) {
+    if (!ls->have_palm || arg_i(argv[0], types[0]) != ls->hand_id) {
         count(o, FP_OSC_INCOMPLETE);
         ls->have_palm = false;
         ls->tips = 0;
@@ -551,7 +577,7 @@ static void fmt_mediapipe(osc_input *o, const char *path, const char *types, lo_
         return;
     }
     float v[21];
-    floats_of(argv, 0, 21, v);
+    floats_of(argv, types, 0, 21, v);
     if (!finite_all(v, 21)) {
         count(o, FP_OSC_NONFINITE);
         return;

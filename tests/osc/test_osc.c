@@ -324,6 +324,65 @@ static void facepuppet_joints_equal_csv(void **state)
     close_fixture(&f);
 }
 
+/* Numbers as other senders type them: a joint as 'd' (float64), 'i' or 'h' (a whole number
+ * as node-osc sends one) gives the same event as 'f'; the Leap format's hand id as 'h' and
+ * tips as 'd'; a string where a number belongs is still bad-types. */
+static void numbers_of_every_type(void **state)
+{
+    (void)state;
+    osc_fixture f;
+    open_fixture(&f, NULL, 256);
+    fp_leap_joints_row r = rows[0];
+    for (int j = 0; j < FP_HAND_JOINTS; j++) /* whole millimetres where sent as integers */
+        for (int k = 0; k < 3; k++)
+            if ((3 * j + k) % 4 == 1 || (3 * j + k) % 4 == 2) r.joints_mm[j][k] = roundf(r.joints_mm[j][k]);
+    lo_message m = lo_message_new();
+    for (int j = 0; j < FP_HAND_JOINTS; j++)
+        for (int k = 0; k < 3; k++) {
+            const float v = r.joints_mm[j][k];
+            switch ((3 * j + k) % 4) {
+            case 0: lo_message_add_double(m, (double)v); break;
+            case 1: lo_message_add_int32(m, (int32_t)v); break;
+            case 2: lo_message_add_int64(m, (int64_t)v); break;
+            default: lo_message_add_float(m, v);
+            }
+        }
+    assert_true(lo_send_message(f.to, "/facepuppet/hand/right/joints", m) > 0);
+    lo_message_free(m);
+    assert_true(wait_type(f.h, FP_EVENT_JOINT_POSITIONS, -1, 1));
+    const fp_event *e = nth_positions(f.h, 0);
+    assert_memory_equal(e->positions.mm, r.joints_mm, sizeof e->positions.mm);
+    /* a Leap bridge's palm and tips with a 64-bit hand id and doubles */
+    lo_message p = lo_message_new();
+    lo_message_add_int64(p, 7);
+    lo_message_add_int32(p, 0);
+    for (int k = 0; k < 3; k++) lo_message_add_double(p, (double)rows[0].palm_mm[k]);
+    assert_true(lo_send_message(f.to, "/hand0", p) > 0);
+    lo_message_free(p);
+    for (int fi = 0; fi < FP_FINGERS; fi++) {
+        lo_message t = lo_message_new();
+        lo_message_add_int64(t, 7);
+        lo_message_add_int32(t, fi);
+        for (int k = 0; k < 3; k++) lo_message_add_double(t, (double)rows[0].joints_mm[FP_JOINT_TIP(fi)][k]);
+        char path[32];
+        snprintf(path, sizeof path, "/finger0-%d", fi);
+        assert_true(lo_send_message(f.to, path, t) > 0);
+        lo_message_free(t);
+    }
+    assert_true(wait_type(f.h, FP_EVENT_JOINT_POSITIONS, -1, 2));
+    e = nth_positions(f.h, 1);
+    for (int fi = 0; fi < FP_FINGERS; fi++)
+        assert_memory_equal(e->positions.mm[FP_JOINT_TIP(fi)], rows[0].joints_mm[FP_JOINT_TIP(fi)],
+                            sizeof e->positions.mm[0]);
+    lo_send(f.to, "/facepuppet/hand/right/wrist", "sffffff", "x", 1.f, 2.f, 3.f, 1.f, 0.f, 0.f);
+    lo_send(f.to, "/facepuppet/button", "fi", 1.f, 1); /* an index is an integer */
+    wait_packets(&f, 9);
+    fp_osc_stats st = stats(&f);
+    assert_int_equal(st.problems[FP_OSC_BAD_TYPES], 2);
+    assert_int_equal(count_type(f.h, FP_EVENT_JOINT_POSITIONS, -1), 2);
+    close_fixture(&f);
+}
+
 /* format=facepuppet: angles (all valid, or with a mask), wrist, buttons; hand filter. */
 static void facepuppet_angles_wrist_buttons(void **state)
 {
@@ -800,8 +859,8 @@ static void hostile_packets_counted(void **state)
             lo_message m = joints_message(&r);
             lo_send_message(f.to, "/facepuppet/hand/left/joints", m);
             lo_message_free(m);
-        } else if (kind == 5) { /* wrong types: ints where floats belong */
-            lo_send(f.to, "/facepuppet/hand/right/wrist", "iiiiiii", 1, 2, 3, 4, 5, 6, 7);
+        } else if (kind == 5) { /* wrong types: strings where numbers belong */
+            lo_send(f.to, "/facepuppet/hand/right/wrist", "sssssss", "1", "2", "3", "4", "5", "6", "7");
         } else if (kind == 6) { /* unknown addresses (another tracker's traffic) */
             lo_send(f.to, i % 2 ? "/found" : "/facepuppet/hand/middle/joints", "i", 1);
         } else { /* bundles with element sizes that lie, or nested beyond the limit */
@@ -953,6 +1012,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(factory_describes_itself),
         cmocka_unit_test(facepuppet_joints_equal_csv),
+        cmocka_unit_test(numbers_of_every_type),
         cmocka_unit_test(facepuppet_angles_wrist_buttons),
         cmocka_unit_test(leap_palm_and_tips_equal_csv),
         cmocka_unit_test(mediapipe_landmarks_to_mm),
