@@ -68,6 +68,11 @@ const char *fp_text_after_space(const char *p, const char *stop)
     return p && p < stop ? p : NULL;
 }
 
+size_t fp_text_bom(const char *p, size_t len)
+{
+    return p && len >= 3 && !memcmp(p, "\xEF\xBB\xBF", 3) ? 3 : 0;
+}
+
 void fp_text_line_col(const char *text, const char *at, long *line, long *col)
 {
     long l = 1, c = 1;

@@ -31,6 +31,12 @@ char *fp_text_clean(const char *s, char *out, size_t n);
  *  the readers that take one JSON value per file (rigs, calibration files). Thread-safe. */
 const char *fp_text_after_space(const char *p, const char *stop);
 
+/** The UTF-8 byte order mark (EF BB BF) that spreadsheet programs and Windows editors write at
+ *  the start of a text file ("CSV UTF-8"): the length of the one at p ([p, p + len)), 3, or
+ *  0 when there is none (p NULL: 0). The text readers skip it (recordings, meshes,
+ *  calibration files). Thread-safe. */
+size_t fp_text_bom(const char *p, size_t len);
+
 /** The 1-based line and column of `at` in text (at within text, or at its end), for
  *  messages "FILE:LINE:COL". line or col may be NULL. Thread-safe. */
 void fp_text_line_col(const char *text, const char *at, long *line, long *col);

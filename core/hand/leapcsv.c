@@ -4,6 +4,7 @@
  */
 #define _GNU_SOURCE
 #include "leapcsv.h"
+#include "fp_text.h"
 
 #include "fp_error.h"
 #include "fp_file.h"
@@ -237,7 +238,7 @@ int fp_leapcsv_read(const char *path, fp_leapcsv_format want, fp_leapcsv_format 
     fp_leapcsv_format fmt = FP_LEAPCSV_ANY;
     long line = 0;
     int have_ts = 0;
-    char *p = data, *end = data + len;
+    char *p = data ? data + fp_text_bom(data, len) : data, *end = data + len;
     while (!rc && p < end) {
         char *nl = memchr(p, '\n', (size_t)(end - p));
         line++;

@@ -5,6 +5,7 @@
 // strict scans (mesh_scan_*.c) check every file first; OpenMesh's calls are serialised and
 // its log captured (its readers and writers are singletons, its log streams global).
 #include "mesh_io_internal.hpp"
+#include "fp_text.h"
 
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/IO/exporter/BaseExporter.hh>
@@ -516,6 +517,8 @@ int load_openmesh(const char *path, const std::string &ext, std::string &data,
     fp__obj_info obj{};
     size_t want_v = 0, want_f = 0; // the header's counts (PLY, OFF)
     if (ext == "obj") {
+        // a byte order mark (a Windows editor's) first: not OBJ, and read from `data` below
+        data.erase(0, fp_text_bom(data.data(), data.size()));
         int rc = fp__obj_scan(path, data.c_str(), data.size(), &obj, err, errlen);
         if (rc != FP_MESH_OK)
             return rc;

@@ -7,6 +7,7 @@
 #include "glove_cal.h"
 #include "fp_error.h"
 #include "fp_file.h"
+#include "fp_text.h"
 
 #include <facepuppet/decimal.h> /* fp_decimal_span: the one syntax of a number */
 
@@ -111,7 +112,7 @@ int fpg_cal_load(const char *path, fpg_cal *cal, char *err, size_t errlen)
             rc = fp_errorf(err, errlen, -EBADMSG, "%s:%d: line too long", path, lineno);
             goto out;
         }
-        char *s = trim_line(buf);
+        char *s = trim_line(buf + (lineno == 1 ? fp_text_bom(buf, strlen(buf)) : 0));
         if (!s)
             continue;
         if (fmt == FPG_CAL_DEFAULT) {

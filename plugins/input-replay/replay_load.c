@@ -9,6 +9,7 @@
 
 #include "fp_error.h"
 #include "fp_file.h"
+#include "fp_text.h"
 #include "fp_eventlog.h"
 #include "fp_hand.h"
 #include "leapcsv.h"
@@ -216,9 +217,10 @@ int replay_load(const char *path, int hands, replay_recording *out, char *err, s
     loader L = {.path = path, .hands = hands, .rec = out, .err = err, .errlen = errlen};
     static const char csv_lead[] = "frame,timestamp_us,hand_id,hand_type,";
     static const char log_lead[] = "# " FP_EVENTLOG_MAGIC;
-    char head[64];
-    int rc = read_head(&L, head, sizeof head);
+    char head_bytes[64];
+    int rc = read_head(&L, head_bytes, sizeof head_bytes);
     if (rc) return rc;
+    const char *head = head_bytes + fp_text_bom(head_bytes, strlen(head_bytes)); /* (CSV, JSON) */
     if (strncmp(head, log_lead, sizeof log_lead - 1) == 0) {
         out->format = REPLAY_FORMAT_EVENTLOG;
         rc = load_eventlog(&L);

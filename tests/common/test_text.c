@@ -76,6 +76,12 @@ static void test_json_helpers(void **state)
     fp_text_line_col(u, u, &line, &col);
     assert_int_equal(line, 1);
     assert_int_equal(col, 1);
+    /* the UTF-8 byte order mark at the start, whole */
+    assert_int_equal(fp_text_bom("\xEF\xBB\xBF" "frame,", 9), 3);
+    assert_int_equal(fp_text_bom("\xEF\xBB\xBF", 2), 0);
+    assert_int_equal(fp_text_bom("\xEF\xBB" "x", 3), 0);
+    assert_int_equal(fp_text_bom("frame,", 6), 0);
+    assert_int_equal(fp_text_bom(NULL, 3), 0);
 }
 
 int main(void)

@@ -467,6 +467,35 @@ static void test_calibration_gain_and_default(void **state)
     finish_cal(&run);
 }
 
+/* A calibration file saved with a byte order mark (a Windows editor's) loads as the file
+ * without it (before: its first line failed to parse) */
+static void test_calibration_byte_order_mark(void **state)
+{
+    (void)state;
+    FILE *in = fopen(CAL_RIGHT, "rb");
+    assert_non_null(in);
+    static char text[16384];
+    size_t n = fread(text, 1, sizeof text - 1, in);
+    fclose(in);
+    assert_true(n > 0 && n < sizeof text - 1);
+    char path[] = "/tmp/fp_cal_bom_XXXXXX";
+    int fd = mkstemp(path);
+    assert_true(fd >= 0);
+    assert_int_equal(write(fd, "\xEF\xBB\xBF", 3), 3);
+    assert_int_equal(write(fd, text, n), (ssize_t)n);
+    close(fd);
+    fpg_cal plain, marked;
+    char cerr[256];
+    assert_int_equal(fpg_cal_load(CAL_RIGHT, &plain, cerr, sizeof cerr), 0);
+    int rc = fpg_cal_load(path, &marked, cerr, sizeof cerr);
+    unlink(path);
+    if (rc) fail_msg("%s", cerr);
+    assert_int_equal(marked.format, plain.format);
+    assert_int_equal(marked.used, plain.used);
+    assert_memory_equal(marked.gain, plain.gain, sizeof plain.gain);
+    assert_memory_equal(marked.offset, plain.offset, sizeof plain.offset);
+}
+
 /* A gain whose angle leaves float range: the plugin pushes that sensor as invalid, never
  * an infinite angle (issue 16). */
 static void test_calibration_never_infinite(void **state)
@@ -887,6 +916,7 @@ int main(void)
         cmocka_unit_test(test_calibration_asr_by_hand),
         cmocka_unit_test(test_calibration_gain_and_default),
         cmocka_unit_test(test_calibration_never_infinite),
+        cmocka_unit_test(test_calibration_byte_order_mark),
         cmocka_unit_test(test_fault_unplug),
         cmocka_unit_test(test_fault_cable_pull),
         cmocka_unit_test(test_fault_garbage_resync),

@@ -439,6 +439,18 @@ static void test_csv_errors(void **state)
     assert_int_equal(n, 1);
     assert_int_equal(rows[0].valid, 0x3FFFFFu & ~1u & ~(7u << 19));
     assert_float_equal(rows[0].degrees[FP_SENSOR_PINKIE_RING_AB], 18, 0);
+    /* saved by a spreadsheet as "CSV UTF-8" on Windows: a byte order mark and CRLF lines
+     * read as the plain file (before: "header column 1 is ..." for the mark) */
+    fp_leap_angles_row first = rows[0];
+    free(rows);
+    rows = NULL;
+    snprintf(text, sizeof text, "\xEF\xBB\xBF%.*s\r\n%.*s\r\n", (int)strlen(hdr) - 1, hdr,
+             (int)strlen(good) - 1, good);
+    fp_test_write_file(path, text);
+    assert_int_equal(fp_leapcsv_read_angles(path, &rows, &n, err, sizeof err), 0);
+    assert_int_equal(n, 1);
+    assert_memory_equal(rows[0].degrees, first.degrees, sizeof first.degrees);
+    assert_int_equal(rows[0].valid, first.valid);
     free(rows);
     /* The joints reader names the column of a bad value. */
     snprintf(text, sizeof text, "%s/hands/leap-motion/grab_joints_mm.csv", fp_test_data_dir());

@@ -360,6 +360,29 @@ static void test_polygons_are_fan_triangulated(void **state)
     fp_mesh_free(&m);
 }
 
+/* An OBJ saved with a byte order mark (a Windows editor's) loads as the same file without
+ * it (before: "line 1: unknown OBJ statement" naming the mark) */
+static void test_obj_byte_order_mark(void **state)
+{
+    (void)state;
+    const char *text = "# a triangle\r\nv 0 0 0\r\nv 1 0 0\r\nv 0 1 0\r\nf 1 2 3\r\n";
+    char marked[128];
+    snprintf(marked, sizeof marked, "\xEF\xBB\xBF%s", text);
+    fp_mesh *a = NULL, *b = NULL;
+    int rc = fp_mesh_load(write_tmp("plain.obj", text), &a, err, sizeof err);
+    if (rc)
+        fail_msg("%s", err);
+    rc = fp_mesh_load(write_tmp("marked.obj", marked), &b, err, sizeof err);
+    if (rc)
+        fail_msg("%s", err);
+    assert_int_equal(a->vertex_count, 3);
+    assert_int_equal(b->vertex_count, 3);
+    assert_memory_equal(a->positions, b->positions, 9 * sizeof(float));
+    assert_memory_equal(a->triangles, b->triangles, 3 * sizeof(uint32_t));
+    fp_mesh_free(&a);
+    fp_mesh_free(&b);
+}
+
 /* Relative (negative) OBJ indices refer back from the last vertex read. */
 static void test_obj_negative_indices(void **state)
 {
@@ -1700,6 +1723,7 @@ int main(void)
         cmocka_unit_test(test_round_trip_glb),
         cmocka_unit_test(test_round_trip_upper_case_extension),
         cmocka_unit_test(test_polygons_are_fan_triangulated),
+        cmocka_unit_test(test_obj_byte_order_mark),
         cmocka_unit_test(test_obj_negative_indices),
         cmocka_unit_test(test_obj_degenerate_faces),
         cmocka_unit_test(test_normals_outward_on_icosahedron),
