@@ -19,6 +19,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 static const char *const lead_names[FP_LEAPCSV_LEAD] = {"frame", "timestamp_us", "hand_id",
                                                         "hand_type"};
@@ -158,9 +159,10 @@ static int parse_row(reader *r, fp_leapcsv_format fmt, long line, char *text, fp
     if (parse_int64(f.s[2], &id) || (long long)(long)id != id)
         return fail(r, -EBADMSG, line, f.col[2], "bad hand_id \"%s\"", f.s[2]);
     fp_hand_side side;
-    if (strcmp(f.s[3], "left") == 0)
+    /* any case: Leap's JavaScript gives "left", other writers "Left" or "LEFT" */
+    if (strcasecmp(f.s[3], "left") == 0)
         side = FP_HAND_LEFT;
-    else if (strcmp(f.s[3], "right") == 0)
+    else if (strcasecmp(f.s[3], "right") == 0)
         side = FP_HAND_RIGHT;
     else
         return fail(r, -EBADMSG, line, f.col[3], "unknown hand_type \"%s\" (left or right)", f.s[3]);

@@ -452,6 +452,16 @@ static void test_csv_errors(void **state)
     assert_memory_equal(rows[0].degrees, first.degrees, sizeof first.degrees);
     assert_int_equal(rows[0].valid, first.valid);
     free(rows);
+    rows = NULL;
+    /* hand_type in any case, as other writers than Leap's JavaScript give it */
+    snprintf(text, sizeof text, "%s0,5,1,Right,,1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,,,\n"
+             "1,6,2,LEFT,,1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,,,\n", hdr);
+    fp_test_write_file(path, text);
+    assert_int_equal(fp_leapcsv_read_angles(path, &rows, &n, err, sizeof err), 0);
+    assert_int_equal(n, 2);
+    assert_int_equal(rows[0].side, FP_HAND_RIGHT);
+    assert_int_equal(rows[1].side, FP_HAND_LEFT);
+    free(rows);
     /* The joints reader names the column of a bad value. */
     snprintf(text, sizeof text, "%s/hands/leap-motion/grab_joints_mm.csv", fp_test_data_dir());
     FILE *in = fopen(text, "r");
