@@ -52,8 +52,8 @@ int fp_app_export_close(const char *cmd, const char *option, fp_exporter **x,
         return fp_app_exit_code(rc, FP_APP_OUTPUT);
     }
     if (!quiet) {
-        fprintf(f, "%s: exported %llu frames to %s (%s): ", cmd, (unsigned long long)res.frames,
-                file, fp_export_format_name(format));
+        fprintf(f, "%s: exported %llu frame%s to %s (%s): ", cmd, (unsigned long long)res.frames,
+                res.frames == 1 ? "" : "s", file, fp_export_format_name(format));
         if (format == FP_EXPORT_GLTF || format == FP_EXPORT_GLB)
             fprintf(f, "K = %zu morph targets, %.2f MB, largest error %.4g mm (limit %.4g mm); "
                     "in metres: root node scale %.6g (%.6g mm per mesh unit)",
