@@ -7,6 +7,7 @@
 
 #include "fp_clock.h"
 #include "fp_error.h"
+#include "fp_net.h"
 #include "fp_stats.h"
 #include "facepuppet/decimal.h"
 #include "facepuppet/plugin_util.h"
@@ -97,19 +98,15 @@ static void drop_knob(fp_stream *s)
     }
 }
 
-/* The socket to HOST:PORT (connected: send() needs no address). */
+/* The socket to HOST:PORT (connected: send() needs no address; IPv4 or IPv6: fp_net.h). */
 static int open_socket(fp_stream *s, char *err, size_t errlen)
 {
-    struct addrinfo hints = {.ai_family = AF_INET, .ai_socktype = SOCK_DGRAM}, *ai = NULL;
-    int g = getaddrinfo(s->host, s->port, &hints, &ai);
-    if (g) return fp_errorf(err, errlen, -ENOENT, "%s: host %s: %s", s->o.spec, s->host, gai_strerror(g));
-    s->sock = socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
-    int big = 4 << 20, rc = 0;
-    if (s->sock >= 0) setsockopt(s->sock, SOL_SOCKET, SO_SNDBUF, &big, sizeof big);
-    if (s->sock < 0 || connect(s->sock, ai->ai_addr, ai->ai_addrlen) != 0)
-        rc = fp_errorf(err, errlen, -errno, "%s: %s", s->o.spec, strerror(errno));
-    freeaddrinfo(ai);
-    return rc;
+    char why[256];
+    s->sock = fp_udp_connect(s->host, s->port, 0, why, sizeof why);
+    if (s->sock < 0) return fp_errorf(err, errlen, s->sock, "%s: host %s: %s", s->o.spec, s->host, why);
+    int big = 4 << 20;
+    setsockopt(s->sock, SOL_SOCKET, SO_SNDBUF, &big, sizeof big);
+    return 0;
 }
 
 int fp_stream_open(const fp_stream_options *o, fp_stream **out, char *err, size_t errlen)

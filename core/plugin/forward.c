@@ -3,6 +3,7 @@
 #include "fp_forward.h"
 
 #include "fp_error.h"
+#include "fp_net.h"
 #include "facepuppet/decimal.h"
 
 #include <errno.h>
@@ -36,23 +37,15 @@ int fp_event_forwarder_create(const char *spec, fp_event_forwarder **out, char *
         return fp_errorf(err, errlen, -EINVAL, "forward=%s: expected osc:HOST:PORT", spec ? spec : "");
     snprintf(host, sizeof host, "%.*s", (int)(colon - p), p);
     snprintf(port, sizeof port, "%s", colon + 1);
-    struct addrinfo hints = {.ai_family = AF_INET, .ai_socktype = SOCK_DGRAM}, *ai = NULL;
-    int g = getaddrinfo(host, port, &hints, &ai);
-    if (g) return fp_errorf(err, errlen, -ENOENT, "forward=%s: host %s: %s", spec, host, gai_strerror(g));
+    char why[256];
+    int sock = fp_udp_connect(host, port, SOCK_NONBLOCK, why, sizeof why); /* (fp_net.h) */
+    if (sock < 0) return fp_errorf(err, errlen, sock, "forward=%s: host %s: %s", spec, host, why);
     fp_event_forwarder *f = calloc(1, sizeof *f);
     if (!f) {
-        freeaddrinfo(ai);
+        close(sock);
         return fp_errorf(err, errlen, -ENOMEM, "forward: out of memory");
     }
-    f->sock = socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
-    if (f->sock < 0 || connect(f->sock, ai->ai_addr, ai->ai_addrlen) != 0) {
-        int e = errno;
-        if (f->sock >= 0) close(f->sock);
-        free(f);
-        freeaddrinfo(ai);
-        return fp_errorf(err, errlen, -e, "forward=%s: %s", spec, strerror(e));
-    }
-    freeaddrinfo(ai);
+    f->sock = sock;
     snprintf(f->target, sizeof f->target, "%s:%s", host, port);
     atomic_init(&f->origin_ns, INT64_MIN);
     *out = f;

@@ -1,0 +1,27 @@
+/*
+ * fp_net.h: the one way the project opens a UDP socket to a HOST:PORT it was given (--stream,
+ * an input's forward=): IPv4 or IPv6, by address or by name.
+ * Link: the static library `fp_common`.
+ */
+#ifndef FP_NET_H
+#define FP_NET_H
+
+#include <stddef.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** A UDP socket connected to host:port (so that send() needs no address): host an IPv4
+ *  address, an IPv6 one bare or in brackets ("::1", "[::1]", as in osc:[::1]:9000) or a name,
+ *  each of its addresses tried in getaddrinfo's order; port decimal. Opened SOCK_CLOEXEC |
+ *  flags (e.g. SOCK_NONBLOCK). Returns the socket (the caller closes it), or a negative
+ *  errno-style code (-ENOENT: the name does not resolve) with the reason in why (whylen
+ *  bytes: getaddrinfo's text or the system's). Thread-safe. */
+int fp_udp_connect(const char *host, const char *port, int flags, char *why, size_t whylen);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif
