@@ -14,25 +14,27 @@
 #define MAX_DEPTH 8
 #define TAKE_MAX 999999u
 
-/* An address, its command, and the type tags it takes ('n': a number, f, d or i; '?': an
- * optional tail starts, so "?sn" takes "", "s" and "s" + a number). */
+/* An address, its command, and the type tags it takes ('n': a number, f, d, i or h; '?': an
+ * optional tail starts, so "?sn" takes "", "s" and "s" + a number). The commands that take
+ * nothing ("?b") also take one number: a control surface's button sends its value, 1 when
+ * pressed and 0 when let go (TouchOSC, Open Stage Control); 0 does nothing. */
 static const struct {
     const char *address;
     fp_control_kind kind;
     const char *types;
 } table[] = {
     {"/fp/record/start", FP_CTL_RECORD_START, "?sn"}, {"/RecordStart", FP_CTL_RECORD_START, "?sn"},
-    {"/fp/record/stop", FP_CTL_RECORD_STOP, ""},      {"/RecordStop", FP_CTL_RECORD_STOP, ""},
-    {"/fp/engage", FP_CTL_ENGAGE, ""},                {"/fp/commit", FP_CTL_COMMIT, ""},
-    {"/fp/cancel", FP_CTL_CANCEL, ""},                {"/fp/undo", FP_CTL_UNDO, ""},
-    {"/fp/reset", FP_CTL_RESET, ""},                  {"/fp/radius", FP_CTL_RADIUS, "n"},
+    {"/fp/record/stop", FP_CTL_RECORD_STOP, "?b"},      {"/RecordStop", FP_CTL_RECORD_STOP, "?b"},
+    {"/fp/engage", FP_CTL_ENGAGE, "?b"},                {"/fp/commit", FP_CTL_COMMIT, "?b"},
+    {"/fp/cancel", FP_CTL_CANCEL, "?b"},                {"/fp/undo", FP_CTL_UNDO, "?b"},
+    {"/fp/reset", FP_CTL_RESET, "?b"},                  {"/fp/radius", FP_CTL_RADIUS, "n"},
     {"/fp/mapping", FP_CTL_MAPPING, "s"},             {"/fp/channel", FP_CTL_CHANNEL, "sn"},
-    {"/fp/play", FP_CTL_PLAY, ""},                    {"/fp/stop", FP_CTL_STOP, ""},
-    {"/fp/seek", FP_CTL_SEEK, "n"},                   {"/fp/status", FP_CTL_STATUS, ""},
+    {"/fp/play", FP_CTL_PLAY, "?b"},                    {"/fp/stop", FP_CTL_STOP, "?b"},
+    {"/fp/seek", FP_CTL_SEEK, "n"},                   {"/fp/status", FP_CTL_STATUS, "?b"},
     {"/fp/subscribe", FP_CTL_SUBSCRIBE, "?n"},        {"/fp/unsubscribe", FP_CTL_UNSUBSCRIBE, "?n"},
     {"/fp/slate", FP_CTL_SLATE, "s"},                 {"/Slate", FP_CTL_SLATE, "s"},
     {"/fp/take", FP_CTL_TAKE, "n"},                   {"/Take", FP_CTL_TAKE, "n"},
-    {"/fp/quit", FP_CTL_QUIT, ""},
+    {"/fp/quit", FP_CTL_QUIT, "?b"},
 };
 
 static const char *const kind_names[FP_CTL_KINDS] = {
@@ -54,7 +56,9 @@ static bool types_match(const char *pattern, const char *types)
         if (!*types) return !*pattern || optional;
         if (!*pattern) return false;
         char t = *types++;
-        if (*pattern == 'n' ? !(t == 'f' || t == 'd' || t == 'i') : t != *pattern) return false;
+        if (*pattern == 'n' || *pattern == 'b' ? !(t == 'f' || t == 'd' || t == 'i' || t == 'h')
+                                               : t != *pattern)
+            return false;
     }
 }
 
@@ -72,6 +76,11 @@ static double number(char type, const lo_arg *a)
         double d;
         memcpy(&d, a, sizeof d);
         return d;
+    }
+    if (type == 'h') {
+        int64_t h;
+        memcpy(&h, a, sizeof h);
+        return (double)h;
     }
     int32_t i;
     memcpy(&i, a, sizeof i);
@@ -96,59 +105,64 @@ static bool channel_ok(const char *s)
            strspn(s, "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789._-") == n;
 }
 
-/* The arguments of a matched message into cmd; false when a value is refused. */
-static bool take_args(fp_control_cmd *cmd, const char *types, lo_arg **argv)
+/* The arguments of a matched message into cmd: TAKE (queue it), REFUSE (a value refused) or
+ * RELEASED (a button let go: nothing to do) */
+enum { REFUSE, TAKE, RELEASED };
+static int take_args(fp_control_cmd *cmd, const char *types, lo_arg **argv)
 {
     size_t argc = strlen(types);
     switch (cmd->kind) {
     case FP_CTL_RECORD_START:
     case FP_CTL_SLATE:
         if (argc >= 1) {
-            if (strlen(&argv[0]->s) >= FP_TAKE_SLATE_MAX || !fp_take_slate_valid(&argv[0]->s)) return false;
+            if (strlen(&argv[0]->s) >= FP_TAKE_SLATE_MAX || !fp_take_slate_valid(&argv[0]->s)) return REFUSE;
             snprintf(cmd->text, sizeof cmd->text, "%s", &argv[0]->s);
             cmd->has_text = true;
         }
         if (argc >= 2) {
             double v = number(types[1], argv[1]);
-            if (!(v >= 1 && v <= TAKE_MAX && v == floor(v))) return false;
+            if (!(v >= 1 && v <= TAKE_MAX && v == floor(v))) return REFUSE;
             cmd->take = (uint32_t)v;
             cmd->has_take = true;
         }
-        return true;
+        return TAKE;
     case FP_CTL_TAKE: {
         double v = number(types[0], argv[0]);
-        if (!(v >= 1 && v <= TAKE_MAX && v == floor(v))) return false;
+        if (!(v >= 1 && v <= TAKE_MAX && v == floor(v))) return REFUSE;
         cmd->take = (uint32_t)v;
         cmd->has_take = true;
-        return true;
+        return TAKE;
     }
     case FP_CTL_RADIUS:
         cmd->value = number(types[0], argv[0]);
-        return isfinite(cmd->value) && cmd->value > 0 && cmd->value < 1e6;
+        return isfinite(cmd->value) && cmd->value > 0 && cmd->value < 1e6 ? TAKE : REFUSE;
     case FP_CTL_SEEK:
         cmd->value = number(types[0], argv[0]);
-        return isfinite(cmd->value) && cmd->value >= 0 && cmd->value < 1e7;
+        return isfinite(cmd->value) && cmd->value >= 0 && cmd->value < 1e7 ? TAKE : REFUSE;
     case FP_CTL_MAPPING:
-        if (!spec_ok(&argv[0]->s)) return false;
+        if (!spec_ok(&argv[0]->s)) return REFUSE;
         snprintf(cmd->text, sizeof cmd->text, "%s", &argv[0]->s);
         cmd->has_text = true;
-        return true;
+        return TAKE;
     case FP_CTL_CHANNEL:
-        if (!channel_ok(&argv[0]->s)) return false;
+        if (!channel_ok(&argv[0]->s)) return REFUSE;
         snprintf(cmd->text, sizeof cmd->text, "%s", &argv[0]->s);
         cmd->has_text = true;
         cmd->value = number(types[1], argv[1]);
-        return isfinite(cmd->value) && fabs(cmd->value) < 1e6;
+        return isfinite(cmd->value) && fabs(cmd->value) < 1e6 ? TAKE : REFUSE;
     case FP_CTL_SUBSCRIBE:
     case FP_CTL_UNSUBSCRIBE:
         if (argc >= 1) {
             double v = number(types[0], argv[0]);
-            if (!(v >= 1 && v <= 65535 && v == floor(v))) return false;
+            if (!(v >= 1 && v <= 65535 && v == floor(v))) return REFUSE;
             cmd->port = (int)v;
         }
-        return true;
-    default:
-        return true;
+        return TAKE;
+    default: { /* a command that takes nothing, or a button's value */
+        if (argc == 0) return TAKE;
+        double v = number(types[0], argv[0]);
+        return !isfinite(v) ? REFUSE : v != 0 ? TAKE : RELEASED;
+    }
     }
 }
 
@@ -183,8 +197,9 @@ static void message(fp_control *c, unsigned char *data, size_t size, const fp_co
         cmd.fromlen = from->fromlen;
         cmd.kind = table[k].kind;
         snprintf(cmd.address, sizeof cmd.address, "%s", table[k].address);
-        if (take_args(&cmd, types, lo_message_get_argv(m))) fp__control_queue(c, &cmd);
-        else fp__control_problem(c, FP_CTL_BAD_VALUE);
+        int r = take_args(&cmd, types, lo_message_get_argv(m));
+        if (r == TAKE) fp__control_queue(c, &cmd);
+        else if (r == REFUSE) fp__control_problem(c, FP_CTL_BAD_VALUE);
     }
     lo_message_free(m);
 }

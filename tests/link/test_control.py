@@ -5,7 +5,8 @@ The run plays a real recording (looped) through the anchored mapping with auto=0
 only the control surface engages and commits, records takes in a folder and listens on
 --control osc:PORT. This client (the standard library's socket and struct: fposc.py):
   1. asks the status (idle, not recording), subscribes;
-  2. /fp/record/start scene7 12, /fp/engage, /fp/commit, /fp/record/stop: every command
+  2. /fp/record/start scene7 12, /fp/engage, /fp/commit (as a button: 0.0 let go does
+     nothing, unanswered; 1.0 pressed commits), /fp/record/stop: every command
      answered by /fp/status naming it, "ok", and the state after it (recording 1 with
      slate scene7 and take 12, engaged, committed, recording 0);
   3. the same take number again is refused ("error: ... exists"), /fp/play too (run has no
@@ -128,7 +129,13 @@ try:
     st = command("/fp/engage")
     time.sleep(0.5)
     want(command("/fp/status"), state="engaged", recording=1)
-    command("/fp/commit")
+    # a control surface's button (TouchOSC, Open Stage Control): its value 0 as it is let go
+    # does nothing and is not answered (nor refused), its value 1 as it is pressed commits
+    sock.sendto(fposc.encode("/fp/commit", 0.0), target)
+    if receive(0.5) is not None:
+        fail("a button let go (/fp/commit 0.0) was answered")
+    want(command("/fp/status"), state="engaged", recording=1, refused=0)
+    command("/fp/commit", 1.0)
     time.sleep(0.3)
     want(command("/fp/status"), state="committed", recording=1, take=12)
     st = command("/fp/record/stop")
@@ -197,8 +204,9 @@ try:
                 p = fposc.bundle(p)
         elif kind == 9:                   # a bundle whose element size lies
             p = b"#bundle\0" + struct.pack(">Q", 1) + struct.pack(">i", 4000) + fposc.encode("/fp/engage")
-        elif kind == 10:                  # extra arguments
-            p = fposc.encode(rng.choice(["/fp/engage", "/fp/record/stop", "/RecordStop", "/fp/quit"]), 1)
+        elif kind == 10:                  # extra arguments (one number is a button's value)
+            p = fposc.encode(rng.choice(["/fp/engage", "/fp/record/stop", "/RecordStop", "/fp/quit"]),
+                             *rng.choice([(1, 2), ("x",), (0.0, 1.0), (float("nan"),)]))
         else:                             # channel with a bad name or value
             p = fposc.encode("/fp/channel", rng.choice(["jaw open", "", "j" * 80, "jaw.open"]),
                              rng.choice([float("nan"), "x"]))
