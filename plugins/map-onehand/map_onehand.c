@@ -131,6 +131,8 @@ typedef struct onehand {
     float held[OH_SLOTS][3];               /* displacement kept from before a rest, mesh units */
     float last[OH_SLOTS][3];               /* this gesture's last displacement (no clamp) */
     double held_jaw, last_jaw;             /* jaw.open above neutral: kept, and the last */
+    bool jaw_set;                          /* the last jaw.open it set was a shape's (posed):
+                                              the next unposed frame sets it back to neutral */
 
     /* still detection (auto=1) */
     bool have_anchor;
@@ -333,9 +335,13 @@ static int emit(const onehand *o, const fp_rig_view *rig, const fp_frame_input *
     return 0;
 }
 
-/* jaw.open for this frame: neutral + (max - neutral) x (held + last), clamped. */
-static void emit_jaw(const onehand *o, const fp_rig_view *rig, fp_control_set *out, bool shown)
+/* jaw.open for this frame: neutral + (max - neutral) x (held + last), clamped, while a shape
+ * is shown; neutral once when it goes; then nothing, so that another driver of the channel
+ * (an input's channel events: the audio input's jaw flap) has it while the hand rests. */
+static void emit_jaw(onehand *o, const fp_rig_view *rig, fp_control_set *out, bool shown)
 {
+    if (!shown && !o->jaw_set) return;
+    o->jaw_set = shown;
     if (!FP_HAS_FIELD(out, fp_control_set, channels) || !out->channels ||
         out->channel_capacity < 1)
         return;

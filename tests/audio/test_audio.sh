@@ -12,7 +12,7 @@
 #  4. LTC at 25 and 29.97 drop-frame, made with libltc's encoder (crossing a dropped minute):
 #     run --timecode ltc:FILE.wav gives a take whose timecode_in and every frame's timecode
 #     equal the encoded ones (as libltc counted them).
-#  5. input-audio: run --input audio:speech.wav: jaw.open above 0.3 within two frames of each
+#  5. input-audio: run --input audio:speech.wav (anchored, and onehand with no hand): jaw.open above 0.3 within two frames of each
 #     syllable's onset, below 0.1 in the silences (0.25 s after each syllable's end on); the
 #     check must fail for onsets moved 0.1 s early; `plugins check` passes input-audio (its
 #     channel events well-formed); a channel name with a space is refused before any work.
@@ -119,6 +119,12 @@ ltc_case 30000 1001 "00:00:59;20" 29.97 ltc2997df
     -o "$tmp/jaw.obj" -q >/dev/null 2>"$tmp/jaw.err" || { cat "$tmp/jaw.err"; fail "run --input audio exited $?"; }
 cat "$tmp/jaw.err"
 "$tool" jaw "$tmp/jaw/scene1_T001.fptake" "$onsets" "$ends" || fail "the jaw does not follow the syllables"
+# the same under the one-hand mapping with no hand: it leaves jaw.open to the audio while the
+# hand rests (before: it set it to neutral every frame, and the jaw never moved)
+"$fp" run "${pd[@]}" --mesh "$mesh" --input "audio:$tmp/speech.wav,fast=1" --mapping onehand \
+    --take-dir "$tmp/jaw1" -o "$tmp/jaw1.obj" -q >/dev/null 2>"$tmp/jaw1.err" ||
+    { cat "$tmp/jaw1.err"; fail "run --input audio --mapping onehand exited $?"; }
+"$tool" jaw "$tmp/jaw1/scene1_T001.fptake" "$onsets" "$ends" || fail "onehand: the jaw does not follow the syllables"
 early=$(echo "$onsets" | awk -F, '{ printf "%.4f,%.4f,%.4f", $1 - 0.1, $2 - 0.1, $3 - 0.1 }')
 "$tool" jaw "$tmp/jaw/scene1_T001.fptake" "$early" "$ends" >/dev/null && fail "the jaw check passed onsets 0.1 s early"
 "$fp" plugins check "$build/lib/facepuppet/input-audio.so" --arg "$tmp/speech.wav" >"$tmp/check.out" 2>&1 ||

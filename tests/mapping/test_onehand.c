@@ -104,6 +104,9 @@ typedef struct fx {
     fp_frame_input in;
     fp_pose_state pose;
     int rc;                       /* the last process() */
+    double jaw_now;               /* jaw.open as the rig holds it: the last value the mapping
+                                     set (it sets none while the hand rests), neutral first */
+    size_t jaw_sets;              /* frames that set jaw.open */
 } fx;
 
 static void host_log(const fp_host *h, fp_log_level level, const char *msg)
@@ -183,17 +186,17 @@ static void step(fx *x, uint32_t requested)
     memcpy(x->in.hands, x->pose.poses, sizeof x->in.hands);
     x->in.requested = requested;
     x->rc = x->m->process(x->m, &x->in, &x->cs);
+    for (size_t i = 0; i < x->cs.channel_count; i++)
+        if (!strcmp(x->ch[i].name, "jaw.open")) {
+            x->jaw_now = x->ch[i].value;
+            x->jaw_sets++;
+        }
     x->in.frame++;
     x->in.time_ns += STEP_NS;
 }
 
-/* jaw.open of the last frame, or NaN where the mapping set no channel. */
-static double jaw(const fx *x)
-{
-    for (size_t i = 0; i < x->cs.channel_count; i++)
-        if (!strcmp(x->ch[i].name, "jaw.open")) return x->ch[i].value;
-    return NAN;
-}
+/* jaw.open after the last frame, as the rig holds it (the value the mapping set last). */
+static double jaw(const fx *x) { return x->jaw_now; }
 
 /* A hand pose: angles (22, radians, a flat hand with the model's rest thumb) and a wrist. */
 typedef struct hand {
@@ -737,6 +740,40 @@ static void test_commit_cancel(void **state)
     }
 }
 
+/* jaw.open is the mapping's only while a shape is shown: it sets none while the hand rests
+ * (the audio input's jaw flap has the channel then), the shape's while engaged, and neutral
+ * once when the shape goes. */
+static void test_jaw_left_alone_at_rest(void **state)
+{
+    (void)state;
+    fx x;
+    char err[1024];
+    fp_param p[] = {{"auto", "0"}, {"jaw", "flexion"}, {"ease", "0"}};
+    assert_int_equal(open_onehand(&x, p, 3, true, err), 0);
+    hand h = rest_hand(FP_HAND_RIGHT);
+    for (int f = 0; f < 30; f++) {            /* a hand, not engaged; then none */
+        if (f < 20) put(&x, FP_HAND_RIGHT, &h, false);
+        else gone(&x, FP_HAND_RIGHT);
+        step(&x, 0);
+        assert_int_equal(x.rc, 0);
+    }
+    assert_int_equal(x.jaw_sets, 0);
+    put(&x, FP_HAND_RIGHT, &h, false);
+    step(&x, FP_INTENT_ENGAGE);
+    h.a[FP_SENSOR_THUMB_MPJ] += (float)(9 * DEG);
+    put(&x, FP_HAND_RIGHT, &h, false);
+    step(&x, 0);
+    assert_float_equal(jaw(&x), 0.2, 0.01);
+    size_t sets = x.jaw_sets;
+    assert_int_equal(sets, 2);                /* the engage frame's and this one's */
+    step(&x, FP_INTENT_CANCEL);               /* the shape goes: neutral, once */
+    assert_float_equal(jaw(&x), 0.0, 0);
+    assert_int_equal(x.jaw_sets, sets + 1);
+    for (int f = 0; f < 10; f++) step(&x, 0);
+    assert_int_equal(x.jaw_sets, sets + 1);
+    close_onehand(&x);
+}
+
 /* hold=1: the face stays posed while the hand is gone, and the next engage continues from
  * it; hold=0: the shape goes with the hand. */
 static void test_hold(void **state)
@@ -890,6 +927,7 @@ int main(void)
         cmocka_unit_test(test_left_ignores_right),   cmocka_unit_test(test_auto_still),
         cmocka_unit_test(test_auto_hand),
         cmocka_unit_test(test_commit_cancel),        cmocka_unit_test(test_hold),
+        cmocka_unit_test(test_jaw_left_alone_at_rest),
         cmocka_unit_test(test_no_rig),               cmocka_unit_test(test_keys),
     };
     return cmocka_run_group_tests(tests, setup_rig, teardown_rig);
