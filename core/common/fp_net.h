@@ -14,7 +14,8 @@ extern "C" {
 
 /** A UDP socket connected to host:port (so that send() needs no address): host an IPv4
  *  address, an IPv6 one bare or in brackets ("::1", "[::1]", as in osc:[::1]:9000) or a name,
- *  each of its addresses tried in getaddrinfo's order; port decimal. Opened SOCK_CLOEXEC |
+ *  its IPv4 addresses tried first (a name such as localhost that resolves to ::1 and
+ *  127.0.0.1 reaches a receiver bound to 127.0.0.1), then its IPv6 ones; port decimal. Opened SOCK_CLOEXEC |
  *  flags (e.g. SOCK_NONBLOCK). Returns the socket (the caller closes it), or a negative
  *  errno-style code (-ENOENT: the name does not resolve) with the reason in why (whylen
  *  bytes: getaddrinfo's text or the system's). Thread-safe. */
