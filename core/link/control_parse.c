@@ -15,26 +15,26 @@
 #define TAKE_MAX 999999u
 
 /* An address, its command, and the type tags it takes ('n': a number, f, d, i or h; '?': an
- * optional tail starts, so "?sn" takes "", "s" and "s" + a number). The commands that take
- * nothing ("?b") also take one number: a control surface's button sends its value, 1 when
- * pressed and 0 when let go (TouchOSC, Open Stage Control); 0 does nothing. */
+ * optional tail starts, so "?sn" takes "", "s" and "s" + a number). A command that may come
+ * without arguments also comes as a button (button_value): one number, which its own tags
+ * do not take otherwise. */
 static const struct {
     const char *address;
     fp_control_kind kind;
     const char *types;
 } table[] = {
     {"/fp/record/start", FP_CTL_RECORD_START, "?sn"}, {"/RecordStart", FP_CTL_RECORD_START, "?sn"},
-    {"/fp/record/stop", FP_CTL_RECORD_STOP, "?b"},      {"/RecordStop", FP_CTL_RECORD_STOP, "?b"},
-    {"/fp/engage", FP_CTL_ENGAGE, "?b"},                {"/fp/commit", FP_CTL_COMMIT, "?b"},
-    {"/fp/cancel", FP_CTL_CANCEL, "?b"},                {"/fp/undo", FP_CTL_UNDO, "?b"},
-    {"/fp/reset", FP_CTL_RESET, "?b"},                  {"/fp/radius", FP_CTL_RADIUS, "n"},
+    {"/fp/record/stop", FP_CTL_RECORD_STOP, ""},      {"/RecordStop", FP_CTL_RECORD_STOP, ""},
+    {"/fp/engage", FP_CTL_ENGAGE, ""},                {"/fp/commit", FP_CTL_COMMIT, ""},
+    {"/fp/cancel", FP_CTL_CANCEL, ""},                {"/fp/undo", FP_CTL_UNDO, ""},
+    {"/fp/reset", FP_CTL_RESET, ""},                  {"/fp/radius", FP_CTL_RADIUS, "n"},
     {"/fp/mapping", FP_CTL_MAPPING, "s"},             {"/fp/channel", FP_CTL_CHANNEL, "sn"},
-    {"/fp/play", FP_CTL_PLAY, "?b"},                    {"/fp/stop", FP_CTL_STOP, "?b"},
-    {"/fp/seek", FP_CTL_SEEK, "n"},                   {"/fp/status", FP_CTL_STATUS, "?b"},
+    {"/fp/play", FP_CTL_PLAY, ""},                    {"/fp/stop", FP_CTL_STOP, ""},
+    {"/fp/seek", FP_CTL_SEEK, "n"},                   {"/fp/status", FP_CTL_STATUS, ""},
     {"/fp/subscribe", FP_CTL_SUBSCRIBE, "?n"},        {"/fp/unsubscribe", FP_CTL_UNSUBSCRIBE, "?n"},
     {"/fp/slate", FP_CTL_SLATE, "s"},                 {"/Slate", FP_CTL_SLATE, "s"},
     {"/fp/take", FP_CTL_TAKE, "n"},                   {"/Take", FP_CTL_TAKE, "n"},
-    {"/fp/quit", FP_CTL_QUIT, "?b"},
+    {"/fp/quit", FP_CTL_QUIT, ""},
 };
 
 static const char *const kind_names[FP_CTL_KINDS] = {
@@ -47,6 +47,8 @@ const char *fp_control_kind_name(fp_control_kind k)
     return (unsigned)k < FP_CTL_KINDS ? kind_names[k] : "?";
 }
 
+static bool number_type(char t) { return t == 'f' || t == 'd' || t == 'i' || t == 'h'; }
+
 /* types matches the pattern (above). */
 static bool types_match(const char *pattern, const char *types)
 {
@@ -56,9 +58,7 @@ static bool types_match(const char *pattern, const char *types)
         if (!*types) return !*pattern || optional;
         if (!*pattern) return false;
         char t = *types++;
-        if (*pattern == 'n' || *pattern == 'b' ? !(t == 'f' || t == 'd' || t == 'i' || t == 'h')
-                                               : t != *pattern)
-            return false;
+        if (*pattern == 'n' ? !number_type(t) : t != *pattern) return false;
     }
 }
 
@@ -105,9 +105,16 @@ static bool channel_ok(const char *s)
            strspn(s, "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789._-") == n;
 }
 
-/* The arguments of a matched message into cmd: TAKE (queue it), REFUSE (a value refused) or
- * RELEASED (a button let go: nothing to do) */
-enum { REFUSE, TAKE, RELEASED };
+/* A button's message for a command of these tags: one number, where the tags take no
+ * arguments but do not take that one number (as /fp/subscribe's optional port does) */
+static bool button_value(const char *pattern, const char *types)
+{
+    return types_match(pattern, "") && strlen(types) == 1 && number_type(types[0]) &&
+           !types_match(pattern, types);
+}
+
+/* The arguments of a matched message into cmd: TAKE (queue it) or REFUSE (a value refused) */
+enum { REFUSE, TAKE };
 static int take_args(fp_control_cmd *cmd, const char *types, lo_arg **argv)
 {
     size_t argc = strlen(types);
@@ -158,11 +165,8 @@ static int take_args(fp_control_cmd *cmd, const char *types, lo_arg **argv)
             cmd->port = (int)v;
         }
         return TAKE;
-    default: { /* a command that takes nothing, or a button's value */
-        if (argc == 0) return TAKE;
-        double v = number(types[0], argv[0]);
-        return !isfinite(v) ? REFUSE : v != 0 ? TAKE : RELEASED;
-    }
+    default:
+        return TAKE;
     }
 }
 
@@ -188,6 +192,21 @@ static void message(fp_control *c, unsigned char *data, size_t size, const fp_co
     while (k < n && strcmp(path, table[k].address)) k++;
     if (k == n) {
         fp__control_problem(c, FP_CTL_UNKNOWN_ADDRESS);
+    } else if (button_value(table[k].types, types)) {
+        /* a control surface's button (TouchOSC, Open Stage Control: 1 pressed, 0 let go) on a
+         * command that may come without arguments: any value but 0 runs it so, 0 does nothing */
+        double v = number(types[0], lo_message_get_argv(m)[0]);
+        if (!isfinite(v)) {
+            fp__control_problem(c, FP_CTL_BAD_VALUE);
+        } else if (v != 0) {
+            fp_control_cmd cmd;
+            memset(&cmd, 0, sizeof cmd);
+            cmd.from = from->from;
+            cmd.fromlen = from->fromlen;
+            cmd.kind = table[k].kind;
+            snprintf(cmd.address, sizeof cmd.address, "%s", table[k].address);
+            fp__control_queue(c, &cmd);
+        }
     } else if (!types_match(table[k].types, types)) {
         fp__control_problem(c, FP_CTL_BAD_TYPES);
     } else {
@@ -197,9 +216,8 @@ static void message(fp_control *c, unsigned char *data, size_t size, const fp_co
         cmd.fromlen = from->fromlen;
         cmd.kind = table[k].kind;
         snprintf(cmd.address, sizeof cmd.address, "%s", table[k].address);
-        int r = take_args(&cmd, types, lo_message_get_argv(m));
-        if (r == TAKE) fp__control_queue(c, &cmd);
-        else if (r == REFUSE) fp__control_problem(c, FP_CTL_BAD_VALUE);
+        if (take_args(&cmd, types, lo_message_get_argv(m)) == TAKE) fp__control_queue(c, &cmd);
+        else fp__control_problem(c, FP_CTL_BAD_VALUE);
     }
     lo_message_free(m);
 }

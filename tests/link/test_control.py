@@ -11,7 +11,8 @@ only the control surface engages and commits, records takes in a folder and list
      slate scene7 and take 12, engaged, committed, recording 0);
   3. the same take number again is refused ("error: ... exists"), /fp/play too (run has no
      transport), /fp/undo and /fp/radius answered;
-  4. Live Link Face's /Slate, /Take, /RecordStart llf 3 and /RecordStop: the same;
+  4. Live Link Face's /Slate, /Take, /RecordStart llf 3 and /RecordStop: the same; then
+     /fp/record/start and /fp/record/stop as buttons (0.0 nothing, 1.0 take llf 5);
   5. 10,000 hostile packets (random bytes, cut messages, wrong types, NaN and negative
      values, slates and mappings with paths, nested and broken bundles, unknown addresses):
      each counted as refused (the status's refused count grows by exactly the messages
@@ -162,6 +163,14 @@ try:
     want(st, recording=1, slate="llf", take=4)
     time.sleep(0.2)
     want(command("/RecordStop"), recording=0, take=4)
+    # a button for recording: pressed (1.0) starts a take with the slate and next number,
+    # let go (0.0) does nothing; a second button stops it
+    sock.sendto(fposc.encode("/fp/record/start", 0.0), target)
+    if receive(0.5) is not None:
+        fail("a button let go (/fp/record/start 0.0) was answered")
+    want(command("/fp/record/start", 1.0), recording=1, slate="llf", take=5)
+    time.sleep(0.2)
+    want(command("/fp/record/stop", 1), recording=0, take=5)
     time.sleep(1.2)                       # (a push a second at least)
     if not any(p["recording"] == 1 for p in pushes) or not pushes:
         fail("the subscriber got no push while recording (%d pushes)" % len(pushes))

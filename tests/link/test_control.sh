@@ -5,8 +5,9 @@
 # slate and take number, engages, commits and stops, does the same with Live Link Face's
 # /RecordStart and /RecordStop, checks every command's /fp/status reply, then sends 10,000
 # hostile packets and checks they changed nothing. Here: the takes exist with those slates
-# and numbers (facepuppet takes --json) and the first one plays back with its commit; then
-# play --control's transport on it (test_transport.py) and, under Xvfb, live --control.
+# and numbers (facepuppet takes --json; llf 5 started and stopped by buttons) and the first one
+# plays back with its commit; then play --control's transport on it (test_transport.py) and,
+# under Xvfb, live --control.
 # SPDX-License-Identifier: GPL-3.0-or-later
 set -uo pipefail
 build=${FP_BUILD_DIR:-build}
@@ -22,7 +23,7 @@ python3 tests/link/test_control.py "$fp" "$build/lib/facepuppet" \
 python3 - "$tmp/takes.json" <<'PY' || fail "the takes"
 import json, sys
 takes = {(t["slate"], t["take"]): t for t in json.load(open(sys.argv[1]))}
-want = [("scene7", 12), ("llf", 3), ("llf", 4)]
+want = [("scene7", 12), ("llf", 3), ("llf", 4), ("llf", 5)]
 for k in want:
     if k not in takes: sys.exit("no take %s %d in %s" % (k + (sorted(takes),)))
     if takes[k]["state"] != "ok" or not takes[k]["frames"] > 0:
