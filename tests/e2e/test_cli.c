@@ -376,6 +376,12 @@ static void test_info(void **state)
     assert_non_null(strstr(out, "probably centimetres"));
     assert_int_equal(fp("info /nonexistent/face.obj"), 66);
     assert_non_null(strstr(out, "/nonexistent/face.obj"));
+    /* a glove's calibration file: said what it is and where it goes (before: "unknown
+     * format: expected a facepuppet event log, ..." as if a recording) */
+    snprintf(args, sizeof args, "info %s/cyberglove/GloveCalibrationRight.cal", data);
+    assert_int_equal(fp(args), 65);
+    assert_non_null(strstr(out, "a CyberGlove calibration file"));
+    assert_non_null(strstr(out, "cyberglove:DEVICE,cal="));
 }
 
 /* A mesh that is not there is an input that cannot be opened: exit 66 (EX_NOINPUT), from

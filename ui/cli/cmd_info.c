@@ -137,7 +137,8 @@ static int info_main(int argc, char **argv)
                    "  rate, hands, duration.\n"
                    "A rig (RIG.json): regions, landmarks, hinge, channels; checked against its mesh.\n"
                    "A take (.fptake): its header, frames, timecode, and where it was cut if it was.\n"
-                   "A stack (.fpstack): its layers (take, region, mode, range, gain, mute, solo).\n");
+                   "A stack (.fpstack): its layers (take, region, mode, range, gain, mute, solo).\n"
+                   "(A CyberGlove calibration, .cal, is the glove input's: cyberglove:DEVICE,cal=FILE.)\n");
         return argc == 2 ? FP_EXIT_OK : FP_EXIT_USAGE;
     }
     if (argv[1][0] == '-' && argv[1][1]) { /* an option it does not have (a file: ./-name) */
@@ -146,6 +147,12 @@ static int info_main(int argc, char **argv)
         return FP_EXIT_USAGE;
     }
     const char *dot = strrchr(argv[1], '.');
+    if (dot && !strcasecmp(dot, ".cal")) { /* (not a recording: its reader's "unknown format" misled) */
+        fprintf(stderr, "facepuppet info: %s: a CyberGlove calibration file, which info does not "
+                "read; the glove input reads it: --input cyberglove:DEVICE,cal=%s (docs/cyberglove.md)\n",
+                argv[1], argv[1]);
+        return FP_EXIT_DATAERR;
+    }
     if (dot && !strcasecmp(dot, ".json") && !is_json_recording(argv[1])) return fp_app_rig_info(argv[1]);
     if (fp_stack_is_stack_path(argv[1])) return fp_app_stack_info(argv[1]);
     if (is_take(argv[1])) return fp_app_take_info(argv[1]);
