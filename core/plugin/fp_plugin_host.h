@@ -166,7 +166,7 @@ typedef struct fp_event_queue {
                                             once, however often pushed again), less those
                                             pushed again and taken (refused) */
     atomic_uint_least64_t refused;       /* the last refused event: a key of its bytes (never
-                                            0); 0: none since the last one was taken */
+                                            0); 0: none since the last push taken */
 } fp_event_queue;
 
 /** capacity is rounded up to a power of two (at least 2). Returns 0 or -ENOMEM. */

@@ -62,13 +62,16 @@ static void refused(fp_event_queue *q, const fp_event_header *ev)
 }
 
 /* The queue took ev: where it is the event last refused (pushed again, as a producer that
- * waits for room does), it was not dropped after all */
+ * waits for room does), it was not dropped after all; another event: the refused one was
+ * given up, its drop stays. Either way refused is cleared, so that a push after a drop
+ * hashes its event once, not every time. */
 static void taken(fp_event_queue *q, const fp_event_header *ev)
 {
     uint64_t old = atomic_load_explicit(&q->refused, memory_order_relaxed);
-    if (!old || old != event_key(ev)) return;
+    if (!old) return;
+    const bool again = old == event_key(ev);
     if (atomic_compare_exchange_strong_explicit(&q->refused, &old, 0, memory_order_relaxed,
-                                                memory_order_relaxed))
+                                                memory_order_relaxed) && again)
         atomic_fetch_sub_explicit(&q->dropped, 1, memory_order_relaxed);
 }
 

@@ -564,6 +564,13 @@ static void test_queue_retry(void **state)
     assert_int_equal(fp_event_queue_dropped(&q), 1);
     assert_false(fp_event_queue_push(&q, &e9.header));
     assert_int_equal(fp_event_queue_dropped(&q), 2);
+    /* another event taken after a refusal: the refused one was given up, counted at once */
+    fp_event_button e10 = e6;
+    e10.header.time_ns = 10;
+    assert_true(fp_event_queue_pop(&q, &ev));
+    assert_true(fp_event_queue_push(&q, &e10.header));
+    assert_int_equal(fp_event_queue_dropped(&q), 3);
+    assert_int_equal(atomic_load(&q.refused), 0);
     fp_event_queue_destroy(&q);
 }
 
