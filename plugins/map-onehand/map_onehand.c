@@ -131,8 +131,9 @@ typedef struct onehand {
     float held[OH_SLOTS][3];               /* displacement kept from before a rest, mesh units */
     float last[OH_SLOTS][3];               /* this gesture's last displacement (no clamp) */
     double held_jaw, last_jaw;             /* jaw.open above neutral: kept, and the last */
-    bool jaw_set;                          /* the last jaw.open it set was a shape's (posed):
-                                              the next unposed frame sets it back to neutral */
+    bool jaw_set;                          /* the last jaw.open it set was a shape's (posed),
+                                              or none was set since create or reset: the next
+                                              unposed frame sets it to neutral */
 
     /* still detection (auto=1) */
     bool have_anchor;
@@ -420,7 +421,15 @@ static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *o
     return 0;
 }
 
-static void reset(fp_mapping *self) { end_gesture(self->plugin_data); }
+/* Back to the first frame's state (plugin.h: the same frames then give the same control
+ * sets): the next frame sets jaw.open neutral once, as the first one did, so that after an
+ * undo mid-gesture the jaw closes with the shape */
+static void reset(fp_mapping *self)
+{
+    onehand *o = self->plugin_data;
+    end_gesture(o);
+    o->jaw_set = true;
+}
 static void destroy(fp_mapping *self) { free(self->plugin_data); }
 
 /* ---- keys ----------------------------------------------------------------------------------- */
@@ -553,6 +562,7 @@ static int create(const fp_host *host, const fp_param *params, size_t nparams, f
     onehand *o = calloc(1, sizeof *o);
     if (!o) return -ENOMEM;
     o->host = host;
+    o->jaw_set = true; /* the first frame sets jaw.open neutral once (as after reset) */
     o->hand_auto = v[KEY_HAND].number == 0;
     o->hand = v[KEY_HAND].number == 1 ? FP_HAND_LEFT : FP_HAND_RIGHT; /* (auto: the right first) */
     o->jaw = v[KEY_JAW].number == 0 ? JAW_FLEXION : JAW_OPENING;

@@ -742,7 +742,7 @@ static void test_commit_cancel(void **state)
 
 /* jaw.open is the mapping's only while a shape is shown: it sets none while the hand rests
  * (the audio input's jaw flap has the channel then), the shape's while engaged, and neutral
- * once when the shape goes. */
+ * once when the shape goes, at the first frame and after a reset. */
 static void test_jaw_left_alone_at_rest(void **state)
 {
     (void)state;
@@ -757,7 +757,7 @@ static void test_jaw_left_alone_at_rest(void **state)
         step(&x, 0);
         assert_int_equal(x.rc, 0);
     }
-    assert_int_equal(x.jaw_sets, 0);
+    assert_int_equal(x.jaw_sets, 1);          /* the first frame's neutral, then none */
     put(&x, FP_HAND_RIGHT, &h, false);
     step(&x, FP_INTENT_ENGAGE);
     h.a[FP_SENSOR_THUMB_MPJ] += (float)(9 * DEG);
@@ -765,12 +765,15 @@ static void test_jaw_left_alone_at_rest(void **state)
     step(&x, 0);
     assert_float_equal(jaw(&x), 0.2, 0.01);
     size_t sets = x.jaw_sets;
-    assert_int_equal(sets, 2);                /* the engage frame's and this one's */
+    assert_int_equal(sets, 3);                /* and the engage frame's and this one's */
     step(&x, FP_INTENT_CANCEL);               /* the shape goes: neutral, once */
     assert_float_equal(jaw(&x), 0.0, 0);
     assert_int_equal(x.jaw_sets, sets + 1);
     for (int f = 0; f < 10; f++) step(&x, 0);
     assert_int_equal(x.jaw_sets, sets + 1);
+    x.m->reset(x.m);                          /* reset: neutral once more, as at the start */
+    for (int f = 0; f < 10; f++) step(&x, 0);
+    assert_int_equal(x.jaw_sets, sets + 2);
     close_onehand(&x);
 }
 
