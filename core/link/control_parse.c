@@ -113,60 +113,59 @@ static bool button_value(const char *pattern, const char *types)
            !types_match(pattern, types);
 }
 
-/* The arguments of a matched message into cmd: TAKE (queue it) or REFUSE (a value refused) */
-enum { REFUSE, TAKE };
-static int take_args(fp_control_cmd *cmd, const char *types, lo_arg **argv)
+/* The arguments of a matched message into cmd; false when a value is refused. */
+static bool take_args(fp_control_cmd *cmd, const char *types, lo_arg **argv)
 {
     size_t argc = strlen(types);
     switch (cmd->kind) {
     case FP_CTL_RECORD_START:
     case FP_CTL_SLATE:
         if (argc >= 1) {
-            if (strlen(&argv[0]->s) >= FP_TAKE_SLATE_MAX || !fp_take_slate_valid(&argv[0]->s)) return REFUSE;
+            if (strlen(&argv[0]->s) >= FP_TAKE_SLATE_MAX || !fp_take_slate_valid(&argv[0]->s)) return false;
             snprintf(cmd->text, sizeof cmd->text, "%s", &argv[0]->s);
             cmd->has_text = true;
         }
         if (argc >= 2) {
             double v = number(types[1], argv[1]);
-            if (!(v >= 1 && v <= TAKE_MAX && v == floor(v))) return REFUSE;
+            if (!(v >= 1 && v <= TAKE_MAX && v == floor(v))) return false;
             cmd->take = (uint32_t)v;
             cmd->has_take = true;
         }
-        return TAKE;
+        return true;
     case FP_CTL_TAKE: {
         double v = number(types[0], argv[0]);
-        if (!(v >= 1 && v <= TAKE_MAX && v == floor(v))) return REFUSE;
+        if (!(v >= 1 && v <= TAKE_MAX && v == floor(v))) return false;
         cmd->take = (uint32_t)v;
         cmd->has_take = true;
-        return TAKE;
+        return true;
     }
     case FP_CTL_RADIUS:
         cmd->value = number(types[0], argv[0]);
-        return isfinite(cmd->value) && cmd->value > 0 && cmd->value < 1e6 ? TAKE : REFUSE;
+        return isfinite(cmd->value) && cmd->value > 0 && cmd->value < 1e6;
     case FP_CTL_SEEK:
         cmd->value = number(types[0], argv[0]);
-        return isfinite(cmd->value) && cmd->value >= 0 && cmd->value < 1e7 ? TAKE : REFUSE;
+        return isfinite(cmd->value) && cmd->value >= 0 && cmd->value < 1e7;
     case FP_CTL_MAPPING:
-        if (!spec_ok(&argv[0]->s)) return REFUSE;
+        if (!spec_ok(&argv[0]->s)) return false;
         snprintf(cmd->text, sizeof cmd->text, "%s", &argv[0]->s);
         cmd->has_text = true;
-        return TAKE;
+        return true;
     case FP_CTL_CHANNEL:
-        if (!channel_ok(&argv[0]->s)) return REFUSE;
+        if (!channel_ok(&argv[0]->s)) return false;
         snprintf(cmd->text, sizeof cmd->text, "%s", &argv[0]->s);
         cmd->has_text = true;
         cmd->value = number(types[1], argv[1]);
-        return isfinite(cmd->value) && fabs(cmd->value) < 1e6 ? TAKE : REFUSE;
+        return isfinite(cmd->value) && fabs(cmd->value) < 1e6;
     case FP_CTL_SUBSCRIBE:
     case FP_CTL_UNSUBSCRIBE:
         if (argc >= 1) {
             double v = number(types[0], argv[0]);
-            if (!(v >= 1 && v <= 65535 && v == floor(v))) return REFUSE;
+            if (!(v >= 1 && v <= 65535 && v == floor(v))) return false;
             cmd->port = (int)v;
         }
-        return TAKE;
+        return true;
     default:
-        return TAKE;
+        return true;
     }
 }
 
@@ -192,32 +191,28 @@ static void message(fp_control *c, unsigned char *data, size_t size, const fp_co
     while (k < n && strcmp(path, table[k].address)) k++;
     if (k == n) {
         fp__control_problem(c, FP_CTL_UNKNOWN_ADDRESS);
-    } else if (button_value(table[k].types, types)) {
+        lo_message_free(m);
+        return;
+    }
+    fp_control_cmd cmd;
+    memset(&cmd, 0, sizeof cmd);
+    cmd.from = from->from;
+    cmd.fromlen = from->fromlen;
+    cmd.kind = table[k].kind;
+    snprintf(cmd.address, sizeof cmd.address, "%s", table[k].address);
+    lo_arg **argv = lo_message_get_argv(m);
+    if (button_value(table[k].types, types)) {
         /* a control surface's button (TouchOSC, Open Stage Control: 1 pressed, 0 let go) on a
          * command that may come without arguments: any value but 0 runs it so, 0 does nothing */
-        double v = number(types[0], lo_message_get_argv(m)[0]);
-        if (!isfinite(v)) {
-            fp__control_problem(c, FP_CTL_BAD_VALUE);
-        } else if (v != 0) {
-            fp_control_cmd cmd;
-            memset(&cmd, 0, sizeof cmd);
-            cmd.from = from->from;
-            cmd.fromlen = from->fromlen;
-            cmd.kind = table[k].kind;
-            snprintf(cmd.address, sizeof cmd.address, "%s", table[k].address);
-            fp__control_queue(c, &cmd);
-        }
+        double v = number(types[0], argv[0]);
+        if (!isfinite(v)) fp__control_problem(c, FP_CTL_BAD_VALUE);
+        else if (v != 0) fp__control_queue(c, &cmd);
     } else if (!types_match(table[k].types, types)) {
         fp__control_problem(c, FP_CTL_BAD_TYPES);
+    } else if (take_args(&cmd, types, argv)) {
+        fp__control_queue(c, &cmd);
     } else {
-        fp_control_cmd cmd;
-        memset(&cmd, 0, sizeof cmd);
-        cmd.from = from->from;
-        cmd.fromlen = from->fromlen;
-        cmd.kind = table[k].kind;
-        snprintf(cmd.address, sizeof cmd.address, "%s", table[k].address);
-        if (take_args(&cmd, types, lo_message_get_argv(m)) == TAKE) fp__control_queue(c, &cmd);
-        else fp__control_problem(c, FP_CTL_BAD_VALUE);
+        fp__control_problem(c, FP_CTL_BAD_VALUE);
     }
     lo_message_free(m);
 }
