@@ -4,10 +4,10 @@
  */
 #define _GNU_SOURCE
 #include "leapcsv.h"
-#include "fp_text.h"
 
 #include "fp_error.h"
 #include "fp_file.h"
+#include "fp_text.h"
 
 #include <facepuppet/decimal.h> /* fp_decimal_span: the one syntax of a number */
 

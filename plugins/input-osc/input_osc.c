@@ -28,6 +28,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <locale.h>
+#include <float.h>
 #include <math.h>
 #include <netinet/in.h>
 #include <poll.h>
@@ -220,8 +221,6 @@ static bool within(const float *v, size_t n, float limit)
     return true;
 }
 
-/* Checks a message's type tags against `want` (all of one letter when `want` is a single
- * letter repeated n times). Counts bad-count or bad-types and returns false on mismatch. */
 /* A number as OSC senders send one: 'f' (float32), 'd' (float64), 'i' (int32) or 'h' (int64);
  * Node's node-osc, for one, types a whole number as an int. An integer: 'i' or 'h'. */
 static bool number_type(char c) { return c == 'f' || c == 'd' || c == 'i' || c == 'h'; }
@@ -256,7 +255,9 @@ static float arg_f(lo_arg *a, char type)
     int32_t i;
     int64_t h;
     switch (type) {
-    case 'd': memcpy(&d, a, sizeof d); return (float)d; /* (beyond float: inf, refused later) */
+    case 'd': /* beyond float: inf (not a conversion out of range), refused as not finite */
+        memcpy(&d, a, sizeof d);
+        return fabs(d) > FLT_MAX ? (float)copysign(INFINITY, d) : (float)d;
     case 'i': memcpy(&i, a, sizeof i); return (float)i;
     case 'h': memcpy(&h, a, sizeof h); return (float)h;
     default: memcpy(&f, a, sizeof f); return f;
