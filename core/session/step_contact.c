@@ -18,7 +18,7 @@ static void cg_check(const fp_cg_step *g)
     assert(!g->lost || !g->contact); /* a lost guard is gone until it is made anew */
     /* while the guard exists, ref records only what FP_CG_REF_CHANGED will compare */
     assert(!g->contact || g->sync == FP_CG_REF_CHANGED || (!g->ref.all && !g->ref.n));
-    assert(g->limited <= g->frames);
+    assert(g->limited <= g->frames && g->turned <= g->limited && g->carried <= g->limited);
     (void)g;
 }
 
@@ -131,6 +131,7 @@ const float *fp_cg_run(fp_cg_step *g, const fp_cg_frame *f, fp_slog *log, fp_fra
         shown = fp_contact_shape(g->contact);
         g->limited++;
         g->carried += r.carried;
+        g->turned += r.pairs == 0;
         if (r.kept < g->t_least) g->t_least = r.kept;
         if (r.t < st->collide_t) st->collide_t = r.t;
         if (r.kept < st->collide_kept) st->collide_kept = r.kept;
@@ -233,12 +234,23 @@ void fp_cg_end_gesture(fp_cg_step *g, fp_slog *log)
     if (g->carried)
         snprintf(carried, sizeof carried, "; in %lu the skin held back was carried along with the drag",
                  g->carried);
+    /* what held the skin back, in the performer's words: crossings (the surface passing
+     * through itself), triangles turning over (the skin folding back), or both */
+    char why[160];
+    if (!g->turned)
+        snprintf(why, sizeof why, "stopped the surface from passing through itself");
+    else if (g->turned == g->limited)
+        snprintf(why, sizeof why, "stopped the skin from folding over (triangles turning past a right "
+                 "angle from the face's own)");
+    else
+        snprintf(why, sizeof why, "stopped the surface from passing through itself (%lu frames) and "
+                 "the skin from folding over (%lu)", g->limited - g->turned, g->turned);
     if (g->limited)
         fp_slog_printf(log, FP_LOG_WARNING, FP_SLOG_CONTACT,
-                       "contact guard stopped the surface from passing through itself: %lu of "
-                       "%lu frames scaled back (least share of a frame's motion kept %.0f%%)%s",
-                       g->limited, g->frames, 100.0 * g->t_least, carried);
-    g->frames = g->limited = g->carried = 0;
+                       "contact guard %s: %lu of %lu frames scaled back (least share of a frame's "
+                       "motion kept %.0f%%)%s",
+                       why, g->limited, g->frames, 100.0 * g->t_least, carried);
+    g->frames = g->limited = g->carried = g->turned = 0;
     cg_check(g);
 }
 

@@ -94,6 +94,8 @@ typedef struct fp_cg_step {
     unsigned long frames, limited; /* this gesture: frames checked, scaled back */
     unsigned long carried;        /* ... of those, the frames whose held skin was carried along
                                      (fp_contact_result.carried) */
+    unsigned long turned;         /* ... of those, the frames held back for triangles turning
+                                     over alone (no new crossing: fp_contact_result.pairs 0) */
     double t_least;               /* this gesture: smallest share of a frame's motion kept
                                      (fp_contact_result.kept) */
     float hold;                   /* fp_contact_hold's eps (mesh units): FP_CONTACT_HOLD of the
@@ -174,7 +176,10 @@ void fp_cg_shown_ref(fp_cg_step *g);
  *  reference: only D_P to compare at the next check. */
 void fp_cg_committed(fp_cg_step *g);
 
-/** The gesture ended: one line when the guard scaled it back (FP_SLOG_CONTACT). */
+/** The gesture ended: one line when the guard scaled it back (FP_SLOG_CONTACT, a warning),
+ *  naming what held the skin back: new crossings ("stopped the surface from passing through
+ *  itself"), triangles turning over alone ("stopped the skin from folding over"), or each
+ *  with its count of frames; then the gesture's counts start again. */
 void fp_cg_end_gesture(fp_cg_step *g, fp_slog *log);
 
 /** The support widening for a gesture's next frame (FP_FLIP_WIDEN), from this frame's

@@ -5,7 +5,8 @@
 #     flipped triangle on the three faces (the same strictness as the recordings themselves);
 #  2. test_reach on the three faces: the skin follows the fingertips (median at least 90%,
 #     each run's 10th percentile at least 60%; measured 100% and 72.0-100%);
-#  3. a gesture the contact guard held back for flips alone goes on widened and says so;
+#  3. a gesture the contact guard held back for flips alone goes on widened and says so,
+#     and its closing line says the skin would have folded over (not crossed itself);
 #  4. onehand on its defaults, the mirrored grab on each face (its rig): it engages, moves
 #     the face (vertices moved and max displacement above 0; measured 10155, 2930 and 214
 #     vertices) and gives no hint (a hand that reaches).
@@ -27,6 +28,10 @@ variant_guard_and_reach mirror "mirrored hands"
     >"$tmp/widen.out" 2>"$tmp/widen.err" || { cat "$tmp/widen.err"; echo "FAIL: the widening run"; exit 1; }
 grep -q "contact guard widened the support 2.25x this gesture" "$tmp/widen.err" ||
     { cat "$tmp/widen.err"; echo "FAIL: no widened gesture said on the mirrored grab (MediaPipe)"; exit 1; }
+# ... and its closing line names the rule that held it (measured: "stopped the skin from
+# folding over", 4 of 106 frames), not crossings
+grep -q "contact guard stopped the skin from folding over" "$tmp/widen.err" ||
+    { cat "$tmp/widen.err"; echo "FAIL: the flip-held gesture's line does not say the skin would fold over"; exit 1; }
 
 variant_onehand mirror "a left hand"
 echo ok
