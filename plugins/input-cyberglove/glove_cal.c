@@ -23,6 +23,21 @@ const int FPG_ASR_LINE_SENSOR[FPG_SENSORS] = {
     21, 20, 3, 0, 1, 2, 4, 10, 5, 6, 7, 19, 8, 9, 11, 14, 12, 13, 15, 18, 16, 17
 };
 
+const char *fpg_sensor_name(int i)
+{
+    static const char *const names[FPG_SENSORS] = {
+        "ThumbRotate", "ThumbMPJ", "ThumbIJ", "ThumbAb", "IndexMPJ", "IndexPIJ", "IndexDIJ",
+        "MiddleMPJ", "MiddlePIJ", "MiddleDIJ", "MiddleIndexAb", "RingMPJ", "RingPIJ", "RingDIJ",
+        "RingMiddleAb", "PinkieMPJ", "PinkiePIJ", "PinkieDIJ", "PinkieRingAb", "PalmArch",
+        "WristPitch", "WristYaw"};
+    return i >= 0 && i < FPG_SENSORS ? names[i] : "?";
+}
+
+const char *fpg_cal_format_name(fpg_cal_format f)
+{
+    return f == FPG_CAL_ASR ? "asr two-point" : f == FPG_CAL_GAIN_OFFSET ? "gain/offset" : "default map";
+}
+
 void fpg_cal_default(fpg_cal *cal)
 {
     const double g = (3.14159265358979323846 / 2.0) / 253.0;

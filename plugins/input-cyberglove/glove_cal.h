@@ -47,6 +47,14 @@ typedef struct fpg_cal {
 /** asr line i calibrates glove sensor FPG_ASR_LINE_SENSOR[i]. */
 extern const int FPG_ASR_LINE_SENSOR[FPG_SENSORS];
 
+/** Sensor i's name in the glove's order (shared/docs/devices.md: "ThumbRotate" ..
+ *  "WristYaw"); "?" outside 0..FPG_SENSORS-1. Static strings. [any-thread] */
+const char *fpg_sensor_name(int i);
+
+/** The format's name for a person ("asr two-point", "gain/offset", "default map").
+ *  [any-thread] */
+const char *fpg_cal_format_name(fpg_cal_format f);
+
 /** Fill *cal with the default map (raw 1..254 -> 0..pi/2). Never fails. */
 void fpg_cal_default(fpg_cal *cal);
 

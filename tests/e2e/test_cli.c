@@ -376,12 +376,41 @@ static void test_info(void **state)
     assert_non_null(strstr(out, "probably centimetres"));
     assert_int_equal(fp("info /nonexistent/face.obj"), 66);
     assert_non_null(strstr(out, "/nonexistent/face.obj"));
-    /* a glove's calibration file: said what it is and where it goes (before: "unknown
-     * format: expected a facepuppet event log, ..." as if a recording) */
+    /* a glove's calibration file: read as the glove input reads it (before: "unknown
+     * format: expected a facepuppet event log, ..." as if a recording; then only what it
+     * is). The real asr file: its format, the palm arch it leaves out, and the thumb's
+     * rotation at raw 1 and 254 from the file's own two points (asr line 3 calibrates
+     * sensor 0, docs/devices.md), computed here */
+    snprintf(args, sizeof args, "%s/cyberglove/GloveCalibrationRight.cal", data);
+    FILE *cf = fopen(args, "r");
+    assert_non_null(cf);
+    char cl[256] = "";
+    for (int i = 0; i < 4; i++) assert_non_null(fgets(cl, sizeof cl, cf));
+    fclose(cf);
+    double r1, w1, r2, w2;
+    assert_int_equal(sscanf(cl, "%lf:%lf %lf:%lf", &r1, &w1, &r2, &w2), 4);
+    const double deg = 180 / 3.14159265358979323846;
+    char want[128];
+    snprintf(want, sizeof want, " 0 ThumbRotate    %7.1f .. %.1f\n", ((r2 - r1) * (1 - w1) / (w2 - w1) + r1) * deg,
+             ((r2 - r1) * (254 - w1) / (w2 - w1) + r1) * deg);
     snprintf(args, sizeof args, "info %s/cyberglove/GloveCalibrationRight.cal", data);
-    assert_int_equal(fp(args), 65);
-    assert_non_null(strstr(out, "a CyberGlove calibration file"));
+    assert_int_equal(fp(args), 0);
+    assert_non_null(strstr(out, "CyberGlove calibration, asr two-point"));
+    assert_non_null(strstr(out, "21 of 22 calibrated (unused: 19 PalmArch)"));
+    if (!strstr(out, want)) fprintf(stderr, "wanted '%s' in:\n%s", want, out);
+    assert_non_null(strstr(out, want));
     assert_non_null(strstr(out, "cyberglove:DEVICE,cal="));
+    /* gain/offset lines: sensor 5 at 0.02 rad a step from -0.1 rad; the rest the default map */
+    write_file("go.cal", "# sensor gain offset\n5 0.02 -0.1\n");
+    assert_int_equal(fp("info go.cal"), 0);
+    assert_non_null(strstr(out, "gain/offset"));
+    snprintf(want, sizeof want, " 5 IndexPIJ       %7.1f .. %.1f\n", (0.02 - 0.1) * deg, (0.02 * 254 - 0.1) * deg);
+    assert_non_null(strstr(out, want));
+    assert_non_null(strstr(out, " 4 IndexMPJ           0.0 .. 90.0\n"));
+    /* a bad one: 65, the file and line */
+    write_file("twice.cal", "5 0.02 -0.1\n5 0.01 0\n");
+    assert_int_equal(fp("info twice.cal"), 65);
+    assert_non_null(strstr(out, "twice.cal:2: sensor 5 given twice"));
 }
 
 /* A mesh that is not there is an input that cannot be opened: exit 66 (EX_NOINPUT), from

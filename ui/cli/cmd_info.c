@@ -1,10 +1,11 @@
-/* facepuppet info: what a mesh or a recording holds. */
+/* facepuppet info: what a mesh, recording, rig, take, stack or glove calibration holds. */
 #define _GNU_SOURCE
 #include "app_util.h"
 #include "command.h"
 #include "fp_file.h"
 #include "fp_mesh.h"
 #include "app_stack.h"
+#include "glove_cal.h" /* (plugins/input-cyberglove: the glove input's own reader) */
 
 #include <getopt.h>
 #include <math.h>
@@ -127,6 +128,37 @@ static int recording_info(const char *path)
     return status;
 }
 
+/* A CyberGlove calibration (.cal), read as the glove input reads it (glove_cal.h): its format
+ * and, per sensor in the glove's order, the joint angle it gives at the 8-bit extremes. */
+static int cal_info(const char *path)
+{
+    fpg_cal cal;
+    char err[1024];
+    int rc = fpg_cal_load(path, &cal, err, sizeof err);
+    if (rc) {
+        fprintf(stderr, "facepuppet info: %s\n", err);
+        return fp_app_exit_code(rc, FP_APP_INPUT);
+    }
+    int used = __builtin_popcount(cal.used);
+    const double deg = 180.0 / 3.14159265358979323846;
+    printf("%s\n  format    CyberGlove calibration, %s%s\n  sensors   %d of %d calibrated", path,
+           fpg_cal_format_name(cal.format),
+           cal.format == FPG_CAL_GAIN_OFFSET ? " (sensors it does not list keep the default map)" : "",
+           used, FPG_SENSORS);
+    const char *sep = " (unused:";
+    for (int i = 0; i < FPG_SENSORS; i++)
+        if (!(cal.used >> i & 1)) printf("%s %d %s", sep, i, fpg_sensor_name(i)), sep = ",";
+    printf("%s\n  sensor            degrees at raw 1 .. 254 (an 18-sensor glove has no DIJ sensors)\n",
+           used < FPG_SENSORS ? ")" : "");
+    for (int i = 0; i < FPG_SENSORS; i++) {
+        if (!(cal.used >> i & 1)) continue;
+        printf("  %2d %-14s %7.1f .. %.1f\n", i, fpg_sensor_name(i), fpg_cal_angle(&cal, i, 1) * deg,
+               fpg_cal_angle(&cal, i, 254) * deg);
+    }
+    printf("  use       --input cyberglove:DEVICE,cal=%s\n", path);
+    return FP_EXIT_OK;
+}
+
 static int info_main(int argc, char **argv)
 {
     if (argc != 2 || !strcmp(argv[1], "-h") || !strcmp(argv[1], "--help")) {
@@ -138,7 +170,7 @@ static int info_main(int argc, char **argv)
                    "A rig (RIG.json): regions, landmarks, hinge, channels; checked against its mesh.\n"
                    "A take (.fptake): its header, frames, timecode, and where it was cut if it was.\n"
                    "A stack (.fpstack): its layers (take, region, mode, range, gain, mute, solo).\n"
-                   "(A CyberGlove calibration, .cal, is the glove input's: cyberglove:DEVICE,cal=FILE.)\n");
+                   "A CyberGlove calibration (.cal): its format and each sensor's angle range.\n");
         return argc == 2 ? FP_EXIT_OK : FP_EXIT_USAGE;
     }
     if (argv[1][0] == '-' && argv[1][1]) { /* an option it does not have (a file: ./-name) */
@@ -147,16 +179,12 @@ static int info_main(int argc, char **argv)
         return FP_EXIT_USAGE;
     }
     const char *dot = strrchr(argv[1], '.');
-    if (dot && !strcasecmp(dot, ".cal")) { /* (not a recording: its reader's "unknown format" misled) */
-        fprintf(stderr, "facepuppet info: %s: a CyberGlove calibration file, which info does not "
-                "read; the glove input reads it: --input cyberglove:DEVICE,cal=%s (docs/cyberglove.md)\n",
-                argv[1], argv[1]);
-        return FP_EXIT_DATAERR;
-    }
+    if (dot && !strcasecmp(dot, ".cal")) return cal_info(argv[1]); /* (not a recording: its reader's
+                                                                     "unknown format" misled) */
     if (dot && !strcasecmp(dot, ".json") && !is_json_recording(argv[1])) return fp_app_rig_info(argv[1]);
     if (fp_stack_is_stack_path(argv[1])) return fp_app_stack_info(argv[1]);
     if (is_take(argv[1])) return fp_app_take_info(argv[1]);
     return is_mesh(argv[1]) ? mesh_info(argv[1]) : recording_info(argv[1]);
 }
 
-const fp_command fp_command_info = {"info", "what a mesh, recording, rig or take holds", info_main};
+const fp_command fp_command_info = {"info", "what a mesh, recording, rig, take or glove calibration holds", info_main};
