@@ -115,9 +115,27 @@ static void test_reach_line(void **state)
                              "keeps them still)");
 }
 
+/* The contact line: nothing for a whole frame; what held a scaled-back one, and how much of
+ * its motion was kept (before, the badge said ENGAGED and nothing said why the face stopped) */
+static void test_contact_line(void **state)
+{
+    (void)state;
+    char out[200];
+    fp_hud_contact_line(1.0, 1.0, 0, out, sizeof out);
+    assert_string_equal(out, "");
+    fp_hud_contact_line(0.0, 0.083, 0, out, sizeof out);
+    assert_string_equal(out, "\ncontact guard kept 8% of this frame's motion: the skin would have folded over");
+    fp_hud_contact_line(0.5, 0.9, 3, out, sizeof out);
+    assert_string_equal(out, "\ncontact guard kept 90% of this frame's motion: the surface would have passed "
+                             "through itself");
+    fp_hud_contact_line(0.5, 0.9, 3, out, 1);
+    assert_string_equal(out, "");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_contact_line),
         cmocka_unit_test(test_wrap_fits),
         cmocka_unit_test(test_confirmations_kept_notes_fade),
         cmocka_unit_test(test_reach_line),

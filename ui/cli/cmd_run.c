@@ -268,6 +268,8 @@ typedef struct run_totals {
     uint64_t guarded, limited;     /* frames the fold-over guard acted on / stopped short */
     double min_det_j;
     uint64_t collided;             /* frames the contact guard scaled back */
+    uint64_t folded;               /* ... of those, for triangles turning over alone (no new
+                                      crossing: the skin would have folded over) */
     double collide_t;              /* the least share of a frame's motion it kept */
     double *update_ms;             /* each deforming frame's update time */
     size_t nupdates, cap;
@@ -297,6 +299,7 @@ static void totals_add(run_totals *t, const fp_frame_stats *st)
     }
     if (st->collide_t < 1.0) {
         t->collided++;
+        t->folded += st->collide_pairs == 0;
         if (st->collide_kept < t->collide_t) t->collide_t = st->collide_kept;
     }
     fp_app_reach_add(&t->reach, st); /* how far the skin followed */
@@ -452,19 +455,26 @@ static void print_summary(const fp_session *s, run_totals *t, const run_displace
                           int status, const char *out)
 {
     double med = fp_median(t->update_ms, t->nupdates), mmu = fp_session_head(s)->mm_per_unit;
-    char reach_text[400];
+    char reach_text[400], why[160] = "";
     fp_app_reach_text(&t->reach, mmu, reach_text, sizeof reach_text);
+    /* what held the skin back (step_contact.h's closing line, over the run) */
+    if (t->collided && t->folded == t->collided)
+        snprintf(why, sizeof why, "; each where the skin would have folded over");
+    else if (t->folded)
+        snprintf(why, sizeof why, "; %llu where the skin would have folded over, %llu where it would "
+                 "have passed through itself", (unsigned long long)t->folded,
+                 (unsigned long long)(t->collided - t->folded));
     printf("frames %llu, deforming %llu, engaged %llu, committed %llu; vertices moved %zu of %zu; "
            "displacement mean %.3g mm max %.3g mm (%.6g, %.6g mesh units of %.4g mm)%s; update median "
            "%.3f ms over %zu updates; "
            "fold-over guard acted on %llu frames (stopped short on %llu), min det J %.3g; "
-           "contact guard scaled back %llu frames (least kept %.0f%%); events dropped %lu%s%s\n",
+           "contact guard scaled back %llu frames (least kept %.0f%%%s); events dropped %lu%s%s\n",
            (unsigned long long)t->frames, (unsigned long long)t->active_frames,
            (unsigned long long)t->engages, (unsigned long long)t->commits, d->moved, d->n,
            d->n ? d->sum / d->n * mmu : 0.0, d->max * mmu, d->n ? d->sum / d->n : 0.0, d->max, mmu,
            reach_text, med, t->nupdates, (unsigned long long)t->guarded,
            (unsigned long long)t->limited, t->active_frames ? t->min_det_j : 1.0,
-           (unsigned long long)t->collided, 100.0 * t->collide_t, fp_session_dropped(s),
+           (unsigned long long)t->collided, 100.0 * t->collide_t, why, fp_session_dropped(s),
            status == FP_EXIT_OK ? "; wrote " : "", status == FP_EXIT_OK ? out : "");
 }
 

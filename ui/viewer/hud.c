@@ -212,3 +212,12 @@ void fp_hud_reach_line(const float *reach, size_t n, const float *allowed, size_
     }
     snprintf(out, len, "\nskin follows the fingertips %.0f%%  (drag %.1f mm%s)", 100.0 * least, drag_mm, rig);
 }
+
+void fp_hud_contact_line(double t, double kept, long pairs, char *out, size_t len)
+{
+    if (!len) return;
+    out[0] = 0;
+    if (!(t < 1.0)) return;
+    snprintf(out, len, "\ncontact guard kept %.0f%% of this frame's motion: %s", 100.0 * kept,
+             pairs ? "the surface would have passed through itself" : "the skin would have folded over");
+}

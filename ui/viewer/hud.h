@@ -4,7 +4,8 @@
  * The badge: a filled box at the top left in the state's colour (fp_hud_badge_color) with
  * the state's word (REC also its timecode) in near-black, so that the state reads at a
  * glance: idle grey, committed teal, ENGAGED green, LIMITED amber (the fold-over guard held
- * the gesture back), PAUSED white, REC red, PLAYING blue, REVIEW purple.
+ * the gesture back, or the contact guard its last frame), PAUSED white, REC red, PLAYING
+ * blue, REVIEW purple.
  *
  * The message stack (fp_hud_msgs): a few lines under the HUD's figures, oldest first, each
  * wrapped to the window's width. Confirmations (kinds FP_HUD_TAKE, FP_HUD_SETTING: a take
@@ -61,6 +62,14 @@ size_t fp_hud_wrap(const char *text, float max_px, float scale, char *out, size_
  *  with n == 0. Plain C; any thread. */
 void fp_hud_reach_line(const float *reach, size_t n, const float *allowed, size_t na, size_t held,
                        double drag_mm, char *out, size_t len);
+
+/** The HUD's contact line, into out (len bytes, always terminated): where the contact guard
+ *  scaled the last deforming frame back (t < 1: fp_frame_stats.collide_t), "\ncontact guard
+ *  kept 8% of this frame's motion: the skin would have folded over" (pairs == 0: triangles
+ *  turning over alone, fp_frame_stats.collide_pairs) or "...: the surface would have passed
+ *  through itself"; kept: fp_frame_stats.collide_kept. Empty where t >= 1. Plain C; any
+ *  thread. */
+void fp_hud_contact_line(double t, double kept, long pairs, char *out, size_t len);
 
 enum { FP_HUD_TAKE, FP_HUD_SETTING, FP_HUD_NOTE, FP_HUD_INFO, FP_HUD_KINDS };
 #define FP_HUD_MSGS 6          /* lines of the stack at most */

@@ -321,14 +321,16 @@ static const char *hud_state(const viewer *v)
 }
 
 /* The HUD's badge (hud.h): recording first, then the review, pause, the gesture (LIMITED
- * while the fold-over guard holds its last frame back), a commit shown, idle. */
+ * while the fold-over guard or the contact guard holds its last frame back), a commit shown,
+ * idle. */
 static fp_hud_badge hud_badge(const viewer *v)
 {
     if (fp_session_take_recording(&v->takes.take)) return FP_HUD_REC;
     if (fp_vtakes_reviewing(&v->takes)) return v->takes.playing ? FP_HUD_PLAYING : FP_HUD_REVIEW;
     if (v->paused) return FP_HUD_PAUSED;
     if (fp_session_control_set(v->s)->active)
-        return v->last_active.guard_reached < 1.0 ? FP_HUD_LIMITED : FP_HUD_ENGAGED;
+        return v->last_active.guard_reached < 1.0 || v->last_active.collide_t < 1.0 ? FP_HUD_LIMITED
+                                                                                    : FP_HUD_ENGAGED;
     return v->committed_shown ? FP_HUD_COMMITTED : FP_HUD_IDLE;
 }
 
@@ -725,22 +727,23 @@ static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
     const fp_head *head = fp_session_head(v->s);
     /* the last deforming frame's reach (skin_reach.h): the least share of a touching
      * fingertip's motion that the skin under it followed, and the longest drag, in mm */
-    char reach[160] = "", tips[160] = "";
+    char reach[160] = "", tips[160] = "", contact[160];
     const fp_frame_stats *la = &v->last_active;
     fp_hud_reach_line(la->reach, la->reach_vectors, la->reach_allowed, la->reach_allowed_vectors,
                       la->reach_held, la->reach_asked_max * head->mm_per_unit, reach, sizeof reach);
+    fp_hud_contact_line(la->collide_t, la->collide_kept, la->collide_pairs, contact, sizeof contact);
     if (v->cues.count && isfinite(v->cues.nearest))
         snprintf(tips, sizeof tips, "\nfingertips: %zu of %zu touching, nearest %.1f mm from the skin",
                  v->cues.touch_count, v->cues.count, v->cues.nearest * head->mm_per_unit);
     char hands[200];
     hud_hands(v, hands, sizeof hands);
-    char text[1024], wrapped[2048];
+    char text[2048], wrapped[4096];
     snprintf(text, sizeof text,
              "%s  %zu vertices  mapping %s\n"
              "%.3g mm per mesh unit, %.*s\n"
              "commits %lu   radius %.4g (%.1f mm)\n"
              "%.1f fps (%.2f ms)   engine %.3f ms   input %.0f ev/s%s\n"
-             "fold-over guard: bound %.2f  reach %.0f%%  sub-steps %d%s%s%s",
+             "fold-over guard: bound %.2f  reach %.0f%%  sub-steps %d%s%s%s%s",
              v->mesh_path ? (strrchr(v->mesh_path, '/') ? strrchr(v->mesh_path, '/') + 1 : v->mesh_path) : "", v->n, v->mapping,
              head->mm_per_unit, (int)strcspn(head->how, ":"), head->how, fp_session_commits(v->s),
              fp_session_radius(v->s), fp_session_radius(v->s) * head->mm_per_unit,
@@ -748,7 +751,7 @@ static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
              st->active ? st->update_ms : v->last_update_ms, v->input_rate,
              v->opt->gpu_warp ? (v->gpu_now ? "   gpu-warp" : "   gpu-warp (CPU now)") : "",
              v->last_active.guard_bound, 100.0 * v->last_active.guard_reached, v->last_active.guard_substeps,
-             reach, tips, hands);
+             reach, contact, tips, hands);
     const float white[4] = {0.95f, 0.95f, 0.92f, 1.f}, dim[4] = {0.8f, 0.85f, 0.9f, 1.f};
     float scale = h >= 600 ? 2.f : 1.f, margin = 8, max_px = (float)w - 2 * margin;
     char tc[40] = "";
@@ -1065,6 +1068,7 @@ int fp_viewer_run(const fp_viewer_options *opt, fp_viewer_report *report, char *
     v->hands_on = v->hud_on = true;
     v->last_active.guard_reached = 1.0;
     v->last_active.guard_substeps = 1;
+    v->last_active.collide_t = v->last_active.collide_kept = 1.0;
     const char *um = getenv("FACEPUPPET_VIEWER_UPLOAD");
     v->upload_mode = um && !strcmp(um, "full") ? UPLOAD_FULL : um && !strcmp(um, "check") ? UPLOAD_CHECK
                                                                                       : UPLOAD_PARTIAL;
