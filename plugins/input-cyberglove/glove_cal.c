@@ -144,8 +144,12 @@ int fpg_cal_load(const char *path, fpg_cal *cal, char *err, size_t errlen)
                 goto out;
             }
             if (parse_asr_line(s, v) != 0) {
+                /* the line as a terminal may show it: a binary file's bytes, an escape
+                 * sequence, become U+FFFD (fp_text.h) */
+                char cut[61], shown[200];
+                snprintf(cut, sizeof cut, "%.60s", s);
                 rc = fp_errorf(err, errlen, -EBADMSG, "%s:%d: expected `rad1:raw1 rad2:raw2` (asr "
-                          "format), got \"%.60s\"", path, lineno, s);
+                          "format), got \"%s\"", path, lineno, fp_text_clean(cut, shown, sizeof shown));
                 goto out;
             }
             if (v[1] < 0 || v[1] > 255 || v[3] < 0 || v[3] > 255) {

@@ -411,6 +411,12 @@ static void test_info(void **state)
     write_file("twice.cal", "5 0.02 -0.1\n5 0.01 0\n");
     assert_int_equal(fp("info twice.cal"), 65);
     assert_non_null(strstr(out, "twice.cal:2: sensor 5 given twice"));
+    /* a bad line is quoted as a terminal may show it: an escape sequence (which would
+     * recolour the terminal) becomes U+FFFD, the rest as written */
+    write_file("esc.cal", "0.3:39 -0.5:111\n\x1b[31mred:1\n");
+    assert_int_equal(fp("info esc.cal"), 65);
+    assert_non_null(strstr(out, "esc.cal:2: expected `rad1:raw1 rad2:raw2` (asr format), got \"\xef\xbf\xbd[31mred:1\""));
+    assert_null(strchr(out, '\x1b'));
 }
 
 /* A mesh that is not there is an input that cannot be opened: exit 66 (EX_NOINPUT), from
