@@ -1,5 +1,6 @@
 /* The one error convention: codes, their text, and the message-buffer helpers. */
 #include "fp_error.h"
+#include "fp_text.h"
 
 #include <errno.h>
 #include <stdio.h>
@@ -34,9 +35,21 @@ int fp_error_is_plugin(int code)
     return code <= FP_EPLUGIN_NOT_FOUND && code >= FP_EPLUGIN_FAULT;
 }
 
+/* err (errlen bytes) made one line a terminal may show (fp_text_clean), where it is not */
+static void clean(char *err, size_t errlen)
+{
+    if (fp_text_ok(err, false)) return;
+    char raw[4096];
+    snprintf(raw, sizeof raw, "%s", err);
+    fp_text_clean(raw, err, errlen);
+}
+
 int fp_verrorf(char *err, size_t errlen, int code, const char *fmt, va_list ap)
 {
-    if (err && errlen) vsnprintf(err, errlen, fmt, ap);
+    if (err && errlen) {
+        vsnprintf(err, errlen, fmt, ap);
+        clean(err, errlen);
+    }
     return code;
 }
 
@@ -59,6 +72,7 @@ int fp_error_prefix(char *err, size_t errlen, int code, const char *fmt, ...)
     int n = vsnprintf(err, errlen, fmt, ap);
     va_end(ap);
     if (n >= 0 && (size_t)n < errlen && old[0]) snprintf(err + n, errlen - (size_t)n, ": %s", old);
+    clean(err, errlen);
     return code;
 }
 

@@ -44,7 +44,11 @@ int fp_error_is_plugin(int code);
 
 /** Write printf-style text into err (errlen bytes, truncated, NUL-terminated; nothing when
  *  err is NULL or errlen is 0) and return `code`, so that a failure reads
- *  `return fp_errorf(err, errlen, -EBADMSG, "%s:%d: bad number", path, line);`. */
+ *  `return fp_errorf(err, errlen, -EBADMSG, "%s:%d: bad number", path, line);`. The message
+ *  is one line a terminal may show: what it quotes of a file or a sender (a token, a field)
+ *  keeps its well-formed UTF-8, and a control character (an escape sequence that would
+ *  recolour the terminal, a line break) or ill-formed byte becomes U+FFFD (fp_text_clean);
+ *  so do fp_error_prefix and fp_error_at. */
 int fp_errorf(char *err, size_t errlen, int code, const char *fmt, ...)
     __attribute__((format(printf, 4, 5)));
 int fp_verrorf(char *err, size_t errlen, int code, const char *fmt, va_list ap);

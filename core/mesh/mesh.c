@@ -25,10 +25,10 @@ int fp__mesh_error(char *err, size_t errlen, int code, const char *path, const c
     int k = snprintf(err, errlen, "%s: ", path ? path : "(mesh)");
     if (k < 0)
         k = 0;
-    if ((size_t)k < errlen) {
+    if ((size_t)k < errlen) { /* (fp_verrorf: what the message quotes of the file, shown safe) */
         va_list ap;
         va_start(ap, fmt);
-        vsnprintf(err + k, errlen - (size_t)k, fmt, ap);
+        fp_verrorf(err + k, errlen - (size_t)k, code, fmt, ap);
         va_end(ap);
     }
     return code;

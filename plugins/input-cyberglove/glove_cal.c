@@ -56,15 +56,6 @@ static bool finite_float(double v)
     return isfinite(v) && isfinite((float)v);
 }
 
-/* The first `most` bytes of a line as an error quotes them: what a terminal may show, a
- * binary file's bytes and escape sequences as U+FFFD (fp_text_clean). out: n bytes. */
-static const char *quoted(const char *s, size_t most, char *out, size_t n)
-{
-    char cut[64];
-    snprintf(cut, sizeof cut, "%.*s", (int)(most < sizeof cut - 1 ? most : sizeof cut - 1), s);
-    return fp_text_clean(cut, out, n);
-}
-
 /* Strip comments and whitespace; returns the first non-blank char or NULL when empty. */
 static char *trim_line(char *s)
 {
@@ -153,9 +144,8 @@ int fpg_cal_load(const char *path, fpg_cal *cal, char *err, size_t errlen)
                 goto out;
             }
             if (parse_asr_line(s, v) != 0) {
-                char q[200];
                 rc = fp_errorf(err, errlen, -EBADMSG, "%s:%d: expected `rad1:raw1 rad2:raw2` (asr "
-                          "format), got \"%s\"", path, lineno, quoted(s, 60, q, sizeof q));
+                          "format), got \"%.60s\"", path, lineno, s); /* (shown safe: fp_error.h) */
                 goto out;
             }
             if (v[1] < 0 || v[1] > 255 || v[3] < 0 || v[3] > 255) {
@@ -185,9 +175,8 @@ int fpg_cal_load(const char *path, fpg_cal *cal, char *err, size_t errlen)
             long idx = strtol(p, &end, 10);
             double g, o;
             if (end == p || errno || (*end != ' ' && *end != '\t')) {
-                char q[200];
                 rc = fp_errorf(err, errlen, -EBADMSG, "%s:%d: expected `SENSOR GAIN OFFSET`, got "
-                          "\"%s\"", path, lineno, quoted(s, 60, q, sizeof q));
+                          "\"%.60s\"", path, lineno, s);
                 goto out;
             }
             if (idx < 0 || idx >= FPG_SENSORS) {
@@ -204,9 +193,8 @@ int fpg_cal_load(const char *path, fpg_cal *cal, char *err, size_t errlen)
             while (*p == ' ' || *p == '\t')
                 p++;
             if (*p) {
-                char q[120];
-                rc = fp_errorf(err, errlen, -EBADMSG, "%s:%d: unexpected text \"%s\"", path, lineno,
-                          quoted(p, 30, q, sizeof q));
+                rc = fp_errorf(err, errlen, -EBADMSG, "%s:%d: unexpected text \"%.30s\"", path, lineno,
+                          p);
                 goto out;
             }
             if (seen & (1u << idx)) {

@@ -1,5 +1,7 @@
 /* test_text.c: fp_text_ok and fp_text_clean (core/common/fp_text.h) against RFC 3629's
- * ill-formed sequences, control characters, and a result cut at a whole character. */
+ * ill-formed sequences, control characters, and a result cut at a whole character; and the
+ * error messages (fp_error.h) made with them. */
+#include <errno.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -8,6 +10,7 @@
 
 #include <string.h>
 
+#include "fp_error.h"
 #include "fp_text.h"
 
 #define FFFD "\xEF\xBF\xBD"
@@ -84,12 +87,37 @@ static void test_json_helpers(void **state)
     assert_int_equal(fp_text_bom(NULL, 3), 0);
 }
 
+/* fp_errorf, fp_error_prefix and fp_error_at (fp_error.h): a message that quotes a file's or
+ * a sender's bytes is one line a terminal may show (an escape sequence would recolour it, a
+ * line break would fake a line of its own): U+FFFD for each, UTF-8 kept, code returned */
+static void test_error_messages_shown_safe(void **state)
+{
+    (void)state;
+    char err[128];
+    assert_int_equal(fp_errorf(err, sizeof err, -EBADMSG, "bad token '%s'", "\x1b[31mred\nx \xc3\xa9"), -EBADMSG);
+    assert_string_equal(err, "bad token '\xef\xbf\xbd[31mred\xef\xbf\xbdx \xc3\xa9'");
+    assert_true(fp_text_ok(err, false));
+    assert_int_equal(fp_error_prefix(err, sizeof err, -EIO, "%s", "f\x07.csv"), -EIO);
+    assert_string_equal(err, "f\xef\xbf\xbd.csv: bad token '\xef\xbf\xbd[31mred\xef\xbf\xbdx \xc3\xa9'");
+    assert_int_equal(fp_error_at(err, sizeof err, -EBADMSG, "a.csv", 2, 18, "hand \"%s\"", "\x1b]0;t\x07"),
+                     -EBADMSG);
+    assert_string_equal(err, "a.csv:2:18: hand \"\xef\xbf\xbd]0;t\xef\xbf\xbd\"");
+    /* a plain message is left as written; one that does not fit is cut at a whole character */
+    fp_errorf(err, sizeof err, -EINVAL, "plain %d \xc2\xb5m", 3);
+    assert_string_equal(err, "plain 3 \xc2\xb5m");
+    char small[8];
+    fp_errorf(small, sizeof small, -EINVAL, "ab\x01\x02xyz");
+    assert_true(fp_text_ok(small, false));
+    assert_true(strlen(small) < sizeof small);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_ok),
         cmocka_unit_test(test_clean),
         cmocka_unit_test(test_json_helpers),
+        cmocka_unit_test(test_error_messages_shown_safe),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

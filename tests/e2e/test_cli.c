@@ -419,6 +419,34 @@ static void test_info(void **state)
     assert_null(strchr(out, '\x1b'));
 }
 
+/* A file's bytes quoted in an error reach the terminal as text, not as commands: an escape
+ * sequence in an OBJ token or a Leap CSV field (which would recolour the terminal, or retitle
+ * its window) is shown as U+FFFD (fp_error.h); the error itself is unchanged (65, the line). */
+static void test_hostile_text_shown_safe(void **state)
+{
+    (void)state;
+    write_file("esc.obj", "v 0 0 \x1b[31mX\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    assert_int_equal(fp("info esc.obj"), 65);
+    assert_non_null(strstr(out, "esc.obj: line 1: malformed number '\xef\xbf\xbd[31mX' in 'v' statement"));
+    assert_null(strchr(out, '\x1b'));
+    char src[4200], row[8192], text[20000];
+    snprintf(src, sizeof src, "%s/hands/leap-motion/grab_joints_mm.csv", data);
+    FILE *in = fopen(src, "r");
+    assert_non_null(in);
+    assert_non_null(fgets(text, 10000, in)); /* the header */
+    assert_non_null(fgets(row, sizeof row, in));
+    fclose(in);
+    char *hand = strstr(row, ",right,");
+    assert_non_null(hand);
+    *hand = 0;
+    snprintf(text + strlen(text), sizeof text - strlen(text), "%s,\x1b]0;owned\x07right,%s", row, hand + 7);
+    write_file("esc_joints_mm.csv", text);
+    assert_int_equal(fp("info esc_joints_mm.csv"), 65);
+    assert_non_null(strstr(out, "unknown hand_type \"\xef\xbf\xbd]0;owned\xef\xbf\xbdright\" (left or right)"));
+    assert_null(strchr(out, '\x1b'));
+    assert_null(strchr(out, '\x07'));
+}
+
 /* A mesh that is not there is an input that cannot be opened: exit 66 (EX_NOINPUT), from
  * the code fp_mesh_load gives (-ENOENT) through the session, never from the message. */
 static void test_missing_mesh(void **state)
@@ -788,6 +816,7 @@ int main(void)
         cmocka_unit_test(test_tool_arguments),
         cmocka_unit_test(test_corrupt_obj),
         cmocka_unit_test(test_bad_csv),        cmocka_unit_test(test_decimal_data),
+        cmocka_unit_test(test_hostile_text_shown_safe),
         cmocka_unit_test(test_plugins),
         cmocka_unit_test(test_info),           cmocka_unit_test(test_missing_mesh), cmocka_unit_test(test_stray_vertex),
         cmocka_unit_test(test_frames_out_and_monitor),

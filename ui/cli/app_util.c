@@ -1,5 +1,6 @@
 #define _GNU_SOURCE
 #include "app_util.h"
+#include "fp_text.h"
 
 #include "command.h"
 #include "fp_error.h"
@@ -314,7 +315,10 @@ void fp_app_log_line(void *user, int level, const char *source, const char *mess
 {
     (void)user;
     if (level > FP_LOG_INFO && !getenv("FACEPUPPET_DEBUG")) return;
-    fprintf(stderr, "facepuppet: %s: %s\n", source, message);
+    /* one line a terminal may show: a plugin's or a sender's text may carry control bytes */
+    char src[128], msg[2048];
+    fprintf(stderr, "facepuppet: %s: %s\n", fp_text_clean(source, src, sizeof src),
+            fp_text_clean(message, msg, sizeof msg));
 }
 
 void fp_app_log_line_quiet(void *user, int level, const char *source, const char *message)
