@@ -15,7 +15,8 @@
 #  5. input-audio: run --input audio:speech.wav (anchored, and onehand with no hand): jaw.open above 0.3 within two frames of each
 #     syllable's onset, below 0.1 in the silences (0.25 s after each syllable's end on); the
 #     check must fail for onsets moved 0.1 s early; `plugins check` passes input-audio (its
-#     channel events well-formed); a channel name with a space is refused before any work.
+#     channel events well-formed); `monitor` prints them by name and value; a channel name
+#     with a space is refused before any work.
 #  6. --audio-in file:ramp.wav (an emulated microphone heard in real time, every sample saying
 #     where it is): the take's SLATE_TNNN.mic.wav spans its frames (last frame's end, within
 #     1/60 s), is one run of the ramp without a gap or a repeat, and the header names it; an
@@ -130,6 +131,15 @@ early=$(echo "$onsets" | awk -F, '{ printf "%.4f,%.4f,%.4f", $1 - 0.1, $2 - 0.1,
 "$fp" plugins check "$build/lib/facepuppet/input-audio.so" --arg "$tmp/speech.wav" >"$tmp/check.out" 2>&1 ||
     { cat "$tmp/check.out"; fail "plugins check of input-audio"; }
 grep -E "events|passed" "$tmp/check.out"
+# monitor shows its channel events by name and value (before: "type":"unknown" and nothing
+# else): jaw.open rises above 0.3 after the first syllable's onset, as the run's jaw did
+"$fp" monitor "${pd[@]}" "audio:$tmp/speech.wav,fast=1" >"$tmp/mon.out" 2>"$tmp/mon.err" ||
+    { cat "$tmp/mon.err"; fail "monitor audio: exited $?"; }
+grep -q '"type":"unknown"' "$tmp/mon.out" && fail "monitor prints an event of the audio input as unknown"
+grep '"type":"channel"' "$tmp/mon.out" | grep -v '"name":"jaw.open","value":' >/dev/null &&
+    fail "monitor: a channel event without jaw.open's name and value"
+awk -F'"value":' '/"type":"channel"/ { v = $2 + 0; if (v > m) m = v } END { exit !(m > 0.3) }' "$tmp/mon.out" ||
+    fail "monitor: jaw.open never above 0.3 ($(grep -c channel "$tmp/mon.out") channel events)"
 # a channel name an event log could not record (record=) is refused before the performance
 "$fp" run "${pd[@]}" --mesh "$mesh" --input "audio:$tmp/speech.wav,fast=1,channel=jaw open" \
     -o "$tmp/bad.obj" -q >/dev/null 2>"$tmp/bad.err" && fail "channel=\"jaw open\" was taken"

@@ -2,6 +2,7 @@
 #define _GNU_SOURCE
 #include "app_util.h"
 #include "command.h"
+#include "fp_text.h"
 
 #include <errno.h>
 #include <getopt.h>
@@ -28,14 +29,16 @@ static void print_floats(const float *v, size_t n)
     putchar(']');
 }
 
+/* s as a JSON string: a plugin's text made well-formed UTF-8 without control characters
+ * first (fp_text_clean: U+FFFD for each), so that every line parses as JSON */
 static void print_json_string(const char *s)
 {
+    char clean[1024];
+    fp_text_clean(s, clean, sizeof clean);
     putchar('"');
-    for (; *s; s++) {
-        unsigned char c = (unsigned char)*s;
-        if (c == '"' || c == '\\') printf("\\%c", c);
-        else if (c < 0x20) printf("\\u%04x", c);
-        else putchar(c);
+    for (const char *p = clean; *p; p++) {
+        if (*p == '"' || *p == '\\') putchar('\\');
+        putchar(*p);
     }
     putchar('"');
 }
@@ -44,12 +47,13 @@ static void print_json_string(const char *s)
  *  named after the hand where given. */
 static void print_event(const fp_event *ev, const char *performer)
 {
-    static const char *types[] = {"", "joint_angles", "joint_positions", "wrist_pose", "button", "status"};
+    static const char *types[] = {"",       "joint_angles", "joint_positions", "wrist_pose",
+                                  "button", "status",       "channel"};
     static const char *codes[] = {"", "connected", "disconnected", "reconnecting", "warning", "error",
                                   "end_of_stream"};
     int t = ev->header.type;
     printf("{\"time_ns\":%" PRId64 ",\"type\":\"%s\"", ev->header.time_ns,
-           t >= 1 && t <= 5 ? types[t] : "unknown");
+           t >= 1 && t <= FP_EVENT_CHANNEL ? types[t] : "unknown");
     const char *hand = hand_name(ev->header.hand);
     if (hand) printf(",\"hand\":\"%s\"", hand);
     if (performer[0]) printf(",\"performer\":\"%s\"", performer); /* ([A-Za-z0-9_-]) */
@@ -81,6 +85,14 @@ static void print_event(const fp_event *ev, const char *performer)
                                                  ? codes[ev->status.code] : "unknown");
         print_json_string(ev->status.text);
         break;
+    case FP_EVENT_CHANNEL: { /* a rig channel an input drives (ABI 1.2: the audio input's jaw.open) */
+        char name[sizeof ev->channel.name + 1];
+        snprintf(name, sizeof name, "%.*s", (int)sizeof ev->channel.name, ev->channel.name);
+        printf(",\"name\":");
+        print_json_string(name);
+        printf(",\"value\":%.6g", ev->channel.value);
+        break;
+    }
     default:
         break;
     }
