@@ -11,7 +11,8 @@
 #     unknown device 64, each with its reason and no take or output written.
 #  4. LTC at 25 and 29.97 drop-frame, made with libltc's encoder (crossing a dropped minute):
 #     run --timecode ltc:FILE.wav gives a take whose timecode_in and every frame's timecode
-#     equal the encoded ones (as libltc counted them).
+#     equal the encoded ones (as libltc counted them); `info` on the file says its rate and
+#     the timecode at its first sample.
 #  5. input-audio: run --input audio:speech.wav (anchored, and onehand with no hand): jaw.open above 0.3 within two frames of each
 #     syllable's onset, below 0.1 in the silences (0.25 s after each syllable's end on); the
 #     check must fail for onsets moved 0.1 s early; `plugins check` passes input-audio (its
@@ -114,6 +115,16 @@ ltc_case() { # NUM DEN START FPS NAME
 }
 ltc_case 25 1 10:00:00:00 25 ltc25
 ltc_case 30000 1001 "00:00:59;20" 29.97 ltc2997df
+# info on a sound file says what it is (before: "unknown format" of a recording): the LTC's
+# rate and the timecode it was encoded from, 48 kHz mono, 4 s; the speech has no LTC
+"$fp" info "$tmp/ltc25.wav" >"$tmp/info.out" 2>&1 || { cat "$tmp/info.out"; fail "info ltc25.wav exited $?"; }
+grep -q "format    sound, 48000 Hz, 1 channel$" "$tmp/info.out" &&
+    grep -q "duration  4.000 s" "$tmp/info.out" &&
+    grep -q "timecode  LTC at 25 fps, 10:00:00:00 at the first sample" "$tmp/info.out" &&
+    grep -q -- "--timecode ltc:$tmp/ltc25.wav" "$tmp/info.out" || { cat "$tmp/info.out"; fail "info of an LTC file"; }
+"$fp" info "$tmp/ltc2997df.wav" | grep -q "timecode  LTC at 29.97 fps, 00:00:59;20 at the first sample" ||
+    fail "info of a drop-frame LTC file: $("$fp" info "$tmp/ltc2997df.wav" 2>&1)"
+"$fp" info "$tmp/speech.wav" | grep -q "timecode  none" || fail "info finds LTC in speech"
 
 # ---- 5. input-audio -------------------------------------------------------------------------
 "$fp" run "${pd[@]}" --mesh "$mesh" --input "audio:$tmp/speech.wav,fast=1" --take-dir "$tmp/jaw" \

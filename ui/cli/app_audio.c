@@ -312,3 +312,47 @@ int fp_app_audio_export_write(const fp_take_header *h, const char *wav, int64_t 
     fp_soundtrack_free(&track);
     return rc ? FP_EXIT_CANTCREAT : 0;
 }
+
+bool fp_app_is_sound(const char *path)
+{
+    unsigned char h[12] = {0};
+    FILE *f = fopen(path, "rb");
+    if (!f) return false;
+    size_t n = fread(h, 1, sizeof h, f);
+    fclose(f);
+    if (n < 4) return false;
+    return ((!memcmp(h, "RIFF", 4) || !memcmp(h, "RF64", 4)) && n == 12 && !memcmp(h + 8, "WAVE", 4)) ||
+           !memcmp(h, "fLaC", 4) || !memcmp(h, "OggS", 4) || !memcmp(h, ".snd", 4) || !memcmp(h, "caff", 4) ||
+           (!memcmp(h, "FORM", 4) && n == 12 && (!memcmp(h + 8, "AIFF", 4) || !memcmp(h + 8, "AIFC", 4)));
+}
+
+int fp_app_sound_info(const char *path)
+{
+    fp_soundtrack st;
+    char err[1024];
+    int rc = fp_soundtrack_load(path, &st, err, sizeof err);
+    if (rc) {
+        fprintf(stderr, "facepuppet info: %s\n", err);
+        return fp_app_exit_code(rc, FP_APP_INPUT);
+    }
+    float peak = 0;
+    for (uint64_t i = 0; i < st.frames * (uint64_t)st.channels; i++)
+        if (fabsf(st.samples[i]) > peak) peak = fabsf(st.samples[i]);
+    printf("%s\n  format    sound, %d Hz, %d channel%s\n  duration  %.3f s (%llu frames)\n", path, st.rate,
+           st.channels, st.channels == 1 ? "" : "s", (double)st.frames / st.rate, (unsigned long long)st.frames);
+    if (peak > 0) printf("  peak      %.1f dBFS\n", 20.0 * log10(peak));
+    else printf("  peak      silence\n");
+    printf("  crc32     %08x (a take records it with --audio)\n", (unsigned)st.crc32);
+    fp_soundtrack_free(&st);
+    fp_ltc_info ltc;
+    char tc[32] = "";
+    if (!fp_ltc_read_file(path, &ltc, err, sizeof err) && !fp_timecode_format(&ltc.first, tc, sizeof tc))
+        printf("  timecode  LTC at %.5g fps, %s at the first sample (%llu frames decoded%s)\n",
+               (double)ltc.rate.num / ltc.rate.den, tc, (unsigned long long)ltc.frames,
+               ltc.jumps ? ", with jumps" : "");
+    else
+        printf("  timecode  none (no LTC on its first channel)\n");
+    printf("  use       --audio %s (a soundtrack), --input audio:%s (the jaw flap)%s%s\n", path, path,
+           tc[0] ? ", --timecode ltc:" : "", tc[0] ? path : "");
+    return FP_EXIT_OK;
+}

@@ -75,6 +75,16 @@ int fp_app_audio_take_started(fp_app_audio *a, const fp_session_take *take, int6
  *  there; says its length unless quiet. Returns 0 or the exit status of a failed write. */
 int fp_app_audio_take_stopped(fp_app_audio *a, int64_t end_ns, const char *cmd, bool quiet);
 
+/** A sound file's signature (RIFF/RF64 WAVE, FLAC, Ogg, AIFF, Sun .snd, CAF) in its first
+ *  bytes: what `info` reads with fp_app_sound_info rather than as a recording. */
+bool fp_app_is_sound(const char *path);
+
+/** `facepuppet info` of a sound file (a soundtrack, the audio input's, an LTC recording):
+ *  rate, channels, duration, peak level, crc32 (what a take records of a soundtrack), its LTC
+ *  where it holds some (fp_ltc_read_file: rate and the timecode at its first sample), and the
+ *  options that take it. Prints on stdout; errors on stderr. Returns the exit status. */
+int fp_app_sound_info(const char *path);
+
 /** The performance reached t_s seconds (the end of the frame shown): deliver the soundtrack
  *  up to there. Returns 0 or the exit status of a failed write (said on stderr). */
 int fp_app_audio_advance(fp_app_audio *a, double t_s, const char *cmd);
