@@ -5,7 +5,8 @@
 #     warnings; fp-export-check reads the file back with tinygltf and evaluates the animation
 #     at every frame's time: every vertex within the stated error (0.1 mm, and 0.001 mm on
 #     the ICT face, which takes more targets);
-#  2. export --format pc2 and mdd: read back bit-exact against the played frames;
+#  2. export --format pc2 and mdd: read back bit-exact against the played frames; `info`
+#     gives their frames and points (and a cut PC2's, exit 65);
 #  3. run --export and play --export give the same point caches byte for byte as export;
 #  4. obj-seq: each file as play --frames-out writes it (byte-identical: both written back as
 #     the input came in), the OBJ's non-vertex lines as in the input;
@@ -68,6 +69,17 @@ for entry in "${faces[@]}"; do
     "$fp" play "${pd[@]}" "$take" --export "$d/play.mdd" -q || fail "$name: play --export exited $?"
     cmp -s "$d/play.mdd" "$d/take.mdd" || fail "$name: play --export differs from export --format mdd"
     echo "$name: run --export, play --export and export give the same point caches"
+    # info reads them back (before: "unknown format" of a recording): the take's frames and
+    # the mesh's points, the MDD's rate; a cache cut short exits 65 and says how much it holds
+    n=$("$fp" info "$take" | sed -n 's/^  frames *\([0-9]*\).*/\1/p')
+    v=$("$fp" info "$data/faces/$face" | sed -n 's/^  vertices *\([0-9]*\).*/\1/p')
+    "$fp" info "$d/take.pc2" >"$d/info-pc2.out" 2>&1 && grep -q "^  points    $v$" "$d/info-pc2.out" &&
+        grep -q "^  frames    $n$" "$d/info-pc2.out" || { cat "$d/info-pc2.out"; fail "$name: info take.pc2 ($n frames, $v points)"; }
+    "$fp" info "$d/take.mdd" >"$d/info-mdd.out" 2>&1 && grep -q "^  frames    $n$" "$d/info-mdd.out" &&
+        grep -q "fps" "$d/info-mdd.out" || { cat "$d/info-mdd.out"; fail "$name: info take.mdd"; }
+    head -c $((32 + 12 * v * 2 + 5)) "$d/take.pc2" >"$d/cut.pc2"
+    expect 65 "$fp" info "$d/cut.pc2"
+    grep -q "cut: the file holds 2 of them" "$tmp/x.out" || { cat "$tmp/x.out"; fail "$name: info of a cut PC2"; }
 done
 
 # a tighter error on the ICT face: more targets, still within it at every frame

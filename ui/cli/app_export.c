@@ -1,8 +1,16 @@
 /* run/play/export: the exporter and its summary line (app_export.h). */
 #include "app_export.h"
+#include <errno.h>
 #include "app_util.h"
 #include "command.h"
 #include "fp_mesh.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
 
 double fp_app_export_frame_bytes(fp_export_format format, const struct fp_mesh *mesh)
 {
@@ -83,4 +91,99 @@ void fp_app_print_dropped(const char *cmd, const char *file, unsigned dropped, b
     char what[256];
     fprintf(stderr, "%s: note: %s cannot hold the input's %s\n", cmd, file,
             fp_mesh_dropped_text(dropped, what, sizeof what));
+}
+
+bool fp_app_is_point_cache(const char *path)
+{
+    const char *dot = strrchr(path, '.');
+    if (dot && !strcasecmp(dot, ".mdd")) return true;
+    char sig[12] = "";
+    FILE *f = fopen(path, "rb");
+    if (!f) return false;
+    size_t n = fread(sig, 1, sizeof sig, f);
+    fclose(f);
+    return n == sizeof sig && !memcmp(sig, "POINTCACHE2\0", sizeof sig);
+}
+
+static uint32_t u32_of(const unsigned char *b, bool big)
+{
+    return big ? (uint32_t)b[0] << 24 | (uint32_t)b[1] << 16 | (uint32_t)b[2] << 8 | b[3]
+               : (uint32_t)b[3] << 24 | (uint32_t)b[2] << 16 | (uint32_t)b[1] << 8 | b[0];
+}
+
+static float f32_of(const unsigned char *b, bool big)
+{
+    uint32_t u = u32_of(b, big);
+    float v;
+    memcpy(&v, &u, sizeof v);
+    return v;
+}
+
+/* the file's size against what its header says it holds: true when whole, else a note */
+static bool cache_whole(double size, double want, double header, double frame, char *note, size_t n)
+{
+    note[0] = 0;
+    if (size == want) return true;
+    if (size > want) snprintf(note, n, " (and %.0f bytes more than they take)", size - want);
+    else snprintf(note, n, " (cut: the file holds %.0f of them)",
+                  size > header && frame > 0 ? floor((size - header) / frame) : 0.0);
+    return false;
+}
+
+int fp_app_cache_info(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    struct stat st;
+    if (!f || fstat(fileno(f), &st) || !S_ISREG(st.st_mode)) {
+        if (f) fclose(f);
+        fprintf(stderr, "facepuppet info: %s: cannot open: %s\n", path, f ? "not a regular file" : strerror(errno));
+        return fp_app_exit_code(f ? -ENXIO : -errno, FP_APP_INPUT);
+    }
+    unsigned char h[32] = {0};
+    size_t got = fread(h, 1, sizeof h, f);
+    const bool pc2 = got >= 12 && !memcmp(h, "POINTCACHE2\0", 12);
+    const double size = (double)st.st_size;
+    char note[96] = "";
+    int status = FP_EXIT_OK;
+    if (pc2) {
+        if (got < 32 || u32_of(h + 12, false) != 1 || (int32_t)u32_of(h + 16, false) <= 0 ||
+            (int32_t)u32_of(h + 28, false) < 0) {
+            fprintf(stderr, "facepuppet info: %s: not a PC2 point cache (a header of 32 bytes, version 1, "
+                    "points > 0, samples >= 0)\n", path);
+            status = FP_EXIT_DATAERR;
+        } else {
+            double points = u32_of(h + 16, false), samples = u32_of(h + 28, false);
+            if (!cache_whole(size, 32 + samples * points * 12, 32, points * 12, note, sizeof note))
+                status = FP_EXIT_DATAERR;
+            printf("%s\n  format    PC2 point cache (little-endian)\n  points    %.0f\n  frames    %.0f%s\n"
+                   "  start     frame %g, a sample every %g frames (PC2 has no rate: the scene's)\n",
+                   path, points, samples, note, f32_of(h + 20, false), f32_of(h + 24, false));
+        }
+    } else if (got >= 8 && (int32_t)u32_of(h, true) >= 0 && (int32_t)u32_of(h + 4, true) > 0) {
+        double frames = u32_of(h, true), points = u32_of(h + 4, true);
+        if (!cache_whole(size, 8 + frames * 4 + frames * points * 12, 8 + frames * 4, points * 12, note,
+                         sizeof note))
+            status = FP_EXIT_DATAERR;
+        unsigned char t[4];
+        double t0 = NAN, t1 = NAN, tl = NAN;
+        if (frames >= 1 && fseek(f, 8, SEEK_SET) == 0 && fread(t, 1, 4, f) == 4) t0 = f32_of(t, true);
+        if (frames >= 2 && fread(t, 1, 4, f) == 4) t1 = f32_of(t, true);
+        if (frames >= 2 && fseek(f, 8 + 4 * ((long)frames - 1), SEEK_SET) == 0 && fread(t, 1, 4, f) == 4)
+            tl = f32_of(t, true);
+        printf("%s\n  format    MDD point cache (big-endian)\n  points    %.0f\n  frames    %.0f%s\n", path, points,
+               frames, note);
+        if (isfinite(t0) && isfinite(tl) && frames >= 2 && tl > t0)
+            printf("  times     %.4g .. %.4g s, %.4g fps (first step %.4g s)\n", t0, tl, (frames - 1) / (tl - t0),
+                   t1 - t0);
+        else if (isfinite(t0))
+            printf("  times     %.4g s\n", t0);
+    } else {
+        fprintf(stderr, "facepuppet info: %s: not an MDD point cache (frames >= 0 and points > 0, big-endian)\n",
+                path);
+        status = FP_EXIT_DATAERR;
+    }
+    fclose(f);
+    if (status == FP_EXIT_DATAERR && note[0])
+        fprintf(stderr, "facepuppet info: %s: not the size its header gives%s\n", path, note);
+    return status;
 }

@@ -41,4 +41,15 @@ int fp_app_export_close(const char *cmd, const char *option, fp_exporter **x,
  *  dropped is 0 or quiet. */
 void fp_app_print_dropped(const char *cmd, const char *file, unsigned dropped, bool quiet);
 
+/** A point cache's signature: PC2 ("POINTCACHE2\0" first) or, by its .mdd extension, MDD
+ *  (which has none). What `info` reads with fp_app_cache_info. */
+bool fp_app_is_point_cache(const char *path);
+
+/** `facepuppet info` of a point cache (PC2 or MDD, as `export` writes them and Blender's
+ *  Mesh Cache modifier reads them): its points, frames, start and sampling (PC2) or the
+ *  frames' times and rate (MDD), and whether the file holds all it says: a file of another
+ *  size than its header gives (cut short) is described, said on stderr with the frames it
+ *  does hold, and exits 65. Prints on stdout; errors on stderr. Returns the exit status. */
+int fp_app_cache_info(const char *path);
+
 #endif

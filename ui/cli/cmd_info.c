@@ -5,6 +5,7 @@
 #include "fp_file.h"
 #include "fp_mesh.h"
 #include "app_audio.h"
+#include "app_export.h"
 #include "app_stack.h"
 #include "glove_cal.h" /* (plugins/input-cyberglove: the glove input's own reader) */
 
@@ -172,7 +173,8 @@ static int info_main(int argc, char **argv)
                    "A take (.fptake): its header, frames, timecode, and where it was cut if it was.\n"
                    "A stack (.fpstack): its layers (take, region, mode, range, gain, mute, solo).\n"
                    "A CyberGlove calibration (.cal): its format and each sensor's angle range.\n"
-                   "A sound file (WAV, FLAC, Ogg, AIFF): rate, channels, duration, peak, its LTC.\n");
+                   "A sound file (WAV, FLAC, Ogg, AIFF): rate, channels, duration, peak, its LTC.\n"
+                   "A point cache (.pc2, .mdd, as export writes them): points, frames, times.\n");
         return argc == 2 ? FP_EXIT_OK : FP_EXIT_USAGE;
     }
     if (argv[1][0] == '-' && argv[1][1]) { /* an option it does not have (a file: ./-name) */
@@ -183,6 +185,7 @@ static int info_main(int argc, char **argv)
     const char *dot = strrchr(argv[1], '.');
     if (dot && !strcasecmp(dot, ".cal")) return cal_info(argv[1]); /* (not a recording: its reader's
                                                                      "unknown format" misled) */
+    if (fp_app_is_point_cache(argv[1])) return fp_app_cache_info(argv[1]);
     if (fp_app_is_sound(argv[1])) return fp_app_sound_info(argv[1]); /* (before: "unknown format"
                                                                         of a recording) */
     if (dot && !strcasecmp(dot, ".json") && !is_json_recording(argv[1])) return fp_app_rig_info(argv[1]);
@@ -191,4 +194,4 @@ static int info_main(int argc, char **argv)
     return is_mesh(argv[1]) ? mesh_info(argv[1]) : recording_info(argv[1]);
 }
 
-const fp_command fp_command_info = {"info", "what a mesh, recording, rig, take, calibration or sound file holds", info_main};
+const fp_command fp_command_info = {"info", "what a mesh, recording, rig, take or other file of ours holds", info_main};
