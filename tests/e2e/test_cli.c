@@ -445,6 +445,19 @@ static void test_hostile_text_shown_safe(void **state)
     assert_non_null(strstr(out, "unknown hand_type \"\xef\xbf\xbd]0;owned\xef\xbf\xbdright\" (left or right)"));
     assert_null(strchr(out, '\x1b'));
     assert_null(strchr(out, '\x07'));
+    /* info on a FIFO named as each kind it reads by signature or name: refused (66), never
+     * waited on for a writer (fp()'s timeout ends a wait: 124) */
+    const char *fifos[] = {"fifo-info.wav", "fifo-info.mdd", "fifo-info.pc2", "fifo-info.cal",
+                           "fifo-info.fptake", "fifo-info.obj", "fifo-info.csv"};
+    for (size_t i = 0; i < sizeof fifos / sizeof fifos[0]; i++) {
+        char path[512], cmd[600];
+        snprintf(path, sizeof path, "%s/%s", tmp, fifos[i]);
+        assert_int_equal(mkfifo(path, 0600), 0);
+        snprintf(cmd, sizeof cmd, "info %s", fifos[i]);
+        int rc = fp(cmd);
+        if (rc != 66) fail_msg("info %s: exit %d: %s", fifos[i], rc, out);
+        assert_non_null(strstr(out, "not a regular file"));
+    }
 }
 
 /* A mesh that is not there is an input that cannot be opened: exit 66 (EX_NOINPUT), from

@@ -4,6 +4,7 @@
 #include "app_util.h"
 
 #include "command.h"
+#include "fp_file.h"
 #include "fp_text.h"
 
 #include <errno.h>
@@ -316,7 +317,8 @@ int fp_app_audio_export_write(const fp_take_header *h, const char *wav, int64_t 
 bool fp_app_is_sound(const char *path)
 {
     unsigned char h[12] = {0};
-    FILE *f = fopen(path, "rb");
+    int code;
+    FILE *f = fp_file_fopen_regular(path, &code); /* (a FIFO is never waited on) */
     if (!f) return false;
     size_t n = fread(h, 1, sizeof h, f);
     fclose(f);

@@ -3,6 +3,7 @@
 #include <errno.h>
 #include "app_util.h"
 #include "command.h"
+#include "fp_file.h"
 #include "fp_mesh.h"
 
 #include <math.h>
@@ -98,7 +99,8 @@ bool fp_app_is_point_cache(const char *path)
     const char *dot = strrchr(path, '.');
     if (dot && !strcasecmp(dot, ".mdd")) return true;
     char sig[12] = "";
-    FILE *f = fopen(path, "rb");
+    int code;
+    FILE *f = fp_file_fopen_regular(path, &code); /* (a FIFO is never waited on) */
     if (!f) return false;
     size_t n = fread(sig, 1, sizeof sig, f);
     fclose(f);
@@ -132,12 +134,13 @@ static bool cache_whole(double size, double want, double header, double frame, c
 
 int fp_app_cache_info(const char *path)
 {
-    FILE *f = fopen(path, "rb");
+    int code;
+    FILE *f = fp_file_fopen_regular(path, &code);
     struct stat st;
-    if (!f || fstat(fileno(f), &st) || !S_ISREG(st.st_mode)) {
-        if (f) fclose(f);
-        fprintf(stderr, "facepuppet info: %s: cannot open: %s\n", path, f ? "not a regular file" : strerror(errno));
-        return fp_app_exit_code(f ? -ENXIO : -errno, FP_APP_INPUT);
+    if (!f || fstat(fileno(f), &st)) {
+        if (f) fclose(f), code = -errno;
+        fprintf(stderr, "facepuppet info: %s: cannot open: %s\n", path, fp_file_error_text(code));
+        return fp_app_exit_code(code, FP_APP_INPUT);
     }
     unsigned char h[32] = {0};
     size_t got = fread(h, 1, sizeof h, f);
