@@ -4,7 +4,6 @@
 #include "app_util.h"
 
 #include "command.h"
-#include "fp_file.h"
 #include "fp_text.h"
 
 #include <errno.h>
@@ -314,18 +313,12 @@ int fp_app_audio_export_write(const fp_take_header *h, const char *wav, int64_t 
     return rc ? FP_EXIT_CANTCREAT : 0;
 }
 
-bool fp_app_is_sound(const char *path)
+bool fp_app_is_sound(const unsigned char *h, size_t n)
 {
-    unsigned char h[12] = {0};
-    int code;
-    FILE *f = fp_file_fopen_regular(path, &code); /* (a FIFO is never waited on) */
-    if (!f) return false;
-    size_t n = fread(h, 1, sizeof h, f);
-    fclose(f);
     if (n < 4) return false;
-    return ((!memcmp(h, "RIFF", 4) || !memcmp(h, "RF64", 4)) && n == 12 && !memcmp(h + 8, "WAVE", 4)) ||
+    return ((!memcmp(h, "RIFF", 4) || !memcmp(h, "RF64", 4)) && n >= 12 && !memcmp(h + 8, "WAVE", 4)) ||
            !memcmp(h, "fLaC", 4) || !memcmp(h, "OggS", 4) || !memcmp(h, ".snd", 4) || !memcmp(h, "caff", 4) ||
-           (!memcmp(h, "FORM", 4) && n == 12 && (!memcmp(h + 8, "AIFF", 4) || !memcmp(h + 8, "AIFC", 4)));
+           (!memcmp(h, "FORM", 4) && n >= 12 && (!memcmp(h + 8, "AIFF", 4) || !memcmp(h + 8, "AIFC", 4)));
 }
 
 int fp_app_sound_info(const char *path)

@@ -75,9 +75,10 @@ int fp_app_audio_take_started(fp_app_audio *a, const fp_session_take *take, int6
  *  there; says its length unless quiet. Returns 0 or the exit status of a failed write. */
 int fp_app_audio_take_stopped(fp_app_audio *a, int64_t end_ns, const char *cmd, bool quiet);
 
-/** A sound file's signature (RIFF/RF64 WAVE, FLAC, Ogg, AIFF, Sun .snd, CAF) in its first
- *  bytes: what `info` reads with fp_app_sound_info rather than as a recording. */
-bool fp_app_is_sound(const char *path);
+/** Whether a file's first n bytes h (12 suffice) are a sound file's signature (RIFF/RF64
+ *  WAVE, FLAC, Ogg, AIFF, Sun .snd, CAF): what `info` reads with fp_app_sound_info rather
+ *  than as a recording. Pure; any thread. */
+bool fp_app_is_sound(const unsigned char *h, size_t n);
 
 /** `facepuppet info` of a sound file (a soundtrack, the audio input's, an LTC recording):
  *  rate, channels, duration, peak level, crc32 (what a take records of a soundtrack), its LTC

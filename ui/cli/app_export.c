@@ -1,11 +1,11 @@
 /* run/play/export: the exporter and its summary line (app_export.h). */
 #include "app_export.h"
-#include <errno.h>
 #include "app_util.h"
 #include "command.h"
 #include "fp_file.h"
 #include "fp_mesh.h"
 
+#include <errno.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -94,17 +94,10 @@ void fp_app_print_dropped(const char *cmd, const char *file, unsigned dropped, b
             fp_mesh_dropped_text(dropped, what, sizeof what));
 }
 
-bool fp_app_is_point_cache(const char *path)
+bool fp_app_is_point_cache(const char *path, const unsigned char *h, size_t n)
 {
     const char *dot = strrchr(path, '.');
-    if (dot && !strcasecmp(dot, ".mdd")) return true;
-    char sig[12] = "";
-    int code;
-    FILE *f = fp_file_fopen_regular(path, &code); /* (a FIFO is never waited on) */
-    if (!f) return false;
-    size_t n = fread(sig, 1, sizeof sig, f);
-    fclose(f);
-    return n == sizeof sig && !memcmp(sig, "POINTCACHE2\0", sizeof sig);
+    return (dot && !strcasecmp(dot, ".mdd")) || (n >= 12 && !memcmp(h, "POINTCACHE2\0", 12));
 }
 
 static uint32_t u32_of(const unsigned char *b, bool big)
@@ -138,7 +131,7 @@ int fp_app_cache_info(const char *path)
     FILE *f = fp_file_fopen_regular(path, &code);
     struct stat st;
     if (!f || fstat(fileno(f), &st)) {
-        if (f) fclose(f), code = -errno;
+        if (f) code = -errno, fclose(f); /* (fstat's errno, before fclose may change it) */
         fprintf(stderr, "facepuppet info: %s: cannot open: %s\n", path, fp_file_error_text(code));
         return fp_app_exit_code(code, FP_APP_INPUT);
     }

@@ -41,9 +41,10 @@ int fp_app_export_close(const char *cmd, const char *option, fp_exporter **x,
  *  dropped is 0 or quiet. */
 void fp_app_print_dropped(const char *cmd, const char *file, unsigned dropped, bool quiet);
 
-/** A point cache's signature: PC2 ("POINTCACHE2\0" first) or, by its .mdd extension, MDD
- *  (which has none). What `info` reads with fp_app_cache_info. */
-bool fp_app_is_point_cache(const char *path);
+/** Whether the file at path, whose first n bytes are h (12 suffice), is a point cache: PC2
+ *  by its signature ("POINTCACHE2\0"), MDD (which has none) by its .mdd extension. What
+ *  `info` reads with fp_app_cache_info. Pure; any thread. */
+bool fp_app_is_point_cache(const char *path, const unsigned char *h, size_t n);
 
 /** `facepuppet info` of a point cache (PC2 or MDD, as `export` writes them and Blender's
  *  Mesh Cache modifier reads them): its points, frames, start and sampling (PC2) or the

@@ -1,4 +1,5 @@
-/* facepuppet info: what a mesh, recording, rig, take, stack or glove calibration holds. */
+/* facepuppet info: what a mesh, recording, rig, take, stack, glove calibration, sound file or
+ * point cache holds. */
 #define _GNU_SOURCE
 #include "app_util.h"
 #include "command.h"
@@ -16,18 +17,24 @@
 #include <string.h>
 #include <strings.h>
 
+/* The first n bytes of the file at path into h (a FIFO or a folder gives none: never waited
+ * on); how many were read. The signatures info tells files apart by. */
+static size_t file_head(const char *path, unsigned char *h, size_t n)
+{
+    int code;
+    FILE *f = fp_file_fopen_regular(path, &code);
+    if (!f) return 0;
+    size_t got = fread(h, 1, n, f);
+    fclose(f);
+    return got;
+}
+
 /* A take: its extension (.fptake) or its signature's first bytes ("\x89FPTAKE\n"). */
-static bool is_take(const char *path)
+static bool is_take(const char *path, const unsigned char *h, size_t n)
 {
     const char *dot = strrchr(path, '.');
     if (dot && !strcasecmp(dot, ".fptake")) return true;
-    char sig[8] = "";
-    int code;
-    FILE *f = fp_file_fopen_regular(path, &code); /* (a FIFO cannot hold it) */
-    if (!f) return false;
-    size_t n = fread(sig, 1, sizeof sig, f);
-    fclose(f);
-    return n == sizeof sig && !memcmp(sig, "\x89" "FPTAKE\n", sizeof sig);
+    return n >= 8 && !memcmp(h, "\x89" "FPTAKE\n", 8);
 }
 
 /* a .json that is a Leap playback recording, not a rig: no "facepuppet-rig" and a "frames"
@@ -183,14 +190,16 @@ static int info_main(int argc, char **argv)
         return FP_EXIT_USAGE;
     }
     const char *dot = strrchr(argv[1], '.');
-    if (dot && !strcasecmp(dot, ".cal")) return cal_info(argv[1]); /* (not a recording: its reader's
-                                                                     "unknown format" misled) */
-    if (fp_app_is_point_cache(argv[1])) return fp_app_cache_info(argv[1]);
-    if (fp_app_is_sound(argv[1])) return fp_app_sound_info(argv[1]); /* (before: "unknown format"
-                                                                        of a recording) */
+    unsigned char head[12];
+    const size_t nh = file_head(argv[1], head, sizeof head);
+    /* (a calibration, a point cache or a sound file is not a recording: its reader's "unknown
+     * format" misled) */
+    if (dot && !strcasecmp(dot, ".cal")) return cal_info(argv[1]);
+    if (fp_app_is_point_cache(argv[1], head, nh)) return fp_app_cache_info(argv[1]);
+    if (fp_app_is_sound(head, nh)) return fp_app_sound_info(argv[1]);
     if (dot && !strcasecmp(dot, ".json") && !is_json_recording(argv[1])) return fp_app_rig_info(argv[1]);
     if (fp_stack_is_stack_path(argv[1])) return fp_app_stack_info(argv[1]);
-    if (is_take(argv[1])) return fp_app_take_info(argv[1]);
+    if (is_take(argv[1], head, nh)) return fp_app_take_info(argv[1]);
     return is_mesh(argv[1]) ? mesh_info(argv[1]) : recording_info(argv[1]);
 }
 
