@@ -83,7 +83,9 @@ bool fp_app_is_sound(const unsigned char *h, size_t n);
 /** `facepuppet info` of a sound file (a soundtrack, the audio input's, an LTC recording):
  *  rate, channels, duration, peak level, crc32 (what a take records of a soundtrack), its LTC
  *  where it holds some (fp_ltc_read_file: rate and the timecode at its first sample), and the
- *  options that take it. Prints on stdout; errors on stderr. Returns the exit status. */
+ *  options that take it. Prints on stdout; errors on stderr. Returns the exit status (0; 65
+ *  for a file libsndfile cannot read, 66 for one that cannot be opened). Loads the whole file
+ *  (at most FP_SOUNDTRACK_MAX_SECONDS). Main thread (it prints). */
 int fp_app_sound_info(const char *path);
 
 /** The performance reached t_s seconds (the end of the frame shown): deliver the soundtrack

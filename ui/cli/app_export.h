@@ -50,7 +50,9 @@ bool fp_app_is_point_cache(const char *path, const unsigned char *h, size_t n);
  *  Mesh Cache modifier reads them): its points, frames, start and sampling (PC2) or the
  *  frames' times and rate (MDD), and whether the file holds all it says: a file of another
  *  size than its header gives (cut short) is described, said on stderr with the frames it
- *  does hold, and exits 65. Prints on stdout; errors on stderr. Returns the exit status. */
+ *  does hold, and exits 65. Prints on stdout; errors on stderr. Returns the exit status (0,
+ *  65, or 66 for a file that cannot be opened: a FIFO is refused, never waited on). Reads the
+ *  header and MDD's times, never the frames. Main thread (it prints). */
 int fp_app_cache_info(const char *path);
 
 #endif
