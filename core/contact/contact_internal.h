@@ -16,6 +16,9 @@
  *                         fp_contact_reference, the accessors and settings, fp_contact_set_pose
  *   contact_step.c        fp_contact_step: the first check, the local scale-back, the
  *                         bisection; fp_contact_hold
+ *   contact_kd.c          the scale-back's k-d tree over the blocking vertices: nearest
+ *                         distances (the ramp), weighted motion sums (the carry); its own
+ *                         header, contact_kd.h, for its test
  *   contact_worker.c      the worker: jobs of tasks on two threads
  */
 #ifndef FP_CONTACT_INTERNAL_H
@@ -24,6 +27,7 @@
 #include "fp_vec.h"
 #include "fp_contact.h"
 #include "fp_select.h"
+#include "contact_kd.h"
 
 #include <errno.h>
 #include <math.h>
@@ -269,10 +273,9 @@ struct track {
                                      (lanes' rec) without record: set by fpc_tree_check for a
                                      step's first check (accepted), so that a local scale-back
                                      has its blocking set without a second check */
-    uint32_t *kd_ix;              /* local_ramp: off's vertices, in its k-d tree's order */
-    size_t cap_kd_ix;
-    struct kdnode *kd;            /* local_ramp's k-d tree over them (node 0 the root) */
-    size_t cap_kd, nkd;           /* (nkd: its nodes now) */
+    fpc_kd kd;                    /* local_ramp's k-d tree over off's vertices (contact_kd.h) */
+    double carry_r2;              /* carry_build's (2r)^2 */
+    const float *carry_cand;      /* (the candidate, for the worker's ranges) */
     bool bg;                      /* a recentre job is posted to the worker (bg_join) */
     bool broken;                  /* a call ran out of memory half way: unusable */
 };
@@ -280,7 +283,7 @@ struct track {
 
 /* ---- jobs for the worker (contact_worker.c) ---- */
 
-enum { FP_JOB_MARK, FP_JOB_REFIT, FP_JOB_WALK, FP_JOB_RECENTRE };
+enum { FP_JOB_MARK, FP_JOB_REFIT, FP_JOB_WALK, FP_JOB_RECENTRE, FP_JOB_CARRY };
 typedef struct pool pool;
 
 /* ---- the triangle-triangle test (contact_predicates.c) ---- */
@@ -551,6 +554,8 @@ int fpc_renew_lists(fp_contact *c);
 long fpc_track_check(fp_contact *c, const float *s, const float *ref, bool cand_boxes, size_t *flips,
                      bool record);
 int fpc_recentre(fp_contact *c);
+/* contact_step.c: a carried round's carry for the held vertices mv[x .. y) (FP_JOB_CARRY) */
+void fpc_carry_range(fp_contact *c, uint32_t x, uint32_t y);
 
 /* contact_bvh.c: the hierarchy's check and its tasks */
 int fpc_rec_merge(fp_contact *c);

@@ -1,6 +1,6 @@
 /* The contact guard's step (fp_contact_step): the moved vertices' first check, the local
- * scale-back (its k-d tree over the blocking vertices), the bisection; and the hold
- * (fp_contact_hold). */
+ * scale-back (its ramp and carry, from contact_kd.c's tree over the blocking vertices), the
+ * bisection; and the hold (fp_contact_hold). */
 #include "contact_internal.h"
 
 #include <assert.h>
@@ -32,53 +32,6 @@ static void track_lerp(struct track *k, double t, const double *ramp)
     }
 }
 
-/* local_ramp's k-d tree over the blocking vertices: a node's points' box, and its points
- * (leaf: at most FP_KD_LEAF) or its children */
-#define FP_KD_LEAF 8
-typedef struct kdnode {
-    double lo[3], hi[3];
-    uint32_t first, count, left, right; /* left == 0: a leaf (node 0 is the root) */
-    double sp[3], sd[3];                /* carry_build: sums of its points' P and motion */
-} kdnode;
-
-/* the node over the vertices ix[first .. first + n) (positions in pos) and those below it
- * into kd[*len ..); its index */
-static uint32_t kd_build(kdnode *kd, size_t *len, uint32_t *ix, const float *pos, uint32_t first,
-                         uint32_t n)
-{
-    uint32_t x = (uint32_t)(*len)++;
-    kdnode *d = &kd[x];
-    for (int a = 0; a < 3; a++) d->lo[a] = INFINITY, d->hi[a] = -INFINITY;
-    for (uint32_t i = first; i < first + n; i++)
-        for (int a = 0; a < 3; a++) {
-            d->lo[a] = dmin(d->lo[a], pos[3 * (size_t)ix[i] + a]);
-            d->hi[a] = dmax(d->hi[a], pos[3 * (size_t)ix[i] + a]);
-        }
-    d->first = first;
-    d->count = n;
-    d->left = d->right = 0;
-    if (n <= FP_KD_LEAF) return x;
-    int ax = 0; /* split at the median of the longest side */
-    for (int a = 1; a < 3; a++)
-        if (d->hi[a] - d->lo[a] > d->hi[ax] - d->lo[ax]) ax = a;
-    fp_select_mid(ix, first, first + n, first + n / 2, ax, pos);
-    uint32_t l = kd_build(kd, len, ix, pos, first, n / 2);
-    uint32_t r = kd_build(kd, len, ix, pos, first + n / 2, n - n / 2);
-    kd[x].left = l;
-    kd[x].right = r;
-    return x;
-}
-
-static inline double kd_lb2(const kdnode *d, const double *p)
-{
-    double s = 0;
-    for (int a = 0; a < 3; a++) {
-        double e = dmax(dmax(d->lo[a] - p[a], p[a] - d->hi[a]), 0.0);
-        s += e * e;
-    }
-    return s;
-}
-
 /* a new clock (tick), and the moved vertices whose share of the motion is below 1 (ramp
  * NULL: all) stamped with it: the hierarchy's next checks look at their triangles only */
 static void stamp_scaled(fp_contact *c, const double *ramp)
@@ -105,121 +58,67 @@ static int local_ramp(fp_contact *c, double r)
         for (size_t i = 0; i < k->nmv; i++) k->ramp[i] = 1;
         return 0;
     }
-    if (reserve((void **)&k->kd_ix, &k->cap_kd_ix, k->noff, sizeof *k->kd_ix) ||
-        reserve((void **)&k->kd, &k->cap_kd, 2 * k->noff, sizeof *k->kd))
-        return -ENOMEM;
-    uint32_t *ix = k->kd_ix;
-    memcpy(ix, k->off, k->noff * sizeof *ix);
-    size_t len = 0;
-    kd_build(k->kd, &len, ix, k->p, 0, (uint32_t)k->noff);
-    k->nkd = len;
-    const kdnode *kd = k->kd;
-    const float *q = k->p;
-    uint32_t stack[64], w = 0; /* w: the last nearest point (a bound for the next search) */
+    if (fpc_kd_build(&k->kd, k->off, k->noff, k->p)) return -ENOMEM;
+    uint32_t w = 0; /* the last nearest (a bound for the next search) */
     for (size_t i = 0; i < k->nmv; i++) {
         const float *pf = k->pv + 3 * i;
         double p[3] = {pf[0], pf[1], pf[2]};
-        const float *qw = q + 3 * (size_t)ix[w];
-        double best = r4, dx = p[0] - qw[0], dy = p[1] - qw[1], dz = p[2] - qw[2];
-        double dw = dx * dx + dy * dy + dz * dz;
-        if (dw < best) best = dw;
-        uint32_t top = 0;
-        stack[top++] = 0;
-        while (top && best > r2) {
-            const kdnode *d = &kd[stack[--top]];
-            if (kd_lb2(d, p) >= best) continue;
-            if (!d->left) {
-                for (uint32_t j = d->first; j < d->first + d->count; j++) {
-                    const float *qj = q + 3 * (size_t)ix[j];
-                    dx = p[0] - qj[0], dy = p[1] - qj[1], dz = p[2] - qj[2];
-                    double d2 = dx * dx + dy * dy + dz * dz;
-                    if (d2 < best) best = d2, w = j;
-                }
-                continue;
-            }
-            double ll = kd_lb2(&kd[d->left], p), lr = kd_lb2(&kd[d->right], p);
-            uint32_t nearer = ll <= lr ? d->left : d->right, farther = ll <= lr ? d->right : d->left;
-            if ((ll <= lr ? lr : ll) < best) stack[top++] = farther; /* (one a level: < 64) */
-            if ((ll <= lr ? ll : lr) < best) stack[top++] = nearer;
-        }
+        double best = fpc_kd_nearest2(&k->kd, p, r4, r2, &w);
         double u = best <= r2 ? 0 : best >= r4 ? 1 : (sqrt(best) - r) / r;
         k->ramp[i] = u * u * (3 - 2 * u);
     }
     return 0;
 }
 
+/* carry_build's share of the held vertices mv[x .. y) (ramp < 1): each one's carry from its
+ * sums, on either thread (FP_JOB_CARRY); it writes only their carry */
+void fpc_carry_range(fp_contact *c, uint32_t x, uint32_t y)
+{
+    struct track *k = c->tk;
+    for (uint32_t i = x; i < y; i++) {
+        if (k->ramp[i] >= 1) continue;
+        const float *pf = k->pv + 3 * (size_t)i;
+        double p[3] = {pf[0], pf[1], pf[2]}, acc[4];
+        fpc_kd_sums(&k->kd, k->carry_cand, p, k->carry_r2, acc);
+        /* (the weight is a sum of positive terms, and 0 with no blocking vertex within 2r) */
+        if (acc[0] > 0)
+            for (int a = 0; a < 3; a++) k->carry[3 * (size_t)i + a] = (float)(acc[1 + a] / acc[0]);
+    }
+}
+
+/* vertices a carry task takes at least (FP_JOB_CARRY; more where that makes over 256 tasks,
+ * as a job's list holds 1,024 at most and the caller runs those beyond at once) */
+#define FP_CARRY_TASK 256
+
 /* A carried round's translation (carry, per moved vertex): each vertex held back (ramp < 1)
  * is carried by the mean motion (candidate - P) of the blocking vertices within 2r of it,
  * weighted by (1 - d^2 / 4r^2)^2, so the held skin moves on with the drag as one piece (its
  * triangles keep their shapes and relative places) instead of staying behind; the ramp
- * then blends it into the candidate. A k-d node under r / 4 across counts as its points'
- * mean (their sums, made bottom-up here: the tree's children follow their parent), so a
- * vertex costs about the nodes near it, not every blocking vertex (the 1.7M face's blocked
- * frames hold some 2,600). Called after local_ramp(c, r), with P in k->p. 0 or -ENOMEM. */
+ * then blends it into the candidate. The sums are exact to rounding (fpc_kd_sums: the k-d
+ * nodes wholly within 2r add their moments), shared with the worker in tasks of at least
+ * FP_CARRY_TASK vertices where there are two threads and more than one task. Each
+ * vertex walked the tree, and nodes under r / 4 across counted as their points' mean, until
+ * ICT's confidence2-49fps (leapjs-playback) took up to 1.1 s a call: 24,000 held vertices,
+ * each with about 10,000 blocking ones within 2r (docs/performance.md). Called after
+ * local_ramp(c, r), with P in k->p. 0 or -ENOMEM. */
 static int carry_build(fp_contact *c, double r, const float *cand)
 {
     struct track *k = c->tk;
     if (reserve((void **)&k->carry, &k->cap_carry, 3 * k->nmv, sizeof *k->carry)) return -ENOMEM;
     memset(k->carry, 0, 3 * k->nmv * sizeof *k->carry);
     if (!k->noff) return 0;
-    kdnode *kd = k->kd;
-    const uint32_t *ix = k->kd_ix;
-    const float *q = k->p;
-    for (size_t x = k->nkd; x-- > 0;) {
-        kdnode *d = &kd[x];
-        for (int a = 0; a < 3; a++) d->sp[a] = d->sd[a] = 0;
-        if (d->left) {
-            for (int a = 0; a < 3; a++)
-                d->sp[a] = kd[d->left].sp[a] + kd[d->right].sp[a], d->sd[a] = kd[d->left].sd[a] + kd[d->right].sd[a];
-            continue;
-        }
-        for (uint32_t j = d->first; j < d->first + d->count; j++)
-            for (int a = 0; a < 3; a++) {
-                double pa = q[3 * (size_t)ix[j] + a];
-                d->sp[a] += pa;
-                d->sd[a] += (double)cand[3 * (size_t)ix[j] + a] - pa;
-            }
+    if (fpc_kd_moments(&k->kd, cand)) return -ENOMEM;
+    k->carry_r2 = 4 * r * r;
+    k->carry_cand = cand;
+    pool *p = c->threads > 1 && k->nmv > FP_CARRY_TASK ? fpc_pool_get(c) : NULL;
+    if (!p || fpc_job_open(c, p, FP_JOB_CARRY, cand, NULL, false)) {
+        fpc_carry_range(c, 0, (uint32_t)k->nmv);
+        return 0;
     }
-    const double R2 = 4 * r * r, small2 = r * r / 16;
-    uint32_t stack[64];
-    for (size_t i = 0; i < k->nmv; i++) {
-        if (k->ramp[i] >= 1) continue;
-        const float *pf = k->pv + 3 * i;
-        double p[3] = {pf[0], pf[1], pf[2]}, sw = 0, sd[3] = {0, 0, 0};
-        uint32_t top = 0;
-        stack[top++] = 0;
-        while (top) {
-            const kdnode *d = &kd[stack[--top]];
-            if (kd_lb2(d, p) >= R2) continue;
-            double diag2 = 0;
-            for (int a = 0; a < 3; a++) diag2 += (d->hi[a] - d->lo[a]) * (d->hi[a] - d->lo[a]);
-            if (diag2 <= small2 || !d->left) {
-                if (diag2 <= small2) { /* its points' mean */
-                    double e2 = 0;
-                    for (int a = 0; a < 3; a++) e2 += (p[a] - d->sp[a] / d->count) * (p[a] - d->sp[a] / d->count);
-                    if (e2 >= R2) continue;
-                    double u = 1 - e2 / R2, w = u * u;
-                    sw += w * d->count;
-                    for (int a = 0; a < 3; a++) sd[a] += w * d->sd[a];
-                    continue;
-                }
-                for (uint32_t j = d->first; j < d->first + d->count; j++) {
-                    const float *qj = q + 3 * (size_t)ix[j], *cj = cand + 3 * (size_t)ix[j];
-                    double e2 = 0;
-                    for (int a = 0; a < 3; a++) e2 += (p[a] - qj[a]) * (p[a] - qj[a]);
-                    if (e2 >= R2) continue;
-                    double u = 1 - e2 / R2, w = u * u;
-                    sw += w;
-                    for (int a = 0; a < 3; a++) sd[a] += w * ((double)cj[a] - qj[a]);
-                }
-                continue;
-            }
-            stack[top++] = d->left; /* (a level each: < 64) */
-            stack[top++] = d->right;
-        }
-        if (sw > 0)
-            for (int a = 0; a < 3; a++) k->carry[3 * i + a] = (float)(sd[a] / sw);
-    }
+    const size_t step = k->nmv / 256 > FP_CARRY_TASK ? k->nmv / 256 : FP_CARRY_TASK;
+    for (size_t x = 0; x < k->nmv; x += step)
+        fpc_add_task(c, p, (uint32_t)x, (uint32_t)(x + step < k->nmv ? x + step : k->nmv), 0);
+    fpc_job_finish(c, p);
     return 0;
 }
 

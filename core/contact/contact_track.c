@@ -74,8 +74,7 @@ void fpc_track_free(struct track *k)
     free(k->ramp);
     free(k->carry);
     free(k->probe);
-    free(k->kd_ix);
-    free(k->kd);
+    fpc_kd_free(&k->kd);
     free(k);
 }
 

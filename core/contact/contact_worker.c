@@ -79,6 +79,8 @@ static void run_task(pool *p, lane *ln, const wtask *t)
         if (fpc_mark_range(p->c, ln, p->s, t->x, t->y, t->z)) ln->flips = -ENOMEM;
     } else if (p->kind == FP_JOB_RECENTRE) {
         if (fpc_recentre(p->c)) ln->flips = -ENOMEM;
+    } else if (p->kind == FP_JOB_CARRY) {
+        fpc_carry_range(p->c, t->x, t->y);
     } else if (p->kind == FP_JOB_REFIT) {
         fpc_update_subtree(p->c, ln, p->s, p->ref, t->x, 0);
     } else if (t->z) {
