@@ -27,7 +27,9 @@
  * FP_TEST_STEADY_HZ=57 (the first jitter test's recording resampled first, as the 57 Hz copy;
  * the second is resampled at 57 Hz always), FP_TEST_STEADY_MAPPING=anchored (instead of
  * onehand; the face then moves only while a fingertip touches), FP_TEST_STEADY_SEED=7 (the
- * noise's seed instead of 51). Each run also prints its
+ * noise's seed instead of 51), FP_TEST_STUTTER_SPEC=replay:FILE,fast=1 (test_no_stutter alone,
+ * on that input instead: its repeated frames listed; FP_TEST_STUTTER_TIMES=1 prints each
+ * frame's time since the right hand's latest sample). Each run also prints its
  * pops: frames where the clean run's face moved over twice as far as the hand's fastest
  * joint and 1 mm more (a clamp or a guard letting go at once; not asserted: the contact
  * guard's held skin catches up in one frame where it lets go, docs/performance.md). */
@@ -283,6 +285,7 @@ static bool step(run *r, size_t k)
     const fp_hand_pose *h = fp_session_hand(r->s, FP_HAND_RIGHT);
     r->present[k] = h && h->present;
     if (r->present[k]) memcpy(r->hand[k], h->joints, sizeof r->hand[k]);
+    if (getenv("FP_TEST_STUTTER_TIMES") && h) printf("  frame %zu: %.2f ms after the last sample (at %.2f ms)\n", k, (fp_test_frame_time(r->s, r->t0, k, FPS) - h->time_ns) / 1e6, (h->time_ns - r->t0) / 1e6);
     size_t n = fp_session_vertex_count(r->s), m = n / FACE_STRIDE + 1;
     const float *pos = fp_session_positions(r->s);
     for (size_t v = 0; v * FACE_STRIDE < n; v++)
@@ -491,6 +494,7 @@ static size_t stutters(const char *spec, size_t *frames_out, size_t *moving_out)
         bool moves = memcmp(r.hand[i + 1], r.hand[i - 1], sizeof r.hand[i]) != 0;
         moving += moves;
         rep += same && moves;
+        if (same && moves && getenv("FP_TEST_STUTTER_SPEC")) printf("  repeated: frame %zu\n", i);
     }
     *frames_out = r.frames;
     *moving_out = moving;
@@ -567,6 +571,13 @@ static void test_no_stutter(void **state)
     snprintf(spec[0], sizeof spec[0], "replay:%s,fast=1", clip_path(NULL));
     snprintf(spec[1], sizeof spec[1], "replay:%s,fast=1", slow_csv);
     size_t frames[2], moving[2], rep[2];
+    if (getenv("FP_TEST_STUTTER_SPEC")) { /* another input instead (the figures printed) */
+        size_t f, m, r = stutters(getenv("FP_TEST_STUTTER_SPEC"), &f, &m);
+        printf("stutter at %d fps: %s: %zu repeated of %zu moving frames (%zu in all)\n", FPS,
+               getenv("FP_TEST_STUTTER_SPEC"), r, m, f);
+        assert_int_equal(r, 0);
+        return;
+    }
     for (int i = 0; i < 2; i++) rep[i] = stutters(spec[i], &frames[i], &moving[i]);
     printf("stutter at %d fps: 108 Hz recording %zu repeated of %zu moving frames (%zu in all); "
            "57 Hz copy (%zu rows) %zu of %zu (%zu)\n", FPS, rep[0], moving[0], frames[0], slow.n,
@@ -609,5 +620,9 @@ int main(void)
         cmocka_unit_test(test_jitter_and_lag_still_pinch),
         cmocka_unit_test(test_no_stutter),
     };
+    if (getenv("FP_TEST_STUTTER_SPEC")) { /* that input's stutter check alone */
+        const struct CMUnitTest one[] = {cmocka_unit_test(test_no_stutter)};
+        return cmocka_run_group_tests(one, setup, teardown);
+    }
     return cmocka_run_group_tests(tests, setup, teardown);
 }
