@@ -1,6 +1,6 @@
 /* The contact guard's worker: jobs of tasks that the caller and one worker thread claim one
- * at a time (a step's marking, a check's refit and walk, the envelopes' re-centring between
- * steps; fp_contact_set_threads). */
+ * at a time (a step's marking, a check's refit and walk, a carried round's carry, the
+ * envelopes' re-centring between steps; fp_contact_set_threads). */
 #define _POSIX_C_SOURCE 200809L /* sched_yield */
 #include "contact_internal.h"
 #include "fp_clock.h"
@@ -27,7 +27,9 @@
  * by busy's clearing. */
 #define FP_POOL_IDLE_NS 20000000  /* the worker polls (yielding) this long for the next job */
 
-typedef struct wtask {            /* a task: the marking's mark_range(x, y, z), the refit of
+typedef struct wtask {            /* a task: the marking's mark_range(x, y, z), the carry of
+                                     mv[x .. y) (fpc_carry_range: its own vertices' carry
+                                     written), the refit of
                                      node x (update_subtree), or the walk's node_self(x) (y ==
                                      FP_TRACK_NONE) or node_pairs(x, y) (z == 0) or its
                                      accept_range(x, y) (z == 1) */
