@@ -1,9 +1,11 @@
-/* fp_net.c: a UDP socket connected to HOST:PORT (fp_net.h). */
+/* fp_net.c: a UDP socket connected to HOST:PORT, and the IPv6 loopback beside 127.0.0.1
+ * (fp_net.h). */
 #define _GNU_SOURCE /* SOCK_CLOEXEC */
 #include "fp_net.h"
 
 #include <errno.h>
 #include <netdb.h>
+#include <netinet/in.h>
 #include <stdio.h>
 #include <string.h>
 #include <sys/socket.h>
@@ -42,4 +44,24 @@ int fp_udp_connect(const char *host, const char *port, int flags, char *why, siz
     freeaddrinfo(ai);
     if (sock < 0 && why && whylen) snprintf(why, whylen, "%s", strerror(e));
     return sock >= 0 ? sock : -e;
+}
+
+int fp_udp_bind_loopback6(unsigned port, int flags)
+{
+    if (port == 0 || port > 65535) {
+        errno = EINVAL;
+        return -1;
+    }
+    struct sockaddr_in6 sa = {.sin6_family = AF_INET6, .sin6_port = htons((uint16_t)port),
+                              .sin6_addr = IN6ADDR_LOOPBACK_INIT};
+    int s = socket(AF_INET6, SOCK_DGRAM | SOCK_CLOEXEC | flags, 0), one = 1;
+    if (s < 0) return -1;
+    if (setsockopt(s, IPPROTO_IPV6, IPV6_V6ONLY, &one, sizeof one) != 0 ||
+        bind(s, (struct sockaddr *)&sa, sizeof sa) != 0) {
+        int e = errno;
+        close(s);
+        errno = e;
+        return -1;
+    }
+    return s;
 }

@@ -10,6 +10,7 @@
 
 struct fp_control {
     int sock;
+    int sock6;                                /* [::1] at the same port beside 127.0.0.1, or -1 */
     unsigned port;
     int stop_pipe[2];
     pthread_t thread;

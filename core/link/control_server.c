@@ -5,6 +5,7 @@
 #include "control_internal.h"
 
 #include "fp_error.h"
+#include "fp_net.h"
 #include "facepuppet/decimal.h"
 
 #include <arpa/inet.h>
@@ -56,15 +57,16 @@ bool fp_control_next(fp_control *c, fp_control_cmd *cmd)
 static void *control_thread(void *arg)
 {
     fp_control *c = arg;
-    struct pollfd fds[2] = {{c->stop_pipe[0], POLLIN, 0}, {c->sock, POLLIN, 0}};
+    struct pollfd fds[3] = {{c->stop_pipe[0], POLLIN, 0}, {c->sock, POLLIN, 0}, {c->sock6, POLLIN, 0}};
     for (;;) {
-        int rc = poll(fds, 2, TICK_MS);
+        int rc = poll(fds, 3, TICK_MS); /* (a negative sock6 is left out by poll) */
         if (rc < 0 && errno != EINTR) return NULL;
         if (fds[0].revents) return NULL;
-        for (int i = 0; i < BURST && rc > 0 && (fds[1].revents & POLLIN); i++) {
+        for (int s = 1; s < 3; s++)
+        for (int i = 0; i < BURST && rc > 0 && (fds[s].revents & POLLIN); i++) {
             fp_control_cmd from = {0};
             from.fromlen = sizeof from.from;
-            ssize_t n = recvfrom(c->sock, c->buf, sizeof c->buf, MSG_DONTWAIT | MSG_TRUNC,
+            ssize_t n = recvfrom(fds[s].fd, c->buf, sizeof c->buf, MSG_DONTWAIT | MSG_TRUNC,
                                  (struct sockaddr *)&from.from, &from.fromlen);
             if (n < 0) break; /* EAGAIN: drained */
             atomic_fetch_add_explicit(&c->packets, 1, memory_order_relaxed);
@@ -131,6 +133,7 @@ int fp_control_open(const char *spec, fp_control **out, char *warning, size_t wl
                          spec, bind_addr);
     fp_control *c = calloc(1, sizeof *c);
     if (!c) return fp_errorf(err, errlen, -ENOMEM, "--control: out of memory");
+    c->sock6 = -1;
     c->sock = socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
     if (c->sock < 0 || bind(c->sock, (struct sockaddr *)&sa, sizeof sa) != 0) {
         int e = errno;
@@ -143,6 +146,8 @@ int fp_control_open(const char *spec, fp_control **out, char *warning, size_t wl
     socklen_t len = sizeof sa;
     getsockname(c->sock, (struct sockaddr *)&sa, &len);
     c->port = ntohs(sa.sin_port);
+    /* on 127.0.0.1, [::1] too (best effort: IPv4 alone where that fails) */
+    if (sa.sin_addr.s_addr == htonl(INADDR_LOOPBACK)) c->sock6 = fp_udp_bind_loopback6(c->port, SOCK_NONBLOCK);
     if ((ntohl(sa.sin_addr.s_addr) >> 24) != 127 && warning && wlen)
         snprintf(warning, wlen, "--control listens on %s:%u beyond loopback: any host that can "
                  "reach it can start takes and drive the session (OSC has no authentication)",
@@ -151,6 +156,7 @@ int fp_control_open(const char *spec, fp_control **out, char *warning, size_t wl
         pthread_create(&c->thread, NULL, control_thread, c) != 0) {
         int e = errno ? errno : EAGAIN;
         close(c->sock);
+        if (c->sock6 >= 0) close(c->sock6);
         if (c->stop_pipe[0] > 0) { close(c->stop_pipe[0]); close(c->stop_pipe[1]); }
         free(c);
         return fp_errorf(err, errlen, -e, "--control: cannot start its thread: %s", strerror(e));
@@ -160,6 +166,8 @@ int fp_control_open(const char *spec, fp_control **out, char *warning, size_t wl
 }
 
 unsigned fp_control_port(const fp_control *c) { return c ? c->port : 0; }
+
+bool fp_control_hears_ipv6(const fp_control *c) { return c && c->sock6 >= 0; }
 
 void fp_control_stats_get(fp_control *c, fp_control_stats *st)
 {
@@ -199,7 +207,11 @@ static int send_status(fp_control *c, const struct sockaddr *to, socklen_t tolen
     size_t size = lo_message_length(m, "/fp/status");
     int rc = 0;
     if (size > sizeof buf || !lo_message_serialise(m, "/fp/status", buf, &size)) rc = -EMSGSIZE;
-    else if (sendto(c->sock, buf, size, MSG_DONTWAIT, to, tolen) < 0) rc = -errno;
+    else {
+        int sock = to->sa_family == AF_INET6 ? c->sock6 : c->sock; /* (the one it came on) */
+        if (sock < 0) rc = -EAFNOSUPPORT;
+        else if (sendto(sock, buf, size, MSG_DONTWAIT, to, tolen) < 0) rc = -errno;
+    }
     lo_message_free(m);
     if (rc) c->send_errors++;
     return rc;
@@ -257,6 +269,7 @@ void fp_control_close(fp_control **cp)
     close(c->stop_pipe[0]);
     close(c->stop_pipe[1]);
     close(c->sock);
+    if (c->sock6 >= 0) close(c->sock6);
     free(c);
     *cp = NULL;
 }

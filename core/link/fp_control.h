@@ -104,7 +104,8 @@ typedef struct fp_control_status {
 typedef struct fp_control fp_control;
 
 /** Parse SPEC "osc:PORT[,bind=ADDR]" (PORT digits 1..65535, or 0: a free port), bind a UDP
- *  socket (127.0.0.1 unless bind= names an IPv4 address) and start the network thread.
+ *  socket (127.0.0.1 unless bind= names an IPv4 address; on 127.0.0.1 also [::1] at the same
+ *  port, best effort: fp_control_hears_ipv6) and start the network thread.
  *  *warning (may be NULL) gets a line to print when bound beyond loopback (OSC has no
  *  authentication), else "". Returns 0 and *out, or a negative code with err. */
 int fp_control_open(const char *spec, fp_control **out, char *warning, size_t wlen, char *err,
@@ -112,6 +113,11 @@ int fp_control_open(const char *spec, fp_control **out, char *warning, size_t wl
 
 /** The port bound (useful with osc:0). */
 unsigned fp_control_port(const fp_control *c);
+
+/** Whether it also hears [::1] at that port (bound on 127.0.0.1 where the machine has IPv6:
+ *  a sender's "localhost" may resolve to ::1 first; replies go back the way a message came).
+ *  [any thread] */
+bool fp_control_hears_ipv6(const fp_control *c);
 
 /** Take the next queued command into *cmd. Returns true when there was one. [frame thread]
  *  No allocation, no lock. */

@@ -15,6 +15,7 @@
  * stop() writes to the pipe and joins.
  */
 #define _GNU_SOURCE
+#include "fp_net.h"
 #include "osc.h"
 #include "osc_spec.h"
 
@@ -1010,16 +1011,7 @@ static int open_sockets(osc_input *o, struct sockaddr_in sa, const osc_settings 
     o->port = ntohs(sa.sin_port);
     snprintf(o->bind_text, sizeof o->bind_text, "%s", set->bind_addr);
     o->loopback = (ntohl(sa.sin_addr.s_addr) >> 24) == 127;
-    if (sa.sin_addr.s_addr == htonl(INADDR_LOOPBACK)) {
-        struct sockaddr_in6 sa6 = {.sin6_family = AF_INET6, .sin6_port = sa.sin_port,
-                                   .sin6_addr = IN6ADDR_LOOPBACK_INIT};
-        int s6 = socket(AF_INET6, SOCK_DGRAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0), one = 1;
-        if (s6 >= 0 && setsockopt(s6, IPPROTO_IPV6, IPV6_V6ONLY, &one, sizeof one) == 0 &&
-            bind(s6, (struct sockaddr *)&sa6, sizeof sa6) == 0)
-            o->sock6 = s6;
-        else if (s6 >= 0)
-            close(s6);
-    }
+    if (sa.sin_addr.s_addr == htonl(INADDR_LOOPBACK)) o->sock6 = fp_udp_bind_loopback6(o->port, SOCK_NONBLOCK);
     return 0;
 }
 

@@ -18,7 +18,9 @@ only the control surface engages and commits, records takes in a folder and list
      each counted as refused (the status's refused count grows by exactly the messages
      sent), none answered, and the status after them is the status before (state, slate,
      take, recording); the takes folder holds the same files;
-  6. /fp/quit: the run ends (exit 0) with 1 engage and 1 commit in its summary.
+  6. from [::1] (a sender whose "localhost" resolved to IPv6 first; where the machine has an
+     IPv6 loopback): /fp/status answered to that sender, from the control port;
+  7. /fp/quit: the run ends (exit 0) with 1 engage and 1 commit in its summary.
 Then the shell wrapper checks the takes (facepuppet takes --json, play).
 Usage: test_control.py FACEPUPPET_BIN PLUGIN_DIR MESH RECORDING TAKE_DIR WORK_DIR
 Prints "PASS" last on success; exit 1 with "FAIL: ..." otherwise."""
@@ -120,9 +122,39 @@ def want(st, **kv):
             fail("status %s = %r, wanted %r (%r)" % (k, st[k], v, st))
 
 
+def ipv6_status():
+    """/fp/status from an IPv6 loopback socket: answered there, or None without IPv6."""
+    try:
+        s6 = socket.socket(socket.AF_INET6, socket.SOCK_DGRAM)
+        s6.bind(("::1", 0))
+    except OSError as e:
+        print("  (no IPv6 loopback here: %s; [::1] not checked)" % e)
+        return None
+    with s6:
+        s6.sendto(fposc.encode("/fp/status"), ("::1", port))
+        if not select.select([s6], [], [], 10)[0]:
+            fail("/fp/status from [::1] got no reply in 10 s (--control hears 127.0.0.1 only)")
+        data, sender = s6.recvfrom(65536)
+        address, args = fposc.decode(data)
+        if address != "/fp/status" or args[0] != "/fp/status" or sender[1] != port:
+            fail("/fp/status from [::1] answered %r %r from %r" % (address, args[:2], sender))
+        print("  %-18s %-40s -> %s" % ("/fp/status", "(from [::1])", args[1]))
+        return args
+
+
 try:
     st = command("/fp/status")
     want(st, state="idle", recording=0)
+    if "[::1] too" in open(os.path.join(work, "run.err")).read():
+        ipv6_status()
+    elif socket.has_ipv6:
+        try:
+            probe = socket.socket(socket.AF_INET6, socket.SOCK_DGRAM)
+            probe.bind(("::1", 0))
+            probe.close()
+            fail("the machine has an IPv6 loopback, but --control did not listen on [::1]")
+        except OSError:
+            print("  (no IPv6 loopback here; [::1] not checked)")
     command("/fp/subscribe")
     st = command("/fp/record/start", "scene7", 12)
     want(st, recording=1, slate="scene7", take=12)
