@@ -116,6 +116,8 @@ typedef struct osc_input {
     bool connected;
     int64_t last_valid_ns;
     unsigned hands_seen;           /* bit per hand that got a pose since the connect */
+    unsigned hands_lost;           /* bit per seen hand reported gone while the sender went on */
+    int64_t hand_last_ns[FP_HANDS];/* receive time of each hand's latest pose */
     char sender[64];
     bool have_offset;
     int64_t offset_ns;
@@ -290,12 +292,16 @@ static void note_valid(osc_input *o, int64_t recv_ns, int hand)
     if (!o->connected) {
         o->connected = true;
         bump(o, &o->st.connects);
-        o->hands_seen = 0;
+        o->hands_seen = o->hands_lost = 0;
         push_status(o, FP_STATUS_CONNECTED, -1, "osc %s: sender %s on port %u",
                     fp__osc_format_names[o->format], o->sender, (unsigned)o->port);
     }
     o->last_valid_ns = recv_ns;
-    if (hand >= 0) o->hands_seen |= 1u << hand;
+    if (hand >= 0) {
+        o->hands_seen |= 1u << hand;
+        o->hands_lost &= ~(1u << hand); /* back: its pose makes it present again */
+        o->hand_last_ns[hand] = recv_ns;
+    }
 }
 
 static void header_for(fp_event *ev, size_t size, uint16_t type, int64_t t, int hand)
@@ -785,6 +791,21 @@ static void timers(osc_input *o, int64_t now)
                         "end (no data for %.3g s): taken as ended", o->sender, o->timeout_s);
         }
     }
+    /* A hand the tracker lost while the sender goes on (out of a camera's view, or a Leap
+     * frame without it): gone after the same silence, so its grab lets go as a stopped
+     * sender's does; its next pose brings it back. */
+    for (int h = 0; o->connected && h < FP_HANDS; h++) {
+        const unsigned bit = 1u << h;
+        if (!(o->hands_seen & bit) || (o->hands_lost & bit) ||
+            now - o->hand_last_ns[h] <= (int64_t)(o->timeout_s * 1e9))
+            continue;
+        o->hands_lost |= bit;
+        bump(o, &o->st.hands_lost);
+        push_status(o, FP_STATUS_DISCONNECTED, h, "osc: %s hand: not in %s's data for %.3g s "
+                    "(the tracker lost it): taken as gone until it comes back",
+                    h == FP_HAND_LEFT ? "left" : "right", o->sender, o->timeout_s);
+        o->mp[h].have = 0;
+    }
     for (int k = 0; k < FP_OSC_PROBLEMS; k++) {
         if (o->report_at[k] <= 0 || now < o->report_at[k]) continue;
         o->report_at[k] = -1;
@@ -928,10 +949,11 @@ static void osc_stop(fp_input *self)
         if (s.problems[k] && len < sizeof problems)
             len += (size_t)snprintf(problems + len, sizeof problems - len, "%s%s %llu", len ? ", " : "",
                                     problem_names[k], (unsigned long long)s.problems[k]);
-    logf_(o, FP_LOG_INFO, "port %u: %llu packets, %llu messages, %llu bundles, %llu events; "
-          "latency packet -> event median %.1f us, p99 %.1f us (%llu packets); problems: %s",
+    logf_(o, FP_LOG_INFO, "port %u: %llu packets, %llu messages, %llu bundles, %llu events, "
+          "%llu hands lost; latency packet -> event median %.1f us, p99 %.1f us (%llu packets); problems: %s",
           (unsigned)s.port, (unsigned long long)s.packets, (unsigned long long)s.messages,
-          (unsigned long long)s.bundles, (unsigned long long)s.events, s.latency_median_us,
+          (unsigned long long)s.bundles, (unsigned long long)s.events,
+          (unsigned long long)s.hands_lost, s.latency_median_us,
           s.latency_p99_us, (unsigned long long)s.latency_samples, len ? problems : "none");
 }
 

@@ -53,6 +53,8 @@ typedef struct fp_osc_stats {
     uint64_t latency_samples;   /* packets behind the two figures below (last <= 65536) */
     double latency_median_us;   /* packet received (recvfrom returned) -> its last event pushed */
     double latency_p99_us;
+    uint64_t hands_lost;        /* a hand silent for `timeout` while the sender went on
+                                   (DISCONNECTED pushed for that hand alone) */
 } fp_osc_stats;
 
 typedef struct fp_osc_ext {

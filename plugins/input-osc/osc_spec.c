@@ -33,7 +33,9 @@ const char fp__osc_usage[] =
     "           integer as i or h\n"
     "  bind     address to listen on (default 127.0.0.1; anything else is logged as a warning)\n"
     "  hand     which hands to take (default both; for leap, left/right takes slot 0 as that hand)\n"
-    "  timeout  seconds of silence before the sender is reported disconnected (default 1)\n"
+    "  timeout  seconds of silence before the sender is reported disconnected, and of a\n"
+    "           hand's absence (the sender going on without it) before that hand is\n"
+    "           reported gone (default 1)\n"
     "  box      the volume the hands move in, mm, device frame: fitted to the face by the host\n"
     "           (default: the host's desktop-tracker box)\n"
     "  mediapipe: width = mm across the image (default 400), aspect = image height / width\n"
@@ -202,7 +204,7 @@ const fp_param_info fp__osc_keys[] = {
     {.name = "clock", .type = FP_PARAM_ENUM, .default_value = "arrival", .choices = "arrival|recording",
      .description = "recording: step on the sender's recording clock (another session's forward=)"},
     {.name = "timeout", .type = FP_PARAM_FLOAT, .min = 0.01, .max = 3600, .default_value = "1",
-     .unit = "s", .description = "silence before the sender is reported disconnected"},
+     .unit = "s", .description = "silence before the sender is reported disconnected, or a hand gone"},
     {.name = "box", .type = FP_PARAM_STRING, .default_value = "", .unit = "mm",
      .description = "X0/Y0/Z0/X1/Y1/Z1: the volume the hands move in, device frame"},
     {.name = "width", .type = FP_PARAM_FLOAT, .min = 1, .max = 10000, .default_value = "400",

@@ -35,12 +35,13 @@ typedef struct replay {
     double speed;
     bool loop, fast;
     bool workspace;          /* state the recording's range (FP_EXT_WORKSPACE); workspace=0: not */
+    double timeout_s;        /* a hand absent this long is reported gone (0: never) */
 
     fp_pacer pacer;          /* the thread, waits stop() interrupts, lossless pushes (fp_pacer.h) */
 } replay;
 
 static const char usage_text[] =
-    "replay:FILE[,speed=X][,loop=1][,fast=1][,hands=left|right|both][,workspace=0]\n"
+    "replay:FILE[,speed=X][,loop=1][,fast=1][,hands=left|right|both][,workspace=0][,timeout=S]\n"
     "  Replays a recording as live input, at the recorded pace (timestamp_us or time_ns).\n"
     "  FILE is detected by its first bytes:\n"
     "    Leap joint-positions CSV (*_joints_mm.csv): per hand and row, joint positions in the\n"
@@ -60,6 +61,9 @@ static const char usage_text[] =
     "           arrive, as a live tracker's (docs/calibration.md; default 1: placed from the\n"
     "           whole recording's range in advance, and brought closer where its fingertips\n"
     "           would never come within reach of the face)\n"
+    "  timeout=S  a hand missing from the recording for S seconds (the tracker lost it) is\n"
+    "           reported gone then, as a live osc input does (default 1, as osc's; 0: never;\n"
+    "           not for event logs, which hold the statuses they were recorded with)\n"
     "  Event times are the recording's own clock (the host clock at start + the sample's\n"
     "  time), whatever the speed; speed and fast only change the pacing. Without loop, the replay ends\n"
     "  with an end-of-stream status. A malformed row fails at creation (FILE:LINE:COLUMN; in a\n"
@@ -169,6 +173,76 @@ static int parse_bool(const fp_param *p, bool *out, char *err, size_t errlen)
 }
 
 /* ------------------------------------------------------------------------------------- */
+/* A hand the tracker lost                                                                */
+
+static bool is_pose(const fp_event *ev)
+{
+    return ev->header.type == FP_EVENT_JOINT_POSITIONS || ev->header.type == FP_EVENT_JOINT_ANGLES;
+}
+
+static int cmp_loss(const void *a, const void *b)
+{
+    const replay_item *x = a, *y = b;
+    if (x->t_ns != y->t_ns) return x->t_ns < y->t_ns ? -1 : 1;
+    return x->event.header.hand - y->event.header.hand;
+}
+
+/* Inserts, for each gap of more than timeout_ns between a hand's poses and after its last
+ * pose, a DISCONNECTED status for that hand timeout_ns after the pose before the gap: what an
+ * osc input reports when its sender goes on without the hand, so a replayed recording lets
+ * a lost hand's grab go as the same recording sent live does. The items stay in time order
+ * (a loss before the poses of its moment). Returns 0 or -ENOMEM (rec unchanged). */
+static int add_losses(replay_recording *rec, int64_t timeout_ns)
+{
+    size_t k = 0, cap = 0;
+    replay_item *loss = NULL;
+    int64_t last[FP_HANDS] = {-1, -1};
+    for (size_t i = 0; i <= rec->count; i++) {
+        const bool end = i == rec->count;
+        const fp_event *ev = end ? NULL : &rec->items[i].event;
+        const int hand = end || !is_pose(ev) ? -1 : ev->header.hand;
+        for (int h = 0; h < FP_HANDS; h++) {
+            if (last[h] < 0 || (!end && hand != h)) continue;
+            const int64_t next = end ? rec->duration_ns : rec->items[i].t_ns;
+            if (next - last[h] <= timeout_ns) continue;
+            if (k == cap) {
+                replay_item *grown = realloc(loss, (cap = cap ? 2 * cap : 8) * sizeof *grown);
+                if (!grown) {
+                    free(loss);
+                    return -ENOMEM;
+                }
+                loss = grown;
+            }
+            replay_item *it = &loss[k++];
+            memset(it, 0, sizeof *it);
+            it->t_ns = last[h] + timeout_ns;
+            it->event.status.header = (fp_event_header){.size = sizeof it->event.status,
+                                                        .type = FP_EVENT_STATUS, .hand = h};
+            it->event.status.code = FP_STATUS_DISCONNECTED;
+            snprintf(it->event.status.text, sizeof it->event.status.text,
+                     "%s hand: not in the recording for %.3g s from %.3f s: taken as gone",
+                     h == FP_HAND_LEFT ? "left" : "right", (double)timeout_ns * 1e-9,
+                     (double)last[h] * 1e-9);
+        }
+        if (hand == FP_HAND_LEFT || hand == FP_HAND_RIGHT) last[hand] = rec->items[i].t_ns;
+    }
+    if (!k) return 0;
+    replay_item *all = malloc((rec->count + k) * sizeof *all);
+    if (!all) {
+        free(loss);
+        return -ENOMEM;
+    }
+    qsort(loss, k, sizeof *loss, cmp_loss);
+    for (size_t a = 0, b = 0, o = 0; o < rec->count + k; o++)
+        all[o] = b < k && (a == rec->count || loss[b].t_ns <= rec->items[a].t_ns) ? loss[b++] : rec->items[a++];
+    free(loss);
+    free(rec->items);
+    rec->items = all;
+    rec->count += k;
+    return 0;
+}
+
+/* ------------------------------------------------------------------------------------- */
 /* Extensions: the workspace the recording's hands move in, and what it holds             */
 
 static int cmp_float(const void *a, const void *b)
@@ -212,6 +286,7 @@ static bool replay_recording_info(const fp_input *self, fp_recording_info *info)
     int64_t last = -1;
     for (size_t i = 0; i < r->rec.count; i++) {
         const replay_item *it = &r->rec.items[i];
+        if (it->event.header.type == FP_EVENT_STATUS) continue; /* (add_losses's) */
         if (it->t_ns != last) distinct++;
         last = it->t_ns;
         int h = it->event.header.hand;
@@ -268,6 +343,7 @@ static int replay_create(const fp_host *host, const char *arg, const fp_param *p
     }
     double speed = 1.0;
     bool loop = false, fast = false, workspace = true;
+    double timeout = 1.0;
     int hands = REPLAY_HAND_BOTH;
     for (size_t i = 0; i < nparams; i++) {
         const fp_param *p = &params[i];
@@ -284,6 +360,13 @@ static int replay_create(const fp_host *host, const char *arg, const fp_param *p
             if (parse_bool(&q, &fast, err, errlen)) return -EINVAL;
         } else if (strcmp(q.key, "workspace") == 0) {
             if (parse_bool(&q, &workspace, err, errlen)) return -EINVAL;
+        } else if (strcmp(q.key, "timeout") == 0) {
+            char *e = NULL;
+            timeout = strtod(v, &e);
+            if (!*v || *e || !(timeout >= 0 && timeout <= 3600)) {
+                snprintf(err, errlen, "replay: timeout=%s: expected seconds from 0 (never) to 3600", v);
+                return -EINVAL;
+            }
         } else if (strcmp(q.key, "hands") == 0) {
             hands = (int)fp_parse_hands(v);
             if (!hands) {
@@ -291,7 +374,7 @@ static int replay_create(const fp_host *host, const char *arg, const fp_param *p
                 return -EINVAL;
             }
         } else {
-            snprintf(err, errlen, "replay: unknown key \"%s\" (known: speed, loop, fast, hands, workspace)",
+            snprintf(err, errlen, "replay: unknown key \"%s\" (known: speed, loop, fast, hands, workspace, timeout)",
                      q.key);
             return -EINVAL;
         }
@@ -307,6 +390,14 @@ static int replay_create(const fp_host *host, const char *arg, const fp_param *p
     if (rc) {
         free(r->path);
         free(r);
+        return rc;
+    }
+    if (timeout > 0 && r->rec.format != REPLAY_FORMAT_EVENTLOG &&
+        (rc = add_losses(&r->rec, (int64_t)llround(timeout * 1e9)))) {
+        replay_recording_free(&r->rec);
+        free(r->path);
+        free(r);
+        snprintf(err, errlen, "replay: out of memory");
         return rc;
     }
     if ((rc = fp_pacer_init(&r->pacer, host))) {
@@ -348,6 +439,9 @@ static const fp_param_info replay_keys[] = {
     {.name = "workspace", .type = FP_PARAM_BOOL, .min = 0, .max = 1, .default_value = "1",
      .description = "state the recording's range, so the hands are placed from it in advance (0: "
                     "placed as they arrive, as a live tracker's)"},
+    {.name = "timeout", .type = FP_PARAM_FLOAT, .min = 0, .max = 3600, .default_value = "1",
+     .unit = "s", .description = "a hand missing from the recording this long is reported gone "
+                                 "(0: never; as osc's timeout)"},
     {.name = NULL},
 };
 

@@ -16,6 +16,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <unistd.h>
 #include <cmocka.h>
 
 typedef struct outcome {
@@ -306,6 +307,74 @@ static void test_input_log_relayed(void **state)
     fp_plugin_path_clear(&path);
 }
 
+/* A hand the tracker loses mid-gesture lets go: three-claps with the right hand's rows
+ * between 1.0 and 3.0 s taken out (the left hand goes on), on the ICT face, anchored, at 30
+ * fps on the recording's clock. With the replay's default timeout (1 s, as a live osc
+ * input's) the right hand is gone at 2.0 s and the gesture it held commits then; with
+ * timeout=0 (a lost hand never reported: the behaviour before) the frozen right hand keeps
+ * that gesture engaged past 2.5 s. */
+static int lost_hand_commits(const char *csv, const char *keys, double from_s, double to_s)
+{
+    char input[4400];
+    snprintf(input, sizeof input, "replay:%s,fast=1%s", csv, keys);
+    fp_session_options so;
+    fp_test_face_options(&so, "anchored", NULL);
+    so.rig_path = "none";
+    so.inputs[0] = input;
+    so.input_count = 1;
+    so.input_clock = true;
+    fp_session *s = fp_test_session_open(&so);
+    int64_t t0 = fp_test_session_t0(s);
+    int commits = 0;
+    for (uint64_t k = 0; !fp_session_finished(s); k++) {
+        fp_frame_stats st;
+        fp_session_step(s, fp_test_frame_time(s, t0, k, 30.0), &st);
+        double t = (double)k / 30.0;
+        if (st.committed && t >= from_s && t <= to_s) commits++;
+    }
+    fp_session_destroy(&s);
+    return commits;
+}
+
+static void test_lost_hand_lets_go(void **state)
+{
+    (void)state;
+    char dir[] = "/tmp/fp_lost_hand_XXXXXX", csv[64], src[4300];
+    assert_non_null(mkdtemp(dir));
+    snprintf(csv, sizeof csv, "%s/claps_joints_mm.csv", dir);
+    snprintf(src, sizeof src, "%s/hands/leap-motion/three-claps_joints_mm.csv", fp_test_data_dir());
+    FILE *in = fopen(src, "r"), *out = fopen(csv, "w");
+    assert_non_null(in);
+    assert_non_null(out);
+    char line[8192];
+    long long first_us = -1;
+    int dropped = 0;
+    for (int row = 0; fgets(line, sizeof line, in); row++) {
+        long long us = 0;
+        char hand[16] = "";
+        /* frame,timestamp_us,hand_id,hand_type,... */
+        if (row && sscanf(line, "%*[^,],%lld,%*[^,],%15[^,]", &us, hand) == 2) {
+            if (first_us < 0) first_us = us;
+            double t = (double)(us - first_us) * 1e-6;
+            if (!strcmp(hand, "right") && t > 1.0 && t < 3.0) {
+                dropped++;
+                continue;
+            }
+        }
+        fputs(line, out);
+    }
+    fclose(in);
+    fclose(out);
+    assert_true(dropped > 100);
+    int with = lost_hand_commits(csv, "", 1.9, 2.5), without = lost_hand_commits(csv, ",timeout=0", 1.0, 3.0);
+    printf("right hand lost from 1.0 to 3.0 s: %d commits between 1.9 and 2.5 s (timeout 1 s), "
+           "%d between 1.0 and 3.0 s with timeout=0\n", with, without);
+    assert_true(with >= 1);
+    assert_int_equal(without, 0);
+    unlink(csv);
+    rmdir(dir);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -314,6 +383,7 @@ int main(void)
         cmocka_unit_test(test_undo_after_ranged_commits),
         cmocka_unit_test(test_open_progress),
         cmocka_unit_test(test_input_log_relayed),
+        cmocka_unit_test(test_lost_hand_lets_go),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -809,6 +809,57 @@ static void stopped_sender_reported(void **state)
     close_fixture(&f);
 }
 
+/* A hand the tracker loses while the sender goes on with the other is reported gone, for
+ * that hand alone, after the timeout; its next pose brings it back without a new connect. */
+static void lost_hand_reported(void **state)
+{
+    (void)state;
+    osc_fixture f;
+    open_fixture(&f, "timeout=0.2", 1024);
+    for (int i = 0; i < 5; i++) { /* both hands */
+        for (int h = 0; h < 2; h++) {
+            lo_message m = joints_message(&rows[0]);
+            assert_true(lo_send_message(f.to, h ? "/facepuppet/hand/right/joints" : "/facepuppet/hand/left/joints", m) > 0);
+            lo_message_free(m);
+        }
+        sleep_ms(20);
+    }
+    assert_true(wait_type(f.h, FP_EVENT_JOINT_POSITIONS, -1, 10));
+    int64_t lost_since = mono_ns(); /* the right hand alone from here, for 0.6 s */
+    for (int i = 0; i < 30; i++) {
+        lo_message m = joints_message(&rows[0]);
+        assert_true(lo_send_message(f.to, "/facepuppet/hand/right/joints", m) > 0);
+        lo_message_free(m);
+        sleep_ms(20);
+    }
+    assert_true(wait_type(f.h, FP_EVENT_STATUS, FP_STATUS_DISCONNECTED, 1));
+    assert_true(mono_ns() - lost_since >= 200000000);
+    size_t n_before = count_type(f.h, FP_EVENT_JOINT_POSITIONS, -1);
+    lo_message m = joints_message(&rows[0]); /* the left hand back */
+    assert_true(lo_send_message(f.to, "/facepuppet/hand/left/joints", m) > 0);
+    lo_message_free(m);
+    assert_true(wait_type(f.h, FP_EVENT_JOINT_POSITIONS, -1, n_before + 1));
+    size_t gone = 0, lost_at = 0, back_at = 0;
+    pthread_mutex_lock(&f.h->mutex);
+    for (size_t i = 0; i < f.h->count; i++) {
+        const fp_event *e = &f.h->events[i];
+        if (e->header.type == FP_EVENT_STATUS && e->status.code == FP_STATUS_DISCONNECTED) {
+            assert_int_equal(e->header.hand, FP_HAND_LEFT); /* the right hand went on */
+            gone++;
+            lost_at = i;
+        }
+        if (e->header.type == FP_EVENT_JOINT_POSITIONS && e->header.hand == FP_HAND_LEFT) back_at = i;
+    }
+    pthread_mutex_unlock(&f.h->mutex);
+    assert_int_equal(gone, 1);          /* once, not every tick */
+    assert_true(back_at > lost_at);     /* and the left hand's pose came after it */
+    fp_osc_stats st = stats(&f);
+    assert_int_equal(st.connects, 1);   /* still the one connection */
+    assert_int_equal(st.disconnects, 0);
+    assert_int_equal(st.hands_lost, 1);
+    close_fixture(&f);
+}
+
 /* Hostile traffic: random bytes, random type tags, wrong counts, NaN, huge values, unknown
  * addresses, broken bundles: 20,000 packets, all counted, none reaching the host as a pose;
  * each kind reported once; a good frame afterwards still arrives. */
@@ -1021,6 +1072,7 @@ int main(void)
         cmocka_unit_test(bundles_keep_timetags),
         cmocka_unit_test(recording_clock_places_events),
         cmocka_unit_test(stopped_sender_reported),
+        cmocka_unit_test(lost_hand_reported),
         cmocka_unit_test(hostile_packets_counted),
         cmocka_unit_test(flood_keeps_memory_bounded),
     };

@@ -462,6 +462,63 @@ static void hands_filter(void **state)
     fp_test_host_free(h);
 }
 
+/* A hand the recording loses while the other goes on: the right hand's rows stop at 0.5 s
+ * and resume at 2.5 s, the left's run from 0 to 3 s, a third hand-free stretch ends it (the
+ * right hand's last row 1.5 s before the left's). With timeout=1 the right hand is reported
+ * gone at 1.5 s and again at 4.0 s (its last row 3.0 s, the recording's end 4.5 s), the left
+ * never; timeout=0 reports none; timeout=1.6 only the first, at 2.1 s. */
+static void lost_hand_reported(void **state)
+{
+    (void)state;
+    char path[512];
+    tmp_path(path, sizeof path, "lost_hand_joints_mm.csv");
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fputs(read_header(LEAP "grab_joints_mm.csv"), f);
+    int id = 0;
+    for (long long t = 0; t <= 4500000; t += 10000) {
+        for (int hand = 0; hand < 2; hand++) {
+            const bool right = hand == 1;
+            if (right ? !((t <= 500000) || (t >= 2500000 && t <= 3000000)) : t > 4500000) continue;
+            fprintf(f, "%d,%lld,7,%s,%d,100,0,0,-1,0,0,0,-1", id++, 1000000 + t, right ? "right" : "left",
+                    right ? 50 : -50);
+            for (int k = 0; k < 60; k++) fprintf(f, ",%g", k * 0.5);
+            fputc('\n', f);
+        }
+    }
+    fclose(f);
+    static const struct { const char *keys; int gone; int64_t at_ms[2]; } cases[] = {
+        {"fast=1", 2, {1500, 4000}},
+        {"fast=1,timeout=1", 2, {1500, 4000}},
+        {"fast=1,timeout=0", 0, {0, 0}},
+        {"fast=1,timeout=1.6", 1, {2100, 0}}, /* the 1.5 s before the end is under 1.6 */
+    };
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        fp_test_host *h = replay_all(path, cases[c].keys, 4000);
+        int64_t t0 = h->events[1].header.time_ns; /* the first pose */
+        int gone = 0;
+        for (size_t i = 0; i < h->count; i++) {
+            const fp_event *e = &h->events[i];
+            if (i) assert_true(e->header.time_ns >= h->events[i - 1].header.time_ns);
+            if (e->header.type != FP_EVENT_STATUS || e->status.code != FP_STATUS_DISCONNECTED) continue;
+            assert_int_equal(e->header.hand, FP_HAND_RIGHT);
+            assert_true(gone < 2);
+            assert_int_equal((e->header.time_ns - t0) / 1000000, cases[c].at_ms[gone]);
+            assert_non_null(strstr(e->status.text, "right hand: not in the recording"));
+            /* the right hand's poses: none between its last before the loss and the loss */
+            for (size_t j = i; j-- > 0;)
+                if (h->events[j].header.type == FP_EVENT_JOINT_POSITIONS && h->events[j].header.hand == FP_HAND_RIGHT) {
+                    assert_true(e->header.time_ns - h->events[j].header.time_ns > 0);
+                    break;
+                }
+            gone++;
+        }
+        if (gone != cases[c].gone) fail_msg("%s: %d losses reported, expected %d", cases[c].keys, gone, cases[c].gone);
+        assert_int_equal(count_type(h, FP_EVENT_JOINT_POSITIONS, FP_HAND_RIGHT), 51 + 51);
+        fp_test_host_free(h);
+    }
+}
+
 /* speed=4 on 21 rows 20 ms apart (400 ms): about 100 ms of wall time, event times 5 ms apart. */
 static void pacing_follows_speed(void **state)
 {
@@ -913,6 +970,7 @@ int main(void)
         cmocka_unit_test(leap_original_replays_as_its_csv),
         cmocka_unit_test(angles_in_radians_empty_invalid),
         cmocka_unit_test(hands_filter),
+        cmocka_unit_test(lost_hand_reported),
         cmocka_unit_test(pacing_follows_speed),
         cmocka_unit_test(fast_never_drops),
         cmocka_unit_test(paced_drops_poses_not_status),
