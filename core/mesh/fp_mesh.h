@@ -231,6 +231,30 @@ typedef struct fp_mesh_morph_animation {
 int fp_mesh_save_animation(const fp_mesh *mesh, const fp_mesh_morph_animation *anim,
                            const char *path, unsigned *dropped, char *err, size_t errlen);
 
+/** What a glTF file held beyond the triangles fp_mesh_load() takes from it. */
+typedef struct fp_mesh_gltf_info {
+    size_t nodes, meshes, materials;
+    size_t morph_targets;    /* the most POSITION targets of one primitive (glTF 2.0 3.7.2.2) */
+    size_t animations;
+    size_t channels;         /* over every animation */
+    size_t weights_channels; /* of them, those that drive morph target weights */
+    size_t keys;             /* the most keyframes of one channel's sampler (its input count) */
+    double duration_s;       /* the latest key time (the input accessors' max), seconds */
+    double frame_rate;       /* asset.extras.frameRate (the project's exports name it), or 0 */
+    double metres_per_unit;  /* asset.extras.metresPerUnit (the same), or 0 */
+    double root_scale;       /* the uniform scale of the default scene's one root node: 1
+                                without a scale; 0 where there are several roots, a matrix
+                                or a non-uniform scale */
+    char animation[64];      /* the first animation's name ("" none) */
+    char generator[64];      /* asset.generator */
+} fp_mesh_gltf_info;
+
+/** The glTF document a mesh was loaded from (fp_mesh_load of a .gltf or .glb: its source),
+ *  summarised into *out (zeroed first). Returns FP_MESH_OK, or FP_MESH_ERR_INVALID when mesh
+ *  or out is NULL or the mesh did not come from a glTF file. Reads only; thread-safe on a
+ *  const mesh. */
+int fp_mesh_gltf_summary(const fp_mesh *mesh, fp_mesh_gltf_info *out);
+
 /** Area-weighted vertex normals (each triangle adds its unnormalised cross product
  *  (p1-p0) x (p2-p0), whose length is twice its area, to its three vertices; then each sum is
  *  normalised). Shapes: tris t x 3, pos n x 3, normals_out n x 3 (may not alias pos).

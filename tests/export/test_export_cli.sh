@@ -4,7 +4,7 @@
 #  1. export --format gltf and glb: the Khronos glTF-Validator reports 0 errors and 0
 #     warnings; fp-export-check reads the file back with tinygltf and evaluates the animation
 #     at every frame's time: every vertex within the stated error (0.1 mm, and 0.001 mm on
-#     the ICT face, which takes more targets);
+#     the ICT face, which takes more targets); `info` reads back its targets, keys and rate;
 #  2. export --format pc2 and mdd: read back bit-exact against the played frames; `info`
 #     gives their frames and points (and a cut PC2's, exit 65);
 #  3. run --export and play --export give the same point caches byte for byte as export;
@@ -60,6 +60,14 @@ for entry in "${faces[@]}"; do
             echo "$name: $(head -1 "$d/validate-$fmt.out")"
         fi
         "$check" "$take" "$d/take.$fmt" --max-error 0.1 || fail "$name: $fmt read back"
+        # info reads the document back through tinygltf: the export's targets, keys and rate
+        k=$(sed -n 's/.*K = \([0-9]*\) morph targets.*/\1/p' "$d/export-$fmt.out")
+        f=$(sed -n 's/.*exported \([0-9]*\) frames.*/\1/p' "$d/export-$fmt.out")
+        "$fp" info "$d/take.$fmt" >"$d/info-$fmt.out" 2>&1 &&
+            grep -q "^  targets   $k morph targets\?$" "$d/info-$fmt.out" &&
+            grep -q "^  animation .*1 channel (1 of morph weights), $f keys, .* 60 fps" "$d/info-$fmt.out" &&
+            grep -q "^  scale     root node " "$d/info-$fmt.out" ||
+            { cat "$d/info-$fmt.out"; fail "$name: info take.$fmt ($k targets, $f keys at 60 fps)"; }
     done
     for fmt in pc2 mdd; do
         "$fp" export "$take" --format $fmt --out "$d/take.$fmt" -q || fail "$name: export $fmt exited $?"

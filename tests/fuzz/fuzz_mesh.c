@@ -70,6 +70,12 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
             if (m->uvs && (!isfinite(m->uvs[2 * v]) || !isfinite(m->uvs[2 * v + 1])))
                 abort();
         }
+        /* `info`'s summary of a glTF document: any index it follows may be hostile */
+        fp_mesh_gltf_info g;
+        int gs = fp_mesh_gltf_summary(m, &g);
+        const int gltf = !strcmp(FP_FUZZ_EXT, "gltf") || !strcmp(FP_FUZZ_EXT, "glb");
+        if (gltf ? gs != FP_MESH_OK : gs != FP_MESH_ERR_INVALID)
+            abort();
     } else {
         /* a refusal: a negative errno code, no mesh, a message naming the file */
         if (rc >= 0 || m || !strstr(err, path))

@@ -69,6 +69,31 @@ static const char *guess_units(double extent)
     return "unknown";
 }
 
+static const char *plural(size_t n) { return n == 1 ? "" : "s"; }
+
+/* A glTF's document beyond the triangles: what an export put there (morph targets, the
+ * animation's keys and rate, the root node's scale to metres), so an animator sees what a
+ * tool will import. The bounds above are the scene's, the nodes' transforms applied. */
+static void gltf_info(const fp_mesh *m)
+{
+    fp_mesh_gltf_info g;
+    if (fp_mesh_gltf_summary(m, &g) != FP_MESH_OK) return;
+    printf("  glTF      %zu mesh%s, %zu node%s, %zu material%s%s%s%s\n", g.meshes, g.meshes == 1 ? "" : "es",
+           g.nodes, plural(g.nodes), g.materials, plural(g.materials), g.generator[0] ? "; generator \"" : "",
+           g.generator, g.generator[0] ? "\"" : "");
+    if (g.morph_targets) printf("  targets   %zu morph target%s\n", g.morph_targets, plural(g.morph_targets));
+    if (g.animations) {
+        printf("  animation %s%s%s%zu channel%s (%zu of morph weights), %zu keys, 0 .. %.3f s", g.animation[0] ? "\"" : "",
+               g.animation, g.animation[0] ? "\": " : "", g.channels, plural(g.channels), g.weights_channels,
+               g.keys, g.duration_s);
+        if (g.frame_rate > 0) printf(", %g fps (asset.extras.frameRate)", g.frame_rate);
+        printf("%s\n", g.animations > 1 ? " (the longest of its animations)" : "");
+    }
+    if (g.root_scale > 0 && g.root_scale != 1)
+        printf("  scale     root node %g: the vertices are in units of %g m (%g mm)%s\n", g.root_scale,
+               g.root_scale, g.root_scale * 1000, g.metres_per_unit > 0 ? ", as asset.extras.metresPerUnit says" : "");
+}
+
 static int mesh_info(const char *path)
 {
     fp_mesh *m = NULL;
@@ -93,6 +118,7 @@ static int mesh_info(const char *path)
     if (unused)
         printf("  unused    %zu vertices in no triangle (left out of the bounds, as run leaves them "
                "out of the face's size)\n", unused);
+    gltf_info(m);
     fp_mesh_free(&m);
     return FP_EXIT_OK;
 }
@@ -173,7 +199,8 @@ static int info_main(int argc, char **argv)
     if (argc != 2 || !strcmp(argv[1], "-h") || !strcmp(argv[1], "--help")) {
         FILE *f = argc == 2 ? stdout : stderr;
         fprintf(f, "usage: facepuppet info FILE\n\n"
-                   "A mesh (OBJ, PLY, OFF, STL, glTF): vertices, triangles, bounds, units.\n"
+                   "A mesh (OBJ, PLY, OFF, STL, glTF): vertices, triangles, bounds, units; a glTF's\n"
+                   "  morph targets, animation (keys, duration, rate) and root scale too.\n"
                    "A recording (joints CSV, angles CSV, Leap playback original, event log): frames,\n"
                    "  rate, hands, duration.\n"
                    "A rig (RIG.json): regions, landmarks, hinge, channels; checked against its mesh.\n"
