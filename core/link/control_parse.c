@@ -4,6 +4,7 @@
 #include "control_internal.h"
 
 #include "fp_take.h"
+#include "fp_osc_arg.h"
 
 #include <lo/lo.h>
 #include <math.h>
@@ -47,8 +48,6 @@ const char *fp_control_kind_name(fp_control_kind k)
     return (unsigned)k < FP_CTL_KINDS ? kind_names[k] : "?";
 }
 
-static bool number_type(char t) { return t == 'f' || t == 'd' || t == 'i' || t == 'h'; }
-
 /* types matches the pattern (above). */
 static bool types_match(const char *pattern, const char *types)
 {
@@ -58,34 +57,11 @@ static bool types_match(const char *pattern, const char *types)
         if (!*types) return !*pattern || optional;
         if (!*pattern) return false;
         char t = *types++;
-        if (*pattern == 'n' ? !number_type(t) : t != *pattern) return false;
+        if (*pattern == 'n' ? !fp_osc_number_type(t) : t != *pattern) return false;
     }
 }
 
-/* liblo's argv points into the message at 4-byte alignment, while lo_arg (a union with
- * 64-bit members) asks for 8: the value is read through memcpy, never through the union
- * (tests/fuzz/fuzz_control found the misaligned access, as fuzz_osc did in input-osc). */
-static double number(char type, const lo_arg *a)
-{
-    if (type == 'f') {
-        float f;
-        memcpy(&f, a, sizeof f);
-        return f;
-    }
-    if (type == 'd') {
-        double d;
-        memcpy(&d, a, sizeof d);
-        return d;
-    }
-    if (type == 'h') {
-        int64_t h;
-        memcpy(&h, a, sizeof h);
-        return (double)h;
-    }
-    int32_t i;
-    memcpy(&i, a, sizeof i);
-    return i;
-}
+static double number(char type, const lo_arg *a) { return fp_osc_number(type, a); }
 
 /* A mapping SPEC: NAME[,key=value...] of letters, digits and . _ - , = + (no '/' or ':': a
  * plugin is found by name in the plugin path, never by a path from the network). */
@@ -109,7 +85,7 @@ static bool channel_ok(const char *s)
  * arguments but do not take that one number (as /fp/subscribe's optional port does) */
 static bool button_value(const char *pattern, const char *types)
 {
-    return types_match(pattern, "") && strlen(types) == 1 && number_type(types[0]) &&
+    return types_match(pattern, "") && strlen(types) == 1 && fp_osc_number_type(types[0]) &&
            !types_match(pattern, types);
 }
 

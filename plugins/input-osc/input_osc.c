@@ -16,6 +16,7 @@
  */
 #define _GNU_SOURCE
 #include "fp_net.h"
+#include "fp_osc_arg.h"
 #include "osc.h"
 #include "osc_spec.h"
 
@@ -224,11 +225,6 @@ static bool within(const float *v, size_t n, float limit)
     return true;
 }
 
-/* A number as OSC senders send one: 'f' (float32), 'd' (float64), 'i' (int32) or 'h' (int64);
- * Node's node-osc, for one, types a whole number as an int. An integer: 'i' or 'h'. */
-static bool number_type(char c) { return c == 'f' || c == 'd' || c == 'i' || c == 'h'; }
-static bool integer_type(char c) { return c == 'i' || c == 'h'; }
-
 /* types against want, where an 'f' takes any number_type and an 'i' any integer_type; a
  * mismatch counted (bad-count or bad-types) */
 static bool check_types(osc_input *o, const char *types, const char *want)
@@ -239,7 +235,7 @@ static bool check_types(osc_input *o, const char *types, const char *want)
         return false;
     }
     for (size_t i = 0; i < n; i++)
-        if (want[i] == 'f' ? !number_type(types[i]) : want[i] == 'i' ? !integer_type(types[i])
+        if (want[i] == 'f' ? !fp_osc_number_type(types[i]) : want[i] == 'i' ? !fp_osc_integer_type(types[i])
                                                                      : types[i] != want[i]) {
             count(o, FP_OSC_BAD_TYPES);
             return false;
@@ -251,32 +247,19 @@ static bool check_types(osc_input *o, const char *types, const char *want)
  * 64-bit members) asks for 8: read the values through memcpy, never through the union
  * (tests/fuzz/fuzz_osc found the misaligned access). type: the argument's tag, one that
  * check_types let through for a number (or an integer, arg_i) */
+/* A number argument as a float: a double beyond float's range becomes inf (refused later as
+ * not finite), not a conversion out of range. */
 static float arg_f(lo_arg *a, char type)
 {
-    float f;
-    double d;
-    int32_t i;
-    int64_t h;
-    switch (type) {
-    case 'd': /* beyond float: inf (not a conversion out of range), refused as not finite */
-        memcpy(&d, a, sizeof d);
-        return fabs(d) > FLT_MAX ? (float)copysign(INFINITY, d) : (float)d;
-    case 'i': memcpy(&i, a, sizeof i); return (float)i;
-    case 'h': memcpy(&h, a, sizeof h); return (float)h;
-    default: memcpy(&f, a, sizeof f); return f;
-    }
+    double d = fp_osc_number(type, a);
+    return type == 'd' && fabs(d) > FLT_MAX ? (float)copysign(INFINITY, d) : (float)d;
 }
 
+/* An integer argument, an int64 clamped to int32. */
 static int32_t arg_i(lo_arg *a, char type)
 {
-    if (type == 'h') {
-        int64_t h;
-        memcpy(&h, a, sizeof h);
-        return h < INT32_MIN ? INT32_MIN : h > INT32_MAX ? INT32_MAX : (int32_t)h;
-    }
-    int32_t v;
-    memcpy(&v, a, sizeof v);
-    return v;
+    double v = fp_osc_number(type, a);
+    return v < INT32_MIN ? INT32_MIN : v > INT32_MAX ? INT32_MAX : (int32_t)v;
 }
 
 static void floats_of(lo_arg **argv, const char *types, int first, int n, float *out)
@@ -390,7 +373,7 @@ static void fmt_facepuppet(osc_input *o, const char *path, const char *types, lo
         want[22] = 0;
         int first = 0;
         uint32_t valid = (1u << FP_GLOVE_SENSORS) - 1;
-        if (integer_type(types[0]) && strlen(types) == 23) {
+        if (fp_osc_integer_type(types[0]) && strlen(types) == 23) {
             if (!check_types(o, types + 1, want)) return;
             first = 1;
             valid = (uint32_t)arg_i(argv[0], types[0]) & ((1u << FP_GLOVE_SENSORS) - 1);
