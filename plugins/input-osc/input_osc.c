@@ -225,7 +225,7 @@ static bool within(const float *v, size_t n, float limit)
     return true;
 }
 
-/* types against want, where an 'f' takes any number_type and an 'i' any integer_type; a
+/* types against want, where an 'f' takes any number's tag and an 'i' any integer's; a
  * mismatch counted (bad-count or bad-types) */
 static bool check_types(osc_input *o, const char *types, const char *want)
 {
@@ -235,20 +235,18 @@ static bool check_types(osc_input *o, const char *types, const char *want)
         return false;
     }
     for (size_t i = 0; i < n; i++)
-        if (want[i] == 'f' ? !fp_osc_number_type(types[i]) : want[i] == 'i' ? !fp_osc_integer_type(types[i])
-                                                                     : types[i] != want[i]) {
+        if (want[i] == 'f'   ? !fp_osc_number_type(types[i])
+            : want[i] == 'i' ? !fp_osc_integer_type(types[i])
+                             : types[i] != want[i]) {
             count(o, FP_OSC_BAD_TYPES);
             return false;
         }
     return true;
 }
 
-/* liblo's argv points into the message at 4-byte alignment, while lo_arg (a union with
- * 64-bit members) asks for 8: read the values through memcpy, never through the union
- * (tests/fuzz/fuzz_osc found the misaligned access). type: the argument's tag, one that
- * check_types let through for a number (or an integer, arg_i) */
-/* A number argument as a float: a double beyond float's range becomes inf (refused later as
- * not finite), not a conversion out of range. */
+/* A number argument (a tag check_types let through) as a float, read through fp_osc_arg.h
+ * (memcpy: liblo's argv is 4-byte aligned); a double beyond float's range becomes inf
+ * (refused later as not finite), not a conversion out of range. */
 static float arg_f(lo_arg *a, char type)
 {
     double d = fp_osc_number(type, a);
