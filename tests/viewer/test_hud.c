@@ -126,7 +126,7 @@ static int hand_pixels(const image *im)
 static void test_badge_per_state(void **state)
 {
     (void)state;
-    assert_int_equal(live("--rig none --size 640x480 -i 'replay:%s' -M anchored,auto=0 --take-dir '%s/t1' "
+    assert_int_equal(live("--rig none --size 640x480 -i 'replay:%s,timeout=0' -M anchored,auto=0 --take-dir '%s/t1' "
                           "--frames 3000 --script 'key H; wait hands; wait frames 1; shot idle.png; "
                           "key E; wait frames 2; shot engaged.png; key T; wait frames 2; shot rec.png; "
                           "wait end; wait frames 2; key T; key C; wait frames 3; shot committed.png; "
@@ -150,7 +150,7 @@ static void test_badge_per_state(void **state)
     assert_true(strstr(out, "note fading alpha 1.00: engine: "));
     /* converging fingertips: the fold-over guard holds the gesture back, LIMITED (apart=0:
      * this recording's fingertips, 9 mm apart, would otherwise share some of their skin) */
-    assert_int_equal(live("--rig none --size 640x480 -i 'replay:%s' -M anchored,auto=0,apart=0 --frames 3000 "
+    assert_int_equal(live("--rig none --size 640x480 -i 'replay:%s,timeout=0' -M anchored,auto=0,apart=0 --frames 3000 "
                           "--script 'key H; wait hands; key E; wait end; wait frames 2; shot limited.png; "
                           "print hud; close'", rec_pinch),
                      0);
@@ -221,7 +221,7 @@ static void test_messages_wrap(void **state)
 static void test_tip_spheres(void **state)
 {
     (void)state;
-    assert_int_equal(live("--rig none --size 640x480 -i 'replay:%s' -M anchored,auto=0 --frames 3000 --script 'key Tab; "
+    assert_int_equal(live("--rig none --size 640x480 -i 'replay:%s,timeout=0' -M anchored,auto=0 --frames 3000 --script 'key Tab; "
                           "wait hands; wait frames 1; shot touch.png; print hud; wait end; wait frames 2; "
                           "shot far.png; print hud; close'", rec_far),
                      0);
@@ -251,7 +251,7 @@ static void test_tip_spheres(void **state)
 static void test_review_lets_go(void **state)
 {
     (void)state;
-    assert_int_equal(live("--rig none --size 640x480 -i 'replay:%s' -M anchored,auto=0 --take-dir '%s/t2' "
+    assert_int_equal(live("--rig none --size 640x480 -i 'replay:%s,timeout=0' -M anchored,auto=0 --take-dir '%s/t2' "
                           "--frames 3000 --script 'key Tab; wait hands; key T; key E; wait frames 5; key T; "
                           "wait frames 30; shot after.png; print hud; key V; wait frames 1; shot review.png; "
                           "print hud; key Esc; wait frames 1; shot back.png; print hud; key V; wait frames 1; "
@@ -289,7 +289,7 @@ static void test_gpu_warp_rig(void **state)
     for (int g = 0; g < 2; g++) {
         const char *name = g ? "gpu" : "cpu";
         snprintf(s, sizeof s, script, name, name);
-        assert_int_equal(live("--size 320x240 -i 'replay:%s' -M anchored,auto=0 --frames 3000 %s --script '%s'",
+        assert_int_equal(live("--size 320x240 -i 'replay:%s,timeout=0' -M anchored,auto=0 --frames 3000 %s --script '%s'",
                               rec_small, g ? "--gpu-warp" : "", s),
                          0);
         assert_true(line_has("hud ", 0, "from the rig"));
@@ -327,7 +327,7 @@ static void test_gpu_warp_rig(void **state)
     assert_true(moved > 30);
     assert_true(off <= 20);
     assert_true(sum / (320 * 240) < 0.5);
-    assert_int_equal(live("--size 320x240 -i 'replay:%s' -M anchored,auto=0 --frames 3000 --gpu-warp --script "
+    assert_int_equal(live("--size 320x240 -i 'replay:%s,timeout=0' -M anchored,auto=0 --frames 3000 --gpu-warp --script "
                           "'key H; key Tab; wait hands; key E; wait end; wait frames 2; print hud; close'", rec_far),
                      0);
     assert_true(line_has("hud ", 0, " drawn cpu"));
@@ -348,7 +348,9 @@ static void test_gpu_warp_rig(void **state)
 
 /* Two poses of one right hand, 1.5 s apart: pose B moved dy up and dz toward the performer,
  * or (pinch) the five fingertips brought together; one: only the index finger near the face
- * (one centre: the fold-over guard's single map, which the shader draws). */
+ * (one centre: the fold-over guard's single map, which the shader draws). Replayed with
+ * timeout=0: the hand holds pose A between the samples (the default 1 s would take it for
+ * a hand the tracker lost). */
 static void write_recording(char *path, size_t n, const char *name, double dy, double dz, bool pinch, bool one)
 {
     snprintf(path, n, "%s/%s", tmp, name);

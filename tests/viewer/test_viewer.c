@@ -129,7 +129,7 @@ static void test_deform_commit_undo(void **state)
     (void)state;
     /* --rig none: this checks the viewer's engage, commit and undo, not the rig (whose skull
      * and finger clamp keep the recording's grab small on the ICT face) */
-    assert_int_equal(live("--rig none -i 'replay:%s' -M anchored,auto=0 --frames 2000 --script "
+    assert_int_equal(live("--rig none -i 'replay:%s,timeout=0' -M anchored,auto=0 --frames 2000 --script "
                           "'key H; key Tab; wait hands; shot %s/a.png; key E; wait end; key C; "
                           "shot %s/b.png; key Z; shot %s/c.png; key Esc'",
                           rec, tmp, tmp, tmp),
@@ -172,7 +172,7 @@ static void test_partial_upload_same_pixels(void **state)
     const char *modes[2] = {"full", "check"};
     for (int m = 0; m < 2; m++) {
         setenv("FACEPUPPET_VIEWER_UPLOAD", modes[m], 1);
-        int rc = live("--rig none -i 'replay:%s' -M anchored,auto=0 --frames 2000 --script "
+        int rc = live("--rig none -i 'replay:%s,timeout=0' -M anchored,auto=0 --frames 2000 --script "
                       "'key H; key Tab; wait hands; key E; wait end; wait frames 2; shot %s/%s-e.png; "
                       "key C; wait frames 2; shot %s/%s-c.png; key Z; wait frames 2; shot %s/%s-z.png; key Esc'",
                       rec, tmp, modes[m], tmp, modes[m], tmp, modes[m]);
@@ -203,7 +203,7 @@ static void test_partial_upload_rig(void **state)
 {
     (void)state;
     setenv("FACEPUPPET_VIEWER_UPLOAD", "check", 1);
-    int rc = live("-i 'replay:%s' -M anchored,auto=0 --frames 2000 --script "
+    int rc = live("-i 'replay:%s,timeout=0' -M anchored,auto=0 --frames 2000 --script "
                   "'wait hands; key E; wait end; wait frames 2; key C; wait frames 2; key E; "
                   "wait frames 2; key Z; wait frames 2; key R; wait frames 2; key Esc'", rec);
     unsetenv("FACEPUPPET_VIEWER_UPLOAD");
@@ -217,7 +217,7 @@ static void test_hud_follows_undo_reset_drop(void **state)
 {
     (void)state;
     /* --rig none: the scale then comes from the head, as the expected lines say */
-    assert_int_equal(live("--rig none -i 'replay:%s' -M anchored,auto=0 --frames 2000 --script "
+    assert_int_equal(live("--rig none -i 'replay:%s,timeout=0' -M anchored,auto=0 --frames 2000 --script "
                           "'wait hands; key E; wait frames 3; print hud; key C; wait frames 3; "
                           "key E; wait frames 3; key C; wait frames 3; print hud; "
                           "key E; wait frames 3; key Z; print hud; key Z; print hud; "
@@ -246,9 +246,9 @@ static void test_hud_follows_undo_reset_drop(void **state)
 static void test_close_button_and_esc(void **state)
 {
     (void)state;
-    assert_int_equal(live("-i 'replay:%s' --frames 1000 --script 'wait frames 2; close'", rec), 0);
+    assert_int_equal(live("-i 'replay:%s,timeout=0' --frames 1000 --script 'wait frames 2; close'", rec), 0);
     assert_true(out_contains("frames 3;"));
-    assert_int_equal(live("-i 'replay:%s' --frames 1000 --script 'wait frames 1; key Esc'", rec), 0);
+    assert_int_equal(live("-i 'replay:%s,timeout=0' --frames 1000 --script 'wait frames 1; key Esc'", rec), 0);
     assert_true(out_contains("frames 2;"));
     /* the same script from a file (--script @FILE, read as every input file is) */
     char path[512];
@@ -257,7 +257,7 @@ static void test_close_button_and_esc(void **state)
     assert_non_null(f);
     fputs("wait frames 2; close\n", f);
     fclose(f);
-    assert_int_equal(live("-i 'replay:%s' --frames 1000 --script @%s", rec, path), 0);
+    assert_int_equal(live("-i 'replay:%s,timeout=0' --frames 1000 --script @%s", rec, path), 0);
     assert_true(out_contains("frames 3;"));
 }
 
@@ -273,7 +273,7 @@ static void test_drop_mesh_and_mapping_keys(void **state)
           "f 1 8 4\nf 2 3 7\nf 2 7 6\n", f);
     fclose(f);
     /* A missing file keeps the face; the cube then replaces it and fills the middle. */
-    assert_int_equal(live("-i 'replay:%s' --frames 100 --script 'key H; key Tab; key 2; key 1; "
+    assert_int_equal(live("-i 'replay:%s,timeout=0' --frames 100 --script 'key H; key Tab; key 2; key 1; "
                           "drop %s/missing.obj; wait frames 1; drop %s; wait frames 1; "
                           "shot %s/cube.png; close'", rec, tmp, path, tmp), 0);
     assert_true(out_contains("cannot load"));
@@ -303,7 +303,7 @@ static void test_take_rec_timeline_scrub(void **state)
 {
     (void)state;
     /* --rig none: the deformation checked here is the fingers', not the rig's clamp */
-    assert_int_equal(live("--rig none --input 'replay:%s' --take-dir '%s/takes' --slate scene --script "
+    assert_int_equal(live("--rig none --input 'replay:%s,timeout=0' --take-dir '%s/takes' --slate scene --script "
                           "'wait hands; key T; key E; wait end; wait frames 3; shot %s/rec.png; "
                           "key T; wait frames 2; shot %s/strip.png; scrub 0; wait frames 1; "
                           "shot %s/a.png; scrub 1; wait frames 1; shot %s/b.png; close'",
@@ -438,7 +438,9 @@ static void test_rig_overlay_and_jaw_keys(void **state)
 static void write_recording(void)
 {
     /* Leap joints CSV, one right hand: pose A on the left cheek (x about 40 mm), pose B 35 mm
-     * up and 35 mm toward the performer, 1.5 s later. Fingers point at the face (-z). */
+     * up and 35 mm toward the performer, 1.5 s later. Fingers point at the face (-z). The
+     * tests replay it with timeout=0: the hand holds pose A between the two samples (with the
+     * default 1 s it would be a hand the tracker lost, gone before pose B). */
     snprintf(rec, sizeof rec, "%s/two-poses_joints_mm.csv", tmp);
     FILE *f = fopen(rec, "w");
     assert_non_null(f);
