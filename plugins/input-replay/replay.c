@@ -35,7 +35,6 @@ typedef struct replay {
     double speed;
     bool loop, fast;
     bool workspace;          /* state the recording's range (FP_EXT_WORKSPACE); workspace=0: not */
-    double timeout_s;        /* a hand absent this long is reported gone (0: never) */
 
     fp_pacer pacer;          /* the thread, waits stop() interrupts, lossless pushes (fp_pacer.h) */
 } replay;
@@ -62,8 +61,9 @@ static const char usage_text[] =
     "           whole recording's range in advance, and brought closer where its fingertips\n"
     "           would never come within reach of the face)\n"
     "  timeout=S  a hand missing from the recording for S seconds (the tracker lost it) is\n"
-    "           reported gone then, as a live osc input does (default 1, as osc's; 0: never;\n"
-    "           not for event logs, which hold the statuses they were recorded with)\n"
+    "           reported gone then, as a live osc input does (0.01 to 3600, default 1, as\n"
+    "           osc's; 0: never; not for event logs, which hold the statuses they were\n"
+    "           recorded with)\n"
     "  Event times are the recording's own clock (the host clock at start + the sample's\n"
     "  time), whatever the speed; speed and fast only change the pacing. Without loop, the replay ends\n"
     "  with an end-of-stream status. A malformed row fails at creation (FILE:LINE:COLUMN; in a\n"
@@ -361,10 +361,9 @@ static int replay_create(const fp_host *host, const char *arg, const fp_param *p
         } else if (strcmp(q.key, "workspace") == 0) {
             if (parse_bool(&q, &workspace, err, errlen)) return -EINVAL;
         } else if (strcmp(q.key, "timeout") == 0) {
-            char *e = NULL;
-            timeout = strtod(v, &e);
-            if (!*v || *e || !(timeout >= 0 && timeout <= 3600)) {
-                snprintf(err, errlen, "replay: timeout=%s: expected seconds from 0 (never) to 3600", v);
+            if (!fp_parse_decimal(v, &timeout) || !(timeout == 0 || (timeout >= 0.01 && timeout <= 3600))) {
+                snprintf(err, errlen, "replay: timeout=%s: expected 0 (never) or seconds from 0.01 to 3600 "
+                         "(as osc's)", v);
                 return -EINVAL;
             }
         } else if (strcmp(q.key, "hands") == 0) {
@@ -439,7 +438,7 @@ static const fp_param_info replay_keys[] = {
     {.name = "workspace", .type = FP_PARAM_BOOL, .min = 0, .max = 1, .default_value = "1",
      .description = "state the recording's range, so the hands are placed from it in advance (0: "
                     "placed as they arrive, as a live tracker's)"},
-    {.name = "timeout", .type = FP_PARAM_FLOAT, .min = 0, .max = 3600, .default_value = "1",
+    {.name = "timeout", .type = FP_PARAM_FLOAT, .min = 0, .max = 3600, .default_value = "1", /* (or 0.01 up) */
      .unit = "s", .description = "a hand missing from the recording this long is reported gone "
                                  "(0: never; as osc's timeout)"},
     {.name = NULL},

@@ -866,6 +866,10 @@ static void spec_errors(void **state)
     expect_create_error(file, "loop=2", 0, 0, "loop=2: expected 0 or 1");
     expect_create_error(file, "fast=maybe", 0, 0, "fast=maybe: expected 0 or 1"); /* (yes, on: accepted, as every plugin's on/off keys) */
     expect_create_error(file, "hands=middle", 0, 0, "hands=middle: expected left, right or both");
+    expect_create_error(file, "timeout=0.001", 0, 0, "timeout=0.001: expected 0 (never) or seconds from 0.01 to 3600");
+    expect_create_error(file, "timeout=-1", 0, 0, "timeout=-1: expected 0 (never)");
+    expect_create_error(file, "timeout=0x10", 0, 0, "timeout=0x10: expected 0 (never)");
+    expect_create_error(file, "timeout=inf", 0, 0, "timeout=inf: expected 0 (never)");
     fp_test_host *h = fp_test_host_new(4);
     fp_input *in = NULL;
     char err[512];
