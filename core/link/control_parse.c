@@ -61,8 +61,6 @@ static bool types_match(const char *pattern, const char *types)
     }
 }
 
-static double number(char type, const lo_arg *a) { return fp_osc_number(type, a); }
-
 /* A mapping SPEC: NAME[,key=value...] of letters, digits and . _ - , = + (no '/' or ':': a
  * plugin is found by name in the plugin path, never by a path from the network). */
 static bool spec_ok(const char *s)
@@ -102,24 +100,24 @@ static bool take_args(fp_control_cmd *cmd, const char *types, lo_arg **argv)
             cmd->has_text = true;
         }
         if (argc >= 2) {
-            double v = number(types[1], argv[1]);
+            double v = fp_osc_number(types[1], argv[1]);
             if (!(v >= 1 && v <= TAKE_MAX && v == floor(v))) return false;
             cmd->take = (uint32_t)v;
             cmd->has_take = true;
         }
         return true;
     case FP_CTL_TAKE: {
-        double v = number(types[0], argv[0]);
+        double v = fp_osc_number(types[0], argv[0]);
         if (!(v >= 1 && v <= TAKE_MAX && v == floor(v))) return false;
         cmd->take = (uint32_t)v;
         cmd->has_take = true;
         return true;
     }
     case FP_CTL_RADIUS:
-        cmd->value = number(types[0], argv[0]);
+        cmd->value = fp_osc_number(types[0], argv[0]);
         return isfinite(cmd->value) && cmd->value > 0 && cmd->value < 1e6;
     case FP_CTL_SEEK:
-        cmd->value = number(types[0], argv[0]);
+        cmd->value = fp_osc_number(types[0], argv[0]);
         return isfinite(cmd->value) && cmd->value >= 0 && cmd->value < 1e7;
     case FP_CTL_MAPPING:
         if (!spec_ok(&argv[0]->s)) return false;
@@ -130,12 +128,12 @@ static bool take_args(fp_control_cmd *cmd, const char *types, lo_arg **argv)
         if (!channel_ok(&argv[0]->s)) return false;
         snprintf(cmd->text, sizeof cmd->text, "%s", &argv[0]->s);
         cmd->has_text = true;
-        cmd->value = number(types[1], argv[1]);
+        cmd->value = fp_osc_number(types[1], argv[1]);
         return isfinite(cmd->value) && fabs(cmd->value) < 1e6;
     case FP_CTL_SUBSCRIBE:
     case FP_CTL_UNSUBSCRIBE:
         if (argc >= 1) {
-            double v = number(types[0], argv[0]);
+            double v = fp_osc_number(types[0], argv[0]);
             if (!(v >= 1 && v <= 65535 && v == floor(v))) return false;
             cmd->port = (int)v;
         }
@@ -180,7 +178,7 @@ static void message(fp_control *c, unsigned char *data, size_t size, const fp_co
     if (button_value(table[k].types, types)) {
         /* a control surface's button (TouchOSC, Open Stage Control: 1 pressed, 0 let go) on a
          * command that may come without arguments: any value but 0 runs it so, 0 does nothing */
-        double v = number(types[0], argv[0]);
+        double v = fp_osc_number(types[0], argv[0]);
         if (!isfinite(v)) fp__control_problem(c, FP_CTL_BAD_VALUE);
         else if (v != 0) fp__control_queue(c, &cmd);
     } else if (!types_match(table[k].types, types)) {

@@ -87,7 +87,10 @@ static void gltf_info(const fp_mesh *m)
                g.animation, g.animation[0] ? "\": " : "", g.channels, plural(g.channels), g.weights_channels,
                g.keys, g.duration_s);
         if (g.frame_rate > 0) printf(", %g fps (asset.extras.frameRate)", g.frame_rate);
-        printf("%s\n", g.animations > 1 ? " (the longest of its animations)" : "");
+        if (g.animations > 1)
+            printf("; %zu animations: the name is the first's, the keys and the time the most of any",
+                   g.animations);
+        printf("\n");
     }
     if (g.root_scale > 0 && g.root_scale != 1)
         printf("  scale     root node %g: the vertices are in units of %g m (%g mm)%s\n", g.root_scale,
