@@ -791,6 +791,29 @@ static double runqueue_ms(int fd)
     return sscanf(buf, "%llu %llu", &run, &wait) == 2 ? (double)wait / 1e6 : NAN;
 }
 
+/* The contact guard's walk (fp_frame_stats.collide_*): a frame it checked into w[0..5) of
+ * row m of cap, each count a check's (the frame's sums over its checks divided by them) */
+static void walk_take(double *w, size_t cap, size_t m, const fp_frame_stats *t)
+{
+    double k = t->collide_checks;
+    w[m] = (double)t->collide_node_pairs / k;
+    w[cap + m] = (double)t->collide_leaf_pairs / k;
+    w[2 * cap + m] = (double)t->collide_tested / k;
+    w[3 * cap + m] = (double)t->collide_certified / k;
+    w[4 * cap + m] = (double)t->collide_moved;
+}
+
+/* walk_take's m rows: their medians, a line of the table */
+static void walk_row(double *w, size_t cap, size_t m)
+{
+    if (m)
+        printf("  contact walk: a check reaches %.0f node pairs and %.0f leaf pairs, tests %.0f triangle "
+               "pairs exactly and certifies %.0f patches (medians over the %zu frames it checked; %.0f "
+               "vertices moved a frame)\n",
+               pct(w, m, 50), pct(w + cap, m, 50), pct(w + 2 * cap, m, 50), pct(w + 3 * cap, m, 50), m,
+               pct(w + 4 * cap, m, 50));
+}
+
 /* --stream measured in the frame case: its part on the frame thread (fp_stream_frame_ranges:
  * the offsets quantised where the mesh moved, the records handed to its sender thread), the
  * sender sending to a socket on loopback that this thread drains after each frame (not
@@ -935,15 +958,16 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
     double *wwait = malloc(CAP * sizeof *wwait); /* its wait for the contact worker */
     int *cpu = malloc(CAP * sizeof *cpu);        /* the CPU it ended on (sched_getcpu) */
     double *on_cpu = malloc(CAP * sizeof *on_cpu); /* the frames that ended on one CPU */
+    double *walk = malloc(5 * CAP * sizeof *walk); /* the contact guard's walk (walk_take) */
     fp_frame_stats *fst = bo->trace ? malloc(CAP * sizeof *fst) : NULL; /* --trace's rows */
     size_t *skipped = bo->trace ? malloc(CAP * sizeof *skipped) : NULL;
     bool oom = !total || !act || !com || !eng || !hands || !contact_ms || !held || !wwait || !cpu ||
-               !on_cpu || (bo->trace && (!fst || !skipped));
+               !on_cpu || !walk || (bo->trace && (!fst || !skipped));
     for (int k = 0; k < FP_STAGE_COUNT; k++) oom |= !st_ms[k];
     if (oom) {
         for (int k = 0; k < FP_STAGE_COUNT; k++) free(st_ms[k]);
         free(total), free(act), free(com), free(eng), free(hands), free(contact_ms), free(held);
-        free(wwait), free(cpu), free(on_cpu), free(fst), free(skipped);
+        free(wwait), free(cpu), free(on_cpu), free(walk), free(fst), free(skipped);
         fp_session_destroy(&s);
         fprintf(stderr, "bench: frame: out of memory\n");
         return -ENOMEM;
@@ -954,6 +978,7 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
     int sched_fd = open("/proc/thread-self/schedstat", O_RDONLY | O_CLOEXEC);
     size_t nheld = 0, nwwait = 0, nthere = 0; /* nthere: frames run on the frame thread */
     size_t nhold = 0; /* vertices the contact guard's hold kept in place, all frames */
+    size_t nwalk = 0; /* frames the contact guard checked (walk) */
     double w0 = runqueue_ms(sched_fd); /* read after each frame only: a read just before one
                                           slowed the ICT frame (docs/performance.md) */
     int64_t period = 1000000000LL / 60, start = fp_now_ns(), next = start, clock0 = 0;
@@ -989,6 +1014,7 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
         contact_ms[nf] = st.collide_ms;
         wwait[nf] = st.collide_wait_ms;
         nhold += st.collide_held;
+        if (st.collide_checks > 0) walk_take(walk, CAP, nwalk++, &st);
         nwwait += wwait[nf] >= 1.0;
         nthere += st.frame_thread;
         for (int h = 0; h < FP_HANDS; h++)
@@ -1021,10 +1047,11 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
             for (int k = 0; k < FP_STAGE_COUNT; k++) fprintf(bo->trace, ",%.6g", t->stage_ms[k]);
             fprintf(bo->trace, ",%.6g,%.6g,", t->collide_ms, t->collide_wait_ms);
             if (sched_fd >= 0) fprintf(bo->trace, "%.6g", held[f]);
-            fprintf(bo->trace, ",%d,%d,%d,%d,%d,%zu,%" PRIu64 ",%d,%.6g,%ld,%zu,%d,%zu,%zu\n",
+            fprintf(bo->trace, ",%d,%d,%d,%d,%d,%zu,%" PRIu64 ",%d,%.6g,%ld,%zu,%d,%zu,%zu,%zu,%zu,%zu,%zu\n",
                     cpu[f], t->active, t->engaged, t->committed, t->refactored, t->control_vectors,
                     t->pairs, t->guard_substeps, t->collide_t, t->collide_pairs, t->collide_held,
-                    t->collide_checks, t->collide_moved, skipped[f]);
+                    t->collide_checks, t->collide_moved, t->collide_node_pairs, t->collide_leaf_pairs,
+                    t->collide_tested, t->collide_certified, skipped[f]);
         }
     /* the reference, and the indexed distances checked against it (same base, same hands) */
     size_t nbrute = 0, within = 0, far = 0, wrong = 0;
@@ -1119,6 +1146,7 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
             printf("  contact hold %s: %.0f vertices a deforming frame kept in place (moved under "
                    "1e-5 of the face's diagonal since the last frame)\n",
                    bo->exact_frames ? "off (--exact-frames)" : "on", nact ? (double)nhold / nact : 0.0);
+        if (!bo->no_contact_guard) walk_row(walk, CAP, nwalk);
         printf("  %-22s %10s %10s\n", "stage", "median_ms", "p99_ms");
         for (int k = 0; k < FP_STAGE_COUNT; k++)
             printf("  %-22s %10.4f %10.4f\n", names[k], pct(st_ms[k], nf, 50), pct(st_ms[k], nf, 99));
@@ -1153,6 +1181,7 @@ static int frame_run(const bench_opts *o, const fp_bench_options *bo, const char
     fflush(stdout);
     for (int k = 0; k < FP_STAGE_COUNT; k++) free(st_ms[k]);
     free(fst);
+    free(walk);
     free(skipped);
     free(stream_us);
     bench_stream_close(&bs);

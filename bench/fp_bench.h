@@ -39,13 +39,16 @@ typedef struct fp_bench_options {
 #define FP_BENCH_MAX_LEVEL 3
 
 /** The trace's header line (fp_bench_options.trace): the columns, in order. Times in ms;
- *  cpu_wait_ms empty where /proc/thread-self/schedstat is missing; skipped_after: the
- *  60 fps periods that passed while the frame ran (frames the paced loop skipped after it). */
+ *  cpu_wait_ms empty where /proc/thread-self/schedstat is missing; contact_node_pairs ..
+ *  contact_certified: the contact guard's walks, summed over the frame's checks
+ *  (fp_frame_stats.collide_*); skipped_after: the 60 fps periods that passed while the frame
+ *  ran (frames the paced loop skipped after it). */
 #define FP_BENCH_TRACE_HEADER                                                                  \
     "mesh,frame,frame_ms,events_ms,hands_ms,distances_ms,mapping_ms,solve_ms,evaluate_ms,"     \
     "shape_ms,commit_ms,contact_ms,contact_worker_wait_ms,cpu_wait_ms,cpu,active,engaged,"      \
     "committed,refactored,control_vectors,pairs,guard_substeps,contact_t,contact_pairs,"       \
-    "contact_held,contact_checks,contact_moved,skipped_after\n"
+    "contact_held,contact_checks,contact_moved,contact_node_pairs,contact_leaf_pairs,"          \
+    "contact_tested,contact_certified,skipped_after\n"
 
 /** The case names, in the order they run; NULL-terminated. */
 extern const char *const fp_bench_cases[];

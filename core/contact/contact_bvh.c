@@ -435,6 +435,7 @@ static long leaf_pairs(fp_contact *c, lane *ln, const float *s, const float *ref
     struct track *k = c->tk;
     const uint32_t clk = k->tclock;
     const bnode *bx = &k->node[x], *by = &k->node[y];
+    ln->leaf_pairs++;
     float lo[3][LEAF_PAD], hi[3][LEAF_PAD];
     uint32_t jy[FP_BVH_LEAF], ny = 0, jm = 0; /* jm: y's moved ones, by bit */
     /* y's boxes that meet x's box, compacted without a branch (each written at ny, which
@@ -496,6 +497,7 @@ long fpc_node_pairs(fp_contact *c, lane *ln, const float *s, const float *ref, u
 {
     struct track *k = c->tk;
     const bnode *bx = &k->node[x], *by = &k->node[y];
+    ln->node_pairs++;
     if ((k->nstamp[x] != k->tclock && k->nstamp[y] != k->tclock) || !boxes_meet(bx->box, by->box)) return 0;
     if (!bx->right && !by->right) return leaf_pairs(c, ln, s, ref, x, y, record);
     bx = into_larger(k, &x, &y);

@@ -161,6 +161,7 @@ typedef struct lane {             /* one thread's part of a hierarchy check: scr
                                      y0, y1; the upper corner over the margin el) */
     size_t cap_sbox;
     size_t certified, tested;     /* patches certified, triangle pairs tested */
+    size_t node_pairs, leaf_pairs; /* node pairs reached, leaf pairs whose boxes met */
     size_t moved;                 /* moved triangles its refit tasks met */
     uint32_t *mq;                 /* one refit task's moved places (gather) */
     size_t nmq, cap_mq;

@@ -427,7 +427,8 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
     fpc_tick(c);
     k->nmv = k->nmt = k->nmo = k->nmq = k->nprobe = k->npair_probe = 0;
     size_t renewed0 = k->renewed;
-    for (int i = 0; i < FP_CONTACT_MAX_THREADS; i++) k->lane[i].certified = k->lane[i].tested = 0;
+    for (int i = 0; i < FP_CONTACT_MAX_THREADS; i++)
+        k->lane[i].certified = k->lane[i].tested = k->lane[i].node_pairs = k->lane[i].leaf_pairs = 0;
     k->shared = 0;
 
     /* the moved vertices: where cand differs from P */
@@ -466,8 +467,13 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
     }
     res->renewed = k->renewed - renewed0;
     res->shared = k->shared;
-    res->certified = 0;
-    for (int i = 0; i < FP_CONTACT_MAX_THREADS; i++) res->certified += k->lane[i].certified;
+    res->certified = res->node_pairs = res->leaf_pairs = res->tested = 0;
+    for (int i = 0; i < FP_CONTACT_MAX_THREADS; i++) {
+        res->certified += k->lane[i].certified;
+        res->node_pairs += k->lane[i].node_pairs;
+        res->leaf_pairs += k->lane[i].leaf_pairs;
+        res->tested += k->lane[i].tested;
+    }
     dp_update(c, ref, accepted && !found && !fl);
     return 0;
 }

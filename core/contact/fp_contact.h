@@ -118,6 +118,14 @@ typedef struct fp_contact_result {
     double worker_wait_ms; /* fp_contact_step: how long the caller waited, at the ends of
                             its shared jobs, for a task the worker held (a worker the
                             system took off its core holds the step up until it is back) */
+    /* fp_contact_step, the hierarchy: the walks' work, summed over the step's checks (both
+       threads; 0 on envelopes), so a caller sees where a check's time goes */
+    size_t node_pairs;   /* node pairs the walks reached (boxes compared; those the caller
+                            passed while splitting the walk into tasks not counted) */
+    size_t leaf_pairs;   /* leaf pairs whose boxes met, a leaf with itself included (their
+                            triangles' boxes compared) */
+    size_t tested;       /* triangle pairs tested exactly (boxes met, a moved one, neither
+                            adjacent nor in a certified patch; a bisection's probes too) */
 } fp_contact_result;
 
 /** The guard: out = ref + t (cand - ref) per vertex (float), with the largest t of the

@@ -277,6 +277,9 @@ typedef struct fp_frame_stats {
     int collide_checks;       /* shapes the guard checked (fp_contact_result.checks: 1 when the
                                  motion passed whole; more when it scaled it back) */
     size_t collide_moved;     /* vertices the guard found moved (fp_contact_result.moved_verts) */
+    /* the guard's walks this frame (fp_contact_result: node_pairs, leaf_pairs, tested,
+       certified; summed over its checks; 0 without a guard): where its time goes */
+    size_t collide_node_pairs, collide_leaf_pairs, collide_tested, collide_certified;
     double stage_ms[FP_STAGE_COUNT]; /* wall time of each stage (fp_frame_stage), ms */
     bool frame_thread;        /* the frame ran on the session's frame thread (fp_session_step) */
 } fp_frame_stats;

@@ -125,6 +125,10 @@ const float *fp_cg_run(fp_cg_step *g, const fp_cg_frame *f, fp_slog *log, fp_fra
     st->collide_wait_ms += r.worker_wait_ms;
     st->collide_checks += r.checks;
     st->collide_moved += r.moved_verts;
+    st->collide_node_pairs += r.node_pairs;
+    st->collide_leaf_pairs += r.leaf_pairs;
+    st->collide_tested += r.tested;
+    st->collide_certified += r.certified;
     if (!g->frames) g->t_least = 1.0;
     g->frames++;
     if (r.t < 1) {

@@ -43,7 +43,8 @@ import csv, math, re, sys
 header = ("mesh,frame,frame_ms,events_ms,hands_ms,distances_ms,mapping_ms,solve_ms,evaluate_ms,"
           "shape_ms,commit_ms,contact_ms,contact_worker_wait_ms,cpu_wait_ms,cpu,active,engaged,"
           "committed,refactored,control_vectors,pairs,guard_substeps,contact_t,contact_pairs,"
-          "contact_held,contact_checks,contact_moved,skipped_after")
+          "contact_held,contact_checks,contact_moved,contact_node_pairs,contact_leaf_pairs,"
+          "contact_tested,contact_certified,skipped_after")
 lines = open(sys.argv[1]).read().splitlines()
 assert lines[0] == header, f"header: {lines[0]}"
 rows = list(csv.DictReader(lines))
@@ -76,8 +77,17 @@ for mesh, (nv, frames, skipped, deforming, commits) in table.items():
         moved, checks = int(r["contact_moved"]), int(r["contact_checks"])
         assert moved <= nv, f"{mesh} frame {r['frame']}: {moved} moved of {nv}"
         assert (checks > 1) >= (t < 1), f"{mesh} frame {r['frame']}: scaled back after {checks} check"
+        walk = [int(r[c]) for c in ("contact_node_pairs", "contact_leaf_pairs", "contact_tested",
+                                    "contact_certified")]
+        assert checks > 0 or walk == [0, 0, 0, 0], f"{mesh} frame {r['frame']}: a walk without a check"
         if r["active"] == "0":
             assert int(r["pairs"]) == 0 and r["committed"] == "0", f"{mesh} frame {r['frame']}: idle frame"
+    # the session's guard walks its hierarchy on every face: over the drags, node pairs, leaf
+    # pairs and exact tests (the counts the table's "contact walk" line gives medians of)
+    for c in ("contact_node_pairs", "contact_leaf_pairs", "contact_tested"):
+        assert sum(int(r[c]) for r in rs) > 0, f"{mesh}: no {c} in any frame"
+walks = [l for l in open(sys.argv[2]) if l.startswith("  contact walk: a check reaches ")]
+assert len(walks) == len(table), f"{len(walks)} 'contact walk' lines for {len(table)} meshes"
 print("trace:", {m: len([r for r in rows if r["mesh"] == m]) for m in table}, "rows")
 PY
 

@@ -253,6 +253,7 @@ typedef struct track_stats {
     double least_t;
     size_t shared; /* checks on two threads (fp_contact_result.shared) */
     double waited; /* the caller's waits for the worker, ms (fp_contact_result.worker_wait_ms) */
+    size_t node_pairs, leaf_pairs, tested, certified; /* the walks' (fp_contact_result) */
 } track_stats;
 
 /* One frame of the incremental guard on cand, checked against the full guard: accepted
@@ -294,6 +295,10 @@ static void track_frame(fp_contact *tk, fp_contact *full, const float *ref, cons
     ts->shared += r.shared;
     assert_true(isfinite(r.worker_wait_ms) && r.worker_wait_ms >= 0);
     ts->waited += r.worker_wait_ms;
+    ts->node_pairs += r.node_pairs;
+    ts->leaf_pairs += r.leaf_pairs;
+    ts->tested += r.tested;
+    ts->certified += r.certified;
     ts->accepted += r.t == 1;
     if (r.t < 1) ts->scaled++;
     if (r.t < ts->least_t) ts->least_t = r.t;
@@ -337,7 +342,7 @@ static void sheets_push(int frames, int lazy)
     if (lazy) fp_contact_set_prewarm(tk, 0);
     if (lazy == 2) fp_contact_set_threads(tk, 2, 1); /* every check shared */
     assert_int_equal(fp_contact_reference(tk, pos, NULL, SIZE_MAX), 0);
-    track_stats ts = {0, 0, 0, 1.0, 0, 0};
+    track_stats ts = {.least_t = 1.0};
     for (int f = 1; f <= frames; f++) {
         bump_to(pos, n, 0.3, 0.12 * f / frames, cand);
         track_frame(tk, full, pos, cand, n, tris, t, ranges, true, 0, &ts);
@@ -410,7 +415,7 @@ static void big_push(bool move_big, bool lazy)
     assert_int_equal(fp_contact_create(tris, t, n, pos, &full), 0);
     if (lazy) fp_contact_set_prewarm(tk, 0);
     assert_int_equal(fp_contact_reference(tk, pos, NULL, SIZE_MAX), 0);
-    track_stats ts = {0, 0, 0, 1.0, 0, 0};
+    track_stats ts = {.least_t = 1.0};
     for (int fr = 1; fr <= frames; fr++) {
         memcpy(cand, pos, n * 3 * sizeof(float));
         double h = 0.3 * fr / frames;
@@ -484,7 +489,7 @@ static void lips_push(int frames, int lazy)
     const float *s0 = ref + 3 * best;
     float start[3] = {s0[0], s0[1], s0[2]};
     assert_true(csrbf_solver_set_start_points(sol, 1, start) >= 0);
-    track_stats ts = {0, 0, 0, 1.0, 0, 0};
+    track_stats ts = {.least_t = 1.0};
     int64_t t0 = fp_now_ns();
     for (int f = 1; f <= frames; f++) {
         double a = (double)f / frames;
@@ -595,6 +600,9 @@ static void replay_close(replay *rp)
     fp_session_destroy(&rp->s);
 }
 
+/* recording_frames' walk counts of the hierarchy with certificates (mode 1) and without (2) */
+static track_stats g_walk[3];
+
 static void recording_frames(const char *take, const char *mapping, int mode)
 {
     bool lazy = mode > 0 && mode < 4; /* 4: envelopes on two threads (re-centred by the worker) */
@@ -611,7 +619,7 @@ static void recording_frames(const char *take, const char *mapping, int mode)
     if (mode >= 3) fp_contact_set_threads(tk, 2, 1);
     uint32_t *ranges = malloc(n * sizeof *ranges);
     assert_int_equal(fp_contact_reference(tk, rp.ref, NULL, SIZE_MAX), 0);
-    track_stats ts = {0, 0, 0, 1.0, 0, 0};
+    track_stats ts = {.least_t = 1.0};
     unsigned commits = 0;
     for (int f; (f = replay_next(&rp)) >= 0;) {
         if (rp.committed) { /* a commit */
@@ -635,6 +643,15 @@ static void recording_frames(const char *take, const char *mapping, int mode)
     assert_true(ts.frames >= 15);
     if (mode == 3) assert_true(ts.shared > 0); /* the worker's path ran */
     else if (mode < 3) assert_true(ts.waited == 0); /* one thread: nothing to wait for */
+    /* the walks' counts (fp_contact_result): the hierarchy's alone; no patch certified without
+     * certificates; with them some are, and their pairs go untested */
+    if (mode == 0 || mode == 4) assert_true(ts.node_pairs == 0 && ts.leaf_pairs == 0 && ts.certified == 0);
+    else assert_true(ts.node_pairs > 0 && ts.leaf_pairs > 0 && ts.tested > 0);
+    if (mode == 2) assert_int_equal(ts.certified, 0);
+    if (mode == 1 || mode == 3) assert_true(ts.certified > 0);
+    if (mode == 1 || mode == 2) g_walk[mode] = ts;
+    printf("  walks: %zu node pairs, %zu leaf pairs, %zu exact tests, %zu patches certified\n", ts.node_pairs,
+           ts.leaf_pairs, ts.tested, ts.certified);
     free(ranges);
     fp_contact_destroy(&tk);
     fp_contact_destroy(&full);
@@ -647,6 +664,9 @@ static void test_track_recordings(void **state)
     recording_frames("Waiting-110fps", "unanchored", 1);
     recording_frames("three-claps", "unanchored", 1);
     recording_frames("three-claps", "unanchored", 2);
+    /* the same decisions either way (each frame the full check's), so the same checks: those
+     * without certificates test every pair the certified patches spared */
+    assert_true(g_walk[2].tested > g_walk[1].tested);
     recording_frames("three-claps", "unanchored", 0);
     recording_frames("three-claps", "unanchored", 3);
     recording_frames("three-claps", "unanchored", 4);
@@ -878,7 +898,7 @@ static void two_fingers(int frames, double local, float *far_kept, float *near_t
     assert_int_equal(fp_contact_create(tris, t, n, pos, &full), 0);
     fp_contact_set_local(tk, local);
     assert_int_equal(fp_contact_reference(tk, pos, NULL, SIZE_MAX), 0);
-    track_stats ts = {0, 0, 0, 1.0, 0, 0};
+    track_stats ts = {.least_t = 1.0};
     fp_contact_result r = {0};
     for (int f = 1; f <= frames; f++) {
         memcpy(cand, pos, n * 3 * sizeof(float));
@@ -1338,7 +1358,7 @@ static void test_cert_contour(void **state)
     assert_int_equal(fp_contact_create(tris, t, n, pos, &full), 0);
     fp_contact_set_prewarm(tk, 0); /* the hierarchy, small as the mesh is */
     assert_int_equal(fp_contact_reference(tk, pos, NULL, SIZE_MAX), 0);
-    track_stats ts = {0, 0, 0, 1.0, 0, 0};
+    track_stats ts = {.least_t = 1.0};
     size_t certified = 0;
     const int frames = 48;
     for (int fr = 1; fr <= frames; fr++) {
@@ -1436,7 +1456,7 @@ static void test_tree_hostile(void **state)
     assert_int_equal(fp_contact_create(tris, t, n, pos, &full), 0);
     fp_contact_set_prewarm(tk, 0);
     assert_int_equal(fp_contact_reference(tk, pos, NULL, SIZE_MAX), 0);
-    track_stats ts = {0, 0, 0, 1.0, 0, 0};
+    track_stats ts = {.least_t = 1.0};
     for (int f = 0; f < 40; f++) {
         memcpy(cand, fp_contact_shape(tk), n * 3 * sizeof(float));
         double bx = 0.2 + 0.6 * urand(), by = 0.2 + 0.6 * urand(), h = 0.03 * (f % 8), r = 0.1 + 0.1 * urand();
