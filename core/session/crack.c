@@ -262,12 +262,16 @@ size_t fp_crack_apply(const fp_crack *k, const uint32_t *tris, const float *ref,
             const uint32_t *f1 = tris + 3 * (size_t)k->pair[i][0], *f2 = tris + 3 * (size_t)k->pair[i][1];
             if (!cross_in(x, f1, f2) || cross_in(ref, f1, f2)) continue;
             /* a corner of the second off the first's plane, else one of the first off the
-             * second's */
+             * second's; a corner that moved from ref only, so x changes only where the frame
+             * moved it already (the engine's ranges, which the guard, the commit and the
+             * stream read) */
             bool done = false;
             for (int j = 3; j < 6 && !done; j++)
-                done = k->corner[i][j] != FP_CRACK_NONE && nudge(k, tris, ref, x, k->pair[i][0], k->corner[i][j], f1, f2);
+                done = k->corner[i][j] != FP_CRACK_NONE && group_moved(k, ref, x, k->corner[i][j]) &&
+                       nudge(k, tris, ref, x, k->pair[i][0], k->corner[i][j], f1, f2);
             for (int j = 0; j < 3 && !done; j++)
-                done = k->corner[i][j] != FP_CRACK_NONE && nudge(k, tris, ref, x, k->pair[i][1], k->corner[i][j], f1, f2);
+                done = k->corner[i][j] != FP_CRACK_NONE && group_moved(k, ref, x, k->corner[i][j]) &&
+                       nudge(k, tris, ref, x, k->pair[i][1], k->corner[i][j], f1, f2);
             parted += done;
         }
     }

@@ -18,7 +18,12 @@
  * face, whose coordinates are under 16 cm), every vertex at the corner's position alike so that the weld stays
  * whole; first the second triangle's corners at a crack, then the first's; where none parts it,
  * the corner is left as it was and the guard holds the pair back, as without this step. So the
- * guard stays the last word; this step only undoes the rounding.
+ * guard stays the last word; this step only undoes the rounding. Only a corner the frame moved
+ * from the reference is moved back: a crack at the edge of a support, one side moved and the
+ * other not, had its still side's corner moved, outside the engine's ranges, where the
+ * contact guard, the commit and the stream never look (the guard then kept a shape other than
+ * the one shown; tests/e2e/test_session saw a vertex outside every support a float step off
+ * the base, under ASan).
  *
  * Built once on the loaded shape: a crack is two vertices at different positions within
  * FP_CRACK_TOL of the bounding box's diagonal of each other. Threads: build on the opening
@@ -64,8 +69,9 @@ int fp_crack_build(const float *pos, size_t n, const uint32_t *tris, size_t t, f
 
 /** Closes the cracks the rounding opened: tris the triangles k was built with, ref the
  *  reference (n x 3, mesh units: the contact guard's, the posed base), x the candidate (n x 3,
- *  changed in place at crack corners only). Only the pairs of a crack where x moved a side's
- *  vertex from ref are tested (a crack outside every support costs one comparison a side).
+ *  changed in place at crack corners that x moved from ref only, so nowhere x equals ref).
+ *  Only the pairs of a crack where x moved a side's vertex from ref are tested (a crack
+ *  outside every support costs one comparison a side).
  *  Returns the number of pairs parted; no errors, no allocation. Threads: the frame thread;
  *  k read only. */
 size_t fp_crack_apply(const fp_crack *k, const uint32_t *tris, const float *ref, float *x);

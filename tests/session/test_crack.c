@@ -5,6 +5,9 @@
  *    the guard's own test (fp_contact_tri_tri);
  *  - nothing moves where nothing moved, where the pair already crossed in the reference, nor
  *    where the corner went too far through to be the rounding (x left as it was);
+ *  - a crack with one side moved and the other still (a support's edge) is parted by the
+ *    moved side's corner: the still side stays as it was, bit for bit (the engine's ranges,
+ *    where the guard, the commit and the stream look, hold every change);
  *  - the ICT face's cracks: its eye blend shell against the eyelids, each crack's sides at
  *    different positions within FP_CRACK_TOL of the diagonal;
  *  - a session on the ICT face (its rig, three-claps, anchored, 60 fps) has no frame the
@@ -74,6 +77,30 @@ static void test_crack_parted(void **state)
     assert_memory_equal(x + 3 * 4, x + 3 * 7, 3 * sizeof *x);
     assert_true(x[3 * 4 + 2] > before[3 * 4 + 2] && x[3 * 4 + 2] - before[3 * 4 + 2] < 1e-6f);
     printf("# the corner moved %.3g up: no pair crosses\n", (double)(x[3 * 4 + 2] - before[3 * 4 + 2]));
+    fp_crack_free(&k);
+}
+
+static void test_still_side_left(void **state)
+{
+    (void)state;
+    float ref[NV * 3], x[NV * 3];
+    reference(ref);
+    for (int v = 0; v < NV; v++) ref[3 * v] += 0.25f; /* (away from 0: float steps of 3e-8) */
+    fp_crack k;
+    assert_int_equal(fp_crack_build(ref, NV, tris, NT, &k), 0);
+    assert_int_equal(k.ncracks, 1);
+    /* A's corner moved 2e-7 up, through B's triangle; B (vertices 4 to 7) still */
+    memcpy(x, ref, sizeof x);
+    x[2] = 2e-7f;
+    assert_true(crosses(x, 0, 2) || crosses(x, 1, 2) || crosses(x, 0, 3) || crosses(x, 1, 3));
+    assert_true(fp_crack_apply(&k, tris, ref, x) >= 1);
+    for (int f = 0; f < 2; f++)
+        for (int g = 2; g < 4; g++) assert_false(crosses(x, f, g));
+    /* B as it was; A's corner moved back down, by under 1e-6; A's others still */
+    assert_memory_equal(x + 3 * 4, ref + 3 * 4, 4 * 3 * sizeof *x);
+    assert_memory_equal(x + 3, ref + 3, 3 * 3 * sizeof *x);
+    assert_true(x[2] < 2e-7f && 2e-7f - x[2] < 1e-6f);
+    printf("# the moved corner went %.3g back down; the still side kept its place\n", (double)(2e-7f - x[2]));
     fp_crack_free(&k);
 }
 
@@ -175,6 +202,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_crack_parted),
         cmocka_unit_test(test_left_alone),
+        cmocka_unit_test(test_still_side_left),
         cmocka_unit_test(test_ict_cracks),
         cmocka_unit_test(test_ict_three_claps_not_held_for_cracks),
     };
