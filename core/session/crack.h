@@ -69,7 +69,8 @@ int fp_crack_build(const float *pos, size_t n, const uint32_t *tris, size_t t, f
 
 /** Closes the cracks the rounding opened: tris the triangles k was built with, ref the
  *  reference (n x 3, mesh units: the contact guard's, the posed base), x the candidate (n x 3,
- *  changed in place at crack corners that x moved from ref only, so nowhere x equals ref).
+ *  changed in place only at crack corners x moved from ref: the vertices at a position whose
+ *  first one moved, all of them in the supports that moved it, so in the engine's ranges).
  *  Only the pairs of a crack where x moved a side's vertex from ref are tested (a crack
  *  outside every support costs one comparison a side).
  *  Returns the number of pairs parted; no errors, no allocation. Threads: the frame thread;
