@@ -77,6 +77,7 @@ typedef struct glove {
 
     /* from the probe */
     int sensors;
+    int sampled;                 /* values a record carries (?N; sensors unless fewer) */
     int right;          /* ?R */
     bool ts_on, status_on;
     char version[64];
@@ -357,6 +358,40 @@ static int drain(glove *g)
     return 0;
 }
 
+/* The glove sensors a record carries, where ?N says fewer than the glove has: their count,
+ * order[] the glove sensor of each value (the software mask ?M's bits, low first; without a
+ * mask, 18 of 22 are the 18-sensor glove's). Returns that count, 0 when every sensor is
+ * sampled (or ?N goes unanswered), or a negative code with a message in err. */
+static int sampled_order(glove *g, int sensors, uint8_t order[FPG_SENSORS], char *err, size_t errlen)
+{
+    uint8_t v[64];
+    int r = query(g, 'N', 1, v, sizeof v);
+    if (r == -EPIPE || r == -ECANCELED)
+        return fp_errorf(err, errlen, r, "line lost");
+    if (r < 1 || v[0] == sensors)
+        return 0;
+    int n = v[0];
+    if (n < 1 || n > sensors)
+        return fp_errorf(err, errlen, -EPROTO, "?N = %d sensors sampled of the glove's %d (?S)", n,
+                         sensors);
+    r = query(g, 'M', 3, v, sizeof v);
+    if (r == -EPIPE || r == -ECANCELED)
+        return fp_errorf(err, errlen, r, "line lost");
+    uint32_t mask = r == 3 ? (uint32_t)v[0] | (uint32_t)v[1] << 8 | (uint32_t)v[2] << 16 : 0;
+    if (r != 3 || __builtin_popcount(mask) != n || (mask >> FPG_SENSORS)) {
+        if (!(n == 18 && sensors == 22))
+            return fp_errorf(err, errlen, -EPROTO,
+                             "?N = %d sensors sampled of %d, and the software mask (?M) does not "
+                             "say which (%s)", n, sensors, r == 3 ? "its bits disagree" : "no answer");
+        mask = ((1u << FPG_SENSORS) - 1) & ~(1u << 6 | 1u << 9 | 1u << 13 | 1u << 17); /* no DIJ */
+    }
+    int k = 0;
+    for (int i = 0; i < FPG_SENSORS; i++)
+        if (mask & (1u << i))
+            order[k++] = (uint8_t)i;
+    return k;
+}
+
 /* Probe the glove and start it. Returns 0, or a negative code with a message in err. */
 static int probe(glove *g, char *err, size_t errlen)
 {
@@ -364,22 +399,40 @@ static int probe(glove *g, char *err, size_t errlen)
     int r = drain(g);
     if (r < 0)
         return fp_errorf(err, errlen, r, "%s: line lost while draining", g->path);
+    /* A CyberGlove III in 16-bit mode needs only `1eu` `1S` (docs/devices.md): its ?G and
+     * ?S are asked, and a box that answers them e? or not at all is taken as plugged, 22 */
+    const bool optional = g->bits == 16;
     r = query(g, 'G', 1, v, sizeof v);
-    if (r == -ETIMEDOUT)
-        return fp_errorf(err, errlen, r, "no answer to ?G (is the glove box on, baud %d?)", g->baud);
-    if (r < 1)
-        return fp_errorf(err, errlen, r < 0 ? r : -EPROTO, "bad answer to ?G");
-    if (v[0] != 3)
-        return fp_errorf(err, errlen, -ENODEV, "glove not plugged into its box (?G = %d)", v[0]);
+    if (!(optional && (r == -ETIMEDOUT || r == -ENOTSUP))) {
+        if (r == -ETIMEDOUT)
+            return fp_errorf(err, errlen, r, "no answer to ?G (is the glove box on, baud %d?)", g->baud);
+        if (r < 1)
+            return fp_errorf(err, errlen, r < 0 ? r : -EPROTO, "bad answer to ?G%s",
+                             r == -ENOTSUP ? " (e?: the box does not know the query)" : "");
+        if ((v[0] & 3) != 3) /* bit 0 initialised, bit 1 glove plugged */
+            return fp_errorf(err, errlen, -ENODEV, "glove not plugged into its box (?G = %d)", v[0]);
+    }
     r = query(g, 'S', 1, v, sizeof v);
-    if (r < 1)
-        return fp_errorf(err, errlen, r < 0 ? r : -EPROTO, "bad answer to ?S");
+    if (optional && (r == -ETIMEDOUT || r == -ENOTSUP)) {
+        v[0] = 22;
+    } else if (r < 1) {
+        return fp_errorf(err, errlen, r < 0 ? r : -EPROTO, "bad answer to ?S%s",
+                         r == -ENOTSUP ? " (e?: the box does not know the query)" : "");
+    }
     if (v[0] != 18 && v[0] != 22)
         return fp_errorf(err, errlen, -EPROTO, "unsupported sensor count %d (?S)", v[0]);
     if (g->bits == 16 && v[0] != 22)
         return fp_errorf(err, errlen, -EPROTO, "bits=16 needs a 22-sensor CyberGlove III (?S = %d)",
                     v[0]);
     int sensors = v[0];
+    /* The sensors sampled (?N) make the record; where not all, the software mask (?M) says
+     * which. Optional: a box that does not answer ?N samples every sensor. */
+    uint8_t order[FPG_SENSORS];
+    int sampled = sensors;
+    if (g->bits == 8 && (r = sampled_order(g, sensors, order, err, errlen)) < 0)
+        return r;
+    if (r > 0)
+        sampled = r;
     /* ?R, ?V, ?D and U are optional: a box that answers them with e? or not at all (a
      * minimal one; the late reply of a slow one is skipped by the next read, which seeks its
      * own header) leaves their defaults */
@@ -445,6 +498,9 @@ static int probe(glove *g, char *err, size_t errlen)
     snprintf(g->version, sizeof g->version, "%s", version);
     g->hand = g->hand_opt >= 0 ? g->hand_opt : (right >= 0 ? right : FP_HAND_RIGHT);
     fpg_decoder_init(&g->dec, g->bits, sensors, ts_on, status_on);
+    if (sampled != sensors)
+        (void)fpg_decoder_set_order(&g->dec, sampled, order); /* (checked by sampled_order) */
+    g->sampled = sampled;
     g->dec.status_seen = status_unknown;
     g->in_noise = false;
     g->unplugged = false;
@@ -594,6 +650,7 @@ static void feed(glove *g, const uint8_t *data, size_t n, int64_t t)
 /* The input thread                                                                      */
 
 enum { END_STOP = 0, END_LOST = 1, END_SILENT = 2 };
+#define SETTLE_MS 20 /* a polled answer's end: the line quiet this long */
 
 /* Read and decode until the line is lost, the glove goes silent, or stop. */
 static int session(glove *g, char *why, size_t whylen)
@@ -602,7 +659,7 @@ static int session(glove *g, char *why, size_t whylen)
     const int64_t timeout = (int64_t)g->timeout_ms * 1000000;
     int64_t t0 = now_ns(g);
     g->last_record_ns = t0;
-    int64_t next_poll = t0, poll_sent = t0;
+    int64_t next_poll = t0, poll_sent = t0, last_read = t0;
     bool awaiting = false;
     for (;;) {
         int64_t now = now_ns(g);
@@ -633,12 +690,24 @@ static int session(glove *g, char *why, size_t whylen)
         int wait_ms = (int)((deadline - now + 999999) / 1000000);
         if (wait_ms < 0)
             wait_ms = 0;
+        /* a polled answer whose end cannot tell a status 0 from the terminator (status
+         * unknown) is read as ended once the line stays quiet (fpg_decoder_settle) */
+        bool held = g->poll_mode && awaiting && g->dec.status_seen && g->dec.len > 0;
+        if (held && wait_ms > SETTLE_MS)
+            wait_ms = SETTLE_MS;
         int r = wait_fd(g, g->fd, POLLIN, wait_ms);
         if (r == -ECANCELED)
             return END_STOP;
         if (r == -EPIPE) {
             snprintf(why, whylen, "cable pulled (hang-up)");
             return END_LOST;
+        }
+        if (r == 0 && held) {
+            uint64_t before = g->units;
+            feed_ctx c = {g, last_read};
+            fpg_decoder_settle(&g->dec, on_unit, &c);
+            if (g->units != before)
+                awaiting = false;
         }
         if (r <= 0)
             continue;
@@ -656,6 +725,7 @@ static int session(glove *g, char *why, size_t whylen)
             return END_LOST;
         }
         uint64_t before = g->units;
+        last_read = t;
         feed(g, buf, (size_t)got, t);
         if (g->poll_mode && g->units != before)
             awaiting = false;
@@ -666,9 +736,9 @@ static void close_port(glove *g, bool polite)
 {
     if (g->fd < 0)
         return;
-    if (polite) {
-        uint8_t stop = 0x03;
-        (void)!write(g->fd, &stop, 1);
+    if (polite) { /* the stops of both kinds of box (docs/devices.md): 0x03, then ^c */
+        const uint8_t stop[3] = {0x03, '^', 'c'};
+        (void)!write(g->fd, stop, sizeof stop);
     }
     close(g->fd);
     g->fd = -1;
@@ -700,13 +770,16 @@ static void *thread_main(void *arg)
             break;
         if (r < 0) {
             close_port(g, false);
-            push_status(g, FP_STATUS_DISCONNECTED, "%s: %s", g->path, why);
+            push_status(g, FP_STATUS_DISCONNECTED, "%s", why);
             continue;
         }
         backoff = BACKOFF_MIN_MS;
         attempt = 0;
-        push_status(g, FP_STATUS_CONNECTED, "%s: %d sensors, %s hand, %s %s, %s%s", g->path,
-                    g->sensors, g->hand ? "right" : "left", g->bits == 16 ? "16-bit" : "8-bit",
+        char sampled[32] = "";
+        if (g->sampled != g->sensors)
+            snprintf(sampled, sizeof sampled, " (%d sampled)", g->sampled);
+        push_status(g, FP_STATUS_CONNECTED, "%d sensors%s, %s hand, %s %s, %s%s", g->sensors,
+                    sampled, g->hand ? "right" : "left", g->bits == 16 ? "16-bit" : "8-bit",
                     g->poll_mode ? "poll" : "stream", g->version[0] ? "version " : "",
                     g->version);
         int end = session(g, why, sizeof why);

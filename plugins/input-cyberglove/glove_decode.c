@@ -5,10 +5,11 @@
  */
 #include "glove_decode.h"
 
+#include <errno.h>
 #include <math.h>
 #include <string.h>
 
-/* Glove sensor of each of an 18-sensor glove's values (no DIP of index..pinky, no palm arch). */
+/* Glove sensor of each of an 18-sensor glove's values (no DIJ of index..pinkie). */
 static const int DIJ_SKIP[18] = {0, 1, 2, 3, 4, 5, 7, 8, 10, 11, 12, 14, 15, 16, 18, 19, 20, 21};
 
 void fpg_decoder_init(fpg_decoder *d, int bits, int sensors, bool ts_on, bool status_on)
@@ -20,19 +21,52 @@ void fpg_decoder_init(fpg_decoder *d, int bits, int sensors, bool ts_on, bool st
     d->status_on = status_on;
 }
 
+int fpg_decoder_set_order(fpg_decoder *d, int n, const uint8_t *order)
+{
+    if (n < 1 || n > FPG_SENSORS)
+        return -EINVAL;
+    for (int k = 0; k < n; k++)
+        if (order[k] >= FPG_SENSORS || (k && order[k] <= order[k - 1]))
+            return -EINVAL;
+    d->sensors = n;
+    d->has_order = true;
+    memcpy(d->order, order, (size_t)n);
+    return 0;
+}
+
+/* An error pair e g|s and 0x00 at a[0..4)? 1 yes, 0 need more bytes, -1 no. */
+static int error_pair(const uint8_t *a, size_t len)
+{
+    if (len < 1 || a[0] != 'e')
+        return len < 1 ? 0 : -1;
+    if (len < 3)
+        return 0;
+    return (a[1] == 'g' || a[1] == 's') && a[2] == 0 ? 1 : -1;
+}
+
+/* Where the box never said whether the status byte is on (status_seen): is there one in the
+ * record at a[0..len), whose values (and timestamp) end before a[at]? 1 yes, 0 no, -1 need
+ * more bytes. A byte 1..7 there is a status; a 0 is the terminator, or a status 0 (the glove
+ * out of its box) when the terminator or an error pair follows it; `final` (no more bytes
+ * are coming now: a polled record's answer is over) reads a 0 at the end as the terminator. */
+static int status_here(const uint8_t *a, size_t len, size_t at, bool final)
+{
+    if (len < at + 1)
+        return -1;
+    if (a[at] != 0)
+        return a[at] <= 7;
+    if (len < at + 2)
+        return final ? 0 : -1;
+    int pair = a[at + 1] == 0 ? 1 : error_pair(a + at + 1, len - at - 1);
+    return pair == 0 ? (final ? 0 : -1) : pair > 0;
+}
+
 /* Try to decode one 8-bit unit at a[0..len). Returns >0 bytes consumed, 0 need more,
- * -1 not a unit here (skip a byte). */
-static int decode8(const fpg_decoder *d, const uint8_t *a, size_t len, fpg_unit *u)
+ * -1 not a unit here (skip a byte). Where the status byte was unknown, three records in a
+ * row read alike settle it for the records after them (d->status_on). */
+static int decode8(fpg_decoder *d, const uint8_t *a, size_t len, bool final, fpg_unit *u)
 {
     const size_t n = (size_t)d->sensors;
-    bool status = d->status_on;
-    if (d->status_seen) { /* the record shows it: a status byte 1..7 before the end */
-        const size_t at = 1 + n + (d->ts_on ? 5 : 0);
-        if (len < at + 1)
-            return 0;
-        status = a[at] >= 1 && a[at] <= 7 && a[0] != 'e';
-    }
-    const size_t body = 1 + n + (d->ts_on ? 5 : 0) + (status ? 1 : 0);
     if (a[0] == 'e') {   /* a bare error: `e` X 0x00 */
         if (len < 3)
             return 0;
@@ -44,10 +78,28 @@ static int decode8(const fpg_decoder *d, const uint8_t *a, size_t len, fpg_unit 
     }
     if (a[0] != 'S' && a[0] != 'G')
         return -1;
+    if (len >= 2 && a[1] == 'e') { /* S|G e g|s 0x00: the error in place of the values */
+        int pair = error_pair(a + 1, len - 1);
+        if (pair == 0)
+            return 0;
+        if (pair > 0) {
+            u->kind = FPG_UNIT_ERROR;
+            u->errc = a[2];
+            return 4;
+        }
+    }
     size_t avail = len < 1 + n ? len : 1 + n;
     for (size_t i = 1; i < avail; i++)
         if (a[i] == 0)
             return -1;
+    bool status = d->status_on;
+    if (d->status_seen) {
+        int here = status_here(a, len, 1 + n + (d->ts_on ? 5 : 0), final);
+        if (here < 0)
+            return 0;
+        status = here > 0;
+    }
+    const size_t body = 1 + n + (d->ts_on ? 5 : 0) + (status ? 1 : 0);
     if (len < body + 1)
         return 0;
     int errc = 0;
@@ -64,8 +116,15 @@ static int decode8(const fpg_decoder *d, const uint8_t *a, size_t len, fpg_unit 
     } else {
         return -1;
     }
+    if (d->status_seen) { /* three records in a row that agree settle it */
+        d->status_votes = d->status_votes && d->status_on == status ? d->status_votes + 1 : 1;
+        d->status_on = status;
+        if (d->status_votes >= 3)
+            d->status_seen = false;
+    }
     u->kind = FPG_UNIT_RECORD;
     u->nraw = (int)n;
+    u->order = d->has_order ? d->order : NULL;
     for (size_t i = 0; i < n; i++)
         u->raw[i] = a[1 + i];
     u->plugged = status ? (a[body - 1] & 1) != 0 : true;
@@ -109,6 +168,7 @@ static int decode16(const uint8_t *a, size_t len, fpg_unit *u)
     }
     u->kind = FPG_UNIT_RECORD;
     u->nraw = FPG_SENSORS;
+    u->order = NULL;
     u->plugged = true;
     u->errc = 0;
     return (int)need;
@@ -123,21 +183,24 @@ static void noise(size_t n, fpg_unit_fn fn, void *user)
     fn(user, &u);
 }
 
-void fpg_decoder_feed(fpg_decoder *d, const uint8_t *data, size_t n, fpg_unit_fn fn, void *user)
+/* fpg_decoder_feed and fpg_decoder_settle: `final`, no more bytes are coming now. */
+static void feed(fpg_decoder *d, const uint8_t *data, size_t n, bool final, fpg_unit_fn fn, void *user)
 {
     fpg_unit u;
-    while (n) {
+    do { /* (once at least: a settle feeds nothing new) */
         size_t take = FPG_DECODE_CAP - d->len;
         if (take > n)
             take = n;
-        memcpy(d->acc + d->len, data, take);
-        d->len += take;
-        data += take;
-        n -= take;
+        if (take) { /* (data is NULL for a settle) */
+            memcpy(d->acc + d->len, data, take);
+            d->len += take;
+            data += take;
+            n -= take;
+        }
         size_t pos = 0, skipped = 0;
         while (pos < d->len) {
             int r = d->bits == 16 ? decode16(d->acc + pos, d->len - pos, &u)
-                                  : decode8(d, d->acc + pos, d->len - pos, &u);
+                                  : decode8(d, d->acc + pos, d->len - pos, final && !n, &u);
             if (r == 0)
                 break;
             if (r < 0) {
@@ -160,7 +223,17 @@ void fpg_decoder_feed(fpg_decoder *d, const uint8_t *data, size_t n, fpg_unit_fn
             noise(d->len, fn, user);
             d->len = 0;
         }
-    }
+    } while (n);
+}
+
+void fpg_decoder_feed(fpg_decoder *d, const uint8_t *data, size_t n, fpg_unit_fn fn, void *user)
+{
+    feed(d, data, n, false, fn, user);
+}
+
+void fpg_decoder_settle(fpg_decoder *d, fpg_unit_fn fn, void *user)
+{
+    feed(d, NULL, 0, true, fn, user);
 }
 
 int fpg_angles_from_raw(const fpg_cal *cal, const fpg_unit *u, float radians[FPG_SENSORS],
@@ -170,7 +243,9 @@ int fpg_angles_from_raw(const fpg_cal *cal, const fpg_unit *u, float radians[FPG
     *valid = 0;
     memset(radians, 0, FPG_SENSORS * sizeof *radians);
     for (int k = 0; k < u->nraw && k < FPG_SENSORS; k++) {
-        int i = u->nraw == FPG_SENSORS ? k : DIJ_SKIP[k];
+        int i = u->order ? u->order[k] : u->nraw == FPG_SENSORS ? k : u->nraw == 18 ? DIJ_SKIP[k] : -1;
+        if (i < 0 || i >= FPG_SENSORS)
+            continue;
         if (!(cal->used & (1u << i)))
             continue;
         float a = fpg_cal_angle(cal, i, u->raw[k]);

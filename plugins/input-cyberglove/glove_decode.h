@@ -7,10 +7,14 @@
  *
  * Wire formats (shared/docs/devices.md, "CyberGlove"):
  *  - 8-bit record (streamed `S` or polled `G`): the command byte, one byte per sensor
- *    (1..255: the glove never sends 0 inside a record), then with `U 1` (timestamp on) five
- *    timestamp bytes, with status on one status byte (bit 0: glove plugged into its box),
- *    then 0x00 -- or, instead of the 0x00, an error pair `e` `g`|`s` and 0x00.
- *  - a bare error message `e` X 0x00 (X one of ? g s n y): the box answers, no record.
+ *    sampled (`?N` of them, the sensors of the software mask `?M` in glove order; 1..255:
+ *    the glove never sends 0 inside a record), then with `D 1` (timestamp on) five
+ *    timestamp bytes, with `U 1` (status on) one status byte (bit 0: glove plugged into its
+ *    box; 0 is a valid status), then 0x00 -- or, instead of the 0x00, an error pair
+ *    `e` `g`|`s` and 0x00.
+ *  - a bare error message `e` X 0x00 (X one of ? g s n y): the box answers, no record; and
+ *    the same after a record's command byte, `S`|`G` `e` `g`|`s` 0x00 (a box that sends the
+ *    error in place of the record's values while the glove is out).
  *  - 16-bit frame (CyberGlove III, `1eu` `1S`): 0D 0A 00, an ASCII timestamp of 8..16
  *    characters of digits, ':', ' ' or '.', 'S', then 22 big-endian 16-bit values in
  *    1..4094 (entering the calibration as v / 16, the 8-bit scale).
@@ -30,7 +34,8 @@
 
 #include "glove_cal.h"
 
-#define FPG_DECODE_CAP 1024 /* bytes held between feeds; far above the longest unit (51) */
+#define FPG_DECODE_CAP 1024 /* bytes held between feeds; far above the longest unit (64: a
+                               16-bit frame with a 16-character timestamp) */
 
 /** What the decoder found. */
 typedef enum fpg_unit_kind {
@@ -41,8 +46,12 @@ typedef enum fpg_unit_kind {
 
 typedef struct fpg_unit {
     fpg_unit_kind kind;
-    int nraw;                  /* RECORD: sensors in raw (18 or 22 for 8-bit, 22 for 16-bit) */
+    int nraw;                  /* RECORD: values in raw (the sensors sampled for 8-bit, 22 for
+                                  16-bit) */
     double raw[FPG_SENSORS];   /* RECORD: wire order, 8-bit scale (16-bit values / 16) */
+    const uint8_t *order;      /* RECORD: the glove sensor (0..21) of each raw value, nraw of
+                                  them (valid during the call), or NULL: the whole glove's
+                                  order for 22 values, the 18-sensor glove's for 18 */
     bool plugged;              /* RECORD: status bit 0, true without a status byte */
     int errc;                  /* RECORD: 'g' or 's' of a trailing error pair, else 0;
                                   ERROR: the code byte */
@@ -52,19 +61,30 @@ typedef struct fpg_unit {
 /** Decoder state; fill with fpg_decoder_init. */
 typedef struct fpg_decoder {
     int bits;        /* 8 or 16 */
-    int sensors;     /* 8-bit records: 18 or 22 */
+    int sensors;     /* 8-bit records: values a record carries (the sensors sampled, 1..22) */
+    bool has_order;  /* order below was set (fpg_decoder_set_order) */
+    uint8_t order[FPG_SENSORS]; /* the glove sensor of each value */
     bool ts_on;      /* 8-bit records carry 5 timestamp bytes */
     bool status_on;  /* 8-bit records carry a status byte */
     bool status_seen; /* set after init where the box never said whether U is on (U 1 and ?U
-                         unanswered): each record shows it, a byte 0..7 (docs/devices.md:
-                         bits plugged, wrist switch, light) before the terminator or error
-                         pair being the status byte; status_on is then ignored */
+                         unanswered): each record shows it, a byte 1..7 (docs/devices.md:
+                         bits plugged, wrist switch, light) where the values end, or a 0
+                         followed by the terminator or an error pair, being the status
+                         byte; three records in a row read alike settle it (status_on,
+                         status_seen cleared) */
+    int status_votes; /* records in a row read with status_on's reading while status_seen */
     uint8_t acc[FPG_DECODE_CAP];
     size_t len;      /* bytes waiting in acc */
 } fpg_decoder;
 
-/** Start a decoder for this wire format (bits 8 or 16; sensors 18 or 22 for 8-bit). */
+/** Start a decoder for this wire format (bits 8 or 16; sensors 18 or 22 for 8-bit: the
+ *  glove's own order, or the 18-sensor glove's). */
 void fpg_decoder_init(fpg_decoder *d, int bits, int sensors, bool ts_on, bool status_on);
+
+/** 8-bit records that carry n values (1..22), the k-th from glove sensor order[k] (strictly
+ *  increasing, each 0..21: the sensors of the box's software mask `?M`, in glove order).
+ *  Returns 0, or -EINVAL (d unchanged) for n or an order outside those rules. */
+int fpg_decoder_set_order(fpg_decoder *d, int n, const uint8_t *order);
 
 /** Called for each unit, in wire order; u is valid during the call only. */
 typedef void (*fpg_unit_fn)(void *user, const fpg_unit *u);
@@ -72,8 +92,15 @@ typedef void (*fpg_unit_fn)(void *user, const fpg_unit *u);
 /** Append n bytes and report every complete unit (and the noise between) to fn. */
 void fpg_decoder_feed(fpg_decoder *d, const uint8_t *data, size_t n, fpg_unit_fn fn, void *user);
 
+/** No more bytes are coming for now (a polled record's answer is over): report what the
+ *  bytes held decode to when nothing follows them. Only a record whose status byte is
+ *  unknown (status_seen) and whose last byte is a 0 waits for one more byte to tell a
+ *  status 0 from the terminator; settled, that 0 is the terminator. */
+void fpg_decoder_settle(fpg_decoder *d, fpg_unit_fn fn, void *user);
+
 /** The joint-angle event fields for one record: for each of the record's sensors (wire
- *  order; an 18-sensor glove skips the 4 DIP/abduction sensors it lacks) that the calibration
+ *  order mapped by u->order, or without one: an 18-sensor glove skips the 4 DIJ sensors it
+ *  lacks) that the calibration
  *  uses, radians[i] = fpg_cal_angle and bit i of *valid. An angle that is not finite (a gain
  *  so large that gain * raw leaves float range) is left 0 and invalid: nothing non-finite is
  *  ever pushed. Returns the number of sensors dropped that way. */

@@ -299,6 +299,97 @@ static void test_minimal_box(void **state)
                                            FP_HAND_RIGHT), 60);
     assert_int_equal(plugin_stats(in).noise_bytes, 0);
     stop_input(&in);
+    /* a box that stops only on ^c is left stopped (the stop sends 0x03 and ^c) */
+    int64_t deadline = fp_test_mono_ns() + (int64_t)WAIT_MS * 1000000;
+    do {
+        usleep(5000);
+        fp_gloveemu_get_stats(e, &es);
+    } while (es.streaming && fp_test_mono_ns() < deadline);
+    assert_int_equal(es.streaming, 0);
+    fp_test_host_free(f);
+    fp_gloveemu_destroy(&e);
+}
+
+/* Unplugged from a box that never said whether its status byte is on (U 1 and ?U go
+ * unanswered): the status 0 of the records is read as such, by records with their status
+ * clear and by `S e g 0x00` frames in place of records alike; no angles while out, no line
+ * noise. */
+static void minimal_box_unplug(bool error_frames, const char *name)
+{
+    fp_gloveemu *e = emu_new((fp_gloveemu_options){.recording = CSV_GRAB, .loop = true,
+                                                   .unanswered = "RVDU", .error_frames = error_frames},
+                             name);
+    fp_test_host *f = fp_test_host_new(0);
+    fp_input *in = NULL;
+    char err[256];
+    assert_int_equal(create_input(f, fp_gloveemu_path(e), &in, err, sizeof err, (char *)NULL), 0);
+    start_input(in);
+    long c = fp_test_host_wait_status(f, 0, FP_STATUS_CONNECTED, NULL, WAIT_MS);
+    assert_true(c >= 0 && fp_test_host_wait_angles(f, (size_t)c, 10, WAIT_MS) > 0);
+    fp_gloveemu_set_plugged(e, false);
+    long d = fp_test_host_wait_status(f, (size_t)c, FP_STATUS_DISCONNECTED, "unplugged", WAIT_MS);
+    assert_true(d >= 0);
+    fp_gloveemu_stats es;
+    fp_gloveemu_get_stats(e, &es);
+    uint64_t target = es.records + 20;
+    int64_t deadline = fp_test_mono_ns() + (int64_t)WAIT_MS * 1000000;
+    while (es.records < target && fp_test_mono_ns() < deadline) {
+        usleep(5000);
+        fp_gloveemu_get_stats(e, &es);
+    }
+    if (!error_frames)
+        assert_true(es.records >= target);
+    else
+        usleep(200000); /* (error frames are not records: 20 periods) */
+    fp_gloveemu_set_plugged(e, true);
+    long r = fp_test_host_wait_status(f, (size_t)d, FP_STATUS_CONNECTED, "plugged", WAIT_MS);
+    assert_true(r > d);
+    for (long i = d + 1; i < r; i++)
+        assert_int_not_equal(fp_test_host_get(f, (size_t)i).header.type, FP_EVENT_JOINT_ANGLES);
+    assert_true(fp_test_host_wait_angles(f, (size_t)r, 10, WAIT_MS) > 0);
+    assert_int_equal(plugin_stats(in).noise_bytes, 0);
+    assert_int_equal(plugin_stats(in).connects, 1);
+    stop_input(&in);
+    fp_test_host_free(f);
+    fp_gloveemu_destroy(&e);
+}
+
+static void test_minimal_box_unplug(void **state)
+{
+    (void)state;
+    minimal_box_unplug(false, "g10");
+    minimal_box_unplug(true, "g11");
+}
+
+/* Fewer sensors sampled than the glove has (?N 19 of ?S 22, the software mask ?M saying
+ * which): records of 19 values, each on its own sensor. */
+static void test_sampled_fewer(void **state)
+{
+    (void)state;
+    uint32_t mask = ((1u << 22) - 1) & ~(1u << 2 | 1u << 10 | 1u << 19);
+    fp_gloveemu *e = emu_new((fp_gloveemu_options){.recording = CSV_GRAB, .calibration = CAL_RIGHT,
+                                                   .sampled = mask}, "g12");
+    fp_test_host *f = fp_test_host_new(0);
+    fp_input *in = NULL;
+    char err[256];
+    assert_int_equal(create_input(f, fp_gloveemu_path(e), &in, err, sizeof err,
+                                  "cal=" CAL_RIGHT, "hand=right", (char *)NULL), 0);
+    start_input(in);
+    long c = fp_test_host_wait_status(f, 0, FP_STATUS_CONNECTED, "22 sensors (19 sampled)", WAIT_MS);
+    assert_true(c >= 0);
+    long end = fp_test_host_wait_angles(f, (size_t)c, 60, WAIT_MS);
+    assert_true(end > 0);
+    fp_gloveemu_stats es;
+    fp_gloveemu_get_stats(e, &es);
+    fpg_cal cal;
+    char cerr[256];
+    assert_int_equal(fpg_cal_load(CAL_RIGHT, &cal, cerr, sizeof cerr), 0);
+    assert_int_equal(check_against_records(f, e, &cal, (size_t)c, (size_t)end, es.session_seq,
+                                           FP_HAND_RIGHT), 60);
+    fp_event ev = fp_test_host_get(f, (size_t)end - 1);
+    assert_int_equal(ev.angles.valid & (1u << 2 | 1u << 10), 0);
+    assert_int_equal(plugin_stats(in).noise_bytes, 0);
+    stop_input(&in);
     fp_test_host_free(f);
     fp_gloveemu_destroy(&e);
 }
@@ -336,12 +427,13 @@ static void test_poll_mode(void **state)
     fp_gloveemu_destroy(&e);
 }
 
-/* CyberGlove III 16-bit frames. */
-static void test_sixteen_bit(void **state)
+/* CyberGlove III 16-bit frames; from a box that answers no query too (docs/devices.md
+ * gives the III only `1eu` and `1S`). */
+static void sixteen_bit(const char *unanswered, const char *name)
 {
-    (void)state;
     fp_gloveemu *e = emu_new((fp_gloveemu_options){.recording = CSV_GRAB,
-                                                   .calibration = CAL_RIGHT}, "g4");
+                                                   .calibration = CAL_RIGHT,
+                                                   .unanswered = unanswered}, name);
     fp_test_host *f = fp_test_host_new(0);
     fp_input *in = NULL;
     char err[256];
@@ -367,6 +459,13 @@ static void test_sixteen_bit(void **state)
     stop_input(&in);
     fp_test_host_free(f);
     fp_gloveemu_destroy(&e);
+}
+
+static void test_sixteen_bit(void **state)
+{
+    (void)state;
+    sixteen_bit(NULL, "g4");
+    sixteen_bit("GSRVDU", "g13");
 }
 
 /* Calibration against numbers read off the real files by hand (independent of the parser):
@@ -911,6 +1010,8 @@ int main(void)
         cmocka_unit_test(test_stream_22_right_calibrated),
         cmocka_unit_test(test_stream_18_left_default_map),
         cmocka_unit_test(test_minimal_box),
+        cmocka_unit_test(test_minimal_box_unplug),
+        cmocka_unit_test(test_sampled_fewer),
         cmocka_unit_test(test_poll_mode),
         cmocka_unit_test(test_sixteen_bit),
         cmocka_unit_test(test_calibration_asr_by_hand),

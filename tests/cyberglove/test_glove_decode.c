@@ -141,6 +141,112 @@ static void test_8bit_status_seen(void **state)
     assert_int_equal(d.len, 0);
 }
 
+/* A status 0 (the glove out of its box) where the box never said whether U is on: the 0
+ * followed by the terminator or an error pair is the status, not the end; three records in
+ * a row read alike settle the layout. */
+static void test_8bit_status_zero_seen(void **state)
+{
+    (void)state;
+    fpg_decoder d;
+    fpg_decoder_init(&d, 8, 22, false, false);
+    d.status_seen = true;
+    uint8_t b[512];
+    size_t k = rec8(b, 'S', 22, 10, false, 0x00, 0);   /* status 0, then the terminator */
+    k += rec8(b + k, 'S', 22, 20, false, 0x00, 'g');   /* status 0, then `eg` */
+    k += rec8(b + k, 'S', 22, 30, false, 0x01, 0);     /* plugged again */
+    sink s = {.n = 0};
+    fpg_decoder_feed(&d, b, k, collect, &s);
+    assert_int_equal(s.n, 3);
+    expect_record(&s.u[0], 22, 10, false, 0);
+    expect_record(&s.u[1], 22, 20, false, 'g');
+    expect_record(&s.u[2], 22, 30, true, 0);
+    assert_int_equal(d.len, 0);
+    /* three read with a status byte: settled, so a record cut after its status 0 waits */
+    assert_false(d.status_seen);
+    assert_true(d.status_on);
+    s.n = 0;
+    k = rec8(b, 'S', 22, 40, false, 0x00, 0);
+    fpg_decoder_feed(&d, b, k - 1, collect, &s);
+    assert_int_equal(s.n, 0);
+    fpg_decoder_feed(&d, b + k - 1, 1, collect, &s);
+    assert_int_equal(s.n, 1);
+    expect_record(&s.u[0], 22, 40, false, 0);
+}
+
+/* A polled answer without a status byte, where the box never said: the 0 at its end could
+ * be a status 0 until the line stays quiet (fpg_decoder_settle), then it is the terminator. */
+static void test_8bit_settle(void **state)
+{
+    (void)state;
+    fpg_decoder d;
+    fpg_decoder_init(&d, 8, 18, false, false);
+    d.status_seen = true;
+    uint8_t b[64];
+    size_t k = rec8(b, 'G', 18, 60, false, -1, 0);
+    sink s = {.n = 0};
+    fpg_decoder_feed(&d, b, k, collect, &s);
+    assert_int_equal(s.n, 0);
+    assert_int_equal(d.len, k);
+    fpg_decoder_settle(&d, collect, &s);
+    assert_int_equal(s.n, 1);
+    expect_record(&s.u[0], 18, 60, true, 0);
+    assert_int_equal(d.len, 0);
+    fpg_decoder_settle(&d, collect, &s); /* nothing held: nothing reported */
+    assert_int_equal(s.n, 1);
+}
+
+/* `S` `e` `g` 0x00: a box that sends the error in place of the record's values. */
+static void test_error_in_place_of_record(void **state)
+{
+    (void)state;
+    fpg_decoder d;
+    fpg_decoder_init(&d, 8, 22, false, true);
+    uint8_t b[128] = {'S', 'e', 'g', 0x00, 'G', 'e', 's', 0x00};
+    size_t k = 8 + rec8(b + 8, 'S', 22, 3, false, 0x01, 0);
+    sink s = {.n = 0};
+    fpg_decoder_feed(&d, b, k, collect, &s);
+    assert_int_equal(s.n, 3);
+    assert_int_equal(s.u[0].kind, FPG_UNIT_ERROR);
+    assert_int_equal(s.u[0].errc, 'g');
+    assert_int_equal(s.u[1].kind, FPG_UNIT_ERROR);
+    assert_int_equal(s.u[1].errc, 's');
+    expect_record(&s.u[2], 22, 3, true, 0);
+}
+
+/* Fewer sensors sampled than the glove has (?N, the software mask ?M): the record carries
+ * those, and each value lands on its own sensor. */
+static void test_sampled_order(void **state)
+{
+    (void)state;
+    fpg_decoder d;
+    fpg_decoder_init(&d, 8, 22, false, false);
+    const uint8_t bad[3] = {4, 4, 9};
+    assert_int_equal(fpg_decoder_set_order(&d, 3, bad), -EINVAL);   /* not increasing */
+    const uint8_t far[1] = {22};
+    assert_int_equal(fpg_decoder_set_order(&d, 1, far), -EINVAL);
+    assert_int_equal(fpg_decoder_set_order(&d, 0, far), -EINVAL);
+    assert_int_equal(d.sensors, 22);
+    const uint8_t order[5] = {0, 4, 7, 20, 21};
+    assert_int_equal(fpg_decoder_set_order(&d, 5, order), 0);
+    uint8_t b[32];
+    size_t k = rec8(b, 'S', 5, 100, false, -1, 0);
+    sink s = {.n = 0};
+    fpg_decoder_feed(&d, b, k, collect, &s);
+    assert_int_equal(s.n, 1);
+    expect_record(&s.u[0], 5, 100, true, 0);
+    fpg_cal cal;
+    fpg_cal_default(&cal);
+    float rad[FPG_SENSORS];
+    uint32_t valid;
+    assert_int_equal(fpg_angles_from_raw(&cal, &s.u[0], rad, &valid), 0);
+    uint32_t want = 0;
+    for (int i = 0; i < 5; i++) want |= 1u << order[i];
+    assert_int_equal(valid, want & cal.used);
+    for (int i = 0; i < 5; i++)
+        if (cal.used & (1u << order[i]))
+            assert_float_equal(rad[order[i]], fpg_cal_angle(&cal, order[i], 100 + i), 1e-6);
+}
+
 static void test_bare_errors(void **state)
 {
     (void)state;
@@ -349,6 +455,10 @@ int main(void)
         cmocka_unit_test(test_8bit_plain),
         cmocka_unit_test(test_8bit_timestamp_status),
         cmocka_unit_test(test_8bit_status_seen),
+        cmocka_unit_test(test_8bit_status_zero_seen),
+        cmocka_unit_test(test_8bit_settle),
+        cmocka_unit_test(test_error_in_place_of_record),
+        cmocka_unit_test(test_sampled_order),
         cmocka_unit_test(test_bare_errors),
         cmocka_unit_test(test_16bit_frames),
         cmocka_unit_test(test_garbage_resync),

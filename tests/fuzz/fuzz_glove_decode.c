@@ -6,6 +6,8 @@
  * sensor count and raw values in the wire's range (8-bit 1..255, 16-bit 1..4094 / 16); the
  * angles of every record, under the default calibration and under one whose gains and offsets
  * come from the input (huge, tiny, infinite), are finite where valid and 0 elsewhere.
+ * Byte 0 also picks a record of fewer sensors sampled (fpg_decoder_set_order), byte 1 a settle
+ * (fpg_decoder_settle) after the last bytes.
  * Seeds: tests/fuzz/corpus/fuzz_glove_decode (records of each format). */
 #include "glove_decode.h"
 
@@ -56,16 +58,26 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (size < 2) return 0;
     const int bits = data[0] & 1 ? 16 : 8, sensors = data[0] & 2 ? 22 : 18;
     const bool ts_on = data[0] & 4, status_on = data[0] & 8, status_seen = data[0] & 16;
+    /* bit 5: fewer sensors sampled (fpg_decoder_set_order), every k-th glove sensor left
+     * out for k from bits 6-7 */
+    uint8_t order[FPG_SENSORS];
+    int sampled = 0;
+    for (int i = 0; i < FPG_SENSORS && (data[0] & 32); i++)
+        if (i % (2 + (data[0] >> 6)) != 1) order[sampled++] = (uint8_t)i;
+    const bool settle = data[1] & 1; /* a settle after the last bytes, on both */
     unsigned seed = data[1];
     data += 2;
     size -= 2;
     static fpg_decoder d;
     whole.n = whole.noise = chunked.n = chunked.noise = 0;
     fpg_decoder_init(&d, bits, sensors, ts_on, status_on);
+    if (sampled && fpg_decoder_set_order(&d, sampled, order)) abort();
     d.status_seen = status_seen;
     fpg_decoder_feed(&d, data, size, on_unit, &whole);
+    if (settle) fpg_decoder_settle(&d, on_unit, &whole);
     size_t pending_whole = d.len;
     fpg_decoder_init(&d, bits, sensors, ts_on, status_on);
+    if (sampled && fpg_decoder_set_order(&d, sampled, order)) abort();
     d.status_seen = status_seen;
     for (size_t at = 0; at < size;) {
         seed = seed * 1103515245u + 12345u;
@@ -74,6 +86,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         fpg_decoder_feed(&d, data + at, k, on_unit, &chunked);
         at += k;
     }
+    if (settle) fpg_decoder_settle(&d, on_unit, &chunked);
     if (whole.n != chunked.n || whole.noise != chunked.noise || d.len != pending_whole) abort();
     if (d.len >= FPG_DECODE_CAP) abort();
 
@@ -96,7 +109,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         const fpg_unit *u = &whole.units[i], *v = &chunked.units[i];
         if (u->kind != v->kind || u->errc != v->errc) abort();
         if (u->kind != FPG_UNIT_RECORD) continue;
-        if (u->nraw != (bits == 16 ? FPG_SENSORS : sensors) || u->nraw != v->nraw ||
+        if (u->nraw != (bits == 16 ? FPG_SENSORS : sampled ? sampled : sensors) || u->nraw != v->nraw ||
             u->plugged != v->plugged)
             abort();
         for (int k = 0; k < u->nraw; k++) {

@@ -56,6 +56,7 @@ struct fp_gloveemu {
     size_t garbage_len;
     bool fixed;
     uint8_t raw8[22];
+    uint32_t sampled;   /* the software mask (options' sampled, or every sensor) */
 
     /* protocol */
     int streaming;
@@ -278,18 +279,24 @@ static void send_record(fp_gloveemu *e, uint8_t start, int bits)
     }
     if (bits == 16 && !e->plugged)
         return;   /* a CyberGlove III without its glove sends no frames */
+    if (bits == 8 && !e->plugged && e->o.error_frames) {
+        uint8_t f[4] = {start, 'e', 'g', 0};
+        put(e, f, sizeof f);
+        return;
+    }
+    const uint32_t carried = bits == 8 ? e->present & e->sampled : e->present;
     fp_gloveemu_record *r = &e->hist[e->st.records % e->hist_cap];
     memset(r, 0, sizeof *r);
     r->seq = e->st.records;
     r->bits = bits;
     r->start = start;
     r->plugged = e->plugged;
-    r->present = e->present;
+    r->present = carried;
     const float *row = e->nframes ? e->deg[e->frame] : NULL;
     double scale = bits == 16 ? 16.0 : 1.0;
     int hi = bits == 16 ? 4094 : 254;
     for (int i = 0; i < 22; i++) {
-        if (!(e->present & (1u << i)))
+        if (!(carried & (1u << i)))
             continue;
         int clamped = 0;
         if (e->fixed || !row) {
@@ -315,7 +322,7 @@ static void send_record(fp_gloveemu *e, uint8_t start, int bits)
     if (bits == 8) {
         b[n++] = start;
         for (int i = 0; i < 22; i++)
-            if (e->present & (1u << i))
+            if (carried & (1u << i))
                 b[n++] = (uint8_t)r->raw[i];
         if (e->ts_on) {
             uint64_t ticks = (uint64_t)((mono_ns() - e->t0) / 10000);
@@ -361,17 +368,20 @@ static void reply_query(fp_gloveemu *e, uint8_t x)
     if (x && e->o.unanswered && strchr(e->o.unanswered, x)) return;
     switch (x) {
     case 'G': v[n++] = e->plugged ? 3 : 1; e->st.session_seq = e->st.records; break;
-    case 'S': case 'N': v[n++] = (uint8_t)e->o.sensors; break;
+    case 'S': v[n++] = (uint8_t)e->o.sensors; break;
+    case 'N': v[n++] = (uint8_t)__builtin_popcount(e->present & e->sampled); break;
     case 'R': v[n++] = e->o.left ? 0 : 1; break;
     case 'D': v[n++] = e->ts_on; break;
     case 'U': v[n++] = e->status_on; break;
     case 'B': v[n++] = 1; break;   /* divisor of 115200 */
     case 'P': v[n++] = 0; break;
-    case 'K': case 'M':
-        v[n++] = (uint8_t)e->present;
-        v[n++] = (uint8_t)(e->present >> 8);
-        v[n++] = (uint8_t)(e->present >> 16);
+    case 'K': case 'M': {
+        uint32_t m = x == 'K' ? e->present : e->present & e->sampled;
+        v[n++] = (uint8_t)m;
+        v[n++] = (uint8_t)(m >> 8);
+        v[n++] = (uint8_t)(m >> 16);
         break;
+    }
     case 'T': {
         unsigned w1 = e->st.period_w1 ? e->st.period_w1 : (unsigned)(115200 * e->period_s);
         unsigned w2 = e->st.period_w2 ? e->st.period_w2 : 1;
@@ -620,6 +630,11 @@ int fp_gloveemu_create(const fp_gloveemu_options *opts, fp_gloveemu **out, char 
     if (o.sensors == 18)
         for (int k = 0; k < 4; k++)
             e->present &= ~(1u << DIJ[k]);
+    e->sampled = o.sampled ? o.sampled : e->present;
+    if (!(e->present & e->sampled)) {
+        free(e);
+        return fp_errorf(err, errlen, -EINVAL, "sampled=%#x: none of the glove's sensors", o.sampled);
+    }
     int rc;
     fpg_cal_default(&e->cal);
     if (o.calibration && (rc = fpg_cal_load(o.calibration, &e->cal, err, errlen)) < 0)

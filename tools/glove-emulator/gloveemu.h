@@ -53,17 +53,22 @@ typedef struct fp_gloveemu_options {
                                  at all (still executed), e.g. "RVDU"; NULL none */
     bool caret_stop_only;     /* 0x03 is ignored: only `^c` stops a stream */
     bool streaming_at_start;  /* streaming 8-bit records from power-up, before any S */
+    uint32_t sampled;         /* the software mask (?M, bit i sensor i): the sensors sampled,
+                                 ?N their count, the 8-bit records' values; 0 = every sensor
+                                 the glove has (?K, the hardware mask) */
+    bool error_frames;        /* glove out of its box: `S`|`G` `e` `g` 0x00 in place of each
+                                 8-bit record (no values), not a record with its status clear */
 } fp_gloveemu_options;
 
 /** A record as sent, in the 22-sensor glove order (for an 18-sensor glove the DIJ entries
- *  are 0 and their bits clear in `present`). */
+ *  are 0 and their bits clear in `present`; so are the sensors not sampled). */
 typedef struct fp_gloveemu_record {
     uint64_t seq;             /* 0, 1, 2, ... over the emulator's life */
     int64_t sent_ns;          /* CLOCK_MONOTONIC when written to the master */
     int bits;                 /* 8 or 16 */
     uint8_t start;            /* 'S', 'G', or 'S' for 16-bit frames */
     bool plugged;
-    uint32_t present;         /* sensors the glove has */
+    uint32_t present;         /* sensors the record carries (the glove has, and are sampled) */
     uint32_t clamped;         /* sensors whose angle lay outside the raw range */
     uint16_t raw[22];
     float radians[22];        /* the angle the raw value was made from */
