@@ -237,6 +237,14 @@ struct GltfReader {
         if (csize <= 0 || ncomp <= 0 || s <= 0)
             return bad(FP_MESH_ERR_FORMAT, name + " has an invalid type, component type or stride");
         const size_t elem = size_t(csize) * size_t(ncomp);
+        // glTF 2.0, bufferView.byteStride: 4..252, a multiple of 4, and at least one element
+        // (a smaller stride would overlap the elements)
+        if (bv.byteStride != 0 && (bv.byteStride < 4 || bv.byteStride > 252 || bv.byteStride % 4 ||
+                                   bv.byteStride < elem))
+            return bad(FP_MESH_ERR_FORMAT, name + ": bufferView " + std::to_string(a.bufferView) +
+                                                " has byteStride " + std::to_string(bv.byteStride) +
+                                                " (glTF: 4..252, a multiple of 4, at least the " +
+                                                std::to_string(elem) + "-byte element)");
         if (bv.byteOffset > buf.data.size() || bv.byteLength > buf.data.size() - bv.byteOffset)
             return bad(FP_MESH_ERR_FORMAT, name + ": bufferView " + std::to_string(a.bufferView) +
                                                 " lies outside its buffer (" +

@@ -59,6 +59,11 @@ int fp__ply_scan(const char *path, const char *text, size_t len, size_t *nv, siz
                  char *err, size_t errlen);
 int fp__stl_ascii_scan(const char *path, const char *text, size_t len, char *err,
                        size_t errlen);
+/** Binary STL (len == 84 + 50 x the count at byte 80, checked by the caller): every corner's
+ *  3 floats finite (OpenMesh's reader merges corners by position, and a NaN corner would be
+ *  welded to another vertex unseen); the facet normals are not read. "path: triangle N
+ *  (byte B): reason" errors. Returns FP_MESH_OK or FP_MESH_ERR_FORMAT. */
+int fp__stl_binary_scan(const char *path, const char *data, size_t len, char *err, size_t errlen);
 
 /** Reference counting of fp_mesh_source (mesh_source.cpp): ref returns src. */
 struct fp_mesh_source *fp__mesh_source_ref(struct fp_mesh_source *src);

@@ -546,11 +546,10 @@ int load_openmesh(const char *path, const std::string &ext, std::string &data,
             return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
                                   "not an STL file (no 'solid' and the size does not match a "
                                   "binary STL's triangle count)");
-        if (!binary) {
-            int rc = fp__stl_ascii_scan(path, data.c_str(), data.size(), err, errlen);
-            if (rc != FP_MESH_OK)
-                return rc;
-        }
+        int rc = binary ? fp__stl_binary_scan(path, data.data(), data.size(), err, errlen)
+                        : fp__stl_ascii_scan(path, data.c_str(), data.size(), err, errlen);
+        if (rc != FP_MESH_OK)
+            return rc;
     }
     if (ext == "ply") {
         int rc = fp__ply_scan(path, data.c_str(), data.size(), &want_v, &want_f, err, errlen);

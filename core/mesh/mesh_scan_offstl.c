@@ -1,7 +1,10 @@
-/* The strict scans of OFF (ASCII and binary, fp__off_scan) and ASCII STL
- * (fp__stl_ascii_scan; binary STL is checked by its size in mesh_openmesh.cpp), mesh_internal.h:
+/* The strict scans of OFF (ASCII and binary, fp__off_scan) and STL (fp__stl_ascii_scan, and
+ * fp__stl_binary_scan for the corners; a binary STL's size is checked in mesh_openmesh.cpp),
+ * mesh_internal.h:
  * what OpenMesh's readers would consume, checked before they see it. */
 #include "mesh_scan.h"
+
+#include <assert.h>
 
 #include <ctype.h>
 #include <stdint.h>
@@ -280,5 +283,26 @@ int fp__stl_ascii_scan(const char *path, const char *text, size_t len, char *err
     if (state != 0)
         return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
                               "the file ends inside a solid (expected '%s')", expect[state]);
+    return FP_MESH_OK;
+}
+
+int fp__stl_binary_scan(const char *path, const char *data, size_t len, char *err, size_t errlen)
+{
+    uint32_t count;
+    assert(len >= 84);
+    memcpy(&count, data + 80, 4);
+    assert(len == 84 + 50 * (uint64_t)count);
+    for (uint32_t i = 0; i < count; i++) {
+        const char *t = data + 84 + 50 * (size_t)i;
+        for (int k = 3; k < 12; k++) { /* after the facet normal: 3 corners of x, y, z */
+            float v;
+            memcpy(&v, t + 4 * k, 4); /* (little-endian floats: the STL's and this machine's) */
+            if (!isfinite(v) || fabsf(v) > FLT_MAX)
+                return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
+                                      "triangle %lu (byte %zu): corner %d's %c is not a finite number",
+                                      (unsigned long)i + 1, (size_t)(t + 4 * k - data), (k - 3) / 3 + 1,
+                                      "xyz"[(k - 3) % 3]);
+        }
+    }
     return FP_MESH_OK;
 }
