@@ -49,6 +49,12 @@ int fp_soundtrack_load(const char *path, fp_soundtrack *out, char *err, size_t e
         out->frames = got > 0 ? (uint64_t)got : 0;
         out->channels = info.channels;
         out->rate = info.samplerate;
+        for (size_t i = 0; !rc && i < (size_t)out->frames * (size_t)info.channels; i++)
+            if (!isfinite(out->samples[i])) /* (a float file's NaN or infinity: played, it is noise) */
+                rc = fp_errorf(err, errlen, -EBADMSG, "%s: sample %zu of channel %zu (at %.3f s) is not a "
+                               "finite number", path, i / (size_t)info.channels + 1,
+                               i % (size_t)info.channels + 1,
+                               (double)(i / (size_t)info.channels) / info.samplerate);
     }
     sf_close(sf);
     if (!rc) rc = fp_take_crc32_file(path, &out->crc32, err, errlen);

@@ -100,7 +100,7 @@ static int env_init(env_state *e, const env_params *p, int rate)
 
 static void env_add(env_state *e, double x)
 {
-    double sq = x * x;
+    double sq = isfinite(x) ? x * x : 0.0; /* (a live device's NaN, as silence: files are refused) */
     e->sum += sq - e->ring[e->ring_at];
     e->ring[e->ring_at] = sq;
     e->ring_at = (e->ring_at + 1) % e->ring_n;
@@ -151,6 +151,13 @@ static int load_file(audio_input *a, bool ref_given, char *err, size_t errlen)
     }
     n = (size_t)fmax(0, (double)sf_readf_float(sf, buf, si.frames));
     sf_close(sf);
+    for (size_t i = 0; i < n * ch; i++)
+        if (!isfinite(buf[i])) { /* (a float file's NaN would hold the envelope's sum for good) */
+            snprintf(err, errlen, "audio: %s: sample %zu of channel %zu (at %.3f s) is not a finite number",
+                     a->path, i / ch + 1, i % ch + 1, (double)(i / ch) / si.samplerate);
+            free(buf);
+            return -EBADMSG;
+        }
     for (size_t i = 0; i < n; i++) { /* mono, in place */
         double m = 0;
         for (size_t c = 0; c < ch; c++) m += buf[i * ch + c];

@@ -96,7 +96,24 @@ refuse() { # WANT_STATUS WANT_TEXT ARGS...
 }
 echo "not a sound file" >"$tmp/garbage.wav"
 refuse 66 "No such file" --audio "$tmp/missing.wav" --audio-out null
-refuse 66 "not a sound file" --audio "$tmp/garbage.wav" --audio-out null
+refuse 65 "not a sound file" --audio "$tmp/garbage.wav" --audio-out null
+# a float file whose samples are not all numbers: refused by --audio, the audio input and info
+python3 - "$tmp/nan.wav" <<'PY' || fail "python3 nan.wav"
+import math, struct, sys
+rate, n = 8000, 8000
+x = [0.5 * math.sin(2 * math.pi * 220 * i / rate) for i in range(n)]
+x[3000:3100] = [float("nan")] * 100
+data = b"".join(struct.pack("<f", v) for v in x)
+fmt = struct.pack("<HHIIHH", 3, 1, rate, rate * 4, 4, 32)
+open(sys.argv[1], "wb").write(b"RIFF" + struct.pack("<I", 4 + 8 + len(fmt) + 8 + len(data)) + b"WAVE" +
+                              b"fmt " + struct.pack("<I", len(fmt)) + fmt + b"data" + struct.pack("<I", len(data)) + data)
+PY
+refuse 65 "sample 3001 of channel 1 (at 0.375 s) is not a finite number" --audio "$tmp/nan.wav" --audio-out null
+"$fp" run "${pd[@]}" --mesh "$mesh" --input "audio:$tmp/nan.wav,fast=1" -o "$tmp/refused.obj" -q 2>"$tmp/refuse.err"
+[ $? -eq 65 ] && grep -q "sample 3001 of channel 1" "$tmp/refuse.err" && [ ! -e "$tmp/refused.obj" ] ||
+    { cat "$tmp/refuse.err"; fail "--input audio: of a file with NaN samples was not refused (65)"; }
+"$fp" info "$tmp/nan.wav" >/dev/null 2>"$tmp/refuse.err"
+[ $? -eq 65 ] && grep -q "sample 3001" "$tmp/refuse.err" || { cat "$tmp/refuse.err"; fail "info of a file with NaN samples"; }
 refuse 64 "no audio output device 'no-such-device-54'" --audio "$tmp/speech.wav" --audio-out no-such-device-54
 refuse 66 "No such file" --timecode "ltc:$tmp/missing-ltc.wav"
 refuse 65 "no LTC" --timecode "ltc:$tmp/speech.wav"

@@ -82,7 +82,11 @@ void fp_app_audio_help(FILE *f, bool with_timecode)
  * input that cannot be opened (66), as the issue asks. */
 static int file_status(int rc)
 {
-    return rc == -ENOMEM ? FP_EXIT_SOFTWARE : FP_EXIT_NOINPUT;
+    switch (rc) {
+    case -ENOMEM: return FP_EXIT_SOFTWARE;
+    case -EBADMSG: return FP_EXIT_DATAERR; /* a file there, but no sound file, or bad samples */
+    default: return FP_EXIT_NOINPUT;
+    }
 }
 
 static int out_status(int rc)

@@ -52,7 +52,8 @@ void fp_app_audio_help(FILE *f, bool with_timecode);
  *  recorded one), check and open its output (--audio-out; a soundtrack needs one, default
  *  "default"), decode --timecode ltc, open --audio-in (capturing from here on). Errors said
  *  on stderr with `cmd`. Returns 0 or the exit status: 66 a sound or LTC file missing or
- *  unreadable (file:X.wav of --audio-in too), 65 no LTC in it, 64 an unknown device (output
+ *  unreadable (file:X.wav of --audio-in too), 65 no LTC in it, or no sound file, or a sample
+ *  not finite, 64 an unknown device (output
  *  or input) or a bad spec, 73 an output that exists without force or cannot be made. */
 int fp_app_audio_prepare(fp_app_audio *a, const char *cmd, const char *fallback, bool force);
 

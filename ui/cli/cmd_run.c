@@ -83,8 +83,8 @@ static void usage(FILE *f)
         "status is 128 + the signal (130 SIGINT, 143 SIGTERM; the frames of --frames-out are\n"
         "written as they go). A second signal a second later ends the run at once, 128 + it.\n\n"
         "Exit status: 0 done, 64 usage (an unknown audio device too), 65 bad input data (an\n"
-        "LTC file without LTC too), 66 input missing (a soundtrack or LTC file missing or\n"
-        "unreadable too), 73 output not writable or existing without --force, 78 plugin\n"
+        "LTC file without LTC, a soundtrack that is no sound file or has samples that are not\n"
+        "numbers too), 66 input missing (a soundtrack or LTC file missing or unreadable too), 73 output not writable or existing without --force, 78 plugin\n"
         "missing or incompatible, or the mapping stopped for a fault (it wrote past the host's\n"
         "arrays), 130/143 ended by SIGINT/SIGTERM with a plugin stuck (above), 1 other failure\n"
         "(facepuppet --help has the whole table).\n");
