@@ -414,6 +414,14 @@ static int replay_create(const fp_host *host, const char *arg, const fp_param *p
     r->input = (fp_input){.size = sizeof(fp_input), .plugin_data = r, .start = replay_start,
                           .stop = replay_stop, .destroy = replay_destroy,
                           .get_extension = replay_get_extension};
+    if (r->rec.repeated && host->log) {
+        char msg[512];
+        snprintf(msg, sizeof msg, "%s: %zu row%s repeat%s the time of the hand's row before (the "
+                 "first: %s %ld); each such pair is one sample, the later row shown", arg,
+                 r->rec.repeated, r->rec.repeated == 1 ? "" : "s", r->rec.repeated == 1 ? "s" : "",
+                 r->rec.format == REPLAY_FORMAT_LEAP_JSON ? "frame" : "line", r->rec.first_repeat);
+        host->log(host, FP_LOG_WARNING, msg);
+    }
     if (r->rec.truncated_line && host->log) {
         char msg[512];
         snprintf(msg, sizeof msg, "%s:%ld: last line cut short (no newline): replay ends at "

@@ -67,6 +67,9 @@ typedef struct loader {
     replay_recording *rec;
     size_t cap;
     size_t seen; /* events or rows read, whatever their hand */
+    int64_t last_t[FP_HANDS]; /* CSV/JSON: the time of each hand's last kept row ... */
+    bool has_last[FP_HANDS];  /* ... once it has one */
+    long first_repeat;        /* the first row repeating its hand's time: line, or frame */
     char *err;
     size_t errlen;
 } loader;
@@ -105,6 +108,10 @@ static int csv_row(void *user, const fp_leapcsv_row *row, char *err, size_t errl
     L->seen++;
     if (!(L->hands & (1 << hand))) return 0; /* parsed for errors, not kept */
     int64_t t_ns = row->timestamp_us * 1000; /* made relative to the first kept item later */
+    if (L->has_last[hand] && t_ns == L->last_t[hand] && !L->rec->repeated++)
+        L->first_repeat = row->line > 0 ? row->line : row->frame;
+    L->last_t[hand] = t_ns;
+    L->has_last[hand] = true;
     const double *v = row->value;
     if (row->format == FP_LEAPCSV_ANGLES) {
         replay_item *it = push_item(L);
@@ -253,6 +260,14 @@ int replay_load(const char *path, int hands, replay_recording *out, char *err, s
         out->items[i].t_ns -= t0;
         if (i > 0 && out->items[i].t_ns != out->items[i - 1].t_ns) distinct++;
     }
+    if (distinct == 1 && out->repeated) { /* every row of a hand at one time: no motion to play */
+        rc = fail(&L, -EBADMSG, 0, 0, "every row has the same time (%s %lld): the recording spans no "
+                  "time, so its %zu rows would play as one", out->format == REPLAY_FORMAT_LEAP_JSON
+                  ? "timestamp" : "timestamp_us", (long long)(t0 / 1000), out->frames);
+        replay_recording_free(out);
+        return rc;
+    }
+    out->first_repeat = L.first_repeat;
     out->duration_ns = out->items[out->count - 1].t_ns;
     int64_t gap = distinct > 1 ? out->duration_ns / (int64_t)(distinct - 1) : DEFAULT_LOOP_GAP_NS;
     if (gap <= 0) gap = DEFAULT_LOOP_GAP_NS;

@@ -40,13 +40,16 @@ typedef struct replay_recording {
     int64_t duration_ns;     /* last t_ns */
     int64_t loop_period_ns;  /* duration plus the mean step between distinct times */
     long truncated_line;     /* 0, or the unterminated last line that was dropped */
+    size_t repeated;         /* CSV/JSON rows at their hand's previous row's time (a sample
+                                sent twice: both kept, the later shown) */
+    long first_repeat;       /* the first of them: its line (CSV), or its frame id (JSON) */
 } replay_recording;
 
 /** Read `path` in full. hands: REPLAY_HAND_* bits.
  *  Returns 0, or a negative errno code (-EBADMSG for malformed content, -ENOENT ...) after
  *  writing to err "PATH: reason" or
  *  "PATH:LINE:COLUMN: reason" (bad number, wrong column count, unknown hand_type, time going
- *  backwards, unknown format, no events for the hands asked for). */
+ *  backwards, every row at one time, unknown format, no events for the hands asked for). */
 int replay_load(const char *path, int hands, replay_recording *out, char *err, size_t errlen);
 
 /** Free what replay_load allocated; leaves *rec zeroed. */

@@ -855,6 +855,53 @@ static void truncated_file_replays_to_last_full_row(void **state)
     fp_test_host_free(h);
 }
 
+/* A row at its hand's previous row's time (a sample sent twice) replays, with a warning
+ * naming the first such line; a recording whose every row has one time spans no time and is
+ * refused as bad data (before: its 374 rows played as one frame without a word). */
+static void repeated_times(void **state)
+{
+    (void)state;
+    const char *good = LEAP "grab_joints_mm.csv";
+    char once[512], same[512], line[16384], prev[16384], mod[16384];
+    tmp_path(once, sizeof once, "repeat_once.csv");
+    tmp_path(same, sizeof same, "repeat_all.csv");
+    get_line(good, 51, prev, sizeof prev); /* lines 51 and 52: the right hand's */
+    get_line(good, 52, line, sizeof line);
+    assert_non_null(strstr(prev, ",right,"));
+    assert_non_null(strstr(line, ",right,"));
+    long c1 = field_col(line, 1), c2 = field_col(line, 2), p1 = field_col(prev, 1), p2 = field_col(prev, 2);
+    snprintf(mod, sizeof mod, "%.*s%.*s%s", (int)(c1 - 1), line, (int)(p2 - p1), prev + p1 - 1, line + c2 - 1);
+    write_with_line(good, once, 52, mod);
+    fp_test_host *h = replay_all(once, "fast=1", 2000);
+    assert_int_equal(count_type(h, FP_EVENT_JOINT_POSITIONS, -1), 374); /* both kept */
+    assert_non_null(strstr(h->log, "1 row repeats the time of the hand's row before (the first: line 52)"));
+    fp_test_host_free(h);
+
+    FILE *in = fopen(good, "r"), *out = fopen(same, "w");
+    assert_non_null(in);
+    assert_non_null(out);
+    char ts[64] = "";
+    for (int n = 1; fgets(line, sizeof line, in); n++) {
+        if (n == 1) {
+            fputs(line, out);
+            continue;
+        }
+        long a = field_col(line, 1), b = field_col(line, 2);
+        if (!ts[0]) snprintf(ts, sizeof ts, "%.*s", (int)(b - a), line + a - 1);
+        fprintf(out, "%.*s%s%s", (int)(a - 1), line, ts, line + b - 1);
+    }
+    fclose(in);
+    fclose(out);
+    h = fp_test_host_new(4);
+    fp_input *inp = NULL;
+    char err[1024];
+    assert_int_equal(create(h, same, NULL, &inp, err, sizeof err), -EBADMSG);
+    assert_null(inp);
+    if (!strstr(err, "every row has the same time") || !strstr(err, "374 rows would play as one"))
+        fail_msg("message \"%s\"", err);
+    fp_test_host_free(h);
+}
+
 static void spec_errors(void **state)
 {
     const char *file = LEAP "grab_joints_mm.csv";
@@ -983,6 +1030,7 @@ int main(void)
         cmocka_unit_test(joints_given_in_advance),
         cmocka_unit_test(malformed_rows_fail_create),
         cmocka_unit_test(truncated_file_replays_to_last_full_row),
+        cmocka_unit_test(repeated_times),
         cmocka_unit_test(spec_errors),
         cmocka_unit_test(eventlog_replays_as_recorded),
         cmocka_unit_test(eventlog_bad_data_codes),
