@@ -106,9 +106,12 @@ static int check_header(reader *r, fp_leapcsv_format want, fp_leapcsv_format *fo
     fields f;
     split(text, &f);
     fp_leapcsv_format fmt = want;
-    if (fmt == FP_LEAPCSV_ANY)
+    if (fmt == FP_LEAPCSV_ANY) /* by the first value column's name, else by the count */
         fmt = f.n > FP_LEAPCSV_LEAD && strcmp(f.s[FP_LEAPCSV_LEAD], "palm_x") == 0 ? FP_LEAPCSV_JOINTS
-                                                                                  : FP_LEAPCSV_ANGLES;
+              : f.n > FP_LEAPCSV_LEAD && strcmp(f.s[FP_LEAPCSV_LEAD], fp_leapcsv_column_name(FP_LEAPCSV_ANGLES, FP_LEAPCSV_LEAD)) == 0
+                  ? FP_LEAPCSV_ANGLES
+              : f.n == columns_of(FP_LEAPCSV_JOINTS) ? FP_LEAPCSV_JOINTS
+                                                     : FP_LEAPCSV_ANGLES;
     int ncol = columns_of(fmt);
     if (f.n != ncol)
         return fail(r, -EBADMSG, 1, count_col(&f, ncol, len), "header has %d columns, expected %d",

@@ -815,6 +815,17 @@ static void malformed_rows_fail_create(void **state)
     snprintf(mod, sizeof mod, "header has 74 columns, expected 73");
     expect_create_error(bad, NULL, 1, (long)hlen + 2, mod);
 
+    /* a joints header with palm_x and palm_y swapped: named at the column (before: "header
+     * has 73 columns, expected 26", the angles CSV's count) */
+    const char *px = strstr(hdr, "palm_x,palm_y,");
+    assert_non_null(px);
+    f = fopen(bad, "w");
+    assert_non_null(f);
+    fprintf(f, "%.*spalm_y,palm_x,%.*s\n", (int)(px - hdr), hdr, (int)(hlen - (size_t)(px - hdr) - 14), px + 14);
+    fprintf(f, "%s\n", line);
+    fclose(f);
+    expect_create_error(bad, NULL, 1, (long)(px - hdr) + 1, "header column 5 is \"palm_y\", expected \"palm_x\"");
+
     /* a file in no known format, a missing file */
     tmp_path(bad, sizeof bad, "unknown.txt");
     f = fopen(bad, "w");
