@@ -248,10 +248,17 @@ extern "C" int fp_mesh_load(const char *path, fp_mesh **out, char *err, size_t e
         char e[16];
         fp__mesh_extension(path, e, sizeof e);
         const std::string ext = e;
-        if (!is_openmesh_ext(ext) && !is_gltf_ext(ext))
+        if (!is_openmesh_ext(ext) && !is_gltf_ext(ext)) {
+            // what is not there (or is a folder) is said as such, whatever its name
+            const int fd = fp_file_open_regular(path);
+            if (fd < 0)
+                return fp__mesh_error(err, errlen, fd == -EISDIR || fd == -ENXIO ? FP_MESH_ERR_NOENT : errno_code(-fd),
+                                      path, "%s", fp_file_error_text(fd));
+            ::close(fd);
             return fp__mesh_error(err, errlen, FP_MESH_ERR_UNSUPPORTED, path,
                                   "unsupported extension '%s' (obj, ply, off, stl, gltf, glb)",
                                   e);
+        }
         std::string data;
         int rc = read_whole_file(path, data, err, errlen);
         if (rc != FP_MESH_OK)

@@ -863,6 +863,10 @@ static void test_error_unknown_extension(void **state)
     (void)state;
     expect_load_error(write_tmp("mesh.fbx", "whatever"), FP_MESH_ERR_UNSUPPORTED, "fbx");
     expect_load_error(write_tmp("noext", "v 0 0 0\n"), FP_MESH_ERR_UNSUPPORTED, NULL);
+    /* what is missing, or a folder, is said as such whatever its name (before: "unsupported
+     * extension ''" for a folder, exit 65 where 66 belongs) */
+    expect_load_error(tmpdir, FP_MESH_ERR_NOENT, "is a folder");
+    expect_load_error(tmp_path("missing.fbx"), FP_MESH_ERR_NOENT, NULL);
     fp_mesh *m = icosahedron();
     assert_int_equal(fp_mesh_save(m, tmp_path("out.3ds"), err, sizeof err),
                      FP_MESH_ERR_UNSUPPORTED);
