@@ -170,6 +170,10 @@ typedef struct fp_rig_placement {
     double shift[3];   /* translation, bound mesh units */
     double rms;        /* the landmarks' residual after the fit, bound mesh units */
     double spread;     /* their RMS distance from their centroid on the bound mesh */
+    int misfit;        /* 1: rms > FP_RIG_PLACE_MISFIT x spread: the landmarks' vertices lie
+                          nowhere like the rig's (another face of its vertex count, or its
+                          own with the vertices in another order): its regions would lie
+                          elsewhere on this mesh */
 } fp_rig_placement;
 #define FP_RIG_PLACE_SAME 0.01
 #define FP_RIG_PLACE_MISFIT 0.25

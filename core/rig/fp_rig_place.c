@@ -59,6 +59,7 @@ void fpr_place(fp_rig *r, const float *pos)
     pl->rms = sqrt(rss / (double)k);
     pl->spread = sqrt(spread / (double)k);
     pl->degrees = 2 * acos(fmin(1.0, q[0])) * 180.0 / M_PI; /* (w >= 0) */
+    pl->misfit = pl->rms > FP_RIG_PLACE_MISFIT * pl->spread;
     if (moved <= FP_RIG_PLACE_SAME * pl->spread || pl->rms > FP_RIG_PLACE_MISFIT * pl->spread) return;
     pl->placed = 1;
     pl->scale = s;

@@ -65,7 +65,7 @@ struct fp_session {
                                        loaded in its helper) */
     char isolated_id[128], isolated_version[64];
     fp_mesh_view view;
-    char rig_how[1200];           /* how the rig was chosen (fp_session_rig_how) */
+    char rig_how[3072];           /* how the rig was chosen (fp_session_rig_how) */
 
     double radius;
     double diagonal;              /* the surface's bounding-box diagonal, mesh units */

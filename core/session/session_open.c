@@ -25,8 +25,10 @@ static int attach_rig(fp_session *s, const fp_session_options *opt, char *err, s
         snprintf(s->rig_how, sizeof s->rig_how, "none (--rig none)");
     } else if (opt->rig_path) {
         if ((rc = fp_rig_load_for_mesh(opt->rig_path, s->n, s->loaded, &rig, err, errlen))) return rc;
-        snprintf(s->rig_how, sizeof s->rig_how, "%s (given; mesh checksum %s)", opt->rig_path,
-                 fp_rig_checksum_matches(rig, s->n, s->loaded) ? "matches" : "differs, same vertex count");
+        snprintf(s->rig_how, sizeof s->rig_how, "%s (given; mesh checksum %s%s)", opt->rig_path,
+                 fp_rig_checksum_matches(rig, s->n, s->loaded) ? "matches" : "differs, same vertex count",
+                 fp_rig_get_placement(rig).misfit ? "; warning: its landmarks do not sit on this face, "
+                 "so its skull and jaw may lie elsewhere" : "");
     } else {
         char dir[1024], path[1024], msg[1200] = "";
         const char *d = opt->rig_dir ? opt->rig_dir : fp_rig_default_dir(NULL, dir, sizeof dir);
@@ -35,7 +37,15 @@ static int attach_rig(fp_session *s, const fp_session_options *opt, char *err, s
             snprintf(s->rig_how, sizeof s->rig_how, "none (%s)", msg);
         } else {
             if ((rc = fp_rig_load_for_mesh(path, s->n, s->loaded, &rig, err, errlen))) return rc;
-            if (fp_rig_checksum_matches(rig, s->n, s->loaded))
+            fp_rig_placement pl = fp_rig_get_placement(rig);
+            if (pl.misfit && !fp_rig_checksum_matches(rig, s->n, s->loaded)) {
+                /* the vertex count alone is no proof: its landmarks must sit on this face */
+                snprintf(s->rig_how, sizeof s->rig_how, "none (%s fits %zu vertices, but not this "
+                         "face: its landmarks lie %.3g mesh units from their vertices after the best "
+                         "fit, against a spread of %.3g: another face, or its own with the vertices "
+                         "in another order; --rig %s uses it anyway)", path, s->n, pl.rms, pl.spread, path);
+                fp_rig_free(&rig);
+            } else if (fp_rig_checksum_matches(rig, s->n, s->loaded))
                 snprintf(s->rig_how, sizeof s->rig_how, "%s (found by the mesh's checksum %08x)", path,
                          fp_rig_mesh_crc32(rig));
             else

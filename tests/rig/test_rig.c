@@ -649,6 +649,7 @@ static void test_placement(void **state)
     fp_rig *a = find_rig(m);
     fp_rig_placement pa = fp_rig_get_placement(a);
     assert_int_equal(pa.placed, 0);
+    assert_int_equal(pa.misfit, 0);
     assert_true(pa.degrees < 0.01 && pa.rms < 1e-3);
     const double s = 0.01, t[3] = {0.3, -1.2, 0.05}; /* cm to m, then moved */
     float *q = malloc(n * 3 * sizeof *q), *pa_out = malloc(n * 3 * sizeof *pa_out), *pb_out = malloc(n * 3 * sizeof *pb_out);
@@ -669,6 +670,7 @@ static void test_placement(void **state)
     assert_int_equal(rc, 0);
     fp_rig_placement pb = fp_rig_get_placement(b);
     assert_int_equal(pb.placed, 1);
+    assert_int_equal(pb.misfit, 0);
     assert_true(fabs(pb.degrees - 90) < 0.01);
     assert_true(fabs(pb.scale / s - 1) < 1e-4);
     assert_true(pb.rms < 1e-5 * pb.spread * 100);
@@ -714,7 +716,10 @@ static void test_placement(void **state)
      * hinge check then judges the file's coordinates as ever) */
     for (size_t v = 0; v < n; v++) memcpy(q + 3 * v, m->positions + 3 * (n - 1 - v), 3 * sizeof *q);
     rc = fp_rig_load_for_mesh(path, n, q, &b, err, sizeof err);
-    if (!rc) assert_int_equal(fp_rig_get_placement(b).placed, 0);
+    if (!rc) {
+        assert_int_equal(fp_rig_get_placement(b).placed, 0);
+        assert_int_equal(fp_rig_get_placement(b).misfit, 1); /* (the session then leaves it) */
+    }
     fp_rig_free(&b);
     fp_rig_free(&a);
     free(q);
