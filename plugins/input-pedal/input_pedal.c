@@ -5,13 +5,31 @@
  *
  * One instance owns one libusb context and one thread ([input-thread]). The thread looks
  * for a pedal every 500 ms while none is open (libusb_get_device_list; a hotplug arrival,
- * where libusb offers hotplug, only makes it look sooner), opens it with the kernel driver
- * detached automatically, claims the interface with the interrupt IN endpoint, and keeps
- * one asynchronous interrupt transfer in flight, serviced by
- * libusb_handle_events_timeout_completed. Each completed report goes through
- * fp_pedal_decode (pedal_decode.c) and becomes fp_event_button events. A transfer that ends
- * with LIBUSB_TRANSFER_NO_DEVICE closes the pedal: held buttons are released, an
- * FP_STATUS_DISCONNECTED event is pushed, and the search starts again.
+ * where libusb offers hotplug, only makes it look sooner), opens it, detaches the kernel
+ * driver from the interface it reads and claims it, and keeps one asynchronous interrupt
+ * transfer of up to 64 bytes (whole packets) in flight, serviced by
+ * libusb_handle_events_timeout_completed.
+ *
+ * The interface: for a keyboard pedal, the interfaces with an interrupt IN endpoint are
+ * tried in the order boot keyboard, other HID, other class, vendor class; the first whose
+ * HID report descriptor (GET_DESCRIPTOR 0x22) has a keyboard collection is read, or the
+ * first whose descriptor cannot be read; when every descriptor says "not a keyboard" (a
+ * configuration interface, say), the first in that order. A VEC pedal: the first HID
+ * interface with an interrupt IN endpoint.
+ *
+ * The keyboard report's framing comes from that report descriptor: report ids declared ->
+ * `id mods 00 k1..k6` with the keyboard collection's id; none -> the 8-byte `mods 00 k1..k6`.
+ * Without a descriptor (an emulator that cannot answer control transfers), a known pedal's
+ * documented framing (id 1, shared/docs/devices.md), else by length. A read that fills its
+ * buffer with less than a whole report (a 9-byte report read 8 bytes at a time) is kept and
+ * completed by the next read; a part is never decoded on its own.
+ *
+ * Leaving: a transfer that ends with LIBUSB_TRANSFER_NO_DEVICE, a hotplug DEVICE_LEFT for
+ * the open device, the device missing from the list at a scan-period check, a cancel that
+ * answers LIBUSB_ERROR_NO_DEVICE, or a read still in flight STUCK_MS after its own timeout
+ * (its cancellation never completed: the node fails every request) close the pedal: held
+ * buttons are released (button up events), FP_STATUS_DISCONNECTED is pushed, and the search
+ * starts again. A read that will never complete is not waited for.
  */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
@@ -32,8 +50,12 @@
 #define TRANSFER_TIMEOUT_MS 1000   /* a silent pedal: the transfer is resubmitted */
 #define LOOP_TIMEOUT_MS 100        /* how often the thread checks `stopping` at worst */
 #define CANCEL_WAIT_MS 2000        /* the most we wait for a cancelled transfer's callback */
+#define CANCEL_SETTLE_MS 250       /* ... for one whose cancellation was already under way */
+#define STUCK_MS 500               /* a read this long past its timeout is taken as dead */
 #define MAX_ERRORS 5               /* consecutive failed transfers before we reopen */
 #define REPORT_MAX 64
+#define MAX_CANDIDATES 8           /* interfaces with an interrupt IN endpoint looked at */
+#define RDESC_MAX 1024             /* the longest HID report descriptor read */
 
 typedef struct pedal {
     fp_input input;
@@ -56,14 +78,21 @@ typedef struct pedal {
     bool detached;                   /* we took the interface from a kernel driver: give it back */
     uint8_t endpoint;
     fp_pedal_layout layout;
+    fp_pedal_kbd_format kbd_format;  /* keyboard layout: how reports are framed */
+    uint8_t kbd_id;                  /* FP_PEDAL_KBD_ID: the keyboard report's id */
     uint16_t vid, pid;
     int bus, address;
     struct libusb_transfer *transfer;
     bool in_flight;
     bool gone;                       /* the device left: close and look again */
+    bool watchdog;                   /* the thread cancelled a read stuck past its timeout */
+    bool stuck;                      /* the read will not complete: close without waiting */
+    int64_t submitted_ns;            /* when the read in flight was submitted */
     int errors;
     uint32_t mask;
     uint8_t buffer[REPORT_MAX];
+    uint8_t pending[REPORT_MAX];     /* the first part of a report cut at the buffer's end */
+    size_t npending;
 
     int announced;                   /* 0 nothing yet, 1 "looking", 2 connected */
     char access_reported[32];        /* "bus/address" last named in a permission error */
@@ -136,30 +165,60 @@ static void push_changes(pedal *p, const fp_pedal_change *ch, int n, int64_t t)
 /* ----------------------------------------------------------------------------------- */
 /* The transfer                                                                        */
 
+/* Decode one completed read. A read that filled its buffer with the first part of a
+ * keyboard report (shorter than the framing's whole report) is kept in `pending` until the
+ * next read completes it. */
+static void handle_report(pedal *p, struct libusb_transfer *t)
+{
+    const uint8_t *data = t->buffer;
+    size_t len = (size_t)t->actual_length;
+    bool keyboard = p->layout == FP_PEDAL_LAYOUT_KEYBOARD;
+    size_t whole = keyboard ? fp_pedal_kbd_report_size(p->kbd_format) : 0;
+    bool full = t->actual_length == t->length;   /* the report may go on in the next read */
+    if (p->npending > 0 ||
+        (full && len > 0 && len < whole &&
+         (p->kbd_format != FP_PEDAL_KBD_ID || data[0] == p->kbd_id))) {
+        size_t room = sizeof p->pending - p->npending, n = len < room ? len : room;
+        memcpy(p->pending + p->npending, data, n);
+        p->npending += n;
+        if (full && p->npending < whole)
+            return;                                /* wait for the rest */
+        data = p->pending;
+        len = p->npending;
+        p->npending = 0;
+    }
+    uint32_t mask;
+    fp_pedal_change ch[3];
+    int n = keyboard ? fp_pedal_decode_keyboard(p->kbd_format, p->kbd_id, &p->keys, data, len,
+                                                p->mask, &mask, ch)
+                     : fp_pedal_decode(p->layout, &p->keys, data, len, p->mask, &mask, ch);
+    if (n < 0) {
+        host_log(p, FP_LOG_DEBUG, "ignored a %zu-byte report (%s layout)", len,
+                 fp_pedal_layout_name(p->layout));
+    } else {
+        p->mask = mask;
+        push_changes(p, ch, n, now_ns(p));
+    }
+}
+
 static void LIBUSB_CALL transfer_cb(struct libusb_transfer *t)
 {
     pedal *p = t->user_data;
     p->in_flight = false;
     switch (t->status) {
-    case LIBUSB_TRANSFER_COMPLETED: {
+    case LIBUSB_TRANSFER_COMPLETED:
         p->errors = 0;
-        uint32_t mask;
-        fp_pedal_change ch[3];
-        int n = fp_pedal_decode(p->layout, &p->keys, t->buffer, (size_t)t->actual_length,
-                                p->mask, &mask, ch);
-        if (n < 0) {
-            host_log(p, FP_LOG_DEBUG, "ignored a %d-byte report (%s layout)", t->actual_length,
-                     fp_pedal_layout_name(p->layout));
-        } else {
-            p->mask = mask;
-            push_changes(p, ch, n, now_ns(p));
-        }
+        handle_report(p, t);
         break;
-    }
     case LIBUSB_TRANSFER_TIMED_OUT:   /* the pedal had nothing to say: ask again */
+        p->npending = 0;
         break;
-    case LIBUSB_TRANSFER_CANCELLED:   /* stop or close asked for it */
-        return;
+    case LIBUSB_TRANSFER_CANCELLED:
+        if (!p->watchdog)
+            return;                   /* stop or close asked for it */
+        p->watchdog = false;          /* the thread's watchdog did: the read went on, ask again */
+        p->npending = 0;
+        break;
     case LIBUSB_TRANSFER_NO_DEVICE:
         p->gone = true;
         return;
@@ -167,6 +226,7 @@ static void LIBUSB_CALL transfer_cb(struct libusb_transfer *t)
         libusb_clear_halt(p->handle, p->endpoint);
         /* fall through */
     default:
+        p->npending = 0;
         if (++p->errors >= MAX_ERRORS) {
             host_log(p, FP_LOG_WARNING, "%d failed reads in a row (%s): reopening the pedal",
                      p->errors, libusb_error_name(t->status));
@@ -180,6 +240,7 @@ static void LIBUSB_CALL transfer_cb(struct libusb_transfer *t)
     int r = libusb_submit_transfer(t);
     if (r == 0) {
         p->in_flight = true;
+        p->submitted_ns = now_ns(p);
     } else {
         if (r != LIBUSB_ERROR_NO_DEVICE)
             host_log(p, FP_LOG_WARNING, "resubmitting the read failed: %s", libusb_strerror(r));
@@ -190,17 +251,38 @@ static void LIBUSB_CALL transfer_cb(struct libusb_transfer *t)
 /* ----------------------------------------------------------------------------------- */
 /* Opening and closing a pedal                                                         */
 
-/* Find the interface and interrupt IN endpoint to read: for a keyboard-layout pedal the
- * boot keyboard interface when there is one, else the first with an interrupt IN. */
-static int find_endpoint(libusb_device *dev, fp_pedal_layout layout, int *iface, uint8_t *ep,
-                         int *maxpacket)
+/* An interface with an interrupt IN endpoint: a place the pedal's reports may come from. */
+typedef struct candidate {
+    int iface;
+    uint8_t ep;
+    int maxpacket;
+    int score;           /* the order they are tried in, highest first */
+    uint16_t rdesc_len;  /* the report descriptor's length from the HID descriptor, 0 unknown */
+} candidate;
+
+/* The report descriptor's length from the HID class descriptor (0x21) among an
+ * interface's extra descriptors; 0 when there is none. */
+static uint16_t hid_rdesc_len(const unsigned char *x, int len)
+{
+    for (int i = 0; i + 2 <= len && x[i] >= 2; i += x[i]) {
+        if (x[i + 1] == 0x21 && x[i] >= 9 && i + 9 <= len && x[i + 6] == 0x22)
+            return (uint16_t)(x[i + 7] | x[i + 8] << 8);
+    }
+    return 0;
+}
+
+/* The interfaces of the active (else the first) configuration that have an interrupt IN
+ * endpoint, best first: for a keyboard pedal a boot keyboard (HID 1/1) 3, another HID
+ * interface 2, another class 1, a vendor-class interface 0; for a VEC pedal HID 2, other 1,
+ * vendor 0. Equal scores keep the interfaces' order. Returns how many (0..max). */
+static int list_candidates(libusb_device *dev, fp_pedal_layout layout, candidate *c, int max)
 {
     struct libusb_config_descriptor *cd = NULL;
     if (libusb_get_active_config_descriptor(dev, &cd) != 0 &&
         libusb_get_config_descriptor(dev, 0, &cd) != 0)
-        return LIBUSB_ERROR_NOT_FOUND;
-    int best = -1, best_score = -1;
-    for (int i = 0; i < cd->bNumInterfaces; i++) {
+        return 0;
+    int n = 0;
+    for (int i = 0; i < cd->bNumInterfaces && n < max; i++) {
         if (cd->interface[i].num_altsetting < 1)
             continue;
         const struct libusb_interface_descriptor *id = &cd->interface[i].altsetting[0];
@@ -209,46 +291,77 @@ static int find_endpoint(libusb_device *dev, fp_pedal_layout layout, int *iface,
             if ((ed->bEndpointAddress & LIBUSB_ENDPOINT_DIR_MASK) != LIBUSB_ENDPOINT_IN ||
                 (ed->bmAttributes & LIBUSB_TRANSFER_TYPE_MASK) != LIBUSB_TRANSFER_TYPE_INTERRUPT)
                 continue;
-            int score = 1;
-            if (layout == FP_PEDAL_LAYOUT_KEYBOARD && id->bInterfaceClass == LIBUSB_CLASS_HID &&
+            bool hid = id->bInterfaceClass == LIBUSB_CLASS_HID;
+            int score = id->bInterfaceClass == LIBUSB_CLASS_VENDOR_SPEC ? 0 : hid ? 2 : 1;
+            if (layout == FP_PEDAL_LAYOUT_KEYBOARD && hid && id->bInterfaceSubClass == 1 &&
                 id->bInterfaceProtocol == 1)
-                score = 2;
-            if (score > best_score) {
-                best_score = score;
-                best = i;
-                *iface = id->bInterfaceNumber;
-                *ep = ed->bEndpointAddress;
-                *maxpacket = ed->wMaxPacketSize;
+                score = 3;
+            candidate k = {id->bInterfaceNumber, ed->bEndpointAddress, ed->wMaxPacketSize, score,
+                           hid ? hid_rdesc_len(id->extra, id->extra_length) : 0};
+            int at = n++;
+            while (at > 0 && c[at - 1].score < score) {   /* stable: after equal scores */
+                c[at] = c[at - 1];
+                at--;
             }
+            c[at] = k;
             break;
         }
     }
     libusb_free_config_descriptor(cd);
-    return best >= 0 ? 0 : LIBUSB_ERROR_NOT_FOUND;
+    return n;
 }
 
-/* Cancel the transfer and run the event loop until its callback has run. */
+/* Read and parse interface c's HID report descriptor (the interface must be claimed).
+ * Returns 0, or a libusb error (the device cannot answer, or the descriptor is malformed). */
+static int read_report_info(libusb_device_handle *h, const candidate *c, fp_pedal_hid_info *info)
+{
+    uint8_t buf[RDESC_MAX];
+    uint16_t len = c->rdesc_len > 0 && c->rdesc_len <= RDESC_MAX ? c->rdesc_len : 256;
+    int r = libusb_control_transfer(h, LIBUSB_ENDPOINT_IN | LIBUSB_RECIPIENT_INTERFACE,
+                                    LIBUSB_REQUEST_GET_DESCRIPTOR, 0x22 << 8,
+                                    (uint16_t)c->iface, buf, len, 500);
+    if (r < 0)
+        return r;
+    return fp_pedal_parse_report_descriptor(buf, (size_t)r, info) == 0 ? 0 : LIBUSB_ERROR_OTHER;
+}
+
+/* Cancel the transfer and run the event loop until its callback has run. Not waited for:
+ * a read whose cancel says the device is gone (its callback never comes; libusb_close takes
+ * it off libusb's lists). A cancellation already under way (libusb's own timeout) is given
+ * CANCEL_SETTLE_MS. */
 static void cancel_and_wait(pedal *p)
 {
     if (!p->in_flight)
         return;
-    libusb_cancel_transfer(p->transfer);
-    int64_t deadline = now_ns(p) + (int64_t)CANCEL_WAIT_MS * 1000000;
+    p->watchdog = false;
+    if (p->stuck)
+        return;
+    int r = libusb_cancel_transfer(p->transfer);
+    if (r == LIBUSB_ERROR_NO_DEVICE) {
+        p->gone = true;
+        return;
+    }
+    int wait_ms = r == 0 ? CANCEL_WAIT_MS : CANCEL_SETTLE_MS;
+    int64_t deadline = now_ns(p) + (int64_t)wait_ms * 1000000;
     while (p->in_flight && now_ns(p) < deadline) {
         struct timeval tv = {0, 50000};
         libusb_handle_events_timeout_completed(p->ctx, &tv, NULL);
     }
     if (p->in_flight)
-        host_log(p, FP_LOG_WARNING, "the cancelled read did not complete in %d ms",
-                 CANCEL_WAIT_MS);
+        host_log(p, FP_LOG_WARNING, "the cancelled read did not complete in %d ms", wait_ms);
 }
 
 /* Let go of an opened pedal: the interface released when claimed, the kernel driver given
  * back when we detached it, the handle closed (each fails harmlessly when the device is gone). */
-static void give_back(libusb_device_handle *h, int iface, bool claimed, bool detached)
+static void release_iface(libusb_device_handle *h, int iface, bool claimed, bool detached)
 {
     if (claimed) libusb_release_interface(h, iface);
     if (detached) libusb_attach_kernel_driver(h, iface);
+}
+
+static void give_back(libusb_device_handle *h, int iface, bool claimed, bool detached)
+{
+    release_iface(h, iface, claimed, detached);
     libusb_close(h);
 }
 
@@ -258,11 +371,15 @@ static void close_pedal(pedal *p, bool report)
     if (!p->handle)
         return;
     cancel_and_wait(p);
-    if (!p->in_flight) {
-        libusb_free_transfer(p->transfer);
-    } /* else: leak it rather than free memory libusb may still write (logged above) */
-    p->transfer = NULL;
     give_back(p->handle, p->iface, true, p->detached);
+    /* Freed after the close: a read that never completed (the device is gone) is off libusb's
+     * in-flight list once its handle is closed, and the closed fd's URBs are the kernel's. */
+    libusb_free_transfer(p->transfer);
+    p->transfer = NULL;
+    p->in_flight = false;
+    p->watchdog = false;
+    p->stuck = false;
+    p->npending = 0;
     p->detached = false;
     p->handle = NULL;
     if (report) {
@@ -278,21 +395,114 @@ static void close_pedal(pedal *p, bool report)
     p->gone = false;
 }
 
+/* Detach a kernel driver (usbhid) from `iface` and claim it. The driver is detached by hand
+ * and given back at close, not through libusb_set_auto_detach_kernel_driver: that claims
+ * with USBDEVFS_DISCONNECT_CLAIM, then GETDRIVER and USBDEVFS_IOCTL(DISCONNECT), and fails
+ * the claim when the node answers those with ENOTTY, as umockdev's in-process handler of
+ * docs/devices.md's recipe does. A driver query that fails is taken as no driver.
+ * Returns 0 (*detached: a driver was taken off), or a libusb error (nothing held). */
+static int claim_iface(pedal *p, libusb_device_handle *h, int iface, uint16_t vid, uint16_t pid,
+                       bool *detached)
+{
+    *detached = false;
+    if (libusb_kernel_driver_active(h, iface) == 1) {
+        int d = libusb_detach_kernel_driver(h, iface);
+        if (d == 0)
+            *detached = true;
+        else if (d != LIBUSB_ERROR_NOT_FOUND && d != LIBUSB_ERROR_NOT_SUPPORTED)
+            host_log(p, FP_LOG_WARNING, "cannot detach the kernel driver from interface %d of "
+                     "%04x:%04x: %s", iface, vid, pid, libusb_strerror(d));
+    }
+    int r = libusb_claim_interface(h, iface);
+    if (r) {
+        host_log(p, r == LIBUSB_ERROR_NO_DEVICE ? FP_LOG_DEBUG : FP_LOG_WARNING,
+                 "cannot claim interface %d of %04x:%04x: %s%s", iface, vid, pid,
+                 libusb_strerror(r),
+                 r == LIBUSB_ERROR_BUSY ? " (is another program reading the pedal?)" : "");
+        if (*detached)
+            libusb_attach_kernel_driver(h, iface);
+        *detached = false;
+    }
+    return r;
+}
+
+/* The keyboard report's framing: from the report descriptor when it was read and has a
+ * keyboard (`info`, else NULL); else a known pedal's documented id 1; else by length. */
+static void set_kbd_format(pedal *p, uint16_t vid, uint16_t pid, const fp_pedal_hid_info *info)
+{
+    if (info && info->keyboard) {
+        p->kbd_format = info->has_ids ? FP_PEDAL_KBD_ID : FP_PEDAL_KBD_BOOT;
+        p->kbd_id = info->keyboard_id;
+    } else if (fp_pedal_find_model(vid, pid)) {
+        p->kbd_format = FP_PEDAL_KBD_ID;
+        p->kbd_id = 1;
+    } else {
+        p->kbd_format = FP_PEDAL_KBD_AUTO;
+        p->kbd_id = 1;
+    }
+}
+
+/* Claim the interface to read (see the file comment for the order) and set the report
+ * framing. Returns 0 with *chosen (an index into c) claimed, or a libusb error with nothing
+ * held. */
+static int choose_interface(pedal *p, libusb_device_handle *h, const candidate *c, int n,
+                            fp_pedal_layout layout, uint16_t vid, uint16_t pid, int *chosen,
+                            bool *detached)
+{
+    int first = -1, r = LIBUSB_ERROR_NOT_FOUND;
+    for (int i = 0; i < n; i++) {
+        r = claim_iface(p, h, c[i].iface, vid, pid, detached);
+        if (r == LIBUSB_ERROR_NO_DEVICE)
+            return r;
+        if (r)
+            continue;
+        if (layout != FP_PEDAL_LAYOUT_KEYBOARD) {
+            *chosen = i;
+            return 0;
+        }
+        fp_pedal_hid_info info;
+        int d = read_report_info(h, &c[i], &info);
+        if (d != 0 || info.keyboard || n == 1) {
+            host_log(p, FP_LOG_DEBUG, "%04x:%04x: reading interface %d (report descriptor: %s)",
+                     vid, pid, c[i].iface, d != 0 ? libusb_error_name(d)
+                     : info.keyboard ? (info.has_ids ? "keyboard with report ids" : "keyboard")
+                                     : "no keyboard");
+            set_kbd_format(p, vid, pid, d == 0 ? &info : NULL);
+            *chosen = i;
+            return 0;
+        }
+        host_log(p, FP_LOG_DEBUG, "%04x:%04x: interface %d is no keyboard (%s)", vid, pid,
+                 c[i].iface, info.vendor ? "vendor page" : "no keyboard collection");
+        if (first < 0)
+            first = i;
+        release_iface(h, c[i].iface, true, *detached);
+        *detached = false;
+    }
+    if (first < 0)
+        return r;
+    /* No interface says it is a keyboard: the first that could be claimed. */
+    r = claim_iface(p, h, c[first].iface, vid, pid, detached);
+    if (r == 0) {
+        set_kbd_format(p, vid, pid, NULL);
+        *chosen = first;
+    }
+    return r;
+}
+
 /* Try to open one matching device. Returns 0, or a libusb error. */
 static int open_pedal(pedal *p, libusb_device *dev, uint16_t vid, uint16_t pid,
                       fp_pedal_layout layout)
 {
     int bus = libusb_get_bus_number(dev), addr = libusb_get_device_address(dev);
-    int iface = 0, maxpacket = 0;
-    uint8_t ep = 0;
-    int r = find_endpoint(dev, layout, &iface, &ep, &maxpacket);
-    if (r) {
+    candidate cands[MAX_CANDIDATES];
+    int ncands = list_candidates(dev, layout, cands, MAX_CANDIDATES);
+    if (ncands == 0) {
         host_log(p, FP_LOG_WARNING, "%04x:%04x at bus %03d address %03d has no interrupt IN "
                  "endpoint", vid, pid, bus, addr);
-        return r;
+        return LIBUSB_ERROR_NOT_FOUND;
     }
     libusb_device_handle *h = NULL;
-    r = libusb_open(dev, &h);
+    int r = libusb_open(dev, &h);
     if (r == LIBUSB_ERROR_ACCESS) {
         char key[32];
         snprintf(key, sizeof key, "%d/%d", bus, addr);
@@ -314,35 +524,24 @@ static int open_pedal(pedal *p, libusb_device *dev, uint16_t vid, uint16_t pid,
                  pid, bus, addr, libusb_strerror(r));
         return r;
     }
-    /* A kernel driver (usbhid) bound to the interface is detached by hand and given back at
-     * close, not through libusb_set_auto_detach_kernel_driver: that claims with
-     * USBDEVFS_DISCONNECT_CLAIM, then GETDRIVER and USBDEVFS_IOCTL(DISCONNECT), and fails the
-     * claim when the node answers those with ENOTTY, as umockdev's in-process handler of
-     * docs/devices.md's recipe does. A driver query that fails is taken as no driver. */
+    int chosen = 0;
     bool detached = false;
-    if (libusb_kernel_driver_active(h, iface) == 1) {
-        int d = libusb_detach_kernel_driver(h, iface);
-        if (d == 0)
-            detached = true;
-        else if (d != LIBUSB_ERROR_NOT_FOUND && d != LIBUSB_ERROR_NOT_SUPPORTED)
-            host_log(p, FP_LOG_WARNING, "cannot detach the kernel driver from interface %d of "
-                     "%04x:%04x: %s", iface, vid, pid, libusb_strerror(d));
-    }
-    r = libusb_claim_interface(h, iface);
+    r = choose_interface(p, h, cands, ncands, layout, vid, pid, &chosen, &detached);
     if (r) {
-        host_log(p, r == LIBUSB_ERROR_NO_DEVICE ? FP_LOG_DEBUG : FP_LOG_WARNING,
-                 "cannot claim interface %d of %04x:%04x: %s%s", iface, vid, pid,
-                 libusb_strerror(r),
-                 r == LIBUSB_ERROR_BUSY ? " (is another program reading the pedal?)" : "");
-        give_back(h, iface, false, detached);
+        libusb_close(h);
         return r;
     }
+    int iface = cands[chosen].iface, maxpacket = cands[chosen].maxpacket;
+    uint8_t ep = cands[chosen].ep;
     struct libusb_transfer *t = libusb_alloc_transfer(0);
     if (!t) {
         give_back(h, iface, true, detached);
         return LIBUSB_ERROR_NO_MEM;
     }
-    int len = maxpacket > 0 && maxpacket <= REPORT_MAX ? maxpacket : REPORT_MAX;
+    /* As many whole packets as REPORT_MAX holds: a report longer than one packet (a 9-byte
+     * keyboard report on an 8-byte endpoint) arrives whole in one read. */
+    int len = maxpacket > 0 && maxpacket <= REPORT_MAX ? REPORT_MAX / maxpacket * maxpacket
+                                                       : REPORT_MAX;
     libusb_fill_interrupt_transfer(t, h, ep, p->buffer, len, transfer_cb, p, TRANSFER_TIMEOUT_MS);
     p->handle = h;
     p->transfer = t;
@@ -357,7 +556,9 @@ static int open_pedal(pedal *p, libusb_device *dev, uint16_t vid, uint16_t pid,
     p->mask = 0;
     p->errors = 0;
     p->gone = false;
-    /* The read's length: wMaxPacketSize (what the kernel and real pedals take). A umockdev
+    p->watchdog = false;
+    p->npending = 0;
+    /* The read's length: whole packets up to 64 bytes (what the kernel and real pedals take). A umockdev
      * replay (docs/devices.md) only completes a URB whose buffer length equals its script's
      * buflen and fails any other submission with EIO, and a script written by hand may give
      * the report's size or 64 instead: on EIO the other usual lengths are tried in turn (a
@@ -381,6 +582,7 @@ static int open_pedal(pedal *p, libusb_device *dev, uint16_t vid, uint16_t pid,
         return r;
     }
     p->in_flight = true;
+    p->submitted_ns = now_ns(p);
     p->access_reported[0] = '\0';
     const fp_pedal_model *m = fp_pedal_find_model(vid, pid);
     push_status(p, FP_STATUS_CONNECTED, "%s %04x:%04x at bus %03d address %03d (%s layout)",
@@ -418,14 +620,61 @@ static int scan(pedal *p)
     return result;
 }
 
+/* Runs on the thread that handles libusb's events: ours, or start()'s during a strict scan. */
 static int LIBUSB_CALL hotplug_cb(libusb_context *ctx, libusb_device *dev,
                                   libusb_hotplug_event event, void *user_data)
 {
     (void)ctx;
-    (void)dev;
-    (void)event;
-    ((pedal *)user_data)->rescan = true;
+    pedal *p = user_data;
+    if (event == LIBUSB_HOTPLUG_EVENT_DEVICE_LEFT) {
+        if (p->handle && libusb_get_device(p->handle) == dev)
+            p->gone = true;   /* the thread closes it: the read in flight may never end */
+    } else {
+        p->rescan = true;
+    }
     return 0;
+}
+
+/* Is the open pedal still there? In libusb's device list (a removal that no hotplug event
+ * and no failed read reported), and its node still answering a driver query (usbfs fails
+ * every request with ENODEV once the device has left, even where its read is never given
+ * back). A list that cannot be had, or a query the node does not know, says yes. */
+static bool still_listed(pedal *p)
+{
+    if (libusb_kernel_driver_active(p->handle, p->iface) == LIBUSB_ERROR_NO_DEVICE)
+        return false;
+    libusb_device **list = NULL;
+    ssize_t n = libusb_get_device_list(p->ctx, &list);
+    if (n < 0)
+        return true;
+    libusb_device *mine = libusb_get_device(p->handle);
+    bool found = false;
+    for (ssize_t i = 0; i < n && !found; i++)
+        found = list[i] == mine;
+    libusb_free_device_list(list, 1);
+    return found;
+}
+
+/* The read in flight outlived its timeout by STUCK_MS: its completion (or libusb's own
+ * timeout cancellation) never came back. Cancel it once; when that cannot be done (the
+ * device is gone, or a cancellation is already hanging) or it is still stuck STUCK_MS after,
+ * the pedal is taken as gone. */
+static void watch_read(pedal *p, int64_t t)
+{
+    if (!p->in_flight || p->gone ||
+        t - p->submitted_ns < (int64_t)(TRANSFER_TIMEOUT_MS + STUCK_MS) * 1000000)
+        return;
+    int r = p->watchdog ? LIBUSB_ERROR_NOT_FOUND : libusb_cancel_transfer(p->transfer);
+    if (r == 0) {
+        p->watchdog = true;
+        p->submitted_ns = t - (int64_t)TRANSFER_TIMEOUT_MS * 1000000;
+        return;
+    }
+    host_log(p, FP_LOG_WARNING, "the read of %04x:%04x has not completed %d ms after its "
+             "timeout (%s): taking the pedal as gone", p->vid, p->pid, STUCK_MS,
+             libusb_error_name(r));
+    p->gone = true;
+    p->stuck = true;
 }
 
 /* Create the context and the hotplug callback. Returns 0 or a libusb error. */
@@ -437,7 +686,8 @@ static int open_context(pedal *p)
         return r;
     }
     if (libusb_has_capability(LIBUSB_CAP_HAS_HOTPLUG)) {
-        r = libusb_hotplug_register_callback(p->ctx, LIBUSB_HOTPLUG_EVENT_DEVICE_ARRIVED, 0,
+        r = libusb_hotplug_register_callback(p->ctx, LIBUSB_HOTPLUG_EVENT_DEVICE_ARRIVED |
+                                             LIBUSB_HOTPLUG_EVENT_DEVICE_LEFT, 0,
                                              LIBUSB_HOTPLUG_MATCH_ANY, LIBUSB_HOTPLUG_MATCH_ANY,
                                              LIBUSB_HOTPLUG_MATCH_ANY, hotplug_cb, p, &p->hotplug);
         p->hotplug_registered = r == 0;
@@ -462,6 +712,15 @@ static void *pedal_thread(void *arg)
             struct timespec ts = {0, LOOP_TIMEOUT_MS * 1000000L};
             nanosleep(&ts, NULL);
             continue;
+        }
+        if (p->handle) {   /* [input-thread] the checks that a read in flight cannot make */
+            int64_t t = now_ns(p);
+            watch_read(p, t);
+            if (!p->gone && t >= next_scan) {   /* still there? (no hotplug, no failed read) */
+                next_scan = t + (int64_t)SCAN_PERIOD_MS * 1000000;
+                if (!still_listed(p))
+                    p->gone = true;
+            }
         }
         if (p->handle && p->gone)
             close_pedal(p, true);

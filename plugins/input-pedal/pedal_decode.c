@@ -92,11 +92,48 @@ int fp_pedal_decode(fp_pedal_layout layout, const fp_pedal_keymap *keys, const u
         mask = (uint32_t)report[0] | (len >= 2 ? (uint32_t)report[1] << 8 : 0u);
         mask &= ALL_BUTTONS;
         break;
-    case FP_PEDAL_LAYOUT_KEYBOARD: {
-        if (!keys)
-            return FP_PEDAL_ERR_ARG;
-        uint8_t mods;
-        const uint8_t *k;
+    case FP_PEDAL_LAYOUT_KEYBOARD:
+        return fp_pedal_decode_keyboard(FP_PEDAL_KBD_AUTO, 1, keys, report, len, prev_mask,
+                                        new_mask, out);
+    default:
+        return FP_PEDAL_ERR_LAYOUT;
+    }
+    *new_mask = mask;
+    return fp_pedal_diff(prev_mask, mask, out);
+}
+
+size_t fp_pedal_kbd_report_size(fp_pedal_kbd_format format)
+{
+    return format == FP_PEDAL_KBD_BOOT ? 8 : format == FP_PEDAL_KBD_ID ? 9 : 0;
+}
+
+int fp_pedal_decode_keyboard(fp_pedal_kbd_format format, uint8_t id, const fp_pedal_keymap *keys,
+                             const uint8_t *report, size_t len, uint32_t prev_mask,
+                             uint32_t *new_mask, fp_pedal_change out[3])
+{
+    if (!new_mask || !out || (!report && len > 0))
+        return FP_PEDAL_ERR_ARG;
+    *new_mask = prev_mask & ALL_BUTTONS;
+    if (!keys)
+        return FP_PEDAL_ERR_ARG;
+    uint8_t mods;
+    const uint8_t *k;
+    switch (format) {
+    case FP_PEDAL_KBD_BOOT:
+        if (len < 8)
+            return FP_PEDAL_ERR_SHORT;
+        mods = report[0];
+        k = report + 2;
+        break;
+    case FP_PEDAL_KBD_ID:
+        if (len >= 1 && report[0] != id)
+            return 0;                        /* another report of a composite unit */
+        if (len < 9)
+            return FP_PEDAL_ERR_SHORT;       /* e.g. the first 8 bytes of a split report */
+        mods = report[1];
+        k = report + 3;
+        break;
+    case FP_PEDAL_KBD_AUTO:
         if (len == 8) {                      /* boot protocol: mods 00 k1..k6 */
             mods = report[0];
             k = report + 2;
@@ -108,21 +145,89 @@ int fp_pedal_decode(fp_pedal_layout layout, const fp_pedal_keymap *keys, const u
         } else {
             return FP_PEDAL_ERR_SHORT;
         }
-        bool rollover = true;
-        for (int i = 0; i < 6; i++)
-            rollover = rollover && k[i] == 0x01;
-        if (rollover)
-            return 0;                        /* ErrorRollOver: the state is unknown */
-        for (int i = 0; i < 3; i++)
-            if (key_held(keys->usage[i], mods, k))
-                mask |= button_bits[i];
         break;
-    }
     default:
         return FP_PEDAL_ERR_LAYOUT;
     }
+    bool rollover = true;
+    for (int i = 0; i < 6; i++)
+        rollover = rollover && k[i] == 0x01;
+    if (rollover)
+        return 0;                            /* ErrorRollOver: the state is unknown */
+    uint32_t mask = 0;
+    for (int i = 0; i < 3; i++)
+        if (key_held(keys->usage[i], mods, k))
+            mask |= button_bits[i];
     *new_mask = mask;
     return fp_pedal_diff(prev_mask, mask, out);
+}
+
+/* ----------------------------------------------------------------------------------- */
+/* HID report descriptors                                                              */
+
+int fp_pedal_parse_report_descriptor(const uint8_t *d, size_t len, fp_pedal_hid_info *info)
+{
+    if (!info)
+        return -1;
+    memset(info, 0, sizeof *info);
+    if (!d || len == 0)
+        return -1;
+    fp_pedal_hid_info r = {.vendor = true};
+    uint32_t page = 0, usage = 0;
+    uint8_t report_id = 0;
+    int depth = 0, apps = 0;
+    bool in_keyboard = false, have_kbd_input = false;
+    size_t i = 0;
+    while (i < len) {
+        uint8_t b = d[i];
+        if (b == 0xfe) {                     /* long item: 0xfe size tag data */
+            if (i + 2 >= len || i + 3 + d[i + 1] > len)
+                return -1;
+            i += 3 + (size_t)d[i + 1];
+            continue;
+        }
+        size_t size = (b & 3) == 3 ? 4 : (b & 3);
+        if (i + 1 + size > len)
+            return -1;
+        uint32_t v = 0;
+        for (size_t j = 0; j < size; j++)
+            v |= (uint32_t)d[i + 1 + j] << (8 * j);
+        int type = (b >> 2) & 3, tag = b >> 4;
+        if (type == 1 && tag == 0) {         /* Usage Page */
+            page = v;
+        } else if (type == 1 && tag == 8) {  /* Report ID */
+            report_id = (uint8_t)v;
+            r.has_ids = true;
+        } else if (type == 2 && tag == 0) {  /* Usage (4 bytes: page in the high half) */
+            usage = v;
+        } else if (type == 0) {
+            uint32_t upage = size == 4 ? usage >> 16 : page, uid = usage & 0xffff;
+            if (tag == 0xa) {                /* Collection */
+                if (depth == 0 && v == 1) {  /* Application */
+                    apps++;
+                    in_keyboard = upage == 0x01 && uid == 0x06;
+                    if (upage < 0xff00)
+                        r.vendor = false;
+                }
+                depth++;
+            } else if (tag == 0xc) {         /* End Collection */
+                if (depth > 0 && --depth == 0)
+                    in_keyboard = false;
+            } else if (tag == 0x8 && in_keyboard && !have_kbd_input) {   /* Input */
+                have_kbd_input = true;
+                r.keyboard = true;
+                r.keyboard_id = report_id;
+            }
+            usage = 0;                       /* local items end at a main item */
+        }
+        i += 1 + size;
+    }
+    if (apps == 0)
+        return -1;
+    if (!r.has_ids)
+        r.keyboard_id = 0;
+    *info = r;
+    return 0;
 }
 
 /* ----------------------------------------------------------------------------------- */

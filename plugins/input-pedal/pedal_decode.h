@@ -10,8 +10,12 @@
  *   VEC Infinity IN-USB-2: 2 bytes, a little-endian bitmask, 0x01 left, 0x02 middle,
  *     0x04 right; 0 = all released; chords OR together.
  *   PCsensor FootSwitch family: a HID keyboard report with report id 1,
- *     `01 mods 00 k1 k2 k3 k4 k5 k6`, all keys zero on release. The 8-byte boot keyboard
- *     report `mods 00 k1..k6` (no report id) is accepted as well.
+ *     `01 mods 00 k1 k2 k3 k4 k5 k6`, all keys zero on release. A keyboard whose HID report
+ *     descriptor declares no report ids sends `mods 00 k1..k6` (8 bytes, the boot layout).
+ *     Which of the two a device sends is said by its report descriptor
+ *     (fp_pedal_parse_report_descriptor), not by a report's length: a 9-byte report read
+ *     8 bytes at a time arrives as 8 + 1 bytes, and its first 8 bytes must not be taken for
+ *     a boot report whose modifier byte is the report id.
  *
  * Thread rules: every function here is pure and reentrant ([any-thread]).
  */
@@ -89,6 +93,45 @@ enum {
  */
 int fp_pedal_decode(fp_pedal_layout layout, const fp_pedal_keymap *keys, const uint8_t *report,
                     size_t len, uint32_t prev_mask, uint32_t *new_mask, fp_pedal_change out[3]);
+
+/** How a keyboard pedal's reports are framed. */
+typedef enum fp_pedal_kbd_format {
+    FP_PEDAL_KBD_AUTO = 0,  /* unknown: by length (8 bytes: boot; 9+ starting with 1: id 1) */
+    FP_PEDAL_KBD_BOOT = 1,  /* no report id: `mods 00 k1..k6`, 8 bytes */
+    FP_PEDAL_KBD_ID = 2     /* report id first: `id mods 00 k1..k6`, 9 bytes */
+} fp_pedal_kbd_format;
+
+/**
+ * Decode one keyboard report framed as `format` says. `id` (FP_PEDAL_KBD_ID only): the
+ * keyboard report's id; a report with another first byte (a mouse or consumer report of a
+ * composite unit) changes nothing and returns 0. A report shorter than its format's 8
+ * (BOOT) or 9 (ID) bytes returns FP_PEDAL_ERR_SHORT and changes nothing: a report cut at a
+ * packet boundary is never read as a shorter format. FP_PEDAL_KBD_AUTO is what
+ * fp_pedal_decode does for FP_PEDAL_LAYOUT_KEYBOARD. Otherwise as fp_pedal_decode.
+ */
+int fp_pedal_decode_keyboard(fp_pedal_kbd_format format, uint8_t id, const fp_pedal_keymap *keys,
+                             const uint8_t *report, size_t len, uint32_t prev_mask,
+                             uint32_t *new_mask, fp_pedal_change out[3]);
+
+/** The size of a whole keyboard report in `format`: 8 (BOOT), 9 (ID), 0 (AUTO: unknown). */
+size_t fp_pedal_kbd_report_size(fp_pedal_kbd_format format);
+
+/** What a HID report descriptor (HID 1.11 section 6.2.2, short and long items) says. */
+typedef struct fp_pedal_hid_info {
+    bool keyboard;        /* an application collection Generic Desktop (0x01) / Keyboard (0x06)
+                             with an Input item */
+    bool has_ids;         /* a Report ID item anywhere: every report starts with its id */
+    uint8_t keyboard_id;  /* the report id of the keyboard's first Input item; 0 without ids */
+    bool vendor;          /* every application collection is on a vendor page (0xff00..0xffff):
+                             a configuration interface, not the pedal's keys */
+} fp_pedal_hid_info;
+
+/**
+ * Parse a HID report descriptor of `len` bytes into *info (zeroed first). Returns 0, or -1
+ * (*info zeroed) when the descriptor is empty, truncated inside an item, or has no
+ * application collection.
+ */
+int fp_pedal_parse_report_descriptor(const uint8_t *desc, size_t len, fp_pedal_hid_info *info);
 
 /** The button changes that lead from `prev_mask` to `mask` (only bits 0..2 count), in the
  *  order fp_pedal_decode uses; returns their count (0..3). Used for releasing held buttons

@@ -13,7 +13,10 @@
  * CLAIMINTERFACE), everything else failing with ENOTTY, as an outside emulator built from
  * that recipe does. Reports
  * queued with emu_send complete the interrupt IN URB that the reader has in flight, one
- * report per URB. emu_unplug completes the in-flight URB with -ESHUTDOWN (as the kernel does
+ * report per URB, cut into packets of the endpoint's wMaxPacketSize as a host controller
+ * moves them: a URB ends at a short packet or when its buffer is full, so a 9-byte report
+ * read 8 bytes at a time takes two URBs (8, then 1). A control URB asking for an interface's
+ * HID report descriptor is answered (not with emu_set_minimal). emu_unplug completes the in-flight URB with -ESHUTDOWN (as the kernel does
  * on disconnect), fails every later ioctl with ENODEV and removes the sysfs device.
  * The process must run with libumockdev-preload loaded (the test links it first).
  */
@@ -25,8 +28,15 @@
 
 typedef enum emu_kind {
     EMU_VEC = 0,       /* 05f3:00ff, one HID interface, EP 0x81, 2-byte bitmask reports */
-    EMU_PCSENSOR = 1   /* 0c45:7403, interface 0 vendor HID (EP 0x82), interface 1 boot
+    EMU_PCSENSOR = 1,  /* 0c45:7403, interface 0 vendor HID (EP 0x82), interface 1 boot
                           keyboard (EP 0x81, 16-byte packets), 9-byte reports with id 1 */
+    EMU_PCSENSOR_MP8 = 2, /* 0c45:7403, interface 0 boot keyboard (EP 0x81, 8-byte packets:
+                          a 9-byte report is two packets, 8 + 1), interface 1 vendor HID */
+    EMU_CONFIG_FIRST = 3, /* 3553:b001, interface 0 HID with a vendor report descriptor
+                          (configuration, EP 0x82), interface 1 HID keyboard that is not a
+                          boot interface (protocol 0; EP 0x81, 16-byte packets), id 1 */
+    EMU_BOOT_NOID = 4  /* 0c45:7404, one boot keyboard interface (EP 0x81, 8-byte packets)
+                          whose report descriptor has no report id: 8-byte reports */
 } emu_kind;
 
 typedef struct emu emu;
@@ -46,7 +56,9 @@ typedef struct emu_stats {
     int flying;                /* URBs submitted and not yet reaped */
     int delivered;             /* reports delivered */
     int queued;                /* reports waiting for a URB */
-    int last_endpoint;         /* endpoint of the last SUBMITURB */
+    int last_endpoint;         /* endpoint of the last interrupt SUBMITURB */
+    int split_transfers;       /* URBs that took part of a report (the rest in the next) */
+    int report_descriptor_reads; /* GET_DESCRIPTOR(HID report) answered */
 } emu_stats;
 
 /** A testbed with no device. NULL when umockdev is not active (preload missing). */
@@ -58,6 +70,15 @@ int emu_plug(emu *e, emu_kind kind, int devnum);
 
 /** Unplug the pedal: the in-flight URB ends with -ESHUTDOWN, the device leaves sysfs. */
 void emu_unplug(emu *e);
+
+/** From now on, emu_unplug leaves the URB in flight uncompleted and fails every ioctl on
+ *  the node with ENODEV (REAPURBNDELAY and DISCARDURB included), as a dead usbfs fd whose
+ *  URBs the kernel never gives back; the device still leaves sysfs. */
+void emu_set_unplug_silent(emu *e, int on);
+
+/** The pedal dies where it stands: every ioctl on its node fails with ENODEV and the URB in
+ *  flight never completes, but the device stays in sysfs (no hotplug event). */
+void emu_kill(emu *e);
 
 /** Queue one report (at most 64 bytes) for the reader. */
 void emu_send(emu *e, const uint8_t *report, size_t len);

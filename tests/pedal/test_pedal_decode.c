@@ -292,6 +292,91 @@ static void test_access_error_text(void **state)
     assert_true(strlen(t) < sizeof t - 1);   /* fits an fp_event_status text uncut */
 }
 
+/* A 9-byte report with id 1 read 8 bytes at a time (wMaxPacketSize 8): the first 8 bytes are
+ * not a boot report whose modifier byte (the id, 0x01) is left Ctrl; the whole report is. */
+static void test_keyboard_formats_split_report(void **state)
+{
+    (void)state;
+    fp_pedal_change ch[3];
+    uint32_t mask = 0;
+    const fp_pedal_keymap ctrl_b_c = {{0xe0, 0x05, 0x06}};
+    const uint8_t whole[9] = {0x01, 0x00, 0x00, 0x05, 0, 0, 0, 0, 0};
+    assert_int_equal(fp_pedal_decode_keyboard(FP_PEDAL_KBD_ID, 1, &ctrl_b_c, whole, 8, 0, &mask,
+                                              ch), FP_PEDAL_ERR_SHORT);
+    assert_int_equal(mask, 0);
+    assert_int_equal(fp_pedal_decode_keyboard(FP_PEDAL_KBD_ID, 1, &ctrl_b_c, whole + 8, 1, 0,
+                                              &mask, ch), 0);   /* the tail: id 0, not ours */
+    assert_int_equal(mask, 0);
+    assert_int_equal(fp_pedal_decode_keyboard(FP_PEDAL_KBD_ID, 1, &ctrl_b_c, whole, 9, 0, &mask,
+                                              ch), 1);
+    check(&ch[0], M, 1, M);
+    /* ctrl really held (mods 0x01 after the id) is left */
+    const uint8_t ctrl[9] = {0x01, 0x01, 0x00, 0, 0, 0, 0, 0, 0};
+    assert_int_equal(fp_pedal_decode_keyboard(FP_PEDAL_KBD_ID, 1, &ctrl_b_c, ctrl, 9, M, &mask,
+                                              ch), 2);
+    check(&ch[0], M, 0, 0);
+    check(&ch[1], L, 1, L);
+    /* another id of the unit (mouse, id 2) changes nothing; a keyboard under id 3 is read */
+    const uint8_t id3[9] = {0x03, 0x00, 0x00, 0x06, 0, 0, 0, 0, 0};
+    assert_int_equal(fp_pedal_decode_keyboard(FP_PEDAL_KBD_ID, 1, &ctrl_b_c, id3, 9, 0, &mask,
+                                              ch), 0);
+    assert_int_equal(fp_pedal_decode_keyboard(FP_PEDAL_KBD_ID, 3, &ctrl_b_c, id3, 9, 0, &mask,
+                                              ch), 1);
+    check(&ch[0], R, 1, R);
+    /* boot framing: byte 0 is the modifier byte, whatever the length beyond 8 */
+    const uint8_t boot[8] = {0x01, 0x00, 0x06, 0, 0, 0, 0, 0};
+    assert_int_equal(fp_pedal_decode_keyboard(FP_PEDAL_KBD_BOOT, 0, &ctrl_b_c, boot, 8, 0,
+                                              &mask, ch), 2);
+    assert_int_equal(mask, L | R);
+    assert_int_equal(fp_pedal_decode_keyboard(FP_PEDAL_KBD_BOOT, 0, &ctrl_b_c, boot, 7, 0,
+                                              &mask, ch), FP_PEDAL_ERR_SHORT);
+    assert_int_equal(fp_pedal_kbd_report_size(FP_PEDAL_KBD_ID), 9);
+    assert_int_equal(fp_pedal_kbd_report_size(FP_PEDAL_KBD_BOOT), 8);
+}
+
+static void test_report_descriptor(void **state)
+{
+    (void)state;
+    fp_pedal_hid_info info;
+    /* keyboard, report id 1 (declared inside the collection), then a mouse under id 2 */
+    const uint8_t kbd_id[] = {
+        0x05, 0x01, 0x09, 0x06, 0xa1, 0x01, 0x85, 0x01, 0x05, 0x07, 0x19, 0xe0, 0x29, 0xe7,
+        0x15, 0x00, 0x25, 0x01, 0x75, 0x01, 0x95, 0x08, 0x81, 0x02, 0x95, 0x01, 0x75, 0x08,
+        0x81, 0x01, 0x95, 0x06, 0x75, 0x08, 0x15, 0x00, 0x26, 0xff, 0x00, 0x05, 0x07, 0x19,
+        0x00, 0x2a, 0xff, 0x00, 0x81, 0x00, 0xc0,
+        0x05, 0x01, 0x09, 0x02, 0xa1, 0x01, 0x85, 0x02, 0x09, 0x01, 0xa1, 0x00, 0x05, 0x09,
+        0x19, 0x01, 0x29, 0x03, 0x95, 0x03, 0x75, 0x01, 0x81, 0x02, 0xc0, 0xc0};
+    assert_int_equal(fp_pedal_parse_report_descriptor(kbd_id, sizeof kbd_id, &info), 0);
+    assert_true(info.keyboard && info.has_ids && !info.vendor);
+    assert_int_equal(info.keyboard_id, 1);
+    /* the same keyboard under id 3, the mouse first */
+    uint8_t swapped[sizeof kbd_id];
+    memcpy(swapped, kbd_id + 49, sizeof kbd_id - 49);
+    memcpy(swapped + sizeof kbd_id - 49, kbd_id, 49);
+    swapped[sizeof kbd_id - 49 + 7] = 0x03;
+    assert_int_equal(fp_pedal_parse_report_descriptor(swapped, sizeof swapped, &info), 0);
+    assert_true(info.keyboard && info.has_ids);
+    assert_int_equal(info.keyboard_id, 3);
+    /* a boot keyboard: no ids */
+    uint8_t boot[49 - 2];
+    memcpy(boot, kbd_id, 6);
+    memcpy(boot + 6, kbd_id + 8, 41);
+    assert_int_equal(fp_pedal_parse_report_descriptor(boot, sizeof boot, &info), 0);
+    assert_true(info.keyboard && !info.has_ids);
+    assert_int_equal(info.keyboard_id, 0);
+    /* a vendor configuration interface (page 0xff00), with a long item to skip */
+    const uint8_t vendor[] = {0x06, 0x00, 0xff, 0x09, 0x01, 0xa1, 0x01, 0xfe, 0x02, 0x10,
+                              0xaa, 0xbb, 0x15, 0x00, 0x26, 0xff, 0x00, 0x75, 0x08, 0x95,
+                              0x08, 0x09, 0x01, 0x81, 0x02, 0xc0};
+    assert_int_equal(fp_pedal_parse_report_descriptor(vendor, sizeof vendor, &info), 0);
+    assert_true(info.vendor && !info.keyboard && !info.has_ids);
+    /* truncated inside an item, empty, no collection */
+    assert_int_equal(fp_pedal_parse_report_descriptor(kbd_id, 37, &info), -1);
+    assert_false(info.keyboard);
+    assert_int_equal(fp_pedal_parse_report_descriptor(kbd_id, 0, &info), -1);
+    assert_int_equal(fp_pedal_parse_report_descriptor(kbd_id, 4, &info), -1);
+}
+
 static void test_models(void **state)
 {
     (void)state;
@@ -321,6 +406,8 @@ int main(void)
         cmocka_unit_test(test_config_errors),
         cmocka_unit_test(test_access_error_text),
         cmocka_unit_test(test_models),
+        cmocka_unit_test(test_keyboard_formats_split_report),
+        cmocka_unit_test(test_report_descriptor),
     };
     return cmocka_run_group_tests_name("pedal_decode", tests, NULL, NULL);
 }

@@ -301,6 +301,104 @@ static void test_pcsensor_single_key(void **state)
     expect_quiet(f, 200);
 }
 
+/* The audit's unit: the boot keyboard's EP 0x81 moves 8 bytes a packet, so a 9-byte report
+ * with id 1 is two packets. Read 8 bytes at a time it came as 8 + 1, and the 8 were decoded
+ * as a boot report whose modifier byte was the id 0x01 (left Ctrl): keys=ctrl/b/c gave a
+ * spurious left with every key, keys=ctrl/-/- a left held for good. */
+static void test_split_report_not_boot(void **state)
+{
+    fixture *f = *state;
+    assert_int_equal(emu_plug(f->emu, EMU_PCSENSOR_MP8, 5), 0);
+    const fp_param p[] = {{"keys", "ctrl/b/c"}};
+    assert_int_equal(start_plugin(f, NULL, p, 1), 0);
+    expect_status(f, FP_STATUS_CONNECTED, "0c45:7403");
+    wait_flying(f);
+    emu_stats s = emu_get_stats(f->emu);
+    assert_int_equal(s.claimed_interface, 0);
+    assert_int_equal(s.last_endpoint, 0x81);
+    KBD(f, 0x05, 0, 0, 0, 0, 0);                   /* b: middle, and nothing else */
+    expect_button(f, FP_BUTTON_MIDDLE, 1, FP_BUTTON_MIDDLE);
+    KBD(f, 0, 0, 0, 0, 0, 0);
+    expect_button(f, FP_BUTTON_MIDDLE, 0, 0);
+    send(f, (const uint8_t[9]){0x01, 0x01, 0x00, 0, 0, 0, 0, 0, 0}, 9);   /* ctrl: left */
+    expect_button(f, FP_BUTTON_LEFT, 1, FP_BUTTON_LEFT);
+    KBD(f, 0x06, 0, 0, 0, 0, 0);                   /* c alone: left up, right down */
+    expect_button(f, FP_BUTTON_LEFT, 0, 0);
+    expect_button(f, FP_BUTTON_RIGHT, 1, FP_BUTTON_RIGHT);
+    KBD(f, 0, 0, 0, 0, 0, 0);
+    expect_button(f, FP_BUTTON_RIGHT, 0, 0);
+    expect_quiet(f, 300);
+    s = emu_get_stats(f->emu);
+    assert_int_equal(s.delivered, 5);
+    assert_int_equal(s.split_transfers, 0);   /* the read takes a whole report */
+    assert_int_equal(s.bad_submits, 0);
+}
+
+/* The same unit under an emulator that cannot answer the report descriptor request (the
+ * in-process recipe): the format comes from the known model (id 1), and a read cut at 8
+ * bytes is put back together, never decoded as a boot report. keys=ctrl/-/-: a b press
+ * must not hold left. */
+static void test_split_report_minimal_emulator(void **state)
+{
+    fixture *f = *state;
+    emu_set_minimal(f->emu, 1);
+    assert_int_equal(emu_plug(f->emu, EMU_PCSENSOR_MP8, 5), 0);
+    const fp_param p[] = {{"keys", "ctrl/-/-"}};
+    assert_int_equal(start_plugin(f, NULL, p, 1), 0);
+    expect_status(f, FP_STATUS_CONNECTED, "0c45:7403");
+    wait_flying(f);
+    KBD(f, 0x05, 0, 0, 0, 0, 0);                   /* b: unbound */
+    KBD(f, 0, 0, 0, 0, 0, 0);
+    expect_quiet(f, 400);
+    send(f, (const uint8_t[9]){0x01, 0x01, 0x00, 0, 0, 0, 0, 0, 0}, 9);
+    expect_button(f, FP_BUTTON_LEFT, 1, FP_BUTTON_LEFT);
+    KBD(f, 0, 0, 0, 0, 0, 0);
+    expect_button(f, FP_BUTTON_LEFT, 0, 0);
+    expect_quiet(f, 200);
+}
+
+/* A keyboard pedal whose report descriptor has no report id sends 8-byte boot reports:
+ * byte 0 is the modifier byte there. */
+static void test_boot_reports_by_descriptor(void **state)
+{
+    fixture *f = *state;
+    assert_int_equal(emu_plug(f->emu, EMU_BOOT_NOID, 5), 0);
+    const fp_param p[] = {{"keys", "ctrl/b/c"}};
+    assert_int_equal(start_plugin(f, NULL, p, 1), 0);
+    expect_status(f, FP_STATUS_CONNECTED, "0c45:7404");
+    wait_flying(f);
+    send(f, (const uint8_t[8]){0x01, 0x00, 0x06, 0, 0, 0, 0, 0}, 8);   /* ctrl + c */
+    expect_button(f, FP_BUTTON_LEFT, 1, FP_BUTTON_LEFT);
+    expect_button(f, FP_BUTTON_RIGHT, 1, FP_BUTTON_LEFT | FP_BUTTON_RIGHT);
+    send(f, (const uint8_t[8]){0x00, 0x00, 0, 0, 0, 0, 0, 0}, 8);
+    expect_button(f, FP_BUTTON_LEFT, 0, FP_BUTTON_RIGHT);
+    expect_button(f, FP_BUTTON_RIGHT, 0, 0);
+    assert_true(emu_get_stats(f->emu).report_descriptor_reads >= 1);
+}
+
+/* Defect 3: the configuration interface (a HID interface with a vendor report descriptor)
+ * comes first and the keyboard interface is not a boot interface: the keyboard is read. */
+static void test_keyboard_interface_not_first(void **state)
+{
+    fixture *f = *state;
+    assert_int_equal(emu_plug(f->emu, EMU_CONFIG_FIRST, 5), 0);
+    assert_int_equal(start_plugin(f, NULL, NULL, 0), 0);
+    expect_status(f, FP_STATUS_CONNECTED, "3553:b001");
+    wait_flying(f);
+    emu_stats s = emu_get_stats(f->emu);
+    assert_int_equal(s.claimed_interface, 1);
+    assert_int_equal(s.last_endpoint, 0x81);
+    assert_int_equal(s.bad_submits, 0);
+    KBD(f, 0x04, 0, 0, 0, 0, 0);
+    expect_button(f, FP_BUTTON_LEFT, 1, FP_BUTTON_LEFT);
+    KBD(f, 0, 0, 0, 0, 0, 0);
+    expect_button(f, FP_BUTTON_LEFT, 0, 0);
+    /* stop gives both interfaces back to the kernel driver */
+    f->input->stop(f->input);
+    s = emu_get_stats(f->emu);
+    assert_int_equal(s.detaches, s.reattaches);
+}
+
 static void test_read_timeout_no_spurious_events(void **state)
 {
     fixture *f = *state;
@@ -349,6 +447,53 @@ static void test_unplug_and_return(void **state)
     VEC(f, 0x00);
     expect_button(f, FP_BUTTON_MIDDLE, 0, 0);
     assert_int_equal(bad_headers(&f->rec), 0);
+}
+
+/* Defect 2: after the unplug every ioctl fails with ENODEV and the read in flight is never
+ * completed (no -ESHUTDOWN reap). The pedal must still be seen to leave (held pedal
+ * released, DISCONNECTED), come back when replugged, and stop must not wait for the read. */
+static void test_unplug_silent(void **state)
+{
+    fixture *f = *state;
+    emu_set_unplug_silent(f->emu, 1);
+    assert_int_equal(emu_plug(f->emu, EMU_VEC, 5), 0);
+    assert_int_equal(start_plugin(f, NULL, NULL, 0), 0);
+    expect_status(f, FP_STATUS_CONNECTED, "address 005");
+    VEC(f, 0x01);
+    expect_button(f, FP_BUTTON_LEFT, 1, FP_BUTTON_LEFT);
+    wait_flying(f);
+    int64_t t0 = fp_test_mono_ns();
+    emu_unplug(f->emu);
+    expect_button(f, FP_BUTTON_LEFT, 0, 0);
+    expect_status(f, FP_STATUS_DISCONNECTED, "05f3:00ff");
+    assert_true(fp_test_mono_ns() - t0 < 2500000000LL);
+    assert_int_equal(emu_plug(f->emu, EMU_VEC, 6), 0);
+    expect_status(f, FP_STATUS_CONNECTED, "address 006");
+    VEC(f, 0x02);
+    expect_button(f, FP_BUTTON_MIDDLE, 1, FP_BUTTON_MIDDLE);
+    emu_unplug(f->emu);   /* gone again, silently, with middle held; then stop at once */
+    t0 = fp_test_mono_ns();
+    f->input->stop(f->input);
+    assert_true(fp_test_mono_ns() - t0 < 1000000000LL);
+}
+
+/* The pedal dies in place (every ioctl ENODEV, the read never completes) and stays listed:
+ * no hotplug event tells; the read that outlives its timeout does. */
+static void test_dead_in_place(void **state)
+{
+    fixture *f = *state;
+    assert_int_equal(emu_plug(f->emu, EMU_VEC, 5), 0);
+    assert_int_equal(start_plugin(f, NULL, NULL, 0), 0);
+    expect_status(f, FP_STATUS_CONNECTED, "address 005");
+    VEC(f, 0x04);
+    expect_button(f, FP_BUTTON_RIGHT, 1, FP_BUTTON_RIGHT);
+    wait_flying(f);
+    emu_kill(f->emu);
+    expect_button(f, FP_BUTTON_RIGHT, 0, 0);
+    expect_status(f, FP_STATUS_DISCONNECTED, "05f3:00ff");
+    int64_t t0 = fp_test_mono_ns();
+    f->input->stop(f->input);
+    assert_true(fp_test_mono_ns() - t0 < 1000000000LL);
 }
 
 static void test_absent_at_start_then_plugged(void **state)
@@ -461,8 +606,14 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_spec_minimal_emulator, setup, teardown),
         cmocka_unit_test_setup_teardown(test_pcsensor_default_keys, setup, teardown),
         cmocka_unit_test_setup_teardown(test_pcsensor_single_key, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_split_report_not_boot, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_split_report_minimal_emulator, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_boot_reports_by_descriptor, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_keyboard_interface_not_first, setup, teardown),
         cmocka_unit_test_setup_teardown(test_read_timeout_no_spurious_events, setup, teardown),
         cmocka_unit_test_setup_teardown(test_unplug_and_return, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_unplug_silent, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_dead_in_place, setup, teardown),
         cmocka_unit_test_setup_teardown(test_absent_at_start_then_plugged, setup, teardown),
         cmocka_unit_test_setup_teardown(test_strict_without_pedal_fails, setup, teardown),
         cmocka_unit_test_setup_teardown(test_other_device_not_taken, setup, teardown),
