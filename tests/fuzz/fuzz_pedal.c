@@ -4,8 +4,10 @@
  * default and a fuzzed key map, and the same bytes as the SPEC's ARG and a key list. A
  * report is decoded or refused (FP_PEDAL_ERR_SHORT) with the held set unchanged; every held
  * set and change stays within the three buttons; the changes lead from the set before to the
- * set after, releases first, each change's mask the set right after it. A parse either
- * succeeds or writes a message. Seeds: tests/fuzz/corpus/fuzz_pedal. */
+ * set after, releases first, each change's mask the set right after it; the keyboard decoder
+ * told its framing (boot, or report id) decodes no report shorter than that framing's. The
+ * same bytes as a HID report descriptor parse or are refused with the result zeroed. A parse
+ * either succeeds or writes a message. Seeds: tests/fuzz/corpus/fuzz_pedal. */
 #include "pedal_decode.h"
 
 #include <stdbool.h>
@@ -17,12 +19,32 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
 #define BUTTONS 7u /* left, middle, right */
 
+static void check_changes(int n, uint32_t after, const fp_pedal_change ch[3], uint32_t *held);
+
 static void check_decode(fp_pedal_layout layout, const fp_pedal_keymap *keys, const uint8_t *r,
                          size_t len, uint32_t *held)
 {
     fp_pedal_change ch[3];
     uint32_t after = 0xdeadbeef;
     int n = fp_pedal_decode(layout, keys, r, len, *held, &after, ch);
+    check_changes(n, after, ch, held);
+}
+
+/* The keyboard decoder told the framing (the report descriptor's): the same rules. */
+static void check_keyboard(fp_pedal_kbd_format format, uint8_t id, const fp_pedal_keymap *keys,
+                           const uint8_t *r, size_t len, uint32_t *held)
+{
+    fp_pedal_change ch[3];
+    uint32_t after = 0xdeadbeef;
+    int n = fp_pedal_decode_keyboard(format, id, keys, r, len, *held, &after, ch);
+    if ((n > 0 || (n == 0 && after != *held)) && format != FP_PEDAL_KBD_AUTO &&
+        len < fp_pedal_kbd_report_size(format))
+        abort(); /* (another id's report, even a short one, changes nothing: 0) */
+    check_changes(n, after, ch, held);
+}
+
+static void check_changes(int n, uint32_t after, const fp_pedal_change ch[3], uint32_t *held)
+{
     if (n < 0) {
         if (n != FP_PEDAL_ERR_SHORT || after != *held) abort();
         return;
@@ -48,14 +70,24 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     /* reports: the first two bytes pick a key map, then (length, bytes) records */
     fp_pedal_keymap fuzzed = {{size > 0 ? data[0] : 0, size > 1 ? data[1] : 0, size > 2 ? data[2] : 0}};
     const fp_pedal_keymap def = FP_PEDAL_KEYMAP_DEFAULT;
-    uint32_t held[3] = {0, 0, 0};
+    uint32_t held[5] = {0, 0, 0, 0, 0};
     for (size_t i = size > 3 ? 3 : size; i < size;) {
         size_t len = data[i++];
         if (len > size - i) len = size - i;
         check_decode(FP_PEDAL_LAYOUT_VEC, NULL, data + i, len, &held[0]);
         check_decode(FP_PEDAL_LAYOUT_KEYBOARD, &def, data + i, len, &held[1]);
         check_decode(FP_PEDAL_LAYOUT_KEYBOARD, &fuzzed, data + i, len, &held[2]);
+        check_keyboard(FP_PEDAL_KBD_BOOT, 0, &fuzzed, data + i, len, &held[3]);
+        check_keyboard(FP_PEDAL_KBD_ID, size > 0 ? data[0] : 1, &def, data + i, len, &held[4]);
         i += len;
+    }
+    /* the same bytes as a HID report descriptor: parsed or refused (info zeroed) */
+    fp_pedal_hid_info info;
+    memset(&info, 0xa5, sizeof info);
+    if (fp_pedal_parse_report_descriptor(data, size, &info)) {
+        if (info.keyboard || info.has_ids || info.keyboard_id || info.vendor) abort();
+    } else if (info.keyboard_id && !info.has_ids) {
+        abort();
     }
     fp_pedal_change ch[3];
     if (fp_pedal_diff(held[1], 0, ch) < 0) abort();
