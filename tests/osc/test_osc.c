@@ -487,7 +487,7 @@ static void bundles_keep_timetags(void **state)
         wait_packets(&f, (uint64_t)i + 1);
     }
     lo_message m = joints_message(&rows[1]);
-    sleep_ms(30);
+    sleep_ms(60); /* past the last bundle's time (t0 + 36 ms): an older pose would be stale */
     int64_t plain_sent = mono_ns();
     assert_true(lo_send_message(f.to, "/facepuppet/hand/right/joints", m) > 0);
     lo_message_free(m);

@@ -306,6 +306,10 @@ static void out_of_order_bundle_dropped(void **state)
         assert_float_equal(e->positions.mm[FP_JOINT_PALM][0], want[i], 0);
         if (i) assert_true(e->header.time_ns > nth_positions(f.h, i - 1)->header.time_ns);
     }
+    fp_osc_stats st = stats(&f);
+    assert_int_equal(st.problems[FP_OSC_STALE], 1);
+    for (int k = 0; k < FP_OSC_PROBLEMS; k++)
+        if (k != FP_OSC_STALE) assert_int_equal(st.problems[k], 0);
     close_fixture(&f);
 }
 
@@ -330,6 +334,14 @@ static void bind_ipv6_and_localhost(void **state)
             send_button(false, port);
             want++;
             assert_true(wait_type(f.h, FP_EVENT_BUTTON, -1, want));
+            /* an IPv4 sender named as such, on a dual-stack socket too (not ::ffff:127.0.0.1) */
+            assert_true(wait_type(f.h, FP_EVENT_STATUS, FP_STATUS_CONNECTED, 1));
+            pthread_mutex_lock(&f.h->mutex);
+            for (size_t e = 0; e < f.h->count; e++)
+                if (f.h->events[e].header.type == FP_EVENT_STATUS &&
+                    !strstr(f.h->events[e].status.text, "sender 127.0.0.1:"))
+                    fail_msg("%s: \"%s\"", binds[i], f.h->events[e].status.text);
+            pthread_mutex_unlock(&f.h->mutex);
         }
         if (v6) {
             send_button(true, port);
