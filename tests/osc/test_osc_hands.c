@@ -393,6 +393,45 @@ static void ipv6_side_taken_warned(void **state)
     fake_free(h);
 }
 
+/* bind=0.0.0.0 with [::]:PORT taken on IPv6 alone by another program: the input listens on
+ * 0.0.0.0 (IPv4) and warns that IPv6 senders are not heard. */
+static void dual_stack_falls_back_to_ipv4(void **state)
+{
+    (void)state;
+    int other = socket(AF_INET6, SOCK_DGRAM, 0), one = 1;
+    if (other < 0) skip(); /* no IPv6 here */
+    assert_int_equal(setsockopt(other, IPPROTO_IPV6, IPV6_V6ONLY, &one, sizeof one), 0);
+    struct sockaddr_in6 a = {.sin6_family = AF_INET6, .sin6_addr = IN6ADDR_ANY_INIT};
+    if (bind(other, (struct sockaddr *)&a, sizeof a) != 0) {
+        close(other);
+        skip();
+    }
+    socklen_t len = sizeof a;
+    assert_int_equal(getsockname(other, (struct sockaddr *)&a, &len), 0);
+    char port[16];
+    snprintf(port, sizeof port, "%u", (unsigned)ntohs(a.sin6_port));
+    fake_host *h = fake_new(16);
+    fp_input *in = NULL;
+    char err[512] = "";
+    fp_param bind = {"bind", "0.0.0.0"};
+    int rc = factory->create(&h->host, port, &bind, 1, &in, err, sizeof err);
+    if (rc == -EBUSY) { /* 0.0.0.0 at that port taken too, by chance */
+        close(other);
+        fake_free(h);
+        skip();
+    }
+    assert_int_equal(rc, 0);
+    if (!log_has(h, FP_LOG_WARNING, "IPv6 senders are not heard"))
+        fail_msg("no warning about IPv6: log \"%s\"", h->log);
+    assert_int_equal(in->start(in, err, sizeof err), 0);
+    send_button(false, (unsigned)atoi(port));
+    assert_true(wait_type(h, FP_EVENT_BUTTON, -1, 1));
+    in->stop(in);
+    in->destroy(in);
+    close(other);
+    fake_free(h);
+}
+
 static int group_setup(void **state)
 {
     (void)state;
@@ -416,6 +455,7 @@ int main(void)
         cmocka_unit_test(out_of_order_bundle_dropped),
         cmocka_unit_test(bind_ipv6_and_localhost),
         cmocka_unit_test(ipv6_side_taken_warned),
+        cmocka_unit_test(dual_stack_falls_back_to_ipv4),
     };
     return cmocka_run_group_tests(tests, group_setup, group_teardown);
 }
