@@ -4,8 +4,9 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  *
- * Flow: create() parses the SPEC and binds the UDP socket (127.0.0.1 unless bind= says
- * otherwise), so that a taken port or a bad address fails before the session starts. start()
+ * Flow: create() parses the SPEC and binds the UDP sockets (osc_net.c: 127.0.0.1 and [::1]
+ * unless bind= says otherwise), so that a taken port or a bad address fails before the
+ * session starts. Leap bridge frames are assembled in osc_leap.c. start()
  * runs one pthread: poll() on the socket and a stop pipe (50 ms ticks); each datagram is read
  * with recvfrom() into one fixed 64 KiB buffer and stamped with the host clock at once; a
  * bundle is walked here (timetags, nesting), each message is decoded by liblo
@@ -15,9 +16,10 @@
  * stop() writes to the pipe and joins.
  */
 #define _GNU_SOURCE
-#include "fp_net.h"
 #include "fp_osc_arg.h"
 #include "osc.h"
+#include "osc_leap.h"
+#include "osc_net.h"
 #include "osc_spec.h"
 
 #include <facepuppet/plugin.h>
@@ -26,7 +28,6 @@
 #include <lo/lo.h>
 #include <lo/lo_lowlevel.h>
 
-#include <arpa/inet.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <locale.h>
@@ -58,38 +59,21 @@
 
 static const char *const problem_names[FP_OSC_PROBLEMS] = {
     "malformed", "bad-types", "bad-count", "non-finite", "out-of-range", "unknown-address",
-    "incomplete", "queue-full", "untimed"};
+    "incomplete", "queue-full", "untimed", "stale"};
 static const char *const problem_text[FP_OSC_PROBLEMS] = {
     "malformed packets (not OSC, or a bad bundle)", "messages with wrong type tags",
     "messages with a wrong argument count", "messages with NaN or infinite values",
     "messages with values out of range (beyond 10 m, 2 pi, a bad quaternion or button)",
     "messages to addresses outside the format", "incomplete frames superseded",
     "events dropped (host queue full)",
-    "messages without a time on the sender's recording clock (needs a session's forward=)"};
-
-/* Straight-finger estimate of the joints a Leap bridge does not send: for each finger the
- * lengths (mm) from the palm centre to MCP (CMC for the thumb), MCP-PIP, PIP-DIP, DIP-tip
- * (with the soft tip), after Buryanov & Kotiuk 2010 (shared/docs/devices.md); fingers use half
- * the metacarpal from the palm centre, the thumb 30 mm to its CMC. */
-static const float leap_chain_mm[FP_FINGERS][4] = {
-    {30.0f, 46.2f, 31.6f, 27.4f},  /* thumb: palm-CMC, metacarpal, proximal, distal + tip */
-    {34.05f, 39.8f, 22.4f, 19.6f}, /* index */
-    {32.3f, 44.6f, 26.3f, 21.4f},  /* middle */
-    {29.0f, 41.4f, 25.7f, 21.3f},  /* ring */
-    {26.85f, 32.6f, 18.1f, 19.7f}, /* pinky */
-};
-
-typedef struct leap_slot {
-    bool have_palm;
-    int32_t hand_id;
-    unsigned tips;                 /* bit per finger received since the palm */
-    float palm[3], tip[FP_FINGERS][3];
-} leap_slot;
+    "messages without a time on the sender's recording clock (needs a session's forward=)",
+    "poses older than one already pushed for that hand (bundles out of order)"};
 
 typedef struct mp_hand {
     unsigned have;                 /* bit 0 x, 1 y, 2 z since the last frame */
-    bool z_seen;                   /* this sender sends z: wait for it */
+    bool z_seen;                   /* this sender sends z: wait for it (until it stops) */
     bool xy_only;                  /* the last frame was emitted from x and y alone */
+    int64_t t;                     /* the time of the frame's latest part */
     float v[3][21];
 } mp_hand;
 
@@ -103,12 +87,12 @@ typedef struct osc_input {
     bool mp_mirror;
     bool have_box;
     float box[6];                  /* box=: the tracking volume, mm (workspace extension) */
-    char bind_text[64];
+    char bind_text[96];            /* where it listens, for the log (osc_listen.text) */
     uint16_t port;
-    bool loopback;
     /* socket and thread */
     int sock;
-    int sock6; /* [::1]:port beside 127.0.0.1:port (a sender's "localhost" may be ::1), -1 none */
+    int sock6; /* [::1]:port beside 127.0.0.1:port (a sender's "localhost" may be ::1), -1 none
+                  (osc_net.h) */
     int stop_pipe[2];
     pthread_t thread;
     bool running;
@@ -128,7 +112,9 @@ typedef struct osc_input {
     int64_t sender_origin_tt;      /* the sender's /facepuppet/origin, ns on the timetag scale */
     int64_t clock_t;               /* the last message's time (statuses are pushed at it) */
     uint32_t buttons;
-    leap_slot leap[2];
+    osc_leap leap;                 /* Leap frames being assembled, Leap ids' sides */
+    int64_t last_pose_t[FP_HANDS][3]; /* per hand: the time of its last joints, angles, wrist
+                                         pushed (a staler one is dropped); INT64_MIN none */
     mp_hand mp[FP_HANDS];
     int64_t report_at[FP_OSC_PROBLEMS]; /* 0: not pending; -1: reported */
     bool packet_pushed;
@@ -176,15 +162,44 @@ static void bump(osc_input *o, uint64_t *field)
     pthread_mutex_unlock(&o->lock);
 }
 
-/* Pushes a pose or button; a full queue drops it (counted): the next pose supersedes it. */
-static void push_event(osc_input *o, fp_event *ev)
+/* Pushes a pose or button; a full queue drops it (counted): the next pose supersedes it.
+ * Returns whether the host took it. */
+static bool push_event(osc_input *o, fp_event *ev)
 {
     if (o->host->push_event(o->host, &ev->header)) {
         bump(o, &o->st.events);
         o->packet_pushed = true;
-    } else {
-        count(o, FP_OSC_QUEUE_FULL);
+        return true;
     }
+    count(o, FP_OSC_QUEUE_FULL);
+    return false;
+}
+
+/* The pose kinds whose times are kept per hand (o->last_pose_t). */
+enum { POSE_JOINTS, POSE_ANGLES, POSE_WRIST };
+
+/* Forgets the poses' times: a sender's clock begins again (disconnect, timetag re-anchored,
+ * a new origin), so its next pose is never stale. */
+static void forget_pose_times(osc_input *o)
+{
+    for (int h = 0; h < FP_HANDS; h++)
+        for (int k = 0; k < 3; k++) o->last_pose_t[h][k] = INT64_MIN;
+}
+
+/* Whether a pose of hand at time t is older than the last of its kind pushed (a bundle that
+ * arrived out of order): then counted stale, to be dropped. */
+static bool stale(osc_input *o, int hand, int kind, int64_t t)
+{
+    if (t >= o->last_pose_t[hand][kind]) return false;
+    count(o, FP_OSC_STALE);
+    return true;
+}
+
+/* Pushes a pose (hand >= 0) and keeps its time when the host took it. */
+static void push_pose(osc_input *o, fp_event *ev, int kind)
+{
+    const int hand = ev->header.hand;
+    if (push_event(o, ev)) o->last_pose_t[hand][kind] = ev->header.time_ns;
 }
 
 /* Pushes a status event, retrying for up to 100 ms while the queue is full. */
@@ -304,12 +319,13 @@ static void push_joints(osc_input *o, int hand, int64_t t, int64_t recv_ns,
         count(o, FP_OSC_OUT_OF_RANGE);
         return;
     }
+    if (stale(o, hand, POSE_JOINTS, t)) return;
     note_valid(o, recv_ns, hand);
     fp_event ev;
     header_for(&ev, sizeof ev.positions, FP_EVENT_JOINT_POSITIONS, t, hand);
     ev.header.flags = flags;
     memcpy(ev.positions.mm, mm, sizeof ev.positions.mm);
-    push_event(o, &ev);
+    push_pose(o, &ev, POSE_JOINTS);
 }
 
 /* ------------------------------------------------------------------------------------- */
@@ -392,11 +408,12 @@ static void fmt_facepuppet(osc_input *o, const char *path, const char *types, lo
             count(o, FP_OSC_OUT_OF_RANGE);
             return;
         }
+        if (stale(o, hand, POSE_ANGLES, t)) return;
         note_valid(o, recv_ns, hand);
         header_for(&ev, sizeof ev.angles, FP_EVENT_JOINT_ANGLES, t, hand);
         ev.angles.valid = valid;
         for (int i = 0; i < FP_GLOVE_SENSORS; i++) ev.angles.radians[i] = valid >> i & 1 ? rad[i] : 0.f;
-        push_event(o, &ev);
+        push_pose(o, &ev, POSE_ANGLES);
     } else if (strcmp(rest, "wrist") == 0) {
         if (!check_types(o, types, "fffffff")) return;
         if (!hand_wanted(o, hand)) {
@@ -415,11 +432,12 @@ static void fmt_facepuppet(osc_input *o, const char *path, const char *types, lo
             count(o, FP_OSC_OUT_OF_RANGE);
             return;
         }
+        if (stale(o, hand, POSE_WRIST, t)) return;
         note_valid(o, recv_ns, -1); /* a wrist alone does not make a hand present */
         header_for(&ev, sizeof ev.wrist, FP_EVENT_WRIST_POSE, t, hand);
         memcpy(ev.wrist.position_mm, v, sizeof ev.wrist.position_mm);
         for (int i = 0; i < 4; i++) ev.wrist.rotation[i] = (float)(v[3 + i] / n);
-        push_event(o, &ev);
+        push_pose(o, &ev, POSE_WRIST);
     } else {
         count(o, FP_OSC_UNKNOWN_ADDRESS);
     }
@@ -428,51 +446,30 @@ static void fmt_facepuppet(osc_input *o, const char *path, const char *types, lo
 /* ------------------------------------------------------------------------------------- */
 /* format=leap                                                                            */
 
-/* Parses "/hand<s>" or "/finger<s>-<n>"; returns 1 hand, 2 finger, 0 neither. */
-static int leap_address(const char *path, int *slot, int *finger)
+/* Pushes Leap frames, each as the side its Leap id has (hand=both) or as the one hand asked. */
+static void leap_push(osc_input *o, const osc_leap_frame *fr, int n, int64_t recv_ns)
 {
-    const char *p;
-    if (strncmp(path, "/hand", 5) == 0)
-        p = path + 5;
-    else if (strncmp(path, "/finger", 7) == 0)
-        p = path + 7;
-    else
-        return 0;
-    if (*p < '0' || *p > '1' || (p[1] >= '0' && p[1] <= '9')) return 0;
-    *slot = *p - '0';
-    if (path[1] == 'h') return p[1] == 0 ? 1 : 0;
-    if (p[1] != '-' || p[2] < '0' || p[2] > '4' || p[3] != 0) return 0;
-    *finger = p[2] - '0';
-    return 2;
-}
-
-static void leap_emit(osc_input *o, int slot, int64_t t, int64_t recv_ns)
-{
-    leap_slot *ls = &o->leap[slot];
-    int hand;
+    int side[OSC_LEAP_SLOTS];
     if (o->hands == HANDS_BOTH)
-        hand = ls->palm[0] < 0 ? FP_HAND_LEFT : FP_HAND_RIGHT;
-    else
-        hand = o->hands == HANDS_LEFT ? FP_HAND_LEFT : FP_HAND_RIGHT;
-    float mm[FP_HAND_JOINTS][3];
-    memcpy(mm[FP_JOINT_PALM], ls->palm, sizeof mm[0]);
-    for (int f = 0; f < FP_FINGERS; f++) {
-        const float *c = leap_chain_mm[f];
-        float total = c[0] + c[1] + c[2] + c[3], acc = 0;
-        for (int k = 0; k < 3; k++) {
-            acc += c[k];
-            float s = acc / total;
-            for (int i = 0; i < 3; i++) mm[FP_JOINT(f, k)][i] = ls->palm[i] + s * (ls->tip[f][i] - ls->palm[i]);
-        }
-        memcpy(mm[FP_JOINT_TIP(f)], ls->tip[f], sizeof mm[0]);
+        fp__osc_leap_sides(&o->leap, fr, n, recv_ns, (int64_t)(o->timeout_s * 1e9), side);
+    for (int i = 0; i < n; i++) {
+        int hand = o->hands == HANDS_BOTH ? side[i] : o->hands == HANDS_LEFT ? FP_HAND_LEFT : FP_HAND_RIGHT;
+        float mm[FP_HAND_JOINTS][3];
+        fp__osc_leap_joints(&fr[i], mm);
+        push_joints(o, hand, fr[i].t, recv_ns, (const float(*)[3])mm, 0);
     }
-    push_joints(o, hand, t, recv_ns, (const float(*)[3])mm, 0);
 }
 
-static void fmt_leap(osc_input *o, const char *path, const char *types, lo_arg **argv,
-                     int64_t t, int64_t recv_ns)
+static void leap_count_incomplete(osc_input *o, unsigned incomplete)
 {
-    int slot = 0, finger = 0, kind = leap_address(path, &slot, &finger);
+    while (incomplete--) count(o, FP_OSC_INCOMPLETE);
+}
+
+/* depth: the message's bundle nesting (0: a plain message) */
+static void fmt_leap(osc_input *o, const char *path, const char *types, lo_arg **argv,
+                     int64_t t, int64_t recv_ns, int depth)
+{
+    int slot = 0, finger = 0, kind = fp__osc_leap_address(path, &slot, &finger);
     if (!kind) {
         count(o, FP_OSC_UNKNOWN_ADDRESS);
         return;
@@ -492,28 +489,22 @@ static void fmt_leap(osc_input *o, const char *path, const char *types, lo_arg *
         count(o, FP_OSC_OUT_OF_RANGE);
         return;
     }
-    leap_slot *ls = &o->leap[slot];
-    if (kind == 1) {
-        if (ls->have_palm && ls->tips) count(o, FP_OSC_INCOMPLETE);
-        ls->have_palm = true;
-        ls->hand_id = arg_i(argv[0], types[0]);
-        ls->tips = 0;
-        memcpy(ls->palm, v, sizeof v);
-        return;
-    }
-    if (!ls->have_palm || arg_i(argv[0], types[0]) != ls->hand_id) {
-        count(o, FP_OSC_INCOMPLETE);
-        ls->have_palm = false;
-        ls->tips = 0;
-        return;
-    }
-    memcpy(ls->tip[finger], v, sizeof v);
-    ls->tips |= 1u << finger;
-    if (ls->tips == (1u << FP_FINGERS) - 1) {
-        leap_emit(o, slot, t, recv_ns);
-        ls->have_palm = false;
-        ls->tips = 0;
-    }
+    osc_leap_frame fr[1];
+    unsigned incomplete = 0;
+    int n = fp__osc_leap_take(&o->leap, kind, slot, finger, arg_i(argv[0], types[0]), v, t,
+                              depth > 0, fr, &incomplete);
+    leap_count_incomplete(o, incomplete);
+    leap_push(o, fr, n, recv_ns);
+}
+
+/* The end of a datagram: the Leap frames its bundle completed, in any order of its messages. */
+static void leap_end_packet(osc_input *o, int64_t recv_ns)
+{
+    osc_leap_frame fr[OSC_LEAP_SLOTS];
+    unsigned incomplete = 0;
+    int n = fp__osc_leap_end_packet(&o->leap, fr, &incomplete);
+    leap_count_incomplete(o, incomplete);
+    leap_push(o, fr, n, recv_ns);
 }
 
 /* ------------------------------------------------------------------------------------- */
@@ -584,10 +575,19 @@ static void fmt_mediapipe(osc_input *o, const char *path, const char *types, lo_
         return;
     }
     if (m->have & (1u << axis)) {
-        count(o, FP_OSC_INCOMPLETE); /* a new frame began before the last was complete */
+        if (m->z_seen && (m->have & 3u) == 3u && !(m->have & 4u)) {
+            /* x and y came, then the next frame's before any z: the sender stopped sending z
+             * (another sender, or the same without depth). The frame is emitted flat, and
+             * from now on x and y make a frame. */
+            m->z_seen = false;
+            mp_emit(o, hand, m->t, recv_ns);
+        } else {
+            count(o, FP_OSC_INCOMPLETE); /* a new frame began before the last was complete */
+        }
         m->have = 0;
     }
     memcpy(m->v[axis], v, sizeof v);
+    m->t = t; /* the frame's time: its last part's */
     m->have |= 1u << axis;
     if (axis == 2) m->z_seen = true;
     unsigned need = m->z_seen ? 7u : 3u;
@@ -631,6 +631,7 @@ static int64_t map_timetag(osc_input *o, uint32_t sec, uint32_t frac, int64_t re
     if (!o->have_offset || llabs(tt + o->offset_ns - recv_ns) > REANCHOR_NS) {
         o->have_offset = true;
         o->offset_ns = recv_ns - tt;
+        forget_pose_times(o); /* the sender's clock began again */
         pthread_mutex_lock(&o->lock);
         o->st.timetag_offset_ns = o->offset_ns;
         pthread_mutex_unlock(&o->lock);
@@ -647,7 +648,9 @@ static bool transport_message(osc_input *o, const char *path, const char *types,
 {
     if (strcmp(path, "/facepuppet/origin") == 0) {
         if (check_types(o, types, "t")) {
-            o->sender_origin_tt = timetag_ns(argv[0]->t.sec, argv[0]->t.frac);
+            int64_t origin = timetag_ns(argv[0]->t.sec, argv[0]->t.frac);
+            if (o->have_sender_origin && origin != o->sender_origin_tt) forget_pose_times(o);
+            o->sender_origin_tt = origin;
             o->have_sender_origin = true;
         }
         return true;
@@ -670,7 +673,7 @@ static bool transport_message(osc_input *o, const char *path, const char *types,
 }
 
 static void handle_message(osc_input *o, unsigned char *data, size_t size, int64_t t,
-                           int64_t recv_ns)
+                           int64_t recv_ns, int depth)
 {
     int result = 0;
     lo_message m = lo_message_deserialise(data, size, &result);
@@ -691,14 +694,14 @@ static void handle_message(osc_input *o, unsigned char *data, size_t size, int64
     if (fmt == FMT_AUTO) { /* each message by its address space (they do not overlap) */
         int slot, finger;
         if (strncmp(path, "/facepuppet/", 12) == 0) fmt = FMT_FACEPUPPET;
-        else if (leap_address(path, &slot, &finger)) fmt = FMT_LEAP;
+        else if (fp__osc_leap_address(path, &slot, &finger)) fmt = FMT_LEAP;
         else if (mp_address(path)) fmt = FMT_MEDIAPIPE;
         else
             count(o, FP_OSC_UNKNOWN_ADDRESS);
     }
     switch (fmt) {
     case FMT_FACEPUPPET: fmt_facepuppet(o, path, types, argv, t, recv_ns); break;
-    case FMT_LEAP: fmt_leap(o, path, types, argv, t, recv_ns); break;
+    case FMT_LEAP: fmt_leap(o, path, types, argv, t, recv_ns, depth); break;
     case FMT_MEDIAPIPE: fmt_mediapipe(o, path, types, argv, t, recv_ns); break;
     default: break;
     }
@@ -740,7 +743,8 @@ static void handle_packet(osc_input *o, unsigned char *data, size_t size, int64_
         count(o, FP_OSC_MALFORMED);
         return;
     }
-    handle_message(o, data, size, o->clock == CLOCK_RECORDING && depth == 0 ? UNTIMED : t, recv_ns);
+    handle_message(o, data, size, o->clock == CLOCK_RECORDING && depth == 0 ? UNTIMED : t, recv_ns,
+                   depth);
 }
 
 static void record_latency(osc_input *o, int64_t recv_ns)
@@ -764,8 +768,10 @@ static void timers(osc_input *o, int64_t now)
         if (!o->hands_seen)
             push_status(o, FP_STATUS_DISCONNECTED, -1, "osc: no data from %s for %.3g s", o->sender,
                         o->timeout_s);
-        memset(o->leap, 0, sizeof o->leap);
-        for (int h = 0; h < FP_HANDS; h++) o->mp[h].have = 0;
+        memset(&o->leap, 0, sizeof o->leap);
+        forget_pose_times(o);
+        for (int h = 0; h < FP_HANDS; h++) /* the next sender may send no z */
+            o->mp[h].have = 0, o->mp[h].z_seen = o->mp[h].xy_only = false;
         if (o->clock == CLOCK_RECORDING && !o->ended) { /* a stopped clock: never wait on it */
             o->ended = true;
             push_status(o, FP_STATUS_END_OF_STREAM, -1, "osc: %s's recording stopped without its "
@@ -786,6 +792,7 @@ static void timers(osc_input *o, int64_t now)
                     "(the tracker lost it): taken as gone until it comes back",
                     h == FP_HAND_LEFT ? "left" : "right", o->sender, o->timeout_s);
         o->mp[h].have = 0;
+        o->mp[h].z_seen = o->mp[h].xy_only = false;
     }
     for (int k = 0; k < FP_OSC_PROBLEMS; k++) {
         if (o->report_at[k] <= 0 || now < o->report_at[k]) continue;
@@ -824,23 +831,10 @@ static void *osc_thread(void *arg)
                 count(o, FP_OSC_MALFORMED);
                 continue;
             }
-            if (!o->connected) {
-                char addr[INET6_ADDRSTRLEN] = "?";
-                unsigned port = 0;
-                if (from.ss_family == AF_INET) {
-                    const struct sockaddr_in *a = (const struct sockaddr_in *)&from;
-                    inet_ntop(AF_INET, &a->sin_addr, addr, sizeof addr);
-                    port = ntohs(a->sin_port);
-                } else if (from.ss_family == AF_INET6) {
-                    const struct sockaddr_in6 *a = (const struct sockaddr_in6 *)&from;
-                    inet_ntop(AF_INET6, &a->sin6_addr, addr, sizeof addr);
-                    port = ntohs(a->sin6_port);
-                }
-                snprintf(o->sender, sizeof o->sender, from.ss_family == AF_INET6 ? "[%s]:%u" : "%s:%u",
-                         addr, port);
-            }
+            if (!o->connected) fp__osc_sender_text(&from, o->sender, sizeof o->sender);
             o->packet_pushed = false;
             handle_packet(o, o->buf, (size_t)n, recv_ns, recv_ns, 0);
+            leap_end_packet(o, recv_ns);
             if (o->packet_pushed) record_latency(o, recv_ns);
         }
         timers(o, now_ns(o));
@@ -876,8 +870,8 @@ static int osc_start(fp_input *self, char *err, size_t errlen)
         return -rc;
     }
     o->running = true;
-    logf_(o, FP_LOG_INFO, "listening on %s:%u%s (format %s)", o->bind_text, (unsigned)o->port,
-          o->sock6 >= 0 ? " and [::1]" : "", fp__osc_format_names[o->format]);
+    logf_(o, FP_LOG_INFO, "listening on %s (format %s)", o->bind_text,
+          fp__osc_format_names[o->format]);
     return 0;
 }
 
@@ -988,36 +982,6 @@ static const void *osc_get_extension(const fp_input *self, const char *id)
 /* ------------------------------------------------------------------------------------- */
 /* Factory                                                                                */
 
-/* Bind the UDP socket (o->sock) to sa (set->bind_addr:set->port), and on 127.0.0.1 also [::1]
- * at the same port (o->sock6), best effort (no IPv6, the port taken there: IPv4 only): a sender
- * told "localhost" may resolve it to ::1 first (getaddrinfo's order where /etc/hosts lists
- * both), and would otherwise send into nothing. Sets o->port (the one bound: PORT 0 picks
- * one), bind_text and loopback. Returns 0 or a negative code with a message; o->sock is
- * closed on failure. */
-static int open_sockets(osc_input *o, struct sockaddr_in sa, const osc_settings *set, char *err,
-                        size_t errlen)
-{
-    o->sock6 = -1;
-    o->sock = socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
-    if (o->sock < 0 || bind(o->sock, (struct sockaddr *)&sa, sizeof sa) != 0) {
-        int e = errno;
-        snprintf(err, errlen, "osc: cannot listen on %s:%ld (UDP): %s", set->bind_addr, set->port,
-                 strerror(e));
-        if (o->sock >= 0) close(o->sock);
-        o->sock = -1;
-        /* the port taken, an address not this machine's: an input that cannot be opened
-         * (-EBUSY, -ENODEV: exit 66), not a failure of the run */
-        return e == EADDRINUSE ? -EBUSY : e == EADDRNOTAVAIL ? -ENODEV : -e;
-    }
-    socklen_t len = sizeof sa;
-    getsockname(o->sock, (struct sockaddr *)&sa, &len);
-    o->port = ntohs(sa.sin_port);
-    snprintf(o->bind_text, sizeof o->bind_text, "%s", set->bind_addr);
-    o->loopback = (ntohl(sa.sin_addr.s_addr) >> 24) == 127;
-    if (sa.sin_addr.s_addr == htonl(INADDR_LOOPBACK)) o->sock6 = fp_udp_bind_loopback6(o->port, SOCK_NONBLOCK);
-    return 0;
-}
-
 static int osc_create(const fp_host *host, const char *arg, const fp_param *params,
                       size_t nparams, fp_input **out, char *err, size_t errlen)
 {
@@ -1029,23 +993,23 @@ static int osc_create(const fp_host *host, const char *arg, const fp_param *para
     osc_settings set;
     int rc = fp__osc_parse_spec(arg, params, nparams, &set, err, errlen);
     if (rc) return rc;
-    struct sockaddr_in sa = {.sin_family = AF_INET, .sin_port = htons((uint16_t)set.port)};
-    if (inet_pton(AF_INET, set.bind_addr, &sa.sin_addr) != 1) {
-        snprintf(err, errlen, "osc: bind=%s: expected an IPv4 address (127.0.0.1, 0.0.0.0, ...)",
-                 set.bind_addr);
-        return -EINVAL;
-    }
     osc_input *o = calloc(1, sizeof *o);
     if (!o || !(o->lat_us = calloc(LATENCY_RING, sizeof *o->lat_us))) {
         free(o);
         snprintf(err, errlen, "osc: out of memory");
         return -ENOMEM;
     }
-    if ((rc = open_sockets(o, sa, &set, err, errlen))) {
+    osc_listen ls;
+    if ((rc = fp__osc_listen(set.bind_addr, set.port, &ls, err, errlen))) {
         free(o->lat_us);
         free(o);
         return rc;
     }
+    o->sock = ls.sock;
+    o->sock6 = ls.sock6;
+    o->port = ls.port;
+    snprintf(o->bind_text, sizeof o->bind_text, "%s", ls.text);
+    forget_pose_times(o);
     o->host = host;
     o->format = set.format;
     o->hands = set.hands;
@@ -1064,9 +1028,10 @@ static int osc_create(const fp_host *host, const char *arg, const fp_param *para
     o->input = (fp_input){.size = sizeof(fp_input), .plugin_data = o, .start = osc_start,
                           .stop = osc_stop, .destroy = osc_destroy,
                           .get_extension = osc_get_extension};
-    if (!o->loopback)
-        logf_(o, FP_LOG_WARNING, "listening on %s:%u beyond loopback: any host that can reach "
-              "this port can drive the hands", set.bind_addr, (unsigned)o->port);
+    if (!ls.loopback)
+        logf_(o, FP_LOG_WARNING, "listening on %s beyond loopback: any host that can reach "
+              "this port can drive the hands", o->bind_text);
+    if (ls.warning[0]) logf_(o, FP_LOG_WARNING, "%s", ls.warning);
     *out = &o->input;
     return 0;
 }

@@ -16,7 +16,7 @@
 
 #include "facepuppet/plugin.h"
 
-#define FP_OSC_EXT_ID "org.facepuppet.osc-stats/2" /* /2: FP_OSC_UNTIMED */
+#define FP_OSC_EXT_ID "org.facepuppet.osc-stats/3" /* /2: FP_OSC_UNTIMED; /3: FP_OSC_STALE */
 
 /** What went wrong with a packet or message; each kind is counted, and reported once (host
  *  log + a warning status) about a second after its first occurrence, with the count by
@@ -34,6 +34,8 @@ typedef enum fp_osc_problem {
     FP_OSC_QUEUE_FULL,      /* an event the host refused (its bounded queue was full) */
     FP_OSC_UNTIMED,         /* clock=recording: a message outside a timed bundle, or before the
                                sender's /facepuppet/origin (no time on the recording's clock) */
+    FP_OSC_STALE,           /* a pose older than the last of its kind pushed for that hand (a
+                               bundle that arrived out of order), dropped */
     FP_OSC_PROBLEMS
 } fp_osc_problem;
 
