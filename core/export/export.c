@@ -626,7 +626,7 @@ static int finish_gltf(fp_exporter *x, fp_export_result *res, char *err, size_t 
     for (size_t f = 1; f < F; f++)
         if (!(times[f] > times[f - 1])) {
             free(times);
-            rc = fp_errorf(err, errlen, -EINVAL, "%s: frames %zu and %zu are closer in time "
+            rc = fp_errorf(err, errlen, -EDOM, "%s: frames %zu and %zu are closer in time "
                            "than float32 seconds resolve", x->path, f - 1, f);
             goto out;
         }

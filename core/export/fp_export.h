@@ -26,9 +26,10 @@
  * (obj-seq files already written stay, each whole).
  *
  * Errors: 0 or a negative errno-style code (core/common/fp_error.h) with a message in err:
- * -EINVAL bad options or frames (non-finite, times not increasing), -ENOENT/-EACCES/-ENOSPC/
- * -EIO for the output, -ENOMEM, -EINVAL an unknown format or bad options, FP_ENUMERIC the eigensolver
- * failed. Nothing is printed. Threads: one exporter belongs to one thread.
+ * -EINVAL bad options or frames (non-finite, times not increasing), -EDOM (glTF) times that
+ * increase by less than float32 seconds resolve (times far from the first frame's: the
+ * frames' data, not the call), -ENOENT/-EACCES/-ENOSPC/-EIO for the output, -ENOMEM, -EINVAL
+ * an unknown format or bad options, FP_ENUMERIC the eigensolver failed. Nothing is printed. Threads: one exporter belongs to one thread.
  */
 #ifndef FP_EXPORT_H
 #define FP_EXPORT_H

@@ -91,6 +91,13 @@ const float *fp_stack_player_layer_positions(fp_stack_player *p, size_t i);
  *  muted layer), and whether it is playing (not muted, solo rules). */
 double fp_stack_player_layer_weight(const fp_stack_player *p, size_t i);
 
+/** "" or a warning for a layer above the base whose take is cut (no end chunk, a damaged
+ *  chunk): "STACK: layers[i]: TAKE: cut at byte N: reason; its K intact frames played" (the
+ *  first such layer). A layer whose take has no intact frame fails fp_stack_player_open
+ *  (-EBADMSG: the stack, the layer and the take named); the base's cut is its reader's
+ *  warning (fp_take_reader_warning). */
+const char *fp_stack_player_warning(const fp_stack_player *p);
+
 /** Frames x layers whose weight the fold bound scaled down so far. */
 unsigned long fp_stack_player_limited(const fp_stack_player *p);
 

@@ -31,6 +31,7 @@ struct fp_stack_player {
     size_t n;                  /* vertices */
     float *out;                /* the composite */
     unsigned long limited;
+    char warning[1024];        /* "" or the first cut layer above the base (fp_stack_player_warning) */
 };
 
 static double smooth(double u) { return u <= 0 ? 0 : u >= 1 ? 1 : u * u * (3 - 2 * u); }
@@ -166,7 +167,7 @@ static int open_layer(fp_stack_player *p, size_t i, const char *mesh_path,
     if (fp_stack_take_path(p->stack, i, path, sizeof path))
         return fp_errorf(err, errlen, -ENAMETOOLONG, "%s: layers[%zu]: path too long", p->stack->path, i);
     if (fp_stack_is_stack_path(path))
-        return fp_errorf(err, errlen, -EINVAL, "%s: layers[%zu]: %s is a stack; a layer is a take",
+        return fp_errorf(err, errlen, -EBADMSG, "%s: layers[%zu]: %s is a stack; a layer is a take",
                          p->stack->path, i, path);
     fp_take_player *base = i ? p->layers[0].tp : NULL;
     const char *mesh = base ? fp_take_player_mesh_path(base) : mesh_path;
@@ -175,6 +176,13 @@ static int open_layer(fp_stack_player *p, size_t i, const char *mesh_path,
     if (rc) return fp_errorf(err, errlen, rc, "%s: layers[%zu]: %s", p->stack->path, i, why);
     fp_take_reader *r = fp_take_player_reader(L->tp);
     L->frames = fp_take_reader_frames(r);
+    const char *cut = fp_take_reader_warning(r);
+    if (!L->frames) /* (it would add nothing, said nowhere; the take alone is refused, 65) */
+        return fp_errorf(err, errlen, -EBADMSG, "%s: layers[%zu]: %s: no intact frame to play%s%s%s",
+                         p->stack->path, i, path, cut[0] ? " (" : "", cut, cut[0] ? ")" : "");
+    if (cut[0] && i > 0 && !p->warning[0]) /* (the base's: the command's own take warning) */
+        snprintf(p->warning, sizeof p->warning, "%.300s: layers[%zu]: %.600s; its %zu intact frames played",
+                 p->stack->path, i, cut, L->frames);
     const fp_take_summary *sum = fp_take_reader_summary(r);
     L->first_ns = sum->first_time_ns;
     L->last_ns = sum->last_time_ns;
@@ -186,19 +194,21 @@ static int open_layer(fp_stack_player *p, size_t i, const char *mesh_path,
         return 0;
     }
     if (fp_session_vertex_count(fp_take_player_session(L->tp)) != p->n)
-        return fp_errorf(err, errlen, -EINVAL, "%s: layers[%zu]: %s is on a mesh of another vertex count",
+        return fp_errorf(err, errlen, -EBADMSG, "%s: layers[%zu]: %s is on a mesh of another vertex count",
                          p->stack->path, i, path);
     if (L->channels) {
         const struct fp_rig *rig = fp_session_rig(fp_take_player_session(base));
         for (size_t c = 0; c < l->region.name_count; c++)
             if (!rig || fp_rig_channel_index(rig, l->region.names[c]) < 0)
-                return fp_errorf(err, errlen, -EINVAL, "%s: layers[%zu]: the base take's rig has no "
+                return fp_errorf(err, errlen, -EBADMSG, "%s: layers[%zu]: the base take's rig has no "
                                  "channel \"%s\"", p->stack->path, i, l->region.names[c]);
         return 0;
     }
     rc = fp_stack_region_weights(&l->region, fp_take_player_session(base),
                                  fp_take_player_mm_per_unit(base), &L->wt, why, sizeof why);
-    return rc ? fp_errorf(err, errlen, rc, "%s: layers[%zu]: %s", p->stack->path, i, why) : 0;
+    /* (a region the file names that the base cannot give is the file's data, not a usage: 65) */
+    return rc ? fp_errorf(err, errlen, rc == -EINVAL ? -EBADMSG : rc, "%s: layers[%zu]: %s",
+                          p->stack->path, i, why) : 0;
 }
 
 int fp_stack_player_open(const char *stack_path, const char *mesh_path,
@@ -381,6 +391,8 @@ int fp_stack_player_next(fp_stack_player *p, fp_take_frame *frame, fp_frame_stat
 const float *fp_stack_player_positions(const fp_stack_player *p) { return p->out; }
 const fp_stack *fp_stack_player_stack(const fp_stack_player *p) { return p->stack; }
 fp_take_player *fp_stack_player_base(fp_stack_player *p) { return p->layers[0].tp; }
+const char *fp_stack_player_warning(const fp_stack_player *p) { return p->warning; }
+
 unsigned long fp_stack_player_limited(const fp_stack_player *p) { return p->limited; }
 
 /* Which layers play: the base; a layer not muted when no layer is soloed, else a soloed one. */

@@ -395,6 +395,9 @@ const fp_take_summary *fp_take_reader_summary(const fp_take_reader *r);
 const char *fp_take_reader_warning(const fp_take_reader *r);
 /** Number of intact frames (= summary.frames). */
 size_t fp_take_reader_frames(const fp_take_reader *r);
+/** The stored time (ns) of intact frame `index`, from the index made at open (no read, the
+ *  iteration of fp_take_reader_next untouched); INT64_MIN past the end. */
+int64_t fp_take_reader_time(const fp_take_reader *r, size_t index);
 
 /** Read frame number `index` (0-based over the intact frames, not the session frame
  *  number) into *frame; its arrays are the reader's until the next read. Returns 0,
@@ -426,8 +429,9 @@ typedef struct fp_take_edit {
  *  Atomic: a temporary file beside the take (fp_file_open_output: a symbolic link written
  *  through, the file's mode kept), fsync, renamed over it, the folder synced: a crash leaves
  *  the old take or the new one. The take is read whole first (fp_take_reader_open); one with
- *  no end chunk and no damage may still be recording (its recorder would write on into the
- *  replaced file) and is refused with -EBUSY unless e->open_ok. Returns 0, or -EINVAL (NULL,
+ *  no end chunk may still be recording (its recorder would write on into the replaced file;
+ *  a take read while its last chunk is half written looks cut) and is refused with -EBUSY
+ *  unless e->open_ok, whether cut or not. Returns 0, or -EINVAL (NULL,
  *  a rating outside 0..5, a description that is not UTF-8 text: fp_text_ok with lines),
  *  the reader's codes (-ENOENT, -EBADMSG a damaged header, -ENOTSUP, ...), -EBUSY, or the
  *  write's (-EACCES, -ENOSPC, -EIO; the take then as it was), with err naming the file.

@@ -242,14 +242,52 @@ static int parse_layer(const pctx *c, const cJSON *o, size_t i, fp_stack_layer *
     return 0;
 }
 
+/* Whether text (n bytes) ends inside a string; *open: the objects and arrays left open. */
+static bool json_unclosed(const char *text, size_t n, size_t *open)
+{
+    bool str = false, esc = false;
+    size_t depth = 0;
+    for (size_t i = 0; i < n; i++) {
+        const char ch = text[i];
+        if (str) {
+            if (esc) esc = false;
+            else if (ch == '\\') esc = true;
+            else if (ch == '"') str = false;
+        } else if (ch == '"') {
+            str = true;
+        } else if (ch == '{' || ch == '[') {
+            depth++;
+        } else if ((ch == '}' || ch == ']') && depth) {
+            depth--;
+        }
+    }
+    *open = depth;
+    return str;
+}
+
 int fp_stack_parse(const char *json, size_t len, const char *name, fp_stack **out, char *err,
                    size_t errlen)
 {
     if (out) *out = NULL;
     if (!json || !out) return fp_errorf(err, errlen, -EINVAL, "fp_stack_parse: NULL argument");
     pctx c = {name ? name : "stack", err, errlen};
-    cJSON *root = cJSON_ParseWithLength(json, len);
-    if (!root) return bad(&c, "byte 0", "not JSON");
+    const char *end = NULL;
+    cJSON *root = cJSON_ParseWithLengthOpts(json, len, &end, false);
+    if (!root) { /* where it stops: the end of a text cut short, else the byte cJSON stopped at */
+        size_t open = 0;
+        const bool in_string = json_unclosed(json, len, &open);
+        char where[48];
+        if (in_string || open) {
+            snprintf(where, sizeof where, "byte %zu", len);
+            return bad(&c, where, "not JSON: the text ends inside %s%zu unclosed object%s or array%s "
+                       "(cut short?)", in_string ? "a string, " : "", open, open == 1 ? "" : "s",
+                       open == 1 ? "" : "s");
+        }
+        const size_t at = end && end >= json && end < json + len ? (size_t)(end - json) : 0;
+        snprintf(where, sizeof where, "byte %zu", at);
+        const unsigned char ch = len ? (unsigned char)json[at] : 0;
+        return bad(&c, where, "not JSON (at '%c', of %zu bytes)", ch >= 0x20 && ch < 0x7f ? ch : '?', len);
+    }
     fp_stack *s = fp_stack_create();
     int rc = s ? 0 : fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", c.name);
     static const char *const known[] = {"format", "version", "layers", NULL};

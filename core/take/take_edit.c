@@ -241,11 +241,16 @@ static int check_edit(const char *path, const fp_take_edit *e, char *err, size_t
     int rc = fp_take_reader_open(path, &r, err, errlen);
     if (rc) return rc;
     const fp_take_summary *s = fp_take_reader_summary(r);
-    const bool open = !s->complete && !s->cut;
+    /* no end chunk: still recording, or its recorder died (a take read mid-write looks cut
+     * too: its last chunk half written) */
+    const bool open = !s->complete;
+    char cut[600];
+    snprintf(cut, sizeof cut, "%s", fp_take_reader_warning(r));
     fp_take_reader_close(&r);
     if (open && !e->open_ok)
-        return fp_errorf(err, errlen, -EBUSY, "%s: no end chunk: it may still be recording (a "
-                         "rewrite would lose what its recorder writes next)", path);
+        return fp_errorf(err, errlen, -EBUSY, "%s: no end chunk%s%s%s: it may still be recording (a "
+                         "rewrite would lose what its recorder writes next)", path,
+                         cut[0] ? " (" : "", cut, cut[0] ? ")" : "");
     return 0;
 }
 

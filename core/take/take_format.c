@@ -202,6 +202,16 @@ int take_frame_check(const uint8_t *rec, size_t n, size_t inputs, size_t *bad_at
         BAD(4, "unknown frame flags");
     size_t off = TAKE_FRAME_FIXED + (size_t)vc * TAKE_VECTOR_SIZE + (size_t)cc * TAKE_CHANNEL_SIZE;
     if (off > n) BAD(40, "control vectors and channels run past the frame record");
+    if (flags & TAKE_FRAME_FLAG_CONTROL) {
+        /* a control set the engine cannot take (it would show the base, frame after frame,
+         * with nothing said of the file): the solver's radius range, finite vectors */
+        const double radius = le_getd(rec + 32);
+        if (!(radius >= TAKE_RADIUS_MIN && radius <= TAKE_RADIUS_MAX))
+            BAD(32, "control set radius not finite and in [1e-15, 1e15] mesh units");
+        for (size_t i = 0; i < (size_t)vc * 6; i++)
+            if (!isfinite(le_getf(rec + TAKE_FRAME_FIXED + 4 * i)))
+                BAD(TAKE_FRAME_FIXED + (i / 6) * TAKE_VECTOR_SIZE, "control vector not finite");
+    }
     for (uint32_t i = 0; i < ec; i++) {
         if (n - off < TAKE_EVENT_HEAD) BAD(off, "event header runs past the frame record");
         uint32_t es = le_get32(rec + off);

@@ -27,6 +27,9 @@
 #define TAKE_FRAME_FLAG_ACTIVE 1u
 #define TAKE_FRAME_FLAG_CONTROL 2u
 #define TAKE_COUNT_MAX (1u << 24)
+/* A stored control set's radius, mesh units: the solver's range (csrbf.h: 1e-15 <= R <= 1e15). */
+#define TAKE_RADIUS_MIN 1e-15
+#define TAKE_RADIUS_MAX 1e15
 
 static inline void le_put16(uint8_t *p, uint16_t v) { p[0] = (uint8_t)v; p[1] = (uint8_t)(v >> 8); }
 static inline void le_put32(uint8_t *p, uint32_t v)

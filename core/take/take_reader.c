@@ -20,6 +20,7 @@
 typedef struct take_index {
     uint64_t offset;   /* of the frame record in the file */
     uint32_t size;
+    int64_t time_ns;   /* the record's time (fp_take_reader_time) */
 } take_index;
 
 struct fp_take_reader {
@@ -161,7 +162,8 @@ static int index_frames(fp_take_reader *r, uint64_t off, chunk_view *cv)
         const char *why;
         if (take_frame_check(cv->payload + pos, sz, r->header.input_count, &bad_at, &why)) {
             cv->bad_at = at + bad_at;
-            snprintf(cv->why, sizeof cv->why, "frame record at byte %" PRIu64 ": %s", at, why);
+            snprintf(cv->why, sizeof cv->why, "frame %zu (its record at byte %" PRIu64 "): %s",
+                     r->frames, at, why);
             goto bad;
         }
         {   /* frames in order: numbers and times never go back (a clock's jump or a patched
@@ -191,6 +193,7 @@ static int index_frames(fp_take_reader *r, uint64_t off, chunk_view *cv)
             r->index_cap = c;
         }
         r->index[r->frames].offset = at;
+        r->index[r->frames].time_ns = (int64_t)le_get64(cv->payload + pos + 16);
         r->index[r->frames++].size = sz;
         const uint8_t *rec = cv->payload + pos;
         uint64_t fn = le_get64(rec + 8);
@@ -399,6 +402,10 @@ const fp_take_header *fp_take_reader_header(const fp_take_reader *r) { return &r
 const fp_take_summary *fp_take_reader_summary(const fp_take_reader *r) { return &r->sum; }
 const char *fp_take_reader_warning(const fp_take_reader *r) { return r->warning; }
 size_t fp_take_reader_frames(const fp_take_reader *r) { return r->frames; }
+int64_t fp_take_reader_time(const fp_take_reader *r, size_t index)
+{
+    return index < r->frames ? r->index[index].time_ns : INT64_MIN;
+}
 
 int fp_take_reader_read(fp_take_reader *r, size_t index, fp_take_frame *frame, char *err,
                         size_t errlen)

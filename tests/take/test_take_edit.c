@@ -154,6 +154,29 @@ static void test_refusals(void **state)
     e.open_ok = true;
     if (fp_take_edit_header(open_path, &e, err, sizeof err)) fail_msg("%s", err);
     fp_take_writer_close(&w, 0, 0, err, sizeof err);
+    /* cut mid-chunk (no end chunk, its last chunk half there): refused as well, the file as it
+     * was (it was rewritten, rc 0, while the docs said a take without an end chunk is refused) */
+    {
+        size_t nc;
+        unsigned char *bc = slurp(path, &nc);
+        char cut_path[4200];
+        snprintf(cut_path, sizeof cut_path, "%s/cut_T009.fptake", dir);
+        FILE *fc = fopen(cut_path, "wb");
+        assert_non_null(fc);
+        assert_int_equal(fwrite(bc, 1, nc - 40, fc), nc - 40); /* (into the end chunk, past it) */
+        fclose(fc);
+        fp_take_edit ec = {.set_rating = true, .rating = 2};
+        assert_int_equal(fp_take_edit_header(cut_path, &ec, err, sizeof err), -EBUSY);
+        assert_non_null(strstr(err, "no end chunk"));
+        size_t nc1;
+        unsigned char *bc1 = slurp(cut_path, &nc1);
+        assert_int_equal(nc1, nc - 40);
+        assert_memory_equal(bc, bc1, nc1);
+        free(bc1);
+        ec.open_ok = true;
+        if (fp_take_edit_header(cut_path, &ec, err, sizeof err)) fail_msg("%s", err);
+        free(bc);
+    }
     /* a damaged header: -EBADMSG, the file as it was */
     b0[40] ^= 0x20;
     FILE *f = fopen(path, "wb");

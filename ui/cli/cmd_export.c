@@ -7,6 +7,7 @@
 #include "app_util.h"
 #include "command.h"
 #include "fp_take_player.h"
+#include "fp_stack_player.h"
 #include "fp_error.h"
 #ifdef FP_HAVE_UI
 #include "fp_frame_render.h"
@@ -16,12 +17,50 @@
 #include <getopt.h>
 #include <limits.h>
 #include <math.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
 #include <sys/stat.h>
 #include <unistd.h>
+
+/* SIGINT or SIGTERM since the export began (0: none). The walk stops at the next frame or
+ * sample, the exporter is aborted (its temporary file removed) and the status is 128 + the
+ * signal, as `run` ends (130, 143). */
+static volatile sig_atomic_t stop_signal;
+
+static void on_stop_signal(int sig)
+{
+    if (!stop_signal) stop_signal = sig;
+}
+
+/* Catch SIGINT and SIGTERM (old: the actions to restore), or give them back. */
+static void stop_signals(bool on, struct sigaction old[2])
+{
+    static const int sigs[2] = {SIGINT, SIGTERM};
+    if (!on) {
+        for (int i = 0; i < 2; i++) sigaction(sigs[i], &old[i], NULL);
+        return;
+    }
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_stop_signal;
+    sigemptyset(&sa.sa_mask);
+    sa.sa_flags = SA_RESTART; /* (a write in progress finishes; the walk looks after it) */
+    stop_signal = 0;
+    for (int i = 0; i < 2; i++) sigaction(sigs[i], &sa, &old[i]);
+}
+
+/* The walk saw a signal: said, and its status (128 + the signal). */
+static int stopped(bool bar)
+{
+    const int sig = stop_signal;
+    fprintf(stderr, "%sfacepuppet export: %s: stopped; the output not written (its temporary file "
+            "removed; obj-seq and png-seq keep the frames already written)\n",
+            bar ? "\n" : "", sig == SIGINT ? "SIGINT" : "SIGTERM");
+    return 128 + sig;
+}
 
 /* Where frames go: an exporter (core/export), or PNG files rendered headless (png-seq). */
 typedef struct sink {
@@ -86,8 +125,12 @@ static void usage(FILE *f)
         "              (needs a display: xvfb-run on a server)\n"
         "The summary line names the frame rate (the take's, or --resample) and the mesh's unit\n"
         "(the glTF's root scale, the caches' scale to metres). A point cache's or an OBJ\n"
-        "sequence's size is reckoned before any frame: said over 1 GiB, and refused (73) where\n"
-        "the folder it goes to has less room free.\n\n"
+        "sequence's size is reckoned before any frame, from the frames' stored times (with\n"
+        "--resample, their first-to-last time): said over 1 GiB, and refused (73) where the\n"
+        "folder it goes to has less room free. Frame times that do not increase are a damaged\n"
+        "take (65). SIGINT or SIGTERM stops the export at the next frame: its temporary file\n"
+        "is removed (an output that existed is left as it was) and the status is 128 + the\n"
+        "signal (130, 143).\n\n"
         "  -f, --format F        the format (required)\n"
         "  -o, --out PATH        the file (a folder for obj-seq); default: the take's path with\n"
         "                        the format's extension (obj-seq: TAKE_frames/)\n"
@@ -120,7 +163,8 @@ static void usage(FILE *f)
         "  -h, --help            this text\n\n"
         "Exit status: 0 done, 64 usage, 65 a damaged take or another mesh, 66 missing,\n"
         "66 no display for png-seq, 69 png-seq in a build without the viewer, 73 an output not written\n"
-        "or existing without --force (facepuppet --help has the whole table).\n");
+        "or existing without --force, 130/143 stopped by SIGINT/SIGTERM (facepuppet --help has the\n"
+        "whole table).\n");
 }
 
 /* One end of --range: "" (open), a frame index, or a timecode. */
@@ -396,19 +440,43 @@ static int check_out(const export_args *a, const char *out, const char *name)
     return fp_app_check_new_output("facepuppet export", opt, out, a->force);
 }
 
-/* The frames an export writes, about: those of the range (the take's rate), or at --fps over
- * their span; from the take's summary, before any is played. */
-static double frames_out(const export_args *a, const range_end *in, const range_end *out,
-                         const fp_take_header *h, const fp_take_summary *sum, size_t frames, uint64_t tc_in)
+/* The frames an export writes, from the frames' stored times (fp_take_reader_time), before
+ * any is played: the range's frames (those walk_take hands the sink), or with --resample the
+ * samples over their stored first-to-last time (what walk_frame writes: a take whose first
+ * frame said -1e18 ns wrote 30 GB unwarned, the estimate having gone by the frame count).
+ * Frame times in the range that do not increase are damaged data (65, said: the frames and
+ * their times). Returns 0 and *count, or the exit status. */
+static int frames_out(const export_args *a, const range_end *in, const range_end *out,
+                      const fp_take_header *h, fp_take_reader *r, uint64_t tc_in, double *count)
 {
-    uint64_t f0 = 0, l0 = 0, f1 = 0, l1 = 0;
-    take_span(in, h, sum, frames, tc_in, &f0, &l0);
-    take_span(out, h, sum, frames, tc_in, &f1, &l1);
-    const double first = in->set ? (double)in->value - (double)f0 : 0;  /* take frames from the start */
-    const double last = out->set ? (double)out->value - (double)f1 : (double)frames - 1;
-    const double n = last >= first ? last - first + 1 : 0;
-    const double rate = h->rate.den ? (double)h->rate.num / h->rate.den : 0;
-    return a->fps > 0 && rate > 0 ? floor(n / rate * a->fps) + 1 : n;
+    const size_t frames = fp_take_reader_frames(r);
+    size_t first = SIZE_MAX, last = 0;
+    *count = 0;
+    for (size_t i = 0; i < frames; i++) {
+        const int64_t t = fp_take_reader_time(r, i);
+        const bool after_in = !in->set || position(in, i, t, h, tc_in) >= in->value;
+        const bool before_out = !out->set || position(out, i, t, h, tc_in) <= out->value;
+        if (!after_in || !before_out) {
+            if (first != SIZE_MAX && out->set) break;   /* past OUT: walk_take stops there */
+            continue;
+        }
+        if (first != SIZE_MAX && t <= fp_take_reader_time(r, last)) {
+            fprintf(stderr, "facepuppet export: %s: frame %zu's time (%lld ns) is not after frame "
+                    "%zu's (%lld ns): a take's frame times increase (a damaged take)\n",
+                    a->take_path, i, (long long)t, last, (long long)fp_take_reader_time(r, last));
+            return FP_EXIT_DATAERR;
+        }
+        if (first == SIZE_MAX) first = i;
+        last = i;
+    }
+    if (first == SIZE_MAX) return 0;
+    if (!(a->fps > 0)) {
+        *count = (double)(last - first + 1);
+        return 0;
+    }
+    const double span_s = ((double)fp_take_reader_time(r, last) - (double)fp_take_reader_time(r, first)) * 1e-9;
+    *count = floor(span_s * a->fps + 1e-9) + 1;
+    return 0;
 }
 
 /* A point cache's or an OBJ sequence's size, about, before any frame (a --fps of 10000 for 100
@@ -518,7 +586,7 @@ static int walk_frame(export_walk *w, const float *pos, int64_t t_ns, char *err,
     if (w->a->fps <= 0) return sink_add(w->k, pos, (double)(t_ns - w->first_ns) * 1e-9, err, errlen);
     /* samples before this frame's time show the frame held before it */
     int rc = 0;
-    for (double t; w->have_held && !rc &&
+    for (double t; w->have_held && !rc && !stop_signal &&
                    (t = (double)w->sample / w->a->fps) < (double)(t_ns - w->first_ns) * 1e-9;
          w->sample++)
         rc = sink_add(w->k, w->held, t, err, errlen);
@@ -533,11 +601,11 @@ static int walk_frame(export_walk *w, const float *pos, int64_t t_ns, char *err,
 static int walk_take(export_walk *w)
 {
     char err[2048];
-    int rc;
+    int rc = 0;
     size_t index = 0;
     fp_take_frame f;
     double last_bar = -1;
-    while ((rc = fp_take_player_next(w->p, &f, NULL, err, sizeof err)) == 1) {
+    while (!stop_signal && (rc = fp_take_player_next(w->p, &f, NULL, err, sizeof err)) == 1) {
         const size_t i = index++;
         const bool after_in = !w->in.set || position(&w->in, i, f.time_ns, w->h, w->tc_in) >= w->in.value;
         const bool before_out = !w->out.set || position(&w->out, i, f.time_ns, w->h, w->tc_in) <= w->out.value;
@@ -554,6 +622,7 @@ static int walk_take(export_walk *w)
             last_bar = (double)i;
         }
     }
+    if (stop_signal) return stopped(w->bar);
     if (rc < 0) {
         fprintf(stderr, "%sfacepuppet export: %s\n", w->bar ? "\n" : "", err);
         return fp_app_exit_code(rc, FP_APP_INPUT);
@@ -562,13 +631,15 @@ static int walk_take(export_walk *w)
         progress(true, w->total, w->total, sink_frames(w->k));
     if (w->a->fps > 0 && w->have_held) {   /* the held frame's own sample times, up to its time */
         for (double t; (t = (double)w->sample / w->a->fps) <= (double)(w->held_ns - w->first_ns) * 1e-9 + 1e-12;
-             w->sample++)
+             w->sample++) {
+            if (stop_signal) return stopped(false);
             if ((rc = sink_add(w->k, w->held, t, err, sizeof err))) {
                 fprintf(stderr, "facepuppet export: %s\n", err);
                 return fp_app_exit_code(rc, FP_APP_OUTPUT);
             }
+        }
     }
-    return FP_EXIT_OK;
+    return stop_signal ? stopped(false) : FP_EXIT_OK;
 }
 
 /* Export the opened take p as *a asks. Returns the exit status. */
@@ -578,6 +649,8 @@ static int export_take(const export_args *a, fp_take_player *p, sink *k, float *
     const fp_take_header *h = fp_take_player_header(p);
     fp_take_reader *r = fp_take_player_reader(p);
     if ((status = fp_app_take_intact("facepuppet export", "export", a->take_path, r))) return status;
+    if (fp_take_player_stack(p) && fp_stack_player_warning(fp_take_player_stack(p))[0])
+        fprintf(stderr, "facepuppet export: warning: %s\n", fp_stack_player_warning(fp_take_player_stack(p)));
     export_walk w = {.a = a, .p = p, .h = h, .k = k};
     if (a->range && (status = parse_range(a->range, h->rate, &w.in, &w.out))) return status;
     fp_timecode_to_frames(&h->timecode_in, h->rate, &w.tc_in);
@@ -599,9 +672,9 @@ static int export_take(const export_args *a, fp_take_player *p, sink *k, float *
     const double rate = a->fps > 0 ? a->fps
                         : h->rate.den ? (double)h->rate.num / (double)h->rate.den : 0;
     if ((status = check_out(a, out, name))) return status;
-    if ((status = check_size(a, out, frames_out(a, &w.in, &w.out, h, fp_take_reader_summary(r),
-                                                fp_take_reader_frames(r), w.tc_in),
-                             fp_session_mesh(s))))
+    double count;
+    if ((status = frames_out(a, &w.in, &w.out, h, r, w.tc_in, &count)) ||
+        (status = check_size(a, out, count, fp_session_mesh(s))))
         return status;
     char wav[4400]; /* the soundtrack under the frames, beside them (NAME.wav) */
     if ((status = fp_app_audio_export_check(h, out, a->force, wav, sizeof wav, "export"))) return status;
@@ -653,8 +726,16 @@ static int export_main(int argc, char **argv)
     }
     sink k = {0};
     float *held = NULL;
+    struct sigaction old[2];
+    stop_signals(true, old);
     status = export_take(&a, p, &k, &held);
     fp_export_abort(&k.x);
+    if (stop_signal && status == FP_EXIT_OK) { /* it came while the output was being finished */
+        fprintf(stderr, "facepuppet export: %s: stopped after the output was written whole\n",
+                stop_signal == SIGINT ? "SIGINT" : "SIGTERM");
+        status = 128 + stop_signal;
+    }
+    stop_signals(false, old);
 #ifdef FP_HAVE_UI
     fp_frame_renderer_close(&k.png);
 #endif

@@ -6,6 +6,7 @@
 #include "fp_session.h"
 #include "fp_session_take.h"
 #include "fp_take_player.h"
+#include "fp_stack_player.h"
 #include "app_export.h"
 #include "app_audio.h"
 #include "app_link.h"
@@ -401,6 +402,8 @@ static int play_main(int argc, char **argv)
     fp_session *s = fp_take_player_session(player);
     const fp_take_header *h = fp_take_reader_header(r);
     if ((status = fp_app_take_intact("facepuppet play", "play", take_path, r))) goto done;
+    if (fp_take_player_stack(player) && fp_stack_player_warning(fp_take_player_stack(player))[0])
+        fprintf(stderr, "facepuppet play: warning: %s\n", fp_stack_player_warning(fp_take_player_stack(player)));
     if ((status = play_audio_prepare(&audio, h, force, quiet))) goto done;
     const double take_frames = (double)fp_take_reader_frames(r); /* outputs' sizes, before any */
     if (frames_out && (status = fp_app_frames_estimate("facepuppet play", "--frames-out", frames_out,

@@ -74,7 +74,8 @@ static void usage(FILE *f)
                "\"fatal signal SIG... in plugin 'NAME' during CALL (frame N)\" and ends with\n"
                "128 + the signal. SIGINT or SIGTERM ends a run after its frame (0); a frame\n"
                "stuck in a plugin call (one that never returns) is abandoned 0.1 s after it,\n"
-               "the take closed, and the run ends with 128 + the signal (130, 143).\n\n"
+               "the take closed, and the run ends with 128 + the signal (130, 143). They stop\n"
+               "an export at its next frame, its temporary file removed: 130, 143.\n\n"
                "Environment: FACEPUPPET_PLUGIN_PATH  more plugin folders (colon-separated,\n"
                "absolute); FACEPUPPET_DEBUG=1  show plugins' and the session's debug lines.\n");
 }
