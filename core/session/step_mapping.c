@@ -17,7 +17,9 @@ static const unsigned char canary = 0xA5;
 int fp_control_set_check(const fp_control_set *cs)
 {
     if (cs->count > cs->capacity || cs->channel_count > cs->channel_capacity) return -ERANGE;
-    if (!(cs->radius > 0) || !isfinite(cs->radius)) return -EINVAL;
+    /* the engine's range (csrbf.h: options.radius), which a take's reader holds frames to:
+     * a set outside it would be recorded, then read back as damage, the take cut there */
+    if (!(cs->radius >= 1e-15 && cs->radius <= 1e15)) return -EINVAL;
     if (cs->count && (!cs->start || !cs->end)) return -EINVAL;
     for (size_t i = 0; i < cs->count; i++)
         for (int k = 0; k < 3; k++)

@@ -53,7 +53,8 @@ typedef struct fp_mapping_step {
 void fp_mapping_step_init(fp_mapping_step *st, fp_control_set *cs, double budget_ms);
 
 /** Check a control set as a mapping wrote it. Returns 0, -ERANGE (count above capacity,
- *  or channel_count above channel_capacity), -EINVAL (radius not > 0 and finite, a NULL
+ *  or channel_count above channel_capacity), -EINVAL (radius outside the engine's [1e-15,
+ *  1e15] mesh units, NaN included; a NULL
  *  array with count > 0, a non-finite start or end point among the first count). */
 int fp_control_set_check(const fp_control_set *cs);
 

@@ -56,6 +56,10 @@ static void test_check(void **state)
     cs.count = 1;
     cs.radius = INFINITY;
     assert_int_equal(fp_control_set_check(&cs), -EINVAL);
+    cs.radius = 1e300; /* finite, but past the engine's range (a take would read it as damage) */
+    assert_int_equal(fp_control_set_check(&cs), -EINVAL);
+    cs.radius = 1e-20;
+    assert_int_equal(fp_control_set_check(&cs), -EINVAL);
     cs.radius = 1.0;
     starts[0][1] = NAN;
     assert_int_equal(fp_control_set_check(&cs), -EINVAL);
