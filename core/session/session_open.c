@@ -79,6 +79,40 @@ static int attach_rig(fp_session *s, const fp_session_options *opt, char *err, s
  * back into it and the head found there (its unit too, unless one is given), where the hands
  * are fitted as for a face that looks along +z (fp_calibration.face). 0, -EINVAL (one axis
  * given, or two not at a right angle: err says) or -ENOMEM. */
+/* With no rig and no --up/--facing the face is taken to look along +z, +y up. A face's front
+ * holds most of its vertices (eyes, nose, lips against the smooth back of a head or the rim of
+ * a mask: on the three faces of ../shared/data the mean vertex lies 0.16-0.23 of the depth in
+ * front of the box's middle, under 0.11 of the extent off it along x and y); where the mean
+ * lies off the middle most along another axis, or behind it, the face probably looks that way
+ * (Blender's Z-up: along -y), and the log says so, with the options that turn it. */
+#define FACING_HINT_MIN 0.12 /* the mean's offset, in the box's extent, that counts */
+static void facing_hint(fp_session *s)
+{
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY}, sum[3] = {0, 0, 0};
+    size_t k = 0;
+    for (size_t v = 0; v < s->n; v++) {
+        if (s->used && !s->used[v]) continue;
+        for (int i = 0; i < 3; i++) {
+            double x = s->loaded[3 * v + i];
+            lo[i] = fmin(lo[i], x), hi[i] = fmax(hi[i], x), sum[i] += x;
+        }
+        k++;
+    }
+    int best = -1;
+    double off[3], most = 0;
+    for (int i = 0; i < 3 && k; i++) {
+        off[i] = hi[i] > lo[i] ? (sum[i] / (double)k - 0.5 * (lo[i] + hi[i])) / (hi[i] - lo[i]) : 0;
+        if (fabs(off[i]) > most) most = fabs(off[i]), best = i;
+    }
+    if (best < 0 || most < FACING_HINT_MIN || (best == 2 && off[2] > 0)) return;
+    const char sign = off[best] > 0 ? '+' : '-', axis = "xyz"[best];
+    fp_slog_printf(&s->log, FP_LOG_WARNING, "session",
+                   "no rig and no --up/--facing: the face is taken to look along +z with +y up, but "
+                   "its vertices lie most toward %c%c (%.2f of its extent off the middle; a face's "
+                   "detailed front does): if it looks along %c%c, give --up and --facing (Blender's "
+                   "Z-up: --up +z --facing -y)", sign, axis, fabs(off[best]), sign, axis);
+}
+
 static int face_frame(fp_session *s, const fp_session_options *opt, char *err, size_t errlen)
 {
     double q[4];
@@ -94,6 +128,7 @@ static int face_frame(fp_session *s, const fp_session_options *opt, char *err, s
     } else if (s->rig.rig) {
         fp_rig_face_rotation(s->rig.rig, q);
     } else {
+        facing_hint(s);
         return 0;
     }
     if (!fp_face_turned(q)) return 0;

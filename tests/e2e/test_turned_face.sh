@@ -9,6 +9,8 @@
 #  2. without a rig, --up +z --facing -y on the Z-up copy gives what the face gives with
 #     --rig none (within 5%; measured equal: 24,301 vertices, 77.5 mm), the unit detected in
 #     the face's frame; --up alone, two parallel axes or an unknown axis: exit 64;
+#  2a. without a rig nor axes, the Z-up copy draws a hint naming -y and the options (the face
+#     itself none);
 #  2b. pose opens the copy's jaw as it opens the face's (exit 0; the pose carried within
 #     0.001 mm is test_rig's test_placement);
 #  3. calibrate --mode hold on the Z-up copy (in metres) writes the face's calibration turned
@@ -77,6 +79,23 @@ for name in metres zup turned; do
     python3 -c "import sys; a, b, c, d = map(float, sys.argv[1:]); sys.exit(not (abs(a / b - 1) <= 0.05 and abs(c / d - 1) <= 0.05))" \
         "$m" "$m0" "$x" "$x0" || { echo "FAIL: $name moves otherwise than the face"; exit 1; }
 done
+
+# without a rig nor --up/--facing, the Z-up copy draws the hint (its vertices lie toward -y,
+# where its face looks); the face itself does not
+for name in zup face; do
+    mesh=$tmp/$name.obj
+    [ "$name" = face ] && mesh=$face
+    "$build/bin/facepuppet" run --plugin-dir "$build/lib/facepuppet" --mesh "$mesh" --rig none -q \
+        --input "replay:$grab,fast=1" --duration 0.1 --out "$tmp/hint.obj" --force >/dev/null 2>"$tmp/hint.err" ||
+        { cat "$tmp/hint.err"; echo "FAIL: run on $name --rig none"; exit 1; }
+    if [ "$name" = zup ]; then
+        grep -q "its vertices lie most toward -y.*--up +z --facing -y" "$tmp/hint.err" ||
+            { cat "$tmp/hint.err"; echo "FAIL: no facing hint on the Z-up copy without a rig"; exit 1; }
+    elif grep -q "no rig and no --up/--facing" "$tmp/hint.err"; then
+        cat "$tmp/hint.err"; echo "FAIL: a facing hint on the face itself"; exit 1
+    fi
+done
+echo "the Z-up copy without a rig: the hint to give --up +z --facing -y; the face itself: none"
 
 png() { # MESH NAME [OPTIONS...]: frame 100 of a take of the grab on MESH, rendered into $tmp/NAME.png.d
     local mesh=$1 name=$2
