@@ -94,6 +94,11 @@ int fp_calibration_load(const char *path, fp_calibration *out, char *err, size_t
                 goto done;
             }
     }
+    const cJSON *comment = cJSON_GetObjectItemCaseSensitive(root, "comment");
+    if (comment && !cJSON_IsString(comment)) {
+        rc = fp_errorf(err, errlen, -EBADMSG, "%s: field comment: expected a string", path);
+        goto done;
+    }
     for (int h = 0; h < 2; h++) { /* left and right hold an offset only */
         const cJSON *o = cJSON_GetObjectItemCaseSensitive(root, h ? "right" : "left");
         for (const cJSON *a = o && cJSON_IsObject(o) ? o->child : NULL; a; a = a->next)

@@ -287,6 +287,7 @@ static void test_calibration_file(void **state)
         {"[1, 2]", "not a JSON object", -EBADMSG},
         {"{\"scale\": 0.1}\n{}", ":2:1: text after the JSON object", -EBADMSG},
         {"{\"scale\": 0.1, \"rotaton\": [1, 0, 0, 0]}", "unknown field \"rotaton\"", -EBADMSG},
+        {"{\"comment\": 5, \"scale\": 0.1}", "field comment: expected a string", -EBADMSG},
         {"{\"scale\": 0.1, \"offset\": [0, 0, 0], \"offset\": [1, 1, 1]}", "offset given twice", -EBADMSG},
         {"{\"scale\": 0.1, \"left\": {\"offst\": [0, 0, 0]}}", "left.offst", -EBADMSG},
     };
