@@ -617,7 +617,7 @@ static int fill_header(const cJSON *o, fp_take_header *h, strstore *st, char *ms
     if (!s || !fp_take_slate_valid(s))
         return fp_errorf(msg, msglen, -EBADMSG, "header: missing or invalid \"slate\"");
     snprintf(h->slate, sizeof h->slate, "%s", s);
-    if (!jnum(o, "take", &d) || d < 0 || d > UINT32_MAX || d != floor(d))
+    if (!jnum(o, "take", &d) || d < 1 || d > UINT32_MAX || d != floor(d)) /* (numbers start at 1) */
         return fp_errorf(msg, msglen, -EBADMSG, "header: missing or invalid \"take\"");
     h->take = (uint32_t)d;
     const cJSON *rate = cJSON_GetObjectItemCaseSensitive(o, "frame_rate");
@@ -720,6 +720,12 @@ static int fill_header(const cJSON *o, fp_take_header *h, strstore *st, char *ms
     if (face && !(cJSON_IsObject(face) && jdarray(face, "up", h->face_up, 3) &&
                   jdarray(face, "facing", h->face_facing, 3)))
         return fp_errorf(msg, msglen, -EBADMSG, "header: invalid \"face\" (up and facing, 3 numbers each)");
+    if (face) { /* two axes, as --up and --facing gave them: neither zero */
+        double nu = 0, nf = 0;
+        for (int i = 0; i < 3; i++) nu += h->face_up[i] * h->face_up[i], nf += h->face_facing[i] * h->face_facing[i];
+        if (!(nu > 1e-12) || !(nf > 1e-12))
+            return fp_errorf(msg, msglen, -EBADMSG, "header: invalid \"face\" (up or facing is a zero vector)");
+    }
     if (!jnum(o, "radius", &h->radius) || h->radius < 0)
         return fp_errorf(msg, msglen, -EBADMSG, "header: missing or invalid \"radius\"");
     h->description = keep(st, jstr(o, "description"));

@@ -719,6 +719,10 @@ static void test_bad_header(void **state)
         {"\"name\":\"B\"", "\"name\":7", 0, "header: invalid \"performers\"[1]"},
         {"\"scale\":0.1,\"rotation\":[1,", "\"scale\":0,\"rotation\":[1,", 0, "header: invalid \"performers\"[0]"},
         {"\"hand_offset\":[[", "\"hand_offset\":[[\"x\",", 0, "header: invalid \"performers\"[0] hand_offset"},
+        /* take numbers start at 1; the face's axes (1.4) are two non-zero vectors */
+        {"\"take\":1,", "\"take\":0,", 0, "header: missing or invalid \"take\""},
+        {"\"radius\":", "\"face\":{\"up\":[0,0,0],\"facing\":[0,0,1]},\"radius\":", 0,
+         "header: invalid \"face\" (up or facing is a zero vector)"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         const size_t tl = cases[i].tl ? cases[i].tl : strlen(cases[i].to); /* (tl: with a NUL) */
