@@ -8,7 +8,7 @@
  * unless bind= says otherwise), so that a taken port or a bad address fails before the
  * session starts. Leap bridge frames are assembled in osc_leap.c. start()
  * runs one pthread: poll() on the socket and a stop pipe (50 ms ticks); each datagram is read
- * with recvfrom() into one fixed 64 KiB buffer and stamped with the host clock at once; a
+ * with recvmsg() into one fixed 64 KiB buffer (the kernel's own drops counted) and stamped with the host clock at once; a
  * bundle is walked here (timetags, nesting), each message is decoded by liblo
  * (lo_message_deserialise), checked (address, type tags, count, finite, range) and turned into
  * events pushed to the host's bounded queue. Nothing grows with traffic: one buffer, one
@@ -59,7 +59,7 @@
 
 static const char *const problem_names[FP_OSC_PROBLEMS] = {
     "malformed", "bad-types", "bad-count", "non-finite", "out-of-range", "unknown-address",
-    "incomplete", "queue-full", "untimed", "stale"};
+    "incomplete", "queue-full", "untimed", "stale", "kernel-dropped"};
 static const char *const problem_text[FP_OSC_PROBLEMS] = {
     "malformed packets (not OSC, or a bad bundle)", "messages with wrong type tags",
     "messages with a wrong argument count", "messages with NaN or infinite values",
@@ -67,7 +67,8 @@ static const char *const problem_text[FP_OSC_PROBLEMS] = {
     "messages to addresses outside the format", "incomplete frames superseded",
     "events dropped (host queue full)",
     "messages without a time on the sender's recording clock (needs a session's forward=)",
-    "poses older than one already pushed for that hand (bundles out of order)"};
+    "poses older than one already pushed for that hand (bundles out of order)",
+    "datagrams the kernel dropped (its socket buffer full: the sender outran this input)"};
 
 typedef struct mp_hand {
     unsigned have;                 /* bit 0 x, 1 y, 2 z since the last frame */
@@ -91,6 +92,7 @@ typedef struct osc_input {
     uint16_t port;
     /* socket and thread */
     int sock;
+    uint32_t kernel_total[2]; /* SO_RXQ_OVFL's last running total, sock and sock6 */
     int sock6; /* [::1]:port beside 127.0.0.1:port (a sender's "localhost" may be ::1), -1 none
                   (osc_net.h) */
     int stop_pipe[2];
@@ -153,6 +155,29 @@ static void count(osc_input *o, int kind)
     o->st.problems[kind]++;
     pthread_mutex_unlock(&o->lock);
     if (o->report_at[kind] == 0) o->report_at[kind] = now_ns(o) + REPORT_DELAY_NS;
+}
+
+/* The kernel's count of datagrams a socket dropped (SO_RXQ_OVFL's control message, a running
+ * total per socket): what it grew by since the last, counted. */
+static void kernel_drops(osc_input *o, int s, const struct msghdr *mh)
+{
+#ifdef SO_RXQ_OVFL
+    for (struct cmsghdr *c = CMSG_FIRSTHDR((struct msghdr *)mh); c; c = CMSG_NXTHDR((struct msghdr *)mh, c)) {
+        if (c->cmsg_level != SOL_SOCKET || c->cmsg_type != SO_RXQ_OVFL || c->cmsg_len < CMSG_LEN(sizeof(uint32_t)))
+            continue;
+        uint32_t total;
+        memcpy(&total, CMSG_DATA(c), sizeof total);
+        uint32_t grew = total - o->kernel_total[s]; /* (wraps as the kernel's counter does) */
+        o->kernel_total[s] = total;
+        if (!grew) continue;
+        pthread_mutex_lock(&o->lock);
+        o->st.problems[FP_OSC_KERNEL_DROPPED] += grew;
+        pthread_mutex_unlock(&o->lock);
+        if (o->report_at[FP_OSC_KERNEL_DROPPED] == 0) o->report_at[FP_OSC_KERNEL_DROPPED] = now_ns(o) + REPORT_DELAY_NS;
+    }
+#else
+    (void)o, (void)s, (void)mh;
+#endif
 }
 
 static void bump(osc_input *o, uint64_t *field)
@@ -821,10 +846,13 @@ static void *osc_thread(void *arg)
         for (int s = 1; s < 3; s++)
         for (int i = 0; i < BURST && rc > 0 && (fds[s].revents & POLLIN); i++) {
             struct sockaddr_storage from;
-            socklen_t fromlen = sizeof from;
-            ssize_t n = recvfrom(fds[s].fd, o->buf, sizeof o->buf, MSG_DONTWAIT | MSG_TRUNC,
-                                 (struct sockaddr *)&from, &fromlen);
+            union { char buf[CMSG_SPACE(sizeof(uint32_t))]; struct cmsghdr align; } ctl;
+            struct iovec iov = {o->buf, sizeof o->buf};
+            struct msghdr mh = {.msg_name = &from, .msg_namelen = sizeof from, .msg_iov = &iov,
+                                .msg_iovlen = 1, .msg_control = ctl.buf, .msg_controllen = sizeof ctl.buf};
+            ssize_t n = recvmsg(fds[s].fd, &mh, MSG_DONTWAIT | MSG_TRUNC);
             if (n < 0) break; /* EAGAIN: drained */
+            kernel_drops(o, s - 1, &mh);
             int64_t recv_ns = now_ns(o);
             bump(o, &o->st.packets);
             if ((size_t)n > sizeof o->buf) {
@@ -1007,6 +1035,14 @@ static int osc_create(const fp_host *host, const char *arg, const fp_param *para
     }
     o->sock = ls.sock;
     o->sock6 = ls.sock6;
+    o->kernel_total[0] = o->kernel_total[1] = 0;
+#ifdef SO_RXQ_OVFL
+    { /* the kernel's drops, counted (kernel_drops); where refused, they go uncounted */
+        int on = 1;
+        (void)setsockopt(o->sock, SOL_SOCKET, SO_RXQ_OVFL, &on, sizeof on);
+        if (o->sock6 >= 0) (void)setsockopt(o->sock6, SOL_SOCKET, SO_RXQ_OVFL, &on, sizeof on);
+    }
+#endif
     o->port = ls.port;
     snprintf(o->bind_text, sizeof o->bind_text, "%s", ls.text);
     forget_pose_times(o);

@@ -16,7 +16,8 @@
 
 #include "facepuppet/plugin.h"
 
-#define FP_OSC_EXT_ID "org.facepuppet.osc-stats/3" /* /2: FP_OSC_UNTIMED; /3: FP_OSC_STALE */
+#define FP_OSC_EXT_ID "org.facepuppet.osc-stats/3" /* /2: FP_OSC_UNTIMED; /3: FP_OSC_STALE,
+                                                      FP_OSC_KERNEL_DROPPED */
 
 /** What went wrong with a packet or message; each kind is counted, and reported once (host
  *  log + a warning status) about a second after its first occurrence, with the count by
@@ -36,6 +37,8 @@ typedef enum fp_osc_problem {
                                sender's /facepuppet/origin (no time on the recording's clock) */
     FP_OSC_STALE,           /* a pose older than the last of its kind pushed for that hand (a
                                bundle that arrived out of order), dropped */
+    FP_OSC_KERNEL_DROPPED,  /* datagrams the kernel dropped, its socket buffer full (Linux
+                               SO_RXQ_OVFL; 0 where the system does not say) */
     FP_OSC_PROBLEMS
 } fp_osc_problem;
 
