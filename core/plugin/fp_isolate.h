@@ -64,8 +64,8 @@ int fp_isolate_mode_parse(const char *text, fp_isolate_mode *out);
 const char *fp_isolate_mode_name(fp_isolate_mode mode);
 
 /** Whether the plugin at `file` (found on `path`, fp_plugin_find) runs in a helper under
- *  `mode`: never for NONE, always for ALL; for THIRD_PARTY, unless `builtin` (the file was
- *  found in the path's built-in folder). */
+ *  `mode`: never for NONE, always for ALL; for THIRD_PARTY, unless `builtin` (one of
+ *  facepuppet's own, found in the path's built-in folder: fp_plugin_find). */
 bool fp_isolate_wanted(fp_isolate_mode mode, bool builtin);
 
 typedef struct fp_isolate_options {

@@ -103,9 +103,13 @@ typedef struct fp_plugin {
 int fp_plugin_load(const fp_plugin_path *path, fp_plugin_kind kind, const char *name,
                    fp_plugin *out, char *err, size_t errlen);
 
+/** Whether `name` (a SPEC's NAME) is one of the plugins facepuppet ships (plugins/). */
+bool fp_plugin_shipped(fp_plugin_kind kind, const char *name);
+
 /** Where fp_plugin_load would find `name` (as it searches: a name with a '/' is the file
  *  itself), into file (filelen bytes), without loading it; *builtin (may be NULL) true when
- *  it is in the path's built-in folder. Unsafe candidates skipped are described in warning
+ *  it is in the path's built-in folder and is one of facepuppet's own (fp_plugin_shipped): a
+ *  third party's plugin installed there (the SDK's install step puts it there) is not. Unsafe candidates skipped are described in warning
  *  (may be NULL). Returns whether a file was found. */
 bool fp_plugin_find(const fp_plugin_path *path, fp_plugin_kind kind, const char *name, char *file,
                     size_t filelen, bool *builtin, char *warning, size_t warnlen);

@@ -140,6 +140,19 @@ void fp_plugin_not_found(const fp_plugin_path *path, fp_plugin_kind kind, const 
                  avail[0] ? avail : "none", warning && warning[0] ? "; " : "", warning ? warning : "");
 }
 
+bool fp_plugin_shipped(fp_plugin_kind kind, const char *name)
+{
+    /* plugins/: every fp_add_plugin of a mapping and an input (tests/plugin checks the list
+     * against the built plugin folder) */
+    static const char *const mappings[] = {"anchored", "unanchored", "onehand"};
+    static const char *const inputs[] = {"replay", "take", "osc", "cyberglove", "pedal", "audio"};
+    const char *const *list = kind == FP_PLUGIN_INPUT ? inputs : mappings;
+    size_t n = kind == FP_PLUGIN_INPUT ? sizeof inputs / sizeof *inputs : sizeof mappings / sizeof *mappings;
+    for (size_t i = 0; name && i < n; i++)
+        if (!strcmp(name, list[i])) return true;
+    return false;
+}
+
 bool fp_plugin_find(const fp_plugin_path *path, fp_plugin_kind kind, const char *name, char *file,
                     size_t filelen, bool *builtin, char *warning, size_t warnlen)
 {
@@ -160,7 +173,7 @@ bool fp_plugin_find(const fp_plugin_path *path, fp_plugin_kind kind, const char 
                 snprintf(warning + used, warnlen - used, "%s%.300s skipped: %.120s", used ? "; " : "", file, why);
             found = false;
         }
-        if (found && builtin) *builtin = i == path->builtin;
+        if (found && builtin) *builtin = i == path->builtin && fp_plugin_shipped(kind, name);
     }
     return found;
 }

@@ -1,9 +1,11 @@
 /* The host side of the plugin ABI: SPEC parsing, the loader's errors, the MPSC queue. */
 #define _GNU_SOURCE
 #include "fp_plugin_host.h"
+#include "fp_isolate.h"
 #include "fp_event_check.h"
 #include "fp_plugin_crash.h"
 
+#include <dirent.h>
 #include <math.h>
 #include <pthread.h>
 #include <setjmp.h>
@@ -344,6 +346,48 @@ static void test_builtin_first(void **state)
     remove_dir(dir);
 }
 
+/* Which plugins are facepuppet's own (fp_plugin_shipped), and so run in process by default:
+ * the list holds every plugin in the built-in folder, and a third party's plugin copied into
+ * that folder (as the SDK's install step does) is not one of them (before: any file there was
+ * "built-in", so a user's crashing mapping installed there ended the run). */
+static void test_shipped_only_builtin(void **state)
+{
+    (void)state;
+    DIR *d = opendir(builtin_dir);
+    assert_non_null(d);
+    int seen = 0;
+    for (struct dirent *e; (e = readdir(d));) {
+        size_t l = strlen(e->d_name);
+        if (l < 4 || strcmp(e->d_name + l - 3, ".so")) continue;
+        char name[256];
+        snprintf(name, sizeof name, "%.*s", (int)(l - 3), e->d_name);
+        bool input = !strncmp(name, "input-", 6), map = !strncmp(name, "map-", 4);
+        assert_true(input || map);
+        if (!fp_plugin_shipped(input ? FP_PLUGIN_INPUT : FP_PLUGIN_MAPPING, name + (input ? 6 : 4)))
+            fail_msg("%s/%s is built but not in fp_plugin_shipped's list", builtin_dir, e->d_name);
+        seen++;
+    }
+    closedir(d);
+    assert_true(seen >= 9);
+    /* a third party's mapping in the built-in folder: found there, not built-in */
+    char dir[64] = "/tmp/fp-builtin-XXXXXX", src[4200], dst[4200], cmd[16384], file[4200];
+    assert_non_null(mkdtemp(dir));
+    snprintf(src, sizeof src, "%s/map-anchored.so", builtin_dir);
+    snprintf(dst, sizeof dst, "%s/map-mine.so", dir);
+    snprintf(cmd, sizeof cmd, "cp '%s' '%s' && cp '%s' '%s/map-anchored.so'", src, dst, src, dir);
+    assert_int_equal(system(cmd), 0);
+    fp_plugin_path path;
+    fp_plugin_path_init(&path, NULL, 0, dir);
+    bool builtin = true;
+    assert_true(fp_plugin_find(&path, FP_PLUGIN_MAPPING, "mine", file, sizeof file, &builtin, NULL, 0));
+    assert_false(builtin);
+    assert_true(fp_isolate_wanted(FP_ISOLATE_THIRD_PARTY, builtin));
+    assert_true(fp_plugin_find(&path, FP_PLUGIN_MAPPING, "anchored", file, sizeof file, &builtin, NULL, 0));
+    assert_true(builtin);
+    fp_plugin_path_clear(&path);
+    remove_dir(dir);
+}
+
 /* ---- a fatal signal inside a plugin names the plugin, then ends the process ---- */
 
 /* Runs fn in a child with the crash handler installed; returns what the child wrote to
@@ -586,7 +630,8 @@ int main(void)
         cmocka_unit_test(test_queue_mpsc),
         cmocka_unit_test(test_queue_full),        cmocka_unit_test(test_queue_retry),
         cmocka_unit_test(test_unsafe_folders_skipped),
-        cmocka_unit_test(test_builtin_first),     cmocka_unit_test(test_crash_names_plugin),
+        cmocka_unit_test(test_builtin_first),
+        cmocka_unit_test(test_shipped_only_builtin),     cmocka_unit_test(test_crash_names_plugin),
         cmocka_unit_test(test_call_oldest),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
