@@ -577,17 +577,19 @@ static void run_sequence(checker *c, fp_mapping *m, scene *s, snapshot *snaps, d
                       cs->count, cs->capacity, cs->channel_count, cs->channel_capacity);
             continue;
         }
-        if (cs->active && (!(cs->radius > 0) || !isfinite(cs->radius)))
-            fault_add(&faults[F_RADIUS], f, scen, "active with radius %g (must be > 0 and finite)", cs->radius);
+        if (cs->active && !(cs->radius >= FP_CONTROL_RADIUS_MIN && cs->radius <= FP_CONTROL_RADIUS_MAX))
+            fault_add(&faults[F_RADIUS], f, scen, "active with radius %g (the host takes %g to %g)", cs->radius,
+                      FP_CONTROL_RADIUS_MIN, FP_CONTROL_RADIUS_MAX);
         for (size_t i = 0; i < cs->count; i++)
             for (int k = 0; k < 3; k++)
-                if (!isfinite(cs->start[i][k]) || !isfinite(cs->end[i][k])) {
+                if (!(fabsf(cs->start[i][k]) <= FP_CONTROL_COORD_MAX) || !(fabsf(cs->end[i][k]) <= FP_CONTROL_COORD_MAX)) {
+                    const bool s_ok = fabsf(cs->start[i][k]) <= FP_CONTROL_COORD_MAX;
                     fault_add(&faults[F_NONFINITE], f, scen,
-                              "control vector %zu: %s point (%g, %g, %g) is not finite%s", i,
-                              isfinite(cs->start[i][k]) ? "end" : "start",
-                              isfinite(cs->start[i][k]) ? cs->end[i][0] : cs->start[i][0],
-                              isfinite(cs->start[i][k]) ? cs->end[i][1] : cs->start[i][1],
-                              isfinite(cs->start[i][k]) ? cs->end[i][2] : cs->start[i][2],
+                              "control vector %zu: %s point (%g, %g, %g) %s%s", i,
+                              s_ok ? "end" : "start", s_ok ? cs->end[i][0] : cs->start[i][0],
+                              s_ok ? cs->end[i][1] : cs->start[i][1], s_ok ? cs->end[i][2] : cs->start[i][2],
+                              isfinite(s_ok ? cs->end[i][k] : cs->start[i][k])
+                                  ? "lies beyond 1e15 (FP_CONTROL_COORD_MAX)" : "is not finite",
                               in.extra_performers ? " (the frame's hands are finite; only extra_hands' rows "
                               "past FP_HANDS x extra_performers hold NaN: read past them?)" : "");
                     i = cs->count;
@@ -739,7 +741,7 @@ static void check_mapping(checker *c, creator *cr)
     if (!any)
         report(c, FP_CHECK_PASS, "control sets",
                "%zu frames (no hands, one hand, both, touching and far, edge poses%s; without and "
-               "with a rig): count <= capacity, canaries intact, finite points, radius > 0", n,
+               "with a rig): count <= capacity, canaries intact, points finite within 1e15, radius in [1e-15, 1e15]", n,
                c->extra ? ", with further performers" : "");
     if (!any && c->extra)
         report(c, FP_CHECK_PASS, "performers", "%d frames with 1 and %d further performers (hands far, "

@@ -17,13 +17,14 @@ static const unsigned char canary = 0xA5;
 int fp_control_set_check(const fp_control_set *cs)
 {
     if (cs->count > cs->capacity || cs->channel_count > cs->channel_capacity) return -ERANGE;
-    /* the engine's range (csrbf.h: options.radius), which a take's reader holds frames to:
-     * a set outside it would be recorded, then read back as damage, the take cut there */
-    if (!(cs->radius >= 1e-15 && cs->radius <= 1e15)) return -EINVAL;
+    /* the engine's range (plugin.h, csrbf.h), which a take's reader holds frames to: a set
+     * outside it would be recorded, then read back as damage, the take cut there */
+    if (!(cs->radius >= FP_CONTROL_RADIUS_MIN && cs->radius <= FP_CONTROL_RADIUS_MAX)) return -EINVAL;
     if (cs->count && (!cs->start || !cs->end)) return -EINVAL;
     for (size_t i = 0; i < cs->count; i++)
         for (int k = 0; k < 3; k++)
-            if (!isfinite(cs->start[i][k]) || !isfinite(cs->end[i][k])) return -EINVAL;
+            if (!(fabsf(cs->start[i][k]) <= FP_CONTROL_COORD_MAX) || !(fabsf(cs->end[i][k]) <= FP_CONTROL_COORD_MAX))
+                return -EINVAL; /* (NaN fails too) */
     return 0;
 }
 
@@ -86,15 +87,26 @@ static const char *source_of(char buf[96], const char *name)
     return buf;
 }
 
+/* A set refused (the mapping's error, a fault, stopped): nothing deformed, and nothing of
+ * what the mapping wrote kept, so that a take records an empty, valid set (the session's
+ * radius): a reader would take a refused set's NaN or huge radius for damage and cut the
+ * take there. */
+static void refuse(fp_control_set *cs, const fp_frame_input *in)
+{
+    cs->active = false;
+    cs->intents = 0;
+    cs->count = 0;
+    cs->channel_count = 0;
+    cs->radius = in->radius >= FP_CONTROL_RADIUS_MIN && in->radius <= FP_CONTROL_RADIUS_MAX ? in->radius : 1.0;
+}
+
 int fp_mapping_step_run(fp_mapping_step *st, fp_mapping *mapping, const char *name,
                         const fp_frame_input *in, fp_control_set *cs, const fp_slog *log)
 {
     char source[96]; /* the reports' source, "mapping 'NAME'", made only for a report */
     unsigned long long frame = (unsigned long long)in->frame;
     if (st->stopped) {
-        cs->active = false;
-        cs->intents = 0;
-        cs->count = 0;
+        refuse(cs, in);
         return st->fault;
     }
     fp_plugin_call_enter(name, "process", in->frame);
@@ -120,9 +132,17 @@ int fp_mapping_step_run(fp_mapping_step *st, fp_mapping *mapping, const char *na
         fill_canaries(st);
         st->stopped = true;
         st->fault = FP_EPLUGIN_FAULT;
-        cs->active = false;
-        cs->intents = 0;
-        cs->count = 0;
+        refuse(cs, in);
+        return st->fault;
+    }
+    if (rc == FP_EPLUGIN_FAULT) { /* an isolated mapping that wrote past the arrays (its proxy
+                                   * said so and stopped it): stopped, as in process */
+        snprintf(st->fault_message, sizeof st->fault_message,
+                 "wrote past the capacity of the host's arrays on frame %llu (in its helper "
+                 "process); the mapping is stopped, the base stays shown", frame);
+        st->stopped = true;
+        st->fault = FP_EPLUGIN_FAULT;
+        refuse(cs, in);
         return st->fault;
     }
     const char *what = NULL;
@@ -143,8 +163,7 @@ int fp_mapping_step_run(fp_mapping_step *st, fp_mapping *mapping, const char *na
             fp_slog_repeat_report(&st->errors, log, FP_LOG_ERROR, source_of(source, name), rc,
                                   "%s %d (%s) on frame %llu; the base shown", what, rc,
                                   fp_strerror(rc), frame);
-        cs->active = false;
-        cs->intents = 0;
+        refuse(cs, in);
         return rc;
     }
     fp_slog_repeat_flush(&st->errors, log);

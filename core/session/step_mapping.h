@@ -53,8 +53,9 @@ typedef struct fp_mapping_step {
 void fp_mapping_step_init(fp_mapping_step *st, fp_control_set *cs, double budget_ms);
 
 /** Check a control set as a mapping wrote it. Returns 0, -ERANGE (count above capacity,
- *  or channel_count above channel_capacity), -EINVAL (radius outside the engine's [1e-15,
- *  1e15] mesh units, NaN included; a NULL
+ *  or channel_count above channel_capacity), -EINVAL (radius outside [FP_CONTROL_RADIUS_MIN,
+ *  FP_CONTROL_RADIUS_MAX] mesh units, NaN included, a coordinate not finite or beyond
+ *  FP_CONTROL_COORD_MAX (plugin.h); a NULL
  *  array with count > 0, a non-finite start or end point among the first count). */
 int fp_control_set_check(const fp_control_set *cs);
 
@@ -66,9 +67,13 @@ int fp_control_set_check(const fp_control_set *cs);
  *  later ones counted. When cs uses the step's arrays (fp_mapping_step_init), the canaries
  *  after them are checked after every call: an overwritten canary (a write past capacity)
  *  is reported, the canaries restored, and the mapping stopped (st->stopped, st->fault =
- *  FP_EPLUGIN_FAULT): it is not called again and every later frame shows the base. On an
- *  error (the mapping's negative code, fp_control_set_check's, or the fault) cs->active and
- *  cs->intents are cleared; the error is reported the first time, then counted. On success
+ *  FP_EPLUGIN_FAULT): it is not called again and every later frame shows the base. So is a
+ *  mapping whose process returns FP_EPLUGIN_FAULT (an isolated one's proxy says so when its
+ *  helper wrote past the arrays; the proxy has said it in the log). On an
+ *  error (the mapping's negative code, fp_control_set_check's, or the fault) the set is
+ *  emptied: inactive, no intents, no vectors nor channels, in->radius as its radius (a take
+ *  records it as such: what the mapping wrote is not kept); the error is reported the first
+ *  time, then counted. On success
  *  a pending repeated error is flushed. Returns 0 or the error code. */
 int fp_mapping_step_run(fp_mapping_step *st, fp_mapping *mapping, const char *name,
                         const fp_frame_input *in, fp_control_set *cs, const fp_slog *log);

@@ -9,9 +9,9 @@
  *   FIXTURE_NO_INSTANCE    create returns 0 without an instance
  *   FIXTURE_SEGV           process dereferences a null pointer from frame 3 on
  *   FIXTURE_SPIN           process spins forever on its 30th call (SIGTERM's watchdog)
- *   FIXTURE_ENGINE_FAIL    A with a support radius of 1e20 (finite and positive: the host's
- *                             checks pass), which the engine refuses every frame (coincident
- *                             start points would not do: the engine merges them)
+ *   FIXTURE_ENGINE_FAIL    A with a support radius of 1e20 (finite and positive, but past the
+ *                             engine's [1e-15, 1e15]: the host refuses it as the mapping's
+ *                             error every frame, before the engine or a take sees it)
  *   FIXTURE_EXTRA_WRITE    A, and writes into the host's const extra_hands (ABI 1.3)
  *   FIXTURE_EXTRA_READ     A, and a control vector from every further hand the ABI allows
  *                             (FP_PERFORMER_CAPACITY - 1 performers), not the extra_performers

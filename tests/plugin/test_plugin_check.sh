@@ -110,11 +110,25 @@ expect 78 "mapping 'fixture-overrun': wrote past the capacity of the host's star
 expect 139 "fatal signal SIGSEGV in plugin 'fixture-segv' during process \(frame 3\)" run --mapping fixture-segv
 expect 0 "mapping 'fixture-slow': process took [0-9]+\.[0-9]+ ms on frame [0-9]+, over the budget of 2 ms" run --mapping fixture-slow
 expect 0 "mapping 'fixture-nan': invalid control set .* on frame [0-9]+" run --mapping fixture-nan
+# ... and a take of it plays: the refused sets are recorded emptied, not as the mapping wrote
+# them (before: play read the NaN as damage, "no intact frame to play", 65)
+expect 0 "mapping 'fixture-nan': invalid control set" run --mapping fixture-nan --take-dir "$tmp/nantakes"
+"$fp" play --plugin-dir "$fx" "$(ls "$tmp"/nantakes/*.fptake | head -1)" -o "$tmp/nanplay.obj" --force >"$tmp/out" 2>&1
+rc=$?
+if [ $rc != 0 ] || grep -q "cut\|damage\|no intact" "$tmp/out"; then
+    fail "the take of a refused mapping does not play whole (exit $rc)"; sed 's/^/    /' "$tmp/out"
+else echo "ok: the take of a refused mapping plays (exit 0)"; fi
 expect 78 "mapping 'fixture-noinstance': create returned 0 without an instance" run --mapping fixture-noinstance
-# An engine error on every frame (the engine refuses the radius) is one line, then its count.
-expect 0 "engine: invalid argument; the base shown \(repeated [0-9]+ more times\)" run --mapping fixture-enginefail
-n=$(grep -c "engine: " "$tmp/out")
-[ "$n" = 2 ] && echo "ok: the repeated engine error: 2 lines" || { fail "engine error lines: $n, wanted 2"; sed 's/^/    /' "$tmp/out"; }
+# A radius the engine would refuse (1e20: finite and positive) is the mapping's error, named,
+# on every frame: one line, then its count (before, the host passed it and the engine said
+# "engine: invalid argument" without the mapping's name, and a take recorded the set).
+expect 0 "mapping 'fixture-enginefail': invalid control set \(radius or points\): -22 .* the base shown \(repeated [0-9]+ more times\)" run --mapping fixture-enginefail
+n=$(grep -c "mapping 'fixture-enginefail': invalid control set" "$tmp/out")
+[ "$n" = 2 ] && echo "ok: the repeated error: 2 lines" || { fail "error lines: $n, wanted 2"; sed 's/^/    /' "$tmp/out"; }
+grep -q "engine: " "$tmp/out" && { fail "the engine saw the refused set"; sed 's/^/    /' "$tmp/out"; }
+# An isolated mapping that writes past the arrays is stopped as in process: exit 78.
+runi() { "$fp" run --plugin-dir "$fx" --mesh "$mesh" --input "replay:$rec" --duration 1 --quiet -o "$tmp/out.obj" --force "$@"; }
+expect 78 "mapping 'fixture-overrun': wrote past the capacity of the host's arrays on frame [0-9]+ \(in its helper process\); the mapping is stopped" runi --mapping fixture-overrun
 # Mapping log lines carry the instance's name.
 expect 0 "facepuppet: mapping 'fixture': fixture A created" run --mapping fixture
 

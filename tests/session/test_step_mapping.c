@@ -101,9 +101,17 @@ static void test_errors_once_with_count(void **state)
     assert_non_null(strstr(cap.lines[1], "repeated 9 more times"));
     mode = 2;
     assert_int_equal(fp_mapping_step_run(&st, &m, "anchored", &in, &cs, &log), -ERANGE);
+    assert_int_equal(cs.count, 0); /* a refused set is emptied, not kept as written */
+    in.radius = 2.5;
     mode = 4;
     assert_int_equal(fp_mapping_step_run(&st, &m, "anchored", &in, &cs, &log), -EINVAL);
     assert_int_equal(cap.count, 5);
+    /* what a take records of it: inactive, empty, the session's radius (before: the radius 0
+     * the mapping wrote, which a take's reader reads as damage) */
+    assert_false(cs.active);
+    assert_int_equal(cs.count, 0);
+    assert_int_equal(cs.channel_count, 0);
+    assert_true(cs.radius == 2.5);
     mode = 0; /* success flushes nothing when the error did not repeat */
     assert_int_equal(fp_mapping_step_run(&st, &m, "anchored", &in, &cs, &log), 0);
     assert_int_equal(cap.count, 5);

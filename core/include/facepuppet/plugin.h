@@ -571,6 +571,14 @@ typedef struct fp_channel {
     float value;
 } fp_channel;
 
+/** The control set a host takes (the engine's own limits, csrbf.h): a radius within
+ *  [FP_CONTROL_RADIUS_MIN, FP_CONTROL_RADIUS_MAX] mesh units and every start and end
+ *  coordinate finite with |x| <= FP_CONTROL_COORD_MAX. Any other set is the mapping's error:
+ *  reported naming it, the base shown that frame, nothing recorded. */
+#define FP_CONTROL_RADIUS_MIN 1e-15
+#define FP_CONTROL_RADIUS_MAX 1e15
+#define FP_CONTROL_COORD_MAX 1e15
+
 /** What a mapping returns each frame. The host owns the arrays and sets the capacities; the
  *  mapping fills at most that many.
  *
@@ -587,7 +595,8 @@ typedef struct fp_control_set {
     uint32_t size;
     bool active;
     uint32_t intents;             /* fp_intent bits */
-    double radius;                /* support radius, mesh units, > 0 */
+    double radius;                /* support radius, mesh units, in [FP_CONTROL_RADIUS_MIN,
+                                     FP_CONTROL_RADIUS_MAX] */
     size_t capacity;              /* set by the host, >= FP_CONTROL_CAPACITY (ABI 1.1) */
     size_t count;                 /* filled by the mapping, <= capacity */
     float (*start)[3];            /* start points s_i, mesh units */
