@@ -310,15 +310,13 @@ static void test_minimal_box(void **state)
     fp_gloveemu_destroy(&e);
 }
 
-/* Unplugged from a box that never said whether its status byte is on (U 1 and ?U go
- * unanswered): the status 0 of the records is read as such, by records with their status
- * clear and by `S e g 0x00` frames in place of records alike; no angles while out, no line
- * noise. */
-static void minimal_box_unplug(bool error_frames, const char *name)
+/* The glove unplugged from its box (the box keeps answering: records with the status bit
+ * clear and `eg`, or `S e g 0x00` frames with error_frames) and plugged back: "unplugged",
+ * no angles while out, "plugged", angles again, no line noise, no reconnection needed. */
+static void unplug_cycle(fp_gloveemu_options o, const char *name)
 {
-    fp_gloveemu *e = emu_new((fp_gloveemu_options){.recording = CSV_GRAB, .loop = true,
-                                                   .unanswered = "RVDU", .error_frames = error_frames},
-                             name);
+    const bool error_frames = o.error_frames;
+    fp_gloveemu *e = emu_new(o, name);
     fp_test_host *f = fp_test_host_new(0);
     fp_input *in = NULL;
     char err[256];
@@ -354,11 +352,15 @@ static void minimal_box_unplug(bool error_frames, const char *name)
     fp_gloveemu_destroy(&e);
 }
 
+/* Unplugged from a box that never said whether its status byte is on (U 1 and ?U go
+ * unanswered): the status 0 of the records is read as such, by records with their status
+ * clear and by `S e g 0x00` frames in place of records alike. */
 static void test_minimal_box_unplug(void **state)
 {
     (void)state;
-    minimal_box_unplug(false, "g10");
-    minimal_box_unplug(true, "g11");
+    unplug_cycle((fp_gloveemu_options){.recording = CSV_GRAB, .loop = true, .unanswered = "RVDU"}, "g10");
+    unplug_cycle((fp_gloveemu_options){.recording = CSV_GRAB, .loop = true, .unanswered = "RVDU",
+                                       .error_frames = true}, "g11");
 }
 
 /* Fewer sensors sampled than the glove has (?N 19 of ?S 22, the software mask ?M saying
@@ -617,37 +619,7 @@ static void test_calibration_never_infinite(void **state)
 static void test_fault_unplug(void **state)
 {
     (void)state;
-    fp_gloveemu *e = emu_new((fp_gloveemu_options){.recording = CSV_GRAB, .loop = true}, "g7");
-    fp_test_host *f = fp_test_host_new(0);
-    fp_input *in = NULL;
-    char err[256];
-    assert_int_equal(create_input(f, fp_gloveemu_path(e), &in, err, sizeof err, (char *)NULL), 0);
-    start_input(in);
-    long c = fp_test_host_wait_status(f, 0, FP_STATUS_CONNECTED, NULL, WAIT_MS);
-    assert_true(c >= 0 && fp_test_host_wait_angles(f, (size_t)c, 10, WAIT_MS) > 0);
-    fp_gloveemu_set_plugged(e, false);
-    long d = fp_test_host_wait_status(f, (size_t)c, FP_STATUS_DISCONNECTED, "unplugged", WAIT_MS);
-    assert_true(d >= 0);
-    /* the box keeps sending (status bit clear, eg): let 20 such records pass */
-    fp_gloveemu_stats es;
-    fp_gloveemu_get_stats(e, &es);
-    uint64_t target = es.records + 20;
-    int64_t deadline = fp_test_mono_ns() + (int64_t)WAIT_MS * 1000000;
-    while (es.records < target && fp_test_mono_ns() < deadline) {
-        usleep(5000);
-        fp_gloveemu_get_stats(e, &es);
-    }
-    assert_true(es.records >= target);
-    fp_gloveemu_set_plugged(e, true);
-    long r = fp_test_host_wait_status(f, (size_t)d, FP_STATUS_CONNECTED, "plugged", WAIT_MS);
-    assert_true(r > d);
-    for (long i = d + 1; i < r; i++)   /* no angles while unplugged: the last pose stays */
-        assert_int_not_equal(fp_test_host_get(f, (size_t)i).header.type, FP_EVENT_JOINT_ANGLES);
-    assert_true(fp_test_host_wait_angles(f, (size_t)r, 10, WAIT_MS) > 0);
-    assert_int_equal(plugin_stats(in).connects, 1);   /* no reconnection was needed */
-    stop_input(&in);
-    fp_test_host_free(f);
-    fp_gloveemu_destroy(&e);
+    unplug_cycle((fp_gloveemu_options){.recording = CSV_GRAB, .loop = true}, "g7");
 }
 
 /* Cable pulled (master closed: EIO/HUP), reconnect with backoff once the link is back. */
