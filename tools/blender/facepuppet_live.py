@@ -3,10 +3,14 @@
 
 The face is shown live on the mesh imported from the same file the session deforms
 (File > Import > Wavefront OBJ, or glTF; the vertex order must be the file's), and what is
-received can be recorded as shape-key animation on the timeline: one shape key a frame,
-keyed to 1 on its frame and 0 elsewhere (constant interpolation), placed by the stream's
-timecode (the first one at the scene's start frame, its timecode in a timeline marker and
-the scene's "facepuppet_timecode_in"), or by its time when it sends none.
+received can be recorded as shape-key animation on the timeline: one shape key a scene
+frame, keyed to 1 on its frame and 0 elsewhere (constant interpolation), placed by the
+stream's timecode (the first one at the scene's start frame, its timecode in a timeline
+marker and the scene's "facepuppet_timecode_in"), or by its time when it sends none. Where
+two stream frames land on one scene frame (live frame times jitter, a timecode at another
+rate) the scene frame keeps the later one: relative keys add, two at 1 would double the
+face's motion. Stop shows the recording (the live key at 0); Record shows the live face
+again (the live key at 1) and mutes the keys recorded before, which would add to it.
 
 OSC is parsed with the standard library (socket, struct): Blender's Python has no liblo.
 Install (Blender 3.4 as Debian ships it, and newer):
@@ -212,7 +216,9 @@ class FaceLink:
         self.obj = obj
         self.align = align
         self.recording = False
-        self.recorded = []         # (scene frame, key name)
+        self.recorded = []         # (scene frame, key name): one a scene frame
+        self._at = {}              # scene frame -> its index in recorded
+        self._stream_frame = []    # the stream frame each recorded key holds
         self.first_tc = None
         self.first_time = None
         self.start_frame = None
@@ -261,15 +267,40 @@ class FaceLink:
         scene = bpy.context.scene
         fr = self._scene_frame(f, scene)
         name = "fp %06d" % f["frame"]
+        at = self._at.get(fr)
+        if at is not None:
+            # a second stream frame on this scene frame (frame times jitter, or the timecode
+            # runs at another rate): relative keys add, so the scene frame keeps one key, the
+            # latest stream frame's
+            held, key_name = self.recorded[at]
+            if self._stream_frame[at] > f["frame"]:
+                return
+            key = self.obj.data.shape_keys.key_blocks[key_name]
+            key.data.foreach_set("co", pos)
+            key.name = name
+            self.recorded[at] = (fr, key.name)
+            self._stream_frame[at] = f["frame"]
+            return
         key = self.obj.shape_key_add(name=name, from_mix=False)
         key.data.foreach_set("co", pos)
         key.value = 0.0
+        self._at[fr] = len(self.recorded)
+        self._stream_frame.append(f["frame"])
         self.recorded.append((fr, key.name))
 
     def start(self):
+        """Record from the next frame on, showing the live face: the live key back at 1 (Stop
+        set it to 0 to show the recording) and the keys recorded before muted, so that they
+        add nothing to it on the scene frames they hold (unmute them to play them again)."""
         self.recording = True
         self.recorded = []
+        self._at = {}              # scene frame -> its index in recorded
+        self._stream_frame = []    # the stream frame each recorded key holds
         self.start_frame = None
+        for kb in self.obj.data.shape_keys.key_blocks:
+            if kb.name.startswith("fp "):
+                kb.mute = True
+        self.live.value = 1.0
 
     def stop(self):
         """Key what was recorded: each key 1 on its frame, 0 on the frames around it."""
@@ -283,15 +314,14 @@ class FaceLink:
         if key.animation_data.action is None:
             key.animation_data.action = bpy.data.actions.new(self.obj.name + " facepuppet")
         action = key.animation_data.action
+        self.recorded.sort()       # (one key a scene frame: _frame kept the latest on each)
         frames = [fr for fr, _ in self.recorded]
         for i, (fr, name) in enumerate(self.recorded):
             path = 'key_blocks["%s"].value' % name
             fc = action.fcurves.find(path) or action.fcurves.new(path)
-            pts = [(fr, 1.0)]
-            before = frames[i - 1] if i else None
-            after = frames[i + 1] if i + 1 < len(frames) else None
-            pts.insert(0, (before if before is not None and before < fr else fr - 1, 0.0))
-            pts.append((after if after is not None and after > fr else fr + 1, 0.0))
+            before = frames[i - 1] if i else fr - 1
+            after = frames[i + 1] if i + 1 < len(frames) else fr + 1
+            pts = [(before, 0.0), (fr, 1.0), (after, 0.0)]
             fc.keyframe_points.add(len(pts))
             fc.keyframe_points.foreach_set("co", [c for p in pts for c in p])
             for kp in fc.keyframe_points:
