@@ -11,6 +11,7 @@
 import argparse
 import importlib.util
 import math
+import socket
 import struct
 import sys
 import time
@@ -159,4 +160,37 @@ if got != 4 or sf != list(range(sf[0], sf[0] + 4)):
     fail("6 stream frames on 4 scene frames recorded %d keys on scene frames %s" % (got, sf))
 say("6 jittered stream frames on 4 scene frames: 4 keys, each scene frame the latest frame on it "
     "(%d shape keys on the face)" % keys_before)
+# A slow receiver (docs/osc.md, "A receiver's buffer"): the add-on asks for a receive buffer of
+# two keyframes of the face at their largest (9 bytes a vertex; 4 MiB at least) and says so when
+# the system grants less. A keyframe of every vertex of this face (ceil(n / 159) packets of 1,400
+# bytes, one burst) sent while nothing reads is held whole.
+say("receive buffer: %d KiB granted of %d KiB asked%s" % (rx.rcvbuf >> 10, rx.rcvbuf_asked >> 10,
+                                                         "; " + rx.warning if rx.warning else ""))
+if rx.rcvbuf_asked < max(4 << 20, 18 * n):
+    fail("the add-on asks for a %d-byte receive buffer, less than two keyframes of %d vertices"
+         % (rx.rcvbuf_asked, n))
+try:
+    rmem_max = int(open("/proc/sys/net/core/rmem_max").read())
+except OSError:
+    rmem_max = None
+if rmem_max is not None:
+    big = addon.StreamReceiver(0, rcvbuf=rmem_max + (1 << 20))
+    if not big.warning or "%d KiB" % (big.rcvbuf >> 10) not in big.warning:
+        fail("asking %d bytes beyond net.core.rmem_max = %d was not reported (%r)"
+             % (rmem_max + (1 << 20), rmem_max, big.warning))
+    say("asking beyond net.core.rmem_max (%d) is reported: %s" % (rmem_max, big.warning))
+    big.close()
+slow = addon.StreamReceiver(0, rcvbuf=link.rx.rcvbuf_asked)
+burst = -(-n // 159)
+out = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+for _ in range(burst):
+    out.sendto(b"\0" * 1400, slow.sock.getsockname())
+time.sleep(0.2)
+held = slow.poll()
+slow.close()
+out.close()
+say("a keyframe's burst of %d packets sent while nothing read: %d held" % (burst, held))
+if held != burst and not slow.warning:
+    fail("a slow receiver held %d of a keyframe's %d packets with the buffer it asked granted"
+         % (held, burst))
 say("PASS")

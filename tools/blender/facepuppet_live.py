@@ -36,6 +36,7 @@ bl_info = {
 
 import socket
 import struct
+import sys
 
 try:  # (Blender ships numpy: a frame of 26,719 vertices in well under a millisecond)
     import numpy as np
@@ -98,9 +99,15 @@ class StreamReceiver:
     each frame; a frame is handed to on_frame(frame) once all its packets came, or a later
     frame's first one did (then frame["complete"] is False)."""
 
-    def __init__(self, port, host="127.0.0.1", on_frame=None):
+    RCVBUF = 4 << 20               # the socket receive buffer asked at least (bytes)
+    KEY_BYTES_PER_VERTEX = 9       # a keyframe at its largest (docs/osc.md, "A receiver's buffer")
+
+    def __init__(self, port, host="127.0.0.1", on_frame=None, rcvbuf=RCVBUF):
         self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 8 << 20)
+        self.rcvbuf_asked = rcvbuf
+        self.rcvbuf, self.warning = self._ask_rcvbuf(rcvbuf)
+        if self.warning:
+            print("facepuppet live: " + self.warning)
         self.sock.bind((host, port))
         self.sock.setblocking(False)
         self.on_frame = on_frame
@@ -111,6 +118,21 @@ class StreamReceiver:
         self.frames = self.packets = self.bad = self.incomplete = 0
         self.last_seq = None
         self.lost = 0
+
+    def _ask_rcvbuf(self, asked):
+        """Ask for a receive buffer of `asked` bytes: a keyframe comes in one burst (about
+        9 bytes a vertex), and what the buffer cannot hold while Blender is busy is lost
+        until the next keyframe. Returns (bytes granted, "" or a warning)."""
+        self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, asked)
+        got = self.sock.getsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF)
+        if sys.platform.startswith("linux"):
+            got //= 2  # (Linux doubles the value for its bookkeeping and reports the double)
+        if got >= asked:
+            return got, ""
+        return got, ("the system granted a %d KiB socket receive buffer of the %d KiB asked: a "
+                     "keyframe of more than about %d vertices comes in part while Blender is busy "
+                     "(raise the limit: sysctl -w net.core.rmem_max=%d on Linux)"
+                     % (got >> 10, asked >> 10, got // self.KEY_BYTES_PER_VERTEX, asked))
 
     def close(self):
         self.flush()
@@ -232,7 +254,10 @@ class FaceLink:
         kb = mesh.shape_keys.key_blocks
         self.live = kb.get(self.LIVE) or obj.shape_key_add(name=self.LIVE, from_mix=False)
         self.live.value = 1.0
-        self.rx = StreamReceiver(port, on_frame=self._frame)
+        # (a buffer for two keyframes of this face at their largest, 4 MiB at least)
+        self.rx = StreamReceiver(port, on_frame=self._frame,
+                                 rcvbuf=max(StreamReceiver.RCVBUF,
+                                            2 * StreamReceiver.KEY_BYTES_PER_VERTEX * len(mesh.vertices)))
 
     def close(self):
         self.rx.close()
@@ -406,6 +431,9 @@ if bpy is not None:
             col.label(text="%d frames, %d packets lost" % (rx.frames, rx.lost))
             if link.error:
                 col.label(text=link.error)
+            if rx.warning:
+                col.label(text="receive buffer %d KiB of %d KiB asked: keyframes may come in part"
+                          % (rx.rcvbuf >> 10, rx.rcvbuf_asked >> 10), icon="ERROR")
             col.operator("facepuppet.record", text="Stop" if link.recording else "Record")
             col.operator("facepuppet.disconnect")
 
