@@ -16,6 +16,7 @@ struct fp_control {
     pthread_t thread;
     unsigned char buf[65536];                 /* one datagram (the network thread's) */
     fp_control_cmd ring[FP_CONTROL_RING];     /* single producer (network), single consumer */
+    fp_control_cmd stage[FP_CONTROL_RING];    /* one datagram's commands, until it is checked whole */
     _Atomic size_t head, tail;
     _Atomic uint64_t packets, messages, queued;
     _Atomic uint64_t problems[FP_CTL_PROBLEMS];
@@ -26,11 +27,13 @@ struct fp_control {
     uint64_t replies, pushes, send_errors;
 };
 
-/** Walk one datagram or bundle element (depth: bundles nested so far); each message checked
- *  and queued, or counted. `from` carries the sender. [network thread] */
-void fp__control_packet(fp_control *c, unsigned char *data, size_t size, const fp_control_cmd *from,
-                        int depth);
-void fp__control_queue(fp_control *c, const fp_control_cmd *cmd);
+/** Walk one datagram (bundles, nesting up to 8): checked whole before any of it is queued.
+ *  Every message in it is queued together (one release of the ring's head), or none is and
+ *  the datagram is counted once, as its first refusal (a malformed part before any other),
+ *  with no reply. `from` carries the sender. [network thread] */
+void fp__control_packet(fp_control *c, unsigned char *data, size_t size, const fp_control_cmd *from);
+/** Queue n commands together, or none (false: the ring lacks room for all). [network thread] */
+bool fp__control_queue_all(fp_control *c, const fp_control_cmd *cmds, size_t n);
 void fp__control_problem(fp_control *c, fp_control_problem p);
 
 #endif

@@ -113,9 +113,9 @@ static bool take_args(fp_control_cmd *cmd, const char *types, lo_arg **argv)
         cmd->has_take = true;
         return true;
     }
-    case FP_CTL_RADIUS:
+    case FP_CTL_RADIUS: /* (any finite number: the session's range check answers the rest) */
         cmd->value = fp_osc_number(types[0], argv[0]);
-        return isfinite(cmd->value) && cmd->value > 0 && cmd->value < 1e6;
+        return isfinite(cmd->value);
     case FP_CTL_SEEK:
         cmd->value = fp_osc_number(types[0], argv[0]);
         return isfinite(cmd->value) && cmd->value >= 0 && cmd->value < 1e7;
@@ -143,35 +143,54 @@ static bool take_args(fp_control_cmd *cmd, const char *types, lo_arg **argv)
     }
 }
 
-static void message(fp_control *c, unsigned char *data, size_t size, const fp_control_cmd *from)
+/* One datagram's walk: its commands staged (c->stage) until the whole datagram is checked. */
+typedef struct walk {
+    fp_control *c;
+    const fp_control_cmd *from;
+    size_t staged;
+    int problem;                      /* the first refusal (malformed before any), or -1 */
+} walk;
+
+static void refuse(walk *w, fp_control_problem p)
+{
+    if (w->problem < 0 || p == FP_CTL_MALFORMED) w->problem = (int)p;
+}
+
+static void stage(walk *w, const fp_control_cmd *cmd)
+{
+    if (w->staged == FP_CONTROL_RING) refuse(w, FP_CTL_QUEUE_FULL); /* (more than the ring holds) */
+    else w->c->stage[w->staged++] = *cmd;
+}
+
+static void message(walk *w, unsigned char *data, size_t size)
 {
     int result = 0;
     size_t alen = strnlen((const char *)data, size);
     size_t tags = (alen + 4) & ~(size_t)3; /* the type tags must follow: no tag-less message */
     if (tags >= size || data[tags] != ',') {
-        fp__control_problem(c, FP_CTL_MALFORMED);
+        refuse(w, FP_CTL_MALFORMED);
         return;
     }
     lo_message m = lo_message_deserialise(data, size, &result);
     if (!m) {
-        fp__control_problem(c, FP_CTL_MALFORMED);
+        refuse(w, FP_CTL_MALFORMED);
         return;
     }
-    atomic_fetch_add_explicit(&c->messages, 1, memory_order_relaxed);
+    atomic_fetch_add_explicit(&w->c->messages, 1, memory_order_relaxed);
     const char *path = (const char *)data; /* validated by lo_message_deserialise */
     const char *types = lo_message_get_types(m);
     if (!types) types = "";
     size_t k = 0, n = sizeof table / sizeof table[0];
     while (k < n && strcmp(path, table[k].address)) k++;
     if (k == n) {
-        fp__control_problem(c, FP_CTL_UNKNOWN_ADDRESS);
+        refuse(w, FP_CTL_UNKNOWN_ADDRESS);
         lo_message_free(m);
         return;
     }
     fp_control_cmd cmd;
     memset(&cmd, 0, sizeof cmd);
-    cmd.from = from->from;
-    cmd.fromlen = from->fromlen;
+    cmd.from = w->from->from;
+    cmd.fromlen = w->from->fromlen;
     cmd.kind = table[k].kind;
     snprintf(cmd.address, sizeof cmd.address, "%s", table[k].address);
     lo_arg **argv = lo_message_get_argv(m);
@@ -179,14 +198,14 @@ static void message(fp_control *c, unsigned char *data, size_t size, const fp_co
         /* a control surface's button (TouchOSC, Open Stage Control: 1 pressed, 0 let go) on a
          * command that may come without arguments: any value but 0 runs it so, 0 does nothing */
         double v = fp_osc_number(types[0], argv[0]);
-        if (!isfinite(v)) fp__control_problem(c, FP_CTL_BAD_VALUE);
-        else if (v != 0) fp__control_queue(c, &cmd);
+        if (!isfinite(v)) refuse(w, FP_CTL_BAD_VALUE);
+        else if (v != 0) stage(w, &cmd);
     } else if (!types_match(table[k].types, types)) {
-        fp__control_problem(c, FP_CTL_BAD_TYPES);
+        refuse(w, FP_CTL_BAD_TYPES);
     } else if (take_args(&cmd, types, argv)) {
-        fp__control_queue(c, &cmd);
+        stage(w, &cmd);
     } else {
-        fp__control_problem(c, FP_CTL_BAD_VALUE);
+        refuse(w, FP_CTL_BAD_VALUE);
     }
     lo_message_free(m);
 }
@@ -196,33 +215,39 @@ static uint32_t be32(const unsigned char *p)
     return (uint32_t)p[0] << 24 | (uint32_t)p[1] << 16 | (uint32_t)p[2] << 8 | p[3];
 }
 
-void fp__control_packet(fp_control *c, unsigned char *data, size_t size, const fp_control_cmd *from,
-                        int depth)
+/* A message or a bundle (depth: bundles nested so far). A bundle's elements are walked to its
+ * end, each message checked (the first refusal kept); a bad size stops the walk. */
+static void element(walk *w, unsigned char *data, size_t size, int depth)
 {
     if (size >= 8 && memcmp(data, "#bundle", 8) == 0) {
         if (size < 16 || depth >= MAX_DEPTH) {
-            fp__control_problem(c, FP_CTL_MALFORMED);
+            refuse(w, FP_CTL_MALFORMED);
             return;
         }
         for (size_t at = 16; at < size;) { /* (timetags: commands apply on arrival) */
-            if (size - at < 4) {
-                fp__control_problem(c, FP_CTL_MALFORMED);
-                return;
-            }
-            uint32_t len = be32(data + at);
+            uint32_t len = size - at >= 4 ? be32(data + at) : 0;
             at += 4;
-            if (len == 0 || len % 4 || len > size - at) {
-                fp__control_problem(c, FP_CTL_MALFORMED);
+            if (len == 0 || len % 4 || at > size || len > size - at) {
+                refuse(w, FP_CTL_MALFORMED);
                 return;
             }
-            fp__control_packet(c, data + at, len, from, depth + 1);
+            element(w, data + at, len, depth + 1);
             at += len;
         }
         return;
     }
     if (size < 4 || size % 4 || data[0] != '/') {
-        fp__control_problem(c, FP_CTL_MALFORMED);
+        refuse(w, FP_CTL_MALFORMED);
         return;
     }
-    message(c, data, size, from);
+    message(w, data, size);
+}
+
+void fp__control_packet(fp_control *c, unsigned char *data, size_t size, const fp_control_cmd *from)
+{
+    walk w = {c, from, 0, -1};
+    element(&w, data, size, 0);
+    if (w.problem < 0 && w.staged && !fp__control_queue_all(c, c->stage, w.staged))
+        w.problem = FP_CTL_QUEUE_FULL;
+    if (w.problem >= 0) fp__control_problem(c, (fp_control_problem)w.problem);
 }

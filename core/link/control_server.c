@@ -29,18 +29,16 @@ static void problem(fp_control *c, fp_control_problem p)
 
 void fp__control_problem(fp_control *c, fp_control_problem p) { problem(c, p); }
 
-/* Queue cmd (the network thread: the ring's only producer). */
-void fp__control_queue(fp_control *c, const fp_control_cmd *cmd)
+/* Queue cmds, all or none (the network thread: the ring's only producer). */
+bool fp__control_queue_all(fp_control *c, const fp_control_cmd *cmds, size_t n)
 {
     size_t head = atomic_load_explicit(&c->head, memory_order_relaxed);
     size_t tail = atomic_load_explicit(&c->tail, memory_order_acquire);
-    if (head - tail >= FP_CONTROL_RING) {
-        problem(c, FP_CTL_QUEUE_FULL);
-        return;
-    }
-    c->ring[head % FP_CONTROL_RING] = *cmd;
-    atomic_store_explicit(&c->head, head + 1, memory_order_release);
-    atomic_fetch_add_explicit(&c->queued, 1, memory_order_relaxed);
+    if (n > FP_CONTROL_RING - (head - tail)) return false;
+    for (size_t k = 0; k < n; k++) c->ring[(head + k) % FP_CONTROL_RING] = cmds[k];
+    atomic_store_explicit(&c->head, head + n, memory_order_release);
+    atomic_fetch_add_explicit(&c->queued, n, memory_order_relaxed);
+    return true;
 }
 
 bool fp_control_next(fp_control *c, fp_control_cmd *cmd)
@@ -74,7 +72,7 @@ static void *control_thread(void *arg)
                 problem(c, FP_CTL_MALFORMED);
                 continue;
             }
-            fp__control_packet(c, c->buf, (size_t)n, &from, 0);
+            fp__control_packet(c, c->buf, (size_t)n, &from);
         }
     }
 }

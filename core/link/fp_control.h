@@ -12,6 +12,8 @@
  * Refused messages (not OSC, bad bundle, wrong type tags, a value out of range or not
  * finite, a slate or mapping that is not allowed text, an unknown address, the ring full)
  * are counted by kind and get no reply (no amplification); the counts are in the status.
+ * A datagram is checked whole first: its commands are queued together or, where any part of
+ * it is refused, none is (a bundle's messages take effect together, OSC 1.0).
  * Memory does not grow with traffic: one 64 KiB receive buffer, one liblo message at a time,
  * the ring's fixed slots, at most FP_CONTROL_MAX_SUBSCRIBERS subscribers.
  *
@@ -44,7 +46,7 @@ typedef enum fp_control_kind {
     FP_CTL_CANCEL,         /* /fp/cancel */
     FP_CTL_UNDO,           /* /fp/undo */
     FP_CTL_RESET,          /* /fp/reset */
-    FP_CTL_RADIUS,         /* /fp/radius f (mesh units, > 0) */
+    FP_CTL_RADIUS,         /* /fp/radius f (mesh units, finite; the session checks its range) */
     FP_CTL_MAPPING,        /* /fp/mapping s (NAME[,key=value...]) */
     FP_CTL_CHANNEL,        /* /fp/channel s f (a rig channel, its value) */
     FP_CTL_PLAY,           /* /fp/play */

@@ -2,12 +2,16 @@
 # the add-on tools/blender/facepuppet_live.py receives a take's --stream onto the ICT face
 # imported from the same OBJ, records it as shape-key animation, and every recorded frame,
 # evaluated by Blender at its scene frame, is compared with the take's PC2 (the frames
-# `facepuppet play` makes) within --tol-mm. Prints "blender-live: ..." lines, the last one
+# `facepuppet play` makes) within --tol-mm. Then Record again after that Stop shows the live
+# face (the live key back at 1, the first recording's keys muted: none adds to it), and six
+# jittered stream frames on four scene frames are keyed as one key at 1 a scene frame, the
+# latest stream frame on it (two would add: the deformation doubled). Prints "blender-live: ..." lines, the last one
 # "blender-live: PASS" on success.
 # ARGS: --addon PY --obj MESH.obj --pc2 TAKE.pc2 --port P [--tol-mm 0.1] [--timeout S]
 import argparse
 import importlib.util
 import math
+import socket
 import struct
 import sys
 import time
@@ -100,4 +104,93 @@ if worst > a.tol_mm:
     fail("frame %d differs by %.4f mm" % (worst_at, worst))
 if moved < 0.5:
     fail("the take hardly moves (%.3f mm): no test of the animation" % moved)
+
+
+def evaluated(fr):
+    """The face as Blender evaluates it at scene frame fr: n x 3 (mesh units)."""
+    scene.frame_set(fr)
+    dg = bpy.context.evaluated_depsgraph_get()
+    me = obj.evaluated_get(dg).to_mesh()
+    me.vertices.foreach_get("co", co)
+    obj.evaluated_get(dg).to_mesh_clear()
+    return co.reshape(n, 3).astype(np.float64)
+
+
+def feed(frame, t, q):
+    """One stream frame handed to the link as the receiver would: offsets q (steps, n x 3)."""
+    rx.q[:] = q.reshape(-1)
+    link._frame({"frame": frame, "time": t, "timecode": "", "parts": 1, "got": 1, "channels": [],
+                 "complete": True})
+    return rx.positions(link.neutral).reshape(n, 3).astype(np.float64)
+
+
+def off_mm(got, want):
+    return float(np.sqrt(((got - want) ** 2).sum(1)).max()) * mmu
+
+
+# Record again after Stop: the viewport shows the live face (the live key back at 1), and the
+# first recording's keys do not add to it on the scene frames they hold.
+rng = np.random.default_rng(55)
+q_live = rng.integers(-40, 40, (n, 3)).astype(np.int32)
+link.start()
+live = feed(100000, 0.0, q_live)
+mid = frames[len(frames) // 2]
+d = off_mm(evaluated(mid), live)
+say("recording again: scene frame %d shows the live face within %.4f mm (live key %.1f)"
+    % (mid, d, link.live.value))
+if d > 0.05:
+    fail("after Record, Stop, Record the viewport is %.3f mm off the live face (live key at %.1f)"
+         % (d, link.live.value))
+
+# Two stream frames on one scene frame (live frame times jitter): one key at 1 there, the later
+# frame's; relative keys add, so two at 1 would double the deformation.
+fps = scene.render.fps
+times = [0.0, 0.3 / fps, 1.0 / fps, 2.0 / fps, 2.4 / fps, 3.0 / fps]   # (scene frames +0 +0 +1 +2 +2 +3)
+link.start()
+shown = [feed(200000 + k, t, (k + 1) * q_live // 3) for k, t in enumerate(times)]
+keys_before = len(obj.data.shape_keys.key_blocks)
+got = link.stop()
+sf = sorted(fr for fr, _ in link.recorded)
+for fr, k in zip(range(sf[0], sf[0] + 4), (1, 2, 4, 5)):   # (the latest stream frame on each)
+    d = off_mm(evaluated(fr), shown[k])
+    if d > 0.05:
+        fail("scene frame %d is %.3f mm off stream frame %d, the latest on it (two keys at 1?)"
+             % (fr, d, 200000 + k))
+if got != 4 or sf != list(range(sf[0], sf[0] + 4)):
+    fail("6 stream frames on 4 scene frames recorded %d keys on scene frames %s" % (got, sf))
+say("6 jittered stream frames on 4 scene frames: 4 keys, each scene frame the latest frame on it "
+    "(%d shape keys on the face)" % keys_before)
+# A slow receiver (docs/osc.md, "A receiver's buffer"): the add-on asks for a receive buffer of
+# two keyframes of the face at their largest (9 bytes a vertex; 4 MiB at least) and says so when
+# the system grants less. A keyframe of every vertex of this face (ceil(n / 159) packets of 1,400
+# bytes, one burst) sent while nothing reads is held whole.
+say("receive buffer: %d KiB granted of %d KiB asked%s" % (rx.rcvbuf >> 10, rx.rcvbuf_asked >> 10,
+                                                         "; " + rx.warning if rx.warning else ""))
+if rx.rcvbuf_asked < max(4 << 20, 18 * n):
+    fail("the add-on asks for a %d-byte receive buffer, less than two keyframes of %d vertices"
+         % (rx.rcvbuf_asked, n))
+try:
+    rmem_max = int(open("/proc/sys/net/core/rmem_max").read())
+except OSError:
+    rmem_max = None
+if rmem_max is not None:
+    big = addon.StreamReceiver(0, rcvbuf=rmem_max + (1 << 20))
+    if not big.warning or "%d KiB" % (big.rcvbuf >> 10) not in big.warning:
+        fail("asking %d bytes beyond net.core.rmem_max = %d was not reported (%r)"
+             % (rmem_max + (1 << 20), rmem_max, big.warning))
+    say("asking beyond net.core.rmem_max (%d) is reported: %s" % (rmem_max, big.warning))
+    big.close()
+slow = addon.StreamReceiver(0, rcvbuf=link.rx.rcvbuf_asked)
+burst = -(-n // 159)
+out = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+for _ in range(burst):
+    out.sendto(b"\0" * 1400, slow.sock.getsockname())
+time.sleep(0.2)
+held = slow.poll()
+slow.close()
+out.close()
+say("a keyframe's burst of %d packets sent while nothing read: %d held" % (burst, held))
+if held != burst and not slow.warning:
+    fail("a slow receiver held %d of a keyframe's %d packets with the buffer it asked granted"
+         % (held, burst))
 say("PASS")

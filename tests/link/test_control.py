@@ -4,16 +4,20 @@
 The run plays a real recording (looped) through the anchored mapping with auto=0, so that
 only the control surface engages and commits, records takes in a folder and listens on
 --control osc:PORT. This client (the standard library's socket and struct: fposc.py):
-  1. asks the status (idle, not recording), subscribes;
+  1. asks the status (idle, not recording); sends four bad bundles each holding /fp/engage
+     (an element of length 0 after it, 2 stray bytes after the bundle, a cut message, a NaN
+     radius): none answered, each counted once, still idle; a good bundle's two messages
+     both answered in order; subscribes;
   2. /fp/record/start scene7 12, /fp/engage, /fp/commit (as a button: 0.0 let go does
      nothing, unanswered; 1.0 pressed commits), /fp/record/stop: every command
      answered by /fp/status naming it, "ok", and the state after it (recording 1 with
      slate scene7 and take 12, engaged, committed, recording 0);
   3. the same take number again is refused ("error: ... exists"), /fp/play too (run has no
-     transport), /fp/undo and /fp/radius answered;
+     transport), /fp/undo and /fp/radius answered; every finite radius outside the range
+     (0, negative, 1e6, 1e300, 1e-7) answered "error: radius ... outside [";
   4. Live Link Face's /Slate, /Take, /RecordStart llf 3 and /RecordStop: the same; then
      /fp/record/start and /fp/record/stop as buttons (0.0 nothing, 1.0 take llf 5);
-  5. 10,000 hostile packets (random bytes, cut messages, wrong types, NaN and negative
+  5. 10,000 hostile packets (random bytes, cut messages, wrong types, NaN and infinite
      values, slates and mappings with paths, nested and broken bundles, unknown addresses):
      each counted as refused (the status's refused count grows by exactly the messages
      sent), none answered, and the status after them is the status before (state, slate,
@@ -155,6 +159,33 @@ try:
             fail("the machine has an IPv6 loopback, but --control did not listen on [::1]")
         except OSError:
             print("  (no IPv6 loopback here; [::1] not checked)")
+    # a bad bundle is refused whole: nothing in it applies nor is answered, counted once
+    # (malformed), even where its first element is a good message (OSC 1.0: a bundle's
+    # messages take effect together)
+    for name, p in [("an element of length 0",
+                     fposc.bundle(fposc.encode("/fp/engage")) + struct.pack(">i", 0)),
+                    ("2 stray bytes after it", fposc.bundle(fposc.encode("/fp/engage")) + b"\0\0"),
+                    ("a cut message after it",
+                     fposc.bundle(fposc.encode("/fp/engage"), fposc.encode("/fp/radius", 2.0)[:-4])),
+                    ("a refused message in it",
+                     fposc.bundle(fposc.encode("/fp/engage"), fposc.encode("/fp/radius", float("nan"))))]:
+        refused0 = command("/fp/status")["refused"]
+        sock.sendto(p, target)
+        got = receive(0.7)
+        if got is not None:
+            fail("a bundle with %s was answered: %r %r" % (name, got["command"], got["result"]))
+        st = command("/fp/status")
+        if st["refused"] != refused0 + 1:
+            fail("a bundle with %s: refused %d -> %d, wanted +1" % (name, refused0, st["refused"]))
+        time.sleep(0.3)
+        want(command("/fp/status"), state="idle")
+        print("  a bundle with %s: refused whole, unanswered, still idle" % name)
+    bad_bundles = 4
+    # a good bundle's messages all apply, each answered in order
+    sock.sendto(fposc.bundle(fposc.encode("/fp/status"), fposc.encode("/fp/radius", 2.5)), target)
+    got = [receive(5), receive(5)]
+    if [g and (g["command"], g["result"]) for g in got] != [("/fp/status", "ok"), ("/fp/radius", "ok")]:
+        fail("a good bundle of /fp/status and /fp/radius answered %r" % got)
     command("/fp/subscribe")
     st = command("/fp/record/start", "scene7", 12)
     want(st, recording=1, slate="scene7", take=12)
@@ -167,7 +198,7 @@ try:
     sock.sendto(fposc.encode("/fp/commit", 0.0), target)
     if receive(0.5) is not None:
         fail("a button let go (/fp/commit 0.0) was answered")
-    want(command("/fp/status"), state="engaged", recording=1, refused=0)
+    want(command("/fp/status"), state="engaged", recording=1, refused=bad_bundles)
     command("/fp/commit", 1.0)
     time.sleep(0.3)
     want(command("/fp/status"), state="committed", recording=1, take=12)
@@ -180,6 +211,11 @@ try:
     # stays (1e-30 was taken, and the engine then refused every frame, the face still)
     command("/fp/radius", 1e-30, expect="error: radius 1e-30 outside [")
     command("/fp/radius", 1e6 - 1, expect="error: radius 999999 outside [")
+    # every finite radius reaches the range check and is answered (0, negative, 1e6 and
+    # beyond were refused unanswered as bad values); NaN and inf stay refused (bad value)
+    for r, words in [(0.0, "0"), (-1.0, "-1"), (1e6, "1e+06"), (("d", 1e300), "1e+300"),
+                     (("i", -5), "-5"), (("d", 1e-7), "1e-07")]:
+        command("/fp/radius", r, expect="error: radius %s outside [" % words)
     command("/fp/radius", 2.5)
     command("/fp/channel", "jaw.open", 0.2)
     command("/fp/channel", "no.such.channel", 0.2, expect="error")
@@ -228,8 +264,9 @@ try:
             p = m[:cut if cut % 4 else cut - 1]          # (not a multiple of 4: never OSC)
         elif kind == 2:                   # wrong types
             p = fposc.encode(rng.choice(["/fp/radius", "/fp/seek", "/Take"]), "text")
-        elif kind == 3:                   # NaN, inf, negative, zero radius
-            p = fposc.encode("/fp/radius", rng.choice([float("nan"), float("inf"), -1.0, 0.0]))
+        elif kind == 3:                   # NaN, inf radius (a finite one is answered)
+            p = fposc.encode("/fp/radius", rng.choice([float("nan"), float("inf"), float("-inf"),
+                                                       ("d", float("nan"))]))
         elif kind == 4:                   # slates with paths or too long
             p = fposc.encode(rng.choice(["/fp/record/start", "/RecordStart", "/Slate"]),
                              rng.choice(["../../etc/x", "a/b", ".hidden", "", "x" * 300, "sp ace"]))

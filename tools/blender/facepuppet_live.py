@@ -3,10 +3,14 @@
 
 The face is shown live on the mesh imported from the same file the session deforms
 (File > Import > Wavefront OBJ, or glTF; the vertex order must be the file's), and what is
-received can be recorded as shape-key animation on the timeline: one shape key a frame,
-keyed to 1 on its frame and 0 elsewhere (constant interpolation), placed by the stream's
-timecode (the first one at the scene's start frame, its timecode in a timeline marker and
-the scene's "facepuppet_timecode_in"), or by its time when it sends none.
+received can be recorded as shape-key animation on the timeline: one shape key a scene
+frame, keyed to 1 on its frame and 0 elsewhere (constant interpolation), placed by the
+stream's timecode (the first one at the scene's start frame, its timecode in a timeline
+marker and the scene's "facepuppet_timecode_in"), or by its time when it sends none. Where
+two stream frames land on one scene frame (live frame times jitter, a timecode at another
+rate) the scene frame keeps the later one: relative keys add, two at 1 would double the
+face's motion. Stop shows the recording (the live key at 0); Record shows the live face
+again (the live key at 1) and mutes the keys recorded before, which would add to it.
 
 OSC is parsed with the standard library (socket, struct): Blender's Python has no liblo.
 Install (Blender 3.4 as Debian ships it, and newer):
@@ -32,6 +36,7 @@ bl_info = {
 
 import socket
 import struct
+import sys
 
 try:  # (Blender ships numpy: a frame of 26,719 vertices in well under a millisecond)
     import numpy as np
@@ -94,9 +99,15 @@ class StreamReceiver:
     each frame; a frame is handed to on_frame(frame) once all its packets came, or a later
     frame's first one did (then frame["complete"] is False)."""
 
-    def __init__(self, port, host="127.0.0.1", on_frame=None):
+    RCVBUF = 4 << 20               # the socket receive buffer asked at least (bytes)
+    KEY_BYTES_PER_VERTEX = 9       # a keyframe at its largest (docs/osc.md, "A receiver's buffer")
+
+    def __init__(self, port, host="127.0.0.1", on_frame=None, rcvbuf=RCVBUF):
         self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 8 << 20)
+        self.rcvbuf_asked = rcvbuf
+        self.rcvbuf, self.warning = self._ask_rcvbuf(rcvbuf)
+        if self.warning:
+            print("facepuppet live: " + self.warning)
         self.sock.bind((host, port))
         self.sock.setblocking(False)
         self.on_frame = on_frame
@@ -107,6 +118,21 @@ class StreamReceiver:
         self.frames = self.packets = self.bad = self.incomplete = 0
         self.last_seq = None
         self.lost = 0
+
+    def _ask_rcvbuf(self, asked):
+        """Ask for a receive buffer of `asked` bytes: a keyframe comes in one burst (about
+        9 bytes a vertex), and what the buffer cannot hold while Blender is busy is lost
+        until the next keyframe. Returns (bytes granted, "" or a warning)."""
+        self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, asked)
+        got = self.sock.getsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF)
+        if sys.platform.startswith("linux"):
+            got //= 2  # (Linux doubles the value for its bookkeeping and reports the double)
+        if got >= asked:
+            return got, ""
+        return got, ("the system granted a %d KiB socket receive buffer of the %d KiB asked: a "
+                     "keyframe of more than about %d vertices comes in part while Blender is busy "
+                     "(raise the limit: sysctl -w net.core.rmem_max=%d on Linux)"
+                     % (got >> 10, asked >> 10, got // self.KEY_BYTES_PER_VERTEX, asked))
 
     def close(self):
         self.flush()
@@ -212,7 +238,9 @@ class FaceLink:
         self.obj = obj
         self.align = align
         self.recording = False
-        self.recorded = []         # (scene frame, key name)
+        self.recorded = []         # (scene frame, key name): one a scene frame
+        self._at = {}              # scene frame -> its index in recorded
+        self._stream_frame = []    # the stream frame each recorded key holds
         self.first_tc = None
         self.first_time = None
         self.start_frame = None
@@ -226,7 +254,10 @@ class FaceLink:
         kb = mesh.shape_keys.key_blocks
         self.live = kb.get(self.LIVE) or obj.shape_key_add(name=self.LIVE, from_mix=False)
         self.live.value = 1.0
-        self.rx = StreamReceiver(port, on_frame=self._frame)
+        # (a buffer for two keyframes of this face at their largest, 4 MiB at least)
+        self.rx = StreamReceiver(port, on_frame=self._frame,
+                                 rcvbuf=max(StreamReceiver.RCVBUF,
+                                            2 * StreamReceiver.KEY_BYTES_PER_VERTEX * len(mesh.vertices)))
 
     def close(self):
         self.rx.close()
@@ -261,15 +292,40 @@ class FaceLink:
         scene = bpy.context.scene
         fr = self._scene_frame(f, scene)
         name = "fp %06d" % f["frame"]
+        at = self._at.get(fr)
+        if at is not None:
+            # a second stream frame on this scene frame (frame times jitter, or the timecode
+            # runs at another rate): relative keys add, so the scene frame keeps one key, the
+            # latest stream frame's
+            held, key_name = self.recorded[at]
+            if self._stream_frame[at] > f["frame"]:
+                return
+            key = self.obj.data.shape_keys.key_blocks[key_name]
+            key.data.foreach_set("co", pos)
+            key.name = name
+            self.recorded[at] = (fr, key.name)
+            self._stream_frame[at] = f["frame"]
+            return
         key = self.obj.shape_key_add(name=name, from_mix=False)
         key.data.foreach_set("co", pos)
         key.value = 0.0
+        self._at[fr] = len(self.recorded)
+        self._stream_frame.append(f["frame"])
         self.recorded.append((fr, key.name))
 
     def start(self):
+        """Record from the next frame on, showing the live face: the live key back at 1 (Stop
+        set it to 0 to show the recording) and the keys recorded before muted, so that they
+        add nothing to it on the scene frames they hold (unmute them to play them again)."""
         self.recording = True
         self.recorded = []
+        self._at = {}              # scene frame -> its index in recorded
+        self._stream_frame = []    # the stream frame each recorded key holds
         self.start_frame = None
+        for kb in self.obj.data.shape_keys.key_blocks:
+            if kb.name.startswith("fp "):
+                kb.mute = True
+        self.live.value = 1.0
 
     def stop(self):
         """Key what was recorded: each key 1 on its frame, 0 on the frames around it."""
@@ -283,15 +339,14 @@ class FaceLink:
         if key.animation_data.action is None:
             key.animation_data.action = bpy.data.actions.new(self.obj.name + " facepuppet")
         action = key.animation_data.action
+        self.recorded.sort()       # (one key a scene frame: _frame kept the latest on each)
         frames = [fr for fr, _ in self.recorded]
         for i, (fr, name) in enumerate(self.recorded):
             path = 'key_blocks["%s"].value' % name
             fc = action.fcurves.find(path) or action.fcurves.new(path)
-            pts = [(fr, 1.0)]
-            before = frames[i - 1] if i else None
-            after = frames[i + 1] if i + 1 < len(frames) else None
-            pts.insert(0, (before if before is not None and before < fr else fr - 1, 0.0))
-            pts.append((after if after is not None and after > fr else fr + 1, 0.0))
+            before = frames[i - 1] if i else fr - 1
+            after = frames[i + 1] if i + 1 < len(frames) else fr + 1
+            pts = [(before, 0.0), (fr, 1.0), (after, 0.0)]
             fc.keyframe_points.add(len(pts))
             fc.keyframe_points.foreach_set("co", [c for p in pts for c in p])
             for kp in fc.keyframe_points:
@@ -376,6 +431,9 @@ if bpy is not None:
             col.label(text="%d frames, %d packets lost" % (rx.frames, rx.lost))
             if link.error:
                 col.label(text=link.error)
+            if rx.warning:
+                col.label(text="receive buffer %d KiB of %d KiB asked: keyframes may come in part"
+                          % (rx.rcvbuf >> 10, rx.rcvbuf_asked >> 10), icon="ERROR")
             col.operator("facepuppet.record", text="Stop" if link.recording else "Record")
             col.operator("facepuppet.disconnect")
 
