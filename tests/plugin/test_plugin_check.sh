@@ -88,6 +88,30 @@ expect 1 'FAIL  create +create returned 0 without an instance' "$fp" plugins che
 expect 78 'FAIL  load .*built for plugin ABI 2\.0, this facepuppet has ABI 1\.3' "$fp" plugins check "$fx/map-fixture-abi2.so"
 expect 78 'built for plugin ABI 2\.0' "$fp" plugins check "$fx/input-fixture-abi2.so"
 expect 64 'give one FILE' "$fp" plugins check
+# A plugin that crashes, calls exit() or hangs in a call fails the check (exit 1, a FAIL line
+# naming the signal, the exit or the hang, and the call and frame), the checker itself intact:
+# the checks run in a child process (before: 139, 134, exit 0 with no verdict, a hang)
+expect 1 'FAIL  process +the plugin died of SIGSEGV during process \(frame 3\)' \
+    timeout 60 "$fp" plugins check "$fx/map-fixture-segv.so"
+expect 1 'FAIL  create +the plugin died of SIGABRT during create' timeout 60 "$fp" plugins check "$fx/map-fixture-abort.so"
+expect 1 'FAIL  process +the plugin ended the process with exit status 0 during process \(frame 3\), without a verdict' \
+    timeout 60 "$fp" plugins check "$fx/map-fixture-exit.so"
+expect 1 'FAIL  process +no progress for 2 s during process \(frame 29\): the plugin hangs' \
+    timeout 60 "$fp" plugins check "$fx/map-fixture-spin.so" --deadline 2
+expect 1 'FAILED: .*map-fixture-spin.so: 1 check\(s\) failed' timeout 60 "$fp" plugins check "$fx/map-fixture-spin.so" --deadline 2
+# ... in --json too: one document, the failure among its checks; a plugin's stdout (in process
+# and in the isolated pass's helper) goes to stderr, not into the document
+for f in segv print; do
+    timeout 60 "$fp" plugins check "$fx/map-fixture-$f.so" --json >"$tmp/$f.json" 2>"$tmp/$f.err"
+    echo $? >"$tmp/$f.rc"
+done
+python3 -c "import json,sys; d=json.load(open(sys.argv[1])); \
+assert d['passed'] is False and any(c['result']=='fail' and 'SIGSEGV during process (frame 3)' in c['message'] for c in d['checks'])" \
+    "$tmp/segv.json" && [ "$(cat "$tmp/segv.rc")" = 1 ] && echo "ok: --json of a crashing plugin: exit 1, the failure listed" ||
+    { fail "--json of a crashing plugin (exit $(cat "$tmp/segv.rc"))"; sed 's/^/    /' "$tmp/segv.json"; }
+python3 -c "import json,sys; d=json.load(open(sys.argv[1])); assert d['passed'] is True" "$tmp/print.json" &&
+    grep -q 'fixture-print: stdout of process' "$tmp/print.err" && echo "ok: a printing plugin's --json parses, its text on stderr" ||
+    { fail "--json of a printing plugin"; head -5 "$tmp/print.json" | sed 's/^/    /'; }
 
 # The list: built-in plugins with their keys, broken fixtures with the reason, as text and JSON.
 # (the fixtures that crash in init would end the listing, naming themselves: left out here)
