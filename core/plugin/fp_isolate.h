@@ -79,7 +79,9 @@ typedef struct fp_isolate_options {
  *  keys); `name` (the SPEC's NAME) names it in messages. `host` is the fp_host the plugin
  *  would have had in process (its log, FP_HOST_EXT_SURFACE and FP_HOST_EXT_RIG are used);
  *  it must outlive the instance. On success *out is the proxy (free it with its destroy,
- *  which ends the helper). On failure, the plugin's message or the loader's in err, and
+ *  which ends the helper). On failure, the plugin's message or the loader's in err (not naming
+ *  the mapping: the caller does; a helper that died or hung says whether while loading the
+ *  file or in the plugin's create), and
  *  the code (above). [main-thread] */
 int fp_isolate_mapping_create(const fp_isolate_options *opt, const char *file, const char *name,
                               const fp_host *host, const fp_param *params, size_t nparams,
@@ -101,7 +103,8 @@ bool fp_isolate_mapping_about(const fp_mapping *m, const char **id, const char *
 
 /** The helper's main: argv as the executable got it (argv[1] is FP_ISOLATE_HELPER_ARG).
  *  Returns the exit status (0 when the host asked it to quit or went away). Prints nothing:
- *  everything goes to the host. */
+ *  everything goes to the host; before the plugin is loaded its stdout is made its stderr
+ *  (dup2), so what a plugin prints reaches the host's stderr, never the host's stdout. */
 int fp_isolate_helper_main(int argc, char **argv);
 
 #ifdef __cplusplus

@@ -357,6 +357,13 @@ static void fault(proxy *x, const char *call, uint64_t frame, const char *cause)
         "restarts in %.1f s (fault %d in a row)", cause, call, (unsigned long long)frame, wait / 1e3, x->streak);
 }
 
+/* The call a helper that has not said READY was in: "create" from the plugin's create on,
+ * "loading" before it (dlopen, the plugin's init). */
+static const char *start_call(const proxy *x)
+{
+    return x->proc.shm && atomic_load(&x->proc.shm->stage) >= FP_ISO_STAGE_CREATE ? "create" : "loading";
+}
+
 static void fault_died(proxy *x, const char *call, uint64_t frame)
 {
     char why[96] = "went away";
@@ -393,11 +400,11 @@ static bool ensure_up(proxy *x, uint64_t frame)
     }
     int rc = fp_iso_proc_poll_ready(&x->proc, relay_log, x);
     if (rc == FP_ISO_PENDING) {
-        if (fp_now_ns() - x->proc.started_ns > (int64_t)(FP_ISOLATE_CREATE_MS * 1e6)) fault_hung(x, "create", frame);
+        if (fp_now_ns() - x->proc.started_ns > (int64_t)(FP_ISOLATE_CREATE_MS * 1e6)) fault_hung(x, start_call(x), frame);
         return false;
     }
     if (rc == FP_ISO_DIED) {
-        fault_died(x, "create", frame);
+        fault_died(x, start_call(x), frame);
         return false;
     }
     if (x->proc.ready_rc) {
@@ -516,7 +523,7 @@ int fp_isolate_mapping_create(const fp_isolate_options *opt, const char *file, c
     if (!x || copy_keys(&x->keys, params, nparams)) {
         if (x) fp_spec_clear(&x->keys);
         free(x);
-        return fp_errorf(err, errlen, -ENOMEM, "mapping '%s': out of memory", name);
+        return fp_errorf(err, errlen, -ENOMEM, "out of memory");
     }
     fp_iso_proc_init(&x->proc);
     x->m.plugin_data = x;
@@ -536,20 +543,27 @@ int fp_isolate_mapping_create(const fp_isolate_options *opt, const char *file, c
     int rc = spawn(x);
     if (rc) {
         proxy_destroy(&x->m);
-        return fp_errorf(err, errlen, -EIO, "mapping '%s': cannot start its helper process %s: %s", name,
+        return fp_errorf(err, errlen, -EIO, "cannot start its helper process %s: %s",
                          opt && opt->helper ? opt->helper : "/proc/self/exe", strerror(-rc));
     }
     rc = fp_iso_proc_wait_ready(&x->proc, FP_ISOLATE_CREATE_MS, relay_log, x);
     if (rc || x->proc.ready_rc) {
+        /* (the caller names the mapping: the message does not) */
         char why[96] = "did not answer";
+        const bool in_create = !strcmp(start_call(x), "create");
         if (rc == FP_ISO_DIED) {
             fp_iso_proc_kill(&x->proc, why, sizeof why);
-            snprintf(err, errlen, "mapping '%s': its helper process %s while loading %s", name, why, file);
+            if (in_create) snprintf(err, errlen, "its helper process %s in the plugin's create", why);
+            else snprintf(err, errlen, "its helper process %s while loading %s", why, file);
             rc = FP_EPLUGIN_FAULT;
         } else if (rc) {
             fp_iso_proc_kill(&x->proc, NULL, 0);
-            snprintf(err, errlen, "mapping '%s': its helper process did not load and create it within %g s",
-                     name, FP_ISOLATE_CREATE_MS / 1e3);
+            if (in_create)
+                snprintf(err, errlen, "the plugin's create did not return within %g s (in its helper process)",
+                         FP_ISOLATE_CREATE_MS / 1e3);
+            else
+                snprintf(err, errlen, "its helper process did not load %s within %g s", file,
+                         FP_ISOLATE_CREATE_MS / 1e3);
             rc = FP_EPLUGIN_FAULT;
         } else {
             snprintf(err, errlen, "%s", x->proc.ready_text);

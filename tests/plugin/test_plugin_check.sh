@@ -153,6 +153,19 @@ grep -q "engine: " "$tmp/out" && { fail "the engine saw the refused set"; sed 's
 # An isolated mapping that writes past the arrays is stopped as in process: exit 78.
 runi() { "$fp" run --plugin-dir "$fx" --mesh "$mesh" --input "replay:$rec" --duration 1 --quiet -o "$tmp/out.obj" --force "$@"; }
 expect 78 "mapping 'fixture-overrun': wrote past the capacity of the host's arrays on frame [0-9]+ \(in its helper process\); the mapping is stopped" runi --mapping fixture-overrun
+# An isolated mapping that prints: its stdout is facepuppet's stderr (the helper's), so run's
+# stdout holds the summary alone, which scripts parse (before: the plugin's lines mixed in).
+runi --mapping fixture-print >"$tmp/print.out" 2>"$tmp/print.err"
+rc=$?
+if [ $rc = 0 ] && [ "$(wc -l <"$tmp/print.out")" = 1 ] && grep -q '^frames [0-9]*, ' "$tmp/print.out" &&
+   grep -q 'fixture-print: stdout of create' "$tmp/print.err" && grep -q 'fixture-print: stdout of process' "$tmp/print.err"; then
+    echo "ok: an isolated plugin's stdout on stderr, run's stdout the summary alone"
+else
+    fail "an isolated plugin's stdout (exit $rc): stdout:"; head -3 "$tmp/print.out" | sed 's/^/    /'
+fi
+# An isolated mapping whose create aborts: exit 78, named once, the call said (it died in create,
+# not while loading; before: "mapping 'x': mapping 'x': ... died of SIGABRT while loading")
+expect 78 "run: mapping 'fixture-abort': its helper process died of SIGABRT in the plugin's create$" runi --mapping fixture-abort
 # Mapping log lines carry the instance's name.
 expect 0 "facepuppet: mapping 'fixture': fixture A created" run --mapping fixture
 
