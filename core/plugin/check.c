@@ -21,7 +21,17 @@ typedef struct checker {
     const fp_check_options *opt;
     const char *who;          /* the plugin's file, for the crash bracket */
     bool extra;               /* the plugin knows ABI 1.3: frames with further performers */
+    fp_check_progress_fn progress; /* told of each call into the plugin, or NULL */
+    void *progress_user;
 } checker;
+
+/* A call into the plugin begins: bracketed for the crash handler, and told to the progress
+ * callback (the guard's: fp_plugin_check) before it is made, outside any timed span. */
+static void enter(checker *c, const char *call, uint64_t frame)
+{
+    if (c->progress) c->progress(c->progress_user, call, frame);
+    fp_plugin_call_enter(c->who, call, frame);
+}
 
 static void report(checker *c, fp_check_level level, const char *check, const char *fmt, ...)
     __attribute__((format(printf, 4, 5)));
@@ -73,7 +83,7 @@ static int create_with(creator *cr, const fp_param *extra, size_t n, void **out_
     msg[0] = '\0';
     *out_inst = NULL;
     int rc;
-    fp_plugin_call_enter(cr->c->who, "create", 0);
+    enter(cr->c, "create", 0);
     if (cr->plugin->kind == FP_PLUGIN_INPUT) {
         const fp_input_factory *f = cr->plugin->factory;
         fp_input *in = NULL;
@@ -95,7 +105,7 @@ static int create_with(creator *cr, const fp_param *extra, size_t n, void **out_
 static void destroy_inst2(creator *cr, void *inst, bool stopped)
 {
     if (!inst) return;
-    fp_plugin_call_enter(cr->c->who, "destroy", 0);
+    enter(cr->c, "destroy", 0);
     if (cr->plugin->kind == FP_PLUGIN_INPUT) {
         fp_input *in = inst;
         if (!stopped && in->stop) in->stop(in); /* allowed without a start (plugin.h) */
@@ -549,7 +559,7 @@ static void run_sequence(checker *c, fp_mapping *m, scene *s, snapshot *snaps, d
         char scen[96];
         make_frame(s, f, &in, &what);
         snprintf(scen, sizeof scen, "%s%s", what, f >= s->half ? ", rig" : "");
-        fp_plugin_call_enter(c->who, in.extra_performers ? "process with further performers" : "process", f);
+        enter(c, in.extra_performers ? "process with further performers" : "process", f);
         int64_t t0 = now_ns();
         int rc = m->process(m, &in, &s->cs);
         int64_t t1 = now_ns();
@@ -644,6 +654,7 @@ static void check_isolated(checker *c, creator *cr, const snapshot *a)
     fp_isolate_options io = {.helper = o->helper, .deadline_ms = 10000, .quiet_restarts = true};
     fp_mapping *m = NULL;
     char msg[1024] = "";
+    if (c->progress) c->progress(c->progress_user, "create in a helper process", 0);
     int rc = fp_isolate_mapping_create(&io, c->who, c->sum->name, &cr->host, o->params, o->nparams, &m, msg,
                                        sizeof msg);
     if (rc) {
@@ -721,7 +732,7 @@ static void check_mapping(checker *c, creator *cr)
     bool ran_twice = false;
     if (!dead) {
         if (m->reset) {
-            fp_plugin_call_enter(c->who, "reset", n);
+            enter(c, "reset", n);
             m->reset(m);
             fp_plugin_call_leave();
         }
@@ -871,7 +882,7 @@ static void check_input(checker *c, creator *cr)
             failed = true;
             break;
         }
-        fp_plugin_call_enter(c->who, "start", 0);
+        enter(c, "start", 0);
         rc = in->start(in, msg, sizeof msg);
         fp_plugin_call_leave();
         msg[sizeof msg - 1] = '\0';
@@ -890,7 +901,7 @@ static void check_input(checker *c, creator *cr)
             nanosleep(&ts, NULL);
         }
         if (in->stop) {
-            fp_plugin_call_enter(c->who, "stop", 0);
+            enter(c, "stop", 0);
             in->stop(in);
             fp_plugin_call_leave();
         }
@@ -934,8 +945,9 @@ static void check_input(checker *c, creator *cr)
 
 /* ---- the entry ------------------------------------------------------------------------- */
 
-int fp_plugin_check(const char *file, const fp_check_options *opt_in, fp_check_fn fn, void *user,
-                    fp_check_summary *sum, char *err, size_t errlen)
+int fp_plugin_check_direct(const char *file, const fp_check_options *opt_in, fp_check_fn fn, void *user,
+                           fp_check_progress_fn progress, void *progress_user, fp_check_summary *sum,
+                           char *err, size_t errlen)
 {
     fp_check_options opt = opt_in ? *opt_in : (fp_check_options){0};
     if (!(opt.budget_ms > 0)) opt.budget_ms = 2;
@@ -943,7 +955,7 @@ int fp_plugin_check(const char *file, const fp_check_options *opt_in, fp_check_f
     fp_check_summary local;
     if (!sum) sum = &local;
     memset(sum, 0, sizeof *sum);
-    checker c = {fn, user, sum, &opt, file, false};
+    checker c = {fn, user, sum, &opt, file, false, progress, progress_user};
     const char *base = strrchr(file, '/');
     base = base ? base + 1 : file;
     fp_plugin_path none;
@@ -951,6 +963,7 @@ int fp_plugin_check(const char *file, const fp_check_options *opt_in, fp_check_f
     none.builtin = SIZE_MAX;
     fp_plugin p;
     int rc;
+    if (progress) progress(progress_user, "load", 0); /* (dlopen runs its constructors) */
     if (!strncmp(base, "input-", 6)) {
         rc = fp_plugin_load(&none, FP_PLUGIN_INPUT, file, &p, err, errlen);
     } else {

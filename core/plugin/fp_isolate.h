@@ -13,9 +13,13 @@
  * signal, any exit), is a fault. The call returns at once with the last good control set
  * held (without its intents; an inactive set where it committed), the fault is reported once
  * through fp_host.log naming the plugin, the call, the frame and the cause, the helper is
- * killed (SIGKILL) and reaped, and a new one is started in the background after a back-off
+ * killed (SIGKILL) and reaped, and a new one is started in the background at the next frame,
+ * created anew with the same keys; it serves from the first frame whose time
+ * (fp_frame_input.time_ns: the frames' clock, not the wall's) is a back-off after the fault's
  * (FP_ISOLATE_BACKOFF_MS, doubling per fault in a row, at most FP_ISOLATE_BACKOFF_MAX_MS),
- * created anew with the same keys; the frames meanwhile hold the set. After
+ * and that frame waits for it to be ready (at most FP_ISOLATE_CREATE_MS from its start; past
+ * that it is a fault), so a run gives the same frames whatever its speed (fast=1, --speed,
+ * real time) or the machine's; the frames meanwhile hold the set. After
  * FP_ISOLATE_MAX_FAULTS faults in a row (a helper that answered FP_ISOLATE_HEALTHY_CALLS
  * calls ends a row) it gives up: one error line, and every later call returns an inactive
  * set with code 0 (the face stays as it was, the session runs on).
@@ -25,7 +29,8 @@
  * started), FP_EPLUGIN_FAULT (the helper died or hung during create).
  *
  * Threads: create and destroy [main-thread]; process and reset on the session's thread, one
- * call at a time (plugin.h's [session-thread]); they never block longer than the deadline.
+ * call at a time (plugin.h's [session-thread]); they never block longer than the deadline,
+ * except the frame a restart is due on, which waits for the new helper's create (above).
  */
 #ifndef FP_ISOLATE_H
 #define FP_ISOLATE_H
@@ -50,7 +55,7 @@ typedef enum fp_isolate_mode {
 
 #define FP_ISOLATE_DEADLINE_MS 50.0     /* default deadline of one call (3 frames at 60 Hz) */
 #define FP_ISOLATE_CREATE_MS 10000.0    /* the helper's load and create */
-#define FP_ISOLATE_BACKOFF_MS 100.0     /* the first restart's wait */
+#define FP_ISOLATE_BACKOFF_MS 100.0     /* the first restart's wait, on the frames' clock */
 #define FP_ISOLATE_BACKOFF_MAX_MS 2000.0
 #define FP_ISOLATE_MAX_FAULTS 5         /* faults in a row before giving up */
 #define FP_ISOLATE_HEALTHY_CALLS 60     /* calls answered that end a row of faults (1 s at 60 Hz) */
@@ -79,7 +84,9 @@ typedef struct fp_isolate_options {
  *  keys); `name` (the SPEC's NAME) names it in messages. `host` is the fp_host the plugin
  *  would have had in process (its log, FP_HOST_EXT_SURFACE and FP_HOST_EXT_RIG are used);
  *  it must outlive the instance. On success *out is the proxy (free it with its destroy,
- *  which ends the helper). On failure, the plugin's message or the loader's in err, and
+ *  which ends the helper). On failure, the plugin's message or the loader's in err (not naming
+ *  the mapping: the caller does; a helper that died or hung says whether while loading the
+ *  file or in the plugin's create), and
  *  the code (above). [main-thread] */
 int fp_isolate_mapping_create(const fp_isolate_options *opt, const char *file, const char *name,
                               const fp_host *host, const fp_param *params, size_t nparams,
@@ -101,7 +108,8 @@ bool fp_isolate_mapping_about(const fp_mapping *m, const char **id, const char *
 
 /** The helper's main: argv as the executable got it (argv[1] is FP_ISOLATE_HELPER_ARG).
  *  Returns the exit status (0 when the host asked it to quit or went away). Prints nothing:
- *  everything goes to the host. */
+ *  everything goes to the host; before the plugin is loaded its stdout is made its stderr
+ *  (dup2), so what a plugin prints reaches the host's stderr, never the host's stdout. */
 int fp_isolate_helper_main(int argc, char **argv);
 
 #ifdef __cplusplus

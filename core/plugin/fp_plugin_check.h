@@ -28,8 +28,18 @@
  *    start failing with -ENOENT, -ENODEV, -EACCES, -EBUSY, -ENXIO and a message is a
  *    documented skip ("needs a device"), not a failure.
  *
- * Threads: [main-thread]; calls into the plugin are bracketed (fp_plugin_crash.h), so a
- * crash in one names the plugin and the call.
+ * The guard (fp_plugin_check): all of it, from the load on, runs in a child process (fork)
+ * whose end the caller's process judges. The child tells the parent of each call into the
+ * plugin before it is made (the call and the frame: the progress) and sends every finding
+ * and at last its verdict through a pipe; a child that dies of a signal, ends (exit() in the
+ * plugin) without a verdict, or makes no progress for `deadline_s`, is a failure naming the
+ * signal, the exit status or the hang, and the call and frame it was in; what is left of it
+ * is killed (SIGKILL) and reaped. The child's stdout is the caller's stderr: a plugin that
+ * prints does not mix its text into the findings the caller prints.
+ *
+ * Threads: [main-thread], with no other thread running (it forks); calls into the plugin are
+ * bracketed (fp_plugin_crash.h), so a crash in one also names the plugin and the call on
+ * stderr (the crash handler, where the caller installed it).
  */
 #ifndef FP_PLUGIN_CHECK_H
 #define FP_PLUGIN_CHECK_H
@@ -58,7 +68,11 @@ typedef struct fp_check_options {
                                  frame for frame ("isolated"; the further performers' frames
                                  too) */
     const char *helper;       /* the helper's executable; NULL: /proc/self/exe */
+    double deadline_s;        /* the guard: the longest a call into the plugin may go without
+                                 progress (s); 0: FP_CHECK_DEADLINE_S */
 } fp_check_options;
+
+#define FP_CHECK_DEADLINE_S 10.0
 
 /** What the check found, besides the lines it reported. */
 typedef struct fp_check_summary {
@@ -75,12 +89,30 @@ typedef struct fp_check_summary {
 typedef void (*fp_check_fn)(void *user, fp_check_level level, const char *check,
                             const char *message);
 
+/** Told of each call into the plugin before it is made: `call` ("load", "create",
+ *  "process", "reset", "destroy", "start", "stop", "create in a helper process"; a string
+ *  literal) and the synthetic frame (0 where none). */
+typedef void (*fp_check_progress_fn)(void *user, const char *call, uint64_t frame);
+
 /** Check the plugin in `file` (a path; its kind from its name input-*.so / map-*.so, else
- *  whichever factory it offers). Returns 0 when every check passed or was skipped,
- *  FP_EPLUGIN_FAULT when one failed, or the loader's FP_EPLUGIN_* code (message in err)
- *  when it cannot be loaded at all. opt may be NULL (defaults). */
+ *  whichever factory it offers) in a child process, guarded (above): fn is called in the
+ *  caller's process, in order, for each finding the child made, then for the failure of a
+ *  child that crashed, exited without a verdict or hung (check: the call it was in, e.g.
+ *  "process"; message: "died of SIGSEGV during process (frame 3) ..."). Returns 0 when
+ *  every check passed or was skipped, FP_EPLUGIN_FAULT when one failed (the guard's
+ *  included; err "FILE: N check(s) failed"), the loader's FP_EPLUGIN_* code (message in
+ *  err) when it cannot be loaded at all, or a negative errno when no child could be
+ *  started (pipe, fork). summary: the child's, its counts those fn was called with. opt may
+ *  be NULL (defaults). [main-thread, no other thread running] */
 int fp_plugin_check(const char *file, const fp_check_options *opt, fp_check_fn fn, void *user,
                     fp_check_summary *summary, char *err, size_t errlen);
+
+/** The same checks in the calling process, unguarded (what the guard's child runs): a
+ *  plugin that crashes, exits or hangs takes the caller with it. progress (may be NULL) is
+ *  called before each call into the plugin. Returns as fp_plugin_check. [main-thread] */
+int fp_plugin_check_direct(const char *file, const fp_check_options *opt, fp_check_fn fn, void *user,
+                           fp_check_progress_fn progress, void *progress_user,
+                           fp_check_summary *summary, char *err, size_t errlen);
 
 #ifdef __cplusplus
 }

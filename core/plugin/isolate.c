@@ -42,7 +42,9 @@ typedef struct proxy {
     bool quiet_restarts;
     fp_iso_proc proc;
     enum state state;
-    int64_t restart_at;                  /* WAITING: when to spawn again */
+    int64_t frame_ns;                    /* the time of the frame being processed (its
+                                            fp_frame_input.time_ns): the restarts' clock */
+    int64_t restart_at;                  /* WAITING: the first frame time the new helper serves */
     int streak;                          /* faults in a row */
     unsigned long calls_ok;              /* calls answered by this helper */
     fp_isolate_stats stats;
@@ -351,10 +353,17 @@ static void fault(proxy *x, const char *call, uint64_t frame, const char *cause)
     for (int i = 1; i < x->streak && wait < FP_ISOLATE_BACKOFF_MAX_MS; i++) wait *= 2;
     if (wait > FP_ISOLATE_BACKOFF_MAX_MS) wait = FP_ISOLATE_BACKOFF_MAX_MS;
     x->state = WAITING;
-    x->restart_at = fp_now_ns() + (int64_t)(wait * 1e6);
+    x->restart_at = x->frame_ns + (int64_t)(wait * 1e6); /* on the frames' clock, not the wall's */
     say(x, FP_LOG_ERROR,
         "isolated: %s during %s (frame %llu); the last control set is held and the helper "
         "restarts in %.1f s (fault %d in a row)", cause, call, (unsigned long long)frame, wait / 1e3, x->streak);
+}
+
+/* The call a helper that has not said READY was in: "create" from the plugin's create on,
+ * "loading" before it (dlopen, the plugin's init). */
+static const char *start_call(const proxy *x)
+{
+    return x->proc.shm && atomic_load(&x->proc.shm->stage) >= FP_ISO_STAGE_CREATE ? "create" : "loading";
 }
 
 static void fault_died(proxy *x, const char *call, uint64_t frame)
@@ -375,29 +384,41 @@ static void fault_hung(proxy *x, const char *call, uint64_t frame)
     fault(x, call, frame, cause);
 }
 
-/* Bring the helper up where it is away: false while it is not (yet) there. */
+/* Bring the helper up where it is away: false while it is not (yet) there. The restart is
+ * decided on the frames' clock (x->frame_ns), so that a run gives the same frames whatever
+ * its speed: the new helper is started at the first frame after the fault, in the background,
+ * and the frame that is due (restart_at) waits for it to be ready, at most the create's
+ * deadline (FP_ISOLATE_CREATE_MS from its start); the frames before hold the set. */
 static bool ensure_up(proxy *x, uint64_t frame)
 {
     if (x->state == UP) return true;
     if (x->state == GAVE_UP || x->state == STOPPED) return false;
     if (x->state == WAITING) {
-        if (fp_now_ns() < x->restart_at) return false;
-        int rc = spawn(x);
-        if (rc) {
-            char cause[160];
-            snprintf(cause, sizeof cause, "no helper could be started (%s)", strerror(-rc));
-            fault(x, "restart", frame, cause);
-            return false;
+        if (x->proc.pid <= 0) {
+            int rc = spawn(x);
+            if (rc) {
+                char cause[160];
+                snprintf(cause, sizeof cause, "no helper could be started (%s)", strerror(-rc));
+                fault(x, "restart", frame, cause);
+                return false;
+            }
         }
+        if (x->frame_ns < x->restart_at) return false;
         x->state = STARTING;
     }
-    int rc = fp_iso_proc_poll_ready(&x->proc, relay_log, x);
-    if (rc == FP_ISO_PENDING) {
-        if (fp_now_ns() - x->proc.started_ns > (int64_t)(FP_ISOLATE_CREATE_MS * 1e6)) fault_hung(x, "create", frame);
+    double left_ms = FP_ISOLATE_CREATE_MS - (double)(fp_now_ns() - x->proc.started_ns) / 1e6;
+    int rc = fp_iso_proc_wait_ready(&x->proc, left_ms > 0 ? left_ms : 0, relay_log, x);
+    if (rc == FP_ISO_PENDING || rc == FP_ISO_HUNG) {
+        const char *call = start_call(x);
+        fp_iso_proc_kill(&x->proc, NULL, 0);
+        char cause[160];
+        snprintf(cause, sizeof cause, "the new helper was not ready within %g s (it was killed)",
+                 FP_ISOLATE_CREATE_MS / 1e3);
+        fault(x, call, frame, cause);
         return false;
     }
     if (rc == FP_ISO_DIED) {
-        fault_died(x, "create", frame);
+        fault_died(x, start_call(x), frame);
         return false;
     }
     if (x->proc.ready_rc) {
@@ -419,6 +440,7 @@ static int proxy_process(fp_mapping *self, const fp_frame_input *in, fp_control_
 {
     proxy *x = self->plugin_data;
     if (x->state == STOPPED) return FP_EPLUGIN_FAULT;
+    x->frame_ns = in->time_ns;
     if (!ensure_up(x, in->frame)) {
         hold(x, in, out);
         return 0;
@@ -516,7 +538,7 @@ int fp_isolate_mapping_create(const fp_isolate_options *opt, const char *file, c
     if (!x || copy_keys(&x->keys, params, nparams)) {
         if (x) fp_spec_clear(&x->keys);
         free(x);
-        return fp_errorf(err, errlen, -ENOMEM, "mapping '%s': out of memory", name);
+        return fp_errorf(err, errlen, -ENOMEM, "out of memory");
     }
     fp_iso_proc_init(&x->proc);
     x->m.plugin_data = x;
@@ -536,20 +558,27 @@ int fp_isolate_mapping_create(const fp_isolate_options *opt, const char *file, c
     int rc = spawn(x);
     if (rc) {
         proxy_destroy(&x->m);
-        return fp_errorf(err, errlen, -EIO, "mapping '%s': cannot start its helper process %s: %s", name,
+        return fp_errorf(err, errlen, -EIO, "cannot start its helper process %s: %s",
                          opt && opt->helper ? opt->helper : "/proc/self/exe", strerror(-rc));
     }
     rc = fp_iso_proc_wait_ready(&x->proc, FP_ISOLATE_CREATE_MS, relay_log, x);
     if (rc || x->proc.ready_rc) {
+        /* (the caller names the mapping: the message does not) */
         char why[96] = "did not answer";
+        const bool in_create = !strcmp(start_call(x), "create");
         if (rc == FP_ISO_DIED) {
             fp_iso_proc_kill(&x->proc, why, sizeof why);
-            snprintf(err, errlen, "mapping '%s': its helper process %s while loading %s", name, why, file);
+            if (in_create) snprintf(err, errlen, "its helper process %s in the plugin's create", why);
+            else snprintf(err, errlen, "its helper process %s while loading %s", why, file);
             rc = FP_EPLUGIN_FAULT;
         } else if (rc) {
             fp_iso_proc_kill(&x->proc, NULL, 0);
-            snprintf(err, errlen, "mapping '%s': its helper process did not load and create it within %g s",
-                     name, FP_ISOLATE_CREATE_MS / 1e3);
+            if (in_create)
+                snprintf(err, errlen, "the plugin's create did not return within %g s (in its helper process)",
+                         FP_ISOLATE_CREATE_MS / 1e3);
+            else
+                snprintf(err, errlen, "its helper process did not load %s within %g s", file,
+                         FP_ISOLATE_CREATE_MS / 1e3);
             rc = FP_EPLUGIN_FAULT;
         } else {
             snprintf(err, errlen, "%s", x->proc.ready_text);

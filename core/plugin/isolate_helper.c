@@ -308,6 +308,10 @@ int fp_isolate_helper_main(int argc, char **argv)
     H.sock = arg_fd(argv[5]);
     const char *file = argv[6];
     if (H.memfd < 0 || H.go < 0 || H.done < 0 || H.sock < 0) return 64;
+    /* the plugin's printf goes to the host's stderr: the host's stdout is its own (run's
+     * summary, which scripts parse), shared with this process since the spawn */
+    fflush(stdout);
+    if (dup2(STDERR_FILENO, STDOUT_FILENO) < 0) return 70;
     signal(SIGPIPE, SIG_IGN);
     prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0); /* wake for the spin when asked, not 50 us late */
     int fl = fcntl(H.go, F_GETFL);
@@ -344,10 +348,12 @@ int fp_isolate_helper_main(int argc, char **argv)
     none.builtin = SIZE_MAX;
     fp_plugin plugin;
     char err[900] = "";
+    atomic_store(&H.shm->stage, FP_ISO_STAGE_LOAD);
     int rc = fp_plugin_load(&none, FP_PLUGIN_MAPPING, file, &plugin, err, sizeof err);
     fp_mapping *m = NULL;
     if (!rc) {
         const fp_mapping_factory *f = plugin.factory;
+        atomic_store(&H.shm->stage, FP_ISO_STAGE_CREATE);
         rc = f->create(&H.host, params, np, &m, err, sizeof err);
         if (!rc && !m) {
             snprintf(err, sizeof err, "create returned 0 without an instance");
@@ -361,6 +367,7 @@ int fp_isolate_helper_main(int argc, char **argv)
     if (!rc) /* what the host shows of it: the entry's id and version */
         snprintf(err, sizeof err, "%.400s\n%.400s", plugin.entry->id ? plugin.entry->id : "?",
                  plugin.entry->version ? plugin.entry->version : "?");
+    atomic_store(&H.shm->stage, FP_ISO_STAGE_READY);
     send_msg(FP_ISO_MSG_READY, rc, rc && !err[0] ? "create failed" : err);
     if (rc) return 0;
     for (;;) {

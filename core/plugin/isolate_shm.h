@@ -26,7 +26,7 @@
 #include <stdint.h>
 
 #define FP_ISO_MAGIC 0x4f534946u        /* "FISO" */
-#define FP_ISO_VERSION 2u              /* 2: the further performers' hands */
+#define FP_ISO_VERSION 3u              /* 2: the further performers' hands; 3: stage */
 #define FP_ISO_SURFACE_MAX 256          /* surface queries per round trip (more: several) */
 #define FP_ISO_GUARD 8                  /* canary entries after each control-set array */
 #define FP_ISO_CANARY 0xA5
@@ -34,6 +34,9 @@
 enum { FP_ISO_OP_PROCESS = 1, FP_ISO_OP_RESET = 2, FP_ISO_OP_SURFACE = 3, FP_ISO_OP_QUIT = 4 };
 enum { FP_ISO_REPLY_DONE = 1, FP_ISO_REPLY_SURFACE = 2 };
 enum { FP_ISO_MSG_READY = 1, FP_ISO_MSG_LOG = 2 };
+/* How far the helper got before its READY (fp_iso_shm.stage): for the message of a helper
+ * that died or hung before it, "while loading" or "in create". */
+enum { FP_ISO_STAGE_START = 0, FP_ISO_STAGE_LOAD = 1, FP_ISO_STAGE_CREATE = 2, FP_ISO_STAGE_READY = 3 };
 
 /** A message on the socket: the create result (READY: rc, text the error) or a log line. */
 typedef struct fp_iso_msg {
@@ -62,6 +65,7 @@ typedef struct fp_iso_shm {
     uint32_t reply;                   /* FP_ISO_REPLY_* of reply_seq */
     int32_t rc;                       /* process()'s code */
     uint32_t offers;                  /* bit 0: surface, bit 1: rig (the host's extensions) */
+    _Atomic uint32_t stage;           /* FP_ISO_STAGE_*, written by the helper */
 
     /* the frame: in's pointers are rebuilt by the helper */
     fp_frame_input in;

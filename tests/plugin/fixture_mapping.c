@@ -9,6 +9,10 @@
  *   FIXTURE_NO_INSTANCE    create returns 0 without an instance
  *   FIXTURE_SEGV           process dereferences a null pointer from frame 3 on
  *   FIXTURE_SPIN           process spins forever on its 30th call (SIGTERM's watchdog)
+ *   FIXTURE_EXIT           process calls exit(0) on frame 3 (the checker's guard)
+ *   FIXTURE_ABORT          create calls abort() (SIGABRT: the guard; an isolated create)
+ *   FIXTURE_PRINT          A, printing a line to stdout in create and in every process (an
+ *                             isolated helper's stdout is facepuppet's stderr)
  *   FIXTURE_ENGINE_FAIL    A with a support radius of 1e20 (finite and positive, but past the
  *                             engine's [1e-15, 1e15]: the host refuses it as the mapping's
  *                             error every frame, before the engine or a take sees it)
@@ -22,6 +26,7 @@
 #include <facepuppet/plugin.h>
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -58,6 +63,13 @@ static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *o
         for (volatile unsigned long spin = 0;; spin++) {} /* never returns */
 #else
     fx->calls++;
+#endif
+#ifdef FIXTURE_EXIT
+    if (in->frame == 3) exit(0);
+#endif
+#ifdef FIXTURE_PRINT
+    printf("fixture-print: stdout of process, frame %llu\n", (unsigned long long)in->frame);
+    fflush(stdout);
 #endif
 #ifdef FIXTURE_SEGV
     if (in->frame >= 3) {
@@ -130,6 +142,13 @@ static int create(const fp_host *host, const fp_param *params, size_t nparams, f
     fpmu_value v[1];
     int rc = fpmu_params_parse("fixture", keys, params, nparams, v, err, errlen);
     if (rc) return rc;
+#ifdef FIXTURE_ABORT
+    abort();
+#endif
+#ifdef FIXTURE_PRINT
+    printf("fixture-print: stdout of create\n");
+    fflush(stdout);
+#endif
 #ifdef FIXTURE_NO_INSTANCE
     (void)host;
     (void)process;

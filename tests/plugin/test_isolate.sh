@@ -10,6 +10,8 @@
 #    deforms again (frames differ from gain=0's and from the held shape) and the last frame
 #    equals the steady plugin's;
 #    the take records the fault as a status event, and `play` of it gives the run's frames;
+#    the restart is on the frames' clock: with fast=1 and at --speed 2 the crash run gives the
+#    real-time run's frames;
 #  - --isolate all with the built-in mappings gives bit-identical meshes to in-process runs
 #    (every frame: --export .pc2, and the last: -o .obj) on the three faces and the four
 #    recordings, the mappings taken in turn (a generous deadline: on a loaded machine a
@@ -106,6 +108,30 @@ fault() {
 }
 fault crash "the helper process (died of SIGSEGV|exited with status [0-9]+)"
 fault hang "no answer within the deadline of $deadline ms \(the helper was killed\)"
+
+# The restart is decided on the frames' clock, and the frame it is due on waits for the new
+# helper: the crash run again with fast=1 (frames as fast as the machine steps them) and at
+# --speed 2 gives the real-time run's frames, every one (before: with fast=1 the run ended
+# before the wall clock's 0.1 s had passed, its frames after the fault all held).
+for how in fast speed2; do
+    if [ $how = fast ]; then input="replay:$rec,fast=1" speed=1; else input="replay:$rec" speed=2; fi
+    d=$tmp/crash-$how
+    mkdir -p "$d"
+    "$fp" run --plugin-dir "$tmp/pc" --mesh "$mesh" --input "$input" --speed $speed --frames-out "$d" \
+        --mapping crash --isolate-deadline "$deadline" -o "$d.obj" >"$d.log" 2>&1 || fail "crash $how: exit $?"
+    k=0 differ=0
+    while [ "$k" -lt "$n" ]; do
+        cmp -s "$(frame "$tmp/crash" "$k")" "$(frame "$d" "$k")" || differ=$((differ + 1))
+        k=$((k + 1))
+    done
+    [ "$differ" = 0 ] && cmp -s "$tmp/crash.obj" "$d.obj" ||
+        fail "crash $how: $differ of $n frames (or the -o mesh) differ from the real-time run's"
+    b1=$(grep -o "the helper is back (restart 1, pid [0-9]*) from frame [0-9]*" "$tmp/crash.log" | sed 's/.* //')
+    b2=$(grep -o "the helper is back (restart 1, pid [0-9]*) from frame [0-9]*" "$d.log" | sed 's/.* //')
+    [ -n "$b2" ] && [ "$b1" = "$b2" ] || fail "crash $how: the helper back from frame '$b2', in real time from '$b1'"
+    echo "crash $how: $((n - differ)) of $n frames identical to the real-time run's, the helper back from frame ${b2:-none}"
+    [ "$fails" = 0 ] || sed 's/^/    /' "$d.log" | grep -v "^     *[0-9.]* s  frame"
+done
 
 # Repeated faults: chaos,mean=2 faults in every call from frame 29 on. The restarts back off
 # (0.1, 0.2, 0.4, 0.8 s), the fifth fault in a row gives up with one line naming the plugin,

@@ -88,6 +88,30 @@ expect 1 'FAIL  create +create returned 0 without an instance' "$fp" plugins che
 expect 78 'FAIL  load .*built for plugin ABI 2\.0, this facepuppet has ABI 1\.3' "$fp" plugins check "$fx/map-fixture-abi2.so"
 expect 78 'built for plugin ABI 2\.0' "$fp" plugins check "$fx/input-fixture-abi2.so"
 expect 64 'give one FILE' "$fp" plugins check
+# A plugin that crashes, calls exit() or hangs in a call fails the check (exit 1, a FAIL line
+# naming the signal, the exit or the hang, and the call and frame), the checker itself intact:
+# the checks run in a child process (before: 139, 134, exit 0 with no verdict, a hang)
+expect 1 'FAIL  process +the plugin died of SIGSEGV during process \(frame 3\)' \
+    timeout 60 "$fp" plugins check "$fx/map-fixture-segv.so"
+expect 1 'FAIL  create +the plugin died of SIGABRT during create' timeout 60 "$fp" plugins check "$fx/map-fixture-abort.so"
+expect 1 'FAIL  process +the plugin ended the process with exit status 0 during process \(frame 3\), without a verdict' \
+    timeout 60 "$fp" plugins check "$fx/map-fixture-exit.so"
+expect 1 'FAIL  process +no progress for 2 s during process \(frame 29\): the plugin hangs' \
+    timeout 60 "$fp" plugins check "$fx/map-fixture-spin.so" --deadline 2
+expect 1 'FAILED: .*map-fixture-spin.so: 1 check\(s\) failed' timeout 60 "$fp" plugins check "$fx/map-fixture-spin.so" --deadline 2
+# ... in --json too: one document, the failure among its checks; a plugin's stdout (in process
+# and in the isolated pass's helper) goes to stderr, not into the document
+for f in segv print; do
+    timeout 60 "$fp" plugins check "$fx/map-fixture-$f.so" --json >"$tmp/$f.json" 2>"$tmp/$f.err"
+    echo $? >"$tmp/$f.rc"
+done
+python3 -c "import json,sys; d=json.load(open(sys.argv[1])); \
+assert d['passed'] is False and any(c['result']=='fail' and 'SIGSEGV during process (frame 3)' in c['message'] for c in d['checks'])" \
+    "$tmp/segv.json" && [ "$(cat "$tmp/segv.rc")" = 1 ] && echo "ok: --json of a crashing plugin: exit 1, the failure listed" ||
+    { fail "--json of a crashing plugin (exit $(cat "$tmp/segv.rc"))"; sed 's/^/    /' "$tmp/segv.json"; }
+python3 -c "import json,sys; d=json.load(open(sys.argv[1])); assert d['passed'] is True" "$tmp/print.json" &&
+    grep -q 'fixture-print: stdout of process' "$tmp/print.err" && echo "ok: a printing plugin's --json parses, its text on stderr" ||
+    { fail "--json of a printing plugin"; head -5 "$tmp/print.json" | sed 's/^/    /'; }
 
 # The list: built-in plugins with their keys, broken fixtures with the reason, as text and JSON.
 # (the fixtures that crash in init would end the listing, naming themselves: left out here)
@@ -129,6 +153,19 @@ grep -q "engine: " "$tmp/out" && { fail "the engine saw the refused set"; sed 's
 # An isolated mapping that writes past the arrays is stopped as in process: exit 78.
 runi() { "$fp" run --plugin-dir "$fx" --mesh "$mesh" --input "replay:$rec" --duration 1 --quiet -o "$tmp/out.obj" --force "$@"; }
 expect 78 "mapping 'fixture-overrun': wrote past the capacity of the host's arrays on frame [0-9]+ \(in its helper process\); the mapping is stopped" runi --mapping fixture-overrun
+# An isolated mapping that prints: its stdout is facepuppet's stderr (the helper's), so run's
+# stdout holds the summary alone, which scripts parse (before: the plugin's lines mixed in).
+runi --mapping fixture-print >"$tmp/print.out" 2>"$tmp/print.err"
+rc=$?
+if [ $rc = 0 ] && [ "$(wc -l <"$tmp/print.out")" = 1 ] && grep -q '^frames [0-9]*, ' "$tmp/print.out" &&
+   grep -q 'fixture-print: stdout of create' "$tmp/print.err" && grep -q 'fixture-print: stdout of process' "$tmp/print.err"; then
+    echo "ok: an isolated plugin's stdout on stderr, run's stdout the summary alone"
+else
+    fail "an isolated plugin's stdout (exit $rc): stdout:"; head -3 "$tmp/print.out" | sed 's/^/    /'
+fi
+# An isolated mapping whose create aborts: exit 78, named once, the call said (it died in create,
+# not while loading; before: "mapping 'x': mapping 'x': ... died of SIGABRT while loading")
+expect 78 "run: mapping 'fixture-abort': its helper process died of SIGABRT in the plugin's create$" runi --mapping fixture-abort
 # Mapping log lines carry the instance's name.
 expect 0 "facepuppet: mapping 'fixture': fixture A created" run --mapping fixture
 

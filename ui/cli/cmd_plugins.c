@@ -146,7 +146,7 @@ static void usage(FILE *f)
     fprintf(f,
         "usage: facepuppet plugins [--json] [--plugin-dir DIR]...\n"
         "       facepuppet plugins check FILE.so [--json] [--arg ARG] [--key K=V]...\n"
-        "                                [--budget MS] [--cycles N]\n\n"
+        "                                [--budget MS] [--cycles N] [--deadline S]\n\n"
         "plugins: every input-*.so and map-*.so on the plugin search path (the built-in\n"
         "folder, --plugin-dir folders, FACEPUPPET_PLUGIN_PATH), loaded and described: kind,\n"
         "id, version, ABI, description, usage and typed keys; a broken one with the reason\n"
@@ -159,16 +159,22 @@ static void usage(FILE *f)
         "(capacity canaries, NaN, radius, time per call, determinism, destroy; from ABI 1.3\n"
         "also frames with 1 and 3 further performers' hands, which it must not write); an\n"
         "input is created, started, stopped and destroyed --cycles times and its events checked.\n"
+        "The checks run in a child process: a plugin that crashes, calls exit() or hangs (no\n"
+        "progress for --deadline) fails the check with a FAIL line naming the signal, the exit\n"
+        "or the hang and the call and frame it was in; the plugin's stdout goes to stderr.\n"
         "  --arg ARG       an input's ARG (e.g. the recording of input-replay)\n"
         "  --key K=V       a key added to every create (repeatable), e.g. --key fast=1\n"
         "  --budget MS     a mapping's process() budget (default 2 ms)\n"
         "  --cycles N      an input's start/stop cycles (default 5)\n"
+        "  --deadline S    the longest one call into the plugin may take before it counts\n"
+        "                  as hung (default 10 s)\n"
         "  --isolate WHICH third-party (default): a mapping not in facepuppet's own plugin\n"
         "                  folder whose frames pass runs them again in a helper process\n"
         "                  (as run and live would run it), control sets compared frame by\n"
         "                  frame (\"isolated\"); all: any mapping; none: no such pass\n"
         "  --json          machine-readable output\n\n"
-        "Exit status: 0 passed (skips allowed, e.g. \"needs a device\"), 1 a check failed,\n"
+        "Exit status: 0 passed (skips allowed, e.g. \"needs a device\"), 1 a check failed (a\n"
+        "crash, exit() or hang in the plugin included),\n"
         "64 usage, 78 the plugin cannot be loaded (missing, ABI, no entry, init, factory).\n");
 }
 
@@ -211,7 +217,8 @@ static int check_main(int argc, char **argv)
     static const struct option opts[] = {{"json", no_argument, 0, 'j'},      {"arg", required_argument, 0, 'a'},
                                          {"key", required_argument, 0, 'k'}, {"budget", required_argument, 0, 'b'},
                                          {"cycles", required_argument, 0, 'c'}, {"help", no_argument, 0, 'h'},
-                                         {"isolate", required_argument, 0, 'I'}, {0, 0, 0, 0}};
+                                         {"isolate", required_argument, 0, 'I'},
+                                         {"deadline", required_argument, 0, 'D'}, {0, 0, 0, 0}};
     fp_check_options o = {0};
     fp_isolate_mode isolate = FP_ISOLATE_THIRD_PARTY;
     fp_param keys[FP_SPEC_MAX_PARAMS];
@@ -253,6 +260,13 @@ static int check_main(int argc, char **argv)
                 goto out;
             }
             o.cycles = (int)whole;
+            break;
+        case 'D':
+            if (!fp_parse_decimal(optarg, &o.deadline_s) || !(o.deadline_s >= 0.1 && o.deadline_s <= 3600)) {
+                fprintf(stderr, "facepuppet plugins check: --deadline must be 0.1 to 3600 s, got '%s'\n", optarg);
+                status = FP_EXIT_USAGE;
+                goto out;
+            }
             break;
         case 'I':
             if (fp_isolate_mode_parse(optarg, &isolate)) {
