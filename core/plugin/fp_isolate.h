@@ -77,6 +77,11 @@ typedef struct fp_isolate_options {
     const char *helper;        /* the executable run as the helper; NULL: /proc/self/exe */
     double deadline_ms;        /* 0: FP_ISOLATE_DEADLINE_MS */
     bool quiet_restarts;       /* true: no info line when a helper is back */
+    bool never_wait;           /* true (live, on the wall clock): a restart never blocks a
+                                  frame; a new helper not ready at its due frame is asked again
+                                  each frame, the last set held, until the create's deadline.
+                                  false (run, on the recording's clock): the due frame waits
+                                  for it, so that every speed gives the same frames */
 } fp_isolate_options;
 
 /** Start a helper that loads the mapping plugin `file` (an absolute or relative path; the

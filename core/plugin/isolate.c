@@ -40,6 +40,7 @@ typedef struct proxy {
     fp_spec keys;                        /* the SPEC's keys, for each restart */
     double deadline_ms;
     bool quiet_restarts;
+    bool never_wait;    /* fp_isolate_options.never_wait */
     fp_iso_proc proc;
     enum state state;
     int64_t frame_ns;                    /* the time of the frame being processed (its
@@ -388,7 +389,8 @@ static void fault_hung(proxy *x, const char *call, uint64_t frame)
  * decided on the frames' clock (x->frame_ns), so that a run gives the same frames whatever
  * its speed: the new helper is started at the first frame after the fault, in the background,
  * and the frame that is due (restart_at) waits for it to be ready, at most the create's
- * deadline (FP_ISOLATE_CREATE_MS from its start); the frames before hold the set. */
+ * deadline (FP_ISOLATE_CREATE_MS from its start); the frames before hold the set. Live
+ * (never_wait) the due frame and those after it only look, holding the set, until then. */
 static bool ensure_up(proxy *x, uint64_t frame)
 {
     if (x->state == UP) return true;
@@ -407,7 +409,10 @@ static bool ensure_up(proxy *x, uint64_t frame)
         x->state = STARTING;
     }
     double left_ms = FP_ISOLATE_CREATE_MS - (double)(fp_now_ns() - x->proc.started_ns) / 1e6;
-    int rc = fp_iso_proc_wait_ready(&x->proc, left_ms > 0 ? left_ms : 0, relay_log, x);
+    /* live: a look, not a wait, while the create's deadline lasts (the set held meanwhile) */
+    int rc = x->never_wait && left_ms > 0 ? fp_iso_proc_poll_ready(&x->proc, relay_log, x)
+                                          : fp_iso_proc_wait_ready(&x->proc, left_ms > 0 ? left_ms : 0, relay_log, x);
+    if ((rc == FP_ISO_PENDING || rc == FP_ISO_HUNG) && x->never_wait && left_ms > 0) return false;
     if (rc == FP_ISO_PENDING || rc == FP_ISO_HUNG) {
         const char *call = start_call(x);
         fp_iso_proc_kill(&x->proc, NULL, 0);
@@ -546,6 +551,7 @@ int fp_isolate_mapping_create(const fp_isolate_options *opt, const char *file, c
     x->host = host;
     x->deadline_ms = opt && opt->deadline_ms > 0 ? opt->deadline_ms : FP_ISOLATE_DEADLINE_MS;
     x->quiet_restarts = opt && opt->quiet_restarts;
+    x->never_wait = opt && opt->never_wait;
     snprintf(x->exe, sizeof x->exe, "%s", opt && opt->helper ? opt->helper : "/proc/self/exe");
     snprintf(x->file, sizeof x->file, "%s", file);
     snprintf(x->name, sizeof x->name, "%s", name);

@@ -390,6 +390,7 @@ static int open_steps(fp_session *s, const fp_session_options *opt, double diag,
     snprintf(s->isolate_helper, sizeof s->isolate_helper, "%s", opt->isolate_helper ? opt->isolate_helper : "");
     s->isolate_opt.helper = opt->isolate_helper ? s->isolate_helper : NULL;
     s->isolate_opt.deadline_ms = opt->isolate_deadline_ms;
+    s->isolate_opt.never_wait = !opt->input_clock; /* live: a frame never waits for a restart */
     s->whole_rig_commit = opt->whole_rig_commit;
     s->frame_thread_opt = opt->frame_thread;
     /* the hold's eps from the loaded face's diagonal (diag: its square, above) */
