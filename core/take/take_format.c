@@ -604,6 +604,21 @@ static bool jdarray(const cJSON *o, const char *key, double *out, int n)
     return jdvec(cJSON_GetObjectItemCaseSensitive(o, key), out, n);
 }
 
+/* The header's "face" (1.4, optional): two axes as --up and --facing gave them, 3 numbers
+ * each, neither a zero vector. 0 or -EBADMSG with the message. */
+static int read_face(const cJSON *o, fp_take_header *h, char *msg, size_t msglen)
+{
+    const cJSON *face = cJSON_GetObjectItemCaseSensitive(o, "face");
+    if (!face) return 0;
+    if (!(cJSON_IsObject(face) && jdarray(face, "up", h->face_up, 3) && jdarray(face, "facing", h->face_facing, 3)))
+        return fp_errorf(msg, msglen, -EBADMSG, "header: invalid \"face\" (up and facing, 3 numbers each)");
+    double nu = 0, nf = 0;
+    for (int i = 0; i < 3; i++) nu += h->face_up[i] * h->face_up[i], nf += h->face_facing[i] * h->face_facing[i];
+    if (!(nu > 1e-12) || !(nf > 1e-12))
+        return fp_errorf(msg, msglen, -EBADMSG, "header: invalid \"face\" (up or facing is a zero vector)");
+    return 0;
+}
+
 static int fill_header(const cJSON *o, fp_take_header *h, strstore *st, char *msg, size_t msglen)
 {
     double d;
@@ -716,16 +731,8 @@ static int fill_header(const cJSON *o, fp_take_header *h, strstore *st, char *ms
         p->name = keep(st, name);
         h->performer_count++;
     }
-    const cJSON *face = cJSON_GetObjectItemCaseSensitive(o, "face"); /* 1.4 */
-    if (face && !(cJSON_IsObject(face) && jdarray(face, "up", h->face_up, 3) &&
-                  jdarray(face, "facing", h->face_facing, 3)))
-        return fp_errorf(msg, msglen, -EBADMSG, "header: invalid \"face\" (up and facing, 3 numbers each)");
-    if (face) { /* two axes, as --up and --facing gave them: neither zero */
-        double nu = 0, nf = 0;
-        for (int i = 0; i < 3; i++) nu += h->face_up[i] * h->face_up[i], nf += h->face_facing[i] * h->face_facing[i];
-        if (!(nu > 1e-12) || !(nf > 1e-12))
-            return fp_errorf(msg, msglen, -EBADMSG, "header: invalid \"face\" (up or facing is a zero vector)");
-    }
+    int rc = read_face(o, h, msg, msglen);
+    if (rc) return rc;
     if (!jnum(o, "radius", &h->radius) || h->radius < 0)
         return fp_errorf(msg, msglen, -EBADMSG, "header: missing or invalid \"radius\"");
     h->description = keep(st, jstr(o, "description"));
