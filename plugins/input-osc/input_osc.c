@@ -149,13 +149,16 @@ static void sleep_ns(int64_t ns)
     nanosleep(&ts, NULL);
 }
 
-static void count(osc_input *o, int kind)
+/* n more of a problem counted; its report is due a second after the first */
+static void count_n(osc_input *o, int kind, uint64_t n)
 {
     pthread_mutex_lock(&o->lock);
-    o->st.problems[kind]++;
+    o->st.problems[kind] += n;
     pthread_mutex_unlock(&o->lock);
     if (o->report_at[kind] == 0) o->report_at[kind] = now_ns(o) + REPORT_DELAY_NS;
 }
+
+static void count(osc_input *o, int kind) { count_n(o, kind, 1); }
 
 /* The kernel's count of datagrams a socket dropped (SO_RXQ_OVFL's control message, a running
  * total per socket): what it grew by since the last, counted. */
@@ -169,11 +172,7 @@ static void kernel_drops(osc_input *o, int s, const struct msghdr *mh)
         memcpy(&total, CMSG_DATA(c), sizeof total);
         uint32_t grew = total - o->kernel_total[s]; /* (wraps as the kernel's counter does) */
         o->kernel_total[s] = total;
-        if (!grew) continue;
-        pthread_mutex_lock(&o->lock);
-        o->st.problems[FP_OSC_KERNEL_DROPPED] += grew;
-        pthread_mutex_unlock(&o->lock);
-        if (o->report_at[FP_OSC_KERNEL_DROPPED] == 0) o->report_at[FP_OSC_KERNEL_DROPPED] = now_ns(o) + REPORT_DELAY_NS;
+        if (grew) count_n(o, FP_OSC_KERNEL_DROPPED, grew);
     }
 #else
     (void)o, (void)s, (void)mh;
