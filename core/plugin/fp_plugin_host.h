@@ -103,7 +103,8 @@ typedef struct fp_plugin {
 int fp_plugin_load(const fp_plugin_path *path, fp_plugin_kind kind, const char *name,
                    fp_plugin *out, char *err, size_t errlen);
 
-/** Whether `name` (a SPEC's NAME) is one of the plugins facepuppet ships (plugins/). */
+/** Whether `name` (a SPEC's NAME, e.g. "anchored"; NULL: false) of `kind` is one of the
+ *  plugins facepuppet ships (plugins/). Pure, [any-thread]; no errors. */
 bool fp_plugin_shipped(fp_plugin_kind kind, const char *name);
 
 /** Where fp_plugin_load would find `name` (as it searches: a name with a '/' is the file
