@@ -2,6 +2,7 @@
  * would, and harder. */
 #define _GNU_SOURCE
 #include "fp_plugin_check.h"
+#include "fp_control_check.h"
 #include "fp_event_check.h"
 #include "fp_isolate.h"
 #include "fp_plugin_crash.h"
@@ -582,29 +583,31 @@ static void run_sequence(checker *c, fp_mapping *m, scene *s, snapshot *snaps, d
             fault_add(&faults[F_RC], f, scen, "process returned %d (%s)", rc, fp_strerror(rc));
             continue;
         }
-        if (cs->count > cs->capacity || cs->channel_count > cs->channel_capacity) {
+        size_t v = 0;
+        int at_start = 0;
+        const fp_control_fault cf = fp_control_check(cs, &v, &at_start); /* the host's rule */
+        if (cf == FP_CONTROL_OVER_CAPACITY) {
             fault_add(&faults[F_COUNT], f, scen, "count %zu > capacity %zu or channel_count %zu > %zu",
                       cs->count, cs->capacity, cs->channel_count, cs->channel_capacity);
             continue;
         }
-        if (cs->active && !(cs->radius >= FP_CONTROL_RADIUS_MIN && cs->radius <= FP_CONTROL_RADIUS_MAX))
+        if (cf == FP_CONTROL_NO_ARRAY) {
+            fault_add(&faults[F_COUNT], f, scen, "count %zu with the start or end array set to NULL (the host's)",
+                      cs->count);
+            continue;
+        }
+        if (cf == FP_CONTROL_BAD_RADIUS)
             fault_add(&faults[F_RADIUS], f, scen, "active with radius %g (the host takes %g to %g)", cs->radius,
                       FP_CONTROL_RADIUS_MIN, FP_CONTROL_RADIUS_MAX);
-        for (size_t i = 0; i < cs->count; i++)
-            for (int k = 0; k < 3; k++)
-                if (!(fabsf(cs->start[i][k]) <= FP_CONTROL_COORD_MAX) || !(fabsf(cs->end[i][k]) <= FP_CONTROL_COORD_MAX)) {
-                    const bool s_ok = fabsf(cs->start[i][k]) <= FP_CONTROL_COORD_MAX;
-                    fault_add(&faults[F_NONFINITE], f, scen,
-                              "control vector %zu: %s point (%g, %g, %g) %s%s", i,
-                              s_ok ? "end" : "start", s_ok ? cs->end[i][0] : cs->start[i][0],
-                              s_ok ? cs->end[i][1] : cs->start[i][1], s_ok ? cs->end[i][2] : cs->start[i][2],
-                              isfinite(s_ok ? cs->end[i][k] : cs->start[i][k])
-                                  ? "lies beyond 1e15 (FP_CONTROL_COORD_MAX)" : "is not finite",
-                              in.extra_performers ? " (the frame's hands are finite; only extra_hands' rows "
-                              "past FP_HANDS x extra_performers hold NaN: read past them?)" : "");
-                    i = cs->count;
-                    break;
-                }
+        if (cf == FP_CONTROL_BAD_POINT) {
+            const float *p = at_start ? cs->start[v] : cs->end[v];
+            const bool finite = isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]);
+            fault_add(&faults[F_NONFINITE], f, scen, "control vector %zu: %s point (%g, %g, %g) %s%s", v,
+                      at_start ? "start" : "end", p[0], p[1], p[2],
+                      finite ? "lies beyond 1e15 (FP_CONTROL_COORD_MAX)" : "is not finite",
+                      in.extra_performers ? " (the frame's hands are finite; only extra_hands' rows "
+                      "past FP_HANDS x extra_performers hold NaN: read past them?)" : "");
+        }
         for (size_t i = 0; i < cs->channel_count; i++)
             if (!isfinite(cs->channels[i].value) || !memchr(cs->channels[i].name, 0, sizeof cs->channels[i].name)) {
                 fault_add(&faults[F_CHANNEL], f, scen, "channel %zu: name not NUL-terminated or value not finite", i);

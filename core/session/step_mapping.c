@@ -3,11 +3,11 @@
 #define _POSIX_C_SOURCE 200809L
 #include "step_mapping.h"
 
+#include "fp_control_check.h"
 #include "fp_error.h"
 #include "fp_plugin_crash.h"
 
 #include <errno.h>
-#include <math.h>
 #include <stdio.h>
 #include <string.h>
 #include <time.h>
@@ -16,16 +16,11 @@ static const unsigned char canary = 0xA5;
 
 int fp_control_set_check(const fp_control_set *cs)
 {
-    if (cs->count > cs->capacity || cs->channel_count > cs->channel_capacity) return -ERANGE;
-    /* the engine's range (plugin.h, csrbf.h), which a take's reader holds frames to: a set
-     * outside it would be recorded, then read back as damage, the take cut there */
-    if (!(cs->radius >= FP_CONTROL_RADIUS_MIN && cs->radius <= FP_CONTROL_RADIUS_MAX)) return -EINVAL;
-    if (cs->count && (!cs->start || !cs->end)) return -EINVAL;
-    for (size_t i = 0; i < cs->count; i++)
-        for (int k = 0; k < 3; k++)
-            if (!(fabsf(cs->start[i][k]) <= FP_CONTROL_COORD_MAX) || !(fabsf(cs->end[i][k]) <= FP_CONTROL_COORD_MAX))
-                return -EINVAL; /* (NaN fails too) */
-    return 0;
+    switch (fp_control_check(cs, NULL, NULL)) {
+    case FP_CONTROL_OK: return 0;
+    case FP_CONTROL_OVER_CAPACITY: return -ERANGE;
+    default: return -EINVAL;
+    }
 }
 
 static void fill_canaries(fp_mapping_step *st)
@@ -91,13 +86,18 @@ static const char *source_of(char buf[96], const char *name)
  * what the mapping wrote kept, so that a take records an empty, valid set (the session's
  * radius): a reader would take a refused set's NaN or huge radius for damage and cut the
  * take there. */
+static double session_radius(const fp_frame_input *in)
+{
+    return in->radius >= FP_CONTROL_RADIUS_MIN && in->radius <= FP_CONTROL_RADIUS_MAX ? in->radius : 1.0;
+}
+
 static void refuse(fp_control_set *cs, const fp_frame_input *in)
 {
     cs->active = false;
     cs->intents = 0;
     cs->count = 0;
     cs->channel_count = 0;
-    cs->radius = in->radius >= FP_CONTROL_RADIUS_MIN && in->radius <= FP_CONTROL_RADIUS_MAX ? in->radius : 1.0;
+    cs->radius = session_radius(in);
 }
 
 int fp_mapping_step_run(fp_mapping_step *st, fp_mapping *mapping, const char *name,
@@ -166,6 +166,9 @@ int fp_mapping_step_run(fp_mapping_step *st, fp_mapping *mapping, const char *na
         refuse(cs, in);
         return rc;
     }
+    /* an inactive set's radius is not the mapping's (fp_control_check.h); a take records it */
+    if (!cs->active && !(cs->radius >= FP_CONTROL_RADIUS_MIN && cs->radius <= FP_CONTROL_RADIUS_MAX))
+        cs->radius = session_radius(in);
     fp_slog_repeat_flush(&st->errors, log);
     return 0;
 }

@@ -52,11 +52,12 @@ typedef struct fp_mapping_step {
  *  Flush pending repeated errors first (fp_mapping_step_flush). */
 void fp_mapping_step_init(fp_mapping_step *st, fp_control_set *cs, double budget_ms);
 
-/** Check a control set as a mapping wrote it. Returns 0, -ERANGE (count above capacity,
- *  or channel_count above channel_capacity), -EINVAL (radius outside [FP_CONTROL_RADIUS_MIN,
- *  FP_CONTROL_RADIUS_MAX] mesh units, NaN included, a coordinate not finite or beyond
- *  FP_CONTROL_COORD_MAX (plugin.h); a NULL
- *  array with count > 0, a non-finite start or end point among the first count). */
+/** Check a control set as a mapping wrote it, by the one rule the plugin validator also
+ *  holds plugins to (core/plugin/fp_control_check.h). Returns 0, -ERANGE (count above
+ *  capacity, or channel_count above channel_capacity), -EINVAL (a NULL array with count > 0;
+ *  a start or end point among the first count not finite or beyond FP_CONTROL_COORD_MAX
+ *  (plugin.h); active with a radius outside [FP_CONTROL_RADIUS_MIN, FP_CONTROL_RADIUS_MAX]
+ *  mesh units, NaN included). */
 int fp_control_set_check(const fp_control_set *cs);
 
 /** Call mapping->process(in, cs) and check cs. `name` is the mapping instance's name (the

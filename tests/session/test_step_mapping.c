@@ -18,15 +18,15 @@
 #include <cmocka.h>
 
 static float starts[4][3], ends[4][3];
-static int mode; /* 0 ok, 1 returns -EIO, 2 over capacity, 3 NaN end, 4 radius 0 */
+static int mode; /* 0 ok, 1 returns -EIO, 2 over capacity, 3 NaN end, 4 radius 0, 5 inactive with radius 0 */
 
 static int fake_process(fp_mapping *self, const fp_frame_input *in, fp_control_set *out)
 {
     (void)self;
     (void)in;
-    out->active = true;
+    out->active = mode != 5;
     out->intents = FP_INTENT_ENGAGE;
-    out->radius = mode == 4 ? 0.0 : 1.0;
+    out->radius = mode == 4 || mode == 5 ? 0.0 : 1.0;
     out->count = mode == 2 ? out->capacity + 1 : 2;
     for (int i = 0; i < 2; i++)
         for (int k = 0; k < 3; k++) out->start[i][k] = out->end[i][k] = (float)(i + k);
@@ -48,6 +48,7 @@ static void test_check(void **state)
     (void)state;
     fp_control_set cs;
     setup_cs(&cs);
+    cs.active = true;
     cs.radius = 1.0;
     cs.count = 4;
     assert_int_equal(fp_control_set_check(&cs), 0);
@@ -60,6 +61,12 @@ static void test_check(void **state)
     assert_int_equal(fp_control_set_check(&cs), -EINVAL);
     cs.radius = 1e-20;
     assert_int_equal(fp_control_set_check(&cs), -EINVAL);
+    cs.active = false; /* an inactive set's radius is not the mapping's (fp_control_check.h), */
+    assert_int_equal(fp_control_set_check(&cs), 0);
+    starts[0][1] = NAN; /* its points are */
+    assert_int_equal(fp_control_set_check(&cs), -EINVAL);
+    starts[0][1] = 0;
+    cs.active = true;
     cs.radius = 1.0;
     starts[0][1] = NAN;
     assert_int_equal(fp_control_set_check(&cs), -EINVAL);
@@ -115,6 +122,14 @@ static void test_errors_once_with_count(void **state)
     mode = 0; /* success flushes nothing when the error did not repeat */
     assert_int_equal(fp_mapping_step_run(&st, &m, "anchored", &in, &cs, &log), 0);
     assert_int_equal(cap.count, 5);
+    /* an inactive set with radius 0 is no error (`plugins check` passes it: one rule,
+     * fp_control_check.h); what is recorded has the session's radius */
+    mode = 5;
+    assert_int_equal(fp_mapping_step_run(&st, &m, "anchored", &in, &cs, &log), 0);
+    assert_int_equal(cap.count, 5);
+    assert_false(cs.active);
+    assert_true(cs.radius == 2.5);
+    mode = 0;
     assert_int_equal(st.errors.total, 13);
     mode = 1;
     fp_mapping_step_run(&st, &m, "anchored", &in, &cs, &log);

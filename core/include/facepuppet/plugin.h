@@ -571,10 +571,12 @@ typedef struct fp_channel {
     float value;
 } fp_channel;
 
-/** The control set a host takes (the engine's own limits, csrbf.h): a radius within
- *  [FP_CONTROL_RADIUS_MIN, FP_CONTROL_RADIUS_MAX] mesh units and every start and end
- *  coordinate finite with |x| <= FP_CONTROL_COORD_MAX. Any other set is the mapping's error:
- *  reported naming it, the base shown that frame, nothing recorded. */
+/** The control set a host takes (the engine's own limits, csrbf.h): every start and end
+ *  coordinate finite with |x| <= FP_CONTROL_COORD_MAX and, when active, a radius within
+ *  [FP_CONTROL_RADIUS_MIN, FP_CONTROL_RADIUS_MAX] mesh units (an inactive set's radius is
+ *  replaced by the session's). Any other set is the mapping's error: reported naming it, the
+ *  base shown that frame, nothing recorded. `facepuppet plugins check` holds a plugin to the
+ *  same rule (the host's fp_control_check.h). */
 #define FP_CONTROL_RADIUS_MIN 1e-15
 #define FP_CONTROL_RADIUS_MAX 1e15
 #define FP_CONTROL_COORD_MAX 1e15
@@ -596,7 +598,7 @@ typedef struct fp_control_set {
     bool active;
     uint32_t intents;             /* fp_intent bits */
     double radius;                /* support radius, mesh units, in [FP_CONTROL_RADIUS_MIN,
-                                     FP_CONTROL_RADIUS_MAX] */
+                                     FP_CONTROL_RADIUS_MAX] when active */
     size_t capacity;              /* set by the host, >= FP_CONTROL_CAPACITY (ABI 1.1) */
     size_t count;                 /* filled by the mapping, <= capacity */
     float (*start)[3];            /* start points s_i, mesh units */
