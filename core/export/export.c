@@ -559,6 +559,68 @@ static double frame_rate(const fp_exporter *x)
     return (double)(x->frames - 1) / (x->last_time - x->first_time);
 }
 
+/* The weights into [0, 1]. Blender 3.4's glTF importer (Debian 12's) keys each shape key's
+ * value within its slider range, [0, 1], widened only by the first key's weight
+ * (io_scene_gltf2 gltf2_blender_animation_weight.py: min(coords[1:2])): a weight below 0 or
+ * above 1 later in a take played as 0 or 1, the face up to 27 mm off in Blender while the
+ * file was right. Per target k, weights in [lo, hi]: a = min(lo, 0), r = max(hi, 0) - a;
+ * weight' = (w - a) / r, target' = r x target, and a x target goes into one more target (the
+ * last, "offset") whose weight is 1 at every key (0 in mesh.weights: the rest shape stays the
+ * loaded face). *T (K x m) and *W (F x K, malloc()ed) are replaced where an offset is needed
+ * and *K is then one more. Returns 0 or -ENOMEM (nothing changed). */
+static int unit_weights(float **T, float **W, size_t F, size_t m, size_t *K)
+{
+    const size_t k0 = *K;
+    double *a = calloc(k0, sizeof(double)), *r = calloc(k0, sizeof(double));
+    float *T2 = calloc((k0 + 1) * m, sizeof(float)), *W2 = calloc(F * (k0 + 1), sizeof(float));
+    double *off = calloc(m, sizeof(double));
+    if (!a || !r || !T2 || !W2 || !off) {
+        free(a); free(r); free(T2); free(W2); free(off);
+        return -ENOMEM;
+    }
+    bool need = false;
+    for (size_t k = 0; k < k0; k++) {
+        double lo = 0, hi = 0;   /* (0 in both: a = min(lo, 0), max(hi, 0)) */
+        for (size_t f = 0; f < F; f++) {
+            const double w = (*W)[f * k0 + k];
+            lo = w < lo ? w : lo;
+            hi = w > hi ? w : hi;
+        }
+        a[k] = lo;
+        r[k] = hi - lo;
+        need |= lo < 0 || hi > 1;
+    }
+    if (need) {
+        for (size_t k = 0; k < k0; k++) {
+            const double s = r[k] > 0 ? r[k] : 1, sh = r[k] > 0 ? a[k] : 0;
+            for (size_t c = 0; c < m; c++) {
+                T2[k * m + c] = (float)(s * (*T)[k * m + c]);
+                off[c] += sh * (double)(*T)[k * m + c];
+            }
+            for (size_t f = 0; f < F; f++) {
+                const double w = ((double)(*W)[f * k0 + k] - sh) / s;
+                W2[f * (k0 + 1) + k] = (float)(w < 0 ? 0 : w > 1 ? 1 : w);
+            }
+        }
+        for (size_t c = 0; c < m; c++)
+            T2[k0 * m + c] = (float)off[c];
+        for (size_t f = 0; f < F; f++)
+            W2[f * (k0 + 1) + k0] = 1;
+        free(*T);
+        free(*W);
+        *T = T2;
+        *W = W2;
+        *K = k0 + 1;
+    } else {
+        free(T2);
+        free(W2);
+    }
+    free(a);
+    free(r);
+    free(off);
+    return 0;
+}
+
 static int finish_gltf(fp_exporter *x, fp_export_result *res, char *err, size_t errlen)
 {
     const size_t F = (size_t)x->frames, n = x->n;
@@ -603,6 +665,13 @@ static int finish_gltf(fp_exporter *x, fp_export_result *res, char *err, size_t 
                     &T, &W, &max_err, err, errlen);
     if (rc)
         goto out;
+    const size_t k_pc = K;   /* the principal components; K: with the offset, if any */
+    if (unit_weights(&T, &W, F, m, &K)) {
+        rc = fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", x->path);
+        goto out;
+    }
+    if (K != k_pc)   /* (the error of the values written: the targets rescaled in float32) */
+        max_err = recon_error(D, F, m, T, W, K);
     targets = calloc(K * n * 3, sizeof(float));
     tnames = calloc(K, sizeof(char *));
     float *times = malloc(F * sizeof(float));
@@ -617,8 +686,10 @@ static int finish_gltf(fp_exporter *x, fp_export_result *res, char *err, size_t 
                 targets[k * n * 3 + 3 * moved[j] + (size_t)c] = T[k * m + 3 * j + (size_t)c];
     for (size_t k = 0; k < K; k++) {
         tnames[k] = malloc(32);
-        if (tnames[k])
+        if (tnames[k] && k < k_pc)
             snprintf(tnames[k], 32, "pc%02zu", k + 1);
+        else if (tnames[k])
+            snprintf(tnames[k], 32, "offset");
     }
     for (size_t f = 0; f < F; f++)
         times[f] = (float)x->times[f];
