@@ -602,62 +602,92 @@ static double frame_rate(const fp_exporter *x)
  * value within its slider range, [0, 1], widened only by the first key's weight
  * (io_scene_gltf2 gltf2_blender_animation_weight.py: min(coords[1:2])): a weight below 0 or
  * above 1 later in a take played as 0 or 1, the face up to 27 mm off in Blender while the
- * file was right. Per target k, weights in [lo, hi]: a = min(lo, 0), r = max(hi, 0) - a;
- * weight' = (w - a) / r, target' = r x target, and a x target goes into one more target (the
+ * file was right. Per target k, weights in [lo, hi]: weight' = (w - a) / s, target' =
+ * s x target, with s = hi, a = 0 where lo >= 0 (a scale); s = lo, a = 0 where hi <= 0 (the
+ * sign turned); else s = hi - lo, a = lo, and a x target goes into one more target (the
  * last, "offset") whose weight is 1 at every key (0 in mesh.weights: the rest shape stays the
- * loaded face). *T (K x m) and *W (F x K, malloc()ed) are replaced where an offset is needed
- * and *K is then one more. Returns 0 or -ENOMEM (nothing changed). */
+ * loaded face). *T (K x m) and *W (F x K, malloc()ed) are replaced where anything changes;
+ * *K is one more with an offset. Returns 0 or -ENOMEM (nothing changed). */
 static int unit_weights(float **T, float **W, size_t F, size_t m, size_t *K)
 {
     const size_t k0 = *K;
-    double *a = calloc(k0, sizeof(double)), *r = calloc(k0, sizeof(double));
+    double *a = calloc(k0, sizeof(double)), *sc = calloc(k0, sizeof(double));
     float *T2 = calloc((k0 + 1) * m, sizeof(float)), *W2 = calloc(F * (k0 + 1), sizeof(float));
     double *off = calloc(m, sizeof(double));
-    if (!a || !r || !T2 || !W2 || !off) {
-        free(a); free(r); free(T2); free(W2); free(off);
+    if (!a || !sc || !T2 || !W2 || !off) {
+        free(a); free(sc); free(T2); free(W2); free(off);
         return -ENOMEM;
     }
-    bool need = false;
+    bool change = false, offset = false;
     for (size_t k = 0; k < k0; k++) {
-        double lo = 0, hi = 0;   /* (0 in both: a = min(lo, 0), max(hi, 0)) */
+        double lo = 0, hi = 0;
         for (size_t f = 0; f < F; f++) {
             const double w = (*W)[f * k0 + k];
             lo = w < lo ? w : lo;
             hi = w > hi ? w : hi;
         }
-        a[k] = lo;
-        r[k] = hi - lo;
-        need |= lo < 0 || hi > 1;
+        sc[k] = lo >= 0 ? (hi > 1 ? hi : 1) : hi <= 0 ? lo : hi - lo;
+        a[k] = lo < 0 && hi > 0 ? lo : 0;
+        change |= sc[k] != 1;
+        offset |= a[k] != 0;
     }
-    if (need) {
+    const size_t k1 = k0 + (offset ? 1 : 0);
+    if (change) {
         for (size_t k = 0; k < k0; k++) {
-            const double s = r[k] > 0 ? r[k] : 1, sh = r[k] > 0 ? a[k] : 0;
             for (size_t c = 0; c < m; c++) {
-                T2[k * m + c] = (float)(s * (*T)[k * m + c]);
-                off[c] += sh * (double)(*T)[k * m + c];
+                T2[k * m + c] = (float)(sc[k] * (*T)[k * m + c]);
+                off[c] += a[k] * (double)(*T)[k * m + c];
             }
             for (size_t f = 0; f < F; f++) {
-                const double w = ((double)(*W)[f * k0 + k] - sh) / s;
-                W2[f * (k0 + 1) + k] = (float)(w < 0 ? 0 : w > 1 ? 1 : w);
+                const double w = ((double)(*W)[f * k0 + k] - a[k]) / sc[k];
+                W2[f * k1 + k] = (float)(w < 0 ? 0 : w > 1 ? 1 : w);
             }
         }
-        for (size_t c = 0; c < m; c++)
+        for (size_t c = 0; offset && c < m; c++)
             T2[k0 * m + c] = (float)off[c];
-        for (size_t f = 0; f < F; f++)
-            W2[f * (k0 + 1) + k0] = 1;
+        for (size_t f = 0; offset && f < F; f++)
+            W2[f * k1 + k0] = 1;
         free(*T);
         free(*W);
         *T = T2;
         *W = W2;
-        *K = k0 + 1;
+        *K = k1;
     } else {
         free(T2);
         free(W2);
     }
     free(a);
-    free(r);
+    free(sc);
     free(off);
     return 0;
+}
+
+/* The compression (compress_f) of D (F x m) and its weights into [0, 1] (unit_weights):
+ * *K targets, the first *k_pc principal components, then "offset" where one is needed; *T,
+ * *W malloc()ed; *max_err measured on the values written. --max-targets counts the offset:
+ * where it would be one too many the components are one fewer (but one component whose
+ * weights change sign still takes two targets). Returns 0 or a negative code (said). */
+static int compress_unit(const fp_exporter *x, const float *D, size_t F, size_t m, size_t *K,
+                         size_t *k_pc, float **T, float **W, double *max_err, char *err,
+                         size_t errlen)
+{
+    const double tol = x->opt.max_error_mm / x->opt.mm_per_unit;
+    const size_t cap = x->opt.max_targets > 0 ? (size_t)x->opt.max_targets : 0;
+    for (size_t kmax = cap;; kmax--) {
+        int rc = compress_f(x->path, D, F, m, tol, kmax, K, T, W, max_err, err, errlen);
+        if (rc)
+            return rc;
+        *k_pc = *K;
+        if (unit_weights(T, W, F, m, K))
+            return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", x->path);
+        /* (the error of the values written: the targets rescaled in float32) */
+        *max_err = recon_error(D, F, m, *T, *W, *K);
+        if (!cap || *K <= cap || kmax <= 1)
+            return 0;
+        free(*T);
+        free(*W);
+        *T = *W = NULL;
+    }
 }
 
 static int finish_gltf(fp_exporter *x, fp_export_result *res, char *err, size_t errlen)
@@ -697,20 +727,10 @@ static int finish_gltf(fp_exporter *x, fp_export_result *res, char *err, size_t 
         for (size_t e = x->frame_start[f]; e < x->frame_start[f + 1]; e++)
             for (int c = 0; c < 3; c++)
                 D[f * m + 3 * col[x->idx[e]] + (size_t)c] = x->disp[3 * e + (size_t)c];
-    const double tol = x->opt.max_error_mm / x->opt.mm_per_unit;
-    size_t K = 0;
+    size_t K = 0, k_pc = 0;   /* targets written; of them, principal components */
     double max_err = 0;
-    rc = compress_f(x->path, D, F, m, tol, x->opt.max_targets > 0 ? (size_t)x->opt.max_targets : 0, &K,
-                    &T, &W, &max_err, err, errlen);
-    if (rc)
+    if ((rc = compress_unit(x, D, F, m, &K, &k_pc, &T, &W, &max_err, err, errlen)))
         goto out;
-    const size_t k_pc = K;   /* the principal components; K: with the offset, if any */
-    if (unit_weights(&T, &W, F, m, &K)) {
-        rc = fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", x->path);
-        goto out;
-    }
-    if (K != k_pc)   /* (the error of the values written: the targets rescaled in float32) */
-        max_err = recon_error(D, F, m, T, W, K);
     targets = calloc(K * n * 3, sizeof(float));
     tnames = calloc(K, sizeof(char *));
     float *times = malloc(F * sizeof(float));

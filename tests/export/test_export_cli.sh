@@ -215,6 +215,17 @@ grep -q "is a take of the stack being read" "$tmp/x.out" || { cat "$tmp/x.out"; 
 [ "$(cksum <"$tmp/self2.fptake")" = "$sum2" ] || fail "export of a stack wrote over its layer's take"
 expect 0 "$fp" export "${pd[@]}" "$tmp/self.fpstack" --format pc2 --out "$tmp/stack.pc2" -q
 echo "an output that is an input (take, link to it, a stack's take, the mesh): refused, 73"
+# --max-targets K: at most K targets in the file, the offset that keeps the weights in [0, 1]
+# counted (it made K + 1); the weights in [0, 1] all the same (fp-export-check)
+for k in 2 3 5; do
+    expect 0 "$fp" export "${pd[@]}" "$small" --format glb --max-targets $k --out "$tmp/cap$k.glb" --force
+    got=$("$fp" info "$tmp/cap$k.glb" | sed -n 's/^ *targets *\([0-9]*\) morph targets.*/\1/p')
+    [ -n "$got" ] && [ "$got" -le $k ] || { cat "$tmp/x.out"; fail "--max-targets $k: $got targets in the file"; }
+    grep -q "K = $got morph targets" "$tmp/x.out" || { cat "$tmp/x.out"; fail "--max-targets $k: the line's K is not the file's $got"; }
+    "$check" "$small" "$tmp/cap$k.glb" --max-error 1000 >"$tmp/x.out" 2>&1 ||
+        { cat "$tmp/x.out"; fail "--max-targets $k: fp-export-check"; }
+done
+echo "--max-targets: at most K targets in the file, the offset counted"
 # An export larger than the room free where it goes: refused before any frame (73), naming the
 # size (a --fps of 10000 for 100 wrote 10.6 GB of a 3.3 s take, unasked). A 1 MiB tmpfs in a
 # user namespace (unshare -r -m); skipped where the system allows none.
