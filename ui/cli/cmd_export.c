@@ -680,7 +680,8 @@ static int export_take(const export_args *a, fp_take_player *p, sink *k, float *
     const double mm_per_unit = fp_take_player_mm_per_unit(p);
     fp_session *s = fp_take_player_session(p);
     char name[96];
-    snprintf(name, sizeof name, "%s_T%03u", h->slate, h->take);
+    fp_app_export_name(a->take_path, fp_take_player_stack(p) != NULL, h->slate, h->take, name,
+                       sizeof name);
     /* the output's rate: --fps, else the take's (named in the file and the summary) */
     const double rate = a->fps > 0 ? a->fps
                         : h->rate.den ? (double)h->rate.num / (double)h->rate.den : 0;

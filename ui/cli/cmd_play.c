@@ -416,10 +416,13 @@ static int play_main(int argc, char **argv)
     if (frames_out && (status = fp_app_frames_estimate("facepuppet play", "--frames-out", frames_out,
                                                        take_frames, 0, fp_session_mesh(s), quiet, NULL)))
         goto done;
+    char name[96]; /* (as export names it: SLATE_TNNN, a stack's file name) */
+    fp_app_export_name(take_path, fp_take_player_stack(player) != NULL, h->slate, h->take, name,
+                       sizeof name);
     if (export_file && (status = fp_app_export_open("facepuppet play", export_file,
                                                     fp_session_mesh(s),
                                                     fp_take_player_mm_per_unit(player),
-                                                    h->slate, take_frames, &ex)))
+                                                    name, take_frames, &ex)))
         goto done;
     play_ctl c = {.take_path = take_path, .mesh = mesh, .path = &path, .quiet = quiet, .player = player};
     if ((status = play_link_open(&c, control, stream, h, &link)) || control) {
