@@ -144,7 +144,8 @@ def check_glb_shapes(a, doc, face, scene, sfps):
     Blender 3.4 clamps each shape key to its slider range, [0, 1] (widened only by the first
     key's weight): a negative weight played as 0, the face 27 mm off at some frames."""
     cache, scale = read_pc2(a["pc2"]), float(a["scale"])
-    src = numpy.array(doc["meshes"][0]["extras"]["sourceVertex"])
+    src = doc["meshes"][0].get("extras", {}).get("sourceVertex")   # (absent: glTF vertex j is j)
+    src = numpy.array(src if src is not None else range(cache.shape[1]))
     times = glb_times(a["glb"], doc)
     tol_units = float(a.get("max_error_mm", "0.1")) * 1.001 / (1000 * scale) + 1e-6 * float(numpy.abs(cache).max())
     ks = [0] + moving_frames(cache, 1e-6 * float(numpy.abs(cache).max()), count=12) + [len(cache) - 1]
