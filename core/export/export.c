@@ -369,6 +369,37 @@ static double recon_error(const float *D, size_t F, size_t m, const float *T, co
     return sqrt(worst);
 }
 
+/* The Gram matrix of D (F x m): D D^T (F x F) or, by_values, D^T D (m x m), both triangles
+ * filled, into G (zeroed). */
+static void gram(const float *D, size_t F, size_t m, bool by_values, double *G)
+{
+    if (!by_values) {
+        for (size_t i = 0; i < F; i++)
+            for (size_t j = 0; j <= i; j++) {
+                double s = 0;
+                const float *a = D + i * m, *b = D + j * m;
+                for (size_t c = 0; c < m; c++)
+                    s += (double)a[c] * (double)b[c];
+                G[i * F + j] = G[j * F + i] = s;
+            }
+        return;
+    }
+    for (size_t f = 0; f < F; f++) {
+        const float *a = D + f * m;
+        for (size_t i = 0; i < m; i++) {
+            const double ai = a[i];
+            if (ai == 0)
+                continue;
+            double *g = G + i * m;
+            for (size_t j = 0; j <= i; j++)
+                g[j] += ai * (double)a[j];
+        }
+    }
+    for (size_t i = 0; i < m; i++)
+        for (size_t j = 0; j < i; j++)
+            G[j * m + i] = G[i * m + j];
+}
+
 /* The F x m float matrix version (what the exporter holds). */
 static int compress_f(const char *who, const float *D, size_t F, size_t m, double tol,
                       size_t kmax, size_t *k_out, float **targets, float **weights,
@@ -378,29 +409,27 @@ static int compress_f(const char *who, const float *D, size_t F, size_t m, doubl
     *weights = NULL;
     if (F == 0 || m == 0 || F > 46340)
         return fp_errorf(err, errlen, -EINVAL, "%s: %zu frames of %zu values", who, F, m);
-    if (kmax == 0 || kmax > F)
-        kmax = F;
-    double *G = calloc(F * F, sizeof(double)), *ev = calloc(F, sizeof(double));
+    /* The principal directions from the smaller of D D^T (F x F) and D^T D (m x m): the same
+     * nonzero eigenvalues, u = D v / sigma. A minute at 60 fps of a face moving 320 vertices
+     * (F 3,601, m 960) took minutes through the 3,601 x 3,601 one. */
+    const bool by_values = m < F;
+    const size_t N = by_values ? m : F;
+    if (kmax == 0 || kmax > N)
+        kmax = N;
+    double *G = calloc(N * N, sizeof(double)), *ev = calloc(N, sizeof(double));
+    double *ub = malloc(F * sizeof(double));
     float *R = malloc(F * m * sizeof(float));
     float *T = calloc(kmax * m, sizeof(float)), *W = calloc(F * kmax, sizeof(float));
     double *v = malloc(m * sizeof(double));
     int rc = 0;
-    if (!G || !ev || !R || !T || !W || !v) {
+    if (!G || !ev || !ub || !R || !T || !W || !v) {
         rc = fp_errorf(err, errlen, -ENOMEM, "%s: out of memory (%zu frames x %zu values)",
                        who, F, m);
         goto out;
     }
-    /* Gram matrix G = D D^T (symmetric; both triangles filled) */
-    for (size_t i = 0; i < F; i++)
-        for (size_t j = 0; j <= i; j++) {
-            double s = 0;
-            const float *a = D + i * m, *b = D + j * m;
-            for (size_t c = 0; c < m; c++)
-                s += (double)a[c] * (double)b[c];
-            G[i * F + j] = G[j * F + i] = s;
-        }
+    gram(D, F, m, by_values, G);
     {
-        int n = (int)F, lwork = -1, info = 0;
+        int n = (int)N, lwork = -1, info = 0;
         double q;
         dsyev_("V", "U", &n, G, &n, ev, &q, &lwork, &info);
         lwork = info == 0 ? (int)q : 3 * n;
@@ -420,18 +449,27 @@ static int compress_f(const char *who, const float *D, size_t F, size_t m, doubl
     memcpy(R, D, F * m * sizeof(float));
     double res = recon_error(D, F, m, T, W, 0);
     size_t K = 0;
-    const double top = ev[F - 1] > 0 ? ev[F - 1] : 0;
+    const double top = ev[N - 1] > 0 ? ev[N - 1] : 0;
     while (K < kmax) {
         if (res <= tol && K > 0)
             break;
         if (res <= tol && K == 0 && top == 0)
             break;
-        /* component K: the (K+1)-th largest eigenpair; column F-1-K of G (column-major) */
-        const double lambda = ev[F - 1 - K];
-        const double *u = G + (F - 1 - K) * F;
+        /* component K: the (K+1)-th largest eigenpair; column N-1-K of G (column-major) */
+        const double lambda = ev[N - 1 - K];
+        const double *u = G + (N - 1 - K) * N;
         if (!(lambda > top * 1e-14) || lambda <= 0)
             break;   /* what is left is rounding: no more directions */
         const double sigma = sqrt(lambda);
+        if (by_values) {   /* u = D v / sigma, v the eigenvector of D^T D */
+            for (size_t f = 0; f < F; f++) {
+                double s = 0;
+                for (size_t c = 0; c < m; c++)
+                    s += (double)D[f * m + c] * u[c];
+                ub[f] = s / sigma;
+            }
+            u = ub;
+        }
         for (size_t c = 0; c < m; c++)
             v[c] = 0;
         for (size_t f = 0; f < F; f++) {
@@ -501,6 +539,7 @@ static int compress_f(const char *who, const float *D, size_t F, size_t m, doubl
 out:
     free(G);
     free(ev);
+    free(ub);
     free(R);
     free(T);
     free(W);
@@ -559,6 +598,98 @@ static double frame_rate(const fp_exporter *x)
     return (double)(x->frames - 1) / (x->last_time - x->first_time);
 }
 
+/* The weights into [0, 1]. Blender 3.4's glTF importer (Debian 12's) keys each shape key's
+ * value within its slider range, [0, 1], widened only by the first key's weight
+ * (io_scene_gltf2 gltf2_blender_animation_weight.py: min(coords[1:2])): a weight below 0 or
+ * above 1 later in a take played as 0 or 1, the face up to 27 mm off in Blender while the
+ * file was right. Per target k, weights in [lo, hi]: weight' = (w - a) / s, target' =
+ * s x target, with s = hi, a = 0 where lo >= 0 (a scale); s = lo, a = 0 where hi <= 0 (the
+ * sign turned); else s = hi - lo, a = lo, and a x target goes into one more target (the
+ * last, "offset") whose weight is 1 at every key (0 in mesh.weights: the rest shape stays the
+ * loaded face). *T (K x m) and *W (F x K, malloc()ed) are replaced where anything changes;
+ * *K is one more with an offset. Returns 0 or -ENOMEM (nothing changed). */
+static int unit_weights(float **T, float **W, size_t F, size_t m, size_t *K)
+{
+    const size_t k0 = *K;
+    double *a = calloc(k0, sizeof(double)), *sc = calloc(k0, sizeof(double));
+    float *T2 = calloc((k0 + 1) * m, sizeof(float)), *W2 = calloc(F * (k0 + 1), sizeof(float));
+    double *off = calloc(m, sizeof(double));
+    if (!a || !sc || !T2 || !W2 || !off) {
+        free(a); free(sc); free(T2); free(W2); free(off);
+        return -ENOMEM;
+    }
+    bool change = false, offset = false;
+    for (size_t k = 0; k < k0; k++) {
+        double lo = 0, hi = 0;
+        for (size_t f = 0; f < F; f++) {
+            const double w = (*W)[f * k0 + k];
+            lo = w < lo ? w : lo;
+            hi = w > hi ? w : hi;
+        }
+        sc[k] = lo >= 0 ? (hi > 1 ? hi : 1) : hi <= 0 ? lo : hi - lo;
+        a[k] = lo < 0 && hi > 0 ? lo : 0;
+        change |= sc[k] != 1;
+        offset |= a[k] != 0;
+    }
+    const size_t k1 = k0 + (offset ? 1 : 0);
+    if (change) {
+        for (size_t k = 0; k < k0; k++) {
+            for (size_t c = 0; c < m; c++) {
+                T2[k * m + c] = (float)(sc[k] * (*T)[k * m + c]);
+                off[c] += a[k] * (double)(*T)[k * m + c];
+            }
+            for (size_t f = 0; f < F; f++) {
+                const double w = ((double)(*W)[f * k0 + k] - a[k]) / sc[k];
+                W2[f * k1 + k] = (float)(w < 0 ? 0 : w > 1 ? 1 : w);
+            }
+        }
+        for (size_t c = 0; offset && c < m; c++)
+            T2[k0 * m + c] = (float)off[c];
+        for (size_t f = 0; offset && f < F; f++)
+            W2[f * k1 + k0] = 1;
+        free(*T);
+        free(*W);
+        *T = T2;
+        *W = W2;
+        *K = k1;
+    } else {
+        free(T2);
+        free(W2);
+    }
+    free(a);
+    free(sc);
+    free(off);
+    return 0;
+}
+
+/* The compression (compress_f) of D (F x m) and its weights into [0, 1] (unit_weights):
+ * *K targets, the first *k_pc principal components, then "offset" where one is needed; *T,
+ * *W malloc()ed; *max_err measured on the values written. --max-targets counts the offset:
+ * where it would be one too many the components are one fewer (but one component whose
+ * weights change sign still takes two targets). Returns 0 or a negative code (said). */
+static int compress_unit(const fp_exporter *x, const float *D, size_t F, size_t m, size_t *K,
+                         size_t *k_pc, float **T, float **W, double *max_err, char *err,
+                         size_t errlen)
+{
+    const double tol = x->opt.max_error_mm / x->opt.mm_per_unit;
+    const size_t cap = x->opt.max_targets > 0 ? (size_t)x->opt.max_targets : 0;
+    for (size_t kmax = cap;; kmax--) {
+        int rc = compress_f(x->path, D, F, m, tol, kmax, K, T, W, max_err, err, errlen);
+        if (rc)
+            return rc;
+        *k_pc = *K;
+        if (unit_weights(T, W, F, m, K))
+            return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", x->path);
+        /* (the error of the values written: the targets rescaled in float32) */
+        *max_err = recon_error(D, F, m, *T, *W, *K);
+        if (!cap || *K <= cap || kmax <= 1)
+            return 0;
+        free(*T);
+        free(*W);
+        *T = *W = NULL;
+    }
+}
+
 static int finish_gltf(fp_exporter *x, fp_export_result *res, char *err, size_t errlen)
 {
     const size_t F = (size_t)x->frames, n = x->n;
@@ -596,12 +727,9 @@ static int finish_gltf(fp_exporter *x, fp_export_result *res, char *err, size_t 
         for (size_t e = x->frame_start[f]; e < x->frame_start[f + 1]; e++)
             for (int c = 0; c < 3; c++)
                 D[f * m + 3 * col[x->idx[e]] + (size_t)c] = x->disp[3 * e + (size_t)c];
-    const double tol = x->opt.max_error_mm / x->opt.mm_per_unit;
-    size_t K = 0;
+    size_t K = 0, k_pc = 0;   /* targets written; of them, principal components */
     double max_err = 0;
-    rc = compress_f(x->path, D, F, m, tol, x->opt.max_targets > 0 ? (size_t)x->opt.max_targets : 0, &K,
-                    &T, &W, &max_err, err, errlen);
-    if (rc)
+    if ((rc = compress_unit(x, D, F, m, &K, &k_pc, &T, &W, &max_err, err, errlen)))
         goto out;
     targets = calloc(K * n * 3, sizeof(float));
     tnames = calloc(K, sizeof(char *));
@@ -617,8 +745,10 @@ static int finish_gltf(fp_exporter *x, fp_export_result *res, char *err, size_t 
                 targets[k * n * 3 + 3 * moved[j] + (size_t)c] = T[k * m + 3 * j + (size_t)c];
     for (size_t k = 0; k < K; k++) {
         tnames[k] = malloc(32);
-        if (tnames[k])
+        if (tnames[k] && k < k_pc)
             snprintf(tnames[k], 32, "pc%02zu", k + 1);
+        else if (tnames[k])
+            snprintf(tnames[k], 32, "offset");
     }
     for (size_t f = 0; f < F; f++)
         times[f] = (float)x->times[f];

@@ -7,8 +7,11 @@
  *     animation whose `weights` channel has a key at every frame. The frames' displacements
  *     from the base are compressed into their K leading principal components (eigenvectors
  *     of the frames x frames Gram matrix D D^T of the (frames x 3n) displacement matrix D,
+ *     or from the 3n x 3n D^T D where that is the smaller,
  *     LAPACK dsyev; K the smallest whose largest per-vertex error, measured with the float32
- *     targets and weights written, is within max_error_mm). Written by
+ *     targets and weights written, is within max_error_mm); the weights then moved into
+ *     [0, 1] (Blender 3.4 clamps shape keys there) by rescaled targets and, where needed, one
+ *     more target "offset" keyed 1 at every frame. Written by
  *     fp_mesh_save_animation (core/mesh). In metres, as glTF wants: the vertices stay in
  *     mesh units under a root node scaled by mm_per_unit / 1000 ("NAME_metres"); the frame
  *     rate is named in asset.extras.frameRate and the animation's extras.frameRate.
@@ -77,7 +80,7 @@ typedef struct fp_export_options {
 
 typedef struct fp_export_result {
     uint64_t frames;         /* frames written */
-    size_t targets;          /* glTF: K */
+    size_t targets;          /* glTF: K (with the "offset" target, if any) */
     uint64_t bytes;          /* size of the file written (obj-seq: all files) */
     double max_error_mm;     /* glTF: the largest per-vertex distance, mm, between a frame
                                 as the glTF's float32 values give it and the frame given;

@@ -4,7 +4,8 @@
 #       --fps 60 --frames 160 --scale 0.01 --height 0.338 [--tol 0.03]
 # 1. glb: bpy.ops.import_scene.gltf; the face's world-space bounding box is --height metres
 #    tall (Blender's Z, within --tol); the JSON names the rate (asset.extras.frameRate); the
-#    shape-key keys span the take's duration at the scene's rate.
+#    shape-key keys span the take's duration at the scene's rate; at the take's moving frames
+#    Blender's evaluated face is the take's (the PC2) within --max-error-mm (default 0.1).
 # 2. pc2: the README's recipe (the fenced block after "<!-- blender-recipe"), executed as
 #    written with the figures given here; the scene runs at --fps, and scene frame
 #    start + k shows the take's frame k exactly (the cache's frame k, which fp-export-check
@@ -123,6 +124,52 @@ def check_glb(a):
     say("glb: shape-key keys span %s scene frames at %g fps (want %.4g: %d frames at %g fps)"
         % (["%.4g" % s for s in spans], sfps, want, frames, fps))
     assert spans and all(abs(s - want) < 1e-3 * max(want, 1) for s in spans), "glb: key span"
+    check_glb_shapes(a, doc, meshes[0], scene, sfps)
+
+
+def glb_times(path, doc):
+    """The animation's key times (seconds), read from the GLB's BIN chunk."""
+    b = open(path, "rb").read()
+    n = struct.unpack_from("<I", b, 12)[0]
+    acc = doc["accessors"][doc["animations"][0]["samplers"][0]["input"]]
+    view = doc["bufferViews"][acc["bufferView"]]
+    off = 20 + n + 8 + view.get("byteOffset", 0) + acc.get("byteOffset", 0)
+    return numpy.frombuffer(b, dtype="<f4", count=acc["count"], offset=off).astype(numpy.float64)
+
+
+def check_glb_shapes(a, doc, face, scene, sfps):
+    """The glb as Blender plays it, at the take's moving frames (its times x the scene's rate),
+    against the PC2 (the take's frames bit for bit: fp-export-check): every vertex within
+    --max-error (mesh units x the root scale, Blender's axes: glTF (x, y, z) is (x, -z, y)).
+    Blender 3.4 clamps each shape key to its slider range, [0, 1] (widened only by the first
+    key's weight): a negative weight played as 0, the face 27 mm off at some frames."""
+    cache, scale = read_pc2(a["pc2"]), float(a["scale"])
+    src = doc["meshes"][0].get("extras", {}).get("sourceVertex")   # (absent: glTF vertex j is j)
+    src = numpy.array(src if src is not None else range(cache.shape[1]))
+    times = glb_times(a["glb"], doc)
+    tol_units = float(a.get("max_error_mm", "0.1")) * 1.001 / (1000 * scale) + 1e-6 * float(numpy.abs(cache).max())
+    ks = [0] + moving_frames(cache, 1e-6 * float(numpy.abs(cache).max()), count=12) + [len(cache) - 1]
+    worst = 0.0
+    for k in ks:
+        fr = times[k] * sfps
+        scene.frame_set(int(numpy.floor(fr)), subframe=float(fr - numpy.floor(fr)))
+        dg = bpy.context.evaluated_depsgraph_get()
+        ev = face.evaluated_get(dg)
+        me = ev.to_mesh()
+        co = numpy.empty(3 * len(me.vertices), dtype=numpy.float32)
+        me.vertices.foreach_get("co", co)
+        ev.to_mesh_clear()
+        co = co.reshape(-1, 3).astype(numpy.float64)
+        got = (numpy.c_[co, numpy.ones(len(co))] @ numpy.array(face.matrix_world).T)[:, :3]
+        assert len(got) == len(src), "glb: Blender has %d vertices, the file %d" % (len(got), len(src))
+        v = cache[k][src].astype(numpy.float64)
+        want = numpy.c_[v[:, 0], -v[:, 2], v[:, 1]] * scale
+        e = float(numpy.linalg.norm(got - want, axis=1).max()) / scale
+        worst = max(worst, e)
+        assert e <= tol_units, "glb: at the take's frame %d (scene frame %.3f) Blender's face is %.4g " \
+            "mesh units (%.4g mm) from the take's (limit %.4g)" % (k, fr, e, e * 1000 * scale, tol_units)
+    say("glb: Blender's shapes at the take's frames %s within %.4g mesh units of the take's "
+        "(largest %.4g)" % (ks, tol_units, worst))
 
 
 def read_pc2(path):

@@ -7,8 +7,9 @@
  *                evaluated at each frame's time (its own sampler interpolation), positions
  *                base + sum w_k target_k in float32, each glTF vertex against its mesh vertex,
  *                within MM millimetres (mm per unit from fp_take_player_mm_per_unit); the
- *                mesh's node placed in metres (the scale above it mm per unit / 1000) and
- *                asset.extras.frameRate the take's rate.
+ *                mesh's node placed in metres (the scale above it mm per unit / 1000),
+ *                asset.extras.frameRate the take's rate, and every weight in [0, 1] (Blender
+ *                3.4's importer clamps shape keys to their [0, 1] slider range).
  * Prints one line of figures; exit 0 when everything holds, 1 otherwise, 64 on usage (a bad
  * or unknown option named). */
 #define _GNU_SOURCE
@@ -139,6 +140,15 @@ int main(int argc, char **argv)
                     "has %zu frames\n", file, a.keys, a.targets, a.target_names, frames);
             return 1;
         }
+        /* every weight in [0, 1]: Blender 3.4's importer (Debian 12's) clamps a shape key's
+         * value to its slider range, [0, 1] (widened only by the first key's weight) */
+        size_t outside = 0;
+        for (size_t i = 0; i < a.keys * a.targets; i++)
+            outside += !(a.weights[i] >= 0 && a.weights[i] <= 1);
+        if (outside)
+            fprintf(stderr, "fp-export-check: %s: %zu of %zu weights outside [0, 1] (Blender 3.4 "
+                    "clamps them)\n", file, outside, a.keys * a.targets);
+        bad += outside != 0;
         float *w = malloc(a.targets * sizeof(float) + 4);
         double worst = 0;
         size_t worst_frame = 0, k = 0;

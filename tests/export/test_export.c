@@ -13,6 +13,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <cmocka.h>
@@ -100,6 +101,40 @@ static void test_compress_rank(void **state)
     free(W);
     free(B);
     free(C);
+    free(D);
+}
+
+/* A long take of few moving vertices (F 5,000 frames, m 30 values, rank 3): the directions
+ * come from the 30 x 30 D^T D, not the 5,000 x 5,000 D D^T (reference LAPACK took minutes
+ * on a minute of 60 fps of the MediaPipe face; this one did not finish in 120 s). */
+static void test_compress_long(void **state)
+{
+    (void)state;
+    const size_t F = 5000, m = 3 * 10, r = 3;
+    double *D = calloc(F * m, sizeof(double)), B[3 * 30];
+    for (size_t i = 0; i < r * m; i++) B[i] = urand() * (i < m ? 1.0 : i < 2 * m ? 0.1 : 0.01);
+    for (size_t f = 0; f < F; f++) {
+        const double c[3] = {sin(0.01 * (double)f), cos(0.037 * (double)f), urand()};
+        for (size_t k = 0; k < r; k++)
+            for (size_t j = 0; j < m; j++)
+                D[f * m + j] += c[k] * B[k * m + j];
+    }
+    struct timespec t0, t1;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    size_t K;
+    float *T, *W;
+    double e;
+    char err[256];
+    assert_int_equal(fp_export_compress(D, F, m, 1e-5, 0, &K, &T, &W, &e, err, sizeof err), 0);
+    clock_gettime(CLOCK_MONOTONIC, &t1);
+    const double secs = (double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec);
+    print_message("5000 frames x 10 vertices: K = %zu, error %.3g, %.3f s\n", K, e, secs);
+    assert_int_equal(K, 3);
+    assert_true(e <= 1e-5);
+    assert_true(fabs(err_of(D, F, m, T, W, K) - e) <= 1e-12 + 1e-9 * e);
+    assert_true(secs < 20);
+    free(T);
+    free(W);
     free(D);
 }
 
@@ -349,6 +384,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_compress_rank),
+        cmocka_unit_test(test_compress_long),
         cmocka_unit_test(test_point_caches),
         cmocka_unit_test(test_obj_round_trip),
         cmocka_unit_test(test_gltf_round_trip),

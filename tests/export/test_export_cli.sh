@@ -187,6 +187,45 @@ grep -qx "facepuppet play: --export: $tmp/big.glb: write failed: File too large.
     { cat "$tmp/x.out"; fail "play --export: not 'facepuppet play: --export: FILE: write failed: ...'"; }
 echo "a failed write: one prefix and the file, in glb, gltf, pc2, mdd and play --export"
 expect 73 "$fp" export "$take" --format pc2 --out /proc/nope/x.pc2
+# An output that is an input is refused, --force or not (73), the input left as it was:
+# `export T.fptake --format pc2 --out T.fptake --force` replaced the take by its point cache
+# (a link to it too); a stack's layer take, the mesh (export and play) likewise.
+cp "$small" "$tmp/self.fptake"
+cp "$data/faces/mediapipe-canonical/canonical_face_model.obj" "$tmp/self.obj"
+ln -s self.fptake "$tmp/self-link.pc2"
+sum=$(cksum <"$tmp/self.fptake") msum=$(cksum <"$tmp/self.obj")
+for c in "export --format pc2 --out self.fptake" "export --format mdd --out self-link.pc2" \
+         "export --format pc2 --mesh self.obj --out self.obj" "play --mesh self.obj --out self.obj" \
+         "play --export self-link.pc2"; do
+    set -- $c
+    cmd=$1; shift
+    args=(); for w in "$@"; do case $w in self*) args+=("$tmp/$w") ;; *) args+=("$w") ;; esac; done
+    expect 73 "$fp" $cmd "${pd[@]}" "$tmp/self.fptake" "${args[@]}" --force -q
+    grep -q "^facepuppet $cmd: .*: is the \(take\|mesh\) being read (.*): refused (it would be written over)" \
+        "$tmp/x.out" || { cat "$tmp/x.out"; fail "$c: not 'is the take/mesh being read ... refused'"; }
+    [ "$(cksum <"$tmp/self.fptake")" = "$sum" ] && [ "$(cksum <"$tmp/self.obj")" = "$msum" ] ||
+        fail "$c --force: the input was written over"
+done
+printf '{"format":"facepuppet-stack","version":1,"layers":[{"take":"self.fptake"},{"take":"self2.fptake","mode":"add"}]}' \
+    >"$tmp/self.fpstack"
+cp "$small" "$tmp/self2.fptake"
+sum2=$(cksum <"$tmp/self2.fptake")
+expect 73 "$fp" export "${pd[@]}" "$tmp/self.fpstack" --format pc2 --out "$tmp/self2.fptake" --force -q
+grep -q "is a take of the stack being read" "$tmp/x.out" || { cat "$tmp/x.out"; fail "a stack's take as --out"; }
+[ "$(cksum <"$tmp/self2.fptake")" = "$sum2" ] || fail "export of a stack wrote over its layer's take"
+expect 0 "$fp" export "${pd[@]}" "$tmp/self.fpstack" --format pc2 --out "$tmp/stack.pc2" -q
+echo "an output that is an input (take, link to it, a stack's take, the mesh): refused, 73"
+# --max-targets K: at most K targets in the file, the offset that keeps the weights in [0, 1]
+# counted (it made K + 1); the weights in [0, 1] all the same (fp-export-check)
+for k in 2 3 5; do
+    expect 0 "$fp" export "${pd[@]}" "$small" --format glb --max-targets $k --out "$tmp/cap$k.glb" --force
+    got=$("$fp" info "$tmp/cap$k.glb" | sed -n 's/^ *targets *\([0-9]*\) morph targets.*/\1/p')
+    [ -n "$got" ] && [ "$got" -le $k ] || { cat "$tmp/x.out"; fail "--max-targets $k: $got targets in the file"; }
+    grep -q "K = $got morph targets" "$tmp/x.out" || { cat "$tmp/x.out"; fail "--max-targets $k: the line's K is not the file's $got"; }
+    "$check" "$small" "$tmp/cap$k.glb" --max-error 1000 >"$tmp/x.out" 2>&1 ||
+        { cat "$tmp/x.out"; fail "--max-targets $k: fp-export-check"; }
+done
+echo "--max-targets: at most K targets in the file, the offset counted"
 # An export larger than the room free where it goes: refused before any frame (73), naming the
 # size (a --fps of 10000 for 100 wrote 10.6 GB of a 3.3 s take, unasked). A 1 MiB tmpfs in a
 # user namespace (unshare -r -m); skipped where the system allows none.

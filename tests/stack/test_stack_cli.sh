@@ -62,6 +62,13 @@ cmp -s "$tmp/base.pc2" "$tmp/play1.pc2" && fail "the stack plays as its base alo
     { cat "$tmp/export.out"; fail "export glb exited $?"; }
 head -1 "$tmp/export.out"
 "$xcheck" "$stack" "$tmp/stack.glb" --max-error 0.1 || fail "the stack's glb is not its composite"
+# named after the stack, not its base take (export and play --export alike): the base's own
+# export and the stack's were both "face_T001" in Blender
+"$fp" play "$stack" --export "$tmp/play-stack.glb" -q || fail "play --export glb exited $?"
+for g in stack.glb play-stack.glb; do
+    "$fp" info "$tmp/$g" | grep -q '^ *animation "face_S001": ' ||
+        { "$fp" info "$tmp/$g"; fail "$g: the animation is not named face_S001"; }
+done
 if command -v node >/dev/null; then
     if [ ! -d tools/gltf-validate/node_modules/gltf-validator ]; then
         (cd tools/gltf-validate && npm ci --no-audit --no-fund >/dev/null 2>&1 ||

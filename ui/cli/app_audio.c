@@ -270,7 +270,13 @@ int fp_app_audio_export_check(const fp_take_header *h, const char *anim_out, boo
     int stem = folder ? (int)len : (int)(dot - anim_out);
     snprintf(wav, n, "%.*s.wav", stem, anim_out);
     char err[2048], spec[4300];
-    int rc;
+    snprintf(err, sizeof err, "facepuppet %s", cmd);
+    int rc = fp_app_check_not_input(err, "the soundtrack's WAV", wav, h->soundtrack_path,
+                                    "the take's soundtrack");
+    if (rc) {   /* (the WAV beside the output would be written over its own source) */
+        wav[0] = '\0';
+        return rc;
+    }
     snprintf(spec, sizeof spec, "file:%s", wav);
     if ((rc = fp_audio_out_check(spec, force, err, sizeof err))) {
         fprintf(stderr, "facepuppet %s: the soundtrack's WAV: %s\n", cmd, err);

@@ -106,7 +106,8 @@ int fp_app_audio_finish(fp_app_audio *a, const char *cmd, bool quiet);
 /** export, before any frame is played: where the soundtrack of the take (header h: a take's
  *  or a stack's base layer's) goes, `anim_out` with its extension replaced by .wav (a folder
  *  output: beside it, FOLDER.wav), into wav (n bytes; "" when the take has none). A file there
- *  without force is refused. Returns 0 or 73 (said with cmd). */
+ *  without force is refused, and the soundtrack itself (out.glb beside the take's out.wav)
+ *  with force too. Returns 0 or 73 (said with cmd). */
 int fp_app_audio_export_check(const fp_take_header *h, const char *anim_out, bool force, char *wav,
                               size_t n, const char *cmd);
 

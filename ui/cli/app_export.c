@@ -24,6 +24,18 @@ double fp_app_export_frame_bytes(fp_export_format format, const struct fp_mesh *
     }
 }
 
+void fp_app_export_name(const char *path, bool stack, const char *slate, unsigned take, char *buf,
+                        size_t n)
+{
+    if (!stack) {
+        snprintf(buf, n, "%s_T%03u", slate, take);
+        return;
+    }
+    const char *slash = strrchr(path, '/'), *base = slash ? slash + 1 : path;
+    const char *dot = strrchr(base, '.');
+    snprintf(buf, n, "%.*s", dot && dot > base ? (int)(dot - base) : (int)strlen(base), base);
+}
+
 int fp_app_export_open(const char *cmd, const char *file, const struct fp_mesh *mesh,
                        double mm_per_unit, const char *name, double frames, fp_exporter **x)
 {

@@ -13,6 +13,14 @@
  *  whose morph targets are reduced). Pure; any thread. */
 double fp_app_export_frame_bytes(fp_export_format format, const struct fp_mesh *mesh);
 
+/** The name an export of a take or stack gives what it writes (the glTF animation and its
+ *  root node "NAME_metres", obj-seq's NAME_NNNNNN files): a take's "SLATE_TNNN" (slate and
+ *  take from its header), a stack's file name without its folder and .fpstack ("face_S001":
+ *  not its base take's, which named a stack's animation as the base take alone). Into buf
+ *  (n bytes, cut to fit). */
+void fp_app_export_name(const char *path, bool stack, const char *slate, unsigned take, char *buf,
+                        size_t n);
+
 /** `--export FILE` of run and play: the format from FILE's extension (.gltf .glb .pc2 .mdd),
  *  the exporter begun on `mesh` (the session's loaded mesh). frames: how many the run will
  *  write when known before it (play: the take's; run: --duration's), else 0; a point cache

@@ -359,6 +359,17 @@ int fp_app_check_new_output(const char *cmd, const char *option, const char *pat
     return 0;
 }
 
+int fp_app_check_not_input(const char *cmd, const char *option, const char *out, const char *input,
+                           const char *what)
+{
+    struct stat so, si;
+    if (!out || !input || !*input || stat(out, &so) || stat(input, &si)) return 0;
+    if (so.st_dev != si.st_dev || so.st_ino != si.st_ino) return 0;
+    fprintf(stderr, "%s: %s %s: is %s being read (%s): refused (it would be written over)\n",
+            cmd, option, out, what, input);
+    return FP_EXIT_CANTCREAT;
+}
+
 bool fp_app_free_name(const char *path, char *buf, size_t len)
 {
     struct stat st;

@@ -103,6 +103,15 @@ int fp_app_check_output(const char *cmd, const char *option, const char *path);
  *  output refused) with the line printed. */
 int fp_app_check_new_output(const char *cmd, const char *option, const char *path, bool force);
 
+/** An output that is one of the command's inputs (the same file by device and inode: another
+ *  spelling, a hard or symbolic link) would be written over the data it comes from, --force
+ *  or not (`export T.fptake --format pc2 --out T.fptake --force` replaced the take by its
+ *  point cache): refused before any work. input may be NULL or "" (nothing to compare); what
+ *  names it ("the take"). Returns 0 (different files, or either missing), or 73 with
+ *  "CMD: OPTION OUT: is WHAT being read (INPUT): refused (it would be written over)" printed. */
+int fp_app_check_not_input(const char *cmd, const char *option, const char *out, const char *input,
+                           const char *what);
+
 /** A default output name (one the user did not give) that exists: the next free name, as
  *  record= takes one: PATH itself when free, else STEM-1.EXT, STEM-2.EXT ... (up to 999).
  *  Into buf (len bytes). Returns true with buf set, false when none is free or it does not

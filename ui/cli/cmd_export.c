@@ -154,7 +154,8 @@ static void usage(FILE *f)
         "                        zoom Z (default 0,0,1: the face from the front)\n"
         "      --force           overwrite an output that exists (the file; obj-seq and\n"
         "                        png-seq: the frames in the folder); without it the export is\n"
-        "                        refused before any work (73)\n"
+        "                        refused before any work (73); an output that is the take,\n"
+        "                        a stack's take, the mesh or the soundtrack is refused even so\n"
         "  -m, --mesh FILE       the take's mesh from another path (its crc32 must match)\n"
         "  -P, --plugin-dir DIR  look for plugins in DIR first\n"
         "  -q, --quiet           no progress and no summary, nor the engine's and contact\n"
@@ -426,11 +427,23 @@ static int check_range(const export_args *a, range_end *in, range_end *out, cons
     return 0;
 }
 
-/* The output, before any frame is played: a file that exists, or a folder (obj-seq, png-seq)
- * holding frames of this take's name, is refused without --force. Returns 0 or 73 (said). */
-static int check_out(const export_args *a, const char *out, const char *name)
+/* The output, before any frame is played: one of the inputs (the take or stack, a stack's
+ * takes, the mesh) is refused, --force or not; a file that exists, or a folder (obj-seq,
+ * png-seq) holding frames of this take's name, is refused without --force. Returns 0 or 73
+ * (said). */
+static int check_out(const export_args *a, fp_take_player *p, const char *out, const char *name)
 {
     const char *opt = a->out ? "--out" : "output";
+    const char *cmd = "facepuppet export";
+    const fp_stack *st = fp_take_player_stack(p) ? fp_stack_player_stack(fp_take_player_stack(p)) : NULL;
+    int rc = fp_app_check_not_input(cmd, opt, out, a->take_path, st ? "the stack" : "the take");
+    if (!rc) rc = fp_app_check_not_input(cmd, opt, out, fp_take_player_mesh_path(p), "the mesh");
+    for (size_t i = 0; !rc && st && i < st->layer_count; i++) {
+        char take[4200];
+        if (!fp_stack_take_path(st, i, take, sizeof take))
+            rc = fp_app_check_not_input(cmd, opt, out, take, "a take of the stack");
+    }
+    if (rc) return rc;
     if (a->png || a->fmt == FP_EXPORT_OBJ_SEQ) {
         char prefix[128];
         snprintf(prefix, sizeof prefix, "%s_", name);
@@ -667,11 +680,12 @@ static int export_take(const export_args *a, fp_take_player *p, sink *k, float *
     const double mm_per_unit = fp_take_player_mm_per_unit(p);
     fp_session *s = fp_take_player_session(p);
     char name[96];
-    snprintf(name, sizeof name, "%s_T%03u", h->slate, h->take);
+    fp_app_export_name(a->take_path, fp_take_player_stack(p) != NULL, h->slate, h->take, name,
+                       sizeof name);
     /* the output's rate: --fps, else the take's (named in the file and the summary) */
     const double rate = a->fps > 0 ? a->fps
                         : h->rate.den ? (double)h->rate.num / (double)h->rate.den : 0;
-    if ((status = check_out(a, out, name))) return status;
+    if ((status = check_out(a, p, out, name))) return status;
     double count;
     if ((status = frames_out(a, &w.in, &w.out, h, r, w.tc_in, &count)) ||
         (status = check_size(a, out, count, fp_session_mesh(s))))

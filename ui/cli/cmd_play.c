@@ -269,6 +269,7 @@ static void play_stream_frame(fp_app_link *link, const fp_take_header *h, fp_tak
 typedef struct play_outputs {
     const char *out, *export_file, *frames_out, *control, *stream, *audio_out;
     bool force;
+    const char *take, *mesh;   /* inputs: never written over (--mesh: NULL when not given) */
 } play_outputs;
 
 /* --control and --stream's SPECs; --out, --export (its format into *fmt), --frames-out: a
@@ -277,6 +278,11 @@ typedef struct play_outputs {
 static int play_check_outputs(const play_outputs *o, fp_export_format *fmt, bool *made)
 {
     int oc = fp_app_link_check("play", o->control, o->stream);
+    const char *opts[2] = {"--out", "--export"}, *outs[2] = {o->out, o->export_file};
+    for (int i = 0; i < 2 && !oc; i++) {   /* (an input written over, --force or not) */
+        oc = fp_app_check_not_input("facepuppet play", opts[i], outs[i], o->take, "the take");
+        if (!oc) oc = fp_app_check_not_input("facepuppet play", opts[i], outs[i], o->mesh, "the mesh");
+    }
     if (oc) return oc;
     if (o->control && (o->out || o->export_file || o->frames_out || o->audio_out)) {
         fprintf(stderr, "facepuppet play: --control is a transport (play, stop, seek): give --out, "
@@ -377,7 +383,8 @@ static int play_main(int argc, char **argv)
     const char *take_path = argv[optind];
     char err[2048];
     fp_export_format export_fmt;
-    const play_outputs po = {out, export_file, frames_out, control, stream, audio.out_spec, force};
+    const play_outputs po = {out, export_file, frames_out, control, stream, audio.out_spec, force,
+                             take_path, mesh};
     bool frames_made = false; /* the --frames-out folder made here: taken away if refused before a frame */
     int oc = play_check_outputs(&po, &export_fmt, &frames_made);
     if (oc) return oc;
@@ -409,10 +416,13 @@ static int play_main(int argc, char **argv)
     if (frames_out && (status = fp_app_frames_estimate("facepuppet play", "--frames-out", frames_out,
                                                        take_frames, 0, fp_session_mesh(s), quiet, NULL)))
         goto done;
+    char name[96]; /* (as export names it: SLATE_TNNN, a stack's file name) */
+    fp_app_export_name(take_path, fp_take_player_stack(player) != NULL, h->slate, h->take, name,
+                       sizeof name);
     if (export_file && (status = fp_app_export_open("facepuppet play", export_file,
                                                     fp_session_mesh(s),
                                                     fp_take_player_mm_per_unit(player),
-                                                    h->slate, take_frames, &ex)))
+                                                    name, take_frames, &ex)))
         goto done;
     play_ctl c = {.take_path = take_path, .mesh = mesh, .path = &path, .quiet = quiet, .player = player};
     if ((status = play_link_open(&c, control, stream, h, &link)) || control) {
