@@ -189,15 +189,17 @@ typedef struct fp_ltc_info {
 } fp_ltc_info;
 
 /** Decode the LTC of a sound file (its first channel): every frame with libltc's decoder;
- *  the rate from the frames' spacing (the nearest of 24, 25, 29.97, 30; 29.97 where the
- *  drop-frame flag is set); the timecode at sample 0 from the first frame decoded and its
- *  position. Needs at least 1 s of LTC. Returns 0 and *info, or -ENOENT/-EACCES/-EBADMSG
+ *  the rate from the frames' median spacing (the nearest of 24, 25, 30; at 30, 29.97
+ *  drop-frame where most frames have the drop-frame flag, else 29.97 or 30 by the mean
+ *  spacing); the timecode at sample 0 as most frames give it (each frame's timecode carried
+ *  back to sample 0 by whole frame periods: a misread frame, the first one included, is
+ *  outvoted and counted as a jump). Needs at least 1 s of LTC. Returns 0 and *info, or -ENOENT/-EACCES/-EBADMSG
  *  (not a sound file, no LTC, less than a second of it, a rate none of those) with err. */
 int fp_ltc_read_file(const char *path, fp_ltc_info *info, char *err, size_t errlen);
 
 /** Listen to a PortAudio input device ("default", an index or part of a name) for up to
  *  `seconds` until 1.5 s of LTC decoded; info->first is the timecode at host time
- *  info->at_ns. Returns 0, -ENODEV (no such input device), -ETIMEDOUT (no LTC heard) or
+ *  info->at_ns (rate and timecode by fp_ltc_read_file's rules). Returns 0, -ENODEV (no such input device), -ETIMEDOUT (no LTC heard) or
  *  -EIO with err. */
 int fp_ltc_listen(const char *device, double seconds, fp_ltc_info *info, char *err,
                   size_t errlen);

@@ -12,7 +12,7 @@
 #  4. LTC at 25 and 29.97 drop-frame, made with libltc's encoder (crossing a dropped minute):
 #     run --timecode ltc:FILE.wav gives a take whose timecode_in and every frame's timecode
 #     equal the encoded ones (as libltc counted them); `info` on the file says its rate and
-#     the timecode at its first sample.
+#     the timecode at its first sample; also at 24 fps with two frames misread.
 #  5. input-audio: run --input audio:speech.wav (anchored, and onehand with no hand): jaw.open above 0.3 within two frames of each
 #     syllable's onset, below 0.1 in the silences (0.25 s after each syllable's end on); the
 #     check must fail for onsets moved 0.1 s early; `plugins check` passes input-audio (its
@@ -121,8 +121,8 @@ refuse 65 "no LTC" --timecode "ltc:$tmp/speech.wav" --audio "$tmp/speech.wav" --
 [ ! -e "$tmp/refused.wav" ] || fail "a refused run left its --audio-out file"
 
 # ---- 4. LTC ---------------------------------------------------------------------------------
-ltc_case() { # NUM DEN START FPS NAME
-    "$tool" ltc "$tmp/$5.wav" "$1" "$2" "$3" 4 || fail "ltc encoding"
+ltc_case() { # NUM DEN START FPS NAME [glitch]
+    "$tool" ltc "$tmp/$5.wav" "$1" "$2" "$3" 4 ${6:-} || fail "ltc encoding"
     "$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv" --speed 3 --duration 3 --fps "$4" \
         --timecode "ltc:$tmp/$5.wav" --take-dir "$tmp/$5" -o "$tmp/$5.obj" -q >/dev/null 2>"$tmp/$5.err" ||
         { cat "$tmp/$5.err"; fail "run --timecode ltc:$5.wav exited $?"; }
@@ -132,6 +132,12 @@ ltc_case() { # NUM DEN START FPS NAME
 }
 ltc_case 25 1 10:00:00:00 25 ltc25
 ltc_case 30000 1001 "00:00:59;20" 29.97 ltc2997df
+# two frames misread (the first one's seconds, a frame field of 24 at 24 fps): the rate comes
+# from the frames' spacing and the timecode from most frames (before: 25 fps from the one
+# frame field of 24, and the first frame's wrong seconds as the timecode in)
+ltc_case 24 1 01:02:03:04 24 ltc24glitch glitch
+"$fp" info "$tmp/ltc24glitch.wav" | grep -q "timecode  LTC at 24 fps, 01:02:03:04 at the first sample" ||
+    fail "info of an LTC file with two misread frames: $("$fp" info "$tmp/ltc24glitch.wav" 2>&1)"
 # info on a sound file says what it is (before: "unknown format" of a recording): the LTC's
 # rate and the timecode it was encoded from, 48 kHz mono, 4 s; the speech has no LTC
 "$fp" info "$tmp/ltc25.wav" >"$tmp/info.out" 2>&1 || { cat "$tmp/info.out"; fail "info ltc25.wav exited $?"; }
