@@ -186,15 +186,18 @@ typedef struct fp_ltc_info {
     uint64_t jumps;               /* frames that did not follow the one before (a cut, a
                                      restart of the generator) */
     int sample_rate;
+    int channel;                  /* the channel it was decoded from, 1-based (a device: 1) */
 } fp_ltc_info;
 
-/** Decode the LTC of a sound file (its first channel): every frame with libltc's decoder;
+/** Decode the LTC of a sound file (every channel, each with its own libltc decoder; the
+ *  channel with the most frames decoded is the LTC's: info->channel):
  *  the rate from the frames' median spacing (the nearest of 24, 25, 30; at 30, 29.97
  *  drop-frame where most frames have the drop-frame flag, else 29.97 or 30 by the mean
  *  spacing); the timecode at sample 0 as most frames give it (each frame's timecode carried
  *  back to sample 0 by whole frame periods: a misread frame, the first one included, is
  *  outvoted and counted as a jump). Needs at least 1 s of LTC. Returns 0 and *info, or -ENOENT/-EACCES/-EBADMSG
- *  (not a sound file, no LTC, less than a second of it, a rate none of those) with err. */
+ *  (not a sound file, no LTC on any channel, less than a second of it, a rate none of
+ *  those) with err. */
 int fp_ltc_read_file(const char *path, fp_ltc_info *info, char *err, size_t errlen);
 
 /** Listen to a PortAudio input device ("default", an index or part of a name) for up to

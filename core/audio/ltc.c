@@ -140,6 +140,33 @@ static int settle(ltc_seen *s, int sample_rate, const char *what, int64_t ref, f
     return 0;
 }
 
+/* Decode every channel of sf (one libltc decoder each) into seen[0..channels). Returns 0 or
+ * -ENOMEM with err. */
+static int decode_channels(SNDFILE *sf, const SF_INFO *si, ltc_seen *seen, char *err, size_t errlen)
+{
+    const size_t ch = (size_t)si->channels;
+    LTCDecoder **d = calloc(ch, sizeof *d);
+    float *block = malloc(1024 * ch * sizeof *block), mono[1024];
+    int rc = d && block ? 0 : -ENOMEM;
+    for (size_t c = 0; !rc && c < ch; c++)
+        if (!(d[c] = ltc_decoder_create(si->samplerate / 25, 64))) rc = -ENOMEM;
+    ltc_off_t pos = 0;
+    sf_count_t got;
+    while (!rc && (got = sf_readf_float(sf, block, 1024)) > 0) {
+        for (size_t c = 0; !rc && c < ch; c++) {
+            for (sf_count_t k = 0; k < got; k++) mono[k] = block[(size_t)k * ch + c];
+            ltc_decoder_write_float(d[c], mono, (size_t)got, pos);
+            rc = collect(d[c], &seen[c]);
+        }
+        pos += got;
+    }
+    for (size_t c = 0; d && c < ch; c++)
+        if (d[c]) ltc_decoder_free(d[c]);
+    free(d);
+    free(block);
+    return rc ? fp_errorf(err, errlen, -ENOMEM, "out of memory") : 0;
+}
+
 int fp_ltc_read_file(const char *path, fp_ltc_info *info, char *err, size_t errlen)
 {
     memset(info, 0, sizeof *info);
@@ -153,29 +180,25 @@ int fp_ltc_read_file(const char *path, fp_ltc_info *info, char *err, size_t errl
         sf_close(sf);
         return fp_errorf(err, errlen, -EBADMSG, "%s: no samples, or under 8 kHz", path);
     }
-    LTCDecoder *d = ltc_decoder_create(si.samplerate / 25, 64);
-    float *block = malloc(1024 * (size_t)si.channels * sizeof *block), mono[1024];
-    ltc_seen s = {0};
-    int rc = d && block ? 0 : fp_errorf(err, errlen, -ENOMEM, "out of memory");
-    ltc_off_t pos = 0;
-    sf_count_t got;
-    while (!rc && (got = sf_readf_float(sf, block, 1024)) > 0) {
-        for (sf_count_t k = 0; k < got; k++) mono[k] = block[k * si.channels];
-        ltc_decoder_write_float(d, mono, (size_t)got, pos);
-        pos += got;
-        if (collect(d, &s)) rc = fp_errorf(err, errlen, -ENOMEM, "out of memory");
-    }
+    ltc_seen *seen = calloc((size_t)si.channels, sizeof *seen);
+    int rc = seen ? decode_channels(sf, &si, seen, err, errlen) : fp_errorf(err, errlen, -ENOMEM, "out of memory");
     sf_close(sf);
-    free(block);
-    if (d) ltc_decoder_free(d);
-    uint64_t *numbers = rc ? NULL : malloc((s.n ? s.n : 1) * sizeof *numbers);
+    size_t best = 0; /* the channel with the most frames: LTC on any track of a recording */
+    for (size_t c = 1; seen && c < (size_t)si.channels; c++)
+        if (seen[c].n > seen[best].n) best = c;
+    ltc_seen *s = seen ? &seen[best] : NULL;
+    uint64_t *numbers = rc ? NULL : malloc((s->n ? s->n : 1) * sizeof *numbers);
     if (!rc && !numbers) rc = fp_errorf(err, errlen, -ENOMEM, "out of memory");
     uint64_t n0 = 0;
-    if (!rc) rc = settle(&s, si.samplerate, path, 0, info, numbers, &n0, err, errlen);
-    if (!rc) fp_timecode_from_frames(n0, info->rate, fp_timecode_drop_allowed(info->rate) && 2 * s.drop_flags > s.n,
-                                     &info->first);
+    if (!rc) rc = settle(s, si.samplerate, path, 0, info, numbers, &n0, err, errlen);
+    if (!rc) {
+        fp_timecode_from_frames(n0, info->rate, fp_timecode_drop_allowed(info->rate) && 2 * s->drop_flags > s->n,
+                                &info->first);
+        info->channel = (int)best + 1;
+    }
     free(numbers);
-    free(s.f);
+    for (size_t c = 0; seen && c < (size_t)si.channels; c++) free(seen[c].f);
+    free(seen);
     return rc;
 }
 
@@ -241,6 +264,7 @@ int fp_ltc_listen(const char *device, double seconds, fp_ltc_info *info, char *e
         fp_timecode_from_frames(n_last + 1, info->rate, fp_timecode_drop_allowed(info->rate) && 2 * s.drop_flags > s.n,
                                 &info->first);
         info->at_ns = read_end - (int64_t)((double)(pos - last->end) * 1e9 / sr);
+        info->channel = 1;
     }
     free(numbers);
     free(s.f);

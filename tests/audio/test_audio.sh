@@ -12,7 +12,8 @@
 #  4. LTC at 25 and 29.97 drop-frame, made with libltc's encoder (crossing a dropped minute):
 #     run --timecode ltc:FILE.wav gives a take whose timecode_in and every frame's timecode
 #     equal the encoded ones (as libltc counted them); `info` on the file says its rate and
-#     the timecode at its first sample; also at 24 fps with two frames misread.
+#     the timecode at its first sample; also at 24 fps with two frames misread, and on
+#     the second channel of a stereo file.
 #  5. input-audio: run --input audio:speech.wav (anchored, and onehand with no hand): jaw.open above 0.3 within two frames of each
 #     syllable's onset, below 0.1 in the silences (0.25 s after each syllable's end on); the
 #     check must fail for onsets moved 0.1 s early; `plugins check` passes input-audio (its
@@ -148,6 +149,18 @@ grep -q "format    sound, 48000 Hz, 1 channel$" "$tmp/info.out" &&
 "$fp" info "$tmp/ltc2997df.wav" | grep -q "timecode  LTC at 29.97 fps, 00:00:59;20 at the first sample" ||
     fail "info of a drop-frame LTC file: $("$fp" info "$tmp/ltc2997df.wav" 2>&1)"
 "$fp" info "$tmp/speech.wav" | grep -q "timecode  none" || fail "info finds LTC in speech"
+# LTC on the second track of a stereo recording, a tone on the first (before: "no LTC", 65:
+# only the first channel was decoded): the take's timecodes are the LTC's, info names the track
+sox -n -r 48000 -c 1 "$tmp/tone.wav" synth 4 sine 440 vol 0.3 && sox -M "$tmp/tone.wav" "$tmp/ltc25.wav" "$tmp/ltc-ch2.wav" ||
+    fail "sox: the stereo LTC file"
+cp "$tmp/ltc25.wav.txt" "$tmp/ltc-ch2.wav.txt"
+"$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv" --speed 3 --duration 3 --fps 25 \
+    --timecode "ltc:$tmp/ltc-ch2.wav" --take-dir "$tmp/ltc-ch2" -o "$tmp/ltc-ch2.obj" -q >/dev/null 2>"$tmp/ltc-ch2.err" ||
+    { rc=$?; cat "$tmp/ltc-ch2.err"; fail "run --timecode ltc:ltc-ch2.wav (LTC on channel 2) exited $rc"; }
+"$tool" timecodes "$tmp/ltc-ch2/scene1_T001.fptake" 25 1 "$tmp/ltc-ch2.wav.txt" ||
+    fail "LTC on channel 2: the take's timecodes are not the LTC's"
+"$fp" info "$tmp/ltc-ch2.wav" | grep -q "timecode  LTC at 25 fps, 10:00:00:00 at the first sample (.* on channel 2)" ||
+    fail "info of LTC on channel 2: $("$fp" info "$tmp/ltc-ch2.wav" 2>&1)"
 
 # ---- 5. input-audio -------------------------------------------------------------------------
 "$fp" run "${pd[@]}" --mesh "$mesh" --input "audio:$tmp/speech.wav,fast=1" --take-dir "$tmp/jaw" \
