@@ -155,23 +155,24 @@ int fp_audio_in_open(const char *spec, fp_audio_in **out, char *err, size_t errl
 int fp_audio_in_rate(const fp_audio_in *in);
 int fp_audio_in_channels(const fp_audio_in *in);
 
-/** Record into a new WAV at `path` (32-bit float, the input's rate and channels; written
- *  through a temporary beside it, renamed by fp_audio_in_record_stop): its sample 0 is the
- *  input's sample at host time t0_ns (silence for any time before the capture began). Returns
- *  0, -EBUSY (recording already), or the file's code (fp_file_open_output's, -EIO) with err.
+/** Record into a WAV at `path` (32-bit float, the input's rate and channels; written in place,
+ *  a file there replaced, its header updated after every write: a process killed mid-take
+ *  leaves a WAV of what was written): its sample 0 is the input's sample at host time t0_ns
+ *  (silence for any time before the capture began). Returns 0, -EBUSY (recording already),
+ *  or the file's code (open(2)'s -errno, -EIO) with err.
  *  Thread-safe against the capture thread; one caller at a time. */
 int fp_audio_in_record(fp_audio_in *in, const char *path, int64_t t0_ns, char *err, size_t errlen);
 
 /** End the recording at host time end_ns: waits until the input has captured up to there (2 s
- *  at most; a device that stopped: silence), writes the samples before end_ns, closes and
- *  renames the WAV into place. *frames (may be NULL): the sample frames in the file, 0 on an
- *  error. Returns 0 (also when nothing records) or the first write's error (-EIO; the
- *  temporary removed) with err. */
+ *  at most; a device that stopped: silence), writes the samples before end_ns, syncs and
+ *  closes the WAV. *frames (may be NULL): the sample frames in the file, 0 on an error.
+ *  Returns 0 (also when nothing records) or the first write's error (-EIO; the WAV removed)
+ *  with err. */
 int fp_audio_in_record_stop(fp_audio_in *in, int64_t end_ns, uint64_t *frames, char *err,
                             size_t errlen);
 
-/** Stop the capture thread, drop a recording in progress (its temporary removed) and free
- *  *in (set to NULL). NULL: nothing. */
+/** Stop the capture thread, end a recording in progress where it got (the WAV kept, its header
+ *  up to date) and free *in (set to NULL). NULL: nothing. */
 void fp_audio_in_close(fp_audio_in **in);
 
 /* ---- LTC ---------------------------------------------------------------------------------- */

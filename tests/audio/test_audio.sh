@@ -22,7 +22,8 @@
 #  6. --audio-in file:ramp.wav (an emulated microphone heard in real time, every sample saying
 #     where it is): the take's SLATE_TNNN.mic.wav spans its frames (last frame's end, within
 #     1/60 s), is one run of the ramp without a gap or a repeat, and the header names it; an
-#     unknown device exits 64, a missing file 66, no --take-dir 64, before any work.
+#     unknown device exits 64, a missing file 66, no --take-dir 64, before any work; a run
+#     killed (-9) mid-take leaves the WAV readable up to the kill.
 #  7. export of the take of 2 (and of a stack over it) writes NAME.wav beside the animation:
 #     bit for bit the soundtrack's samples under the exported frames (from the first's
 #     soundtrack time, for the frames' span + one period), also for --range 30-90; an
@@ -211,6 +212,24 @@ cat "$tmp/mic.err"
 "$tool" ramp-check "$tmp/mic/scene1_T001.mic.wav" || fail "the microphone's WAV is not one run of its samples"
 "$fp" info "$tmp/mic/scene1_T001.fptake" | grep -q "microphone   scene1_T001.mic.wav (from file:$tmp/ramp.wav)" ||
     fail "the take's header does not name its microphone"
+# kill -9 mid-take: the take reads back, and so does its microphone up to the kill (before: it
+# was left in a hidden temporary, .scene1_T001.mic.wav.XXXXXX, and the take named a missing file)
+"$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv" --take-dir "$tmp/mickill" \
+    --audio-in "file:$tmp/ramp.wav" -o "$tmp/mickill.obj" -q >/dev/null 2>&1 &
+pid=$!
+for _ in $(seq 100); do # until the take holds 30 frames (its first chunk): a second of recording
+    sleep 0.1
+    [ -f "$tmp/mickill/scene1_T001.fptake" ] &&
+        [ "$(stat -c %s "$tmp/mickill/scene1_T001.fptake")" -gt 30000 ] && break
+done
+sleep 1
+kill -9 $pid
+wait $pid 2>/dev/null
+[ -f "$tmp/mickill/scene1_T001.mic.wav" ] || { ls -a "$tmp/mickill"; fail "kill -9: no scene1_T001.mic.wav beside the take"; }
+"$tool" ramp-check "$tmp/mickill/scene1_T001.mic.wav" || fail "kill -9: the microphone's WAV is not one run of its samples"
+mic_s=$(soxi -D "$tmp/mickill/scene1_T001.mic.wav" 2>/dev/null)
+awk -v d="$mic_s" 'BEGIN { exit !(d >= 1.0) }' || fail "kill -9: the microphone's WAV holds $mic_s s, want 1 s or more"
+echo "kill -9: the take's microphone holds $mic_s s"
 refuse 64 "no audio input device 'no-such-mic-54'" --audio-in no-such-mic-54
 refuse 66 "No such file" --audio-in "file:$tmp/missing-mic.wav"
 "$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv" --audio-in "file:$tmp/ramp.wav" -o "$tmp/refused.obj" -q \
