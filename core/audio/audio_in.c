@@ -2,17 +2,18 @@
  * "inputs"): a PortAudio input device, or "file:X.wav", a sound file heard in real time (an
  * emulated microphone for machines without one and for tests). A thread captures blocks
  * into a ring of the last seconds, each sample at a known host time; a recording writes the
- * samples from its start time to its end time into a WAV (32-bit float), through a temporary
- * renamed at the end. */
+ * samples from its start time to its end time into a WAV (32-bit float), written in place with
+ * its header kept up to date after every write, as a take is: a run killed mid-take leaves a
+ * WAV that reads up to its last write. */
 #define _GNU_SOURCE
 #include "fp_audio.h"
 #include "audio_internal.h"
 
 #include "fp_clock.h"
 #include "fp_error.h"
-#include "fp_file.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <math.h>
 #include <portaudio.h>
 #include <pthread.h>
@@ -22,6 +23,7 @@
 #include <string.h>
 #include <strings.h>
 #include <time.h>
+#include <unistd.h>
 
 #define RING_SECONDS 10      /* samples kept for a recording that starts in the past */
 #define BLOCKS_PER_SECOND 100
@@ -41,7 +43,7 @@ struct fp_audio_in {
     /* the recording */
     bool rec;
     SNDFILE *sf;
-    fp_file_output file;
+    char rec_path[4096];      /* the WAV being written */
     uint64_t rec_next;        /* the next frame to write */
     uint64_t rec_end;         /* frames from here are not written (UINT64_MAX: open) */
     uint64_t rec_written;
@@ -106,7 +108,7 @@ static void append(fp_audio_in *in, const float *frames, size_t n)
 static void rec_fail(fp_audio_in *in)
 {
     in->rec_error = -EIO;
-    snprintf(in->rec_err, sizeof in->rec_err, "%.400s: %.150s", in->file.path, sf_strerror(in->sf));
+    snprintf(in->rec_err, sizeof in->rec_err, "%.400s: %.150s", in->rec_path, sf_strerror(in->sf));
 }
 
 static void sleep_until(int64_t t_ns)
@@ -192,7 +194,6 @@ int fp_audio_in_open(const char *spec, fp_audio_in **out, char *err, size_t errl
     pthread_condattr_setclock(&ca, CLOCK_MONOTONIC);
     pthread_cond_init(&in->cv, &ca);
     pthread_condattr_destroy(&ca);
-    in->file.fd = -1;
     if (is_file(spec)) {
         rc = fp_soundtrack_load(spec + 5, &in->track, err, errlen);
         in->rate = in->track.rate;
@@ -252,16 +253,20 @@ int fp_audio_in_record(fp_audio_in *in, const char *path, int64_t t0_ns, char *e
         rc = fp_errorf(err, errlen, -EBUSY, "the audio input is recording already");
         goto out;
     }
-    if ((rc = fp_file_open_output(path, "", NULL, 0, &in->file))) {
-        rc = fp_errorf(err, errlen, rc, "%s: %s", path, fp_file_error_text(rc));
+    /* in place, not through a temporary renamed at the end: a killed run keeps what it heard */
+    int fd = open(path, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+    if (fd < 0) {
+        rc = fp_errorf(err, errlen, -errno, "%s: %s", path, strerror(errno));
         goto out;
     }
+    snprintf(in->rec_path, sizeof in->rec_path, "%s", path);
     SF_INFO info = {.samplerate = in->rate, .channels = in->channels, .format = SF_FORMAT_WAV | SF_FORMAT_FLOAT};
-    if (!(in->sf = sf_open_fd(in->file.fd, SFM_WRITE, &info, 0))) {
-        fp_file_output_abort(&in->file);
+    if (!(in->sf = sf_open_fd(fd, SFM_WRITE, &info, 1))) { /* (closes fd, also on failure) */
         rc = fp_errorf(err, errlen, -EIO, "%s: %s", path, sf_strerror(NULL));
+        unlink(path);
         goto out;
     }
+    sf_command(in->sf, SFC_SET_UPDATE_HEADER_AUTO, NULL, SF_TRUE); /* the header after every write */
     in->rec = true;
     in->rec_error = 0;
     in->rec_written = 0;
@@ -317,11 +322,10 @@ int fp_audio_in_record_stop(fp_audio_in *in, int64_t end_ns, uint64_t *frames, c
     in->rec_next = in->rec_end;
     int rc = in->rec_error;
     if (rc) fp_errorf(err, errlen, rc, "%s", in->rec_err);
-    if (sf_close(in->sf) && !rc) rc = fp_errorf(err, errlen, -EIO, "%s: closing the WAV failed", in->file.path);
+    sf_write_sync(in->sf);
+    if (sf_close(in->sf) && !rc) rc = fp_errorf(err, errlen, -EIO, "%s: closing the WAV failed", in->rec_path);
     in->sf = NULL;
-    if (!rc && (rc = fp_file_output_commit(&in->file)))
-        fp_errorf(err, errlen, rc, "%s: %s", in->file.path, strerror(-rc));
-    if (rc) fp_file_output_abort(&in->file);
+    if (rc) unlink(in->rec_path); /* (a write failed: no half file beside the take) */
     if (frames && !rc) *frames = in->rec_written;
     in->rec = false;
     pthread_mutex_unlock(&in->mu);
@@ -338,8 +342,7 @@ void fp_audio_in_close(fp_audio_in **inp)
         pthread_mutex_unlock(&in->mu);
         pthread_join(in->thread, NULL);
     }
-    if (in->sf) sf_close(in->sf);
-    fp_file_output_abort(&in->file);
+    if (in->sf) sf_close(in->sf); /* a recording in progress ends where it got (its header up to date) */
     if (in->stream) {
         Pa_AbortStream(in->stream);
         Pa_CloseStream(in->stream);

@@ -155,23 +155,24 @@ int fp_audio_in_open(const char *spec, fp_audio_in **out, char *err, size_t errl
 int fp_audio_in_rate(const fp_audio_in *in);
 int fp_audio_in_channels(const fp_audio_in *in);
 
-/** Record into a new WAV at `path` (32-bit float, the input's rate and channels; written
- *  through a temporary beside it, renamed by fp_audio_in_record_stop): its sample 0 is the
- *  input's sample at host time t0_ns (silence for any time before the capture began). Returns
- *  0, -EBUSY (recording already), or the file's code (fp_file_open_output's, -EIO) with err.
+/** Record into a WAV at `path` (32-bit float, the input's rate and channels; written in place,
+ *  a file there replaced, its header updated after every write: a process killed mid-take
+ *  leaves a WAV of what was written): its sample 0 is the input's sample at host time t0_ns
+ *  (silence for any time before the capture began). Returns 0, -EBUSY (recording already),
+ *  or the file's code (open(2)'s -errno, -EIO) with err.
  *  Thread-safe against the capture thread; one caller at a time. */
 int fp_audio_in_record(fp_audio_in *in, const char *path, int64_t t0_ns, char *err, size_t errlen);
 
 /** End the recording at host time end_ns: waits until the input has captured up to there (2 s
- *  at most; a device that stopped: silence), writes the samples before end_ns, closes and
- *  renames the WAV into place. *frames (may be NULL): the sample frames in the file, 0 on an
- *  error. Returns 0 (also when nothing records) or the first write's error (-EIO; the
- *  temporary removed) with err. */
+ *  at most; a device that stopped: silence), writes the samples before end_ns, syncs and
+ *  closes the WAV. *frames (may be NULL): the sample frames in the file, 0 on an error.
+ *  Returns 0 (also when nothing records) or the first write's error (-EIO; the WAV removed)
+ *  with err. */
 int fp_audio_in_record_stop(fp_audio_in *in, int64_t end_ns, uint64_t *frames, char *err,
                             size_t errlen);
 
-/** Stop the capture thread, drop a recording in progress (its temporary removed) and free
- *  *in (set to NULL). NULL: nothing. */
+/** Stop the capture thread, end a recording in progress where it got (the WAV kept, its header
+ *  up to date) and free *in (set to NULL). NULL: nothing. */
 void fp_audio_in_close(fp_audio_in **in);
 
 /* ---- LTC ---------------------------------------------------------------------------------- */
@@ -186,18 +187,23 @@ typedef struct fp_ltc_info {
     uint64_t jumps;               /* frames that did not follow the one before (a cut, a
                                      restart of the generator) */
     int sample_rate;
+    int channel;                  /* the channel it was decoded from, 1-based (a device: 1) */
 } fp_ltc_info;
 
-/** Decode the LTC of a sound file (its first channel): every frame with libltc's decoder;
- *  the rate from the frames' spacing (the nearest of 24, 25, 29.97, 30; 29.97 where the
- *  drop-frame flag is set); the timecode at sample 0 from the first frame decoded and its
- *  position. Needs at least 1 s of LTC. Returns 0 and *info, or -ENOENT/-EACCES/-EBADMSG
- *  (not a sound file, no LTC, less than a second of it, a rate none of those) with err. */
+/** Decode the LTC of a sound file (every channel, each with its own libltc decoder; the
+ *  channel with the most frames decoded is the LTC's: info->channel):
+ *  the rate from the frames' median spacing (the nearest of 24, 25, 30; at 30, 29.97
+ *  drop-frame where most frames have the drop-frame flag, else 29.97 or 30 by the mean
+ *  spacing); the timecode at sample 0 as most frames give it (each frame's timecode carried
+ *  back to sample 0 by whole frame periods: a misread frame, the first one included, is
+ *  outvoted and counted as a jump). Needs at least 1 s of LTC. Returns 0 and *info, or -ENOENT/-EACCES/-EBADMSG
+ *  (not a sound file, no LTC on any channel, less than a second of it, a rate none of
+ *  those) with err. */
 int fp_ltc_read_file(const char *path, fp_ltc_info *info, char *err, size_t errlen);
 
 /** Listen to a PortAudio input device ("default", an index or part of a name) for up to
  *  `seconds` until 1.5 s of LTC decoded; info->first is the timecode at host time
- *  info->at_ns. Returns 0, -ENODEV (no such input device), -ETIMEDOUT (no LTC heard) or
+ *  info->at_ns (rate and timecode by fp_ltc_read_file's rules). Returns 0, -ENODEV (no such input device), -ETIMEDOUT (no LTC heard) or
  *  -EIO with err. */
 int fp_ltc_listen(const char *device, double seconds, fp_ltc_info *info, char *err,
                   size_t errlen);

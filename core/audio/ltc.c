@@ -21,7 +21,7 @@ typedef struct ltc_seen {
     struct seen { fp_timecode tc; int64_t start, end; } *f;
     size_t n, cap;
     unsigned max_frame;     /* the largest frame field: base - 1 after a second */
-    bool drop;              /* a frame had the drop-frame flag */
+    size_t drop_flags;      /* frames with the drop-frame flag set */
 } ltc_seen;
 
 /* Read every frame the decoder holds into s. Returns 0 or -ENOMEM. */
@@ -43,44 +43,128 @@ static int collect(LTCDecoder *d, ltc_seen *s)
         e->start = fx.off_start;
         e->end = fx.off_end;
         if (t.frame > s->max_frame) s->max_frame = t.frame;
-        if (fx.ltc.dfbit) s->drop = true;
+        if (fx.ltc.dfbit) s->drop_flags++;
     }
     return 0;
 }
 
-/* The rate from the frames (max frame field, drop flag, spacing), each frame's number, the
- * jumps. Returns 0 or -EBADMSG with err. */
-static int settle(ltc_seen *s, int sample_rate, const char *what, fp_ltc_info *info, uint64_t *numbers,
-                  char *err, size_t errlen)
+static int cmp_i64(const void *a, const void *b)
+{
+    int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* The most frequent of v[0..n) (sorted in place; the smallest of equally frequent ones). */
+static int64_t mode_i64(int64_t *v, size_t n)
+{
+    qsort(v, n, sizeof *v, cmp_i64);
+    int64_t best = v[0];
+    size_t best_run = 0;
+    for (size_t i = 0, j; i < n; i = j) {
+        for (j = i; j < n && v[j] == v[i]; j++) {}
+        if (j - i > best_run) best = v[i], best_run = j - i;
+    }
+    return best;
+}
+
+/* The LTC frame period in samples: the median spacing of consecutive frames (a frame lost
+ * or misread moves single spacings, not the median). 0 when there is none. */
+static double median_period(const ltc_seen *s)
+{
+    int64_t *d = malloc((s->n - 1) * sizeof *d);
+    if (!d) return 0;
+    for (size_t i = 0; i + 1 < s->n; i++) d[i] = s->f[i + 1].start - s->f[i].start;
+    qsort(d, s->n - 1, sizeof *d, cmp_i64);
+    double p = (double)d[(s->n - 1) / 2];
+    free(d);
+    return p;
+}
+
+/* The rate from the frames' spacing (the nearest of 24, 25 and 30 a second; at 30, 29.97
+ * where most frames have the drop-frame flag, else 29.97 or 30 by the mean spacing), each
+ * frame's number (UINT64_MAX where its fields are no timecode at that rate: misread), the
+ * jumps, and in *n_ref the frame number at sample `ref` by the most frames' vote (each
+ * frame's number carried to `ref` by whole periods): one misread frame, the first one
+ * included, moves neither the rate nor the timecode. Returns 0 or -EBADMSG with err. */
+static int settle(ltc_seen *s, int sample_rate, const char *what, int64_t ref, fp_ltc_info *info,
+                  uint64_t *numbers, uint64_t *n_ref, char *err, size_t errlen)
 {
     if (s->n < 2 || s->max_frame < 20)
         return fp_errorf(err, errlen, -EBADMSG, "%s: %s (less than a second of LTC decoded)", what,
                          s->n ? "too little LTC" : "no LTC");
-    unsigned base = s->max_frame + 1;
+    double period = median_period(s);
+    if (!(period > 0)) return fp_errorf(err, errlen, -ENOMEM, "out of memory");
+    const double per_s = sample_rate / period;
+    const bool flagged = 2 * s->drop_flags > s->n;
     fp_take_rate rate;
-    if (base == 24) rate = (fp_take_rate){24, 1};
-    else if (base == 25) rate = (fp_take_rate){25, 1};
-    else if (base == 30 && s->drop) rate = (fp_take_rate){30000, 1001};
-    else if (base == 30) { /* 29.97 non-drop or 30: by the frames' spacing */
-        double period = (double)(s->f[s->n - 1].start - s->f[0].start) / (double)(s->n - 1);
+    if (fabs(per_s - 24) < 0.5) rate = (fp_take_rate){24, 1};
+    else if (fabs(per_s - 25) < 0.5) rate = (fp_take_rate){25, 1};
+    else if (fabs(per_s - 30) < 0.5 && flagged) rate = (fp_take_rate){30000, 1001};
+    else if (fabs(per_s - 30) < 0.5) { /* 29.97 non-drop or 30: by the frames' mean spacing */
+        double span = (double)(s->f[s->n - 1].start - s->f[0].start);
+        double mean = span / fmax(1.0, round(span / period));
         double p30 = sample_rate / 30.0, p2997 = sample_rate * 1001.0 / 30000.0;
-        rate = fabs(period - p2997) < fabs(period - p30) ? (fp_take_rate){30000, 1001} : (fp_take_rate){30, 1};
+        rate = fabs(mean - p2997) < fabs(mean - p30) ? (fp_take_rate){30000, 1001} : (fp_take_rate){30, 1};
     } else {
-        return fp_errorf(err, errlen, -EBADMSG, "%s: LTC frames count to %u a second (24, 25 or 30 expected)",
-                         what, base);
+        return fp_errorf(err, errlen, -EBADMSG, "%s: LTC frames come %.2f a second (24, 25 or 30 expected)",
+                         what, per_s);
     }
     info->rate = rate;
     info->frames = s->n;
     info->jumps = 0;
     info->sample_rate = sample_rate;
+    const bool drop = flagged && fp_timecode_drop_allowed(rate);
+    uint64_t day = 0;
+    fp_timecode_to_frames(&(fp_timecode){23, 59, 59, fp_timecode_base(rate) - 1, drop}, rate, &day);
+    day += 1;
+    const double exact = (double)sample_rate * rate.den / rate.num;
+    int64_t *votes = malloc(s->n * sizeof *votes);
+    if (!votes) return fp_errorf(err, errlen, -ENOMEM, "out of memory");
+    size_t nv = 0;
     for (size_t i = 0; i < s->n; i++) {
         fp_timecode tc = s->f[i].tc;
-        tc.drop = s->drop;
-        if (fp_timecode_to_frames(&tc, rate, &numbers[i]))
-            return fp_errorf(err, errlen, -EBADMSG, "%s: LTC frame %zu holds no valid timecode", what, i);
-        if (i && numbers[i] != numbers[i - 1] + 1) info->jumps++;
+        tc.drop = drop;
+        if (fp_timecode_to_frames(&tc, rate, &numbers[i])) numbers[i] = UINT64_MAX;
+        if (i && (numbers[i] == UINT64_MAX || numbers[i] != numbers[i - 1] + 1)) info->jumps++;
+        if (numbers[i] == UINT64_MAX) continue;
+        int64_t back = (int64_t)llround((double)(s->f[i].start - ref) / exact);
+        votes[nv++] = (((int64_t)numbers[i] - back) % (int64_t)day + (int64_t)day) % (int64_t)day;
     }
+    if (!nv) {
+        free(votes);
+        return fp_errorf(err, errlen, -EBADMSG, "%s: no LTC frame holds a valid timecode at %u/%u fps",
+                         what, rate.num, rate.den);
+    }
+    *n_ref = (uint64_t)mode_i64(votes, nv);
+    free(votes);
     return 0;
+}
+
+/* Decode every channel of sf (one libltc decoder each) into seen[0..channels). Returns 0 or
+ * -ENOMEM with err. */
+static int decode_channels(SNDFILE *sf, const SF_INFO *si, ltc_seen *seen, char *err, size_t errlen)
+{
+    const size_t ch = (size_t)si->channels;
+    LTCDecoder **d = calloc(ch, sizeof *d);
+    float *block = malloc(1024 * ch * sizeof *block), mono[1024];
+    int rc = d && block ? 0 : -ENOMEM;
+    for (size_t c = 0; !rc && c < ch; c++)
+        if (!(d[c] = ltc_decoder_create(si->samplerate / 25, 64))) rc = -ENOMEM;
+    ltc_off_t pos = 0;
+    sf_count_t got;
+    while (!rc && (got = sf_readf_float(sf, block, 1024)) > 0) {
+        for (size_t c = 0; !rc && c < ch; c++) {
+            for (sf_count_t k = 0; k < got; k++) mono[k] = block[(size_t)k * ch + c];
+            ltc_decoder_write_float(d[c], mono, (size_t)got, pos);
+            rc = collect(d[c], &seen[c]);
+        }
+        pos += got;
+    }
+    for (size_t c = 0; d && c < ch; c++)
+        if (d[c]) ltc_decoder_free(d[c]);
+    free(d);
+    free(block);
+    return rc ? fp_errorf(err, errlen, -ENOMEM, "out of memory") : 0;
 }
 
 int fp_ltc_read_file(const char *path, fp_ltc_info *info, char *err, size_t errlen)
@@ -96,36 +180,25 @@ int fp_ltc_read_file(const char *path, fp_ltc_info *info, char *err, size_t errl
         sf_close(sf);
         return fp_errorf(err, errlen, -EBADMSG, "%s: no samples, or under 8 kHz", path);
     }
-    LTCDecoder *d = ltc_decoder_create(si.samplerate / 25, 64);
-    float *block = malloc(1024 * (size_t)si.channels * sizeof *block), mono[1024];
-    ltc_seen s = {0};
-    int rc = d && block ? 0 : fp_errorf(err, errlen, -ENOMEM, "out of memory");
-    ltc_off_t pos = 0;
-    sf_count_t got;
-    while (!rc && (got = sf_readf_float(sf, block, 1024)) > 0) {
-        for (sf_count_t k = 0; k < got; k++) mono[k] = block[k * si.channels];
-        ltc_decoder_write_float(d, mono, (size_t)got, pos);
-        pos += got;
-        if (collect(d, &s)) rc = fp_errorf(err, errlen, -ENOMEM, "out of memory");
-    }
+    ltc_seen *seen = calloc((size_t)si.channels, sizeof *seen);
+    int rc = seen ? decode_channels(sf, &si, seen, err, errlen) : fp_errorf(err, errlen, -ENOMEM, "out of memory");
     sf_close(sf);
-    free(block);
-    if (d) ltc_decoder_free(d);
-    uint64_t *numbers = rc ? NULL : malloc((s.n ? s.n : 1) * sizeof *numbers);
+    size_t best = 0; /* the channel with the most frames: LTC on any track of a recording */
+    for (size_t c = 1; seen && c < (size_t)si.channels; c++)
+        if (seen[c].n > seen[best].n) best = c;
+    ltc_seen *s = seen ? &seen[best] : NULL;
+    uint64_t *numbers = rc ? NULL : malloc((s->n ? s->n : 1) * sizeof *numbers);
     if (!rc && !numbers) rc = fp_errorf(err, errlen, -ENOMEM, "out of memory");
-    if (!rc) rc = settle(&s, si.samplerate, path, info, numbers, err, errlen);
-    if (!rc) { /* back from the first frame to sample 0, a whole number of frame periods */
-        double period = (double)si.samplerate * info->rate.den / info->rate.num;
-        uint64_t back = (uint64_t)llround((double)s.f[0].start / period);
-        uint64_t day = 0;
-        fp_timecode_to_frames(&(fp_timecode){23, 59, 59, (uint32_t)(fp_timecode_base(info->rate) - 1), s.drop},
-                              info->rate, &day);
-        day += 1;
-        uint64_t n0 = (numbers[0] + day - back % day) % day;
-        fp_timecode_from_frames(n0, info->rate, s.drop, &info->first);
+    uint64_t n0 = 0;
+    if (!rc) rc = settle(s, si.samplerate, path, 0, info, numbers, &n0, err, errlen);
+    if (!rc) {
+        fp_timecode_from_frames(n0, info->rate, fp_timecode_drop_allowed(info->rate) && 2 * s->drop_flags > s->n,
+                                &info->first);
+        info->channel = (int)best + 1;
     }
     free(numbers);
-    free(s.f);
+    for (size_t c = 0; seen && c < (size_t)si.channels; c++) free(seen[c].f);
+    free(seen);
     return rc;
 }
 
@@ -184,11 +257,14 @@ int fp_ltc_listen(const char *device, double seconds, fp_ltc_info *info, char *e
         rc = fp_errorf(err, errlen, -ETIMEDOUT, "LTC device '%s': no LTC heard in %.0f s", device, seconds);
     uint64_t *numbers = rc ? NULL : malloc(s.n * sizeof *numbers);
     if (!rc && !numbers) rc = fp_errorf(err, errlen, -ENOMEM, "out of memory");
-    if (!rc) rc = settle(&s, sr, device, info, numbers, err, errlen);
+    uint64_t n_last = 0;
+    const struct seen *last = s.n ? &s.f[s.n - 1] : NULL;
+    if (!rc) rc = settle(&s, sr, device, last->start, info, numbers, &n_last, err, errlen);
     if (!rc) { /* the next frame begins where the last decoded one ended */
-        const struct seen *last = &s.f[s.n - 1];
-        fp_timecode_from_frames(numbers[s.n - 1] + 1, info->rate, s.drop, &info->first);
+        fp_timecode_from_frames(n_last + 1, info->rate, fp_timecode_drop_allowed(info->rate) && 2 * s.drop_flags > s.n,
+                                &info->first);
         info->at_ns = read_end - (int64_t)((double)(pos - last->end) * 1e9 / sr);
+        info->channel = 1;
     }
     free(numbers);
     free(s.f);

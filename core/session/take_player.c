@@ -6,6 +6,7 @@
 #include "fp_mesh.h"
 
 #include <errno.h>
+#include <stdio.h>
 #include <stdlib.h>
 
 struct fp_take_player {
@@ -58,8 +59,17 @@ int fp_take_player_open_logged(const char *take_path, const char *mesh_path,
     /* the mesh first: the take's (checksum) before any rig is bound to it */
     {
         fp_mesh *m = NULL;
-        if ((rc = fp_mesh_load(p->mesh, &m, err, errlen)))
+        if ((rc = fp_mesh_load(p->mesh, &m, err, errlen))) {
+            if (!mesh_path && rc == -ENOENT) { /* the header's path, relative to the recording's cwd */
+                char why[1024];
+                snprintf(why, sizeof why, "%s", err);
+                fp_errorf(err, errlen, rc, "%s: the take's mesh %s is not there from this folder "
+                          "(%s): a relative path is the one given to the recording run, from the "
+                          "folder it ran in; play from there or give the mesh (--mesh FILE)",
+                          take_path, p->mesh, why);
+            }
             goto fail;
+        }
         char why[1024];
         rc = fp_take_check_positions(m->positions, m->vertex_count, p->mesh, h, why, sizeof why);
         fp_mesh_free(&m);

@@ -1,9 +1,12 @@
 /* fp_audio_testtool: the measurements behind tests/audio/test_audio.sh (issue 54, items 4-6).
  *
- *   ltc OUT.wav NUM DEN HH:MM:SS[:;]FF SECONDS
+ *   ltc OUT.wav NUM DEN HH:MM:SS[:;]FF SECONDS [glitch]
  *       LTC made with libltc's encoder at NUM/DEN fps (30000/1001 with ';': drop-frame),
  *       48 kHz mono, starting at the timecode given at sample 0; OUT.wav.txt lists the
  *       timecode of every frame encoded, as libltc counted them (ltc_encoder_get_timecode).
+ *       glitch: two frames misread as a worn tape or a lossy codec gives them (the list
+ *       keeps their true timecodes): the first with its seconds 7 on, the 13th with the
+ *       frame field one past the last of a second (24 at 24 fps).
  *   sync REF.wav OUT.wav OFFSET_S
  *       Where OUT's samples sit in REF: the lag (samples) of the best match of OUT against
  *       REF from OFFSET_S on, searched over +-0.25 s, and the relative error there. Exit 1
@@ -75,6 +78,7 @@ static float *read_wav(const char *path, SF_INFO *si)
 static int cmd_ltc(char **argv)
 {
     double fps = atof(argv[3]) / atof(argv[4]), seconds = atof(argv[6]);
+    const bool glitch = argv[7] && !strcmp(argv[7], "glitch");
     fp_timecode tc;
     if (parse_tc(argv[5], &tc)) return 2;
     const double rate = 48000;
@@ -96,7 +100,15 @@ static int cmd_ltc(char **argv)
         SMPTETimecode now;
         ltc_encoder_get_timecode(e, &now);
         fprintf(list, "%02d:%02d:%02d%c%02d\n", now.hours, now.mins, now.secs, tc.drop ? ';' : ':', now.frame);
+        const bool bad = glitch && (k == 0 || k == 12);
+        if (bad) {
+            SMPTETimecode g = now;
+            if (k == 0) g.secs = (unsigned char)((now.secs + 7) % 60);
+            else g.frame = (unsigned char)lround(fps);
+            ltc_encoder_set_timecode(e, &g);
+        }
         ltc_encoder_encode_frame(e);
+        if (bad) ltc_encoder_set_timecode(e, &now);
         ltcsnd_sample_t *buf;
         int n = ltc_encoder_get_bufferptr(e, &buf, 1);
         float out[4096];

@@ -12,7 +12,8 @@
 #  4. LTC at 25 and 29.97 drop-frame, made with libltc's encoder (crossing a dropped minute):
 #     run --timecode ltc:FILE.wav gives a take whose timecode_in and every frame's timecode
 #     equal the encoded ones (as libltc counted them); `info` on the file says its rate and
-#     the timecode at its first sample.
+#     the timecode at its first sample; also at 24 fps with two frames misread, and on
+#     the second channel of a stereo file.
 #  5. input-audio: run --input audio:speech.wav (anchored, and onehand with no hand): jaw.open above 0.3 within two frames of each
 #     syllable's onset, below 0.1 in the silences (0.25 s after each syllable's end on); the
 #     check must fail for onsets moved 0.1 s early; `plugins check` passes input-audio (its
@@ -21,7 +22,8 @@
 #  6. --audio-in file:ramp.wav (an emulated microphone heard in real time, every sample saying
 #     where it is): the take's SLATE_TNNN.mic.wav spans its frames (last frame's end, within
 #     1/60 s), is one run of the ramp without a gap or a repeat, and the header names it; an
-#     unknown device exits 64, a missing file 66, no --take-dir 64, before any work.
+#     unknown device exits 64, a missing file 66, no --take-dir 64, before any work; a run
+#     killed (-9) mid-take leaves the WAV readable up to the kill.
 #  7. export of the take of 2 (and of a stack over it) writes NAME.wav beside the animation:
 #     bit for bit the soundtrack's samples under the exported frames (from the first's
 #     soundtrack time, for the frames' span + one period), also for --range 30-90; an
@@ -121,8 +123,8 @@ refuse 65 "no LTC" --timecode "ltc:$tmp/speech.wav" --audio "$tmp/speech.wav" --
 [ ! -e "$tmp/refused.wav" ] || fail "a refused run left its --audio-out file"
 
 # ---- 4. LTC ---------------------------------------------------------------------------------
-ltc_case() { # NUM DEN START FPS NAME
-    "$tool" ltc "$tmp/$5.wav" "$1" "$2" "$3" 4 || fail "ltc encoding"
+ltc_case() { # NUM DEN START FPS NAME [glitch]
+    "$tool" ltc "$tmp/$5.wav" "$1" "$2" "$3" 4 ${6:-} || fail "ltc encoding"
     "$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv" --speed 3 --duration 3 --fps "$4" \
         --timecode "ltc:$tmp/$5.wav" --take-dir "$tmp/$5" -o "$tmp/$5.obj" -q >/dev/null 2>"$tmp/$5.err" ||
         { cat "$tmp/$5.err"; fail "run --timecode ltc:$5.wav exited $?"; }
@@ -132,6 +134,12 @@ ltc_case() { # NUM DEN START FPS NAME
 }
 ltc_case 25 1 10:00:00:00 25 ltc25
 ltc_case 30000 1001 "00:00:59;20" 29.97 ltc2997df
+# two frames misread (the first one's seconds, a frame field of 24 at 24 fps): the rate comes
+# from the frames' spacing and the timecode from most frames (before: 25 fps from the one
+# frame field of 24, and the first frame's wrong seconds as the timecode in)
+ltc_case 24 1 01:02:03:04 24 ltc24glitch glitch
+"$fp" info "$tmp/ltc24glitch.wav" | grep -q "timecode  LTC at 24 fps, 01:02:03:04 at the first sample" ||
+    fail "info of an LTC file with two misread frames: $("$fp" info "$tmp/ltc24glitch.wav" 2>&1)"
 # info on a sound file says what it is (before: "unknown format" of a recording): the LTC's
 # rate and the timecode it was encoded from, 48 kHz mono, 4 s; the speech has no LTC
 "$fp" info "$tmp/ltc25.wav" >"$tmp/info.out" 2>&1 || { cat "$tmp/info.out"; fail "info ltc25.wav exited $?"; }
@@ -142,6 +150,18 @@ grep -q "format    sound, 48000 Hz, 1 channel$" "$tmp/info.out" &&
 "$fp" info "$tmp/ltc2997df.wav" | grep -q "timecode  LTC at 29.97 fps, 00:00:59;20 at the first sample" ||
     fail "info of a drop-frame LTC file: $("$fp" info "$tmp/ltc2997df.wav" 2>&1)"
 "$fp" info "$tmp/speech.wav" | grep -q "timecode  none" || fail "info finds LTC in speech"
+# LTC on the second track of a stereo recording, a tone on the first (before: "no LTC", 65:
+# only the first channel was decoded): the take's timecodes are the LTC's, info names the track
+sox -n -r 48000 -c 1 "$tmp/tone.wav" synth 4 sine 440 vol 0.3 && sox -M "$tmp/tone.wav" "$tmp/ltc25.wav" "$tmp/ltc-ch2.wav" ||
+    fail "sox: the stereo LTC file"
+cp "$tmp/ltc25.wav.txt" "$tmp/ltc-ch2.wav.txt"
+"$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv" --speed 3 --duration 3 --fps 25 \
+    --timecode "ltc:$tmp/ltc-ch2.wav" --take-dir "$tmp/ltc-ch2" -o "$tmp/ltc-ch2.obj" -q >/dev/null 2>"$tmp/ltc-ch2.err" ||
+    { rc=$?; cat "$tmp/ltc-ch2.err"; fail "run --timecode ltc:ltc-ch2.wav (LTC on channel 2) exited $rc"; }
+"$tool" timecodes "$tmp/ltc-ch2/scene1_T001.fptake" 25 1 "$tmp/ltc-ch2.wav.txt" ||
+    fail "LTC on channel 2: the take's timecodes are not the LTC's"
+"$fp" info "$tmp/ltc-ch2.wav" | grep -q "timecode  LTC at 25 fps, 10:00:00:00 at the first sample (.* on channel 2)" ||
+    fail "info of LTC on channel 2: $("$fp" info "$tmp/ltc-ch2.wav" 2>&1)"
 
 # ---- 5. input-audio -------------------------------------------------------------------------
 "$fp" run "${pd[@]}" --mesh "$mesh" --input "audio:$tmp/speech.wav,fast=1" --take-dir "$tmp/jaw" \
@@ -192,6 +212,24 @@ cat "$tmp/mic.err"
 "$tool" ramp-check "$tmp/mic/scene1_T001.mic.wav" || fail "the microphone's WAV is not one run of its samples"
 "$fp" info "$tmp/mic/scene1_T001.fptake" | grep -q "microphone   scene1_T001.mic.wav (from file:$tmp/ramp.wav)" ||
     fail "the take's header does not name its microphone"
+# kill -9 mid-take: the take reads back, and so does its microphone up to the kill (before: it
+# was left in a hidden temporary, .scene1_T001.mic.wav.XXXXXX, and the take named a missing file)
+"$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv" --take-dir "$tmp/mickill" \
+    --audio-in "file:$tmp/ramp.wav" -o "$tmp/mickill.obj" -q >/dev/null 2>&1 &
+pid=$!
+for _ in $(seq 100); do # until the take holds 30 frames (its first chunk): a second of recording
+    sleep 0.1
+    [ -f "$tmp/mickill/scene1_T001.fptake" ] &&
+        [ "$(stat -c %s "$tmp/mickill/scene1_T001.fptake")" -gt 30000 ] && break
+done
+sleep 1
+kill -9 $pid
+wait $pid 2>/dev/null
+[ -f "$tmp/mickill/scene1_T001.mic.wav" ] || { ls -a "$tmp/mickill"; fail "kill -9: no scene1_T001.mic.wav beside the take"; }
+"$tool" ramp-check "$tmp/mickill/scene1_T001.mic.wav" || fail "kill -9: the microphone's WAV is not one run of its samples"
+mic_s=$(soxi -D "$tmp/mickill/scene1_T001.mic.wav" 2>/dev/null)
+awk -v d="$mic_s" 'BEGIN { exit !(d >= 1.0) }' || fail "kill -9: the microphone's WAV holds $mic_s s, want 1 s or more"
+echo "kill -9: the take's microphone holds $mic_s s"
 refuse 64 "no audio input device 'no-such-mic-54'" --audio-in no-such-mic-54
 refuse 66 "No such file" --audio-in "file:$tmp/missing-mic.wav"
 "$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv" --audio-in "file:$tmp/ramp.wav" -o "$tmp/refused.obj" -q \

@@ -72,6 +72,17 @@ expect 66 "$fp" takes rate takes/nope.fptake 3
 echo "not a take" >takes/junk.fptake
 expect 65 "$fp" takes rate takes/junk.fptake 3
 cmp -s "$take" kept.fptake || fail "a refused edit changed the take"
+# a take with no end chunk (its recorder killed): refused (73) pointing at --force; the
+# --force given after TAKE N as the message suggests rewrites it (before: 64, "give TAKE N")
+head -c 2000 "$take" >takes/open_T001.fptake
+expect 73 "$fp" takes rate takes/open_T001.fptake 3
+grep -q "(--force rewrites it anyway)" "$tmp/x.out" || { cat "$tmp/x.out"; fail "open take: no hint of --force"; }
+expect 0 "$fp" takes rate takes/open_T001.fptake 3 --force
+expect 0 "$fp" takes describe takes/open_T001.fptake "cut short" --force
+"$fp" info takes/open_T001.fptake 2>/dev/null | grep -q "rating       3/5" || fail "rate --force after N: no rating"
+"$fp" info takes/open_T001.fptake 2>/dev/null | grep -q "description  cut short" || fail "describe --force after TEXT"
+expect 0 "$fp" takes describe "$take" "--force"   # a TEXT alone is a TEXT
+"$fp" info "$take" | grep -q "description  --force" || fail "describe TAKE --force: not the text"
 # 0 clears the rating, "" the description
 expect 0 "$fp" takes rate "$take" 0
 expect 0 "$fp" takes describe "$take" ""

@@ -1,7 +1,8 @@
 #!/bin/bash
 # Takes end to end with the facepuppet command (the takes issue, items 3-6):
 #  1. run --take-dir --frames-out records a take; play --frames-out gives byte-identical
-#     frames; play refuses another mesh naming both; takes (table, --json) and info list it.
+#     frames; play refuses another mesh naming both, and from another folder names the
+#     take and --mesh; takes (table, --json) and info list it.
 #  2. SIGKILL of a recording run mid-take: the take reads back (no end chunk) and plays all
 #     frames but those of the last chunk, each byte-identical to the run's.
 #  3. --input take:FILE performs the take again: through the same mapping it reproduces the
@@ -82,6 +83,18 @@ cat "$tmp/play.err"
 [ $rc -eq 65 ] || fail "play on another mesh exited $rc, want 65"
 grep -q "canonical_face_model.obj.*is not the take's mesh.*generic_neutral_mesh.obj" "$tmp/play.err" ||
     fail "the mesh error does not name both meshes"
+# from another folder the header's relative mesh path is not there: 66 naming the take and
+# --mesh (before: only "../shared/...obj: cannot open"); with --mesh it plays the same frames
+abs_mesh=$(realpath "$mesh") abs_fp=$(realpath "$fp")
+(cd "$tmp" && "$abs_fp" play takes/clap_T001.fptake -o "$tmp/elsewhere.obj" 2>"$tmp/play.err")
+rc=$?
+cat "$tmp/play.err"
+[ $rc -eq 66 ] || fail "play from another folder exited $rc, want 66"
+grep -q "^facepuppet play: takes/clap_T001.fptake: the take's mesh $mesh is not there from this folder.*--mesh FILE" \
+    "$tmp/play.err" || fail "play from another folder: the error names neither the take nor --mesh"
+(cd "$tmp" && "$abs_fp" play takes/clap_T001.fptake --mesh "$abs_mesh" -o "$tmp/elsewhere.obj") ||
+    fail "play from another folder with --mesh exited $?"
+cmp -s "$tmp/run.obj" "$tmp/elsewhere.obj" || fail "play from another folder with --mesh differs from run's"
 # takes and info
 "$fp" takes "$tmp/takes" | tee "$tmp/takes.txt"
 grep -Eq "^clap +1 +[0-9:]{11} +[0-9:]{11} .* anchored .*generic_neutral_mesh.obj +ok" "$tmp/takes.txt" ||

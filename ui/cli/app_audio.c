@@ -348,15 +348,19 @@ int fp_app_sound_info(const char *path)
     if (peak > 0) printf("  peak      %.1f dBFS\n", 20.0 * log10(peak));
     else printf("  peak      silence\n");
     printf("  crc32     %08x (a take records it with --audio)\n", (unsigned)st.crc32);
+    const int st_channels = st.channels;
     fp_soundtrack_free(&st);
     fp_ltc_info ltc;
     char tc[32] = "";
-    if (!fp_ltc_read_file(path, &ltc, err, sizeof err) && !fp_timecode_format(&ltc.first, tc, sizeof tc))
-        printf("  timecode  LTC at %.5g fps, %s at the first sample (%llu frames decoded%s)\n",
-               (double)ltc.rate.num / ltc.rate.den, tc, (unsigned long long)ltc.frames,
+    if (!fp_ltc_read_file(path, &ltc, err, sizeof err) && !fp_timecode_format(&ltc.first, tc, sizeof tc)) {
+        char on[32] = ""; /* which track holds it, where there are several */
+        if (st_channels > 1) snprintf(on, sizeof on, " on channel %d", ltc.channel);
+        printf("  timecode  LTC at %.5g fps, %s at the first sample (%llu frames decoded%s%s)\n",
+               (double)ltc.rate.num / ltc.rate.den, tc, (unsigned long long)ltc.frames, on,
                ltc.jumps ? ", with jumps" : "");
-    else
-        printf("  timecode  none (no LTC on its first channel)\n");
+    } else {
+        printf("  timecode  none (no LTC on any channel)\n");
+    }
     printf("  use       --audio %s (a soundtrack), --input audio:%s (the jaw flap)%s%s\n", path, path,
            tc[0] ? ", --timecode ltc:" : "", tc[0] ? path : "");
     return FP_EXIT_OK;

@@ -43,7 +43,7 @@ static void usage(FILE *f)
                "take renamed over it, every other byte as it was. TAKE is the file (the\n"
                ".fptake may be left out). A take with no end chunk may still be recording and\n"
                "is refused unless --force.\n"
-               "  --force  rewrite a take that has no end chunk\n\n"
+               "  --force  rewrite a take that has no end chunk (before TAKE, or last)\n\n"
                "Exit status: 0 once the folder is listed, whatever the files' states (see STATE),\n"
                "or the take rewritten; 64 usage, 65 a damaged take, 66 the folder or take cannot\n"
                "be read, 73 the take cannot be rewritten (or has no end chunk, without --force).\n");
@@ -194,6 +194,12 @@ static int takes_edit(int argc, char **argv)
         if (c == 'f') e.open_ok = true;
         else if (c == 'h') { usage(stdout); return FP_EXIT_OK; }
         else { usage(stderr); return FP_EXIT_USAGE; }
+    }
+    /* options end at TAKE (a TEXT may start with '-'), but the --force that the refusal of an
+     * open take asks for is taken after TAKE N / TAKE TEXT too */
+    if (argc - optind == 3 && !strcmp(argv[optind + 2], "--force")) {
+        e.open_ok = true;
+        argc--;
     }
     if (argc - optind != 2) {
         fprintf(stderr, "facepuppet takes %s: give %s (see --help)\n", argv[0],
