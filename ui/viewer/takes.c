@@ -260,8 +260,10 @@ void fp_vtakes_draw(fp_vtakes *t, fp_render *r, int w, int h, int64_t now)
     static const float red[4] = {0.95f, 0.15f, 0.12f, 1.f}, white[4] = {0.95f, 0.95f, 0.92f, 1.f},
                        dim[4] = {0.8f, 0.85f, 0.9f, 1.f};
     char text[160];
-    /* top right, under the HUD's first line (stb_easy_font: about 6 pixels a character) */
-    float ty = 8 + 14 * scale;
+    /* top right, on the badge's row (the badge at 8, 15 x scale high, its text 4 x scale
+     * down: hud.c), where the HUD's text, which starts under the badge, never runs
+     * (stb_easy_font: about 6 pixels a character) */
+    float ty = 8 + 4 * scale;
 #define RIGHT(s) ((float)w - 8 - (float)(strlen(s) * 6 + 20) * scale)
     if (fp_session_take_recording(&t->take)) {
         fp_timecode tc;
@@ -269,8 +271,8 @@ void fp_vtakes_draw(fp_vtakes *t, fp_render *r, int w, int h, int64_t now)
         if (!fp_session_take_timecode(&t->take, now, &tc)) fp_timecode_format(&tc, tcs, sizeof tcs);
         snprintf(text, sizeof text, "REC  %s  %s take %u", tcs, t->slate, t->take.header.take);
         float tx = RIGHT(text);
-        fp_render_rect(r, w, h, tx, ty, 12 * scale, 12 * scale, red);
-        fp_render_text(r, w, h, tx + 18 * scale, ty + 2 * scale, scale, text, red);
+        fp_render_rect(r, w, h, tx, ty - 2 * scale, 11 * scale, 11 * scale, red);
+        fp_render_text(r, w, h, tx + 18 * scale, ty, scale, text, red);
     } else if (t->countdown_until) {
         double left = (double)(t->countdown_until - now) * 1e-9;
         snprintf(text, sizeof text, "recording in %.0f ...", ceil(left > 0 ? left : 0));
