@@ -427,6 +427,40 @@ static void test_hand_gone_stays_said(void **state)
     assert_true(line_has("hud ", 2, " hands ''"));            /* back: nothing to say */
 }
 
+/* live keeps what exists (README: no command overwrites a file without being asked): an
+ * --out that exists is refused before the window (exit 73, naming it) unless --force, and the
+ * S key's screenshot takes the next name no file has, where before it wrote
+ * facepuppet-shot-001.png over an earlier session's and --out replaced the file silently. */
+static void test_outputs_kept(void **state)
+{
+    (void)state;
+    FILE *f = fopen("kept.obj", "w");
+    assert_non_null(f);
+    fputs("# an earlier shape\n", f);
+    fclose(f);
+    f = fopen("facepuppet-shot-001.png", "w");
+    assert_non_null(f);
+    fputs("an earlier shot", f);
+    fclose(f);
+    assert_int_equal(live("--size 160x120 --frames 2 -o kept.obj"), 73);
+    assert_non_null(strstr(out, "--out kept.obj: exists (--force to overwrite)"));
+    assert_int_equal(live("--size 160x120 --script 'key S; wait frames 2; close'"), 0);
+    char text[64] = "";
+    f = fopen("facepuppet-shot-001.png", "r");
+    assert_non_null(f);
+    text[fread(text, 1, sizeof text - 1, f)] = '\0';
+    fclose(f);
+    assert_string_equal(text, "an earlier shot");
+    image im = load("facepuppet-shot-002.png", 160, 120);
+    free(im.px);
+    assert_int_equal(live("--size 160x120 --frames 2 -o kept.obj --force"), 0);
+    f = fopen("kept.obj", "r");
+    assert_non_null(f);
+    text[fread(text, 1, sizeof text - 1, f)] = '\0';
+    fclose(f);
+    assert_null(strstr(text, "an earlier shape"));
+}
+
 static int setup(void **state)
 {
     (void)state;
@@ -463,7 +497,7 @@ int main(void)
         cmocka_unit_test(test_badge_per_state), cmocka_unit_test(test_help_backdrop),
         cmocka_unit_test(test_messages_wrap),   cmocka_unit_test(test_tip_spheres),
         cmocka_unit_test(test_review_lets_go),  cmocka_unit_test(test_gpu_warp_rig),
-        cmocka_unit_test(test_hand_gone_stays_said),
+        cmocka_unit_test(test_hand_gone_stays_said), cmocka_unit_test(test_outputs_kept),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

@@ -413,9 +413,15 @@ static void act(viewer *v, int key)
     case GLFW_KEY_LEFT_BRACKET: (void)fp_session_set_radius(v->s, fp_session_radius(v->s) / 1.1); break; /* (at a bound: stays) */
     case GLFW_KEY_RIGHT_BRACKET: (void)fp_session_set_radius(v->s, fp_session_radius(v->s) * 1.1); break;
     case GLFW_KEY_W: v->wireframe = !v->wireframe; break;
-    case GLFW_KEY_S:
-        if (!v->shot_path && asprintf(&v->shot_path, "facepuppet-shot-%03d.png", ++v->shot_counter) < 0)
-            v->shot_path = NULL;
+    case GLFW_KEY_S: /* the next name no file has: an earlier session's shots are kept */
+        while (!v->shot_path && v->shot_counter < 9999) {
+            if (asprintf(&v->shot_path, "facepuppet-shot-%03d.png", ++v->shot_counter) < 0) {
+                v->shot_path = NULL;
+            } else if (access(v->shot_path, F_OK) == 0) {
+                free(v->shot_path);
+                v->shot_path = NULL;
+            }
+        }
         break;
     case GLFW_KEY_F: frame_mesh(v); break;
     case GLFW_KEY_H: v->hands_on = !v->hands_on; break;
