@@ -12,6 +12,7 @@ struct fp_control {
     int sock;
     int sock6;                                /* [::1] at the same port beside 127.0.0.1, or -1 */
     unsigned port;
+    char where[96];                           /* fp_udp_listener.text: "127.0.0.1:9001 and [::1]:9001" */
     int stop_pipe[2];
     pthread_t thread;
     unsigned char buf[65536];                 /* one datagram (the network thread's) */

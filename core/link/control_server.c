@@ -104,16 +104,32 @@ static int parse_spec(const char *spec, long *port, char *bind_addr, size_t n, c
     return 0;
 }
 
+/* bind= as fp_udp_listen takes it (fp_net.h): an IP literal (IPv4, IPv6 bare or in brackets,
+ * with a %scope where link-local) or localhost; -EINVAL with err otherwise. */
+static int check_bind(const char *spec, const char *bind_addr, char *err, size_t errlen)
+{
+    unsigned char a[sizeof(struct in6_addr)];
+    char text[INET6_ADDRSTRLEN + 24];
+    size_t n = strlen(bind_addr);
+    if (n >= 2 && bind_addr[0] == '[' && bind_addr[n - 1] == ']')
+        snprintf(text, sizeof text, "%.*s", (int)(n - 2), bind_addr + 1);
+    else
+        snprintf(text, sizeof text, "%s", bind_addr);
+    char *scope = strchr(text, '%');
+    if (scope && strchr(text, ':')) *scope = '\0'; /* (the scope is checked by the bind) */
+    if (strcmp(text, "localhost") == 0 || inet_pton(AF_INET, text, a) == 1 ||
+        inet_pton(AF_INET6, text, a) == 1)
+        return 0;
+    return fp_errorf(err, errlen, -EINVAL, "--control %s: bind=%s: expected an IP address "
+                     "(127.0.0.1, 0.0.0.0, ::1, ::, ...) or localhost", spec, bind_addr);
+}
+
 int fp_control_spec_check(const char *spec, char *err, size_t errlen)
 {
     long port;
     char bind_addr[64];
-    struct in_addr a;
     int rc = parse_spec(spec, &port, bind_addr, sizeof bind_addr, err, errlen);
-    if (!rc && inet_pton(AF_INET, bind_addr, &a) != 1)
-        rc = fp_errorf(err, errlen, -EINVAL, "--control %s: bind=%s: expected an IPv4 address", spec,
-                       bind_addr);
-    return rc;
+    return rc ? rc : check_bind(spec, bind_addr, err, errlen);
 }
 
 int fp_control_open(const char *spec, fp_control **out, char *warning, size_t wlen, char *err,
@@ -122,34 +138,30 @@ int fp_control_open(const char *spec, fp_control **out, char *warning, size_t wl
     *out = NULL;
     if (warning && wlen) warning[0] = '\0';
     long port = 0;
-    char bind_addr[64];
+    char bind_addr[64], why[384];
     int rc = parse_spec(spec, &port, bind_addr, sizeof bind_addr, err, errlen);
-    if (rc) return rc;
-    struct sockaddr_in sa = {.sin_family = AF_INET, .sin_port = htons((uint16_t)port)};
-    if (inet_pton(AF_INET, bind_addr, &sa.sin_addr) != 1)
-        return fp_errorf(err, errlen, -EINVAL, "--control %s: bind=%s: expected an IPv4 address",
-                         spec, bind_addr);
+    if (rc || (rc = check_bind(spec, bind_addr, err, errlen))) return rc;
+    fp_udp_listener ls;
+    if ((rc = fp_udp_listen(bind_addr, port, &ls, why, sizeof why)))
+        return fp_errorf(err, errlen, rc, "--control %s: %s", spec, why);
     fp_control *c = calloc(1, sizeof *c);
-    if (!c) return fp_errorf(err, errlen, -ENOMEM, "--control: out of memory");
-    c->sock6 = -1;
-    c->sock = socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
-    if (c->sock < 0 || bind(c->sock, (struct sockaddr *)&sa, sizeof sa) != 0) {
-        int e = errno;
-        if (c->sock >= 0) close(c->sock);
-        free(c);
-        return fp_errorf(err, errlen, e == EADDRINUSE ? -EBUSY : -e,
-                         "--control %s: cannot listen on %s:%ld (UDP): %s", spec, bind_addr, port,
-                         strerror(e));
+    if (!c) {
+        close(ls.sock);
+        if (ls.sock6 >= 0) close(ls.sock6);
+        return fp_errorf(err, errlen, -ENOMEM, "--control: out of memory");
     }
-    socklen_t len = sizeof sa;
-    getsockname(c->sock, (struct sockaddr *)&sa, &len);
-    c->port = ntohs(sa.sin_port);
-    /* on 127.0.0.1, [::1] too (best effort: IPv4 alone where that fails) */
-    if (sa.sin_addr.s_addr == htonl(INADDR_LOOPBACK)) c->sock6 = fp_udp_bind_loopback6(c->port, SOCK_NONBLOCK);
-    if ((ntohl(sa.sin_addr.s_addr) >> 24) != 127 && warning && wlen)
-        snprintf(warning, wlen, "--control listens on %s:%u beyond loopback: any host that can "
-                 "reach it can start takes and drive the session (OSC has no authentication)",
-                 bind_addr, c->port);
+    c->sock = ls.sock;
+    c->sock6 = ls.sock6;
+    c->port = ls.port;
+    snprintf(c->where, sizeof c->where, "%s", ls.text);
+    if (warning && wlen) {
+        if (!ls.loopback)
+            snprintf(warning, wlen, "--control listens on %s beyond loopback: any host that can "
+                     "reach it can start takes and drive the session (OSC has no authentication)%s%s",
+                     ls.text, ls.warning[0] ? "; " : "", ls.warning);
+        else if (ls.warning[0])
+            snprintf(warning, wlen, "--control: %s", ls.warning);
+    }
     if (pipe2(c->stop_pipe, O_CLOEXEC) != 0 ||
         pthread_create(&c->thread, NULL, control_thread, c) != 0) {
         int e = errno ? errno : EAGAIN;
@@ -164,6 +176,8 @@ int fp_control_open(const char *spec, fp_control **out, char *warning, size_t wl
 }
 
 unsigned fp_control_port(const fp_control *c) { return c ? c->port : 0; }
+
+const char *fp_control_where(const fp_control *c) { return c ? c->where : ""; }
 
 bool fp_control_hears_ipv6(const fp_control *c) { return c && c->sock6 >= 0; }
 
@@ -206,7 +220,9 @@ static int send_status(fp_control *c, const struct sockaddr *to, socklen_t tolen
     int rc = 0;
     if (size > sizeof buf || !lo_message_serialise(m, "/fp/status", buf, &size)) rc = -EMSGSIZE;
     else {
-        int sock = to->sa_family == AF_INET6 ? c->sock6 : c->sock; /* (the one it came on) */
+        /* the one it came on: [::1] beside 127.0.0.1, else the one socket (IPv4, IPv6, or
+         * [::] dual-stack, where IPv4 senders are ::ffff:a.b.c.d) */
+        int sock = to->sa_family == AF_INET6 && c->sock6 >= 0 ? c->sock6 : c->sock;
         if (sock < 0) rc = -EAFNOSUPPORT;
         else if (sendto(sock, buf, size, MSG_DONTWAIT, to, tolen) < 0) rc = -errno;
     }

@@ -18,7 +18,7 @@
  * the ring's fixed slots, at most FP_CONTROL_MAX_SUBSCRIBERS subscribers.
  *
  * Errors: 0 or a negative errno code with a message in err (fp_errorf): -EINVAL a bad SPEC,
- * -EADDRINUSE and the socket's codes when it cannot bind, -ENOMEM. Nothing is printed.
+ * -EBUSY (the port taken), -ENODEV and the socket's codes when it cannot bind, -ENOMEM. Nothing is printed.
  * Threads: create and destroy on the main thread; next, reply, push, subscribe and stats on
  * one frame thread; the network thread is the control's own.
  */
@@ -105,16 +105,25 @@ typedef struct fp_control_status {
 
 typedef struct fp_control fp_control;
 
-/** Parse SPEC "osc:PORT[,bind=ADDR]" (PORT digits 1..65535, or 0: a free port), bind a UDP
- *  socket (127.0.0.1 unless bind= names an IPv4 address; on 127.0.0.1 also [::1] at the same
- *  port, best effort: fp_control_hears_ipv6) and start the network thread.
- *  *warning (may be NULL) gets a line to print when bound beyond loopback (OSC has no
- *  authentication), else "". Returns 0 and *out, or a negative code with err. */
+/** Parse SPEC "osc:PORT[,bind=ADDR]" (PORT digits 1..65535, or 0: a free port), bind the
+ *  UDP sockets as fp_udp_listen does (fp_net.h; the osc input's bind= alike): 127.0.0.1 unless
+ *  bind= says otherwise, and on 127.0.0.1 or localhost also [::1] at the same port, best effort
+ *  (fp_control_hears_ipv6); 0.0.0.0 or :: one dual-stack socket on [::] hearing IPv4 and IPv6
+ *  senders; another IPv4 or IPv6 literal (bare or in brackets) that address alone; and start
+ *  the network thread. Replies go back on the socket a command came in on.
+ *  *warning (wlen bytes, may be NULL) gets a line to print when bound beyond loopback (OSC
+ *  has no authentication) or where the IPv6 side could not be bound, else "". Returns 0 and
+ *  *out, or a negative code with err: -EINVAL (a bad SPEC, bind= not an IP address nor
+ *  localhost), -EBUSY (the port taken), -ENODEV (an address this machine lacks), -ENOMEM. */
 int fp_control_open(const char *spec, fp_control **out, char *warning, size_t wlen, char *err,
                     size_t errlen);
 
 /** The port bound (useful with osc:0). */
 unsigned fp_control_port(const fp_control *c);
+
+/** Where it listens, for the log ("127.0.0.1:9001 and [::1]:9001", "[::]:9001 (IPv4 and
+ *  IPv6)"): the control's own text, valid until fp_control_close; "" for NULL. [any thread] */
+const char *fp_control_where(const fp_control *c);
 
 /** Whether it also hears [::1] at that port (bound on 127.0.0.1 where the machine has IPv6:
  *  a sender's "localhost" may resolve to ::1 first; replies go back the way a message came).

@@ -43,9 +43,15 @@ void fp_intents_take(fp_intents *it, size_t input, const char *name, const fp_ev
             snprintf(it->last_error, sizeof it->last_error, "%.*s", 100, st->text);
         }
         if (st->code == FP_STATUS_ERROR || st->code == FP_STATUS_WARNING ||
-            st->code == FP_STATUS_DISCONNECTED)
-            fp_slog_printf(log, st->code == FP_STATUS_ERROR ? FP_LOG_ERROR : FP_LOG_WARNING,
-                           name ? name : "input", "%.*s", (int)sizeof st->text, st->text);
+            st->code == FP_STATUS_DISCONNECTED) {
+            /* the line's source is the input's name: a text that names it itself ("osc: left
+             * hand: no data ...") is said once, not "osc: osc: ..." */
+            const char *who = name ? name : "input", *text = st->text;
+            size_t k = strlen(who);
+            if (strncmp(text, who, k) == 0 && text[k] == ':' && text[k + 1] == ' ') text += k + 2;
+            fp_slog_printf(log, st->code == FP_STATUS_ERROR ? FP_LOG_ERROR : FP_LOG_WARNING, who,
+                           "%.*s", (int)(sizeof st->text - (size_t)(text - st->text)), text);
+        }
         keep(it, ev);
         break;
     }

@@ -4,7 +4,7 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  *
- * Flow: create() parses the SPEC and binds the UDP sockets (osc_net.c: 127.0.0.1 and [::1]
+ * Flow: create() parses the SPEC and binds the UDP sockets (fp_udp_listen, fp_net.h: 127.0.0.1 and [::1]
  * unless bind= says otherwise), so that a taken port or a bad address fails before the
  * session starts. Leap bridge frames are assembled in osc_leap.c. start()
  * runs one pthread: poll() on the socket and a stop pipe (50 ms ticks); each datagram is read
@@ -19,8 +19,8 @@
 #include "fp_osc_arg.h"
 #include "osc.h"
 #include "osc_leap.h"
-#include "osc_net.h"
 #include "osc_spec.h"
+#include "fp_net.h"
 
 #include <facepuppet/plugin.h>
 #include <facepuppet/plugin_util.h>
@@ -88,13 +88,13 @@ typedef struct osc_input {
     bool mp_mirror;
     bool have_box;
     float box[6];                  /* box=: the tracking volume, mm (workspace extension) */
-    char bind_text[96];            /* where it listens, for the log (osc_listen.text) */
+    char bind_text[96];            /* where it listens, for the log (fp_udp_listener.text) */
     uint16_t port;
     /* socket and thread */
     int sock;
     uint32_t kernel_total[2]; /* SO_RXQ_OVFL's last running total, sock and sock6 */
     int sock6; /* [::1]:port beside 127.0.0.1:port (a sender's "localhost" may be ::1), -1 none
-                  (osc_net.h) */
+                  (fp_net.h) */
     int stop_pipe[2];
     pthread_t thread;
     bool running;
@@ -858,7 +858,7 @@ static void *osc_thread(void *arg)
                 count(o, FP_OSC_MALFORMED);
                 continue;
             }
-            if (!o->connected) fp__osc_sender_text(&from, o->sender, sizeof o->sender);
+            if (!o->connected) fp_udp_sender_text(&from, o->sender, sizeof o->sender);
             o->packet_pushed = false;
             handle_packet(o, o->buf, (size_t)n, recv_ns, recv_ns, 0);
             leap_end_packet(o, recv_ns);
@@ -1026,8 +1026,10 @@ static int osc_create(const fp_host *host, const char *arg, const fp_param *para
         snprintf(err, errlen, "osc: out of memory");
         return -ENOMEM;
     }
-    osc_listen ls;
-    if ((rc = fp__osc_listen(set.bind_addr, set.port, &ls, err, errlen))) {
+    fp_udp_listener ls;
+    char why[384];
+    if ((rc = fp_udp_listen(set.bind_addr, set.port, &ls, why, sizeof why))) {
+        snprintf(err, errlen, "osc: %s", why);
         free(o->lat_us);
         free(o);
         return rc;

@@ -2,7 +2,7 @@
 # End to end over loopback: `facepuppet run --input osc:PORT` while fp-osc-send replays the
 # three-claps recording to it (bundles, timetags, recorded pace); the ICT face must deform.
 # The sender reads the Leap playback original (three-claps.json.lz, core/hand/leapjson.h);
-# test_osc_live sends a CSV.
+# test_osc_live sends a CSV. Then a sender that stops: the input's "no data" line.
 # A random high port is tried, and another if it is taken (tests run in parallel).
 # SPDX-License-Identifier: GPL-3.0-or-later
 set -u
@@ -40,6 +40,23 @@ for attempt in 1 2 3 4 5; do
     grep -q "problems: none" "$tmp/run.err" || { echo "the osc input counted problems"; exit 1; }
     [ -s "$tmp/out.obj" ] || { echo "no mesh written"; exit 1; }
     echo "ok: $moved vertices moved (port $port)"
+    # A sender that stops after 20 frames: 1 s later the input says its hands have no data,
+    # the line naming the input once ("facepuppet: osc: left hand: no data from ..."; before:
+    # "facepuppet: osc: osc: left hand: ...", the session's source before the plugin's own).
+    "$build/bin/facepuppet" run --plugin-dir "$build/lib/facepuppet" -q --input "osc:$port" \
+        --duration 3 --out "$tmp/quiet.obj" >"$tmp/quiet.out" 2>"$tmp/quiet.err" &
+    run=$!
+    for i in $(seq 600); do
+        grep -q "listening on" "$tmp/quiet.err" && break
+        kill -0 $run 2>/dev/null || break
+        sleep 0.1
+    done
+    "$build/bin/fp-osc-send" --port "$port" --quiet --frames 20 "$csv" || { echo "fp-osc-send failed"; kill $run; exit 1; }
+    wait $run
+    grep "no data" "$tmp/quiet.err"
+    grep -q "^facepuppet: osc: [a-z]* hand: no data from" "$tmp/quiet.err" ||
+        { cat "$tmp/quiet.err"; echo "no line says the stopped sender's hands have no data"; exit 1; }
+    if grep -q "osc: osc:" "$tmp/quiet.err"; then echo "a line names the input twice"; exit 1; fi
     exit 0
 done
 echo "no free port found in 5 tries"

@@ -3,7 +3,8 @@
  * face, messages wrapped inside the window at 640 and 1280 px, take confirmations kept past
  * the notes that follow, fingertip spheres that turn green on the skin with their depth cue,
  * a stopped take that leaves the live face and hands shown (review only on V, left by Esc and
- * by the next engage), and --gpu-warp with the ICT face's rig against the CPU's image.
+ * by the next engage), --gpu-warp with the ICT face's rig against the CPU's image, and a hand
+ * that goes (a replay's gap, as a lost tracker or glove) said on the HUD's hands line until back.
  * Recordings (Leap joints CSV, one right hand) are written here: two poses 1.5 s apart. */
 #define _GNU_SOURCE
 #include <setjmp.h>
@@ -379,6 +380,87 @@ static void write_recording(char *path, size_t n, const char *name, double dy, d
     fclose(f);
 }
 
+/* A right hand the tracker loses for 2.5 s while the left goes on (a replay's gap, default
+ * timeout 1 s: as an osc sender's hand or a glove that stops; README "A hand the tracker
+ * loses lets go"), then finds again: both hands every 100 ms over 6 s, but no right hand
+ * from 0.5 s to 3 s. */
+static void write_gap_recording(char *path, size_t n)
+{
+    snprintf(path, n, "%s/gap.csv", tmp);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fputs("frame,timestamp_us,hand_id,hand_type,palm_x,palm_y,palm_z,palm_nx,palm_ny,palm_nz,"
+          "dir_x,dir_y,dir_z", f);
+    const char *fingers[] = {"thumb", "index", "middle", "ring", "pinky"}, *joints[] = {"mcp", "pip", "dip", "tip"};
+    for (int fi = 0; fi < 5; fi++)
+        for (int j = 0; j < 4; j++)
+            fprintf(f, ",%s_%s_x,%s_%s_y,%s_%s_z", fingers[fi], joints[j], fingers[fi], joints[j], fingers[fi], joints[j]);
+    fputs("\n", f);
+    for (int row = 0; row <= 60; row++)
+        for (int side = 0; side < 2; side++) {
+            if (side == 1 && row > 5 && row < 30) continue; /* the right hand lost */
+            double sx = side ? 1 : -1; /* the left hand mirrored, 120 mm out (hovering) */
+            fprintf(f, "%d,%d,%d,%s,%.1f,200,80,0,-1,0,0,0,-1", row, row * 100000, 7 + side,
+                    side ? "right" : "left", sx * 40);
+            for (int fi = 0; fi < 5; fi++)
+                for (int j = 0; j < 4; j++)
+                    fprintf(f, ",%.1f,%.1f,%.1f", sx * (22 + 9 * fi), fi ? 212.0 : 200.0, 50.0 - 10 * j);
+            fputs("\n", f);
+        }
+    fclose(f);
+}
+
+/* A hand that goes (its input unplugged, its tracker lost it) stays said in the HUD for as
+ * long as it is gone, with its input's word on it, and the line goes once it is back (before,
+ * the input's note faded after a few seconds like any note and nothing said the hand was
+ * gone; docs/cyberglove.md: "the HUD shows the input's state"). */
+static void test_hand_gone_stays_said(void **state)
+{
+    (void)state;
+    char gap[512];
+    write_gap_recording(gap, sizeof gap);
+    assert_int_equal(live("--size 640x400 --input 'replay:%s' --script 'wait hands; print hud; "
+                          "wait seconds 2.3; print hud; wait seconds 1.5; print hud; close'", gap), 0);
+    assert_non_null(line("hud ", 2));
+    assert_true(line_has("hud ", 0, " hands ''"));           /* (one performer, both there) */
+    assert_true(line_has("hud ", 1, " hands 'hands: left; gone: right (replay: right hand: "));
+    assert_true(line_has("hud ", 2, " hands ''"));            /* back: nothing to say */
+}
+
+/* live keeps what exists (README: no command overwrites a file without being asked): an
+ * --out that exists is refused before the window (exit 73, naming it) unless --force, and the
+ * S key's screenshot takes the next name no file has, where before it wrote
+ * facepuppet-shot-001.png over an earlier session's and --out replaced the file silently. */
+static void test_outputs_kept(void **state)
+{
+    (void)state;
+    FILE *f = fopen("kept.obj", "w");
+    assert_non_null(f);
+    fputs("# an earlier shape\n", f);
+    fclose(f);
+    f = fopen("facepuppet-shot-001.png", "w");
+    assert_non_null(f);
+    fputs("an earlier shot", f);
+    fclose(f);
+    assert_int_equal(live("--size 160x120 --frames 2 -o kept.obj"), 73);
+    assert_non_null(strstr(out, "--out kept.obj: exists (--force to overwrite)"));
+    assert_int_equal(live("--size 160x120 --script 'key S; wait frames 2; close'"), 0);
+    char text[64] = "";
+    f = fopen("facepuppet-shot-001.png", "r");
+    assert_non_null(f);
+    text[fread(text, 1, sizeof text - 1, f)] = '\0';
+    fclose(f);
+    assert_string_equal(text, "an earlier shot");
+    image im = load("facepuppet-shot-002.png", 160, 120);
+    free(im.px);
+    assert_int_equal(live("--size 160x120 --frames 2 -o kept.obj --force"), 0);
+    f = fopen("kept.obj", "r");
+    assert_non_null(f);
+    text[fread(text, 1, sizeof text - 1, f)] = '\0';
+    fclose(f);
+    assert_null(strstr(text, "an earlier shape"));
+}
+
 static int setup(void **state)
 {
     (void)state;
@@ -415,6 +497,7 @@ int main(void)
         cmocka_unit_test(test_badge_per_state), cmocka_unit_test(test_help_backdrop),
         cmocka_unit_test(test_messages_wrap),   cmocka_unit_test(test_tip_spheres),
         cmocka_unit_test(test_review_lets_go),  cmocka_unit_test(test_gpu_warp_rig),
+        cmocka_unit_test(test_hand_gone_stays_said), cmocka_unit_test(test_outputs_kept),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

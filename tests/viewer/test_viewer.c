@@ -347,6 +347,41 @@ static void test_take_rec_timeline_scrub(void **state)
     free(b.px);
 }
 
+/* The take's label at the top right ("T: record  scene take 1", then "REC  TIMECODE  scene
+ * take 1") stays on the badge's row, clear of the HUD's text under it: at 320x240 (scale 1)
+ * the badge spans rows 8..22 and the HUD's first line (the mesh, its vertices, the mapping:
+ * wider than the window's right half) starts at row 27. Before, the label was drawn at rows
+ * 22..29, over the first line's "mapping anchored" (at 960x600: rows 36..50 over 46..60). */
+static void test_take_label_clear_of_hud(void **state)
+{
+    (void)state;
+    assert_int_equal(live("--rig none --take-dir '%s/label-takes' --slate scene --script "
+                          "'wait frames 2; shot %s/label.png; key T; wait frames 3; shot %s/label-rec.png; "
+                          "key T; wait frames 1; close'", tmp, tmp, tmp), 0);
+    image a = load("label.png"), b = load("label-rec.png");
+    static const unsigned char dim[3] = {204, 217, 230}; /* takes.c's dim, 0.8 0.85 0.9 */
+    int label = 0, label_low = 0, rec = 0, rec_low = 0, white_first_line = 0;
+    for (int y = 0; y < 60; y++)
+        for (int x = a.w / 2; x < a.w; x++) {
+            const unsigned char *p = at(&a, x, y), *q = at(&b, x, y);
+            bool d = diff(p, dim) <= 3, red = q[0] > 200 && q[1] < 80 && q[2] < 80;
+            label += d;
+            label_low += d && y >= 23;
+            rec += red;
+            rec_low += red && y >= 23;
+            white_first_line += y >= 27 && y < 35 && p[0] > 235 && p[1] > 235 && p[2] > 225;
+        }
+    print_message("top right: label pixels %d (%d under the badge's row), REC pixels %d (%d under), "
+                  "the HUD's first line there %d\n", label, label_low, rec, rec_low, white_first_line);
+    assert_true(label > 40);
+    assert_true(rec > 40);
+    assert_true(white_first_line > 20); /* (the line the label used to cover is there) */
+    assert_int_equal(label_low, 0);
+    assert_int_equal(rec_low, 0);
+    free(a.px);
+    free(b.px);
+}
+
 /* Pixels of the rig overlay's colours (ui/viewer/viewer.c, key G) in an image: shaded region
  * colours told apart from the skin (which has r > g > b, r - g under 50), the hinge axis and
  * the landmarks in their exact colours (lines and points are not shaded). */
@@ -499,6 +534,7 @@ int main(void)
         cmocka_unit_test(test_drop_mesh_and_mapping_keys),
         cmocka_unit_test(test_command_line_errors),
         cmocka_unit_test(test_take_rec_timeline_scrub),
+        cmocka_unit_test(test_take_label_clear_of_hud),
         cmocka_unit_test(test_rig_overlay_and_jaw_keys),
     };
     return cmocka_run_group_tests(tests, setup, teardown);

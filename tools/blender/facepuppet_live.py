@@ -118,6 +118,7 @@ class StreamReceiver:
         self.frames = self.packets = self.bad = self.incomplete = 0
         self.last_seq = None
         self.lost = 0
+        self.restarts = 0          # streams begun again (a sender's seq 0 after others)
 
     def _ask_rcvbuf(self, asked):
         """Ask for a receive buffer of `asked` bytes: a keyframe comes in one burst (about
@@ -162,9 +163,15 @@ class StreamReceiver:
         address, args = osc_decode(data)
         self.packets += 1
         seq = args[0] & 0xffffffff
-        if self.last_seq is not None and seq != (self.last_seq + 1) & 0xffffffff:
-            self.lost += (seq - self.last_seq - 1) & 0xffffffff
-        self.last_seq = seq
+        if address == "/fp/stream/info" and seq == 0:
+            self.last_seq = None  # a sender started (again): its count starts afresh
+            self.restarts += self.packets > 1
+        gap = None if self.last_seq is None else (seq - self.last_seq - 1) & 0xffffffff
+        if gap is not None and gap >= 0x80000000:
+            pass  # a packet older than the last one (reordered): neither lost nor the newest
+        else:
+            self.lost += gap or 0
+            self.last_seq = seq
         if address == "/fp/stream/info":
             n, mmu, step, key, fps, crc, path = args[1:8]
             self.info = {"n": n, "mm_per_unit": mmu, "step": step, "key": key, "fps": fps,

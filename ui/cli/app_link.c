@@ -93,8 +93,9 @@ int fp_app_link_open(const fp_app_link_options *o, fp_app_link **out)
         l->cs.on_take = on_take;
         l->cs.state = state;
         l->cs.user = l;
-        fprintf(stderr, "facepuppet %s: --control: listening on port %u%s (docs/osc.md, Control)\n",
-                o->cmd, fp_control_port(l->ctl), fp_control_hears_ipv6(l->ctl) ? ", [::1] too" : "");
+        fprintf(stderr, "facepuppet %s: --control: listening on port %u%s (%s; docs/osc.md, Control)\n",
+                o->cmd, fp_control_port(l->ctl), fp_control_hears_ipv6(l->ctl) ? ", [::1] too" : "",
+                fp_control_where(l->ctl));
     }
     if (o->stream) {
         const struct fp_rig *rig = fp_session_rig(o->s);

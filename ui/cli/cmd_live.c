@@ -33,7 +33,7 @@ static void usage(FILE *f)
     fprintf(f,
         "usage: facepuppet live [--mesh FILE] [--input SPEC]... [--mapping SPEC] [--radius R]\n"
         "                       [--speed X] [--size WxH] [--frames N] [--screenshot FILE.png]\n"
-        "                       [--script TEXT|@FILE] [--gpu-warp] [--vsync] [--out FILE]\n"
+        "                       [--script TEXT|@FILE] [--gpu-warp] [--vsync] [--out FILE [--force]]\n"
         "                       [--audio FILE [--audio-out SPEC] [--audio-offset S]] [--timecode SRC]\n"
         "                       [--audio-in DEVICE]\n\n"
         "Perform with the face in a window: the inputs drive the mapping, the mapping drives\n"
@@ -43,7 +43,9 @@ static void usage(FILE *f)
     fp_session_opts_help(f);
     fprintf(f,
         "Options of live:\n"
-        "  -o, --out FILE         write the final shape when the window closes\n"
+        "  -o, --out FILE         write the final shape when the window closes (a file that\n"
+        "                         exists is refused before the window opens, exit 73)\n"
+        "      --force            overwrite an --out that exists\n"
         "      --size WxH         window size (default 1280x720)\n"
         "      --frames N         stop after N frames\n"
         "      --screenshot FILE  write the last frame as PNG (with --frames N: run N frames,\n"
@@ -322,9 +324,9 @@ static void print_report(const fp_viewer_report *r, bool gpu_warp)
 static int live_main(int argc, char **argv)
 {
     enum { OPT_SIZE = FP_SESSION_OPTS_FIRST_FREE, OPT_FRAMES, OPT_SHOT, OPT_SCRIPT, OPT_GPU,
-           OPT_VSYNC, OPT_TAKE_DIR, OPT_SLATE, OPT_COUNTDOWN, OPT_OVER, OPT_LAYER };
+           OPT_VSYNC, OPT_TAKE_DIR, OPT_SLATE, OPT_COUNTDOWN, OPT_OVER, OPT_LAYER, OPT_FORCE };
     static const struct option own[] = {
-        {"out", required_argument, 0, 'o'},
+        {"out", required_argument, 0, 'o'},        {"force", no_argument, 0, OPT_FORCE},
         {"size", required_argument, 0, OPT_SIZE},  {"frames", required_argument, 0, OPT_FRAMES},
         {"screenshot", required_argument, 0, OPT_SHOT}, {"script", required_argument, 0, OPT_SCRIPT},
         {"gpu-warp", no_argument, 0, OPT_GPU},     {"vsync", no_argument, 0, OPT_VSYNC},
@@ -343,6 +345,7 @@ static int live_main(int argc, char **argv)
     fp_session_opts sopt;
     fp_session_opts_init(&sopt, so);
     const char *script_arg = NULL;
+    bool force = false;
     optind = 1;
     for (int c; (c = getopt_long(argc, argv, FP_SESSION_OPTS_SHORT "o:h", opts, NULL)) != -1;) {
         int shared = fp_session_opts_parse(&sopt, c, optarg, "live");
@@ -353,6 +356,7 @@ static int live_main(int argc, char **argv)
         if (audio) continue;
         switch (c) {
         case 'o': vo.out = optarg; break;
+        case OPT_FORCE: force = true; break;
         case OPT_SIZE:
             if (!fp_app_parse_size(optarg, 16, 16384, &vo.width, &vo.height)) {
                 fprintf(stderr, "facepuppet live: --size must be WxH (16..16384), got '%s'\n", optarg);
@@ -402,6 +406,9 @@ static int live_main(int argc, char **argv)
     if (!orc && snd.audio.path && !snd.audio.offset_given) /* the line where the base heard it */
         fp_app_over_soundtrack_offset(&over, &snd.audio.offset_s);
     if (!orc) orc = fp_app_link_check("live", sopt.control, sopt.stream);
+    /* an --out that exists is refused before the window (README: no command overwrites a
+     * file without being asked) */
+    if (!orc && vo.out) orc = fp_app_check_new_output("facepuppet live", "--out", vo.out, force);
     fp_app_over_free(&over);
     if (orc) return orc;
     vo.duration_s = sopt.duration_s;

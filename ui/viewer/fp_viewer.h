@@ -19,7 +19,7 @@
  *
  * Keys: space pause, E engage, C commit, X cancel, Z undo, R reset to the loaded shape,
  * 1 anchored, 2 unanchored, [ ] radius down / up (x 1/1.1, 1.1), W wireframe, S screenshot
- * (facepuppet-shot-NNN.png), F frame the mesh, H hands and supports on/off, Tab HUD on/off,
+ * (facepuppet-shot-NNN.png, the next NNN no file has), F frame the mesh, H hands and supports on/off, Tab HUD on/off,
  * J / K open / close the jaw by 0.1 (a rig's jaw.open), G the rig on/off (regions coloured:
  * skull blue, jaw red, soft tissue green blending to red by its jaw weight; landmarks as
  * white points, the hinge axis as a cyan line through the two joints; a legend in the HUD),

@@ -24,8 +24,56 @@ void fp_vtakes_init(fp_vtakes *t, const char *dir, const char *slate, double cou
     }
 }
 
+/* A take opened for review: its reader and a session of the same mesh (no inputs). Made on
+ * the opener's thread (below) or, where that could not start, when first asked. */
+static int open_review(const char *mesh_path, const fp_plugin_path *plugin_path, const char *take_path,
+                       fp_take_reader **reader, fp_session **rs, char *msg, size_t n)
+{
+    char err[1024];
+    int rc = fp_take_reader_open(take_path, reader, err, sizeof err);
+    if (rc) {
+        snprintf(msg, n, "review: %.900s", err);
+        return rc;
+    }
+    const fp_take_header *hd = fp_take_reader_header(*reader);
+    fp_session_options ro = {.mesh_path = mesh_path, .mapping = "anchored", .radius = hd->radius,
+                             .plugin_path = plugin_path, .rig_path = hd->rig_path ? hd->rig_path : "none"};
+    if ((rc = fp_session_create(&ro, rs, err, sizeof err))) {
+        snprintf(msg, n, "review: %.900s", err);
+        fp_take_reader_close(reader);
+    }
+    return rc;
+}
+
+static void *opener_main(void *arg)
+{
+    fp_vtakes_opener *o = arg;
+    o->rc = open_review(o->mesh_path, o->plugin_path, o->take_path, &o->reader, &o->rs, o->err, sizeof o->err);
+    return NULL;
+}
+
+/* Wait for the opener; its reader and session (NULL where it failed) into *reader, *rs. */
+static int opener_join(fp_vtakes *t, fp_take_reader **reader, fp_session **rs)
+{
+    fp_vtakes_opener *o = &t->opener;
+    if (!o->running) return -ENOENT;
+    pthread_join(o->thread, NULL);
+    o->running = false;
+    *reader = o->reader;
+    *rs = o->rs;
+    o->reader = NULL;
+    o->rs = NULL;
+    return o->rc;
+}
+
 static void review_close(fp_vtakes *t)
 {
+    fp_take_reader *reader = NULL;
+    fp_session *rs = NULL;
+    if (!opener_join(t, &reader, &rs)) { /* (a review opened and never shown) */
+        fp_session_destroy(&rs);
+        fp_take_reader_close(&reader);
+    }
     fp_session_destroy(&t->rs);
     fp_take_reader_close(&t->reader);
     t->frames = t->applied = 0;
@@ -35,41 +83,39 @@ static void review_close(fp_vtakes *t)
 
 void fp_vtakes_free(fp_vtakes *t) { review_close(t); }
 
-/* Open the take just written for review, on a session of the same mesh (no inputs). */
-static int review_open(fp_vtakes *t, const fp_session_take_result *res, char *msg, size_t n)
+/* Start opening the take just written for review on the opener's thread, so that V finds it
+ * ready: a session made from the mesh file takes about half a second, which on the viewer's
+ * thread was a frame that long. Where the thread cannot start, V opens it. */
+static void opener_start(fp_vtakes *t)
 {
-    review_close(t);
-    char err[1024];
-    int rc = fp_take_reader_open(res->path, &t->reader, err, sizeof err);
-    if (rc) {
-        snprintf(msg, n, "review: %.900s", err);
-        return rc;
-    }
+    fp_vtakes_opener *o = &t->opener;
     const fp_session_options *so = t->take.so;
-    fp_session_options ro = {.mesh_path = so->mesh_path, .mapping = "anchored",
-                             .radius = fp_take_reader_header(t->reader)->radius,
-                             .plugin_path = so->plugin_path,
-                             .rig_path = fp_take_reader_header(t->reader)->rig_path
-                                             ? fp_take_reader_header(t->reader)->rig_path : "none"};
-    if ((rc = fp_session_create(&ro, &t->rs, err, sizeof err))) {
-        snprintf(msg, n, "review: %.900s", err);
-        fp_take_reader_close(&t->reader);
-        return rc;
-    }
-    t->frames = fp_take_reader_frames(t->reader);
-    t->review_take = res->take;
-    return 0;
+    if (!so->mesh_path || strlen(so->mesh_path) >= sizeof o->mesh_path ||
+        strlen(t->last.path) >= sizeof o->take_path)
+        return;
+    snprintf(o->mesh_path, sizeof o->mesh_path, "%s", so->mesh_path); /* (copies: a mesh dropped */
+    snprintf(o->take_path, sizeof o->take_path, "%s", t->last.path);  /*  on the window frees it) */
+    o->plugin_path = so->plugin_path;
+    o->reader = NULL;
+    o->rs = NULL;
+    o->running = pthread_create(&o->thread, NULL, opener_main, o) == 0;
 }
 
-/* The last take's review session, opened at the first request. */
+/* The last take's review session: the opener's, else opened now. */
 static bool review_ready(fp_vtakes *t)
 {
     if (t->rs) return true;
+    if (!t->have_last) return false;
     char err[1100];
-    if (!t->have_last || review_open(t, &t->last, err, sizeof err)) {
+    int rc = t->opener.running ? opener_join(t, &t->reader, &t->rs)
+                               : open_review(t->take.so->mesh_path, t->take.so->plugin_path, t->last.path,
+                                             &t->reader, &t->rs, err, sizeof err);
+    if (rc) {
         t->have_last = false; /* (a take that cannot be read is not tried every frame) */
         return false;
     }
+    t->frames = fp_take_reader_frames(t->reader);
+    t->review_take = t->last.take;
     return true;
 }
 
@@ -130,11 +176,13 @@ int fp_vtakes_stop(fp_vtakes *t, fp_session *s, char *msg, size_t n)
     t->blocks[t->nblocks].take = res.take;
     t->blocks[t->nblocks].frames = res.frames;
     t->nblocks++;
-    /* the review opens when asked (fp_vtakes_review): the live face and hands stay */
+    /* the review is shown when asked (fp_vtakes_review): the live face and hands stay; its
+     * session is made meanwhile */
     review_close(t);
     t->last = res;
     t->have_last = res.frames > 0;
     t->review_take = res.take; /* (the strip lights it) */
+    if (t->have_last) opener_start(t);
     return 0;
 }
 
@@ -260,8 +308,10 @@ void fp_vtakes_draw(fp_vtakes *t, fp_render *r, int w, int h, int64_t now)
     static const float red[4] = {0.95f, 0.15f, 0.12f, 1.f}, white[4] = {0.95f, 0.95f, 0.92f, 1.f},
                        dim[4] = {0.8f, 0.85f, 0.9f, 1.f};
     char text[160];
-    /* top right, under the HUD's first line (stb_easy_font: about 6 pixels a character) */
-    float ty = 8 + 14 * scale;
+    /* top right, on the badge's row (the badge at 8, 15 x scale high, its text 4 x scale
+     * down: hud.c), where the HUD's text, which starts under the badge, never runs
+     * (stb_easy_font: about 6 pixels a character) */
+    float ty = 8 + 4 * scale;
 #define RIGHT(s) ((float)w - 8 - (float)(strlen(s) * 6 + 20) * scale)
     if (fp_session_take_recording(&t->take)) {
         fp_timecode tc;
@@ -269,8 +319,8 @@ void fp_vtakes_draw(fp_vtakes *t, fp_render *r, int w, int h, int64_t now)
         if (!fp_session_take_timecode(&t->take, now, &tc)) fp_timecode_format(&tc, tcs, sizeof tcs);
         snprintf(text, sizeof text, "REC  %s  %s take %u", tcs, t->slate, t->take.header.take);
         float tx = RIGHT(text);
-        fp_render_rect(r, w, h, tx, ty, 12 * scale, 12 * scale, red);
-        fp_render_text(r, w, h, tx + 18 * scale, ty + 2 * scale, scale, text, red);
+        fp_render_rect(r, w, h, tx, ty - 2 * scale, 11 * scale, 11 * scale, red);
+        fp_render_text(r, w, h, tx + 18 * scale, ty, scale, text, red);
     } else if (t->countdown_until) {
         double left = (double)(t->countdown_until - now) * 1e-9;
         snprintf(text, sizeof text, "recording in %.0f ...", ceil(left > 0 ? left : 0));

@@ -8,7 +8,11 @@
  * sets through a second session on the same mesh (fp_session_play_frame, as `facepuppet
  * play`), so the live session goes on untouched.
  *
- * Threads: the viewer's (the session thread). Recording: core/session/fp_session_take.h. */
+ * Once a take is written its review's session is made on a thread of its own (a session of
+ * the mesh file takes about half a second, which V used to cost as one frame); V joins it.
+ *
+ * Threads: the viewer's (the session thread), and that opener's, which touches only its own
+ * fp_vtakes_opener until joined. Recording: core/session/fp_session_take.h. */
 #ifndef FP_UI_TAKES_H
 #define FP_UI_TAKES_H
 
@@ -16,11 +20,24 @@
 #include "fp_viewer.h"
 #include "render.h"
 
+#include <pthread.h>
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 
 #define FP_VTAKES_BLOCKS 64
+
+/* The review's session being made on a thread of its own once a take is written (takes.c). */
+typedef struct fp_vtakes_opener {
+    pthread_t thread;
+    bool running;                 /* started and not joined */
+    char mesh_path[4096], take_path[4096];
+    const fp_plugin_path *plugin_path;
+    fp_take_reader *reader;       /* what it made (the thread's until joined) */
+    fp_session *rs;
+    int rc;
+    char err[1100];
+} fp_vtakes_opener;
 
 typedef struct fp_vtakes {
     bool enabled;                 /* a take folder was given */
@@ -42,6 +59,7 @@ typedef struct fp_vtakes {
     char slate[FP_TAKE_SLATE_MAX];
     const fp_viewer_sound *sound; /* the take hooks (fp_viewer.h), or NULL */
     int64_t origin_ns;            /* the take recording's (or the last one's) start */
+    fp_vtakes_opener opener;      /* the last take's review, being opened */
 } fp_vtakes;
 
 /** Set up: the options' take folder, slate, countdown; puts the record sink into *so (the

@@ -8,6 +8,7 @@
 #include "fp_error.h"
 #include "fp_stats.h"
 #include "hud.h"
+#include "hud_hands.h"
 #include "overlay.h"
 #include "png_file.h"
 #include "render.h"
@@ -113,6 +114,7 @@ typedef struct viewer {
     double mx, my;
     int drag;                 /* 0 none, 1 orbit, 2 pan */
     fp_hud_msgs msgs;         /* the HUD's message stack (hud.h) */
+    fp_hud_hands hands;       /* the HUD's hands line: who is there, who is gone (hud_hands.h) */
     fp_tip_cues cues;         /* the fingertips' nearest skin points this frame (overlay.h) */
 
     /* measurements */
@@ -176,6 +178,7 @@ static void on_session_log(void *user, int level, const char *source, const char
     char text[FP_HUD_MSG_LEN];
     snprintf(text, sizeof text, "%s: %s", source, message);
     fp_hud_say(&v->msgs, FP_HUD_NOTE, fp_now_ns(), text);
+    fp_hud_hands_log(&v->hands, v->so.inputs, v->so.input_count, level, source, message);
     if (!(v->opt->quiet && fp_slog_is_note(level, source)))
         fprintf(stderr, "facepuppet live: %s: %s\n", source, message);
 }
@@ -277,6 +280,7 @@ static int open_session(viewer *v, char *err, size_t errlen)
     fp_session_destroy(&v->s);
     v->s = s;
     for (int h = 0; h < FP_HANDS; h++) v->seen_time[h] = v->pending_time[h] = 0;
+    memset(&v->hands, 0, sizeof v->hands); /* (a new session: its inputs open afresh) */
     if ((rc = geometry_alloc(v))) {
         snprintf(err, errlen, "viewer: out of memory for %zu vertices", v->n);
         return rc;
@@ -409,9 +413,15 @@ static void act(viewer *v, int key)
     case GLFW_KEY_LEFT_BRACKET: (void)fp_session_set_radius(v->s, fp_session_radius(v->s) / 1.1); break; /* (at a bound: stays) */
     case GLFW_KEY_RIGHT_BRACKET: (void)fp_session_set_radius(v->s, fp_session_radius(v->s) * 1.1); break;
     case GLFW_KEY_W: v->wireframe = !v->wireframe; break;
-    case GLFW_KEY_S:
-        if (!v->shot_path && asprintf(&v->shot_path, "facepuppet-shot-%03d.png", ++v->shot_counter) < 0)
-            v->shot_path = NULL;
+    case GLFW_KEY_S: /* the next name no file has: an earlier session's shots are kept */
+        while (!v->shot_path && v->shot_counter < 9999) {
+            if (asprintf(&v->shot_path, "facepuppet-shot-%03d.png", ++v->shot_counter) < 0) {
+                v->shot_path = NULL;
+            } else if (access(v->shot_path, F_OK) == 0) {
+                free(v->shot_path);
+                v->shot_path = NULL;
+            }
+        }
         break;
     case GLFW_KEY_F: frame_mesh(v); break;
     case GLFW_KEY_H: v->hands_on = !v->hands_on; break;
@@ -640,17 +650,21 @@ static void run_script(viewer *v)
             fflush(stdout);
             break;
         }
-        case FP_SCRIPT_PRINT_HUD:
+        case FP_SCRIPT_PRINT_HUD: {
+            char hands[FP_HUD_MSG_LEN + 600];
+            fp_hud_hands_line(&v->hands, v->s, hands, sizeof hands);
             printf("hud frame %llu state %s commits %lu scale %.4g mm per mesh unit (%s) badge %s "
-                   "touching %zu of %zu nearest %.2f mm messages %zu drawn %s\n",
+                   "touching %zu of %zu nearest %.2f mm messages %zu drawn %s hands '%s'\n",
                    (unsigned long long)v->frames, hud_state(v), fp_session_commits(v->s),
                    fp_session_head(v->s)->mm_per_unit, fp_session_head(v->s)->how,
                    fp_hud_badge_name(hud_badge(v)), v->cues.touch_count, v->cues.count,
                    v->cues.nearest * fp_session_head(v->s)->mm_per_unit,
                    fp_hud_live(&v->msgs, fp_now_ns(), (const fp_hud_msg *[FP_HUD_MSGS]){0}, NULL),
-                   v->gpu_now ? (v->warp_solved ? "gpu-warp" : "gpu-surface") : "cpu");
+                   v->gpu_now ? (v->warp_solved ? "gpu-warp" : "gpu-surface") : "cpu",
+                   hands[0] ? hands + 1 : "");
             fflush(stdout);
             break;
+        }
         case FP_SCRIPT_PRINT_MESSAGES: {
             static const char *const kinds[FP_HUD_KINDS] = {"take", "setting", "note", "info"};
             const fp_hud_msg *live[FP_HUD_MSGS];
@@ -702,23 +716,6 @@ static const char help_text[] =
     "spheres: green where a fingertip's support reaches the skin;\n"
     "lines: each fingertip to its nearest skin point";
 
-/* Whose hands are there, with several performers (inputs' performer=NAME): "\nhands: first
- * left right, B right"; "" with one performer. */
-static void hud_hands(const viewer *v, char *buf, size_t len)
-{
-    size_t np = fp_session_performer_count(v->s), used;
-    buf[0] = 0;
-    if (np < 2) return;
-    snprintf(buf, len, "\nhands:");
-    for (size_t p = 0; p < np; p++) {
-        const char *name = fp_session_performer_name(v->s, p);
-        bool l = fp_session_performer_hand(v->s, p, FP_HAND_LEFT), r = fp_session_performer_hand(v->s, p, FP_HAND_RIGHT);
-        used = strlen(buf);
-        snprintf(buf + used, len - used, "%s %s %s", p ? "," : "", name && name[0] ? name : "first",
-                 l && r ? "left right" : l ? "left" : r ? "right" : "none");
-    }
-}
-
 static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
 {
     double recent = 0;
@@ -735,9 +732,9 @@ static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
     if (v->cues.count && isfinite(v->cues.nearest))
         snprintf(tips, sizeof tips, "\nfingertips: %zu of %zu touching, nearest %.1f mm from the skin",
                  v->cues.touch_count, v->cues.count, v->cues.nearest * head->mm_per_unit);
-    char hands[200];
-    hud_hands(v, hands, sizeof hands);
-    char text[2048], wrapped[4096];
+    char hands[FP_HUD_MSG_LEN + 600];
+    fp_hud_hands_line(&v->hands, v->s, hands, sizeof hands);
+    char text[4096], wrapped[8192];
     snprintf(text, sizeof text,
              "%s  %zu vertices  mapping %s\n"
              "%.3g mm per mesh unit, %.*s\n"

@@ -1,11 +1,10 @@
 /*
- * osc_net.c: the input-osc plugin's listening sockets (osc_net.h, docs/osc.md "bind").
+ * fp_net_listen.c: a UDP listener on the address a user gave (fp_net.h, fp_udp_listen): the osc
+ * input's bind= and --control's bind= (docs/osc.md).
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #define _GNU_SOURCE
-#include "osc_net.h"
-
 #include "fp_net.h"
 
 #include <arpa/inet.h>
@@ -87,7 +86,7 @@ static int parse_bind(const char *bind_addr, struct sockaddr_storage *sa, sockle
 
 /* Opens out->sock (and out->sock6) for kind; 0 or -errno (out->sock closed). */
 static int open_kind(int kind, const char *bind_addr, struct sockaddr_storage *sa,
-                     socklen_t len, long port, osc_listen *out)
+                     socklen_t len, long port, fp_udp_listener *out)
 {
     const bool asked_v6 = sa->ss_family == AF_INET6;
     if (asked_v6)
@@ -127,7 +126,7 @@ static int open_kind(int kind, const char *bind_addr, struct sockaddr_storage *s
     return 0;
 }
 
-int fp__osc_listen(const char *bind_addr, long port, osc_listen *out, char *err, size_t errlen)
+int fp_udp_listen(const char *bind_addr, long port, fp_udp_listener *out, char *err, size_t errlen)
 {
     memset(out, 0, sizeof *out);
     out->sock = out->sock6 = -1;
@@ -135,13 +134,13 @@ int fp__osc_listen(const char *bind_addr, long port, osc_listen *out, char *err,
     socklen_t len = 0;
     int kind = parse_bind(bind_addr, &sa, &len);
     if (kind < 0) {
-        snprintf(err, errlen, "osc: bind=%s: expected an IP address (127.0.0.1, 0.0.0.0, ::1, ::, "
+        snprintf(err, errlen, "bind=%s: expected an IP address (127.0.0.1, 0.0.0.0, ::1, ::, "
                  "...) or localhost", bind_addr);
         return -EINVAL;
     }
     int rc = open_kind(kind, bind_addr, &sa, len, port, out);
     if (rc < 0) {
-        snprintf(err, errlen, "osc: cannot listen on %s:%ld (UDP): %s", bind_addr, port, strerror(-rc));
+        snprintf(err, errlen, "cannot listen on %s:%ld (UDP): %s", bind_addr, port, strerror(-rc));
         out->sock = -1;
         return open_code(-rc);
     }
@@ -154,7 +153,7 @@ int fp__osc_listen(const char *bind_addr, long port, osc_listen *out, char *err,
     return 0;
 }
 
-void fp__osc_sender_text(const struct sockaddr_storage *from, char *text, size_t textlen)
+void fp_udp_sender_text(const struct sockaddr_storage *from, char *text, size_t textlen)
 {
     char addr[INET6_ADDRSTRLEN] = "?";
     unsigned port = 0;
