@@ -167,6 +167,9 @@ grep -q "range ' 5-10': ' 5' is neither a frame index nor a timecode" "$tmp/x.ou
 expect 64 "$fp" export "$take" --format pc2 --range "5- 10"
 expect 0 "$fp" export "$take" --format pc2 --range +5-+6 --out "$tmp/plus.pc2" -q
 expect 66 "$fp" export "$tmp/none.fptake" --format pc2
+expect 64 "$fp" export "$take" --format pc2 --out ""
+grep -qx "facepuppet export: --out: give a file or folder name (it is empty)" "$tmp/x.out" ||
+    { cat "$tmp/x.out"; fail "--out '': not said as an empty name"; }
 # A write that fails (over the file size limit, write() gets EFBIG) names the file once, after
 # the command's one prefix, in every format: glb and gltf said "facepuppet export: export:
 # FILE: write failed: ...". play --export names its option, as on opening.
