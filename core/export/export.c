@@ -604,10 +604,9 @@ static double frame_rate(const fp_exporter *x)
  * above 1 later in a take played as 0 or 1, the face up to 27 mm off in Blender while the
  * file was right. Per target k, weights in [lo, hi]: weight' = (w - a) / s, target' =
  * s x target, with s = max(hi, 1), a = 0 where lo >= 0 (a scale where hi > 1); s = lo, a = 0
- * where hi <= 0 (the
- * sign turned); else s = hi - lo, a = lo, and a x target goes into one more target (the
- * last, "offset") whose weight is 1 at every key (0 in mesh.weights: the rest shape stays the
- * loaded face). *T (K x m) and *W (F x K, malloc()ed) are replaced where anything changes;
+ * where hi <= 0 (the sign turned); else s = hi - lo, a = lo, and a x target goes into one
+ * more target (the last, "offset") whose weight is 1 at every key (0 in mesh.weights: the
+ * rest shape stays the loaded face). *T (K x m) and *W (F x K, malloc()ed) are replaced where anything changes;
  * *K is one more with an offset. Returns 1 (changed), 0 (the weights were in [0, 1]) or
  * -ENOMEM (nothing changed). */
 static int unit_weights(float **T, float **W, size_t F, size_t m, size_t *K)
