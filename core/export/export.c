@@ -603,11 +603,12 @@ static double frame_rate(const fp_exporter *x)
  * (io_scene_gltf2 gltf2_blender_animation_weight.py: min(coords[1:2])): a weight below 0 or
  * above 1 later in a take played as 0 or 1, the face up to 27 mm off in Blender while the
  * file was right. Per target k, weights in [lo, hi]: weight' = (w - a) / s, target' =
- * s x target, with s = hi, a = 0 where lo >= 0 (a scale); s = lo, a = 0 where hi <= 0 (the
- * sign turned); else s = hi - lo, a = lo, and a x target goes into one more target (the
- * last, "offset") whose weight is 1 at every key (0 in mesh.weights: the rest shape stays the
- * loaded face). *T (K x m) and *W (F x K, malloc()ed) are replaced where anything changes;
- * *K is one more with an offset. Returns 0 or -ENOMEM (nothing changed). */
+ * s x target, with s = max(hi, 1), a = 0 where lo >= 0 (a scale where hi > 1); s = lo, a = 0
+ * where hi <= 0 (the sign turned); else s = hi - lo, a = lo, and a x target goes into one
+ * more target (the last, "offset") whose weight is 1 at every key (0 in mesh.weights: the
+ * rest shape stays the loaded face). *T (K x m) and *W (F x K, malloc()ed) are replaced where anything changes;
+ * *K is one more with an offset. Returns 1 (changed), 0 (the weights were in [0, 1]) or
+ * -ENOMEM (nothing changed). */
 static int unit_weights(float **T, float **W, size_t F, size_t m, size_t *K)
 {
     const size_t k0 = *K;
@@ -659,7 +660,7 @@ static int unit_weights(float **T, float **W, size_t F, size_t m, size_t *K)
     free(a);
     free(sc);
     free(off);
-    return 0;
+    return change ? 1 : 0;
 }
 
 /* The compression (compress_f) of D (F x m) and its weights into [0, 1] (unit_weights):
@@ -678,10 +679,11 @@ static int compress_unit(const fp_exporter *x, const float *D, size_t F, size_t 
         if (rc)
             return rc;
         *k_pc = *K;
-        if (unit_weights(T, W, F, m, K))
+        const int changed = unit_weights(T, W, F, m, K);
+        if (changed < 0)
             return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", x->path);
-        /* (the error of the values written: the targets rescaled in float32) */
-        *max_err = recon_error(D, F, m, *T, *W, *K);
+        if (changed)   /* (the error of the values written: targets rescaled in float32) */
+            *max_err = recon_error(D, F, m, *T, *W, *K);
         if (!cap || *K <= cap || kmax <= 1)
             return 0;
         free(*T);

@@ -167,6 +167,9 @@ grep -q "range ' 5-10': ' 5' is neither a frame index nor a timecode" "$tmp/x.ou
 expect 64 "$fp" export "$take" --format pc2 --range "5- 10"
 expect 0 "$fp" export "$take" --format pc2 --range +5-+6 --out "$tmp/plus.pc2" -q
 expect 66 "$fp" export "$tmp/none.fptake" --format pc2
+expect 64 "$fp" export "$take" --format pc2 --out ""
+grep -qx "facepuppet export: --out: give a file or folder name (it is empty)" "$tmp/x.out" ||
+    { cat "$tmp/x.out"; fail "--out '': not said as an empty name"; }
 # A write that fails (over the file size limit, write() gets EFBIG) names the file once, after
 # the command's one prefix, in every format: glb and gltf said "facepuppet export: export:
 # FILE: write failed: ...". play --export names its option, as on opening.
@@ -214,7 +217,16 @@ expect 73 "$fp" export "${pd[@]}" "$tmp/self.fpstack" --format pc2 --out "$tmp/s
 grep -q "is a take of the stack being read" "$tmp/x.out" || { cat "$tmp/x.out"; fail "a stack's take as --out"; }
 [ "$(cksum <"$tmp/self2.fptake")" = "$sum2" ] || fail "export of a stack wrote over its layer's take"
 expect 0 "$fp" export "${pd[@]}" "$tmp/self.fpstack" --format pc2 --out "$tmp/stack.pc2" -q
-echo "an output that is an input (take, link to it, a stack's take, the mesh): refused, 73"
+# the soundtrack: --out beside it with its name (line.glb -> line.wav) would write the WAV over it
+python3 -c "import wave; w = wave.open('$tmp/line.wav', 'wb'); w.setnchannels(1); w.setsampwidth(2);
+w.setframerate(8000); w.writeframes(bytes(2 * 8000 * 2)); w.close()"
+expect 0 "$fp" run "${pd[@]}" --mesh "$tmp/self.obj" --input "replay:$data/hands/leap-motion/grab_joints_mm.csv,fast=1" \
+    --duration 0.5 --take-dir "$tmp/aud" --slate aud --audio "$tmp/line.wav" --audio-out null -q -o "$tmp/aud.obj"
+wsum=$(cksum <"$tmp/line.wav")
+expect 73 "$fp" export "${pd[@]}" "$tmp/aud/aud_T001.fptake" --format glb --out "$tmp/line.glb" --force -q
+grep -q "line.wav: is the take's soundtrack being read" "$tmp/x.out" || { cat "$tmp/x.out"; fail "the soundtrack as the WAV"; }
+[ "$(cksum <"$tmp/line.wav")" = "$wsum" ] && [ ! -e "$tmp/line.glb" ] || fail "the soundtrack was written over"
+echo "an output that is an input (take, link to it, a stack's take, the mesh, the soundtrack): refused, 73"
 # --max-targets K: at most K targets in the file, the offset that keeps the weights in [0, 1]
 # counted (it made K + 1); the weights in [0, 1] all the same (fp-export-check)
 for k in 2 3 5; do

@@ -316,6 +316,10 @@ static int export_parse(int argc, char **argv, export_args *a)
         return FP_EXIT_USAGE;
     }
     a->take_path = argv[optind];
+    if (a->out && !*a->out) {   /* (said "export: no mesh, options or output path") */
+        fprintf(stderr, "facepuppet export: --out: give a file or folder name (it is empty)\n");
+        return FP_EXIT_USAGE;
+    }
     if (!a->format) {
         fprintf(stderr, "facepuppet export: give --format gltf|glb|pc2|mdd|obj-seq|png-seq\n");
         return FP_EXIT_USAGE;
