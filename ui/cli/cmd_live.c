@@ -149,14 +149,17 @@ static void live_opened(void *user, fp_session *s, struct fp_session_take *take)
     c->s = s;
     c->take = take;
     if ((c->link_opt.control || c->link_opt.stream) && !c->link_status) {
-        if (c->link) { /* a dropped mesh: the link follows the new session */
-            fp_app_link_close(&c->link);
-            fprintf(stderr, "facepuppet live: --control/--stream opened again on the new mesh\n");
-        }
         c->link_opt.s = s;
         c->link_opt.take = take && take->opt.dir ? take : NULL;
-        if ((c->link_status = fp_app_link_open(&c->link_opt, &c->link)) == 0)
+        if (c->link) { /* a dropped mesh: the control surface stays (its port, its subscribers),
+                        * the stream opens again on the new mesh, named by its path */
+            if (take && take->so && take->so->mesh_path) c->link_opt.mesh_path = take->so->mesh_path;
+            c->link_status = fp_app_link_reopen(c->link, s, c->link_opt.take, c->link_opt.mesh_path, fp_now_ns());
+            if (!c->link_status && c->link_opt.stream)
+                fprintf(stderr, "facepuppet live: --stream opened again on the new mesh\n");
+        } else if ((c->link_status = fp_app_link_open(&c->link_opt, &c->link)) == 0) {
             fp_app_link_origin(c->link, fp_now_ns());
+        }
     }
     if (c->installed) return;
     c->installed = true;
