@@ -138,6 +138,15 @@ static void live_frame_end(void *user, int64_t now_ns)
     fp_app_link_after(c->link, now_ns, c->frame++);
 }
 
+/* Paused (space): the commands answered and the status pushed, as between frames (before,
+ * nothing was answered until the performer went on). */
+static void live_frame_paused(void *user, int64_t now_ns)
+{
+    live_stuck *c = user;
+    fp_app_link_before(c->link, now_ns, c->frame);
+    fp_app_link_idle(c->link, now_ns, c->frame);
+}
+
 static void live_take_over(void *user, int sig, bool in_plugin);
 
 /* fp_viewer_options.opened: the session and take for the take-over; the first time, the
@@ -284,6 +293,7 @@ static void live_link_setup(live_stuck *c, fp_viewer_options *vo, const fp_sessi
     vo->stop_requested = live_stop_requested;
     vo->frame_begin = live_frame_begin;
     vo->frame_end = live_frame_end;
+    vo->frame_paused = live_frame_paused;
 }
 
 /* --script @FILE: the file's text into *text (the caller frees it); TEXT itself: *text NULL.
