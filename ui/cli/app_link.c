@@ -70,6 +70,48 @@ static const char *state(void *user, double *time_s)
     return l->state ? l->state(l->user, time_s) : NULL;
 }
 
+/* The stream of l->o.s's mesh (l->o.mesh_path names it), its rig's channels. 0 or the exit
+ * status (said). */
+static int stream_open(fp_app_link *l)
+{
+    const fp_app_link_options *o = &l->o;
+    char err[1024];
+    int rc;
+    const struct fp_rig *rig = fp_session_rig(o->s);
+    l->nchannels = 0;
+    for (size_t i = 0; rig && i < fp_rig_channel_count(rig) && l->nchannels < FP_STREAM_MAX_CHANNELS; i++) {
+        fp_rig_channel_desc d;
+        if (!fp_rig_channel_get(rig, i, &d)) l->channels[l->nchannels++] = d.name;
+    }
+    const float *neutral = fp_session_loaded(o->s);
+    size_t n = fp_session_vertex_count(o->s);
+    fp_stream_options so = {.spec = o->stream, .neutral = neutral, .n = n,
+                            .mm_per_unit = fp_session_head(o->s)->mm_per_unit,
+                            .mesh_path = o->mesh_path,
+                            .mesh_crc32 = fp_take_crc32_positions(neutral, n),
+                            .channels = l->channels, .nchannels = l->nchannels, .fps = o->fps,
+                            .wait = strcmp(o->cmd, "live") != 0};
+    if ((rc = fp_stream_open(&so, &l->stream, err, sizeof err))) {
+        fprintf(stderr, "facepuppet %s: --stream %s\n", o->cmd, err);
+        return fp_app_exit_code(rc, FP_APP_OUTPUT);
+    }
+    if (!o->quiet) {
+        fp_stream_describe(l->stream, err, sizeof err);
+        fprintf(stderr, "facepuppet %s: --stream: %s\n", o->cmd, err);
+    }
+    return 0;
+}
+
+/* The stream's summary line, then closed. */
+static void stream_close(fp_app_link *l)
+{
+    if (!l->stream) return;
+    char line[512];
+    fp_stream_summary(l->stream, line, sizeof line);
+    fprintf(stderr, "facepuppet %s: --stream: %s\n", l->o.cmd, line); /* (-q or not) */
+    fp_stream_close(&l->stream);
+}
+
 int fp_app_link_open(const fp_app_link_options *o, fp_app_link **out)
 {
     *out = NULL;
@@ -97,30 +139,10 @@ int fp_app_link_open(const fp_app_link_options *o, fp_app_link **out)
                 o->cmd, fp_control_port(l->ctl), fp_control_hears_ipv6(l->ctl) ? ", [::1] too" : "",
                 fp_control_where(l->ctl));
     }
-    if (o->stream) {
-        const struct fp_rig *rig = fp_session_rig(o->s);
-        for (size_t i = 0; rig && i < fp_rig_channel_count(rig) && l->nchannels < FP_STREAM_MAX_CHANNELS; i++) {
-            fp_rig_channel_desc d;
-            if (!fp_rig_channel_get(rig, i, &d)) l->channels[l->nchannels++] = d.name;
-        }
-        const float *neutral = fp_session_loaded(o->s);
-        size_t n = fp_session_vertex_count(o->s);
-        fp_stream_options so = {.spec = o->stream, .neutral = neutral, .n = n,
-                                .mm_per_unit = fp_session_head(o->s)->mm_per_unit,
-                                .mesh_path = o->mesh_path,
-                                .mesh_crc32 = fp_take_crc32_positions(neutral, n),
-                                .channels = l->channels, .nchannels = l->nchannels, .fps = o->fps,
-                                .wait = strcmp(o->cmd, "live") != 0};
-        if ((rc = fp_stream_open(&so, &l->stream, err, sizeof err))) {
-            fprintf(stderr, "facepuppet %s: --stream %s\n", o->cmd, err);
-            fp_control_close(&l->ctl);
-            free(l);
-            return fp_app_exit_code(rc, FP_APP_OUTPUT);
-        }
-        if (!o->quiet) {
-            fp_stream_describe(l->stream, err, sizeof err);
-            fprintf(stderr, "facepuppet %s: --stream: %s\n", o->cmd, err);
-        }
+    if (o->stream && (rc = stream_open(l))) {
+        fp_control_close(&l->ctl);
+        free(l);
+        return rc;
     }
     *out = l;
     return 0;
@@ -187,6 +209,22 @@ void fp_app_link_set_session(fp_app_link *l, fp_session *s)
     l->cs.s = s;
 }
 
+int fp_app_link_reopen(fp_app_link *l, fp_session *s, fp_session_take *take, const char *mesh_path,
+                       int64_t t0_ns)
+{
+    if (!l) return 0;
+    l->o.s = s;
+    l->o.take = take;
+    l->o.mesh_path = mesh_path;
+    l->cs.s = s;
+    l->cs.take = take;
+    if (!l->o.stream) return 0;
+    stream_close(l);
+    int rc = stream_open(l);
+    if (!rc) fp_stream_origin(l->stream, t0_ns);
+    return rc;
+}
+
 bool fp_app_link_quit(const fp_app_link *l) { return l && l->cs.quit; }
 
 void fp_app_link_close(fp_app_link **lp)
@@ -210,12 +248,7 @@ void fp_app_link_close(fp_app_link **lp)
                     (unsigned long long)st.problems[FP_CTL_QUEUE_FULL]);
         fp_control_close(&l->ctl);
     }
-    if (l->stream) {
-        char line[512];
-        fp_stream_summary(l->stream, line, sizeof line);
-        fprintf(stderr, "facepuppet %s: --stream: %s\n", l->o.cmd, line); /* (-q or not) */
-        fp_stream_close(&l->stream);
-    }
+    stream_close(l);
     free(l);
     *lp = NULL;
 }
@@ -244,6 +277,12 @@ void fp_app_link_after_frame(fp_app_link *l, int64_t now_ns, uint64_t frame, con
     (void)l; (void)now_ns; (void)frame; (void)pos; (void)timecode;
 }
 void fp_app_link_set_session(fp_app_link *l, fp_session *s) { (void)l; (void)s; }
+int fp_app_link_reopen(fp_app_link *l, fp_session *s, fp_session_take *take, const char *mesh_path,
+                       int64_t t0_ns)
+{
+    (void)l; (void)s; (void)take; (void)mesh_path; (void)t0_ns;
+    return 0;
+}
 void fp_app_link_idle(fp_app_link *l, int64_t now_ns, uint64_t frame) { (void)l; (void)now_ns; (void)frame; }
 bool fp_app_link_quit(const fp_app_link *l) { (void)l; return false; }
 void fp_app_link_set_transport(fp_app_link *l, fp_app_link_transport_fn fn, fp_app_link_state_fn st,

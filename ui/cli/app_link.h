@@ -52,6 +52,14 @@ void fp_app_link_idle(fp_app_link *l, int64_t now_ns, uint64_t frame);
 /** The session the commands and the stream read from now on (play's seek reopens it); the
  *  same vertex count. */
 void fp_app_link_set_session(fp_app_link *l, fp_session *s);
+/** Another session on another mesh (live: a mesh dropped on the window): the control surface
+ *  stays as it is (its socket, port and subscribers; its commands and status from now on on
+ *  s and take), the stream is closed (its line said) and opened again on s's mesh, named
+ *  mesh_path (the caller's, kept), its frame times from t0_ns: a receiver sees a new stream
+ *  (seq 0, an info and a keyframe). Returns 0 or the exit status of the stream's opening
+ *  (said; the stream is then gone). NULL l: 0. */
+int fp_app_link_reopen(fp_app_link *l, fp_session *s, fp_session_take *take, const char *mesh_path,
+                       int64_t t0_ns);
 /** True once /fp/quit was received. */
 bool fp_app_link_quit(const fp_app_link *l);
 

@@ -138,6 +138,15 @@ static void live_frame_end(void *user, int64_t now_ns)
     fp_app_link_after(c->link, now_ns, c->frame++);
 }
 
+/* Paused (space): the commands answered and the status pushed, as between frames (before,
+ * nothing was answered until the performer went on). */
+static void live_frame_paused(void *user, int64_t now_ns)
+{
+    live_stuck *c = user;
+    fp_app_link_before(c->link, now_ns, c->frame);
+    fp_app_link_idle(c->link, now_ns, c->frame);
+}
+
 static void live_take_over(void *user, int sig, bool in_plugin);
 
 /* fp_viewer_options.opened: the session and take for the take-over; the first time, the
@@ -149,14 +158,17 @@ static void live_opened(void *user, fp_session *s, struct fp_session_take *take)
     c->s = s;
     c->take = take;
     if ((c->link_opt.control || c->link_opt.stream) && !c->link_status) {
-        if (c->link) { /* a dropped mesh: the link follows the new session */
-            fp_app_link_close(&c->link);
-            fprintf(stderr, "facepuppet live: --control/--stream opened again on the new mesh\n");
-        }
         c->link_opt.s = s;
         c->link_opt.take = take && take->opt.dir ? take : NULL;
-        if ((c->link_status = fp_app_link_open(&c->link_opt, &c->link)) == 0)
+        if (c->link) { /* a dropped mesh: the control surface stays (its port, its subscribers),
+                        * the stream opens again on the new mesh, named by its path */
+            if (take && take->so && take->so->mesh_path) c->link_opt.mesh_path = take->so->mesh_path;
+            c->link_status = fp_app_link_reopen(c->link, s, c->link_opt.take, c->link_opt.mesh_path, fp_now_ns());
+            if (!c->link_status && c->link_opt.stream)
+                fprintf(stderr, "facepuppet live: --stream opened again on the new mesh\n");
+        } else if ((c->link_status = fp_app_link_open(&c->link_opt, &c->link)) == 0) {
             fp_app_link_origin(c->link, fp_now_ns());
+        }
     }
     if (c->installed) return;
     c->installed = true;
@@ -281,6 +293,7 @@ static void live_link_setup(live_stuck *c, fp_viewer_options *vo, const fp_sessi
     vo->stop_requested = live_stop_requested;
     vo->frame_begin = live_frame_begin;
     vo->frame_end = live_frame_end;
+    vo->frame_paused = live_frame_paused;
 }
 
 /* --script @FILE: the file's text into *text (the caller frees it); TEXT itself: *text NULL.

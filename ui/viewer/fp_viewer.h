@@ -122,6 +122,10 @@ typedef struct fp_viewer_options {
      * streamed after it (ui/cli/app_link.h); now_ns is the frame's time. */
     void (*frame_begin)(void *user, int64_t now_ns);
     void (*frame_end)(void *user, int64_t now_ns);
+    /* frame_paused (NULL: none) instead of them on each frame drawn while paused (space): the
+     * control surface's commands applied and answered, the status pushed when due, nothing
+     * streamed (the session does not step). */
+    void (*frame_paused)(void *user, int64_t now_ns);
     void *user;
     fp_viewer_sound sound;       /* soundtrack, microphone, timecode hooks (above) */
 } fp_viewer_options;

@@ -969,6 +969,7 @@ static void frame(viewer *v)
     char take_msg[1200];
     fp_vtakes_tick(&v->takes, v->s, now, take_msg, sizeof take_msg);
     if (take_msg[0]) say_kind(v, FP_HUD_TAKE, false, "%s", take_msg);
+    if (v->paused && v->opt->frame_paused) v->opt->frame_paused(v->opt->user, now); /* (--control) */
     if (!v->paused) {
         if (v->opt->frame_begin) v->opt->frame_begin(v->opt->user, now); /* (--control) */
         if (v->opt->step_begin) v->opt->step_begin(); /* (a stuck frame: app_stop.h) */
