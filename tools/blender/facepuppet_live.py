@@ -18,7 +18,8 @@ Install (Blender 3.4 as Debian ships it, and newer):
 filepath='tools/blender/facepuppet_live.py', overwrite=True); \
 bpy.ops.preferences.addon_enable(module='facepuppet_live'); bpy.ops.wm.save_userpref()"
 Then View3D > Sidebar (N) > facepuppet: select the face, Connect (port 9100 by default:
-`facepuppet live ... --stream osc:127.0.0.1:9100`), Record, Stop.
+`facepuppet live ... --stream osc:127.0.0.1:9100`; the address, 127.0.0.1 by default, takes
+what facepuppet's bind= takes: listen_udp), Record, Stop.
 
 The receiving part (StreamReceiver) needs no bpy: tests/link/test_blender.sh drives it in a
 headless Blender (tests/link/blender_live_check.py).
@@ -94,6 +95,73 @@ def timecode_frames(tc, fps):
         return None
 
 
+def _bound(family, addr, v6only=None):
+    sock = socket.socket(family, socket.SOCK_DGRAM)
+    try:
+        if v6only is not None:
+            sock.setsockopt(socket.IPPROTO_IPV6, socket.IPV6_V6ONLY, int(v6only))
+        sock.bind(addr)
+    except OSError:
+        sock.close()
+        raise
+    sock.setblocking(False)
+    return sock
+
+
+def listen_udp(host, port):
+    """Non-blocking UDP sockets listening on `host` at `port` (0: a free one) as facepuppet's
+    bind= does (docs/osc.md, core/common/fp_net_listen.c): 127.0.0.1 or localhost, the
+    IPv4 loopback and [::1] at the same port beside it where it can be bound; 0.0.0.0 or ::,
+    every address, IPv4 and IPv6, through one [::] socket with IPV6_V6ONLY off (0.0.0.0 falls
+    back to IPv4 alone, :: fails, where there is no IPv6); another IPv4 or IPv6 address
+    (::1, [::1], fe80::1%eth0), that address alone. Returns (sockets, the addresses in words,
+    "" or a warning). Raises ValueError for a name other than localhost, OSError where the
+    address cannot be bound."""
+    text = host[1:-1] if host.startswith("[") and host.endswith("]") else host
+    if text == "localhost":
+        text = "127.0.0.1"
+    if ":" not in text:
+        try:
+            socket.inet_pton(socket.AF_INET, text)
+        except OSError:
+            raise ValueError("address %s: expected an IP address (127.0.0.1, 0.0.0.0, ::1, ::, "
+                             "...) or localhost" % host) from None
+        family = socket.AF_INET
+    else:
+        try:
+            info = socket.getaddrinfo(text, port, socket.AF_INET6, socket.SOCK_DGRAM, 0,
+                                      socket.AI_NUMERICHOST | socket.AI_PASSIVE)
+        except socket.gaierror:
+            raise ValueError("address %s: expected an IP address (127.0.0.1, 0.0.0.0, ::1, ::, "
+                             "...) or localhost" % host) from None
+        family, addr6 = socket.AF_INET6, info[0][4]
+    warning = ""
+    if text in ("0.0.0.0", "::") or (family == socket.AF_INET6 and
+                                     socket.inet_pton(socket.AF_INET6, addr6[0]) == bytes(16)):
+        try:
+            sock = _bound(socket.AF_INET6, ("::", port), v6only=False)
+            return [sock], "[::]:%d (IPv4 and IPv6)" % sock.getsockname()[1], ""
+        except OSError as e:
+            if family == socket.AF_INET6:
+                raise
+            warning = ("IPv6 senders are not heard: [::]:%d (IPv4 and IPv6) cannot be bound (%s); "
+                       "listening on 0.0.0.0 (IPv4) alone" % (port, e.strerror))
+    if family == socket.AF_INET6:
+        sock = _bound(socket.AF_INET6, addr6, v6only=True)
+        return [sock], "[%s]:%d" % (text, sock.getsockname()[1]), warning
+    sock = _bound(socket.AF_INET, (text, port))
+    port = sock.getsockname()[1]
+    if text != "127.0.0.1":
+        return [sock], "%s:%d" % (text, port), warning
+    try:
+        sock6 = _bound(socket.AF_INET6, ("::1", port), v6only=True)
+    except OSError as e:
+        return [sock], "127.0.0.1:%d" % port, (
+            "[::1]:%d cannot be bound (%s): a sender whose localhost is ::1 is not heard; "
+            "listening on 127.0.0.1 alone" % (port, e.strerror))
+    return [sock, sock6], "127.0.0.1:%d and [::1]:%d" % (port, port), ""
+
+
 class StreamReceiver:
     """The stream's state: the quantised offsets of every vertex, rebuilt from the packets of
     each frame; a frame is handed to on_frame(frame) once all its packets came, or a later
@@ -103,13 +171,13 @@ class StreamReceiver:
     KEY_BYTES_PER_VERTEX = 9       # a keyframe at its largest (docs/osc.md, "A receiver's buffer")
 
     def __init__(self, port, host="127.0.0.1", on_frame=None, rcvbuf=RCVBUF):
-        self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         self.rcvbuf_asked = rcvbuf
+        self.socks, self.listening, bind_warning = listen_udp(host, port)
+        self.sock = self.socks[0]
         self.rcvbuf, self.warning = self._ask_rcvbuf(rcvbuf)
+        self.warning = "; ".join(w for w in (self.warning, bind_warning) if w)
         if self.warning:
             print("facepuppet live: " + self.warning)
-        self.sock.bind((host, port))
-        self.sock.setblocking(False)
         self.on_frame = on_frame
         self.info = None
         self.n = 0
@@ -124,8 +192,9 @@ class StreamReceiver:
         """Ask for a receive buffer of `asked` bytes: a keyframe comes in one burst (about
         9 bytes a vertex), and what the buffer cannot hold while Blender is busy is lost
         until the next keyframe. Returns (bytes granted, "" or a warning)."""
-        self.sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, asked)
-        got = self.sock.getsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF)
+        for sock in self.socks:
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, asked)
+        got = min(sock.getsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF) for sock in self.socks)
         if sys.platform.startswith("linux"):
             got //= 2  # (Linux doubles the value for its bookkeeping and reports the double)
         if got >= asked:
@@ -137,21 +206,23 @@ class StreamReceiver:
 
     def close(self):
         self.flush()
-        self.sock.close()
+        for sock in self.socks:
+            sock.close()
 
     def poll(self, max_packets=100000):
         """Read what has arrived (without blocking). Returns the packets read."""
         k = 0
-        while k < max_packets:
-            try:
-                data = self.sock.recv(65536)
-            except BlockingIOError:
-                break
-            k += 1
-            try:
-                self._packet(data)
-            except ValueError:
-                self.bad += 1
+        for sock in self.socks:
+            while k < max_packets:
+                try:
+                    data = sock.recv(65536)
+                except BlockingIOError:
+                    break
+                k += 1
+                try:
+                    self._packet(data)
+                except ValueError:
+                    self.bad += 1
         return k
 
     def flush(self):
@@ -241,7 +312,7 @@ class FaceLink:
 
     LIVE = "facepuppet live"
 
-    def __init__(self, obj, port, align="TIMECODE"):
+    def __init__(self, obj, port, align="TIMECODE", host="127.0.0.1"):
         self.obj = obj
         self.align = align
         self.recording = False
@@ -262,7 +333,7 @@ class FaceLink:
         self.live = kb.get(self.LIVE) or obj.shape_key_add(name=self.LIVE, from_mix=False)
         self.live.value = 1.0
         # (a buffer for two keyframes of this face at their largest, 4 MiB at least)
-        self.rx = StreamReceiver(port, on_frame=self._frame,
+        self.rx = StreamReceiver(port, host, on_frame=self._frame,
                                  rcvbuf=max(StreamReceiver.RCVBUF,
                                             2 * StreamReceiver.KEY_BYTES_PER_VERTEX * len(mesh.vertices)))
 
@@ -379,6 +450,9 @@ if bpy is not None:
         bl_idname = "facepuppet.connect"
         bl_label = "Connect"
         port: IntProperty(name="Port", default=9100, min=1, max=65535)
+        address: StringProperty(name="Address", default="127.0.0.1",
+                                description="127.0.0.1 or localhost (and [::1] beside it), 0.0.0.0 or "
+                                            ":: (every address, IPv4 and IPv6), or one IPv4 or IPv6 address")
 
         def execute(self, context):
             obj = context.active_object
@@ -386,9 +460,9 @@ if bpy is not None:
                 self.report({"ERROR"}, "select the face (the mesh imported from the session's file)")
                 return {"CANCELLED"}
             try:
-                link = FaceLink(obj, self.port, context.scene.facepuppet_align)
-            except OSError as e:
-                self.report({"ERROR"}, "port %d: %s" % (self.port, e))
+                link = FaceLink(obj, self.port, context.scene.facepuppet_align, self.address)
+            except (OSError, ValueError) as e:
+                self.report({"ERROR"}, "%s port %d: %s" % (self.address, self.port, e))
                 return {"CANCELLED"}
             _links[obj.name] = link
             if not bpy.app.timers.is_registered(_tick):
