@@ -123,6 +123,9 @@ static void logf_(const glove *g, fp_log_level lvl, const char *fmt, ...)
         g->host->log(g->host, lvl, msg);
 }
 
+/* The event's text names the port ("PATH: text" unless the text names it already). The host
+ * says warnings, errors and disconnections itself, one line each (docs/plugins.md), so only
+ * the other codes (connected, reconnecting) are logged here too: an unplug is one line. */
 static void push_status(glove *g, fp_status_code code, const char *fmt, ...)
 {
     fp_event_status ev;
@@ -132,13 +135,18 @@ static void push_status(glove *g, fp_status_code code, const char *fmt, ...)
     ev.header.time_ns = now_ns(g);
     ev.header.hand = g->hand;
     ev.code = code;
+    char text[sizeof ev.text];
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(ev.text, sizeof ev.text, fmt, ap);
+    vsnprintf(text, sizeof text, fmt, ap);
     va_end(ap);
+    if (strstr(text, g->path))
+        snprintf(ev.text, sizeof ev.text, "%s", text);
+    else
+        snprintf(ev.text, sizeof ev.text, "%s: %s", g->path, text);
     g->host->push_event(g->host, &ev.header);
-    logf_(g, code == FP_STATUS_CONNECTED ? FP_LOG_INFO : FP_LOG_WARNING, "%s: %s", g->path,
-          ev.text);
+    if (code == FP_STATUS_CONNECTED || code == FP_STATUS_RECONNECTING)
+        logf_(g, code == FP_STATUS_CONNECTED ? FP_LOG_INFO : FP_LOG_WARNING, "%s", ev.text);
 }
 
 static bool stopping(glove *g) { return atomic_load(&g->stopping); }

@@ -310,6 +310,38 @@ static void test_minimal_box(void **state)
     fp_gloveemu_destroy(&e);
 }
 
+/* Occurrences of `what` in `text`. */
+static int occurrences(const char *text, const char *what)
+{
+    int n = 0;
+    for (const char *p = strstr(text, what); p; p = strstr(p + 1, what))
+        n++;
+    return n;
+}
+
+/* An unplug is said once to the performer, with the port: the session logs a DISCONNECTED
+ * status's text itself (core/session/intents.c), so the event names the port and the plugin
+ * does not log it too (before: "PATH: glove unplugged ..." from the plugin, and "cyberglove:
+ * glove unplugged ..." from the session, two lines); the plugging back, which the session
+ * does not log, is one line of the plugin's naming the port. */
+static void said_once(fp_test_host *f, const char *path, size_t d, size_t r)
+{
+    const fp_event ev_d = fp_test_host_get(f, d), ev_r = fp_test_host_get(f, r);
+    assert_non_null(strstr(ev_d.status.text, path));
+    assert_non_null(strstr(ev_r.status.text, path));
+    char log[sizeof f->log];
+    pthread_mutex_lock(&f->lock);
+    snprintf(log, sizeof log, "%s", f->log);
+    pthread_mutex_unlock(&f->lock);
+    if (occurrences(log, "unplugged") != 0 || occurrences(log, "plugged into its box again") != 1)
+        fprintf(stderr, "plugin log:\n%s", log);
+    assert_int_equal(occurrences(log, "unplugged"), 0);
+    assert_int_equal(occurrences(log, "plugged into its box again"), 1);
+    char line[256];
+    snprintf(line, sizeof line, "%s: glove plugged into its box again", path);
+    assert_non_null(strstr(log, line));
+}
+
 /* The glove unplugged from its box (the box keeps answering: records with the status bit
  * clear and `eg`, or `S e g 0x00` frames with error_frames) and plugged back: "unplugged",
  * no angles while out, "plugged", angles again, no line noise, no reconnection needed. */
@@ -347,6 +379,7 @@ static void unplug_cycle(fp_gloveemu_options o, const char *name)
     assert_true(fp_test_host_wait_angles(f, (size_t)r, 10, WAIT_MS) > 0);
     assert_int_equal(plugin_stats(in).noise_bytes, 0);
     assert_int_equal(plugin_stats(in).connects, 1);
+    said_once(f, fp_gloveemu_path(e), (size_t)d, (size_t)r);
     stop_input(&in);
     fp_test_host_free(f);
     fp_gloveemu_destroy(&e);
