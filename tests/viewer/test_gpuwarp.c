@@ -204,7 +204,13 @@ static void test_script_parse(void **state)
     assert_true(s.cmds[0].op == FP_SCRIPT_WAIT_SECONDS && s.cmds[0].number == 1.25);
     assert_true(s.cmds[1].op == FP_SCRIPT_WAIT_SECONDS && s.cmds[1].number == 0);
     fp_script_free(&s);
-    const char *bad[] = {"jump 3", "key Q", "wait forever", "radius -1", "shot", "close now",
+    /* the window resized: W x H pixels, 16..16384 each, as --size */
+    assert_int_equal(fp_script_parse("size 240x480; size +16x16384", &s, err, sizeof err), 0);
+    assert_true(s.cmds[0].op == FP_SCRIPT_SIZE && s.cmds[0].pitch == 240 && s.cmds[0].zoom == 480);
+    assert_true(s.cmds[1].op == FP_SCRIPT_SIZE && s.cmds[1].pitch == 16 && s.cmds[1].zoom == 16384);
+    fp_script_free(&s);
+    const char *bad[] = {"size", "size 240", "size 15x480", "size 240x16385", "size 240x", "size x480",
+                         "size 240x480x2", "size -240x480", "jump 3", "key Q", "wait forever", "radius -1", "shot", "close now",
                          "wait frames x", "camera", "camera 10", "camera 10 95", "camera 1 2 0",
                          "camera 1 2 3 4", "camera nan 0", "radius 0x10", "radius inf",
                          "scrub 0x1p-1", "wait frames 0x3", "camera 0x10 5", "camera 10 5 0x1",

@@ -43,6 +43,8 @@
  *   camera YAW PITCH [ZOOM]   the framed view (F) turned by yaw (degrees, about +y, positive
  *                to the face's left) and pitch (degrees, from above), the distance / ZOOM
  *   drop FILE    as a file dropped on the window
+ *   size WxH     resize the window to W x H pixels (16..16384), as the performer dragging
+ *                its edge: the framing is kept (the face keeps its place and share)
  *   print mapping | print hud   one stdout line: the mapping (name, id, version, active,
  *                control vectors, reloads) / the HUD (state ENGAGED|committed|idle|PAUSED,
  *                commits in the base, mm per mesh unit and how it was found, the badge,

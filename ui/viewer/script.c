@@ -98,6 +98,20 @@ int fp_script_parse(const char *text, fp_script *s, char *err, size_t errlen)
             if (m < 2 || !(fabs(c.pitch) <= 89) ||
                 !(c.zoom > 0 && c.zoom <= 100))
                 rc = -EINVAL;
+        } else if (!strcmp(word, "size")) {
+            /* size WxH: 16..16384 each, as --size */
+            c.op = FP_SCRIPT_SIZE;
+            const char *x = strchr(arg, 'x');
+            char first[32];
+            unsigned long long w = 0, h = 0;
+            if (!x || (size_t)(x - arg) >= sizeof first) {
+                rc = -EINVAL;
+            } else {
+                snprintf(first, sizeof first, "%.*s", (int)(x - arg), arg);
+                if (!fp_parse_whole(first, 16384, &w) || !fp_parse_whole(x + 1, 16384, &h) || w < 16 || h < 16)
+                    rc = -EINVAL;
+            }
+            c.pitch = (double)w, c.zoom = (double)h;
         } else if (!strcmp(word, "print") && !strcmp(arg, "mapping")) {
             c.op = FP_SCRIPT_PRINT_MAPPING;
         } else if (!strcmp(word, "print") && !strcmp(arg, "hud")) {
@@ -112,7 +126,7 @@ int fp_script_parse(const char *text, fp_script *s, char *err, size_t errlen)
         }
         if (rc == -EINVAL)
             snprintf(err, errlen, "--script: command %d '%s %s' is not one of: wait hands|end|reload|frames N|seconds S, "
-                     "key NAME, shot FILE, radius R, drop FILE, scrub F, camera YAW PITCH [ZOOM], print mapping|hud|messages, close", index, word, arg);
+                     "key NAME, shot FILE, radius R, drop FILE, scrub F, camera YAW PITCH [ZOOM], size WxH, print mapping|hud|messages, close", index, word, arg);
         if (!rc) rc = add(s, c);
         else free(c.text);
     }

@@ -14,14 +14,15 @@ typedef enum fp_script_op {
     FP_SCRIPT_PRINT_HUD,     /* print hud: one stdout line, the HUD's state, commits and scale */
     FP_SCRIPT_CAMERA,        /* camera YAW PITCH [ZOOM]: the framed view turned (degrees), zoomed */
     FP_SCRIPT_PRINT_MESSAGES, /* print messages: the HUD's message stack, a stdout line each */
-    FP_SCRIPT_WAIT_SECONDS   /* wait seconds S: until S s of the wall clock have passed */
+    FP_SCRIPT_WAIT_SECONDS,  /* wait seconds S: until S s of the wall clock have passed */
+    FP_SCRIPT_SIZE           /* size WxH: the window resized (as the performer drags it) */
 } fp_script_op;
 
 typedef struct fp_script_cmd {
     fp_script_op op;
     int key;            /* GLFW key code for FP_SCRIPT_KEY */
     double number;      /* frames, seconds, radius; camera: yaw (degrees) */
-    double pitch, zoom; /* camera: pitch (degrees), zoom (> 0) */
+    double pitch, zoom; /* camera: pitch (degrees), zoom (> 0); size: width, height (pixels) */
     char *text;         /* file for SHOT and DROP (owned) */
 } fp_script_cmd;
 

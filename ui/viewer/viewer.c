@@ -65,6 +65,7 @@ typedef struct camera {
     float yaw, pitch, dist;
     float fovy;
     float scene_size;   /* bounding-box diagonal of the mesh */
+    float front[2], depth, aspect; /* framed box (mesh units), window w / h it was fitted to */
     face_axes axes;     /* yaw and pitch turn about the face's up and left (fp_session_face_axes) */
 } camera;
 
@@ -203,7 +204,10 @@ static void frame_mesh(viewer *v)
     float half = 0.5f * fmaxf(d[1], d[0] / aspect) * 1.15f;
     v->cam.dist = half / tanf(v->cam.fovy / 2) + 0.5f * d[2];
     v->cam.scene_size = diag > 0 ? diag : 1.f;
+    v->cam.front[0] = d[0], v->cam.front[1] = d[1], v->cam.depth = d[2];
+    v->cam.aspect = aspect;
 }
+
 
 static void camera_matrices(const viewer *v, int w, int h, float view[16], float proj[16])
 {
@@ -639,6 +643,7 @@ static void run_script(viewer *v)
             v->cam.pitch = (float)(c->pitch * M_PI / 180);
             v->cam.dist /= (float)c->zoom;
             break;
+        case FP_SCRIPT_SIZE: glfwSetWindowSize(v->win, (int)c->pitch, (int)c->zoom); break;
         case FP_SCRIPT_CLOSE: glfwSetWindowShouldClose(v->win, GLFW_TRUE); return;
         case FP_SCRIPT_PRINT_MAPPING: {
             const fp_plugin *p = fp_session_mapping_plugin(v->s);
@@ -1007,6 +1012,8 @@ static void frame(viewer *v)
     upload(v);
     int w, h;
     glfwGetFramebufferSize(v->win, &w, &h);
+    if (w > 0 && h > 0) /* a resized window keeps the framing */
+        v->cam.dist = frame_keep_dist(v->cam.dist, v->cam.front, v->cam.depth, &v->cam.aspect, (float)w / (float)h);
     draw(v, &st, w, h);
     bool last = v->opt->frames && v->frames + 1 >= v->opt->frames;
     if (last && v->opt->screenshot && !v->shot_path) v->shot_path = strdup(v->opt->screenshot);

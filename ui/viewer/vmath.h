@@ -138,4 +138,20 @@ static inline void face_axes_eye(const face_axes *a, const float target[3], floa
     for (int i = 0; i < 3; i++) eye[i] += target[i];
 }
 
+/* The camera's distance (mesh units) that keeps a view framed on a box of front (width,
+ * height) and depth (mesh units) at a fixed vertical field of view when the window's aspect
+ * (width / height) goes from *from to `to` (then *from = to): the face keeps its place and the share of the
+ * window it fills, with the orbit, pan and zoom chosen. The distance to the box's front scales
+ * with the height the box needs at the new aspect against the old: narrower than the face, the
+ * camera backs away instead of cutting it off; wider again, it comes back. */
+static inline float frame_keep_dist(float dist, const float front[2], float depth, float *from, float to)
+{
+    if (!(*from > 0) || !(to > 0) || *from == to) return dist;
+    const float need_old = fmaxf(front[1], front[0] / *from), need_new = fmaxf(front[1], front[0] / to);
+    *from = to; /* (the aspect the view is now fitted to) */
+    if (!(need_old > 0) || !(need_new > 0)) return dist;
+    const float r = need_new / need_old, to_front = dist - 0.5f * depth;
+    return to_front > 0 ? to_front * r + 0.5f * depth : dist * r;
+}
+
 #endif
