@@ -140,10 +140,10 @@ static void push_status(glove *g, fp_status_code code, const char *fmt, ...)
     va_start(ap, fmt);
     vsnprintf(text, sizeof text, fmt, ap);
     va_end(ap);
-    if (strstr(text, g->path))
-        snprintf(ev.text, sizeof ev.text, "%s", text);
-    else
-        snprintf(ev.text, sizeof ev.text, "%s: %s", g->path, text);
+    int len = strstr(text, g->path) ? snprintf(ev.text, sizeof ev.text, "%s", text)
+                                    : snprintf(ev.text, sizeof ev.text, "%s: %s", g->path, text);
+    if (len >= (int)sizeof ev.text) /* a long path: the line keeps what fits, and says it was cut */
+        memcpy(ev.text + sizeof ev.text - 4, "...", 4);
     g->host->push_event(g->host, &ev.header);
     if (code == FP_STATUS_CONNECTED || code == FP_STATUS_RECONNECTING)
         logf_(g, code == FP_STATUS_CONNECTED ? FP_LOG_INFO : FP_LOG_WARNING, "%s", ev.text);
