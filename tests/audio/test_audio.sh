@@ -140,6 +140,12 @@ ltc_case 30000 1001 "00:00:59;20" 29.97 ltc2997df
 ltc_case 24 1 01:02:03:04 24 ltc24glitch glitch
 "$fp" info "$tmp/ltc24glitch.wav" | grep -q "timecode  LTC at 24 fps, 01:02:03:04 at the first sample" ||
     fail "info of an LTC file with two misread frames: $("$fp" info "$tmp/ltc24glitch.wav" 2>&1)"
+# a jump (the generator restarted at 11:00:00:00 after 2 s, 3 s more): the timecode at the first
+# sample is the first run's, not the longer second one's carried back (10:59:58:00)
+"$tool" ltc "$tmp/jump1.wav" 25 1 10:00:00:00 2 >/dev/null && "$tool" ltc "$tmp/jump2.wav" 25 1 11:00:00:00 3 >/dev/null &&
+    sox "$tmp/jump1.wav" "$tmp/jump2.wav" "$tmp/jump.wav" || fail "the LTC file with a jump"
+"$fp" info "$tmp/jump.wav" | grep -q "timecode  LTC at 25 fps, 10:00:00:00 at the first sample (.*with jumps)" ||
+    fail "info of an LTC file with a jump: $("$fp" info "$tmp/jump.wav" 2>&1)"
 # info on a sound file says what it is (before: "unknown format" of a recording): the LTC's
 # rate and the timecode it was encoded from, 48 kHz mono, 4 s; the speech has no LTC
 "$fp" info "$tmp/ltc25.wav" >"$tmp/info.out" 2>&1 || { cat "$tmp/info.out"; fail "info ltc25.wav exited $?"; }
