@@ -81,6 +81,13 @@ static int play_audio_prepare(fp_app_audio *a, const fp_take_header *h, bool for
         fprintf(stderr, "facepuppet play: the take has no soundtrack: give --audio FILE\n");
         return FP_EXIT_USAGE;
     }
+    struct stat st;
+    if (!a->path && fallback && stat(fallback, &st) && errno == ENOENT) { /* (fp_app_audio_prepare: "--audio: X") */
+        fprintf(stderr, "facepuppet play: the take's soundtrack %s is not there from this folder (a "
+                "relative path is the one given to the recording run, from the folder it ran in): "
+                "give it with --audio FILE\n", fallback);
+        return FP_EXIT_NOINPUT;
+    }
     int rc = fp_app_audio_prepare(a, "play", fallback, force);
     if (rc) return rc;
     if (a->playing && h->soundtrack_path && a->track.crc32 != h->soundtrack_crc32 && !quiet)
