@@ -106,6 +106,16 @@ python3 -c "import json,sys; t=json.load(open(sys.argv[1])); assert t[0]['slate'
 grep -q "description  three claps, test" "$tmp/info.txt" || fail "info: no description"
 grep -q "closed normally, 0 dropped" "$tmp/info.txt" || fail "info: not closed normally"
 
+# export --range TC-TC of one timecode holds exactly its frame at 60 fps (before: frames 1 and 2,
+# at 16666667 and 33333333 ns, both counted 1 (floor of 1.99999998), so :01 held two frames
+# and :02 none, "holds none of the take's frames")
+tcin=$(sed -n 's/^  timecode     \([0-9:]*\) - .*/\1/p' "$tmp/info.txt")
+for k in 1 2 3 4 5; do
+    tc=$(python3 -c "import sys; h,m,s,f=map(int,sys.argv[1].split(':')); n=((h*60+m)*60+s)*60+f+int(sys.argv[2]); print('%02d:%02d:%02d:%02d'%(n//216000%24,n//3600%60,n//60%60,n%60))" "$tcin" $k)
+    expect_one=$("$fp" export "$take" --format pc2 --out "$tmp/one.pc2" --force --range "$tc-$tc" 2>&1)
+    echo "$expect_one" | grep -q "exported 1 frame to" || fail "export --range $tc-$tc (frame $k of a take from $tcin): $expect_one"
+done
+echo "export --range of one timecode: one frame each, frames 1-5"
 # --fps 29.97 and 59.94 are NTSC's 30000/1001 and 60000/1001 (before: 29970/1000 and 59940/1000,
 # so no drop-frame), their time-of-day timecode drop-frame (';'), which follows the clock: the
 # header's timecode_in is the local time of its date within 2 s (non-drop at 29.97 runs 3.6 s

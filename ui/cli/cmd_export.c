@@ -202,7 +202,7 @@ static uint64_t position(const range_end *e, size_t index, int64_t t_ns,
 {
     if (!e->timecode)
         return index;
-    return tc_in + fp_take_frames_in(t_ns - h->time_origin_ns, h->rate);
+    return tc_in + fp_take_frames_at(t_ns - h->time_origin_ns, h->rate);
 }
 
 static void progress(bool on, size_t done, size_t total, uint64_t written)
@@ -359,8 +359,8 @@ static int parse_range(const char *range, fp_take_rate rate, range_end *in, rang
 static void take_span(const range_end *e, const fp_take_header *h, const fp_take_summary *sum,
                       size_t frames, uint64_t tc_in, uint64_t *first, uint64_t *last)
 {
-    *first = e->timecode ? tc_in + fp_take_frames_in(sum->first_time_ns - h->time_origin_ns, h->rate) : 0;
-    *last = e->timecode ? tc_in + fp_take_frames_in(sum->last_time_ns - h->time_origin_ns, h->rate)
+    *first = e->timecode ? tc_in + fp_take_frames_at(sum->first_time_ns - h->time_origin_ns, h->rate) : 0;
+    *last = e->timecode ? tc_in + fp_take_frames_at(sum->last_time_ns - h->time_origin_ns, h->rate)
                         : frames - 1;
 }
 

@@ -125,9 +125,11 @@ static void frame_timecode(const fp_take_header *h, int64_t time_ns, char *buf, 
     uint64_t f0;
     fp_timecode tc;
     buf[0] = '\0';
-    double k = (double)(time_ns - h->time_origin_ns) * 1e-9 * h->rate.num / h->rate.den;
-    if (k < 0 || fp_timecode_to_frames(&h->timecode_in, h->rate, &f0) ||
-        fp_timecode_from_frames(f0 + (uint64_t)llround(k), h->rate, h->timecode_in.drop, &tc))
+    /* (the take's formula, docs/take-format.md: rounding instead put a 60 fps frame on a
+     * 25 fps LTC frame not yet begun) */
+    if (time_ns < h->time_origin_ns || fp_timecode_to_frames(&h->timecode_in, h->rate, &f0) ||
+        fp_timecode_from_frames(f0 + fp_take_frames_at(time_ns - h->time_origin_ns, h->rate), h->rate,
+                                h->timecode_in.drop, &tc))
         return;
     fp_timecode_format(&tc, buf, n);
 }
