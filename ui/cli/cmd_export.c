@@ -8,6 +8,7 @@
 #include "command.h"
 #include "fp_take_player.h"
 #include "fp_stack_player.h"
+#include "app_stack.h"
 #include "fp_error.h"
 #ifdef FP_HAVE_UI
 #include "fp_frame_render.h"
@@ -703,6 +704,7 @@ static int export_take(const export_args *a, fp_take_player *p, sink *k, float *
                                              a->quiet, stdout))) {
         return status;
     }
+    fp_app_stack_limited_note("export", a->take_path, fp_take_player_stack(p), a->quiet);
     return fp_app_audio_export_write(h, wav, w.first_ns, k->last_t + (rate > 0 ? 1.0 / rate : 0), a->force,
                                      a->quiet, stdout, "export");
 }

@@ -7,6 +7,7 @@
 #include "fp_session_take.h"
 #include "fp_take_player.h"
 #include "fp_stack_player.h"
+#include "app_stack.h"
 #include "app_export.h"
 #include "app_audio.h"
 #include "app_link.h"
@@ -464,6 +465,7 @@ static int play_main(int argc, char **argv)
         const uint64_t counts[3] = {frames, active, commits};
         print_played(take_path, r, &reach, fp_take_player_mm_per_unit(player), counts, out);
     }
+    fp_app_stack_limited_note("play", take_path, fp_take_player_stack(player), quiet);
 done:
     if (frames_made) rmdir(frames_out);
     fp_app_link_close(&link);
