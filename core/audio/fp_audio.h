@@ -191,19 +191,20 @@ typedef struct fp_ltc_info {
 } fp_ltc_info;
 
 /** Decode the LTC of a sound file (every channel, each with its own libltc decoder; the
- *  channel with the most frames decoded is the LTC's: info->channel):
- *  the rate from the frames' median spacing (the nearest of 24, 25, 30; at 30, 29.97
- *  drop-frame where most frames have the drop-frame flag, else 29.97 or 30 by the mean
- *  spacing); the timecode at sample 0 as most frames give it (each frame's timecode carried
- *  back to sample 0 by whole frame periods: a misread frame, the first one included, is
- *  outvoted and counted as a jump). Needs at least 1 s of LTC. Returns 0 and *info, or -ENOENT/-EACCES/-EBADMSG
- *  (not a sound file, no LTC on any channel, less than a second of it, a rate none of
- *  those) with err. */
+ *  channel with the most frames decoded is the LTC's: info->channel): the rate from the
+ *  frames' median spacing (the nearest of 24, 25, 30; at 30, 29.97 drop-frame where most
+ *  frames have the drop-frame flag, else 29.97 or 30 by the mean spacing); the timecode at
+ *  sample 0 from the first frame that starts three consecutive ones, carried back by whole
+ *  frame periods (a misread frame, the first one included, is passed over and counted as a
+ *  jump; after a jump the first run counts). Needs at least 1 s of LTC. Returns 0 and
+ *  *info, or -ENOENT/-EACCES/-EBADMSG (not a sound file, no LTC on any channel, less than a
+ *  second of it, a rate none of those) with err. */
 int fp_ltc_read_file(const char *path, fp_ltc_info *info, char *err, size_t errlen);
 
 /** Listen to a PortAudio input device ("default", an index or part of a name) for up to
  *  `seconds` until 1.5 s of LTC decoded; info->first is the timecode at host time
- *  info->at_ns (rate and timecode by fp_ltc_read_file's rules). Returns 0, -ENODEV (no such input device), -ETIMEDOUT (no LTC heard) or
+ *  info->at_ns (fp_ltc_read_file's rules, the timecode from the last three consecutive
+ *  frames). Returns 0, -ENODEV (no such input device), -ETIMEDOUT (no LTC heard) or
  *  -EIO with err. */
 int fp_ltc_listen(const char *device, double seconds, fp_ltc_info *info, char *err,
                   size_t errlen);

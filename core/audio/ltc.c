@@ -12,6 +12,7 @@
 #include <math.h>
 #include <portaudio.h>
 #include <sndfile.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
@@ -54,19 +55,6 @@ static int cmp_i64(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-/* The most frequent of v[0..n) (sorted in place; the smallest of equally frequent ones). */
-static int64_t mode_i64(int64_t *v, size_t n)
-{
-    qsort(v, n, sizeof *v, cmp_i64);
-    int64_t best = v[0];
-    size_t best_run = 0;
-    for (size_t i = 0, j; i < n; i = j) {
-        for (j = i; j < n && v[j] == v[i]; j++) {}
-        if (j - i > best_run) best = v[i], best_run = j - i;
-    }
-    return best;
-}
-
 /* The LTC frame period in samples: the median spacing of consecutive frames (a frame lost
  * or misread moves single spacings, not the median). 0 when there is none. */
 static double median_period(const ltc_seen *s)
@@ -83,11 +71,11 @@ static double median_period(const ltc_seen *s)
 /* The rate from the frames' spacing (the nearest of 24, 25 and 30 a second; at 30, 29.97
  * where most frames have the drop-frame flag, else 29.97 or 30 by the mean spacing), each
  * frame's number (UINT64_MAX where its fields are no timecode at that rate: misread), the
- * jumps, and in *n_ref the frame number at sample `ref` by the most frames' vote (each
- * frame's number carried to `ref` by whole periods): one misread frame, the first one
- * included, moves neither the rate nor the timecode. Returns 0 or -EBADMSG with err. */
-static int settle(ltc_seen *s, int sample_rate, const char *what, int64_t ref, fp_ltc_info *info,
-                  uint64_t *numbers, uint64_t *n_ref, char *err, size_t errlen)
+ * jumps, and in *n_ref the frame number at sample `ref`: the first frame (from_end: the last)
+ * that three frames in a row confirm, carried to `ref` by whole periods. A misread frame, the
+ * first one included, moves neither the rate nor the timecode. Returns 0 or -EBADMSG with err. */
+static int settle(ltc_seen *s, int sample_rate, const char *what, int64_t ref, bool from_end,
+                  fp_ltc_info *info, uint64_t *numbers, uint64_t *n_ref, char *err, size_t errlen)
 {
     if (s->n < 2 || s->max_frame < 20)
         return fp_errorf(err, errlen, -EBADMSG, "%s: %s (less than a second of LTC decoded)", what,
@@ -118,25 +106,31 @@ static int settle(ltc_seen *s, int sample_rate, const char *what, int64_t ref, f
     fp_timecode_to_frames(&(fp_timecode){23, 59, 59, fp_timecode_base(rate) - 1, drop}, rate, &day);
     day += 1;
     const double exact = (double)sample_rate * rate.den / rate.num;
-    int64_t *votes = malloc(s->n * sizeof *votes);
-    if (!votes) return fp_errorf(err, errlen, -ENOMEM, "out of memory");
-    size_t nv = 0;
     for (size_t i = 0; i < s->n; i++) {
         fp_timecode tc = s->f[i].tc;
         tc.drop = drop;
         if (fp_timecode_to_frames(&tc, rate, &numbers[i])) numbers[i] = UINT64_MAX;
-        if (i && (numbers[i] == UINT64_MAX || numbers[i] != numbers[i - 1] + 1)) info->jumps++;
-        if (numbers[i] == UINT64_MAX) continue;
-        int64_t back = (int64_t)llround((double)(s->f[i].start - ref) / exact);
-        votes[nv++] = (((int64_t)numbers[i] - back) % (int64_t)day + (int64_t)day) % (int64_t)day;
+        if (i && (numbers[i] == UINT64_MAX || numbers[i] != (numbers[i - 1] + 1) % day)) info->jumps++;
     }
-    if (!nv) {
-        free(votes);
+    /* the anchor: the first (from_end: the last) frame that starts three in a row, so that a
+     * misread frame is passed over and, after a jump, the run at `ref` counts; none: the
+     * first (last) valid frame */
+    size_t anchor = SIZE_MAX, any = SIZE_MAX;
+    for (size_t k = 0; k < s->n && anchor == SIZE_MAX; k++) {
+        const size_t i = from_end ? s->n - 1 - k : k;
+        if (numbers[i] == UINT64_MAX) continue;
+        if (any == SIZE_MAX) any = i;
+        const size_t lo = from_end ? (i >= 2 ? i - 2 : SIZE_MAX) : i;
+        if (lo != SIZE_MAX && lo + 2 < s->n && numbers[lo] != UINT64_MAX &&
+            numbers[lo + 1] == (numbers[lo] + 1) % day && numbers[lo + 2] == (numbers[lo] + 2) % day)
+            anchor = i;
+    }
+    if (anchor == SIZE_MAX) anchor = any;
+    if (anchor == SIZE_MAX)
         return fp_errorf(err, errlen, -EBADMSG, "%s: no LTC frame holds a valid timecode at %u/%u fps",
                          what, rate.num, rate.den);
-    }
-    *n_ref = (uint64_t)mode_i64(votes, nv);
-    free(votes);
+    const int64_t back = (int64_t)llround((double)(s->f[anchor].start - ref) / exact);
+    *n_ref = (uint64_t)((((int64_t)numbers[anchor] - back) % (int64_t)day + (int64_t)day) % (int64_t)day);
     return 0;
 }
 
@@ -190,7 +184,7 @@ int fp_ltc_read_file(const char *path, fp_ltc_info *info, char *err, size_t errl
     uint64_t *numbers = rc ? NULL : malloc((s->n ? s->n : 1) * sizeof *numbers);
     if (!rc && !numbers) rc = fp_errorf(err, errlen, -ENOMEM, "out of memory");
     uint64_t n0 = 0;
-    if (!rc) rc = settle(s, si.samplerate, path, 0, info, numbers, &n0, err, errlen);
+    if (!rc) rc = settle(s, si.samplerate, path, 0, false, info, numbers, &n0, err, errlen);
     if (!rc) {
         fp_timecode_from_frames(n0, info->rate, fp_timecode_drop_allowed(info->rate) && 2 * s->drop_flags > s->n,
                                 &info->first);
@@ -259,7 +253,7 @@ int fp_ltc_listen(const char *device, double seconds, fp_ltc_info *info, char *e
     if (!rc && !numbers) rc = fp_errorf(err, errlen, -ENOMEM, "out of memory");
     uint64_t n_last = 0;
     const struct seen *last = s.n ? &s.f[s.n - 1] : NULL;
-    if (!rc) rc = settle(&s, sr, device, last->start, info, numbers, &n_last, err, errlen);
+    if (!rc) rc = settle(&s, sr, device, last->start, true, info, numbers, &n_last, err, errlen);
     if (!rc) { /* the next frame begins where the last decoded one ended */
         fp_timecode_from_frames(n_last + 1, info->rate, fp_timecode_drop_allowed(info->rate) && 2 * s.drop_flags > s.n,
                                 &info->first);

@@ -116,7 +116,10 @@ int fp_session_take_start(fp_session_take *t, const fp_session *s, int64_t origi
                              h->rate.num, h->rate.den);
         h->timecode_in = t->opt.timecode_in;
     } else {
-        fp_timecode_time_of_day(rt.tv_sec, rt.tv_nsec, h->rate, false, &h->timecode_in);
+        /* drop-frame where the rate has it (29.97, 59.94): the time of day's timecode then
+         * follows the clock; non-drop at 29.97 would be 3.6 s an hour behind it */
+        fp_timecode_time_of_day(rt.tv_sec, rt.tv_nsec, h->rate, fp_timecode_drop_allowed(h->rate),
+                                &h->timecode_in);
     }
     h->timecode_source = t->opt.timecode_source;
     h->soundtrack_path = t->opt.soundtrack_path;

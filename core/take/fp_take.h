@@ -101,6 +101,12 @@ int fp_timecode_parse(const char *text, fp_take_rate rate, fp_timecode *tc, char
  *  negative ns gives 0. */
 uint64_t fp_take_frames_in(int64_t ns, fp_take_rate rate);
 
+/** The frame count of the take's rate at a frame's time, `ns` after the time origin: the
+ *  frames in ns + 1 (fp_take_frames_in), since frame times are whole nanoseconds rounded to
+ *  the nearest: frame 2 at 60 fps lies at 33333333 ns, short of 2/60 s, and counts 2, not 1.
+ *  What docs/take-format.md's frame timecode uses. Negative ns gives 0. */
+uint64_t fp_take_frames_at(int64_t ns, fp_take_rate rate);
+
 /** The timecode of the local time of day given as seconds + nanoseconds since the epoch
  *  (CLOCK_REALTIME), at `rate`: the "system clock" timecode source of Live Link. The local
  *  time is the process's time zone (TZ, localtime_r). Returns 0, or -EINVAL (a time

@@ -332,7 +332,7 @@ static int open_common(fp_take_reader *r, char *err, size_t errlen)
     r->sum.duration_s = (double)(r->sum.last_time_ns - r->sum.first_time_ns) / 1e9;
     uint64_t f0 = 0;
     fp_timecode_to_frames(&r->header.timecode_in, r->header.rate, &f0);
-    uint64_t df = r->frames ? fp_take_frames_in(r->sum.last_time_ns - r->header.time_origin_ns,
+    uint64_t df = r->frames ? fp_take_frames_at(r->sum.last_time_ns - r->header.time_origin_ns,
                                                 r->header.rate) : 0;
     fp_timecode_from_frames(f0 + df, r->header.rate, r->header.timecode_in.drop,
                             &r->sum.timecode_out);

@@ -364,7 +364,7 @@ int fp_take_writer_close(fp_take_writer **wp, uint64_t dropped, int status, char
         uint64_t f0 = 0;
         fp_timecode_to_frames(&w->tc_in, w->rate, &f0);
         if (w->any_frame)
-            fp_timecode_from_frames(f0 + fp_take_frames_in(w->last_time_ns - w->origin_ns, w->rate),
+            fp_timecode_from_frames(f0 + fp_take_frames_at(w->last_time_ns - w->origin_ns, w->rate),
                                     w->rate, w->tc_in.drop, &tc);
         cJSON_AddNumberToObject(o, "frames", (double)w->frames);
         cJSON_AddNumberToObject(o, "dropped", (double)dropped);

@@ -31,6 +31,11 @@ uint64_t fp_take_frames_in(int64_t ns, fp_take_rate r)
     return (uint64_t)f;
 }
 
+uint64_t fp_take_frames_at(int64_t ns, fp_take_rate r)
+{
+    return ns < 0 || ns == INT64_MAX ? fp_take_frames_in(ns, r) : fp_take_frames_in(ns + 1, r);
+}
+
 int fp_timecode_from_frames(uint64_t frames, fp_take_rate r, bool drop, fp_timecode *tc)
 {
     uint32_t base = fp_timecode_base(r);

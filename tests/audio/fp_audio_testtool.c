@@ -184,9 +184,9 @@ static int cmd_timecodes(char **argv)
         if (fp_take_reader_read(r, i, &f, err, sizeof err)) return fprintf(stderr, "%s\n", err), 1;
         if (!i) t_first = f.time_ns;
         fp_timecode got;
-        fp_timecode_from_frames(in_n + fp_take_frames_in(f.time_ns - h->time_origin_ns, h->rate), h->rate,
+        fp_timecode_from_frames(in_n + fp_take_frames_at(f.time_ns - h->time_origin_ns, h->rate), h->rate,
                                 h->timecode_in.drop, &got);
-        uint64_t k = base + fp_take_frames_in(f.time_ns - (any ? h->time_origin_ns : t_first), want);
+        uint64_t k = base + fp_take_frames_at(f.time_ns - (any ? h->time_origin_ns : t_first), want);
         if (k >= nl) break; /* (past the LTC encoded) */
         snprintf(ws, sizeof ws, "%s", lines[k]);
         char gs[32];

@@ -82,6 +82,21 @@ grep -qE "format       facepuppet take 1\.([2-9]|[1-9][0-9])$" "$tmp/info.out" |
 "$tool" sync "$tmp/speech.wav" "$tmp/play.wav" 0.25 || fail "play's soundtrack is out of sync"
 "$fp" play "$take" "${pd[@]}" --audio-out "file:$tmp/play.wav" -q 2>"$tmp/exists.err"
 [ $? -eq 73 ] || fail "play over an existing --audio-out without --force did not exit 73"
+# a soundtrack given by a relative path, the take played from another folder: 66 naming the take's
+# soundtrack and --audio (before: "--audio: speech.wav: No such file or directory", though no
+# --audio was given); with --audio it plays in sync
+abs_fp=$(realpath "$fp") abs_pd=$(realpath "$build/lib/facepuppet") abs_csv=$(realpath "$csv") abs_mesh=$(realpath "$mesh")
+(cd "$tmp" && "$abs_fp" run --plugin-dir "$abs_pd" --mesh "$abs_mesh" --input "replay:$abs_csv" --speed 3 --duration 1 \
+    --take-dir rel --audio speech.wav --audio-offset 0.25 --audio-out null -o rel.obj -q >/dev/null 2>&1) ||
+    fail "run --audio speech.wav (relative) exited $?"
+"$fp" play "$tmp/rel/scene1_T001.fptake" "${pd[@]}" --mesh "$mesh" --audio-out "file:$tmp/rel.wav" -q 2>"$tmp/rel.err"
+rc=$?
+[ $rc -eq 66 ] && grep -q "the take's soundtrack speech.wav is not there from this folder.*--audio FILE" "$tmp/rel.err" ||
+    { cat "$tmp/rel.err"; fail "play of a take whose soundtrack is not there: exit $rc, want 66 naming it and --audio"; }
+[ ! -e "$tmp/rel.wav" ] || fail "play wrote its --audio-out though the soundtrack is missing"
+"$fp" play "$tmp/rel/scene1_T001.fptake" "${pd[@]}" --mesh "$mesh" --audio "$tmp/speech.wav" \
+    --audio-out "file:$tmp/rel.wav" -q || fail "play --audio (the soundtrack from here) exited $?"
+"$tool" sync "$tmp/speech.wav" "$tmp/rel.wav" 0.25 || fail "play --audio of the relative take is out of sync"
 
 # ---- 3. refusals ---------------------------------------------------------------------------
 refuse() { # WANT_STATUS WANT_TEXT ARGS...
@@ -140,6 +155,12 @@ ltc_case 30000 1001 "00:00:59;20" 29.97 ltc2997df
 ltc_case 24 1 01:02:03:04 24 ltc24glitch glitch
 "$fp" info "$tmp/ltc24glitch.wav" | grep -q "timecode  LTC at 24 fps, 01:02:03:04 at the first sample" ||
     fail "info of an LTC file with two misread frames: $("$fp" info "$tmp/ltc24glitch.wav" 2>&1)"
+# a jump (the generator restarted at 11:00:00:00 after 2 s, 3 s more): the timecode at the first
+# sample is the first run's, not the longer second one's carried back (10:59:58:00)
+"$tool" ltc "$tmp/jump1.wav" 25 1 10:00:00:00 2 >/dev/null && "$tool" ltc "$tmp/jump2.wav" 25 1 11:00:00:00 3 >/dev/null &&
+    sox "$tmp/jump1.wav" "$tmp/jump2.wav" "$tmp/jump.wav" || fail "the LTC file with a jump"
+"$fp" info "$tmp/jump.wav" | grep -q "timecode  LTC at 25 fps, 10:00:00:00 at the first sample (.*with jumps)" ||
+    fail "info of an LTC file with a jump: $("$fp" info "$tmp/jump.wav" 2>&1)"
 # info on a sound file says what it is (before: "unknown format" of a recording): the LTC's
 # rate and the timecode it was encoded from, 48 kHz mono, 4 s; the speech has no LTC
 "$fp" info "$tmp/ltc25.wav" >"$tmp/info.out" 2>&1 || { cat "$tmp/info.out"; fail "info ltc25.wav exited $?"; }

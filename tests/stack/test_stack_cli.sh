@@ -52,6 +52,16 @@ grep -q "stack $stack: 2 layers, top: face_T002.fptake, mouth" "$tmp/pass.err" |
 "$fp" play "$stack" --export "$tmp/play2.pc2" -o "$tmp/play2.obj" -q || fail "play 2 exited $?"
 cmp "$tmp/play1.pc2" "$tmp/play2.pc2" && cmp "$tmp/play1.obj" "$tmp/play2.obj" || fail "two plays of the stack differ"
 echo "play twice: $(stat -c %s "$tmp/play1.pc2") bytes of PC2 and the last frame's OBJ identical"
+# where the blend's fold bound held the pass back (the pass shows partly there, not its frame),
+# play says on how many layer frames (before: counted, never said); at gain 0 it never does
+"$fp" play "$stack" -o "$tmp/note.obj" --force >/dev/null 2>"$tmp/note.err" || fail "play (not quiet) exited $?"
+grep -E "^facepuppet play: $stack: the blend's fold bound held a layer back on [0-9]+ layer frames?:" "$tmp/note.err" ||
+    { cat "$tmp/note.err"; fail "play did not say where the fold bound held the mouth pass back"; }
+sed 's/"gain":[[:space:]]*1/"gain": 0/g' "$stack" >"$takes/gain0.fpstack"
+grep -q '"gain": 0' "$takes/gain0.fpstack" || fail "could not make the gain-0 stack"
+"$fp" play "$takes/gain0.fpstack" -o "$tmp/note.obj" --force >/dev/null 2>"$tmp/note.err" || fail "play gain 0 exited $?"
+grep -q "fold bound held" "$tmp/note.err" && fail "play of a pass at gain 0 says the fold bound held it back"
+rm -f "$takes/gain0.fpstack"
 "$fp" play "$base" --export "$tmp/base.pc2" -q || fail "play base exited $?"
 # the PC2 holds the composite bit for bit (fp-export-check plays the stack again)
 xcheck="$build/tests/fp-export-check"   # (built where TinyGLTF is)

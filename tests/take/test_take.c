@@ -228,6 +228,13 @@ static void test_timecode_roundtrip_and_errors(void **state)
     assert_int_equal(fp_take_frames_in(16666667, r60), 1);
     assert_int_equal(fp_take_frames_in(3600LL * 1000000000, r60), 216000);
     assert_int_equal(fp_take_frames_in(-5, r60), 0);
+    /* A frame's count at its time (whole ns, rounded): frame k at round(k / 60 s) counts k. */
+    for (int64_t k = 0; k < 100000; k++)
+        assert_int_equal(fp_take_frames_at((k * 1000000000 + 30) / 60, r60), k);
+    assert_int_equal(fp_take_frames_at(33333333, r60), 2);       /* fp_take_frames_in: 1 */
+    assert_int_equal(fp_take_frames_at(40000000, (fp_take_rate){25, 1}), 1);
+    assert_int_equal(fp_take_frames_at(39999998, (fp_take_rate){25, 1}), 0);
+    assert_int_equal(fp_take_frames_at(-5, r60), 0);
     assert_int_equal(fp_timecode_base(df), 30);
     assert_true(fp_timecode_drop_allowed((fp_take_rate){60000, 1001}));
     assert_false(fp_timecode_drop_allowed((fp_take_rate){24000, 1001}));

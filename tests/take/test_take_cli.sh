@@ -106,6 +106,48 @@ python3 -c "import json,sys; t=json.load(open(sys.argv[1])); assert t[0]['slate'
 grep -q "description  three claps, test" "$tmp/info.txt" || fail "info: no description"
 grep -q "closed normally, 0 dropped" "$tmp/info.txt" || fail "info: not closed normally"
 
+# export --range TC-TC of one timecode holds exactly its frame at 60 fps (before: frames 1 and 2,
+# at 16666667 and 33333333 ns, both counted 1 (floor of 1.99999998), so :01 held two frames
+# and :02 none, "holds none of the take's frames")
+tcin=$(sed -n 's/^  timecode     \([0-9:]*\) - .*/\1/p' "$tmp/info.txt")
+for k in 1 2 3 4 5; do
+    tc=$(python3 -c "import sys; h,m,s,f=map(int,sys.argv[1].split(':')); n=((h*60+m)*60+s)*60+f+int(sys.argv[2]); print('%02d:%02d:%02d:%02d'%(n//216000%24,n//3600%60,n//60%60,n%60))" "$tcin" $k)
+    expect_one=$("$fp" export "$take" --format pc2 --out "$tmp/one.pc2" --force --range "$tc-$tc" 2>&1)
+    echo "$expect_one" | grep -q "exported 1 frame to" || fail "export --range $tc-$tc (frame $k of a take from $tcin): $expect_one"
+done
+echo "export --range of one timecode: one frame each, frames 1-5"
+# --fps 29.97 and 59.94 are NTSC's 30000/1001 and 60000/1001 (before: 29970/1000 and 59940/1000,
+# so no drop-frame), their time-of-day timecode drop-frame (';'), which follows the clock: the
+# header's timecode_in is the local time of its date within 2 s (non-drop at 29.97 runs 3.6 s
+# an hour behind); 23.976 is 24000/1001 (non-drop: there is no drop-frame at 24)
+for r in "29.97 30000/1001 ;" "59.94 60000/1001 ;" "23.976 24000/1001 :"; do
+    read -r fps want sep <<<"$r"
+    rm -rf "$tmp/ntsc"
+    "$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv" --speed 3 --duration 0.3 --fps "$fps" \
+        --take-dir "$tmp/ntsc" -o "$tmp/ntsc.obj" --force -q >/dev/null 2>&1 || fail "run --fps $fps exited $?"
+    "$fp" info "$tmp/ntsc/scene1_T001.fptake" >"$tmp/ntsc.txt" || fail "info (--fps $fps) exited $?"
+    grep -q "frame rate   $want " "$tmp/ntsc.txt" || { cat "$tmp/ntsc.txt"; fail "--fps $fps: the take's rate is not $want"; }
+    grep -Eq "timecode     [0-9]{2}:[0-9]{2}:[0-9]{2}$sep[0-9]{2} - " "$tmp/ntsc.txt" ||
+        { cat "$tmp/ntsc.txt"; fail "--fps $fps: the timecode is not marked '$sep'"; }
+    [ "$sep" = ";" ] || continue
+    python3 - "$tmp/ntsc/scene1_T001.fptake" <<'PY' || fail "--fps $fps: the drop-frame timecode in is not the time of day"
+import calendar, json, struct, sys, time
+b = open(sys.argv[1], "rb").read()
+h = json.loads(b[32:32 + struct.unpack_from("<I", b, 24)[0]])   # the HEAD chunk's JSON
+num, den = h["frame_rate"]["num"], h["frame_rate"]["den"]
+base, drop = round(num / den), round(num / den) // 15
+hh, mm, ss, ff = map(int, h["timecode_in"].replace(";", ":").split(":"))
+mins = 60 * hh + mm
+n = ((hh * 3600 + mm * 60 + ss) * base + ff) - drop * (mins - mins // 10)
+tc_s = n * den / num                                              # the timecode's time of day
+t = time.localtime(calendar.timegm(time.strptime(h["date"], "%Y-%m-%dT%H:%M:%SZ")))
+tod = t.tm_hour * 3600 + t.tm_min * 60 + t.tm_sec
+d = abs(tc_s - tod) % 86400
+print("%s: timecode in %s is %.2f s from the time of day %02d:%02d:%02d" % (h["frame_rate"], h["timecode_in"], min(d, 86400 - d), t.tm_hour, t.tm_min, t.tm_sec))
+sys.exit(min(d, 86400 - d) > 2)
+PY
+done
+
 # ---- 2. SIGKILL mid-take ------------------------------------------------------------------
 "$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv" --take-dir "$tmp/takes" --slate clap \
     --frames-out "$tmp/killed" -o "$tmp/killed.obj" -q >/dev/null 2>&1 &

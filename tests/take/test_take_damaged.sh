@@ -11,7 +11,8 @@
 #  4. a stack whose layer take has no intact frame: 65 naming the stack, layer and take;
 #  5. bad data inside a .fpstack is 65 (an unknown landmark, a layer that is a stack); a
 #     stack cut short says where it ends; takes rate refuses a take cut mid-chunk (no end
-#     chunk) without --force, as its --help says.
+#     chunk) without --force, as its --help says; info of a take cut after its header says it
+#     holds no frame.
 # SPDX-License-Identifier: GPL-3.0-or-later
 set -u
 build=${FP_BUILD_DIR:-build}
@@ -199,4 +200,16 @@ has "no end chunk" "takes rate cut"
 cmp -s "$d/cuttail_T001.fptake" "$tmp/cut.fptake" || fail "takes rate rewrote a take with no end chunk"
 expect 0 "$fp" takes rate --force "$tmp/cut.fptake" 3
 echo "5. takes rate of a take with no end chunk: refused without --force"
+# a take killed before its first chunk (its header alone): info says it holds no frame (before:
+# "frames 0 (session frames 0..0)", a range of one frame), and play refuses it (65)
+python3 - "$good" "$tmp/empty_T001.fptake" <<'PY' || fail "could not cut the take after its header"
+import struct, sys
+b = open(sys.argv[1], "rb").read()
+open(sys.argv[2], "wb").write(b[:16 + 20 + struct.unpack_from("<I", b, 24)[0]])
+PY
+expect 0 "$fp" info "$tmp/empty_T001.fptake"
+has "frames       0 (no intact frame)" "info of a header alone"
+hasnt "session frames 0..0" "info of a header alone"
+expect 65 "$fp" play "${pd[@]}" "$tmp/empty_T001.fptake" -o "$tmp/s.obj" --force -q
+has "no intact frame to play" "play of a header alone"
 echo "PASS"

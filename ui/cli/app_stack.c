@@ -6,6 +6,7 @@
 #include "fp_session.h"
 #include "fp_session_take.h"
 #include "fp_take.h"
+#include "fp_stack_player.h"
 #include "fp_error.h"
 #include "fp_text.h"
 
@@ -248,4 +249,13 @@ void fp_app_stack_list(const char *dir)
         fp_stack_free(&s);
         free(names[i]);
     }
+}
+
+void fp_app_stack_limited_note(const char *cmd, const char *path, const fp_stack_player *sp, bool quiet)
+{
+    const unsigned long n = sp ? fp_stack_player_limited(sp) : 0;
+    if (quiet || !n) return;
+    fprintf(stderr, "facepuppet %s: %s: the blend's fold bound held a layer back on %lu layer frame%s: "
+            "there the layer shows partly, not its own frame (docs/stack.md, \"The composite does not "
+            "fold\")\n", cmd, path, n, n == 1 ? "" : "s");
 }

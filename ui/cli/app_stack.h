@@ -65,4 +65,11 @@ bool fp_app_over_soundtrack_offset(const fp_app_over *o, double *offset_s);
 /** Free what o holds (the stack, the layer's vertices). */
 void fp_app_over_free(fp_app_over *o);
 
+struct fp_stack_player;
+/** After a stack's play or export (cmd "play", "export"): where the blend's fold bound held a
+ *  layer back (fp_stack_player_limited: the layer then shows partly, not its frame bit for
+ *  bit in its core, docs/stack.md), one line on stderr saying on how many layer frames.
+ *  Nothing for NULL, none held back, or quiet. */
+void fp_app_stack_limited_note(const char *cmd, const char *path, const struct fp_stack_player *sp, bool quiet);
+
 #endif

@@ -253,7 +253,9 @@ int fp_app_session_defaults(const char *cmd, fp_session_options *so, double spee
 fp_take_rate fp_app_take_rate(double fps)
 {
     if (fps == floor(fps)) return (fp_take_rate){(uint32_t)fps, 1};
-    if (fabs(fps * 1001 - floor(fps * 1001 + 0.5)) < 1e-6 * fps && fabs(fps - round(fps) * 1000 / 1001) < 1e-3)
+    /* the NTSC rates as written (23.976, 29.97, 59.94) and as computed (30000/1001.0): the
+     * nearest N*1000/1001 within 0.005 (was: fps * 1001 a whole number, which 29.97 is not) */
+    if (fabs(fps - round(fps) * 1000 / 1001) < 0.005)
         return (fp_take_rate){(uint32_t)round(fps) * 1000, 1001};
     return (fp_take_rate){(uint32_t)llround(fps * 1000), 1000};
 }

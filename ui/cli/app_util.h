@@ -233,7 +233,8 @@ int fp_app_rig_info(const char *path);
 int fp_app_take_info(const char *path);
 
 /** The take frame rate of a session loop at fps frames per second: N/1 for a whole number,
- *  else fps*1000/1000 (29.97 -> 30000/1001). */
+ *  N*1000/1001 within 0.005 of it (23.976 -> 24000/1001, 29.97 -> 30000/1001, 59.94 ->
+ *  60000/1001), else round(fps*1000)/1000. */
 fp_take_rate fp_app_take_rate(double fps);
 
 /** One line about a finished take to f: "PREFIX: take PATH: N frames, D dropped, timecode

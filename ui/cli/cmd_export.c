@@ -8,6 +8,7 @@
 #include "command.h"
 #include "fp_take_player.h"
 #include "fp_stack_player.h"
+#include "app_stack.h"
 #include "fp_error.h"
 #ifdef FP_HAVE_UI
 #include "fp_frame_render.h"
@@ -203,7 +204,7 @@ static uint64_t position(const range_end *e, size_t index, int64_t t_ns,
 {
     if (!e->timecode)
         return index;
-    return tc_in + fp_take_frames_in(t_ns - h->time_origin_ns, h->rate);
+    return tc_in + fp_take_frames_at(t_ns - h->time_origin_ns, h->rate);
 }
 
 static void progress(bool on, size_t done, size_t total, uint64_t written)
@@ -364,8 +365,8 @@ static int parse_range(const char *range, fp_take_rate rate, range_end *in, rang
 static void take_span(const range_end *e, const fp_take_header *h, const fp_take_summary *sum,
                       size_t frames, uint64_t tc_in, uint64_t *first, uint64_t *last)
 {
-    *first = e->timecode ? tc_in + fp_take_frames_in(sum->first_time_ns - h->time_origin_ns, h->rate) : 0;
-    *last = e->timecode ? tc_in + fp_take_frames_in(sum->last_time_ns - h->time_origin_ns, h->rate)
+    *first = e->timecode ? tc_in + fp_take_frames_at(sum->first_time_ns - h->time_origin_ns, h->rate) : 0;
+    *last = e->timecode ? tc_in + fp_take_frames_at(sum->last_time_ns - h->time_origin_ns, h->rate)
                         : frames - 1;
 }
 
@@ -721,6 +722,7 @@ static int export_take(const export_args *a, fp_take_player *p, sink *k, float *
                                              a->quiet, stdout))) {
         return status;
     }
+    fp_app_stack_limited_note("export", a->take_path, fp_take_player_stack(p), a->quiet);
     return fp_app_audio_export_write(h, wav, w.first_ns, k->last_t + (rate > 0 ? 1.0 / rate : 0), a->force,
                                      a->quiet, stdout, "export");
 }

@@ -7,6 +7,7 @@
 #include "fp_session_take.h"
 #include "fp_take_player.h"
 #include "fp_stack_player.h"
+#include "app_stack.h"
 #include "app_export.h"
 #include "app_audio.h"
 #include "app_link.h"
@@ -81,6 +82,13 @@ static int play_audio_prepare(fp_app_audio *a, const fp_take_header *h, bool for
         fprintf(stderr, "facepuppet play: the take has no soundtrack: give --audio FILE\n");
         return FP_EXIT_USAGE;
     }
+    struct stat st;
+    if (!a->path && fallback && stat(fallback, &st) && errno == ENOENT) { /* (fp_app_audio_prepare: "--audio: X") */
+        fprintf(stderr, "facepuppet play: the take's soundtrack %s is not there from this folder (a "
+                "relative path is the one given to the recording run, from the folder it ran in): "
+                "give it with --audio FILE\n", fallback);
+        return FP_EXIT_NOINPUT;
+    }
     int rc = fp_app_audio_prepare(a, "play", fallback, force);
     if (rc) return rc;
     if (a->playing && h->soundtrack_path && a->track.crc32 != h->soundtrack_crc32 && !quiet)
@@ -118,9 +126,11 @@ static void frame_timecode(const fp_take_header *h, int64_t time_ns, char *buf, 
     uint64_t f0;
     fp_timecode tc;
     buf[0] = '\0';
-    double k = (double)(time_ns - h->time_origin_ns) * 1e-9 * h->rate.num / h->rate.den;
-    if (k < 0 || fp_timecode_to_frames(&h->timecode_in, h->rate, &f0) ||
-        fp_timecode_from_frames(f0 + (uint64_t)llround(k), h->rate, h->timecode_in.drop, &tc))
+    /* (the take's formula, docs/take-format.md: rounding instead put a 60 fps frame on a
+     * 25 fps LTC frame not yet begun) */
+    if (time_ns < h->time_origin_ns || fp_timecode_to_frames(&h->timecode_in, h->rate, &f0) ||
+        fp_timecode_from_frames(f0 + fp_take_frames_at(time_ns - h->time_origin_ns, h->rate), h->rate,
+                                h->timecode_in.drop, &tc))
         return;
     fp_timecode_format(&tc, buf, n);
 }
@@ -465,6 +475,7 @@ static int play_main(int argc, char **argv)
         const uint64_t counts[3] = {frames, active, commits};
         print_played(take_path, r, &reach, fp_take_player_mm_per_unit(player), counts, out);
     }
+    fp_app_stack_limited_note("play", take_path, fp_take_player_stack(player), quiet);
 done:
     if (frames_made) rmdir(frames_out);
     fp_app_link_close(&link);

@@ -292,13 +292,16 @@ int fp_app_take_info(const char *path)
     char in[32], out[32], a[4096], b[4096]; /* a, b: the file's strings made UTF-8 text */
     fp_timecode_format(&h->timecode_in, in, sizeof in);
     fp_timecode_format(&s->timecode_out, out, sizeof out);
+    char span[64] = "(no intact frame)"; /* (a take killed before its first chunk: 0..0 is no range) */
+    if (s->frames)
+        snprintf(span, sizeof span, "(session frames %llu..%llu)", (unsigned long long)s->first_frame,
+                 (unsigned long long)s->last_frame);
     printf("%s\n  format       facepuppet take %u.%u\n  slate        %s\n  take         %u\n"
            "  date         %s\n  frame rate   %u/%u (%.3f fps)\n  timecode     %s - %s\n"
-           "  frames       %llu (session frames %llu..%llu)\n  duration     %.3f s\n",
+           "  frames       %llu %s\n  duration     %.3f s\n",
            path, s->version_major, s->version_minor, h->slate, h->take, fp_text_clean(h->date, a, sizeof a),
            h->rate.num, h->rate.den, (double)h->rate.num / h->rate.den, in, out,
-           (unsigned long long)s->frames, (unsigned long long)s->first_frame,
-           (unsigned long long)s->last_frame, s->duration_s);
+           (unsigned long long)s->frames, span, s->duration_s);
     printf("  mesh         %s (%llu vertices, crc32 %08x of its %s)\n",
            h->mesh_path ? fp_text_clean(h->mesh_path, a, sizeof a) : "-",
            (unsigned long long)h->mesh_vertices, h->mesh_crc32,
