@@ -1,6 +1,9 @@
 """Minimal OSC 1.0 encoding and decoding with the standard library (socket, struct), for the
-tests of the control surface and the stream (docs/osc.md). Types: i f d s b (and T F N)."""
+tests of the control surface and the stream (docs/osc.md). Types: i f d s b (and T F N).
+Also control_port: the port a `--control osc:0` process says it listens on."""
+import re
 import struct
+import time
 
 
 def _pad(b):
@@ -73,3 +76,17 @@ def decode(p):
         return address, args
     except (struct.error, IndexError) as e:
         raise ValueError(str(e))
+
+
+def control_port(p, err_path, timeout=120):
+    """The port process p (started with --control osc:0, its stderr to the file err_path) says
+    it listens on ("--control: listening on port N"), or None when it exits or the timeout
+    passes first (the caller kills it and fails, with the file's text)."""
+    t_end = time.time() + timeout
+    while time.time() < t_end and p.poll() is None:
+        with open(err_path) as f:
+            m = re.search(r"--control: listening on port (\d+)", f.read())
+        if m:
+            return int(m.group(1))
+        time.sleep(0.05)
+    return None

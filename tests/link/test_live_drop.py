@@ -51,12 +51,7 @@ p = subprocess.Popen([fp, "live", "-q", "--plugin-dir", plugdir, "--mesh", face,
                       "--control", "osc:0", "--stream", "osc:127.0.0.1:%d" % stream.getsockname()[1],
                       "--script", "wait seconds 3; drop %s; wait seconds 4; close" % other],
                      stdout=subprocess.DEVNULL, stderr=open(err_path, "w"), cwd=work)
-port = None
-t_end = time.time() + 120
-while port is None and time.time() < t_end and p.poll() is None:
-    m = re.search(r"--control: listening on port (\d+)", open(err_path).read())
-    port = int(m.group(1)) if m else None
-    time.sleep(0.05)
+port = fposc.control_port(p, err_path)
 if port is None:
     p.kill()
     fail("live did not listen: %s" % open(err_path).read())

@@ -8,7 +8,6 @@ commands queued until the performer went on.
 Usage: test_live_paused.py FACEPUPPET_BIN PLUGIN_DIR FACE WORK_DIR
 Prints "PASS" last on success; exit 1 with "FAIL: ..." otherwise."""
 import os
-import re
 import select
 import socket
 import subprocess
@@ -31,12 +30,7 @@ p = subprocess.Popen([fp, "live", "-q", "--plugin-dir", plugdir, "--mesh", face,
                       "--control", "osc:0", "--script",
                       "wait seconds 1.5; key space; print hud; wait seconds 6; key space; wait frames 2; close"],
                      stdout=subprocess.PIPE, stderr=open(err_path, "w"), cwd=work, text=True)
-port = None
-t_end = time.time() + 120
-while port is None and time.time() < t_end and p.poll() is None:
-    m = re.search(r"--control: listening on port (\d+)", open(err_path).read())
-    port = int(m.group(1)) if m else None
-    time.sleep(0.05)
+port = fposc.control_port(p, err_path)
 if port is None:
     p.kill()
     fail("live did not listen: %s" % open(err_path).read())
