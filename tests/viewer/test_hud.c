@@ -347,6 +347,18 @@ static void test_gpu_warp_rig(void **state)
     free(rest.px);
 }
 
+/* The header row of a joints CSV as the replay input reads it (../shared/data's *_joints_mm.csv): palm, direction, 5 x 4 joints. */
+static void write_csv_header(FILE *f)
+{
+    fputs("frame,timestamp_us,hand_id,hand_type,palm_x,palm_y,palm_z,palm_nx,palm_ny,palm_nz,"
+          "dir_x,dir_y,dir_z", f);
+    const char *fingers[] = {"thumb", "index", "middle", "ring", "pinky"}, *joints[] = {"mcp", "pip", "dip", "tip"};
+    for (int fi = 0; fi < 5; fi++)
+        for (int j = 0; j < 4; j++)
+            fprintf(f, ",%s_%s_x,%s_%s_y,%s_%s_z", fingers[fi], joints[j], fingers[fi], joints[j], fingers[fi], joints[j]);
+    fputs("\n", f);
+}
+
 /* Two poses of one right hand, 1.5 s apart: pose B moved dy up and dz toward the performer,
  * or (pinch) the five fingertips brought together; one: only the index finger near the face
  * (one centre: the fold-over guard's single map, which the shader draws). Replayed with
@@ -357,13 +369,7 @@ static void write_recording(char *path, size_t n, const char *name, double dy, d
     snprintf(path, n, "%s/%s", tmp, name);
     FILE *f = fopen(path, "w");
     assert_non_null(f);
-    fputs("frame,timestamp_us,hand_id,hand_type,palm_x,palm_y,palm_z,palm_nx,palm_ny,palm_nz,"
-          "dir_x,dir_y,dir_z", f);
-    const char *fingers[] = {"thumb", "index", "middle", "ring", "pinky"}, *joints[] = {"mcp", "pip", "dip", "tip"};
-    for (int fi = 0; fi < 5; fi++)
-        for (int j = 0; j < 4; j++)
-            fprintf(f, ",%s_%s_x,%s_%s_y,%s_%s_z", fingers[fi], joints[j], fingers[fi], joints[j], fingers[fi], joints[j]);
-    fputs("\n", f);
+    write_csv_header(f);
     for (int row = 0; row < 2; row++) {
         double ry = row ? dy : 0, rz = row ? dz : 0;
         fprintf(f, "%d,%d,7,right,40,%.1f,%.1f,0,-1,0,0,0,-1", row, row ? 1500000 : 0, 200 + ry, -40 + rz);
@@ -389,13 +395,7 @@ static void write_gap_recording(char *path, size_t n)
     snprintf(path, n, "%s/gap.csv", tmp);
     FILE *f = fopen(path, "w");
     assert_non_null(f);
-    fputs("frame,timestamp_us,hand_id,hand_type,palm_x,palm_y,palm_z,palm_nx,palm_ny,palm_nz,"
-          "dir_x,dir_y,dir_z", f);
-    const char *fingers[] = {"thumb", "index", "middle", "ring", "pinky"}, *joints[] = {"mcp", "pip", "dip", "tip"};
-    for (int fi = 0; fi < 5; fi++)
-        for (int j = 0; j < 4; j++)
-            fprintf(f, ",%s_%s_x,%s_%s_y,%s_%s_z", fingers[fi], joints[j], fingers[fi], joints[j], fingers[fi], joints[j]);
-    fputs("\n", f);
+    write_csv_header(f);
     for (int row = 0; row <= 60; row++)
         for (int side = 0; side < 2; side++) {
             if (side == 1 && row > 5 && row < 30) continue; /* the right hand lost */
