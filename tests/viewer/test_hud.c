@@ -347,7 +347,8 @@ static void test_gpu_warp_rig(void **state)
     free(rest.px);
 }
 
-/* The header row of a joints CSV as the replay input reads it (../shared/data's *_joints_mm.csv): palm, direction, 5 x 4 joints. */
+/* The header row of a joints CSV as the replay input reads it (../shared/data's
+ * *_joints_mm.csv): palm, direction, 5 x 4 joints. */
 static void write_csv_header(FILE *f)
 {
     fputs("frame,timestamp_us,hand_id,hand_type,palm_x,palm_y,palm_z,palm_nx,palm_ny,palm_nz,"
