@@ -40,4 +40,20 @@ cmp -s a.pc2 b.pc2 || fail "export --fps 24 and --resample 24 differ"
 "$fp" export "$take" --format pc2 --resample 0 --out c.pc2 >c.out 2>&1
 [ $? -eq 64 ] || fail "export --resample 0: want exit 64"
 grep -q -- "--resample" c.out || fail "export --resample 0: the message does not name --resample"
+# `facepuppet help CMD` (the top --help offers it) is `facepuppet CMD --help`, exit 0, for
+# every command listed there; an unknown CMD is usage (64); no arguments is usage (64).
+cmds=$("$fp" --help | sed -n '/^Commands:/,/^$/p' | awk 'NF>1 {print $1}')
+[ -n "$cmds" ] || fail "facepuppet --help lists no commands"
+for c in $cmds; do
+    "$fp" $c --help >want.out 2>&1; want=$?
+    "$fp" help $c >got.out 2>&1; got=$?
+    [ $want -eq 0 ] || fail "$c --help exited $want"
+    [ $got -eq 0 ] || fail "help $c exited $got"
+    cmp -s want.out got.out || { diff want.out got.out | head; fail "help $c differs from $c --help"; }
+done
+"$fp" help frob >u.out 2>&1
+[ $? -eq 64 ] || fail "help frob: want exit 64"
+grep -q "frob" u.out || fail "help frob: the message does not name frob"
+"$fp" >n.out 2>&1
+[ $? -eq 64 ] || fail "facepuppet with no arguments: want exit 64"
 echo ok

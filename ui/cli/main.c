@@ -51,7 +51,8 @@ static void usage(FILE *f)
                "Commands:\n");
     for (size_t i = 0; i < NCOMMANDS; i++)
         fprintf(f, "  %-10s %s\n", commands[i]->name, commands[i]->summary);
-    fprintf(f, "\nfacepuppet COMMAND --help shows a command's options.\n"
+    fprintf(f, "\nfacepuppet COMMAND --help (or facepuppet help COMMAND) shows a command's\n"
+               "options.\n"
                "Options: -h, --help   this text;  -V, --version   the version.\n\n"
                "Errors name the file and line, the option, the SPEC or the plugin at fault.\n"
                "Exit status (sysexits.h), the same for every command:\n"
@@ -87,6 +88,17 @@ int main(int argc, char **argv)
         return FP_EXIT_USAGE;
     }
     const char *name = argv[1];
+    /* `facepuppet help CMD` is `facepuppet CMD --help`, as git and cmake do it. */
+    if (!strcmp(name, "help") && argc >= 3) {
+        for (size_t i = 0; i < NCOMMANDS; i++) {
+            if (strcmp(commands[i]->name, argv[2])) continue;
+            char *help_argv[] = { argv[2], "--help", NULL };
+            return commands[i]->main(2, help_argv);
+        }
+        fprintf(stderr, "facepuppet help: unknown command '%s' (see facepuppet --help)\n",
+                argv[2]);
+        return FP_EXIT_USAGE;
+    }
     if (!strcmp(name, "-h") || !strcmp(name, "--help") || !strcmp(name, "help")) {
         usage(stdout);
         return FP_EXIT_OK;
