@@ -32,6 +32,19 @@ grep -q "^frame" "$tmp/out" && fail "the frame case ran with --subdivide 4"
 rc=$?
 [ $rc = 64 ] || fail "--subdivide with --case table1: exit $rc, expected 64"
 [ -z "$(ls -A "$tmp/o")" ] || fail "files left behind by the failed calls: $(ls -A "$tmp/o")"
+# an existing trace is refused before any work (73, named, untouched) unless --force
+echo "mine" >"$tmp/mine.csv"
+"$fp" bench --case frame --trace "$tmp/mine.csv" >"$tmp/out" 2>"$tmp/err"
+rc=$?
+[ $rc = 73 ] || fail "--trace onto an existing file: exit $rc, expected 73"
+grep -q -- "--trace $tmp/mine.csv: exists (--force to overwrite)" "$tmp/err" ||
+    fail "no message naming the existing trace: $(cat "$tmp/err")"
+grep -q "^frame" "$tmp/out" && fail "the frame case ran before the existing trace was refused"
+[ "$(cat "$tmp/mine.csv")" = mine ] || fail "the refused trace was changed"
+"$fp" bench --force --case table1 --trace "$tmp/mine.csv" >/dev/null 2>"$tmp/err"
+rc=$?
+[ $rc = 64 ] || fail "--force --case table1 --trace: exit $rc, expected 64 (--trace's case), not --force refused"
+grep -q "records the frame case" "$tmp/err" || fail "--force is not an option of bench: $(cat "$tmp/err")"
 
 # 2. a real run: one row per frame of each mesh, agreeing with the table it printed
 "$fp" bench --case frame --trace "$tmp/o/t.csv" >"$tmp/out" 2>"$tmp/err" ||

@@ -49,6 +49,19 @@ grep -q "wrote $tmp/fig3.png" "$tmp/err" || fail "no 'wrote' line: $(tail -2 "$t
 [ "$(grep -c '"case":"table1"' "$tmp/t1.jsonl")" = 40 ] || fail "expected 40 table1 rows on stdout"
 check_png "$tmp/fig3.png"
 ls -a "$tmp" | grep -q '^\.fig3\.png\.' && fail "a temporary PNG was left behind"
+# an existing PNG is refused before any work (73, named) unless --force, which replaces it
+sum=$(md5sum <"$tmp/fig3.png")
+"$fp" bench --quick --json --plot "$tmp/fig3.png" >"$tmp/t2.jsonl" 2>"$tmp/err"
+rc=$?
+[ $rc = 73 ] || fail "--plot onto an existing file: exit $rc, expected 73"
+grep -q -- "--plot $tmp/fig3.png: exists (--force to overwrite)" "$tmp/err" ||
+    fail "no message naming the existing PNG: $(cat "$tmp/err")"
+[ -s "$tmp/t2.jsonl" ] && fail "the bench ran before the existing PNG was refused"
+[ "$(md5sum <"$tmp/fig3.png")" = "$sum" ] || fail "the refused PNG was changed"
+"$fp" bench --quick --plot "$tmp/fig3.png" --force >/dev/null 2>"$tmp/err" ||
+    fail "bench --plot --force exited $?: $(tail -3 "$tmp/err")"
+grep -q "wrote $tmp/fig3.png" "$tmp/err" || fail "--force: no 'wrote' line: $(tail -2 "$tmp/err")"
+check_png "$tmp/fig3.png"
 
 # 2. the script alone on the same rows (stdin and --in)
 "$py" "$script" --in "$tmp/t1.jsonl" --out "$tmp/direct.png" || fail "script --in"

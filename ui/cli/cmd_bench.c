@@ -25,7 +25,8 @@ static void usage(FILE *f)
     fprintf(f,
             "usage: facepuppet bench [--quick] [--json] [--case NAME] [--no-contact-guard]\n"
             "                        [--exact-frames] [--every-frame] [--no-rig] [--subdivide L[,L...]]\n"
-            "                        [--mapping SPEC] [--trace FILE.csv] [--plot FILE.png] [--help]\n\n"
+            "                        [--mapping SPEC] [--trace FILE.csv] [--plot FILE.png] [--force]\n"
+            "                        [--help]\n\n"
             "Times the CSRBF engine (medians over repeated updates; the lowest median of 3\n"
             "rounds, 2 with --quick, as the machine may be shared) beside references measured\n"
             "in the same run. Cases:\n"
@@ -101,9 +102,12 @@ static void usage(FILE *f)
             "           R for the four meshes, anchored and unanchored, ours beside the paper's,\n"
             "           with plot_fig3.py (share/facepuppet/ when installed, else the source\n"
             "           tree's bench/) and matplotlib; python3 is $FACEPUPPET_PYTHON, else\n"
-            "           /usr/bin/python3, else the PATH's. FILE.png is written whole or not at all\n\n"
+            "           /usr/bin/python3, else the PATH's. FILE.png is written whole or not at all\n"
+            "  --force  overwrite FILE.csv or FILE.png when it exists; without it, an existing\n"
+            "           one is refused before any work (73)\n\n"
             "Exit status: 0 done, 64 usage, 69 --plot without python3, matplotlib or the script,\n"
-            "70 out of memory, 73 FILE.png or FILE.csv not writable, 78 a plugin missing or failing\n"
+            "70 out of memory, 73 FILE.png or FILE.csv not writable or existing without --force,\n"
+            "78 a plugin missing or failing\n"
             "(case frame: --mapping names no mapping plugin), 1 an engine call failed.\n");
 }
 
@@ -176,6 +180,17 @@ static int open_output(const char *path, const char *stdio_mode, fp_file_output 
         break;
     }
     return fp_app_exit_code(rc, FP_APP_OUTPUT);
+}
+
+/* An output that exists is refused before any work, as every command does (README: no
+ * command overwrites a file without being asked), unless --force. Returns 0, or 73 with a
+ * message naming the option and the file. */
+static int refuse_existing(const char *option, const char *path, bool force)
+{
+    struct stat st;
+    if (force || stat(path, &st)) return FP_EXIT_OK; /* (a link's end: what would be replaced) */
+    fprintf(stderr, "facepuppet bench: %s %s: exists (--force to overwrite)\n", option, path);
+    return FP_EXIT_CANTCREAT;
 }
 
 /* o's temporary made o->path (fsync, rename: fp_file_output_commit). Returns 0 or a negative
@@ -284,9 +299,12 @@ static int bench_main(int argc, char **argv)
 {
     fp_bench_options o = {0};
     const char *plot = NULL, *trace = NULL;
+    bool force = false;
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--quick")) {
             o.quick = true;
+        } else if (!strcmp(argv[i], "--force")) {
+            force = true;
         } else if (!strcmp(argv[i], "--json")) {
             o.json = true;
         } else if (!strcmp(argv[i], "--no-contact-guard")) {
@@ -347,7 +365,8 @@ static int bench_main(int argc, char **argv)
             fprintf(stderr, "facepuppet bench: --plot draws the table1 case, not '%s'\n", o.only);
             return FP_EXIT_USAGE;
         }
-        return bench_plot(&o, plot);
+        int ec = refuse_existing("--plot", plot, force);
+        return ec ? ec : bench_plot(&o, plot);
     }
     if (o.subdivide && o.only && strcmp(o.only, "frame")) {
         fprintf(stderr, "facepuppet bench: --subdivide chooses the frame case's meshes (--case is '%s')\n", o.only);
@@ -360,7 +379,8 @@ static int bench_main(int argc, char **argv)
     /* the trace's temporary file first, so that an unwritable folder fails before the work */
     fp_file_output out = {.fd = -1};
     if (trace) {
-        int ec = open_output(trace, "w", &out);
+        int ec = refuse_existing("--trace", trace, force);
+        if (!ec) ec = open_output(trace, "w", &out);
         if (ec) return ec;
         trace = out.path;
         o.trace = out.f;
