@@ -98,16 +98,30 @@ static int play_audio_prepare(fp_app_audio *a, const fp_take_header *h, bool for
     return 0;
 }
 
-/* The summary line: the take, its timecodes, rating and description, what was played. */
-static void print_played(const char *take_path, const fp_take_reader *r, fp_app_reach *reach,
-                         double mm_per_unit, const uint64_t counts[3], const char *out)
+/* The summary line: the take, its timecodes, rating and description, what was played. How
+ * far the skin followed is the take's own (its end chunk, as `info` and the recording run
+ * said it) where it has one and is played alone: the control sets it stores are what the rig
+ * allowed, so a reach measured against them on playback says 100% where the performer's
+ * fingertips asked for more. A stack, or a take cut before its end chunk: measured here. */
+static void print_played(const char *take_path, const fp_take_reader *r, bool stack,
+                         fp_app_reach *reach, double mm_per_unit, const uint64_t counts[3],
+                         const char *out)
 {
     const fp_take_header *h = fp_take_reader_header(r);
+    const fp_take_summary *sum = fp_take_reader_summary(r);
     char in[32], tcout[32];
     fp_timecode_format(&h->timecode_in, in, sizeof in);
-    fp_timecode_format(&fp_take_reader_summary(r)->timecode_out, tcout, sizeof tcout);
+    fp_timecode_format(&sum->timecode_out, tcout, sizeof tcout);
     char reach_text[400];
-    fp_app_reach_text(reach, mm_per_unit, reach_text, sizeof reach_text);
+    if (!stack && sum->reach.vectors) {
+        reach_text[0] = ';';
+        reach_text[1] = ' ';
+        fp_app_reach_sentence(reach_text + 2, sizeof reach_text - 2, sum->reach.median,
+                              (size_t)sum->reach.vectors, sum->reach.p10,
+                              sum->reach.longest_drag_mm, "", (size_t)sum->reach.held);
+    } else {
+        fp_app_reach_text(reach, mm_per_unit, reach_text, sizeof reach_text);
+    }
     char rated[16] = "", desc[600] = ""; /* the take's rating and description, when set */
     if (h->rating) snprintf(rated, sizeof rated, ", rated %d/5", h->rating);
     if (h->description && h->description[0]) {
@@ -473,7 +487,8 @@ static int play_main(int argc, char **argv)
     if ((status = play_finish_outputs(player, out, &ex, export_fmt, export_file, quiet))) goto done;
     if (!quiet) {
         const uint64_t counts[3] = {frames, active, commits};
-        print_played(take_path, r, &reach, fp_take_player_mm_per_unit(player), counts, out);
+        print_played(take_path, r, fp_take_player_stack(player) != NULL, &reach,
+                     fp_take_player_mm_per_unit(player), counts, out);
     }
     fp_app_stack_limited_note("play", take_path, fp_take_player_stack(player), quiet);
 done:
