@@ -85,6 +85,19 @@ for c in run play export pose calibrate; do
     "$fp" $c --help | grep -q -- "--force" || fail "$c --help does not name --force"
 done
 echo "play, export, pose, calibrate: refused, --force: ok"
+# live (where this build has the viewer): --out and --screenshot refused before the window
+# opens (no display needed to see it); with --force the check passes and live goes on to the
+# window (here without a display: any status but 73), the file untouched
+if "$fp" live --help >/dev/null 2>&1; then
+    echo "stale" >shot.png
+    refused shot.png "$fp" live "${pd[@]}" --frames 1 --screenshot shot.png
+    refused old.obj "$fp" live "${pd[@]}" --frames 1 -o old.obj
+    env -u DISPLAY -u WAYLAND_DISPLAY "$fp" live "${pd[@]}" --frames 1 --screenshot shot.png --force \
+        >"$tmp/x.out" 2>&1
+    [ $? -ne 73 ] || { cat "$tmp/x.out"; fail "live --screenshot --force: still refused"; }
+    "$fp" live --help | grep -q -- "--force" || fail "live --help does not name --force"
+    echo "live: --out, --screenshot refused: ok"
+fi
 
 # ---- 2. folders of frames, the size estimate --------------------------------------------------
 expect 0 "$fp" play "${pd[@]}" "$take" --frames-out pf

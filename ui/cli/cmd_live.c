@@ -45,11 +45,11 @@ static void usage(FILE *f)
         "Options of live:\n"
         "  -o, --out FILE         write the final shape when the window closes (a file that\n"
         "                         exists is refused before the window opens, exit 73)\n"
-        "      --force            overwrite an --out that exists\n"
+        "      --force            overwrite an --out or --screenshot that exists\n"
         "      --size WxH         window size (default 1280x720)\n"
         "      --frames N         stop after N frames\n"
         "      --screenshot FILE  write the last frame as PNG (with --frames N: run N frames,\n"
-        "                         write, exit)\n"
+        "                         write, exit; one that exists is refused as --out is)\n"
         "      --script TEXT      scripted actions, or @FILE to read them from FILE:\n"
         "                         'wait hands|end|frames N|seconds S; key K; shot FILE;\n"
         "                         radius R; drop FILE; print hud|messages; close' (seconds\n"
@@ -420,9 +420,11 @@ static int live_main(int argc, char **argv)
     if (!orc && snd.audio.path && !snd.audio.offset_given) /* the line where the base heard it */
         fp_app_over_soundtrack_offset(&over, &snd.audio.offset_s);
     if (!orc) orc = fp_app_link_check("live", sopt.control, sopt.stream);
-    /* an --out that exists is refused before the window (README: no command overwrites a
+    /* an --out or --screenshot that exists is refused before the window (README: no command overwrites a
      * file without being asked) */
     if (!orc && vo.out) orc = fp_app_check_new_output("facepuppet live", "--out", vo.out, force);
+    if (!orc && vo.screenshot)
+        orc = fp_app_check_new_output("facepuppet live", "--screenshot", vo.screenshot, force);
     fp_app_over_free(&over);
     if (orc) return orc;
     vo.duration_s = sopt.duration_s;
