@@ -51,6 +51,18 @@ for c in $cmds; do
     [ $got -eq 0 ] || fail "help $c exited $got"
     cmp -s want.out got.out || { diff want.out got.out | head; fail "help $c differs from $c --help"; }
 done
+# an unknown option is usage (64), said as "facepuppet CMD: ..." (getopt's message named the
+# command alone: "run: unrecognized option")
+for c in $cmds; do
+    "$fp" $c --no-such-option-xyz >o.out 2>&1; rc=$?
+    [ $rc -eq 64 ] || { cat o.out; fail "$c --no-such-option-xyz: exit $rc, want 64"; }
+    head -1 o.out | grep -q "^facepuppet $c: " || { cat o.out; fail "$c: the message does not start 'facepuppet $c: '"; }
+done
+for v in "takes rate" "takes describe" "plugins check"; do
+    "$fp" $v --no-such-option-xyz >o.out 2>&1; rc=$?
+    [ $rc -eq 64 ] || { cat o.out; fail "$v --no-such-option-xyz: exit $rc, want 64"; }
+    head -1 o.out | grep -q "^facepuppet $v: " || { cat o.out; fail "$v: the message does not start 'facepuppet $v: '"; }
+done
 "$fp" help frob >u.out 2>&1
 [ $? -eq 64 ] || fail "help frob: want exit 64"
 grep -q "frob" u.out || fail "help frob: the message does not name frob"

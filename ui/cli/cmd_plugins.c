@@ -331,7 +331,11 @@ out:
 
 static int plugins_main(int argc, char **argv)
 {
-    if (argc >= 2 && !strcmp(argv[1], "check")) return check_main(argc - 1, argv + 1);
+    if (argc >= 2 && !strcmp(argv[1], "check")) {
+        static char prog[] = "facepuppet plugins check"; /* getopt's messages start with it */
+        argv[1] = prog;
+        return check_main(argc - 1, argv + 1);
+    }
     static const struct option opts[] = {{"json", no_argument, 0, 'j'},
                                          {"plugin-dir", required_argument, 0, 'P'},
                                          {"help", no_argument, 0, 'h'},

@@ -187,6 +187,9 @@ static int takes_edit(int argc, char **argv)
     static const struct option opts[] = {{"force", no_argument, 0, 'f'},
                                          {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     const bool rate = !strcmp(argv[0], "rate");
+    char prog[48]; /* getopt's messages start "facepuppet takes VERB: " */
+    snprintf(prog, sizeof prog, "facepuppet takes %s", rate ? "rate" : "describe");
+    argv[0] = prog;
     fp_take_edit e = {0};
     optind = 1;
     for (int c; (c = getopt_long(argc, argv, "+h", opts, NULL)) != -1;) {
@@ -201,7 +204,7 @@ static int takes_edit(int argc, char **argv)
         argc--;
     }
     if (argc - optind != 2) {
-        fprintf(stderr, "facepuppet takes %s: give %s (see --help)\n", argv[0],
+        fprintf(stderr, "%s: give %s (see --help)\n", prog,
                 rate ? "TAKE N" : "TAKE TEXT (quote the text: one argument)");
         return FP_EXIT_USAGE;
     }
@@ -223,13 +226,13 @@ static int takes_edit(int argc, char **argv)
     e.description = rate ? NULL : arg;
     struct stat st;
     if (stat(path, &st)) { /* (a take missing is an input: 66, not an output's 73) */
-        fprintf(stderr, "facepuppet takes %s: %s: %s\n", argv[0], path, strerror(errno));
+        fprintf(stderr, "%s: %s: %s\n", prog, path, strerror(errno));
         return fp_app_exit_code(-errno, FP_APP_INPUT);
     }
     char err[1024];
     int rc = fp_take_edit_header(path, &e, err, sizeof err);
     if (rc) {
-        fprintf(stderr, "facepuppet takes %s: %s%s\n", argv[0], err,
+        fprintf(stderr, "%s: %s%s\n", prog, err,
                 rc == -EBUSY ? " (--force rewrites it anyway)" : "");
         return fp_app_exit_code(rc, FP_APP_OUTPUT);
     }

@@ -89,10 +89,13 @@ int main(int argc, char **argv)
     }
     const char *name = argv[1];
     /* `facepuppet help CMD` is `facepuppet CMD --help`, as git and cmake do it. */
+    /* a command's argv[0] is "facepuppet CMD": getopt's messages start with it */
+    static char prog[64];
     if (!strcmp(name, "help") && argc >= 3) {
         for (size_t i = 0; i < NCOMMANDS; i++) {
             if (strcmp(commands[i]->name, argv[2])) continue;
-            char *help_argv[] = { argv[2], "--help", NULL };
+            snprintf(prog, sizeof prog, "facepuppet %s", commands[i]->name);
+            char *help_argv[] = { prog, "--help", NULL };
             return commands[i]->main(2, help_argv);
         }
         fprintf(stderr, "facepuppet help: unknown command '%s' (see facepuppet --help)\n",
@@ -112,8 +115,12 @@ int main(int argc, char **argv)
     if (!strcmp(name, FP_ISOLATE_HELPER_ARG)) return fp_isolate_helper_main(argc, argv);
     /* A fatal signal inside a plugin call names the plugin, the call and the frame. */
     fp_plugin_crash_install();
-    for (size_t i = 0; i < NCOMMANDS; i++)
-        if (!strcmp(commands[i]->name, name)) return commands[i]->main(argc - 1, argv + 1);
+    for (size_t i = 0; i < NCOMMANDS; i++) {
+        if (strcmp(commands[i]->name, name)) continue;
+        snprintf(prog, sizeof prog, "facepuppet %s", commands[i]->name);
+        argv[1] = prog;
+        return commands[i]->main(argc - 1, argv + 1);
+    }
     fprintf(stderr, "facepuppet: unknown command '%s' (see facepuppet --help)\n", name);
     return FP_EXIT_USAGE;
 }
