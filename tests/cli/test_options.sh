@@ -58,6 +58,13 @@ for c in $cmds; do
     [ $rc -eq 64 ] || { cat o.out; fail "$c --no-such-option-xyz: exit $rc, want 64"; }
     head -1 o.out | grep -q "^facepuppet $c: " || { cat o.out; fail "$c: the message does not start 'facepuppet $c: '"; }
 done
+# bench's values: a missing one is named (was "unknown option '--case'"), levels are digits
+"$fp" bench --case >o.out 2>&1; rc=$?
+[ $rc -eq 64 ] && grep -q "'--case' requires an argument" o.out || { cat o.out; fail "bench --case: exit $rc"; }
+for v in " 2" "2," "0x2" "+2" "4"; do
+    "$fp" bench --subdivide "$v" --case nope >o.out 2>&1; rc=$?
+    [ $rc -eq 64 ] && grep -q "subdivide '$v'" o.out || { cat o.out; fail "bench --subdivide '$v': exit $rc"; }
+done
 for v in "takes rate" "takes describe" "plugins check"; do
     "$fp" $v --no-such-option-xyz >o.out 2>&1; rc=$?
     [ $rc -eq 64 ] || { cat o.out; fail "$v --no-such-option-xyz: exit $rc, want 64"; }

@@ -8,6 +8,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <getopt.h>
 #include <spawn.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -297,54 +298,58 @@ done:
 
 static int bench_main(int argc, char **argv)
 {
+    enum { O_QUICK = 256, O_FORCE, O_JSON, O_NOGUARD, O_EXACT, O_NORIG, O_EVERY, O_SUBDIV, O_MAPPING,
+           O_CASE, O_PLOT, O_TRACE };
+    static const struct option opts[] = {
+        {"quick", no_argument, 0, O_QUICK},           {"force", no_argument, 0, O_FORCE},
+        {"json", no_argument, 0, O_JSON},             {"no-contact-guard", no_argument, 0, O_NOGUARD},
+        {"exact-frames", no_argument, 0, O_EXACT},    {"no-rig", no_argument, 0, O_NORIG},
+        {"every-frame", no_argument, 0, O_EVERY},     {"subdivide", required_argument, 0, O_SUBDIV},
+        {"mapping", required_argument, 0, O_MAPPING}, {"case", required_argument, 0, O_CASE},
+        {"plot", required_argument, 0, O_PLOT},       {"trace", required_argument, 0, O_TRACE},
+        {"help", no_argument, 0, 'h'},                {0, 0, 0, 0}};
     fp_bench_options o = {0};
     const char *plot = NULL, *trace = NULL;
     bool force = false;
-    for (int i = 1; i < argc; i++) {
-        if (!strcmp(argv[i], "--quick")) {
-            o.quick = true;
-        } else if (!strcmp(argv[i], "--force")) {
-            force = true;
-        } else if (!strcmp(argv[i], "--json")) {
-            o.json = true;
-        } else if (!strcmp(argv[i], "--no-contact-guard")) {
-            o.no_contact_guard = true;
-        } else if (!strcmp(argv[i], "--exact-frames")) {
-            o.exact_frames = true;
-        } else if (!strcmp(argv[i], "--no-rig")) {
-            o.no_rig = true;
-        } else if (!strcmp(argv[i], "--every-frame")) {
-            o.every_frame = true;
-        } else if (!strcmp(argv[i], "--subdivide") && i + 1 < argc) {
-            const char *v = argv[++i];
-            char *end;
+    optind = 1;
+    for (int c; (c = getopt_long(argc, argv, "h", opts, NULL)) != -1;) {
+        switch (c) {
+        case O_QUICK: o.quick = true; break;
+        case O_FORCE: force = true; break;
+        case O_JSON: o.json = true; break;
+        case O_NOGUARD: o.no_contact_guard = true; break;
+        case O_EXACT: o.exact_frames = true; break;
+        case O_NORIG: o.no_rig = true; break;
+        case O_EVERY: o.every_frame = true; break;
+        case O_MAPPING: o.mapping = optarg; break;
+        case O_CASE: o.only = optarg; break;
+        case O_PLOT: plot = optarg; break;
+        case O_TRACE: trace = optarg; break;
+        case O_SUBDIV: {
+            const char *v = optarg;
             o.subdivide = 0;
-            do {
-                long l = strtol(v, &end, 10);
-                if (end == v || l < 1 || l > FP_BENCH_MAX_LEVEL || (*end && *end != ',')) {
+            for (;;) { /* digits only: no sign, space or hex */
+                long l = 0;
+                const char *d = v;
+                while (*v >= '0' && *v <= '9' && l <= FP_BENCH_MAX_LEVEL) l = 10 * l + (*v++ - '0');
+                if (v == d || l < 1 || l > FP_BENCH_MAX_LEVEL || (*v && *v != ',') || (*v == ',' && !v[1])) {
                     fprintf(stderr, "facepuppet bench: --subdivide '%s': levels 1 to %d, comma-separated\n",
-                            argv[i], FP_BENCH_MAX_LEVEL);
+                            optarg, FP_BENCH_MAX_LEVEL);
                     return FP_EXIT_USAGE;
                 }
                 o.subdivide |= 1u << l;
-                v = end + (*end == ',');
-            } while (*end);
-        } else if (!strcmp(argv[i], "--mapping") && i + 1 < argc) {
-            o.mapping = argv[++i];
-        } else if (!strcmp(argv[i], "--case") && i + 1 < argc) {
-            o.only = argv[++i];
-        } else if (!strcmp(argv[i], "--plot") && i + 1 < argc) {
-            plot = argv[++i];
-        } else if (!strcmp(argv[i], "--trace") && i + 1 < argc) {
-            trace = argv[++i];
-        } else if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
-            usage(stdout);
-            return FP_EXIT_OK;
-        } else {
-            fprintf(stderr, "facepuppet bench: unknown option '%s'\n", argv[i]);
-            usage(stderr);
-            return FP_EXIT_USAGE;
+                if (!*v++) break;
+            }
+            break;
         }
+        case 'h': usage(stdout); return FP_EXIT_OK;
+        default: usage(stderr); return FP_EXIT_USAGE;
+        }
+    }
+    if (optind < argc) {
+        fprintf(stderr, "facepuppet bench: unexpected argument '%s'\n", argv[optind]);
+        usage(stderr);
+        return FP_EXIT_USAGE;
     }
     if (o.only) {
         size_t c = 0;
