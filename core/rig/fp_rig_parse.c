@@ -212,11 +212,11 @@ static int parse_mesh(const fpr_ctx *c, fp_rig *r, const cJSON *root)
     r->n = (size_t)n;
     char crc[16] = "";
     if ((rc = get_string(c, m, "mesh", "positions_crc32", true, crc, sizeof crc))) return rc;
-    char *end = NULL;
-    unsigned long v = strtoul(crc, &end, 16);
-    if (strlen(crc) != 8 || !end || *end)
+    /* exactly 8 hex digits: strtoul alone took "0x123456", " 1234567", "+1234567" and
+     * "-0000001" (that one as ffffffff) */
+    if (strlen(crc) != 8 || strspn(crc, "0123456789abcdefABCDEF") != 8)
         return fpr_bad(c, "mesh.positions_crc32", "expected 8 hexadecimal digits, got \"%s\"", crc);
-    r->crc = (uint32_t)v;
+    r->crc = (uint32_t)strtoul(crc, NULL, 16);
     return 0;
 }
 
@@ -673,9 +673,12 @@ int fp_rig_load(const char *path, fp_rig **out, char *err, size_t errlen)
     if (!path || !out) return fp_errorf(err, errlen, -EINVAL, "fp_rig_load: NULL argument");
     char *buf;
     size_t len;
-    int code = fp_file_read_all(path, (size_t)1 << 30, &buf, &len); /* (a folder, FIFO or
-                                                                       device: refused) */
-    if (code == -EFBIG) return fp_errorf(err, errlen, -EBADMSG, "%s: larger than 1 GiB", path);
+    /* (a folder, FIFO or device: refused). At most FP_RIG_FILE_MAX: cJSON keeps some 80 bytes
+     * a value, 40 times a file of "0,0,..." (1 GiB allowed was 40 GB: the OOM killer) */
+    int code = fp_file_read_all(path, FP_RIG_FILE_MAX, &buf, &len);
+    if (code == -EFBIG)
+        return fp_errorf(err, errlen, -EBADMSG, "%s: larger than %d MiB (a rig file is kilobytes)", path,
+                         (int)(FP_RIG_FILE_MAX >> 20));
     if (code == -ENOMEM) return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", path);
     if (code == -EIO) return fp_errorf(err, errlen, -EIO, "%s: read error", path);
     if (code) return fp_errorf(err, errlen, code, "%s: %s", path, fp_file_error_text(code));
