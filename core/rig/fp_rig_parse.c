@@ -500,6 +500,28 @@ static int parse_weights(const fpr_ctx *c, fp_rig *r, const cJSON *wj)
     return rc;
 }
 
+/* The jaw's outline in the sagittal (forward, up) plane: the back border hinge -> gonion and the
+ * lower border gonion -> menton must be lines (a gonion on the menton or on the hinge left
+ * that border no direction: its fade was silently off, the whole neck turned with the jaw). */
+static int check_outline(const fpr_ctx *c, const rig_geom *g)
+{
+    double zy[3][2]; /* hinge centre, gonion, menton */
+    const double *pt[3] = {NULL, g->gonion, g->menton};
+    for (int k = 0; k < 3; k++) {
+        double d[3];
+        for (int i = 0; i < 3; i++)
+            d[i] = (k ? pt[k][i] : 0.5 * (g->hinge_r[i] + g->hinge_l[i])) - 0.5 * (g->hinge_r[i] + g->hinge_l[i]);
+        zy[k][0] = fp_dot3(d, g->fwd), zy[k][1] = fp_dot3(d, g->up);
+    }
+    if (!(hypot(zy[1][0] - zy[2][0], zy[1][1] - zy[2][1]) > 0))
+        return fpr_bad(c, "jaw.falloff.gonion", "lies on the menton in the (forward, up) plane: the jaw's lower border "
+                       "gonion -> menton has no direction");
+    if (!(hypot(zy[1][0], zy[1][1]) > 0))
+        return fpr_bad(c, "jaw.falloff.gonion", "lies on the hinge in the (forward, up) plane: the jaw's back border "
+                       "hinge -> gonion has no direction");
+    return 0;
+}
+
 static int parse_jaw(const fpr_ctx *c, fp_rig *r, const cJSON *root)
 {
     char p[512];
@@ -584,6 +606,7 @@ static int parse_jaw(const fpr_ctx *c, fp_rig *r, const cJSON *root)
     if (!(r->geom.lip_band > 0) || !(r->geom.cheek_band > 0) || !(r->geom.neck_band > 0) || !(r->geom.back_band > 0) ||
         !(r->geom.cheek_distance > 0))
         return fpr_bad(c, "jaw.falloff", "the bands and cheek_distance must be > 0");
+    if ((rc = check_outline(c, &r->geom))) return rc;
     const cJSON *wj;
     if ((rc = get_object(c, jaw, "jaw", "weights", false, &wj, p, sizeof p))) return rc;
     return wj ? parse_weights(c, r, wj) : 0;
@@ -636,7 +659,7 @@ int fp_rig_parse(const char *json, size_t len, const char *name, fp_rig **out, c
     double ver = 0;
     if ((rc = get_number(&c, root, "", "version", true, 0, 1e6, &ver))) goto done;
     if (ver != FP_RIG_FORMAT_VERSION) {
-        rc = fpr_bad(&c, "version", "this facepuppet reads version %d, the file is %g", FP_RIG_FORMAT_VERSION, ver);
+        rc = fpr_bad(&c, "version", "this facepuppet reads version %d, the file is %.15g", FP_RIG_FORMAT_VERSION, ver);
         goto done;
     }
     char desc[2048];

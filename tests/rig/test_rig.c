@@ -822,6 +822,11 @@ static void test_broken_files(void **state)
         {"\"right\": [", "\"right\": [\"a\", ", "jaw.hinge.right"},
         {"\"right\": [", "\"right\": [0, 0, 0], \"x\": [", "jaw.hinge.x"},
         {"\"open_degrees\": 29.9", "\"open_degrees\": 90", "jaw.open_degrees"},
+        /* (%g said "reads version 1, the file is 1") */
+        {"\"version\": 1", "\"version\": 1.0000001", "the file is 1.0000001"},
+        /* the jaw outline degenerate: gonion on menton, gonion on the hinge (in the sagittal plane) */
+        {"\"gonion\": [5.3, -5.0, 1.6]", "\"gonion\": [4.0, -8.0, 9.2]", "jaw.falloff.gonion: lies on the menton"},
+        {"\"gonion\": [5.3, -5.0, 1.6]", "\"gonion\": [3.0, 0.5, 2.3]", "jaw.falloff.gonion: lies on the hinge"},
         {"\"lip_band\": ", "\"lip_band\": -", "jaw.falloff.lip_band"},
         {"\"ramp\": ", "\"ramp\": null, \"r\": ", "mobility.r"},
         {"\"name\": \"jaw.open\"", "\"name\": \"jaw.shut\"", "channels"},
