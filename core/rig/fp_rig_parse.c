@@ -617,6 +617,15 @@ int fp_rig_parse(const char *json, size_t len, const char *name, fp_rig **out, c
     if (out) *out = NULL;
     if (!json || !out) return fp_errorf(err, errlen, -EINVAL, "fp_rig_parse: NULL argument");
     fpr_ctx c = {name ? name : "(rig)", err, errlen};
+    /* a \u0000 in a string: cJSON ends the string there, so "ict\u0000x" was read as "ict"
+     * (a name, a landmark's key) without a word. Escapes are two characters ("\\" too). */
+    for (const char *q = json; q < json + len && (q = memchr(q, '\\', (size_t)(json + len - q))); q += 2)
+        if ((size_t)(json + len - q) >= 6 && !memcmp(q, "\\u0000", 6)) {
+            long line;
+            fp_text_line_col(json, q, &line, NULL);
+            return fp_errorf(err, errlen, -EBADMSG, "%s:%ld: \\u0000 (a NUL character) in a string (byte %zu)",
+                             c.file, line, (size_t)(q - json));
+        }
     const char *end = NULL;
     cJSON *root = cJSON_ParseWithLengthOpts(json, len, &end, false);
     const char *rest = root ? fp_text_after_space(end, json + len) : NULL;

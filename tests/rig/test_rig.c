@@ -835,6 +835,8 @@ static void test_broken_files(void **state)
         {"{", "[", ""},
         /* a glide of more than half the joints' distance (1e308 made the posed jaw infinite) */
         {"\"name\": \"ict-facekit\"", "\"name\": \"ict\\u001b[31m\"", "name"}, /* an ESC: no text */
+        /* a NUL: cJSON ended the string there (read as "ict", accepted) */
+        {"\"name\": \"ict-facekit\"", "\"name\": \"ict\\u0000x\"", "broken.json:4: \\u0000"},
         {"\"glide\": [0.735, 0.515]", "\"glide\": [1e308, 0.515]", "jaw.glide[0]"},
         {"\"glide\": [0.735, 0.515]", "\"glide\": [0.735, -100]", "jaw.glide[1]"},
         /* where the condyles start to slide: a fraction of the opening below 0.95 */
@@ -871,6 +873,13 @@ static void test_broken_files(void **state)
         assert_non_null(strstr(err, cases[i].field));
         assert_true(strlen(err) < 400); /* (numbers as %g: 1e308 was 309 digits) */
         free(bad);
+    }
+    { /* an escaped backslash before u0000 is text, not a NUL: accepted */
+        char *txt = edit(good, "\"description\": \"ICT", "\"description\": \"\\\\u0000 ICT");
+        assert_non_null(strstr(txt, "\"\\\\u0000 ICT"));
+        assert_int_equal(fp_rig_parse(txt, strlen(txt), "bs.json", &r, err, sizeof err), 0);
+        fp_rig_free(&r);
+        free(txt);
     }
     { /* one JSON value only: text after it is refused, white space is not */
         size_t gl = strlen(good);
