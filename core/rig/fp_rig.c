@@ -269,7 +269,8 @@ int fp_rig_find(const char *dir, size_t n, const float *pos, char *path_out, siz
     qsort(names, count, sizeof *names, by_name);
     uint32_t crc = fp_rig_positions_crc32(n, pos);
     char by_count[4096] = "";
-    int count_matches = 0;
+    int count_matches = 0, unread = 0;
+    char first_unread[300] = ""; /* the first file that did not parse: why (said when none fits) */
     int rc = -ENOENT;
     for (size_t i = 0; i < count; i++) {
         if (!names[i]) continue;
@@ -286,6 +287,8 @@ int fp_rig_find(const char *dir, size_t n, const float *pos, char *path_out, siz
                 snprintf(by_count, sizeof by_count, "%s", path);
             }
             fp_rig_free(&r);
+        } else if (!unread++) {
+            snprintf(first_unread, sizeof first_unread, "%s", e2);
         }
     }
     for (size_t i = 0; i < count; i++) free(names[i]);
@@ -296,10 +299,14 @@ int fp_rig_find(const char *dir, size_t n, const float *pos, char *path_out, siz
         strcpy(path_out, by_count);
         return 0;
     }
+    char why[400] = ""; /* (an artist's own rig with an error was skipped without a word) */
+    if (unread)
+        snprintf(why, sizeof why, "; %d file%s not read as a rig, the first: %s", unread, unread > 1 ? "s" : "",
+                 first_unread);
     if (count_matches > 1)
-        return fp_errorf(err, errlen, -ENOENT, "%s: %d rigs fit %zu vertices and none has the mesh's checksum %08x: name one with --rig",
-                         dir, count_matches, n, crc);
-    return fp_errorf(err, errlen, -ENOENT, "%s: no rig fits this mesh (%zu vertices, checksum %08x)", dir, n, crc);
+        return fp_errorf(err, errlen, -ENOENT, "%s: %d rigs fit %zu vertices and none has the mesh's checksum %08x: name one with --rig%s",
+                         dir, count_matches, n, crc, why);
+    return fp_errorf(err, errlen, -ENOENT, "%s: no rig fits this mesh (%zu vertices, checksum %08x)%s", dir, n, crc, why);
 }
 
 /* ---------------------------------------------------------------------------------- */
@@ -373,7 +380,10 @@ int fp_rig_channel_check(const fp_rig *r, const char *name, double value, char *
     long i = fp_rig_channel_index(r, name);
     if (i < 0) return fp_errorf(err, errlen, -ENOENT, "%s: no channel \"%s\"", r ? r->source : "(rig)", name ? name : "");
     const channel *c = &r->channels[i];
-    if (!(value >= c->min && value <= c->max))
+    /* compared as the float the channel keeps: the file's max 0.7 is 0.69999999f, and the
+     * value 0.7 a user types (a double) was refused as outside [-0.3, 0.7] */
+    float v = (float)value;
+    if (!(v >= c->min && v <= c->max))
         return fp_errorf(err, errlen, -ERANGE, "%s: channel %s = %g is outside [%g, %g]", r->source, name, value,
                          c->min, c->max);
     return 0;

@@ -119,7 +119,11 @@ typedef struct fp_rig_channel_desc {
 int fp_rig_parse(const char *json, size_t len, const char *name, fp_rig **out, char *err,
                  size_t errlen);
 
-/** Read and parse a rig file. Errors as fp_rig_parse (a file over 1 GiB: -EBADMSG), plus
+/** The largest rig file fp_rig_load reads: 32 MiB (ICT's is 64 kB; a weight for every vertex of
+ *  a million-vertex mesh about 10 MB), so that parsing needs at most about 1.3 GB. */
+#define FP_RIG_FILE_MAX ((size_t)32 << 20)
+
+/** Read and parse a rig file. Errors as fp_rig_parse (a file over FP_RIG_FILE_MAX: -EBADMSG), plus
  *  the file's own codes (-ENOENT, -EACCES, -EISDIR, -ENXIO: a folder, FIFO or device;
  *  fp_file_read_all), -ENOMEM, -EIO. */
 int fp_rig_load(const char *path, fp_rig **out, char *err, size_t errlen);
@@ -202,8 +206,9 @@ int fp_rig_checksum_matches(const fp_rig *rig, size_t n, const float *positions)
 
 /** Find the rig of a mesh among the *.json files of `dir`: the file whose mesh checksum
  *  matches; else the only one whose vertex count matches. Files that do not parse are
- *  skipped. Writes its path into path_out. Returns 0, -ENOENT (none, or several with that
- *  vertex count and none by checksum; message says which), -ENAMETOOLONG, -EINVAL. */
+ *  skipped (when none fits, the message counts them and gives the first one's error: file
+ *  and JSON path). Writes its path into path_out. Returns 0, -ENOENT (none, or several with
+ *  that vertex count and none by checksum; message says which), -ENAMETOOLONG, -EINVAL. */
 int fp_rig_find(const char *dir, size_t n, const float *positions, char *path_out,
                 size_t path_len, char *err, size_t errlen);
 
@@ -245,7 +250,8 @@ int fp_rig_channel_get(const fp_rig *rig, size_t i, fp_rig_channel_desc *out);
 long fp_rig_channel_index(const fp_rig *rig, const char *name);
 
 /** Check one value for a channel: 0 when name exists and min <= value <= max; -ENOENT
- *  (unknown channel) or -ERANGE (outside, or NaN), with a message. For the command line,
+ *  (unknown channel) or -ERANGE (outside, or NaN), with a message; value is compared as a
+ *  float, as the channel keeps its range (the file's 0.7 admits 0.7). For the command line,
  *  which refuses out-of-range values; fp_rig_pose clamps instead. */
 int fp_rig_channel_check(const fp_rig *rig, const char *name, double value, char *err,
                          size_t errlen);

@@ -212,11 +212,11 @@ static int parse_mesh(const fpr_ctx *c, fp_rig *r, const cJSON *root)
     r->n = (size_t)n;
     char crc[16] = "";
     if ((rc = get_string(c, m, "mesh", "positions_crc32", true, crc, sizeof crc))) return rc;
-    char *end = NULL;
-    unsigned long v = strtoul(crc, &end, 16);
-    if (strlen(crc) != 8 || !end || *end)
+    /* exactly 8 hex digits: strtoul alone took "0x123456", " 1234567", "+1234567" and
+     * "-0000001" (that one as ffffffff) */
+    if (strlen(crc) != 8 || strspn(crc, "0123456789abcdefABCDEF") != 8)
         return fpr_bad(c, "mesh.positions_crc32", "expected 8 hexadecimal digits, got \"%s\"", crc);
-    r->crc = (uint32_t)v;
+    r->crc = (uint32_t)strtoul(crc, NULL, 16);
     return 0;
 }
 
@@ -500,6 +500,28 @@ static int parse_weights(const fpr_ctx *c, fp_rig *r, const cJSON *wj)
     return rc;
 }
 
+/* The jaw's outline in the sagittal (forward, up) plane: the back border hinge -> gonion and the
+ * lower border gonion -> menton must be lines (a gonion on the menton or on the hinge left
+ * that border no direction: its fade was silently off, the whole neck turned with the jaw). */
+static int check_outline(const fpr_ctx *c, const rig_geom *g)
+{
+    double zy[3][2]; /* hinge centre, gonion, menton */
+    const double *pt[3] = {NULL, g->gonion, g->menton};
+    for (int k = 0; k < 3; k++) {
+        double d[3];
+        for (int i = 0; i < 3; i++)
+            d[i] = (k ? pt[k][i] : 0.5 * (g->hinge_r[i] + g->hinge_l[i])) - 0.5 * (g->hinge_r[i] + g->hinge_l[i]);
+        zy[k][0] = fp_dot3(d, g->fwd), zy[k][1] = fp_dot3(d, g->up);
+    }
+    if (!(hypot(zy[1][0] - zy[2][0], zy[1][1] - zy[2][1]) > 0))
+        return fpr_bad(c, "jaw.falloff.gonion", "lies on the menton in the (forward, up) plane: the jaw's lower border "
+                       "gonion -> menton has no direction");
+    if (!(hypot(zy[1][0], zy[1][1]) > 0))
+        return fpr_bad(c, "jaw.falloff.gonion", "lies on the hinge in the (forward, up) plane: the jaw's back border "
+                       "hinge -> gonion has no direction");
+    return 0;
+}
+
 static int parse_jaw(const fpr_ctx *c, fp_rig *r, const cJSON *root)
 {
     char p[512];
@@ -584,6 +606,7 @@ static int parse_jaw(const fpr_ctx *c, fp_rig *r, const cJSON *root)
     if (!(r->geom.lip_band > 0) || !(r->geom.cheek_band > 0) || !(r->geom.neck_band > 0) || !(r->geom.back_band > 0) ||
         !(r->geom.cheek_distance > 0))
         return fpr_bad(c, "jaw.falloff", "the bands and cheek_distance must be > 0");
+    if ((rc = check_outline(c, &r->geom))) return rc;
     const cJSON *wj;
     if ((rc = get_object(c, jaw, "jaw", "weights", false, &wj, p, sizeof p))) return rc;
     return wj ? parse_weights(c, r, wj) : 0;
@@ -594,6 +617,15 @@ int fp_rig_parse(const char *json, size_t len, const char *name, fp_rig **out, c
     if (out) *out = NULL;
     if (!json || !out) return fp_errorf(err, errlen, -EINVAL, "fp_rig_parse: NULL argument");
     fpr_ctx c = {name ? name : "(rig)", err, errlen};
+    /* a \u0000 in a string: cJSON ends the string there, so "ict\u0000x" was read as "ict"
+     * (a name, a landmark's key) without a word. Escapes are two characters ("\\" too). */
+    for (const char *q = json; q < json + len && (q = memchr(q, '\\', (size_t)(json + len - q))); q += 2)
+        if ((size_t)(json + len - q) >= 6 && !memcmp(q, "\\u0000", 6)) {
+            long line;
+            fp_text_line_col(json, q, &line, NULL);
+            return fp_errorf(err, errlen, -EBADMSG, "%s:%ld: \\u0000 (a NUL character) in a string (byte %zu)",
+                             c.file, line, (size_t)(q - json));
+        }
     const char *end = NULL;
     cJSON *root = cJSON_ParseWithLengthOpts(json, len, &end, false);
     const char *rest = root ? fp_text_after_space(end, json + len) : NULL;
@@ -636,7 +668,7 @@ int fp_rig_parse(const char *json, size_t len, const char *name, fp_rig **out, c
     double ver = 0;
     if ((rc = get_number(&c, root, "", "version", true, 0, 1e6, &ver))) goto done;
     if (ver != FP_RIG_FORMAT_VERSION) {
-        rc = fpr_bad(&c, "version", "this facepuppet reads version %d, the file is %g", FP_RIG_FORMAT_VERSION, ver);
+        rc = fpr_bad(&c, "version", "this facepuppet reads version %d, the file is %.15g", FP_RIG_FORMAT_VERSION, ver);
         goto done;
     }
     char desc[2048];
@@ -673,9 +705,12 @@ int fp_rig_load(const char *path, fp_rig **out, char *err, size_t errlen)
     if (!path || !out) return fp_errorf(err, errlen, -EINVAL, "fp_rig_load: NULL argument");
     char *buf;
     size_t len;
-    int code = fp_file_read_all(path, (size_t)1 << 30, &buf, &len); /* (a folder, FIFO or
-                                                                       device: refused) */
-    if (code == -EFBIG) return fp_errorf(err, errlen, -EBADMSG, "%s: larger than 1 GiB", path);
+    /* (a folder, FIFO or device: refused). At most FP_RIG_FILE_MAX: cJSON keeps some 80 bytes
+     * a value, 40 times a file of "0,0,..." (1 GiB allowed was 40 GB: the OOM killer) */
+    int code = fp_file_read_all(path, FP_RIG_FILE_MAX, &buf, &len);
+    if (code == -EFBIG)
+        return fp_errorf(err, errlen, -EBADMSG, "%s: larger than %d MiB (a rig file is kilobytes)", path,
+                         (int)(FP_RIG_FILE_MAX >> 20));
     if (code == -ENOMEM) return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", path);
     if (code == -EIO) return fp_errorf(err, errlen, -EIO, "%s: read error", path);
     if (code) return fp_errorf(err, errlen, code, "%s: %s", path, fp_file_error_text(code));

@@ -20,6 +20,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <unistd.h>
 
 static const char *data_dir(void)
 {
@@ -634,6 +635,60 @@ static char *edit(const char *text, const char *from, const char *to)
     return o;
 }
 
+/* A rig folder whose only rig for the mesh has an error: fp_rig_find skips it, and says so
+ * (the file and the JSON path), not only "no rig fits this mesh" (an artist's own rig in
+ * $FACEPUPPET_RIGS was skipped without a word). */
+static void test_find_names_unread(void **state)
+{
+    (void)state;
+    size_t len;
+    char *good = read_text(FP_TEST_RIGS_DIR "/mediapipe-canonical.json", &len);
+    char *bad = edit(good, "\"open_degrees\": 29.9", "\"open_degrees\": \"30\"");
+    fp_mesh *m = load_face("mediapipe-canonical/canonical_face_model.obj"); /* (first: no folder left) */
+    char dir[] = "/tmp/fp-test-rig-find-XXXXXX", path[4096], found[4096], err[1024];
+    assert_non_null(mkdtemp(dir));
+    snprintf(path, sizeof path, "%s/mine.json", dir);
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    assert_int_equal(fwrite(bad, 1, strlen(bad), f), strlen(bad));
+    assert_int_equal(fclose(f), 0);
+    int rc = fp_rig_find(dir, m->vertex_count, m->positions, found, sizeof found, err, sizeof err);
+    printf("find in a folder of one broken rig: %s\n", err);
+    remove(path);
+    rmdir(dir);
+    assert_int_equal(rc, -ENOENT);
+    assert_non_null(strstr(err, "no rig fits this mesh"));
+    assert_non_null(strstr(err, "mine.json"));
+    assert_non_null(strstr(err, "jaw.open_degrees"));
+    fp_mesh_free(&m);
+    free(bad);
+    free(good);
+}
+
+/* A channel's range ends that are no floats (0.7, -0.3): the ends themselves are in range for
+ * fp_rig_channel_check (pose --set refused brow.raise=0.7 as outside [-0.3, 0.7]). */
+static void test_channel_range_ends(void **state)
+{
+    (void)state;
+    size_t len;
+    char *good = read_text(FP_TEST_RIGS_DIR "/mediapipe-canonical.json", &len);
+    char *two = edit(good, "\"channels\": [", "\"channels\": [{\"name\": \"brow.raise\", \"min\": -0.3, \"max\": 0.7}, ");
+    fp_rig *r = NULL;
+    char err[512];
+    assert_int_equal(fp_rig_parse(two, strlen(two), "two.json", &r, err, sizeof err), 0);
+    assert_int_equal(fp_rig_channel_check(r, "brow.raise", 0.7, err, sizeof err), 0);
+    assert_int_equal(fp_rig_channel_check(r, "brow.raise", -0.3, err, sizeof err), 0);
+    assert_int_equal(fp_rig_channel_check(r, "brow.raise", 0.1, err, sizeof err), 0);
+    assert_int_equal(fp_rig_channel_check(r, "brow.raise", 0.71, err, sizeof err), -ERANGE);
+    assert_int_equal(fp_rig_channel_check(r, "brow.raise", -0.31, err, sizeof err), -ERANGE);
+    assert_int_equal(fp_rig_channel_check(r, "brow.raise", NAN, err, sizeof err), -ERANGE);
+    assert_int_equal(fp_rig_channel_check(r, "brow.raise", 1e300, err, sizeof err), -ERANGE);
+    assert_int_equal(fp_rig_channel_check(r, "jaw.open", 1.0, err, sizeof err), 0);
+    fp_rig_free(&r);
+    free(two);
+    free(good);
+}
+
 /* A rig on a moved copy of its mesh (fp_rig_placement): the ICT face turned 90 degrees about x
  * (Blender's Z-up), in metres and moved gets the rig carried there by its landmarks; the jaw
  * weights and the mobility are the original's, and the jaw opens as the original's carried
@@ -745,6 +800,10 @@ static void test_broken_files(void **state)
         {"\"format\": \"facepuppet-rig\"", "\"format\": \"x\"", "format"},
         {"\"vertex_count\": 26719", "\"vertex_count\": 26719.5", "mesh.vertex_count"},
         {"\"positions_crc32\": \"", "\"positions_crc32\": \"zz", "mesh.positions_crc32"},
+        /* 8 characters, but not 8 hex digits (strtoul took a 0x, a sign, a leading space) */
+        {"\"positions_crc32\": \"577903df\"", "\"positions_crc32\": \"0x577903\"", "mesh.positions_crc32"},
+        {"\"positions_crc32\": \"577903df\"", "\"positions_crc32\": \"-0000001\"", "mesh.positions_crc32"},
+        {"\"positions_crc32\": \"577903df\"", "\"positions_crc32\": \" 577903d\"", "mesh.positions_crc32"},
         {"\"mm_per_unit\": 10.0", "\"mm_per_unit\": -1", "mm_per_unit"},
         {"\"up\": [0, 1, 0]", "\"up\": [0, 2, 0]", "axes.up"},
         {"\"left\": [1, 0, 0]", "\"left\": [-1, 0, 0]", "axes.left"},
@@ -763,6 +822,11 @@ static void test_broken_files(void **state)
         {"\"right\": [", "\"right\": [\"a\", ", "jaw.hinge.right"},
         {"\"right\": [", "\"right\": [0, 0, 0], \"x\": [", "jaw.hinge.x"},
         {"\"open_degrees\": 29.9", "\"open_degrees\": 90", "jaw.open_degrees"},
+        /* (%g said "reads version 1, the file is 1") */
+        {"\"version\": 1", "\"version\": 1.0000001", "the file is 1.0000001"},
+        /* the jaw outline degenerate: gonion on menton, gonion on the hinge (in the sagittal plane) */
+        {"\"gonion\": [5.3, -5.0, 1.6]", "\"gonion\": [4.0, -8.0, 9.2]", "jaw.falloff.gonion: lies on the menton"},
+        {"\"gonion\": [5.3, -5.0, 1.6]", "\"gonion\": [3.0, 0.5, 2.3]", "jaw.falloff.gonion: lies on the hinge"},
         {"\"lip_band\": ", "\"lip_band\": -", "jaw.falloff.lip_band"},
         {"\"ramp\": ", "\"ramp\": null, \"r\": ", "mobility.r"},
         {"\"name\": \"jaw.open\"", "\"name\": \"jaw.shut\"", "channels"},
@@ -771,6 +835,8 @@ static void test_broken_files(void **state)
         {"{", "[", ""},
         /* a glide of more than half the joints' distance (1e308 made the posed jaw infinite) */
         {"\"name\": \"ict-facekit\"", "\"name\": \"ict\\u001b[31m\"", "name"}, /* an ESC: no text */
+        /* a NUL: cJSON ended the string there (read as "ict", accepted) */
+        {"\"name\": \"ict-facekit\"", "\"name\": \"ict\\u0000x\"", "broken.json:4: \\u0000"},
         {"\"glide\": [0.735, 0.515]", "\"glide\": [1e308, 0.515]", "jaw.glide[0]"},
         {"\"glide\": [0.735, 0.515]", "\"glide\": [0.735, -100]", "jaw.glide[1]"},
         /* where the condyles start to slide: a fraction of the opening below 0.95 */
@@ -807,6 +873,13 @@ static void test_broken_files(void **state)
         assert_non_null(strstr(err, cases[i].field));
         assert_true(strlen(err) < 400); /* (numbers as %g: 1e308 was 309 digits) */
         free(bad);
+    }
+    { /* an escaped backslash before u0000 is text, not a NUL: accepted */
+        char *txt = edit(good, "\"description\": \"ICT", "\"description\": \"\\\\u0000 ICT");
+        assert_non_null(strstr(txt, "\"\\\\u0000 ICT"));
+        assert_int_equal(fp_rig_parse(txt, strlen(txt), "bs.json", &r, err, sizeof err), 0);
+        fp_rig_free(&r);
+        free(txt);
     }
     { /* one JSON value only: text after it is refused, white space is not */
         size_t gl = strlen(good);
@@ -885,6 +958,20 @@ static void test_broken_files(void **state)
     fp_rig_free(&r);
     free(far), free(far2);
     assert_int_equal(fp_rig_load("no/such/rig.json", &r, err, sizeof err), -ENOENT);
+    { /* a file over FP_RIG_FILE_MAX is refused before it is read (1 GiB of "0," was 40 GB of cJSON) */
+        char big[] = "/tmp/fp-test-rig-big-XXXXXX";
+        int fd = mkstemp(big);
+        assert_true(fd >= 0);
+        assert_int_equal(ftruncate(fd, (off_t)FP_RIG_FILE_MAX + 1), 0);
+        close(fd);
+        int brc = fp_rig_load(big, &r, err, sizeof err);
+        remove(big);
+        assert_int_equal(brc, -EBADMSG);
+        printf("a rig file of FP_RIG_FILE_MAX + 1 bytes: %s\n", err);
+        assert_non_null(strstr(err, big));
+        assert_non_null(strstr(err, "larger than 32 MiB"));
+        assert_null(r);
+    }
     fp_mesh_free(&m);
     free(good);
 }
@@ -898,6 +985,7 @@ int main(void)
         cmocka_unit_test(test_lee_perry_smith),  cmocka_unit_test(test_mediapipe),
         cmocka_unit_test(test_mobility_brute_force),
         cmocka_unit_test(test_broken_files),     cmocka_unit_test(test_placement),
+        cmocka_unit_test(test_find_names_unread), cmocka_unit_test(test_channel_range_ends),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
