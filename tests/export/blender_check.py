@@ -153,13 +153,7 @@ def check_glb_shapes(a, doc, face, scene, sfps):
     for k in ks:
         fr = times[k] * sfps
         scene.frame_set(int(numpy.floor(fr)), subframe=float(fr - numpy.floor(fr)))
-        dg = bpy.context.evaluated_depsgraph_get()
-        ev = face.evaluated_get(dg)
-        me = ev.to_mesh()
-        co = numpy.empty(3 * len(me.vertices), dtype=numpy.float32)
-        me.vertices.foreach_get("co", co)
-        ev.to_mesh_clear()
-        co = co.reshape(-1, 3).astype(numpy.float64)
+        co = local_positions(face).astype(numpy.float64)
         got = (numpy.c_[co, numpy.ones(len(co))] @ numpy.array(face.matrix_world).T)[:, :3]
         assert len(got) == len(src), "glb: Blender has %d vertices, the file %d" % (len(got), len(src))
         v = cache[k][src].astype(numpy.float64)

@@ -12,6 +12,15 @@ tmp=$(mktemp -d "${TMPDIR:-/tmp}/fp-osc-run-XXXXXX")
 trap 'rm -rf "$tmp"' EXIT
 # the recording's volume (mm), as a performer would state their tracker's
 box=-100/100/-111/132/292/77
+# Wait (up to 60 s) until run PID says in FILE that it listens, or has ended.
+wait_listening() {
+    local i
+    for i in $(seq 600); do
+        grep -q "listening on" "$1" && return
+        kill -0 "$2" 2>/dev/null || return
+        sleep 0.1
+    done
+}
 for attempt in 1 2 3 4 5; do
     port=$((20000 + RANDOM % 40000))
     "$build/bin/facepuppet" run --plugin-dir "$build/lib/facepuppet" \
@@ -19,11 +28,7 @@ for attempt in 1 2 3 4 5; do
     run=$!
     # the sender starts once the run listens (opening the face takes a while, longer under
     # the sanitizers: a fixed wait sent the whole recording to a port not yet bound)
-    for i in $(seq 600); do
-        grep -q "listening on" "$tmp/run.err" && break
-        kill -0 $run 2>/dev/null || break
-        sleep 0.1
-    done
+    wait_listening "$tmp/run.err" $run
     if ! kill -0 $run 2>/dev/null && grep -q "cannot listen" "$tmp/run.err"; then
         wait $run
         continue
@@ -46,11 +51,7 @@ for attempt in 1 2 3 4 5; do
     "$build/bin/facepuppet" run --plugin-dir "$build/lib/facepuppet" -q --input "osc:$port" \
         --duration 3 --out "$tmp/quiet.obj" >"$tmp/quiet.out" 2>"$tmp/quiet.err" &
     run=$!
-    for i in $(seq 600); do
-        grep -q "listening on" "$tmp/quiet.err" && break
-        kill -0 $run 2>/dev/null || break
-        sleep 0.1
-    done
+    wait_listening "$tmp/quiet.err" $run
     "$build/bin/fp-osc-send" --port "$port" --quiet --frames 20 "$csv" || { echo "fp-osc-send failed"; kill $run; exit 1; }
     wait $run
     grep "no data" "$tmp/quiet.err"
