@@ -117,35 +117,12 @@ if "$build/bin/facepuppet" live --help >/dev/null 2>&1 && command -v xvfb-run >/
     png "$tmp/zup.obj" zup_norig --rig none --up +z --facing -y
     for pair in "face zup" "face_norig zup_norig"; do
     set -- $pair
-    python3 - "$(ls "$tmp/$1.png.d"/*.png)" "$(ls "$tmp/$2.png.d"/*.png)" <<'EOF' ||
-import struct, sys, zlib
-def pixels(path):  # 8-bit RGB or RGBA, every PNG filter undone
-    b = open(path, 'rb').read()
-    w, h, depth, kind = struct.unpack('>IIBB', b[16:26])
-    assert depth == 8 and kind in (2, 6), (depth, kind)
-    bpp = 3 if kind == 2 else 4
-    data, i = b'', 8
-    while i < len(b):
-        n, = struct.unpack('>I', b[i:i + 4])
-        if b[i + 4:i + 8] == b'IDAT': data += b[i + 8:i + 8 + n]
-        i += 12 + n
-    raw, out, prev, stride = zlib.decompress(data), [], bytearray(w * bpp), w * bpp
-    for y in range(h):
-        f, row = raw[y * (stride + 1)], bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
-        for x in range(stride):
-            a = row[x - bpp] if x >= bpp else 0
-            c = prev[x - bpp] if x >= bpp else 0
-            up = prev[x]
-            if f == 1: row[x] = (row[x] + a) & 255
-            elif f == 2: row[x] = (row[x] + up) & 255
-            elif f == 3: row[x] = (row[x] + (a + up) // 2) & 255
-            elif f == 4:
-                p = a + up - c
-                pa, pb, pc = abs(p - a), abs(p - up), abs(p - c)
-                row[x] = (row[x] + (a if pa <= pb and pa <= pc else up if pb <= pc else c)) & 255
-        out.append(bytes(v for k, v in enumerate(row) if k % bpp < 3))
-        prev = row
-    return b''.join(out)
+    PYTHONPATH="$(dirname "$0")/../support" python3 - "$(ls "$tmp/$1.png.d"/*.png)" "$(ls "$tmp/$2.png.d"/*.png)" <<'EOF' ||
+import sys
+from pngread import read_png
+def pixels(path):  # the RGB bytes, alpha left out
+    w, h, bpp, rows = read_png(path)
+    return b''.join(bytes(v for k, v in enumerate(row) if k % bpp < 3) for row in rows)
 a, b = pixels(sys.argv[1]), pixels(sys.argv[2])
 diff = sum(abs(x - y) for x, y in zip(a, b)) / len(a)
 print(f"png-seq: {sys.argv[2].split('/')[-2]}'s frame 100 differs from the face's by {diff:.2f} of 255 a pixel")

@@ -44,27 +44,11 @@ shot $tmp/lanes.png; key T; wait frames 2; close" >"$tmp/live.out" 2>"$tmp/live.
 grep -q "layer 1 (face_T002.fptake) muted" "$tmp/live.out" || { cat "$tmp/live.out"; fail "M did not mute layer 1"; }
 python3 -c "import json,sys; l=json.load(open(sys.argv[1]))['layers']; assert len(l)==3 and l[1]['mute'] and not l[2]['mute'], l" \
     "$P/face_S002.fpstack" || fail "the new stack does not record layer 1 muted"
-python3 - "$tmp/lanes.png" "$span" <<'PY' || fail "the timeline's lanes and waveform"
-import struct, sys, zlib
+PYTHONPATH="$(dirname "$0")/../support" python3 - "$tmp/lanes.png" "$span" <<'PY' || fail "the timeline's lanes and waveform"
+import sys
+from pngread import read_png
 def png(path):
-    b = open(path, 'rb').read()
-    w, h, depth, ctype = struct.unpack('>IIBB', b[16:26])
-    data, i = b'', 8
-    while i < len(b):
-        n, = struct.unpack('>I', b[i:i + 4])
-        if b[i + 4:i + 8] == b'IDAT': data += b[i + 8:i + 8 + n]
-        i += 12 + n
-    raw, bpp = zlib.decompress(data), {2: 3, 6: 4}[ctype]
-    stride, rows, prev = w * bpp, [], bytearray(w * bpp)
-    for y in range(h):
-        f, line = raw[y * (stride + 1)], bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
-        for x in range(stride):
-            a = line[x - bpp] if x >= bpp else 0
-            c = prev[x - bpp] if x >= bpp else 0
-            p = a + prev[x] - c
-            pr = a if abs(p - a) <= abs(p - prev[x]) and abs(p - a) <= abs(p - c) else prev[x] if abs(p - prev[x]) <= abs(p - c) else c
-            line[x] = (line[x] + [0, a, prev[x], (a + prev[x]) // 2, pr][f]) & 255
-        rows.append(line); prev = line
+    w, h, bpp, rows = read_png(path)
     return w, h, lambda x, y: tuple(rows[y][x * bpp:x * bpp + 3])
 w, h, px = png(sys.argv[1])
 span = float(sys.argv[2])
