@@ -207,16 +207,53 @@ static int write_all(glove *g, const void *buf, size_t n)
     return 0;
 }
 
+/* The box's error replies (docs/devices.md: `e?` unknown command, `eg` glove not plugged,
+ * `en` bad number, `es` sampling too fast, `ey` sync too fast) as read_reply_n's codes. */
+static int box_error_code(uint8_t c)
+{
+    switch (c) {
+    case '?': return -ENOTSUP;
+    case 'g': return -ENODEV;
+    case 'n': return -EINVAL;
+    case 's': return -ERANGE;
+    case 'y': return -EBUSY;
+    default: return 0;
+    }
+}
+
+/* What a read_reply_n code means, for a message. */
+static const char *reply_text(int r)
+{
+    switch (r) {
+    case -ENOTSUP: return "e?: the box does not know the command";
+    case -ENODEV: return "eg: glove not plugged into its box";
+    case -EINVAL: return "en: the box refused the number";
+    case -ERANGE: return "es: sampling too fast";
+    case -EBUSY: return "ey: sync too fast";
+    default: return strerror(-r);
+    }
+}
+
+/* An optional query or command the box did not answer with a value: silence or an error
+ * reply (a minimal box, or a glove pulled out of its box since ?G). */
+static bool unanswered(int r)
+{
+    return r == -ETIMEDOUT || r == -ENOTSUP || r == -ENODEV || r == -EINVAL || r == -ERANGE ||
+           r == -EBUSY;
+}
+
 /* Read the reply to a command: skips bytes until `c0` `c1` (c1 < 0: only c0), then collects
  * `fixed` value bytes whatever they are (a value may be 0, e.g. ?R of a left glove) or, with
- * fixed == 0, the bytes up to the 0x00 terminator. An `e` `?` reply gives -ENOTSUP. Returns
- * the number of value bytes, -ETIMEDOUT, -ECANCELED, -EPIPE or -EIO. */
+ * fixed == 0, the bytes up to the 0x00 terminator. An `e` `?` reply gives -ENOTSUP; the
+ * other error replies, `e` X 0x00, their box_error_code (-ENODEV for `eg`, ...). Returns
+ * the number of value bytes, one of those codes, -ETIMEDOUT, -ECANCELED, -EPIPE or -EIO. */
 static int read_reply_n(glove *g, int c0, int c1, size_t fixed, uint8_t *out, size_t cap,
                         int timeout_ms)
 {
     int64_t deadline = now_ns(g) + (int64_t)timeout_ms * 1000000;
-    int state = 0; /* 0 seek c0, 1 seek c1, 2 value, 3 after 'e' */
+    int state = 0; /* 0 seek c0, 1 seek c1, 2 value, 3 after 'e', 4 after `e` X: its 0x00 */
     size_t n = 0;
+    int box_err = 0;
     for (;;) {
         int64_t left = (deadline - now_ns(g)) / 1000000;
         if (left < 0)
@@ -264,7 +301,16 @@ static int read_reply_n(glove *g, int c0, int c1, size_t fixed, uint8_t *out, si
             case 3:
                 if (b == '?')
                     return -ENOTSUP;
+                if ((box_err = box_error_code(b)) != 0) {
+                    state = 4;
+                    break;
+                }
                 state = b == c0 ? (c1 < 0 ? 2 : 1) : 0;
+                break;
+            case 4: /* (`eg` without its 0x00 is not the box's reply: seek on) */
+                if (b == 0)
+                    return box_err;
+                state = b == c0 ? (c1 < 0 ? 2 : 1) : b == 'e' ? 3 : 0;
                 break;
             }
         }
@@ -414,18 +460,22 @@ static int probe(glove *g, char *err, size_t errlen)
     if (!(optional && (r == -ETIMEDOUT || r == -ENOTSUP))) {
         if (r == -ETIMEDOUT)
             return fp_errorf(err, errlen, r, "no answer to ?G (is the glove box on, baud %d?)", g->baud);
+        if (r == -ENODEV)
+            return fp_errorf(err, errlen, r, "glove not plugged into its box (?G answered eg)");
         if (r < 1)
-            return fp_errorf(err, errlen, r < 0 ? r : -EPROTO, "bad answer to ?G%s",
-                             r == -ENOTSUP ? " (e?: the box does not know the query)" : "");
+            return fp_errorf(err, errlen, r < 0 ? r : -EPROTO, "bad answer to ?G%s%s%s",
+                             r < 0 ? " (" : "", r < 0 ? reply_text(r) : "", r < 0 ? ")" : "");
         if ((v[0] & 3) != 3) /* bit 0 initialised, bit 1 glove plugged */
             return fp_errorf(err, errlen, -ENODEV, "glove not plugged into its box (?G = %d)", v[0]);
     }
     r = query(g, 'S', 1, v, sizeof v);
     if (optional && (r == -ETIMEDOUT || r == -ENOTSUP)) {
         v[0] = 22;
+    } else if (r == -ENODEV) {
+        return fp_errorf(err, errlen, r, "glove not plugged into its box (?S answered eg)");
     } else if (r < 1) {
-        return fp_errorf(err, errlen, r < 0 ? r : -EPROTO, "bad answer to ?S%s",
-                         r == -ENOTSUP ? " (e?: the box does not know the query)" : "");
+        return fp_errorf(err, errlen, r < 0 ? r : -EPROTO, "bad answer to ?S%s%s%s",
+                         r < 0 ? " (" : "", r < 0 ? reply_text(r) : "", r < 0 ? ")" : "");
     }
     if (v[0] != 18 && v[0] != 22)
         return fp_errorf(err, errlen, -EPROTO, "unsupported sensor count %d (?S)", v[0]);
@@ -437,20 +487,22 @@ static int probe(glove *g, char *err, size_t errlen)
      * which. Optional: a box that does not answer ?N samples every sensor. */
     uint8_t order[FPG_SENSORS];
     int sampled = sensors;
-    if (g->bits == 8 && (r = sampled_order(g, sensors, order, err, errlen)) < 0)
-        return r;
-    if (r > 0)
-        sampled = r;
+    if (g->bits == 8) { /* (a 16-bit frame carries all 22: r still holds ?S's byte count) */
+        if ((r = sampled_order(g, sensors, order, err, errlen)) < 0)
+            return r;
+        if (r > 0)
+            sampled = r;
+    }
     /* ?R, ?V, ?D and U are optional: a box that answers them with e? or not at all (a
      * minimal one; the late reply of a slow one is skipped by the next read, which seeks its
      * own header) leaves their defaults */
     r = query(g, 'R', 1, v, sizeof v);
     int right = r >= 1 ? (v[0] != 0) : -1;
-    if (r < 0 && r != -ENOTSUP && r != -ETIMEDOUT)
+    if (r < 0 && !unanswered(r))
         return fp_errorf(err, errlen, r, "bad answer to ?R");
     char version[64] = "";
     r = query(g, 'V', 0, v, sizeof v - 1);
-    if (r < 0 && r != -ENOTSUP && r != -ETIMEDOUT)
+    if (r < 0 && !unanswered(r))
         return fp_errorf(err, errlen, r, "bad answer to ?V");
     if (r > 0) {
         for (int i = 0; i < r && i < (int)sizeof version - 1; i++)
@@ -460,14 +512,14 @@ static int probe(glove *g, char *err, size_t errlen)
     bool ts_on = false, status_on = false, status_unknown = false;
     if (g->bits == 8) {
         r = query(g, 'D', 1, v, sizeof v);
-        if (r < 0 && r != -ENOTSUP && r != -ETIMEDOUT)
+        if (r < 0 && !unanswered(r))
             return fp_errorf(err, errlen, r, "bad answer to ?D");
         ts_on = r >= 1 && v[0] != 0;
         uint8_t u[2] = {'U', 1};
         if ((r = write_all(g, u, 2)) < 0)
             return fp_errorf(err, errlen, r, "line lost");
         r = read_reply(g, 'U', -1, v, sizeof v, 500);
-        if (r < 0 && r != -ENOTSUP && r != -ETIMEDOUT)
+        if (r < 0 && !unanswered(r))
             return fp_errorf(err, errlen, r, "bad answer to U 1");
         status_on = r >= 0;
         /* ?U decides where it answers (the record layout depends on it): U 1 may have been
@@ -497,7 +549,7 @@ static int probe(glove *g, char *err, size_t errlen)
         return fp_errorf(err, errlen, r, "line lost");
     if (r < 0)
         logf_(g, FP_LOG_WARNING, "%s: sample period command `t %u %u` not acknowledged (%s)",
-              g->path, w1, w2, strerror(-r));
+              g->path, w1, w2, reply_text(r));
 
     g->sensors = sensors;
     g->right = right;

@@ -10,9 +10,12 @@
 #define _GNU_SOURCE
 #include <dlfcn.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <math.h>
+#include <poll.h>
 #include <pthread.h>
 #include <setjmp.h>
+#include <stdatomic.h>
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdio.h>
@@ -477,6 +480,11 @@ static void sixteen_bit(const char *unanswered, const char *name)
     start_input(in);
     long c = fp_test_host_wait_status(f, 0, FP_STATUS_CONNECTED, "16-bit", WAIT_MS);
     assert_true(c >= 0);
+    /* a 16-bit frame carries all 22 (before: "22 sensors (1 sampled)" where ?S answered) */
+    const char *text = fp_test_host_get(f, (size_t)c).status.text;
+    if (!strstr(text, "22 sensors, "))
+        fprintf(stderr, "connected: %s\n", text);
+    assert_non_null(strstr(text, "22 sensors, "));
     long end = fp_test_host_wait_angles(f, (size_t)c, 60, WAIT_MS);
     assert_true(end > 0);
     fp_gloveemu_stats es;
@@ -696,6 +704,127 @@ static void test_fault_cable_pull(void **state)
     stop_input(&in);
     fp_test_host_free(f);
     fp_gloveemu_destroy(&e);
+}
+
+/* A box that answers with docs/devices.md's error replies, on a bare pty (fp_gloveemu answers
+ * ?G with 1 when the glove is out; a box may answer `eg` instead): `?G` gets `g_reply`, `?S`
+ * 22, the optional queries `e?`, `t w1 w2\r` `t_reply`; no records. */
+typedef struct error_box {
+    int master;
+    const char *g_reply, *t_reply;
+    size_t g_len, t_len;
+    atomic_bool stop;
+    pthread_t thread;
+} error_box;
+
+static void *error_box_main(void *arg)
+{
+    error_box *b = arg;
+    uint8_t cmd[64];
+    size_t have = 0;
+    while (!atomic_load(&b->stop)) {
+        struct pollfd p = {.fd = b->master, .events = POLLIN};
+        if (poll(&p, 1, 20) <= 0)
+            continue;
+        ssize_t got = read(b->master, cmd + have, sizeof cmd - have);
+        if (got <= 0)
+            continue;
+        have += (size_t)got;
+        size_t i = 0;
+        while (i < have) {
+            uint8_t c = cmd[i];
+            if ((c == '?' || c == 'U' || c == '^') && i + 1 >= have)
+                break;                                  /* its second byte is still to come */
+            if (c == 't') {
+                uint8_t *cr = memchr(cmd + i, '\r', have - i);
+                if (!cr)
+                    break;
+                (void)!write(b->master, b->t_reply, b->t_len);
+                i = (size_t)(cr - cmd) + 1;
+            } else if (c == '?' && cmd[i + 1] == 'G') {
+                (void)!write(b->master, b->g_reply, b->g_len);
+                i += 2;
+            } else if (c == '?' && cmd[i + 1] == 'S') {
+                (void)!write(b->master, "?S\x16", 4);
+                i += 2;
+            } else if (c == '?' || c == 'U') {
+                (void)!write(b->master, "e?", 3);
+                i += 2;
+            } else {
+                i += c == '^' ? 2 : 1;                  /* 0x03, ^c, S: nothing to answer */
+            }
+        }
+        memmove(cmd, cmd + i, have - i);
+        have -= i;
+    }
+    return NULL;
+}
+
+/* Start an error box behind tmpdir/NAME (the link the plugin opens, written to path). */
+static void error_box_start(error_box *b, const char *name, char *path, size_t pathlen)
+{
+    b->master = posix_openpt(O_RDWR | O_NOCTTY);
+    assert_true(b->master >= 0);
+    assert_int_equal(grantpt(b->master), 0);
+    assert_int_equal(unlockpt(b->master), 0);
+    snprintf(path, pathlen, "%s/%s", tmpdir, name);
+    unlink(path);
+    assert_int_equal(symlink(ptsname(b->master), path), 0);
+    atomic_store(&b->stop, false);
+    assert_int_equal(pthread_create(&b->thread, NULL, error_box_main, b), 0);
+}
+
+static void error_box_stop(error_box *b, const char *path)
+{
+    atomic_store(&b->stop, true);
+    pthread_join(b->thread, NULL);
+    close(b->master);
+    unlink(path);
+}
+
+/* The box's error replies are said as what they mean: `eg` to ?G is a glove out of its box
+ * (before: "no answer to ?G (is the glove box on, baud 115200?)", after waiting 500 ms for
+ * an answer that had come), and `es` to the sample period names the rate as too fast (before:
+ * "Timer expired"). */
+static void test_box_error_replies(void **state)
+{
+    (void)state;
+    char path[256];
+    error_box b = {.g_reply = "eg", .g_len = 3, .t_reply = "t", .t_len = 2};
+    error_box_start(&b, "g14", path, sizeof path);
+    fp_test_host *f = fp_test_host_new(0);
+    fp_input *in = NULL;
+    char err[256];
+    assert_int_equal(create_input(f, path, &in, err, sizeof err, (char *)NULL), 0);
+    start_input(in);
+    long d = fp_test_host_wait_status(f, 0, FP_STATUS_DISCONNECTED, NULL, WAIT_MS);
+    assert_true(d >= 0);
+    const char *text = fp_test_host_get(f, (size_t)d).status.text;
+    if (!strstr(text, "glove not plugged into its box"))
+        fprintf(stderr, "status: %s\n", text);
+    assert_non_null(strstr(text, "glove not plugged into its box"));
+    assert_non_null(strstr(text, "eg"));
+    assert_non_null(strstr(text, path));
+    stop_input(&in);
+    fp_test_host_free(f);
+    error_box_stop(&b, path);
+
+    error_box b2 = {.g_reply = "?G\x03", .g_len = 4, .t_reply = "es", .t_len = 3};
+    error_box_start(&b2, "g15", path, sizeof path);
+    f = fp_test_host_new(0);
+    assert_int_equal(create_input(f, path, &in, err, sizeof err, "hand=right", (char *)NULL), 0);
+    start_input(in);
+    assert_true(fp_test_host_wait_status(f, 0, FP_STATUS_CONNECTED, "22 sensors", WAIT_MS) >= 0);
+    char log[sizeof f->log];
+    pthread_mutex_lock(&f->lock);
+    snprintf(log, sizeof log, "%s", f->log);
+    pthread_mutex_unlock(&f->lock);
+    if (!strstr(log, "not acknowledged (es: sampling too fast)"))
+        fprintf(stderr, "plugin log:\n%s", log);
+    assert_non_null(strstr(log, "not acknowledged (es: sampling too fast)"));
+    stop_input(&in);
+    fp_test_host_free(f);
+    error_box_stop(&b2, path);
 }
 
 /* Garbage between records: a WARNING, every garbage byte skipped, no record lost. */
@@ -1025,6 +1154,7 @@ int main(void)
         cmocka_unit_test(test_calibration_byte_order_mark),
         cmocka_unit_test(test_fault_unplug),
         cmocka_unit_test(test_fault_cable_pull),
+        cmocka_unit_test(test_box_error_replies),
         cmocka_unit_test(test_fault_garbage_resync),
         cmocka_unit_test(test_fault_silence),
         cmocka_unit_test(test_fault_slow),
