@@ -38,7 +38,9 @@ typedef struct fp_spec {
 } fp_spec;
 
 /** Parse `text` (e.g. "replay:take.csv,speed=2") into *spec. The ARG ends at the first
- *  comma; keys are [A-Za-z0-9_-]+ and must be unique; a value may be empty.
+ *  comma; keys are [A-Za-z0-9_-]+ and must be unique; a value may be empty, and runs to the
+ *  next `,key=` (`keys=a,b,c` gives keys the value "a,b,c"; an item without '=' before any
+ *  key is refused).
  *  Returns 0, or -EINVAL with a message in err naming the offending part.
  *  Free with fp_spec_clear. */
 int fp_spec_parse(const char *text, fp_spec *spec, char *err, size_t errlen);

@@ -44,6 +44,13 @@ int fp_spec_parse(const char *text, fp_spec *spec, char *err, size_t errlen)
         char *next = strchr(p, ',');
         if (next) *next++ = '\0';
         char *eq = strchr(p, '=');
+        if (!eq && spec->nparams > 0) {
+            /* a value runs to the next `,key=`: `keys=a,b,c` is keys "a,b,c" (docs/pedal.md);
+             * the value before is contiguous in the buffer, its comma was cut at p[-1] */
+            p[-1] = ',';
+            p = next;
+            continue;
+        }
         if (!eq) {
             snprintf(err, errlen, "SPEC '%s': '%s' is not key=value", text, p);
             fp_spec_clear(spec);

@@ -9,7 +9,9 @@
 #     and 64: `facepuppet monitor pedal --count 5` prints connected, left down, left up,
 #     right down, right up, and exits 0;
 #  2. a PCsensor FootSwitch (0c45:7403, boot keyboard interface, 9-byte reports with id 1):
-#     keys a, b, c give left, middle, right.
+#     keys a, b, c give left, middle, right;
+#  3. the same pedal with `pedal,keys=c,b,a` (the commas docs/pedal.md allows): c, b, a give
+#     left, middle, right.
 # Run from the repository root by ctest (FP_BUILD_DIR). SPDX-License-Identifier: GPL-3.0-or-later
 set -u
 build=${FP_BUILD_DIR:-build}
@@ -88,5 +90,14 @@ got=$(buttons <<<"$out")
 [[ $got == "left+ left- middle+ middle- right+ right- " ]] ||
     fail "PCsensor: buttons '$got', expected 'left+ left- middle+ middle- right+ right- ': $(cat "$tmp/err")"
 
+# ---- 3. keys= with commas, as docs/pedal.md gives them (before: "'b' is not key=value") ----
+out=$(timeout -k 2 20 umockdev-run --device "$tmp/kbd.umockdev" --ioctl /dev/bus/usb/001/004="$tmp/kbd.ioctl" \
+    -- "$fp" monitor pedal,keys=c,b,a --count 7 2>"$tmp/err")
+rc=$?
+[[ $rc == 0 ]] || fail "PCsensor keys=c,b,a: monitor exit $rc: $(cat "$tmp/err")"
+got=$(buttons <<<"$out")
+[[ $got == "right+ right- middle+ middle- left+ left- " ]] ||
+    fail "PCsensor keys=c,b,a: buttons '$got', expected 'right+ right- middle+ middle- left+ left- '"
+
 if (( fails )); then echo "$fails failure(s)"; exit 1; fi
-echo "ok: VEC at buflen 8, 2, 64 and PCsensor a/b/c read through umockdev-run's replay"
+echo "ok: VEC at buflen 8, 2, 64, PCsensor a/b/c and keys=c,b,a read through umockdev-run's replay"

@@ -49,6 +49,18 @@ static void test_spec_parse(void **state)
     assert_string_equal(s.params[0].value, "");
     fp_spec_clear(&s);
 
+    /* A value runs to the next `,key=`: docs/pedal.md's `keys=a,b,c` (before: "'b' is not
+     * key=value", exit 64); an item without '=' before any key is still refused. */
+    assert_int_equal(fp_spec_parse("pedal,keys=a,b,c,strict=1", &s, err, sizeof err), 0);
+    assert_int_equal(s.nparams, 2);
+    assert_string_equal(s.params[0].key, "keys");
+    assert_string_equal(s.params[0].value, "a,b,c");
+    assert_string_equal(s.params[1].key, "strict");
+    assert_string_equal(s.params[1].value, "1");
+    fp_spec_clear(&s);
+    assert_int_not_equal(fp_spec_parse("pedal,a,keys=b", &s, err, sizeof err), 0);
+    assert_non_null(strstr(err, "'a' is not key=value"));
+
     assert_int_not_equal(fp_spec_parse("", &s, err, sizeof err), 0);
     assert_int_not_equal(fp_spec_parse("replay:x,speed", &s, err, sizeof err), 0);
     assert_non_null(strstr(err, "'speed' is not key=value"));
