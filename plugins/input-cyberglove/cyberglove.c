@@ -710,6 +710,22 @@ static void feed(glove *g, const uint8_t *data, size_t n, int64_t t)
 /* The input thread                                                                      */
 
 enum { END_STOP = 0, END_LOST = 1, END_SILENT = 2 };
+
+/* The silence timeout's text where bytes came but formed no record (records of another
+ * length than the probe's answers make: a timestamp or status byte ?D or ?U did not say,
+ * a ?S or ?N that disagrees with the records, or another baud): said as such, not as a glove
+ * that stopped answering. */
+static void silent_noise_text(const glove *g, char *why, size_t whylen)
+{
+    if (g->bits == 16) {
+        snprintf(why, whylen, "no well-formed 16-bit frame in %d ms, %llu bytes of line noise",
+                 g->timeout_ms, (unsigned long long)g->noise_episode);
+        return;
+    }
+    int len = 1 + g->sampled + (g->ts_on ? 5 : 0) + (g->status_on ? 1 : 0) + 1;
+    snprintf(why, whylen, "no well-formed record in %d ms, %llu bytes of line noise (expected "
+             "%d-byte records)", g->timeout_ms, (unsigned long long)g->noise_episode, len);
+}
 #define SETTLE_MS 20 /* a polled answer's end: the line quiet this long */
 
 /* Read and decode until the line is lost, the glove goes silent, or stop. */
@@ -744,7 +760,10 @@ static int session(glove *g, char *why, size_t whylen)
             pthread_mutex_lock(&g->lock);
             g->st.timeouts++;
             pthread_mutex_unlock(&g->lock);
-            snprintf(why, whylen, "glove stopped answering (no record for %d ms)", g->timeout_ms);
+            if (g->in_noise && g->noise_episode > 0) /* it answers, in records not its own */
+                silent_noise_text(g, why, whylen);
+            else
+                snprintf(why, whylen, "glove stopped answering (no record for %d ms)", g->timeout_ms);
             return END_SILENT;
         }
         int wait_ms = (int)((deadline - now + 999999) / 1000000);

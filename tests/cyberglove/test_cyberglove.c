@@ -481,7 +481,8 @@ static void sixteen_bit(const char *unanswered, const char *name)
     long c = fp_test_host_wait_status(f, 0, FP_STATUS_CONNECTED, "16-bit", WAIT_MS);
     assert_true(c >= 0);
     /* a 16-bit frame carries all 22 (before: "22 sensors (1 sampled)" where ?S answered) */
-    const char *text = fp_test_host_get(f, (size_t)c).status.text;
+    fp_event ce = fp_test_host_get(f, (size_t)c);
+    const char *text = ce.status.text;
     if (!strstr(text, "22 sensors, "))
         fprintf(stderr, "connected: %s\n", text);
     assert_non_null(strstr(text, "22 sensors, "));
@@ -708,11 +709,14 @@ static void test_fault_cable_pull(void **state)
 
 /* A box that answers with docs/devices.md's error replies, on a bare pty (fp_gloveemu answers
  * ?G with 1 when the glove is out; a box may answer `eg` instead): `?G` gets `g_reply`, `?S`
- * 22, the optional queries `e?`, `t w1 w2\r` `t_reply`; no records. */
+ * 22, the optional queries `e?`, `t w1 w2\r` `t_reply`; after `S`, records of `values`
+ * values (none where 0), whatever ?S said. */
 typedef struct error_box {
     int master;
     const char *g_reply, *t_reply;
     size_t g_len, t_len;
+    int values;
+    bool streaming;
     atomic_bool stop;
     pthread_t thread;
 } error_box;
@@ -724,8 +728,14 @@ static void *error_box_main(void *arg)
     size_t have = 0;
     while (!atomic_load(&b->stop)) {
         struct pollfd p = {.fd = b->master, .events = POLLIN};
-        if (poll(&p, 1, 20) <= 0)
+        if (poll(&p, 1, 20) <= 0) {
+            if (b->streaming && b->values > 0) {
+                uint8_t rec[32] = {'S'};
+                memset(rec + 1, 0x40, (size_t)b->values);
+                (void)!write(b->master, rec, (size_t)b->values + 2); /* (0x00 last) */
+            }
             continue;
+        }
         ssize_t got = read(b->master, cmd + have, sizeof cmd - have);
         if (got <= 0)
             continue;
@@ -751,6 +761,7 @@ static void *error_box_main(void *arg)
                 (void)!write(b->master, "e?", 3);
                 i += 2;
             } else {
+                b->streaming = c == 'S' || (b->streaming && c != 0x03 && c != '^');
                 i += c == '^' ? 2 : 1;                  /* 0x03, ^c, S: nothing to answer */
             }
         }
@@ -785,7 +796,8 @@ static void error_box_stop(error_box *b, const char *path)
 /* The box's error replies are said as what they mean: `eg` to ?G is a glove out of its box
  * (before: "no answer to ?G (is the glove box on, baud 115200?)", after waiting 500 ms for
  * an answer that had come), and `es` to the sample period names the rate as too fast (before:
- * "Timer expired"). */
+ * "Timer expired"); records of another length than the probe's answers make are said as
+ * such at the timeout, not as a glove that stopped answering. */
 static void test_box_error_replies(void **state)
 {
     (void)state;
@@ -799,7 +811,8 @@ static void test_box_error_replies(void **state)
     start_input(in);
     long d = fp_test_host_wait_status(f, 0, FP_STATUS_DISCONNECTED, NULL, WAIT_MS);
     assert_true(d >= 0);
-    const char *text = fp_test_host_get(f, (size_t)d).status.text;
+    fp_event de = fp_test_host_get(f, (size_t)d);
+    const char *text = de.status.text;
     if (!strstr(text, "glove not plugged into its box"))
         fprintf(stderr, "status: %s\n", text);
     assert_non_null(strstr(text, "glove not plugged into its box"));
@@ -825,6 +838,27 @@ static void test_box_error_replies(void **state)
     stop_input(&in);
     fp_test_host_free(f);
     error_box_stop(&b2, path);
+
+    /* records of 18 values from a box that said 22 (?S): all line noise, and the timeout
+     * says so (before: "glove stopped answering (no record for 500 ms)") */
+    error_box b3 = {.g_reply = "?G\x03", .g_len = 4, .t_reply = "t", .t_len = 2, .values = 18};
+    error_box_start(&b3, "g16", path, sizeof path);
+    f = fp_test_host_new(0);
+    assert_int_equal(create_input(f, path, &in, err, sizeof err, "timeout=500", (char *)NULL), 0);
+    start_input(in);
+    long c = fp_test_host_wait_status(f, 0, FP_STATUS_CONNECTED, "22 sensors", WAIT_MS);
+    assert_true(c >= 0);
+    d = fp_test_host_wait_status(f, (size_t)c, FP_STATUS_DISCONNECTED, NULL, WAIT_MS);
+    assert_true(d > c);
+    de = fp_test_host_get(f, (size_t)d);
+    if (!strstr(text, "no well-formed record in 500 ms"))
+        fprintf(stderr, "status: %s\n", text);
+    assert_non_null(strstr(text, "no well-formed record in 500 ms"));
+    assert_non_null(strstr(text, "expected 24-byte records"));
+    assert_true(plugin_stats(in).noise_bytes > 0);
+    stop_input(&in);
+    fp_test_host_free(f);
+    error_box_stop(&b3, path);
 }
 
 /* Garbage between records: a WARNING, every garbage byte skipped, no record lost. */
