@@ -68,6 +68,30 @@ static int parse_number(const char *key, const char *v, double lo, double hi, do
 }
 
 
+/* aspect=H/W (the image's height over its width, docs/osc.md: `480/640`) or the ratio as one
+ * number (0.75): 0.01..100. Returns 0 or -EINVAL with a message. */
+static int parse_aspect(const char *v, double *out, char *err, size_t errlen)
+{
+    const char *slash = strchr(v, '/');
+    if (!slash) return parse_number("aspect", v, 0.01, 100, out, err, errlen);
+    char h[64], msg[8];
+    double hv, wv;
+    const size_t n = (size_t)(slash - v);
+    if (n >= sizeof h || parse_number("aspect", slash + 1, 1e-9, 1e9, &wv, msg, sizeof msg) != 0)
+        goto bad;
+    memcpy(h, v, n);
+    h[n] = '\0';
+    if (parse_number("aspect", h, 1e-9, 1e9, &hv, msg, sizeof msg) != 0 || !(hv / wv >= 0.01) ||
+        !(hv / wv <= 100))
+        goto bad;
+    *out = hv / wv;
+    return 0;
+bad:
+    snprintf(err, errlen, "osc: aspect=%s: expected H/W, the image's height over its width "
+             "(480/640), or their ratio (0.75), within [0.01, 100]", v);
+    return -EINVAL;
+}
+
 /* format=V into *format (FMT_*). Returns 0, -ENOTSUP (vmc) or -EINVAL, with a message. */
 static int parse_format(const char *v, int *format, char *err, size_t errlen)
 {
@@ -148,7 +172,7 @@ static int parse_key(const char *k, const char *v, osc_settings *o, char *err, s
     }
     if (strcmp(k, "timeout") == 0) return parse_number(k, v, 0.01, 3600, &o->timeout, err, errlen);
     if (strcmp(k, "width") == 0) return parse_number(k, v, 1, 10000, &o->width, err, errlen);
-    if (strcmp(k, "aspect") == 0) return parse_number(k, v, 0.01, 100, &o->aspect, err, errlen);
+    if (strcmp(k, "aspect") == 0) return parse_aspect(v, &o->aspect, err, errlen);
     if (strcmp(k, "height") == 0) return parse_number(k, v, -10000, 10000, &o->height, err, errlen);
     if (strcmp(k, "depth") == 0) return parse_number(k, v, -10000, 10000, &o->depth, err, errlen);
     if (strcmp(k, "box") == 0) {

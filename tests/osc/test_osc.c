@@ -412,13 +412,22 @@ static void ipv6_loopback_heard(void **state)
 }
 
 /* format=mediapipe: landmarks made from CSV joints by the documented mapping (with
- * non-default keys) come back as those joints; the palm is the mean of wrist and MCPs. */
+ * non-default keys) come back as those joints; the palm is the mean of wrist and MCPs. The
+ * aspect as docs/osc.md writes it, `aspect=H/W` (1080/1920), is the same as its ratio (before:
+ * "expected a number", exit 64). */
+static void mediapipe_run(const char *keys);
 static void mediapipe_landmarks_to_mm(void **state)
 {
     (void)state;
+    mediapipe_run("format=mediapipe,width=500,aspect=0.5625,height=180,depth=10");
+    mediapipe_run("format=mediapipe,width=500,aspect=1080/1920,height=180,depth=10");
+}
+
+static void mediapipe_run(const char *keys)
+{
     const float W = 500.f, A = 0.5625f, H = 180.f, D = 10.f;
     osc_fixture f;
-    open_fixture(&f, "format=mediapipe,width=500,aspect=0.5625,height=180,depth=10", 256);
+    open_fixture(&f, keys, 256);
     const size_t n = 30;
     for (size_t i = 0; i < n; i++) {
         const fp_leap_joints_row *r = &rows[i];
