@@ -284,8 +284,8 @@ int fp_pedal_parse_key(const char *name, uint8_t *usage)
         }
     if (isdigit((unsigned char)s[0])) {      /* a number: 1..255, decimal or 0x-hex */
         char *end;
-        errno = 0;
-        long v = strtol(s, &end, 0);
+        errno = 0;                           /* (base 10 unless 0x: "040" is 40, not octal) */
+        long v = strtol(s, &end, s[0] == '0' && s[1] == 'x' ? 16 : 10);
         if (errno == 0 && *end == '\0' && v >= 1 && v <= 255) {
             *usage = (uint8_t)v;
             return 0;

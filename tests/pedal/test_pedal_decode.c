@@ -175,6 +175,12 @@ static void test_parse_keys(void **state)
     assert_int_equal(u, 0x2c);
     assert_int_equal(fp_pedal_parse_key("0x2c", &u), 0);
     assert_int_equal(u, 0x2c);
+    /* a number is decimal unless it starts 0x (before: strtol's base 0 read "040" as octal
+     * 32, and refused "08") */
+    assert_int_equal(fp_pedal_parse_key("040", &u), 0);
+    assert_int_equal(u, 40);
+    assert_int_equal(fp_pedal_parse_key("08", &u), 0);
+    assert_int_equal(u, 8);
     assert_int_equal(fp_pedal_parse_key("ctrl", &u), 0);
     assert_int_equal(u, 0xe0);
     assert_int_equal(fp_pedal_parse_key("-", &u), 0);
