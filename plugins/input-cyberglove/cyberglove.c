@@ -230,6 +230,7 @@ static const char *reply_text(int r)
     case -EINVAL: return "en: the box refused the number";
     case -ERANGE: return "es: sampling too fast";
     case -EBUSY: return "ey: sync too fast";
+    case -ETIMEDOUT: return "no reply";
     default: return strerror(-r);
     }
 }

@@ -796,7 +796,7 @@ static void error_box_stop(error_box *b, const char *path)
 /* The box's error replies are said as what they mean: `eg` to ?G is a glove out of its box
  * (before: "no answer to ?G (is the glove box on, baud 115200?)", after waiting 500 ms for
  * an answer that had come), and `es` to the sample period names the rate as too fast (before:
- * "Timer expired"); records of another length than the probe's answers make are said as
+ * "Connection timed out", after waiting for a reply that had come); records of another length than the probe's answers make are said as
  * such at the timeout, not as a glove that stopped answering. */
 static void test_box_error_replies(void **state)
 {
