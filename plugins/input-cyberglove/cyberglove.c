@@ -829,7 +829,7 @@ static void *thread_main(void *arg)
     glove *g = arg;
     int backoff = BACKOFF_MIN_MS;
     unsigned attempt = 0;
-    char why[160];
+    char why[160], said[160] = ""; /* said: the probe's failure said since the last connection */
     for (;;) {
         if (g->fd < 0) {
             attempt++;
@@ -850,9 +850,13 @@ static void *thread_main(void *arg)
             break;
         if (r < 0) {
             close_port(g, false);
-            push_status(g, FP_STATUS_DISCONNECTED, "%s", why);
+            if (strcmp(why, said) != 0) { /* the same failure at each retry is said once */
+                push_status(g, FP_STATUS_DISCONNECTED, "%s", why);
+                snprintf(said, sizeof said, "%s", why);
+            }
             continue;
         }
+        said[0] = '\0';
         backoff = BACKOFF_MIN_MS;
         attempt = 0;
         char sampled[32] = "";

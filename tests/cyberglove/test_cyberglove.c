@@ -818,6 +818,16 @@ static void test_box_error_replies(void **state)
     assert_non_null(strstr(text, "glove not plugged into its box"));
     assert_non_null(strstr(text, "eg"));
     assert_non_null(strstr(text, path));
+    /* the plugin keeps retrying (RECONNECTING, attempt after attempt), and says the same
+     * failure once (before: a DISCONNECTED line at every retry, forever) */
+    long r3 = fp_test_host_wait_status(f, (size_t)d, FP_STATUS_RECONNECTING, "(attempt 3)", WAIT_MS);
+    assert_true(r3 > d);
+    int disconnected = 0;
+    for (long i = 0; i <= r3; i++) {
+        fp_event ev = fp_test_host_get(f, (size_t)i);
+        disconnected += ev.header.type == FP_EVENT_STATUS && ev.status.code == FP_STATUS_DISCONNECTED;
+    }
+    assert_int_equal(disconnected, 1);
     stop_input(&in);
     fp_test_host_free(f);
     error_box_stop(&b, path);
