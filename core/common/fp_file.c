@@ -3,8 +3,11 @@
 #define _GNU_SOURCE /* mkostemp */
 #include "fp_file.h"
 
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <limits.h>
+#include <signal.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -17,8 +20,9 @@ int fp_file_temp_beside(const char *path, const char *tag, char *tmp, size_t n)
     if (!path || !tmp || !n) return -EINVAL;
     if (!tag) tag = "";
     const char *slash = strrchr(path, '/');
-    int len = slash ? snprintf(tmp, n, "%.*s/.%s%s.XXXXXX", (int)(slash - path), path, slash + 1, tag)
-                    : snprintf(tmp, n, ".%s%s.XXXXXX", path, tag);
+    const long pid = (long)getpid(); /* (whose it is: fp_file_open_output removes a dead one's) */
+    int len = slash ? snprintf(tmp, n, "%.*s/.%s%s.%ld.XXXXXX", (int)(slash - path), path, slash + 1, tag, pid)
+                    : snprintf(tmp, n, ".%s%s.%ld.XXXXXX", path, tag, pid);
     if (len < 0 || (size_t)len >= n) {
         tmp[0] = '\0';
         return -ENAMETOOLONG;
@@ -180,6 +184,36 @@ int fp_file_output_code(int e)
     }
 }
 
+/* Remove the temporaries fp_file_temp_beside made for `path` and `tag` in processes that are
+ * gone (killed before their commit or abort): ".NAME<tag>.PID.XXXXXX" beside path whose PID
+ * names no process (kill(PID, 0): ESRCH). Best effort. Returns how many were removed. */
+static size_t remove_stale(const char *path, const char *tag)
+{
+    const char *slash = strrchr(path, '/');
+    char folder[4096], prefix[512];
+    if (!slash) snprintf(folder, sizeof folder, ".");
+    else if (slash == path) snprintf(folder, sizeof folder, "/");
+    else if ((size_t)snprintf(folder, sizeof folder, "%.*s", (int)(slash - path), path) >= sizeof folder) return 0;
+    int pl = snprintf(prefix, sizeof prefix, ".%s%s.", slash ? slash + 1 : path, tag);
+    if (pl < 0 || (size_t)pl >= sizeof prefix) return 0;
+    DIR *d = opendir(folder);
+    if (!d) return 0;
+    size_t removed = 0;
+    const struct dirent *e;
+    while ((e = readdir(d))) {
+        if (strncmp(e->d_name, prefix, (size_t)pl)) continue;
+        const char *p = e->d_name + pl;
+        char *end;
+        errno = 0;
+        long pid = strtol(p, &end, 10);
+        if (end == p || *p < '1' || *p > '9' || errno || *end != '.' || strlen(end + 1) != 6) continue;
+        if (pid == (long)getpid() || pid > INT_MAX || kill((pid_t)pid, 0) == 0 || errno != ESRCH) continue;
+        removed += unlinkat(dirfd(d), e->d_name, 0) == 0;
+    }
+    closedir(d);
+    return removed;
+}
+
 /* o emptied: nothing open, no temporary (o->path kept). */
 static void output_clear(fp_file_output *o)
 {
@@ -193,11 +227,13 @@ int fp_file_open_output(const char *path, const char *tag, const char *stdio_mod
 {
     if (!o) return -EINVAL;
     output_clear(o);
+    o->stale = 0;
     o->flags = flags;
     o->failed = FP_FILE_STEP_TARGET;
     int rc = fp_file_target(path, o->path, sizeof o->path); /* (path may be o->path) */
     if (rc < 0) return rc;
     o->failed = FP_FILE_STEP_TEMP;
+    o->stale = remove_stale(o->path, tag ? tag : "");
     int fd = fp_file_temp_beside(o->path, tag, o->tmp, sizeof o->tmp);
     if (fd < 0) return fd;
     o->fd = fd;

@@ -18,8 +18,10 @@
 extern "C" {
 #endif
 
-/** Create the temporary file ".NAME<tag>.XXXXXX" in path's folder (NAME: path's last
- *  component; no folder: the working one), so that a rename over path is atomic. path: the
+/** Create the temporary file ".NAME<tag>.PID.XXXXXX" in path's folder (NAME: path's last
+ *  component; no folder: the working one; PID: this process's, so that a later save can tell
+ *  a temporary of a process that died from one being written), so that a rename over path is
+ *  atomic. path: the
  *  target (need not exist); tag: "" or a suffix that tells a caller's several temporaries
  *  apart (NULL as ""); tmp: n bytes for the temporary's name, "" after a failure. Returns the
  *  descriptor (O_CLOEXEC, mode 0600 as mkostemp makes it; the caller owns it and the file),
@@ -108,11 +110,15 @@ typedef struct fp_file_output {
     FILE *f;             /* a stream on fd when opened with a stdio mode, else NULL */
     unsigned flags;      /* fp_file_open_output's */
     fp_file_step failed; /* the step at which the last open or commit failed, else NONE */
+    size_t stale;        /* temporaries of dead processes the open removed beside the target */
 } fp_file_output;
 
 /** Start writing `path` whole or not at all: resolve the file it replaces (fp_file_target: a
- *  symbolic link written through; a folder, FIFO or device refused), make the temporary file
- *  ".NAME<tag>.XXXXXX" beside that file (tag: as fp_file_temp_beside's; NULL as ""), give it
+ *  symbolic link written through; a folder, FIFO or device refused), remove the temporaries
+ *  an earlier save of that file with the same tag left when its process was killed (SIGKILL,
+ *  a power cut: ".NAME<tag>.PID.XXXXXX" whose PID is no process on this machine; o->stale
+ *  counts them; a live process's and a name without a PID are left), make the temporary file
+ *  ".NAME<tag>.PID.XXXXXX" beside that file (tag: as fp_file_temp_beside's; NULL as ""), give it
  *  the mode a new file gets (fp_file_new_mode(); flags FP_FILE_OUTPUT_*; best effort: a file
  *  system without Unix modes, vfat or exFAT, refuses it and the save goes on), and with
  *  stdio_mode ("w", "wb", "w+b", ...; NULL: none) a stream on it. The caller writes through

@@ -137,6 +137,19 @@ for sig in TERM INT; do
     grep -q "SIG$sig: stopped" "$tmp/sig.out" || fail "SIG$sig: not said"
     echo "2. SIG$sig: exit $rc, no temporary file"
 done
+# SIGKILL: nothing runs, the temporary stays; the next export to that path removes it (its
+# name holds the dead process's pid)
+out="$tmp/sigKILL"
+mkdir -p "$out"
+"$fp" export "$d/long_T001.fptake" --format pc2 --resample 10000 -o "$out/x.pc2" -q >/dev/null 2>&1 &
+pid=$!
+for ((i = 0; i < 200; i++)); do [ "$(temps "$out")" -gt 0 ] && break; sleep 0.05; done
+kill -KILL $pid; wait $pid
+[ "$(temps "$out")" -eq 1 ] || fail "SIGKILL: $(temps "$out") temporary files, want the one it was writing"
+ls -A "$out" | grep -q "^\.x\.pc2\.$pid\.......$" || fail "SIGKILL: the temporary's name holds no pid: $(ls -A "$out")"
+expect 0 "$fp" export "$good" --format pc2 --resample 100 -o "$out/x.pc2" -q
+[ "$(temps "$out")" -eq 0 ] || fail "the next export left the dead one's temporary: $(ls -A "$out")"
+echo "2. SIGKILL: its temporary removed by the next export to the path"
 # an existing output survives the signal (--force)
 cp "$tmp/ok.pc2" "$tmp/keep.pc2"
 "$fp" export "$d/long_T001.fptake" --format pc2 --resample 10000 -o "$tmp/keep.pc2" --force -q >/dev/null 2>&1 &
