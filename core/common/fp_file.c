@@ -307,3 +307,24 @@ void fp_file_output_abort(fp_file_output *o)
     unlink(o->tmp);
     output_clear(o);
 }
+
+int fp_file_mkdirs(const char *path)
+{
+    if (!path || !*path) return -EINVAL;
+    char p[4096];
+    size_t n = strlen(path);
+    if (n >= sizeof p) return -ENAMETOOLONG;
+    memcpy(p, path, n + 1);
+    while (n > 1 && p[n - 1] == '/') p[--n] = '\0'; /* (a trailing slash) */
+    for (char *s = p + 1;; s++) { /* each parent in turn, then the whole */
+        if (*s && *s != '/') continue;
+        const char c = *s;
+        *s = '\0';
+        struct stat st;
+        if (mkdir(p, 0777) != 0 && errno != EEXIST) return -errno;
+        if (stat(p, &st) != 0) return -errno;
+        if (!S_ISDIR(st.st_mode)) return -ENOTDIR;
+        if (!c) return 0;
+        *s = c;
+    }
+}

@@ -29,6 +29,12 @@ extern "C" {
  *  mkostemp's (-ENOENT no folder, -EACCES, ...). Thread-safe. */
 int fp_file_temp_beside(const char *path, const char *tag, char *tmp, size_t n);
 
+/** Make the folder `path` and every missing folder above it, as `mkdir -p` (mode 0777 less
+ *  the umask). Returns 0 when it is a folder afterwards (made or already there), or a negative
+ *  errno: -ENOTDIR (it or a folder above it is a file), mkdir's (-EACCES, -EROFS, -ENOSPC ...),
+ *  -ENAMETOOLONG (over 4095 bytes), -EINVAL (NULL or ""). Thread-safe. */
+int fp_file_mkdirs(const char *path);
+
 /** Open `path` for reading if it is a regular file (a symbolic link to one included), without
  *  blocking on what is not: opened O_NONBLOCK (a FIFO with no writer, a tty, a device cannot
  *  hold the open), checked by fstat, then made blocking again. Returns the descriptor

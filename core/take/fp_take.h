@@ -244,7 +244,8 @@ typedef struct fp_take_writer_options {
                                   control surface names it: --control), -EEXIST if taken */
 } fp_take_writer_options;
 
-/** Create the next take of header->slate in `dir` (created if missing): choose the number
+/** Create the next take of header->slate in `dir` (made with its parents if missing, as
+ *  mkdir -p: fp_file_mkdirs; -ENOTDIR where a file is in the way): choose the number
  *  (fp_take_next_number, retried on EEXIST; or opt->take exactly), open with
  *  O_CREAT|O_EXCL, write the file signature and the header chunk. header->take is ignored;
  *  header->date empty means now. Returns 0 and *out, or a negative errno with err (-EINVAL

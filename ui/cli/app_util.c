@@ -407,6 +407,41 @@ static size_t count_named(const char *dir, const char *prefix, const char *suffi
     return n;
 }
 
+int fp_app_check_take_dir(const char *cmd, const char *dir)
+{
+    char p[4096];
+    size_t n = strlen(dir);
+    if (n >= sizeof p) {
+        fprintf(stderr, "%s: --take-dir %s: %s\n", cmd, dir, strerror(ENAMETOOLONG));
+        return FP_EXIT_CANTCREAT;
+    }
+    memcpy(p, dir, n + 1);
+    for (;;) { /* the folder, else the nearest one above it that is there */
+        while (n > 1 && p[n - 1] == '/') p[--n] = '\0';
+        struct stat st;
+        const char *why = NULL;
+        if (stat(p, &st) == 0) {
+            if (!S_ISDIR(st.st_mode)) why = "not a folder (a file is in its place)";
+            else if (access(p, W_OK | X_OK)) why = strerror(errno);
+            else return 0;
+        } else if (errno == ENOTDIR) {
+            why = "not a folder (a file is in its path)";
+        } else if (errno != ENOENT) {
+            why = strerror(errno);
+        }
+        if (why) {
+            fprintf(stderr, "%s: --take-dir %s: %s%s%s\n", cmd, dir, why, strcmp(p, dir) ? ": " : "",
+                    strcmp(p, dir) ? p : "");
+            return FP_EXIT_CANTCREAT;
+        }
+        char *slash = strrchr(p, '/'); /* missing: made by the take writer, as mkdir -p */
+        if (!slash) snprintf(p, sizeof p, ".");
+        else if (slash == p) p[1] = '\0';
+        else *slash = '\0';
+        n = strlen(p);
+    }
+}
+
 int fp_app_check_output_dir(const char *cmd, const char *option, const char *dir, const char *prefix,
                             const char *suffix, bool make, bool force, bool *made)
 {

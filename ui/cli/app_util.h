@@ -128,6 +128,13 @@ bool fp_app_free_name(const char *path, char *buf, size_t len);
 int fp_app_check_output_dir(const char *cmd, const char *option, const char *dir, const char *prefix,
                             const char *suffix, bool make, bool force, bool *made);
 
+/** --take-dir DIR of run and live, before any work, making nothing: DIR a folder we can write
+ *  in, or, where it is missing, the nearest folder above it that is there (the take writer
+ *  makes DIR with its parents at the first take, as `mkdir -p`: fp_take_writer_create), with
+ *  no file in the way. Takes are numbered on, never overwritten: what DIR holds is kept.
+ *  Returns 0, or 73 with "CMD: --take-dir DIR: reason[: the folder or file at fault]" printed. */
+int fp_app_check_take_dir(const char *cmd, const char *dir);
+
 /** Bytes a frame of --frames-out takes a vertex, about (an OBJ written back as the input came
  *  in: its v, vn, vt and face lines; 1.34 MB a frame for the ICT face's 26719 vertices). */
 /** An OBJ frame's bytes, about, as the mesh writer writes it (core/mesh): a "v" line of about
