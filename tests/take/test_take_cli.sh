@@ -70,6 +70,22 @@ echo "0. with the rig: followed $r_rig (median %, vectors, p10 %), of what it al
 r_info=$(reach_of "$tmp/info-rig.out") r_play=$(reach_of "$tmp/play-rig.out")
 [ -n "$r_play" ] || { cat "$tmp/play-rig.out"; fail "play printed no reach"; }
 [ "$r_play" = "$r_info" ] || fail "play's reach ($r_play) is not the take's ($r_info; run said $r_rig)"
+# with run's clause of what the rig allowed (measured on playback: the take's stored sets are it)
+grep -q "the skin followed the fingertips [0-9]*% .*; [0-9]*% of what the rig allowed, 10th percentile [0-9]*%: it holds back" "$tmp/play-rig.out" ||
+    { cat "$tmp/play-rig.out"; fail "play (rig): its summary does not say what the rig allowed, as run's does"; }
+# and its notes on each gesture say what they measure: the take stores what the rig allowed,
+# not the fingertips' ask (before: "the skin followed the fingertips 100% this gesture")
+grep -q "this gesture" "$tmp/play-rig.err" || { cat "$tmp/play-rig.err"; fail "play (rig) said nothing of its gestures"; }
+! grep -q "the skin followed the fingertips [0-9]*% this gesture" "$tmp/play-rig.err" ||
+    { cat "$tmp/play-rig.err"; fail "play (rig) says the skin followed the fingertips, which a take does not store"; }
+grep -q "the skin followed [0-9]*% of what the rig allowed this gesture" "$tmp/play-rig.err" ||
+    { cat "$tmp/play-rig.err"; fail "play (rig): no gesture note of what the rig allowed"; }
+"$fp" export "$tmp/reach-rig-takes/scene1_T001.fptake" --format pc2 -o "$tmp/reach-rig.pc2" \
+    >"$tmp/export-rig.out" 2>"$tmp/export-rig.err" || { cat "$tmp/export-rig.err"; fail "export (rig) exited $?"; }
+! grep -q "the skin followed the fingertips [0-9]*% this gesture" "$tmp/export-rig.err" ||
+    { cat "$tmp/export-rig.err"; fail "export (rig) says the skin followed the fingertips"; }
+grep -q "the skin followed [0-9]*% of what the rig allowed this gesture" "$tmp/export-rig.err" ||
+    { cat "$tmp/export-rig.err" "$tmp/export-rig.out"; fail "export (rig): no gesture note of what the rig allowed"; }
 
 # ---- 1. record, play ----------------------------------------------------------------------
 "$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv" --speed 3 --duration 0.8 --take-dir "$tmp/takes" \

@@ -458,7 +458,7 @@ static void print_summary(const fp_session *s, run_totals *t, const run_displace
 {
     double med = fp_median(t->update_ms, t->nupdates), mmu = fp_session_head(s)->mm_per_unit;
     char reach_text[400], why[160] = "";
-    fp_app_reach_text(&t->reach, mmu, reach_text, sizeof reach_text);
+    fp_app_reach_text(&t->reach, mmu, false, reach_text, sizeof reach_text);
     /* what held the skin back (step_contact.h's closing line, over the run) */
     if (t->collided && t->folded == t->collided)
         snprintf(why, sizeof why, "; each where the skin would have folded over");
