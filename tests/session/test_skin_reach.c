@@ -35,6 +35,19 @@ static void control_set(fp_control_set *cs, float (*start)[3], float (*end)[3], 
     }
 }
 
+/* The four points indexed (*pts, destroy it) and one frame of n of the vectors above, with the
+ * mobility, into st, g and ga. */
+static void first_frame(csrbf_points **pts, size_t n, fp_frame_stats *st, fp_skin_reach_gesture *g,
+                        fp_skin_reach_gesture *ga)
+{
+    assert_int_equal(csrbf_points_create(4, &ref[0][0], pts), 0);
+    float start[3][3], end[3][3];
+    fp_control_set cs;
+    control_set(&cs, start, end, n);
+    memset(st, 0, sizeof *st);
+    fp_skin_reach_frame(*pts, &ref[0][0], &shown[0][0], &cs, &cs, mobility, st, g, ga);
+}
+
 static void test_held_by_the_rig(void **state)
 {
     (void)state;
@@ -101,14 +114,9 @@ static void test_played_take(void **state)
 {
     (void)state;
     csrbf_points *pts = NULL;
-    assert_int_equal(csrbf_points_create(4, &ref[0][0], &pts), 0);
-    float start[3][3], end[3][3];
-    fp_control_set cs;
-    control_set(&cs, start, end, 3);
     fp_frame_stats st;
-    memset(&st, 0, sizeof st);
     fp_skin_reach_gesture g = {.played = true}, ga = {0};
-    fp_skin_reach_frame(pts, &ref[0][0], &shown[0][0], &cs, &cs, mobility, &st, &g, &ga);
+    first_frame(&pts, 3, &st, &g, &ga);
     log_capture cap = {0};
     fp_slog log = {.fn = capture_log, .user = &cap};
     fp_skin_reach_gesture_end(&g, &ga, 10.0, &log);
