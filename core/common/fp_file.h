@@ -123,7 +123,9 @@ typedef struct fp_file_output {
  *  symbolic link written through; a folder, FIFO or device refused), remove the temporaries
  *  an earlier save of that file with the same tag left when its process was killed (SIGKILL,
  *  a power cut: ".NAME<tag>.PID.XXXXXX" whose PID is no process on this machine; o->stale
- *  counts them; a live process's and a name without a PID are left), make the temporary file
+ *  counts them; a live process's and a name without a PID are left; the folder is read at most
+ *  once a second by a thread, so one left there later by another process in that second waits
+ *  for the next save), make the temporary file
  *  ".NAME<tag>.PID.XXXXXX" beside that file (tag: as fp_file_temp_beside's; NULL as ""), give it
  *  the mode a new file gets (fp_file_new_mode(); flags FP_FILE_OUTPUT_*; best effort: a file
  *  system without Unix modes, vfat or exFAT, refuses it and the save goes on), and with

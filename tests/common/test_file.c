@@ -316,13 +316,16 @@ static void test_output_stale(void **state)
     assert_true(child >= 0);
     if (!child) _exit(0);
     assert_int_equal(waitpid(child, NULL, 0), child); /* (gone: its pid names no process) */
-    char p[256], dead[300], live[300], mine[300], other[300], nopid[300];
-    snprintf(p, sizeof p, "%s/take.pc2", dir);
-    snprintf(dead, sizeof dead, "%s/.take.pc2.%ld.aB3dE9", dir, (long)child);
-    snprintf(live, sizeof live, "%s/.take.pc2.1.aB3dE9", dir); /* init: always there */
-    snprintf(mine, sizeof mine, "%s/.take.pc2.%ld.zZ9yY8", dir, (long)getpid());
-    snprintf(other, sizeof other, "%s/.take.pc2frames.%ld.aB3dE9", dir, (long)child);
-    snprintf(nopid, sizeof nopid, "%s/.take.pc2.aB3dE9", dir);
+    /* (a folder of its own: this thread's last read of another is kept for a second) */
+    char sub[128], p[256], dead[300], live[300], mine[300], other[300], nopid[300];
+    snprintf(sub, sizeof sub, "%s/stale", dir);
+    assert_int_equal(mkdir(sub, 0700), 0);
+    snprintf(p, sizeof p, "%s/take.pc2", sub);
+    snprintf(dead, sizeof dead, "%s/.take.pc2.%ld.aB3dE9", sub, (long)child);
+    snprintf(live, sizeof live, "%s/.take.pc2.1.aB3dE9", sub); /* init: always there */
+    snprintf(mine, sizeof mine, "%s/.take.pc2.%ld.zZ9yY8", sub, (long)getpid());
+    snprintf(other, sizeof other, "%s/.take.pc2frames.%ld.aB3dE9", sub, (long)child);
+    snprintf(nopid, sizeof nopid, "%s/.take.pc2.aB3dE9", sub);
     const char *all[] = {dead, live, mine, other, nopid};
     for (size_t i = 0; i < 5; i++) write_file(all[i], "part", 0600);
     fp_file_output o;
@@ -331,8 +334,15 @@ static void test_output_stale(void **state)
     assert_int_equal(access(dead, F_OK), -1);
     for (size_t i = 1; i < 5; i++) assert_int_equal(access(all[i], F_OK), 0);
     assert_int_equal(fp_file_output_commit(&o), 0);
-    for (size_t i = 1; i < 5; i++) assert_int_equal(unlink(all[i]), 0);
+    /* the next save of another tag in that folder (the folder's read kept): the other tag's */
+    assert_int_equal(fp_file_open_output(p, "frames", "wb", 0, &o), 0);
+    assert_int_equal(o.stale, 1);
+    assert_int_equal(access(other, F_OK), -1);
+    fp_file_output_abort(&o);
+    const char *kept[] = {live, mine, nopid};
+    for (size_t i = 0; i < 3; i++) assert_int_equal(unlink(kept[i]), 0);
     assert_int_equal(unlink(p), 0);
+    assert_int_equal(rmdir(sub), 0);
 }
 
 /* fp_file_open_output + commit: the temporary beside the target while it is written (the
