@@ -230,8 +230,12 @@ int take_frame_check(const uint8_t *rec, size_t n, size_t inputs, size_t *bad_at
                 BAD(TAKE_FRAME_FIXED + (i / 6) * TAKE_VECTOR_SIZE, "control vector not finite");
     }
     for (size_t i = 0, at = TAKE_FRAME_FIXED + (size_t)vc * TAKE_VECTOR_SIZE; i < cc; i++, at += TAKE_CHANNEL_SIZE)
-        if (!isfinite(le_getf(rec + at + 32))) /* (the rig would ignore it, or pin it to a bound) */
-            BAD(at + 32, "channel \"%.31s\" value not finite", (const char *)rec + at);
+        if (!isfinite(le_getf(rec + at + 32))) { /* (the rig would ignore it, or pin it to a bound) */
+            char name[32], clean[100]; /* (a damaged file's name: no control bytes to the terminal) */
+            memcpy(name, rec + at, 31);
+            name[31] = '\0';
+            BAD(at + 32, "channel \"%s\" value not finite", fp_text_clean(name, clean, sizeof clean));
+        }
     for (uint32_t i = 0; i < ec; i++) {
         if (n - off < TAKE_EVENT_HEAD) BAD(off, "event header runs past the frame record");
         uint32_t es = le_get32(rec + off);

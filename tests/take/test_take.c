@@ -936,6 +936,19 @@ static void test_not_finite(void **state)
         fp_take_reader_close(&r);
         free(p);
     }
+    { /* a damaged name with an escape byte: the reason carries no control byte */
+        uint8_t *p = malloc(n);
+        memcpy(p, b, n);
+        const float nan = NAN;
+        p[rec + chan0] = 0x1b;
+        memcpy(p + rec + chan0 + 32, &nan, 4);
+        rechunk(p, starts[3]);
+        assert_int_equal(fp_take_reader_open_memory(p, n, "f.fptake", &r, err, sizeof err), 0);
+        assert_non_null(strstr(fp_take_reader_warning(r), "aw.open\" value not finite"));
+        assert_null(strchr(fp_take_reader_warning(r), 0x1b));
+        fp_take_reader_close(&r);
+        free(p);
+    }
     free(b);
     rm_rf(dir);
 }
