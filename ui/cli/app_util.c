@@ -660,7 +660,7 @@ void fp_app_reach_text(fp_app_reach *r, double mm_per_unit, bool played_rig, cha
         char h[96] = "";
         if (r->held) snprintf(h, sizeof h, "; %zu more on the skull or the jaw, which the rig keeps still", r->held);
         snprintf(text, len, "; the skin followed %.0f%% of what the rig allowed (median over %zu touching vectors, "
-                 "10th percentile %.0f%%, longest drag %.1f mm; the takes hold the rig's vectors, not how far "
+                 "10th percentile %.0f%%, longest drag %.1f mm; a take holds the rig's vectors, not how far "
                  "the fingertips asked%s)", 100.0 * ma, r->na, 100.0 * pa, r->asked_max * mm_per_unit, h);
         return;
     }

@@ -270,7 +270,7 @@ void fp_app_reach_add(fp_app_reach *r, const fp_frame_stats *st);
  *  still)". Reorders r->v and r->va. played_rig: the reaches were measured on takes played
  *  with a rig (play of a stack or of a take cut before its end chunk), whose stored vectors
  *  are already the rig's cut of the fingertips' ask: then only "; the skin followed 100% of
- *  what the rig allowed (median over N touching vectors, ...; the takes hold the rig's
+ *  what the rig allowed (median over N touching vectors, ...; a take holds the rig's
  *  vectors, not how far the fingertips asked)" (empty when none was gathered). */
 void fp_app_reach_text(fp_app_reach *r, double mm_per_unit, bool played_rig, char *text, size_t len);
 /** The clause run's summary adds with a rig: "; 100% of what the rig allowed, 10th percentile
