@@ -2,9 +2,14 @@
  * regular files opened for reading (fp_file.h). */
 #define _GNU_SOURCE /* mkostemp */
 #include "fp_file.h"
+#include "fp_clock.h"
 
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <limits.h>
+#include <signal.h>
+#include <stdbool.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -17,8 +22,9 @@ int fp_file_temp_beside(const char *path, const char *tag, char *tmp, size_t n)
     if (!path || !tmp || !n) return -EINVAL;
     if (!tag) tag = "";
     const char *slash = strrchr(path, '/');
-    int len = slash ? snprintf(tmp, n, "%.*s/.%s%s.XXXXXX", (int)(slash - path), path, slash + 1, tag)
-                    : snprintf(tmp, n, ".%s%s.XXXXXX", path, tag);
+    const long pid = (long)getpid(); /* (whose it is: fp_file_open_output removes a dead one's) */
+    int len = slash ? snprintf(tmp, n, "%.*s/.%s%s.%ld.XXXXXX", (int)(slash - path), path, slash + 1, tag, pid)
+                    : snprintf(tmp, n, ".%s%s.%ld.XXXXXX", path, tag, pid);
     if (len < 0 || (size_t)len >= n) {
         tmp[0] = '\0';
         return -ENAMETOOLONG;
@@ -180,6 +186,91 @@ int fp_file_output_code(int e)
     }
 }
 
+/* A temporary's name ends ".PID.XXXXXX": the PID (a positive decimal without sign or leading
+ * zero) where p is "PID.XXXXXX" exactly, else 0. */
+static long temp_pid(const char *p)
+{
+    char *end;
+    if (*p < '1' || *p > '9') return 0;
+    errno = 0;
+    long pid = strtol(p, &end, 10);
+    return errno || *end != '.' || strlen(end + 1) != 6 || pid > INT_MAX ? 0 : pid;
+}
+
+/* Whether name is a temporary fp_file_temp_beside made in a process that is gone (its PID
+ * names no process: kill(PID, 0) fails with ESRCH; this process's are never). */
+static bool dead_temp(const char *name)
+{
+    const char *dot = strrchr(name, '.');
+    if (name[0] != '.' || !dot || dot - name < 3) return false;
+    const char *p = dot - 1; /* back to the '.' before the PID */
+    while (p > name && *p >= '0' && *p <= '9') p--;
+    long pid = *p == '.' && p > name ? temp_pid(p + 1) : 0;
+    return pid > 0 && pid != (long)getpid() && kill((pid_t)pid, 0) != 0 && errno == ESRCH;
+}
+
+/* The dead processes' temporaries of the folder this thread last read, for a second: a
+ * sequence of saves into one folder (obj-seq, png-seq, --frames-out: thousands of files) reads
+ * it once a second, not once a file (3 ms a file in a folder of 10000). More than
+ * FP_SWEEP_KEEP: read it each time. */
+enum { FP_SWEEP_KEEP = 8 };
+#define FP_SWEEP_NS 1000000000LL
+static _Thread_local struct {
+    char folder[4096];
+    bool valid, overflow;
+    int64_t read_ns;
+    size_t n;
+    char names[FP_SWEEP_KEEP][256];
+} sweep;
+
+/* Remove the temporaries fp_file_temp_beside made for `path` and `tag` in processes that are
+ * gone (killed before their commit or abort): ".NAME<tag>.PID.XXXXXX" beside path whose PID
+ * names no process. Best effort. Returns how many were removed. */
+static size_t remove_stale(const char *path, const char *tag)
+{
+    const char *slash = strrchr(path, '/');
+    char folder[4096], prefix[512];
+    if (!slash) snprintf(folder, sizeof folder, ".");
+    else if (slash == path) snprintf(folder, sizeof folder, "/");
+    else if ((size_t)snprintf(folder, sizeof folder, "%.*s", (int)(slash - path), path) >= sizeof folder) return 0;
+    int pl = snprintf(prefix, sizeof prefix, ".%s%s.", slash ? slash + 1 : path, tag);
+    if (pl < 0 || (size_t)pl >= sizeof prefix) return 0;
+    size_t removed = 0;
+    const int64_t now = fp_now_ns();
+    if (sweep.valid && !sweep.overflow && now - sweep.read_ns < FP_SWEEP_NS && !strcmp(sweep.folder, folder)) {
+        for (size_t i = 0; i < sweep.n;) {
+            if (strncmp(sweep.names[i], prefix, (size_t)pl) || !temp_pid(sweep.names[i] + pl)) {
+                i++;
+                continue;
+            }
+            char p[4096 + 260];
+            snprintf(p, sizeof p, "%s/%s", folder, sweep.names[i]);
+            removed += unlink(p) == 0;
+            memcpy(sweep.names[i], sweep.names[--sweep.n], sizeof sweep.names[i]);
+        }
+        return removed;
+    }
+    DIR *d = opendir(folder);
+    sweep.valid = d != NULL;
+    sweep.read_ns = now;
+    sweep.overflow = false;
+    sweep.n = 0;
+    snprintf(sweep.folder, sizeof sweep.folder, "%s", folder);
+    if (!d) return 0;
+    const struct dirent *e;
+    while ((e = readdir(d))) {
+        if (!dead_temp(e->d_name)) continue;
+        if (!strncmp(e->d_name, prefix, (size_t)pl) && temp_pid(e->d_name + pl))
+            removed += unlinkat(dirfd(d), e->d_name, 0) == 0;
+        else if (sweep.n < FP_SWEEP_KEEP && strlen(e->d_name) < sizeof sweep.names[0])
+            snprintf(sweep.names[sweep.n++], sizeof sweep.names[0], "%s", e->d_name);
+        else
+            sweep.overflow = true;
+    }
+    closedir(d);
+    return removed;
+}
+
 /* o emptied: nothing open, no temporary (o->path kept). */
 static void output_clear(fp_file_output *o)
 {
@@ -193,11 +284,13 @@ int fp_file_open_output(const char *path, const char *tag, const char *stdio_mod
 {
     if (!o) return -EINVAL;
     output_clear(o);
+    o->stale = 0;
     o->flags = flags;
     o->failed = FP_FILE_STEP_TARGET;
     int rc = fp_file_target(path, o->path, sizeof o->path); /* (path may be o->path) */
     if (rc < 0) return rc;
     o->failed = FP_FILE_STEP_TEMP;
+    o->stale = remove_stale(o->path, tag ? tag : "");
     int fd = fp_file_temp_beside(o->path, tag, o->tmp, sizeof o->tmp);
     if (fd < 0) return fd;
     o->fd = fd;
@@ -270,4 +363,25 @@ void fp_file_output_abort(fp_file_output *o)
     else if (o->fd >= 0) close(o->fd);
     unlink(o->tmp);
     output_clear(o);
+}
+
+int fp_file_mkdirs(const char *path)
+{
+    if (!path || !*path) return -EINVAL;
+    char p[4096];
+    size_t n = strlen(path);
+    if (n >= sizeof p) return -ENAMETOOLONG;
+    memcpy(p, path, n + 1);
+    while (n > 1 && p[n - 1] == '/') p[--n] = '\0'; /* (a trailing slash) */
+    for (char *s = p + 1;; s++) { /* each parent in turn, then the whole */
+        if (*s && *s != '/') continue;
+        const char c = *s;
+        *s = '\0';
+        struct stat st;
+        if (mkdir(p, 0777) != 0 && errno != EEXIST) return -errno;
+        if (stat(p, &st) != 0) return -errno;
+        if (!S_ISDIR(st.st_mode)) return -ENOTDIR;
+        if (!c) return 0;
+        *s = c;
+    }
 }

@@ -18,14 +18,22 @@
 extern "C" {
 #endif
 
-/** Create the temporary file ".NAME<tag>.XXXXXX" in path's folder (NAME: path's last
- *  component; no folder: the working one), so that a rename over path is atomic. path: the
+/** Create the temporary file ".NAME<tag>.PID.XXXXXX" in path's folder (NAME: path's last
+ *  component; no folder: the working one; PID: this process's, so that a later save can tell
+ *  a temporary of a process that died from one being written), so that a rename over path is
+ *  atomic. path: the
  *  target (need not exist); tag: "" or a suffix that tells a caller's several temporaries
  *  apart (NULL as ""); tmp: n bytes for the temporary's name, "" after a failure. Returns the
  *  descriptor (O_CLOEXEC, mode 0600 as mkostemp makes it; the caller owns it and the file),
  *  or a negative errno: -EINVAL (NULL argument), -ENAMETOOLONG (the name does not fit n),
  *  mkostemp's (-ENOENT no folder, -EACCES, ...). Thread-safe. */
 int fp_file_temp_beside(const char *path, const char *tag, char *tmp, size_t n);
+
+/** Make the folder `path` and every missing folder above it, as `mkdir -p` (mode 0777 less
+ *  the umask). Returns 0 when it is a folder afterwards (made or already there), or a negative
+ *  errno: -ENOTDIR (it or a folder above it is a file), mkdir's (-EACCES, -EROFS, -ENOSPC ...),
+ *  -ENAMETOOLONG (over 4095 bytes), -EINVAL (NULL or ""). Thread-safe. */
+int fp_file_mkdirs(const char *path);
 
 /** Open `path` for reading if it is a regular file (a symbolic link to one included), without
  *  blocking on what is not: opened O_NONBLOCK (a FIFO with no writer, a tty, a device cannot
@@ -108,11 +116,17 @@ typedef struct fp_file_output {
     FILE *f;             /* a stream on fd when opened with a stdio mode, else NULL */
     unsigned flags;      /* fp_file_open_output's */
     fp_file_step failed; /* the step at which the last open or commit failed, else NONE */
+    size_t stale;        /* temporaries of dead processes the open removed beside the target */
 } fp_file_output;
 
 /** Start writing `path` whole or not at all: resolve the file it replaces (fp_file_target: a
- *  symbolic link written through; a folder, FIFO or device refused), make the temporary file
- *  ".NAME<tag>.XXXXXX" beside that file (tag: as fp_file_temp_beside's; NULL as ""), give it
+ *  symbolic link written through; a folder, FIFO or device refused), remove the temporaries
+ *  an earlier save of that file with the same tag left when its process was killed (SIGKILL,
+ *  a power cut: ".NAME<tag>.PID.XXXXXX" whose PID is no process on this machine; o->stale
+ *  counts them; a live process's and a name without a PID are left; the folder is read at most
+ *  once a second by a thread, so one left there later by another process in that second waits
+ *  for the next save), make the temporary file
+ *  ".NAME<tag>.PID.XXXXXX" beside that file (tag: as fp_file_temp_beside's; NULL as ""), give it
  *  the mode a new file gets (fp_file_new_mode(); flags FP_FILE_OUTPUT_*; best effort: a file
  *  system without Unix modes, vfat or exFAT, refuses it and the save goes on), and with
  *  stdio_mode ("w", "wb", "w+b", ...; NULL: none) a stream on it. The caller writes through

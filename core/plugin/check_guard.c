@@ -56,14 +56,20 @@ static void send_rec(writer *w, rec *r, size_t used)
     }
 }
 
+/* A record of `type` about `call`, its bytes up to `used` zeroed (those it sends). */
+static void rec_begin(rec *r, uint32_t type, const char *call, size_t used)
+{
+    memset(r, 0, used);
+    r->type = type;
+    snprintf(r->call, sizeof r->call, "%s", call);
+}
+
 static void child_finding(void *user, fp_check_level level, const char *check, const char *message)
 {
     writer *w = user;
     rec r;
-    memset(&r, 0, offsetof(rec, text));
-    r.type = REC_FINDING;
+    rec_begin(&r, REC_FINDING, check, offsetof(rec, text));
     r.code = level;
-    snprintf(r.call, sizeof r.call, "%s", check);
     r.sum = *w->sum;
     size_t n = strlen(message);
     if (n >= sizeof r.text) n = sizeof r.text - 1;
@@ -76,10 +82,8 @@ static void child_progress(void *user, const char *call, uint64_t frame)
 {
     writer *w = user;
     rec r;
-    memset(&r, 0, offsetof(rec, sum));
-    r.type = REC_PROGRESS;
+    rec_begin(&r, REC_PROGRESS, call, offsetof(rec, sum));
     r.frame = frame;
-    snprintf(r.call, sizeof r.call, "%s", call);
     send_rec(w, &r, offsetof(rec, sum));
 }
 

@@ -252,36 +252,60 @@ static int by_name(const void *a, const void *b)
     return strcmp(*(char *const *)a, *(char *const *)b);
 }
 
+/* The names of dir's *.json files, sorted, into *names (malloc()ed, each and the array).
+ * Returns their count, or a negative errno. */
+static long json_names(const char *dir, char ***names)
+{
+    *names = NULL;
+    DIR *d = opendir(dir);
+    if (!d) return -errno;
+    size_t count = 0, cap = 0;
+    long rc = 0;
+    struct dirent *e;
+    while ((e = readdir(d))) {
+        size_t l = strlen(e->d_name);
+        if (l <= 5 || strcmp(e->d_name + l - 5, ".json")) continue;
+        if (count == cap) {
+            size_t nc = cap ? 2 * cap : 64;
+            char **g = realloc(*names, nc * sizeof *g);
+            if (!g) { rc = -ENOMEM; break; }
+            *names = g, cap = nc;
+        }
+        if (!((*names)[count] = strdup(e->d_name))) { rc = -ENOMEM; break; }
+        count++;
+    }
+    closedir(d);
+    if (rc) {
+        for (size_t i = 0; i < count; i++) free((*names)[i]);
+        free(*names);
+        *names = NULL;
+        return rc;
+    }
+    if (count) qsort(*names, count, sizeof **names, by_name);
+    return (long)count;
+}
+
 int fp_rig_find(const char *dir, size_t n, const float *pos, char *path_out, size_t path_len, char *err,
                 size_t errlen)
 {
     if (!dir || !pos || !path_out || !path_len) return fp_errorf(err, errlen, -EINVAL, "fp_rig_find: NULL argument");
-    DIR *d = opendir(dir);
-    if (!d) return fp_errorf(err, errlen, -ENOENT, "%s: %s", dir, strerror(errno));
-    char *names[512];
-    size_t count = 0;
-    struct dirent *e;
-    while ((e = readdir(d)) && count < 512) {
-        size_t l = strlen(e->d_name);
-        if (l > 5 && !strcmp(e->d_name + l - 5, ".json")) names[count++] = strdup(e->d_name);
-    }
-    closedir(d);
-    qsort(names, count, sizeof *names, by_name);
+    char **names;
+    long count = json_names(dir, &names);
+    if (count == -ENOMEM) return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", dir);
+    if (count < 0) return fp_errorf(err, errlen, -ENOENT, "%s: %s", dir, strerror((int)-count));
     uint32_t crc = fp_rig_positions_crc32(n, pos);
-    char by_count[4096] = "";
+    char by_count[4096] = "", by_crc[4096] = "", twin[4096] = "";
     int count_matches = 0, unread = 0;
     char first_unread[300] = ""; /* the first file that did not parse: why (said when none fits) */
-    int rc = -ENOENT;
-    for (size_t i = 0; i < count; i++) {
-        if (!names[i]) continue;
+    for (long i = 0; i < count; i++) {
         char path[4096];
         snprintf(path, sizeof path, "%s/%s", dir, names[i]);
         fp_rig *r = NULL;
         char e2[256];
         if (fp_rig_load(path, &r, e2, sizeof e2) == 0) {
-            if (r->n == n && r->crc == crc && rc != 0) {
-                rc = strlen(path) < path_len ? 0 : -ENAMETOOLONG;
-                if (!rc) strcpy(path_out, path);
+            if (r->n == n && r->crc == crc) { /* the first by name; a second one is said */
+                if (!by_crc[0]) snprintf(by_crc, sizeof by_crc, "%s", path);
+                else if (!twin[0]) snprintf(twin, sizeof twin, "%s", path);
             } else if (r->n == n) {
                 count_matches++;
                 snprintf(by_count, sizeof by_count, "%s", path);
@@ -291,12 +315,15 @@ int fp_rig_find(const char *dir, size_t n, const float *pos, char *path_out, siz
             snprintf(first_unread, sizeof first_unread, "%s", e2);
         }
     }
-    for (size_t i = 0; i < count; i++) free(names[i]);
-    if (rc == 0) return 0;
-    if (rc == -ENAMETOOLONG) return fp_errorf(err, errlen, rc, "%s: path too long", dir);
-    if (count_matches == 1) {
-        if (strlen(by_count) >= path_len) return fp_errorf(err, errlen, -ENAMETOOLONG, "%s: path too long", by_count);
-        strcpy(path_out, by_count);
+    for (long i = 0; i < count; i++) free(names[i]);
+    free(names);
+    if (twin[0]) /* (which one a run took hung on the files' names) */
+        return fp_errorf(err, errlen, -EEXIST, "%s and %s both fit this mesh (%zu vertices, checksum %08x): "
+                         "name one with --rig, or remove the other", by_crc, twin, n, crc);
+    const char *found = by_crc[0] ? by_crc : count_matches == 1 ? by_count : NULL;
+    if (found) {
+        if (strlen(found) >= path_len) return fp_errorf(err, errlen, -ENAMETOOLONG, "%s: path too long", found);
+        strcpy(path_out, found);
         return 0;
     }
     char why[400] = ""; /* (an artist's own rig with an error was skipped without a word) */

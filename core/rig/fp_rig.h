@@ -204,11 +204,13 @@ uint32_t fp_rig_positions_crc32(size_t n, const float *positions);
 /** Whether positions (n x 3) have the checksum the rig records: 1 yes, 0 no. */
 int fp_rig_checksum_matches(const fp_rig *rig, size_t n, const float *positions);
 
-/** Find the rig of a mesh among the *.json files of `dir`: the file whose mesh checksum
- *  matches; else the only one whose vertex count matches. Files that do not parse are
- *  skipped (when none fits, the message counts them and gives the first one's error: file
- *  and JSON path). Writes its path into path_out. Returns 0, -ENOENT (none, or several with
- *  that vertex count and none by checksum; message says which), -ENAMETOOLONG, -EINVAL. */
+/** Find the rig of a mesh among the *.json files of `dir` (all of them, however many): the
+ *  file whose mesh checksum matches; else the only one whose vertex count matches. Files that
+ *  do not parse are skipped (when none fits, the message counts them and gives the first
+ *  one's error: file and JSON path). Writes its path into path_out. Returns 0, -ENOENT (none,
+ *  or several with that vertex count and none by checksum; message says which), -EEXIST (two
+ *  files with the mesh's checksum: the message names both, the first two by name),
+ *  -ENAMETOOLONG, -ENOMEM, -EINVAL. Reads the folder and its files; any thread. */
 int fp_rig_find(const char *dir, size_t n, const float *positions, char *path_out,
                 size_t path_len, char *err, size_t errlen);
 

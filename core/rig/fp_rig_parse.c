@@ -311,6 +311,8 @@ static int parse_regions(const fpr_ctx *c, fp_rig *r, const cJSON *root)
                 reg->count++;
             }
         }
+        if (!rc && !reg->count) /* (a region of nothing: a mistake, never a choice) */
+            rc = fpr_bad(c, vp, "empty: region \"%s\" lists no vertex", reg->name);
     }
     if (rc) return rc;
     r->region_count = (size_t)nr;

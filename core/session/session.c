@@ -399,6 +399,8 @@ void fp_session_apply_controls(fp_session *s, int64_t now_ns, const fp_control_s
         fp_changed_all(&s->shown_changed);
         fp_cg_reference_changed(&s->cg, NULL, SIZE_MAX);
     }
+    /* the stored set is the rig's cut of what the fingertips asked: the reach is against it */
+    s->gesture_reach.played = s->rig.rig != NULL;
     engine_and_history(s, cs, cs, st);
     fp_record_step_end(&s->record, s->frame, now_ns, requested | s->actions, cs, st, s->inputs,
                        s->input_count, &s->log);

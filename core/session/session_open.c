@@ -33,6 +33,8 @@ static int attach_rig(fp_session *s, const fp_session_options *opt, char *err, s
         char dir[1024], path[1024], msg[1200] = "";
         const char *d = opt->rig_dir ? opt->rig_dir : fp_rig_default_dir(NULL, dir, sizeof dir);
         rc = fp_rig_find(d, s->n, s->loaded, path, sizeof path, msg, sizeof msg);
+        if (rc == -EEXIST) /* (two rigs of this mesh: a choice not ours; said also under -q) */
+            fp_slog_printf(&s->log, FP_LOG_WARNING, "rig", "%s; running without a rig", msg);
         if (rc) {
             snprintf(s->rig_how, sizeof s->rig_how, "none (%s)", msg);
         } else {

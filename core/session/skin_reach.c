@@ -82,10 +82,38 @@ void fp_skin_reach_frame(const csrbf_points *points, const float *ref, const flo
 
 void fp_skin_reach_gesture_reset(fp_skin_reach_gesture *g) { memset(g, 0, sizeof *g); }
 
+/* A played take's gesture with a rig: only the reach against what the rig allowed is known
+ * (the take stores the clamped vectors). */
+static void end_played(const fp_skin_reach_gesture *g, const fp_skin_reach_gesture *allowed, double mm_per_unit,
+                       const fp_slog *log)
+{
+    bool mm = mm_per_unit > 0 && isfinite(mm_per_unit);
+    if (!allowed->vectors) {
+        if (allowed->held)
+            fp_slog_printf(log, FP_LOG_INFO, FP_SLOG_ENGINE, "the fingertips grabbed the skull or the jaw this "
+                           "gesture, which the rig keeps still (%zu vector%s)", allowed->held,
+                           allowed->held == 1 ? "" : "s");
+        return;
+    }
+    char held[128] = "";
+    if (allowed->held)
+        snprintf(held, sizeof held, "; %zu more grabbed the skull or the jaw, which the rig keeps still",
+                 allowed->held);
+    fp_slog_printf(log, FP_LOG_INFO, FP_SLOG_ENGINE,
+                   "the skin followed %.0f%% of what the rig allowed this gesture (mean of %zu; least %.0f%%, "
+                   "under 90%% in %zu; longest drag %.1f %s; the take holds the rig's vectors, not how far "
+                   "the fingertips asked%s)",
+                   100.0 * allowed->sum_reach / (double)allowed->vectors, allowed->vectors,
+                   100.0 * allowed->least, allowed->below_90, g->asked_max * (mm ? mm_per_unit : 1.0),
+                   mm ? "mm" : "mesh units", held);
+}
+
 void fp_skin_reach_gesture_end(fp_skin_reach_gesture *g, fp_skin_reach_gesture *allowed, double mm_per_unit,
                                const fp_slog *log)
 {
-    if (g->vectors) {
+    if (g->vectors && g->played && allowed) {
+        end_played(g, allowed, mm_per_unit, log);
+    } else if (g->vectors) {
         bool mm = mm_per_unit > 0 && isfinite(mm_per_unit);
         double mean = g->sum_reach / (double)g->vectors;
         double mean_allowed = allowed && allowed->vectors ? allowed->sum_reach / (double)allowed->vectors : mean;

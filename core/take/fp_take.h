@@ -203,13 +203,16 @@ typedef struct fp_take_frame {
     uint32_t requested;             /* fp_intent bits the performer asked for (keys, pedal) */
     /** The control set the engine used (its `intents` are those the mapping returned; with a
      *  rig, its channels are every channel of the rig with the value posed that frame, from
-     *  keys, the host's API or the mapping: format 1.1); NULL where the frame had none
-     *  (mapping failed): recorded as inactive, no vectors. */
+     *  keys, the host's API or the mapping: format 1.1; a channel whose value is NaN or
+     *  infinite, which only a mapping without a rig returns, is not recorded: the rig ignores
+     *  a NaN and a reader refuses the record); NULL where the frame had none (mapping failed):
+     *  recorded as inactive, no vectors. */
     const fp_control_set *control;
 } fp_take_frame;
 
 /** Encoded size of a frame record in bytes (docs/take-format.md), or 0 when it cannot be
- *  recorded (count fields beyond 2^24, an event of unknown type is skipped and not counted). */
+ *  recorded (count fields beyond 2^24; an event of unknown type, and a channel whose value
+ *  is not finite, are skipped and not counted). */
 size_t fp_take_frame_size(const fp_take_frame *frame);
 
 /* ------------------------------------------------------------------------------------- */
@@ -244,7 +247,8 @@ typedef struct fp_take_writer_options {
                                   control surface names it: --control), -EEXIST if taken */
 } fp_take_writer_options;
 
-/** Create the next take of header->slate in `dir` (created if missing): choose the number
+/** Create the next take of header->slate in `dir` (made with its parents if missing, as
+ *  mkdir -p: fp_file_mkdirs; -ENOTDIR where a file is in the way): choose the number
  *  (fp_take_next_number, retried on EEXIST; or opt->take exactly), open with
  *  O_CREAT|O_EXCL, write the file signature and the header chunk. header->take is ignored;
  *  header->date empty means now. Returns 0 and *out, or a negative errno with err (-EINVAL

@@ -29,6 +29,19 @@ static size_t event_body_size(uint32_t type)
     }
 }
 
+/* The f32 fields of a type's body: *first their offset in it, the count returned (0: none). */
+static size_t event_floats(uint32_t type, size_t *first)
+{
+    *first = 0;
+    switch (type) {
+    case FP_EVENT_JOINT_ANGLES: *first = 4; return FP_GLOVE_SENSORS;
+    case FP_EVENT_JOINT_POSITIONS: return 3 * FP_HAND_JOINTS;
+    case FP_EVENT_WRIST_POSE: return 7;
+    case FP_EVENT_CHANNEL: *first = sizeof(((fp_event_channel *)0)->name); return 1;
+    default: return 0;
+    }
+}
+
 size_t take_event_size(const fp_event *e)
 {
     size_t b = event_body_size(e->header.type);
@@ -142,7 +155,8 @@ size_t fp_take_frame_size(const fp_take_frame *f)
     if (c) {
         if (c->count >= TAKE_COUNT_MAX || c->channel_count >= TAKE_COUNT_MAX) return 0;
         if ((c->count && (!c->start || !c->end)) || (c->channel_count && !c->channels)) return 0;
-        n += TAKE_VECTOR_SIZE * c->count + TAKE_CHANNEL_SIZE * c->channel_count;
+        n += TAKE_VECTOR_SIZE * c->count;
+        for (size_t i = 0; i < c->channel_count; i++) n += TAKE_CHANNEL_SIZE * !!isfinite(c->channels[i].value);
     }
     if (f->event_count >= TAKE_COUNT_MAX) return 0;
     for (size_t i = 0; i < f->event_count; i++) n += take_event_size(&f->events[i]);
@@ -156,8 +170,9 @@ size_t fp_take_frame_encode(const fp_take_frame *f, void *buf, size_t cap)
     uint8_t *p = buf;
     const fp_control_set *c = f->control;
     uint32_t flags = c ? TAKE_FRAME_FLAG_CONTROL | (c->active ? TAKE_FRAME_FLAG_ACTIVE : 0) : 0;
-    uint32_t events = 0;
+    uint32_t events = 0, channels = 0;
     for (size_t i = 0; i < f->event_count; i++) events += take_event_size(&f->events[i]) != 0;
+    for (size_t i = 0; c && i < c->channel_count; i++) channels += isfinite(c->channels[i].value) != 0;
     le_put32(p, (uint32_t)n);
     le_put32(p + 4, flags);
     le_put64(p + 8, f->frame);
@@ -166,7 +181,7 @@ size_t fp_take_frame_encode(const fp_take_frame *f, void *buf, size_t cap)
     le_put32(p + 28, c ? c->intents : 0);
     le_putd(p + 32, c ? c->radius : 0.0);
     le_put32(p + 40, c ? (uint32_t)c->count : 0);
-    le_put32(p + 44, c ? (uint32_t)c->channel_count : 0);
+    le_put32(p + 44, channels);
     le_put32(p + 48, events);
     le_put32(p + 52, 0);
     p += TAKE_FRAME_FIXED;
@@ -176,11 +191,13 @@ size_t fp_take_frame_encode(const fp_take_frame *f, void *buf, size_t cap)
                 le_putf(p + 4 * k, c->start[i][k]);
                 le_putf(p + 12 + 4 * k, c->end[i][k]);
             }
-        for (size_t i = 0; i < c->channel_count; i++, p += TAKE_CHANNEL_SIZE) {
+        for (size_t i = 0; i < c->channel_count; i++) {
+            if (!isfinite(c->channels[i].value)) continue; /* not recorded: fp_take.h */
             size_t len = strnlen(c->channels[i].name, sizeof c->channels[i].name - 1);
             memcpy(p, c->channels[i].name, len);
             memset(p + len, 0, 32 - len);
             le_putf(p + 32, c->channels[i].value);
+            p += TAKE_CHANNEL_SIZE;
         }
     }
     for (size_t i = 0; i < f->event_count; i++)
@@ -188,9 +205,9 @@ size_t fp_take_frame_encode(const fp_take_frame *f, void *buf, size_t cap)
     return n;
 }
 
-int take_frame_check(const uint8_t *rec, size_t n, size_t inputs, size_t *bad_at, const char **why)
+int take_frame_check(const uint8_t *rec, size_t n, size_t inputs, size_t *bad_at, char *why, size_t whylen)
 {
-#define BAD(off, text) do { *bad_at = (off); *why = (text); return -EBADMSG; } while (0)
+#define BAD(off, ...) do { *bad_at = (off); snprintf(why, whylen, __VA_ARGS__); return -EBADMSG; } while (0)
     if (n < TAKE_FRAME_FIXED) BAD(0, "frame record shorter than its fixed part (56 bytes)");
     if (le_get32(rec) != n) BAD(0, "frame record size field disagrees with the chunk");
     uint32_t vc = le_get32(rec + 40), cc = le_get32(rec + 44), ec = le_get32(rec + 48);
@@ -212,6 +229,13 @@ int take_frame_check(const uint8_t *rec, size_t n, size_t inputs, size_t *bad_at
             if (!isfinite(le_getf(rec + TAKE_FRAME_FIXED + 4 * i)))
                 BAD(TAKE_FRAME_FIXED + (i / 6) * TAKE_VECTOR_SIZE, "control vector not finite");
     }
+    for (size_t i = 0, at = TAKE_FRAME_FIXED + (size_t)vc * TAKE_VECTOR_SIZE; i < cc; i++, at += TAKE_CHANNEL_SIZE)
+        if (!isfinite(le_getf(rec + at + 32))) { /* (the rig would ignore it, or pin it to a bound) */
+            char name[32], clean[100]; /* (a damaged file's name: no control bytes to the terminal) */
+            memcpy(name, rec + at, 31);
+            name[31] = '\0';
+            BAD(at + 32, "channel \"%s\" value not finite", fp_text_clean(name, clean, sizeof clean));
+        }
     for (uint32_t i = 0; i < ec; i++) {
         if (n - off < TAKE_EVENT_HEAD) BAD(off, "event header runs past the frame record");
         uint32_t es = le_get32(rec + off);
@@ -219,6 +243,11 @@ int take_frame_check(const uint8_t *rec, size_t n, size_t inputs, size_t *bad_at
         uint16_t type = le_get16(rec + off + 4);
         size_t body = event_body_size(type);
         if (body && es < TAKE_EVENT_HEAD + body) BAD(off, "event shorter than its type needs");
+        size_t first, nf = event_floats(type, &first); /* (an input refuses such events live) */
+        for (size_t k = 0; k < nf; k++)
+            if (!isfinite(le_getf(rec + off + TAKE_EVENT_HEAD + first + 4 * k)))
+                BAD(off + TAKE_EVENT_HEAD + first + 4 * k, "event %" PRIu32 " (type %u): a value not finite",
+                    i, (unsigned)type);
         int32_t hand = (int32_t)le_get32(rec + off + 20);
         if (hand < -1 || hand >= FP_HANDS) BAD(off + 20, "event hand out of range");
         if (le_get32(rec + off + 16) >= inputs) /* (an input the header does not list) */

@@ -64,9 +64,11 @@ typedef struct take_frame_buf {
 } take_frame_buf;
 
 /** Check a frame record's structure (rec, n bytes: exactly one record), its events' sources
- *  below `inputs` (the header's input count). Returns 0, or -EBADMSG with *bad_at the offset
- *  within the record and a reason in why. */
-int take_frame_check(const uint8_t *rec, size_t n, size_t inputs, size_t *bad_at, const char **why);
+ *  below `inputs` (the header's input count), and that every float the engine, the rig or an
+ *  input would take is finite (control vectors, channel values, known events' fields).
+ *  Returns 0, or -EBADMSG with *bad_at the offset within the record and the reason in why
+ *  (whylen bytes, e.g. `channel "jaw.open" value not finite`). */
+int take_frame_check(const uint8_t *rec, size_t n, size_t inputs, size_t *bad_at, char *why, size_t whylen);
 /** Decode a checked record into *frame, growing buf. Returns 0 or -ENOMEM. */
 int take_frame_decode(const uint8_t *rec, size_t n, take_frame_buf *buf, fp_take_frame *frame);
 void take_frame_buf_free(take_frame_buf *buf);

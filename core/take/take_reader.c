@@ -159,8 +159,8 @@ static int index_frames(fp_take_reader *r, uint64_t off, chunk_view *cv)
             goto bad;
         }
         size_t bad_at;
-        const char *why;
-        if (take_frame_check(cv->payload + pos, sz, r->header.input_count, &bad_at, &why)) {
+        char why[128];
+        if (take_frame_check(cv->payload + pos, sz, r->header.input_count, &bad_at, why, sizeof why)) {
             cv->bad_at = at + bad_at;
             snprintf(cv->why, sizeof cv->why, "frame %zu (its record at byte %" PRIu64 "): %s",
                      r->frames, at, why);
@@ -417,9 +417,9 @@ int fp_take_reader_read(fp_take_reader *r, size_t index, fp_take_frame *frame, c
     ssize_t k = src_read(r, x->offset, r->buf, x->size);
     if (k < 0) return fp_errorf(err, errlen, (int)k, "%s: %s", r->name, strerror((int)-k));
     size_t bad_at;
-    const char *why = "record cut short";
+    char why[128] = "record cut short";
     if ((size_t)k != x->size ||
-        take_frame_check(r->buf, x->size, r->header.input_count, &bad_at, &why))
+        take_frame_check(r->buf, x->size, r->header.input_count, &bad_at, why, sizeof why))
         return fp_errorf(err, errlen, -EBADMSG, "%s: byte %" PRIu64 ": the file changed: %s",
                          r->name, x->offset, why);
     if (take_frame_decode(r->buf, x->size, &r->fb, frame))

@@ -3,6 +3,7 @@
 #include "take_internal.h"
 
 #include "fp_error.h"
+#include "fp_file.h"
 
 #include <assert.h>
 #include <cjson/cJSON.h>
@@ -211,8 +212,8 @@ int fp_take_writer_create(const char *dir, const fp_take_header *header,
     if (!dir || !*dir) return fp_errorf(err, errlen, -EINVAL, "take: no folder given");
     int rc = take_header_check(header, err, errlen);
     if (rc) return rc;
-    if (mkdir(dir, 0777) < 0 && errno != EEXIST)
-        return fp_errorf(err, errlen, -errno, "%s: %s", dir, strerror(errno));
+    if ((rc = fp_file_mkdirs(dir))) /* (with its parents, as mkdir -p) */
+        return fp_errorf(err, errlen, rc, "%s: cannot make the folder: %s", dir, strerror(-rc));
     fp_take_writer *w = calloc(1, sizeof *w);
     if (!w) return fp_errorf(err, errlen, -ENOMEM, "take: out of memory");
     w->fd = -1;

@@ -29,14 +29,13 @@
 #define _GNU_SOURCE
 #include <facepuppet/plugin.h>
 #include <facepuppet/plugin_util.h>
-#include "fp_file.h"
+#include "fp_audio.h"
 #include "fp_pacer.h"
 
 #include <alsa/asoundlib.h>
 #include <errno.h>
 #include <math.h>
 #include <portaudio.h>
-#include <sndfile.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -124,48 +123,25 @@ static double env_step(env_state *e, const env_params *p, double ref_rms)
  * the value at every hop. */
 static int load_file(audio_input *a, bool ref_given, char *err, size_t errlen)
 {
-    SF_INFO si;
-    memset(&si, 0, sizeof si);
-    /* a regular file only: a FIFO or a device is refused, never waited on (fp_file.h) */
-    int fd = fp_file_open_regular(a->path);
-    if (fd < 0) {
-        snprintf(err, errlen, "audio: %s: %s", a->path, fp_file_error_text(fd));
-        return fd;
+    /* core's reader (fp_audio.h): a regular file only, every sample finite, at most 2 h */
+    fp_soundtrack t;
+    char msg[512];
+    int rc = fp_soundtrack_load(a->path, &t, msg, sizeof msg);
+    if (rc) {
+        snprintf(err, errlen, "audio: %s", msg);
+        return rc;
     }
-    SNDFILE *sf = sf_open_fd(fd, SFM_READ, &si, 1); /* (closes fd, also on failure) */
-    if (!sf) {
-        snprintf(err, errlen, "audio: %s: not a sound file libsndfile reads (%s)", a->path, sf_strerror(NULL));
-        return -EBADMSG;
-    }
-    if (si.frames <= 0 || si.channels <= 0 || si.samplerate <= 0 || si.frames > (sf_count_t)si.samplerate * 7200) {
-        sf_close(sf);
-        snprintf(err, errlen, "audio: %s: no samples, or longer than 2 h", a->path);
-        return -EBADMSG;
-    }
-    size_t n = (size_t)si.frames, ch = (size_t)si.channels;
-    float *buf = malloc(n * ch * sizeof *buf);
-    if (!buf) {
-        sf_close(sf);
-        snprintf(err, errlen, "audio: out of memory");
-        return -ENOMEM;
-    }
-    n = (size_t)fmax(0, (double)sf_readf_float(sf, buf, si.frames));
-    sf_close(sf);
-    for (size_t i = 0; i < n * ch; i++)
-        if (!isfinite(buf[i])) { /* (a float file's NaN would hold the envelope's sum for good) */
-            snprintf(err, errlen, "audio: %s: sample %zu of channel %zu (at %.3f s) is not a finite number",
-                     a->path, i / ch + 1, i % ch + 1, (double)(i / ch) / si.samplerate);
-            free(buf);
-            return -EBADMSG;
-        }
+    float *buf = t.samples; /* (owned here from now on) */
+    size_t n = (size_t)t.frames, ch = (size_t)t.channels;
+    const int rate = t.rate;
     for (size_t i = 0; i < n; i++) { /* mono, in place */
         double m = 0;
         for (size_t c = 0; c < ch; c++) m += buf[i * ch + c];
         buf[i] = (float)(m / (double)ch);
     }
-    size_t hop = (size_t)llround(HOP_S * si.samplerate);
+    size_t hop = (size_t)llround(HOP_S * rate);
     env_state e;
-    if (env_init(&e, &a->p, si.samplerate)) {
+    if (env_init(&e, &a->p, rate)) {
         free(buf);
         return -ENOMEM;
     }
@@ -178,7 +154,7 @@ static int load_file(audio_input *a, bool ref_given, char *err, size_t errlen)
     free(e.ring);
     a->count = n / hop + 1;
     a->values = malloc(a->count * sizeof *a->values);
-    int rc = a->values ? env_init(&e, &a->p, si.samplerate) : -ENOMEM;
+    rc = a->values ? env_init(&e, &a->p, rate) : -ENOMEM;
     if (!rc) {
         a->values[0] = (float)a->p.min;
         for (size_t i = 0, k = 1; i < n; i++) {

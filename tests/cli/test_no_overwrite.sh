@@ -35,6 +35,16 @@ run=("$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv,fast=1" --duration
 "${run[@]}" -q --take-dir takes --slate clap -o run.obj >/dev/null 2>&1 || fail "run exited $?"
 take=takes/clap_T001.fptake
 [ -f "$take" ] || fail "no take recorded"
+# --take-dir whose parents are missing: made, as mkdir -p (the take was lost: "No such file")
+expect 0 "${run[@]}" -q --take-dir new/deep/takes --slate deep -o deep.obj
+[ -f new/deep/takes/deep_T001.fptake ] || fail "no take in new/deep/takes: $(cat "$tmp/x.out")"
+# one under a file: refused before any work, naming the option and the folder
+echo "a file" >plain
+expect 73 "${run[@]}" -q --take-dir plain/takes -o under.obj
+grep -q "facepuppet run: --take-dir plain/takes: not a folder" "$tmp/x.out" || { cat "$tmp/x.out"; fail "run --take-dir under a file: not said"; }
+[ ! -e under.obj ] || fail "a run refused for its --take-dir wrote its --out"
+expect 73 "$fp" live --take-dir plain/takes --frames 1
+grep -q "facepuppet live: --take-dir plain/takes: not a folder" "$tmp/x.out" || { cat "$tmp/x.out"; fail "live --take-dir under a file: not said before the window"; }
 echo "stale" >old.obj
 refused old.obj "${run[@]}" -q -o old.obj
 # (refused before any work: no take, no frames)

@@ -16,6 +16,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include "fp_file.h"
@@ -35,11 +36,11 @@ static int remove_dir(void **state)
     return rmdir(dir);
 }
 
-/* the name: ".NAME<tag>.XXXXXX" in the target's folder, six characters filled in */
+/* the name: ".NAME<tag>.PID.XXXXXX" in the target's folder, six characters filled in */
 static void check_name(const char *tmp, const char *folder, const char *name, const char *tag)
 {
     char want[256];
-    snprintf(want, sizeof want, "%s%s.%s%s.", folder, folder[0] ? "/" : "", name, tag);
+    snprintf(want, sizeof want, "%s%s.%s%s.%ld.", folder, folder[0] ? "/" : "", name, tag, (long)getpid());
     size_t wl = strlen(want);
     assert_int_equal(strlen(tmp), wl + 6);
     assert_memory_equal(tmp, want, wl);
@@ -96,7 +97,9 @@ static void test_errors(void **state)
     assert_string_equal(tmp, "");
     snprintf(path, sizeof path, "%s/x.csv", dir);
     /* too small by one for the name and its NUL */
-    size_t need = strlen(dir) + strlen("/.x.csv.XXXXXX") + 1;
+    char pid[32];
+    snprintf(pid, sizeof pid, "%ld.", (long)getpid());
+    size_t need = strlen(dir) + strlen("/.x.csv.XXXXXX") + strlen(pid) + 1;
     strcpy(tmp, "old");
     assert_int_equal(fp_file_temp_beside(path, "", tmp, need - 1), -ENAMETOOLONG);
     assert_string_equal(tmp, "");
@@ -303,6 +306,45 @@ static void check_file(const char *p, const char *text, mode_t mode)
     assert_int_equal(st.st_mode & 07777, mode);
 }
 
+/* A save killed before its commit or abort (SIGKILL) left its temporary beside the target:
+ * the next fp_file_open_output of that target and tag removes it (its PID names no process),
+ * and leaves a live process's, this one's, another tag's and a name without a PID. */
+static void test_output_stale(void **state)
+{
+    (void)state;
+    pid_t child = fork();
+    assert_true(child >= 0);
+    if (!child) _exit(0);
+    assert_int_equal(waitpid(child, NULL, 0), child); /* (gone: its pid names no process) */
+    /* (a folder of its own: this thread's last read of another is kept for a second) */
+    char sub[128], p[256], dead[300], live[300], mine[300], other[300], nopid[300];
+    snprintf(sub, sizeof sub, "%s/stale", dir);
+    assert_int_equal(mkdir(sub, 0700), 0);
+    snprintf(p, sizeof p, "%s/take.pc2", sub);
+    snprintf(dead, sizeof dead, "%s/.take.pc2.%ld.aB3dE9", sub, (long)child);
+    snprintf(live, sizeof live, "%s/.take.pc2.1.aB3dE9", sub); /* init: always there */
+    snprintf(mine, sizeof mine, "%s/.take.pc2.%ld.zZ9yY8", sub, (long)getpid());
+    snprintf(other, sizeof other, "%s/.take.pc2frames.%ld.aB3dE9", sub, (long)child);
+    snprintf(nopid, sizeof nopid, "%s/.take.pc2.aB3dE9", sub);
+    const char *all[] = {dead, live, mine, other, nopid};
+    for (size_t i = 0; i < 5; i++) write_file(all[i], "part", 0600);
+    fp_file_output o;
+    assert_int_equal(fp_file_open_output(p, "", "wb", 0, &o), 0);
+    assert_int_equal(o.stale, 1);
+    assert_int_equal(access(dead, F_OK), -1);
+    for (size_t i = 1; i < 5; i++) assert_int_equal(access(all[i], F_OK), 0);
+    assert_int_equal(fp_file_output_commit(&o), 0);
+    /* the next save of another tag in that folder (the folder's read kept): the other tag's */
+    assert_int_equal(fp_file_open_output(p, "frames", "wb", 0, &o), 0);
+    assert_int_equal(o.stale, 1);
+    assert_int_equal(access(other, F_OK), -1);
+    fp_file_output_abort(&o);
+    const char *kept[] = {live, mine, nopid};
+    for (size_t i = 0; i < 3; i++) assert_int_equal(unlink(kept[i]), 0);
+    assert_int_equal(unlink(p), 0);
+    assert_int_equal(rmdir(sub), 0);
+}
+
 /* fp_file_open_output + commit: the temporary beside the target while it is written (the
  * target as it was), then the whole content under the target's name with the mode a new file
  * gets (a replaced file's own with FP_FILE_OUTPUT_KEEP_MODE), nothing left beside it; a
@@ -459,6 +501,7 @@ int main(void)
         cmocka_unit_test(test_read_all),
         cmocka_unit_test(test_output_code),
         cmocka_unit_test(test_output_commit),
+        cmocka_unit_test(test_output_stale),
         cmocka_unit_test(test_output_abort),
         cmocka_unit_test(test_output_refused),
     };

@@ -665,6 +665,58 @@ static void test_find_names_unread(void **state)
     free(good);
 }
 
+static void write_file(const char *path, const char *text)
+{
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    assert_int_equal(fwrite(text, 1, strlen(text), f), strlen(text));
+    assert_int_equal(fclose(f), 0);
+}
+
+/* A rig folder of many files is read whole (fp_rig_find read the first 512 in readdir's
+ * order, so a rig past them was not found), and two rigs with the mesh's checksum are both
+ * named, not the first by name taken without a word. */
+static void test_find_all_and_twins(void **state)
+{
+    (void)state;
+    size_t len;
+    char *good = read_text(FP_TEST_RIGS_DIR "/mediapipe-canonical.json", &len);
+    fp_mesh *m = load_face("mediapipe-canonical/canonical_face_model.obj");
+    char dir[] = "/tmp/fp-test-rig-many-XXXXXX", path[4096], found[4096], err[1024];
+    assert_non_null(mkdtemp(dir));
+    enum { JUNK = 600 };
+    for (int i = 0; i < JUNK; i++) {
+        snprintf(path, sizeof path, "%s/junk%03d.json", dir, i);
+        write_file(path, "{}");
+    }
+    int rc = fp_rig_find(dir, m->vertex_count, m->positions, found, sizeof found, err, sizeof err);
+    printf("find among %d files that are no rigs: %s\n", JUNK, err);
+    assert_int_equal(rc, -ENOENT);
+    assert_non_null(strstr(err, "600 files not read as a rig"));
+    snprintf(path, sizeof path, "%s/b-face.json", dir);
+    write_file(path, good);
+    assert_int_equal(fp_rig_find(dir, m->vertex_count, m->positions, found, sizeof found, err, sizeof err), 0);
+    assert_string_equal(found, path);
+    snprintf(path, sizeof path, "%s/a-face.json", dir);
+    write_file(path, good);
+    rc = fp_rig_find(dir, m->vertex_count, m->positions, found, sizeof found, err, sizeof err);
+    printf("find with two rigs of the mesh: %s\n", err);
+    assert_int_equal(rc, -EEXIST);
+    assert_non_null(strstr(err, "a-face.json and "));
+    assert_non_null(strstr(err, "b-face.json both fit this mesh"));
+    for (int i = 0; i < JUNK; i++) {
+        snprintf(path, sizeof path, "%s/junk%03d.json", dir, i);
+        remove(path);
+    }
+    snprintf(path, sizeof path, "%s/a-face.json", dir);
+    remove(path);
+    snprintf(path, sizeof path, "%s/b-face.json", dir);
+    remove(path);
+    assert_int_equal(rmdir(dir), 0);
+    fp_mesh_free(&m);
+    free(good);
+}
+
 /* A channel's range ends that are no floats (0.7, -0.3): the ends themselves are in range for
  * fp_rig_channel_check (pose --set refused brow.raise=0.7 as outside [-0.3, 0.7]). */
 static void test_channel_range_ends(void **state)
@@ -814,6 +866,9 @@ static void test_broken_files(void **state)
         {"\"vertices\": [", "\"vertices\": [[10, 5], ", "regions[0].vertices[0]"},
         {"\"vertices\": [", "\"vertices\": [-1, ", "regions[0].vertices[0]"},
         {"\"vertices\": [", "\"vertices\": [19300, ", "regions[6].vertices"}, /* a lower tooth: overlaps jaw */
+        /* a region of no vertex (was accepted without a word) */
+        {"\"regions\": [", "\"regions\": [{\"name\": \"none\", \"kind\": \"jaw\", \"vertices\": []}, ",
+         "broken.json: regions[0].vertices: empty: region \"none\" lists no vertex"},
         /* the whole mesh listed over and over (a hostile file: refused as counted, not walked) */
         {"\"vertices\": [", "\"vertices\": [[0, 26718], [0, 26718], [0, 26718], [0, 26718], ",
          "regions[0].vertices[4]: the regions list more than 4 x 26719 vertices"},
@@ -985,7 +1040,8 @@ int main(void)
         cmocka_unit_test(test_lee_perry_smith),  cmocka_unit_test(test_mediapipe),
         cmocka_unit_test(test_mobility_brute_force),
         cmocka_unit_test(test_broken_files),     cmocka_unit_test(test_placement),
-        cmocka_unit_test(test_find_names_unread), cmocka_unit_test(test_channel_range_ends),
+        cmocka_unit_test(test_find_names_unread),
+        cmocka_unit_test(test_find_all_and_twins), cmocka_unit_test(test_channel_range_ends),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

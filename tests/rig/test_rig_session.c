@@ -323,6 +323,54 @@ static void test_renumbered_face(void **state)
     fp_mesh_free(&m);
 }
 
+/* A rig folder with two rigs of the mesh (a copy kept beside the original): the session runs
+ * without a rig and warns naming both (it took the first by name without a word before). */
+static void test_two_rigs_of_the_mesh(void **state)
+{
+    (void)state;
+    char dir[] = "/tmp/fp-rig-twins-XXXXXX", a[600], b[600], err[2048] = "";
+    assert_non_null(mkdtemp(dir));
+    FILE *in = fopen(FP_TEST_RIGS_DIR "/mediapipe-canonical.json", "rb");
+    assert_non_null(in);
+    static char text[1 << 20];
+    size_t len = fread(text, 1, sizeof text, in);
+    fclose(in);
+    snprintf(a, sizeof a, "%s/face.json", dir);
+    snprintf(b, sizeof b, "%s/face-copy.json", dir);
+    const char *both[] = {a, b};
+    for (int i = 0; i < 2; i++) {
+        FILE *f = fopen(both[i], "wb");
+        assert_non_null(f);
+        assert_int_equal(fwrite(text, 1, len, f), len);
+        assert_int_equal(fclose(f), 0);
+    }
+    fp_plugin_path path;
+    const char *dirs[] = {FP_TEST_FIXTURE_DIR, fp_test_plugin_dir()};
+    fp_plugin_path_init(&path, dirs, 2, NULL);
+    fp_session_options so = {0};
+    char mesh[1024];
+    snprintf(mesh, sizeof mesh, "%s/faces/mediapipe-canonical/canonical_face_model.obj", fp_test_data_dir());
+    so.mesh_path = mesh;
+    so.mapping = "anchored";
+    so.plugin_path = &path;
+    so.rig_dir = dir;
+    so.log = on_log;
+    warnings[0] = '\0';
+    warning_count = 0;
+    fp_session *s = NULL;
+    if (fp_session_create(&so, &s, err, sizeof err)) fail_msg("%s", err);
+    assert_null(fp_session_rig(s));
+    printf("%s", warnings);
+    assert_int_equal(warning_count, 1);
+    assert_non_null(strstr(warnings, "face-copy.json and "));
+    assert_non_null(strstr(warnings, "face.json both fit this mesh"));
+    assert_non_null(strstr(fp_session_rig_how(s), "both fit this mesh"));
+    fp_session_destroy(&s);
+    remove(a);
+    remove(b);
+    assert_int_equal(rmdir(dir), 0);
+}
+
 static void test_other_faces(void **state)
 {
     (void)state;
@@ -354,7 +402,7 @@ int main(void)
         cmocka_unit_test(test_ict_press_forehead_jaw_open), cmocka_unit_test(test_ict_press_lips),
         cmocka_unit_test(test_ict_commit_undo_reset),
         cmocka_unit_test(test_ict_channels),                cmocka_unit_test(test_unknown_channel_once),
-        cmocka_unit_test(test_rig_that_does_not_fit),       cmocka_unit_test(test_other_faces),
+        cmocka_unit_test(test_rig_that_does_not_fit),       cmocka_unit_test(test_two_rigs_of_the_mesh), cmocka_unit_test(test_other_faces),
         cmocka_unit_test(test_renumbered_face),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

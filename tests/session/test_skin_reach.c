@@ -11,6 +11,7 @@
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
+#include <stdio.h>
 #include <string.h>
 #include <cmocka.h>
 
@@ -32,6 +33,19 @@ static void control_set(fp_control_set *cs, float (*start)[3], float (*end)[3], 
         memcpy(end[i], ref[i], sizeof end[i]);
         end[i][1] += 1.f;
     }
+}
+
+/* The four points indexed (*pts, destroy it) and one frame of n of the vectors above, with the
+ * mobility, into st, g and ga. */
+static void first_frame(csrbf_points **pts, size_t n, fp_frame_stats *st, fp_skin_reach_gesture *g,
+                        fp_skin_reach_gesture *ga)
+{
+    assert_int_equal(csrbf_points_create(4, &ref[0][0], pts), 0);
+    float start[3][3], end[3][3];
+    fp_control_set cs;
+    control_set(&cs, start, end, n);
+    memset(st, 0, sizeof *st);
+    fp_skin_reach_frame(*pts, &ref[0][0], &shown[0][0], &cs, &cs, mobility, st, g, ga);
 }
 
 static void test_held_by_the_rig(void **state)
@@ -93,8 +107,44 @@ static void test_held_by_the_rig(void **state)
     csrbf_points_destroy(&pts);
 }
 
+/* A take played with a rig (play, export): its vectors are the rig's cut already, so the
+ * gesture's line gives the reach against what the rig allowed and says so, never "followed the
+ * fingertips" (it said 100% where the performer's fingertips were held back) */
+static void test_played_take(void **state)
+{
+    (void)state;
+    csrbf_points *pts = NULL;
+    fp_frame_stats st;
+    fp_skin_reach_gesture g = {.played = true}, ga = {0};
+    first_frame(&pts, 3, &st, &g, &ga);
+    log_capture cap = {0};
+    fp_slog log = {.fn = capture_log, .user = &cap};
+    fp_skin_reach_gesture_end(&g, &ga, 10.0, &log);
+    assert_int_equal(cap.count, 1);
+    printf("%s\n", cap.lines[0]);
+    assert_null(strstr(cap.lines[0], "followed the fingertips"));
+    assert_non_null(strstr(cap.lines[0], "the skin followed 100% of what the rig allowed this gesture (mean of 2; "
+                                         "least 100%, under 90% in 0; longest drag 10.0 mm; the take holds the "
+                                         "rig's vectors, not how far the fingertips asked; 1 more grabbed the "
+                                         "skull or the jaw, which the rig keeps still)"));
+    assert_false(g.played); /* (reset with the gesture: the session sets it each played frame) */
+    /* the skull alone grabbed */
+    fp_control_set one;
+    float s1[1][3], e1[1][3];
+    control_set(&one, s1, e1, 1);
+    memset(&st, 0, sizeof st);
+    g.played = true;
+    fp_skin_reach_frame(pts, &ref[0][0], &shown[0][0], &one, &one, mobility, &st, &g, &ga);
+    cap.count = 0;
+    fp_skin_reach_gesture_end(&g, &ga, 10.0, &log);
+    assert_int_equal(cap.count, 1);
+    assert_non_null(strstr(cap.lines[0], "the fingertips grabbed the skull or the jaw this gesture, which the rig "
+                                         "keeps still (1 vector)"));
+    csrbf_points_destroy(&pts);
+}
+
 int main(void)
 {
-    const struct CMUnitTest tests[] = {cmocka_unit_test(test_held_by_the_rig)};
+    const struct CMUnitTest tests[] = {cmocka_unit_test(test_held_by_the_rig), cmocka_unit_test(test_played_take)};
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

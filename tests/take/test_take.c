@@ -773,6 +773,17 @@ static void rechunk(uint8_t *b, size_t off)
     memcpy(b + off + 16 + len, &crc, 4);
 }
 
+/* The file at path (*n bytes; free it) of five chunks, HEAD, 3 x FRMS, TAIL: their file
+ * offsets into starts (16). */
+static uint8_t *slurp_five(const char *path, size_t *n, uint64_t *starts)
+{
+    uint8_t *b = slurp(path, n);
+    uint32_t frames[16];
+    char types[16][5];
+    assert_int_equal(chunk_starts(b, *n, starts, frames, types, 16), 5);
+    return b;
+}
+
 /* Frames out of order (a patched or clock-jumped record, crc32 intact): the take is cut at the
  * chunk that holds it, with the reason; the summary counts only the frames kept. */
 static void test_frames_out_of_order(void **state)
@@ -782,11 +793,8 @@ static void test_frames_out_of_order(void **state)
     make_dir(dir, sizeof dir, "order");
     write_take(dir, "O", 9, 3, path, sizeof path); /* HEAD, 3 x FRMS(3), TAIL */
     size_t n;
-    uint8_t *b = slurp(path, &n);
     uint64_t starts[16];
-    uint32_t frames[16];
-    char types[16][5];
-    assert_int_equal(chunk_starts(b, n, starts, frames, types, 16), 5);
+    uint8_t *b = slurp_five(path, &n, starts);
     fp_take_reader *r;
     assert_int_equal(fp_take_reader_open_memory(b, n, "o.fptake", &r, err, sizeof err), 0);
     assert_int_equal(fp_take_reader_frames(r), 9);
@@ -826,29 +834,44 @@ static void test_frames_out_of_order(void **state)
     rm_rf(dir);
 }
 
+/* A new folder `name` (its path into dir, 512 bytes) with a take of `slate`: nine frames of
+ * tt_make(i, 0) in chunks of three, each passed to tweak (may be NULL) before it is written;
+ * its path into path (1024 bytes). Returns the take opened (fp_take_reader_open). */
+static fp_take_reader *nine_frames(const char *name, const char *slate, void (*tweak)(tt_frame *, uint64_t),
+                                   char *dir, char *path)
+{
+    char err[512];
+    make_dir(dir, 512, name);
+    fp_take_header h;
+    tt_header(&h, slate); /* two inputs */
+    fp_take_writer_options o = {.chunk_frames = 3, .no_sync = true};
+    fp_take_writer *w;
+    assert_int_equal(fp_take_writer_create(dir, &h, &o, &w, err, sizeof err), 0);
+    snprintf(path, 1024, "%s", fp_take_writer_path(w));
+    for (uint64_t i = 0; i < 9; i++) {
+        tt_frame t;
+        tt_make(&t, i, 0); /* 10 vectors; 4 events, 2 positions and 2 wrists, sources 0 and 1 */
+        if (tweak) tweak(&t, i);
+        assert_int_equal(fp_take_writer_add(w, &t.f, err, sizeof err), 0);
+    }
+    assert_int_equal(fp_take_writer_close(&w, 0, 0, err, sizeof err), 0);
+    fp_take_reader *r;
+    if (fp_take_reader_open(path, &r, err, sizeof err)) fail_msg("%s", err);
+    return r;
+}
+
+static void source_beyond(tt_frame *t, uint64_t i)
+{
+    if (i == 7) t->ev[3].header.source = 2;
+}
+
 /* An event of an input the header does not list (source >= its inputs' count; crc32 right):
  * its chunk is damage, the take cut there naming the field; the frames before it play. */
 static void test_event_source(void **state)
 {
     (void)state;
-    char dir[512], err[512];
-    make_dir(dir, sizeof dir, "source");
-    fp_take_header h;
-    tt_header(&h, "S"); /* two inputs */
-    fp_take_writer_options o = {.chunk_frames = 3, .no_sync = true};
-    fp_take_writer *w;
-    assert_int_equal(fp_take_writer_create(dir, &h, &o, &w, err, sizeof err), 0);
-    char path[1024];
-    snprintf(path, sizeof path, "%s", fp_take_writer_path(w));
-    for (uint64_t i = 0; i < 9; i++) {
-        tt_frame t;
-        tt_make(&t, i, 0); /* 4 events, sources 0 and 1 */
-        if (i == 7) t.ev[3].header.source = 2;
-        assert_int_equal(fp_take_writer_add(w, &t.f, err, sizeof err), 0);
-    }
-    assert_int_equal(fp_take_writer_close(&w, 0, 0, err, sizeof err), 0);
-    fp_take_reader *r;
-    assert_int_equal(fp_take_reader_open(path, &r, err, sizeof err), 0);
+    char dir[512], err[512], path[1024];
+    fp_take_reader *r = nine_frames("source", "S", source_beyond, dir, path);
     print_message("%s\n", fp_take_reader_warning(r));
     assert_int_equal(fp_take_reader_frames(r), 6);
     assert_true(fp_take_reader_summary(r)->cut);
@@ -857,6 +880,76 @@ static void test_event_source(void **state)
     assert_int_equal(fp_take_reader_read(r, 5, &f, err, sizeof err), 0);
     assert_int_equal(f.frame, 5);
     fp_take_reader_close(&r);
+    rm_rf(dir);
+}
+
+/* Two channels, "jaw.open" 0.25 and "mapping.x": NaN in frame 4, infinite in frame 5, else 1. */
+static void two_channels(tt_frame *t, uint64_t i)
+{
+    t->cs.channel_count = 2;
+    snprintf(t->chan[0].name, sizeof t->chan[0].name, "jaw.open");
+    t->chan[0].value = 0.25f;
+    snprintf(t->chan[1].name, sizeof t->chan[1].name, "mapping.x");
+    t->chan[1].value = i == 4 ? NAN : i == 5 ? INFINITY : 1.0f;
+}
+
+/* Floats a take may not hold: a channel value or an event's field that is NaN or infinite
+ * (patched in, crc32 right) is damage, named by its frame and channel or event, the take cut
+ * there; the writer leaves out a channel whose value is not finite (a mapping's without a
+ * rig), so the take it writes reads whole. */
+static void test_not_finite(void **state)
+{
+    (void)state;
+    char dir[512], path[1024], err[512];
+    fp_take_reader *r = nine_frames("finite", "F", two_channels, dir, path);
+    assert_false(fp_take_reader_summary(r)->cut);
+    assert_int_equal(fp_take_reader_frames(r), 9);
+    for (size_t i = 3; i < 7; i++) {
+        fp_take_frame f;
+        assert_int_equal(fp_take_reader_read(r, i, &f, err, sizeof err), 0);
+        assert_int_equal(f.control->channel_count, i == 4 || i == 5 ? 1 : 2);
+        assert_string_equal(f.control->channels[0].name, "jaw.open");
+    }
+    fp_take_reader_close(&r);
+    size_t n;
+    uint64_t starts[16];
+    uint8_t *b = slurp_five(path, &n, starts);
+    /* frame 6, the third FRMS chunk's first record: 56 + 10 x 24 bytes, then its channels */
+    const size_t rec = starts[3] + 16, chan0 = 56 + 10 * 24, ev0 = chan0 + 2 * 36;
+    static const struct { size_t at; float v; const char *why; } cases[] = {
+        {chan0 + 32, NAN, "frame 6 (its record at byte %zu): channel \"jaw.open\" value not finite"},
+        {chan0 + 36 + 32, -INFINITY, "frame 6 (its record at byte %zu): channel \"mapping.x\" value not finite"},
+        {ev0 + 24 + 4 * 7, INFINITY, "frame 6 (its record at byte %zu): event 0 (type 2): a value not finite"},
+    };
+    for (size_t c = 0; c < sizeof cases / sizeof *cases; c++) {
+        uint8_t *p = malloc(n);
+        memcpy(p, b, n);
+        memcpy(p + rec + cases[c].at, &cases[c].v, 4);
+        rechunk(p, starts[3]);
+        assert_int_equal(fp_take_reader_open_memory(p, n, "f.fptake", &r, err, sizeof err), 0);
+        char want[200];
+        snprintf(want, sizeof want, cases[c].why, rec);
+        if (!strstr(fp_take_reader_warning(r), want) || !strstr(fp_take_reader_warning(r), "f.fptake"))
+            fail_msg("case %zu: \"%s\", not \"%s\"", c, fp_take_reader_warning(r), want);
+        assert_int_equal(fp_take_reader_frames(r), 6);
+        assert_true(fp_take_reader_summary(r)->cut);
+        fp_take_reader_close(&r);
+        free(p);
+    }
+    { /* a damaged name with an escape byte: the reason carries no control byte */
+        uint8_t *p = malloc(n);
+        memcpy(p, b, n);
+        const float nan = NAN;
+        p[rec + chan0] = 0x1b;
+        memcpy(p + rec + chan0 + 32, &nan, 4);
+        rechunk(p, starts[3]);
+        assert_int_equal(fp_take_reader_open_memory(p, n, "f.fptake", &r, err, sizeof err), 0);
+        assert_non_null(strstr(fp_take_reader_warning(r), "aw.open\" value not finite"));
+        assert_null(strchr(fp_take_reader_warning(r), 0x1b));
+        fp_take_reader_close(&r);
+        free(p);
+    }
+    free(b);
     rm_rf(dir);
 }
 
@@ -1171,6 +1264,7 @@ int main(void)
         cmocka_unit_test(test_bad_files),
         cmocka_unit_test(test_bad_header),
         cmocka_unit_test(test_event_source),
+        cmocka_unit_test(test_not_finite),
         cmocka_unit_test(test_numbering),
         cmocka_unit_test(test_enospc),
         cmocka_unit_test(test_list),

@@ -70,6 +70,31 @@ echo "0. with the rig: followed $r_rig (median %, vectors, p10 %), of what it al
 r_info=$(reach_of "$tmp/info-rig.out") r_play=$(reach_of "$tmp/play-rig.out")
 [ -n "$r_play" ] || { cat "$tmp/play-rig.out"; fail "play printed no reach"; }
 [ "$r_play" = "$r_info" ] || fail "play's reach ($r_play) is not the take's ($r_info; run said $r_rig)"
+# with run's clause of what the rig allowed (measured on playback: the take's stored sets are it)
+grep -q "the skin followed the fingertips [0-9]*% .*; [0-9]*% of what the rig allowed, 10th percentile [0-9]*%: it holds back" "$tmp/play-rig.out" ||
+    { cat "$tmp/play-rig.out"; fail "play (rig): its summary does not say what the rig allowed, as run's does"; }
+# and its notes on each gesture say what they measure: the take stores what the rig allowed,
+# not the fingertips' ask (before: "the skin followed the fingertips 100% this gesture")
+grep -q "this gesture" "$tmp/play-rig.err" || { cat "$tmp/play-rig.err"; fail "play (rig) said nothing of its gestures"; }
+! grep -q "the skin followed the fingertips [0-9]*% this gesture" "$tmp/play-rig.err" ||
+    { cat "$tmp/play-rig.err"; fail "play (rig) says the skin followed the fingertips, which a take does not store"; }
+grep -q "the skin followed [0-9]*% of what the rig allowed this gesture" "$tmp/play-rig.err" ||
+    { cat "$tmp/play-rig.err"; fail "play (rig): no gesture note of what the rig allowed"; }
+# cut before its end chunk, the take's own figure is gone: play measures, and with the rig
+# says only what the rig allowed (before: "the skin followed the fingertips 100%")
+rt="$tmp/reach-rig-takes/scene1_T001.fptake"
+head -c $(($(stat -c %s "$rt") - 30)) "$rt" >"$tmp/reach-rig-cut.fptake"
+"$fp" play "$tmp/reach-rig-cut.fptake" -o "$tmp/reach-rig-cut.obj" >"$tmp/play-cut.out" 2>"$tmp/play-cut.err" ||
+    { cat "$tmp/play-cut.err"; fail "play (rig, cut) exited $?"; }
+grep -q "; the skin followed [0-9]*% of what the rig allowed (median over [0-9]* touching vectors, .*a take holds the rig's vectors" "$tmp/play-cut.out" &&
+    ! grep -q "followed the fingertips" "$tmp/play-cut.out" ||
+    { cat "$tmp/play-cut.out"; fail "play (rig, cut): its summary says the skin followed the fingertips"; }
+"$fp" export "$tmp/reach-rig-takes/scene1_T001.fptake" --format pc2 -o "$tmp/reach-rig.pc2" \
+    >"$tmp/export-rig.out" 2>"$tmp/export-rig.err" || { cat "$tmp/export-rig.err"; fail "export (rig) exited $?"; }
+! grep -q "the skin followed the fingertips [0-9]*% this gesture" "$tmp/export-rig.err" ||
+    { cat "$tmp/export-rig.err"; fail "export (rig) says the skin followed the fingertips"; }
+grep -q "the skin followed [0-9]*% of what the rig allowed this gesture" "$tmp/export-rig.err" ||
+    { cat "$tmp/export-rig.err" "$tmp/export-rig.out"; fail "export (rig): no gesture note of what the rig allowed"; }
 
 # ---- 1. record, play ----------------------------------------------------------------------
 "$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv" --speed 3 --duration 0.8 --take-dir "$tmp/takes" \

@@ -90,6 +90,13 @@ ch = chunks(src)
 last = [(p, o) for p, o in records(ch) if struct.unpack_from('<I', p, o + 40)[0] > 0][-1]
 struct.pack_into('<f', last[0], last[1] + 56 + 12, float('inf'))
 write('vecinf', ch)
+# a channel's value NaN in the last frame that has channels (the rig's jaw.open): cut there
+ch = chunks(src)
+withc = [(p, o) for p, o in records(ch) if struct.unpack_from('<I', p, o + 44)[0] > 0]
+assert len(withc) > 3, "the good take has no channels"
+p, o = withc[-1]
+struct.pack_into('<f', p, o + 56 + 24 * struct.unpack_from('<I', p, o + 40)[0] + 32, float('nan'))
+write('channan', ch)
 # cut in its end chunk: no end chunk, some bytes of it
 open('%s/cuttail_T001.fptake' % out, 'wb').write(src[:len(src) - 30])
 EOF
@@ -137,6 +144,19 @@ for sig in TERM INT; do
     grep -q "SIG$sig: stopped" "$tmp/sig.out" || fail "SIG$sig: not said"
     echo "2. SIG$sig: exit $rc, no temporary file"
 done
+# SIGKILL: nothing runs, the temporary stays; the next export to that path removes it (its
+# name holds the dead process's pid)
+out="$tmp/sigKILL"
+mkdir -p "$out"
+"$fp" export "$d/long_T001.fptake" --format pc2 --resample 10000 -o "$out/x.pc2" -q >/dev/null 2>&1 &
+pid=$!
+for ((i = 0; i < 200; i++)); do [ "$(temps "$out")" -gt 0 ] && break; sleep 0.05; done
+kill -KILL $pid; wait $pid
+[ "$(temps "$out")" -eq 1 ] || fail "SIGKILL: $(temps "$out") temporary files, want the one it was writing"
+ls -A "$out" | grep -q "^\.x\.pc2\.$pid\.......$" || fail "SIGKILL: the temporary's name holds no pid: $(ls -A "$out")"
+expect 0 "$fp" export "$good" --format pc2 --resample 100 -o "$out/x.pc2" -q
+[ "$(temps "$out")" -eq 0 ] || fail "the next export left the dead one's temporary: $(ls -A "$out")"
+echo "2. SIGKILL: its temporary removed by the next export to the path"
 # an existing output survives the signal (--force)
 cp "$tmp/ok.pc2" "$tmp/keep.pc2"
 "$fp" export "$d/long_T001.fptake" --format pc2 --resample 10000 -o "$tmp/keep.pc2" --force -q >/dev/null 2>&1 &
@@ -162,6 +182,13 @@ has "vecinf_T001.fptake: cut at byte" "play vecinf"
 has "control vector not finite" "play vecinf"
 hasnt "engine: invalid argument" "play vecinf"
 echo "3. a vector not finite: read as cut there ($(head -1 "$tmp/x.out"))"
+# a channel's value NaN (was played without a word, the jaw left as it was): cut there, named
+for cmd in play export; do
+    if [ $cmd = play ]; then expect 0 "$fp" play "${pd[@]}" "$d/channan_T001.fptake" -o "$tmp/c.obj" --force
+    else expect 0 "$fp" export "$d/channan_T001.fptake" --format pc2 -o "$tmp/c.pc2" --force; fi
+    has "channan_T001.fptake: cut at byte [0-9]*: frame [0-9]* (its record at byte [0-9]*): channel \"jaw.open\" value not finite" "$cmd channan"
+done
+echo "3. a channel value not finite: read as cut there ($(grep -o 'frame [0-9]* .*' "$tmp/x.out" | head -1))"
 
 # ---- 4. a stack whose layer take has no intact frame -------------------------------------
 cp "$good" "$d/base_T001.fptake"

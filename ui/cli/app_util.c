@@ -407,6 +407,41 @@ static size_t count_named(const char *dir, const char *prefix, const char *suffi
     return n;
 }
 
+int fp_app_check_take_dir(const char *cmd, const char *dir)
+{
+    char p[4096];
+    size_t n = strlen(dir);
+    if (n >= sizeof p) {
+        fprintf(stderr, "%s: --take-dir %s: %s\n", cmd, dir, strerror(ENAMETOOLONG));
+        return FP_EXIT_CANTCREAT;
+    }
+    memcpy(p, dir, n + 1);
+    for (;;) { /* the folder, else the nearest one above it that is there */
+        while (n > 1 && p[n - 1] == '/') p[--n] = '\0';
+        struct stat st;
+        const char *why = NULL;
+        if (stat(p, &st) == 0) {
+            if (!S_ISDIR(st.st_mode)) why = "not a folder (a file is in its place)";
+            else if (access(p, W_OK | X_OK)) why = strerror(errno);
+            else return 0;
+        } else if (errno == ENOTDIR) {
+            why = "not a folder (a file is in its path)";
+        } else if (errno != ENOENT) {
+            why = strerror(errno);
+        }
+        if (why) {
+            fprintf(stderr, "%s: --take-dir %s: %s%s%s\n", cmd, dir, why, strcmp(p, dir) ? ": " : "",
+                    strcmp(p, dir) ? p : "");
+            return FP_EXIT_CANTCREAT;
+        }
+        char *slash = strrchr(p, '/'); /* missing: made by the take writer, as mkdir -p */
+        if (!slash) snprintf(p, sizeof p, ".");
+        else if (slash == p) p[1] = '\0';
+        else *slash = '\0';
+        n = strlen(p);
+    }
+}
+
 int fp_app_check_output_dir(const char *cmd, const char *option, const char *dir, const char *prefix,
                             const char *suffix, bool make, bool force, bool *made)
 {
@@ -604,19 +639,35 @@ void fp_app_reach_add(fp_app_reach *r, const fp_frame_stats *st)
     if (st->reach_asked_max > r->asked_max) r->asked_max = st->reach_asked_max;
 }
 
-void fp_app_reach_text(fp_app_reach *r, double mm_per_unit, char *text, size_t len)
+void fp_app_reach_rig_clause(fp_app_reach *r, double median, double p10, char *rig, size_t len)
+{
+    if (!len) return;
+    rig[0] = '\0';
+    if (!r->na) return;
+    double ma = fp_median(r->va, r->na), pa = fp_percentile(r->va, r->na, 0.10);
+    if (fabs(ma - median) >= 0.005 || fabs(pa - p10) >= 0.005)
+        snprintf(rig, len, "; %.0f%% of what the rig allowed, 10th percentile %.0f%%: it holds back a push "
+                 "toward the skull or the jaw", 100.0 * ma, 100.0 * pa);
+}
+
+void fp_app_reach_text(fp_app_reach *r, double mm_per_unit, bool played_rig, char *text, size_t len)
 {
     if (!len) return;
     text[0] = 0;
+    if (played_rig) { /* the vectors are a take's, the rig's cut: only what it allowed is known */
+        if (!r->na) return;
+        double ma = fp_median(r->va, r->na), pa = fp_percentile(r->va, r->na, 0.10);
+        char h[96] = "";
+        if (r->held) snprintf(h, sizeof h, "; %zu more on the skull or the jaw, which the rig keeps still", r->held);
+        snprintf(text, len, "; the skin followed %.0f%% of what the rig allowed (median over %zu touching vectors, "
+                 "10th percentile %.0f%%, longest drag %.1f mm; a take holds the rig's vectors, not how far "
+                 "the fingertips asked%s)", 100.0 * ma, r->na, 100.0 * pa, r->asked_max * mm_per_unit, h);
+        return;
+    }
     if (!r->n) return;
     double med = fp_median(r->v, r->n), p10 = fp_percentile(r->v, r->n, 0.10);
-    char rig[256] = "";
-    if (r->na) {
-        double ma = fp_median(r->va, r->na), pa = fp_percentile(r->va, r->na, 0.10);
-        if (fabs(ma - med) >= 0.005 || fabs(pa - p10) >= 0.005)
-            snprintf(rig, sizeof rig, "; %.0f%% of what the rig allowed, 10th percentile %.0f%%: it "
-                     "holds back a push toward the skull or the jaw", 100.0 * ma, 100.0 * pa);
-    }
+    char rig[256];
+    fp_app_reach_rig_clause(r, med, p10, rig, sizeof rig);
     int w = snprintf(text, len, "; ");
     if (w > 0 && (size_t)w < len)
         fp_app_reach_sentence(text + w, len - (size_t)w, med, r->n, p10, r->asked_max * mm_per_unit, rig,

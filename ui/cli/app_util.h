@@ -128,6 +128,13 @@ bool fp_app_free_name(const char *path, char *buf, size_t len);
 int fp_app_check_output_dir(const char *cmd, const char *option, const char *dir, const char *prefix,
                             const char *suffix, bool make, bool force, bool *made);
 
+/** --take-dir DIR of run and live, before any work, making nothing: DIR a folder we can write
+ *  in, or, where it is missing, the nearest folder above it that is there (the take writer
+ *  makes DIR with its parents at the first take, as `mkdir -p`: fp_take_writer_create), with
+ *  no file in the way. Takes are numbered on, never overwritten: what DIR holds is kept.
+ *  Returns 0, or 73 with "CMD: --take-dir DIR: reason[: the folder or file at fault]" printed. */
+int fp_app_check_take_dir(const char *cmd, const char *dir);
+
 /** Bytes a frame of --frames-out takes a vertex, about (an OBJ written back as the input came
  *  in: its v, vn, vt and face lines; 1.34 MB a frame for the ICT face's 26719 vertices). */
 /** An OBJ frame's bytes, about, as the mesh writer writes it (core/mesh): a "v" line of about
@@ -260,8 +267,17 @@ void fp_app_reach_add(fp_app_reach *r, const fp_frame_stats *st);
  *  differs by half a point or more), "...; 100% of what the rig allowed, 10th percentile
  *  100%: it holds back a push toward the skull or the jaw)", and where fingertips grabbed
  *  the skull or the jaw, "...; 26 of them on the skull or the jaw, which the rig keeps
- *  still)". Reorders r->v and r->va. */
-void fp_app_reach_text(fp_app_reach *r, double mm_per_unit, char *text, size_t len);
+ *  still)". Reorders r->v and r->va. played_rig: the reaches were measured on takes played
+ *  with a rig (play of a stack or of a take cut before its end chunk), whose stored vectors
+ *  are already the rig's cut of the fingertips' ask: then only "; the skin followed 100% of
+ *  what the rig allowed (median over N touching vectors, ...; a take holds the rig's
+ *  vectors, not how far the fingertips asked)" (empty when none was gathered). */
+void fp_app_reach_text(fp_app_reach *r, double mm_per_unit, bool played_rig, char *text, size_t len);
+/** The clause run's summary adds with a rig: "; 100% of what the rig allowed, 10th percentile
+ *  100%: it holds back a push toward the skull or the jaw" where r's reach against what the
+ *  rig allowed (r->va: median, 10th percentile) differs from median or p10 (fractions) by half
+ *  a point or more; else "" (also without r->va). Into rig (len bytes). Reorders r->va. */
+void fp_app_reach_rig_clause(fp_app_reach *r, double median, double p10, char *rig, size_t len);
 void fp_app_reach_free(fp_app_reach *r);
 /** The sentence both `run`'s summary (fp_app_reach_text) and `info` (a take's TAIL) print:
  *  "the skin followed the fingertips M% (median over N touching vectors, 10th percentile P%,

@@ -61,7 +61,8 @@ static void usage(FILE *f)
         "                         exit); frames it cannot draw (the contact guard's) come from\n"
         "                         the CPU, the reason said once\n"
         "      --vsync            wait for the display (default: never, swap interval 0)\n"
-        "      --take-dir DIR     T (or the pedal's middle button) records takes in DIR\n"
+        "      --take-dir DIR     T (or the pedal's middle button) records takes in DIR (made\n"
+        "                         with its parents when missing; checked before the window)\n"
         "      --slate NAME       the takes' slate (default \"scene1\"); numbers go up per slate\n"
         "      --countdown S      count S seconds down before a take starts\n"
         "      --over STACK_OR_TAKE  overdub: each take is a pass over it (needs --take-dir):\n"
@@ -420,6 +421,7 @@ static int live_main(int argc, char **argv)
     if (!orc && snd.audio.path && !snd.audio.offset_given) /* the line where the base heard it */
         fp_app_over_soundtrack_offset(&over, &snd.audio.offset_s);
     if (!orc) orc = fp_app_link_check("live", sopt.control, sopt.stream);
+    if (!orc && vo.take_dir) orc = fp_app_check_take_dir("facepuppet live", vo.take_dir);
     /* an --out or --screenshot that exists is refused before the window (README: no command overwrites a
      * file without being asked) */
     if (!orc && vo.out) orc = fp_app_check_new_output("facepuppet live", "--out", vo.out, force);

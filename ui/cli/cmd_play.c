@@ -102,8 +102,10 @@ static int play_audio_prepare(fp_app_audio *a, const fp_take_header *h, bool for
  * far the skin followed is the take's own (its end chunk, as `info` and the recording run
  * said it) where it has one and is played alone: the control sets it stores are what the rig
  * allowed, so a reach measured against them on playback says 100% where the performer's
- * fingertips asked for more. A stack, or a take cut before its end chunk: measured here. */
-static void print_played(const char *take_path, const fp_take_reader *r, bool stack,
+ * fingertips asked for more; what the rig allowed is measured here, as run says it. A stack,
+ * or a take cut before its end chunk: measured here, with a rig (played_rig) only against
+ * what it allowed. */
+static void print_played(const char *take_path, const fp_take_reader *r, bool stack, bool played_rig,
                          fp_app_reach *reach, double mm_per_unit, const uint64_t counts[3],
                          const char *out)
 {
@@ -112,15 +114,17 @@ static void print_played(const char *take_path, const fp_take_reader *r, bool st
     char in[32], tcout[32];
     fp_timecode_format(&h->timecode_in, in, sizeof in);
     fp_timecode_format(&sum->timecode_out, tcout, sizeof tcout);
-    char reach_text[400];
-    if (!stack && sum->reach.vectors) {
+    char reach_text[600];
+    if (!stack && sum->reach.vectors) { /* with run's clause of what the rig allowed, measured here */
+        char rig[256];
+        fp_app_reach_rig_clause(reach, sum->reach.median, sum->reach.p10, rig, sizeof rig);
         reach_text[0] = ';';
         reach_text[1] = ' ';
         fp_app_reach_sentence(reach_text + 2, sizeof reach_text - 2, sum->reach.median,
                               (size_t)sum->reach.vectors, sum->reach.p10,
-                              sum->reach.longest_drag_mm, "", (size_t)sum->reach.held);
+                              sum->reach.longest_drag_mm, rig, (size_t)sum->reach.held);
     } else {
-        fp_app_reach_text(reach, mm_per_unit, reach_text, sizeof reach_text);
+        fp_app_reach_text(reach, mm_per_unit, played_rig, reach_text, sizeof reach_text);
     }
     char rated[16] = "", desc[600] = ""; /* the take's rating and description, when set */
     if (h->rating) snprintf(rated, sizeof rated, ", rated %d/5", h->rating);
@@ -487,7 +491,8 @@ static int play_main(int argc, char **argv)
     if ((status = play_finish_outputs(player, out, &ex, export_fmt, export_file, quiet))) goto done;
     if (!quiet) {
         const uint64_t counts[3] = {frames, active, commits};
-        print_played(take_path, r, fp_take_player_stack(player) != NULL, &reach,
+        print_played(take_path, r, fp_take_player_stack(player) != NULL,
+                     fp_session_rig(fp_take_player_session(player)) != NULL, &reach,
                      fp_take_player_mm_per_unit(player), counts, out);
     }
     fp_app_stack_limited_note("play", take_path, fp_take_player_stack(player), quiet);

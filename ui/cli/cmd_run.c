@@ -55,7 +55,8 @@ static void usage(FILE *f)
         "                         0.1 mm), .pc2/.mdd (point caches: with --duration, a\n"
         "                         warning over 1 GiB); see facepuppet export\n"
         "      --take-dir DIR     record the run as a take in DIR (SLATE_TNNN.fptake; see\n"
-        "                         facepuppet takes, play, --input take:FILE); its path,\n"
+        "                         facepuppet takes, play, --input take:FILE), made with its\n"
+        "                         parents when missing (checked before any work); its path,\n"
         "                         frames and timecode are said at the end, -q or not\n"
         "      --slate NAME       the take's slate (default \"scene1\"); numbers go up per slate\n"
         "      --take-description TEXT  a line stored in the take's header\n"
@@ -257,6 +258,7 @@ static int run_settle(run_args *a)
     }
     if ((rc = fp_app_link_check("run", a->sopt.control, a->sopt.stream))) return rc;
     if ((rc = fp_app_over_check(&a->over, "facepuppet run", a->take_dir))) return rc;
+    if (a->take_dir && (rc = fp_app_check_take_dir("facepuppet run", a->take_dir))) return rc;
     if (a->audio.path && !a->audio.offset_given) /* the line where the base take heard it */
         fp_app_over_soundtrack_offset(&a->over, &a->audio.offset_s);
     return 0;
@@ -456,7 +458,7 @@ static void print_summary(const fp_session *s, run_totals *t, const run_displace
 {
     double med = fp_median(t->update_ms, t->nupdates), mmu = fp_session_head(s)->mm_per_unit;
     char reach_text[400], why[160] = "";
-    fp_app_reach_text(&t->reach, mmu, reach_text, sizeof reach_text);
+    fp_app_reach_text(&t->reach, mmu, false, reach_text, sizeof reach_text);
     /* what held the skin back (step_contact.h's closing line, over the run) */
     if (t->collided && t->folded == t->collided)
         snprintf(why, sizeof why, "; each where the skin would have folded over");
