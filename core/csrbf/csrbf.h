@@ -164,9 +164,13 @@ unsigned csrbf_solver_warnings(const csrbf_solver *solver);
  *  points share one coefficient); build A_ij = phi(|s_i - s_j| / R); factor A = L L^T (dense
  *  or CHOLMOD, see dense_limit). With CSRBF_POLY_LINEAR also W = A^-1 Q and S = Q^T W, where
  *  Q = P D V holds the polynomial basis q(x) = [1, (x - c)/R] (c the centres' mean) at the
- *  centres, column-scaled by D and restricted by V to the eigenvectors of D P^T P D whose
- *  singular values exceed 1e-6 of the largest: the directions that the centres cannot
- *  determine (collinear, coplanar, n < 4) are dropped from p, with CSRBF_WARN_POLY_RANK.
+ *  centres, scaled by D (the constant column to unit norm, the three coordinate columns by
+ *  one common factor, so that the eigenvectors are the centres' principal axes in any
+ *  orientation) and restricted by V to the eigenvectors of D P^T P D whose singular values
+ *  exceed 1e-6 of the largest and 4x what the float rounding of the start points gives
+ *  (sqrt(3m) 2^-24 max|coordinate| / R): the directions that the centres cannot determine
+ *  (collinear, coplanar, n < 4, within rounding of it) are dropped from p, which is then
+ *  constant along them (along the line's or plane's normals), with CSRBF_WARN_POLY_RANK.
  *  The factor is reused by every set_end_points until the next set_start_points. The
  *  coefficients are reset to zero (T = identity) until end points are set.
  *  Returns CSRBF_OK, CSRBF_WARN_MERGED / CSRBF_WARN_POLY_RANK (success, see
