@@ -446,7 +446,8 @@ typedef struct csrbf_guard_stats {
     double min_scale;         /* smallest cluster scale t of the first sub-step (1: none) */
     int substeps;             /* maps composed (1: the step was applied in one map) */
     double reached;           /* smallest fraction of its control vector that any start
-                                 point travelled (1: every end point reached) */
+                                 point travelled, 1 - |end - where it got| / |end - start|,
+                                 at least 0 (1: every end point reached) */
     csrbf_eval_stats eval;    /* csrbf_guarded_step only: pairs summed over the sub-steps,
                                  moved / max_displacement against the input shape,
                                  min_jacobian_det the minimum over the sub-steps' maps */
@@ -485,7 +486,9 @@ typedef struct csrbf_guard {
  *  csrbf_points_count); start, end: n x 3 floats; deformed: n_vertices x 3 floats (must not
  *  overlap shape's memory). Sub-step j factors at the current start points p (p = start for
  *  j = 1), solves for the end points, limits per cluster (csrbf_solver_limit_end_points:
- *  t_C), evaluates on the shape so far, and moves p_i <- p_i + t_C (end_i - p_i); it stops
+ *  t_C), evaluates on the shape so far, and moves p_i <- p_i + t_C (end_i - p_i) (start
+ *  points merged into one centre move as the map moves them, by t_C times their mean
+ *  end - p, and so stop short of their own ends: CSRBF_WARN_LIMITED); it stops
  *  when every t_C = 1 (T(start_i) = end_i, the composition of injective maps is injective)
  *  or after max_substeps maps, or past the CSRBF_GUARD_MAX_SUBSTEPS-th once the maps so far
  *  evaluated max_pairs pairs (the rest of the motion is dropped; CSRBF_WARN_LIMITED).
