@@ -95,8 +95,15 @@ const char *csrbf_simd_path(void);
  *  - radius: support radius R in mesh units; required; finite, 1e-15 <= R <= 1e15.
  *  - merge_tolerance: start points closer than merge_tolerance * R are merged into one centre
  *    (csrbf.md pitfall 1). 0 selects the default CSRBF_DEFAULT_MERGE_TOLERANCE (1e-4: the
- *    2x2 block of two centres that far apart still has a condition number near 1e7 for every
- *    kernel, harmless in double). Must be finite and in [0, 0.5).
+ *    2x2 block of two centres that far apart has a condition number of 2e7 for psi31 and
+ *    psi32, 1e4 for psi30, harmless in double; ten centres within 3e-4 R of each other reach
+ *    1e11 to 1e13). csrbf_evaluate sums in float: centres that close whose control vectors
+ *    differ get coefficients up to the condition number times them, of opposite signs, and
+ *    the float sum then misses T by about 2^-24 |alpha| (a pair 2e-4 R apart pulled 0.06 R
+ *    different ways: 55% of the control vectors for psi31, 67% for psi32, 0.03% for psi30;
+ *    csrbf_solver_map_point, in double, 1e-7); such a map folds over anyway
+ *    (CSRBF_WARN_FOLDOVER), and csrbf_solver_limit_end_points scales it back, the error
+ *    with it (5e-7). Must be finite and in [0, 0.5).
  *  - dense_limit: factor A with a dense Cholesky when the number of (merged) centres is at most
  *    this, else with CHOLMOD (supernodal or simplicial as CHOLMOD chooses, AMD, METIS where
  *    fill is high). 0 selects CSRBF_DEFAULT_DENSE_LIMIT (200); a negative value always uses
