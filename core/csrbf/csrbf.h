@@ -84,8 +84,8 @@ const char *csrbf_strerror(int result);
 /** The instruction set csrbf_evaluate's fast path runs on in this process: "avx512" (AVX-512F),
  *  "avx2" (AVX2 + FMA; the kernels are the same code on two 8-lane halves) or "portable" (no
  *  fast path: the general path's compiler-vectorised C). Chosen once, at the first call or
- *  evaluation, from the CPU; the environment variable CSRBF_ISA=avx2 or CSRBF_ISA=none asks
- *  for less (tests, comparisons). A static string; thread-safe. For benchmark headers and bug
+ *  evaluation, from the CPU; the environment variable CSRBF_ISA=avx2 or CSRBF_ISA=none (or
+ *  =portable) asks for less (tests, comparisons); any other value changes nothing. A static string; thread-safe. For benchmark headers and bug
  *  reports: the engine's speed differs several-fold between them. */
 const char *csrbf_simd_path(void);
 
