@@ -328,8 +328,9 @@ typedef struct csrbf_eval_stats {
                                   "number of displacement calculations" */
     size_t moved;              /* vertices inside at least one support (all with a polynomial) */
     double max_displacement;   /* max |T(x) - x| over the vertices, mesh units */
-    double min_jacobian_det;   /* min det dT/dx over the moved vertices (1 if none moved);
-                                  <= 0 means fold-over. Only with CSRBF_EVAL_JACOBIAN, else 1 */
+    double min_jacobian_det;   /* min det dT/dx over the moved vertices, above 1 where every
+                                  one has det > 1 (1 if none moved); <= 0 means fold-over.
+                                  Only with CSRBF_EVAL_JACOBIAN, else 1 */
 } csrbf_eval_stats;
 
 /** deformed[v] = T(base[v]) for every vertex v (n x 3 floats, original vertex order; must not

@@ -408,7 +408,7 @@ static int guarded(csrbf_solver *s, const csrbf_points *shape, follow *fw, size_
     csrbf_guard_stats out;
     memset(&out, 0, sizeof out);
     out.min_scale = 1.0;
-    out.eval.min_jacobian_det = 1.0;
+    out.eval.min_jacobian_det = INFINITY; /* 1 at the end if no map moved a vertex */
     int rc;
     for (int j = 0;; j++) {
         if (j > 0 || !reuse) {
@@ -449,7 +449,7 @@ static int guarded(csrbf_solver *s, const csrbf_points *shape, follow *fw, size_
         out.substeps = j + 1;
         if (counted) {
             out.eval.pairs += es.pairs; /* (also the budget's count) */
-            if (es.min_jacobian_det < out.eval.min_jacobian_det)
+            if (es.moved && es.min_jacobian_det < out.eval.min_jacobian_det)
                 out.eval.min_jacobian_det = es.min_jacobian_det;
             if (j == 0) {
                 out.eval.moved = es.moved;
@@ -492,6 +492,7 @@ static int guarded(csrbf_solver *s, const csrbf_points *shape, follow *fw, size_
         }
     }
     out.reached = reached;
+    if (!(out.eval.min_jacobian_det < INFINITY)) out.eval.min_jacobian_det = 1.0;
     if (st) {
         if (out.substeps > 1) composed_moved(shape, fw, deformed, &out.eval);
         *st = out;
