@@ -84,8 +84,8 @@ const char *csrbf_strerror(int result);
 /** The instruction set csrbf_evaluate's fast path runs on in this process: "avx512" (AVX-512F),
  *  "avx2" (AVX2 + FMA; the kernels are the same code on two 8-lane halves) or "portable" (no
  *  fast path: the general path's compiler-vectorised C). Chosen once, at the first call or
- *  evaluation, from the CPU; the environment variable CSRBF_ISA=avx2 or CSRBF_ISA=none asks
- *  for less (tests, comparisons). A static string; thread-safe. For benchmark headers and bug
+ *  evaluation, from the CPU; the environment variable CSRBF_ISA=avx2 or CSRBF_ISA=none (or
+ *  =portable) asks for less (tests, comparisons); any other value changes nothing. A static string; thread-safe. For benchmark headers and bug
  *  reports: the engine's speed differs several-fold between them. */
 const char *csrbf_simd_path(void);
 
@@ -95,8 +95,15 @@ const char *csrbf_simd_path(void);
  *  - radius: support radius R in mesh units; required; finite, 1e-15 <= R <= 1e15.
  *  - merge_tolerance: start points closer than merge_tolerance * R are merged into one centre
  *    (csrbf.md pitfall 1). 0 selects the default CSRBF_DEFAULT_MERGE_TOLERANCE (1e-4: the
- *    2x2 block of two centres that far apart still has a condition number near 1e7 for every
- *    kernel, harmless in double). Must be finite and in [0, 0.5).
+ *    2x2 block of two centres that far apart has a condition number of 2e7 for psi31 and
+ *    psi32, 1e4 for psi30, harmless in double; ten centres within 3e-4 R of each other reach
+ *    1e11 to 1e13). csrbf_evaluate sums in float: centres that close whose control vectors
+ *    differ get coefficients up to the condition number times them, of opposite signs, and
+ *    the float sum then misses T by about 2^-24 |alpha| (a pair 2e-4 R apart pulled 0.06 R
+ *    different ways: 55% of the control vectors for psi31, 67% for psi32, 0.03% for psi30;
+ *    csrbf_solver_map_point, in double, 1e-7); such a map folds over anyway
+ *    (CSRBF_WARN_FOLDOVER), and csrbf_solver_limit_end_points scales it back, the error
+ *    with it (5e-7). Must be finite and in [0, 0.5).
  *  - dense_limit: factor A with a dense Cholesky when the number of (merged) centres is at most
  *    this, else with CHOLMOD (supernodal or simplicial as CHOLMOD chooses, AMD, METIS where
  *    fill is high). 0 selects CSRBF_DEFAULT_DENSE_LIMIT (200); a negative value always uses
@@ -164,9 +171,13 @@ unsigned csrbf_solver_warnings(const csrbf_solver *solver);
  *  points share one coefficient); build A_ij = phi(|s_i - s_j| / R); factor A = L L^T (dense
  *  or CHOLMOD, see dense_limit). With CSRBF_POLY_LINEAR also W = A^-1 Q and S = Q^T W, where
  *  Q = P D V holds the polynomial basis q(x) = [1, (x - c)/R] (c the centres' mean) at the
- *  centres, column-scaled by D and restricted by V to the eigenvectors of D P^T P D whose
- *  singular values exceed 1e-6 of the largest: the directions that the centres cannot
- *  determine (collinear, coplanar, n < 4) are dropped from p, with CSRBF_WARN_POLY_RANK.
+ *  centres, scaled by D (the constant column to unit norm, the three coordinate columns by
+ *  one common factor, so that the eigenvectors are the centres' principal axes in any
+ *  orientation) and restricted by V to the eigenvectors of D P^T P D whose singular values
+ *  exceed 1e-6 of the largest and 4x what the float rounding of the start points gives
+ *  (sqrt(3m) 2^-24 max|coordinate| / R): the directions that the centres cannot determine
+ *  (collinear, coplanar, n < 4, within rounding of it) are dropped from p, which is then
+ *  constant along them (along the line's or plane's normals), with CSRBF_WARN_POLY_RANK.
  *  The factor is reused by every set_end_points until the next set_start_points. The
  *  coefficients are reset to zero (T = identity) until end points are set.
  *  Returns CSRBF_OK, CSRBF_WARN_MERGED / CSRBF_WARN_POLY_RANK (success, see
@@ -317,8 +328,9 @@ typedef struct csrbf_eval_stats {
                                   "number of displacement calculations" */
     size_t moved;              /* vertices inside at least one support (all with a polynomial) */
     double max_displacement;   /* max |T(x) - x| over the vertices, mesh units */
-    double min_jacobian_det;   /* min det dT/dx over the moved vertices (1 if none moved);
-                                  <= 0 means fold-over. Only with CSRBF_EVAL_JACOBIAN, else 1 */
+    double min_jacobian_det;   /* min det dT/dx over the moved vertices, above 1 where every
+                                  one has det > 1 (1 if none moved); <= 0 means fold-over.
+                                  Only with CSRBF_EVAL_JACOBIAN, else 1 */
 } csrbf_eval_stats;
 
 /** deformed[v] = T(base[v]) for every vertex v (n x 3 floats, original vertex order; must not
@@ -442,7 +454,8 @@ typedef struct csrbf_guard_stats {
     double min_scale;         /* smallest cluster scale t of the first sub-step (1: none) */
     int substeps;             /* maps composed (1: the step was applied in one map) */
     double reached;           /* smallest fraction of its control vector that any start
-                                 point travelled (1: every end point reached) */
+                                 point travelled, 1 - |end - where it got| / |end - start|,
+                                 at least 0 (1: every end point reached) */
     csrbf_eval_stats eval;    /* csrbf_guarded_step only: pairs summed over the sub-steps,
                                  moved / max_displacement against the input shape,
                                  min_jacobian_det the minimum over the sub-steps' maps */
@@ -481,7 +494,9 @@ typedef struct csrbf_guard {
  *  csrbf_points_count); start, end: n x 3 floats; deformed: n_vertices x 3 floats (must not
  *  overlap shape's memory). Sub-step j factors at the current start points p (p = start for
  *  j = 1), solves for the end points, limits per cluster (csrbf_solver_limit_end_points:
- *  t_C), evaluates on the shape so far, and moves p_i <- p_i + t_C (end_i - p_i); it stops
+ *  t_C), evaluates on the shape so far, and moves p_i <- p_i + t_C (end_i - p_i) (start
+ *  points merged into one centre move as the map moves them, by t_C times their mean
+ *  end - p, and so stop short of their own ends: CSRBF_WARN_LIMITED); it stops
  *  when every t_C = 1 (T(start_i) = end_i, the composition of injective maps is injective)
  *  or after max_substeps maps, or past the CSRBF_GUARD_MAX_SUBSTEPS-th once the maps so far
  *  evaluated max_pairs pairs (the rest of the motion is dropped; CSRBF_WARN_LIMITED).

@@ -47,7 +47,8 @@ interleave_avx512(float *restrict out, __m512 X, __m512 Y, __m512 Z)
 
 /* The instruction set of the fast path: AVX-512 where the CPU has it, else AVX2 with FMA,
  * else none (the portable general path). The environment variable CSRBF_ISA=avx2 or =none
- * asks for less than the CPU has (tests run every path on one machine). */
+ * (or =portable, the name csrbf_simd_path gives it) asks for less than the CPU has (tests
+ * run every path on one machine); any other value changes nothing. */
 int csrbf_isa_pick(const eval_isa **isa)
 {
 #if CSRBF_SIMD
@@ -61,7 +62,7 @@ int csrbf_isa_pick(const eval_isa **isa)
                                                                                           : 0;
         int use = cap;
         if (want && !strcmp(want, "avx2") && use > 1) use = 1;
-        if (want && !strcmp(want, "none")) use = 0;
+        if (want && (!strcmp(want, "none") || !strcmp(want, "portable"))) use = 0;
         atomic_store(&picked, use == 2 ? &isa_avx512 : use == 1 ? &isa_avx2 : NULL);
         atomic_store(&known, 1);
     }

@@ -203,14 +203,16 @@ void csrbf_run_general(eval_plan *p)
         cost > PARALLEL_COST || (m > CSRBF_FAST_MAX_CENTRES && !p->all_in) ? p->nt : 1;
     const block_fn kern = p->isa ? p->isa->kern[p->ki] : portable_kern[p->ki];
     size_t pairs = 0, moved = 0;
-    double maxd = 0.0, minjac = 1.0;
+    /* (the minimum starts at +inf, not 1: where every moved vertex has det > 1, that is
+     * the minimum; 1 is said only when no vertex moved) */
+    double maxd = 0.0, minjac = INFINITY;
 #pragma omp parallel num_threads(threads) reduction(+ : pairs, moved) reduction(max : maxd) \
     reduction(min : minjac)
     {
         uint32_t *list = (uint32_t *)(p->tbase + (size_t)omp_get_thread_num() * p->per_thread);
         if (p->all_in)
             for (size_t i = 0; i < m; i++) list[i] = (uint32_t)i;
-        gen_stats gs = {0, 0, 0.0, 1.0};
+        gen_stats gs = {0, 0, 0.0, INFINITY};
 #pragma omp for schedule(dynamic, 64)
         for (size_t b = 0; b < nb; b++) general_block(p, kern, b, list, &gs);
         pairs += gs.pairs;
@@ -221,6 +223,6 @@ void csrbf_run_general(eval_plan *p)
     p->pairs += pairs;
     p->moved += moved;
     p->maxd = maxd;
-    p->minjac = minjac;
+    p->minjac = minjac < INFINITY ? minjac : 1.0;
     if (p->touch) csrbf_touch_after_general(p->touch, p->tcur, p->tprev);
 }

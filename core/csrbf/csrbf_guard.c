@@ -345,6 +345,34 @@ static void composed_moved(const csrbf_points *shape, const follow *fw, const fl
     ev->max_displacement = sqrt(md);
 }
 
+/* guarded's move of the start points P (n x 3) toward the ends E after a sub-step: P_i +
+ * t_C (E_i - P_i) (E_i itself when t_C = 1), t_C the scale of its cluster; for points merged
+ * into one centre (more than one member), P_i + t_C H_g with H_g their mean E - P, which is
+ * where the map took them. s->Y (set_end_points' scratch, room for 3 n) holds the sums. */
+static void track_start_points(csrbf_solver *s, size_t n, float *P, const float *E)
+{
+    const size_t m = s->m;
+    double *H = s->Y;
+    if (m < n) {
+        memset(H, 0, m * 3 * sizeof *H);
+        for (size_t i = 0; i < n; i++)
+            for (int a = 0; a < 3; a++)
+                H[3 * s->group[i] + a] += (double)E[3 * i + a] - P[3 * i + a];
+    }
+    for (size_t i = 0; i < n; i++) {
+        const size_t g = s->group[i];
+        const double t = s->cl_t[s->cluster[g]];
+        if (m < n && s->inv_count[g] < 1.0) {
+            for (int a = 0; a < 3; a++)
+                P[3 * i + a] = (float)(P[3 * i + a] + t * H[3 * g + a] * s->inv_count[g]);
+            continue;
+        }
+        for (int a = 0; a < 3; a++)
+            P[3 * i + a] = t < 1.0 ? (float)(P[3 * i + a] + t * (E[3 * i + a] - P[3 * i + a]))
+                                   : E[3 * i + a];
+    }
+}
+
 static int guarded(csrbf_solver *s, const csrbf_points *shape, follow *fw, size_t n,
                    const float *start, const float *end, const csrbf_guard *guard, float *deformed,
                    csrbf_guard_stats *st)
@@ -380,7 +408,7 @@ static int guarded(csrbf_solver *s, const csrbf_points *shape, follow *fw, size_
     csrbf_guard_stats out;
     memset(&out, 0, sizeof out);
     out.min_scale = 1.0;
-    out.eval.min_jacobian_det = 1.0;
+    out.eval.min_jacobian_det = INFINITY; /* 1 at the end if no map moved a vertex */
     int rc;
     for (int j = 0;; j++) {
         if (j > 0 || !reuse) {
@@ -421,20 +449,17 @@ static int guarded(csrbf_solver *s, const csrbf_points *shape, follow *fw, size_
         out.substeps = j + 1;
         if (counted) {
             out.eval.pairs += es.pairs; /* (also the budget's count) */
-            if (es.min_jacobian_det < out.eval.min_jacobian_det)
+            if (es.moved && es.min_jacobian_det < out.eval.min_jacobian_det)
                 out.eval.min_jacobian_det = es.min_jacobian_det;
             if (j == 0) {
                 out.eval.moved = es.moved;
                 out.eval.max_displacement = es.max_displacement;
             }
         }
-        /* each start point travels its cluster's share of the rest of its control vector */
-        for (size_t i = 0; i < n; i++) {
-            double t = s->cl_t[s->cluster[s->group[i]]];
-            for (int a = 0; a < 3; a++)
-                P[3 * i + a] = t < 1.0 ? (float)(P[3 * i + a] + t * (E[3 * i + a] - P[3 * i + a]))
-                                       : E[3 * i + a];
-        }
+        /* each start point travels its cluster's share of the rest of its control vector;
+         * start points merged into one centre travel that share of their mean (the map
+         * moves them together: set_start_points), which stops them short of their own ends */
+        track_start_points(s, n, P, E);
         if (ls.clusters_limited == 0 || j + 1 >= maxk) break;
         if (max_pairs && j + 1 >= CSRBF_GUARD_MAX_SUBSTEPS && out.eval.pairs >= max_pairs) break;
         /* the next map acts on the shape so far */
@@ -461,12 +486,13 @@ static int guarded(csrbf_solver *s, const csrbf_points *shape, follow *fw, size_
             full += f * f;
             left += l * l;
         }
-        if (full > 0.0) {
-            double u = 1.0 - sqrt(left / full);
+        if (full > 0.0) { /* (0: none of it, also for a merged point taken elsewhere) */
+            double u = fmax(0.0, 1.0 - sqrt(left / full));
             if (u < reached) reached = u;
         }
     }
     out.reached = reached;
+    if (!(out.eval.min_jacobian_det < INFINITY)) out.eval.min_jacobian_det = 1.0;
     if (st) {
         if (out.substeps > 1) composed_moved(shape, fw, deformed, &out.eval);
         *st = out;

@@ -695,7 +695,13 @@ static int setup_poly(csrbf_solver *s)
         for (int a = 0; a < 3; a++) pc[a] += s->c[3 * i + a];
     for (int a = 0; a < 3; a++) pc[a] /= (double)m;
     memcpy(s->pc, pc, sizeof pc);
-    /* P columns: 1, (x - pc)/R; D scales each to unit norm (0 for a zero column) */
+    /* P columns: 1, (x - pc)/R. D scales the constant column to unit norm and the three
+     * coordinate columns by one common factor (their joint norm; 0 when every centre is at
+     * pc), so that the eigenvectors below are the centres' principal axes whatever the
+     * orientation of their line or plane: a direction dropped is the line's or plane's
+     * normal, and p stays constant along it. (A factor per column made the dropped direction
+     * depend on the frame: for centres on a line a hair off an axis, p's gradient pointed
+     * across the line and a vertex 1 unit off it moved 10,000.) */
     double M[4][4] = {{0}}, D[4];
     for (size_t i = 0; i < m; i++) {
         double q[4] = {1.0, (s->c[3 * i] - pc[0]) * s->inv_R, (s->c[3 * i + 1] - pc[1]) * s->inv_R,
@@ -703,17 +709,32 @@ static int setup_poly(csrbf_solver *s)
         for (int a = 0; a < 4; a++)
             for (int b = 0; b < 4; b++) M[a][b] += q[a] * q[b];
     }
-    for (int a = 0; a < 4; a++) D[a] = M[a][a] > 0.0 ? 1.0 / sqrt(M[a][a]) : 0.0;
+    const double tr = M[1][1] + M[2][2] + M[3][3];
+    D[0] = 1.0 / sqrt(M[0][0]); /* m >= 1 */
+    for (int a = 1; a < 4; a++) D[a] = tr > 0.0 ? 1.0 / sqrt(tr) : 0.0;
     for (int a = 0; a < 4; a++)
         for (int b = 0; b < 4; b++) M[a][b] *= D[a] * D[b];
     double w[4], V[4][4];
     jacobi4(M, 4, w, V);
-    double wmax = 0.0;
-    for (int a = 0; a < 4; a++) wmax = fmax(wmax, w[a]);
+    double wmax = 0.0, cmax = 0.0;
+    int e0 = 0; /* the constant's eigenvector (M is block-diagonal: the columns are centred) */
+    for (int a = 0; a < 4; a++) {
+        wmax = fmax(wmax, w[a]);
+        if (fabs(V[0][a]) > fabs(V[0][e0])) e0 = a;
+    }
+    /* The centres are floats: each coordinate stands for anything within half an ulp of it,
+     * up to 2^-24 cmax. A direction whose singular value is within 4x what that rounding
+     * gives the m centres (sqrt(3m) 2^-24 cmax / R) is not one they determine: a flat hand
+     * 1e4 mesh units from the origin lies off its plane by 1e-4 of its span in float alone,
+     * and p fitted along that normal moved vertices 20-30 times the control vectors. */
+    for (size_t i = 0; i < 3 * m; i++) cmax = fmax(cmax, fabs(s->c[i]));
+    const double fl = 4.0 * sqrt(3.0 * (double)m) * 0x1p-24 * cmax * s->inv_R;
+    const double wfloor = tr > 0.0 ? fl * fl / tr : 0.0;
     int k = 0;
     memset(s->DV, 0, sizeof s->DV);
     for (int e = 0; e < 4; e++) {
-        if (!(w[e] > 1e-12 * wmax)) continue; /* singular value below 1e-6 of the largest */
+        /* singular value below 1e-6 of the largest, or within the rounding above */
+        if (e != e0 && !(w[e] > 1e-12 * wmax && w[e] > wfloor)) continue;
         for (int a = 0; a < 4; a++) s->DV[a * 4 + k] = D[a] * V[a][e];
         k++;
     }

@@ -1296,7 +1296,9 @@ static void test_simd_path(void **state)
     (void)state;
     const char *path = csrbf_simd_path(), *want = getenv("CSRBF_ISA");
     assert_true(!strcmp(path, "avx512") || !strcmp(path, "avx2") || !strcmp(path, "portable"));
-    if (want && !strcmp(want, "none")) assert_string_equal(path, "portable");
+    /* "portable", the name csrbf_simd_path gives the path, asks for it as "none" does */
+    if (want && (!strcmp(want, "none") || !strcmp(want, "portable")))
+        assert_string_equal(path, "portable");
     if (want && !strcmp(want, "avx2")) assert_true(strcmp(path, "avx512") != 0);
     assert_ptr_equal(csrbf_simd_path(), path); /* chosen once */
 }

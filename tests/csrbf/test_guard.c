@@ -409,6 +409,46 @@ static void test_guarded_step_gentle(void **state)
     free(o2);
 }
 
+/* Start points within the merge tolerance share one centre and move by the mean of their
+ * control vectors (csrbf_solver_set_start_points). Two fingertips touching at a vertex, one
+ * staying and one pulled 0.4 R away (or the two pulled apart): the vertex under them moves
+ * by the mean, so the step does not reach the end points, and the guard must say so
+ * (WARN_LIMITED, reached measured from the output), not CSRBF_OK with reached 1. */
+static void test_guarded_step_merged(void **state)
+{
+    (void)state;
+    const float v[12] = {-1, 0, 0, 1, 0, 0, 0, 0, 0, 3, 3, 3}; /* vertex 2 under the tips */
+    csrbf_points *pts;
+    assert_int_equal(csrbf_points_create(4, v, &pts), CSRBF_OK);
+    const float st[6] = {0, 0, 0, 0, 0, 0};
+    const float ends[2][6] = {{0, 0, 0, 0, 0, 0.4f}, {0, 0, 0.3f, 0, 0, -0.3f}};
+    for (int c = 0; c < 2; c++) {
+        const float *en = ends[c];
+        csrbf_solver *s = make_solver(1.0, CSRBF_PSI31, CSRBF_POLY_NONE);
+        float out[12];
+        csrbf_guard_stats gs;
+        int rc = csrbf_guarded_step(s, pts, 2, st, en, NULL, out, &gs);
+        /* reference: how far each start point's vertex got along its control vector */
+        double reached = 1.0;
+        for (int i = 0; i < 2; i++) {
+            double full = 0, left = 0;
+            for (int a = 0; a < 3; a++) {
+                full += pow((double)en[3 * i + a] - st[3 * i + a], 2);
+                left += pow((double)en[3 * i + a] - out[6 + a], 2);
+            }
+            if (full > 0) reached = fmin(reached, 1.0 - sqrt(left / full));
+        }
+        assert_true(reached < 0.6); /* (0.5 and 0: the tips' mean is 0.2 and 0) */
+        if (rc != CSRBF_WARN_LIMITED)
+            fail_msg("case %d: %d (%s), the vertex reached %g of the way", c, rc, csrbf_strerror(rc),
+                     reached);
+        if (!(fabs(gs.reached - reached) < 1e-6))
+            fail_msg("case %d: reached %g said, %g measured", c, gs.reached, reached);
+        csrbf_solver_destroy(&s);
+    }
+    csrbf_points_destroy(&pts);
+}
+
 /* Skin grabbed by two fingertips close together and pulled far apart (0.01 R to 1.2 R): each
  * map may stretch the gap only so much (the bound grows as 1 / gap^2), so the default 16 maps
  * stop short; 64 maps reach it, with or without a pairs budget that allows them, and a budget
@@ -602,6 +642,7 @@ int main(void)
         cmocka_unit_test(test_single_centre_beyond_bound), cmocka_unit_test(test_bound_random),
         cmocka_unit_test(test_limit_per_cluster),    cmocka_unit_test(test_guarded_step_gentle),
         cmocka_unit_test(test_guarded_step_touched), cmocka_unit_test(test_guarded_step_pairs_budget),
+        cmocka_unit_test(test_guarded_step_merged),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
