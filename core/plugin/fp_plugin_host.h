@@ -37,7 +37,9 @@ typedef struct fp_spec {
     size_t nparams;
 } fp_spec;
 
-/** Parse `text` (e.g. "replay:take.csv,speed=2") into *spec. The ARG ends at the first
+/** Parse `text` (e.g. "replay:take.csv,speed=2") into *spec. The NAME is [A-Za-z0-9_-]+,
+ *  or a plugin file's path where it holds a '/' (fp_plugin_find loads that file; any text
+ *  but control characters, ending at the first ':' or ','). The ARG ends at the first
  *  comma; keys are [A-Za-z0-9_-]+ and must be unique; a value may be empty.
  *  Returns 0, or -EINVAL with a message in err naming the offending part.
  *  Free with fp_spec_clear. */

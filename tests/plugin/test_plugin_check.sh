@@ -143,6 +143,14 @@ if [ $rc != 0 ] || grep -q "cut\|damage\|no intact" "$tmp/out"; then
     fail "the take of a refused mapping does not play whole (exit $rc)"; sed 's/^/    /' "$tmp/out"
 else echo "ok: the take of a refused mapping plays (exit 0)"; fi
 expect 78 "mapping 'fixture-noinstance': create returned 0 without an instance" run --mapping fixture-noinstance
+# A SPEC whose NAME holds a '/' names the plugin's file (docs/plugin-guide.md), in process
+# and isolated (before: "bad name", exit 64), an input's too.
+expect 0 "frames [0-9]+, deforming" run --mapping "$fx/map-fixture.so"
+expect 0 "isolated: the helper process died of SIGSEGV during process \(frame 3\)" \
+    "$fp" run --plugin-dir "$fx" --mesh "$mesh" --input "replay:$rec" --duration 1 -o "$tmp/out.obj" --force \
+    --mapping "$fx/map-fixture-segv.so"
+expect 0 "frames [0-9]+, deforming" "$fp" run --isolate none --plugin-dir "$fx" --mesh "$mesh" --duration 1 \
+    --quiet -o "$tmp/out.obj" --force --mapping fixture --input "$builtin/input-replay.so:$rec"
 # A radius the engine would refuse (1e20: finite and positive) is the mapping's error, named,
 # on every frame: one line, then its count (before, the host passed it and the engine said
 # "engine: invalid argument" without the mapping's name, and a take recorded the set).

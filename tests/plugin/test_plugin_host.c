@@ -55,6 +55,21 @@ static void test_spec_parse(void **state)
     assert_int_not_equal(fp_spec_parse("replay:x,a=1,a=2", &s, err, sizeof err), 0);
     assert_non_null(strstr(err, "given twice"));
     assert_int_not_equal(fp_spec_parse("re play", &s, err, sizeof err), 0);
+
+    /* A NAME holding a '/' names the plugin's file (docs/plugin-guide.md): its path, up to
+     * the ARG's ':' or the first key's ','. Before: refused as a bad name. */
+    assert_int_equal(fp_spec_parse("/opt/my plugins/map-x.so,gain=2", &s, err, sizeof err), 0);
+    assert_string_equal(s.name, "/opt/my plugins/map-x.so");
+    assert_null(s.arg);
+    assert_int_equal(s.nparams, 1);
+    fp_spec_clear(&s);
+    assert_int_equal(fp_spec_parse("./build/input-x.so:dev0,rate=5", &s, err, sizeof err), 0);
+    assert_string_equal(s.name, "./build/input-x.so");
+    assert_string_equal(s.arg, "dev0");
+    fp_spec_clear(&s);
+    assert_int_not_equal(fp_spec_parse("./a\nb/map-x.so", &s, err, sizeof err), 0); /* control char */
+    assert_int_not_equal(fp_spec_parse("map-x.so", &s, err, sizeof err), 0); /* no '/': a NAME */
+    assert_non_null(strstr(err, "bad name"));
 }
 
 static int load(const char *name, fp_plugin *p, char *err, size_t len)
