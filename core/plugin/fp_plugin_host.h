@@ -221,6 +221,8 @@ typedef struct fp_input_instance {
                                             takes is sent again over OSC (fp_forward.h) */
     bool started;
     bool stopped;                        /* stop() was called (it is called once) */
+    bool abandoned;                      /* stop() did not return within
+                                            FP_INPUT_STOP_DEADLINE_MS: left running */
     fp_log_relay log;                    /* the plugin's log lines, from any thread, until
                                             drained on the owner's (log_relay.h) */
     fp_host_log_fn log_fn;               /* where they are drained to (fp_input_instance_set_log) */
@@ -267,8 +269,17 @@ void fp_input_instance_set_log(fp_input_instance *inst, fp_host_log_fn fn, void 
  *  [owner's thread]: the session drains its inputs every frame; monitor and calibrate in
  *  their loops. Safe on a zeroed instance. */
 size_t fp_input_instance_drain_log(fp_input_instance *inst);
+/** How long the host waits for an input's stop() (ms): its call runs on a thread of the
+ *  host's while the owner waits; one that has not returned by then is abandoned. */
+#define FP_INPUT_STOP_DEADLINE_MS 5000
+
 /** Stop (if started), destroy, close the recording, unload; the lines logged until then are
- *  drained to the set_log callback last. Safe on a zeroed instance. */
+ *  drained to the set_log callback last. Safe on a zeroed instance. A stop() that has not
+ *  returned within FP_INPUT_STOP_DEADLINE_MS (a plugin's thread blocked for good) is
+ *  abandoned so that the command can end: an error line in the input's log names it
+ *  ("stop has not returned within 5 s ..."), inst->abandoned is set, and nothing more of the
+ *  plugin is called or freed (destroy, its queue, its code stay: its threads may still run).
+ *  The same holds for fp_input_instance_close_record. */
 void fp_input_instance_close(fp_input_instance *inst);
 /** Pop one event; queues it for the recording if any (no I/O on the caller's thread).
  *  [session-thread]. */

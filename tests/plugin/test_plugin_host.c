@@ -17,6 +17,7 @@
 #include <signal.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
+#include <time.h>
 #include <unistd.h>
 #include <cmocka.h>
 
@@ -201,6 +202,44 @@ static void test_log_relayed(void **state)
     assert_string_equal(seen.lines[3], "line 2");
     assert_int_equal(seen.on_owner, 4);
     assert_int_equal(seen.warnings, 3);
+    fp_plugin_path_clear(&path);
+}
+
+/* ---- a stop() that never returns is abandoned after FP_INPUT_STOP_DEADLINE_MS ---- */
+
+static void test_stuck_stop_abandoned(void **state)
+{
+    (void)state;
+    const char *dirs[] = {fixture_dir};
+    fp_plugin_path path;
+    fp_plugin_path_init(&path, dirs, 1, NULL);
+    fp_input_instance inst;
+    char err[1024];
+    log_seen seen = {.owner = pthread_self()};
+    assert_int_equal(fp_input_instance_open(&inst, &path, "fixture,stuck=1", 0, err, sizeof err), 0);
+    fp_input_instance_set_log(&inst, seen_log, &seen);
+    assert_int_equal(fp_input_instance_start(&inst, err, sizeof err), 0);
+    struct timespec t0, t1;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    fp_input_instance_close(&inst); /* before: joined the plugin's thread forever */
+    clock_gettime(CLOCK_MONOTONIC, &t1);
+    double ms = (double)(t1.tv_sec - t0.tv_sec) * 1e3 + (double)(t1.tv_nsec - t0.tv_nsec) / 1e6;
+    assert_true(inst.abandoned);
+    assert_true(ms >= FP_INPUT_STOP_DEADLINE_MS - 50 && ms < FP_INPUT_STOP_DEADLINE_MS + 2000);
+    assert_true(seen.n >= 1);
+    assert_string_equal(seen.source, "fixture");
+    assert_non_null(strstr(seen.lines[seen.n - 1], "stop has not returned within 5 s"));
+    fp_input_instance_close(&inst); /* again: nothing more */
+    assert_true(inst.abandoned);
+
+    /* a stop that returns at once is waited for, not abandoned */
+    seen = (log_seen){.owner = pthread_self()};
+    assert_int_equal(fp_input_instance_open(&inst, &path, "fixture,log=2", 0, err, sizeof err), 0);
+    fp_input_instance_set_log(&inst, seen_log, &seen);
+    assert_int_equal(fp_input_instance_start(&inst, err, sizeof err), 0);
+    fp_input_instance_close(&inst);
+    assert_false(inst.abandoned);
+    assert_int_equal(seen.n, 3);
     fp_plugin_path_clear(&path);
 }
 
@@ -648,6 +687,8 @@ int main(void)
         cmocka_unit_test(test_builtin_first),
         cmocka_unit_test(test_shipped_only_builtin),     cmocka_unit_test(test_crash_names_plugin),
         cmocka_unit_test(test_call_oldest),
+        /* last: its abandoned stop() stays a call in progress (test_call_oldest wants none) */
+        cmocka_unit_test(test_stuck_stop_abandoned),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
