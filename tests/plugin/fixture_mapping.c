@@ -20,6 +20,7 @@
  *   FIXTURE_EXTRA_READ     A, and a control vector from every further hand the ABI allows
  *                             (FP_PERFORMER_CAPACITY - 1 performers), not the extra_performers
  *                             given (ABI 1.3)
+ *   FIXTURE_NO_NAME        its factory has no name (a broken factory, not a missing one)
  *   FIXTURE_ABI_MAJOR=2    built for ABI 2.0; FIXTURE_ABI_MINOR=3: 1.3 (else 1.0) */
 #define _POSIX_C_SOURCE 200809L
 #include <facepuppet/mapping_util.h>
@@ -172,7 +173,9 @@ static int create(const fp_host *host, const fp_param *params, size_t nparams, f
 
 static const fp_mapping_factory factory = {
     .size = sizeof(fp_mapping_factory),
+#ifndef FIXTURE_NO_NAME
     .name = "fixture",
+#endif
     .description = "test fixture (build " FIXTURE_VERSION ")",
     .usage = "fixture[,gain=F]",
     .create = create,

@@ -87,6 +87,11 @@ expect 1 'FAIL  time +process took [0-9]+\.[0-9]+ ms .*over the budget of 2 ms' 
 expect 1 'FAIL  create +create returned 0 without an instance' "$fp" plugins check "$fx/map-fixture-noinstance.so"
 expect 78 'FAIL  load .*built for plugin ABI 2\.0, this facepuppet has ABI 1\.3' "$fp" plugins check "$fx/map-fixture-abi2.so"
 expect 78 'built for plugin ABI 2\.0' "$fp" plugins check "$fx/input-fixture-abi2.so"
+# a factory offered but broken is said so (before: "offers no mapping factory", as if none)
+expect 78 "map-fixture-noname.so: its mapping factory \('facepuppet.mapping-factory/1'\) has no name" \
+    "$fp" plugins check "$fx/map-fixture-noname.so"
+expect 78 "map-fixture-noname.so: its mapping factory .* has no name" \
+    "$fp" run --isolate none --plugin-dir "$fx" --mesh "$mesh" --input "replay:$rec" --duration 1 -o "$tmp/out.obj" --force --mapping fixture-noname
 expect 64 'give one FILE' "$fp" plugins check
 # A plugin that crashes, calls exit() or hangs in a call fails the check (exit 1, a FAIL line
 # naming the signal, the exit or the hang, and the call and frame), the checker itself intact:
