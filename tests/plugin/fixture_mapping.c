@@ -20,6 +20,9 @@
  *   FIXTURE_EXTRA_READ     A, and a control vector from every further hand the ABI allows
  *                             (FP_PERFORMER_CAPACITY - 1 performers), not the extra_performers
  *                             given (ABI 1.3)
+ *   FIXTURE_UNDERWRITE     A, and from frame 3 writes the 7 entries before its start array
+ *                          (in a helper: the shared control set's scalars, its capacity
+ *                          among them) and claims a count of 10 million (isolated runs only)
  *   FIXTURE_NO_NAME        its factory has no name (a broken factory, not a missing one)
  *   FIXTURE_ABI_MAJOR=2    built for ABI 2.0; FIXTURE_ABI_MINOR=3: 1.3 (else 1.0) */
 #define _POSIX_C_SOURCE 200809L
@@ -117,6 +120,12 @@ static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *o
             out->end[out->count++][2] += (float)(0.01 * in->radius);
             out->active = true;
         }
+#endif
+#ifdef FIXTURE_UNDERWRITE
+    if (in->frame >= 3) { /* (isolated only: in process this is the host's heap) */
+        for (int i = -7; i < 0; i++) out->start[i][0] = out->start[i][1] = out->start[i][2] = 1e30f;
+        out->count = 10000000;
+    }
 #endif
 #ifdef FIXTURE_OVERRUN
     for (size_t i = 0; i < out->capacity + 2; i++) {

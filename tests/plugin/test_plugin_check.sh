@@ -166,6 +166,10 @@ grep -q "engine: " "$tmp/out" && { fail "the engine saw the refused set"; sed 's
 # An isolated mapping that writes past the arrays is stopped as in process: exit 78.
 runi() { "$fp" run --plugin-dir "$fx" --mesh "$mesh" --input "replay:$rec" --duration 1 --quiet -o "$tmp/out.obj" --force "$@"; }
 expect 78 "mapping 'fixture-overrun': wrote past the capacity of the host's arrays on frame [0-9]+ \(in its helper process\); the mapping is stopped" runi --mapping fixture-overrun
+# ... and one that writes before its arrays (the shared set's capacity) and claims 10 million
+# vectors: the host copies no more than its own capacity and refuses the set, named (before:
+# it trusted the helper's capacity and crashed with SIGSEGV, ending the show)
+expect 0 "mapping 'fixture-underwrite': control set over capacity: count 10000000 > capacity 64" runi --mapping fixture-underwrite
 # An isolated mapping that prints: its stdout is facepuppet's stderr (the helper's), so run's
 # stdout holds the summary alone, which scripts parse (before: the plugin's lines mixed in).
 runi --mapping fixture-print >"$tmp/print.out" 2>"$tmp/print.err"
