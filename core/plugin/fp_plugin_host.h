@@ -181,7 +181,12 @@ int fp_event_queue_init(fp_event_queue *q, size_t capacity);
 /** Free the cells; no producer may push any more (the input stopped, its threads joined).
  *  Safe on a zeroed queue. */
 void fp_event_queue_destroy(fp_event_queue *q);
-/** Copy ev (ev->size bytes, at most sizeof(fp_event)) in. False when full or too large.
+/** The share of a queue's capacity kept from poses: 1/8 (a capacity under 8: none). */
+#define FP_EVENT_QUEUE_RESERVE 8
+/** Copy ev (ev->size bytes, at most sizeof(fp_event)) in. False when full or too large; a
+ *  pose (joint angles, joint positions, wrist pose) finds it full with 1/FP_EVENT_QUEUE_RESERVE
+ *  of the capacity still free, which only the other events (statuses, buttons, channels)
+ *  take: an input that floods poses cannot push out its end of stream or a button.
  *  An event refused as full counts once in dropped, however often it is pushed again; when
  *  it is taken before another is refused, that count is taken back: a producer that waits
  *  for room loses nothing, and the count says so. */

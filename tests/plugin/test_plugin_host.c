@@ -619,6 +619,32 @@ static void test_queue_full(void **state)
     fp_event_queue_destroy(&q);
 }
 
+/* An input that floods poses cannot push out its end of stream or a button: poses find the
+ * queue full with 1/8 of it free, which the other events take (before: the status was
+ * dropped like any event, and `run` waited for that end of stream forever). */
+static void test_queue_reserve(void **state)
+{
+    (void)state;
+    assert_int_equal(fp_event_queue_init(&q, 64), 0);
+    fp_event_joint_positions jp = {{sizeof jp, FP_EVENT_JOINT_POSITIONS, 0, 0, 0, 1}, {{0}}};
+    int poses = 0;
+    while (poses < 100 && fp_event_queue_push(&q, &jp.header)) jp.header.time_ns = ++poses;
+    assert_int_equal(poses, 64 - 64 / FP_EVENT_QUEUE_RESERVE);
+    fp_event_status st = {{sizeof st, FP_EVENT_STATUS, 0, 0, 0, -1}, FP_STATUS_END_OF_STREAM, "done"};
+    fp_event_button b = {{sizeof b, FP_EVENT_BUTTON, 0, 0, 0, -1}, 1, 1, 1};
+    assert_true(fp_event_queue_push(&q, &b.header));
+    assert_true(fp_event_queue_push(&q, &st.header));
+    int others = 2;
+    while (fp_event_queue_push(&q, &b.header)) others++; /* the rest of the capacity */
+    assert_int_equal(poses + others, 64);
+    fp_event ev;
+    int n = 0, last_type = 0;
+    while (fp_event_queue_pop(&q, &ev)) n++, last_type = ev.header.type;
+    assert_int_equal(n, 64);
+    assert_int_equal(last_type, FP_EVENT_BUTTON);
+    fp_event_queue_destroy(&q);
+}
+
 /* A producer that waits for room (the replay's fast=1, fp_pacer_push) pushes the refused event
  * again: once it is taken, its refusals are not drops; an event refused and never pushed
  * again (another came instead) stays one */
@@ -683,6 +709,7 @@ int main(void)
         cmocka_unit_test(test_log_relayed), cmocka_unit_test(test_malformed_events_refused),
         cmocka_unit_test(test_queue_mpsc),
         cmocka_unit_test(test_queue_full),        cmocka_unit_test(test_queue_retry),
+        cmocka_unit_test(test_queue_reserve),
         cmocka_unit_test(test_unsafe_folders_skipped),
         cmocka_unit_test(test_builtin_first),
         cmocka_unit_test(test_shipped_only_builtin),     cmocka_unit_test(test_crash_names_plugin),
