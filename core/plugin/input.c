@@ -276,6 +276,14 @@ int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
         if (!rc) rc = FP_EPLUGIN_FAULT;
         goto out;
     }
+    if (!FP_HAS_FIELD(inst->input, fp_input, destroy) || !inst->input->start) {
+        /* as `plugins check` refuses it (before: start was called through NULL) */
+        snprintf(err, errlen, "input '%s': the fp_input has size %u, or no start()", spec_text,
+                 inst->input->size);
+        inst->input = NULL; /* (its destroy may be missing too: left as it is) */
+        rc = FP_EPLUGIN_FAULT;
+        goto out;
+    }
     if (record) {
         char used[4096];
         rc = fp_event_recorder_create(record, force && !strcmp(force, "1") ? FP_RECORD_OVERWRITE : 0,

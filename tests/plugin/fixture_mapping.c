@@ -23,6 +23,7 @@
  *   FIXTURE_UNDERWRITE     A, and from frame 3 writes the 7 entries before its start array
  *                          (in a helper: the shared control set's scalars, its capacity
  *                          among them) and claims a count of 10 million (isolated runs only)
+ *   FIXTURE_NO_PROCESS     A whose instance has no process() (NULL)
  *   FIXTURE_NO_NAME        its factory has no name (a broken factory, not a missing one)
  *   FIXTURE_ABI_MAJOR=2    built for ABI 2.0; FIXTURE_ABI_MINOR=3: 1.3 (else 1.0) */
 #define _POSIX_C_SOURCE 200809L
@@ -174,6 +175,9 @@ static int create(const fp_host *host, const fp_param *params, size_t nparams, f
     fx->mapping.process = process;
     fx->mapping.reset = reset;
     fx->mapping.destroy = destroy;
+#ifdef FIXTURE_NO_PROCESS
+    fx->mapping.process = NULL;
+#endif
     *out = &fx->mapping;
     if (host && host->log) host->log(host, FP_LOG_INFO, "fixture " FIXTURE_VERSION " created");
     return 0;

@@ -15,6 +15,7 @@
  *                       viewer's opening screen is read while it waits); key log=N:
  *                       create logs "created", start runs a thread of its own that logs
  *                       "line 0" .. "line N-1" (warnings) and ends (joined by stop);
+ *                       key nostart=1: its instance has no start() (NULL);
  *                       key stuck=1: start runs a thread that never ends (a read loop
  *                       blocked for good), which stop joins: stop never returns */
 #define _POSIX_C_SOURCE 200809L /* nanosleep */
@@ -137,7 +138,7 @@ static void destroy(fp_input *self) { free(self); }
 static int create(const fp_host *host, const char *arg, const fp_param *params, size_t nparams,
                   fp_input **out, char *err, size_t errlen)
 {
-    int log_lines = 0, stuck = 0;
+    int log_lines = 0, stuck = 0, nostart = 0;
     for (size_t i = 0; i < nparams; i++) {
         if (!strcmp(params[i].key, "open_ms")) {
             long ms = strtol(params[i].value, NULL, 10);
@@ -148,6 +149,8 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
             log_lines = atoi(params[i].value);
         } else if (!strcmp(params[i].key, "stuck")) {
             stuck = atoi(params[i].value);
+        } else if (!strcmp(params[i].key, "nostart")) {
+            nostart = atoi(params[i].value);
         } else if (strcmp(params[i].key, "ok")) {
             strncpy(err, "unknown key", errlen);
             return -22;
@@ -161,7 +164,7 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
     fp_input *in = &fx->in;
     in->size = sizeof *in;
     in->plugin_data = (void *)host;
-    in->start = start;
+    in->start = nostart ? NULL : start;
     in->stop = stop;
     in->destroy = destroy;
     *out = in;

@@ -148,6 +148,11 @@ if [ $rc != 0 ] || grep -q "cut\|damage\|no intact" "$tmp/out"; then
     fail "the take of a refused mapping does not play whole (exit $rc)"; sed 's/^/    /' "$tmp/out"
 else echo "ok: the take of a refused mapping plays (exit 0)"; fi
 expect 78 "mapping 'fixture-noinstance': create returned 0 without an instance" run --mapping fixture-noinstance
+# an instance without process() (a mapping) or start() (an input) is refused in process as
+# isolated and by plugins check: exit 78, named (before: called through NULL, exit 139)
+expect 78 "mapping 'fixture-noprocess': the fp_mapping has size [0-9]+ or no process\(\)" run --mapping fixture-noprocess
+expect 78 "input 'fixture,nostart=1': the fp_input has size [0-9]+, or no start\(\)" \
+    "$fp" run --isolate none --plugin-dir "$fx" --mesh "$mesh" --duration 1 -o "$tmp/out.obj" --force --input fixture,nostart=1
 # A SPEC whose NAME holds a '/' names the plugin's file (docs/plugin-guide.md), in process
 # and isolated (before: "bad name", exit 64), an input's too.
 expect 0 "frames [0-9]+, deforming" run --mapping "$fx/map-fixture.so"
