@@ -23,6 +23,7 @@
  *   FIXTURE_UNDERWRITE     A, and from frame 3 writes the 7 entries before its start array
  *                          (in a helper: the shared control set's scalars, its capacity
  *                          among them) and claims a count of 10 million (isolated runs only)
+ *   FIXTURE_OOM            A, and create logs its process's oom_score_adj
  *   FIXTURE_NO_PROCESS     A whose instance has no process() (NULL)
  *   FIXTURE_NO_NAME        its factory has no name (a broken factory, not a missing one)
  *   FIXTURE_ABI_MAJOR=2    built for ABI 2.0; FIXTURE_ABI_MINOR=3: 1.3 (else 1.0) */
@@ -180,6 +181,15 @@ static int create(const fp_host *host, const fp_param *params, size_t nparams, f
 #endif
     *out = &fx->mapping;
     if (host && host->log) host->log(host, FP_LOG_INFO, "fixture " FIXTURE_VERSION " created");
+#ifdef FIXTURE_OOM
+    char adj[32] = "?";
+    FILE *f = fopen("/proc/self/oom_score_adj", "r");
+    if (f && fgets(adj, sizeof adj, f)) adj[strcspn(adj, "\n")] = '\0';
+    if (f) fclose(f);
+    char line[64];
+    snprintf(line, sizeof line, "oom_score_adj %s", adj);
+    if (host && host->log) host->log(host, FP_LOG_INFO, line);
+#endif
     return 0;
 #endif
 }

@@ -175,6 +175,10 @@ expect 78 "mapping 'fixture-overrun': wrote past the capacity of the host's arra
 # vectors: the host copies no more than its own capacity and refuses the set, named (before:
 # it trusted the helper's capacity and crashed with SIGSEGV, ending the show)
 expect 0 "mapping 'fixture-underwrite': control set over capacity: count 10000000 > capacity 64" runi --mapping fixture-underwrite
+# An isolated mapping's helper is the kernel's first choice when memory runs out (a plugin
+# that eats memory without end must not take the host with it): oom_score_adj 1000 there
+# (before: the host's, 0).
+expect 0 "mapping 'fixture-oom': oom_score_adj 1000$" runi --mapping fixture-oom
 # An isolated mapping that prints: its stdout is facepuppet's stderr (the helper's), so run's
 # stdout holds the summary alone, which scripts parse (before: the plugin's lines mixed in).
 runi --mapping fixture-print >"$tmp/print.out" 2>"$tmp/print.err"
