@@ -269,6 +269,7 @@ int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
     fp_plugin_call_enter(inst->name, "create", 0);
     rc = f->create(&inst->host, spec.arg, spec.params, spec.nparams, &inst->input, perr, sizeof perr);
     fp_plugin_call_leave();
+    perr[sizeof perr - 1] = '\0'; /* (a plugin that filled it to the end: read no further) */
     if (rc || !inst->input) {
         snprintf(err, errlen, "input '%s': %s", spec_text,
                  perr[0] ? perr : rc ? "create failed" : "create returned 0 without an instance");
@@ -329,6 +330,7 @@ int fp_input_instance_start(fp_input_instance *inst, char *err, size_t errlen)
     fp_plugin_call_enter(inst->name, "start", 0);
     int rc = inst->input->start(inst->input, perr, sizeof perr);
     fp_plugin_call_leave();
+    perr[sizeof perr - 1] = '\0';
     if (rc) {
         snprintf(err, errlen, "input '%s': %s", inst->name, perr[0] ? perr : "start failed");
         return rc;

@@ -368,6 +368,7 @@ int fp_isolate_helper_main(int argc, char **argv)
         const fp_mapping_factory *f = plugin.factory;
         atomic_store(&H.shm->stage, FP_ISO_STAGE_CREATE);
         rc = f->create(&H.host, params, np, &m, err, sizeof err);
+        err[sizeof err - 1] = '\0'; /* (a plugin that filled it to the end) */
         if (!rc && !m) {
             snprintf(err, sizeof err, "create returned 0 without an instance");
             rc = FP_EPLUGIN_FAULT;

@@ -23,6 +23,7 @@
  *   FIXTURE_UNDERWRITE     A, and from frame 3 writes the 7 entries before its start array
  *                          (in a helper: the shared control set's scalars, its capacity
  *                          among them) and claims a count of 10 million (isolated runs only)
+ *   FIXTURE_ERR_FILL       create fills err to its very end (no NUL) and fails
  *   FIXTURE_OOM            A, and create logs its process's oom_score_adj
  *   FIXTURE_NO_PROCESS     A whose instance has no process() (NULL)
  *   FIXTURE_NO_NAME        its factory has no name (a broken factory, not a missing one)
@@ -156,6 +157,10 @@ static int create(const fp_host *host, const fp_param *params, size_t nparams, f
     if (rc) return rc;
 #ifdef FIXTURE_ABORT
     abort();
+#endif
+#ifdef FIXTURE_ERR_FILL
+    memset(err, 'E', errlen);
+    return -22;
 #endif
 #ifdef FIXTURE_PRINT
     printf("fixture-print: stdout of create\n");

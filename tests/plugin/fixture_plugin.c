@@ -15,7 +15,8 @@
  *                       viewer's opening screen is read while it waits); key log=N:
  *                       create logs "created", start runs a thread of its own that logs
  *                       "line 0" .. "line N-1" (warnings) and ends (joined by stop);
- *                       key nostart=1: its instance has no start() (NULL);
+ *                       key nostart=1: its instance has no start() (NULL); key
+ *                       errfill=1: create fills err to its very end (no NUL) and fails;
  *                       key stuck=1: start runs a thread that never ends (a read loop
  *                       blocked for good), which stop joins: stop never returns */
 #define _POSIX_C_SOURCE 200809L /* nanosleep */
@@ -149,6 +150,9 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
             log_lines = atoi(params[i].value);
         } else if (!strcmp(params[i].key, "stuck")) {
             stuck = atoi(params[i].value);
+        } else if (!strcmp(params[i].key, "errfill")) {
+            memset(err, 'E', errlen);
+            return -22;
         } else if (!strcmp(params[i].key, "nostart")) {
             nostart = atoi(params[i].value);
         } else if (strcmp(params[i].key, "ok")) {

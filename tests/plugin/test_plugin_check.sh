@@ -175,6 +175,18 @@ expect 78 "mapping 'fixture-overrun': wrote past the capacity of the host's arra
 # vectors: the host copies no more than its own capacity and refuses the set, named (before:
 # it trusted the helper's capacity and crashed with SIGSEGV, ending the show)
 expect 0 "mapping 'fixture-underwrite': control set over capacity: count 10000000 > capacity 64" runi --mapping fixture-underwrite
+# A create that fills err to its very end (no NUL): the message is the plugin's bytes and
+# nothing after them, in process and isolated (before: read past the buffer, stack garbage)
+for iso in none third-party; do
+    "$fp" run --isolate $iso --plugin-dir "$fx" --mesh "$mesh" --input "replay:$rec" --duration 1 -o "$tmp/out.obj" \
+        --force --mapping fixture-errfill >"$tmp/out" 2>&1
+    rc=$?
+    if [ $rc = 64 ] && tail -1 "$tmp/out" | grep -Eq "^facepuppet run: mapping 'fixture-errfill': E{100,}$"; then
+        echo "ok: errfill ($iso): exit 64, the plugin's bytes alone"
+    else
+        fail "errfill ($iso): exit $rc"; tail -1 "$tmp/out" | od -c | tail -4
+    fi
+done
 # An isolated mapping's helper is the kernel's first choice when memory runs out (a plugin
 # that eats memory without end must not take the host with it): oom_score_adj 1000 there
 # (before: the host's, 0).

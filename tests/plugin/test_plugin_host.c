@@ -205,6 +205,25 @@ static void test_log_relayed(void **state)
     fp_plugin_path_clear(&path);
 }
 
+/* A create that fills err to its very end, without a NUL: the host's message holds what fits
+ * and no byte past the plugin's buffer (before: read on past it, garbage from the stack). */
+static void test_err_filled(void **state)
+{
+    (void)state;
+    const char *dirs[] = {fixture_dir};
+    fp_plugin_path path;
+    fp_plugin_path_init(&path, dirs, 1, NULL);
+    fp_input_instance inst;
+    char err[4096];
+    assert_int_equal(fp_input_instance_open(&inst, &path, "fixture,errfill=1", 0, err, sizeof err), -22);
+    const char *prefix = "input 'fixture,errfill=1': ";
+    assert_int_equal(strncmp(err, prefix, strlen(prefix)), 0);
+    size_t n = strlen(err) - strlen(prefix);
+    assert_int_equal(strspn(err + strlen(prefix), "E"), n); /* only the plugin's bytes */
+    assert_true(n > 100 && n < 1024);
+    fp_plugin_path_clear(&path);
+}
+
 /* ---- a stop() that never returns is abandoned after FP_INPUT_STOP_DEADLINE_MS ---- */
 
 static void test_stuck_stop_abandoned(void **state)
@@ -707,6 +726,7 @@ int main(void)
         cmocka_unit_test(test_spec_parse),        cmocka_unit_test(test_loader_errors),
         cmocka_unit_test(test_env_path_and_instance),
         cmocka_unit_test(test_log_relayed), cmocka_unit_test(test_malformed_events_refused),
+        cmocka_unit_test(test_err_filled),
         cmocka_unit_test(test_queue_mpsc),
         cmocka_unit_test(test_queue_full),        cmocka_unit_test(test_queue_retry),
         cmocka_unit_test(test_queue_reserve),
