@@ -3,6 +3,7 @@
  *   FIXTURE_NO_ENTRY    no facepuppet_plugin_entry symbol at all
  *   FIXTURE_INIT_FAILS  init returns false
  *   FIXTURE_CRASH_INIT  init dereferences a null pointer
+ *   FIXTURE_HANG_INIT   init never returns
  *   FIXTURE_CRASH_THREAD start() runs a thread of its own that dereferences a null pointer
  *   FIXTURE_BAD_EVENTS  start() pushes a right hand's joint positions 600 times, 10 ms apart
  *                       (a hand held still 40 mm in front of the tracker's origin), with
@@ -187,6 +188,16 @@ static const void *get_factory(const char *id)
 static bool init(const char *path) { (void)path; return false; }
 #elif defined(FIXTURE_CRASH_INIT)
 static bool init(const char *path) { (void)path; crash(); return true; }
+#elif defined(FIXTURE_HANG_INIT)
+static bool init(const char *path)
+{
+    (void)path;
+    for (;;) {
+        struct timespec ts = {1, 0};
+        nanosleep(&ts, NULL);
+    }
+    return true;
+}
 #else
 static bool init(const char *path) { (void)path; return true; }
 #endif
