@@ -21,8 +21,9 @@
  * that it is a fault), so a run gives the same frames whatever its speed (fast=1, --speed,
  * real time) or the machine's; the frames meanwhile hold the set. After
  * FP_ISOLATE_MAX_FAULTS faults in a row (a helper that answered FP_ISOLATE_HEALTHY_CALLS
- * calls ends a row) it gives up: one error line, and every later call returns an inactive
- * set with code 0 (the face stays as it was, the session runs on).
+ * calls ends a row) it gives up: one error line, and every later call returns, with code 0,
+ * the set held as while a helper restarts (the last good one without its intents; inactive
+ * where it committed or was inactive), so the face stays as it was and the session runs on.
  *
  * Errors: as the in-process loader and factory (fp_plugin_load's FP_EPLUGIN_* codes, the
  * factory's own code with its message), plus the host's: -ENOMEM, -EIO (no helper could be

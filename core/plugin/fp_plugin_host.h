@@ -37,7 +37,9 @@ typedef struct fp_spec {
     size_t nparams;
 } fp_spec;
 
-/** Parse `text` (e.g. "replay:take.csv,speed=2") into *spec. The ARG ends at the first
+/** Parse `text` (e.g. "replay:take.csv,speed=2") into *spec. The NAME is [A-Za-z0-9_-]+,
+ *  or a plugin file's path where it holds a '/' (fp_plugin_find loads that file; any text
+ *  but control characters, ending at the first ':' or ','). The ARG ends at the first
  *  comma; keys are [A-Za-z0-9_-]+ and must be unique; a value may be empty, and runs to the
  *  next `,key=` (`keys=a,b,c` gives keys the value "a,b,c"; an item without '=' before any
  *  key is refused).
@@ -181,7 +183,12 @@ int fp_event_queue_init(fp_event_queue *q, size_t capacity);
 /** Free the cells; no producer may push any more (the input stopped, its threads joined).
  *  Safe on a zeroed queue. */
 void fp_event_queue_destroy(fp_event_queue *q);
-/** Copy ev (ev->size bytes, at most sizeof(fp_event)) in. False when full or too large.
+/** The share of a queue's capacity kept from poses: 1/8 (a capacity under 8: none). */
+#define FP_EVENT_QUEUE_RESERVE 8
+/** Copy ev (ev->size bytes, at most sizeof(fp_event)) in. False when full or too large; a
+ *  pose (joint angles, joint positions, wrist pose) finds it full with 1/FP_EVENT_QUEUE_RESERVE
+ *  of the capacity still free, which only the other events (statuses, buttons, channels)
+ *  take: an input that floods poses cannot push out its end of stream or a button.
  *  An event refused as full counts once in dropped, however often it is pushed again; when
  *  it is taken before another is refused, that count is taken back: a producer that waits
  *  for room loses nothing, and the count says so. */
@@ -221,6 +228,8 @@ typedef struct fp_input_instance {
                                             takes is sent again over OSC (fp_forward.h) */
     bool started;
     bool stopped;                        /* stop() was called (it is called once) */
+    bool abandoned;                      /* stop() did not return within
+                                            FP_INPUT_STOP_DEADLINE_MS: left running */
     fp_log_relay log;                    /* the plugin's log lines, from any thread, until
                                             drained on the owner's (log_relay.h) */
     fp_host_log_fn log_fn;               /* where they are drained to (fp_input_instance_set_log) */
@@ -267,8 +276,17 @@ void fp_input_instance_set_log(fp_input_instance *inst, fp_host_log_fn fn, void 
  *  [owner's thread]: the session drains its inputs every frame; monitor and calibrate in
  *  their loops. Safe on a zeroed instance. */
 size_t fp_input_instance_drain_log(fp_input_instance *inst);
+/** How long the host waits for an input's stop() (ms): its call runs on a thread of the
+ *  host's while the owner waits; one that has not returned by then is abandoned. */
+#define FP_INPUT_STOP_DEADLINE_MS 5000
+
 /** Stop (if started), destroy, close the recording, unload; the lines logged until then are
- *  drained to the set_log callback last. Safe on a zeroed instance. */
+ *  drained to the set_log callback last. Safe on a zeroed instance. A stop() that has not
+ *  returned within FP_INPUT_STOP_DEADLINE_MS (a plugin's thread blocked for good) is
+ *  abandoned so that the command can end: an error line in the input's log names it
+ *  ("stop has not returned within 5 s ..."), inst->abandoned is set, and nothing more of the
+ *  plugin is called or freed (destroy, its queue, its code stay: its threads may still run).
+ *  The same holds for fp_input_instance_close_record. */
 void fp_input_instance_close(fp_input_instance *inst);
 /** Pop one event; queues it for the recording if any (no I/O on the caller's thread).
  *  [session-thread]. */

@@ -1,6 +1,6 @@
 /* Input instances: a loaded input plugin, the fp_host it pushes through, its queue, and
  * the optional recording of every event it delivered (record=FILE). */
-#define _POSIX_C_SOURCE 200809L
+#define _GNU_SOURCE /* pthread_timedjoin_np */
 #include "fp_plugin_host.h"
 
 #include "fp_plugin_crash.h"
@@ -8,9 +8,11 @@
 #include "fp_record.h"
 
 #include <errno.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #define FP_INPUT_QUEUE_CAPACITY 4096
 
@@ -267,11 +269,20 @@ int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
     fp_plugin_call_enter(inst->name, "create", 0);
     rc = f->create(&inst->host, spec.arg, spec.params, spec.nparams, &inst->input, perr, sizeof perr);
     fp_plugin_call_leave();
+    perr[sizeof perr - 1] = '\0'; /* (a plugin that filled it to the end: read no further) */
     if (rc || !inst->input) {
         snprintf(err, errlen, "input '%s': %s", spec_text,
                  perr[0] ? perr : rc ? "create failed" : "create returned 0 without an instance");
         inst->input = NULL;
         if (!rc) rc = FP_EPLUGIN_FAULT;
+        goto out;
+    }
+    if (!FP_HAS_FIELD(inst->input, fp_input, destroy) || !inst->input->start) {
+        /* as `plugins check` refuses it (before: start was called through NULL) */
+        snprintf(err, errlen, "input '%s': the fp_input has size %u, or no start()", spec_text,
+                 inst->input->size);
+        inst->input = NULL; /* (its destroy may be missing too: left as it is) */
+        rc = FP_EPLUGIN_FAULT;
         goto out;
     }
     if (record) {
@@ -319,6 +330,7 @@ int fp_input_instance_start(fp_input_instance *inst, char *err, size_t errlen)
     fp_plugin_call_enter(inst->name, "start", 0);
     int rc = inst->input->start(inst->input, perr, sizeof perr);
     fp_plugin_call_leave();
+    perr[sizeof perr - 1] = '\0';
     if (rc) {
         snprintf(err, errlen, "input '%s': %s", inst->name, perr[0] ? perr : "start failed");
         return rc;
@@ -334,13 +346,61 @@ bool fp_input_instance_poll(fp_input_instance *inst, fp_event *out)
     return true;
 }
 
-static void stop_input(fp_input_instance *inst)
+/* The plugin's stop() on a thread of the host's (freed by whichever side is last: the caller
+ * when the call returned in time, else nobody: a stop that never returns keeps it). */
+typedef struct stop_call {
+    fp_input *input;
+    const char *who;
+} stop_call;
+
+static void *stop_thread(void *arg)
 {
-    if (inst->input && !inst->stopped && inst->input->stop) {
+    stop_call *c = arg;
+    fp_plugin_call_enter(c->who, "stop", 0);
+    c->input->stop(c->input);
+    fp_plugin_call_leave();
+    return NULL;
+}
+
+/* stop(), waited for FP_INPUT_STOP_DEADLINE_MS: true when it returned. A stop that does not
+ * (a thread of the plugin's blocked in a read that nothing ends) is abandoned, so that it
+ * cannot keep the command from ending; said in the input's log. Where no thread can be
+ * started, stop is called here and waited for. */
+static bool stop_within_deadline(fp_input_instance *inst)
+{
+    stop_call *c = malloc(sizeof *c);
+    pthread_t t;
+    if (!c || (*c = (stop_call){inst->input, inst->name}, pthread_create(&t, NULL, stop_thread, c))) {
+        free(c);
         fp_plugin_call_enter(inst->name, "stop", 0);
         inst->input->stop(inst->input);
         fp_plugin_call_leave();
+        return true;
     }
+    struct timespec until;
+    clock_gettime(CLOCK_REALTIME, &until); /* (pthread_timedjoin_np's clock) */
+    until.tv_sec += FP_INPUT_STOP_DEADLINE_MS / 1000;
+    until.tv_nsec += (FP_INPUT_STOP_DEADLINE_MS % 1000) * 1000000L;
+    if (until.tv_nsec >= 1000000000L) until.tv_sec++, until.tv_nsec -= 1000000000L;
+    int rc;
+    while ((rc = pthread_timedjoin_np(t, NULL, &until)) == EINTR) {}
+    if (!rc) {
+        free(c);
+        return true;
+    }
+    pthread_detach(t);
+    char line[300];
+    snprintf(line, sizeof line, "stop has not returned within %g s (a thread of the plugin's does "
+             "not end): abandoned, the plugin left loaded and running; nothing more of it is "
+             "called", FP_INPUT_STOP_DEADLINE_MS / 1000.0);
+    fp_log_relay_push(&inst->log, FP_LOG_ERROR, line);
+    return false;
+}
+
+static void stop_input(fp_input_instance *inst)
+{
+    if (inst->input && !inst->stopped && inst->input->stop && !stop_within_deadline(inst))
+        inst->abandoned = true;
     inst->stopped = true;
     inst->started = false;
 }
@@ -363,6 +423,12 @@ void fp_input_instance_close(fp_input_instance *inst)
 {
     fp_input_instance_close_record(inst, NULL, 0);
     stop_input(inst);
+    if (inst->abandoned) { /* its threads may still run its code and push: nothing is freed
+                            * that they use (the queue, the log relay, the plugin's code) */
+        inst->input = NULL;
+        fp_input_instance_drain_log(inst);
+        return;
+    }
     if (inst->input) {
         if (inst->input->destroy) {
             fp_plugin_call_enter(inst->name, "destroy", 0);

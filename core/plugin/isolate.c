@@ -253,7 +253,9 @@ static const char *overwritten(const fp_iso_shm *s)
 }
 
 /* The helper's control set into the host's (counts clamped to the capacities: the host's
- * own check reports a count above them). */
+ * own check reports a count above them). The capacities are the host's own, never read back
+ * from the shared memory: the plugin can write there (before its arrays, into the shared
+ * set's scalars), and a capacity it overwrote made this copy run past out's arrays. */
 static void get_controls(proxy *x, fp_control_set *out)
 {
     const fp_iso_shm *s = x->proc.shm;
@@ -262,8 +264,10 @@ static void get_controls(proxy *x, fp_control_set *out)
     out->radius = s->cs.radius;
     out->count = s->cs.count;
     out->channel_count = s->cs.channel_count;
-    size_t nc = out->count < s->cs.capacity ? out->count : s->cs.capacity;
-    size_t nh = out->channel_count < s->cs.channel_capacity ? out->channel_count : s->cs.channel_capacity;
+    size_t cap = out->capacity < FP_CONTROL_CAPACITY ? out->capacity : FP_CONTROL_CAPACITY;
+    size_t ccap = out->channel_capacity < FP_CHANNEL_CAPACITY ? out->channel_capacity : FP_CHANNEL_CAPACITY;
+    size_t nc = out->count < cap ? out->count : cap;
+    size_t nh = out->channel_count < ccap ? out->channel_count : ccap;
     if (out->start && nc) memcpy(out->start, s->start, nc * sizeof s->start[0]);
     if (out->end && nc) memcpy(out->end, s->end, nc * sizeof s->end[0]);
     if (out->channels && nh) memcpy(out->channels, s->channels, nh * sizeof s->channels[0]);
@@ -309,6 +313,7 @@ static int surface_answer(void *user, fp_iso_shm *s)
 {
     proxy *x = user;
     if (!x->surface) return -ENOTSUP;
+    if (s->surf_count > FP_ISO_SURFACE_MAX) return -EINVAL; /* (shared: the plugin may write it) */
     return x->surface->nearest(x->host, (const float(*)[3])s->surf_points, s->surf_count, s->surf_max,
                                s->surf_hits);
 }

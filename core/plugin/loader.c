@@ -178,6 +178,24 @@ bool fp_plugin_find(const fp_plugin_path *path, fp_plugin_kind kind, const char 
     return found;
 }
 
+/* What makes an offered factory unusable, for the message (NULL: usable). An ABI 1.0 factory
+ * ends before `params`; fields past its size are never read. */
+static const char *factory_broken(fp_plugin_kind kind, const void *factory)
+{
+    bool sized, named, creates;
+    if (kind == FP_PLUGIN_INPUT) {
+        const fp_input_factory *f = factory;
+        sized = FP_HAS_FIELD(f, fp_input_factory, create);
+        named = sized && f->name, creates = sized && f->create;
+    } else {
+        const fp_mapping_factory *f = factory;
+        sized = FP_HAS_FIELD(f, fp_mapping_factory, create);
+        named = sized && f->name, creates = sized && f->create;
+    }
+    return !sized ? "is too small: its size ends before create"
+           : !named ? "has no name (NULL)" : !creates ? "has no create (NULL)" : NULL;
+}
+
 int fp_plugin_load(const fp_plugin_path *path, fp_plugin_kind kind, const char *name,
                    fp_plugin *out, char *err, size_t errlen)
 {
@@ -232,17 +250,14 @@ int fp_plugin_load(const fp_plugin_path *path, fp_plugin_kind kind, const char *
     }
     const char *fid = kind == FP_PLUGIN_INPUT ? FP_INPUT_FACTORY_ID : FP_MAPPING_FACTORY_ID;
     out->factory = out->entry->get_factory ? out->entry->get_factory(fid) : NULL;
-    bool ok = out->factory != NULL;
-    if (ok && kind == FP_PLUGIN_INPUT) {
-        /* An ABI 1.0 factory ends before `params`; fields past f->size are never read. */
-        const fp_input_factory *f = out->factory;
-        ok = FP_HAS_FIELD(f, fp_input_factory, create) && f->create && f->name;
-    } else if (ok) {
-        const fp_mapping_factory *f = out->factory;
-        ok = FP_HAS_FIELD(f, fp_mapping_factory, create) && f->create && f->name;
+    if (!out->entry->get_factory || !out->factory) {
+        snprintf(err, errlen, "%s: offers no %s factory ('%s'%s)", file, what, fid,
+                 out->entry->get_factory ? "" : ": its entry's get_factory is NULL");
+        return fail(out, FP_EPLUGIN_NO_FACTORY);
     }
-    if (!ok) {
-        snprintf(err, errlen, "%s: offers no %s factory ('%s')", file, what, fid);
+    const char *broken = factory_broken(kind, out->factory);
+    if (broken) {
+        snprintf(err, errlen, "%s: its %s factory ('%s') %s", file, what, fid, broken);
         return fail(out, FP_EPLUGIN_NO_FACTORY);
     }
     return 0;

@@ -75,6 +75,21 @@ static void taken(fp_event_queue *q, const fp_event_header *ev)
         atomic_fetch_sub_explicit(&q->dropped, 1, memory_order_relaxed);
 }
 
+/* A pose (angles, positions, wrist) finds the queue full FP_EVENT_QUEUE_RESERVE of its
+ * capacity early: the rest is kept for the events that are not repeated (statuses, the end
+ * of a stream above all; buttons; channels), so that an input flooding poses cannot push
+ * them out. (head - tail is read without a lock: a soft bound, never past the capacity.) */
+static bool pose_room(fp_event_queue *q, const fp_event_header *ev)
+{
+    if (ev->type != FP_EVENT_JOINT_ANGLES && ev->type != FP_EVENT_JOINT_POSITIONS &&
+        ev->type != FP_EVENT_WRIST_POSE)
+        return true;
+    const size_t capacity = q->mask + 1, reserve = capacity / FP_EVENT_QUEUE_RESERVE;
+    const size_t head = atomic_load_explicit(&q->head, memory_order_relaxed);
+    const size_t tail = atomic_load_explicit(&q->tail, memory_order_relaxed);
+    return head - tail < capacity - reserve;
+}
+
 bool fp_event_queue_push(fp_event_queue *q, const fp_event_header *ev)
 {
     if (!ev || ev->size < sizeof *ev || ev->size > sizeof(fp_event)) {
@@ -82,6 +97,10 @@ bool fp_event_queue_push(fp_event_queue *q, const fp_event_header *ev)
         return false;
     }
     assert(q->cells && (q->mask & (q->mask + 1)) == 0); /* initialised; capacity a power of 2 */
+    if (!pose_room(q, ev)) {
+        refused(q, ev);
+        return false; /* full for poses */
+    }
     size_t pos = atomic_load_explicit(&q->head, memory_order_relaxed);
     for (;;) {
         struct fp_event_cell *c = &q->cells[pos & q->mask];

@@ -16,6 +16,16 @@ static bool valid_key(const char *k)
     return true;
 }
 
+/* A NAME holding a '/' is a plugin file's path (docs/plugin-guide.md, "Names"): any text but
+ * control characters (':' and ',' end it, as they end any NAME). */
+static bool valid_name(const char *n)
+{
+    if (!strchr(n, '/')) return valid_key(n);
+    for (; *n; n++)
+        if ((unsigned char)*n < 0x20 || *n == 0x7f) return false;
+    return true;
+}
+
 int fp_spec_parse(const char *text, fp_spec *spec, char *err, size_t errlen)
 {
     memset(spec, 0, sizeof *spec);
@@ -34,8 +44,9 @@ int fp_spec_parse(const char *text, fp_spec *spec, char *err, size_t errlen)
         spec->arg = colon + 1;
     }
     spec->name = s;
-    if (!valid_key(spec->name)) {
-        snprintf(err, errlen, "SPEC '%s': bad name '%s' (letters, digits, '_' and '-')", text,
+    if (!valid_name(spec->name)) {
+        snprintf(err, errlen, "SPEC '%s': bad name '%s' (letters, digits, '_' and '-'; or a "
+                 "plugin file's path, holding a '/')", text,
                  spec->name);
         fp_spec_clear(spec);
         return -EINVAL;

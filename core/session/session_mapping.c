@@ -73,8 +73,15 @@ int fp__session_load_mapping(fp_session *s, const char *mapping, const fp_plugin
         else
             rc = f->create(&s->mapping_host.host, spec.params, spec.nparams, &s->mapping, perr, sizeof perr);
         fp_plugin_call_leave();
+        perr[sizeof perr - 1] = '\0'; /* (a plugin that filled it to the end: read no further) */
         fp_mapping_host_drain_log(&s->mapping_host); /* what its create said */
-        if (rc || !s->mapping) {
+        if (!rc && s->mapping && (!FP_HAS_FIELD(s->mapping, fp_mapping, destroy) || !s->mapping->process)) {
+            /* as the helper and `plugins check` refuse it (before: called through NULL) */
+            snprintf(err, errlen, "mapping '%s': the fp_mapping has size %u or no process()", mapping,
+                     s->mapping->size);
+            s->mapping = NULL; /* (its destroy may be missing too: left as it is) */
+            rc = FP_EPLUGIN_FAULT;
+        } else if (rc || !s->mapping) {
             snprintf(err, errlen, "mapping '%s': %s", mapping,
                      perr[0] ? perr : rc ? "create failed" : "create returned 0 without an instance");
             s->mapping = NULL;

@@ -130,6 +130,12 @@ bool fp_rig_step_update(fp_rig_step *st, const fp_control_set *cs, const float *
         name[sizeof name - 1] = '\0';
         int rc = fp_rig_step_set_channel(st, name, cs->channels[k].value);
         if (rc == -ENOENT) report_unknown(st, name, log);
+        if (rc == -ERANGE && !st->nan_said) { /* (before: ignored without a word) */
+            st->nan_said = true;
+            fp_slog_printf(log, FP_LOG_WARNING, "rig", "%s: the mapping drives channel \"%.31s\" with "
+                           "a value that is not a number; ignored (the channel keeps its value; said once)",
+                           fp_rig_source(st->rig), name);
+        }
     }
     size_t nc = fp_rig_channel_count(st->rig);
     if (!st->dirty && !memcmp(st->values, st->posed_values, nc * sizeof(float))) return false;

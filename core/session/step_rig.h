@@ -78,6 +78,7 @@ typedef struct fp_rig_step {
     fp_channel applied[FP_RIG_MAX_CHANNELS];      /* cs.channels: every channel, posed values */
     char unknown[FP_RIG_STEP_UNKNOWN][32];        /* unknown channel names already reported */
     size_t unknown_count;
+    bool nan_said;                                /* a NaN channel value was reported */
 } fp_rig_step;
 
 /** Attach `rig` (bound to the session's mesh, n vertices; owned by the step from here on,

@@ -20,6 +20,13 @@
  *   FIXTURE_EXTRA_READ     A, and a control vector from every further hand the ABI allows
  *                             (FP_PERFORMER_CAPACITY - 1 performers), not the extra_performers
  *                             given (ABI 1.3)
+ *   FIXTURE_UNDERWRITE     A, and from frame 3 writes the 7 entries before its start array
+ *                          (in a helper: the shared control set's scalars, its capacity
+ *                          among them) and claims a count of 10 million (isolated runs only)
+ *   FIXTURE_ERR_FILL       create fills err to its very end (no NUL) and fails
+ *   FIXTURE_OOM            A, and create logs its process's oom_score_adj
+ *   FIXTURE_NO_PROCESS     A whose instance has no process() (NULL)
+ *   FIXTURE_NO_NAME        its factory has no name (a broken factory, not a missing one)
  *   FIXTURE_ABI_MAJOR=2    built for ABI 2.0; FIXTURE_ABI_MINOR=3: 1.3 (else 1.0) */
 #define _POSIX_C_SOURCE 200809L
 #include <facepuppet/mapping_util.h>
@@ -117,6 +124,12 @@ static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *o
             out->active = true;
         }
 #endif
+#ifdef FIXTURE_UNDERWRITE
+    if (in->frame >= 3) { /* (isolated only: in process this is the host's heap) */
+        for (int i = -7; i < 0; i++) out->start[i][0] = out->start[i][1] = out->start[i][2] = 1e30f;
+        out->count = 10000000;
+    }
+#endif
 #ifdef FIXTURE_OVERRUN
     for (size_t i = 0; i < out->capacity + 2; i++) {
         out->start[i][0] = out->end[i][0] = 0.1f * (float)i;
@@ -145,6 +158,10 @@ static int create(const fp_host *host, const fp_param *params, size_t nparams, f
 #ifdef FIXTURE_ABORT
     abort();
 #endif
+#ifdef FIXTURE_ERR_FILL
+    memset(err, 'E', errlen);
+    return -22;
+#endif
 #ifdef FIXTURE_PRINT
     printf("fixture-print: stdout of create\n");
     fflush(stdout);
@@ -164,15 +181,29 @@ static int create(const fp_host *host, const fp_param *params, size_t nparams, f
     fx->mapping.process = process;
     fx->mapping.reset = reset;
     fx->mapping.destroy = destroy;
+#ifdef FIXTURE_NO_PROCESS
+    fx->mapping.process = NULL;
+#endif
     *out = &fx->mapping;
     if (host && host->log) host->log(host, FP_LOG_INFO, "fixture " FIXTURE_VERSION " created");
+#ifdef FIXTURE_OOM
+    char adj[32] = "?";
+    FILE *f = fopen("/proc/self/oom_score_adj", "r");
+    if (f && fgets(adj, sizeof adj, f)) adj[strcspn(adj, "\n")] = '\0';
+    if (f) fclose(f);
+    char line[64];
+    snprintf(line, sizeof line, "oom_score_adj %s", adj);
+    if (host && host->log) host->log(host, FP_LOG_INFO, line);
+#endif
     return 0;
 #endif
 }
 
 static const fp_mapping_factory factory = {
     .size = sizeof(fp_mapping_factory),
+#ifndef FIXTURE_NO_NAME
     .name = "fixture",
+#endif
     .description = "test fixture (build " FIXTURE_VERSION ")",
     .usage = "fixture[,gain=F]",
     .create = create,

@@ -3,6 +3,7 @@
  *   FIXTURE_NO_ENTRY    no facepuppet_plugin_entry symbol at all
  *   FIXTURE_INIT_FAILS  init returns false
  *   FIXTURE_CRASH_INIT  init dereferences a null pointer
+ *   FIXTURE_HANG_INIT   init never returns
  *   FIXTURE_CRASH_THREAD start() runs a thread of its own that dereferences a null pointer
  *   FIXTURE_BAD_EVENTS  start() pushes a right hand's joint positions 600 times, 10 ms apart
  *                       (a hand held still 40 mm in front of the tracker's origin), with
@@ -14,7 +15,11 @@
  *                       key open_ms=N: its create takes N ms (a slow device's open: the
  *                       viewer's opening screen is read while it waits); key log=N:
  *                       create logs "created", start runs a thread of its own that logs
- *                       "line 0" .. "line N-1" (warnings) and ends (joined by stop) */
+ *                       "line 0" .. "line N-1" (warnings) and ends (joined by stop);
+ *                       key nostart=1: its instance has no start() (NULL); key
+ *                       errfill=1: create fills err to its very end (no NUL) and fails;
+ *                       key stuck=1: start runs a thread that never ends (a read loop
+ *                       blocked for good), which stop joins: stop never returns */
 #define _POSIX_C_SOURCE 200809L /* nanosleep */
 #include <facepuppet/plugin.h>
 
@@ -51,7 +56,18 @@ typedef struct fixture {
     int log_lines;
     pthread_t logger;
     int logging;
+    int stuck;
 } fixture;
+
+static void *stuck_thread(void *arg)
+{
+    (void)arg;
+    for (;;) {
+        struct timespec ts = {1, 0};
+        nanosleep(&ts, NULL);
+    }
+    return NULL;
+}
 
 static void *logger(void *arg)
 {
@@ -74,6 +90,7 @@ static int start(fp_input *self, char *err, size_t errlen)
     fixture *fx = (fixture *)self;
     const fp_host *host = fx->host;
     if (fx->log_lines > 0) fx->logging = !pthread_create(&fx->logger, NULL, logger, fx);
+    else if (fx->stuck) fx->logging = !pthread_create(&fx->logger, NULL, stuck_thread, fx);
 #ifdef FIXTURE_BAD_EVENTS
     int64_t t0 = host->now_ns(host);
     for (int k = 0; k < 600; k++) {
@@ -123,7 +140,7 @@ static void destroy(fp_input *self) { free(self); }
 static int create(const fp_host *host, const char *arg, const fp_param *params, size_t nparams,
                   fp_input **out, char *err, size_t errlen)
 {
-    int log_lines = 0;
+    int log_lines = 0, stuck = 0, nostart = 0;
     for (size_t i = 0; i < nparams; i++) {
         if (!strcmp(params[i].key, "open_ms")) {
             long ms = strtol(params[i].value, NULL, 10);
@@ -132,6 +149,13 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
             }
         } else if (!strcmp(params[i].key, "log")) {
             log_lines = atoi(params[i].value);
+        } else if (!strcmp(params[i].key, "stuck")) {
+            stuck = atoi(params[i].value);
+        } else if (!strcmp(params[i].key, "errfill")) {
+            memset(err, 'E', errlen);
+            return -22;
+        } else if (!strcmp(params[i].key, "nostart")) {
+            nostart = atoi(params[i].value);
         } else if (strcmp(params[i].key, "ok")) {
             strncpy(err, "unknown key", errlen);
             return -22;
@@ -140,11 +164,12 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
     fixture *fx = calloc(1, sizeof *fx);
     fx->host = host;
     fx->log_lines = log_lines;
+    fx->stuck = stuck;
     if (log_lines > 0) host->log(host, FP_LOG_INFO, "created");
     fp_input *in = &fx->in;
     in->size = sizeof *in;
     in->plugin_data = (void *)host;
-    in->start = start;
+    in->start = nostart ? NULL : start;
     in->stop = stop;
     in->destroy = destroy;
     *out = in;
@@ -163,6 +188,16 @@ static const void *get_factory(const char *id)
 static bool init(const char *path) { (void)path; return false; }
 #elif defined(FIXTURE_CRASH_INIT)
 static bool init(const char *path) { (void)path; crash(); return true; }
+#elif defined(FIXTURE_HANG_INIT)
+static bool init(const char *path)
+{
+    (void)path;
+    for (;;) {
+        struct timespec ts = {1, 0};
+        nanosleep(&ts, NULL);
+    }
+    return true;
+}
 #else
 static bool init(const char *path) { (void)path; return true; }
 #endif

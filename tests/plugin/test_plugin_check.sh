@@ -87,6 +87,11 @@ expect 1 'FAIL  time +process took [0-9]+\.[0-9]+ ms .*over the budget of 2 ms' 
 expect 1 'FAIL  create +create returned 0 without an instance' "$fp" plugins check "$fx/map-fixture-noinstance.so"
 expect 78 'FAIL  load .*built for plugin ABI 2\.0, this facepuppet has ABI 1\.3' "$fp" plugins check "$fx/map-fixture-abi2.so"
 expect 78 'built for plugin ABI 2\.0' "$fp" plugins check "$fx/input-fixture-abi2.so"
+# a factory offered but broken is said so (before: "offers no mapping factory", as if none)
+expect 78 "map-fixture-noname.so: its mapping factory \('facepuppet.mapping-factory/1'\) has no name" \
+    "$fp" plugins check "$fx/map-fixture-noname.so"
+expect 78 "map-fixture-noname.so: its mapping factory .* has no name" \
+    "$fp" run --isolate none --plugin-dir "$fx" --mesh "$mesh" --input "replay:$rec" --duration 1 -o "$tmp/out.obj" --force --mapping fixture-noname
 expect 64 'give one FILE' "$fp" plugins check
 # A plugin that crashes, calls exit() or hangs in a call fails the check (exit 1, a FAIL line
 # naming the signal, the exit or the hang, and the call and frame), the checker itself intact:
@@ -116,7 +121,7 @@ python3 -c "import json,sys; d=json.load(open(sys.argv[1])); assert d['passed'] 
 # The list: built-in plugins with their keys, broken fixtures with the reason, as text and JSON.
 # (the fixtures that crash in init would end the listing, naming themselves: left out here)
 mkdir "$tmp/list" && chmod 700 "$tmp/list"
-for f in "$fx"/*.so; do case $f in *crash*) ;; *) cp "$f" "$tmp/list/" ;; esac; done
+for f in "$fx"/*.so; do case $f in *crash*|*hanginit*) ;; *) cp "$f" "$tmp/list/" ;; esac; done
 chmod 644 "$tmp"/list/*.so
 expect 0 'release +float +\[0\.1, 100\]' "$fp" plugins
 expect 0 'fixture-abi2 +BROKEN \(abi\)' "$fp" plugins --plugin-dir "$tmp/list"
@@ -127,6 +132,12 @@ assert k['anchored']['keys'][2]['name']=='release' and k['anchored']['abi']=='1.
 assert k['replay']['keys'][0]['name']=='speed'; assert k['fixture-initfails']['status']=='init-failed'" \
     "$tmp/list.json" && echo "ok: plugins --json parses" || fail "plugins --json content"
 chmod 777 "$tmp" && expect 0 "skipped" "$fp" plugins --plugin-dir "$tmp"; chmod 700 "$tmp"
+# A plugin whose init never returns ends the listing after 10 s, named, exit 78, what was
+# listed kept (before: the listing hung without a word; timeout's 124)
+mkdir "$tmp/hang" && chmod 700 "$tmp/hang" && cp "$fx/input-fixture-hanginit.so" "$tmp/hang/"
+expect 78 "plugin '.*input-fixture-hanginit.so' has not returned from init for 10 s: it hangs" \
+    timeout 60 "$fp" plugins --plugin-dir "$tmp/hang"
+grep -Eq "^mapping +anchored " "$tmp/out" && echo "ok: the listing before it kept" || fail "the listing before the hang lost"
 
 # run: the host names the mapping at fault.
 run() { "$fp" run --isolate none --plugin-dir "$fx" --mesh "$mesh" --input "replay:$rec" --duration 1 --quiet -o "$tmp/out.obj" --force "$@"; }
@@ -143,6 +154,19 @@ if [ $rc != 0 ] || grep -q "cut\|damage\|no intact" "$tmp/out"; then
     fail "the take of a refused mapping does not play whole (exit $rc)"; sed 's/^/    /' "$tmp/out"
 else echo "ok: the take of a refused mapping plays (exit 0)"; fi
 expect 78 "mapping 'fixture-noinstance': create returned 0 without an instance" run --mapping fixture-noinstance
+# an instance without process() (a mapping) or start() (an input) is refused in process as
+# isolated and by plugins check: exit 78, named (before: called through NULL, exit 139)
+expect 78 "mapping 'fixture-noprocess': the fp_mapping has size [0-9]+ or no process\(\)" run --mapping fixture-noprocess
+expect 78 "input 'fixture,nostart=1': the fp_input has size [0-9]+, or no start\(\)" \
+    "$fp" run --isolate none --plugin-dir "$fx" --mesh "$mesh" --duration 1 -o "$tmp/out.obj" --force --input fixture,nostart=1
+# A SPEC whose NAME holds a '/' names the plugin's file (docs/plugin-guide.md), in process
+# and isolated (before: "bad name", exit 64), an input's too.
+expect 0 "frames [0-9]+, deforming" run --mapping "$fx/map-fixture.so"
+expect 0 "isolated: the helper process died of SIGSEGV during process \(frame 3\)" \
+    "$fp" run --plugin-dir "$fx" --mesh "$mesh" --input "replay:$rec" --duration 1 -o "$tmp/out.obj" --force \
+    --mapping "$fx/map-fixture-segv.so"
+expect 0 "frames [0-9]+, deforming" "$fp" run --isolate none --plugin-dir "$fx" --mesh "$mesh" --duration 1 \
+    --quiet -o "$tmp/out.obj" --force --mapping fixture --input "$builtin/input-replay.so:$rec"
 # A radius the engine would refuse (1e20: finite and positive) is the mapping's error, named,
 # on every frame: one line, then its count (before, the host passed it and the engine said
 # "engine: invalid argument" without the mapping's name, and a take recorded the set).
@@ -153,6 +177,26 @@ grep -q "engine: " "$tmp/out" && { fail "the engine saw the refused set"; sed 's
 # An isolated mapping that writes past the arrays is stopped as in process: exit 78.
 runi() { "$fp" run --plugin-dir "$fx" --mesh "$mesh" --input "replay:$rec" --duration 1 --quiet -o "$tmp/out.obj" --force "$@"; }
 expect 78 "mapping 'fixture-overrun': wrote past the capacity of the host's arrays on frame [0-9]+ \(in its helper process\); the mapping is stopped" runi --mapping fixture-overrun
+# ... and one that writes before its arrays (the shared set's capacity) and claims 10 million
+# vectors: the host copies no more than its own capacity and refuses the set, named (before:
+# it trusted the helper's capacity and crashed with SIGSEGV, ending the show)
+expect 0 "mapping 'fixture-underwrite': control set over capacity: count 10000000 > capacity 64" runi --mapping fixture-underwrite
+# A create that fills err to its very end (no NUL): the message is the plugin's bytes and
+# nothing after them, in process and isolated (before: read past the buffer, stack garbage)
+for iso in none third-party; do
+    "$fp" run --isolate $iso --plugin-dir "$fx" --mesh "$mesh" --input "replay:$rec" --duration 1 -o "$tmp/out.obj" \
+        --force --mapping fixture-errfill >"$tmp/out" 2>&1
+    rc=$?
+    if [ $rc = 64 ] && tail -1 "$tmp/out" | grep -Eq "^facepuppet run: mapping 'fixture-errfill': E{100,}$"; then
+        echo "ok: errfill ($iso): exit 64, the plugin's bytes alone"
+    else
+        fail "errfill ($iso): exit $rc"; tail -1 "$tmp/out" | od -c | tail -4
+    fi
+done
+# An isolated mapping's helper is the kernel's first choice when memory runs out (a plugin
+# that eats memory without end must not take the host with it): oom_score_adj 1000 there
+# (before: the host's, 0).
+expect 0 "mapping 'fixture-oom': oom_score_adj 1000$" runi --mapping fixture-oom
 # An isolated mapping that prints: its stdout is facepuppet's stderr (the helper's), so run's
 # stdout holds the summary alone, which scripts parse (before: the plugin's lines mixed in).
 runi --mapping fixture-print >"$tmp/print.out" 2>"$tmp/print.err"

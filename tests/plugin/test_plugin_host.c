@@ -17,6 +17,7 @@
 #include <signal.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
+#include <time.h>
 #include <unistd.h>
 #include <cmocka.h>
 
@@ -67,6 +68,21 @@ static void test_spec_parse(void **state)
     assert_int_not_equal(fp_spec_parse("replay:x,a=1,a=2", &s, err, sizeof err), 0);
     assert_non_null(strstr(err, "given twice"));
     assert_int_not_equal(fp_spec_parse("re play", &s, err, sizeof err), 0);
+
+    /* A NAME holding a '/' names the plugin's file (docs/plugin-guide.md): its path, up to
+     * the ARG's ':' or the first key's ','. Before: refused as a bad name. */
+    assert_int_equal(fp_spec_parse("/opt/my plugins/map-x.so,gain=2", &s, err, sizeof err), 0);
+    assert_string_equal(s.name, "/opt/my plugins/map-x.so");
+    assert_null(s.arg);
+    assert_int_equal(s.nparams, 1);
+    fp_spec_clear(&s);
+    assert_int_equal(fp_spec_parse("./build/input-x.so:dev0,rate=5", &s, err, sizeof err), 0);
+    assert_string_equal(s.name, "./build/input-x.so");
+    assert_string_equal(s.arg, "dev0");
+    fp_spec_clear(&s);
+    assert_int_not_equal(fp_spec_parse("./a\nb/map-x.so", &s, err, sizeof err), 0); /* control char */
+    assert_int_not_equal(fp_spec_parse("map-x.so", &s, err, sizeof err), 0); /* no '/': a NAME */
+    assert_non_null(strstr(err, "bad name"));
 }
 
 static int load(const char *name, fp_plugin *p, char *err, size_t len)
@@ -198,6 +214,63 @@ static void test_log_relayed(void **state)
     assert_string_equal(seen.lines[3], "line 2");
     assert_int_equal(seen.on_owner, 4);
     assert_int_equal(seen.warnings, 3);
+    fp_plugin_path_clear(&path);
+}
+
+/* A create that fills err to its very end, without a NUL: the host's message holds what fits
+ * and no byte past the plugin's buffer (before: read on past it, garbage from the stack). */
+static void test_err_filled(void **state)
+{
+    (void)state;
+    const char *dirs[] = {fixture_dir};
+    fp_plugin_path path;
+    fp_plugin_path_init(&path, dirs, 1, NULL);
+    fp_input_instance inst;
+    char err[4096];
+    assert_int_equal(fp_input_instance_open(&inst, &path, "fixture,errfill=1", 0, err, sizeof err), -22);
+    const char *prefix = "input 'fixture,errfill=1': ";
+    assert_int_equal(strncmp(err, prefix, strlen(prefix)), 0);
+    size_t n = strlen(err) - strlen(prefix);
+    assert_int_equal(strspn(err + strlen(prefix), "E"), n); /* only the plugin's bytes */
+    assert_true(n > 100 && n < 1024);
+    fp_plugin_path_clear(&path);
+}
+
+/* ---- a stop() that never returns is abandoned after FP_INPUT_STOP_DEADLINE_MS ---- */
+
+static void test_stuck_stop_abandoned(void **state)
+{
+    (void)state;
+    const char *dirs[] = {fixture_dir};
+    fp_plugin_path path;
+    fp_plugin_path_init(&path, dirs, 1, NULL);
+    fp_input_instance inst;
+    char err[1024];
+    log_seen seen = {.owner = pthread_self()};
+    assert_int_equal(fp_input_instance_open(&inst, &path, "fixture,stuck=1", 0, err, sizeof err), 0);
+    fp_input_instance_set_log(&inst, seen_log, &seen);
+    assert_int_equal(fp_input_instance_start(&inst, err, sizeof err), 0);
+    struct timespec t0, t1;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    fp_input_instance_close(&inst); /* before: joined the plugin's thread forever */
+    clock_gettime(CLOCK_MONOTONIC, &t1);
+    double ms = (double)(t1.tv_sec - t0.tv_sec) * 1e3 + (double)(t1.tv_nsec - t0.tv_nsec) / 1e6;
+    assert_true(inst.abandoned);
+    assert_true(ms >= FP_INPUT_STOP_DEADLINE_MS - 50 && ms < FP_INPUT_STOP_DEADLINE_MS + 2000);
+    assert_true(seen.n >= 1);
+    assert_string_equal(seen.source, "fixture");
+    assert_non_null(strstr(seen.lines[seen.n - 1], "stop has not returned within 5 s"));
+    fp_input_instance_close(&inst); /* again: nothing more */
+    assert_true(inst.abandoned);
+
+    /* a stop that returns at once is waited for, not abandoned */
+    seen = (log_seen){.owner = pthread_self()};
+    assert_int_equal(fp_input_instance_open(&inst, &path, "fixture,log=2", 0, err, sizeof err), 0);
+    fp_input_instance_set_log(&inst, seen_log, &seen);
+    assert_int_equal(fp_input_instance_start(&inst, err, sizeof err), 0);
+    fp_input_instance_close(&inst);
+    assert_false(inst.abandoned);
+    assert_int_equal(seen.n, 3);
     fp_plugin_path_clear(&path);
 }
 
@@ -577,6 +650,32 @@ static void test_queue_full(void **state)
     fp_event_queue_destroy(&q);
 }
 
+/* An input that floods poses cannot push out its end of stream or a button: poses find the
+ * queue full with 1/8 of it free, which the other events take (before: the status was
+ * dropped like any event, and `run` waited for that end of stream forever). */
+static void test_queue_reserve(void **state)
+{
+    (void)state;
+    assert_int_equal(fp_event_queue_init(&q, 64), 0);
+    fp_event_joint_positions jp = {{sizeof jp, FP_EVENT_JOINT_POSITIONS, 0, 0, 0, 1}, {{0}}};
+    int poses = 0;
+    while (poses < 100 && fp_event_queue_push(&q, &jp.header)) jp.header.time_ns = ++poses;
+    assert_int_equal(poses, 64 - 64 / FP_EVENT_QUEUE_RESERVE);
+    fp_event_status st = {{sizeof st, FP_EVENT_STATUS, 0, 0, 0, -1}, FP_STATUS_END_OF_STREAM, "done"};
+    fp_event_button b = {{sizeof b, FP_EVENT_BUTTON, 0, 0, 0, -1}, 1, 1, 1};
+    assert_true(fp_event_queue_push(&q, &b.header));
+    assert_true(fp_event_queue_push(&q, &st.header));
+    int others = 2;
+    while (fp_event_queue_push(&q, &b.header)) others++; /* the rest of the capacity */
+    assert_int_equal(poses + others, 64);
+    fp_event ev;
+    int n = 0, last_type = 0;
+    while (fp_event_queue_pop(&q, &ev)) n++, last_type = ev.header.type;
+    assert_int_equal(n, 64);
+    assert_int_equal(last_type, FP_EVENT_BUTTON);
+    fp_event_queue_destroy(&q);
+}
+
 /* A producer that waits for room (the replay's fast=1, fp_pacer_push) pushes the refused event
  * again: once it is taken, its refusals are not drops; an event refused and never pushed
  * again (another came instead) stays one */
@@ -639,12 +738,16 @@ int main(void)
         cmocka_unit_test(test_spec_parse),        cmocka_unit_test(test_loader_errors),
         cmocka_unit_test(test_env_path_and_instance),
         cmocka_unit_test(test_log_relayed), cmocka_unit_test(test_malformed_events_refused),
+        cmocka_unit_test(test_err_filled),
         cmocka_unit_test(test_queue_mpsc),
         cmocka_unit_test(test_queue_full),        cmocka_unit_test(test_queue_retry),
+        cmocka_unit_test(test_queue_reserve),
         cmocka_unit_test(test_unsafe_folders_skipped),
         cmocka_unit_test(test_builtin_first),
         cmocka_unit_test(test_shipped_only_builtin),     cmocka_unit_test(test_crash_names_plugin),
         cmocka_unit_test(test_call_oldest),
+        /* last: its abandoned stop() stays a call in progress (test_call_oldest wants none) */
+        cmocka_unit_test(test_stuck_stop_abandoned),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -54,3 +54,31 @@ test -n "$moved" && test "$moved" -gt 0
 syms=$(nm -D --defined-only "$tmp/pc/map-grab.so" | awk '{print $3}' | grep -v '^_' || true)
 test "$syms" = "facepuppet_plugin_entry"
 echo "SDK: templates built with CMake and pkg-config ($warn) against $prefix; map-grab moved $moved vertices"
+
+# 3. The installed plugin's folder, with CMake's install and pkg-config's plugindir: in this
+#    build's layout the template's `cmake --install` into facepuppet's prefix puts map-grab.so
+#    where facepuppet looks (found without --plugin-dir); and in Debian's multiarch layout
+#    (LIBDIR lib/x86_64-linux-gnu: a second tree, configured only, its SDK and headers
+#    installed) both name facepuppet's plugin folder and pkg-config's include folder holds
+#    plugin.h (before: facepuppet_add_plugin installed into lib/facepuppet whatever the
+#    layout, and the .pc file's prefix was its folder's ../.. , in multiarch LIBDIR itself).
+cmake --install "$tmp/mapping/build" --prefix "$prefix" >/dev/null
+test -f "$prefix/lib/facepuppet/map-grab.so"
+"$prefix/bin/facepuppet" plugins | grep -q "^mapping grab .*org.example.map-grab"
+ma=$tmp/multiarch
+cmake -S "$src" -B "$ma/build" $gen -DCMAKE_INSTALL_LIBDIR=lib/x86_64-linux-gnu -DFP_BUILD_UI=OFF \
+      -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --install "$ma/build/sdk" --prefix "$ma/prefix" >/dev/null
+cmake --install "$ma/build/core/plugin" --prefix "$ma/prefix" >/dev/null # (the headers)
+cp -r "$prefix/share/facepuppet/templates/mapping" "$ma/mapping"
+cmake -S "$ma/mapping" -B "$ma/mapping/build" $gen -DCMAKE_PREFIX_PATH="$ma/prefix" \
+      -DCMAKE_INSTALL_PREFIX="$ma/prefix" -DCMAKE_BUILD_TYPE=Release >/dev/null
+cmake --build "$ma/mapping/build" >/dev/null
+cmake --install "$ma/mapping/build" >/dev/null
+test -f "$ma/prefix/lib/x86_64-linux-gnu/facepuppet/map-grab.so"
+export PKG_CONFIG_PATH="$ma/prefix/lib/x86_64-linux-gnu/pkgconfig"
+test "$(realpath "$(pkg-config --variable=plugindir facepuppet)")" = "$ma/prefix/lib/x86_64-linux-gnu/facepuppet"
+test -f "$(pkg-config --variable=includedir facepuppet)/facepuppet/plugin.h"
+cc -std=c11 -O2 $warn -shared -fPIC $(pkg-config --cflags facepuppet) -o "$ma/map-grab.so" \
+   "$ma/mapping/map_grab.c" $(pkg-config --libs facepuppet)
+echo "SDK: plugins installed into facepuppet's plugin folder (lib/ and lib/x86_64-linux-gnu/ layouts)"

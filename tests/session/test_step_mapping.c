@@ -151,6 +151,38 @@ static void test_rig_pass_through(void **state)
     assert_memory_equal(&copy, &cs, sizeof cs);
 }
 
+/* A mapping's channel value that is not a number is ignored and said once, naming the
+ * channel (before: ignored without a word); a finite one is clamped to the range. */
+static void test_rig_nan_channel_said(void **state)
+{
+    (void)state;
+    char err[512];
+    fp_mesh *m = NULL;
+    assert_int_equal(fp_mesh_load(fp_test_face_path(), &m, err, sizeof err), 0);
+    fp_rig *rig = NULL;
+    assert_int_equal(fp_rig_load_for_mesh("rigs/ict-facekit.json", m->vertex_count, m->positions, &rig, err,
+                                          sizeof err), 0);
+    fp_rig_step r;
+    assert_int_equal(fp_rig_step_init(&r, rig, m->vertex_count, m->positions), 0);
+    log_capture cap = {0};
+    fp_slog log = {capture_log, &cap};
+    fp_channel ch[1] = {{"jaw.open", 0.5f}};
+    fp_control_set cs;
+    setup_cs(&cs);
+    cs.channels = ch;
+    cs.channel_capacity = cs.channel_count = 1;
+    fp_rig_step_update(&r, &cs, m->positions, &log);
+    assert_true(fp_rig_step_channel(&r, "jaw.open") == 0.5f);
+    assert_int_equal(cap.count, 0);
+    ch[0].value = NAN;
+    for (int i = 0; i < 3; i++) fp_rig_step_update(&r, &cs, m->positions, &log);
+    assert_true(fp_rig_step_channel(&r, "jaw.open") == 0.5f); /* kept */
+    assert_int_equal(cap.count, 1);
+    assert_non_null(strstr(cap.lines[0], "\"jaw.open\" with a value that is not a number"));
+    fp_rig_step_free(&r);
+    fp_mesh_free(&m);
+}
+
 /* The rig's finger clamp on the ICT face, against the brute force fp_rig_finger_limit_toward
  * computed afresh on the current posed base (the step's clamp goes through the slope index),
  * through an anchored gesture, after a start point moves, the radius changes, the jaw is
@@ -327,6 +359,7 @@ int main(void)
         cmocka_unit_test(test_check),
         cmocka_unit_test(test_errors_once_with_count),
         cmocka_unit_test(test_rig_pass_through),
+        cmocka_unit_test(test_rig_nan_channel_said),
         cmocka_unit_test(test_rig_clamp_kept),
         cmocka_unit_test(test_rig_finish_ranges),
     };

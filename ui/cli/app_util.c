@@ -564,6 +564,8 @@ bool fp_app_spec_looks_like_file(const char *cmd, const char *option, const char
 {
     const size_t name = strcspn(spec, ":,");
     if (!memchr(spec, '/', name) && !memchr(spec, '.', name)) return false;
+    if (memchr(spec, '/', name) && name > 3 && !strncmp(spec + name - 3, ".so", 3))
+        return false; /* a plugin's file, named by its path (docs/plugin-guide.md) */
     const size_t el = strlen(FP_TAKE_EXTENSION);
     const bool take = name > el && !strncasecmp(spec + name - el, FP_TAKE_EXTENSION, el);
     fprintf(stderr, "%s: %s %s: not a SPEC (NAME[:ARG][,key=value...]); it looks like a file: did "

@@ -178,7 +178,8 @@ int fp_app_frames_estimate(const char *cmd, const char *option, const char *dir,
  *  which no plugin name does: "foo.csv", "../rec/clap.fplog"): "CMD: OPTION SPEC: not a SPEC
  *  (NAME[:ARG][,key=value...]); it looks like a file: did you mean OPTION take:SPEC?" (a
  *  .fptake) or "replay:SPEC" (any other) on stderr and true; false (nothing said) for a SPEC
- *  whose name a plugin could have. Before any work, in every command taking --input. */
+ *  whose name a plugin could have, or that names a plugin's file (a path holding '/' and
+ *  ending in ".so": docs/plugin-guide.md). Before any work, in every command taking --input. */
 bool fp_app_spec_looks_like_file(const char *cmd, const char *option, const char *spec);
 
 /** The one map from an error code (fp_error.h: 0, a negative errno or an FP_E* code) to the

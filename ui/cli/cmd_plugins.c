@@ -11,10 +11,35 @@
 #include <errno.h>
 #include <getopt.h>
 #include <limits.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
+
+/* The listing runs each plugin's init in this process: one that never returns would hang it
+ * without a word. A watchdog thread looks every 100 ms at the plugin call in progress and,
+ * past the deadline, names it and ends the listing (exit 78), what was listed kept. */
+#define PLUGINS_INIT_DEADLINE_S 10
+static void *init_watch(void *arg)
+{
+    (void)arg;
+    for (;;) {
+        struct timespec ts = {0, 100000000L};
+        nanosleep(&ts, NULL);
+        fp_plugin_call_info call;
+        struct timespec now;
+        clock_gettime(CLOCK_MONOTONIC, &now);
+        int64_t ns = (int64_t)now.tv_sec * 1000000000LL + now.tv_nsec;
+        if (!fp_plugin_call_oldest(&call) || ns - call.since_ns < PLUGINS_INIT_DEADLINE_S * 1000000000LL)
+            continue;
+        fflush(stdout);
+        fprintf(stderr, "facepuppet plugins: plugin '%s' has not returned from %s for %d s: it hangs; "
+                "the listing ends here\n", call.who, call.call ? call.call : "a call", PLUGINS_INIT_DEADLINE_S);
+        _exit(FP_EXIT_PLUGIN);
+    }
+    return NULL;
+}
 
 static const char *type_name(fp_param_type t)
 {
@@ -374,6 +399,8 @@ static int plugins_main(int argc, char **argv)
         }
         printf("\n");
     }
+    pthread_t watch;
+    if (!pthread_create(&watch, NULL, init_watch, NULL)) pthread_detach(watch);
     size_t n = fp_plugin_scan(&path, on_item, &L);
     if (json) {
         cJSON *root = cJSON_CreateObject();

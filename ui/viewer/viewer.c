@@ -583,19 +583,21 @@ static void watch_mapping(viewer *v)
     const char *name = fp_session_mapping_name(v->s);
     int rc = copy_to_temp(file, tmp, sizeof tmp);
     if (rc) {
-        say(v, "mapping '%s': reload of %s failed: cannot copy it (%s); keeping the old one", name, file,
-            strerror(-rc));
+        say_kind(v, FP_HUD_INFO, true, "mapping '%s': reload of %s failed: cannot copy it (%s); keeping the old one", name, file, strerror(-rc));
         return;
     }
     rc = fp_session_reload_mapping(v->s, tmp, err, sizeof err);
     unlink(tmp); /* loaded (or not): the copy is no longer needed by name */
-    if (rc) {
-        say(v, "mapping '%s': reload of %s failed: %s; keeping the old one", name, file, err);
+    if (rc) { /* said with -q too (an error), without the isolated load's own prefix */
+        char prefix[128];
+        size_t n = (size_t)snprintf(prefix, sizeof prefix, "mapping '%s': ", name);
+        const char *why = strncmp(err, prefix, n) ? err : err + n;
+        say_kind(v, FP_HUD_INFO, true, "mapping '%s': reload of %s failed: %s; keeping the old one", name, file, why);
         return;
     }
     v->hot.reloads++;
     const fp_plugin *p = fp_session_mapping_plugin(v->s);
-    say_kind(v, FP_HUD_SETTING, false, "mapping '%s' reloaded from %s (%s %s)", name, file, p->entry && p->entry->id ? p->entry->id : "?",
+    say_kind(v, FP_HUD_SETTING, true, "mapping '%s' reloaded from %s (%s %s)", name, file, p->entry && p->entry->id ? p->entry->id : "?",
         p->entry && p->entry->version ? p->entry->version : "?");
 }
 

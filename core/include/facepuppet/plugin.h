@@ -344,7 +344,10 @@ typedef struct fp_input {
     int (*start)(struct fp_input *self, char *err, size_t errlen);
 
     /** [main-thread] Stop: join the plugin's threads. No push_event after it returns. May be
-     *  called without a successful start. */
+     *  called without a successful start. The host calls it on a thread of its own while the
+     *  main thread waits (no other call into the instance meanwhile), at most 5 s: a stop that
+     *  has not returned by then is abandoned (destroy is never called; the plugin stays
+     *  loaded), so make a blocking read wake up for it. */
     void (*stop)(struct fp_input *self);
 
     /** [main-thread] Free the instance (after stop). */
