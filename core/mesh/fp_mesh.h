@@ -179,7 +179,10 @@ int fp_mesh_save(const fp_mesh *mesh, const char *path, char *err, size_t errlen
  *  that uses it (when the file had vn lines): quads stay quads, UV seams stay seams.
  *  glTF/GLB: the document (nodes, materials, images, other attributes, morph targets) with
  *  POSITION (min/max updated) and NORMAL of each triangle primitive rewritten in the node's
- *  local frame (the inverse of the transform fp_mesh_load() applied); the buffers become one
+ *  local frame (the inverse of the transform fp_mesh_load() applied); a mesh that several
+ *  nodes place (one copy per node in fp_mesh) keeps one mesh while the copies agree, and a
+ *  node whose copy differs from the first gets a copy of the mesh (named NAME_nodeN) with
+ *  its own POSITION and NORMAL, so every copy comes back as saved; the buffers become one
  *  (embedded in .gltf as base64, the BIN chunk of .glb); image URIs are kept as written.
  *  Another format keeps what it can hold: PLY and OFF write the file's polygons (per-vertex
  *  UVs: seams dropped); glTF from an OBJ splits vertices at UV seams (one glTF vertex per

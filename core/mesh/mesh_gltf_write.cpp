@@ -470,6 +470,22 @@ bool affine_inverse(const std::array<double, 16> &M, std::array<double, 16> &R)
     return true;
 }
 
+// Whether two copies of an accessor's positions differ by more than float round-off: a
+// node's transform there and back moves a vertex by a few ulps of its size.
+bool differs(const std::vector<float> &a, const std::vector<float> &b)
+{
+    if (a.size() != b.size())
+        return true;
+    double extent = 0;
+    for (size_t i = 0; i < a.size(); i++)
+        extent = std::max(extent, double(std::fabs(a[i])));
+    const double tol = 1e-5 * std::max(extent, 1e-30);
+    for (size_t i = 0; i < a.size(); i++)
+        if (std::fabs(double(a[i]) - b[i]) > tol)
+            return true;
+    return false;
+}
+
 } // namespace
 
 // glTF back as it came in: the document with POSITION and NORMAL rewritten.
@@ -494,14 +510,15 @@ int save_gltf_source(const fp_mesh *m, const fp_mesh_source &src, const char *pa
     model.buffers.push_back(all);
     GltfOut extra; // new accessors where the old cannot be overwritten in place
     std::vector<char> done(model.accessors.size(), 0);
+    // fresh: a new accessor whatever the old one (the primitive of a mesh copied for its node)
     auto rewrite = [&](int ai, const std::vector<float> &v, bool minmax, int mesh, int prim,
-                       const char *attr) {
-        if (ai < 0 || size_t(ai) >= done.size() || done[size_t(ai)])
+                       const char *attr, bool fresh) {
+        if (ai < 0 || size_t(ai) >= done.size() || (done[size_t(ai)] && !fresh))
             return;
         done[size_t(ai)] = 1;
         tinygltf::Accessor &a = model.accessors[size_t(ai)];
         const tinygltf::BufferView *bv = a.bufferView >= 0 ? &model.bufferViews[size_t(a.bufferView)] : nullptr;
-        const bool in_place = bv && !a.sparse.isSparse && a.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT &&
+        const bool in_place = !fresh && bv && !a.sparse.isSparse && a.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT &&
                               a.type == TINYGLTF_TYPE_VEC3 && (bv->byteStride == 0 || bv->byteStride == 12) &&
                               a.count * 3 == v.size();
         if (in_place) {
@@ -534,6 +551,12 @@ int save_gltf_source(const fp_mesh *m, const fp_mesh_source &src, const char *pa
         if (minmax)
             minmax3(v, model.accessors[size_t(nai)]);
     };
+    // A mesh that several nodes place (instances) is one set of accessors in the file but as
+    // many copies in fp_mesh, each deformed where its node put it: the first copy's shape went
+    // into the accessors and the others' was lost. A node whose copy differs from what its
+    // accessor got gets a copy of the mesh of its own (own_mesh) with accessors of its own.
+    std::map<int, std::vector<float>> written;  // POSITION accessor -> local positions written
+    std::map<std::pair<int, int>, int> own_mesh; // (node, mesh) -> its own copy of the mesh
     for (const auto &in : src.instances) {
         std::array<double, 16> inv;
         if (!affine_inverse(in.xf, inv))
@@ -546,7 +569,23 @@ int save_gltf_source(const fp_mesh *m, const fp_mesh_source &src, const char *pa
                 p[3 * i + size_t(r)] = float(inv[size_t(r)] * x[0] + inv[size_t(4 + r)] * x[1] +
                                              inv[size_t(8 + r)] * x[2] + inv[size_t(12 + r)]);
         }
-        rewrite(in.pos, p, true, in.mesh, in.prim, "POSITION");
+        int mesh = in.mesh;
+        auto own = own_mesh.find({in.node, in.mesh});
+        bool fresh = own != own_mesh.end();
+        if (fresh) {
+            mesh = own->second;
+        } else if (in.node >= 0 && written.count(in.pos) && differs(written[in.pos], p)) {
+            model.meshes.push_back(model.meshes[size_t(in.mesh)]);
+            mesh = int(model.meshes.size() - 1);
+            model.meshes.back().name += model.meshes.back().name.empty() ? "" : "_";
+            model.meshes.back().name += "node" + std::to_string(in.node);
+            model.nodes[size_t(in.node)].mesh = mesh;
+            own_mesh[{in.node, in.mesh}] = mesh;
+            fresh = true;
+        }
+        if (!written.count(in.pos))
+            written[in.pos] = p;
+        rewrite(in.pos, p, true, mesh, in.prim, "POSITION", fresh);
         if (in.nrm >= 0 && m->normals) {
             q.resize(3 * in.count);
             for (size_t i = 0; i < in.count; i++) {
@@ -561,7 +600,7 @@ int save_gltf_source(const fp_mesh *m, const fp_mesh_source &src, const char *pa
                 for (int r = 0; r < 3; r++)
                     q[3 * i + size_t(r)] = len > 0 ? float(w[r] / len) : 0.0f;
             }
-            rewrite(in.nrm, q, false, in.mesh, in.prim, "NORMAL");
+            rewrite(in.nrm, q, false, mesh, in.prim, "NORMAL", fresh);
         }
     }
     return write_gltf_model(model, path, ext, err, errlen);

@@ -50,6 +50,7 @@ struct fp_mesh_source {
         size_t first, count;             // mesh vertices [first, first + count)
         std::array<double, 16> xf;       // node transform applied at load (column-major)
         int pos, nrm;                    // accessors (nrm -1: none)
+        int node;                        // the node that placed it (-1: a mesh in no scene)
     };
     std::unique_ptr<tinygltf::Model> model;
     std::vector<Instance> instances;

@@ -665,6 +665,50 @@ static void test_gltf_node_transform_applied(void **state)
     fp_mesh_free(&m);
 }
 
+/* One mesh placed by two nodes loads as two copies, each deformed where its node put it;
+ * written back, the file held one set of positions for both, the first copy's: the second's
+ * deformation was lost (a face instanced beside itself kept one face's shape twice). Each
+ * node whose copy differs now gets a mesh of its own; both come back as they were saved. */
+static void test_gltf_instances_saved_apart(void **state)
+{
+    (void)state;
+    fp_mesh *m = load_transformed_triangle(
+        "{\"mesh\":0,\"children\":[1]},{\"mesh\":0,\"translation\":[10,0,0]}");
+    assert_int_equal(m->vertex_count, 6);
+    const float want[18] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 10, 0, 0, 11, 0, 0, 10, 1, 0};
+    for (int i = 0; i < 18; i++) assert_true(fabsf(m->positions[i] - want[i]) < 1e-6f);
+    m->positions[3 * 1 + 1] += 0.25f; /* the first copy's second vertex up */
+    m->positions[3 * 5 + 2] += 0.5f;  /* the second copy's third vertex out */
+    const char *path = tmp_path("instances-out.gltf");
+    assert_int_equal(fp_mesh_save(m, path, err, sizeof err), FP_MESH_OK);
+    fp_mesh *back = NULL;
+    if (fp_mesh_load(path, &back, err, sizeof err)) fail_msg("%s", err);
+    assert_int_equal(back->vertex_count, 6);
+    for (int i = 0; i < 18; i++)
+        if (fabsf(back->positions[i] - m->positions[i]) > 1e-6f)
+            fail_msg("coordinate %d: %g written back, %g saved", i, (double)back->positions[i],
+                     (double)m->positions[i]);
+    fp_mesh_free(&back);
+    /* copies that agree stay one mesh for both nodes */
+    fp_mesh_free(&m);
+    m = load_transformed_triangle("{\"mesh\":0,\"children\":[1]},{\"mesh\":0,\"translation\":[10,0,0]}");
+    m->positions[3 * 1 + 1] += 0.25f;
+    m->positions[3 * 4 + 1] += 0.25f;
+    assert_int_equal(fp_mesh_save(m, path, err, sizeof err), FP_MESH_OK);
+    FILE *f = fopen(path, "rb");
+    char json[16384];
+    size_t len = fread(json, 1, sizeof json - 1, f);
+    fclose(f);
+    json[len] = '\0';
+    size_t k = 0; /* without white space, as the writer may indent */
+    for (size_t i = 0; i < len; i++)
+        if (!strchr(" \t\r\n", json[i])) json[k++] = json[i];
+    json[k] = '\0';
+    assert_non_null(strstr(json, "\"mesh\":0"));
+    assert_null(strstr(json, "\"mesh\":1"));
+    fp_mesh_free(&m);
+}
+
 /* ---- errors: each names the file and the reason ---------------------------------------- */
 
 static void expect_load_error(const char *path, int code, const char *needle)
@@ -1736,6 +1780,7 @@ int main(void)
         cmocka_unit_test(test_bounds),
         cmocka_unit_test(test_subdivide),
         cmocka_unit_test(test_gltf_node_transform_applied),
+        cmocka_unit_test(test_gltf_instances_saved_apart),
         cmocka_unit_test(test_error_missing_file),
         cmocka_unit_test(test_error_empty_file),
         cmocka_unit_test(test_error_malformed_text),
