@@ -319,9 +319,10 @@ struct GltfReader {
                 for (size_t i = 0; i < count; i++)
                     idx[i] = uint32_t(i);
             }
-            if (idx.size() % 3 != 0)
+            if (idx.size() % 3 != 0) // (a primitive without indices: its vertices in threes)
                 return bad(FP_MESH_ERR_FORMAT, where + " has " + std::to_string(idx.size()) +
-                                                   " indices, not a multiple of 3");
+                                                   (prim.indices >= 0 ? " indices" : " vertices and no indices") +
+                                                   ", not a multiple of 3");
             for (size_t i = 0; i < idx.size(); i++)
                 if (idx[i] >= count)
                     return bad(FP_MESH_ERR_FORMAT, where + ": index " + std::to_string(i) + " = " +

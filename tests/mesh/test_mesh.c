@@ -1687,6 +1687,12 @@ static void test_gltf_bad_index_fields(void **state)
         expect_load_error(strict_gltf(name, "\"indices\":1", cases[i].to, NULL),
                           FP_MESH_ERR_FORMAT, cases[i].want);
     }
+    /* no indices: the vertices in threes; two are no triangle, and the message said "2
+     * indices" of a primitive that has none */
+    expect_load_error(strict_gltf("noidx.gltf", ",\"indices\":1", "", "\"POSITION\":0,\"TEXCOORD_0\":2",
+                                  "\"POSITION\":0", "\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"",
+                                  "\"componentType\":5126,\"count\":2,\"type\":\"VEC3\"", NULL),
+                      FP_MESH_ERR_FORMAT, "mesh 0 primitive 0 has 2 vertices and no indices, not a multiple of 3");
     expect_load_error(strict_gltf("mesh_neg.gltf", "\"mesh\":0", "\"mesh\":-1", NULL),
                       FP_MESH_ERR_FORMAT, "nodes[0].mesh is -1");
     expect_load_error(strict_gltf("attr_neg.gltf", "\"POSITION\":0", "\"POSITION\":-1", NULL),
