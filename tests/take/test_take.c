@@ -826,6 +826,38 @@ static void test_frames_out_of_order(void **state)
     rm_rf(dir);
 }
 
+/* A chunk of frames missing from the middle, the chunks around it whole (a copy that lost a
+ * block): the TAIL says how many frames were written; the take read as closed normally with
+ * fewer, and play skipped the gap's commits with no word. Now it is cut at the TAIL, naming
+ * both counts. */
+static void test_frames_chunk_missing(void **state)
+{
+    (void)state;
+    char dir[512], path[1024], err[512];
+    make_dir(dir, sizeof dir, "gap");
+    write_take(dir, "G", 9, 3, path, sizeof path); /* HEAD, 3 x FRMS(3), TAIL */
+    size_t n;
+    uint8_t *b = slurp(path, &n);
+    uint64_t starts[16];
+    uint32_t frames[16];
+    char types[16][5];
+    assert_int_equal(chunk_starts(b, n, starts, frames, types, 16), 5);
+    assert_string_equal(types[4], "TAIL");
+    const size_t gap = starts[3] - starts[2]; /* the second FRMS chunk out */
+    memmove(b + starts[2], b + starts[3], n - starts[3]);
+    fp_take_reader *r;
+    assert_int_equal(fp_take_reader_open_memory(b, n - gap, "g.fptake", &r, err, sizeof err), 0);
+    assert_int_equal(fp_take_reader_frames(r), 6);
+    const fp_take_summary *sm = fp_take_reader_summary(r);
+    assert_true(sm->cut);
+    assert_false(sm->complete);
+    if (!strstr(fp_take_reader_warning(r), "TAIL chunk says 9 frames, the file holds 6"))
+        fail_msg("\"%s\"", fp_take_reader_warning(r));
+    fp_take_reader_close(&r);
+    free(b);
+    rm_rf(dir);
+}
+
 /* An event of an input the header does not list (source >= its inputs' count; crc32 right):
  * its chunk is damage, the take cut there naming the field; the frames before it play. */
 static void test_event_source(void **state)
@@ -1167,6 +1199,7 @@ int main(void)
         cmocka_unit_test(test_sigkill_mid_take),
         cmocka_unit_test(test_truncated_every_offset),
         cmocka_unit_test(test_frames_out_of_order),
+        cmocka_unit_test(test_frames_chunk_missing),
         cmocka_unit_test(test_random_flips),
         cmocka_unit_test(test_bad_files),
         cmocka_unit_test(test_bad_header),
