@@ -683,6 +683,9 @@ static void test_refused_up_front(void **state)
                                 "mesh's floats keep steps of 0.0625 units"));
     snprintf(args, sizeof args, "%s/far-out.obj", tmp);
     assert_int_equal(access(args, F_OK), -1);
+    assert_int_equal(fp("info far.obj"), 0); /* info shows it, and why run refuses it */
+    assert_non_null(strstr(out, "precision the surface lies 1e+06 units from the origin, where its floats "
+                                "step by 0.0625 units"));
     snprintf(args, sizeof args, "pose --mesh %s --set jaw.open=0.2 --out noext --force", face());
     assert_int_equal(fp(args), 64);
     assert_non_null(strstr(out, "noext"));
