@@ -730,6 +730,11 @@ static void test_bad_header(void **state)
         {"\"take\":1,", "\"take\":0,", 0, "header: missing or invalid \"take\""},
         {"\"radius\":", "\"face\":{\"up\":[0,0,0],\"facing\":[0,0,1]},\"radius\":", 0,
          "header: invalid \"face\" (up or facing is a zero vector)"},
+        /* a key twice: the first was read and the other ignored (a patched take's "take":7
+         * after "take":1 played as take 1), as rig, calibration and stack files refuse it */
+        {"\"take\":1,", "\"take\":1,\"take\":7,", 0, "header: \"take\" given twice"},
+        {"\"release\"", "\"engage\":\"0.3\",\"engage\":\"0.4\",\"release\"", 0,
+         "header: \"mapping.keys.engage\" given twice"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         const size_t tl = cases[i].tl ? cases[i].tl : strlen(cases[i].to); /* (tl: with a NUL) */
