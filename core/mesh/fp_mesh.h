@@ -84,7 +84,11 @@ enum {
     FP_MESH_DROPPED_NORMALS = 1u << 3,   /* vertex normals not written */
     FP_MESH_DROPPED_GROUPS = 1u << 4,    /* OBJ g, o, s statements and comments */
     FP_MESH_DROPPED_MATERIALS = 1u << 5, /* OBJ mtllib/usemtl, glTF materials and images */
-    FP_MESH_DROPPED_NODES = 1u << 6      /* glTF node hierarchy and names, other primitives */
+    FP_MESH_DROPPED_NODES = 1u << 6,     /* glTF node hierarchy and names, other primitives */
+    FP_MESH_DROPPED_PROPERTIES = 1u << 7 /* a PLY's vertex and face properties other than
+                                            positions, normals and UVs (colours, flags), its
+                                            other elements, an OFF's colours: read past, never
+                                            written, whatever the format saved */
 };
 
 /** The message for a result code: fp_strerror(result) (a static string, never NULL), kept

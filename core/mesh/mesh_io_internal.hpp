@@ -43,6 +43,8 @@ struct fp_mesh_source {
     std::vector<int> face_material;      // OBJ: material per face (index into materials), -1
     std::vector<std::string> materials;  // OBJ usemtl names in first-use order
     bool groups = false;                 // OBJ g / o statements
+    bool other = false;                  // PLY properties or elements read past (colours,
+                                         // flags, edges), OFF colours: never written
     std::string obj_text;                // OBJ: the file
     // glTF: the document and where each triangle primitive's vertices went
     struct Instance {

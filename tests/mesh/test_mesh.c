@@ -1176,6 +1176,51 @@ static void test_obj_scan_fast_paths(void **state)
     }
 }
 
+/* A PLY's vertex colours and a face's flags (and an OFF's colours) are read past and never
+ * written: saved back (the same format too) they were lost with no word. The save says it
+ * dropped them; a plain PLY drops nothing. */
+static void test_ply_other_properties_dropped(void **state)
+{
+    (void)state;
+    static const char head[] = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                               "property float y\nproperty float z\n%selement face 1\n"
+                               "property list uchar int vertex_indices\n%send_header\n";
+    static const struct { const char *v, *f, *vals, *fval; int other; } cases[] = {
+        {"property uchar red\nproperty uchar green\nproperty uchar blue\n", "", " 9 8 7", "", 1},
+        {"", "property uchar flags\n", "", " 5", 1},
+        {"property float nx\nproperty float ny\nproperty float nz\n", "", " 0 0 1", "", 0},
+        {"", "", "", "", 0},
+    };
+    char text[1024], hdr[512], name[32];
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        snprintf(hdr, sizeof hdr, head, cases[i].v, cases[i].f);
+        snprintf(text, sizeof text, "%s0 0 0%s\n1 0 0%s\n0 1 0%s\n3 0 1 2%s\n", hdr, cases[i].vals,
+                 cases[i].vals, cases[i].vals, cases[i].fval);
+        snprintf(name, sizeof name, "props%zu.ply", i);
+        fp_mesh *m = NULL;
+        if (fp_mesh_load(write_tmp(name, text), &m, err, sizeof err)) fail_msg("%s", err);
+        for (int fmt = 0; fmt < 2; fmt++) {
+            unsigned dropped = 0;
+            assert_int_equal(fp_mesh_save_ex(m, tmp_path(fmt ? "props-out.obj" : "props-out.ply"), &dropped,
+                                             err, sizeof err), FP_MESH_OK);
+            if (((dropped & FP_MESH_DROPPED_PROPERTIES) != 0) != cases[i].other)
+                fail_msg("case %zu to %s: dropped %#x", i, fmt ? "obj" : "ply", dropped);
+        }
+        fp_mesh_free(&m);
+    }
+    fp_mesh *m = NULL;
+    if (fp_mesh_load(write_tmp("colours.off", "COFF\n3 1 0\n0 0 0 1 0 0 1\n1 0 0 1 0 0 1\n"
+                                              "0 1 0 1 0 0 1\n3 0 1 2\n"), &m, err, sizeof err))
+        fail_msg("%s", err);
+    unsigned dropped = 0;
+    assert_int_equal(fp_mesh_save_ex(m, tmp_path("colours-out.off"), &dropped, err, sizeof err), FP_MESH_OK);
+    assert_true(dropped & FP_MESH_DROPPED_PROPERTIES);
+    fp_mesh_free(&m);
+    char what[256];
+    assert_non_null(strstr(fp_mesh_dropped_text(FP_MESH_DROPPED_PROPERTIES, what, sizeof what),
+                           "vertex and face properties"));
+}
+
 /* The codes are the project's negative errno values; a missing and an unreadable file. */
 static void test_error_codes(void **state)
 {
@@ -1787,6 +1832,7 @@ int main(void)
         cmocka_unit_test(test_subdivide),
         cmocka_unit_test(test_gltf_node_transform_applied),
         cmocka_unit_test(test_gltf_instances_saved_apart),
+        cmocka_unit_test(test_ply_other_properties_dropped),
         cmocka_unit_test(test_error_missing_file),
         cmocka_unit_test(test_error_empty_file),
         cmocka_unit_test(test_error_malformed_text),
