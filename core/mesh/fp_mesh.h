@@ -87,8 +87,9 @@ enum {
     FP_MESH_DROPPED_NODES = 1u << 6,     /* glTF node hierarchy and names, other primitives */
     FP_MESH_DROPPED_PROPERTIES = 1u << 7 /* a PLY's vertex and face properties other than
                                             positions, normals and UVs (colours, flags), its
-                                            other elements, an OFF's colours: read past, never
-                                            written, whatever the format saved */
+                                            other elements, an OFF's colours, an OBJ's vertex
+                                            colours: read past, never written (but in an OBJ
+                                            written back as it came in) */
 };
 
 /** The message for a result code: fp_strerror(result) (a static string, never NULL), kept

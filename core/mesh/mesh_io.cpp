@@ -204,7 +204,8 @@ int save_dispatch(const fp_mesh *mesh, const char *path, const std::string &ext,
 {
     const fp_mesh_source *src = source_of(mesh);
     const bool src_gltf = src && (src->format == "gltf" || src->format == "glb");
-    if (src && src->other) // (whatever the format: no writer keeps them)
+    // (whatever the format: no writer keeps them, but an OBJ written back as it came in)
+    if (src && src->other && !(ext == "obj" && src->format == "obj" && !src->obj_text.empty()))
         *dropped |= FP_MESH_DROPPED_PROPERTIES;
     if (is_gltf_ext(ext)) {
         if (src_gltf)

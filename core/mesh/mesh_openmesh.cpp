@@ -655,7 +655,7 @@ int load_openmesh(const char *path, const std::string &ext, std::string &data,
                               "and %zu", soup.n(), soup.faces(), want_v, want_f);
     auto src = std::make_unique<fp_mesh_source>();
     src->format = ext;
-    src->other = (ext == "ply" || ext == "off") && holds_other(data, ext);
+    src->other = ext == "obj" ? obj.colours > 0 : (ext == "ply" || ext == "off") && holds_other(data, ext);
     if (ext == "obj") {
         if (obj.usemtl) {
             obj_materials(data, *src);

@@ -1216,6 +1216,15 @@ static void test_ply_other_properties_dropped(void **state)
     assert_int_equal(fp_mesh_save_ex(m, tmp_path("colours-out.off"), &dropped, err, sizeof err), FP_MESH_OK);
     assert_true(dropped & FP_MESH_DROPPED_PROPERTIES);
     fp_mesh_free(&m);
+    /* an OBJ's vertex colours: kept written back as OBJ (its text), dropped in a PLY */
+    if (fp_mesh_load(write_tmp("colours.obj", "v 0 0 0 1 0 0\nv 1 0 0 1 0 0\nv 0 1 0 1 0 0\nf 1 2 3\n"),
+                     &m, err, sizeof err))
+        fail_msg("%s", err);
+    assert_int_equal(fp_mesh_save_ex(m, tmp_path("colours-out.obj"), &dropped, err, sizeof err), FP_MESH_OK);
+    assert_false(dropped & FP_MESH_DROPPED_PROPERTIES);
+    assert_int_equal(fp_mesh_save_ex(m, tmp_path("colours-out.ply"), &dropped, err, sizeof err), FP_MESH_OK);
+    assert_true(dropped & FP_MESH_DROPPED_PROPERTIES);
+    fp_mesh_free(&m);
     char what[256];
     assert_non_null(strstr(fp_mesh_dropped_text(FP_MESH_DROPPED_PROPERTIES, what, sizeof what),
                            "vertex and face properties"));
