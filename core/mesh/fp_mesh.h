@@ -187,7 +187,10 @@ int fp_mesh_save(const fp_mesh *mesh, const char *path, char *err, size_t errlen
  *  local frame (the inverse of the transform fp_mesh_load() applied); a mesh that several
  *  nodes place (one copy per node in fp_mesh) keeps one mesh while the copies agree, and a
  *  node whose copy differs from the first gets a copy of the mesh (named NAME_nodeN) with
- *  its own POSITION and NORMAL, so every copy comes back as saved; the buffers become one
+ *  its own POSITION and NORMAL, so every copy comes back as saved; a node whose transform
+ *  is singular (a scale of 0 flattens its mesh) keeps its transform and children but not the
+ *  mesh, whose copy goes as it is (mesh units) onto a new root node NAME_deformed of the
+ *  scene; the buffers become one
  *  (embedded in .gltf as base64, the BIN chunk of .glb); image URIs are kept as written.
  *  Another format keeps what it can hold: PLY and OFF write the file's polygons (per-vertex
  *  UVs: seams dropped); glTF from an OBJ splits vertices at UV seams (one glTF vertex per

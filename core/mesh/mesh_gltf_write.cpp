@@ -558,10 +558,21 @@ int save_gltf_source(const fp_mesh *m, const fp_mesh_source &src, const char *pa
     std::map<int, std::vector<float>> written;  // POSITION accessor -> local positions written
     std::map<std::pair<int, int>, int> own_mesh; // (node, mesh) -> its own copy of the mesh
     for (const auto &in : src.instances) {
-        std::array<double, 16> inv;
-        if (!affine_inverse(in.xf, inv))
+        // A node that flattens its mesh (a scale of 0: singular) has no local frame to write
+        // the deformation back into; the refusal came after the whole performance. Its copy
+        // goes, as deformed, into a mesh of its own on a new root node of the scene (the
+        // node keeps its transform and children, not the mesh).
+        std::array<double, 16> inv, xf = in.xf;
+        const bool flat = !affine_inverse(in.xf, inv);
+        const int scene = model.defaultScene >= 0 ? model.defaultScene : 0;
+        if (flat && (in.node < 0 || size_t(scene) >= model.scenes.size()))
             return fp__mesh_error(err, errlen, FP_MESH_ERR_INVALID, path,
                                   "glTF: mesh %d has a singular node transform", in.mesh);
+        if (flat) {
+            inv.fill(0);
+            inv[0] = inv[5] = inv[10] = inv[15] = 1;
+            xf = inv;
+        }
         std::vector<float> p(3 * in.count), q;
         for (size_t i = 0; i < in.count; i++) {
             const float *x = m->positions + 3 * (in.first + i);
@@ -574,16 +585,25 @@ int save_gltf_source(const fp_mesh *m, const fp_mesh_source &src, const char *pa
         bool fresh = own != own_mesh.end();
         if (fresh) {
             mesh = own->second;
-        } else if (in.node >= 0 && written.count(in.pos) && differs(written[in.pos], p)) {
+        } else if (in.node >= 0 && (flat || (written.count(in.pos) && differs(written[in.pos], p)))) {
             model.meshes.push_back(model.meshes[size_t(in.mesh)]);
             mesh = int(model.meshes.size() - 1);
             model.meshes.back().name += model.meshes.back().name.empty() ? "" : "_";
             model.meshes.back().name += "node" + std::to_string(in.node);
-            model.nodes[size_t(in.node)].mesh = mesh;
+            if (flat) {
+                tinygltf::Node root;
+                root.name = model.nodes[size_t(in.node)].name + "_deformed";
+                root.mesh = mesh;
+                model.nodes[size_t(in.node)].mesh = -1;
+                model.nodes.push_back(root);
+                model.scenes[size_t(scene)].nodes.push_back(int(model.nodes.size() - 1));
+            } else {
+                model.nodes[size_t(in.node)].mesh = mesh;
+            }
             own_mesh[{in.node, in.mesh}] = mesh;
             fresh = true;
         }
-        if (!written.count(in.pos))
+        if (!written.count(in.pos) && !flat)
             written[in.pos] = p;
         rewrite(in.pos, p, true, mesh, in.prim, "POSITION", fresh);
         if (in.nrm >= 0 && m->normals) {
@@ -592,8 +612,8 @@ int save_gltf_source(const fp_mesh *m, const fp_mesh_source &src, const char *pa
                 const float *x = m->normals + 3 * (in.first + i);
                 double w[3], len = 0;
                 for (int r = 0; r < 3; r++) { // local normal ~ M^T n
-                    w[r] = in.xf[size_t(r * 4)] * x[0] + in.xf[size_t(r * 4 + 1)] * x[1] +
-                           in.xf[size_t(r * 4 + 2)] * x[2];
+                    w[r] = xf[size_t(r * 4)] * x[0] + xf[size_t(r * 4 + 1)] * x[1] +
+                           xf[size_t(r * 4 + 2)] * x[2];
                     len += w[r] * w[r];
                 }
                 len = std::sqrt(len);

@@ -709,6 +709,29 @@ static void test_gltf_instances_saved_apart(void **state)
     fp_mesh_free(&m);
 }
 
+/* A node that flattens its mesh (scale 0 along z: singular) loads; its deformed copy had no
+ * local frame to go back into, and the save failed ("singular node transform") after the
+ * whole performance. It goes, as deformed, onto a new root node; a reload gives it back. */
+static void test_gltf_singular_node_saved(void **state)
+{
+    (void)state;
+    fp_mesh *m = load_transformed_triangle("{\"mesh\":0,\"scale\":[2,1,0]}");
+    const float want[9] = {0, 0, 0, 2, 0, 0, 0, 1, 0};
+    for (int i = 0; i < 9; i++) assert_true(fabsf(m->positions[i] - want[i]) < 1e-6f);
+    m->positions[3 * 2 + 2] = 0.5f; /* the third vertex off the flattened plane */
+    const char *path = tmp_path("flat-out.gltf");
+    if (fp_mesh_save(m, path, err, sizeof err)) fail_msg("%s", err);
+    fp_mesh *back = NULL;
+    if (fp_mesh_load(path, &back, err, sizeof err)) fail_msg("%s", err);
+    assert_int_equal(back->vertex_count, 3);
+    for (int i = 0; i < 9; i++)
+        if (fabsf(back->positions[i] - m->positions[i]) > 1e-6f)
+            fail_msg("coordinate %d: %g written back, %g saved", i, (double)back->positions[i],
+                     (double)m->positions[i]);
+    fp_mesh_free(&back);
+    fp_mesh_free(&m);
+}
+
 /* ---- errors: each names the file and the reason ---------------------------------------- */
 
 static void expect_load_error(const char *path, int code, const char *needle)
@@ -1841,6 +1864,7 @@ int main(void)
         cmocka_unit_test(test_subdivide),
         cmocka_unit_test(test_gltf_node_transform_applied),
         cmocka_unit_test(test_gltf_instances_saved_apart),
+        cmocka_unit_test(test_gltf_singular_node_saved),
         cmocka_unit_test(test_ply_other_properties_dropped),
         cmocka_unit_test(test_error_missing_file),
         cmocka_unit_test(test_error_empty_file),
