@@ -205,6 +205,13 @@ int fp_mesh_save_ex(const fp_mesh *mesh, const char *path, unsigned *dropped, ch
  *  bytes); "" for 0. Returns buf. */
 const char *fp_mesh_dropped_text(unsigned dropped, char *buf, size_t n);
 
+/** About how many bytes fp_mesh_save() of `mesh` to a .obj writes (a frame of --frames-out or
+ *  of an obj-seq export, for the room it needs): an OBJ written back as it came in, its text
+ *  with each v and vn line's numbers at the typical length of three "%.9g" coordinates; any
+ *  other, the v, vn and vt lines and the faces' corners with their UV and normal indices
+ *  (each index counted at the vertex count's digits). 0 for NULL. Thread-safe (reads mesh). */
+double fp_mesh_obj_bytes(const fp_mesh *mesh);
+
 /** A morph-target animation for fp_mesh_save_animation(). */
 typedef struct fp_mesh_morph_animation {
     size_t target_count;           /* K >= 1 */
