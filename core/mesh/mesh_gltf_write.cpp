@@ -470,6 +470,31 @@ bool affine_inverse(const std::array<double, 16> &M, std::array<double, 16> &R)
     return true;
 }
 
+// Vertex i's NORMAL in the file (a float VEC3, glTF 2.0's only NORMAL without quantization,
+// which the load refuses) into out, made unit; +z where it has none or is no unit vector.
+void file_normal(const tinygltf::Model &model, int ai, size_t i, float out[3])
+{
+    out[0] = out[1] = 0, out[2] = 1;
+    if (ai < 0 || size_t(ai) >= model.accessors.size())
+        return;
+    const tinygltf::Accessor &a = model.accessors[size_t(ai)];
+    if (a.bufferView < 0 || size_t(a.bufferView) >= model.bufferViews.size() || a.sparse.isSparse ||
+        a.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT || a.type != TINYGLTF_TYPE_VEC3 || i >= a.count)
+        return;
+    const tinygltf::BufferView &bv = model.bufferViews[size_t(a.bufferView)];
+    if (bv.buffer < 0 || size_t(bv.buffer) >= model.buffers.size())
+        return;
+    const size_t stride = bv.byteStride ? bv.byteStride : 12, at = bv.byteOffset + a.byteOffset + i * stride;
+    const std::vector<unsigned char> &data = model.buffers[size_t(bv.buffer)].data;
+    if (at + 12 > data.size())
+        return;
+    float n[3];
+    std::memcpy(n, data.data() + at, 12);
+    const double len = std::sqrt(double(n[0]) * n[0] + double(n[1]) * n[1] + double(n[2]) * n[2]);
+    if (len > 0 && std::isfinite(len))
+        for (int r = 0; r < 3; r++) out[r] = float(n[r] / len);
+}
+
 // Whether two copies of an accessor's positions differ by more than float round-off: a
 // node's transform there and back moves a vertex by a few ulps of its size.
 bool differs(const std::vector<float> &a, const std::vector<float> &b)
@@ -617,8 +642,12 @@ int save_gltf_source(const fp_mesh *m, const fp_mesh_source &src, const char *pa
                     len += w[r] * w[r];
                 }
                 len = std::sqrt(len);
+                if (!(len > 0)) { // no normal (a vertex in no triangle): the file's, unit as glTF wants
+                    file_normal(*src.model, in.nrm, i, &q[3 * i]);
+                    continue;
+                }
                 for (int r = 0; r < 3; r++)
-                    q[3 * i + size_t(r)] = len > 0 ? float(w[r] / len) : 0.0f;
+                    q[3 * i + size_t(r)] = float(w[r] / len);
             }
             rewrite(in.nrm, q, false, mesh, in.prim, "NORMAL", fresh);
         }

@@ -1784,6 +1784,46 @@ static void test_gltf_bad_index_fields(void **state)
                       FP_MESH_ERR_FORMAT, "meshes[0].primitives[0].attributes.TEXCOORD_1 is -3");
 }
 
+/* A glTF vertex in no triangle has no normal after the deformation (fp_mesh_compute_normals
+ * gives it 0): written back as a zero NORMAL, which glTF forbids (the Khronos validator's
+ * ACCESSOR_VECTOR3_NON_UNIT, one error a stray vertex). It keeps the file's unit normal. */
+static void test_gltf_unused_vertex_normal(void **state)
+{
+    (void)state;
+    unsigned char bin[104] = {0};
+    const float pos[12] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 5, 5, 5}, nrm[12] = {0, 0, 1, 0, 0, 1, 0, 0, 1, 1, 0, 0};
+    const uint16_t idx[3] = {0, 1, 2}; /* vertex 3 in no triangle, its normal +x in the file */
+    memcpy(bin, pos, sizeof pos);
+    memcpy(bin + 48, nrm, sizeof nrm);
+    memcpy(bin + 96, idx, sizeof idx);
+    write_bytes("stray.bin", bin, sizeof bin);
+    static const char json[] =
+        "{\"asset\":{\"version\":\"2.0\"},\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"NORMAL\":1},\"indices\":2}]}],"
+        "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":4,\"type\":\"VEC3\"},"
+        "{\"bufferView\":1,\"componentType\":5126,\"count\":4,\"type\":\"VEC3\"},"
+        "{\"bufferView\":2,\"componentType\":5123,\"count\":3,\"type\":\"SCALAR\"}],"
+        "\"bufferViews\":[{\"buffer\":0,\"byteLength\":48},{\"buffer\":0,\"byteOffset\":48,\"byteLength\":48},"
+        "{\"buffer\":0,\"byteOffset\":96,\"byteLength\":6}],\"buffers\":[{\"byteLength\":104,\"uri\":\"stray.bin\"}]}";
+    const char *first = write_tmp("stray-n.gltf", json), *again = tmp_path("stray-n-out.gltf");
+    fp_mesh *m = NULL;
+    if (fp_mesh_load(first, &m, err, sizeof err)) fail_msg("%s", err);
+    assert_int_equal(m->vertex_count, 4);
+    assert_int_equal(fp_mesh_compute_normals(m), FP_MESH_OK); /* as the session does each frame */
+    m->positions[1] = -0.25f;
+    if (fp_mesh_save(m, again, err, sizeof err)) fail_msg("%s", err);
+    fp_mesh *back = NULL;
+    if (fp_mesh_load(again, &back, err, sizeof err)) fail_msg("%s", err);
+    for (int v = 0; v < 4; v++) {
+        const float *n = back->normals + 3 * v;
+        const float len = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        if (fabsf(len - 1) > 1e-5f) fail_msg("vertex %d: normal of length %g written", v, (double)len);
+    }
+    assert_true(back->normals[9] == 1 && back->normals[10] == 0 && back->normals[11] == 0);
+    fp_mesh_free(&back);
+    fp_mesh_free(&m);
+}
+
 /* 4. GLB header version other than 2: tinygltf never looked. */
 static void test_glb_version(void **state)
 {
@@ -1864,6 +1904,7 @@ int main(void)
         cmocka_unit_test(test_subdivide),
         cmocka_unit_test(test_gltf_node_transform_applied),
         cmocka_unit_test(test_gltf_instances_saved_apart),
+        cmocka_unit_test(test_gltf_unused_vertex_normal),
         cmocka_unit_test(test_gltf_singular_node_saved),
         cmocka_unit_test(test_ply_other_properties_dropped),
         cmocka_unit_test(test_error_missing_file),
