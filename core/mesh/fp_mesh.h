@@ -84,7 +84,12 @@ enum {
     FP_MESH_DROPPED_NORMALS = 1u << 3,   /* vertex normals not written */
     FP_MESH_DROPPED_GROUPS = 1u << 4,    /* OBJ g, o, s statements and comments */
     FP_MESH_DROPPED_MATERIALS = 1u << 5, /* OBJ mtllib/usemtl, glTF materials and images */
-    FP_MESH_DROPPED_NODES = 1u << 6      /* glTF node hierarchy and names, other primitives */
+    FP_MESH_DROPPED_NODES = 1u << 6,     /* glTF node hierarchy and names, other primitives */
+    FP_MESH_DROPPED_PROPERTIES = 1u << 7 /* a PLY's vertex and face properties other than
+                                            positions, normals and UVs (colours, flags), its
+                                            other elements, an OFF's colours, an OBJ's vertex
+                                            colours: read past, never written (but in an OBJ
+                                            written back as it came in) */
 };
 
 /** The message for a result code: fp_strerror(result) (a static string, never NULL), kept
@@ -179,7 +184,13 @@ int fp_mesh_save(const fp_mesh *mesh, const char *path, char *err, size_t errlen
  *  that uses it (when the file had vn lines): quads stay quads, UV seams stay seams.
  *  glTF/GLB: the document (nodes, materials, images, other attributes, morph targets) with
  *  POSITION (min/max updated) and NORMAL of each triangle primitive rewritten in the node's
- *  local frame (the inverse of the transform fp_mesh_load() applied); the buffers become one
+ *  local frame (the inverse of the transform fp_mesh_load() applied); a mesh that several
+ *  nodes place (one copy per node in fp_mesh) keeps one mesh while the copies agree, and a
+ *  node whose copy differs from the first gets a copy of the mesh (named NAME_nodeN) with
+ *  its own POSITION and NORMAL, so every copy comes back as saved; a node whose transform
+ *  is singular (a scale of 0 flattens its mesh) keeps its transform and children but not the
+ *  mesh, whose copy goes as it is (mesh units) onto a new root node NAME_deformed of the
+ *  scene; the buffers become one
  *  (embedded in .gltf as base64, the BIN chunk of .glb); image URIs are kept as written.
  *  Another format keeps what it can hold: PLY and OFF write the file's polygons (per-vertex
  *  UVs: seams dropped); glTF from an OBJ splits vertices at UV seams (one glTF vertex per
@@ -193,6 +204,13 @@ int fp_mesh_save_ex(const fp_mesh *mesh, const char *path, unsigned *dropped, ch
 /** "polygons, UV seams, ..." naming the FP_MESH_DROPPED_* bits of `dropped` into buf (n
  *  bytes); "" for 0. Returns buf. */
 const char *fp_mesh_dropped_text(unsigned dropped, char *buf, size_t n);
+
+/** About how many bytes fp_mesh_save() of `mesh` to a .obj writes (a frame of --frames-out or
+ *  of an obj-seq export, for the room it needs): an OBJ written back as it came in, its text
+ *  with each v and vn line's numbers at the typical length of three "%.9g" coordinates; any
+ *  other, the v, vn and vt lines and the faces' corners with their UV and normal indices
+ *  (each index counted at the vertex count's digits). 0 for NULL. Thread-safe (reads mesh). */
+double fp_mesh_obj_bytes(const fp_mesh *mesh);
 
 /** A morph-target animation for fp_mesh_save_animation(). */
 typedef struct fp_mesh_morph_animation {

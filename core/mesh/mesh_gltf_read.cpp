@@ -263,7 +263,7 @@ struct GltfReader {
         return true;
     }
 
-    bool add_mesh(int mi, const Mat4 &xf)
+    bool add_mesh(int mi, const Mat4 &xf, int node)
     {
         if (mi < 0 || size_t(mi) >= model.meshes.size())
             return bad(FP_MESH_ERR_FORMAT, "mesh " + std::to_string(mi) + " does not exist");
@@ -319,9 +319,10 @@ struct GltfReader {
                 for (size_t i = 0; i < count; i++)
                     idx[i] = uint32_t(i);
             }
-            if (idx.size() % 3 != 0)
+            if (idx.size() % 3 != 0) // (a primitive without indices: its vertices in threes)
                 return bad(FP_MESH_ERR_FORMAT, where + " has " + std::to_string(idx.size()) +
-                                                   " indices, not a multiple of 3");
+                                                   (prim.indices >= 0 ? " indices" : " vertices and no indices") +
+                                                   ", not a multiple of 3");
             for (size_t i = 0; i < idx.size(); i++)
                 if (idx[i] >= count)
                     return bad(FP_MESH_ERR_FORMAT, where + ": index " + std::to_string(i) + " = " +
@@ -330,7 +331,7 @@ struct GltfReader {
             const size_t base = soup.n();
             {
                 fp_mesh_source::Instance in{mi, int(pi), base, count, {}, pos_it->second,
-                                            n_it != prim.attributes.end() ? n_it->second : -1};
+                                            n_it != prim.attributes.end() ? n_it->second : -1, node};
                 std::copy(xf.m, xf.m + 16, in.xf.begin());
                 instances.push_back(in);
             }
@@ -386,7 +387,7 @@ struct GltfReader {
         visited[size_t(ni)] = 1;
         const tinygltf::Node &nd = model.nodes[size_t(ni)];
         const Mat4 xf = mat_mul(parent, node_local(nd));
-        if (nd.mesh >= 0 && !add_mesh(nd.mesh, xf))
+        if (nd.mesh >= 0 && !add_mesh(nd.mesh, xf, ni))
             return false;
         for (int c : nd.children)
             if (!add_node(c, xf, visited, depth + 1))
@@ -788,7 +789,7 @@ int load_gltf(const char *path, const std::string &ext, const std::string &data,
                 break;
     } else {
         for (size_t mi = 0; mi < model.meshes.size(); mi++)
-            if (!r.add_mesh(int(mi), mat_identity()))
+            if (!r.add_mesh(int(mi), mat_identity(), -1))
                 break;
     }
     if (r.code != FP_MESH_OK)

@@ -470,6 +470,47 @@ bool affine_inverse(const std::array<double, 16> &M, std::array<double, 16> &R)
     return true;
 }
 
+// Vertex i's NORMAL in the file (a float VEC3, glTF 2.0's only NORMAL without quantization,
+// which the load refuses) into out, made unit; +z where it has none or is no unit vector.
+void file_normal(const tinygltf::Model &model, int ai, size_t i, float out[3])
+{
+    out[0] = out[1] = 0, out[2] = 1;
+    if (ai < 0 || size_t(ai) >= model.accessors.size())
+        return;
+    const tinygltf::Accessor &a = model.accessors[size_t(ai)];
+    if (a.bufferView < 0 || size_t(a.bufferView) >= model.bufferViews.size() || a.sparse.isSparse ||
+        a.componentType != TINYGLTF_COMPONENT_TYPE_FLOAT || a.type != TINYGLTF_TYPE_VEC3 || i >= a.count)
+        return;
+    const tinygltf::BufferView &bv = model.bufferViews[size_t(a.bufferView)];
+    if (bv.buffer < 0 || size_t(bv.buffer) >= model.buffers.size())
+        return;
+    const size_t stride = bv.byteStride ? bv.byteStride : 12, at = bv.byteOffset + a.byteOffset + i * stride;
+    const std::vector<unsigned char> &data = model.buffers[size_t(bv.buffer)].data;
+    if (at + 12 > data.size())
+        return;
+    float n[3];
+    std::memcpy(n, data.data() + at, 12);
+    const double len = std::sqrt(double(n[0]) * n[0] + double(n[1]) * n[1] + double(n[2]) * n[2]);
+    if (len > 0 && std::isfinite(len))
+        for (int r = 0; r < 3; r++) out[r] = float(n[r] / len);
+}
+
+// Whether two copies of an accessor's positions differ by more than float round-off: a
+// node's transform there and back moves a vertex by a few ulps of its size.
+bool differs(const std::vector<float> &a, const std::vector<float> &b)
+{
+    if (a.size() != b.size())
+        return true;
+    double extent = 0;
+    for (size_t i = 0; i < a.size(); i++)
+        extent = std::max(extent, double(std::fabs(a[i])));
+    const double tol = 1e-5 * std::max(extent, 1e-30);
+    for (size_t i = 0; i < a.size(); i++)
+        if (std::fabs(double(a[i]) - b[i]) > tol)
+            return true;
+    return false;
+}
+
 } // namespace
 
 // glTF back as it came in: the document with POSITION and NORMAL rewritten.
@@ -494,14 +535,15 @@ int save_gltf_source(const fp_mesh *m, const fp_mesh_source &src, const char *pa
     model.buffers.push_back(all);
     GltfOut extra; // new accessors where the old cannot be overwritten in place
     std::vector<char> done(model.accessors.size(), 0);
+    // fresh: a new accessor whatever the old one (the primitive of a mesh copied for its node)
     auto rewrite = [&](int ai, const std::vector<float> &v, bool minmax, int mesh, int prim,
-                       const char *attr) {
-        if (ai < 0 || size_t(ai) >= done.size() || done[size_t(ai)])
+                       const char *attr, bool fresh) {
+        if (ai < 0 || size_t(ai) >= done.size() || (done[size_t(ai)] && !fresh))
             return;
         done[size_t(ai)] = 1;
         tinygltf::Accessor &a = model.accessors[size_t(ai)];
         const tinygltf::BufferView *bv = a.bufferView >= 0 ? &model.bufferViews[size_t(a.bufferView)] : nullptr;
-        const bool in_place = bv && !a.sparse.isSparse && a.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT &&
+        const bool in_place = !fresh && bv && !a.sparse.isSparse && a.componentType == TINYGLTF_COMPONENT_TYPE_FLOAT &&
                               a.type == TINYGLTF_TYPE_VEC3 && (bv->byteStride == 0 || bv->byteStride == 12) &&
                               a.count * 3 == v.size();
         if (in_place) {
@@ -534,11 +576,28 @@ int save_gltf_source(const fp_mesh *m, const fp_mesh_source &src, const char *pa
         if (minmax)
             minmax3(v, model.accessors[size_t(nai)]);
     };
+    // A mesh that several nodes place (instances) is one set of accessors in the file but as
+    // many copies in fp_mesh, each deformed where its node put it: the first copy's shape went
+    // into the accessors and the others' was lost. A node whose copy differs from what its
+    // accessor got gets a copy of the mesh of its own (own_mesh) with accessors of its own.
+    std::map<int, std::vector<float>> written;  // POSITION accessor -> local positions written
+    std::map<std::pair<int, int>, int> own_mesh; // (node, mesh) -> its own copy of the mesh
     for (const auto &in : src.instances) {
-        std::array<double, 16> inv;
-        if (!affine_inverse(in.xf, inv))
+        // A node that flattens its mesh (a scale of 0: singular) has no local frame to write
+        // the deformation back into; the refusal came after the whole performance. Its copy
+        // goes, as deformed, into a mesh of its own on a new root node of the scene (the
+        // node keeps its transform and children, not the mesh).
+        std::array<double, 16> inv, xf = in.xf;
+        const bool flat = !affine_inverse(in.xf, inv);
+        const int scene = model.defaultScene >= 0 ? model.defaultScene : 0;
+        if (flat && (in.node < 0 || size_t(scene) >= model.scenes.size()))
             return fp__mesh_error(err, errlen, FP_MESH_ERR_INVALID, path,
                                   "glTF: mesh %d has a singular node transform", in.mesh);
+        if (flat) {
+            inv.fill(0);
+            inv[0] = inv[5] = inv[10] = inv[15] = 1;
+            xf = inv;
+        }
         std::vector<float> p(3 * in.count), q;
         for (size_t i = 0; i < in.count; i++) {
             const float *x = m->positions + 3 * (in.first + i);
@@ -546,22 +605,51 @@ int save_gltf_source(const fp_mesh *m, const fp_mesh_source &src, const char *pa
                 p[3 * i + size_t(r)] = float(inv[size_t(r)] * x[0] + inv[size_t(4 + r)] * x[1] +
                                              inv[size_t(8 + r)] * x[2] + inv[size_t(12 + r)]);
         }
-        rewrite(in.pos, p, true, in.mesh, in.prim, "POSITION");
+        int mesh = in.mesh;
+        auto own = own_mesh.find({in.node, in.mesh});
+        bool fresh = own != own_mesh.end();
+        if (fresh) {
+            mesh = own->second;
+        } else if (in.node >= 0 && (flat || (written.count(in.pos) && differs(written[in.pos], p)))) {
+            model.meshes.push_back(model.meshes[size_t(in.mesh)]);
+            mesh = int(model.meshes.size() - 1);
+            model.meshes.back().name += model.meshes.back().name.empty() ? "" : "_";
+            model.meshes.back().name += "node" + std::to_string(in.node);
+            if (flat) {
+                tinygltf::Node root;
+                root.name = model.nodes[size_t(in.node)].name + "_deformed";
+                root.mesh = mesh;
+                model.nodes[size_t(in.node)].mesh = -1;
+                model.nodes.push_back(root);
+                model.scenes[size_t(scene)].nodes.push_back(int(model.nodes.size() - 1));
+            } else {
+                model.nodes[size_t(in.node)].mesh = mesh;
+            }
+            own_mesh[{in.node, in.mesh}] = mesh;
+            fresh = true;
+        }
+        if (!written.count(in.pos) && !flat)
+            written[in.pos] = p;
+        rewrite(in.pos, p, true, mesh, in.prim, "POSITION", fresh);
         if (in.nrm >= 0 && m->normals) {
             q.resize(3 * in.count);
             for (size_t i = 0; i < in.count; i++) {
                 const float *x = m->normals + 3 * (in.first + i);
                 double w[3], len = 0;
                 for (int r = 0; r < 3; r++) { // local normal ~ M^T n
-                    w[r] = in.xf[size_t(r * 4)] * x[0] + in.xf[size_t(r * 4 + 1)] * x[1] +
-                           in.xf[size_t(r * 4 + 2)] * x[2];
+                    w[r] = xf[size_t(r * 4)] * x[0] + xf[size_t(r * 4 + 1)] * x[1] +
+                           xf[size_t(r * 4 + 2)] * x[2];
                     len += w[r] * w[r];
                 }
                 len = std::sqrt(len);
+                if (!(len > 0)) { // no normal (a vertex in no triangle): the file's, unit as glTF wants
+                    file_normal(*src.model, in.nrm, i, &q[3 * i]);
+                    continue;
+                }
                 for (int r = 0; r < 3; r++)
-                    q[3 * i + size_t(r)] = len > 0 ? float(w[r] / len) : 0.0f;
+                    q[3 * i + size_t(r)] = float(w[r] / len);
             }
-            rewrite(in.nrm, q, false, in.mesh, in.prim, "NORMAL");
+            rewrite(in.nrm, q, false, mesh, in.prim, "NORMAL", fresh);
         }
     }
     return write_gltf_model(model, path, ext, err, errlen);

@@ -25,6 +25,7 @@ typedef struct fp__obj_info {
     size_t usemtl;     /* usemtl lines */
     size_t groups;     /* g and o lines */
     size_t mtllib;     /* mtllib lines */
+    size_t colours;    /* v lines with a colour (6 or 7 numbers) */
 } fp__obj_info;
 
 /** Check OBJ text (NUL-terminated, len bytes) line by line: known statements only; v, vt, vn

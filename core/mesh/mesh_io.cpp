@@ -204,6 +204,9 @@ int save_dispatch(const fp_mesh *mesh, const char *path, const std::string &ext,
 {
     const fp_mesh_source *src = source_of(mesh);
     const bool src_gltf = src && (src->format == "gltf" || src->format == "glb");
+    // (whatever the format: no writer keeps them, but an OBJ written back as it came in)
+    if (src && src->other && !(ext == "obj" && src->format == "obj" && !src->obj_text.empty()))
+        *dropped |= FP_MESH_DROPPED_PROPERTIES;
     if (is_gltf_ext(ext)) {
         if (src_gltf)
             return save_gltf_source(mesh, *src, path, ext, err, errlen);
@@ -285,12 +288,13 @@ extern "C" const char *fp_mesh_dropped_text(unsigned dropped, char *buf, size_t 
 {
     static const char *const names[] = {"polygons (written as triangles)", "UV seams",
                                         "texture coordinates", "normals", "groups",
-                                        "materials", "glTF nodes"};
+                                        "materials", "glTF nodes",
+                                        "other vertex and face properties (colours, flags and the like)"};
     if (!buf || n == 0)
         return buf;
     buf[0] = '\0';
     size_t k = 0;
-    for (int i = 0; i < 7; i++)
+    for (int i = 0; i < 8; i++)
         if (dropped & (1u << i)) {
             int w = std::snprintf(buf + k, n - k, "%s%s", k ? ", " : "", names[i]);
             if (w < 0 || size_t(w) >= n - k)

@@ -43,6 +43,8 @@ struct fp_mesh_source {
     std::vector<int> face_material;      // OBJ: material per face (index into materials), -1
     std::vector<std::string> materials;  // OBJ usemtl names in first-use order
     bool groups = false;                 // OBJ g / o statements
+    bool other = false;                  // PLY properties or elements read past (colours,
+                                         // flags, edges), OFF colours: never written
     std::string obj_text;                // OBJ: the file
     // glTF: the document and where each triangle primitive's vertices went
     struct Instance {
@@ -50,6 +52,7 @@ struct fp_mesh_source {
         size_t first, count;             // mesh vertices [first, first + count)
         std::array<double, 16> xf;       // node transform applied at load (column-major)
         int pos, nrm;                    // accessors (nrm -1: none)
+        int node;                        // the node that placed it (-1: a mesh in no scene)
     };
     std::unique_ptr<tinygltf::Model> model;
     std::vector<Instance> instances;

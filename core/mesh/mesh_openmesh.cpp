@@ -470,6 +470,50 @@ std::string ply_without_notes(const std::string &data)
     return out;
 }
 
+// Whether a PLY header (the scan accepted it) names what fp_mesh does not keep: a vertex
+// property other than a position, normal or UV, a face property other than its corner list,
+// another element (edges, materials); or an OFF header has colours (COFF, [ST][C][N]OFF).
+bool holds_other(const std::string &data, const std::string &ext)
+{
+    static const char *const kept_v[] = {"x", "y", "z", "nx", "ny", "nz", "u", "v", "s", "t",
+                                         "texture_u", "texture_v", "texture_s", "texture_t"};
+    static const char *const kept_f[] = {"vertex_indices", "vertex_index", "texcoord"};
+    std::string element;
+    for (size_t p = 0; p < data.size();) {
+        size_t eol = data.find('\n', p);
+        if (eol == std::string::npos)
+            eol = data.size();
+        std::istringstream line(data.substr(p, eol - p));
+        p = eol + 1;
+        std::string w, a, b, name;
+        line >> w;
+        if (ext == "off") {
+            const size_t at = w.find("OFF");
+            return at != std::string::npos && w.substr(0, at).find('C') != std::string::npos;
+        }
+        if (w == "end_header")
+            return false;
+        if (w == "element") {
+            line >> element;
+            if (element != "vertex" && element != "face")
+                return true;
+        } else if (w == "property") {
+            line >> a >> b; // TYPE NAME, or list COUNT_TYPE TYPE NAME
+            name = b;
+            if (a == "list")
+                line >> name >> name;
+            bool known = false;
+            if (element == "vertex")
+                for (const char *k : kept_v) known = known || name == k;
+            else
+                for (const char *k : kept_f) known = known || name == k;
+            if (!known)
+                return true;
+        }
+    }
+    return false;
+}
+
 // OBJ materials per face (faces OpenMesh keeps: >= 3 distinct vertices) and groups.
 void obj_materials(const std::string &text, fp_mesh_source &src)
 {
@@ -611,6 +655,7 @@ int load_openmesh(const char *path, const std::string &ext, std::string &data,
                               "and %zu", soup.n(), soup.faces(), want_v, want_f);
     auto src = std::make_unique<fp_mesh_source>();
     src->format = ext;
+    src->other = ext == "obj" ? obj.colours > 0 : (ext == "ply" || ext == "off") && holds_other(data, ext);
     if (ext == "obj") {
         if (obj.usemtl) {
             obj_materials(data, *src);

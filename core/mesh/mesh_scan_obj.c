@@ -125,7 +125,7 @@ int fp__obj_scan(const char *path, const char *text, size_t len, fp__obj_info *i
                                           "expected %zu%s",
                                           line_no, (int)kwlen, kw, count, lo,
                                           hi > lo ? " or more" : "");
-                if (is_v) seen.v++;
+                if (is_v) seen.v++, seen.colours += count >= 6;
                 else if (is_vt) seen.vt++;
                 else seen.vn++;
             } else if (is_f) {
@@ -191,6 +191,7 @@ int fp__obj_scan(const char *path, const char *text, size_t len, fp__obj_info *i
             seen.usemtl = total.usemtl;
             seen.groups = total.groups;
             seen.mtllib = total.mtllib;
+            seen.colours = total.colours;
             total = seen;
         }
     }

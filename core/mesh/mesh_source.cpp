@@ -277,3 +277,33 @@ int save_obj_source(const fp_mesh *m, const fp_mesh_source &src, const char *pat
 }
 
 } // namespace fp_mesh_io
+
+// The size of an OBJ save (fp_mesh.h): the source's text with its v and vn lines rewritten,
+// or OpenMesh's writer's lines (save_openmesh: v, vn, vt, f with normal and UV indices).
+extern "C" double fp_mesh_obj_bytes(const fp_mesh *m)
+{
+    if (!m)
+        return 0;
+    const double line = 38; // "v " and three "%.9g" of a face's sizes ("-11.2345678"), "\n"
+    const fp_mesh_source *src = m->source;
+    try {
+        if (src && src->format == "obj" && !src->obj_text.empty()) {
+            const std::string &text = src->obj_text;
+            double bytes = double(text.size());
+            size_t p = 0;
+            fp_mesh_io::ObjLine l;
+            while (fp_mesh_io::obj_next_line(text, p, l))
+                if (l.tok.size() >= 4 && (fp_mesh_io::obj_is(text, l, "v") || fp_mesh_io::obj_is(text, l, "vn")))
+                    bytes += line + (l.tok[0].second - 1) - double(l.tok[3].first + l.tok[3].second - l.begin);
+            return bytes;
+        }
+    } catch (...) {
+        // (out of memory for a line's tokens: the estimate below)
+    }
+    const double n = double(m->vertex_count), digits = n >= 1 ? std::floor(std::log10(n)) + 1 : 1;
+    const bool poly = src && src->polygons && src->face_start.size() > 1;
+    const double faces = poly ? double(src->face_start.size() - 1) : double(m->triangle_count);
+    const double corners = poly ? double(src->corners.size()) : 3.0 * double(m->triangle_count);
+    const double corner = 1 + digits + (m->uvs ? 1 + digits : 0) + (m->normals ? (m->uvs ? 1 : 2) + digits : 0);
+    return 64 + n * (line + (m->normals ? line + 1 : 0) + (m->uvs ? 28 : 0)) + faces * 2 + corners * corner;
+}

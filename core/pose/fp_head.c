@@ -95,6 +95,7 @@ int fp_head_detect_used(const float *pos, size_t n, const uint8_t *used, fp_head
             continue;
         }
         double h = (double)hi[1] - y_neck;
+        if (!(h > 0)) return -EINVAL; /* no height above the neck (a mesh of a few float steps) */
         out->method = neck > 0 ? FP_HEAD_NECK : FP_HEAD_NO_NECK;
         out->mm_per_unit = FP_HEAD_HEIGHT_MM / h;
         snprintf(out->how, sizeof out->how, "detected from the head: %.4g units %s to crown = %g mm",

@@ -55,8 +55,9 @@ typedef struct fp_head {
 } fp_head;
 
 /** Find the head in n vertices (pos: n x 3 floats, mesh units) and the mesh's unit, as the
- *  top of this file says. Returns 0, or -EINVAL (NULL, n < 4, a non-finite coordinate or a
- *  flat mesh), -ENOMEM. */
+ *  top of this file says. Returns 0, or -EINVAL (NULL, n < 4, a non-finite coordinate, a
+ *  flat mesh or one with no height above the neck found), -ENOMEM; on 0 mm_per_unit is finite
+ *  and > 0. */
 int fp_head_detect(const float *pos, size_t n, fp_head *out);
 
 /** fp_head_detect over the vertices v with used[v] != 0 only (used: n bytes, or NULL for all;

@@ -112,8 +112,8 @@ static int vec3_of(const fpr_ctx *c, const cJSON *j, const char *p, double out[3
         char q[560];
         snprintf(q, sizeof q, "%s[%d]", p, i);
         if (!cJSON_IsNumber(e)) return fpr_bad(c, q, "expected a number, got %s", type_name(e));
-        if (!isfinite(e->valuedouble) || fabs(e->valuedouble) > 1e12)
-            return fpr_bad(c, q, "not a finite coordinate");
+        if (!isfinite(e->valuedouble)) return fpr_bad(c, q, "not a finite coordinate");
+        if (fabs(e->valuedouble) > 1e12) return fpr_bad(c, q, "%g is beyond 1e12 mesh units", e->valuedouble);
         out[i] = e->valuedouble;
     }
     return 0;

@@ -53,6 +53,12 @@ extern "C" {
  *  6% of that, then stays far above the engine's smallest, 1e-15); fp_session_create refuses
  *  another (-EBADMSG, naming the file and the figure) before any work. */
 #define FP_SESSION_MIN_DIAGONAL 1e-12
+/** A mesh's surface is kept in floats (24-bit mantissa): far from the origin their step grows
+ *  (0.0625 units at 1e6), and a face 0.3 units across placed there is a handful of steps,
+ *  its shape gone before any work. fp_session_create refuses (-EBADMSG, naming the file, the
+ *  step and the size) a mesh whose float step at its surface's largest |coordinate| exceeds
+ *  this fraction of its bounding box's diagonal (0.3 mm on a 30 cm head). */
+#define FP_SESSION_MAX_STEP_DIAGONALS 1e-3
 /** A support radius is at least this many and at most this many bounding-box diagonals
  *  (--radius at open, fp_session_set_radius after): below, no vertex would move; above, every
  *  vertex would move as one. */

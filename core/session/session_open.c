@@ -281,6 +281,19 @@ static int open_mesh(fp_session *s, const fp_session_options *opt, double *diag,
                  "scale the mesh down (export it in larger units)", name, reach, CSRBF_MAX_COORD);
         return -EBADMSG;
     }
+    /* the float step where the surface lies (FP_SESSION_MAX_STEP_DIAGONALS): a face in metres
+     * moved 1e6 units off the origin loaded as a few steps of 0.0625, its unit detected as inf
+     * mm and its summary NaN, exit 0 */
+    double far = 0;
+    for (int k = 0; k < 3; k++)
+        far = fmax(far, fmax(fabs(s->view.bounds_min[k]), fabs(s->view.bounds_max[k])));
+    const double step = far > 0 ? (double)nextafterf((float)far, INFINITY) - (double)(float)far : 0;
+    if (step > FP_SESSION_MAX_STEP_DIAGONALS * s->diagonal) {
+        snprintf(err, errlen, "%s: the surface lies %.3g mesh units from the origin, where the mesh's "
+                 "floats keep steps of %.3g units, coarse for a mesh %.3g units across (its shape is "
+                 "lost): move it near the origin in a modeller", name, far, step, s->diagonal);
+        return -EBADMSG;
+    }
     if (*diag > 0 && sqrt(*diag) < FP_SESSION_MIN_DIAGONAL) {
         snprintf(err, errlen, "%s: the mesh spans %.3g mesh units (its bounding box's diagonal), under "
                  "%g, too small for the engine's support radii: scale it up (export it in smaller "

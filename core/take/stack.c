@@ -85,6 +85,9 @@ static int check_members(const pctx *c, const cJSON *o, const char *where,
         bool ok = false;
         for (size_t k = 0; known[k] && !ok; k++) ok = m->string && !strcmp(m->string, known[k]);
         if (!ok) return bad(c, where, "unknown member \"%s\"", m->string ? m->string : "");
+        /* each once: cJSON finds the first, so a second was read nowhere */
+        for (const cJSON *e = o->child; e != m; e = e->next)
+            if (!strcmp(e->string, m->string)) return bad(c, where, "member \"%s\" given twice", m->string);
     }
     return 0;
 }

@@ -879,6 +879,40 @@ static bool json_nul(const char *text, size_t n, size_t *at, char *where, size_t
     return true;
 }
 
+static int name_cmp(const void *a, const void *b)
+{
+    return strcmp(*(const char *const *)a, *(const char *const *)b);
+}
+
+/* A key given twice in any object of the header, its path into `where` ("take",
+ * "mapping.keys.engage"): cJSON finds the first, so the second would be read nowhere. 1 when
+ * one is, -ENOMEM, else 0. Sorted names: a hostile header of a million keys stays n log n. */
+static int json_dup(const cJSON *o, const char *path, char *where, size_t len)
+{
+    size_t k = 0, i = 0;
+    for (const cJSON *m = o->child; m; m = m->next) k++;
+    if (cJSON_IsObject(o) && k > 1) {
+        const char **names = malloc(k * sizeof *names);
+        if (!names) return -ENOMEM;
+        for (const cJSON *m = o->child; m; m = m->next) names[i++] = m->string ? m->string : "";
+        qsort(names, k, sizeof *names, name_cmp);
+        for (i = 1; i < k && strcmp(names[i - 1], names[i]); i++) {}
+        if (i < k) snprintf(where, len, "%s%s%s", path, *path ? "." : "", names[i]);
+        free(names);
+        if (i < k) return 1;
+    }
+    i = 0;
+    for (const cJSON *m = o->child; m; m = m->next, i++) {
+        if (!cJSON_IsObject(m) && !cJSON_IsArray(m)) continue;
+        char sub[200];
+        if (cJSON_IsObject(o)) snprintf(sub, sizeof sub, "%s%s%s", path, *path ? "." : "", m->string ? m->string : "");
+        else snprintf(sub, sizeof sub, "%s[%zu]", path, i);
+        int rc = json_dup(m, sub, where, len);
+        if (rc) return rc;
+    }
+    return 0;
+}
+
 int take_header_from_json(const char *text, size_t n, fp_take_header *h, char **store,
                           size_t *bad_at, char *msg, size_t msglen)
 {
@@ -901,6 +935,12 @@ int take_header_from_json(const char *text, size_t n, fp_take_header *h, char **
         cJSON_Delete(o);
         *bad_at = rest;
         return fp_errorf(msg, msglen, -EBADMSG, "header: text after the JSON object");
+    }
+    int dup = json_dup(o, "", where, sizeof where);
+    if (dup) {
+        cJSON_Delete(o);
+        if (dup < 0) return fp_errorf(msg, msglen, dup, "header: out of memory");
+        return fp_errorf(msg, msglen, -EBADMSG, "header: \"%s\" given twice", where);
     }
     strstore st = {0};
     int rc = fill_header(o, h, &st, msg, msglen);   /* measuring pass */

@@ -228,6 +228,15 @@ static int read_tail(fp_take_reader *r, chunk_view *cv, uint64_t off)
         snprintf(cv->why, sizeof cv->why, "TAIL chunk: malformed JSON");
         return -EBADMSG;
     }
+    /* the frames the writer wrote (take_writer.c): fewer here is a chunk of them gone from
+     * the middle, its neighbours whole; the take is cut, not closed normally */
+    if (cJSON_IsNumber(v = cJSON_GetObjectItemCaseSensitive(o, "frames")) && v->valuedouble != (double)r->frames) {
+        cv->bad_at = off + TAKE_CHUNK_HEAD_SIZE;
+        snprintf(cv->why, sizeof cv->why, "TAIL chunk says %.0f frames, the file holds %zu before it "
+                 "(a chunk of frames is missing)", v->valuedouble, r->frames);
+        cJSON_Delete(o);
+        return -EBADMSG;
+    }
     r->sum.complete = true;
     if (cJSON_IsNumber(v = cJSON_GetObjectItemCaseSensitive(o, "dropped")) && v->valuedouble >= 0)
         r->sum.dropped = (uint64_t)v->valuedouble;

@@ -141,6 +141,18 @@ grep -q "warning: --export big.pc2: about 1.9 GB (6001 frames x 26719 vertices, 
 expect 0 "$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:short.csv,fast=1" -o r4.obj --frames-out big2
 grep -q -- "--frames-out big2: about [0-9]* MB a second (60 frames a second x 26719 vertices.*1 GiB after [0-9]* s" "$tmp/x.out" ||
     { cat "$tmp/x.out"; fail "run did not say --frames-out's rate"; }
+# the estimate holds for a face that is no OBJ: its frames carry vn lines and normal indices
+# (36 bytes a vertex and 17 a triangle said ~24 kB of MediaPipe's 468-vertex mask as a PLY,
+# whose frames are 49 kB: a disk's room checked against half the frames' size)
+mp=$data/faces/mediapipe-canonical/canonical_face_model.obj
+expect 0 "$fp" run "${pd[@]}" --mesh "$mp" --input "replay:short.csv,fast=1" --duration 0.01 -q -o mask.ply
+expect 0 "$fp" run "${pd[@]}" --mesh mask.ply --input "replay:short.csv,fast=1" --duration 0.05 \
+    -o mask-out.ply --frames-out maskframes
+said=$(grep -o -- "--frames-out maskframes: about .*, ~[0-9]* kB a frame" "$tmp/x.out" | grep -o "~[0-9]*" | tr -d '~')
+[ -n "$said" ] || { cat "$tmp/x.out"; fail "no size said for the PLY face's frames"; }
+real=$(wc -c <"maskframes/$(ls maskframes | head -1)")
+[ $((said * 1000)) -ge "$real" ] && [ $((said * 1000)) -le $((real * 13 / 10)) ] ||
+    fail "--frames-out said ~$said kB a frame, a frame holds $real bytes"
 expect 0 "$fp" export "${pd[@]}" "$take" -f obj-seq -o seq -q
 expect 73 "$fp" export "${pd[@]}" "$take" -f obj-seq -o seq
 grep -q "seq: holds .* of an earlier run (clap_T001_000000.obj" "$tmp/x.out" || { cat "$tmp/x.out"; fail "obj-seq refusal"; }

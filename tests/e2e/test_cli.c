@@ -669,6 +669,23 @@ static void test_refused_up_front(void **state)
     snprintf(args, sizeof args, "run --mesh tiny.obj %s --out t.obj --force", rec);
     assert_int_equal(fp(args), 65);
     assert_non_null(strstr(out, "tiny.obj: the mesh spans 1.73e-20 mesh units"));
+    /* A face 0.3 units across 1e6 units off the origin (a face in metres with a survey
+     * offset): its floats keep steps of 0.0625 there, the shape a handful of them; it ran
+     * (exit 0, a vertex moved 0.23 units, the unit inf mm on a sphere): refused, 65, naming
+     * the file, the step and the size. */
+    write_file("far.obj", "v 1000000 1000000.1 1000000\nv 1000000.08 1000000 1000000\n"
+               "v 999999.92 1000000 1000000\nv 1000000 1000000 1000000.09\nv 1000000 1000000 999999.91\n"
+               "v 1000000 999999.9 1000000\nf 1 4 2\nf 1 3 4\nf 1 5 3\nf 1 2 5\nf 6 2 4\nf 6 4 3\n"
+               "f 6 3 5\nf 6 5 2\n");
+    snprintf(args, sizeof args, "run --mesh far.obj --rig none %s --out far-out.obj --force", rec);
+    assert_int_equal(fp(args), 65);
+    assert_non_null(strstr(out, "far.obj: the surface lies 1e+06 mesh units from the origin, where the "
+                                "mesh's floats keep steps of 0.0625 units"));
+    snprintf(args, sizeof args, "%s/far-out.obj", tmp);
+    assert_int_equal(access(args, F_OK), -1);
+    assert_int_equal(fp("info far.obj"), 0); /* info shows it, and why run refuses it */
+    assert_non_null(strstr(out, "precision the surface lies 1e+06 units from the origin, where its floats "
+                                "step by 0.0625 units"));
     snprintf(args, sizeof args, "pose --mesh %s --set jaw.open=0.2 --out noext --force", face());
     assert_int_equal(fp(args), 64);
     assert_non_null(strstr(out, "noext"));

@@ -47,6 +47,18 @@ grep -qF "${cr}${esc}[Kfacepuppet info: opening: loading generic_neutral_mesh.ob
 [ -s "$tmp/info.err" ] && fail "info on a pipe wrote to stderr: $(cat "$tmp/info.err")"
 grep -q "vertices  26719" "$tmp/info.out" || fail "info: no vertex count"
 
+# 5. a warning while the status line is shown (a stray vertex, said while the face opens): the
+#    status line is erased before it, not run into ("... ...facepuppet: session: ..."), and
+#    drawn again after it
+{ cat ../shared/data/faces/mediapipe-canonical/canonical_face_model.obj; echo "v 1000 1000 1000"; } >"$tmp/stray.obj"
+script -qec "$fp run --rig none --mesh $tmp/stray.obj --input replay:../shared/data/hands/leap-motion/grab_joints_mm.csv,fast=1 --duration 0.2 --out $tmp/s.obj" "$tmp/warn.txt" >/dev/null 2>&1 ||
+    fail "run of stray.obj on a terminal failed: $(tail -c 400 "$tmp/warn.txt" | cat -v)"
+grep -qF "vertices are in no triangle" "$tmp/warn.txt" || fail "no stray-vertex warning: $(head -c 600 "$tmp/warn.txt" | cat -v)"
+grep -qF " ...facepuppet: session:" "$tmp/warn.txt" &&
+    fail "a warning ran into the status line: $(head -c 800 "$tmp/warn.txt" | cat -v)"
+grep -qF "${cr}${esc}[Kfacepuppet: session: $tmp/stray.obj: 1 of " "$tmp/warn.txt" ||
+    fail "the status line was not erased before the warning: $(head -c 800 "$tmp/warn.txt" | cat -v)"
+
 # 4. live (where built, with Xvfb): the viewer draws the steps in its window and still calls
 #    the caller's callback, so the terminal gets the same status lines
 if command -v xvfb-run >/dev/null && "$fp" live --help >/dev/null 2>&1; then

@@ -665,6 +665,73 @@ static void test_gltf_node_transform_applied(void **state)
     fp_mesh_free(&m);
 }
 
+/* One mesh placed by two nodes loads as two copies, each deformed where its node put it;
+ * written back, the file held one set of positions for both, the first copy's: the second's
+ * deformation was lost (a face instanced beside itself kept one face's shape twice). Each
+ * node whose copy differs now gets a mesh of its own; both come back as they were saved. */
+static void test_gltf_instances_saved_apart(void **state)
+{
+    (void)state;
+    fp_mesh *m = load_transformed_triangle(
+        "{\"mesh\":0,\"children\":[1]},{\"mesh\":0,\"translation\":[10,0,0]}");
+    assert_int_equal(m->vertex_count, 6);
+    const float want[18] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 10, 0, 0, 11, 0, 0, 10, 1, 0};
+    for (int i = 0; i < 18; i++) assert_true(fabsf(m->positions[i] - want[i]) < 1e-6f);
+    m->positions[3 * 1 + 1] += 0.25f; /* the first copy's second vertex up */
+    m->positions[3 * 5 + 2] += 0.5f;  /* the second copy's third vertex out */
+    const char *path = tmp_path("instances-out.gltf");
+    assert_int_equal(fp_mesh_save(m, path, err, sizeof err), FP_MESH_OK);
+    fp_mesh *back = NULL;
+    if (fp_mesh_load(path, &back, err, sizeof err)) fail_msg("%s", err);
+    assert_int_equal(back->vertex_count, 6);
+    for (int i = 0; i < 18; i++)
+        if (fabsf(back->positions[i] - m->positions[i]) > 1e-6f)
+            fail_msg("coordinate %d: %g written back, %g saved", i, (double)back->positions[i],
+                     (double)m->positions[i]);
+    fp_mesh_free(&back);
+    /* copies that agree stay one mesh for both nodes */
+    fp_mesh_free(&m);
+    m = load_transformed_triangle("{\"mesh\":0,\"children\":[1]},{\"mesh\":0,\"translation\":[10,0,0]}");
+    m->positions[3 * 1 + 1] += 0.25f;
+    m->positions[3 * 4 + 1] += 0.25f;
+    assert_int_equal(fp_mesh_save(m, path, err, sizeof err), FP_MESH_OK);
+    FILE *f = fopen(path, "rb");
+    char json[16384];
+    size_t len = fread(json, 1, sizeof json - 1, f);
+    fclose(f);
+    json[len] = '\0';
+    size_t k = 0; /* without white space, as the writer may indent */
+    for (size_t i = 0; i < len; i++)
+        if (!strchr(" \t\r\n", json[i])) json[k++] = json[i];
+    json[k] = '\0';
+    assert_non_null(strstr(json, "\"mesh\":0"));
+    assert_null(strstr(json, "\"mesh\":1"));
+    fp_mesh_free(&m);
+}
+
+/* A node that flattens its mesh (scale 0 along z: singular) loads; its deformed copy had no
+ * local frame to go back into, and the save failed ("singular node transform") after the
+ * whole performance. It goes, as deformed, onto a new root node; a reload gives it back. */
+static void test_gltf_singular_node_saved(void **state)
+{
+    (void)state;
+    fp_mesh *m = load_transformed_triangle("{\"mesh\":0,\"scale\":[2,1,0]}");
+    const float want[9] = {0, 0, 0, 2, 0, 0, 0, 1, 0};
+    for (int i = 0; i < 9; i++) assert_true(fabsf(m->positions[i] - want[i]) < 1e-6f);
+    m->positions[3 * 2 + 2] = 0.5f; /* the third vertex off the flattened plane */
+    const char *path = tmp_path("flat-out.gltf");
+    if (fp_mesh_save(m, path, err, sizeof err)) fail_msg("%s", err);
+    fp_mesh *back = NULL;
+    if (fp_mesh_load(path, &back, err, sizeof err)) fail_msg("%s", err);
+    assert_int_equal(back->vertex_count, 3);
+    for (int i = 0; i < 9; i++)
+        if (fabsf(back->positions[i] - m->positions[i]) > 1e-6f)
+            fail_msg("coordinate %d: %g written back, %g saved", i, (double)back->positions[i],
+                     (double)m->positions[i]);
+    fp_mesh_free(&back);
+    fp_mesh_free(&m);
+}
+
 /* ---- errors: each names the file and the reason ---------------------------------------- */
 
 static void expect_load_error(const char *path, int code, const char *needle)
@@ -1130,6 +1197,60 @@ static void test_obj_scan_fast_paths(void **state)
         assert_int_equal(mats, !strcmp(cases[i][1], "materials"));
         fp_mesh_free(&m);
     }
+}
+
+/* A PLY's vertex colours and a face's flags (and an OFF's colours) are read past and never
+ * written: saved back (the same format too) they were lost with no word. The save says it
+ * dropped them; a plain PLY drops nothing. */
+static void test_ply_other_properties_dropped(void **state)
+{
+    (void)state;
+    static const char head[] = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                               "property float y\nproperty float z\n%selement face 1\n"
+                               "property list uchar int vertex_indices\n%send_header\n";
+    static const struct { const char *v, *f, *vals, *fval; int other; } cases[] = {
+        {"property uchar red\nproperty uchar green\nproperty uchar blue\n", "", " 9 8 7", "", 1},
+        {"", "property uchar flags\n", "", " 5", 1},
+        {"property float nx\nproperty float ny\nproperty float nz\n", "", " 0 0 1", "", 0},
+        {"", "", "", "", 0},
+    };
+    char text[1024], hdr[512], name[32];
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        snprintf(hdr, sizeof hdr, head, cases[i].v, cases[i].f);
+        snprintf(text, sizeof text, "%s0 0 0%s\n1 0 0%s\n0 1 0%s\n3 0 1 2%s\n", hdr, cases[i].vals,
+                 cases[i].vals, cases[i].vals, cases[i].fval);
+        snprintf(name, sizeof name, "props%zu.ply", i);
+        fp_mesh *m = NULL;
+        if (fp_mesh_load(write_tmp(name, text), &m, err, sizeof err)) fail_msg("%s", err);
+        for (int fmt = 0; fmt < 2; fmt++) {
+            unsigned dropped = 0;
+            assert_int_equal(fp_mesh_save_ex(m, tmp_path(fmt ? "props-out.obj" : "props-out.ply"), &dropped,
+                                             err, sizeof err), FP_MESH_OK);
+            if (((dropped & FP_MESH_DROPPED_PROPERTIES) != 0) != cases[i].other)
+                fail_msg("case %zu to %s: dropped %#x", i, fmt ? "obj" : "ply", dropped);
+        }
+        fp_mesh_free(&m);
+    }
+    fp_mesh *m = NULL;
+    if (fp_mesh_load(write_tmp("colours.off", "COFF\n3 1 0\n0 0 0 1 0 0 1\n1 0 0 1 0 0 1\n"
+                                              "0 1 0 1 0 0 1\n3 0 1 2\n"), &m, err, sizeof err))
+        fail_msg("%s", err);
+    unsigned dropped = 0;
+    assert_int_equal(fp_mesh_save_ex(m, tmp_path("colours-out.off"), &dropped, err, sizeof err), FP_MESH_OK);
+    assert_true(dropped & FP_MESH_DROPPED_PROPERTIES);
+    fp_mesh_free(&m);
+    /* an OBJ's vertex colours: kept written back as OBJ (its text), dropped in a PLY */
+    if (fp_mesh_load(write_tmp("colours.obj", "v 0 0 0 1 0 0\nv 1 0 0 1 0 0\nv 0 1 0 1 0 0\nf 1 2 3\n"),
+                     &m, err, sizeof err))
+        fail_msg("%s", err);
+    assert_int_equal(fp_mesh_save_ex(m, tmp_path("colours-out.obj"), &dropped, err, sizeof err), FP_MESH_OK);
+    assert_false(dropped & FP_MESH_DROPPED_PROPERTIES);
+    assert_int_equal(fp_mesh_save_ex(m, tmp_path("colours-out.ply"), &dropped, err, sizeof err), FP_MESH_OK);
+    assert_true(dropped & FP_MESH_DROPPED_PROPERTIES);
+    fp_mesh_free(&m);
+    char what[256];
+    assert_non_null(strstr(fp_mesh_dropped_text(FP_MESH_DROPPED_PROPERTIES, what, sizeof what),
+                           "vertex and face properties"));
 }
 
 /* The codes are the project's negative errno values; a missing and an unreadable file. */
@@ -1643,6 +1764,12 @@ static void test_gltf_bad_index_fields(void **state)
         expect_load_error(strict_gltf(name, "\"indices\":1", cases[i].to, NULL),
                           FP_MESH_ERR_FORMAT, cases[i].want);
     }
+    /* no indices: the vertices in threes; two are no triangle, and the message said "2
+     * indices" of a primitive that has none */
+    expect_load_error(strict_gltf("noidx.gltf", ",\"indices\":1", "", "\"POSITION\":0,\"TEXCOORD_0\":2",
+                                  "\"POSITION\":0", "\"componentType\":5126,\"count\":3,\"type\":\"VEC3\"",
+                                  "\"componentType\":5126,\"count\":2,\"type\":\"VEC3\"", NULL),
+                      FP_MESH_ERR_FORMAT, "mesh 0 primitive 0 has 2 vertices and no indices, not a multiple of 3");
     expect_load_error(strict_gltf("mesh_neg.gltf", "\"mesh\":0", "\"mesh\":-1", NULL),
                       FP_MESH_ERR_FORMAT, "nodes[0].mesh is -1");
     expect_load_error(strict_gltf("attr_neg.gltf", "\"POSITION\":0", "\"POSITION\":-1", NULL),
@@ -1655,6 +1782,46 @@ static void test_gltf_bad_index_fields(void **state)
     expect_load_error(strict_gltf("uv1_neg.gltf", "\"TEXCOORD_0\":2",
                                   "\"TEXCOORD_0\":2,\"TEXCOORD_1\":-3", NULL),
                       FP_MESH_ERR_FORMAT, "meshes[0].primitives[0].attributes.TEXCOORD_1 is -3");
+}
+
+/* A glTF vertex in no triangle has no normal after the deformation (fp_mesh_compute_normals
+ * gives it 0): written back as a zero NORMAL, which glTF forbids (the Khronos validator's
+ * ACCESSOR_VECTOR3_NON_UNIT, one error a stray vertex). It keeps the file's unit normal. */
+static void test_gltf_unused_vertex_normal(void **state)
+{
+    (void)state;
+    unsigned char bin[104] = {0};
+    const float pos[12] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 5, 5, 5}, nrm[12] = {0, 0, 1, 0, 0, 1, 0, 0, 1, 1, 0, 0};
+    const uint16_t idx[3] = {0, 1, 2}; /* vertex 3 in no triangle, its normal +x in the file */
+    memcpy(bin, pos, sizeof pos);
+    memcpy(bin + 48, nrm, sizeof nrm);
+    memcpy(bin + 96, idx, sizeof idx);
+    write_bytes("stray.bin", bin, sizeof bin);
+    static const char json[] =
+        "{\"asset\":{\"version\":\"2.0\"},\"scene\":0,\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0}],"
+        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0,\"NORMAL\":1},\"indices\":2}]}],"
+        "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,\"count\":4,\"type\":\"VEC3\"},"
+        "{\"bufferView\":1,\"componentType\":5126,\"count\":4,\"type\":\"VEC3\"},"
+        "{\"bufferView\":2,\"componentType\":5123,\"count\":3,\"type\":\"SCALAR\"}],"
+        "\"bufferViews\":[{\"buffer\":0,\"byteLength\":48},{\"buffer\":0,\"byteOffset\":48,\"byteLength\":48},"
+        "{\"buffer\":0,\"byteOffset\":96,\"byteLength\":6}],\"buffers\":[{\"byteLength\":104,\"uri\":\"stray.bin\"}]}";
+    const char *first = write_tmp("stray-n.gltf", json), *again = tmp_path("stray-n-out.gltf");
+    fp_mesh *m = NULL;
+    if (fp_mesh_load(first, &m, err, sizeof err)) fail_msg("%s", err);
+    assert_int_equal(m->vertex_count, 4);
+    assert_int_equal(fp_mesh_compute_normals(m), FP_MESH_OK); /* as the session does each frame */
+    m->positions[1] = -0.25f;
+    if (fp_mesh_save(m, again, err, sizeof err)) fail_msg("%s", err);
+    fp_mesh *back = NULL;
+    if (fp_mesh_load(again, &back, err, sizeof err)) fail_msg("%s", err);
+    for (int v = 0; v < 4; v++) {
+        const float *n = back->normals + 3 * v;
+        const float len = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        if (fabsf(len - 1) > 1e-5f) fail_msg("vertex %d: normal of length %g written", v, (double)len);
+    }
+    assert_true(back->normals[9] == 1 && back->normals[10] == 0 && back->normals[11] == 0);
+    fp_mesh_free(&back);
+    fp_mesh_free(&m);
 }
 
 /* 4. GLB header version other than 2: tinygltf never looked. */
@@ -1736,6 +1903,10 @@ int main(void)
         cmocka_unit_test(test_bounds),
         cmocka_unit_test(test_subdivide),
         cmocka_unit_test(test_gltf_node_transform_applied),
+        cmocka_unit_test(test_gltf_instances_saved_apart),
+        cmocka_unit_test(test_gltf_unused_vertex_normal),
+        cmocka_unit_test(test_gltf_singular_node_saved),
+        cmocka_unit_test(test_ply_other_properties_dropped),
         cmocka_unit_test(test_error_missing_file),
         cmocka_unit_test(test_error_empty_file),
         cmocka_unit_test(test_error_malformed_text),

@@ -202,6 +202,41 @@ static void test_head_detect(void **state)
     }
 }
 
+/* A head of a few float steps (a face in metres moved 1e6 units off the origin: floats keep
+ * steps of 0.0625 there) has no height above its neck: fp_head_detect said 0 with an infinite
+ * mm per unit (run printed "inf mm per mesh unit" and a NaN summary, exit 0); it refuses it, and
+ * whatever it returns 0 for has a finite unit > 0. */
+static void test_head_detect_coarse(void **state)
+{
+    (void)state;
+    enum { LAT = 60, LON = 80 };
+    static float pos[3 * (LAT + 1) * LON];
+    for (int i = 0; i <= LAT; i++)
+        for (int j = 0; j < LON; j++) {
+            const double th = M_PI * i / LAT, ph = 2 * M_PI * j / LON;
+            float *p = pos + 3 * (i * LON + j);
+            p[0] = (float)(1e6 + 0.075 * sin(th) * sin(ph));
+            p[1] = (float)(1e6 + 0.115 * cos(th));
+            p[2] = (float)(1e6 + 0.095 * sin(th) * cos(ph));
+        }
+    fp_head h;
+    int rc = fp_head_detect(pos, (LAT + 1) * LON, &h);
+    if (rc == 0 && !(isfinite(h.mm_per_unit) && h.mm_per_unit > 0))
+        fail_msg("fp_head_detect returned 0 with %g mm per unit (%s)", h.mm_per_unit, h.how);
+    assert_int_equal(rc, -EINVAL);
+    /* the same head at the origin is found, about 1000 mm per unit (230 mm over 0.23 units) */
+    for (int i = 0; i <= LAT; i++)
+        for (int j = 0; j < LON; j++) {
+            const double th = M_PI * i / LAT, ph = 2 * M_PI * j / LON;
+            float *p = pos + 3 * (i * LON + j);
+            p[0] = (float)(0.075 * sin(th) * sin(ph));
+            p[1] = (float)(0.115 * cos(th));
+            p[2] = (float)(0.095 * sin(th) * cos(ph));
+        }
+    assert_int_equal(fp_head_detect(pos, (LAT + 1) * LON, &h), 0);
+    assert_true(h.mm_per_unit > 900 && h.mm_per_unit < 1100);
+}
+
 /* The face's frame (fp_calibration.face): a point goes through scale, R and the offsets in the
  * face's frame, then F turns it into the mesh's; fp_calibration_flatten folds F into R and the
  * offsets with the same result, and so does a calibration file saved from it; a face of all
@@ -481,6 +516,7 @@ int main(void)
         cmocka_unit_test(test_angles_forward_kinematics),
         cmocka_unit_test(test_fit_workspace),
         cmocka_unit_test(test_head_detect),
+        cmocka_unit_test(test_head_detect_coarse),
         cmocka_unit_test(test_calibration_file),
         cmocka_unit_test(test_face_frame),
         cmocka_unit_test(test_head_scale_plausible),

@@ -876,6 +876,8 @@ static void test_broken_files(void **state)
         {"\"nose_tip\": 4857", "\"nose tip\": 4857", "landmarks.nose tip"},
         {"\"right\": [", "\"right\": [\"a\", ", "jaw.hinge.right"},
         {"\"right\": [", "\"right\": [0, 0, 0], \"x\": [", "jaw.hinge.x"},
+        /* a finite number past 1e12 is no coordinate, and was said to be "not a finite" one */
+        {"\"right\": [-5.0, 0.5", "\"right\": [-1e300, 0.5", "jaw.hinge.right[0]: -1e+300 is beyond 1e12 mesh units"},
         {"\"open_degrees\": 29.9", "\"open_degrees\": 90", "jaw.open_degrees"},
         /* (%g said "reads version 1, the file is 1") */
         {"\"version\": 1", "\"version\": 1.0000001", "the file is 1.0000001"},

@@ -88,6 +88,8 @@ static void test_refusals(void **state)
     expect_bad("{\"format\":\"x\",\"version\":1,\"layers\":[{\"take\":\"a\"}]}", "format");
     expect_bad("{\"format\":\"facepuppet-stack\",\"version\":2,\"layers\":[{\"take\":\"a\"}]}", "version");
     expect_bad("{\"format\":\"facepuppet-stack\",\"version\":1,\"layers\":[]}", "layers");
+    expect_bad("{\"format\":\"facepuppet-stack\",\"version\":1,\"version\":1,\"layers\":[{\"take\":\"a\"}]}",
+               "(root): member \"version\" given twice");
     const char *head = "{\"format\":\"facepuppet-stack\",\"version\":1,\"layers\":[{\"take\":\"a\"},";
     char j[1024];
     static const char *const cases[][2] = {
@@ -95,6 +97,12 @@ static void test_refusals(void **state)
         {"{\"take\":\"b\",\"gain\":3}", "\"gain\": 3 outside"},
         {"{\"take\":\"b\",\"in\":2,\"out\":1}", "before \"in\""},
         {"{\"take\":\"b\",\"colour\":1}", "unknown member \"colour\""},
+        /* a member given twice: the first was taken and the other silently ignored (a stack
+         * edited by hand to trim a pass, "in":1 ... "in":2, kept 1), as rigs and calibration
+         * files refuse it */
+        {"{\"take\":\"b\",\"in\":1,\"in\":2}", "layers[1]: member \"in\" given twice"},
+        {"{\"take\":\"b\",\"region\":{\"landmarks\":[\"chin\"],\"falloff_mm\":4,\"falloff_mm\":9}}",
+         "layers[1].region: member \"falloff_mm\" given twice"},
         {"{\"take\":\"b\",\"region\":{\"landmarks\":[\"chin\"],\"channels\":[\"jaw.open\"]}}", "exactly one"},
         {"{\"take\":\"b\",\"region\":{\"landmarks\":[\"chin\"],\"falloff_mm\":0}}", "core_mm or falloff_mm"},
         {"{\"take\":\"b\",\"region\":{\"vertices\":[[5,2]]}}", "vertex span"},

@@ -730,6 +730,11 @@ static void test_bad_header(void **state)
         {"\"take\":1,", "\"take\":0,", 0, "header: missing or invalid \"take\""},
         {"\"radius\":", "\"face\":{\"up\":[0,0,0],\"facing\":[0,0,1]},\"radius\":", 0,
          "header: invalid \"face\" (up or facing is a zero vector)"},
+        /* a key twice: the first was read and the other ignored (a patched take's "take":7
+         * after "take":1 played as take 1), as rig, calibration and stack files refuse it */
+        {"\"take\":1,", "\"take\":1,\"take\":7,", 0, "header: \"take\" given twice"},
+        {"\"release\"", "\"engage\":\"0.3\",\"engage\":\"0.4\",\"release\"", 0,
+         "header: \"mapping.keys.engage\" given twice"},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         const size_t tl = cases[i].tl ? cases[i].tl : strlen(cases[i].to); /* (tl: with a NUL) */
@@ -863,6 +868,38 @@ static fp_take_reader *nine_frames(const char *name, const char *slate, void (*t
 static void source_beyond(tt_frame *t, uint64_t i)
 {
     if (i == 7) t->ev[3].header.source = 2;
+}
+
+/* A chunk of frames missing from the middle, the chunks around it whole (a copy that lost a
+ * block): the TAIL says how many frames were written; the take read as closed normally with
+ * fewer, and play skipped the gap's commits with no word. Now it is cut at the TAIL, naming
+ * both counts. */
+static void test_frames_chunk_missing(void **state)
+{
+    (void)state;
+    char dir[512], path[1024], err[512];
+    make_dir(dir, sizeof dir, "gap");
+    write_take(dir, "G", 9, 3, path, sizeof path); /* HEAD, 3 x FRMS(3), TAIL */
+    size_t n;
+    uint8_t *b = slurp(path, &n);
+    uint64_t starts[16];
+    uint32_t frames[16];
+    char types[16][5];
+    assert_int_equal(chunk_starts(b, n, starts, frames, types, 16), 5);
+    assert_string_equal(types[4], "TAIL");
+    const size_t gap = starts[3] - starts[2]; /* the second FRMS chunk out */
+    memmove(b + starts[2], b + starts[3], n - starts[3]);
+    fp_take_reader *r;
+    assert_int_equal(fp_take_reader_open_memory(b, n - gap, "g.fptake", &r, err, sizeof err), 0);
+    assert_int_equal(fp_take_reader_frames(r), 6);
+    const fp_take_summary *sm = fp_take_reader_summary(r);
+    assert_true(sm->cut);
+    assert_false(sm->complete);
+    if (!strstr(fp_take_reader_warning(r), "TAIL chunk says 9 frames, the file holds 6"))
+        fail_msg("\"%s\"", fp_take_reader_warning(r));
+    fp_take_reader_close(&r);
+    free(b);
+    rm_rf(dir);
 }
 
 /* An event of an input the header does not list (source >= its inputs' count; crc32 right):
@@ -1260,6 +1297,7 @@ int main(void)
         cmocka_unit_test(test_sigkill_mid_take),
         cmocka_unit_test(test_truncated_every_offset),
         cmocka_unit_test(test_frames_out_of_order),
+        cmocka_unit_test(test_frames_chunk_missing),
         cmocka_unit_test(test_random_flips),
         cmocka_unit_test(test_bad_files),
         cmocka_unit_test(test_bad_header),

@@ -275,18 +275,25 @@ void fp_app_open_progress_init(fp_app_open_progress *p, const char *cmd, bool qu
     *p = (fp_app_open_progress){cmd, !quiet && isatty(STDERR_FILENO), false, 0, "opening", "opened"};
 }
 
+/* The status line on the screen, if any (fp_app_log_line erases it before a line of its own
+ * and draws it again after: a warning while a face opens ran into it). */
+static char status_line[1024];
+static bool status_shown;
+
 void fp_app_open_progress_fn(void *user, const char *stage)
 {
     fp_app_open_progress *p = user;
     if (!p->on) return;
     if (stage) {
         if (!p->shown) p->t0 = fp_now_ns();
+        snprintf(status_line, sizeof status_line, "%s: %s: %s ...", p->cmd, p->phase, stage);
         /* \r and "erase to the end of the line" (ECMA-48 EL): the last step's text goes */
-        fprintf(stderr, "\r\033[K%s: %s: %s ...", p->cmd, p->phase, stage);
+        fprintf(stderr, "\r\033[K%s", status_line);
         fflush(stderr);
-        p->shown = true;
+        p->shown = status_shown = true;
         return;
     }
+    status_shown = false;
     if (!p->shown) return;
     double s = (double)(fp_now_ns() - p->t0) / 1e9;
     fprintf(stderr, "\r\033[K");
@@ -319,8 +326,10 @@ void fp_app_log_line(void *user, int level, const char *source, const char *mess
     if (level > FP_LOG_INFO && !getenv("FACEPUPPET_DEBUG")) return;
     /* one line a terminal may show: a plugin's or a sender's text may carry control bytes */
     char src[128], msg[2048];
-    fprintf(stderr, "facepuppet: %s: %s\n", fp_text_clean(source, src, sizeof src),
-            fp_text_clean(message, msg, sizeof msg));
+    const bool status = status_shown; /* (erased first, drawn again after) */
+    fprintf(stderr, "%sfacepuppet: %s: %s\n%s", status ? "\r\033[K" : "", fp_text_clean(source, src, sizeof src),
+            fp_text_clean(message, msg, sizeof msg), status ? status_line : "");
+    if (status) fflush(stderr);
 }
 
 void fp_app_log_line_quiet(void *user, int level, const char *source, const char *message)
@@ -485,8 +494,9 @@ void fp_app_size_text(double bytes, char *buf, size_t len)
 
 double fp_app_obj_frame_bytes(const fp_mesh *mesh)
 {
-    const double n = (double)mesh->vertex_count, t = (double)mesh->triangle_count;
-    return mesh->uvs ? 36 * n + 23 * n + 24 * t : 36 * n + 17 * t;
+    /* (36 bytes a vertex and 17 a triangle undercounted a frame of a face not from an OBJ by
+     * half: its frames carry vn lines and normal indices) */
+    return fp_mesh_obj_bytes(mesh);
 }
 
 int fp_app_free_room(const char *path, double *bytes)

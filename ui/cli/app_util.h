@@ -18,7 +18,8 @@
  *  as each step begins; when it returns the line is cleared, or replaced by "CMD: opened in
  *  N.N s" when that took a second or more (a large face: loading it and building the contact
  *  guard take long; docs/performance.md). Where stderr is not a terminal (a pipe, a log), or
- *  quiet: nothing. */
+ *  quiet: nothing. A line fp_app_log_line prints meanwhile erases the status line first and
+ *  draws it again after (one status line on the screen at a time, process-wide). */
 typedef struct fp_app_open_progress {
     const char *cmd;  /* "facepuppet run" */
     bool on;          /* stderr is a terminal and not quiet */

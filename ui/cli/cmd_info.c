@@ -121,6 +121,16 @@ static int mesh_info(const char *path)
     if (unused)
         printf("  unused    %zu vertices in no triangle (left out of the bounds, as run leaves them "
                "out of the face's size)\n", unused);
+    /* far from the origin the floats step coarsely (FP_SESSION_MAX_STEP_DIAGONALS): run refuses */
+    double far = 0, diag = 0;
+    for (int k = 0; k < 3; k++) {
+        far = fmax(far, fmax(fabs(lo[k]), fabs(hi[k])));
+        diag += ((double)hi[k] - lo[k]) * ((double)hi[k] - lo[k]);
+    }
+    const double step = far > 0 ? (double)nextafterf((float)far, INFINITY) - (double)(float)far : 0;
+    if (step > FP_SESSION_MAX_STEP_DIAGONALS * sqrt(diag))
+        printf("  precision the surface lies %g units from the origin, where its floats step by %g "
+               "units, coarse for its size (run refuses it: move it near the origin)\n", far, step);
     gltf_info(m);
     fp_mesh_free(&m);
     return FP_EXIT_OK;
