@@ -171,6 +171,22 @@ static void seen_log(void *user, int level, const char *source, const char *mess
     l->n++;
 }
 
+/* The plugin path of the fixtures' folder (fp_plugin_path_init copies the folder's name). */
+static void fixture_path(fp_plugin_path *path)
+{
+    const char *dirs[] = {fixture_dir};
+    fp_plugin_path_init(path, dirs, 1, NULL);
+}
+
+/* Open the input `spec` from path into *inst, its log lines to *seen, and start it. */
+static void start_logged(fp_input_instance *inst, fp_plugin_path *path, const char *spec, log_seen *seen)
+{
+    char err[1024];
+    assert_int_equal(fp_input_instance_open(inst, path, spec, 0, err, sizeof err), 0);
+    fp_input_instance_set_log(inst, seen_log, seen);
+    assert_int_equal(fp_input_instance_start(inst, err, sizeof err), 0);
+}
+
 static void test_log_relayed(void **state)
 {
     (void)state;
@@ -205,9 +221,7 @@ static void test_log_relayed(void **state)
 
     /* create's line waits for the first drain; lines still held at close are handed then */
     seen = (log_seen){.owner = pthread_self()};
-    assert_int_equal(fp_input_instance_open(&inst, &path, "fixture,log=3", 0, err, sizeof err), 0);
-    fp_input_instance_set_log(&inst, seen_log, &seen);
-    assert_int_equal(fp_input_instance_start(&inst, err, sizeof err), 0);
+    start_logged(&inst, &path, "fixture,log=3", &seen);
     fp_input_instance_close(&inst); /* stop joins the thread; close drains */
     assert_int_equal(seen.n, 4);
     assert_string_equal(seen.lines[0], "created");
@@ -241,15 +255,11 @@ static void test_err_filled(void **state)
 static void test_stuck_stop_abandoned(void **state)
 {
     (void)state;
-    const char *dirs[] = {fixture_dir};
     fp_plugin_path path;
-    fp_plugin_path_init(&path, dirs, 1, NULL);
+    fixture_path(&path);
     fp_input_instance inst;
-    char err[1024];
     log_seen seen = {.owner = pthread_self()};
-    assert_int_equal(fp_input_instance_open(&inst, &path, "fixture,stuck=1", 0, err, sizeof err), 0);
-    fp_input_instance_set_log(&inst, seen_log, &seen);
-    assert_int_equal(fp_input_instance_start(&inst, err, sizeof err), 0);
+    start_logged(&inst, &path, "fixture,stuck=1", &seen);
     struct timespec t0, t1;
     clock_gettime(CLOCK_MONOTONIC, &t0);
     fp_input_instance_close(&inst); /* before: joined the plugin's thread forever */
@@ -265,9 +275,7 @@ static void test_stuck_stop_abandoned(void **state)
 
     /* a stop that returns at once is waited for, not abandoned */
     seen = (log_seen){.owner = pthread_self()};
-    assert_int_equal(fp_input_instance_open(&inst, &path, "fixture,log=2", 0, err, sizeof err), 0);
-    fp_input_instance_set_log(&inst, seen_log, &seen);
-    assert_int_equal(fp_input_instance_start(&inst, err, sizeof err), 0);
+    start_logged(&inst, &path, "fixture,log=2", &seen);
     fp_input_instance_close(&inst);
     assert_false(inst.abandoned);
     assert_int_equal(seen.n, 3);
@@ -279,17 +287,13 @@ static void test_stuck_stop_abandoned(void **state)
 static void test_malformed_events_refused(void **state)
 {
     (void)state;
-    const char *dirs[] = {fixture_dir};
     fp_plugin_path path;
-    fp_plugin_path_init(&path, dirs, 1, NULL);
+    fixture_path(&path);
     fp_input_instance inst;
-    char err[1024];
     log_seen seen = {.owner = pthread_self()};
     /* 600 pushes of a still hand, every 100 six of them malformed (fixture_plugin.c
      * FIXTURE_BAD_EVENTS), then 3 buttons and the end of the stream */
-    assert_int_equal(fp_input_instance_open(&inst, &path, "fixture-badevents", 0, err, sizeof err), 0);
-    fp_input_instance_set_log(&inst, seen_log, &seen);
-    assert_int_equal(fp_input_instance_start(&inst, err, sizeof err), 0);
+    start_logged(&inst, &path, "fixture-badevents", &seen);
     fp_event ev;
     int joints = 0, other = 0;
     while (fp_input_instance_poll(&inst, &ev)) {
@@ -322,9 +326,7 @@ static void test_malformed_events_refused(void **state)
 
     /* the good fixture: nothing refused, nothing said */
     seen = (log_seen){.owner = pthread_self()};
-    assert_int_equal(fp_input_instance_open(&inst, &path, "fixture", 0, err, sizeof err), 0);
-    fp_input_instance_set_log(&inst, seen_log, &seen);
-    assert_int_equal(fp_input_instance_start(&inst, err, sizeof err), 0);
+    start_logged(&inst, &path, "fixture", &seen);
     while (fp_input_instance_poll(&inst, &ev)) {
     }
     fp_input_instance_close(&inst);
