@@ -321,6 +321,20 @@ void fp_mesh_bounds(const fp_mesh *mesh, float min[3], float max[3]);
  *  (*used NULL, *unused 0). */
 int fp_mesh_surface_mask(const fp_mesh *mesh, uint8_t **used, size_t *unused);
 
+/** The surface's far-off vertices, a stray spike's tip (one long thin triangle an exporter or
+ *  a slip in a modeller left): per axis, the 0.5th and 99.5th percentiles p_lo, p_hi of the
+ *  coordinates of the vertices in *used (NULL: all); a vertex beyond p_hi + s (p_hi - p_lo)
+ *  or below p_lo - s (p_hi - p_lo) on any axis, s = FP_MESH_OUTLIER_SPAN, is far off and
+ *  used[v] is cleared (a spike 30 mm out of a 21 mm deep head lies 1.35 of the depth out;
+ *  the real faces' farthest, the ICT face's shoulders along x, 0.23). *used, n bytes as
+ *  fp_mesh_surface_mask gives it, is malloc'ed here (all 1, then cleared) when NULL and one
+ *  is found; the caller frees it. *outliers: how many were cleared. Fewer than 4 used
+ *  vertices: none. The session and calibrate leave them out of the face's size, head and
+ *  the hands' placement, as points in no triangle. Returns 0, or -ENOMEM (*used unchanged,
+ *  *outliers 0). Pure but for *used; any thread. */
+#define FP_MESH_OUTLIER_SPAN 0.5
+int fp_mesh_outlier_mask(const fp_mesh *mesh, uint8_t **used, size_t *outliers);
+
 /** fp_mesh_bounds over the vertices v with used[v] != 0 (used NULL: every vertex; none used:
  *  all zeros): the surface's bounds, without points in no triangle. */
 void fp_mesh_bounds_used(const fp_mesh *mesh, const uint8_t *used, float min[3], float max[3]);

@@ -257,11 +257,23 @@ static int open_mesh(fp_session *s, const fp_session_options *opt, double *diag,
         snprintf(err, errlen, "session: out of memory for %zu vertices", s->n);
         return -ENOMEM;
     }
-    fp_mesh_bounds_used(s->mesh, s->used, s->view.bounds_min, s->view.bounds_max);
     if (unused)
         fp_slog_printf(&s->log, FP_LOG_WARNING, "session",
                        "%s: %zu of %zu vertices are in no triangle: left out of the face's size, "
                        "its head and the hands' placement", name, unused, s->n);
+    /* a stray spike's tip (fp_mesh_outlier_mask) decided the face's front: the hands, placed
+     * at its tip, grabbed the spike alone */
+    size_t spiked;
+    if (fp_mesh_outlier_mask(s->mesh, &s->used, &spiked)) {
+        snprintf(err, errlen, "session: out of memory for %zu vertices", s->n);
+        return -ENOMEM;
+    }
+    if (spiked)
+        fp_slog_printf(&s->log, FP_LOG_WARNING, "session",
+                       "%s: %zu of %zu vertices lie far off the rest (beyond %g of its 0.5th-99.5th "
+                       "percentile extent on an axis: a stray spike's tip): left out of the face's "
+                       "size, its head and the hands' placement", name, spiked, s->n, FP_MESH_OUTLIER_SPAN);
+    fp_mesh_bounds_used(s->mesh, s->used, s->view.bounds_min, s->view.bounds_max);
     s->view.vertex_count = s->n;
     s->view.base = s->base;
     *diag = 0;
