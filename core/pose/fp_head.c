@@ -143,3 +143,47 @@ int fp_head_detect_turned(const float *pos, size_t n, const uint8_t *used, const
     }
     return fp_head_detect_used(turned, n, used, out);
 }
+
+int fp_head_nose(const float *pos, size_t n, const uint8_t *used, fp_head_front *out)
+{
+    if (!pos || !out) return -EINVAL;
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t v = 0; v < n; v++) {
+        if (used && !used[v]) continue;
+        for (int k = 0; k < 3; k++) lo[k] = fminf(lo[k], pos[3 * v + k]), hi[k] = fmaxf(hi[k], pos[3 * v + k]);
+    }
+    double ext[3];
+    for (int k = 0; k < 3; k++)
+        if (!((ext[k] = (double)hi[k] - lo[k]) > 0) || !isfinite(ext[k])) return -EINVAL;
+    /* each end's cap (d = 2k for -k, 2k + 1 for +k): its box across, [d][j][0 min, 1 max] */
+    float cap[6][3][2];
+    for (int d = 0; d < 6; d++)
+        for (int j = 0; j < 3; j++) cap[d][j][0] = INFINITY, cap[d][j][1] = -INFINITY;
+    for (size_t v = 0; v < n; v++) {
+        if (used && !used[v]) continue;
+        const float *p = pos + 3 * v;
+        for (int k = 0; k < 3; k++) {
+            const double depth = FP_HEAD_CAP_DEPTH * ext[k];
+            int d = (double)p[k] <= lo[k] + depth ? 2 * k : (double)p[k] >= hi[k] - depth ? 2 * k + 1 : -1;
+            if (d < 0) continue;
+            for (int j = 0; j < 3; j++) cap[d][j][0] = fminf(cap[d][j][0], p[j]), cap[d][j][1] = fmaxf(cap[d][j][1], p[j]);
+        }
+    }
+    double area[6];
+    for (int d = 0; d < 6; d++) {
+        area[d] = 1;
+        for (int j = 0; j < 3; j++)
+            if (j != d / 2) area[d] *= ((double)cap[d][j][1] - cap[d][j][0]) / ext[j];
+    }
+    int best = -1;
+    for (int d = 0; d < 6; d++)
+        if (area[d ^ 1] >= FP_HEAD_NOSE_CONTRAST * area[d] && (best < 0 || area[d] < area[best])) best = d;
+    if (best < 0) return -ENOENT;
+    const int k = best / 2, a = (k + 1) % 3, b = (k + 2) % 3;
+    out->axis = k;
+    out->sign = best & 1 ? 1 : -1;
+    out->up_axis = ext[a] >= ext[b] ? a : b;
+    out->cap = area[best];
+    out->opposite = area[best ^ 1];
+    return 0;
+}

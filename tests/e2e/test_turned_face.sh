@@ -97,6 +97,50 @@ for name in zup face; do
 done
 echo "the Z-up copy without a rig: the hint to give --up +z --facing -y; the face itself: none"
 
+# a smooth head (an ellipsoid 15 x 23 x 19 units with a nose 2.4 units out and a mouth slit),
+# its vertices spread evenly: the mean says nothing, the hint above never fired on its Z-up
+# copy (unit and placement taken along the wrong axes, 6,101 vertices moved against 7,618);
+# its nose does (fp_head_nose): the Z-up copy and one looking along +x draw the hint with the
+# options, the head itself none
+smooth_head() { # FILE UP FACING: the head with +y turned into UP and +z into FACING
+    python3 - "$@" <<'PY'
+import math, sys
+out, up, fa = sys.argv[1:4]
+ax = lambda s: [(1 if s[0] == "+" else -1) if "xyz".index(s[1]) == i else 0 for i in range(3)]
+u, f = ax(up), ax(fa)
+l = [u[1] * f[2] - u[2] * f[1], u[2] * f[0] - u[0] * f[2], u[0] * f[1] - u[1] * f[0]]
+LAT, LON = 60, 90
+with open(out, "w") as o:
+    for i in range(LAT + 1):
+        for j in range(LON):
+            th, ph = math.pi * i / LAT, 2 * math.pi * j / LON
+            d = (math.sin(th) * math.sin(ph), math.cos(th), math.sin(th) * math.cos(ph))
+            nose = math.exp(-((d[0] / 0.12) ** 2 + ((d[1] + 0.05) / 0.2) ** 2)) * max(d[2], 0)
+            mouth = math.exp(-((d[1] + 0.45) / 0.03) ** 2) * math.exp(-((d[0] / 0.3) ** 4)) * max(d[2], 0)
+            p = [a * c * (1 + 0.25 * nose - 0.06 * mouth) for a, c in zip((7.5, 11.5, 9.5), d)]
+            o.write("v %.5f %.5f %.5f\n" % tuple(p[0] * l[k] + p[1] * u[k] + p[2] * f[k] for k in range(3)))
+    for i in range(LAT):
+        for j in range(LON):
+            a, b = i * LON + j + 1, i * LON + (j + 1) % LON + 1
+            o.write("f %d %d %d\nf %d %d %d\n" % (a, a + LON, b, b, a + LON, b + LON))
+PY
+}
+for case in "+y +z none" "+z -y -y" "+z +x +x"; do
+    set -- $case
+    smooth_head "$tmp/smooth.obj" "$1" "$2" || { echo "FAIL: cannot write the smooth head"; exit 1; }
+    "$build/bin/facepuppet" run --plugin-dir "$build/lib/facepuppet" --mesh "$tmp/smooth.obj" --rig none -q \
+        --input "replay:$grab,fast=1" --duration 0.1 --out "$tmp/hint.obj" --force >/dev/null 2>"$tmp/hint.err" ||
+        { cat "$tmp/hint.err"; echo "FAIL: run on the smooth head, up $1 facing $2"; exit 1; }
+    if [ "$3" = none ]; then
+        ! grep -q "no rig and no --up/--facing" "$tmp/hint.err" ||
+            { cat "$tmp/hint.err"; echo "FAIL: a facing hint on the smooth head itself"; exit 1; }
+    else
+        grep -q "a nose, points along $3.*--up +z --facing $3" "$tmp/hint.err" ||
+            { cat "$tmp/hint.err"; echo "FAIL: no nose hint on the smooth head looking along $3, up $1"; exit 1; }
+    fi
+done
+echo "the smooth head: the nose's hint looking along -y and +x with up +z; looking along +z none"
+
 png() { # MESH NAME [OPTIONS...]: frame 100 of a take of the grab on MESH, rendered into $tmp/NAME.png.d
     local mesh=$1 name=$2
     shift 2

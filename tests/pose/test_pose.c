@@ -202,6 +202,60 @@ static void test_head_detect(void **state)
     }
 }
 
+/* The nose (fp_head_nose): on the three real faces, along +z (so the session's hint stays
+ * quiet on them); on a smooth head of evenly spread vertices (an ellipsoid with a nose bump)
+ * turned every way a face is exported, along the axis it was turned to, and up along the
+ * head's long axis. */
+static void test_head_nose(void **state)
+{
+    (void)state;
+    static const char *faces[] = {"ict-facekit/generic_neutral_mesh.obj", "lee-perry-smith/LeePerrySmith.obj",
+                                  "mediapipe-canonical/canonical_face_model.obj"};
+    fp_head_front f;
+    for (size_t i = 0; i < sizeof faces / sizeof faces[0]; i++) {
+        fp_mesh *m = load_face(faces[i]);
+        assert_int_equal(fp_head_nose(m->positions, m->vertex_count, NULL, &f), 0);
+        print_message("%s: nose along %c%c, cap %.3f against %.3f\n", faces[i], f.sign > 0 ? '+' : '-',
+                      "xyz"[f.axis], f.cap, f.opposite);
+        assert_int_equal(f.axis, 2);
+        assert_int_equal(f.sign, 1);
+        fp_mesh_free(&m);
+    }
+    enum { LAT = 60, LON = 90 };
+    static float head[3 * (LAT + 1) * LON], pos[3 * (LAT + 1) * LON];
+    for (int i = 0; i <= LAT; i++)
+        for (int j = 0; j < LON; j++) {
+            const double th = M_PI * i / LAT, ph = 2 * M_PI * j / LON;
+            const double d[3] = {sin(th) * sin(ph), cos(th), sin(th) * cos(ph)}, a[3] = {7.5, 11.5, 9.5};
+            const double nose = exp(-(pow(d[0] / 0.12, 2) + pow((d[1] + 0.05) / 0.2, 2))) * fmax(d[2], 0);
+            for (int k = 0; k < 3; k++) head[3 * (i * LON + j) + k] = (float)(a[k] * d[k] * (1 + 0.25 * nose));
+        }
+    /* (up, facing) as axis indices with signs: Y-up, Z-up looking along -y, Z-up along +x, Y-up along -z */
+    static const int turns[][4] = {{1, 1, 2, 1}, {2, 1, 1, -1}, {2, 1, 0, 1}, {1, 1, 2, -1}};
+    for (size_t t = 0; t < sizeof turns / sizeof turns[0]; t++) {
+        const int ua = turns[t][0], us = turns[t][1], fa = turns[t][2], fs = turns[t][3], la = 3 - ua - fa;
+        for (int v = 0; v < (LAT + 1) * LON; v++) {
+            const float *h = head + 3 * v;
+            float *p = pos + 3 * v;
+            p[la] = h[0], p[ua] = (float)us * h[1], p[fa] = (float)fs * h[2];
+        }
+        assert_int_equal(fp_head_nose(pos, (LAT + 1) * LON, NULL, &f), 0);
+        assert_int_equal(f.axis, fa);
+        assert_int_equal(f.sign, fs);
+        assert_int_equal(f.up_axis, ua);
+        assert_true(f.opposite >= FP_HEAD_NOSE_CONTRAST * f.cap);
+    }
+    /* a ball has no nose; a flat mesh is refused */
+    for (int v = 0; v < (LAT + 1) * LON; v++) {
+        const float *h = head + 3 * v;
+        const double r = sqrt((double)h[0] * h[0] + (double)h[1] * h[1] + (double)h[2] * h[2]);
+        for (int k = 0; k < 3; k++) pos[3 * v + k] = (float)(10 * h[k] / r);
+    }
+    assert_int_equal(fp_head_nose(pos, (LAT + 1) * LON, NULL, &f), -ENOENT);
+    for (int v = 0; v < (LAT + 1) * LON; v++) pos[3 * v + 2] = 0;
+    assert_int_equal(fp_head_nose(pos, (LAT + 1) * LON, NULL, &f), -EINVAL);
+}
+
 /* A head of a few float steps (a face in metres moved 1e6 units off the origin: floats keep
  * steps of 0.0625 there) has no height above its neck: fp_head_detect said 0 with an infinite
  * mm per unit (run printed "inf mm per mesh unit" and a NaN summary, exit 0); it refuses it, and
@@ -517,6 +571,7 @@ int main(void)
         cmocka_unit_test(test_fit_workspace),
         cmocka_unit_test(test_head_detect),
         cmocka_unit_test(test_head_detect_coarse),
+        cmocka_unit_test(test_head_nose),
         cmocka_unit_test(test_calibration_file),
         cmocka_unit_test(test_face_frame),
         cmocka_unit_test(test_head_scale_plausible),
