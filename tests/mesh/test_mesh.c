@@ -1296,6 +1296,39 @@ static fp_mesh *grid_mesh(size_t side, float z)
     return m;
 }
 
+/* fp_mesh_outlier_mask: a grid has none (used stays NULL); one vertex pulled 20 units out of
+ * a 0.016-unit relief is cleared, alone, and a mask given keeps its zeros; a grid of one depth
+ * (every z equal: the selection over equal values) clears the pulled vertex too. */
+static void test_outlier_mask(void **state)
+{
+    (void)state;
+    fp_mesh *m = grid_mesh(30, 0);
+    uint8_t *used = NULL;
+    size_t far = 99;
+    assert_int_equal(fp_mesh_outlier_mask(m, &used, &far), 0);
+    assert_null(used);
+    assert_int_equal(far, 0);
+    m->positions[3 * 17 + 2] = 20;
+    assert_int_equal(fp_mesh_outlier_mask(m, &used, &far), 0);
+    assert_non_null(used);
+    assert_int_equal(far, 1);
+    for (size_t v = 0; v < m->vertex_count; v++) assert_int_equal(used[v], v != 17);
+    memset(used, 1, m->vertex_count);
+    used[5] = 0;
+    assert_int_equal(fp_mesh_outlier_mask(m, &used, &far), 0);
+    assert_int_equal(far, 1);
+    for (size_t v = 0; v < m->vertex_count; v++) assert_int_equal(used[v], v != 17 && v != 5);
+    free(used);
+    used = NULL;
+    for (size_t v = 0; v < m->vertex_count; v++) m->positions[3 * v + 2] = v == 17 ? 20.0f : 1.0f;
+    assert_int_equal(fp_mesh_outlier_mask(m, &used, &far), 0);
+    assert_int_equal(far, 1);
+    assert_non_null(used);
+    assert_int_equal(used[17], 0);
+    free(used);
+    fp_mesh_free(&m);
+}
+
 static int same_positions(const fp_mesh *a, const fp_mesh *b)
 {
     return a->vertex_count == b->vertex_count && a->triangle_count == b->triangle_count &&
@@ -1934,6 +1967,7 @@ int main(void)
         cmocka_unit_test(test_gltf_bad_index_fields),
         cmocka_unit_test(test_glb_version),
         cmocka_unit_test(test_gltf_node_transform_lengths),
+        cmocka_unit_test(test_outlier_mask),
     };
     return cmocka_run_group_tests_name("mesh", tests, setup, teardown);
 }
