@@ -1,5 +1,6 @@
 /* facepuppet plugins: list every plugin on the search path; plugins check FILE.so: validate one. */
 #define _GNU_SOURCE
+#include "app_getopt.h"
 #include "fp_isolate.h"
 #include "app_util.h"
 #include "command.h"
@@ -253,7 +254,7 @@ static int check_main(int argc, char **argv)
     unsigned long long whole; /* an integer option (fp_parse_whole) */
     optind = 1;
     int status = FP_EXIT_OK;
-    for (int c; (c = getopt_long(argc, argv, "h", opts, NULL)) != -1;) {
+    for (int c; (c = fp_app_getopt(argc, argv, "h", opts)) != -1;) {
         switch (c) {
         case 'j': json = true; break;
         case 'a': o.arg = optarg; break;
@@ -369,7 +370,7 @@ static int plugins_main(int argc, char **argv)
     size_t ndirs = 0;
     bool json = false;
     optind = 1;
-    for (int c; (c = getopt_long(argc, argv, "P:h", opts, NULL)) != -1;) {
+    for (int c; (c = fp_app_getopt(argc, argv, "P:h", opts)) != -1;) {
         switch (c) {
         case 'j': json = true; break;
         case 'P':

@@ -1,6 +1,7 @@
 /* facepuppet pose: the mesh posed by its rig's channels, without hands (for rig authors and
  * checks). Also fp_app_rig_info(), the `facepuppet info RIG.json` description. */
 #define _GNU_SOURCE
+#include "app_getopt.h"
 #include "app_util.h"
 #include "command.h"
 #include "fp_mesh.h"
@@ -47,7 +48,7 @@ static int pose_main(int argc, char **argv)
     const char *sets[FP_RIG_MAX_CHANNELS];
     size_t nsets = 0;
     optind = 1;
-    for (int c; (c = getopt_long(argc, argv, "m:r:s:o:h", opts, NULL)) != -1;) {
+    for (int c; (c = fp_app_getopt(argc, argv, "m:r:s:o:h", opts)) != -1;) {
         switch (c) {
         case 'm': mesh_path = optarg; break;
         case 'r': rig_path = optarg; break;
