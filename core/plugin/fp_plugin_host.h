@@ -246,6 +246,8 @@ typedef struct fp_input_instance {
     _Atomic(const char *) refused_why[FP_EVENT_FAULTS]; /* per fp_event_fault: the first
                                             one's reason (a static phrase), set by push_event */
     unsigned refused_said;               /* owner's: bit f, the warning for fault f was said */
+    bool own_clock;                      /* fp_input_own_clock, read before start: its events'
+                                            times are not held to the host's clock */
 } fp_input_instance;
 
 /** Load the plugin for `spec` and create the instance (not yet started). The host strips

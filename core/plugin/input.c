@@ -24,6 +24,7 @@ static bool host_push(const fp_host *host, const fp_event_header *ev)
     memcpy(&copy, ev, ev->size);
     const char *why;
     fp_event_fault f = fp_event_check(&copy, &why);
+    if (!f) f = fp_event_check_time(&copy, inst->own_clock ? 0 : fp_now_ns(), inst->own_clock, &why);
     if (f) { /* dropped here, so a torn or absurd sample never reaches a hand; the owner's
               * next drain says so (no lock on the plugin's thread) */
         const char *none = NULL;
@@ -327,6 +328,7 @@ out:
 int fp_input_instance_start(fp_input_instance *inst, char *err, size_t errlen)
 {
     char perr[512] = "";
+    inst->own_clock = fp_input_own_clock(inst->input); /* (fp_event_check_time) */
     fp_plugin_call_enter(inst->name, "start", 0);
     int rc = inst->input->start(inst->input, perr, sizeof perr);
     fp_plugin_call_leave();

@@ -5,7 +5,7 @@
  *   FIXTURE_CRASH_INIT  init dereferences a null pointer
  *   FIXTURE_HANG_INIT   init never returns
  *   FIXTURE_CRASH_THREAD start() runs a thread of its own that dereferences a null pointer
- *   FIXTURE_BAD_EVENTS  start() pushes a right hand's joint positions 600 times, 10 ms apart
+ *   FIXTURE_BAD_EVENTS  start() pushes a right hand's joint positions 600 times, each stamped when pushed
  *                       (a hand held still 40 mm in front of the tracker's origin), with
  *                       malformed events among them: joint positions with a NaN, one
  *                       beyond 10 m, an unknown type, a joint positions event of a wrong
@@ -92,9 +92,11 @@ static int start(fp_input *self, char *err, size_t errlen)
     if (fx->log_lines > 0) fx->logging = !pthread_create(&fx->logger, NULL, logger, fx);
     else if (fx->stuck) fx->logging = !pthread_create(&fx->logger, NULL, stuck_thread, fx);
 #ifdef FIXTURE_BAD_EVENTS
-    int64_t t0 = host->now_ns(host);
     for (int k = 0; k < 600; k++) {
-        fp_event_joint_positions jp = {{sizeof jp, FP_EVENT_JOINT_POSITIONS, 0, t0 + k * 10000000LL, 0, 1}, {{0}}};
+        /* stamped when pushed: 10 ms apart ahead of the clock would be up to 6 s in the
+         * future, itself refused (fp_event_check_time) */
+        const int64_t tk = host->now_ns(host);
+        fp_event_joint_positions jp = {{sizeof jp, FP_EVENT_JOINT_POSITIONS, 0, tk, 0, 1}, {{0}}};
         for (int j = 0; j < FP_HAND_JOINTS; j++) {
             jp.mm[j][0] = 10.0f * (float)(j % 5);
             jp.mm[j][1] = 150.0f + 8.0f * (float)(j / 5);
@@ -106,7 +108,7 @@ static int start(fp_input *self, char *err, size_t errlen)
         case 30: jp.header.type = 99; break;
         case 40: jp.header.size = sizeof jp - 12; break;
         case 50: {
-            fp_event_wrist_pose w = {{sizeof w, FP_EVENT_WRIST_POSE, 0, t0 + k * 10000000LL, 0, 1},
+            fp_event_wrist_pose w = {{sizeof w, FP_EVENT_WRIST_POSE, 0, tk, 0, 1},
                                      {0, 150, 40}, {2, 0, 0, 0}};
             host->push_event(host, &w.header);
             continue;

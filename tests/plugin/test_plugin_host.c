@@ -334,6 +334,53 @@ static void test_malformed_events_refused(void **state)
     fp_plugin_path_clear(&path);
 }
 
+/* ---- an event's time: the host refuses what `plugins check` fails (fp_event_check_time) ---- */
+
+static void test_event_times_refused(void **state)
+{
+    (void)state;
+    fp_plugin_path path;
+    fixture_path(&path);
+    fp_input_instance inst;
+    log_seen seen = {.owner = pthread_self()};
+    start_logged(&inst, &path, "fixture", &seen);
+    assert_false(inst.own_clock); /* a device's input: its times are the host's */
+    fp_event ev;
+    while (fp_input_instance_poll(&inst, &ev)) {
+    }
+    uint64_t before = atomic_load(&inst.refused);
+    fp_event_status st = {{sizeof st, FP_EVENT_STATUS, 0, 0, 0, -1}, FP_STATUS_CONNECTED, "t"};
+    int64_t ahead[] = {-1, fp_now_ns() + 10 * FP_EVENT_MAX_AHEAD_NS, INT64_MAX, fp_now_ns()};
+    for (int i = 0; i < 4; i++) {
+        st.header.time_ns = ahead[i];
+        assert_true(inst.host.push_event(&inst.host, &st.header));
+    }
+    /* the negative and the future ones refused (before: taken), the one of now kept */
+    assert_int_equal((int)(atomic_load(&inst.refused) - before), 3);
+    bool now_kept = false;
+    while (fp_input_instance_poll(&inst, &ev))
+        if (ev.header.type == FP_EVENT_STATUS && ev.header.time_ns == ahead[3]) now_kept = true;
+    assert_true(now_kept);
+    fp_input_instance_drain_log(&inst);
+    bool said = false;
+    for (int i = 0; i < seen.n; i++) said = said || strstr(seen.lines[i], "time_ns");
+    assert_true(said);
+    fp_input_instance_close(&inst);
+    fp_plugin_path_clear(&path);
+
+    /* the rule itself: an input with its own clock may run ahead, never below 0 */
+    const char *why = NULL;
+    fp_event e;
+    memset(&e, 0, sizeof e);
+    e.status = st;
+    e.header.time_ns = fp_now_ns() + 10 * FP_EVENT_MAX_AHEAD_NS;
+    assert_int_equal(fp_event_check_time(&e, fp_now_ns(), true, &why), FP_EVENT_OK);
+    assert_int_equal(fp_event_check_time(&e, fp_now_ns(), false, &why), FP_EVENT_BAD_TIME);
+    assert_non_null(strstr(why, "ahead"));
+    e.header.time_ns = -5;
+    assert_int_equal(fp_event_check_time(&e, fp_now_ns(), true, &why), FP_EVENT_BAD_TIME);
+}
+
 /* ---- plugin folders that could be hijacked are skipped, with the reason ---- */
 
 /* A fresh folder holding a copy of the good fixture plugin as input-NAME.so. */
@@ -740,6 +787,7 @@ int main(void)
         cmocka_unit_test(test_spec_parse),        cmocka_unit_test(test_loader_errors),
         cmocka_unit_test(test_env_path_and_instance),
         cmocka_unit_test(test_log_relayed), cmocka_unit_test(test_malformed_events_refused),
+        cmocka_unit_test(test_event_times_refused),
         cmocka_unit_test(test_err_filled),
         cmocka_unit_test(test_queue_mpsc),
         cmocka_unit_test(test_queue_full),        cmocka_unit_test(test_queue_retry),
