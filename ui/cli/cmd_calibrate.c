@@ -216,8 +216,10 @@ static int calibrate_parse(int argc, char **argv, calibrate_args *a)
     }
     int oc = fp_app_check_new_output("facepuppet calibrate", "--out", a->out, a->force);
     if (oc) return oc;
-    if (!a->mesh_path)
-        a->mesh_path = fp_app_data_path("faces/ict-facekit/generic_neutral_mesh.obj", a->demo, sizeof a->demo);
+    if (!a->mesh_path &&
+        !(a->mesh_path = fp_app_data_path("facepuppet calibrate", "faces/ict-facekit/generic_neutral_mesh.obj",
+                                          a->demo, sizeof a->demo)))
+        return FP_EXIT_NOINPUT;
     return -1;
 }
 

@@ -156,10 +156,8 @@ int fp_app_rig_info(const char *path)
     fp_mesh *m = NULL;
     char mp[4096] = "";
     if (fp_rig_mesh_name(rig)[0]) {
-        const char *root = getenv("FP_SHARED_DATA");
-#ifdef FP_SHARED_DATA
-        if (!root || !*root) root = FP_SHARED_DATA;
-#endif
+        char rootbuf[4096];
+        const char *root = fp_app_data_root(rootbuf, sizeof rootbuf); /* none: no mesh */
         if (root) {
             snprintf(mp, sizeof mp, "%s/%s", root, fp_rig_mesh_name(rig));
             if (fp_mesh_load(mp, &m, err, sizeof err) != FP_MESH_OK) m = NULL;
