@@ -19,7 +19,9 @@
  *                       key nostart=1: its instance has no start() (NULL); key
  *                       errfill=1: create fills err to its very end (no NUL) and fails;
  *                       key stuck=1: start runs a thread that never ends (a read loop
- *                       blocked for good), which stop joins: stop never returns */
+ *                       blocked for good), which stop joins: stop never returns;
+ *                       stuck=2: the same thread also pushes a status event and logs a
+ *                       line every 50 ms (a read that woke up after its input was abandoned) */
 #define _POSIX_C_SOURCE 200809L /* nanosleep */
 #include <facepuppet/plugin.h>
 
@@ -61,10 +63,15 @@ typedef struct fixture {
 
 static void *stuck_thread(void *arg)
 {
-    (void)arg;
+    fixture *fx = arg;
     for (;;) {
-        struct timespec ts = {1, 0};
+        struct timespec ts = {fx->stuck == 2 ? 0 : 1, fx->stuck == 2 ? 50000000L : 0};
         nanosleep(&ts, NULL);
+        if (fx->stuck != 2) continue;
+        fp_event_status st = {{sizeof st, FP_EVENT_STATUS, 0, fx->host->now_ns(fx->host), 0, -1},
+                              FP_STATUS_CONNECTED, "woke"};
+        fx->host->push_event(fx->host, &st.header);
+        fx->host->log(fx->host, FP_LOG_WARNING, "woke");
     }
     return NULL;
 }

@@ -282,6 +282,32 @@ static void test_stuck_stop_abandoned(void **state)
     fp_plugin_path_clear(&path);
 }
 
+/* ---- an abandoned input's thread that wakes after its instance was freed ---- */
+
+static void test_abandoned_push_after_free(void **state)
+{
+    (void)state;
+    fp_plugin_path path;
+    fixture_path(&path);
+    fp_input_instance *inst = malloc(sizeof *inst);
+    assert_non_null(inst);
+    log_seen seen = {.owner = pthread_self()};
+    /* stuck=2: a thread stop never ends, which pushes and logs every 50 ms */
+    start_logged(inst, &path, "fixture,stuck=2", &seen);
+    fp_input_instance_close(inst);
+    assert_true(inst->abandoned);
+    assert_null(inst->link); /* handed to the plugin's threads, no longer the instance's */
+    /* the owner frees what it owns (a session freed with its inputs); the thread goes on
+     * pushing and logging through the fp_host it was given (before: &inst->host, inside the
+     * freed instance: a call through garbage, SIGSEGV) */
+    void *(*volatile wipe)(void *, int, size_t) = memset; /* (not elided before free) */
+    wipe(inst, 0xA5, sizeof *inst); /* as the memory would be when used again */
+    free(inst);
+    struct timespec ts = {0, 300000000L}; /* six pushes and logs */
+    nanosleep(&ts, NULL);
+    fp_plugin_path_clear(&path);
+}
+
 /* ---- malformed events are refused at push_event, said once per kind and counted ---- */
 
 static void test_malformed_events_refused(void **state)
@@ -353,7 +379,7 @@ static void test_event_times_refused(void **state)
     int64_t ahead[] = {-1, fp_now_ns() + 10 * FP_EVENT_MAX_AHEAD_NS, INT64_MAX, fp_now_ns()};
     for (int i = 0; i < 4; i++) {
         st.header.time_ns = ahead[i];
-        assert_true(inst.host.push_event(&inst.host, &st.header));
+        assert_true(inst.link->host.push_event(&inst.link->host, &st.header));
     }
     /* the negative and the future ones refused (before: taken), the one of now kept */
     assert_int_equal((int)(atomic_load(&inst.refused) - before), 3);
@@ -798,6 +824,7 @@ int main(void)
         cmocka_unit_test(test_call_oldest),
         /* last: its abandoned stop() stays a call in progress (test_call_oldest wants none) */
         cmocka_unit_test(test_stuck_stop_abandoned),
+        cmocka_unit_test(test_abandoned_push_after_free), /* (the same) */
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
