@@ -2,6 +2,7 @@
 #define _GNU_SOURCE
 #include "fp_plugin_host.h"
 #include "fp_isolate.h"
+#include "fp_control_check.h"
 #include "fp_event_check.h"
 #include "fp_plugin_crash.h"
 
@@ -280,6 +281,44 @@ static void test_stuck_stop_abandoned(void **state)
     assert_false(inst.abandoned);
     assert_int_equal(seen.n, 3);
     fp_plugin_path_clear(&path);
+}
+
+/* ---- an isolated mapping holds, after a fault, only a set the session would take ---- */
+
+static void test_isolate_holds_only_good_set(void **state)
+{
+    (void)state;
+    char file[4200], helper[4200], err[1024] = "";
+    snprintf(file, sizeof file, "%s/map-crash.so", fixture_dir);
+    snprintf(helper, sizeof helper, "%s/../../bin/facepuppet", fixture_dir);
+    fp_host host;
+    fp_host_init_for_mapping(&host, "crash");
+    /* frame 1: a set over capacity (refused by the session), frame 2: a crash (SIGSEGV) */
+    fp_param keys[] = {{"at", "2"}, {"overcount", "1"}};
+    fp_isolate_options opt = {.helper = helper, .deadline_ms = 5000, .quiet_restarts = true};
+    fp_mapping *m = NULL;
+    int rc = fp_isolate_mapping_create(&opt, file, "crash", &host, keys, 2, &m, err, sizeof err);
+    if (rc) fail_msg("isolated map-crash: %s", err);
+    enum { CAP = 8 };
+    float start[CAP][3], end[CAP][3];
+    fp_channel ch[2];
+    fp_control_set cs = {.size = sizeof cs, .capacity = CAP, .start = start, .end = end,
+                         .channels = ch, .channel_capacity = 2};
+    fp_frame_input in = {.size = sizeof in, .radius = 1.0};
+    for (int h = 0; h < FP_HANDS; h++)
+        for (int f = 0; f < FP_FINGERS; f++) in.tip_distance[h][f] = INFINITY;
+    in.frame = 0; /* no hands: an empty, inactive set (the last good one) */
+    assert_int_equal(m->process(m, &in, &cs), 0);
+    assert_int_equal(fp_control_check(&cs, NULL, NULL), FP_CONTROL_OK);
+    in.frame = 1;
+    assert_int_equal(m->process(m, &in, &cs), 0);
+    assert_int_equal(fp_control_check(&cs, NULL, NULL), FP_CONTROL_OVER_CAPACITY); /* refused */
+    in.frame = 2; /* the helper crashes: the held set is frame 0's, not frame 1's clamped */
+    assert_int_equal(m->process(m, &in, &cs), 0);
+    assert_false(cs.active); /* before: active, 8 vectors of the refused set */
+    assert_int_equal(cs.count, 0);
+    assert_int_equal(fp_control_check(&cs, NULL, NULL), FP_CONTROL_OK);
+    m->destroy(m);
 }
 
 /* ---- an abandoned input's thread that wakes after its instance was freed ---- */
@@ -814,6 +853,7 @@ int main(void)
         cmocka_unit_test(test_env_path_and_instance),
         cmocka_unit_test(test_log_relayed), cmocka_unit_test(test_malformed_events_refused),
         cmocka_unit_test(test_event_times_refused),
+        cmocka_unit_test(test_isolate_holds_only_good_set),
         cmocka_unit_test(test_err_filled),
         cmocka_unit_test(test_queue_mpsc),
         cmocka_unit_test(test_queue_full),        cmocka_unit_test(test_queue_retry),
