@@ -844,13 +844,12 @@ static void ih_log(const fp_host *host, fp_log_level level, const char *message)
 }
 static const void *ih_ext(const fp_host *host, const char *id) { (void)host; (void)id; return NULL; }
 
-/* Why ev is malformed, or NULL: its content (fp_event_check.h), then its time. latest: the
- * last time_ns an event may have. */
-static const char *event_problem(const fp_event *ev, int64_t latest)
+/* Why ev is malformed, or NULL: its content and its time, the host's rule (fp_event_check.h).
+ * now: the host's clock when the queue is read; own_clock: the input keeps its own. */
+static const char *event_problem(const fp_event *ev, int64_t now, bool own_clock)
 {
     const char *why;
-    if (fp_event_check(ev, &why)) return why;
-    if (ev->header.time_ns < 0 || ev->header.time_ns > latest) return "time_ns in the future or negative";
+    if (fp_event_check(ev, &why) || fp_event_check_time(ev, now, own_clock, &why)) return why;
     return NULL;
 }
 
@@ -909,17 +908,14 @@ static void check_input(checker *c, creator *cr)
             fp_plugin_call_leave();
         }
         atomic_store(&ih->stopped, true);
-        /* a device's events are measured by now (1 s of leeway); a recording's are on its own
-         * clock (host time at start + the sample's time: plugin.h, FP_EXT_RECORDING_INFO), ahead
-         * of the host's with fast=1 or a high speed, by as much as the recording lasts */
-        const bool recording = FP_HAS_FIELD(in, fp_input, get_extension) && in->get_extension &&
-                               (in->get_extension(in, FP_EXT_RECORDING_INFO) ||
-                                in->get_extension(in, FP_EXT_INPUT_CLOCK));
-        int64_t latest = recording ? INT64_MAX : now_ns() + 1000000000LL;
+        /* a device's events are measured by now; a recording's are on its own clock
+         * (fp_event_check_time, as the host applies it at push_event) */
+        const bool own_clock = fp_input_own_clock(in);
+        const int64_t now = now_ns();
         fp_event ev;
         while (fp_event_queue_pop(&ih->queue, &ev)) {
             events++;
-            const char *why = event_problem(&ev, latest);
+            const char *why = event_problem(&ev, now, own_clock);
             if (why && !bad++)
                 snprintf(first_bad, sizeof first_bad, "cycle %d, event %zu (type %u, size %u, hand %d): %s",
                          k + 1, events, ev.header.type, ev.header.size, ev.header.hand, why);

@@ -79,3 +79,19 @@ fp_event_fault fp_event_check(const fp_event *ev, const char **why)
     }
     return FP_EVENT_OK;
 }
+
+fp_event_fault fp_event_check_time(const fp_event *ev, int64_t now_ns, bool own_clock, const char **why)
+{
+    if (why) *why = NULL;
+    if (ev->header.time_ns < 0) return fault(FP_EVENT_BAD_TIME, "time_ns is negative", why);
+    if (!own_clock && now_ns <= INT64_MAX - FP_EVENT_MAX_AHEAD_NS &&
+        ev->header.time_ns > now_ns + FP_EVENT_MAX_AHEAD_NS)
+        return fault(FP_EVENT_BAD_TIME, "time_ns is more than 1 s ahead of the host's clock", why);
+    return FP_EVENT_OK;
+}
+
+bool fp_input_own_clock(fp_input *in)
+{
+    return in && FP_HAS_FIELD(in, fp_input, get_extension) && in->get_extension &&
+           (in->get_extension(in, FP_EXT_RECORDING_INFO) || in->get_extension(in, FP_EXT_INPUT_CLOCK));
+}

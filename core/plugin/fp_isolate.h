@@ -11,7 +11,9 @@
  *
  * The watchdog: a call that has not answered within the deadline, or a helper that died (any
  * signal, any exit), is a fault. The call returns at once with the last good control set
- * held (without its intents; an inactive set where it committed), the fault is reported once
+ * held (good: process returned >= 0 and the set passed the session's rule, fp_control_check.h,
+ * so a set the session refused is never shown later; without its intents; an inactive set
+ * where it committed), the fault is reported once
  * through fp_host.log naming the plugin, the call, the frame and the cause, the helper is
  * killed (SIGKILL) and reaped, and a new one is started in the background at the next frame,
  * created anew with the same keys; it serves from the first frame whose time

@@ -214,10 +214,24 @@ typedef void (*fp_host_log_fn)(void *user, int level, const char *source, const 
  *  a session): letters, digits, '-' and '_'. */
 #define FP_PERFORMER_NAME_MAX 31
 
-/** One running input: its plugin, the fp_host given to it, its queue. */
+struct fp_input_instance;
+/** The fp_host an input plugin is given, apart from its instance (host_data is this link):
+ *  a plugin's thread that outlives an abandoned stop() may still push or log through it after
+ *  the owner freed the instance, so an abandoned input's link is never freed (leaked on
+ *  purpose, a few dozen bytes) and its calls find inst gone and do nothing. Otherwise freed by
+ *  fp_input_instance_close once the plugin's threads are gone. */
+typedef struct fp_input_link {
+    fp_host host;                        /* what the plugin holds (create's host) */
+    struct fp_input_instance *inst;      /* where push_event and log go, until abandoned */
+    atomic_bool abandoned;               /* set by the owner: calls do nothing from then on */
+    atomic_int busy;                     /* push_event and log calls in progress (the owner
+                                            waits for 0 after setting abandoned) */
+} fp_input_link;
+
+/** One running input: its plugin, the fp_host given to it (its link), its queue. */
 typedef struct fp_input_instance {
     fp_plugin plugin;
-    fp_host host;
+    fp_input_link *link;                 /* link->host is the plugin's fp_host (heap) */
     fp_input *input;
     fp_event_queue queue;
     char name[64];                       /* the SPEC's name, for messages */
@@ -246,6 +260,8 @@ typedef struct fp_input_instance {
     _Atomic(const char *) refused_why[FP_EVENT_FAULTS]; /* per fp_event_fault: the first
                                             one's reason (a static phrase), set by push_event */
     unsigned refused_said;               /* owner's: bit f, the warning for fault f was said */
+    bool own_clock;                      /* fp_input_own_clock, read before start: its events'
+                                            times are not held to the host's clock */
 } fp_input_instance;
 
 /** Load the plugin for `spec` and create the instance (not yet started). The host strips
@@ -285,7 +301,9 @@ size_t fp_input_instance_drain_log(fp_input_instance *inst);
  *  returned within FP_INPUT_STOP_DEADLINE_MS (a plugin's thread blocked for good) is
  *  abandoned so that the command can end: an error line in the input's log names it
  *  ("stop has not returned within 5 s ..."), inst->abandoned is set, and nothing more of the
- *  plugin is called or freed (destroy, its queue, its code stay: its threads may still run).
+ *  plugin is called or freed (destroy, its code stay: its threads may still run). Its link
+ *  is detached (inst->link NULL, the link kept for good): what its threads push or log from
+ *  then on is dropped there, so the owner may free the instance's memory.
  *  The same holds for fp_input_instance_close_record. */
 void fp_input_instance_close(fp_input_instance *inst);
 /** Pop one event; queues it for the recording if any (no I/O on the caller's thread).

@@ -16,14 +16,14 @@
 
 #define FP_INPUT_QUEUE_CAPACITY 4096
 
-static bool host_push(const fp_host *host, const fp_event_header *ev)
+static bool push_to(fp_input_instance *inst, const fp_event_header *ev)
 {
-    fp_input_instance *inst = host->host_data;
     if (!ev || ev->size < sizeof *ev || ev->size > sizeof(fp_event)) return false;
     fp_event copy;
     memcpy(&copy, ev, ev->size);
     const char *why;
     fp_event_fault f = fp_event_check(&copy, &why);
+    if (!f) f = fp_event_check_time(&copy, inst->own_clock ? 0 : fp_now_ns(), inst->own_clock, &why);
     if (f) { /* dropped here, so a torn or absurd sample never reaches a hand; the owner's
               * next drain says so (no lock on the plugin's thread) */
         const char *none = NULL;
@@ -37,6 +37,30 @@ static bool host_push(const fp_host *host, const fp_event_header *ev)
     return true;
 }
 
+/* The link's instance for one call, busy counted, or NULL once abandoned (then the call does
+ * nothing: the instance may be freed). Pair with link_leave. */
+static fp_input_instance *link_enter(const fp_host *host)
+{
+    fp_input_link *l = host ? host->host_data : NULL;
+    if (!l) return NULL;
+    atomic_fetch_add(&l->busy, 1);
+    if (atomic_load(&l->abandoned)) return NULL; /* (seq_cst: the owner sees busy, or we see this) */
+    return l->inst;
+}
+static void link_leave(const fp_host *host)
+{
+    fp_input_link *l = host ? host->host_data : NULL;
+    if (l) atomic_fetch_sub(&l->busy, 1);
+}
+
+static bool host_push(const fp_host *host, const fp_event_header *ev)
+{
+    fp_input_instance *inst = link_enter(host);
+    bool taken = inst ? push_to(inst, ev) : true; /* abandoned: dropped, never to be sent again */
+    link_leave(host);
+    return taken;
+}
+
 static int64_t host_now(const fp_host *host)
 {
     (void)host;
@@ -46,9 +70,10 @@ static int64_t host_now(const fp_host *host)
 /* Any thread: the line waits in the instance's relay for its owner (log_relay.h). */
 static void host_log(const fp_host *host, fp_log_level level, const char *message)
 {
-    fp_input_instance *inst = host ? host->host_data : NULL;
-    if (!inst || (level > FP_LOG_INFO && !getenv("FACEPUPPET_DEBUG"))) return;
-    fp_log_relay_push(&inst->log, (int)level, message);
+    if (level > FP_LOG_INFO && !getenv("FACEPUPPET_DEBUG")) return;
+    fp_input_instance *inst = link_enter(host);
+    if (inst) fp_log_relay_push(&inst->log, (int)level, message);
+    link_leave(host);
 }
 
 void fp_input_instance_set_log(fp_input_instance *inst, fp_host_log_fn fn, void *user)
@@ -263,11 +288,16 @@ int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
         snprintf(err, errlen, "%s: out of memory", spec_text);
         goto out;
     }
-    host_fill(&inst->host, inst);
+    if (!(inst->link = calloc(1, sizeof *inst->link))) {
+        rc = fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", spec_text);
+        goto out;
+    }
+    inst->link->inst = inst;
+    host_fill(&inst->link->host, inst->link);
     const fp_input_factory *f = inst->plugin.factory;
     char perr[512] = "";
     fp_plugin_call_enter(inst->name, "create", 0);
-    rc = f->create(&inst->host, spec.arg, spec.params, spec.nparams, &inst->input, perr, sizeof perr);
+    rc = f->create(&inst->link->host, spec.arg, spec.params, spec.nparams, &inst->input, perr, sizeof perr);
     fp_plugin_call_leave();
     perr[sizeof perr - 1] = '\0'; /* (a plugin that filled it to the end: read no further) */
     if (rc || !inst->input) {
@@ -297,7 +327,7 @@ int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
             char msg[8400];
             snprintf(msg, sizeof msg, "record=%s exists: recording to %s instead (force=1 "
                      "overwrites)", record, used);
-            inst->host.log(&inst->host, FP_LOG_WARNING, msg);
+            inst->link->host.log(&inst->link->host, FP_LOG_WARNING, msg);
         }
     }
     if (forward) {
@@ -308,12 +338,12 @@ int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
         char line[400];
         snprintf(line, sizeof line, "forwarding its events to %s over OSC (docs/osc.md, Forward)",
                  fp_event_forwarder_target(inst->forward));
-        inst->host.log(&inst->host, FP_LOG_INFO, line);
+        inst->link->host.log(&inst->link->host, FP_LOG_INFO, line);
     }
     if (inst->filter.kind != FP_FILTER_OFF) {
         char line[512];
         fp_filter_describe(&inst->filter, line, sizeof line);
-        inst->host.log(&inst->host, FP_LOG_INFO, line);
+        inst->link->host.log(&inst->link->host, FP_LOG_INFO, line);
     }
 out:
     fp_spec_clear(&spec);
@@ -327,6 +357,7 @@ out:
 int fp_input_instance_start(fp_input_instance *inst, char *err, size_t errlen)
 {
     char perr[512] = "";
+    inst->own_clock = fp_input_own_clock(inst->input); /* (fp_event_check_time) */
     fp_plugin_call_enter(inst->name, "start", 0);
     int rc = inst->input->start(inst->input, perr, sizeof perr);
     fp_plugin_call_leave();
@@ -350,7 +381,8 @@ bool fp_input_instance_poll(fp_input_instance *inst, fp_event *out)
  * when the call returned in time, else nobody: a stop that never returns keeps it). */
 typedef struct stop_call {
     fp_input *input;
-    const char *who;
+    char who[64]; /* a copy of the instance's name: an abandoned call outlives the instance,
+                     and fp_plugin_call_oldest reads its name */
 } stop_call;
 
 static void *stop_thread(void *arg)
@@ -370,7 +402,11 @@ static bool stop_within_deadline(fp_input_instance *inst)
 {
     stop_call *c = malloc(sizeof *c);
     pthread_t t;
-    if (!c || (*c = (stop_call){inst->input, inst->name}, pthread_create(&t, NULL, stop_thread, c))) {
+    if (c) {
+        c->input = inst->input;
+        snprintf(c->who, sizeof c->who, "%s", inst->name);
+    }
+    if (!c || pthread_create(&t, NULL, stop_thread, c)) {
         free(c);
         fp_plugin_call_enter(inst->name, "stop", 0);
         inst->input->stop(inst->input);
@@ -397,10 +433,27 @@ static bool stop_within_deadline(fp_input_instance *inst)
     return false;
 }
 
+/* An abandoned input's threads may run on: from here its link sends nothing to inst (the
+ * calls already in progress are waited for: push and log are wait-free), and the link is
+ * never freed, so that a push after the owner freed inst touches only the link. */
+static void detach_link(fp_input_instance *inst)
+{
+    fp_input_link *l = inst->link;
+    if (!l) return;
+    atomic_store(&l->abandoned, true);
+    while (atomic_load(&l->busy)) {
+        struct timespec ts = {0, 100000L};
+        nanosleep(&ts, NULL);
+    }
+    inst->link = NULL; /* leaked on purpose: the plugin holds &l->host */
+}
+
 static void stop_input(fp_input_instance *inst)
 {
-    if (inst->input && !inst->stopped && inst->input->stop && !stop_within_deadline(inst))
+    if (inst->input && !inst->stopped && inst->input->stop && !stop_within_deadline(inst)) {
         inst->abandoned = true;
+        detach_link(inst);
+    }
     inst->stopped = true;
     inst->started = false;
 }
@@ -462,4 +515,6 @@ void fp_input_instance_close(fp_input_instance *inst)
     inst->started = false;
     fp_input_instance_drain_log(inst); /* (the plugin's threads are gone) */
     fp_log_relay_destroy(&inst->log);
+    free(inst->link);
+    inst->link = NULL;
 }

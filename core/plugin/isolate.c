@@ -3,6 +3,7 @@
  * restarts with their back-off and the give-up. The process itself: isolate_proc.c. */
 #define _GNU_SOURCE
 #include "fp_isolate.h"
+#include "fp_control_check.h"
 #include "isolate_proc.h"
 
 #include "fp_clock.h"
@@ -474,7 +475,9 @@ static int proxy_process(fp_mapping *self, const fp_frame_input *in, fp_control_
     }
     get_controls(x, out);
     rc = x->proc.shm->rc;
-    if (rc >= 0) keep_last(x, out);
+    /* the last good set is one the session takes: its rule (fp_control_check.h), else a set
+     * it refused (e.g. over capacity, kept clamped) was shown after a later fault */
+    if (rc >= 0 && fp_control_check(out, NULL, NULL) == FP_CONTROL_OK) keep_last(x, out);
     if (++x->calls_ok >= FP_ISOLATE_HEALTHY_CALLS) x->streak = 0;
     return rc;
 }

@@ -58,6 +58,27 @@ for c in $cmds; do
     [ $rc -eq 64 ] || { cat o.out; fail "$c --no-such-option-xyz: exit $rc, want 64"; }
     head -1 o.out | grep -q "^facepuppet $c: " || { cat o.out; fail "$c: the message does not start 'facepuppet $c: '"; }
 done
+# a long option is spelled out: getopt_long's unambiguous prefix was taken silently (`run
+# --frames 30` was --frames-out 30 and wrote 225 OBJ files into ./30); now usage (64) naming
+# the token and the option it abbreviates, nothing written, in every command's parser
+"$fp" run --frames 30 --duration 0.2 >o.out 2>&1; rc=$?
+[ $rc -eq 64 ] || { cat o.out; fail "run --frames 30: exit $rc, want 64"; }
+grep -q "^facepuppet run: unknown option '--frames' (did you mean --frames-out?)" o.out \
+    || { cat o.out; fail "run --frames: the message"; }
+[ -e 30 ] && fail "run --frames 30 wrote ./30"
+"$fp" run --frames=30 >o.out 2>&1; rc=$?
+[ $rc -eq 64 ] && grep -q "unknown option '--frames' (did you mean --frames-out?)" o.out \
+    || { cat o.out; fail "run --frames=30: exit $rc"; }
+for v in "plugins --js" "plugins check --js x.so" "takes rate --hel" "export --form pc2 x.fptake" \
+         "bench --hel" "pose --mes x.obj"; do
+    "$fp" $v >o.out 2>&1; rc=$?
+    c=${v%% --*}
+    [ $rc -eq 64 ] || { cat o.out; fail "$v: exit $rc, want 64"; }
+    head -1 o.out | grep -q "^facepuppet $c: unknown option '--" || { cat o.out; fail "$v: the message"; }
+done
+# ... while the full names, with a separate value or =VALUE, still work
+"$fp" plugins --json -P "$plugdir" >o.out 2>&1 || { cat o.out; fail "plugins --json refused"; }
+"$fp" export "$take" --format=pc2 --out=d.pc2 >o.out 2>&1 || { cat o.out; fail "export --format=pc2 refused"; }
 # bench's values: a missing one is named (was "unknown option '--case'"), levels are digits
 "$fp" bench --case >o.out 2>&1; rc=$?
 [ $rc -eq 64 ] && grep -q "'--case' requires an argument" o.out || { cat o.out; fail "bench --case: exit $rc"; }

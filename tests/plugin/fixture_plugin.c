@@ -5,7 +5,7 @@
  *   FIXTURE_CRASH_INIT  init dereferences a null pointer
  *   FIXTURE_HANG_INIT   init never returns
  *   FIXTURE_CRASH_THREAD start() runs a thread of its own that dereferences a null pointer
- *   FIXTURE_BAD_EVENTS  start() pushes a right hand's joint positions 600 times, 10 ms apart
+ *   FIXTURE_BAD_EVENTS  start() pushes a right hand's joint positions 600 times, each stamped when pushed
  *                       (a hand held still 40 mm in front of the tracker's origin), with
  *                       malformed events among them: joint positions with a NaN, one
  *                       beyond 10 m, an unknown type, a joint positions event of a wrong
@@ -19,7 +19,9 @@
  *                       key nostart=1: its instance has no start() (NULL); key
  *                       errfill=1: create fills err to its very end (no NUL) and fails;
  *                       key stuck=1: start runs a thread that never ends (a read loop
- *                       blocked for good), which stop joins: stop never returns */
+ *                       blocked for good), which stop joins: stop never returns;
+ *                       stuck=2: the same thread also pushes a status event and logs a
+ *                       line every 50 ms (a read that woke up after its input was abandoned) */
 #define _POSIX_C_SOURCE 200809L /* nanosleep */
 #include <facepuppet/plugin.h>
 
@@ -61,10 +63,15 @@ typedef struct fixture {
 
 static void *stuck_thread(void *arg)
 {
-    (void)arg;
+    fixture *fx = arg;
     for (;;) {
-        struct timespec ts = {1, 0};
+        struct timespec ts = {fx->stuck == 2 ? 0 : 1, fx->stuck == 2 ? 50000000L : 0};
         nanosleep(&ts, NULL);
+        if (fx->stuck != 2) continue;
+        fp_event_status st = {{sizeof st, FP_EVENT_STATUS, 0, fx->host->now_ns(fx->host), 0, -1},
+                              FP_STATUS_CONNECTED, "woke"};
+        fx->host->push_event(fx->host, &st.header);
+        fx->host->log(fx->host, FP_LOG_WARNING, "woke");
     }
     return NULL;
 }
@@ -92,9 +99,11 @@ static int start(fp_input *self, char *err, size_t errlen)
     if (fx->log_lines > 0) fx->logging = !pthread_create(&fx->logger, NULL, logger, fx);
     else if (fx->stuck) fx->logging = !pthread_create(&fx->logger, NULL, stuck_thread, fx);
 #ifdef FIXTURE_BAD_EVENTS
-    int64_t t0 = host->now_ns(host);
     for (int k = 0; k < 600; k++) {
-        fp_event_joint_positions jp = {{sizeof jp, FP_EVENT_JOINT_POSITIONS, 0, t0 + k * 10000000LL, 0, 1}, {{0}}};
+        /* stamped when pushed: 10 ms apart ahead of the clock would be up to 6 s in the
+         * future, itself refused (fp_event_check_time) */
+        const int64_t tk = host->now_ns(host);
+        fp_event_joint_positions jp = {{sizeof jp, FP_EVENT_JOINT_POSITIONS, 0, tk, 0, 1}, {{0}}};
         for (int j = 0; j < FP_HAND_JOINTS; j++) {
             jp.mm[j][0] = 10.0f * (float)(j % 5);
             jp.mm[j][1] = 150.0f + 8.0f * (float)(j / 5);
@@ -106,7 +115,7 @@ static int start(fp_input *self, char *err, size_t errlen)
         case 30: jp.header.type = 99; break;
         case 40: jp.header.size = sizeof jp - 12; break;
         case 50: {
-            fp_event_wrist_pose w = {{sizeof w, FP_EVENT_WRIST_POSE, 0, t0 + k * 10000000LL, 0, 1},
+            fp_event_wrist_pose w = {{sizeof w, FP_EVENT_WRIST_POSE, 0, tk, 0, 1},
                                      {0, 150, 40}, {2, 0, 0, 0}};
             host->push_event(host, &w.header);
             continue;

@@ -11,7 +11,9 @@
  *             first half: a crash (40%), a hang (40%) or nothing (a xorshift of `seed` and
  *             the window's number)
  * With commit=1 each step is committed and its start read from the frame's mesh->base (the
- * test that an isolated mapping's copy of the base follows the commits).
+ * test that an isolated mapping's copy of the base follows the commits). With overcount=1,
+ * on the frame before `at` it returns an active set of count capacity + 1 (its first
+ * capacity vectors written), which the host refuses (fp_control_check.h).
  * It keeps no state, so after a restart it deforms as it did before. */
 #include <facepuppet/mapping_util.h>
 #include <facepuppet/plugin.h>
@@ -29,7 +31,7 @@ typedef struct fault {
     const fp_host *host;
     const fp_host_surface *surface;
     double gain, at, mean, seed;
-    bool commit;
+    bool commit, overcount;
 } fault;
 
 static void crash(void)
@@ -74,6 +76,13 @@ static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *o
         for (int k = 0; k < FP_FINGERS; k++)
             if (in->tip_distance[h][k] < in->radius) memcpy(tips[n++], t[k], sizeof t[k]);
     }
+    if (f->overcount && in->frame + 1 == (uint64_t)f->at) {
+        for (size_t i = 0; i < out->capacity; i++)
+            for (int k = 0; k < 3; k++) out->start[i][k] = out->end[i][k] = (float)k;
+        out->count = out->capacity + 1;
+        out->active = true;
+        return 0;
+    }
     if (!n || !f->surface) return 0;
     fp_surface_hit hits[FP_HANDS * FP_FINGERS];
     int rc = f->surface->nearest(f->host, (const float(*)[3])tips, n, (float)in->radius, hits);
@@ -102,13 +111,14 @@ static const fp_param_info keys[] = {
     {"mean", FP_PARAM_INT, 2, 1e9, "240", NULL, "frames", "chaos: at most one fault in this many frames"},
     {"seed", FP_PARAM_INT, 0, 1e9, "1", NULL, NULL, "chaos: the random sequence"},
     {"commit", FP_PARAM_BOOL, 0, 1, "0", NULL, NULL, "commit each step, its start read from the frame's base"},
+    {"overcount", FP_PARAM_BOOL, 0, 1, "0", NULL, NULL, "on the frame before `at`, a set over capacity"},
     {NULL, 0, 0, 0, NULL, NULL, NULL, NULL},
 };
 
 static int create(const fp_host *host, const fp_param *params, size_t nparams, fp_mapping **out,
                   char *err, size_t errlen)
 {
-    fpmu_value v[5];
+    fpmu_value v[6];
     int rc = fpmu_params_parse("fault", keys, params, nparams, v, err, errlen);
     if (rc) return rc;
     fault *f = calloc(1, sizeof *f);
@@ -120,6 +130,7 @@ static int create(const fp_host *host, const fp_param *params, size_t nparams, f
     f->mean = v[2].number;
     f->seed = v[3].number;
     f->commit = v[4].number != 0;
+    f->overcount = v[5].number != 0;
     f->mapping = (fp_mapping){.size = sizeof(fp_mapping), .plugin_data = f, .process = process,
                               .destroy = destroy};
     *out = &f->mapping;
@@ -130,7 +141,7 @@ static const fp_mapping_factory factory = {
     .size = sizeof(fp_mapping_factory),
     .name = "fault",
     .description = "pulls the skin to the fingertips; faults on a chosen frame (isolation tests)",
-    .usage = "gain=G, at=FRAME, mean=N, seed=S, commit=0|1",
+    .usage = "gain=G, at=FRAME, mean=N, seed=S, commit=0|1, overcount=0|1",
     .create = create,
     .params = keys,
 };

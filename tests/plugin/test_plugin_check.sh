@@ -129,7 +129,7 @@ expect 0 '"status":[[:space:]]+"no-entry"' "$fp" plugins --json --plugin-dir "$t
 "$fp" plugins --json --plugin-dir "$tmp/list" >"$tmp/list.json" 2>&1
 python3 -c "import json,sys; d=json.load(open(sys.argv[1])); k={p['name']:p for p in d['plugins']}; \
 assert k['anchored']['keys'][2]['name']=='release' and k['anchored']['abi']=='1.3'; \
-assert k['replay']['keys'][0]['name']=='speed'; assert k['fixture-initfails']['status']=='init-failed'" \
+assert k['replay']['keys'][0]['name']=='speed'; assert d['complete'] is True; assert k['fixture-initfails']['status']=='init-failed'" \
     "$tmp/list.json" && echo "ok: plugins --json parses" || fail "plugins --json content"
 chmod 777 "$tmp" && expect 0 "skipped" "$fp" plugins --plugin-dir "$tmp"; chmod 700 "$tmp"
 # A plugin whose init never returns ends the listing after 10 s, named, exit 78, what was
@@ -138,6 +138,14 @@ mkdir "$tmp/hang" && chmod 700 "$tmp/hang" && cp "$fx/input-fixture-hanginit.so"
 expect 78 "plugin '.*input-fixture-hanginit.so' has not returned from init for 10 s: it hangs" \
     timeout 60 "$fp" plugins --plugin-dir "$tmp/hang"
 grep -Eq "^mapping +anchored " "$tmp/out" && echo "ok: the listing before it kept" || fail "the listing before the hang lost"
+# ... and with --json, one JSON document still: what was listed, "complete": false and the
+# hang as "error" (before: exit 78 and no document on stdout)
+timeout 60 "$fp" plugins --json --plugin-dir "$tmp/hang" >"$tmp/hang.json" 2>"$tmp/hang.err"; rc=$?
+[ "$rc" = 78 ] || fail "plugins --json with a hanging init exited $rc, wanted 78"
+python3 -c "import json,sys; d=json.load(open(sys.argv[1])); n=[p['name'] for p in d['plugins']]; \
+assert 'anchored' in n, n; assert d['complete'] is False; assert 'hanginit.so' in d['error'] and 'hangs' in d['error']" \
+    "$tmp/hang.json" && echo "ok: plugins --json with a hang prints its document" \
+    || { fail "plugins --json with a hang: no valid document"; head -c 400 "$tmp/hang.json"; }
 
 # run: the host names the mapping at fault.
 run() { "$fp" run --isolate none --plugin-dir "$fx" --mesh "$mesh" --input "replay:$rec" --duration 1 --quiet -o "$tmp/out.obj" --force "$@"; }

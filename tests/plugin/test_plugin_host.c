@@ -2,6 +2,7 @@
 #define _GNU_SOURCE
 #include "fp_plugin_host.h"
 #include "fp_isolate.h"
+#include "fp_control_check.h"
 #include "fp_event_check.h"
 #include "fp_plugin_crash.h"
 
@@ -282,6 +283,70 @@ static void test_stuck_stop_abandoned(void **state)
     fp_plugin_path_clear(&path);
 }
 
+/* ---- an isolated mapping holds, after a fault, only a set the session would take ---- */
+
+static void test_isolate_holds_only_good_set(void **state)
+{
+    (void)state;
+    char file[4200], helper[4200], err[1024] = "";
+    snprintf(file, sizeof file, "%s/map-crash.so", fixture_dir);
+    snprintf(helper, sizeof helper, "%s/../../bin/facepuppet", fixture_dir);
+    fp_host host;
+    fp_host_init_for_mapping(&host, "crash");
+    /* frame 1: a set over capacity (refused by the session), frame 2: a crash (SIGSEGV) */
+    fp_param keys[] = {{"at", "2"}, {"overcount", "1"}};
+    fp_isolate_options opt = {.helper = helper, .deadline_ms = 5000, .quiet_restarts = true};
+    fp_mapping *m = NULL;
+    int rc = fp_isolate_mapping_create(&opt, file, "crash", &host, keys, 2, &m, err, sizeof err);
+    if (rc) fail_msg("isolated map-crash: %s", err);
+    enum { CAP = 8 };
+    float start[CAP][3], end[CAP][3];
+    fp_channel ch[2];
+    fp_control_set cs = {.size = sizeof cs, .capacity = CAP, .start = start, .end = end,
+                         .channels = ch, .channel_capacity = 2};
+    fp_frame_input in = {.size = sizeof in, .radius = 1.0};
+    for (int h = 0; h < FP_HANDS; h++)
+        for (int f = 0; f < FP_FINGERS; f++) in.tip_distance[h][f] = INFINITY;
+    in.frame = 0; /* no hands: an empty, inactive set (the last good one) */
+    assert_int_equal(m->process(m, &in, &cs), 0);
+    assert_int_equal(fp_control_check(&cs, NULL, NULL), FP_CONTROL_OK);
+    in.frame = 1;
+    assert_int_equal(m->process(m, &in, &cs), 0);
+    assert_int_equal(fp_control_check(&cs, NULL, NULL), FP_CONTROL_OVER_CAPACITY); /* refused */
+    in.frame = 2; /* the helper crashes: the held set is frame 0's, not frame 1's clamped */
+    assert_int_equal(m->process(m, &in, &cs), 0);
+    assert_false(cs.active); /* before: active, 8 vectors of the refused set */
+    assert_int_equal(cs.count, 0);
+    assert_int_equal(fp_control_check(&cs, NULL, NULL), FP_CONTROL_OK);
+    m->destroy(m);
+}
+
+/* ---- an abandoned input's thread that wakes after its instance was freed ---- */
+
+static void test_abandoned_push_after_free(void **state)
+{
+    (void)state;
+    fp_plugin_path path;
+    fixture_path(&path);
+    fp_input_instance *inst = malloc(sizeof *inst);
+    assert_non_null(inst);
+    log_seen seen = {.owner = pthread_self()};
+    /* stuck=2: a thread stop never ends, which pushes and logs every 50 ms */
+    start_logged(inst, &path, "fixture,stuck=2", &seen);
+    fp_input_instance_close(inst);
+    assert_true(inst->abandoned);
+    assert_null(inst->link); /* handed to the plugin's threads, no longer the instance's */
+    /* the owner frees what it owns (a session freed with its inputs); the thread goes on
+     * pushing and logging through the fp_host it was given (before: &inst->host, inside the
+     * freed instance: a call through garbage, SIGSEGV) */
+    void *(*volatile wipe)(void *, int, size_t) = memset; /* (not elided before free) */
+    wipe(inst, 0xA5, sizeof *inst); /* as the memory would be when used again */
+    free(inst);
+    struct timespec ts = {0, 300000000L}; /* six pushes and logs */
+    nanosleep(&ts, NULL);
+    fp_plugin_path_clear(&path);
+}
+
 /* ---- malformed events are refused at push_event, said once per kind and counted ---- */
 
 static void test_malformed_events_refused(void **state)
@@ -332,6 +397,53 @@ static void test_malformed_events_refused(void **state)
     fp_input_instance_close(&inst);
     assert_int_equal(seen.n, 0);
     fp_plugin_path_clear(&path);
+}
+
+/* ---- an event's time: the host refuses what `plugins check` fails (fp_event_check_time) ---- */
+
+static void test_event_times_refused(void **state)
+{
+    (void)state;
+    fp_plugin_path path;
+    fixture_path(&path);
+    fp_input_instance inst;
+    log_seen seen = {.owner = pthread_self()};
+    start_logged(&inst, &path, "fixture", &seen);
+    assert_false(inst.own_clock); /* a device's input: its times are the host's */
+    fp_event ev;
+    while (fp_input_instance_poll(&inst, &ev)) {
+    }
+    uint64_t before = atomic_load(&inst.refused);
+    fp_event_status st = {{sizeof st, FP_EVENT_STATUS, 0, 0, 0, -1}, FP_STATUS_CONNECTED, "t"};
+    int64_t ahead[] = {-1, fp_now_ns() + 10 * FP_EVENT_MAX_AHEAD_NS, INT64_MAX, fp_now_ns()};
+    for (int i = 0; i < 4; i++) {
+        st.header.time_ns = ahead[i];
+        assert_true(inst.link->host.push_event(&inst.link->host, &st.header));
+    }
+    /* the negative and the future ones refused (before: taken), the one of now kept */
+    assert_int_equal((int)(atomic_load(&inst.refused) - before), 3);
+    bool now_kept = false;
+    while (fp_input_instance_poll(&inst, &ev))
+        if (ev.header.type == FP_EVENT_STATUS && ev.header.time_ns == ahead[3]) now_kept = true;
+    assert_true(now_kept);
+    fp_input_instance_drain_log(&inst);
+    bool said = false;
+    for (int i = 0; i < seen.n; i++) said = said || strstr(seen.lines[i], "time_ns");
+    assert_true(said);
+    fp_input_instance_close(&inst);
+    fp_plugin_path_clear(&path);
+
+    /* the rule itself: an input with its own clock may run ahead, never below 0 */
+    const char *why = NULL;
+    fp_event e;
+    memset(&e, 0, sizeof e);
+    e.status = st;
+    e.header.time_ns = fp_now_ns() + 10 * FP_EVENT_MAX_AHEAD_NS;
+    assert_int_equal(fp_event_check_time(&e, fp_now_ns(), true, &why), FP_EVENT_OK);
+    assert_int_equal(fp_event_check_time(&e, fp_now_ns(), false, &why), FP_EVENT_BAD_TIME);
+    assert_non_null(strstr(why, "ahead"));
+    e.header.time_ns = -5;
+    assert_int_equal(fp_event_check_time(&e, fp_now_ns(), true, &why), FP_EVENT_BAD_TIME);
 }
 
 /* ---- plugin folders that could be hijacked are skipped, with the reason ---- */
@@ -740,6 +852,8 @@ int main(void)
         cmocka_unit_test(test_spec_parse),        cmocka_unit_test(test_loader_errors),
         cmocka_unit_test(test_env_path_and_instance),
         cmocka_unit_test(test_log_relayed), cmocka_unit_test(test_malformed_events_refused),
+        cmocka_unit_test(test_event_times_refused),
+        cmocka_unit_test(test_isolate_holds_only_good_set),
         cmocka_unit_test(test_err_filled),
         cmocka_unit_test(test_queue_mpsc),
         cmocka_unit_test(test_queue_full),        cmocka_unit_test(test_queue_retry),
@@ -750,6 +864,7 @@ int main(void)
         cmocka_unit_test(test_call_oldest),
         /* last: its abandoned stop() stays a call in progress (test_call_oldest wants none) */
         cmocka_unit_test(test_stuck_stop_abandoned),
+        cmocka_unit_test(test_abandoned_push_after_free), /* (the same) */
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -56,10 +56,50 @@ void fp_app_plugin_path(fp_plugin_path *path, const char *const *dirs, size_t nd
     }
 }
 
-const char *fp_app_data_path(const char *rel, char *buf, size_t len)
+#ifdef FP_BUILD_BIN_DIR
+/* Whether folders a and b are the same one (device and inode). */
+static bool same_dir(const char *a, const char *b)
 {
-    const char *root = getenv("FP_SHARED_DATA");
-    snprintf(buf, len, "%s/%s", root && *root ? root : FP_SHARED_DATA, rel);
+    struct stat sa, sb;
+    return !stat(a, &sa) && !stat(b, &sb) && S_ISDIR(sa.st_mode) && sa.st_dev == sb.st_dev &&
+           sa.st_ino == sb.st_ino;
+}
+#endif
+
+const char *fp_app_data_root(char *buf, size_t len)
+{
+    const char *env = getenv("FP_SHARED_DATA");
+    if (env && *env) {
+        snprintf(buf, len, "%s", env);
+        return buf;
+    }
+    struct stat st;
+    snprintf(buf, len, "%s/../share/facepuppet/data", fp_app_exe_dir());
+    if (!stat(buf, &st) && S_ISDIR(st.st_mode)) return buf;
+#ifdef FP_BUILD_BIN_DIR
+    /* the build tree's binary: the folder the build was configured with */
+    if (same_dir(fp_app_exe_dir(), FP_BUILD_BIN_DIR)) {
+        snprintf(buf, len, "%s", FP_SHARED_DATA);
+        return buf;
+    }
+#endif
+    return NULL;
+}
+
+const char *fp_app_data_path(const char *cmd, const char *rel, char *buf, size_t len)
+{
+    char root[4096];
+    if (!fp_app_data_root(root, sizeof root)) {
+        fprintf(stderr, "%s: no shared data folder for %s: set FP_SHARED_DATA to the folder that "
+                "holds faces/ and hands/ (or put it at %s/../share/facepuppet/data), or give the "
+                "file yourself\n", cmd, rel, fp_app_exe_dir());
+        return NULL;
+    }
+    int n = snprintf(buf, len, "%s/%s", root, rel);
+    if (n < 0 || (size_t)n >= len) {
+        fprintf(stderr, "%s: the shared data folder's path is too long: %s\n", cmd, root);
+        return NULL;
+    }
     return buf;
 }
 
@@ -204,12 +244,14 @@ int fp_app_session_defaults(const char *cmd, fp_session_options *so, double spee
 {
     bool demo = !so->mesh_path && !so->input_count;
     if (demo_out) *demo_out = demo;
-    if (!so->mesh_path)
-        so->mesh_path = fp_app_data_path("faces/ict-facekit/generic_neutral_mesh.obj",
-                                         buf->demo_mesh, sizeof buf->demo_mesh);
+    if (!so->mesh_path &&
+        !(so->mesh_path = fp_app_data_path(cmd, "faces/ict-facekit/generic_neutral_mesh.obj",
+                                           buf->demo_mesh, sizeof buf->demo_mesh)))
+        return FP_EXIT_NOINPUT;
     if (demo) {
         char rec[4000];
-        fp_app_data_path("hands/leap-motion/three-claps_joints_mm.csv", rec, sizeof rec);
+        if (!fp_app_data_path(cmd, "hands/leap-motion/three-claps_joints_mm.csv", rec, sizeof rec))
+            return FP_EXIT_NOINPUT;
         snprintf(buf->demo_input, sizeof buf->demo_input, "replay:%s", rec);
         so->inputs[so->input_count++] = buf->demo_input;
     }

@@ -51,9 +51,17 @@ void fp_app_plugin_path(fp_plugin_path *path, const char *const *dirs, size_t nd
 /** The built-in plugin folder, <directory of the executable>/FP_PLUGIN_RELDIR, into buf. */
 const char *fp_app_builtin_plugin_dir(char *buf, size_t len);
 
-/** A file under the shared data folder (FP_SHARED_DATA in the environment, else the one
- *  beside the source tree): writes "<data>/<rel>" into buf. */
-const char *fp_app_data_path(const char *rel, char *buf, size_t len);
+/** The shared data folder (faces/, hands/: the demo's face and recording, a rig's mesh) into
+ *  buf, looked up in order: FP_SHARED_DATA in the environment; PREFIX/share/facepuppet/data
+ *  beside the executable (PREFIX/bin) where that folder exists; for the build tree's binary
+ *  only (its folder is the build's bin/), the FP_SHARED_DATA the build was configured with
+ *  (../shared/data beside the source tree). NULL when none applies: an installed binary never
+ *  reads the build tree. Main thread (fp_app_exe_dir); no message. */
+const char *fp_app_data_root(char *buf, size_t len);
+
+/** "<data>/<rel>" into buf (fp_app_data_root), or NULL after "CMD: no shared data folder for
+ *  REL: set FP_SHARED_DATA ..." on stderr (the caller exits FP_EXIT_NOINPUT). */
+const char *fp_app_data_path(const char *cmd, const char *rel, char *buf, size_t len);
 
 /** What a failing call was doing, for the codes whose exit status depends on it. */
 typedef enum fp_app_io {

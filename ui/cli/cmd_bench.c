@@ -1,6 +1,7 @@
 /* facepuppet bench: the command line of the CSRBF engine benchmarks (bodies in bench/), and
  * --plot: the paper's Figure 3 remade from the table1 case by bench/plot_fig3.py. */
 #define _GNU_SOURCE
+#include "app_getopt.h"
 #include "app_util.h"
 #include "command.h"
 #include "fp_bench.h"
@@ -312,7 +313,7 @@ static int bench_main(int argc, char **argv)
     const char *plot = NULL, *trace = NULL;
     bool force = false;
     optind = 1;
-    for (int c; (c = getopt_long(argc, argv, "h", opts, NULL)) != -1;) {
+    for (int c; (c = fp_app_getopt(argc, argv, "h", opts)) != -1;) {
         switch (c) {
         case O_QUICK: o.quick = true; break;
         case O_FORCE: force = true; break;

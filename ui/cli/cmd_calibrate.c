@@ -1,5 +1,6 @@
 /* facepuppet calibrate: a calibration file from a short recording (docs/calibration.md). */
 #define _GNU_SOURCE
+#include "app_getopt.h"
 #include "app_util.h"
 #include "session_opts.h"
 #include "command.h"
@@ -151,7 +152,7 @@ static int calibrate_parse(int argc, char **argv, calibrate_args *a)
         {0, 0, 0, 0}};
     const char *mode = "hold";
     optind = 1;
-    for (int c; (c = getopt_long(argc, argv, "m:i:o:d:P:h", opts, NULL)) != -1;) {
+    for (int c; (c = fp_app_getopt(argc, argv, "m:i:o:d:P:h", opts)) != -1;) {
         switch (c) {
         case 'm': a->mesh_path = optarg; break;
         case 'i':
@@ -215,8 +216,10 @@ static int calibrate_parse(int argc, char **argv, calibrate_args *a)
     }
     int oc = fp_app_check_new_output("facepuppet calibrate", "--out", a->out, a->force);
     if (oc) return oc;
-    if (!a->mesh_path)
-        a->mesh_path = fp_app_data_path("faces/ict-facekit/generic_neutral_mesh.obj", a->demo, sizeof a->demo);
+    if (!a->mesh_path &&
+        !(a->mesh_path = fp_app_data_path("facepuppet calibrate", "faces/ict-facekit/generic_neutral_mesh.obj",
+                                          a->demo, sizeof a->demo)))
+        return FP_EXIT_NOINPUT;
     return -1;
 }
 

@@ -2,6 +2,7 @@
  * fp_take_player) out as glTF/GLB morph-target animation, PC2 or MDD point caches, or one
  * mesh file per frame (core/export, docs/export.md). */
 #define _GNU_SOURCE
+#include "app_getopt.h"
 #include "app_export.h"
 #include "app_audio.h"
 #include "app_util.h"
@@ -262,7 +263,7 @@ static int export_parse(int argc, char **argv, export_args *a)
                        .fmt = FP_EXPORT_OBJ_SEQ};
     unsigned long long whole; /* an integer option (fp_parse_whole) */
     optind = 1;
-    for (int c; (c = getopt_long(argc, argv, "f:o:m:P:qh", opts, NULL)) != -1;) {
+    for (int c; (c = fp_app_getopt(argc, argv, "f:o:m:P:qh", opts)) != -1;) {
         switch (c) {
         case 'f': a->format = optarg; break;
         case 'o': a->out = optarg; break;

@@ -2,6 +2,7 @@
  * where the viewer is built (FP_BUILD_UI, GLFW and epoxy found: ui/cli/CMakeLists.txt
  * defines FP_HAVE_UI); elsewhere the command says it is not built. */
 #define _GNU_SOURCE
+#include "app_getopt.h"
 #include "command.h"
 
 #include <stdio.h>
@@ -362,7 +363,7 @@ static int live_main(int argc, char **argv)
     const char *script_arg = NULL;
     bool force = false;
     optind = 1;
-    for (int c; (c = getopt_long(argc, argv, FP_SESSION_OPTS_SHORT "o:h", opts, NULL)) != -1;) {
+    for (int c; (c = fp_app_getopt(argc, argv, FP_SESSION_OPTS_SHORT "o:h", opts)) != -1;) {
         int shared = fp_session_opts_parse(&sopt, c, optarg, "live");
         if (shared < 0) return fp_app_exit_code(shared, FP_APP_INPUT);
         if (shared) continue;

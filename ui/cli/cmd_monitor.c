@@ -1,5 +1,6 @@
 /* facepuppet monitor: print every event of one input as a JSON line (as evtest, oscdump). */
 #define _GNU_SOURCE
+#include "app_getopt.h"
 #include "app_util.h"
 #include "command.h"
 #include "fp_text.h"
@@ -126,7 +127,7 @@ static int monitor_main(int argc, char **argv)
     const char *dirs[8];
     size_t ndirs = 0;
     optind = 1;
-    for (int c; (c = getopt_long(argc, argv, "n:d:P:h", opts, NULL)) != -1;) {
+    for (int c; (c = fp_app_getopt(argc, argv, "n:d:P:h", opts)) != -1;) {
         switch (c) {
         case 'n': {
             unsigned long long n;

@@ -1,6 +1,7 @@
 /* facepuppet play: a take's frames again, from its stored control sets (no input devices,
  * no mapping): bit-identical to the frames the recording session showed. */
 #define _GNU_SOURCE
+#include "app_getopt.h"
 #include "app_util.h"
 #include "command.h"
 #include "fp_session.h"
@@ -384,7 +385,7 @@ static int play_main(int argc, char **argv)
     size_t ndirs = 0;
     bool quiet = false, force = false;
     optind = 1;
-    for (int c; (c = getopt_long(argc, argv, "o:m:P:qh", all, NULL)) != -1;) {
+    for (int c; (c = fp_app_getopt(argc, argv, "o:m:P:qh", all)) != -1;) {
         int ac = fp_app_audio_parse(&audio, c, optarg, "play");
         if (ac > 1) return ac;
         if (ac) continue;

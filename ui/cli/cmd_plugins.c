@@ -1,5 +1,6 @@
 /* facepuppet plugins: list every plugin on the search path; plugins check FILE.so: validate one. */
 #define _GNU_SOURCE
+#include "app_getopt.h"
 #include "fp_isolate.h"
 #include "app_util.h"
 #include "command.h"
@@ -16,30 +17,6 @@
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
-
-/* The listing runs each plugin's init in this process: one that never returns would hang it
- * without a word. A watchdog thread looks every 100 ms at the plugin call in progress and,
- * past the deadline, names it and ends the listing (exit 78), what was listed kept. */
-#define PLUGINS_INIT_DEADLINE_S 10
-static void *init_watch(void *arg)
-{
-    (void)arg;
-    for (;;) {
-        struct timespec ts = {0, 100000000L};
-        nanosleep(&ts, NULL);
-        fp_plugin_call_info call;
-        struct timespec now;
-        clock_gettime(CLOCK_MONOTONIC, &now);
-        int64_t ns = (int64_t)now.tv_sec * 1000000000LL + now.tv_nsec;
-        if (!fp_plugin_call_oldest(&call) || ns - call.since_ns < PLUGINS_INIT_DEADLINE_S * 1000000000LL)
-            continue;
-        fflush(stdout);
-        fprintf(stderr, "facepuppet plugins: plugin '%s' has not returned from %s for %d s: it hangs; "
-                "the listing ends here\n", call.who, call.call ? call.call : "a call", PLUGINS_INIT_DEADLINE_S);
-        _exit(FP_EXIT_PLUGIN);
-    }
-    return NULL;
-}
 
 static const char *type_name(fp_param_type t)
 {
@@ -79,9 +56,75 @@ static void range_text(const fp_param_info *p, char *buf, size_t len)
 
 typedef struct lister {
     bool json;
-    cJSON *array;
+    cJSON *array;               /* --json: the plugins listed so far */
     size_t broken;
+    const fp_plugin_path *path; /* the folders searched */
+    pthread_mutex_t lock;       /* array, between on_item and the watchdog */
 } lister;
+
+/* The --json document: folders, skipped, plugins (L's array, given away); with hang set
+ * (the watchdog's "plugin 'WHO' has not returned ..."), "complete": false and "error": hang. */
+static void print_json(lister *L, const char *hang)
+{
+    const fp_plugin_path *path = L->path;
+    cJSON *root = cJSON_CreateObject();
+    cJSON *folders = cJSON_AddArrayToObject(root, "folders");
+    for (size_t i = 0; i < path->count; i++) {
+        cJSON *f = cJSON_CreateObject();
+        cJSON_AddStringToObject(f, "path", path->dirs[i]);
+        cJSON_AddBoolToObject(f, "builtin", i == path->builtin);
+        cJSON_AddItemToArray(folders, f);
+    }
+    cJSON *skipped = cJSON_AddArrayToObject(root, "skipped");
+    for (const char *w = path->warnings; *w;) {
+        const char *nl = strchr(w, '\n');
+        int len = nl ? (int)(nl - w) : (int)strlen(w);
+        char line[1100];
+        snprintf(line, sizeof line, "%.*s", len, w);
+        cJSON_AddItemToArray(skipped, cJSON_CreateString(line));
+        w += len + (nl ? 1 : 0);
+    }
+    cJSON_AddItemToObject(root, "plugins", L->array);
+    L->array = NULL;
+    cJSON_AddBoolToObject(root, "complete", hang == NULL);
+    if (hang) cJSON_AddStringToObject(root, "error", hang);
+    char *text = cJSON_Print(root);
+    if (text) puts(text);
+    free(text);
+    cJSON_Delete(root);
+}
+
+/* The listing runs each plugin's init in this process: one that never returns would hang it
+ * without a word. A watchdog thread (arg: the lister) looks every 100 ms at the plugin call in
+ * progress and, past the deadline, names it and ends the listing (exit 78), what was listed
+ * kept: printed as it went, or with --json the document of what was listed, "complete":
+ * false and the message as "error" (the main thread is inside the plugin: the array stays). */
+#define PLUGINS_INIT_DEADLINE_S 10
+static void *init_watch(void *arg)
+{
+    lister *L = arg;
+    for (;;) {
+        struct timespec ts = {0, 100000000L};
+        nanosleep(&ts, NULL);
+        fp_plugin_call_info call;
+        struct timespec now;
+        clock_gettime(CLOCK_MONOTONIC, &now);
+        int64_t ns = (int64_t)now.tv_sec * 1000000000LL + now.tv_nsec;
+        if (!fp_plugin_call_oldest(&call) || ns - call.since_ns < PLUGINS_INIT_DEADLINE_S * 1000000000LL)
+            continue;
+        char msg[1400];
+        snprintf(msg, sizeof msg, "plugin '%s' has not returned from %s for %d s: it hangs; the listing "
+                 "ends here", call.who, call.call ? call.call : "a call", PLUGINS_INIT_DEADLINE_S);
+        if (L->json) {
+            pthread_mutex_lock(&L->lock);
+            print_json(L, msg);
+        }
+        fflush(stdout);
+        fprintf(stderr, "facepuppet plugins: %s\n", msg);
+        _exit(FP_EXIT_PLUGIN);
+    }
+    return NULL;
+}
 
 static void print_indented(const char *text, const char *indent)
 {
@@ -134,7 +177,9 @@ static void on_item(void *user, const fp_plugin_scan_item *it)
                 cJSON_AddItemToArray(keys, k);
             }
         }
+        pthread_mutex_lock(&L->lock);
         cJSON_AddItemToArray(L->array, o);
+        pthread_mutex_unlock(&L->lock);
         return;
     }
     if (it->code) {
@@ -253,7 +298,7 @@ static int check_main(int argc, char **argv)
     unsigned long long whole; /* an integer option (fp_parse_whole) */
     optind = 1;
     int status = FP_EXIT_OK;
-    for (int c; (c = getopt_long(argc, argv, "h", opts, NULL)) != -1;) {
+    for (int c; (c = fp_app_getopt(argc, argv, "h", opts)) != -1;) {
         switch (c) {
         case 'j': json = true; break;
         case 'a': o.arg = optarg; break;
@@ -369,7 +414,7 @@ static int plugins_main(int argc, char **argv)
     size_t ndirs = 0;
     bool json = false;
     optind = 1;
-    for (int c; (c = getopt_long(argc, argv, "P:h", opts, NULL)) != -1;) {
+    for (int c; (c = fp_app_getopt(argc, argv, "P:h", opts)) != -1;) {
         switch (c) {
         case 'j': json = true; break;
         case 'P':
@@ -388,7 +433,7 @@ static int plugins_main(int argc, char **argv)
     char builtin[4200];
     fp_app_builtin_plugin_dir(builtin, sizeof builtin);
     fp_plugin_path_init(&path, dirs, ndirs, builtin); /* warnings are listed below, not on stderr */
-    lister L = {json, json ? cJSON_CreateArray() : NULL, 0};
+    lister L = {json, json ? cJSON_CreateArray() : NULL, 0, &path, PTHREAD_MUTEX_INITIALIZER};
     if (!json) {
         printf("plugin folders searched, in order:\n");
         for (size_t i = 0; i < path.count; i++)
@@ -400,31 +445,11 @@ static int plugins_main(int argc, char **argv)
         printf("\n");
     }
     pthread_t watch;
-    if (!pthread_create(&watch, NULL, init_watch, NULL)) pthread_detach(watch);
+    if (!pthread_create(&watch, NULL, init_watch, &L)) pthread_detach(watch);
     size_t n = fp_plugin_scan(&path, on_item, &L);
     if (json) {
-        cJSON *root = cJSON_CreateObject();
-        cJSON *folders = cJSON_AddArrayToObject(root, "folders");
-        for (size_t i = 0; i < path.count; i++) {
-            cJSON *f = cJSON_CreateObject();
-            cJSON_AddStringToObject(f, "path", path.dirs[i]);
-            cJSON_AddBoolToObject(f, "builtin", i == path.builtin);
-            cJSON_AddItemToArray(folders, f);
-        }
-        cJSON *skipped = cJSON_AddArrayToObject(root, "skipped");
-        for (const char *w = path.warnings; *w;) {
-            const char *nl = strchr(w, '\n');
-            int len = nl ? (int)(nl - w) : (int)strlen(w);
-            char line[1100];
-            snprintf(line, sizeof line, "%.*s", len, w);
-            cJSON_AddItemToArray(skipped, cJSON_CreateString(line));
-            w += len + (nl ? 1 : 0);
-        }
-        cJSON_AddItemToObject(root, "plugins", L.array);
-        char *text = cJSON_Print(root);
-        if (text) puts(text);
-        free(text);
-        cJSON_Delete(root);
+        pthread_mutex_lock(&L.lock); /* the watchdog prints no second document */
+        print_json(&L, NULL);
     } else {
         printf("%zu plugin file(s), %zu broken\n", n, L.broken);
     }

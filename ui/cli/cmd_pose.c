@@ -1,6 +1,7 @@
 /* facepuppet pose: the mesh posed by its rig's channels, without hands (for rig authors and
  * checks). Also fp_app_rig_info(), the `facepuppet info RIG.json` description. */
 #define _GNU_SOURCE
+#include "app_getopt.h"
 #include "app_util.h"
 #include "command.h"
 #include "fp_mesh.h"
@@ -47,7 +48,7 @@ static int pose_main(int argc, char **argv)
     const char *sets[FP_RIG_MAX_CHANNELS];
     size_t nsets = 0;
     optind = 1;
-    for (int c; (c = getopt_long(argc, argv, "m:r:s:o:h", opts, NULL)) != -1;) {
+    for (int c; (c = fp_app_getopt(argc, argv, "m:r:s:o:h", opts)) != -1;) {
         switch (c) {
         case 'm': mesh_path = optarg; break;
         case 'r': rig_path = optarg; break;
@@ -155,10 +156,8 @@ int fp_app_rig_info(const char *path)
     fp_mesh *m = NULL;
     char mp[4096] = "";
     if (fp_rig_mesh_name(rig)[0]) {
-        const char *root = getenv("FP_SHARED_DATA");
-#ifdef FP_SHARED_DATA
-        if (!root || !*root) root = FP_SHARED_DATA;
-#endif
+        char rootbuf[4096];
+        const char *root = fp_app_data_root(rootbuf, sizeof rootbuf); /* none: no mesh */
         if (root) {
             snprintf(mp, sizeof mp, "%s/%s", root, fp_rig_mesh_name(rig));
             if (fp_mesh_load(mp, &m, err, sizeof err) != FP_MESH_OK) m = NULL;

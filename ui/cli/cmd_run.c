@@ -1,5 +1,6 @@
 /* facepuppet run: a headless session (the main job). */
 #define _GNU_SOURCE
+#include "app_getopt.h"
 #include "app_util.h"
 #include "fp_text.h"
 #include "command.h"
@@ -164,7 +165,7 @@ static int run_parse(int argc, char **argv, run_args *a)
     fp_session_opts_init(&a->sopt, &a->so);
     a->fps = 60;
     optind = 1;
-    for (int c; (c = getopt_long(argc, argv, FP_SESSION_OPTS_SHORT "o:h", opts, NULL)) != -1;) {
+    for (int c; (c = fp_app_getopt(argc, argv, FP_SESSION_OPTS_SHORT "o:h", opts)) != -1;) {
         int shared = fp_session_opts_parse(&a->sopt, c, optarg, "run");
         if (shared < 0) return fp_app_exit_code(shared, FP_APP_INPUT);
         if (shared) continue;

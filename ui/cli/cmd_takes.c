@@ -2,6 +2,7 @@
  * and description rewritten (takes rate, takes describe: fp_take_edit_header); and
  * fp_app_take_info for `facepuppet info TAKE`. */
 #define _GNU_SOURCE
+#include "app_getopt.h"
 #include "app_util.h"
 #include "command.h"
 #include "fp_take.h"
@@ -192,7 +193,7 @@ static int takes_edit(int argc, char **argv)
     argv[0] = prog;
     fp_take_edit e = {0};
     optind = 1;
-    for (int c; (c = getopt_long(argc, argv, "+h", opts, NULL)) != -1;) {
+    for (int c; (c = fp_app_getopt(argc, argv, "+h", opts)) != -1;) {
         if (c == 'f') e.open_ok = true;
         else if (c == 'h') { usage(stdout); return FP_EXIT_OK; }
         else { usage(stderr); return FP_EXIT_USAGE; }
@@ -249,7 +250,7 @@ static int takes_main(int argc, char **argv)
                                          {"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
     bool json = false;
     optind = 1;
-    for (int c; (c = getopt_long(argc, argv, "h", opts, NULL)) != -1;) {
+    for (int c; (c = fp_app_getopt(argc, argv, "h", opts)) != -1;) {
         if (c == 'j') json = true;
         else if (c == 'h') { usage(stdout); return FP_EXIT_OK; }
         else { usage(stderr); return FP_EXIT_USAGE; }
