@@ -1,6 +1,7 @@
 /* fuzz_spec.c: libFuzzer target for SPEC strings (core/plugin/spec.c: NAME[:ARG][,key=value],
  * what --input, --mapping and the viewer's scripts pass). The input up to its first NUL is
- * parsed. A parse must give a valid name, at most FP_SPEC_MAX_PARAMS unique valid keys, and
+ * parsed. A parse must give a valid name (a key, or a path holding '/'), at most
+ * FP_SPEC_MAX_PARAMS unique valid keys, and
  * the same text when put back together; fp_spec_take gives each value once. A refusal: -EINVAL
  * and a message. The host's filter keys of an input SPEC (core/pose/fp_filter.h:
  * fp_filter_parse on filter=, mincutoff=, beta=, dcutoff=, trend=, as fp_input_instance_open takes
@@ -28,6 +29,16 @@ static int valid_key(const char *k)
     return 1;
 }
 
+/* A NAME: a key, or a plugin file's path where it holds a '/' (any bytes but control
+ * characters, ':' and ','; fp_plugin_host.h fp_spec_parse). */
+static int valid_name(const char *n)
+{
+    if (!strchr(n, '/')) return valid_key(n);
+    for (; *n; n++)
+        if ((unsigned char)*n < 0x20 || *n == 0x7f || *n == ':' || *n == ',') return 0;
+    return 1;
+}
+
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     char *text = malloc(size + 1), *back = malloc(size + 2);
@@ -41,7 +52,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (rc) {
         if (rc != -EINVAL || !err[0] || s.buffer) abort();
     } else {
-        if (!s.name || !valid_key(s.name) || s.nparams > FP_SPEC_MAX_PARAMS) abort();
+        if (!s.name || !valid_name(s.name) || s.nparams > FP_SPEC_MAX_PARAMS) abort();
         size_t n = 0;
         n += (size_t)snprintf(back + n, size + 2 - n, "%s", s.name);
         if (s.arg) n += (size_t)snprintf(back + n, size + 2 - n, ":%s", s.arg);
