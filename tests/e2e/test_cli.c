@@ -483,6 +483,17 @@ static void moved_of(unsigned *moved, unsigned *of, double *max)
     assert_int_equal(sscanf(q, " max %lf mm", max), 1);
 }
 
+/* Run the grab recording on `mesh` (--rig none, written to `out_name`), exit 0, and read its
+ * summary's moved vertices, vertex count and max displacement (mm). */
+static void grab_on(const char *mesh, const char *out_name, unsigned *moved, unsigned *of, double *max)
+{
+    char args[16384];
+    snprintf(args, sizeof args, "run -q --rig none --mesh %s --input replay:%s/hands/leap-motion/grab_joints_mm.csv,fast=1 "
+             "--out %s --force", mesh, data, out_name);
+    assert_int_equal(fp(args), 0);
+    moved_of(moved, of, max);
+}
+
 /* A vertex in no triangle (a stray point an exporter left) is no part of the face's size: one
  * 1e6 units beside the 25-unit MediaPipe mask made a default radius of 6e4 units, placed the
  * hands by it and moved that point alone. Now the run says so and deforms as without it. */
@@ -490,21 +501,15 @@ static void test_stray_vertex(void **state)
 {
     (void)state;
     char args[16384], path[4400];
-    snprintf(args, sizeof args, "run -q --rig none --mesh %s --input replay:%s/hands/leap-motion/grab_joints_mm.csv,fast=1 "
-             "--out plain.obj --force", face(), data);
-    assert_int_equal(fp(args), 0);
-    assert_null(strstr(out, "in no triangle"));
     unsigned m0, n0, m1, n1;
     double x0, x1;
-    moved_of(&m0, &n0, &x0);
+    grab_on(face(), "plain.obj", &m0, &n0, &x0);
+    assert_null(strstr(out, "in no triangle"));
     snprintf(path, sizeof path, "%s/stray.obj", tmp);
     snprintf(args, sizeof args, "cp %s %s && echo 'v 1000000 0 0' >> %s", face(), path, path);
     assert_int_equal(system(args), 0);
-    snprintf(args, sizeof args, "run -q --rig none --mesh stray.obj --input replay:%s/hands/leap-motion/grab_joints_mm.csv,fast=1 "
-             "--out stray-out.obj --force", data);
-    assert_int_equal(fp(args), 0);
+    grab_on("stray.obj", "stray-out.obj", &m1, &n1, &x1);
     assert_non_null(strstr(out, "stray.obj: 1 of 469 vertices are in no triangle"));
-    moved_of(&m1, &n1, &x1);
     assert_int_equal(n1, n0 + 1);
     assert_int_equal(m1, m0);    /* the face's, not the point's alone */
     assert_true(x1 == x0);
@@ -523,23 +528,17 @@ static void test_spike_triangle(void **state)
 {
     (void)state;
     char args[16384], path[4400];
-    snprintf(args, sizeof args, "run -q --rig none --mesh %s --input replay:%s/hands/leap-motion/grab_joints_mm.csv,fast=1 "
-             "--out plain.obj --force", face(), data);
-    assert_int_equal(fp(args), 0);
-    assert_null(strstr(out, "lie far off"));
     unsigned m0, n0, m1, n1;
     double x0, x1;
-    moved_of(&m0, &n0, &x0);
+    grab_on(face(), "plain.obj", &m0, &n0, &x0);
+    assert_null(strstr(out, "lie far off"));
     snprintf(path, sizeof path, "%s/spike.obj", tmp);
     /* the spike: from vertex 1 (below the nose, z 6) to two points 34 units in front of it */
     snprintf(args, sizeof args, "cp %s %s && printf 'v 0 -3.4 40\\nv 0.05 -3.4 40\\nf 1/1 469/1 470/1\\n' >> %s", face(),
              path, path);
     assert_int_equal(system(args), 0);
-    snprintf(args, sizeof args, "run -q --rig none --mesh spike.obj --input replay:%s/hands/leap-motion/grab_joints_mm.csv,fast=1 "
-             "--out spike-out.obj --force", data);
-    assert_int_equal(fp(args), 0);
+    grab_on("spike.obj", "spike-out.obj", &m1, &n1, &x1);
     assert_non_null(strstr(out, "spike.obj: 2 of 470 vertices lie far off the rest"));
-    moved_of(&m1, &n1, &x1);
     assert_int_equal(n1, n0 + 2);
     print_message("the mask: %u moved, max %.1f mm; with the spike: %u, max %.1f mm\n", m0, x0, m1, x1);
     assert_true(m1 >= m0 - m0 / 20 && m1 <= m0 + 2); /* the face's grab, not the spike's tips */
