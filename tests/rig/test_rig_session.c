@@ -366,6 +366,7 @@ static void test_two_rigs_of_the_mesh(void **state)
     assert_non_null(strstr(warnings, "face.json both fit this mesh"));
     assert_non_null(strstr(fp_session_rig_how(s), "both fit this mesh"));
     fp_session_destroy(&s);
+    fp_plugin_path_clear(&path);
     remove(a);
     remove(b);
     assert_int_equal(rmdir(dir), 0);
