@@ -263,6 +263,23 @@ struct GltfReader {
         return true;
     }
 
+    // A strip's or a fan's triangles as a list (glTF 2.0, 3.7.2.1 "Topology types": strip
+    // triangle i is {v_i, v_(i+1+i%2), v_(i+2-i%2)}, fan triangle i {v_(i+1), v_(i+2), v_0}),
+    // the degenerate ones a strip's restarts make (a repeated index) left out; fewer than 3
+    // indices make none.
+    static std::vector<uint32_t> strip_or_fan_triangles(const std::vector<uint32_t> &v, bool strip)
+    {
+        std::vector<uint32_t> out;
+        for (size_t i = 0; i + 2 < v.size(); i++) {
+            const uint32_t a = strip ? v[i] : v[i + 1], b = strip ? v[i + 1 + i % 2] : v[i + 2],
+                           c = strip ? v[i + 2 - i % 2] : v[0];
+            if (a == b || b == c || a == c)
+                continue;
+            out.insert(out.end(), {a, b, c});
+        }
+        return out;
+    }
+
     bool add_mesh(int mi, const Mat4 &xf, int node)
     {
         if (mi < 0 || size_t(mi) >= model.meshes.size())
@@ -282,8 +299,10 @@ struct GltfReader {
         for (size_t pi = 0; pi < mesh.primitives.size(); pi++) {
             const tinygltf::Primitive &prim = mesh.primitives[pi];
             prims_seen++;
-            if (prim.mode != -1 && prim.mode != TINYGLTF_MODE_TRIANGLES)
-                continue;
+            const bool strip = prim.mode == TINYGLTF_MODE_TRIANGLE_STRIP,
+                       fan = prim.mode == TINYGLTF_MODE_TRIANGLE_FAN;
+            if (prim.mode != -1 && prim.mode != TINYGLTF_MODE_TRIANGLES && !strip && !fan)
+                continue; // points and lines: no surface to deform
             const std::string where = "mesh " + std::to_string(mi) + " primitive " +
                                       std::to_string(pi);
             auto pos_it = prim.attributes.find("POSITION");
@@ -319,7 +338,9 @@ struct GltfReader {
                 for (size_t i = 0; i < count; i++)
                     idx[i] = uint32_t(i);
             }
-            if (idx.size() % 3 != 0) // (a primitive without indices: its vertices in threes)
+            if (strip || fan) // glTF 2.0 3.7.2.1: as a list of triangles, the winding kept
+                idx = strip_or_fan_triangles(idx, strip);
+            else if (idx.size() % 3 != 0) // (a primitive without indices: its vertices in threes)
                 return bad(FP_MESH_ERR_FORMAT, where + " has " + std::to_string(idx.size()) +
                                                    (prim.indices >= 0 ? " indices" : " vertices and no indices") +
                                                    ", not a multiple of 3");
@@ -796,7 +817,7 @@ int load_gltf(const char *path, const std::string &ext, const std::string &data,
         return fail(err, errlen, r.code, path, "glTF: " + r.error);
     if (r.prims_seen > 0 && r.prims_used == 0)
         return fp__mesh_error(err, errlen, FP_MESH_ERR_UNSUPPORTED, path,
-                              "glTF: no triangle primitives (only points, lines, strips or fans)");
+                              "glTF: no triangle primitives (only points or lines)");
     if (!r.all_normals)
         std::fill(soup.has_nrm.begin(), soup.has_nrm.end(), 0);
     soup.any_vertex_uv = r.any_uv;
