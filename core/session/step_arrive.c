@@ -11,8 +11,8 @@
 #define FP_ARRIVE_MAX_STEP_S 0.25 /* a gap between frames counts at most this much */
 #define FP_ARRIVE_FAR_EVERY_NS 100000000 /* the unbounded nearest query: at most 10 a second */
 
-static void bring_in_live(fp_arrive_step *r, fp_pose_state *ps, const fp_head *head, double radius,
-                          const fp_engine_step *e, const fp_slog *log);
+static void bring_in_live(fp_arrive_step *r, fp_pose_state *ps, const fp_calibration *before,
+                          const fp_head *head, double radius, const fp_engine_step *e, const fp_slog *log);
 
 int fp_arrive_step_init(fp_arrive_step *r, fp_arrive_placement how)
 {
@@ -55,11 +55,12 @@ void fp_arrive_step_place(fp_arrive_step *r, fp_pose_state *p, bool engaged, con
     double hover = radius > 0 ? FP_ARRIVE_HOVER * radius : 0;
     if (!r->place) return;
     bool now = r->bring_on && !r->bring_tried && !engaged; /* the first bring-in: at once */
+    fp_calibration before = p->calib; /* (kept where a push in effect cannot be made again now) */
     if (!fp_pose_auto_refit(r->place, p, engaged, head->mm_per_unit, head->min, head->max, hover)) {
-        if (now) bring_in_live(r, p, head, radius, e, log);
+        if (now) bring_in_live(r, p, &before, head, radius, e, log);
         return;
     }
-    if (r->bring_on && !fp_pose_auto_still(r->place)) bring_in_live(r, p, head, radius, e, log);
+    if (r->bring_on && !fp_pose_auto_still(r->place)) bring_in_live(r, p, &before, head, radius, e, log);
     double mm = head->mm_per_unit > 0 ? head->mm_per_unit : 1.0;
     bool still = fp_pose_auto_still(r->place) && hover > 0;
     if (r->placed_said) {
@@ -183,11 +184,11 @@ static void each_sample(fp_input *const *ins, size_t n, void (*fn)(void *ctx, in
  * them near (*p 0); BRING_PUSH: *p > 0. */
 enum { BRING_NONE, BRING_STILL, BRING_PUSH };
 static int bring_push(const tips_in *t, const fp_calibration *c, double radius, const fp_head *head,
-                      const fp_engine_step *e, float (*q)[3], float *d, double *d0, double *p, double *dp)
+                      const fp_engine_step *e, float (*q)[3], float *d, double *d0, double *p, double *dp,
+                      bool acts[FP_HANDS][FP_FINGERS])
 {
     const double near = FP_ARRIVE_NEAR * radius, to = FP_ARRIVE_BRING_TO * radius;
     const double deepest = (double)head->max[2] - head->min[2];
-    bool acts[FP_HANDS][FP_FINGERS];
     *p = 0;
     *d0 = *dp = INFINITY;
     double most = acting(t, d, acts); /* (d: room for a float a kept fingertip) */
@@ -229,7 +230,8 @@ int fp_arrive_bring_in(fp_calibration *c, fp_input *const *ins, size_t n, double
     t.seen = 0;
     each_sample(ins, n, keep_one, &t);
     double d0, p, dp;
-    switch (bring_push(&t, c, radius, head, e, q, d, &d0, &p, &dp)) {
+    bool acts[FP_HANDS][FP_FINGERS];
+    switch (bring_push(&t, c, radius, head, e, q, d, &d0, &p, &dp, acts)) {
     case BRING_STILL: /* hands that never move hover, as live ones do */
         c->offset[2] += FP_ARRIVE_HOVER * radius;
         fp_slog_printf(log, FP_LOG_INFO, "session",
@@ -258,12 +260,57 @@ out:
     return rc;
 }
 
+/* each hand's newest sample's fingertips (device mm) */
+typedef struct newest_tips {
+    float mm[FP_HANDS][FP_FINGERS][3];
+    bool have[FP_HANDS];
+} newest_tips;
+
+static void keep_newest(void *ctx, int hand, const float (*mm)[3])
+{
+    newest_tips *n = ctx;
+    if (hand != FP_HAND_LEFT && hand != FP_HAND_RIGHT) return;
+    for (int f = 0; f < FP_FINGERS; f++) memcpy(n->mm[hand][f], mm[FP_JOINT_TIP(f)], sizeof n->mm[hand][f]);
+    n->have[hand] = true;
+}
+
+/* Where the hands as they are now (each hand's newest sample) would be at c: LAND_AWAY no
+ * fingertip within FP_ARRIVE_NEAR x radius of the face (a push made now grabs nothing at once),
+ * LAND_ACTING some fingertip that acts (acts: acting()) within it (a push made now grabs with
+ * the fingertips that move, at their approach), LAND_STILL only fingertips that do not act. */
+enum { LAND_AWAY, LAND_ACTING, LAND_STILL };
+static int lands(const fp_arrive_step *r, const fp_calibration *c, const bool acts[FP_HANDS][FP_FINGERS],
+                 double radius, const fp_engine_step *e)
+{
+    newest_tips n = {0};
+    fp_pose_auto_each(r->place, keep_newest, &n);
+    float q[FP_HANDS * FP_FINGERS][3], d[FP_HANDS * FP_FINGERS];
+    bool act[FP_HANDS * FP_FINGERS];
+    size_t nq = 0;
+    for (int h = 0; h < FP_HANDS; h++)
+        for (int f = 0; n.have[h] && f < FP_FINGERS; f++) {
+            act[nq] = acts[h][f];
+            fp_pose_to_mesh(c, h, n.mm[h][f], q[nq++]);
+        }
+    float near = (float)(FP_ARRIVE_NEAR * radius);
+    if (!nq || csrbf_points_nearest(e->points, &q[0][0], nq, near, d, NULL) < 0) return LAND_AWAY;
+    int at = LAND_AWAY;
+    for (size_t i = 0; i < nq; i++)
+        if (d[i] <= near) at = act[i] ? LAND_ACTING : at == LAND_ACTING ? at : LAND_STILL;
+    return at;
+}
+
 /* The same for a live input's hands at a refit (step_arrive.h): on the estimator's samples,
  * every stride-th of at most FP_ARRIVE_LIVE_SAMPLES, into r's buffers; p->calib, the range's
- * placement just made, moved by the push. The first push is said on log. */
-static void bring_in_live(fp_arrive_step *r, fp_pose_state *ps, const fp_head *head, double radius,
-                          const fp_engine_step *e, const fp_slog *log)
+ * placement just made (`before`: the placement in effect before that refit), moved by the
+ * push when its time has come (step_arrive.h, FP_ARRIVE_BRING_WAIT_S: a push that would put
+ * the hands as they are now into a grab waits; meanwhile a push in effect stays). The first
+ * push is said on log. */
+static void bring_in_live(fp_arrive_step *r, fp_pose_state *ps, const fp_calibration *before,
+                          const fp_head *head, double radius, const fp_engine_step *e, const fp_slog *log)
 {
+    bool had = r->pushed; /* (p->calib is the range's placement now, or as it was) */
+    r->pushed = false;
     r->bring_tried = true; /* (later tries come with the refits only) */
     size_t n = fp_pose_auto_samples(r->place);
     if (!n || !r->live_tips || !e || !e->points || !(radius > 0)) return;
@@ -271,10 +318,25 @@ static void bring_in_live(fp_arrive_step *r, fp_pose_state *ps, const fp_head *h
                  .stride = (n + FP_ARRIVE_LIVE_SAMPLES - 1) / FP_ARRIVE_LIVE_SAMPLES};
     fp_pose_auto_each(r->place, keep_one, &t);
     double d0, p, dp, mm = head->mm_per_unit > 0 ? head->mm_per_unit : 1.0;
-    if (bring_push(&t, &ps->calib, radius, head, e, r->live_q, r->live_d, &d0, &p, &dp) != BRING_PUSH) return;
+    bool acts[FP_HANDS][FP_FINGERS];
+    if (bring_push(&t, &ps->calib, radius, head, e, r->live_q, r->live_d, &d0, &p, &dp, acts) != BRING_PUSH)
+        return; /* (the range's placement stands) */
     fp_calibration c = ps->calib;
     c.offset[2] -= p;
+    /* when (step_arrive.h): a push that grabs nothing at once, from FP_ARRIVE_BRING_AFTER_S
+     * away; one that grabs with the fingertips that move, at their approach, from a wait later;
+     * any from two waits later */
+    double waited = r->moving_away_s - FP_ARRIVE_BRING_AFTER_S + 1e-6;
+    int at = waited < 2 * FP_ARRIVE_BRING_WAIT_S ? lands(r, &c, acts, radius, e) : LAND_AWAY;
+    if (at == LAND_STILL || (at == LAND_ACTING && waited < FP_ARRIVE_BRING_WAIT_S)) {
+        if (had) { /* (the push in effect stays; again at the next refit) */
+            fp_pose_recalibrate(ps, before);
+            r->pushed = true;
+        }
+        return;
+    }
     fp_pose_recalibrate(ps, &c);
+    r->pushed = true;
     if (r->brought) return;
     r->brought = true;
     fp_slog_printf(log, FP_LOG_INFO, "session",

@@ -70,6 +70,7 @@ typedef struct fp_arrive_step {
     bool bring_on;                 /* FP_ARRIVE_BRING_AFTER_S of those came: bring them in */
     bool bring_tried;              /* the live bring-in ran (outside a refit: once) */
     bool brought;                  /* the live bring-in was said */
+    bool pushed;                   /* the placement in effect holds a live bring-in's push */
     float (*live_tips)[3];         /* FP_ARRIVE_PLACED_AUTO: its buffers (FP_ARRIVE_LIVE_SAMPLES */
     int *live_hand;                /* samples' fingertips, hands, their points in mesh units */
     float (*live_q)[3];            /* and distances) */
@@ -104,9 +105,21 @@ void fp_arrive_step_event(fp_arrive_step *r, const fp_event *ev);
  *  as the same hands replayed from a recording are (so the same motion grabs the same skin
  *  live and replayed); one info line the first time. Cost: one march over the fingertips of at most 64
  *  samples, 1.6-2.6 ms (ICT face), at a refit (every FP_POSE_AUTO_REFIT_S at most, never
- *  engaged). Gloves placed on the face keep their place (fp_pose_recalibrate). */
+ *  engaged). Gloves placed on the face keep their place (fp_pose_recalibrate).
+ *  When the push is made (the replay's is there from the first frame, a live one is a guess
+ *  that the hands will not come near by themselves): the hands as they are now (each hand's
+ *  newest sample) are placed pushed. A push that leaves every fingertip beyond FP_ARRIVE_NEAR x
+ *  radius (it grabs nothing at once) is made from FP_ARRIVE_BRING_AFTER_S of moving away; one
+ *  that would put a fingertip that acts within it (a grab with the fingertips that move, at
+ *  their approach, as the replay's grab starts) from FP_ARRIVE_BRING_WAIT_S later; one that
+ *  would put only fingertips that do not act there (a still finger resting in the skin, the
+ *  moving ones away: a grab they would not move), and any, from two waits later. Until then
+ *  a push in effect stays and the range's placement stands where there is none; the hands
+ *  that come near by themselves meanwhile (HandSplay's hover for 1.4 s, then a reach) are
+ *  never pushed, as the replay does not push them. */
 #define FP_ARRIVE_HOVER 1.0
 #define FP_ARRIVE_BRING_AFTER_S 1.0
+#define FP_ARRIVE_BRING_WAIT_S 1.0
 #define FP_ARRIVE_LIVE_SAMPLES 64
 void fp_arrive_step_place(fp_arrive_step *r, fp_pose_state *p, bool engaged, const fp_head *head,
                          double radius, const fp_engine_step *e, const fp_slog *log);

@@ -287,9 +287,11 @@ static void shifted_csv(const char *rec, const char *out, int from, double dx)
  * it, so brought closer by its pinching fingertips, and the pinch moves the skin; the same
  * hand placed as it arrives (no range in advance, as a live tracker's) is brought in by the
  * same rule on what it has sent, once it has moved for FP_ARRIVE_BRING_AFTER_S (1 s) without
- * coming near: the push within 5 mm of the replay's, and the pinch pulls the skin
- * millimetres (measured 22.0 mm at most, the replay 15.8: its grab starts 1 s later in the
- * pinch's 1.5 s cycle), and no hint. */
+ * coming near, at the moment step_arrive.h gives (its still fingertips would rest in the skin
+ * at once, so the push waits FP_ARRIVE_BRING_WAIT_S for the pinching ones' approach, where the
+ * replay's grab starts: pushed 2.8 s in): the push within 5 mm of the replay's, and the pinch
+ * pulls the skin millimetres (measured 25.4 mm at most, 4871 vertices; the replay 15.8, 6156;
+ * pushed at 1.0-1.3 s before, mid-pinch: 22.0 mm), and no hint. */
 static void test_bring_in(void **state)
 {
     (void)state;
