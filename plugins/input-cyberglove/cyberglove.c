@@ -125,7 +125,7 @@ static void logf_(const glove *g, fp_log_level lvl, const char *fmt, ...)
 
 /* The event's text names the port ("PATH: text" unless the text names it already). The host
  * says warnings, errors and disconnections itself, one line each (docs/plugins.md), so only
- * the other codes (connected, reconnecting) are logged here too: an unplug is one line. */
+ * CONNECTED is logged here too (RECONNECTING, one per attempt, is summed up by say_outage). */
 static void push_status(glove *g, fp_status_code code, const char *fmt, ...)
 {
     fp_event_status ev;
@@ -135,18 +135,37 @@ static void push_status(glove *g, fp_status_code code, const char *fmt, ...)
     ev.header.time_ns = now_ns(g);
     ev.header.hand = g->hand;
     ev.code = code;
-    char text[sizeof ev.text];
+    char text[400], full[PATH_MAX + sizeof text + 2]; /* full: the logged line, whole */
     va_list ap;
     va_start(ap, fmt);
     vsnprintf(text, sizeof text, fmt, ap);
     va_end(ap);
-    int len = strstr(text, g->path) ? snprintf(ev.text, sizeof ev.text, "%s", text)
-                                    : snprintf(ev.text, sizeof ev.text, "%s: %s", g->path, text);
-    if (len >= (int)sizeof ev.text) /* a long path: the line keeps what fits, and says it was cut */
+    const char *sep = strstr(text, g->path) ? "" : ": ";
+    snprintf(full, sizeof full, "%s%s%s", *sep ? g->path : "", sep, text);
+    if (snprintf(ev.text, sizeof ev.text, "%s", full) >= (int)sizeof ev.text) /* cut: says so */
         memcpy(ev.text + sizeof ev.text - 4, "...", 4);
     g->host->push_event(g->host, &ev.header);
-    if (code == FP_STATUS_CONNECTED || code == FP_STATUS_RECONNECTING)
-        logf_(g, code == FP_STATUS_CONNECTED ? FP_LOG_INFO : FP_LOG_WARNING, "%s", ev.text);
+    if (code == FP_STATUS_CONNECTED)
+        logf_(g, FP_LOG_INFO, "%s", full);
+}
+
+/* A long outage in few lines (docs/cyberglove.md): the loss once (its DISCONNECTED), then
+ * "still no answer" 10 s after it and every minute after that, and the return once
+ * (CONNECTED, saying how long it took). Before, each attempt was a line. */
+#define OUTAGE_FIRST_SAY_NS 10000000000LL
+#define OUTAGE_SAY_NS 60000000000LL
+typedef struct outage { int64_t since_ns, say_ns; } outage; /* since: 0 while connected */
+/* Before attempt number `attempt` (1, 2, ...) of an outage: starts it, or says the summary due. */
+static void say_outage(glove *g, outage *o, unsigned attempt)
+{
+    int64_t t = now_ns(g);
+    if (!o->since_ns) {
+        *o = (outage){t, t + OUTAGE_FIRST_SAY_NS};
+    } else if (t >= o->say_ns) {
+        logf_(g, FP_LOG_WARNING, "still no answer from %s after %.0f s, %u tries", g->path,
+              (double)(t - o->since_ns) / 1e9, attempt - 1);
+        o->say_ns = t + OUTAGE_SAY_NS;
+    }
 }
 
 static bool stopping(glove *g) { return atomic_load(&g->stopping); }
@@ -830,9 +849,10 @@ static void *thread_main(void *arg)
     int backoff = BACKOFF_MIN_MS;
     unsigned attempt = 0;
     char why[160], said[160] = ""; /* said: the probe's failure said since the last connection */
+    outage out = {0, 0};
     for (;;) {
         if (g->fd < 0) {
-            attempt++;
+            say_outage(g, &out, ++attempt);
             push_status(g, FP_STATUS_RECONNECTING, "reopening %s in %d ms (attempt %u)", g->path,
                         backoff, attempt);
             if (nap(g, backoff) < 0)
@@ -857,15 +877,19 @@ static void *thread_main(void *arg)
             continue;
         }
         said[0] = '\0';
-        backoff = BACKOFF_MIN_MS;
-        attempt = 0;
-        char sampled[32] = "";
+        char sampled[32] = "", back[64] = "";
         if (g->sampled != g->sensors)
             snprintf(sampled, sizeof sampled, " (%d sampled)", g->sampled);
-        push_status(g, FP_STATUS_CONNECTED, "%d sensors%s, %s hand, %s %s, %s%s", g->sensors,
+        if (out.since_ns)
+            snprintf(back, sizeof back, "; back after %.1f s, %u tries",
+                     (double)(now_ns(g) - out.since_ns) / 1e9, attempt);
+        push_status(g, FP_STATUS_CONNECTED, "%d sensors%s, %s hand, %s %s, %s%s%s", g->sensors,
                     sampled, g->hand ? "right" : "left", g->bits == 16 ? "16-bit" : "8-bit",
                     g->poll_mode ? "poll" : "stream", g->version[0] ? "version " : "",
-                    g->version);
+                    g->version, back);
+        backoff = BACKOFF_MIN_MS;
+        attempt = 0;
+        out.since_ns = 0;
         int end = session(g, why, sizeof why);
         if (end == END_STOP)
             break;
