@@ -260,6 +260,10 @@ typedef struct fp_input_instance {
     _Atomic(const char *) refused_why[FP_EVENT_FAULTS]; /* per fp_event_fault: the first
                                             one's reason (a static phrase), set by push_event */
     unsigned refused_said;               /* owner's: bit f, the warning for fault f was said */
+    atomic_uint_least64_t oversize;      /* the first event refused for its size (over
+                                            sizeof(fp_event), or under its header): its
+                                            size << 32 | its type; 0: none */
+    bool oversize_said;                  /* owner's: its warning was said */
     bool own_clock;                      /* fp_input_own_clock, read before start: its events'
                                             times are not held to the host's clock */
 } fp_input_instance;

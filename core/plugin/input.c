@@ -18,7 +18,14 @@
 
 static bool push_to(fp_input_instance *inst, const fp_event_header *ev)
 {
-    if (!ev || ev->size < sizeof *ev || ev->size > sizeof(fp_event)) return false;
+    if (!ev) return false;
+    if (ev->size < sizeof *ev || ev->size > sizeof(fp_event)) { /* no room for it: refused, said
+        * once with its size (before: false, as for a full queue, which a plugin sends again) */
+        uint_least64_t none = 0;
+        atomic_compare_exchange_strong(&inst->oversize, &none, (uint_least64_t)ev->size << 32 | ev->type);
+        atomic_fetch_add(&inst->refused, 1);
+        return true;
+    }
     fp_event copy;
     memcpy(&copy, ev, ev->size);
     const char *why;
@@ -93,6 +100,19 @@ static void say_refused(fp_input_instance *inst)
         char line[200];
         snprintf(line, sizeof line, "refused a malformed event: %s; such events are dropped, and "
                  "counted when the input closes", why);
+        fp_log_relay_push(&inst->log, FP_LOG_WARNING, line);
+    }
+    uint_least64_t big = atomic_load(&inst->oversize);
+    if (big && !inst->oversize_said) {
+        inst->oversize_said = true;
+        char line[300];
+        unsigned size = (unsigned)(big >> 32), type = (unsigned)(big & 0xffff);
+        bool over = size > sizeof(fp_event);
+        snprintf(line, sizeof line, "refused an %s event: %s (header.type %u) of %u bytes, %s %zu "
+                 "bytes (%s); such events are dropped, and counted when the input closes",
+                 over ? "oversize" : "undersize", fp_event_type_name(type), type, size,
+                 over ? "over the host's limit of" : "under the", over ? sizeof(fp_event) : sizeof(fp_event_header),
+                 over ? "sizeof(fp_event)" : "the event header's size");
         fp_log_relay_push(&inst->log, FP_LOG_WARNING, line);
     }
 }

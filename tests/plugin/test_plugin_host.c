@@ -158,7 +158,7 @@ static void test_env_path_and_instance(void **state)
 typedef struct log_seen {
     pthread_t owner;
     int n, on_owner, warnings;
-    char lines[40][128];
+    char lines[40][320];
     char source[64];
 } log_seen;
 
@@ -396,6 +396,40 @@ static void test_malformed_events_refused(void **state)
     }
     fp_input_instance_close(&inst);
     assert_int_equal(seen.n, 0);
+    fp_plugin_path_clear(&path);
+}
+
+/* ---- an event larger than the host takes: refused, said once with its size, counted ---- */
+
+static void test_oversize_events_refused(void **state)
+{
+    (void)state;
+    fp_plugin_path path;
+    fixture_path(&path);
+    fp_input_instance inst;
+    log_seen seen = {.owner = pthread_self()};
+    /* 3 joint angles events of sizeof(fp_event) + 64 bytes, then 3 buttons and the end */
+    start_logged(&inst, &path, "fixture,oversize=3", &seen);
+    fp_event ev;
+    int taken = 0;
+    while (fp_input_instance_poll(&inst, &ev)) {
+        assert_int_equal(fp_event_check(&ev, NULL), FP_EVENT_OK);
+        assert_int_not_equal(ev.header.type, FP_EVENT_JOINT_ANGLES);
+        taken++;
+    }
+    assert_int_equal(taken, 4);
+    assert_int_equal((int)atomic_load(&inst.refused), 3); /* before: 0, nothing counted */
+    /* one warning for the three, naming the kind, the size and the limit (before: none, and
+     * push_event answered false, a full queue, which a plugin sends again) */
+    assert_int_equal(fp_input_instance_drain_log(&inst), 1);
+    char want[160];
+    snprintf(want, sizeof want, "refused an oversize event: joint angles (header.type 1) of %zu bytes, "
+             "over the host's limit of %zu bytes", sizeof(fp_event) + 64, sizeof(fp_event));
+    if (!strstr(seen.lines[0], want)) fail_msg("said: %s\nwanted: %s", seen.lines[0], want);
+    assert_string_equal(seen.source, "fixture");
+    fp_input_instance_close(&inst);
+    assert_int_equal(seen.n, 2); /* not said again; the closing count */
+    assert_non_null(strstr(seen.lines[1], "refused 3 malformed events in all"));
     fp_plugin_path_clear(&path);
 }
 
@@ -852,7 +886,7 @@ int main(void)
         cmocka_unit_test(test_spec_parse),        cmocka_unit_test(test_loader_errors),
         cmocka_unit_test(test_env_path_and_instance),
         cmocka_unit_test(test_log_relayed), cmocka_unit_test(test_malformed_events_refused),
-        cmocka_unit_test(test_event_times_refused),
+        cmocka_unit_test(test_event_times_refused), cmocka_unit_test(test_oversize_events_refused),
         cmocka_unit_test(test_isolate_holds_only_good_set),
         cmocka_unit_test(test_err_filled),
         cmocka_unit_test(test_queue_mpsc),
