@@ -4,45 +4,19 @@
 # On stage the outage must take few lines: the loss once, one "still no answer from PATH after
 # N s, N tries" (due 10 s after the loss), and the return once, each naming the device.
 # Before: a "reopening PATH in 2000 ms (attempt N)" warning at every attempt, every 2 s for as
-# long as the glove was gone (8 lines in this test), burying the other messages.
+# long as the glove was gone (10 lines in this test), burying the other messages.
 # Usage: test_outage_said_briefly.sh FACEPUPPET FP_GLOVE_EMU   (from the source root)
 set -u
 fp=$1 emu=$2
-cal=../shared/data/cyberglove/GloveCalibrationRight.cal
-tmp=$(mktemp -d)
-link=$tmp/glove
-mkfifo "$tmp/cmd"
-"$emu" --csv ../shared/data/hands/leap-motion/grab_cyberglove_like_angles_deg.csv --cal "$cal" \
-    --loop --link "$link" <"$tmp/cmd" >"$tmp/emu.out" 2>&1 &
-emu_pid=$!
-exec 3>"$tmp/cmd"
-run_pid=
-trap 'exec 3>&-; [ -n "$run_pid" ] && kill $run_pid 2>/dev/null; kill $emu_pid 2>/dev/null; rm -rf "$tmp"' EXIT
-fail() { echo "FAIL: $*"; echo "--- run's stderr:"; cat "$tmp/err"; exit 1; }
-# wait_for TEXT [COUNT]: until run's stderr holds COUNT lines with TEXT (60 s at most)
-wait_for() {
-    i=0
-    while n=$(grep -c "$1" "$tmp/err" 2>/dev/null); [ "${n:-0}" -lt "${2:-1}" ]; do
-        i=$((i + 1)); [ $i -gt 600 ] && fail "not ${2:-1} lines with '$1' in 60 s"
-        sleep 0.1
-    done
-}
-i=0
-while [ ! -e "$link" ]; do i=$((i + 1)); [ $i -gt 300 ] && fail "the emulator made no $link"; sleep 0.1; done
-"$fp" run --input "cyberglove:$link,cal=$cal" --duration 120 --out "$tmp/out.obj" >"$tmp/out" 2>"$tmp/err" &
-run_pid=$!
-wait_for "sensors, right hand"
-echo pull >&3
+. "$(dirname "$0")/glove_run.sh"
+run_glove
+glove_say pull
 wait_for "cable pulled"
 sleep 13
-echo replug >&3
+glove_say replug
 wait_for "sensors, right hand" 2
 sleep 1
-kill -INT $run_pid
-wait $run_pid
-rc=$?
-run_pid=
-[ $rc -eq 0 ] || fail "run exited $rc after SIGINT"
+run_stop
 # the outage: the input's lines from the loss line to the return line, both included (run's
 # progress lines, once a second, aside)
 awk '/cable pulled/ {on = 1} on && /cyberglove: / {print} on && /sensors, right hand/ {exit}' \
