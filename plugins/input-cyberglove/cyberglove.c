@@ -154,13 +154,13 @@ static void push_status(glove *g, fp_status_code code, const char *fmt, ...)
  * (CONNECTED, saying how long it took). Before, each attempt was a line. */
 #define OUTAGE_FIRST_SAY_NS 10000000000LL
 #define OUTAGE_SAY_NS 60000000000LL
-typedef struct outage { int64_t since_ns, say_ns; } outage; /* since: 0 while connected */
+typedef struct outage { int64_t since_ns, say_ns; bool was_up; } outage; /* since: 0 if up */
 /* Before attempt number `attempt` (1, 2, ...) of an outage: starts it, or says the summary due. */
 static void say_outage(glove *g, outage *o, unsigned attempt)
 {
     int64_t t = now_ns(g);
     if (!o->since_ns) {
-        *o = (outage){t, t + OUTAGE_FIRST_SAY_NS};
+        *o = (outage){t, t + OUTAGE_FIRST_SAY_NS, o->was_up};
     } else if (t >= o->say_ns) {
         logf_(g, FP_LOG_WARNING, "still no answer from %s after %.0f s, %u tries", g->path,
               (double)(t - o->since_ns) / 1e9, attempt - 1);
@@ -849,7 +849,7 @@ static void *thread_main(void *arg)
     int backoff = BACKOFF_MIN_MS;
     unsigned attempt = 0;
     char why[160], said[160] = ""; /* said: the probe's failure said since the last connection */
-    outage out = {0, 0};
+    outage out = {0, 0, false};
     for (;;) {
         if (g->fd < 0) {
             say_outage(g, &out, ++attempt);
@@ -881,7 +881,7 @@ static void *thread_main(void *arg)
         if (g->sampled != g->sensors)
             snprintf(sampled, sizeof sampled, " (%d sampled)", g->sampled);
         if (out.since_ns)
-            snprintf(back, sizeof back, "; back after %.1f s, %u tries",
+            snprintf(back, sizeof back, "; %s after %.1f s, %u tries", out.was_up ? "back" : "answered",
                      (double)(now_ns(g) - out.since_ns) / 1e9, attempt);
         push_status(g, FP_STATUS_CONNECTED, "%d sensors%s, %s hand, %s %s, %s%s%s", g->sensors,
                     sampled, g->hand ? "right" : "left", g->bits == 16 ? "16-bit" : "8-bit",
@@ -889,7 +889,7 @@ static void *thread_main(void *arg)
                     g->version, back);
         backoff = BACKOFF_MIN_MS;
         attempt = 0;
-        out.since_ns = 0;
+        out = (outage){0, 0, true};
         int end = session(g, why, sizeof why);
         if (end == END_STOP)
             break;
