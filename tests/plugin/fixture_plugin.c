@@ -25,7 +25,9 @@
  *                       key oversize=N: start first pushes N joint angles events whose
  *                       header.size is 64 bytes over sizeof(fp_event) (a plugin built
  *                       with a larger event), each once, logging "oversize push returned
- *                       false" where push_event says the queue is full */
+ *                       false" where push_event says the queue is full; with
+ *                       oversize_retry=1 it pushes each again while push_event says so,
+ *                       as a pacer waiting for room does (fp_pacer_push) */
 #define _POSIX_C_SOURCE 200809L /* nanosleep */
 #include <facepuppet/plugin.h>
 
@@ -63,7 +65,7 @@ typedef struct fixture {
     pthread_t logger;
     int logging;
     int stuck;
-    int oversize;
+    int oversize, oversize_retry;
 } fixture;
 
 static void *stuck_thread(void *arg)
@@ -110,7 +112,12 @@ static int start(fp_input *self, char *err, size_t errlen)
         } big;
         memset(&big, 0, sizeof big);
         big.ja.header = (fp_event_header){sizeof big, FP_EVENT_JOINT_ANGLES, 0, host->now_ns(host), 0, 1};
-        if (!host->push_event(host, &big.ja.header)) host->log(host, FP_LOG_WARNING, "oversize push returned false");
+        while (!host->push_event(host, &big.ja.header)) {
+            host->log(host, FP_LOG_WARNING, "oversize push returned false");
+            if (!fx->oversize_retry) break;
+            struct timespec ts = {0, 1000000};
+            nanosleep(&ts, NULL);
+        }
     }
 #ifdef FIXTURE_BAD_EVENTS
     for (int k = 0; k < 600; k++) {
@@ -163,7 +170,7 @@ static void destroy(fp_input *self) { free(self); }
 static int create(const fp_host *host, const char *arg, const fp_param *params, size_t nparams,
                   fp_input **out, char *err, size_t errlen)
 {
-    int log_lines = 0, stuck = 0, nostart = 0, oversize = 0;
+    int log_lines = 0, stuck = 0, nostart = 0, oversize = 0, oversize_retry = 0;
     for (size_t i = 0; i < nparams; i++) {
         if (!strcmp(params[i].key, "open_ms")) {
             long ms = strtol(params[i].value, NULL, 10);
@@ -179,6 +186,8 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
             return -22;
         } else if (!strcmp(params[i].key, "oversize")) {
             oversize = atoi(params[i].value);
+        } else if (!strcmp(params[i].key, "oversize_retry")) {
+            oversize_retry = atoi(params[i].value);
         } else if (!strcmp(params[i].key, "nostart")) {
             nostart = atoi(params[i].value);
         } else if (strcmp(params[i].key, "ok")) {
@@ -191,6 +200,7 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
     fx->log_lines = log_lines;
     fx->stuck = stuck;
     fx->oversize = oversize;
+    fx->oversize_retry = oversize_retry;
     if (log_lines > 0) host->log(host, FP_LOG_INFO, "created");
     fp_input *in = &fx->in;
     in->size = sizeof *in;
