@@ -47,6 +47,7 @@
 #include "facepuppet/plugin.h"
 #include "glove_cal.h"
 #include "glove_decode.h"
+#include "glove_outage.h"
 
 #define LAT_CAP 65536
 #define BACKOFF_MIN_MS 100
@@ -125,7 +126,7 @@ static void logf_(const glove *g, fp_log_level lvl, const char *fmt, ...)
 
 /* The event's text names the port ("PATH: text" unless the text names it already). The host
  * says warnings, errors and disconnections itself, one line each (docs/plugins.md), so only
- * CONNECTED is logged here too (RECONNECTING, one per attempt, is summed up by say_outage). */
+ * CONNECTED is logged here too (RECONNECTING, one per attempt, is summed up: glove_outage.h). */
 static void push_status(glove *g, fp_status_code code, const char *fmt, ...)
 {
     fp_event_status ev;
@@ -147,25 +148,6 @@ static void push_status(glove *g, fp_status_code code, const char *fmt, ...)
     g->host->push_event(g->host, &ev.header);
     if (code == FP_STATUS_CONNECTED)
         logf_(g, FP_LOG_INFO, "%s", full);
-}
-
-/* A long outage in few lines (docs/cyberglove.md): the loss once (its DISCONNECTED), then
- * "still no answer" 10 s after it and every minute after that, and the return once
- * (CONNECTED, saying how long it took). Before, each attempt was a line. */
-#define OUTAGE_FIRST_SAY_NS 10000000000LL
-#define OUTAGE_SAY_NS 60000000000LL
-typedef struct outage { int64_t since_ns, say_ns; bool was_up; } outage; /* since: 0 if up */
-/* Before attempt number `attempt` (1, 2, ...) of an outage: starts it, or says the summary due. */
-static void say_outage(glove *g, outage *o, unsigned attempt)
-{
-    int64_t t = now_ns(g);
-    if (!o->since_ns) {
-        *o = (outage){t, t + OUTAGE_FIRST_SAY_NS, o->was_up};
-    } else if (t >= o->say_ns) {
-        logf_(g, FP_LOG_WARNING, "still no answer from %s after %.0f s, %u tries", g->path,
-              (double)(t - o->since_ns) / 1e9, attempt - 1);
-        o->say_ns = t + OUTAGE_SAY_NS;
-    }
 }
 
 static bool stopping(glove *g) { return atomic_load(&g->stopping); }
@@ -848,19 +830,21 @@ static void *thread_main(void *arg)
     glove *g = arg;
     int backoff = BACKOFF_MIN_MS;
     unsigned attempt = 0;
-    char why[160], said[160] = ""; /* said: the probe's failure said since the last connection */
-    outage out = {0, 0, false};
+    char why[160], line[400];
+    fpg_outage out = {0}; /* an outage is said in few lines (glove_outage.h) */
     for (;;) {
         if (g->fd < 0) {
-            say_outage(g, &out, ++attempt);
+            if (fpg_outage_attempt(&out, now_ns(g), g->path, line, sizeof line))
+                logf_(g, FP_LOG_WARNING, "%s", line);
             push_status(g, FP_STATUS_RECONNECTING, "reopening %s in %d ms (attempt %u)", g->path,
-                        backoff, attempt);
+                        backoff, ++attempt);
             if (nap(g, backoff) < 0)
                 break;
             backoff = backoff * 2 > BACKOFF_MAX_MS ? BACKOFF_MAX_MS : backoff * 2;
             int fd = open_port(g, why, sizeof why);
             if (fd < 0) {
                 logf_(g, FP_LOG_DEBUG, "%s", why);
+                (void)fpg_outage_failed(&out, why); /* (the summary's last reason; the loss was said) */
                 continue;
             }
             g->fd = fd;
@@ -870,31 +854,27 @@ static void *thread_main(void *arg)
             break;
         if (r < 0) {
             close_port(g, false);
-            if (strcmp(why, said) != 0) { /* the same failure at each retry is said once */
-                push_status(g, FP_STATUS_DISCONNECTED, "%s", why);
-                snprintf(said, sizeof said, "%s", why);
-            }
+            int how = fpg_outage_failed(&out, why); /* the loss once, a new reason as an event */
+            if (how)
+                push_status(g, how == 2 ? FP_STATUS_DISCONNECTED : FP_STATUS_RECONNECTING, "%s", why);
             continue;
         }
-        said[0] = '\0';
-        char sampled[32] = "", back[64] = "";
+        char sampled[32] = "", back[64];
         if (g->sampled != g->sensors)
             snprintf(sampled, sizeof sampled, " (%d sampled)", g->sampled);
-        if (out.since_ns)
-            snprintf(back, sizeof back, "; %s after %.1f s, %u tries", out.was_up ? "back" : "answered",
-                     (double)(now_ns(g) - out.since_ns) / 1e9, attempt);
+        fpg_outage_up(&out, now_ns(g), back, sizeof back);
         push_status(g, FP_STATUS_CONNECTED, "%d sensors%s, %s hand, %s %s, %s%s%s", g->sensors,
                     sampled, g->hand ? "right" : "left", g->bits == 16 ? "16-bit" : "8-bit",
                     g->poll_mode ? "poll" : "stream", g->version[0] ? "version " : "",
                     g->version, back);
         backoff = BACKOFF_MIN_MS;
         attempt = 0;
-        out = (outage){0, 0, true};
         int end = session(g, why, sizeof why);
         if (end == END_STOP)
             break;
         close_port(g, end == END_SILENT);
         push_status(g, FP_STATUS_DISCONNECTED, "%s", why);
+        fpg_outage_lost(&out, why);
     }
     close_port(g, true);
     return NULL;
