@@ -822,6 +822,7 @@ typedef struct input_host {
     atomic_bool stopped;          /* stop() returned */
     atomic_ulong after_stop;      /* pushes after that */
     atomic_ulong bad_size;        /* pushes with a size no event has */
+    atomic_uint_least64_t first_bad; /* the first of them: its size << 32 | its type */
 } input_host;
 
 static bool ih_push(const fp_host *host, const fp_event_header *ev)
@@ -831,9 +832,13 @@ static bool ih_push(const fp_host *host, const fp_event_header *ev)
         atomic_fetch_add(&ih->after_stop, 1);
         return false;
     }
-    if (!ev || ev->size < sizeof *ev || ev->size > sizeof(fp_event)) {
+    if (!ev) return false;
+    if (ev->size < sizeof *ev || ev->size > sizeof(fp_event)) { /* true, as the host answers (do
+        * not send it again; before: false, a full queue, which a pacer retries for good) */
+        uint_least64_t none = 0;
+        atomic_compare_exchange_strong(&ih->first_bad, &none, (uint_least64_t)ev->size << 32 | ev->type);
         atomic_fetch_add(&ih->bad_size, 1);
-        return false;
+        return true;
     }
     return fp_event_queue_push(&ih->queue, ev);
 }
@@ -932,9 +937,12 @@ static void check_input(checker *c, creator *cr)
         report(c, FP_CHECK_FAIL, "events", "%zu of %zu events malformed; first: %s", bad, events, first_bad);
     else if (!skipped)
         report(c, FP_CHECK_PASS, "events", "%zu events well-formed", events);
+    uint_least64_t first = atomic_load(&ih->first_bad);
     if (atomic_load(&ih->bad_size))
-        report(c, FP_CHECK_FAIL, "events", "%lu push_event calls with a size no event has",
-               atomic_load(&ih->bad_size));
+        report(c, FP_CHECK_FAIL, "events", "%lu push_event calls with a size no event has (the first: "
+               "%s, header.type %u, of %u bytes; the host takes %zu to %zu, sizeof(fp_event))",
+               atomic_load(&ih->bad_size), fp_event_type_name((uint32_t)(first & 0xffff)),
+               (unsigned)(first & 0xffff), (unsigned)(first >> 32), sizeof(fp_event_header), sizeof(fp_event));
     if (atomic_load(&ih->after_stop))
         report(c, FP_CHECK_FAIL, "stop", "%lu push_event calls after stop() returned",
                atomic_load(&ih->after_stop));

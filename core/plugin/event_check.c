@@ -24,6 +24,13 @@ static fp_event_fault fault(fp_event_fault f, const char *what, const char **why
     return f;
 }
 
+const char *fp_event_type_name(uint32_t type)
+{
+    static const char *const names[] = {NULL, "joint angles", "joint positions", "wrist pose",
+                                        "button", "status", "channel"};
+    return type >= 1 && type <= FP_EVENT_CHANNEL ? names[type] : "an unknown type";
+}
+
 fp_event_fault fp_event_check(const fp_event *ev, const char **why)
 {
     static const uint32_t sizes[] = {0, sizeof(fp_event_joint_angles), sizeof(fp_event_joint_positions),

@@ -47,6 +47,11 @@ typedef enum fp_event_fault {
  *  ev: a whole fp_event (at least header.size bytes, as the queue holds them). */
 fp_event_fault fp_event_check(const fp_event *ev, const char **why);
 
+/** What an event of `type` (an fp_event_type) is, in English for messages: "joint angles",
+ *  "joint positions", "wrist pose", "button", "status", "channel"; "an unknown type" for any
+ *  other value. A static string. Any thread. */
+const char *fp_event_type_name(uint32_t type);
+
 /** How far past the host's clock an event's time_ns may be (ns, 1 s): a device's events are
  *  measured by the time they are pushed, with leeway for a clock read a little ahead. */
 #define FP_EVENT_MAX_AHEAD_NS 1000000000LL

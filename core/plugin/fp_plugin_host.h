@@ -226,6 +226,7 @@ typedef struct fp_input_link {
     atomic_bool abandoned;               /* set by the owner: calls do nothing from then on */
     atomic_int busy;                     /* push_event and log calls in progress (the owner
                                             waits for 0 after setting abandoned) */
+    atomic_uint_least64_t dropped;       /* events pushed after abandoned: dropped, counted */
 } fp_input_link;
 
 /** One running input: its plugin, the fp_host given to it (its link), its queue. */
@@ -244,6 +245,10 @@ typedef struct fp_input_instance {
     bool stopped;                        /* stop() was called (it is called once) */
     bool abandoned;                      /* stop() did not return within
                                             FP_INPUT_STOP_DEADLINE_MS: left running */
+    fp_input_link *orphan;               /* once abandoned: its link (kept for good), which
+                                            counts what the plugin pushes from then on */
+    uint64_t unread;                     /* once abandoned and closed: the events left in
+                                            its queue, never read (a recording's kept) */
     fp_log_relay log;                    /* the plugin's log lines, from any thread, until
                                             drained on the owner's (log_relay.h) */
     fp_host_log_fn log_fn;               /* where they are drained to (fp_input_instance_set_log) */
@@ -260,6 +265,10 @@ typedef struct fp_input_instance {
     _Atomic(const char *) refused_why[FP_EVENT_FAULTS]; /* per fp_event_fault: the first
                                             one's reason (a static phrase), set by push_event */
     unsigned refused_said;               /* owner's: bit f, the warning for fault f was said */
+    atomic_uint_least64_t oversize;      /* the first event refused for its size (over
+                                            sizeof(fp_event), or under its header): its
+                                            size << 32 | its type; 0: none */
+    bool oversize_said;                  /* owner's: its warning was said */
     bool own_clock;                      /* fp_input_own_clock, read before start: its events'
                                             times are not held to the host's clock */
 } fp_input_instance;
@@ -302,10 +311,17 @@ size_t fp_input_instance_drain_log(fp_input_instance *inst);
  *  abandoned so that the command can end: an error line in the input's log names it
  *  ("stop has not returned within 5 s ..."), inst->abandoned is set, and nothing more of the
  *  plugin is called or freed (destroy, its code stay: its threads may still run). Its link
- *  is detached (inst->link NULL, the link kept for good): what its threads push or log from
- *  then on is dropped there, so the owner may free the instance's memory.
+ *  is detached (inst->link NULL, the link kept for good as inst->orphan): what its threads
+ *  push or log from then on is dropped there (the pushes counted: fp_input_instance_dropped),
+ *  so the owner may free the instance's memory. A line says how many of its events were so
+ *  dropped by then, those it had queued and not delivered among them.
  *  The same holds for fp_input_instance_close_record. */
 void fp_input_instance_close(fp_input_instance *inst);
+/** The events of this input that were lost: refused by its full queue
+ *  (fp_event_queue_dropped) and, once abandoned, those it had queued that will never be read
+ *  and those it pushed after (its link counts them, for good: the figure may grow while its
+ *  threads run). Any thread for the queue's part; the rest is the owner's. */
+uint64_t fp_input_instance_dropped(const fp_input_instance *inst);
 /** Pop one event; queues it for the recording if any (no I/O on the caller's thread).
  *  [session-thread]. */
 bool fp_input_instance_poll(fp_input_instance *inst, fp_event *out);

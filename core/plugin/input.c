@@ -18,7 +18,14 @@
 
 static bool push_to(fp_input_instance *inst, const fp_event_header *ev)
 {
-    if (!ev || ev->size < sizeof *ev || ev->size > sizeof(fp_event)) return false;
+    if (!ev) return false;
+    if (ev->size < sizeof *ev || ev->size > sizeof(fp_event)) { /* no room for it: refused, said
+        * once with its size (before: false, as for a full queue, which a plugin sends again) */
+        uint_least64_t none = 0;
+        atomic_compare_exchange_strong(&inst->oversize, &none, (uint_least64_t)ev->size << 32 | ev->type);
+        atomic_fetch_add(&inst->refused, 1);
+        return true;
+    }
     fp_event copy;
     memcpy(&copy, ev, ev->size);
     const char *why;
@@ -57,6 +64,8 @@ static bool host_push(const fp_host *host, const fp_event_header *ev)
 {
     fp_input_instance *inst = link_enter(host);
     bool taken = inst ? push_to(inst, ev) : true; /* abandoned: dropped, never to be sent again */
+    if (!inst && host && host->host_data) /* (counted: the input's closing line says it) */
+        atomic_fetch_add(&((fp_input_link *)host->host_data)->dropped, 1);
     link_leave(host);
     return taken;
 }
@@ -93,6 +102,19 @@ static void say_refused(fp_input_instance *inst)
         char line[200];
         snprintf(line, sizeof line, "refused a malformed event: %s; such events are dropped, and "
                  "counted when the input closes", why);
+        fp_log_relay_push(&inst->log, FP_LOG_WARNING, line);
+    }
+    uint_least64_t big = atomic_load(&inst->oversize);
+    if (big && !inst->oversize_said) {
+        inst->oversize_said = true;
+        char line[300];
+        unsigned size = (unsigned)(big >> 32), type = (unsigned)(big & 0xffff);
+        bool over = size > sizeof(fp_event);
+        snprintf(line, sizeof line, "refused an %s event: %s (header.type %u) of %u bytes, %s %zu "
+                 "bytes (%s); such events are dropped, and counted when the input closes",
+                 over ? "oversize" : "undersize", fp_event_type_name(type), type, size,
+                 over ? "over the host's limit of" : "under the", over ? sizeof(fp_event) : sizeof(fp_event_header),
+                 over ? "sizeof(fp_event)" : "the event header's size");
         fp_log_relay_push(&inst->log, FP_LOG_WARNING, line);
     }
 }
@@ -425,6 +447,8 @@ static bool stop_within_deadline(fp_input_instance *inst)
         return true;
     }
     pthread_detach(t);
+    fp_input_instance_drain_log(inst); /* room for the host's lines: a plugin that logged 32 lines
+                                        * while stop was waited for had them dropped */
     char line[300];
     snprintf(line, sizeof line, "stop has not returned within %g s (a thread of the plugin's does "
              "not end): abandoned, the plugin left loaded and running; nothing more of it is "
@@ -446,6 +470,13 @@ static void detach_link(fp_input_instance *inst)
         nanosleep(&ts, NULL);
     }
     inst->link = NULL; /* leaked on purpose: the plugin holds &l->host */
+    inst->orphan = l;
+}
+
+uint64_t fp_input_instance_dropped(const fp_input_instance *inst)
+{
+    uint64_t n = inst->queue.cells ? fp_event_queue_dropped(&inst->queue) : 0;
+    return n + inst->unread + (inst->orphan ? atomic_load(&inst->orphan->dropped) : 0);
 }
 
 static void stop_input(fp_input_instance *inst)
@@ -472,12 +503,28 @@ int fp_input_instance_close_record(fp_input_instance *inst, char *err, size_t er
     return fp_event_recorder_close(&inst->record, err, errlen);
 }
 
+/* The closing line of an abandoned input: what of its events was dropped (before: nothing
+ * said, the events it had queued and those it pushed after lost uncounted). */
+static void say_abandoned_drops(fp_input_instance *inst)
+{
+    fp_event ev; /* (a recording has kept what was queued: fp_input_instance_close_record) */
+    while (fp_event_queue_pop(&inst->queue, &ev)) inst->unread++;
+    uint64_t after = atomic_load(&inst->orphan->dropped);
+    char line[300];
+    snprintf(line, sizeof line, "abandoned: dropped %llu event%s it pushed while its stop() did not "
+             "return (%llu queued and never read, %llu pushed after it was abandoned; what it pushes "
+             "from here is dropped too)", (unsigned long long)(inst->unread + after),
+             inst->unread + after == 1 ? "" : "s", (unsigned long long)inst->unread, (unsigned long long)after);
+    fp_log_relay_push(&inst->log, FP_LOG_WARNING, line);
+}
+
 void fp_input_instance_close(fp_input_instance *inst)
 {
     fp_input_instance_close_record(inst, NULL, 0);
     stop_input(inst);
     if (inst->abandoned) { /* its threads may still run its code and push: nothing is freed
                             * that they use (the queue, the log relay, the plugin's code) */
+        if (inst->input) say_abandoned_drops(inst);
         inst->input = NULL;
         fp_input_instance_drain_log(inst);
         return;

@@ -591,7 +591,7 @@ unsigned long fp_session_dropped(const fp_session *s)
 {
     unsigned long n = 0;
     for (size_t i = 0; i < s->input_count; i++)
-        n += fp_event_queue_dropped(&s->inputs[i].queue);
+        n += (unsigned long)fp_input_instance_dropped(&s->inputs[i]);
     return n;
 }
 

@@ -47,6 +47,7 @@
 #include "facepuppet/plugin.h"
 #include "glove_cal.h"
 #include "glove_decode.h"
+#include "glove_outage.h"
 
 #define LAT_CAP 65536
 #define BACKOFF_MIN_MS 100
@@ -125,7 +126,7 @@ static void logf_(const glove *g, fp_log_level lvl, const char *fmt, ...)
 
 /* The event's text names the port ("PATH: text" unless the text names it already). The host
  * says warnings, errors and disconnections itself, one line each (docs/plugins.md), so only
- * the other codes (connected, reconnecting) are logged here too: an unplug is one line. */
+ * CONNECTED is logged here too (RECONNECTING, one per attempt, is summed up: glove_outage.h). */
 static void push_status(glove *g, fp_status_code code, const char *fmt, ...)
 {
     fp_event_status ev;
@@ -135,18 +136,18 @@ static void push_status(glove *g, fp_status_code code, const char *fmt, ...)
     ev.header.time_ns = now_ns(g);
     ev.header.hand = g->hand;
     ev.code = code;
-    char text[sizeof ev.text];
+    char text[400], full[PATH_MAX + sizeof text + 2]; /* full: the logged line, whole */
     va_list ap;
     va_start(ap, fmt);
     vsnprintf(text, sizeof text, fmt, ap);
     va_end(ap);
-    int len = strstr(text, g->path) ? snprintf(ev.text, sizeof ev.text, "%s", text)
-                                    : snprintf(ev.text, sizeof ev.text, "%s: %s", g->path, text);
-    if (len >= (int)sizeof ev.text) /* a long path: the line keeps what fits, and says it was cut */
+    const char *sep = strstr(text, g->path) ? "" : ": ";
+    snprintf(full, sizeof full, "%s%s%s", *sep ? g->path : "", sep, text);
+    if (snprintf(ev.text, sizeof ev.text, "%s", full) >= (int)sizeof ev.text) /* cut: says so */
         memcpy(ev.text + sizeof ev.text - 4, "...", 4);
     g->host->push_event(g->host, &ev.header);
-    if (code == FP_STATUS_CONNECTED || code == FP_STATUS_RECONNECTING)
-        logf_(g, code == FP_STATUS_CONNECTED ? FP_LOG_INFO : FP_LOG_WARNING, "%s", ev.text);
+    if (code == FP_STATUS_CONNECTED)
+        logf_(g, FP_LOG_INFO, "%s", full);
 }
 
 static bool stopping(glove *g) { return atomic_load(&g->stopping); }
@@ -829,18 +830,21 @@ static void *thread_main(void *arg)
     glove *g = arg;
     int backoff = BACKOFF_MIN_MS;
     unsigned attempt = 0;
-    char why[160], said[160] = ""; /* said: the probe's failure said since the last connection */
+    char why[160], line[400];
+    fpg_outage out = {0}; /* an outage is said in few lines (glove_outage.h) */
     for (;;) {
         if (g->fd < 0) {
-            attempt++;
+            if (fpg_outage_attempt(&out, now_ns(g), g->path, line, sizeof line))
+                logf_(g, FP_LOG_WARNING, "%s", line);
             push_status(g, FP_STATUS_RECONNECTING, "reopening %s in %d ms (attempt %u)", g->path,
-                        backoff, attempt);
+                        backoff, ++attempt);
             if (nap(g, backoff) < 0)
                 break;
             backoff = backoff * 2 > BACKOFF_MAX_MS ? BACKOFF_MAX_MS : backoff * 2;
             int fd = open_port(g, why, sizeof why);
             if (fd < 0) {
                 logf_(g, FP_LOG_DEBUG, "%s", why);
+                (void)fpg_outage_failed(&out, why); /* (the summary's last reason; the loss was said) */
                 continue;
             }
             g->fd = fd;
@@ -850,27 +854,27 @@ static void *thread_main(void *arg)
             break;
         if (r < 0) {
             close_port(g, false);
-            if (strcmp(why, said) != 0) { /* the same failure at each retry is said once */
-                push_status(g, FP_STATUS_DISCONNECTED, "%s", why);
-                snprintf(said, sizeof said, "%s", why);
-            }
+            int how = fpg_outage_failed(&out, why); /* the loss once, a new reason as an event */
+            if (how)
+                push_status(g, how == 2 ? FP_STATUS_DISCONNECTED : FP_STATUS_RECONNECTING, "%s", why);
             continue;
         }
-        said[0] = '\0';
-        backoff = BACKOFF_MIN_MS;
-        attempt = 0;
-        char sampled[32] = "";
+        char sampled[32] = "", back[64];
         if (g->sampled != g->sensors)
             snprintf(sampled, sizeof sampled, " (%d sampled)", g->sampled);
-        push_status(g, FP_STATUS_CONNECTED, "%d sensors%s, %s hand, %s %s, %s%s", g->sensors,
+        fpg_outage_up(&out, now_ns(g), back, sizeof back);
+        push_status(g, FP_STATUS_CONNECTED, "%d sensors%s, %s hand, %s %s, %s%s%s", g->sensors,
                     sampled, g->hand ? "right" : "left", g->bits == 16 ? "16-bit" : "8-bit",
                     g->poll_mode ? "poll" : "stream", g->version[0] ? "version " : "",
-                    g->version);
+                    g->version, back);
+        backoff = BACKOFF_MIN_MS;
+        attempt = 0;
         int end = session(g, why, sizeof why);
         if (end == END_STOP)
             break;
         close_port(g, end == END_SILENT);
         push_status(g, FP_STATUS_DISCONNECTED, "%s", why);
+        fpg_outage_lost(&out, why);
     }
     close_port(g, true);
     return NULL;

@@ -21,7 +21,13 @@
  *                       key stuck=1: start runs a thread that never ends (a read loop
  *                       blocked for good), which stop joins: stop never returns;
  *                       stuck=2: the same thread also pushes a status event and logs a
- *                       line every 50 ms (a read that woke up after its input was abandoned) */
+ *                       line every 50 ms (a read that woke up after its input was abandoned);
+ *                       key oversize=N: start first pushes N joint angles events whose
+ *                       header.size is 64 bytes over sizeof(fp_event) (a plugin built
+ *                       with a larger event), each once, logging "oversize push returned
+ *                       false" where push_event says the queue is full; with
+ *                       oversize_retry=1 it pushes each again while push_event says so,
+ *                       as a pacer waiting for room does (fp_pacer_push) */
 #define _POSIX_C_SOURCE 200809L /* nanosleep */
 #include <facepuppet/plugin.h>
 
@@ -59,6 +65,7 @@ typedef struct fixture {
     pthread_t logger;
     int logging;
     int stuck;
+    int oversize, oversize_retry;
 } fixture;
 
 static void *stuck_thread(void *arg)
@@ -98,6 +105,20 @@ static int start(fp_input *self, char *err, size_t errlen)
     const fp_host *host = fx->host;
     if (fx->log_lines > 0) fx->logging = !pthread_create(&fx->logger, NULL, logger, fx);
     else if (fx->stuck) fx->logging = !pthread_create(&fx->logger, NULL, stuck_thread, fx);
+    for (int i = 0; i < fx->oversize; i++) {
+        union {
+            fp_event_joint_angles ja;
+            unsigned char bytes[sizeof(fp_event) + 64];
+        } big;
+        memset(&big, 0, sizeof big);
+        big.ja.header = (fp_event_header){sizeof big, FP_EVENT_JOINT_ANGLES, 0, host->now_ns(host), 0, 1};
+        while (!host->push_event(host, &big.ja.header)) {
+            host->log(host, FP_LOG_WARNING, "oversize push returned false");
+            if (!fx->oversize_retry) break;
+            struct timespec ts = {0, 1000000};
+            nanosleep(&ts, NULL);
+        }
+    }
 #ifdef FIXTURE_BAD_EVENTS
     for (int k = 0; k < 600; k++) {
         /* stamped when pushed: 10 ms apart ahead of the clock would be up to 6 s in the
@@ -149,7 +170,7 @@ static void destroy(fp_input *self) { free(self); }
 static int create(const fp_host *host, const char *arg, const fp_param *params, size_t nparams,
                   fp_input **out, char *err, size_t errlen)
 {
-    int log_lines = 0, stuck = 0, nostart = 0;
+    int log_lines = 0, stuck = 0, nostart = 0, oversize = 0, oversize_retry = 0;
     for (size_t i = 0; i < nparams; i++) {
         if (!strcmp(params[i].key, "open_ms")) {
             long ms = strtol(params[i].value, NULL, 10);
@@ -163,6 +184,10 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
         } else if (!strcmp(params[i].key, "errfill")) {
             memset(err, 'E', errlen);
             return -22;
+        } else if (!strcmp(params[i].key, "oversize")) {
+            oversize = atoi(params[i].value);
+        } else if (!strcmp(params[i].key, "oversize_retry")) {
+            oversize_retry = atoi(params[i].value);
         } else if (!strcmp(params[i].key, "nostart")) {
             nostart = atoi(params[i].value);
         } else if (strcmp(params[i].key, "ok")) {
@@ -174,6 +199,8 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
     fx->host = host;
     fx->log_lines = log_lines;
     fx->stuck = stuck;
+    fx->oversize = oversize;
+    fx->oversize_retry = oversize_retry;
     if (log_lines > 0) host->log(host, FP_LOG_INFO, "created");
     fp_input *in = &fx->in;
     in->size = sizeof *in;

@@ -104,6 +104,11 @@ expect 1 'FAIL  process +the plugin ended the process with exit status 0 during 
 expect 1 'FAIL  process +no progress for 2 s during process \(frame 29\): the plugin hangs' \
     timeout 60 "$fp" plugins check "$fx/map-fixture-spin.so" --deadline 2
 expect 1 'FAILED: .*map-fixture-spin.so: 1 check\(s\) failed' timeout 60 "$fp" plugins check "$fx/map-fixture-spin.so" --deadline 2
+# An input's event over sizeof(fp_event), pushed again while push_event answers false (as a
+# pacer does): named with its size and the limit, as the host refuses it (before: false, the
+# plugin pushed it again for good and the check failed it as a hang)
+expect 1 'FAIL  events +3 push_event calls with a size no event has \(the first: joint angles, header.type 1, of [0-9]+ bytes; the host takes [0-9]+ to [0-9]+' \
+    timeout 60 "$fp" plugins check "$fx/input-fixture.so" --key oversize=3 --key oversize_retry=1 --deadline 2 --cycles 1
 # ... in --json too: one document, the failure among its checks; a plugin's stdout (in process
 # and in the isolated pass's helper) goes to stderr, not into the document
 for f in segv print; do

@@ -158,7 +158,7 @@ static void test_env_path_and_instance(void **state)
 typedef struct log_seen {
     pthread_t owner;
     int n, on_owner, warnings;
-    char lines[40][128];
+    char lines[40][320];
     char source[64];
 } log_seen;
 
@@ -270,7 +270,9 @@ static void test_stuck_stop_abandoned(void **state)
     assert_true(ms >= FP_INPUT_STOP_DEADLINE_MS - 50 && ms < FP_INPUT_STOP_DEADLINE_MS + 2000);
     assert_true(seen.n >= 1);
     assert_string_equal(seen.source, "fixture");
-    assert_non_null(strstr(seen.lines[seen.n - 1], "stop has not returned within 5 s"));
+    bool said = false; /* (then the events it had queued, dropped: test_abandoned_drops_counted) */
+    for (int i = 0; i < seen.n && i < 40; i++) said |= strstr(seen.lines[i], "stop has not returned within 5 s") != NULL;
+    assert_true(said);
     fp_input_instance_close(&inst); /* again: nothing more */
     assert_true(inst.abandoned);
 
@@ -347,6 +349,53 @@ static void test_abandoned_push_after_free(void **state)
     fp_plugin_path_clear(&path);
 }
 
+/* ---- what an abandoned input pushed is counted and said ---- */
+
+static void test_abandoned_drops_counted(void **state)
+{
+    (void)state;
+    fp_plugin_path path;
+    fixture_path(&path);
+    fp_input_instance inst;
+    log_seen seen = {.owner = pthread_self()};
+    /* stuck=2: a thread stop never ends, which pushes a status and logs every 50 ms */
+    start_logged(&inst, &path, "fixture,stuck=2", &seen);
+    struct timespec ts = {0, 200000000L};
+    nanosleep(&ts, NULL);
+    fp_event ev;
+    while (fp_input_instance_poll(&inst, &ev)) {
+    }
+    fp_input_instance_drain_log(&inst);
+    seen = (log_seen){.owner = pthread_self()};
+    fp_input_instance_close(&inst); /* 5 s of pushes into its queue, then abandoned */
+    assert_true(inst.abandoned);
+    /* its closing line: what it queued while stop was waited for, what it pushed after
+     * (before: no line, the events lost uncounted) */
+    const char *line = NULL;
+    for (int i = 0; i < seen.n && i < 40; i++)
+        if (strstr(seen.lines[i], "abandoned: dropped")) line = seen.lines[i];
+    if (!line) fail_msg("no line counts the abandoned input's events (%d lines, last: %s)", seen.n,
+                        seen.n ? seen.lines[seen.n - 1] : "");
+    /* ... nor the abandonment's own line lost behind the 32 lines the plugin logged meanwhile
+     * (before: "69 log lines dropped" and no "stop has not returned") */
+    bool said = false;
+    for (int i = 0; i < seen.n && i < 40; i++) said |= strstr(seen.lines[i], "stop has not returned within 5 s") != NULL;
+    assert_true(said);
+    unsigned long long total, queued, after;
+    assert_int_equal(sscanf(line, "abandoned: dropped %llu events it pushed while its stop() did not return "
+                            "(%llu queued and never read, %llu pushed after", &total, &queued, &after), 3);
+    assert_int_equal(total, queued + after);
+    assert_int_equal(queued, inst.unread);
+    assert_true(queued >= 20); /* one every 50 ms for the 5 s waited */
+    /* it goes on pushing: counted, for the figure a summary reads (fp_session_dropped) */
+    uint64_t then = fp_input_instance_dropped(&inst);
+    assert_true(then >= total);
+    ts.tv_nsec = 300000000L;
+    nanosleep(&ts, NULL);
+    assert_true(fp_input_instance_dropped(&inst) >= then + 2);
+    fp_plugin_path_clear(&path);
+}
+
 /* ---- malformed events are refused at push_event, said once per kind and counted ---- */
 
 static void test_malformed_events_refused(void **state)
@@ -396,6 +445,40 @@ static void test_malformed_events_refused(void **state)
     }
     fp_input_instance_close(&inst);
     assert_int_equal(seen.n, 0);
+    fp_plugin_path_clear(&path);
+}
+
+/* ---- an event larger than the host takes: refused, said once with its size, counted ---- */
+
+static void test_oversize_events_refused(void **state)
+{
+    (void)state;
+    fp_plugin_path path;
+    fixture_path(&path);
+    fp_input_instance inst;
+    log_seen seen = {.owner = pthread_self()};
+    /* 3 joint angles events of sizeof(fp_event) + 64 bytes, then 3 buttons and the end */
+    start_logged(&inst, &path, "fixture,oversize=3", &seen);
+    fp_event ev;
+    int taken = 0;
+    while (fp_input_instance_poll(&inst, &ev)) {
+        assert_int_equal(fp_event_check(&ev, NULL), FP_EVENT_OK);
+        assert_int_not_equal(ev.header.type, FP_EVENT_JOINT_ANGLES);
+        taken++;
+    }
+    assert_int_equal(taken, 4);
+    assert_int_equal((int)atomic_load(&inst.refused), 3); /* before: 0, nothing counted */
+    /* one warning for the three, naming the kind, the size and the limit (before: none, and
+     * push_event answered false, a full queue, which a plugin sends again) */
+    assert_int_equal(fp_input_instance_drain_log(&inst), 1);
+    char want[160];
+    snprintf(want, sizeof want, "refused an oversize event: joint angles (header.type 1) of %zu bytes, "
+             "over the host's limit of %zu bytes", sizeof(fp_event) + 64, sizeof(fp_event));
+    if (!strstr(seen.lines[0], want)) fail_msg("said: %s\nwanted: %s", seen.lines[0], want);
+    assert_string_equal(seen.source, "fixture");
+    fp_input_instance_close(&inst);
+    assert_int_equal(seen.n, 2); /* not said again; the closing count */
+    assert_non_null(strstr(seen.lines[1], "refused 3 malformed events in all"));
     fp_plugin_path_clear(&path);
 }
 
@@ -852,7 +935,7 @@ int main(void)
         cmocka_unit_test(test_spec_parse),        cmocka_unit_test(test_loader_errors),
         cmocka_unit_test(test_env_path_and_instance),
         cmocka_unit_test(test_log_relayed), cmocka_unit_test(test_malformed_events_refused),
-        cmocka_unit_test(test_event_times_refused),
+        cmocka_unit_test(test_event_times_refused), cmocka_unit_test(test_oversize_events_refused),
         cmocka_unit_test(test_isolate_holds_only_good_set),
         cmocka_unit_test(test_err_filled),
         cmocka_unit_test(test_queue_mpsc),
@@ -865,6 +948,7 @@ int main(void)
         /* last: its abandoned stop() stays a call in progress (test_call_oldest wants none) */
         cmocka_unit_test(test_stuck_stop_abandoned),
         cmocka_unit_test(test_abandoned_push_after_free), /* (the same) */
+        cmocka_unit_test(test_abandoned_drops_counted),   /* (the same) */
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -162,7 +162,7 @@ static void usage(FILE *f)
         "                        refused before any work (73); an output that is the take,\n"
         "                        a stack's take, the mesh or the soundtrack is refused even so\n"
         "  -m, --mesh FILE       the take's mesh from another path (its crc32 must match)\n"
-        "  -P, --plugin-dir DIR  look for plugins in DIR first\n"
+        "  -P, --plugin-dir DIR  look for plugins in DIR too, after the built-in folder\n"
         "  -q, --quiet           no progress and no summary, nor the engine's and contact\n"
         "                        guard's notes on each gesture; errors and a damaged take's\n"
         "                        warning still print\n"

@@ -61,7 +61,7 @@ static void usage(FILE *f)
         "                         A take made with --audio plays its recorded soundtrack when\n"
         "                         --audio-out is given (--audio FILE: another copy of it;\n"
         "                         a different crc32 is said); its samples follow the frames\n"
-        "  -P, --plugin-dir DIR   look for plugins in DIR first\n"
+        "  -P, --plugin-dir DIR   look for plugins in DIR too, after the built-in folder\n"
         "  -q, --quiet            no summary line, nor the engine's and contact guard's\n"
         "                         notes on each gesture; errors and a damaged take's\n"
         "                         warning still print\n"

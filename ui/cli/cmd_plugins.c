@@ -54,13 +54,91 @@ static void range_text(const fp_param_info *p, char *buf, size_t len)
     else buf[0] = '\0';
 }
 
+/* A plugin file that loaded: the name its factory gives, for the files that give the same one. */
+typedef struct listed {
+    fp_plugin_kind kind;
+    char *name, *file;
+} listed;
+
 typedef struct lister {
     bool json;
     cJSON *array;               /* --json: the plugins listed so far */
     size_t broken;
     const fp_plugin_path *path; /* the folders searched */
     pthread_mutex_t lock;       /* array, between on_item and the watchdog */
+    listed *loaded;             /* every file that loaded, in listing order */
+    size_t nloaded;
 } lister;
+
+/* What to give --input/--mapping to load `file` (found as NAME `name`): NAME, or the file's
+ * path where an earlier folder's file of that NAME shadows it. */
+static const char *load_spec(const fp_plugin_scan_item *it)
+{
+    return it->shadowed ? it->file : it->name;
+}
+
+static void remember(lister *L, const fp_plugin_scan_item *it, const char *name)
+{
+    listed *grown = realloc(L->loaded, (L->nloaded + 1) * sizeof *grown);
+    if (!grown) return;
+    L->loaded = grown;
+    listed *l = &L->loaded[L->nloaded];
+    *l = (listed){it->kind, strdup(name), strdup(it->file)};
+    if (l->name && l->file) L->nloaded++;
+    else free(l->name), free(l->file);
+}
+
+/* A warning for each name that two or more files give (a user's copy of a bundled plugin
+ * under another file name, or in another folder): the files, and which one `--input NAME`
+ * / `--mapping NAME` loads (the first input-NAME.so / map-NAME.so on the path, maybe none of
+ * them). On stderr, or with --json (root not NULL) in the document alone, as "same_name"
+ * (its stdout stays one document, even where stderr is merged into it). Before, two such
+ * files were listed as the same name with nothing said. */
+static void warn_same_names(const lister *L, cJSON *root)
+{
+    cJSON *groups = root ? cJSON_AddArrayToObject(root, "same_name") : NULL;
+    for (size_t i = 0; i < L->nloaded; i++) {
+        const listed *a = &L->loaded[i];
+        size_t count = 0;
+        bool first = true;
+        for (size_t j = 0; j < L->nloaded; j++) {
+            const listed *b = &L->loaded[j];
+            if (b->kind != a->kind || strcmp(b->name, a->name)) continue;
+            if (j < i) first = false;
+            count++;
+        }
+        if (count < 2 || !first) continue;
+        const char *kind = a->kind == FP_PLUGIN_INPUT ? "input" : "mapping";
+        char files[3000] = "", loads[4096];
+        cJSON *g = groups ? cJSON_CreateObject() : NULL, *list = NULL;
+        if (g) {
+            cJSON_AddStringToObject(g, "kind", kind);
+            cJSON_AddStringToObject(g, "name", a->name);
+            list = cJSON_AddArrayToObject(g, "files");
+        }
+        for (size_t j = i; j < L->nloaded; j++) {
+            const listed *b = &L->loaded[j];
+            if (b->kind != a->kind || strcmp(b->name, a->name)) continue;
+            size_t used = strlen(files);
+            snprintf(files + used, sizeof files - used, "%s%s", used ? ", " : "", b->file);
+            if (list) cJSON_AddItemToArray(list, cJSON_CreateString(b->file));
+        }
+        bool found = !strchr(a->name, '/') &&
+                     fp_plugin_find(L->path, a->kind, a->name, loads, sizeof loads, NULL, NULL, 0);
+        char line[8000];
+        snprintf(line, sizeof line, "%zu %s plugin files give the name '%s': %s; `--%s %s` loads %s; "
+                 "load another by the name or path its listing shows", count, kind, a->name, files,
+                 kind, a->name, found ? loads : "none of them (no file of that NAME)");
+        if (g) {
+            if (found) cJSON_AddStringToObject(g, "loads", loads);
+            else cJSON_AddNullToObject(g, "loads");
+            cJSON_AddStringToObject(g, "warning", line);
+            cJSON_AddItemToArray(groups, g);
+        } else {
+            fprintf(stderr, "facepuppet plugins: warning: %s\n", line);
+        }
+    }
+}
 
 /* The --json document: folders, skipped, plugins (L's array, given away); with hang set
  * (the watchdog's "plugin 'WHO' has not returned ..."), "complete": false and "error": hang. */
@@ -86,6 +164,7 @@ static void print_json(lister *L, const char *hang)
     }
     cJSON_AddItemToObject(root, "plugins", L->array);
     L->array = NULL;
+    warn_same_names(L, root);
     cJSON_AddBoolToObject(root, "complete", hang == NULL);
     if (hang) cJSON_AddStringToObject(root, "error", hang);
     char *text = cJSON_Print(root);
@@ -144,11 +223,15 @@ static void on_item(void *user, const fp_plugin_scan_item *it)
     const fp_plugin_entry *e = it->plugin ? it->plugin->entry : NULL;
     if (it->plugin) fp_plugin_describe(it->plugin, &about);
     if (it->code) L->broken++;
+    pthread_mutex_lock(&L->lock); /* (the watchdog's document reads them) */
+    if (!it->code) remember(L, it, about.name ? about.name : it->name);
+    pthread_mutex_unlock(&L->lock);
     if (L->json) {
         cJSON *o = cJSON_CreateObject();
         cJSON_AddStringToObject(o, "kind", kind);
         cJSON_AddStringToObject(o, "name", about.name ? about.name : it->name);
         cJSON_AddStringToObject(o, "file", it->file);
+        cJSON_AddStringToObject(o, "load", load_spec(it)); /* what --input/--mapping takes */
         cJSON_AddStringToObject(o, "status", code_reason(it->code));
         if (it->shadowed) cJSON_AddBoolToObject(o, "shadowed", true);
         if (it->code) cJSON_AddStringToObject(o, "error", it->error ? it->error : fp_strerror(it->code));
@@ -190,7 +273,7 @@ static void on_item(void *user, const fp_plugin_scan_item *it)
     printf("%-7s %-14s %s %s  ABI %u.%u%s\n", kind, about.name ? about.name : it->name,
            e->id ? e->id : "?", e->version ? e->version : "?", e->abi.major, e->abi.minor,
            it->shadowed ? "  [shadowed by an earlier folder]" : "");
-    printf("        %s\n", it->file);
+    printf("        %s  (--%s %s)\n", it->file, kind, load_spec(it));
     if (about.description) printf("        %s\n", about.description);
     if (about.usage && *about.usage) {
         printf("        usage:\n");
@@ -219,10 +302,13 @@ static void usage(FILE *f)
         "                                [--budget MS] [--cycles N] [--deadline S]\n\n"
         "plugins: every input-*.so and map-*.so on the plugin search path (the built-in\n"
         "folder, --plugin-dir folders, FACEPUPPET_PLUGIN_PATH), loaded and described: kind,\n"
-        "id, version, ABI, description, usage and typed keys; a broken one with the reason\n"
-        "(dlopen error, no entry, ABI, init failed, no factory, unsafe file). Also the\n"
-        "folders searched and those skipped for safety.\n"
-        "  -P, --plugin-dir DIR  look for plugins in DIR first (repeatable)\n"
+        "name, id, version, ABI, file and what --input/--mapping takes to load it,\n"
+        "description, usage and typed keys; a broken one with the reason (dlopen error, no\n"
+        "entry, ABI, init failed, no factory, unsafe file). Also the folders searched and\n"
+        "those skipped for safety, and a warning where two files give the same name (which\n"
+        "one --input NAME / --mapping NAME loads; with --json in the document, \"same_name\").\n"
+        "  -P, --plugin-dir DIR  look for plugins in DIR too, after the built-in folder\n"
+        "                        (repeatable)\n"
         "      --json            one JSON document\n\n"
         "plugins check: validate one plugin file (docs/plugin-guide.md, \"Checking a\n"
         "plugin\"): create with defaults and with bad keys; a mapping gets synthetic frames\n"
@@ -433,7 +519,7 @@ static int plugins_main(int argc, char **argv)
     char builtin[4200];
     fp_app_builtin_plugin_dir(builtin, sizeof builtin);
     fp_plugin_path_init(&path, dirs, ndirs, builtin); /* warnings are listed below, not on stderr */
-    lister L = {json, json ? cJSON_CreateArray() : NULL, 0, &path, PTHREAD_MUTEX_INITIALIZER};
+    lister L = {json, json ? cJSON_CreateArray() : NULL, 0, &path, PTHREAD_MUTEX_INITIALIZER, NULL, 0};
     if (!json) {
         printf("plugin folders searched, in order:\n");
         for (size_t i = 0; i < path.count; i++)
@@ -452,7 +538,11 @@ static int plugins_main(int argc, char **argv)
         print_json(&L, NULL);
     } else {
         printf("%zu plugin file(s), %zu broken\n", n, L.broken);
+        fflush(stdout); /* (the warnings after the listing, where both go to one terminal) */
+        warn_same_names(&L, NULL);
     }
+    for (size_t i = 0; i < L.nloaded; i++) free(L.loaded[i].name), free(L.loaded[i].file);
+    free(L.loaded);
     fp_plugin_path_clear(&path);
     return FP_EXIT_OK;
 }

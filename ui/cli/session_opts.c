@@ -61,7 +61,7 @@ static const struct {
     {"speed", required_argument, 's', "X", "replay speed factor for replay inputs (default 1)"},
     {"duration", required_argument, OPT_DURATION, "S", "stop after S seconds (default: when the inputs end)"},
     {"hand-size", required_argument, OPT_HAND_SIZE, "F", "performer's hand size, 1 = mean adult"},
-    {"plugin-dir", required_argument, 'P', "DIR", "look for plugins in DIR first (repeatable)"},
+    {"plugin-dir", required_argument, 'P', "DIR", "look for plugins in DIR too, after the built-in folder (repeatable)"},
     {"rig", required_argument, OPT_RIG, "R",
      "rig file (rigs/README.md); default: the mesh's rig found\nby checksum, else vertex count; 'none': no rig"},
     {"control", required_argument, OPT_CONTROL, "SPEC",
