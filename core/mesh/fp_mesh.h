@@ -157,9 +157,12 @@ int fp_mesh_load(const char *path, fp_mesh **out, char *err, size_t errlen);
 /** Write `mesh` to `path` in the format of its extension (as fp_mesh_load()), overwriting.
  *  Written data: positions and triangles always; normals and UVs when present:
  *  OBJ: v, vt (when uvs), vn (when normals), f v/vt/vn, 9 significant digits (float exact).
- *  PLY: binary little-endian, x y z nx ny nz u v properties, faces as uchar/int lists.
+ *  PLY: x y z nx ny nz u v properties, faces as uchar/int lists; binary little-endian, or
+ *  as the PLY or STL the mesh was loaded from was (while its source applies, see fp_mesh):
+ *  ASCII (9 digits) from ASCII, big-endian from a big-endian PLY.
  *  OFF: ASCII, 9 digits; header "NOFF", "STOFF" or "STNOFF" as normals/uvs are written.
- *  STL: binary; triangles with their face normals only (no vertex normals, no UVs).
+ *  STL: triangles with their face normals only (no vertex normals, no UVs); binary, or ASCII
+ *  where the mesh was loaded from an ASCII PLY or STL (as PLY above).
  *  glTF: one mesh, one triangle primitive with POSITION (with min/max), NORMAL, TEXCOORD_0
  *  and uint32 indices, one node, one scene; .gltf embeds the buffer as a base64 data URI,
  *  .glb puts it in the binary chunk.

@@ -52,12 +52,13 @@ int fp__off_scan(const char *path, const char *text, size_t len, size_t *nv, siz
  *  loader leaves out of what OpenMesh reads), counts against the file's size, then every
  *  value walked: ASCII tokens of the right type and range (floats finite), binary sizes
  *  exact to the file's end, list counts, face indices < vertex count. *nv and *nf get the
- *  header's vertex and face counts. Errors in a binary body say "byte N" (the offset).
+ *  header's vertex and face counts, *format its encoding (0 ascii, 1 binary_little_endian,
+ *  2 binary_big_endian; -1 on error). Errors in a binary body say "byte N" (the offset).
  *  ASCII STL: solid / facet normal / outer loop / 3 vertex / endloop / endfacet / endsolid in
  *  order, 3 finite numbers where numbers belong.
  *  "path: line N: reason" errors. Return FP_MESH_OK, FP_MESH_ERR_FORMAT or NOMEM. */
 int fp__ply_scan(const char *path, const char *text, size_t len, size_t *nv, size_t *nf,
-                 char *err, size_t errlen);
+                 int *format, char *err, size_t errlen);
 int fp__stl_ascii_scan(const char *path, const char *text, size_t len, char *err,
                        size_t errlen);
 /** Binary STL (len == 84 + 50 x the count at byte 80, checked by the caller): every corner's

@@ -42,6 +42,8 @@ struct fp_mesh_source {
     bool any_corner_uv = false, seams = false, polygons = false, file_normals = false;
     std::vector<int> face_material;      // OBJ: material per face (index into materials), -1
     std::vector<std::string> materials;  // OBJ usemtl names in first-use order
+    int encoding = -1;                   // PLY, STL as read, kept when saved to PLY or STL:
+                                         // 0 ASCII, 1 binary little-endian, 2 big-endian
     bool groups = false;                 // OBJ g / o statements
     bool other = false;                  // PLY properties or elements read past (colours,
                                          // flags, edges), OFF colours: never written
