@@ -123,7 +123,9 @@ fp_mesh *fp_mesh_copy(const fp_mesh *mesh);
  *
  *  Faces: polygons are fan-triangulated in file order, each giving (corners - 2) consecutive
  *  triangles (0,1,2), (0,2,3), ... OBJ faces that repeat a vertex lose the repeats, and one
- *  left with fewer than 3 distinct vertices is dropped (OpenMesh's OBJ reader does this). Normals: the file's vertex normals when every vertex has a finite,
+ *  left with fewer than 3 distinct vertices is dropped (OpenMesh's OBJ reader does this). An OBJ
+ *  line that ends in a backslash (blanks after it allowed) continues on the next, as the
+ *  format says (comments too); errors name the line a statement starts on. Normals: the file's vertex normals when every vertex has a finite,
  *  non-zero one (normalised); otherwise computed with fp_mesh_compute_normals(). UVs: per
  *  vertex; OBJ gives a UV per face corner, and a vertex used with several UVs (a texture seam)
  *  takes the UV of its first use in face order. glTF TEXCOORD_0 (float or normalised
@@ -181,7 +183,8 @@ int fp_mesh_save(const fp_mesh *mesh, const char *path, char *err, size_t errlen
  *
  *  Written back as it came in: where mesh->source applies (see fp_mesh), a mesh saved in the
  *  format it was loaded from keeps everything but positions and normals:
- *  OBJ: the file's text line for line (comments, mtllib, usemtl, g, o, s, vt and f lines
+ *  OBJ: the file's text line for line (a line continued with a backslash comes back joined,
+ *  an empty line after it; comments, mtllib, usemtl, g, o, s, vt and f lines
  *  unchanged; the .mtl is never opened), with each `v` line's x y z replaced (any further
  *  numbers on the line kept) and each `vn` line replaced by the normal of the first vertex
  *  that uses it (when the file had vn lines): quads stay quads, UV seams stay seams.

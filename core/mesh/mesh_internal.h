@@ -35,6 +35,15 @@ typedef struct fp__obj_info {
 int fp__obj_scan(const char *path, const char *text, size_t len, fp__obj_info *info,
                  char *err, size_t errlen);
 
+/** OBJ's line continuation (Wavefront, appendix B1: a backslash at the end of a line
+ *  continues it on the next), resolved in place before the scan and OpenMesh's reader (which
+ *  reads the backslash as a token): each backslash that only blanks separate from the end of
+ *  its line becomes a space with those blanks, and its newline moves to the end of the joined
+ *  line (an empty line after it), so the text keeps its length and every statement its line
+ *  number (a joined statement's: its first line's). Comment lines continue too, as the
+ *  format says. Returns the number of lines joined onto the one before. */
+size_t fp__obj_join_continuations(char *text, size_t len);
+
 /** Check OFF text the way OpenMesh's reader consumes it. ASCII: header line, a line of three
  *  counts (which must fit the file's size), one vertex per line with finite numbers, one
  *  face per line "k i1 .. ik" with indices < vertex count and nothing after them unless the

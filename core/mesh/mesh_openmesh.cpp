@@ -564,6 +564,8 @@ int load_openmesh(const char *path, const std::string &ext, std::string &data,
     if (ext == "obj") {
         // a byte order mark (a Windows editor's) first: not OBJ, and read from `data` below
         data.erase(0, fp_text_bom(data.data(), data.size()));
+        // lines continued with '\' joined (in place: the line numbers stay the file's)
+        fp__obj_join_continuations(&data[0], data.size());
         int rc = fp__obj_scan(path, data.c_str(), data.size(), &obj, err, errlen);
         if (rc != FP_MESH_OK)
             return rc;
