@@ -336,6 +336,23 @@ static int open_mesh(fp_session *s, const fp_session_options *opt, double *diag,
     return 0;
 }
 
+/* A given --radius under the face's median edge (fp_mesh_median_edge over the face's
+ * vertices, where the fingers act) holds one vertex or none: a fingertip pulls spikes. Said
+ * once, with a radius of three edges (or the default, if larger); the radius is kept. */
+static void warn_small_radius(fp_session *s, const fp_session_options *opt)
+{
+    double edge;
+    if (!(opt->radius > 0) || fp_mesh_median_edge(s->mesh, s->used, &edge) || !(opt->radius < edge))
+        return;
+    const double mm = s->head.mm_per_unit > 0 && isfinite(s->head.mm_per_unit) ? s->head.mm_per_unit : NAN;
+    const double hint = fmax(3 * edge, s->touch_radius);
+    fp_slog_printf(&s->log, FP_LOG_WARNING, "session",
+                   "--radius %.4g mesh units (%.3g mm) is under the face's typical edge length, "
+                   "%.4g mesh units (%.3g mm, the median): a fingertip moves single vertices or "
+                   "none (spikes); try --radius %.4g (%.3g mm)",
+                   opt->radius, opt->radius * mm, edge, edge * mm, hint, hint * mm);
+}
+
 /* The head, the rig (the shape shown: the posed base), the mesh's unit and the radius. 0 or
  * the code. */
 static int open_scale(fp_session *s, const fp_session_options *opt, double diag, char *err, size_t errlen)
@@ -399,6 +416,7 @@ static int open_scale(fp_session *s, const fp_session_options *opt, double diag,
      * holds hardly a vertex. */
     s->touch_radius = fmax(0.06 * sqrt(diag), FP_SESSION_MIN_RADIUS_MM / s->head.mm_per_unit);
     s->radius = opt->radius > 0 ? opt->radius : s->touch_radius;
+    warn_small_radius(s, opt);
     return 0;
 }
 
