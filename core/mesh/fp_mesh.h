@@ -341,6 +341,13 @@ int fp_mesh_surface_mask(const fp_mesh *mesh, uint8_t **used, size_t *unused);
 #define FP_MESH_OUTLIER_SPAN 0.5
 int fp_mesh_outlier_mask(const fp_mesh *mesh, uint8_t **used, size_t *outliers);
 
+/** The face's vertices, as the session and calibrate count them: fp_mesh_surface_mask (in a
+ *  triangle) then fp_mesh_outlier_mask (not far off the rest). *used: vertex_count bytes,
+ *  1 for a face vertex, malloc'ed (the caller frees it), or NULL where every vertex is one;
+ *  *unused: the vertices in no triangle, *outliers: the far-off ones cleared after them.
+ *  Returns 0, or -ENOMEM (*used NULL, both counts 0). Pure but for its outputs; any thread. */
+int fp_mesh_face_mask(const fp_mesh *mesh, uint8_t **used, size_t *unused, size_t *outliers);
+
 /** The typical edge length (mesh units) where the mesh is the face: the median of the edge
  *  lengths of the triangles whose three corners are in used (NULL: every triangle), measured
  *  on at most 65,536 triangles taken at an even stride (a 1.7M-vertex face costs what a small

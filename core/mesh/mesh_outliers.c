@@ -1,5 +1,6 @@
 /* The face's vertices (fp_mesh.h): the surface's far-off ones, a stray spike's tip
- * (fp_mesh_outlier_mask) and the face's typical edge length (fp_mesh_median_edge). */
+ * (fp_mesh_outlier_mask), the face's mask (fp_mesh_face_mask: in a triangle and not far off)
+ * and the face's typical edge length (fp_mesh_median_edge). */
 #include "fp_mesh.h"
 
 #include <errno.h>
@@ -69,6 +70,19 @@ int fp_mesh_outlier_mask(const fp_mesh *mesh, uint8_t **used, size_t *outliers)
             if (p[k] < lo[k] || p[k] > hi[k]) (*used)[v] = 0;
     }
     *outliers = far;
+    return 0;
+}
+
+int fp_mesh_face_mask(const fp_mesh *mesh, uint8_t **used, size_t *unused, size_t *outliers)
+{
+    *outliers = 0;
+    if (fp_mesh_surface_mask(mesh, used, unused)) return -ENOMEM;
+    if (fp_mesh_outlier_mask(mesh, used, outliers)) {
+        free(*used);
+        *used = NULL;
+        *unused = 0;
+        return -ENOMEM;
+    }
     return 0;
 }
 

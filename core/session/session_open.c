@@ -273,8 +273,10 @@ static int open_mesh(fp_session *s, const fp_session_options *opt, double *diag,
      * placement (one at 1e6 units beside a 25-unit mask made a radius of 6e4 units and moved
      * only itself); the engine still carries it */
     const char *name = opt->mesh_path ? opt->mesh_path : "the mesh";
-    size_t unused;
-    if (fp_mesh_surface_mask(s->mesh, &s->used, &unused)) {
+    /* and a stray spike's tip (fp_mesh_face_mask's outliers) decided the face's front: the
+     * hands, placed at its tip, grabbed the spike alone */
+    size_t unused, spiked;
+    if (fp_mesh_face_mask(s->mesh, &s->used, &unused, &spiked)) {
         snprintf(err, errlen, "session: out of memory for %zu vertices", s->n);
         return -ENOMEM;
     }
@@ -282,13 +284,6 @@ static int open_mesh(fp_session *s, const fp_session_options *opt, double *diag,
         fp_slog_printf(&s->log, FP_LOG_WARNING, "session",
                        "%s: %zu of %zu vertices are in no triangle: left out of the face's size, "
                        "its head and the hands' placement", name, unused, s->n);
-    /* a stray spike's tip (fp_mesh_outlier_mask) decided the face's front: the hands, placed
-     * at its tip, grabbed the spike alone */
-    size_t spiked;
-    if (fp_mesh_outlier_mask(s->mesh, &s->used, &spiked)) {
-        snprintf(err, errlen, "session: out of memory for %zu vertices", s->n);
-        return -ENOMEM;
-    }
     if (spiked)
         fp_slog_printf(&s->log, FP_LOG_WARNING, "session",
                        "%s: %zu of %zu vertices lie far off the rest (beyond %g of its 0.5th-99.5th "
