@@ -10,6 +10,7 @@
 #include <cmocka.h>
 
 #include "fp_mesh.h"
+#include "mesh_tmp.h"
 
 #include <stdint.h>
 #include <stdio.h>
@@ -17,25 +18,12 @@
 #include <string.h>
 #include <unistd.h>
 
-static char tmpdir[64];
 static char err[1024];
-
-static const char *tmp_path(const char *name)
-{
-    static char buf[4][512];
-    static int k;
-    k = (k + 1) % 4;
-    snprintf(buf[k], sizeof buf[k], "%s/%s", tmpdir, name);
-    return buf[k];
-}
 
 static const char *write_tmp(const char *name, const char *text)
 {
-    const char *p = tmp_path(name);
-    FILE *f = fopen(p, "wb");
-    assert_non_null(f);
-    assert_int_equal(fwrite(text, 1, strlen(text), f), strlen(text));
-    assert_int_equal(fclose(f), 0);
+    const char *p = tmp_write(name, text, strlen(text));
+    assert_non_null(p);
     return p;
 }
 
@@ -86,16 +74,13 @@ static void test_errors_keep_line_numbers(void **state)
 static int setup(void **state)
 {
     (void)state;
-    snprintf(tmpdir, sizeof tmpdir, "%s/fp-obj-cont-XXXXXX", getenv("TMPDIR") ? getenv("TMPDIR") : "/tmp");
-    return mkdtemp(tmpdir) ? 0 : -1;
+    return tmp_setup("fp-obj-cont");
 }
 
 static int teardown(void **state)
 {
     (void)state;
-    const char *names[] = {"cont.obj", "cont-out.obj", "bad.obj", "mid.obj"};
-    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) unlink(tmp_path(names[i]));
-    return rmdir(tmpdir);
+    return tmp_teardown();
 }
 
 int main(void)

@@ -11,6 +11,7 @@
 #include <cmocka.h>
 
 #include "fp_mesh.h"
+#include "mesh_tmp.h"
 
 #include <stdint.h>
 #include <stdio.h>
@@ -18,26 +19,12 @@
 #include <string.h>
 #include <unistd.h>
 
-static char tmpdir[64];
 static char err[1024];
-
-/* tmpdir/name */
-static const char *tmp_path(const char *name)
-{
-    static char buf[4][512];
-    static int k;
-    k = (k + 1) % 4;
-    snprintf(buf[k], sizeof buf[k], "%s/%s", tmpdir, name);
-    return buf[k];
-}
 
 static const char *write_file(const char *name, const void *bytes, size_t n)
 {
-    const char *p = tmp_path(name);
-    FILE *f = fopen(p, "wb");
-    assert_non_null(f);
-    assert_int_equal(fwrite(bytes, 1, n, f), n);
-    assert_int_equal(fclose(f), 0);
+    const char *p = tmp_write(name, bytes, n);
+    assert_non_null(p);
     return p;
 }
 
@@ -159,18 +146,13 @@ static void test_other_formats_write_binary(void **state)
 static int setup(void **state)
 {
     (void)state;
-    snprintf(tmpdir, sizeof tmpdir, "%s/fp-ply-enc-XXXXXX", getenv("TMPDIR") ? getenv("TMPDIR") : "/tmp");
-    return mkdtemp(tmpdir) ? 0 : -1;
+    return tmp_setup("fp-ply-enc");
 }
 
 static int teardown(void **state)
 {
     (void)state;
-    const char *names[] = {"in.ply", "out.ply", "ply-out.stl", "be.ply", "be-out.ply", "le.ply",
-                           "le-out.ply", "in.stl", "out.stl", "le2.ply", "bin-out.stl",
-                           "bin-out2.stl", "in.obj", "obj-out.ply"};
-    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) unlink(tmp_path(names[i]));
-    return rmdir(tmpdir);
+    return tmp_teardown();
 }
 
 int main(void)
