@@ -136,6 +136,28 @@ static void test_compress_ragged_frames(void **state)
     }
 }
 
+/* A matrix of full rank (100 frames of 300 random values) to a tight tolerance: more
+ * components than the first 64 eigenpairs asked for (the exporter asks for more as it needs
+ * them), the error within the tolerance and reported truly. */
+static void test_compress_many_components(void **state)
+{
+    (void)state;
+    const size_t F = 100, m = 300;
+    double *D = malloc(F * m * sizeof(double));
+    assert_non_null(D);
+    for (size_t i = 0; i < F * m; i++) D[i] = urand();
+    size_t K;
+    float *T, *W;
+    double e;
+    char err[256];
+    assert_int_equal(fp_export_compress(D, F, m, 1e-4, 0, &K, &T, &W, &e, err, sizeof err), 0);
+    if (K <= 64 || K > F || !(e <= 1e-4)) fail_msg("K %zu, error %g", K, e);
+    assert_true(fabs(err_of(D, F, m, T, W, K) - e) <= 1e-12 + 1e-9 * e);
+    free(T);
+    free(W);
+    free(D);
+}
+
 /* A long take of few moving vertices (F 5,000 frames, m 30 values, rank 3): the directions
  * come from the 30 x 30 D^T D, not the 5,000 x 5,000 D D^T (reference LAPACK took minutes
  * on a minute of 60 fps of the MediaPipe face; this one did not finish in 120 s). */
@@ -417,6 +439,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_compress_rank),
         cmocka_unit_test(test_compress_ragged_frames),
+        cmocka_unit_test(test_compress_many_components),
         cmocka_unit_test(test_compress_long),
         cmocka_unit_test(test_point_caches),
         cmocka_unit_test(test_obj_round_trip),
