@@ -670,7 +670,6 @@ int load_openmesh(const char *path, const std::string &ext, std::string &data,
             src->face_material.assign(soup.faces(), -1);
         }
         src->obj_text = std::move(data); // the caller's last use: kept, not copied
-        obj_plan(*src);
         if (src->face_material.size() != soup.faces()) { // should not happen: same rule
             src->face_material.clear();
             src->materials.clear();

@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <map>
 #include <memory>
 #include <new>
@@ -215,7 +216,7 @@ void obj_corner(const std::string &text, std::pair<size_t, size_t> tok, size_t n
     }
 }
 
-void obj_plan(fp_mesh_source &src)
+void obj_plan(const fp_mesh_source &src)
 {
     const std::string &text = src.obj_text;
     // vn index -> the first vertex that uses it
@@ -254,6 +255,7 @@ void obj_plan(fp_mesh_source &src)
 int save_obj_source(const fp_mesh *m, const fp_mesh_source &src, const char *path, char *err,
                     size_t errlen)
 {
+    std::call_once(src.obj_planned, obj_plan, std::cref(src));
     const std::string &text = src.obj_text;
     std::string out;
     out.reserve(text.size() + text.size() / 4);
