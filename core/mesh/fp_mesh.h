@@ -123,7 +123,9 @@ fp_mesh *fp_mesh_copy(const fp_mesh *mesh);
  *
  *  Faces: polygons are fan-triangulated in file order, each giving (corners - 2) consecutive
  *  triangles (0,1,2), (0,2,3), ... OBJ faces that repeat a vertex lose the repeats, and one
- *  left with fewer than 3 distinct vertices is dropped (OpenMesh's OBJ reader does this). Normals: the file's vertex normals when every vertex has a finite,
+ *  left with fewer than 3 distinct vertices is dropped (OpenMesh's OBJ reader does this). An OBJ
+ *  line that ends in a backslash (blanks after it allowed) continues on the next, as the
+ *  format says (comments too); errors name the line a statement starts on. Normals: the file's vertex normals when every vertex has a finite,
  *  non-zero one (normalised); otherwise computed with fp_mesh_compute_normals(). UVs: per
  *  vertex; OBJ gives a UV per face corner, and a vertex used with several UVs (a texture seam)
  *  takes the UV of its first use in face order. glTF TEXCOORD_0 (float or normalised
@@ -157,9 +159,12 @@ int fp_mesh_load(const char *path, fp_mesh **out, char *err, size_t errlen);
 /** Write `mesh` to `path` in the format of its extension (as fp_mesh_load()), overwriting.
  *  Written data: positions and triangles always; normals and UVs when present:
  *  OBJ: v, vt (when uvs), vn (when normals), f v/vt/vn, 9 significant digits (float exact).
- *  PLY: binary little-endian, x y z nx ny nz u v properties, faces as uchar/int lists.
+ *  PLY: x y z nx ny nz u v properties, faces as uchar/int lists; binary little-endian, or
+ *  as the PLY or STL the mesh was loaded from was (while its source applies, see fp_mesh):
+ *  ASCII (9 digits) from ASCII, big-endian from a big-endian PLY.
  *  OFF: ASCII, 9 digits; header "NOFF", "STOFF" or "STNOFF" as normals/uvs are written.
- *  STL: binary; triangles with their face normals only (no vertex normals, no UVs).
+ *  STL: triangles with their face normals only (no vertex normals, no UVs); binary, or ASCII
+ *  where the mesh was loaded from an ASCII PLY or STL (as PLY above).
  *  glTF: one mesh, one triangle primitive with POSITION (with min/max), NORMAL, TEXCOORD_0
  *  and uint32 indices, one node, one scene; .gltf embeds the buffer as a base64 data URI,
  *  .glb puts it in the binary chunk.
@@ -178,7 +183,8 @@ int fp_mesh_save(const fp_mesh *mesh, const char *path, char *err, size_t errlen
  *
  *  Written back as it came in: where mesh->source applies (see fp_mesh), a mesh saved in the
  *  format it was loaded from keeps everything but positions and normals:
- *  OBJ: the file's text line for line (comments, mtllib, usemtl, g, o, s, vt and f lines
+ *  OBJ: the file's text line for line (a line continued with a backslash comes back joined,
+ *  an empty line after it; comments, mtllib, usemtl, g, o, s, vt and f lines
  *  unchanged; the .mtl is never opened), with each `v` line's x y z replaced (any further
  *  numbers on the line kept) and each `vn` line replaced by the normal of the first vertex
  *  that uses it (when the file had vn lines): quads stay quads, UV seams stay seams.
@@ -334,6 +340,21 @@ int fp_mesh_surface_mask(const fp_mesh *mesh, uint8_t **used, size_t *unused);
  *  *outliers 0). Pure but for *used; any thread. */
 #define FP_MESH_OUTLIER_SPAN 0.5
 int fp_mesh_outlier_mask(const fp_mesh *mesh, uint8_t **used, size_t *outliers);
+
+/** The face's vertices, as the session and calibrate count them: fp_mesh_surface_mask (in a
+ *  triangle) then fp_mesh_outlier_mask (not far off the rest). *used: vertex_count bytes,
+ *  1 for a face vertex, malloc'ed (the caller frees it), or NULL where every vertex is one;
+ *  *unused: the vertices in no triangle, *outliers: the far-off ones cleared after them.
+ *  Returns 0, or -ENOMEM (*used NULL, both counts 0). Pure but for its outputs; any thread. */
+int fp_mesh_face_mask(const fp_mesh *mesh, uint8_t **used, size_t *unused, size_t *outliers);
+
+/** The typical edge length (mesh units) where the mesh is the face: the median of the edge
+ *  lengths of the triangles whose three corners are in used (NULL: every triangle), measured
+ *  on at most 65,536 triangles taken at an even stride (a 1.7M-vertex face costs what a small
+ *  one does). *median := 0 when no triangle counts. Scratch: 12 bytes a triangle measured.
+ *  Indices must be < vertex_count (not checked). Returns 0, or -ENOMEM (*median 0).
+ *  Pure; any thread. */
+int fp_mesh_median_edge(const fp_mesh *mesh, const uint8_t *used, double *median);
 
 /** fp_mesh_bounds over the vertices v with used[v] != 0 (used NULL: every vertex; none used:
  *  all zeros): the surface's bounds, without points in no triangle. */

@@ -35,6 +35,15 @@ typedef struct fp__obj_info {
 int fp__obj_scan(const char *path, const char *text, size_t len, fp__obj_info *info,
                  char *err, size_t errlen);
 
+/** OBJ's line continuation (Wavefront, appendix B1: a backslash at the end of a line
+ *  continues it on the next), resolved in place before the scan and OpenMesh's reader (which
+ *  reads the backslash as a token): each backslash that only blanks separate from the end of
+ *  its line becomes a space with those blanks, and its newline moves to the end of the joined
+ *  line (an empty line after it), so the text keeps its length and every statement its line
+ *  number (a joined statement's: its first line's). Comment lines continue too, as the
+ *  format says. Returns the number of lines joined onto the one before. */
+size_t fp__obj_join_continuations(char *text, size_t len);
+
 /** Check OFF text the way OpenMesh's reader consumes it. ASCII: header line, a line of three
  *  counts (which must fit the file's size), one vertex per line with finite numbers, one
  *  face per line "k i1 .. ik" with indices < vertex count and nothing after them unless the
@@ -52,12 +61,13 @@ int fp__off_scan(const char *path, const char *text, size_t len, size_t *nv, siz
  *  loader leaves out of what OpenMesh reads), counts against the file's size, then every
  *  value walked: ASCII tokens of the right type and range (floats finite), binary sizes
  *  exact to the file's end, list counts, face indices < vertex count. *nv and *nf get the
- *  header's vertex and face counts. Errors in a binary body say "byte N" (the offset).
+ *  header's vertex and face counts, *format its encoding (0 ascii, 1 binary_little_endian,
+ *  2 binary_big_endian; -1 on error). Errors in a binary body say "byte N" (the offset).
  *  ASCII STL: solid / facet normal / outer loop / 3 vertex / endloop / endfacet / endsolid in
  *  order, 3 finite numbers where numbers belong.
  *  "path: line N: reason" errors. Return FP_MESH_OK, FP_MESH_ERR_FORMAT or NOMEM. */
 int fp__ply_scan(const char *path, const char *text, size_t len, size_t *nv, size_t *nf,
-                 char *err, size_t errlen);
+                 int *format, char *err, size_t errlen);
 int fp__stl_ascii_scan(const char *path, const char *text, size_t len, char *err,
                        size_t errlen);
 /** Binary STL (len == 84 + 50 x the count at byte 80, checked by the caller): every corner's

@@ -25,6 +25,7 @@
 #include <cmath>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <utility>
 #include <vector>
@@ -42,10 +43,23 @@ struct fp_mesh_source {
     bool any_corner_uv = false, seams = false, polygons = false, file_normals = false;
     std::vector<int> face_material;      // OBJ: material per face (index into materials), -1
     std::vector<std::string> materials;  // OBJ usemtl names in first-use order
+    int encoding = -1;                   // PLY, STL as read, kept when saved to PLY or STL:
+                                         // 0 ASCII, 1 binary little-endian, 2 big-endian
     bool groups = false;                 // OBJ g / o statements
     bool other = false;                  // PLY properties or elements read past (colours,
                                          // flags, edges), OFF colours: never written
     std::string obj_text;                // OBJ: the file
+    // OBJ: its v and vn lines of 4 or more tokens, for the write-back (obj_plan, made at the
+    // first save: loading stays as fast; once, whichever thread saves first): the line is
+    // obj_text[begin, end), what follows x y z starts at tail (== end: nothing), and it takes
+    // the position (v) or normal (vn) of `vertex` (-1: a vn no face uses)
+    struct ObjRewrite {
+        size_t begin, tail, end;
+        long vertex;
+        bool vn;
+    };
+    mutable std::once_flag obj_planned;
+    mutable std::vector<ObjRewrite> obj_rewrites;
     // glTF: the document and where each triangle primitive's vertices went
     struct Instance {
         int mesh, prim;
@@ -129,6 +143,10 @@ bool obj_is(const std::string &text, const ObjLine &l, const char *kw);
 // Corner k of an f line: 0-based v, vt, vn indices (-1 where absent), relative resolved.
 void obj_corner(const std::string &text, std::pair<size_t, size_t> tok, size_t nv, size_t nvt,
                 size_t nvn, long out[3]);
+// The write-back's plan of src.obj_text into src.obj_rewrites (save_obj_source makes it at
+// the first save, through src.obj_planned): each save then copies the text between the lines
+// it rewrites.
+void obj_plan(const fp_mesh_source &src);
 // OBJ back as it came in: the text with v (and vn) lines rewritten.
 int save_obj_source(const fp_mesh *m, const fp_mesh_source &src, const char *path, char *err,
                     size_t errlen);

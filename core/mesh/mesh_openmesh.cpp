@@ -560,9 +560,12 @@ int load_openmesh(const char *path, const std::string &ext, std::string &data,
 {
     fp__obj_info obj{};
     size_t want_v = 0, want_f = 0; // the header's counts (PLY, OFF)
+    int encoding = -1;             // PLY, STL: 0 ASCII, 1 binary little-, 2 big-endian
     if (ext == "obj") {
         // a byte order mark (a Windows editor's) first: not OBJ, and read from `data` below
         data.erase(0, fp_text_bom(data.data(), data.size()));
+        // lines continued with '\' joined (in place: the line numbers stay the file's)
+        fp__obj_join_continuations(&data[0], data.size());
         int rc = fp__obj_scan(path, data.c_str(), data.size(), &obj, err, errlen);
         if (rc != FP_MESH_OK)
             return rc;
@@ -590,13 +593,15 @@ int load_openmesh(const char *path, const std::string &ext, std::string &data,
             return fp__mesh_error(err, errlen, FP_MESH_ERR_FORMAT, path,
                                   "not an STL file (no 'solid' and the size does not match a "
                                   "binary STL's triangle count)");
+        encoding = binary ? 1 : 0;
         int rc = binary ? fp__stl_binary_scan(path, data.data(), data.size(), err, errlen)
                         : fp__stl_ascii_scan(path, data.c_str(), data.size(), err, errlen);
         if (rc != FP_MESH_OK)
             return rc;
     }
     if (ext == "ply") {
-        int rc = fp__ply_scan(path, data.c_str(), data.size(), &want_v, &want_f, err, errlen);
+        int rc = fp__ply_scan(path, data.c_str(), data.size(), &want_v, &want_f, &encoding, err,
+                              errlen);
         if (rc != FP_MESH_OK)
             return rc;
     }
@@ -655,6 +660,7 @@ int load_openmesh(const char *path, const std::string &ext, std::string &data,
                               "and %zu", soup.n(), soup.faces(), want_v, want_f);
     auto src = std::make_unique<fp_mesh_source>();
     src->format = ext;
+    src->encoding = encoding;
     src->other = ext == "obj" ? obj.colours > 0 : (ext == "ply" || ext == "off") && holds_other(data, ext);
     if (ext == "obj") {
         if (obj.usemtl) {
@@ -680,9 +686,12 @@ int save_openmesh(const fp_mesh *m, const char *path, const std::string &ext, ch
         opt += IO::Options::VertexNormal;
     if (m->uvs && ext != "stl")
         opt += IO::Options::VertexTexCoord;
-    if (ext == "stl" || ext == "ply") {
+    // PLY and STL: binary little-endian, or the encoding a PLY or STL source was read in
+    // (an ASCII file is saved as ASCII, a big-endian PLY as big-endian; STL has no such)
+    const int encoding = poly && poly->encoding >= 0 ? poly->encoding : 1;
+    if ((ext == "stl" || ext == "ply") && encoding > 0) {
         opt += IO::Options::Binary;
-        opt += IO::Options::LSB;
+        opt += encoding == 2 && ext == "ply" ? IO::Options::MSB : IO::Options::LSB;
     }
     std::ostringstream os(std::ios::out | std::ios::binary);
     bool ok;

@@ -1,7 +1,10 @@
-/* The surface's far-off vertices: a stray spike's tip (fp_mesh.h, fp_mesh_outlier_mask). */
+/* The face's vertices (fp_mesh.h): the surface's far-off ones, a stray spike's tip
+ * (fp_mesh_outlier_mask), the face's mask (fp_mesh_face_mask: in a triangle and not far off)
+ * and the face's typical edge length (fp_mesh_median_edge). */
 #include "fp_mesh.h"
 
 #include <errno.h>
+#include <math.h>
 #include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
@@ -67,5 +70,43 @@ int fp_mesh_outlier_mask(const fp_mesh *mesh, uint8_t **used, size_t *outliers)
             if (p[k] < lo[k] || p[k] > hi[k]) (*used)[v] = 0;
     }
     *outliers = far;
+    return 0;
+}
+
+int fp_mesh_face_mask(const fp_mesh *mesh, uint8_t **used, size_t *unused, size_t *outliers)
+{
+    *outliers = 0;
+    if (fp_mesh_surface_mask(mesh, used, unused)) return -ENOMEM;
+    if (fp_mesh_outlier_mask(mesh, used, outliers)) {
+        free(*used);
+        *used = NULL;
+        *unused = 0;
+        return -ENOMEM;
+    }
+    return 0;
+}
+
+/* at most this many triangles' edges are measured, at an even stride */
+#define MEDIAN_EDGE_TRIANGLES 65536
+
+int fp_mesh_median_edge(const fp_mesh *mesh, const uint8_t *used, double *median)
+{
+    *median = 0;
+    const size_t t = mesh->triangle_count;
+    const size_t stride = t > MEDIAN_EDGE_TRIANGLES ? (t + MEDIAN_EDGE_TRIANGLES - 1) / MEDIAN_EDGE_TRIANGLES : 1;
+    float *len = malloc(3 * (t / stride + 1) * sizeof *len);
+    if (!len) return -ENOMEM;
+    size_t m = 0;
+    for (size_t i = 0; i < t; i += stride) {
+        const uint32_t *c = mesh->triangles + 3 * i;
+        if (used && (!used[c[0]] || !used[c[1]] || !used[c[2]])) continue;
+        for (int k = 0; k < 3; k++) {
+            const float *a = mesh->positions + 3 * c[k], *b = mesh->positions + 3 * c[(k + 1) % 3];
+            const double dx = (double)a[0] - b[0], dy = (double)a[1] - b[1], dz = (double)a[2] - b[2];
+            len[m++] = (float)sqrt(dx * dx + dy * dy + dz * dz);
+        }
+    }
+    if (m) *median = select_rank(len, m, m / 2);
+    free(len);
     return 0;
 }

@@ -198,3 +198,28 @@ int fp__obj_scan(const char *path, const char *text, size_t len, fp__obj_info *i
     *info = total;
     return FP_MESH_OK;
 }
+
+size_t fp__obj_join_continuations(char *text, size_t len)
+{
+    size_t o = 0, held = 0, joined = 0; /* o <= i: the text is rewritten in place */
+    for (size_t i = 0; i < len; i++) {
+        if (text[i] == '\\') {
+            size_t j = i + 1;
+            while (j < len && is_blank(text[j]))
+                j++;
+            if (j == len || text[j] == '\n') {
+                for (; i < j; i++)
+                    text[o++] = ' ';
+                held += j < len;
+                joined += j < len;
+                continue; /* i is at the newline (skipped) or the end */
+            }
+        }
+        text[o++] = text[i];
+        for (; text[i] == '\n' && held > 0; held--)
+            text[o++] = '\n';
+    }
+    for (; held > 0; held--)
+        text[o++] = '\n';
+    return joined;
+}

@@ -531,9 +531,10 @@ static int ply_walk(ply_scan *S)
 #undef PLY_FAIL
 
 int fp__ply_scan(const char *path, const char *text, size_t len, size_t *vertices,
-                 size_t *faces, char *err, size_t errlen)
+                 size_t *faces, int *format, char *err, size_t errlen)
 {
     *vertices = *faces = 0;
+    *format = -1;
     ply_element *el = calloc(PLY_MAX_ELEMENTS, sizeof *el);
     if (!el)
         return fp__mesh_error(err, errlen, FP_MESH_ERR_NOMEM, path, "out of memory");
@@ -543,6 +544,8 @@ int fp__ply_scan(const char *path, const char *text, size_t len, size_t *vertice
         rc = ply_layout(&S, vertices, faces);
     if (rc == FP_MESH_OK)
         rc = ply_walk(&S);
+    if (rc == FP_MESH_OK)
+        *format = S.format;
     free(el);
     return rc;
 }

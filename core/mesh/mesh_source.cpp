@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <map>
 #include <memory>
 #include <new>
@@ -162,17 +163,6 @@ const fp_mesh_source *source_of(const fp_mesh *m)
     return nullptr;
 }
 
-namespace {
-
-std::string fmt9(float x)
-{
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%.9g", double(x));
-    return buf;
-}
-
-} // namespace
-
 bool obj_next_line(const std::string &text, size_t &p, ObjLine &l)
 {
     if (p >= text.size())
@@ -226,9 +216,7 @@ void obj_corner(const std::string &text, std::pair<size_t, size_t> tok, size_t n
     }
 }
 
-// OBJ back as it came in: the text with v (and vn) lines rewritten.
-int save_obj_source(const fp_mesh *m, const fp_mesh_source &src, const char *path, char *err,
-                    size_t errlen)
+void obj_plan(const fp_mesh_source &src)
 {
     const std::string &text = src.obj_text;
     // vn index -> the first vertex that uses it
@@ -249,30 +237,42 @@ int save_obj_source(const fp_mesh *m, const fp_mesh_source &src, const char *pat
                 }
         }
     }
-    std::string out;
-    out.reserve(text.size() + text.size() / 4);
+    src.obj_rewrites.clear();
     size_t p = 0, iv = 0, ivn = 0;
     ObjLine l;
     while (obj_next_line(text, p, l)) {
         const bool v = obj_is(text, l, "v"), vn = obj_is(text, l, "vn");
-        if ((v && iv < m->vertex_count && l.tok.size() >= 4) ||
-            (vn && m->normals && ivn < vn_vertex.size() && vn_vertex[ivn] >= 0 &&
-             size_t(vn_vertex[ivn]) < m->vertex_count && l.tok.size() >= 4)) {
-            const float *q = v ? m->positions + 3 * iv : m->normals + 3 * size_t(vn_vertex[ivn]);
-            out += v ? "v " : "vn ";
-            out += fmt9(q[0]) + " " + fmt9(q[1]) + " " + fmt9(q[2]);
-            if (l.tok.size() > 4) // w or colours: kept as written
-                out.append(text, l.tok[4].first - 1, l.end - (l.tok[4].first - 1));
-        } else {
-            out.append(text, l.begin, l.end - l.begin);
-        }
-        if (l.cr)
-            out += '\r';
-        if (l.end + (l.cr ? 1 : 0) < text.size())
-            out += '\n';
+        if ((v || vn) && l.tok.size() >= 4) // (a tail: w or colours, kept as written)
+            src.obj_rewrites.push_back({l.begin, l.tok.size() > 4 ? l.tok[4].first - 1 : l.end, l.end,
+                                        v ? long(iv) : vn_vertex[ivn], vn});
         iv += v;
         ivn += vn;
     }
+}
+
+// OBJ back as it came in: the text with v (and vn) lines rewritten (obj_plan's lines, those
+// whose vertex the mesh has; a vn line only when the mesh has normals), the rest copied.
+int save_obj_source(const fp_mesh *m, const fp_mesh_source &src, const char *path, char *err,
+                    size_t errlen)
+{
+    std::call_once(src.obj_planned, obj_plan, std::cref(src));
+    const std::string &text = src.obj_text;
+    std::string out;
+    out.reserve(text.size() + text.size() / 4);
+    size_t copied = 0; // text[0, copied) is in out
+    for (const fp_mesh_source::ObjRewrite &r : src.obj_rewrites) {
+        if (r.vertex < 0 || size_t(r.vertex) >= m->vertex_count || (r.vn && !m->normals))
+            continue; // copied as it is
+        const float *q = (r.vn ? m->normals : m->positions) + 3 * size_t(r.vertex);
+        char buf[96];
+        std::snprintf(buf, sizeof buf, "%s %.9g %.9g %.9g", r.vn ? "vn" : "v", double(q[0]),
+                      double(q[1]), double(q[2]));
+        out.append(text, copied, r.begin - copied);
+        out += buf;
+        out.append(text, r.tail, r.end - r.tail);
+        copied = r.end;
+    }
+    out.append(text, copied, std::string::npos);
     return write_atomically(path, out, err, errlen);
 }
 

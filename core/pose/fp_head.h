@@ -61,9 +61,9 @@ typedef struct fp_head {
 int fp_head_detect(const float *pos, size_t n, fp_head *out);
 
 /** fp_head_detect over the vertices v with used[v] != 0 only (used: n bytes, or NULL for all;
- *  fp_mesh_surface_mask: the surface's, without points in no triangle, which a stray one far
- *  off would turn into the head's box and the mesh's unit). -EINVAL also when fewer than 4 are
- *  used. */
+ *  fp_mesh_face_mask: the surface's, without points in no triangle or far off the rest, which
+ *  a stray one would turn into the head's box and the mesh's unit). -EINVAL also when fewer
+ *  than 4 are used. */
 int fp_head_detect_used(const float *pos, size_t n, const uint8_t *used, fp_head *out);
 
 /** A face that looks elsewhere than +z (fp_calibration.face): its n positions turned back into

@@ -74,8 +74,9 @@ struct fp_session {
     double face[4];               /* the face's frame (fp_calibration.face): set where the rig
                                      says the face looks along another axis than +z, or up is
                                      not +y (a turned copy of its mesh); all zeros: none */
-    uint8_t *used;                /* n: 1 where a vertex is in a triangle; NULL when all are
-                                     (fp_mesh_surface_mask: the surface's size and head) */
+    uint8_t *used;                /* n: 1 where a vertex is in a triangle and not far off the
+                                     rest; NULL when all are (fp_mesh_face_mask: the face's
+                                     size and head) */
     float *canon;                 /* n x 3: the loaded shape turned into the face's frame (with
                                      face; the gloves' placement reads it) */
     fp_head face_head;            /* the head in the face's frame (with face) */

@@ -273,8 +273,10 @@ static int open_mesh(fp_session *s, const fp_session_options *opt, double *diag,
      * placement (one at 1e6 units beside a 25-unit mask made a radius of 6e4 units and moved
      * only itself); the engine still carries it */
     const char *name = opt->mesh_path ? opt->mesh_path : "the mesh";
-    size_t unused;
-    if (fp_mesh_surface_mask(s->mesh, &s->used, &unused)) {
+    /* and a stray spike's tip (fp_mesh_face_mask's outliers) decided the face's front: the
+     * hands, placed at its tip, grabbed the spike alone */
+    size_t unused, spiked;
+    if (fp_mesh_face_mask(s->mesh, &s->used, &unused, &spiked)) {
         snprintf(err, errlen, "session: out of memory for %zu vertices", s->n);
         return -ENOMEM;
     }
@@ -282,13 +284,6 @@ static int open_mesh(fp_session *s, const fp_session_options *opt, double *diag,
         fp_slog_printf(&s->log, FP_LOG_WARNING, "session",
                        "%s: %zu of %zu vertices are in no triangle: left out of the face's size, "
                        "its head and the hands' placement", name, unused, s->n);
-    /* a stray spike's tip (fp_mesh_outlier_mask) decided the face's front: the hands, placed
-     * at its tip, grabbed the spike alone */
-    size_t spiked;
-    if (fp_mesh_outlier_mask(s->mesh, &s->used, &spiked)) {
-        snprintf(err, errlen, "session: out of memory for %zu vertices", s->n);
-        return -ENOMEM;
-    }
     if (spiked)
         fp_slog_printf(&s->log, FP_LOG_WARNING, "session",
                        "%s: %zu of %zu vertices lie far off the rest (beyond %g of its 0.5th-99.5th "
@@ -334,6 +329,23 @@ static int open_mesh(fp_session *s, const fp_session_options *opt, double *diag,
         return -EBADMSG;
     }
     return 0;
+}
+
+/* A given --radius under the face's median edge (fp_mesh_median_edge over the face's
+ * vertices, where the fingers act) holds one vertex or none: a fingertip pulls spikes. Said
+ * once, with a radius of three edges (or the default, if larger); the radius is kept. */
+static void warn_small_radius(fp_session *s, const fp_session_options *opt)
+{
+    double edge;
+    if (!(opt->radius > 0) || fp_mesh_median_edge(s->mesh, s->used, &edge) || !(opt->radius < edge))
+        return;
+    const double mm = s->head.mm_per_unit > 0 && isfinite(s->head.mm_per_unit) ? s->head.mm_per_unit : NAN;
+    const double hint = fmax(3 * edge, s->touch_radius);
+    fp_slog_printf(&s->log, FP_LOG_WARNING, "session",
+                   "--radius %.4g mesh units (%.3g mm) is under the face's typical edge length, "
+                   "%.4g mesh units (%.3g mm, the median): a fingertip moves single vertices or "
+                   "none (spikes); try --radius %.4g (%.3g mm)",
+                   opt->radius, opt->radius * mm, edge, edge * mm, hint, hint * mm);
 }
 
 /* The head, the rig (the shape shown: the posed base), the mesh's unit and the radius. 0 or
@@ -399,6 +411,7 @@ static int open_scale(fp_session *s, const fp_session_options *opt, double diag,
      * holds hardly a vertex. */
     s->touch_radius = fmax(0.06 * sqrt(diag), FP_SESSION_MIN_RADIUS_MM / s->head.mm_per_unit);
     s->radius = opt->radius > 0 ? opt->radius : s->touch_radius;
+    warn_small_radius(s, opt);
     return 0;
 }
 

@@ -545,6 +545,27 @@ static void test_spike_triangle(void **state)
     assert_true(fabs(x1 - x0) <= 0.1 * x0); /* (the spike triangle on vertex 1 is in the guards too) */
 }
 
+/* A --radius under the face's typical edge length moves single vertices or none (spikes):
+ * said once at the start, with both figures and a radius to try; the default radius is not. */
+static void test_small_radius_warned(void **state)
+{
+    (void)state;
+    unsigned m0, n0;
+    double x0;
+    grab_on(face(), "plain.obj", &m0, &n0, &x0);
+    assert_null(strstr(out, "typical edge length"));
+    char args[16384];
+    snprintf(args, sizeof args, "run -q --rig none --radius 0.05 --mesh %s --input replay:%s/hands/leap-motion/"
+             "grab_joints_mm.csv,fast=1 --out tiny-radius.obj --force", face(), data);
+    assert_int_equal(fp(args), 0);
+    const char *w = strstr(out, "--radius 0.05 mesh units (");
+    if (!w) fail_msg("no warning for --radius 0.05: %.2000s", out);
+    assert_non_null(strstr(w, "mm) is under the face's typical edge length, "));
+    assert_non_null(strstr(w, "try --radius "));
+    const char *once = strstr(out, "typical edge length");
+    assert_null(strstr(once + 1, "typical edge length")); /* once */
+}
+
 static void test_frames_out_and_monitor(void **state)
 {
     (void)state;
@@ -880,6 +901,7 @@ int main(void)
         cmocka_unit_test(test_plugins),
         cmocka_unit_test(test_info),           cmocka_unit_test(test_missing_mesh), cmocka_unit_test(test_stray_vertex),
         cmocka_unit_test(test_spike_triangle),
+        cmocka_unit_test(test_small_radius_warned),
         cmocka_unit_test(test_frames_out_and_monitor),
         cmocka_unit_test(test_deterministic),  cmocka_unit_test(test_refused_up_front),
         cmocka_unit_test(test_robust_workspace),

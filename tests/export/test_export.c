@@ -61,19 +61,31 @@ static double err_of(const double *D, size_t F, size_t m, const float *T, const 
     return worst;
 }
 
-/* A rank-3 matrix: 3 components are exact; a looser tolerance takes fewer. */
-static void test_compress_rank(void **state)
+/* A random F x m matrix of rank 3 (malloc'ed): frames' random weights of three random
+ * directions of scales 1, 0.1 and 0.01. */
+static double *rank3(size_t F, size_t m)
 {
-    (void)state;
-    const size_t F = 40, m = 3 * 200, r = 3;
+    const size_t r = 3;
     double *B = malloc(r * m * sizeof(double)), *C = malloc(F * r * sizeof(double));
     double *D = calloc(F * m, sizeof(double));
+    assert_true(B && C && D);
     for (size_t i = 0; i < r * m; i++) B[i] = urand() * (i < m ? 1.0 : i < 2 * m ? 0.1 : 0.01);
     for (size_t i = 0; i < F * r; i++) C[i] = urand();
     for (size_t f = 0; f < F; f++)
         for (size_t c = 0; c < m; c++)
             for (size_t k = 0; k < r; k++)
                 D[f * m + c] += C[f * r + k] * B[k * m + c];
+    free(B);
+    free(C);
+    return D;
+}
+
+/* A rank-3 matrix: 3 components are exact; a looser tolerance takes fewer. */
+static void test_compress_rank(void **state)
+{
+    (void)state;
+    const size_t F = 40, m = 3 * 200;
+    double *D = rank3(F, m);
     size_t K;
     float *T, *W;
     double e;
@@ -99,9 +111,50 @@ static void test_compress_rank(void **state)
     assert_true(fabs(err_of(D, F, m, T, W, K) - e) <= 1e-9);
     free(T);
     free(W);
-    free(B);
-    free(C);
     free(D);
+}
+
+/* fp_export_compress of D (F x m, freed here) to tol, K uncapped: the error within tol and
+ * the one reported true. Returns K. */
+static size_t compress_checked(double *D, size_t F, size_t m, double tol)
+{
+    size_t K;
+    float *T, *W;
+    double e;
+    char err[256];
+    assert_int_equal(fp_export_compress(D, F, m, tol, 0, &K, &T, &W, &e, err, sizeof err), 0);
+    if (!(e <= tol)) fail_msg("F %zu: K %zu, error %g over %g", F, K, e, tol);
+    assert_true(fabs(err_of(D, F, m, T, W, K) - e) <= 1e-12 + 1e-9 * e);
+    free(T);
+    free(W);
+    free(D);
+    return K;
+}
+
+/* More values than frames and a frame count that is not a multiple of 4 (the Gram matrix
+ * D D^T is summed in 4 x 4 tiles of frames: the last, partial ones too): a rank-3 matrix still
+ * takes exactly 3 components. */
+static void test_compress_ragged_frames(void **state)
+{
+    (void)state;
+    for (size_t F = 37; F <= 39; F++) {
+        const size_t K = compress_checked(rank3(F, 150), F, 150, 1e-5);
+        if (K != 3) fail_msg("F %zu: K %zu", F, K);
+    }
+}
+
+/* A matrix of full rank (100 frames of 300 random values) to a tight tolerance: more
+ * components than the first 64 eigenpairs asked for (the exporter asks for more as it needs
+ * them). */
+static void test_compress_many_components(void **state)
+{
+    (void)state;
+    const size_t F = 100, m = 300;
+    double *D = malloc(F * m * sizeof(double));
+    assert_non_null(D);
+    for (size_t i = 0; i < F * m; i++) D[i] = urand();
+    const size_t K = compress_checked(D, F, m, 1e-4);
+    if (K <= 64 || K > F) fail_msg("K %zu", K);
 }
 
 /* A long take of few moving vertices (F 5,000 frames, m 30 values, rank 3): the directions
@@ -384,6 +437,8 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_compress_rank),
+        cmocka_unit_test(test_compress_ragged_frames),
+        cmocka_unit_test(test_compress_many_components),
         cmocka_unit_test(test_compress_long),
         cmocka_unit_test(test_point_caches),
         cmocka_unit_test(test_obj_round_trip),

@@ -10,6 +10,7 @@
 #include <cmocka.h>
 
 #include "fp_mesh.h"
+#include "mesh_tmp.h"
 
 #include <stdint.h>
 #include <stdio.h>
@@ -17,18 +18,7 @@
 #include <string.h>
 #include <unistd.h>
 
-static char tmpdir[64];
 static char err[1024];
-
-/* tmpdir/name */
-static const char *tmp_path(const char *name)
-{
-    static char buf[4][512];
-    static int k;
-    k = (k + 1) % 4;
-    snprintf(buf[k], sizeof buf[k], "%s/%s", tmpdir, name);
-    return buf[k];
-}
 
 /* A glTF of one primitive of the given mode over the six vertices of a 3 x 2 grid in z = 0,
  * its indices those given (unsigned short); written as NAME.gltf and NAME.bin */
@@ -142,16 +132,13 @@ static void test_lines_refused(void **state)
 static int setup(void **state)
 {
     (void)state;
-    snprintf(tmpdir, sizeof tmpdir, "%s/fp-gltf-topo-XXXXXX", getenv("TMPDIR") ? getenv("TMPDIR") : "/tmp");
-    return mkdtemp(tmpdir) ? 0 : -1;
+    return tmp_setup("fp-gltf-topo");
 }
 
 static int teardown(void **state)
 {
     (void)state;
-    const char *names[] = {"strip.gltf", "strip.bin", "strip-out.gltf", "fan.gltf", "fan.bin", "lines.gltf", "lines.bin"};
-    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) unlink(tmp_path(names[i]));
-    return rmdir(tmpdir);
+    return tmp_teardown();
 }
 
 int main(void)

@@ -1329,6 +1329,35 @@ static void test_outlier_mask(void **state)
     fp_mesh_free(&m);
 }
 
+/* fp_mesh_face_mask: a vertex in no triangle (0, its two triangles moved off it) and one far
+ * off (17, pulled 20 units out) are both cleared and counted apart; fp_mesh_median_edge: the
+ * grid's edges are 1 (two of three) and sqrt 2, median 1, with or without the mask. */
+static void test_face_mask_and_median_edge(void **state)
+{
+    (void)state;
+    fp_mesh *m = grid_mesh(30, 0);
+    double edge = 0;
+    assert_int_equal(fp_mesh_median_edge(m, NULL, &edge), 0);
+    assert_float_equal(edge, 1.0, 1e-3);
+    uint8_t *used = NULL;
+    size_t unused = 99, far = 99;
+    assert_int_equal(fp_mesh_face_mask(m, &used, &unused, &far), 0);
+    assert_null(used);
+    assert_int_equal(unused + far, 0);
+    for (size_t i = 0; i < 6; i++)
+        if (m->triangles[i] == 0) m->triangles[i] = 1;
+    m->positions[3 * 17 + 2] = 20;
+    assert_int_equal(fp_mesh_face_mask(m, &used, &unused, &far), 0);
+    assert_non_null(used);
+    assert_int_equal(unused, 1);
+    assert_int_equal(far, 1);
+    for (size_t v = 0; v < m->vertex_count; v++) assert_int_equal(used[v], v != 0 && v != 17);
+    assert_int_equal(fp_mesh_median_edge(m, used, &edge), 0);
+    assert_float_equal(edge, 1.0, 1e-3);
+    free(used);
+    fp_mesh_free(&m);
+}
+
 static int same_positions(const fp_mesh *a, const fp_mesh *b)
 {
     return a->vertex_count == b->vertex_count && a->triangle_count == b->triangle_count &&
@@ -1968,6 +1997,7 @@ int main(void)
         cmocka_unit_test(test_glb_version),
         cmocka_unit_test(test_gltf_node_transform_lengths),
         cmocka_unit_test(test_outlier_mask),
+        cmocka_unit_test(test_face_mask_and_median_edge),
     };
     return cmocka_run_group_tests_name("mesh", tests, setup, teardown);
 }

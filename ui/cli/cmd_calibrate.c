@@ -223,16 +223,14 @@ static int calibrate_parse(int argc, char **argv, calibrate_args *a)
     return -1;
 }
 
-/* The vertices in a triangle (fp_mesh_surface_mask) and not far off the rest
- * (fp_mesh_outlier_mask), or NULL when every one is (or out of memory: then all count): the
- * head is found on the surface, as the session finds it. */
+/* The face's vertices (fp_mesh_face_mask: in a triangle, not far off the rest), or NULL when
+ * every one is (or out of memory: then all count): the head is found on the surface, as the
+ * session finds it. */
 static uint8_t *surface_vertices(const fp_mesh *m)
 {
     uint8_t *used;
     size_t unused, far;
-    if (fp_mesh_surface_mask(m, &used, &unused)) return NULL;
-    (void)fp_mesh_outlier_mask(m, &used, &far); /* (out of memory: as it was) */
-    return used;
+    return fp_mesh_face_mask(m, &used, &unused, &far) ? NULL : used;
 }
 
 /* The face and its head: loaded, detected, and --mm-per-unit checked as run checks it (a face
