@@ -327,8 +327,9 @@ static void bring_in_live(fp_arrive_step *r, fp_pose_state *ps, const fp_calibra
      * away; one that grabs with the fingertips that move, at their approach, from a wait later;
      * any from two waits later */
     double waited = r->moving_away_s - FP_ARRIVE_BRING_AFTER_S + 1e-6;
+    bool held = fp_pose_auto_held(r->place); /* (held in place: no wait for the acting ones) */
     int at = waited < 2 * FP_ARRIVE_BRING_WAIT_S ? lands(r, &c, acts, radius, e) : LAND_AWAY;
-    if (at == LAND_STILL || (at == LAND_ACTING && waited < FP_ARRIVE_BRING_WAIT_S)) {
+    if (at == LAND_STILL || (at == LAND_ACTING && !held && waited < FP_ARRIVE_BRING_WAIT_S)) {
         if (had) { /* (the push in effect stays; again at the next refit) */
             fp_pose_recalibrate(ps, before);
             r->pushed = true;
@@ -411,7 +412,9 @@ void fp_arrive_step_check(fp_arrive_step *r, int64_t now_ns, const fp_hand_pose 
     r->away_s += dt;
     if (r->place && !r->hovered) { /* moving hands, placed by their range */
         r->moving_away_s += dt;
-        if (r->moving_away_s >= FP_ARRIVE_BRING_AFTER_S - 1e-6) r->bring_on = true;
+        /* (hands held in place, fingers acting: their range is where they are held, and the
+         * replay's push is there from the first frame; no wait) */
+        if (r->moving_away_s >= FP_ARRIVE_BRING_AFTER_S - 1e-6 || fp_pose_auto_held(r->place)) r->bring_on = true;
     }
     bool due = r->away_s >= FP_ARRIVE_HINT_S - 1e-6; /* (a sum of frame steps: 180 x 1/60) */
     /* beyond the tip distances' reach: how far, unbounded (a tree search; throttled, and
