@@ -317,6 +317,7 @@ static void bring_in_live(fp_arrive_step *r, fp_pose_state *ps, const fp_calibra
 {
     bool had = r->pushed; /* (p->calib is the range's placement now, or as it was) */
     r->pushed = false;
+    r->awaiting = false; /* (set again below while held hands await their approach) */
     r->bring_tried = true; /* (later tries come with the refits only) */
     size_t n = fp_pose_auto_samples(r->place);
     if (!n || !r->live_tips || !e || !e->points || !(radius > 0)) return;
@@ -336,7 +337,6 @@ static void bring_in_live(fp_arrive_step *r, fp_pose_state *ps, const fp_calibra
     bool held = fp_pose_auto_held(r->place); /* (held in place: at the acting ones' approach) */
     double act_d;
     int at = waited < 2 * FP_ARRIVE_BRING_WAIT_S ? lands(r, &c, acts, radius, e, &act_d) : LAND_AWAY;
-    r->awaiting = false;
     if (held && !had && at != LAND_STILL && waited < 2 * FP_ARRIVE_BRING_WAIT_S &&
         !(act_d <= dp + FP_ARRIVE_APPROACH * radius)) {
         r->awaiting = true; /* (tried again every frame: step_arrive.h) */
