@@ -11,6 +11,7 @@
 /* the ring: a window of both hands at the highest sample rate */
 #define CAPACITY ((size_t)(FP_POSE_AUTO_WINDOW_S * FP_POSE_AUTO_RATE_HZ) * FP_HANDS)
 #define PERIOD_NS ((int64_t)(1e9 / FP_POSE_AUTO_RATE_HZ))
+#define BASES (1 + FP_FINGERS) /* a hand's base: its palm centre and each finger's first joint */
 
 /* (NBINS <= 65536: a bin index fits in uint16_t; asserted at create, as clang does not
  * take a floating-point expression in _Static_assert) */
@@ -35,6 +36,11 @@ struct fp_pose_auto {
     bool have_first[FP_HANDS];
     int beyond[FP_HANDS];          /* samples in a row with a fingertip FP_POSE_STILL_MM off */
     bool moved;                    /* a hand moved (FP_POSE_STILL_MM): not still any more */
+    float base[FP_HANDS][BASES][3]; /* each hand's palm and finger bases in its first sample, mm */
+    int base_beyond[FP_HANDS];     /* samples in a row with one of them FP_POSE_STILL_MM off */
+    bool shifted;                  /* a hand's base moved (FP_POSE_STILL_MM): not held in place */
+    int64_t first_t, newest_t;     /* the first sample's time and the newest's (any hand) */
+    bool have_any;
     bool hovered;                  /* the last refit placed them hovering */
 };
 
@@ -83,20 +89,37 @@ static void drop_oldest(fp_pose_auto *a)
     a->dirty = true;
 }
 
-/* Stillness (FP_POSE_STILL_MM): hand h's fingertips in a kept sample against its first. */
+/* joint b of a hand's base (BASES): the palm centre, then each finger's first joint */
+static int base_joint(int b) { return b ? FP_JOINT(b - 1, 0) : FP_JOINT_PALM; }
+
+/* Whether some of the n points p lies FP_POSE_STILL_MM or more (on an axis) from ref. */
+static bool off_by(const float (*ref)[3], const float (*mm)[3], const int *joint, int n)
+{
+    for (int i = 0; i < n; i++)
+        for (int k = 0; k < 3; k++)
+            if (fabs((double)mm[joint[i]][k] - ref[i][k]) >= FP_POSE_STILL_MM) return true;
+    return false;
+}
+
+/* Stillness (FP_POSE_STILL_MM): hand h's fingertips in a kept sample against its first; and
+ * its base (palm and finger bases) against its first, whatever the fingertips do. */
 static void note_motion(fp_pose_auto *a, int h, const float (*mm)[3])
 {
-    if (a->moved) return;
+    int tips[FP_FINGERS], bases[BASES];
+    for (int f = 0; f < FP_FINGERS; f++) tips[f] = FP_JOINT_TIP(f);
+    for (int b = 0; b < BASES; b++) bases[b] = base_joint(b);
     if (!a->have_first[h]) {
-        for (int f = 0; f < FP_FINGERS; f++) memcpy(a->first[h][f], mm[FP_JOINT_TIP(f)], sizeof a->first[h][f]);
+        for (int f = 0; f < FP_FINGERS; f++) memcpy(a->first[h][f], mm[tips[f]], sizeof a->first[h][f]);
+        for (int b = 0; b < BASES; b++) memcpy(a->base[h][b], mm[bases[b]], sizeof a->base[h][b]);
         a->have_first[h] = true;
         return;
     }
-    bool off = false;
-    for (int f = 0; f < FP_FINGERS && !off; f++)
-        for (int k = 0; k < 3; k++)
-            off |= fabs((double)mm[FP_JOINT_TIP(f)][k] - a->first[h][f][k]) >= FP_POSE_STILL_MM;
-    a->beyond[h] = off ? a->beyond[h] + 1 : 0;
+    if (!a->shifted) {
+        a->base_beyond[h] = off_by((const float(*)[3])a->base[h], mm, bases, BASES) ? a->base_beyond[h] + 1 : 0;
+        if (a->base_beyond[h] >= 2) a->shifted = true;
+    }
+    if (a->moved) return;
+    a->beyond[h] = off_by((const float(*)[3])a->first[h], mm, tips, FP_FINGERS) ? a->beyond[h] + 1 : 0;
     if (a->beyond[h] >= 2) {
         a->moved = true;
         a->dirty = true; /* (the next refit drops the hover) */
@@ -104,6 +127,11 @@ static void note_motion(fp_pose_auto *a, int h, const float (*mm)[3])
 }
 
 bool fp_pose_auto_still(const fp_pose_auto *a) { return !a->moved; }
+
+bool fp_pose_auto_held(const fp_pose_auto *a)
+{
+    return a->moved && !a->shifted && a->have_any && a->newest_t - a->first_t >= (int64_t)(FP_POSE_HELD_S * 1e9);
+}
 
 void fp_pose_auto_take(fp_pose_auto *a, const fp_event *ev)
 {
@@ -122,6 +150,9 @@ void fp_pose_auto_take(fp_pose_auto *a, const fp_event *ev)
         }
     a->last_kept[h] = t;
     a->have_kept[h] = true;
+    if (!a->have_any) a->first_t = t;
+    a->newest_t = t;
+    a->have_any = true;
     note_motion(a, h, ev->positions.mm);
     /* the window, by the newest sample's time (a clock gone backwards drops nothing: the
      * ring's capacity still bounds it) */

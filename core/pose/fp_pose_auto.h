@@ -105,6 +105,17 @@ bool fp_pose_auto_refit(fp_pose_auto *a, fp_pose_state *p, bool engaged, double 
 /** Whether no hand has moved yet (FP_POSE_STILL_MM): true before any sample. */
 bool fp_pose_auto_still(const fp_pose_auto *a);
 
+/** Whether the hands are held in place: a fingertip moved (not fp_pose_auto_still), the
+ *  samples kept so far span FP_POSE_HELD_S or more (the newest sample's time against the
+ *  first's), and no hand's base (its palm centre and every finger's first joint,
+ *  FP_JOINT(f, 0)) has been FP_POSE_STILL_MM or more (on an axis) from where that hand's
+ *  first sample put it, in two samples kept in a row: a hand held in place whose fingers act
+ *  (a pinch), whose range is its own reach from where it is held. (The four Leap
+ *  recordings' bases move so far within 0.05-0.88 s, a hand that reaches sooner still.) Once
+ *  a base moved, false for good. */
+#define FP_POSE_HELD_S 1.0
+bool fp_pose_auto_held(const fp_pose_auto *a);
+
 /** Refits done so far (the first one is the first placement). */
 unsigned long fp_pose_auto_refits(const fp_pose_auto *a);
 

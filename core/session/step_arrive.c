@@ -54,7 +54,8 @@ void fp_arrive_step_place(fp_arrive_step *r, fp_pose_state *p, bool engaged, con
 {
     double hover = radius > 0 ? FP_ARRIVE_HOVER * radius : 0;
     if (!r->place) return;
-    bool now = r->bring_on && !r->bring_tried && !engaged; /* the first bring-in: at once */
+    /* the first bring-in at once; held hands awaiting their approach: every frame */
+    bool now = r->bring_on && (!r->bring_tried || r->awaiting) && !engaged;
     fp_calibration before = p->calib; /* (kept where a push in effect cannot be made again now) */
     if (!fp_pose_auto_refit(r->place, p, engaged, head->mm_per_unit, head->min, head->max, hover)) {
         if (now) bring_in_live(r, p, &before, head, radius, e, log);
@@ -277,11 +278,13 @@ static void keep_newest(void *ctx, int hand, const float (*mm)[3])
 /* Where the hands as they are now (each hand's newest sample) would be at c: LAND_AWAY no
  * fingertip within FP_ARRIVE_NEAR x radius of the face (a push made now grabs nothing at once),
  * LAND_ACTING some fingertip that acts (acts: acting()) within it (a push made now grabs with
- * the fingertips that move, at their approach), LAND_STILL only fingertips that do not act. */
+ * the fingertips that move, at their approach), LAND_STILL only fingertips that do not act.
+ * *act_d: the nearest of the fingertips that act within it (+INFINITY: none). */
 enum { LAND_AWAY, LAND_ACTING, LAND_STILL };
 static int lands(const fp_arrive_step *r, const fp_calibration *c, const bool acts[FP_HANDS][FP_FINGERS],
-                 double radius, const fp_engine_step *e)
+                 double radius, const fp_engine_step *e, double *act_d)
 {
+    *act_d = INFINITY;
     newest_tips n = {0};
     fp_pose_auto_each(r->place, keep_newest, &n);
     float q[FP_HANDS * FP_FINGERS][3], d[FP_HANDS * FP_FINGERS];
@@ -296,7 +299,10 @@ static int lands(const fp_arrive_step *r, const fp_calibration *c, const bool ac
     if (!nq || csrbf_points_nearest(e->points, &q[0][0], nq, near, d, NULL) < 0) return LAND_AWAY;
     int at = LAND_AWAY;
     for (size_t i = 0; i < nq; i++)
-        if (d[i] <= near) at = act[i] ? LAND_ACTING : at == LAND_ACTING ? at : LAND_STILL;
+        if (d[i] <= near) {
+            at = act[i] ? LAND_ACTING : at == LAND_ACTING ? at : LAND_STILL;
+            if (act[i]) *act_d = fmin(*act_d, d[i]);
+        }
     return at;
 }
 
@@ -311,6 +317,7 @@ static void bring_in_live(fp_arrive_step *r, fp_pose_state *ps, const fp_calibra
 {
     bool had = r->pushed; /* (p->calib is the range's placement now, or as it was) */
     r->pushed = false;
+    r->awaiting = false; /* (set again below while held hands await their approach) */
     r->bring_tried = true; /* (later tries come with the refits only) */
     size_t n = fp_pose_auto_samples(r->place);
     if (!n || !r->live_tips || !e || !e->points || !(radius > 0)) return;
@@ -327,8 +334,15 @@ static void bring_in_live(fp_arrive_step *r, fp_pose_state *ps, const fp_calibra
      * away; one that grabs with the fingertips that move, at their approach, from a wait later;
      * any from two waits later */
     double waited = r->moving_away_s - FP_ARRIVE_BRING_AFTER_S + 1e-6;
-    int at = waited < 2 * FP_ARRIVE_BRING_WAIT_S ? lands(r, &c, acts, radius, e) : LAND_AWAY;
-    if (at == LAND_STILL || (at == LAND_ACTING && waited < FP_ARRIVE_BRING_WAIT_S)) {
+    bool held = fp_pose_auto_held(r->place); /* (held in place: at the acting ones' approach) */
+    double act_d;
+    int at = waited < 2 * FP_ARRIVE_BRING_WAIT_S ? lands(r, &c, acts, radius, e, &act_d) : LAND_AWAY;
+    if (held && !had && at != LAND_STILL && waited < 2 * FP_ARRIVE_BRING_WAIT_S &&
+        !(act_d <= dp + FP_ARRIVE_APPROACH * radius)) {
+        r->awaiting = true; /* (tried again every frame: step_arrive.h) */
+        return;
+    }
+    if (at == LAND_STILL || (at == LAND_ACTING && !held && waited < FP_ARRIVE_BRING_WAIT_S)) {
         if (had) { /* (the push in effect stays; again at the next refit) */
             fp_pose_recalibrate(ps, before);
             r->pushed = true;
@@ -411,7 +425,9 @@ void fp_arrive_step_check(fp_arrive_step *r, int64_t now_ns, const fp_hand_pose 
     r->away_s += dt;
     if (r->place && !r->hovered) { /* moving hands, placed by their range */
         r->moving_away_s += dt;
-        if (r->moving_away_s >= FP_ARRIVE_BRING_AFTER_S - 1e-6) r->bring_on = true;
+        /* (hands held in place, fingers acting: their range is where they are held, and the
+         * replay's push is there from the first frame; no wait) */
+        if (r->moving_away_s >= FP_ARRIVE_BRING_AFTER_S - 1e-6 || fp_pose_auto_held(r->place)) r->bring_on = true;
     }
     bool due = r->away_s >= FP_ARRIVE_HINT_S - 1e-6; /* (a sum of frame steps: 180 x 1/60) */
     /* beyond the tip distances' reach: how far, unbounded (a tree search; throttled, and

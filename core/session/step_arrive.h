@@ -71,6 +71,7 @@ typedef struct fp_arrive_step {
     bool bring_tried;              /* the live bring-in ran (outside a refit: once) */
     bool brought;                  /* the live bring-in was said */
     bool pushed;                   /* the placement in effect holds a live bring-in's push */
+    bool awaiting;                 /* held hands: the push waits for the acting tips' approach */
     float (*live_tips)[3];         /* FP_ARRIVE_PLACED_AUTO: its buffers (FP_ARRIVE_LIVE_SAMPLES */
     int *live_hand;                /* samples' fingertips, hands, their points in mesh units */
     float (*live_q)[3];            /* and distances) */
@@ -116,10 +117,18 @@ void fp_arrive_step_event(fp_arrive_step *r, const fp_event *ev);
  *  moving ones away: a grab they would not move), and any, from two waits later. Until then
  *  a push in effect stays and the range's placement stands where there is none; the hands
  *  that come near by themselves meanwhile (HandSplay's hover for 1.4 s, then a reach) are
- *  never pushed, as the replay does not push them. */
+ *  never pushed, as the replay does not push them. Hands held in place (fp_pose_auto_held: a
+ *  fingertip moved, no hand's base over FP_POSE_HELD_S) are due at once, without the
+ *  moving away nor the wait for a push that lands a fingertip that acts; before a push is in
+ *  effect it is tried every frame (a march each, while not engaged) and made when the
+ *  fingertips that act, as they are now, lie within FP_ARRIVE_APPROACH x radius of the
+ *  nearest the march brought them to (their approach: the grab starts with the fingertips
+ *  near there, as the replay's does), or from two waits later; one that rests only still
+ *  fingertips in the skin waits as above. */
 #define FP_ARRIVE_HOVER 1.0
 #define FP_ARRIVE_BRING_AFTER_S 1.0
 #define FP_ARRIVE_BRING_WAIT_S 1.0
+#define FP_ARRIVE_APPROACH 0.1
 #define FP_ARRIVE_LIVE_SAMPLES 64
 void fp_arrive_step_place(fp_arrive_step *r, fp_pose_state *p, bool engaged, const fp_head *head,
                          double radius, const fp_engine_step *e, const fp_slog *log);

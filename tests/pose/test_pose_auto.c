@@ -289,6 +289,55 @@ static void test_still_hands_hover(void **state)
     fp_pose_auto_destroy(&a);
 }
 
+/* fp_pose_auto_held: a hand whose thumb and index tips pinch (30 mm) while its palm and finger
+ * bases stay within 2 mm is held in place once the samples span FP_POSE_HELD_S, not before,
+ * and for good no more once a base has moved 12 mm in two samples in a row (one glitch sample
+ * is not a move); a hand that moves as a whole never is. */
+static void test_held_in_place(void **state)
+{
+    (void)state;
+    for (int whole = 0; whole < 2; whole++) {
+        fp_pose_auto *a;
+        assert_int_equal(fp_pose_auto_create(&a), 0);
+        assert_false(fp_pose_auto_held(a));
+        float mm[FP_HAND_JOINTS][3];
+        int64_t t = 0;
+        const int frames = (int)(FP_POSE_HELD_S * 60) + 30;
+        for (int f = 0; f <= frames; f++, t += 16666667) {
+            double c = 0.5 * (1 - cos(2 * M_PI * f / 60.0)); /* a pinch a second */
+            spread_hand(mm, 10.f + (float)(f % 3), 100, whole ? -50.f + 0.5f * (float)f : -50.f);
+            mm[FP_JOINT_TIP(0)][0] += (float)(30 * c);
+            mm[FP_JOINT_TIP(1)][0] -= (float)(30 * c);
+            fp_event ev = joints_event(FP_HAND_RIGHT, mm, t);
+            fp_pose_auto_take(a, &ev);
+            bool due = (double)t >= FP_POSE_HELD_S * 1e9;
+            if (!whole) assert_int_equal(fp_pose_auto_held(a), due && !fp_pose_auto_still(a));
+            else assert_false(fp_pose_auto_held(a) && f > 30); /* (its base 12 mm off by 0.4 s) */
+        }
+        if (!whole) {
+            assert_true(fp_pose_auto_held(a));
+            spread_hand(mm, 10.f, 100, -38.f); /* one glitch sample: still held */
+            fp_event ev = joints_event(FP_HAND_RIGHT, mm, t += 16666667);
+            fp_pose_auto_take(a, &ev);
+            spread_hand(mm, 10.f, 100, -50.f);
+            ev = joints_event(FP_HAND_RIGHT, mm, t += 16666667);
+            fp_pose_auto_take(a, &ev);
+            assert_true(fp_pose_auto_held(a));
+            for (int f = 0; f < 2; f++) { /* the base moves 12 mm: no more, and for good */
+                spread_hand(mm, 10.f, 100, -38.f);
+                ev = joints_event(FP_HAND_RIGHT, mm, t += 16666667);
+                fp_pose_auto_take(a, &ev);
+            }
+            assert_false(fp_pose_auto_held(a));
+            spread_hand(mm, 10.f, 100, -50.f);
+            ev = joints_event(FP_HAND_RIGHT, mm, t += 16666667);
+            fp_pose_auto_take(a, &ev);
+            assert_false(fp_pose_auto_held(a));
+        }
+        fp_pose_auto_destroy(&a);
+    }
+}
+
 /* fp_pose_auto_each: every kept sample, oldest first, with its hand and its joints at their
  * bins' middles (within half a bin of what was sent). */
 typedef struct seen {
@@ -335,6 +384,7 @@ int main(void)
         cmocka_unit_test(test_deterministic),
         cmocka_unit_test(test_gloves_keep_their_place),
         cmocka_unit_test(test_still_hands_hover),
+        cmocka_unit_test(test_held_in_place),
         cmocka_unit_test(test_each_sample),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
