@@ -442,8 +442,8 @@ static void gram(const float *D, size_t F, size_t m, bool by_values, double *G)
  * eigenvectors, column j for ev[j]. dsyevr overwrites G's upper triangle with the diagonal:
  * they are put back from the lower triangle and diag (N, G's diagonal), so G can be asked
  * again. *Z is realloc'ed to N x want. 0, -ENOMEM or FP_ENUMERIC (LAPACK's info). */
-static int top_eigen(double *G, const double *diag, size_t N, size_t want, double *ev,
-                     double **Z)
+static int top_eigen_range(double *G, const double *diag, size_t N, size_t want, double *ev,
+                           double **Z)
 {
     double *z = realloc(*Z, N * want * sizeof(double));
     if (!z) return -ENOMEM;
@@ -475,6 +475,23 @@ static int top_eigen(double *G, const double *diag, size_t N, size_t want, doubl
         G[c + c * N] = diag[c];
     }
     return rc;
+}
+
+/* top_eigen_range, and where LAPACK fails on a part of the spectrum (dsyevr's inverse
+ * iteration, DSTEIN, not converging), the whole of it (the MRRR path dsyevr takes for every
+ * eigenpair); the largest `want` then lie at ev[N - want ..] and Z's last columns, moved to
+ * the front so that the caller's view is the same. */
+static int top_eigen(double *G, const double *diag, size_t N, size_t want, double *ev,
+                     double **Z)
+{
+    int rc = top_eigen_range(G, diag, N, want, ev, Z);
+    if (rc != FP_ENUMERIC || want == N)
+        return rc;
+    if ((rc = top_eigen_range(G, diag, N, N, ev, Z)))
+        return rc;
+    memmove(ev, ev + (N - want), want * sizeof(double));
+    memmove(*Z, *Z + (N - want) * N, want * N * sizeof(double));
+    return 0;
 }
 
 /* The F x m float matrix version (what the exporter holds). */
@@ -517,7 +534,8 @@ static int compress_f(const char *who, const float *D, size_t F, size_t m, doubl
     }
     got = want;
     memcpy(R, D, F * m * sizeof(float));
-    double res = recon_error(D, F, m, T, W, 0);
+    const double res0 = recon_error(D, F, m, T, W, 0);
+    double res = res0;
     size_t K = 0;
     const double top = ev[got - 1] > 0 ? ev[got - 1] : 0;
     while (K < kmax) {
@@ -532,6 +550,13 @@ static int compress_f(const char *who, const float *D, size_t F, size_t m, doubl
                 goto out;
             }
             got = want;
+            /* and the components again from the first: where eigenvalues tie across the
+             * first call's last one, the new call may span that eigenspace with another basis,
+             * and a new column would repeat a direction already taken and miss another */
+            K = 0;
+            memcpy(R, D, F * m * sizeof(float));
+            res = res0;
+            continue;
         }
         /* component K: the (K+1)-th largest eigenpair; column got-1-K of Z */
         const double lambda = ev[got - 1 - K];

@@ -8,7 +8,7 @@
  *     from the base are compressed into their K leading principal components (eigenvectors
  *     of the frames x frames Gram matrix D D^T of the (frames x 3n) displacement matrix D,
  *     or from the 3n x 3n D^T D where that is the smaller,
- *     LAPACK dsyev; K the smallest whose largest per-vertex error, measured with the float32
+ *     LAPACK dsyevr; K the smallest whose largest per-vertex error, measured with the float32
  *     targets and weights written, is within max_error_mm); the weights then moved into
  *     [0, 1] (Blender 3.4 clamps shape keys there) by rescaled targets and, where needed, one
  *     more target "offset" keyed 1 at every frame. Written by
