@@ -22,7 +22,9 @@ static bool push_to(fp_input_instance *inst, const fp_event_header *ev)
     if (ev->size < sizeof *ev || ev->size > sizeof(fp_event)) { /* no room for it: refused, said
         * once with its size (before: false, as for a full queue, which a plugin sends again) */
         uint_least64_t none = 0;
-        atomic_compare_exchange_strong(&inst->oversize, &none, (uint_least64_t)ev->size << 32 | ev->type);
+        /* bit 31 marks one as said: an all-zero header (a memset event, size 0, type 0) too */
+        atomic_compare_exchange_strong(&inst->oversize, &none,
+                                       (uint_least64_t)ev->size << 32 | 1u << 31 | (ev->type & 0xffffu));
         atomic_fetch_add(&inst->refused, 1);
         return true;
     }

@@ -27,7 +27,9 @@
  *                       with a larger event), each once, logging "oversize push returned
  *                       false" where push_event says the queue is full; with
  *                       oversize_retry=1 it pushes each again while push_event says so,
- *                       as a pacer waiting for room does (fp_pacer_push) */
+ *                       as a pacer waiting for room does (fp_pacer_push);
+ *                       key zeroed=N: start first pushes N events whose header is all
+ *                       zeros (size 0, type 0: a memset event whose header was never set) */
 #define _POSIX_C_SOURCE 200809L /* nanosleep */
 #include <facepuppet/plugin.h>
 
@@ -65,7 +67,7 @@ typedef struct fixture {
     pthread_t logger;
     int logging;
     int stuck;
-    int oversize, oversize_retry;
+    int oversize, oversize_retry, zeroed;
 } fixture;
 
 static void *stuck_thread(void *arg)
@@ -105,6 +107,11 @@ static int start(fp_input *self, char *err, size_t errlen)
     const fp_host *host = fx->host;
     if (fx->log_lines > 0) fx->logging = !pthread_create(&fx->logger, NULL, logger, fx);
     else if (fx->stuck) fx->logging = !pthread_create(&fx->logger, NULL, stuck_thread, fx);
+    for (int i = 0; i < fx->zeroed; i++) {
+        fp_event zero;
+        memset(&zero, 0, sizeof zero);
+        host->push_event(host, &zero.header);
+    }
     for (int i = 0; i < fx->oversize; i++) {
         union {
             fp_event_joint_angles ja;
@@ -170,7 +177,7 @@ static void destroy(fp_input *self) { free(self); }
 static int create(const fp_host *host, const char *arg, const fp_param *params, size_t nparams,
                   fp_input **out, char *err, size_t errlen)
 {
-    int log_lines = 0, stuck = 0, nostart = 0, oversize = 0, oversize_retry = 0;
+    int log_lines = 0, stuck = 0, nostart = 0, oversize = 0, oversize_retry = 0, zeroed = 0;
     for (size_t i = 0; i < nparams; i++) {
         if (!strcmp(params[i].key, "open_ms")) {
             long ms = strtol(params[i].value, NULL, 10);
@@ -186,6 +193,8 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
             return -22;
         } else if (!strcmp(params[i].key, "oversize")) {
             oversize = atoi(params[i].value);
+        } else if (!strcmp(params[i].key, "zeroed")) {
+            zeroed = atoi(params[i].value);
         } else if (!strcmp(params[i].key, "oversize_retry")) {
             oversize_retry = atoi(params[i].value);
         } else if (!strcmp(params[i].key, "nostart")) {
@@ -201,6 +210,7 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
     fx->stuck = stuck;
     fx->oversize = oversize;
     fx->oversize_retry = oversize_retry;
+    fx->zeroed = zeroed;
     if (log_lines > 0) host->log(host, FP_LOG_INFO, "created");
     fp_input *in = &fx->in;
     in->size = sizeof *in;

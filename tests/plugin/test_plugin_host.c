@@ -482,6 +482,28 @@ static void test_oversize_events_refused(void **state)
     fp_plugin_path_clear(&path);
 }
 
+/* Events whose header is all zeros (a plugin that memsets an event and never sets its header):
+ * refused and counted, and said (before: counted, never said, as the first one's record, 0,
+ * read as "none yet") */
+static void test_zeroed_events_said(void **state)
+{
+    (void)state;
+    fp_plugin_path path;
+    fixture_path(&path);
+    fp_input_instance inst;
+    log_seen seen = {.owner = pthread_self()};
+    start_logged(&inst, &path, "fixture,zeroed=2", &seen);
+    fp_event ev;
+    while (fp_input_instance_poll(&inst, &ev)) {
+    }
+    assert_int_equal((int)atomic_load(&inst.refused), 2);
+    assert_int_equal(fp_input_instance_drain_log(&inst), 1);
+    if (!strstr(seen.lines[0], "refused an undersize event:") || !strstr(seen.lines[0], "of 0 bytes"))
+        fail_msg("said: %s", seen.lines[0]);
+    fp_input_instance_close(&inst);
+    fp_plugin_path_clear(&path);
+}
+
 /* ---- an event's time: the host refuses what `plugins check` fails (fp_event_check_time) ---- */
 
 static void test_event_times_refused(void **state)
@@ -936,6 +958,7 @@ int main(void)
         cmocka_unit_test(test_env_path_and_instance),
         cmocka_unit_test(test_log_relayed), cmocka_unit_test(test_malformed_events_refused),
         cmocka_unit_test(test_event_times_refused), cmocka_unit_test(test_oversize_events_refused),
+        cmocka_unit_test(test_zeroed_events_said),
         cmocka_unit_test(test_isolate_holds_only_good_set),
         cmocka_unit_test(test_err_filled),
         cmocka_unit_test(test_queue_mpsc),
