@@ -338,17 +338,17 @@ struct GltfReader {
                 for (size_t i = 0; i < count; i++)
                     idx[i] = uint32_t(i);
             }
-            if (strip || fan) // glTF 2.0 3.7.2.1: as a list of triangles, the winding kept
-                idx = strip_or_fan_triangles(idx, strip);
-            else if (idx.size() % 3 != 0) // (a primitive without indices: its vertices in threes)
+            if (!strip && !fan && idx.size() % 3 != 0) // (without indices: its vertices in threes)
                 return bad(FP_MESH_ERR_FORMAT, where + " has " + std::to_string(idx.size()) +
                                                    (prim.indices >= 0 ? " indices" : " vertices and no indices") +
                                                    ", not a multiple of 3");
-            for (size_t i = 0; i < idx.size(); i++)
+            for (size_t i = 0; i < idx.size(); i++) // (the file's indices, before a strip's expansion)
                 if (idx[i] >= count)
                     return bad(FP_MESH_ERR_FORMAT, where + ": index " + std::to_string(i) + " = " +
                                                        std::to_string(idx[i]) + " is out of range (" +
                                                        std::to_string(count) + " vertices)");
+            if (strip || fan) // glTF 2.0 3.7.2.1: as a list of triangles, the winding kept
+                idx = strip_or_fan_triangles(idx, strip);
             const size_t base = soup.n();
             {
                 fp_mesh_source::Instance in{mi, int(pi), base, count, {}, pos_it->second,

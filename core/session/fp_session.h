@@ -545,8 +545,10 @@ bool fp_session_undo(fp_session *s);
 void fp_session_reset(fp_session *s);
 /** Events dropped because an input's queue was full, over all inputs: an event the input
  *  pushed again until it was taken (a replay with fast=1) is not one
- *  (fp_event_queue_dropped); and those of an input abandoned at its stop, which it had queued
- *  or pushed after (fp_input_instance_dropped). The session's owner's thread. */
+ *  (fp_event_queue_dropped); and those an input abandoned at its stop pushed after it was
+ *  abandoned, as far as they are known when called (fp_input_instance_dropped: what it had
+ *  queued and never had read is known only when the session is destroyed, and said then in
+ *  that input's closing line). The session's owner's thread. */
 unsigned long fp_session_dropped(const fp_session *s);
 
 /** How many FP_STATUS_ERROR events the inputs reported (a damaged recording, a device that

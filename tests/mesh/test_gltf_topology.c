@@ -118,6 +118,19 @@ static void test_fan(void **state)
     fp_mesh_free(&m);
 }
 
+/* An index out of range in a strip is named by its place in the file's indices, even where
+ * it lies only in a degenerate triangle (before: checked after the expansion, so [0, 1, 1, 9]
+ * loaded, its 9 in no triangle kept, and another's place was a triangle list's) */
+static void test_strip_index_out_of_range(void **state)
+{
+    (void)state;
+    const uint16_t idx[4] = {0, 1, 1, 9};
+    fp_mesh *m = NULL;
+    assert_int_equal(fp_mesh_load(grid_gltf("strip-bad", 5, idx, 4), &m, err, sizeof err), FP_MESH_ERR_FORMAT);
+    if (!strstr(err, "index 3 = 9 is out of range (6 vertices)")) fail_msg("%s", err);
+    assert_null(m);
+}
+
 /* Points and lines are still no surface: refused, saying so */
 static void test_lines_refused(void **state)
 {
@@ -146,6 +159,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_strip),
         cmocka_unit_test(test_fan),
+        cmocka_unit_test(test_strip_index_out_of_range),
         cmocka_unit_test(test_lines_refused),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
