@@ -201,25 +201,40 @@ int fp__obj_scan(const char *path, const char *text, size_t len, fp__obj_info *i
 
 size_t fp__obj_join_continuations(char *text, size_t len)
 {
-    size_t o = 0, held = 0, joined = 0; /* o <= i: the text is rewritten in place */
+    /* o <= i: the text is rewritten in place; held: line ends moved to the joined line's end,
+     * held_crlf of them a CR LF (a Windows file keeps its line ends) */
+    size_t o = 0, held = 0, held_crlf = 0, joined = 0;
     for (size_t i = 0; i < len; i++) {
         if (text[i] == '\\') {
             size_t j = i + 1;
             while (j < len && is_blank(text[j]))
                 j++;
             if (j == len || text[j] == '\n') {
-                for (; i < j; i++)
+                const bool crlf = j < len && text[j - 1] == '\r';
+                for (; i < j - crlf; i++)
                     text[o++] = ' ';
+                i = j;
                 held += j < len;
+                held_crlf += crlf;
                 joined += j < len;
                 continue; /* i is at the newline (skipped) or the end */
             }
         }
         text[o++] = text[i];
-        for (; text[i] == '\n' && held > 0; held--)
+        for (; text[i] == '\n' && held > 0; held--) {
+            if (held_crlf > 0) {
+                held_crlf--;
+                text[o++] = '\r';
+            }
             text[o++] = '\n';
+        }
     }
-    for (; held > 0; held--)
+    for (; held > 0; held--) {
+        if (held_crlf > 0) {
+            held_crlf--;
+            text[o++] = '\r';
+        }
         text[o++] = '\n';
+    }
     return joined;
 }

@@ -71,6 +71,31 @@ static void test_errors_keep_line_numbers(void **state)
     assert_null(m);
 }
 
+/* A Windows file (CR LF line ends) with a continued line: read as one line, and written back
+ * with CR LF line ends only (before: the line end moved to the joined line's end was a bare LF,
+ * so the file written back mixed the two) */
+static void test_crlf_kept(void **state)
+{
+    (void)state;
+    fp_mesh *m = NULL;
+    const char *p = write_tmp("crlf.obj", "v 0 0 0\r\nv 1 \\\r\n0 0\r\nv 0 1 0\r\nf 1 2 3\r\n");
+    if (fp_mesh_load(p, &m, err, sizeof err)) fail_msg("%s", err);
+    assert_int_equal(m->vertex_count, 3);
+    assert_true(m->positions[3] == 1 && m->positions[4] == 0 && m->positions[5] == 0);
+    m->positions[7] = 2;
+    const char *out = tmp_path("crlf-out.obj");
+    if (fp_mesh_save(m, out, err, sizeof err)) fail_msg("%s", err);
+    FILE *f = fopen(out, "rb");
+    assert_non_null(f);
+    char text[4096];
+    const size_t len = fread(text, 1, sizeof text, f);
+    fclose(f);
+    for (size_t i = 0; i < len; i++)
+        if (text[i] == '\n' && (i == 0 || text[i - 1] != '\r'))
+            fail_msg("a bare LF at byte %zu of the file written back", i);
+    fp_mesh_free(&m);
+}
+
 static int setup(void **state)
 {
     (void)state;
@@ -88,6 +113,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_continued_lines_read),
         cmocka_unit_test(test_errors_keep_line_numbers),
+        cmocka_unit_test(test_crlf_kept),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
