@@ -39,7 +39,7 @@ int fp__obj_scan(const char *path, const char *text, size_t len, fp__obj_info *i
  *  continues it on the next), resolved in place before the scan and OpenMesh's reader (which
  *  reads the backslash as a token): each backslash that only blanks separate from the end of
  *  its line becomes a space with those blanks, and its newline moves to the end of the joined
- *  line (an empty line after it), so the text keeps its length and every statement its line
+ *  line (an empty line after it; a CR LF stays a CR LF), so the text keeps its length and every statement its line
  *  number (a joined statement's: its first line's). Comment lines continue too, as the
  *  format says. Returns the number of lines joined onto the one before. */
 size_t fp__obj_join_continuations(char *text, size_t len);
