@@ -26,6 +26,8 @@ struct fp_pose_auto {
     sample *ring;                  /* CAPACITY samples, oldest at head */
     size_t head, count;
     uint32_t *hist;                /* 3 x NBINS counts of joint coordinates */
+    uint32_t *hand_hist;           /* FP_HANDS x 3 x NBINS: the same per hand */
+    size_t hand_count[FP_HANDS];   /* samples kept per hand */
     int64_t last_kept[FP_HANDS];   /* each hand's last sample time */
     bool have_kept[FP_HANDS];
     bool dirty;                    /* samples came (or went) since the last refit */
@@ -52,7 +54,8 @@ int fp_pose_auto_create(fp_pose_auto **out)
     if (!a) return -ENOMEM;
     a->ring = malloc(CAPACITY * sizeof *a->ring);
     a->hist = calloc(3 * (size_t)NBINS, sizeof *a->hist);
-    if (!a->ring || !a->hist) {
+    a->hand_hist = calloc(FP_HANDS * 3 * (size_t)NBINS, sizeof *a->hand_hist);
+    if (!a->ring || !a->hist || !a->hand_hist) {
         fp_pose_auto_destroy(&a);
         return -ENOMEM;
     }
@@ -65,6 +68,7 @@ void fp_pose_auto_destroy(fp_pose_auto **a)
     if (!a || !*a) return;
     free((*a)->ring);
     free((*a)->hist);
+    free((*a)->hand_hist);
     free(*a);
     *a = NULL;
 }
@@ -77,8 +81,13 @@ static uint16_t bin_of(float mm)
 
 static void count_sample(fp_pose_auto *a, const sample *s, uint32_t sign)
 {
+    uint32_t *hh = a->hand_hist + (size_t)s->hand * 3 * NBINS;
     for (int j = 0; j < FP_HAND_JOINTS; j++)
-        for (int k = 0; k < 3; k++) a->hist[(size_t)k * NBINS + s->bin[j][k]] += sign; /* -1u: wraps back */
+        for (int k = 0; k < 3; k++) {
+            a->hist[(size_t)k * NBINS + s->bin[j][k]] += sign; /* -1u: wraps back */
+            hh[(size_t)k * NBINS + s->bin[j][k]] += sign;
+        }
+    a->hand_count[s->hand] += sign == 1 ? 1 : (size_t)-1;
 }
 
 static void drop_oldest(fp_pose_auto *a)
@@ -182,9 +191,9 @@ void fp_pose_auto_each(const fp_pose_auto *a, void (*fn)(void *ctx, int hand, co
 unsigned long fp_pose_auto_refits(const fp_pose_auto *a) { return a->refits; }
 
 /* The coordinate of 0-based rank r in axis k's histogram: the middle of its bin. */
-static float rank_value(const fp_pose_auto *a, int k, size_t r)
+static float rank_in(const uint32_t *hist, int k, size_t r)
 {
-    const uint32_t *hk = a->hist + (size_t)k * NBINS;
+    const uint32_t *hk = hist + (size_t)k * NBINS;
     size_t cum = 0;
     int b = 0;
     for (; b < NBINS - 1; b++) {
@@ -192,6 +201,17 @@ static float rank_value(const fp_pose_auto *a, int k, size_t r)
         if (cum > r) break;
     }
     return bin_mm((uint16_t)b);
+}
+
+static float rank_value(const fp_pose_auto *a, int k, size_t r) { return rank_in(a->hist, k, r); }
+
+/* hand h's 2nd-98th percentile centre on axis k (mm) */
+static double hand_centre(const fp_pose_auto *a, int h, int k)
+{
+    size_t m = a->hand_count[h] * FP_HAND_JOINTS;
+    size_t lo = (size_t)(0.02 * (double)(m - 1) + 0.5), hi = (size_t)(0.98 * (double)(m - 1) + 0.5);
+    const uint32_t *hh = a->hand_hist + (size_t)h * 3 * NBINS;
+    return 0.5 * ((double)rank_in(hh, k, lo) + rank_in(hh, k, hi));
 }
 
 bool fp_pose_auto_box(const fp_pose_auto *a, float ws_min[3], float ws_max[3])
@@ -220,6 +240,15 @@ bool fp_pose_auto_refit(fp_pose_auto *a, fp_pose_state *p, bool engaged, double 
         return false; /* (hands that hovered and moved are placed at once) */
     float wmin[3], wmax[3];
     fp_pose_auto_box(a, wmin, wmax);
+    /* two hands: centred between their own centres (sideways and up), not on the box of both
+     * (fp_pose_auto.h) */
+    if (a->hand_count[FP_HAND_LEFT] && a->hand_count[FP_HAND_RIGHT])
+        for (int k = 0; k < 2; k++) {
+            double c = 0.5 * (hand_centre(a, FP_HAND_LEFT, k) + hand_centre(a, FP_HAND_RIGHT, k));
+            double sh = c - 0.5 * ((double)wmin[k] + wmax[k]);
+            wmin[k] += (float)sh;
+            wmax[k] += (float)sh;
+        }
     fp_calibration old = p->calib, c;
     fp_pose_fit_workspace(&c, mm_per_unit, wmin, wmax, head_min, head_max);
     memcpy(c.face, old.face, sizeof c.face); /* (the fit is in the face's frame) */

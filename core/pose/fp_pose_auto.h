@@ -13,6 +13,17 @@
  * it does in the replay's sort). The percentiles are read off the histograms: within half a
  * bin of the replay's sorted-index rule on the same samples.
  *
+ * Two hands: while both hands have samples kept, the placement's sideways and vertical centre
+ * is the middle of the two hands' own 2nd-98th percentile centres (each hand's joints alone),
+ * not the middle of the box of both (its width and the front in depth stay the box's). A box
+ * of both hands is the hands' outer extremes, and hands that start apart and then work
+ * together (three-claps: 230 mm wide at its first frame, 147 mm over the recording) move its
+ * centre far as the range fills in: 11 mm from the whole recording's at the start, 7 mm at
+ * the first grab (0.93 s), and the skin a clapping grab drags is that sensitive (the replay
+ * shifted 5 mm to the side moves 1723 vertices, not 11710). Each hand's own centre is set by
+ * its own motion and settles sooner: 2.4, 2.3, 0.1 mm off at 0, 0.5 and 1 s, ending 1.5 mm
+ * off. One hand: the box, as before, bit for bit.
+ *
  * When it refits (fp_pose_auto_refit, once a frame before the poses are built): from the
  * first sample on (one hand frame's 21 joints already span the hand: on the four Leap
  * recordings the first 50 ms give the whole recording's centre within 2-6 mm and its front
@@ -60,7 +71,8 @@ extern "C" {
 
 typedef struct fp_pose_auto fp_pose_auto;
 
-/** A new estimator with no sample (about 0.5 MiB: the samples' ring and the histograms).
+/** A new estimator with no sample (about 0.7 MiB: the samples' ring and the histograms, of
+ *  both hands and of each).
  *  Returns 0 and *out (owned by the caller: fp_pose_auto_destroy), or -ENOMEM (*out NULL). */
 int fp_pose_auto_create(fp_pose_auto **out);
 
@@ -91,7 +103,8 @@ bool fp_pose_auto_box(const fp_pose_auto *a, float ws_min[3], float ws_max[3]);
 
 /** Once a frame, after the frame's events were taken and before fp_pose_build: when a refit
  *  is due (see the header: any new sample since the last, not engaged, the schedule), the
- *  calibration p->calib becomes fp_pose_fit_workspace(mm_per_unit, the estimated box,
+ *  calibration p->calib becomes fp_pose_fit_workspace(mm_per_unit, the estimated box (with
+ *  two hands, moved sideways and up to centre between the hands' own centres: the header),
  *  head_min, head_max), moved `hover` (mesh units, >= 0) away from the face in depth while
  *  the hands are still (FP_POSE_STILL_MM; fp_pose_auto_still), and gloves placed by fp_pose_place_gloves keep their place on the
  *  face (their device-frame wrists move by the offset's change; every fit is life-size at

@@ -16,7 +16,9 @@
 #     under the replay now and then; hence RUN_SERIAL and 5 runs still.
 #     Then HandSplay the same way (median of 3 runs of 4 s): a hand that hovers 1.4 s before it
 #     reaches, which a live bring-in made after 1 s pushed into the skin at once (the replay
-#     pushes nothing; step_arrive.h FP_ARRIVE_BRING_WAIT_S). Skipped with FP_OSC_LIVE_CSV.
+#     pushes nothing; step_arrive.h FP_ARRIVE_BRING_WAIT_S). Then three-claps (median of 3
+#     runs of 5 s): two hands, centred between their own centres (fp_pose_auto.h). Both
+#     skipped with FP_OSC_LIVE_CSV.
 #  2. A hand held still (grab's first row, 6 s; then three-claps', whose pose touched the face
 #     before still hands were held out) hovers in front of the face, never reaching it: the
 #     run says so (the hint, source "session") within 5 s of the sender starting.
@@ -125,6 +127,11 @@ compare grab "$grab" 5 5
 # 1 s away, into the skin at once (a grab mid-hover, held to the end): 804 vertices, max 6.9 mm
 # against the replay's 4616 and 23.5 (step_arrive.h FP_ARRIVE_BRING_WAIT_S).
 [ -n "${FP_OSC_LIVE_CSV:-}" ] || compare handsplay "$data/hands/leap-motion/HandSplay-110fps_joints_mm.csv" 4 3
+# three-claps (3.5 s, the demo's): two hands that start 230 mm apart and clap inward. Before,
+# the live placement centred on the box of both hands' joints so far, 7 mm to the side of the
+# replay's at the first grab: 11011 vertices, max 42.8 mm against 11710 and 31.4 (one run);
+# now centred between the hands' own centres (fp_pose_auto.h): 5 runs 11076-11443, 26.8-30.8.
+[ -n "${FP_OSC_LIVE_CSV:-}" ] || compare claps "$data/hands/leap-motion/three-claps_joints_mm.csv" 5 3
 
 # ---- 2. a hand that never reaches: the hint within 5 s --------------------------------------
 # Held still (a recording's first row for 6 s): still hands are held out, hovering

@@ -375,6 +375,47 @@ static void test_each_sample(void **state)
     fp_pose_auto_destroy(&a);
 }
 
+/* Two hands: centred sideways and up between the hands' own centres, not on the box of both
+ * (fp_pose_auto.h). One left sample 300..200 mm to the left, 60 right ones at 0..100 mm: the
+ * box of both is nearly the right hand's (the left one's joints are under 2%), centred near
+ * x 50 mm; each hand's own centre is -250 and 50, so the placement centres on -100. The width
+ * and the depth stay the box's. Before, the placement centred on the box (x 50.5). */
+static void test_two_hands_centre(void **state)
+{
+    (void)state;
+    fp_pose_auto *a;
+    assert_int_equal(fp_pose_auto_create(&a), 0);
+    fp_pose_state p;
+    fp_pose_init(&p, 0, NULL);
+    float mm[FP_HAND_JOINTS][3];
+    int64_t t = 0;
+    spread_hand(mm, -300, 100, -50);
+    fp_event ev = joints_event(FP_HAND_LEFT, mm, t);
+    fp_pose_auto_take(a, &ev);
+    for (int f = 0; f < 60; f++, t += 16666667) {
+        spread_hand(mm, 0, 120, -50);
+        ev = joints_event(FP_HAND_RIGHT, mm, t);
+        fp_pose_auto_take(a, &ev);
+    }
+    assert_true(fp_pose_auto_refit(a, &p, false, 10.0, head_min, head_max, 0));
+    float lo[3], hi[3];
+    assert_true(fp_pose_auto_box(a, lo, hi));
+    assert_true(0.5f * (lo[0] + hi[0]) > 40.f); /* (the box of both: the right hand's) */
+    float mid[3] = {0.5f * (-250.f + 50.f) + 0.5f, 0.5f * (135.f + 155.f) + 0.5f, 0}; /* bin middles (y spans 0..70 mm) */
+    float wlo[3], whi[3];
+    for (int k = 0; k < 3; k++) {
+        float half = 0.5f * (hi[k] - lo[k]);
+        wlo[k] = k < 2 ? mid[k] - half : lo[k];
+        whi[k] = k < 2 ? mid[k] + half : hi[k];
+    }
+    fp_calibration want;
+    fp_pose_fit_workspace(&want, 10.0, wlo, whi, head_min, head_max);
+    for (int k = 0; k < 3; k++)
+        if (!(fabs(p.calib.offset[k] - want.offset[k]) < 1e-3))
+            fail_msg("axis %d: offset %.4f, want %.4f (centred between the hands)", k, p.calib.offset[k], want.offset[k]);
+    fp_pose_auto_destroy(&a);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -386,6 +427,7 @@ int main(void)
         cmocka_unit_test(test_still_hands_hover),
         cmocka_unit_test(test_held_in_place),
         cmocka_unit_test(test_each_sample),
+        cmocka_unit_test(test_two_hands_centre),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
