@@ -335,7 +335,12 @@ int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
         /* as `plugins check` refuses it (before: start was called through NULL) */
         snprintf(err, errlen, "input '%s': the fp_input has size %u, or no start()", spec_text,
                  inst->input->size);
-        inst->input = NULL; /* (its destroy may be missing too: left as it is) */
+        if (FP_HAS_FIELD(inst->input, fp_input, destroy) && inst->input->destroy) {
+            fp_plugin_call_enter(inst->name, "destroy", 0);
+            inst->input->destroy(inst->input); /* (an instance too short for one: left) */
+            fp_plugin_call_leave();
+        }
+        inst->input = NULL;
         rc = FP_EPLUGIN_FAULT;
         goto out;
     }

@@ -79,7 +79,12 @@ int fp__session_load_mapping(fp_session *s, const char *mapping, const fp_plugin
             /* as the helper and `plugins check` refuse it (before: called through NULL) */
             snprintf(err, errlen, "mapping '%s': the fp_mapping has size %u or no process()", mapping,
                      s->mapping->size);
-            s->mapping = NULL; /* (its destroy may be missing too: left as it is) */
+            if (FP_HAS_FIELD(s->mapping, fp_mapping, destroy) && s->mapping->destroy) {
+                fp_plugin_call_enter(s->mapping_name, "destroy", s->frame);
+                s->mapping->destroy(s->mapping); /* (an instance too short for one: left) */
+                fp_plugin_call_leave();
+            }
+            s->mapping = NULL;
             rc = FP_EPLUGIN_FAULT;
         } else if (rc || !s->mapping) {
             snprintf(err, errlen, "mapping '%s': %s", mapping,
