@@ -421,14 +421,17 @@ void fp_arrive_step_check(fp_arrive_step *r, int64_t now_ns, const fp_hand_pose 
         r->reached = true;
         return;
     }
-    if (!present || r->warned || r->reached) return;
-    r->away_s += dt;
+    if (!present || r->reached) return;
     if (r->place && !r->hovered) { /* moving hands, placed by their range */
+        /* (after the hint too: the bring-in's waits are timed by it, step_arrive.h; frozen at
+         * the hint, a push waiting for 2 or 3 s of it never came) */
         r->moving_away_s += dt;
         /* (hands held in place, fingers acting: their range is where they are held, and the
          * replay's push is there from the first frame; no wait) */
         if (r->moving_away_s >= FP_ARRIVE_BRING_AFTER_S - 1e-6 || fp_pose_auto_held(r->place)) r->bring_on = true;
     }
+    if (r->warned) return;
+    r->away_s += dt;
     bool due = r->away_s >= FP_ARRIVE_HINT_S - 1e-6; /* (a sum of frame steps: 180 x 1/60) */
     /* beyond the tip distances' reach: how far, unbounded (a tree search; throttled, and
      * always on the hint's frame) */
