@@ -477,6 +477,19 @@ static int top_eigen_range(double *G, const double *diag, size_t N, size_t want,
     return rc;
 }
 
+/* The largest norm of the n / 3 vectors of three floats in R (the residual's largest vertex
+ * norm: a close estimate of the float residual's) */
+static double largest_norm(const float *R, size_t n)
+{
+    double worst = 0;
+    for (size_t i = 0; i + 2 < n; i += 3) {
+        const double e2 = (double)R[i] * R[i] + (double)R[i + 1] * R[i + 1] + (double)R[i + 2] * R[i + 2];
+        if (e2 > worst)
+            worst = e2;
+    }
+    return sqrt(worst);
+}
+
 /* top_eigen_range, and where LAPACK fails on a part of the spectrum (dsyevr's inverse
  * iteration, DSTEIN, not converging), the whole of it (the MRRR path dsyevr takes for every
  * eigenpair); the largest `want` then lie at ev[N - want ..] and Z's last columns, moved to
@@ -610,15 +623,7 @@ static int compress_f(const char *who, const float *D, size_t F, size_t m, doubl
                 rr[c] = (float)((double)rr[c] - (double)w * (double)t[c]);
         }
         K++;
-        /* the residual's largest vertex norm (float residual: a close estimate) */
-        double worst = 0;
-        for (size_t i = 0; i + 2 < F * m; i += 3) {
-            double e2 = (double)R[i] * R[i] + (double)R[i + 1] * R[i + 1] +
-                        (double)R[i + 2] * R[i + 2];
-            if (e2 > worst)
-                worst = e2;
-        }
-        res = sqrt(worst);
+        res = largest_norm(R, F * m);
     }
     if (K == 0) {   /* nothing moved: one zero target keeps the file well-formed */
         K = 1;

@@ -26,15 +26,7 @@ fail() { echo "FAIL: $*"; exit 1; }
 mkdir -p "$tmp/data/hands/leap-motion"
 for r in HandSplay-110fps Waiting-110fps three-claps; do cp "$data/hands/leap-motion/${r}_joints_mm.csv" "$tmp/data/hands/leap-motion/"; done
 python3 tools/hands-variants "$tmp/v" --data "$tmp/data" >/dev/null || fail "hands-variants"
-fp=("$build/bin/facepuppet" run --plugin-dir "$build/lib/facepuppet" -q --mesh "$mesh" --force)
-summary() { sed -n 's/.*vertices moved \([0-9]*\) of [0-9]*; displacement mean [^;]* max \([0-9.e+-]*\) mm.*/\1 \2/p' "$1"; }
-# run NAME CSV KEYS: sets moved, max
-run() {
-    "${fp[@]}" --input "replay:$2,fast=1$3" --out "$tmp/$1.obj" >"$tmp/$1.out" 2>"$tmp/$1.err" ||
-        { cat "$tmp/$1.err"; fail "run $1"; }
-    read -r moved max < <(summary "$tmp/$1.out")
-    [ -n "${max:-}" ] || { cat "$tmp/$1.out"; fail "no summary for $1"; }
-}
+. "$(dirname "$0")/replay_run.sh" # fp, summary, run NAME CSV KEYS
 # within NAME: live within 20% of the replay in vertices moved and max displacement
 within() {
     echo "stillpinch $1: replay $rm vertices, max $rx mm; live $lm, $lx mm"
