@@ -203,27 +203,27 @@ static float rank_in(const uint32_t *hist, int k, size_t r)
     return bin_mm((uint16_t)b);
 }
 
-static float rank_value(const fp_pose_auto *a, int k, size_t r) { return rank_in(a->hist, k, r); }
+/* The 2nd and 98th percentiles on axis k of a histogram of `samples` samples' joints (mm), by
+ * the replay's ranks (input-replay's workspace: v[(size_t)(0.02 (m - 1) + 0.5)]) */
+static void percentiles(const uint32_t *hist, size_t samples, int k, float *lo_mm, float *hi_mm)
+{
+    size_t m = samples * FP_HAND_JOINTS;
+    *lo_mm = rank_in(hist, k, (size_t)(0.02 * (double)(m - 1) + 0.5));
+    *hi_mm = rank_in(hist, k, (size_t)(0.98 * (double)(m - 1) + 0.5));
+}
 
 /* hand h's 2nd-98th percentile centre on axis k (mm) */
 static double hand_centre(const fp_pose_auto *a, int h, int k)
 {
-    size_t m = a->hand_count[h] * FP_HAND_JOINTS;
-    size_t lo = (size_t)(0.02 * (double)(m - 1) + 0.5), hi = (size_t)(0.98 * (double)(m - 1) + 0.5);
-    const uint32_t *hh = a->hand_hist + (size_t)h * 3 * NBINS;
-    return 0.5 * ((double)rank_in(hh, k, lo) + rank_in(hh, k, hi));
+    float lo, hi;
+    percentiles(a->hand_hist + (size_t)h * 3 * NBINS, a->hand_count[h], k, &lo, &hi);
+    return 0.5 * ((double)lo + hi);
 }
 
 bool fp_pose_auto_box(const fp_pose_auto *a, float ws_min[3], float ws_max[3])
 {
     if (!a->count) return false;
-    size_t m = a->count * FP_HAND_JOINTS;
-    /* the replay's ranks (input-replay's workspace: v[(size_t)(0.02 (m - 1) + 0.5)]) */
-    size_t lo = (size_t)(0.02 * (double)(m - 1) + 0.5), hi = (size_t)(0.98 * (double)(m - 1) + 0.5);
-    for (int k = 0; k < 3; k++) {
-        ws_min[k] = rank_value(a, k, lo);
-        ws_max[k] = rank_value(a, k, hi);
-    }
+    for (int k = 0; k < 3; k++) percentiles(a->hist, a->count, k, &ws_min[k], &ws_max[k]);
     return true;
 }
 
