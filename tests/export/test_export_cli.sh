@@ -126,6 +126,23 @@ cmp -s <(tail -c $((10 * 26719 * 12)) "$ict/r.pc2") \
        <(dd if="$ict/take.pc2" bs=1 skip=$((32 + 10 * 26719 * 12)) count=$((10 * 26719 * 12)) 2>/dev/null) ||
     fail "--range 10-19: frames differ from the whole export's"
 echo "ict-facekit: --fps 30 gives $n30 samples of $frames frames; --range 10-19 the same 10 frames"
+# --resample F of the 60 fps take: sample k (at k/F s) is the take's frame floor(60k/F) bit for
+# bit, and the last sample is the last frame where it falls on the grid. A frame on the grid
+# whose time, stored in whole ns, reads up to 0.5 ns late (10/60 s: 166666667 ns) showed the
+# frame before it (sample 40 of --resample 24 was frame 99, not 100: 3.35 mm off in Blender).
+fb=$((26719 * 12))
+for F in 24 30; do
+    "$fp" export "$take" --format pc2 --resample $F --out "$ict/rs$F.pc2" -q || fail "--resample $F exited $?"
+    n=$(od -An -tu4 -j28 -N4 "$ict/rs$F.pc2" | tr -d ' ')
+    [ "$n" -eq $(((frames - 1) * F / 60 + 1)) ] || fail "--resample $F: $n samples of $frames frames at 60 fps"
+    for ((k = 0; k < n; k++)); do
+        j=$((60 * k / F))
+        cmp -s <(tail -c +$((33 + k * fb)) "$ict/rs$F.pc2" | head -c $fb) \
+               <(tail -c +$((33 + j * fb)) "$ict/take.pc2" | head -c $fb) ||
+            fail "--resample $F: sample $k ($k/$F s) is not the take's frame $j"
+    done
+done
+echo "ict-facekit: --resample 24 and 30: every sample the take's frame at its time, bit for bit"
 
 # png-seq: rendered headless as the viewer draws the face (under Xvfb), the asked size
 if "$fp" live --help >/dev/null 2>&1 && command -v xvfb-run >/dev/null; then

@@ -462,6 +462,11 @@ static int check_out(const export_args *a, fp_take_player *p, const char *out, c
     return fp_app_check_new_output("facepuppet export", opt, out, a->force);
 }
 
+/* --resample: a frame whose time is within this of a sample's is at that sample's time (frame
+ * times are stored in whole ns, so a frame exactly on the sample grid can read up to 0.5 ns
+ * late; a sample lasts at least 100 us, 1 / 10000 fps). */
+#define SAMPLE_SLACK_S 1e-9
+
 /* The frames an export writes, from the frames' stored times (fp_take_reader_time), before
  * any is played: the range's frames (those walk_take hands the sink), or with --resample the
  * samples over their stored first-to-last time (what walk_frame writes: a take whose first
@@ -497,7 +502,7 @@ static int frames_out(const export_args *a, const range_end *in, const range_end
         return 0;
     }
     const double span_s = ((double)fp_take_reader_time(r, last) - (double)fp_take_reader_time(r, first)) * 1e-9;
-    *count = floor(span_s * a->fps + 1e-9) + 1;
+    *count = floor((span_s + SAMPLE_SLACK_S) * a->fps) + 1;   /* as walk_take's samples */
     return 0;
 }
 
@@ -606,10 +611,12 @@ static int walk_frame(export_walk *w, const float *pos, int64_t t_ns, char *err,
         w->first_ns = t_ns;
     }
     if (w->a->fps <= 0) return sink_add(w->k, pos, (double)(t_ns - w->first_ns) * 1e-9, err, errlen);
-    /* samples before this frame's time show the frame held before it */
+    /* samples before this frame's time show the frame held before it; a sample at the
+     * frame's time shows the frame (its time stored to the nearest ns: 10/60 s is 166666667
+     * ns, after the sample at 4/24 s, which then showed frame 9) */
     int rc = 0;
     for (double t; w->have_held && !rc && !stop_signal &&
-                   (t = (double)w->sample / w->a->fps) < (double)(t_ns - w->first_ns) * 1e-9;
+                   (t = (double)w->sample / w->a->fps) + SAMPLE_SLACK_S < (double)(t_ns - w->first_ns) * 1e-9;
          w->sample++)
         rc = sink_add(w->k, w->held, t, err, errlen);
     memcpy(w->held, pos, w->n * 3 * sizeof(float));
@@ -652,7 +659,7 @@ static int walk_take(export_walk *w)
     if (w->bar && index < w->total)
         progress(true, w->total, w->total, sink_frames(w->k));
     if (w->a->fps > 0 && w->have_held) {   /* the held frame's own sample times, up to its time */
-        for (double t; (t = (double)w->sample / w->a->fps) <= (double)(w->held_ns - w->first_ns) * 1e-9 + 1e-12;
+        for (double t; (t = (double)w->sample / w->a->fps) <= (double)(w->held_ns - w->first_ns) * 1e-9 + SAMPLE_SLACK_S;
              w->sample++) {
             if (stop_signal) return stopped(false);
             if ((rc = sink_add(w->k, w->held, t, err, sizeof err))) {
