@@ -184,6 +184,22 @@ grep -q "range ' 5-10': ' 5' is neither a frame index nor a timecode" "$tmp/x.ou
 expect 64 "$fp" export "$take" --format pc2 --range "5- 10"
 expect 0 "$fp" export "$take" --format pc2 --range +5-+6 --out "$tmp/plus.pc2" -q
 expect 66 "$fp" export "$tmp/none.fptake" --format pc2
+# a drop-frame take (29.97 fps): --range's timecodes are written as its own, HH:MM:SS;FF; one
+# written HH:MM:SS:FF counted non-drop, thousands of frames off in the day ("IN is past the
+# take's last frame" for the take's own first timecode), and is refused saying so
+mp="$data/faces/mediapipe-canonical/canonical_face_model.obj"
+"$fp" run "${pd[@]}" --mesh "$mp" --input "replay:$data/hands/leap-motion/grab_joints_mm.csv,fast=1" \
+    --fps 29.97 --duration 1 --take-dir "$tmp/df" --slate df -o "$tmp/df.obj" -q >/dev/null 2>&1 ||
+    fail "run --fps 29.97 exited $?"
+dftake=$(ls "$tmp"/df/*.fptake)
+tcin=$("$fp" info "$dftake" | sed -n 's/^  timecode *\([0-9:;]*\) - .*/\1/p')
+[[ $tcin == *";"* ]] || fail "the 29.97 fps take's timecode in '$tcin' is not drop-frame"
+dfn=$("$fp" info "$dftake" | sed -n 's/^  frames *\([0-9]*\) .*/\1/p')
+expect 0 "$fp" export "$dftake" --format pc2 --range "$tcin-" --out "$tmp/df.pc2" -q
+[ "$(od -An -tu4 -j28 -N4 "$tmp/df.pc2" | tr -d ' ')" -eq "$dfn" ] || fail "--range $tcin-: not the take's $dfn frames"
+expect 64 "$fp" export "$dftake" --format pc2 --range "${tcin/;/:}-" --out "$tmp/df2.pc2"
+grep -q "the take's timecodes are drop-frame ($tcin - .*): write them HH:MM:SS;FF" "$tmp/x.out" ||
+    { cat "$tmp/x.out"; fail "--range ${tcin/;/:}- on a drop-frame take: not said"; }
 expect 64 "$fp" export "$take" --format pc2 --out ""
 grep -qx "facepuppet export: --out: give a file or folder name (it is empty)" "$tmp/x.out" ||
     { cat "$tmp/x.out"; fail "--out '': not said as an empty name"; }

@@ -140,8 +140,9 @@ static void usage(FILE *f)
         "  -o, --out PATH        the file (a folder for obj-seq); default: the take's path with\n"
         "                        the format's extension (obj-seq: TAKE_frames/)\n"
         "      --range IN-OUT    only these frames: 0-based frame indices of the take or\n"
-        "                        timecodes HH:MM:SS:FF (either side may be left out: 120-, -300);\n"
-        "                        frames before IN are still played (commits carry over). Checked\n"
+        "                        timecodes HH:MM:SS:FF (a drop-frame take's HH:MM:SS;FF; either\n"
+        "                        side may be left out: 120-, -300); frames before IN are still\n"
+        "                        played (commits carry over). Checked\n"
         "                        before any frame is played: IN past the take's last frame, OUT\n"
         "                        before its first or IN after OUT is refused (64, naming the\n"
         "                        take's frames and timecodes); an end past the take is clipped\n"
@@ -176,6 +177,7 @@ static void usage(FILE *f)
 /* One end of --range: "" (open), a frame index, or a timecode. */
 typedef struct range_end {
     bool set, timecode;
+    bool drop;               /* a timecode written HH:MM:SS;FF (drop-frame counting) */
     uint64_t value;          /* index, or frames since 00:00:00:00 */
 } range_end;
 
@@ -190,6 +192,7 @@ static int parse_end(const char *s, fp_take_rate rate, range_end *e, char *err, 
         if (fp_timecode_parse(s, rate, &tc, err, n))
             return -EINVAL;
         e->timecode = true;
+        e->drop = tc.drop;
         return fp_timecode_to_frames(&tc, rate, &e->value) ? -EINVAL : 0;
     }
     unsigned long long v;
@@ -402,6 +405,14 @@ static int check_range(const export_args *a, range_end *in, range_end *out, cons
     snprintf(have, sizeof have, "the take has frames 0-%zu, timecodes %s - %s", frames - 1, tc0, tc1);
     const bool drop = h->timecode_in.drop;
     const char *why = NULL;
+    /* a timecode counts frames as the take's do: 19:40:44:00 against a drop-frame take
+     * (19:40:43;09 - 19:40:46;09) was a non-drop count 2,124 frames on, "past the last frame" */
+    if ((in->set && in->timecode && in->drop != drop) || (out->set && out->timecode && out->drop != drop)) {
+        fprintf(stderr, "facepuppet export: --range %s: the take's timecodes are %s (%s - %s): "
+                "write them HH:MM:SS%sFF\n", a->range, drop ? "drop-frame" : "non-drop", tc0, tc1,
+                drop ? ";" : ":");
+        return FP_EXIT_USAGE;
+    }
     if (in->set && in->value > l_in) why = "IN is past the take's last frame";
     else if (out->set && out->value < f_out) why = "OUT is before the take's first frame";
     else if (in->set && out->set && in->timecode == out->timecode && in->value > out->value)
