@@ -1,4 +1,4 @@
-/* fp-export-check TAKE|STACK FILE [--max-error MM] [--fps F]: checks an export against its take
+/* fp-export-check TAKE|STACK FILE [--max-error MM]: checks an export against its take
  * (a stack: its composite, fp_take_player_positions), frame by frame. The take is played
  * again (fp_take_player: bit-identical frames), and:
  *   .pc2 / .mdd  read back with their own header parsing here: points, frames (and MDD's
