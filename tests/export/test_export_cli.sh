@@ -200,6 +200,23 @@ expect 0 "$fp" export "$dftake" --format pc2 --range "$tcin-" --out "$tmp/df.pc2
 expect 64 "$fp" export "$dftake" --format pc2 --range "${tcin/;/:}-" --out "$tmp/df2.pc2"
 grep -q "the take's timecodes are drop-frame ($tcin - .*): write them HH:MM:SS;FF" "$tmp/x.out" ||
     { cat "$tmp/x.out"; fail "--range ${tcin/;/:}- on a drop-frame take: not said"; }
+# a face written Z-up (Blender's axes: x, -z, y) and run with --up +z --facing -y: the glb's
+# root node turns its up to glTF's +y and its front to +z (without the turn Blender showed it on
+# its back), on export and run --export alike; fp-export-check reads the turn back
+awk '/^v /{printf "v %s %s %s\n",$2,-$4,$3; next} /^vn /{printf "vn %s %s %s\n",$2,-$4,$3; next} {print}' \
+    "$mp" >"$tmp/zup.obj"
+"$fp" run "${pd[@]}" --mesh "$tmp/zup.obj" --up +z --facing -y --duration 1 \
+    --input "replay:$data/hands/leap-motion/grab_joints_mm.csv,fast=1" --take-dir "$tmp/zup" \
+    --slate zup -o "$tmp/zup-out.obj" --export "$tmp/zup-run.glb" -q >/dev/null 2>&1 ||
+    fail "run on the Z-up face exited $?"
+ztake=$(ls "$tmp"/zup/*.fptake)
+"$fp" export "$ztake" --format glb --out "$tmp/zup.glb" -q || fail "export of the Z-up take exited $?"
+for g in zup.glb zup-run.glb; do
+    "$check" "$ztake" "$tmp/$g" >"$tmp/zup-check.out" 2>&1 &&
+        grep -q "up turned to (0 1 0), its front to (0 0 1)" "$tmp/zup-check.out" ||
+        { cat "$tmp/zup-check.out"; fail "$g: the Z-up face is not turned to +y up, +z front"; }
+done
+echo "mediapipe Z-up: the glb's root turns the face to +y up and +z front (export and run --export)"
 expect 64 "$fp" export "$take" --format pc2 --out ""
 grep -qx "facepuppet export: --out: give a file or folder name (it is empty)" "$tmp/x.out" ||
     { cat "$tmp/x.out"; fail "--out '': not said as an empty name"; }

@@ -571,6 +571,9 @@ static int open_sink(sink *k, const export_args *a, const fp_session *s, const c
                             .mm_per_unit = mm_per_unit, .max_targets = a->max_targets,
                             .step = a->step, .name = name, .stem = name,
                             .frame_rate = frame_rate};
+    float up[3], facing[3];   /* the take's face axes (its player's session has them) */
+    fp_session_face_axes(s, up, facing);
+    for (int i = 0; i < 3; i++) eo.up[i] = up[i], eo.facing[i] = facing[i];
     if (!a->png && (rc = fp_export_begin(fp_session_mesh(s), &eo, &k->x, err, sizeof err))) {
         fprintf(stderr, "facepuppet export: %s\n", err);
         return fp_app_exit_code(rc, FP_APP_OUTPUT);
