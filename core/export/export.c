@@ -878,6 +878,8 @@ static int finish_gltf(fp_exporter *x, fp_export_result *res, char *err, size_t 
                                     .step = x->opt.step, .name = x->opt.name,
                                     .unit_scale = x->opt.mm_per_unit / 1000,
                                     .frame_rate = frame_rate(x)};
+    memcpy(anim.up, x->opt.up, sizeof anim.up);
+    memcpy(anim.facing, x->opt.facing, sizeof anim.facing);
     unsigned dropped = 0;
     rc = fp_mesh_save_animation(x->base, &anim, x->path, &dropped, err, errlen);
     free(times);

@@ -76,6 +76,8 @@ typedef struct fp_export_options {
     double frame_rate;       /* the frames' rate, frames per second (a take's nominal rate,
                                 or the resampling rate), named in the glTF and in the result;
                                 0: measured from the frames' times at finish */
+    double up[3], facing[3]; /* glTF: the face's up and front in the mesh (unit; all zeros:
+                                +y, +z), turned to glTF's +y and +z by the root node */
 } fp_export_options;
 
 typedef struct fp_export_result {

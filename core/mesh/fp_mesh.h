@@ -238,6 +238,12 @@ typedef struct fp_mesh_morph_animation {
                                       asset.extras.frameRate and the animation's
                                       extras.frameRate (glTF has no field of its own for it;
                                       the keys' times are in seconds). 0: not named */
+    double up[3], facing[3];       /* the mesh's up and the axis its front looks along (the
+                                      face's: fp_session_face_axes); with unit_scale > 0 the
+                                      root node also turns them to glTF's +y up and +z front
+                                      (glTF 2.0 3.4), a rotation quaternion: each taken as the
+                                      mesh axis nearest it (quarter and half turns only). All
+                                      zeros, or nearest +y and +z: no turn */
 } fp_mesh_morph_animation;
 
 /** Write `mesh` as glTF 2.0 (.gltf, buffer embedded as base64, or .glb) with morph targets
@@ -248,7 +254,8 @@ typedef struct fp_mesh_morph_animation {
  *  primitive gets K POSITION targets (accessors with min/max) sharing the vertex set. From a
  *  glTF input the document's nodes and materials are not kept (*dropped says so).
  *  Buffer views carry their target (34962/34963) except the animation's. anim->unit_scale
- *  adds the root node of that scale (the animation's channel stays on node 0, the mesh's);
+ *  adds the root node of that scale, turned by anim->up and ->facing (the animation's channel
+ *  stays on node 0, the mesh's);
  *  anim->frame_rate names the rate in extras. Atomic as
  *  fp_mesh_save(). Returns FP_MESH_OK, INVALID (bad arguments, non-finite values, times not
  *  increasing), UNSUPPORTED (extension other than gltf/glb), and the save's codes. */

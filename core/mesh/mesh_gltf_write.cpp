@@ -369,6 +369,49 @@ void add_animation(GltfOut &g, const fp_mesh_morph_animation *anim)
     g.model.animations.push_back(an);
 }
 
+// The root's rotation (x, y, z, w) that turns the mesh's up to +y and its front to +z, the
+// axes glTF's readers expect (a Z-up face imported into Blender on its back without it).
+// Each axis is taken as the mesh axis nearest it (a quarter or half turn, as an importer's
+// Up and Forward settings turn a file; a face a few degrees off stays as its OBJ shows it).
+// false where none is needed (+y and +z, or all zeros) or the axes are not two directions.
+static bool root_rotation(const double up[3], const double facing[3], double q[4])
+{
+    double u[3] = {0, 0, 0}, f[3] = {0, 0, 0};
+    int iu = 0, jf = -1;
+    for (int i = 1; i < 3; i++)
+        if (std::fabs(up[i]) > std::fabs(up[iu])) iu = i;
+    if (!(std::fabs(up[iu]) > 0) || !std::isfinite(up[iu])) return false;
+    for (int i = 0; i < 3; i++)
+        if (i != iu && (jf < 0 || std::fabs(facing[i]) > std::fabs(facing[jf]))) jf = i;
+    if (!(std::fabs(facing[jf]) > 0) || !std::isfinite(facing[jf])) return false;
+    u[iu] = up[iu] > 0 ? 1 : -1;
+    f[jf] = facing[jf] > 0 ? 1 : -1;
+    const double r[3] = {u[1] * f[2] - u[2] * f[1], u[2] * f[0] - u[0] * f[2],
+                         u[0] * f[1] - u[1] * f[0]}; // right = up x front: x = y x z
+    // R's rows are right, up, front (R up = +y, R front = +z); its quaternion
+    const double R[3][3] = {{r[0], r[1], r[2]}, {u[0], u[1], u[2]}, {f[0], f[1], f[2]}};
+    if (R[0][0] > 1 - 1e-12 && R[1][1] > 1 - 1e-12 && R[2][2] > 1 - 1e-12) return false;
+    const double tr = R[0][0] + R[1][1] + R[2][2];
+    if (tr > 0) {
+        const double s = 2 * std::sqrt(tr + 1);
+        q[3] = s / 4, q[0] = (R[2][1] - R[1][2]) / s, q[1] = (R[0][2] - R[2][0]) / s,
+        q[2] = (R[1][0] - R[0][1]) / s;
+    } else if (R[0][0] > R[1][1] && R[0][0] > R[2][2]) {
+        const double s = 2 * std::sqrt(1 + R[0][0] - R[1][1] - R[2][2]);
+        q[3] = (R[2][1] - R[1][2]) / s, q[0] = s / 4, q[1] = (R[0][1] + R[1][0]) / s,
+        q[2] = (R[0][2] + R[2][0]) / s;
+    } else if (R[1][1] > R[2][2]) {
+        const double s = 2 * std::sqrt(1 + R[1][1] - R[0][0] - R[2][2]);
+        q[3] = (R[0][2] - R[2][0]) / s, q[0] = (R[0][1] + R[1][0]) / s, q[1] = s / 4,
+        q[2] = (R[1][2] + R[2][1]) / s;
+    } else {
+        const double s = 2 * std::sqrt(1 + R[2][2] - R[0][0] - R[1][1]);
+        q[3] = (R[1][0] - R[0][1]) / s, q[0] = (R[0][2] + R[2][0]) / s,
+        q[1] = (R[1][2] + R[2][1]) / s, q[2] = s / 4;
+    }
+    return true;
+}
+
 // A fresh glTF document of the mesh (and its source's polygons, UV seams, OBJ materials),
 // with morph targets and an animation when anim is given.
 void build_gltf(const fp_mesh *m, const fp_mesh_morph_animation *anim, GltfOut &g,
@@ -427,6 +470,9 @@ void build_gltf(const fp_mesh *m, const fp_mesh_morph_animation *anim, GltfOut &
         tinygltf::Node root;
         root.name = std::string(anim->name ? anim->name : "take") + "_metres";
         root.scale.assign(3, anim->unit_scale);
+        double q[4];
+        if (root_rotation(anim->up, anim->facing, q))
+            root.rotation.assign(q, q + 4);
         root.children.push_back(0);
         g.model.nodes.push_back(root);
         scene.nodes[0] = int(g.model.nodes.size() - 1);

@@ -1,7 +1,9 @@
 # Blender's side of tests/export/test_export_blender.sh (issue 53): run headless by
 #   blender -b --factory-startup --python-exit-code 1 --python blender_check.py -- \
 #       --readme README.md --glb T.glb --obj FACE.obj --pc2 T.pc2 --mdd T.mdd \
-#       --fps 60 --frames 160 --scale 0.01 --height 0.338 [--tol 0.03]
+#       --fps 60 --frames 160 --scale 0.01 --height 0.338 [--tol 0.03] \
+#       [--face F.glb --face-pc2 T2.pc2 --face-glb T2.glb --face-fps 30000/1001 \
+#        --face-frames N --face-scale 0.01]
 # 1. glb: bpy.ops.import_scene.gltf; the face's world-space bounding box is --height metres
 #    tall (Blender's Z, within --tol); the JSON names the rate (asset.extras.frameRate); the
 #    shape-key keys span the take's duration at the scene's rate; at the take's moving frames
@@ -13,6 +15,9 @@
 #    next (so a cache played slow or one frame off would not pass).
 # 3. mdd: the same recipe, then the README's Time Mode block in a 24 fps scene: scene frame
 #    start + f shows the take's frame at f / 24 s.
+# 4. with --face (a take on a glTF face): the README's glTF-face recipe plays --face-pc2 on the
+#    face imported from its GLB (scene frame start + k the take's frame k, in Blender's world);
+#    and --face-glb in a 29.97 fps scene, its keys moved by the README's block, within 0.1 mm.
 # Prints "blender-check: ..." lines; any failed check raises (exit 1 by --python-exit-code).
 import json
 import os
@@ -53,7 +58,8 @@ def recipe_blocks(readme):
     blocks = {}
     for m in re.finditer(r"<!-- (blender-recipe[\w-]*)[^>]*-->\s*```python\n(.*?)```", text, re.S):
         blocks[m.group(1)] = m.group(2)
-    if "blender-recipe" not in blocks or "blender-recipe-mdd-time" not in blocks:
+    if any(k not in blocks for k in ("blender-recipe", "blender-recipe-mdd-time",
+                                     "blender-recipe-gltf-face", "blender-recipe-gltf-rate")):
         raise AssertionError("README: no blender-recipe blocks (found %s)" % sorted(blocks))
     return blocks
 
@@ -266,12 +272,77 @@ def check_mdd(a, blocks):
         "mesh units; times %.4f .. %.4f s)" % (checked, tol, times[0], times[-1]))
 
 
+def world_positions(o):
+    co = local_positions(o).astype(numpy.float64)
+    return (numpy.c_[co, numpy.ones(len(co))] @ numpy.array(o.matrix_world).T)[:, :3]
+
+
+def check_gltf_face(a, blocks):
+    """The README's recipe for a take whose mesh is a glTF (--face, a GLB written by `pose`):
+    the face imported from it, the cache (--face-pc2) on it; scene frame start + k is the
+    take's frame k in Blender's world (glTF (x, y, z) is (x, -z, y), x --face-scale) at the
+    take's moving frames, and not its neighbours."""
+    fps, frames, scale = float(Fraction(a["face-fps"])), int(a["face-frames"]), float(a["face-scale"])
+    r = Fraction(a["face-fps"]).limit_denominator(1001)
+    fresh()
+    env = {"FACE": a["face"], "CACHE": a["face-pc2"], "RATE": (r.numerator, r.denominator),
+           "FRAMES": frames, "SCALE": scale}
+    run_block(blocks["blender-recipe-gltf-face"], env)
+    scene, face = env["scene"], env["face"]
+    cache = read_pc2(a["face-pc2"]).astype(numpy.float64)
+    assert cache.shape[0] == frames, "gltf face: %d samples, want %d" % (cache.shape[0], frames)
+    world = numpy.stack([cache[..., 0], -cache[..., 2], cache[..., 1]], axis=-1) * scale
+    tol = 1e-6 * float(numpy.abs(world).max())
+    ks = [0] + moving_frames(cache * scale, tol, count=8) + [frames - 1]
+    assert len(ks) > 2, "gltf face: the take does not move from frame to frame"
+    worst = 0.0
+    for k in ks:
+        scene.frame_set(scene.frame_start + k)
+        got = world_positions(face)
+        assert got.shape == world[k].shape, "gltf face: %s vertices, want %s" % (got.shape, world[k].shape)
+        e = float(numpy.linalg.norm(got - world[k], axis=1).max())
+        worst = max(worst, e)
+        assert e <= tol, "gltf face: scene frame %d is %.4g m from the take's frame %d" % (
+            scene.frame_start + k, e, k)
+        for j in (k - 1, k + 1):
+            if 0 <= j < frames and k not in (0, frames - 1):
+                assert float(numpy.abs(got - world[j]).max()) > 10 * tol, \
+                    "gltf face: scene frame %d also matches the take's frame %d" % (scene.frame_start + k, j)
+    say("gltf face: the README's glTF-face recipe: scene frame %d+k shows the take's frame k in "
+        "metres, Z-up, for k in %s (largest %.3g m, tolerance %.3g)" % (scene.frame_start, ks, worst, tol))
+
+
+def check_glb_rate(a, blocks):
+    """--face-glb (a take at --face-fps, 30000/1001) imported into a 29.97 fps scene (30 /
+    1.001), then the README's block that moves the keys: the keys span frames - 1 scene
+    frames, and the shapes at each frame's time x the scene's rate are the take's (Blender
+    3.4 keys at t x 30 without the block: 1.86 mm off by frame 81)."""
+    fps, frames = float(Fraction(a["face-fps"])), int(a["face-frames"])
+    fresh()
+    scene = bpy.context.scene
+    scene.render.fps, scene.render.fps_base = 30, 1.001
+    bpy.ops.import_scene.gltf(filepath=a["face-glb"])
+    run_block(blocks["blender-recipe-gltf-rate"], {})
+    sfps = scene.render.fps / scene.render.fps_base
+    spans = [x.frame_range[1] - x.frame_range[0] for x in bpy.data.actions]
+    want = (frames - 1) / fps * sfps
+    say("glb at %.5g fps: keys span %s scene frames of a %.5g fps scene (want %.5g)"
+        % (fps, ["%.5g" % x for x in spans], sfps, want))
+    assert spans and all(abs(x - want) < 1e-3 for x in spans), "glb at 29.97 fps: key span"
+    faces = [o for o in bpy.data.objects if o.type == "MESH"]
+    b = {"glb": a["face-glb"], "pc2": a["face-pc2"], "scale": a["face-scale"]}
+    check_glb_shapes(b, glb_json(a["face-glb"]), faces[0], scene, sfps)
+
+
 def main():
     a = args()
     blocks = recipe_blocks(a["readme"])
     check_glb(a)
     check_pc2(a, blocks)
     check_mdd(a, blocks)
+    if "face" in a:
+        check_gltf_face(a, blocks)
+        check_glb_rate(a, blocks)
     say("PASS")
 
 

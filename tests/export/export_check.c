@@ -1,4 +1,4 @@
-/* fp-export-check TAKE|STACK FILE [--max-error MM] [--fps F]: checks an export against its take
+/* fp-export-check TAKE|STACK FILE [--max-error MM]: checks an export against its take
  * (a stack: its composite, fp_take_player_positions), frame by frame. The take is played
  * again (fp_take_player: bit-identical frames), and:
  *   .pc2 / .mdd  read back with their own header parsing here: points, frames (and MDD's
@@ -42,6 +42,15 @@ static unsigned char *slurp(const char *path, size_t *n)
     fclose(f);
     *n = (size_t)len;
     return b;
+}
+
+/* v turned by the unit quaternion q (x, y, z, w): v + 2w (q x v) + 2 q x (q x v). */
+static void rotate(const double q[4], double v[3])
+{
+    const double t[3] = {2 * (q[1] * v[2] - q[2] * v[1]), 2 * (q[2] * v[0] - q[0] * v[2]),
+                         2 * (q[0] * v[1] - q[1] * v[0])};
+    const double u[3] = {q[1] * t[2] - q[2] * t[1], q[2] * t[0] - q[0] * t[2], q[0] * t[1] - q[1] * t[0]};
+    for (int c = 0; c < 3; c++) v[c] += q[3] * t[c] + u[c];
 }
 
 int main(int argc, char **argv)
@@ -174,6 +183,19 @@ int main(int argc, char **argv)
         const double want_rate = rate.den ? (double)rate.num / rate.den : 0;
         const bool metres = fabs(a.unit_scale - mmu / 1000) <= 1e-9 * (mmu / 1000);
         const bool rate_ok = fabs(a.frame_rate - want_rate) <= 1e-9 * want_rate;
+        /* glTF's +y up and +z front: the root's rotation takes the take's face axes there (a
+         * Z-up face, --up +z --facing -y, lay on its back in Blender without it) */
+        const fp_take_header *h = fp_take_player_header(p);
+        const bool axes = h->face_up[0] != 0 || h->face_up[1] != 0 || h->face_up[2] != 0;
+        double up[3] = {0, 1, 0}, front[3] = {0, 0, 1};
+        if (axes)
+            for (int c = 0; c < 3; c++) up[c] = h->face_up[c], front[c] = h->face_facing[c];
+        rotate(a.rotation, up);
+        rotate(a.rotation, front);
+        const bool upright = fabs(up[1] - 1) < 1e-6 && fabs(front[2] - 1) < 1e-6;
+        printf("%s: the face's up turned to (%.4g %.4g %.4g), its front to (%.4g %.4g %.4g) "
+               "(want +y and +z)\n", file, up[0], up[1], up[2], front[0], front[1], front[2]);
+        bad += !upright;
         printf("%s: %zu frames, %zu glTF vertices (mesh %zu), %zu triangles, "
                "%zu primitives, materials [%s], K = %zu, largest error %.6g mm at frame %zu "
                "(limit %.6g mm, %.6g mm per unit); scene scale %.6g (want %.6g: metres), "

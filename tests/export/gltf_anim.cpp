@@ -102,15 +102,22 @@ extern "C" int fp_test_gltf_anim_load(const char *path, size_t mesh_vertices,
                         ? m.asset.extras.Get("frameRate").GetNumberAsDouble() : 0;
     // the path from the mesh's node up to a scene root: each uniform scale multiplied in
     a->unit_scale = 1;
+    a->rotation[0] = a->rotation[1] = a->rotation[2] = 0, a->rotation[3] = 1;
+    bool turned = false;
     for (int ni = an.channels[0].target_node, hops = 0; ni >= 0 && hops <= int(m.nodes.size()); hops++) {
         const tinygltf::Node &nd = m.nodes[size_t(ni)];
-        if (!nd.matrix.empty() || !nd.rotation.empty() || !nd.translation.empty() ||
+        if (!nd.matrix.empty() || !nd.translation.empty() ||
+            (!nd.rotation.empty() && (nd.rotation.size() != 4 || turned)) ||
             (!nd.scale.empty() && (nd.scale.size() != 3 || nd.scale[0] != nd.scale[1] ||
                                    nd.scale[1] != nd.scale[2]))) {
             a->unit_scale = -1;
             break;
         }
         if (!nd.scale.empty()) a->unit_scale *= nd.scale[0];
+        if (!nd.rotation.empty()) {
+            for (int i = 0; i < 4; i++) a->rotation[i] = nd.rotation[size_t(i)];
+            turned = true;
+        }
         int parent = -1;
         for (size_t q = 0; q < m.nodes.size() && parent < 0; q++)
             for (int c : m.nodes[q].children)

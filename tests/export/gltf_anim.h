@@ -24,7 +24,9 @@ typedef struct fp_test_gltf_anim {
     double unit_scale;       /* the scale from the mesh's node to the scene (the product of
                                 the uniform scales of it and its ancestors; 1: none), or -1
                                 when a node on that path has a non-uniform scale, a
-                                rotation, a translation or a matrix */
+                                translation or a matrix, or more than one rotation */
+    double rotation[4];      /* the one node rotation on that path (x, y, z, w; the export's
+                                root turns the face's up to +y and front to +z), else 0 0 0 1 */
     double frame_rate;       /* asset.extras.frameRate; 0 where it is not there */
     char material_names[1024]; /* "a,b,c" */
 } fp_test_gltf_anim;

@@ -126,6 +126,23 @@ cmp -s <(tail -c $((10 * 26719 * 12)) "$ict/r.pc2") \
        <(dd if="$ict/take.pc2" bs=1 skip=$((32 + 10 * 26719 * 12)) count=$((10 * 26719 * 12)) 2>/dev/null) ||
     fail "--range 10-19: frames differ from the whole export's"
 echo "ict-facekit: --fps 30 gives $n30 samples of $frames frames; --range 10-19 the same 10 frames"
+# --resample F of the 60 fps take: sample k (at k/F s) is the take's frame floor(60k/F) bit for
+# bit, and the last sample is the last frame where it falls on the grid. A frame on the grid
+# whose time, stored in whole ns, reads up to 0.5 ns late (10/60 s: 166666667 ns) showed the
+# frame before it (sample 40 of --resample 24 was frame 99, not 100: 3.35 mm off in Blender).
+fb=$((26719 * 12))
+for F in 24 30; do
+    "$fp" export "$take" --format pc2 --resample $F --out "$ict/rs$F.pc2" -q || fail "--resample $F exited $?"
+    n=$(od -An -tu4 -j28 -N4 "$ict/rs$F.pc2" | tr -d ' ')
+    [ "$n" -eq $(((frames - 1) * F / 60 + 1)) ] || fail "--resample $F: $n samples of $frames frames at 60 fps"
+    for ((k = 0; k < n; k++)); do
+        j=$((60 * k / F))
+        cmp -s <(tail -c +$((33 + k * fb)) "$ict/rs$F.pc2" | head -c $fb) \
+               <(tail -c +$((33 + j * fb)) "$ict/take.pc2" | head -c $fb) ||
+            fail "--resample $F: sample $k ($k/$F s) is not the take's frame $j"
+    done
+done
+echo "ict-facekit: --resample 24 and 30: every sample the take's frame at its time, bit for bit"
 
 # png-seq: rendered headless as the viewer draws the face (under Xvfb), the asked size
 if "$fp" live --help >/dev/null 2>&1 && command -v xvfb-run >/dev/null; then
@@ -167,6 +184,39 @@ grep -q "range ' 5-10': ' 5' is neither a frame index nor a timecode" "$tmp/x.ou
 expect 64 "$fp" export "$take" --format pc2 --range "5- 10"
 expect 0 "$fp" export "$take" --format pc2 --range +5-+6 --out "$tmp/plus.pc2" -q
 expect 66 "$fp" export "$tmp/none.fptake" --format pc2
+# a drop-frame take (29.97 fps): --range's timecodes are written as its own, HH:MM:SS;FF; one
+# written HH:MM:SS:FF counted non-drop, thousands of frames off in the day ("IN is past the
+# take's last frame" for the take's own first timecode), and is refused saying so
+mp="$data/faces/mediapipe-canonical/canonical_face_model.obj"
+"$fp" run "${pd[@]}" --mesh "$mp" --input "replay:$data/hands/leap-motion/grab_joints_mm.csv,fast=1" \
+    --fps 29.97 --duration 1 --take-dir "$tmp/df" --slate df -o "$tmp/df.obj" -q >/dev/null 2>&1 ||
+    fail "run --fps 29.97 exited $?"
+dftake=$(ls "$tmp"/df/*.fptake)
+tcin=$("$fp" info "$dftake" | sed -n 's/^  timecode *\([0-9:;]*\) - .*/\1/p')
+[[ $tcin == *";"* ]] || fail "the 29.97 fps take's timecode in '$tcin' is not drop-frame"
+dfn=$("$fp" info "$dftake" | sed -n 's/^  frames *\([0-9]*\) .*/\1/p')
+expect 0 "$fp" export "$dftake" --format pc2 --range "$tcin-" --out "$tmp/df.pc2" -q
+[ "$(od -An -tu4 -j28 -N4 "$tmp/df.pc2" | tr -d ' ')" -eq "$dfn" ] || fail "--range $tcin-: not the take's $dfn frames"
+expect 64 "$fp" export "$dftake" --format pc2 --range "${tcin/;/:}-" --out "$tmp/df2.pc2"
+grep -q "the take's timecodes are drop-frame ($tcin - .*): write them HH:MM:SS;FF" "$tmp/x.out" ||
+    { cat "$tmp/x.out"; fail "--range ${tcin/;/:}- on a drop-frame take: not said"; }
+# a face written Z-up (Blender's axes: x, -z, y) and run with --up +z --facing -y: the glb's
+# root node turns its up to glTF's +y and its front to +z (without the turn Blender showed it on
+# its back), on export and run --export alike; fp-export-check reads the turn back
+awk '/^v /{printf "v %s %s %s\n",$2,-$4,$3; next} /^vn /{printf "vn %s %s %s\n",$2,-$4,$3; next} {print}' \
+    "$mp" >"$tmp/zup.obj"
+"$fp" run "${pd[@]}" --mesh "$tmp/zup.obj" --up +z --facing -y --duration 1 \
+    --input "replay:$data/hands/leap-motion/grab_joints_mm.csv,fast=1" --take-dir "$tmp/zup" \
+    --slate zup -o "$tmp/zup-out.obj" --export "$tmp/zup-run.glb" -q >/dev/null 2>&1 ||
+    fail "run on the Z-up face exited $?"
+ztake=$(ls "$tmp"/zup/*.fptake)
+"$fp" export "$ztake" --format glb --out "$tmp/zup.glb" -q || fail "export of the Z-up take exited $?"
+for g in zup.glb zup-run.glb; do
+    "$check" "$ztake" "$tmp/$g" >"$tmp/zup-check.out" 2>&1 &&
+        grep -q "up turned to (0 1 0), its front to (0 0 1)" "$tmp/zup-check.out" ||
+        { cat "$tmp/zup-check.out"; fail "$g: the Z-up face is not turned to +y up, +z front"; }
+done
+echo "mediapipe Z-up: the glb's root turns the face to +y up and +z front (export and run --export)"
 expect 64 "$fp" export "$take" --format pc2 --out ""
 grep -qx "facepuppet export: --out: give a file or folder name (it is empty)" "$tmp/x.out" ||
     { cat "$tmp/x.out"; fail "--out '': not said as an empty name"; }

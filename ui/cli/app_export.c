@@ -4,6 +4,7 @@
 #include "command.h"
 #include "fp_file.h"
 #include "fp_mesh.h"
+#include "fp_session.h"
 
 #include <errno.h>
 #include <math.h>
@@ -36,9 +37,10 @@ void fp_app_export_name(const char *path, bool stack, const char *slate, unsigne
     snprintf(buf, n, "%.*s", dot && dot > base ? (int)(dot - base) : (int)strlen(base), base);
 }
 
-int fp_app_export_open(const char *cmd, const char *file, const struct fp_mesh *mesh,
+int fp_app_export_open(const char *cmd, const char *file, const struct fp_session *s,
                        double mm_per_unit, const char *name, double frames, fp_exporter **x)
 {
+    const struct fp_mesh *mesh = fp_session_mesh(s);
     fp_export_format fmt;
     if (fp_export_format_from_path(file, &fmt)) {
         fprintf(stderr, "%s: --export %s: give a file ending in .gltf, .glb, .pc2 or .mdd\n",
@@ -52,6 +54,9 @@ int fp_app_export_open(const char *cmd, const char *file, const struct fp_mesh *
     if (status) return status;
     fp_export_options eo = {.format = fmt, .path = file, .mm_per_unit = mm_per_unit,
                             .name = name};
+    float up[3], facing[3];
+    fp_session_face_axes(s, up, facing);
+    for (int i = 0; i < 3; i++) eo.up[i] = up[i], eo.facing[i] = facing[i];
     char err[1024];
     int rc = fp_export_begin(mesh, &eo, x, err, sizeof err);
     if (rc) {

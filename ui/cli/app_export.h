@@ -8,6 +8,8 @@
 #include <stdbool.h>
 #include <stdio.h>
 
+struct fp_session; /* fp_session.h */
+
 /** A frame's bytes in `format` for `mesh`, about: a point cache's 12 a vertex (MDD 4 more a
  *  frame), an OBJ sequence's fp_app_obj_frame_bytes; 0 where it is not known ahead (glTF,
  *  whose morph targets are reduced). Pure; any thread. */
@@ -22,13 +24,14 @@ void fp_app_export_name(const char *path, bool stack, const char *slate, unsigne
                         size_t n);
 
 /** `--export FILE` of run and play: the format from FILE's extension (.gltf .glb .pc2 .mdd),
- *  the exporter begun on `mesh` (the session's loaded mesh). frames: how many the run will
+ *  the exporter begun on the session's loaded mesh (a glTF turned by the session's face axes,
+ *  fp_session_face_axes, to +y up and +z front). frames: how many the run will
  *  write when known before it (play: the take's; run: --duration's), else 0; a point cache
  *  larger than its file system's free room is then refused before any work
  *  (fp_app_output_fits). Prints "CMD: ..." on error and returns the exit status (64 an
  *  unknown extension, 73 an output not writable or too large); 0 and *x (owned by the
  *  caller: fp_app_export_close or fp_export_abort). The thread that feeds *x. */
-int fp_app_export_open(const char *cmd, const char *file, const struct fp_mesh *mesh,
+int fp_app_export_open(const char *cmd, const char *file, const struct fp_session *s,
                        double mm_per_unit, const char *name, double frames, fp_exporter **x);
 
 /** Finish *x and print the summary to f unless quiet: "CMD: exported N frames to FILE

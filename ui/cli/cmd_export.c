@@ -140,8 +140,9 @@ static void usage(FILE *f)
         "  -o, --out PATH        the file (a folder for obj-seq); default: the take's path with\n"
         "                        the format's extension (obj-seq: TAKE_frames/)\n"
         "      --range IN-OUT    only these frames: 0-based frame indices of the take or\n"
-        "                        timecodes HH:MM:SS:FF (either side may be left out: 120-, -300);\n"
-        "                        frames before IN are still played (commits carry over). Checked\n"
+        "                        timecodes HH:MM:SS:FF (a drop-frame take's HH:MM:SS;FF; either\n"
+        "                        side may be left out: 120-, -300); frames before IN are still\n"
+        "                        played (commits carry over). Checked\n"
         "                        before any frame is played: IN past the take's last frame, OUT\n"
         "                        before its first or IN after OUT is refused (64, naming the\n"
         "                        take's frames and timecodes); an end past the take is clipped\n"
@@ -176,6 +177,7 @@ static void usage(FILE *f)
 /* One end of --range: "" (open), a frame index, or a timecode. */
 typedef struct range_end {
     bool set, timecode;
+    bool drop;               /* a timecode written HH:MM:SS;FF (drop-frame counting) */
     uint64_t value;          /* index, or frames since 00:00:00:00 */
 } range_end;
 
@@ -190,6 +192,7 @@ static int parse_end(const char *s, fp_take_rate rate, range_end *e, char *err, 
         if (fp_timecode_parse(s, rate, &tc, err, n))
             return -EINVAL;
         e->timecode = true;
+        e->drop = tc.drop;
         return fp_timecode_to_frames(&tc, rate, &e->value) ? -EINVAL : 0;
     }
     unsigned long long v;
@@ -402,6 +405,14 @@ static int check_range(const export_args *a, range_end *in, range_end *out, cons
     snprintf(have, sizeof have, "the take has frames 0-%zu, timecodes %s - %s", frames - 1, tc0, tc1);
     const bool drop = h->timecode_in.drop;
     const char *why = NULL;
+    /* a timecode counts frames as the take's do: 19:40:44:00 against a drop-frame take
+     * (19:40:43;09 - 19:40:46;09) was a non-drop count 2,124 frames on, "past the last frame" */
+    if ((in->set && in->timecode && in->drop != drop) || (out->set && out->timecode && out->drop != drop)) {
+        fprintf(stderr, "facepuppet export: --range %s: the take's timecodes are %s (%s - %s): "
+                "write them HH:MM:SS%sFF\n", a->range, drop ? "drop-frame" : "non-drop", tc0, tc1,
+                drop ? ";" : ":");
+        return FP_EXIT_USAGE;
+    }
     if (in->set && in->value > l_in) why = "IN is past the take's last frame";
     else if (out->set && out->value < f_out) why = "OUT is before the take's first frame";
     else if (in->set && out->set && in->timecode == out->timecode && in->value > out->value)
@@ -462,6 +473,11 @@ static int check_out(const export_args *a, fp_take_player *p, const char *out, c
     return fp_app_check_new_output("facepuppet export", opt, out, a->force);
 }
 
+/* --resample: a frame whose time is within this of a sample's is at that sample's time (frame
+ * times are stored in whole ns, so a frame exactly on the sample grid can read up to 0.5 ns
+ * late; a sample lasts at least 100 us, 1 / 10000 fps). */
+#define SAMPLE_SLACK_S 1e-9
+
 /* The frames an export writes, from the frames' stored times (fp_take_reader_time), before
  * any is played: the range's frames (those walk_take hands the sink), or with --resample the
  * samples over their stored first-to-last time (what walk_frame writes: a take whose first
@@ -497,7 +513,7 @@ static int frames_out(const export_args *a, const range_end *in, const range_end
         return 0;
     }
     const double span_s = ((double)fp_take_reader_time(r, last) - (double)fp_take_reader_time(r, first)) * 1e-9;
-    *count = floor(span_s * a->fps + 1e-9) + 1;
+    *count = floor((span_s + SAMPLE_SLACK_S) * a->fps) + 1;   /* as walk_take's samples */
     return 0;
 }
 
@@ -555,6 +571,9 @@ static int open_sink(sink *k, const export_args *a, const fp_session *s, const c
                             .mm_per_unit = mm_per_unit, .max_targets = a->max_targets,
                             .step = a->step, .name = name, .stem = name,
                             .frame_rate = frame_rate};
+    float up[3], facing[3];   /* the take's face axes (its player's session has them) */
+    fp_session_face_axes(s, up, facing);
+    for (int i = 0; i < 3; i++) eo.up[i] = up[i], eo.facing[i] = facing[i];
     if (!a->png && (rc = fp_export_begin(fp_session_mesh(s), &eo, &k->x, err, sizeof err))) {
         fprintf(stderr, "facepuppet export: %s\n", err);
         return fp_app_exit_code(rc, FP_APP_OUTPUT);
@@ -606,10 +625,12 @@ static int walk_frame(export_walk *w, const float *pos, int64_t t_ns, char *err,
         w->first_ns = t_ns;
     }
     if (w->a->fps <= 0) return sink_add(w->k, pos, (double)(t_ns - w->first_ns) * 1e-9, err, errlen);
-    /* samples before this frame's time show the frame held before it */
+    /* samples before this frame's time show the frame held before it; a sample at the
+     * frame's time shows the frame (its time stored to the nearest ns: 10/60 s is 166666667
+     * ns, after the sample at 4/24 s, which then showed frame 9) */
     int rc = 0;
     for (double t; w->have_held && !rc && !stop_signal &&
-                   (t = (double)w->sample / w->a->fps) < (double)(t_ns - w->first_ns) * 1e-9;
+                   (t = (double)w->sample / w->a->fps) + SAMPLE_SLACK_S < (double)(t_ns - w->first_ns) * 1e-9;
          w->sample++)
         rc = sink_add(w->k, w->held, t, err, errlen);
     memcpy(w->held, pos, w->n * 3 * sizeof(float));
@@ -652,7 +673,7 @@ static int walk_take(export_walk *w)
     if (w->bar && index < w->total)
         progress(true, w->total, w->total, sink_frames(w->k));
     if (w->a->fps > 0 && w->have_held) {   /* the held frame's own sample times, up to its time */
-        for (double t; (t = (double)w->sample / w->a->fps) <= (double)(w->held_ns - w->first_ns) * 1e-9 + 1e-12;
+        for (double t; (t = (double)w->sample / w->a->fps) <= (double)(w->held_ns - w->first_ns) * 1e-9 + SAMPLE_SLACK_S;
              w->sample++) {
             if (stop_signal) return stopped(false);
             if ((rc = sink_add(w->k, w->held, t, err, sizeof err))) {

@@ -448,8 +448,7 @@ static int play_main(int argc, char **argv)
     char name[96]; /* (as export names it: SLATE_TNNN, a stack's file name) */
     fp_app_export_name(take_path, fp_take_player_stack(player) != NULL, h->slate, h->take, name,
                        sizeof name);
-    if (export_file && (status = fp_app_export_open("facepuppet play", export_file,
-                                                    fp_session_mesh(s),
+    if (export_file && (status = fp_app_export_open("facepuppet play", export_file, s,
                                                     fp_take_player_mm_per_unit(player),
                                                     name, take_frames, &ex)))
         goto done;

@@ -636,7 +636,7 @@ static int run_main(int argc, char **argv)
         (a->frames_out && (rc = fp_app_frames_estimate("facepuppet run", "--frames-out", a->frames_out,
                                                        frames, a->fps, fp_session_mesh(s), quiet,
                                                        "a shorter --duration"))) ||
-        (a->export_file && (rc = fp_app_export_open("facepuppet run", a->export_file, fp_session_mesh(s),
+        (a->export_file && (rc = fp_app_export_open("facepuppet run", a->export_file, s,
                                                     fp_session_head(s)->mm_per_unit, "run", frames,
                                                     &ex)))) {
         return run_abandon(a, &ex, &s, &path, rc);
