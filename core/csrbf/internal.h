@@ -146,6 +146,10 @@ struct csrbf_solver {
     size_t nclusters;
     double *cl_L, *cl_t;     /* m each: per-cluster bound and scale (scratch) */
     double *anorm;           /* m: |alpha_j| (scratch) */
+    uint32_t *gpair;         /* m: each centre's partner in a close pair (under
+                                CSRBF_GUARD_PAIR_GAP x R apart, greedy), or UINT32_MAX */
+    int g_paired;            /* the bounds use the pair terms (csrbf_guard.c: a composed
+                                step's last maps); 0 outside guarded() */
     float *g_p, *g_e;        /* guarded step: current start and end points, n x 3 */
     size_t g_cap;
     csrbf_points *g_tmp;     /* guarded step: index of the intermediate shape */
