@@ -438,14 +438,14 @@ int csrbf_evaluate_touched(const csrbf_solver *solver, const csrbf_points *base,
 #define CSRBF_GUARD_MARGIN 0.9
 /** Default limit of composed sub-steps in csrbf_guarded_step. */
 #define CSRBF_GUARD_MAX_SUBSTEPS 16
-/** Centres under this x R apart are paired in the bound of a composed step's last maps
- *  (csrbf_guarded_step): for a pair (j, k) with alpha_j = a + b, alpha_k = a - b, row i's
- *  terms |alpha_j| w_ij + |alpha_k| w_ik become, where smaller,
- *  |a| (w_ij + w_ik) + |b| min(w_ij + w_ik, H |s_j - s_k| / R^2), H the largest norm of the
- *  kernel's Hessian (20 for psi31, 56/3 for psi32; psi30 is not paired): still rigorous, and
- *  close skin pulled apart, whose two fields cancel but for their difference, gets there in
- *  a few maps instead of dozens. */
-#define CSRBF_GUARD_PAIR_GAP 0.25
+/** Close groups in the bound of a composed step's last maps (csrbf_guarded_step): each
+ *  centre joins the first group whose first centre lies under this x R from it. For a
+ *  group G with mean centre c, row i's terms sum_{j in G} |alpha_j| w_ij become, where
+ *  smaller, |sum_j alpha_j| w_ic + sum_j |alpha_j| min(H |s_j - c| / R^2, w_ij + w_ic), H the
+ *  largest norm of the kernel's Hessian (20 for psi31, 56/3 for psi32; psi30 is not
+ *  grouped): still rigorous, and close skin pulled apart or shuffled, whose fields cancel but
+ *  for their differences, gets there in a few maps instead of dozens. */
+#define CSRBF_GUARD_GROUP_GAP 0.25
 
 /** The injectivity bound L of the current map (see above); L < 1 implies T injective with
  *  det dT/dx > 0 everywhere. 0 before end points are set (T = identity).

@@ -48,7 +48,8 @@ void csrbf_guard_free(csrbf_solver *s)
     free(s->cl_L);
     free(s->cl_t);
     free(s->anorm);
-    free(s->gpair);
+    free(s->gg_u32);
+    free(s->gg_f64);
     free(s->g_p);
     free(s->g_e);
     free(s->g_blk);
@@ -58,7 +59,9 @@ void csrbf_guard_free(csrbf_solver *s)
     s->gn_w = NULL;
     s->cluster = NULL;
     s->cl_L = s->cl_t = s->anorm = NULL;
-    s->gpair = NULL;
+    s->gg_u32 = s->gg_group = s->gg_start = s->gg_idx = NULL;
+    s->gg_f64 = s->gg_c = s->gg_r = NULL;
+    s->ngroups = 0;
     s->g_p = s->g_e = NULL;
     s->g_blk = NULL;
     s->gn_cap = s->g_cap = s->g_bcap = 0;
@@ -123,33 +126,60 @@ static double hessian_max(csrbf_kernel k)
     }
 }
 
-/* Close pairs for the bound's pair terms (pair_term): each centre paired at most once, with
- * the nearest unpaired centre under CSRBF_GUARD_PAIR_GAP x R (greedy in index order; m is a
- * few dozen fingertips at most, so O(m^2)). */
-static void pair_close_centres(csrbf_solver *s)
+/* Close groups for the bound's group terms (group_term): each centre joins the first group
+ * whose leader (its first centre) lies under CSRBF_GUARD_GROUP_GAP x R from it, else leads
+ * a new one; groups of one centre are dropped. Fills gg_group, gg_start, gg_idx, gg_c, gg_r,
+ * ngroups. m is a few dozen fingertips at most: O(m^2). */
+static void close_groups(csrbf_solver *s)
 {
     const size_t m = s->m;
-    const double gap2 = CSRBF_GUARD_PAIR_GAP * CSRBF_GUARD_PAIR_GAP * s->R * s->R;
-    for (size_t i = 0; i < m; i++) s->gpair[i] = UINT32_MAX;
+    const double gap2 = CSRBF_GUARD_GROUP_GAP * CSRBF_GUARD_GROUP_GAP * s->R * s->R;
+    uint32_t *lead = s->gg_idx, *count = s->gg_start; /* scratch first */
+    size_t nl = 0;
+    s->ngroups = 0;
+    for (size_t i = 0; i < m; i++) s->gg_group[i] = UINT32_MAX;
     if (hessian_max(s->opt.kernel) == 0.0) return;
     for (size_t i = 0; i < m; i++) {
-        if (s->gpair[i] != UINT32_MAX) continue;
-        double best = gap2;
-        size_t bj = m;
-        for (size_t j = i + 1; j < m; j++) {
-            if (s->gpair[j] != UINT32_MAX) continue;
-            const double *ci = s->c + 3 * i, *cj = s->c + 3 * j;
-            double d0 = ci[0] - cj[0], d1 = ci[1] - cj[1], d2 = ci[2] - cj[2];
-            double r2 = d0 * d0 + d1 * d1 + d2 * d2;
-            if (r2 < best) {
-                best = r2;
-                bj = j;
-            }
+        const double *ci = s->c + 3 * i;
+        size_t g = nl;
+        for (size_t l = 0; l < nl && g == nl; l++) {
+            const double *cl = s->c + 3 * (size_t)lead[l];
+            double d0 = ci[0] - cl[0], d1 = ci[1] - cl[1], d2 = ci[2] - cl[2];
+            if (d0 * d0 + d1 * d1 + d2 * d2 < gap2) g = l;
         }
-        if (bj < m) {
-            s->gpair[i] = (uint32_t)bj;
-            s->gpair[bj] = (uint32_t)i;
+        if (g == nl) {
+            lead[nl] = (uint32_t)i;
+            count[nl++] = 0;
         }
+        s->gg_group[i] = (uint32_t)g;
+        count[g]++;
+    }
+    /* number the groups of two or more 0..ngroups-1 (the provisional number g >= the new) */
+    size_t ng = 0;
+    for (size_t l = 0; l < nl; l++) lead[l] = count[l] > 1 ? (uint32_t)ng++ : UINT32_MAX;
+    for (size_t i = 0; i < m; i++) s->gg_group[i] = lead[s->gg_group[i]];
+    s->ngroups = ng;
+    memset(s->gg_start, 0, (ng + 1) * sizeof *s->gg_start);
+    for (size_t i = 0; i < m; i++)
+        if (s->gg_group[i] != UINT32_MAX) s->gg_start[s->gg_group[i] + 1]++;
+    for (size_t g = 0; g < ng; g++) s->gg_start[g + 1] += s->gg_start[g];
+    memset(s->gg_c, 0, 3 * (ng ? ng : 1) * sizeof *s->gg_c);
+    for (size_t g = 0; g < ng; g++) s->gg_r[g] = 0.0; /* (fill counts, in gg_r for now) */
+    for (size_t i = 0; i < m; i++) {
+        uint32_t g = s->gg_group[i];
+        if (g == UINT32_MAX) continue;
+        s->gg_idx[s->gg_start[g] + (size_t)s->gg_r[g]] = (uint32_t)i;
+        s->gg_r[g] += 1.0;
+        for (int a = 0; a < 3; a++) s->gg_c[3 * g + a] += s->c[3 * i + a];
+    }
+    for (size_t g = 0; g < ng; g++)
+        for (int a = 0; a < 3; a++) s->gg_c[3 * g + a] /= (double)(s->gg_start[g + 1] - s->gg_start[g]);
+    for (size_t i = 0; i < m; i++) {
+        uint32_t g = s->gg_group[i];
+        double r2 = 0.0;
+        if (g != UINT32_MAX)
+            for (int a = 0; a < 3; a++) r2 += (s->c[3 * i + a] - s->gg_c[3 * g + a]) * (s->c[3 * i + a] - s->gg_c[3 * g + a]);
+        s->gg_r[i] = sqrt(r2);
     }
 }
 
@@ -172,9 +202,17 @@ int csrbf_guard_prepare(csrbf_solver *s)
     if (!a) return CSRBF_ERR_NOMEM;
     s->anorm = a;
     memset(s->anorm, 0, (m ? m : 1) * sizeof *a);
-    uint32_t *gp = realloc(s->gpair, (m ? m : 1) * sizeof *gp);
-    if (!gp) return CSRBF_ERR_NOMEM;
-    s->gpair = gp;
+    uint32_t *gu = realloc(s->gg_u32, (4 * m + 1) * sizeof *gu);
+    if (!gu) return CSRBF_ERR_NOMEM;
+    s->gg_u32 = gu;
+    s->gg_group = gu;
+    s->gg_start = gu + m;
+    s->gg_idx = gu + 2 * m + 1;
+    double *gf = realloc(s->gg_f64, (4 * m + 1) * sizeof *gf);
+    if (!gf) return CSRBF_ERR_NOMEM;
+    s->gg_f64 = gf;
+    s->gg_c = gf;
+    s->gg_r = gf + 3 * m;
     if (!s->gn_cap) {
         s->gn_cap = 16 * (m ? m : 1);
         s->gn_idx = malloc(s->gn_cap * sizeof *s->gn_idx);
@@ -208,60 +246,63 @@ int csrbf_guard_prepare(csrbf_solver *s)
     }
     for (size_t i = 0; i < m; i++) cl[i] = (uint32_t)s->cl_t[i];
     s->nclusters = nc;
-    pair_close_centres(s);
+    close_groups(s);
     return CSRBF_OK;
 }
 
-/* w(|c_i - c_j| / R - 1) / R, the largest |grad psi_j| over centre i's support (0 where the
- * supports do not overlap) */
-static double weight_between(const csrbf_solver *s, size_t i, size_t j)
+/* w(|c_i - p| / R - 1) / R, the largest |grad psi(|x - p| / R)| over centre i's support (0
+ * where the supports do not overlap: neighbour_try's test) */
+static double weight_at(const csrbf_solver *s, size_t i, const double *p)
 {
-    const double *ci = s->c + 3 * i, *cj = s->c + 3 * j;
-    double d0 = ci[0] - cj[0], d1 = ci[1] - cj[1], d2 = ci[2] - cj[2];
+    const double *ci = s->c + 3 * i;
+    double d0 = ci[0] - p[0], d1 = ci[1] - p[1], d2 = ci[2] - p[2];
     double r2 = d0 * d0 + d1 * d1 + d2 * d2;
-    if (r2 >= 4.0 * s->R * s->R) return 0.0; /* (neighbour_try's test) */
+    if (r2 >= 4.0 * s->R * s->R) return 0.0;
     return dpsi_max_from(s->opt.kernel, sqrt(r2) * s->inv_R - 1.0) * s->inv_R;
 }
 
-/* A close pair's share of row i's bound (j < k partners; wj, wk their weights for centre i's
- * support): with alpha_j = a + b, alpha_k = a - b their gradient terms are
- * a (grad psi_j + grad psi_k) + b (grad psi_j - grad psi_k), and |grad psi_j - grad psi_k| <=
- * H |c_j - c_k| / R^2 (H: hessian_max; the gradient of psi(|x - c| / R) is H / R^2-Lipschitz,
- * psi31 and psi32 being C^2). Two fingertips' fields that pull close skin apart cancel
- * but for their difference, which the plain bound counts twice over: skin pulled apart from
- * 0.01 R needs about 6 maps under this bound against 60 under the plain one. The smaller of
- * this and the plain terms. */
-static double pair_term(const csrbf_solver *s, size_t j, size_t k, double wj, double wk)
+/* A close group's share of row i's bound. With c its mean centre, the group's gradient
+ * terms are (sum_j alpha_j) grad psi_c + sum_j alpha_j (grad psi_j - grad psi_c), and
+ * |grad psi_j - grad psi_c| <= min(H |c_j - c| / R^2, w_ij + w_ic) (H: hessian_max; the
+ * gradient of psi(|x - p| / R) is H / R^2-Lipschitz in p, psi31 and psi32 being C^2).
+ * Fingertips on close skin moving apart, together or round each other have large
+ * coefficients of opposite signs whose fields cancel but for their differences, which the
+ * plain terms count whole: skin pulled apart from 0.01 R needs about a dozen maps under
+ * this bound against 60 under the plain one. The smaller of this and the plain terms. */
+static double group_term(const csrbf_solver *s, size_t i, uint32_t g)
 {
-    const double *aj = s->alpha + 3 * j, *ak = s->alpha + 3 * k, *cj = s->c + 3 * j, *ck = s->c + 3 * k;
-    double a2 = 0.0, b2 = 0.0, g2 = 0.0;
-    for (int c = 0; c < 3; c++) {
-        double a = 0.5 * (aj[c] + ak[c]), b = 0.5 * (aj[c] - ak[c]), g = cj[c] - ck[c];
-        a2 += a * a;
-        b2 += b * b;
-        g2 += g * g;
+    const double wc = weight_at(s, i, s->gg_c + 3 * (size_t)g);
+    const double h = hessian_max(s->opt.kernel) * s->inv_R * s->inv_R;
+    double sum[3] = {0, 0, 0}, plain = 0.0, spread = 0.0;
+    for (uint32_t t = s->gg_start[g]; t < s->gg_start[g + 1]; t++) {
+        size_t j = s->gg_idx[t];
+        double wj = weight_at(s, i, s->c + 3 * j);
+        for (int a = 0; a < 3; a++) sum[a] += s->alpha[3 * j + a];
+        plain += s->anorm[j] * wj;
+        spread += s->anorm[j] * fmin(h * s->gg_r[j], wj + wc);
     }
-    double diff = hessian_max(s->opt.kernel) * sqrt(g2) * s->inv_R * s->inv_R;
-    double paired = sqrt(a2) * (wj + wk) + sqrt(b2) * fmin(wj + wk, diff);
-    double plain = s->anorm[j] * wj + s->anorm[k] * wk;
-    return fmin(paired, plain);
+    double grouped = sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]) * wc + spread;
+    return fmin(grouped, plain);
 }
 
 /* Row i of the bound: sum over the centres j within 2R of |alpha_j| w_ij; with g_paired,
- * close pairs by pair_term. */
+ * close groups by group_term, each once (at its first member within 2R of centre i). */
 static double row_bound(const csrbf_solver *s, size_t i)
 {
     double L = 0.0;
     for (size_t t = s->gn_start[i]; t < s->gn_start[i + 1]; t++) {
         size_t j = s->gn_idx[t];
-        uint32_t k = s->g_paired ? s->gpair[j] : UINT32_MAX;
-        if (k == UINT32_MAX) {
+        uint32_t g = s->g_paired ? s->gg_group[j] : UINT32_MAX;
+        if (g == UINT32_MAX) {
             L += s->gn_w[t] * s->anorm[j];
             continue;
         }
-        double wk = weight_between(s, i, k);
-        /* once per pair: at its first member, or here when the other is out of reach */
-        if (j < k || wk == 0.0) L += pair_term(s, j, k, s->gn_w[t], wk);
+        bool first = true;
+        for (uint32_t u = s->gg_start[g]; u < s->gg_start[g + 1] && first; u++) {
+            size_t k = s->gg_idx[u];
+            if (k < j && weight_at(s, i, s->c + 3 * k) > 0.0) first = false;
+        }
+        if (first) L += group_term(s, i, g);
     }
     return L;
 }
@@ -474,7 +515,7 @@ static void track_start_points(csrbf_solver *s, size_t n, float *P, const float 
     }
 }
 
-/* The sub-step from which guarded's maps are certified with the pair terms: the last
+/* The sub-step from which guarded's maps are certified with the group terms: the last
  * quarter (at least 12) of the maps it may compose, max_substeps or, with a pair budget, the
  * map at which the budget will stop it at the pairs the maps so far averaged (j maps,
  * `pairs` pairs). Before it the plain bound (a long drag's many small maps, whose shape the

@@ -456,7 +456,7 @@ static void test_guarded_step_merged(void **state)
  * lattice turns over, det > 0 at every vertex). */
 /* Skin grabbed 0.01 R apart and pulled 1.2 R apart (not converging: an injective map does
  * it) is delivered in full within the default 16 maps: the last maps are certified with the
- * pair terms (CSRBF_GUARD_PAIR_GAP), which see the two fields cancel; under the plain bound
+ * group terms (CSRBF_GUARD_GROUP_GAP), which see the two fields cancel; under the plain bound
  * alone 16 maps reached 5% of it and the gesture read "limited". Every map stays within the
  * margin, det > 0, no tetrahedron flips. */
 static void test_guarded_step_pulled_apart_close(void **state)
@@ -492,7 +492,7 @@ static void test_guarded_step_pulled_apart_close(void **state)
 }
 
 /* Points drawn onto one point (0.4 R apart to none): no injective map gets there, so the
- * step stops short (the pair terms bring them within the merge tolerance, where they move
+ * step stops short (the group terms bring them within the merge tolerance, where they move
  * as one). */
 static void test_guarded_step_onto_one_point(void **state)
 {
