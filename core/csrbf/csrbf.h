@@ -507,7 +507,10 @@ typedef struct csrbf_guard {
  *  end - p, and so stop short of their own ends: CSRBF_WARN_LIMITED); it stops
  *  when every t_C = 1 (T(start_i) = end_i, the composition of injective maps is injective)
  *  or after max_substeps maps, or past the CSRBF_GUARD_MAX_SUBSTEPS-th once the maps so far
- *  evaluated max_pairs pairs (the rest of the motion is dropped; CSRBF_WARN_LIMITED).
+ *  evaluated max_pairs pairs (the rest of the motion is dropped; CSRBF_WARN_LIMITED). The
+ *  last quarter (at least 12) of the maps it may compose (max_substeps, or where the budget
+ *  will stop it at the pairs the maps so far averaged) are limited with the group terms
+ *  (CSRBF_GUARD_GROUP_GAP), the earlier ones with the plain bound.
  *  When start equals the solver's current start points bit for bit, the factor is reused.
  *  Cost: a step that is injective already costs one update plus the bound (O(m^2) for m
  *  fingertips: a few per cent of the evaluation); otherwise each sub-step costs a
