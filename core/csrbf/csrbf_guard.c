@@ -48,6 +48,8 @@ void csrbf_guard_free(csrbf_solver *s)
     free(s->cl_L);
     free(s->cl_t);
     free(s->anorm);
+    free(s->gg_u32);
+    free(s->gg_f64);
     free(s->g_p);
     free(s->g_e);
     free(s->g_blk);
@@ -57,6 +59,9 @@ void csrbf_guard_free(csrbf_solver *s)
     s->gn_w = NULL;
     s->cluster = NULL;
     s->cl_L = s->cl_t = s->anorm = NULL;
+    s->gg_u32 = s->gg_group = s->gg_start = s->gg_idx = NULL;
+    s->gg_f64 = s->gg_c = s->gg_r = NULL;
+    s->ngroups = 0;
     s->g_p = s->g_e = NULL;
     s->g_blk = NULL;
     s->gn_cap = s->g_cap = s->g_bcap = 0;
@@ -106,6 +111,78 @@ static int neighbour_try(void *ctx, uint32_t j)
     return CSRBF_OK;
 }
 
+/* The largest norm of the Hessian of psi(|x|) over x, max over r of |psi''(r)| and
+ * |psi'(r) / r| (the eigenvalues), for the kernels whose Hessian is bounded: psi31
+ * (psi' = -20 r (1-r)^3, psi'' = -20 (1-r)^2 (1 - 4r): 20 at r = 0) and psi32 (psi' / r =
+ * -(56/3) (1-r)^5 (5r+1), psi'' = -(56/3) (1-r)^4 (1 + 4r - 35r^2): 56/3 at r = 0). 0 for
+ * psi30, a cone at its centre: no pair term. */
+static double hessian_max(csrbf_kernel k)
+{
+    switch (k) {
+    case CSRBF_PSI31: return 20.0;
+    case CSRBF_PSI32: return 56.0 / 3.0;
+    case CSRBF_PSI30:
+    default: return 0.0;
+    }
+}
+
+/* Close groups for the bound's group terms (group_term): each centre joins the first group
+ * whose leader (its first centre) lies under CSRBF_GUARD_GROUP_GAP x R from it, else leads
+ * a new one; groups of one centre are dropped. Fills gg_group, gg_start, gg_idx, gg_c, gg_r,
+ * ngroups. m is a few dozen fingertips at most: O(m^2). */
+static void close_groups(csrbf_solver *s)
+{
+    const size_t m = s->m;
+    const double gap2 = CSRBF_GUARD_GROUP_GAP * CSRBF_GUARD_GROUP_GAP * s->R * s->R;
+    uint32_t *lead = s->gg_idx, *count = s->gg_start; /* scratch first */
+    size_t nl = 0;
+    s->ngroups = 0;
+    for (size_t i = 0; i < m; i++) s->gg_group[i] = UINT32_MAX;
+    if (hessian_max(s->opt.kernel) == 0.0) return;
+    for (size_t i = 0; i < m; i++) {
+        const double *ci = s->c + 3 * i;
+        size_t g = nl;
+        for (size_t l = 0; l < nl && g == nl; l++) {
+            const double *cl = s->c + 3 * (size_t)lead[l];
+            double d0 = ci[0] - cl[0], d1 = ci[1] - cl[1], d2 = ci[2] - cl[2];
+            if (d0 * d0 + d1 * d1 + d2 * d2 < gap2) g = l;
+        }
+        if (g == nl) {
+            lead[nl] = (uint32_t)i;
+            count[nl++] = 0;
+        }
+        s->gg_group[i] = (uint32_t)g;
+        count[g]++;
+    }
+    /* number the groups of two or more 0..ngroups-1 (the provisional number g >= the new) */
+    size_t ng = 0;
+    for (size_t l = 0; l < nl; l++) lead[l] = count[l] > 1 ? (uint32_t)ng++ : UINT32_MAX;
+    for (size_t i = 0; i < m; i++) s->gg_group[i] = lead[s->gg_group[i]];
+    s->ngroups = ng;
+    memset(s->gg_start, 0, (ng + 1) * sizeof *s->gg_start);
+    for (size_t i = 0; i < m; i++)
+        if (s->gg_group[i] != UINT32_MAX) s->gg_start[s->gg_group[i] + 1]++;
+    for (size_t g = 0; g < ng; g++) s->gg_start[g + 1] += s->gg_start[g];
+    memset(s->gg_c, 0, 3 * (ng ? ng : 1) * sizeof *s->gg_c);
+    for (size_t g = 0; g < ng; g++) s->gg_r[g] = 0.0; /* (fill counts, in gg_r for now) */
+    for (size_t i = 0; i < m; i++) {
+        uint32_t g = s->gg_group[i];
+        if (g == UINT32_MAX) continue;
+        s->gg_idx[s->gg_start[g] + (size_t)s->gg_r[g]] = (uint32_t)i;
+        s->gg_r[g] += 1.0;
+        for (int a = 0; a < 3; a++) s->gg_c[3 * g + a] += s->c[3 * i + a];
+    }
+    for (size_t g = 0; g < ng; g++)
+        for (int a = 0; a < 3; a++) s->gg_c[3 * g + a] /= (double)(s->gg_start[g + 1] - s->gg_start[g]);
+    for (size_t i = 0; i < m; i++) {
+        uint32_t g = s->gg_group[i];
+        double r2 = 0.0;
+        if (g != UINT32_MAX)
+            for (int a = 0; a < 3; a++) r2 += (s->c[3 * i + a] - s->gg_c[3 * g + a]) * (s->c[3 * i + a] - s->gg_c[3 * g + a]);
+        s->gg_r[i] = sqrt(r2);
+    }
+}
+
 int csrbf_guard_prepare(csrbf_solver *s)
 {
     size_t m = s->m;
@@ -125,6 +202,17 @@ int csrbf_guard_prepare(csrbf_solver *s)
     if (!a) return CSRBF_ERR_NOMEM;
     s->anorm = a;
     memset(s->anorm, 0, (m ? m : 1) * sizeof *a);
+    uint32_t *gu = realloc(s->gg_u32, (4 * m + 1) * sizeof *gu);
+    if (!gu) return CSRBF_ERR_NOMEM;
+    s->gg_u32 = gu;
+    s->gg_group = gu;
+    s->gg_start = gu + m;
+    s->gg_idx = gu + 2 * m + 1;
+    double *gf = realloc(s->gg_f64, (4 * m + 1) * sizeof *gf);
+    if (!gf) return CSRBF_ERR_NOMEM;
+    s->gg_f64 = gf;
+    s->gg_c = gf;
+    s->gg_r = gf + 3 * m;
     if (!s->gn_cap) {
         s->gn_cap = 16 * (m ? m : 1);
         s->gn_idx = malloc(s->gn_cap * sizeof *s->gn_idx);
@@ -158,7 +246,65 @@ int csrbf_guard_prepare(csrbf_solver *s)
     }
     for (size_t i = 0; i < m; i++) cl[i] = (uint32_t)s->cl_t[i];
     s->nclusters = nc;
+    close_groups(s);
     return CSRBF_OK;
+}
+
+/* w(|c_i - p| / R - 1) / R, the largest |grad psi(|x - p| / R)| over centre i's support (0
+ * where the supports do not overlap: neighbour_try's test) */
+static double weight_at(const csrbf_solver *s, size_t i, const double *p)
+{
+    const double *ci = s->c + 3 * i;
+    double d0 = ci[0] - p[0], d1 = ci[1] - p[1], d2 = ci[2] - p[2];
+    double r2 = d0 * d0 + d1 * d1 + d2 * d2;
+    if (r2 >= 4.0 * s->R * s->R) return 0.0;
+    return dpsi_max_from(s->opt.kernel, sqrt(r2) * s->inv_R - 1.0) * s->inv_R;
+}
+
+/* A close group's share of row i's bound. With c its mean centre, the group's gradient
+ * terms are (sum_j alpha_j) grad psi_c + sum_j alpha_j (grad psi_j - grad psi_c), and
+ * |grad psi_j - grad psi_c| <= min(H |c_j - c| / R^2, w_ij + w_ic) (H: hessian_max; the
+ * gradient of psi(|x - p| / R) is H / R^2-Lipschitz in p, psi31 and psi32 being C^2).
+ * Fingertips on close skin moving apart, together or round each other have large
+ * coefficients of opposite signs whose fields cancel but for their differences, which the
+ * plain terms count whole: skin pulled apart from 0.01 R needs about a dozen maps under
+ * this bound against 60 under the plain one. The smaller of this and the plain terms. */
+static double group_term(const csrbf_solver *s, size_t i, uint32_t g)
+{
+    const double wc = weight_at(s, i, s->gg_c + 3 * (size_t)g);
+    const double h = hessian_max(s->opt.kernel) * s->inv_R * s->inv_R;
+    double sum[3] = {0, 0, 0}, plain = 0.0, spread = 0.0;
+    for (uint32_t t = s->gg_start[g]; t < s->gg_start[g + 1]; t++) {
+        size_t j = s->gg_idx[t];
+        double wj = weight_at(s, i, s->c + 3 * j);
+        for (int a = 0; a < 3; a++) sum[a] += s->alpha[3 * j + a];
+        plain += s->anorm[j] * wj;
+        spread += s->anorm[j] * fmin(h * s->gg_r[j], wj + wc);
+    }
+    double grouped = sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]) * wc + spread;
+    return fmin(grouped, plain);
+}
+
+/* Row i of the bound: sum over the centres j within 2R of |alpha_j| w_ij; with g_paired,
+ * close groups by group_term, each once (at its first member within 2R of centre i). */
+static double row_bound(const csrbf_solver *s, size_t i)
+{
+    double L = 0.0;
+    for (size_t t = s->gn_start[i]; t < s->gn_start[i + 1]; t++) {
+        size_t j = s->gn_idx[t];
+        uint32_t g = s->g_paired ? s->gg_group[j] : UINT32_MAX;
+        if (g == UINT32_MAX) {
+            L += s->gn_w[t] * s->anorm[j];
+            continue;
+        }
+        bool first = true;
+        for (uint32_t u = s->gg_start[g]; u < s->gg_start[g + 1] && first; u++) {
+            size_t k = s->gg_idx[u];
+            if (k < j && weight_at(s, i, s->c + 3 * k) > 0.0) first = false;
+        }
+        if (first) L += group_term(s, i, g);
+    }
+    return L;
 }
 
 /* Per-cluster bounds into cl_L (without the polynomial term); returns ||B||_F. */
@@ -166,9 +312,7 @@ static double cluster_bounds(const csrbf_solver *s, double *cl_L)
 {
     for (size_t c = 0; c < s->nclusters; c++) cl_L[c] = 0.0;
     for (size_t i = 0; i < s->m; i++) {
-        double L = 0.0;
-        for (size_t t = s->gn_start[i]; t < s->gn_start[i + 1]; t++)
-            L += s->gn_w[t] * s->anorm[s->gn_idx[t]];
+        double L = row_bound(s, i);
         size_t c = s->cluster[i];
         if (L > cl_L[c]) cl_L[c] = L;
     }
@@ -183,9 +327,7 @@ static double total_bound(const csrbf_solver *s)
 {
     double L = 0.0;
     for (size_t i = 0; i < s->m; i++) {
-        double v = 0.0;
-        for (size_t t = s->gn_start[i]; t < s->gn_start[i + 1]; t++)
-            v += s->gn_w[t] * s->anorm[s->gn_idx[t]];
+        double v = row_bound(s, i);
         if (v > L) L = v;
     }
     double b2 = 0.0;
@@ -373,9 +515,42 @@ static void track_start_points(csrbf_solver *s, size_t n, float *P, const float 
     }
 }
 
+/* The sub-step from which guarded's maps are certified with the group terms: the last
+ * quarter (at least 12) of the maps it may compose, max_substeps or, with a pair budget, the
+ * map at which the budget will stop it at the pairs the maps so far averaged (j maps,
+ * `pairs` pairs). Before it the plain bound (a long drag's many small maps, whose shape the
+ * contact guard's figures were measured on); from it, skin pulled apart from a close pair
+ * that the plain bound would stop short gets there in a few larger maps, still each one
+ * injective. */
+static int paired_from(int j, int maxk, uint64_t max_pairs, uint64_t pairs)
+{
+    int stop = maxk;
+    if (max_pairs && j > 0 && pairs > 0) {
+        double per = (double)pairs / j, at = ceil((double)max_pairs / per);
+        int budget = at > CSRBF_GUARD_MAX_SUBSTEPS ? (at < maxk ? (int)at : maxk) : CSRBF_GUARD_MAX_SUBSTEPS;
+        if (budget < stop) stop = budget;
+    }
+    int last = stop / 4 > 12 ? stop / 4 : 12;
+    return stop - last;
+}
+
+static int guarded_maps(csrbf_solver *s, const csrbf_points *shape, follow *fw, size_t n,
+                        const float *start, const float *end, const csrbf_guard *guard, float *deformed,
+                        csrbf_guard_stats *st);
+
 static int guarded(csrbf_solver *s, const csrbf_points *shape, follow *fw, size_t n,
                    const float *start, const float *end, const csrbf_guard *guard, float *deformed,
                    csrbf_guard_stats *st)
+{
+    s->g_paired = 0;
+    int rc = guarded_maps(s, shape, fw, n, start, end, guard, deformed, st);
+    s->g_paired = 0; /* the plain bound for every other caller */
+    return rc;
+}
+
+static int guarded_maps(csrbf_solver *s, const csrbf_points *shape, follow *fw, size_t n,
+                        const float *start, const float *end, const csrbf_guard *guard, float *deformed,
+                        csrbf_guard_stats *st)
 {
     double margin = guard && guard->margin != 0.0 ? guard->margin : CSRBF_GUARD_MARGIN;
     int maxk = guard && guard->max_substeps != 0 ? guard->max_substeps : CSRBF_GUARD_MAX_SUBSTEPS;
@@ -417,6 +592,7 @@ static int guarded(csrbf_solver *s, const csrbf_points *shape, follow *fw, size_
         }
         rc = csrbf_solver_set_end_points(s, E);
         if (rc < 0) return rc;
+        if (maxk > 1 && j >= paired_from(j, maxk, max_pairs, out.eval.pairs)) s->g_paired = 1;
         csrbf_guard_stats ls;
         rc = csrbf_solver_limit_end_points(s, margin, &ls);
         if (rc < 0) return rc;

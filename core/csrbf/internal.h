@@ -146,6 +146,16 @@ struct csrbf_solver {
     size_t nclusters;
     double *cl_L, *cl_t;     /* m each: per-cluster bound and scale (scratch) */
     double *anorm;           /* m: |alpha_j| (scratch) */
+    uint32_t *gg_u32;        /* close groups (csrbf_guard.c close_groups): 4 m + 1: each
+                                centre's group or UINT32_MAX (gg_group), the groups' member
+                                lists gg_start (ngroups + 1) and gg_idx */
+    uint32_t *gg_group, *gg_start, *gg_idx;
+    double *gg_f64;          /* 4 m: each group's mean centre gg_c (3 per group), each
+                                centre's distance to its group's mean gg_r */
+    double *gg_c, *gg_r;
+    size_t ngroups;
+    int g_paired;            /* the bounds use the group terms (csrbf_guard.c: a composed
+                                step's last maps); 0 outside guarded() */
     float *g_p, *g_e;        /* guarded step: current start and end points, n x 3 */
     size_t g_cap;
     csrbf_points *g_tmp;     /* guarded step: index of the intermediate shape */

@@ -454,7 +454,12 @@ static void test_guarded_step_merged(void **state)
  * stop short; 64 maps reach it, with or without a pairs budget that allows them, and a budget
  * already spent keeps the default's 16. Every map applied is injective (no tetrahedron of the
  * lattice turns over, det > 0 at every vertex). */
-static void test_guarded_step_pairs_budget(void **state)
+/* Skin grabbed 0.01 R apart and pulled 1.2 R apart (not converging: an injective map does
+ * it) is delivered in full within the default 16 maps: the last maps are certified with the
+ * group terms (CSRBF_GUARD_GROUP_GAP), which see the two fields cancel; under the plain bound
+ * alone 16 maps reached 5% of it and the gesture read "limited". Every map stays within the
+ * margin, det > 0, no tetrahedron flips. */
+static void test_guarded_step_pulled_apart_close(void **state)
 {
     (void)state;
     const double lo[3] = {-1.6, -1.2, -1.2}, hi[3] = {1.6, 1.2, 1.2};
@@ -468,35 +473,178 @@ static void test_guarded_step_pairs_budget(void **state)
     csrbf_guard_stats gs;
     csrbf_guard g = {0};
     g.eval_flags = CSRBF_EVAL_JACOBIAN;
+    int rc = csrbf_guarded_step(s, pts, 2, st, en, &g, out, &gs);
+    printf("  pulled apart from 0.01 R to 1.2 R: %d maps reach %.1f%%, min det J %.3g\n", gs.substeps,
+           100 * gs.reached, gs.eval.min_jacobian_det);
+    assert_int_equal(rc, CSRBF_WARN_SUBSTEPS);
+    assert_true(gs.substeps <= CSRBF_GUARD_MAX_SUBSTEPS);
+    assert_true(gs.reached == 1.0);
+    assert_true(gs.eval.min_jacobian_det > 0.0);
+    assert_double_le(gs.bound_after, 0.9 + 1e-12);
+    assert_int_equal(flipped_tets(grid, out, 20), 0);
+    /* the plain bound stays the solver's outside a composed step */
+    double L;
+    assert_int_equal(csrbf_solver_injectivity(s, &L), CSRBF_OK);
+    csrbf_solver_destroy(&s);
+    csrbf_points_destroy(&pts);
+    free(grid);
+    free(out);
+}
+
+/* max over a lattice of the box of ||dT/dx - I||_2 (power iteration on (J - I)^T (J - I)) */
+static double max_stretch_map(const csrbf_solver *s, int q, const double lo[3], const double hi[3])
+{
+    double mx = 0.0;
+    for (int z = 0; z <= q; z++)
+        for (int y = 0; y <= q; y++)
+            for (int x = 0; x <= q; x++) {
+                double p[3] = {lo[0] + (hi[0] - lo[0]) * x / q, lo[1] + (hi[1] - lo[1]) * y / q,
+                               lo[2] + (hi[2] - lo[2]) * z / q}, o[3], J[9], M[9], v[3] = {1, 0.7, 0.3};
+                assert_int_equal(csrbf_solver_map_point(s, p, o, J), CSRBF_OK);
+                for (int a = 0; a < 3; a++) J[4 * a] -= 1.0;
+                for (int a = 0; a < 3; a++)
+                    for (int b = 0; b < 3; b++)
+                        M[3 * a + b] = J[a] * J[b] + J[3 + a] * J[3 + b] + J[6 + a] * J[6 + b];
+                double lam = 0.0;
+                for (int it = 0; it < 60; it++) {
+                    double w[3], n = 0.0;
+                    for (int a = 0; a < 3; a++) w[a] = M[3 * a] * v[0] + M[3 * a + 1] * v[1] + M[3 * a + 2] * v[2];
+                    for (int a = 0; a < 3; a++) n += w[a] * w[a];
+                    n = sqrt(n);
+                    if (!(n > 0)) break;
+                    for (int a = 0; a < 3; a++) v[a] = w[a] / n;
+                    lam = n;
+                }
+                if (sqrt(lam) > mx) mx = sqrt(lam);
+            }
+    return mx;
+}
+
+/* The group terms are a bound: close groups of 2-5 centres (within 0.15 R) moved at random
+ * (up to 0.8 R each, apart, together, round each other), composed in at most 16 maps, the
+ * last 12 certified with the group terms: the last map's measured ||dT/dx - I|| stays under
+ * the margin, though its plain bound may be far over it; det dT/dx > 0 at every lattice
+ * point under every map. */
+static void test_group_terms_bound(void **state)
+{
+    (void)state;
+    const double lo[3] = {-2.2, -2.2, -2.2}, hi[3] = {2.2, 2.2, 2.2};
+    size_t nv;
+    float *grid = lattice(16, lo, hi, &nv);
+    float *out = malloc(nv * 3 * sizeof *out);
+    csrbf_points *pts;
+    assert_int_equal(csrbf_points_create(nv, grid, &pts), CSRBF_OK);
+    int delivered = 0, over_plain = 0, trials = 40;
+    size_t flips = 0;
+    double worst = 0.0;
+    for (int k = 0; k < trials; k++) {
+        size_t n = 2 + (size_t)(urand() * 4);
+        float st[15], en[15];
+        for (size_t i = 0; i < 3 * n; i++) {
+            st[i] = (float)(0.15 * (urand() - 0.5));
+            en[i] = st[i] + (float)(0.8 * 2 * (urand() - 0.5) / sqrt(3.0));
+        }
+        csrbf_solver *s = make_solver(1.0, CSRBF_PSI31, CSRBF_POLY_NONE);
+        csrbf_guard_stats gs;
+        csrbf_guard g = {0};
+        g.eval_flags = CSRBF_EVAL_JACOBIAN;
+        int rc = csrbf_guarded_step(s, pts, n, st, en, &g, out, &gs);
+        assert_true(rc >= 0);
+        assert_true(gs.eval.min_jacobian_det > 0.0);
+        delivered += gs.reached == 1.0;
+        flips += flipped_tets(grid, out, 16); /* (a coarse tetrahedron, 0.27 R across, about
+            skin drawn together 0.15 R across, can turn under an injective map: said, not
+            asserted; the plain bound's 16 maps turn some too) */
+        if (gs.substeps > CSRBF_GUARD_MAX_SUBSTEPS - 12) { /* the last map had the group terms */
+            double L, m = max_stretch_map(s, 24, lo, hi);
+            assert_int_equal(csrbf_solver_injectivity(s, &L), CSRBF_OK);
+            over_plain += L > 0.9 + 1e-9;
+            assert_double_le(m, 0.9 + 1e-6);
+            if (m > worst) worst = m;
+        }
+        csrbf_solver_destroy(&s);
+    }
+    printf("  close groups: %zu lattice tetrahedra flipped; %d of %d delivered in 16 maps; last maps' measured stretch up to %.3f "
+           "(%d of them over the margin by the plain bound)\n", flips, delivered, trials, worst, over_plain);
+    assert_true(over_plain > 0); /* the group terms were what certified them */
+    csrbf_points_destroy(&pts);
+    free(grid);
+    free(out);
+}
+
+/* Points drawn onto one point (0.4 R apart to none): no injective map gets there, so the
+ * step stops short (the group terms bring them within the merge tolerance, where they move
+ * as one). */
+static void test_guarded_step_onto_one_point(void **state)
+{
+    (void)state;
+    const double lo[3] = {-1.6, -1.2, -1.2}, hi[3] = {1.6, 1.2, 1.2};
+    size_t nv;
+    float *grid = lattice(20, lo, hi, &nv);
+    float *out = malloc(nv * 3 * sizeof *out);
+    csrbf_points *pts;
+    assert_int_equal(csrbf_points_create(nv, grid, &pts), CSRBF_OK);
+    const float st[6] = {-0.2f, 0, 0, 0.2f, 0, 0}, en[6] = {0, 0, 0, 0, 0, 0};
+    csrbf_solver *s = make_solver(1.0, CSRBF_PSI31, CSRBF_POLY_NONE);
+    csrbf_guard_stats gs;
+    csrbf_guard g = {0};
+    g.eval_flags = CSRBF_EVAL_JACOBIAN;
+    g.max_substeps = 64;
     assert_int_equal(csrbf_guarded_step(s, pts, 2, st, en, &g, out, &gs), CSRBF_WARN_LIMITED);
+    assert_true(gs.reached < 1.0);
+    assert_true(gs.eval.min_jacobian_det > 0.0);
+    assert_double_le(gs.bound_after, 0.9 + 1e-12);
+    assert_int_equal(flipped_tets(grid, out, 20), 0);
+    printf("  drawn onto one point from 0.4 R: %d maps reach %.2f%%\n", gs.substeps, 100 * gs.reached);
+    csrbf_solver_destroy(&s);
+    csrbf_points_destroy(&pts);
+    free(grid);
+    free(out);
+}
+
+/* The pair budget: one centre moved 10 R (about 26 maps of 0.43 R each, the plain bound
+ * being exact for one centre) stops at the default 16 maps, goes all the way with 64, with
+ * a budget the maps stay under the same, with one the default's maps spent 16, and with one
+ * spent part way at the first map past the 16th that reaches it. */
+static void test_guarded_step_pairs_budget(void **state)
+{
+    (void)state;
+    const double lo[3] = {-1.6, -1.2, -1.2}, hi[3] = {1.6, 1.2, 1.2};
+    size_t nv;
+    float *grid = lattice(20, lo, hi, &nv);
+    float *out = malloc(nv * 3 * sizeof *out);
+    csrbf_points *pts;
+    assert_int_equal(csrbf_points_create(nv, grid, &pts), CSRBF_OK);
+    const float st[3] = {0, 0, 0}, en[3] = {10.0f, 0, 0};
+    csrbf_solver *s = make_solver(1.0, CSRBF_PSI31, CSRBF_POLY_NONE);
+    csrbf_guard_stats gs;
+    csrbf_guard g = {0};
+    g.eval_flags = CSRBF_EVAL_JACOBIAN;
+    assert_int_equal(csrbf_guarded_step(s, pts, 1, st, en, &g, out, &gs), CSRBF_WARN_LIMITED);
     assert_int_equal(gs.substeps, CSRBF_GUARD_MAX_SUBSTEPS);
     double reached16 = gs.reached;
     assert_true(reached16 < 1.0);
     uint64_t pairs16 = gs.eval.pairs;
     g.max_substeps = 64;
-    assert_int_equal(csrbf_guarded_step(s, pts, 2, st, en, &g, out, &gs), CSRBF_WARN_SUBSTEPS);
+    assert_int_equal(csrbf_guarded_step(s, pts, 1, st, en, &g, out, &gs), CSRBF_WARN_SUBSTEPS);
     int needed = gs.substeps;
     assert_true(needed > CSRBF_GUARD_MAX_SUBSTEPS && needed <= 64);
     assert_true(gs.reached == 1.0);
     assert_true(gs.eval.min_jacobian_det > 0.0);
     assert_double_le(gs.bound_after, 0.9 + 1e-12);
     assert_int_equal(flipped_tets(grid, out, 20), 0);
-    /* a budget the maps stay under: the same composition */
     g.max_pairs = (uint64_t)gs.eval.pairs + 1;
-    assert_int_equal(csrbf_guarded_step(s, pts, 2, st, en, &g, out, &gs), CSRBF_WARN_SUBSTEPS);
+    assert_int_equal(csrbf_guarded_step(s, pts, 1, st, en, &g, out, &gs), CSRBF_WARN_SUBSTEPS);
     assert_int_equal(gs.substeps, needed);
-    /* a budget the default's maps already spent: those 16, no more */
     g.max_pairs = pairs16 / 2;
-    assert_int_equal(csrbf_guarded_step(s, pts, 2, st, en, &g, out, &gs), CSRBF_WARN_LIMITED);
+    assert_int_equal(csrbf_guarded_step(s, pts, 1, st, en, &g, out, &gs), CSRBF_WARN_LIMITED);
     assert_int_equal(gs.substeps, CSRBF_GUARD_MAX_SUBSTEPS);
     assert_true(gs.reached == reached16);
-    /* one spent part way: stops at the first map past the 16th that reaches it */
     g.max_pairs = pairs16 + 1;
-    assert_int_equal(csrbf_guarded_step(s, pts, 2, st, en, &g, out, &gs), CSRBF_WARN_LIMITED);
+    assert_int_equal(csrbf_guarded_step(s, pts, 1, st, en, &g, out, &gs), CSRBF_WARN_LIMITED);
     assert_int_equal(gs.substeps, CSRBF_GUARD_MAX_SUBSTEPS + 1);
     assert_true(gs.reached > reached16 && gs.reached < 1.0);
-    printf("  pulled apart from 0.01 R to 1.2 R: 16 maps reach %.0f%%, %d maps all of it\n",
-           100 * reached16, needed);
+    printf("  one centre moved 10 R: 16 maps reach %.0f%%, %d maps all of it\n", 100 * reached16, needed);
     csrbf_solver_destroy(&s);
     csrbf_points_destroy(&pts);
     free(grid);
@@ -642,6 +790,9 @@ int main(void)
         cmocka_unit_test(test_single_centre_beyond_bound), cmocka_unit_test(test_bound_random),
         cmocka_unit_test(test_limit_per_cluster),    cmocka_unit_test(test_guarded_step_gentle),
         cmocka_unit_test(test_guarded_step_touched), cmocka_unit_test(test_guarded_step_pairs_budget),
+        cmocka_unit_test(test_guarded_step_pulled_apart_close),
+        cmocka_unit_test(test_guarded_step_onto_one_point),
+        cmocka_unit_test(test_group_terms_bound),
         cmocka_unit_test(test_guarded_step_merged),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

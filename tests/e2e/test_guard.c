@@ -6,7 +6,9 @@
  *    engine directly); with it no new crossing (CGAL, fp_selfx_count_new against the loaded
  *    face), min det J > 0, every end point reached (composed sub-steps, both modes), the
  *    stats say what the guard did and the log says it once per gesture.
- *  - test_five_finger_pull: five grabbed cheek points pulled together out of the face.
+ *  - test_five_finger_pull: five grabbed cheek points pulled together out of the face;
+ *    test_five_finger_pull_elsewhere: the same at both cheeks, forehead and chin of the three
+ *    faces, out of the face, up, down and across: every one delivered in full.
  *  - test_recordings_*: the three faces x the four Leap joints recordings, both mappings,
  *    replayed through the session: no new crossing at the end and every few deforming
  *    frames, and the face still deforms (moved share and max displacement printed). */
@@ -341,6 +343,127 @@ static void test_five_finger_pull(void **state)
     five_finger_pull(2.0, true, 0.5);
 }
 
+/* The same pull elsewhere (issue 51's "delivered in full" at any place, not the one cheek):
+ * on each face, five fingertips grab the skin 0.4 R apart in an arc at a place given by its
+ * fractions of the face's box (fx across, fy up from the middle; the frontmost vertex there,
+ * the faces looking along +z), and pull it together 1.5 R along dir_kind (0 out of the face
+ * along the grabbed skin's mean normal, 1 up, 2 down, 3 across toward +x, 4 across toward
+ * -x) over ten frames of one anchored gesture, the mapping's support for the drag (widen
+ * 0.5). The fold-over guard alone (the contact guard off: what it holds back is its own
+ * statistic): every frame composed of injective maps and delivered in full (reached 1, each
+ * grabbed vertex at its end point, min det J > 0), never "limited". */
+static int pull_elsewhere(const char *face, double fx, double fy, int dir_kind)
+{
+    char path[4200], err[2048];
+    snprintf(path, sizeof path, "%s/faces/%s", fp_test_data_dir(), face);
+    logbook lb = {0};
+    fp_session_options so = {0};
+    so.mesh_path = path;
+    so.mapping = "anchored";
+    so.plugin_path = plugin_path();
+    so.rig_path = "none";
+    so.measure_jacobian = true;
+    so.no_contact_guard = true;
+    so.log = on_log;
+    so.log_user = &lb;
+    fp_session *s = NULL;
+    assert_int_equal(fp_session_create(&so, &s, err, sizeof err), 0);
+    const float *b = fp_session_base(s);
+    size_t n = fp_session_vertex_count(s), skin = strstr(face, "ict-facekit") ? 9409 : n;
+    double R = fp_session_radius(s);
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t v = 0; v < skin; v++)
+        for (int a = 0; a < 3; a++) {
+            lo[a] = fminf(lo[a], b[3 * v + a]);
+            hi[a] = fmaxf(hi[a], b[3 * v + a]);
+        }
+    float cx = 0.5f * (lo[0] + hi[0]) + (float)fx * (hi[0] - lo[0]);
+    float cy = 0.5f * (lo[1] + hi[1]) + (float)fy * (hi[1] - lo[1]);
+    fp_control_set cs;
+    float starts[5][3], ends[5][3];
+    memset(&cs, 0, sizeof cs);
+    cs.size = sizeof cs;
+    cs.capacity = 5;
+    cs.start = starts;
+    cs.end = ends;
+    cs.count = 5;
+    uint32_t grabbed[5];
+    for (int i = 0; i < 5; i++) { /* an arc across, as a hand's tips lie */
+        double u = 0.4 * R * (i - 2);
+        float q[2] = {cx + (float)u, cy + (float)(0.1 * fabs(u))};
+        double best = INFINITY;
+        size_t bi = 0;
+        for (size_t v = 0; v < skin; v++) {
+            double dx = b[3 * v] - q[0], dy = b[3 * v + 1] - q[1];
+            double d = dx * dx + dy * dy - 1e-3 * R * b[3 * v + 2];
+            if (d < best) {
+                best = d;
+                bi = v;
+            }
+        }
+        grabbed[i] = (uint32_t)bi;
+        memcpy(cs.start[i], b + 3 * bi, sizeof cs.start[i]);
+    }
+    double dir[3] = {0, 0, 0}, len = 0;
+    if (dir_kind == 0) {
+        const struct fp_mesh *m = fp_session_mesh(s);
+        float *nrm = malloc(n * 3 * sizeof *nrm);
+        assert_non_null(nrm);
+        fp_mesh_normals(m->triangles, m->triangle_count, b, n, nrm);
+        for (int i = 0; i < 5; i++)
+            for (int a = 0; a < 3; a++) dir[a] += nrm[3 * grabbed[i] + a];
+        free(nrm);
+    } else {
+        dir[dir_kind <= 2 ? 1 : 0] = dir_kind == 1 || dir_kind == 3 ? 1.0 : -1.0;
+    }
+    for (int a = 0; a < 3; a++) len += dir[a] * dir[a];
+    for (int a = 0; a < 3; a++) dir[a] /= sqrt(len);
+    int composed = 0, delivered = 1;
+    double least = 1.0;
+    for (int f = 1; f <= 10; f++) {
+        cs.active = true;
+        cs.intents = f == 1 ? FP_INTENT_ENGAGE : 0;
+        for (int i = 0; i < 5; i++)
+            for (int a = 0; a < 3; a++) cs.end[i][a] = cs.start[i][a] + (float)(dir[a] * 1.5 * R * f / 10);
+        cs.radius = fp_drag_radius(R, 0.5, (const float (*)[3])cs.start, (const float (*)[3])cs.start,
+                                   (const float (*)[3])cs.end, 5);
+        fp_frame_stats st;
+        fp_session_apply_controls(s, fp_now_ns(), &cs, 0, &st);
+        assert_true(st.active);
+        assert_true(st.min_det_j > 0);
+        composed += st.guard_substeps > 1;
+        if (st.guard_reached < least) least = st.guard_reached;
+        const float *p = fp_session_positions(s);
+        for (int i = 0; i < 5; i++)
+            for (int a = 0; a < 3; a++)
+                if (!(fabs((double)p[3 * grabbed[i] + a] - cs.end[i][a]) < 1e-3 * R)) delivered = 0;
+    }
+    fp_session_destroy(&s); /* (the gesture's guard line is said at its end) */
+    bool ok = least == 1.0 && delivered && !strstr(lb.last, "limited");
+    if (!ok || getenv("FP_TEST_VERBOSE"))
+        printf("  %s at (%+.2f, %+.2f), direction %d: composed on %d of 10 frames, least reached %.3f, "
+           "%s; guard lines %u%s%s\n",
+               face, fx, fy, dir_kind, composed, least, delivered ? "every end point reached" : "END POINTS MISSED",
+               lb.guard_lines, lb.guard_lines ? ": " : "", lb.last);
+    return ok;
+}
+
+static void test_five_finger_pull_elsewhere(void **state)
+{
+    (void)state;
+    /* cheeks, forehead, chin: fractions of the face's box (x across, y up) */
+    static const double places[][2] = {{0.3, -0.1}, {-0.3, -0.1}, {0.0, 0.3}, {0.0, -0.4}};
+    static const char *on[] = {"ict-facekit/generic_neutral_mesh.obj", "lee-perry-smith/LeePerrySmith.obj",
+                               "mediapipe-canonical/canonical_face_model.obj"};
+    int failed = 0;
+    for (size_t f = 0; f < sizeof on / sizeof on[0]; f++)
+        for (size_t p = 0; p < sizeof places / sizeof places[0]; p++)
+            for (int d = 0; d <= 4; d++) failed += !pull_elsewhere(on[f], places[p][0], places[p][1], d);
+    printf("five-finger pulls of 1.5 R at 4 places x 5 directions on 3 faces: %d not delivered in full\n",
+           failed);
+    assert_int_equal(failed, 0);
+}
+
 /* ---- the host's surface service (FP_HOST_EXT_SURFACE) ------------------------------------ */
 
 /* The fixture mapping asks the service; its answers equal a brute force over the base
@@ -522,6 +645,7 @@ int main(void)
         cmocka_unit_test(test_fold_fixture_unanchored),
         cmocka_unit_test(test_surface_service),
         cmocka_unit_test(test_five_finger_pull),
+        cmocka_unit_test(test_five_finger_pull_elsewhere),
         cmocka_unit_test(test_recordings_anchored),
         cmocka_unit_test(test_recordings_unanchored),
         cmocka_unit_test(test_recordings_onehand),

@@ -9,6 +9,7 @@
 
 #include "hud.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -132,9 +133,29 @@ static void test_contact_line(void **state)
     assert_string_equal(out, "");
 }
 
+/* The gesture's badge: "limited" only where the fold-over guard stopped it short; the
+ * contact guard scaling a frame back is HELD, not LIMITED (before, both read LIMITED) */
+static void test_gesture_badge(void **state)
+{
+    (void)state;
+    assert_int_equal(fp_hud_gesture_badge(1.0, 1.0), FP_HUD_ENGAGED);
+    assert_int_equal(fp_hud_gesture_badge(0.35, 1.0), FP_HUD_LIMITED);
+    assert_int_equal(fp_hud_gesture_badge(0.35, 0.5), FP_HUD_LIMITED);
+    assert_int_equal(fp_hud_gesture_badge(1.0, 0.5), FP_HUD_HELD);
+    assert_string_equal(fp_hud_badge_name(FP_HUD_HELD), "HELD");
+    assert_string_equal(fp_hud_badge_name(FP_HUD_LIMITED), "LIMITED");
+    /* every badge's colour its own */
+    for (int a = 0; a < FP_HUD_BADGES; a++)
+        for (int b = a + 1; b < FP_HUD_BADGES; b++) {
+            const float *x = fp_hud_badge_color((fp_hud_badge)a), *y = fp_hud_badge_color((fp_hud_badge)b);
+            assert_true(fabsf(x[0] - y[0]) + fabsf(x[1] - y[1]) + fabsf(x[2] - y[2]) > 0.3f);
+        }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_gesture_badge),
         cmocka_unit_test(test_contact_line),
         cmocka_unit_test(test_wrap_fits),
         cmocka_unit_test(test_confirmations_kept_notes_fade),

@@ -10,7 +10,7 @@
 /* ---- the badge -------------------------------------------------------------------------- */
 
 static const char *const badge_names[FP_HUD_BADGES] = {
-    "idle", "committed", "ENGAGED", "LIMITED", "PAUSED", "REC", "PLAYING", "REVIEW"};
+    "idle", "committed", "ENGAGED", "LIMITED", "HELD", "PAUSED", "REC", "PLAYING", "REVIEW"};
 
 /* Far apart in hue (the tests tell them apart by colour), none of the skin's, the hands'
  * (blue, orange) or the background's. */
@@ -19,11 +19,18 @@ static const float badge_colors[FP_HUD_BADGES][4] = {
     {0.1f, 0.6f, 0.62f, 1.f},    /* committed: teal */
     {0.2f, 0.78f, 0.25f, 1.f},   /* ENGAGED: green */
     {1.f, 0.7f, 0.f, 1.f},       /* LIMITED: amber */
+    {0.95f, 0.3f, 0.62f, 1.f},   /* HELD: pink */
     {0.92f, 0.92f, 0.92f, 1.f},  /* PAUSED: white */
     {0.9f, 0.08f, 0.08f, 1.f},   /* REC: red */
     {0.15f, 0.35f, 0.95f, 1.f},  /* PLAYING: blue */
     {0.65f, 0.25f, 0.85f, 1.f},  /* REVIEW: purple */
 };
+
+fp_hud_badge fp_hud_gesture_badge(double guard_reached, double collide_t)
+{
+    if (guard_reached < 1.0) return FP_HUD_LIMITED;
+    return collide_t < 1.0 ? FP_HUD_HELD : FP_HUD_ENGAGED;
+}
 
 const char *fp_hud_badge_name(fp_hud_badge b)
 {

@@ -29,13 +29,20 @@
 
 /** The badge's states, in the order the viewer picks them (the first that holds). */
 typedef enum fp_hud_badge {
-    FP_HUD_IDLE, FP_HUD_COMMITTED, FP_HUD_ENGAGED, FP_HUD_LIMITED, FP_HUD_PAUSED,
+    FP_HUD_IDLE, FP_HUD_COMMITTED, FP_HUD_ENGAGED, FP_HUD_LIMITED, FP_HUD_HELD, FP_HUD_PAUSED,
     FP_HUD_REC, FP_HUD_PLAYING, FP_HUD_REVIEW, FP_HUD_BADGES
 } fp_hud_badge;
 
-/** The state's word ("idle", "committed", "ENGAGED", "LIMITED", "PAUSED", "REC",
+/** The state's word ("idle", "committed", "ENGAGED", "LIMITED", "HELD", "PAUSED", "REC",
  *  "PLAYING", "REVIEW"); "?" out of range. Static storage. */
 const char *fp_hud_badge_name(fp_hud_badge b);
+/** An engaged gesture's badge from its last deforming frame's guards: FP_HUD_LIMITED where
+ *  the fold-over guard stopped it short (guard_reached < 1: fingertips converging onto one
+ *  point, which no injective map delivers), else FP_HUD_HELD where the contact guard scaled
+ *  the frame back (collide_t < 1: the skin would have passed through itself or folded
+ *  over; not a limit of the deformation), else FP_HUD_ENGAGED. Pure; any thread. */
+fp_hud_badge fp_hud_gesture_badge(double guard_reached, double collide_t);
+
 /** The badge's fill colour, RGBA in [0, 1] (alpha 1: drawn exactly, for pixel checks);
  *  idle's for a value out of range. Static storage. */
 const float *fp_hud_badge_color(fp_hud_badge b);

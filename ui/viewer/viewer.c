@@ -329,16 +329,15 @@ static const char *hud_state(const viewer *v)
 }
 
 /* The HUD's badge (hud.h): recording first, then the review, pause, the gesture (LIMITED
- * while the fold-over guard or the contact guard holds its last frame back), a commit shown,
- * idle. */
+ * while the fold-over guard stops its last frame short, HELD while the contact guard scales
+ * it back: fp_hud_gesture_badge), a commit shown, idle. */
 static fp_hud_badge hud_badge(const viewer *v)
 {
     if (fp_session_take_recording(&v->takes.take)) return FP_HUD_REC;
     if (fp_vtakes_reviewing(&v->takes)) return v->takes.playing ? FP_HUD_PLAYING : FP_HUD_REVIEW;
     if (v->paused) return FP_HUD_PAUSED;
     if (fp_session_control_set(v->s)->active)
-        return v->last_active.guard_reached < 1.0 || v->last_active.collide_t < 1.0 ? FP_HUD_LIMITED
-                                                                                    : FP_HUD_ENGAGED;
+        return fp_hud_gesture_badge(v->last_active.guard_reached, v->last_active.collide_t);
     return v->committed_shown ? FP_HUD_COMMITTED : FP_HUD_IDLE;
 }
 
