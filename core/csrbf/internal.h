@@ -150,7 +150,7 @@ struct csrbf_solver {
                                 centre's group or UINT32_MAX (gg_group), the groups' member
                                 lists gg_start (ngroups + 1) and gg_idx */
     uint32_t *gg_group, *gg_start, *gg_idx;
-    double *gg_f64;          /* 4 m: each group's mean centre gg_c (3 per group), each
+    double *gg_f64;          /* 4 m + 1: each group's mean centre gg_c (3 per group), each
                                 centre's distance to its group's mean gg_r */
     double *gg_c, *gg_r;
     size_t ngroups;

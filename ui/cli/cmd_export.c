@@ -512,7 +512,7 @@ static int frames_out(const export_args *a, const range_end *in, const range_end
         *count = (double)(last - first + 1);
         return 0;
     }
-    const double span_s = ((double)fp_take_reader_time(r, last) - (double)fp_take_reader_time(r, first)) * 1e-9;
+    const double span_s = (double)(fp_take_reader_time(r, last) - fp_take_reader_time(r, first)) * 1e-9;
     *count = floor((span_s + SAMPLE_SLACK_S) * a->fps) + 1;   /* as walk_take's samples */
     return 0;
 }

@@ -4,7 +4,8 @@
  * The badge: a filled box at the top left in the state's colour (fp_hud_badge_color) with
  * the state's word (REC also its timecode) in near-black, so that the state reads at a
  * glance: idle grey, committed teal, ENGAGED green, LIMITED amber (the fold-over guard held
- * the gesture back, or the contact guard its last frame), PAUSED white, REC red, PLAYING
+ * the gesture back: fp_hud_gesture_badge), HELD pink (the contact guard scaled its last frame
+ * back), PAUSED white, REC red, PLAYING
  * blue, REVIEW purple.
  *
  * The message stack (fp_hud_msgs): a few lines under the HUD's figures, oldest first, each
