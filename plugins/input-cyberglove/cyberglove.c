@@ -863,10 +863,10 @@ static void *thread_main(void *arg)
         if (g->sampled != g->sensors)
             snprintf(sampled, sizeof sampled, " (%d sampled)", g->sampled);
         fpg_outage_up(&out, now_ns(g), back, sizeof back);
-        push_status(g, FP_STATUS_CONNECTED, "%d sensors%s, %s hand, %s %s, %s%s%s", g->sensors,
+        push_status(g, FP_STATUS_CONNECTED, "%d sensors%s, %s hand, %s %s%s%s%s", g->sensors,
                     sampled, g->hand ? "right" : "left", g->bits == 16 ? "16-bit" : "8-bit",
-                    g->poll_mode ? "poll" : "stream", g->version[0] ? "version " : "",
-                    g->version, back);
+                    g->poll_mode ? "poll" : "stream", g->version[0] ? ", version " : "",
+                    g->version, back); /* (no version field where ?V went unanswered) */
         backoff = BACKOFF_MIN_MS;
         attempt = 0;
         int end = session(g, why, sizeof why);
