@@ -8,8 +8,8 @@
  *
  * One instance = one glove on one port, one thread (no global state: two gloves on two
  * ports are two instances). The thread opens the port raw (termios, 8N1, O_NOCTTY), probes
- * the glove (?G ?S ?R ?V ?D, then U 1 to get the status byte), sets the sample period with
- * the ASCII command `t w1 w2\r` (period = w1*w2/115200 s, shared/docs/devices.md), then
+ * the glove (?G ?S ?R ?V ?D, `D 0` where ?D is unanswered, then U 1 to get the status
+ * byte), sets the sample period with the ASCII command `t w1 w2\r` (period = w1*w2/115200 s, shared/docs/devices.md), then
  * streams (`S`) or polls (`G` at `rate`), or in 16-bit mode sends `1eu` then `1S`.
  * Records are decoded (glove_decode.h, pure), calibrated (glove_cal.h) and pushed as fp_event_joint_angles stamped
  * with fp_host.now_ns taken when the chunk holding the record's last byte was read.
@@ -517,6 +517,14 @@ static int probe(glove *g, char *err, size_t errlen)
         if (r < 0 && !unanswered(r))
             return fp_errorf(err, errlen, r, "bad answer to ?D");
         ts_on = r >= 1 && v[0] != 0;
+        if (r < 1) { /* ?D said nothing: turn the timestamps off, so that "off" is true */
+            uint8_t d0[2] = {'D', 0};
+            if ((r = write_all(g, d0, 2)) < 0)
+                return fp_errorf(err, errlen, r, "line lost");
+            r = read_reply(g, 'D', -1, v, sizeof v, 300);
+            if (r == -EPIPE || r == -ECANCELED)
+                return fp_errorf(err, errlen, r, "line lost");
+        }
         uint8_t u[2] = {'U', 1};
         if ((r = write_all(g, u, 2)) < 0)
             return fp_errorf(err, errlen, r, "line lost");
