@@ -9,8 +9,9 @@
  * One instance = one glove on one port, one thread (no global state: two gloves on two
  * ports are two instances). The thread opens the port raw (termios, 8N1, O_NOCTTY), probes
  * the glove (?G ?S ?R ?V ?D, `D 0` where ?D is unanswered, then U 1 to get the status
- * byte), sets the sample period with the ASCII command `t w1 w2\r` (period = w1*w2/115200 s, shared/docs/devices.md), then
- * streams (`S`) or polls (`G` at `rate`), or in 16-bit mode sends `1eu` then `1S`.
+ * byte), sets the sample period with the ASCII command `t w1 w2\r` (period = w1*w2/115200
+ * s, shared/docs/devices.md), then streams (`S`) or polls (`G` at `rate`), or in 16-bit
+ * mode sends `1eu` then `1S`.
  * Records are decoded (glove_decode.h, pure), calibrated (glove_cal.h) and pushed as fp_event_joint_angles stamped
  * with fp_host.now_ns taken when the chunk holding the record's last byte was read.
  *
