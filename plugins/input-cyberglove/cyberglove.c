@@ -8,9 +8,10 @@
  *
  * One instance = one glove on one port, one thread (no global state: two gloves on two
  * ports are two instances). The thread opens the port raw (termios, 8N1, O_NOCTTY), probes
- * the glove (?G ?S ?R ?V ?D, then U 1 to get the status byte), sets the sample period with
- * the ASCII command `t w1 w2\r` (period = w1*w2/115200 s, shared/docs/devices.md), then
- * streams (`S`) or polls (`G` at `rate`), or in 16-bit mode sends `1eu` then `1S`.
+ * the glove (?G ?S ?R ?V ?D, `D 0` where ?D is unanswered, then U 1 to get the status
+ * byte), sets the sample period with the ASCII command `t w1 w2\r` (period = w1*w2/115200
+ * s, shared/docs/devices.md), then streams (`S`) or polls (`G` at `rate`), or in 16-bit
+ * mode sends `1eu` then `1S`.
  * Records are decoded (glove_decode.h, pure), calibrated (glove_cal.h) and pushed as fp_event_joint_angles stamped
  * with fp_host.now_ns taken when the chunk holding the record's last byte was read.
  *
@@ -517,6 +518,14 @@ static int probe(glove *g, char *err, size_t errlen)
         if (r < 0 && !unanswered(r))
             return fp_errorf(err, errlen, r, "bad answer to ?D");
         ts_on = r >= 1 && v[0] != 0;
+        if (r < 1) { /* ?D said nothing: turn the timestamps off, so that "off" is true */
+            uint8_t d0[2] = {'D', 0};
+            if ((r = write_all(g, d0, 2)) < 0)
+                return fp_errorf(err, errlen, r, "line lost");
+            r = read_reply(g, 'D', -1, v, sizeof v, 300);
+            if (r == -EPIPE || r == -ECANCELED)
+                return fp_errorf(err, errlen, r, "line lost");
+        }
         uint8_t u[2] = {'U', 1};
         if ((r = write_all(g, u, 2)) < 0)
             return fp_errorf(err, errlen, r, "line lost");
@@ -863,10 +872,10 @@ static void *thread_main(void *arg)
         if (g->sampled != g->sensors)
             snprintf(sampled, sizeof sampled, " (%d sampled)", g->sampled);
         fpg_outage_up(&out, now_ns(g), back, sizeof back);
-        push_status(g, FP_STATUS_CONNECTED, "%d sensors%s, %s hand, %s %s, %s%s%s", g->sensors,
+        push_status(g, FP_STATUS_CONNECTED, "%d sensors%s, %s hand, %s %s%s%s%s", g->sensors,
                     sampled, g->hand ? "right" : "left", g->bits == 16 ? "16-bit" : "8-bit",
-                    g->poll_mode ? "poll" : "stream", g->version[0] ? "version " : "",
-                    g->version, back);
+                    g->poll_mode ? "poll" : "stream", g->version[0] ? ", version " : "",
+                    g->version, back); /* (no version field where ?V went unanswered) */
         backoff = BACKOFF_MIN_MS;
         attempt = 0;
         int end = session(g, why, sizeof why);

@@ -119,6 +119,7 @@ typedef struct osc_input {
                                          pushed (a staler one is dropped); INT64_MIN none */
     mp_hand mp[FP_HANDS];
     int64_t report_at[FP_OSC_PROBLEMS]; /* 0: not pending; -1: reported */
+    char unknown_first[64];        /* the first unknown address, for its report ("" none) */
     bool packet_pushed;
     /* statistics (mutex) */
     pthread_mutex_t lock;
@@ -159,6 +160,38 @@ static void count_n(osc_input *o, int kind, uint64_t n)
 }
 
 static void count(osc_input *o, int kind) { count_n(o, kind, 1); }
+
+/* An unknown address counted; the first is kept for the report (receive thread). */
+static void count_unknown(osc_input *o, const char *path)
+{
+    if (!o->unknown_first[0])
+        snprintf(o->unknown_first, sizeof o->unknown_first, "%s", path);
+    count(o, FP_OSC_UNKNOWN_ADDRESS);
+}
+
+static const char *format_name(int fmt) { return fp__osc_format_names[fmt]; }
+
+/* The addresses a format takes (docs/osc.md, "Address spaces"). */
+static const char *format_space(int fmt)
+{
+    switch (fmt) {
+    case FMT_FACEPUPPET: return "/facepuppet/...";
+    case FMT_LEAP: return "/hand<s> and /finger<s>-<n>";
+    case FMT_MEDIAPIPE: return "/lx/ ... /rz/";
+    default: return "/facepuppet/..., /hand<s>, /finger<s>-<n> and /lx/ ... /rz/";
+    }
+}
+
+/* What an unknown address is, where shared/docs/devices.md names its sender's format. */
+static const char *foreign_space(const char *path)
+{
+    if (strcmp(path, "/found") == 0 || strncmp(path, "/pose/", 6) == 0 ||
+        strncmp(path, "/gesture/", 9) == 0 || strcmp(path, "/raw") == 0)
+        return ": FaceOSC's face data, not hand input";
+    if (strncmp(path, "/VMC/", 5) == 0)
+        return ": the VMC protocol's avatar data, not supported";
+    return "";
+}
 
 /* The kernel's count of datagrams a socket dropped (SO_RXQ_OVFL's control message, a running
  * total per socket): what it grew by since the last, counted. */
@@ -378,7 +411,7 @@ static void fmt_facepuppet(osc_input *o, const char *path, const char *types, lo
     }
     static const char prefix[] = "/facepuppet/hand/";
     if (strncmp(path, prefix, sizeof prefix - 1) != 0) {
-        count(o, FP_OSC_UNKNOWN_ADDRESS);
+        count_unknown(o, path);
         return;
     }
     const char *rest = path + sizeof prefix - 1;
@@ -388,7 +421,7 @@ static void fmt_facepuppet(osc_input *o, const char *path, const char *types, lo
     else if (strncmp(rest, "right/", 6) == 0)
         hand = FP_HAND_RIGHT, rest += 6;
     else {
-        count(o, FP_OSC_UNKNOWN_ADDRESS);
+        count_unknown(o, path);
         return;
     }
     fp_event ev;
@@ -463,7 +496,7 @@ static void fmt_facepuppet(osc_input *o, const char *path, const char *types, lo
         for (int i = 0; i < 4; i++) ev.wrist.rotation[i] = (float)(v[3 + i] / n);
         push_pose(o, &ev, POSE_WRIST);
     } else {
-        count(o, FP_OSC_UNKNOWN_ADDRESS);
+        count_unknown(o, path);
     }
 }
 
@@ -495,7 +528,7 @@ static void fmt_leap(osc_input *o, const char *path, const char *types, lo_arg *
 {
     int slot = 0, finger = 0, kind = fp__osc_leap_address(path, &slot, &finger);
     if (!kind) {
-        count(o, FP_OSC_UNKNOWN_ADDRESS);
+        count_unknown(o, path);
         return;
     }
     if (!check_types(o, types, "iifff")) return;
@@ -568,7 +601,7 @@ static void fmt_mediapipe(osc_input *o, const char *path, const char *types, lo_
                           int64_t t, int64_t recv_ns)
 {
     if (!mp_address(path)) {
-        count(o, FP_OSC_UNKNOWN_ADDRESS);
+        count_unknown(o, path);
         return;
     }
     char want[22];
@@ -721,7 +754,7 @@ static void handle_message(osc_input *o, unsigned char *data, size_t size, int64
         else if (fp__osc_leap_address(path, &slot, &finger)) fmt = FMT_LEAP;
         else if (mp_address(path)) fmt = FMT_MEDIAPIPE;
         else
-            count(o, FP_OSC_UNKNOWN_ADDRESS);
+            count_unknown(o, path);
     }
     switch (fmt) {
     case FMT_FACEPUPPET: fmt_facepuppet(o, path, types, argv, t, recv_ns); break;
@@ -824,8 +857,13 @@ static void timers(osc_input *o, int64_t now)
         pthread_mutex_lock(&o->lock);
         unsigned long long n = (unsigned long long)o->st.problems[k];
         pthread_mutex_unlock(&o->lock);
-        logf_(o, FP_LOG_WARNING, "port %u: %llu %s in the first second (dropped; further ones are "
-              "counted, totals at stop)", (unsigned)o->port, n, problem_text[k]);
+        char first[256] = "";
+        if (k == FP_OSC_UNKNOWN_ADDRESS && o->unknown_first[0])
+            snprintf(first, sizeof first, " (first: %s%s; format %s takes %s)", o->unknown_first,
+                     foreign_space(o->unknown_first), format_name(o->format),
+                     format_space(o->format));
+        logf_(o, FP_LOG_WARNING, "port %u: %llu %s%s in the first second (dropped; further ones "
+              "are counted, totals at stop)", (unsigned)o->port, n, problem_text[k], first);
         push_status(o, FP_STATUS_WARNING, -1, "osc: %llu %s (%s)", n, problem_names[k],
                     "dropped, counted");
     }

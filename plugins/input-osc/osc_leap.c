@@ -144,6 +144,24 @@ void fp__osc_leap_sides(osc_leap *l, const osc_leap_frame *fr, int n, int64_t no
         side[i] = e ? e->side : -1;
         if (!e) order[unknown++] = i;
     }
+    if (unknown == 1 && n == 1) { /* the one present hand found again under a new id? */
+        osc_leap_side *held = NULL;
+        int present = 0;
+        for (int i = 0; i < OSC_LEAP_IDS; i++)
+            if (l->ids[i].used) held = &l->ids[i], present++;
+        if (present == 1) {
+            float d2 = 0;
+            for (int k = 0; k < 3; k++)
+                d2 += (fr[0].palm[k] - held->palm[k]) * (fr[0].palm[k] - held->palm[k]);
+            if (d2 <= OSC_LEAP_REACQUIRE_MM * OSC_LEAP_REACQUIRE_MM) {
+                held->id = fr[0].id; /* the same hand: its entry, its side */
+                held->last_ns = now_ns;
+                memcpy(held->palm, fr[0].palm, sizeof held->palm);
+                side[0] = held->side;
+                return;
+            }
+        }
+    }
     if (unknown == 2 && fr[order[1]].palm[0] < fr[order[0]].palm[0]) {
         int k = order[0];
         order[0] = order[1];
@@ -160,13 +178,17 @@ void fp__osc_leap_sides(osc_leap *l, const osc_leap_frame *fr, int n, int64_t no
         else
             s = fr[i].palm[0] < 0 ? FP_HAND_LEFT : FP_HAND_RIGHT;
         osc_leap_side *e = new_id(l);
-        *e = (osc_leap_side){.used = true, .id = fr[i].id, .side = s, .last_ns = now_ns};
+        *e = (osc_leap_side){.used = true, .id = fr[i].id, .side = s, .last_ns = now_ns,
+                             .palm = {fr[i].palm[0], fr[i].palm[1], fr[i].palm[2]}};
         taken |= 1u << s;
         side[i] = s;
     }
     for (int i = 0; i < n; i++) {
         osc_leap_side *e = find_id(l, fr[i].id);
-        if (e) e->last_ns = now_ns;
+        if (e) {
+            e->last_ns = now_ns;
+            memcpy(e->palm, fr[i].palm, sizeof e->palm);
+        }
     }
 }
 

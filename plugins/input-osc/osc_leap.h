@@ -36,12 +36,17 @@ typedef struct osc_leap_frame {
     float palm[3], tip[FP_FINGERS][3];
 } osc_leap_frame;
 
+/* A new Leap id this close (mm, palm to palm) to the one other present id's last palm is
+ * that hand re-acquired (fp__osc_leap_sides). */
+#define OSC_LEAP_REACQUIRE_MM 100.0f
+
 /* A Leap hand id and the side it was given. */
 typedef struct osc_leap_side {
     bool used;
     int32_t id;
     int side;                      /* FP_HAND_LEFT or FP_HAND_RIGHT */
     int64_t last_ns;               /* host time of its latest frame */
+    float palm[3];                 /* its latest frame's palm, mm */
 } osc_leap_side;
 
 /* All of a sender's Leap state; all zeros is the empty state (memset to reset). */
@@ -74,7 +79,10 @@ int fp__osc_leap_end_packet(osc_leap *l, osc_leap_frame out[OSC_LEAP_SLOTS], uns
 /** The side (FP_HAND_LEFT / FP_HAND_RIGHT) of each of the n (<= OSC_LEAP_SLOTS) frames of one
  *  datagram, into side[]: a Leap id keeps the side it was given when it first came; a new id
  *  takes the side no present id holds; two new ids at once (and nothing present) take left
- *  for the smaller palm x; otherwise a new id alone is left at palm x < 0. An id is present
+ *  for the smaller palm x; otherwise a new id alone is left at palm x < 0. A new id alone in
+ *  its datagram while one other id is present, absent from it, with its last palm within
+ *  OSC_LEAP_REACQUIRE_MM of the new palm, is that hand found again under a new id (a Leap
+ *  renumbers a hand it lost): it takes that id's side, and the old id is forgotten. An id is present
  *  while its last frame is at most keep_ns (the input's timeout) before now_ns; older ones are
  *  forgotten. */
 void fp__osc_leap_sides(osc_leap *l, const osc_leap_frame *fr, int n, int64_t now_ns,

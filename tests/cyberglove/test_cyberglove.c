@@ -271,6 +271,43 @@ static void test_stream_18_left_default_map(void **state)
     fp_gloveemu_destroy(&e);
 }
 
+/* A box that streams with timestamps on (D at power-up) and does not answer ?D (nor the
+ * `D value` command, which it still executes): the plugin turns the timestamps off with
+ * `D 0` where ?D said nothing, so the records have the length it expects. Before, it took
+ * the timestamps as off, found 30-byte records where it expected 25, and flapped between
+ * connected and "no well-formed record" every 0.2 s, no angle ever decoded. */
+static void test_timestamps_unsaid(void **state)
+{
+    (void)state;
+    fp_gloveemu *e = emu_new((fp_gloveemu_options){.sensors = 22, .recording = CSV_GRAB,
+                                                   .timestamps = true, .unanswered = "D"},
+                             "g17");
+    fp_test_host *f = fp_test_host_new(0);
+    fp_input *in = NULL;
+    char err[256];
+    assert_int_equal(create_input(f, fp_gloveemu_path(e), &in, err, sizeof err, "hand=right",
+                                  (char *)NULL), 0);
+    start_input(in);
+    long c = fp_test_host_wait_status(f, 0, FP_STATUS_CONNECTED, "22 sensors", 3 * WAIT_MS);
+    assert_true(c >= 0);
+    long end = fp_test_host_wait_angles(f, (size_t)c, 60, WAIT_MS);
+    assert_true(end > 0);
+    fp_gloveemu_stats es;
+    fp_gloveemu_get_stats(e, &es);
+    fpg_cal cal;
+    fpg_cal_default(&cal);
+    assert_int_equal(check_against_records(f, e, &cal, (size_t)c, (size_t)end, es.session_seq,
+                                           FP_HAND_RIGHT), 60);
+    assert_int_equal(plugin_stats(in).noise_bytes, 0);
+    for (long i = c; i <= end; i++) {
+        fp_event ev = fp_test_host_get(f, (size_t)i);
+        assert_false(ev.header.type == FP_EVENT_STATUS && ev.status.code == FP_STATUS_DISCONNECTED);
+    }
+    stop_input(&in);
+    fp_test_host_free(f);
+    fp_gloveemu_destroy(&e);
+}
+
 /* A minimal box, as an emulator written from docs/devices.md alone may be: ?R, ?V, ?D, ?U
  * and `U 1` never answered (executed all the same: the status byte is on), only `^c` stops a
  * stream, and it streams from power-up. The glove still connects, and every record decodes
@@ -837,7 +874,15 @@ static void test_box_error_replies(void **state)
     f = fp_test_host_new(0);
     assert_int_equal(create_input(f, path, &in, err, sizeof err, "hand=right", (char *)NULL), 0);
     start_input(in);
-    assert_true(fp_test_host_wait_status(f, 0, FP_STATUS_CONNECTED, "22 sensors", WAIT_MS) >= 0);
+    long cb = fp_test_host_wait_status(f, 0, FP_STATUS_CONNECTED, "22 sensors", WAIT_MS);
+    assert_true(cb >= 0);
+    /* ?V unanswered: no version in the text, and no empty field for it (before:
+     * "22 sensors, right hand, 8-bit stream, " with a dangling separator) */
+    fp_event cbe = fp_test_host_get(f, (size_t)cb);
+    size_t cbn = strlen(cbe.status.text);
+    if (cbn < 6 || strcmp(cbe.status.text + cbn - 6, "stream") != 0)
+        fprintf(stderr, "connected: %s\n", cbe.status.text);
+    assert_true(cbn >= 6 && strcmp(cbe.status.text + cbn - 6, "stream") == 0);
     char log[sizeof f->log];
     pthread_mutex_lock(&f->lock);
     snprintf(log, sizeof log, "%s", f->log);
@@ -1204,6 +1249,7 @@ int main(void)
         cmocka_unit_test(test_fault_unplug),
         cmocka_unit_test(test_fault_cable_pull),
         cmocka_unit_test(test_box_error_replies),
+        cmocka_unit_test(test_timestamps_unsaid),
         cmocka_unit_test(test_fault_garbage_resync),
         cmocka_unit_test(test_fault_silence),
         cmocka_unit_test(test_fault_slow),

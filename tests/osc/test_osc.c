@@ -381,6 +381,36 @@ static void auto_format_takes_each_address_space(void **state)
     close_fixture(&f);
 }
 
+/* A sender of another kind of OSC (FaceOSC's face, shared/docs/devices.md) is told what the
+ * input got: the warning names an address it received and says FaceOSC's data is not hand
+ * input (before: "N messages to addresses outside the format", nothing to go on). */
+static void unknown_address_warning_names_it(void **state)
+{
+    (void)state;
+    osc_fixture f;
+    open_fixture(&f, NULL, 64);
+    lo_bundle b = lo_bundle_new(LO_TT_IMMEDIATE);
+    lo_message found = lo_message_new(), mouth = lo_message_new();
+    lo_message_add_int32(found, 1);
+    lo_message_add_float(mouth, 14.0f);
+    lo_bundle_add_message(b, "/found", found);
+    lo_bundle_add_message(b, "/gesture/mouth/width", mouth);
+    assert_true(lo_send_bundle(f.to, b) > 0);
+    wait_packets(&f, 1);
+    assert_true(wait_type(f.h, FP_EVENT_STATUS, FP_STATUS_WARNING, 1));
+    sleep_ms(50);
+    pthread_mutex_lock(&f.h->mutex);
+    char log[sizeof f.h->log];
+    snprintf(log, sizeof log, "%s", f.h->log);
+    pthread_mutex_unlock(&f.h->mutex);
+    if (!strstr(log, "/found") || !strstr(log, "FaceOSC"))
+        fprintf(stderr, "log:\n%s", log);
+    assert_non_null(strstr(log, "first: /found"));
+    assert_non_null(strstr(log, "FaceOSC"));
+    lo_bundle_free_recursive(b);
+    close_fixture(&f);
+}
+
 /* On the default 127.0.0.1 the input also listens on [::1] at the same port: a sender whose
  * "localhost" resolves to ::1 first (getaddrinfo's order where /etc/hosts lists both) is
  * heard. Skipped where this machine has no IPv6 loopback. */
@@ -893,6 +923,7 @@ int main(void)
         cmocka_unit_test(leap_palm_and_tips_equal_csv),
         cmocka_unit_test(mediapipe_landmarks_to_mm),
         cmocka_unit_test(auto_format_takes_each_address_space),
+        cmocka_unit_test(unknown_address_warning_names_it),
         cmocka_unit_test(ipv6_loopback_heard),
         cmocka_unit_test(bundles_keep_timetags),
         cmocka_unit_test(recording_clock_places_events),

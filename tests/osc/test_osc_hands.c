@@ -245,6 +245,43 @@ static void leap_side_kept_by_id(void **state)
     close_fixture(&f);
 }
 
+/* A Leap gives a hand a new id when it loses it and finds it again: the one right hand,
+ * re-acquired under a new id a frame later at the same place, stays the right hand (before:
+ * the new id took the side the old, still "present" id did not hold, and the right hand
+ * became the left one for the timeout). A second hand that comes while the first is in the
+ * same frame still takes the other side. */
+static void leap_reacquired_hand_keeps_side(void **state)
+{
+    (void)state;
+    osc_fixture f;
+    open_fixture(&f, "format=leap", 256);
+    for (int k = 0; k < 20; k++) {
+        lo_timetag tt;
+        lo_timetag_now(&tt);
+        lo_bundle b = lo_bundle_new(tt);
+        add_leap_frame(b, 0, k < 10 ? 7 : 8, 40.f + (float)k, -1); /* id 7, then 8 */
+        send_bundle(&f, b);
+        wait_packets(&f, (uint64_t)k + 1);
+    }
+    lo_timetag tt;
+    lo_timetag_now(&tt);
+    lo_bundle b = lo_bundle_new(tt); /* id 8 and a new hand 9 beside it in one frame */
+    add_leap_frame(b, 0, 8, 60.f, -1);
+    add_leap_frame(b, 1, 9, 90.f, -1);
+    send_bundle(&f, b);
+    wait_packets(&f, 21);
+    assert_true(wait_type(f.h, FP_EVENT_JOINT_POSITIONS, -1, 22));
+    float x[64];
+    int hand[64];
+    assert_int_equal(poses(f.h, x, hand, 64), 22);
+    for (int k = 0; k < 21; k++) {
+        if (hand[k] != FP_HAND_RIGHT) fprintf(stderr, "pose %d: hand %d\n", k, hand[k]);
+        assert_int_equal(hand[k], FP_HAND_RIGHT);
+    }
+    assert_int_equal(hand[21], FP_HAND_LEFT);
+    close_fixture(&f);
+}
+
 /* Two Leap hands at once get two sides, the one at smaller x left, even both at x > 0; each
  * keeps it when they cross. */
 static void leap_two_hands_two_sides(void **state)
@@ -451,6 +488,7 @@ int main(void)
         cmocka_unit_test(mediapipe_z_then_no_z),
         cmocka_unit_test(leap_bundle_any_order),
         cmocka_unit_test(leap_side_kept_by_id),
+        cmocka_unit_test(leap_reacquired_hand_keeps_side),
         cmocka_unit_test(leap_two_hands_two_sides),
         cmocka_unit_test(out_of_order_bundle_dropped),
         cmocka_unit_test(bind_ipv6_and_localhost),
