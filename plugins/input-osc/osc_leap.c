@@ -149,12 +149,15 @@ void fp__osc_leap_sides(osc_leap *l, const osc_leap_frame *fr, int n, int64_t no
         int present = 0;
         for (int i = 0; i < OSC_LEAP_IDS; i++)
             if (l->ids[i].used) held = &l->ids[i], present++;
-        if (present == 1) {
+        /* ... and gone quiet: no frame for half its own spacing (a second hand a bridge sends in
+         * a datagram of its own comes within the first's frame, not a frame later) */
+        if (present == 1 && now_ns - held->last_ns >= held->gap_ns / 2) {
             float d2 = 0;
             for (int k = 0; k < 3; k++)
                 d2 += (fr[0].palm[k] - held->palm[k]) * (fr[0].palm[k] - held->palm[k]);
             if (d2 <= OSC_LEAP_REACQUIRE_MM * OSC_LEAP_REACQUIRE_MM) {
                 held->id = fr[0].id; /* the same hand: its entry, its side */
+                held->gap_ns = now_ns - held->last_ns;
                 held->last_ns = now_ns;
                 memcpy(held->palm, fr[0].palm, sizeof held->palm);
                 side[0] = held->side;
@@ -186,6 +189,7 @@ void fp__osc_leap_sides(osc_leap *l, const osc_leap_frame *fr, int n, int64_t no
     for (int i = 0; i < n; i++) {
         osc_leap_side *e = find_id(l, fr[i].id);
         if (e) {
+            if (now_ns > e->last_ns) e->gap_ns = now_ns - e->last_ns;
             e->last_ns = now_ns;
             memcpy(e->palm, fr[i].palm, sizeof e->palm);
         }

@@ -46,6 +46,7 @@ typedef struct osc_leap_side {
     int32_t id;
     int side;                      /* FP_HAND_LEFT or FP_HAND_RIGHT */
     int64_t last_ns;               /* host time of its latest frame */
+    int64_t gap_ns;                /* ... and the spacing before it (0: one frame so far) */
     float palm[3];                 /* its latest frame's palm, mm */
 } osc_leap_side;
 
@@ -80,8 +81,9 @@ int fp__osc_leap_end_packet(osc_leap *l, osc_leap_frame out[OSC_LEAP_SLOTS], uns
  *  datagram, into side[]: a Leap id keeps the side it was given when it first came; a new id
  *  takes the side no present id holds; two new ids at once (and nothing present) take left
  *  for the smaller palm x; otherwise a new id alone is left at palm x < 0. A new id alone in
- *  its datagram while one other id is present, absent from it, with its last palm within
- *  OSC_LEAP_REACQUIRE_MM of the new palm, is that hand found again under a new id (a Leap
+ *  its datagram while one other id is present, absent from it and quiet for half its frames'
+ *  spacing or more, with its last palm within OSC_LEAP_REACQUIRE_MM of the new palm, is
+ *  that hand found again under a new id (a Leap
  *  renumbers a hand it lost): it takes that id's side, and the old id is forgotten. An id is present
  *  while its last frame is at most keep_ns (the input's timeout) before now_ns; older ones are
  *  forgotten. */

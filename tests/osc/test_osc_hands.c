@@ -262,6 +262,7 @@ static void leap_reacquired_hand_keeps_side(void **state)
         add_leap_frame(b, 0, k < 10 ? 7 : 8, 40.f + (float)k, -1); /* id 7, then 8 */
         send_bundle(&f, b);
         wait_packets(&f, (uint64_t)k + 1);
+        sleep_ms(10); /* a Leap's frames, about 100 a second */
     }
     lo_timetag tt;
     lo_timetag_now(&tt);
@@ -279,6 +280,40 @@ static void leap_reacquired_hand_keeps_side(void **state)
         assert_int_equal(hand[k], FP_HAND_RIGHT);
     }
     assert_int_equal(hand[21], FP_HAND_LEFT);
+    close_fixture(&f);
+}
+
+/* A bridge that sends each hand in a datagram of its own: a second hand that comes beside
+ * the first, its datagram within the first's frame, is the other hand, not the first one
+ * found again under a new id (it came while the first was not quiet). */
+static void leap_second_hand_own_datagram(void **state)
+{
+    (void)state;
+    osc_fixture f;
+    open_fixture(&f, "format=leap", 256);
+    uint64_t sent = 0;
+    for (int k = 0; k < 6; k++) {
+        lo_timetag tt;
+        lo_timetag_now(&tt);
+        lo_bundle b = lo_bundle_new(tt);
+        add_leap_frame(b, 0, 7, 40.f + (float)k, -1);
+        send_bundle(&f, b);
+        wait_packets(&f, ++sent);
+        if (k == 5) { /* the second hand, 50 mm away, in its own datagram of the same frame */
+            lo_timetag_now(&tt);
+            b = lo_bundle_new(tt);
+            add_leap_frame(b, 1, 9, 90.f, -1);
+            send_bundle(&f, b);
+            wait_packets(&f, ++sent);
+        }
+        sleep_ms(10);
+    }
+    assert_true(wait_type(f.h, FP_EVENT_JOINT_POSITIONS, -1, 7));
+    float x[64];
+    int hand[64];
+    assert_int_equal(poses(f.h, x, hand, 64), 7);
+    for (int k = 0; k < 6; k++) assert_int_equal(hand[k], FP_HAND_RIGHT);
+    assert_int_equal(hand[6], FP_HAND_LEFT);
     close_fixture(&f);
 }
 
@@ -489,6 +524,7 @@ int main(void)
         cmocka_unit_test(leap_bundle_any_order),
         cmocka_unit_test(leap_side_kept_by_id),
         cmocka_unit_test(leap_reacquired_hand_keeps_side),
+        cmocka_unit_test(leap_second_hand_own_datagram),
         cmocka_unit_test(leap_two_hands_two_sides),
         cmocka_unit_test(out_of_order_bundle_dropped),
         cmocka_unit_test(bind_ipv6_and_localhost),
