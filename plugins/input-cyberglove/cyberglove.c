@@ -91,9 +91,15 @@ typedef struct glove {
     uint64_t noise_episode;
     bool unplugged;
     bool warned_fast;
-    bool warned_nonfinite;
+    bool warned_nonfinite, warned_line; /* (the last: baud cannot carry rate, said once) */
+    int rec_len;        /* bytes of a record as the probe expects it (16-bit: the shortest) */
     int64_t last_record_ns;
     uint64_t units;     /* records and bare error messages decoded */
+    fpg_lenmeter meter; /* the records' length as sent (a box the probe misread) */
+    fpg_outage outage;  /* an outage is said in few lines (glove_outage.h) */
+    bool up_pending;    /* the probe answered, no unit yet: CONNECTED at the first */
+    int64_t status_at;  /* a status's time where not now (CONNECTED: its first record's: a
+                           recording's times only grow) */
 
     /* statistics */
     pthread_mutex_t lock;
@@ -134,7 +140,7 @@ static void push_status(glove *g, fp_status_code code, const char *fmt, ...)
     memset(&ev, 0, sizeof ev);
     ev.header.size = sizeof ev;
     ev.header.type = FP_EVENT_STATUS;
-    ev.header.time_ns = now_ns(g);
+    ev.header.time_ns = g->status_at ? g->status_at : now_ns(g);
     ev.header.hand = g->hand;
     ev.code = code;
     char text[400], full[PATH_MAX + sizeof text + 2]; /* full: the logged line, whole */
@@ -576,6 +582,8 @@ static int probe(glove *g, char *err, size_t errlen)
     g->in_noise = false;
     g->unplugged = false;
     g->warned_fast = false;
+    g->meter = (fpg_lenmeter){0};
+    g->rec_len = g->bits == 16 ? 3 + 8 + 1 + 44 : 1 + sampled + (ts_on ? 5 : 0) + status_on + 1;
 
     if (g->bits == 16) {
         if ((r = write_all(g, "1eu", 3)) < 0 || (r = write_all(g, "1S", 2)) < 0)
@@ -623,6 +631,27 @@ static void emit_angles(glove *g, const fpg_unit *u, int64_t t_read)
     g->lat[g->lat_n % LAT_CAP] = (int32_t)(lat > INT32_MAX ? INT32_MAX : lat);
     g->lat_n++;
     pthread_mutex_unlock(&g->lock);
+}
+
+/* The session's first unit: CONNECTED, the outage over. Until then it is one more attempt
+ * (a box whose records never match the probe: an outage, not a line pair per probe). */
+static void say_up(glove *g, int64_t t)
+{
+    char sampled[32] = "", back[64];
+    g->up_pending = false;
+    if (g->sampled != g->sensors)
+        snprintf(sampled, sizeof sampled, " (%d sampled)", g->sampled);
+    fpg_outage_up(&g->outage, now_ns(g), back, sizeof back);
+    g->status_at = t;
+    push_status(g, FP_STATUS_CONNECTED, "%d sensors%s, %s hand, %s %s%s%s%s", g->sensors,
+                sampled, g->hand ? "right" : "left", g->bits == 16 ? "16-bit" : "8-bit",
+                g->poll_mode ? "poll" : "stream", g->version[0] ? ", version " : "",
+                g->version, back); /* (no version field where ?V went unanswered) */
+    g->status_at = 0;
+    char slow[160]; /* a line too slow for the rate: said once, at the first connect */
+    if (!g->warned_line &&
+        (g->warned_line = fpg_line_too_slow(g->baud, g->rate_hz, g->rec_len, slow, sizeof slow)))
+        push_status(g, FP_STATUS_WARNING, "%s", slow);
 }
 
 static void on_record(glove *g, const fpg_unit *u, int64_t t)
@@ -686,7 +715,8 @@ static void on_noise(glove *g, size_t n)
         pthread_mutex_lock(&g->lock);
         g->st.resyncs++;
         pthread_mutex_unlock(&g->lock);
-        push_status(g, FP_STATUS_WARNING, "line noise on %s: resynchronising", g->path);
+        if (!g->up_pending) /* (before any record: the attempt's failure says it) */
+            push_status(g, FP_STATUS_WARNING, "line noise on %s: resynchronising", g->path);
     }
     g->noise_episode += n;
     pthread_mutex_lock(&g->lock);
@@ -703,6 +733,8 @@ typedef struct feed_ctx {
 static void on_unit(void *user, const fpg_unit *u)
 {
     feed_ctx *c = user;
+    if (c->g->up_pending && u->kind != FPG_UNIT_NOISE)
+        say_up(c->g, c->t);
     if (u->kind == FPG_UNIT_RECORD)
         on_record(c->g, u, c->t);
     else if (u->kind == FPG_UNIT_ERROR)
@@ -722,21 +754,6 @@ static void feed(glove *g, const uint8_t *data, size_t n, int64_t t)
 
 enum { END_STOP = 0, END_LOST = 1, END_SILENT = 2 };
 
-/* The silence timeout's text where bytes came but formed no record (records of another
- * length than the probe's answers make: a timestamp or status byte ?D or ?U did not say,
- * a ?S or ?N that disagrees with the records, or another baud): said as such, not as a glove
- * that stopped answering. */
-static void silent_noise_text(const glove *g, char *why, size_t whylen)
-{
-    if (g->bits == 16) {
-        snprintf(why, whylen, "no well-formed 16-bit frame in %d ms, %llu bytes of line noise",
-                 g->timeout_ms, (unsigned long long)g->noise_episode);
-        return;
-    }
-    int len = 1 + g->sampled + (g->ts_on ? 5 : 0) + (g->status_on ? 1 : 0) + 1;
-    snprintf(why, whylen, "no well-formed record in %d ms, %llu bytes of line noise (expected "
-             "%d-byte records)", g->timeout_ms, (unsigned long long)g->noise_episode, len);
-}
 #define SETTLE_MS 20 /* a polled answer's end: the line quiet this long */
 
 /* Read and decode until the line is lost, the glove goes silent, or stop. */
@@ -772,7 +789,8 @@ static int session(glove *g, char *why, size_t whylen)
             g->st.timeouts++;
             pthread_mutex_unlock(&g->lock);
             if (g->in_noise && g->noise_episode > 0) /* it answers, in records not its own */
-                silent_noise_text(g, why, whylen);
+                fpg_noise_text(why, whylen, g->bits, g->timeout_ms, g->noise_episode, g->rec_len,
+                               g->meter.seen);
             else
                 snprintf(why, whylen, "glove stopped answering (no record for %d ms)", g->timeout_ms);
             return END_SILENT;
@@ -816,6 +834,7 @@ static int session(glove *g, char *why, size_t whylen)
         }
         uint64_t before = g->units;
         last_read = t;
+        fpg_lenmeter_feed(&g->meter, buf, (size_t)got);
         feed(g, buf, (size_t)got, t);
         if (g->poll_mode && g->units != before)
             awaiting = false;
@@ -840,10 +859,10 @@ static void *thread_main(void *arg)
     int backoff = BACKOFF_MIN_MS;
     unsigned attempt = 0;
     char why[160], line[400];
-    fpg_outage out = {0}; /* an outage is said in few lines (glove_outage.h) */
+    fpg_outage *out = &g->outage;
     for (;;) {
         if (g->fd < 0) {
-            if (fpg_outage_attempt(&out, now_ns(g), g->path, line, sizeof line))
+            if (fpg_outage_attempt(out, now_ns(g), g->path, line, sizeof line))
                 logf_(g, FP_LOG_WARNING, "%s", line);
             push_status(g, FP_STATUS_RECONNECTING, "reopening %s in %d ms (attempt %u)", g->path,
                         backoff, ++attempt);
@@ -853,37 +872,28 @@ static void *thread_main(void *arg)
             int fd = open_port(g, why, sizeof why);
             if (fd < 0) {
                 logf_(g, FP_LOG_DEBUG, "%s", why);
-                (void)fpg_outage_failed(&out, why); /* (the summary's last reason; the loss was said) */
+                (void)fpg_outage_failed(out, why); /* (the summary's last reason; the loss was said) */
                 continue;
             }
             g->fd = fd;
         }
-        int r = probe(g, why, sizeof why);
+        int r = probe(g, why, sizeof why), end = END_LOST;
         if (r == -ECANCELED)
             break;
-        if (r < 0) {
-            close_port(g, false);
-            int how = fpg_outage_failed(&out, why); /* the loss once, a new reason as an event */
+        g->up_pending = r >= 0; /* CONNECTED at the session's first unit (say_up) */
+        if (r >= 0 && (end = session(g, why, sizeof why)) == END_STOP)
+            break;
+        close_port(g, r >= 0 && end == END_SILENT);
+        if (r < 0 || g->up_pending) { /* the probe failed, or it answered and no record came */
+            int how = fpg_outage_failed(out, why); /* the loss once, a new reason as an event */
             if (how)
                 push_status(g, how == 2 ? FP_STATUS_DISCONNECTED : FP_STATUS_RECONNECTING, "%s", why);
             continue;
         }
-        char sampled[32] = "", back[64];
-        if (g->sampled != g->sensors)
-            snprintf(sampled, sizeof sampled, " (%d sampled)", g->sampled);
-        fpg_outage_up(&out, now_ns(g), back, sizeof back);
-        push_status(g, FP_STATUS_CONNECTED, "%d sensors%s, %s hand, %s %s%s%s%s", g->sensors,
-                    sampled, g->hand ? "right" : "left", g->bits == 16 ? "16-bit" : "8-bit",
-                    g->poll_mode ? "poll" : "stream", g->version[0] ? ", version " : "",
-                    g->version, back); /* (no version field where ?V went unanswered) */
         backoff = BACKOFF_MIN_MS;
         attempt = 0;
-        int end = session(g, why, sizeof why);
-        if (end == END_STOP)
-            break;
-        close_port(g, end == END_SILENT);
         push_status(g, FP_STATUS_DISCONNECTED, "%s", why);
-        fpg_outage_lost(&out, why);
+        fpg_outage_lost(out, why);
     }
     close_port(g, true);
     return NULL;

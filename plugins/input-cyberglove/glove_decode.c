@@ -7,6 +7,7 @@
 
 #include <errno.h>
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 /* Glove sensor of each of an 18-sensor glove's values (no DIJ of index..pinkie). */
@@ -257,4 +258,32 @@ int fpg_angles_from_raw(const fpg_cal *cal, const fpg_unit *u, float radians[FPG
         *valid |= 1u << i;
     }
     return dropped;
+}
+
+void fpg_lenmeter_feed(fpg_lenmeter *m, const uint8_t *data, size_t n)
+{
+    for (size_t i = 0; i < n; i++) {
+        uint8_t b = data[i];
+        if (m->prev == 0 && (b == 'S' || b == 'G')) {
+            if (m->started)
+                m->seen = m->run;
+            m->started = true;
+            m->run = 0;
+        }
+        if (m->run < 1 << 20)
+            m->run++;
+        m->prev = b;
+    }
+}
+
+bool fpg_line_too_slow(int baud, double rate_hz, int record_bytes, char *text, size_t len)
+{
+    if (baud <= 0 || record_bytes <= 0)
+        return false;
+    int most = baud / (10 * record_bytes); /* whole records a second */
+    if (rate_hz <= most)
+        return false;
+    snprintf(text, len, "baud=%d carries at most %d records/s (%d bytes), not rate=%g: set rate=%d",
+             baud, most, record_bytes, rate_hz, most > 1 ? most : 1); /* (short: a status) */
+    return true;
 }

@@ -98,6 +98,27 @@ void fpg_decoder_feed(fpg_decoder *d, const uint8_t *data, size_t n, fpg_unit_fn
  *  status 0 from the terminator; settled, that 0 is the terminator. */
 void fpg_decoder_settle(fpg_decoder *d, fpg_unit_fn fn, void *user);
 
+/** The length of the 8-bit records a box actually sends, seen on the wire whatever the probe
+ *  said: the bytes from one record's command byte (`S` or `G` right after a 0x00) to the
+ *  next's. Zero-initialised; seen 0 until two such starts were seen. For the text of a box
+ *  whose records never match the probe's answers ("records of 21 bytes, expected 25").
+ *  Single-threaded, no allocation, no errors. */
+typedef struct fpg_lenmeter {
+    int run;      /* bytes since the last record start */
+    int seen;     /* the last distance between two record starts; 0 none yet */
+    bool started; /* a record start was seen */
+    uint8_t prev; /* the byte before */
+} fpg_lenmeter;
+
+/** Count n bytes as they came from the line. */
+void fpg_lenmeter_feed(fpg_lenmeter *m, const uint8_t *data, size_t n);
+
+/** Whether a line at `baud` bits/s (8N1: 10 bits a byte) cannot carry records of
+ *  record_bytes bytes at rate_hz: where it cannot, writes the warning into text (len bytes:
+ *  "baud=19200 carries at most 76 records/s (25 bytes), not rate=100: set rate=76") and
+ *  returns true. Pure. */
+bool fpg_line_too_slow(int baud, double rate_hz, int record_bytes, char *text, size_t len);
+
 /** The joint-angle event fields for one record: for each of the record's sensors (wire
  *  order mapped by u->order, or without one: an 18-sensor glove skips the 4 DIJ sensors it
  *  lacks) that the calibration

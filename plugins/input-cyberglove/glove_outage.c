@@ -49,3 +49,17 @@ void fpg_outage_up(fpg_outage *o, int64_t t_ns, char *buf, size_t len)
         buf[0] = '\0';
     *o = (fpg_outage){.was_up = true};
 }
+
+void fpg_noise_text(char *why, size_t len, int bits, int timeout_ms, uint64_t noise, int expected,
+                    int seen)
+{
+    if (bits == 16)
+        snprintf(why, len, "no well-formed 16-bit frame in %d ms, %llu bytes of line noise",
+                 timeout_ms, (unsigned long long)noise);
+    else if (seen > 0 && seen != expected) /* (no byte count: said alike each time) */
+        snprintf(why, len, "records of %d bytes, expected %d (?S/?N, ?D or ?U disagree with "
+                 "the records)", seen, expected); /* (short: a status event's text) */
+    else
+        snprintf(why, len, "no well-formed record in %d ms, %llu bytes of line noise (expected "
+                 "%d-byte records)", timeout_ms, (unsigned long long)noise, expected);
+}

@@ -55,4 +55,14 @@ int fpg_outage_failed(fpg_outage *o, const char *why);
  *  before, "" where there was no outage); the outage ends. */
 void fpg_outage_up(fpg_outage *o, int64_t t_ns, char *buf, size_t len);
 
+/** The silence timeout's text where bytes came but formed no record (records of another
+ *  length than the probe's answers make: a timestamp or status byte ?D or ?U did not say, a
+ *  ?S or ?N that disagrees with the records, or another baud), into why (len bytes): said
+ *  as such, not as a glove that stopped answering. bits 8 or 16; timeout_ms the timeout;
+ *  noise the bytes skipped; expected the probe's 8-bit record length, seen the length the
+ *  records have on the wire (fpg_lenmeter; 0 unknown): where known and not the expected,
+ *  "records of SEEN bytes, expected EXPECTED (...)", the same text each time. */
+void fpg_noise_text(char *why, size_t len, int bits, int timeout_ms, uint64_t noise, int expected,
+                    int seen);
+
 #endif

@@ -105,7 +105,10 @@ typedef struct osc_input {
     unsigned hands_seen;           /* bit per hand that got a pose since the connect */
     unsigned hands_lost;           /* bit per seen hand reported gone while the sender went on */
     int64_t hand_last_ns[FP_HANDS];/* receive time of each hand's latest pose */
-    char sender[64];
+    char sender[64];               /* the current sender's ADDR:PORT, as statuses name it */
+    struct sockaddr_storage sender_addr; /* its address */
+    int64_t sender_last_ns;        /* receive time of its latest valid message */
+    struct sockaddr_storage pkt_from; /* the sender of the latest datagram */
     bool have_offset;
     int64_t offset_ns;
     /* clock=recording: event time = origin_ns + (timetag - the sender's origin timetag) */
@@ -339,6 +342,39 @@ static void floats_of(lo_arg **argv, const char *types, int first, int n, float 
 
 static bool hand_wanted(const osc_input *o, int h) { return o->hands & (1 << h); }
 
+/* Whether two senders are one (address and port; IPv4 or IPv6). */
+static bool same_sender(const struct sockaddr_storage *a, const struct sockaddr_storage *b)
+{
+    if (a->ss_family != b->ss_family) return false;
+    if (a->ss_family == AF_INET) {
+        const struct sockaddr_in *x = (const void *)a, *y = (const void *)b;
+        return x->sin_port == y->sin_port && x->sin_addr.s_addr == y->sin_addr.s_addr;
+    }
+    if (a->ss_family != AF_INET6) return true;
+    const struct sockaddr_in6 *x = (const void *)a, *y = (const void *)b;
+    return x->sin6_port == y->sin6_port && !memcmp(&x->sin6_addr, &y->sin6_addr, sizeof x->sin6_addr);
+}
+
+/* Another sender's valid message while connected: it takes over (statuses name it from now
+ * on, said once) where the current sender has been quiet for TAKEOVER (a quarter of the
+ * timeout, at most 250 ms: a sender replaced with no silence in between); two senders that
+ * interleave leave the first in place. */
+static void maybe_take_over(osc_input *o, int64_t recv_ns)
+{
+    int64_t quiet = (int64_t)(o->timeout_s * 0.25e9);
+    if (quiet > 250000000) quiet = 250000000;
+    if (same_sender(&o->pkt_from, &o->sender_addr) || recv_ns - o->sender_last_ns < quiet)
+        return;
+    char old[sizeof o->sender];
+    memcpy(old, o->sender, sizeof old);
+    o->sender_addr = o->pkt_from;
+    fp_udp_sender_text(&o->pkt_from, o->sender, sizeof o->sender);
+    bump(o, &o->st.connects);
+    push_status(o, FP_STATUS_CONNECTED, -1, "osc %s: sender %s on port %u (took over from %s)",
+                fp__osc_format_names[o->format], o->sender, (unsigned)o->port, old);
+    logf_(o, FP_LOG_INFO, "port %u: sender %s took over from %s", (unsigned)o->port, o->sender, old);
+}
+
 /* Called for every message that produced a pose or button: connection bookkeeping. */
 static void note_valid(osc_input *o, int64_t recv_ns, int hand)
 {
@@ -346,9 +382,13 @@ static void note_valid(osc_input *o, int64_t recv_ns, int hand)
         o->connected = true;
         bump(o, &o->st.connects);
         o->hands_seen = o->hands_lost = 0;
+        o->sender_addr = o->pkt_from;
         push_status(o, FP_STATUS_CONNECTED, -1, "osc %s: sender %s on port %u",
                     fp__osc_format_names[o->format], o->sender, (unsigned)o->port);
+    } else {
+        maybe_take_over(o, recv_ns);
     }
+    if (same_sender(&o->pkt_from, &o->sender_addr)) o->sender_last_ns = recv_ns;
     o->last_valid_ns = recv_ns;
     if (hand >= 0) {
         o->hands_seen |= 1u << hand;
@@ -898,6 +938,7 @@ static void *osc_thread(void *arg)
             }
             if (!o->connected) fp_udp_sender_text(&from, o->sender, sizeof o->sender);
             o->packet_pushed = false;
+            o->pkt_from = from;
             handle_packet(o, o->buf, (size_t)n, recv_ns, recv_ns, 0);
             leap_end_packet(o, recv_ns);
             if (o->packet_pushed) record_latency(o, recv_ns);

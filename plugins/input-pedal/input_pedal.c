@@ -386,9 +386,11 @@ static void close_pedal(pedal *p, bool report)
         fp_pedal_change ch[3];
         int n = fp_pedal_diff(p->mask, 0, ch);
         push_changes(p, ch, n, now_ns(p));
+        const fp_pedal_model *m = fp_pedal_find_model(p->vid, p->pid); /* (no "pedal: pedal") */
         push_status(p, FP_STATUS_DISCONNECTED,
-                    "pedal %04x:%04x at bus %03d address %03d left; looking every %d ms",
-                    p->vid, p->pid, p->bus, p->address, SCAN_PERIOD_MS);
+                    "%s%s%04x:%04x at bus %03d address %03d unplugged; looking every %d ms",
+                    m ? m->name : "", m ? " " : "", p->vid, p->pid, p->bus, p->address,
+                    SCAN_PERIOD_MS);
         p->announced = 1;
     }
     p->mask = 0;

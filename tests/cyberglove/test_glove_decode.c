@@ -449,6 +449,35 @@ static void test_cal_decimals(void **state)
     rmdir(dir);
 }
 
+/* The records' length as sent, from one record start (`S` after a 0x00) to the next, across
+ * feeds: 21 for 18 values and a status byte; nothing before two starts. */
+static void test_lenmeter(void **state)
+{
+    (void)state;
+    uint8_t rec[21] = {'S'};
+    memset(rec + 1, 0x40, 19); /* 18 values, status 0x40 stands for any non-zero byte */
+    fpg_lenmeter m = {0};
+    fpg_lenmeter_feed(&m, rec, sizeof rec - 1);
+    assert_int_equal(m.seen, 0);
+    fpg_lenmeter_feed(&m, rec + 20, 1); /* the terminator */
+    fpg_lenmeter_feed(&m, rec, 7);      /* the next record's start */
+    assert_int_equal(m.seen, 21);
+}
+
+/* 8N1: baud / 10 bytes a second. 19200 carries 76 records of 25 bytes: rate=100 is said,
+ * with both figures and what to set; 115200 (460) and rate=76 are not. */
+static void test_line_too_slow(void **state)
+{
+    (void)state;
+    char text[160] = "";
+    assert_true(fpg_line_too_slow(19200, 100, 25, text, sizeof text));
+    assert_string_equal(text, "baud=19200 carries at most 76 records/s (25 bytes), not rate=100: set rate=76");
+    assert_false(fpg_line_too_slow(19200, 76, 25, text, sizeof text));
+    assert_false(fpg_line_too_slow(115200, 100, 25, text, sizeof text));
+    assert_true(fpg_line_too_slow(1200, 100, 25, text, sizeof text)); /* 4.8 a second */
+    assert_non_null(strstr(text, "at most 4 records/s"));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -466,6 +495,8 @@ int main(void)
         cmocka_unit_test(test_angles_finite),
         cmocka_unit_test(test_cal_beyond_float),
         cmocka_unit_test(test_cal_decimals),
+        cmocka_unit_test(test_lenmeter),
+        cmocka_unit_test(test_line_too_slow),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -69,11 +69,29 @@ static void test_never_answered(void **state)
     assert_string_equal(back, "; answered after 3.0 s, 2 tries");
 }
 
+/* A box whose records are another length than the probe's: both lengths named, the same text
+ * whatever noise came (said once as the loss, the same reason after); unknown length or
+ * 16-bit frames: the noise count. */
+static void test_noise_text(void **state)
+{
+    (void)state;
+    char a[200], b[200];
+    fpg_noise_text(a, sizeof a, 8, 250, 546, 25, 21);
+    assert_string_equal(a, "records of 21 bytes, expected 25 (?S/?N, ?D or ?U disagree with the records)");
+    fpg_noise_text(b, sizeof b, 8, 250, 525, 25, 21);
+    assert_string_equal(a, b);
+    fpg_noise_text(a, sizeof a, 8, 3000, 4221, 25, 0);
+    assert_string_equal(a, "no well-formed record in 3000 ms, 4221 bytes of line noise (expected 25-byte records)");
+    fpg_noise_text(a, sizeof a, 16, 500, 77, 56, 30);
+    assert_string_equal(a, "no well-formed 16-bit frame in 500 ms, 77 bytes of line noise");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_silence_said_briefly),
         cmocka_unit_test(test_never_answered),
+        cmocka_unit_test(test_noise_text),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -656,6 +656,68 @@ static void stopped_sender_reported(void **state)
     close_fixture(&f);
 }
 
+/* A sender replaced by another (a new source port) with no silence in between: the new one
+ * is said once (a CONNECTED naming it and the one it took over from) and the statuses that
+ * follow name it. Before: never said, and the DISCONNECTED after the new sender stopped named
+ * the old one ("no data from 127.0.0.1:OLD"). */
+static int udp_from(char *text, size_t len)
+{
+    int s = socket(AF_INET, SOCK_DGRAM, 0);
+    struct sockaddr_in a = {.sin_family = AF_INET, .sin_addr.s_addr = htonl(INADDR_LOOPBACK)};
+    socklen_t al = sizeof a;
+    assert_true(s >= 0);
+    assert_int_equal(bind(s, (struct sockaddr *)&a, sizeof a), 0);
+    assert_int_equal(getsockname(s, (struct sockaddr *)&a, &al), 0);
+    snprintf(text, len, "127.0.0.1:%u", (unsigned)ntohs(a.sin_port));
+    return s;
+}
+
+static void new_sender_followed(void **state)
+{
+    (void)state;
+    osc_fixture f;
+    open_fixture(&f, "timeout=0.5", 1024);
+    char name[2][32];
+    int sock[2] = {udp_from(name[0], sizeof name[0]), udp_from(name[1], sizeof name[1])};
+    struct sockaddr_in to = {.sin_family = AF_INET, .sin_port = htons((uint16_t)atoi(f.port)),
+                             .sin_addr.s_addr = htonl(INADDR_LOOPBACK)};
+    for (int k = 0; k < 2; k++) /* 0.2 s of the old sender, then 0.6 s of the new at once */
+        for (int i = 0; i < (k ? 30 : 10); i++) {
+            lo_message m = joints_message(&rows[0]);
+            size_t len = 0;
+            void *bytes = lo_message_serialise(m, "/facepuppet/hand/left/joints", NULL, &len);
+            assert_int_equal(sendto(sock[k], bytes, len, 0, (struct sockaddr *)&to, sizeof to), (ssize_t)len);
+            free(bytes);
+            lo_message_free(m);
+            sleep_ms(20);
+        }
+    assert_true(wait_type(f.h, FP_EVENT_STATUS, FP_STATUS_DISCONNECTED, 1));
+    char took[160];
+    snprintf(took, sizeof took, "%s on port %s (took over from %s)", name[1], f.port, name[0]);
+    size_t said_new = 0, disconnects = 0;
+    pthread_mutex_lock(&f.h->mutex);
+    for (size_t i = 0; i < f.h->count; i++) {
+        const fp_event *e = &f.h->events[i];
+        if (e->header.type != FP_EVENT_STATUS) continue;
+        printf("  status %u: %s\n", e->status.code, e->status.text);
+        if (e->status.code == FP_STATUS_CONNECTED && strstr(e->status.text, name[1])) {
+            assert_non_null(strstr(e->status.text, took));
+            said_new++;
+        }
+        if (e->status.code == FP_STATUS_DISCONNECTED) {
+            assert_non_null(strstr(e->status.text, name[1])); /* the sender that stopped */
+            assert_null(strstr(e->status.text, name[0]));
+            disconnects++;
+        }
+    }
+    pthread_mutex_unlock(&f.h->mutex);
+    assert_int_equal(said_new, 1);
+    assert_int_equal(disconnects, 1);
+    close(sock[0]);
+    close(sock[1]);
+    close_fixture(&f);
+}
+
 /* A hand the tracker loses while the sender goes on with the other is reported gone, for
  * that hand alone, after the timeout; its next pose brings it back without a new connect. */
 static void lost_hand_reported(void **state)
@@ -928,6 +990,7 @@ int main(void)
         cmocka_unit_test(bundles_keep_timetags),
         cmocka_unit_test(recording_clock_places_events),
         cmocka_unit_test(stopped_sender_reported),
+        cmocka_unit_test(new_sender_followed),
         cmocka_unit_test(lost_hand_reported),
         cmocka_unit_test(hostile_packets_counted),
         cmocka_unit_test(flood_keeps_memory_bounded),

@@ -436,7 +436,10 @@ static void test_unplug_and_return(void **state)
     emu_unplug(f->emu);
     expect_button(f, FP_BUTTON_LEFT, 0, FP_BUTTON_RIGHT);
     expect_button(f, FP_BUTTON_RIGHT, 0, 0);
-    expect_status(f, FP_STATUS_DISCONNECTED, "05f3:00ff");
+    /* said as an unplug, the model named once (before: "pedal 05f3:00ff ... left", read
+     * "pedal: pedal ... left" on stage, "left" taken for the left pedal) */
+    expect_status(f, FP_STATUS_DISCONNECTED,
+                  "VEC Infinity IN-USB-2 05f3:00ff at bus 001 address 005 unplugged; looking every 500 ms");
     expect_quiet(f, 800);   /* looking, not finding, not repeating itself */
 
     /* Back at a new address, as the kernel numbers it. */

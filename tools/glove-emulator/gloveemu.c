@@ -368,8 +368,9 @@ static void reply_query(fp_gloveemu *e, uint8_t x)
     if (x && e->o.unanswered && strchr(e->o.unanswered, x)) return;
     switch (x) {
     case 'G': v[n++] = e->plugged ? 3 : 1; e->st.session_seq = e->st.records; break;
-    case 'S': v[n++] = (uint8_t)e->o.sensors; break;
-    case 'N': v[n++] = (uint8_t)__builtin_popcount(e->present & e->sampled); break;
+    case 'S': v[n++] = (uint8_t)(e->o.claim_sensors ? e->o.claim_sensors : e->o.sensors); break;
+    case 'N': v[n++] = (uint8_t)(e->o.claim_sensors ? e->o.claim_sensors
+                                                    : __builtin_popcount(e->present & e->sampled)); break;
     case 'R': v[n++] = e->o.left ? 0 : 1; break;
     case 'D': v[n++] = e->ts_on; break;
     case 'U': v[n++] = e->status_on; break;

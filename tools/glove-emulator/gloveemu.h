@@ -56,6 +56,9 @@ typedef struct fp_gloveemu_options {
     uint32_t sampled;         /* the software mask (?M, bit i sensor i): the sensors sampled,
                                  ?N their count, the 8-bit records' values; 0 = every sensor
                                  the glove has (?K, the hardware mask) */
+    int claim_sensors;        /* ?S and ?N answer this (18 or 22) while the records carry
+                                 the glove's own: a box whose records disagree with its
+                                 answers; 0 = the truth */
     bool error_frames;        /* glove out of its box: `S`|`G` `e` `g` 0x00 in place of each
                                  8-bit record (no values), not a record with its status clear */
 } fp_gloveemu_options;

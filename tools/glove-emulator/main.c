@@ -30,6 +30,7 @@ static void usage(FILE *f)
     fprintf(f,
             "usage: fp-glove-emu [--sensors 18|22] [--hand left|right] [--csv FILE] [--cal FILE]\n"
             "                    [--rate HZ] [--fast] [--timestamps] [--loop] [--link PATH]\n"
+            "                    [--claim-sensors 18|22 (?S and ?N say so; the records stay)]\n"
             "Serves a CyberGlove on a pty; prints its path, then reads fault commands on stdin:\n"
             "  unplug, plug, pull, replug, garbage N, slow FACTOR, silent, answer, line, stats,"
             " quit\n"
@@ -51,6 +52,15 @@ int main(int argc, char **argv)
                 return 64;
             }
             o.sensors = (int)n;
+            i++;
+        }
+        else if (!strcmp(a, "--claim-sensors") && v) {
+            unsigned long long n;
+            if (!fp_parse_whole(v, 22, &n) || (n != 18 && n != 22)) {
+                fprintf(stderr, "fp-glove-emu: --claim-sensors '%s': expected 18 or 22\n", v);
+                return 64;
+            }
+            o.claim_sensors = (int)n;
             i++;
         }
         else if (!strcmp(a, "--hand") && v) {
