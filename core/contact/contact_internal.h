@@ -278,19 +278,8 @@ struct track {
     double carry_r2;              /* carry_build's (2r)^2 */
     const float *carry_cand;      /* (the candidate, for the worker's ranges) */
     bool bg;                      /* a recentre job is posted to the worker (bg_join) */
-    uint32_t *ease_v;             /* the vertices where the last step's candidate (before
-                                     fp_contact_ease) differs from P: held or carried skin */
-    float *ease_t;                /* (x3) that candidate there: where the map puts them */
-    size_t nease, cap_ease_v, cap_ease_t;
-    uint32_t *ease_at;            /* n: 1 + the index in ease_v, 0 for none */
-    bool eased;                   /* fp_contact_ease ran since the last step (ease_t: its
-                                     candidate) */
     bool broken;                  /* a call ran out of memory half way: unusable */
 };
-
-/* fp_contact_step's end (contact_ease.c): ease_v, ease_t from the step's candidate cand and
- * its P, whole (the candidate passed) or not. 0 or -ENOMEM. */
-int fpc_ease_record(fp_contact *c, const float *cand, bool whole);
 
 
 /* ---- jobs for the worker (contact_worker.c) ---- */

@@ -435,10 +435,7 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
     if (k->tree ? fpc_collect_mark(c, cand, ranges, nranges) : fpc_collect_moved(c, cand, ranges, nranges))
         return -ENOMEM;
     res->moved_verts = k->nmv;
-    if (!k->nmv) { /* nothing moved: P is the candidate (no lag eased: fp_contact_ease) */
-        k->eased = false;
-        return 0;
-    }
+    if (!k->nmv) return 0; /* nothing moved: P is the candidate */
     for (size_t i = 0; !k->tree && i < k->nmv; i++) {
         /* the vertex's triangle range, its triangles and their stamps fetched ahead: three
          * dependent loads that would otherwise miss the cache in turn (the marking of the
@@ -478,7 +475,7 @@ static int step(fp_contact *c, const float *ref, const float *cand, const uint32
         res->tested += k->lane[i].tested;
     }
     dp_update(c, ref, accepted && !found && !fl);
-    return fpc_ease_record(c, cand, !found && !fl);
+    return 0;
 }
 
 /* the vertices v in [f, e) where cand moved from P by less than eps in every coordinate,

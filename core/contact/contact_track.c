@@ -73,9 +73,6 @@ void fpc_track_free(struct track *k)
     free(k->off_mark);
     free(k->ramp);
     free(k->carry);
-    free(k->ease_v);
-    free(k->ease_t);
-    free(k->ease_at);
     free(k->probe);
     fpc_kd_free(&k->kd);
     free(k);
@@ -100,11 +97,10 @@ int fpc_track_build(fp_contact *c)
     k->dp = zalloc(n ? n : 1, sizeof *k->dp);
     k->in_dp = zalloc(n ? n : 1, 1);
     k->off_mark = zalloc(n ? n : 1, 1);
-    k->ease_at = zalloc(n ? n : 1, sizeof *k->ease_at);
     k->tstamp = zalloc(t ? t : 1, sizeof *k->tstamp);
     k->qstamp = zalloc(t ? t : 1, sizeof *k->qstamp);
     k->slot = malloc((t ? t : 1) * sizeof *k->slot);
-    if (!k->p || !k->vt_start || !k->vt || !k->dp || !k->in_dp || !k->off_mark || !k->ease_at || !k->tstamp || !k->qstamp || !k->slot) {
+    if (!k->p || !k->vt_start || !k->vt || !k->dp || !k->in_dp || !k->off_mark || !k->tstamp || !k->qstamp || !k->slot) {
         if (k->p) c->weld_copy = NULL;
         fpc_track_free(k);
         return -ENOMEM;
@@ -317,9 +313,6 @@ static int reference(fp_contact *c, const float *ref, const uint32_t *ranges, si
     struct track *k = c->tk;
     fpc_tick(c);
     k->nmt = k->nmo = k->nmq = 0;
-    for (size_t i = 0; i < k->nease; i++) k->ease_at[k->ease_v[i]] = 0;
-    k->nease = 0; /* P is the reference: nothing to ease toward (fp_contact_ease) */
-    k->eased = false;
     /* P := ref where they differ: D_P, then the ranges (or everything); the hierarchy's
      * triangles there marked */
     if (k->tree ? fpc_collect_mark(c, ref, ranges, nranges) : fpc_collect_moved(c, ref, ranges, nranges))

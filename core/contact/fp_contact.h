@@ -265,10 +265,6 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
  * added nothing. So on the hierarchy the check of each ramp and, once one passed, the
  * bisection's look only at the triangles of the vertices with s(v) < 1.
  * tests/session/test_contact.c holds every decision to the full check's.
- * Held or carried skin lags the map; without more, the first candidate that passes whole
- * is shown exactly and the lag closes in one frame, a pop while the hand may be still.
- * fp_contact_ease (below) rewrites the next candidate there so that the lag closes at a
- * bounded speed; the eased candidate is checked like any other (test_contact_ease).
  *
  * Cost: per frame, the vertices in the ranges and D_P, then
  *  - envelopes: each moved triangle (boxes, its flip, its list: about 100 ns on a large
@@ -468,27 +464,6 @@ void fp_contact_set_local(fp_contact *c, double radius);
  *  held rounds alone, as before issue 51's carry: tests and comparisons). Threads: as
  *  every call on c. */
 void fp_contact_set_carry(fp_contact *c, bool on);
-
-/** Eases the candidate cand (n x 3 floats, the caller's, rewritten in place; the one the
- *  next fp_contact_step checks) where P lags the map: at the vertices where the last step's
- *  candidate differed from the shape it kept (skin a scale-back held back or carried), and
- *  nowhere else. Without it, the first candidate that passes whole is shown exactly, so
- *  skin held or carried millimetres away returns in one frame while the hand is still (a
- *  pop: an outside audit saw 9.65 mm in a frame where the hand moved 0.4 mm; the ICT face
- *  on grab 2.8 mm where it moved 0.9; docs/performance.md). Here each such vertex's lag L (the last
- *  candidate there minus P) shrinks by at most step + |m| a call, m its candidate's own
- *  motion since the last one: vertex v goes to C(v) - L (1 - s / |L|), s = step + |m|, when
- *  |L| > s, else stays at C(v). Skin that was never held is left as the map puts it, and
- *  a fast drag catches up as fast as it moves. The eased candidate is a candidate like any
- *  other: the step checks it in full, so every shape shown still passes the full check.
- *  ranges, nranges: as fp_contact_step's (only vertices inside them are rewritten; their
- *  lag is kept for later where they are not). step: mesh units per call, >= 0 (0: the lag
- *  closes only by the map's own motion). Call it before fp_contact_step with the same
- *  ranges (after fp_contact_hold, if any); fp_contact_reference forgets the lags (P is then
- *  the reference). Returns the vertices rewritten (0 for c NULL, before the first step, for
- *  a step not >= 0, or ranges NULL with nranges not SIZE_MAX). No errors; no allocation.
- *  Threads: as every call on c. */
-size_t fp_contact_ease(fp_contact *c, float *cand, const uint32_t *ranges, size_t nranges, float step);
 
 /** The scale-back's search from the last step's t (fp_contact_step: after a step that kept at
  *  most 1/16, that t tried first and doubled) applies to steps that move at least min_tris

@@ -188,10 +188,7 @@ typedef struct fp_session_options {
                                                        (fp_contact_hold): a vertex that moved
                                                        less than 1e-5 of the face's diagonal
                                                        since the last frame keeps its place
-                                                       until it moves more (commits exact),
-                                                       and its ease (fp_contact_ease): skin
-                                                       it held back returns at a bounded
-                                                       speed, not in one frame */
+                                                       until it moves more (commits exact) */
     int frame_thread;                               /* 0 (default): fp_session_start makes
                                                        a frame thread when the machine has
                                                        2 or more CPUs and the mesh at most

@@ -454,9 +454,7 @@ static int open_steps(fp_session *s, const fp_session_options *opt, double diag,
     s->isolate_opt.never_wait = !opt->input_clock; /* live: a frame never waits for a restart */
     s->whole_rig_commit = opt->whole_rig_commit;
     s->frame_thread_opt = opt->frame_thread;
-    /* the ease's step and the hold's eps from the loaded face's diagonal (diag: its square,
-     * above) */
-    s->cg.ease = opt->exact_frames || !isfinite(diag) ? 0.0f : (float)(FP_CONTACT_EASE * sqrt(diag));
+    /* the hold's eps from the loaded face's diagonal (diag: its square, above) */
     s->cg.hold = opt->exact_frames || !isfinite(diag) ? 0.0f : (float)(FP_CONTACT_HOLD * sqrt(diag));
     s->engine.jacobian = opt->measure_jacobian;
     if ((rc = fp_engine_step_set_topology(&s->engine, s->mesh->triangles, s->mesh->triangle_count))) {

@@ -110,10 +110,6 @@ const float *fp_cg_run(fp_cg_step *g, const fp_cg_frame *f, fp_slog *log, fp_fra
                   : f->rig->rig && shown == f->rig->shown ? f->rig->shown : NULL;
     if (!rc && !f->commit && g->hold > 0 && cand)
         st->collide_held = fp_contact_hold(g->contact, ref, cand, f->touched, f->ntouched, g->hold);
-    /* skin held back or carried eases back to the map (fp_contact_ease), not in one frame;
-     * never in a commit's frame either */
-    if (!rc && !f->commit && g->ease > 0 && cand)
-        fp_contact_ease(g->contact, cand, f->touched, f->ntouched, g->ease);
     if (!rc)
         rc = fp_contact_step(g->contact, ref, shown, f->touched, f->ntouched, FP_CONTACT_BISECTIONS, &r);
     st->collide_ms += (double)(fp_now_ns() - t0) / 1e6;

@@ -60,11 +60,6 @@ extern "C" {
  * commit (4.75 um on the ICT face, 47.5 cm across: about 1/25 of a pixel where the face
  * fills a 4K screen) */
 #define FP_CONTACT_HOLD 1e-5
-/* fp_contact_ease's step, a fraction of the loaded face's bounding-box diagonal: skin the
- * guard held back or carried returns to where the map puts it at most this far a frame
- * faster than the map itself moves there (0.95 mm a frame on the ICT face, 47.5 cm across;
- * 0.5 mm on a 25 cm one), not in one frame */
-#define FP_CONTACT_EASE 2e-3
 
 /* A gesture the guard held back for flipped triangles alone (a long drag turning skin over
  * without crossing anything: under a nostril, a lip) is widened: from the next frame its
@@ -103,8 +98,6 @@ typedef struct fp_cg_step {
                                      over alone (no new crossing: fp_contact_result.pairs 0) */
     double t_least;               /* this gesture: smallest share of a frame's motion kept
                                      (fp_contact_result.kept) */
-    float ease;                   /* fp_contact_ease's step (mesh units a frame): FP_CONTACT_EASE
-                                     of the loaded face's diagonal; 0: none (exact_frames) */
     float hold;                   /* fp_contact_hold's eps (mesh units): FP_CONTACT_HOLD of the
                                      loaded face's diagonal; 0: none (options.exact_frames) */
     fp_changed ref;               /* where the reference changed since the guard last took it

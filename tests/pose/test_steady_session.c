@@ -32,8 +32,7 @@
  * frame's time since the right hand's latest sample). Each run also prints its
  * pops: frames where the clean run's face moved over twice as far as the hand's fastest
  * joint and 1 mm more (a clamp or a guard letting go at once; not asserted: the contact
- * guard's held skin catches up in one frame where it lets go with exact_frames, as here; the
- * default session eases it back, fp_contact_ease; docs/performance.md). */
+ * guard's held skin catches up in one frame where it lets go, docs/performance.md). */
 #define _GNU_SOURCE
 #include "fp_plugin_host.h"
 #include "fp_session.h"
