@@ -98,8 +98,6 @@ typedef struct glove {
     fpg_lenmeter meter; /* the records' length as sent (a box the probe misread) */
     fpg_outage outage;  /* an outage is said in few lines (glove_outage.h) */
     bool up_pending;    /* the probe answered, no unit yet: CONNECTED at the first */
-    int64_t status_at;  /* a status's time where not now (CONNECTED: its first record's: a
-                           recording's times only grow) */
 
     /* statistics */
     pthread_mutex_t lock;
@@ -133,14 +131,15 @@ static void logf_(const glove *g, fp_log_level lvl, const char *fmt, ...)
 
 /* The event's text names the port ("PATH: text" unless the text names it already). The host
  * says warnings, errors and disconnections itself, one line each (docs/plugins.md), so only
- * CONNECTED is logged here too (RECONNECTING, one per attempt, is summed up: glove_outage.h). */
-static void push_status(glove *g, fp_status_code code, const char *fmt, ...)
+ * CONNECTED is logged here too (RECONNECTING, one per attempt, is summed up: glove_outage.h).
+ * t: the event's time, 0 now (push_status). */
+static void push_status_at(glove *g, int64_t t, fp_status_code code, const char *fmt, ...)
 {
     fp_event_status ev;
     memset(&ev, 0, sizeof ev);
     ev.header.size = sizeof ev;
     ev.header.type = FP_EVENT_STATUS;
-    ev.header.time_ns = g->status_at ? g->status_at : now_ns(g);
+    ev.header.time_ns = t ? t : now_ns(g);
     ev.header.hand = g->hand;
     ev.code = code;
     char text[400], full[PATH_MAX + sizeof text + 2]; /* full: the logged line, whole */
@@ -156,6 +155,8 @@ static void push_status(glove *g, fp_status_code code, const char *fmt, ...)
     if (code == FP_STATUS_CONNECTED)
         logf_(g, FP_LOG_INFO, "%s", full);
 }
+
+#define push_status(g, ...) push_status_at((g), 0, __VA_ARGS__)
 
 static bool stopping(glove *g) { return atomic_load(&g->stopping); }
 
@@ -642,12 +643,11 @@ static void say_up(glove *g, int64_t t)
     if (g->sampled != g->sensors)
         snprintf(sampled, sizeof sampled, " (%d sampled)", g->sampled);
     fpg_outage_up(&g->outage, now_ns(g), back, sizeof back);
-    g->status_at = t;
-    push_status(g, FP_STATUS_CONNECTED, "%d sensors%s, %s hand, %s %s%s%s%s", g->sensors,
+    /* (at its first record's time: a recording's times only grow) */
+    push_status_at(g, t, FP_STATUS_CONNECTED, "%d sensors%s, %s hand, %s %s%s%s%s", g->sensors,
                 sampled, g->hand ? "right" : "left", g->bits == 16 ? "16-bit" : "8-bit",
                 g->poll_mode ? "poll" : "stream", g->version[0] ? ", version " : "",
                 g->version, back); /* (no version field where ?V went unanswered) */
-    g->status_at = 0;
     char slow[160]; /* a line too slow for the rate: said once, at the first connect */
     if (!g->warned_line &&
         (g->warned_line = fpg_line_too_slow(g->baud, g->rate_hz, g->rec_len, slow, sizeof slow)))

@@ -172,8 +172,6 @@ static void count_unknown(osc_input *o, const char *path)
     count(o, FP_OSC_UNKNOWN_ADDRESS);
 }
 
-static const char *format_name(int fmt) { return fp__osc_format_names[fmt]; }
-
 /* The addresses a format takes (docs/osc.md, "Address spaces"). */
 static const char *format_space(int fmt)
 {
@@ -900,7 +898,7 @@ static void timers(osc_input *o, int64_t now)
         char first[256] = "";
         if (k == FP_OSC_UNKNOWN_ADDRESS && o->unknown_first[0])
             snprintf(first, sizeof first, " (first: %s%s; format %s takes %s)", o->unknown_first,
-                     foreign_space(o->unknown_first), format_name(o->format),
+                     foreign_space(o->unknown_first), fp__osc_format_names[o->format],
                      format_space(o->format));
         logf_(o, FP_LOG_WARNING, "port %u: %llu %s%s in the first second (dropped; further ones "
               "are counted, totals at stop)", (unsigned)o->port, n, problem_text[k], first);
