@@ -60,6 +60,29 @@ static float *lattice(int q, const double lo[3], const double hi[3], size_t *n)
     return p;
 }
 
+/* A lattice of (q + 1)^3 vertices over the box lo..hi, its points and an output of as many:
+ * the guarded steps' grid (lattice_open, lattice_close). */
+typedef struct lattice_grid {
+    size_t nv;
+    float *grid, *out;
+    csrbf_points *pts;
+} lattice_grid;
+
+static void lattice_open(lattice_grid *l, int q, const double lo[3], const double hi[3])
+{
+    l->grid = lattice(q, lo, hi, &l->nv);
+    l->out = malloc(l->nv * 3 * sizeof *l->out);
+    assert_non_null(l->out);
+    assert_int_equal(csrbf_points_create(l->nv, l->grid, &l->pts), CSRBF_OK);
+}
+
+static void lattice_close(lattice_grid *l)
+{
+    csrbf_points_destroy(&l->pts);
+    free(l->grid);
+    free(l->out);
+}
+
 /* min det dT/dx over a dense lattice of the box, through map_point (double). */
 static double min_det_map(const csrbf_solver *s, int q, const double lo[3], const double hi[3])
 {
@@ -449,11 +472,6 @@ static void test_guarded_step_merged(void **state)
     csrbf_points_destroy(&pts);
 }
 
-/* Skin grabbed by two fingertips close together and pulled far apart (0.01 R to 1.2 R): each
- * map may stretch the gap only so much (the bound grows as 1 / gap^2), so the default 16 maps
- * stop short; 64 maps reach it, with or without a pairs budget that allows them, and a budget
- * already spent keeps the default's 16. Every map applied is injective (no tetrahedron of the
- * lattice turns over, det > 0 at every vertex). */
 /* Skin grabbed 0.01 R apart and pulled 1.2 R apart (not converging: an injective map does
  * it) is delivered in full within the default 16 maps: the last maps are certified with the
  * group terms (CSRBF_GUARD_GROUP_GAP), which see the two fields cancel; under the plain bound
@@ -463,17 +481,14 @@ static void test_guarded_step_pulled_apart_close(void **state)
 {
     (void)state;
     const double lo[3] = {-1.6, -1.2, -1.2}, hi[3] = {1.6, 1.2, 1.2};
-    size_t nv;
-    float *grid = lattice(20, lo, hi, &nv);
-    float *out = malloc(nv * 3 * sizeof *out);
-    csrbf_points *pts;
-    assert_int_equal(csrbf_points_create(nv, grid, &pts), CSRBF_OK);
+    lattice_grid l;
+    lattice_open(&l, 20, lo, hi);
     const float st[6] = {-0.005f, 0, 0, 0.005f, 0, 0}, en[6] = {-0.6f, 0, 0, 0.6f, 0, 0};
     csrbf_solver *s = make_solver(1.0, CSRBF_PSI31, CSRBF_POLY_NONE);
     csrbf_guard_stats gs;
     csrbf_guard g = {0};
     g.eval_flags = CSRBF_EVAL_JACOBIAN;
-    int rc = csrbf_guarded_step(s, pts, 2, st, en, &g, out, &gs);
+    int rc = csrbf_guarded_step(s, l.pts, 2, st, en, &g, l.out, &gs);
     printf("  pulled apart from 0.01 R to 1.2 R: %d maps reach %.1f%%, min det J %.3g\n", gs.substeps,
            100 * gs.reached, gs.eval.min_jacobian_det);
     assert_int_equal(rc, CSRBF_WARN_SUBSTEPS);
@@ -481,14 +496,12 @@ static void test_guarded_step_pulled_apart_close(void **state)
     assert_true(gs.reached == 1.0);
     assert_true(gs.eval.min_jacobian_det > 0.0);
     assert_double_le(gs.bound_after, 0.9 + 1e-12);
-    assert_int_equal(flipped_tets(grid, out, 20), 0);
+    assert_int_equal(flipped_tets(l.grid, l.out, 20), 0);
     /* the plain bound stays the solver's outside a composed step */
     double L;
     assert_int_equal(csrbf_solver_injectivity(s, &L), CSRBF_OK);
     csrbf_solver_destroy(&s);
-    csrbf_points_destroy(&pts);
-    free(grid);
-    free(out);
+    lattice_close(&l);
 }
 
 /* max over a lattice of the box of ||dT/dx - I||_2 (power iteration on (J - I)^T (J - I)) */
@@ -529,11 +542,8 @@ static void test_group_terms_bound(void **state)
 {
     (void)state;
     const double lo[3] = {-2.2, -2.2, -2.2}, hi[3] = {2.2, 2.2, 2.2};
-    size_t nv;
-    float *grid = lattice(16, lo, hi, &nv);
-    float *out = malloc(nv * 3 * sizeof *out);
-    csrbf_points *pts;
-    assert_int_equal(csrbf_points_create(nv, grid, &pts), CSRBF_OK);
+    lattice_grid l;
+    lattice_open(&l, 16, lo, hi);
     int delivered = 0, over_plain = 0, trials = 40;
     size_t flips = 0;
     double worst = 0.0;
@@ -548,11 +558,11 @@ static void test_group_terms_bound(void **state)
         csrbf_guard_stats gs;
         csrbf_guard g = {0};
         g.eval_flags = CSRBF_EVAL_JACOBIAN;
-        int rc = csrbf_guarded_step(s, pts, n, st, en, &g, out, &gs);
+        int rc = csrbf_guarded_step(s, l.pts, n, st, en, &g, l.out, &gs);
         assert_true(rc >= 0);
         assert_true(gs.eval.min_jacobian_det > 0.0);
         delivered += gs.reached == 1.0;
-        flips += flipped_tets(grid, out, 16); /* (a coarse tetrahedron, 0.27 R across, about
+        flips += flipped_tets(l.grid, l.out, 16); /* (a coarse tetrahedron, 0.27 R across, about
             skin drawn together 0.15 R across, can turn under an injective map: said, not
             asserted; the plain bound's 16 maps turn some too) */
         if (gs.substeps > CSRBF_GUARD_MAX_SUBSTEPS - 12) { /* the last map had the group terms */
@@ -567,9 +577,7 @@ static void test_group_terms_bound(void **state)
     printf("  close groups: %zu lattice tetrahedra flipped; %d of %d delivered in 16 maps; last maps' measured stretch up to %.3f "
            "(%d of them over the margin by the plain bound)\n", flips, delivered, trials, worst, over_plain);
     assert_true(over_plain > 0); /* the group terms were what certified them */
-    csrbf_points_destroy(&pts);
-    free(grid);
-    free(out);
+    lattice_close(&l);
 }
 
 /* Points drawn onto one point (0.4 R apart to none): no injective map gets there, so the
@@ -579,27 +587,22 @@ static void test_guarded_step_onto_one_point(void **state)
 {
     (void)state;
     const double lo[3] = {-1.6, -1.2, -1.2}, hi[3] = {1.6, 1.2, 1.2};
-    size_t nv;
-    float *grid = lattice(20, lo, hi, &nv);
-    float *out = malloc(nv * 3 * sizeof *out);
-    csrbf_points *pts;
-    assert_int_equal(csrbf_points_create(nv, grid, &pts), CSRBF_OK);
+    lattice_grid l;
+    lattice_open(&l, 20, lo, hi);
     const float st[6] = {-0.2f, 0, 0, 0.2f, 0, 0}, en[6] = {0, 0, 0, 0, 0, 0};
     csrbf_solver *s = make_solver(1.0, CSRBF_PSI31, CSRBF_POLY_NONE);
     csrbf_guard_stats gs;
     csrbf_guard g = {0};
     g.eval_flags = CSRBF_EVAL_JACOBIAN;
     g.max_substeps = 64;
-    assert_int_equal(csrbf_guarded_step(s, pts, 2, st, en, &g, out, &gs), CSRBF_WARN_LIMITED);
+    assert_int_equal(csrbf_guarded_step(s, l.pts, 2, st, en, &g, l.out, &gs), CSRBF_WARN_LIMITED);
     assert_true(gs.reached < 1.0);
     assert_true(gs.eval.min_jacobian_det > 0.0);
     assert_double_le(gs.bound_after, 0.9 + 1e-12);
-    assert_int_equal(flipped_tets(grid, out, 20), 0);
+    assert_int_equal(flipped_tets(l.grid, l.out, 20), 0);
     printf("  drawn onto one point from 0.4 R: %d maps reach %.2f%%\n", gs.substeps, 100 * gs.reached);
     csrbf_solver_destroy(&s);
-    csrbf_points_destroy(&pts);
-    free(grid);
-    free(out);
+    lattice_close(&l);
 }
 
 /* The pair budget: one centre moved 10 R (about 26 maps of 0.43 R each, the plain bound
@@ -610,45 +613,40 @@ static void test_guarded_step_pairs_budget(void **state)
 {
     (void)state;
     const double lo[3] = {-1.6, -1.2, -1.2}, hi[3] = {1.6, 1.2, 1.2};
-    size_t nv;
-    float *grid = lattice(20, lo, hi, &nv);
-    float *out = malloc(nv * 3 * sizeof *out);
-    csrbf_points *pts;
-    assert_int_equal(csrbf_points_create(nv, grid, &pts), CSRBF_OK);
+    lattice_grid l;
+    lattice_open(&l, 20, lo, hi);
     const float st[3] = {0, 0, 0}, en[3] = {10.0f, 0, 0};
     csrbf_solver *s = make_solver(1.0, CSRBF_PSI31, CSRBF_POLY_NONE);
     csrbf_guard_stats gs;
     csrbf_guard g = {0};
     g.eval_flags = CSRBF_EVAL_JACOBIAN;
-    assert_int_equal(csrbf_guarded_step(s, pts, 1, st, en, &g, out, &gs), CSRBF_WARN_LIMITED);
+    assert_int_equal(csrbf_guarded_step(s, l.pts, 1, st, en, &g, l.out, &gs), CSRBF_WARN_LIMITED);
     assert_int_equal(gs.substeps, CSRBF_GUARD_MAX_SUBSTEPS);
     double reached16 = gs.reached;
     assert_true(reached16 < 1.0);
     uint64_t pairs16 = gs.eval.pairs;
     g.max_substeps = 64;
-    assert_int_equal(csrbf_guarded_step(s, pts, 1, st, en, &g, out, &gs), CSRBF_WARN_SUBSTEPS);
+    assert_int_equal(csrbf_guarded_step(s, l.pts, 1, st, en, &g, l.out, &gs), CSRBF_WARN_SUBSTEPS);
     int needed = gs.substeps;
     assert_true(needed > CSRBF_GUARD_MAX_SUBSTEPS && needed <= 64);
     assert_true(gs.reached == 1.0);
     assert_true(gs.eval.min_jacobian_det > 0.0);
     assert_double_le(gs.bound_after, 0.9 + 1e-12);
-    assert_int_equal(flipped_tets(grid, out, 20), 0);
+    assert_int_equal(flipped_tets(l.grid, l.out, 20), 0);
     g.max_pairs = (uint64_t)gs.eval.pairs + 1;
-    assert_int_equal(csrbf_guarded_step(s, pts, 1, st, en, &g, out, &gs), CSRBF_WARN_SUBSTEPS);
+    assert_int_equal(csrbf_guarded_step(s, l.pts, 1, st, en, &g, l.out, &gs), CSRBF_WARN_SUBSTEPS);
     assert_int_equal(gs.substeps, needed);
     g.max_pairs = pairs16 / 2;
-    assert_int_equal(csrbf_guarded_step(s, pts, 1, st, en, &g, out, &gs), CSRBF_WARN_LIMITED);
+    assert_int_equal(csrbf_guarded_step(s, l.pts, 1, st, en, &g, l.out, &gs), CSRBF_WARN_LIMITED);
     assert_int_equal(gs.substeps, CSRBF_GUARD_MAX_SUBSTEPS);
     assert_true(gs.reached == reached16);
     g.max_pairs = pairs16 + 1;
-    assert_int_equal(csrbf_guarded_step(s, pts, 1, st, en, &g, out, &gs), CSRBF_WARN_LIMITED);
+    assert_int_equal(csrbf_guarded_step(s, l.pts, 1, st, en, &g, l.out, &gs), CSRBF_WARN_LIMITED);
     assert_int_equal(gs.substeps, CSRBF_GUARD_MAX_SUBSTEPS + 1);
     assert_true(gs.reached > reached16 && gs.reached < 1.0);
     printf("  one centre moved 10 R: 16 maps reach %.0f%%, %d maps all of it\n", 100 * reached16, needed);
     csrbf_solver_destroy(&s);
-    csrbf_points_destroy(&pts);
-    free(grid);
-    free(out);
+    lattice_close(&l);
 }
 
 /* csrbf_guarded_step_touched against csrbf_guarded_step, frame after frame on one persistent
