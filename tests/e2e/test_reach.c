@@ -24,7 +24,10 @@
  * FP_REACH_SAVE) instead of the largest ask's, FP_REACH_PAIRS=1 prints the start and end
  * distances of the vectors within 2 R of each other in each frame the fold-over guard
  * limited (fingertips converging, or pulling apart skin they grabbed close together), and
- * FP_REACH_DUMP=1 each touching vector's asked and moved millimetres, every frame. */
+ * FP_REACH_DUMP=1 each touching vector's asked and moved millimetres, every frame.
+ * FP_REACH_KEYS=",key=value..." is appended to each replay SPEC (e.g. ",workspace=0": the
+ * hands placed as a live tracker's, docs/performance.md "Live, replay and the replay placed
+ * as live"). */
 #define _GNU_SOURCE
 #include "fp_session.h"
 #include "fp_stats.h"
@@ -89,7 +92,7 @@ static void one_run(const char *face, const char *rec, const char *rec_name, sam
 {
     char mesh[4300], input[4400], err[2048];
     snprintf(mesh, sizeof mesh, "%s/faces/%s", fp_test_data_dir(), face);
-    snprintf(input, sizeof input, "replay:%s,fast=1", rec);
+    snprintf(input, sizeof input, "replay:%s,fast=1%s", rec, getenv("FP_REACH_KEYS") ? getenv("FP_REACH_KEYS") : ""); /* (experiments) */
     fp_session_options so = {0};
     so.mesh_path = mesh;
     so.inputs[0] = input;
