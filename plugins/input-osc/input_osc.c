@@ -111,6 +111,7 @@ typedef struct osc_input {
     struct sockaddr_storage pkt_from; /* the sender of the latest datagram */
     bool have_offset;
     int64_t offset_ns;
+    struct sockaddr_storage offset_from; /* the sender whose timetags offset_ns maps */
     /* clock=recording: event time = origin_ns + (timetag - the sender's origin timetag) */
     int64_t origin_ns;             /* host time at start(): the recording's time zero here */
     bool have_sender_origin, ended;
@@ -716,21 +717,34 @@ static int64_t recording_time(const osc_input *o, uint32_t sec, uint32_t frac)
     return o->origin_ns + (timetag_ns(sec, frac) - o->sender_origin_tt);
 }
 
-/* Host time of an OSC timetag: sender time plus the offset fixed by the first timed bundle
- * (arrival - timetag), re-anchored when the result strays more than 1 s from the arrival
- * (the sender restarted or its clock stepped). Immediate (0, 1) means the arrival. */
+/* Host time of an OSC timetag: sender time plus an offset, arrival - timetag of the bundle
+ * that came soonest (the least transit delay seen: so a first bundle that waited in the socket
+ * before the thread read it, or came late, does not leave every later event stamped late by
+ * its wait), so the sender's spacing is kept and its jitter in transit is not added. The
+ * offset is fixed again (its pose times forgotten) when the result strays more than 1 s
+ * from the arrival (the sender restarted, its clock stepped) and when the datagram comes
+ * from another sender than the one it was fixed by (a sender restarted on a new port, with a
+ * clock of its own). Immediate (0, 1) means the arrival. */
 static int64_t map_timetag(osc_input *o, uint32_t sec, uint32_t frac, int64_t recv_ns)
 {
     if (sec == 0 && frac <= 1) return recv_ns;
     int64_t tt = timetag_ns(sec, frac);
-    if (!o->have_offset || llabs(tt + o->offset_ns - recv_ns) > REANCHOR_NS) {
+    const bool other = o->have_offset && !same_sender(&o->pkt_from, &o->offset_from);
+    if (!o->have_offset || other || llabs(tt + o->offset_ns - recv_ns) > REANCHOR_NS) {
         o->have_offset = true;
         o->offset_ns = recv_ns - tt;
+        o->offset_from = o->pkt_from;
         forget_pose_times(o); /* the sender's clock began again */
-        pthread_mutex_lock(&o->lock);
-        o->st.timetag_offset_ns = o->offset_ns;
-        pthread_mutex_unlock(&o->lock);
+    } else if (tt + o->offset_ns > recv_ns) {
+        /* sooner than the offset says (the bundles before waited): never stamped after its
+         * arrival; later times keep their order (each is at least this arrival) */
+        o->offset_ns = recv_ns - tt;
+    } else {
+        return tt + o->offset_ns;
     }
+    pthread_mutex_lock(&o->lock);
+    o->st.timetag_offset_ns = o->offset_ns;
+    pthread_mutex_unlock(&o->lock);
     return tt + o->offset_ns;
 }
 
@@ -865,6 +879,7 @@ static void timers(osc_input *o, int64_t now)
                         o->timeout_s);
         memset(&o->leap, 0, sizeof o->leap);
         forget_pose_times(o);
+        o->have_offset = false; /* the next sender's timetags: on a clock of their own */
         for (int h = 0; h < FP_HANDS; h++) /* the next sender may send no z */
             o->mp[h].have = 0, o->mp[h].z_seen = o->mp[h].xy_only = false;
         if (o->clock == CLOCK_RECORDING && !o->ended) { /* a stopped clock: never wait on it */

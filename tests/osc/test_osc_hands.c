@@ -385,6 +385,84 @@ static void out_of_order_bundle_dropped(void **state)
     close_fixture(&f);
 }
 
+/* A first bundle that waited (its timetag 300 ms before the others': it sat in the socket
+ * before the input read it, as a sender started before facepuppet leaves its first ones)
+ * does not leave every later event stamped 300 ms late: no event is stamped after its
+ * arrival, and the bundles' spacing is kept. (Before: the first bundle fixed the offset, and
+ * every later event was stamped 300 ms after it arrived, the hands shown that late.) */
+static void first_bundle_late_not_kept(void **state)
+{
+    (void)state;
+    osc_fixture f;
+    open_fixture(&f, "format=leap", 256);
+    lo_timetag base;
+    lo_timetag_now(&base);
+    base.sec -= 1; /* (timetag_plus adds: 0.3 s before now is 1 s before plus 0.7) */
+    int64_t seen[6];
+    for (int k = 0; k < 6; k++) {
+        lo_timetag tt;
+        lo_timetag_now(&tt);
+        lo_bundle b = lo_bundle_new(k == 0 ? timetag_plus(base, 0.7) : tt);
+        add_leap_frame(b, 0, 7, 10.f * (float)k, -1);
+        send_bundle(&f, b);
+        wait_packets(&f, (uint64_t)k + 1);
+        assert_true(wait_type(f.h, FP_EVENT_JOINT_POSITIONS, -1, (size_t)k + 1));
+        seen[k] = mono_ns(); /* the event is in: it arrived before now */
+        sleep_ms(20);
+    }
+    for (size_t k = 0; k < 6; k++) {
+        const fp_event *e = nth_positions(f.h, k);
+        if (e->header.time_ns > seen[k])
+            fail_msg("bundle %zu stamped %.1f ms after it was received", k,
+                     (double)(e->header.time_ns - seen[k]) / 1e6);
+        if (k) assert_true(e->header.time_ns > nth_positions(f.h, k - 1)->header.time_ns);
+    }
+    fp_osc_stats st = stats(&f);
+    for (int k = 0; k < FP_OSC_PROBLEMS; k++) assert_int_equal(st.problems[k], 0);
+    close_fixture(&f);
+}
+
+/* A sender restarted on a new port, its clock begun again (timetags from 1000 s on its own
+ * scale, 20 ms apart), 0.3 s after the first stopped: its bundles are its own, neither
+ * stale nor stamped on the first sender's clock. (Before: they mapped 0.4 s into the past
+ * through the first sender's offset, under the 1 s that fixes it again, so every one was
+ * dropped as "stale".) */
+static void restarted_sender_not_stale(void **state)
+{
+    (void)state;
+    osc_fixture f;
+    open_fixture(&f, "format=leap", 256);
+    const lo_timetag zero = {1000, 0};
+    uint64_t sent = 0;
+    int64_t t_first_end = 0;
+    for (int run = 0; run < 2; run++) {
+        lo_address to = run ? lo_address_new("127.0.0.1", f.port) : f.to; /* a new source port */
+        for (int k = 0; k < 5; k++) {
+            lo_bundle b = lo_bundle_new(timetag_plus(zero, 0.02 * k));
+            add_leap_frame(b, 0, 7, (float)(100 * run + k), -1);
+            assert_true(lo_send_bundle(to, b) > 0);
+            lo_bundle_free_recursive(b);
+            wait_packets(&f, ++sent);
+            sleep_ms(20);
+        }
+        if (run) lo_address_free(to);
+        t_first_end = run ? t_first_end : mono_ns();
+        sleep_ms(300); /* the first sender quiet: the second takes over */
+    }
+    assert_true(wait_type(f.h, FP_EVENT_JOINT_POSITIONS, -1, 10));
+    fp_osc_stats st = stats(&f);
+    assert_int_equal(st.problems[FP_OSC_STALE], 0);
+    for (size_t k = 5; k < 10; k++) {
+        const fp_event *e = nth_positions(f.h, k);
+        assert_float_equal(e->positions.mm[FP_JOINT_PALM][0], 100.f + (float)(k - 5), 0);
+        if (e->header.time_ns < t_first_end)
+            fail_msg("the new sender's bundle %zu stamped %.1f ms before the first sender stopped",
+                     k - 5, (double)(t_first_end - e->header.time_ns) / 1e6);
+        assert_true(e->header.time_ns > nth_positions(f.h, k - 1)->header.time_ns);
+    }
+    close_fixture(&f);
+}
+
 /* ------------------------------------------------------------------------------------- */
 /* Binding                                                                                */
 
@@ -527,6 +605,8 @@ int main(void)
         cmocka_unit_test(leap_second_hand_own_datagram),
         cmocka_unit_test(leap_two_hands_two_sides),
         cmocka_unit_test(out_of_order_bundle_dropped),
+        cmocka_unit_test(first_bundle_late_not_kept),
+        cmocka_unit_test(restarted_sender_not_stale),
         cmocka_unit_test(bind_ipv6_and_localhost),
         cmocka_unit_test(ipv6_side_taken_warned),
         cmocka_unit_test(dual_stack_falls_back_to_ipv4),
