@@ -124,6 +124,8 @@ typedef struct osc_input {
     mp_hand mp[FP_HANDS];
     int64_t report_at[FP_OSC_PROBLEMS]; /* 0: not pending; -1: reported */
     char unknown_first[64];        /* the first unknown address, for its report ("" none) */
+    char bad_first[2][160];        /* the first bad-count and bad-types message, said ("" none) */
+    const char *cur_path;          /* the address of the message being checked */
     bool packet_pushed;
     /* statistics (mutex) */
     pthread_mutex_t lock;
@@ -299,23 +301,52 @@ static bool within(const float *v, size_t n, float limit)
     return true;
 }
 
-/* types against want, where an 'f' takes any number's tag and an 'i' any integer's; a
- * mismatch counted (bad-count or bad-types) */
-static bool check_types(osc_input *o, const char *types, const char *want)
+/* The first bad-count or bad-types message kept for its report (receive thread): its
+ * address and what was wrong, so that a sender's mistake can be found. */
+static void note_bad(osc_input *o, int kind, const char *fmt, ...)
 {
+    char *out = o->bad_first[kind == FP_OSC_BAD_COUNT ? 0 : 1];
+    if (!out[0]) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(out, sizeof o->bad_first[0], fmt, ap);
+        va_end(ap);
+    }
+    count(o, kind);
+}
+
+/* What a type tag `want` takes, for a report. */
+static const char *wanted_text(char want)
+{
+    return want == 'f' ? "a number (f, d, i or h)" : want == 'i' ? "an integer (i or h)" : "a timetag (t)";
+}
+
+/* types against want, where an 'f' takes any number's tag and an 'i' any integer's; a
+ * mismatch counted (bad-count or bad-types) and the first of each kept for its report;
+ * base: the arguments before `types` (an optional leading one already taken) */
+static bool check_types_at(osc_input *o, const char *types, const char *want, size_t base)
+{
+    const char *path = o->cur_path ? o->cur_path : "?";
     const size_t n = strlen(want);
     if (strlen(types) != n) {
-        count(o, FP_OSC_BAD_COUNT);
+        note_bad(o, FP_OSC_BAD_COUNT, "%s with %zu arguments, wants %zu", path, base + strlen(types),
+                 base + n);
         return false;
     }
     for (size_t i = 0; i < n; i++)
         if (want[i] == 'f'   ? !fp_osc_number_type(types[i])
             : want[i] == 'i' ? !fp_osc_integer_type(types[i])
                              : types[i] != want[i]) {
-            count(o, FP_OSC_BAD_TYPES);
+            note_bad(o, FP_OSC_BAD_TYPES, "%s: argument %zu is '%c', wants %s", path, base + i + 1,
+                     types[i], wanted_text(want[i]));
             return false;
         }
     return true;
+}
+
+static bool check_types(osc_input *o, const char *types, const char *want)
+{
+    return check_types_at(o, types, want, 0);
 }
 
 /* A number argument (a tag check_types let through) as a float, read through fp_osc_arg.h
@@ -484,7 +515,7 @@ static void fmt_facepuppet(osc_input *o, const char *path, const char *types, lo
         int first = 0;
         uint32_t valid = (1u << FP_GLOVE_SENSORS) - 1;
         if (fp_osc_integer_type(types[0]) && strlen(types) == 23) {
-            if (!check_types(o, types + 1, want)) return;
+            if (!check_types_at(o, types + 1, want, 1)) return;
             first = 1;
             valid = (uint32_t)arg_i(argv[0], types[0]) & ((1u << FP_GLOVE_SENSORS) - 1);
         } else if (!check_types(o, types, want)) {
@@ -795,7 +826,9 @@ static void handle_message(osc_input *o, unsigned char *data, size_t size, int64
     const char *types = lo_message_get_types(m);
     lo_arg **argv = lo_message_get_argv(m);
     if (!types) types = "";
+    o->cur_path = path;
     if (transport_message(o, path, types, argv, t)) {
+        o->cur_path = NULL;
         lo_message_free(m);
         return;
     }
@@ -814,6 +847,7 @@ static void handle_message(osc_input *o, unsigned char *data, size_t size, int64
     case FMT_MEDIAPIPE: fmt_mediapipe(o, path, types, argv, t, recv_ns); break;
     default: break;
     }
+    o->cur_path = NULL;
     lo_message_free(m);
 }
 
@@ -915,6 +949,8 @@ static void timers(osc_input *o, int64_t now)
             snprintf(first, sizeof first, " (first: %s%s; format %s takes %s)", o->unknown_first,
                      foreign_space(o->unknown_first), fp__osc_format_names[o->format],
                      format_space(o->format));
+        else if ((k == FP_OSC_BAD_COUNT || k == FP_OSC_BAD_TYPES) && o->bad_first[k == FP_OSC_BAD_TYPES][0])
+            snprintf(first, sizeof first, " (first: %s; docs/osc.md)", o->bad_first[k == FP_OSC_BAD_TYPES]);
         logf_(o, FP_LOG_WARNING, "port %u: %llu %s%s in the first second (dropped; further ones "
               "are counted, totals at stop)", (unsigned)o->port, n, problem_text[k], first);
         push_status(o, FP_STATUS_WARNING, -1, "osc: %llu %s (%s)", n, problem_names[k],

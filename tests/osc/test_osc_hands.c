@@ -351,6 +351,43 @@ static void leap_two_hands_two_sides(void **state)
 }
 
 /* ------------------------------------------------------------------------------------- */
+/* Problems named                                                                         */
+
+/* A sender's message with extra trailing arguments (a bridge that adds a velocity) and one
+ * with a wrong type: each kind's warning names the first such message, its address and what
+ * was wrong. (Before: "messages with a wrong argument count", nothing to find it by.) */
+static void bad_messages_named(void **state)
+{
+    (void)state;
+    osc_fixture f;
+    open_fixture(&f, NULL, 64);
+    lo_bundle b = lo_bundle_new(LO_TT_IMMEDIATE);
+    lo_message palm = leap_msg(7, 0, 1.f, 2.f, 3.f), wrist = lo_message_new();
+    lo_message_add_float(palm, 0.5f);
+    lo_message_add_float(palm, 0.5f);
+    lo_message_add_float(wrist, 1.f);
+    lo_message_add_string(wrist, "y");
+    for (int i = 0; i < 5; i++) lo_message_add_float(wrist, 0.f);
+    lo_bundle_add_message(b, "/hand0", palm);
+    lo_bundle_add_message(b, "/facepuppet/hand/right/wrist", wrist);
+    send_bundle(&f, b);
+    wait_packets(&f, 1);
+    assert_true(wait_type(f.h, FP_EVENT_STATUS, FP_STATUS_WARNING, 2));
+    sleep_ms(50);
+    if (!log_has(f.h, FP_LOG_WARNING, "first: /hand0 with 7 arguments, wants 5") ||
+        !log_has(f.h, FP_LOG_WARNING, "first: /facepuppet/hand/right/wrist: argument 2 is 's', wants a number")) {
+        pthread_mutex_lock(&f.h->mutex);
+        fprintf(stderr, "log:\n%s", f.h->log);
+        pthread_mutex_unlock(&f.h->mutex);
+        fail();
+    }
+    fp_osc_stats st = stats(&f);
+    assert_int_equal(st.problems[FP_OSC_BAD_COUNT], 1);
+    assert_int_equal(st.problems[FP_OSC_BAD_TYPES], 1);
+    close_fixture(&f);
+}
+
+/* ------------------------------------------------------------------------------------- */
 /* Time                                                                                   */
 
 /* Bundles out of order (timetags 0, 1, 3, 2, 4 x 100 ms): the stale one (2, after 3) is
@@ -604,6 +641,7 @@ int main(void)
         cmocka_unit_test(leap_reacquired_hand_keeps_side),
         cmocka_unit_test(leap_second_hand_own_datagram),
         cmocka_unit_test(leap_two_hands_two_sides),
+        cmocka_unit_test(bad_messages_named),
         cmocka_unit_test(out_of_order_bundle_dropped),
         cmocka_unit_test(first_bundle_late_not_kept),
         cmocka_unit_test(restarted_sender_not_stale),
