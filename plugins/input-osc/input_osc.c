@@ -74,6 +74,8 @@ typedef struct mp_hand {
     unsigned have;                 /* bit 0 x, 1 y, 2 z since the last frame */
     bool z_seen;                   /* this sender sends z: wait for it (until it stops) */
     bool xy_only;                  /* the last frame was emitted from x and y alone */
+    bool pending;                  /* x and y in a bundle, z not yet seen from this sender: the frame
+                                      waits for the datagram's end (its z may be in it) */
     int64_t t;                     /* the time of the frame's latest part */
     float v[3][21];
 } mp_hand;
@@ -667,8 +669,28 @@ static bool mp_address(const char *path)
            (path[2] == 'x' || path[2] == 'y' || path[2] == 'z') && (n == 3 || path[3] == '/');
 }
 
+/* x and y of a frame whose z never came in its datagram: emitted flat, and from now on x and
+ * y make a frame (the sender sends no z). */
+static void mp_emit_pending(osc_input *o, int hand, int64_t recv_ns)
+{
+    mp_hand *m = &o->mp[hand];
+    m->pending = false;
+    m->have &= 3u;
+    mp_emit(o, hand, m->t, recv_ns);
+    m->have = 0;
+    m->xy_only = true;
+}
+
+/* The end of a datagram: MediaPipe frames that waited in it for a z that did not come. */
+static void mp_end_packet(osc_input *o, int64_t recv_ns)
+{
+    for (int h = 0; h < FP_HANDS; h++)
+        if (o->mp[h].pending) mp_emit_pending(o, h, recv_ns);
+}
+
+/* depth: the message's bundle nesting (0: a plain message) */
 static void fmt_mediapipe(osc_input *o, const char *path, const char *types, lo_arg **argv,
-                          int64_t t, int64_t recv_ns)
+                          int64_t t, int64_t recv_ns, int depth)
 {
     if (!mp_address(path)) {
         count_unknown(o, path);
@@ -690,6 +712,7 @@ static void fmt_mediapipe(osc_input *o, const char *path, const char *types, lo_
         return;
     }
     mp_hand *m = &o->mp[hand];
+    if (m->pending && axis != 2) mp_emit_pending(o, hand, recv_ns); /* the next frame's, no z */
     if (axis == 2 && !m->z_seen && m->have == 0 && m->xy_only) {
         /* the first z of a sender that sends z after x and y: the frame just emitted without
          * depth is emitted again with it */
@@ -720,6 +743,11 @@ static void fmt_mediapipe(osc_input *o, const char *path, const char *types, lo_
     unsigned need = m->z_seen ? 7u : 3u;
     m->xy_only = !m->z_seen;
     if ((m->have & need) == need) {
+        if (!m->z_seen && depth > 0) { /* its z may follow in the bundle: at the datagram's end */
+            m->pending = true;
+            return;
+        }
+        m->pending = false;
         mp_emit(o, hand, t, recv_ns);
         m->have = 0;
     }
@@ -844,7 +872,7 @@ static void handle_message(osc_input *o, unsigned char *data, size_t size, int64
     switch (fmt) {
     case FMT_FACEPUPPET: fmt_facepuppet(o, path, types, argv, t, recv_ns); break;
     case FMT_LEAP: fmt_leap(o, path, types, argv, t, recv_ns, depth); break;
-    case FMT_MEDIAPIPE: fmt_mediapipe(o, path, types, argv, t, recv_ns); break;
+    case FMT_MEDIAPIPE: fmt_mediapipe(o, path, types, argv, t, recv_ns, depth); break;
     default: break;
     }
     o->cur_path = NULL;
@@ -915,7 +943,7 @@ static void timers(osc_input *o, int64_t now)
         forget_pose_times(o);
         o->have_offset = false; /* the next sender's timetags: on a clock of their own */
         for (int h = 0; h < FP_HANDS; h++) /* the next sender may send no z */
-            o->mp[h].have = 0, o->mp[h].z_seen = o->mp[h].xy_only = false;
+            o->mp[h].have = 0, o->mp[h].z_seen = o->mp[h].xy_only = o->mp[h].pending = false;
         if (o->clock == CLOCK_RECORDING && !o->ended) { /* a stopped clock: never wait on it */
             o->ended = true;
             push_status(o, FP_STATUS_END_OF_STREAM, -1, "osc: %s's recording stopped without its "
@@ -936,7 +964,7 @@ static void timers(osc_input *o, int64_t now)
                     "(the tracker lost it): taken as gone until it comes back",
                     h == FP_HAND_LEFT ? "left" : "right", o->sender, o->timeout_s);
         o->mp[h].have = 0;
-        o->mp[h].z_seen = o->mp[h].xy_only = false;
+        o->mp[h].z_seen = o->mp[h].xy_only = o->mp[h].pending = false;
     }
     for (int k = 0; k < FP_OSC_PROBLEMS; k++) {
         if (o->report_at[k] <= 0 || now < o->report_at[k]) continue;
@@ -990,6 +1018,7 @@ static void *osc_thread(void *arg)
             o->pkt_from = from;
             handle_packet(o, o->buf, (size_t)n, recv_ns, recv_ns, 0);
             leap_end_packet(o, recv_ns);
+            mp_end_packet(o, recv_ns);
             if (o->packet_pushed) record_latency(o, recv_ns);
         }
         timers(o, now_ns(o));

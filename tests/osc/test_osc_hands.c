@@ -192,6 +192,62 @@ static void mediapipe_z_then_no_z(void **state)
     close_fixture(&f);
 }
 
+/* 21 floats a + b * j added to bundle b at path */
+static void add_mp(lo_bundle b, const char *path, float a, float c)
+{
+    lo_message m = lo_message_new();
+    for (int j = 0; j < 21; j++) lo_message_add_float(m, a + c * (float)j);
+    lo_bundle_add_message(b, path, m);
+}
+
+/* A sender with z that sends each frame as one bundle (/rx /ry /rz): one frame a bundle, the
+ * first one too, with its depth. (Before: the first frame came twice at one time, flat from
+ * x and y and again with z: the session took it as a hand jumping 40 mm in no time, "the
+ * right hand jumped farther and faster than a hand moves", and placed the hands from a flat
+ * first frame.) And a sender without z in bundles: one flat frame a bundle. */
+static void mediapipe_bundle_with_z_once(void **state)
+{
+    (void)state;
+    osc_fixture f;
+    open_fixture(&f, "format=mediapipe,depth=10", 256);
+    for (int k = 0; k < 3; k++) {
+        lo_timetag tt;
+        lo_timetag_now(&tt);
+        lo_bundle b = lo_bundle_new(tt);
+        add_mp(b, "/rx", 0.4f, 0.01f);
+        add_mp(b, "/ry", 0.5f, 0.01f);
+        add_mp(b, "/rz", 0.1f, 0.f);
+        send_bundle(&f, b);
+        wait_packets(&f, (uint64_t)k + 1);
+        sleep_ms(10);
+    }
+    assert_true(wait_type(f.h, FP_EVENT_JOINT_POSITIONS, -1, 3));
+    sleep_ms(50);
+    assert_int_equal(count_type(f.h, FP_EVENT_JOINT_POSITIONS, -1), 3);
+    for (size_t k = 0; k < 3; k++) /* depth 10 + 0.1 x 400 mm */
+        assert_float_equal(nth_positions(f.h, k)->positions.mm[FP_JOINT_TIP(1)][2], 50.f, 1e-3);
+    close_fixture(&f);
+
+    open_fixture(&f, "format=mediapipe,depth=10", 256);
+    for (int k = 0; k < 3; k++) {
+        lo_bundle b = lo_bundle_new(LO_TT_IMMEDIATE);
+        add_mp(b, "/lx/", 0.4f, 0.01f);
+        add_mp(b, "/ly/", 0.5f, 0.01f);
+        send_bundle(&f, b);
+        wait_packets(&f, (uint64_t)k + 1);
+    }
+    assert_true(wait_type(f.h, FP_EVENT_JOINT_POSITIONS, -1, 3));
+    sleep_ms(50);
+    assert_int_equal(count_type(f.h, FP_EVENT_JOINT_POSITIONS, -1), 3);
+    for (size_t k = 0; k < 3; k++) {
+        assert_int_equal(nth_positions(f.h, k)->header.hand, FP_HAND_LEFT);
+        assert_float_equal(nth_positions(f.h, k)->positions.mm[FP_JOINT_TIP(1)][2], 10.f, 1e-4);
+    }
+    fp_osc_stats st = stats(&f);
+    for (int k = 0; k < FP_OSC_PROBLEMS; k++) assert_int_equal(st.problems[k], 0);
+    close_fixture(&f);
+}
+
 /* ------------------------------------------------------------------------------------- */
 /* Leap                                                                                   */
 
@@ -636,6 +692,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(mediapipe_z_then_no_z),
+        cmocka_unit_test(mediapipe_bundle_with_z_once),
         cmocka_unit_test(leap_bundle_any_order),
         cmocka_unit_test(leap_side_kept_by_id),
         cmocka_unit_test(leap_reacquired_hand_keeps_side),
