@@ -117,6 +117,7 @@ typedef struct osc_input {
     /* clock=recording: event time = origin_ns + (timetag - the sender's origin timetag) */
     int64_t origin_ns;             /* host time at start(): the recording's time zero here */
     bool have_sender_origin, ended;
+    int64_t heard_ns;              /* the latest datagram's arrival; 0: none yet */
     int64_t sender_origin_tt;      /* the sender's /facepuppet/origin, ns on the timetag scale */
     int64_t clock_t;               /* the last message's time (statuses are pushed at it) */
     uint32_t buttons;
@@ -950,6 +951,23 @@ static void timers(osc_input *o, int64_t now)
                         "end (no data for %.3g s): taken as ended", o->sender, o->timeout_s);
         }
     }
+    /* clock=recording: a sender that never connected (every message untimed: not a session's
+     * forward=, no /facepuppet/origin) and then went quiet is a stopped clock too: its input
+     * ends, so that run does not wait on it for ever */
+    if (o->clock == CLOCK_RECORDING && !o->ended && !o->connected && o->heard_ns &&
+        now - o->heard_ns > (int64_t)(o->timeout_s * 1e9)) {
+        o->ended = true;
+        pthread_mutex_lock(&o->lock);
+        unsigned long long untimed = (unsigned long long)o->st.problems[FP_OSC_UNTIMED];
+        pthread_mutex_unlock(&o->lock);
+        push_status(o, FP_STATUS_END_OF_STREAM, -1, "osc: %s sent nothing on a recording's clock "
+                    "(%llu messages without a time on it: clock=recording takes a session's forward=) "
+                    "and has been quiet for %.3g s: taken as ended", o->sender, untimed, o->timeout_s);
+        logf_(o, FP_LOG_WARNING, "port %u: %s sent nothing on a recording's clock (%llu messages "
+              "without a time on it: clock=recording takes a session's forward=, docs/osc.md) and "
+              "has been quiet for %.3g s: taken as ended", (unsigned)o->port, o->sender, untimed,
+              o->timeout_s);
+    }
     /* A hand the tracker lost while the sender goes on (out of a camera's view, or a Leap
      * frame without it): gone after the same silence, so its grab lets go as a stopped
      * sender's does; its next pose brings it back. */
@@ -1016,6 +1034,7 @@ static void *osc_thread(void *arg)
             if (!o->connected) fp_udp_sender_text(&from, o->sender, sizeof o->sender);
             o->packet_pushed = false;
             o->pkt_from = from;
+            o->heard_ns = recv_ns;
             handle_packet(o, o->buf, (size_t)n, recv_ns, recv_ns, 0);
             leap_end_packet(o, recv_ns);
             mp_end_packet(o, recv_ns);
@@ -1043,6 +1062,7 @@ static int osc_start(fp_input *self, char *err, size_t errlen)
     o->connected = false;
     o->origin_ns = o->clock_t = now_ns(o);
     o->have_sender_origin = o->ended = false;
+    o->heard_ns = 0;
     if (o->clock == CLOCK_RECORDING) /* the recording's time zero here: its first event */
         push_status(o, FP_STATUS_CONNECTED, -1, "osc: port %u, on the sender's recording clock "
                     "(clock=recording): waiting for a forwarded recording", (unsigned)o->port);

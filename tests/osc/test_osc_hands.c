@@ -556,6 +556,23 @@ static void restarted_sender_not_stale(void **state)
     close_fixture(&f);
 }
 
+/* clock=recording with a sender that is not a session's forward= (plain messages: nothing on
+ * a recording's clock) that then goes quiet: the input ends after the timeout, so `run`
+ * does not wait on it for ever. (Before: no end, and `run --duration 5` waited until killed,
+ * "waiting 39 s for 'osc' to deliver past 0.000 s".) */
+static void recording_clock_untimed_sender_ends(void **state)
+{
+    (void)state;
+    osc_fixture f;
+    open_fixture(&f, "clock=recording,timeout=0.2", 64);
+    for (int i = 0; i < 3; i++) send_button(false, (unsigned)atoi(f.port));
+    wait_packets(&f, 3);
+    assert_int_equal(stats(&f).problems[FP_OSC_UNTIMED], 3);
+    assert_true(wait_type(f.h, FP_EVENT_STATUS, FP_STATUS_END_OF_STREAM, 1));
+    assert_true(log_has(f.h, FP_LOG_WARNING, "sent nothing on a recording's clock (3 messages"));
+    close_fixture(&f);
+}
+
 /* ------------------------------------------------------------------------------------- */
 /* Binding                                                                                */
 
@@ -702,6 +719,7 @@ int main(void)
         cmocka_unit_test(out_of_order_bundle_dropped),
         cmocka_unit_test(first_bundle_late_not_kept),
         cmocka_unit_test(restarted_sender_not_stale),
+        cmocka_unit_test(recording_clock_untimed_sender_ends),
         cmocka_unit_test(bind_ipv6_and_localhost),
         cmocka_unit_test(ipv6_side_taken_warned),
         cmocka_unit_test(dual_stack_falls_back_to_ipv4),
