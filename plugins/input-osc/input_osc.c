@@ -6,7 +6,8 @@
  *
  * Flow: create() parses the SPEC and binds the UDP sockets (fp_udp_listen, fp_net.h: 127.0.0.1 and [::1]
  * unless bind= says otherwise), so that a taken port or a bad address fails before the
- * session starts. Leap bridge frames are assembled in osc_leap.c. start()
+ * session starts. Leap bridge frames are assembled in osc_leap.c, MediaPipe ones in
+ * osc_mediapipe.c. start()
  * runs one pthread: poll() on the socket and a stop pipe (50 ms ticks); each datagram is read
  * with recvmsg() into one fixed 64 KiB buffer (the kernel's own drops counted) and stamped with the host clock at once; a
  * bundle is walked here (timetags, nesting), each message is decoded by liblo
@@ -19,6 +20,7 @@
 #include "fp_osc_arg.h"
 #include "osc.h"
 #include "osc_leap.h"
+#include "osc_mediapipe.h"
 #include "osc_spec.h"
 #include "fp_net.h"
 
@@ -70,24 +72,13 @@ static const char *const problem_text[FP_OSC_PROBLEMS] = {
     "poses older than one already pushed for that hand (bundles out of order)",
     "datagrams the kernel dropped (its socket buffer full: the sender outran this input)"};
 
-typedef struct mp_hand {
-    unsigned have;                 /* bit 0 x, 1 y, 2 z since the last frame */
-    bool z_seen;                   /* this sender sends z: wait for it (until it stops) */
-    bool xy_only;                  /* the last frame was emitted from x and y alone */
-    bool pending;                  /* x and y in a bundle, z not yet seen from this sender: the frame
-                                      waits for the datagram's end (its z may be in it) */
-    int64_t t;                     /* the time of the frame's latest part */
-    float v[3][21];
-} mp_hand;
-
 typedef struct osc_input {
     fp_input input;
     const fp_host *host;
     /* configuration */
     int format, hands, clock;
     double timeout_s;
-    float mp_width, mp_aspect, mp_height, mp_depth;
-    bool mp_mirror;
+    osc_mp_place mp_place;         /* format=mediapipe's image placement */
     bool have_box;
     float box[6];                  /* box=: the tracking volume, mm (workspace extension) */
     char bind_text[96];            /* where it listens, for the log (fp_udp_listener.text) */
@@ -124,7 +115,7 @@ typedef struct osc_input {
     osc_leap leap;                 /* Leap frames being assembled, Leap ids' sides */
     int64_t last_pose_t[FP_HANDS][3]; /* per hand: the time of its last joints, angles, wrist
                                          pushed (a staler one is dropped); INT64_MIN none */
-    mp_hand mp[FP_HANDS];
+    osc_mp_hand mp[FP_HANDS];
     int64_t report_at[FP_OSC_PROBLEMS]; /* 0: not pending; -1: reported */
     char unknown_first[64];        /* the first unknown address, for its report ("" none) */
     char bad_first[2][160];        /* the first bad-count and bad-types message, said ("" none) */
@@ -638,62 +629,28 @@ static void leap_end_packet(osc_input *o, int64_t recv_ns)
 }
 
 /* ------------------------------------------------------------------------------------- */
-/* format=mediapipe                                                                       */
+/* format=mediapipe (assembled in osc_mediapipe.c)                                        */
 
-static void mp_emit(osc_input *o, int hand, int64_t t, int64_t recv_ns)
+static void mp_push(osc_input *o, int hand, const osc_mp_frame *fr, int n, int64_t recv_ns)
 {
-    mp_hand *m = &o->mp[hand];
-    float lm[21][3];
-    for (int j = 0; j < 21; j++) {
-        float x = m->v[0][j], y = m->v[1][j], z = m->have & 4 ? m->v[2][j] : 0.f;
-        if (o->mp_mirror) x = 1.f - x;
-        lm[j][0] = (x - 0.5f) * o->mp_width;
-        lm[j][1] = o->mp_height + (0.5f - y) * o->mp_width * o->mp_aspect;
-        lm[j][2] = o->mp_depth + z * o->mp_width;
-    }
-    /* MediaPipe's 21 landmarks: 0 wrist, then thumb CMC MCP IP tip, then MCP PIP DIP tip of
-     * index, middle, ring, pinky: plugin.h's layout from 1 on. The palm centre is the mean of
-     * the wrist and the four finger MCPs. */
-    float mm[FP_HAND_JOINTS][3];
-    for (int j = 1; j < 21; j++) memcpy(mm[j], lm[j], sizeof mm[j]);
-    for (int i = 0; i < 3; i++)
-        mm[FP_JOINT_PALM][i] = (lm[0][i] + lm[5][i] + lm[9][i] + lm[13][i] + lm[17][i]) / 5.f;
-    push_joints(o, hand, t, recv_ns, (const float(*)[3])mm, FP_EVENT_FLAG_UNSMOOTHED);
-}
-
-/* Whether path is a MediaPipe hand's: "/lx", "/ly", "/lz", "/rx", ... with or without a
- * trailing '/'. */
-static bool mp_address(const char *path)
-{
-    size_t n = strlen(path);
-    return n >= 3 && n <= 4 && path[0] == '/' && (path[1] == 'l' || path[1] == 'r') &&
-           (path[2] == 'x' || path[2] == 'y' || path[2] == 'z') && (n == 3 || path[3] == '/');
-}
-
-/* x and y of a frame whose z never came in its datagram: emitted flat, and from now on x and
- * y make a frame (the sender sends no z). */
-static void mp_emit_pending(osc_input *o, int hand, int64_t recv_ns)
-{
-    mp_hand *m = &o->mp[hand];
-    m->pending = false;
-    m->have &= 3u;
-    mp_emit(o, hand, m->t, recv_ns);
-    m->have = 0;
-    m->xy_only = true;
+    for (int i = 0; i < n; i++)
+        push_joints(o, hand, fr[i].t, recv_ns, (const float(*)[3])fr[i].mm, FP_EVENT_FLAG_UNSMOOTHED);
 }
 
 /* The end of a datagram: MediaPipe frames that waited in it for a z that did not come. */
 static void mp_end_packet(osc_input *o, int64_t recv_ns)
 {
-    for (int h = 0; h < FP_HANDS; h++)
-        if (o->mp[h].pending) mp_emit_pending(o, h, recv_ns);
+    for (int h = 0; h < FP_HANDS; h++) {
+        osc_mp_frame fr;
+        mp_push(o, h, &fr, fp__osc_mp_end_packet(&o->mp[h], &o->mp_place, &fr), recv_ns);
+    }
 }
 
 /* depth: the message's bundle nesting (0: a plain message) */
 static void fmt_mediapipe(osc_input *o, const char *path, const char *types, lo_arg **argv,
                           int64_t t, int64_t recv_ns, int depth)
 {
-    if (!mp_address(path)) {
+    if (!fp__osc_mp_address(path)) {
         count_unknown(o, path);
         return;
     }
@@ -706,52 +663,17 @@ static void fmt_mediapipe(osc_input *o, const char *path, const char *types, lo_
         bump(o, &o->st.filtered);
         return;
     }
-    float v[21];
-    floats_of(argv, types, 0, 21, v);
-    if (!finite_all(v, 21)) {
+    float v[OSC_MP_LANDMARKS];
+    floats_of(argv, types, 0, OSC_MP_LANDMARKS, v);
+    if (!finite_all(v, OSC_MP_LANDMARKS)) {
         count(o, FP_OSC_NONFINITE);
         return;
     }
-    mp_hand *m = &o->mp[hand];
-    if (m->pending && axis != 2) mp_emit_pending(o, hand, recv_ns); /* the next frame's, no z */
-    if (axis == 2 && !m->z_seen && m->have == 0 && m->xy_only) {
-        /* the first z of a sender that sends z after x and y: the frame just emitted without
-         * depth is emitted again with it */
-        memcpy(m->v[2], v, sizeof v);
-        m->z_seen = true;
-        m->xy_only = false;
-        m->have = 7;
-        mp_emit(o, hand, t, recv_ns);
-        m->have = 0;
-        return;
-    }
-    if (m->have & (1u << axis)) {
-        if (m->z_seen && (m->have & 3u) == 3u && !(m->have & 4u)) {
-            /* x and y came, then the next frame's before any z: the sender stopped sending z
-             * (another sender, or the same without depth). The frame is emitted flat, and
-             * from now on x and y make a frame. */
-            m->z_seen = false;
-            mp_emit(o, hand, m->t, recv_ns);
-        } else {
-            count(o, FP_OSC_INCOMPLETE); /* a new frame began before the last was complete */
-        }
-        m->have = 0;
-    }
-    memcpy(m->v[axis], v, sizeof v);
-    m->t = t; /* the frame's time: its last part's */
-    m->have |= 1u << axis;
-    if (axis == 2) m->z_seen = true;
-    unsigned need = m->z_seen ? 7u : 3u;
-    m->xy_only = !m->z_seen;
-    if ((m->have & need) == need) {
-        if (!m->z_seen && depth > 0) { /* its z may follow in the bundle: at the datagram's end */
-            m->pending = true;
-            return;
-        }
-        m->pending = false;
-        mp_emit(o, hand, t, recv_ns);
-        m->have = 0;
-    }
+    osc_mp_frame fr[2];
+    unsigned incomplete = 0;
+    int n = fp__osc_mp_take(&o->mp[hand], &o->mp_place, axis, v, t, depth > 0, fr, &incomplete);
+    if (incomplete) count_n(o, FP_OSC_INCOMPLETE, incomplete);
+    mp_push(o, hand, fr, n, recv_ns);
 }
 
 /* ------------------------------------------------------------------------------------- */
@@ -866,7 +788,7 @@ static void handle_message(osc_input *o, unsigned char *data, size_t size, int64
         int slot, finger;
         if (strncmp(path, "/facepuppet/", 12) == 0) fmt = FMT_FACEPUPPET;
         else if (fp__osc_leap_address(path, &slot, &finger)) fmt = FMT_LEAP;
-        else if (mp_address(path)) fmt = FMT_MEDIAPIPE;
+        else if (fp__osc_mp_address(path)) fmt = FMT_MEDIAPIPE;
         else
             count_unknown(o, path);
     }
@@ -944,7 +866,7 @@ static void timers(osc_input *o, int64_t now)
         forget_pose_times(o);
         o->have_offset = false; /* the next sender's timetags: on a clock of their own */
         for (int h = 0; h < FP_HANDS; h++) /* the next sender may send no z */
-            o->mp[h].have = 0, o->mp[h].z_seen = o->mp[h].xy_only = o->mp[h].pending = false;
+            fp__osc_mp_forget(&o->mp[h]);
         if (o->clock == CLOCK_RECORDING && !o->ended) { /* a stopped clock: never wait on it */
             o->ended = true;
             push_status(o, FP_STATUS_END_OF_STREAM, -1, "osc: %s's recording stopped without its "
@@ -981,8 +903,7 @@ static void timers(osc_input *o, int64_t now)
         push_status(o, FP_STATUS_DISCONNECTED, h, "osc: %s hand: not in %s's data for %.3g s "
                     "(the tracker lost it): taken as gone until it comes back",
                     h == FP_HAND_LEFT ? "left" : "right", o->sender, o->timeout_s);
-        o->mp[h].have = 0;
-        o->mp[h].z_seen = o->mp[h].xy_only = o->mp[h].pending = false;
+        fp__osc_mp_forget(&o->mp[h]);
     }
     for (int k = 0; k < FP_OSC_PROBLEMS; k++) {
         if (o->report_at[k] <= 0 || now < o->report_at[k]) continue;
@@ -1229,11 +1150,8 @@ static int osc_create(const fp_host *host, const char *arg, const fp_param *para
     o->hands = set.hands;
     o->clock = set.clock;
     o->timeout_s = set.timeout;
-    o->mp_width = (float)set.width;
-    o->mp_aspect = (float)set.aspect;
-    o->mp_height = (float)set.height;
-    o->mp_depth = (float)set.depth;
-    o->mp_mirror = set.mirror;
+    o->mp_place = (osc_mp_place){(float)set.width, (float)set.aspect, (float)set.height,
+                                 (float)set.depth, set.mirror};
     o->have_box = set.have_box;
     memcpy(o->box, set.box, sizeof set.box);
     pthread_mutex_init(&o->lock, NULL);
