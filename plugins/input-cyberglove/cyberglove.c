@@ -23,7 +23,8 @@
  *    backoff (100 ms doubling to 2 s): the device path is re-opened and the glove re-probed;
  *  - line noise: bytes that do not form a record are skipped until the next plausible record
  *    (start byte, non-zero sensor bytes, 0x00 terminator at the right place) -> WARNING;
- *  - silence: no record for `timeout` ms (default 3 record periods, at least 250 ms) ->
+ *  - silence: no record for `timeout` ms (default 3 record periods, at least 250 ms and 3
+ *    records' time on the line at `baud`) ->
  *    DISCONNECTED, then as for a pulled cable.
  */
 #define _GNU_SOURCE
@@ -68,7 +69,9 @@ typedef struct glove {
     double rate_hz;
     bool poll_mode;
     int bits;
-    int timeout_ms;
+    int timeout_ms;     /* no record this long: the glove stopped answering */
+    int timeout_base_ms; /* timeout= or 3 periods at rate=, at least 250 (create) */
+    bool timeout_given; /* timeout= said it: kept whatever the line */
 
     /* thread */
     pthread_t thread;
@@ -585,6 +588,11 @@ static int probe(glove *g, char *err, size_t errlen)
     g->warned_fast = false;
     g->meter = (fpg_lenmeter){0};
     g->rec_len = g->bits == 16 ? 3 + 8 + 1 + 44 : 1 + sampled + (ts_on ? 5 : 0) + status_on + 1;
+    if (!g->timeout_given) { /* at least 3 records' time on the line (a slow baud: 30 bytes take
+                                250 ms at 1200), a poll's G with each */
+        long line_ms = (long)(3.0 * 10.0 * (g->rec_len + 1) * 1000.0 / g->baud + 0.5);
+        g->timeout_ms = line_ms > g->timeout_base_ms ? (int)line_ms : g->timeout_base_ms;
+    }
 
     if (g->bits == 16) {
         if ((r = write_all(g, "1eu", 3)) < 0 || (r = write_all(g, "1S", 2)) < 0)
@@ -1009,7 +1017,8 @@ static const char USAGE[] =
     "  rate     records per second (default 100): sample period in stream mode, G rate in poll\n"
     "  mode     stream (S, default) or poll (G per record)\n"
     "  bits     8 (default) or 16 (CyberGlove III USB: 1eu, 1S)\n"
-    "  timeout  ms without a record before reconnecting (default 3 periods, at least 250)\n";
+    "  timeout  ms without a record before reconnecting (default 3 periods, at least 250\n"
+    "           and 3 records' time at baud)\n";
 
 /* A whole number in lo..hi (lo >= 0), as every integer option reads one (fp_parse_whole: an
  * optional '+' and digits; strtol took a leading blank). */
@@ -1123,12 +1132,13 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
     }
     if (!g->speed)
         speed_of(g->baud, &g->speed);
+    g->timeout_given = timeout != 0;
     if (timeout == 0) {
         timeout = (long)(3000.0 / g->rate_hz + 0.5);
         if (timeout < 250)
             timeout = 250;
     }
-    g->timeout_ms = (int)timeout;
+    g->timeout_ms = g->timeout_base_ms = (int)timeout;
     if (pipe2(g->wake, O_CLOEXEC | O_NONBLOCK) != 0) {
         rc = fp_errorf(err, errlen, -errno, "cyberglove: pipe: %s", strerror(errno));
         goto fail;
