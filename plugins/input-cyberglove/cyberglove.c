@@ -459,6 +459,15 @@ static int sampled_order(glove *g, int sensors, uint8_t order[FPG_SENSORS], char
     return k;
 }
 
+/* The silence that means the glove stopped answering, once the probe knows g->rec_len: the
+ * timeout given, else at least 3 records' time on the line, a poll's G with each (a slow
+ * baud: 30 bytes take 250 ms at 1200). */
+static void set_timeout(glove *g)
+{
+    long line_ms = (long)(3.0 * 10.0 * (g->rec_len + 1) * 1000.0 / g->baud + 0.5);
+    g->timeout_ms = !g->timeout_given && line_ms > g->timeout_base_ms ? (int)line_ms : g->timeout_base_ms;
+}
+
 /* Probe the glove and start it. Returns 0, or a negative code with a message in err. */
 static int probe(glove *g, char *err, size_t errlen)
 {
@@ -588,11 +597,7 @@ static int probe(glove *g, char *err, size_t errlen)
     g->warned_fast = false;
     g->meter = (fpg_lenmeter){0};
     g->rec_len = g->bits == 16 ? 3 + 8 + 1 + 44 : 1 + sampled + (ts_on ? 5 : 0) + status_on + 1;
-    if (!g->timeout_given) { /* at least 3 records' time on the line (a slow baud: 30 bytes take
-                                250 ms at 1200), a poll's G with each */
-        long line_ms = (long)(3.0 * 10.0 * (g->rec_len + 1) * 1000.0 / g->baud + 0.5);
-        g->timeout_ms = line_ms > g->timeout_base_ms ? (int)line_ms : g->timeout_base_ms;
-    }
+    set_timeout(g);
 
     if (g->bits == 16) {
         if ((r = write_all(g, "1eu", 3)) < 0 || (r = write_all(g, "1S", 2)) < 0)
