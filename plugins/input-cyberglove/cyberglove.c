@@ -23,7 +23,8 @@
  *    backoff (100 ms doubling to 2 s): the device path is re-opened and the glove re-probed;
  *  - line noise: bytes that do not form a record are skipped until the next plausible record
  *    (start byte, non-zero sensor bytes, 0x00 terminator at the right place) -> WARNING;
- *  - silence: no record for `timeout` ms (default 3 record periods, at least 250 ms) ->
+ *  - silence: no record for `timeout` ms (default 3 record periods, at least 250 ms and 3
+ *    records' time on the line at `baud`) ->
  *    DISCONNECTED, then as for a pulled cable.
  */
 #define _GNU_SOURCE
@@ -68,7 +69,9 @@ typedef struct glove {
     double rate_hz;
     bool poll_mode;
     int bits;
-    int timeout_ms;
+    int timeout_ms;     /* no record this long: the glove stopped answering */
+    int timeout_base_ms; /* timeout= or 3 periods at rate=, at least 250 (create) */
+    bool timeout_given; /* timeout= said it: kept whatever the line */
 
     /* thread */
     pthread_t thread;
@@ -216,42 +219,6 @@ static int write_all(glove *g, const void *buf, size_t n)
     return 0;
 }
 
-/* The box's error replies (docs/devices.md: `e?` unknown command, `eg` glove not plugged,
- * `en` bad number, `es` sampling too fast, `ey` sync too fast) as read_reply_n's codes. */
-static int box_error_code(uint8_t c)
-{
-    switch (c) {
-    case '?': return -ENOTSUP;
-    case 'g': return -ENODEV;
-    case 'n': return -EINVAL;
-    case 's': return -ERANGE;
-    case 'y': return -EBUSY;
-    default: return 0;
-    }
-}
-
-/* What a read_reply_n code means, for a message. */
-static const char *reply_text(int r)
-{
-    switch (r) {
-    case -ENOTSUP: return "e?: the box does not know the command";
-    case -ENODEV: return "eg: glove not plugged into its box";
-    case -EINVAL: return "en: the box refused the number";
-    case -ERANGE: return "es: sampling too fast";
-    case -EBUSY: return "ey: sync too fast";
-    case -ETIMEDOUT: return "no reply";
-    default: return strerror(-r);
-    }
-}
-
-/* An optional query or command the box did not answer with a value: silence or an error
- * reply (a minimal box, or a glove pulled out of its box since ?G). */
-static bool unanswered(int r)
-{
-    return r == -ETIMEDOUT || r == -ENOTSUP || r == -ENODEV || r == -EINVAL || r == -ERANGE ||
-           r == -EBUSY;
-}
-
 /* Read the reply to a command: skips bytes until `c0` `c1` (c1 < 0: only c0), then collects
  * `fixed` value bytes whatever they are (a value may be 0, e.g. ?R of a left glove) or, with
  * fixed == 0, the bytes up to the 0x00 terminator. An `e` `?` reply gives -ENOTSUP; the
@@ -311,7 +278,7 @@ static int read_reply_n(glove *g, int c0, int c1, size_t fixed, uint8_t *out, si
             case 3:
                 if (b == '?')
                     return -ENOTSUP;
-                if ((box_err = box_error_code(b)) != 0) {
+                if ((box_err = fpg_box_error_code(b)) != 0) {
                     state = 4;
                     break;
                 }
@@ -474,7 +441,7 @@ static int probe(glove *g, char *err, size_t errlen)
             return fp_errorf(err, errlen, r, "glove not plugged into its box (?G answered eg)");
         if (r < 1)
             return fp_errorf(err, errlen, r < 0 ? r : -EPROTO, "bad answer to ?G%s%s%s",
-                             r < 0 ? " (" : "", r < 0 ? reply_text(r) : "", r < 0 ? ")" : "");
+                             r < 0 ? " (" : "", r < 0 ? fpg_reply_text(r) : "", r < 0 ? ")" : "");
         if ((v[0] & 3) != 3) /* bit 0 initialised, bit 1 glove plugged */
             return fp_errorf(err, errlen, -ENODEV, "glove not plugged into its box (?G = %d)", v[0]);
     }
@@ -485,7 +452,7 @@ static int probe(glove *g, char *err, size_t errlen)
         return fp_errorf(err, errlen, r, "glove not plugged into its box (?S answered eg)");
     } else if (r < 1) {
         return fp_errorf(err, errlen, r < 0 ? r : -EPROTO, "bad answer to ?S%s%s%s",
-                         r < 0 ? " (" : "", r < 0 ? reply_text(r) : "", r < 0 ? ")" : "");
+                         r < 0 ? " (" : "", r < 0 ? fpg_reply_text(r) : "", r < 0 ? ")" : "");
     }
     if (v[0] != 18 && v[0] != 22)
         return fp_errorf(err, errlen, -EPROTO, "unsupported sensor count %d (?S)", v[0]);
@@ -508,11 +475,11 @@ static int probe(glove *g, char *err, size_t errlen)
      * own header) leaves their defaults */
     r = query(g, 'R', 1, v, sizeof v);
     int right = r >= 1 ? (v[0] != 0) : -1;
-    if (r < 0 && !unanswered(r))
+    if (r < 0 && !fpg_unanswered(r))
         return fp_errorf(err, errlen, r, "bad answer to ?R");
     char version[64] = "";
     r = query(g, 'V', 0, v, sizeof v - 1);
-    if (r < 0 && !unanswered(r))
+    if (r < 0 && !fpg_unanswered(r))
         return fp_errorf(err, errlen, r, "bad answer to ?V");
     if (r > 0) {
         for (int i = 0; i < r && i < (int)sizeof version - 1; i++)
@@ -522,7 +489,7 @@ static int probe(glove *g, char *err, size_t errlen)
     bool ts_on = false, status_on = false, status_unknown = false;
     if (g->bits == 8) {
         r = query(g, 'D', 1, v, sizeof v);
-        if (r < 0 && !unanswered(r))
+        if (r < 0 && !fpg_unanswered(r))
             return fp_errorf(err, errlen, r, "bad answer to ?D");
         ts_on = r >= 1 && v[0] != 0;
         if (r < 1) { /* ?D said nothing: turn the timestamps off, so that "off" is true */
@@ -537,7 +504,7 @@ static int probe(glove *g, char *err, size_t errlen)
         if ((r = write_all(g, u, 2)) < 0)
             return fp_errorf(err, errlen, r, "line lost");
         r = read_reply(g, 'U', -1, v, sizeof v, 500);
-        if (r < 0 && !unanswered(r))
+        if (r < 0 && !fpg_unanswered(r))
             return fp_errorf(err, errlen, r, "bad answer to U 1");
         status_on = r >= 0;
         /* ?U decides where it answers (the record layout depends on it): U 1 may have been
@@ -567,7 +534,7 @@ static int probe(glove *g, char *err, size_t errlen)
         return fp_errorf(err, errlen, r, "line lost");
     if (r < 0)
         logf_(g, FP_LOG_WARNING, "%s: sample period command `t %u %u` not acknowledged (%s)",
-              g->path, w1, w2, reply_text(r));
+              g->path, w1, w2, fpg_reply_text(r));
 
     g->sensors = sensors;
     g->right = right;
@@ -585,6 +552,8 @@ static int probe(glove *g, char *err, size_t errlen)
     g->warned_fast = false;
     g->meter = (fpg_lenmeter){0};
     g->rec_len = g->bits == 16 ? 3 + 8 + 1 + 44 : 1 + sampled + (ts_on ? 5 : 0) + status_on + 1;
+    g->timeout_ms = g->timeout_given ? g->timeout_base_ms
+                                      : fpg_line_timeout_ms(g->baud, g->rec_len, g->timeout_base_ms);
 
     if (g->bits == 16) {
         if ((r = write_all(g, "1eu", 3)) < 0 || (r = write_all(g, "1S", 2)) < 0)
@@ -1009,7 +978,8 @@ static const char USAGE[] =
     "  rate     records per second (default 100): sample period in stream mode, G rate in poll\n"
     "  mode     stream (S, default) or poll (G per record)\n"
     "  bits     8 (default) or 16 (CyberGlove III USB: 1eu, 1S)\n"
-    "  timeout  ms without a record before reconnecting (default 3 periods, at least 250)\n";
+    "  timeout  ms without a record before reconnecting (default 3 periods, at least 250\n"
+    "           and 3 records' time at baud)\n";
 
 /* A whole number in lo..hi (lo >= 0), as every integer option reads one (fp_parse_whole: an
  * optional '+' and digits; strtol took a leading blank). */
@@ -1123,12 +1093,13 @@ static int create(const fp_host *host, const char *arg, const fp_param *params, 
     }
     if (!g->speed)
         speed_of(g->baud, &g->speed);
+    g->timeout_given = timeout != 0;
     if (timeout == 0) {
         timeout = (long)(3000.0 / g->rate_hz + 0.5);
         if (timeout < 250)
             timeout = 250;
     }
-    g->timeout_ms = (int)timeout;
+    g->timeout_ms = g->timeout_base_ms = (int)timeout;
     if (pipe2(g->wake, O_CLOEXEC | O_NONBLOCK) != 0) {
         rc = fp_errorf(err, errlen, -errno, "cyberglove: pipe: %s", strerror(errno));
         goto fail;

@@ -287,3 +287,45 @@ bool fpg_line_too_slow(int baud, double rate_hz, int record_bytes, char *text, s
              baud, most, record_bytes, rate_hz, most > 1 ? most : 1); /* (short: a status) */
     return true;
 }
+
+/* The box's error replies (docs/devices.md: `e?` unknown command, `eg` glove not plugged,
+ * `en` bad number, `es` sampling too fast, `ey` sync too fast) as read_reply_n's codes (glove_decode.h). */
+int fpg_box_error_code(uint8_t c)
+{
+    switch (c) {
+    case '?': return -ENOTSUP;
+    case 'g': return -ENODEV;
+    case 'n': return -EINVAL;
+    case 's': return -ERANGE;
+    case 'y': return -EBUSY;
+    default: return 0;
+    }
+}
+
+/* What a read_reply_n code means, for a message. */
+const char *fpg_reply_text(int r)
+{
+    switch (r) {
+    case -ENOTSUP: return "e?: the box does not know the command";
+    case -ENODEV: return "eg: glove not plugged into its box";
+    case -EINVAL: return "en: the box refused the number";
+    case -ERANGE: return "es: sampling too fast";
+    case -EBUSY: return "ey: sync too fast";
+    case -ETIMEDOUT: return "no reply";
+    default: return strerror(-r);
+    }
+}
+
+/* An optional query or command the box did not answer with a value: silence or an error
+ * reply (a minimal box, or a glove pulled out of its box since ?G). */
+bool fpg_unanswered(int r)
+{
+    return r == -ETIMEDOUT || r == -ENOTSUP || r == -ENODEV || r == -EINVAL || r == -ERANGE ||
+           r == -EBUSY;
+}
+
+int fpg_line_timeout_ms(int baud, int record_bytes, int at_least_ms)
+{
+    long line_ms = baud > 0 ? (long)(3.0 * 10.0 * (record_bytes + 1) * 1000.0 / baud + 0.5) : 0;
+    return line_ms > at_least_ms ? (int)line_ms : at_least_ms;
+}

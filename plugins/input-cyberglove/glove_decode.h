@@ -119,6 +119,24 @@ void fpg_lenmeter_feed(fpg_lenmeter *m, const uint8_t *data, size_t n);
  *  returns true. Pure. */
 bool fpg_line_too_slow(int baud, double rate_hz, int record_bytes, char *text, size_t len);
 
+/** The default silence (ms) after which a glove at `baud` (8N1) sending records of
+ *  record_bytes bytes has stopped answering: at least 3 records' time on the line, a poll's
+ *  G with each (30 bytes take 250 ms at 1200 baud), and at least at_least_ms. Pure. */
+int fpg_line_timeout_ms(int baud, int record_bytes, int at_least_ms);
+
+/** The box's error reply `e` X (docs/devices.md: `e?` unknown command, `eg` glove not
+ *  plugged, `en` bad number, `es` sampling too fast, `ey` sync too fast) as a negative errno
+ *  (-ENOTSUP, -ENODEV, -EINVAL, -ERANGE, -EBUSY), 0 for another X. Pure. */
+int fpg_box_error_code(uint8_t c);
+
+/** What such a code, or -ETIMEDOUT ("no reply") or another -errno, means, for a message:
+ *  a static string. Pure. */
+const char *fpg_reply_text(int r);
+
+/** Whether an optional query or command went unanswered: silence (-ETIMEDOUT) or one of
+ *  the box's error codes. Pure. */
+bool fpg_unanswered(int r);
+
 /** The joint-angle event fields for one record: for each of the record's sensors (wire
  *  order mapped by u->order, or without one: an 18-sensor glove skips the 4 DIJ sensors it
  *  lacks) that the calibration

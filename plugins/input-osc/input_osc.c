@@ -6,7 +6,8 @@
  *
  * Flow: create() parses the SPEC and binds the UDP sockets (fp_udp_listen, fp_net.h: 127.0.0.1 and [::1]
  * unless bind= says otherwise), so that a taken port or a bad address fails before the
- * session starts. Leap bridge frames are assembled in osc_leap.c. start()
+ * session starts. Leap bridge frames are assembled in osc_leap.c, MediaPipe ones in
+ * osc_mediapipe.c. start()
  * runs one pthread: poll() on the socket and a stop pipe (50 ms ticks); each datagram is read
  * with recvmsg() into one fixed 64 KiB buffer (the kernel's own drops counted) and stamped with the host clock at once; a
  * bundle is walked here (timetags, nesting), each message is decoded by liblo
@@ -19,6 +20,7 @@
 #include "fp_osc_arg.h"
 #include "osc.h"
 #include "osc_leap.h"
+#include "osc_mediapipe.h"
 #include "osc_spec.h"
 #include "fp_net.h"
 
@@ -70,22 +72,13 @@ static const char *const problem_text[FP_OSC_PROBLEMS] = {
     "poses older than one already pushed for that hand (bundles out of order)",
     "datagrams the kernel dropped (its socket buffer full: the sender outran this input)"};
 
-typedef struct mp_hand {
-    unsigned have;                 /* bit 0 x, 1 y, 2 z since the last frame */
-    bool z_seen;                   /* this sender sends z: wait for it (until it stops) */
-    bool xy_only;                  /* the last frame was emitted from x and y alone */
-    int64_t t;                     /* the time of the frame's latest part */
-    float v[3][21];
-} mp_hand;
-
 typedef struct osc_input {
     fp_input input;
     const fp_host *host;
     /* configuration */
     int format, hands, clock;
     double timeout_s;
-    float mp_width, mp_aspect, mp_height, mp_depth;
-    bool mp_mirror;
+    osc_mp_place mp_place;         /* format=mediapipe's image placement */
     bool have_box;
     float box[6];                  /* box=: the tracking volume, mm (workspace extension) */
     char bind_text[96];            /* where it listens, for the log (fp_udp_listener.text) */
@@ -111,18 +104,22 @@ typedef struct osc_input {
     struct sockaddr_storage pkt_from; /* the sender of the latest datagram */
     bool have_offset;
     int64_t offset_ns;
+    struct sockaddr_storage offset_from; /* the sender whose timetags offset_ns maps */
     /* clock=recording: event time = origin_ns + (timetag - the sender's origin timetag) */
     int64_t origin_ns;             /* host time at start(): the recording's time zero here */
     bool have_sender_origin, ended;
+    int64_t heard_ns;              /* the latest datagram's arrival; 0: none yet */
     int64_t sender_origin_tt;      /* the sender's /facepuppet/origin, ns on the timetag scale */
     int64_t clock_t;               /* the last message's time (statuses are pushed at it) */
     uint32_t buttons;
     osc_leap leap;                 /* Leap frames being assembled, Leap ids' sides */
     int64_t last_pose_t[FP_HANDS][3]; /* per hand: the time of its last joints, angles, wrist
                                          pushed (a staler one is dropped); INT64_MIN none */
-    mp_hand mp[FP_HANDS];
+    osc_mp_hand mp[FP_HANDS];
     int64_t report_at[FP_OSC_PROBLEMS]; /* 0: not pending; -1: reported */
     char unknown_first[64];        /* the first unknown address, for its report ("" none) */
+    char bad_first[2][160];        /* the first bad-count and bad-types message, said ("" none) */
+    const char *cur_path;          /* the address of the message being checked */
     bool packet_pushed;
     /* statistics (mutex) */
     pthread_mutex_t lock;
@@ -298,23 +295,52 @@ static bool within(const float *v, size_t n, float limit)
     return true;
 }
 
-/* types against want, where an 'f' takes any number's tag and an 'i' any integer's; a
- * mismatch counted (bad-count or bad-types) */
-static bool check_types(osc_input *o, const char *types, const char *want)
+/* The first bad-count or bad-types message kept for its report (receive thread): its
+ * address and what was wrong, so that a sender's mistake can be found. */
+static void note_bad(osc_input *o, int kind, const char *fmt, ...)
 {
+    char *out = o->bad_first[kind == FP_OSC_BAD_COUNT ? 0 : 1];
+    if (!out[0]) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(out, sizeof o->bad_first[0], fmt, ap);
+        va_end(ap);
+    }
+    count(o, kind);
+}
+
+/* What a type tag `want` takes, for a report. */
+static const char *wanted_text(char want)
+{
+    return want == 'f' ? "a number (f, d, i or h)" : want == 'i' ? "an integer (i or h)" : "a timetag (t)";
+}
+
+/* types against want, where an 'f' takes any number's tag and an 'i' any integer's; a
+ * mismatch counted (bad-count or bad-types) and the first of each kept for its report;
+ * base: the arguments before `types` (an optional leading one already taken) */
+static bool check_types_at(osc_input *o, const char *types, const char *want, size_t base)
+{
+    const char *path = o->cur_path ? o->cur_path : "?";
     const size_t n = strlen(want);
     if (strlen(types) != n) {
-        count(o, FP_OSC_BAD_COUNT);
+        note_bad(o, FP_OSC_BAD_COUNT, "%s with %zu arguments, wants %zu", path, base + strlen(types),
+                 base + n);
         return false;
     }
     for (size_t i = 0; i < n; i++)
         if (want[i] == 'f'   ? !fp_osc_number_type(types[i])
             : want[i] == 'i' ? !fp_osc_integer_type(types[i])
                              : types[i] != want[i]) {
-            count(o, FP_OSC_BAD_TYPES);
+            note_bad(o, FP_OSC_BAD_TYPES, "%s: argument %zu is '%c', wants %s", path, base + i + 1,
+                     types[i], wanted_text(want[i]));
             return false;
         }
     return true;
+}
+
+static bool check_types(osc_input *o, const char *types, const char *want)
+{
+    return check_types_at(o, types, want, 0);
 }
 
 /* A number argument (a tag check_types let through) as a float, read through fp_osc_arg.h
@@ -483,7 +509,7 @@ static void fmt_facepuppet(osc_input *o, const char *path, const char *types, lo
         int first = 0;
         uint32_t valid = (1u << FP_GLOVE_SENSORS) - 1;
         if (fp_osc_integer_type(types[0]) && strlen(types) == 23) {
-            if (!check_types(o, types + 1, want)) return;
+            if (!check_types_at(o, types + 1, want, 1)) return;
             first = 1;
             valid = (uint32_t)arg_i(argv[0], types[0]) & ((1u << FP_GLOVE_SENSORS) - 1);
         } else if (!check_types(o, types, want)) {
@@ -603,42 +629,28 @@ static void leap_end_packet(osc_input *o, int64_t recv_ns)
 }
 
 /* ------------------------------------------------------------------------------------- */
-/* format=mediapipe                                                                       */
+/* format=mediapipe (assembled in osc_mediapipe.c)                                        */
 
-static void mp_emit(osc_input *o, int hand, int64_t t, int64_t recv_ns)
+static void mp_push(osc_input *o, int hand, const osc_mp_frame *fr, int n, int64_t recv_ns)
 {
-    mp_hand *m = &o->mp[hand];
-    float lm[21][3];
-    for (int j = 0; j < 21; j++) {
-        float x = m->v[0][j], y = m->v[1][j], z = m->have & 4 ? m->v[2][j] : 0.f;
-        if (o->mp_mirror) x = 1.f - x;
-        lm[j][0] = (x - 0.5f) * o->mp_width;
-        lm[j][1] = o->mp_height + (0.5f - y) * o->mp_width * o->mp_aspect;
-        lm[j][2] = o->mp_depth + z * o->mp_width;
+    for (int i = 0; i < n; i++)
+        push_joints(o, hand, fr[i].t, recv_ns, (const float(*)[3])fr[i].mm, FP_EVENT_FLAG_UNSMOOTHED);
+}
+
+/* The end of a datagram: MediaPipe frames that waited in it for a z that did not come. */
+static void mp_end_packet(osc_input *o, int64_t recv_ns)
+{
+    for (int h = 0; h < FP_HANDS; h++) {
+        osc_mp_frame fr;
+        mp_push(o, h, &fr, fp__osc_mp_end_packet(&o->mp[h], &o->mp_place, &fr), recv_ns);
     }
-    /* MediaPipe's 21 landmarks: 0 wrist, then thumb CMC MCP IP tip, then MCP PIP DIP tip of
-     * index, middle, ring, pinky: plugin.h's layout from 1 on. The palm centre is the mean of
-     * the wrist and the four finger MCPs. */
-    float mm[FP_HAND_JOINTS][3];
-    for (int j = 1; j < 21; j++) memcpy(mm[j], lm[j], sizeof mm[j]);
-    for (int i = 0; i < 3; i++)
-        mm[FP_JOINT_PALM][i] = (lm[0][i] + lm[5][i] + lm[9][i] + lm[13][i] + lm[17][i]) / 5.f;
-    push_joints(o, hand, t, recv_ns, (const float(*)[3])mm, FP_EVENT_FLAG_UNSMOOTHED);
 }
 
-/* Whether path is a MediaPipe hand's: "/lx", "/ly", "/lz", "/rx", ... with or without a
- * trailing '/'. */
-static bool mp_address(const char *path)
-{
-    size_t n = strlen(path);
-    return n >= 3 && n <= 4 && path[0] == '/' && (path[1] == 'l' || path[1] == 'r') &&
-           (path[2] == 'x' || path[2] == 'y' || path[2] == 'z') && (n == 3 || path[3] == '/');
-}
-
+/* depth: the message's bundle nesting (0: a plain message) */
 static void fmt_mediapipe(osc_input *o, const char *path, const char *types, lo_arg **argv,
-                          int64_t t, int64_t recv_ns)
+                          int64_t t, int64_t recv_ns, int depth)
 {
-    if (!mp_address(path)) {
+    if (!fp__osc_mp_address(path)) {
         count_unknown(o, path);
         return;
     }
@@ -651,46 +663,17 @@ static void fmt_mediapipe(osc_input *o, const char *path, const char *types, lo_
         bump(o, &o->st.filtered);
         return;
     }
-    float v[21];
-    floats_of(argv, types, 0, 21, v);
-    if (!finite_all(v, 21)) {
+    float v[OSC_MP_LANDMARKS];
+    floats_of(argv, types, 0, OSC_MP_LANDMARKS, v);
+    if (!finite_all(v, OSC_MP_LANDMARKS)) {
         count(o, FP_OSC_NONFINITE);
         return;
     }
-    mp_hand *m = &o->mp[hand];
-    if (axis == 2 && !m->z_seen && m->have == 0 && m->xy_only) {
-        /* the first z of a sender that sends z after x and y: the frame just emitted without
-         * depth is emitted again with it */
-        memcpy(m->v[2], v, sizeof v);
-        m->z_seen = true;
-        m->xy_only = false;
-        m->have = 7;
-        mp_emit(o, hand, t, recv_ns);
-        m->have = 0;
-        return;
-    }
-    if (m->have & (1u << axis)) {
-        if (m->z_seen && (m->have & 3u) == 3u && !(m->have & 4u)) {
-            /* x and y came, then the next frame's before any z: the sender stopped sending z
-             * (another sender, or the same without depth). The frame is emitted flat, and
-             * from now on x and y make a frame. */
-            m->z_seen = false;
-            mp_emit(o, hand, m->t, recv_ns);
-        } else {
-            count(o, FP_OSC_INCOMPLETE); /* a new frame began before the last was complete */
-        }
-        m->have = 0;
-    }
-    memcpy(m->v[axis], v, sizeof v);
-    m->t = t; /* the frame's time: its last part's */
-    m->have |= 1u << axis;
-    if (axis == 2) m->z_seen = true;
-    unsigned need = m->z_seen ? 7u : 3u;
-    m->xy_only = !m->z_seen;
-    if ((m->have & need) == need) {
-        mp_emit(o, hand, t, recv_ns);
-        m->have = 0;
-    }
+    osc_mp_frame fr[2];
+    unsigned incomplete = 0;
+    int n = fp__osc_mp_take(&o->mp[hand], &o->mp_place, axis, v, t, depth > 0, fr, &incomplete);
+    if (incomplete) count_n(o, FP_OSC_INCOMPLETE, incomplete);
+    mp_push(o, hand, fr, n, recv_ns);
 }
 
 /* ------------------------------------------------------------------------------------- */
@@ -716,21 +699,34 @@ static int64_t recording_time(const osc_input *o, uint32_t sec, uint32_t frac)
     return o->origin_ns + (timetag_ns(sec, frac) - o->sender_origin_tt);
 }
 
-/* Host time of an OSC timetag: sender time plus the offset fixed by the first timed bundle
- * (arrival - timetag), re-anchored when the result strays more than 1 s from the arrival
- * (the sender restarted or its clock stepped). Immediate (0, 1) means the arrival. */
+/* Host time of an OSC timetag: sender time plus an offset, arrival - timetag of the bundle
+ * that came soonest (the least transit delay seen: so a first bundle that waited in the socket
+ * before the thread read it, or came late, does not leave every later event stamped late by
+ * its wait), so the sender's spacing is kept and its jitter in transit is not added. The
+ * offset is fixed again (its pose times forgotten) when the result strays more than 1 s
+ * from the arrival (the sender restarted, its clock stepped) and when the datagram comes
+ * from another sender than the one it was fixed by (a sender restarted on a new port, with a
+ * clock of its own). Immediate (0, 1) means the arrival. */
 static int64_t map_timetag(osc_input *o, uint32_t sec, uint32_t frac, int64_t recv_ns)
 {
     if (sec == 0 && frac <= 1) return recv_ns;
     int64_t tt = timetag_ns(sec, frac);
-    if (!o->have_offset || llabs(tt + o->offset_ns - recv_ns) > REANCHOR_NS) {
+    const bool other = o->have_offset && !same_sender(&o->pkt_from, &o->offset_from);
+    if (!o->have_offset || other || llabs(tt + o->offset_ns - recv_ns) > REANCHOR_NS) {
         o->have_offset = true;
         o->offset_ns = recv_ns - tt;
+        o->offset_from = o->pkt_from;
         forget_pose_times(o); /* the sender's clock began again */
-        pthread_mutex_lock(&o->lock);
-        o->st.timetag_offset_ns = o->offset_ns;
-        pthread_mutex_unlock(&o->lock);
+    } else if (tt + o->offset_ns > recv_ns) {
+        /* sooner than the offset says (the bundles before waited): never stamped after its
+         * arrival; later times keep their order (each is at least this arrival) */
+        o->offset_ns = recv_ns - tt;
+    } else {
+        return tt + o->offset_ns;
     }
+    pthread_mutex_lock(&o->lock);
+    o->st.timetag_offset_ns = o->offset_ns;
+    pthread_mutex_unlock(&o->lock);
     return tt + o->offset_ns;
 }
 
@@ -781,7 +777,9 @@ static void handle_message(osc_input *o, unsigned char *data, size_t size, int64
     const char *types = lo_message_get_types(m);
     lo_arg **argv = lo_message_get_argv(m);
     if (!types) types = "";
+    o->cur_path = path;
     if (transport_message(o, path, types, argv, t)) {
+        o->cur_path = NULL;
         lo_message_free(m);
         return;
     }
@@ -790,16 +788,17 @@ static void handle_message(osc_input *o, unsigned char *data, size_t size, int64
         int slot, finger;
         if (strncmp(path, "/facepuppet/", 12) == 0) fmt = FMT_FACEPUPPET;
         else if (fp__osc_leap_address(path, &slot, &finger)) fmt = FMT_LEAP;
-        else if (mp_address(path)) fmt = FMT_MEDIAPIPE;
+        else if (fp__osc_mp_address(path)) fmt = FMT_MEDIAPIPE;
         else
             count_unknown(o, path);
     }
     switch (fmt) {
     case FMT_FACEPUPPET: fmt_facepuppet(o, path, types, argv, t, recv_ns); break;
     case FMT_LEAP: fmt_leap(o, path, types, argv, t, recv_ns, depth); break;
-    case FMT_MEDIAPIPE: fmt_mediapipe(o, path, types, argv, t, recv_ns); break;
+    case FMT_MEDIAPIPE: fmt_mediapipe(o, path, types, argv, t, recv_ns, depth); break;
     default: break;
     }
+    o->cur_path = NULL;
     lo_message_free(m);
 }
 
@@ -865,13 +864,31 @@ static void timers(osc_input *o, int64_t now)
                         o->timeout_s);
         memset(&o->leap, 0, sizeof o->leap);
         forget_pose_times(o);
+        o->have_offset = false; /* the next sender's timetags: on a clock of their own */
         for (int h = 0; h < FP_HANDS; h++) /* the next sender may send no z */
-            o->mp[h].have = 0, o->mp[h].z_seen = o->mp[h].xy_only = false;
+            fp__osc_mp_forget(&o->mp[h]);
         if (o->clock == CLOCK_RECORDING && !o->ended) { /* a stopped clock: never wait on it */
             o->ended = true;
             push_status(o, FP_STATUS_END_OF_STREAM, -1, "osc: %s's recording stopped without its "
                         "end (no data for %.3g s): taken as ended", o->sender, o->timeout_s);
         }
+    }
+    /* clock=recording: a sender that never connected (every message untimed: not a session's
+     * forward=, no /facepuppet/origin) and then went quiet is a stopped clock too: its input
+     * ends, so that run does not wait on it for ever */
+    if (o->clock == CLOCK_RECORDING && !o->ended && !o->connected && o->heard_ns &&
+        now - o->heard_ns > (int64_t)(o->timeout_s * 1e9)) {
+        o->ended = true;
+        pthread_mutex_lock(&o->lock);
+        unsigned long long untimed = (unsigned long long)o->st.problems[FP_OSC_UNTIMED];
+        pthread_mutex_unlock(&o->lock);
+        push_status(o, FP_STATUS_END_OF_STREAM, -1, "osc: %s sent nothing on a recording's clock "
+                    "(%llu messages without a time on it: clock=recording takes a session's forward=) "
+                    "and has been quiet for %.3g s: taken as ended", o->sender, untimed, o->timeout_s);
+        logf_(o, FP_LOG_WARNING, "port %u: %s sent nothing on a recording's clock (%llu messages "
+              "without a time on it: clock=recording takes a session's forward=, docs/osc.md) and "
+              "has been quiet for %.3g s: taken as ended", (unsigned)o->port, o->sender, untimed,
+              o->timeout_s);
     }
     /* A hand the tracker lost while the sender goes on (out of a camera's view, or a Leap
      * frame without it): gone after the same silence, so its grab lets go as a stopped
@@ -886,8 +903,7 @@ static void timers(osc_input *o, int64_t now)
         push_status(o, FP_STATUS_DISCONNECTED, h, "osc: %s hand: not in %s's data for %.3g s "
                     "(the tracker lost it): taken as gone until it comes back",
                     h == FP_HAND_LEFT ? "left" : "right", o->sender, o->timeout_s);
-        o->mp[h].have = 0;
-        o->mp[h].z_seen = o->mp[h].xy_only = false;
+        fp__osc_mp_forget(&o->mp[h]);
     }
     for (int k = 0; k < FP_OSC_PROBLEMS; k++) {
         if (o->report_at[k] <= 0 || now < o->report_at[k]) continue;
@@ -900,6 +916,8 @@ static void timers(osc_input *o, int64_t now)
             snprintf(first, sizeof first, " (first: %s%s; format %s takes %s)", o->unknown_first,
                      foreign_space(o->unknown_first), fp__osc_format_names[o->format],
                      format_space(o->format));
+        else if ((k == FP_OSC_BAD_COUNT || k == FP_OSC_BAD_TYPES) && o->bad_first[k == FP_OSC_BAD_TYPES][0])
+            snprintf(first, sizeof first, " (first: %s; docs/osc.md)", o->bad_first[k == FP_OSC_BAD_TYPES]);
         logf_(o, FP_LOG_WARNING, "port %u: %llu %s%s in the first second (dropped; further ones "
               "are counted, totals at stop)", (unsigned)o->port, n, problem_text[k], first);
         push_status(o, FP_STATUS_WARNING, -1, "osc: %llu %s (%s)", n, problem_names[k],
@@ -937,8 +955,10 @@ static void *osc_thread(void *arg)
             if (!o->connected) fp_udp_sender_text(&from, o->sender, sizeof o->sender);
             o->packet_pushed = false;
             o->pkt_from = from;
+            o->heard_ns = recv_ns;
             handle_packet(o, o->buf, (size_t)n, recv_ns, recv_ns, 0);
             leap_end_packet(o, recv_ns);
+            mp_end_packet(o, recv_ns);
             if (o->packet_pushed) record_latency(o, recv_ns);
         }
         timers(o, now_ns(o));
@@ -963,6 +983,7 @@ static int osc_start(fp_input *self, char *err, size_t errlen)
     o->connected = false;
     o->origin_ns = o->clock_t = now_ns(o);
     o->have_sender_origin = o->ended = false;
+    o->heard_ns = 0;
     if (o->clock == CLOCK_RECORDING) /* the recording's time zero here: its first event */
         push_status(o, FP_STATUS_CONNECTED, -1, "osc: port %u, on the sender's recording clock "
                     "(clock=recording): waiting for a forwarded recording", (unsigned)o->port);
@@ -1129,11 +1150,8 @@ static int osc_create(const fp_host *host, const char *arg, const fp_param *para
     o->hands = set.hands;
     o->clock = set.clock;
     o->timeout_s = set.timeout;
-    o->mp_width = (float)set.width;
-    o->mp_aspect = (float)set.aspect;
-    o->mp_height = (float)set.height;
-    o->mp_depth = (float)set.depth;
-    o->mp_mirror = set.mirror;
+    o->mp_place = (osc_mp_place){(float)set.width, (float)set.aspect, (float)set.height,
+                                 (float)set.depth, set.mirror};
     o->have_box = set.have_box;
     memcpy(o->box, set.box, sizeof set.box);
     pthread_mutex_init(&o->lock, NULL);

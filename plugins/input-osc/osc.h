@@ -53,8 +53,8 @@ typedef struct fp_osc_stats {
     uint64_t problems[FP_OSC_PROBLEMS]; /* per fp_osc_problem; [FP_OSC_QUEUE_FULL] = drops */
     uint64_t connects;          /* silence -> traffic transitions (CONNECTED pushed) */
     uint64_t disconnects;       /* traffic -> silence for `timeout` (DISCONNECTED pushed) */
-    int64_t timetag_offset_ns;  /* host clock - sender clock, from the first timed bundle
-                                   (clock=arrival) */
+    int64_t timetag_offset_ns;  /* host clock - sender clock: arrival - timetag of the sender's
+                                   bundle that came soonest (clock=arrival; docs/osc.md, Time) */
     uint64_t latency_samples;   /* packets behind the two figures below (last <= 65536) */
     double latency_median_us;   /* packet received (recvfrom returned) -> its last event pushed */
     double latency_p99_us;

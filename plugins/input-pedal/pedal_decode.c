@@ -174,7 +174,10 @@ int fp_pedal_parse_report_descriptor(const uint8_t *d, size_t len, fp_pedal_hid_
         return -1;
     fp_pedal_hid_info r = {.vendor = true};
     uint32_t page = 0, usage = 0;
+    bool usage_has_page = false;     /* a 4-byte Usage: its page in the high half */
     uint8_t report_id = 0;
+    struct { uint32_t page; uint8_t report_id; } pushed[8]; /* Push / Pop of the globals read */
+    int npushed = 0;
     int depth = 0, apps = 0;
     bool in_keyboard = false, have_kbd_input = false;
     size_t i = 0;
@@ -198,10 +201,21 @@ int fp_pedal_parse_report_descriptor(const uint8_t *d, size_t len, fp_pedal_hid_
         } else if (type == 1 && tag == 8) {  /* Report ID */
             report_id = (uint8_t)v;
             r.has_ids = true;
+        } else if (type == 1 && tag == 0xa) { /* Push: the global items' state */
+            if (npushed == (int)(sizeof pushed / sizeof pushed[0]))
+                return -1;
+            pushed[npushed].page = page;
+            pushed[npushed++].report_id = report_id;
+        } else if (type == 1 && tag == 0xb) { /* Pop */
+            if (npushed == 0)
+                return -1;
+            page = pushed[--npushed].page;
+            report_id = pushed[npushed].report_id;
         } else if (type == 2 && tag == 0) {  /* Usage (4 bytes: page in the high half) */
             usage = v;
+            usage_has_page = size == 4;
         } else if (type == 0) {
-            uint32_t upage = size == 4 ? usage >> 16 : page, uid = usage & 0xffff;
+            uint32_t upage = usage_has_page ? usage >> 16 : page, uid = usage & 0xffff;
             if (tag == 0xa) {                /* Collection */
                 if (depth == 0 && v == 1) {  /* Application */
                     apps++;
@@ -219,6 +233,7 @@ int fp_pedal_parse_report_descriptor(const uint8_t *d, size_t len, fp_pedal_hid_
                 r.keyboard_id = report_id;
             }
             usage = 0;                       /* local items end at a main item */
+            usage_has_page = false;
         }
         i += 1 + size;
     }

@@ -127,9 +127,10 @@ typedef struct fp_pedal_hid_info {
 } fp_pedal_hid_info;
 
 /**
- * Parse a HID report descriptor of `len` bytes into *info (zeroed first). Returns 0, or -1
- * (*info zeroed) when the descriptor is empty, truncated inside an item, or has no
- * application collection.
+ * Parse a HID report descriptor of `len` bytes into *info (zeroed first). A 4-byte Usage
+ * names its own page (high half); Push and Pop save and restore the usage page and report
+ * id. Returns 0, or -1 (*info zeroed) when the descriptor is empty, truncated inside an
+ * item, pops more than it pushed or pushes deeper than 8, or has no application collection.
  */
 int fp_pedal_parse_report_descriptor(const uint8_t *desc, size_t len, fp_pedal_hid_info *info);
 

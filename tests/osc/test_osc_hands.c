@@ -192,6 +192,62 @@ static void mediapipe_z_then_no_z(void **state)
     close_fixture(&f);
 }
 
+/* 21 floats a + b * j added to bundle b at path */
+static void add_mp(lo_bundle b, const char *path, float a, float c)
+{
+    lo_message m = lo_message_new();
+    for (int j = 0; j < 21; j++) lo_message_add_float(m, a + c * (float)j);
+    lo_bundle_add_message(b, path, m);
+}
+
+/* A sender with z that sends each frame as one bundle (/rx /ry /rz): one frame a bundle, the
+ * first one too, with its depth. (Before: the first frame came twice at one time, flat from
+ * x and y and again with z: the session took it as a hand jumping 40 mm in no time, "the
+ * right hand jumped farther and faster than a hand moves", and placed the hands from a flat
+ * first frame.) And a sender without z in bundles: one flat frame a bundle. */
+static void mediapipe_bundle_with_z_once(void **state)
+{
+    (void)state;
+    osc_fixture f;
+    open_fixture(&f, "format=mediapipe,depth=10", 256);
+    for (int k = 0; k < 3; k++) {
+        lo_timetag tt;
+        lo_timetag_now(&tt);
+        lo_bundle b = lo_bundle_new(tt);
+        add_mp(b, "/rx", 0.4f, 0.01f);
+        add_mp(b, "/ry", 0.5f, 0.01f);
+        add_mp(b, "/rz", 0.1f, 0.f);
+        send_bundle(&f, b);
+        wait_packets(&f, (uint64_t)k + 1);
+        sleep_ms(10);
+    }
+    assert_true(wait_type(f.h, FP_EVENT_JOINT_POSITIONS, -1, 3));
+    sleep_ms(50);
+    assert_int_equal(count_type(f.h, FP_EVENT_JOINT_POSITIONS, -1), 3);
+    for (size_t k = 0; k < 3; k++) /* depth 10 + 0.1 x 400 mm */
+        assert_float_equal(nth_positions(f.h, k)->positions.mm[FP_JOINT_TIP(1)][2], 50.f, 1e-3);
+    close_fixture(&f);
+
+    open_fixture(&f, "format=mediapipe,depth=10", 256);
+    for (int k = 0; k < 3; k++) {
+        lo_bundle b = lo_bundle_new(LO_TT_IMMEDIATE);
+        add_mp(b, "/lx/", 0.4f, 0.01f);
+        add_mp(b, "/ly/", 0.5f, 0.01f);
+        send_bundle(&f, b);
+        wait_packets(&f, (uint64_t)k + 1);
+    }
+    assert_true(wait_type(f.h, FP_EVENT_JOINT_POSITIONS, -1, 3));
+    sleep_ms(50);
+    assert_int_equal(count_type(f.h, FP_EVENT_JOINT_POSITIONS, -1), 3);
+    for (size_t k = 0; k < 3; k++) {
+        assert_int_equal(nth_positions(f.h, k)->header.hand, FP_HAND_LEFT);
+        assert_float_equal(nth_positions(f.h, k)->positions.mm[FP_JOINT_TIP(1)][2], 10.f, 1e-4);
+    }
+    fp_osc_stats st = stats(&f);
+    for (int k = 0; k < FP_OSC_PROBLEMS; k++) assert_int_equal(st.problems[k], 0);
+    close_fixture(&f);
+}
+
 /* ------------------------------------------------------------------------------------- */
 /* Leap                                                                                   */
 
@@ -351,6 +407,43 @@ static void leap_two_hands_two_sides(void **state)
 }
 
 /* ------------------------------------------------------------------------------------- */
+/* Problems named                                                                         */
+
+/* A sender's message with extra trailing arguments (a bridge that adds a velocity) and one
+ * with a wrong type: each kind's warning names the first such message, its address and what
+ * was wrong. (Before: "messages with a wrong argument count", nothing to find it by.) */
+static void bad_messages_named(void **state)
+{
+    (void)state;
+    osc_fixture f;
+    open_fixture(&f, NULL, 64);
+    lo_bundle b = lo_bundle_new(LO_TT_IMMEDIATE);
+    lo_message palm = leap_msg(7, 0, 1.f, 2.f, 3.f), wrist = lo_message_new();
+    lo_message_add_float(palm, 0.5f);
+    lo_message_add_float(palm, 0.5f);
+    lo_message_add_float(wrist, 1.f);
+    lo_message_add_string(wrist, "y");
+    for (int i = 0; i < 5; i++) lo_message_add_float(wrist, 0.f);
+    lo_bundle_add_message(b, "/hand0", palm);
+    lo_bundle_add_message(b, "/facepuppet/hand/right/wrist", wrist);
+    send_bundle(&f, b);
+    wait_packets(&f, 1);
+    assert_true(wait_type(f.h, FP_EVENT_STATUS, FP_STATUS_WARNING, 2));
+    sleep_ms(50);
+    if (!log_has(f.h, FP_LOG_WARNING, "first: /hand0 with 7 arguments, wants 5") ||
+        !log_has(f.h, FP_LOG_WARNING, "first: /facepuppet/hand/right/wrist: argument 2 is 's', wants a number")) {
+        pthread_mutex_lock(&f.h->mutex);
+        fprintf(stderr, "log:\n%s", f.h->log);
+        pthread_mutex_unlock(&f.h->mutex);
+        fail();
+    }
+    fp_osc_stats st = stats(&f);
+    assert_int_equal(st.problems[FP_OSC_BAD_COUNT], 1);
+    assert_int_equal(st.problems[FP_OSC_BAD_TYPES], 1);
+    close_fixture(&f);
+}
+
+/* ------------------------------------------------------------------------------------- */
 /* Time                                                                                   */
 
 /* Bundles out of order (timetags 0, 1, 3, 2, 4 x 100 ms): the stale one (2, after 3) is
@@ -382,6 +475,101 @@ static void out_of_order_bundle_dropped(void **state)
     assert_int_equal(st.problems[FP_OSC_STALE], 1);
     for (int k = 0; k < FP_OSC_PROBLEMS; k++)
         if (k != FP_OSC_STALE) assert_int_equal(st.problems[k], 0);
+    close_fixture(&f);
+}
+
+/* A first bundle that waited (its timetag 300 ms before the others': it sat in the socket
+ * before the input read it, as a sender started before facepuppet leaves its first ones)
+ * does not leave every later event stamped 300 ms late: no event is stamped after its
+ * arrival, and the bundles' spacing is kept. (Before: the first bundle fixed the offset, and
+ * every later event was stamped 300 ms after it arrived, the hands shown that late.) */
+static void first_bundle_late_not_kept(void **state)
+{
+    (void)state;
+    osc_fixture f;
+    open_fixture(&f, "format=leap", 256);
+    lo_timetag base;
+    lo_timetag_now(&base);
+    base.sec -= 1; /* (timetag_plus adds: 0.3 s before now is 1 s before plus 0.7) */
+    int64_t seen[6];
+    for (int k = 0; k < 6; k++) {
+        lo_timetag tt;
+        lo_timetag_now(&tt);
+        lo_bundle b = lo_bundle_new(k == 0 ? timetag_plus(base, 0.7) : tt);
+        add_leap_frame(b, 0, 7, 10.f * (float)k, -1);
+        send_bundle(&f, b);
+        wait_packets(&f, (uint64_t)k + 1);
+        assert_true(wait_type(f.h, FP_EVENT_JOINT_POSITIONS, -1, (size_t)k + 1));
+        seen[k] = mono_ns(); /* the event is in: it arrived before now */
+        sleep_ms(20);
+    }
+    for (size_t k = 0; k < 6; k++) {
+        const fp_event *e = nth_positions(f.h, k);
+        if (e->header.time_ns > seen[k])
+            fail_msg("bundle %zu stamped %.1f ms after it was received", k,
+                     (double)(e->header.time_ns - seen[k]) / 1e6);
+        if (k) assert_true(e->header.time_ns > nth_positions(f.h, k - 1)->header.time_ns);
+    }
+    fp_osc_stats st = stats(&f);
+    for (int k = 0; k < FP_OSC_PROBLEMS; k++) assert_int_equal(st.problems[k], 0);
+    close_fixture(&f);
+}
+
+/* A sender restarted on a new port, its clock begun again (timetags from 1000 s on its own
+ * scale, 20 ms apart), 0.3 s after the first stopped: its bundles are its own, neither
+ * stale nor stamped on the first sender's clock. (Before: they mapped 0.4 s into the past
+ * through the first sender's offset, under the 1 s that fixes it again, so every one was
+ * dropped as "stale".) */
+static void restarted_sender_not_stale(void **state)
+{
+    (void)state;
+    osc_fixture f;
+    open_fixture(&f, "format=leap", 256);
+    const lo_timetag zero = {1000, 0};
+    uint64_t sent = 0;
+    int64_t t_first_end = 0;
+    for (int run = 0; run < 2; run++) {
+        lo_address to = run ? lo_address_new("127.0.0.1", f.port) : f.to; /* a new source port */
+        for (int k = 0; k < 5; k++) {
+            lo_bundle b = lo_bundle_new(timetag_plus(zero, 0.02 * k));
+            add_leap_frame(b, 0, 7, (float)(100 * run + k), -1);
+            assert_true(lo_send_bundle(to, b) > 0);
+            lo_bundle_free_recursive(b);
+            wait_packets(&f, ++sent);
+            sleep_ms(20);
+        }
+        if (run) lo_address_free(to);
+        t_first_end = run ? t_first_end : mono_ns();
+        sleep_ms(300); /* the first sender quiet: the second takes over */
+    }
+    assert_true(wait_type(f.h, FP_EVENT_JOINT_POSITIONS, -1, 10));
+    fp_osc_stats st = stats(&f);
+    assert_int_equal(st.problems[FP_OSC_STALE], 0);
+    for (size_t k = 5; k < 10; k++) {
+        const fp_event *e = nth_positions(f.h, k);
+        assert_float_equal(e->positions.mm[FP_JOINT_PALM][0], 100.f + (float)(k - 5), 0);
+        if (e->header.time_ns < t_first_end)
+            fail_msg("the new sender's bundle %zu stamped %.1f ms before the first sender stopped",
+                     k - 5, (double)(t_first_end - e->header.time_ns) / 1e6);
+        assert_true(e->header.time_ns > nth_positions(f.h, k - 1)->header.time_ns);
+    }
+    close_fixture(&f);
+}
+
+/* clock=recording with a sender that is not a session's forward= (plain messages: nothing on
+ * a recording's clock) that then goes quiet: the input ends after the timeout, so `run`
+ * does not wait on it for ever. (Before: no end, and `run --duration 5` waited until killed,
+ * "waiting 39 s for 'osc' to deliver past 0.000 s".) */
+static void recording_clock_untimed_sender_ends(void **state)
+{
+    (void)state;
+    osc_fixture f;
+    open_fixture(&f, "clock=recording,timeout=0.2", 64);
+    for (int i = 0; i < 3; i++) send_button(false, (unsigned)atoi(f.port));
+    wait_packets(&f, 3);
+    assert_int_equal(stats(&f).problems[FP_OSC_UNTIMED], 3);
+    assert_true(wait_type(f.h, FP_EVENT_STATUS, FP_STATUS_END_OF_STREAM, 1));
+    assert_true(log_has(f.h, FP_LOG_WARNING, "sent nothing on a recording's clock (3 messages"));
     close_fixture(&f);
 }
 
@@ -521,12 +709,17 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(mediapipe_z_then_no_z),
+        cmocka_unit_test(mediapipe_bundle_with_z_once),
         cmocka_unit_test(leap_bundle_any_order),
         cmocka_unit_test(leap_side_kept_by_id),
         cmocka_unit_test(leap_reacquired_hand_keeps_side),
         cmocka_unit_test(leap_second_hand_own_datagram),
         cmocka_unit_test(leap_two_hands_two_sides),
+        cmocka_unit_test(bad_messages_named),
         cmocka_unit_test(out_of_order_bundle_dropped),
+        cmocka_unit_test(first_bundle_late_not_kept),
+        cmocka_unit_test(restarted_sender_not_stale),
+        cmocka_unit_test(recording_clock_untimed_sender_ends),
         cmocka_unit_test(bind_ipv6_and_localhost),
         cmocka_unit_test(ipv6_side_taken_warned),
         cmocka_unit_test(dual_stack_falls_back_to_ipv4),

@@ -340,6 +340,36 @@ static void test_keyboard_formats_split_report(void **state)
     assert_int_equal(fp_pedal_kbd_report_size(FP_PEDAL_KBD_BOOT), 8);
 }
 
+/* Items other report descriptors use (HID 1.11 6.2.2.7-8): a 4-byte Usage naming its page
+ * (0x0b: Generic Desktop / Keyboard as 0x00010006) for the keyboard collection, and Push /
+ * Pop around another report's items, the keyboard's Input after the Pop under its own id.
+ * (Before: the 4-byte usage's page was taken from the Collection item's size, not the
+ * usage's, so the keyboard was not seen; Push and Pop were ignored, so the Input was taken
+ * as id 5's and every id-1 report ignored: a pedal that never pressed.) */
+static void test_report_descriptor_items(void **state)
+{
+    (void)state;
+    fp_pedal_hid_info info;
+    const uint8_t extended[] = {
+        0x0b, 0x06, 0x00, 0x01, 0x00, 0xa1, 0x01, 0x85, 0x01, 0x05, 0x07, 0x19, 0xe0, 0x29,
+        0xe7, 0x15, 0x00, 0x25, 0x01, 0x75, 0x01, 0x95, 0x08, 0x81, 0x02, 0x95, 0x01, 0x75,
+        0x08, 0x81, 0x01, 0x95, 0x06, 0x75, 0x08, 0x19, 0x00, 0x29, 0xff, 0x81, 0x00, 0xc0};
+    assert_int_equal(fp_pedal_parse_report_descriptor(extended, sizeof extended, &info), 0);
+    assert_true(info.keyboard && info.has_ids && !info.vendor);
+    assert_int_equal(info.keyboard_id, 1);
+    const uint8_t pushed[] = {
+        0x05, 0x01, 0x09, 0x06, 0xa1, 0x01, 0x85, 0x01,
+        0xa4, 0x85, 0x05, 0x06, 0x00, 0xff, 0xb4,           /* Push, id 5 on a vendor page, Pop */
+        0x05, 0x07, 0x19, 0xe0, 0x29, 0xe7, 0x15, 0x00, 0x25, 0x01, 0x75, 0x01, 0x95, 0x08,
+        0x81, 0x02, 0x95, 0x07, 0x75, 0x08, 0x81, 0x00, 0xc0};
+    assert_int_equal(fp_pedal_parse_report_descriptor(pushed, sizeof pushed, &info), 0);
+    assert_true(info.keyboard && info.has_ids && !info.vendor);
+    assert_int_equal(info.keyboard_id, 1);
+    /* a Pop with nothing pushed is a broken descriptor */
+    const uint8_t popped[] = {0x05, 0x01, 0x09, 0x06, 0xb4, 0xa1, 0x01, 0x81, 0x00, 0xc0};
+    assert_int_equal(fp_pedal_parse_report_descriptor(popped, sizeof popped, &info), -1);
+}
+
 static void test_report_descriptor(void **state)
 {
     (void)state;
@@ -414,6 +444,7 @@ int main(void)
         cmocka_unit_test(test_models),
         cmocka_unit_test(test_keyboard_formats_split_report),
         cmocka_unit_test(test_report_descriptor),
+        cmocka_unit_test(test_report_descriptor_items),
     };
     return cmocka_run_group_tests_name("pedal_decode", tests, NULL, NULL);
 }
