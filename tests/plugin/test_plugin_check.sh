@@ -44,6 +44,13 @@ expect 0 'input-fifo.so: cannot load: not a regular file' timeout 30 "$fp" plugi
 # ... and one of the same name in a later folder: the FIFO shadows it, looked at without opening
 mkdir "$tmp/fifodir2" && cp "$builtin/input-replay.so" "$tmp/fifodir2/input-fifo.so"
 expect 0 'input-fifo.so: cannot load: not a regular file' timeout 30 "$fp" plugins --plugin-dir "$tmp/fifodir" --plugin-dir "$tmp/fifodir2"
+# ... and a mapping named by one, which run loads in a helper process (not one of ours): the
+# host opened the file to keep it for restarts and waited there for a writer (124, no output)
+mkfifo "$tmp/fifodir/map-fifo.so"
+expect 78 "mapping 'fifo': .*map-fifo.so: cannot load: not a regular file" timeout 30 "$fp" run -q \
+    --plugin-dir "$tmp/fifodir" --mapping fifo --mesh "$data/faces/mediapipe-canonical/canonical_face_model.obj" \
+    --input "replay:$rec,fast=1" --duration 0.2 --out "$tmp/fifo.obj"
+[ -e "$tmp/fifo.obj" ] && fail "run --mapping fifo wrote $tmp/fifo.obj"
 # a recording given with --arg that is not there: a failure, not a device to skip
 expect 1 'FAIL  create .*No such file' "$fp" plugins check "$builtin/input-replay.so" --arg /nonexistent/rec.csv
 expect 0 'PASS  cycle +5 x create' "$fp" plugins check "$builtin/input-pedal.so"
