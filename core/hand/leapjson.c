@@ -504,6 +504,14 @@ int fp_leapjson_read(const char *path, fp_leapcsv_row_fn fn, void *user, char *e
         fp_text_line_col(text, at, &line, NULL);
         rc = root ? 0 : fp_error_at(err, errlen, -EBADMSG, path, 0, 0, "not valid JSON near line %ld%s",
                                     line, packed ? " of the decompressed text" : "");
+    } else if ((end = fp_text_after_space(end, json + len))) {
+        /* one recording per file: what follows it is damage (two pasted into one file: the
+         * second was ignored in silence), as the calibration, rig and stack readers refuse it */
+        long line;
+        fp_text_line_col(text, end, &line, NULL);
+        rc = fp_error_at(err, errlen, -EBADMSG, path, 0, 0, "text after the JSON object, at line %ld%s",
+                         line, packed ? " of the decompressed text" : "");
+        cJSON_Delete(root);
     } else {
         rc = walk_frames(&W, root, fn, user);
         cJSON_Delete(root);

@@ -95,7 +95,8 @@ typedef struct fp_isolate_options {
  *  which ends the helper). On failure, the plugin's message or the loader's in err (not naming
  *  the mapping: the caller does; a helper that died or hung says whether while loading the
  *  file or in the plugin's create), and
- *  the code (above). [main-thread] */
+ *  the code (above): FP_EPLUGIN_DLOPEN, before any helper, where `file` is not a regular file
+ *  (opened without blocking: a FIFO is refused, never waited on). [main-thread] */
 int fp_isolate_mapping_create(const fp_isolate_options *opt, const char *file, const char *name,
                               const fp_host *host, const fp_param *params, size_t nparams,
                               fp_mapping **out, char *err, size_t errlen);

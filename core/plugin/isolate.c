@@ -7,6 +7,7 @@
 #include "isolate_proc.h"
 
 #include "fp_clock.h"
+#include "fp_file.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -547,15 +548,24 @@ int fp_isolate_mapping_create(const fp_isolate_options *opt, const char *file, c
                               fp_mapping **out, char *err, size_t errlen)
 {
     *out = NULL;
+    /* a regular file only, opened without waiting (a FIFO named like a plugin in a plugin
+     * folder: open() waited for a writer and hung `run` before any output, where the
+     * in-process loader refuses it) */
+    int fd = fp_file_open_regular(file);
+    if (fd < 0)
+        return fp_errorf(err, errlen, FP_EPLUGIN_DLOPEN, "%s: cannot load: %s", file,
+                         fd == -ENXIO ? "not a regular file (a FIFO, device or socket)"
+                                      : fp_file_error_text(fd));
     proxy *x = calloc(1, sizeof *x);
     if (!x || copy_keys(&x->keys, params, nparams)) {
         if (x) fp_spec_clear(&x->keys);
         free(x);
+        close(fd);
         return fp_errorf(err, errlen, -ENOMEM, "out of memory");
     }
     fp_iso_proc_init(&x->proc);
     x->m.plugin_data = x;
-    x->file_fd = open(file, O_RDONLY | O_CLOEXEC);
+    x->file_fd = fd;
     x->host = host;
     x->deadline_ms = opt && opt->deadline_ms > 0 ? opt->deadline_ms : FP_ISOLATE_DEADLINE_MS;
     x->quiet_restarts = opt && opt->quiet_restarts;

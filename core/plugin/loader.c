@@ -5,7 +5,9 @@
 
 #include <dirent.h>
 #include <dlfcn.h>
+#include <elf.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <stddef.h>
@@ -196,6 +198,53 @@ static const char *factory_broken(fp_plugin_kind kind, const void *factory)
            : !named ? "has no name (NULL)" : !creates ? "has no create (NULL)" : NULL;
 }
 
+/* Whether the regular file `file` is a shared object of this machine's ELF class whose
+ * program headers or loaded segments end past the file's end (a copy cut short): into why.
+ * dlopen maps such segments, and the first touch past the end raises SIGBUS in the host,
+ * before any plugin code runs. Anything else (not ELF, another class, unreadable) is left
+ * for dlopen to judge. */
+static bool elf_cut_short(const char *file, char *why, size_t n)
+{
+#if UINTPTR_MAX > 0xffffffffu
+    typedef Elf64_Ehdr ehdr;
+    typedef Elf64_Phdr phdr;
+    const unsigned char cls = ELFCLASS64;
+#else
+    typedef Elf32_Ehdr ehdr;
+    typedef Elf32_Phdr phdr;
+    const unsigned char cls = ELFCLASS32;
+#endif
+    int fd = open(file, O_RDONLY | O_CLOEXEC | O_NONBLOCK);
+    struct stat st;
+    ehdr eh;
+    bool cut = false;
+    if (fd < 0) return false;
+    if (fstat(fd, &st) || pread(fd, &eh, sizeof eh, 0) != (ssize_t)sizeof eh ||
+        memcmp(eh.e_ident, ELFMAG, SELFMAG) || eh.e_ident[EI_CLASS] != cls || eh.e_phentsize != sizeof(phdr)) {
+        close(fd);
+        return false;
+    }
+    const uint64_t size = (uint64_t)st.st_size;
+    const uint64_t ph_end = (uint64_t)eh.e_phoff + (uint64_t)eh.e_phnum * sizeof(phdr);
+    if (ph_end > size) {
+        snprintf(why, n, "cut short: its program headers end at byte %llu of a file of %llu bytes",
+                 (unsigned long long)ph_end, (unsigned long long)size);
+        cut = true;
+    }
+    for (unsigned i = 0; !cut && i < eh.e_phnum; i++) {
+        phdr ph;
+        if (pread(fd, &ph, sizeof ph, (off_t)(eh.e_phoff + (uint64_t)i * sizeof ph)) != (ssize_t)sizeof ph) break;
+        const uint64_t end = (uint64_t)ph.p_offset + (uint64_t)ph.p_filesz;
+        if (ph.p_type == PT_LOAD && end > size) {
+            snprintf(why, n, "cut short: its loaded segment %u ends at byte %llu of a file of %llu bytes "
+                     "(a copy interrupted?)", i, (unsigned long long)end, (unsigned long long)size);
+            cut = true;
+        }
+    }
+    close(fd);
+    return cut;
+}
+
 int fp_plugin_load(const fp_plugin_path *path, fp_plugin_kind kind, const char *name,
                    fp_plugin *out, char *err, size_t errlen)
 {
@@ -216,6 +265,11 @@ int fp_plugin_load(const fp_plugin_path *path, fp_plugin_kind kind, const char *
     if (!there || !S_ISREG(st.st_mode)) {
         snprintf(err, errlen, "%s: cannot load: %s", file,
                  !there ? strerror(errno) : "not a regular file (a FIFO, device or socket)");
+        return fail(out, FP_EPLUGIN_DLOPEN);
+    }
+    char why[200];
+    if (elf_cut_short(file, why, sizeof why)) {
+        snprintf(err, errlen, "%s: cannot load: %s", file, why);
         return fail(out, FP_EPLUGIN_DLOPEN);
     }
     out->handle = dlopen(file, RTLD_NOW | RTLD_LOCAL);

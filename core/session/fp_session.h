@@ -93,6 +93,10 @@ typedef struct fp_session_options {
     double radius;                                  /* support radius, mesh units; 0: 6% of
                                                        the mesh's bounding-box diagonal, at
                                                        least FP_SESSION_MIN_RADIUS_MM */
+    const char *radius_name;                        /* what a refused radius is called: NULL
+                                                       "--radius" (the option's: -EINVAL);
+                                                       else a file's value ("T.fptake: the
+                                                       take's radius": -ERANGE) */
     double hand_size;                               /* 0 or 1: mean adult hand */
     const fp_session_performer_placement *performer_calibrations; /* a performer's own
                                                        calibration by name (a take performed
@@ -295,7 +299,8 @@ typedef struct fp_session fp_session;
 /** Load the mesh, load the mapping plugin and every input (not started), open the inputs'
  *  record=FILE recordings. Returns 0, or a negative code with a message in err naming the
  *  file, SPEC or plugin at fault: -EINVAL bad options (no mesh or plugin path, too many
- *  inputs, a negative or NaN radius, a radius beyond 10x the mesh's bounding-box diagonal,
+ *  inputs, a negative or NaN radius, a radius beyond 10x the mesh's bounding-box diagonal
+ *  or under a millionth of it: -ERANGE instead where radius_name is given,
  *  a negative or NaN mm_per_unit, a mapping SPEC with ':ARG'), -ENOMEM, the mesh
  *  loader's code unchanged (fp_mesh_load), the rig's code unchanged (options rig_path,
  *  rig_dir; fp_rig_load_for_mesh: -ENOENT a missing file, -EBADMSG a malformed rig or one that

@@ -198,6 +198,18 @@ static const char *file_name(const char *path)
 }
 
 /* The options checked before anything is made: 0 or -EINVAL (the message in err). */
+/* What messages call the radius, and a refused one's code: the option's (-EINVAL, 64), or a
+ * file's value (opt->radius_name, e.g. a take's header: -ERANGE, 65). */
+static const char *radius_name(const fp_session_options *opt)
+{
+    return opt->radius_name ? opt->radius_name : "--radius";
+}
+
+static int radius_code(const fp_session_options *opt)
+{
+    return opt->radius_name ? -ERANGE : -EINVAL;
+}
+
 static int check_options(const fp_session_options *opt, char *err, size_t errlen)
 {
     if (!opt || (!opt->mesh_path && !opt->mesh) || !opt->plugin_path) {
@@ -213,8 +225,8 @@ static int check_options(const fp_session_options *opt, char *err, size_t errlen
         return -EINVAL;
     }
     if (opt->radius < 0 || isnan(opt->radius)) {
-        snprintf(err, errlen, "--radius must be > 0 (mesh units), got %g", opt->radius);
-        return -EINVAL;
+        snprintf(err, errlen, "%s must be > 0 (mesh units), got %g", radius_name(opt), opt->radius);
+        return radius_code(opt);
     }
     return 0;
 }
@@ -375,10 +387,10 @@ static int open_scale(fp_session *s, const fp_session_options *opt, double diag,
         snprintf(s->head.how, sizeof s->head.how, "from the rig %s", fp_rig_source(s->rig.rig));
     }
     if (opt->radius > 0 && opt->radius < FP_SESSION_RADIUS_MIN_DIAGONALS * sqrt(diag)) {
-        rc = -EINVAL;
-        snprintf(err, errlen, "--radius %g is below a millionth of the mesh's bounding-box "
+        rc = radius_code(opt);
+        snprintf(err, errlen, "%s %g is below a millionth of the mesh's bounding-box "
                  "diagonal (%.4g mesh units): no vertex would move; give a radius in mesh units",
-                 opt->radius, sqrt(diag));
+                 radius_name(opt), opt->radius, sqrt(diag));
         return rc;
     }
     {   /* a given scale that makes the face under a millimetre or over a kilometre across is
@@ -395,10 +407,10 @@ static int open_scale(fp_session *s, const fp_session_options *opt, double diag,
         }
     }
     if (opt->radius > FP_SESSION_RADIUS_MAX_DIAGONALS * sqrt(diag)) {
-        rc = -EINVAL;
-        snprintf(err, errlen, "--radius %g is beyond 10x the mesh's bounding-box diagonal (%.4g "
+        rc = radius_code(opt);
+        snprintf(err, errlen, "%s %g is beyond 10x the mesh's bounding-box diagonal (%.4g "
                  "mesh units): every vertex would move as one; give a radius in mesh units",
-                 opt->radius, sqrt(diag));
+                 radius_name(opt), opt->radius, sqrt(diag));
         return rc;
     }
     if (s->canon) { /* the face's frame's head: the same unit */

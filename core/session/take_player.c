@@ -8,6 +8,7 @@
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 struct fp_take_player {
     fp_stack_player *stack;    /* a stack: its base layer's player does the rest */
@@ -79,14 +80,24 @@ int fp_take_player_open_logged(const char *take_path, const char *mesh_path,
         }
     }
     /* a session on the take's mesh with no inputs; its mapping is never called */
+    char radius_name[4200];
+    snprintf(radius_name, sizeof radius_name, "%s: the take's radius", take_path);
     fp_session_options so = {.mesh_path = p->mesh, .mapping = "anchored", .radius = h->radius,
+                             .radius_name = radius_name,
                              .plugin_path = plugin_path,
                              .rig_path = h->rig_path ? h->rig_path : "none",
                              .log = log, .log_user = log_user};
     for (int i = 0; i < 3; i++) /* (1.4: the face's axes, for the camera) */
         so.face_up[i] = (float)h->face_up[i], so.face_facing[i] = (float)h->face_facing[i];
-    if ((rc = fp_session_create(&so, &p->session, err, errlen)))
+    if ((rc = fp_session_create(&so, &p->session, err, errlen))) {
+        if (h->rig_path && strstr(err, h->rig_path)) { /* the take's rig: say it is the take's */
+            char why[2048];
+            snprintf(why, sizeof why, "%s", err);
+            fp_errorf(err, errlen, rc, "%s: the take's rig %s (the rig it was recorded with: "
+                      "put it back there to play the take): %s", take_path, h->rig_path, why);
+        }
         goto fail;
+    }
     if ((rc = fp_session_take_check_mesh(p->session, p->mesh, h, err, errlen)))
         goto fail;
     *out = p;

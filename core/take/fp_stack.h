@@ -97,8 +97,9 @@ fp_stack *fp_stack_create(void);
  *  becomes stack->path. Checks the structure, types, unknown members, ranges (in <= out,
  *  fade, gain 0..2), one kind per region, a vertex group of at most FP_STACK_MAX_GROUP
  *  indices (counted by its spans' lengths before any is walked or allocated), layer 0 with no
- *  region and replace mode, at most FP_STACK_MAX_LAYERS. Returns 0 and *out (fp_stack_free) or -EBADMSG with
- *  "NAME: json.path: reason", -ENOMEM. */
+ *  region and replace mode, at most FP_STACK_MAX_LAYERS, nothing but white space after the
+ *  object. Returns 0 and *out (fp_stack_free) or -EBADMSG with
+ *  "NAME: json.path: reason" ("NAME: byte N: reason" where the text is no JSON object), -ENOMEM. */
 int fp_stack_parse(const char *json, size_t len, const char *name, fp_stack **out, char *err,
                    size_t errlen);
 

@@ -4,6 +4,7 @@
 #include "fp_take.h"
 #include "fp_error.h"
 #include "fp_file.h"
+#include "fp_text.h"
 
 #include <cjson/cJSON.h>
 #include <dirent.h>
@@ -290,6 +291,15 @@ int fp_stack_parse(const char *json, size_t len, const char *name, fp_stack **ou
         snprintf(where, sizeof where, "byte %zu", at);
         const unsigned char ch = len ? (unsigned char)json[at] : 0;
         return bad(&c, where, "not JSON (at '%c', of %zu bytes)", ch >= 0x20 && ch < 0x7f ? ch : '?', len);
+    }
+    /* one stack per file: what follows the object is damage (two stacks pasted into one
+     * file played the first in silence), as rigs and calibration files refuse it */
+    const char *rest = fp_text_after_space(end, json + len);
+    if (rest) {
+        cJSON_Delete(root);
+        char where[48];
+        snprintf(where, sizeof where, "byte %zu", (size_t)(rest - json));
+        return bad(&c, where, "text after the JSON object (a stack file holds one)");
     }
     fp_stack *s = fp_stack_create();
     int rc = s ? 0 : fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", c.name);

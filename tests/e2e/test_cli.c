@@ -794,6 +794,14 @@ static void test_calibrate(void **state)
     snprintf(args, sizeof args, "run --mesh %s --input %s --calibration cal-hold.json --out h.obj --force", ict, rec);
     assert_int_equal(fp(args), 0);
     assert_non_null(strstr(out, "scale: 10 mm per mesh unit (from the calibration)"));
+    /* info describes the file calibrate wrote (it was read as a rig: "comment: unknown
+     * field", 65); a damaged one is named with its field, as run names it */
+    assert_int_equal(fp("info cal-hold.json"), 0);
+    assert_non_null(strstr(out, "hand calibration"));
+    assert_non_null(strstr(out, "10 mm per mesh unit"));
+    assert_int_equal(sh("sed 's/\"mm_per_unit\": 10/\"mm_per_unit\": -1/' cal-hold.json > cal-bad.json"), 0);
+    assert_int_equal(fp("info cal-bad.json"), 65);
+    assert_non_null(strstr(out, "cal-bad.json: field mm_per_unit: must be a finite number > 0"));
     snprintf(args, sizeof args, "run --mesh %s --input %s --out h.obj --force", ict, rec);
     assert_int_equal(fp(args), 0);
     assert_non_null(strstr(out, "scale: 10 mm per mesh unit"));

@@ -330,6 +330,8 @@ static void plain_json_and_hostile_files(void **state)
         {"bad type", "frames[0].hands[0].type: expected \"left\" or \"right\""},
         {"packed", "frames[0]: a packed frame, but metadata.formatVersion is not 2"},
         {"not json", "not valid JSON near line 2"},
+        /* two recordings pasted into one file: the second was ignored in silence */
+        {"after", "text after the JSON object, at line 2"},
         {"fraction", "frames[0].timestamp: expected an integer"},
         {"not base64", "not a Leap playback recording (JSON, or LZ-string base64 as *.json.lz): "
                        "not base64 at byte 10"},
@@ -358,6 +360,7 @@ static void plain_json_and_hostile_files(void **state)
         }
         if (!strcmp(w, "packed")) snprintf(text, sizeof text, "{\"frames\":[[1,2,3]]}");
         if (!strcmp(w, "not json")) snprintf(text, sizeof text, "{\"frames\":\n[}");
+        if (!strcmp(w, "after")) snprintf(text, sizeof text, "{\"frames\":[%s]}\n {\"frames\":[]}\n", f0);
         if (!strcmp(w, "fraction")) snprintf(text, sizeof text, "{\"frames\":[{\"timestamp\":1.5}]}");
         if (!strcmp(w, "not base64")) snprintf(text, sizeof text, "BIUwNmD2A0?EDukBOYAmBCIA");
         refused(path, text, w, cases[c].want);

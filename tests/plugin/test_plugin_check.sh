@@ -44,6 +44,21 @@ expect 0 'input-fifo.so: cannot load: not a regular file' timeout 30 "$fp" plugi
 # ... and one of the same name in a later folder: the FIFO shadows it, looked at without opening
 mkdir "$tmp/fifodir2" && cp "$builtin/input-replay.so" "$tmp/fifodir2/input-fifo.so"
 expect 0 'input-fifo.so: cannot load: not a regular file' timeout 30 "$fp" plugins --plugin-dir "$tmp/fifodir" --plugin-dir "$tmp/fifodir2"
+# ... and a mapping named by one, which run loads in a helper process (not one of ours): the
+# host opened the file to keep it for restarts and waited there for a writer (124, no output)
+mkfifo "$tmp/fifodir/map-fifo.so"
+expect 78 "mapping 'fifo': .*map-fifo.so: cannot load: not a regular file" timeout 30 "$fp" run -q \
+    --plugin-dir "$tmp/fifodir" --mapping fifo --mesh "$data/faces/mediapipe-canonical/canonical_face_model.obj" \
+    --input "replay:$rec,fast=1" --duration 0.2 --out "$tmp/fifo.obj"
+[ -e "$tmp/fifo.obj" ] && fail "run --mapping fifo wrote $tmp/fifo.obj"
+# a plugin file cut short (a copy interrupted): its headers whole, its segments past the
+# end. dlopen mapped them and the first touch past the end was SIGBUS, taking the listing
+# (and a run with it as an input, loaded in process) down with "not inside a plugin"
+mkdir "$tmp/cut" && head -c 3000 "$builtin/input-replay.so" >"$tmp/cut/input-cut.so"
+expect 0 'input-cut.so: cannot load: cut short: .* ends at byte [0-9]+ of a file of 3000 bytes' \
+    timeout 30 "$fp" plugins --plugin-dir "$tmp/cut"
+expect 78 "input-cut.so: cannot load: cut short" timeout 30 "$fp" run -q --plugin-dir "$tmp/cut" \
+    --input cut:x --mesh "$data/faces/mediapipe-canonical/canonical_face_model.obj" --out "$tmp/cut.obj"
 # a recording given with --arg that is not there: a failure, not a device to skip
 expect 1 'FAIL  create .*No such file' "$fp" plugins check "$builtin/input-replay.so" --arg /nonexistent/rec.csv
 expect 0 'PASS  cycle +5 x create' "$fp" plugins check "$builtin/input-pedal.so"

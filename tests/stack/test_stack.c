@@ -119,6 +119,18 @@ static void test_refusals(void **state)
     }
     expect_bad("{\"format\":\"facepuppet-stack\",\"version\":1,\"layers\":[{\"take\":\"a\",\"mode\":\"add\"}]}",
                "base layer");
+    /* text after the object: one stack per file, as rigs, calibration files and a take's
+     * header refuse it (two stacks pasted into one file played the first, in silence) */
+    const char *one = "{\"format\":\"facepuppet-stack\",\"version\":1,\"layers\":[{\"take\":\"a\"}]}";
+    snprintf(j, sizeof j, "%s\n%s\n", one, one);
+    expect_bad(j, "x.fpstack: byte 66: text after the JSON object");
+    snprintf(j, sizeof j, "%s garbage", one);
+    expect_bad(j, "byte 66: text after the JSON object");
+    snprintf(j, sizeof j, "%s \r\n\t\n", one); /* white space after it is no text */
+    char err[1024] = "";
+    fp_stack *s = NULL;
+    assert_int_equal(fp_stack_parse(j, strlen(j), "x.fpstack", &s, err, sizeof err), 0);
+    fp_stack_free(&s);
 }
 
 static void test_layer_specs(void **state)

@@ -16,6 +16,7 @@
 #include "fp_test_support.h"
 #include "gltf_anim.h"
 
+#include <errno.h>
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -214,6 +215,73 @@ static void test_version(void **state)
     free(b);
 }
 
+/* A copy of the recorded take whose header has `key`'s value (a JSON value's text, up to the
+ * next ',' or '}') replaced by `value`, its chunk's crc32 made again: a take edited by hand
+ * or by another tool, every check of the reader passed. Into path (n bytes). */
+static void take_with_header_value(const char *key, const char *value, char *path, size_t n)
+{
+    FILE *f = fopen(rec.path, "rb");
+    assert_non_null(f);
+    static unsigned char b[1 << 20];
+    size_t len = fread(b, 1, sizeof b, f);
+    fclose(f);
+    uint32_t hl;
+    memcpy(&hl, b + 16 + 8, 4); /* the HEAD chunk's payload length (little-endian here) */
+    char *json = calloc(1, hl + strlen(value) + 1), *out = calloc(1, hl + strlen(value) + 1);
+    memcpy(json, b + 32, hl);
+    char want[64];
+    snprintf(want, sizeof want, "\"%s\":", key);
+    char *at = strstr(json, want);
+    assert_non_null(at);
+    at += strlen(want);
+    size_t end = strcspn(at, ",}");
+    snprintf(out, hl + strlen(value) + 1, "%.*s%s%s", (int)(at - json), json, value, at + end);
+    const uint32_t nl = (uint32_t)strlen(out);
+    snprintf(path, n, "%s/edited.fptake", tmp);
+    f = fopen(path, "wb");
+    assert_non_null(f);
+    unsigned char head[16];
+    memcpy(head, b + 16, 16);
+    memcpy(head + 8, &nl, 4);
+    uLong crc = crc32(crc32(0L, Z_NULL, 0), head, 16);
+    crc = crc32(crc, (const Bytef *)out, nl);
+    const uint32_t c32 = (uint32_t)crc;
+    fwrite(b, 1, 16, f);
+    fwrite(head, 1, 16, f);
+    fwrite(out, 1, nl, f);
+    fwrite(&c32, 1, 4, f);
+    fwrite(b + 32 + hl + 4, 1, len - (32 + hl + 4), f);
+    fclose(f);
+    free(json);
+    free(out);
+}
+
+/* play of a take whose recorded session cannot be made again names the take: its rig gone
+ * ("x.json: No such file or directory" alone, before, named neither the take nor that it was
+ * the take's rig), or a radius the session refuses (said as a "--radius" that play has not,
+ * and exit 64 for the take's damage, before: now -ERANGE, 65). */
+static void test_play_names_the_take(void **state)
+{
+    (void)state;
+    char path[4200], err[4096];
+    fp_take_player *p = NULL;
+    take_with_header_value("rig", "\"/nonexistent/rigs/face.json\"", path, sizeof path);
+    int rc = fp_take_player_open(path, NULL, plugins(), &p, err, sizeof err);
+    printf("rig gone: %d, %s\n", rc, err);
+    assert_int_equal(rc, -ENOENT);
+    assert_null(p);
+    assert_non_null(strstr(err, path));
+    assert_non_null(strstr(err, "the take's rig /nonexistent/rigs/face.json"));
+    take_with_header_value("radius", "1e30", path, sizeof path);
+    rc = fp_take_player_open(path, NULL, plugins(), &p, err, sizeof err);
+    printf("radius 1e30: %d, %s\n", rc, err);
+    assert_int_equal(rc, -ERANGE); /* a file's value: 65, as the calibration's scale */
+    assert_null(p);
+    assert_non_null(strstr(err, path));
+    assert_non_null(strstr(err, "the take's radius 1e+30"));
+    assert_null(strstr(err, "--radius"));
+}
+
 /* play: every frame bit for bit, the chin included; the channel as recorded. */
 static void test_play_reproduces_jaw(void **state)
 {
@@ -345,6 +413,7 @@ int main(void)
         cmocka_unit_test(test_frames_hold_channels),
         cmocka_unit_test(test_version),
         cmocka_unit_test(test_play_reproduces_jaw),
+        cmocka_unit_test(test_play_names_the_take),
         cmocka_unit_test(test_export_carries_jaw),
     };
     return cmocka_run_group_tests(tests, setup, teardown);

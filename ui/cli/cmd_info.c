@@ -1,4 +1,4 @@
-/* facepuppet info: what a mesh, recording, rig, take, stack, glove calibration, sound file or
+/* facepuppet info: what a mesh, recording, rig, hand or glove calibration, take, stack, sound file or
  * point cache holds. */
 #define _GNU_SOURCE
 #include "app_util.h"
@@ -8,6 +8,7 @@
 #include "app_audio.h"
 #include "app_export.h"
 #include "app_stack.h"
+#include "fp_calib_file.h"
 #include "glove_cal.h" /* (plugins/input-cyberglove: the glove input's own reader) */
 
 #include <getopt.h>
@@ -37,18 +38,50 @@ static bool is_take(const char *path, const unsigned char *h, size_t n)
     return n >= 8 && !memcmp(h, "\x89" "FPTAKE\n", 8);
 }
 
-/* a .json that is a Leap playback recording, not a rig: no "facepuppet-rig" and a "frames"
- * key in its first 64 KiB (a rig names its format first; a recording holds its frames) */
-static bool is_json_recording(const char *path)
+/* What a .json holds, from its first 64 KiB: a rig names its format ("facepuppet-rig"); else
+ * a Leap playback recording holds its frames ("frames"); else a hand calibration (calibrate
+ * --out) its unit ("mm_per_unit" or "scale"); anything else is read as a rig, whose reader
+ * names what is wrong. */
+enum json_kind { JSON_RIG, JSON_RECORDING, JSON_CALIBRATION };
+
+static enum json_kind json_kind(const char *path)
 {
     static char head[65537];
     int code;
     FILE *f = fp_file_fopen_regular(path, &code);
-    if (!f) return false;
+    if (!f) return JSON_RIG;
     size_t n = fread(head, 1, sizeof head - 1, f);
     fclose(f);
     head[n] = '\0';
-    return !strstr(head, "\"facepuppet-rig\"") && strstr(head, "\"frames\"");
+    if (strstr(head, "\"facepuppet-rig\"")) return JSON_RIG;
+    if (strstr(head, "\"frames\"")) return JSON_RECORDING;
+    return strstr(head, "\"mm_per_unit\"") || strstr(head, "\"scale\"") ? JSON_CALIBRATION : JSON_RIG;
+}
+
+/* A hand calibration file, read as run --calibration reads it (fp_calib_file.h). */
+static int calibration_info(const char *path)
+{
+    fp_calibration c;
+    char err[1024];
+    int rc = fp_calibration_load(path, &c, err, sizeof err);
+    if (rc) {
+        fprintf(stderr, "facepuppet info: %s\n", err);
+        return fp_app_exit_code(rc, FP_APP_INPUT);
+    }
+    const double w = fmin(1, fabs(c.rotation[0])), s = sqrt(fmax(0, 1 - w * w));
+    const double sign = c.rotation[0] < 0 ? -1 : 1;
+    printf("%s\n  format    hand calibration (calibrate --out; docs/calibration.md)\n"
+           "  unit      %g mm per mesh unit\n  rotation  %.3g degrees", path, 1 / c.scale,
+           2 * acos(w) * 180 / 3.14159265358979323846);
+    if (s > 1e-12)
+        printf(" about (%.4g, %.4g, %.4g)", sign * c.rotation[1] / s, sign * c.rotation[2] / s,
+               sign * c.rotation[3] / s);
+    printf(" (tracker to mesh)\n  offset    %g %g %g mesh units\n", c.offset[0], c.offset[1], c.offset[2]);
+    for (int h = 0; h < FP_HANDS; h++)
+        printf("  %-9s offset %g %g %g mesh units\n", h == FP_HAND_LEFT ? "left" : "right",
+               c.hand_offset[h][0], c.hand_offset[h][1], c.hand_offset[h][2]);
+    printf("  use       --calibration %s\n", path);
+    return FP_EXIT_OK;
 }
 
 static bool is_mesh(const char *path)
@@ -219,6 +252,7 @@ static int info_main(int argc, char **argv)
                    "A rig (RIG.json): regions, landmarks, hinge, channels; checked against its mesh.\n"
                    "A take (.fptake): its header, frames, timecode, and where it was cut if it was.\n"
                    "A stack (.fpstack): its layers (take, region, mode, range, gain, mute, solo).\n"
+                   "A hand calibration (calibrate --out, JSON): unit, rotation, offsets.\n"
                    "A CyberGlove calibration (.cal): its format and each sensor's angle range.\n"
                    "A sound file (WAV, FLAC, Ogg, AIFF): rate, channels, duration, peak, its LTC.\n"
                    "A point cache (.pc2, .mdd, as export writes them): points, frames, times.\n");
@@ -237,7 +271,11 @@ static int info_main(int argc, char **argv)
     if (dot && !strcasecmp(dot, ".cal")) return cal_info(argv[1]);
     if (fp_app_is_point_cache(argv[1], head, nh)) return fp_app_cache_info(argv[1]);
     if (fp_app_is_sound(head, nh)) return fp_app_sound_info(argv[1]);
-    if (dot && !strcasecmp(dot, ".json") && !is_json_recording(argv[1])) return fp_app_rig_info(argv[1]);
+    if (dot && !strcasecmp(dot, ".json")) {
+        const enum json_kind k = json_kind(argv[1]);
+        if (k == JSON_CALIBRATION) return calibration_info(argv[1]);
+        if (k == JSON_RIG) return fp_app_rig_info(argv[1]);
+    }
     if (fp_stack_is_stack_path(argv[1])) return fp_app_stack_info(argv[1]);
     if (is_take(argv[1], head, nh)) return fp_app_take_info(argv[1]);
     return is_mesh(argv[1]) ? mesh_info(argv[1]) : recording_info(argv[1]);

@@ -37,6 +37,7 @@ static int open_review(const char *mesh_path, const fp_plugin_path *plugin_path,
     }
     const fp_take_header *hd = fp_take_reader_header(*reader);
     fp_session_options ro = {.mesh_path = mesh_path, .mapping = "anchored", .radius = hd->radius,
+                             .radius_name = "the take's radius", /* (not --radius: the file's) */
                              .plugin_path = plugin_path, .rig_path = hd->rig_path ? hd->rig_path : "none"};
     if ((rc = fp_session_create(&ro, rs, err, sizeof err))) {
         snprintf(msg, n, "review: %.900s", err);
