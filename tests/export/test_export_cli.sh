@@ -288,6 +288,42 @@ for k in 2 3 5; do
         { cat "$tmp/x.out"; fail "--max-targets $k: fp-export-check"; }
 done
 echo "--max-targets: at most K targets in the file, the offset counted"
+# An obj-seq written with --force over a longer one of the same take: the folder holds the new
+# frames alone (3 exported over 6 left frames 3-5 of the old export after them, which a
+# sequence importer played on); files of other names are left
+stem=$(basename "$small" .fptake)
+expect 0 "$fp" export "${pd[@]}" "$small" --format obj-seq --range 0-5 --out "$tmp/reseq" -q
+touch "$tmp/reseq/notes.txt" "$tmp/reseq/other_000009.obj"
+expect 0 "$fp" export "${pd[@]}" "$small" --format obj-seq --range 10-12 --out "$tmp/reseq" --force
+grep -q "removed 3 frames of an earlier export from $tmp/reseq (${stem}_000003.obj ...)" "$tmp/x.out" ||
+    { cat "$tmp/x.out"; fail "obj-seq --force over a longer sequence: the removal not said"; }
+[ "$(ls "$tmp/reseq" | tr '\n' ' ')" = "${stem}_000000.obj ${stem}_000001.obj ${stem}_000002.obj notes.txt other_000009.obj " ] ||
+    fail "obj-seq --force over a longer sequence left: $(ls "$tmp/reseq" | tr '\n' ' ')"
+"$fp" play "${pd[@]}" "$small" --frames-out "$tmp/replay" -q >/dev/null 2>&1 || fail "play --frames-out exited $?"
+for i in 0 1 2; do
+    cmp -s "$tmp/reseq/${stem}_00000$i.obj" "$tmp/replay/$(ls "$tmp/replay" | sed -n "$((11 + i))p")" ||
+        fail "obj-seq --force: frame $i is not the take's frame $((10 + i))"
+done
+echo "obj-seq --force over a longer sequence: the folder holds the 3 new frames alone"
+# A take with no end chunk (still recording, or its recorder killed): exported whole as far as
+# it goes, with a warning (it said nothing: a take exported mid-recording was silently short)
+off=$(grep -obUa "FPCKTAIL" "$small" | tail -1 | cut -d: -f1)
+[ -n "$off" ] || fail "no TAIL chunk in $small"
+head -c "$off" "$small" >"$tmp/open.fptake"
+expect 0 "$fp" export "${pd[@]}" "$tmp/open.fptake" --format pc2 --out "$tmp/open.pc2"
+grep -q "^facepuppet export: warning: $tmp/open.fptake: no end chunk: it may still be recording" "$tmp/x.out" ||
+    { cat "$tmp/x.out"; fail "a take with no end chunk exported without a warning"; }
+expect 0 "$fp" export "${pd[@]}" "$small" --format pc2 --out "$tmp/closed.pc2"
+! grep -q "no end chunk" "$tmp/x.out" || { cat "$tmp/x.out"; fail "a closed take warned of no end chunk"; }
+cmp -s "$tmp/open.pc2" "$tmp/closed.pc2" || fail "the take without its end chunk exported other frames"
+echo "a take with no end chunk: exported with a warning, the same frames"
+# A point cache named as another format (an MDD in x.pc2, read as a PC2 by what goes by the
+# name) is refused before any work
+expect 64 "$fp" export "${pd[@]}" "$small" --format mdd --out "$tmp/named.pc2"
+grep -q "the name says pc2, not mdd" "$tmp/x.out" || { cat "$tmp/x.out"; fail "--format mdd --out x.pc2"; }
+expect 64 "$fp" export "${pd[@]}" "$small" --format pc2 --out "$tmp/named.glb"
+[ ! -e "$tmp/named.pc2" ] && [ ! -e "$tmp/named.glb" ] || fail "a point cache named as another format was written"
+expect 0 "$fp" export "${pd[@]}" "$small" --format mdd --out "$tmp/named.cache" -q
 # An export larger than the room free where it goes: refused before any frame (73), naming the
 # size (a --fps of 10000 for 100 wrote 10.6 GB of a 3.3 s take, unasked). A 1 MiB tmpfs in a
 # user namespace (unshare -r -m); skipped where the system allows none.

@@ -10,6 +10,7 @@
 #include "fp_session_take.h"
 
 #include <errno.h>
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -527,6 +528,53 @@ int fp_app_check_output_dir(const char *cmd, const char *option, const char *dir
     return 0;
 }
 
+/* name = prefix + digits (six or more) + suffix (NULL: "." and an extension without a dot):
+ * true with the number in *num */
+static bool frame_named(const char *name, const char *prefix, const char *suffix,
+                        unsigned long long *num)
+{
+    const size_t pl = strlen(prefix);
+    if (strncmp(name, prefix, pl)) return false;
+    const char *d = name + pl, *e = d;
+    unsigned long long v = 0;
+    for (; *e >= '0' && *e <= '9'; e++) {
+        if (v > (ULLONG_MAX - 9) / 10) return false;
+        v = 10 * v + (unsigned long long)(*e - '0');
+    }
+    if (e - d < 6) return false;
+    if (suffix ? strcmp(e, suffix) != 0 : (e[0] != '.' || !e[1] || strchr(e + 1, '.'))) return false;
+    *num = v;
+    return true;
+}
+
+long fp_app_remove_stale_frames(const char *dir, const char *prefix, const char *suffix,
+                                unsigned long long from, char *first, size_t len)
+{
+    first[0] = '\0';
+    DIR *d = opendir(dir);
+    if (!d) {
+        snprintf(first, len, "%s", dir);
+        return -errno;
+    }
+    long n = 0;
+    for (struct dirent *e; (e = readdir(d));) {
+        unsigned long long num;
+        if (e->d_name[0] == '.' || !frame_named(e->d_name, prefix, suffix, &num) || num < from)
+            continue;
+        char path[4600];
+        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
+        if (unlink(path)) {
+            const int code = -errno;
+            snprintf(first, len, "%s", e->d_name);
+            closedir(d);
+            return code;
+        }
+        if (!n++ || strcmp(e->d_name, first) < 0) snprintf(first, len, "%s", e->d_name);
+    }
+    closedir(d);
+    return n;
+}
+
 void fp_app_size_text(double bytes, char *buf, size_t len)
 {
     if (bytes >= 1e9) snprintf(buf, len, "%.1f GB", bytes / 1e9);
@@ -666,6 +714,10 @@ int fp_app_take_intact(const char *cmd, const char *verb, const char *path,
     if (cut[0])
         fprintf(stderr, "%s: warning: %s; %sing the %zu intact frames\n", cmd, cut, verb,
                 fp_take_reader_frames(r));
+    else if (!fp_take_reader_summary(r)->complete) /* (exported mid-take: said nothing) */
+        fprintf(stderr, "%s: warning: %s: no end chunk: it may still be recording, or its "
+                "recording stopped without closing it (killed, a full disk); %sing the %zu "
+                "frames it holds now\n", cmd, path, verb, fp_take_reader_frames(r));
     return FP_EXIT_OK;
 }
 

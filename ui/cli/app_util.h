@@ -85,7 +85,9 @@ void fp_app_log_line_quiet(void *user, int level, const char *source, const char
 
 /** Before play or export (verb) of the take at path: with no intact frame, "CMD: PATH: no
  *  intact frame to VERB (the cut)" and 65, before any output; a damaged tail is warned about
- *  ("CMD: warning: CUT; VERBing the N intact frames") and 0 returned. */
+ *  ("CMD: warning: CUT; VERBing the N intact frames") and 0 returned; so is a take with no
+ *  end chunk, still being recorded or left open by a recorder that died ("CMD: warning:
+ *  PATH: no end chunk: ...; VERBing the N frames it holds now"). */
 struct fp_take_reader;
 int fp_app_take_intact(const char *cmd, const char *verb, const char *path,
                        const struct fp_take_reader *r);
@@ -136,6 +138,16 @@ bool fp_app_free_name(const char *path, char *buf, size_t len);
  *  missing folder with make false passes. Returns 0, or 73 with the line printed. */
 int fp_app_check_output_dir(const char *cmd, const char *option, const char *dir, const char *prefix,
                             const char *suffix, bool make, bool force, bool *made);
+
+/** After an obj-seq or png-seq export written whole over an earlier one (--force): the files
+ *  of dir named prefix, a frame number (six digits or more), then suffix (".png"), or with
+ *  suffix NULL a dot and one extension with no further dot (".obj"), numbered `from` or more,
+ *  are removed, so that the folder holds the new sequence alone (10 frames exported over 113
+ *  left frames 10-112 of the old take after the new ones). Hidden files and other names are
+ *  left. Returns how many were removed (the first by name into first, len bytes), or -errno
+ *  of the first that could not be (its name in first). [main-thread]. */
+long fp_app_remove_stale_frames(const char *dir, const char *prefix, const char *suffix,
+                                unsigned long long from, char *first, size_t len);
 
 /** --take-dir DIR of run and live, before any work, making nothing: DIR a folder we can write
  *  in, or, where it is missing, the nearest folder above it that is there (the take writer

@@ -159,7 +159,9 @@ static void usage(FILE *f)
         "      --camera Y,P[,Z]  png-seq: turn the framed view by yaw Y and pitch P degrees,\n"
         "                        zoom Z (default 0,0,1: the face from the front)\n"
         "      --force           overwrite an output that exists (the file; obj-seq and\n"
-        "                        png-seq: the frames in the folder); without it the export is\n"
+        "                        png-seq: the frames in the folder, and once the new ones are\n"
+        "                        written an earlier export's frames numbered past them are\n"
+        "                        removed); without it the export is\n"
         "                        refused before any work (73); an output that is the take,\n"
         "                        a stack's take, the mesh or the soundtrack is refused even so\n"
         "  -m, --mesh FILE       the take's mesh from another path (its crc32 must match)\n"
@@ -546,6 +548,22 @@ static void default_out(const export_args *a, char *buf, size_t len)
         snprintf(buf, len, "%.*s.%s", stem, take_path, fp_export_format_extension(a->fmt));
 }
 
+/* A point cache's name may end in anything but another export format's extension (an MDD
+ * written to x.pc2 was read as a PC2 by what goes by the name: `info`, a file browser's
+ * filter). After check_out: an output that is an input is refused as that first. Returns 0
+ * or FP_EXIT_USAGE (said). */
+static int check_cache_name(const char *out, fp_export_format fmt)
+{
+    fp_export_format named;
+    if ((fmt != FP_EXPORT_PC2 && fmt != FP_EXPORT_MDD) || fp_export_format_from_path(out, &named) ||
+        named == fmt)
+        return 0;
+    fprintf(stderr, "facepuppet export: --out %s: the name says %s, not %s: give a name ending .%s "
+            "for --format %s\n", out, fp_export_format_name(named), fp_export_format_name(fmt),
+            fp_export_format_extension(fmt), fp_export_format_name(fmt));
+    return FP_EXIT_USAGE;
+}
+
 /* glTF and GLB: the mesh writer goes by the name, so --out must end in the format's
  * extension. Returns 0 or FP_EXIT_USAGE (said). */
 static int check_gltf_name(const char *out, fp_export_format fmt)
@@ -685,6 +703,27 @@ static int walk_take(export_walk *w)
     return stop_signal ? stopped(false) : FP_EXIT_OK;
 }
 
+/* A sequence written whole over an earlier one (--force): that one's frames numbered past
+ * the new ones are removed (10 frames exported over 113 left 103 of the old take after them,
+ * which a sequence importer played on). Returns 0 or 73 (said). */
+static int remove_stale(const export_args *a, const char *out, const char *name, uint64_t written)
+{
+    char prefix[128], first[512];
+    snprintf(prefix, sizeof prefix, "%s_", name);
+    const long n = fp_app_remove_stale_frames(out, prefix, a->png ? ".png" : NULL, written, first,
+                                              sizeof first);
+    if (n < 0) {
+        fprintf(stderr, "facepuppet export: %s/%s: an earlier export's frame past the %llu written "
+                "could not be removed: %s\n", out, first, (unsigned long long)written,
+                strerror((int)-n));
+        return FP_EXIT_CANTCREAT;
+    }
+    if (n > 0 && !a->quiet)
+        printf("facepuppet export: removed %ld frame%s of an earlier export from %s (%s%s), "
+               "numbered past these\n", n, n == 1 ? "" : "s", out, first, n > 1 ? " ..." : "");
+    return 0;
+}
+
 /* Export the opened take p as *a asks. Returns the exit status. */
 static int export_take(const export_args *a, fp_take_player *p, sink *k, float **held)
 {
@@ -715,7 +754,8 @@ static int export_take(const export_args *a, fp_take_player *p, sink *k, float *
     /* the output's rate: --fps, else the take's (named in the file and the summary) */
     const double rate = a->fps > 0 ? a->fps
                         : h->rate.den ? (double)h->rate.num / (double)h->rate.den : 0;
-    if ((status = check_out(a, p, out, name))) return status;
+    if ((status = check_out(a, p, out, name)) || (status = check_cache_name(out, a->fmt)))
+        return status;
     double count;
     if ((status = frames_out(a, &w.in, &w.out, h, r, w.tc_in, &count)) ||
         (status = check_size(a, out, count, fp_session_mesh(s))))
@@ -739,6 +779,7 @@ static int export_take(const export_args *a, fp_take_player *p, sink *k, float *
                 w.total);
         return FP_EXIT_USAGE;
     }
+    const uint64_t written = sink_frames(k);
     if (a->png) {
         if (!a->quiet)
             printf("facepuppet export: wrote %llu PNG frames (%dx%d) to %s: %.2f MB\n",
@@ -747,6 +788,9 @@ static int export_take(const export_args *a, fp_take_player *p, sink *k, float *
                                              a->quiet, stdout))) {
         return status;
     }
+    if ((a->png || a->fmt == FP_EXPORT_OBJ_SEQ) && a->force &&
+        (status = remove_stale(a, out, name, written)))
+        return status;
     fp_app_stack_limited_note("export", a->take_path, fp_take_player_stack(p), a->quiet);
     return fp_app_audio_export_write(h, wav, w.first_ns, k->last_t + (rate > 0 ? 1.0 / rate : 0), a->force,
                                      a->quiet, stdout, "export");
