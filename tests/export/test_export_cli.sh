@@ -305,6 +305,25 @@ for i in 0 1 2; do
         fail "obj-seq --force: frame $i is not the take's frame $((10 + i))"
 done
 echo "obj-seq --force over a longer sequence: the folder holds the 3 new frames alone"
+# --frames-out DIR --force (run, play: the frames an export is checked against) over an earlier
+# run's: the folder holds the new frames alone (a run at 24 fps over one at 60 left
+# frame_000001_t0.017s.obj beside frame_000001_t0.042s.obj, 85 files for 25 frames)
+expect 0 "$fp" run "${pd[@]}" --mesh "$mp" --input "replay:$data/hands/leap-motion/grab_joints_mm.csv,fast=1" \
+    --duration 1 -o "$tmp/fo.obj" --frames-out "$tmp/fo" -q
+touch "$tmp/fo/notes.txt"
+expect 0 "$fp" run "${pd[@]}" --mesh "$mp" --input "replay:$data/hands/leap-motion/grab_joints_mm.csv,fast=1" \
+    --duration 1 --fps 24 -o "$tmp/fo.obj" --frames-out "$tmp/fo" --force
+grep -q "^facepuppet run: --frames-out $tmp/fo: removed 61 frames of an earlier run" "$tmp/x.out" ||
+    { cat "$tmp/x.out"; fail "run --frames-out --force: the removal of the earlier run's frames not said"; }
+[ "$(ls "$tmp/fo" | grep -c '^frame_')" -eq 25 ] && [ -e "$tmp/fo/notes.txt" ] &&
+    [ "$(ls "$tmp/fo" | grep '^frame_' | sed -n 2p)" = frame_000001_t0.042s.obj ] ||
+    fail "run --frames-out --force at 24 fps over 60 left: $(ls "$tmp/fo" | head -4 | tr '\n' ' ')... ($(ls "$tmp/fo" | wc -l) files)"
+dfn=$("$fp" info "$dftake" | sed -n 's/^  frames *\([0-9]*\) .*/\1/p')
+expect 0 "$fp" play "${pd[@]}" "$small" --frames-out "$tmp/fo" --force -q
+expect 0 "$fp" play "${pd[@]}" "$dftake" --frames-out "$tmp/fo" --force -q
+[ "$(ls "$tmp/fo" | grep -c '^frame_')" -eq "$dfn" ] ||
+    fail "play --frames-out --force of a $dfn-frame take over a longer one left $(ls "$tmp/fo" | grep -c '^frame_') frames"
+echo "--frames-out --force (run, play): the folder holds the new run's frames alone"
 # A take with no end chunk (still recording, or its recorder killed): exported whole as far as
 # it goes, with a warning (it said nothing: a take exported mid-recording was silently short)
 off=$(grep -obUa "FPCKTAIL" "$small" | tail -1 | cut -d: -f1)

@@ -528,8 +528,8 @@ int fp_app_check_output_dir(const char *cmd, const char *option, const char *dir
     return 0;
 }
 
-/* name = prefix + digits (six or more) + suffix (NULL: "." and an extension without a dot):
- * true with the number in *num */
+/* name = prefix + digits (six or more) + suffix (NULL: "." and an extension without a dot;
+ * "_t*REST": "_t", a time of digits, '.' and '-', then REST): true with the number in *num */
 static bool frame_named(const char *name, const char *prefix, const char *suffix,
                         unsigned long long *num)
 {
@@ -542,7 +542,14 @@ static bool frame_named(const char *name, const char *prefix, const char *suffix
         v = 10 * v + (unsigned long long)(*e - '0');
     }
     if (e - d < 6) return false;
-    if (suffix ? strcmp(e, suffix) != 0 : (e[0] != '.' || !e[1] || strchr(e + 1, '.'))) return false;
+    if (suffix && !strncmp(suffix, "_t*", 3)) { /* --frames-out's frame_NNNNNN_tS.SSSs.obj */
+        if (strncmp(e, "_t", 2)) return false;
+        const char *t = e + 2;
+        while ((*t >= '0' && *t <= '9') || *t == '.' || *t == '-') t++;
+        if (t == e + 2 || strcmp(t, suffix + 3)) return false;
+    } else if (suffix ? strcmp(e, suffix) != 0 : (e[0] != '.' || !e[1] || strchr(e + 1, '.'))) {
+        return false;
+    }
     *num = v;
     return true;
 }
@@ -573,6 +580,21 @@ long fp_app_remove_stale_frames(const char *dir, const char *prefix, const char 
     }
     closedir(d);
     return n;
+}
+
+int fp_app_frames_out_clear(const char *cmd, const char *dir, bool quiet)
+{
+    char first[512];
+    const long n = fp_app_remove_stale_frames(dir, "frame_", "_t*s.obj", 0, first, sizeof first);
+    if (n < 0) {
+        fprintf(stderr, "%s: --frames-out %s: %s: an earlier run's frame could not be removed: %s\n",
+                cmd, dir, first, strerror((int)-n));
+        return FP_EXIT_CANTCREAT;
+    }
+    if (n > 0 && !quiet)
+        fprintf(stderr, "%s: --frames-out %s: removed %ld frame%s of an earlier run (%s%s) (--force)\n",
+                cmd, dir, n, n == 1 ? "" : "s", first, n > 1 ? " ..." : "");
+    return 0;
 }
 
 void fp_app_size_text(double bytes, char *buf, size_t len)

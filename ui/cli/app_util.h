@@ -141,13 +141,21 @@ int fp_app_check_output_dir(const char *cmd, const char *option, const char *dir
 
 /** After an obj-seq or png-seq export written whole over an earlier one (--force): the files
  *  of dir named prefix, a frame number (six digits or more), then suffix (".png"), or with
- *  suffix NULL a dot and one extension with no further dot (".obj"), numbered `from` or more,
+ *  suffix NULL a dot and one extension with no further dot (".obj"), or with suffix "_t*REST"
+ *  "_t", a time (digits, '.', '-') and REST (--frames-out's "_t*s.obj"), numbered `from` or more,
  *  are removed, so that the folder holds the new sequence alone (10 frames exported over 113
  *  left frames 10-112 of the old take after the new ones). Hidden files and other names are
  *  left. Returns how many were removed (the first by name into first, len bytes), or -errno
  *  of the first that could not be (its name in first). [main-thread]. */
 long fp_app_remove_stale_frames(const char *dir, const char *prefix, const char *suffix,
                                 unsigned long long from, char *first, size_t len);
+
+/** --frames-out DIR with --force, once the command's checks have passed and before its first
+ *  frame: the frames of an earlier run there (frame_NNNNNN_tS.SSSs.obj) are removed, said on
+ *  stderr unless quiet, so that the folder holds this run's frames alone (a run at 24 fps over
+ *  one at 60 left frame_000001_t0.017s.obj beside frame_000001_t0.042s.obj, 85 files for 25
+ *  frames). Returns 0, or 73 with the line printed. [main-thread]. */
+int fp_app_frames_out_clear(const char *cmd, const char *dir, bool quiet);
 
 /** --take-dir DIR of run and live, before any work, making nothing: DIR a folder we can write
  *  in, or, where it is missing, the nearest folder above it that is there (the take writer
