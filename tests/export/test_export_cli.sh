@@ -336,6 +336,29 @@ expect 0 "$fp" export "${pd[@]}" "$small" --format pc2 --out "$tmp/closed.pc2"
 ! grep -q "no end chunk" "$tmp/x.out" || { cat "$tmp/x.out"; fail "a closed take warned of no end chunk"; }
 cmp -s "$tmp/open.pc2" "$tmp/closed.pc2" || fail "the take without its end chunk exported other frames"
 echo "a take with no end chunk: exported with a warning, the same frames"
+# A take recorded across midnight (its timecode in set to 23:59:58:00, the HEAD's crc32 made
+# again): --range by timecodes after midnight is the take's frames a day on (00:00:00:00 is
+# frame 120 at 60 fps), not "OUT is before the take's first frame"
+python3 - "$small" "$tmp/midnight.fptake" <<'PY' || fail "could not write the midnight take"
+import re, struct, sys, zlib
+b = bytearray(open(sys.argv[1], 'rb').read())
+i = b.find(b'FPCKHEAD')
+n = struct.unpack_from('<I', b, i + 8)[0]
+head = re.sub(rb'"timecode_in":"\d\d:\d\d:\d\d:\d\d"', b'"timecode_in":"23:59:58:00"', bytes(b[i + 16:i + 16 + n]))
+assert len(head) == n
+b[i + 16:i + 16 + n] = head
+struct.pack_into('<I', b, i + 16 + n, zlib.crc32(bytes(b[i:i + 16]) + head) & 0xffffffff)
+open(sys.argv[2], 'wb').write(b)
+PY
+"$fp" info "$tmp/midnight.fptake" | grep -q "^  timecode *23:59:58:00 - 00:00:0" || fail "the midnight take's timecodes"
+expect 0 "$fp" export "${pd[@]}" "$tmp/midnight.fptake" --format pc2 --range 00:00:00:00-00:00:01:00 --out "$tmp/mid.pc2" -q
+expect 0 "$fp" export "${pd[@]}" "$tmp/midnight.fptake" --format pc2 --range 120-180 --out "$tmp/mid-idx.pc2" -q
+cmp -s "$tmp/mid.pc2" "$tmp/mid-idx.pc2" || fail "--range 00:00:00:00-00:00:01:00 past midnight is not frames 120-180"
+expect 0 "$fp" export "${pd[@]}" "$tmp/midnight.fptake" --format pc2 --range 23:59:59:00-00:00:00:30 --out "$tmp/mid2.pc2" -q
+[ "$(od -An -tu4 -j28 -N4 "$tmp/mid2.pc2" | tr -d ' ')" -eq 91 ] || fail "--range 23:59:59:00-00:00:00:30 across midnight: not 91 frames"
+expect 64 "$fp" export "${pd[@]}" "$tmp/midnight.fptake" --format pc2 --range 00:00:05:00- --out "$tmp/mid3.pc2"
+grep -q "IN is past the take's last frame" "$tmp/x.out" || { cat "$tmp/x.out"; fail "--range 00:00:05:00- past the midnight take"; }
+echo "a take across midnight: --range by timecodes after midnight, and across it"
 # A point cache named as another format (an MDD in x.pc2, read as a PC2 by what goes by the
 # name) is refused before any work
 expect 64 "$fp" export "${pd[@]}" "$small" --format mdd --out "$tmp/named.pc2"

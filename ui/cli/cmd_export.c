@@ -142,7 +142,8 @@ static void usage(FILE *f)
         "      --range IN-OUT    only these frames: 0-based frame indices of the take or\n"
         "                        timecodes HH:MM:SS:FF (a drop-frame take's HH:MM:SS;FF; either\n"
         "                        side may be left out: 120-, -300); frames before IN are still\n"
-        "                        played (commits carry over). Checked\n"
+        "                        played (commits carry over). A take across midnight: a\n"
+        "                        timecode after it counts on into the next day. Checked\n"
         "                        before any frame is played: IN past the take's last frame, OUT\n"
         "                        before its first or IN after OUT is refused (64, naming the\n"
         "                        take's frames and timecodes); an end past the take is clipped\n"
@@ -392,6 +393,21 @@ static void end_text(const range_end *e, uint64_t v, fp_take_rate rate, bool dro
     }
 }
 
+/* A timecode end before the take's first frame (on its scale, tc_in + frames since the time
+ * origin, which runs on past 24 h) may be one after midnight: a take from 23:59:58:00 to
+ * 00:00:01:22 holds 00:00:00:00 a day on (it was "OUT is before the take's first frame").
+ * The end is taken on the day that puts it nearer the take's frames [first, last]. */
+static void unwrap_day(range_end *e, uint64_t first, uint64_t last, fp_take_rate rate)
+{
+    const fp_timecode end_of_day = {23, 59, 59, fp_timecode_base(rate) - 1, e->drop};
+    uint64_t day;
+    if (!e->set || !e->timecode || e->value >= first || fp_timecode_to_frames(&end_of_day, rate, &day))
+        return;
+    day++;
+    const uint64_t next = e->value + day;
+    if ((next <= last ? 0 : next - last) < first - e->value) e->value = next;
+}
+
 /* --range against the take, before any frame is played (issue 53): IN past the last frame, OUT
  * before the first, or IN after OUT (both of one kind) is refused (64); an end past the take is
  * clipped to it with a warning naming what is exported. Returns 0 or FP_EXIT_USAGE (said). */
@@ -415,6 +431,8 @@ static int check_range(const export_args *a, range_end *in, range_end *out, cons
                 drop ? ";" : ":");
         return FP_EXIT_USAGE;
     }
+    unwrap_day(in, f_in, l_in, h->rate);
+    unwrap_day(out, f_out, l_out, h->rate);
     if (in->set && in->value > l_in) why = "IN is past the take's last frame";
     else if (out->set && out->value < f_out) why = "OUT is before the take's first frame";
     else if (in->set && out->set && in->timecode == out->timecode && in->value > out->value)
