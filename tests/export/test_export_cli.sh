@@ -217,6 +217,12 @@ for g in zup.glb zup-run.glb; do
         { cat "$tmp/zup-check.out"; fail "$g: the Z-up face is not turned to +y up, +z front"; }
 done
 echo "mediapipe Z-up: the glb's root turns the face to +y up and +z front (export and run --export)"
+# -q on play and export prints errors and warnings alone: the session's line on the turned
+# face ("the face looks along ... the hands are placed in front of it") printed under it
+expect 0 "$fp" export "${pd[@]}" "$ztake" --format pc2 --out "$tmp/zup.pc2" -q
+[ ! -s "$tmp/x.out" ] || { cat "$tmp/x.out"; fail "export -q of the Z-up take printed the lines above"; }
+expect 0 "$fp" play "${pd[@]}" "$ztake" -o "$tmp/zup-play.obj" -q
+[ ! -s "$tmp/x.out" ] || { cat "$tmp/x.out"; fail "play -q of the Z-up take printed the lines above"; }
 expect 64 "$fp" export "$take" --format pc2 --out ""
 grep -qx "facepuppet export: --out: give a file or folder name (it is empty)" "$tmp/x.out" ||
     { cat "$tmp/x.out"; fail "--out '': not said as an empty name"; }

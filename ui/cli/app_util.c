@@ -380,6 +380,11 @@ void fp_app_log_line_quiet(void *user, int level, const char *source, const char
     if (!fp_slog_is_note(level, source)) fp_app_log_line(user, level, source, message);
 }
 
+void fp_app_log_line_warnings(void *user, int level, const char *source, const char *message)
+{
+    if (level <= FP_LOG_WARNING) fp_app_log_line_quiet(user, level, source, message);
+}
+
 int fp_app_check_output(const char *cmd, const char *option, const char *path)
 {
     char real[4096];

@@ -79,6 +79,13 @@ void fp_app_log_line(void *user, int level, const char *source, const char *mess
  *  fp_app_log_line (one fprintf a line: lines from two threads never interleave). */
 void fp_app_log_line_quiet(void *user, int level, const char *source, const char *message);
 
+/** fp_app_log_line for play -q and export -q, which play a take (no inputs, mapping or hands
+ *  placed): errors and warnings alone (level FP_LOG_WARNING or below, the engine's and
+ *  contact guard's notes left out as by fp_app_log_line_quiet); an information line such as
+ *  the session's "the face looks along ... the hands are placed in front of it" printed under
+ *  -q, which their help says prints errors and a damaged take's warning only. Any thread. */
+void fp_app_log_line_warnings(void *user, int level, const char *source, const char *message);
+
 /** The longest --duration a command takes, seconds (116 days: its nanoseconds fit an
  *  int64 with room; 9.3e9 s wrapped around and stopped after one frame). */
 #define FP_APP_MAX_DURATION_S 1e7

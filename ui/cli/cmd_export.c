@@ -824,7 +824,7 @@ static int export_main(int argc, char **argv)
     fp_app_plugin_path(&path, a.dirs, a.ndirs);
     fp_take_player *p = NULL;
     int rc = fp_take_player_open_logged(a.take_path, a.mesh, &path,
-                                        a.quiet ? fp_app_log_line_quiet : fp_app_log_line, NULL, &p,
+                                        a.quiet ? fp_app_log_line_warnings : fp_app_log_line, NULL, &p,
                                         err, sizeof err);
     if (rc) {
         fprintf(stderr, "facepuppet export: %s\n", err);

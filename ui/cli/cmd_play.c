@@ -189,7 +189,7 @@ static int play_seek(play_ctl *c, double t, char *msg, size_t n)
     fp_take_player *p = NULL;
     char err[2048];
     int rc = fp_take_player_open_logged(c->take_path, c->mesh, c->path,
-                                        c->quiet ? fp_app_log_line_quiet : fp_app_log_line, NULL, &p,
+                                        c->quiet ? fp_app_log_line_warnings : fp_app_log_line, NULL, &p,
                                         err, sizeof err);
     if (rc) return snprintf(msg, n, "%.900s", err), rc;
     fp_take_player_close(&c->player);
@@ -427,7 +427,7 @@ static int play_main(int argc, char **argv)
     int status = FP_EXIT_OK;
     fp_app_reach reach = {0}; /* how far the skin followed, over the take */
     int rc = fp_take_player_open_logged(take_path, mesh, &path,
-                                        quiet ? fp_app_log_line_quiet : fp_app_log_line, NULL,
+                                        quiet ? fp_app_log_line_warnings : fp_app_log_line, NULL,
                                         &player, err, sizeof err);
     if (rc) {
         fprintf(stderr, "facepuppet play: %s\n", err);
