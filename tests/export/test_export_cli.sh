@@ -296,14 +296,14 @@ done
 echo "--max-targets: at most K targets in the file, the offset counted"
 # An obj-seq written with --force over a longer one of the same take: the folder holds the new
 # frames alone (3 exported over 6 left frames 3-5 of the old export after them, which a
-# sequence importer played on); files of other names are left
+# sequence importer played on); files of other names (a png-seq's beside it too) are left
 stem=$(basename "$small" .fptake)
 expect 0 "$fp" export "${pd[@]}" "$small" --format obj-seq --range 0-5 --out "$tmp/reseq" -q
-touch "$tmp/reseq/notes.txt" "$tmp/reseq/other_000009.obj"
+touch "$tmp/reseq/notes.txt" "$tmp/reseq/other_000009.obj" "$tmp/reseq/${stem}_000007.png"
 expect 0 "$fp" export "${pd[@]}" "$small" --format obj-seq --range 10-12 --out "$tmp/reseq" --force
 grep -q "removed 3 frames of an earlier export from $tmp/reseq (${stem}_000003.obj ...)" "$tmp/x.out" ||
     { cat "$tmp/x.out"; fail "obj-seq --force over a longer sequence: the removal not said"; }
-[ "$(ls "$tmp/reseq" | tr '\n' ' ')" = "${stem}_000000.obj ${stem}_000001.obj ${stem}_000002.obj notes.txt other_000009.obj " ] ||
+[ "$(ls "$tmp/reseq" | tr '\n' ' ')" = "${stem}_000000.obj ${stem}_000001.obj ${stem}_000002.obj ${stem}_000007.png notes.txt other_000009.obj " ] ||
     fail "obj-seq --force over a longer sequence left: $(ls "$tmp/reseq" | tr '\n' ' ')"
 "$fp" play "${pd[@]}" "$small" --frames-out "$tmp/replay" -q >/dev/null 2>&1 || fail "play --frames-out exited $?"
 for i in 0 1 2; do

@@ -724,12 +724,16 @@ static int walk_take(export_walk *w)
 /* A sequence written whole over an earlier one (--force): that one's frames numbered past
  * the new ones are removed (10 frames exported over 113 left 103 of the old take after them,
  * which a sequence importer played on). Returns 0 or 73 (said). */
-static int remove_stale(const export_args *a, const char *out, const char *name, uint64_t written)
+static int remove_stale(const export_args *a, const fp_mesh *mesh, const char *out, const char *name,
+                        uint64_t written)
 {
-    char prefix[128], first[512];
+    char prefix[128], first[512], suffix[64] = ".png";
     snprintf(prefix, sizeof prefix, "%s_", name);
-    const long n = fp_app_remove_stale_frames(out, prefix, a->png ? ".png" : NULL, written, first,
-                                              sizeof first);
+    if (!a->png) { /* obj-seq: the mesh's own extension, as core/export names the files */
+        const char *dot = mesh->source_path ? strrchr(mesh->source_path, '.') : NULL;
+        snprintf(suffix, sizeof suffix, ".%s", dot && !strchr(dot, '/') ? dot + 1 : "obj");
+    }
+    const long n = fp_app_remove_stale_frames(out, prefix, suffix, written, first, sizeof first);
     if (n < 0) {
         fprintf(stderr, "facepuppet export: %s/%s: an earlier export's frame past the %llu written "
                 "could not be removed: %s\n", out, first, (unsigned long long)written,
@@ -807,7 +811,7 @@ static int export_take(const export_args *a, fp_take_player *p, sink *k, float *
         return status;
     }
     if ((a->png || a->fmt == FP_EXPORT_OBJ_SEQ) && a->force &&
-        (status = remove_stale(a, out, name, written)))
+        (status = remove_stale(a, fp_session_mesh(s), out, name, written)))
         return status;
     fp_app_stack_limited_note("export", a->take_path, fp_take_player_stack(p), a->quiet);
     return fp_app_audio_export_write(h, wav, w.first_ns, k->last_t + (rate > 0 ? 1.0 / rate : 0), a->force,
