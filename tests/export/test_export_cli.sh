@@ -217,6 +217,12 @@ for g in zup.glb zup-run.glb; do
         { cat "$tmp/zup-check.out"; fail "$g: the Z-up face is not turned to +y up, +z front"; }
 done
 echo "mediapipe Z-up: the glb's root turns the face to +y up and +z front (export and run --export)"
+# -q on play and export prints errors and warnings alone: the session's line on the turned
+# face ("the face looks along ... the hands are placed in front of it") printed under it
+expect 0 "$fp" export "${pd[@]}" "$ztake" --format pc2 --out "$tmp/zup.pc2" -q
+[ ! -s "$tmp/x.out" ] || { cat "$tmp/x.out"; fail "export -q of the Z-up take printed the lines above"; }
+expect 0 "$fp" play "${pd[@]}" "$ztake" -o "$tmp/zup-play.obj" -q
+[ ! -s "$tmp/x.out" ] || { cat "$tmp/x.out"; fail "play -q of the Z-up take printed the lines above"; }
 expect 64 "$fp" export "$take" --format pc2 --out ""
 grep -qx "facepuppet export: --out: give a file or folder name (it is empty)" "$tmp/x.out" ||
     { cat "$tmp/x.out"; fail "--out '': not said as an empty name"; }
@@ -288,6 +294,84 @@ for k in 2 3 5; do
         { cat "$tmp/x.out"; fail "--max-targets $k: fp-export-check"; }
 done
 echo "--max-targets: at most K targets in the file, the offset counted"
+# An obj-seq written with --force over a longer one of the same take: the folder holds the new
+# frames alone (3 exported over 6 left frames 3-5 of the old export after them, which a
+# sequence importer played on); files of other names (a png-seq's beside it too) are left
+stem=$(basename "$small" .fptake)
+expect 0 "$fp" export "${pd[@]}" "$small" --format obj-seq --range 0-5 --out "$tmp/reseq" -q
+touch "$tmp/reseq/notes.txt" "$tmp/reseq/other_000009.obj" "$tmp/reseq/${stem}_000007.png"
+expect 0 "$fp" export "${pd[@]}" "$small" --format obj-seq --range 10-12 --out "$tmp/reseq" --force
+grep -q "removed 3 frames of an earlier export from $tmp/reseq (${stem}_000003.obj ...)" "$tmp/x.out" ||
+    { cat "$tmp/x.out"; fail "obj-seq --force over a longer sequence: the removal not said"; }
+[ "$(ls "$tmp/reseq" | tr '\n' ' ')" = "${stem}_000000.obj ${stem}_000001.obj ${stem}_000002.obj ${stem}_000007.png notes.txt other_000009.obj " ] ||
+    fail "obj-seq --force over a longer sequence left: $(ls "$tmp/reseq" | tr '\n' ' ')"
+"$fp" play "${pd[@]}" "$small" --frames-out "$tmp/replay" -q >/dev/null 2>&1 || fail "play --frames-out exited $?"
+for i in 0 1 2; do
+    cmp -s "$tmp/reseq/${stem}_00000$i.obj" "$tmp/replay/$(ls "$tmp/replay" | sed -n "$((11 + i))p")" ||
+        fail "obj-seq --force: frame $i is not the take's frame $((10 + i))"
+done
+echo "obj-seq --force over a longer sequence: the folder holds the 3 new frames alone"
+# --frames-out DIR --force (run, play: the frames an export is checked against) over an earlier
+# run's: the folder holds the new frames alone (a run at 24 fps over one at 60 left
+# frame_000001_t0.017s.obj beside frame_000001_t0.042s.obj, 85 files for 25 frames)
+expect 0 "$fp" run "${pd[@]}" --mesh "$mp" --input "replay:$data/hands/leap-motion/grab_joints_mm.csv,fast=1" \
+    --duration 1 -o "$tmp/fo.obj" --frames-out "$tmp/fo" -q
+touch "$tmp/fo/notes.txt"
+expect 0 "$fp" run "${pd[@]}" --mesh "$mp" --input "replay:$data/hands/leap-motion/grab_joints_mm.csv,fast=1" \
+    --duration 1 --fps 24 -o "$tmp/fo.obj" --frames-out "$tmp/fo" --force
+grep -q "^facepuppet run: --frames-out $tmp/fo: removed 61 frames of an earlier run" "$tmp/x.out" ||
+    { cat "$tmp/x.out"; fail "run --frames-out --force: the removal of the earlier run's frames not said"; }
+[ "$(ls "$tmp/fo" | grep -c '^frame_')" -eq 25 ] && [ -e "$tmp/fo/notes.txt" ] &&
+    [ "$(ls "$tmp/fo" | grep '^frame_' | sed -n 2p)" = frame_000001_t0.042s.obj ] ||
+    fail "run --frames-out --force at 24 fps over 60 left: $(ls "$tmp/fo" | head -4 | tr '\n' ' ')... ($(ls "$tmp/fo" | wc -l) files)"
+dfn=$("$fp" info "$dftake" | sed -n 's/^  frames *\([0-9]*\) .*/\1/p')
+expect 0 "$fp" play "${pd[@]}" "$small" --frames-out "$tmp/fo" --force -q
+expect 0 "$fp" play "${pd[@]}" "$dftake" --frames-out "$tmp/fo" --force -q
+[ "$(ls "$tmp/fo" | grep -c '^frame_')" -eq "$dfn" ] ||
+    fail "play --frames-out --force of a $dfn-frame take over a longer one left $(ls "$tmp/fo" | grep -c '^frame_') frames"
+echo "--frames-out --force (run, play): the folder holds the new run's frames alone"
+# A take with no end chunk (still recording, or its recorder killed): exported whole as far as
+# it goes, with a warning (it said nothing: a take exported mid-recording was silently short)
+off=$(grep -obUa "FPCKTAIL" "$small" | tail -1 | cut -d: -f1)
+[ -n "$off" ] || fail "no TAIL chunk in $small"
+head -c "$off" "$small" >"$tmp/open.fptake"
+expect 0 "$fp" export "${pd[@]}" "$tmp/open.fptake" --format pc2 --out "$tmp/open.pc2"
+grep -q "^facepuppet export: warning: $tmp/open.fptake: no end chunk: it may still be recording" "$tmp/x.out" ||
+    { cat "$tmp/x.out"; fail "a take with no end chunk exported without a warning"; }
+expect 0 "$fp" export "${pd[@]}" "$small" --format pc2 --out "$tmp/closed.pc2"
+! grep -q "no end chunk" "$tmp/x.out" || { cat "$tmp/x.out"; fail "a closed take warned of no end chunk"; }
+cmp -s "$tmp/open.pc2" "$tmp/closed.pc2" || fail "the take without its end chunk exported other frames"
+echo "a take with no end chunk: exported with a warning, the same frames"
+# A take recorded across midnight (its timecode in set to 23:59:58:00, the HEAD's crc32 made
+# again): --range by timecodes after midnight is the take's frames a day on (00:00:00:00 is
+# frame 120 at 60 fps), not "OUT is before the take's first frame"
+python3 - "$small" "$tmp/midnight.fptake" <<'PY' || fail "could not write the midnight take"
+import re, struct, sys, zlib
+b = bytearray(open(sys.argv[1], 'rb').read())
+i = b.find(b'FPCKHEAD')
+n = struct.unpack_from('<I', b, i + 8)[0]
+head = re.sub(rb'"timecode_in":"\d\d:\d\d:\d\d:\d\d"', b'"timecode_in":"23:59:58:00"', bytes(b[i + 16:i + 16 + n]))
+assert len(head) == n
+b[i + 16:i + 16 + n] = head
+struct.pack_into('<I', b, i + 16 + n, zlib.crc32(bytes(b[i:i + 16]) + head) & 0xffffffff)
+open(sys.argv[2], 'wb').write(b)
+PY
+"$fp" info "$tmp/midnight.fptake" | grep -q "^  timecode *23:59:58:00 - 00:00:0" || fail "the midnight take's timecodes"
+expect 0 "$fp" export "${pd[@]}" "$tmp/midnight.fptake" --format pc2 --range 00:00:00:00-00:00:01:00 --out "$tmp/mid.pc2" -q
+expect 0 "$fp" export "${pd[@]}" "$tmp/midnight.fptake" --format pc2 --range 120-180 --out "$tmp/mid-idx.pc2" -q
+cmp -s "$tmp/mid.pc2" "$tmp/mid-idx.pc2" || fail "--range 00:00:00:00-00:00:01:00 past midnight is not frames 120-180"
+expect 0 "$fp" export "${pd[@]}" "$tmp/midnight.fptake" --format pc2 --range 23:59:59:00-00:00:00:30 --out "$tmp/mid2.pc2" -q
+[ "$(od -An -tu4 -j28 -N4 "$tmp/mid2.pc2" | tr -d ' ')" -eq 91 ] || fail "--range 23:59:59:00-00:00:00:30 across midnight: not 91 frames"
+expect 64 "$fp" export "${pd[@]}" "$tmp/midnight.fptake" --format pc2 --range 00:00:05:00- --out "$tmp/mid3.pc2"
+grep -q "IN is past the take's last frame" "$tmp/x.out" || { cat "$tmp/x.out"; fail "--range 00:00:05:00- past the midnight take"; }
+echo "a take across midnight: --range by timecodes after midnight, and across it"
+# A point cache named as another format (an MDD in x.pc2, read as a PC2 by what goes by the
+# name) is refused before any work
+expect 64 "$fp" export "${pd[@]}" "$small" --format mdd --out "$tmp/named.pc2"
+grep -q "the name says pc2, not mdd" "$tmp/x.out" || { cat "$tmp/x.out"; fail "--format mdd --out x.pc2"; }
+expect 64 "$fp" export "${pd[@]}" "$small" --format pc2 --out "$tmp/named.glb"
+[ ! -e "$tmp/named.pc2" ] && [ ! -e "$tmp/named.glb" ] || fail "a point cache named as another format was written"
+expect 0 "$fp" export "${pd[@]}" "$small" --format mdd --out "$tmp/named.cache" -q
 # An export larger than the room free where it goes: refused before any frame (73), naming the
 # size (a --fps of 10000 for 100 wrote 10.6 GB of a 3.3 s take, unasked). A 1 MiB tmpfs in a
 # user namespace (unshare -r -m); skipped where the system allows none.

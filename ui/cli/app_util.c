@@ -10,6 +10,7 @@
 #include "fp_session_take.h"
 
 #include <errno.h>
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -379,6 +380,11 @@ void fp_app_log_line_quiet(void *user, int level, const char *source, const char
     if (!fp_slog_is_note(level, source)) fp_app_log_line(user, level, source, message);
 }
 
+void fp_app_log_line_warnings(void *user, int level, const char *source, const char *message)
+{
+    if (level <= FP_LOG_WARNING) fp_app_log_line_quiet(user, level, source, message);
+}
+
 int fp_app_check_output(const char *cmd, const char *option, const char *path)
 {
     char real[4096];
@@ -527,6 +533,75 @@ int fp_app_check_output_dir(const char *cmd, const char *option, const char *dir
     return 0;
 }
 
+/* name = prefix + digits (six or more) + suffix (NULL: "." and an extension without a dot;
+ * "_t*REST": "_t", a time of digits, '.' and '-', then REST): true with the number in *num */
+static bool frame_named(const char *name, const char *prefix, const char *suffix,
+                        unsigned long long *num)
+{
+    const size_t pl = strlen(prefix);
+    if (strncmp(name, prefix, pl)) return false;
+    const char *d = name + pl, *e = d;
+    unsigned long long v = 0;
+    for (; *e >= '0' && *e <= '9'; e++) {
+        if (v > (ULLONG_MAX - 9) / 10) return false;
+        v = 10 * v + (unsigned long long)(*e - '0');
+    }
+    if (e - d < 6) return false;
+    if (suffix && !strncmp(suffix, "_t*", 3)) { /* --frames-out's frame_NNNNNN_tS.SSSs.obj */
+        if (strncmp(e, "_t", 2)) return false;
+        const char *t = e + 2;
+        while ((*t >= '0' && *t <= '9') || *t == '.' || *t == '-') t++;
+        if (t == e + 2 || strcmp(t, suffix + 3)) return false;
+    } else if (suffix ? strcmp(e, suffix) != 0 : (e[0] != '.' || !e[1] || strchr(e + 1, '.'))) {
+        return false;
+    }
+    *num = v;
+    return true;
+}
+
+long fp_app_remove_stale_frames(const char *dir, const char *prefix, const char *suffix,
+                                unsigned long long from, char *first, size_t len)
+{
+    first[0] = '\0';
+    DIR *d = opendir(dir);
+    if (!d) {
+        snprintf(first, len, "%s", dir);
+        return -errno;
+    }
+    long n = 0;
+    for (struct dirent *e; (e = readdir(d));) {
+        unsigned long long num;
+        if (e->d_name[0] == '.' || !frame_named(e->d_name, prefix, suffix, &num) || num < from)
+            continue;
+        char path[4600];
+        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
+        if (unlink(path)) {
+            const int code = -errno;
+            snprintf(first, len, "%s", e->d_name);
+            closedir(d);
+            return code;
+        }
+        if (!n++ || strcmp(e->d_name, first) < 0) snprintf(first, len, "%s", e->d_name);
+    }
+    closedir(d);
+    return n;
+}
+
+int fp_app_frames_out_clear(const char *cmd, const char *dir, bool quiet)
+{
+    char first[512];
+    const long n = fp_app_remove_stale_frames(dir, "frame_", "_t*s.obj", 0, first, sizeof first);
+    if (n < 0) {
+        fprintf(stderr, "%s: --frames-out %s: %s: an earlier run's frame could not be removed: %s\n",
+                cmd, dir, first, strerror((int)-n));
+        return FP_EXIT_CANTCREAT;
+    }
+    if (n > 0 && !quiet)
+        fprintf(stderr, "%s: --frames-out %s: removed %ld frame%s of an earlier run (%s%s) (--force)\n",
+                cmd, dir, n, n == 1 ? "" : "s", first, n > 1 ? " ..." : "");
+    return 0;
+}
+
 void fp_app_size_text(double bytes, char *buf, size_t len)
 {
     if (bytes >= 1e9) snprintf(buf, len, "%.1f GB", bytes / 1e9);
@@ -666,6 +741,10 @@ int fp_app_take_intact(const char *cmd, const char *verb, const char *path,
     if (cut[0])
         fprintf(stderr, "%s: warning: %s; %sing the %zu intact frames\n", cmd, cut, verb,
                 fp_take_reader_frames(r));
+    else if (!fp_take_reader_summary(r)->complete) /* (exported mid-take: said nothing) */
+        fprintf(stderr, "%s: warning: %s: no end chunk: it may still be recording, or its "
+                "recording stopped without closing it (killed, a full disk); %sing the %zu "
+                "frames it holds now\n", cmd, path, verb, fp_take_reader_frames(r));
     return FP_EXIT_OK;
 }
 

@@ -79,13 +79,22 @@ void fp_app_log_line(void *user, int level, const char *source, const char *mess
  *  fp_app_log_line (one fprintf a line: lines from two threads never interleave). */
 void fp_app_log_line_quiet(void *user, int level, const char *source, const char *message);
 
+/** fp_app_log_line for play -q and export -q, which play a take (no inputs, mapping or hands
+ *  placed): errors and warnings alone (level FP_LOG_WARNING or below, the engine's and
+ *  contact guard's notes left out as by fp_app_log_line_quiet); an information line such as
+ *  the session's "the face looks along ... the hands are placed in front of it" printed under
+ *  -q, which their help says prints errors and a damaged take's warning only. Any thread. */
+void fp_app_log_line_warnings(void *user, int level, const char *source, const char *message);
+
 /** The longest --duration a command takes, seconds (116 days: its nanoseconds fit an
  *  int64 with room; 9.3e9 s wrapped around and stopped after one frame). */
 #define FP_APP_MAX_DURATION_S 1e7
 
 /** Before play or export (verb) of the take at path: with no intact frame, "CMD: PATH: no
  *  intact frame to VERB (the cut)" and 65, before any output; a damaged tail is warned about
- *  ("CMD: warning: CUT; VERBing the N intact frames") and 0 returned. */
+ *  ("CMD: warning: CUT; VERBing the N intact frames") and 0 returned; so is a take with no
+ *  end chunk, still being recorded or left open by a recorder that died ("CMD: warning:
+ *  PATH: no end chunk: ...; VERBing the N frames it holds now"). */
 struct fp_take_reader;
 int fp_app_take_intact(const char *cmd, const char *verb, const char *path,
                        const struct fp_take_reader *r);
@@ -136,6 +145,24 @@ bool fp_app_free_name(const char *path, char *buf, size_t len);
  *  missing folder with make false passes. Returns 0, or 73 with the line printed. */
 int fp_app_check_output_dir(const char *cmd, const char *option, const char *dir, const char *prefix,
                             const char *suffix, bool make, bool force, bool *made);
+
+/** After an obj-seq or png-seq export written whole over an earlier one (--force): the files
+ *  of dir named prefix, a frame number (six digits or more), then suffix (".png"), or with
+ *  suffix NULL a dot and one extension with no further dot (".obj"), or with suffix "_t*REST"
+ *  "_t", a time (digits, '.', '-') and REST (--frames-out's "_t*s.obj"), numbered `from` or more,
+ *  are removed, so that the folder holds the new sequence alone (10 frames exported over 113
+ *  left frames 10-112 of the old take after the new ones). Hidden files and other names are
+ *  left. Returns how many were removed (the first by name into first, len bytes), or -errno
+ *  of the first that could not be (its name in first). [main-thread]. */
+long fp_app_remove_stale_frames(const char *dir, const char *prefix, const char *suffix,
+                                unsigned long long from, char *first, size_t len);
+
+/** --frames-out DIR with --force, once the command's checks have passed and before its first
+ *  frame: the frames of an earlier run there (frame_NNNNNN_tS.SSSs.obj) are removed, said on
+ *  stderr unless quiet, so that the folder holds this run's frames alone (a run at 24 fps over
+ *  one at 60 left frame_000001_t0.017s.obj beside frame_000001_t0.042s.obj, 85 files for 25
+ *  frames). Returns 0, or 73 with the line printed. [main-thread]. */
+int fp_app_frames_out_clear(const char *cmd, const char *dir, bool quiet);
 
 /** --take-dir DIR of run and live, before any work, making nothing: DIR a folder we can write
  *  in, or, where it is missing, the nearest folder above it that is there (the take writer

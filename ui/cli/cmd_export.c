@@ -142,7 +142,8 @@ static void usage(FILE *f)
         "      --range IN-OUT    only these frames: 0-based frame indices of the take or\n"
         "                        timecodes HH:MM:SS:FF (a drop-frame take's HH:MM:SS;FF; either\n"
         "                        side may be left out: 120-, -300); frames before IN are still\n"
-        "                        played (commits carry over). Checked\n"
+        "                        played (commits carry over). A take across midnight: a\n"
+        "                        timecode after it counts on into the next day. Checked\n"
         "                        before any frame is played: IN past the take's last frame, OUT\n"
         "                        before its first or IN after OUT is refused (64, naming the\n"
         "                        take's frames and timecodes); an end past the take is clipped\n"
@@ -159,7 +160,9 @@ static void usage(FILE *f)
         "      --camera Y,P[,Z]  png-seq: turn the framed view by yaw Y and pitch P degrees,\n"
         "                        zoom Z (default 0,0,1: the face from the front)\n"
         "      --force           overwrite an output that exists (the file; obj-seq and\n"
-        "                        png-seq: the frames in the folder); without it the export is\n"
+        "                        png-seq: the frames in the folder, and once the new ones are\n"
+        "                        written an earlier export's frames numbered past them are\n"
+        "                        removed); without it the export is\n"
         "                        refused before any work (73); an output that is the take,\n"
         "                        a stack's take, the mesh or the soundtrack is refused even so\n"
         "  -m, --mesh FILE       the take's mesh from another path (its crc32 must match)\n"
@@ -390,6 +393,21 @@ static void end_text(const range_end *e, uint64_t v, fp_take_rate rate, bool dro
     }
 }
 
+/* A timecode end before the take's first frame (on its scale, tc_in + frames since the time
+ * origin, which runs on past 24 h) may be one after midnight: a take from 23:59:58:00 to
+ * 00:00:01:22 holds 00:00:00:00 a day on (it was "OUT is before the take's first frame").
+ * The end is taken on the day that puts it nearer the take's frames [first, last]. */
+static void unwrap_day(range_end *e, uint64_t first, uint64_t last, fp_take_rate rate)
+{
+    const fp_timecode end_of_day = {23, 59, 59, fp_timecode_base(rate) - 1, e->drop};
+    uint64_t day;
+    if (!e->set || !e->timecode || e->value >= first || fp_timecode_to_frames(&end_of_day, rate, &day))
+        return;
+    day++;
+    const uint64_t next = e->value + day;
+    if ((next <= last ? 0 : next - last) < first - e->value) e->value = next;
+}
+
 /* --range against the take, before any frame is played (issue 53): IN past the last frame, OUT
  * before the first, or IN after OUT (both of one kind) is refused (64); an end past the take is
  * clipped to it with a warning naming what is exported. Returns 0 or FP_EXIT_USAGE (said). */
@@ -413,6 +431,8 @@ static int check_range(const export_args *a, range_end *in, range_end *out, cons
                 drop ? ";" : ":");
         return FP_EXIT_USAGE;
     }
+    unwrap_day(in, f_in, l_in, h->rate);
+    unwrap_day(out, f_out, l_out, h->rate);
     if (in->set && in->value > l_in) why = "IN is past the take's last frame";
     else if (out->set && out->value < f_out) why = "OUT is before the take's first frame";
     else if (in->set && out->set && in->timecode == out->timecode && in->value > out->value)
@@ -544,6 +564,22 @@ static void default_out(const export_args *a, char *buf, size_t len)
         snprintf(buf, len, "%.*s_frames", stem, take_path);
     else
         snprintf(buf, len, "%.*s.%s", stem, take_path, fp_export_format_extension(a->fmt));
+}
+
+/* A point cache's name may end in anything but another export format's extension (an MDD
+ * written to x.pc2 was read as a PC2 by what goes by the name: `info`, a file browser's
+ * filter). After check_out: an output that is an input is refused as that first. Returns 0
+ * or FP_EXIT_USAGE (said). */
+static int check_cache_name(const char *out, fp_export_format fmt)
+{
+    fp_export_format named;
+    if ((fmt != FP_EXPORT_PC2 && fmt != FP_EXPORT_MDD) || fp_export_format_from_path(out, &named) ||
+        named == fmt)
+        return 0;
+    fprintf(stderr, "facepuppet export: --out %s: the name says %s, not %s: give a name ending .%s "
+            "for --format %s\n", out, fp_export_format_name(named), fp_export_format_name(fmt),
+            fp_export_format_extension(fmt), fp_export_format_name(fmt));
+    return FP_EXIT_USAGE;
 }
 
 /* glTF and GLB: the mesh writer goes by the name, so --out must end in the format's
@@ -685,6 +721,31 @@ static int walk_take(export_walk *w)
     return stop_signal ? stopped(false) : FP_EXIT_OK;
 }
 
+/* A sequence written whole over an earlier one (--force): that one's frames numbered past
+ * the new ones are removed (10 frames exported over 113 left 103 of the old take after them,
+ * which a sequence importer played on). Returns 0 or 73 (said). */
+static int remove_stale(const export_args *a, const fp_mesh *mesh, const char *out, const char *name,
+                        uint64_t written)
+{
+    char prefix[128], first[512], suffix[64] = ".png";
+    snprintf(prefix, sizeof prefix, "%s_", name);
+    if (!a->png) { /* obj-seq: the mesh's own extension, as core/export names the files */
+        const char *dot = mesh->source_path ? strrchr(mesh->source_path, '.') : NULL;
+        snprintf(suffix, sizeof suffix, ".%s", dot && !strchr(dot, '/') ? dot + 1 : "obj");
+    }
+    const long n = fp_app_remove_stale_frames(out, prefix, suffix, written, first, sizeof first);
+    if (n < 0) {
+        fprintf(stderr, "facepuppet export: %s/%s: an earlier export's frame past the %llu written "
+                "could not be removed: %s\n", out, first, (unsigned long long)written,
+                strerror((int)-n));
+        return FP_EXIT_CANTCREAT;
+    }
+    if (n > 0 && !a->quiet)
+        printf("facepuppet export: removed %ld frame%s of an earlier export from %s (%s%s), "
+               "numbered past these\n", n, n == 1 ? "" : "s", out, first, n > 1 ? " ..." : "");
+    return 0;
+}
+
 /* Export the opened take p as *a asks. Returns the exit status. */
 static int export_take(const export_args *a, fp_take_player *p, sink *k, float **held)
 {
@@ -715,7 +776,8 @@ static int export_take(const export_args *a, fp_take_player *p, sink *k, float *
     /* the output's rate: --fps, else the take's (named in the file and the summary) */
     const double rate = a->fps > 0 ? a->fps
                         : h->rate.den ? (double)h->rate.num / (double)h->rate.den : 0;
-    if ((status = check_out(a, p, out, name))) return status;
+    if ((status = check_out(a, p, out, name)) || (status = check_cache_name(out, a->fmt)))
+        return status;
     double count;
     if ((status = frames_out(a, &w.in, &w.out, h, r, w.tc_in, &count)) ||
         (status = check_size(a, out, count, fp_session_mesh(s))))
@@ -739,6 +801,7 @@ static int export_take(const export_args *a, fp_take_player *p, sink *k, float *
                 w.total);
         return FP_EXIT_USAGE;
     }
+    const uint64_t written = sink_frames(k);
     if (a->png) {
         if (!a->quiet)
             printf("facepuppet export: wrote %llu PNG frames (%dx%d) to %s: %.2f MB\n",
@@ -747,6 +810,9 @@ static int export_take(const export_args *a, fp_take_player *p, sink *k, float *
                                              a->quiet, stdout))) {
         return status;
     }
+    if ((a->png || a->fmt == FP_EXPORT_OBJ_SEQ) && a->force &&
+        (status = remove_stale(a, fp_session_mesh(s), out, name, written)))
+        return status;
     fp_app_stack_limited_note("export", a->take_path, fp_take_player_stack(p), a->quiet);
     return fp_app_audio_export_write(h, wav, w.first_ns, k->last_t + (rate > 0 ? 1.0 / rate : 0), a->force,
                                      a->quiet, stdout, "export");
@@ -762,7 +828,7 @@ static int export_main(int argc, char **argv)
     fp_app_plugin_path(&path, a.dirs, a.ndirs);
     fp_take_player *p = NULL;
     int rc = fp_take_player_open_logged(a.take_path, a.mesh, &path,
-                                        a.quiet ? fp_app_log_line_quiet : fp_app_log_line, NULL, &p,
+                                        a.quiet ? fp_app_log_line_warnings : fp_app_log_line, NULL, &p,
                                         err, sizeof err);
     if (rc) {
         fprintf(stderr, "facepuppet export: %s\n", err);

@@ -47,7 +47,8 @@ static void usage(FILE *f)
         "                         point cache larger than the room free where they go are\n"
         "                         refused before any frame, 73)\n"
         "      --force            overwrite outputs that exist (--out, --export, frames in\n"
-        "                         --frames-out); without it they are refused before any work\n"
+        "                         --frames-out: an earlier run's frames there are removed\n"
+        "                         before the first); without it they are refused before any work\n"
         "  -m, --mesh FILE        the take's mesh from another path (its crc32 must match)\n"
         "      --stream SPEC      osc:HOST:PORT[,step=MM][,key=N][,mtu=B]: every frame sent\n"
         "                         over OSC at the take's pace, with its time and timecode\n"
@@ -188,7 +189,7 @@ static int play_seek(play_ctl *c, double t, char *msg, size_t n)
     fp_take_player *p = NULL;
     char err[2048];
     int rc = fp_take_player_open_logged(c->take_path, c->mesh, c->path,
-                                        c->quiet ? fp_app_log_line_quiet : fp_app_log_line, NULL, &p,
+                                        c->quiet ? fp_app_log_line_warnings : fp_app_log_line, NULL, &p,
                                         err, sizeof err);
     if (rc) return snprintf(msg, n, "%.900s", err), rc;
     fp_take_player_close(&c->player);
@@ -426,7 +427,7 @@ static int play_main(int argc, char **argv)
     int status = FP_EXIT_OK;
     fp_app_reach reach = {0}; /* how far the skin followed, over the take */
     int rc = fp_take_player_open_logged(take_path, mesh, &path,
-                                        quiet ? fp_app_log_line_quiet : fp_app_log_line, NULL,
+                                        quiet ? fp_app_log_line_warnings : fp_app_log_line, NULL,
                                         &player, err, sizeof err);
     if (rc) {
         fprintf(stderr, "facepuppet play: %s\n", err);
@@ -457,6 +458,8 @@ static int play_main(int argc, char **argv)
         player = c.player; /* (a seek reopens it) */
         goto done;
     }
+    if (frames_out && force && (status = fp_app_frames_out_clear("facepuppet play", frames_out, quiet)))
+        goto done;
     frames_made = false; /* (frames are written from here on) */
     int64_t wall0 = fp_now_ns();
     uint64_t frames = 0, commits = 0, active = 0;

@@ -50,7 +50,8 @@ static void usage(FILE *f)
         "                         with --duration, refused (73) where it is more than the room\n"
         "                         free there, as is --export's point cache)\n"
         "      --force            overwrite outputs that exist (--out, --export, frames in\n"
-        "                         --frames-out); without it they are refused before any work\n"
+        "                         --frames-out: an earlier run's frames there are removed\n"
+        "                         before the first); without it they are refused before any work\n"
         "      --fps N            frames per second of the session loop (default 60)\n"
         "      --export FILE      every frame into FILE: .gltf/.glb (morph-target animation,\n"
         "                         0.1 mm), .pc2/.mdd (point caches: with --duration, a\n"
@@ -638,7 +639,8 @@ static int run_main(int argc, char **argv)
                                                        "a shorter --duration"))) ||
         (a->export_file && (rc = fp_app_export_open("facepuppet run", a->export_file, s,
                                                     fp_session_head(s)->mm_per_unit, "run", frames,
-                                                    &ex)))) {
+                                                    &ex))) ||
+        (a->frames_out && a->force && (rc = fp_app_frames_out_clear("facepuppet run", a->frames_out, quiet)))) {
         return run_abandon(a, &ex, &s, &path, rc);
     }
     if ((rc = fp_session_start(s, err, sizeof err))) {
