@@ -154,12 +154,48 @@ size_t fp_hud_live(fp_hud_msgs *s, int64_t now, const fp_hud_msg *out[FP_HUD_MSG
     return s->count;
 }
 
+/* The height one message takes wrapped to max_px at scale, with the gap after it. */
+static float msg_height(const char *text, float max_px, float scale)
+{
+    char wrapped[2 * FP_HUD_MSG_LEN];
+    fp_hud_wrap(text, max_px, scale, wrapped, sizeof wrapped);
+    return fp_render_text_height(wrapped, scale) + 2 * scale;
+}
+
+size_t fp_hud_fit(fp_hud_msgs *s, int64_t now, float max_px, float scale, float room,
+                  const fp_hud_msg *out[FP_HUD_MSGS], float alpha[FP_HUD_MSGS])
+{
+    const fp_hud_msg *live[FP_HUD_MSGS];
+    float a[FP_HUD_MSGS], hgt[FP_HUD_MSGS], total = 0;
+    bool keep[FP_HUD_MSGS];
+    size_t n = fp_hud_live(s, now, live, a);
+    for (size_t i = 0; i < n; i++) {
+        hgt[i] = msg_height(live[i]->text, max_px, scale);
+        total += hgt[i];
+        keep[i] = true;
+    }
+    /* leave out the oldest fading ones, then the oldest confirmations, until the rest fit */
+    for (int pass = 0; pass < 2; pass++)
+        for (size_t i = 0; i < n && total > room; i++)
+            if (keep[i] && (pass || !kept_kind(live[i]->kind))) {
+                keep[i] = false;
+                total -= hgt[i];
+            }
+    size_t k = 0;
+    for (size_t i = 0; i < n; i++)
+        if (keep[i]) {
+            if (alpha) alpha[k] = a[i];
+            out[k++] = live[i];
+        }
+    return k;
+}
+
 float fp_hud_draw_msgs(fp_hud_msgs *s, fp_render *r, int w, int h, float x, float y,
-                       float max_px, float scale, const float color[4], int64_t now)
+                       float max_px, float scale, float room, const float color[4], int64_t now)
 {
     const fp_hud_msg *live[FP_HUD_MSGS];
     float alpha[FP_HUD_MSGS];
-    size_t n = fp_hud_live(s, now, live, alpha);
+    size_t n = fp_hud_fit(s, now, max_px, scale, room, live, alpha);
     float y0 = y;
     char wrapped[2 * FP_HUD_MSG_LEN];
     for (size_t i = 0; i < n; i++) {

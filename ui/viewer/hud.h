@@ -110,10 +110,20 @@ void fp_hud_say(fp_hud_msgs *s, int kind, int64_t now, const char *text);
 size_t fp_hud_live(fp_hud_msgs *s, int64_t now, const fp_hud_msg *out[FP_HUD_MSGS],
                    float alpha[FP_HUD_MSGS]);
 
-/** Draw the live messages at (x, y), each wrapped to max_px, in `color` faded by its alpha;
- *  returns the height drawn. */
+/** The live messages at now (as fp_hud_live) that fit `room` pixels of height, each wrapped
+ *  to max_px at scale and followed by a 2 x scale gap, as fp_hud_draw_msgs draws them: where
+ *  they do not all fit, the oldest fading ones are left out first, then the oldest
+ *  confirmations, so that the newest confirmation (a take written) is the last to go. Written
+ *  oldest first to out, with alpha (may be NULL) as fp_hud_live's. Returns how many (0 where
+ *  room is under one message). Plain C, no GL. */
+size_t fp_hud_fit(fp_hud_msgs *s, int64_t now, float max_px, float scale, float room,
+                  const fp_hud_msg *out[FP_HUD_MSGS], float alpha[FP_HUD_MSGS]);
+
+/** Draw the live messages that fit `room` pixels of height (fp_hud_fit) at (x, y), each
+ *  wrapped to max_px, in `color` faded by its alpha; returns the height drawn (at most
+ *  room). */
 float fp_hud_draw_msgs(fp_hud_msgs *s, fp_render *r, int w, int h, float x, float y,
-                       float max_px, float scale, const float color[4], int64_t now);
+                       float max_px, float scale, float room, const float color[4], int64_t now);
 
 /** The key list centred in the window on a near-opaque dark backdrop (so that it reads over
  *  the face), text wrapped to the window. */

@@ -225,3 +225,8 @@ float fp_overlay_rig_legend(fp_render *r, const fp_session *s, int w, int h, flo
     }
     return y - y0;
 }
+
+float fp_overlay_rig_legend_height(float scale)
+{
+    return 6 * (fp_render_text_height("rig", scale) + 2 * scale); /* its six rows */
+}

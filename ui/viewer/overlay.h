@@ -63,6 +63,9 @@ void fp_overlay_rig_colors(fp_render *r, const fp_session *s, size_t n);
 void fp_overlay_rig(fp_render *r, const fp_session *s, const float *pos, size_t n,
                     const float pv[16], int w, int h);
 
+/** The height fp_overlay_rig_legend draws at scale (pixels). */
+float fp_overlay_rig_legend_height(float scale);
+
 /** The rig overlay's legend at (8, y), each name in its colour; returns the height drawn. */
 float fp_overlay_rig_legend(fp_render *r, const fp_session *s, int w, int h, float y,
                             float scale);

@@ -763,12 +763,13 @@ static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
         fp_timecode t;
         if (!fp_session_take_timecode(&v->takes.take, fp_now_ns(), &t)) fp_timecode_format(&t, tc, sizeof tc);
     }
-    float y = margin;
-    y += fp_hud_draw_badge(&v->r, w, h, margin, y, scale, b, tc) + 4 * scale;
+    float y = margin + fp_hud_draw_badge(&v->r, w, h, margin, margin, scale, b, tc) + 4 * scale;
     fp_hud_wrap(text, max_px, scale, wrapped, sizeof wrapped);
     y += fp_render_text(&v->r, w, h, margin, y, scale, wrapped, white) + 6 * scale;
-    y += fp_hud_draw_msgs(&v->msgs, &v->r, w, h, margin, y, max_px, scale, dim, fp_now_ns()) + 4 * scale;
-    if (v->rig_on && fp_session_rig(v->s)) y += fp_overlay_rig_legend(&v->r, v->s, w, h, y, scale) + 6 * scale;
+    float room = fp_voverdub_bottom_top(&v->over, &v->takes, &v->wave, w, h) - y; /* to the strip */
+    if (v->rig_on && fp_session_rig(v->s)) room -= fp_overlay_rig_legend_height(scale) + 4 * scale;
+    y += fp_hud_draw_msgs(&v->msgs, &v->r, w, h, margin, y, max_px, scale, room, dim, fp_now_ns()) + 4 * scale;
+    if (v->rig_on && fp_session_rig(v->s)) fp_overlay_rig_legend(&v->r, v->s, w, h, y, scale);
     fp_vtakes_draw(&v->takes, &v->r, w, h, fp_now_ns());
     if (!fp_voverdub_draw(&v->over, &v->r, w, h, &v->wave)) /* else the waveform alone */
         fp_vwave_draw_lane(&v->wave, &v->r, w, h, fp_session_take_recording(&v->takes.take)
