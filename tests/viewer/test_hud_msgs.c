@@ -186,6 +186,11 @@ static void test_contact_line(void **state)
     fp_hud_contact_line(0.5, 0.9, 3, out, sizeof out);
     assert_string_equal(out, "\ncontact guard kept 90% of this frame's motion: the surface would have passed "
                              "through itself");
+    /* held back by a hair: not "kept 100%" beside the HELD badge (before: 100%) */
+    fp_hud_contact_line(0.9, 0.996, 0, out, sizeof out);
+    assert_string_equal(out, "\ncontact guard kept over 99% of this frame's motion: the skin would have folded over");
+    fp_hud_contact_line(0.9, 0.994, 0, out, sizeof out);
+    assert_string_equal(out, "\ncontact guard kept 99% of this frame's motion: the skin would have folded over");
     fp_hud_contact_line(0.5, 0.9, 3, out, 1);
     assert_string_equal(out, "");
 }

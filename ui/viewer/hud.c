@@ -261,6 +261,10 @@ void fp_hud_contact_line(double t, double kept, long pairs, char *out, size_t le
     if (!len) return;
     out[0] = 0;
     if (!(t < 1.0)) return;
-    snprintf(out, len, "\ncontact guard kept %.0f%% of this frame's motion: %s", 100.0 * kept,
+    /* a frame held back reads under 100% (99.6% printed as 100% beside the HELD badge) */
+    char share[16];
+    if (100.0 * kept >= 99.5) snprintf(share, sizeof share, "over 99%%");
+    else snprintf(share, sizeof share, "%.0f%%", 100.0 * kept);
+    snprintf(out, len, "\ncontact guard kept %s of this frame's motion: %s", share,
              pairs ? "the surface would have passed through itself" : "the skin would have folded over");
 }
