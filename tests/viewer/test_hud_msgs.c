@@ -195,6 +195,19 @@ static void test_contact_line(void **state)
     assert_string_equal(out, "");
 }
 
+/* The unit's line: a face in metres reads 1000 mm per mesh unit (before: "1e+03 mm per mesh
+ * unit", %.3g), as run and calibrate print it; the how up to its first ':'. */
+static void test_scale_line(void **state)
+{
+    (void)state;
+    char out[120];
+    assert_string_equal(fp_hud_scale_line(1000, "from the rig rigs/ict-facekit.json: placed", out, sizeof out),
+                        "1000 mm per mesh unit, from the rig rigs/ict-facekit.json");
+    assert_string_equal(fp_hud_scale_line(49.0345, "detected from the head", out, sizeof out),
+                        "49.03 mm per mesh unit, detected from the head");
+    assert_string_equal(fp_hud_scale_line(10, "--mm-per-unit", out, sizeof out), "10 mm per mesh unit, --mm-per-unit");
+}
+
 /* The gesture's badge: "limited" only where the fold-over guard stopped it short; the
  * contact guard scaling a frame back is HELD, not LIMITED (before, both read LIMITED) */
 static void test_gesture_badge(void **state)
@@ -222,6 +235,7 @@ int main(void)
         cmocka_unit_test(test_wrap_fits),
         cmocka_unit_test(test_confirmations_kept_notes_fade),
         cmocka_unit_test(test_fit_room),
+        cmocka_unit_test(test_scale_line),
         cmocka_unit_test(test_reach_line),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -268,3 +268,9 @@ void fp_hud_contact_line(double t, double kept, long pairs, char *out, size_t le
     snprintf(out, len, "\ncontact guard kept %s of this frame's motion: %s", share,
              pairs ? "the surface would have passed through itself" : "the skin would have folded over");
 }
+
+const char *fp_hud_scale_line(double mm_per_unit, const char *how, char *out, size_t len)
+{
+    if (len) snprintf(out, len, "%.4g mm per mesh unit, %.*s", mm_per_unit, (int)strcspn(how, ":"), how);
+    return out;
+}

@@ -125,6 +125,11 @@ size_t fp_hud_fit(fp_hud_msgs *s, int64_t now, float max_px, float scale, float 
 float fp_hud_draw_msgs(fp_hud_msgs *s, fp_render *r, int w, int h, float x, float y,
                        float max_px, float scale, float room, const float color[4], int64_t now);
 
+/** The HUD's line of the mesh's unit into out (len bytes; returns out): "1000 mm per mesh
+ *  unit, from the rig ..." (how: fp_head's, up to its first ':'), mm_per_unit in %.4g as the
+ *  other commands print it (so a face in metres reads 1000, not 1e+03). */
+const char *fp_hud_scale_line(double mm_per_unit, const char *how, char *out, size_t len);
+
 /** The key list centred in the window on a near-opaque dark backdrop (so that it reads over
  *  the face), text wrapped to the window. */
 void fp_hud_draw_help(fp_render *r, int w, int h, float scale, const char *text,

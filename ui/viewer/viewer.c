@@ -740,15 +740,15 @@ static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
                  v->cues.touch_count, v->cues.count, v->cues.nearest * head->mm_per_unit);
     char hands[FP_HUD_MSG_LEN + 600];
     fp_hud_hands_line(&v->hands, v->s, hands, sizeof hands);
-    char text[4096], wrapped[8192];
+    char text[4096], wrapped[8192], scale_line[300];
     snprintf(text, sizeof text,
              "%s  %zu vertices  mapping %s\n"
-             "%.3g mm per mesh unit, %.*s\n"
+             "%s\n"
              "commits %lu   radius %.4g (%.1f mm)\n"
              "%.1f fps (%.2f ms)   engine %.3f ms   input %.0f ev/s%s\n"
              "fold-over guard: bound %.2f  reach %.0f%%  sub-steps %d%s%s%s%s",
              v->mesh_path ? (strrchr(v->mesh_path, '/') ? strrchr(v->mesh_path, '/') + 1 : v->mesh_path) : "", v->n, v->mapping,
-             head->mm_per_unit, (int)strcspn(head->how, ":"), head->how, fp_session_commits(v->s),
+             fp_hud_scale_line(head->mm_per_unit, head->how, scale_line, sizeof scale_line), fp_session_commits(v->s),
              fp_session_radius(v->s), fp_session_radius(v->s) * head->mm_per_unit,
              recent > 0 ? 1000.0 / recent : 0.0, recent,
              st->active ? st->update_ms : v->last_update_ms, v->input_rate,
