@@ -90,6 +90,35 @@ static void test_confirmations_kept_notes_fade(void **state)
     assert_string_equal(live[1]->text, "take 3: 12 frames");
 }
 
+/* A warning (the hint that the hands never reach the face) outlives the notes after it: under
+ * Xvfb, an OSC sender restarting every 0.15 s sent six 'sender ... took over' notes within a
+ * second of the hint, and it was gone from the HUD (the stack's six lines all notes). */
+static void test_warning_outlives_notes(void **state)
+{
+    (void)state;
+    fp_hud_msgs s = {0};
+    const int64_t sec = 1000000000LL;
+    const fp_hud_msg *live[FP_HUD_MSGS];
+    fp_hud_say(&s, FP_HUD_WARN, 0, "session: hands present for 3 s, but no fingertip came within 14 mm");
+    for (int i = 0; i < 10; i++) {
+        char t[64];
+        snprintf(t, sizeof t, "osc: port 9125: sender %d took over", i);
+        fp_hud_say(&s, FP_HUD_NOTE, i * sec / 10, t);
+    }
+    size_t n = fp_hud_live(&s, sec, live, NULL);
+    assert_int_equal(n, FP_HUD_MSGS);
+    assert_int_equal(live[0]->kind, FP_HUD_WARN);
+    assert_string_equal(live[n - 1]->text, "osc: port 9125: sender 9 took over");
+    /* it fades as a note does */
+    assert_int_equal(fp_hud_live(&s, (int64_t)(FP_HUD_NOTE_S * sec) - 1, live, NULL) >= 1, 1);
+    assert_int_equal(live[0]->kind, FP_HUD_WARN);
+    /* in a room for two lines, it and the newest note */
+    n = fp_hud_fit(&s, sec, 1008, 2, 2 * (fp_render_text_height("x", 2) + 4), live, NULL);
+    assert_int_equal(n, 2);
+    assert_int_equal(live[0]->kind, FP_HUD_WARN);
+    assert_string_equal(live[1]->text, "osc: port 9125: sender 9 took over");
+}
+
 /* The stack fits the room left above the window's bottom (the take strip, its lanes, "? keys"):
  * before, six long notes ran 400 px down a 640 px window, past the strip, and the take's
  * confirmation, drawn last as the newest, lay under the strip, never seen. Now the oldest
@@ -234,6 +263,7 @@ int main(void)
         cmocka_unit_test(test_contact_line),
         cmocka_unit_test(test_wrap_fits),
         cmocka_unit_test(test_confirmations_kept_notes_fade),
+        cmocka_unit_test(test_warning_outlives_notes),
         cmocka_unit_test(test_fit_room),
         cmocka_unit_test(test_scale_line),
         cmocka_unit_test(test_reach_line),

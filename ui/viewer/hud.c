@@ -102,6 +102,9 @@ size_t fp_hud_wrap(const char *text, float max_px, float scale, char *out, size_
 
 static bool kept_kind(int kind) { return kind == FP_HUD_TAKE || kind == FP_HUD_SETTING; }
 
+/* The order messages make room in: notes and answers (0), warnings (1), confirmations (2). */
+static int drop_rank(int kind) { return kept_kind(kind) ? 2 : kind == FP_HUD_WARN; }
+
 static void drop_expired(fp_hud_msgs *s, int64_t now)
 {
     for (size_t i = 0; i < s->count;) {
@@ -119,19 +122,20 @@ void fp_hud_say(fp_hud_msgs *s, int kind, int64_t now, const char *text)
         if (s->m[i].kind == kind && (kept_kind(kind) || !strncmp(s->m[i].text, text, FP_HUD_MSG_LEN - 1)))
             slot = &s->m[i];
     if (!slot && s->count < FP_HUD_MSGS) slot = &s->m[s->count++];
-    if (!slot) { /* full: the oldest fading message makes room, else the oldest */
-        fp_hud_msg *oldest = NULL, *oldest_fading = NULL;
+    if (!slot) { /* full: the oldest note or answer makes room, else warning, else the oldest */
+        fp_hud_msg *oldest = NULL, *oldest_fading = NULL, *oldest_plain = NULL;
         for (size_t i = 0; i < s->count; i++) {
             fp_hud_msg *m = &s->m[i];
             if (!oldest || m->seq < oldest->seq) oldest = m;
             if (!kept_kind(m->kind) && (!oldest_fading || m->seq < oldest_fading->seq)) oldest_fading = m;
+            if (drop_rank(m->kind) == 0 && (!oldest_plain || m->seq < oldest_plain->seq)) oldest_plain = m;
         }
-        slot = oldest_fading ? oldest_fading : oldest;
+        slot = oldest_plain ? oldest_plain : oldest_fading ? oldest_fading : oldest;
     }
     slot->kind = kind;
     slot->seq = s->next_seq++;
     slot->until = kept_kind(kind) ? INT64_MAX
-                                  : now + (int64_t)((kind == FP_HUD_NOTE ? FP_HUD_NOTE_S : FP_HUD_INFO_S) * 1e9);
+                                  : now + (int64_t)((kind == FP_HUD_INFO ? FP_HUD_INFO_S : FP_HUD_NOTE_S) * 1e9);
     snprintf(slot->text, sizeof slot->text, "%s", text);
 }
 
@@ -174,10 +178,10 @@ size_t fp_hud_fit(fp_hud_msgs *s, int64_t now, float max_px, float scale, float 
         total += hgt[i];
         keep[i] = true;
     }
-    /* leave out the oldest fading ones, then the oldest confirmations, until the rest fit */
-    for (int pass = 0; pass < 2; pass++)
+    /* leave out the oldest notes, then warnings, then confirmations, until the rest fit */
+    for (int pass = 0; pass < 3; pass++)
         for (size_t i = 0; i < n && total > room; i++)
-            if (keep[i] && (pass || !kept_kind(live[i]->kind))) {
+            if (keep[i] && drop_rank(live[i]->kind) <= pass) {
                 keep[i] = false;
                 total -= hgt[i];
             }

@@ -178,7 +178,7 @@ static void on_session_log(void *user, int level, const char *source, const char
     if (level > FP_LOG_INFO && !getenv("FACEPUPPET_DEBUG")) return;
     char text[FP_HUD_MSG_LEN];
     snprintf(text, sizeof text, "%s: %s", source, message);
-    fp_hud_say(&v->msgs, FP_HUD_NOTE, fp_now_ns(), text);
+    fp_hud_say(&v->msgs, level <= FP_LOG_WARNING ? FP_HUD_WARN : FP_HUD_NOTE, fp_now_ns(), text);
     fp_hud_hands_log(&v->hands, v->so.inputs, v->so.input_count, level, source, message);
     if (!(v->opt->quiet && fp_slog_is_note(level, source)))
         fprintf(stderr, "facepuppet live: %s: %s\n", source, message);
@@ -672,7 +672,7 @@ static void run_script(viewer *v)
             break;
         }
         case FP_SCRIPT_PRINT_MESSAGES: {
-            static const char *const kinds[FP_HUD_KINDS] = {"take", "setting", "note", "info"};
+            static const char *const kinds[FP_HUD_KINDS] = {"take", "setting", "note", "info", "warning"};
             const fp_hud_msg *live[FP_HUD_MSGS];
             float alpha[FP_HUD_MSGS];
             size_t n = fp_hud_live(&v->msgs, fp_now_ns(), live, alpha);
