@@ -42,14 +42,26 @@ const float *fp_hud_badge_color(fp_hud_badge b)
     return badge_colors[(unsigned)b < FP_HUD_BADGES ? b : FP_HUD_IDLE];
 }
 
+/* The badge's text: its state's word, then its detail (REC's timecode). */
+static void badge_text(fp_hud_badge b, const char *detail, char *text, size_t n)
+{
+    snprintf(text, n, "%s%s%s", fp_hud_badge_name(b), detail && *detail ? "  " : "", detail ? detail : "");
+}
+
+float fp_hud_badge_width(fp_hud_badge b, const char *detail, float scale)
+{
+    char text[128];
+    badge_text(b, detail, text, sizeof text);
+    return fmaxf(64 * scale, fp_render_text_width(text, scale) + 12 * scale);
+}
+
 float fp_hud_draw_badge(fp_render *r, int w, int h, float x, float y, float scale,
                         fp_hud_badge b, const char *detail)
 {
     static const float ink[4] = {0.04f, 0.04f, 0.06f, 1.f};
     char text[128];
-    snprintf(text, sizeof text, "%s%s%s", fp_hud_badge_name(b), detail && *detail ? "  " : "",
-             detail ? detail : "");
-    float bw = fmaxf(64 * scale, fp_render_text_width(text, scale) + 12 * scale), bh = 15 * scale;
+    badge_text(b, detail, text, sizeof text);
+    float bw = fp_hud_badge_width(b, detail, scale), bh = 15 * scale;
     fp_render_rect(r, w, h, x, y, bw, bh, fp_hud_badge_color(b));
     fp_render_text(r, w, h, x + 6 * scale, y + 4 * scale, scale, text, ink);
     return bh;

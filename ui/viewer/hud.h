@@ -50,6 +50,8 @@ fp_hud_badge fp_hud_gesture_badge(double guard_reached, double collide_t);
  *  idle's for a value out of range. Static storage. */
 const float *fp_hud_badge_color(fp_hud_badge b);
 
+/** The badge's width in pixels at scale (as fp_hud_draw_badge draws it). Plain C. */
+float fp_hud_badge_width(fp_hud_badge b, const char *detail, float scale);
 /** Draw the badge at pixel (x, y) from the top left of a w x h framebuffer: the state's
  *  word, then `detail` (the REC timecode; NULL or "" for none), on the state's colour, text
  *  scaled by `scale` (1 or 2). Returns the box's height in pixels. */

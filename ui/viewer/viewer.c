@@ -770,7 +770,7 @@ static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
     if (v->rig_on && fp_session_rig(v->s)) room -= fp_overlay_rig_legend_height(scale) + 4 * scale;
     y += fp_hud_draw_msgs(&v->msgs, &v->r, w, h, margin, y, max_px, scale, room, dim, fp_now_ns()) + 4 * scale;
     if (v->rig_on && fp_session_rig(v->s)) fp_overlay_rig_legend(&v->r, v->s, w, h, y, scale);
-    fp_vtakes_draw(&v->takes, &v->r, w, h, fp_now_ns());
+    fp_vtakes_draw(&v->takes, &v->r, w, h, fp_now_ns(), margin + fp_hud_badge_width(b, tc, scale) + 8 * scale);
     if (!fp_voverdub_draw(&v->over, &v->r, w, h, &v->wave)) /* else the waveform alone */
         fp_vwave_draw_lane(&v->wave, &v->r, w, h, fp_session_take_recording(&v->takes.take)
                                                       ? (double)(fp_now_ns() - v->takes.origin_ns) * 1e-9 : NAN);
