@@ -302,6 +302,20 @@ void fp_vtakes_strip_rect(int w, int h, float *x, float *y, float *sw, float *sh
     *y = (float)h - *sh - 28 * scale;
 }
 
+/* text cut at its last two blanks, a hint at a time ("...   P play/pause  , . step"), until it
+ * is no wider than max_px at scale (the strip's line: a narrow window); returns text. */
+static char *fit_hints(char *text, float max_px, float scale)
+{
+    char *cut;
+    while (fp_render_text_width(text, scale) > max_px && (cut = strstr(text, "  "))) {
+        char *last = cut;
+        while ((cut = strstr(cut + 1, "  "))) last = cut;
+        while (last > text && last[-1] == ' ') last--;
+        *last = '\0';
+    }
+    return text;
+}
+
 /* The first of n texts that fits right-aligned between left and the window's right edge
  * (pad: pixels before it at scale 1, REC's square), or NULL. */
 static const char *corner_fit(char texts[][160], int n, int w, float scale, float pad, float left)
@@ -375,9 +389,9 @@ void fp_vtakes_draw(fp_vtakes *t, fp_render *r, int w, int h, int64_t now, float
     if (t->frames) {
         snprintf(text, sizeof text, "review take %u: frame %ld / %zu %s   P play/pause  , . step  Esc or V: live",
                  t->review_take, t->playhead + 1, t->frames, t->playing ? "playing" : t->playhead >= 0 ? "paused" : "live");
-        fp_render_text(r, w, h, x, y - 14 * scale, scale, text, dim);
+        fp_render_text(r, w, h, x, y - 14 * scale, scale, fit_hints(text, sw, scale), dim);
     } else if (t->have_last) {
         snprintf(text, sizeof text, "take %u: V review   P play   mouse on the strip: scrub", t->last.take);
-        fp_render_text(r, w, h, x, y - 14 * scale, scale, text, dim);
+        fp_render_text(r, w, h, x, y - 14 * scale, scale, fit_hints(text, sw, scale), dim);
     }
 }

@@ -766,10 +766,10 @@ static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
     float y = margin + fp_hud_draw_badge(&v->r, w, h, margin, margin, scale, b, tc) + 4 * scale;
     fp_hud_wrap(text, max_px, scale, wrapped, sizeof wrapped);
     y += fp_render_text(&v->r, w, h, margin, y, scale, wrapped, white) + 6 * scale;
-    float room = fp_voverdub_bottom_top(&v->over, &v->takes, &v->wave, w, h) - y; /* to the strip */
+    float bottom = fp_voverdub_bottom_top(&v->over, &v->takes, &v->wave, w, h), room = bottom - y; /* to the strip */
     if (v->rig_on && fp_session_rig(v->s)) room -= fp_overlay_rig_legend_height(scale) + 4 * scale;
     y += fp_hud_draw_msgs(&v->msgs, &v->r, w, h, margin, y, max_px, scale, room, dim, fp_now_ns()) + 4 * scale;
-    if (v->rig_on && fp_session_rig(v->s)) fp_overlay_rig_legend(&v->r, v->s, w, h, y, scale);
+    if (v->rig_on && fp_session_rig(v->s)) fp_overlay_rig_legend(&v->r, v->s, w, h, y, scale, bottom - y);
     fp_vtakes_draw(&v->takes, &v->r, w, h, fp_now_ns(), margin + fp_hud_badge_width(b, tc, scale) + 8 * scale);
     if (!fp_voverdub_draw(&v->over, &v->r, w, h, &v->wave)) /* else the waveform alone */
         fp_vwave_draw_lane(&v->wave, &v->r, w, h, fp_session_take_recording(&v->takes.take)
