@@ -222,6 +222,12 @@ static void test_script_parse(void **state)
         assert_non_null(strstr(err, "--script"));
         assert_int_equal(s.count, 0);
     }
+    /* a key it has no name for: the key said, and the keys it knows (before: "'key Q' is not
+     * one of: ... key NAME ...", which read as if the command were wrong) */
+    err[0] = '\0';
+    assert_int_equal(fp_script_parse("wait frames 2; key Q", &s, err, sizeof err), -EINVAL);
+    assert_non_null(strstr(err, "command 2 'key Q': no such key; keys: E C X"));
+    assert_null(strstr(err, "is not one of"));
 }
 
 static void test_percentiles(void **state)

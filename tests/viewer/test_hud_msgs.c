@@ -90,6 +90,92 @@ static void test_confirmations_kept_notes_fade(void **state)
     assert_string_equal(live[1]->text, "take 3: 12 frames");
 }
 
+/* A warning (the hint that the hands never reach the face) outlives the notes after it: under
+ * Xvfb, an OSC sender restarting every 0.15 s sent six 'sender ... took over' notes within a
+ * second of the hint, and it was gone from the HUD (the stack's six lines all notes). */
+static void test_warning_outlives_notes(void **state)
+{
+    (void)state;
+    fp_hud_msgs s = {0};
+    const int64_t sec = 1000000000LL;
+    const fp_hud_msg *live[FP_HUD_MSGS];
+    fp_hud_say(&s, FP_HUD_WARN, 0, "session: hands present for 3 s, but no fingertip came within 14 mm");
+    for (int i = 0; i < 10; i++) {
+        char t[64];
+        snprintf(t, sizeof t, "osc: port 9125: sender %d took over", i);
+        fp_hud_say(&s, FP_HUD_NOTE, i * sec / 10, t);
+    }
+    size_t n = fp_hud_live(&s, sec, live, NULL);
+    assert_int_equal(n, FP_HUD_MSGS);
+    assert_int_equal(live[0]->kind, FP_HUD_WARN);
+    assert_string_equal(live[n - 1]->text, "osc: port 9125: sender 9 took over");
+    /* it fades as a note does */
+    assert_int_equal(fp_hud_live(&s, (int64_t)(FP_HUD_NOTE_S * sec) - 1, live, NULL) >= 1, 1);
+    assert_int_equal(live[0]->kind, FP_HUD_WARN);
+    /* in a room for two lines, it and the newest note */
+    n = fp_hud_fit(&s, sec, 1008, 2, 2 * (fp_render_text_height("x", 2) + 4), live, NULL);
+    assert_int_equal(n, 2);
+    assert_int_equal(live[0]->kind, FP_HUD_WARN);
+    assert_string_equal(live[1]->text, "osc: port 9125: sender 9 took over");
+}
+
+/* The stack fits the room left above the window's bottom (the take strip, its lanes, "? keys"):
+ * before, six long notes ran 400 px down a 640 px window, past the strip, and the take's
+ * confirmation, drawn last as the newest, lay under the strip, never seen. Now the oldest
+ * fading notes are left out first and the take's line stays. */
+static void test_fit_room(void **state)
+{
+    (void)state;
+    fp_hud_msgs s = {0};
+    const int64_t sec = 1000000000LL;
+    const fp_hud_msg *live[FP_HUD_MSGS];
+    float alpha[FP_HUD_MSGS];
+    const float width = 1024 - 16, scale = 2;
+    char t[400];
+    for (int i = 0; i < 5; i++) {
+        snprintf(t, sizeof t, "engine: the skin followed the fingertips %d%% this gesture (mean of 15; least 22%%, "
+                 "under 90%% in 10; longest drag 100.8 mm; 100%% of what the rig allowed: it holds back a push "
+                 "toward the skull or the jaw)", 50 + i);
+        fp_hud_say(&s, FP_HUD_NOTE, i * sec / 10, t);
+    }
+    fp_hud_say(&s, FP_HUD_TAKE, sec, "take 1: 74 frames, 0 dropped, 23:57:17:49 - 23:57:19:17, "
+                                     "takes/scene1_T001.fptake   V: review");
+    /* all of them, as drawn: more than the room between the HUD's figures and the strip */
+    size_t all = fp_hud_live(&s, sec, live, alpha);
+    assert_int_equal(all, 6);
+    float whole = 0;
+    for (size_t i = 0; i < all; i++) {
+        char w[2 * FP_HUD_MSG_LEN];
+        fp_hud_wrap(live[i]->text, width, scale, w, sizeof w);
+        whole += fp_render_text_height(w, scale) + 2 * scale;
+    }
+    const float room = 300; /* 640 px: the strip's text at 536, the messages from 228 */
+    assert_true(whole > room);
+    assert_int_equal(fp_hud_fit(&s, sec, width, scale, 1e6f, live, alpha), all); /* room for all */
+    size_t n = fp_hud_fit(&s, sec, width, scale, room, live, alpha);
+    assert_true(n >= 2 && n < all);
+    float used = 0;
+    uint64_t last_seq = 0;
+    for (size_t i = 0; i < n; i++) {
+        char w[2 * FP_HUD_MSG_LEN];
+        fp_hud_wrap(live[i]->text, width, scale, w, sizeof w);
+        used += fp_render_text_height(w, scale) + 2 * scale;
+        assert_true(i == 0 || live[i]->seq > last_seq); /* oldest first */
+        last_seq = live[i]->seq;
+        assert_float_equal(alpha[i], 1.f, 0);
+    }
+    assert_true(used <= room);
+    assert_string_equal(live[n - 1]->text, "take 1: 74 frames, 0 dropped, 23:57:17:49 - 23:57:19:17, "
+                                           "takes/scene1_T001.fptake   V: review");
+    assert_non_null(strstr(live[n - 2]->text, "54%")); /* the newest note kept, the oldest gone */
+    /* a room under one message: none, the take's line neither (nothing drawn past the room) */
+    assert_int_equal(fp_hud_fit(&s, sec, width, scale, 10, live, alpha), 0);
+    /* a room for the take's line alone keeps it over every note */
+    n = fp_hud_fit(&s, sec, width, scale, 60, live, NULL);
+    assert_int_equal(n, 1);
+    assert_int_equal(live[0]->kind, FP_HUD_TAKE);
+}
+
 /* The reach line: the least reach and the drag; with a rig whose clamp held a push back, what
  * it allowed too; fingertips on the skull or the jaw named; nothing without a touching
  * vector. */
@@ -129,8 +215,26 @@ static void test_contact_line(void **state)
     fp_hud_contact_line(0.5, 0.9, 3, out, sizeof out);
     assert_string_equal(out, "\ncontact guard kept 90% of this frame's motion: the surface would have passed "
                              "through itself");
+    /* held back by a hair: not "kept 100%" beside the HELD badge (before: 100%) */
+    fp_hud_contact_line(0.9, 0.996, 0, out, sizeof out);
+    assert_string_equal(out, "\ncontact guard kept over 99% of this frame's motion: the skin would have folded over");
+    fp_hud_contact_line(0.9, 0.994, 0, out, sizeof out);
+    assert_string_equal(out, "\ncontact guard kept 99% of this frame's motion: the skin would have folded over");
     fp_hud_contact_line(0.5, 0.9, 3, out, 1);
     assert_string_equal(out, "");
+}
+
+/* The unit's line: a face in metres reads 1000 mm per mesh unit (before: "1e+03 mm per mesh
+ * unit", %.3g), as run and calibrate print it; the how up to its first ':'. */
+static void test_scale_line(void **state)
+{
+    (void)state;
+    char out[120];
+    assert_string_equal(fp_hud_scale_line(1000, "from the rig rigs/ict-facekit.json: placed", out, sizeof out),
+                        "1000 mm per mesh unit, from the rig rigs/ict-facekit.json");
+    assert_string_equal(fp_hud_scale_line(49.0345, "detected from the head", out, sizeof out),
+                        "49.03 mm per mesh unit, detected from the head");
+    assert_string_equal(fp_hud_scale_line(10, "--mm-per-unit", out, sizeof out), "10 mm per mesh unit, --mm-per-unit");
 }
 
 /* The gesture's badge: "limited" only where the fold-over guard stopped it short; the
@@ -159,6 +263,9 @@ int main(void)
         cmocka_unit_test(test_contact_line),
         cmocka_unit_test(test_wrap_fits),
         cmocka_unit_test(test_confirmations_kept_notes_fade),
+        cmocka_unit_test(test_warning_outlives_notes),
+        cmocka_unit_test(test_fit_room),
+        cmocka_unit_test(test_scale_line),
         cmocka_unit_test(test_reach_line),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -42,14 +42,26 @@ const float *fp_hud_badge_color(fp_hud_badge b)
     return badge_colors[(unsigned)b < FP_HUD_BADGES ? b : FP_HUD_IDLE];
 }
 
+/* The badge's text: its state's word, then its detail (REC's timecode). */
+static void badge_text(fp_hud_badge b, const char *detail, char *text, size_t n)
+{
+    snprintf(text, n, "%s%s%s", fp_hud_badge_name(b), detail && *detail ? "  " : "", detail ? detail : "");
+}
+
+float fp_hud_badge_width(fp_hud_badge b, const char *detail, float scale)
+{
+    char text[128];
+    badge_text(b, detail, text, sizeof text);
+    return fmaxf(64 * scale, fp_render_text_width(text, scale) + 12 * scale);
+}
+
 float fp_hud_draw_badge(fp_render *r, int w, int h, float x, float y, float scale,
                         fp_hud_badge b, const char *detail)
 {
     static const float ink[4] = {0.04f, 0.04f, 0.06f, 1.f};
     char text[128];
-    snprintf(text, sizeof text, "%s%s%s", fp_hud_badge_name(b), detail && *detail ? "  " : "",
-             detail ? detail : "");
-    float bw = fmaxf(64 * scale, fp_render_text_width(text, scale) + 12 * scale), bh = 15 * scale;
+    badge_text(b, detail, text, sizeof text);
+    float bw = fp_hud_badge_width(b, detail, scale), bh = 15 * scale;
     fp_render_rect(r, w, h, x, y, bw, bh, fp_hud_badge_color(b));
     fp_render_text(r, w, h, x + 6 * scale, y + 4 * scale, scale, text, ink);
     return bh;
@@ -102,6 +114,9 @@ size_t fp_hud_wrap(const char *text, float max_px, float scale, char *out, size_
 
 static bool kept_kind(int kind) { return kind == FP_HUD_TAKE || kind == FP_HUD_SETTING; }
 
+/* The order messages make room in: notes and answers (0), warnings (1), confirmations (2). */
+static int drop_rank(int kind) { return kept_kind(kind) ? 2 : kind == FP_HUD_WARN; }
+
 static void drop_expired(fp_hud_msgs *s, int64_t now)
 {
     for (size_t i = 0; i < s->count;) {
@@ -119,19 +134,20 @@ void fp_hud_say(fp_hud_msgs *s, int kind, int64_t now, const char *text)
         if (s->m[i].kind == kind && (kept_kind(kind) || !strncmp(s->m[i].text, text, FP_HUD_MSG_LEN - 1)))
             slot = &s->m[i];
     if (!slot && s->count < FP_HUD_MSGS) slot = &s->m[s->count++];
-    if (!slot) { /* full: the oldest fading message makes room, else the oldest */
-        fp_hud_msg *oldest = NULL, *oldest_fading = NULL;
+    if (!slot) { /* full: the oldest note or answer makes room, else warning, else the oldest */
+        fp_hud_msg *oldest = NULL, *oldest_fading = NULL, *oldest_plain = NULL;
         for (size_t i = 0; i < s->count; i++) {
             fp_hud_msg *m = &s->m[i];
             if (!oldest || m->seq < oldest->seq) oldest = m;
             if (!kept_kind(m->kind) && (!oldest_fading || m->seq < oldest_fading->seq)) oldest_fading = m;
+            if (drop_rank(m->kind) == 0 && (!oldest_plain || m->seq < oldest_plain->seq)) oldest_plain = m;
         }
-        slot = oldest_fading ? oldest_fading : oldest;
+        slot = oldest_plain ? oldest_plain : oldest_fading ? oldest_fading : oldest;
     }
     slot->kind = kind;
     slot->seq = s->next_seq++;
     slot->until = kept_kind(kind) ? INT64_MAX
-                                  : now + (int64_t)((kind == FP_HUD_NOTE ? FP_HUD_NOTE_S : FP_HUD_INFO_S) * 1e9);
+                                  : now + (int64_t)((kind == FP_HUD_INFO ? FP_HUD_INFO_S : FP_HUD_NOTE_S) * 1e9);
     snprintf(slot->text, sizeof slot->text, "%s", text);
 }
 
@@ -154,12 +170,48 @@ size_t fp_hud_live(fp_hud_msgs *s, int64_t now, const fp_hud_msg *out[FP_HUD_MSG
     return s->count;
 }
 
+/* The height one message takes wrapped to max_px at scale, with the gap after it. */
+static float msg_height(const char *text, float max_px, float scale)
+{
+    char wrapped[2 * FP_HUD_MSG_LEN];
+    fp_hud_wrap(text, max_px, scale, wrapped, sizeof wrapped);
+    return fp_render_text_height(wrapped, scale) + 2 * scale;
+}
+
+size_t fp_hud_fit(fp_hud_msgs *s, int64_t now, float max_px, float scale, float room,
+                  const fp_hud_msg *out[FP_HUD_MSGS], float alpha[FP_HUD_MSGS])
+{
+    const fp_hud_msg *live[FP_HUD_MSGS];
+    float a[FP_HUD_MSGS], hgt[FP_HUD_MSGS], total = 0;
+    bool keep[FP_HUD_MSGS];
+    size_t n = fp_hud_live(s, now, live, a);
+    for (size_t i = 0; i < n; i++) {
+        hgt[i] = msg_height(live[i]->text, max_px, scale);
+        total += hgt[i];
+        keep[i] = true;
+    }
+    /* leave out the oldest notes, then warnings, then confirmations, until the rest fit */
+    for (int pass = 0; pass < 3; pass++)
+        for (size_t i = 0; i < n && total > room; i++)
+            if (keep[i] && drop_rank(live[i]->kind) <= pass) {
+                keep[i] = false;
+                total -= hgt[i];
+            }
+    size_t k = 0;
+    for (size_t i = 0; i < n; i++)
+        if (keep[i]) {
+            if (alpha) alpha[k] = a[i];
+            out[k++] = live[i];
+        }
+    return k;
+}
+
 float fp_hud_draw_msgs(fp_hud_msgs *s, fp_render *r, int w, int h, float x, float y,
-                       float max_px, float scale, const float color[4], int64_t now)
+                       float max_px, float scale, float room, const float color[4], int64_t now)
 {
     const fp_hud_msg *live[FP_HUD_MSGS];
     float alpha[FP_HUD_MSGS];
-    size_t n = fp_hud_live(s, now, live, alpha);
+    size_t n = fp_hud_fit(s, now, max_px, scale, room, live, alpha);
     float y0 = y;
     char wrapped[2 * FP_HUD_MSG_LEN];
     for (size_t i = 0; i < n; i++) {
@@ -225,6 +277,16 @@ void fp_hud_contact_line(double t, double kept, long pairs, char *out, size_t le
     if (!len) return;
     out[0] = 0;
     if (!(t < 1.0)) return;
-    snprintf(out, len, "\ncontact guard kept %.0f%% of this frame's motion: %s", 100.0 * kept,
+    /* a frame held back reads under 100% (99.6% printed as 100% beside the HELD badge) */
+    char share[16];
+    if (100.0 * kept >= 99.5) snprintf(share, sizeof share, "over 99%%");
+    else snprintf(share, sizeof share, "%.0f%%", 100.0 * kept);
+    snprintf(out, len, "\ncontact guard kept %s of this frame's motion: %s", share,
              pairs ? "the surface would have passed through itself" : "the skin would have folded over");
+}
+
+const char *fp_hud_scale_line(double mm_per_unit, const char *how, char *out, size_t len)
+{
+    if (len) snprintf(out, len, "%.4g mm per mesh unit, %.*s", mm_per_unit, (int)strcspn(how, ":"), how);
+    return out;
 }

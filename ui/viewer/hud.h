@@ -11,9 +11,11 @@
  * The message stack (fp_hud_msgs): a few lines under the HUD's figures, oldest first, each
  * wrapped to the window's width. Confirmations (kinds FP_HUD_TAKE, FP_HUD_SETTING: a take
  * written, a mapping set) stay until a message of their own kind replaces them; notes
- * (FP_HUD_NOTE: the session's log lines) and answers (FP_HUD_INFO: a key's reply, an error)
- * stay FP_HUD_NOTE_S / FP_HUD_INFO_S seconds, fading out over the last one. A note never
- * pushes out a confirmation: when the stack is full the oldest fading message goes.
+ * (FP_HUD_NOTE: the session's log lines; FP_HUD_WARN: its warnings and errors) and answers
+ * (FP_HUD_INFO: a key's reply, an error) stay FP_HUD_NOTE_S / FP_HUD_INFO_S seconds, fading
+ * out over the last one. A note never pushes out a warning or a confirmation: when the stack
+ * is full the oldest note or answer goes, else the oldest warning. The stack drawn stops
+ * above the window's bottom (fp_hud_fit), leaving out messages in the same order.
  *
  * Everything here but the drawing functions is plain C (no GL): the wrap and the stack are
  * tested without a display (tests/viewer/test_hud_msgs.c). Drawing needs the renderer's
@@ -48,6 +50,8 @@ fp_hud_badge fp_hud_gesture_badge(double guard_reached, double collide_t);
  *  idle's for a value out of range. Static storage. */
 const float *fp_hud_badge_color(fp_hud_badge b);
 
+/** The badge's width in pixels at scale (as fp_hud_draw_badge draws it). Plain C. */
+float fp_hud_badge_width(fp_hud_badge b, const char *detail, float scale);
 /** Draw the badge at pixel (x, y) from the top left of a w x h framebuffer: the state's
  *  word, then `detail` (the REC timecode; NULL or "" for none), on the state's colour, text
  *  scaled by `scale` (1 or 2). Returns the box's height in pixels. */
@@ -79,7 +83,9 @@ void fp_hud_reach_line(const float *reach, size_t n, const float *allowed, size_
  *  thread. */
 void fp_hud_contact_line(double t, double kept, long pairs, char *out, size_t len);
 
-enum { FP_HUD_TAKE, FP_HUD_SETTING, FP_HUD_NOTE, FP_HUD_INFO, FP_HUD_KINDS };
+/* FP_HUD_WARN: a note from a warning or an error (the hint that the hands never reach the
+ * face, a hand gone): it fades as a note does, but notes and answers make room before it. */
+enum { FP_HUD_TAKE, FP_HUD_SETTING, FP_HUD_NOTE, FP_HUD_INFO, FP_HUD_WARN, FP_HUD_KINDS };
 #define FP_HUD_MSGS 6          /* lines of the stack at most */
 #define FP_HUD_MSG_LEN 512     /* bytes a message keeps (longer ones are cut) */
 #define FP_HUD_NOTE_S 6.0      /* seconds a note stays (the last one fading) */
@@ -100,7 +106,8 @@ typedef struct fp_hud_msgs {
 
 /** Add a message of `kind` at host time now (ns): a confirmation replaces the one of its
  *  kind; the same text as a live message of its kind renews that one; otherwise it is
- *  appended, the oldest fading message (else the oldest) making room when the stack is full.
+ *  appended, the oldest note or answer (else the oldest warning, else the oldest) making room
+ *  when the stack is full.
  *  Expired messages go first. A kind out of range counts as FP_HUD_INFO. */
 void fp_hud_say(fp_hud_msgs *s, int kind, int64_t now, const char *text);
 
@@ -110,10 +117,25 @@ void fp_hud_say(fp_hud_msgs *s, int kind, int64_t now, const char *text);
 size_t fp_hud_live(fp_hud_msgs *s, int64_t now, const fp_hud_msg *out[FP_HUD_MSGS],
                    float alpha[FP_HUD_MSGS]);
 
-/** Draw the live messages at (x, y), each wrapped to max_px, in `color` faded by its alpha;
- *  returns the height drawn. */
+/** The live messages at now (as fp_hud_live) that fit `room` pixels of height, each wrapped
+ *  to max_px at scale and followed by a 2 x scale gap, as fp_hud_draw_msgs draws them: where
+ *  they do not all fit, the oldest notes and answers are left out first, then the oldest
+ *  warnings, then the oldest confirmations, so that the newest confirmation (a take written) is the last to go. Written
+ *  oldest first to out, with alpha (may be NULL) as fp_hud_live's. Returns how many (0 where
+ *  room is under one message). Plain C, no GL. */
+size_t fp_hud_fit(fp_hud_msgs *s, int64_t now, float max_px, float scale, float room,
+                  const fp_hud_msg *out[FP_HUD_MSGS], float alpha[FP_HUD_MSGS]);
+
+/** Draw the live messages that fit `room` pixels of height (fp_hud_fit) at (x, y), each
+ *  wrapped to max_px, in `color` faded by its alpha; returns the height drawn (at most
+ *  room). */
 float fp_hud_draw_msgs(fp_hud_msgs *s, fp_render *r, int w, int h, float x, float y,
-                       float max_px, float scale, const float color[4], int64_t now);
+                       float max_px, float scale, float room, const float color[4], int64_t now);
+
+/** The HUD's line of the mesh's unit into out (len bytes; returns out): "1000 mm per mesh
+ *  unit, from the rig ..." (how: fp_head's, up to its first ':'), mm_per_unit in %.4g as the
+ *  other commands print it (so a face in metres reads 1000, not 1e+03). */
+const char *fp_hud_scale_line(double mm_per_unit, const char *how, char *out, size_t len);
 
 /** The key list centred in the window on a near-opaque dark backdrop (so that it reads over
  *  the face), text wrapped to the window. */

@@ -269,3 +269,19 @@ bool fp_voverdub_draw(const fp_voverdub *o, fp_render *r, int w, int h, const fp
     }
     return true;
 }
+
+float fp_voverdub_bottom_top(const fp_voverdub *o, const fp_vtakes *t, const fp_vwave *wave,
+                             int w, int h)
+{
+    float scale = h >= 600 ? 2.f : 1.f, x, y, sw, sh, lh = 12 * scale;
+    float top = (float)h - 16 * scale; /* the "? keys" line (viewer.c's draw_hud) */
+    fp_vtakes_strip_rect(w, h, &x, &y, &sw, &sh);
+    if (t->enabled && t->nblocks) top = fminf(top, y - 16 * scale); /* its line of text */
+    if (o->enabled && o->stack) {
+        size_t lanes = o->stack->layer_count + 1 + (fp_vwave_on(wave) ? 1 : 0);
+        top = fminf(top, y - 10 * scale - lh * (float)lanes);
+    } else if (fp_vwave_on(wave)) {
+        top = fminf(top, y - 10 * scale - lh);
+    }
+    return top;
+}

@@ -76,4 +76,11 @@ const float *fp_voverdub_shown(const fp_voverdub *o);
  *  (wave, when on) on the same time axis. Returns false (nothing drawn) when disabled. */
 bool fp_voverdub_draw(const fp_voverdub *o, fp_render *r, int w, int h, const fp_vwave *wave);
 
+/** The top (pixels from the window's top, w x h) of what the bottom of the window holds
+ *  now: the take strip with its line of text above (t: when it has a take), the lanes of o
+ *  (fp_voverdub_draw) or the soundtrack's lane alone (fp_vwave_draw_lane), and the "? keys"
+ *  line under them all; the HUD's messages stop above it. */
+float fp_voverdub_bottom_top(const fp_voverdub *o, const fp_vtakes *t, const fp_vwave *wave,
+                             int w, int h);
+
 #endif

@@ -207,7 +207,8 @@ void fp_overlay_rig(fp_render *r, const fp_session *s, const float *pos, size_t 
     free(axis.v);
 }
 
-float fp_overlay_rig_legend(fp_render *r, const fp_session *s, int w, int h, float y, float scale)
+float fp_overlay_rig_legend(fp_render *r, const fp_session *s, int w, int h, float y, float scale,
+                            float room)
 {
     char jaw[64];
     double j = fp_session_channel(s, "jaw.open");
@@ -218,10 +219,18 @@ float fp_overlay_rig_legend(fp_render *r, const fp_session *s, int w, int h, flo
     const float dim[4] = {0.8f, 0.85f, 0.9f, 1.f};
     float y0 = y;
     for (size_t i = 0; i < sizeof rows / sizeof rows[0]; i++) {
+        /* the rows that fit above the strip; the heading alone says nothing: then none */
+        float need = fp_render_text_height(rows[i].text, scale) * (i ? 1 : 2) + (i ? 0 : 2 * scale);
+        if (y - y0 + need > room) break;
         float c[4] = {1, 1, 1, 1};
         if (rows[i].c) memcpy(c, rows[i].c, 3 * sizeof *c);
         y += fp_render_text(r, w, h, 8 + (rows[i].c ? 10 * scale : 0), y, scale, rows[i].text,
                             rows[i].c ? c : dim) + 2 * scale;
     }
     return y - y0;
+}
+
+float fp_overlay_rig_legend_height(float scale)
+{
+    return 6 * (fp_render_text_height("rig", scale) + 2 * scale); /* its six rows */
 }

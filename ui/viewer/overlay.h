@@ -63,8 +63,14 @@ void fp_overlay_rig_colors(fp_render *r, const fp_session *s, size_t n);
 void fp_overlay_rig(fp_render *r, const fp_session *s, const float *pos, size_t n,
                     const float pv[16], int w, int h);
 
-/** The rig overlay's legend at (8, y), each name in its colour; returns the height drawn. */
-float fp_overlay_rig_legend(fp_render *r, const fp_session *s, int w, int h, float y,
-                            float scale);
+/** The height fp_overlay_rig_legend draws at scale (pixels). */
+float fp_overlay_rig_legend_height(float scale);
+
+/** The rig overlay's legend at (8, y), each name in its colour, the rows that fit in room
+ *  pixels of height (a short window: the first ones, none where its heading and one row do
+ *  not fit); returns the height
+ *  drawn. */
+float fp_overlay_rig_legend(fp_render *r, const fp_session *s, int w, int h, float y, float scale,
+                            float room);
 
 #endif

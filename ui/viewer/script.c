@@ -77,7 +77,11 @@ int fp_script_parse(const char *text, fp_script *s, char *err, size_t errlen)
         } else if (!strcmp(word, "key")) {
             c.op = FP_SCRIPT_KEY;
             c.key = fp_script_key(arg);
-            if (c.key < 0) rc = -EINVAL;
+            if (c.key < 0) { /* the command is right, the key is not: name the keys */
+                snprintf(err, errlen, "--script: command %d 'key %s': no such key; keys: E C X Z R W S F H T P "
+                         "J K G V I L M O 1 2 , . [ ] ? space Tab Esc", index, arg);
+                rc = -ENOENT;
+            }
         } else if (!strcmp(word, "shot") || !strcmp(word, "drop")) {
             c.op = word[0] == 's' ? FP_SCRIPT_SHOT : FP_SCRIPT_DROP;
             if (!arg[0]) rc = -EINVAL;
@@ -127,6 +131,7 @@ int fp_script_parse(const char *text, fp_script *s, char *err, size_t errlen)
         if (rc == -EINVAL)
             snprintf(err, errlen, "--script: command %d '%s %s' is not one of: wait hands|end|reload|frames N|seconds S, "
                      "key NAME, shot FILE, radius R, drop FILE, scrub F, camera YAW PITCH [ZOOM], size WxH, print mapping|hud|messages, close", index, word, arg);
+        if (rc == -ENOENT) rc = -EINVAL; /* (said above) */
         if (!rc) rc = add(s, c);
         else free(c.text);
     }

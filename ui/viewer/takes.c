@@ -302,36 +302,66 @@ void fp_vtakes_strip_rect(int w, int h, float *x, float *y, float *sw, float *sh
     *y = (float)h - *sh - 28 * scale;
 }
 
-void fp_vtakes_draw(fp_vtakes *t, fp_render *r, int w, int h, int64_t now)
+/* text cut at its last two blanks, a hint at a time ("...   P play/pause  , . step"), until it
+ * is no wider than max_px at scale (the strip's line: a narrow window); returns text. */
+static char *fit_hints(char *text, float max_px, float scale)
+{
+    char *cut;
+    while (fp_render_text_width(text, scale) > max_px && (cut = strstr(text, "  "))) {
+        char *last = cut;
+        while ((cut = strstr(cut + 1, "  "))) last = cut;
+        while (last > text && last[-1] == ' ') last--;
+        *last = '\0';
+    }
+    return text;
+}
+
+/* The first of n texts that fits right-aligned between left and the window's right edge
+ * (pad: pixels before it at scale 1, REC's square), or NULL. */
+static const char *corner_fit(char texts[][160], int n, int w, float scale, float pad, float left)
+{
+    for (int i = 0; i < n; i++)
+        if (texts[i][0] && (float)w - 8 - ((float)strlen(texts[i]) * 6 + pad) * scale >= left) return texts[i];
+    return NULL;
+}
+
+void fp_vtakes_draw(fp_vtakes *t, fp_render *r, int w, int h, int64_t now, float left)
 {
     if (!t->enabled) return;
     float scale = h >= 600 ? 2.f : 1.f;
     static const float red[4] = {0.95f, 0.15f, 0.12f, 1.f}, white[4] = {0.95f, 0.95f, 0.92f, 1.f},
                        dim[4] = {0.8f, 0.85f, 0.9f, 1.f};
-    char text[160];
+    char text[160], fit[3][160] = {"", "", ""};
+    const char *line;
     /* top right, on the badge's row (the badge at 8, 15 x scale high, its text 4 x scale
      * down: hud.c), where the HUD's text, which starts under the badge, never runs
-     * (stb_easy_font: about 6 pixels a character) */
+     * (stb_easy_font: about 6 pixels a character); shortened, or left out, rather than
+     * drawn over the badge (a narrow window, a long slate) */
     float ty = 8 + 4 * scale;
-#define RIGHT(s) ((float)w - 8 - (float)(strlen(s) * 6 + 20) * scale)
+#define RIGHT(s, pad) ((float)w - 8 - ((float)strlen(s) * 6 + (pad)) * scale)
     if (fp_session_take_recording(&t->take)) {
         fp_timecode tc;
         char tcs[32] = "";
         if (!fp_session_take_timecode(&t->take, now, &tc)) fp_timecode_format(&tc, tcs, sizeof tcs);
-        snprintf(text, sizeof text, "REC  %s  %s take %u", tcs, t->slate, t->take.header.take);
-        float tx = RIGHT(text);
-        fp_render_rect(r, w, h, tx, ty - 2 * scale, 11 * scale, 11 * scale, red);
-        fp_render_text(r, w, h, tx + 18 * scale, ty, scale, text, red);
+        snprintf(fit[0], sizeof fit[0], "REC  %s  %s take %u", tcs, t->slate, t->take.header.take);
+        snprintf(fit[1], sizeof fit[1], "%s take %u", t->slate, t->take.header.take);
+        snprintf(fit[2], sizeof fit[2], "take %u", t->take.header.take);
+        if ((line = corner_fit(fit, 3, w, scale, 20, left))) {
+            float tx = RIGHT(line, 20);
+            fp_render_rect(r, w, h, tx, ty - 2 * scale, 11 * scale, 11 * scale, red);
+            fp_render_text(r, w, h, tx + 18 * scale, ty, scale, line, red);
+        }
     } else if (t->countdown_until) {
-        double left = (double)(t->countdown_until - now) * 1e-9;
-        snprintf(text, sizeof text, "recording in %.0f ...", ceil(left > 0 ? left : 0));
-        fp_render_text(r, w, h, RIGHT(text), ty, scale, text, red);
+        double left_s = (double)(t->countdown_until - now) * 1e-9;
+        snprintf(fit[0], sizeof fit[0], "recording in %.0f ...", ceil(left_s > 0 ? left_s : 0));
+        if ((line = corner_fit(fit, 1, w, scale, 20, left))) fp_render_text(r, w, h, RIGHT(line, 20), ty, scale, line, red);
     } else {
         uint32_t next = 0;
         char err[256];
         if (fp_take_next_number(t->take.opt.dir, t->slate, &next, err, sizeof err)) next = 0;
-        snprintf(text, sizeof text, "T: record  %s take %u", t->slate, next);
-        fp_render_text(r, w, h, RIGHT(text), ty, scale, text, dim);
+        snprintf(fit[0], sizeof fit[0], "T: record  %s take %u", t->slate, next);
+        snprintf(fit[1], sizeof fit[1], "T: record");
+        if ((line = corner_fit(fit, 2, w, scale, 20, left))) fp_render_text(r, w, h, RIGHT(line, 20), ty, scale, line, dim);
     }
     if (!t->nblocks) return;
     /* the strip: one block per take of this session, the reviewed one lit, a playhead */
@@ -359,9 +389,9 @@ void fp_vtakes_draw(fp_vtakes *t, fp_render *r, int w, int h, int64_t now)
     if (t->frames) {
         snprintf(text, sizeof text, "review take %u: frame %ld / %zu %s   P play/pause  , . step  Esc or V: live",
                  t->review_take, t->playhead + 1, t->frames, t->playing ? "playing" : t->playhead >= 0 ? "paused" : "live");
-        fp_render_text(r, w, h, x, y - 14 * scale, scale, text, dim);
+        fp_render_text(r, w, h, x, y - 14 * scale, scale, fit_hints(text, sw, scale), dim);
     } else if (t->have_last) {
         snprintf(text, sizeof text, "take %u: V review   P play   mouse on the strip: scrub", t->last.take);
-        fp_render_text(r, w, h, x, y - 14 * scale, scale, text, dim);
+        fp_render_text(r, w, h, x, y - 14 * scale, scale, fit_hints(text, sw, scale), dim);
     }
 }

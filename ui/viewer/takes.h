@@ -94,7 +94,9 @@ void fp_vtakes_leave(fp_vtakes *t);
 
 /** The strip's rectangle in a w x h framebuffer (pixels from the top left). */
 void fp_vtakes_strip_rect(int w, int h, float *x, float *y, float *sw, float *sh);
-/** Draw REC / countdown / take number (top right) and the strip (bottom). */
-void fp_vtakes_draw(fp_vtakes *t, fp_render *r, int w, int h, int64_t now);
+/** Draw REC / countdown / take number (top right, right of x = left: the badge's row, whose
+ *  badge ends there; where the whole line does not fit, a shorter one, "slate take N" or
+ *  "take N" when recording, "T: record" else, or none) and the strip (bottom). */
+void fp_vtakes_draw(fp_vtakes *t, fp_render *r, int w, int h, int64_t now, float left);
 
 #endif

@@ -178,7 +178,7 @@ static void on_session_log(void *user, int level, const char *source, const char
     if (level > FP_LOG_INFO && !getenv("FACEPUPPET_DEBUG")) return;
     char text[FP_HUD_MSG_LEN];
     snprintf(text, sizeof text, "%s: %s", source, message);
-    fp_hud_say(&v->msgs, FP_HUD_NOTE, fp_now_ns(), text);
+    fp_hud_say(&v->msgs, level <= FP_LOG_WARNING ? FP_HUD_WARN : FP_HUD_NOTE, fp_now_ns(), text);
     fp_hud_hands_log(&v->hands, v->so.inputs, v->so.input_count, level, source, message);
     if (!(v->opt->quiet && fp_slog_is_note(level, source)))
         fprintf(stderr, "facepuppet live: %s: %s\n", source, message);
@@ -672,7 +672,7 @@ static void run_script(viewer *v)
             break;
         }
         case FP_SCRIPT_PRINT_MESSAGES: {
-            static const char *const kinds[FP_HUD_KINDS] = {"take", "setting", "note", "info"};
+            static const char *const kinds[FP_HUD_KINDS] = {"take", "setting", "note", "info", "warning"};
             const fp_hud_msg *live[FP_HUD_MSGS];
             float alpha[FP_HUD_MSGS];
             size_t n = fp_hud_live(&v->msgs, fp_now_ns(), live, alpha);
@@ -740,15 +740,15 @@ static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
                  v->cues.touch_count, v->cues.count, v->cues.nearest * head->mm_per_unit);
     char hands[FP_HUD_MSG_LEN + 600];
     fp_hud_hands_line(&v->hands, v->s, hands, sizeof hands);
-    char text[4096], wrapped[8192];
+    char text[4096], wrapped[8192], scale_line[300];
     snprintf(text, sizeof text,
              "%s  %zu vertices  mapping %s\n"
-             "%.3g mm per mesh unit, %.*s\n"
+             "%s\n"
              "commits %lu   radius %.4g (%.1f mm)\n"
              "%.1f fps (%.2f ms)   engine %.3f ms   input %.0f ev/s%s\n"
              "fold-over guard: bound %.2f  reach %.0f%%  sub-steps %d%s%s%s%s",
              v->mesh_path ? (strrchr(v->mesh_path, '/') ? strrchr(v->mesh_path, '/') + 1 : v->mesh_path) : "", v->n, v->mapping,
-             head->mm_per_unit, (int)strcspn(head->how, ":"), head->how, fp_session_commits(v->s),
+             fp_hud_scale_line(head->mm_per_unit, head->how, scale_line, sizeof scale_line), fp_session_commits(v->s),
              fp_session_radius(v->s), fp_session_radius(v->s) * head->mm_per_unit,
              recent > 0 ? 1000.0 / recent : 0.0, recent,
              st->active ? st->update_ms : v->last_update_ms, v->input_rate,
@@ -763,13 +763,14 @@ static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
         fp_timecode t;
         if (!fp_session_take_timecode(&v->takes.take, fp_now_ns(), &t)) fp_timecode_format(&t, tc, sizeof tc);
     }
-    float y = margin;
-    y += fp_hud_draw_badge(&v->r, w, h, margin, y, scale, b, tc) + 4 * scale;
+    float y = margin + fp_hud_draw_badge(&v->r, w, h, margin, margin, scale, b, tc) + 4 * scale;
     fp_hud_wrap(text, max_px, scale, wrapped, sizeof wrapped);
     y += fp_render_text(&v->r, w, h, margin, y, scale, wrapped, white) + 6 * scale;
-    y += fp_hud_draw_msgs(&v->msgs, &v->r, w, h, margin, y, max_px, scale, dim, fp_now_ns()) + 4 * scale;
-    if (v->rig_on && fp_session_rig(v->s)) y += fp_overlay_rig_legend(&v->r, v->s, w, h, y, scale) + 6 * scale;
-    fp_vtakes_draw(&v->takes, &v->r, w, h, fp_now_ns());
+    float bottom = fp_voverdub_bottom_top(&v->over, &v->takes, &v->wave, w, h), room = bottom - y; /* to the strip */
+    if (v->rig_on && fp_session_rig(v->s)) room -= fp_overlay_rig_legend_height(scale) + 4 * scale;
+    y += fp_hud_draw_msgs(&v->msgs, &v->r, w, h, margin, y, max_px, scale, room, dim, fp_now_ns()) + 4 * scale;
+    if (v->rig_on && fp_session_rig(v->s)) fp_overlay_rig_legend(&v->r, v->s, w, h, y, scale, bottom - y);
+    fp_vtakes_draw(&v->takes, &v->r, w, h, fp_now_ns(), margin + fp_hud_badge_width(b, tc, scale) + 8 * scale);
     if (!fp_voverdub_draw(&v->over, &v->r, w, h, &v->wave)) /* else the waveform alone */
         fp_vwave_draw_lane(&v->wave, &v->r, w, h, fp_session_take_recording(&v->takes.take)
                                                       ? (double)(fp_now_ns() - v->takes.origin_ns) * 1e-9 : NAN);
