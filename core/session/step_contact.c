@@ -249,11 +249,15 @@ void fp_cg_end_gesture(fp_cg_step *g, fp_slog *log)
     else
         snprintf(why, sizeof why, "stopped the surface from passing through itself (%lu frames) and "
                  "the skin from folding over (%lu)", g->limited - g->turned, g->turned);
+    /* a frame held back by a hair rounds to 100%: said as over 99% (as the HUD says it) */
+    char least[16];
+    if (100.0 * g->t_least >= 99.5) snprintf(least, sizeof least, "over 99%%");
+    else snprintf(least, sizeof least, "%.0f%%", 100.0 * g->t_least);
     if (g->limited)
         fp_slog_printf(log, FP_LOG_WARNING, FP_SLOG_CONTACT,
                        "contact guard %s: %lu of %lu frames scaled back (least share of a frame's "
-                       "motion kept %.0f%%)%s",
-                       why, g->limited, g->frames, 100.0 * g->t_least, carried);
+                       "motion kept %s)%s",
+                       why, g->limited, g->frames, least, carried);
     g->frames = g->limited = g->carried = g->turned = 0;
     cg_check(g);
 }

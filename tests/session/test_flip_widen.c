@@ -55,17 +55,22 @@ static void on_log(void *user, int level, const char *source, const char *messag
 
 /* the line after a gesture of `frames` checked frames, `limited` scaled back, `turned` of
  * them for flips alone; NULL when none was said */
-static const char *gesture_line(unsigned long frames, unsigned long limited, unsigned long turned)
+static const char *gesture_line_at(unsigned long frames, unsigned long limited, unsigned long turned, double least)
 {
     fp_cg_step g;
     memset(&g, 0, sizeof g);
     g.sync = FP_CG_SYNCED;
-    g.frames = frames, g.limited = limited, g.turned = turned, g.t_least = 0.25;
+    g.frames = frames, g.limited = limited, g.turned = turned, g.t_least = least;
     fp_slog log = {.fn = on_log};
     g_lines = 0;
     fp_cg_end_gesture(&g, &log);
     assert_true(g.frames == 0 && g.limited == 0 && g.turned == 0); /* the next gesture's afresh */
     return g_lines ? g_line : NULL;
+}
+
+static const char *gesture_line(unsigned long frames, unsigned long limited, unsigned long turned)
+{
+    return gesture_line_at(frames, limited, turned, 0.25);
 }
 
 static void test_gesture_line_names_the_rule(void **state)
@@ -81,6 +86,11 @@ static void test_gesture_line_names_the_rule(void **state)
     assert_null(strstr(l, "passing through"));
     l = gesture_line(10, 4, 1);
     assert_non_null(strstr(l, "passing through itself (3 frames) and the skin from folding over (1): 4 of 10"));
+    /* a frame held back by a hair is not said as 100% kept (as the HUD's line) */
+    l = gesture_line_at(10, 1, 0, 0.9996);
+    assert_non_null(strstr(l, "(least share of a frame's motion kept over 99%)"));
+    l = gesture_line_at(10, 1, 0, 0.994);
+    assert_non_null(strstr(l, "(least share of a frame's motion kept 99%)"));
 }
 
 int main(void)
