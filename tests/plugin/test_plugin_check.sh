@@ -90,6 +90,8 @@ expect 0 'INFO  performers +the plugin declares ABI 1\.0, before 1\.3: no frames
 expect 0 'PASS  isolated +in a helper process the same 320 frames gave identical control sets' \
     "$fp" plugins check "$builtin/map-unanchored.so" --isolate all
 expect 0 'PASS  isolated' "$fp" plugins check "$builtin/map-onehand.so" --isolate all
+# A mapping written in C++ with FP_PLUGIN_DECLARE_ENTRY loads (before: no entry symbol, 78)
+expect 0 "PASS  load +mapping plugin 'cxx'" "$fp" plugins check "$fx/map-fixture-cxx.so"
 expect 1 "FAIL  overrun +wrote past the capacity of the host's start array" "$fp" plugins check "$fx/map-fixture-overrun.so"
 expect 1 'FAIL  finite points +control vector 0: end point .*nan.* is not finite' "$fp" plugins check "$fx/map-fixture-nan.so"
 # ABI 1.3: a mapping that writes into the host's const extra_hands, or reads further hands past
