@@ -5,6 +5,7 @@
 #include "fp_isolate.h"
 #include "fp_control_check.h"
 #include "isolate_proc.h"
+#include "log_relay.h"
 
 #include "fp_clock.h"
 #include "fp_file.h"
@@ -51,6 +52,8 @@ typedef struct proxy {
     int streak;                          /* faults in a row */
     unsigned long calls_ok;              /* calls answered by this helper */
     fp_isolate_stats stats;
+    unsigned relayed;                    /* the plugin's log lines relayed this frame */
+    unsigned long relay_dropped;         /* and those dropped over FP_ISOLATE_LOG_LINES */
     /* the last good control set, held while the helper is away */
     fp_control_set last;
     float last_start[FP_CONTROL_CAPACITY][3], last_end[FP_CONTROL_CAPACITY][3];
@@ -89,10 +92,31 @@ static void say(proxy *x, fp_log_level level, const char *fmt, ...)
     if (x->host && x->host->log) x->host->log(x->host, level, line);
 }
 
+/* The plugin's lines a frame takes at most: the host's log keeps FP_LOG_RELAY_LINES a frame
+ * and drops the newest, so a plugin that floods its log (from process, against the rule)
+ * would push out the proxy's own lines said after them (a fault, a restart): the rest of
+ * the ring is kept for those. */
+#define FP_ISOLATE_LOG_LINES (FP_LOG_RELAY_LINES - 8)
+
 static void relay_log(void *user, int level, const char *message)
 {
     proxy *x = user;
+    if (x->relayed >= FP_ISOLATE_LOG_LINES) {
+        x->relay_dropped++;
+        return;
+    }
+    x->relayed++;
     if (x->host && x->host->log) x->host->log(x->host, (fp_log_level)level, message);
+}
+
+/* A frame's end: say how many of the plugin's lines were dropped, and start counting anew. */
+static void relay_frame_end(proxy *x)
+{
+    if (x->relay_dropped)
+        say(x, FP_LOG_WARNING, "%lu log line%s of the plugin dropped (more than %d in a frame)",
+            x->relay_dropped, x->relay_dropped == 1 ? "" : "s", FP_ISOLATE_LOG_LINES);
+    x->relay_dropped = 0;
+    x->relayed = 0;
 }
 
 /* ---- the frame into the shared memory ------------------------------------------------- */
@@ -448,9 +472,8 @@ static bool ensure_up(proxy *x, uint64_t frame)
     return true;
 }
 
-static int proxy_process(fp_mapping *self, const fp_frame_input *in, fp_control_set *out)
+static int frame_process(proxy *x, const fp_frame_input *in, fp_control_set *out)
 {
-    proxy *x = self->plugin_data;
     if (x->state == STOPPED) return FP_EPLUGIN_FAULT;
     x->frame_ns = in->time_ns;
     if (!ensure_up(x, in->frame)) {
@@ -480,6 +503,14 @@ static int proxy_process(fp_mapping *self, const fp_frame_input *in, fp_control_
      * it refused (e.g. over capacity, kept clamped) was shown after a later fault */
     if (rc >= 0 && fp_control_check(out, NULL, NULL) == FP_CONTROL_OK) keep_last(x, out);
     if (++x->calls_ok >= FP_ISOLATE_HEALTHY_CALLS) x->streak = 0;
+    return rc;
+}
+
+static int proxy_process(fp_mapping *self, const fp_frame_input *in, fp_control_set *out)
+{
+    proxy *x = self->plugin_data;
+    int rc = frame_process(x, in, out);
+    relay_frame_end(x);
     return rc;
 }
 

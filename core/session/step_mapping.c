@@ -100,6 +100,52 @@ static void refuse(fp_control_set *cs, const fp_frame_input *in)
     cs->radius = session_radius(in);
 }
 
+/* A set the host refuses (fp_control_check.h): reported naming what is wrong in it (the
+ * vector, its start or end point and the values, the radius, the count), so that the author
+ * sees the fault without running `plugins check`. Returns 0, -ERANGE (over a capacity) or
+ * -EINVAL. */
+static int refusal(const fp_control_set *cs, unsigned long long frame, fp_slog_repeat *errors,
+                   const fp_slog *log, const char *source)
+{
+    size_t v = 0;
+    int at_start = 0;
+    switch (fp_control_check(cs, &v, &at_start)) {
+    case FP_CONTROL_OK: return 0;
+    case FP_CONTROL_OVER_CAPACITY:
+        if (cs->count > cs->capacity)
+            fp_slog_repeat_report(errors, log, FP_LOG_ERROR, source, -ERANGE,
+                                  "control set over capacity: count %zu > capacity %zu on frame %llu; "
+                                  "the base shown", cs->count, cs->capacity, frame);
+        else
+            fp_slog_repeat_report(errors, log, FP_LOG_ERROR, source, -ERANGE,
+                                  "control set over capacity: channel_count %zu > channel_capacity %zu "
+                                  "on frame %llu; the base shown", cs->channel_count,
+                                  cs->channel_capacity, frame);
+        return -ERANGE;
+    case FP_CONTROL_NO_ARRAY:
+        fp_slog_repeat_report(errors, log, FP_LOG_ERROR, source, -EINVAL,
+                              "invalid control set: count %zu with a NULL %s array on frame %llu; "
+                              "the base shown", cs->count, cs->start ? "end" : "start", frame);
+        return -EINVAL;
+    case FP_CONTROL_BAD_POINT: {
+        const float *p = at_start ? cs->start[v] : cs->end[v];
+        fp_slog_repeat_report(errors, log, FP_LOG_ERROR, source, -EINVAL,
+                              "invalid control set: vector %zu's %s point (%g, %g, %g) is not finite "
+                              "or beyond %g mesh units on frame %llu; the base shown", v,
+                              at_start ? "start" : "end", (double)p[0], (double)p[1], (double)p[2],
+                              FP_CONTROL_COORD_MAX, frame);
+        return -EINVAL;
+    }
+    case FP_CONTROL_BAD_RADIUS:
+        fp_slog_repeat_report(errors, log, FP_LOG_ERROR, source, -EINVAL,
+                              "invalid control set: radius %g of an active set, outside [%g, %g] mesh "
+                              "units on frame %llu; the base shown", cs->radius, FP_CONTROL_RADIUS_MIN,
+                              FP_CONTROL_RADIUS_MAX, frame);
+        return -EINVAL;
+    }
+    return -EINVAL;
+}
+
 int fp_mapping_step_run(fp_mapping_step *st, fp_mapping *mapping, const char *name,
                         const fp_frame_input *in, fp_control_set *cs, const fp_slog *log)
 {
@@ -145,24 +191,15 @@ int fp_mapping_step_run(fp_mapping_step *st, fp_mapping *mapping, const char *na
         refuse(cs, in);
         return st->fault;
     }
-    const char *what = NULL;
     if (rc < 0) {
-        what = "process returned";
-    } else {
-        rc = fp_control_set_check(cs);
-        if (rc == -ERANGE) what = "control set over capacity: count";
-        else if (rc) what = "invalid control set (radius or points):";
+        fp_slog_repeat_report(&st->errors, log, FP_LOG_ERROR, source_of(source, name), rc,
+                              "process returned %d (%s) on frame %llu; the base shown", rc,
+                              fp_strerror(rc), frame);
+        refuse(cs, in);
+        return rc;
     }
+    rc = refusal(cs, frame, &st->errors, log, source_of(source, name));
     if (rc < 0) {
-        if (rc == -ERANGE && what[0] == 'c')
-            fp_slog_repeat_report(&st->errors, log, FP_LOG_ERROR, source_of(source, name), rc,
-                                  "%s %zu > capacity %zu (or channel_count %zu > %zu) on frame %llu; "
-                                  "the base shown", what, cs->count, cs->capacity,
-                                  cs->channel_count, cs->channel_capacity, frame);
-        else
-            fp_slog_repeat_report(&st->errors, log, FP_LOG_ERROR, source_of(source, name), rc,
-                                  "%s %d (%s) on frame %llu; the base shown", what, rc,
-                                  fp_strerror(rc), frame);
         refuse(cs, in);
         return rc;
     }

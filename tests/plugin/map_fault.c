@@ -13,7 +13,8 @@
  * With commit=1 each step is committed and its start read from the frame's mesh->base (the
  * test that an isolated mapping's copy of the base follows the commits). With overcount=1,
  * on the frame before `at` it returns an active set of count capacity + 1 (its first
- * capacity vectors written), which the host refuses (fp_control_check.h).
+ * capacity vectors written), which the host refuses (fp_control_check.h). With logs=N it
+ * logs N lines at the start of each process (against plugin.h's rule: a log flood).
  * It keeps no state, so after a restart it deforms as it did before. */
 #include <facepuppet/mapping_util.h>
 #include <facepuppet/plugin.h>
@@ -31,6 +32,7 @@ typedef struct fault {
     const fp_host *host;
     const fp_host_surface *surface;
     double gain, at, mean, seed;
+    double logs;
     bool commit, overcount;
 } fault;
 
@@ -48,6 +50,8 @@ static void hang(void)
 static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *out)
 {
     fault *f = self->plugin_data;
+    for (double i = 0; i < f->logs && f->host->log; i++) /* (against the rule: a flood) */
+        f->host->log(f->host, FP_LOG_INFO, "fault: a line logged from process");
     if (FAULT_MODE == 1 && in->frame == (uint64_t)f->at) crash();
     if (FAULT_MODE == 2 && in->frame == (uint64_t)f->at) hang();
     if (FAULT_MODE == 3 && in->frame >= (uint64_t)f->at) {
@@ -112,13 +116,14 @@ static const fp_param_info keys[] = {
     {"seed", FP_PARAM_INT, 0, 1e9, "1", NULL, NULL, "chaos: the random sequence"},
     {"commit", FP_PARAM_BOOL, 0, 1, "0", NULL, NULL, "commit each step, its start read from the frame's base"},
     {"overcount", FP_PARAM_BOOL, 0, 1, "0", NULL, NULL, "on the frame before `at`, a set over capacity"},
+    {"logs", FP_PARAM_INT, 0, 1e6, "0", NULL, "lines", "log this many lines in each process, first"},
     {NULL, 0, 0, 0, NULL, NULL, NULL, NULL},
 };
 
 static int create(const fp_host *host, const fp_param *params, size_t nparams, fp_mapping **out,
                   char *err, size_t errlen)
 {
-    fpmu_value v[6];
+    fpmu_value v[7];
     int rc = fpmu_params_parse("fault", keys, params, nparams, v, err, errlen);
     if (rc) return rc;
     fault *f = calloc(1, sizeof *f);
@@ -131,6 +136,7 @@ static int create(const fp_host *host, const fp_param *params, size_t nparams, f
     f->seed = v[3].number;
     f->commit = v[4].number != 0;
     f->overcount = v[5].number != 0;
+    f->logs = v[6].number;
     f->mapping = (fp_mapping){.size = sizeof(fp_mapping), .plugin_data = f, .process = process,
                               .destroy = destroy};
     *out = &f->mapping;
@@ -141,7 +147,7 @@ static const fp_mapping_factory factory = {
     .size = sizeof(fp_mapping_factory),
     .name = "fault",
     .description = "pulls the skin to the fingertips; faults on a chosen frame (isolation tests)",
-    .usage = "gain=G, at=FRAME, mean=N, seed=S, commit=0|1, overcount=0|1",
+    .usage = "gain=G, at=FRAME, mean=N, seed=S, commit=0|1, overcount=0|1, logs=N",
     .create = create,
     .params = keys,
 };

@@ -90,6 +90,8 @@ expect 0 'INFO  performers +the plugin declares ABI 1\.0, before 1\.3: no frames
 expect 0 'PASS  isolated +in a helper process the same 320 frames gave identical control sets' \
     "$fp" plugins check "$builtin/map-unanchored.so" --isolate all
 expect 0 'PASS  isolated' "$fp" plugins check "$builtin/map-onehand.so" --isolate all
+# A mapping written in C++ with FP_PLUGIN_DECLARE_ENTRY loads (before: no entry symbol, 78)
+expect 0 "PASS  load +mapping plugin 'cxx'" "$fp" plugins check "$fx/map-fixture-cxx.so"
 expect 1 "FAIL  overrun +wrote past the capacity of the host's start array" "$fp" plugins check "$fx/map-fixture-overrun.so"
 expect 1 'FAIL  finite points +control vector 0: end point .*nan.* is not finite' "$fp" plugins check "$fx/map-fixture-nan.so"
 # ABI 1.3: a mapping that writes into the host's const extra_hands, or reads further hands past
@@ -172,7 +174,7 @@ run() { "$fp" run --isolate none --plugin-dir "$fx" --mesh "$mesh" --input "repl
 expect 78 "mapping 'fixture-overrun': wrote past the capacity of the host's start array \(64 entries\) on frame [0-9]+; the mapping is stopped" run --mapping fixture-overrun
 expect 139 "fatal signal SIGSEGV in plugin 'fixture-segv' during process \(frame 3\)" run --mapping fixture-segv
 expect 0 "mapping 'fixture-slow': process took [0-9]+\.[0-9]+ ms on frame [0-9]+, over the budget of 2 ms" run --mapping fixture-slow
-expect 0 "mapping 'fixture-nan': invalid control set .* on frame [0-9]+" run --mapping fixture-nan
+expect 0 "mapping 'fixture-nan': invalid control set: vector 0's end point \(.*nan.*\) is not finite .* on frame [0-9]+" run --mapping fixture-nan
 # ... and a take of it plays: the refused sets are recorded emptied, not as the mapping wrote
 # them (before: play read the NaN as damage, "no intact frame to play", 65)
 expect 0 "mapping 'fixture-nan': invalid control set" run --mapping fixture-nan --take-dir "$tmp/nantakes"
@@ -198,7 +200,7 @@ expect 0 "frames [0-9]+, deforming" "$fp" run --isolate none --plugin-dir "$fx" 
 # A radius the engine would refuse (1e20: finite and positive) is the mapping's error, named,
 # on every frame: one line, then its count (before, the host passed it and the engine said
 # "engine: invalid argument" without the mapping's name, and a take recorded the set).
-expect 0 "mapping 'fixture-enginefail': invalid control set \(radius or points\): -22 .* the base shown \(repeated [0-9]+ more times\)" run --mapping fixture-enginefail
+expect 0 "mapping 'fixture-enginefail': invalid control set: radius 1e\+20 of an active set, outside \[1e-15, 1e\+15\] mesh units on frame 0; the base shown \(repeated [0-9]+ more times\)" run --mapping fixture-enginefail
 n=$(grep -c "mapping 'fixture-enginefail': invalid control set" "$tmp/out")
 [ "$n" = 2 ] && echo "ok: the repeated error: 2 lines" || { fail "error lines: $n, wanted 2"; sed 's/^/    /' "$tmp/out"; }
 grep -q "engine: " "$tmp/out" && { fail "the engine saw the refused set"; sed 's/^/    /' "$tmp/out"; }

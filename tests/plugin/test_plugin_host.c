@@ -2,6 +2,7 @@
 #define _GNU_SOURCE
 #include "fp_plugin_host.h"
 #include "fp_isolate.h"
+#include "log_relay.h"
 #include "fp_control_check.h"
 #include "fp_event_check.h"
 #include "fp_plugin_crash.h"
@@ -321,6 +322,54 @@ static void test_isolate_holds_only_good_set(void **state)
     assert_int_equal(cs.count, 0);
     assert_int_equal(fp_control_check(&cs, NULL, NULL), FP_CONTROL_OK);
     m->destroy(m);
+}
+
+/* ---- an isolated mapping's fault is said even when the plugin floods its log ---- */
+
+static void test_isolate_fault_said_through_log_flood(void **state)
+{
+    (void)state;
+    char file[4200], helper[4200], err[1024] = "";
+    snprintf(file, sizeof file, "%s/map-crash.so", fixture_dir);
+    snprintf(helper, sizeof helper, "%s/../../bin/facepuppet", fixture_dir);
+    log_seen seen = {.owner = pthread_self()};
+    fp_log_relay relay;
+    assert_int_equal(fp_log_relay_init(&relay), 0);
+    fp_mapping_host mh;
+    fp_mapping_host_init(&mh, "crash", seen_log, &seen);
+    mh.relay = &relay;
+    /* 100 lines logged in each process (from process, against the rule), then a crash on
+     * frame 1 after its lines */
+    fp_param keys[] = {{"at", "1"}, {"logs", "100"}};
+    fp_isolate_options opt = {.helper = helper, .deadline_ms = 5000, .quiet_restarts = true};
+    fp_mapping *m = NULL;
+    int rc = fp_isolate_mapping_create(&opt, file, "crash", &mh.host, keys, 2, &m, err, sizeof err);
+    if (rc) fail_msg("isolated map-crash: %s", err);
+    enum { CAP = 8 };
+    float start[CAP][3], end[CAP][3];
+    fp_channel ch[2];
+    fp_control_set cs = {.size = sizeof cs, .capacity = CAP, .start = start, .end = end,
+                         .channels = ch, .channel_capacity = 2};
+    fp_frame_input in = {.size = sizeof in, .radius = 1.0};
+    for (int h = 0; h < FP_HANDS; h++)
+        for (int f = 0; f < FP_FINGERS; f++) in.tip_distance[h][f] = INFINITY;
+    int said = 0, dropped = 0;
+    for (uint64_t f = 0; f < 2; f++) {
+        in.frame = f;
+        assert_int_equal(m->process(m, &in, &cs), 0);
+        seen.n = 0;
+        fp_mapping_host_drain_log(&mh); /* once a frame, as the session does */
+        for (int i = 0; i < seen.n && i < 40; i++) {
+            said += strstr(seen.lines[i], "died of SIGSEGV during process (frame 1)") != NULL;
+            dropped += strstr(seen.lines[i], "76 log lines of the plugin dropped") != NULL;
+        }
+    }
+    /* before: the plugin's 100 lines filled the host's 32-line ring and the fault's line,
+     * said after them, was the one dropped ("69 log lines dropped" and no word of the crash) */
+    assert_int_equal(said, 1);
+    assert_int_equal(dropped, 2); /* 100 - 24 kept, each frame */
+    m->destroy(m);
+    fp_log_relay_destroy(&relay);
 }
 
 /* ---- an abandoned input's thread that wakes after its instance was freed ---- */
@@ -960,6 +1009,7 @@ int main(void)
         cmocka_unit_test(test_event_times_refused), cmocka_unit_test(test_oversize_events_refused),
         cmocka_unit_test(test_zeroed_events_said),
         cmocka_unit_test(test_isolate_holds_only_good_set),
+        cmocka_unit_test(test_isolate_fault_said_through_log_flood),
         cmocka_unit_test(test_err_filled),
         cmocka_unit_test(test_queue_mpsc),
         cmocka_unit_test(test_queue_full),        cmocka_unit_test(test_queue_retry),

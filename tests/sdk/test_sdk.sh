@@ -55,6 +55,32 @@ syms=$(nm -D --defined-only "$tmp/pc/map-grab.so" | awk '{print $3}' | grep -v '
 test "$syms" = "facepuppet_plugin_entry"
 echo "SDK: templates built with CMake and pkg-config ($warn) against $prefix; map-grab moved $moved vertices"
 
+# 2b. C++: a mapping in C++ with facepuppet_add_plugin (project LANGUAGES CXX) and with g++
+#     and pkg-config exports the entry, and only it (before: FP_PLUGIN_DECLARE_ENTRY gave a
+#     const of internal linkage in C++, no symbol, "no-entry"; and the CMake function hid C
+#     symbols only, so a C++ plugin exported all of its own).
+if command -v c++ >/dev/null; then
+  mkdir "$tmp/cxx"
+  cp "$src/tests/plugin/fixture_cxx.cpp" "$tmp/cxx/map_cxx.cpp"
+  printf '%s\n' 'cmake_minimum_required(VERSION 3.22)' 'project(map_cxx LANGUAGES CXX)' \
+    'find_package(facepuppet 0.1 REQUIRED)' 'facepuppet_add_plugin(map-cxx map_cxx.cpp)' \
+    >"$tmp/cxx/CMakeLists.txt"
+  # a function of the plugin's own, not static: hidden too
+  printf '%s\n' 'extern "C" int fp_test_cxx_helper(int x);' \
+    'extern "C" int fp_test_cxx_helper(int x) { return x + 1; }' >>"$tmp/cxx/map_cxx.cpp"
+  cmake -S "$tmp/cxx" -B "$tmp/cxx/build" $gen -DCMAKE_PREFIX_PATH="$prefix" \
+        -DCMAKE_CXX_FLAGS="$warn" >/dev/null
+  cmake --build "$tmp/cxx/build" >/dev/null
+  c++ -std=c++17 -O2 $warn -shared -fPIC $cflags -o "$tmp/cxx/map-cxxpc.so" "$tmp/cxx/map_cxx.cpp" $libs
+  for so in "$tmp/cxx/build/map-cxx.so" "$tmp/cxx/map-cxxpc.so"; do
+    syms=$(nm -D --defined-only "$so" | awk '{print $3}' | grep -v '^_' || true)
+    test "$syms" = "facepuppet_plugin_entry" || { echo "$so exports: $syms" >&2; exit 1; }
+    "$prefix/bin/facepuppet" plugins check "$so" >"$tmp/cxx/check.out" 2>&1 ||
+      { cat "$tmp/cxx/check.out" >&2; exit 1; }
+  done
+  echo "SDK: a C++ mapping built with CMake and pkg-config exports only its entry and passes plugins check"
+fi
+
 # 3. The installed plugin's folder, with CMake's install and pkg-config's plugindir: in this
 #    build's layout the template's `cmake --install` into facepuppet's prefix puts map-grab.so
 #    where facepuppet looks (found without --plugin-dir); and in Debian's multiarch layout

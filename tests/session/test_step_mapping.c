@@ -139,6 +139,43 @@ static void test_errors_once_with_count(void **state)
     assert_non_null(strstr(cap.lines[6], "repeated 1 more time)"));
 }
 
+/* A refused set is reported naming what is wrong in it (before: "invalid control set (radius
+ * or points): -22 (Invalid argument)" for all three, so the author had to guess which vector,
+ * which point, or whether the radius). */
+static void test_refusal_named(void **state)
+{
+    (void)state;
+    fp_mapping m = {0};
+    m.size = sizeof m;
+    m.process = fake_process;
+    log_capture cap = {0};
+    fp_slog log = {capture_log, &cap};
+    fp_control_set cs;
+    fp_frame_input in = {0};
+    in.radius = 1.0;
+    in.frame = 7;
+    fp_mapping_step st = {0};
+    setup_cs(&cs);
+    mode = 3; /* end[1][2] NaN */
+    assert_int_equal(fp_mapping_step_run(&st, &m, "pinch", &in, &cs, &log), -EINVAL);
+    assert_int_equal(cap.count, 1);
+    assert_non_null(strstr(cap.lines[0], "vector 1's end point (1, 2, nan) is not finite"));
+    assert_non_null(strstr(cap.lines[0], "on frame 7; the base shown"));
+    memset(&st, 0, sizeof st);
+    setup_cs(&cs);
+    mode = 4; /* an active set with radius 0 */
+    assert_int_equal(fp_mapping_step_run(&st, &m, "pinch", &in, &cs, &log), -EINVAL);
+    assert_int_equal(cap.count, 2);
+    assert_non_null(strstr(cap.lines[1], "radius 0 of an active set, outside [1e-15, 1e+15]"));
+    memset(&st, 0, sizeof st);
+    setup_cs(&cs);
+    mode = 2; /* count past capacity: the count named, not the channels */
+    assert_int_equal(fp_mapping_step_run(&st, &m, "pinch", &in, &cs, &log), -ERANGE);
+    assert_int_equal(cap.count, 3);
+    assert_non_null(strstr(cap.lines[2], "count 5 > capacity 4 on frame 7"));
+    assert_null(strstr(cap.lines[2], "channel"));
+}
+
 static void test_rig_pass_through(void **state)
 {
     (void)state;
@@ -358,6 +395,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_check),
         cmocka_unit_test(test_errors_once_with_count),
+        cmocka_unit_test(test_refusal_named),
         cmocka_unit_test(test_rig_pass_through),
         cmocka_unit_test(test_rig_nan_channel_said),
         cmocka_unit_test(test_rig_clamp_kept),

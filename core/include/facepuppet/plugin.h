@@ -675,8 +675,14 @@ typedef struct fp_plugin_entry {
  *    FP_PLUGIN_DECLARE_ENTRY = {
  *        .abi = {.major = FP_PLUGIN_ABI_MAJOR, .minor = FP_PLUGIN_ABI_MINOR},
  *        .id = "org.example.map-grab", .version = "1.0", .get_factory = get_factory,
- *    }; */
+ *    };
+ *  In C++ too (it gives the entry C linkage; designated initialisers need C++20, in the
+ *  fields' order). */
+#ifdef __cplusplus /* (C linkage: a const object at namespace scope is otherwise internal) */
+#define FP_PLUGIN_DECLARE_ENTRY extern "C" FP_PLUGIN_EXPORT const fp_plugin_entry facepuppet_plugin_entry
+#else
 #define FP_PLUGIN_DECLARE_ENTRY FP_PLUGIN_EXPORT const fp_plugin_entry facepuppet_plugin_entry
+#endif
 
 #ifdef __cplusplus
 }
