@@ -291,6 +291,9 @@ static void test_command_line_errors(void **state)
     assert_true(out_contains("jump"));
     assert_int_equal(live("--size 0x0"), 64);
     assert_int_equal(live("--screenshot '%s/x.png'", tmp), 64);
+    /* a screenshot is a PNG: another name is refused before the window, not written as PNG */
+    assert_int_equal(live("--frames 1 --screenshot '%s/x.jpg'", tmp), 64);
+    assert_true(out_contains("a screenshot is a PNG"));
     assert_int_equal(live("--frames 2 -M nosuchmapping"), 78);
     /* A screenshot that cannot be written: exit 73. */
     assert_int_equal(live("--frames 1 --screenshot /nonexistent-dir/x.png"), 73);

@@ -26,6 +26,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #define LIVE_SCRIPT_MAX ((size_t)1 << 20) /* --script @FILE: bytes at most */
 
@@ -50,7 +51,8 @@ static void usage(FILE *f)
         "      --size WxH         window size (default 1280x720)\n"
         "      --frames N         stop after N frames\n"
         "      --screenshot FILE  write the last frame as PNG (with --frames N: run N frames,\n"
-        "                         write, exit; one that exists is refused as --out is)\n"
+        "                         write, exit; FILE ends in .png, and one that exists is\n"
+        "                         refused as --out is)\n"
         "      --script TEXT      scripted actions, or @FILE to read them from FILE:\n"
         "                         'wait hands|end|frames N|seconds S; key K; shot FILE;\n"
         "                         radius R; drop FILE; print hud|messages; close' (seconds\n"
@@ -436,6 +438,14 @@ static int live_main(int argc, char **argv)
     if (orc) return orc;
     vo.duration_s = sopt.duration_s;
     vo.quiet = sopt.quiet;
+    if (vo.screenshot) { /* a PNG under another name (x.jpg) would mislead every viewer */
+        size_t k = strlen(vo.screenshot);
+        if (k < 4 || strcasecmp(vo.screenshot + k - 4, ".png")) {
+            fprintf(stderr, "facepuppet live: --screenshot %s: a screenshot is a PNG; name it FILE.png\n",
+                    vo.screenshot);
+            return FP_EXIT_USAGE;
+        }
+    }
     if (vo.screenshot && !vo.frames && !script_arg) {
         fprintf(stderr, "facepuppet live: --screenshot needs --frames N (or a --script that closes)\n");
         return FP_EXIT_USAGE;
