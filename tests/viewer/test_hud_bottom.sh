@@ -14,21 +14,12 @@
 # Usage: test_hud_bottom.sh FACEPUPPET PLUGIN_DIR FACE RECORDING   (from the source root)
 set -u
 fp=$1 plugdir=$2 face=$3 rec=$4
-py=/usr/bin/python3
-[ -x "$py" ] || py=python3
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-"$fp" live -q --plugin-dir "$plugdir" --mesh "$face" --mapping onehand --input "replay:$rec" \
+. "$(dirname "$0")/live_shot.sh"
+live_or_fail -q --plugin-dir "$plugdir" --mesh "$face" --mapping onehand --input "replay:$rec" \
     --size 480x600 --take-dir "$tmp/takes" \
     --script "key T; wait frames 8; key T; wait frames 2; key G; camera 0 0 0.5; wait frames 2; shot $tmp/a.png; close" \
-    >"$tmp/out" 2>"$tmp/err"
-rc=$?
-if [ $rc -ne 0 ]; then
-    cat "$tmp/err"
-    echo "FAIL: live exited $rc"
-    exit 1
-fi
-PYTHONPATH="$(dirname "$0")/../support" "$py" - "$tmp/a.png" <<'PY'
+   
+shot_py "$tmp/a.png" <<'PY'
 import sys
 
 from pngread import read_png

@@ -8,20 +8,11 @@
 # Usage: test_hud_corner.sh FACEPUPPET PLUGIN_DIR FACE RECORDING   (from the source root)
 set -u
 fp=$1 plugdir=$2 face=$3 rec=$4
-py=/usr/bin/python3
-[ -x "$py" ] || py=python3
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-"$fp" live -q --plugin-dir "$plugdir" --mesh "$face" --input "replay:$rec" --size 320x240 \
+. "$(dirname "$0")/live_shot.sh"
+live_or_fail -q --plugin-dir "$plugdir" --mesh "$face" --input "replay:$rec" --size 320x240 \
     --take-dir "$tmp/takes" --slate a_long_slate_name \
-    --script "key T; wait frames 5; shot $tmp/a.png; close" >"$tmp/out" 2>"$tmp/err"
-rc=$?
-if [ $rc -ne 0 ]; then
-    cat "$tmp/err"
-    echo "FAIL: live exited $rc"
-    exit 1
-fi
-PYTHONPATH="$(dirname "$0")/../support" "$py" - "$tmp/a.png" <<'PY'
+    --script "key T; wait frames 5; shot $tmp/a.png; close"
+shot_py "$tmp/a.png" <<'PY'
 import sys
 
 from pngread import read_png

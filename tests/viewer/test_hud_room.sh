@@ -10,29 +10,20 @@
 # Usage: test_hud_room.sh FACEPUPPET PLUGIN_DIR FACE   (from the source root)
 set -u
 fp=$1 plugdir=$2 face=$3
-py=/usr/bin/python3
-[ -x "$py" ] || py=python3
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
+. "$(dirname "$0")/live_shot.sh"
 long=""
 for i in 1 2 3 4 5 6 7 8 9 10 11 12 13 14; do long="${long}a_folder_that_is_not_there_"; done
 drops=""
 for i in 1 2 3 4 5 6; do drops="$drops drop $tmp/none$i/$long/face$i.obj;"; done
-"$fp" live -q --plugin-dir "$plugdir" --mesh "$face" --size 640x480 --script \
-    "key H; wait frames 2; $drops wait frames 2; shot $tmp/a.png; close" >"$tmp/out" 2>"$tmp/err"
-rc=$?
-if [ $rc -ne 0 ]; then
-    cat "$tmp/err"
-    echo "FAIL: live exited $rc"
-    exit 1
-fi
+live_or_fail -q --plugin-dir "$plugdir" --mesh "$face" --size 640x480 --script \
+    "key H; wait frames 2; $drops wait frames 2; shot $tmp/a.png; close"
 n=$(grep -c 'cannot load' "$tmp/err")
 if [ "$n" -ne 6 ]; then
     cat "$tmp/err"
     echo "FAIL: $n 'cannot load' answers, 6 expected"
     exit 1
 fi
-PYTHONPATH="$(dirname "$0")/../support" "$py" - "$tmp/a.png" <<'PY'
+shot_py "$tmp/a.png" <<'PY'
 import sys
 
 from pngread import read_png

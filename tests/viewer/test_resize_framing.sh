@@ -10,21 +10,12 @@
 # Usage: test_resize_framing.sh FACEPUPPET PLUGIN_DIR FACE   (from the source root)
 set -u
 fp=$1 plugdir=$2 face=$3
-py=/usr/bin/python3
-[ -x "$py" ] || py=python3
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-"$fp" live -q --plugin-dir "$plugdir" --mesh "$face" --size 640x480 --script \
+. "$(dirname "$0")/live_shot.sh"
+live_or_fail -q --plugin-dir "$plugdir" --mesh "$face" --size 640x480 --script \
     "key Tab; wait frames 5; shot $tmp/a.png; size 240x480; wait frames 15; shot $tmp/b.png; \
 size 960x360; wait frames 15; shot $tmp/c.png; size 640x480; wait frames 15; shot $tmp/d.png; close" \
-    >"$tmp/out" 2>"$tmp/err"
-rc=$?
-if [ $rc -ne 0 ]; then
-    cat "$tmp/err"
-    echo "FAIL: live exited $rc"
-    exit 1
-fi
-PYTHONPATH="$(dirname "$0")/../support" "$py" - "$tmp" <<'PY'
+   
+shot_py "$tmp" <<'PY'
 import sys
 
 from pngread import read_png
