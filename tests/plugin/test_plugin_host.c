@@ -286,6 +286,27 @@ static void test_stuck_stop_abandoned(void **state)
     fp_plugin_path_clear(&path);
 }
 
+/* An isolated mapping's buffers: a control set of 8 vectors and 2 channels (set_buf_init:
+ * the set over b's arrays), and a frame with no hand near the face. */
+typedef struct set_buf {
+    float start[8][3], end[8][3];
+    fp_channel ch[2];
+} set_buf;
+
+static fp_control_set set_buf_init(set_buf *b)
+{
+    return (fp_control_set){.size = sizeof(fp_control_set), .capacity = 8, .start = b->start, .end = b->end,
+                            .channels = b->ch, .channel_capacity = 2};
+}
+
+static fp_frame_input no_hands(void)
+{
+    fp_frame_input in = {.size = sizeof in, .radius = 1.0};
+    for (int h = 0; h < FP_HANDS; h++)
+        for (int f = 0; f < FP_FINGERS; f++) in.tip_distance[h][f] = INFINITY;
+    return in;
+}
+
 /* ---- an isolated mapping holds, after a fault, only a set the session would take ---- */
 
 static void test_isolate_holds_only_good_set(void **state)
@@ -302,14 +323,9 @@ static void test_isolate_holds_only_good_set(void **state)
     fp_mapping *m = NULL;
     int rc = fp_isolate_mapping_create(&opt, file, "crash", &host, keys, 2, &m, err, sizeof err);
     if (rc) fail_msg("isolated map-crash: %s", err);
-    enum { CAP = 8 };
-    float start[CAP][3], end[CAP][3];
-    fp_channel ch[2];
-    fp_control_set cs = {.size = sizeof cs, .capacity = CAP, .start = start, .end = end,
-                         .channels = ch, .channel_capacity = 2};
-    fp_frame_input in = {.size = sizeof in, .radius = 1.0};
-    for (int h = 0; h < FP_HANDS; h++)
-        for (int f = 0; f < FP_FINGERS; f++) in.tip_distance[h][f] = INFINITY;
+    set_buf b;
+    fp_control_set cs = set_buf_init(&b);
+    fp_frame_input in = no_hands();
     in.frame = 0; /* no hands: an empty, inactive set (the last good one) */
     assert_int_equal(m->process(m, &in, &cs), 0);
     assert_int_equal(fp_control_check(&cs, NULL, NULL), FP_CONTROL_OK);
@@ -345,14 +361,9 @@ static void test_isolate_fault_said_through_log_flood(void **state)
     fp_mapping *m = NULL;
     int rc = fp_isolate_mapping_create(&opt, file, "crash", &mh.host, keys, 2, &m, err, sizeof err);
     if (rc) fail_msg("isolated map-crash: %s", err);
-    enum { CAP = 8 };
-    float start[CAP][3], end[CAP][3];
-    fp_channel ch[2];
-    fp_control_set cs = {.size = sizeof cs, .capacity = CAP, .start = start, .end = end,
-                         .channels = ch, .channel_capacity = 2};
-    fp_frame_input in = {.size = sizeof in, .radius = 1.0};
-    for (int h = 0; h < FP_HANDS; h++)
-        for (int f = 0; f < FP_FINGERS; f++) in.tip_distance[h][f] = INFINITY;
+    set_buf b;
+    fp_control_set cs = set_buf_init(&b);
+    fp_frame_input in = no_hands();
     int said = 0, dropped = 0;
     for (uint64_t f = 0; f < 2; f++) {
         in.frame = f;
