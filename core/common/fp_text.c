@@ -1,6 +1,7 @@
 /* fp_text.c: UTF-8 text checked or cleaned (fp_text.h). */
 #include "fp_text.h"
 
+#include <stdio.h>
 #include <string.h>
 
 /* The code point of the well-formed UTF-8 sequence at s and its length in *len; -1 (and
@@ -66,6 +67,13 @@ const char *fp_text_after_space(const char *p, const char *stop)
 {
     while (p && p < stop && (*p == ' ' || *p == '\t' || *p == '\n' || *p == '\r')) p++;
     return p && p < stop ? p : NULL;
+}
+
+void fp_text_share_held(double share, char *out, size_t n)
+{
+    if (!n) return;
+    if (100.0 * share >= 99.5) snprintf(out, n, "over 99%%");
+    else snprintf(out, n, "%.0f%%", 100.0 * share);
 }
 
 size_t fp_text_bom(const char *p, size_t len)

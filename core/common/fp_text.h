@@ -37,6 +37,11 @@ const char *fp_text_after_space(const char *p, const char *stop);
  *  calibration files). Thread-safe. */
 size_t fp_text_bom(const char *p, size_t len);
 
+/** The share (0..1) of something held back (a motion the contact guard scaled back) as a
+ *  whole percentage for a person, into out (n bytes, NUL-terminated when n > 0): "37%", but
+ *  "over 99%" from 0.995 on, where it would read "100%" beside "held back". Thread-safe. */
+void fp_text_share_held(double share, char *out, size_t n);
+
 /** The 1-based line and column of `at` in text (at within text, or at its end), for
  *  messages "FILE:LINE:COL". line or col may be NULL. Thread-safe. */
 void fp_text_line_col(const char *text, const char *at, long *line, long *col);

@@ -3,6 +3,7 @@
 #include "step_contact.h"
 
 #include "fp_clock.h"
+#include "fp_text.h"
 
 #include <assert.h>
 #include <math.h>
@@ -249,10 +250,8 @@ void fp_cg_end_gesture(fp_cg_step *g, fp_slog *log)
     else
         snprintf(why, sizeof why, "stopped the surface from passing through itself (%lu frames) and "
                  "the skin from folding over (%lu)", g->limited - g->turned, g->turned);
-    /* a frame held back by a hair rounds to 100%: said as over 99% (as the HUD says it) */
-    char least[16];
-    if (100.0 * g->t_least >= 99.5) snprintf(least, sizeof least, "over 99%%");
-    else snprintf(least, sizeof least, "%.0f%%", 100.0 * g->t_least);
+    char least[16]; /* (a frame held back by a hair: "over 99%", not "100%") */
+    fp_text_share_held(g->t_least, least, sizeof least);
     if (g->limited)
         fp_slog_printf(log, FP_LOG_WARNING, FP_SLOG_CONTACT,
                        "contact guard %s: %lu of %lu frames scaled back (least share of a frame's "

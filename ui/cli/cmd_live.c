@@ -343,6 +343,24 @@ static void print_report(const fp_viewer_report *r, bool gpu_warp)
                r->warp_max_displacement, r->warp_cpu_frames);
 }
 
+
+/* --screenshot FILE's usage, before the window: a PNG's name (x.jpg holding PNG data would
+ * mislead every viewer), and a run that ends (--frames N or a --script that closes).
+ * 0 or FP_EXIT_USAGE, said. */
+static int screenshot_usage(const char *path, bool ends)
+{
+    if (!path) return 0;
+    size_t k = strlen(path);
+    if (k < 4 || strcasecmp(path + k - 4, ".png")) {
+        fprintf(stderr, "facepuppet live: --screenshot %s: a screenshot is a PNG; name it FILE.png\n", path);
+        return FP_EXIT_USAGE;
+    }
+    if (!ends) {
+        fprintf(stderr, "facepuppet live: --screenshot needs --frames N (or a --script that closes)\n");
+        return FP_EXIT_USAGE;
+    }
+    return 0;
+}
 static int live_main(int argc, char **argv)
 {
     enum { OPT_SIZE = FP_SESSION_OPTS_FIRST_FREE, OPT_FRAMES, OPT_SHOT, OPT_SCRIPT, OPT_GPU,
@@ -438,18 +456,7 @@ static int live_main(int argc, char **argv)
     if (orc) return orc;
     vo.duration_s = sopt.duration_s;
     vo.quiet = sopt.quiet;
-    if (vo.screenshot) { /* a PNG under another name (x.jpg) would mislead every viewer */
-        size_t k = strlen(vo.screenshot);
-        if (k < 4 || strcasecmp(vo.screenshot + k - 4, ".png")) {
-            fprintf(stderr, "facepuppet live: --screenshot %s: a screenshot is a PNG; name it FILE.png\n",
-                    vo.screenshot);
-            return FP_EXIT_USAGE;
-        }
-    }
-    if (vo.screenshot && !vo.frames && !script_arg) {
-        fprintf(stderr, "facepuppet live: --screenshot needs --frames N (or a --script that closes)\n");
-        return FP_EXIT_USAGE;
-    }
+    if ((orc = screenshot_usage(vo.screenshot, vo.frames || script_arg))) return orc;
     /* The demo when no mesh and no input are given; --speed for replay inputs; a take of
      * several inputs: one take input for each of them. */
     fp_app_inputs inputs_buf;

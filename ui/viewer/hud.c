@@ -1,6 +1,7 @@
 /* The live viewer's HUD parts: badge, message stack, key list backdrop, word wrap (hud.h). */
 #define _GNU_SOURCE
 #include "hud.h"
+#include "fp_text.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -277,10 +278,8 @@ void fp_hud_contact_line(double t, double kept, long pairs, char *out, size_t le
     if (!len) return;
     out[0] = 0;
     if (!(t < 1.0)) return;
-    /* a frame held back reads under 100% (99.6% printed as 100% beside the HELD badge) */
-    char share[16];
-    if (100.0 * kept >= 99.5) snprintf(share, sizeof share, "over 99%%");
-    else snprintf(share, sizeof share, "%.0f%%", 100.0 * kept);
+    char share[16]; /* (a frame held back by a hair: "over 99%", not "100%" beside HELD) */
+    fp_text_share_held(kept, share, sizeof share);
     snprintf(out, len, "\ncontact guard kept %s of this frame's motion: %s", share,
              pairs ? "the surface would have passed through itself" : "the skin would have folded over");
 }
