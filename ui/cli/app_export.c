@@ -10,8 +10,10 @@
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 
 double fp_app_export_frame_bytes(fp_export_format format, const struct fp_mesh *mesh)
@@ -37,6 +39,57 @@ void fp_app_export_name(const char *path, bool stack, const char *slate, unsigne
     snprintf(buf, n, "%.*s", dot && dot > base ? (int)(dot - base) : (int)strlen(base), base);
 }
 
+/* A /proc file's "KEY: N kB" line, in bytes; -1 where absent. */
+static double proc_kb(const char *file, const char *key)
+{
+    FILE *f = fopen(file, "re");
+    if (!f) return -1;
+    char line[256];
+    double v = -1;
+    const size_t n = strlen(key);
+    while (fgets(line, sizeof line, f))
+        if (!strncmp(line, key, n) && line[n] == ':') {
+            v = strtod(line + n + 1, NULL) * 1024.0;
+            break;
+        }
+    fclose(f);
+    return v;
+}
+
+double fp_app_memory_budget(void)
+{
+    const double avail = proc_kb("/proc/meminfo", "MemAvailable"), swap = proc_kb("/proc/meminfo", "SwapFree");
+    double budget = avail > 0 ? avail + (swap > 0 ? swap : 0) : 0;
+    struct rlimit rl;
+    if (getrlimit(RLIMIT_AS, &rl) == 0 && rl.rlim_cur != RLIM_INFINITY) {
+        const double size = proc_kb("/proc/self/status", "VmSize");
+        const double left = (double)rl.rlim_cur - (size > 0 ? size : 0);
+        if (budget == 0 || left < budget) budget = left > 1 ? left : 1;
+    }
+    return budget;
+}
+
+int fp_app_export_gltf_plan(const char *cmd, const char *what, const char *hint, double frames,
+                            const struct fp_mesh *mesh, bool quiet,
+                            fp_export_options *eo)
+{
+    if (eo->format != FP_EXPORT_GLTF && eo->format != FP_EXPORT_GLB) return FP_EXIT_OK;
+    if (frames > FP_EXPORT_GLTF_MAX_FRAMES) {
+        fprintf(stderr, "%s: %s: %.0f frames: a glTF export holds at most %d (%s); nothing "
+                "written\n", cmd, what, frames, FP_EXPORT_GLTF_MAX_FRAMES, hint);
+        return FP_EXIT_USAGE;
+    }
+    eo->frames_expected = frames > 0 ? (uint64_t)frames : 0;
+    eo->memory_budget = fp_app_memory_budget();
+    const double most = fp_export_gltf_peak_bytes(eo->frames_expected, mesh->vertex_count);
+    if (!quiet && frames > 0 && eo->memory_budget > 0 && most > eo->memory_budget)
+        fprintf(stderr, "%s: %s: %.0f frames of %zu vertices: the morph targets may need "
+                "%.1f GB or more at the end, more than the %.1f GB there is room for; the export stops "
+                "as soon as the frames show it cannot fit (%s)\n", cmd, what, frames,
+                mesh->vertex_count, most / 1e9, eo->memory_budget / 1e9, hint);
+    return FP_EXIT_OK;
+}
+
 int fp_app_export_open(const char *cmd, const char *file, const struct fp_session *s,
                        double mm_per_unit, const char *name, double frames, fp_exporter **x)
 {
@@ -54,6 +107,9 @@ int fp_app_export_open(const char *cmd, const char *file, const struct fp_sessio
     if (status) return status;
     fp_export_options eo = {.format = fmt, .path = file, .mm_per_unit = mm_per_unit,
                             .name = name};
+    if ((status = fp_app_export_gltf_plan(cmd, what, "a shorter --duration", frames, mesh, false,
+                                          &eo)))
+        return status;
     float up[3], facing[3];
     fp_session_face_axes(s, up, facing);
     for (int i = 0; i < 3; i++) eo.up[i] = up[i], eo.facing[i] = facing[i];
