@@ -257,6 +257,8 @@ int fp_app_session_defaults(const char *cmd, fp_session_options *so, double spee
         so->inputs[so->input_count++] = buf->demo_input;
     }
     if (!so->mapping) so->mapping = "anchored";
+    /* where the rigs' meshes lie: a glTF copy of a rig's mesh, split at seams, finds its rig */
+    if (!so->rig_mesh_root) so->rig_mesh_root = fp_app_data_root(buf->data_root, sizeof buf->data_root);
     for (size_t i = 0; i < so->input_count; i++) {
         const char *in = so->inputs[i];
         bool paced = (!strncmp(in, "replay", 6) && (in[6] == ':' || in[6] == ',' || !in[6])) ||

@@ -249,6 +249,7 @@ int fp_app_exit_code(int code, fp_app_io io);
 typedef struct fp_app_inputs {
     char demo_mesh[4096];
     char demo_input[4200];
+    char data_root[4096];   /* the shared data folder: the rigs' meshes (rig_mesh_root) */
     char specs[FP_SESSION_MAX_INPUTS][4300];
     char takes[FP_SESSION_MAX_INPUTS][5600]; /* a take's inputs, one take input each (source=N) */
     fp_calibration take_calibration;   /* a take input's recorded calibration */
