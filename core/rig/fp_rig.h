@@ -229,8 +229,8 @@ int fp_rig_match_positions(size_t rig_n, const float *rig_pos, size_t n, const f
  *  every vertex takes its rig vertex's region, kind and file jaw weight; a landmark goes to the
  *  first vertex of its own; the rig's vertex count and checksum become the mesh's (pos). Then
  *  fp_rig_bind(rig, n, pos). Returns 0; -EBADMSG (a landmark's vertex is in no vertex of the
- *  mesh: the message names it), -EINVAL (a to_rig entry out of range, a bound rig), -ENOMEM
- *  (the rig unchanged). */
+ *  mesh: the message names it), -EINVAL (a to_rig entry out of range, a bound rig), -ENOMEM;
+ *  on any error the rig is unchanged. */
 int fp_rig_remap(fp_rig *rig, size_t n, const uint32_t *to_rig, const float *pos, char *err,
                  size_t errlen);
 

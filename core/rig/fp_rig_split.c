@@ -62,7 +62,7 @@ int fp_rig_match_positions(size_t rig_n, const float *rig_pos, size_t n, const f
 }
 
 int fp_rig_remap(fp_rig *r, size_t n, const uint32_t *to_rig, const float *pos, char *err, size_t errlen)
-{
+{ /* (the rig is changed only once nothing can fail) */
     if (!r || !to_rig || !pos || !n || n > UINT32_MAX) return fp_errorf(err, errlen, -EINVAL, "fp_rig_remap: bad argument");
     if (r->w) return fp_errorf(err, errlen, -EINVAL, "%s: fp_rig_remap: the rig is bound already", r->source);
     for (size_t i = 0; i < n; i++)
@@ -79,13 +79,12 @@ int fp_rig_remap(fp_rig *r, size_t n, const uint32_t *to_rig, const float *pos, 
     }
     for (size_t u = 0; u < r->n; u++) first[u] = wat[u] = UINT32_MAX;
     for (size_t j = 0; j < r->weight_count; j++) wat[r->weight_v[j]] = (uint32_t)j;
-    size_t wc = 0;
-    for (size_t k = 0; k < r->region_count; k++) r->regions[k].count = 0;
+    size_t wc = 0, counts[FP_RIG_MAX_REGIONS] = {0};
     for (size_t i = 0; i < n; i++) {
         const uint32_t u = to_rig[i];
         kind[i] = r->kind[u];
         owner[i] = r->owner[u];
-        if (owner[i]) r->regions[owner[i] - 1].count++;
+        if (owner[i]) counts[owner[i] - 1]++;
         if (first[u] == UINT32_MAX) first[u] = (uint32_t)i;
         if (wat[u] != UINT32_MAX) wv[wc] = (uint32_t)i, ww[wc++] = r->weight_w[wat[u]]; /* ascending in i */
     }
@@ -102,6 +101,7 @@ int fp_rig_remap(fp_rig *r, size_t n, const uint32_t *to_rig, const float *pos, 
         goto out;
     }
     for (size_t i = 0; i < n; i++) weld[i] = first[to_rig[i]];
+    for (size_t k = 0; k < r->region_count; k++) r->regions[k].count = counts[k];
     free(r->weld);
     r->weld = weld;
     for (size_t k = 0; k < r->landmark_count; k++) r->landmarks[k].vertex = first[r->landmarks[k].vertex];
