@@ -41,6 +41,8 @@ struct fp_exporter {
     size_t used, cap;         /* entries in idx (disp has 3x) */
     size_t *frame_start;      /* frames + 1 offsets into idx */
     size_t fs_cap;
+    unsigned char *seen;      /* glTF with a memory budget: n flags, the vertices moved so far */
+    size_t moved;             /* ... how many */
     uint64_t seq_bytes;
     unsigned dropped;
 };
@@ -201,6 +203,16 @@ int fp_export_begin(const fp_mesh *base, const fp_export_options *opt, fp_export
         break;
     case FP_EXPORT_GLTF:
     case FP_EXPORT_GLB: {
+        if (opt->frames_expected > FP_EXPORT_GLTF_MAX_FRAMES) {
+            rc = fp_errorf(err, errlen, -E2BIG, "%s: %llu frames: a glTF export holds at most %d",
+                           x->path, (unsigned long long)opt->frames_expected,
+                           FP_EXPORT_GLTF_MAX_FRAMES);
+            break;
+        }
+        if (opt->memory_budget > 0 && !(x->seen = calloc(x->n ? x->n : 1, 1))) {
+            rc = fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", x->path);
+            break;
+        }
         /* the folder must take a file now, not after the whole take was played */
         fp_file_output probe;
         rc = open_output(x, opt->path, "probe", &probe, err, errlen);
@@ -224,6 +236,15 @@ int fp_export_begin(const fp_mesh *base, const fp_export_options *opt, fp_export
     }
     *out = x;
     return 0;
+}
+
+double fp_export_gltf_peak_bytes(uint64_t frames, size_t moved)
+{
+    /* what the finish writes whole, at once: finish_gltf's dense D (F x m floats, m = 3 x
+     * moved), compress_f's copy R (F x m) and its Gram matrix G (N x N doubles, N the smaller
+     * of F and m); its components (T, W, Z: calloc'ed, written in part) come on top */
+    const double F = (double)frames, m = 3.0 * (double)moved, N = F < m ? F : m;
+    return 8.0 * F * m + 8.0 * N * N;
 }
 
 static int grow(void **p, size_t *cap, size_t need, size_t elem)
@@ -307,12 +328,28 @@ int fp_export_add(fp_exporter *x, const float *positions, double time_s, char *e
                 x->disp = d;
                 x->cap = cap;
             }
+            if (x->seen && !x->seen[v]) {
+                x->seen[v] = 1;
+                x->moved++;
+            }
             x->idx[x->used] = (uint32_t)v;
             for (int k = 0; k < 3; k++)
                 x->disp[3 * x->used + (size_t)k] = (float)((double)p[k] - (double)q[k]);
             x->used++;
         }
         x->frame_start[x->frames + 1] = x->used;
+        if (!rc && x->seen) { /* the finish's memory, at least: refused now, not at the end */
+            const uint64_t F = x->opt.frames_expected > x->frames + 1 ? x->opt.frames_expected
+                                                                      : x->frames + 1;
+            const double need = fp_export_gltf_peak_bytes(F, x->moved) +
+                                16.0 * (double)x->used;
+            if (need > x->opt.memory_budget)
+                rc = fp_errorf(err, errlen, -ENOMEM, "%s: the morph targets of %llu frames need "
+                               "%.1f GB or more at the end (%zu vertices moved by frame %llu), more "
+                               "than the %.1f GB there is room for: stopped before it; nothing "
+                               "written", x->path, (unsigned long long)F, need / 1e9, x->moved,
+                               (unsigned long long)x->frames + 1, x->opt.memory_budget / 1e9);
+        }
         break;
     }
     case FP_EXPORT_OBJ_SEQ: {
@@ -1006,6 +1043,7 @@ void fp_export_abort(fp_exporter **xp)
     free(x->idx);
     free(x->disp);
     free(x->frame_start);
+    free(x->seen);
     free(x);
     *xp = NULL;
 }

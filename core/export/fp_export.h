@@ -78,7 +78,23 @@ typedef struct fp_export_options {
                                 0: measured from the frames' times at finish */
     double up[3], facing[3]; /* glTF: the face's up and front in the mesh (unit; all zeros:
                                 +y, +z), turned to glTF's +y and +z by the root node */
+    uint64_t frames_expected; /* glTF: the frames that will be added, when known (0: not);
+                                 more than FP_EXPORT_GLTF_MAX_FRAMES is refused at begin */
+    double memory_budget;    /* glTF: bytes the finish may take (0: no check); an add whose
+                                frames show that the finish would need more
+                                (fp_export_gltf_peak_bytes of frames_expected and the vertices
+                                moved so far, plus the 16 bytes a moved vertex a frame held)
+                                fails with -ENOMEM at once, not after the last frame */
 } fp_export_options;
+
+/** The most frames a glTF export compresses (its F x F Gram matrix indexed in size_t). */
+#define FP_EXPORT_GLTF_MAX_FRAMES 46340
+
+/** Bytes the finish of a glTF export of `frames` frames that move `moved` vertices writes at
+ *  once, at least: the dense displacements and their copy (8 x frames x 3 moved) and their
+ *  Gram matrix (8 x min(frames, 3 moved)^2); the components found come on top (a lower
+ *  bound: an export refused by it could not have been written). Thread-safe, pure. */
+double fp_export_gltf_peak_bytes(uint64_t frames, size_t moved);
 
 typedef struct fp_export_result {
     uint64_t frames;         /* frames written */
@@ -105,7 +121,7 @@ typedef struct fp_exporter fp_exporter;
  *  replace, fp_file_target: a folder, FIFO or device is refused with -EEXIST; pc2/mdd/glTF:
  *  creates the temporary file; obj-seq: creates the folder). Returns 0 and *out, which
  *  fp_export_finish or fp_export_abort frees; or -EINVAL (NULL, an empty path, an unknown
- *  format, bad limits), -EEXIST, -ENOENT/-EACCES/-ENOSPC/-EIO for the output, -ENOMEM, with
+ *  format, bad limits), -E2BIG (glTF: frames_expected over FP_EXPORT_GLTF_MAX_FRAMES), -EEXIST, -ENOENT/-EACCES/-ENOSPC/-EIO for the output, -ENOMEM, with
  *  err. [main-thread]. */
 int fp_export_begin(const fp_mesh *base, const fp_export_options *opt, fp_exporter **out,
                     char *err, size_t errlen);

@@ -216,6 +216,29 @@ static int parse_row(reader *r, fp_leapcsv_format fmt, long line, char *text, fp
     return 0;
 }
 
+/* Digits after the decimal point in a line's last field (0 without a point). */
+static int last_decimals(const char *text)
+{
+    const char *f = strrchr(text, ',');
+    const char *dot = strchr(f ? f + 1 : text, '.');
+    return dot ? (int)strspn(dot + 1, "0123456789") : 0;
+}
+
+/* The last line, without its newline: a row whole (a writer that ends the file without one),
+ * or a recording cut off inside it. Whole when it parses as a row and its last field has as
+ * many decimals as the row before's (d against prev; prev -1: no row before): a cut inside the
+ * last number ("-42.37" of "-42.3741") parses, but with fewer decimals. 1: whole, *row filled;
+ * 0: cut off (dropped: the caller reports the line, never its parse error). */
+static int unterminated_row(reader *r, fp_leapcsv_format fmt, long line, char *text,
+                            fp_leapcsv_row *row, int have_ts, int d, int prev)
+{
+    char *quiet = r->err; /* a cut row's parse error is not the read's */
+    r->err = NULL;
+    int rc = parse_row(r, fmt, line, text, row, have_ts);
+    r->err = quiet;
+    return !rc && d >= prev;
+}
+
 /* The file whole (fp_file_read_all: a regular file, FP_LEAPCSV_MAX_BYTES at most, refused by
  * its size before reading when larger). */
 static int read_whole(reader *r, char **data, size_t *len)
@@ -242,19 +265,18 @@ int fp_leapcsv_read(const char *path, fp_leapcsv_format want, fp_leapcsv_format 
                                                : read_whole(&r, &data, &len);
     fp_leapcsv_format fmt = FP_LEAPCSV_ANY;
     long line = 0;
-    int have_ts = 0;
+    int have_ts = 0, decimals = -1; /* decimals: the last field's in the row before (-1: none) */
     char *p = data ? data + fp_text_bom(data, len) : data, *end = data + len;
     while (!rc && p < end) {
         char *nl = memchr(p, '\n', (size_t)(end - p));
         line++;
-        if (!nl) {
-            /* The last line has no newline: cut short (a crash, a copy cut off). */
-            if (line == 1) rc = fail(&r, -EBADMSG, 1, 1, "header line not terminated");
-            else if (truncated_line) *truncated_line = line;
+        if (!nl && line == 1) {
+            rc = fail(&r, -EBADMSG, 1, 1, "header line not terminated");
             break;
         }
-        *nl = '\0';
-        size_t n = (size_t)(nl - p);
+        char *eol = nl ? nl : end; /* (data is NUL-ended: *end is '\0') */
+        *eol = '\0';
+        size_t n = (size_t)(eol - p);
         if (n > 0 && p[n - 1] == '\r') p[--n] = '\0';
         if (strlen(p) != n) {
             rc = fail(&r, -EBADMSG, line, (long)strlen(p) + 1, "NUL byte in line");
@@ -263,11 +285,21 @@ int fp_leapcsv_read(const char *path, fp_leapcsv_format want, fp_leapcsv_format 
         if (line == 1) {
             rc = check_header(&r, want, &fmt, p);
         } else if (*p) { /* blank lines are skipped */
+            int d = last_decimals(p);
             row->path = path;
-            rc = parse_row(&r, fmt, line, p, row, have_ts);
+            if (!nl) { /* no newline: a whole row, or a recording cut off (unterminated_row) */
+                if (!unterminated_row(&r, fmt, line, p, row, have_ts, d, decimals)) {
+                    if (truncated_line) *truncated_line = line;
+                    break;
+                }
+            } else {
+                rc = parse_row(&r, fmt, line, p, row, have_ts);
+            }
             if (!rc) rc = fn(user, row, err, errlen);
             have_ts = 1;
+            decimals = d;
         }
+        if (!nl) break;
         p = nl + 1;
     }
     if (!rc && line == 0) rc = fail(&r, -EBADMSG, 1, 1, "empty file, expected a header line");

@@ -14,7 +14,9 @@
  * than the row before's and within +-FP_LEAPCSV_TIME_MAX_US (so that it converts to ns and
  * differences of times never overflow, as for the event log's times); no NUL
  * byte. Blank lines are skipped; a CR before the newline is dropped. A last line without a
- * newline (a recording cut off) is dropped and reported through *truncated_line.
+ * newline is read when it is a whole row (it parses, and its last field has as many decimals
+ * as the row before's: a writer that ends the file without a newline); otherwise (a recording
+ * cut off inside it) it is dropped and reported through *truncated_line.
  *
  * Errors (core/common/fp_error.h): -EBADMSG for malformed content, with the message
  * "FILE:LINE:COLUMN: reason" (COLUMN 1-based, in bytes; the reason names the column, e.g.
@@ -80,7 +82,7 @@ const char *fp_leapcsv_column_name(fp_leapcsv_format format, int i);
 /** Read `path` whole and call fn for each row. want: the format required, or FP_LEAPCSV_ANY
  *  (the header decides: "palm_x" as column 5 means joints, else angles). *format (may be
  *  NULL) receives the format read; *truncated_line (may be NULL) the number of a last line
- *  dropped for lacking its newline, else 0. Returns 0 or a negative code (above). */
+ *  without a newline dropped as cut off (above), else 0. Returns 0 or a negative code (above). */
 int fp_leapcsv_read(const char *path, fp_leapcsv_format want, fp_leapcsv_format *format,
                     fp_leapcsv_row_fn fn, void *user, long *truncated_line, char *err,
                     size_t errlen);

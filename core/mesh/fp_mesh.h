@@ -137,7 +137,9 @@ fp_mesh *fp_mesh_copy(const fp_mesh *mesh);
  *  obj_info lines anywhere after the first) and every value walked; OFF (ASCII and
  *  binary) and STL counts must fit the file's size; every number must be finite as a float;
  *  glTF buffers and images are read only from data URIs or relative paths that stay inside
- *  the file's folder (after normalisation and symlinks) and name regular files; glTF 2.0
+ *  the file's folder (after normalisation and symlinks) and name regular files (one that is
+ *  not there, or not a regular file, is NOENT and one not readable ACCESS, as the glTF file
+ *  itself, the message naming the URI and the path; one that leaves the folder FORMAT); glTF 2.0
  *  only (GLB header version 2, asset.version 2.x); every index in the JSON an integer from
  *  0 (a negative "indices" is refused, not read as absent); POSITION and NORMAL FLOAT,
  *  TEXCOORD_0 FLOAT or normalised unsigned byte/short; node matrix 16 numbers, translation

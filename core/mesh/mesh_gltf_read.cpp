@@ -453,10 +453,14 @@ std::string one_line(std::string s)
 // be a relative path that stays inside the glTF file's folder after normalisation, whose
 // real path (symlinks resolved) is inside that folder too, and that names a regular file
 // (opened O_NONBLOCK, so a FIFO or device cannot block). Every refusal is remembered, and the
-// load fails naming the URI, even where tinygltf would only warn (images).
+// load fails naming the URI, even where tinygltf would only warn (images): with the code of a
+// file not there or not readable (FP_MESH_ERR_NOENT, _ACCESS: an input file missing, as the
+// glTF's own) where the URI is a fair name that names no file, else FORMAT (a URI the glTF
+// may not use).
 struct GltfFs {
-    std::string base;    // the folder given to tinygltf
-    std::string refused; // the first refusal: "URI 'x': reason"
+    std::string base;      // the folder given to tinygltf
+    std::string refused;   // the first refusal: "URI 'x': reason"
+    int code = FP_MESH_OK; // ... and its code
 };
 
 bool gltf_fs_exists(const std::string &, void *) { return true; } // fs_read decides
@@ -473,13 +477,21 @@ bool gltf_fs_read(std::vector<unsigned char> *out, std::string *err, const std::
     const std::string prefix = fs.base.empty() || fs.base.back() == '/' ? fs.base : fs.base + "/";
     std::string rel = path.compare(0, prefix.size(), prefix) == 0 ? path.substr(prefix.size())
                                                                   : path;
-    auto refuse = [&](const std::string &why) {
-        const std::string msg = "URI '" + rel + "' refused: " + why;
-        if (fs.refused.empty())
+    auto refuse_as = [&](int code, const std::string &msg) {
+        if (fs.refused.empty()) {
             fs.refused = msg;
+            fs.code = code;
+        }
         if (err)
             *err = msg;
         return false;
+    };
+    auto refuse = [&](const std::string &why) {
+        return refuse_as(FP_MESH_ERR_FORMAT, "URI '" + rel + "' refused: " + why);
+    };
+    // a file the URI fairly names that is not there (or may not be read): named by its path
+    auto missing = [&](int code, const std::string &why) {
+        return refuse_as(code, "URI '" + rel + "': " + path + ": " + why);
     };
     if (path.compare(0, prefix.size(), prefix) != 0)
         return refuse("not inside the glTF file's folder");
@@ -508,6 +520,10 @@ bool gltf_fs_read(std::vector<unsigned char> *out, std::string *err, const std::
     std::string rb = real_base ? real_base : "", rp = real ? real : "";
     free(real_base);
     free(real);
+    if (!rb.empty() && rp.empty() && (e == ENOENT || e == ENOTDIR || e == EACCES))
+        return missing(e == EACCES ? FP_MESH_ERR_ACCESS : FP_MESH_ERR_NOENT,
+                       e == EACCES ? "cannot open: " + std::string(std::strerror(e))
+                                   : std::string("no such file (the glTF's buffer or image)"));
     if (rb.empty() || rp.empty())
         return refuse(std::string("cannot resolve: ") + std::strerror(e));
     if (rb.back() != '/')
@@ -520,8 +536,10 @@ bool gltf_fs_read(std::vector<unsigned char> *out, std::string *err, const std::
     int code = FP_MESH_OK;
     std::string why;
     int fd = open_regular(rp.c_str(), max_file_bytes, &size, &code, &why);
-    if (fd < 0)
-        return refuse(why);
+    if (fd < 0) // (a FIFO or a device: NOENT, as the glTF itself would be)
+        return refuse_as(code == FP_MESH_ERR_NOENT || code == FP_MESH_ERR_ACCESS ? code
+                                                                                 : FP_MESH_ERR_FORMAT,
+                         "URI '" + rel + "' refused: " + why);
     std::string data;
     const bool ok = read_fd(fd, size, data, &code, &why);
     ::close(fd);
@@ -761,7 +779,7 @@ int load_gltf(const char *path, const std::string &ext, const std::string &data,
         ok = loader.LoadASCIIFromString(&model, &gerr, &gwarn, data.data(),
                                         unsigned(data.size()), dir);
     if (!fs.refused.empty())
-        return fail(err, errlen, FP_MESH_ERR_FORMAT, path, "glTF: " + fs.refused);
+        return fail(err, errlen, fs.code, path, "glTF: " + fs.refused);
     if (!ok)
         return fail(err, errlen, FP_MESH_ERR_FORMAT, path,
                     "glTF: " + one_line(gerr.empty() ? std::string("cannot parse") : gerr));

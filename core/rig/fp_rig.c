@@ -222,6 +222,7 @@ void fp_rig_free(fp_rig **rig)
     free((*rig)->slope_v);
     free((*rig)->weight_v);
     free((*rig)->weight_w);
+    free((*rig)->weld);
     free(*rig);
     *rig = NULL;
 }
@@ -252,9 +253,7 @@ static int by_name(const void *a, const void *b)
     return strcmp(*(char *const *)a, *(char *const *)b);
 }
 
-/* The names of dir's *.json files, sorted, into *names (malloc()ed, each and the array).
- * Returns their count, or a negative errno. */
-static long json_names(const char *dir, char ***names)
+long fpr_json_names(const char *dir, char ***names)
 {
     *names = NULL;
     DIR *d = opendir(dir);
@@ -290,7 +289,7 @@ int fp_rig_find(const char *dir, size_t n, const float *pos, char *path_out, siz
 {
     if (!dir || !pos || !path_out || !path_len) return fp_errorf(err, errlen, -EINVAL, "fp_rig_find: NULL argument");
     char **names;
-    long count = json_names(dir, &names);
+    long count = fpr_json_names(dir, &names);
     if (count == -ENOMEM) return fp_errorf(err, errlen, -ENOMEM, "%s: out of memory", dir);
     if (count < 0) return fp_errorf(err, errlen, -ENOENT, "%s: %s", dir, strerror((int)-count));
     uint32_t crc = fp_rig_positions_crc32(n, pos);

@@ -214,6 +214,36 @@ int fp_rig_checksum_matches(const fp_rig *rig, size_t n, const float *positions)
 int fp_rig_find(const char *dir, size_t n, const float *positions, char *path_out,
                 size_t path_len, char *err, size_t errlen);
 
+/** Each of the n vertices of pos (n x 3) found at a vertex of rig_pos (rig_n x 3) by its
+ *  position, the three floats bit for bit (-0 as +0): to_rig[i] (n entries, the caller's) the
+ *  lowest such vertex, UINT32_MAX where none. What finds a rig's own mesh whose vertices were
+ *  split at UV or material seams (a glTF, GLB or PLY copy: the ICT face's 26719 vertices as
+ *  28716): each copy of a split vertex lies where the vertex does. Returns the number of
+ *  vertices not found (0: all), -EINVAL (no vertex), -ENOMEM. O((rig_n + n) log rig_n); any
+ *  thread. */
+int fp_rig_match_positions(size_t rig_n, const float *rig_pos, size_t n, const float *pos,
+                           uint32_t *to_rig);
+
+/** Carry a loaded rig (fp_rig_load; not yet bound) over to a mesh of n vertices whose vertex i
+ *  is the rig's vertex to_rig[i] (fp_rig_match_positions; pos, n x 3, that mesh's positions):
+ *  every vertex takes its rig vertex's region, kind and file jaw weight; a landmark goes to the
+ *  first vertex of its own; the rig's vertex count and checksum become the mesh's (pos). Then
+ *  fp_rig_bind(rig, n, pos). Returns 0; -EBADMSG (a landmark's vertex is in no vertex of the
+ *  mesh: the message names it), -EINVAL (a to_rig entry out of range, a bound rig), -ENOMEM;
+ *  on any error the rig is unchanged. */
+int fp_rig_remap(fp_rig *rig, size_t n, const uint32_t *to_rig, const float *pos, char *err,
+                 size_t errlen);
+
+/** Where fp_rig_find finds none: the rig of `dir` whose own mesh (its mesh.name under
+ *  data_root, the shared data folder; loaded, and with the rig's vertex count and checksum)
+ *  has fewer vertices than this one (n, pos) and holds every one of its positions
+ *  (fp_rig_match_positions): the rig's path into path_out and the map into *to_rig (n entries,
+ *  malloc()ed: the caller frees it) for fp_rig_remap. The first such rig by file name. Returns
+ *  0, -ENOENT (none: err says so), -ENOMEM, -EINVAL. Reads the folder, the rigs and their
+ *  meshes; any thread. */
+int fp_rig_find_split(const char *dir, const char *data_root, size_t n, const float *pos,
+                      char *path_out, size_t path_len, uint32_t **to_rig, char *err, size_t errlen);
+
 /** The rig's name (file "name"), its file's name (as given to parse/load), the vertex
  *  count it fits, the mesh name it records (may be ""). Strings owned by the rig. */
 const char *fp_rig_name(const fp_rig *rig);

@@ -71,6 +71,8 @@ struct fp_rig {
     size_t weight_count;        /* jaw.weights: soft vertices whose weight the file gives */
     uint32_t *weight_v;         /* their indices, ascending */
     float *weight_w;            /* their weights in [0, 1] */
+    uint32_t *weld;             /* n or NULL: after fp_rig_remap, the first vertex of each
+                                   vertex's rig vertex (its split copies share it) */
     /* bound */
     float *w;                   /* n jaw weights */
     float *m;                   /* n mobility */
@@ -107,6 +109,10 @@ static inline size_t fpr_landmark_at(const fp_rig *r, const char *name)
  * vertices in pos (n x 3) lie elsewhere than their ref (a moved, turned or scaled copy of the
  * rig's mesh), carried there by the similarity that fits them best (r->placement says) */
 void fpr_place(fp_rig *r, const float *pos);
+
+/* fp_rig.c: the names of dir's *.json files, sorted, into *names (malloc()ed, each and the
+ * array). Returns their count, or a negative errno. */
+long fpr_json_names(const char *dir, char ***names);
 
 /* fp_rig_near.c: for each soft vertex v (kind[v] == FP_RIG_SOFT) of the n (positions pos, n x 3),
  * the nearest vertex of another kind within reach2 (a squared distance, inclusive), its squared

@@ -137,6 +137,12 @@ int fp_rig_unfold_jaw(fp_rig *r, const float *pos, const uint32_t *tris, size_t 
         if (tris[i] >= r->n) return -EINVAL;
     if (r->jaw_open < 0 || !(r->open_deg > 0) || !t) return 0;
     if (t > UINT32_MAX / 3) return -EINVAL;
+    uint32_t *welded = NULL; /* a mesh split at seams (fp_rig_remap): its triangles joined */
+    if (r->weld) {
+        if (!(welded = malloc(3 * t * sizeof *welded))) return -ENOMEM;
+        for (size_t i = 0; i < 3 * t; i++) welded[i] = r->weld[tris[i]];
+        tris = welded;
+    }
     size_t n = r->n;
     double *n0 = malloc(3 * t * sizeof *n0);
     float *posed = malloc(3 * n * sizeof *posed);
@@ -170,9 +176,13 @@ int fp_rig_unfold_jaw(fp_rig *r, const float *pos, const uint32_t *tris, size_t 
         }
         if (!u.nfresh) break; /* what is left turned over has no soft vertex to give */
     }
+    if (r->weld) /* each split copy as its first */
+        for (size_t v = 0; v < r->n; v++)
+            if (r->w[v] != r->w[r->weld[v]]) r->w[v] = r->w[r->weld[v]], touched[v] = 1;
     if (changed)
         for (size_t v = 0; v < r->n; v++) *changed += touched[v]; /* (soft vertices only) */
 out:
+    free(welded);
     free(n0), free(posed), free(touched);
     free(u.cand), free(u.vlist), free(u.vstamp), free(u.tstamp), free(u.marked), free(u.freshv);
     free(u.adj_start), free(u.adj), free(u.mark), free(u.fresh);

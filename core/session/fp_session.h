@@ -169,6 +169,14 @@ typedef struct fp_session_options {
                                                        no rig. A rig's mm_per_unit is the
                                                        mesh's unit unless mm_per_unit is given */
     const char *rig_dir;                            /* NULL: fp_rig_default_dir(NULL) */
+    const char *rig_mesh_root;                      /* the shared data folder, where the rigs'
+                                                       meshes (mesh.name) lie: a mesh no rig
+                                                       fits by checksum or vertex count that
+                                                       is a rig's own with its vertices split
+                                                       at seams (a glTF copy) gets that rig,
+                                                       carried over by position
+                                                       (fp_rig_find_split); NULL: not looked
+                                                       for */
     bool measure_jacobian;                          /* fill fp_frame_stats.min_det_j (the
                                                        engine's general path: slower, same
                                                        shape) */

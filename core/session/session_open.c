@@ -16,6 +16,35 @@
 #include <unistd.h>
 #include <sys/stat.h> /* stat: the mesh file's size for progress */
 
+/* A rig of dir whose own mesh (under root) holds every vertex of this one, split at seams:
+ * loaded, carried over (fp_rig_find_split, fp_rig_remap), bound, s->rig_how said. 0 and *rig,
+ * 1 none (nothing said), or -ENOMEM. */
+static int attach_split_rig(fp_session *s, const char *dir, const char *root, fp_rig **rig,
+                            char *err, size_t errlen)
+{
+    char path[1024], msg[300];
+    uint32_t *map = NULL;
+    int rc = fp_rig_find_split(dir, root, s->n, s->loaded, path, sizeof path, &map, msg, sizeof msg);
+    if (rc) return rc == -ENOMEM ? fp_errorf(err, errlen, rc, "session: %s", msg) : 1;
+    size_t rig_n = 0;
+    rc = fp_rig_load(path, rig, msg, sizeof msg);
+    if (!rc) {
+        rig_n = fp_rig_vertex_count(*rig);
+        rc = fp_rig_remap(*rig, s->n, map, s->loaded, msg, sizeof msg);
+    }
+    if (!rc) rc = fp_rig_bind(*rig, s->n, s->loaded, msg, sizeof msg);
+    free(map);
+    if (rc) { /* (it fit when found: only memory, or a file changed since, stops it) */
+        fp_rig_free(rig);
+        if (rc == -ENOMEM) return fp_errorf(err, errlen, rc, "session: %s", msg);
+        fp_slog_printf(&s->log, FP_LOG_WARNING, "rig", "%s; running without a rig", msg);
+        return 1;
+    }
+    snprintf(s->rig_how, sizeof s->rig_how, "%s (found by position: this mesh is its %s with the "
+             "vertices split at seams, %zu vertices at its %zu)", path, fp_rig_mesh_name(*rig), s->n, rig_n);
+    return 0;
+}
+
 /* The rig: given, "none", or the one of this mesh in the rig folder (fp_rig_find). */
 static int attach_rig(fp_session *s, const fp_session_options *opt, char *err, size_t errlen)
 {
@@ -35,7 +64,14 @@ static int attach_rig(fp_session *s, const fp_session_options *opt, char *err, s
         rc = fp_rig_find(d, s->n, s->loaded, path, sizeof path, msg, sizeof msg);
         if (rc == -EEXIST) /* (two rigs of this mesh: a choice not ours; said also under -q) */
             fp_slog_printf(&s->log, FP_LOG_WARNING, "rig", "%s; running without a rig", msg);
-        if (rc) {
+        if (rc == -ENOENT && opt->rig_mesh_root) { /* its own mesh, split at seams? */
+            int src = attach_split_rig(s, d, opt->rig_mesh_root, &rig, err, errlen);
+            if (src < 0) return src;
+            rc = src ? rc : 0;
+        }
+        if (rig) {
+            /* (found by position: attach_split_rig said how) */
+        } else if (rc) {
             snprintf(s->rig_how, sizeof s->rig_how, "none (%s)", msg);
         } else {
             if ((rc = fp_rig_load_for_mesh(path, s->n, s->loaded, &rig, err, errlen))) return rc;

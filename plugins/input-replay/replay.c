@@ -68,8 +68,9 @@ static const char usage_text[] =
     "  time), whatever the speed; speed and fast only change the pacing. Without loop, the replay ends\n"
     "  with an end-of-stream status. A malformed row fails at creation (FILE:LINE:COLUMN; in a\n"
     "  Leap original FILE: JSON.PATH, e.g. frames[12].hands[0].palmNormal); a\n"
-    "  last line cut short (no newline) is dropped and reported with an error status (the\n"
-    "  recording is damaged) after the rows before it were replayed.\n";
+    "  last line without a newline is replayed when it is a whole row (a CSV's: its last number\n"
+    "  with the row before's decimals); one cut short is dropped and reported with an error\n"
+    "  status (the recording is damaged) after the rows before it were replayed.\n";
 
 /* ------------------------------------------------------------------------------------- */
 /* Thread                                                                                 */

@@ -91,6 +91,17 @@ for v in "takes rate" "takes describe" "plugins check"; do
     [ $rc -eq 64 ] || { cat o.out; fail "$v --no-such-option-xyz: exit $rc, want 64"; }
     head -1 o.out | grep -q "^facepuppet $v: " || { cat o.out; fail "$v: the message does not start 'facepuppet $v: '"; }
 done
+# live names a bad file argument before it opens its window: without a display it said "no
+# display" (exit 66 too) and never the file. --mesh, --rig and a replay: input's FILE, as run.
+if "$fp" live --help >/dev/null 2>&1; then
+    for a in "--mesh nope.obj" "--rig nope.json" "--input replay:nope.csv"; do
+        env -u DISPLAY -u WAYLAND_DISPLAY "$fp" live $a >l.out 2>&1; rc=$?
+        [ $rc -eq 66 ] || { cat l.out; fail "live $a: exit $rc, want 66"; }
+        head -1 l.out | grep -q "^facepuppet live: .*nope\.[a-z]*: cannot open: No such file" ||
+            { cat l.out; fail "live $a: the first line does not name the file"; }
+        grep -qi "display" l.out && { cat l.out; fail "live $a: a display was tried first"; }
+    done
+fi
 "$fp" help frob >u.out 2>&1
 [ $? -eq 64 ] || fail "help frob: want exit 64"
 grep -q "frob" u.out || fail "help frob: the message does not name frob"

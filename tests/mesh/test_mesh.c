@@ -901,7 +901,18 @@ static void test_error_gltf_missing_buffer(void **state)
     (void)state;
     char json[1024];
     snprintf(json, sizeof json, tri_gltf_fmt, 3, "missing.bin");
-    expect_load_error(write_tmp("nobuffer.gltf", json), FP_MESH_ERR_FORMAT, "missing.bin");
+    /* an input file missing (exit 66), named by its path: before, FORMAT (65) */
+    expect_load_error(write_tmp("nobuffer.gltf", json), FP_MESH_ERR_NOENT,
+                      tmp_path("missing.bin"));
+    /* one that may not be read: ACCESS (66), named (not as root: root reads it anyway) */
+    if (geteuid() != 0) {
+        FILE *f = fopen(tmp_path("locked.bin"), "wb");
+        assert_non_null(f);
+        fclose(f);
+        assert_int_equal(chmod(tmp_path("locked.bin"), 0), 0);
+        snprintf(json, sizeof json, tri_gltf_fmt, 3, "locked.bin");
+        expect_load_error(write_tmp("locked.gltf", json), FP_MESH_ERR_ACCESS, "locked.bin");
+    }
 }
 
 static void test_error_gltf_bad_accessor(void **state)

@@ -866,6 +866,48 @@ static void truncated_file_replays_to_last_full_row(void **state)
     fp_test_host_free(h);
 }
 
+/* Lines 1..101 of three-claps, the last without its newline: whole (the file simply ends
+ * without one, as many writers leave it: replayed, no warning) or cut inside its last number
+ * ("-42.37" of "-42.3741": it parses, but with fewer decimals than the row before: dropped,
+ * said). Before, a whole last row without a newline was dropped as cut off. */
+static void write_unterminated(const char *path, size_t cut_last)
+{
+    FILE *in = fopen(LEAP "three-claps_joints_mm.csv", "r"), *out = fopen(path, "w");
+    assert_non_null(in);
+    assert_non_null(out);
+    static char buf[16384];
+    for (int n = 1; n <= 101 && fgets(buf, sizeof buf, in); n++) {
+        size_t len = strlen(buf);
+        if (n == 101) {
+            assert_true(len > cut_last + 1 && buf[len - 1] == '\n');
+            fwrite(buf, 1, len - 1 - cut_last, out); /* no newline, cut_last bytes less */
+        } else {
+            fputs(buf, out);
+        }
+    }
+    fclose(in);
+    fclose(out);
+}
+
+static void unterminated_last_row(void **state)
+{
+    (void)state;
+    char path[512];
+    tmp_path(path, sizeof path, "unterminated_joints.csv");
+    write_unterminated(path, 0);
+    fp_test_host *h = replay_all(path, "fast=1", 1000);
+    assert_int_equal(count_type(h, FP_EVENT_JOINT_POSITIONS, -1), 100); /* lines 2..101 */
+    assert_null(strstr(h->log, "unterminated_joints.csv:101:"));
+    assert_int_equal(h->events[h->count - 1].status.code, FP_STATUS_END_OF_STREAM);
+    assert_int_equal(h->events[h->count - 2].header.type, FP_EVENT_WRIST_POSE);
+    fp_test_host_free(h);
+    write_unterminated(path, 2); /* the last number without its last two decimals */
+    h = replay_all(path, "fast=1", 1000);
+    assert_int_equal(count_type(h, FP_EVENT_JOINT_POSITIONS, -1), 99);
+    assert_non_null(strstr(h->log, "unterminated_joints.csv:101: last line cut short"));
+    fp_test_host_free(h);
+}
+
 /* A row at its hand's previous row's time (a sample sent twice) replays, with a warning
  * naming the first such line; a recording whose every row has one time spans no time and is
  * refused as bad data (before: its 374 rows played as one frame without a word). */
@@ -1041,6 +1083,7 @@ int main(void)
         cmocka_unit_test(joints_given_in_advance),
         cmocka_unit_test(malformed_rows_fail_create),
         cmocka_unit_test(truncated_file_replays_to_last_full_row),
+        cmocka_unit_test(unterminated_last_row),
         cmocka_unit_test(repeated_times),
         cmocka_unit_test(spec_errors),
         cmocka_unit_test(eventlog_replays_as_recorded),

@@ -607,6 +607,80 @@ static void test_mediapipe(void **state)
     other_face("mediapipe-canonical/canonical_face_model.obj", "mediapipe-canonical");
 }
 
+/* A copy of a rig's mesh split at seams (fp_rig_match_positions, fp_rig_remap): the
+ * MediaPipe face's vertices in reverse order, every 10th one written twice more at the end
+ * (515 for 468). Every vertex finds its rig vertex; the remapped rig gives each its rig
+ * vertex's kind and poses it where the rig poses that vertex on the mesh itself; a landmark
+ * goes to its vertex's first copy. A copy without a landmark's vertex is refused by name,
+ * the rig unchanged. */
+static void test_split_copy(void **state)
+{
+    (void)state;
+    fp_mesh *m = load_face("mediapipe-canonical/canonical_face_model.obj");
+    fp_rig *r = find_rig(m);
+    const size_t n = m->vertex_count, extra = (n + 9) / 10, n2 = n + extra;
+    float *pos = malloc(n2 * 3 * sizeof *pos), *out = malloc(n * 3 * sizeof *out);
+    float *out2 = malloc(n2 * 3 * sizeof *out2);
+    uint32_t *map = malloc(n2 * sizeof *map), want[1024];
+    assert_true(pos && out && out2 && map && n2 <= 1024);
+    for (size_t i = 0; i < n; i++) want[i] = (uint32_t)(n - 1 - i);
+    for (size_t k = 0; k < extra; k++) want[n + k] = (uint32_t)(10 * k);
+    for (size_t i = 0; i < n2; i++) memcpy(pos + 3 * i, m->positions + 3 * want[i], 3 * sizeof(float));
+    assert_int_equal(fp_rig_match_positions(n, m->positions, n2, pos, map), 0);
+    for (size_t i = 0; i < n2; i++) /* (coincident vertices: the lowest) */
+        assert_memory_equal(m->positions + 3 * map[i], m->positions + 3 * want[i], 3 * sizeof(float));
+    char path[4096], err[512];
+    snprintf(path, sizeof path, "%s", fp_rig_source(r));
+    fp_rig *s = NULL;
+    assert_int_equal(fp_rig_load(path, &s, err, sizeof err), 0);
+    assert_int_equal(fp_rig_remap(s, n2, map, pos, err, sizeof err), 0);
+    assert_int_equal(fp_rig_bind(s, n2, pos, err, sizeof err), 0);
+    assert_int_equal(fp_rig_vertex_count(s), n2);
+    assert_true(fp_rig_checksum_matches(s, n2, pos));
+    const uint8_t *k1 = fp_rig_vertex_kinds(r), *k2 = fp_rig_vertex_kinds(s);
+    for (size_t i = 0; i < n2; i++) assert_int_equal(k2[i], k1[map[i]]);
+    for (size_t l = 0; l < fp_rig_landmark_count(r); l++) {
+        const char *name;
+        uint32_t v1, v2;
+        assert_int_equal(fp_rig_landmark_get(r, l, &name, &v1), 0);
+        assert_int_equal(fp_rig_landmark_get(s, l, &name, &v2), 0);
+        assert_int_equal(v2, n - 1 - v1); /* its first copy: the reversed vertex */
+    }
+    float vals[FP_RIG_MAX_CHANNELS], vals2[FP_RIG_MAX_CHANNELS];
+    const char *names[] = {"jaw.open"};
+    const float v[] = {0.6f};
+    fp_rig_channel_values(r, names, v, 1, vals);
+    fp_rig_channel_values(s, names, v, 1, vals2);
+    assert_int_equal(fp_rig_pose(r, m->positions, vals, out), 0);
+    assert_int_equal(fp_rig_pose(s, pos, vals2, out2), 0);
+    size_t moved = 0;
+    for (size_t i = 0; i < n2; i++) {
+        assert_memory_equal(out2 + 3 * i, out + 3 * map[i], 3 * sizeof(float));
+        moved += memcmp(out2 + 3 * i, pos + 3 * i, 3 * sizeof(float)) != 0;
+    }
+    assert_true(moved > n / 10);
+    fp_rig_free(&s);
+    /* without the chin's vertex (its copies too): refused by the landmark's name */
+    const long c = fp_rig_landmark_index(r, "chin");
+    assert_true(c >= 0);
+    const uint32_t chin = (uint32_t)c;
+    size_t n3 = 0;
+    for (size_t i = 0; i < n2; i++)
+        if (map[i] != chin) map[n3] = map[i], memcpy(pos + 3 * n3, pos + 3 * i, 3 * sizeof(float)), n3++;
+    assert_int_equal(fp_rig_load(path, &s, err, sizeof err), 0);
+    assert_int_equal(fp_rig_remap(s, n3, map, pos, err, sizeof err), -EBADMSG);
+    assert_non_null(strstr(err, "landmark chin"));
+    assert_int_equal(fp_rig_vertex_count(s), n);
+    fp_rig_free(&s);
+    /* a vertex at no rig vertex's position */
+    pos[0] += 1e-3f;
+    assert_int_equal(fp_rig_match_positions(n, m->positions, n3, pos, map), 1);
+    assert_int_equal(map[0], UINT32_MAX);
+    free(pos), free(out), free(out2), free(map);
+    fp_rig_free(&r);
+    fp_mesh_free(&m);
+}
+
 static char *read_text(const char *path, size_t *len)
 {
     FILE *f = fopen(path, "rb");
@@ -1042,7 +1116,7 @@ int main(void)
         cmocka_unit_test(test_lee_perry_smith),  cmocka_unit_test(test_mediapipe),
         cmocka_unit_test(test_mobility_brute_force),
         cmocka_unit_test(test_broken_files),     cmocka_unit_test(test_placement),
-        cmocka_unit_test(test_find_names_unread),
+        cmocka_unit_test(test_find_names_unread), cmocka_unit_test(test_split_copy),
         cmocka_unit_test(test_find_all_and_twins), cmocka_unit_test(test_channel_range_ends),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -2,6 +2,7 @@
 #include "app_export.h"
 #include "app_util.h"
 #include "command.h"
+#include "fp_cache_info.h"
 #include "fp_file.h"
 #include "fp_mesh.h"
 #include "fp_session.h"
@@ -10,8 +11,10 @@
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 
 double fp_app_export_frame_bytes(fp_export_format format, const struct fp_mesh *mesh)
@@ -37,6 +40,57 @@ void fp_app_export_name(const char *path, bool stack, const char *slate, unsigne
     snprintf(buf, n, "%.*s", dot && dot > base ? (int)(dot - base) : (int)strlen(base), base);
 }
 
+/* A /proc file's "KEY: N kB" line, in bytes; -1 where absent. */
+static double proc_kb(const char *file, const char *key)
+{
+    FILE *f = fopen(file, "re");
+    if (!f) return -1;
+    char line[256];
+    double v = -1;
+    const size_t n = strlen(key);
+    while (fgets(line, sizeof line, f))
+        if (!strncmp(line, key, n) && line[n] == ':') {
+            v = strtod(line + n + 1, NULL) * 1024.0;
+            break;
+        }
+    fclose(f);
+    return v;
+}
+
+double fp_app_memory_budget(void)
+{
+    const double avail = proc_kb("/proc/meminfo", "MemAvailable"), swap = proc_kb("/proc/meminfo", "SwapFree");
+    double budget = avail > 0 ? avail + (swap > 0 ? swap : 0) : 0;
+    struct rlimit rl;
+    if (getrlimit(RLIMIT_AS, &rl) == 0 && rl.rlim_cur != RLIM_INFINITY) {
+        const double size = proc_kb("/proc/self/status", "VmSize");
+        const double left = (double)rl.rlim_cur - (size > 0 ? size : 0);
+        if (budget == 0 || left < budget) budget = left > 1 ? left : 1;
+    }
+    return budget;
+}
+
+int fp_app_export_gltf_plan(const char *cmd, const char *what, const char *hint, double frames,
+                            const struct fp_mesh *mesh, bool quiet,
+                            fp_export_options *eo)
+{
+    if (eo->format != FP_EXPORT_GLTF && eo->format != FP_EXPORT_GLB) return FP_EXIT_OK;
+    if (frames > FP_EXPORT_GLTF_MAX_FRAMES) {
+        fprintf(stderr, "%s: %s: %.0f frames: a glTF export holds at most %d (%s); nothing "
+                "written\n", cmd, what, frames, FP_EXPORT_GLTF_MAX_FRAMES, hint);
+        return FP_EXIT_USAGE;
+    }
+    eo->frames_expected = frames > 0 ? (uint64_t)frames : 0;
+    eo->memory_budget = fp_app_memory_budget();
+    const double most = fp_export_gltf_peak_bytes(eo->frames_expected, mesh->vertex_count);
+    if (!quiet && frames > 0 && eo->memory_budget > 0 && most > eo->memory_budget)
+        fprintf(stderr, "%s: %s: %.0f frames of %zu vertices: the morph targets may need "
+                "%.1f GB or more at the end, more than the %.1f GB there is room for; the export stops "
+                "as soon as the frames show it cannot fit (%s)\n", cmd, what, frames,
+                mesh->vertex_count, most / 1e9, eo->memory_budget / 1e9, hint);
+    return FP_EXIT_OK;
+}
+
 int fp_app_export_open(const char *cmd, const char *file, const struct fp_session *s,
                        double mm_per_unit, const char *name, double frames, fp_exporter **x)
 {
@@ -54,6 +108,9 @@ int fp_app_export_open(const char *cmd, const char *file, const struct fp_sessio
     if (status) return status;
     fp_export_options eo = {.format = fmt, .path = file, .mm_per_unit = mm_per_unit,
                             .name = name};
+    if ((status = fp_app_export_gltf_plan(cmd, what, "a shorter --duration", frames, mesh, false,
+                                          &eo)))
+        return status;
     float up[3], facing[3];
     fp_session_face_axes(s, up, facing);
     for (int i = 0; i < 3; i++) eo.up[i] = up[i], eo.facing[i] = facing[i];
@@ -117,86 +174,34 @@ bool fp_app_is_point_cache(const char *path, const unsigned char *h, size_t n)
     return (dot && !strcasecmp(dot, ".mdd")) || (n >= 12 && !memcmp(h, "POINTCACHE2\0", 12));
 }
 
-static uint32_t u32_of(const unsigned char *b, bool big)
-{
-    return big ? (uint32_t)b[0] << 24 | (uint32_t)b[1] << 16 | (uint32_t)b[2] << 8 | b[3]
-               : (uint32_t)b[3] << 24 | (uint32_t)b[2] << 16 | (uint32_t)b[1] << 8 | b[0];
-}
-
-static float f32_of(const unsigned char *b, bool big)
-{
-    uint32_t u = u32_of(b, big);
-    float v;
-    memcpy(&v, &u, sizeof v);
-    return v;
-}
-
-/* the file's size against what its header says it holds: true when whole, else a note */
-static bool cache_whole(double size, double want, double header, double frame, char *note, size_t n)
-{
-    note[0] = 0;
-    if (size == want) return true;
-    if (size > want) snprintf(note, n, " (and %.0f bytes more than they take)", size - want);
-    else snprintf(note, n, " (cut: the file holds %.0f of them)",
-                  size > header && frame > 0 ? floor((size - header) / frame) : 0.0);
-    return false;
-}
-
 int fp_app_cache_info(const char *path)
 {
-    int code;
-    FILE *f = fp_file_fopen_regular(path, &code);
-    struct stat st;
-    if (!f || fstat(fileno(f), &st)) {
-        if (f) code = -errno, fclose(f); /* (fstat's errno, before fclose may change it) */
-        fprintf(stderr, "facepuppet info: %s: cannot open: %s\n", path, fp_file_error_text(code));
-        return fp_app_exit_code(code, FP_APP_INPUT);
+    fp_cache_info c;
+    char err[256];
+    int rc = fp_cache_info_read(path, &c, err, sizeof err);
+    if (rc) {
+        fprintf(stderr, "facepuppet info: %s: %s\n", path, err);
+        return fp_app_exit_code(rc, FP_APP_INPUT);
     }
-    unsigned char h[32] = {0};
-    size_t got = fread(h, 1, sizeof h, f);
-    const bool pc2 = got >= 12 && !memcmp(h, "POINTCACHE2\0", 12);
-    const double size = (double)st.st_size;
-    char note[96] = "";
-    int status = FP_EXIT_OK;
-    if (pc2) {
-        if (got < 32 || u32_of(h + 12, false) != 1 || (int32_t)u32_of(h + 16, false) <= 0 ||
-            (int32_t)u32_of(h + 28, false) < 0) {
-            fprintf(stderr, "facepuppet info: %s: not a PC2 point cache (a header of 32 bytes, version 1, "
-                    "points > 0, samples >= 0)\n", path);
-            status = FP_EXIT_DATAERR;
-        } else {
-            double points = u32_of(h + 16, false), samples = u32_of(h + 28, false);
-            if (!cache_whole(size, 32 + samples * points * 12, 32, points * 12, note, sizeof note))
-                status = FP_EXIT_DATAERR;
-            printf("%s\n  format    PC2 point cache (little-endian)\n  points    %.0f\n  frames    %.0f%s\n"
-                   "  start     frame %g, a sample every %g frames (PC2 has no rate: the scene's)\n",
-                   path, points, samples, note, f32_of(h + 20, false), f32_of(h + 24, false));
-        }
-    } else if (got >= 8 && (int32_t)u32_of(h, true) >= 0 && (int32_t)u32_of(h + 4, true) > 0) {
-        double frames = u32_of(h, true), points = u32_of(h + 4, true);
-        if (!cache_whole(size, 8 + frames * 4 + frames * points * 12, 8 + frames * 4, points * 12, note,
-                         sizeof note))
-            status = FP_EXIT_DATAERR;
-        unsigned char t[4];
-        double t0 = NAN, t1 = NAN, tl = NAN;
-        if (frames >= 1 && fseek(f, 8, SEEK_SET) == 0 && fread(t, 1, 4, f) == 4) t0 = f32_of(t, true);
-        if (frames >= 2 && fread(t, 1, 4, f) == 4) t1 = f32_of(t, true);
-        if (frames >= 2 && fseek(f, 8 + 4 * ((long)frames - 1), SEEK_SET) == 0 && fread(t, 1, 4, f) == 4)
-            tl = f32_of(t, true);
-        printf("%s\n  format    MDD point cache (big-endian)\n  points    %.0f\n  frames    %.0f%s\n", path, points,
-               frames, note);
-        if (isfinite(t0) && isfinite(tl) && frames >= 2 && tl > t0)
-            printf("  times     %.4g .. %.4g s, %.4g fps (first step %.4g s)\n", t0, tl, (frames - 1) / (tl - t0),
-                   t1 - t0);
-        else if (isfinite(t0))
-            printf("  times     %.4g s\n", t0);
+    char note[96] = ""; /* the file's size against what its header says it holds */
+    if (c.bytes > c.want) snprintf(note, sizeof note, " (and %.0f bytes more than they take)", c.bytes - c.want);
+    else if (c.bytes < c.want) snprintf(note, sizeof note, " (cut: the file holds %.0f of them)", c.held);
+    if (!c.mdd) {
+        printf("%s\n  format    PC2 point cache (little-endian)\n  points    %.0f\n  frames    %.0f%s\n"
+               "  start     frame %g, a sample every %g frames (PC2 has no rate: the scene's)\n",
+               path, c.points, c.frames, note, c.start, c.sampling);
     } else {
-        fprintf(stderr, "facepuppet info: %s: not an MDD point cache (frames >= 0 and points > 0, big-endian)\n",
-                path);
-        status = FP_EXIT_DATAERR;
+        printf("%s\n  format    MDD point cache (big-endian)\n  points    %.0f\n  frames    %.0f%s\n", path,
+               c.points, c.frames, note);
+        if (isfinite(c.t_first) && isfinite(c.t_last) && c.frames >= 2 && c.t_last > c.t_first)
+            printf("  times     %.4g .. %.4g s, %.4g fps (first step %.4g s)\n", c.t_first, c.t_last,
+                   (c.frames - 1) / (c.t_last - c.t_first), c.t_second - c.t_first);
+        else if (isfinite(c.t_first))
+            printf("  times     %.4g s\n", c.t_first);
     }
-    fclose(f);
-    if (status == FP_EXIT_DATAERR && note[0])
+    if (note[0]) {
         fprintf(stderr, "facepuppet info: %s: not the size its header gives%s\n", path, note);
-    return status;
+        return FP_EXIT_DATAERR;
+    }
+    return FP_EXIT_OK;
 }

@@ -23,6 +23,21 @@ double fp_app_export_frame_bytes(fp_export_format format, const struct fp_mesh *
 void fp_app_export_name(const char *path, bool stack, const char *slate, unsigned take, char *buf,
                         size_t n);
 
+/** Bytes this process may still allocate, about: MemAvailable + SwapFree (/proc/meminfo), or
+ *  less where RLIMIT_AS (ulimit -v) leaves less above the process's size now (VmSize); 0 where
+ *  neither is known. Any thread. */
+double fp_app_memory_budget(void);
+
+/** A glTF or GLB export (eo->format; other formats: nothing done, 0) of `frames` frames (known
+ *  before any work; 0: not known) of `mesh`: more than FP_EXPORT_GLTF_MAX_FRAMES is refused,
+ *  "CMD: WHAT: N frames: a glTF export holds at most 46340 (HINT); nothing written", exit 64;
+ *  else eo->frames_expected and eo->memory_budget (fp_app_memory_budget) are set, so that the
+ *  exporter stops as soon as the frames played show that its finish cannot fit, and where
+ *  moving every vertex would not fit it is said first unless quiet. Returns 0 or 64. [main-thread] */
+int fp_app_export_gltf_plan(const char *cmd, const char *what, const char *hint, double frames,
+                            const struct fp_mesh *mesh, bool quiet,
+                            fp_export_options *eo);
+
 /** `--export FILE` of run and play: the format from FILE's extension (.gltf .glb .pc2 .mdd),
  *  the exporter begun on the session's loaded mesh (a glTF turned by the session's face axes,
  *  fp_session_face_axes, to +y up and +z front). frames: how many the run will

@@ -257,6 +257,8 @@ int fp_app_session_defaults(const char *cmd, fp_session_options *so, double spee
         so->inputs[so->input_count++] = buf->demo_input;
     }
     if (!so->mapping) so->mapping = "anchored";
+    /* where the rigs' meshes lie: a glTF copy of a rig's mesh, split at seams, finds its rig */
+    if (!so->rig_mesh_root) so->rig_mesh_root = fp_app_data_root(buf->data_root, sizeof buf->data_root);
     for (size_t i = 0; i < so->input_count; i++) {
         const char *in = so->inputs[i];
         bool paced = (!strncmp(in, "replay", 6) && (in[6] == ':' || in[6] == ',' || !in[6])) ||
@@ -462,6 +464,35 @@ static size_t count_named(const char *dir, const char *prefix, const char *suffi
     }
     if (d) closedir(d);
     return n;
+}
+
+/* One file of fp_app_check_input_files: 0, or its exit code with the line printed. */
+static int check_input_file(const char *cmd, const char *spec, const char *path)
+{
+    int fd = fp_file_open_regular(path);
+    if (fd >= 0) {
+        close(fd);
+        return 0;
+    }
+    if (spec) fprintf(stderr, "%s: input '%s': %s: cannot open: %s\n", cmd, spec, path, fp_file_error_text(fd));
+    else fprintf(stderr, "%s: %s: cannot open: %s\n", cmd, path, fp_file_error_text(fd));
+    return fp_app_exit_code(fd, FP_APP_INPUT);
+}
+
+int fp_app_check_input_files(const char *cmd, const fp_session_options *so)
+{
+    int rc = 0;
+    if (so->mesh_path && !so->mesh) rc = check_input_file(cmd, NULL, so->mesh_path);
+    if (!rc && so->rig_path && strcmp(so->rig_path, "none")) rc = check_input_file(cmd, NULL, so->rig_path);
+    for (size_t i = 0; !rc && i < so->input_count; i++) {
+        fp_spec spec;
+        char err[256];
+        if (fp_spec_parse(so->inputs[i], &spec, err, sizeof err)) continue; /* said when opened */
+        if (spec.arg && (!strcmp(spec.name, "replay") || !strcmp(spec.name, "take")))
+            rc = check_input_file(cmd, so->inputs[i], spec.arg);
+        fp_spec_clear(&spec);
+    }
+    return rc;
 }
 
 int fp_app_check_take_dir(const char *cmd, const char *dir)

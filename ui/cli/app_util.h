@@ -164,6 +164,14 @@ long fp_app_remove_stale_frames(const char *dir, const char *prefix, const char 
  *  frames). Returns 0, or 73 with the line printed. [main-thread]. */
 int fp_app_frames_out_clear(const char *cmd, const char *dir, bool quiet);
 
+/** The files a session will read, before a command's slow or fallible start (live's window):
+ *  so->mesh_path, so->rig_path (not "none"), and the FILE of each replay: or take: input SPEC,
+ *  each a regular file that opens for reading (fp_file_open_regular), so that a wrong path is
+ *  said first, as `run` says it, and not after "no display". Their content is read later, by
+ *  the session. Returns 0, or the exit code (66 for a missing or unreadable file) with
+ *  "CMD: [input 'SPEC': ]FILE: cannot open: reason" printed. [main-thread] */
+int fp_app_check_input_files(const char *cmd, const fp_session_options *so);
+
 /** --take-dir DIR of run and live, before any work, making nothing: DIR a folder we can write
  *  in, or, where it is missing, the nearest folder above it that is there (the take writer
  *  makes DIR with its parents at the first take, as `mkdir -p`: fp_take_writer_create), with
@@ -241,6 +249,7 @@ int fp_app_exit_code(int code, fp_app_io io);
 typedef struct fp_app_inputs {
     char demo_mesh[4096];
     char demo_input[4200];
+    char data_root[4096];   /* the shared data folder: the rigs' meshes (rig_mesh_root) */
     char specs[FP_SESSION_MAX_INPUTS][4300];
     char takes[FP_SESSION_MAX_INPUTS][5600]; /* a take's inputs, one take input each (source=N) */
     fp_calibration take_calibration;   /* a take input's recorded calibration */

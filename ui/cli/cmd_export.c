@@ -129,7 +129,9 @@ static void usage(FILE *f)
         "(the glTF's root scale, the caches' scale to metres). A point cache's or an OBJ\n"
         "sequence's size is reckoned before any frame, from the frames' stored times (with\n"
         "--resample, their first-to-last time): said over 1 GiB, and refused (73) where the\n"
-        "folder it goes to has less room free. Frame times that do not increase are a damaged\n"
+        "folder it goes to has less room free; a glTF's frames over 46340 are refused (64),\n"
+        "and it stops as soon as the frames show its morph targets will not fit in memory\n"
+        "(70, docs/export.md). Frame times that do not increase are a damaged\n"
         "take (65). SIGINT or SIGTERM stops the export at the next frame: its temporary file\n"
         "is removed (an output that existed is left as it was) and the status is 128 + the\n"
         "signal (130, 143). One that comes after the last frame, while the output is being\n"
@@ -599,7 +601,7 @@ static int check_gltf_name(const char *out, fp_export_format fmt)
 /* Where the frames go: the exporter (core/export), or for png-seq the folder `out` (made if
  * missing) and a headless renderer. Returns 0 or the exit status (said). */
 static int open_sink(sink *k, const export_args *a, const fp_session *s, const char *out,
-                     const char *name, double mm_per_unit, double frame_rate)
+                     const char *name, double mm_per_unit, double frame_rate, double frames)
 {
     char err[2048];
     int rc;
@@ -610,6 +612,11 @@ static int open_sink(sink *k, const export_args *a, const fp_session *s, const c
     float up[3], facing[3];   /* the take's face axes (its player's session has them) */
     fp_session_face_axes(s, up, facing);
     for (int i = 0; i < 3; i++) eo.up[i] = up[i], eo.facing[i] = facing[i];
+    /* a glTF's frames and the memory its finish needs: refused before the frames, or as soon
+     * as they show it (before: out of memory after playing the whole take) */
+    if ((rc = fp_app_export_gltf_plan("facepuppet export", out, "a smaller --resample or --range",
+                                      frames, fp_session_mesh(s), a->quiet, &eo)))
+        return rc;
     if (!a->png && (rc = fp_export_begin(fp_session_mesh(s), &eo, &k->x, err, sizeof err))) {
         fprintf(stderr, "facepuppet export: %s\n", err);
         return fp_app_exit_code(rc, FP_APP_OUTPUT);
@@ -784,7 +791,7 @@ static int export_take(const export_args *a, fp_take_player *p, sink *k, float *
         return status;
     char wav[4400]; /* the soundtrack under the frames, beside them (NAME.wav) */
     if ((status = fp_app_audio_export_check(h, out, a->force, wav, sizeof wav, "export"))) return status;
-    if ((status = open_sink(k, a, s, out, name, mm_per_unit, rate))) return status;
+    if ((status = open_sink(k, a, s, out, name, mm_per_unit, rate, count))) return status;
     w.s = s;
     w.n = fp_session_vertex_count(s);
     w.total = fp_take_reader_frames(r);

@@ -462,6 +462,8 @@ static int live_main(int argc, char **argv)
     fp_app_inputs inputs_buf;
     if ((orc = fp_app_session_defaults("facepuppet live", so, sopt.speed, &inputs_buf, NULL)))
         return orc;
+    /* the files the session reads, named before the window can fail for want of a display */
+    if ((orc = fp_app_check_input_files("facepuppet live", so))) return orc;
     char *script_text = NULL;
     if ((orc = read_script(script_arg, &script_text))) return orc;
     vo.script = script_text ? script_text : script_arg;

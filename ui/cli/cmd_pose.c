@@ -19,7 +19,8 @@ static void pose_usage(FILE *f)
                "                      [--force]\n\n"
                "Writes the mesh posed by its rig (the jaw about its hinge, the soft tissue by the\n"
                "rig's falloff), without hands. Without --rig the rig is found among the rig files\n"
-               "(by the mesh's checksum, else its vertex count): $FACEPUPPET_RIGS, else\n"
+               "(by the mesh's checksum, else its vertex count, else as the rig's own mesh\n"
+               "split at seams, by its vertices' positions): $FACEPUPPET_RIGS, else\n"
                "<bin>/../share/facepuppet/rigs when installed, else the source tree's rigs/.\n"
                "Values outside a channel's range are refused. The output format follows FILE's\n"
                "extension (OBJ, PLY, OFF, STL, glTF, GLB); it is written atomically, and an\n"
@@ -86,11 +87,16 @@ static int pose_main(int argc, char **argv)
         fprintf(stderr, "facepuppet pose: %s\n", err);
         return fp_app_exit_code(rc, FP_APP_INPUT);
     }
-    char found[4096];
+    char found[4096], root[4096];
+    uint32_t *split = NULL; /* the mesh is the rig's own, split at seams: its vertices' rig vertices */
     if (!rig_path) {
         char dir[4096];
         fp_rig_default_dir(fp_app_exe_dir(), dir, sizeof dir);
         rc = fp_rig_find(dir, m->vertex_count, m->positions, found, sizeof found, err, sizeof err);
+        if (rc == -ENOENT && fp_app_data_root(root, sizeof root) &&
+            fp_rig_find_split(dir, root, m->vertex_count, m->positions, found, sizeof found, &split,
+                              NULL, 0) == 0)
+            rc = 0;
         if (rc) {
             fprintf(stderr, "facepuppet pose: %s\n", err);
             fp_mesh_free(&m);
@@ -99,7 +105,15 @@ static int pose_main(int argc, char **argv)
         rig_path = found;
     }
     fp_rig *rig = NULL;
-    rc = fp_rig_load_for_mesh(rig_path, m->vertex_count, m->positions, &rig, err, sizeof err);
+    if (split) { /* as the session does (fp_session_options.rig_mesh_root) */
+        rc = fp_rig_load(rig_path, &rig, err, sizeof err);
+        if (!rc) rc = fp_rig_remap(rig, m->vertex_count, split, m->positions, err, sizeof err);
+        if (!rc) rc = fp_rig_bind(rig, m->vertex_count, m->positions, err, sizeof err);
+        if (rc) fp_rig_free(&rig);
+        free(split);
+    } else {
+        rc = fp_rig_load_for_mesh(rig_path, m->vertex_count, m->positions, &rig, err, sizeof err);
+    }
     if (!rc && (rc = fp_rig_unfold_jaw(rig, m->positions, m->triangles, m->triangle_count, NULL)))
         snprintf(err, sizeof err, "%.1000s: out of memory for the jaw weights", rig_path);
     if (rc) {
