@@ -633,7 +633,7 @@ static int run_main(int argc, char **argv)
     /* the frames written, when known before the run (--duration): the outputs' sizes checked */
     const double frames = a->sopt.duration_s > 0 ? ceil(a->sopt.duration_s * a->fps) + 1 : 0;
     if ((rc = open_session(a, &path, &take, &s)) ||
-        (rc = fp_app_over_check_mesh(&a->over, "facepuppet run", s)) ||
+        (rc = fp_app_over_check_mesh(&a->over, "facepuppet run", s, a->so.mesh_path)) ||
         (a->frames_out && (rc = fp_app_frames_estimate("facepuppet run", "--frames-out", a->frames_out,
                                                        frames, a->fps, fp_session_mesh(s), quiet,
                                                        "a shorter --duration"))) ||
