@@ -9,7 +9,10 @@
 #  - each take's timecode in is 10:00:00:00 + K frames (the LTC at its first frame), its
 #    soundtrack offset K / 25 s, and play --audio-out file:PLAY.wav gives exactly RUN.wav's
 #    samples from K / 25 s on (before: timecode 10:00:00:00 and offset 0 for every take, so
-#    the takes shared one timecode and played their soundtrack from its start).
+#    the takes shared one timecode and played their soundtrack from its start);
+#  - with --audio-in file:MIC.wav (an emulated microphone), each take has its microphone WAV
+#    beside it spanning its frames to the last one's end (before: the header named
+#    SLATE_TNNN.mic.wav and none was written).
 # Usage: test_audio_control.sh PATH/TO/fp_audio_testtool (from the source root).
 # SPDX-License-Identifier: GPL-3.0-or-later
 set -u
@@ -24,6 +27,7 @@ trap 'rm -rf "$tmp"' EXIT
 fail() { echo "FAIL: $*"; exit 1; }
 "$tool" ltc "$tmp/ltc.wav" 25 1 10:00:00:00 8 >/dev/null || fail "ltc"
 "$tool" ramp "$tmp/ramp.wav" 8 >/dev/null || fail "ramp"
+"$tool" ramp "$tmp/mic.wav" 30 >/dev/null || fail "ramp (the microphone)"
 python3 - "$fp" "$build/lib/facepuppet" "$mesh" "$csv" "$tmp" <<'PY' || fail "the run driven over OSC"
 import os, socket, subprocess, sys, time
 sys.path.insert(0, "tests/link")
@@ -33,6 +37,7 @@ err_path = os.path.join(tmp, "run.err")
 p = subprocess.Popen([fp, "run", "--plugin-dir", plugdir, "--mesh", mesh, "--input", "replay:%s,loop=1" % csv,
                       "--fps", "25", "--timecode", "ltc:" + os.path.join(tmp, "ltc.wav"),
                       "--audio", os.path.join(tmp, "ramp.wav"), "--audio-out", "file:" + os.path.join(tmp, "run.wav"),
+                      "--audio-in", "file:" + os.path.join(tmp, "mic.wav"),
                       "--take-dir", os.path.join(tmp, "takes"), "--control", "osc:0", "--duration", "7",
                       "-o", os.path.join(tmp, "run.obj"), "-q"],
                      stdout=subprocess.DEVNULL, stderr=open(err_path, "w"))
@@ -58,9 +63,10 @@ PY
 for n in 1 2; do
     take="$tmp/takes/stage_T00$n.fptake"
     "$fp" info "$take" >"$tmp/info$n.txt" || fail "info $take"
+    [ -f "$tmp/takes/stage_T00$n.mic.wav" ] || { ls "$tmp/takes"; fail "take $n: no microphone WAV beside it"; }
     "$fp" play --plugin-dir "$build/lib/facepuppet" "$take" --audio-out "file:$tmp/play$n.wav" -q \
         -o "$tmp/play$n.obj" >/dev/null 2>"$tmp/play$n.err" || { cat "$tmp/play$n.err"; fail "play $take"; }
-    python3 - "$tmp/info$n.txt" "$tmp/run.wav" "$tmp/play$n.wav" <<'PY' || fail "take $n"
+    python3 - "$tmp/info$n.txt" "$tmp/run.wav" "$tmp/play$n.wav" "$tmp/takes/stage_T00$n.mic.wav" <<'PY' || fail "take $n"
 import re, struct, sys
 info = open(sys.argv[1]).read()
 k = int(re.search(r"session frames (\d+)\.\.", info).group(1))
@@ -82,6 +88,10 @@ if len(play) < 1000 or tuple(run[first:first + len(play)]) != play:
     sys.exit("play's soundtrack (%d samples) is not the run's from sample %d (%g s): it starts at the "
              "soundtrack's sample %d" % (len(play), first, k / 25, round(play[0] * 65536) - 1))
 print("play: %d samples, bit for bit the run's from sample %d" % (len(play), first))
+frames = int(re.search(r"^  frames +(\d+) ", info, re.M).group(1))
+mic = len(floats(sys.argv[4])) / 48000
+print("microphone: %.4f s beside a take of %d frames at 25 fps (%.4f s)" % (mic, frames, frames / 25))
+if abs(mic - frames / 25) > 0.002: sys.exit("the microphone WAV is %.4f s, the take's frames span %.4f s" % (mic, frames / 25))
 PY
 done
-echo "PASS: takes started over OSC mid-run keep the stage timecode and the soundtrack at their first frame"
+echo "PASS: takes started over OSC mid-run keep the stage timecode and the soundtrack at their first frame, and record the microphone"

@@ -115,6 +115,8 @@ typedef struct run_args {
     fp_app_audio audio;            /* --audio, --audio-out, --audio-offset, --timecode */
     fp_app_over over;              /* --over, --layer, --punch (app_stack.h) */
     int64_t take_end_ns;           /* the end of the take's last frame (its mic WAV's end) */
+    int control_status;            /* the first failure of a take's microphone WAV begun or
+                                      ended over --control (the run's exit status) */
     fp_app_link *link;             /* --control, --stream (app_link.h) */
 } run_args;
 
@@ -336,6 +338,16 @@ static int write_frame(fp_session *s, const run_args *a, fp_exporter *ex, uint64
         }
     }
     return 0;
+}
+
+/* fp_app_link_take_fn: a take started or stopped over --control records its microphone
+ * (--audio-in) beside it as a take run records from its first frame does. [frame thread] */
+static void run_control_take(void *user, const fp_session_take *t, const fp_session_take_result *res)
+{
+    run_args *a = user;
+    int st = res ? fp_app_audio_take_stopped(&a->audio, a->take_end_ns, "run", a->sopt.quiet)
+                 : fp_app_audio_take_started(&a->audio, t, t->header.time_origin_ns, "run");
+    if (st && !a->control_status) a->control_status = st;
 }
 
 /* The session's frames, until the inputs end, --duration, an interrupt or a failed write.
@@ -651,6 +663,7 @@ static int run_main(int argc, char **argv)
                               .s = s, .mesh_path = a->so.mesh_path, .take = a->take_dir ? &take : NULL,
                               .plugin_path = &path, .fps = a->fps, .quiet = quiet, .touched = true};
     if ((rc = fp_app_link_open(&lo, &a->link))) return run_abandon(a, &ex, &s, &path, rc);
+    fp_app_link_set_take_hook(a->link, run_control_take, a);
     /* SIGINT, SIGTERM: the loop ends after the frame; a frame stuck in a plugin is abandoned */
     run_stuck stuck = {s, a, &take, &ex};
     if ((rc = fp_app_stop_install("facepuppet run", run_take_over, &stuck)))
@@ -677,6 +690,7 @@ static int run_main(int argc, char **argv)
     }
     int audio_status = fp_app_audio_finish(&a->audio, "run", quiet); /* (a file renamed into place) */
     if (status == FP_EXIT_OK) status = audio_status;
+    if (status == FP_EXIT_OK) status = a->control_status;
     fp_app_over_free(&a->over);
     /* Close the record=FILE recordings: a failed write must fail the run. */
     char record_err[1024] = "";
