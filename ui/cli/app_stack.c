@@ -101,6 +101,14 @@ int fp_app_over_check_mesh(const fp_app_over *o, const char *cmd, const fp_sessi
 int fp_app_over_finish(fp_app_over *o, const char *cmd, const char *take_dir,
                        const char *take_path, const char *slate)
 {
+    int status = fp_app_over_save(o, cmd, take_dir, take_path, slate);
+    fp_app_over_free(o);
+    return status;
+}
+
+int fp_app_over_save(const fp_app_over *o, const char *cmd, const char *take_dir,
+                     const char *take_path, const char *slate)
+{
     char err[8192], stack_path[FP_STACK_PATH_MAX + 512];
     int rc = fp_stack_over_save(o->over, o->stack, &o->new_layer, take_dir, take_path, slate,
                                 stack_path, sizeof stack_path, err, sizeof err);
@@ -117,7 +125,6 @@ int fp_app_over_finish(fp_app_over *o, const char *cmd, const char *take_dir,
         if (o->punch) fprintf(stderr, ", punched %g s to %g s", o->new_layer.in_s, o->new_layer.out_s);
         fprintf(stderr, "\n");
     }
-    fp_app_over_free(o);
     return status;
 }
 

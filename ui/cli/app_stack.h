@@ -42,6 +42,11 @@ int fp_app_over_check_mesh(const fp_app_over *o, const char *cmd, const struct f
 int fp_app_over_finish(fp_app_over *o, const char *cmd, const char *take_dir,
                        const char *take_path, const char *slate);
 
+/** As fp_app_over_finish without freeing o: one stack for each pass of a run that records
+ *  several (run --control: each take started and stopped over OSC). Returns 0 or 73. */
+int fp_app_over_save(const fp_app_over *o, const char *cmd, const char *take_dir,
+                     const char *take_path, const char *slate);
+
 /** `facepuppet info STACK`: the stack's layers, one a line (take, region, mode, range,
  *  fade, offset, gain, mute/solo, the take's frames and duration or why it cannot be read).
  *  Returns the exit status (65 a malformed stack, 66 missing). */

@@ -341,12 +341,17 @@ static int write_frame(fp_session *s, const run_args *a, fp_exporter *ex, uint64
 }
 
 /* fp_app_link_take_fn: a take started or stopped over --control records its microphone
- * (--audio-in) beside it as a take run records from its first frame does. [frame thread] */
+ * (--audio-in) beside it, and with --over is a pass with a new stack, as the take run
+ * records from its first frame does. [frame thread] */
 static void run_control_take(void *user, const fp_session_take *t, const fp_session_take_result *res)
 {
     run_args *a = user;
     int st = res ? fp_app_audio_take_stopped(&a->audio, a->take_end_ns, "run", a->sopt.quiet)
                  : fp_app_audio_take_started(&a->audio, t, t->header.time_origin_ns, "run");
+    if (res && a->over.over && !res->error && res->frames) {
+        int over = fp_app_over_save(&a->over, "facepuppet run", a->take_dir, res->path, t->header.slate);
+        if (!st) st = over;
+    }
     if (st && !a->control_status) a->control_status = st;
 }
 
@@ -684,7 +689,7 @@ static int run_main(int argc, char **argv)
         if (status == FP_EXIT_OK) status = in_status;
         if (a->over.over && !take_rc && tr.frames) { /* the pass on top of a new stack */
             int st = fp_app_over_finish(&a->over, "facepuppet run", a->take_dir, tr.path,
-                                        a->slate ? a->slate : FP_TAKE_DEFAULT_SLATE);
+                                        take.header.slate); /* (the take's: --slate or /fp/record/start's) */
             if (status == FP_EXIT_OK) status = st;
         }
     }
