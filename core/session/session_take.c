@@ -111,7 +111,7 @@ int fp_session_take_start(fp_session_take *t, const fp_session *s, int64_t origi
     clock_gettime(CLOCK_REALTIME, &rt);
     /* the stage's timecode and the soundtrack's offset hold at stage_at_ns: carried on to a
      * take that starts later (run --control's /fp/record/start mid-run) */
-    const int64_t later = t->opt.stage_at_ns && origin_ns > t->opt.stage_at_ns
+    const int64_t later = t->opt.stage_at_given && origin_ns > t->opt.stage_at_ns
                               ? origin_ns - t->opt.stage_at_ns : 0;
     if (t->opt.have_timecode) { /* the stage's timecode (LTC) */
         uint64_t first;
