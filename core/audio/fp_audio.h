@@ -194,8 +194,9 @@ typedef struct fp_ltc_info {
  *  channel with the most frames decoded is the LTC's: info->channel): the rate from the
  *  frames' median spacing (the nearest of 24, 25, 30; at 30, 29.97 drop-frame where most
  *  frames have the drop-frame flag, else 29.97 or 30 by the mean spacing); the timecode at
- *  sample 0 from the first frame that starts three consecutive ones, carried back by whole
- *  frame periods (a misread frame, the first one included, is passed over and counted as a
+ *  sample 0 from the first frame that starts three consecutive ones, carried back to the
+ *  frame in progress at sample 0 (SMPTE: a frame's timecode holds from its start; a start
+ *  within 5% of a period after sample 0 counts as at it) (a misread frame, the first one included, is passed over and counted as a
  *  jump; after a jump the first run counts). Needs at least 1 s of LTC. Returns 0 and
  *  *info, or -ENOENT/-EACCES/-EBADMSG (not a sound file, no LTC on any channel, less than a
  *  second of it, a rate none of those) with err. */

@@ -17,6 +17,10 @@
 #include <string.h>
 #include <strings.h>
 
+/* How far (in frame periods) a decoded frame's start may stray from where it lies: libltc's
+ * off_start is within a few samples (-7 to +5 at 48 kHz in the encoder's own files). */
+#define LTC_START_SLACK 0.05
+
 /* The frames decoded so far. */
 typedef struct ltc_seen {
     struct seen { fp_timecode tc; int64_t start, end; } *f;
@@ -72,7 +76,7 @@ static double median_period(const ltc_seen *s)
  * where most frames have the drop-frame flag, else 29.97 or 30 by the mean spacing), each
  * frame's number (UINT64_MAX where its fields are no timecode at that rate: misread), the
  * jumps, and in *n_ref the frame number at sample `ref`: the first frame (from_end: the last)
- * that three frames in a row confirm, carried to `ref` by whole periods. A misread frame, the
+ * that three frames in a row confirm, carried back to the frame in progress at `ref`. A misread frame, the
  * first one included, moves neither the rate nor the timecode. Returns 0 or -EBADMSG with err. */
 static int settle(ltc_seen *s, int sample_rate, const char *what, int64_t ref, bool from_end,
                   fp_ltc_info *info, uint64_t *numbers, uint64_t *n_ref, char *err, size_t errlen)
@@ -129,7 +133,13 @@ static int settle(ltc_seen *s, int sample_rate, const char *what, int64_t ref, b
     if (anchor == SIZE_MAX)
         return fp_errorf(err, errlen, -EBADMSG, "%s: no LTC frame holds a valid timecode at %u/%u fps",
                          what, rate.num, rate.den);
-    const int64_t back = (int64_t)llround((double)(s->f[anchor].start - ref) / exact);
+    /* the frame in progress at `ref`: the anchor's number less the frame starts between ref
+     * and the anchor's start, a start up to LTC_START_SLACK of a period after ref counting as
+     * at ref (libltc places a frame's start within a few samples). Before, the nearest whole
+     * period: a file whose first whole LTC frame began under half a frame in was said to start
+     * at that frame, one ahead of the frame its first sample is in. */
+    const double periods = (double)(s->f[anchor].start - ref) / exact;
+    const int64_t back = (int64_t)ceil(periods - LTC_START_SLACK);
     *n_ref = (uint64_t)((((int64_t)numbers[anchor] - back) % (int64_t)day + (int64_t)day) % (int64_t)day);
     return 0;
 }

@@ -60,6 +60,14 @@ typedef struct fp_session_take_options {
     double soundtrack_offset_s;    /* the soundtrack's time at the take's origin */
     const char *audio_in_device;   /* a microphone recorded beside the take (its WAV's name in
                                       the header: fp_take_audio_in_name); NULL: none */
+    bool stage_at_given;           /* stage_at_ns below is given; false: both hold at the
+                                      take's origin */
+    int64_t stage_at_ns;           /* the session time (ns, the clock of the take's origin) at
+                                      which timecode_in and soundtrack_offset_s hold. A take
+                                      whose origin is later (run --control: a take started
+                                      mid-run) has both carried on to it: the timecode by the
+                                      frames of `rate` between (fp_take_frames_at), the offset
+                                      by the seconds */
 } fp_session_take_options;
 
 /** What a finished take holds (fp_session_take_stop). */

@@ -109,12 +109,17 @@ int fp_session_take_start(fp_session_take *t, const fp_session *s, int64_t origi
     h->rate = t->opt.rate;
     struct timespec rt;
     clock_gettime(CLOCK_REALTIME, &rt);
+    /* the stage's timecode and the soundtrack's offset hold at stage_at_ns: carried on to a
+     * take that starts later (run --control's /fp/record/start mid-run) */
+    const int64_t later = t->opt.stage_at_given && origin_ns > t->opt.stage_at_ns
+                              ? origin_ns - t->opt.stage_at_ns : 0;
     if (t->opt.have_timecode) { /* the stage's timecode (LTC) */
-        uint64_t check;
-        if (fp_timecode_to_frames(&t->opt.timecode_in, h->rate, &check))
+        uint64_t first;
+        if (fp_timecode_to_frames(&t->opt.timecode_in, h->rate, &first) ||
+            fp_timecode_from_frames(first + fp_take_frames_at(later, h->rate), h->rate,
+                                    t->opt.timecode_in.drop, &h->timecode_in))
             return fp_errorf(err, errlen, -EINVAL, "the timecode in is not valid at %u/%u fps",
                              h->rate.num, h->rate.den);
-        h->timecode_in = t->opt.timecode_in;
     } else {
         /* drop-frame where the rate has it (29.97, 59.94): the time of day's timecode then
          * follows the clock; non-drop at 29.97 would be 3.6 s an hour behind it */
@@ -124,7 +129,7 @@ int fp_session_take_start(fp_session_take *t, const fp_session *s, int64_t origi
     h->timecode_source = t->opt.timecode_source;
     h->soundtrack_path = t->opt.soundtrack_path;
     h->soundtrack_crc32 = t->opt.soundtrack_crc32;
-    h->soundtrack_offset_s = t->opt.soundtrack_offset_s;
+    h->soundtrack_offset_s = t->opt.soundtrack_offset_s + (t->opt.soundtrack_path ? (double)later * 1e-9 : 0);
     h->audio_in_device = t->opt.audio_in_device;
     h->time_origin_ns = origin_ns;
     h->mesh_path = so->mesh_path;

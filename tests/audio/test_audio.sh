@@ -13,7 +13,8 @@
 #     run --timecode ltc:FILE.wav gives a take whose timecode_in and every frame's timecode
 #     equal the encoded ones (as libltc counted them); `info` on the file says its rate and
 #     the timecode at its first sample; also at 24 fps with two frames misread, and on
-#     the second channel of a stereo file.
+#     the second channel of a stereo file, and cut mid-frame (the frame in progress at its
+#     first sample).
 #  5. input-audio: run --input audio:speech.wav (anchored, and onehand with no hand): jaw.open above 0.3 within two frames of each
 #     syllable's onset, below 0.1 in the silences (0.25 s after each syllable's end on); the
 #     check must fail for onsets moved 0.1 s early; `plugins check` passes input-audio (its
@@ -161,6 +162,20 @@ ltc_case 24 1 01:02:03:04 24 ltc24glitch glitch
     sox "$tmp/jump1.wav" "$tmp/jump2.wav" "$tmp/jump.wav" || fail "the LTC file with a jump"
 "$fp" info "$tmp/jump.wav" | grep -q "timecode  LTC at 25 fps, 10:00:00:00 at the first sample (.*with jumps)" ||
     fail "info of an LTC file with a jump: $("$fp" info "$tmp/jump.wav" 2>&1)"
+# an LTC file cut mid-frame (its first 0.55 frame gone: frame 10:00:00:00 is in progress at the
+# first sample, 10:00:00:01 begins 0.45 frame in): the timecode at the first sample, and a
+# take's timecode in, are 10:00:00:00 (before: the nearest frame start's, 10:00:00:01, one
+# frame ahead of the LTC for every frame of the take); 0.25 frame cut: 10:00:00:00 as before
+sox "$tmp/ltc25.wav" "$tmp/ltc-cut55.wav" trim 1056s && sox "$tmp/ltc25.wav" "$tmp/ltc-cut25.wav" trim 480s ||
+    fail "sox: the LTC files cut mid-frame"
+for cut in 55 25; do
+    "$fp" info "$tmp/ltc-cut$cut.wav" | grep -q "timecode  LTC at 25 fps, 10:00:00:00 at the first sample" ||
+        fail "info of an LTC file cut 0.$cut frame in: $("$fp" info "$tmp/ltc-cut$cut.wav" 2>&1 | grep timecode)"
+done
+"$fp" run "${pd[@]}" --mesh "$mesh" --input "replay:$csv" --speed 3 --duration 1 --fps 25 \
+    --timecode "ltc:$tmp/ltc-cut55.wav" --take-dir "$tmp/ltc-cut" -o "$tmp/ltc-cut.obj" -q >/dev/null 2>"$tmp/ltc-cut.err" ||
+    { cat "$tmp/ltc-cut.err"; fail "run --timecode ltc:ltc-cut55.wav exited $?"; }
+grep -q "timecode 10:00:00:00 - 10:00:01:00" "$tmp/ltc-cut.err" || { cat "$tmp/ltc-cut.err"; fail "the take on the cut LTC"; }
 # info on a sound file says what it is (before: "unknown format" of a recording): the LTC's
 # rate and the timecode it was encoded from, 48 kHz mono, 4 s; the speech has no LTC
 "$fp" info "$tmp/ltc25.wav" >"$tmp/info.out" 2>&1 || { cat "$tmp/info.out"; fail "info ltc25.wav exited $?"; }

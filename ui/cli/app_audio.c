@@ -167,6 +167,8 @@ void fp_app_audio_take_options(const fp_app_audio *a, int64_t t0_ns, fp_session_
         o->soundtrack_offset_s = a->offset_s;
     }
     if (a->in) o->audio_in_device = a->in_spec;
+    o->stage_at_given = true; /* (a take started later carries both on: fp_session_take.h) */
+    o->stage_at_ns = t0_ns;
     if (a->have_ltc) {
         o->rate = a->ltc.rate;
         o->have_timecode = true;

@@ -58,9 +58,10 @@ void fp_app_audio_help(FILE *f, bool with_timecode);
 int fp_app_audio_prepare(fp_app_audio *a, const char *cmd, const char *fallback, bool force);
 
 /** Fill a take's options from what prepare found: the soundtrack's path, crc32 and offset,
- *  and the LTC's timecode at the take's origin t0_ns (a file's first sample is the
- *  performance's start; a device's timecode runs on from when it was heard) and its rate.
- *  Call before fp_session_take_start (on the take's own copy, fp_session_take.opt). */
+ *  and the LTC's timecode at t0_ns (a file's first sample is the performance's start; a
+ *  device's timecode runs on from when it was heard) and its rate; both hold at t0_ns
+ *  (o->stage_at_ns), so a take started later (run --control) gets them at its own first
+ *  frame. Call before fp_session_take_start (on the take's own copy, fp_session_take.opt). */
 void fp_app_audio_take_options(const fp_app_audio *a, int64_t t0_ns, fp_session_take_options *o);
 
 /** Play the soundtrack from its start (--audio-offset) again: live, at each take's start. */

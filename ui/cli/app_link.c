@@ -24,6 +24,8 @@ struct fp_app_link {
     fp_app_link_transport_fn transport;
     fp_app_link_state_fn state;
     void *user;
+    fp_app_link_take_fn take_hook;
+    void *take_user;
 };
 
 int fp_app_link_check(const char *cmd, const char *control, const char *stream)
@@ -50,10 +52,18 @@ static void on_take(void *user, const fp_session_take *t, const fp_session_take_
         if (!l->o.quiet)
             fprintf(stderr, "%s: --control: recording %s take %u\n", prefix, t->header.slate,
                     fp_take_recorder_take(t->rec));
-        return;
+    } else {
+        if (rc) fprintf(stderr, "%s: the take was not written whole: %s\n", prefix, err);
+        fp_app_print_take(stderr, prefix, res);
     }
-    if (rc) fprintf(stderr, "%s: the take was not written whole: %s\n", prefix, err);
-    fp_app_print_take(stderr, prefix, res);
+    if (l->take_hook) l->take_hook(l->take_user, t, res);
+}
+
+void fp_app_link_set_take_hook(fp_app_link *l, fp_app_link_take_fn fn, void *user)
+{
+    if (!l) return;
+    l->take_hook = fn;
+    l->take_user = user;
 }
 
 static int transport(void *user, const fp_control_cmd *cmd, char *msg, size_t n)
@@ -289,6 +299,10 @@ void fp_app_link_set_transport(fp_app_link *l, fp_app_link_transport_fn fn, fp_a
                                void *user)
 {
     (void)l; (void)fn; (void)st; (void)user;
+}
+void fp_app_link_set_take_hook(fp_app_link *l, fp_app_link_take_fn fn, void *user)
+{
+    (void)l; (void)fn; (void)user;
 }
 void fp_app_link_close(fp_app_link **l) { (void)l; }
 

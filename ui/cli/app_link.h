@@ -70,6 +70,13 @@ typedef const char *(*fp_app_link_state_fn)(void *user, double *time_s);
 void fp_app_link_set_transport(fp_app_link *l, fp_app_link_transport_fn fn, fp_app_link_state_fn state,
                                void *user);
 
+/** A take the control surface started (res NULL) or stopped (res: what was written): called
+ *  after the command's own line, on the frame thread (run: the microphone's WAV beside it). */
+typedef void (*fp_app_link_take_fn)(void *user, const fp_session_take *t,
+                                    const fp_session_take_result *res);
+/** Set (fn NULL: clear) the hook above. NULL l: nothing. */
+void fp_app_link_set_take_hook(fp_app_link *l, fp_app_link_take_fn fn, void *user);
+
 /** Close: a line with what the control surface and the stream did (unless quiet). NULL ok. */
 void fp_app_link_close(fp_app_link **l);
 

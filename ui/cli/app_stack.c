@@ -78,7 +78,8 @@ bool fp_app_over_soundtrack_offset(const fp_app_over *o, double *offset_s)
     return has;
 }
 
-int fp_app_over_check_mesh(const fp_app_over *o, const char *cmd, const fp_session *s)
+int fp_app_over_check_mesh(const fp_app_over *o, const char *cmd, const fp_session *s,
+                           const char *mesh_path)
 {
     if (!o->over) return 0;
     char path[FP_STACK_PATH_MAX + 512], err[8192], why[1024];
@@ -88,7 +89,7 @@ int fp_app_over_check_mesh(const fp_app_over *o, const char *cmd, const fp_sessi
     if (!rc) {
         const fp_take_header *h = fp_take_reader_header(r);
         rc = fp_take_check_positions(fp_session_loaded(s), fp_session_vertex_count(s),
-                                     h->mesh_path ? h->mesh_path : "?", h, why, sizeof why);
+                                     mesh_path ? mesh_path : "(the loaded mesh)", h, why, sizeof why);
         if (rc) snprintf(err, sizeof err, "%s: %s", path, why);
     }
     fp_take_reader_close(&r);
@@ -99,6 +100,14 @@ int fp_app_over_check_mesh(const fp_app_over *o, const char *cmd, const fp_sessi
 
 int fp_app_over_finish(fp_app_over *o, const char *cmd, const char *take_dir,
                        const char *take_path, const char *slate)
+{
+    int status = fp_app_over_save(o, cmd, take_dir, take_path, slate);
+    fp_app_over_free(o);
+    return status;
+}
+
+int fp_app_over_save(const fp_app_over *o, const char *cmd, const char *take_dir,
+                     const char *take_path, const char *slate)
 {
     char err[8192], stack_path[FP_STACK_PATH_MAX + 512];
     int rc = fp_stack_over_save(o->over, o->stack, &o->new_layer, take_dir, take_path, slate,
@@ -116,7 +125,6 @@ int fp_app_over_finish(fp_app_over *o, const char *cmd, const char *take_dir,
         if (o->punch) fprintf(stderr, ", punched %g s to %g s", o->new_layer.in_s, o->new_layer.out_s);
         fprintf(stderr, "\n");
     }
-    fp_app_over_free(o);
     return status;
 }
 

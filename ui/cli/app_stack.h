@@ -30,8 +30,10 @@ typedef struct fp_app_over {
 int fp_app_over_check(fp_app_over *o, const char *cmd, const char *take_dir);
 
 /** After the session opened: the base take's mesh is the session's (its checksum). Prints
- *  and returns 65 when not, else 0. */
-int fp_app_over_check_mesh(const fp_app_over *o, const char *cmd, const struct fp_session *s);
+ *  and returns 65 when not, else 0; the message names mesh_path (the session's mesh, as
+ *  loaded; NULL: "the loaded mesh") and the take's own mesh. */
+int fp_app_over_check_mesh(const fp_app_over *o, const char *cmd, const struct fp_session *s,
+                           const char *mesh_path);
 
 /** The pass was recorded as take_path: write DIR/SLATE_SNNN.fpstack (the next free number
  *  for the take's slate; never over a file) with the old layers and the pass on top, and say
@@ -39,6 +41,11 @@ int fp_app_over_check_mesh(const fp_app_over *o, const char *cmd, const struct f
  *  status (73 not written). Frees what o holds either way. */
 int fp_app_over_finish(fp_app_over *o, const char *cmd, const char *take_dir,
                        const char *take_path, const char *slate);
+
+/** As fp_app_over_finish without freeing o: one stack for each pass of a run that records
+ *  several (run --control: each take started and stopped over OSC). Returns 0 or 73. */
+int fp_app_over_save(const fp_app_over *o, const char *cmd, const char *take_dir,
+                     const char *take_path, const char *slate);
 
 /** `facepuppet info STACK`: the stack's layers, one a line (take, region, mode, range,
  *  fade, offset, gain, mute/solo, the take's frames and duration or why it cannot be read).

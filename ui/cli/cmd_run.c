@@ -115,6 +115,8 @@ typedef struct run_args {
     fp_app_audio audio;            /* --audio, --audio-out, --audio-offset, --timecode */
     fp_app_over over;              /* --over, --layer, --punch (app_stack.h) */
     int64_t take_end_ns;           /* the end of the take's last frame (its mic WAV's end) */
+    int control_status;            /* the first failure of a take's microphone WAV begun or
+                                      ended over --control (the run's exit status) */
     fp_app_link *link;             /* --control, --stream (app_link.h) */
 } run_args;
 
@@ -336,6 +338,21 @@ static int write_frame(fp_session *s, const run_args *a, fp_exporter *ex, uint64
         }
     }
     return 0;
+}
+
+/* fp_app_link_take_fn: a take started or stopped over --control records its microphone
+ * (--audio-in) beside it, and with --over is a pass with a new stack, as the take run
+ * records from its first frame does. [frame thread] */
+static void run_control_take(void *user, const fp_session_take *t, const fp_session_take_result *res)
+{
+    run_args *a = user;
+    int st = res ? fp_app_audio_take_stopped(&a->audio, a->take_end_ns, "run", a->sopt.quiet)
+                 : fp_app_audio_take_started(&a->audio, t, t->header.time_origin_ns, "run");
+    if (res && a->over.over && !res->error && res->frames) {
+        int over = fp_app_over_save(&a->over, "facepuppet run", a->take_dir, res->path, t->header.slate);
+        if (!st) st = over;
+    }
+    if (st && !a->control_status) a->control_status = st;
 }
 
 /* The session's frames, until the inputs end, --duration, an interrupt or a failed write.
@@ -633,7 +650,7 @@ static int run_main(int argc, char **argv)
     /* the frames written, when known before the run (--duration): the outputs' sizes checked */
     const double frames = a->sopt.duration_s > 0 ? ceil(a->sopt.duration_s * a->fps) + 1 : 0;
     if ((rc = open_session(a, &path, &take, &s)) ||
-        (rc = fp_app_over_check_mesh(&a->over, "facepuppet run", s)) ||
+        (rc = fp_app_over_check_mesh(&a->over, "facepuppet run", s, a->so.mesh_path)) ||
         (a->frames_out && (rc = fp_app_frames_estimate("facepuppet run", "--frames-out", a->frames_out,
                                                        frames, a->fps, fp_session_mesh(s), quiet,
                                                        "a shorter --duration"))) ||
@@ -651,6 +668,7 @@ static int run_main(int argc, char **argv)
                               .s = s, .mesh_path = a->so.mesh_path, .take = a->take_dir ? &take : NULL,
                               .plugin_path = &path, .fps = a->fps, .quiet = quiet, .touched = true};
     if ((rc = fp_app_link_open(&lo, &a->link))) return run_abandon(a, &ex, &s, &path, rc);
+    fp_app_link_set_take_hook(a->link, run_control_take, a);
     /* SIGINT, SIGTERM: the loop ends after the frame; a frame stuck in a plugin is abandoned */
     run_stuck stuck = {s, a, &take, &ex};
     if ((rc = fp_app_stop_install("facepuppet run", run_take_over, &stuck)))
@@ -671,12 +689,13 @@ static int run_main(int argc, char **argv)
         if (status == FP_EXIT_OK) status = in_status;
         if (a->over.over && !take_rc && tr.frames) { /* the pass on top of a new stack */
             int st = fp_app_over_finish(&a->over, "facepuppet run", a->take_dir, tr.path,
-                                        a->slate ? a->slate : FP_TAKE_DEFAULT_SLATE);
+                                        take.header.slate); /* (the take's: --slate or /fp/record/start's) */
             if (status == FP_EXIT_OK) status = st;
         }
     }
     int audio_status = fp_app_audio_finish(&a->audio, "run", quiet); /* (a file renamed into place) */
     if (status == FP_EXIT_OK) status = audio_status;
+    if (status == FP_EXIT_OK) status = a->control_status;
     fp_app_over_free(&a->over);
     /* Close the record=FILE recordings: a failed write must fail the run. */
     char record_err[1024] = "";
