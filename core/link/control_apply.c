@@ -27,13 +27,6 @@ void fp_control_session_status(fp_control_session *cs, int64_t now_ns, uint64_t 
 {
     memset(st, 0, sizeof *st);
     const bool rec = cs->take && fp_session_take_recording(cs->take);
-    double t = (double)(now_ns - cs->t0_ns) * 1e-9;
-    const char *state = cs->state ? cs->state(cs->user, &t) : NULL;
-    if (!state) {
-        const fp_control_set *set = fp_session_control_set(cs->s);
-        state = set && set->active ? "engaged" : fp_session_commits(cs->s) ? "committed" : "idle";
-    }
-    st->state = state;
     fp_timecode tc;
     fp_take_rate rate = cs->take ? cs->take->opt.rate : (fp_take_rate){60, 1};
     if (!rec || fp_session_take_timecode(cs->take, now_ns, &tc)) {
@@ -46,8 +39,14 @@ void fp_control_session_status(fp_control_session *cs, int64_t now_ns, uint64_t 
     st->recording = rec;
     st->slate = rec ? cs->take->header.slate : cs->slate;
     st->take = rec ? fp_take_recorder_take(cs->take->rec) : cs->next_take ? cs->next_take : cs->last_take;
-    st->time_s = t;
+    st->time_s = (double)(now_ns - cs->t0_ns) * 1e-9;
     st->frame = frame;
+    const char *state = cs->state ? cs->state(cs->user, st) : NULL; /* (play's transport) */
+    if (!state) {
+        const fp_control_set *set = fp_session_control_set(cs->s);
+        state = set && set->active ? "engaged" : fp_session_commits(cs->s) ? "committed" : "idle";
+    }
+    st->state = state;
 }
 
 static int record_start(fp_control_session *cs, const fp_control_cmd *c, int64_t now, char *msg,

@@ -25,8 +25,11 @@ extern "C" {
 
 /** A transport (play, stop, seek): returns 0 or a negative code with msg. */
 typedef int (*fp_control_transport_fn)(void *user, const fp_control_cmd *cmd, char *msg, size_t n);
-/** The transport's state word ("playing", "stopped") and time (seconds), or NULL: the session's. */
-typedef const char *(*fp_control_state_fn)(void *user, double *time_s);
+/** The transport's state word ("playing", "stopped"), or NULL: the session's. st holds the
+ *  session's status, which the transport may overwrite: its time (seconds), frame, timecode,
+ *  slate and take (play: the played take's at the playhead; strings it points to stay the
+ *  transport's and valid until its next call). Called on the frame thread. */
+typedef const char *(*fp_control_state_fn)(void *user, fp_control_status *st);
 /** A take started (res NULL) or stopped (res: what was recorded, rc its code), for the
  *  command's own lines. */
 typedef void (*fp_control_take_fn)(void *user, const fp_session_take *t,

@@ -4,6 +4,10 @@ runs it on the take the control test recorded). Cued at the first frame ("stoppe
 /fp/play: "playing", the time advancing at the take's pace; /fp/stop: "stopped", the time held;
 /fp/seek 0.5: the time at the first frame at or after 0.5 s; /fp/play to the end: "ended";
 /fp/record/start answered with an error (play has no takes); /fp/quit ends it (exit 0).
+The status names the played take (its slate and number, from `facepuppet info`), and its frame
+and timecode are the take's at the playhead: frame 0 and the take's first timecode when cued;
+after the seek the frame whose time the status gives (frames at the take's rate) and the
+timecode that many frames on.
 Usage: test_transport.py FACEPUPPET_BIN PLUGIN_DIR TAKE WORK_DIR. Prints "PASS" last."""
 import os
 import random
@@ -17,6 +21,18 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import fposc  # noqa: E402
 
 fp, plugdir, take, work = sys.argv[1:5]
+
+info = subprocess.run([fp, "info", take], capture_output=True, text=True).stdout
+fields = dict((line.split(None, 1) + [""])[:2] for line in info.splitlines()[1:] if line.strip())
+take_slate, take_number = fields["slate"].strip(), int(fields["take"])
+rate_n, rate_d = (int(x) for x in fields["frame"].split()[1].split("/"))  # "rate 60/1 (...)"
+first_tc = fields["timecode"].split()[0]
+fps = rate_n / rate_d
+
+
+def tc_frames(tc):
+    h, m, sec, f = (int(x) for x in tc.replace(";", ":").split(":"))
+    return ((h * 60 + m) * 60 + sec) * round(fps) + f
 
 
 def fail(msg):
@@ -66,6 +82,10 @@ try:
     st = command("/fp/status")
     if st["state"] != "stopped" or st["time"] != 0:
         fail("not cued at the first frame: %r" % st)
+    if (st["slate"], st["take"]) != (take_slate, take_number):
+        fail("the status does not name the played take %s %d: %r" % (take_slate, take_number, st))
+    if st["frame"] != 0 or st["timecode"] != first_tc:
+        fail("cued: frame 0 at %s expected: %r" % (first_tc, st))
     command("/fp/play")
     time.sleep(0.4)
     a = command("/fp/status")
@@ -79,6 +99,10 @@ try:
     d = command("/fp/seek", 0.5)
     if not 0.5 - 1e-6 <= d["time"] < 0.5 + 0.05 or d["state"] != "stopped":
         fail("seek 0.5: %r" % d)
+    if abs(d["frame"] - d["time"] * fps) > 0.51:
+        fail("seek 0.5: frame %d is not the take's at %.3f s (%g fps)" % (d["frame"], d["time"], fps))
+    if tc_frames(d["timecode"]) - tc_frames(first_tc) != d["frame"]:
+        fail("seek 0.5: timecode %s is not %d frames after %s" % (d["timecode"], d["frame"], first_tc))
     command("/fp/record/start", expect="error: no take folder")
     command("/fp/play")
     for _ in range(100):

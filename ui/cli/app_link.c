@@ -74,10 +74,17 @@ static int transport(void *user, const fp_control_cmd *cmd, char *msg, size_t n)
     return l->transport(l->user, kind, cmd->value, msg, n);
 }
 
-static const char *state(void *user, double *time_s)
+static const char *state(void *user, fp_control_status *st)
 {
     fp_app_link *l = user;
-    return l->state ? l->state(l->user, time_s) : NULL;
+    if (!l->state) return NULL;
+    fp_app_link_playhead at = {.time_s = st->time_s, .frame = st->frame};
+    const char *word = l->state(l->user, &at);
+    st->time_s = at.time_s;
+    st->frame = at.frame;
+    if (at.timecode) st->timecode = at.timecode;
+    if (at.slate) st->slate = at.slate, st->take = at.take;
+    return word;
 }
 
 /* The stream of l->o.s's mesh (l->o.mesh_path names it), its rig's channels. 0 or the exit

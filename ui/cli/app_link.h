@@ -64,9 +64,18 @@ int fp_app_link_reopen(fp_app_link *l, fp_session *s, fp_session_take *take, con
 bool fp_app_link_quit(const fp_app_link *l);
 
 enum { FP_APP_LINK_PLAY, FP_APP_LINK_STOP, FP_APP_LINK_SEEK };
-/** play's transport: fn answers play, stop and seek; state gives its state word and time. */
+/** play's transport: fn answers play, stop and seek; state gives its state word and the
+ *  playhead: the played take's time (seconds since its first frame), frame (0 at its first),
+ *  timecode (NULL: the session's) and slate and take number (NULL slate: the session's),
+ *  which the control surface's status reports (docs/osc.md). Strings stay the transport's. */
+typedef struct fp_app_link_playhead {
+    double time_s;
+    uint64_t frame;
+    const char *timecode, *slate;
+    uint32_t take;
+} fp_app_link_playhead;
 typedef int (*fp_app_link_transport_fn)(void *user, int kind /* FP_APP_LINK_* */, double seek_s, char *msg, size_t n);
-typedef const char *(*fp_app_link_state_fn)(void *user, double *time_s);
+typedef const char *(*fp_app_link_state_fn)(void *user, fp_app_link_playhead *at);
 void fp_app_link_set_transport(fp_app_link *l, fp_app_link_transport_fn fn, fp_app_link_state_fn state,
                                void *user);
 

@@ -179,7 +179,10 @@ typedef struct play_ctl {
     double pos_s;          /* the shown frame's time since the first frame */
     int64_t first_ns;      /* the first frame's time (the take's clock) */
     int64_t wall_base;     /* wall time of pos 0 while playing */
-    uint64_t frames;       /* frames shown */
+    uint64_t frames;       /* frames shown (the stream's count) */
+    uint64_t applied;      /* frames of the take applied since it was opened: the playhead's
+                            * frame is applied - 1 */
+    char tc[32];           /* the status's timecode: the take's at the playhead */
     int error;             /* a reader's code that ended the transport */
 } play_ctl;
 
@@ -197,8 +200,10 @@ static int play_seek(play_ctl *c, double t, char *msg, size_t n)
     fp_app_link_set_session(c->link, fp_take_player_session(p));
     fp_take_frame f;
     c->pos_s = 0;
+    c->applied = 0;
     c->ended = false;
     while ((rc = fp_take_player_next(p, &f, NULL, err, sizeof err)) == 1) {
+        c->applied++;
         c->pos_s = (double)(f.time_ns - c->first_ns) * 1e-9;
         if (c->pos_s >= t - 1e-9) break;
     }
@@ -226,10 +231,18 @@ static int play_transport(void *user, int kind, double seek_s, char *msg, size_t
     return 0;
 }
 
-static const char *play_state(void *user, double *time_s)
+/* The status at the playhead: the played take's frame (0 at its first), timecode, slate and
+ * take number, and the time since its first frame */
+static const char *play_state(void *user, fp_app_link_playhead *at)
 {
     play_ctl *c = user;
-    *time_s = c->pos_s;
+    const fp_take_header *h = fp_take_player_header(c->player);
+    at->time_s = c->pos_s;
+    at->frame = c->applied ? c->applied - 1 : 0;
+    frame_timecode(h, c->first_ns + (int64_t)llround(c->pos_s * 1e9), c->tc, sizeof c->tc);
+    if (c->tc[0]) at->timecode = c->tc;
+    at->slate = h->slate;
+    at->take = h->take;
     return c->playing ? "playing" : c->ended ? "ended" : "stopped";
 }
 
@@ -258,6 +271,7 @@ static int play_controlled(play_ctl *c, const fp_take_header *h)
             c->ended = true;
             continue;
         }
+        c->applied++;
         c->pos_s = (double)(f.time_ns - c->first_ns) * 1e-9;
         sleep_until_ns(c->wall_base + (int64_t)llround(c->pos_s * 1e9));
         frame_timecode(fp_take_player_header(c->player), f.time_ns, tc, sizeof tc);
