@@ -106,6 +106,21 @@ int fp_app_over_finish(fp_app_over *o, const char *cmd, const char *take_dir,
     return status;
 }
 
+/* A punch that starts at or after the pass's last frame keeps none of it: said (the stack is
+ * written as asked) */
+static void punch_check(const fp_app_over *o, const char *cmd, const char *take_path)
+{
+    char err[2048];
+    fp_take_reader *r = NULL;
+    if (!o->punch || fp_take_reader_open(take_path, &r, err, sizeof err)) return;
+    const double d = fp_take_reader_summary(r)->duration_s;
+    if (o->new_layer.in_s >= d)
+        fprintf(stderr, "%s: warning: --punch %s starts after the pass's last frame (%.3f s): the new "
+                "layer changes nothing (the punch is on the stack's clock, where the pass starts at 0)\n",
+                cmd, o->punch, d);
+    fp_take_reader_close(&r);
+}
+
 int fp_app_over_save(const fp_app_over *o, const char *cmd, const char *take_dir,
                      const char *take_path, const char *slate)
 {
@@ -124,6 +139,7 @@ int fp_app_over_save(const fp_app_over *o, const char *cmd, const char *take_dir
                 o->new_layer.mode == FP_STACK_ADD ? "add" : "replace");
         if (o->punch) fprintf(stderr, ", punched %g s to %g s", o->new_layer.in_s, o->new_layer.out_s);
         fprintf(stderr, "\n");
+        punch_check(o, cmd, take_path);
     }
     return status;
 }
