@@ -110,9 +110,10 @@ int main(int argc, char **argv)
         printf("facepuppet %s\n", FP_VERSION_STRING);
         return FP_EXIT_OK;
     }
-    /* The hidden helper mode of an isolated mapping (fp_isolate.h): no crash handler, so a
-     * fault ends the helper by its signal and the host sees it. */
+    /* The hidden helper modes of an isolated mapping and an isolated input (fp_isolate.h): no
+     * crash handler, so a fault ends the helper by its signal and the host sees it. */
     if (!strcmp(name, FP_ISOLATE_HELPER_ARG)) return fp_isolate_helper_main(argc, argv);
+    if (!strcmp(name, FP_ISOLATE_INPUT_HELPER_ARG)) return fp_isolate_input_helper_main(argc, argv);
     /* A fatal signal inside a plugin call names the plugin, the call and the frame. */
     fp_plugin_crash_install();
     for (size_t i = 0; i < NCOMMANDS; i++) {
