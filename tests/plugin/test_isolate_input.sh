@@ -5,7 +5,8 @@
 #    thread) with a take and -o: `run` exits 0, the take is closed ("ok" in `takes`), the mesh
 #    is written; the log names the input and the signal once per fault ("crashy: isolated: the
 #    helper process died of SIGSEGV; hands released, restarts in 0.1 s (fault 1 in a row)")
-#    and says when the helper is back; the same for abort (SIGABRT) and exit (status 3);
+#    and says when the helper is back; the take holds that line and, after it, each hand's
+#    release (DISCONNECTED); the same for abort (SIGABRT) and exit (status 3);
 #  - faults in a row: after 5 the input is given up, its stream ends, and `run` without
 #    --duration ends by itself, exit 0, take closed;
 #  - a hang of the input's own thread: the run keeps its pace and ends at --duration; the
@@ -48,6 +49,11 @@ n=$(grep -Ec "crashy: isolated: the helper process ($segv); hands released, rest
 grep -q "crashy: isolated: the helper is back (restart 1, pid [0-9]*)" "$tmp/segv.log" ||
     fail "segv: the helper did not come back"
 grep -Eq "^frames [0-9]+," "$tmp/segv.log" || fail "segv: no summary line"
+# the take holds the fault and, after it, the hands' release (monitor prints its events)
+"$fp" monitor "take:$(ls "$tmp/segv"/*.fptake),fast=1" >"$tmp/segv.events" 2>&1
+grep -A2 '"code":"warning","text":"isolated: the helper process' "$tmp/segv.events" | tr -d '\n' |
+    grep -q '"hand":"left","code":"disconnected".*"hand":"right","code":"disconnected"' ||
+    { head -c 3000 "$tmp/segv.events"; fail "segv: the take has not the fault and the hands released"; }
 crash abort 'died of SIGABRT' --input crashy,mode=abort --duration 1
 crash exit 'exited with status 3' --input crashy,mode=exit --duration 1
 
