@@ -355,8 +355,9 @@ static int spawn(proxy *x)
     char via_fd[64];
     bool restart = x->stats.faults > 0 && x->file_fd >= 0;
     if (restart) snprintf(via_fd, sizeof via_fd, "/proc/self/fd/%d", x->file_fd);
-    return fp_iso_proc_spawn(&x->proc, x->exe, FP_ISOLATE_HELPER_ARG, restart ? via_fd : x->file, restart ? x->file_fd : -1, x->name,
-                             x->keys.params, x->keys.nparams, bytes, offers(x), fill_create, x);
+    return fp_iso_proc_spawn(&x->proc, x->exe, FP_ISOLATE_HELPER_ARG, restart ? via_fd : x->file,
+                             restart ? x->file_fd : -1, x->name, x->keys.params, x->keys.nparams, bytes, offers(x),
+                             fill_create, x);
 }
 
 /* A fault: the helper is gone or killed; say why once, and when it comes back. */

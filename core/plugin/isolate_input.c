@@ -116,8 +116,8 @@ static int wait_created(iproxy *x, char *err, size_t errlen)
     char why[96] = "did not answer";
     if (rc == FP_ISO_DIED) {
         fp_iso_proc_kill(&x->proc, why, sizeof why);
-        snprintf(err, errlen, "its helper process %s %s%s", why, in_create ? "in the plugin's create" : "while loading ",
-                 in_create ? "" : x->file);
+        snprintf(err, errlen, "its helper process %s %s%s", why,
+                 in_create ? "in the plugin's create" : "while loading ", in_create ? "" : x->file);
         return FP_EPLUGIN_FAULT;
     }
     if (rc) {

@@ -101,7 +101,8 @@ static int put_extensions(fp_input *in)
     const fp_input_recording *ri = get ? get(in, FP_EXT_RECORDING_INFO) : NULL;
     const fp_input_recording_joints *rj = get ? get(in, FP_EXT_RECORDING_JOINTS) : NULL;
     uint32_t ext = 0;
-    if (ws) ext |= FP_ISO_EXT_WORKSPACE | (ws->get && ws->get(in, s->in_ws_min, s->in_ws_max) ? FP_ISO_EXT_WORKSPACE_OK : 0);
+    if (ws)
+        ext |= FP_ISO_EXT_WORKSPACE | (ws->get && ws->get(in, s->in_ws_min, s->in_ws_max) ? FP_ISO_EXT_WORKSPACE_OK : 0);
     if (ck) ext |= FP_ISO_EXT_CLOCK | (ck->on_recording_clock && ck->on_recording_clock(in) ? FP_ISO_EXT_CLOCK_ON : 0);
     if (ri) ext |= FP_ISO_EXT_INFO | (ri->get && ri->get(in, &s->in_info) ? FP_ISO_EXT_INFO_OK : 0);
     if (rj) ext |= FP_ISO_EXT_JOINTS;
@@ -221,7 +222,8 @@ int fp_isolate_input_helper_main(int argc, char **argv)
     int rc = create(&plugin, argv[6], argc, argv, &in, err, sizeof err);
     atomic_store(&H.shm->stage, FP_ISO_STAGE_READY);
     uint64_t seen = atomic_load(&H.shm->req_seq); /* (before READY: the host asks only after it) */
-    send_msg(FP_ISO_MSG_READY, rc, rc && !err[0] ? "create failed" : err, strlen(rc && !err[0] ? "create failed" : err) + 1);
+    const char *said = rc && !err[0] ? "create failed" : err;
+    send_msg(FP_ISO_MSG_READY, rc, said, strlen(said) + 1);
     if (rc) return 0;
     for (uint32_t op; (op = next_op(&seen)) != FP_ISO_OP_QUIT;) {
         if (op != FP_ISO_OP_START) continue;
