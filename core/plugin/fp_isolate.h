@@ -115,6 +115,49 @@ bool fp_isolate_mapping_stats(const fp_mapping *m, fp_isolate_stats *out);
  *  the proxy, valid while it lives. False where `m` is not an isolated mapping. */
 bool fp_isolate_mapping_about(const fp_mapping *m, const char **id, const char **version);
 
+/* ---- isolated inputs ------------------------------------------------------------------
+ * An input plugin in a helper process (`facepuppet __input-helper ...`): the host gets an
+ * fp_input whose start, stop and destroy forward to the plugin there; every event the plugin
+ * pushes (and every line it logs) crosses the helper's socket in order and is pushed, as it
+ * was (its time_ns included), into the instance's own queue by a reader thread of the host's,
+ * so the session sees the same events as in process. The extensions (FP_EXT_WORKSPACE,
+ * FP_EXT_INPUT_CLOCK, FP_EXT_RECORDING_INFO, FP_EXT_RECORDING_JOINTS) are asked once in the
+ * helper after create and answered from the copies.
+ *
+ * A helper that dies (any signal, any exit) while the input runs is a fault: its reader
+ * pushes, after every event the plugin sent before, a status FP_STATUS_WARNING (hand -1) whose
+ * text names the signal and what follows ("isolated: the helper process died of SIGSEGV;
+ * hands released, restarts in 0.1 s (fault 1 in a row)": the session logs it under the input's
+ * name and the take records it) and an FP_STATUS_DISCONNECTED with no text for each hand (so a
+ * grab lets go, as an unplugged device's), then starts a new helper (create and start with the
+ * same SPEC) after FP_ISOLATE_BACKOFF_MS on the wall clock, doubling per fault in a row up to
+ * FP_ISOLATE_BACKOFF_MAX_MS; a helper that served FP_ISOLATE_INPUT_HEALTHY_MS ends a row.
+ * After FP_ISOLATE_MAX_FAULTS in a row, or at the first fault of an input on a recording's
+ * clock (a recording started again would repeat its times), it gives up: an
+ * FP_STATUS_END_OF_STREAM follows, and the session goes on without the input. A stop that has
+ * not returned within FP_ISOLATE_INPUT_STOP_MS kills the helper (nothing is abandoned). */
+#define FP_ISOLATE_INPUT_HEALTHY_MS 1000.0
+#define FP_ISOLATE_INPUT_STOP_MS 4000.0    /* under the host's own FP_INPUT_STOP_DEADLINE_MS */
+#define FP_ISOLATE_INPUT_HELPER_ARG "__input-helper"
+
+/** Start a helper that loads the input plugin `file` and creates an instance with `arg` (the
+ *  SPEC's ARG; NULL: none) and `params`; `name` names it. `host` is the instance's fp_host
+ *  (its push_event and log are used, from the caller's thread during create and start, from
+ *  the reader thread after); it must outlive the instance. On success *out is the proxy:
+ *  call its start, stop and destroy as an input's. On failure the plugin's message or the
+ *  helper's fate in err (not naming the input: the caller does) and the code, as
+ *  fp_isolate_mapping_create's. [main-thread] */
+int fp_isolate_input_create(const fp_isolate_options *opt, const char *file, const char *name,
+                            const fp_host *host, const char *arg, const fp_param *params, size_t nparams,
+                            fp_input **out, char *err, size_t errlen);
+
+/** Faults and restarts of an isolated input so far (gave_up: it ended its stream). False
+ *  where `in` is not an isolated input. [any-thread] */
+bool fp_isolate_input_stats(const fp_input *in, fp_isolate_stats *out);
+
+/** The input helper's main: argv[1] is FP_ISOLATE_INPUT_HELPER_ARG (as fp_isolate_helper_main). */
+int fp_isolate_input_helper_main(int argc, char **argv);
+
 /** The helper's main: argv as the executable got it (argv[1] is FP_ISOLATE_HELPER_ARG).
  *  Returns the exit status (0 when the host asked it to quit or went away). Prints nothing:
  *  everything goes to the host; before the plugin is loaded its stdout is made its stderr

@@ -269,6 +269,7 @@ typedef struct fp_input_instance {
                                             sizeof(fp_event), or under its header): its
                                             size << 32 | its type; 0: none */
     bool oversize_said;                  /* owner's: its warning was said */
+    bool isolated;                       /* in a helper process (fp_input_instance_open_isolated) */
     bool own_clock;                      /* fp_input_own_clock, read before start: its events'
                                             times are not held to the host's clock */
 } fp_input_instance;
@@ -288,6 +289,15 @@ typedef struct fp_input_instance {
  *  negative errno; err names the SPEC and reason. */
 int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
                            const char *spec_text, uint32_t source, char *err, size_t errlen);
+struct fp_isolate_options;
+/** fp_input_instance_open where `isolate` (fp_isolate.h's fp_isolate_mode; 0: none) may put
+ *  the plugin in a helper process (fp_isolate_input_create, with `opt`, may be NULL): under
+ *  fp_isolate_wanted (a plugin found outside facepuppet's own, or every one under ALL).
+ *  inst->isolated says which. The host keys, the queue, the checks of every event, record=
+ *  and forward= stay here, as in process. [main-thread] */
+int fp_input_instance_open_isolated(fp_input_instance *inst, const fp_plugin_path *path, const char *spec_text,
+                                    uint32_t source, int isolate, const struct fp_isolate_options *opt,
+                                    char *err, size_t errlen);
 /** Call the plugin's start(): its threads or device run from here. Returns 0 or the plugin's
  *  negative errno (err "input 'NAME': REASON"). [main-thread], once, after a successful open. */
 int fp_input_instance_start(fp_input_instance *inst, char *err, size_t errlen);

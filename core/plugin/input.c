@@ -5,6 +5,7 @@
 
 #include "fp_plugin_crash.h"
 #include "fp_forward.h"
+#include "fp_isolate.h"
 #include "fp_record.h"
 
 #include <errno.h>
@@ -271,6 +272,29 @@ static int take_calibration(fp_input_instance *inst, fp_spec *spec, const char *
 int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
                            const char *spec_text, uint32_t source, char *err, size_t errlen)
 {
+    return fp_input_instance_open_isolated(inst, path, spec_text, source, FP_ISOLATE_NONE, NULL, err, errlen);
+}
+
+/* The plugin loaded here, or only found where it runs in a helper (fp_isolate.h): then
+ * inst->plugin holds its path alone and *found the file. */
+static int load_plugin(fp_input_instance *inst, const fp_plugin_path *path, const char *name, int isolate,
+                       char *found, size_t foundlen, char *err, size_t errlen)
+{
+    bool builtin = false;
+    inst->isolated = isolate != FP_ISOLATE_NONE &&
+                     fp_plugin_find(path, FP_PLUGIN_INPUT, name, found, foundlen, &builtin, NULL, 0) &&
+                     fp_isolate_wanted((fp_isolate_mode)isolate, builtin);
+    if (!inst->isolated) return fp_plugin_load(path, FP_PLUGIN_INPUT, name, &inst->plugin, err, errlen);
+    memset(&inst->plugin, 0, sizeof inst->plugin);
+    inst->plugin.kind = FP_PLUGIN_INPUT;
+    if (!(inst->plugin.path = strdup(found))) return fp_errorf(err, errlen, -ENOMEM, "out of memory");
+    return 0;
+}
+
+int fp_input_instance_open_isolated(fp_input_instance *inst, const fp_plugin_path *path, const char *spec_text,
+                                    uint32_t source, int isolate, const struct fp_isolate_options *opt,
+                                    char *err, size_t errlen)
+{
     memset(inst, 0, sizeof *inst);
     fp_spec spec;
     int rc = fp_spec_parse(spec_text, &spec, err, errlen);
@@ -305,7 +329,8 @@ int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
     if ((rc = take_performer(inst, &spec, spec_text, err, errlen)) ||
         (rc = take_calibration(inst, &spec, spec_text, err, errlen)))
         goto out;
-    rc = fp_plugin_load(path, FP_PLUGIN_INPUT, spec.name, &inst->plugin, err, errlen);
+    char found[4096];
+    rc = load_plugin(inst, path, spec.name, isolate, found, sizeof found, err, errlen);
     if (rc) goto out;
     rc = fp_event_queue_init(&inst->queue, FP_INPUT_QUEUE_CAPACITY);
     if (rc) {
@@ -321,7 +346,11 @@ int fp_input_instance_open(fp_input_instance *inst, const fp_plugin_path *path,
     const fp_input_factory *f = inst->plugin.factory;
     char perr[512] = "";
     fp_plugin_call_enter(inst->name, "create", 0);
-    rc = f->create(&inst->link->host, spec.arg, spec.params, spec.nparams, &inst->input, perr, sizeof perr);
+    if (inst->isolated)
+        rc = fp_isolate_input_create(opt, found, inst->name, &inst->link->host, spec.arg, spec.params,
+                                     spec.nparams, &inst->input, perr, sizeof perr);
+    else
+        rc = f->create(&inst->link->host, spec.arg, spec.params, spec.nparams, &inst->input, perr, sizeof perr);
     fp_plugin_call_leave();
     perr[sizeof perr - 1] = '\0'; /* (a plugin that filled it to the end: read no further) */
     if (rc || !inst->input) {

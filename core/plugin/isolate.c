@@ -355,8 +355,9 @@ static int spawn(proxy *x)
     char via_fd[64];
     bool restart = x->stats.faults > 0 && x->file_fd >= 0;
     if (restart) snprintf(via_fd, sizeof via_fd, "/proc/self/fd/%d", x->file_fd);
-    return fp_iso_proc_spawn(&x->proc, x->exe, restart ? via_fd : x->file, restart ? x->file_fd : -1, x->name,
-                             x->keys.params, x->keys.nparams, bytes, offers(x), fill_create, x);
+    return fp_iso_proc_spawn(&x->proc, x->exe, FP_ISOLATE_HELPER_ARG, restart ? via_fd : x->file,
+                             restart ? x->file_fd : -1, x->name, x->keys.params, x->keys.nparams, bytes, offers(x),
+                             fill_create, x);
 }
 
 /* A fault: the helper is gone or killed; say why once, and when it comes back. */
@@ -552,8 +553,7 @@ bool fp_isolate_mapping_about(const fp_mapping *m, const char **id, const char *
     return true;
 }
 
-/* A copy of the keys in an fp_spec of our own (they must outlive the caller's). */
-static int copy_keys(fp_spec *spec, const fp_param *params, size_t nparams)
+int fp_iso_copy_keys(fp_spec *spec, const fp_param *params, size_t nparams)
 {
     memset(spec, 0, sizeof *spec);
     size_t len = 1;
@@ -588,7 +588,7 @@ int fp_isolate_mapping_create(const fp_isolate_options *opt, const char *file, c
                          fd == -ENXIO ? "not a regular file (a FIFO, device or socket)"
                                       : fp_file_error_text(fd));
     proxy *x = calloc(1, sizeof *x);
-    if (!x || copy_keys(&x->keys, params, nparams)) {
+    if (!x || fp_iso_copy_keys(&x->keys, params, nparams)) {
         if (x) fp_spec_clear(&x->keys);
         free(x);
         close(fd);

@@ -3,7 +3,7 @@
  * or the host goes away. argv: EXE __plugin-helper MEMFD GO DONE SOCK FILE NAME [KEY=VALUE...] */
 #define _GNU_SOURCE
 #include "fp_isolate.h"
-#include "isolate_shm.h"
+#include "isolate_proc.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -292,7 +292,7 @@ static void *host_watch(void *arg)
     return NULL;
 }
 
-static int arg_fd(const char *s)
+int fp_iso_helper_arg_fd(const char *s)
 {
     char *end;
     long v = strtol(s, &end, 10);
@@ -302,7 +302,7 @@ static int arg_fd(const char *s)
 /* A plugin that eats memory without end (a leak in every process(), a runaway create) must
  * not take the host with it: where the kernel runs out, its OOM killer takes this helper
  * first (the most a process may ask for itself; the host restarts a helper that died). */
-static void oom_first(void)
+void fp_iso_helper_oom_first(void)
 {
     int fd = open("/proc/self/oom_score_adj", O_WRONLY | O_CLOEXEC);
     if (fd < 0) return;
@@ -314,10 +314,10 @@ static void oom_first(void)
 int fp_isolate_helper_main(int argc, char **argv)
 {
     if (argc < 8) return 64;
-    H.memfd = arg_fd(argv[2]);
-    H.go = arg_fd(argv[3]);
-    H.done = arg_fd(argv[4]);
-    H.sock = arg_fd(argv[5]);
+    H.memfd = fp_iso_helper_arg_fd(argv[2]);
+    H.go = fp_iso_helper_arg_fd(argv[3]);
+    H.done = fp_iso_helper_arg_fd(argv[4]);
+    H.sock = fp_iso_helper_arg_fd(argv[5]);
     const char *file = argv[6];
     if (H.memfd < 0 || H.go < 0 || H.done < 0 || H.sock < 0) return 64;
     /* the plugin's printf goes to the host's stderr: the host's stdout is its own (run's
@@ -326,7 +326,7 @@ int fp_isolate_helper_main(int argc, char **argv)
     if (dup2(STDERR_FILENO, STDOUT_FILENO) < 0) return 70;
     signal(SIGPIPE, SIG_IGN);
     prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0); /* wake for the spin when asked, not 50 us late */
-    oom_first();
+    fp_iso_helper_oom_first();
     int fl = fcntl(H.go, F_GETFL);
     if (fl < 0 || fcntl(H.go, F_SETFL, fl | O_NONBLOCK)) return 70;
     struct stat st;

@@ -60,7 +60,8 @@ static void release(fp_iso_proc *p)
     p->pid = 0;
 }
 
-int fp_iso_proc_spawn(fp_iso_proc *p, const char *exe, const char *file, int file_fd, const char *name,
+int fp_iso_proc_spawn(fp_iso_proc *p, const char *exe, const char *mode, const char *file, int file_fd,
+                      const char *name,
                       const fp_param *params, size_t nparams, size_t bytes, uint32_t offers,
                       void (*fill)(void *user, fp_iso_shm *shm), void *fill_user)
 {
@@ -112,7 +113,7 @@ int fp_iso_proc_spawn(fp_iso_proc *p, const char *exe, const char *file, int fil
     if (nl > 0) name0[nl] = '\0';
     else snprintf(name0, sizeof name0, "%s", exe);
     argv[a++] = name0;
-    argv[a++] = (char *)FP_ISOLATE_HELPER_ARG;
+    argv[a++] = (char *)mode;
     for (int i = 0; i < 4; i++) argv[a++] = fds[i];
     argv[a++] = (char *)file;
     argv[a++] = (char *)name;
@@ -167,7 +168,9 @@ static bool drain_sock(fp_iso_proc *p, fp_iso_log_fn log_fn, void *user)
         if ((size_t)n < offsetof(fp_iso_msg, text)) continue;
         ((char *)&m)[n] = '\0';
         m.text[sizeof m.text - 1] = '\0';
-        if (m.type == FP_ISO_MSG_LOG && log_fn) {
+        if (m.type == FP_ISO_MSG_EVENT) {
+            if (p->on_event) p->on_event(p->event_user, m.text, (size_t)n - offsetof(fp_iso_msg, text));
+        } else if (m.type == FP_ISO_MSG_LOG && log_fn) {
             log_fn(user, m.rc, m.text);
         } else if (m.type == FP_ISO_MSG_READY) {
             p->ready = true;
@@ -242,9 +245,20 @@ int fp_iso_proc_call(fp_iso_proc *p, uint32_t op, double deadline_ms,
     }
 }
 
-void fp_iso_proc_drain_log(fp_iso_proc *p, fp_iso_log_fn log_fn, void *user)
+bool fp_iso_proc_drain_log(fp_iso_proc *p, fp_iso_log_fn log_fn, void *user)
 {
-    if (p->sock >= 0) drain_sock(p, log_fn, user);
+    return p->sock >= 0 && drain_sock(p, log_fn, user);
+}
+
+int fp_iso_proc_follow(fp_iso_proc *p)
+{
+    size_t want = (size_t)atomic_load(&p->shm->size);
+    if (want <= p->mapped) return 0;
+    void *m = mremap(p->shm, p->mapped, want, MREMAP_MAYMOVE);
+    if (m == MAP_FAILED) return -errno;
+    p->shm = m;
+    p->mapped = want;
+    return 0;
 }
 
 void fp_iso_proc_kill(fp_iso_proc *p, char *why, size_t whylen)

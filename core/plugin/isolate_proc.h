@@ -24,6 +24,9 @@
 #define FP_ISO_PENDING 3  /* no answer yet (a wait of 0 ms) */
 
 typedef void (*fp_iso_log_fn)(void *user, int level, const char *message);
+/** An isolated input's event as its helper sent it: `bytes` (at most sizeof(fp_event); the
+ *  header's size as the plugin set it). */
+typedef void (*fp_iso_event_fn)(void *user, const void *bytes, size_t n);
 
 typedef struct fp_iso_proc {
     pid_t pid;               /* 0: none */
@@ -34,6 +37,8 @@ typedef struct fp_iso_proc {
     bool ready;              /* its READY came */
     int ready_rc;            /* create's code */
     char ready_text[1000];   /* create's message */
+    fp_iso_event_fn on_event; /* an input's events on the socket (NULL: dropped) */
+    void *event_user;
 } fp_iso_proc;
 
 /** A zeroed process with every descriptor -1. */
@@ -41,10 +46,12 @@ void fp_iso_proc_init(fp_iso_proc *p);
 
 /** Make the shared memory (at least `bytes`, with `offers`; `fill` writes into it before the
  *  helper starts, e.g. the rig for the plugin's create), the eventfds and the socket, and
- *  spawn `exe` in helper mode for the plugin `file` named `name` with `params`; file_fd
+ *  spawn `exe` in helper mode `mode` (FP_ISOLATE_HELPER_ARG, FP_ISOLATE_INPUT_HELPER_ARG) for
+ *  the plugin `file` named `name` with `params`; file_fd
  *  (-1: none) is a descriptor the helper inherits (`file` may then be /proc/self/fd/N). Returns 0 or
  *  a negative errno (nothing is left open). Does not wait for the helper. */
-int fp_iso_proc_spawn(fp_iso_proc *p, const char *exe, const char *file, int file_fd, const char *name,
+int fp_iso_proc_spawn(fp_iso_proc *p, const char *exe, const char *mode, const char *file, int file_fd,
+                      const char *name,
                       const fp_param *params, size_t nparams, size_t bytes, uint32_t offers,
                       void (*fill)(void *user, fp_iso_shm *shm), void *fill_user);
 
@@ -64,8 +71,12 @@ int fp_iso_proc_poll_ready(fp_iso_proc *p, fp_iso_log_fn log_fn, void *user);
 int fp_iso_proc_call(fp_iso_proc *p, uint32_t op, double deadline_ms,
                      int (*surface)(void *user, fp_iso_shm *shm), fp_iso_log_fn log_fn, void *user);
 
-/** Hand the log lines waiting on the socket to log_fn. */
-void fp_iso_proc_drain_log(fp_iso_proc *p, fp_iso_log_fn log_fn, void *user);
+/** Hand the log lines waiting on the socket to log_fn (and an input's events to on_event).
+ *  False when the helper hung up. */
+bool fp_iso_proc_drain_log(fp_iso_proc *p, fp_iso_log_fn log_fn, void *user);
+
+/** Map the shared memory again where the helper grew it (shm->size). 0 or a negative errno. */
+int fp_iso_proc_follow(fp_iso_proc *p);
 
 /** SIGKILL the helper unless it has exited, reap it, close everything. `why` (may be NULL)
  *  gets how it ended: "died of SIGSEGV", "exited with status 3". */
@@ -73,5 +84,15 @@ void fp_iso_proc_kill(fp_iso_proc *p, char *why, size_t whylen);
 
 /** Ask the helper to quit (destroy, deinit), wait up to wait_ms for it, then kill. */
 void fp_iso_proc_end(fp_iso_proc *p, double wait_ms, fp_iso_log_fn log_fn, void *user);
+
+/** A copy of the keys in an fp_spec of the caller's (they must outlive the SPEC they came
+ *  from; free with fp_spec_clear). 0 or -ENOMEM. */
+int fp_iso_copy_keys(fp_spec *spec, const fp_param *params, size_t nparams);
+
+/* The helpers' side (isolate_helper.c), shared by the input's (isolate_input_helper.c): a
+ * descriptor from argv (-1: not one); oom_score_adj 1000, so that the kernel's OOM killer
+ * takes the helper first. */
+int fp_iso_helper_arg_fd(const char *s);
+void fp_iso_helper_oom_first(void);
 
 #endif

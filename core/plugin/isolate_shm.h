@@ -14,8 +14,12 @@
  * socket carries the helper's log lines and its create result (fp_iso_msg), and its hang-up
  * tells either side that the other is gone.
  *
- * Thread rules: the host side is one thread at a time (the session's); the helper is one
- * thread.
+ * An isolated input (isolate_input.c, isolate_input_helper.c) uses the same memfd, eventfds
+ * and socket: the host asks START and QUIT through the memory; the helper sends its READY,
+ * log lines and every event its plugin pushes (FP_ISO_MSG_EVENT) on the socket, in order.
+ *
+ * Thread rules: the host side is one thread at a time (the session's; an isolated input's
+ * reader thread once started); the mapping's helper is one thread.
  */
 #ifndef FP_ISOLATE_SHM_H
 #define FP_ISOLATE_SHM_H
@@ -26,14 +30,15 @@
 #include <stdint.h>
 
 #define FP_ISO_MAGIC 0x4f534946u        /* "FISO" */
-#define FP_ISO_VERSION 3u              /* 2: the further performers' hands; 3: stage */
+#define FP_ISO_VERSION 4u              /* 2: the further performers' hands; 3: stage; 4: inputs */
 #define FP_ISO_SURFACE_MAX 256          /* surface queries per round trip (more: several) */
 #define FP_ISO_GUARD 8                  /* canary entries after each control-set array */
 #define FP_ISO_CANARY 0xA5
 
-enum { FP_ISO_OP_PROCESS = 1, FP_ISO_OP_RESET = 2, FP_ISO_OP_SURFACE = 3, FP_ISO_OP_QUIT = 4 };
+enum { FP_ISO_OP_PROCESS = 1, FP_ISO_OP_RESET = 2, FP_ISO_OP_SURFACE = 3, FP_ISO_OP_QUIT = 4, FP_ISO_OP_START = 5 };
 enum { FP_ISO_REPLY_DONE = 1, FP_ISO_REPLY_SURFACE = 2 };
-enum { FP_ISO_MSG_READY = 1, FP_ISO_MSG_LOG = 2 };
+/* EVENT: an isolated input's pushed event, its bytes in text (at most sizeof(fp_event)) */
+enum { FP_ISO_MSG_READY = 1, FP_ISO_MSG_LOG = 2, FP_ISO_MSG_EVENT = 3 };
 /* How far the helper got before its READY (fp_iso_shm.stage): for the message of a helper
  * that died or hung before it, "while loading" or "in create". */
 enum { FP_ISO_STAGE_START = 0, FP_ISO_STAGE_LOAD = 1, FP_ISO_STAGE_CREATE = 2, FP_ISO_STAGE_READY = 3 };
@@ -91,6 +96,30 @@ typedef struct fp_iso_shm {
     int32_t surf_rc;
     float surf_points[FP_ISO_SURFACE_MAX][3];
     fp_surface_hit surf_hits[FP_ISO_SURFACE_MAX];
+
+    /* an isolated input's (isolate_input.c): its SPEC's ARG, written by the host before the
+     * spawn; what its extensions answered after create, written by the helper before READY;
+     * start's message */
+    uint32_t in_has_arg;
+    char in_arg[4096];
+    uint32_t in_ext;                  /* FP_ISO_EXT_* bits */
+    float in_ws_min[3], in_ws_max[3];
+    fp_recording_info in_info;
+    uint64_t in_joints, off_joints;   /* samples at off_joints: fp_iso_joints each; the helper
+                                         grows the memfd (and `size`) to hold them */
+    char in_err[512];
 } fp_iso_shm;
+
+/* in_ext: which extensions the instance offers, and what each answered */
+enum {
+    FP_ISO_EXT_WORKSPACE = 1, FP_ISO_EXT_WORKSPACE_OK = 2, FP_ISO_EXT_CLOCK = 4, FP_ISO_EXT_CLOCK_ON = 8,
+    FP_ISO_EXT_INFO = 16, FP_ISO_EXT_INFO_OK = 32, FP_ISO_EXT_JOINTS = 64
+};
+
+/** One sample of an input's FP_EXT_RECORDING_JOINTS, as shared. */
+typedef struct fp_iso_joints {
+    int32_t hand;
+    float mm[FP_HAND_JOINTS][3];
+} fp_iso_joints;
 
 #endif

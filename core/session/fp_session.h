@@ -211,11 +211,12 @@ typedef struct fp_session_options {
                                                        machine a 20 us grace may pass every
                                                        frame); -1: never. fp_session_step,
                                                        frame_thread.h */
-    int isolate;                                    /* which mapping runs in a helper
-                                                       process (fp_isolate.h's
-                                                       fp_isolate_mode): 0 (FP_ISOLATE_NONE,
-                                                       the default of the library) every one
-                                                       in process; 1 those not found in the
+    int isolate;                                    /* which plugins, the mapping and the
+                                                       inputs, run in a helper process
+                                                       (fp_isolate.h's fp_isolate_mode): 0
+                                                       (FP_ISOLATE_NONE, the default of the
+                                                       library) every one in process; 1 those
+                                                       that are not facepuppet's own in the
                                                        path's built-in folder (the default of
                                                        `run` and `live`); 2 every one */
     double isolate_deadline_ms;                     /* an isolated process() that has not

@@ -42,8 +42,10 @@ void fp_intents_take(fp_intents *it, size_t input, const char *name, const fp_ev
             it->input_errors++;
             snprintf(it->last_error, sizeof it->last_error, "%.*s", 100, st->text);
         }
+        /* (a DISCONNECTED without text says nothing: an isolated input's hands released after
+         * its fault, which its WARNING said) */
         if (st->code == FP_STATUS_ERROR || st->code == FP_STATUS_WARNING ||
-            st->code == FP_STATUS_DISCONNECTED) {
+            (st->code == FP_STATUS_DISCONNECTED && st->text[0])) {
             /* the line's source is the input's name: a text that names it itself ("osc: left
              * hand: no data ...") is said once, not "osc: osc: ..." */
             const char *who = name ? name : "input", *text = st->text;

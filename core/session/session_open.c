@@ -542,8 +542,8 @@ static int open_inputs(fp_session *s, const fp_session_options *opt, char *err, 
     progress(opt, "loading the mapping and %zu input%s", opt->input_count, opt->input_count == 1 ? "" : "s");
     if ((rc = fp__session_load_mapping(s, opt->mapping, opt->plugin_path, NULL, err, errlen))) return rc;
     for (size_t i = 0; i < opt->input_count; i++) {
-        rc = fp_input_instance_open(&s->inputs[i], opt->plugin_path, opt->inputs[i], (uint32_t)i,
-                                    err, errlen);
+        rc = fp_input_instance_open_isolated(&s->inputs[i], opt->plugin_path, opt->inputs[i], (uint32_t)i,
+                                             s->isolate, &s->isolate_opt, err, errlen);
         if (rc) return rc;
         s->input_count = i + 1;
         /* its log lines (relayed from any thread) straight to the session's callback, on the

@@ -1008,6 +1008,85 @@ static void test_queue_retry(void **state)
     fp_event_queue_destroy(&q);
 }
 
+
+/* The next event of an isolated input, waited for up to 10 s (its helper's events come
+ * through the host's reader thread). */
+static bool poll_wait(fp_input_instance *inst, fp_event *ev)
+{
+    for (int i = 0; i < 10000; i++) {
+        if (fp_input_instance_poll(inst, ev)) return true;
+        struct timespec ts = {0, 1000000};
+        nanosleep(&ts, NULL);
+    }
+    return false;
+}
+
+/* An isolated input (fp_isolate.h): the bad-events fixture in a helper gives the queue the same
+ * events, the malformed refused alike and said alike, as in process (test_malformed_events_refused);
+ * input-crashy's SIGSEGV on its own thread comes after its 20 samples, in their order, as one
+ * status of the input naming the signal, then each hand released; the helper is restarted. */
+static void test_isolated_input(void **state)
+{
+    (void)state;
+    fp_plugin_path path;
+    fixture_path(&path);
+    char helper[4200], err[1024] = "";
+    snprintf(helper, sizeof helper, "%s/../../bin/facepuppet", fixture_dir);
+    fp_isolate_options opt = {.helper = helper};
+    fp_input_instance inst;
+    log_seen seen = {.owner = pthread_self()};
+    assert_int_equal(fp_input_instance_open_isolated(&inst, &path, "fixture-badevents", 0, FP_ISOLATE_THIRD_PARTY,
+                                                     &opt, err, sizeof err), 0);
+    assert_true(inst.isolated);
+    fp_input_instance_set_log(&inst, seen_log, &seen);
+    assert_int_equal(fp_input_instance_start(&inst, err, sizeof err), 0);
+    fp_event ev;
+    int joints = 0, other = 0;
+    for (bool ended = false; !ended && poll_wait(&inst, &ev);) {
+        const char *why = NULL;
+        assert_int_equal(fp_event_check(&ev, &why), FP_EVENT_OK);
+        joints += ev.header.type == FP_EVENT_JOINT_POSITIONS;
+        other += ev.header.type != FP_EVENT_JOINT_POSITIONS;
+        ended = ev.header.type == FP_EVENT_STATUS && ev.status.code == FP_STATUS_END_OF_STREAM;
+    }
+    assert_int_equal(joints, 600 - 36);
+    assert_int_equal(other, 4);
+    assert_int_equal((int)atomic_load(&inst.refused), 36);
+    assert_int_equal(fp_input_instance_drain_log(&inst), 6); /* one warning per kind */
+    fp_input_instance_close(&inst);
+    assert_non_null(strstr(seen.lines[6], "refused 36 malformed events in all"));
+
+    seen = (log_seen){.owner = pthread_self()};
+    assert_int_equal(fp_input_instance_open_isolated(&inst, &path, "crashy", 0, FP_ISOLATE_THIRD_PARTY, &opt, err,
+                                                     sizeof err), 0);
+    fp_input_instance_set_log(&inst, seen_log, &seen);
+    assert_int_equal(fp_input_instance_start(&inst, err, sizeof err), 0);
+    int64_t last = 0;
+    for (joints = 0; poll_wait(&inst, &ev) && ev.header.type == FP_EVENT_JOINT_POSITIONS; joints++) {
+        assert_true(ev.header.time_ns >= last); /* as pushed, in order */
+        assert_true(ev.positions.mm[0][0] == 0.5f * (float)joints);
+        last = ev.header.time_ns;
+    }
+    assert_int_equal(joints, 20);
+    assert_int_equal(ev.header.type, FP_EVENT_STATUS);
+    assert_int_equal(ev.status.code, FP_STATUS_WARNING);
+    assert_true(strstr(ev.status.text, "isolated: the helper process died of SIGSEGV; hands released, restarts in "
+                                       "0.1 s (fault 1 in a row)") ||
+                strstr(ev.status.text, "exited with status 1")); /* (ASan's report of the SEGV) */
+    for (int h = FP_HAND_LEFT; h <= FP_HAND_RIGHT; h++) {
+        assert_true(poll_wait(&inst, &ev));
+        assert_int_equal(ev.status.code, FP_STATUS_DISCONNECTED);
+        assert_int_equal(ev.header.hand, h);
+    }
+    assert_true(poll_wait(&inst, &ev)); /* the new helper's first sample */
+    assert_int_equal(ev.header.type, FP_EVENT_JOINT_POSITIONS);
+    fp_isolate_stats st;
+    assert_true(fp_isolate_input_stats(inst.input, &st));
+    assert_true(st.faults >= 1 && st.restarts >= 1);
+    fp_input_instance_close(&inst);
+    fp_plugin_path_clear(&path);
+}
+
 int main(void)
 {
     const char *build = getenv("FP_BUILD_DIR");
@@ -1021,6 +1100,7 @@ int main(void)
         cmocka_unit_test(test_zeroed_events_said),
         cmocka_unit_test(test_isolate_holds_only_good_set),
         cmocka_unit_test(test_isolate_fault_said_through_log_flood),
+        cmocka_unit_test(test_isolated_input),
         cmocka_unit_test(test_err_filled),
         cmocka_unit_test(test_queue_mpsc),
         cmocka_unit_test(test_queue_full),        cmocka_unit_test(test_queue_retry),

@@ -81,6 +81,14 @@ static void test_status_counts_and_log(void **state)
     assert_string_equal(cap.source, "glove");
     fp_intents_take(&it, 1, "replay", &c, false, &log); /* connected: no line */
     assert_int_equal(cap.count, 3);
+    /* a DISCONNECTED without text (an isolated input's hands released after its fault,
+     * which its WARNING said): kept for the take, no line */
+    fp_event quiet = status(FP_STATUS_DISCONNECTED, "");
+    quiet.header.hand = FP_HAND_RIGHT;
+    size_t kept = it.frame_event_count;
+    fp_intents_take(&it, 1, "crashy", &quiet, false, &log);
+    assert_int_equal(cap.count, 3);
+    assert_int_equal(it.frame_event_count, kept + 1);
     assert_false(fp_intents_all_ended(&it, 2));
     fp_intents_take(&it, 1, "replay", &end, false, &log);
     assert_false(fp_intents_all_ended(&it, 2));

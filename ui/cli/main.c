@@ -71,9 +71,11 @@ static void usage(FILE *f)
                "  78  a plugin missing, built for another ABI, failing its init, or stopped\n"
                "      for a fault (it wrote past the host's arrays; create returned no instance)\n"
                "A plugin's create() error goes through the same table by its code (EINVAL 64,\n"
-               "EBADMSG 65, ENOENT/ENODEV 66...). A crash inside a plugin prints\n"
+               "EBADMSG 65, ENOENT/ENODEV 66...). A crash inside a plugin in process prints\n"
                "\"fatal signal SIG... in plugin 'NAME' during CALL (frame N)\" and ends with\n"
-               "128 + the signal. SIGINT or SIGTERM ends a run after its frame (0); a frame\n"
+               "128 + the signal; in an isolated one (run and live's --isolate: a third\n"
+               "party's mapping or input by default) it ends only that plugin's helper\n"
+               "process, named once in the log, and the run goes on. SIGINT or SIGTERM ends a run after its frame (0); a frame\n"
                "stuck in a plugin call (one that never returns) is abandoned 0.1 s after it,\n"
                "the take closed, and the run ends with 128 + the signal (130, 143). They stop\n"
                "an export at its next frame, its temporary file removed: 130, 143.\n\n"
@@ -110,9 +112,10 @@ int main(int argc, char **argv)
         printf("facepuppet %s\n", FP_VERSION_STRING);
         return FP_EXIT_OK;
     }
-    /* The hidden helper mode of an isolated mapping (fp_isolate.h): no crash handler, so a
-     * fault ends the helper by its signal and the host sees it. */
+    /* The hidden helper modes of an isolated mapping and an isolated input (fp_isolate.h): no
+     * crash handler, so a fault ends the helper by its signal and the host sees it. */
     if (!strcmp(name, FP_ISOLATE_HELPER_ARG)) return fp_isolate_helper_main(argc, argv);
+    if (!strcmp(name, FP_ISOLATE_INPUT_HELPER_ARG)) return fp_isolate_input_helper_main(argc, argv);
     /* A fatal signal inside a plugin call names the plugin, the call and the frame. */
     fp_plugin_crash_install();
     for (size_t i = 0; i < NCOMMANDS; i++) {

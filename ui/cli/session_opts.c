@@ -72,8 +72,9 @@ static const struct {
      "osc:HOST:PORT[,step=MM][,key=N][,mtu=B]: send every frame\n(vertex offsets from the neutral, 0.05 mm steps; rig\n"
      "channels) over OSC, a keyframe every 30 frames; the\nBlender add-on receives it (docs/osc.md, Stream)"},
     {"isolate", required_argument, OPT_ISOLATE, "WHICH",
-     "third-party (default): a mapping plugin not shipped with\nfacepuppet runs in a helper process; a crash or hang\n"
-     "there holds the last control set and restarts it;\nall: every mapping so; none: every one in process"},
+     "third-party (default): a mapping or input plugin not\nshipped with facepuppet runs in a helper process; a\n"
+     "crash or hang there holds the mapping's last control\nset, or releases the input's hands, and restarts it;\n"
+     "all: every plugin so; none: every one in process"},
     {"isolate-deadline", required_argument, OPT_ISOLATE_DEADLINE, "MS",
      "an isolated mapping's process() that has not answered\nwithin MS ms (default 50) is abandoned, its helper\nrestarted"},
     {"quiet", no_argument, 'q', NULL,
