@@ -291,7 +291,9 @@ typedef struct fp_take_reach {
 void fp_take_writer_set_reach(fp_take_writer *w, const fp_take_reach *reach);
 
 /** Write the frames buffered so far as one chunk (nothing if none). Returns 0 or the write
- *  error (-ENOSPC, -EIO, ...), after which the writer only closes. */
+ *  error (-ENOSPC, -EIO, ...; -ENOENT where the file was deleted while recording, its folder
+ *  removed: writes to it would succeed and the take vanish at close), after which the writer
+ *  only closes. */
 int fp_take_writer_flush(fp_take_writer *w, char *err, size_t errlen);
 /** Frames buffered and not yet written. */
 size_t fp_take_writer_pending(const fp_take_writer *w);

@@ -232,6 +232,15 @@ static void show(fp_vtakes *t, long index)
 int fp_vtakes_tick(fp_vtakes *t, fp_session *s, int64_t now, char *msg, size_t n)
 {
     msg[0] = '\0';
+    if (fp_session_take_failed(&t->take, NULL, 0)) { /* a full disk: said now, REC off, the
+                                                         session goes on */
+        int rc = fp_vtakes_stop(t, s, msg, n);
+        if (rc && !t->failed) {
+            t->failed = rc;
+            snprintf(t->failed_msg, sizeof t->failed_msg, "%s", msg);
+        }
+        return rc;
+    }
     if (t->countdown_until && now >= t->countdown_until) {
         t->countdown_until = 0;
         return start(t, s, now, msg, n);
