@@ -766,6 +766,7 @@ static void test_refused_up_front(void **state)
     snprintf(args, sizeof args, "run --mesh %s %s --calibration cal.json --out c.obj --force", face(), rec);
     assert_int_equal(fp(args), 0);
     assert_non_null(strstr(out, "scale: 10 mm per mesh unit (from the calibration)"));
+    assert_null(strstr(out, "another mesh"));
     snprintf(args, sizeof args, "run --mesh %s %s --mm-per-unit 12.5 --out c.obj --force", face(), rec);
     assert_int_equal(fp(args), 0);
     assert_non_null(strstr(out, "scale: 12.5 mm per mesh unit (from --mm-per-unit)"));
@@ -794,6 +795,20 @@ static void test_calibrate(void **state)
     snprintf(args, sizeof args, "run --mesh %s --input %s --calibration cal-hold.json --out h.obj --force", ict, rec);
     assert_int_equal(fp(args), 0);
     assert_non_null(strstr(out, "scale: 10 mm per mesh unit (from the calibration)"));
+    assert_null(strstr(out, "another mesh"));
+    /* the calibration made for ICT (10 mm per unit) used on Lee Perry-Smith (48.98 by his
+     * rig, 48.07 by his head): the hands 4.9 times too large moved the whole head in silence;
+     * now warned, naming the file and both units (the run goes on with it) */
+    snprintf(args, sizeof args, "run --mesh %s/faces/lee-perry-smith/LeePerrySmith.obj --input %s "
+             "--calibration cal-hold.json --duration 0.5 --out l.obj --force", data, rec);
+    assert_int_equal(fp(args), 0);
+    assert_non_null(strstr(out, "cal-hold.json: 10 mm per mesh unit, but "));
+    assert_non_null(strstr(out, "LeePerrySmith.obj is 48.98 mm per unit (the rig "));
+    assert_non_null(strstr(out, "a calibration made for another mesh?"));
+    snprintf(args, sizeof args, "run --mesh %s/faces/lee-perry-smith/LeePerrySmith.obj --rig none "
+             "--input %s --calibration cal-hold.json --duration 0.5 --out l.obj --force", data, rec);
+    assert_int_equal(fp(args), 0);
+    assert_non_null(strstr(out, "is 48.07 mm per unit (detected from the head"));
     /* info describes the file calibrate wrote (it was read as a rig: "comment: unknown
      * field", 65); a damaged one is named with its field, as run names it */
     assert_int_equal(fp("info cal-hold.json"), 0);
