@@ -123,53 +123,11 @@ static int attach_rig(fp_session *s, const fp_session_options *opt, char *err, s
  * front of the box's middle, under 0.11 of the extent off it along x and y); where the mean
  * lies off the middle most along another axis, or behind it, the face probably looks that way
  * (Blender's Z-up: along -y), and the log says so, with the options that turn it. */
-/* A face whose vertices are spread evenly (a smooth or procedural head: no detailed front)
- * leaves the mean in the middle; its nose still stands out (fp_head_nose): where it points
- * elsewhere than +z, the log says so, with the options to give. */
-static void nose_hint(fp_session *s)
-{
-    fp_head_front f;
-    if (fp_head_nose(s->loaded, s->n, s->used, &f) || (f.axis == 2 && f.sign > 0)) return;
-    const char sign = f.sign > 0 ? '+' : '-', axis = "xyz"[f.axis], up = "xyz"[f.up_axis];
-    fp_slog_printf(&s->log, FP_LOG_WARNING, "session",
-                   "no rig and no --up/--facing: the face is taken to look along +z with +y up, but "
-                   "its most protruding end, a nose, points along %c%c (the vertices within %g of "
-                   "the mesh's extent of its tip cover %.2f of the mesh's cross-section, those at "
-                   "the other end %.2f): if it looks along %c%c, give --up and --facing (its head is longest "
-                   "along %c: --up +%c --facing %c%c, or --up -%c where its crown is at -%c)",
-                   sign, axis, FP_HEAD_CAP_DEPTH, f.cap, f.opposite, sign, axis, up, up, sign, axis,
-                   up, up);
-}
-
-#define FACING_HINT_MIN 0.12 /* the mean's offset, in the box's extent, that counts */
 static void facing_hint(fp_session *s)
 {
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY}, sum[3] = {0, 0, 0};
-    size_t k = 0;
-    for (size_t v = 0; v < s->n; v++) {
-        if (s->used && !s->used[v]) continue;
-        for (int i = 0; i < 3; i++) {
-            double x = s->loaded[3 * v + i];
-            lo[i] = fmin(lo[i], x), hi[i] = fmax(hi[i], x), sum[i] += x;
-        }
-        k++;
-    }
-    int best = -1;
-    double off[3], most = 0;
-    for (int i = 0; i < 3 && k; i++) {
-        off[i] = hi[i] > lo[i] ? (sum[i] / (double)k - 0.5 * (lo[i] + hi[i])) / (hi[i] - lo[i]) : 0;
-        if (fabs(off[i]) > most) most = fabs(off[i]), best = i;
-    }
-    if (best < 0 || most < FACING_HINT_MIN || (best == 2 && off[2] > 0)) {
-        nose_hint(s);
-        return;
-    }
-    const char sign = off[best] > 0 ? '+' : '-', axis = "xyz"[best];
-    fp_slog_printf(&s->log, FP_LOG_WARNING, "session",
-                   "no rig and no --up/--facing: the face is taken to look along +z with +y up, but "
-                   "its vertices lie most toward %c%c (%.2f of its extent off the middle; a face's "
-                   "detailed front does): if it looks along %c%c, give --up and --facing (Blender's "
-                   "Z-up: --up +z --facing -y)", sign, axis, fabs(off[best]), sign, axis);
+    char msg[768];
+    if (fp_head_facing_hint(s->loaded, s->n, s->used, msg, sizeof msg))
+        fp_slog_printf(&s->log, FP_LOG_WARNING, "session", "%s", msg);
 }
 
 static int face_frame(fp_session *s, const fp_session_options *opt, char *err, size_t errlen)

@@ -844,6 +844,22 @@ static void test_calibrate(void **state)
     assert_int_equal(fp(args), 65);
     assert_non_null(strstr(out, "--rig"));
     assert_non_null(strstr(out, "26719"));
+    /* a Z-up copy with no rig and no --up/--facing: calibrate says the face probably looks
+     * along -y, as run does (it wrote its hold for a face looking along +z in silence) */
+    snprintf(args, sizeof args, "awk '$1==\"v\"{print \"v\", $2, -$4, $3; next} {print}' %s > mp-zup.obj",
+             face());
+    assert_int_equal(sh(args), 0);
+    snprintf(args, sizeof args, "calibrate --mesh mp-zup.obj --rig none --input %s --out z.json --force", rec);
+    assert_int_equal(fp(args), 0);
+    assert_non_null(strstr(out, "calibrate: warning: mp-zup.obj: no rig and no --up/--facing"));
+    assert_non_null(strstr(out, "toward -y"));
+    snprintf(args, sizeof args, "calibrate --mesh mp-zup.obj --rig none --up +z --facing -y --input %s "
+             "--out z.json --force", rec);
+    assert_int_equal(fp(args), 0);
+    assert_null(strstr(out, "no rig and no --up/--facing"));
+    snprintf(args, sizeof args, "calibrate --mesh %s --rig none --input %s --out z.json --force", face(), rec);
+    assert_int_equal(fp(args), 0);
+    assert_null(strstr(out, "no rig and no --up/--facing"));
     snprintf(args, sizeof args, "pose --mesh %s --rig none --set jaw.open=0.3 --out p.obj --force", ict);
     assert_int_equal(fp(args), 64);
     assert_non_null(strstr(out, "needs a rig"));
