@@ -181,7 +181,7 @@ static int write_chunk(fp_take_writer *w, const char type[4], uint32_t count, ch
         if (ftruncate(w->fd, (off_t)w->offset) == 0) lseek(w->fd, (off_t)w->offset, SEEK_SET);
         if (gone) /* (writes to a file no folder holds succeed: the take would vanish at close) */
             fp_errorf(w->errmsg, sizeof w->errmsg, rc, "%s: the file was deleted while recording "
-                      "(its folder removed?): the take is lost, %" PRIu64 " frames", w->path,
+                      "(its folder removed?): its %" PRIu64 " frames are lost", w->path,
                       w->frames + w->pending);
         else
             fp_errorf(w->errmsg, sizeof w->errmsg, rc, "%s: writing a %.4s chunk at byte %" PRIu64
