@@ -187,3 +187,55 @@ int fp_head_nose(const float *pos, size_t n, const uint8_t *used, fp_head_front 
     out->opposite = area[best ^ 1];
     return 0;
 }
+
+/* ---- which way the face looks (fp_head_facing_hint) ---------------------------------- */
+
+/* A face whose vertices are spread evenly (a smooth or procedural head: no detailed front)
+ * leaves the mean in the middle; its nose still stands out (fp_head_nose): where it points
+ * elsewhere than +z, the log says so, with the options to give. */
+static bool nose_hint(const float *pos, size_t n, const uint8_t *used, char *msg, size_t len)
+{
+    fp_head_front f;
+    if (fp_head_nose(pos, n, used, &f) || (f.axis == 2 && f.sign > 0)) return false;
+    const char sign = f.sign > 0 ? '+' : '-', axis = "xyz"[f.axis], up = "xyz"[f.up_axis];
+    snprintf(msg, len,
+                   "no rig and no --up/--facing: the face is taken to look along +z with +y up, but "
+                   "its most protruding end, a nose, points along %c%c (the vertices within %g of "
+                   "the mesh's extent of its tip cover %.2f of the mesh's cross-section, those at "
+                   "the other end %.2f): if it looks along %c%c, give --up and --facing (its head is longest "
+                   "along %c: --up +%c --facing %c%c, or --up -%c where its crown is at -%c)",
+                   sign, axis, FP_HEAD_CAP_DEPTH, f.cap, f.opposite, sign, axis, up, up, sign, axis,
+                   up, up);
+    return true;
+}
+
+#define FACING_HINT_MIN 0.12 /* the mean's offset, in the box's extent, that counts */
+bool fp_head_facing_hint(const float *pos, size_t n, const uint8_t *used, char *msg, size_t len)
+{
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY}, sum[3] = {0, 0, 0};
+    size_t k = 0;
+    if (!pos || !msg || !len) return false;
+    for (size_t v = 0; v < n; v++) {
+        if (used && !used[v]) continue;
+        for (int i = 0; i < 3; i++) {
+            double x = pos[3 * v + i];
+            lo[i] = fmin(lo[i], x), hi[i] = fmax(hi[i], x), sum[i] += x;
+        }
+        k++;
+    }
+    int best = -1;
+    double off[3], most = 0;
+    for (int i = 0; i < 3 && k; i++) {
+        off[i] = hi[i] > lo[i] ? (sum[i] / (double)k - 0.5 * (lo[i] + hi[i])) / (hi[i] - lo[i]) : 0;
+        if (fabs(off[i]) > most) most = fabs(off[i]), best = i;
+    }
+    if (best < 0 || most < FACING_HINT_MIN || (best == 2 && off[2] > 0))
+        return nose_hint(pos, n, used, msg, len);
+    const char sign = off[best] > 0 ? '+' : '-', axis = "xyz"[best];
+    snprintf(msg, len,
+                   "no rig and no --up/--facing: the face is taken to look along +z with +y up, but "
+                   "its vertices lie most toward %c%c (%.2f of its extent off the middle; a face's "
+                   "detailed front does): if it looks along %c%c, give --up and --facing (Blender's "
+                   "Z-up: --up +z --facing -y)", sign, axis, fabs(off[best]), sign, axis);
+    return true;
+}

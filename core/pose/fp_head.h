@@ -98,6 +98,15 @@ typedef struct fp_head_front {
 } fp_head_front;
 int fp_head_nose(const float *pos, size_t n, const uint8_t *used, fp_head_front *out);
 
+/** Whether a face with no rig and no --up/--facing (taken to look along +z with +y up)
+ *  probably looks elsewhere: where the mean vertex lies off the box's middle most along another
+ *  axis than +z (a face's detailed front: on the shared faces 0.16-0.23 of the depth in front,
+ *  under 0.11 off along x and y), or, for evenly spread vertices, where its nose
+ *  (fp_head_nose) points elsewhere. True with the hint in msg (len bytes; no prefix: it names
+ *  the axis and the --up/--facing to give), false where it looks along +z or cannot be told.
+ *  `used` as fp_head_detect_used. What `run` and `calibrate` warn with. Pure; any thread. */
+bool fp_head_facing_hint(const float *pos, size_t n, const uint8_t *used, char *msg, size_t len);
+
 /** The face's size across, in millimetres, for a given scale: diagonal (the mesh's
  *  bounding-box diagonal, mesh units) x mm_per_unit, into *across_mm (may be NULL). Returns
  *  true when it is a face a hand can reach, 1 mm to 1 km (FP_HEAD_ACROSS_MIN_MM ..

@@ -64,6 +64,12 @@ extern "C" {
  *  vertex would move as one. */
 #define FP_SESSION_RADIUS_MIN_DIAGONALS 1e-6
 #define FP_SESSION_RADIUS_MAX_DIAGONALS 10.0
+/** A calibration whose unit (mm per mesh unit) is more than this many times the mesh's own
+ *  (its rig's, else detected from the head: within 7% of the rigs' on the shared faces), or
+ *  less than its inverse, was made for another mesh (ICT's 10 mm/unit on Lee Perry-Smith's
+ *  48.98: hands 4.9 times too large, the whole head moved): fp_session_create warns (source
+ *  `session`), naming both units and where the mesh's came from, and goes on with it. */
+#define FP_SESSION_CALIBRATION_UNIT_RATIO 1.5
 
 /* fp_calibration (p_mesh = scale * p_mm + offset) is declared in fp_pose.h;
  * fp_session_log_fn in session_log.h; fp_frame_record and fp_frame_record_fn in
@@ -110,6 +116,13 @@ typedef struct fp_session_options {
                                                        input states one, estimated from the
                                                        joints as the hands arrive and refined
                                                        as they run: step_arrive.h) */
+    const char *calibration_source;                 /* what `calibration` is called in a
+                                                       warning or an error (its file: "cal.json");
+                                                       NULL: "the calibration". A calibration
+                                                       whose unit is over 1.5 times off the
+                                                       mesh's (its rig's, else the head's) is
+                                                       warned about: one made for another mesh
+                                                       (FP_SESSION_CALIBRATION_UNIT_RATIO) */
     double mm_per_unit;                             /* the mesh's unit in mm; 0: detect it
                                                        from the head (core/pose/fp_head.h).
                                                        The --mm-per-unit option sets it, and

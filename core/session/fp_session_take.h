@@ -124,6 +124,14 @@ int fp_session_take_start(fp_session_take *t, const fp_session *s, int64_t origi
 /** True while a take is recording. */
 bool fp_session_take_recording(const fp_session_take *t);
 
+/** Whether the take recording has stopped writing (a full disk, an I/O error, its file
+ *  deleted: the recorder's thread stopped on the write, docs/take-format.md) while it still
+ *  counts as recording until fp_session_take_stop: 0 while it writes (or nothing records),
+ *  else the code (-ENOSPC, -EIO, -ENOENT...) with the recorder's message, naming the file and
+ *  the byte, in err. No I/O, no lock (two atomic loads): a host asks it every frame to say a
+ *  failure at once rather than at the take's end. [session thread] */
+int fp_session_take_failed(const fp_session_take *t, char *err, size_t errlen);
+
 /** The running timecode of a frame at host time now_ns of the take recording (timecode in
  *  plus the frames of the rate since the origin). Returns 0, or -EINVAL when not recording. */
 int fp_session_take_timecode(const fp_session_take *t, int64_t now_ns, fp_timecode *tc);

@@ -123,53 +123,11 @@ static int attach_rig(fp_session *s, const fp_session_options *opt, char *err, s
  * front of the box's middle, under 0.11 of the extent off it along x and y); where the mean
  * lies off the middle most along another axis, or behind it, the face probably looks that way
  * (Blender's Z-up: along -y), and the log says so, with the options that turn it. */
-/* A face whose vertices are spread evenly (a smooth or procedural head: no detailed front)
- * leaves the mean in the middle; its nose still stands out (fp_head_nose): where it points
- * elsewhere than +z, the log says so, with the options to give. */
-static void nose_hint(fp_session *s)
-{
-    fp_head_front f;
-    if (fp_head_nose(s->loaded, s->n, s->used, &f) || (f.axis == 2 && f.sign > 0)) return;
-    const char sign = f.sign > 0 ? '+' : '-', axis = "xyz"[f.axis], up = "xyz"[f.up_axis];
-    fp_slog_printf(&s->log, FP_LOG_WARNING, "session",
-                   "no rig and no --up/--facing: the face is taken to look along +z with +y up, but "
-                   "its most protruding end, a nose, points along %c%c (the vertices within %g of "
-                   "the mesh's extent of its tip cover %.2f of the mesh's cross-section, those at "
-                   "the other end %.2f): if it looks along %c%c, give --up and --facing (its head is longest "
-                   "along %c: --up +%c --facing %c%c, or --up -%c where its crown is at -%c)",
-                   sign, axis, FP_HEAD_CAP_DEPTH, f.cap, f.opposite, sign, axis, up, up, sign, axis,
-                   up, up);
-}
-
-#define FACING_HINT_MIN 0.12 /* the mean's offset, in the box's extent, that counts */
 static void facing_hint(fp_session *s)
 {
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY}, sum[3] = {0, 0, 0};
-    size_t k = 0;
-    for (size_t v = 0; v < s->n; v++) {
-        if (s->used && !s->used[v]) continue;
-        for (int i = 0; i < 3; i++) {
-            double x = s->loaded[3 * v + i];
-            lo[i] = fmin(lo[i], x), hi[i] = fmax(hi[i], x), sum[i] += x;
-        }
-        k++;
-    }
-    int best = -1;
-    double off[3], most = 0;
-    for (int i = 0; i < 3 && k; i++) {
-        off[i] = hi[i] > lo[i] ? (sum[i] / (double)k - 0.5 * (lo[i] + hi[i])) / (hi[i] - lo[i]) : 0;
-        if (fabs(off[i]) > most) most = fabs(off[i]), best = i;
-    }
-    if (best < 0 || most < FACING_HINT_MIN || (best == 2 && off[2] > 0)) {
-        nose_hint(s);
-        return;
-    }
-    const char sign = off[best] > 0 ? '+' : '-', axis = "xyz"[best];
-    fp_slog_printf(&s->log, FP_LOG_WARNING, "session",
-                   "no rig and no --up/--facing: the face is taken to look along +z with +y up, but "
-                   "its vertices lie most toward %c%c (%.2f of its extent off the middle; a face's "
-                   "detailed front does): if it looks along %c%c, give --up and --facing (Blender's "
-                   "Z-up: --up +z --facing -y)", sign, axis, fabs(off[best]), sign, axis);
+    char msg[768];
+    if (fp_head_facing_hint(s->loaded, s->n, s->used, msg, sizeof msg))
+        fp_slog_printf(&s->log, FP_LOG_WARNING, "session", "%s", msg);
 }
 
 static int face_frame(fp_session *s, const fp_session_options *opt, char *err, size_t errlen)
@@ -396,6 +354,32 @@ static void warn_small_radius(fp_session *s, const fp_session_options *opt)
                    opt->radius, opt->radius * mm, edge, edge * mm, hint, hint * mm);
 }
 
+/* A calibration made for another mesh: its unit against the mesh's own (the rig's, else the
+ * head's as detected, *head), FP_SESSION_CALIBRATION_UNIT_RATIO. */
+static void warn_calibration_unit(fp_session *s, const fp_session_options *opt, const fp_head *head)
+{
+    const double cal = 1.0 / opt->calibration->scale;
+    double own = head->mm_per_unit;
+    char how[300];
+    if (s->rig.rig) {
+        own = fp_rig_mm_per_unit(s->rig.rig);
+        snprintf(how, sizeof how, "the rig %s", fp_rig_source(s->rig.rig));
+    } else {
+        snprintf(how, sizeof how, "%s", head->how[0] ? head->how : "detected from the head");
+    }
+    if (!(own > 0) || !isfinite(own) || (cal <= own * FP_SESSION_CALIBRATION_UNIT_RATIO &&
+                                         cal * FP_SESSION_CALIBRATION_UNIT_RATIO >= own))
+        return;
+    fp_slog_printf(&s->log, FP_LOG_WARNING, "session",
+                   "%s: %.4g mm per mesh unit, but %s is %.4g mm per unit (%s): %.2g times %s; "
+                   "a calibration made for another mesh? The hands are placed by it (make one "
+                   "for this mesh: facepuppet calibrate --mesh %s ...)",
+                   opt->calibration_source ? opt->calibration_source : "the calibration", cal,
+                   opt->mesh_path ? opt->mesh_path : "the mesh", own, how,
+                   cal > own ? cal / own : own / cal, cal > own ? "larger" : "smaller",
+                   opt->mesh_path ? opt->mesh_path : "FACE");
+}
+
 /* The head, the rig (the shape shown: the posed base), the mesh's unit and the radius. 0 or
  * the code. */
 static int open_scale(fp_session *s, const fp_session_options *opt, double diag, char *err, size_t errlen)
@@ -410,6 +394,7 @@ static int open_scale(fp_session *s, const fp_session_options *opt, double diag,
     if ((rc = attach_rig(s, opt, err, errlen))) return rc;
     if ((rc = face_frame(s, opt, err, errlen))) return rc;
     s->shown = s->view.base = fp_rig_step_posed(&s->rig, s->base);
+    const fp_head detected = s->head; /* (for a calibration's unit: warn_calibration_unit) */
     if (opt->mm_per_unit > 0) {
         s->head.mm_per_unit = opt->mm_per_unit;
         s->head.method = FP_HEAD_GIVEN;
@@ -437,11 +422,14 @@ static int open_scale(fp_session *s, const fp_session_options *opt, double diag,
             rc = opt->mm_per_unit > 0 ? -EINVAL : -ERANGE; /* an option's, or a file's (65) */
             snprintf(err, errlen, "%s: %g mm per mesh unit makes the face %.3g mm across "
                      "(its diagonal %.4g mesh units); give millimetres per mesh unit",
-                     opt->mm_per_unit > 0 ? "--mm-per-unit" : "the calibration's scale",
+                     opt->mm_per_unit > 0 ? "--mm-per-unit"
+                     : opt->calibration_source ? opt->calibration_source : "the calibration's scale",
                      s->head.mm_per_unit, across_mm, sqrt(diag));
             return rc;
         }
     }
+    if (!(opt->mm_per_unit > 0) && opt->calibration && opt->calibration->scale > 0)
+        warn_calibration_unit(s, opt, &detected);
     if (opt->radius > FP_SESSION_RADIUS_MAX_DIAGONALS * sqrt(diag)) {
         rc = radius_code(opt);
         snprintf(err, errlen, "%s %g is beyond 10x the mesh's bounding-box diagonal (%.4g "

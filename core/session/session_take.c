@@ -80,6 +80,16 @@ static double reach_quantile(const fp_session_take *t, double q)
 
 bool fp_session_take_recording(const fp_session_take *t) { return t->rec != NULL; }
 
+int fp_session_take_failed(const fp_session_take *t, char *err, size_t errlen)
+{
+    if (!t->rec) return 0;
+    fp_take_recorder_status st;
+    fp_take_recorder_status_get(t->rec, &st);
+    if (!st.error) return 0;
+    if (err && errlen) snprintf(err, errlen, "%s", fp_take_recorder_error(t->rec));
+    return st.error;
+}
+
 /* The mapping's name and keys from its SPEC (NAME[,key=value...]) into h; the strings live
  * in *spec until fp_spec_clear. */
 static int mapping_keys(const char *mapping, fp_spec *spec, fp_take_header *h, char *err,

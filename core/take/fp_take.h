@@ -291,7 +291,9 @@ typedef struct fp_take_reach {
 void fp_take_writer_set_reach(fp_take_writer *w, const fp_take_reach *reach);
 
 /** Write the frames buffered so far as one chunk (nothing if none). Returns 0 or the write
- *  error (-ENOSPC, -EIO, ...), after which the writer only closes. */
+ *  error (-ENOSPC, -EIO, ...; -ENOENT where the file was deleted while recording, its folder
+ *  removed: writes to it would succeed and the take vanish at close), after which the writer
+ *  only closes. */
 int fp_take_writer_flush(fp_take_writer *w, char *err, size_t errlen);
 /** Frames buffered and not yet written. */
 size_t fp_take_writer_pending(const fp_take_writer *w);
@@ -383,12 +385,20 @@ typedef struct fp_take_summary {
     uint64_t file_size;
     unsigned version_major, version_minor;   /* the file's format version (signature) */
     fp_take_reach reach;       /* from the end chunk (vectors = 0: none stored) */
+    /* What a cut leaves unplayed, from a scan past the damage for whole chunks (their magic,
+     * length and crc32 intact; the frames in them are not indexed): */
+    uint64_t after_bytes;      /* bytes from cut_offset to the end of the file */
+    uint64_t after_frames;     /* frames in whole FRMS chunks after the damaged one */
+    uint64_t after_total;      /* the end chunk's "frames" where a whole one lies after it
+                                  (the take's frames in all), else 0 */
 } fp_take_summary;
 
 /** Open a take: check the signature and header chunk, then scan every chunk (magic, type,
  *  length, crc32, each frame record's structure) and index every frame of the intact part.
  *  A damaged tail is not an error: open succeeds, summary.cut is set and
- *  fp_take_reader_warning says "FILE: cut at byte N: reason". A damaged signature or header
+ *  fp_take_reader_warning says "FILE: cut at byte N: reason", and what is not played after
+ *  it ("; the 151261 bytes from there are not read: 105 frames in whole chunks past the
+ *  damage, of the 225 the end chunk counts": summary.after_*). A damaged signature or header
  *  fails with -EBADMSG ("FILE: byte N: reason"); -ENOTSUP for another major version;
  *  -ENOENT/-EACCES/-EIO for the file, -EISDIR (a folder), -ENXIO (a FIFO or device: refused
  *  at once, never read from; fp_file_open_regular). */

@@ -260,6 +260,49 @@ static int read_tail(fp_take_reader *r, chunk_view *cv, uint64_t off)
     return 0;
 }
 
+/* A cut at r->sum.cut_offset: what lies after it (summary.after_*), from a scan for whole
+ * chunks (each "FPCK" whose chunk checks: magic, length, crc32; its frames not indexed), and
+ * said after the warning. Best effort: an I/O error ends the scan. */
+static void note_after_cut(fp_take_reader *r)
+{
+    const uint64_t cut = r->sum.cut_offset;
+    r->sum.after_bytes = r->size - cut;
+    uint8_t win[4096];
+    chunk_view cv;
+    for (uint64_t off = cut + 1; off + TAKE_CHUNK_OVERHEAD <= r->size;) {
+        ssize_t k = src_read(r, off, win, sizeof win);
+        if (k < 4) break;
+        size_t i = 0;
+        while (i + 4 <= (size_t)k && memcmp(win + i, TAKE_CHUNK_MAGIC, 4)) i++;
+        if (i + 4 > (size_t)k) { /* (the magic may straddle the window's end) */
+            off += (uint64_t)k - 3;
+            continue;
+        }
+        off += i;
+        if (load_chunk(r, off, &cv) != 1) {
+            off++;
+            continue;
+        }
+        if (!memcmp(cv.type, TAKE_TYPE_FRAMES, 4)) {
+            r->sum.after_frames += cv.count;
+        } else if (!memcmp(cv.type, TAKE_TYPE_TAIL, 4)) {
+            cJSON *o = cJSON_ParseWithLength((const char *)cv.payload, cv.length);
+            const cJSON *v = cJSON_GetObjectItemCaseSensitive(o, "frames");
+            if (cJSON_IsNumber(v) && v->valuedouble >= 0 && v->valuedouble < 1e15)
+                r->sum.after_total = (uint64_t)v->valuedouble;
+            cJSON_Delete(o);
+        }
+        off += TAKE_CHUNK_OVERHEAD + cv.length;
+    }
+    size_t w = strlen(r->warning);
+    char total[96] = "";
+    if (r->sum.after_total)
+        snprintf(total, sizeof total, ", of the %" PRIu64 " the end chunk counts", r->sum.after_total);
+    snprintf(r->warning + w, sizeof r->warning - w, "; the %" PRIu64 " bytes from there are not read: "
+             "%" PRIu64 " frames in whole chunks past the damage%s", r->sum.after_bytes,
+             r->sum.after_frames, total);
+}
+
 static int open_common(fp_take_reader *r, char *err, size_t errlen)
 {
     uint8_t sig[TAKE_SIG_SIZE], want[TAKE_SIG_SIZE];
@@ -327,6 +370,7 @@ static int open_common(fp_take_reader *r, char *err, size_t errlen)
             else
                 snprintf(r->warning, sizeof r->warning, "%s: cut at byte %" PRIu64 ": %s (byte %"
                          PRIu64 ")", r->name, off, cv.why, cv.bad_at);
+            note_after_cut(r);
             break;
         }
         if (rc < 0) return fp_errorf(err, errlen, rc, "%s: %s", r->name, fp_strerror(rc));

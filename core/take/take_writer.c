@@ -150,7 +150,16 @@ static void assert_chunk_state(const fp_take_writer *w)
     (void)w;
 }
 
-/* Write one chunk from w->buf (payload already at buf + 16). */
+/* Whether the open file no longer has a name (unlinked, or its folder removed): every write
+ * still succeeds, and the take is gone when the file is closed. */
+static bool file_gone(int fd)
+{
+    struct stat st;
+    return fstat(fd, &st) == 0 && st.st_nlink == 0;
+}
+
+/* Write one chunk from w->buf (payload already at buf + 16; a file deleted meanwhile is an
+ * error, -ENOENT, checked after each chunk). */
 static int write_chunk(fp_take_writer *w, const char type[4], uint32_t count, char *err,
                        size_t errlen)
 {
@@ -164,12 +173,19 @@ static int write_chunk(fp_take_writer *w, const char type[4], uint32_t count, ch
     int rc = write_all(w->fd, w->buf, n);
     if (!rc && !w->opt.no_sync && fdatasync(w->fd) < 0 && errno != EINVAL && errno != EROFS)
         rc = -errno;
+    bool gone = !rc && file_gone(w->fd);
+    if (gone) rc = -ENOENT;
     if (rc) {
         w->error = rc;
         /* Cut back to the last whole chunk so the file ends cleanly (ftruncate frees space). */
         if (ftruncate(w->fd, (off_t)w->offset) == 0) lseek(w->fd, (off_t)w->offset, SEEK_SET);
-        fp_errorf(w->errmsg, sizeof w->errmsg, rc, "%s: writing a %.4s chunk at byte %" PRIu64
-                  ": %s", w->path, type, w->offset, strerror(-rc));
+        if (gone) /* (writes to a file no folder holds succeed: the take would vanish at close) */
+            fp_errorf(w->errmsg, sizeof w->errmsg, rc, "%s: the file was deleted while recording "
+                      "(its folder removed?): its %" PRIu64 " frames are lost", w->path,
+                      w->frames + w->pending);
+        else
+            fp_errorf(w->errmsg, sizeof w->errmsg, rc, "%s: writing a %.4s chunk at byte %" PRIu64
+                      ": %s", w->path, type, w->offset, strerror(-rc));
         return fp_errorf(err, errlen, rc, "%s", w->errmsg);
     }
     w->offset += n;

@@ -766,6 +766,7 @@ static void test_refused_up_front(void **state)
     snprintf(args, sizeof args, "run --mesh %s %s --calibration cal.json --out c.obj --force", face(), rec);
     assert_int_equal(fp(args), 0);
     assert_non_null(strstr(out, "scale: 10 mm per mesh unit (from the calibration)"));
+    assert_null(strstr(out, "another mesh"));
     snprintf(args, sizeof args, "run --mesh %s %s --mm-per-unit 12.5 --out c.obj --force", face(), rec);
     assert_int_equal(fp(args), 0);
     assert_non_null(strstr(out, "scale: 12.5 mm per mesh unit (from --mm-per-unit)"));
@@ -794,6 +795,20 @@ static void test_calibrate(void **state)
     snprintf(args, sizeof args, "run --mesh %s --input %s --calibration cal-hold.json --out h.obj --force", ict, rec);
     assert_int_equal(fp(args), 0);
     assert_non_null(strstr(out, "scale: 10 mm per mesh unit (from the calibration)"));
+    assert_null(strstr(out, "another mesh"));
+    /* the calibration made for ICT (10 mm per unit) used on Lee Perry-Smith (48.98 by his
+     * rig, 48.07 by his head): the hands 4.9 times too large moved the whole head in silence;
+     * now warned, naming the file and both units (the run goes on with it) */
+    snprintf(args, sizeof args, "run --mesh %s/faces/lee-perry-smith/LeePerrySmith.obj --input %s "
+             "--calibration cal-hold.json --duration 0.5 --out l.obj --force", data, rec);
+    assert_int_equal(fp(args), 0);
+    assert_non_null(strstr(out, "cal-hold.json: 10 mm per mesh unit, but "));
+    assert_non_null(strstr(out, "LeePerrySmith.obj is 48.98 mm per unit (the rig "));
+    assert_non_null(strstr(out, "a calibration made for another mesh?"));
+    snprintf(args, sizeof args, "run --mesh %s/faces/lee-perry-smith/LeePerrySmith.obj --rig none "
+             "--input %s --calibration cal-hold.json --duration 0.5 --out l.obj --force", data, rec);
+    assert_int_equal(fp(args), 0);
+    assert_non_null(strstr(out, "is 48.07 mm per unit (detected from the head"));
     /* info describes the file calibrate wrote (it was read as a rig: "comment: unknown
      * field", 65); a damaged one is named with its field, as run names it */
     assert_int_equal(fp("info cal-hold.json"), 0);
@@ -829,6 +844,22 @@ static void test_calibrate(void **state)
     assert_int_equal(fp(args), 65);
     assert_non_null(strstr(out, "--rig"));
     assert_non_null(strstr(out, "26719"));
+    /* a Z-up copy with no rig and no --up/--facing: calibrate says the face probably looks
+     * along -y, as run does (it wrote its hold for a face looking along +z in silence) */
+    snprintf(args, sizeof args, "awk '$1==\"v\"{print \"v\", $2, -$4, $3; next} {print}' %s > mp-zup.obj",
+             face());
+    assert_int_equal(sh(args), 0);
+    snprintf(args, sizeof args, "calibrate --mesh mp-zup.obj --rig none --input %s --out z.json --force", rec);
+    assert_int_equal(fp(args), 0);
+    assert_non_null(strstr(out, "calibrate: warning: mp-zup.obj: no rig and no --up/--facing"));
+    assert_non_null(strstr(out, "toward -y"));
+    snprintf(args, sizeof args, "calibrate --mesh mp-zup.obj --rig none --up +z --facing -y --input %s "
+             "--out z.json --force", rec);
+    assert_int_equal(fp(args), 0);
+    assert_null(strstr(out, "no rig and no --up/--facing"));
+    snprintf(args, sizeof args, "calibrate --mesh %s --rig none --input %s --out z.json --force", face(), rec);
+    assert_int_equal(fp(args), 0);
+    assert_null(strstr(out, "no rig and no --up/--facing"));
     snprintf(args, sizeof args, "pose --mesh %s --rig none --set jaw.open=0.3 --out p.obj --force", ict);
     assert_int_equal(fp(args), 64);
     assert_non_null(strstr(out, "needs a rig"));

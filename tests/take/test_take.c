@@ -1133,6 +1133,115 @@ static void test_enospc(void **state)
     rm_rf(dir);
 }
 
+/* A cut says what it leaves unplayed: a byte flipped in the first FRMS chunk of a take of 12
+ * frames in chunks of 4 plays none, and the warning counts the 8 frames in the whole chunks
+ * past the damage and the end chunk's 12 (before: only "cut at byte N", the rest unsaid). A
+ * file cut short (a kill -9) has nothing whole past it. */
+static void test_cut_says_what_is_lost(void **state)
+{
+    (void)state;
+    char dir[512], path[1024], err[512];
+    make_dir(dir, sizeof dir, "lost");
+    write_take(dir, "L", 12, 4, path, sizeof path);
+    size_t n;
+    uint8_t *b = slurp(path, &n);
+    uint64_t starts[16];
+    uint32_t frames[16];
+    char types[16][5];
+    size_t nc = chunk_starts(b, n, starts, frames, types, 16);
+    assert_int_equal(nc, 5); /* HEAD, 3 x FRMS, TAIL */
+    b[starts[1] + 40] ^= 0x20;
+    fp_take_reader *r;
+    if (fp_take_reader_open_memory(b, n, "l.fptake", &r, err, sizeof err)) fail_msg("%s", err);
+    const fp_take_summary *s = fp_take_reader_summary(r);
+    assert_true(s->cut);
+    assert_int_equal(s->frames, 0);
+    assert_int_equal(s->after_bytes, n - starts[1]);
+    assert_int_equal(s->after_frames, 8);
+    assert_int_equal(s->after_total, 12);
+    char expect[160];
+    snprintf(expect, sizeof expect, "; the %zu bytes from there are not read: 8 frames in whole "
+             "chunks past the damage, of the 12 the end chunk counts", n - (size_t)starts[1]);
+    if (!strstr(fp_take_reader_warning(r), expect)) fail_msg("%s", fp_take_reader_warning(r));
+    fp_take_reader_close(&r);
+    b[starts[1] + 40] ^= 0x20; /* whole again, then cut short inside the third FRMS chunk */
+    if (fp_take_reader_open_memory(b, (size_t)starts[3] + 7, "l.fptake", &r, err, sizeof err))
+        fail_msg("%s", err);
+    s = fp_take_reader_summary(r);
+    assert_int_equal(s->frames, 8);
+    assert_int_equal(s->after_bytes, 7);
+    assert_int_equal(s->after_frames, 0);
+    assert_int_equal(s->after_total, 0);
+    assert_non_null(strstr(fp_take_reader_warning(r), "; the 7 bytes from there are not read: 0 frames"));
+    fp_take_reader_close(&r);
+    free(b);
+    rm_rf(dir);
+}
+
+/* The take's folder removed while it records (a clean-up script, a stage hand's rm -rf):
+ * writes to the unlinked file all succeed, so the take used to close "ok" with every frame
+ * counted, and vanish. The recorder stops at the next chunk with -ENOENT naming the file. */
+static void test_folder_removed(void **state)
+{
+    (void)state;
+    char dir[512], err[512];
+    make_dir(dir, sizeof dir, "removed");
+    fp_take_header h;
+    tt_header(&h, "R");
+    fp_take_recorder_options o = {.writer = {.chunk_frames = 5}};
+    fp_take_recorder *rec;
+    if (fp_take_recorder_start(dir, &h, &o, &rec, err, sizeof err)) fail_msg("%s", err);
+    uint64_t i = 0;
+    for (; i < 12; i++) {
+        tt_frame t;
+        tt_make(&t, i, 1);
+        assert_true(fp_take_recorder_push(rec, &t.f));
+    }
+    rm_rf(dir);
+    rmdir(dir);
+    fp_take_recorder_status st;
+    for (; i < 100000; i++) {
+        tt_frame t;
+        tt_make(&t, i, 1);
+        fp_take_recorder_push(rec, &t.f);
+        fp_take_recorder_status_get(rec, &st);
+        if (st.stopped) break;
+        usleep(200);
+    }
+    assert_true(st.stopped);   /* (before: never, the frames went to a file with no name) */
+    assert_int_equal(st.error, -ENOENT);
+    assert_non_null(strstr(fp_take_recorder_error(rec), "R_T001.fptake"));
+    assert_non_null(strstr(fp_take_recorder_error(rec), "deleted while recording"));
+    assert_int_equal(fp_take_recorder_close(&rec, &st, err, sizeof err), -ENOENT);
+    assert_non_null(strstr(err, "deleted while recording"));
+}
+
+/* The writer alone: the file unlinked between chunks fails the next flush, and the close. */
+static void test_file_unlinked(void **state)
+{
+    (void)state;
+    char dir[512], err[512];
+    make_dir(dir, sizeof dir, "unlinked");
+    fp_take_header h;
+    tt_header(&h, "U");
+    fp_take_writer_options o = {.chunk_frames = 4, .no_sync = true};
+    fp_take_writer *w;
+    if (fp_take_writer_create(dir, &h, &o, &w, err, sizeof err)) fail_msg("%s", err);
+    tt_frame t;
+    for (uint64_t i = 0; i < 4; i++) {
+        tt_make(&t, i, 1);
+        if (fp_take_writer_add(w, &t.f, err, sizeof err)) fail_msg("%s", err);
+    }
+    assert_int_equal(unlink(fp_take_writer_path(w)), 0);
+    tt_make(&t, 4, 1);
+    assert_int_equal(fp_take_writer_add(w, &t.f, err, sizeof err), 0);   /* (buffered) */
+    assert_int_equal(fp_take_writer_flush(w, err, sizeof err), -ENOENT);
+    assert_non_null(strstr(err, "U_T001.fptake: the file was deleted while recording"));
+    assert_int_equal(fp_take_writer_close(&w, 0, 0, err, sizeof err), -ENOENT);
+    rm_rf(dir);
+    rmdir(dir);
+}
+
 /* ---- listing ------------------------------------------------------------------------ */
 
 static void test_list(void **state)
@@ -1305,6 +1414,9 @@ int main(void)
         cmocka_unit_test(test_not_finite),
         cmocka_unit_test(test_numbering),
         cmocka_unit_test(test_enospc),
+        cmocka_unit_test(test_folder_removed),
+        cmocka_unit_test(test_cut_says_what_is_lost),
+        cmocka_unit_test(test_file_unlinked),
         cmocka_unit_test(test_list),
         cmocka_unit_test(test_timecode_out),
         cmocka_unit_test(test_rate_range),

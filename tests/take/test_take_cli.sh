@@ -8,7 +8,8 @@
 #  3. --input take:FILE performs the take again: through the same mapping it reproduces the
 #     run's frames (compared where the run's clock allows: see below); through the other
 #     mapping the face differs and has no new self-crossings (fp-selfx).
-#  4. a failed write (file size limit: EFBIG, as ENOSPC) makes run exit 73 saying so.
+#  4. a failed write (file size limit: EFBIG, as ENOSPC) makes run exit 73 saying so, and
+#     says it at once (the frame the take stopped at), not only at the end.
 # SPDX-License-Identifier: GPL-3.0-or-later
 set -u
 build=${FP_BUILD_DIR:-build}
@@ -253,6 +254,9 @@ rc=$?
 cat "$tmp/full.err"
 [ $rc -eq 73 ] || fail "a failed take write exited $rc, want 73"
 grep -q "the take was not written whole" "$tmp/full.err" || fail "no message for the failed take"
+# said when it happened, not only at the end (a run of live devices may go on for an hour)
+grep -q "take 1 stopped recording at frame [0-9]* (.* s): .*File too large; the run goes on" "$tmp/full.err" ||
+    fail "the failed take write was not said at once"
 # ---- 5. damaged takes: a refused frame said, no intact frame refused -----------------------
 # a stored control vector made NaN (its chunk's crc32 fixed): a damaged frame (the engine
 # could only refuse it, the base shown): the take reads as cut there, play naming the file

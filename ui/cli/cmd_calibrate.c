@@ -233,6 +233,18 @@ static uint8_t *surface_vertices(const fp_mesh *m)
     return fp_mesh_face_mask(m, &used, &unused, &far) ? NULL : used;
 }
 
+/* No rig and no --up/--facing: a face that probably looks elsewhere than +z said, as `run`
+ * says it (fp_head_facing_hint): the hold's unit and place are found as for +z, +y up (a Z-up
+ * copy of ICT gave 77.59 mm per unit, not 10.24, in silence). */
+static void warn_facing(const calibrate_args *a, const fp_mesh *m)
+{
+    char msg[768];
+    uint8_t *used = surface_vertices(m);
+    if (fp_head_facing_hint(m->positions, m->vertex_count, used, msg, sizeof msg))
+        fprintf(stderr, "facepuppet calibrate: warning: %s: %s\n", a->mesh_path, msg);
+    free(used);
+}
+
 /* The face and its head: loaded, detected, and --mm-per-unit checked as run checks it (a face
  * under 1 mm or over 1 km is a slip). Returns 0 or the exit status (said); *m to free. */
 static int load_face(const calibrate_args *a, fp_mesh **m, fp_head *head)
@@ -334,6 +346,7 @@ static int fit_and_save(const calibrate_args *a, const fp_mesh *m, const fp_head
         double q[4] = {1, 0, 0, 0};
         if (a->up[0] != 0 || a->up[1] != 0 || a->up[2] != 0) fp_face_from_axes(a->up, a->facing, q); /* (checked) */
         else if (given_rig) fp_rig_face_rotation(given_rig, q);
+        else warn_facing(a, m);
         float *turned = fp_face_turned(q) ? malloc(m->vertex_count * 3 * sizeof *turned) : NULL;
         fp_head th;
         uint8_t *used = turned ? surface_vertices(m) : NULL;

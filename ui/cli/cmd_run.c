@@ -355,6 +355,21 @@ static void run_control_take(void *user, const fp_session_take *t, const fp_sess
     if (st && !a->control_status) a->control_status = st;
 }
 
+/* A take whose write failed (a full disk, its file deleted) said at once, on the frame the
+ * recorder stopped at, once per take: the run goes on (its other outputs), the take keeps its
+ * frames up to its last whole chunk, and the end says it again and exits 73. */
+static void say_take_failed(const fp_session_take *take, uint32_t *said, uint64_t frame, double t_s)
+{
+    char err[1024];
+    if (!fp_session_take_recording(take) || *said == take->header.take ||
+        !fp_session_take_failed(take, err, sizeof err))
+        return;
+    *said = take->header.take;
+    fprintf(stderr, "facepuppet run: take %u stopped recording at frame %llu (%.2f s): %s; the run "
+            "goes on without it (the take keeps the frames before; exit 73 at the end)\n",
+            take->header.take, (unsigned long long)frame, t_s, err);
+}
+
 /* The session's frames, until the inputs end, --duration, an interrupt or a failed write.
  * The clock: the recordings' own (frame k at t0 + k/fps, each step only once every
  * recording has delivered past it), else the wall clock (live devices only). The take (if
@@ -383,6 +398,7 @@ static int run_frames(fp_session *s, run_args *a, fp_session_take *take, fp_expo
     a->take_end_ns = t0;
     if (fp_session_take_recording(take) && (status = fp_app_audio_take_started(&a->audio, take, t0, "run")))
         return status;
+    uint32_t said_take = 0; /* the take whose failed write was said */
     for (uint64_t k = 0; !fp_app_stop_requested(); k++) {
         int64_t now = t0 + (int64_t)llround((double)k * 1e9 / a->fps);
         if (input_clock) {
@@ -409,6 +425,7 @@ static int run_frames(fp_session *s, run_args *a, fp_session_take *take, fp_expo
         fp_app_stop_step_end();
         fp_app_link_after(a->link, now, k); /* status pushed, the frame streamed */
         totals_add(t, &st);
+        say_take_failed(take, &said_take, k, (double)(now - t0) * 1e-9);
         a->take_end_ns = now + (int64_t)llround(1e9 / a->fps);
         if ((status = write_frame(s, a, ex, k, (double)(now - t0) * 1e-9))) break;
         /* the soundtrack up to the end of this frame (its samples follow the frames) */

@@ -174,6 +174,7 @@ int fp_session_opts_parse(fp_session_opts *o, int c, const char *arg, const char
             return rc;
         }
         so->calibration = &o->calibration;
+        so->calibration_source = arg;
         return 1;
     }
     case OPT_ISOLATE: {

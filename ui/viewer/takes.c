@@ -165,6 +165,10 @@ int fp_vtakes_stop(fp_vtakes *t, fp_session *s, char *msg, size_t n)
     fp_timecode_format(&res.timecode_out, out, sizeof out);
     if (rc) {
         snprintf(msg, n, "take %u not written whole: %s", res.take, err);
+        if (!t->failed) {
+            t->failed = rc;
+            snprintf(t->failed_msg, sizeof t->failed_msg, "%s", msg);
+        }
         return rc;
     }
     snprintf(msg, n, "take %u: %llu frames, %llu dropped, %s - %s, %s%s", res.take,
@@ -185,6 +189,13 @@ int fp_vtakes_stop(fp_vtakes *t, fp_session *s, char *msg, size_t n)
     t->review_take = res.take; /* (the strip lights it) */
     if (t->have_last) opener_start(t);
     return 0;
+}
+
+int fp_vtakes_failed(const fp_vtakes *t, char *err, size_t errlen)
+{
+    if (!t->failed) return 0;
+    snprintf(err, errlen, "%s", t->failed_msg);
+    return t->failed == -ENOENT ? -EIO : t->failed; /* (its file deleted: an output lost) */
 }
 
 int fp_vtakes_toggle(fp_vtakes *t, fp_session *s, int64_t now, char *msg, size_t n)
@@ -232,6 +243,9 @@ static void show(fp_vtakes *t, long index)
 int fp_vtakes_tick(fp_vtakes *t, fp_session *s, int64_t now, char *msg, size_t n)
 {
     msg[0] = '\0';
+    if (fp_session_take_failed(&t->take, NULL, 0)) /* a full disk: said now, REC off, the
+                                                       session goes on */
+        return fp_vtakes_stop(t, s, msg, n);
     if (t->countdown_until && now >= t->countdown_until) {
         t->countdown_until = 0;
         return start(t, s, now, msg, n);

@@ -60,6 +60,9 @@ typedef struct fp_vtakes {
     const fp_viewer_sound *sound; /* the take hooks (fp_viewer.h), or NULL */
     int64_t origin_ns;            /* the take recording's (or the last one's) start */
     fp_vtakes_opener opener;      /* the last take's review, being opened */
+    int failed;                   /* the first take not written whole (its write failed: a
+                                     full disk, its file deleted): its code, what was said */
+    char failed_msg[1200];
 } fp_vtakes;
 
 /** Set up: the options' take folder, slate, countdown; puts the record sink into *so (the
@@ -71,11 +74,18 @@ void fp_vtakes_free(fp_vtakes *t);
 /** T or the middle pedal: start (after the countdown) or stop the take; msg gets a line for
  *  the HUD ("" when none). Returns 0 or the recorder's code (msg says why). */
 int fp_vtakes_toggle(fp_vtakes *t, fp_session *s, int64_t now, char *msg, size_t n);
-/** Each frame before the session's step: a countdown that ran out starts the take; a
- *  review that plays advances with the clock. */
+/** Each frame before the session's step: a take whose write failed (a full disk, its file
+ *  deleted) is stopped at once, msg saying so (fp_vtakes_stop); a countdown that ran out
+ *  starts the take; a review that plays advances with the clock. Returns 0 or the failed
+ *  take's code. */
 int fp_vtakes_tick(fp_vtakes *t, fp_session *s, int64_t now, char *msg, size_t n);
-/** Stop a take recording (end of the run). */
+/** Stop a take recording (end of the run). One not written whole is kept in t->failed
+ *  (the first such take of the session). */
 int fp_vtakes_stop(fp_vtakes *t, fp_session *s, char *msg, size_t n);
+/** The first take of the session not written whole: its code (-ENOSPC, -EIO...; a file
+ *  deleted while recording: -EIO, an output lost) with its message in err, else 0. The run's
+ *  end fails with it (73). */
+int fp_vtakes_failed(const fp_vtakes *t, char *err, size_t errlen);
 
 /** The review's shape to show, or NULL (show the live session). */
 const float *fp_vtakes_shown(const fp_vtakes *t);

@@ -974,8 +974,8 @@ static void frame(viewer *v)
     memset(&st, 0, sizeof st);
     int64_t now = fp_now_ns();
     char take_msg[1200];
-    fp_vtakes_tick(&v->takes, v->s, now, take_msg, sizeof take_msg);
-    if (take_msg[0]) say_kind(v, FP_HUD_TAKE, false, "%s", take_msg);
+    int take_rc = fp_vtakes_tick(&v->takes, v->s, now, take_msg, sizeof take_msg); /* (a failed */
+    if (take_msg[0]) say_kind(v, FP_HUD_TAKE, take_rc != 0, "%s", take_msg); /* one: with -q too) */
     if (v->paused && v->opt->frame_paused) v->opt->frame_paused(v->opt->user, now); /* (--control) */
     if (!v->paused) {
         if (v->opt->frame_begin) v->opt->frame_begin(v->opt->user, now); /* (--control) */
@@ -1137,16 +1137,13 @@ int fp_viewer_run(const fp_viewer_options *opt, fp_viewer_report *report, char *
         if (opt->duration_s > 0 && fp_now_ns() - t0 >= (int64_t)(opt->duration_s * 1e9)) break;
     }
     if (!v->error && opt->out && fp_session_save(v->s, opt->out, err, errlen)) v->error = -EIO;
-    {   /* a take still recording ends with the run; a failed one fails it */
-        char msg[1200];
+    {   /* a take still recording ends with the run; a failed one (then or before) fails it */
+        char msg[1200], over_msg[1200];
         int trc = fp_vtakes_stop(&v->takes, v->s, msg, sizeof msg);
         if (msg[0] && (trc || !opt->quiet)) fprintf(stderr, "facepuppet live: %s\n", msg);
-        fp_voverdub_frame(&v->over, &v->takes, v->s, v->so.plugin_path, fp_now_ns(), msg, sizeof msg);
-        if (msg[0]) fprintf(stderr, "facepuppet live: %s\n", msg);
-        if (trc && !v->error) {
-            v->error = trc;
-            snprintf(err, errlen, "%s", msg);
-        }
+        fp_voverdub_frame(&v->over, &v->takes, v->s, v->so.plugin_path, fp_now_ns(), over_msg, sizeof over_msg);
+        if (over_msg[0]) fprintf(stderr, "facepuppet live: %s\n", over_msg);
+        if (!v->error && (trc = fp_vtakes_failed(&v->takes, err, errlen))) v->error = trc;
     }
     char stop_err[1024]; /* record=FILE: a failed write fails the run */
     int stop_rc = fp_session_stop(v->s, stop_err, sizeof stop_err);
