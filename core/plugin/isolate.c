@@ -101,6 +101,10 @@ static void say(proxy *x, fp_log_level level, const char *fmt, ...)
 static void relay_log(void *user, int level, const char *message)
 {
     proxy *x = user;
+    if (level == FP_ISO_LOG_UNSENT) { /* lines the helper had no room to send */
+        x->relay_dropped += strtoul(message, NULL, 10);
+        return;
+    }
     if (x->relayed >= FP_ISOLATE_LOG_LINES) {
         x->relay_dropped++;
         return;

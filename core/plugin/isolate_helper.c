@@ -42,8 +42,10 @@ typedef struct helper {
 #define FP_ISO_SPIN_MAX_PERIOD_NS 50000000
 
 static helper H; /* one per process: the host's callbacks reach it without a pointer */
+static unsigned long log_unsent; /* log lines the socket had no room for (FP_ISO_LOG_UNSENT) */
 
-static void send_msg(uint32_t type, int rc, const char *text)
+/* A message, never waiting (the frame's deadline runs); a log line with no room counted */
+static bool send_msg(uint32_t type, int rc, const char *text)
 {
     fp_iso_msg m;
     memset(&m, 0, sizeof m);
@@ -51,7 +53,17 @@ static void send_msg(uint32_t type, int rc, const char *text)
     m.rc = rc;
     snprintf(m.text, sizeof m.text, "%s", text ? text : "");
     size_t len = offsetof(fp_iso_msg, text) + strlen(m.text) + 1;
-    (void)!send(H.sock, &m, len, MSG_DONTWAIT | MSG_NOSIGNAL);
+    bool sent = send(H.sock, &m, len, MSG_DONTWAIT | MSG_NOSIGNAL) >= 0;
+    if (!sent && type == FP_ISO_MSG_LOG && rc != FP_ISO_LOG_UNSENT) log_unsent++;
+    return sent;
+}
+
+/* The lines not sent, counted to the host before a reply (read by it before the reply's) */
+static void send_unsent(void)
+{
+    char n[32];
+    snprintf(n, sizeof n, "%lu", log_unsent);
+    if (log_unsent && send_msg(FP_ISO_MSG_LOG, FP_ISO_LOG_UNSENT, n)) log_unsent = 0;
 }
 
 static void host_log(const fp_host *host, fp_log_level level, const char *message)
@@ -86,6 +98,7 @@ static int remap(void)
 
 static void signal_done(uint32_t reply)
 {
+    send_unsent();
     H.shm->reply = reply;
     atomic_store(&H.shm->reply_seq, atomic_load(&H.shm->req_seq));
     uint64_t one = 1;
@@ -327,6 +340,8 @@ int fp_isolate_helper_main(int argc, char **argv)
     signal(SIGPIPE, SIG_IGN);
     prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0); /* wake for the spin when asked, not 50 us late */
     fp_iso_helper_oom_first();
+    int big = 1 << 20; /* room for a frame's burst of log lines (the kernel caps it at wmem_max) */
+    (void)setsockopt(H.sock, SOL_SOCKET, SO_SNDBUF, &big, sizeof big);
     int fl = fcntl(H.go, F_GETFL);
     if (fl < 0 || fcntl(H.go, F_SETFL, fl | O_NONBLOCK)) return 70;
     struct stat st;

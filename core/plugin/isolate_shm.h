@@ -39,6 +39,10 @@ enum { FP_ISO_OP_PROCESS = 1, FP_ISO_OP_RESET = 2, FP_ISO_OP_SURFACE = 3, FP_ISO
 enum { FP_ISO_REPLY_DONE = 1, FP_ISO_REPLY_SURFACE = 2 };
 /* EVENT: an isolated input's pushed event, its bytes in text (at most sizeof(fp_event)) */
 enum { FP_ISO_MSG_READY = 1, FP_ISO_MSG_LOG = 2, FP_ISO_MSG_EVENT = 3 };
+/* A LOG whose rc is FP_ISO_LOG_UNSENT: the mapping helper's count (decimal text) of log lines
+ * it could not send since its last such count (the socket full: a plugin that floods its log),
+ * sent before its reply, so the host counts them as dropped */
+#define FP_ISO_LOG_UNSENT (-1000)
 /* How far the helper got before its READY (fp_iso_shm.stage): for the message of a helper
  * that died or hung before it, "while loading" or "in create". */
 enum { FP_ISO_STAGE_START = 0, FP_ISO_STAGE_LOAD = 1, FP_ISO_STAGE_CREATE = 2, FP_ISO_STAGE_READY = 3 };
