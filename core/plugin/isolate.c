@@ -557,6 +557,16 @@ bool fp_isolate_mapping_about(const fp_mapping *m, const char **id, const char *
     return true;
 }
 
+int fp_iso_open_plugin_file(const char *file, int *rc, char *err, size_t errlen)
+{
+    int fd = fp_file_open_regular(file);
+    if (fd < 0)
+        *rc = fp_errorf(err, errlen, FP_EPLUGIN_DLOPEN, "%s: cannot load: %s", file,
+                        fd == -ENXIO ? "not a regular file (a FIFO, device or socket)"
+                                     : fp_file_error_text(fd));
+    return fd < 0 ? -1 : fd;
+}
+
 int fp_iso_copy_keys(fp_spec *spec, const fp_param *params, size_t nparams)
 {
     memset(spec, 0, sizeof *spec);
@@ -583,14 +593,9 @@ int fp_isolate_mapping_create(const fp_isolate_options *opt, const char *file, c
                               fp_mapping **out, char *err, size_t errlen)
 {
     *out = NULL;
-    /* a regular file only, opened without waiting (a FIFO named like a plugin in a plugin
-     * folder: open() waited for a writer and hung `run` before any output, where the
-     * in-process loader refuses it) */
-    int fd = fp_file_open_regular(file);
-    if (fd < 0)
-        return fp_errorf(err, errlen, FP_EPLUGIN_DLOPEN, "%s: cannot load: %s", file,
-                         fd == -ENXIO ? "not a regular file (a FIFO, device or socket)"
-                                      : fp_file_error_text(fd));
+    int rc;
+    int fd = fp_iso_open_plugin_file(file, &rc, err, errlen);
+    if (fd < 0) return rc;
     proxy *x = calloc(1, sizeof *x);
     if (!x || fp_iso_copy_keys(&x->keys, params, nparams)) {
         if (x) fp_spec_clear(&x->keys);
@@ -614,7 +619,7 @@ int fp_isolate_mapping_create(const fp_isolate_options *opt, const char *file, c
         x->notice = host->get_extension(host, FP_HOST_EXT_FAULT_NOTICE);
         x->base_ext = host->get_extension(host, FP_HOST_EXT_BASE_VERSION);
     }
-    int rc = spawn(x);
+    rc = spawn(x);
     if (rc) {
         proxy_destroy(&x->m);
         return fp_errorf(err, errlen, -EIO, "cannot start its helper process %s: %s",

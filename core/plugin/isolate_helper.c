@@ -324,6 +324,26 @@ void fp_iso_helper_oom_first(void)
     close(fd);
 }
 
+size_t fp_iso_helper_params(int argc, char **argv, fp_param *params)
+{
+    size_t np = 0;
+    for (int i = 8; i < argc && np < FP_SPEC_MAX_PARAMS; i++) {
+        char *eq = strchr(argv[i], '=');
+        if (!eq) continue;
+        *eq = '\0';
+        params[np++] = (fp_param){argv[i], eq + 1};
+    }
+    return np;
+}
+
+int fp_iso_helper_load(fp_plugin_kind kind, const char *file, fp_plugin *plugin, char *err, size_t errlen)
+{
+    fp_plugin_path none;
+    memset(&none, 0, sizeof none);
+    none.builtin = SIZE_MAX;
+    return fp_plugin_load(&none, kind, file, plugin, err, errlen);
+}
+
 int fp_isolate_helper_main(int argc, char **argv)
 {
     if (argc < 8) return 64;
@@ -364,20 +384,11 @@ int fp_isolate_helper_main(int argc, char **argv)
     H.host.get_extension = host_extension;
 
     fp_param params[FP_SPEC_MAX_PARAMS];
-    size_t np = 0;
-    for (int i = 8; i < argc && np < FP_SPEC_MAX_PARAMS; i++) {
-        char *eq = strchr(argv[i], '=');
-        if (!eq) continue;
-        *eq = '\0';
-        params[np++] = (fp_param){argv[i], eq + 1};
-    }
-    fp_plugin_path none;
-    memset(&none, 0, sizeof none);
-    none.builtin = SIZE_MAX;
+    size_t np = fp_iso_helper_params(argc, argv, params);
     fp_plugin plugin;
     char err[900] = "";
     atomic_store(&H.shm->stage, FP_ISO_STAGE_LOAD);
-    int rc = fp_plugin_load(&none, FP_PLUGIN_MAPPING, file, &plugin, err, sizeof err);
+    int rc = fp_iso_helper_load(FP_PLUGIN_MAPPING, file, &plugin, err, sizeof err);
     fp_mapping *m = NULL;
     if (!rc) {
         const fp_mapping_factory *f = plugin.factory;

@@ -385,10 +385,9 @@ int fp_isolate_input_create(const fp_isolate_options *opt, const char *file, con
     *out = NULL;
     if (arg && strlen(arg) >= sizeof ((iproxy *)0)->arg)
         return fp_errorf(err, errlen, -EINVAL, "its ARG is over %zu bytes", sizeof ((iproxy *)0)->arg - 1);
-    int fd = fp_file_open_regular(file); /* (a FIFO is refused, never waited on) */
-    if (fd < 0)
-        return fp_errorf(err, errlen, FP_EPLUGIN_DLOPEN, "%s: cannot load: %s", file,
-                         fd == -ENXIO ? "not a regular file (a FIFO, device or socket)" : fp_file_error_text(fd));
+    int rc;
+    int fd = fp_iso_open_plugin_file(file, &rc, err, errlen);
+    if (fd < 0) return rc;
     iproxy *x = calloc(1, sizeof *x);
     if (!x || fp_iso_copy_keys(&x->keys, params, nparams)) {
         if (x) fp_spec_clear(&x->keys);
@@ -411,7 +410,7 @@ int fp_isolate_input_create(const fp_isolate_options *opt, const char *file, con
     snprintf(x->exe, sizeof x->exe, "%s", opt && opt->helper ? opt->helper : "/proc/self/exe");
     snprintf(x->file, sizeof x->file, "%s", file);
     snprintf(x->name, sizeof x->name, "%s", name);
-    int rc = spawn(x, false);
+    rc = spawn(x, false);
     if (rc) {
         proxy_destroy(&x->in);
         return fp_errorf(err, errlen, -EIO, "cannot start its helper process %s: %s",

@@ -158,18 +158,9 @@ static int create(fp_plugin *plugin, const char *file, int argc, char **argv, fp
                   size_t errlen)
 {
     fp_param params[FP_SPEC_MAX_PARAMS];
-    size_t np = 0;
-    for (int i = 8; i < argc && np < FP_SPEC_MAX_PARAMS; i++) {
-        char *eq = strchr(argv[i], '=');
-        if (!eq) continue;
-        *eq = '\0';
-        params[np++] = (fp_param){argv[i], eq + 1};
-    }
-    fp_plugin_path none;
-    memset(&none, 0, sizeof none);
-    none.builtin = SIZE_MAX;
+    size_t np = fp_iso_helper_params(argc, argv, params);
     atomic_store(&H.shm->stage, FP_ISO_STAGE_LOAD);
-    int rc = fp_plugin_load(&none, FP_PLUGIN_INPUT, file, plugin, err, errlen);
+    int rc = fp_iso_helper_load(FP_PLUGIN_INPUT, file, plugin, err, errlen);
     if (rc) return rc;
     const fp_input_factory *f = plugin->factory;
     atomic_store(&H.shm->stage, FP_ISO_STAGE_CREATE);

@@ -94,5 +94,16 @@ int fp_iso_copy_keys(fp_spec *spec, const fp_param *params, size_t nparams);
  * takes the helper first. */
 int fp_iso_helper_arg_fd(const char *s);
 void fp_iso_helper_oom_first(void);
+/** The SPEC's keys from argv[8..] ("KEY=VALUE", split in place; other words skipped) into
+ *  params (at most FP_SPEC_MAX_PARAMS); returns their count. */
+size_t fp_iso_helper_params(int argc, char **argv, fp_param *params);
+/** Load the plugin `file` of `kind` by its path alone (no search), as fp_plugin_load. */
+int fp_iso_helper_load(fp_plugin_kind kind, const char *file, fp_plugin *plugin, char *err, size_t errlen);
+
+/* The host's side: the plugin file opened as a regular file only, without waiting (a FIFO
+ * named like a plugin in a plugin folder: open() waited for a writer and hung `run` before
+ * any output, where the in-process loader refuses it). The descriptor, or -1 with err set
+ * (FP_EPLUGIN_DLOPEN in *rc). */
+int fp_iso_open_plugin_file(const char *file, int *rc, char *err, size_t errlen);
 
 #endif
