@@ -44,15 +44,7 @@ p = subprocess.Popen([fp, "run", "--plugin-dir", plugdir, "--mesh", mesh, "--inp
 port = fposc.control_port(p, err_path)
 if port is None:
     p.kill(); sys.exit("no control port: " + open(err_path).read())
-s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-s.settimeout(10)
-def cmd(address, *args):
-    s.sendto(fposc.encode(address, *args), ("127.0.0.1", port))
-    while True:
-        a, v = fposc.decode(s.recvfrom(65536)[0])
-        if a == "/fp/status" and v[0] == address:
-            if v[1] != "ok": sys.exit("%s: %s" % (address, v[1]))
-            return v
+cmd = fposc.controller(port)
 while cmd("/fp/status")[7] < 1.0: time.sleep(0.05)
 cmd("/fp/record/start", "stage", 1); time.sleep(0.8); cmd("/fp/record/stop")
 time.sleep(0.5)

@@ -90,3 +90,23 @@ def control_port(p, err_path, timeout=120):
             return int(m.group(1))
         time.sleep(0.05)
     return None
+
+
+def controller(port, timeout=10):
+    """A control surface on 127.0.0.1:port: cmd(address, *args) sends one command and returns
+    the arguments of its /fp/status reply; a result other than "ok" ends the test (sys.exit
+    with the address and the result)."""
+    import socket
+    import sys
+    s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    s.settimeout(timeout)
+
+    def cmd(address, *args):
+        s.sendto(encode(address, *args), ("127.0.0.1", port))
+        while True:
+            a, v = decode(s.recvfrom(65536)[0])
+            if a == "/fp/status" and v[0] == address:
+                if v[1] != "ok":
+                    sys.exit("%s: %s" % (address, v[1]))
+                return v
+    return cmd
