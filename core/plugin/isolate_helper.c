@@ -344,31 +344,43 @@ int fp_iso_helper_load(fp_plugin_kind kind, const char *file, fp_plugin *plugin,
     return fp_plugin_load(&none, kind, file, plugin, err, errlen);
 }
 
-int fp_isolate_helper_main(int argc, char **argv)
+int fp_iso_helper_begin(char **argv, int *memfd, int *go, int *done, int *sock, fp_iso_shm **shm,
+                        size_t *mapped)
 {
-    if (argc < 8) return 64;
-    H.memfd = fp_iso_helper_arg_fd(argv[2]);
-    H.go = fp_iso_helper_arg_fd(argv[3]);
-    H.done = fp_iso_helper_arg_fd(argv[4]);
-    H.sock = fp_iso_helper_arg_fd(argv[5]);
-    const char *file = argv[6];
-    if (H.memfd < 0 || H.go < 0 || H.done < 0 || H.sock < 0) return 64;
+    *memfd = fp_iso_helper_arg_fd(argv[2]);
+    *go = fp_iso_helper_arg_fd(argv[3]);
+    *done = fp_iso_helper_arg_fd(argv[4]);
+    *sock = fp_iso_helper_arg_fd(argv[5]);
+    if (*memfd < 0 || *go < 0 || *done < 0 || *sock < 0) return 64;
     /* the plugin's printf goes to the host's stderr: the host's stdout is its own (run's
      * summary, which scripts parse), shared with this process since the spawn */
     fflush(stdout);
     if (dup2(STDERR_FILENO, STDOUT_FILENO) < 0) return 70;
     signal(SIGPIPE, SIG_IGN);
-    prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0); /* wake for the spin when asked, not 50 us late */
     fp_iso_helper_oom_first();
-    int big = 1 << 20; /* room for a frame's burst of log lines (the kernel caps it at wmem_max) */
-    (void)setsockopt(H.sock, SOL_SOCKET, SO_SNDBUF, &big, sizeof big);
+    /* room for a burst of log lines or events (the kernel caps it at wmem_max) */
+    int big = 1 << 20;
+    (void)setsockopt(*sock, SOL_SOCKET, SO_SNDBUF, &big, sizeof big);
+    struct stat st;
+    if (fstat(*memfd, &st) || (size_t)st.st_size < sizeof(fp_iso_shm)) return 66;
+    *mapped = (size_t)st.st_size;
+    *shm = mmap(NULL, *mapped, PROT_READ | PROT_WRITE, MAP_SHARED, *memfd, 0);
+    if (*shm == MAP_FAILED || (*shm)->magic != FP_ISO_MAGIC || (*shm)->version != FP_ISO_VERSION) {
+        *shm = NULL;
+        return 66;
+    }
+    return 0;
+}
+
+int fp_isolate_helper_main(int argc, char **argv)
+{
+    if (argc < 8) return 64;
+    const char *file = argv[6];
+    int rc0 = fp_iso_helper_begin(argv, &H.memfd, &H.go, &H.done, &H.sock, &H.shm, &H.mapped);
+    if (rc0) return rc0;
+    prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0); /* wake for the spin when asked, not 50 us late */
     int fl = fcntl(H.go, F_GETFL);
     if (fl < 0 || fcntl(H.go, F_SETFL, fl | O_NONBLOCK)) return 70;
-    struct stat st;
-    if (fstat(H.memfd, &st) || (size_t)st.st_size < sizeof(fp_iso_shm)) return 66;
-    H.mapped = (size_t)st.st_size;
-    H.shm = mmap(NULL, H.mapped, PROT_READ | PROT_WRITE, MAP_SHARED, H.memfd, 0);
-    if (H.shm == MAP_FAILED || H.shm->magic != FP_ISO_MAGIC || H.shm->version != FP_ISO_VERSION) return 66;
     if (remap()) return 70;
     if (rebuild_rig()) return 70;
     pthread_t watch;

@@ -182,22 +182,8 @@ static int create(fp_plugin *plugin, const char *file, int argc, char **argv, fp
 int fp_isolate_input_helper_main(int argc, char **argv)
 {
     if (argc < 8) return 64;
-    H.memfd = fp_iso_helper_arg_fd(argv[2]);
-    H.go = fp_iso_helper_arg_fd(argv[3]);
-    H.done = fp_iso_helper_arg_fd(argv[4]);
-    H.sock = fp_iso_helper_arg_fd(argv[5]);
-    if (H.memfd < 0 || H.go < 0 || H.done < 0 || H.sock < 0) return 64;
-    fflush(stdout); /* the plugin's printf to the host's stderr, as a mapping's */
-    if (dup2(STDERR_FILENO, STDOUT_FILENO) < 0) return 70;
-    signal(SIGPIPE, SIG_IGN);
-    fp_iso_helper_oom_first();
-    int big = 1 << 20; /* room for a burst of events (the kernel caps it at wmem_max) */
-    (void)setsockopt(H.sock, SOL_SOCKET, SO_SNDBUF, &big, sizeof big);
-    struct stat st;
-    if (fstat(H.memfd, &st) || (size_t)st.st_size < sizeof(fp_iso_shm)) return 66;
-    H.mapped = (size_t)st.st_size;
-    H.shm = mmap(NULL, H.mapped, PROT_READ | PROT_WRITE, MAP_SHARED, H.memfd, 0);
-    if (H.shm == MAP_FAILED || H.shm->magic != FP_ISO_MAGIC || H.shm->version != FP_ISO_VERSION) return 66;
+    int rc0 = fp_iso_helper_begin(argv, &H.memfd, &H.go, &H.done, &H.sock, &H.shm, &H.mapped);
+    if (rc0) return rc0;
 
     memset(&H.host, 0, sizeof H.host);
     H.host.size = sizeof H.host;

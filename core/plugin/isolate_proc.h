@@ -97,6 +97,14 @@ void fp_iso_helper_oom_first(void);
 /** The SPEC's keys from argv[8..] ("KEY=VALUE", split in place; other words skipped) into
  *  params (at most FP_SPEC_MAX_PARAMS); returns their count. */
 size_t fp_iso_helper_params(int argc, char **argv, fp_param *params);
+/** A helper's start, shared by both: argv[2..5] (at least 6 words, checked by the caller) the
+ *  shared memory's descriptor, the go and done eventfds and the socket; the plugin's stdout
+ *  to the host's stderr; SIGPIPE ignored; OOM-killed first; a 1 MiB send buffer; the shared
+ *  memory mapped (*shm, its size *mapped) and its magic and version checked. Returns 0 or
+ *  the helper's exit status: 64 a bad descriptor, 70 a failed dup2, 66 a bad shared memory
+ *  (*shm NULL). Once per process, before any thread. */
+int fp_iso_helper_begin(char **argv, int *memfd, int *go, int *done, int *sock, fp_iso_shm **shm,
+                        size_t *mapped);
 /** Load the plugin `file` of `kind` by its path alone (no search), as fp_plugin_load. */
 int fp_iso_helper_load(fp_plugin_kind kind, const char *file, fp_plugin *plugin, char *err, size_t errlen);
 
