@@ -144,6 +144,13 @@ void fp__session_reset_mapping(fp_session *s);
 void fp__session_destroy_mapping(fp_session *s, fp_mapping *m, const char *name);
 void fp__session_mapping_services(fp_session *s);
 
+/* session_open.c: a calibration whose unit (1 / scale mm per mesh unit) is far from the mesh's
+ * own (the rig's, else the head's: as detected, or given) is warned of in the log, naming source
+ * (the file, or the input and its calibration= file) and mesh_path; --calibration and an
+ * input's calibration= alike. */
+void fp__session_warn_calibration_unit(fp_session *s, const char *source, double scale,
+                                       const char *mesh_path, const fp_head *head);
+
 /* session_performers.c: the inputs' performers (performers.h) and each performer's pose state
  * and calibration (given, else its own inputs' workspaces, else placed as the hands arrive;
  * the glove placement), after the inputs opened; then, each frame, every performer's hands
