@@ -98,6 +98,7 @@ struct fp_session {
     fp_skin_reach_gesture gesture_reach; /* the gesture's reach so far (skin_reach.h) */
     fp_skin_reach_gesture gesture_reach_allowed; /* ... against what the rig allowed */
     fp_slog_repeat jump_report;          /* hands that jumped (fp_pose.h FP_POSE_JUMP_MM) */
+    int64_t hand_since_ns[FP_HANDS];     /* fp_session_hand_since: the first performer's */
     fp_history history;           /* step 6 */
     fp_record_step record;        /* step 7 */
     fp_arrive_step arrive[FP_PERFORMER_CAPACITY]; /* each performer's placement as the hands
