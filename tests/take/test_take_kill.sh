@@ -27,8 +27,9 @@ for round in 1 2 3; do
         --frames-out "$d/frames" -o "$d/out.obj" -q >/dev/null 2>"$d/run.err" &
     pid=$!
     take="$d/takes/k_T001.fptake"
-    # killed while it records, after 90 frames (1.5 s) or more (the opening's time varies)
-    for i in $(seq 600); do
+    # killed while it records, after 90 frames (1.5 s) or more (the opening's time varies:
+    # up to a minute allowed, for the sanitizers)
+    for i in $(seq 1200); do
         [ -f "$take" ] && [ "$(ls "$d/frames" 2>/dev/null | wc -l)" -ge 90 ] && break
         kill -0 $pid 2>/dev/null || { cat "$d/run.err"; fail "round $round: the run ended before the kill"; }
         sleep 0.05
