@@ -8,6 +8,7 @@
 #include <errno.h>
 #include <stdio.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
 
 void fp_control_session_init(fp_control_session *cs, fp_control *ctl, fp_session *s,
@@ -87,6 +88,26 @@ static int record_stop(fp_control_session *cs, char *msg, size_t n)
     return rc;
 }
 
+/* /fp/take N: the next take's number, refused where the take folder holds that take of the
+ * current slate already (a take is never overwritten: /fp/record/start would refuse it). */
+static int next_take(fp_control_session *cs, uint32_t take, char *msg, size_t n)
+{
+    char name[FP_TAKE_SLATE_MAX + 32], path[4096];
+    struct stat st;
+    if (cs->take && cs->take->opt.dir && !fp_take_filename(cs->slate, take, name, sizeof name) &&
+        (size_t)snprintf(path, sizeof path, "%s/%s", cs->take->opt.dir, name) < sizeof path &&
+        lstat(path, &st) == 0) {
+        uint32_t free_take = 0;
+        char err[256];
+        if (fp_take_next_number(cs->take->opt.dir, cs->slate, &free_take, err, sizeof err)) free_take = 0;
+        snprintf(msg, n, "take %u of slate %s exists (%.600s; a take is never overwritten): the next free "
+                 "number is %u", (unsigned)take, cs->slate, path, (unsigned)free_take);
+        return -EEXIST;
+    }
+    cs->next_take = take;
+    return 0;
+}
+
 /* One command; msg gets the error's words. Returns 0 or a negative code. */
 static int apply_one(fp_control_session *cs, const fp_control_cmd *c, int64_t now, char *msg, size_t n)
 {
@@ -132,7 +153,7 @@ static int apply_one(fp_control_session *cs, const fp_control_cmd *c, int64_t no
         return rc;
     }
     case FP_CTL_SLATE: snprintf(cs->slate, sizeof cs->slate, "%.63s", c->text); return 0;
-    case FP_CTL_TAKE: cs->next_take = c->take; return 0;
+    case FP_CTL_TAKE: return next_take(cs, c->take, msg, n);
     case FP_CTL_QUIT: cs->quit = true; return 0;
     case FP_CTL_STATUS:
     default: return 0;

@@ -176,6 +176,8 @@ typedef struct fp_event_queue {
                                             pushed again and taken (refused) */
     atomic_uint_least64_t refused;       /* the last refused event: a key of its bytes (never
                                             0); 0: none since the last push taken */
+    int64_t popped_since_ns;             /* the consumer's: the since_ns of the event popped
+                                            last (fp_event_queue_push_at) */
 } fp_event_queue;
 
 /** capacity is rounded up to a power of two (at least 2). Returns 0 or -ENOMEM. */
@@ -193,6 +195,11 @@ void fp_event_queue_destroy(fp_event_queue *q);
  *  it is taken before another is refused, that count is taken back: a producer that waits
  *  for room loses nothing, and the count says so. */
 bool fp_event_queue_push(fp_event_queue *q, const fp_event_header *ev);
+/** fp_event_queue_push, with since_ns (ns, host clock) kept beside the event: the time its
+ *  delay is counted from (fp_event_queue_push gives the event's own time_ns; an input on a
+ *  recording's clock, whose times are not the host's, the time it was pushed). The pop that
+ *  takes the event sets q->popped_since_ns to it. */
+bool fp_event_queue_push_at(fp_event_queue *q, const fp_event_header *ev, int64_t since_ns);
 /** The events dropped so far: dropped, less the last refused event, which its producer may
  *  still be waiting to push again (a replay stopped while it waited for room lost nothing
  *  the run had reached; an event not pushed again counts once another is refused). About,

@@ -42,7 +42,10 @@ static bool push_to(fp_input_instance *inst, const fp_event_header *ev)
         return true; /* (not a full queue: the plugin must not send it again) */
     }
     copy.header.source = inst->source;
-    if (!fp_event_queue_push(&inst->queue, &copy.header)) return false;
+    /* (a recording's times are its own clock's, which speed= stretches: its events' delay is
+     * counted from their arrival, fp_session_hand_since) */
+    if (!fp_event_queue_push_at(&inst->queue, &copy.header, inst->own_clock ? fp_now_ns() : copy.header.time_ns))
+        return false;
     if (inst->forward) fp_event_forwarder_push(inst->forward, &copy); /* (the input's thread) */
     return true;
 }

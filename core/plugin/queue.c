@@ -10,6 +10,7 @@
 
 struct fp_event_cell {
     atomic_size_t seq;
+    int64_t since_ns; /* fp_event_queue_push_at's; written and read as the event is */
     fp_event event;
 };
 
@@ -92,6 +93,11 @@ static bool pose_room(fp_event_queue *q, const fp_event_header *ev)
 
 bool fp_event_queue_push(fp_event_queue *q, const fp_event_header *ev)
 {
+    return fp_event_queue_push_at(q, ev, ev ? ev->time_ns : 0);
+}
+
+bool fp_event_queue_push_at(fp_event_queue *q, const fp_event_header *ev, int64_t since_ns)
+{
     if (!ev || ev->size < sizeof *ev || ev->size > sizeof(fp_event)) {
         atomic_fetch_add_explicit(&q->dropped, 1, memory_order_relaxed);
         return false;
@@ -111,6 +117,7 @@ bool fp_event_queue_push(fp_event_queue *q, const fp_event_header *ev)
                                                       memory_order_relaxed,
                                                       memory_order_relaxed)) {
                 memcpy(&c->event, ev, ev->size);
+                c->since_ns = since_ns;
                 atomic_store_explicit(&c->seq, pos + 1, memory_order_release);
                 taken(q, ev);
                 return true;
@@ -144,6 +151,7 @@ bool fp_event_queue_pop(fp_event_queue *q, fp_event *out)
     assert(atomic_load_explicit(&q->head, memory_order_relaxed) - pos - 1 <= q->mask);
     assert(c->event.header.size >= sizeof(fp_event_header) && c->event.header.size <= sizeof(fp_event));
     memcpy(out, &c->event, c->event.header.size);
+    q->popped_since_ns = c->since_ns;
     atomic_store_explicit(&c->seq, pos + q->mask + 1, memory_order_release);
     atomic_store_explicit(&q->tail, pos + 1, memory_order_relaxed);
     return true;

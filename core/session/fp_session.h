@@ -497,6 +497,14 @@ const fp_head *fp_session_head(const fp_session *s);
  *  never seen, or its device is disconnected). Owned by the session; valid until the next
  *  fp_session_step. */
 const fp_hand_pose *fp_session_hand(const fp_session *s, int hand);
+/** For a viewer's event-to-frame latency: the host time (ns, fp_now_ns's clock) that the
+ *  newest sample of the first performer's hand `hand` (fp_session_hand's time_ns) is late
+ *  from. Its time_ns where its input measures on the host's clock (a tracker, a glove); the
+ *  time it was pushed where the input keeps a recording's clock (a replay, a take: their
+ *  times run on the recording's clock, which speed=X stretches away from the host's), so a
+ *  replay at speed=0.5 or 2 is late by what the performer sees, not by the stretch. Under
+ *  the input clock (options.input_clock) its time_ns. 0 before any sample. */
+int64_t fp_session_hand_since(const fp_session *s, int hand);
 /** Performers (the inputs' host key `performer=NAME`; core/session/performers.h): how many
  *  share the session (1 to FP_PERFORMER_CAPACITY; 1 where no input names one), performer i's
  *  name ("" for a first performer whose inputs name none; NULL beyond the count; the

@@ -121,7 +121,11 @@ static void on_event(void *user, size_t input, const fp_event *ev)
     size_t p = input < s->input_count ? s->performers.of_input[input] : 0; /* whose hands */
     int h = ev->header.hand;
     unsigned long jumps = h == FP_HAND_LEFT || h == FP_HAND_RIGHT ? s->pose[p].hands[h].jumps : 0;
+    int64_t sample = h == FP_HAND_LEFT || h == FP_HAND_RIGHT ? s->pose[p].hands[h].time_ns : 0;
     fp_pose_take_event_filtered(&s->pose[p], ev, input < s->input_count ? &s->inputs[input].filter : NULL);
+    if (p == 0 && (h == FP_HAND_LEFT || h == FP_HAND_RIGHT) && s->pose[0].hands[h].time_ns != sample)
+        s->hand_since_ns[h] = !s->intents.clocked && input < s->input_count /* (its pop, just now) */
+                                  ? s->inputs[input].queue.popped_since_ns : ev->header.time_ns;
     if ((h == FP_HAND_LEFT || h == FP_HAND_RIGHT) && s->pose[p].hands[h].jumps != jumps) {
         const char *src = input < s->input_count ? s->inputs[input].name : NULL;
         fp_slog_repeat_report(&s->jump_report, &s->log, FP_LOG_WARNING, src ? src : "input", -ERANGE,
@@ -534,6 +538,11 @@ int fp_session_set_radius(fp_session *s, double radius)
 const fp_hand_pose *fp_session_hand(const fp_session *s, int hand)
 {
     return fp_session_performer_hand(s, 0, hand);
+}
+
+int64_t fp_session_hand_since(const fp_session *s, int hand)
+{
+    return hand == FP_HAND_LEFT || hand == FP_HAND_RIGHT ? s->hand_since_ns[hand] : 0;
 }
 
 size_t fp_session_performer_count(const fp_session *s) { return s->performers.count; }

@@ -98,6 +98,7 @@ struct fp_session {
     fp_skin_reach_gesture gesture_reach; /* the gesture's reach so far (skin_reach.h) */
     fp_skin_reach_gesture gesture_reach_allowed; /* ... against what the rig allowed */
     fp_slog_repeat jump_report;          /* hands that jumped (fp_pose.h FP_POSE_JUMP_MM) */
+    int64_t hand_since_ns[FP_HANDS];     /* fp_session_hand_since: the first performer's */
     fp_history history;           /* step 6 */
     fp_record_step record;        /* step 7 */
     fp_arrive_step arrive[FP_PERFORMER_CAPACITY]; /* each performer's placement as the hands
@@ -143,6 +144,13 @@ int fp__session_load_mapping(fp_session *s, const char *mapping, const fp_plugin
 void fp__session_reset_mapping(fp_session *s);
 void fp__session_destroy_mapping(fp_session *s, fp_mapping *m, const char *name);
 void fp__session_mapping_services(fp_session *s);
+
+/* session_open.c: a calibration whose unit (1 / scale mm per mesh unit) is far from the mesh's
+ * own (the rig's, else the head's: as detected, or given) is warned of in the log, naming source
+ * (the file, or the input and its calibration= file) and mesh_path; --calibration and an
+ * input's calibration= alike. */
+void fp__session_warn_calibration_unit(fp_session *s, const char *source, double scale,
+                                       const char *mesh_path, const fp_head *head);
 
 /* session_performers.c: the inputs' performers (performers.h) and each performer's pose state
  * and calibration (given, else its own inputs' workspaces, else placed as the hands arrive;

@@ -356,9 +356,10 @@ static void warn_small_radius(fp_session *s, const fp_session_options *opt)
 
 /* A calibration made for another mesh: its unit against the mesh's own (the rig's, else the
  * head's as detected, *head), FP_SESSION_CALIBRATION_UNIT_RATIO. */
-static void warn_calibration_unit(fp_session *s, const fp_session_options *opt, const fp_head *head)
+void fp__session_warn_calibration_unit(fp_session *s, const char *source, double scale,
+                                       const char *mesh_path, const fp_head *head)
 {
-    const double cal = 1.0 / opt->calibration->scale;
+    const double cal = 1.0 / scale;
     double own = head->mm_per_unit;
     char how[300];
     if (s->rig.rig) {
@@ -367,17 +368,16 @@ static void warn_calibration_unit(fp_session *s, const fp_session_options *opt, 
     } else {
         snprintf(how, sizeof how, "%s", head->how[0] ? head->how : "detected from the head");
     }
-    if (!(own > 0) || !isfinite(own) || (cal <= own * FP_SESSION_CALIBRATION_UNIT_RATIO &&
-                                         cal * FP_SESSION_CALIBRATION_UNIT_RATIO >= own))
+    if (!(scale > 0) || !(own > 0) || !isfinite(own) || (cal <= own * FP_SESSION_CALIBRATION_UNIT_RATIO &&
+                                                          cal * FP_SESSION_CALIBRATION_UNIT_RATIO >= own))
         return;
     fp_slog_printf(&s->log, FP_LOG_WARNING, "session",
                    "%s: %.4g mm per mesh unit, but %s is %.4g mm per unit (%s): %.2g times %s; "
                    "a calibration made for another mesh? The hands are placed by it (make one "
                    "for this mesh: facepuppet calibrate --mesh %s ...)",
-                   opt->calibration_source ? opt->calibration_source : "the calibration", cal,
-                   opt->mesh_path ? opt->mesh_path : "the mesh", own, how,
+                   source ? source : "the calibration", cal, mesh_path ? mesh_path : "the mesh", own, how,
                    cal > own ? cal / own : own / cal, cal > own ? "larger" : "smaller",
-                   opt->mesh_path ? opt->mesh_path : "FACE");
+                   mesh_path ? mesh_path : "FACE");
 }
 
 /* The head, the rig (the shape shown: the posed base), the mesh's unit and the radius. 0 or
@@ -394,7 +394,7 @@ static int open_scale(fp_session *s, const fp_session_options *opt, double diag,
     if ((rc = attach_rig(s, opt, err, errlen))) return rc;
     if ((rc = face_frame(s, opt, err, errlen))) return rc;
     s->shown = s->view.base = fp_rig_step_posed(&s->rig, s->base);
-    const fp_head detected = s->head; /* (for a calibration's unit: warn_calibration_unit) */
+    const fp_head detected = s->head; /* (for a calibration's unit: fp__session_warn_calibration_unit) */
     if (opt->mm_per_unit > 0) {
         s->head.mm_per_unit = opt->mm_per_unit;
         s->head.method = FP_HEAD_GIVEN;
@@ -429,7 +429,8 @@ static int open_scale(fp_session *s, const fp_session_options *opt, double diag,
         }
     }
     if (!(opt->mm_per_unit > 0) && opt->calibration && opt->calibration->scale > 0)
-        warn_calibration_unit(s, opt, &detected);
+        fp__session_warn_calibration_unit(s, opt->calibration_source, opt->calibration->scale, opt->mesh_path,
+                                          &detected);
     if (opt->radius > FP_SESSION_RADIUS_MAX_DIAGONALS * sqrt(diag)) {
         rc = radius_code(opt);
         snprintf(err, errlen, "%s %g is beyond 10x the mesh's bounding-box diagonal (%.4g "

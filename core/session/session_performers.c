@@ -13,10 +13,10 @@
 _Static_assert(FP_SESSION_MAX_INPUTS <= sizeof(((fp_performers *)0)->of_input), "every input has a performer");
 _Static_assert(FP_SESSION_MAX_INPUTS <= FP_POSE_MAX_INPUTS, "every input has its filter state");
 
-/* The calibration=FILE its inputs give performer p, read into *c: 1; 0 where none gives one;
- * or the code: the file's (fp_calib_file.h), -EINVAL where two of its inputs name two files
- * (err names the SPEC). */
-static int own_calibration(const fp_session *s, const fp_session_options *opt, size_t p, fp_calibration *c,
+/* The calibration=FILE its inputs give performer p, read into *c: 1 (a unit far from the
+ * mesh's warned, as --calibration's); 0 where none gives one; or the code: the file's
+ * (fp_calib_file.h), -EINVAL where two of its inputs name two files (err names the SPEC). */
+static int own_calibration(fp_session *s, const fp_session_options *opt, size_t p, fp_calibration *c,
                            char *err, size_t errlen)
 {
     size_t first = s->input_count;
@@ -32,6 +32,9 @@ static int own_calibration(const fp_session *s, const fp_session_options *opt, s
     char ferr[1024];
     int rc = fp_calibration_load(s->inputs[first].calibration, c, ferr, sizeof ferr);
     if (rc) return fp_errorf(err, errlen, rc, "input '%s': calibration=%s", opt->inputs[first], ferr);
+    char source[1200]; /* its unit against the mesh's, as --calibration's (session_open.c) */
+    snprintf(source, sizeof source, "input '%s': calibration=%s", s->inputs[first].name, s->inputs[first].calibration);
+    fp__session_warn_calibration_unit(s, source, c->scale, opt->mesh_path, &s->head);
     return 1;
 }
 

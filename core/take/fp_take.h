@@ -243,6 +243,9 @@ typedef struct fp_take_writer_options {
     uint32_t chunk_frames;     /* frames per chunk at most; 0: 30 */
     size_t chunk_bytes;        /* flush a chunk once its payload reaches this; 0: 1 MiB */
     bool no_sync;              /* skip fdatasync after each chunk (tests); default: sync */
+    bool sync_later;           /* FRMS chunks are written without fdatasync: the caller syncs
+                                  (fp_take_writer_sync; the recorder: every flush_seconds);
+                                  HEAD and TAIL are synced still (unless no_sync) */
     uint32_t take;             /* 0: the next free number; else exactly this one (a stage's
                                   control surface names it: --control), -EEXIST if taken */
 } fp_take_writer_options;
@@ -295,6 +298,10 @@ void fp_take_writer_set_reach(fp_take_writer *w, const fp_take_reach *reach);
  *  removed: writes to it would succeed and the take vanish at close), after which the writer
  *  only closes. */
 int fp_take_writer_flush(fp_take_writer *w, char *err, size_t errlen);
+/** fdatasync what was written since the last sync (nothing with no_sync, or when all is
+ *  synced). Returns 0 or the error (-EIO, ...), after which the writer only closes (the file
+ *  keeps its whole chunks). */
+int fp_take_writer_sync(fp_take_writer *w, char *err, size_t errlen);
 /** Frames buffered and not yet written. */
 size_t fp_take_writer_pending(const fp_take_writer *w);
 
@@ -317,7 +324,10 @@ typedef struct fp_take_recorder fp_take_recorder;
 typedef struct fp_take_recorder_options {
     fp_take_writer_options writer;
     size_t ring_bytes;         /* ring capacity, rounded up to a power of two; 0: 8 MiB */
-    double flush_seconds;      /* a chunk goes out at least this often; 0: 0.25 */
+    double flush_seconds;      /* the file is synced to disk (fdatasync) at least this often;
+                                  0: 0.25. Frames go to the file (a write(2), one chunk of what
+                                  the ring held) as the thread takes them, every 2 ms at most:
+                                  a kill -9 loses only the frames not yet taken */
 } fp_take_recorder_options;
 
 typedef struct fp_take_recorder_status {

@@ -100,8 +100,10 @@ static void fail(fp_take_recorder *rec, int code, const char *msg)
     atomic_store_explicit(&rec->stopped, true, memory_order_release);
 }
 
-/* Move every published record into the writer. Returns 0 or the writer's error. */
-static int drain(fp_take_recorder *rec, double *first_pending)
+/* Move every published record into the writer, and what it took into the file (one chunk,
+ * a write(2): a process killed now keeps them; synced to disk later, recorder_main). Returns
+ * 0 or the writer's error. */
+static int drain(fp_take_recorder *rec)
 {
     uint64_t head = atomic_load_explicit(&rec->head, memory_order_acquire);
     uint64_t tail = atomic_load_explicit(&rec->tail, memory_order_relaxed);
@@ -110,7 +112,6 @@ static int drain(fp_take_recorder *rec, double *first_pending)
         size_t pos = (size_t)(tail & (rec->cap - 1));
         uint32_t len = le_get32(rec->ring + pos), kind = le_get32(rec->ring + pos + 4);
         if (kind == SLOT_FRAME) {
-            if (!fp_take_writer_pending(rec->w)) *first_pending = mono_s();
             int rc = fp_take_writer_add_encoded(rec->w, rec->ring + pos + SLOT_HEAD, len, msg,
                                                 sizeof msg);
             if (rc) {
@@ -121,13 +122,15 @@ static int drain(fp_take_recorder *rec, double *first_pending)
         tail += SLOT_HEAD + pad8(len);
         atomic_store_explicit(&rec->tail, tail, memory_order_release);
     }
-    return 0;
+    int rc = fp_take_writer_flush(rec->w, msg, sizeof msg);
+    if (rc) fail(rec, rc, msg);
+    return rc;
 }
 
 static void *recorder_main(void *arg)
 {
     fp_take_recorder *rec = arg;
-    double first_pending = 0;
+    double synced = mono_s();
     struct timespec nap = {0, 2000000};   /* 2 ms between looks at the ring */
     long nap_ns = (long)(rec->flush_s * 1e9 / 8);
     if (nap_ns < 1000000) nap_ns = 1000000;
@@ -135,13 +138,14 @@ static void *recorder_main(void *arg)
     char msg[512];
     for (;;) {
         bool stopping = atomic_load_explicit(&rec->stop, memory_order_acquire);
-        if (drain(rec, &first_pending)) break;
-        if (fp_take_writer_pending(rec->w) && mono_s() - first_pending >= rec->flush_s) {
-            int rc = fp_take_writer_flush(rec->w, msg, sizeof msg);
+        if (drain(rec)) break;
+        if (mono_s() - synced >= rec->flush_s) { /* (to disk: a power cut loses less) */
+            int rc = fp_take_writer_sync(rec->w, msg, sizeof msg);
             if (rc) {
                 fail(rec, rc, msg);
                 break;
             }
+            synced = mono_s();
         }
         atomic_store_explicit(&rec->written, take_writer_frames(rec->w), memory_order_relaxed);
         atomic_store_explicit(&rec->bytes, take_writer_bytes(rec->w), memory_order_relaxed);
@@ -173,6 +177,7 @@ int fp_take_recorder_start(const char *dir, const fp_take_header *header,
         return fp_errorf(err, errlen, -ENOMEM, "take recorder: out of memory for a %zu-byte ring", cap);
     }
     memset(rec->ring, 0, cap);   /* touch every page now, not on the session thread */
+    o.writer.sync_later = true; /* (recorder_main syncs every flush_s) */
     int rc = fp_take_writer_create(dir, header, &o.writer, &rec->w, err, errlen);
     if (rc) {
         free(rec->ring);

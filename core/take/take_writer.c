@@ -90,6 +90,7 @@ struct fp_take_writer {
     uint32_t pending;       /* frames in the payload: 0 exactly when used is 0 (between
                                chunks; a JSON chunk is written from an empty payload) */
     uint64_t offset;        /* bytes on disk = end of the last whole chunk */
+    uint64_t synced;        /* bytes fdatasync'd (offset where every chunk was synced) */
     uint64_t frames;        /* frames on disk */
     int64_t last_time_ns;
     bool any_frame;
@@ -171,7 +172,8 @@ static int write_chunk(fp_take_writer *w, const char type[4], uint32_t count, ch
     le_put32(w->buf + TAKE_CHUNK_HEAD_SIZE + w->used, crc);
     size_t n = TAKE_CHUNK_OVERHEAD + w->used;
     int rc = write_all(w->fd, w->buf, n);
-    if (!rc && !w->opt.no_sync && fdatasync(w->fd) < 0 && errno != EINVAL && errno != EROFS)
+    bool later = w->opt.sync_later && !memcmp(type, TAKE_TYPE_FRAMES, 4); /* (the caller's) */
+    if (!rc && !w->opt.no_sync && !later && fdatasync(w->fd) < 0 && errno != EINVAL && errno != EROFS)
         rc = -errno;
     bool gone = !rc && file_gone(w->fd);
     if (gone) rc = -ENOENT;
@@ -189,7 +191,23 @@ static int write_chunk(fp_take_writer *w, const char type[4], uint32_t count, ch
         return fp_errorf(err, errlen, rc, "%s", w->errmsg);
     }
     w->offset += n;
+    if (!later) w->synced = w->offset;
     w->used = 0;
+    return 0;
+}
+
+int fp_take_writer_sync(fp_take_writer *w, char *err, size_t errlen)
+{
+    if (w->error) return w->error;
+    if (w->opt.no_sync || w->synced == w->offset) return 0;
+    if (fdatasync(w->fd) < 0 && errno != EINVAL && errno != EROFS) {
+        int rc = -errno;
+        w->error = rc; /* (what is in the file stays: only the disk's copy is in doubt) */
+        fp_errorf(w->errmsg, sizeof w->errmsg, rc, "%s: syncing to disk at byte %" PRIu64 ": %s", w->path,
+                  w->offset, strerror(-rc));
+        return fp_errorf(err, errlen, rc, "%s", w->errmsg);
+    }
+    w->synced = w->offset;
     return 0;
 }
 

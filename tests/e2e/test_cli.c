@@ -805,6 +805,18 @@ static void test_calibrate(void **state)
     assert_non_null(strstr(out, "cal-hold.json: 10 mm per mesh unit, but "));
     assert_non_null(strstr(out, "LeePerrySmith.obj is 48.98 mm per unit (the rig "));
     assert_non_null(strstr(out, "a calibration made for another mesh?"));
+    /* the same file as the input's calibration= key (SPEC keys) placed the hands as silently:
+     * now warned the same, naming the input and the file; on its own face, not */
+    snprintf(args, sizeof args, "run --mesh %s/faces/lee-perry-smith/LeePerrySmith.obj --input "
+             "%s,calibration=cal-hold.json --duration 0.5 --out l.obj --force", data, rec);
+    assert_int_equal(fp(args), 0);
+    assert_non_null(strstr(out, "input 'replay': calibration=cal-hold.json: 10 mm per mesh unit, but "));
+    assert_non_null(strstr(out, "LeePerrySmith.obj is 48.98 mm per unit (the rig "));
+    assert_non_null(strstr(out, "a calibration made for another mesh?"));
+    snprintf(args, sizeof args, "run --mesh %s --input %s,calibration=cal-hold.json --duration 0.5 "
+             "--out h.obj --force", ict, rec);
+    assert_int_equal(fp(args), 0);
+    assert_null(strstr(out, "another mesh"));
     snprintf(args, sizeof args, "run --mesh %s/faces/lee-perry-smith/LeePerrySmith.obj --rig none "
              "--input %s --calibration cal-hold.json --duration 0.5 --out l.obj --force", data, rec);
     assert_int_equal(fp(args), 0);

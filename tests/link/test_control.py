@@ -205,6 +205,17 @@ try:
     st = command("/fp/record/stop")
     want(st, recording=0, take=12, slate="scene7")
     command("/fp/record/start", "scene7", 12, expect="error")
+    # /fp/take of a number that exists is refused at once, naming the take and the next free
+    # number (before: "ok", and the /fp/record/start after it refused); that start then takes
+    # the next free number, 13, and leaves take 12 as it was
+    size12 = os.path.getsize(os.path.join(takes, "scene7_T012.fptake"))
+    command("/fp/slate", "scene7")
+    command("/fp/take", 12, expect="error: take 12 of slate scene7 exists (")
+    want(command("/fp/record/start"), recording=1, slate="scene7", take=13)
+    time.sleep(0.2)
+    want(command("/fp/record/stop"), recording=0, take=13)
+    if os.path.getsize(os.path.join(takes, "scene7_T012.fptake")) != size12:
+        fail("take 12 changed after /fp/take 12")
     command("/fp/play", expect="error: no transport")
     command("/fp/radius", 2.5)
     # a radius the face cannot use (a millionth to 10 times its diagonal): an error, the radius

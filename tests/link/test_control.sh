@@ -23,7 +23,7 @@ python3 tests/link/test_control.py "$fp" "$build/lib/facepuppet" \
 python3 - "$tmp/takes.json" <<'PY' || fail "the takes"
 import json, sys
 takes = {(t["slate"], t["take"]): t for t in json.load(open(sys.argv[1]))}
-want = [("scene7", 12), ("llf", 3), ("llf", 4), ("llf", 5)]
+want = [("scene7", 12), ("scene7", 13), ("llf", 3), ("llf", 4), ("llf", 5)]
 for k in want:
     if k not in takes: sys.exit("no take %s %d in %s" % (k + (sorted(takes),)))
     if takes[k]["state"] != "ok" or not takes[k]["frames"] > 0:

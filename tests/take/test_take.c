@@ -1125,8 +1125,8 @@ static void test_enospc(void **state)
     assert_false(s->cut);
     assert_false(s->complete);
     assert_true(s->frames > 0);
-    assert_int_equal(s->frames, st.written);
-    assert_int_equal(s->frames % 5, 0);
+    assert_int_equal(s->frames, st.written);   /* (in chunks of what the recorder took at
+                                                  a time, 5 frames at most: no multiple) */
     assert_int_equal(st.written + st.dropped, i + 2);   /* every frame counted once */
     assert_int_equal(check_frames(r), s->frames);
     fp_take_reader_close(&r);

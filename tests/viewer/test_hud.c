@@ -1,10 +1,11 @@
 /* The live viewer's HUD and review under Xvfb (issue 53 items 1-3): screenshots whose pixels
  * show each state's badge colour (hud.h) and no other, the key list on its backdrop over the
- * face, messages wrapped inside the window at 640 and 1280 px, take confirmations kept past
- * the notes that follow, fingertip spheres that turn green on the skin with their depth cue,
- * a stopped take that leaves the live face and hands shown (review only on V, left by Esc and
- * by the next engage), --gpu-warp with the ICT face's rig against the CPU's image, and a hand
- * that goes (a replay's gap, as a lost tracker or glove) said on the HUD's hands line until back.
+ * face and whole in narrow and short windows, messages wrapped inside the window at 640 and
+ * 1280 px, take confirmations kept past the notes that follow, fingertip spheres that turn
+ * green on the skin with their depth cue, a stopped take that leaves the live face and hands
+ * shown (review only on V, left by Esc and by the next engage), --gpu-warp with the ICT
+ * face's rig against the CPU's image, and a hand that goes (a replay's gap, as a lost tracker
+ * or glove) said on the HUD's hands line until back.
  * Recordings (Leap joints CSV, one right hand) are written here: two poses 1.5 s apart. */
 #define _GNU_SOURCE
 #include <setjmp.h>
@@ -184,6 +185,34 @@ static void test_help_backdrop(void **state)
     assert_true(dark_b > total * 6 / 10);
     free(a.px);
     free(b.px);
+}
+
+/* The key list fits narrow and short windows whole: its backdrop ends above the window's
+ * bottom (the bottom rows in the middle are as without it), at 200x480 and 280x720 (narrow:
+ * wrapped, at scale 1 where 2 does not fit) and 640x240 (short: two columns). Before, it was
+ * wrapped to the width alone and cut off at the bottom in each (about 290 px wide or less). */
+static void test_help_fits_narrow(void **state)
+{
+    (void)state;
+    const int sizes[3][2] = {{200, 480}, {280, 720}, {640, 240}};
+    for (int k = 0; k < 3; k++) {
+        const int w = sizes[k][0], h = sizes[k][1];
+        assert_int_equal(live("--rig none --size %dx%d --frames 100 --script 'key space; key H; wait frames 1; "
+                              "shot plain.png; key ?; wait frames 1; shot help.png; close'", w, h),
+                         0);
+        image a = load("plain.png", w, h), b = load("help.png", w, h);
+        int changed_bottom = 0, changed_middle = 0;
+        for (int x = w / 2 - 5; x <= w / 2 + 5; x++) {
+            for (int y = h - 2; y < h; y++) changed_bottom += diff(at(&a, x, y), at(&b, x, y)) > 8;
+            changed_middle += diff(at(&a, x, h / 2), at(&b, x, h / 2)) > 8;
+        }
+        print_message("%dx%d: middle columns changed by the key list: %d at mid-height, %d in the bottom two rows\n",
+                      w, h, changed_middle, changed_bottom);
+        assert_true(changed_middle > 0);   /* the backdrop is there */
+        assert_int_equal(changed_bottom, 0); /* and ends inside the window */
+        free(a.px);
+        free(b.px);
+    }
 }
 
 /* A long message wraps inside the window: the right margin stays background, at 640 and
@@ -499,6 +528,7 @@ int main(void)
         cmocka_unit_test(test_messages_wrap),   cmocka_unit_test(test_tip_spheres),
         cmocka_unit_test(test_review_lets_go),  cmocka_unit_test(test_gpu_warp_rig),
         cmocka_unit_test(test_hand_gone_stays_said), cmocka_unit_test(test_outputs_kept),
+        cmocka_unit_test(test_help_fits_narrow),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

@@ -256,12 +256,58 @@ static void test_gesture_badge(void **state)
         }
 }
 
+/* The key list's layout (fp_hud_help_layout_make) fits whole every window from 200x400,
+ * 280x300 and 640x240 (two columns) to 1280x720: the backdrop inside the window, each
+ * column's lines within its share of the width, every character of the list kept (blanks
+ * aside). A list as live's: aligned columns of keys, long lines of words. Smaller windows
+ * get the smallest layout from the top, its last lines cut. */
+static void test_help_layout_fits(void **state)
+{
+    (void)state;
+    const char *text = "keys\n space  pause / run\n E      engage      C  commit\n"
+                       " X      cancel      Z  undo commit\n R      back to the loaded shape\n"
+                       " J / K  open / close the jaw (rig)\n G      rig: regions, landmarks, hinge axis\n"
+                       " 1 / 2  anchored / unanchored\n [ / ]  radius down / up\n"
+                       " W wireframe  S screenshot  F frame\n H hands  Tab HUD  ? this list\n"
+                       " T      record a take (start / stop)\n V      review the last take / back to live\n"
+                       " P      play / pause the last take\n , / .  a frame back / on; mouse on the strip scrubs\n"
+                       " Esc    leave the review; else quit\n I punch in/out; L layer, M mute, O solo (--over)\n"
+                       "mouse: left orbit, right pan, wheel zoom\ndrop a mesh file on the window to load it\n"
+                       "spheres: green where a fingertip's support reaches the skin;\n"
+                       "lines: each fingertip to its nearest skin point";
+    size_t want = 0;
+    for (const char *p = text; *p; p++) want += *p != ' ' && *p != '\n';
+    const int ws[] = {200, 240, 280, 320, 480, 640, 1280}, hs[] = {240, 300, 360, 400, 480, 600, 720};
+    for (size_t i = 0; i < sizeof ws / sizeof *ws; i++)
+        for (size_t j = 0; j < sizeof hs / sizeof *hs; j++) {
+            const int w = ws[i], h = hs[j];
+            if ((w < 280 && h < 400) || (w < 640 && h < 300)) continue; /* (too small: cut, said) */
+            const float scale = h >= 600 ? 2.f : 1.f; /* (the viewer's) */
+            fp_hud_help_layout l;
+            assert_int_equal(fp_hud_help_layout_make(text, w, h, scale, &l), 0);
+            print_message("%4dx%-4d: scale %.0f, %d column(s), pad %.0f, box %.0fx%.0f at %.0f,%.0f\n", w, h,
+                          l.scale, l.columns, l.pad, l.w, l.h, l.x, l.y);
+            assert_true(l.fits);
+            assert_true(l.x >= 0 && l.y >= 0 && l.x + l.w <= (float)w && l.y + l.h <= (float)h);
+            size_t kept = 0;
+            for (int c = 0; c < l.columns; c++) {
+                assert_non_null(l.text[c]);
+                float right = c + 1 < l.columns ? l.col_x[c + 1] : l.w - l.pad + 0.5f;
+                assert_true(l.col_x[c] + fp_render_text_width(l.text[c], l.scale) <= right);
+                for (const char *p = l.text[c]; *p; p++) kept += *p != ' ' && *p != '\n';
+            }
+            assert_int_equal(kept, want);
+            fp_hud_help_layout_free(&l);
+        }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_gesture_badge),
         cmocka_unit_test(test_contact_line),
         cmocka_unit_test(test_wrap_fits),
+        cmocka_unit_test(test_help_layout_fits),
         cmocka_unit_test(test_confirmations_kept_notes_fade),
         cmocka_unit_test(test_warning_outlives_notes),
         cmocka_unit_test(test_fit_room),

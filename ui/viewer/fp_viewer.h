@@ -14,8 +14,9 @@
  * bit the whole computation's), the base only when it changed. FACEPUPPET_VIEWER_UPLOAD=full
  * uploads whole meshes on any change (for comparisons), =check compares every partial upload
  * with the whole computation (fp_viewer_report.upload_mismatches). Timing is measured inside: frame time (swap to swap) and the latency from a
- * hand event's time (fp_hand_pose.time_ns, the host clock when the input pushed it) to the
- * swap of the first frame showing it.
+ * hand event's time (fp_session_hand_since: fp_hand_pose.time_ns on the host clock, or, for a
+ * replay or take, whose times are the recording's, when it was pushed) to the swap of the
+ * first frame showing it.
  *
  * Keys: space pause, E engage, C commit, X cancel, Z undo, R reset to the loaded shape,
  * 1 anchored, 2 unanchored, [ ] radius down / up (x 1/1.1, 1.1), W wireframe, S screenshot
@@ -137,7 +138,8 @@ typedef struct fp_viewer_report {
     uint64_t frames;
     double frame_ms_median, frame_ms_p99;      /* swap to swap, over all frames but the first */
     size_t latency_samples;                    /* hand events shown */
-    double latency_ms_median, latency_ms_p99;  /* event time_ns to the swap showing it */
+    double latency_ms_median, latency_ms_p99;  /* event (fp_session_hand_since) to the swap
+                                                  showing it */
     double engine_ms_median;                   /* fp_frame_stats.update_ms of active frames */
     size_t warp_checks;                        /* GPU-warp read-backs compared */
     double warp_max_error;                     /* max |GPU - CPU| over vertices, mesh units */

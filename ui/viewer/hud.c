@@ -232,17 +232,12 @@ const float *fp_hud_backdrop_color(void) { return backdrop; }
 void fp_hud_draw_help(fp_render *r, int w, int h, float scale, const char *text,
                       const float color[4])
 {
-    size_t n = strlen(text) * 2 + 64;
-    char *wrapped = malloc(n);
-    if (!wrapped) return;
-    float pad = 10 * scale;
-    fp_hud_wrap(text, (float)w - 4 * pad, scale, wrapped, n);
-    float tw = fp_render_text_width(wrapped, scale), th = fp_render_text_height(wrapped, scale);
-    float bw = tw + 2 * pad, bh = th + 2 * pad;
-    float x = floorf(((float)w - bw) / 2), y = floorf(fmaxf(4, ((float)h - bh) / 2));
-    fp_render_rect(r, w, h, x, y, bw, bh, backdrop);
-    fp_render_text(r, w, h, x + pad, y + pad, scale, wrapped, color);
-    free(wrapped);
+    fp_hud_help_layout l;
+    if (fp_hud_help_layout_make(text, w, h, scale, &l)) return;
+    fp_render_rect(r, w, h, l.x, l.y, l.w, l.h, backdrop);
+    for (int c = 0; c < l.columns; c++)
+        if (l.text[c]) fp_render_text(r, w, h, l.x + l.col_x[c], l.y + l.pad, l.scale, l.text[c], color);
+    fp_hud_help_layout_free(&l);
 }
 
 /* The smallest of n reaches (0 for none). */

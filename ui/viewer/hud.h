@@ -138,9 +138,30 @@ float fp_hud_draw_msgs(fp_hud_msgs *s, fp_render *r, int w, int h, float x, floa
 const char *fp_hud_scale_line(double mm_per_unit, const char *how, char *out, size_t len);
 
 /** The key list centred in the window on a near-opaque dark backdrop (so that it reads over
- *  the face), text wrapped to the window. */
+ *  the face), laid out by fp_hud_help_layout_make to fit the window. */
 void fp_hud_draw_help(fp_render *r, int w, int h, float scale, const char *text,
                       const float color[4]);
+
+/** The key list's layout in a w x h window (pixels): its text wrapped in one or two columns,
+ *  each column's lines in text[c] (owned: fp_hud_help_layout_free) drawn at (x + col_x[c],
+ *  y + pad) at `scale`, on the backdrop x, y, w, h (pixels). */
+typedef struct fp_hud_help_layout {
+    float scale, pad;
+    int columns;              /* 1 or 2 */
+    char *text[2];            /* each column's wrapped lines; NULL past columns */
+    float col_x[2];           /* each column's left, from x */
+    float x, y, w, h;         /* the backdrop */
+    bool fits;                /* false: no layout fits; the smallest, from the top (cut) */
+} fp_hud_help_layout;
+
+/** Lay out text (lines, blanks aligning its columns) for a w x h window at the viewer's scale
+ *  (1 or 2): the first that fits whole of the viewer's scale then 1, the text as written then
+ *  without its alignment (runs of blanks shortened: fewer lines wrap), one column then two
+ *  (a short window), a padding of 10 then 3 (x scale). Returns 0 (*l to be freed with
+ *  fp_hud_help_layout_free), or -1 out of memory or a window too narrow for a character
+ *  (*l empty). No GL: [any-thread]. */
+int fp_hud_help_layout_make(const char *text, int w, int h, float scale, fp_hud_help_layout *l);
+void fp_hud_help_layout_free(fp_hud_help_layout *l);
 
 /** The backdrop's colour (RGBA): the test's reference. Static storage. */
 const float *fp_hud_backdrop_color(void);

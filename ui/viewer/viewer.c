@@ -998,7 +998,9 @@ static void frame(viewer *v)
             const fp_hand_pose *p = fp_session_hand(v->s, h);
             if (p && p->time_ns > v->seen_time[h]) {
                 v->seen_time[h] = p->time_ns;
-                v->pending_time[h] = p->time_ns;
+                /* late from its measure, or from its arrival for a replay (its times the
+                 * recording's, which speed= stretches) */
+                v->pending_time[h] = fp_session_hand_since(v->s, h);
             }
         }
     }
