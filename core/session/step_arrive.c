@@ -92,8 +92,10 @@ void fp_arrive_step_place(fp_arrive_step *r, fp_pose_state *p, bool engaged, con
 typedef struct tips_in {
     float (*mm)[3];   /* FP_FINGERS fingertips a sample, device mm */
     int *hand;
-    size_t stride;    /* every stride-th sample is kept */
+    size_t stride;    /* every stride-th sample of each hand is kept */
     size_t seen, kept, cap;
+    size_t seen_hand[FP_HANDS]; /* (counted per hand: two hands' samples come interleaved,
+                                   and every 2nd of all kept one hand alone) */
 } tips_in;
 
 static void count_one(void *ctx, int hand, const float (*mm)[3])
@@ -105,7 +107,8 @@ static void count_one(void *ctx, int hand, const float (*mm)[3])
 static void keep_one(void *ctx, int hand, const float (*mm)[3])
 {
     tips_in *t = ctx;
-    if (t->seen++ % t->stride || t->kept == t->cap || (hand != FP_HAND_LEFT && hand != FP_HAND_RIGHT)) return;
+    if (hand != FP_HAND_LEFT && hand != FP_HAND_RIGHT) return;
+    if (t->seen_hand[hand]++ % t->stride || t->kept == t->cap) return;
     for (int f = 0; f < FP_FINGERS; f++)
         for (int k = 0; k < 3; k++)
             if (!isfinite(mm[FP_JOINT_TIP(f)][k])) return; /* (a sample the replay would not make) */
@@ -218,7 +221,7 @@ int fp_arrive_bring_in(fp_calibration *c, fp_input *const *ins, size_t n, double
     if (!t.seen || !(radius > 0) || !e || !e->points) return 0;
     double mm = head->mm_per_unit > 0 ? head->mm_per_unit : 1.0;
     t.stride = (t.seen + FP_ARRIVE_BRING_SAMPLES - 1) / FP_ARRIVE_BRING_SAMPLES;
-    t.cap = (t.seen + t.stride - 1) / t.stride;
+    t.cap = (t.seen + t.stride - 1) / t.stride + FP_HANDS; /* (each hand's count rounded up) */
     t.mm = malloc(FP_FINGERS * t.cap * sizeof *t.mm);
     t.hand = malloc(t.cap * sizeof *t.hand);
     float(*q)[3] = malloc(FP_FINGERS * t.cap * sizeof *q);
@@ -307,11 +310,11 @@ static int lands(const fp_arrive_step *r, const fp_calibration *c, const bool ac
 }
 
 /* The same for a live input's hands at a refit (step_arrive.h): on the estimator's samples,
- * every stride-th of at most FP_ARRIVE_LIVE_SAMPLES, into r's buffers; p->calib, the range's
- * placement just made (`before`: the placement in effect before that refit), moved by the
- * push when its time has come (step_arrive.h, FP_ARRIVE_BRING_WAIT_S: a push that would put
- * the hands as they are now into a grab waits; meanwhile a push in effect stays). The first
- * push is said on log. */
+ * each hand's every stride-th, at most FP_ARRIVE_LIVE_SAMPLES in all, into r's buffers;
+ * p->calib, the range's placement just made (`before`: the placement in effect before that
+ * refit), moved by the push when its time has come (step_arrive.h, FP_ARRIVE_BRING_WAIT_S:
+ * a push that would put the hands as they are now into a grab waits; meanwhile a push in
+ * effect stays). The first push is said on log. */
 static void bring_in_live(fp_arrive_step *r, fp_pose_state *ps, const fp_calibration *before,
                           const fp_head *head, double radius, const fp_engine_step *e, const fp_slog *log)
 {
@@ -322,7 +325,9 @@ static void bring_in_live(fp_arrive_step *r, fp_pose_state *ps, const fp_calibra
     size_t n = fp_pose_auto_samples(r->place);
     if (!n || !r->live_tips || !e || !e->points || !(radius > 0)) return;
     tips_in t = {.mm = r->live_tips, .hand = r->live_hand, .cap = FP_ARRIVE_LIVE_SAMPLES,
-                 .stride = (n + FP_ARRIVE_LIVE_SAMPLES - 1) / FP_ARRIVE_LIVE_SAMPLES};
+                 .stride = (n + FP_ARRIVE_LIVE_SAMPLES - FP_HANDS - 1) /
+                           (FP_ARRIVE_LIVE_SAMPLES - FP_HANDS)};
+    /* (each hand's count rounded up: at most n / stride + FP_HANDS kept, within the cap) */
     fp_pose_auto_each(r->place, keep_one, &t);
     double d0, p, dp, mm = head->mm_per_unit > 0 ? head->mm_per_unit : 1.0;
     bool acts[FP_HANDS][FP_FINGERS];

@@ -156,12 +156,13 @@ void fp_arrive_step_check(fp_arrive_step *r, int64_t now_ns, const fp_hand_pose 
  *  before the brow or an eye rather than the nose) is brought toward the face, along depth,
  *  until its nearest approach lies FP_ARRIVE_BRING_TO x radius from the surface. ins: the n
  *  inputs of one performer; those stating a workspace and giving their joints in advance
- *  (FP_EXT_RECORDING_JOINTS) are read, every k-th sample where they hold more than
- *  FP_ARRIVE_BRING_SAMPLES; their fingertips are placed by *c and measured against the
- *  face's vertices (e's index, as the mapping's fingertip distances are). Where some
- *  fingertip comes near already (every recording in ../shared/data does, but three-claps on
- *  the MediaPipe face at its rig's scale: brought 7 mm), or none is given,
- *  or no push up to the head's depth (head box, mesh units) brings one near, *c is left as
+ *  (FP_EXT_RECORDING_JOINTS) are read, every k-th sample of each hand where they hold more
+ *  than FP_ARRIVE_BRING_SAMPLES (of each hand, not of all: a two-hand recording's rows
+ *  alternate, and every 2nd row was one hand alone); their fingertips are placed by *c and
+ *  measured against the face's vertices (e's index, as the mapping's fingertip distances
+ *  are). Where some fingertip comes near already (every recording in ../shared/data does,
+ *  but three-claps on the MediaPipe face at its rig's scale: brought 7 mm), or none is
+ *  given, or no push up to the head's depth (head box, mesh units) brings one near, *c is left as
  *  it is. The push: a march in depth by the nearest distance less the target, which cannot
  *  step past a nearer placement (a distance changes no faster than the push; it is
  *  subtracted from c->offset[2]). One info line (source "session") says how far they were
