@@ -315,6 +315,21 @@ static int open_mesh(fp_session *s, const fp_session_options *opt, double *diag,
                  "scale the mesh down (export it in larger units)", name, reach, CSRBF_MAX_COORD);
         return -EBADMSG;
     }
+    /* a surface of no size, or too small for the engine, before the float step where it lies:
+     * triangles all collapsed onto one point 1 unit off the origin were told to move near the
+     * origin, which gives them no size */
+    if (*diag == 0) {
+        snprintf(err, errlen, "%s: its triangles have no size: every corner of every one lies at "
+                 "(%.6g, %.6g, %.6g), nothing a hand can shape (a degenerate export)", name,
+                 s->view.bounds_min[0], s->view.bounds_min[1], s->view.bounds_min[2]);
+        return -EBADMSG;
+    }
+    if (sqrt(*diag) < FP_SESSION_MIN_DIAGONAL) {
+        snprintf(err, errlen, "%s: the mesh spans %.3g mesh units (its bounding box's diagonal), under "
+                 "%g, too small for the engine's support radii: scale it up (export it in smaller "
+                 "units)", name, sqrt(*diag), FP_SESSION_MIN_DIAGONAL);
+        return -EBADMSG;
+    }
     /* the float step where the surface lies (FP_SESSION_MAX_STEP_DIAGONALS): a face in metres
      * moved 1e6 units off the origin loaded as a few steps of 0.0625, its unit detected as inf
      * mm and its summary NaN, exit 0 */
@@ -326,12 +341,6 @@ static int open_mesh(fp_session *s, const fp_session_options *opt, double *diag,
         snprintf(err, errlen, "%s: the surface lies %.3g mesh units from the origin, where the mesh's "
                  "floats keep steps of %.3g units, coarse for a mesh %.3g units across (its shape is "
                  "lost): move it near the origin in a modeller", name, far, step, s->diagonal);
-        return -EBADMSG;
-    }
-    if (*diag > 0 && sqrt(*diag) < FP_SESSION_MIN_DIAGONAL) {
-        snprintf(err, errlen, "%s: the mesh spans %.3g mesh units (its bounding box's diagonal), under "
-                 "%g, too small for the engine's support radii: scale it up (export it in smaller "
-                 "units)", name, sqrt(*diag), FP_SESSION_MIN_DIAGONAL);
         return -EBADMSG;
     }
     return 0;
