@@ -56,7 +56,9 @@ static int attach_rig(fp_session *s, const fp_session_options *opt, char *err, s
         if ((rc = fp_rig_load_for_mesh(opt->rig_path, s->n, s->loaded, &rig, err, errlen))) return rc;
         snprintf(s->rig_how, sizeof s->rig_how, "%s (given; mesh checksum %s%s)", opt->rig_path,
                  fp_rig_checksum_matches(rig, s->n, s->loaded) ? "matches" : "differs, same vertex count",
-                 fp_rig_get_placement(rig).misfit ? "; warning: its landmarks do not sit on this face, "
+                 fp_rig_get_placement(rig).mirrored ? "; warning: this face is its mesh mirrored, left "
+                 "for right, so its skull and jaw lie elsewhere: mirror the face back in a modeller"
+                 : fp_rig_get_placement(rig).misfit ? "; warning: its landmarks do not sit on this face, "
                  "so its skull and jaw may lie elsewhere" : "");
     } else {
         char dir[1024], path[1024], msg[1200] = "";
@@ -74,14 +76,26 @@ static int attach_rig(fp_session *s, const fp_session_options *opt, char *err, s
         } else if (rc) {
             snprintf(s->rig_how, sizeof s->rig_how, "none (%s)", msg);
         } else {
-            if ((rc = fp_rig_load_for_mesh(path, s->n, s->loaded, &rig, err, errlen))) return rc;
+            if ((rc = fp_rig_load(path, &rig, err, errlen))) return rc;
+            rc = fp_rig_bind(rig, s->n, s->loaded, err, errlen);
             fp_rig_placement pl = fp_rig_get_placement(rig);
+            /* a rig found by the count whose landmarks do not sit on this face is left below,
+             * not failed for its hinge off this mesh (a mirrored copy in metres exited 65) */
+            if (rc && (rc == -ENOMEM || !pl.misfit || fp_rig_checksum_matches(rig, s->n, s->loaded))) {
+                fp_rig_free(&rig);
+                return rc;
+            }
             if (pl.misfit && !fp_rig_checksum_matches(rig, s->n, s->loaded)) {
                 /* the vertex count alone is no proof: its landmarks must sit on this face */
-                snprintf(s->rig_how, sizeof s->rig_how, "none (%s fits %zu vertices, but not this "
-                         "face: its landmarks lie %.3g mesh units from their vertices after the best "
-                         "fit, against a spread of %.3g: another face, or its own with the vertices "
-                         "in another order; --rig %s uses it anyway)", path, s->n, pl.rms, pl.spread, path);
+                if (pl.mirrored) /* (a mirror image: no similarity places the rig on it) */
+                    snprintf(s->rig_how, sizeof s->rig_how, "none (%s fits %zu vertices, but this face "
+                             "is its mesh mirrored, left for right, which no turn, scale or move of the "
+                             "rig gives: mirror the face back in a modeller to use the rig)", path, s->n);
+                else
+                    snprintf(s->rig_how, sizeof s->rig_how, "none (%s fits %zu vertices, but not this "
+                             "face: its landmarks lie %.3g mesh units from their vertices after the best "
+                             "fit, against a spread of %.3g: another face, or its own with the vertices "
+                             "in another order; --rig %s uses it anyway)", path, s->n, pl.rms, pl.spread, path);
                 fp_rig_free(&rig);
             } else if (fp_rig_checksum_matches(rig, s->n, s->loaded))
                 snprintf(s->rig_how, sizeof s->rig_how, "%s (found by the mesh's checksum %08x)", path,
