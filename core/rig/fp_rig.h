@@ -178,9 +178,13 @@ typedef struct fp_rig_placement {
                           nowhere like the rig's (another face of its vertex count, or its
                           own with the vertices in another order): its regions would lie
                           elsewhere on this mesh */
+    int mirrored;      /* 1 (with misfit): the landmarks fit the rig's own mirrored (within
+                          FP_RIG_PLACE_MIRROR x spread): a mirror image of its mesh, which no
+                          turn, scale or move gives (the rig is not placed on it) */
 } fp_rig_placement;
 #define FP_RIG_PLACE_SAME 0.01
 #define FP_RIG_PLACE_MISFIT 0.25
+#define FP_RIG_PLACE_MIRROR 0.01
 
 /** The last fp_rig_bind's placement (zeros before a bind). [any-thread] */
 fp_rig_placement fp_rig_get_placement(const fp_rig *rig);

@@ -287,6 +287,28 @@ void fp_session_step(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     st->frame_thread = there;
 }
 
+/* The face's frame a mapping is given (fp_frame_input.face_*): where the face is turned
+ * (fp_calibration.face), the frame the hands are placed in and turned with (the rig's axes,
+ * or --up/--facing, which win); else the rig's axes; else +x, +y, +z (fp_head.h). A mapping
+ * that reads a hand's motion in the performer's axes (onehand) reads it along these. */
+static void frame_face_axes(const fp_session *s, fp_frame_input *in)
+{
+    double x[3] = {1, 0, 0}, y[3] = {0, 1, 0}, z[3] = {0, 0, 1}, l[3], u[3], f[3];
+    if (s->canon) { /* (the face's frame is set) */
+        fp_qrot(s->face, x, l);
+        fp_qrot(s->face, y, u);
+        fp_qrot(s->face, z, f);
+        for (int i = 0; i < 3; i++)
+            in->face_left[i] = (float)l[i], in->face_up[i] = (float)u[i], in->face_forward[i] = (float)f[i];
+    } else if (s->rig.rig) {
+        fp_rig_axes(s->rig.rig, in->face_up, in->face_forward, in->face_left);
+    } else {
+        in->face_up[1] = 1.f; /* the project's convention (fp_head.h) */
+        in->face_forward[2] = 1.f;
+        in->face_left[0] = 1.f;
+    }
+}
+
 /* One frame (fp_session_step), on the frame thread or the caller's. */
 static void step_frame(fp_session *s, int64_t now_ns, fp_frame_stats *st)
 {
@@ -327,13 +349,7 @@ static void step_frame(fp_session *s, int64_t now_ns, fp_frame_stats *st)
     in.touch_radius = s->touch_radius;
     in.requested = fp_intents_take_requested(&s->intents);
     in.mm_per_unit = s->head.mm_per_unit;
-    if (s->rig.rig) {
-        fp_rig_axes(s->rig.rig, in.face_up, in.face_forward, in.face_left);
-    } else {
-        in.face_up[1] = 1.f; /* the project's convention (fp_head.h) */
-        in.face_forward[2] = 1.f;
-        in.face_left[0] = 1.f;
-    }
+    frame_face_axes(s, &in);
     in.rig = fp_rig_step_view(&s->rig);
     const float *surface = fp_rig_step_posed(&s->rig, s->base); /* what the fingers touch */
     s->view.base = surface;

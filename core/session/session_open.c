@@ -56,7 +56,9 @@ static int attach_rig(fp_session *s, const fp_session_options *opt, char *err, s
         if ((rc = fp_rig_load_for_mesh(opt->rig_path, s->n, s->loaded, &rig, err, errlen))) return rc;
         snprintf(s->rig_how, sizeof s->rig_how, "%s (given; mesh checksum %s%s)", opt->rig_path,
                  fp_rig_checksum_matches(rig, s->n, s->loaded) ? "matches" : "differs, same vertex count",
-                 fp_rig_get_placement(rig).misfit ? "; warning: its landmarks do not sit on this face, "
+                 fp_rig_get_placement(rig).mirrored ? "; warning: this face is its mesh mirrored, left "
+                 "for right, so its skull and jaw lie elsewhere: mirror the face back in a modeller"
+                 : fp_rig_get_placement(rig).misfit ? "; warning: its landmarks do not sit on this face, "
                  "so its skull and jaw may lie elsewhere" : "");
     } else {
         char dir[1024], path[1024], msg[1200] = "";
@@ -74,14 +76,26 @@ static int attach_rig(fp_session *s, const fp_session_options *opt, char *err, s
         } else if (rc) {
             snprintf(s->rig_how, sizeof s->rig_how, "none (%s)", msg);
         } else {
-            if ((rc = fp_rig_load_for_mesh(path, s->n, s->loaded, &rig, err, errlen))) return rc;
+            if ((rc = fp_rig_load(path, &rig, err, errlen))) return rc;
+            rc = fp_rig_bind(rig, s->n, s->loaded, err, errlen);
             fp_rig_placement pl = fp_rig_get_placement(rig);
+            /* a rig found by the count whose landmarks do not sit on this face is left below,
+             * not failed for its hinge off this mesh (a mirrored copy in metres exited 65) */
+            if (rc && (rc == -ENOMEM || !pl.misfit || fp_rig_checksum_matches(rig, s->n, s->loaded))) {
+                fp_rig_free(&rig);
+                return rc;
+            }
             if (pl.misfit && !fp_rig_checksum_matches(rig, s->n, s->loaded)) {
                 /* the vertex count alone is no proof: its landmarks must sit on this face */
-                snprintf(s->rig_how, sizeof s->rig_how, "none (%s fits %zu vertices, but not this "
-                         "face: its landmarks lie %.3g mesh units from their vertices after the best "
-                         "fit, against a spread of %.3g: another face, or its own with the vertices "
-                         "in another order; --rig %s uses it anyway)", path, s->n, pl.rms, pl.spread, path);
+                if (pl.mirrored) /* (a mirror image: no similarity places the rig on it) */
+                    snprintf(s->rig_how, sizeof s->rig_how, "none (%s fits %zu vertices, but this face "
+                             "is its mesh mirrored, left for right, which no turn, scale or move of the "
+                             "rig gives: mirror the face back in a modeller to use the rig)", path, s->n);
+                else
+                    snprintf(s->rig_how, sizeof s->rig_how, "none (%s fits %zu vertices, but not this "
+                             "face: its landmarks lie %.3g mesh units from their vertices after the best "
+                             "fit, against a spread of %.3g: another face, or its own with the vertices "
+                             "in another order; --rig %s uses it anyway)", path, s->n, pl.rms, pl.spread, path);
                 fp_rig_free(&rig);
             } else if (fp_rig_checksum_matches(rig, s->n, s->loaded))
                 snprintf(s->rig_how, sizeof s->rig_how, "%s (found by the mesh's checksum %08x)", path,
@@ -315,6 +329,21 @@ static int open_mesh(fp_session *s, const fp_session_options *opt, double *diag,
                  "scale the mesh down (export it in larger units)", name, reach, CSRBF_MAX_COORD);
         return -EBADMSG;
     }
+    /* a surface of no size, or too small for the engine, before the float step where it lies:
+     * triangles all collapsed onto one point 1 unit off the origin were told to move near the
+     * origin, which gives them no size */
+    if (*diag == 0) {
+        snprintf(err, errlen, "%s: its triangles have no size: every corner of every one lies at "
+                 "(%.6g, %.6g, %.6g), nothing a hand can shape (a degenerate export)", name,
+                 s->view.bounds_min[0], s->view.bounds_min[1], s->view.bounds_min[2]);
+        return -EBADMSG;
+    }
+    if (sqrt(*diag) < FP_SESSION_MIN_DIAGONAL) {
+        snprintf(err, errlen, "%s: the mesh spans %.3g mesh units (its bounding box's diagonal), under "
+                 "%g, too small for the engine's support radii: scale it up (export it in smaller "
+                 "units)", name, sqrt(*diag), FP_SESSION_MIN_DIAGONAL);
+        return -EBADMSG;
+    }
     /* the float step where the surface lies (FP_SESSION_MAX_STEP_DIAGONALS): a face in metres
      * moved 1e6 units off the origin loaded as a few steps of 0.0625, its unit detected as inf
      * mm and its summary NaN, exit 0 */
@@ -326,12 +355,6 @@ static int open_mesh(fp_session *s, const fp_session_options *opt, double *diag,
         snprintf(err, errlen, "%s: the surface lies %.3g mesh units from the origin, where the mesh's "
                  "floats keep steps of %.3g units, coarse for a mesh %.3g units across (its shape is "
                  "lost): move it near the origin in a modeller", name, far, step, s->diagonal);
-        return -EBADMSG;
-    }
-    if (*diag > 0 && sqrt(*diag) < FP_SESSION_MIN_DIAGONAL) {
-        snprintf(err, errlen, "%s: the mesh spans %.3g mesh units (its bounding box's diagonal), under "
-                 "%g, too small for the engine's support radii: scale it up (export it in smaller "
-                 "units)", name, sqrt(*diag), FP_SESSION_MIN_DIAGONAL);
         return -EBADMSG;
     }
     return 0;

@@ -37,7 +37,8 @@
  *  - Relative to the performer's own neutral hand: the pose at engage is the zero.
  *    end = landmark + gain x (fingertip now - fingertip at neutral), the hand's motion
  *    taken in millimetres and expressed in the face's frame from the rig (the hand's right,
- *    up and toward-the-performer become the face's left, up and forward: the face looks at
+ *    up and toward-the-performer, read along the frame the host placed the hands in,
+ *    fp_frame_input.face_*, become the face's left, up and forward: the face looks at
  *    the performer), then divided by the rig's mm_per_unit. gain is mm on the face per mm of
  *    hand: 1 (the default) moves a landmark as far as the fingertip moved, in physical units.
  *    The hand's millimetres: the host gives hands in mesh units after its workspace
@@ -295,8 +296,17 @@ static double jaw_curve(double u, double e)
 
 /* Follow the hand: this gesture's displacement of every landmark and the jaw. A frame with
  * a non-finite joint keeps the last displacement. */
-static void follow(onehand *o, const fp_hand_pose *h, const fp_rig_view *rig, double mm_per_unit)
+static void follow(onehand *o, const fp_hand_pose *h, const fp_rig_view *rig, const fp_frame_input *in,
+                   double mm_per_unit)
 {
+    /* The host places the hands in front of the face's frame and turns them with it (a turned
+     * copy of the rig's mesh: fp_frame_input.face_*), so the hand's right, up and toward the
+     * performer are those axes in the mesh, not +x, +y, +z: read the motion along them first
+     * (a Z-up copy of the ICT face had its landmarks pulled toward the viewer by a hand moving
+     * up, 12.6 mm off the face's own at the end of HandSplay). A 1.0 host: +x, +y, +z. */
+    static const float ex[3] = {1, 0, 0}, ey[3] = {0, 1, 0}, ez[3] = {0, 0, 1};
+    bool axes = FP_HAS_FIELD(in, fp_frame_input, face_left);
+    const float *hx = axes ? in->face_left : ex, *hy = axes ? in->face_up : ey, *hz = axes ? in->face_forward : ez;
     for (int j = 0; j < FP_HAND_JOINTS; j++)
         for (int c = 0; c < 3; c++)
             if (!isfinite(h->joints[j][c])) return;
@@ -305,8 +315,10 @@ static void follow(onehand *o, const fp_hand_pose *h, const fp_rig_view *rig, do
     for (size_t i = 0; i < o->count; i++) {
         const float *now = h->joints[FP_JOINT_TIP(o->finger[i])];
         const float *zero = o->neutral[FP_JOINT_TIP(o->finger[i])];
-        double d[3] = {now[0] - zero[0], now[1] - zero[1], now[2] - zero[2]};
-        /* the hand's right (+x), up (+y), toward the performer (+z) in the face's frame */
+        double m[3] = {now[0] - zero[0], now[1] - zero[1], now[2] - zero[2]};
+        /* the hand's right, up, toward the performer -> the face's left, up, forward */
+        double d[3] = {m[0] * hx[0] + m[1] * hx[1] + m[2] * hx[2], m[0] * hy[0] + m[1] * hy[1] + m[2] * hy[2],
+                       m[0] * hz[0] + m[1] * hz[1] + m[2] * hz[2]};
         for (int c = 0; c < 3; c++)
             o->last[i][c] = (float)(k * (d[0] * rig->left[c] + d[1] * rig->up[c] + d[2] * rig->forward[c]));
     }
@@ -403,7 +415,7 @@ static int process(fp_mapping *self, const fp_frame_input *in, fp_control_set *o
         bool still = o->automatic && !o->engaged && held_still(o, h, in->time_ns);
         if (((asked && (!o->engaged || o->hold)) || still) && engage(o, h))
             out->intents |= FP_INTENT_ENGAGE;
-        if (o->engaged) follow(o, h, rig, mm_per_unit);
+        if (o->engaged) follow(o, h, rig, in, mm_per_unit);
     }
     if (o->posed) {
         int rc = emit(o, rig, in, out);

@@ -720,6 +720,14 @@ static void test_refused_up_front(void **state)
     snprintf(args, sizeof args, "run --mesh tiny.obj %s --out t.obj --force", rec);
     assert_int_equal(fp(args), 65);
     assert_non_null(strstr(out, "tiny.obj: the mesh spans 1.73e-20 mesh units"));
+    /* Triangles collapsed onto one point away from the origin (a stray vertex beside them):
+     * refused, 65, as having no size; it was told to move near the origin, which gives it none
+     * ("the surface lies 1 mesh units from the origin ... coarse for a mesh 0 units across") */
+    write_file("point.obj", "v 1 1 1\nv 1 1 1\nv 1 1 1\nv 2 2 2\nf 1 2 3\n");
+    snprintf(args, sizeof args, "run --mesh point.obj %s --out p.obj --force", rec);
+    assert_int_equal(fp(args), 65);
+    assert_non_null(strstr(out, "point.obj: its triangles have no size: every corner of every one lies at (1, 1, 1)"));
+    assert_null(strstr(out, "near the origin"));
     /* A face 0.3 units across 1e6 units off the origin (a face in metres with a survey
      * offset): its floats keep steps of 0.0625 there, the shape a handful of them; it ran
      * (exit 0, a vertex moved 0.23 units, the unit inf mm on a sphere): refused, 65, naming

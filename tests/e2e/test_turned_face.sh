@@ -11,6 +11,7 @@
 #     the face's frame; --up alone, two parallel axes or an unknown axis: exit 64;
 #  2a. without a rig nor axes, the Z-up copy draws a hint naming -y and the options (the face
 #     itself none);
+#  2c. a mirrored copy is said to be the rig's mesh mirrored (no similarity places the rig);
 #  2b. pose opens the copy's jaw as it opens the face's (exit 0; the pose carried within
 #     0.001 mm is test_rig's test_placement);
 #  3. calibrate --mode hold on the Z-up copy (in metres) writes the face's calibration turned
@@ -42,6 +43,7 @@ copies = {
     'metres': lambda x, y, z: (0.01 * x + 0.3, 0.01 * y - 1.2, 0.01 * z + 0.05),
     'zup': lambda x, y, z: (0.01 * x, -0.01 * z, 0.01 * y),
     'turned': lambda x, y, z: (c * x + s * z, y, -s * x + c * z),
+    'mirrored': lambda x, y, z: (-0.01 * x, 0.01 * y, 0.01 * z),
 }
 for name, f in copies.items():
     with open(f'{out}/{name}.obj', 'w') as o:
@@ -96,6 +98,16 @@ for name in zup face; do
     fi
 done
 echo "the Z-up copy without a rig: the hint to give --up +z --facing -y; the face itself: none"
+
+# 2c. a mirrored copy (left for right, in metres) has the rig's vertex count but no turn, scale
+# or move places the rig on it: run says it is the mesh mirrored (it said "another face, or its
+# own with the vertices in another order") and runs without the rig
+"$build/bin/facepuppet" run --plugin-dir "$build/lib/facepuppet" --mesh "$tmp/mirrored.obj" \
+    --input "replay:$grab,fast=1" --duration 0.1 --out "$tmp/mirrored.out.obj" --force >/dev/null 2>"$tmp/mirrored.err" ||
+    { cat "$tmp/mirrored.err"; echo "FAIL: run on the mirrored copy"; exit 1; }
+grep -q "rig none (.*is its mesh mirrored, left for right.*mirror the face back" "$tmp/mirrored.err" ||
+    { cat "$tmp/mirrored.err"; echo "FAIL: the mirrored copy not said to be mirrored"; exit 1; }
+echo "the mirrored copy: said to be its rig's mesh mirrored, run without the rig"
 
 # a smooth head (an ellipsoid 15 x 23 x 19 units with a nose 2.4 units out and a mouth slit),
 # its vertices spread evenly: the mean says nothing, the hint above never fired on its Z-up

@@ -900,6 +900,19 @@ static void test_placement(void **state)
     if (!rc) {
         assert_int_equal(fp_rig_get_placement(b).placed, 0);
         assert_int_equal(fp_rig_get_placement(b).misfit, 1); /* (the session then leaves it) */
+        assert_int_equal(fp_rig_get_placement(b).mirrored, 0);
+    }
+    fp_rig_free(&b);
+    /* mirrored, left for right, and in metres: no similarity fits (misfit), a mirrored one
+     * does, said so (the session's rig line names it; it said "another face") */
+    for (size_t v = 0; v < n; v++)
+        for (int k = 0; k < 3; k++) q[3 * v + k] = (float)((k ? 0.01 : -0.01) * m->positions[3 * v + k]);
+    rc = fp_rig_load_for_mesh(path, n, q, &b, err, sizeof err);
+    if (!rc) {
+        fp_rig_placement pm = fp_rig_get_placement(b);
+        assert_int_equal(pm.placed, 0);
+        assert_int_equal(pm.misfit, 1);
+        assert_int_equal(pm.mirrored, 1);
     }
     fp_rig_free(&b);
     fp_rig_free(&a);

@@ -472,7 +472,11 @@ typedef struct fp_frame_input {
      *  0 where unknown. A gain "in mm" becomes mesh units by dividing by it. */
     double mm_per_unit;
     /** The face's frame in mesh coordinates, unit vectors: up (chin to crown), forward
-     *  (out of the face, toward the viewer) and the face's own left. */
+     *  (out of the face, toward the viewer) and the face's own left. Where the face is turned
+     *  (a rig placed on a turned copy of its mesh, or --up/--facing), the hands are placed in
+     *  front of this frame and turned with it: the performer's right, up and toward the
+     *  performer are face_left, face_up and face_forward in `hands`, so a mapping reads a
+     *  hand's motion along them (not +x, +y, +z). Else the rig's axes, or +x, +y, +z. */
     float face_up[3], face_forward[3], face_left[3];
     /** The rig of this mesh (fp_rig_view below), or NULL where the session has none. Valid
      *  during this call. */
