@@ -82,6 +82,13 @@ struct fp_contact {
 #define FP_CONTACT_LOCAL_NARROW 4.0 /* its first ramp: local_r / this, doubled each round */
 #define FP_CONTACT_CARRY_ROUNDS 3 /* its rounds that try the held skin carried first (r / 4,
                                      r / 2, r: later ones never passed on the recordings) */
+#define FP_CONTACT_CARRY_RIGID 4.0 /* a carried round held back for flips alone whose blocking
+                                     vertices span at most this many r (their box's diagonal in
+                                     P) carries the held skin by one translation, their mean
+                                     motion (carry_rigid): a few triangles that earlier motion
+                                     left near a right angle from the loaded face keep their
+                                     normals, where a carry that varies over them turned them
+                                     past it (issue 51) */
 #define FP_CONTACT_CARRY_MAX_TRIS 200000 /* a step with more moved triangles tries none (a
                                      carried check that fails costs a check: 0.1-1 s on the
                                      1.7M face) */

@@ -242,7 +242,16 @@ int fp_contact_guard(fp_contact *c, const float *ref, const float *cand, float *
  * blocked spot T is nearly constant, so the skin there moves on with the drag as one piece,
  * its triangles keeping their shapes and places among themselves, instead of staying
  * behind: a finger that drags a nostril's crease or an eyelid along keeps it under the
- * finger. When that shape passes, it is the round's, and the bisection goes over t from it
+ * finger. Where the first check found flipped triangles and no new pair, and the blocking
+ * vertices are one compact patch (their box in P at most FP_CONTACT_CARRY_RIGID r across,
+ * contact_internal.h), T is exactly constant: every held vertex is carried by their mean
+ * motion, so each held triangle keeps the normal it has in P.
+ * A few triangles that earlier motion left 1-10 degrees short of turning over
+ * (leapjs-playback's recordings on ICT and Lee Perry-Smith) had been turned past it by the
+ * small differences of the weighted T across them, every carried round
+ * failed, and the held rounds kept the fingertip's skin back for up to 38 frames
+ * (tests/session/test_contact_rigid_carry; docs/performance.md "Skin left near a right
+ * angle"). When that shape passes, it is the round's, and the bisection goes over t from it
  * (P + T + w (C - P - T)); when it does not, the round goes on held as above. A carried
  * vertex leaves the segment P -> C, which the envelopes' argument (3a) needs, so carried
  * rounds run on the hierarchy alone (3b: its check refits the shape it is given, wherever
