@@ -626,17 +626,17 @@ static void run_script(viewer *v)
             break;
         }
         case FP_SCRIPT_PRINT_HUD: {
-            char hands[FP_HUD_MSG_LEN + 600];
+            char hands[FP_HUD_MSG_LEN + 600], lag[64];
             fp_hud_hands_line(&v->hands, v->s, hands, sizeof hands);
             printf("hud frame %llu state %s commits %lu scale %.4g mm per mesh unit (%s) badge %s "
-                   "touching %zu of %zu nearest %.2f mm messages %zu drawn %s hands '%s'\n",
+                   "touching %zu of %zu nearest %.2f mm messages %zu drawn %s lag %s hands '%s'\n",
                    (unsigned long long)v->frames, hud_state(v), fp_session_commits(v->s),
                    fp_session_head(v->s)->mm_per_unit, fp_session_head(v->s)->how,
                    fp_hud_badge_name(hud_badge(v)), v->cues.touch_count, v->cues.count,
                    v->cues.nearest * fp_session_head(v->s)->mm_per_unit,
                    fp_hud_live(&v->msgs, fp_now_ns(), (const fp_hud_msg *[FP_HUD_MSGS]){0}, NULL),
                    v->gpu_now ? (v->warp_solved ? "gpu-warp" : "gpu-surface") : "cpu",
-                   hands[0] ? hands + 1 : "");
+                   fp_vmeasure_lag_text(&v->m, fp_now_ns(), lag, sizeof lag), hands[0] ? hands + 1 : "");
             fflush(stdout);
             break;
         }
@@ -707,17 +707,17 @@ static void draw_hud(viewer *v, int w, int h, const fp_frame_stats *st)
                  v->cues.touch_count, v->cues.count, v->cues.nearest * head->mm_per_unit);
     char hands[FP_HUD_MSG_LEN + 600];
     fp_hud_hands_line(&v->hands, v->s, hands, sizeof hands);
-    char text[4096], wrapped[8192], scale_line[300];
+    char text[4096], wrapped[8192], scale_line[300], lag[64];
     snprintf(text, sizeof text,
              "%s  %zu vertices  mapping %s\n"
              "%s\n"
              "commits %lu   radius %.4g (%.1f mm)\n"
-             "%.1f fps (%.2f ms)   engine %.3f ms   input %.0f ev/s%s\n"
+             "%.1f fps (%.2f ms)   lag %s   engine %.3f ms   input %.0f ev/s%s\n"
              "fold-over guard: bound %.2f  reach %.0f%%  sub-steps %d%s%s%s%s",
              v->mesh_path ? (strrchr(v->mesh_path, '/') ? strrchr(v->mesh_path, '/') + 1 : v->mesh_path) : "", v->n, v->mapping,
              fp_hud_scale_line(head->mm_per_unit, head->how, scale_line, sizeof scale_line), fp_session_commits(v->s),
              fp_session_radius(v->s), fp_session_radius(v->s) * head->mm_per_unit,
-             recent > 0 ? 1000.0 / recent : 0.0, recent,
+             recent > 0 ? 1000.0 / recent : 0.0, recent, fp_vmeasure_lag_text(&v->m, fp_now_ns(), lag, sizeof lag),
              st->active ? st->update_ms : v->last_update_ms, v->input_rate,
              v->opt->gpu_warp ? (v->gpu_now ? "   gpu-warp" : "   gpu-warp (CPU now)") : "",
              v->last_active.guard_bound, 100.0 * v->last_active.guard_reached, v->last_active.guard_substeps,
